@@ -1,0 +1,29 @@
+"""Errors a user can cause. The CLI prints their message (no traceback) and exits non-zero."""
+
+
+class RobocalError(Exception):
+    """Base class of every error robocal raises because of its input."""
+
+
+class ModelError(RobocalError):
+    """A robot model is malformed: wrong sizes, NaN parameters, unknown names, bad YAML."""
+
+
+class DataError(RobocalError):
+    """A measurement file or array is malformed: columns, units, NaN, joint count."""
+
+
+class UnitError(DataError):
+    """Units are missing, unknown or implausible for the values."""
+
+
+class IdentificationError(RobocalError):
+    """A calibration problem cannot be solved: too few observations, rank collapse."""
+
+
+class ConvergenceError(IdentificationError):
+    """An iterative solver did not converge."""
+
+
+class UnreachableError(RobocalError):
+    """A target pose has no inverse-kinematics solution."""

@@ -1,0 +1,342 @@
+"""The robot model: modified DH + parallel-axis beta, base and tool frames, limits, nominal values.
+
+Parameter vector (the view every solver uses), in this order with these stable names::
+
+    alpha1 a1 beta1 theta1 d1 ... alphan an betan thetan dn
+    base.x base.y base.z base.rx base.ry base.rz  tool.x tool.y tool.z tool.rx tool.ry tool.rz
+    smr1.x smr1.y smr1.z ...   (only when the tool carries extra SMRs)
+
+Values are SI (m, rad). ``base.r*``/``tool.r*`` hold the rotation vector of the frame's rotation
+for reading and writing; solvers never add to them: :meth:`Robot.displaced` applies rotation
+increments multiplicatively (base: about world axes through the world origin, tool: about flange
+axes through the TCP), which is what the identification Jacobian differentiates.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from robocal.errors import ModelError
+from robocal.kinematics.fk import LinkArrays, chain_fk, chain_frames
+from robocal.kinematics.transforms import make_transform, matrix_to_rotvec, rotvec_to_matrix
+
+LINK_FIELDS = ("alpha", "a", "beta", "theta", "d")
+FRAME_FIELDS = ("x", "y", "z", "rx", "ry", "rz")
+_LINK_IS_LENGTH = {"alpha": False, "a": True, "beta": False, "theta": False, "d": True}
+
+# Default search half-widths around nominal (bounds for metaheuristics and sanity checks).
+DEFAULT_SPAN = {"length": 0.005, "angle": np.deg2rad(1.0), "frame_length": 0.05,
+                "frame_angle": np.deg2rad(5.0)}
+
+
+def _as_vector(values, n: int, what: str) -> np.ndarray:
+    arr = np.asarray(values, dtype=float).reshape(-1)
+    if arr.shape != (n,):
+        raise ModelError(f"{what} must have {n} values, got {arr.size}")
+    if not np.isfinite(arr).all():
+        raise ModelError(f"{what} contains NaN or infinite values: {arr.tolist()}")
+    return arr
+
+
+def _as_frame(T, what: str) -> np.ndarray:
+    if T is None:
+        return np.eye(4)
+    T = np.asarray(T, dtype=float)
+    if T.shape != (4, 4) or not np.isfinite(T).all():
+        raise ModelError(f"{what} must be a finite 4x4 transform")
+    R = T[:3, :3]
+    if np.abs(R @ R.T - np.eye(3)).max() > 1e-9 or abs(np.linalg.det(R) - 1) > 1e-9:
+        raise ModelError(f"{what} rotation is not orthonormal with det +1")
+    return T.copy()
+
+
+@dataclass(frozen=True, eq=False)
+class Robot:
+    """A serial revolute robot in modified DH + beta. Lengths in m, angles in rad.
+
+    Attributes are ``(n,)`` arrays; ``limits`` is ``(n, 2)``; ``parallel[i]`` says that axis i
+    is nominally parallel to axis i-1, so ``beta_(i+1)`` is a parameter there. ``nominal`` is the
+    nominal model's parameter vector (the controller's model), ``opw`` an optional OPW form.
+    """
+
+    alpha: np.ndarray
+    a: np.ndarray
+    beta: np.ndarray
+    theta: np.ndarray
+    d: np.ndarray
+    base: np.ndarray = field(default_factory=lambda: np.eye(4))
+    tool: np.ndarray = field(default_factory=lambda: np.eye(4))
+    limits: np.ndarray | None = None
+    parallel: np.ndarray | None = None
+    nominal: np.ndarray | None = None
+    name: str = "robot"
+    description: str = ""
+    opw: dict | None = None
+    smr: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        n = np.asarray(self.alpha).size
+        if n < 1:
+            raise ModelError("a robot needs at least one joint")
+        set_ = object.__setattr__
+        for f in LINK_FIELDS:
+            set_(self, f, _as_vector(getattr(self, f), n, f))
+        set_(self, "base", _as_frame(self.base, "base"))
+        set_(self, "tool", _as_frame(self.tool, "tool"))
+        if self.limits is None:
+            limits = np.tile([-np.pi, np.pi], (n, 1))
+        else:
+            limits = np.asarray(self.limits, dtype=float)
+            if limits.shape != (n, 2) or np.isnan(limits).any():
+                raise ModelError(f"joint limits must be {n} (lower, upper) pairs without NaN")
+            if (limits[:, 0] > limits[:, 1]).any():
+                raise ModelError("a joint's lower limit is above its upper limit")
+        set_(self, "limits", limits)
+        parallel = np.zeros(n, bool) if self.parallel is None else np.asarray(self.parallel, bool)
+        if parallel.shape != (n,):
+            raise ModelError(f"parallel flags must have {n} values")
+        set_(self, "parallel", parallel)
+        smr = np.zeros((0, 3)) if self.smr is None else np.asarray(self.smr, dtype=float)
+        if smr.ndim != 2 or smr.shape[1] != 3 or not np.isfinite(smr).all():
+            raise ModelError("extra SMR offsets must be a finite (k, 3) array")
+        set_(self, "smr", smr)
+        values = self._values()
+        nominal = values if self.nominal is None else _as_vector(self.nominal, values.size,
+                                                                  "nominal parameters")
+        set_(self, "nominal", nominal)
+
+    # ----------------------------------------------------------------- construction
+    @classmethod
+    def from_mdh(cls, alpha: Sequence[float], a: Sequence[float], theta: Sequence[float],
+                 d: Sequence[float], beta: Sequence[float] | None = None, *,
+                 degrees: bool = False, length_unit: str = "m", **kwargs) -> Robot:
+        """Robot from Craig's modified DH rows (alpha_{i-1}, a_{i-1}, theta offset, d_i).
+
+        ``degrees`` and ``length_unit`` ('m' or 'mm') state the units of the given values;
+        axes i-1, i are flagged parallel where alpha_i = 0 (then beta_i is a parameter).
+        """
+        ang = np.deg2rad if degrees else np.asarray
+        scale = {"m": 1.0, "mm": 1e-3}.get(length_unit)
+        if scale is None:
+            raise ModelError(f"unknown length unit {length_unit!r}: use 'm' or 'mm'")
+        alpha = np.asarray(ang(np.asarray(alpha, float)), float)
+        beta = np.zeros_like(alpha) if beta is None else np.asarray(ang(np.asarray(beta, float)))
+        if "parallel" not in kwargs:
+            parallel = np.abs(np.sin(alpha)) < 1e-12
+            parallel[0] = False
+            kwargs["parallel"] = parallel
+        if "limits" in kwargs and kwargs["limits"] is not None and degrees:
+            kwargs["limits"] = np.deg2rad(np.asarray(kwargs["limits"], float))
+        return cls(alpha=alpha, a=np.asarray(a, float) * scale, beta=beta,
+                   theta=np.asarray(ang(np.asarray(theta, float)), float),
+                   d=np.asarray(d, float) * scale, **kwargs)
+
+    # ----------------------------------------------------------------- parameter view
+    @property
+    def n_joints(self) -> int:
+        return self.alpha.size
+
+    @property
+    def parameter_names(self) -> list[str]:
+        """All parameter names, in vector order."""
+        names = [f"{f}{i + 1}" for i in range(self.n_joints) for f in LINK_FIELDS]
+        names += [f"base.{f}" for f in FRAME_FIELDS] + [f"tool.{f}" for f in FRAME_FIELDS]
+        names += [f"smr{s + 1}.{c}" for s in range(len(self.smr)) for c in "xyz"]
+        return names
+
+    def parameter_units(self) -> list[str]:
+        """'m' or 'rad' for each parameter, in vector order."""
+        units = ["m" if _LINK_IS_LENGTH[f] else "rad" for _ in range(self.n_joints)
+                 for f in LINK_FIELDS]
+        return units + (["m"] * 3 + ["rad"] * 3) * 2 + ["m"] * self.smr.size
+
+    def indices(self, names: Iterable[str]) -> np.ndarray:
+        """Vector indices of parameter names; unknown names raise ModelError."""
+        lookup = {name: i for i, name in enumerate(self.parameter_names)}
+        names = list(names)
+        unknown = [nm for nm in names if nm not in lookup]
+        if unknown:
+            raise ModelError(f"unknown parameter name(s) {unknown}; known: alpha1 a1 beta1 "
+                             f"theta1 d1 ... d{self.n_joints}, base.x..base.rz, tool.x..tool.rz")
+        return np.array([lookup[nm] for nm in names], dtype=int)
+
+    def _values(self) -> np.ndarray:
+        links = np.stack([getattr(self, f) for f in LINK_FIELDS], axis=1).reshape(-1)
+        frames = [np.concatenate([T[:3, 3], matrix_to_rotvec(T[:3, :3])])
+                  for T in (self.base, self.tool)]
+        return np.concatenate([links, *frames, self.smr.reshape(-1)])
+
+    @property
+    def values(self) -> np.ndarray:
+        """Current parameter vector ``(5n + 12,)`` in SI units."""
+        return self._values()
+
+    def get(self, name: str) -> float:
+        """One parameter's value (m or rad)."""
+        return float(self.values[self.indices([name])[0]])
+
+    def with_values(self, updates: dict[str, float]) -> Robot:
+        """A copy with parameters set by name to absolute values (m, rad)."""
+        vec = self.values
+        idx = self.indices(updates)
+        vec[idx] = _as_vector(list(updates.values()), len(idx), "parameter values")
+        return self._from_vector(vec)
+
+    def _from_vector(self, vec: np.ndarray) -> Robot:
+        n = self.n_joints
+        links = vec[: 5 * n].reshape(n, 5)
+        frames = [make_transform(rotvec_to_matrix(v[3:]), v[:3])
+                  for v in (vec[5 * n : 5 * n + 6], vec[5 * n + 6 : 5 * n + 12])]
+        kw = {f: links[:, k] for k, f in enumerate(LINK_FIELDS)}
+        return replace(self, base=frames[0], tool=frames[1], smr=vec[5 * n + 12 :].reshape(-1, 3),
+                       **kw)
+
+    def default_free(self, orientation: bool = False) -> list[str]:
+        """Parameters a calibration frees by default: every link parameter (beta only on
+        parallel axes), the base frame, the tool translation (and rotation for pose data)."""
+        names = []
+        for i in range(self.n_joints):
+            for f in LINK_FIELDS:
+                if f != "beta" or self.parallel[i]:
+                    names.append(f"{f}{i + 1}")
+        names += [f"base.{f}" for f in FRAME_FIELDS] + ["tool.x", "tool.y", "tool.z"]
+        if orientation:
+            names += ["tool.rx", "tool.ry", "tool.rz"]
+        names += [f"smr{s + 1}.{c}" for s in range(len(self.smr)) for c in "xyz"]
+        return names
+
+    def default_spans(self, names: Iterable[str]) -> np.ndarray:
+        """Default search half-widths (m or rad) of the named parameters."""
+        spans = []
+        for name in names:
+            frame = name.startswith(("base.", "tool.", "smr"))
+            length = self.parameter_units()[self.indices([name])[0]] == "m"
+            key = ("frame_" if frame else "") + ("length" if length else "angle")
+            spans.append(DEFAULT_SPAN[key])
+        return np.array(spans)
+
+    def bounds(self, names: Iterable[str], spans: np.ndarray | None = None):
+        """(lower, upper) bounds of displacements from the current model for ``names``."""
+        names = list(names)
+        spans = self.default_spans(names) if spans is None else np.asarray(spans, float)
+        return -spans, spans
+
+    # ----------------------------------------------------------------- displacements
+    def displaced_arrays(self, names: Sequence[str], delta: np.ndarray):
+        """Link arrays, base, tool and SMRs for displacements ``delta`` ``(..., k)`` of ``names``.
+
+        Returns ``(LinkArrays (..., n), base (..., 4, 4), tool (..., 4, 4), smr (..., s, 3))``.
+        Link parameters and frame translations add; frame rotations compose (base:
+        R <- exp(d) R about the world origin; tool: R <- exp(d) R in flange axes), matching the
+        identification Jacobian.
+        """
+        delta = np.asarray(delta, dtype=float)
+        batch = delta.shape[:-1]
+        n = self.n_joints
+        idx = self.indices(names)
+        full = np.zeros(batch + (self.nominal.size,))
+        full[..., idx] = delta
+        links = np.stack([getattr(self, f) for f in LINK_FIELDS], axis=1).reshape(-1)
+        links = links + full[..., : 5 * n]
+        links = links.reshape(batch + (n, 5))
+        link_arrays = LinkArrays(*(links[..., k] for k in range(5)))
+        db, dt = full[..., 5 * n : 5 * n + 6], full[..., 5 * n + 6 : 5 * n + 12]
+        Rb = rotvec_to_matrix(db[..., 3:])
+        base = make_transform(Rb @ self.base[:3, :3],
+                              np.einsum("...ij,j->...i", Rb, self.base[:3, 3]) + db[..., :3])
+        tool = make_transform(rotvec_to_matrix(dt[..., 3:]) @ self.tool[:3, :3],
+                              self.tool[:3, 3] + dt[..., :3])
+        smr = self.smr + full[..., 5 * n + 12 :].reshape(batch + self.smr.shape)
+        return link_arrays, base, tool, smr
+
+    def displaced(self, names: Sequence[str], delta: np.ndarray) -> Robot:
+        """A copy displaced by ``delta`` ``(k,)`` on ``names`` (see :meth:`displaced_arrays`)."""
+        delta = _as_vector(delta, len(names), "parameter displacement")
+        links, base, tool, smr = self.displaced_arrays(names, delta)
+        return replace(self, base=base, tool=tool, smr=smr, **links._asdict())
+
+    def with_frames(self, base: np.ndarray | None = None, tool: np.ndarray | None = None) -> Robot:
+        """A copy with a new base and/or tool frame (4x4)."""
+        return replace(self, base=self.base if base is None else base,
+                       tool=self.tool if tool is None else tool)
+
+    def tools_for(self, smr_index) -> np.ndarray:
+        """Tool frames ``(N, 4, 4)`` for SMR indices ``(N,)``: SMR 0 is the tool, s > 0 the
+        tool's rotation with translation ``smr[s - 1]``."""
+        smr_index = np.asarray(smr_index, dtype=int)
+        if smr_index.size and (smr_index.min() < 0 or smr_index.max() > len(self.smr)):
+            raise ModelError(f"SMR index out of range: the model has {len(self.smr) + 1} SMR(s)")
+        offsets = np.vstack([self.tool[:3, 3], self.smr])[smr_index]
+        tools = np.broadcast_to(self.tool, smr_index.shape + (4, 4)).copy()
+        tools[..., :3, 3] = offsets
+        return tools
+
+    def nominal_robot(self) -> Robot:
+        """The nominal model (the controller's), with this robot's nominal as its own."""
+        return self._from_vector(self.nominal.copy())
+
+    # ----------------------------------------------------------------- kinematics
+    @property
+    def links(self) -> LinkArrays:
+        return LinkArrays(self.alpha, self.a, self.beta, self.theta, self.d)
+
+    def check_joints(self, q) -> np.ndarray:
+        """Joints as a ``(N, n)`` float array; raises ModelError on wrong shape or NaN."""
+        from robocal.errors import DataError
+
+        q = np.asarray(q, dtype=float)
+        if q.ndim == 1:
+            q = q[None, :]
+        if q.ndim != 2 or q.shape[1] != self.n_joints:
+            raise DataError(f"joints must have shape (N, {self.n_joints}) for {self.name}, "
+                            f"got {q.shape}")
+        if not np.isfinite(q).all():
+            bad = np.flatnonzero(~np.isfinite(q).all(axis=1))
+            raise DataError(f"joints contain NaN or infinite values in row(s) {bad[:10].tolist()}")
+        return q
+
+    def fk(self, q, frames: bool = False, smr=None):
+        """TCP poses ``(N, 4, 4)`` (world frame, m) for joints ``(N, n)`` in rad.
+
+        ``smr`` ``(N,)`` picks each row's SMR (default: the tool). With ``frames=True`` returns
+        ``(tcp, frames)`` where frames ``(N, n + 1, 4, 4)`` are the world poses of frames
+        {0}..{n} (frame {n} is the flange, before the tool).
+        """
+        q = self.check_joints(q)
+        tool = self.tool if smr is None else self.tools_for(smr)
+        if frames:
+            return chain_frames(self.links, self.base, tool, q, frames=True)
+        return chain_fk(self.links, self.base, tool, q)
+
+    def jacobian(self, q, params: Sequence[str] | None = None, kind: str = "point", smr=None):
+        """Identification Jacobian ``(N, 3|6, k)``; see
+        :func:`robocal.kinematics.jacobian.identification_jacobian`."""
+        from robocal.kinematics.jacobian import identification_jacobian
+
+        names = self.default_free(kind == "pose") if params is None else list(params)
+        return identification_jacobian(self, self.check_joints(q), names, kind, smr)
+
+    def within_limits(self, q) -> np.ndarray:
+        """``(N,)`` bool: every joint inside its limits."""
+        q = self.check_joints(q)
+        return ((q >= self.limits[:, 0]) & (q <= self.limits[:, 1])).all(axis=1)
+
+    # ----------------------------------------------------------------- files
+    def save(self, path) -> None:
+        """Write the model as YAML (SI units, exact round trip), atomically."""
+        from robocal.kinematics.yaml_io import save_robot
+
+        save_robot(self, path)
+
+    @classmethod
+    def load(cls, path) -> Robot:
+        """Read a model YAML written by :meth:`save` or by hand (units declared in the file)."""
+        from robocal.kinematics.yaml_io import load_robot
+
+        return load_robot(path)
+
+    def __repr__(self) -> str:
+        return f"Robot({self.name!r}, {self.n_joints} joints)"

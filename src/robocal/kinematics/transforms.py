@@ -1,0 +1,75 @@
+"""Small rigid-transform helpers on plain arrays (hot paths; scipy Rotation only at the edges)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def skew(v: np.ndarray) -> np.ndarray:
+    """Cross-product matrices of vectors ``(..., 3)`` -> ``(..., 3, 3)``."""
+    v = np.asarray(v, dtype=float)
+    out = np.zeros(v.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
+def rotvec_to_matrix(rv: np.ndarray) -> np.ndarray:
+    """Rodrigues: rotation vectors ``(..., 3)`` in rad -> rotation matrices ``(..., 3, 3)``."""
+    rv = np.asarray(rv, dtype=float)
+    angle = np.linalg.norm(rv, axis=-1)[..., None, None]
+    K = skew(rv)
+    small = angle < 1e-8
+    safe = np.where(small, 1.0, angle)
+    a = np.where(small, 1.0 - angle**2 / 6.0, np.sin(safe) / safe)
+    b = np.where(small, 0.5 - angle**2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    return np.eye(3) + a * K + b * (K @ K)
+
+
+def matrix_to_rotvec(R: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``(..., 3, 3)`` -> rotation vectors ``(..., 3)`` (rad), valid up to pi."""
+    from scipy.spatial.transform import Rotation
+
+    R = np.asarray(R, dtype=float)
+    flat = R.reshape(-1, 3, 3)
+    return Rotation.from_matrix(flat).as_rotvec().reshape(R.shape[:-2] + (3,))
+
+
+def make_transform(R: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Homogeneous transforms ``(..., 4, 4)`` from rotations ``(..., 3, 3)`` and translations."""
+    R = np.asarray(R, dtype=float)
+    t = np.asarray(t, dtype=float)
+    shape = np.broadcast_shapes(R.shape[:-2], t.shape[:-1])
+    T = np.zeros(shape + (4, 4))
+    T[..., :3, :3] = R
+    T[..., :3, 3] = t
+    T[..., 3, 3] = 1.0
+    return T
+
+
+def invert_transform(T: np.ndarray) -> np.ndarray:
+    """Inverse of rigid transforms ``(..., 4, 4)``."""
+    R = T[..., :3, :3]
+    Rt = np.swapaxes(R, -1, -2)
+    return make_transform(Rt, -np.einsum("...ij,...j->...i", Rt, T[..., :3, 3]))
+
+
+def pose_error(T_measured: np.ndarray, T_model: np.ndarray) -> np.ndarray:
+    """6-vector errors ``(..., 6)``: position difference and the rotation vector of R_meas R_model^T.
+
+    Both in the world frame, so they match the identification Jacobian's rows.
+    """
+    dp = T_measured[..., :3, 3] - T_model[..., :3, 3]
+    dR = T_measured[..., :3, :3] @ np.swapaxes(T_model[..., :3, :3], -1, -2)
+    return np.concatenate([dp, matrix_to_rotvec(dR)], axis=-1)
+
+
+def is_rigid(T: np.ndarray, tol: float = 1e-6) -> np.ndarray:
+    """Whether each ``(..., 4, 4)`` matrix is a proper rigid transform (to ``tol``)."""
+    T = np.asarray(T, dtype=float)
+    R = T[..., :3, :3]
+    ortho = np.abs(R @ np.swapaxes(R, -1, -2) - np.eye(3)).max(axis=(-1, -2)) < tol
+    det = np.abs(np.linalg.det(R) - 1.0) < tol
+    last = np.abs(T[..., 3, :] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=-1) < tol
+    return ortho & det & last & np.isfinite(T).all(axis=(-1, -2))
