@@ -103,9 +103,9 @@ class Robot:
         if smr.ndim != 2 or smr.shape[1] != 3 or not np.isfinite(smr).all():
             raise ModelError("extra SMR offsets must be a finite (k, 3) array")
         set_(self, "smr", smr)
-        values = self._values()
-        nominal = values if self.nominal is None else _as_vector(self.nominal, values.size,
-                                                                  "nominal parameters")
+        size = 5 * n + 12 + smr.size
+        nominal = self._values() if self.nominal is None else _as_vector(self.nominal, size,
+                                                                          "nominal parameters")
         set_(self, "nominal", nominal)
 
     # ----------------------------------------------------------------- construction
