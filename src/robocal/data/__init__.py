@@ -1,0 +1,9 @@
+"""Measurements, their files and importer, the virtual laser tracker, and frame registration."""
+
+from robocal.data.measurements import Measurements
+from robocal.data.registration import Registration, register, register_frame
+from robocal.data.simulate import SimulationResult, simulate_tracker, write_simulation
+from robocal.evaluate import evaluate
+
+__all__ = ["Measurements", "Registration", "SimulationResult", "evaluate", "register", "register_frame",
+           "simulate_tracker", "write_simulation"]

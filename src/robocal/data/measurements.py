@@ -1,0 +1,487 @@
+"""Measurements: joints plus what the tracker (or probe) saw, and their canonical CSV file.
+
+One :class:`Measurements` holds one observation kind for all its rows:
+
+- ``point``: ``points (N, 3)`` m, an SMR position in the tracker frame;
+- ``pose``: ``points (N, 3)`` m and ``rotations (N, 3, 3)``, a 6-DOF probe pose in the tracker frame;
+- ``plane``: ``plane (N,)`` int, the index of the plane the probe tip touched (no coordinates);
+- ``distance``: ``pair (N,)`` int and ``distance (N,)`` m. The two rows that share a ``pair`` id are
+  the two ends (two joint vectors / SMRs) of one measured distance, and both carry the same
+  measured distance (ball bar length, or distance between two tracker readings).
+
+Every row also has ``joints (N, n)`` rad, ``pose_id (N,)`` (rows sharing one commanded pose: the
+SMRs of one pose, or repeated readings kept without averaging), ``smr (N,)`` (0 = the tool,
+s > 0 = ``Robot.smr[s - 1]``), an optional ``sigma (N,)`` m, and ``source_row (N,)``: the 1-based
+line number of the row in the file it came from (for an import, the line in the raw file that
+held its joints, or the first reading of an averaged group).
+
+Canonical CSV (DESIGN.md "Files"): optional leading ``#`` comment lines (the first one is kept as
+``source``, the provenance text), then a header, then one line per row. Column names carry their
+units: ``q1_deg..qn_deg`` or ``q1_rad..qn_rad``; ``x_mm y_mm z_mm`` or ``x_m y_m z_m``; optional
+``smr``, ``sigma_mm``/``sigma_m``, ``qw qx qy qz`` (pose), ``plane`` (plane contacts, then no
+x/y/z), ``pair`` and ``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``.
+:meth:`Measurements.save` writes SI columns (``_rad``, ``_m``) with 17 significant digits, so a
+save/load round trip is exact (rotations through the quaternion to 1e-15).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from robocal.errors import DataError, UnitError
+
+KINDS = ("point", "pose", "plane", "distance")
+_LENGTH = {"m": 1.0, "mm": 1e-3}
+_ANGLE = {"rad": 1.0, "deg": np.pi / 180.0}
+_LENGTH_COLUMNS = ("x", "y", "z", "sigma", "distance")
+_PLAIN_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row", "qw", "qx", "qy", "qz")
+_INT_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row")
+# A laser tracker's range is below ~80 m; anything farther is a unit mistake whatever the robot.
+MAX_TRACKER_RANGE_M = 100.0
+
+
+def _int_array(values, name: str, n: int) -> np.ndarray:
+    arr = np.asarray(values)
+    if arr.shape != (n,):
+        raise DataError(f"{name} must have shape ({n},), got {arr.shape}")
+    if arr.dtype.kind == "f":
+        if not np.isfinite(arr).all() or (arr != np.round(arr)).any():
+            raise DataError(f"{name} must hold integers")
+    elif arr.dtype.kind not in "iub":
+        raise DataError(f"{name} must hold integers, got dtype {arr.dtype}")
+    return arr.astype(np.int64)
+
+
+def _float_array(values, name: str, shape: tuple) -> np.ndarray:
+    try:
+        arr = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise DataError(f"{name} must be numeric") from None
+    if arr.shape != shape:
+        raise DataError(f"{name} must have shape {shape}, got {arr.shape}")
+    if not np.isfinite(arr).all():
+        rows = np.flatnonzero(~np.isfinite(arr.reshape(shape[0], -1)).all(axis=1)) if arr.ndim else []
+        raise DataError(f"{name} contains NaN or infinite values (row indices {list(rows[:10])})")
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class Measurements:
+    """One kind of observation for N rows; see the module docstring for every field's meaning."""
+
+    kind: str
+    joints: np.ndarray
+    pose_id: np.ndarray
+    smr: np.ndarray
+    source_row: np.ndarray
+    sigma: np.ndarray | None = None
+    points: np.ndarray | None = None
+    rotations: np.ndarray | None = None
+    plane: np.ndarray | None = None
+    pair: np.ndarray | None = None
+    distance: np.ndarray | None = None
+    source: str = ""
+
+    # ----------------------------------------------------------------- construction
+    @classmethod
+    def from_arrays(cls, kind: str, joints, *, points=None, rotations=None, plane=None, pair=None,
+                    distance=None, smr=None, sigma=None, pose_id=None, source_row=None,
+                    source: str = "") -> Measurements:
+        """Validated measurements from arrays in SI units (rad, m).
+
+        Defaults: ``smr`` 0, ``pose_id`` one per row (``0..N-1``), ``source_row`` ``1..N``.
+        """
+        if kind not in KINDS:
+            raise DataError(f"unknown measurement kind {kind!r}: use one of {', '.join(KINDS)}")
+        joints = np.asarray(joints, dtype=float) if not isinstance(joints, np.ndarray) else joints
+        if joints.ndim != 2 or joints.shape[0] < 1 or joints.shape[1] < 1:
+            raise DataError(f"joints must have shape (N, n) with N, n >= 1, got {joints.shape}")
+        N, n = joints.shape
+        joints = _float_array(joints, "joints", (N, n))
+        need = {"point": {"points"}, "pose": {"points", "rotations"}, "plane": {"plane"},
+                "distance": {"pair", "distance"}}[kind]
+        given = {k for k, v in (("points", points), ("rotations", rotations), ("plane", plane),
+                                ("pair", pair), ("distance", distance)) if v is not None}
+        if need - given:
+            raise DataError(f"{kind} measurements need {sorted(need - given)}")
+        if given - need:
+            raise DataError(f"{kind} measurements do not take {sorted(given - need)}")
+        kw = {}
+        if points is not None:
+            kw["points"] = _float_array(points, "points", (N, 3))
+        if rotations is not None:
+            R = _float_array(rotations, "rotations", (N, 3, 3))
+            err = np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max(axis=(1, 2))
+            bad = np.flatnonzero((err > 1e-6) | (np.linalg.det(R) < 0))
+            if bad.size:
+                raise DataError(f"rotations of row index(es) {bad[:10].tolist()} are not proper rotations")
+            kw["rotations"] = R
+        if plane is not None:
+            kw["plane"] = _int_array(plane, "plane", N)
+            if kw["plane"].min() < 0:
+                raise DataError("plane indices must be >= 0")
+        if pair is not None:
+            kw["pair"] = _int_array(pair, "pair", N)
+            kw["distance"] = _float_array(distance, "distance", (N,))
+            ids, counts = np.unique(kw["pair"], return_counts=True)
+            if (counts != 2).any():
+                raise DataError(f"every distance pair needs exactly 2 rows (its two ends); pair(s) "
+                                f"{ids[counts != 2][:10].tolist()} have {counts[counts != 2][:10].tolist()}")
+            order = np.argsort(kw["pair"], kind="stable")
+            d2 = kw["distance"][order].reshape(-1, 2)
+            if (d2[:, 0] != d2[:, 1]).any() or (d2 <= 0).any():
+                raise DataError("both rows of a distance pair must carry the same positive distance")
+        smr = np.zeros(N, np.int64) if smr is None else _int_array(smr, "smr", N)
+        if smr.min() < 0:
+            raise DataError("smr indices must be >= 0 (0 is the tool)")
+        pose_id = np.arange(N) if pose_id is None else _int_array(pose_id, "pose_id", N)
+        source_row = np.arange(1, N + 1) if source_row is None else _int_array(source_row, "source_row", N)
+        if sigma is not None:
+            sigma = _float_array(sigma, "sigma", (N,))
+            if (sigma <= 0).any():
+                raise DataError("sigma must be positive (m)")
+        return cls(kind=kind, joints=joints, pose_id=pose_id, smr=smr, source_row=source_row,
+                   sigma=sigma, source=str(source).replace("\n", " "), **kw)
+
+    # ----------------------------------------------------------------- views
+    def __len__(self) -> int:
+        return self.joints.shape[0]
+
+    @property
+    def n_joints(self) -> int:
+        return self.joints.shape[1]
+
+    @property
+    def n_poses(self) -> int:
+        """Number of distinct commanded poses (distinct ``pose_id``)."""
+        return int(np.unique(self.pose_id).size)
+
+    @property
+    def n_smr(self) -> int:
+        """Number of SMRs referenced (max index + 1)."""
+        return int(self.smr.max()) + 1
+
+    def subset(self, index) -> Measurements:
+        """Rows selected by an integer index array or a boolean mask ``(N,)``."""
+        index = np.asarray(index)
+        if index.dtype == bool:
+            if index.shape != (len(self),):
+                raise DataError(f"a row mask must have shape ({len(self)},), got {index.shape}")
+            index = np.flatnonzero(index)
+        index = index.astype(np.int64).reshape(-1)
+        if index.size == 0:
+            raise DataError("the selection is empty: keep at least one row")
+        if index.min() < -len(self) or index.max() >= len(self):
+            raise DataError(f"row index out of range for {len(self)} rows")
+        take = {f: (None if getattr(self, f) is None else getattr(self, f)[index])
+                for f in ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations",
+                          "plane", "pair", "distance")}
+        if self.kind == "distance":
+            ids, counts = np.unique(take["pair"], return_counts=True)
+            if (counts != 2).any():
+                raise DataError("a distance subset must keep both rows of every pair")
+        return replace(self, **take)
+
+    def _groups(self) -> np.ndarray:
+        """Group label of each row: rows that must stay together when splitting."""
+        return self.pair if self.kind == "distance" else self.pose_id
+
+    def split_poses(self, fraction: float | int = 0.5, seed: int = 0) -> tuple[Measurements, Measurements]:
+        """Random split by pose (distance data: by pair) into (first, rest).
+
+        ``fraction`` in (0, 1) is the share of poses in the first part; an int is a pose count.
+        """
+        labels = np.unique(self._groups())
+        k = int(fraction) if isinstance(fraction, int | np.integer) else int(round(fraction * labels.size))
+        if not 0 < k < labels.size:
+            raise DataError(f"cannot split {labels.size} poses with fraction/count {fraction}: "
+                            "both parts need at least one pose")
+        chosen = np.random.default_rng(seed).permutation(labels)[:k]
+        mask = np.isin(self._groups(), chosen)
+        return self.subset(mask), self.subset(~mask)
+
+    def first_poses(self, k: int) -> Measurements:
+        """Rows of the first ``k`` distinct poses in file order (e.g. a calibration half)."""
+        _, first = np.unique(self._groups(), return_index=True)
+        labels = self._groups()[np.sort(first)][:k]
+        return self.subset(np.isin(self._groups(), labels))
+
+    def check_against(self, robot, reach: float | None = None, path: str | None = None) -> Measurements:
+        """Check joint count, SMR indices and unit plausibility against a robot; returns self."""
+        where = f"{path}: " if path else (f"{self.source}: " if self.source else "")
+        if self.n_joints != robot.n_joints:
+            raise DataError(f"{where}the data have {self.n_joints} joint columns but {robot.name} has "
+                            f"{robot.n_joints} joints: use a file with q1..q{robot.n_joints} or the "
+                            "matching robot model")
+        if reach is None:
+            reach = robot_reach(robot)
+        _check_plausible(self, reach, where)
+        return self
+
+    # ----------------------------------------------------------------- files
+    @classmethod
+    def load(cls, path, robot=None, reach: float | None = None) -> Measurements:
+        """Read a canonical measurement CSV. ``robot`` (or ``reach`` in m) enables the joint count and
+        length plausibility checks; every problem is a DataError/UnitError naming file and row."""
+        path = Path(path)
+        try:
+            raw = path.read_bytes()
+        except OSError as exc:
+            raise DataError(f"cannot read measurement file {path}: {exc.strerror}") from None
+        try:
+            text = raw.decode("utf-8-sig")
+        except UnicodeDecodeError:
+            raise DataError(f"{path}: not a UTF-8 text file; export the measurements as CSV") from None
+        data = parse_csv(text, str(path))
+        if robot is not None:
+            data.check_against(robot, reach, str(path))
+        elif reach is not None:
+            _check_plausible(data, reach, f"{path}: ")
+        return data
+
+    def to_csv(self) -> str:
+        """Canonical CSV text in SI columns (exact round trip)."""
+        n = self.n_joints
+        cols = {"pose_id": self.pose_id, "source_row": self.source_row}
+        for i in range(n):
+            cols[f"q{i + 1}_rad"] = self.joints[:, i]
+        if self.points is not None:
+            for k, c in enumerate("xyz"):
+                cols[f"{c}_m"] = self.points[:, k]
+        if self.rotations is not None:
+            from scipy.spatial.transform import Rotation
+
+            quat = Rotation.from_matrix(self.rotations).as_quat()  # x y z w
+            quat *= np.where(quat[:, 3:] < 0, -1.0, 1.0)
+            for k, c in enumerate(("qw", "qx", "qy", "qz")):
+                cols[c] = quat[:, (3, 0, 1, 2)[k]]
+        if self.plane is not None:
+            cols["plane"] = self.plane
+        if self.pair is not None:
+            cols["pair"] = self.pair
+            cols["distance_m"] = self.distance
+        cols["smr"] = self.smr
+        if self.sigma is not None:
+            cols["sigma_m"] = self.sigma
+        out = io.StringIO()
+        if self.source:
+            out.write(f"# {self.source}\n")
+        out.write(",".join(cols) + "\n")
+        fmt = [(lambda v: str(int(v))) if np.asarray(c).dtype.kind in "iu" else (lambda v: repr(float(v)))
+               for c in cols.values()]
+        columns = list(cols.values())
+        for r in range(len(self)):
+            out.write(",".join(f(c[r]) for f, c in zip(fmt, columns, strict=True)) + "\n")
+        return out.getvalue()
+
+    def save(self, path) -> None:
+        """Write the canonical CSV atomically."""
+        from robocal.kinematics.yaml_io import write_atomic
+
+        write_atomic(path, self.to_csv())
+
+
+def robot_reach(robot) -> float:
+    """A generous reach (m) of a robot: sum of link lengths plus tool and SMR offsets."""
+    tool = max([np.linalg.norm(robot.tool[:3, 3])] + [np.linalg.norm(s) for s in robot.smr])
+    return float(np.abs(robot.a).sum() + np.abs(robot.d).sum() + tool)
+
+
+def _check_plausible(data: Measurements, reach: float, where: str) -> None:
+    """Unit plausibility: the measured points must span no more than the robot can reach."""
+    if data.points is None or len(data) < 2:
+        return
+    extent = float((data.points.max(axis=0) - data.points.min(axis=0)).max())
+    limit = 2.0 * reach + 0.5
+    if extent > limit:
+        row = int(data.source_row[np.argmax(np.abs(data.points - np.median(data.points, 0)).max(1))])
+        raise UnitError(f"{where}the points span {extent:.4g} m but a robot of {reach:.3g} m reach can move "
+                        f"an SMR over at most ~{limit:.3g} m (e.g. row {row}): the length unit is "
+                        "probably wrong; if the values are millimetres, name the columns x_mm, y_mm, z_mm")
+
+
+def _header_role(name: str):
+    """(role, index or None, scale) of one header name, or raise UnitError/None for unknown."""
+    m = re.fullmatch(r"q(\d+)_([a-z]+)", name)
+    if m:
+        unit = m.group(2)
+        if unit not in _ANGLE:
+            raise UnitError(f"unknown angle unit {unit!r} in column {name!r}: use _deg or _rad")
+        return "q", int(m.group(1)), _ANGLE[unit]
+    m = re.fullmatch(r"(x|y|z|sigma|distance)_([a-z]+)", name)
+    if m:
+        unit = m.group(2)
+        if unit not in _LENGTH:
+            raise UnitError(f"unknown length unit {unit!r} in column {name!r}: use _mm or _m")
+        return m.group(1), None, _LENGTH[unit]
+    if name in _PLAIN_COLUMNS:
+        return name, None, 1.0
+    if name in _LENGTH_COLUMNS or re.fullmatch(r"q\d+", name):
+        raise UnitError(f"column {name!r} has no unit: name it {name}_mm or {name}_m"
+                        if name in _LENGTH_COLUMNS else f"column {name!r} has no unit: name it "
+                        f"{name}_deg or {name}_rad")
+    return None
+
+
+def parse_csv(text: str, name: str = "<text>") -> Measurements:
+    """Parse canonical CSV text; ``name`` is used in error messages."""
+    lines = text.splitlines()
+    source = ""
+    start = 0
+    while start < len(lines) and (lines[start].lstrip().startswith("#") or not lines[start].strip()):
+        if not source and lines[start].lstrip().startswith("#"):
+            source = lines[start].lstrip()[1:].strip()
+        start += 1
+    if start >= len(lines):
+        raise DataError(f"{name}: the file is empty; a measurement CSV needs a header line "
+                        "(e.g. q1_deg,...,q6_deg,x_mm,y_mm,z_mm) and data rows")
+    try:
+        rows = list(csv.reader(lines[start:]))
+    except csv.Error as exc:
+        raise DataError(f"{name}: not a valid CSV file ({exc})") from None
+    header = [h.strip().lower() for h in rows[0]]
+    header_line = start + 1
+    seen = set()
+    for h in header:
+        if h in seen:
+            raise DataError(f"{name}: column {h!r} appears twice in the header (line {header_line}); "
+                            "remove the duplicate")
+        seen.add(h)
+    roles = {}
+    for h in header:
+        try:
+            role = _header_role(h)
+        except UnitError as exc:
+            raise UnitError(f"{name}, line {header_line}: {exc}") from None
+        if role is None:
+            raise DataError(f"{name}, line {header_line}: unknown column {h!r}; known columns are "
+                            "q1_deg..qn_deg (or _rad), x_mm,y_mm,z_mm (or _m), smr, sigma_mm, qw,qx,qy,qz, "
+                            "plane, pair, distance_mm, pose_id, source_row. For another layout use "
+                            "`robocal import`")
+        roles[h] = role
+    joint_cols = sorted((r[1], h) for h, r in roles.items() if r[0] == "q")
+    n = len(joint_cols)
+    if n == 0:
+        raise DataError(f"{name}: no joint columns; add q1_deg..qn_deg (or q1_rad..qn_rad)")
+    if [i for i, _ in joint_cols] != list(range(1, n + 1)):
+        raise DataError(f"{name}: joint columns must be q1..q{n} without gaps, got "
+                        f"{[h for _, h in joint_cols]}")
+    angle_units = {roles[h][2] for _, h in joint_cols}
+    if len(angle_units) > 1:
+        raise UnitError(f"{name}: joint columns mix _deg and _rad; use one unit for all joints")
+    present = {r[0] for r in roles.values()}
+    xyz = {"x", "y", "z"} & present
+    if xyz and xyz != {"x", "y", "z"}:
+        raise DataError(f"{name}: a point needs all of x, y, z; missing {sorted({'x', 'y', 'z'} - xyz)}")
+    if xyz and len({roles[h][2] for h in roles if roles[h][0] in "xyz"}) > 1:
+        raise UnitError(f"{name}: x, y, z columns mix units; use one length unit for all three")
+    quat = {"qw", "qx", "qy", "qz"} & present
+    if quat and len(quat) != 4:
+        raise DataError(f"{name}: a pose needs all of qw, qx, qy, qz; missing "
+                        f"{sorted({'qw', 'qx', 'qy', 'qz'} - quat)}")
+    if "plane" in present:
+        kind = "plane"
+        if xyz or quat or "pair" in present:
+            raise DataError(f"{name}: plane contacts have only joints and 'plane'; remove x/y/z, "
+                            "quaternion and pair columns")
+    elif "pair" in present or "distance" in present:
+        kind = "distance"
+        if not {"pair", "distance"} <= present:
+            raise DataError(f"{name}: distance data need both 'pair' and 'distance_mm' columns")
+        if xyz or quat:
+            raise DataError(f"{name}: distance data have no x/y/z or quaternion columns")
+    elif quat:
+        kind = "pose"
+        if not xyz:
+            raise DataError(f"{name}: pose data need x, y, z columns with the quaternion")
+    elif xyz:
+        kind = "point"
+    else:
+        raise DataError(f"{name}: no observation columns; add x_mm,y_mm,z_mm (points), "
+                        "qw..qz (poses), plane (plane contacts) or pair,distance_mm")
+    width = len(header)
+    body = []
+    line_no = []
+    for k, row in enumerate(rows[1:]):
+        ln = header_line + 1 + k
+        if not row or all(not c.strip() for c in row):
+            continue
+        if row[0].lstrip().startswith("#"):
+            continue
+        if len(row) != width:
+            raise DataError(f"{name}, line {ln}: {len(row)} values but the header has {width} columns; "
+                            "fix or remove that row")
+        vals = []
+        for h, cell in zip(header, row, strict=True):
+            try:
+                v = float(cell)
+            except ValueError:
+                raise DataError(f"{name}, line {ln}, column {h}: {cell.strip()[:40]!r} is not a number; "
+                                "fix or remove that row") from None
+            if not np.isfinite(v):
+                raise DataError(f"{name}, line {ln}, column {h}: {cell.strip()[:40]!r} (NaN or infinite); "
+                                "remove failed readings or re-import with `robocal import`, which "
+                                "drops them")
+            if h in _INT_COLUMNS and v != round(v):
+                raise DataError(f"{name}, line {ln}, column {h}: {cell.strip()[:40]!r} must be an integer")
+            if h in _INT_COLUMNS and abs(v) > 2**53:
+                raise DataError(f"{name}, line {ln}, column {h}: {cell.strip()[:40]!r} is out of range")
+            vals.append(v)
+        body.append(vals)
+        line_no.append(ln)
+    if not body:
+        raise DataError(f"{name}: the file has a header but no data rows")
+    table = np.array(body, dtype=float)
+    col = {h: table[:, i] for i, h in enumerate(header)}
+
+    def length(c: str) -> np.ndarray:
+        h = next(h for h in header if roles[h][0] == c)
+        return col[h] * roles[h][2]
+
+    def integer(c: str) -> np.ndarray:
+        return col[c].astype(np.int64)
+
+    joints = np.stack([col[h] * roles[h][2] for _, h in joint_cols], axis=1)
+    kw = {}
+    if xyz:
+        kw["points"] = np.stack([length(c) for c in "xyz"], axis=1)
+        far = np.abs(kw["points"]).max(axis=1) > MAX_TRACKER_RANGE_M
+        if far.any():
+            ln = line_no[int(np.argmax(far))]
+            raise UnitError(f"{name}, line {ln}: a point {np.abs(kw['points'][far][0]).max():.4g} m from the "
+                            f"tracker is beyond any tracker's range: the length unit is probably wrong "
+                            f"(values in mm must be in columns x_mm, y_mm, z_mm)")
+    if np.abs(joints).max() > 4 * np.pi and roles[joint_cols[0][1]][2] == 1.0:
+        ln = line_no[int(np.argmax(np.abs(joints).max(axis=1)))]
+        raise UnitError(f"{name}, line {ln}: joint values up to {np.abs(joints).max():.4g} rad (> 2 turns): "
+                        "these look like degrees; name the columns q1_deg..")
+    if quat:
+        from scipy.spatial.transform import Rotation
+
+        qv = np.stack([col["qx"], col["qy"], col["qz"], col["qw"]], axis=1)
+        norm = np.linalg.norm(qv, axis=1)
+        bad = np.flatnonzero(np.abs(norm - 1.0) > 1e-6)
+        if bad.size:
+            raise DataError(f"{name}, line {line_no[bad[0]]}: quaternion norm {norm[bad[0]]:.6g} is not 1; "
+                            "give a unit quaternion qw,qx,qy,qz")
+        kw["rotations"] = Rotation.from_quat(qv).as_matrix()
+    if kind == "plane":
+        kw["plane"] = integer("plane")
+    if kind == "distance":
+        kw["pair"] = integer("pair")
+        kw["distance"] = length("distance")
+    sigma = length("sigma") if "sigma" in present else None
+    smr = integer("smr") if "smr" in present else None
+    pose_id = integer("pose_id") if "pose_id" in present else None
+    source_row = integer("source_row") if "source_row" in present else np.array(line_no)
+    try:
+        return Measurements.from_arrays(kind, joints, smr=smr, sigma=sigma, pose_id=pose_id,
+                                        source_row=source_row, source=source, **kw)
+    except DataError as exc:
+        raise DataError(f"{name}: {exc}") from None

@@ -1,0 +1,134 @@
+"""Tracker-to-base registration: the base frame and SMR offsets from measured points.
+
+Model: a point of SMR s at pose i is ``p_i = B (R_i t_s + o_i)`` with ``(R_i, o_i)`` the nominal
+flange pose in frame {0}, ``B`` the base frame (tracker -> frame {0}) and ``t_s`` the SMR offset in
+flange coordinates. Rotations are never parameterised by Euler angles, so any tracker orientation
+works:
+
+1. alternate a weighted Umeyama/Kabsch fit of ``B`` (SVD, no scaling) with a linear least-squares
+   fit of every ``t_s`` (starting from the model's offsets, or zero);
+2. finish with Gauss-Newton on (B translation, B rotation as a multiplicative rotation vector,
+   all t_s) until the step is below 1e-13 m.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from robocal.errors import DataError
+from robocal.kinematics.transforms import make_transform, rotvec_to_matrix, skew
+
+
+@dataclass(frozen=True)
+class Registration:
+    """Result of :func:`register_frame`: ``base`` (4, 4) tracker -> frame {0}; ``offsets`` (k, 3) m,
+    SMR s's offset on the flange (row 0: the tool); ``residuals`` (N, 3) m; ``rms`` m (3-D RMS);
+    ``tool_rotation`` (3, 3) (pose data only, else None); ``iterations`` of Gauss-Newton."""
+
+    base: np.ndarray
+    offsets: np.ndarray
+    residuals: np.ndarray
+    rms: float
+    tool_rotation: np.ndarray | None
+    iterations: int
+
+
+def umeyama(src: np.ndarray, dst: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+    """Rigid transform (4, 4) minimising sum w |dst - (R src + t)|^2 for points ``(N, 3)`` (SVD)."""
+    w = np.ones(len(src)) if weights is None else np.asarray(weights, float)
+    w = w / w.sum()
+    cs, cd = w @ src, w @ dst
+    H = (src - cs).T @ ((dst - cd) * w[:, None])
+    U, _, Vt = np.linalg.svd(H)
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0])
+    R = Vt.T @ D @ U.T
+    return make_transform(R, cd - R @ cs)
+
+
+def _offsets_lsq(Rf: np.ndarray, of: np.ndarray, local: np.ndarray, smr: np.ndarray, k: int) -> np.ndarray:
+    """Least-squares SMR offsets: ``local_i - o_i = R_i t_s`` -> ``t_s = mean_i R_i^T (local_i - o_i)``
+    (exact least squares since every R_i is orthonormal)."""
+    v = np.einsum("nji,nj->ni", Rf, local - of)
+    sums = np.zeros((k, 3))
+    np.add.at(sums, smr, v)
+    return sums / np.bincount(smr, minlength=k)[:, None]
+
+
+def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30) -> Registration:
+    """Fit the base frame and the SMR offsets of ``robot`` (its links, nominal or not) to point or
+    pose measurements ``data`` (tracker frame). See the module docstring."""
+    if data.kind not in ("point", "pose"):
+        raise DataError(f"registration needs point or pose measurements, not {data.kind!r}")
+    if data.n_joints != robot.n_joints:
+        data.check_against(robot)
+    smr = data.smr
+    k = int(smr.max()) + 1
+    missing = np.setdiff1d(np.arange(k), smr)
+    if missing.size:
+        raise DataError(f"SMR index(es) {missing.tolist()} have no measurement; renumber the SMRs 0..k-1")
+    flange = replace(robot, base=np.eye(4), tool=np.eye(4), smr=np.zeros((0, 3))).fk(data.joints)
+    Rf, of = flange[:, :3, :3], flange[:, :3, 3]
+    p = data.points
+    start = np.vstack([robot.tool[:3, 3], robot.smr])
+    t = np.zeros((k, 3))
+    t[: min(k, len(start))] = start[: min(k, len(start))]
+    # 1. alternation: Umeyama for B, linear least squares for the offsets
+    B = umeyama(np.einsum("nij,nj->ni", Rf, t[smr]) + of, p)
+    for _ in range(alternations):
+        Binv_p = (p - B[:3, 3]) @ B[:3, :3]
+        t_new = _offsets_lsq(Rf, of, Binv_p, smr, k)
+        B = umeyama(np.einsum("nij,nj->ni", Rf, t_new[smr]) + of, p)
+        step = np.abs(t_new - t).max()
+        t = t_new
+        if step < 1e-10:
+            break
+    # 2. Gauss-Newton on (B translation, B rotation increment, offsets)
+    it = 0
+    while it < iterations:
+        it += 1
+        local = np.einsum("nij,nj->ni", Rf, t[smr]) + of
+        model = local @ B[:3, :3].T + B[:3, 3]
+        r = (p - model).reshape(-1)
+        J = np.zeros((len(p), 3, 6 + 3 * k))
+        J[:, :, :3] = np.eye(3)
+        J[:, :, 3:6] = -skew(model)
+        RBRf = B[:3, :3] @ Rf
+        for s in range(k):
+            rows = smr == s
+            J[rows, :, 6 + 3 * s : 9 + 3 * s] = RBRf[rows]
+        dx = np.linalg.lstsq(J.reshape(-1, 6 + 3 * k), r, rcond=None)[0]
+        Rb = rotvec_to_matrix(dx[3:6])
+        B = make_transform(Rb @ B[:3, :3], Rb @ B[:3, 3] + dx[:3])
+        t = t + dx[6:].reshape(k, 3)
+        if np.abs(dx).max() < 1e-13:
+            break
+    local = np.einsum("nij,nj->ni", Rf, t[smr]) + of
+    res = p - (local @ B[:3, :3].T + B[:3, 3])
+    tool_R = None
+    if data.kind == "pose":
+        # R_meas = R_B R_f R_tool  ->  R_tool = projection onto SO(3) of the mean of (R_B R_f)^T R_meas
+        M = np.einsum("nji,njk->ik", B[:3, :3] @ Rf, data.rotations)
+        U, _, Vt = np.linalg.svd(M)
+        tool_R = U @ np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))]) @ Vt
+    rms = float(np.sqrt(np.mean(np.sum(res**2, axis=1))))
+    if not np.isfinite(rms):
+        raise DataError("registration failed (non-finite residuals): check the data's units and joints")
+    return Registration(base=B, offsets=t, residuals=res, rms=rms, tool_rotation=tool_R, iterations=it)
+
+
+def register(robot, data, **kwargs):
+    """A copy of ``robot`` with its base frame and tool/SMR offsets fitted to ``data``.
+
+    The tool keeps its rotation (pose data: the fitted tool rotation); SMR 0's offset becomes the
+    tool translation and SMRs 1.. become ``robot.smr``.
+    """
+    reg = register_frame(robot, data, **kwargs)
+    rot = robot.tool[:3, :3] if reg.tool_rotation is None else reg.tool_rotation
+    tool = make_transform(rot, reg.offsets[0])
+    out = replace(robot, base=reg.base, tool=tool, smr=reg.offsets[1:].copy(), nominal=None)
+    # nominal: the robot's nominal links with the registered frames (nominal + fitted base/SMR)
+    nominal = out.values
+    nominal[: 5 * robot.n_joints] = robot.nominal[: 5 * robot.n_joints]
+    return replace(out, nominal=nominal)

@@ -1,0 +1,291 @@
+"""Virtual laser tracker (and plane-contact probe): measurements of a known true robot.
+
+The true robot is the given (nominal) robot plus random parameter errors: lengths a, d by
+0.05-0.5 mm, angles alpha, theta (theta errors are the joint zero offsets) by 0.005-0.05 deg,
+beta by the same on nominally parallel axes; random signs, uniform magnitudes (``error_scale``
+multiplies them). The tracker stands at a random position 2-4 m from the robot's base origin
+with a uniformly random orientation, so the truth's base frame is tracker -> frame {0}.
+SMR 0 sits on the flange at a random offset (|xy| <= 50 mm, z 50-120 mm); extra SMRs are
+100-150 mm from SMR 0. Joints are uniform within the joint limits (optionally kept only where
+the SMR is inside ``workspace_box``, robot base frame, m).
+
+Noise, added to each point in the tracker frame:
+
+- ``isotropic``: N(0, noise_mm^2) on each axis;
+- ``tracker``: the instrument's own model, radial (range, ADM) sigma = 10 um + 0.5 um/m * r and
+  transverse (angle encoders) sigma = 2.5 urad * r on each of the two transverse axes
+  (r = distance from the tracker, m). ``noise_mm`` is ignored.
+
+A fraction ``outliers`` of the rows gets an extra gross error of uniform size ``outlier_mm`` in a
+random direction. The *noise floor* is the 3-D RMS (sqrt(mean |n|^2), mm) of the noise actually
+added, outliers excluded: the figure a perfect calibration's RMS residual would reach. It is in
+``SimulationResult.noise_floor_mm``, in the truth YAML's description and in the sidecar JSON
+that :func:`write_simulation` writes next to the truth (``truth.yaml`` -> ``truth.sim.json``).
+
+Kinds: ``point`` (n_smr SMRs per pose), ``pose`` (6-DOF probe; ``rotation_noise_deg`` per axis),
+``plane`` (a probe tip touching ``n_planes`` planes with random normals; the world frame is the
+robot base, only joints are recorded, with ``joint_noise_deg`` reading noise; plane coefficients
+go to the sidecar). ``joint_noise_deg`` adds reading noise to the recorded joints of every kind.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from robocal.data.measurements import Measurements
+from robocal.errors import DataError, UnreachableError
+from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
+
+TRACKER_RADIAL_MM = 0.010        # ADM range noise at zero distance (1 sigma)
+TRACKER_RADIAL_UM_PER_M = 0.5    # growth of the range noise with distance
+TRACKER_ANGULAR_URAD = 2.5       # angle-encoder noise (1 sigma, each transverse axis)
+NOISE_MODELS = ("isotropic", "tracker")
+SIM_KINDS = ("point", "pose", "plane")
+
+
+@dataclass(frozen=True, eq=False)
+class SimulationResult:
+    """``data``: the measurements; ``truth``: the true robot (tracker frame as base, SMR 0 as tool,
+    extra SMRs in ``truth.smr``); ``noise`` (N, 3) m the noise added to each point (zeros for
+    plane data); ``noise_floor_mm`` (see module docstring); ``outlier_rows`` row indices with a
+    gross error; ``true_joints`` (N, n) rad before joint reading noise; ``planes`` (P, 4) unit
+    normal and offset (n.p = c, m) of plane data (world = robot base), else None; ``info`` the
+    settings and seed."""
+
+    data: Measurements
+    truth: object
+    noise: np.ndarray
+    noise_floor_mm: float
+    outlier_rows: np.ndarray
+    true_joints: np.ndarray
+    planes: np.ndarray | None
+    info: dict
+
+
+def _random_rotation(rng: np.random.Generator, size: int | None = None) -> np.ndarray:
+    shape = (4,) if size is None else (size, 4)
+    q = rng.standard_normal(shape)
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    R = np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
+                  2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+                  2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=-1)
+    return R.reshape(q.shape[:-1] + (3, 3))
+
+
+def _unit(rng: np.random.Generator, n: int) -> np.ndarray:
+    v = rng.standard_normal((n, 3))
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def perturb_robot(robot, rng: np.random.Generator, scale: float = 1.0):
+    """The robot with random link-parameter errors of realistic size (see module docstring)."""
+    n = robot.n_joints
+
+    def draw(lo, hi):
+        return rng.uniform(lo, hi, n) * rng.choice([-1.0, 1.0], n) * scale
+
+    mm, deg = 1e-3, np.pi / 180
+    return replace(robot, alpha=robot.alpha + draw(0.005 * deg, 0.05 * deg),
+                   a=robot.a + draw(0.05 * mm, 0.5 * mm),
+                   beta=robot.beta + np.where(robot.parallel, draw(0.005 * deg, 0.05 * deg), 0.0),
+                   theta=robot.theta + draw(0.005 * deg, 0.05 * deg),
+                   d=robot.d + draw(0.05 * mm, 0.5 * mm))
+
+
+def sample_joints(robot, n: int, rng: np.random.Generator, workspace_box=None, tool=None) -> np.ndarray:
+    """``(n, dof)`` joints uniform in the limits; with ``workspace_box`` ((3,), (3,)) m in the
+    robot base frame, only poses whose tool point lies inside (batched rejection sampling)."""
+    lo, hi = robot.limits[:, 0], robot.limits[:, 1]
+    if workspace_box is None:
+        return rng.uniform(lo, hi, (n, robot.n_joints))
+    box = np.asarray(workspace_box, float)
+    if box.shape != (2, 3) or (box[0] >= box[1]).any():
+        raise DataError("workspace_box must be ((xmin, ymin, zmin), (xmax, ymax, zmax)) in m with min < max")
+    local = replace(robot, base=np.eye(4), tool=robot.tool if tool is None else tool)
+    kept = []
+    count = 0
+    for _ in range(200):
+        q = rng.uniform(lo, hi, (max(4 * n, 256), robot.n_joints))
+        p = local.fk(q)[:, :3, 3]
+        ok = ((p >= box[0]) & (p <= box[1])).all(axis=1)
+        kept.append(q[ok])
+        count += int(ok.sum())
+        if count >= n:
+            return np.concatenate(kept)[:n]
+    raise UnreachableError(f"only {count} of {n} poses found inside the workspace box {box.tolist()} m "
+                           "(robot base frame): enlarge the box or check its units")
+
+
+def _tracker_noise(p: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    r = np.linalg.norm(p, axis=1, keepdims=True)
+    u = p / r
+    helper = np.where(np.abs(u[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    e1 = np.cross(u, helper)
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    e2 = np.cross(u, e1)
+    z = rng.standard_normal((len(p), 3))
+    radial = (TRACKER_RADIAL_MM * 1e-3 + TRACKER_RADIAL_UM_PER_M * 1e-6 * r) * z[:, :1]
+    transverse = TRACKER_ANGULAR_URAD * 1e-6 * r
+    return radial * u + transverse * (z[:, 1:2] * e1 + z[:, 2:3] * e2)
+
+
+def _solve_plane_contacts(robot, q: np.ndarray, normal: np.ndarray, offset: np.ndarray,
+                          iterations: int = 30, damping: float = 1e-9):
+    """Move each pose's tip onto its plane (n . p = c) with damped Gauss-Newton on the joints
+    (minimum-norm step); the joint Jacobian is the theta_i column of the identification Jacobian."""
+    names = [f"theta{i + 1}" for i in range(robot.n_joints)]
+    for _ in range(iterations):
+        p = robot.fk(q)[:, :3, 3]
+        r = np.einsum("ni,ni->n", normal, p) - offset
+        if np.abs(r).max() < 1e-13:
+            break
+        g = np.einsum("ni,nij->nj", normal, robot.jacobian(q, names, kind="point"))
+        q = q - g * (r / (np.einsum("nj,nj->n", g, g) + damping))[:, None]
+    p = robot.fk(q)[:, :3, 3]
+    return q, np.einsum("ni,ni->n", normal, p) - offset
+
+
+def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model: str = "isotropic",
+                     outliers: float = 0.0, outlier_mm: tuple[float, float] = (1.0, 5.0), n_smr: int = 1,
+                     workspace_box=None, seed: int = 0, kind: str = "point", n_planes: int = 1,
+                     joint_noise_deg: float = 0.0, rotation_noise_deg: float = 0.0,
+                     error_scale: float = 1.0, tracker_distance_m: tuple[float, float] = (2.0, 4.0),
+                     ) -> SimulationResult:
+    """Simulate ``n_poses`` measured poses of a perturbed copy of ``robot`` (see module docstring).
+
+    Returns a :class:`SimulationResult`; the same arguments and seed give identical results.
+    """
+    if kind not in SIM_KINDS:
+        raise DataError(f"unknown simulation kind {kind!r}: use one of {', '.join(SIM_KINDS)}")
+    if noise_model not in NOISE_MODELS:
+        raise DataError(f"unknown noise model {noise_model!r}: use 'isotropic' or 'tracker'")
+    if int(n_poses) < 1 or int(n_smr) < 1 or int(n_planes) < 1:
+        raise DataError("n_poses, n_smr and n_planes must be >= 1")
+    if not 0.0 <= outliers < 1.0 or noise_mm < 0 or joint_noise_deg < 0 or rotation_noise_deg < 0:
+        raise DataError("outliers must be in [0, 1) and noise levels >= 0")
+    if kind != "point" and n_smr != 1:
+        raise DataError(f"{kind} simulation uses one tool point: set n_smr = 1")
+    rng = np.random.default_rng(seed)
+    n = robot.n_joints
+    true = perturb_robot(robot, rng, error_scale)
+    # SMR / probe offsets on the flange
+    tool0 = np.array([*rng.uniform(-0.05, 0.05, 2), rng.uniform(0.05, 0.12)])
+    extra = np.zeros((0, 3))
+    if n_smr > 1:
+        directions = _unit(rng, n_smr - 1)
+        extra = tool0 + directions * rng.uniform(0.10, 0.15, (n_smr - 1, 1))
+    tool_R = _random_rotation(rng) if kind == "pose" else robot.tool[:3, :3]
+    # the tracker frame: random position 2-4 m from the base origin, random orientation
+    if kind == "plane":
+        base = robot.base.copy()
+    else:
+        c = _unit(rng, 1)[0] * rng.uniform(*tracker_distance_m)
+        T_tracker = make_transform(_random_rotation(rng), c)
+        base = invert_transform(T_tracker) @ robot.base
+    tool = make_transform(tool_R, tool0)
+    true = replace(true, base=base, tool=tool, smr=extra, nominal=None)
+    true_nominal_links = robot.nominal[: 5 * n]
+    nominal_vec = true.values
+    nominal_vec[: 5 * n] = true_nominal_links
+    true = replace(true, nominal=nominal_vec)
+
+    n_poses = int(n_poses)
+    planes = None
+    if kind == "plane":
+        q, plane_idx, planes = _plane_poses(true, n_poses, int(n_planes), rng, workspace_box)
+    else:
+        q = sample_joints(true, n_poses, rng, workspace_box, tool=true.tool)
+    smr = np.tile(np.arange(n_smr), n_poses) if kind == "point" else np.zeros(n_poses, np.int64)
+    pose_id = np.repeat(np.arange(n_poses), n_smr if kind == "point" else 1)
+    q_rows = q[pose_id]
+    N = len(q_rows)
+    T = true.fk(q_rows, smr=smr)
+    p = T[:, :3, 3]
+    noise = np.zeros((N, 3))
+    outlier_rows = np.zeros(0, np.int64)
+    kw = {}
+    if kind in ("point", "pose"):
+        noise = (rng.standard_normal((N, 3)) * noise_mm * 1e-3 if noise_model == "isotropic"
+                 else _tracker_noise(p, rng))
+        n_out = int(round(outliers * N))
+        outlier_rows = np.sort(rng.choice(N, n_out, replace=False)) if n_out else outlier_rows
+        gross = np.zeros((N, 3))
+        gross[outlier_rows] = _unit(rng, n_out) * rng.uniform(*outlier_mm, (n_out, 1)) * 1e-3
+        kw["points"] = p + noise + gross
+        if kind == "pose":
+            dR = rotvec_to_matrix(rng.standard_normal((N, 3)) * np.deg2rad(rotation_noise_deg))
+            kw["rotations"] = dR @ T[:, :3, :3]
+    else:
+        kw["plane"] = plane_idx
+    joint_noise = rng.standard_normal(q_rows.shape) * np.deg2rad(joint_noise_deg)
+    clean = np.ones(N, bool)
+    clean[outlier_rows] = False
+    floor = float(np.sqrt(np.mean(np.sum(noise[clean] ** 2, axis=1)))) * 1e3 if clean.any() else 0.0
+    info = {"seed": int(seed), "kind": kind, "n_poses": n_poses, "n_smr": int(n_smr),
+            "noise_model": noise_model, "noise_mm": float(noise_mm), "outliers": float(outliers),
+            "outlier_mm": [float(v) for v in outlier_mm], "joint_noise_deg": float(joint_noise_deg),
+            "rotation_noise_deg": float(rotation_noise_deg), "error_scale": float(error_scale),
+            "noise_floor_mm": floor}
+    source = f"simulated by robocal: robot {robot.name}, seed {seed}, {kind}, noise floor {floor:.6g} mm"
+    data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id,
+                                    source_row=np.arange(2, N + 2), source=source, **kw)
+    truth = replace(true, name=f"{robot.name}_true",
+                    description=f"true robot of a robocal simulation (seed {seed}); noise floor "
+                                f"{floor:.6g} mm (3-D RMS of the added noise)")
+    return SimulationResult(data=data, truth=truth, noise=noise, noise_floor_mm=floor,
+                            outlier_rows=outlier_rows, true_joints=q_rows, planes=planes, info=info)
+
+
+def _plane_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, workspace_box):
+    """Joints putting the true tip on one of ``n_planes`` random planes through the workspace."""
+    normals = _unit(rng, n_planes)
+    q0 = sample_joints(true, 2048, rng, workspace_box, tool=true.tool)
+    centre = np.median(true.fk(q0)[:, :3, 3], axis=0)
+    offsets = normals @ centre + rng.uniform(-0.1, 0.1, n_planes)
+    plane_idx = np.arange(n_poses) % n_planes
+    chosen = np.zeros((n_poses, true.n_joints))
+    filled = np.zeros(n_poses, bool)
+    for _ in range(100):
+        todo = np.flatnonzero(~filled)
+        if todo.size == 0:
+            break
+        q = sample_joints(true, 4 * todo.size, rng, workspace_box, tool=true.tool)
+        k = plane_idx[np.resize(todo, len(q))]
+        dist = np.einsum("ni,ni->n", normals[k], true.fk(q)[:, :3, 3]) - offsets[k]
+        near = np.abs(dist) < 0.15
+        q, k = q[near], k[near]
+        q, res = _solve_plane_contacts(true, q, normals[k], offsets[k])
+        ok = (np.abs(res) < 1e-12) & true.within_limits(q)
+        for plane in range(n_planes):  # fill each plane's open slots (a loop over planes only)
+            slots = todo[plane_idx[todo] == plane]
+            cand = q[ok & (k == plane)][: slots.size]
+            chosen[slots[: len(cand)]] = cand
+            filled[slots[: len(cand)]] = True
+            todo = todo[~np.isin(todo, slots[: len(cand)])]
+    if not filled.all():
+        raise UnreachableError(f"could place only {int(filled.sum())} of {n_poses} plane contacts: "
+                               "use fewer poses or a larger workspace")
+    return chosen, plane_idx, np.column_stack([normals, offsets])
+
+
+def write_simulation(result: SimulationResult, data_path, truth_path) -> Path:
+    """Write the data CSV, the truth model YAML and the sidecar JSON (returned path), atomically."""
+    from robocal.kinematics.yaml_io import write_atomic
+
+    truth_path = Path(truth_path)
+    sidecar = truth_path.with_suffix(".sim.json")
+    side = dict(result.info)
+    side["outlier_rows"] = (result.outlier_rows + 2).tolist()  # file line numbers
+    side["planes"] = None if result.planes is None else [
+        {"normal": row[:3].tolist(), "offset_m": float(row[3])} for row in result.planes]
+    side["data"] = str(data_path)
+    side["truth"] = str(truth_path)
+    result.data.save(data_path)
+    result.truth.save(truth_path)
+    write_atomic(sidecar, json.dumps(side, indent=2) + "\n")
+    return sidecar

@@ -1,0 +1,90 @@
+"""How accurate is a model on measurements: position error statistics in mm."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from robocal.errors import DataError, ModelError
+from robocal.report.metrics import position_stats
+
+
+def load_model(spec: str):
+    """A robot from a model YAML path or a catalog name."""
+    from robocal.kinematics.model import Robot
+
+    path = Path(spec)
+    if path.suffix.lower() in (".yaml", ".yml") or path.exists():
+        return Robot.load(path)
+    if not hasattr(Robot, "from_catalog"):
+        raise ModelError(f"{spec!r} is not a model file and the robot catalog is not available: "
+                         "give a model YAML path")
+    return Robot.from_catalog(spec)
+
+
+def model_errors(robot, data) -> np.ndarray:
+    """Per-row errors of ``robot`` on ``data`` (m): point/pose ``(N, 3)`` measured - modelled;
+    plane ``(N,)`` signed distance of the modelled tip to the least-squares plane of its plane
+    index; distance ``(N,)`` modelled - measured distance (both rows of a pair carry it)."""
+    data.check_against(robot)
+    if data.n_smr > len(robot.smr) + 1:
+        raise DataError(f"the data use {data.n_smr} SMRs but the model has {len(robot.smr) + 1}: "
+                        "register the frame first (--fit-frame) or use a model with these SMRs")
+    p = robot.fk(data.joints, smr=data.smr)[:, :3, 3]
+    if data.kind in ("point", "pose"):
+        return data.points - p
+    if data.kind == "plane":
+        err = np.zeros(len(data))
+        for k in np.unique(data.plane):  # one least-squares plane per plane index
+            rows = data.plane == k
+            if rows.sum() < 3:
+                raise DataError(f"plane {k} has {int(rows.sum())} contact(s); a plane needs at least 3")
+            centred = p[rows] - p[rows].mean(axis=0)
+            normal = np.linalg.svd(centred, full_matrices=False)[2][-1]
+            err[rows] = centred @ normal
+        return err
+    order = np.argsort(data.pair, kind="stable")
+    ends = p[order].reshape(-1, 2, 3)
+    modelled = np.linalg.norm(ends[:, 0] - ends[:, 1], axis=1)
+    err = np.empty(len(data))
+    err[order] = np.repeat(modelled - data.distance[order][::2], 2)
+    return err
+
+
+def evaluate(robot, data, fit_frame: bool = False) -> dict:
+    """Position error statistics (mm) of ``robot`` against ``data``.
+
+    ``fit_frame`` first registers the base frame and SMR offsets (for a nominal model). Returns
+    ``{"n", "rms", "mean", "max", "p95"}`` plus ``"errors_mm"`` (N,) per-row error magnitudes
+    (plane/distance: signed), ``"error_vectors_mm"`` (N, 3) for point/pose data, ``"kind"``,
+    ``"n_poses"`` and, with ``fit_frame``, ``"robot"`` (the registered model) and
+    ``"registration_rms_mm"``.
+    """
+    out = {}
+    if fit_frame:
+        from robocal.data.registration import register, register_frame
+
+        reg = register_frame(robot, data)
+        robot = register(robot, data)
+        out["robot"] = robot
+        out["registration_rms_mm"] = reg.rms * 1e3
+    err = model_errors(robot, data)
+    stats = position_stats(err)
+    stats["kind"] = data.kind
+    stats["n_poses"] = data.n_poses
+    if err.ndim == 2:
+        stats["errors_mm"] = np.linalg.norm(err, axis=1) * 1e3
+        stats["error_vectors_mm"] = err * 1e3
+    else:
+        stats["errors_mm"] = err * 1e3
+    if data.kind == "pose":
+        from robocal.kinematics.transforms import matrix_to_rotvec
+
+        R = robot.fk(data.joints, smr=data.smr)[:, :3, :3]
+        ang = np.linalg.norm(matrix_to_rotvec(data.rotations @ np.swapaxes(R, 1, 2)), axis=1)
+        deg = np.rad2deg(ang)
+        stats["rotation_deg"] = {"rms": float(np.sqrt(np.mean(deg**2))), "mean": float(deg.mean()),
+                                 "max": float(deg.max()), "p95": float(np.percentile(deg, 95))}
+    stats.update(out)
+    return stats
