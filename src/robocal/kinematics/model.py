@@ -134,6 +134,35 @@ class Robot:
                    theta=np.asarray(ang(np.asarray(theta, float)), float),
                    d=np.asarray(d, float) * scale, **kwargs)
 
+    @classmethod
+    def from_dh(cls, theta_offsets: Sequence[float], d: Sequence[float], a: Sequence[float],
+                alpha: Sequence[float], *, degrees: bool = False, length_unit: str = "m",
+                **kwargs) -> Robot:
+        """Robot from a standard DH table, converted exactly (see
+        :func:`robocal.kinematics.convert.robot_from_dh`)."""
+        from robocal.kinematics.convert import robot_from_dh
+
+        return robot_from_dh(cls, theta_offsets, d, a, alpha, degrees=degrees,
+                             length_unit=length_unit, **kwargs)
+
+    @classmethod
+    def from_opw(cls, a1: float, a2: float, b: float, c1: float, c2: float, c3: float, c4: float,
+                 offsets: Sequence[float] = (0.0,) * 6, signs: Sequence[int] = (1,) * 6, *,
+                 degrees: bool = False, length_unit: str = "m", **kwargs) -> Robot:
+        """Robot from an OPW parameter set, converted exactly (see
+        :func:`robocal.kinematics.convert.robot_from_opw`)."""
+        from robocal.kinematics.convert import robot_from_opw
+
+        return robot_from_opw(cls, a1, a2, b, c1, c2, c3, c4, offsets, signs, degrees=degrees,
+                              length_unit=length_unit, **kwargs)
+
+    @classmethod
+    def from_catalog(cls, name: str) -> Robot:
+        """A catalog robot by name (``robocal robots`` lists them)."""
+        from robocal.kinematics.catalog import load_catalog_robot
+
+        return load_catalog_robot(name)
+
     # ----------------------------------------------------------------- parameter view
     @property
     def n_joints(self) -> int:

@@ -1,0 +1,223 @@
+"""Exact conversions of other kinematic conventions to modified DH + beta.
+
+Every convention here is first written as a product of constant transforms and joint rotations;
+from it we take the joint axes (lines in space, directed so that a positive joint value turns
+right-handedly) and the flange pose at zero joints. :func:`mdh_from_axes` then places the MDH
+frames on those axes (common normals; on parallel axes the foot of the previous common normal,
+so d = 0 there) and lets the base and tool frames absorb what the chain cannot express. This is
+exact by the product-of-exponentials argument: a joint turning about a line acts the same in
+every frame whose z axis is that line.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from robocal.errors import ModelError
+from robocal.kinematics.opw import OPWParameters
+
+_LENGTH_UNITS = {"m": 1.0, "mm": 1e-3}
+_PARALLEL_TOL = 1e-9  # |sin| of the angle between two axes below which they count as parallel
+_DIST_TOL = 1e-12  # m: axes closer than this intersect
+
+
+def _rot(axis: str, angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    i, j = {"x": (1, 2), "y": (2, 0), "z": (0, 1)}[axis]
+    T = np.eye(4)
+    T[i, i], T[i, j], T[j, i], T[j, j] = c, -s, s, c
+    return T
+
+
+def _trans(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 3] = (x, y, z)
+    return T
+
+
+def _joint(axis: str, sign: float) -> list:
+    """Chain elements of a joint turning by ``sign * q`` about the local ``axis``: constant
+    frames around the marker ``None`` (the marker stands for Rz(q))."""
+    pre, post = np.eye(4), np.eye(4)
+    if axis == "y":
+        pre, post = _rot("x", -np.pi / 2), _rot("x", np.pi / 2)
+    if sign < 0:
+        pre, post = pre @ _rot("x", np.pi), _rot("x", np.pi) @ post
+    return [pre, None, post]
+
+
+def _zero_pose(elements: list) -> tuple[np.ndarray, np.ndarray]:
+    """Joint frames ``(n, 4, 4)`` (z = positive joint axis) and flange pose at zero joints."""
+    T = np.eye(4)
+    frames = []
+    for el in elements:
+        if el is None:
+            frames.append(T.copy())
+        else:
+            T = T @ el
+    return np.array(frames), T
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
+
+
+def _perp(v: np.ndarray, z: np.ndarray) -> np.ndarray:
+    return v - (v @ z) * z
+
+
+def _frame(x: np.ndarray, z: np.ndarray, o: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = x, np.cross(z, x), z, o
+    return T
+
+
+def _snap(values: np.ndarray, grid: float, tol: float) -> np.ndarray:
+    """Round values within ``tol`` of a multiple of ``grid`` onto it (cleans 1e-17 residue)."""
+    k = np.round(values / grid)
+    return np.where(np.abs(values - k * grid) < tol, k * grid, values) + 0.0  # + 0.0: no -0.0
+
+
+def mdh_from_axes(joint_frames: np.ndarray, flange: np.ndarray) -> dict:
+    """MDH + beta parameters of the chain whose joint i turns about the z axis of
+    ``joint_frames[i]`` (world, zero joints), with flange pose ``flange`` at zero joints.
+
+    Returns ``alpha, a, beta, theta, d`` ``(n,)`` (m, rad), ``base``, ``tool`` (4x4) and
+    ``parallel`` ``(n,)`` so that ``base * T_1(q_1) ... T_n(q_n) * tool`` equals the chain.
+    """
+    u = joint_frames[:, :3, 2]
+    p = joint_frames[:, :3, 3]
+    n = len(u)
+    ez = np.array([0.0, 0.0, 1.0])
+    # frame {0}: the world frame when axis 1 is the world z line, else a frame on axis 1
+    if np.linalg.norm(np.cross(u[0], ez)) < _PARALLEL_TOL and np.linalg.norm(p[0, :2]) < _DIST_TOL:
+        F = [np.eye(4)]
+    else:
+        x0 = _perp(np.array([1.0, 0, 0]), u[0])
+        x0 = _unit(x0 if np.linalg.norm(x0) > 1e-6 else _perp(np.array([0, 1.0, 0]), u[0]))
+        F = [_frame(x0, u[0], p[0] - (p[0] @ u[0]) * u[0])]
+    for i in range(n):
+        prev = F[-1]
+        x_prev, o_prev = prev[:3, 0], prev[:3, 3]
+        # where the previous x axis meets axis i (the MDH intermediate origin, d_i = 0 there)
+        hit = o_prev + ((p[i] - o_prev) @ x_prev) * x_prev
+        z = u[i]
+        if i == n - 1:
+            o = p[i] + ((flange[:3, 3] - p[i]) @ z) * z
+            x = next(_unit(_perp(v, z)) for v in (flange[:3, 0], flange[:3, 1], x_prev)
+                      if np.linalg.norm(_perp(v, z)) > 1e-6)
+        else:
+            w = np.cross(z, u[i + 1])
+            if np.linalg.norm(w) < _PARALLEL_TOL:  # parallel: normal from the hit point
+                o = hit
+                v = _perp(p[i + 1] - o, z)
+                x = _unit(v) if np.linalg.norm(v) > _DIST_TOL else _unit(_perp(x_prev, z))
+            else:
+                r = p[i + 1] - p[i]
+                ww = w @ w
+                o = p[i] + (np.cross(r, u[i + 1]) @ w) / ww * z
+                foot = p[i + 1] + (np.cross(r, z) @ w) / ww * u[i + 1]
+                v = foot - o
+                x = _unit(v) if np.linalg.norm(v) > _DIST_TOL else _unit(w)
+            if x @ x_prev < -1e-9:  # prefer theta near 0: a may then be negative
+                x = -x
+        F.append(_frame(x, z, o))
+    alpha, a, theta, d = (np.zeros(n) for _ in range(4))
+    for i in range(n):
+        x0, z0, o0 = F[i][:3, 0], F[i][:3, 2], F[i][:3, 3]
+        x1, z1, o1 = F[i + 1][:3, 0], F[i + 1][:3, 2], F[i + 1][:3, 3]
+        alpha[i] = np.arctan2(np.cross(z0, z1) @ x0, z0 @ z1)
+        a[i] = (o1 - o0) @ x0
+        theta[i] = np.arctan2(np.cross(x0, x1) @ z1, x0 @ x1)
+        d[i] = (o1 - o0 - a[i] * x0) @ z1
+    alpha = _snap(alpha, np.pi / 2, 1e-13)
+    theta = _snap(theta, np.pi / 2, 1e-13)
+    a, d = _snap(a, 1.0, 1e-15), _snap(d, 1.0, 1e-15)
+    tool = np.linalg.solve(F[-1], flange)
+    tool[:3] = _snap(tool[:3], 1.0, 1e-15)
+    parallel = np.abs(np.sin(alpha)) < _PARALLEL_TOL
+    parallel[0] = False
+    return {"alpha": alpha, "a": a, "beta": np.zeros(n), "theta": theta, "d": d,
+            "base": F[0], "tool": tool, "parallel": parallel}
+
+
+def _table(values, n: int | None, what: str) -> np.ndarray:
+    arr = np.asarray(values, dtype=float).reshape(-1)
+    if n is not None and arr.size != n:
+        raise ModelError(f"{what} must have {n} values (one per joint), got {arr.size}")
+    if arr.size == 0:
+        raise ModelError(f"{what} is empty: a robot needs at least one joint")
+    if not np.isfinite(arr).all():
+        raise ModelError(f"{what} contains NaN or infinite values: {arr.tolist()}")
+    return arr
+
+
+def _length_scale(length_unit: str) -> float:
+    scale = _LENGTH_UNITS.get(length_unit)
+    if scale is None:
+        raise ModelError(f"unknown length unit {length_unit!r}: use 'm' or 'mm'")
+    return scale
+
+
+def _finish(cls, mdh: dict, degrees: bool, kw: dict):
+    """Build the Robot: user base/tool wrap the converted ones, limits converted from deg."""
+    base = mdh["base"] if kw.get("base") is None else np.asarray(kw["base"], float) @ mdh["base"]
+    tool = mdh["tool"] if kw.get("tool") is None else mdh["tool"] @ np.asarray(kw["tool"], float)
+    kw = {**kw, "base": base, "tool": tool}
+    kw.setdefault("parallel", mdh["parallel"])
+    if kw.get("limits") is not None:
+        limits = np.asarray(kw["limits"], dtype=float)
+        kw["limits"] = np.deg2rad(limits) if degrees else limits
+    return cls(alpha=mdh["alpha"], a=mdh["a"], beta=mdh["beta"], theta=mdh["theta"], d=mdh["d"],
+               **kw)
+
+
+def robot_from_dh(cls, theta_offsets: Sequence[float], d: Sequence[float], a: Sequence[float],
+                  alpha: Sequence[float], *, degrees: bool = False, length_unit: str = "m", **kw):
+    """Robot from a standard DH table (A_i = Rz(theta_i + q_i) Tz(d_i) Tx(a_i) Rx(alpha_i)).
+
+    The DH base frame is the world frame and the DH frame n is the flange; ``base`` / ``tool`` in
+    ``kw`` (4x4, m) are world -> DH base and DH flange -> TCP. ``limits`` ``(n, 2)`` are in degrees
+    when ``degrees``.
+    """
+    scale = _length_scale(length_unit)
+    ang = np.pi / 180.0 if degrees else 1.0
+    th = _table(theta_offsets, None, "DH theta offsets") * ang
+    n = th.size
+    dd = _table(d, n, "DH d") * scale
+    aa = _table(a, n, "DH a") * scale
+    al = _table(alpha, n, "DH alpha") * ang
+    elements = []
+    for i in range(n):
+        elements += [_rot("z", th[i]), None, _trans(z=dd[i]) @ _trans(x=aa[i]) @ _rot("x", al[i])]
+    return _finish(cls, mdh_from_axes(*_zero_pose(elements)), degrees, kw)
+
+
+def opw_elements(params: OPWParameters) -> list:
+    """The OPW arm as a chain: Rz(t1) T(a1, b, c1) Ry(t2) Tz(c2) Ry(t3) T(a2, 0, c3) Rz(t4) Ry(t5)
+    Rz(t6) Tz(c4) with t_i = sign_i q_i - offset_i."""
+    axes = ("z", "y", "y", "z", "y", "z")
+    after = (_trans(params.a1, params.b, params.c1), _trans(z=params.c2),
+             _trans(params.a2, 0.0, params.c3), np.eye(4), np.eye(4), _trans(z=params.c4))
+    elements = []
+    for axis, sign, offset, post in zip(axes, params.signs, params.offsets, after, strict=True):
+        elements += [_rot(axis, -offset), *_joint(axis, sign), post]
+    return elements
+
+
+def robot_from_opw(cls, a1: float, a2: float, b: float, c1: float, c2: float, c3: float, c4: float,
+                   offsets: Sequence[float] = (0.0,) * 6, signs: Sequence[int] = (1,) * 6, *,
+                   degrees: bool = False, length_unit: str = "m", **kw):
+    """Robot from an OPW parameter set (opw_kinematics convention, theta = q * sign - offset).
+
+    ``offsets`` (and ``limits``) are in degrees when ``degrees``; lengths in ``length_unit``.
+    The robot keeps the OPW form in SI as ``robot.opw`` for closed-form inverse kinematics.
+    """
+    scale = _length_scale(length_unit)
+    lengths = _table([a1, a2, b, c1, c2, c3, c4], 7, "OPW lengths (a1, a2, b, c1, c2, c3, c4)") * scale
+    off = _table(offsets, 6, "OPW offsets") * (np.pi / 180.0 if degrees else 1.0)
+    params = OPWParameters(*lengths, offsets=tuple(off), signs=tuple(_table(signs, 6, "OPW signs")))
+    kw.setdefault("opw", params.to_dict())
+    return _finish(cls, mdh_from_axes(*_zero_pose(opw_elements(params))), degrees, kw)

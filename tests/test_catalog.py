@@ -1,0 +1,124 @@
+"""The robot catalog against the OPW forward kinematics of its sets, other sources and py-opw."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_convert import dh_product
+
+from robocal import ModelError, Robot
+from robocal.cli import main
+from robocal.kinematics.catalog import catalog_descriptions, catalog_names
+from robocal.kinematics.opw import OPWParameters, opw_fk
+
+REQUIRED = ["abb_irb120", "abb_irb1600", "abb_irb2400", "abb_irb2600", "abb_irb4600", "kuka_kr6_r700",
+            "kuka_kr16_2", "fanuc_lrmate200id", "staubli_tx2_140", "puma560", "meca500", "ur5", "ur10"]
+OPW_ROBOTS = [n for n in REQUIRED if n not in ("meca500", "ur5", "ur10")]
+
+
+def random_joints(robot: Robot, rng, n: int = 200) -> np.ndarray:
+    return rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (n, robot.n_joints))
+
+
+def test_catalog_lists_required_robots():
+    assert set(REQUIRED) <= set(catalog_names())
+    for name, text in catalog_descriptions().items():
+        assert text and "\n" not in text, name
+
+
+@pytest.mark.parametrize("name", OPW_ROBOTS)
+def test_opw_entry_equals_opw_fk(name, rng):
+    robot = Robot.from_catalog(name)
+    q = random_joints(robot, rng)
+    np.testing.assert_allclose(robot.fk(q), opw_fk(OPWParameters.from_dict(robot.opw), q), rtol=0,
+                               atol=1e-12)
+    assert robot.parallel.tolist() == [False, False, True, False, False, False]
+
+
+@pytest.mark.parametrize("name", OPW_ROBOTS)
+def test_opw_entry_against_py_opw_kinematics(name, rng):
+    po = pytest.importorskip("py_opw_kinematics", reason="py-opw-kinematics (test extra) not installed")
+    robot = Robot.from_catalog(name)
+    p = robot.opw
+    model = po.KinematicModel(a1=p["a1"], a2=p["a2"], b=p["b"], c1=p["c1"], c2=p["c2"], c3=p["c3"],
+                              c4=p["c4"], offsets=tuple(p["offsets"]),
+                              flip_axes=tuple(s < 0 for s in p["signs"]))
+    q = random_joints(robot, rng)
+    theirs = po.Robot(model, degrees=False).batch_forward(q).as_matrix()
+    np.testing.assert_allclose(robot.fk(q), theirs, rtol=0, atol=1e-12)
+
+
+def test_known_poses_in_vendor_convention():
+    """Zero pose as the controllers show it: ABB upper arm up and forearm forward, KUKA whole arm
+    stretched forward (A2 = 0 is horizontal), Staubli straight up."""
+    flange = {n: Robot.from_catalog(n).fk(np.zeros(6))[0, :3, 3] for n in
+              ("abb_irb2400", "kuka_kr16_2", "staubli_tx2_140")}
+    expected = {"abb_irb2400": [0.100 + 0.755 + 0.085, 0, 0.615 + 0.705 + 0.135],
+                "kuka_kr16_2": [0.260 + 0.680 + 0.670 + 0.158, 0, 0.675 - 0.035],
+                "staubli_tx2_140": [0.150, 0, 0.550 + 0.625 + 0.625 + 0.110]}
+    for name, xyz in expected.items():
+        np.testing.assert_allclose(flange[name], xyz, atol=1e-12)
+    # KUKA A1 positive turns the arm clockwise seen from above (the vendor sign)
+    kuka = Robot.from_catalog("kuka_kr16_2").fk(np.radians([[30, 0, 0, 0, 0, 0]]))[0]
+    assert kuka[1, 3] < 0
+
+
+def test_ur_from_official_dh(rng):
+    """UR5/UR10 = the ur_kin.cpp DH product (flange = tool0 in the controller base); ur_kinematics'
+    forward() is Rz(pi) * that * the ee_link rotation."""
+    tables = {"ur5": ([0.089159, 0, 0, 0.10915, 0.09465, 0.0823], [0, -0.425, -0.39225, 0, 0, 0]),
+              "ur10": ([0.1273, 0, 0, 0.163941, 0.1157, 0.0922], [0, -0.612, -0.5723, 0, 0, 0])}
+    alpha = [np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0]
+    ee = np.array([[0, -1, 0, 0], [0, 0, -1, 0], [1, 0, 0, 0], [0, 0, 0, 1.0]])
+    for name, (d, a) in tables.items():
+        robot = Robot.from_catalog(name)
+        q = random_joints(robot, rng, 100)
+        T06 = dh_product(np.zeros(6), d, a, alpha, q)
+        np.testing.assert_allclose(robot.fk(q), T06, rtol=0, atol=1e-12)
+        ur_forward = np.diag([-1.0, -1, 1, 1]) @ T06 @ ee
+        np.testing.assert_allclose(np.diag([-1.0, -1, 1, 1]) @ robot.fk(q) @ ee, ur_forward, atol=1e-12)
+        assert robot.parallel.tolist() == [False, False, True, True, False, False]
+
+
+def test_puma560_opw_equals_robotics_toolbox_dh(rng):
+    robot = Robot.from_catalog("puma560")
+    q = random_joints(robot, rng)
+    rtb = dh_product(np.zeros(6), [0.67183, 0, 0.15005, 0.4318, 0, 0], [0, 0.4318, 0.0203, 0, 0, 0],
+                     [np.pi / 2, 0, -np.pi / 2, np.pi / 2, -np.pi / 2, 0], q)
+    np.testing.assert_allclose(robot.fk(q), rtb, rtol=0, atol=1e-12)
+
+
+def test_irb120_opw_equals_pybotics_mdh(rng):
+    robot = Robot.from_catalog("abb_irb120")
+    pyb = Robot.from_mdh([0, -90, 0, -90, 90, -90], [0, 0, 270, 70, 0, 0], [0, -90, 0, 0, 0, 180],
+                         [290, 0, 0, 302, 0, 72], degrees=True, length_unit="mm")
+    q = random_joints(robot, rng)
+    np.testing.assert_allclose(robot.fk(q), pyb.fk(q), rtol=0, atol=1e-12)
+
+
+def test_meca500_matches_dataset_mdh(rng):
+    robot = Robot.from_catalog("meca500")
+    assert robot.opw is None
+    np.testing.assert_allclose(np.rad2deg(robot.limits[1]), [-70, 90])
+    T = robot.fk(np.zeros(6))[0]
+    np.testing.assert_allclose(T[:3, 3], [0.120 + 0.070, 0, 0.135 + 0.135 + 0.038], atol=1e-15)
+
+
+def test_limits_are_vendor_values():
+    assert np.allclose(np.rad2deg(Robot.from_catalog("abb_irb2600").limits[2]), [-180, 75])
+    assert np.allclose(np.rad2deg(Robot.from_catalog("kuka_kr6_r700").limits[1]), [-190, 45])
+    for name in REQUIRED:
+        lim = Robot.from_catalog(name).limits
+        assert lim.shape == (6, 2) and (lim[:, 0] < 0).all() and (lim[:, 1] > 0).all(), name
+
+
+def test_unknown_name_lists_the_catalog():
+    with pytest.raises(ModelError, match="unknown robot 'irb9999'.*abb_irb120.*ur10"):
+        Robot.from_catalog("irb9999")
+
+
+def test_cli_robots_lists_names(capsys):
+    assert main(["robots"]) == 0
+    out = capsys.readouterr().out
+    for name in REQUIRED:
+        assert name in out
