@@ -1,0 +1,282 @@
+"""``rc.calibrate``: registration, identifiability, a solver, uncertainty and statistics.
+
+The pipeline: fit the tracker frame and SMR offsets to the nominal model (registration), pick
+the identifiable parameters (QR with pivoting), run the chosen method, then compute the
+covariance of the estimate and the before/after position statistics.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from robocal.errors import IdentificationError
+from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, analyze
+from robocal.identify.problem import CalibrationProblem, State, candidate_parameters
+from robocal.identify.solvers import SolverOutput, get_solver
+from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
+from robocal.kinematics.yaml_io import write_atomic
+from robocal.report.metrics import position_stats
+
+RESULT_FORMAT = "robocal-result/1"
+
+
+def _display(unit: str) -> tuple[str, float]:
+    return ("mm", 1e3) if unit == "m" else ("deg", 180.0 / np.pi)
+
+
+@dataclass
+class CalibrationResult:
+    """Everything a calibration found; ``to_dict()`` is the JSON of docs/result-json.md."""
+
+    robot: object
+    start: object
+    method: str
+    identifiability: Identifiability
+    names: list[str]
+    unknowns: list[str]
+    covariance: np.ndarray
+    solver: SolverOutput
+    before: dict
+    after: dict
+    problem: CalibrationProblem = field(repr=False)
+    validation_before: dict | None = None
+    validation: dict | None = None
+    validation_data: object = field(default=None, repr=False)
+    warnings: list[str] = field(default_factory=list)
+    settings: dict = field(default_factory=dict)
+
+    @property
+    def state(self) -> State:
+        return self.solver.state
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """1-sigma of every unknown (robot parameters then nuisance), SI units."""
+        return np.sqrt(np.maximum(np.diag(self.covariance), 0.0))
+
+    @property
+    def correlation(self) -> np.ndarray:
+        return correlation(self.covariance)
+
+    @property
+    def rejected(self) -> np.ndarray:
+        """Indices of the measurement items a robust method rejected (weight 0)."""
+        w = self.solver.item_weights
+        return np.zeros(0, int) if w is None else np.flatnonzero(w == 0)
+
+    def predict_position_sigma(self, q) -> np.ndarray:
+        """1-sigma ``(N, 3)`` (m) of the calibrated model's TCP position at joints ``q``."""
+        k = len(self.names)
+        cov = tcp_position_covariance(self.robot, self.robot.check_joints(q), self.names,
+                                      self.covariance[:k, :k])
+        return np.sqrt(np.maximum(np.diagonal(cov, axis1=1, axis2=2), 0.0))
+
+    def parameter_table(self) -> list[dict]:
+        """Every candidate parameter (and nuisance) with nominal, estimate, correction, sigma."""
+        robot, start = self.robot, self.start
+        sigma = dict(zip(self.unknowns, self.sigma, strict=True))
+        units = dict(zip(robot.parameter_names, robot.parameter_units(), strict=True))
+        values, nominal = robot.values, start.nominal
+        rows = []
+        dropped = set(self.identifiability.dropped)
+        for name in self.identifiability.names:
+            if name in units:
+                i = robot.indices([name])[0]
+                unit, f = _display(units[name])
+                nom, est = nominal[i] * f, values[i] * f
+            else:  # nuisance (e.g. plane coefficients): reported in its own unit
+                j = self.problem.nuisance_names.index(name)
+                unit, f = "", 1.0
+                nom, est = float(self.problem.observation.nuisance_start(start)[j]), \
+                    float(self.state.nuisance[j])
+            status = "dropped" if name in dropped else "estimated"
+            s = sigma.get(name)
+            rows.append({"name": name, "unit": unit, "nominal": float(nom), "estimate": float(est),
+                         "correction": float(est - nom),
+                         "sigma": None if s is None else float(s * f), "status": status})
+        return rows
+
+    def _observations(self, data, problem, start_state, final_state) -> dict:
+        obs = problem.observation
+        measured = getattr(obs, "measured", None)
+        measured = None if measured is None or measured.ndim != 2 else measured * 1e3
+        weights = self.solver.item_weights if data is self.problem.data else None
+        return {
+            "pose_id": data.pose_id.tolist(), "source_row": data.source_row.tolist(),
+            "smr": data.smr.tolist(), "joints_deg": np.rad2deg(data.joints).tolist(),
+            "measured": None if measured is None else measured.tolist(),
+            "model_before": (obs.modelled_points(start_state.robot, start_state.nuisance) * 1e3).tolist(),
+            "model_after": (obs.modelled_points(final_state.robot, final_state.nuisance) * 1e3).tolist(),
+            "weight": None if weights is None else weights.tolist(),
+        }
+
+    def to_dict(self) -> dict:
+        """The result as plain data (mm, deg), per docs/result-json.md."""
+        from robocal import __version__
+
+        ident = self.identifiability
+        k = len(self.unknowns)
+        errors = self.problem.position_errors(self.state)
+        out = {
+            "format": RESULT_FORMAT,
+            "robocal_version": __version__,
+            "robot": {"name": self.robot.name, "description": self.robot.description,
+                      "n_joints": self.robot.n_joints},
+            "data": {"file": self.problem.data.source, "kind": self.problem.kind,
+                     "n_poses": int(self.problem.data.n_poses),
+                     "n_observations": int(len(self.problem.data))},
+            "method": self.method,
+            "settings": self.settings,
+            "converged": self.solver.converged,
+            "message": self.solver.message,
+            "before": self.before,
+            "after": self.after,
+            "parameters": self.parameter_table(),
+            "dropped": [{"name": n, "reason": "not identifiable from these data",
+                         "confounded_with": ident.confounded_with[n]} for n in ident.dropped],
+            "identifiability": {key: v for key, v in ident.to_dict().items()
+                                if key not in ("kept", "dropped", "confounded_with")},
+            "correlation": {"names": self.unknowns,
+                            "matrix": np.round(self.correlation, 6).reshape(k, k).tolist()},
+            "rejected": [{"source_row": int(self.problem.data.source_row[i]),
+                          "pose_id": int(self.problem.data.pose_id[i]),
+                          "residual": float(errors[i] * 1e3), "weight": 0.0}
+                         for i in self.rejected],
+            "observations": self._observations(self.problem.data, self.problem,
+                                               self.problem.start(self.start), self.state),
+            "history": [{key: float(v) if isinstance(v, float | np.floating) else v
+                         for key, v in h.items()} for h in self.solver.history],
+            "warnings": self.warnings,
+        }
+        if self.validation is not None:
+            out["data"]["validation_file"] = self.validation_data.source
+            out["validation_before"] = self.validation_before
+            out["validation"] = self.validation
+            vproblem = CalibrationProblem(self.robot, self.validation_data)
+            out["validation_observations"] = self._observations(
+                self.validation_data, vproblem, vproblem.start(self.start),
+                vproblem.start(self.robot))
+        return out
+
+    def save_json(self, path) -> None:
+        write_atomic(path, json.dumps(self.to_dict(), indent=1, allow_nan=False))
+
+    def summary(self) -> str:
+        """A short human summary: before -> after, largest corrections, dropped parameters."""
+        b, a = self.before, self.after
+        lines = [f"{self.method}: {self.solver.message}",
+                 f"calibration set ({b['n']} obs): RMS {b['rms']:.4f} -> {a['rms']:.4f} mm, "
+                 f"max {b['max']:.4f} -> {a['max']:.4f} mm"]
+        if self.validation is not None:
+            vb, va = self.validation_before, self.validation
+            lines.append(f"validation set  ({va['n']} obs): RMS {vb['rms']:.4f} -> {va['rms']:.4f} mm, "
+                         f"max {vb['max']:.4f} -> {va['max']:.4f} mm")
+        links = [r for r in self.parameter_table()
+                 if r["status"] == "estimated" and "." not in r["name"]]
+        for unit in ("mm", "deg"):
+            top = sorted((r for r in links if r["unit"] == unit), key=lambda r: -abs(r["correction"]))[:3]
+            if top:
+                lines.append(f"largest corrections ({unit}): " + ", ".join(
+                    f"{r['name']} {r['correction']:+.4f} ± {r['sigma']:.4f}" for r in top))
+        if self.identifiability.dropped:
+            lines.append("not identifiable (fixed): " + ", ".join(
+                f"{n} (~{'/'.join(self.identifiability.confounded_with[n]) or 'no effect'})"
+                for n in self.identifiability.dropped))
+        if len(self.rejected):
+            lines.append(f"rejected observations: {len(self.rejected)}")
+        lines += [f"WARNING: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+
+def _start_model(robot, data, register_frames: bool):
+    if data.kind not in ("point", "pose") or not register_frames:
+        return robot
+    from robocal.data.registration import register
+
+    return register(robot, data)
+
+
+def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
+              register_frames: bool = True, rtol: float = DEFAULT_RTOL, seed: int = 0,
+              progress=None, **options) -> CalibrationResult:
+    """Calibrate ``robot`` (nominal model) against ``data`` (Measurements).
+
+    method: 'lsq' (default), 'robust', or another registered solver; params: 'auto' (the
+    default free set, unidentifiable ones dropped), 'all', or a list of names. ``validation``
+    (Measurements) is judged with the calibrated model. ``options`` go to the solver (e.g.
+    k0, k1, ridge for 'robust'). Raises IdentificationError when the data cannot support the
+    calibration.
+    """
+    data.check_against(robot)
+    if validation is not None:
+        validation.check_against(robot)
+    start = _start_model(robot, data, register_frames)
+    problem = CalibrationProblem(start, data)
+    candidates = candidate_parameters(start, problem.kind, params)
+    state0 = problem.start(start)
+    unknown_candidates = candidates + problem.nuisance_names
+    J0 = problem.jacobian(state0, candidates)
+    ident = analyze(J0, unknown_candidates, data.n_poses, rtol)
+    warnings = []
+    if ident.rank < max(1, len(unknown_candidates) // 2):
+        raise IdentificationError(
+            f"the pose set is degenerate: only {ident.rank} of {len(unknown_candidates)} parameters "
+            f"are identifiable from {data.n_poses} poses; measure poses spread over the workspace")
+    if J0.shape[0] <= ident.rank:
+        raise IdentificationError(
+            f"{J0.shape[0]} residuals cannot determine {ident.rank} identifiable parameters: "
+            "measure more poses")
+    names = [n for n in ident.kept if n in candidates]
+    if len(names) + len(problem.nuisance_names) != ident.rank:
+        lost = sorted(set(problem.nuisance_names) - set(ident.kept))
+        raise IdentificationError(f"the nuisance parameters {lost} are not identifiable: "
+                                  "each plane needs contacts spread over its surface")
+    solve = get_solver(method)
+    out = solve(problem, state0, names, seed=seed, progress=progress, **options)
+    if not out.converged:
+        warnings.append(out.message)
+    if ident.condition_class == "strong":
+        warnings.append(f"the normal matrix is strongly ill-conditioned (condition number "
+                        f"{ident.condition_number:.3g}): some parameters are poorly determined; "
+                        "see the correlation matrix")
+    final = out.state
+    row_w = None if out.item_weights is None else np.repeat(out.item_weights, problem.rows_per_item)
+    J = problem.jacobian(final, names)
+    r = problem.residuals(final)
+    if row_w is not None:
+        J, r = J * np.sqrt(row_w)[:, None], r * np.sqrt(row_w)
+    cov = covariance(J, r)
+    result = CalibrationResult(
+        robot=final.robot, start=start, method=method, identifiability=ident, names=names,
+        unknowns=names + problem.nuisance_names, covariance=cov, solver=out,
+        before=position_stats(problem.position_errors(state0)),
+        after=position_stats(problem.position_errors(final)), problem=problem,
+        warnings=warnings, settings={"params": params if isinstance(params, str) else list(params),
+                                     "seed": seed, "rtol": rtol, **_plain(options)})
+    if validation is not None:
+        vproblem = CalibrationProblem(start, validation)
+        result.validation_data = validation
+        result.validation_before = position_stats(vproblem.position_errors(vproblem.start(start)))
+        result.validation = position_stats(vproblem.position_errors(vproblem.start(final.robot)))
+    return result
+
+
+def _plain(options: dict) -> dict:
+    return {k: v for k, v in options.items() if isinstance(v, str | int | float | bool)}
+
+
+def load_result(path) -> dict:
+    """Read a result JSON written by :meth:`CalibrationResult.save_json`."""
+    from robocal.errors import DataError
+
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise DataError(f"cannot read result file {path}: {exc}") from None
+    if not isinstance(data, dict) or data.get("format") != RESULT_FORMAT:
+        raise DataError(f"{path} is not a robocal result JSON (format {RESULT_FORMAT})")
+    return data

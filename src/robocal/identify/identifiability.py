@@ -1,0 +1,131 @@
+"""Which parameters the data can identify (seed 003): column scaling, pivoted QR, rank.
+
+Columns are scaled to unit norm (lengths and angles on one scale), then QR with column
+pivoting orders them by independent information. A parameter whose pivot |R_jj| falls below
+``rtol * |R_00|`` is not identifiable from these data: it is fixed and reported with the
+parameters whose columns explain it (the confounders). Frame and nuisance parameters are
+selected first, so that of a confounded pair the link parameter is the one dropped (d1 rather
+than base.z). Condition number of the scaled normal matrix with the seed-003 classes, and the
+observability indices O1 (Borm & Menq) .. O4 over the identifiable set.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+
+DEFAULT_RTOL = 1e-7
+
+
+def condition_class(cond: float) -> str:
+    """Seed-003 classes of the normal matrix's condition number."""
+    if cond < 100:
+        return "weak"
+    if cond <= 1000:
+        return "moderate"
+    return "strong"
+
+
+@dataclass
+class Identifiability:
+    """Result of the analysis; ``kept`` and ``dropped`` are parameter names."""
+
+    names: list[str]
+    kept: list[str]
+    dropped: list[str]
+    confounded_with: dict[str, list[str]]
+    rank: int
+    condition_number: float
+    singular_values: np.ndarray = field(repr=False)
+    n_poses: int = 0
+
+    @property
+    def condition_class(self) -> str:
+        return condition_class(self.condition_number)
+
+    @property
+    def observability(self) -> dict[str, float]:
+        s = self.singular_values
+        if s.size == 0 or s[-1] <= 0:
+            return {"O1": 0.0, "O2": 0.0, "O3": 0.0, "O4": 0.0}
+        return {
+            "O1": float(np.exp(np.mean(np.log(s))) / np.sqrt(max(self.n_poses, 1))),
+            "O2": float(s[-1] / s[0]),
+            "O3": float(s[-1]),
+            "O4": float(s[-1] ** 2 / s[0]),
+        }
+
+    def to_dict(self) -> dict:
+        return {"n_params": len(self.names), "rank": self.rank,
+                "condition_number": self.condition_number,
+                "condition_class": self.condition_class, **self.observability,
+                "kept": self.kept, "dropped": self.dropped,
+                "confounded_with": self.confounded_with}
+
+    def summary(self) -> str:
+        o = self.observability
+        lines = [f"rank {self.rank} of {len(self.names)} parameters; condition number of the "
+                 f"scaled normal matrix {self.condition_number:.3g} ({self.condition_class})",
+                 "observability O1 {O1:.3g}  O2 {O2:.3g}  O3 {O3:.3g}  O4 {O4:.3g}".format(**o)]
+        for name in self.dropped:
+            conf = ", ".join(self.confounded_with[name]) or "nothing (no effect on these data)"
+            lines.append(f"  not identifiable: {name}  (confounded with {conf})")
+        return "\n".join(lines)
+
+
+def _is_frame(name: str) -> bool:
+    """Frame, SMR and nuisance parameter names all contain a dot (base.x, smr1.y, plane0.a)."""
+    return "." in name
+
+
+def _pivoted_rank(A: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Column indices of ``A`` (unit-scale columns) kept by pivoted QR, and an orthonormal
+    basis of their span."""
+    if A.shape[1] == 0:
+        return np.zeros(0, int), np.zeros((A.shape[0], 0))
+    Q, R, piv = scipy.linalg.qr(A, mode="economic", pivoting=True)
+    rank = int(np.sum(np.abs(np.diag(R)) > rtol))
+    return piv[:rank], Q[:, :rank]
+
+
+def analyze(J: np.ndarray, names: Sequence[str], n_poses: int,
+            rtol: float = DEFAULT_RTOL) -> Identifiability:
+    """Identifiability of ``names`` from the Jacobian ``J (M, k)`` (weighted rows).
+
+    Two stages: frame, SMR and nuisance columns first, then the link columns with the part
+    the kept frame columns explain removed — so of a confounded pair the link parameter is the
+    one fixed (d1 rather than base.z, theta6 rather than tool.x).
+    """
+    names = list(names)
+    norms = np.linalg.norm(J, axis=0)
+    zero = norms <= 1e-300
+    Js = J / np.where(zero, 1.0, norms)
+    frame = np.array([_is_frame(nm) and not z for nm, z in zip(names, zero, strict=True)], bool)
+    link = ~frame & ~zero
+    groups = [np.flatnonzero(frame), np.flatnonzero(link)]
+    kept_frame, Qf = _pivoted_rank(Js[:, groups[0]], rtol)
+    links = Js[:, groups[1]]
+    kept_link, _ = _pivoted_rank(links - Qf @ (Qf.T @ links), rtol)
+    kept_idx = np.sort(np.concatenate([groups[0][kept_frame], groups[1][kept_link]])).astype(int)
+    rank = kept_idx.size
+    drop_idx = sorted(set(range(len(names))) - set(kept_idx.tolist()))
+    confounded: dict[str, list[str]] = {}
+    if drop_idx:
+        coef, *_ = np.linalg.lstsq(Js[:, kept_idx], Js[:, drop_idx], rcond=None)
+        for c, j in enumerate(drop_idx):
+            weights = np.abs(coef[:, c])
+            if zero[j] or weights.max(initial=0) == 0:
+                confounded[names[j]] = []
+                continue
+            order = np.argsort(-weights)
+            confounded[names[j]] = [names[kept_idx[i]] for i in order
+                                    if weights[i] > 0.1 * weights[order[0]]][:4]
+    s = np.linalg.svd(Js[:, kept_idx], compute_uv=False) if rank else np.zeros(0)
+    cond = float((s[0] / s[-1]) ** 2) if rank and s[-1] > 0 else float("inf")
+    return Identifiability(names=names, kept=[names[j] for j in kept_idx],
+                           dropped=[names[j] for j in drop_idx],
+                           confounded_with=confounded, rank=rank, condition_number=cond,
+                           singular_values=s, n_poses=n_poses)

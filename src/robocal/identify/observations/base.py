@@ -1,0 +1,77 @@
+"""The interface every observation type implements (see ``point.py`` for the simplest)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from robocal.kinematics.fk import chain_frames
+
+
+class Observation:
+    """Residuals ``measured - modelled`` (unweighted, SI) and their Jacobian rows.
+
+    Subclasses set ``kind``, ``rows_per_item`` and implement :meth:`residuals`,
+    :meth:`jacobian` and :meth:`residuals_batch`. Items are the measurement rows; each gives
+    ``rows_per_item`` residuals. Observation types with nuisance parameters (plane
+    coefficients) list them in :attr:`nuisance_names` and solve for them with the robot.
+    """
+
+    kind = "abstract"
+    rows_per_item = 1
+    nuisance_names: list[str] = []
+
+    def __init__(self, data, robot) -> None:
+        self.data = data
+        self.q = robot.check_joints(data.joints)
+        self.smr = np.asarray(data.smr, dtype=int)
+        sigma = getattr(data, "sigma", None)
+        self.item_sigma = None if sigma is None else np.asarray(sigma, dtype=float)
+
+    @property
+    def n_items(self) -> int:
+        return self.q.shape[0]
+
+    def nuisance_start(self, robot) -> np.ndarray:
+        """Starting values of the nuisance parameters ``(m,)``."""
+        return np.zeros(len(self.nuisance_names))
+
+    def residual_scale(self, default_sigma: float = 1.0) -> np.ndarray:
+        """Per-residual standard deviation ``(N * rows_per_item,)`` used for weighting."""
+        sigma = np.full(self.n_items, default_sigma) if self.item_sigma is None else self.item_sigma
+        return np.repeat(sigma, self.rows_per_item)
+
+    def residuals(self, robot, nuisance: np.ndarray) -> np.ndarray:
+        """``(N * rows_per_item,)`` residuals."""
+        raise NotImplementedError
+
+    def jacobian(self, robot, names: Sequence[str], nuisance: np.ndarray) -> np.ndarray:
+        """``(N * rows_per_item, len(names) + len(nuisance))`` d(modelled)/d(parameters)."""
+        raise NotImplementedError
+
+    def residuals_batch(self, robot, names: Sequence[str], X: np.ndarray,
+                        nuisance: np.ndarray | None = None) -> np.ndarray:
+        """Residuals ``(P, N * rows_per_item)`` for P displacement vectors ``X (P, k)`` of
+        ``names`` around ``robot`` — one vectorised evaluation for a whole population."""
+        raise NotImplementedError
+
+    def modelled_points(self, robot, nuisance: np.ndarray) -> np.ndarray:
+        """``(N, 3)`` modelled positions (TCP / SMR / probe tip) in the world frame, m."""
+        return robot.fk(self.q, smr=self.smr)[:, :3, 3]
+
+    def position_errors(self, robot, nuisance: np.ndarray) -> np.ndarray:
+        """``(N,)`` position error of each item in m (what the statistics report)."""
+        r = self.residuals(robot, nuisance).reshape(self.n_items, self.rows_per_item)
+        return np.linalg.norm(r[:, :3], axis=1)
+
+    # shared by point-like observations ------------------------------------------------
+    def batch_tcp(self, robot, names, X) -> np.ndarray:
+        """TCP poses ``(P, N, 4, 4)`` of the displaced robots (each row with its SMR)."""
+        links, base, tool, smr = robot.displaced_arrays(names, X)
+        P = X.shape[0]
+        offsets = np.concatenate([tool[:, None, :3, 3], smr], axis=1)[:, self.smr]  # (P, N, 3)
+        tools = np.broadcast_to(tool[:, None], (P, self.n_items, 4, 4)).copy()
+        tools[..., :3, 3] = offsets
+        links = type(links)(*(v[:, None, :] for v in links))
+        return chain_frames(links, base[:, None], tools, self.q[None])

@@ -1,0 +1,114 @@
+"""Method ``robust`` (seed 003): ridge estimation with IGG3 equivalent weights, iterated.
+
+Each outer iteration fits the model with the current item weights and a ridge term on the
+(column-scaled) parameter errors, then recomputes the weights from the standardised
+residuals. The standardisation uses the median absolute deviation of the residual
+components; an item's statistic is its residual norm over (scale * sqrt(rows per item)).
+IGG3: weight 1 up to k0, (k0/|v|)((k1-|v|)/(k1-k0))^2 between k0 and k1, 0 beyond k1.
+
+Ridge parameter (in the scaled problem):
+- ``double-h`` (default): h1 = k s^2 / |x_LS|^2 (Hoerl-Kennard-Baldwin), then
+  h2 = k s^2 / |x(h1)|^2 from the ridge solution with h1;
+- ``gcv``: minimises generalised cross-validation over a log grid;
+- ``lcurve``: the corner (maximum curvature) of the L-curve over the same grid;
+- ``none``: IGG3 reweighting without ridge.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robocal.errors import IdentificationError
+from robocal.identify.linalg import ScaledSVD
+from robocal.identify.lsq import gauss_newton
+from robocal.identify.solvers import SolverOutput
+
+MAD_TO_SIGMA = 1.4826
+
+
+def igg3_weights(v: np.ndarray, k0: float = 1.5, k1: float = 3.0) -> np.ndarray:
+    """IGG3 equivalent weights of standardised residuals ``v``."""
+    if not 0 < k0 < k1:
+        raise IdentificationError(f"IGG3 needs 0 < k0 < k1, got k0={k0}, k1={k1}")
+    a = np.abs(v)
+    mid = (k0 / np.maximum(a, 1e-300)) * ((k1 - a) / (k1 - k0)) ** 2
+    return np.where(a <= k0, 1.0, np.where(a <= k1, mid, 0.0))
+
+
+def standardized(r: np.ndarray, rows: int) -> tuple[np.ndarray, float]:
+    """Per-item statistics ``(N,)`` and the robust residual scale (MAD) of residuals ``(M,)``."""
+    scale = MAD_TO_SIGMA * np.median(np.abs(r - np.median(r)))
+    scale = max(scale, 1e-15)
+    per_item = np.linalg.norm(r.reshape(-1, rows), axis=1)
+    return per_item / (scale * np.sqrt(rows)), scale
+
+
+def ridge_parameter(J: np.ndarray, r: np.ndarray, prior: np.ndarray, rule: str = "double-h") -> float:
+    """Ridge parameter (scaled units) for the linearised problem J x = r around ``prior``."""
+    if rule == "none":
+        return 0.0
+    svd = ScaledSVD.of(J)
+    m, k = J.shape
+    x_ls = svd.solve(r) + prior
+    res = r - J @ (x_ls - prior)
+    s2 = float(res @ res) / max(m - k, 1)
+    if rule == "double-h":
+        h1 = k * s2 / max(float(np.sum((x_ls * svd.scale) ** 2)), 1e-300)
+        x_h1 = svd.solve(r, damping=h1, prior=prior) + prior
+        return k * s2 / max(float(np.sum((x_h1 * svd.scale) ** 2)), 1e-300)
+    s = svd.s
+    grid = np.logspace(np.log10(s[-1] ** 2 * 1e-6 + 1e-300), np.log10(s[0] ** 2), 60)
+    beta = svd.U.T @ r
+    z = svd.Vt @ (prior * svd.scale)
+    res_norm, sol_norm, gcv = [], [], []
+    r_perp = float(r @ r - beta @ beta)
+    for h in grid:
+        f = s**2 / (s**2 + h)
+        c = (s * beta - h * z) / (s**2 + h)  # solution coefficients of the total, minus prior
+        total = c + z
+        res_norm.append(float(np.sum((beta - s * c) ** 2)) + r_perp)
+        sol_norm.append(float(np.sum(total**2)))
+        gcv.append(m * res_norm[-1] / (m - np.sum(f)) ** 2)
+    if rule == "gcv":
+        return float(grid[int(np.argmin(gcv))])
+    if rule == "lcurve":
+        x, y = np.log(np.maximum(res_norm, 1e-300)), np.log(np.maximum(sol_norm, 1e-300))
+        t = np.log(grid)
+        dx, dy = np.gradient(x, t), np.gradient(y, t)
+        ddx, ddy = np.gradient(dx, t), np.gradient(dy, t)
+        curvature = (dx * ddy - dy * ddx) / np.maximum((dx**2 + dy**2) ** 1.5, 1e-300)
+        return float(grid[int(np.argmax(curvature))])
+    raise IdentificationError(f"unknown ridge rule {rule!r}: double-h, gcv, lcurve or none")
+
+
+def solve(problem, start, names, *, k0: float = 1.5, k1: float = 3.0, ridge: str = "double-h",
+          max_outer: int = 30, progress=None, **_) -> SolverOutput:
+    """Robust ridge estimation from ``start`` on ``names`` (plus nuisance)."""
+    rows = problem.rows_per_item
+    item_w = np.ones(problem.observation.n_items)
+    state, total = start, None
+    history, converged = [], False
+    for outer in range(1, max_outer + 1):
+        row_w = np.repeat(item_w, rows)
+        sw = np.sqrt(row_w)
+        J = problem.jacobian(state, names) * sw[:, None]
+        r = problem.residuals(state) * sw
+        prior = np.zeros(J.shape[1]) if total is None else total
+        h = ridge_parameter(J, r, prior, ridge)
+        state, _, _, _, total = gauss_newton(problem, state, names, row_weights=row_w,
+                                             ridge=h, prior=prior)
+        v, scale = standardized(problem.residuals(state), rows)
+        new_w = igg3_weights(v, k0, k1)
+        change = float(np.max(np.abs(new_w - item_w)))
+        item_w = new_w
+        history.append({"iteration": outer, "ridge": h, "scale": scale,
+                        "rejected": int(np.sum(item_w == 0)), "weight_change": change})
+        if progress is not None:
+            progress(outer, scale)
+        if change < 1e-4:
+            converged = True
+            break
+    message = (f"IGG3 weights converged in {len(history)} iterations" if converged
+               else f"IGG3 weights still changing after {max_outer} iterations")
+    return SolverOutput(state=state, converged=converged, message=message, history=history,
+                        item_weights=item_w)

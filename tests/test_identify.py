@@ -1,0 +1,175 @@
+"""Identification on simulated truth: lsq, robust ridge + IGG3, identifiability, uncertainty."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from robocal import DataError, IdentificationError, Robot
+from robocal.calibration import calibrate
+from robocal.data.measurements import Measurements
+from robocal.data.simulate import simulate_tracker
+from robocal.identify.identifiability import analyze, condition_class
+from robocal.identify.robust import igg3_weights
+
+PI = np.pi
+
+
+def irb2600() -> Robot:
+    """ABB IRB 2600 in MDH (same geometry as the catalog entry), J2 || J3."""
+    return Robot.from_mdh(alpha=[0, -PI / 2, 0, -PI / 2, PI / 2, -PI / 2], a=[0, 0.15, 0.7, 0.115, 0, 0],
+                          theta=[0, -PI / 2, 0, 0, 0, PI], d=[0.445, 0, 0, 0.795, 0, 0.085],
+                          limits=np.deg2rad([[-180, 180], [-95, 155], [-180, 75], [-400, 400],
+                                             [-120, 120], [-400, 400]]), name="irb2600-test")
+
+
+def campaign(n_cal=100, n_val=200, seed=0, **kw):
+    """Calibration set, outlier-free validation set (same truth) and its noise floor (mm)."""
+    sim = simulate_tracker(irb2600(), n_cal + n_val, seed=seed, **kw)
+    clean = ~np.isin(np.arange(len(sim.data)), sim.outlier_rows)
+    cal = sim.data.subset(np.flatnonzero(sim.data.pose_id < n_cal))
+    is_val = (sim.data.pose_id >= n_cal) & clean
+    val = sim.data.subset(np.flatnonzero(is_val))
+    val_noise = sim.noise[is_val]
+    floor = float(np.sqrt(np.mean(np.sum(val_noise**2, axis=1)))) * 1e3
+    return sim, cal, val, floor
+
+
+def test_noise_free_data_recover_the_truth():
+    sim, cal, val, _ = campaign(60, 50, seed=3, noise_mm=0.0)
+    res = calibrate(irb2600(), cal, validation=val)
+    assert res.solver.converged
+    assert res.validation["rms"] < 1e-6  # mm
+    assert res.validation_before["rms"] > 0.1
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_lsq_reaches_the_noise_floor(seed):
+    _, cal, val, floor = campaign(seed=seed)
+    res = calibrate(irb2600(), cal, validation=val)
+    assert res.validation["rms"] < 1.10 * floor
+    assert res.before["rms"] > 10 * res.after["rms"]
+
+
+def test_identifiability_finds_the_textbook_redundancies():
+    _, cal, _, _ = campaign(seed=4)
+    res = calibrate(irb2600(), cal)
+    assert set(res.identifiability.dropped) == {"alpha1", "a1", "theta1", "d1", "d2", "theta6", "d6"}
+    assert res.identifiability.confounded_with["d2"] == ["d3"]
+    assert res.identifiability.confounded_with["d6"] == ["tool.z"]
+    assert res.identifiability.rank == 27
+    for key in ("O1", "O2", "O3", "O4"):
+        assert res.identifiability.observability[key] > 0
+
+
+def test_robust_rejects_gross_outliers():
+    sim, cal, val, floor = campaign(seed=5, outliers=0.05)
+    robust = calibrate(irb2600(), cal, method="robust", validation=val)
+    lsq = calibrate(irb2600(), cal, validation=val)
+    assert robust.validation["rms"] < 1.2 * floor
+    assert lsq.validation["rms"] > robust.validation["rms"]
+    outlier_items = set(np.flatnonzero(np.isin(cal.source_row, sim.data.source_row[sim.outlier_rows])))
+    assert outlier_items <= set(robust.rejected.tolist())
+    assert len(robust.rejected) <= len(outlier_items) + 3
+
+
+@pytest.mark.parametrize("rule", ["gcv", "lcurve", "none"])
+def test_robust_ridge_rules(rule):
+    _, cal, val, floor = campaign(seed=6, outliers=0.05)
+    res = calibrate(irb2600(), cal, method="robust", validation=val, ridge=rule)
+    assert res.validation["rms"] < 1.3 * floor
+
+
+def test_igg3_weight_function():
+    w = igg3_weights(np.array([0.0, 1.5, 2.0, 3.0, 3.1, -2.0]), 1.5, 3.0)
+    assert w[0] == 1 and w[1] == 1 and w[3] == 0 and w[4] == 0
+    assert w[2] == pytest.approx((1.5 / 2.0) * ((3 - 2.0) / 1.5) ** 2)
+    assert w[5] == w[2]
+    with pytest.raises(IdentificationError):
+        igg3_weights(np.zeros(2), 3.0, 1.5)
+
+
+def test_several_smrs_and_pose_data():
+    sim = simulate_tracker(irb2600(), 80, seed=7, n_smr=3)
+    res = calibrate(irb2600(), sim.data)
+    assert res.after["rms"] < 1.15 * sim.noise_floor_mm
+    assert {"smr1.x", "smr2.z"} <= set(res.names)
+    sim = simulate_tracker(irb2600(), 60, seed=8, kind="pose", rotation_noise_deg=0.001)
+    res = calibrate(irb2600(), sim.data)
+    assert res.after["rms"] < 1.2 * sim.noise_floor_mm
+    assert "tool.rz" in res.names + res.identifiability.dropped
+
+
+def test_predicted_sigma_matches_monte_carlo_spread():
+    """Repeat calibrate on fresh noise: the predicted 1-sigma match the observed spread.
+
+    Link and tool parameters are compared directly; base.* are increments of a multiplicative
+    chart about the tracker origin, whose absolute values are not component-wise comparable.
+    """
+    sim = simulate_tracker(irb2600(), 60, seed=9, noise_mm=0.0)
+    truth, q = sim.truth, sim.data.joints
+    exact = truth.fk(q)[:, :3, 3]
+    rng = np.random.default_rng(10)
+    estimates, predicted = [], []
+    for _ in range(100):
+        noisy = Measurements.from_arrays("point", q, points=exact + rng.normal(0, 2e-5, exact.shape))
+        res = calibrate(irb2600(), noisy)
+        names = [n for n in res.names if not n.startswith("base.")]
+        estimates.append(res.robot.values[res.robot.indices(names)])
+        predicted.append(res.sigma[[res.unknowns.index(n) for n in names]])
+    ratio = np.std(estimates, axis=0, ddof=1) / np.mean(predicted, axis=0)
+    assert np.all(np.abs(ratio - 1) < 0.25), dict(zip(names, np.round(ratio, 3), strict=True))
+
+
+def test_predicted_tcp_sigma_shape_and_scale():
+    _, cal, val, floor = campaign(seed=11)
+    res = calibrate(irb2600(), cal)
+    s = res.predict_position_sigma(val.joints[:5])
+    assert s.shape == (5, 3)
+    assert np.all(s > 0) and np.all(s * 1e3 < floor)
+
+
+def test_result_json_and_summary(tmp_path):
+    _, cal, val, _ = campaign(seed=12, outliers=0.03)
+    res = calibrate(irb2600(), cal, method="robust", validation=val)
+    path = tmp_path / "r.json"
+    res.save_json(path)
+    d = json.loads(path.read_text())
+    for key in ("before", "after", "validation", "validation_before"):
+        assert set(d[key]) == {"n", "rms", "mean", "max", "p95"}
+    assert d["identifiability"]["condition_class"] in ("weak", "moderate", "strong")
+    names = [p["name"] for p in d["parameters"]]
+    assert "a2" in names and d["parameters"][names.index("d2")]["status"] == "dropped"
+    assert len(d["observations"]["measured"]) == len(cal)
+    assert d["rejected"] and all(r["weight"] == 0 for r in d["rejected"])
+    assert "->" in res.summary()
+
+
+def test_condition_classes():
+    assert condition_class(50) == "weak"
+    assert condition_class(500) == "moderate"
+    assert condition_class(5000) == "strong"
+
+
+def test_bad_input():
+    sim = simulate_tracker(irb2600(), 30, seed=13)
+    with pytest.raises(IdentificationError, match="more poses"):
+        calibrate(irb2600(), sim.data.subset(np.arange(8)))
+    same = Measurements.from_arrays("point", np.repeat(sim.data.joints[:1], 40, axis=0),
+                                    points=np.repeat(sim.data.points[:1], 40, axis=0))
+    with pytest.raises(IdentificationError, match="degenerate"):
+        calibrate(irb2600(), same)
+    five = Robot.from_mdh(alpha=[0] * 5, a=[0.1] * 5, theta=[0] * 5, d=[0] * 5)
+    with pytest.raises(DataError):
+        calibrate(five, sim.data)
+    with pytest.raises(IdentificationError, match="unknown method"):
+        calibrate(irb2600(), sim.data, method="magic")
+
+
+def test_analyze_on_its_own_zero_column():
+    J = np.random.default_rng(0).normal(size=(30, 3))
+    J[:, 2] = 0
+    ident = analyze(J, ["a1", "a2", "a3"], 10)
+    assert ident.dropped == ["a3"] and ident.confounded_with["a3"] == []
