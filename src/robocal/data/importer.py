@@ -285,7 +285,8 @@ def import_tracker(raw=(), *, joints: str | ColumnSpec, points, base=(), average
         pose_id = np.unique(pose_id, return_inverse=True)[1]
     else:
         order = np.arange(len(q))
-    files_text = ", ".join(Path(f).name for f, _ in files)
+    names = [f for f, _ in files] + ([p.file for p in pspecs] if separate else [])
+    files_text = ", ".join(Path(f).name for f in names)
     data = Measurements.from_arrays("point", q[order], points=np.concatenate(out_p)[order], smr=smr[order],
                                     pose_id=pose_id[order], source_row=np.concatenate(out_row)[order],
                                     source=f"imported by robocal from {files_text}")
