@@ -13,7 +13,7 @@ Values are split on commas, semicolons or whitespace; blank lines and ``#`` line
 row) are dropped and reported with file and line. Consecutive rows of one file with identical
 joints are repeated readings of one pose: averaged (their spread reported: max and RMS deviation
 from the mean), or kept with a shared ``pose_id`` (``average=False``). ``source_row`` is the line
-(1-based) in the file that held the joints (for an averaged group, its first reading). Optional
+(1-based) in the file that held the joints (for an averaged group, its first valid reading). Optional
 ``base`` specs name drift-monitor SMR files (fixed SMRs on the robot base re-measured at every
 pose): their drift from the median position is reported, the data are not changed.
 """
