@@ -22,8 +22,8 @@ def test_combined_files_average_repeats_and_drop_failed(tmp_path, rng):
     p = rng.uniform(-1, 1, (4, 3))
     noise = rng.normal(scale=1e-6, size=(12, 3))
     rows = np.hstack([np.repeat(q, 3, 0), np.repeat(p, 3, 0) + noise, np.zeros((12, 3))])
-    rows[4, 6:9] = 0.0        # failed reading (zeros) of pose 1, line 5
-    rows[9, 7] = np.nan       # NaN of pose 3, line 10
+    rows[4, 6:9] = 0.0  # failed reading (zeros) of pose 1, line 5
+    rows[9, 7] = np.nan  # NaN of pose 3, line 10
     f1 = _write(tmp_path / "a.csv", rows)
     f2 = _write(tmp_path / "b.txt", rows[:3], sep=" ")
     res = import_tracker([f1, f2], joints="cols=0-5:deg", points="cols=6-8:m")
@@ -65,13 +65,16 @@ def test_separate_smr_files_in_mm(tmp_path, rng):
     assert res.drift[0]["max_mm"] == pytest.approx(0.03, abs=1e-9) and res.drift[0]["dropped"] == 1
 
 
-@pytest.mark.parametrize(("kwargs", "error", "match"), [
-    ({"joints": "cols=0-5", "points": "cols=6-8:m"}, UnitError, "state the unit"),
-    ({"joints": "cols=0-5:mm", "points": "cols=6-8:m"}, UnitError, "not a joints unit"),
-    ({"joints": "cols=0-5:deg", "points": "cols=6-7:m"}, DataError, "exactly 3"),
-    ({"joints": "cols=0-5:deg", "points": "cols=6-9x:m"}, DataError, "columns must be"),
-    ({"joints": "cols=0-5:deg", "points": "cols=20-22:m"}, DataError, "only 12 columns"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"joints": "cols=0-5", "points": "cols=6-8:m"}, UnitError, "state the unit"),
+        ({"joints": "cols=0-5:mm", "points": "cols=6-8:m"}, UnitError, "not a joints unit"),
+        ({"joints": "cols=0-5:deg", "points": "cols=6-7:m"}, DataError, "exactly 3"),
+        ({"joints": "cols=0-5:deg", "points": "cols=6-9x:m"}, DataError, "columns must be"),
+        ({"joints": "cols=0-5:deg", "points": "cols=20-22:m"}, DataError, "only 12 columns"),
+    ],
+)
 def test_bad_specs(tmp_path, rng, kwargs, error, match):
     f = _write(tmp_path / "a.csv", rng.normal(size=(3, 12)))
     with pytest.raises(error, match=match):
@@ -94,7 +97,10 @@ def test_cli_imports_real_data_sets(tmp_path, capsys):
     for part, poses in (("cal", 490), ("val", 70)):
         files = sorted(str(p) for p in meca.glob(f"{part}_data__*_Output.csv"))
         out = tmp_path / f"meca_{part}.csv"
-        assert main(["import", *files, "--joints", "cols=0-5:deg", "--points", "cols=6-8:m", "-o", str(out)]) == 0
+        assert (
+            main(["import", *files, "--joints", "cols=0-5:deg", "--points", "cols=6-8:m", "-o", str(out)])
+            == 0
+        )
         d = Measurements.load(out)
         assert d.n_poses == poses and len(d) == poses
     irb = ds / "irb120-faro"

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -12,14 +14,28 @@ from robocal.data import Measurements
 from robocal.data.measurements import parse_csv
 from robocal.kinematics.transforms import rotvec_to_matrix
 
-MECA = Robot.from_mdh([0, -90, 0, -90, 90, -90], [0, 0, 135, 38, 0, 0], [0, -90, 0, 0, 0, 180],
-                      [135, 0, 0, 120, 0, 70], degrees=True, length_unit="mm", name="meca500")
+MECA = Robot.from_mdh(
+    [0, -90, 0, -90, 90, -90],
+    [0, 0, 135, 38, 0, 0],
+    [0, -90, 0, 0, 0, 180],
+    [135, 0, 0, 120, 0, 70],
+    degrees=True,
+    length_unit="mm",
+    name="meca500",
+)
 
 
 def _point_data(rng, N=12, sigma=True):
-    return Measurements.from_arrays("point", rng.uniform(-3, 3, (N, 6)), points=rng.uniform(-2, 2, (N, 3)),
-                                    smr=rng.integers(0, 3, N), sigma=rng.uniform(1e-6, 1e-4, N) if sigma else None,
-                                    pose_id=np.arange(N) // 2, source_row=np.arange(N) + 5, source="test set")
+    return Measurements.from_arrays(
+        "point",
+        rng.uniform(-3, 3, (N, 6)),
+        points=rng.uniform(-2, 2, (N, 3)),
+        smr=rng.integers(0, 3, N),
+        sigma=rng.uniform(1e-6, 1e-4, N) if sigma else None,
+        pose_id=np.arange(N) // 2,
+        source_row=np.arange(N) + 5,
+        source="test set",
+    )
 
 
 def _same(a: Measurements, b: Measurements, rot_tol=0.0):
@@ -42,18 +58,27 @@ def test_point_round_trip_is_exact(tmp_path, rng):
 def test_pose_plane_distance_round_trips(tmp_path, rng):
     N = 8
     q = rng.uniform(-2, 2, (N, 6))
-    pose = Measurements.from_arrays("pose", q, points=rng.normal(size=(N, 3)),
-                                    rotations=rotvec_to_matrix(rng.uniform(-3, 3, (N, 3))))
+    pose = Measurements.from_arrays(
+        "pose", q, points=rng.normal(size=(N, 3)), rotations=rotvec_to_matrix(rng.uniform(-3, 3, (N, 3)))
+    )
     plane = Measurements.from_arrays("plane", q, plane=np.arange(N) % 3)
-    dist = Measurements.from_arrays("distance", q, pair=np.repeat(np.arange(N // 2), 2),
-                                    distance=np.repeat(rng.uniform(0.1, 1, N // 2), 2), smr=np.tile([0, 1], N // 2))
+    dist = Measurements.from_arrays(
+        "distance",
+        q,
+        pair=np.repeat(np.arange(N // 2), 2),
+        distance=np.repeat(rng.uniform(0.1, 1, N // 2), 2),
+        smr=np.tile([0, 1], N // 2),
+    )
     for k, d in enumerate((pose, plane, dist)):
         d.save(tmp_path / f"{k}.csv")
         _same(d, Measurements.load(tmp_path / f"{k}.csv"), rot_tol=1e-15)
 
 
 def test_reads_mm_deg_columns_and_comment(tmp_path):
-    text = "# from the tracker\nq1_deg,q2_deg,x_mm,y_mm,z_mm,sigma_mm\n90,-45,1000,2000,-500,0.01\n\n0,0,1,2,3,0.02\n"
+    text = (
+        "# from the tracker\nq1_deg,q2_deg,x_mm,y_mm,z_mm,sigma_mm\n"
+        "90,-45,1000,2000,-500,0.01\n\n0,0,1,2,3,0.02\n"
+    )
     (tmp_path / "a.csv").write_text(text)
     d = Measurements.load(tmp_path / "a.csv")
     np.testing.assert_allclose(d.joints, [[np.pi / 2, -np.pi / 4], [0, 0]])
@@ -98,7 +123,9 @@ def test_from_arrays_validation(rng):
 
 
 def test_check_against_robot(tmp_path):
-    (tmp_path / "five.csv").write_text("q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,x_mm,y_mm,z_mm\n" + "0,0,0,0,0,1,2,3\n")
+    (tmp_path / "five.csv").write_text(
+        "q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,x_mm,y_mm,z_mm\n" + "0,0,0,0,0,1,2,3\n"
+    )
     with pytest.raises(DataError, match=r"5 joint columns but meca500 has 6.*five\.csv|five\.csv.*5 joint"):
         Measurements.load(tmp_path / "five.csv", robot=MECA)
     # 2000-m spread for a 0.5 m robot: the values are millimetres labelled metres
@@ -157,24 +184,59 @@ def test_unreadable_files(tmp_path):
         Measurements.load(tmp_path / "bin.csv")
 
 
-_TOKENS = st.sampled_from(["q1_deg", "q2_rad", "x_mm", "y_mm", "z_mm", "x_m", "smr", "plane", "pair",
-                           "distance_mm", "qw", "qx", "qy", "qz", "sigma_mm", "pose_id", "source_row", "1",
-                           "-0.5", "nan", "inf", "1e400", "abc", "", " ", "0", "3", "1e30", "#", "\"", "q7_deg",
-                           "q1_cm", "9999999999999999999999"])
+_TOKENS = st.sampled_from(
+    [
+        "q1_deg",
+        "q2_rad",
+        "x_mm",
+        "y_mm",
+        "z_mm",
+        "x_m",
+        "smr",
+        "plane",
+        "pair",
+        "distance_mm",
+        "qw",
+        "qx",
+        "qy",
+        "qz",
+        "sigma_mm",
+        "pose_id",
+        "source_row",
+        "1",
+        "-0.5",
+        "nan",
+        "inf",
+        "1e400",
+        "abc",
+        "",
+        " ",
+        "0",
+        "3",
+        "1e30",
+        "#",
+        '"',
+        "q7_deg",
+        "q1_cm",
+        "9999999999999999999999",
+    ]
+)
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(st.one_of(
-    st.text(max_size=200),
-    st.lists(st.lists(_TOKENS, min_size=1, max_size=8).map(",".join), min_size=0, max_size=6).map("\n".join),
-))
+@given(
+    st.one_of(
+        st.text(max_size=200),
+        st.lists(st.lists(_TOKENS, min_size=1, max_size=8).map(",".join), min_size=0, max_size=6).map(
+            "\n".join
+        ),
+    )
+)
 def test_fuzz_reader_raises_only_robocal_errors(text):
     try:
         data = parse_csv(text, "fuzz.csv")
     except RobocalError:
         return
     assert len(data) >= 1 and np.isfinite(data.joints).all()
-    try:
+    with contextlib.suppress(RobocalError):
         data.check_against(MECA)
-    except RobocalError:
-        pass
