@@ -14,11 +14,13 @@ from pathlib import Path
 import numpy as np
 
 from robocal.errors import IdentificationError
-from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, analyze
+from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability
+from robocal.identify.identifiability import analyze as analyze_jacobian
 from robocal.identify.problem import CalibrationProblem, State, candidate_parameters
 from robocal.identify.solvers import SolverOutput, get_solver
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
 from robocal.kinematics.yaml_io import write_atomic
+from robocal.progress import Progress
 from robocal.report.metrics import position_stats
 
 RESULT_FORMAT = "robocal-result/1"
@@ -48,6 +50,7 @@ class CalibrationResult:
     validation_data: object = field(default=None, repr=False)
     warnings: list[str] = field(default_factory=list)
     settings: dict = field(default_factory=dict)
+    nongeometric: dict | None = None
 
     @property
     def state(self) -> State:
@@ -152,6 +155,8 @@ class CalibrationResult:
                          for key, v in h.items()} for h in self.solver.history],
             "warnings": self.warnings,
         }
+        if self.nongeometric is not None:
+            out["nongeometric"] = self.nongeometric
         if self.validation is not None:
             out["data"]["validation_file"] = self.validation_data.source
             out["validation_before"] = self.validation_before
@@ -202,14 +207,17 @@ def _start_model(robot, data, register_frames: bool):
 
 def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
               register_frames: bool = True, rtol: float = DEFAULT_RTOL, seed: int = 0,
-              progress=None, **options) -> CalibrationResult:
+              progress=None, nongeometric=None, **options) -> CalibrationResult:
     """Calibrate ``robot`` (nominal model) against ``data`` (Measurements).
 
     method: 'lsq' (default), 'robust', or another registered solver; params: 'auto' (the
     default free set, unidentifiable ones dropped), 'all', or a list of names. ``validation``
-    (Measurements) is judged with the calibrated model. ``options`` go to the solver (e.g.
-    k0, k1, ridge for 'robust'). Raises IdentificationError when the data cannot support the
-    calibration.
+    (Measurements) is judged with the calibrated model. ``progress``: True shows a bar on a
+    terminal, or a callable ``progress(iteration, cost)``. ``options`` go to the solver (e.g.
+    k0, k1, ridge for 'robust'). ``nongeometric``: terms identified with the geometry by any
+    method, e.g. 'compliance,gear' (see robocal.identify.nongeometric); the calibrated robot
+    carries them and its fk applies them. Raises IdentificationError when the data cannot
+    support the calibration.
     """
     data.check_against(robot)
     if validation is not None:
@@ -220,8 +228,15 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     state0 = problem.start(start)
     unknown_candidates = candidates + problem.nuisance_names
     J0 = problem.jacobian(state0, candidates)
-    ident = analyze(J0, unknown_candidates, data.n_poses, rtol)
+    ident = analyze_jacobian(J0, unknown_candidates, data.n_poses, rtol)
     warnings = []
+    if problem.kind == "plane":
+        from robocal.identify.observations.plane import check_enough_contacts, not_observable
+
+        check_enough_contacts(len(data), len(unknown_candidates))
+        if isinstance(params, str):
+            warnings.append("plane contacts carry no length reference and do not see the base frame: "
+                            f"{', '.join(not_observable(start))} are held at their nominal values")
     if ident.rank < max(1, len(unknown_candidates) // 2):
         raise IdentificationError(
             f"the pose set is degenerate: only {ident.rank} of {len(unknown_candidates)} parameters "
@@ -235,8 +250,18 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         lost = sorted(set(problem.nuisance_names) - set(ident.kept))
         raise IdentificationError(f"the nuisance parameters {lost} are not identifiable: "
                                   "each plane needs contacts spread over its surface")
+    ng_info = None
+    if nongeometric:
+        from robocal.identify.nongeometric import attach, parse_terms
+
+        state0, ng_info = attach(problem, state0, names, parse_terms(nongeometric), rtol)
     solve = get_solver(method)
-    out = solve(problem, state0, names, seed=seed, progress=progress, **options)
+    with Progress(None, f"calibrate ({method})", quiet=progress is not True) as bar:
+        if progress is True:
+            rows = problem.residuals(state0).size
+            def progress(iteration, cost):  # noqa: E306 - the bar's callback
+                bar.update(info=f"rms residual {np.sqrt(cost / rows) * 1e3:.4f} mm-equivalent")
+        out = solve(problem, state0, names, seed=seed, progress=progress or None, **options)
     if not out.converged:
         warnings.append(out.message)
     if ident.condition_class == "strong":
@@ -244,6 +269,7 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
                         f"{ident.condition_number:.3g}): some parameters are poorly determined; "
                         "see the correlation matrix")
     final = out.state
+    final_robot = final.robot if ng_info is None else problem.observation.calibrated_robot(final)
     row_w = None if out.item_weights is None else np.repeat(out.item_weights, problem.rows_per_item)
     J = problem.jacobian(final, names)
     r = problem.residuals(final)
@@ -251,7 +277,7 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         J, r = J * np.sqrt(row_w)[:, None], r * np.sqrt(row_w)
     cov = covariance(J, r)
     result = CalibrationResult(
-        robot=final.robot, start=start, method=method, identifiability=ident, names=names,
+        robot=final_robot, start=start, method=method, identifiability=ident, names=names,
         unknowns=names + problem.nuisance_names, covariance=cov, solver=out,
         before=position_stats(problem.position_errors(state0)),
         after=position_stats(problem.position_errors(final)), problem=problem,
@@ -261,8 +287,34 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         vproblem = CalibrationProblem(start, validation)
         result.validation_data = validation
         result.validation_before = position_stats(vproblem.position_errors(vproblem.start(start)))
-        result.validation = position_stats(vproblem.position_errors(vproblem.start(final.robot)))
+        result.validation = position_stats(vproblem.position_errors(vproblem.start(final_robot)))
+    if ng_info is not None:
+        sig = dict(zip(result.unknowns, result.sigma, strict=True))
+        ng_info["parameters"] = [{"name": nm, "estimate": float(v), "sigma": float(sig[nm])}
+                                 for nm, v in zip(ng_info["kept"], final_robot.joint_errors.values,
+                                                  strict=True)]
+        result.nongeometric = ng_info
     return result
+
+
+def analyze(robot, joints_or_data, kind: str = "point", params="auto",
+            rtol: float = DEFAULT_RTOL) -> Identifiability:
+    """Identifiability of a pose set before measuring: only the joints matter.
+
+    ``joints_or_data`` is a ``(N, n)`` array (rad) or Measurements; the observations are taken
+    as the model's own predictions, so no measurement is needed.
+    """
+    from robocal.data.measurements import Measurements
+
+    q = robot.check_joints(getattr(joints_or_data, "joints", joints_or_data))
+    smr = getattr(joints_or_data, "smr", None)
+    T = robot.fk(q, smr=None if smr is None or smr.max(initial=0) > len(robot.smr) else smr)
+    extra = {"rotations": T[:, :3, :3]} if kind == "pose" else {}
+    data = Measurements.from_arrays(kind, q, points=T[:, :3, 3], **extra)
+    problem = CalibrationProblem(robot, data)
+    names = candidate_parameters(robot, kind, params)
+    J = problem.jacobian(problem.start(robot), names)
+    return analyze_jacobian(J, names + problem.nuisance_names, data.n_poses, rtol)
 
 
 def _plain(options: dict) -> dict:

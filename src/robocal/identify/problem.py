@@ -26,11 +26,17 @@ class State:
 
 def candidate_parameters(robot, kind: str, params) -> list[str]:
     """Resolve ``params``: 'auto' (the robot's default free set), 'all' (every parameter),
-    or an explicit list of names."""
-    if isinstance(params, str) and params == "auto":
-        return robot.default_free(orientation=(kind == "pose"))
-    if isinstance(params, str) and params == "all":
-        return list(robot.parameter_names)
+    or an explicit list of names. Plane contacts carry no length reference and are expressed
+    in the robot base frame, whose motion the plane coefficients absorb: for them 'auto' and
+    'all' leave out ``base.*`` and the scale reference (see ``observations.plane``)."""
+    if isinstance(params, str) and params in ("auto", "all"):
+        names = (robot.default_free(orientation=(kind == "pose")) if params == "auto"
+                 else list(robot.parameter_names))
+        if kind == "plane":
+            from robocal.identify.observations.plane import not_observable
+
+            names = [n for n in names if n not in not_observable(robot)]
+        return names
     if isinstance(params, str):
         params = [p for p in params.replace(",", " ").split() if p]
     names = list(params)
