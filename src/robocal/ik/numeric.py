@@ -1,0 +1,124 @@
+"""Numeric inverse kinematics for any robot model (calibrated ones with beta, any base/tool).
+
+Batched Levenberg-Marquardt on the 6 pose residuals (position m, rotation vector rad, world
+frame) with the joint Jacobian, which is the identification Jacobian w.r.t. theta1..thetan
+(d TCP / d theta_i = d TCP / d q_i). Seeds default to the closed-form solution of the robot's
+nominal model (its OPW form) in the requested branch, with this robot's base and tool.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robocal.errors import DataError, UnreachableError
+from robocal.ik.opw_ik import check_poses, solve_branches
+from robocal.kinematics.model import Robot
+from robocal.kinematics.transforms import pose_error
+
+POS_TOL = 1e-10  # m
+ROT_TOL = 1e-9  # rad
+
+
+@dataclass(frozen=True)
+class IKResult:
+    """Joints ``(N, n)`` rad, ``converged`` ``(N,)``, final ``position_error`` ``(N,)`` m and
+    ``orientation_error`` ``(N,)`` rad, the seeds used ``(N, n)`` and the iteration count."""
+
+    joints: np.ndarray
+    converged: np.ndarray
+    position_error: np.ndarray
+    orientation_error: np.ndarray
+    seeds: np.ndarray
+    iterations: int
+
+    @property
+    def failed(self) -> np.ndarray:
+        """Indices of the poses that did not converge."""
+        return np.flatnonzero(~self.converged)
+
+
+def nominal_seeds(robot: Robot, T: np.ndarray, branch: int | None = None) -> np.ndarray:
+    """Closed-form seeds ``(N, 6)`` from the nominal links with this robot's base and tool.
+
+    ``branch`` picks the slot (0..7, see :mod:`robocal.ik.opw_ik`); None takes, per pose, the
+    lowest slot inside the joint limits, else the lowest that exists. Rows without a closed-form
+    solution are NaN (those poses are then reported as not converged).
+    """
+    nominal = robot.nominal_robot().with_frames(base=robot.base, tool=robot.tool)
+    sols = solve_branches(nominal, T)
+    if branch is not None:
+        if not 0 <= int(branch) < 8:
+            raise DataError(f"branch must be 0..7 (slot = 4 * wrist_flip + 2 * shoulder + elbow), "
+                            f"got {branch}")
+        return sols[:, int(branch)]
+    exists = np.isfinite(sols).all(axis=2)
+    inside = exists & ((sols >= robot.limits[:, 0]) & (sols <= robot.limits[:, 1])).all(axis=2)
+    pick = np.where(inside.any(axis=1), np.argmax(inside, axis=1), np.argmax(exists, axis=1))
+    return sols[np.arange(len(T)), pick]
+
+
+def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, max_iter: int = 100,
+          pos_tol: float = POS_TOL, rot_tol: float = ROT_TOL, strict: bool = False) -> IKResult:
+    """Numeric IK: joints (rad) putting the TCP of ``robot`` at world ``poses`` ``(N, 4, 4)`` (m).
+
+    ``seeds``: ``(N, n)`` starting joints (rad), or None for the nominal closed-form solution
+    in ``branch`` (see :func:`nominal_seeds`; needs an OPW form on the nominal model). Converged
+    means position error <= ``pos_tol`` (1e-10 m) and rotation error <= ``rot_tol`` (1e-9 rad).
+    Poses that do not converge are flagged in ``converged``; ``strict=True`` raises
+    UnreachableError listing them instead.
+    """
+    T = check_poses(poses)
+    N, n = T.shape[0], robot.n_joints
+    if seeds is None:
+        q0 = nominal_seeds(robot, T, branch)
+    else:
+        q0 = np.asarray(seeds, dtype=float)
+        if q0.shape == (n,):
+            q0 = np.broadcast_to(q0, (N, n))
+        if q0.shape != (N, n):
+            raise DataError(f"seeds must have shape ({N}, {n}), got {q0.shape}")
+    q = np.where(np.isfinite(q0), q0, 0.0).copy()
+    names = [f"theta{i + 1}" for i in range(n)]
+    lam = np.full(N, 1e-6)
+    err = pose_error(T, robot.fk(q))
+    cost = np.einsum("ij,ij->i", err, err)
+    active = np.ones(N, bool)
+    it = 0
+    for it in range(1, max_iter + 1):  # noqa: B007  (the count is reported)
+        done = (np.linalg.norm(err[:, :3], axis=1) <= pos_tol) & (np.linalg.norm(err[:, 3:], axis=1)
+                                                                 <= rot_tol)
+        active &= ~done
+        if not active.any():
+            break
+        idx = np.flatnonzero(active)
+        J = robot.jacobian(q[idx], names, kind="pose")  # (k, 6, n)
+        JtJ = np.einsum("kri,krj->kij", J, J)
+        g = np.einsum("kri,kr->ki", J, err[idx])
+        diag = np.einsum("kii->ki", JtJ)
+        A = JtJ + (lam[idx, None] * (diag + 1e-12))[:, :, None] * np.eye(n)
+        step = np.linalg.solve(A, g[:, :, None])[:, :, 0]
+        q_new = q[idx] + step
+        e_new = pose_error(T[idx], robot.fk(q_new))
+        c_new = np.einsum("ij,ij->i", e_new, e_new)
+        better = c_new < cost[idx]
+        acc = idx[better]
+        q[acc], err[acc], cost[acc] = q_new[better], e_new[better], c_new[better]
+        lam[acc] = np.maximum(lam[acc] * 0.1, 1e-12)
+        rej = idx[~better]
+        lam[rej] *= 10.0
+        active[rej[lam[rej] > 1e8]] = False  # stalled: cannot improve any more
+    pe = np.linalg.norm(err[:, :3], axis=1)
+    re = np.linalg.norm(err[:, 3:], axis=1)
+    converged = (pe <= pos_tol) & (re <= rot_tol) & np.isfinite(q0).all(axis=1)
+    q = np.remainder(q + np.pi, 2 * np.pi) - np.pi
+    q = np.where(q < robot.limits[:, 0], q + 2 * np.pi, np.where(q > robot.limits[:, 1], q - 2 * np.pi, q))
+    result = IKResult(q, converged, pe, re, q0, it)
+    if strict and not converged.all():
+        bad = result.failed
+        raise UnreachableError(
+            f"numeric IK did not reach {bad.size} of {N} pose(s) to {pos_tol:g} m / {rot_tol:g} rad: "
+            f"indices {bad[:20].tolist()}{' ...' if bad.size > 20 else ''} (worst position error "
+            f"{pe[bad].max() * 1e3:.3g} mm); the targets may be out of reach or the seeds too far")
+    return result

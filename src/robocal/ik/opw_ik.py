@@ -1,0 +1,253 @@
+"""Closed-form inverse kinematics of ortho-parallel arms with a spherical wrist (OPW form).
+
+All 8 branches of N poses in one vectorised pass, each verified by the robot's own MDH forward
+kinematics (``robot.fk``); there is no second OPW forward model here.
+
+Branch slot order (the order of py-opw-kinematics' ``ReachResult`` and of opw_kinematics):
+``s = 4 * wrist_flip + 2 * shoulder + elbow`` with, on the paper angles (Brandstoetter et al.
+2014, theta = q * sign - offset):
+
+* shoulder 0: theta1 = atan2(cy, cx) - atan2(b, r), the wrist centre in front of the J1 axis;
+  shoulder 1: theta1 = atan2(cy, cx) + atan2(b, r) - pi, the arm reaching back over J1;
+* elbow 0: theta3 = +acos(D) - psi3; elbow 1: theta3 = -acos(D) - psi3 (psi3 = atan2(a2, c3));
+* wrist_flip 0: sin(theta5) >= 0; wrist_flip 1: (theta4 + pi, -theta5, theta6 - pi).
+
+Singular poses get a documented exact answer instead of noise:
+
+* wrist singularity (|sin theta5| < 1e-12, theta5 = 0 or +-pi): theta4 = 0 (paper angle, pi
+  in the flipped slot) and theta6 takes the whole rotation about the aligned axes; theta5 and
+  theta6 are always computed *after* theta4 from the rotation that remains, so they are exact
+  for any theta4 (the reference C++ solver gets theta5 = +-pi wrong; this one does not);
+* shoulder singularity (wrist centre on the J1 axis, b = 0): theta1 = 0 for shoulder 0 and pi
+  for shoulder 1 (any theta1 reaches the pose);
+* edge of reach: acos/sqrt arguments within 1e-9 (relative) of their domain are clamped, so a
+  fully stretched or folded arm keeps both (coinciding) elbow branches and no phantom branch
+  appears; the forward-kinematics check below is the final judge.
+
+Every solution is checked with ``robot.fk``; one whose TCP is more than ``tol`` (1e-9 m /
+1e-9 rad) off the target becomes NaN. Output joints are in the robot's convention, wrapped to
+[-pi, pi).
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from robocal.errors import DataError, ModelError
+from robocal.kinematics.fk import LinkArrays, chain_frames
+from robocal.kinematics.model import Robot
+from robocal.kinematics.transforms import invert_transform, is_rigid
+
+_GEOMETRY = ("a1", "a2", "b", "c1", "c2", "c3", "c4")
+_CHUNK = 1024  # poses per chunk (8 branches each): keeps the temporaries in cache
+_SINGULAR = 1e-12  # |sin theta5| below which the wrist is treated as singular
+_CLAMP = 1e-9  # relative tolerance for clamping acos / sqrt arguments at the edge of reach
+TOL = 1e-9  # m and rad: largest forward-kinematics error of a returned solution
+
+
+def opw_form(robot: Robot) -> dict:
+    """The robot's OPW form (lengths m, offsets rad, signs +-1); ModelError if it has none."""
+    opw = robot.opw
+    if robot.n_joints != 6 or not opw or any(k not in opw for k in (*_GEOMETRY, "offsets", "signs")):
+        raise ModelError(
+            f"robot {robot.name!r} has no OPW form (ortho-parallel arm with a spherical wrist), so "
+            "closed-form inverse kinematics is not available; use the numeric solver "
+            "rc.ik.solve(robot, poses, seeds) instead")
+    return opw
+
+
+def check_poses(poses) -> np.ndarray:
+    """Poses as a ``(N, 4, 4)`` float array of proper rigid transforms, else DataError."""
+    T = np.asarray(poses, dtype=float)
+    if T.ndim == 2:
+        T = T[None]
+    if T.ndim != 3 or T.shape[1:] != (4, 4):
+        raise DataError(f"poses must be 4x4 transforms of shape (N, 4, 4), got {T.shape}")
+    bad = np.flatnonzero(~is_rigid(T))
+    if bad.size:
+        raise DataError(f"pose(s) {bad[:10].tolist()}{' ...' if bad.size > 10 else ''} are not rigid "
+                        "transforms (rotation not orthonormal with det +1, last row not 0 0 0 1, "
+                        "or NaN); check the orientation columns and units")
+    return T
+
+
+def _flange_correction(robot: Robot, opw: dict) -> np.ndarray:
+    """Q with chain(q) = OPW_flange(q) * Q, from the paper's zero pose (identity rotation,
+    flange at (a1 + a2, b, c1 + c2 + c3 + c4)); absorbs how the MDH conversion split the flange
+    orientation between frame {6} and the tool. Frame {0} is the OPW base frame."""
+    q0 = np.asarray(opw["offsets"], float) * np.asarray(opw["signs"], float)
+    F6 = chain_frames(robot.links, np.eye(4), np.eye(4), q0[None])[0]
+    G0 = np.eye(4)
+    G0[:3, 3] = (opw["a1"] + opw["a2"], opw["b"], opw["c1"] + opw["c2"] + opw["c3"] + opw["c4"])
+    return invert_transform(G0) @ F6
+
+
+def _clamp(x: np.ndarray, lo: float, hi: float, tol: float) -> np.ndarray:
+    """Clip x into [lo, hi] when within tol outside, NaN further out."""
+    out = np.clip(x, lo, hi)
+    return np.where((x < lo - tol) | (x > hi + tol), np.nan, out)
+
+
+def paper_branches(opw: dict, flange: np.ndarray) -> np.ndarray:
+    """Paper angles ``(N, 8, 6)`` (rad) of flange poses ``(N, 4, 4)`` in the OPW base frame."""
+    a1, a2, b, c1, c2, c3, c4 = (float(opw[k]) for k in _GEOMETRY)
+    N = flange.shape[0]
+    R = flange[:, :3, :3]
+    C = flange[:, :3, 3] - c4 * R[:, :, 2]  # wrist centre
+    k = np.hypot(a2, c3)
+    psi3 = np.arctan2(a2, c3)
+    rho2 = C[:, 0] ** 2 + C[:, 1] ** 2
+    scale = max(a1 * a1 + b * b + c2 * c2 + k * k, 1e-12)
+    r = np.sqrt(_clamp(rho2 - b * b, 0.0, np.inf, _CLAMP * scale))
+    phi_c = np.arctan2(C[:, 1], C[:, 0])
+    beta_b = np.arctan2(b, r)
+    q1 = np.stack([phi_c - beta_b, phi_c + beta_b - np.pi], axis=1)  # (N, 2) shoulder
+    xs = np.stack([r - a1, -r - a1], axis=1)  # horizontal distance J2 -> C in the arm plane
+    zs = (C[:, 2] - c1)[:, None]
+    s2 = xs * xs + zs * zs
+    D = (s2 - c2 * c2 - k * k) / (2.0 * c2 * k) if c2 * k > 0 else np.full_like(s2, np.nan)
+    phi = np.arccos(_clamp(D, -1.0, 1.0, _CLAMP))  # (N, 2)
+    phi = np.stack([phi, -phi], axis=2)  # (N, 2 shoulder, 2 elbow)
+    q2 = np.arctan2(xs, zs)[:, :, None] - np.arctan2(k * np.sin(phi), c2 + k * np.cos(phi))
+    q3 = phi - psi3
+    q1 = np.broadcast_to(q1[:, :, None], q2.shape)
+    # wrist: M = (Rz(q1) Ry(q2 + q3))^T R = Rz(q4) Ry(q5) Rz(q6)
+    c1_, s1_ = np.cos(q1), np.sin(q1)
+    t23 = q2 + q3
+    c23, s23 = np.cos(t23), np.sin(t23)
+    Rb = R[:, None, None]  # (N, 1, 1, 3, 3)
+    u0 = (c1_ * c23, s1_ * c23, -s23)
+    u1 = (-s1_, c1_, np.zeros_like(c1_))
+    u2 = (c1_ * s23, s1_ * s23, c23)
+
+    def m(u, j):
+        return u[0] * Rb[..., 0, j] + u[1] * Rb[..., 1, j] + u[2] * Rb[..., 2, j]
+
+    M02, M12, M22 = m(u0, 2), m(u1, 2), m(u2, 2)
+    M00, M10, M01, M11 = m(u0, 0), m(u1, 0), m(u0, 1), m(u1, 1)
+    singular = np.hypot(M02, M12) < _SINGULAR
+    q4 = np.where(singular, 0.0, np.arctan2(M12, M02))
+    c4_, s4_ = np.cos(q4), np.sin(q4)
+    # remaining rotation Rz(-q4) M = Ry(q5) Rz(q6): exact for whatever q4 was chosen
+    p02 = c4_ * M02 + s4_ * M12
+    p10 = c4_ * M10 - s4_ * M00
+    p11 = c4_ * M11 - s4_ * M01
+    q5 = np.arctan2(p02, M22)
+    q6 = np.arctan2(p10, p11)
+    q5f = np.arctan2(-p02, M22)
+    q6f = np.arctan2(-p10, -p11)
+    out = np.empty((N, 2, 2, 2, 6))  # (flip, shoulder, elbow)
+    for f, (w4, w5, w6) in enumerate(((q4, q5, q6), (q4 + np.pi, q5f, q6f))):
+        for j, v in enumerate((q1, q2, q3, w4, w5, w6)):
+            out[:, f, :, :, j] = v
+    return out.reshape(N, 8, 6)
+
+
+def _wrap(q: np.ndarray) -> np.ndarray:
+    return np.remainder(q + np.pi, 2 * np.pi) - np.pi
+
+
+def _solve_chunk(robot: Robot, opw: dict, Q_inv: np.ndarray, T: np.ndarray, tol: float) -> np.ndarray:
+    flange = invert_transform(robot.base) @ T @ invert_transform(robot.tool) @ Q_inv
+    paper = paper_branches(opw, flange)
+    q = _wrap((paper + np.asarray(opw["offsets"], float)) * np.asarray(opw["signs"], float))
+    ok = np.isfinite(q).all(axis=2)
+    q = np.where(ok[:, :, None], q, 0.0).reshape(-1, 2, 4, 6)  # (N, flip, arm, joint)
+    # robot.fk's MDH chain, split at frame {3}: the arm part is shared by the two wrist flips
+    links = robot.links
+    arm = LinkArrays(*(v[:3] for v in links))
+    wrist = LinkArrays(*(v[3:] for v in links))
+    F3 = chain_frames(arm, robot.base, np.eye(4), q[:, 0, :, :3])  # (N, 4, 4, 4)
+    fk = chain_frames(wrist, F3[:, None], robot.tool, q[:, :, :, 3:]).reshape(-1, 8, 4, 4)
+    dp = np.linalg.norm(fk[..., :3, 3] - T[:, None, :3, 3], axis=2)
+    # ||R_fk - R_target||_F / sqrt(2) = 2 sin(angle / 2): the rotation angle to first order
+    dR = (fk[..., :3, :3] - T[:, None, :3, :3]).reshape(-1, 8, 9)
+    dr = np.sqrt(np.einsum("nbk,nbk->nb", dR, dR) / 2.0)
+    ok &= (dp <= tol) & (dr <= tol)
+    flat = q.reshape(-1, 8, 6)
+    flat[~ok] = np.nan
+    return flat
+
+
+def solve_branches(robot: Robot, T: np.ndarray, tol: float = TOL, threads: int | None = None) -> np.ndarray:
+    """All 8 verified branches ``(N, 8, 6)`` for checked world poses ``T`` (no limit handling).
+
+    Raises ModelError when the robot's MDH chain does not follow its OPW form (then no reachable
+    pose verifies: typically a calibrated model, which needs the numeric solver)."""
+    opw = opw_form(robot)
+    Q_inv = invert_transform(_flange_correction(robot, opw))
+    N = T.shape[0]
+    parts = [slice(s, min(s + _CHUNK, N)) for s in range(0, N, _CHUNK)]
+    out = np.empty((N, 8, 6))
+    workers = threads or min(os.cpu_count() or 1, 8)
+
+    def run(part: slice) -> None:
+        out[part] = _solve_chunk(robot, opw, Q_inv, T[part], tol)
+
+    if workers > 1 and len(parts) > 1:
+        with ThreadPoolExecutor(workers) as pool:
+            list(pool.map(run, parts))
+    else:
+        for part in parts:
+            run(part)
+    found = np.isfinite(out).all(axis=2).any(axis=1)
+    if N and not found.any():
+        raw = paper_branches(opw, invert_transform(robot.base) @ T[:64] @ invert_transform(robot.tool)
+                             @ Q_inv)
+        if np.isfinite(raw).all(axis=2).any():
+            raise ModelError(
+                f"robot {robot.name!r}: its MDH chain does not match its OPW form (closed-form "
+                "solutions fail the forward-kinematics check; a calibrated model?); use the "
+                "numeric solver rc.ik.solve(robot, poses) instead")
+    return out
+
+
+def turn_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Candidates inside the joint limits, including the +-2 pi copies of each solution.
+
+    q ``(N, B, 6)`` (NaN rows absent) -> ``(N, K, 6)`` candidates (NaN padded, valid first, in
+    slot order then copy order) and ``(N, K)`` source slot index (-1 for padding)."""
+    lo, hi = robot.limits[:, 0], robot.limits[:, 1]
+    # q in [-pi, pi): a copy q + 2 pi k can be inside [lo, hi] only for these k
+    kmin = np.floor((lo - np.pi) / (2 * np.pi)).astype(int) + 1
+    kmax = np.ceil((hi + np.pi) / (2 * np.pi)).astype(int) - 1
+    grids = np.meshgrid(*[np.arange(a, b + 1) for a, b in zip(kmin, kmax, strict=True)], indexing="ij")
+    shifts = 2 * np.pi * np.stack([g.reshape(-1) for g in grids], axis=1)  # (C, 6)
+    N, B, _ = q.shape
+    cand = q[:, :, None, :] + shifts[None, None]  # (N, B, C, 6)
+    ok = np.isfinite(cand).all(axis=3) & ((cand >= lo) & (cand <= hi)).all(axis=3)
+    cand = cand.reshape(N, -1, 6)
+    ok = ok.reshape(N, -1)
+    slot = np.broadcast_to(np.repeat(np.arange(B), shifts.shape[0]), ok.shape)
+    K = max(int(ok.sum(axis=1).max(initial=0)), 1)
+    order = np.argsort(~ok, axis=1, kind="stable")[:, :K]
+    taken = np.take_along_axis(ok, order, axis=1)
+    out = np.take_along_axis(cand, order[:, :, None], axis=1)
+    out[~taken] = np.nan
+    src = np.where(taken, np.take_along_axis(slot, order, axis=1), -1)
+    return out, src
+
+
+def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = False,
+              tol: float = TOL) -> np.ndarray:
+    """Closed-form IK: all branches of world TCP poses ``(N, 4, 4)`` (m) -> joints (rad).
+
+    Default: ``(N, 8, 6)`` in the slot order of the module docstring, NaN where a branch does
+    not exist, joints wrapped to [-pi, pi). ``limits=True``: branches outside the joint limits
+    become NaN (still ``(N, 8, 6)``). ``extra_turns=True`` (implies limits): every candidate
+    inside the limits including +-2 pi copies for joints with more than 360 deg of travel,
+    ``(N, K, 6)`` with K the largest count over the poses, valid rows first, NaN padding.
+    Base and tool of the model are removed first; each solution is verified by ``robot.fk`` to
+    ``tol`` (m, rad).
+    """
+    T = check_poses(poses)
+    q = solve_branches(robot, T, tol)
+    if extra_turns:
+        return turn_copies(robot, q)[0]
+    if limits:
+        inside = ((q >= robot.limits[:, 0]) & (q <= robot.limits[:, 1])).all(axis=2)
+        q[~inside] = np.nan
+    return q

@@ -1,0 +1,148 @@
+"""Globally optimal choice of IK branches along a trajectory (seed 001).
+
+Per waypoint, every closed-form solution inside the joint limits (with the +-2 pi copies of
+joints that travel more than 360 deg) is a node; nodes of consecutive waypoints are joined by
+directed edges of cost ``sum_i w_i |dq_i|``; a start node S joins the first layer and an end node
+T the last; Dijkstra (``scipy.sparse.csgraph``) from S to T picks one node per waypoint so that
+the whole trajectory's weighted joint travel is minimal.
+
+Default weights (:func:`default_weights`): ``w_i = 1 + rho_i`` for the three arm joints, with
+rho_i (m) the distance from joint axis i to the flange origin at zero joints (the lever the
+joint swings), and ``w_4..w_6 = 1``: the cost is joint travel in rad plus, for the big joints,
+roughly the arc the flange sweeps in m, so big joints cost more ("move the small joints, spare
+the big ones").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from robocal.errors import DataError, UnreachableError
+from robocal.ik.opw_ik import check_poses, solve_branches, turn_copies
+from robocal.kinematics.model import Robot
+
+_EDGE_CHUNK = 4_000_000  # pair evaluations per block when building edges (bounds memory)
+
+
+@dataclass(frozen=True)
+class PathResult:
+    """Optimal joints ``(M, 6)`` rad and their weighted travel ``cost``; the greedy choice
+    (nearest candidate step by step) ``greedy_joints`` and ``greedy_cost``; ``weights`` (6,);
+    ``slots`` ``(M,)`` the closed-form branch slot of each chosen joint vector; ``candidates``
+    ``(M,)`` how many candidates each waypoint had."""
+
+    joints: np.ndarray
+    cost: float
+    greedy_joints: np.ndarray
+    greedy_cost: float
+    weights: np.ndarray
+    slots: np.ndarray
+    candidates: np.ndarray
+
+
+def default_weights(robot: Robot, wrist=(1.0, 1.0, 1.0)) -> np.ndarray:
+    """``(n,)`` weights: 1 + lever arm (m) from axis i to the flange at zero joints for the first
+    three joints, ``wrist`` for the others."""
+    n = robot.n_joints
+    _, frames = robot.fk(np.zeros((1, n)), frames=True)
+    flange = frames[0, n, :3, 3]
+    w = np.ones(n)
+    for i in range(min(3, n)):
+        o, z = frames[0, i + 1, :3, 3], frames[0, i + 1, :3, 2]
+        v = flange - o
+        w[i] = 1.0 + np.linalg.norm(v - (v @ z) * z)
+    w[3:] = np.asarray(wrist, dtype=float)[: n - 3]
+    return w
+
+
+def check_weights(weights, n: int) -> np.ndarray:
+    """Weights as ``(n,)`` finite non-negative floats, else DataError."""
+    w = np.asarray(weights, dtype=float).reshape(-1)
+    if w.shape != (n,):
+        raise DataError(f"weights must have {n} values (one per joint), got {w.size}")
+    if not np.isfinite(w).all() or (w < 0).any():
+        raise DataError(f"weights must be finite and >= 0, got {w.tolist()}")
+    return w
+
+
+def travel(q: np.ndarray, weights: np.ndarray, start: np.ndarray | None = None) -> float:
+    """Weighted joint travel ``sum_m sum_i w_i |q[m+1, i] - q[m, i]|`` (from ``start`` if given)."""
+    if start is not None:
+        q = np.vstack([start, q])
+    return float((np.abs(np.diff(q, axis=0)) @ weights).sum())
+
+
+def _greedy(cand: np.ndarray, valid: np.ndarray, w: np.ndarray, first: np.ndarray) -> np.ndarray:
+    M = cand.shape[0]
+    out = np.empty((M, cand.shape[2]))
+    prev = first
+    for m in range(M):  # sequential by nature: each choice depends on the previous one
+        d = np.where(valid[m], np.abs(cand[m] - prev) @ w, np.inf)
+        prev = out[m] = cand[m, np.argmin(d)]
+    return out
+
+
+def plan_path(robot: Robot, poses, weights=None, start=None) -> PathResult:
+    """Globally optimal joints for world TCP poses ``(M, 4, 4)`` (m); see the module docstring.
+
+    ``weights`` ``(6,)`` (default :func:`default_weights`); ``start`` ``(6,)`` rad: a fixed
+    starting configuration whose distance to the first waypoint counts in the cost (else the
+    first waypoint is free). UnreachableError lists the waypoints without any candidate.
+    """
+    T = check_poses(poses)
+    n = robot.n_joints
+    w = default_weights(robot) if weights is None else check_weights(weights, n)
+    if start is not None:
+        start = np.asarray(start, dtype=float).reshape(-1)
+        if start.shape != (n,) or not np.isfinite(start).all():
+            raise DataError(f"start must be {n} finite joint values (rad), got {start.tolist()}")
+    cand, src = turn_copies(robot, solve_branches(robot, T))
+    valid = src >= 0
+    M, K, _ = cand.shape
+    empty = np.flatnonzero(~valid.any(axis=1))
+    if empty.size:
+        raise UnreachableError(
+            f"{empty.size} of {M} waypoint(s) have no IK solution inside the joint limits: indices "
+            f"{empty[:30].tolist()}{' ...' if empty.size > 30 else ''}; move or drop them")
+    node = 1 + np.arange(M * K).reshape(M, K)
+    t_node = 1 + M * K
+    rows, cols, data = [], [], []
+    # S -> first layer: 1 (seed 001), or 1 + distance from the fixed start
+    k0 = np.flatnonzero(valid[0])
+    c0 = np.ones(k0.size) if start is None else 1.0 + np.abs(cand[0, k0] - start) @ w
+    rows.append(np.zeros(k0.size, int)), cols.append(node[0, k0]), data.append(c0)
+    # layer m -> m + 1: every valid pair; +1 on every edge keeps zero-travel edges explicit and
+    # shifts every S-T path by the same M - 1, so the optimum is unchanged
+    step = max(1, _EDGE_CHUNK // (K * K))
+    for s in range(0, M - 1, step):
+        e = min(s + step, M - 1)
+        cost = np.zeros((e - s, K, K))
+        for i in range(n):  # per joint on (m, K, K) blocks: no 4-D temporary
+            cost += w[i] * np.abs(cand[s:e, :, None, i] - cand[s + 1 : e + 1, None, :, i])
+        ok = valid[s:e, :, None] & valid[s + 1 : e + 1, None, :]
+        mi, ki, li = np.nonzero(ok)
+        rows.append(node[s + mi, ki]), cols.append(node[s + mi + 1, li]), data.append(1.0 + cost[ok])
+    kl = np.flatnonzero(valid[M - 1])
+    rows.append(node[M - 1, kl]), cols.append(np.full(kl.size, t_node)), data.append(np.ones(kl.size))
+    G = csr_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))),
+                   shape=(t_node + 1, t_node + 1))
+    _, pred = dijkstra(G, directed=True, indices=0, return_predecessors=True)
+    chosen = np.empty(M, int)
+    v = pred[t_node]
+    for m in range(M - 1, -1, -1):  # walk back from T: one node per layer
+        chosen[m] = v - 1 - m * K
+        v = pred[v]
+    joints = cand[np.arange(M), chosen]
+    if start is None:
+        home = np.clip(np.zeros(n), robot.limits[:, 0], robot.limits[:, 1])
+        first = cand[0, np.argmin(np.where(valid[0], np.abs(cand[0] - home) @ w, np.inf))]
+    else:
+        first = start
+    greedy = _greedy(cand, valid, w, first)
+    return PathResult(joints=joints, cost=travel(joints, w, start), greedy_joints=greedy,
+                      greedy_cost=travel(greedy, w, start), weights=w,
+                      slots=src[np.arange(M), chosen], candidates=valid.sum(axis=1))
