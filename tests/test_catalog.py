@@ -122,3 +122,21 @@ def test_cli_robots_lists_names(capsys):
     out = capsys.readouterr().out
     for name in REQUIRED:
         assert name in out
+
+
+@pytest.mark.parametrize("name", ["kuka_kr16_2", "fanuc_lrmate200id", "ur10", "puma560"])
+def test_one_robot_fk_path_equals_general_path(name, rng):
+    """The one-robot FK path (quarter-turn swaps, lazy signs) against the broadcasting path, for
+    robots whose alphas are multiples of 90 deg, with frames and with one tool per row."""
+    from robocal.kinematics.fk import chain_frames
+    from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
+
+    robot = Robot.from_catalog(name)
+    q = random_joints(robot, rng, 300)
+    tools = make_transform(rotvec_to_matrix(rng.normal(size=(300, 3))), rng.normal(size=(300, 3)))
+    batched = robot.links._replace(**{f: getattr(robot.links, f)[None] for f in robot.links._fields})
+    for tool in (robot.tool, tools):
+        fast = chain_frames(robot.links, robot.base, tool, q, frames=True)
+        general = chain_frames(batched, robot.base, tool, q, frames=True)
+        for a, b in zip(fast, general, strict=True):
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-13)

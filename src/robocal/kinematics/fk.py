@@ -2,7 +2,11 @@
 
 Link i carries frame {i-1} to frame {i}:  T_i = Rx(alpha_i) Tx(a_i) Ry(beta_i) Rz(theta_i + q_i) Tz(d_i).
 The chain is composed element-wise on component arrays (structure of arrays), which is several
-times faster in numpy than stacked 4x4 matrix products.
+times faster in numpy than stacked 4x4 matrix products. One robot with a batch of joints (the
+common case) takes a faster path: cache-sized chunks, the frame kept as four (3, M) column blocks,
+the link's constant rotations Rx(alpha) Ry(beta) applied as scalar column mixes (skipped or turned
+into a column swap when alpha, beta are 0 or multiples of pi/2) and sin/cos of every joint taken
+in one call.
 """
 
 from __future__ import annotations
@@ -11,7 +15,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-CHUNK = 65536  # poses per chunk: bounds peak memory for very large batches
+CHUNK = 65536  # poses per chunk of the general path: bounds peak memory for very large batches
+FAST_CHUNK = 4096  # poses per chunk of the one-robot path: its temporaries stay in the CPU cache
 
 
 class LinkArrays(NamedTuple):
@@ -70,6 +75,8 @@ def chain_frames(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nd
     Returns the TCP poses ``(..., 4, 4)``; with ``frames=True`` also the world poses of frames
     {0}..{n} as ``(..., n + 1, 4, 4)`` (frame {n} is the flange).
     """
+    if _fast_ok(links, base, tool, q):
+        return _fast_chain(links, base, tool, q, frames)
     n = q.shape[-1]
     shape = np.broadcast_shapes(q.shape[:-1], links.alpha.shape[:-1], base.shape[:-2], tool.shape[:-2])
     base = np.broadcast_to(base, shape + (4, 4))
@@ -101,7 +108,7 @@ def chain_fk(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarra
 
     ``tool`` is one ``(4, 4)`` frame or one per row ``(N, 4, 4)``."""
     N = q.shape[0]
-    if N <= CHUNK:
+    if N <= CHUNK or _fast_ok(links, base, tool, q):
         return chain_frames(links, base, tool, q)
     out = np.empty((N, 4, 4))
     per_row_tool = tool.ndim == 3
@@ -109,3 +116,159 @@ def chain_fk(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarra
         part = slice(start, start + CHUNK)
         out[part] = chain_frames(links, base, tool[part] if per_row_tool else tool, q[part])
     return out
+
+
+def _fast_ok(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray) -> bool:
+    """One robot (links ``(n,)``, base ``(4, 4)``), joints ``(N, n)``, one tool or one per row."""
+    return (q.ndim == 2 and links.alpha.ndim == 1 and base.shape == (4, 4)
+            and all(np.ndim(v) == 1 for v in links)
+            and (tool.shape == (4, 4) or tool.shape == (q.shape[0], 4, 4)))
+
+
+def _cos_sin(angle: float) -> tuple[float, float]:
+    """cos, sin with the 1e-17 residue at multiples of pi/2 removed (so those become swaps)."""
+    c, s = float(np.cos(angle)), float(np.sin(angle))
+    return (0.0 if abs(c) < 1e-15 else c), (0.0 if abs(s) < 1e-15 else s)
+
+
+class _Frame:
+    """A chunk's frame as column blocks ``x[k]`` ``(3, m)`` with lazy signs: the rotation's column
+    k is ``sign[k] * x[k]`` (quarter turns about x or y then cost a swap, not arithmetic);
+    ``x[3]`` is the translation, ``t1``, ``t2`` scratch blocks."""
+
+    def __init__(self, blocks: list) -> None:
+        self.x = blocks[:4]
+        self.t1, self.t2 = blocks[4], blocks[5]
+        self.sign = [1.0, 1.0, 1.0]
+
+    def translate(self, k: int, dist: float) -> None:
+        """t += dist * column k."""
+        if dist != 0.0:
+            np.multiply(self.x[k], dist * self.sign[k], out=self.t1)
+            np.add(self.x[3], self.t1, out=self.x[3])
+
+    def turn(self, i: int, j: int, c: float, s: float) -> None:
+        """Columns (i, j) <- (c col_i + s col_j, c col_j - s col_i), scalar c, s."""
+        x, sg = self.x, self.sign
+        if s == 0.0:
+            if c < 0:
+                sg[i], sg[j] = -sg[i], -sg[j]
+        elif c == 0.0:
+            x[i], x[j] = x[j], x[i]
+            sg[i], sg[j] = s * sg[j], -s * sg[i]
+        else:
+            np.multiply(x[j], s * sg[j], out=self.t1)
+            np.multiply(x[i], s * sg[i], out=self.t2)
+            np.multiply(x[i], c * sg[i], out=x[i])
+            np.add(x[i], self.t1, out=x[i])
+            np.multiply(x[j], c * sg[j], out=x[j])
+            np.subtract(x[j], self.t2, out=x[j])
+            sg[i] = sg[j] = 1.0
+
+    def joint(self, c: np.ndarray, s: np.ndarray) -> None:
+        """Columns (0, 1) <- (c col_0 + s col_1, c col_1 - s col_0), arrays c, s ``(m,)``."""
+        x0, x1, t1, t2 = self.x[0], self.x[1], self.t1, self.t2
+        np.multiply(x1, s, out=t1)
+        np.multiply(x0, s, out=t2)
+        np.multiply(x0, c, out=x0)
+        np.multiply(x1, c, out=x1)
+        if self.sign[0] == self.sign[1]:
+            np.add(x0, t1, out=x0)
+            np.subtract(x1, t2, out=x1)
+        else:
+            np.subtract(x0, t1, out=x0)
+            np.add(x1, t2, out=x1)
+
+    def set(self, R: np.ndarray, t: np.ndarray, c: np.ndarray, s: np.ndarray) -> None:
+        """The frame (R, t) * Rz(phi) for constant R, t and arrays cos, sin of phi."""
+        x = self.x
+        np.multiply(R[:, 0, None], c, out=x[0])
+        np.multiply(R[:, 1, None], s, out=self.t1)
+        np.add(x[0], self.t1, out=x[0])
+        np.multiply(R[:, 1, None], c, out=x[1])
+        np.multiply(R[:, 0, None], s, out=self.t1)
+        np.subtract(x[1], self.t1, out=x[1])
+        x[2][:] = R[:, 2, None]
+        x[3][:] = t[:, None]
+        self.sign = [1.0, 1.0, 1.0]
+
+    def apply_tool(self, tool: np.ndarray, rot_identity: bool) -> None:
+        """(R, t) <- (R, t) * tool, tool ``(4, 4)`` or ``(m, 4, 4)``."""
+        x, sg = self.x, self.sign
+        for k in range(3):
+            w = tool[..., k, 3]
+            if np.ndim(w):
+                np.multiply(x[k], w, out=self.t1)
+                (np.add if sg[k] > 0 else np.subtract)(x[3], self.t1, out=x[3])
+            else:
+                self.translate(k, float(w))
+        if rot_identity:
+            return
+        new = []
+        for jj in range(3):
+            acc = np.multiply(x[0], tool[..., 0, jj] * sg[0])
+            for k in (1, 2):
+                np.multiply(x[k], tool[..., k, jj] * sg[k], out=self.t1)
+                np.add(acc, self.t1, out=acc)
+            new.append(acc)
+        for jj in range(3):
+            x[jj][:] = new[jj]
+        self.sign = [1.0, 1.0, 1.0]
+
+    def store(self, dest: np.ndarray) -> None:
+        """Write into ``dest`` ``(m, 4, 4)`` (its last row is set by the caller)."""
+        for k in range(4):
+            if k < 3 and self.sign[k] < 0:
+                np.negative(self.x[k].T, out=dest[:, :3, k])
+            else:
+                dest[:, :3, k] = self.x[k].T
+
+
+def _rx_ry(R: np.ndarray, ca: float, sa: float, cb: float, sb: float) -> np.ndarray:
+    return R @ np.array([[1, 0, 0], [0, ca, -sa], [0, sa, ca]]) @ np.array([[cb, 0, sb], [0, 1, 0],
+                                                                             [-sb, 0, cb]])
+
+
+def _fast_chain(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray, frames: bool):
+    """The one-robot path of :func:`chain_frames` (same results, same shapes)."""
+    N, n = q.shape
+    out = np.empty((N, 4, 4))
+    out[:, 3, :] = (0.0, 0.0, 0.0, 1.0)
+    saved = None
+    if frames:
+        saved = np.empty((N, n + 1, 4, 4))
+        saved[:, :, 3, :] = (0.0, 0.0, 0.0, 1.0)
+        saved[:, 0] = base
+    alpha_cs = [_cos_sin(v) for v in links.alpha]
+    beta_cs = [_cos_sin(v) for v in links.beta]
+    a, d, theta = (np.asarray(v, dtype=float) for v in (links.a, links.d, links.theta))
+    # joint 1 starts from a constant frame: base * Rx(alpha1) Tx(a1) Ry(beta1)
+    R1 = _rx_ry(base[:3, :3], *alpha_cs[0], *beta_cs[0])
+    t1 = base[:3, 3] + a[0] * base[:3, 0]
+    per_row_tool = tool.ndim == 3
+    tool_rot_identity = not per_row_tool and np.array_equal(tool[:3, :3], np.eye(3))
+    M = min(N, FAST_CHUNK)
+    blocks = np.empty((6, 3, M))
+    phi, cph, sph = np.empty((n, M)), np.empty((n, M)), np.empty((n, M))
+    for start in range(0, N, M):
+        m = min(M, N - start)
+        rows = slice(start, start + m)
+        np.add(q[rows].T, theta[:, None], out=phi[:, :m])
+        np.cos(phi[:, :m], out=cph[:, :m])
+        np.sin(phi[:, :m], out=sph[:, :m])
+        f = _Frame([blocks[k, :, :m] for k in range(6)])
+        f.set(R1, t1, cph[0, :m], sph[0, :m])
+        f.translate(2, d[0])
+        for j in range(1, n):
+            if frames:
+                f.store(saved[rows, j])
+            f.translate(0, a[j])
+            f.turn(1, 2, *alpha_cs[j])  # Rx(alpha)
+            f.turn(2, 0, *beta_cs[j])  # Ry(beta)
+            f.joint(cph[j, :m], sph[j, :m])  # Rz(theta + q)
+            f.translate(2, d[j])
+        if frames:
+            f.store(saved[rows, n])
+        f.apply_tool(tool[rows] if per_row_tool else tool, tool_rot_identity)
+        f.store(out[rows])
+    return (out, saved) if frames else out
