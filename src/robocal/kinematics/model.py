@@ -60,6 +60,8 @@ class Robot:
     Attributes are ``(n,)`` arrays; ``limits`` is ``(n, 2)``; ``parallel[i]`` says that axis i
     is nominally parallel to axis i-1, so ``beta_(i+1)`` is a parameter there. ``nominal`` is the
     nominal model's parameter vector (the controller's model), ``opw`` an optional OPW form.
+    ``joint_errors`` is an optional non-geometric joint-error model
+    (:class:`robocal.kinematics.joint_errors.JointErrorModel`) that :meth:`fk` applies.
     """
 
     alpha: np.ndarray
@@ -76,6 +78,7 @@ class Robot:
     description: str = ""
     opw: dict | None = None
     smr: np.ndarray | None = None
+    joint_errors: object | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.alpha).size
@@ -305,7 +308,7 @@ class Robot:
 
     def nominal_robot(self) -> Robot:
         """The nominal model (the controller's), with this robot's nominal as its own."""
-        return self._from_vector(self.nominal.copy())
+        return replace(self._from_vector(self.nominal.copy()), joint_errors=None)
 
     # ----------------------------------------------------------------- kinematics
     @property
@@ -332,9 +335,12 @@ class Robot:
 
         ``smr`` ``(N,)`` picks each row's SMR (default: the tool). With ``frames=True`` returns
         ``(tcp, frames)`` where frames ``(N, n + 1, 4, 4)`` are the world poses of frames
-        {0}..{n} (frame {n} is the flange, before the tool).
+        {0}..{n} (frame {n} is the flange, before the tool). A ``joint_errors`` model turns the
+        commanded joints into the joints the robot really reaches (``q + dq(q)``) first.
         """
         q = self.check_joints(q)
+        if self.joint_errors is not None:
+            q = q + self.joint_errors.offsets(self, q)
         tool = self.tool if smr is None else self.tools_for(smr)
         if frames:
             return chain_frames(self.links, self.base, tool, q, frames=True)

@@ -61,6 +61,8 @@ def robot_to_dict(robot: Robot) -> dict:
         out["smr"] = robot.smr.tolist()
     if robot.opw is not None:
         out["opw"] = robot.opw
+    if robot.joint_errors is not None:
+        out["joint_errors"] = robot.joint_errors.to_dict()
     return out
 
 
@@ -147,6 +149,12 @@ def robot_from_dict(data) -> Robot:
         from dataclasses import replace
 
         robot = replace(robot, nominal=vec)
+    if data.get("joint_errors") is not None:
+        from dataclasses import replace
+
+        from robocal.kinematics.joint_errors import JointErrorModel
+
+        robot = replace(robot, joint_errors=JointErrorModel.from_dict(data["joint_errors"], robot.n_joints))
     return robot
 
 

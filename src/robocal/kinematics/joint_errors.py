@@ -1,0 +1,123 @@
+"""Non-geometric joint errors: joint compliance under gravity and gear (harmonic) errors.
+
+The joint a robot really turns to is ``q + dq(q)`` with ``dq`` linear in the parameters::
+
+    compliance  comp{i}_{j}:  dq_i += c_ij * tau_ij(q)
+    gear        gear{i}_s1, gear{i}_c1, gear{i}_s2, gear{i}_c2:
+                dq_i += s1 sin q_i + c1 cos q_i + s2 sin 2q_i + c2 cos 2q_i
+
+Mass model of the compliance term: the links beyond joint i are lumped into point masses at the
+origins o_j of the distal frames {j}, j = i+1..n (frame {n} is the flange, which also carries
+the payload). tau_ij(q) = z_i . ((o_j - o_i) x g) is the gravity torque about axis i of a unit
+weight at o_j (m), with g the unit vector -z of the robot base frame {0} (a floor-mounted robot),
+all computed from the frames at the commanded joints (the deflection is small: first order).
+c_ij = k_i m_j |g| (rad/m) is the compliance k_i of joint i (rad/(N m)) times the weight of
+the lumped mass m_j (N): the product is what position data identify, and keeping one
+coefficient per (joint, mass) keeps the model linear (no scale ambiguity between k and m).
+Gear parameters are in rad. Joints are 1-based in the names.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from robocal.errors import ModelError
+from robocal.kinematics.fk import chain_frames
+
+TERMS = ("compliance", "gear")
+_COMP = re.compile(r"^comp(\d+)_(\d+)$")
+_GEAR = re.compile(r"^gear(\d+)_([sc][12])$")
+
+
+def term_names(n: int, term: str) -> list[str]:
+    """All parameter names of one term for an ``n``-joint robot."""
+    if term == "compliance":
+        return [f"comp{i}_{j}" for i in range(1, n + 1) for j in range(i + 1, n + 1)]
+    if term == "gear":
+        return [f"gear{i}_{h}" for i in range(1, n + 1) for h in ("s1", "c1", "s2", "c2")]
+    raise ModelError(f"unknown non-geometric term {term!r}; choose from {', '.join(TERMS)}")
+
+
+def _parse(name: str, n: int) -> tuple[int, str, int | str]:
+    """(joint index 0-based, kind, detail) of a parameter name; ModelError if unknown."""
+    m = _COMP.match(name)
+    if m and 1 <= int(m[1]) < int(m[2]) <= n:
+        return int(m[1]) - 1, "comp", int(m[2])
+    m = _GEAR.match(name)
+    if m and 1 <= int(m[1]) <= n:
+        return int(m[1]) - 1, "gear", m[2]
+    raise ModelError(f"unknown joint-error parameter {name!r} for a {n}-joint robot: "
+                     "use comp{i}_{j} (i < j <= n) or gear{i}_s1|c1|s2|c2")
+
+
+def joint_error_basis(robot, q: np.ndarray, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+    """``(B (N, k), joint (k,))``: d(dq_joint[p])/d(param p) at joints ``q (N, n)`` (rad).
+
+    ``dq[:, joint[p]] += B[:, p] * value[p]``. Compliance columns use the robot's frames at ``q``
+    (its link parameters and base; the robot's own joint-error model is not applied)."""
+    n = robot.n_joints
+    parsed = [_parse(nm, n) for nm in names]
+    B = np.empty((q.shape[0], len(parsed)))
+    frames = None
+    for p, (i, kind, detail) in enumerate(parsed):
+        if kind == "gear":
+            h = 2.0 if detail[1] == "2" else 1.0
+            B[:, p] = np.sin(h * q[:, i]) if detail[0] == "s" else np.cos(h * q[:, i])
+            continue
+        if frames is None:
+            _, frames = chain_frames(robot.links, robot.base, robot.tool, q, frames=True)
+            g = -frames[:, 0, :3, 2]
+        z_i, o_i = frames[:, i + 1, :3, 2], frames[:, i + 1, :3, 3]
+        arm = frames[:, detail, :3, 3] - o_i
+        B[:, p] = np.einsum("ij,ij->i", z_i, np.cross(arm, g))
+    return B, np.array([t[0] for t in parsed], dtype=int)
+
+
+@dataclass(frozen=True, eq=False)
+class JointErrorModel:
+    """Named joint-error parameters and their values (rad/m for comp, rad for gear)."""
+
+    names: tuple[str, ...]
+    values: np.ndarray
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "names", tuple(str(n) for n in self.names))
+        values = np.asarray(self.values, dtype=float).reshape(-1)
+        if values.shape != (len(self.names),) or not np.isfinite(values).all():
+            raise ModelError(f"joint-error model needs {len(self.names)} finite values")
+        if len(set(self.names)) != len(self.names):
+            raise ModelError("a joint-error parameter is named twice")
+        object.__setattr__(self, "values", values)
+
+    @property
+    def terms(self) -> list[str]:
+        """The terms present ('compliance', 'gear')."""
+        kinds = {("compliance" if n.startswith("comp") else "gear") for n in self.names}
+        return [t for t in TERMS if t in kinds]
+
+    def offsets(self, robot, q: np.ndarray) -> np.ndarray:
+        """Joint offsets ``dq (N, n)`` (rad) at commanded joints ``q (N, n)``."""
+        B, joint = joint_error_basis(robot, q, self.names)
+        dq = np.zeros_like(q)
+        np.add.at(dq.T, joint, (B * self.values).T)
+        return dq
+
+    def to_dict(self) -> dict:
+        """Plain data for the model YAML (SI: rad/m for comp*, rad for gear*)."""
+        return {"units": "SI (comp: rad per m of unit-weight moment arm; gear: rad)",
+                "parameters": dict(zip(self.names, self.values.tolist(), strict=True))}
+
+    @classmethod
+    def from_dict(cls, data, n: int) -> JointErrorModel:
+        if not isinstance(data, dict) or not isinstance(data.get("parameters"), dict):
+            raise ModelError("joint_errors must be a mapping with 'parameters: {name: value}'")
+        params = data["parameters"]
+        for name, v in params.items():
+            _parse(str(name), n)
+            if isinstance(v, bool) or not isinstance(v, int | float):
+                raise ModelError(f"joint_errors.parameters.{name}: expected a number, got {v!r}")
+        return cls(tuple(params), np.array(list(params.values()), dtype=float))
