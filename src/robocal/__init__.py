@@ -1,5 +1,7 @@
 """robocal: kinematic calibration, compensation and trajectory IK for serial industrial robots."""
 
+from robocal import ik  # rc.ik.solve_all, rc.ik.solve, rc.ik.plan_path
+from robocal.compensate import compensate
 from robocal.errors import (
     ConvergenceError,
     DataError,
@@ -22,4 +24,6 @@ __all__ = [
     "Robot",
     "UnitError",
     "UnreachableError",
+    "compensate",
+    "ik",
 ]

@@ -16,6 +16,7 @@ from robocal.errors import RobocalError
 COMMANDS = {
     "robots": "robots",
     "import": "importer", "simulate": "simulate", "evaluate": "evaluate",
+    "plan": "plan", "compensate": "compensate",
 }
 
 

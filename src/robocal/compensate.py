@@ -1,0 +1,179 @@
+"""Compensation: make the real robot go where it is told, given a calibrated model.
+
+* corrected joint commands: joints q with T_calibrated(q) = target (numeric IK on the calibrated
+  model, seeded by the nominal closed-form solution in the chosen branch);
+* corrected Cartesian targets: T_nominal(q) for those joints, for programs written in
+  Cartesian space (the controller's own nominal IK then lands on the true target);
+* corrected parameters (seed 000, step 8): the identified parameters for a controller that
+  accepts them. With eta the nominal link/frame parameters and q the joint zero offsets
+  (theta_i), d_eta = eta_nominal - eta_calibrated and d_q = theta_nominal - theta_calibrated, so
+  the seed's eta - d_eta and q - d_q are exactly the calibrated values.
+
+Target files: CSV with a header; position ``x_mm, y_mm, z_mm`` (or ``x_m, y_m, z_m``) and
+orientation either a unit quaternion ``qw, qx, qy, qz`` or fixed-axis XYZ roll-pitch-yaw
+``rx_deg, ry_deg, rz_deg`` (or ``_rad``): R = Rz(rz) Ry(ry) Rx(rx), scipy's ``"xyz"``.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from robocal.errors import DataError
+from robocal.ik.numeric import nominal_seeds
+from robocal.ik.numeric import solve as ik_solve
+from robocal.ik.opw_ik import check_poses
+from robocal.kinematics.model import Robot
+from robocal.kinematics.transforms import make_transform, pose_error
+
+_LENGTH = {"mm": 1e-3, "m": 1.0}
+_ANGLE = {"deg": np.pi / 180.0, "rad": 1.0}
+
+
+@dataclass(frozen=True)
+class Compensation:
+    """``joints`` ``(N, n)`` rad for the controller; ``corrected_targets`` ``(N, 4, 4)`` m;
+    ``converged`` ``(N,)``; ``position_error`` ``(N,)`` m / ``orientation_error`` ``(N,)`` rad
+    left on the calibrated model; ``parameters``: rows (name, unit, nominal, calibrated, delta)
+    in SI with delta = nominal - calibrated; ``corrected_model`` the calibrated robot."""
+
+    joints: np.ndarray
+    corrected_targets: np.ndarray
+    converged: np.ndarray
+    position_error: np.ndarray
+    orientation_error: np.ndarray
+    parameters: list[dict]
+    corrected_model: Robot
+
+
+def parameter_table(calibrated: Robot, nominal: Robot) -> list[dict]:
+    """Seed-000 export: every link, base and tool parameter with nominal, calibrated and
+    d = nominal - calibrated (SI: m, rad); the controller loads nominal - d."""
+    if calibrated.n_joints != nominal.n_joints:
+        raise DataError(f"calibrated model has {calibrated.n_joints} joints, nominal "
+                        f"{nominal.n_joints}: they must describe the same robot")
+    k = 5 * calibrated.n_joints + 12
+    names, units = calibrated.parameter_names[:k], calibrated.parameter_units()[:k]
+    cal, nom = calibrated.values[:k], nominal.values[:k]
+    return [{"name": nm, "unit": u, "nominal": float(a), "calibrated": float(b), "delta": float(a - b)}
+            for nm, u, a, b in zip(names, units, nom, cal, strict=True)]
+
+
+def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None = None,
+               seeds=None) -> Compensation:
+    """Corrected joints and Cartesian targets for world target poses ``(N, 4, 4)`` (m).
+
+    Seeds: the closed-form solution of ``nominal`` (needs its OPW form) in slot ``branch``
+    (None: per target the lowest slot inside the limits), with the calibrated base and tool; or
+    explicit ``seeds`` ``(N, n)`` rad. Targets the calibrated model cannot reach to 1e-10 m /
+    1e-9 rad are flagged in ``converged`` (their joints are the best found).
+    """
+    T = check_poses(targets)
+    if seeds is None:
+        seed_model = nominal.with_frames(base=calibrated.base, tool=calibrated.tool)
+        seeds = nominal_seeds(seed_model, T, branch)
+    res = ik_solve(calibrated, T, seeds)
+    return Compensation(joints=res.joints, corrected_targets=nominal.fk(res.joints),
+                        converged=res.converged, position_error=res.position_error,
+                        orientation_error=res.orientation_error,
+                        parameters=parameter_table(calibrated, nominal), corrected_model=calibrated)
+
+
+def perturbed(robot: Robot, seed: int | np.random.Generator | None = None, *,
+              length_mm=(0.05, 0.5), angle_deg=(0.005, 0.05)) -> Robot:
+    """A realistic 'true' robot around ``robot``: every link parameter a calibration frees
+    (beta only on parallel axes) displaced by a random sign times a magnitude drawn uniformly
+    in ``length_mm`` (lengths) or ``angle_deg`` (angles). The nominal vector is kept."""
+    rng = np.random.default_rng(seed)
+    names = [nm for nm in robot.default_free() if not nm.startswith(("base.", "tool.", "smr"))]
+    lengths = np.array([robot.parameter_units()[i] == "m" for i in robot.indices(names)])
+    lo = np.where(lengths, length_mm[0] * 1e-3, np.deg2rad(angle_deg[0]))
+    hi = np.where(lengths, length_mm[1] * 1e-3, np.deg2rad(angle_deg[1]))
+    delta = rng.uniform(lo, hi) * rng.choice([-1.0, 1.0], len(names))
+    return robot.displaced(names, delta)
+
+
+# ----------------------------------------------------------------------------- pose CSV files
+def _column_unit(header: list[str], stem: str, units: dict) -> tuple[str, float] | None:
+    hits = [(f"{stem}_{u}", s) for u, s in units.items() if f"{stem}_{u}" in header]
+    if len(hits) > 1:
+        raise DataError(f"column {stem} appears with two units: {[h[0] for h in hits]}")
+    return hits[0] if hits else None
+
+
+def read_poses_csv(path) -> tuple[np.ndarray, dict]:
+    """Poses ``(N, 4, 4)`` (m) from a targets CSV (see the module docstring) and its layout
+    (``length``: 'mm'|'m', ``orientation``: 'quat'|'deg'|'rad'), to write results alike."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise DataError(f"cannot read pose file {path}: {exc}") from exc
+    rows = list(csv.reader(io.StringIO(text)))
+    if not rows:
+        raise DataError(f"{path} is empty: expected a header x_mm,y_mm,z_mm,qw,qx,qy,qz (or rx_deg..)")
+    header = [h.strip().lower() for h in rows[0]]
+    body = [r for r in rows[1:] if any(c.strip() for c in r)]
+    pos = [_column_unit(header, c, _LENGTH) for c in "xyz"]
+    if None in pos or len({p[0].split("_")[1] for p in pos}) != 1:
+        raise DataError(f"{path}: need position columns x_mm, y_mm, z_mm (or x_m, y_m, z_m), one unit; "
+                        f"header is {rows[0]}")
+    rot = [_column_unit(header, c, _ANGLE) for c in ("rx", "ry", "rz")]
+    quat = all(c in header for c in ("qw", "qx", "qy", "qz"))
+    if quat == (None not in rot):
+        raise DataError(f"{path}: give the orientation as qw,qx,qy,qz or as rx_deg,ry_deg,rz_deg "
+                        f"(fixed-axis XYZ; or _rad), exactly one of them; header is {rows[0]}")
+    cols = [p[0] for p in pos] + (["qw", "qx", "qy", "qz"] if quat else [r[0] for r in rot])
+    idx = [header.index(c) for c in cols]
+    try:
+        data = np.array([[float(r[i]) for i in idx] for r in body], dtype=float).reshape(-1, len(cols))
+    except (ValueError, IndexError) as exc:
+        raise DataError(f"{path}: a row is short or not numeric ({exc})") from exc
+    if not np.isfinite(data).all():
+        bad = np.flatnonzero(~np.isfinite(data).all(axis=1)) + 2
+        raise DataError(f"{path}: NaN or infinite values in line(s) {bad[:10].tolist()}")
+    if data.shape[0] == 0:
+        raise DataError(f"{path} has a header but no poses")
+    p = data[:, :3] * pos[0][1]
+    if quat:
+        qn = np.linalg.norm(data[:, 3:], axis=1)
+        bad = np.flatnonzero(np.abs(qn - 1.0) > 1e-6) + 2
+        if bad.size:
+            raise DataError(f"{path}: quaternion not of unit length in line(s) {bad[:10].tolist()}")
+        R = Rotation.from_quat(data[:, 3:], scalar_first=True).as_matrix()
+        orient = "quat"
+    else:
+        R = Rotation.from_euler("xyz", data[:, 3:] * rot[0][1]).as_matrix()
+        orient = rot[0][0].split("_")[1]
+    layout = {"length": pos[0][0].split("_")[1], "orientation": orient}
+    return make_transform(R, p), layout
+
+
+def pose_columns(T: np.ndarray, layout: dict) -> tuple[list[str], np.ndarray]:
+    """Column names and values ``(N, 6|7)`` of poses ``(N, 4, 4)`` in a CSV ``layout``."""
+    u = layout["length"]
+    names = [f"x_{u}", f"y_{u}", f"z_{u}"]
+    p = T[:, :3, 3] / _LENGTH[u]
+    rot = Rotation.from_matrix(T[:, :3, :3])
+    if layout["orientation"] == "quat":
+        return names + ["qw", "qx", "qy", "qz"], np.hstack([p, rot.as_quat(scalar_first=True)])
+    a = layout["orientation"]
+    return names + [f"rx_{a}", f"ry_{a}", f"rz_{a}"], np.hstack([p, rot.as_euler("xyz") / _ANGLE[a]])
+
+
+def format_csv(columns: list[str], values: np.ndarray) -> str:
+    """CSV text with a header and full-precision numbers."""
+    lines = [",".join(columns)]
+    lines += [",".join(repr(float(v)) if isinstance(v, float | np.floating) else str(v) for v in row)
+              for row in values.tolist()]
+    return "\n".join(lines) + "\n"
+
+
+def residual_mm(robot: Robot, q: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """Position error ``(N,)`` in mm of ``robot`` at joints ``q`` against target poses."""
+    return np.linalg.norm(pose_error(targets, robot.fk(q))[:, :3], axis=1) * 1e3
