@@ -14,7 +14,7 @@ from robocal.errors import RobocalError
 
 # subcommand name -> module in robocal.cli (one file per command)
 COMMANDS = {
-    "robots": "robots",
+    "robots": "robots", "demo": "demo",
     "import": "importer", "simulate": "simulate", "evaluate": "evaluate",
     "plan": "plan", "compensate": "compensate",
 }
