@@ -16,6 +16,8 @@ from robocal.errors import IdentificationError
 SOLVERS = {
     "lsq": "lsq",
     "robust": "robust",
+    "genetic": "genetic",
+    "swarm": "swarm",
 }
 
 
