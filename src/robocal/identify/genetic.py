@@ -73,6 +73,9 @@ def check_bounds(robot, names, bounds) -> tuple[np.ndarray, np.ndarray]:
     """(lower, upper) displacement bounds ``(k,)``; they must contain 0 (the start model)."""
     k = len(names)
     lo, hi = robot.bounds(names) if bounds is None else (np.asarray(b, float) for b in bounds)
+    if np.ndim(lo) not in (0, 1) or np.size(lo) not in (1, k) or np.shape(lo) != np.shape(hi):
+        raise IdentificationError(f"bounds must be two scalars or two arrays of {k} values (one per free "
+                                  f"parameter: {', '.join(names)})")
     lo, hi = np.broadcast_to(lo, (k,)).astype(float), np.broadcast_to(hi, (k,)).astype(float)
     if not (np.isfinite(lo).all() and np.isfinite(hi).all() and (lo < hi).all()):
         raise IdentificationError("bounds must be finite with lower < upper for every parameter")
