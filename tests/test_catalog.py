@@ -140,3 +140,26 @@ def test_one_robot_fk_path_equals_general_path(name, rng):
         general = chain_frames(batched, robot.base, tool, q, frames=True)
         for a, b in zip(fast, general, strict=True):
             np.testing.assert_allclose(a, b, rtol=0, atol=1e-13)
+
+
+def test_cli_demo_prints_table_and_poses(capsys):
+    assert main(["demo", "--robot", "kuka_kr16_2"]) == 0
+    out = capsys.readouterr().out
+    assert "kuka_kr16_2" in out and "flange pose" in out and out.count("q = [") == 3
+    assert main(["demo", "--robot", "no_such_robot"]) == 2
+    assert "abb_irb120" in capsys.readouterr().err
+
+
+def test_fk_polynomial_sin_cos_and_large_angle_fallback(rng):
+    """The one-robot path's sin/cos polynomial agrees with libm; angles beyond its range use libm."""
+    from robocal.kinematics.fk import _POLY_MAX, _sin_cos
+
+    x = np.concatenate([rng.uniform(-50, 50, 5000), np.arange(-40, 41) * np.pi / 2, [0.0, 1e-300, 7e4]])
+    c, s = np.empty_like(x), np.empty_like(x)
+    _sin_cos(x, c, s, np.empty((4,) + x.shape))
+    np.testing.assert_allclose(c, np.cos(x), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(s, np.sin(x), rtol=0, atol=1e-15)
+    robot = Robot.from_catalog("abb_irb2400")
+    q = random_joints(robot, rng, 50)
+    big = q + 2 * np.pi * np.round(2 * _POLY_MAX / (2 * np.pi))
+    np.testing.assert_allclose(robot.fk(big), robot.fk(q), rtol=0, atol=1e-9)
