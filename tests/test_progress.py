@@ -77,3 +77,16 @@ def test_small_totals(total):
     with Progress(total, stream=tty, min_interval=0.0) as bar:
         bar.update(total)
     assert tty.getvalue().endswith("\n")
+
+
+def test_every_command_help_has_an_example(capsys):
+    from robocal.cli import COMMANDS, main
+
+    assert COMMANDS
+    for command in COMMANDS:
+        with pytest.raises(SystemExit) as exit_info:
+            main([command, "--help"])
+        assert exit_info.value.code == 0
+        text = capsys.readouterr().out
+        assert "Example" in text, f"`robocal {command} --help` shows no example"
+        assert f"robocal {command}" in text.split("Example", 1)[1], f"{command}: example does not run it"

@@ -202,3 +202,29 @@ def test_rpy_round_trip_including_gimbal_lock():
     mats += [rpy_to_matrix([0.3, s * np.pi / 2, -1.0]) for s in (1, -1)]
     for R in mats:
         np.testing.assert_allclose(rpy_to_matrix(matrix_to_rpy(R)), R, atol=1e-12)
+
+
+def test_hostile_names_stay_well_formed():
+    from dataclasses import replace
+
+    odd = replace(industrial(), name='a--b"<&>')
+    back = from_urdf(to_urdf(odd))
+    assert back.name == 'a--b"<&>'
+
+
+def test_cli_export_and_import(tmp_path):
+    from robocal.cli import main
+
+    model = tmp_path / "m.yaml"
+    robot = industrial(np.random.default_rng(9))
+    robot.save(model)
+    before = model.read_bytes()
+    urdf = tmp_path / "m.urdf"
+    assert main(["--quiet", "export", str(model), "--urdf", str(urdf)]) == 0
+    assert model.read_bytes() == before
+    q = np.random.default_rng(1).uniform(-2, 2, (8, 6))
+    np.testing.assert_allclose(urdf_fk(urdf.read_text(), q), robot.fk(q), atol=1e-9, rtol=0)
+    back = tmp_path / "back.yaml"
+    assert main(["--quiet", "export", str(urdf), "--yaml", str(back)]) == 0
+    np.testing.assert_allclose(Robot.load(back).fk(q), robot.fk(q), atol=1e-9, rtol=0)
+    assert main(["export", str(model)]) == 2

@@ -15,6 +15,7 @@ from robocal.errors import RobocalError
 # subcommand name -> module in robocal.cli (one file per command)
 COMMANDS = {
     "robots": "robots", "demo": "demo",
+    "report": "report", "export": "export",
     "import": "importer", "simulate": "simulate", "evaluate": "evaluate",
     "plan": "plan", "compensate": "compensate",
 }

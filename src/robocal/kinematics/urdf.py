@@ -76,7 +76,8 @@ def to_urdf(robot: Robot, name: str | None = None) -> str:
     kinematics equals ``robot.fk``; joint limits are the model's."""
     name = robot.name if name is None else name
     lines = ['<?xml version="1.0"?>',
-             f"<!-- written by robocal from model {_attr(robot.name)!s}: frames are the model's "
+             f"<!-- written by robocal from model {_attr(robot.name).replace('-', '&#45;')}: "
+             "frames are the model's "
              "MDH+beta frames; effort and velocity limits are not part of a kinematic model "
              "(0 here), set them for your robot -->",
              f'<robot name="{_attr(name)}">', '  <link name="world"/>',

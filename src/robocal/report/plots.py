@@ -1,0 +1,221 @@
+"""Report figures as inline SVG strings (matplotlib, no pyplot global state, no JavaScript).
+
+Every function takes plain arrays in the report's units (mm, deg) and returns one ``<svg>``
+element; ids inside are made unique per figure so several SVGs can share one HTML page.
+"""
+
+from __future__ import annotations
+
+import io
+import itertools
+import re
+
+import numpy as np
+
+try:
+    from matplotlib import colors as mcolors
+    from matplotlib.figure import Figure
+except ImportError as exc:  # pragma: no cover - exercised only without the extra
+    from robocal.errors import RobocalError
+
+    raise RobocalError("the HTML report needs matplotlib: pip install 'robocal[report]'") from exc
+
+BEFORE, AFTER, VALIDATION = "#d95f02", "#1b9e77", "#7570b3"
+CMAP = "viridis"
+_RC = {"svg.fonttype": "none", "svg.hashsalt": "robocal", "font.size": 9, "axes.grid": True,
+       "grid.alpha": 0.3, "axes.spines.top": False, "axes.spines.right": False}
+_counter = itertools.count()
+
+
+def _figure(w: float, h: float, left: float = 0.8, right: float = 0.2, bottom: float = 0.5,
+            top: float = 0.15, wspace: float = 0.25, hspace: float = 0.5) -> Figure:
+    """A figure with fixed margins in inches (constrained layout costs seconds per figure)."""
+    fig = Figure(figsize=(w, h))
+    fig.subplots_adjust(left=left / w, right=1 - right / w, bottom=bottom / h, top=1 - top / h,
+                        wspace=wspace, hspace=hspace)
+    return fig
+
+
+def to_svg(fig: Figure) -> str:
+    """One figure as an ``<svg>`` element with figure-unique ids (no XML prolog, no dates)."""
+    import matplotlib
+
+    buf = io.StringIO()
+    with matplotlib.rc_context(_RC):
+        fig.savefig(buf, format="svg", metadata={"Date": None, "Creator": None})
+    text = buf.getvalue()
+    text = text[text.index("<svg"):]
+    prefix = f"f{next(_counter)}-"
+    text = re.sub(r'id="([^"]+)"', lambda m: f'id="{prefix}{m.group(1)}"', text)
+    text = re.sub(r"url\(#([^)]+)\)", lambda m: f"url(#{prefix}{m.group(1)})", text)
+    return re.sub(r'href="#([^"]+)"', lambda m: f'href="#{prefix}{m.group(1)}"', text)
+
+
+def _styled(build):
+    """Build the figure inside the report's rc context (fonts, grid) and return its SVG."""
+    import matplotlib
+
+    def wrapper(*args, **kwargs) -> str:
+        with matplotlib.rc_context(_RC):
+            return to_svg(build(*args, **kwargs))
+
+    wrapper.__doc__ = build.__doc__
+    wrapper.__name__ = build.__name__
+    return wrapper
+
+
+def _wide(values: np.ndarray) -> bool:
+    """Whether positive ``values`` span more than a factor 20 (then a log axis reads better)."""
+    pos = values[values > 0]
+    return pos.size == values.size and pos.size > 1 and pos.max() / pos.min() > 20
+
+
+def _log_if_wide(ax, values: np.ndarray, which: str) -> None:
+    if _wide(values):
+        (ax.set_yscale if which == "y" else ax.set_xscale)("log")
+
+
+@_styled
+def sorted_errors(before: np.ndarray, after: np.ndarray, label: str = "position error (mm)") -> Figure:
+    """Per-observation errors ``(N,)`` before and after, each sorted descending (bars/lines)."""
+    fig = _figure(7.5, 2.8)
+    ax = fig.add_subplot()
+    x = np.arange(1, before.size + 1)
+    if before.size <= 120:
+        ax.bar(x, np.sort(before)[::-1], width=0.9, color=BEFORE, alpha=0.55, label="before")
+        ax.bar(x, np.sort(after)[::-1], width=0.9, color=AFTER, label="after")
+    else:
+        ax.fill_between(x, np.sort(before)[::-1], step="mid", color=BEFORE, alpha=0.45, label="before")
+        ax.fill_between(x, np.sort(after)[::-1], step="mid", color=AFTER, alpha=0.9, label="after")
+    _log_if_wide(ax, np.concatenate([before, after]), "y")
+    ax.set_xlabel("observations, sorted by error")
+    ax.set_ylabel(label)
+    ax.set_xlim(0.4, before.size + 0.6)
+    ax.legend(frameon=False)
+    return fig
+
+
+@_styled
+def distribution(series: list[tuple[str, np.ndarray, str]], label: str = "position error (mm)") -> Figure:
+    """Histogram and cumulative distribution of error series ``(name, values (N,), colour)``."""
+    fig = _figure(7.5, 2.8, wspace=0.3)
+    hist, cdf = fig.subplots(1, 2)
+    allv = np.concatenate([values for _, values, _ in series])
+    pos = allv[allv > 0]
+    if _wide(allv):
+        bins = np.geomspace(pos.min() * 0.98, pos.max() * 1.02, 50)
+        hist.set_xscale("log")
+        cdf.set_xscale("log")
+    else:
+        bins = np.linspace(0.0, float(allv.max()) * 1.02 if allv.size and allv.max() > 0 else 1.0, 40)
+    for name, values, colour in series:
+        hist.hist(values, bins=bins, color=colour, alpha=0.6, label=name)
+        xs = np.sort(values)
+        cdf.step(xs, np.arange(1, xs.size + 1) / xs.size * 100.0, where="post", color=colour,
+                 label=name)
+    hist.set_xlabel(label)
+    hist.set_ylabel("count")
+    cdf.set_xlabel(label)
+    cdf.set_ylabel("cumulative (%)")
+    cdf.set_ylim(0, 101)
+    cdf.axhline(95, color="grey", lw=0.8, ls="--")
+    hist.legend(frameon=False)
+    return fig
+
+
+@_styled
+def error_vs_joints(joints_deg: np.ndarray, before: np.ndarray, after: np.ndarray,
+                    label: str = "error (mm)") -> Figure:
+    """Error ``(N,)`` before/after against each joint angle of ``joints_deg`` ``(N, n)``."""
+    n = joints_deg.shape[1]
+    cols = 3
+    rows = -(-n // cols)
+    fig = _figure(7.5, 2.0 * rows, top=0.1, hspace=0.6, wspace=0.1)
+    axes = np.atleast_1d(fig.subplots(rows, cols, sharey=True)).reshape(-1)
+    for j, ax in enumerate(axes):
+        if j >= n:
+            ax.set_visible(False)
+            continue
+        ax.scatter(joints_deg[:, j], before, s=6, color=BEFORE, alpha=0.6, lw=0, label="before")
+        ax.scatter(joints_deg[:, j], after, s=6, color=AFTER, alpha=0.9, lw=0, label="after")
+        _log_if_wide(ax, np.concatenate([before, after]), "y")
+        ax.set_xlabel(f"q{j + 1} (deg)")
+        if j % cols == 0:
+            ax.set_ylabel(label)
+    axes[0].legend(frameon=False, markerscale=2)
+    return fig
+
+
+@_styled
+def points_3d(points: np.ndarray, values: np.ndarray, label: str) -> Figure:
+    """3-D scatter of ``points`` ``(N, 3)`` (mm) coloured by ``values`` ``(N,)``."""
+    fig = _figure(6.0, 4.6, left=0.0, right=0.0, bottom=0.0, top=0.0)
+    ax = fig.add_subplot(projection="3d")
+    sc = ax.scatter(points[:, 0], points[:, 1], points[:, 2], c=values, cmap=CMAP, s=9,
+                    depthshade=False)
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_zlabel("z (mm)")
+    _equal_3d(ax, points)
+    fig.colorbar(sc, ax=ax, shrink=0.6, pad=0.12, label=label)
+    return fig
+
+
+def _equal_3d(ax, points: np.ndarray) -> None:
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre, half = (lo + hi) / 2, max(float((hi - lo).max()) / 2, 1e-9)
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+
+
+@_styled
+def worst_vectors(points: np.ndarray, residuals: np.ndarray, worst: np.ndarray) -> Figure:
+    """All ``points`` (N, 3) in grey and, at the ``worst`` indices, the residual vectors
+    (measured - model, mm) scaled so the longest is 15 % of the workspace size."""
+    fig = _figure(5.2, 4.6, left=0.0, right=0.0, bottom=0.0, top=0.3)
+    ax = fig.add_subplot(projection="3d")
+    ax.scatter(points[:, 0], points[:, 1], points[:, 2], color="#bbbbbb", s=4, depthshade=False)
+    p, r = points[worst], residuals[worst]
+    longest = float(np.linalg.norm(r, axis=1).max()) if worst.size else 0.0
+    size = float((points.max(axis=0) - points.min(axis=0)).max()) or 1.0
+    scale = 0.15 * size / longest if longest > 0 else 1.0
+    ax.quiver(p[:, 0], p[:, 1], p[:, 2], r[:, 0] * scale, r[:, 1] * scale, r[:, 2] * scale,
+              color="#e7298a", lw=1.5, arrow_length_ratio=0.25)
+    ax.scatter(p[:, 0], p[:, 1], p[:, 2], color="#e7298a", s=14, depthshade=False)
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_zlabel("z (mm)")
+    ax.set_title(f"residual vectors x{scale:.3g}", fontsize=9)
+    _equal_3d(ax, points)
+    return fig
+
+
+@_styled
+def correlation(names: list[str], matrix: np.ndarray) -> Figure:
+    """Heat map of a correlation matrix ``(k, k)`` in [-1, 1] with parameter names."""
+    k = len(names)
+    side = float(np.clip(0.16 * k + 1.6, 3.5, 9.0))
+    margin = 0.9 if k <= 30 else 0.7
+    fig = _figure(side + 1.2, side, left=margin, bottom=margin, right=0.1, top=0.1)
+    ax = fig.add_subplot()
+    im = ax.imshow(matrix, cmap="RdBu_r", norm=mcolors.Normalize(-1, 1), interpolation="nearest")
+    ax.grid(False)
+    fontsize = 8 if k <= 30 else 6 if k <= 50 else 4
+    ax.set_xticks(range(k), names, rotation=90, fontsize=fontsize)
+    ax.set_yticks(range(k), names, fontsize=fontsize)
+    fig.colorbar(im, ax=ax, shrink=0.8, label="correlation")
+    return fig
+
+
+@_styled
+def history(iterations: np.ndarray, values: np.ndarray, label: str) -> Figure:
+    """Solver history: ``values`` ``(m,)`` against ``iterations`` (log scale when positive)."""
+    fig = _figure(7.5, 2.4)
+    ax = fig.add_subplot()
+    ax.plot(iterations, values, "o-", color=AFTER, ms=3)
+    if (values > 0).all() and values.max() / max(values.min(), 1e-300) > 20:
+        ax.set_yscale("log")
+    ax.set_xlabel("iteration")
+    ax.set_ylabel(label)
+    return fig

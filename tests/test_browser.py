@@ -1,0 +1,92 @@
+"""The HTML report in a real browser (headless Chromium): renders without console messages,
+every figure is in the DOM, and the screenshot is a rich, non-blank page."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+pytest.importorskip("matplotlib", reason="the report needs matplotlib (report/test extra)")
+
+from test_report import section_ids, svg_count, synthetic_result  # noqa: E402
+
+from robocal.report.html import write_report  # noqa: E402
+
+BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync",
+         "--hide-scrollbars", "--enable-logging=stderr", "--v=0"]
+CONSOLE = re.compile(r":CONSOLE[:(]\d*\)?\] (.*)")
+
+
+@pytest.fixture(scope="module")
+def browser() -> str:
+    for name in BROWSERS:
+        path = shutil.which(name)
+        if path:
+            return path
+    pytest.skip("no Chromium found (Debian: apt-get install chromium; `make test` installs it where "
+                "apt-get is available)")
+
+
+def run_browser(browser: str, tmp_path, url: str, *extra: str) -> subprocess.CompletedProcess:
+    profile = tmp_path / f"profile{len(list(tmp_path.glob('profile*')))}"
+    return subprocess.run([browser, *FLAGS, f"--user-data-dir={profile}", *extra, url],
+                          capture_output=True, text=True, timeout=120, check=False)
+
+
+def console_messages(stderr: str) -> list[str]:
+    return [m.group(1) for m in CONSOLE.finditer(stderr)]
+
+
+def test_console_detection_works(browser, tmp_path):
+    """Negative control: a page with a script error and a blocked network load is caught."""
+    page = tmp_path / "bad.html"
+    page.write_text("<!DOCTYPE html><html><head><meta http-equiv='Content-Security-Policy' "
+                    "content=\"default-src 'none'\"></head><body><img src='http://192.0.2.1/x.png'>"
+                    "</body></html>")
+    messages = console_messages(run_browser(browser, tmp_path, page.as_uri(), "--dump-dom").stderr)
+    assert any("Content Security Policy" in m for m in messages), messages
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    path = tmp_path_factory.mktemp("report") / "report.html"
+    write_report(synthetic_result(11, n_poses=80), path)
+    return path
+
+
+def test_report_renders_without_console_messages(browser, tmp_path, report):
+    proc = run_browser(browser, tmp_path, report.as_uri(), "--dump-dom")
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert console_messages(proc.stderr) == []
+    dom = proc.stdout
+    source = report.read_text(encoding="utf-8")
+    assert svg_count(dom) == svg_count(source) == 7
+    assert section_ids(dom) == section_ids(source)
+    assert len(re.findall(r"<table", dom)) >= 8
+
+
+def test_screenshot_shows_the_plots(browser, tmp_path, report):
+    from PIL import Image
+
+    shot = tmp_path / "report.png"
+    proc = run_browser(browser, tmp_path, report.as_uri(), f"--screenshot={shot}",
+                       "--window-size=1280,4000")
+    assert shot.exists(), proc.stderr[-2000:]
+    assert console_messages(proc.stderr) == []
+    img = np.asarray(Image.open(shot).convert("RGB"))
+    assert img.shape == (4000, 1280, 3)
+    colours = np.unique(img.reshape(-1, 3) // 8, axis=0)  # 32 levels per channel
+    assert len(colours) > 300, f"only {len(colours)} distinct colours: blank or unstyled page"
+    ink = (img.min(axis=2) < 200).mean()
+    assert ink > 0.05, f"only {ink:.1%} of the page is drawn on"
+    # the 'before' (orange, partly transparent) and 'after' (green) series are on screen
+    r, g, b = (img[..., k].astype(int) for k in range(3))
+    orange = ((r - b > 80) & (r > g + 30)).sum()
+    green = ((g - r > 60) & (g > b)).sum()
+    assert orange > 5000 and green > 2000, (orange, green)
