@@ -17,6 +17,11 @@ demo: $(STAMP)
 	$(VENV)/bin/robocal demo
 
 test: $(STAMP)
+	@# headless Chromium for tests/test_browser.py; where it cannot be installed that test skips
+	@command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || \
+	  { command -v apt-get >/dev/null 2>&1 && \
+	    (apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium) >/dev/null 2>&1; } || \
+	  echo "chromium not installed (no apt-get or no permission): the browser test will be skipped"
 	$(PY) -m ruff check .
 	$(PY) -m pytest -q
 
