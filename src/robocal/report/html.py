@@ -35,7 +35,7 @@ tr.fixed td{color:#999}tr.dropped td{background:#fff4e5}
 .kpi b{display:block;font-size:22px}.kpi span{color:#666;font-size:12px}
 .good{color:#1b9e77}.bad{color:#d95f02}.warn{background:#fff4e5;border-left:4px solid #d95f02;
  padding:6px 10px;margin:6px 0}
-figure{margin:10px 0 18px}figure svg{max-width:100%;height:auto}figcaption{color:#555;font-size:12px}
+figure{margin:10px 0 18px}figure svg{width:100%;height:auto}figcaption{color:#555;font-size:12px}
 .row{display:flex;flex-wrap:wrap;gap:12px}.row figure{flex:1 1 460px}
 .note{color:#666;font-size:12px}
 @media print{body{background:#fff}main{padding:0}h2{break-after:avoid}figure{break-inside:avoid}}

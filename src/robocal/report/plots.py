@@ -130,7 +130,7 @@ def error_vs_joints(joints_deg: np.ndarray, before: np.ndarray, after: np.ndarra
     n = joints_deg.shape[1]
     cols = 3
     rows = -(-n // cols)
-    fig = _figure(7.5, 2.0 * rows, top=0.1, hspace=0.6, wspace=0.1)
+    fig = _figure(7.5, 2.0 * rows + 0.3, top=0.35, hspace=0.6, wspace=0.1)
     axes = np.atleast_1d(fig.subplots(rows, cols, sharey=True)).reshape(-1)
     for j, ax in enumerate(axes):
         if j >= n:
@@ -142,7 +142,8 @@ def error_vs_joints(joints_deg: np.ndarray, before: np.ndarray, after: np.ndarra
         ax.set_xlabel(f"q{j + 1} (deg)")
         if j % cols == 0:
             ax.set_ylabel(label)
-    axes[0].legend(frameon=False, markerscale=2)
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="upper right", ncols=2, frameon=False,
+               markerscale=2)
     return fig
 
 
