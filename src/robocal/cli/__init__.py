@@ -17,6 +17,7 @@ COMMANDS = {
     "robots": "robots", "demo": "demo",
     "report": "report", "export": "export",
     "import": "importer", "simulate": "simulate", "evaluate": "evaluate",
+    "calibrate": "calibrate",
     "plan": "plan", "compensate": "compensate",
 }
 

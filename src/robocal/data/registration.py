@@ -82,7 +82,7 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
         B = umeyama(np.einsum("nij,nj->ni", Rf, t_new[smr]) + of, p)
         step = np.abs(t_new - t).max()
         t = t_new
-        if step < 1e-10:
+        if step < 1e-6:  # Gauss-Newton below polishes to machine precision
             break
     # 2. Gauss-Newton on (B translation, B rotation increment, offsets)
     it = 0

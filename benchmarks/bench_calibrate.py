@@ -1,0 +1,110 @@
+"""Calibration speed: robocal lsq vs scipy least_squares with a finite-difference Jacobian on the
+same residual (what pybotics does) vs pybotics itself, simulated ABB IRB 2600, same run."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from robocal import Robot
+from robocal.calibration import calibrate
+from robocal.data.registration import register
+from robocal.data.simulate import simulate_tracker
+from robocal.identify.problem import CalibrationProblem
+from robocal.report.metrics import position_stats
+
+PYBOTICS_MAX_POSES = 100  # pybotics loops over poses in Python: ~minutes per 100-pose fit
+
+
+def _best_time(fn, repeat: int) -> tuple[float, object]:
+    best, out = np.inf, None
+    for _ in range(repeat):
+        t = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t)
+    return best, out
+
+
+def _validation_rms(robot, val) -> float:
+    return position_stats(val.points - robot.fk(val.joints, smr=val.smr)[:, :3, 3])["rms"]
+
+
+def scipy_fd(nominal, cal, names):
+    """scipy.optimize.least_squares, 2-point finite-difference Jacobian, same residual."""
+    start = register(nominal, cal)
+    problem = CalibrationProblem(start, cal)
+    state0 = problem.start(start)
+
+    def fun(x):
+        return problem.residuals(problem.step(state0, names, x))
+
+    sol = least_squares(fun, np.zeros(len(names)), jac="2-point", method="trf", x_scale="jac",
+                        xtol=1e-12, ftol=1e-12)
+    return problem.step(state0, names, sol.x).robot
+
+
+def pybotics_fit(nominal, cal):
+    """pybotics' own accuracy optimisation (plain MDH, per-pose error norms, scipy 'lm')."""
+    from pybotics.kinematic_chain import MDHKinematicChain
+    from pybotics.optimization import OptimizationHandler, optimize_accuracy
+    from pybotics.robot import Robot as PRobot
+
+    start = register(nominal, cal)
+    rows = np.column_stack([start.alpha, start.a * 1e3, start.theta, start.d * 1e3])
+    probot = PRobot(MDHKinematicChain(rows))
+    world = start.base.copy()
+    world[:3, 3] *= 1e3  # pybotics works in mm
+    probot.world_frame = world
+    probot.tool.position = start.tool[:3, 3] * 1e3
+    mask = np.ones((6, 4), bool)
+    mask[0] = False  # joint 1 is redundant with the world frame
+    mask[1, 3] = mask[5, 3] = mask[5, 2] = False  # d2 ~ d3 (parallel axes), d6 ~ tool z, theta6 ~ tool
+    handler = OptimizationHandler(probot, kinematic_chain_mask=mask.ravel().tolist(),
+                                  tool_mask=[True] * 3 + [False] * 3, world_mask=[True] * 6)
+    x0 = handler.generate_optimization_vector()
+    sol = least_squares(optimize_accuracy, x0, args=(handler, cal.joints, cal.points * 1e3), method="lm")
+    handler.apply_optimization_vector(sol.x)
+    fitted = handler.robot
+
+    def rms(val):
+        pred = np.array([fitted.fk(q)[:3, 3] for q in val.joints]) / 1e3
+        return position_stats(val.points - pred)["rms"]
+
+    return rms
+
+
+def _pybotics_rows(nominal, cal, val) -> list:
+    try:
+        import pybotics  # noqa: F401
+    except ImportError:
+        print("  (pybotics not installed: `make bench` installs it with --no-deps)")
+        return []
+    if len(cal) > PYBOTICS_MAX_POSES:
+        print(f"  (pybotics skipped above {PYBOTICS_MAX_POSES} poses: it needs minutes per fit)")
+        return []
+    t_pb, rms = _best_time(lambda: pybotics_fit(nominal, cal), 1)
+    return [("pybotics (FD J, per-pose norms)", t_pb, rms(val))]
+
+
+def main() -> None:
+    nominal = Robot.from_catalog("abb_irb2600")
+    print("calibration: simulated abb_irb2600, noise 0.02 mm, 200 validation poses")
+    print(f"{'poses':>6} {'method':<28} {'time':>10} {'val RMS mm':>11} {'speed-up':>9}")
+    for n in (100, 1000):
+        sim = simulate_tracker(nominal, n + 200, seed=42)
+        cal = sim.data.subset(np.flatnonzero(sim.data.pose_id < n))
+        val = sim.data.subset(np.flatnonzero(sim.data.pose_id >= n))
+        t_rc, res = _best_time(lambda cal=cal: calibrate(nominal, cal), 5)
+        rows = [("robocal lsq (analytic J)", t_rc, _validation_rms(res.robot, val))]
+        t_fd, fd_robot = _best_time(lambda cal=cal, names=res.names: scipy_fd(nominal, cal, names), 2)
+        rows.append(("scipy least_squares (FD J)", t_fd, _validation_rms(fd_robot, val)))
+        rows += _pybotics_rows(nominal, cal, val)
+        for label, t, rms in rows:
+            print(f"{n:>6} {label:<28} {t * 1e3:>8.1f}ms {rms:>11.4f} {t / t_rc:>8.1f}x")
+        print(f"{'':>6} noise floor of the validation set: {sim.noise_floor_mm:.4f} mm (whole set)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,74 @@
+"""``robocal calibrate``: identify the robot's parameters from measurements."""
+
+from __future__ import annotations
+
+import argparse
+
+EPILOG = """Examples:
+  robocal calibrate data.csv --robot abb_irb2600 --validate val.csv -o calibrated.yaml --json result.json
+  robocal calibrate data.csv --robot nominal.yaml --method robust --set k0=1.5 --set k1=3.0
+  robocal calibrate data.csv --robot meca500 --params "a2 a3 d4 theta2 theta3" --report report.html
+"""
+
+
+def _option(text: str):
+    key, sep, value = text.partition("=")
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    for convert in (int, float):
+        try:
+            return key, convert(value)
+        except ValueError:
+            pass
+    return key, value
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("calibrate", help="identify the parameters from measurements",
+                       description="Register the tracker frame, select the identifiable parameters, "
+                                   "identify them, and report accuracy before and after (mm).",
+                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("data", help="canonical measurement CSV (robocal import / simulate)")
+    p.add_argument("--robot", required=True, help="nominal model: catalog name or model YAML")
+    p.add_argument("--method", default="lsq", help="lsq (default), robust, genetic, swarm, neural")
+    p.add_argument("--params", default="auto",
+                   help="auto (identifiable default set), all, or names separated by spaces/commas")
+    p.add_argument("--validate", metavar="VAL.csv", help="measurements to judge the result on")
+    p.add_argument("-o", "--output", metavar="calibrated.yaml", help="write the calibrated model")
+    p.add_argument("--json", metavar="result.json", help="write the full result as JSON")
+    p.add_argument("--report", metavar="report.html", help="write the HTML report")
+    p.add_argument("--seed", type=int, default=0, help="random seed of stochastic methods")
+    p.add_argument("--set", dest="options", type=_option, action="append", default=[],
+                   metavar="KEY=VALUE", help="a method option, e.g. k0=1.5, ridge=gcv, population=60")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from robocal.calibration import calibrate
+    from robocal.data.measurements import Measurements
+    from robocal.evaluate import load_model
+
+    robot = load_model(args.robot)
+    data = Measurements.load(args.data, robot=robot)
+    validation = Measurements.load(args.validate, robot=robot) if args.validate else None
+    result = calibrate(robot, data, method=args.method, params=args.params, validation=validation,
+                       seed=args.seed, progress=not args.quiet, **dict(args.options))
+    # every output is computed before the first is written: a failure leaves nothing behind
+    report = None
+    if args.report:
+        from robocal.report.html import render_report
+
+        report = render_report(result.to_dict())
+    if args.output:
+        result.robot.save(args.output)
+    if args.json:
+        result.save_json(args.json)
+    if report is not None:
+        from robocal.kinematics.yaml_io import write_atomic
+
+        write_atomic(args.report, report)
+    print(result.summary())
+    for path in (args.output, args.json, args.report):
+        if path:
+            print(f"wrote {path}")
+    return 0
