@@ -25,7 +25,6 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from robocal.errors import DataError
-from robocal.ik.numeric import nominal_seeds
 from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
 from robocal.kinematics.model import Robot
@@ -69,15 +68,13 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     """Corrected joints and Cartesian targets for world target poses ``(N, 4, 4)`` (m).
 
     Seeds: the closed-form solution of ``nominal`` (needs its OPW form) in slot ``branch``
-    (None: per target the lowest slot inside the limits), with the calibrated base and tool; or
+    (None: per target the lowest slot inside the limits, then the next ones where the calibrated
+    model has no solution in it), with the calibrated base and tool; or
     explicit ``seeds`` ``(N, n)`` rad. Targets the calibrated model cannot reach to 1e-10 m /
     1e-9 rad are flagged in ``converged`` (their joints are the best found).
     """
     T = check_poses(targets)
-    if seeds is None:
-        seed_model = nominal.with_frames(base=calibrated.base, tool=calibrated.tool)
-        seeds = nominal_seeds(seed_model, T, branch)
-    res = ik_solve(calibrated, T, seeds)
+    res = ik_solve(calibrated, T, seeds, branch=branch, nominal=nominal)
     return Compensation(joints=res.joints, corrected_targets=nominal.fk(res.joints),
                         converged=res.converged, position_error=res.position_error,
                         orientation_error=res.orientation_error,

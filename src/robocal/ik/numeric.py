@@ -39,40 +39,75 @@ class IKResult:
         return np.flatnonzero(~self.converged)
 
 
-def nominal_seeds(robot: Robot, T: np.ndarray, branch: int | None = None) -> np.ndarray:
-    """Closed-form seeds ``(N, 6)`` from the nominal links with this robot's base and tool.
+def _nominal_model(robot: Robot, nominal: Robot | None) -> Robot:
+    return (robot.nominal_robot() if nominal is None else nominal).with_frames(base=robot.base,
+                                                                                tool=robot.tool)
+
+
+def _nominal_candidates(robot: Robot, T: np.ndarray, nominal: Robot | None = None) -> np.ndarray:
+    """Nominal closed-form solutions ``(N, 8, 6)`` ordered per pose: inside the limits first,
+    then the rest that exist, each in slot order; NaN rows last."""
+    sols = solve_branches(_nominal_model(robot, nominal), T)
+    exists = np.isfinite(sols).all(axis=2)
+    inside = exists & ((sols >= robot.limits[:, 0]) & (sols <= robot.limits[:, 1])).all(axis=2)
+    rank = np.where(inside, 0, np.where(exists, 1, 2)) * 8 + np.arange(8)
+    order = np.argsort(rank, axis=1)
+    return np.take_along_axis(sols, order[:, :, None], axis=1)
+
+
+def nominal_seeds(robot: Robot, T: np.ndarray, branch: int | None = None,
+                  nominal: Robot | None = None) -> np.ndarray:
+    """Closed-form seeds ``(N, 6)`` from the nominal links (``nominal``, default the robot's own
+    nominal model) with this robot's base and tool.
 
     ``branch`` picks the slot (0..7, see :mod:`robocal.ik.opw_ik`); None takes, per pose, the
     lowest slot inside the joint limits, else the lowest that exists. Rows without a closed-form
     solution are NaN (those poses are then reported as not converged).
     """
-    nominal = robot.nominal_robot().with_frames(base=robot.base, tool=robot.tool)
-    sols = solve_branches(nominal, T)
     if branch is not None:
         if not 0 <= int(branch) < 8:
             raise DataError(f"branch must be 0..7 (slot = 4 * wrist_flip + 2 * shoulder + elbow), "
                             f"got {branch}")
-        return sols[:, int(branch)]
-    exists = np.isfinite(sols).all(axis=2)
-    inside = exists & ((sols >= robot.limits[:, 0]) & (sols <= robot.limits[:, 1])).all(axis=2)
-    pick = np.where(inside.any(axis=1), np.argmax(inside, axis=1), np.argmax(exists, axis=1))
-    return sols[np.arange(len(T)), pick]
+        return solve_branches(_nominal_model(robot, nominal), T)[:, int(branch)]
+    return _nominal_candidates(robot, T, nominal)[:, 0]
 
 
-def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, max_iter: int = 100,
+def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal: Robot | None = None,
+          max_iter: int = 100,
           pos_tol: float = POS_TOL, rot_tol: float = ROT_TOL, strict: bool = False) -> IKResult:
     """Numeric IK: joints (rad) putting the TCP of ``robot`` at world ``poses`` ``(N, 4, 4)`` (m).
 
     ``seeds``: ``(N, n)`` starting joints (rad), or None for the nominal closed-form solution
-    in ``branch`` (see :func:`nominal_seeds`; needs an OPW form on the nominal model). Converged
+    in ``branch`` (see :func:`nominal_seeds`; needs an OPW form on the nominal model, ``nominal``
+    or the robot's own); with
+    neither, each pose starts from its preferred nominal branch and, if that fails, tries the
+    next ones (inside the limits first, then slot order). Converged
     means position error <= ``pos_tol`` (1e-10 m) and rotation error <= ``rot_tol`` (1e-9 rad).
     Poses that do not converge are flagged in ``converged``; ``strict=True`` raises
     UnreachableError listing them instead.
     """
     T = check_poses(poses)
     N, n = T.shape[0], robot.n_joints
+    if seeds is None and branch is None:
+        # per pose the preferred nominal branch; where the calibrated model has no solution in
+        # it (e.g. near a stretched arm), the next branch in preference order
+        cands = _nominal_candidates(robot, T, nominal)
+        res = solve(robot, T, cands[:, 0], max_iter=max_iter, pos_tol=pos_tol, rot_tol=rot_tol)
+        for b in range(1, 8):
+            retry = np.flatnonzero(~res.converged & np.isfinite(cands[:, b]).all(axis=1))
+            if retry.size == 0:
+                break
+            alt = solve(robot, T[retry], cands[retry, b], max_iter=max_iter, pos_tol=pos_tol,
+                        rot_tol=rot_tol)
+            take = retry[alt.converged]
+            for arr, new in ((res.joints, alt.joints), (res.seeds, alt.seeds)):
+                arr[take] = new[alt.converged]
+            res.converged[take] = True
+            res.position_error[take] = alt.position_error[alt.converged]
+            res.orientation_error[take] = alt.orientation_error[alt.converged]
+        return _finish(res, N, pos_tol, rot_tol, strict)
     if seeds is None:
-        q0 = nominal_seeds(robot, T, branch)
+        q0 = nominal_seeds(robot, T, branch, nominal)
     else:
         q0 = np.asarray(seeds, dtype=float)
         if q0.shape == (n,):
@@ -114,8 +149,12 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, max_ite
     converged = (pe <= pos_tol) & (re <= rot_tol) & np.isfinite(q0).all(axis=1)
     q = np.remainder(q + np.pi, 2 * np.pi) - np.pi
     q = np.where(q < robot.limits[:, 0], q + 2 * np.pi, np.where(q > robot.limits[:, 1], q - 2 * np.pi, q))
-    result = IKResult(q, converged, pe, re, q0, it)
-    if strict and not converged.all():
+    return _finish(IKResult(q, converged, pe, re, np.array(q0), it), N, pos_tol, rot_tol, strict)
+
+
+def _finish(result: IKResult, N: int, pos_tol: float, rot_tol: float, strict: bool) -> IKResult:
+    pe = result.position_error
+    if strict and not result.converged.all():
         bad = result.failed
         raise UnreachableError(
             f"numeric IK did not reach {bad.size} of {N} pose(s) to {pos_tol:g} m / {rot_tol:g} rad: "
