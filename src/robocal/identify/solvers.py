@@ -18,6 +18,7 @@ SOLVERS = {
     "robust": "robust",
     "genetic": "genetic",
     "swarm": "swarm",
+    "neural": "neural",
 }
 
 
