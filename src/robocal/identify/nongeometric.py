@@ -12,7 +12,8 @@ dependence of tau_ij on the link parameters is left out of the link columns (sec
 Which parameters are kept: a third identifiability stage after the geometric one — the part of
 each column the kept geometric columns explain is removed, then pivoted QR — so of a
 confounded pair the geometric parameter is kept (e.g. theta_i rather than gear_i c1 on a joint
-that hardly moves). The learned residual is :mod:`robocal.identify.residual`.
+that hardly moves). The learned residual (:mod:`robocal.identify.residual`) is fitted on
+the calibrated model's remaining errors, separately.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from robocal.errors import IdentificationError
 from robocal.identify.identifiability import DEFAULT_RTOL, _pivoted_rank
 from robocal.kinematics.joint_errors import TERMS, JointErrorModel, joint_error_basis, term_names
 
-ALL_TERMS = (*TERMS, "residual")
+ALL_TERMS = TERMS
 
 
 def parse_terms(spec) -> list[str]:
