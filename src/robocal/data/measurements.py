@@ -230,15 +230,7 @@ class Measurements:
         """Read a canonical measurement CSV. ``robot`` (or ``reach`` in m) enables the joint count and
         length plausibility checks; every problem is a DataError/UnitError naming file and row."""
         path = Path(path)
-        try:
-            raw = path.read_bytes()
-        except OSError as exc:
-            raise DataError(f"cannot read measurement file {path}: {exc.strerror}") from None
-        try:
-            text = raw.decode("utf-8-sig")
-        except UnicodeDecodeError:
-            raise DataError(f"{path}: not a UTF-8 text file; export the measurements as CSV") from None
-        data = parse_csv(text, str(path))
+        data = parse_csv(_read_text(path), str(path))
         if robot is not None:
             data.check_against(robot, reach, str(path))
         elif reach is not None:
@@ -304,6 +296,45 @@ def _check_plausible(data: Measurements, reach: float, where: str) -> None:
         raise UnitError(f"{where}the points span {extent:.4g} m but a robot of {reach:.3g} m reach can move "
                         f"an SMR over at most ~{limit:.3g} m (e.g. row {row}): the length unit is "
                         "probably wrong; if the values are millimetres, name the columns x_mm, y_mm, z_mm")
+
+
+def _read_text(path: Path) -> str:
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise DataError(f"cannot read measurement file {path}: {exc.strerror}") from None
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise DataError(f"{path}: not a UTF-8 text file; export the measurements as CSV") from None
+
+
+def read_joints(path, robot=None) -> np.ndarray:
+    """Only the joint columns (q1_deg.. or _rad) of a CSV, ``(N, n)`` rad — for planning a pose
+    set before anything is measured. Other columns are ignored."""
+    path = Path(path)
+    lines = [ln for ln in _read_text(path).splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    if not lines:
+        raise DataError(f"{path}: the file is empty; it needs a header (q1_deg,...) and joint rows")
+    rows = list(csv.reader(lines))
+    header = [h.strip().lower() for h in rows[0]]
+    cols = {}
+    for c, name in enumerate(header):
+        role = _header_role(name) if re.fullmatch(r"q\d+_[a-z]+", name) else None
+        if role is not None:
+            cols[role[1]] = (c, role[2])
+    n = len(cols)
+    if n == 0 or sorted(cols) != list(range(1, n + 1)):
+        raise DataError(f"{path}: joint columns must be q1_deg..qn_deg (or _rad), found {header}")
+    q = np.empty((len(rows) - 1, n))
+    for i, row in enumerate(rows[1:], start=2):
+        try:
+            q[i - 2] = [float(row[cols[j][0]]) * cols[j][1] for j in range(1, n + 1)]
+        except (ValueError, IndexError):
+            raise DataError(f"{path}, line {i}: expected {n} numeric joint values") from None
+    if len(q) == 0:
+        raise DataError(f"{path}: no joint rows below the header")
+    return q if robot is None else robot.check_joints(q)
 
 
 def _header_role(name: str):

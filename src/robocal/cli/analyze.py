@@ -1,0 +1,50 @@
+"""``robocal analyze``: identifiability and observability of a pose set, before measuring."""
+
+from __future__ import annotations
+
+import argparse
+
+EPILOG = """Examples:
+  robocal analyze planned_poses.csv --robot abb_irb2600 --tool-mm 30,20,80   # joints only is enough
+  robocal analyze data.csv --robot meca500 --kind pose
+"""
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("analyze", help="identifiability and observability of a pose set",
+                       description="Which parameters a set of poses can identify, the condition "
+                                   "number of the normal matrix and the observability indices O1-O4.",
+                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("data", help="CSV with joint columns q1_deg.. (or _rad); measurements optional")
+    p.add_argument("--robot", required=True, help="nominal model: catalog name or model YAML")
+    p.add_argument("--kind", choices=("point", "pose"), default="point",
+                   help="what will be measured at each pose (default: point)")
+    p.add_argument("--params", default="auto", help="auto, all, or names")
+    p.add_argument("--tool-mm", metavar="X,Y,Z",
+                   help="the SMR/tool position on the flange in mm (default: the model's tool); "
+                        "an SMR on the flange axis leaves the last joint's offset unobservable")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from robocal.calibration import analyze
+    from robocal.data.measurements import read_joints
+    from robocal.errors import DataError
+    from robocal.evaluate import load_model
+
+    robot = load_model(args.robot)
+    if args.tool_mm:
+        try:
+            xyz = [float(v) * 1e-3 for v in args.tool_mm.split(",")]
+        except ValueError:
+            xyz = []
+        if len(xyz) != 3:
+            raise DataError(f"--tool-mm needs three numbers X,Y,Z, got {args.tool_mm!r}")
+        tool = robot.tool.copy()
+        tool[:3, 3] = xyz
+        robot = robot.with_frames(tool=tool)
+    joints = read_joints(args.data, robot)
+    ident = analyze(robot, joints, kind=args.kind, params=args.params)
+    print(f"{len(joints)} poses of {robot.name}, {args.kind} measurements")
+    print(ident.summary())
+    return 0

@@ -1,0 +1,79 @@
+"""``robocal calibrate`` and ``robocal analyze`` through the command line."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from robocal import DataError, Robot
+from robocal.cli import main
+from robocal.data.measurements import Measurements, read_joints
+
+
+@pytest.fixture
+def campaign(tmp_path):
+    out = tmp_path / "sim.csv"
+    assert main(["simulate", "--robot", "abb_irb2600", "--poses", "160", "--seed", "3",
+                 "-o", str(out), "--truth", str(tmp_path / "truth.yaml")]) == 0
+    data = Measurements.load(out)
+    data.subset(np.flatnonzero(data.pose_id < 100)).save(tmp_path / "cal.csv")
+    data.subset(np.flatnonzero(data.pose_id >= 100)).save(tmp_path / "val.csv")
+    return tmp_path
+
+
+def test_calibrate_writes_model_and_json(campaign, capsys):
+    d = campaign
+    rc = main(["--quiet", "calibrate", str(d / "cal.csv"), "--robot", "abb_irb2600",
+               "--validate", str(d / "val.csv"), "-o", str(d / "cal.yaml"), "--json", str(d / "r.json")])
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "->" in text and "not identifiable" in text
+    result = json.loads((d / "r.json").read_text())
+    assert result["validation"]["rms"] < 0.05 and result["before"]["rms"] > 0.2
+    calibrated = Robot.load(d / "cal.yaml")
+    truth = Robot.load(d / "truth.yaml")
+    q = Measurements.load(d / "val.csv").joints
+    np.testing.assert_allclose(calibrated.fk(q)[:, :3, 3], truth.fk(q)[:, :3, 3], atol=1e-4)
+
+
+def test_calibrate_method_options(campaign):
+    d = campaign
+    assert main(["--quiet", "calibrate", str(d / "cal.csv"), "--robot", "abb_irb2600", "--method",
+                 "robust", "--set", "k0=2.0", "--set", "ridge=gcv", "--json", str(d / "r.json")]) == 0
+    settings = json.loads((d / "r.json").read_text())["settings"]
+    assert settings["k0"] == 2.0 and settings["ridge"] == "gcv"
+
+
+def test_failed_calibration_writes_nothing(campaign, capsys):
+    d = campaign
+    few = Measurements.load(d / "cal.csv").subset(np.arange(6))
+    few.save(d / "few.csv")
+    rc = main(["calibrate", str(d / "few.csv"), "--robot", "abb_irb2600", "-o", str(d / "out.yaml"),
+               "--json", str(d / "out.json")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "more poses" in err and "Traceback" not in err
+    assert not (d / "out.yaml").exists() and not (d / "out.json").exists()
+    rc = main(["calibrate", str(d / "cal.csv"), "--robot", "no_such_robot"])
+    assert rc == 2 and "abb_irb2600" in capsys.readouterr().err
+
+
+def test_analyze_a_planned_pose_set(tmp_path, capsys):
+    q = np.random.default_rng(0).uniform(-60, 60, (40, 6))
+    path = tmp_path / "plan.csv"
+    path.write_text("q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg\n"
+                    + "\n".join(",".join(map(str, r)) for r in q) + "\n")
+    assert main(["analyze", str(path), "--robot", "abb_irb2600", "--tool-mm", "30,20,80"]) == 0
+    out = capsys.readouterr().out
+    assert "rank 27 of 34" in out and "not identifiable: d1" in out
+    np.testing.assert_allclose(read_joints(path), np.deg2rad(q))
+
+
+@pytest.mark.parametrize("text", ["", "a,b\n1,2\n", "q1_deg,q2_deg\n1,x\n", "q1_deg,q3_deg\n1,2\n",
+                                  "q1_deg,q2_deg\n"])
+def test_read_joints_bad_files(tmp_path, text):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with pytest.raises(DataError):
+        read_joints(path)
