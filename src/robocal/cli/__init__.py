@@ -17,7 +17,7 @@ COMMANDS = {
     "robots": "robots", "demo": "demo",
     "report": "report", "export": "export",
     "import": "importer", "simulate": "simulate", "evaluate": "evaluate",
-    "calibrate": "calibrate",
+    "calibrate": "calibrate", "analyze": "analyze",
     "plan": "plan", "compensate": "compensate",
 }
 
