@@ -1,7 +1,11 @@
 """robocal: kinematic calibration, compensation and trajectory IK for serial industrial robots."""
 
 from robocal import ik  # rc.ik.solve_all, rc.ik.solve, rc.ik.plan_path
+from robocal.calibration import CalibrationResult, analyze, calibrate
 from robocal.compensate import compensate
+from robocal.data.measurements import Measurements
+from robocal.data.registration import register
+from robocal.data.simulate import simulate_tracker
 from robocal.errors import (
     ConvergenceError,
     DataError,
@@ -11,11 +15,19 @@ from robocal.errors import (
     UnitError,
     UnreachableError,
 )
+from robocal.evaluate import evaluate
 from robocal.kinematics.model import Robot
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "CalibrationResult",
+    "Measurements",
+    "analyze",
+    "calibrate",
+    "evaluate",
+    "register",
+    "simulate_tracker",
     "ConvergenceError",
     "DataError",
     "IdentificationError",
