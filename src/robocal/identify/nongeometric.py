@@ -107,8 +107,8 @@ def select_parameters(problem, state, names: Sequence[str], candidates: Sequence
     J = trial.jacobian(state.robot, names, nu) / problem.sigma[:, None]
     k0 = J.shape[1] - len(candidates)
     norms = np.linalg.norm(J, axis=0)
-    norms = np.where(norms > 1e-300, norms, 1.0)
-    Js = J / norms
+    Js = J / np.where(norms > 1e-300, norms, 1.0)
+    Js[:, norms <= 1e-9 * norms.max(initial=0.0)] = 0.0  # no effect (e.g. torque about a vertical axis)
     _, Qg = _pivoted_rank(Js[:, :k0], rtol)
     ng = Js[:, k0:]
     ng = ng - Qg @ (Qg.T @ ng)

@@ -1,0 +1,116 @@
+"""Non-geometric terms: analytic columns vs finite differences, fk/YAML round trip, simulated
+truth with injected compliance and gear errors, the residual model, real Meca500 data."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from conftest import require_datasets
+
+from robocal import Robot
+from robocal.calibration import calibrate
+from robocal.data.simulate import simulate_tracker
+from robocal.errors import IdentificationError, ModelError
+from robocal.identify.nongeometric import NonGeometricObservation, parse_terms
+from robocal.identify.problem import CalibrationProblem
+from robocal.identify.residual import ResidualModel
+from robocal.kinematics.joint_errors import JointErrorModel, term_names
+
+NAMES = ["comp2_3", "comp2_6", "comp3_6", "comp5_6", "gear1_s1", "gear2_c1", "gear3_s2", "gear5_c2"]
+VALUES = np.array([4e-4, 3e-4, 5e-4, 2e-3, 2e-4, -1.5e-4, 1e-4, -2e-4])
+
+
+def _robot_with_errors():
+    robot = Robot.from_catalog("abb_irb2600")
+    return replace(robot, joint_errors=JointErrorModel(tuple(NAMES), VALUES))
+
+
+def test_fk_applies_joint_offsets_and_yaml_round_trips(tmp_path, rng):
+    robot = _robot_with_errors()
+    q = rng.uniform(-1.5, 1.5, (20, 6))
+    dq = robot.joint_errors.offsets(robot, q)
+    plain = replace(robot, joint_errors=None)
+    assert np.allclose(robot.fk(q), plain.fk(q + dq))
+    # gear terms by hand
+    assert np.allclose(dq[:, 0], 2e-4 * np.sin(q[:, 0]))
+    robot.save(tmp_path / "m.yaml")
+    back = Robot.load(tmp_path / "m.yaml")
+    assert back.joint_errors.names == robot.joint_errors.names
+    assert np.array_equal(back.joint_errors.values, VALUES)
+    assert np.array_equal(back.fk(q), robot.fk(q))
+    assert back.nominal_robot().joint_errors is None
+    with pytest.raises(ModelError, match="comp"):
+        JointErrorModel.from_dict({"parameters": {"comp3_2": 1.0}}, 6)
+
+
+def test_compliance_torque_is_zero_about_a_vertical_axis(rng):
+    robot = Robot.from_catalog("abb_irb2600")
+    q = rng.uniform(-1.5, 1.5, (10, 6))
+    model = JointErrorModel(tuple(term_names(6, "compliance")), np.ones(15))
+    assert np.allclose(model.offsets(robot, q)[:, 0], 0.0, atol=1e-12)  # joint 1 is vertical
+
+
+@pytest.mark.parametrize("kind", ["point", "pose"])
+def test_jacobian_columns_match_finite_differences(kind):
+    robot = Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(robot, 15, kind=kind, noise_mm=0.0, seed=3)
+    problem = CalibrationProblem(sim.truth, sim.data)
+    obs = NonGeometricObservation(problem.observation, NAMES)
+    names = ["a2", "theta3", "d4"]
+    # pose rows differentiate the rotation-vector error exactly only at zero error
+    nu = 0.5 * VALUES if kind == "point" else 1e-6 * VALUES
+    J = obs.jacobian(sim.truth, names, nu)
+    h = 1e-7
+    for c in range(len(NAMES)):
+        e = np.zeros(len(NAMES))
+        e[c] = h
+        fd = -(obs.residuals(sim.truth, nu + e) - obs.residuals(sim.truth, nu - e)) / (2 * h)
+        assert np.allclose(J[:, 3 + c], fd, rtol=1e-5, atol=1e-7)
+
+
+def test_simulated_truth_reaches_noise_floor_only_with_the_terms():
+    robot = Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(_robot_with_errors(), 240, noise_mm=0.02, n_smr=2, seed=7)
+    cal, val = sim.data.split_poses(0.5, seed=1)
+    plain = calibrate(robot, cal, validation=val)
+    full = calibrate(robot, cal, validation=val, nongeometric="compliance,gear")
+    floor = sim.noise_floor_mm
+    assert full.validation["rms"] <= 1.1 * floor
+    assert plain.validation["rms"] >= 2.0 * full.validation["rms"]
+    assert full.nongeometric["terms"] == ["compliance", "gear"]
+    assert {"comp3_6", "gear1_s1"} <= set(full.nongeometric["kept"])
+    assert not any(nm.startswith("comp1_") for nm in full.nongeometric["kept"])
+    assert full.robot.joint_errors is not None and "nongeometric" in full.to_dict()
+    with pytest.raises(IdentificationError, match="unknown non-geometric"):
+        parse_terms("compliance,backlash")
+
+
+def test_residual_model_learns_a_smooth_field_and_refuses_noise(tmp_path, rng):
+    q = rng.uniform(-2, 2, (160, 6))
+    smr = np.zeros(160, int)
+    pose = np.arange(160)
+    field = 1e-4 * np.stack([np.sin(q[:, 1]), np.cos(q[:, 2]), np.sin(q[:, 1] + q[:, 2])], axis=1)
+    noise = rng.normal(0, 1e-6, (160, 3))
+    model = ResidualModel.fit(q[:120], smr[:120], pose[:120], field[:120] + noise[:120])
+    err = field[120:] - model.predict(q[120:], smr[120:])
+    assert np.sqrt(np.mean(err**2)) < 0.2 * np.sqrt(np.mean(field[120:] ** 2))
+    pure = ResidualModel.fit(q, smr, pose, rng.normal(0, 1e-5, (160, 3)))
+    assert np.allclose(pure.predict(q, smr), 0.0) or pure.cv_rms_mm <= pure.zero_rms_mm
+    for suffix in (".npz", ".json"):
+        model.save(tmp_path / f"r{suffix}")
+        back = ResidualModel.load(tmp_path / f"r{suffix}")
+        assert np.allclose(back.predict(q, smr), model.predict(q, smr))
+
+
+def test_real_meca500_no_worse_with_the_terms():
+    ds = require_datasets() / "meca500-faro"
+    from robocal.data.importer import import_tracker
+
+    cal, val = (import_tracker(sorted(ds.glob(f"{p}_data__*_Output.csv")), joints="cols=0-5:deg",
+                               points="cols=6-8:m").data for p in ("cal", "val"))
+    robot = Robot.from_catalog("meca500")
+    plain = calibrate(robot, cal, validation=val)
+    full = calibrate(robot, cal, validation=val, nongeometric="compliance,gear")
+    assert full.validation["rms"] <= plain.validation["rms"]
