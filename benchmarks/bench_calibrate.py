@@ -4,6 +4,7 @@ same residual (what pybotics does) vs pybotics itself, simulated ABB IRB 2600, s
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -88,7 +89,49 @@ def _pybotics_rows(nominal, cal, val) -> list:
     return [("pybotics (FD J, per-pose norms)", t_pb, rms(val))]
 
 
+def _floor_mm(sim, rows) -> float:
+    return float(np.sqrt(np.mean(np.sum(sim.noise[rows] ** 2, axis=1)))) * 1e3
+
+
+def accuracy_goals(seeds=range(5)) -> None:
+    """Validation RMS against the noise floor on simulated data, and the real data sets."""
+    nominal = Robot.from_catalog("abb_irb2600")
+    print("\naccuracy: simulated abb_irb2600, 100 calibration / 200 validation poses, noise 0.02 mm")
+    print(f"{'case':<34} {'method':<7} {'val RMS / floor':>16} (per seed)")
+    for label, outliers, methods in (("isotropic noise", 0.0, ("lsq",)),
+                                     ("5% outliers of 1-5 mm", 0.05, ("robust", "lsq"))):
+        ratios = {m: [] for m in methods}
+        for seed in seeds:
+            sim = simulate_tracker(nominal, 300, seed=seed, outliers=outliers)
+            clean = ~np.isin(np.arange(len(sim.data)), sim.outlier_rows)
+            val_rows = np.flatnonzero((sim.data.pose_id >= 100) & clean)
+            cal = sim.data.subset(np.flatnonzero(sim.data.pose_id < 100))
+            val = sim.data.subset(val_rows)
+            for m in methods:
+                res = calibrate(nominal, cal, method=m, validation=val)
+                ratios[m].append(res.validation["rms"] / _floor_mm(sim, val_rows))
+        for m in methods:
+            r = np.array(ratios[m])
+            print(f"{label:<34} {m:<7} mean {r.mean():6.3f} max {r.max():6.3f}  "
+                  + " ".join(f"{v:.3f}" for v in r))
+    root = Path(__file__).resolve().parents[2] / "shared" / "datasets"
+    if not root.is_dir():
+        print(f"(real data sets not found at {root}: skipped)")
+        return
+    from robocal.data.datasets import irb120, meca500
+
+    print("\nreal data: held-out position error, mm")
+    for name, robot, (cal, val) in (("Meca500 490/70", "meca500", meca500(root)),
+                                    ("IRB 120 500/500 x 3 SMRs", "abb_irb120", irb120(root))):
+        for m in ("lsq", "robust"):
+            res = calibrate(Robot.from_catalog(robot), cal, method=m, validation=val)
+            v, vb = res.validation, res.validation_before
+            print(f"{name:<26} {m:<7} nominal+frame {vb['rms']:.4f} -> RMS {v['rms']:.4f} "
+                  f"mean {v['mean']:.4f} max {v['max']:.4f}")
+
+
 def main() -> None:
+    accuracy_goals()
     nominal = Robot.from_catalog("abb_irb2600")
     print("calibration: simulated abb_irb2600, noise 0.02 mm, 200 validation poses")
     print(f"{'poses':>6} {'method':<28} {'time':>10} {'val RMS mm':>11} {'speed-up':>9}")

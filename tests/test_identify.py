@@ -173,3 +173,19 @@ def test_analyze_on_its_own_zero_column():
     J[:, 2] = 0
     ident = analyze(J, ["a1", "a2", "a3"], 10)
     assert ident.dropped == ["a3"] and ident.confounded_with["a3"] == []
+
+
+def test_real_meca500_and_irb120():
+    """The real data sets: lsq beats the datasets README's plain baselines' nominal figures."""
+    from conftest import require_datasets
+
+    from robocal.data.datasets import irb120, meca500
+
+    root = require_datasets()
+    cal, val = meca500(root)
+    res = calibrate(Robot.from_catalog("meca500"), cal, validation=val)
+    assert res.validation_before["rms"] == pytest.approx(0.182, abs=0.002)
+    assert res.validation["rms"] < 0.044  # README: plain full-MDH fit 0.044 mm
+    cal, val = irb120(root)
+    res = calibrate(Robot.from_catalog("abb_irb120"), cal, validation=val)
+    assert res.validation["rms"] < 0.625  # README: plain full-MDH fit 0.625 mm
