@@ -115,6 +115,7 @@ class CalibrationResult:
             "model_before": (obs.modelled_points(start_state.robot, start_state.nuisance) * 1e3).tolist(),
             "model_after": (obs.modelled_points(final_state.robot, final_state.nuisance) * 1e3).tolist(),
             "weight": None if weights is None else weights.tolist(),
+            "plane": None if data.plane is None else data.plane.tolist(),
         }
 
     def to_dict(self) -> dict:

@@ -38,6 +38,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    from robocal.progress import set_quiet
+
+    set_quiet(args.quiet)
     try:
         return int(args.func(args) or 0)
     except RobocalError as exc:
