@@ -62,6 +62,15 @@ class CalibrationResult:
         return np.sqrt(np.maximum(np.diag(self.covariance), 0.0))
 
     @property
+    def after_inliers(self) -> dict | None:
+        """Statistics after calibration without the rejected observations (robust), else None."""
+        rejected = self.rejected
+        if not len(rejected):
+            return None
+        keep = np.setdiff1d(np.arange(self.problem.observation.n_items), rejected)
+        return position_stats(self.problem.position_errors(self.state)[keep])
+
+    @property
     def correlation(self) -> np.ndarray:
         return correlation(self.covariance)
 
@@ -139,6 +148,7 @@ class CalibrationResult:
             "message": self.solver.message,
             "before": self.before,
             "after": self.after,
+            **({"after_inliers": self.after_inliers} if self.after_inliers else {}),
             "parameters": self.parameter_table(),
             "dropped": [{"name": n, "reason": "not identifiable from these data",
                          "confounded_with": ident.confounded_with[n]} for n in ident.dropped],
@@ -193,7 +203,8 @@ class CalibrationResult:
                 f"{n} (~{'/'.join(self.identifiability.confounded_with[n]) or 'no effect'})"
                 for n in self.identifiability.dropped))
         if len(self.rejected):
-            lines.append(f"rejected observations: {len(self.rejected)}")
+            lines.append(f"rejected observations: {len(self.rejected)}; without them the calibration "
+                         f"set's RMS is {self.after_inliers['rms']:.4f} mm")
         lines += [f"WARNING: {w}" for w in self.warnings]
         return "\n".join(lines)
 

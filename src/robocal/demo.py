@@ -50,9 +50,10 @@ def run_demo(out_dir: Path, quiet: bool = False) -> dict[str, Path]:
     _line("  " + robust.identifiability.summary().replace("\n", "\n  "))
     _line("\nposition error, mm          calibration RMS  ->  after     validation RMS  ->  after")
     for method, res in results.items():
-        _line(f"  {method:<8} {res.before['rms']:>22.4f} {res.after['rms']:>10.4f} "
+        after = res.after_inliers or res.after
+        _line(f"  {method:<8} {res.before['rms']:>22.4f} {after['rms']:>10.4f} "
               f"{res.validation_before['rms']:>18.4f} {res.validation['rms']:>10.4f}"
-              + (f"   ({len(res.rejected)} observations rejected)" if method == "robust" else ""))
+              + (f"   ({len(res.rejected)} rejected observations left out)" if len(res.rejected) else ""))
     q_val = val.joints
     model_vs_truth = np.linalg.norm(robust.robot.fk(q_val)[:, :3, 3] - truth.fk(q_val)[:, :3, 3], axis=1)
     _line(f"  robust model vs the true robot on the validation poses: RMS "

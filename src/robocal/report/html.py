@@ -170,8 +170,9 @@ def _summary(result: dict) -> str:
     facts.append(("robocal", esc(result.get("robocal_version"))))
     out = [_table(["", ""], [[f"<b>{k}</b>", v] for k, v in facts], left=2)]
     b, a = result.get("before") or {}, result.get("after") or {}
+    a_in = result.get("after_inliers")
     kpis = []
-    for label, s0, s1 in (("calibration RMS", b, a),
+    for label, s0, s1 in (("calibration RMS" + (", inliers" if a_in else ""), b, a_in or a),
                           ("validation RMS", result.get("validation_before"), result.get("validation"))):
         if s1 and s1.get("rms") is not None:
             gain = ""
@@ -184,6 +185,7 @@ def _summary(result: dict) -> str:
         kpis.append(f"<div><span>calibration max</span><b>{_num(a['max'])} mm</b>"
                     f"<span>before {_num(b.get('max'))} mm</span></div>")
     rows = [r for r in (_stats_row("calibration set, before", b), _stats_row("calibration set, after", a),
+                        _stats_row("calibration set, after, rejected left out", a_in),
                         _stats_row("validation set, before", result.get("validation_before")),
                         _stats_row("validation set, after", result.get("validation"))) if r]
     out.append(f"<div class='kpi'>{''.join(kpis)}</div>")
