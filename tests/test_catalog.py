@@ -142,12 +142,20 @@ def test_one_robot_fk_path_equals_general_path(name, rng):
             np.testing.assert_allclose(a, b, rtol=0, atol=1e-13)
 
 
-def test_cli_demo_prints_table_and_poses(capsys):
-    assert main(["demo", "--robot", "kuka_kr16_2"]) == 0
+def test_cli_robots_shows_one_robot(capsys):
+    assert main(["robots", "kuka_kr16_2"]) == 0
     out = capsys.readouterr().out
-    assert "kuka_kr16_2" in out and "flange pose" in out and out.count("q = [") == 3
-    assert main(["demo", "--robot", "no_such_robot"]) == 2
+    assert "kuka_kr16_2" in out and "tool pose" in out and out.count("q = [") == 3
+    assert main(["robots", "no_such_robot"]) == 2
     assert "abb_irb120" in capsys.readouterr().err
+
+
+def test_cli_demo_runs_the_pipeline(tmp_path, capsys):
+    assert main(["--quiet", "demo", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "robust" in out and "compensated joint commands" in out and "open the report" in out
+    for name in ("calibrated.yaml", "result.json", "report.html"):
+        assert (tmp_path / name).stat().st_size > 0
 
 
 def test_fk_polynomial_sin_cos_and_large_angle_fallback(rng):
