@@ -22,9 +22,8 @@ from scipy.optimize import differential_evolution
 
 from robocal import Robot
 from robocal.calibration import calibrate
-from robocal.data.measurements import Measurements
 from robocal.data.registration import umeyama
-from robocal.data.simulate import _solve_plane_contacts, sample_joints, simulate_tracker
+from robocal.data.simulate import sample_joints, simulate_tracker
 from robocal.identify.genetic import PopulationCost
 from robocal.identify.observations.plane import PlaneObservation
 from robocal.identify.problem import CalibrationProblem
@@ -49,11 +48,8 @@ def differential_evolution_fit(result, seed: int = 0, maxiter: int = 300):
 
 def plane_campaign(n: int, n_planes: int, noise_mm: float, seed: int):
     robot = Robot.from_catalog("abb_irb2600")
-    sim = simulate_tracker(robot, n, kind="plane", n_planes=n_planes, seed=seed)
-    k = sim.data.plane
-    e = np.random.default_rng(seed + 1000).standard_normal(len(k)) * noise_mm * 1e-3
-    q, _ = _solve_plane_contacts(sim.truth, sim.true_joints, sim.planes[k, :3], sim.planes[k, 3] + e)
-    data = Measurements.from_arrays("plane", q, plane=k)
+    sim = simulate_tracker(robot, n, kind="plane", n_planes=n_planes, seed=seed, noise_mm=noise_mm)
+    data = sim.data
     return sim, data, replace(robot, tool=sim.truth.tool.round(3), nominal=None)
 
 

@@ -13,7 +13,7 @@ from robocal import IdentificationError, Robot
 from robocal.calibration import calibrate
 from robocal.data.measurements import Measurements
 from robocal.data.registration import umeyama
-from robocal.data.simulate import _solve_plane_contacts, sample_joints, simulate_tracker
+from robocal.data.simulate import sample_joints, simulate_tracker
 from robocal.identify.observations.plane import PlaneObservation, not_observable, scale_reference
 from robocal.identify.problem import CalibrationProblem
 
@@ -23,12 +23,8 @@ def plane_campaign(n: int, n_planes: int, noise_mm: float, seed: int):
     N(0, noise_mm) probe error off its plane. Returns (sim, data, nominal): the nominal model
     carries the probe offset rounded to 1 mm (a drawing value), as the seed assumes it known."""
     robot = Robot.from_catalog("abb_irb2600")
-    sim = simulate_tracker(robot, n, kind="plane", n_planes=n_planes, seed=seed)
-    k = sim.data.plane
-    e = np.random.default_rng(seed + 1000).standard_normal(len(k)) * noise_mm * 1e-3
-    q, res = _solve_plane_contacts(sim.truth, sim.true_joints, sim.planes[k, :3], sim.planes[k, 3] + e)
-    assert np.abs(res).max() < 1e-12
-    data = Measurements.from_arrays("plane", q, plane=k)
+    sim = simulate_tracker(robot, n, kind="plane", n_planes=n_planes, seed=seed, noise_mm=noise_mm)
+    data = sim.data
     nominal = replace(robot, tool=sim.truth.tool.round(3), nominal=None)
     return sim, data, nominal
 

@@ -76,10 +76,15 @@ def test_workspace_box_and_joint_noise():
 
 
 def test_plane_contacts_touch_their_planes():
-    sim = simulate_tracker(MECA, 90, kind="plane", n_planes=3, seed=8)
+    sim = simulate_tracker(MECA, 90, kind="plane", n_planes=3, seed=8, noise_mm=0.0)
     tips = sim.truth.fk(sim.true_joints)[:, :3, 3]
     n, c = sim.planes[sim.data.plane, :3], sim.planes[sim.data.plane, 3]
     assert np.abs(np.einsum("ni,ni->n", n, tips) - c).max() < 1e-11
+    noisy = simulate_tracker(MECA, 90, kind="plane", n_planes=3, seed=8, noise_mm=0.01)
+    tips = noisy.truth.fk(noisy.true_joints)[:, :3, 3]
+    off = np.einsum("ni,ni->n", noisy.planes[noisy.data.plane, :3], tips) - noisy.planes[noisy.data.plane, 3]
+    assert np.std(off) * 1e3 == pytest.approx(0.01, rel=0.25)
+    assert noisy.noise_floor_mm == pytest.approx(np.sqrt(np.mean(off**2)) * 1e3, rel=1e-9)
     assert np.bincount(sim.data.plane).tolist() == [30, 30, 30]
     # varied orientations: tool z axes differ across contacts
     z = sim.truth.fk(sim.true_joints)[:, :3, 2]

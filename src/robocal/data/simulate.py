@@ -24,8 +24,10 @@ that :func:`write_simulation` writes next to the truth (``truth.yaml`` -> ``trut
 
 Kinds: ``point`` (n_smr SMRs per pose), ``pose`` (6-DOF probe; ``rotation_noise_deg`` per axis),
 ``plane`` (a probe tip touching ``n_planes`` planes with random normals; the world frame is the
-robot base, only joints are recorded, with ``joint_noise_deg`` reading noise; plane coefficients
-go to the sidecar). ``joint_noise_deg`` adds reading noise to the recorded joints of every kind.
+robot base, only joints are recorded, with ``joint_noise_deg`` reading noise; probe noise: each
+true tip lies ``noise_mm`` (1-sigma, along the normal) off its plane, so the noise floor is that
+distance's RMS; plane coefficients go to the sidecar). ``joint_noise_deg`` adds reading noise to
+the recorded joints of every kind.
 """
 
 from __future__ import annotations
@@ -220,8 +222,12 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
         if kind == "pose":
             dR = rotvec_to_matrix(rng.standard_normal((N, 3)) * np.deg2rad(rotation_noise_deg))
             kw["rotations"] = dR @ T[:, :3, :3]
-    else:
+    else:  # probe noise: each true tip ends up noise_mm (1-sigma) off its plane, along the normal
         kw["plane"] = plane_idx
+        normal, offset = planes[plane_idx, :3], planes[plane_idx, 3]
+        off_plane = rng.standard_normal(N) * noise_mm * 1e-3
+        q_rows, _ = _solve_plane_contacts(true, q_rows, normal, offset + off_plane)
+        noise = normal * off_plane[:, None]
     joint_noise = rng.standard_normal(q_rows.shape) * np.deg2rad(joint_noise_deg)
     clean = np.ones(N, bool)
     clean[outlier_rows] = False
