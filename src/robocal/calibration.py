@@ -173,9 +173,9 @@ class CalibrationResult:
             out["validation_before"] = self.validation_before
             out["validation"] = self.validation
             vproblem = CalibrationProblem(self.robot, self.validation_data)
-            out["validation_observations"] = self._observations(
-                self.validation_data, vproblem, vproblem.start(self.start),
-                vproblem.start(self.robot))
+            before = carry_over(vproblem, self.problem, self.problem.start(self.start))
+            after = carry_over(vproblem, self.problem, State(self.robot, self.state.nuisance))
+            out["validation_observations"] = self._observations(self.validation_data, vproblem, before, after)
         return out
 
     def save_json(self, path) -> None:
@@ -298,8 +298,9 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     if validation is not None:
         vproblem = CalibrationProblem(start, validation)
         result.validation_data = validation
-        result.validation_before = position_stats(vproblem.position_errors(vproblem.start(start)))
-        result.validation = position_stats(vproblem.position_errors(vproblem.start(final_robot)))
+        for key, state in (("validation_before", state0), ("validation", State(final_robot, final.nuisance))):
+            errors = vproblem.position_errors(carry_over(vproblem, problem, state))
+            setattr(result, key, position_stats(errors))
     if ng_info is not None:
         sig = dict(zip(result.unknowns, result.sigma, strict=True))
         ng_info["parameters"] = [{"name": nm, "estimate": float(v), "sigma": float(sig[nm])}
@@ -327,6 +328,14 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     names = candidate_parameters(robot, kind, params)
     J = problem.jacobian(problem.start(robot), names)
     return analyze_jacobian(J, names + problem.nuisance_names, data.n_poses, rtol)
+
+
+def carry_over(vproblem: CalibrationProblem, problem: CalibrationProblem, state: State) -> State:
+    """``state`` for judging other data: with the identified nuisance parameters (e.g. the planes
+    found on the calibration contacts) when both data sets have the same ones, else re-fitted."""
+    if vproblem.nuisance_names == problem.nuisance_names:
+        return State(state.robot, state.nuisance)
+    return vproblem.start(state.robot)
 
 
 def _plain(options: dict) -> dict:
