@@ -222,3 +222,10 @@ def test_jacobian_with_extra_smrs(rng):
               - robot.displaced(names, -e).fk(q, smr=smr)[:, :3, 3]) / (2 * h)
         np.testing.assert_allclose(J[:, :, k], fd, atol=1e-7, err_msg=name)
     np.testing.assert_allclose(robot.fk(q, smr=smr)[smr == 0], robot.fk(q[smr == 0]))
+
+
+def test_empty_batches(rng):
+    for robot in (random_robot(rng), Robot.from_catalog("abb_irb2600")):
+        assert robot.fk(np.zeros((0, 6))).shape == (0, 4, 4)
+        assert robot.fk(np.zeros((0, 6)), frames=True)[1].shape == (0, 7, 4, 4)
+        assert robot.jacobian(np.zeros((0, 6)), ["a2", "d4"]).shape == (0, 3, 2)

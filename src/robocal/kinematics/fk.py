@@ -292,7 +292,7 @@ def _fast_chain(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nda
     t1 = base[:3, 3] + a[0] * base[:3, 0] + d[0] * R1[:, 2]  # Rz(q1) moves neither
     per_row_tool = tool.ndim == 3
     tool_rot_identity = not per_row_tool and np.array_equal(tool[:3, :3], np.eye(3))
-    M = min(N, FAST_CHUNK)
+    M = max(min(N, FAST_CHUNK), 1)  # N = 0 gives empty results
     blocks = np.empty((6, 3, M))
     phi, cph, sph = np.empty((n, M)), np.empty((n, M)), np.empty((n, M))
     work = np.empty((4, n, M))
