@@ -77,3 +77,18 @@ def test_read_joints_bad_files(tmp_path, text):
     path.write_text(text)
     with pytest.raises(DataError):
         read_joints(path)
+
+
+def test_nongeometric_terms_and_network_out(campaign):
+    d = campaign
+    assert main(["--quiet", "calibrate", str(d / "cal.csv"), "--robot", "abb_irb2600", "--nongeometric",
+                 "gear", "-o", str(d / "ng.yaml"), "--json", str(d / "ng.json")]) == 0
+    assert "joint_errors" in (d / "ng.yaml").read_text()
+    assert json.loads((d / "ng.json").read_text())["nongeometric"]
+    assert main(["--quiet", "calibrate", str(d / "cal.csv"), "--robot", "abb_irb2600", "--method", "neural",
+                 "--set", "epochs=20", "--network-out", str(d / "net.npz")]) == 0
+    from robocal.identify.neural import BPNetwork
+
+    assert BPNetwork.load(d / "net.npz").outputs
+    assert main(["calibrate", str(d / "cal.csv"), "--robot", "abb_irb2600", "--network-out",
+                 str(d / "net.npz")]) == 2

@@ -8,6 +8,15 @@ EPILOG = """Examples:
   robocal calibrate data.csv --robot abb_irb2600 --validate val.csv -o calibrated.yaml --json result.json
   robocal calibrate data.csv --robot nominal.yaml --method robust --set k0=1.5 --set k1=3.0
   robocal calibrate data.csv --robot meca500 --params "a2 a3 d4 theta2 theta3" --report report.html
+  robocal calibrate data.csv --robot abb_irb120 --nongeometric compliance,gear -o calibrated.yaml
+  robocal calibrate data.csv --robot abb_irb2600 --method genetic --set population=60 --set generations=100
+  robocal calibrate data.csv --robot abb_irb2600 --method neural --set hidden=10 --network-out net.npz
+
+Method options (--set KEY=VALUE, SI units): robust: k0, k1, ridge (double-h|gcv|lcurve|none);
+genetic: population, generations, crossover, mutation, elite, encoding (binary|real), bits,
+spread, threshold (m); swarm: particles, iterations, inertia, c1, c2, vmax, polish (0|1),
+threshold (m); neural: hidden, index (mae|mse), learning_rate, epochs, threshold, n_consecutive,
+outputs.
 """
 
 
@@ -38,6 +47,10 @@ def add_parser(sub) -> None:
     p.add_argument("--json", metavar="result.json", help="write the full result as JSON")
     p.add_argument("--report", metavar="report.html", help="write the HTML report")
     p.add_argument("--seed", type=int, default=0, help="random seed of stochastic methods")
+    p.add_argument("--nongeometric", metavar="TERMS",
+                   help="add non-geometric terms to any method: compliance, gear (comma separated)")
+    p.add_argument("--network-out", metavar="net.npz",
+                   help="method neural: save the trained network (.npz or .json, plain arrays)")
     p.add_argument("--set", dest="options", type=_option, action="append", default=[],
                    metavar="KEY=VALUE", help="a method option, e.g. k0=1.5, ridge=gcv, population=60")
     p.set_defaults(func=run)
@@ -46,13 +59,17 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from robocal.calibration import calibrate
     from robocal.data.measurements import Measurements
+    from robocal.errors import IdentificationError
     from robocal.evaluate import load_model
 
     robot = load_model(args.robot)
     data = Measurements.load(args.data, robot=robot)
     validation = Measurements.load(args.validate, robot=robot) if args.validate else None
+    if args.network_out and (args.method != "neural" or not args.network_out.endswith((".npz", ".json"))):
+        raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
     result = calibrate(robot, data, method=args.method, params=args.params, validation=validation,
-                       seed=args.seed, progress=not args.quiet, **dict(args.options))
+                       seed=args.seed, progress=not args.quiet, nongeometric=args.nongeometric,
+                       **dict(args.options))
     # every output is computed before the first is written: a failure leaves nothing behind
     report = None
     if args.report:
@@ -63,12 +80,14 @@ def run(args) -> int:
         result.robot.save(args.output)
     if args.json:
         result.save_json(args.json)
+    if args.network_out:
+        result.solver.extra["network"].save(args.network_out)
     if report is not None:
         from robocal.kinematics.yaml_io import write_atomic
 
         write_atomic(args.report, report)
     print(result.summary())
-    for path in (args.output, args.json, args.report):
+    for path in (args.output, args.json, args.report, args.network_out):
         if path:
             print(f"wrote {path}")
     return 0
