@@ -240,3 +240,17 @@ def test_fuzz_reader_raises_only_robocal_errors(text):
     assert len(data) >= 1 and np.isfinite(data.joints).all()
     with contextlib.suppress(RobocalError):
         data.check_against(MECA)
+
+
+def test_approach_directions_follow_the_measurement_order_and_survive_subsets(tmp_path):
+    q = np.array([[0.0, 0.0], [0.1, -0.2], [0.1, -0.2], [0.0, 0.3]])
+    data = Measurements.from_arrays("point", q, points=np.zeros((4, 3)), pose_id=[0, 1, 1, 2])
+    assert data.approach.tolist() == [[0, 0], [1, -1], [1, -1], [-1, 1]]
+    data.save(tmp_path / "all.csv")
+    assert "approach1" not in (tmp_path / "all.csv").read_text()  # implied by the order
+    part = data.subset([3, 0])
+    assert part.approach.tolist() == [[-1, 1], [0, 0]]
+    part.save(tmp_path / "part.csv")
+    assert Measurements.load(tmp_path / "part.csv").approach.tolist() == [[-1, 1], [0, 0]]
+    with pytest.raises(DataError, match="approach"):
+        Measurements.from_arrays("point", q, points=np.zeros((4, 3)), approach=np.full((4, 2), 2))

@@ -31,7 +31,7 @@ def model_errors(robot, data) -> np.ndarray:
     if data.n_smr > len(robot.smr) + 1:
         raise DataError(f"the data use {data.n_smr} SMRs but the model has {len(robot.smr) + 1}: "
                         "register the frame first (--fit-frame) or use a model with these SMRs")
-    p = robot.fk(data.joints, smr=data.smr)[:, :3, 3]
+    p = robot.fk(data.joints, smr=data.smr, approach=data.approach)[:, :3, 3]
     if data.kind in ("point", "pose"):
         return data.points - p
     if data.kind == "plane":
@@ -81,7 +81,7 @@ def evaluate(robot, data, fit_frame: bool = False) -> dict:
     if data.kind == "pose":
         from robocal.kinematics.transforms import matrix_to_rotvec
 
-        R = robot.fk(data.joints, smr=data.smr)[:, :3, :3]
+        R = robot.fk(data.joints, smr=data.smr, approach=data.approach)[:, :3, :3]
         ang = np.linalg.norm(matrix_to_rotvec(data.rotations @ np.swapaxes(R, 1, 2)), axis=1)
         deg = np.rad2deg(ang)
         stats["rotation_deg"] = {"rms": float(np.sqrt(np.mean(deg**2))), "mean": float(deg.mean()),

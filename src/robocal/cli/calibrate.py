@@ -8,7 +8,7 @@ EPILOG = """Examples:
   robocal calibrate data.csv --robot abb_irb2600 --validate val.csv -o calibrated.yaml --json result.json
   robocal calibrate data.csv --robot nominal.yaml --method robust --set k0=1.5 --set k1=3.0
   robocal calibrate data.csv --robot meca500 --params "a2 a3 d4 theta2 theta3" --report report.html
-  robocal calibrate data.csv --robot abb_irb120 --nongeometric compliance,gear -o calibrated.yaml
+  robocal calibrate data.csv --robot abb_irb120 --nongeometric compliance,gear,backlash -o calibrated.yaml
   robocal calibrate data.csv --robot abb_irb2600 --method genetic --set population=60 --set generations=100
   robocal calibrate data.csv --robot abb_irb2600 --method neural --set hidden=10 --network-out net.npz
 
@@ -48,7 +48,7 @@ def add_parser(sub) -> None:
     p.add_argument("--report", metavar="report.html", help="write the HTML report")
     p.add_argument("--seed", type=int, default=0, help="random seed of stochastic methods")
     p.add_argument("--nongeometric", metavar="TERMS",
-                   help="add non-geometric terms to any method: compliance, gear (comma separated)")
+                   help="add non-geometric terms to any method: compliance, gear, backlash (comma separated)")
     p.add_argument("--network-out", metavar="net.npz",
                    help="method neural: save the trained network (.npz or .json, plain arrays)")
     p.add_argument("--set", dest="options", type=_option, action="append", default=[],

@@ -9,6 +9,10 @@ One :class:`Measurements` holds one observation kind for all its rows:
   the two ends (two joint vectors / SMRs) of one measured distance, and both carry the same
   measured distance (ball bar length, or distance between two tracker readings).
 
+Every row also has ``approach (N, n)`` in {-1, 0, +1}: the direction each joint moved to reach
+the row's pose from the previous pose (the rows are in measurement order; 0 for the first pose
+and joints that did not move) — what a backlash model needs. It is derived from the row order
+when the data are created and travels with subsets, so random splits keep the true directions.
 Every row also has ``joints (N, n)`` rad, ``pose_id (N,)`` (rows sharing one commanded pose: the
 SMRs of one pose, or repeated readings kept without averaging), ``smr (N,)`` (0 = the tool,
 s > 0 = ``Robot.smr[s - 1]``), an optional ``sigma (N,)`` m, and ``source_row (N,)``: the 1-based
@@ -19,7 +23,8 @@ Canonical CSV (DESIGN.md "Files"): optional leading ``#`` comment lines (the fir
 ``source``, the provenance text), then a header, then one line per row. Column names carry their
 units: ``q1_deg..qn_deg`` or ``q1_rad..qn_rad``; ``x_mm y_mm z_mm`` or ``x_m y_m z_m``; optional
 ``smr``, ``sigma_mm``/``sigma_m``, ``qw qx qy qz`` (pose), ``plane`` (plane contacts, then no
-x/y/z), ``pair`` and ``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``.
+x/y/z), ``pair`` and ``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``,
+``approach1..approachn`` (written only where they differ from what the row order implies).
 :meth:`Measurements.save` writes SI columns (``_rad``, ``_m``) with 17 significant digits, so a
 save/load round trip is exact (rotations through the quaternion to 1e-15).
 """
@@ -87,15 +92,17 @@ class Measurements:
     pair: np.ndarray | None = None
     distance: np.ndarray | None = None
     source: str = ""
+    approach: np.ndarray | None = None
 
     # ----------------------------------------------------------------- construction
     @classmethod
     def from_arrays(cls, kind: str, joints, *, points=None, rotations=None, plane=None, pair=None,
                     distance=None, smr=None, sigma=None, pose_id=None, source_row=None,
-                    source: str = "") -> Measurements:
+                    source: str = "", approach=None) -> Measurements:
         """Validated measurements from arrays in SI units (rad, m).
 
-        Defaults: ``smr`` 0, ``pose_id`` one per row (``0..N-1``), ``source_row`` ``1..N``.
+        Defaults: ``smr`` 0, ``pose_id`` one per row (``0..N-1``), ``source_row`` ``1..N``,
+        ``approach`` from the row order (:func:`approach_from_order`).
         """
         if kind not in KINDS:
             raise DataError(f"unknown measurement kind {kind!r}: use one of {', '.join(KINDS)}")
@@ -146,8 +153,17 @@ class Measurements:
             sigma = _float_array(sigma, "sigma", (N,))
             if (sigma <= 0).any():
                 raise DataError("sigma must be positive (m)")
+        if approach is None:
+            approach = approach_from_order(joints, pose_id)
+        else:
+            approach = np.asarray(approach)
+            if approach.shape != (N, n):
+                raise DataError(f"approach must have shape ({N}, {n}), got {approach.shape}")
+            approach = _int_array(approach.reshape(-1), "approach", N * n).reshape(N, n)
+            if np.abs(approach).max(initial=0) > 1:
+                raise DataError("approach directions must be -1, 0 or +1")
         return cls(kind=kind, joints=joints, pose_id=pose_id, smr=smr, source_row=source_row,
-                   sigma=sigma, source=str(source).replace("\n", " "), **kw)
+                   sigma=sigma, source=str(source).replace("\n", " "), approach=approach, **kw)
 
     # ----------------------------------------------------------------- views
     def __len__(self) -> int:
@@ -181,7 +197,7 @@ class Measurements:
             raise DataError(f"row index out of range for {len(self)} rows")
         take = {f: (None if getattr(self, f) is None else getattr(self, f)[index])
                 for f in ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations",
-                          "plane", "pair", "distance")}
+                          "plane", "pair", "distance", "approach")}
         if self.kind == "distance":
             ids, counts = np.unique(take["pair"], return_counts=True)
             if (counts != 2).any():
@@ -261,6 +277,9 @@ class Measurements:
         cols["smr"] = self.smr
         if self.sigma is not None:
             cols["sigma_m"] = self.sigma
+        if not np.array_equal(self.approach, approach_from_order(self.joints, self.pose_id)):
+            for i in range(n):
+                cols[f"approach{i + 1}"] = self.approach[:, i]
         out = io.StringIO()
         if self.source:
             out.write(f"# {self.source}\n")
@@ -296,6 +315,15 @@ def _check_plausible(data: Measurements, reach: float, where: str) -> None:
         raise UnitError(f"{where}the points span {extent:.4g} m but a robot of {reach:.3g} m reach can move "
                         f"an SMR over at most ~{limit:.3g} m (e.g. row {row}): the length unit is "
                         "probably wrong; if the values are millimetres, name the columns x_mm, y_mm, z_mm")
+
+
+def approach_from_order(joints: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
+    """``(N, n)`` sign of each joint's move from the previous pose to this row's pose, poses taken
+    in row order (consecutive rows with the same pose_id are one pose); 0 for the first pose."""
+    new_pose = np.r_[True, pose_id[1:] != pose_id[:-1]]
+    q = joints[new_pose]
+    step = np.sign(np.diff(q, axis=0, prepend=q[:1])).astype(np.int64)
+    return step[np.cumsum(new_pose) - 1]
 
 
 def _read_text(path: Path) -> str:
@@ -345,6 +373,9 @@ def _header_role(name: str):
         if unit not in _ANGLE:
             raise UnitError(f"unknown angle unit {unit!r} in column {name!r}: use _deg or _rad")
         return "q", int(m.group(1)), _ANGLE[unit]
+    m = re.fullmatch(r"approach(\d+)", name)
+    if m:
+        return "approach", int(m.group(1)), 1.0
     m = re.fullmatch(r"(x|y|z|sigma|distance)_([a-z]+)", name)
     if m:
         unit = m.group(2)
@@ -459,7 +490,7 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
                 raise DataError(f"{name}, line {ln}, column {h}: {cell.strip()[:40]!r} (NaN or infinite); "
                                 "remove failed readings or re-import with `robocal import`, which "
                                 "drops them")
-            if h in _INT_COLUMNS and v != round(v):
+            if (h in _INT_COLUMNS or h.startswith("approach")) and v != round(v):
                 raise DataError(f"{name}, line {ln}, column {h}: {cell.strip()[:40]!r} must be an integer")
             if h in _INT_COLUMNS and abs(v) > 2**53:
                 raise DataError(f"{name}, line {ln}, column {h}: {cell.strip()[:40]!r} is out of range")
@@ -511,8 +542,14 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     smr = integer("smr") if "smr" in present else None
     pose_id = integer("pose_id") if "pose_id" in present else None
     source_row = integer("source_row") if "source_row" in present else np.array(line_no)
+    approach_cols = sorted((r[1], h) for h, r in roles.items() if r[0] == "approach")
+    approach = None
+    if approach_cols:
+        if [i for i, _ in approach_cols] != list(range(1, n + 1)):
+            raise DataError(f"{name}: approach columns must be approach1..approach{n}, one per joint")
+        approach = np.stack([col[h] for _, h in approach_cols], axis=1).astype(np.int64)
     try:
         return Measurements.from_arrays(kind, joints, smr=smr, sigma=sigma, pose_id=pose_id,
-                                        source_row=source_row, source=source, **kw)
+                                        source_row=source_row, source=source, approach=approach, **kw)
     except DataError as exc:
         raise DataError(f"{name}: {exc}") from None

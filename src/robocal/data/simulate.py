@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.data.measurements import Measurements
+from robocal.data.measurements import Measurements, approach_from_order
 from robocal.errors import DataError, UnreachableError
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
 
@@ -206,7 +206,8 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
     pose_id = np.repeat(np.arange(n_poses), n_smr if kind == "point" else 1)
     q_rows = q[pose_id]
     N = len(q_rows)
-    T = true.fk(q_rows, smr=smr)
+    approach = approach_from_order(q_rows, pose_id)  # the poses are measured in this order
+    T = true.fk(q_rows, smr=smr, approach=approach)
     p = T[:, :3, 3]
     noise = np.zeros((N, 3))
     outlier_rows = np.zeros(0, np.int64)
@@ -238,7 +239,7 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
             "rotation_noise_deg": float(rotation_noise_deg), "error_scale": float(error_scale),
             "noise_floor_mm": floor}
     source = f"simulated by robocal: robot {robot.name}, seed {seed}, {kind}, noise floor {floor:.6g} mm"
-    data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id,
+    data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id, approach=approach,
                                     source_row=np.arange(2, N + 2), source=source, **kw)
     truth = replace(true, name=f"{robot.name}_true",
                     description=f"true robot of a robocal simulation (seed {seed}); noise floor "

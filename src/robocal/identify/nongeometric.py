@@ -1,11 +1,13 @@
 """Non-geometric terms identified jointly with the geometric parameters, by any method.
 
 Terms (see :mod:`robocal.kinematics.joint_errors` for the models): ``compliance`` (joint
-compliance under the gravity torque of lumped link masses) and ``gear`` (first and second
-harmonics of each joint angle). Their parameters join the problem as extra unknowns after the
-observation's nuisance parameters; their Jacobian columns are analytic::
+compliance under the gravity torque of lumped link masses), ``gear`` (first and second
+harmonics of each joint angle) and ``backlash`` (lost motion by the direction each joint
+approached the pose from, taken from the measurement order). Their parameters join the problem
+as extra unknowns after the observation's nuisance parameters; their Jacobian columns are
+analytic::
 
-    d(TCP)/d(p) = d(TCP)/d(theta_i) * d(dq_i)/d(p)     (tau_ij(q) for comp, sin/cos for gear)
+    d(TCP)/d(p) = d(TCP)/d(theta_i) * d(dq_i)/d(p)     (tau_ij(q), sin/cos, or the direction)
 
 with d(TCP)/d(theta_i) the identification Jacobian at the joints the robot reaches. The small
 dependence of tau_ij on the link parameters is left out of the link columns (second order).
@@ -59,7 +61,7 @@ class NonGeometricObservation:
     def _at(self, robot, nuisance):
         robot = robot if robot.joint_errors is None else replace(robot, joint_errors=None)
         nuisance = np.asarray(nuisance, dtype=float)
-        B, joint = joint_error_basis(robot, self.q0, self.names)
+        B, joint = joint_error_basis(robot, self.q0, self.names, self.inner.approach)
         dq = np.zeros_like(self.q0)
         np.add.at(dq.T, joint, (B * nuisance[self.m0:]).T)
         obs = copy.copy(self.inner)

@@ -1,10 +1,16 @@
-"""Non-geometric joint errors: joint compliance under gravity and gear (harmonic) errors.
+"""Non-geometric joint errors: compliance under gravity, gear (harmonic) errors, backlash.
 
 The joint a robot really turns to is ``q + dq(q)`` with ``dq`` linear in the parameters::
 
     compliance  comp{i}_{j}:  dq_i += c_ij * tau_ij(q)
     gear        gear{i}_s1, gear{i}_c1, gear{i}_s2, gear{i}_c2:
                 dq_i += s1 sin q_i + c1 cos q_i + s2 sin 2q_i + c2 cos 2q_i
+    backlash    backlash{i}:  dq_i += b_i * s_i
+
+Backlash (lost motion): a joint stops b_i short of or beyond its command depending on the
+direction s_i in {-1, 0, +1} from which it approached the pose (the sign of its last move; 0
+where unknown, which predicts the middle of the band). ``approach`` arrays carry s (N, n);
+:meth:`robocal.data.Measurements.approach_directions` derives them from the measurement order.
 
 Mass model of the compliance term: the links beyond joint i are lumped into point masses at the
 origins o_j of the distal frames {j}, j = i+1..n (frame {n} is the flange, which also carries
@@ -14,7 +20,7 @@ all computed from the frames at the commanded joints (the deflection is small: f
 c_ij = k_i m_j |g| (rad/m) is the compliance k_i of joint i (rad/(N m)) times the weight of
 the lumped mass m_j (N): the product is what position data identify, and keeping one
 coefficient per (joint, mass) keeps the model linear (no scale ambiguity between k and m).
-Gear parameters are in rad. Joints are 1-based in the names.
+Gear and backlash parameters are in rad. Joints are 1-based in the names.
 """
 
 from __future__ import annotations
@@ -28,9 +34,10 @@ import numpy as np
 from robocal.errors import ModelError
 from robocal.kinematics.fk import chain_frames
 
-TERMS = ("compliance", "gear")
+TERMS = ("compliance", "gear", "backlash")
 _COMP = re.compile(r"^comp(\d+)_(\d+)$")
 _GEAR = re.compile(r"^gear(\d+)_([sc][12])$")
+_BACKLASH = re.compile(r"^backlash(\d+)$")
 
 
 def term_names(n: int, term: str) -> list[str]:
@@ -39,6 +46,8 @@ def term_names(n: int, term: str) -> list[str]:
         return [f"comp{i}_{j}" for i in range(1, n + 1) for j in range(i + 1, n + 1)]
     if term == "gear":
         return [f"gear{i}_{h}" for i in range(1, n + 1) for h in ("s1", "c1", "s2", "c2")]
+    if term == "backlash":
+        return [f"backlash{i}" for i in range(1, n + 1)]
     raise ModelError(f"unknown non-geometric term {term!r}; choose from {', '.join(TERMS)}")
 
 
@@ -50,15 +59,20 @@ def _parse(name: str, n: int) -> tuple[int, str, int | str]:
     m = _GEAR.match(name)
     if m and 1 <= int(m[1]) <= n:
         return int(m[1]) - 1, "gear", m[2]
+    m = _BACKLASH.match(name)
+    if m and 1 <= int(m[1]) <= n:
+        return int(m[1]) - 1, "backlash", None
     raise ModelError(f"unknown joint-error parameter {name!r} for a {n}-joint robot: "
-                     "use comp{i}_{j} (i < j <= n) or gear{i}_s1|c1|s2|c2")
+                     "use comp{i}_{j} (i < j <= n), gear{i}_s1|c1|s2|c2 or backlash{i}")
 
 
-def joint_error_basis(robot, q: np.ndarray, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+def joint_error_basis(robot, q: np.ndarray, names: Sequence[str],
+                      approach: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(B (N, k), joint (k,))``: d(dq_joint[p])/d(param p) at joints ``q (N, n)`` (rad).
 
     ``dq[:, joint[p]] += B[:, p] * value[p]``. Compliance columns use the robot's frames at ``q``
-    (its link parameters and base; the robot's own joint-error model is not applied)."""
+    (its link parameters and base; the robot's own joint-error model is not applied); backlash
+    columns are the approach directions ``approach (N, n)`` (zeros when not given)."""
     n = robot.n_joints
     parsed = [_parse(nm, n) for nm in names]
     B = np.empty((q.shape[0], len(parsed)))
@@ -67,6 +81,9 @@ def joint_error_basis(robot, q: np.ndarray, names: Sequence[str]) -> tuple[np.nd
         if kind == "gear":
             h = 2.0 if detail[1] == "2" else 1.0
             B[:, p] = np.sin(h * q[:, i]) if detail[0] == "s" else np.cos(h * q[:, i])
+            continue
+        if kind == "backlash":
+            B[:, p] = 0.0 if approach is None else approach[:, i]
             continue
         if frames is None:
             _, frames = chain_frames(robot.links, robot.base, robot.tool, q, frames=True)
@@ -95,20 +112,22 @@ class JointErrorModel:
 
     @property
     def terms(self) -> list[str]:
-        """The terms present ('compliance', 'gear')."""
-        kinds = {("compliance" if n.startswith("comp") else "gear") for n in self.names}
+        """The terms present ('compliance', 'gear', 'backlash')."""
+        prefix = {"comp": "compliance", "gear": "gear", "backl": "backlash"}
+        kinds = {prefix[n[:5] if n.startswith("backl") else n[:4]] for n in self.names}
         return [t for t in TERMS if t in kinds]
 
-    def offsets(self, robot, q: np.ndarray) -> np.ndarray:
-        """Joint offsets ``dq (N, n)`` (rad) at commanded joints ``q (N, n)``."""
-        B, joint = joint_error_basis(robot, q, self.names)
+    def offsets(self, robot, q: np.ndarray, approach: np.ndarray | None = None) -> np.ndarray:
+        """Joint offsets ``dq (N, n)`` (rad) at commanded joints ``q (N, n)`` reached from the
+        directions ``approach (N, n)`` (backlash; None: unknown, mid-band)."""
+        B, joint = joint_error_basis(robot, q, self.names, approach)
         dq = np.zeros_like(q)
         np.add.at(dq.T, joint, (B * self.values).T)
         return dq
 
     def to_dict(self) -> dict:
         """Plain data for the model YAML (SI: rad/m for comp*, rad for gear*)."""
-        return {"units": "SI (comp: rad per m of unit-weight moment arm; gear: rad)",
+        return {"units": "SI (comp: rad per m of unit-weight moment arm; gear, backlash: rad)",
                 "parameters": dict(zip(self.names, self.values.tolist(), strict=True))}
 
     @classmethod

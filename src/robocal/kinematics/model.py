@@ -330,17 +330,18 @@ class Robot:
             raise DataError(f"joints contain NaN or infinite values in row(s) {bad[:10].tolist()}")
         return q
 
-    def fk(self, q, frames: bool = False, smr=None):
+    def fk(self, q, frames: bool = False, smr=None, approach=None):
         """TCP poses ``(N, 4, 4)`` (world frame, m) for joints ``(N, n)`` in rad.
 
         ``smr`` ``(N,)`` picks each row's SMR (default: the tool). With ``frames=True`` returns
         ``(tcp, frames)`` where frames ``(N, n + 1, 4, 4)`` are the world poses of frames
         {0}..{n} (frame {n} is the flange, before the tool). A ``joint_errors`` model turns the
-        commanded joints into the joints the robot really reaches (``q + dq(q)``) first.
+        commanded joints into the joints the robot really reaches (``q + dq(q)``) first;
+        ``approach`` ``(N, n)`` gives the direction each joint came from (its backlash term).
         """
         q = self.check_joints(q)
         if self.joint_errors is not None:
-            q = q + self.joint_errors.offsets(self, q)
+            q = q + self.joint_errors.offsets(self, q, approach)
         tool = self.tool if smr is None else self.tools_for(smr)
         if frames:
             return chain_frames(self.links, self.base, tool, q, frames=True)

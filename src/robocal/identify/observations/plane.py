@@ -110,7 +110,7 @@ class PlaneObservation(Observation):
 
     def modelled_points(self, robot, nuisance=None) -> np.ndarray:
         """``(N, 3)`` modelled probe tip positions (base frame), m."""
-        return robot.fk(self.q)[:, :3, 3]
+        return robot.fk(self.q, approach=self.approach)[:, :3, 3]
 
     def _local(self, points: np.ndarray) -> np.ndarray:
         """Points ``(..., N, 3)`` reordered per contact to ``(u, v, d)`` of its plane."""

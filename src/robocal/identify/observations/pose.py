@@ -29,7 +29,7 @@ class PoseObservation(Observation):
         self.scale = np.array([1.0, 1.0, 1.0, length_scale, length_scale, length_scale])
 
     def residuals(self, robot, nuisance=None) -> np.ndarray:
-        T = robot.fk(self.q, smr=self.smr)
+        T = robot.fk(self.q, smr=self.smr, approach=self.approach)
         return (pose_error(self.measured, T) * self.scale).reshape(-1)
 
     def jacobian(self, robot, names, nuisance=None) -> np.ndarray:
