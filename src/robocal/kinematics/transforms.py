@@ -68,8 +68,13 @@ def pose_error(T_measured: np.ndarray, T_model: np.ndarray) -> np.ndarray:
 def is_rigid(T: np.ndarray, tol: float = 1e-6) -> np.ndarray:
     """Whether each ``(..., 4, 4)`` matrix is a proper rigid transform (to ``tol``)."""
     T = np.asarray(T, dtype=float)
-    R = T[..., :3, :3]
-    ortho = np.abs(R @ np.swapaxes(R, -1, -2) - np.eye(3)).max(axis=(-1, -2)) < tol
-    det = np.abs(np.linalg.det(R) - 1.0) < tol
-    last = np.abs(T[..., 3, :] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=-1) < tol
-    return ortho & det & last & np.isfinite(T).all(axis=(-1, -2))
+    c = [T[..., :3, k] for k in range(3)]  # rotation columns
+    ortho = np.zeros(T.shape[:-2])
+    for i in range(3):
+        for j in range(i, 3):
+            dot = np.einsum("...k,...k->...", c[i], c[j])
+            ortho = np.maximum(ortho, np.abs(dot - (i == j)))
+    det = np.einsum("...k,...k->...", np.cross(c[0], c[1]), c[2])
+    last = np.abs(T[..., 3, :] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=-1)
+    with np.errstate(invalid="ignore"):  # NaN compares False below: not rigid
+        return (ortho < tol) & (np.abs(det - 1.0) < tol) & (last < tol) & np.isfinite(T).all(axis=(-1, -2))
