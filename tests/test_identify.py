@@ -189,3 +189,21 @@ def test_real_meca500_and_irb120():
     cal, val = irb120(root)
     res = calibrate(Robot.from_catalog("abb_irb120"), cal, validation=val)
     assert res.validation["rms"] < 0.625  # README: plain full-MDH fit 0.625 mm
+
+
+def test_gram_route_equals_the_direct_svd():
+    from robocal.identify.linalg import ScaledSVD
+
+    rng = np.random.default_rng(3)
+    J = rng.normal(size=(600, 20)) * np.logspace(-3, 1, 20)  # scaled columns: well conditioned
+    r = rng.normal(size=600)
+    gram = ScaledSVD.of(J)
+    assert gram.U is None  # tall and well conditioned: the Gram route
+    direct = np.linalg.pinv(J) @ r
+    np.testing.assert_allclose(gram.solve(r), direct, rtol=1e-9)
+    prior = rng.normal(size=20)
+    ridge = np.linalg.solve(J.T @ J / np.outer(gram.scale, gram.scale) + 0.3 * np.eye(20),
+                            (J / gram.scale).T @ r - 0.3 * prior * gram.scale) / gram.scale
+    np.testing.assert_allclose(gram.solve(r, damping=0.3, prior=prior), ridge, rtol=1e-8)
+    J[:, 1] = J[:, 0] / J[:, 0].std() * J[:, 1].std() + 1e-7 * rng.normal(size=600)  # near-collinear
+    assert ScaledSVD.of(J).U is not None  # ill conditioned: the direct SVD

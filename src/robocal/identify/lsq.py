@@ -14,29 +14,28 @@ from robocal.identify.solvers import SolverOutput
 
 
 def gauss_newton(problem, state, names, *, row_weights=None, max_iter: int = 50,
-                 ftol: float = 1e-12, damping: float = 1e-6, ridge: float = 0.0,
+                 ftol: float = 1e-10, damping: float = 1e-6, ridge: float = 0.0,
                  prior=None, progress=None):
     """Damped Gauss-Newton on ``names`` + nuisance with fixed ``row_weights`` ``(M,)``.
 
     ``ridge`` (scaled units) with ``prior`` (the displacement accumulated so far, unscaled)
-    regularises the total displacement (robust ridge). Returns ``(state, converged,
-    iterations, history, total_displacement)``.
+    regularises the total displacement (robust ridge). Converged when the linear model predicts
+    a decrease below ``ftol`` times the cost (no trial evaluation is spent on it). Returns
+    ``(state, converged, iterations, history, total_displacement)``.
     """
     w = np.ones_like(problem.residuals(state)) if row_weights is None else np.sqrt(row_weights)
     k = len(names) + len(problem.nuisance_names)
     total = np.zeros(k) if prior is None else np.asarray(prior, float).copy()
 
-    def cost_of(st, tot):
-        r = problem.residuals(st) * w
+    def cost_of(r, tot):
         c = float(r @ r)
-        if ridge:
-            c += ridge * float(np.sum((tot * scale) ** 2))
-        return r, c
+        return c + ridge * float(np.sum((tot * scale) ** 2)) if ridge else c
 
     J = problem.jacobian(state, names) * w[:, None]
     svd = ScaledSVD.of(J)
     scale = svd.scale
-    r, cost = cost_of(state, total)
+    r = problem.residuals(state) * w
+    cost = cost_of(r, total)
     history = [{"iteration": 0, "cost": cost}]
     lam = damping
     converged = False
@@ -44,23 +43,24 @@ def gauss_newton(problem, state, names, *, row_weights=None, max_iter: int = 50,
         s0 = svd.s[0] ** 2 if svd.s.size else 1.0
         while True:
             dx = svd.solve(r, damping=lam * s0 + ridge, prior=total if ridge else None)
+            predicted = cost - cost_of(r - J @ dx, total + dx)
+            if predicted <= ftol * max(cost, 1e-300):
+                converged = True  # the linear model sees nothing left to gain
+                break
             trial = problem.step(state, names, dx)
-            r_new, cost_new = cost_of(trial, total + dx)
-            if cost_new <= cost or lam > 1e8:
+            r_new = problem.residuals(trial) * w
+            cost_new = cost_of(r_new, total + dx)
+            if cost_new < cost or lam > 1e8:
                 break
             lam *= 10.0
-        if cost_new > cost:  # no damping makes progress: we are at the minimum
+        if converged or cost_new >= cost:
             converged = True
             break
-        improvement = cost - cost_new
         state, r, cost, total = trial, r_new, cost_new, total + dx
         lam = max(lam / 10.0, 1e-12)
         history.append({"iteration": it, "cost": cost, "damping": lam})
         if progress is not None:
             progress(it, cost)
-        if improvement <= ftol * max(cost, 1e-300) or np.max(np.abs(dx * scale)) < 1e-14:
-            converged = True
-            break
         J = problem.jacobian(state, names) * w[:, None]
         svd = ScaledSVD.of(J, scale)
     return state, converged, len(history) - 1, history, total

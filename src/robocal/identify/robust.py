@@ -58,7 +58,7 @@ def ridge_parameter(J: np.ndarray, r: np.ndarray, prior: np.ndarray, rule: str =
         return k * s2 / max(float(np.sum((x_h1 * svd.scale) ** 2)), 1e-300)
     s = svd.s
     grid = np.logspace(np.log10(s[-1] ** 2 * 1e-6 + 1e-300), np.log10(s[0] ** 2), 60)
-    beta = svd.U.T @ r
+    beta = svd.project(r)
     z = svd.Vt @ (prior * svd.scale)
     res_norm, sol_norm, gcv = [], [], []
     r_perp = float(r @ r - beta @ beta)

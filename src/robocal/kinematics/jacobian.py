@@ -16,40 +16,41 @@ from robocal.kinematics.fk import LinkArrays, chain_frames
 
 
 def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray):
-    """TCP poses and, for every parameter, its motion axis.
+    """TCP poses and, for every parameter, its motion axis, component-major for speed.
 
-    Returns ``tcp (N, 4, 4)``, ``u (N, P, 3)`` unit axes, ``o (N, P, 3)`` points on the axes and
+    Returns ``tcp (N, 4, 4)``, ``u (3, P, N)`` unit axes, ``o (3, P, N)`` points on the axes and
     ``rotation (P,)`` bool, P = 5n + 12 in the order of :attr:`Robot.parameter_names`.
     For tool rotations o is the TCP itself (they turn the TCP without moving it).
     """
     tcp, frames = chain_frames(links, base, tool, q, frames=True)
     N, n = q.shape[0], q.shape[-1]
+    F = np.ascontiguousarray(frames.transpose(2, 3, 1, 0))  # (4, 4, n + 1, N): row, column, frame
     P = 5 * n + 12
-    u = np.empty((N, P, 3))
-    o = np.zeros((N, P, 3))
+    u = np.empty((3, P, N))
+    o = np.zeros((3, P, N))
     rotation = np.zeros(P, bool)
-    x_prev, y_prev, z_prev = (frames[:, :n, :3, k] for k in range(3))
-    o_prev = frames[:, :n, :3, 3]
-    z_cur, o_cur = frames[:, 1:, :3, 2], frames[:, 1:, :3, 3]
-    ca, sa = np.cos(links.alpha), np.sin(links.alpha)
-    ax = np.broadcast_to(links.a, (N, n))[..., None]
-    # alpha, a, beta, theta, d of link i at 5 i + (0..4)
-    u[:, 0:5 * n:5], o[:, 0:5 * n:5] = x_prev, o_prev
-    u[:, 1:5 * n:5] = x_prev
-    u[:, 2:5 * n:5] = ca[..., None] * y_prev + sa[..., None] * z_prev
-    o[:, 2:5 * n:5] = o_prev + ax * x_prev
-    u[:, 3:5 * n:5], o[:, 3:5 * n:5] = z_cur, o_cur
-    u[:, 4:5 * n:5] = z_cur
-    rotation[0:5 * n:5] = rotation[2:5 * n:5] = rotation[3:5 * n:5] = True
-    eye = np.broadcast_to(np.eye(3), (N, 3, 3))
-    u[:, 5 * n : 5 * n + 3] = eye
-    u[:, 5 * n + 3 : 5 * n + 6] = eye
-    rotation[5 * n + 3 : 5 * n + 6] = True
-    flange_axes = np.swapaxes(frames[:, n, :3, :3], -1, -2)  # rows: flange x, y, z in world
-    u[:, 5 * n + 6 : 5 * n + 9] = flange_axes
-    u[:, 5 * n + 9 :] = flange_axes
-    o[:, 5 * n + 9 :] = tcp[:, None, :3, 3]
-    rotation[5 * n + 9 :] = True
+    x_prev, y_prev, z_prev, o_prev = (F[:3, c, :n] for c in range(4))  # (3, n, N)
+    z_cur, o_cur = F[:3, 2, 1:], F[:3, 3, 1:]
+    ca = np.cos(links.alpha)[:, None]
+    sa = np.sin(links.alpha)[:, None]
+    a = np.asarray(links.a, float)[:, None]
+    L = 5 * n  # alpha, a, beta, theta, d of link i at 5 i + (0..4)
+    u[:, 0:L:5], o[:, 0:L:5] = x_prev, o_prev
+    u[:, 1:L:5] = x_prev
+    u[:, 2:L:5] = ca * y_prev + sa * z_prev
+    o[:, 2:L:5] = o_prev + a * x_prev
+    u[:, 3:L:5], o[:, 3:L:5] = z_cur, o_cur
+    u[:, 4:L:5] = z_cur
+    rotation[0:L:5] = rotation[2:L:5] = rotation[3:L:5] = True
+    eye = np.eye(3)[:, :, None]
+    u[:, L : L + 3] = eye
+    u[:, L + 3 : L + 6] = eye
+    rotation[L + 3 : L + 6] = True
+    flange = F[:3, :3, n]  # (3 components, 3 axes, N)
+    u[:, L + 6 : L + 9] = flange
+    u[:, L + 9 :] = flange
+    o[:, L + 9 :] = tcp[:, :3, 3].T[:, None]
+    rotation[L + 9 :] = True
     return tcp, u, o, rotation
 
 
@@ -63,12 +64,12 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None):
     tcp, u, o, rotation = motion_axes(robot.links, robot.base, tools, q)
     k = len(robot.smr)
     if k:
-        n, N = robot.n_joints, q.shape[0]
-        s = np.zeros(N, int) if smr is None else np.asarray(smr, int)
-        flange = u[:, 5 * n + 6 : 5 * n + 9]
-        active = s[:, None] == np.repeat(np.arange(1, k + 1), 3)[None, :]
-        u_smr = np.tile(flange, (1, k, 1)) * active[..., None]
-        u[:, 5 * n + 6 : 5 * n + 9] *= (s == 0)[:, None, None]
+        L = 5 * robot.n_joints
+        s = np.zeros(q.shape[0], int) if smr is None else np.asarray(smr, int)
+        flange = u[:, L + 6 : L + 9]
+        active = s[None, :] == np.repeat(np.arange(1, k + 1), 3)[:, None]  # (3k, N)
+        u_smr = np.tile(flange, (1, k, 1)) * active
+        u[:, L + 6 : L + 9] *= s == 0
         u = np.concatenate([u, u_smr], axis=1)
         o = np.concatenate([o, np.zeros_like(u_smr)], axis=1)
         rotation = np.concatenate([rotation, np.zeros(3 * k, bool)])
@@ -90,11 +91,12 @@ def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: s
 
 
 def jacobian_from_axes(tcp, u, o, rotation, kind: str = "point") -> np.ndarray:
-    """Assemble Jacobian rows ``(N, 3|6, k)`` from motion axes ``u, o (N, k, 3)``."""
-    p = tcp[:, None, :3, 3]
-    rot = rotation[None, :, None]
-    dpos = np.where(rot, np.cross(u, p - o), u)
+    """Assemble Jacobian rows ``(N, 3|6, k)`` from motion axes ``u, o (3, k, N)``."""
+    d = tcp[:, :3, 3].T[:, None] - o  # (3, k, N)
+    rot = rotation[:, None]
+    cross = np.stack([u[1] * d[2] - u[2] * d[1], u[2] * d[0] - u[0] * d[2], u[0] * d[1] - u[1] * d[0]])
+    dpos = np.where(rot, cross, u)
     if kind == "point":
-        return np.swapaxes(dpos, 1, 2)
+        return dpos.transpose(2, 0, 1)
     dori = np.where(rot, u, 0.0)
-    return np.swapaxes(np.concatenate([dpos, dori], axis=2), 1, 2)
+    return np.concatenate([dpos, dori]).transpose(2, 0, 1)
