@@ -30,7 +30,9 @@ def _sets():
 
 
 RUNS = [("lsq", {}), ("lsq", {"nongeometric": "gear"}), ("lsq", {"nongeometric": "compliance"}),
-        ("lsq", {"nongeometric": "compliance,gear"}), ("neural", {}), ("neural", {"outputs": "all"})]
+        ("lsq", {"nongeometric": "compliance,gear"}), ("lsq", {"nongeometric": "backlash"}),
+        ("lsq", {"nongeometric": "gear,backlash"}), ("lsq", {"nongeometric": "compliance,gear,backlash"}),
+        ("neural", {}), ("neural", {"outputs": "all"})]
 
 
 def main() -> None:
