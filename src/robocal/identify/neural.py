@@ -27,13 +27,12 @@ the network's outputs over the calibration targets. Networks save as ``.npz`` or
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import DataError, IdentificationError
+from robocal.errors import IdentificationError
+from robocal.identify.plain_io import load_plain, save_plain
 from robocal.identify.problem import State
 from robocal.identify.solvers import SolverOutput
 
@@ -79,36 +78,14 @@ class BPNetwork:
 
     def save(self, path) -> None:
         """Write ``.json`` or ``.npz`` (plain arrays) atomically."""
-        from robocal.kinematics.yaml_io import write_atomic
-
-        path = Path(path)
-        if path.suffix == ".json":
-            write_atomic(path, json.dumps(self.to_dict(), indent=1))
-            return
-        if path.suffix != ".npz":
-            raise DataError(f"{path}: save a network as .json or .npz")
-        tmp = path.with_name(f".{path.name}.tmp.npz")
-        np.savez(tmp, format=np.array(FORMAT), outputs=np.array(self.outputs),
-                 inputs=np.array(self.inputs), **{f: getattr(self, f) for f in _FIELDS})
-        tmp.replace(path)
+        save_plain(path, self.to_dict(), "BP network")
 
     @classmethod
     def load(cls, path) -> BPNetwork:
         """Read a network written by :meth:`save` (no pickle)."""
-        path = Path(path)
-        try:
-            if path.suffix == ".json":
-                d = json.loads(path.read_text(encoding="utf-8"))
-            else:
-                with np.load(path, allow_pickle=False) as z:
-                    d = {k: z[k] for k in z.files}
-                    d["format"], d["inputs"] = str(d["format"]), int(d["inputs"])
-                    d["outputs"] = [str(s) for s in d["outputs"]]
-        except (OSError, ValueError, KeyError) as exc:
-            raise DataError(f"cannot read network file {path}: {exc}") from None
-        if d.get("format") != FORMAT:
-            raise DataError(f"{path} is not a robocal BP network ({FORMAT})")
-        return cls(*(np.asarray(d[f], float) for f in _FIELDS), list(d["outputs"]), int(d["inputs"]))
+        d = load_plain(path, "BP network", FORMAT)
+        outputs = [str(s) for s in np.atleast_1d(d["outputs"])]
+        return cls(*(np.asarray(d[f], float) for f in _FIELDS), outputs, int(d["inputs"]))
 
 
 def pose_error_inputs(problem, state) -> np.ndarray:

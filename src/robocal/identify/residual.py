@@ -12,14 +12,13 @@ numpy/scipy only. Saved as plain arrays (npz / JSON), never pickle.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import scipy.linalg
 
 from robocal.errors import DataError
+from robocal.identify.plain_io import load_plain, save_plain
 
 FORMAT = "robocal-residual/1"
 LAMBDAS = (1e-3, 1e-2, 1e-1, 1.0, 10.0)
@@ -100,33 +99,12 @@ class ResidualModel:
 
     def save(self, path) -> None:
         """Write ``.json`` or ``.npz`` atomically (plain arrays)."""
-        from robocal.kinematics.yaml_io import write_atomic
-
-        path = Path(path)
-        if path.suffix == ".json":
-            write_atomic(path, json.dumps(self.to_dict()))
-            return
-        if path.suffix != ".npz":
-            raise DataError(f"{path}: save a residual model as .json or .npz")
-        tmp = path.with_name(f".{path.name}.tmp.npz")
-        d = self.to_dict()
-        np.savez(tmp, **{k: np.asarray(v) for k, v in d.items() if k != "units"})
-        tmp.replace(path)
+        save_plain(path, self.to_dict(), "residual model")
 
     @classmethod
     def load(cls, path) -> ResidualModel:
         """Read a model written by :meth:`save` (no pickle)."""
-        path = Path(path)
-        try:
-            if path.suffix == ".json":
-                d = json.loads(path.read_text(encoding="utf-8"))
-            else:
-                with np.load(path, allow_pickle=False) as z:
-                    d = {k: z[k] for k in z.files}
-        except (OSError, ValueError) as exc:
-            raise DataError(f"cannot read residual model {path}: {exc}") from None
-        if str(d.get("format")) != FORMAT:
-            raise DataError(f"{path} is not a robocal residual model ({FORMAT})")
+        d = load_plain(path, "residual model", FORMAT)
         X = np.asarray(d["X"], float)
         return cls(X.reshape(-1, X.shape[-1]) if X.size else X.reshape(0, 0),
                    np.asarray(d["coef"], float).reshape(-1, 3), float(d["length"]), float(d["lam"]),

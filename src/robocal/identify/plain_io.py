@@ -1,0 +1,45 @@
+"""Learned models saved as plain arrays: ``.json`` or ``.npz``, written atomically, never pickle."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from robocal.errors import DataError
+from robocal.kinematics.yaml_io import write_atomic
+
+
+def save_plain(path, data: dict, what: str) -> None:
+    """Write ``data`` (numbers, strings, lists/arrays of them) to ``.json`` or ``.npz``."""
+    path = Path(path)
+    if path.suffix == ".json":
+        write_atomic(path, json.dumps(data, indent=1))
+        return
+    if path.suffix != ".npz":
+        raise DataError(f"{path}: save a {what} as .json or .npz")
+    tmp = path.with_name(f".{path.name}.tmp.npz")
+    try:
+        np.savez(tmp, **{k: np.asarray(v) for k, v in data.items()})
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def load_plain(path, what: str, fmt: str) -> dict:
+    """Read what :func:`save_plain` wrote; ``fmt`` is the expected ``format`` field.
+
+    Values come back as JSON types or numpy arrays (0-d for scalars): convert at the caller."""
+    path = Path(path)
+    try:
+        if path.suffix == ".json":
+            data = json.loads(path.read_text(encoding="utf-8"))
+        else:
+            with np.load(path, allow_pickle=False) as z:
+                data = {k: z[k] for k in z.files}
+    except (OSError, ValueError, KeyError) as exc:
+        raise DataError(f"cannot read {what} file {path}: {exc}") from None
+    if not isinstance(data, dict) or str(data.get("format")) != fmt:
+        raise DataError(f"{path} is not a robocal {what} ({fmt})")
+    return data
