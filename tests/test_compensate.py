@@ -103,3 +103,24 @@ def test_cli_compensate(tmp_path, capsys):
     assert main(["compensate", str(tmp_path / "cal.yaml"), str(tmp_path / "bad.csv"), "--nominal",
                  "abb_irb2600", "-o", str(tmp_path / "never.csv")]) == 2
     assert not (tmp_path / "never.csv").exists()
+
+
+def test_compensation_after_a_real_calibration_on_simulated_truth():
+    """Issue goal: after calibrate, the compensated joints put the true robot within 1.2x the
+    model's validation RMS of the targets, and at least 5x closer than the nominal joints."""
+    import robocal as rc
+
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    sim = rc.simulate_tracker(nominal, 220, seed=21)
+    cal = sim.data.subset(sim.data.pose_id < 120)
+    val = sim.data.subset(sim.data.pose_id >= 120)
+    res = rc.calibrate(nominal, cal, validation=val)
+    controller = res.start  # the controller's model: nominal links, registered tracker frame and SMR
+    targets = controller.fk(val.joints[:60])
+    comp = rc.compensate(res.robot, controller, targets)
+    assert comp.converged.all()
+    err = np.linalg.norm(sim.truth.fk(comp.joints)[:, :3, 3] - targets[:, :3, 3], axis=1) * 1e3
+    nominal_err = np.linalg.norm(sim.truth.fk(val.joints[:60])[:, :3, 3] - targets[:, :3, 3], axis=1) * 1e3
+    rms, nominal_rms = np.sqrt(np.mean(err**2)), np.sqrt(np.mean(nominal_err**2))
+    assert rms <= 1.2 * res.validation["rms"]
+    assert nominal_rms >= 5 * rms
