@@ -90,3 +90,42 @@ def test_screenshot_shows_the_plots(browser, tmp_path, report):
     orange = ((r - b > 80) & (r > g + 30)).sum()
     green = ((g - r > 60) & (g > b)).sum()
     assert orange > 5000 and green > 2000, (orange, green)
+
+
+def _demo_report(tmp_path_factory):
+    from robocal.demo import run_demo
+
+    return run_demo(tmp_path_factory.mktemp("demo"), quiet=True)["report"]
+
+
+def _meca500_report(tmp_path_factory):
+    from conftest import require_datasets
+
+    from robocal import Robot, calibrate
+    from robocal.data.datasets import meca500
+
+    cal, val = meca500(require_datasets())
+    result = calibrate(Robot.from_catalog("meca500"), cal, validation=val)
+    return write_report(result.to_dict(), tmp_path_factory.mktemp("meca") / "report.html")
+
+
+@pytest.mark.parametrize("make, sections", [
+    (_demo_report, ["summary", "errors", "parameters", "identifiability", "correlation", "rejected",
+                    "history"]),
+    (_meca500_report, ["summary", "errors", "parameters", "identifiability", "correlation", "history"]),
+], ids=["demo", "real-meca500"])
+def test_real_reports_open_with_every_section(browser, tmp_path, tmp_path_factory, make, sections):
+    """The demo's report and a real Meca500 calibration's: no console message, every section and
+    figure rendered, a screenshot that is not blank."""
+    from PIL import Image
+
+    path = make(tmp_path_factory)
+    proc = run_browser(browser, tmp_path, path.as_uri(), "--dump-dom")
+    assert proc.returncode == 0 and console_messages(proc.stderr) == []
+    assert section_ids(proc.stdout) == sections
+    assert svg_count(proc.stdout) == svg_count(path.read_text(encoding="utf-8")) >= 7
+    shot = tmp_path / "shot.png"
+    proc = run_browser(browser, tmp_path, path.as_uri(), f"--screenshot={shot}", "--window-size=1280,3000")
+    assert console_messages(proc.stderr) == []
+    img = np.asarray(Image.open(shot).convert("RGB"))
+    assert len(np.unique(img.reshape(-1, 3) // 8, axis=0)) > 300

@@ -397,7 +397,7 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     corr = _correlation(result)
     if corr:
         sections.append(("correlation", "Parameter correlation", corr))
-    if "rejected" in result:
+    if result.get("rejected") or ("rejected" in result and result.get("method") == "robust"):
         sections.append(("rejected", "Rejected observations", _rejected(result)))
     iso = _iso([("calibration set", cal), ("validation set", val)])
     if iso:
