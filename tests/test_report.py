@@ -228,3 +228,14 @@ def test_report_of_a_real_robust_calibration(tmp_path):
         assert f"<td>{r['source_row']}</td><td>{r['pose_id']}</td>" in text
     for d in data["dropped"]:
         assert f"<td class=\"l\">{d['name']}</td>" in text
+
+
+def test_nongeometric_terms_are_tabled():
+    result = synthetic_result(5, n_poses=20, repeats=0, validation=False)
+    result["nongeometric"] = {"terms": ["gear", "backlash"], "kept": ["gear2_s1", "backlash1"],
+                              "dropped": ["gear1_c1"],
+                              "parameters": [{"name": "gear2_s1", "estimate": 1e-4, "sigma": 1e-5},
+                                             {"name": "backlash1", "estimate": 2e-4, "sigma": 2e-5}]}
+    text = render_report(result)
+    assert "Non-geometric terms: gear, backlash" in text and "backlash1" in text
+    assert "0.01146" in text  # 2e-4 rad in deg

@@ -271,9 +271,28 @@ def _parameters(result: dict) -> str:
     text = (f"<p>{n_est} parameters estimated, {len(dropped)} not identifiable from these data "
             "(kept at their start value; highlighted), the others fixed (grey). Correction = estimate "
             "&minus; nominal; 1&sigma; from the covariance of the estimate.</p>")
-    return text + _table(["name", "status", "unit", "nominal", "estimate", "correction", "1&sigma;",
-                          "note"], rows, left=3, row_class=classes).replace(
+    table = _table(["name", "status", "unit", "nominal", "estimate", "correction", "1&sigma;",
+                    "note"], rows, left=3, row_class=classes).replace(
         "<td>confounded", "<td class='l'>confounded")
+    return text + table + _nongeometric(result.get("nongeometric"))
+
+
+def _nongeometric(ng: dict | None) -> str:
+    """The non-geometric terms' parameters (rad and rad/m in the JSON, shown in deg)."""
+    if not ng or not ng.get("parameters"):
+        return ""
+    rows = []
+    for p in ng["parameters"]:
+        name = str(p.get("name", ""))
+        unit = "deg/m" if name.startswith("comp") else "deg"
+        rows.append([esc(name), unit, _num(np.rad2deg(p.get("estimate", np.nan)), 5),
+                     _num(np.rad2deg(p.get("sigma", np.nan)), 5)])
+    dropped = ng.get("dropped") or []
+    return (f"<h3>Non-geometric terms: {esc(', '.join(ng.get('terms', [])))}</h3>"
+            "<p>Joint errors the model adds to the commanded joints: compliance (per metre of "
+            "unit-weight moment arm), gear harmonics and backlash (half lost motion, by approach "
+            f"direction). {len(dropped)} candidate(s) the data cannot separate from the geometry "
+            "were left out.</p>" + _table(["name", "unit", "estimate", "1&sigma;"], rows, left=2))
 
 
 _IDENT_LABELS = {"n_params": "candidate parameters", "rank": "rank (identifiable)",
