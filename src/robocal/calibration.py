@@ -268,11 +268,11 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
 
         state0, ng_info = attach(problem, state0, names, parse_terms(nongeometric), rtol)
     solve = get_solver(method)
-    with Progress(None, f"calibrate ({method})", quiet=progress is not True) as bar:
+    total = options.get("generations") or options.get("iterations") or options.get("epochs")
+    with Progress(total, f"calibrate ({method})", quiet=progress is not True) as bar:
         if progress is True:
-            rows = problem.residuals(state0).size
-            def progress(iteration, cost):  # noqa: E306 - the bar's callback
-                bar.update(info=f"rms residual {np.sqrt(cost / rows) * 1e3:.4f} mm-equivalent")
+            def progress(iteration, rms):  # noqa: E306 - the bar's callback
+                bar.update(info=f"rms {rms * 1e3:.4f} mm")
         out = solve(problem, state0, names, seed=seed, progress=progress or None, **options)
     if not out.converged:
         warnings.append(out.message)

@@ -87,15 +87,15 @@ def check_bounds(robot, names, bounds) -> tuple[np.ndarray, np.ndarray]:
 
 
 def progress_reporter(progress, label: str, total: int):
-    """``(bar, report)``: the caller's ``progress(iteration, cost)`` when given (``calibrate(...,
+    """``(bar, report)``: the caller's ``progress(iteration, rms)`` when given (``calibrate(...,
     progress=True)`` draws its own bar through it), else a :class:`Progress` bar of ``total``
     steps with the best RMS error (drawn on a terminal only, silent under ``--quiet``)."""
     bar = Progress(total, label, quiet=True if progress is not None else None)
 
-    def report(iteration: int, cost: float, rms: float) -> None:
+    def report(iteration: int, rms: float) -> None:
         bar.update(info=f"best rms {rms * 1e3:.5f} mm")
         if progress is not None:
-            progress(iteration, cost)
+            progress(iteration, rms)
     return bar, report
 
 
@@ -192,7 +192,7 @@ def solve(problem, start, names, *, seed: int = 0, progress=None, population: in
                     best_x, best_nu, best_mu = decode(chrom)[i].copy(), nu[i].copy(), mu[i]
                     best_rms = float(np.sqrt(np.mean(err[i] ** 2)))
                 history.append({"iteration": gen, "cost": float(best_mu), "rms": best_rms})
-                report(gen, float(best_mu), best_rms)
+                report(gen, best_rms)
             else:
                 gen = generations
         except KeyboardInterrupt:

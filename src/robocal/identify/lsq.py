@@ -60,7 +60,7 @@ def gauss_newton(problem, state, names, *, row_weights=None, max_iter: int = 50,
         lam = max(lam / 10.0, 1e-12)
         history.append({"iteration": it, "cost": cost, "damping": lam})
         if progress is not None:
-            progress(it, cost)
+            progress(it, np.sqrt(cost / problem.observation.n_items))
         J = problem.jacobian(state, names) * w[:, None]
         svd = ScaledSVD.of(J, scale)
     return state, converged, len(history) - 1, history, total

@@ -158,7 +158,7 @@ def train(problem, start: State, outputs: list[str], *, hidden: int = 9, index: 
             lr *= 1.05
         history.append({"iteration": epoch, "cost": cost, "learning_rate": lr})
         if progress is not None:
-            progress(epoch, cost)
+            progress(epoch, np.sqrt(np.mean(np.sum(rt**2, axis=1))) * 1e-3)
         streak = streak + 1 if cost <= threshold else 0
         if streak >= n_consecutive:
             met = True

@@ -103,8 +103,8 @@ def solve(problem, start, names, *, k0: float = 1.5, k1: float = 3.0, ridge: str
         item_w = new_w
         history.append({"iteration": outer, "ridge": h, "scale": scale,
                         "rejected": int(np.sum(item_w == 0)), "weight_change": change})
-        if progress is not None:
-            progress(outer, scale)
+        if progress is not None:  # the robust scale of one item's residual
+            progress(outer, scale * np.sqrt(rows))
         if change < 1e-4:
             converged = True
             break

@@ -1,7 +1,9 @@
 """Solver registry and the output every solver returns.
 
-A new method is one module in this package with ``solve(problem, start, names, **options)
--> SolverOutput`` and one line in ``SOLVERS``.
+A new method is one module in this package with ``solve(problem, start, names, *, seed,
+progress, **options) -> SolverOutput`` and one line in ``SOLVERS``. ``progress``, when given, is
+called as ``progress(iteration, rms)`` with the current (best) RMS error of one measurement item
+in SI units (m for tracker points when the data carry no sigma).
 """
 
 from __future__ import annotations

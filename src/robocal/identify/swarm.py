@@ -84,7 +84,7 @@ def solve(problem, start, names, *, seed: int = 0, progress=None, particles: int
                 if f[g] < gbest_f:
                     gbest, gbest_f, gbest_nu = X[g].copy(), f[g], nu[g].copy()
                 history.append({"iteration": it, "cost": float(gbest_f), "rms": rms(gbest_f)})
-                report(it, float(gbest_f), rms(gbest_f))
+                report(it, rms(gbest_f))
         except KeyboardInterrupt:
             interrupted = True
     state = cost.state_of(gbest, gbest_nu)
