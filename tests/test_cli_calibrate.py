@@ -92,3 +92,13 @@ def test_nongeometric_terms_and_network_out(campaign):
     assert BPNetwork.load(d / "net.npz").outputs
     assert main(["calibrate", str(d / "cal.csv"), "--robot", "abb_irb2600", "--network-out",
                  str(d / "net.npz")]) == 2
+
+
+def test_hold_out_the_last_poses(campaign, capsys):
+    d = campaign
+    assert main(["--quiet", "calibrate", str(d / "cal.csv"), "--robot", "abb_irb2600", "--hold-out", "30",
+                 "--json", str(d / "h.json")]) == 0
+    result = json.loads((d / "h.json").read_text())
+    assert result["validation"]["n"] == 30 and result["after"]["n"] == 70
+    assert main(["calibrate", str(d / "cal.csv"), "--robot", "abb_irb2600", "--hold-out", "100"]) == 2
+    assert "--hold-out must be between" in capsys.readouterr().err

@@ -8,7 +8,7 @@ EPILOG = """Examples:
   robocal calibrate data.csv --robot abb_irb2600 --validate val.csv -o calibrated.yaml --json result.json
   robocal calibrate data.csv --robot nominal.yaml --method robust --set k0=1.5 --set k1=3.0
   robocal calibrate data.csv --robot meca500 --params "a2 a3 d4 theta2 theta3" --report report.html
-  robocal calibrate data.csv --robot abb_irb120 --nongeometric compliance,gear,backlash -o calibrated.yaml
+  robocal calibrate irb120.csv --robot abb_irb120 --hold-out 500 --nongeometric compliance,gear,backlash
   robocal calibrate data.csv --robot abb_irb2600 --method genetic --set population=60 --set generations=100
   robocal calibrate data.csv --robot abb_irb2600 --method neural --set hidden=10 --network-out net.npz
 
@@ -43,6 +43,8 @@ def add_parser(sub) -> None:
     p.add_argument("--params", default="auto",
                    help="auto (identifiable default set), all, or names separated by spaces/commas")
     p.add_argument("--validate", metavar="VAL.csv", help="measurements to judge the result on")
+    p.add_argument("--hold-out", type=int, metavar="N",
+                   help="judge on the last N poses of DATA (file order) and calibrate on the rest")
     p.add_argument("-o", "--output", metavar="calibrated.yaml", help="write the calibrated model")
     p.add_argument("--json", metavar="result.json", help="write the full result as JSON")
     p.add_argument("--report", metavar="report.html", help="write the HTML report")
@@ -57,14 +59,25 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    import numpy as np
+
     from robocal.calibration import calibrate
     from robocal.data.measurements import Measurements
-    from robocal.errors import IdentificationError
+    from robocal.errors import DataError, IdentificationError
     from robocal.evaluate import load_model
 
     robot = load_model(args.robot)
     data = Measurements.load(args.data, robot=robot)
     validation = Measurements.load(args.validate, robot=robot) if args.validate else None
+    if args.hold_out:
+        if validation is not None:
+            raise DataError("give either --validate or --hold-out, not both")
+        if not 0 < args.hold_out < data.n_poses:
+            raise DataError(f"--hold-out must be between 1 and {data.n_poses - 1} (the data have "
+                            f"{data.n_poses} poses)")
+        calibration = data.first_poses(data.n_poses - args.hold_out)
+        validation = data.subset(~np.isin(data.pose_id, calibration.pose_id))
+        data = calibration
     if args.network_out and (args.method != "neural" or not args.network_out.endswith((".npz", ".json"))):
         raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
     result = calibrate(robot, data, method=args.method, params=args.params, validation=validation,
