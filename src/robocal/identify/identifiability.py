@@ -18,6 +18,7 @@ import numpy as np
 import scipy.linalg
 
 DEFAULT_RTOL = 1e-7
+NO_EFFECT = 1e-9  # column norm, relative to the largest, below which a parameter has no effect
 
 
 def condition_class(cond: float) -> str:
@@ -101,7 +102,9 @@ def analyze(J: np.ndarray, names: Sequence[str], n_poses: int,
     """
     names = list(names)
     norms = np.linalg.norm(J, axis=0)
-    zero = norms <= 1e-300
+    # a column of rounding noise (a parameter these data cannot see at all, e.g. alpha1 for
+    # distances) must not be scaled up to a unit column that looks independent
+    zero = norms <= NO_EFFECT * norms.max(initial=0.0)
     Js = J / np.where(zero, 1.0, norms)
     frame = np.array([_is_frame(nm) and not z for nm, z in zip(names, zero, strict=True)], bool)
     link = ~frame & ~zero

@@ -7,6 +7,7 @@ parameters (see :meth:`Robot.displaced`) followed by the observation's nuisance 
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -28,14 +29,14 @@ def candidate_parameters(robot, kind: str, params) -> list[str]:
     """Resolve ``params``: 'auto' (the robot's default free set), 'all' (every parameter),
     or an explicit list of names. Plane contacts carry no length reference and are expressed
     in the robot base frame, whose motion the plane coefficients absorb: for them 'auto' and
-    'all' leave out ``base.*`` and the scale reference (see ``observations.plane``)."""
+    'all' leave out ``base.*`` and the scale reference (see ``observations.plane``); distances
+    do not see the base frame either (``observations.distance``)."""
     if isinstance(params, str) and params in ("auto", "all"):
         names = (robot.default_free(orientation=(kind == "pose")) if params == "auto"
                  else list(robot.parameter_names))
-        if kind == "plane":
-            from robocal.identify.observations.plane import not_observable
-
-            names = [n for n in names if n not in not_observable(robot)]
+        if kind in ("plane", "distance"):
+            module = importlib.import_module(f"robocal.identify.observations.{kind}")
+            names = [n for n in names if n not in module.not_observable(robot)]
         return names
     if isinstance(params, str):
         params = [p for p in params.replace(",", " ").split() if p]

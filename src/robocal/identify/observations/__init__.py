@@ -14,6 +14,7 @@ from robocal.errors import IdentificationError
 OBSERVATIONS = {
     "point": "point:PointObservation",
     "pose": "pose:PoseObservation",
+    "distance": "distance:DistanceObservation",
     "plane": "plane:PlaneObservation",
 }
 

@@ -72,7 +72,7 @@ class Observation:
         links, base, tool, smr = robot.displaced_arrays(names, X)
         P = X.shape[0]
         offsets = np.concatenate([tool[:, None, :3, 3], smr], axis=1)[:, self.smr]  # (P, N, 3)
-        tools = np.broadcast_to(tool[:, None], (P, self.n_items, 4, 4)).copy()
+        tools = np.broadcast_to(tool[:, None], (P, self.q.shape[0], 4, 4)).copy()
         tools[..., :3, 3] = offsets
         links = type(links)(*(v[:, None, :] for v in links))
         return chain_frames(links, base[:, None], tools, self.q[None])
