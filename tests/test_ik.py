@@ -247,3 +247,12 @@ def test_numeric_reports_unreachable():
         rc.ik.solve(robot, T, np.zeros((2, 6)))
     with pytest.raises(DataError, match="branch"):
         rc.ik.solve(robot, T, branch=9)
+
+
+def test_numeric_ik_keeps_the_seed_turn():
+    """On a joint with +-360 deg of travel, the solution stays on the seed's turn."""
+    robot = rc.Robot.from_catalog("ur5")
+    q_true = np.array([[0.3, -1.0, 1.2, -0.5, 0.8, 4.0]])  # q6 beyond pi: a second turn
+    res = rc.ik.solve(robot, robot.fk(q_true), seeds=q_true + 0.01)
+    assert res.converged.all()
+    np.testing.assert_allclose(res.joints, q_true, atol=1e-8)

@@ -285,9 +285,11 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     row_w = None if out.item_weights is None else np.repeat(out.item_weights, problem.rows_per_item)
     J = problem.jacobian(final, names)
     r = problem.residuals(final)
+    dof_rows = None
     if row_w is not None:
         J, r = J * np.sqrt(row_w)[:, None], r * np.sqrt(row_w)
-    cov = covariance(J, r)
+        dof_rows = int(np.count_nonzero(row_w))  # rejected rows carry no information
+    cov = covariance(J, r, dof_rows)
     result = CalibrationResult(
         robot=final_robot, start=start, method=method, identifiability=ident, names=names,
         unknowns=names + problem.nuisance_names, covariance=cov, solver=out,

@@ -5,7 +5,7 @@ flange pose in frame {0}, ``B`` the base frame (tracker -> frame {0}) and ``t_s`
 flange coordinates. Rotations are never parameterised by Euler angles, so any tracker orientation
 works:
 
-1. alternate a weighted Umeyama/Kabsch fit of ``B`` (SVD, no scaling) with a linear least-squares
+1. alternate an Umeyama/Kabsch fit of ``B`` (SVD, no scaling) with a linear least-squares
    fit of every ``t_s`` (starting from the model's offsets, or zero);
 2. finish with Gauss-Newton on (B translation, B rotation as a multiplicative rotation vector,
    all t_s) until the step is below 1e-13 m.
@@ -35,10 +35,9 @@ class Registration:
     iterations: int
 
 
-def umeyama(src: np.ndarray, dst: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
-    """Rigid transform (4, 4) minimising sum w |dst - (R src + t)|^2 for points ``(N, 3)`` (SVD)."""
-    w = np.ones(len(src)) if weights is None else np.asarray(weights, float)
-    w = w / w.sum()
+def umeyama(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+    """Rigid transform (4, 4) minimising sum |dst - (R src + t)|^2 for points ``(N, 3)`` (SVD)."""
+    w = np.full(len(src), 1.0 / len(src))
     cs, cd = w @ src, w @ dst
     H = (src - cs).T @ ((dst - cd) * w[:, None])
     U, _, Vt = np.linalg.svd(H)

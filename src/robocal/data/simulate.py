@@ -266,6 +266,8 @@ def _plane_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, wo
         dist = np.einsum("ni,ni->n", normals[k], true.fk(q)[:, :3, 3]) - offsets[k]
         near = np.abs(dist) < 0.15
         q, k = q[near], k[near]
+        if not len(q):  # no sample near a plane this round: draw again
+            continue
         q, res = _solve_plane_contacts(true, q, normals[k], offsets[k])
         ok = (np.abs(res) < 1e-12) & true.within_limits(q)
         for plane in range(n_planes):  # fill each plane's open slots (a loop over planes only)

@@ -92,7 +92,3 @@ class CalibrationProblem:
     def position_errors(self, state: State) -> np.ndarray:
         """``(N,)`` unweighted position error of each measurement item (m)."""
         return self.observation.position_errors(state.robot, state.nuisance)
-
-    def item_of_row(self) -> np.ndarray:
-        """Measurement item of every residual row ``(M,)``."""
-        return np.repeat(np.arange(self.observation.n_items), self.rows_per_item)

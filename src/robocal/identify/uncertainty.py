@@ -11,11 +11,12 @@ import numpy as np
 from robocal.identify.linalg import ScaledSVD
 
 
-def covariance(J: np.ndarray, r: np.ndarray, dof_items: int | None = None) -> np.ndarray:
+def covariance(J: np.ndarray, r: np.ndarray, n_rows: int | None = None) -> np.ndarray:
     """Covariance ``(k, k)`` of the estimate from the weighted Jacobian ``(M, k)`` and
-    weighted residuals ``(M,)`` at the solution."""
+    weighted residuals ``(M,)`` at the solution; ``n_rows`` counts the rows that carry
+    information (default M; fewer when a robust fit gave some zero weight)."""
     M, k = J.shape
-    dof = max((M if dof_items is None else dof_items) - k, 1)
+    dof = max((M if n_rows is None else n_rows) - k, 1)
     s0_sq = float(r @ r) / dof
     svd = ScaledSVD.of(J)
     inv_s = np.where(svd.s > 1e-12 * svd.s[0], 1.0 / svd.s, 0.0)

@@ -147,7 +147,9 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
     pe = np.linalg.norm(err[:, :3], axis=1)
     re = np.linalg.norm(err[:, 3:], axis=1)
     converged = (pe <= pos_tol) & (re <= rot_tol) & np.isfinite(q0).all(axis=1)
-    q = np.remainder(q + np.pi, 2 * np.pi) - np.pi
+    # stay on the seed's turn (joints with more than 360 deg of travel), then into the limits
+    seed = np.where(np.isfinite(q0), q0, 0.0)
+    q = seed + (np.remainder(q - seed + np.pi, 2 * np.pi) - np.pi)
     q = np.where(q < robot.limits[:, 0], q + 2 * np.pi, np.where(q > robot.limits[:, 1], q - 2 * np.pi, q))
     return _finish(IKResult(q, converged, pe, re, np.array(q0), it), N, pos_tol, rot_tol, strict)
 

@@ -10,7 +10,7 @@ The joint a robot really turns to is ``q + dq(q)`` with ``dq`` linear in the par
 Backlash (lost motion): a joint stops b_i short of or beyond its command depending on the
 direction s_i in {-1, 0, +1} from which it approached the pose (the sign of its last move; 0
 where unknown, which predicts the middle of the band). ``approach`` arrays carry s (N, n);
-:meth:`robocal.data.Measurements.approach_directions` derives them from the measurement order.
+:func:`robocal.data.measurements.approach_from_order` derives them from the measurement order.
 
 Mass model of the compliance term: the links beyond joint i are lumped into point masses at the
 origins o_j of the distal frames {j}, j = i+1..n (frame {n} is the flange, which also carries

@@ -203,7 +203,7 @@ class Robot:
 
     @property
     def values(self) -> np.ndarray:
-        """Current parameter vector ``(5n + 12,)`` in SI units."""
+        """Current parameter vector ``(5n + 12 + 3k,)`` in SI units (k extra SMRs)."""
         return self._values()
 
     def get(self, name: str) -> float:
@@ -316,7 +316,7 @@ class Robot:
         return LinkArrays(self.alpha, self.a, self.beta, self.theta, self.d)
 
     def check_joints(self, q) -> np.ndarray:
-        """Joints as a ``(N, n)`` float array; raises ModelError on wrong shape or NaN."""
+        """Joints as a ``(N, n)`` float array; raises DataError on wrong shape or NaN."""
         from robocal.errors import DataError
 
         q = np.asarray(q, dtype=float)
