@@ -135,3 +135,20 @@ def test_real_irb120_and_meca500_reach_the_goals_with_backlash():
     cal, val = meca500(root)
     res = calibrate(Robot.from_catalog("meca500"), cal, validation=val, nongeometric=terms)
     assert res.validation["rms"] <= 0.040
+
+
+def test_jacobian_of_a_robot_with_joint_errors_matches_finite_differences(rng):
+    """Robot.jacobian differentiates the FK the robot applies, joint errors and backlash included."""
+    errors = JointErrorModel(("gear2_s1", "gear3_c1", "backlash5"), np.array([0.01, -0.02, 0.003]))
+    robot = replace(Robot.from_catalog("abb_irb2600"), joint_errors=errors)
+    q = rng.uniform(-1.5, 1.5, (8, 6))
+    s = np.sign(rng.normal(size=q.shape)).astype(int)
+    names = ["a2", "theta3", "d4", "alpha5", "tool.x"]
+    J = robot.jacobian(q, names, approach=s)
+    h = 1e-7
+    for k in range(len(names)):
+        e = np.zeros(len(names))
+        e[k] = h
+        fd = (robot.displaced(names, e).fk(q, approach=s)[:, :3, 3]
+              - robot.displaced(names, -e).fk(q, approach=s)[:, :3, 3]) / (2 * h)
+        np.testing.assert_allclose(J[:, :, k], fd, atol=1e-8)

@@ -347,13 +347,14 @@ class Robot:
             return chain_frames(self.links, self.base, tool, q, frames=True)
         return chain_fk(self.links, self.base, tool, q)
 
-    def jacobian(self, q, params: Sequence[str] | None = None, kind: str = "point", smr=None):
+    def jacobian(self, q, params: Sequence[str] | None = None, kind: str = "point", smr=None,
+                 approach=None):
         """Identification Jacobian ``(N, 3|6, k)``; see
         :func:`robocal.kinematics.jacobian.identification_jacobian`."""
         from robocal.kinematics.jacobian import identification_jacobian
 
         names = self.default_free(kind == "pose") if params is None else list(params)
-        return identification_jacobian(self, self.check_joints(q), names, kind, smr)
+        return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach)
 
     def within_limits(self, q) -> np.ndarray:
         """``(N,)`` bool: every joint inside its limits."""

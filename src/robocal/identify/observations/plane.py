@@ -161,8 +161,8 @@ class PlaneObservation(Observation):
         p = self.modelled_points(robot)
         h = self.signed_distance(p, nuisance)
         normal = self.plane_normals(nuisance)[self.plane_of]  # (N, 3)
-        J_robot = (np.einsum("ni,nik->nk", normal, identification_jacobian(robot, self.q, names, "point"))
-                   if len(names) else np.zeros((self.n_items, 0)))
+        J_tip = identification_jacobian(robot, self.q, names, "point", approach=self.approach)
+        J_robot = np.einsum("ni,nik->nk", normal, J_tip) if len(names) else np.zeros((self.n_items, 0))
         coef = nuisance.reshape(-1, 3)[self.plane_of]
         a, b = coef[:, 0], coef[:, 1]
         s = np.sqrt(1.0 + a * a + b * b)

@@ -33,7 +33,7 @@ class PoseObservation(Observation):
         return (pose_error(self.measured, T) * self.scale).reshape(-1)
 
     def jacobian(self, robot, names, nuisance=None) -> np.ndarray:
-        J = identification_jacobian(robot, self.q, names, "pose", self.smr)
+        J = identification_jacobian(robot, self.q, names, "pose", self.smr, self.approach)
         return (J * self.scale[None, :, None]).reshape(-1, len(names))
 
     def residuals_batch(self, robot, names, X, nuisance=None) -> np.ndarray:
