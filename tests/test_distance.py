@@ -66,3 +66,16 @@ def test_calibration_from_distances_recovers_the_shape():
     T0 = umeyama(p0, t)
     fit0 = np.sqrt(np.mean(np.sum((p0 @ T0[:3, :3].T + T0[:3, 3] - t) ** 2, axis=1))) * 1e3
     assert fit < 0.2 * fit0
+
+
+def test_robust_rejection_names_the_rows_of_the_bad_pair():
+    nominal, truth = _truth()
+    data = ballbar(truth, 150, 0.005, seed=7)
+    distance = data.distance.copy()
+    distance[200:202] += 0.003  # pair 100 (rows 200, 201) measured 3 mm long
+    bad = Measurements.from_arrays("distance", data.joints, pair=data.pair, distance=distance)
+    res = calibrate(nominal, bad, method="robust")
+    rejected = res.to_dict()["rejected"]
+    assert {r["source_row"] for r in rejected} >= {201, 202}  # 1-based lines of rows 200, 201
+    weights = res.to_dict()["observations"]["weight"]
+    assert len(weights) == len(bad) and weights[200] == weights[201] == 0.0

@@ -117,6 +117,8 @@ class CalibrationResult:
         measured = getattr(obs, "measured", None)
         measured = None if measured is None or measured.ndim != 2 else measured * 1e3
         weights = self.solver.item_weights if data is self.problem.data else None
+        if weights is not None:
+            weights = weights[obs.item_of_rows()]  # one per data row
         return {
             "pose_id": data.pose_id.tolist(), "source_row": data.source_row.tolist(),
             "smr": data.smr.tolist(), "joints_deg": np.rad2deg(data.joints).tolist(),
@@ -156,10 +158,11 @@ class CalibrationResult:
                                 if key not in ("kept", "dropped", "confounded_with")},
             "correlation": {"names": self.unknowns,
                             "matrix": np.round(self.correlation, 6).reshape(k, k).tolist()},
-            "rejected": [{"source_row": int(self.problem.data.source_row[i]),
-                          "pose_id": int(self.problem.data.pose_id[i]),
-                          "residual": float(errors[i] * 1e3), "weight": 0.0}
-                         for i in self.rejected],
+            "rejected": [{"source_row": int(self.problem.data.source_row[row]),
+                          "pose_id": int(self.problem.data.pose_id[row]),
+                          "residual": float(errors[item] * 1e3), "weight": 0.0}
+                         for item in self.rejected
+                         for row in np.flatnonzero(self.problem.observation.item_of_rows() == item)],
             "observations": self._observations(self.problem.data, self.problem,
                                                self.problem.start(self.start), self.state),
             "history": [{key: float(v) if isinstance(v, float | np.floating) else v

@@ -34,6 +34,10 @@ class Observation:
     def n_items(self) -> int:
         return self.q.shape[0]
 
+    def item_of_rows(self) -> np.ndarray:
+        """``(N,)``: the measurement item each data row belongs to (each row is one item here)."""
+        return np.arange(self.q.shape[0])
+
     def nuisance_start(self, robot) -> np.ndarray:
         """Starting values of the nuisance parameters ``(m,)``."""
         return np.zeros(len(self.nuisance_names))

@@ -36,6 +36,11 @@ class DistanceObservation(Observation):
     def n_items(self) -> int:
         return self.ends.shape[1]
 
+    def item_of_rows(self) -> np.ndarray:
+        items = np.empty(self.q.shape[0], int)
+        items[self.ends] = np.arange(self.n_items)
+        return items
+
     def _vectors(self, p: np.ndarray) -> np.ndarray:
         """End-to-end vectors ``(..., pairs, 3)`` from positions ``(..., N, 3)``."""
         return p[..., self.ends[0], :] - p[..., self.ends[1], :]
