@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from contextlib import nullcontext
 
 import numpy as np
 import pytest
@@ -102,3 +103,21 @@ def test_hold_out_the_last_poses(campaign, capsys):
     assert result["validation"]["n"] == 30 and result["after"]["n"] == 70
     assert main(["calibrate", str(d / "cal.csv"), "--robot", "abb_irb2600", "--hold-out", "100"]) == 2
     assert "--hold-out must be between" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--set", "seed=1"], "not a method option"),
+    (["--set", "populaton=10", "--method", "genetic"], "has no option"),
+    (["--set", "k0=abc", "--method", "robust"], "must be float"),
+    (["--set", "population=2.5", "--method", "genetic"], "must be int"),
+    (["--method", "neural", "--set", "epochs=0"], "epochs"),
+    (["--method", "genetic", "--nongeometric", "gear"], "lsq, robust"),
+    (["--json", "/nonexistent/folder/r.json"], "folder does not exist"),
+])
+def test_bad_options_are_clear_errors(campaign, capsys, argv, message):
+    d = campaign
+    with pytest.raises(SystemExit) if argv[:2] == ["--set", "seed=1"] else nullcontext():
+        rc = main(["calibrate", str(d / "cal.csv"), "--robot", "abb_irb2600", *argv])
+        assert rc == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err

@@ -17,13 +17,14 @@ from robocal.errors import IdentificationError
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability
 from robocal.identify.identifiability import analyze as analyze_jacobian
 from robocal.identify.problem import CalibrationProblem, State, candidate_parameters
-from robocal.identify.solvers import SolverOutput, get_solver
+from robocal.identify.solvers import SolverOutput, check_options, get_solver
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
 from robocal.kinematics.yaml_io import write_atomic
 from robocal.progress import Progress
 from robocal.report.metrics import position_stats
 
 RESULT_FORMAT = "robocal-result/1"
+NONGEOMETRIC_METHODS = ("lsq", "robust")  # the methods that estimate the joint-error terms
 
 
 def _display(unit: str) -> tuple[str, float]:
@@ -234,6 +235,13 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     carries them and its fk applies them. Raises IdentificationError when the data cannot
     support the calibration.
     """
+    solve = get_solver(method)
+    check_options(method, solve, options)
+    if nongeometric and method not in NONGEOMETRIC_METHODS:
+        raise IdentificationError(
+            f"non-geometric terms are identified by the methods {', '.join(NONGEOMETRIC_METHODS)}; "
+            f"{method!r} searches the geometric parameters only (calibrate with lsq first, or "
+            "drop --nongeometric)")
     data.check_against(robot)
     if validation is not None:
         validation.check_against(robot)
@@ -270,7 +278,6 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         from robocal.identify.nongeometric import attach, parse_terms
 
         state0, ng_info = attach(problem, state0, names, parse_terms(nongeometric), rtol)
-    solve = get_solver(method)
     total = options.get("generations") or options.get("iterations") or options.get("epochs")
     with Progress(total, f"calibrate ({method})", quiet=progress is not True) as bar:
         if progress is True:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 EPILOG = """Examples:
   robocal calibrate data.csv --robot abb_irb2600 --validate val.csv -o calibrated.yaml --json result.json
@@ -20,10 +21,17 @@ outputs.
 """
 
 
+RESERVED = ("seed", "method", "params", "validation", "progress", "nongeometric", "register_frames",
+            "rtol", "robot", "data")
+
+
 def _option(text: str):
     key, sep, value = text.partition("=")
     if not sep or not key:
         raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    if key in RESERVED:
+        raise argparse.ArgumentTypeError(f"{key!r} is not a method option: use the command's own "
+                                         f"--{key.replace('_', '-')} argument where there is one")
     for convert in (int, float):
         try:
             return key, convert(value)
@@ -50,7 +58,8 @@ def add_parser(sub) -> None:
     p.add_argument("--report", metavar="report.html", help="write the HTML report")
     p.add_argument("--seed", type=int, default=0, help="random seed of stochastic methods")
     p.add_argument("--nongeometric", metavar="TERMS",
-                   help="add non-geometric terms to any method: compliance, gear, backlash (comma separated)")
+                   help="non-geometric terms identified with the geometry (methods lsq, robust): "
+                        "compliance, gear, backlash (comma separated)")
     p.add_argument("--network-out", metavar="net.npz",
                    help="method neural: save the trained network (.npz or .json, plain arrays)")
     p.add_argument("--set", dest="options", type=_option, action="append", default=[],
@@ -66,6 +75,9 @@ def run(args) -> int:
     from robocal.errors import DataError, IdentificationError
     from robocal.evaluate import load_model
 
+    for out in (args.output, args.json, args.report, args.network_out):  # fail before the work
+        if out and not Path(out).resolve().parent.is_dir():
+            raise DataError(f"cannot write {out}: its folder does not exist")
     robot = load_model(args.robot)
     data = Measurements.load(args.data, robot=robot)
     validation = Measurements.load(args.validate, robot=robot) if args.validate else None

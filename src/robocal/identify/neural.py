@@ -120,6 +120,8 @@ def train(problem, start: State, outputs: list[str], *, hidden: int = 9, index: 
         raise IdentificationError(f"hidden must be 8-10 units (seed 002), got {hidden}")
     if index not in ("mae", "mse"):
         raise IdentificationError(f"index must be 'mae' or 'mse', got {index!r}")
+    if epochs < 1 or n_consecutive < 1 or not learning_rate > 0:
+        raise IdentificationError("epochs and n_consecutive must be >= 1 and learning_rate > 0")
     x = pose_error_inputs(problem, start)
     net = BPNetwork.init(x.shape[1], hidden, outputs, np.random.default_rng(seed))
     rows = problem.rows_per_item

@@ -1,4 +1,4 @@
-"""Non-geometric terms identified jointly with the geometric parameters, by any method.
+"""Non-geometric terms identified jointly with the geometric parameters (methods lsq, robust).
 
 Terms (see :mod:`robocal.kinematics.joint_errors` for the models): ``compliance`` (joint
 compliance under the gravity torque of lumped link masses), ``gear`` (first and second

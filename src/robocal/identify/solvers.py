@@ -9,6 +9,7 @@ in SI units (m for tracker points when the data carry no sigma).
 from __future__ import annotations
 
 import importlib
+import inspect
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -41,3 +42,32 @@ def get_solver(method: str):
     if module is None:
         raise IdentificationError(f"unknown method {method!r}; choose one of {sorted(SOLVERS)}")
     return importlib.import_module(f"robocal.identify.{module}").solve
+
+
+_PASSED_BY_CALIBRATE = ("seed", "progress")
+
+
+def check_options(method: str, solve, options: dict) -> dict:
+    """The method's options, validated against its ``solve`` signature: known names only, and
+    numbers where the default is a number (int where it is an int). Raises IdentificationError."""
+    params = {p.name: p for p in inspect.signature(solve).parameters.values()
+              if p.kind is inspect.Parameter.KEYWORD_ONLY and p.name not in _PASSED_BY_CALIBRATE}
+    unknown = sorted(set(options) - set(params))
+    if unknown:
+        raise IdentificationError(f"method {method!r} has no option(s) {unknown}; its options are "
+                                  f"{sorted(params) or 'none'}")
+    for name, value in options.items():
+        default = params[name].default
+        if isinstance(default, bool):
+            ok = isinstance(value, bool) or value in (0, 1)
+        elif isinstance(default, int):
+            ok = isinstance(value, int | np.integer) and not isinstance(value, bool)
+        elif isinstance(default, float):
+            ok = isinstance(value, int | float | np.number) and not isinstance(value, bool) \
+                and np.isfinite(value)
+        else:
+            ok = True  # str / None / object options are checked by the method itself
+        if not ok:
+            raise IdentificationError(f"option {name}={value!r} of method {method!r} must be "
+                                      f"{type(default).__name__} like its default {default!r}")
+    return options

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from robocal.errors import ModelError
+from robocal.errors import DataError, ModelError
 from robocal.kinematics.model import LINK_FIELDS, Robot
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
 
@@ -25,7 +25,11 @@ _ANGLE = {"rad": 1.0, "deg": np.pi / 180.0}
 def write_atomic(path, text: str) -> None:
     """Write text to ``path`` via a temporary file and rename (never a half-written file)."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.", suffix=".tmp")
+    except OSError as exc:
+        raise DataError(f"cannot write {path}: {exc.strerror} (does its folder exist and is it "
+                        "writable?)") from None
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(text)
