@@ -20,7 +20,8 @@ def gauss_newton(problem, state, names, *, row_weights=None, max_iter: int = 50,
 
     ``ridge`` (scaled units) with ``prior`` (the displacement accumulated so far, unscaled)
     regularises the total displacement (robust ridge). Converged when the linear model predicts
-    a decrease below ``ftol`` times the cost (no trial evaluation is spent on it). Returns
+    a decrease below ``ftol`` times the cost (no trial evaluation is spent on it); stalled (not
+    converged) when it predicts a real decrease that no damped step achieves. Returns
     ``(state, converged, iterations, history, total_displacement)``.
     """
     w = np.ones_like(problem.residuals(state)) if row_weights is None else np.sqrt(row_weights)
@@ -41,9 +42,11 @@ def gauss_newton(problem, state, names, *, row_weights=None, max_iter: int = 50,
     converged = False
     for it in range(1, max_iter + 1):
         s0 = svd.s[0] ** 2 if svd.s.size else 1.0
+        first_prediction = None
         while True:
             dx = svd.solve(r, damping=lam * s0 + ridge, prior=total if ridge else None)
             predicted = cost - cost_of(r - J @ dx, total + dx)
+            first_prediction = predicted if first_prediction is None else first_prediction
             if predicted <= ftol * max(cost, 1e-300):
                 converged = True  # the linear model sees nothing left to gain
                 break
@@ -53,8 +56,12 @@ def gauss_newton(problem, state, names, *, row_weights=None, max_iter: int = 50,
             if cost_new < cost or lam > 1e8:
                 break
             lam *= 10.0
-        if converged or cost_new >= cost:
-            converged = True
+        if converged:
+            break
+        if cost_new >= cost:
+            # no damped step decreases the cost: at the minimum to rounding if the linear model
+            # promised little, else stalled (reported as not converged)
+            converged = first_prediction <= 1e-6 * cost
             break
         state, r, cost, total = trial, r_new, cost_new, total + dx
         lam = max(lam / 10.0, 1e-12)
