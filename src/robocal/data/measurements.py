@@ -65,7 +65,7 @@ def _int_array(values, name: str, n: int) -> np.ndarray:
 
 def _float_array(values, name: str, shape: tuple) -> np.ndarray:
     try:
-        arr = np.asarray(values, dtype=float)
+        arr = np.array(values, dtype=float)  # a copy: caller edits cannot bypass validation
     except (TypeError, ValueError):
         raise DataError(f"{name} must be numeric") from None
     if arr.shape != shape:

@@ -33,7 +33,7 @@ DEFAULT_SPAN = {"length": 0.005, "angle": np.deg2rad(1.0), "frame_length": 0.05,
 
 
 def _as_vector(values, n: int, what: str) -> np.ndarray:
-    arr = np.asarray(values, dtype=float).reshape(-1)
+    arr = np.array(values, dtype=float).reshape(-1)  # a copy: the robot never aliases user arrays
     if arr.shape != (n,):
         raise ModelError(f"{what} must have {n} values, got {arr.size}")
     if not np.isfinite(arr).all():
@@ -92,7 +92,7 @@ class Robot:
         if self.limits is None:
             limits = np.tile([-np.pi, np.pi], (n, 1))
         else:
-            limits = np.asarray(self.limits, dtype=float)
+            limits = np.array(self.limits, dtype=float)
             if limits.shape != (n, 2) or np.isnan(limits).any():
                 raise ModelError(f"joint limits must be {n} (lower, upper) pairs without NaN")
             if (limits[:, 0] > limits[:, 1]).any():
