@@ -11,8 +11,9 @@ from test_measurements import MECA
 
 from robocal import DataError, Robot
 from robocal.cli import main
-from robocal.data import Measurements, evaluate, simulate_tracker
+from robocal.data import Measurements, simulate_tracker
 from robocal.data.importer import import_tracker
+from robocal.evaluate import evaluate
 from robocal.report import position_stats
 
 

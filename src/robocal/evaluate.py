@@ -2,25 +2,10 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-from robocal.errors import DataError, ModelError
+from robocal.errors import DataError
 from robocal.report.metrics import position_stats
-
-
-def load_model(spec: str):
-    """A robot from a model YAML path or a catalog name."""
-    from robocal.kinematics.model import Robot
-
-    path = Path(spec)
-    if path.suffix.lower() in (".yaml", ".yml") or path.exists():
-        return Robot.load(path)
-    if not hasattr(Robot, "from_catalog"):
-        raise ModelError(f"{spec!r} is not a model file and the robot catalog is not available: "
-                         "give a model YAML path")
-    return Robot.from_catalog(spec)
 
 
 def model_errors(robot, data) -> np.ndarray:
@@ -63,10 +48,10 @@ def evaluate(robot, data, fit_frame: bool = False) -> dict:
     """
     out = {}
     if fit_frame:
-        from robocal.data.registration import register, register_frame
+        from robocal.data.registration import apply_registration, register_frame
 
         reg = register_frame(robot, data)
-        robot = register(robot, data)
+        robot = apply_registration(robot, reg)
         out["robot"] = robot
         out["registration_rms_mm"] = reg.rms * 1e3
     err = model_errors(robot, data)

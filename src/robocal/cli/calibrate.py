@@ -73,7 +73,7 @@ def run(args) -> int:
     from robocal.calibration import calibrate
     from robocal.data.measurements import Measurements
     from robocal.errors import DataError, IdentificationError
-    from robocal.evaluate import load_model
+    from robocal.kinematics.catalog import load_model
 
     for out in (args.output, args.json, args.report, args.network_out):  # fail before the work
         if out and not Path(out).resolve().parent.is_dir():

@@ -36,7 +36,7 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.compensate import compensate, format_csv, pose_columns, read_poses_csv
-    from robocal.evaluate import load_model
+    from robocal.kinematics.catalog import load_model
     from robocal.kinematics.model import Robot
     from robocal.kinematics.yaml_io import write_atomic
 

@@ -27,7 +27,8 @@ def run(args) -> int:
     import json
 
     from robocal.data.measurements import Measurements
-    from robocal.evaluate import evaluate, load_model
+    from robocal.evaluate import evaluate
+    from robocal.kinematics.catalog import load_model
     from robocal.kinematics.yaml_io import write_atomic
 
     robot = load_model(args.model)

@@ -39,8 +39,8 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.compensate import format_csv, read_poses_csv
-    from robocal.evaluate import load_model
     from robocal.ik.path import plan_path
+    from robocal.kinematics.catalog import load_model
     from robocal.kinematics.yaml_io import write_atomic
 
     robot = load_model(args.robot)

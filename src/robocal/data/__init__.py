@@ -3,7 +3,6 @@
 from robocal.data.measurements import Measurements
 from robocal.data.registration import Registration, register, register_frame
 from robocal.data.simulate import SimulationResult, simulate_tracker, write_simulation
-from robocal.evaluate import evaluate
 
-__all__ = ["Measurements", "Registration", "SimulationResult", "evaluate", "register", "register_frame",
+__all__ = ["Measurements", "Registration", "SimulationResult", "register", "register_frame",
            "simulate_tracker", "write_simulation"]

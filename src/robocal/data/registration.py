@@ -123,7 +123,11 @@ def register(robot, data, **kwargs):
     The tool keeps its rotation (pose data: the fitted tool rotation); SMR 0's offset becomes the
     tool translation and SMRs 1.. become ``robot.smr``.
     """
-    reg = register_frame(robot, data, **kwargs)
+    return apply_registration(robot, register_frame(robot, data, **kwargs))
+
+
+def apply_registration(robot, reg: Registration):
+    """A copy of ``robot`` with the base frame and tool/SMR offsets of ``reg``."""
     rot = robot.tool[:3, :3] if reg.tool_rotation is None else reg.tool_rotation
     tool = make_transform(rot, reg.offsets[0])
     out = replace(robot, base=reg.base, tool=tool, smr=reg.offsets[1:].copy(), nominal=None)

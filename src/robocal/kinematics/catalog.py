@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from functools import cache
 from importlib import resources
+from pathlib import Path
 
 import yaml
 
@@ -57,6 +58,14 @@ def robot_from_entry(data: dict) -> Robot:
     if form == "dh":
         return Robot.from_dh(table["theta"], table["d"], table["a"], table["alpha"], **kw)
     return Robot.from_mdh(table["alpha"], table["a"], table["theta"], table["d"], **kw)
+
+
+def load_model(spec: str) -> Robot:
+    """A robot from a model YAML path or a catalog name (what every ``--robot`` option takes)."""
+    path = Path(spec)
+    if path.suffix.lower() in (".yaml", ".yml") or path.exists():
+        return Robot.load(path)
+    return load_catalog_robot(spec)
 
 
 def load_catalog_robot(name: str) -> Robot:
