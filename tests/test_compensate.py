@@ -124,3 +124,24 @@ def test_compensation_after_a_real_calibration_on_simulated_truth():
     rms, nominal_rms = np.sqrt(np.mean(err**2)), np.sqrt(np.mean(nominal_err**2))
     assert rms <= 1.2 * res.validation["rms"]
     assert nominal_rms >= 5 * rms
+
+
+def test_targets_in_the_robot_base_frame():
+    """A tracker-frame calibration compensates targets given in robot coordinates."""
+    import robocal as rc
+
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    sim = rc.simulate_tracker(nominal, 150, seed=22)
+    res = rc.calibrate(nominal, sim.data)
+    controller = nominal.with_frames(tool=res.start.tool)  # the controller's TCP: the SMR
+    q = sim.data.joints[:40]
+    targets = controller.fk(q)  # robot base frame
+    comp = rc.compensate(res.robot, controller, targets, targets_frame="robot")
+    # the truth in robot coordinates, with the calibrated model's identified frame {0} as the robot's
+    truth = sim.truth.with_frames(base=nominal.base @ np.linalg.inv(res.robot.base) @ sim.truth.base)
+    err = np.linalg.norm(truth.fk(comp.joints)[:, :3, 3] - targets[:, :3, 3], axis=1)
+    before = np.linalg.norm(truth.fk(q)[:, :3, 3] - targets[:, :3, 3], axis=1)
+    assert comp.converged.all()
+    assert np.sqrt(np.mean(err**2)) < 0.05e-3 < 0.2 * np.sqrt(np.mean(before**2))
+    with pytest.raises(DataError, match="targets_frame"):
+        rc.compensate(res.robot, controller, targets, targets_frame="tracker")

@@ -3,7 +3,9 @@
 * corrected joint commands: joints q with T_calibrated(q) = target (numeric IK on the calibrated
   model, seeded by the nominal closed-form solution in the chosen branch);
 * corrected Cartesian targets: T_nominal(q) for those joints, for programs written in
-  Cartesian space (the controller's own nominal IK then lands on the true target);
+  Cartesian space (the controller's own nominal IK then lands on the true target). They are in
+  the nominal (controller's) model's own base frame and for its own TCP: what the controller is
+  given, whatever frame the targets came in;
 * corrected parameters (seed 000, step 8): the identified parameters for a controller that
   accepts them. With eta the nominal link/frame parameters and q the joint zero offsets
   (theta_i), d_eta = eta_nominal - eta_calibrated and d_q = theta_nominal - theta_calibrated, so
@@ -64,8 +66,14 @@ def parameter_table(calibrated: Robot, nominal: Robot) -> list[dict]:
 
 
 def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None = None,
-               seeds=None) -> Compensation:
-    """Corrected joints and Cartesian targets for world target poses ``(N, 4, 4)`` (m).
+               seeds=None, targets_frame: str = "model") -> Compensation:
+    """Corrected joints and Cartesian targets for target poses ``(N, 4, 4)`` (m) of the
+    calibrated model's TCP.
+
+    ``targets_frame``: 'model' (default) - the targets are in the calibrated model's world frame
+    (after a tracker calibration, the tracker frame); 'robot' - they are in the robot's base frame
+    as the controller sees it: the calibrated model is first re-expressed with the nominal
+    model's base frame (its identified frame {0} taken as the controller's frame {0}).
 
     Seeds: the closed-form solution of ``nominal`` (needs its OPW form) in slot ``branch``
     (None: per target the lowest slot inside the limits, then the next ones where the calibrated
@@ -73,6 +81,10 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     explicit ``seeds`` ``(N, n)`` rad. Targets the calibrated model cannot reach to 1e-10 m /
     1e-9 rad are flagged in ``converged`` (their joints are the best found).
     """
+    if targets_frame not in ("model", "robot"):
+        raise DataError(f"targets_frame must be 'model' or 'robot', got {targets_frame!r}")
+    if targets_frame == "robot":
+        calibrated = calibrated.with_frames(base=nominal.base)
     T = check_poses(targets)
     res = ik_solve(calibrated, T, seeds, branch=branch, nominal=nominal)
     return Compensation(joints=res.joints, corrected_targets=nominal.fk(res.joints),

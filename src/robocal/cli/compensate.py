@@ -9,8 +9,11 @@ EPILOG = """Examples:
   robocal compensate calibrated.yaml targets.csv --nominal nominal.yaml --branch 0 \\
       --parameters corrected_parameters.csv -o commands.csv
 targets.csv: x_mm,y_mm,z_mm (or _m) and qw,qx,qy,qz or rx_deg,ry_deg,rz_deg (fixed-axis XYZ:
-R = Rz(rz) Ry(ry) Rx(rx)), in the calibrated model's world frame. commands.csv: q1_deg..q6_deg
-(joints to command), the corrected Cartesian targets in the targets' units, and converged (1/0).
+R = Rz(rz) Ry(ry) Rx(rx)), for the calibrated model's TCP, in its world frame (after a tracker
+calibration: the tracker frame) or, with --targets-in robot, in the robot's base frame.
+commands.csv: q1_deg..q6_deg (joints to command), the corrected Cartesian targets (in the
+nominal model's base frame and for its TCP: what the controller is given) in the targets'
+units, and converged (1/0).
 --parameters writes name, unit (mm/deg), nominal, calibrated, delta = nominal - calibrated
 (seed 000: the controller loads nominal - delta)."""
 
@@ -27,6 +30,9 @@ def add_parser(sub) -> None:
     p.add_argument("--branch", type=int, default=None,
                    help="IK branch slot 0..7 (4*wrist_flip + 2*shoulder + elbow); default: per target "
                         "the lowest slot inside the joint limits")
+    p.add_argument("--targets-in", choices=("model", "robot"), default="model",
+                   help="frame of the targets: the calibrated model's world frame (default) or the "
+                        "robot's base frame")
     p.add_argument("--parameters", help="also write the corrected-parameter table (CSV) here")
     p.add_argument("-o", "--output", required=True, help="commands CSV to write")
     p.set_defaults(func=run)
@@ -43,7 +49,7 @@ def run(args) -> int:
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)
     targets, layout = read_poses_csv(args.targets)
-    res = compensate(calibrated, nominal, targets, branch=args.branch)
+    res = compensate(calibrated, nominal, targets, branch=args.branch, targets_frame=args.targets_in)
     names, values = pose_columns(res.corrected_targets, layout)
     joints = [f"q{i + 1}_deg" for i in range(calibrated.n_joints)]
     table = np.hstack([np.rad2deg(res.joints), values, res.converged[:, None].astype(float)])
