@@ -3,11 +3,11 @@ same residual (what pybotics does) vs pybotics itself, simulated ABB IRB 2600, s
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
 from scipy.optimize import least_squares
+from timing import best_time
 
 from robocal import Robot
 from robocal.calibration import calibrate
@@ -18,15 +18,6 @@ from robocal.identify.problem import CalibrationProblem
 from robocal.report.metrics import position_stats
 
 PYBOTICS_MAX_POSES = 100  # pybotics loops over poses in Python: ~minutes per 100-pose fit
-
-
-def _best_time(fn, repeat: int) -> tuple[float, object]:
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t)
-    return best, out
 
 
 def _validation_rms(robot, val) -> float:
@@ -95,7 +86,7 @@ def _pybotics_rows(nominal, cal, val) -> list:
     if len(cal) > PYBOTICS_MAX_POSES:
         print(f"  (pybotics skipped above {PYBOTICS_MAX_POSES} poses: it needs minutes per fit)")
         return []
-    t_pb, rms = _best_time(lambda: pybotics_fit(nominal, cal), 1)
+    t_pb, rms = best_time(lambda: pybotics_fit(nominal, cal), 1)
     return [("pybotics: its own fit (FD J, per-pose norms)", t_pb, rms(val))]
 
 
@@ -145,10 +136,10 @@ def speed_rows(nominal, n: int) -> list:
     sim = simulate_tracker(nominal, n + 200, seed=42)
     cal = sim.data.subset(np.flatnonzero(sim.data.pose_id < n))
     val = sim.data.subset(np.flatnonzero(sim.data.pose_id >= n))
-    t_full, res = _best_time(lambda: calibrate(nominal, cal), 5)
+    t_full, res = best_time(lambda: calibrate(nominal, cal), 5)
     problem, state0 = solve_problem(nominal, cal, res.names)
-    t_rc, rc_robot = _best_time(lambda: robocal_solve(problem, state0, res.names), 5)
-    t_fd, fd_robot = _best_time(lambda: scipy_fd(problem, state0, res.names), 3)
+    t_rc, rc_robot = best_time(lambda: robocal_solve(problem, state0, res.names), 5)
+    t_fd, fd_robot = best_time(lambda: scipy_fd(problem, state0, res.names), 3)
     rows = [("robocal solve (analytic J, LM)", t_rc, _validation_rms(rc_robot, val)),
             ("scipy least_squares solve (FD J, trf)", t_fd, _validation_rms(fd_robot, val)),
             ("robocal calibrate(): whole pipeline", t_full, _validation_rms(res.robot, val))]

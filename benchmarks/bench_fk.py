@@ -9,6 +9,7 @@ import time
 import tracemalloc
 
 import numpy as np
+from timing import best_time
 
 from robocal import Robot
 
@@ -16,15 +17,6 @@ N = 200_000
 N_PIN = 20_000
 N_MEM = 1_000_000
 REPEAT = 7
-
-
-def _best(fn, repeat: int = REPEAT, clock=time.perf_counter) -> float:
-    best = np.inf
-    for _ in range(repeat):
-        t = clock()
-        fn()
-        best = min(best, clock() - t)
-    return best
 
 
 def _py_opw(robot: Robot):
@@ -70,11 +62,11 @@ def main() -> None:
     opw = _py_opw(robot)
     t_ours, t_opw, c_ours, c_opw = (np.inf,) * 4
     for _ in range(REPEAT):  # interleaved, so that a busy machine slows both alike
-        t_ours = min(t_ours, _best(lambda: robot.fk(q), 1))
-        c_ours = min(c_ours, _best(lambda: robot.fk(q), 1, time.process_time))
+        t_ours = min(t_ours, best_time(lambda: robot.fk(q), 1)[0])
+        c_ours = min(c_ours, best_time(lambda: robot.fk(q), 1, time.process_time)[0])
         if opw is not None:
-            t_opw = min(t_opw, _best(lambda: opw.batch_forward(q), 1))
-            c_opw = min(c_opw, _best(lambda: opw.batch_forward(q), 1, time.process_time))
+            t_opw = min(t_opw, best_time(lambda: opw.batch_forward(q), 1)[0])
+            c_opw = min(c_opw, best_time(lambda: opw.batch_forward(q), 1, time.process_time)[0])
     print(f"  robocal Robot.fk            {t_ours:7.3f} s  {t_ours / N * 1e9:7.0f} ns/pose   "
           f"(CPU time {c_ours:.3f} s)")
     if opw is None:
@@ -100,7 +92,7 @@ def main() -> None:
             return out
 
         err = np.abs(pin_loop() - ours[:N_PIN]).max()
-        t_pin = _best(pin_loop, 3) / N_PIN * N
+        t_pin = best_time(pin_loop, 3)[0] / N_PIN * N
         print(f"  pinocchio per-call loop     {t_pin:7.3f} s  {t_pin / N * 1e9:7.0f} ns/pose   "
               f"robocal is {t_pin / t_ours:.1f}x faster   (timed on {N_PIN:,} calls, "
               f"max |diff| {err:.1e})")

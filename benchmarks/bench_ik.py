@@ -3,21 +3,11 @@
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
+from timing import best_time
 
 import robocal as rc
 from robocal.kinematics.transforms import pose_error
-
-
-def _best(fn, repeat: int = 3) -> tuple[float, object]:
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t)
-    return best, out
 
 
 def main(n: int = 100_000, waypoints: int = 10_000) -> None:
@@ -25,7 +15,7 @@ def main(n: int = 100_000, waypoints: int = 10_000) -> None:
     rng = np.random.default_rng(0)
     q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (n, 6))
     T = robot.fk(q)
-    t_ours, sols = _best(lambda: rc.ik.solve_all(robot, T))
+    t_ours, sols = best_time(lambda: rc.ik.solve_all(robot, T))
     ok = np.isfinite(sols).all(axis=2)
     ni, bi = np.nonzero(ok)
     e = pose_error(T[ni], robot.fk(sols[ni, bi]))
@@ -46,7 +36,7 @@ def main(n: int = 100_000, waypoints: int = 10_000) -> None:
         peer = Robot(model, degrees=False)
         poses = RigidTransform.from_matrix(np.linalg.inv(robot.base) @ T)
         for threads in (1, 0):
-            t_peer, res = _best(lambda th=threads: peer.reach(poses, threads=th))
+            t_peer, res = best_time(lambda th=threads: peer.reach(poses, threads=th))
             print(f"py-opw-kinematics reach (threads={threads or 'all'}): {t_peer:.3f} s; "
                   f"solve_all is {t_peer / t_ours:.2f}x faster")
         found = np.isfinite(res.joints).all(axis=2)
@@ -63,7 +53,7 @@ def main(n: int = 100_000, waypoints: int = 10_000) -> None:
     qp = np.array([0.8, 0.3, 0.4, 2.5, 0.9, 3.0]) * np.sin(2 * np.pi * np.array([1, 2, 1, 3, 2, 1]) * t
                                                           + np.arange(6))
     Tp = r8.fk(qp)
-    t_plan, path = _best(lambda: rc.ik.plan_path(r8, Tp), repeat=2)
+    t_plan, path = best_time(lambda: rc.ik.plan_path(r8, Tp), repeat=2)
     print(f"plan_path: {waypoints} waypoints, {path.candidates.mean():.2f} candidates each (max "
           f"{path.candidates.max()}), {t_plan:.3f} s; optimal cost {path.cost:.4f}, greedy "
           f"{path.greedy_cost:.4f}")
