@@ -12,6 +12,8 @@ import numpy as np
 from robocal.identify.linalg import ScaledSVD
 from robocal.identify.solvers import SolverOutput
 
+STEP_TOL = 1e-13  # largest change of a unit-scaled column's contribution that still counts as a step
+
 
 def gauss_newton(problem, state, names, *, row_weights=None, max_iter: int = 50,
                  ftol: float = 1e-10, damping: float = 1e-6, ridge: float = 0.0,
@@ -20,7 +22,8 @@ def gauss_newton(problem, state, names, *, row_weights=None, max_iter: int = 50,
 
     ``ridge`` (scaled units) with ``prior`` (the displacement accumulated so far, unscaled)
     regularises the total displacement (robust ridge). Converged when the linear model predicts
-    a decrease below ``ftol`` times the cost (no trial evaluation is spent on it); stalled (not
+    a decrease below ``ftol`` times the cost, or the step is below rounding (exact data, where the
+    cost itself is at rounding level); no trial evaluation is spent on it. Stalled (not
     converged) when it predicts a real decrease that no damped step achieves. Returns
     ``(state, converged, iterations, history, total_displacement)``.
     """
@@ -47,8 +50,8 @@ def gauss_newton(problem, state, names, *, row_weights=None, max_iter: int = 50,
             dx = svd.solve(r, damping=lam * s0 + ridge, prior=total if ridge else None)
             predicted = cost - cost_of(r - J @ dx, total + dx)
             first_prediction = predicted if first_prediction is None else first_prediction
-            if predicted <= ftol * max(cost, 1e-300):
-                converged = True  # the linear model sees nothing left to gain
+            if predicted <= ftol * max(cost, 1e-300) or np.max(np.abs(dx * scale), initial=0.0) < STEP_TOL:
+                converged = True  # nothing left to gain, or (exact data) a step below rounding
                 break
             trial = problem.step(state, names, dx)
             r_new = problem.residuals(trial) * w
