@@ -86,15 +86,7 @@ def test_cli_evaluate_json(tmp_path):
     assert main(["evaluate", str(tmp_path / "t.yaml"), str(tmp_path / "nope.csv")]) == 2
 
 
-IRB120 = Robot.from_mdh(
-    [0, -90, 0, -90, 90, -90],
-    [0, 0, 270, 70, 0, 0],
-    [0, -90, 0, 0, 0, 180],
-    [290, 0, 0, 302, 0, 72],
-    degrees=True,
-    length_unit="mm",
-    name="irb120",
-)
+IRB120 = Robot.from_catalog("abb_irb120")
 
 
 def test_real_data_nominal_after_registration():

@@ -18,11 +18,8 @@ PI = np.pi
 
 
 def irb2600() -> Robot:
-    """ABB IRB 2600 in MDH (same geometry as the catalog entry), J2 || J3."""
-    return Robot.from_mdh(alpha=[0, -PI / 2, 0, -PI / 2, PI / 2, -PI / 2], a=[0, 0.15, 0.7, 0.115, 0, 0],
-                          theta=[0, -PI / 2, 0, 0, 0, PI], d=[0.445, 0, 0, 0.795, 0, 0.085],
-                          limits=np.deg2rad([[-180, 180], [-95, 155], [-180, 75], [-400, 400],
-                                             [-120, 120], [-400, 400]]), name="irb2600-test")
+    """The catalog's ABB IRB 2600 (J2 || J3)."""
+    return Robot.from_catalog("abb_irb2600")
 
 
 def campaign(n_cal=100, n_val=200, seed=0, **kw):

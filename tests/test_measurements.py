@@ -14,15 +14,7 @@ from robocal.data import Measurements
 from robocal.data.measurements import parse_csv
 from robocal.kinematics.transforms import rotvec_to_matrix
 
-MECA = Robot.from_mdh(
-    [0, -90, 0, -90, 90, -90],
-    [0, 0, 135, 38, 0, 0],
-    [0, -90, 0, 0, 0, 180],
-    [135, 0, 0, 120, 0, 70],
-    degrees=True,
-    length_unit="mm",
-    name="meca500",
-)
+MECA = Robot.from_catalog("meca500")
 
 
 def _point_data(rng, N=12, sigma=True):

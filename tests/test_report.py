@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import re
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -36,11 +37,7 @@ def synthetic_result(seed: int = 0, n_poses: int = 60, repeats: int = 5, validat
     """A realistic result dict: nominal IRB 2600-like arm, a 'true' robot with mm-level errors,
     measurements with 20 um noise, a calibrated model close to the truth."""
     rng = np.random.default_rng(seed)
-    nominal = Robot.from_mdh(alpha=[0, -90, 0, -90, 90, -90], a=[0, 150, 700, 115, 0, 0],
-                             theta=[0, -90, 0, 0, 0, 180], d=[445, 0, 0, 795, 0, 85], degrees=True,
-                             length_unit="mm", name=name,
-                             limits=[[-180, 180], [-95, 155], [-180, 75], [-400, 400], [-120, 120],
-                                     [-400, 400]])
+    nominal = replace(Robot.from_catalog("abb_irb2600"), name=name)
     free = nominal.default_free()
     true = nominal.displaced(free, rng.normal(scale=4e-4, size=len(free)))
     after = true.displaced(free, rng.normal(scale=5e-6, size=len(free)))
