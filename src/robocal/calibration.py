@@ -229,11 +229,11 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     method: 'lsq' (default), 'robust', or another registered solver; params: 'auto' (the
     default free set, unidentifiable ones dropped), 'all', or a list of names. ``validation``
     (Measurements) is judged with the calibrated model. ``progress``: True shows a bar on a
-    terminal, or a callable ``progress(iteration, cost)``. ``options`` go to the solver (e.g.
-    k0, k1, ridge for 'robust'). ``nongeometric``: terms identified with the geometry by any
-    method, e.g. 'compliance,gear' (see robocal.identify.nongeometric); the calibrated robot
-    carries them and its fk applies them. Raises IdentificationError when the data cannot
-    support the calibration.
+    terminal, or a callable ``progress(iteration, rms)``. ``options`` go to the solver (e.g.
+    k0, k1, ridge for 'robust'; checked against its signature). ``nongeometric``: terms
+    identified with the geometry by lsq or robust, e.g. 'compliance,gear,backlash' (see
+    robocal.identify.nongeometric); the calibrated robot carries them and its fk applies them.
+    Raises IdentificationError when the data cannot support the calibration.
     """
     solve = get_solver(method)
     check_options(method, solve, options)
@@ -247,19 +247,17 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         validation.check_against(robot)
     start = _start_model(robot, data, register_frames)
     problem = CalibrationProblem(start, data)
-    candidates = candidate_parameters(start, problem.kind, params)
+    candidates = candidate_parameters(start, problem.observation, params)
     state0 = problem.start(start)
     unknown_candidates = candidates + problem.nuisance_names
     J0 = problem.jacobian(state0, candidates)
     ident = analyze_jacobian(J0, unknown_candidates, data.n_poses, rtol)
     warnings = []
-    if problem.kind == "plane":
-        from robocal.identify.observations.plane import check_enough_contacts, not_observable
-
-        check_enough_contacts(len(data), len(unknown_candidates))
-        if isinstance(params, str):
-            warnings.append("plane contacts carry no length reference and do not see the base frame: "
-                            f"{', '.join(not_observable(start))} are held at their nominal values")
+    problem.observation.check_enough(len(unknown_candidates))
+    blind = problem.observation.not_observable(start)
+    if blind and isinstance(params, str):
+        warnings.append(f"{problem.observation.blind_spot}: {', '.join(blind)} are held at their "
+                        "nominal values")
     if ident.rank < max(1, len(unknown_candidates) // 2):
         raise IdentificationError(
             f"the pose set is degenerate: only {ident.rank} of {len(unknown_candidates)} parameters "
@@ -337,7 +335,7 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     extra = {"rotations": T[:, :3, :3]} if kind == "pose" else {}
     data = Measurements.from_arrays(kind, q, points=T[:, :3, 3], **extra)
     problem = CalibrationProblem(robot, data)
-    names = candidate_parameters(robot, kind, params)
+    names = candidate_parameters(robot, problem.observation, params)
     J = problem.jacobian(problem.start(robot), names)
     return analyze_jacobian(J, names + problem.nuisance_names, data.n_poses, rtol)
 

@@ -7,7 +7,6 @@ parameters (see :meth:`Robot.displaced`) followed by the observation's nuisance 
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -25,19 +24,15 @@ class State:
     nuisance: np.ndarray
 
 
-def candidate_parameters(robot, kind: str, params) -> list[str]:
+def candidate_parameters(robot, observation, params) -> list[str]:
     """Resolve ``params``: 'auto' (the robot's default free set), 'all' (every parameter),
-    or an explicit list of names. Plane contacts carry no length reference and are expressed
-    in the robot base frame, whose motion the plane coefficients absorb: for them 'auto' and
-    'all' leave out ``base.*`` and the scale reference (see ``observations.plane``); distances
-    do not see the base frame either (``observations.distance``)."""
+    or an explicit list of names. 'auto' and 'all' leave out what the observation can never
+    see (``observation.not_observable``: e.g. the base frame for plane contacts and distances)."""
     if isinstance(params, str) and params in ("auto", "all"):
-        names = (robot.default_free(orientation=(kind == "pose")) if params == "auto"
+        names = (robot.default_free(orientation=(observation.kind == "pose")) if params == "auto"
                  else list(robot.parameter_names))
-        if kind in ("plane", "distance"):
-            module = importlib.import_module(f"robocal.identify.observations.{kind}")
-            names = [n for n in names if n not in module.not_observable(robot)]
-        return names
+        blind = set(observation.not_observable(robot))
+        return [n for n in names if n not in blind]
     if isinstance(params, str):
         params = [p for p in params.replace(",", " ").split() if p]
     names = list(params)

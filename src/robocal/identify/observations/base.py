@@ -21,6 +21,7 @@ class Observation:
     kind = "abstract"
     rows_per_item = 1
     nuisance_names: list[str] = []
+    blind_spot = ""  # why :meth:`not_observable` is not empty, for the result's warnings
 
     def __init__(self, data, robot) -> None:
         self.data = data
@@ -33,6 +34,14 @@ class Observation:
     @property
     def n_items(self) -> int:
         return self.q.shape[0]
+
+    def not_observable(self, robot) -> list[str]:
+        """Parameters this kind of data can never identify ('auto' leaves them out)."""
+        return []
+
+    def check_enough(self, n_unknowns: int) -> None:
+        """Raise IdentificationError when the data are too few for ``n_unknowns`` (kinds with a
+        sharper count than the general residuals-versus-rank check)."""
 
     def item_of_rows(self) -> np.ndarray:
         """``(N,)``: the measurement item each data row belongs to (each row is one item here)."""

@@ -23,6 +23,10 @@ def not_observable(robot) -> list[str]:
 class DistanceObservation(Observation):
     kind = "distance"
     rows_per_item = 1
+    blind_spot = "distances do not see the base frame"
+
+    def not_observable(self, robot) -> list[str]:
+        return not_observable(robot)
 
     def __init__(self, data, robot) -> None:
         super().__init__(data, robot)

@@ -72,6 +72,13 @@ def check_enough_contacts(n_contacts: int, n_unknowns: int) -> None:
 class PlaneObservation(Observation):
     kind = "plane"
     rows_per_item = 1
+    blind_spot = "plane contacts carry no length reference and do not see the base frame"
+
+    def not_observable(self, robot) -> list[str]:
+        return not_observable(robot)
+
+    def check_enough(self, n_unknowns: int) -> None:
+        check_enough_contacts(self.n_items, n_unknowns)
 
     def __init__(self, data, robot) -> None:
         super().__init__(data, robot)
