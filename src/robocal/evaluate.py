@@ -5,36 +5,24 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.errors import DataError
+from robocal.identify.observations import observation_for
 from robocal.report.metrics import position_stats
 
 
 def model_errors(robot, data) -> np.ndarray:
-    """Per-row errors of ``robot`` on ``data`` (m): point/pose ``(N, 3)`` measured - modelled;
-    plane ``(N,)`` signed distance of the modelled tip to the least-squares plane of its plane
-    index; distance ``(N,)`` modelled - measured distance (both rows of a pair carry it)."""
+    """Per-row errors of ``robot`` on ``data`` (m), from the data kind's observation model:
+    point/pose ``(N, 3)`` measured - modelled position; plane ``(N,)`` signed distance of the
+    modelled tip to the least-squares plane (of the model's tips) of its plane index; distance
+    ``(N,)`` modelled - measured distance (both rows of a pair carry it)."""
     data.check_against(robot)
     if data.n_smr > len(robot.smr) + 1:
         raise DataError(f"the data use {data.n_smr} SMRs but the model has {len(robot.smr) + 1}: "
                         "register the frame first (--fit-frame) or use a model with these SMRs")
-    p = robot.fk(data.joints, smr=data.smr, approach=data.approach)[:, :3, 3]
-    if data.kind in ("point", "pose"):
-        return data.points - p
-    if data.kind == "plane":
-        err = np.zeros(len(data))
-        for k in np.unique(data.plane):  # one least-squares plane per plane index
-            rows = data.plane == k
-            if rows.sum() < 3:
-                raise DataError(f"plane {k} has {int(rows.sum())} contact(s); a plane needs at least 3")
-            centred = p[rows] - p[rows].mean(axis=0)
-            normal = np.linalg.svd(centred, full_matrices=False)[2][-1]
-            err[rows] = centred @ normal
-        return err
-    order = np.argsort(data.pair, kind="stable")
-    ends = p[order].reshape(-1, 2, 3)
-    modelled = np.linalg.norm(ends[:, 0] - ends[:, 1], axis=1)
-    err = np.empty(len(data))
-    err[order] = np.repeat(modelled - data.distance[order][::2], 2)
-    return err
+    obs = observation_for(data, robot)
+    r = obs.residuals(robot, obs.nuisance_start(robot)).reshape(obs.n_items, obs.rows_per_item)
+    if obs.rows_per_item > 1:
+        return r[:, :3]
+    return -r[obs.item_of_rows(), 0]
 
 
 def evaluate(robot, data, fit_frame: bool = False) -> dict:
