@@ -25,26 +25,27 @@ def _validation_rms(robot, val) -> float:
 
 
 def solve_problem(nominal, cal, names):
-    """The registered start and the calibration problem every solver below starts from."""
+    """The calibration problem, the registered start state and the estimated space every solver
+    below starts from."""
     start = register(nominal, cal)
     problem = CalibrationProblem(start, cal)
-    return problem, problem.start(start)
+    return problem, problem.start(start), problem.space(start, names)
 
 
-def robocal_solve(problem, state0, names):
+def robocal_solve(problem, state0, space):
     """robocal's solve step alone: damped Gauss-Newton with the analytic Jacobian."""
-    return gauss_newton(problem, state0, names)[0].robot
+    return gauss_newton(problem, state0, space).state.robot
 
 
-def scipy_fd(problem, state0, names):
+def scipy_fd(problem, state0, space):
     """scipy.optimize.least_squares, 2-point finite-difference Jacobian, same residual and start."""
 
     def fun(x):
-        return problem.residuals(problem.step(state0, names, x))
+        return problem.residuals(space.apply(state0, x))
 
-    sol = least_squares(fun, np.zeros(len(names)), jac="2-point", method="trf", x_scale="jac",
+    sol = least_squares(fun, np.zeros(space.size), jac="2-point", method="trf", x_scale="jac",
                         xtol=1e-12, ftol=1e-12)
-    return problem.step(state0, names, sol.x).robot
+    return space.apply(state0, sol.x).robot
 
 
 def pybotics_fit(nominal, cal):
@@ -137,9 +138,9 @@ def speed_rows(nominal, n: int) -> list:
     cal = sim.data.subset(np.flatnonzero(sim.data.pose_id < n))
     val = sim.data.subset(np.flatnonzero(sim.data.pose_id >= n))
     t_full, res = best_time(lambda: calibrate(nominal, cal), 5)
-    problem, state0 = solve_problem(nominal, cal, res.names)
-    t_rc, rc_robot = best_time(lambda: robocal_solve(problem, state0, res.names), 5)
-    t_fd, fd_robot = best_time(lambda: scipy_fd(problem, state0, res.names), 3)
+    problem, state0, space = solve_problem(nominal, cal, res.names)
+    t_rc, rc_robot = best_time(lambda: robocal_solve(problem, state0, space), 5)
+    t_fd, fd_robot = best_time(lambda: scipy_fd(problem, state0, space), 3)
     rows = [("robocal solve (analytic J, LM)", t_rc, _validation_rms(rc_robot, val)),
             ("scipy least_squares solve (FD J, trf)", t_fd, _validation_rms(fd_robot, val)),
             ("robocal calibrate(): whole pipeline", t_full, _validation_rms(res.robot, val))]

@@ -24,17 +24,16 @@ from robocal import Robot
 from robocal.calibration import calibrate
 from robocal.data.registration import umeyama
 from robocal.data.simulate import sample_joints, simulate_tracker
-from robocal.identify.genetic import PopulationCost
 from robocal.identify.observations.plane import PlaneObservation
+from robocal.identify.population import PopulationCost
 from robocal.identify.problem import CalibrationProblem
 
 
 def differential_evolution_fit(result, seed: int = 0, maxiter: int = 300):
     """DE on the free parameters of a finished calibration (same start, names and bounds)."""
-    problem, names = result.problem, result.names
-    start = problem.start(result.start)
-    cost = PopulationCost(problem, start, names)
-    lo, hi = result.start.bounds(names)
+    problem, space, start = result.problem, result.space, result.initial
+    cost = PopulationCost(problem, start, space)
+    lo, hi = space.robot_bounds(start.robot)
 
     def f(X):  # X (k, S) -> (S,)
         err, _ = cost.item_errors(X.T)

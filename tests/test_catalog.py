@@ -9,7 +9,7 @@ from test_convert import dh_product
 from robocal import ModelError, Robot
 from robocal.cli import main
 from robocal.kinematics.catalog import catalog_descriptions, catalog_names
-from robocal.kinematics.opw import OPWParameters, opw_fk
+from robocal.kinematics.opw import opw_fk
 
 REQUIRED = ["abb_irb120", "abb_irb1600", "abb_irb2400", "abb_irb2600", "abb_irb4600", "kuka_kr6_r700",
             "kuka_kr16_2", "fanuc_lrmate200id", "staubli_tx2_140", "puma560", "meca500", "ur5", "ur10"]
@@ -30,7 +30,7 @@ def test_catalog_lists_required_robots():
 def test_opw_entry_equals_opw_fk(name, rng):
     robot = Robot.from_catalog(name)
     q = random_joints(robot, rng)
-    np.testing.assert_allclose(robot.fk(q), opw_fk(OPWParameters.from_dict(robot.opw), q), rtol=0,
+    np.testing.assert_allclose(robot.fk(q), opw_fk(robot.opw, q), rtol=0,
                                atol=1e-12)
     assert robot.parallel.tolist() == [False, False, True, False, False, False]
 
@@ -40,9 +40,9 @@ def test_opw_entry_against_py_opw_kinematics(name, rng):
     po = pytest.importorskip("py_opw_kinematics", reason="py-opw-kinematics (test extra) not installed")
     robot = Robot.from_catalog(name)
     p = robot.opw
-    model = po.KinematicModel(a1=p["a1"], a2=p["a2"], b=p["b"], c1=p["c1"], c2=p["c2"], c3=p["c3"],
-                              c4=p["c4"], offsets=tuple(p["offsets"]),
-                              flip_axes=tuple(s < 0 for s in p["signs"]))
+    model = po.KinematicModel(a1=p.a1, a2=p.a2, b=p.b, c1=p.c1, c2=p.c2, c3=p.c3,
+                              c4=p.c4, offsets=tuple(p.offsets),
+                              flip_axes=tuple(s < 0 for s in p.signs))
     q = random_joints(robot, rng)
     theirs = po.Robot(model, degrees=False).batch_forward(q).as_matrix()
     np.testing.assert_allclose(robot.fk(q), theirs, rtol=0, atol=1e-12)

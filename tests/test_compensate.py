@@ -10,11 +10,11 @@ from robocal.cli import main
 from robocal.compensate import (
     format_csv,
     parameter_table,
-    perturbed,
     pose_columns,
     read_poses_csv,
     residual_mm,
 )
+from robocal.data.simulate import perturbed
 from robocal.errors import DataError
 from robocal.ik.numeric import nominal_seeds
 
@@ -28,7 +28,7 @@ def simulated_cell(name="abb_irb2600", n=300, seed=0):
     rng = np.random.default_rng(seed + 2)
     q = rng.uniform(nominal.limits[:, 0] * 0.6, nominal.limits[:, 1] * 0.6, (3 * n, 6))
     o = nominal.opw
-    phi = q[:, 2] * o["signs"][2] - o["offsets"][2] + np.arctan2(o["a2"], o["c3"])
+    phi = q[:, 2] * o.signs[2] - o.offsets[2] + np.arctan2(o.a2, o.c3)
     q = q[np.abs(np.sin(phi)) > 0.1][:n]  # off the stretched arm, which the nominal may not reach
     return nominal, true, calibrated, true.fk(q)
 
@@ -67,19 +67,16 @@ def test_pose_csv_round_trip(tmp_path, layout):
     assert np.abs(back - targets).max() < 1e-12
 
 
-def test_pose_csv_errors(tmp_path):
+@pytest.mark.parametrize("text, match", [
+    ("x_mm,y_mm,z_mm\n1,2,3\n", "orientation"),
+    ("x,y,z,qw,qx,qy,qz\n1,2,3,1,0,0,0\n", "x_mm"),
+    ("x_mm,y_mm,z_mm,qw,qx,qy,qz\n1,2,3,2,0,0,0\n", "unit length"),
+    ("x_mm,y_mm,z_mm,qw,qx,qy,qz\n1,2,abc,1,0,0,0\n", "numeric"),
+])
+def test_pose_csv_errors(tmp_path, text, match):
     p = tmp_path / "bad.csv"
-    p.write_text("x_mm,y_mm,z_mm\n1,2,3\n")
-    with pytest.raises(DataError, match="orientation"):
-        read_poses_csv(p)
-    p.write_text("x,y,z,qw,qx,qy,qz\n1,2,3,1,0,0,0\n")
-    with pytest.raises(DataError, match="x_mm"):
-        read_poses_csv(p)
-    p.write_text("x_mm,y_mm,z_mm,qw,qx,qy,qz\n1,2,3,2,0,0,0\n")
-    with pytest.raises(DataError, match="unit length"):
-        read_poses_csv(p)
-    p.write_text("x_mm,y_mm,z_mm,qw,qx,qy,qz\n1,2,abc,1,0,0,0\n")
-    with pytest.raises(DataError, match="numeric"):
+    p.write_text(text)
+    with pytest.raises(DataError, match=match):
         read_poses_csv(p)
 
 

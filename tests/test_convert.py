@@ -73,7 +73,7 @@ def test_from_opw_equals_opw_fk(seed):
     q = rng.uniform(-2 * np.pi, 2 * np.pi, (20, 6))
     np.testing.assert_allclose(robot.fk(q), opw_fk(p, q), rtol=0, atol=1e-12)
     assert robot.parallel.tolist() == [False, False, True, False, False, False]  # J2 || J3
-    assert OPWParameters.from_dict(robot.opw) == p
+    assert robot.opw == p
 
 
 def test_opw_fk_geometry_at_zero():

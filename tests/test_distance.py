@@ -7,8 +7,9 @@ import numpy as np
 from robocal import Robot, calibrate
 from robocal.data.measurements import Measurements
 from robocal.data.registration import umeyama
-from robocal.data.simulate import perturb_robot, sample_joints
+from robocal.data.simulate import perturbed, sample_joints
 from robocal.identify.problem import CalibrationProblem
+from robocal.identify.space import ParameterSpace
 from robocal.kinematics.transforms import make_transform
 
 
@@ -25,7 +26,7 @@ def ballbar(truth, n_pairs: int, noise_mm: float, seed: int) -> Measurements:
 def _truth():
     nominal = Robot.from_catalog("abb_irb2600")
     nominal = nominal.with_frames(tool=make_transform(np.eye(3), [0.03, 0.02, 0.10]))
-    truth = perturb_robot(nominal, np.random.default_rng(1))
+    truth = perturbed(nominal, np.random.default_rng(1))
     return nominal, truth
 
 
@@ -34,19 +35,18 @@ def test_jacobian_and_batch_match_the_residuals():
     data = ballbar(truth, 12, 0.0, seed=2)
     problem = CalibrationProblem(nominal, data)
     state = problem.start(nominal)
-    names = ["a2", "theta3", "d4", "beta3", "tool.x"]
-    J = problem.jacobian(state, names)
+    space = ParameterSpace(("a2", "theta3", "d4", "beta3", "tool.x"))
+    J = problem.jacobian(state, space)
     h = 1e-7
-    for k in range(len(names)):
-        e = np.zeros(len(names))
+    for k in range(space.size):
+        e = np.zeros(space.size)
         e[k] = h
-        fd = -(problem.residuals(problem.step(state, names, e))
-               - problem.residuals(problem.step(state, names, -e))) / (2 * h)
+        fd = -(problem.residuals(space.apply(state, e)) - problem.residuals(space.apply(state, -e))) / (2 * h)
         np.testing.assert_allclose(J[:, k], fd, atol=1e-7)
-    X = np.random.default_rng(3).normal(0, 1e-4, (4, len(names)))
-    batch = problem.residuals_batch(state, names, X)
+    X = np.random.default_rng(3).normal(0, 1e-4, (4, space.size))
+    batch = problem.residuals_batch(state, space.robot, X)
     for i in range(4):
-        np.testing.assert_allclose(batch[i], problem.residuals(problem.step(state, names, X[i])), atol=1e-12)
+        np.testing.assert_allclose(batch[i], problem.residuals(space.apply(state, X[i])), atol=1e-12)
 
 
 def test_calibration_from_distances_recovers_the_shape():

@@ -37,7 +37,7 @@ def campaign(n_cal=100, n_val=200, seed=0, **kw):
 def test_noise_free_data_recover_the_truth():
     sim, cal, val, _ = campaign(60, 50, seed=3, noise_mm=0.0)
     res = calibrate(irb2600(), cal, validation=val)
-    assert res.solver.converged
+    assert res.solver.success
     assert res.validation["rms"] < 1e-6  # mm
     assert res.validation_before["rms"] > 0.1
 

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import robocal as rc
-from robocal.compensate import perturbed
+from robocal.data.simulate import perturbed
 from robocal.errors import DataError, ModelError, UnreachableError
 from robocal.ik.opw_ik import solve_all
 from robocal.kinematics.transforms import make_transform, pose_error, rotvec_to_matrix
@@ -55,9 +55,9 @@ def test_slots_match_py_opw(name):
 
     robot = rc.Robot.from_catalog(name)
     o = robot.opw
-    model = popw.KinematicModel(a1=o["a1"], a2=o["a2"], b=o["b"], c1=o["c1"], c2=o["c2"], c3=o["c3"],
-                                c4=o["c4"], offsets=tuple(o["offsets"]),
-                                flip_axes=tuple(s < 0 for s in o["signs"]))
+    model = popw.KinematicModel(a1=o.a1, a2=o.a2, b=o.b, c1=o.c1, c2=o.c2, c3=o.c3,
+                                c4=o.c4, offsets=tuple(o.offsets),
+                                flip_axes=tuple(s < 0 for s in o.signs))
     rng = np.random.default_rng(3)
     q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (2000, 6))
     T = robot.fk(q)
@@ -72,7 +72,7 @@ def test_slots_match_py_opw(name):
 def _with_q5(robot, q, paper5):
     o = robot.opw
     q = q.copy()
-    q[:, 4] = (paper5 + o["offsets"][4]) * o["signs"][4]
+    q[:, 4] = (paper5 + o.offsets[4]) * o.signs[4]
     return q
 
 
@@ -92,10 +92,10 @@ def test_wrist_singularity(name, paper5):
     assert (np.isfinite(sols).all(axis=2).sum(axis=1) == np.isfinite(regular).all(axis=2).sum(axis=1)).all()
     if abs(np.sin(paper5)) < 1e-12:  # documented split: paper theta4 = 0 in the unflipped slots
         o = robot.opw
-        sol5 = wrapped(sols[:, :4, 4] * o["signs"][4] - o["offsets"][4])
+        sol5 = wrapped(sols[:, :4, 4] * o.signs[4] - o.offsets[4])
         singular = np.isfinite(sol5) & (np.abs(np.sin(sol5)) < 1e-12)
         assert singular.any(axis=1).mean() > 0.95  # the original arm branch keeps theta5 = 0 / pi
-        paper4 = wrapped(sols[:, :4, 3] * o["signs"][3] - o["offsets"][3])
+        paper4 = wrapped(sols[:, :4, 3] * o.signs[3] - o.offsets[3])
         assert np.abs(paper4[singular]).max() < 1e-12
 
 
@@ -105,9 +105,9 @@ def test_shoulder_singularity(name):
     o = robot.opw
     rng = np.random.default_rng(5)
     R = rotvec_to_matrix(rng.uniform(-2, 2, (200, 3)))
-    z = o["c1"] + rng.uniform(0.2, 0.6, 200) * (o["c2"] + o["c3"])
+    z = o.c1 + rng.uniform(0.2, 0.6, 200) * (o.c2 + o.c3)
     C = np.stack([np.zeros(200), np.zeros(200), z], axis=1)  # wrist centre on the J1 axis
-    flange = make_transform(R, C + o["c4"] * R[:, :, 2])
+    flange = make_transform(R, C + o.c4 * R[:, :, 2])
     T = robot.base @ flange @ robot.tool
     sols = solve_all(robot, T)
     assert np.isfinite(sols).all(axis=2).sum(axis=1).min() >= 4
@@ -121,9 +121,9 @@ def test_edge_of_reach(name):
     o = robot.opw
     rng = np.random.default_rng(2)
     q = rng.uniform(-1, 1, (500, 6))
-    psi3 = np.arctan2(o["a2"], o["c3"])
+    psi3 = np.arctan2(o.a2, o.c3)
     for phi in (0.0, np.pi):  # stretched and folded arm: both elbow branches coincide
-        q[:, 2] = (phi - psi3 + o["offsets"][2]) * o["signs"][2]
+        q[:, 2] = (phi - psi3 + o.offsets[2]) * o.signs[2]
         T = robot.fk(q)
         sols = solve_all(robot, T)
         # acos at +-1 turns 1e-16 of rounding into ~1e-8 rad (more where the wrist is near
@@ -221,7 +221,7 @@ def test_numeric_seeded_from_nominal_same_branch():
     rng = np.random.default_rng(8)
     q = rng.uniform(nominal.limits[:, 0] * 0.7, nominal.limits[:, 1] * 0.7, (300, 6))
     o = nominal.opw
-    phi = q[:, 2] * o["signs"][2] - o["offsets"][2] + np.arctan2(o["a2"], o["c3"])
+    phi = q[:, 2] * o.signs[2] - o.offsets[2] + np.arctan2(o.a2, o.c3)
     q = q[np.abs(np.sin(phi)) > 0.1]  # off the stretched arm, where branches of the two models differ
     T = robot.fk(q)
     for slot in (0, 5):

@@ -170,12 +170,15 @@ def test_yaml_hand_written_mm_deg(tmp_path):
 
 
 @pytest.mark.parametrize("text,match", [
-    ("joints: [1, 2]\nunits: {length: m, angle: rad}\n", "must be a mapping"),
+    ("joints: [1, 2]\nunits: {length: m, angle: rad}\n", r"joints\[1\] \(joint 1\): expected a mapping"),
     ("joints: []\nunits: {length: m, angle: rad}\n", "non-empty"),
-    ("joints: [{a: 1}]\n", "declare units"),
+    ("joints: [{a: 1}]\n", "declare its units"),
     ("joints: [{a: 1}]\nunits: {length: furlong, angle: rad}\n", "unknown units"),
-    ("joints: [{a: .nan}]\nunits: {length: m, angle: rad}\n", "NaN"),
-    ("joints: [{a: hello}]\nunits: {length: m, angle: rad}\n", "expected a number"),
+    ("joints: [{alpha: 0, a: .nan, theta: 0, d: 0}]\nunits: {length: m, angle: rad}\n", "not finite"),
+    ("joints: [{alpha: 0, a: hello, theta: 0, d: 0}]\nunits: {length: m, angle: rad}\n",
+     "expected a number"),
+    ("joints: [{alpha: 0, a: 1, theta: 0}]\nunits: {length: m, angle: rad}\n",
+     r"joints\[1\] \(joint 1\): missing key\(s\) \['d'\]"),
     ("!!python/object/apply:os.system ['echo hacked']\n", "not valid"),
     ("joints: [{a: 1, b: 2}]\nunits: {length: m, angle: rad}\n", "unknown key"),
     ("key: [unclosed\n", "not valid"),

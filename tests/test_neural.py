@@ -10,7 +10,8 @@ from robocal import Robot
 from robocal.calibration import calibrate
 from robocal.data.simulate import simulate_tracker
 from robocal.errors import DataError, IdentificationError
-from robocal.identify.neural import BPNetwork, compensate, default_outputs
+from robocal.identify.neural import BPNetwork, compensate, default_outputs, train
+from robocal.identify.problem import CalibrationProblem
 
 
 @pytest.fixture(scope="module")
@@ -40,17 +41,20 @@ def test_training_lowers_the_index_and_compensation_matches(sim, index):
     res = calibrate(robot, sim.data, method="neural", index=index, epochs=300, outputs="all")
     costs = [h["cost"] for h in res.solver.history]
     assert costs[-1] < 0.5 * costs[0]
-    assert all(b <= a for a, b in zip(costs, costs[1:], strict=False))  # steps that raise E are undone
+    assert [h["iteration"] for h in res.solver.history] == list(range(len(costs)))
+    problem = CalibrationProblem(res.start, sim.data)
+    _, x, _, indices, _ = train(problem, problem.start(res.start), res.solver.network.outputs,
+                                index=index, epochs=300)
+    assert all(b <= a for a, b in zip(indices, indices[1:], strict=False))  # steps raising E are undone
     assert res.after["rms"] < res.before["rms"]
-    net = res.solver.extra["network"]
-    comp = compensate(net, res.start, res.solver.extra["inputs_mm"])
+    comp = compensate(res.solver.network, res.start, x)
     assert np.allclose(comp.values, res.robot.values)
 
 
 def test_threshold_stops_and_bad_options(sim):
     robot = Robot.from_catalog("abb_irb2600")
     res = calibrate(robot, sim.data, method="neural", epochs=400, threshold=1e3, n_consecutive=3)
-    assert res.solver.converged and len(res.solver.history) == 3
-    assert set(res.solver.extra["network"].outputs) == set(default_outputs(res.names))
+    assert res.solver.success and res.solver.status == "threshold" and res.solver.nit == 3
+    assert set(res.solver.network.outputs) == set(default_outputs(res.names))
     with pytest.raises(IdentificationError, match="8-10"):
         calibrate(robot, sim.data, method="neural", hidden=4)

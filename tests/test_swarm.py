@@ -32,9 +32,9 @@ def test_pure_pso_finds_a_known_optimum():
     sim = simulate_tracker(robot, 30, seed=2, noise_mm=0.0, error_scale=0.0)
     start = sim.truth.with_values({"tool.x": 0.0, "tool.y": 0.0, "tool.z": 0.1})
     problem = CalibrationProblem(start, sim.data)
-    names = ["tool.x", "tool.y", "tool.z"]
-    out = swarm.solve(problem, problem.start(start), names, particles=30, iterations=150, polish=False,
-                      bounds=([-0.1] * 3, [0.1] * 3))
+    space = problem.space(start, ["tool.x", "tool.y", "tool.z"])
+    out = swarm.solve(problem, problem.start(start), space, particles=30, iterations=150, polish=False,
+                      patience=0, bounds=([-0.1] * 3, [0.1] * 3))
     assert np.allclose(out.state.robot.tool[:3, 3], sim.truth.tool[:3, 3], atol=1e-6)
     costs = [h["cost"] for h in out.history]
     assert costs == sorted(costs, reverse=True)
@@ -61,8 +61,8 @@ def test_reproducible_and_interruptible():
             raise KeyboardInterrupt
 
     res = calibrate(nominal, data, method="swarm", progress=ctrl_c, particles=12, iterations=50)
-    assert res.solver.message == "interrupted" and not res.solver.converged
-    assert res.solver.history[-1]["iteration"] == 3 and "polish_iterations" not in res.solver.extra
+    assert res.solver.status == "interrupted" and not res.solver.success
+    assert res.solver.history[-1]["iteration"] == 3 and "polish" not in res.solver.message
     assert res.after["rms"] <= res.before["rms"] * (1 + 1e-9)  # never worse than the start
 
 

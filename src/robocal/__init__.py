@@ -7,7 +7,6 @@ from robocal.data.measurements import Measurements
 from robocal.data.registration import register
 from robocal.data.simulate import simulate_tracker
 from robocal.errors import (
-    ConvergenceError,
     DataError,
     IdentificationError,
     ModelError,
@@ -17,8 +16,7 @@ from robocal.errors import (
 )
 from robocal.evaluate import evaluate
 from robocal.kinematics.model import Robot
-
-__version__ = "0.1.0"
+from robocal.version import __version__
 
 __all__ = [
     "CalibrationResult",
@@ -28,7 +26,6 @@ __all__ = [
     "evaluate",
     "register",
     "simulate_tracker",
-    "ConvergenceError",
     "DataError",
     "IdentificationError",
     "ModelError",
@@ -36,6 +33,7 @@ __all__ = [
     "Robot",
     "UnitError",
     "UnreachableError",
+    "__version__",
     "compensate",
     "ik",
 ]

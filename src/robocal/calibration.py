@@ -1,54 +1,70 @@
 """``rc.calibrate``: registration, identifiability, a solver, uncertainty and statistics.
 
-The pipeline: fit the tracker frame and SMR offsets to the nominal model (registration), pick
-the identifiable parameters (QR with pivoting), run the chosen method, then compute the
-covariance of the estimate and the before/after position statistics.
+The pipeline: fit the tracker frame and SMR offsets to the nominal model (registration), declare
+the joint-error terms asked for, pick the identifiable parameters (QR with pivoting: the
+:class:`ParameterSpace` that is estimated), run the chosen method, then compute the covariance of
+the estimate and the before/after position statistics.
 """
 
 from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import IdentificationError
+from robocal.data.measurements import Measurements
+from robocal.data.registration import register
+from robocal.errors import DataError, IdentificationError
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability
 from robocal.identify.identifiability import analyze as analyze_jacobian
-from robocal.identify.problem import CalibrationProblem, State, candidate_parameters
-from robocal.identify.solvers import SolverOutput, check_options, get_solver
+from robocal.identify.problem import CalibrationProblem
+from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
+from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
-from robocal.kinematics.yaml_io import write_atomic
+from robocal.io import read_text, write_atomic
+from robocal.kinematics.joint_errors import candidate_names, parse_terms
 from robocal.progress import Progress
 from robocal.report.metrics import position_stats
+from robocal.version import __version__
 
 RESULT_FORMAT = "robocal-result/1"
 NONGEOMETRIC_METHODS = ("lsq", "robust")  # the methods that estimate the joint-error terms
+_DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 180.0 / np.pi)}
 
 
-def _display(unit: str) -> tuple[str, float]:
-    return ("mm", 1e3) if unit == "m" else ("deg", 180.0 / np.pi)
+@dataclass
+class Judged:
+    """A measurement set judged with the start and the calibrated model: its problem, the two
+    states (nuisance carried over from the calibration) and their position statistics (mm)."""
+
+    data: Measurements
+    problem: CalibrationProblem
+    states: tuple[State, State]
+    before: dict
+    after: dict
 
 
 @dataclass
 class CalibrationResult:
-    """Everything a calibration found; ``to_dict()`` is the JSON of docs/result-json.md."""
+    """Everything a calibration found; ``to_dict()`` is the JSON of docs/result-json.md.
+
+    ``space`` is what was estimated (robot parameters, then nuisance), ``covariance`` its
+    covariance (SI), ``initial`` the start state (registered model, nuisance fitted to it).
+    """
 
     robot: object
     start: object
     method: str
     identifiability: Identifiability
-    names: list[str]
-    unknowns: list[str]
+    space: ParameterSpace
     covariance: np.ndarray
-    solver: SolverOutput
+    solver: SolverResult
     before: dict
     after: dict
     problem: CalibrationProblem = field(repr=False)
-    validation_before: dict | None = None
-    validation: dict | None = None
-    validation_data: object = field(default=None, repr=False)
+    initial: State = field(repr=False)
+    judged: Judged | None = field(default=None, repr=False)
     warnings: list[str] = field(default_factory=list)
     settings: dict = field(default_factory=dict)
     nongeometric: dict | None = None
@@ -56,6 +72,24 @@ class CalibrationResult:
     @property
     def state(self) -> State:
         return self.solver.state
+
+    @property
+    def names(self) -> list[str]:
+        """The estimated robot parameters."""
+        return list(self.space.robot)
+
+    @property
+    def unknowns(self) -> list[str]:
+        """Every estimated unknown (robot parameters, then nuisance)."""
+        return self.space.names
+
+    @property
+    def validation_before(self) -> dict | None:
+        return None if self.judged is None else self.judged.before
+
+    @property
+    def validation(self) -> dict | None:
+        return None if self.judged is None else self.judged.after
 
     @property
     def sigma(self) -> np.ndarray:
@@ -68,7 +102,7 @@ class CalibrationResult:
         rejected = self.rejected
         if not len(rejected):
             return None
-        keep = np.setdiff1d(np.arange(self.problem.observation.n_items), rejected)
+        keep = np.setdiff1d(np.arange(self.problem.n_items), rejected)
         return position_stats(self.problem.position_errors(self.state)[keep])
 
     @property
@@ -83,71 +117,70 @@ class CalibrationResult:
 
     def predict_position_sigma(self, q) -> np.ndarray:
         """1-sigma ``(N, 3)`` (m) of the calibrated model's TCP position at joints ``q``."""
-        k = len(self.names)
+        k = len(self.space.robot)
         cov = tcp_position_covariance(self.robot, self.robot.check_joints(q), self.names,
                                       self.covariance[:k, :k])
         return np.sqrt(np.maximum(np.diagonal(cov, axis1=1, axis2=2), 0.0))
 
     def parameter_table(self) -> list[dict]:
-        """Every candidate parameter (and nuisance) with nominal, estimate, correction, sigma."""
-        robot, start = self.robot, self.start
+        """Every candidate parameter (and nuisance) with nominal, estimate, correction, sigma
+        (display units: mm, deg; nuisance in its own)."""
+        start = self.initial.robot
         sigma = dict(zip(self.unknowns, self.sigma, strict=True))
-        units = dict(zip(robot.parameter_names, robot.parameter_units(), strict=True))
-        values, nominal = robot.values, start.nominal
-        rows = []
+        units = dict(zip(start.parameter_names, start.parameter_units(), strict=True))
+        nominal = dict(zip(start.parameter_names, start.nominal_values, strict=True))
+        estimate = dict(zip(self.robot.parameter_names, self.robot.values, strict=True))
+        nuisance = self.problem.nuisance_names
         dropped = set(self.identifiability.dropped)
+        rows = []
         for name in self.identifiability.names:
-            if name in units:
-                i = robot.indices([name])[0]
-                unit, f = _display(units[name])
-                nom, est = nominal[i] * f, values[i] * f
-            else:  # nuisance (e.g. plane coefficients): reported in its own unit
-                j = self.problem.nuisance_names.index(name)
+            if name in nuisance:  # e.g. plane coefficients: reported in their own unit
+                j = nuisance.index(name)
                 unit, f = "", 1.0
-                nom, est = float(self.problem.observation.nuisance_start(start)[j]), \
-                    float(self.state.nuisance[j])
-            status = "dropped" if name in dropped else "estimated"
+                nom, est = float(self.initial.nuisance[j]), float(self.state.nuisance[j])
+            else:  # a joint-error term left unidentified is not carried: its estimate is nominal
+                unit, f = _DISPLAY[units[name]]
+                nom, est = nominal[name] * f, estimate.get(name, nominal[name]) * f
             s = sigma.get(name)
             rows.append({"name": name, "unit": unit, "nominal": float(nom), "estimate": float(est),
-                         "correction": float(est - nom),
-                         "sigma": None if s is None else float(s * f), "status": status})
+                         "correction": float(est - nom), "sigma": None if s is None else float(s * f),
+                         "status": "dropped" if name in dropped else "estimated"})
         return rows
 
-    def _observations(self, data, problem, start_state, final_state) -> dict:
-        obs = problem.observation
+    def _observations(self, problem: CalibrationProblem, states: tuple[State, State],
+                      weights: np.ndarray | None) -> dict:
+        obs, data = problem.observation, problem.data
         measured = getattr(obs, "measured", None)
         measured = None if measured is None or measured.ndim != 2 else measured * 1e3
-        weights = self.solver.item_weights if data is self.problem.data else None
         if weights is not None:
             weights = weights[obs.item_of_rows()]  # one per data row
+        before, after = (obs.modelled_points(s.robot, s.nuisance) * 1e3 for s in states)
         return {
             "pose_id": data.pose_id.tolist(), "source_row": data.source_row.tolist(),
             "smr": data.smr.tolist(), "joints_deg": np.rad2deg(data.joints).tolist(),
             "measured": None if measured is None else measured.tolist(),
-            "model_before": (obs.modelled_points(start_state.robot, start_state.nuisance) * 1e3).tolist(),
-            "model_after": (obs.modelled_points(final_state.robot, final_state.nuisance) * 1e3).tolist(),
+            "model_before": before.tolist(), "model_after": after.tolist(),
             "weight": None if weights is None else weights.tolist(),
             "plane": None if data.plane is None else data.plane.tolist(),
         }
 
     def to_dict(self) -> dict:
         """The result as plain data (mm, deg), per docs/result-json.md."""
-        from robocal import __version__
-
-        ident = self.identifiability
+        ident, problem = self.identifiability, self.problem
         k = len(self.unknowns)
-        errors = self.problem.position_errors(self.state)
+        errors = problem.position_errors(self.state)
+        data = problem.data
         out = {
             "format": RESULT_FORMAT,
             "robocal_version": __version__,
             "robot": {"name": self.robot.name, "description": self.robot.description,
                       "n_joints": self.robot.n_joints},
-            "data": {"file": self.problem.data.source, "kind": self.problem.kind,
-                     "n_poses": int(self.problem.data.n_poses),
-                     "n_observations": int(len(self.problem.data))},
+            "data": {"file": data.source, "kind": problem.kind, "n_poses": int(data.n_poses),
+                     "n_observations": int(len(data))},
             "method": self.method,
             "settings": self.settings,
-            "converged": self.solver.converged,
+            "converged": self.solver.success,
+            "status": self.solver.status.value,
             "message": self.solver.message,
             "before": self.before,
             "after": self.after,
@@ -159,27 +192,23 @@ class CalibrationResult:
                                 if key not in ("kept", "dropped", "confounded_with")},
             "correlation": {"names": self.unknowns,
                             "matrix": np.round(self.correlation, 6).reshape(k, k).tolist()},
-            "rejected": [{"source_row": int(self.problem.data.source_row[row]),
-                          "pose_id": int(self.problem.data.pose_id[row]),
+            "rejected": [{"source_row": int(data.source_row[row]), "pose_id": int(data.pose_id[row]),
                           "residual": float(errors[item] * 1e3), "weight": 0.0}
                          for item in self.rejected
-                         for row in np.flatnonzero(self.problem.observation.item_of_rows() == item)],
-            "observations": self._observations(self.problem.data, self.problem,
-                                               self.problem.start(self.start), self.state),
-            "history": [{key: float(v) if isinstance(v, float | np.floating) else v
-                         for key, v in h.items()} for h in self.solver.history],
+                         for row in np.flatnonzero(problem.observation.item_of_rows() == item)],
+            "observations": self._observations(problem, (self.initial, self.state),
+                                               self.solver.item_weights),
+            "history": self.solver.history,
             "warnings": self.warnings,
         }
         if self.nongeometric is not None:
             out["nongeometric"] = self.nongeometric
-        if self.validation is not None:
-            out["data"]["validation_file"] = self.validation_data.source
-            out["validation_before"] = self.validation_before
-            out["validation"] = self.validation
-            vproblem = CalibrationProblem(self.robot, self.validation_data)
-            before = carry_over(vproblem, self.problem, self.problem.start(self.start))
-            after = carry_over(vproblem, self.problem, State(self.robot, self.state.nuisance))
-            out["validation_observations"] = self._observations(self.validation_data, vproblem, before, after)
+        if self.judged is not None:
+            out["data"]["validation_file"] = self.judged.data.source
+            out["validation_before"] = self.judged.before
+            out["validation"] = self.judged.after
+            out["validation_observations"] = self._observations(self.judged.problem, self.judged.states,
+                                                                None)
         return out
 
     def save_json(self, path) -> None:
@@ -191,12 +220,12 @@ class CalibrationResult:
         lines = [f"{self.method}: {self.solver.message}",
                  f"calibration set ({b['n']} obs): RMS {b['rms']:.4f} -> {a['rms']:.4f} mm, "
                  f"max {b['max']:.4f} -> {a['max']:.4f} mm"]
-        if self.validation is not None:
-            vb, va = self.validation_before, self.validation
+        if self.judged is not None:
+            vb, va = self.judged.before, self.judged.after
             lines.append(f"validation set  ({va['n']} obs): RMS {vb['rms']:.4f} -> {va['rms']:.4f} mm, "
                          f"max {vb['max']:.4f} -> {va['max']:.4f} mm")
         links = [r for r in self.parameter_table()
-                 if r["status"] == "estimated" and "." not in r["name"]]
+                 if r["status"] == "estimated" and block_of(r["name"]) == "links"]
         for unit in ("mm", "deg"):
             top = sorted((r for r in links if r["unit"] == unit), key=lambda r: -abs(r["correction"]))[:3]
             if top:
@@ -216,9 +245,67 @@ class CalibrationResult:
 def _start_model(robot, data, register_frames: bool):
     if data.kind not in ("point", "pose") or not register_frames:
         return robot
-    from robocal.data.registration import register
-
     return register(robot, data)
+
+
+def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: float,
+                     n_poses: int) -> tuple[ParameterSpace, Identifiability, list[str]]:
+    """The identifiable unknowns of ``params`` (plus every nuisance parameter), their analysis, and
+    warnings; IdentificationError when the data cannot support a calibration."""
+    candidates = problem.space(state0.robot, params)
+    J0 = problem.jacobian(state0, candidates)
+    ident = analyze_jacobian(J0, candidates.names, n_poses, rtol)
+    warnings = []
+    if len(problem.observations) == 1:
+        problem.observation.check_enough(candidates.size)
+    blind = set.intersection(*(set(obs.not_observable(state0.robot)) for obs in problem.observations))
+    if blind and isinstance(params, str):
+        reason = "; ".join(dict.fromkeys(obs.blind_spot for obs in problem.observations if obs.blind_spot))
+        warnings.append(f"{reason}: {', '.join(sorted(blind, key=state0.robot.parameter_names.index))} "
+                        "are held at their nominal values")
+    if ident.rank < max(1, candidates.size // 2):
+        raise IdentificationError(
+            f"the pose set is degenerate: only {ident.rank} of {candidates.size} parameters "
+            f"are identifiable from {n_poses} poses; measure poses spread over the workspace")
+    if J0.shape[0] <= ident.rank:
+        raise IdentificationError(f"{J0.shape[0]} residuals cannot determine {ident.rank} identifiable "
+                                  "parameters: measure more poses")
+    lost = sorted(set(candidates.nuisance) - set(ident.kept))
+    if lost:
+        raise IdentificationError(f"the nuisance parameters {lost} are not identifiable: "
+                                  "each plane needs contacts spread over its surface")
+    return candidates.restricted(ident.kept), ident, warnings
+
+
+def _run_solver(method: str, problem, state0: State, space: ParameterSpace, seed: int, progress,
+                options: dict) -> SolverResult:
+    """The method's solve, with a progress bar on a terminal when ``progress`` is True."""
+    solve = get_solver(method)
+    with Progress(iteration_limit(method, options), f"calibrate ({method})",
+                  quiet=progress is not True) as bar:
+        if progress is True:
+            def progress(iteration, rms):  # noqa: E306 - the bar's callback
+                bar.update(info=f"rms {rms * 1e3:.4f} mm")
+        return solve(problem, state0, space, seed=seed, progress=progress or None, **options)
+
+
+def _covariance(problem: CalibrationProblem, out: SolverResult, space: ParameterSpace) -> np.ndarray:
+    """s0^2 (J^T W J)^-1 at the solution; rows a robust method rejected carry no information."""
+    J = problem.jacobian(out.state, space)
+    r = problem.residuals(out.state)
+    if out.item_weights is None:
+        return covariance(J, r)
+    row_w = np.repeat(out.item_weights, problem.item_rows())
+    sw = np.sqrt(row_w)
+    return covariance(J * sw[:, None], r * sw, int(np.count_nonzero(row_w)))
+
+
+def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data) -> Judged:
+    """Statistics of ``data`` with the two states' robots, the nuisance (planes) carried over."""
+    vproblem = CalibrationProblem(start, data)
+    judged = tuple(vproblem.carried_state(s.robot, problem.export_nuisance(s)) for s in states)
+    before, after = (position_stats(vproblem.position_errors(s)) for s in judged)
+    return Judged(data=data, problem=vproblem, states=judged, before=before, after=after)
 
 
 def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
@@ -230,14 +317,14 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     default free set, unidentifiable ones dropped), 'all', or a list of names. ``validation``
     (Measurements) is judged with the calibrated model. ``progress``: True shows a bar on a
     terminal, or a callable ``progress(iteration, rms)``. ``options`` go to the solver (e.g.
-    k0, k1, ridge for 'robust'; checked against its signature). ``nongeometric``: terms
-    identified with the geometry by lsq or robust, e.g. 'compliance,gear,backlash' (see
-    robocal.identify.nongeometric); the calibrated robot carries them and its fk applies them.
+    k0, k1, ridge for 'robust'; checked against its signature). ``nongeometric``: joint-error
+    terms identified with the geometry by lsq or robust, e.g. 'compliance,gear,backlash' (see
+    robocal.kinematics.joint_errors); the calibrated robot carries them and its fk applies them.
     Raises IdentificationError when the data cannot support the calibration.
     """
-    solve = get_solver(method)
-    check_options(method, solve, options)
-    if nongeometric and method not in NONGEOMETRIC_METHODS:
+    check_options(method, options)
+    terms = parse_terms(nongeometric) if nongeometric else []
+    if terms and method not in NONGEOMETRIC_METHODS:
         raise IdentificationError(
             f"non-geometric terms are identified by the methods {', '.join(NONGEOMETRIC_METHODS)}; "
             f"{method!r} searches the geometric parameters only (calibrate with lsq first, or "
@@ -246,77 +333,38 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     if validation is not None:
         validation.check_against(robot)
     start = _start_model(robot, data, register_frames)
-    problem = CalibrationProblem(start, data)
-    candidates = candidate_parameters(start, problem.observation, params)
-    state0 = problem.start(start)
-    unknown_candidates = candidates + problem.nuisance_names
-    J0 = problem.jacobian(state0, candidates)
-    ident = analyze_jacobian(J0, unknown_candidates, data.n_poses, rtol)
-    warnings = []
-    problem.observation.check_enough(len(unknown_candidates))
-    blind = problem.observation.not_observable(start)
-    if blind and isinstance(params, str):
-        warnings.append(f"{problem.observation.blind_spot}: {', '.join(blind)} are held at their "
-                        "nominal values")
-    if ident.rank < max(1, len(unknown_candidates) // 2):
-        raise IdentificationError(
-            f"the pose set is degenerate: only {ident.rank} of {len(unknown_candidates)} parameters "
-            f"are identifiable from {data.n_poses} poses; measure poses spread over the workspace")
-    if J0.shape[0] <= ident.rank:
-        raise IdentificationError(
-            f"{J0.shape[0]} residuals cannot determine {ident.rank} identifiable parameters: "
-            "measure more poses")
-    names = [n for n in ident.kept if n in candidates]
-    if len(names) + len(problem.nuisance_names) != ident.rank:
-        lost = sorted(set(problem.nuisance_names) - set(ident.kept))
-        raise IdentificationError(f"the nuisance parameters {lost} are not identifiable: "
-                                  "each plane needs contacts spread over its surface")
-    ng_info = None
-    if nongeometric:
-        from robocal.identify.nongeometric import attach, parse_terms
-
-        state0, ng_info = attach(problem, state0, names, parse_terms(nongeometric), rtol)
-    total = options.get("generations") or options.get("iterations") or options.get("epochs")
-    with Progress(total, f"calibrate ({method})", quiet=progress is not True) as bar:
-        if progress is True:
-            def progress(iteration, rms):  # noqa: E306 - the bar's callback
-                bar.update(info=f"rms {rms * 1e3:.4f} mm")
-        out = solve(problem, state0, names, seed=seed, progress=progress or None, **options)
-    if not out.converged:
+    declared = start.joint_error_names + candidate_names(start.n_joints, terms)
+    problem = CalibrationProblem(start.with_joint_errors(declared), data)
+    state0 = problem.start(start.with_joint_errors(declared))
+    space, ident, warnings = _estimated_space(problem, state0, params, rtol, data.n_poses)
+    out = _run_solver(method, problem, state0, space, seed, progress, options)
+    if not out.success:
         warnings.append(out.message)
     if ident.condition_class == "strong":
         warnings.append(f"the normal matrix is strongly ill-conditioned (condition number "
                         f"{ident.condition_number:.3g}): some parameters are poorly determined; "
                         "see the correlation matrix")
-    final = out.state
-    final_robot = final.robot if ng_info is None else problem.observation.calibrated_robot(final)
-    row_w = None if out.item_weights is None else np.repeat(out.item_weights, problem.rows_per_item)
-    J = problem.jacobian(final, names)
-    r = problem.residuals(final)
-    dof_rows = None
-    if row_w is not None:
-        J, r = J * np.sqrt(row_w)[:, None], r * np.sqrt(row_w)
-        dof_rows = int(np.count_nonzero(row_w))  # rejected rows carry no information
-    cov = covariance(J, r, dof_rows)
+    estimated_terms = [n for n in space.robot if block_of(n) == "joint_errors"]
+    final_robot = out.state.robot.with_joint_errors(start.joint_error_names + [
+        n for n in estimated_terms if n not in start.joint_error_names])
     result = CalibrationResult(
-        robot=final_robot, start=start, method=method, identifiability=ident, names=names,
-        unknowns=names + problem.nuisance_names, covariance=cov, solver=out,
+        robot=final_robot, start=start, method=method, identifiability=ident, space=space,
+        covariance=_covariance(problem, out, space), solver=out,
         before=position_stats(problem.position_errors(state0)),
-        after=position_stats(problem.position_errors(final)), problem=problem,
+        after=position_stats(problem.position_errors(out.state)), problem=problem, initial=state0,
         warnings=warnings, settings={"params": params if isinstance(params, str) else list(params),
                                      "seed": seed, "rtol": rtol, **_plain(options)})
     if validation is not None:
-        vproblem = CalibrationProblem(start, validation)
-        result.validation_data = validation
-        for key, state in (("validation_before", state0), ("validation", State(final_robot, final.nuisance))):
-            errors = vproblem.position_errors(carry_over(vproblem, problem, state))
-            setattr(result, key, position_stats(errors))
-    if ng_info is not None:
-        sig = dict(zip(result.unknowns, result.sigma, strict=True))
-        ng_info["parameters"] = [{"name": nm, "estimate": float(v), "sigma": float(sig[nm])}
-                                 for nm, v in zip(ng_info["kept"], final_robot.joint_errors.values,
-                                                  strict=True)]
-        result.nongeometric = ng_info
+        result.judged = _judge(problem, start, (state0, State(final_robot, out.state.nuisance)),
+                               validation)
+    if terms:
+        sigma = dict(zip(result.unknowns, result.sigma, strict=True))
+        values = dict(zip(final_robot.parameter_names, final_robot.values, strict=True))
+        result.nongeometric = {
+            "terms": terms, "kept": estimated_terms,
+            "dropped": [n for n in ident.names if block_of(n) == "joint_errors" and n not in space.robot],
+            "parameters": [{"name": n, "estimate": float(values[n]), "sigma": float(sigma[n])}
+                           for n in estimated_terms]}
     return result
 
 
@@ -327,25 +375,15 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     ``joints_or_data`` is a ``(N, n)`` array (rad) or Measurements; the observations are taken
     as the model's own predictions, so no measurement is needed.
     """
-    from robocal.data.measurements import Measurements
-
     q = robot.check_joints(getattr(joints_or_data, "joints", joints_or_data))
     smr = getattr(joints_or_data, "smr", None)
     T = robot.fk(q, smr=None if smr is None or smr.max(initial=0) > len(robot.smr) else smr)
     extra = {"rotations": T[:, :3, :3]} if kind == "pose" else {}
     data = Measurements.from_arrays(kind, q, points=T[:, :3, 3], **extra)
     problem = CalibrationProblem(robot, data)
-    names = candidate_parameters(robot, problem.observation, params)
-    J = problem.jacobian(problem.start(robot), names)
-    return analyze_jacobian(J, names + problem.nuisance_names, data.n_poses, rtol)
-
-
-def carry_over(vproblem: CalibrationProblem, problem: CalibrationProblem, state: State) -> State:
-    """``state`` for judging other data: with the identified nuisance parameters (e.g. the planes
-    found on the calibration contacts) when both data sets have the same ones, else re-fitted."""
-    if vproblem.nuisance_names == problem.nuisance_names:
-        return State(state.robot, state.nuisance)
-    return vproblem.start(state.robot)
+    space = problem.space(robot, params)
+    J = problem.jacobian(problem.start(robot), space)
+    return analyze_jacobian(J, space.names, data.n_poses, rtol)
 
 
 def _plain(options: dict) -> dict:
@@ -354,12 +392,10 @@ def _plain(options: dict) -> dict:
 
 def load_result(path) -> dict:
     """Read a result JSON written by :meth:`CalibrationResult.save_json`."""
-    from robocal.errors import DataError
-
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
-        raise DataError(f"cannot read result file {path}: {exc}") from None
+        data = json.loads(read_text(path, "result JSON file"))
+    except json.JSONDecodeError as exc:
+        raise DataError(f"{path} is not a robocal result JSON: {exc}") from None
     if not isinstance(data, dict) or data.get("format") != RESULT_FORMAT:
         raise DataError(f"{path} is not a robocal result JSON (format {RESULT_FORMAT})")
     return data

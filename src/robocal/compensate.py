@@ -29,11 +29,9 @@ from scipy.spatial.transform import Rotation
 from robocal.errors import DataError
 from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
+from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.kinematics.model import Robot
-from robocal.kinematics.transforms import make_transform, pose_error
-
-_LENGTH = {"mm": 1e-3, "m": 1.0}
-_ANGLE = {"deg": np.pi / 180.0, "rad": 1.0}
+from robocal.kinematics.transforms import ROTATION_TOL, make_transform, pose_error
 
 
 @dataclass(frozen=True)
@@ -93,20 +91,6 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
                         parameters=parameter_table(calibrated, nominal), corrected_model=calibrated)
 
 
-def perturbed(robot: Robot, seed: int | np.random.Generator | None = None, *,
-              length_mm=(0.05, 0.5), angle_deg=(0.005, 0.05)) -> Robot:
-    """A realistic 'true' robot around ``robot``: every link parameter a calibration frees
-    (beta only on parallel axes) displaced by a random sign times a magnitude drawn uniformly
-    in ``length_mm`` (lengths) or ``angle_deg`` (angles). The nominal vector is kept."""
-    rng = np.random.default_rng(seed)
-    names = [nm for nm in robot.default_free() if not nm.startswith(("base.", "tool.", "smr"))]
-    lengths = np.array([robot.parameter_units()[i] == "m" for i in robot.indices(names)])
-    lo = np.where(lengths, length_mm[0] * 1e-3, np.deg2rad(angle_deg[0]))
-    hi = np.where(lengths, length_mm[1] * 1e-3, np.deg2rad(angle_deg[1]))
-    delta = rng.uniform(lo, hi) * rng.choice([-1.0, 1.0], len(names))
-    return robot.displaced(names, delta)
-
-
 # ----------------------------------------------------------------------------- pose CSV files
 def _column_unit(header: list[str], stem: str, units: dict) -> tuple[str, float] | None:
     hits = [(f"{stem}_{u}", s) for u, s in units.items() if f"{stem}_{u}" in header]
@@ -119,20 +103,16 @@ def read_poses_csv(path) -> tuple[np.ndarray, dict]:
     """Poses ``(N, 4, 4)`` (m) from a targets CSV (see the module docstring) and its layout
     (``length``: 'mm'|'m', ``orientation``: 'quat'|'deg'|'rad'), to write results alike."""
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise DataError(f"cannot read pose file {path}: {exc}") from exc
-    rows = list(csv.reader(io.StringIO(text)))
+    rows = list(csv.reader(io.StringIO(read_text(path, "pose CSV file"))))
     if not rows:
         raise DataError(f"{path} is empty: expected a header x_mm,y_mm,z_mm,qw,qx,qy,qz (or rx_deg..)")
     header = [h.strip().lower() for h in rows[0]]
     body = [r for r in rows[1:] if any(c.strip() for c in r)]
-    pos = [_column_unit(header, c, _LENGTH) for c in "xyz"]
+    pos = [_column_unit(header, c, LENGTH_UNITS) for c in "xyz"]
     if None in pos or len({p[0].split("_")[1] for p in pos}) != 1:
         raise DataError(f"{path}: need position columns x_mm, y_mm, z_mm (or x_m, y_m, z_m), one unit; "
                         f"header is {rows[0]}")
-    rot = [_column_unit(header, c, _ANGLE) for c in ("rx", "ry", "rz")]
+    rot = [_column_unit(header, c, ANGLE_UNITS) for c in ("rx", "ry", "rz")]
     quat = all(c in header for c in ("qw", "qx", "qy", "qz"))
     if quat == (None not in rot):
         raise DataError(f"{path}: give the orientation as qw,qx,qy,qz or as rx_deg,ry_deg,rz_deg "
@@ -151,7 +131,7 @@ def read_poses_csv(path) -> tuple[np.ndarray, dict]:
     p = data[:, :3] * pos[0][1]
     if quat:
         qn = np.linalg.norm(data[:, 3:], axis=1)
-        bad = np.flatnonzero(np.abs(qn - 1.0) > 1e-6) + 2
+        bad = np.flatnonzero(np.abs(qn - 1.0) > ROTATION_TOL) + 2
         if bad.size:
             raise DataError(f"{path}: quaternion not of unit length in line(s) {bad[:10].tolist()}")
         R = Rotation.from_quat(data[:, 3:], scalar_first=True).as_matrix()
@@ -167,12 +147,12 @@ def pose_columns(T: np.ndarray, layout: dict) -> tuple[list[str], np.ndarray]:
     """Column names and values ``(N, 6|7)`` of poses ``(N, 4, 4)`` in a CSV ``layout``."""
     u = layout["length"]
     names = [f"x_{u}", f"y_{u}", f"z_{u}"]
-    p = T[:, :3, 3] / _LENGTH[u]
+    p = T[:, :3, 3] / LENGTH_UNITS[u]
     rot = Rotation.from_matrix(T[:, :3, :3])
     if layout["orientation"] == "quat":
         return names + ["qw", "qx", "qy", "qz"], np.hstack([p, rot.as_quat(scalar_first=True)])
     a = layout["orientation"]
-    return names + [f"rx_{a}", f"ry_{a}", f"rz_{a}"], np.hstack([p, rot.as_euler("xyz") / _ANGLE[a]])
+    return names + [f"rx_{a}", f"ry_{a}", f"rz_{a}"], np.hstack([p, rot.as_euler("xyz") / ANGLE_UNITS[a]])
 
 
 def format_csv(columns: list[str], values: np.ndarray) -> str:

@@ -21,9 +21,5 @@ class IdentificationError(RobocalError):
     """A calibration problem cannot be solved: too few observations, rank collapse."""
 
 
-class ConvergenceError(IdentificationError):
-    """An iterative solver did not converge."""
-
-
 class UnreachableError(RobocalError):
     """A target pose has no inverse-kinematics solution."""

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from robocal.data.registration import apply_registration, register_frame
 from robocal.errors import DataError
 from robocal.identify.observations import observation_for
+from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.metrics import position_stats
 
 
@@ -36,8 +38,6 @@ def evaluate(robot, data, fit_frame: bool = False) -> dict:
     """
     out = {}
     if fit_frame:
-        from robocal.data.registration import apply_registration, register_frame
-
         reg = register_frame(robot, data)
         robot = apply_registration(robot, reg)
         out["robot"] = robot
@@ -52,8 +52,6 @@ def evaluate(robot, data, fit_frame: bool = False) -> dict:
     else:
         stats["errors_mm"] = err * 1e3
     if data.kind == "pose":
-        from robocal.kinematics.transforms import matrix_to_rotvec
-
         R = robot.fk(data.joints, smr=data.smr, approach=data.approach)[:, :3, :3]
         ang = np.linalg.norm(matrix_to_rotvec(data.rotations @ np.swapaxes(R, 1, 2)), axis=1)
         deg = np.rad2deg(ang)

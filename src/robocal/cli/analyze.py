@@ -30,7 +30,7 @@ def run(args) -> int:
     from robocal.calibration import analyze
     from robocal.data.measurements import read_joints
     from robocal.errors import DataError
-    from robocal.kinematics.catalog import load_model
+    from robocal.kinematics.model import load_model
 
     robot = load_model(args.robot)
     if args.tool_mm:

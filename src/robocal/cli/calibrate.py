@@ -73,7 +73,7 @@ def run(args) -> int:
     from robocal.calibration import calibrate
     from robocal.data.measurements import Measurements
     from robocal.errors import DataError, IdentificationError
-    from robocal.kinematics.catalog import load_model
+    from robocal.kinematics.model import load_model
 
     for out in (args.output, args.json, args.report, args.network_out):  # fail before the work
         if out and not Path(out).resolve().parent.is_dir():
@@ -106,9 +106,9 @@ def run(args) -> int:
     if args.json:
         result.save_json(args.json)
     if args.network_out:
-        result.solver.extra["network"].save(args.network_out)
+        result.solver.network.save(args.network_out)
     if report is not None:
-        from robocal.kinematics.yaml_io import write_atomic
+        from robocal.io import write_atomic
 
         write_atomic(args.report, report)
     print(result.summary())

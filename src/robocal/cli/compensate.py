@@ -42,9 +42,8 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.compensate import compensate, format_csv, pose_columns, read_poses_csv
-    from robocal.kinematics.catalog import load_model
-    from robocal.kinematics.model import Robot
-    from robocal.kinematics.yaml_io import write_atomic
+    from robocal.io import write_atomic
+    from robocal.kinematics.model import Robot, load_model
 
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)

@@ -28,8 +28,8 @@ def run(args) -> int:
 
     from robocal.data.measurements import Measurements
     from robocal.evaluate import evaluate
-    from robocal.kinematics.catalog import load_model
-    from robocal.kinematics.yaml_io import write_atomic
+    from robocal.io import write_atomic
+    from robocal.kinematics.model import load_model
 
     robot = load_model(args.model)
     data = Measurements.load(args.data, robot=robot)

@@ -28,7 +28,7 @@ def run(args) -> int:
     from pathlib import Path
 
     from robocal.errors import DataError
-    from robocal.kinematics.catalog import load_model
+    from robocal.kinematics.model import load_model
     from robocal.kinematics.urdf import from_urdf, write_urdf
 
     if not args.urdf and not args.yaml:

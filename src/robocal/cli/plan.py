@@ -40,8 +40,8 @@ def run(args) -> int:
 
     from robocal.compensate import format_csv, read_poses_csv
     from robocal.ik.path import plan_path
-    from robocal.kinematics.catalog import load_model
-    from robocal.kinematics.yaml_io import write_atomic
+    from robocal.io import write_atomic
+    from robocal.kinematics.model import load_model
 
     robot = load_model(args.robot)
     poses, _ = read_poses_csv(args.poses)

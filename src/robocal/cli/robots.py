@@ -38,7 +38,7 @@ def show(spec: str) -> None:
 
     from scipy.spatial.transform import Rotation
 
-    from robocal.kinematics.catalog import load_model
+    from robocal.kinematics.model import load_model
 
     robot = load_model(spec)
     print(f"{robot.name}: {robot.description}")

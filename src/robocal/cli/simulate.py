@@ -42,7 +42,7 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.data.simulate import simulate_tracker, write_simulation
-    from robocal.kinematics.catalog import load_model
+    from robocal.kinematics.model import load_model
 
     robot = load_model(args.robot)
     box = None if args.box is None else np.array(args.box).reshape(2, 3) * 1e-3

@@ -20,7 +20,6 @@ pose): their drift from the median position is reported, the data are not change
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,10 +28,9 @@ import numpy as np
 
 from robocal.data.measurements import Measurements
 from robocal.errors import DataError, UnitError
+from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 
 _SPLIT = re.compile(r"[,;\s]+")
-_JOINT_UNITS = {"deg": math.pi / 180.0, "rad": 1.0}
-_LENGTH_UNITS = {"mm": 1e-3, "m": 1.0}
 # A drift-monitor reading farther than this from its median is a stray (the tracker caught another
 # target), reported by line and left out of the drift figures.
 STRAY_MM = 1.0
@@ -49,7 +47,7 @@ class ColumnSpec:
     @classmethod
     def parse(cls, text: str, role: str) -> ColumnSpec:
         """Parse ``[FILE:]cols=A-B:UNIT``; ``role`` is 'joints' or 'points' (decides valid units)."""
-        units = _JOINT_UNITS if role == "joints" else _LENGTH_UNITS
+        units = ANGLE_UNITS if role == "joints" else LENGTH_UNITS
         parts = text.split(":")
         cols = unit = None
         rest = []
@@ -58,7 +56,7 @@ class ColumnSpec:
                 cols = _parse_cols(part[5:], text)
             elif part in units:
                 unit = part
-            elif part in _JOINT_UNITS or part in _LENGTH_UNITS or part in ("cm", "um", "grad"):
+            elif part in ANGLE_UNITS or part in LENGTH_UNITS or part in ("cm", "um", "grad"):
                 raise UnitError(f"--{role} {text!r}: unit {part!r} is not a {role} unit; use "
                                 f"{' or '.join(units)}")
             else:
@@ -78,7 +76,7 @@ class ColumnSpec:
 
     @property
     def scale(self) -> float:
-        return {**_JOINT_UNITS, **_LENGTH_UNITS}[self.unit]
+        return {**ANGLE_UNITS, **LENGTH_UNITS}[self.unit]
 
 
 def _parse_cols(text: str, spec: str) -> tuple[int, ...]:
@@ -99,12 +97,7 @@ def read_table(path, skip_rows: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Numeric table of a headerless text file: values ``(R, C)`` (``nan`` cells allowed) and their
     1-based line numbers ``(R,)``. Non-numeric cells and ragged rows raise DataError."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise DataError(f"cannot read {path}: {exc.strerror}") from None
-    except UnicodeDecodeError:
-        raise DataError(f"{path}: not a text file") from None
+    text = read_text(path, "raw measurement file")
     rows, lines = [], []
     for ln, line in enumerate(text.splitlines(), 1):
         s = line.strip()
@@ -189,9 +182,8 @@ def _group_repeats(joints: np.ndarray) -> np.ndarray:
     return np.cumsum(new) - 1
 
 
-def import_tracker(raw=(), *, joints: str | ColumnSpec, points, base=(), average: bool = True,
-                   skip_rows: int = 0) -> ImportResult:
-    """Import raw files (see module docstring). ``points``: one spec or a list (one per SMR)."""
+def _parse_specs(raw, joints, points) -> tuple[list[str], ColumnSpec, list[ColumnSpec]]:
+    """Validated raw file names, joints spec and points specs (one layout or the other)."""
     jspec = joints if isinstance(joints, ColumnSpec) else ColumnSpec.parse(joints, "joints")
     pspecs = [points] if isinstance(points, str | ColumnSpec) else list(points)
     pspecs = [p if isinstance(p, ColumnSpec) else ColumnSpec.parse(p, "points") for p in pspecs]
@@ -208,11 +200,14 @@ def import_tracker(raw=(), *, joints: str | ColumnSpec, points, base=(), average
         raise DataError("with raw files give one --points spec without a file (cols=..:unit)")
     if separate and any(p.file is None for p in pspecs):
         raise DataError("with --joints FILE:... every --points spec needs its FILE too")
+    return raw, jspec, pspecs
 
-    # (joints (R, n), points (R, 3), smr, joint-file lines (R,), point-file lines (R,),
-    #  points file, joints file)
+
+def _read_blocks(raw: list[str], jspec: ColumnSpec, pspecs: list[ColumnSpec], skip_rows: int) -> list:
+    """One block per points source: (joints (R, n), points (R, 3), smr, joint-file lines (R,),
+    point-file lines (R,), points file, joints file)."""
     blocks = []
-    if separate:
+    if jspec.file is not None:
         jt, jl = read_table(jspec.file, skip_rows)
         q = _columns(jt, jspec, jspec.file, "joints")
         for s, ps in enumerate(pspecs):
@@ -226,74 +221,76 @@ def import_tracker(raw=(), *, joints: str | ColumnSpec, points, base=(), average
             t, lines = read_table(f, skip_rows)
             blocks.append((_columns(t, jspec, f, "joints"), _columns(t, pspecs[0], f, "points"), 0, lines,
                            lines, f, f))
+    return blocks
 
-    dropped, out_q, out_p, out_smr, out_pose, out_row = [], [], [], [], [], []
-    spread_max, spread_rms, readings, files = [], [], [], []
+
+def _group_stats(group: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                  np.ndarray]:
+    """Per group of repeated readings: readings, mean point, max and RMS deviation from the mean."""
+    n_groups = int(group.max()) + 1
+    count = np.bincount(group, minlength=n_groups)
+    mean = np.zeros((n_groups, 3))
+    np.add.at(mean, group, points)
+    mean /= count[:, None]
+    dev = np.linalg.norm(points - mean[group], axis=1)
+    gmax = np.zeros(n_groups)
+    np.maximum.at(gmax, group, dev)
+    gss = np.zeros(n_groups)
+    np.add.at(gss, group, dev**2)
+    return count, mean, gmax, np.sqrt(gss / count)
+
+
+def import_tracker(raw=(), *, joints: str | ColumnSpec, points, base=(), average: bool = True,
+                   skip_rows: int = 0) -> ImportResult:
+    """Import raw files (see module docstring). ``points``: one spec or a list (one per SMR)."""
+    raw, jspec, pspecs = _parse_specs(raw, joints, points)
+    separate = jspec.file is not None
+    dropped, files = [], []
+    out = {k: [] for k in ("q", "p", "smr", "pose", "row", "spread_max", "spread_rms", "readings")}
     next_pose = 0
-    for b, (q, p, s, lines, plines, pfile, jfile) in enumerate(blocks):
+    for b, (q, p, s, lines, plines, pfile, jfile) in enumerate(_read_blocks(raw, jspec, pspecs, skip_rows)):
         bad, why = _failed(p, q)
         dropped += [(pfile, int(plines[i]), str(why[i])) for i in np.flatnonzero(bad)]
         qk, pk, lk = q[~bad], p[~bad], lines[~bad]
-        if separate:
-            group = np.arange(len(qk))  # row i of every file is pose i: no repeat detection
-            pose = lk  # joints line number identifies the pose across SMR files
-        else:
-            group = _group_repeats(qk)
-            pose = None
+        # separate files: row i of every file is pose i (no repeat detection); else repeats group
+        group = np.arange(len(qk)) if separate else _group_repeats(qk)
         n_groups = int(group.max()) + 1 if len(group) else 0
         if not separate or b == 0:
             files.append((jfile, n_groups))
         if n_groups == 0:
             continue
-        count = np.bincount(group, minlength=n_groups)
-        mean = np.zeros((n_groups, 3))
-        np.add.at(mean, group, pk)
-        mean /= count[:, None]
-        dev = np.linalg.norm(pk - mean[group], axis=1)
-        gmax = np.zeros(n_groups)
-        np.maximum.at(gmax, group, dev)
-        gss = np.zeros(n_groups)
-        np.add.at(gss, group, dev**2)
+        count, mean, gmax, grms = _group_stats(group, pk)
         first = np.flatnonzero(np.r_[True, group[1:] != group[:-1]])
-        spread_max.append(gmax)
-        spread_rms.append(np.sqrt(gss / count))
-        readings.append(count)
+        out["spread_max"].append(gmax)
+        out["spread_rms"].append(grms)
+        out["readings"].append(count)
         if separate:
-            ids = pose
+            ids = lk  # the joints line number identifies the pose across SMR files
         else:
             ids = next_pose + (group if not average else np.arange(n_groups))
             next_pose += n_groups
-        if average:
-            out_q.append(qk[first])
-            out_p.append(mean)
-            out_smr.append(np.full(n_groups, s))
-            out_pose.append(ids)
-            out_row.append(lk[first])
-        else:
-            out_q.append(qk)
-            out_p.append(pk)
-            out_smr.append(np.full(len(qk), s))
-            out_pose.append(ids)
-            out_row.append(lk)
-    if not out_q:
+        take = first if average else slice(None)
+        out["q"].append(qk[take])
+        out["p"].append(mean if average else pk)
+        out["smr"].append(np.full(len(qk[take]), s))
+        out["pose"].append(ids)
+        out["row"].append(lk[take])
+    if not out["q"]:
         raise DataError("no valid readings left after dropping failed rows")
-    q = np.concatenate(out_q)
-    pose_id = np.concatenate(out_pose)
-    smr = np.concatenate(out_smr)
+    q, p, smr, pose_id, rows = (np.concatenate(out[k]) for k in ("q", "p", "smr", "pose", "row"))
+    order = np.arange(len(q))
     if separate:  # order by pose, then SMR; renumber poses 0..P-1
         order = np.lexsort((smr, pose_id))
         pose_id = np.unique(pose_id, return_inverse=True)[1]
-    else:
-        order = np.arange(len(q))
     names = [f for f, _ in files] + ([p.file for p in pspecs] if separate else [])
     files_text = ", ".join(Path(f).name for f in names)
-    data = Measurements.from_arrays("point", q[order], points=np.concatenate(out_p)[order], smr=smr[order],
-                                    pose_id=pose_id[order], source_row=np.concatenate(out_row)[order],
+    data = Measurements.from_arrays("point", q[order], points=p[order], smr=smr[order],
+                                    pose_id=pose_id[order], source_row=rows[order],
                                     source=f"imported by robocal from {files_text}")
     drift = [_drift(ColumnSpec.parse(b, "points") if isinstance(b, str) else b, skip_rows) for b in base]
-    return ImportResult(data=data, dropped=dropped, spread_max=np.concatenate(spread_max),
-                        spread_rms=np.concatenate(spread_rms), readings=np.concatenate(readings),
-                        drift=drift, files=files)
+    return ImportResult(data=data, dropped=dropped, spread_max=np.concatenate(out["spread_max"]),
+                        spread_rms=np.concatenate(out["spread_rms"]),
+                        readings=np.concatenate(out["readings"]), drift=drift, files=files)
 
 
 def _drift(spec: ColumnSpec, skip_rows: int) -> dict:

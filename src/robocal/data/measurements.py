@@ -38,12 +38,15 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from robocal.errors import DataError, UnitError
+from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
+from robocal.kinematics.transforms import ROTATION_TOL
 
 KINDS = ("point", "pose", "plane", "distance")
-_LENGTH = {"m": 1.0, "mm": 1e-3}
-_ANGLE = {"rad": 1.0, "deg": np.pi / 180.0}
+_ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
+                 "pair", "distance", "approach")
 _LENGTH_COLUMNS = ("x", "y", "z", "sigma", "distance")
 _PLAIN_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row", "qw", "qx", "qy", "qz")
 _INT_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row")
@@ -94,6 +97,14 @@ class Measurements:
     source: str = ""
     approach: np.ndarray | None = None
 
+    def __post_init__(self) -> None:
+        for f in _ARRAY_FIELDS:  # frozen all the way down: the validated arrays cannot change
+            value = getattr(self, f)
+            if value is not None:
+                value = np.array(value)
+                value.flags.writeable = False
+                object.__setattr__(self, f, value)
+
     # ----------------------------------------------------------------- construction
     @classmethod
     def from_arrays(cls, kind: str, joints, *, points=None, rotations=None, plane=None, pair=None,
@@ -125,7 +136,7 @@ class Measurements:
         if rotations is not None:
             R = _float_array(rotations, "rotations", (N, 3, 3))
             err = np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max(axis=(1, 2))
-            bad = np.flatnonzero((err > 1e-6) | (np.linalg.det(R) < 0))
+            bad = np.flatnonzero((err > ROTATION_TOL) | (np.linalg.det(R) < 0))
             if bad.size:
                 raise DataError(f"rotations of row index(es) {bad[:10].tolist()} are not proper rotations")
             kw["rotations"] = R
@@ -195,9 +206,7 @@ class Measurements:
             raise DataError("the selection is empty: keep at least one row")
         if index.min() < -len(self) or index.max() >= len(self):
             raise DataError(f"row index out of range for {len(self)} rows")
-        take = {f: (None if getattr(self, f) is None else getattr(self, f)[index])
-                for f in ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations",
-                          "plane", "pair", "distance", "approach")}
+        take = {f: (None if getattr(self, f) is None else getattr(self, f)[index]) for f in _ARRAY_FIELDS}
         if self.kind == "distance":
             ids, counts = np.unique(take["pair"], return_counts=True)
             if (counts != 2).any():
@@ -246,7 +255,7 @@ class Measurements:
         """Read a canonical measurement CSV. ``robot`` (or ``reach`` in m) enables the joint count and
         length plausibility checks; every problem is a DataError/UnitError naming file and row."""
         path = Path(path)
-        data = parse_csv(_read_text(path), str(path))
+        data = parse_csv(read_text(path, "measurement file"), str(path))
         if robot is not None:
             data.check_against(robot, reach, str(path))
         elif reach is not None:
@@ -263,8 +272,6 @@ class Measurements:
             for k, c in enumerate("xyz"):
                 cols[f"{c}_m"] = self.points[:, k]
         if self.rotations is not None:
-            from scipy.spatial.transform import Rotation
-
             quat = Rotation.from_matrix(self.rotations).as_quat()  # x y z w
             quat *= np.where(quat[:, 3:] < 0, -1.0, 1.0)
             for k, c in enumerate(("qw", "qx", "qy", "qz")):
@@ -293,8 +300,6 @@ class Measurements:
 
     def save(self, path) -> None:
         """Write the canonical CSV atomically."""
-        from robocal.kinematics.yaml_io import write_atomic
-
         write_atomic(path, self.to_csv())
 
 
@@ -326,22 +331,12 @@ def approach_from_order(joints: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
     return step[np.cumsum(new_pose) - 1]
 
 
-def _read_text(path: Path) -> str:
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise DataError(f"cannot read measurement file {path}: {exc.strerror}") from None
-    try:
-        return raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise DataError(f"{path}: not a UTF-8 text file; export the measurements as CSV") from None
-
-
 def read_joints(path, robot=None) -> np.ndarray:
     """Only the joint columns (q1_deg.. or _rad) of a CSV, ``(N, n)`` rad — for planning a pose
     set before anything is measured. Other columns are ignored."""
     path = Path(path)
-    lines = [ln for ln in _read_text(path).splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    text = read_text(path, "joints CSV file")
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise DataError(f"{path}: the file is empty; it needs a header (q1_deg,...) and joint rows")
     rows = list(csv.reader(lines))
@@ -370,18 +365,18 @@ def _header_role(name: str):
     m = re.fullmatch(r"q(\d+)_([a-z]+)", name)
     if m:
         unit = m.group(2)
-        if unit not in _ANGLE:
+        if unit not in ANGLE_UNITS:
             raise UnitError(f"unknown angle unit {unit!r} in column {name!r}: use _deg or _rad")
-        return "q", int(m.group(1)), _ANGLE[unit]
+        return "q", int(m.group(1)), ANGLE_UNITS[unit]
     m = re.fullmatch(r"approach(\d+)", name)
     if m:
         return "approach", int(m.group(1)), 1.0
     m = re.fullmatch(r"(x|y|z|sigma|distance)_([a-z]+)", name)
     if m:
         unit = m.group(2)
-        if unit not in _LENGTH:
+        if unit not in LENGTH_UNITS:
             raise UnitError(f"unknown length unit {unit!r} in column {name!r}: use _mm or _m")
-        return m.group(1), None, _LENGTH[unit]
+        return m.group(1), None, LENGTH_UNITS[unit]
     if name in _PLAIN_COLUMNS:
         return name, None, 1.0
     if name in _LENGTH_COLUMNS or re.fullmatch(r"q\d+", name):
@@ -391,8 +386,8 @@ def _header_role(name: str):
     return None
 
 
-def parse_csv(text: str, name: str = "<text>") -> Measurements:
-    """Parse canonical CSV text; ``name`` is used in error messages."""
+def _split_csv(text: str, name: str) -> tuple[str, int, list[list[str]]]:
+    """(provenance comment, header line number, CSV rows from the header on)."""
     lines = text.splitlines()
     source = ""
     start = 0
@@ -407,8 +402,11 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
         rows = list(csv.reader(lines[start:]))
     except csv.Error as exc:
         raise DataError(f"{name}: not a valid CSV file ({exc})") from None
-    header = [h.strip().lower() for h in rows[0]]
-    header_line = start + 1
+    return source, start + 1, rows
+
+
+def _column_roles(header: list[str], name: str, header_line: int) -> dict:
+    """Header name -> (role, index or None, unit scale); errors name the column."""
     seen = set()
     for h in header:
         if h in seen:
@@ -427,6 +425,11 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
                             "plane, pair, distance_mm, pose_id, source_row. For another layout use "
                             "`robocal import`")
         roles[h] = role
+    return roles
+
+
+def _joint_columns(roles: dict, name: str) -> list[str]:
+    """The joint columns q1..qn in order (one angle unit, no gaps)."""
     joint_cols = sorted((r[1], h) for h, r in roles.items() if r[0] == "q")
     n = len(joint_cols)
     if n == 0:
@@ -434,9 +437,13 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     if [i for i, _ in joint_cols] != list(range(1, n + 1)):
         raise DataError(f"{name}: joint columns must be q1..q{n} without gaps, got "
                         f"{[h for _, h in joint_cols]}")
-    angle_units = {roles[h][2] for _, h in joint_cols}
-    if len(angle_units) > 1:
+    if len({roles[h][2] for _, h in joint_cols}) > 1:
         raise UnitError(f"{name}: joint columns mix _deg and _rad; use one unit for all joints")
+    return [h for _, h in joint_cols]
+
+
+def _data_kind(roles: dict, name: str) -> str:
+    """The measurement kind the columns describe."""
     present = {r[0] for r in roles.values()}
     xyz = {"x", "y", "z"} & present
     if xyz and xyz != {"x", "y", "z"}:
@@ -448,70 +455,71 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
         raise DataError(f"{name}: a pose needs all of qw, qx, qy, qz; missing "
                         f"{sorted({'qw', 'qx', 'qy', 'qz'} - quat)}")
     if "plane" in present:
-        kind = "plane"
         if xyz or quat or "pair" in present:
             raise DataError(f"{name}: plane contacts have only joints and 'plane'; remove x/y/z, "
                             "quaternion and pair columns")
-    elif "pair" in present or "distance" in present:
-        kind = "distance"
+        return "plane"
+    if "pair" in present or "distance" in present:
         if not {"pair", "distance"} <= present:
             raise DataError(f"{name}: distance data need both 'pair' and 'distance_mm' columns")
         if xyz or quat:
             raise DataError(f"{name}: distance data have no x/y/z or quaternion columns")
-    elif quat:
-        kind = "pose"
+        return "distance"
+    if quat:
         if not xyz:
             raise DataError(f"{name}: pose data need x, y, z columns with the quaternion")
-    elif xyz:
-        kind = "point"
-    else:
-        raise DataError(f"{name}: no observation columns; add x_mm,y_mm,z_mm (points), "
-                        "qw..qz (poses), plane (plane contacts) or pair,distance_mm")
+        return "pose"
+    if xyz:
+        return "point"
+    raise DataError(f"{name}: no observation columns; add x_mm,y_mm,z_mm (points), "
+                    "qw..qz (poses), plane (plane contacts) or pair,distance_mm")
+
+
+def _cell(cell: str, column: str, where: str) -> float:
+    """One numeric cell; errors name the line, the column and the value."""
+    text = cell.strip()[:40]
+    try:
+        v = float(cell)
+    except ValueError:
+        raise DataError(f"{where}, column {column}: {text!r} is not a number; fix or remove that "
+                        "row") from None
+    if not np.isfinite(v):
+        raise DataError(f"{where}, column {column}: {text!r} (NaN or infinite); remove failed readings "
+                        "or re-import with `robocal import`, which drops them")
+    integer = column in _INT_COLUMNS or column.startswith("approach")
+    if integer and v != round(v):
+        raise DataError(f"{where}, column {column}: {text!r} must be an integer")
+    if column in _INT_COLUMNS and abs(v) > 2**53:
+        raise DataError(f"{where}, column {column}: {text!r} is out of range")
+    return v
+
+
+def _table(rows: list[list[str]], header: list[str], name: str, header_line: int):
+    """The numeric body ``(R, C)`` and each row's line number; blank and ``#`` rows skipped."""
     width = len(header)
-    body = []
-    line_no = []
-    for k, row in enumerate(rows[1:]):
+    body, line_no = [], []
+    for k, row in enumerate(rows):
         ln = header_line + 1 + k
-        if not row or all(not c.strip() for c in row):
-            continue
-        if row[0].lstrip().startswith("#"):
+        if not row or all(not c.strip() for c in row) or row[0].lstrip().startswith("#"):
             continue
         if len(row) != width:
             raise DataError(f"{name}, line {ln}: {len(row)} values but the header has {width} columns; "
                             "fix or remove that row")
-        vals = []
-        for h, cell in zip(header, row, strict=True):
-            try:
-                v = float(cell)
-            except ValueError:
-                raise DataError(f"{name}, line {ln}, column {h}: {cell.strip()[:40]!r} is not a number; "
-                                "fix or remove that row") from None
-            if not np.isfinite(v):
-                raise DataError(f"{name}, line {ln}, column {h}: {cell.strip()[:40]!r} (NaN or infinite); "
-                                "remove failed readings or re-import with `robocal import`, which "
-                                "drops them")
-            if (h in _INT_COLUMNS or h.startswith("approach")) and v != round(v):
-                raise DataError(f"{name}, line {ln}, column {h}: {cell.strip()[:40]!r} must be an integer")
-            if h in _INT_COLUMNS and abs(v) > 2**53:
-                raise DataError(f"{name}, line {ln}, column {h}: {cell.strip()[:40]!r} is out of range")
-            vals.append(v)
-        body.append(vals)
+        body.append([_cell(cell, h, f"{name}, line {ln}") for h, cell in zip(header, row, strict=True)])
         line_no.append(ln)
     if not body:
         raise DataError(f"{name}: the file has a header but no data rows")
-    table = np.array(body, dtype=float)
-    col = {h: table[:, i] for i, h in enumerate(header)}
+    return np.array(body, dtype=float), line_no
 
+
+def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) -> dict:
+    """The kind's observation arrays (SI) from the columns; unit errors name the line."""
     def length(c: str) -> np.ndarray:
-        h = next(h for h in header if roles[h][0] == c)
+        h = next(h for h in col if roles[h][0] == c)
         return col[h] * roles[h][2]
 
-    def integer(c: str) -> np.ndarray:
-        return col[c].astype(np.int64)
-
-    joints = np.stack([col[h] * roles[h][2] for _, h in joint_cols], axis=1)
     kw = {}
-    if xyz:
+    if kind in ("point", "pose"):
         kw["points"] = np.stack([length(c) for c in "xyz"], axis=1)
         far = np.abs(kw["points"]).max(axis=1) > MAX_TRACKER_RANGE_M
         if far.any():
@@ -519,37 +527,50 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
             raise UnitError(f"{name}, line {ln}: a point {np.abs(kw['points'][far][0]).max():.4g} m from the "
                             f"tracker is beyond any tracker's range: the length unit is probably wrong "
                             f"(values in mm must be in columns x_mm, y_mm, z_mm)")
-    if np.abs(joints).max() > 4 * np.pi and roles[joint_cols[0][1]][2] == 1.0:
-        ln = line_no[int(np.argmax(np.abs(joints).max(axis=1)))]
-        raise UnitError(f"{name}, line {ln}: joint values up to {np.abs(joints).max():.4g} rad (> 2 turns): "
-                        "these look like degrees; name the columns q1_deg..")
-    if quat:
-        from scipy.spatial.transform import Rotation
-
+    if kind == "pose":
         qv = np.stack([col["qx"], col["qy"], col["qz"], col["qw"]], axis=1)
         norm = np.linalg.norm(qv, axis=1)
-        bad = np.flatnonzero(np.abs(norm - 1.0) > 1e-6)
+        bad = np.flatnonzero(np.abs(norm - 1.0) > ROTATION_TOL)
         if bad.size:
             raise DataError(f"{name}, line {line_no[bad[0]]}: quaternion norm {norm[bad[0]]:.6g} is not 1; "
                             "give a unit quaternion qw,qx,qy,qz")
         kw["rotations"] = Rotation.from_quat(qv).as_matrix()
     if kind == "plane":
-        kw["plane"] = integer("plane")
+        kw["plane"] = col["plane"].astype(np.int64)
     if kind == "distance":
-        kw["pair"] = integer("pair")
+        kw["pair"] = col["pair"].astype(np.int64)
         kw["distance"] = length("distance")
-    sigma = length("sigma") if "sigma" in present else None
-    smr = integer("smr") if "smr" in present else None
-    pose_id = integer("pose_id") if "pose_id" in present else None
-    source_row = integer("source_row") if "source_row" in present else np.array(line_no)
+    if "sigma" in {r[0] for r in roles.values()}:
+        kw["sigma"] = length("sigma")
+    return kw
+
+
+def parse_csv(text: str, name: str = "<text>") -> Measurements:
+    """Parse canonical CSV text; ``name`` is used in error messages."""
+    source, header_line, rows = _split_csv(text, name)
+    header = [h.strip().lower() for h in rows[0]]
+    roles = _column_roles(header, name, header_line)
+    joint_cols = _joint_columns(roles, name)
+    kind = _data_kind(roles, name)
+    table, line_no = _table(rows[1:], header, name, header_line)
+    col = {h: table[:, i] for i, h in enumerate(header)}
+    joints = np.stack([col[h] * roles[h][2] for h in joint_cols], axis=1)
+    if np.abs(joints).max() > 4 * np.pi and roles[joint_cols[0]][2] == 1.0:
+        ln = line_no[int(np.argmax(np.abs(joints).max(axis=1)))]
+        raise UnitError(f"{name}, line {ln}: joint values up to {np.abs(joints).max():.4g} rad (> 2 turns): "
+                        "these look like degrees; name the columns q1_deg..")
+    kw = _observed(kind, col, roles, line_no, name)
     approach_cols = sorted((r[1], h) for h, r in roles.items() if r[0] == "approach")
     approach = None
     if approach_cols:
-        if [i for i, _ in approach_cols] != list(range(1, n + 1)):
-            raise DataError(f"{name}: approach columns must be approach1..approach{n}, one per joint")
+        if [i for i, _ in approach_cols] != list(range(1, len(joint_cols) + 1)):
+            raise DataError(f"{name}: approach columns must be approach1..approach{len(joint_cols)}, one "
+                            "per joint")
         approach = np.stack([col[h] for _, h in approach_cols], axis=1).astype(np.int64)
+    ints = {c: (col[c].astype(np.int64) if c in col else None) for c in ("smr", "pose_id")}
+    source_row = col["source_row"].astype(np.int64) if "source_row" in col else np.array(line_no)
     try:
-        return Measurements.from_arrays(kind, joints, smr=smr, sigma=sigma, pose_id=pose_id,
+        return Measurements.from_arrays(kind, joints, smr=ints["smr"], pose_id=ints["pose_id"],
                                         source_row=source_row, source=source, approach=approach, **kw)
     except DataError as exc:
         raise DataError(f"{name}: {exc}") from None

@@ -132,6 +132,6 @@ def apply_registration(robot, reg: Registration):
     tool = make_transform(rot, reg.offsets[0])
     out = replace(robot, base=reg.base, tool=tool, smr=reg.offsets[1:].copy(), nominal=None)
     # nominal: the robot's nominal links with the registered frames (nominal + fitted base/SMR)
-    nominal = out.values
+    nominal = out.nominal.copy()
     nominal[: 5 * robot.n_joints] = robot.nominal[: 5 * robot.n_joints]
     return replace(out, nominal=nominal)

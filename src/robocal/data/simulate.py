@@ -1,9 +1,9 @@
 """Virtual laser tracker (and plane-contact probe): measurements of a known true robot.
 
-The true robot is the given (nominal) robot plus random parameter errors: lengths a, d by
-0.05-0.5 mm, angles alpha, theta (theta errors are the joint zero offsets) by 0.005-0.05 deg,
-beta by the same on nominally parallel axes; random signs, uniform magnitudes (``error_scale``
-multiplies them). The tracker stands at a random position 2-4 m from the robot's base origin
+The true robot is the given (nominal) robot plus random parameter errors (:func:`perturbed`):
+lengths a, d by 0.05-0.5 mm, angles alpha, theta (theta errors are the joint zero offsets) by
+0.005-0.05 deg, beta by the same on nominally parallel axes; random signs, uniform magnitudes
+(``error_scale`` multiplies them). The tracker stands at a random position 2-4 m from the robot's base origin
 with a uniformly random orientation, so the truth's base frame is tracker -> frame {0}.
 SMR 0 sits on the flange at a random offset (|xy| <= 50 mm, z 50-120 mm); extra SMRs are
 100-150 mm from SMR 0. Joints are uniform within the joint limits (optionally kept only where
@@ -37,9 +37,13 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from robocal.data.measurements import Measurements, approach_from_order
 from robocal.errors import DataError, UnreachableError
+from robocal.io import write_all
+from robocal.kinematics.model import Robot
+from robocal.kinematics.model_file import dump_model
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
 
 TRACKER_RADIAL_MM = 0.010        # ADM range noise at zero distance (1 sigma)
@@ -68,15 +72,9 @@ class SimulationResult:
     info: dict
 
 
-def _random_rotation(rng: np.random.Generator, size: int | None = None) -> np.ndarray:
-    shape = (4,) if size is None else (size, 4)
-    q = rng.standard_normal(shape)
-    q /= np.linalg.norm(q, axis=-1, keepdims=True)
-    w, x, y, z = np.moveaxis(q, -1, 0)
-    R = np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
-                  2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
-                  2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=-1)
-    return R.reshape(q.shape[:-1] + (3, 3))
+def _random_rotation(rng: np.random.Generator) -> np.ndarray:
+    """A uniformly random rotation matrix (scipy, from a normal 4-vector read as w, x, y, z)."""
+    return Rotation.from_quat(rng.standard_normal(4), scalar_first=True).as_matrix()
 
 
 def _unit(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -84,19 +82,24 @@ def _unit(rng: np.random.Generator, n: int) -> np.ndarray:
     return v / np.linalg.norm(v, axis=1, keepdims=True)
 
 
-def perturb_robot(robot, rng: np.random.Generator, scale: float = 1.0):
-    """The robot with random link-parameter errors of realistic size (see module docstring)."""
+def perturbed(robot: Robot, seed: int | np.random.Generator | None = None, *, scale: float = 1.0,
+              length_mm: tuple[float, float] = (0.05, 0.5),
+              angle_deg: tuple[float, float] = (0.005, 0.05)) -> Robot:
+    """A realistic 'true' robot around ``robot``: every link length a, d displaced by a random sign
+    times a magnitude uniform in ``length_mm``, every angle alpha, theta (and beta on nominally
+    parallel axes) likewise in ``angle_deg``, all times ``scale``. The nominal vector is kept."""
+    rng = np.random.default_rng(seed)
     n = robot.n_joints
 
     def draw(lo, hi):
         return rng.uniform(lo, hi, n) * rng.choice([-1.0, 1.0], n) * scale
 
     mm, deg = 1e-3, np.pi / 180
-    return replace(robot, alpha=robot.alpha + draw(0.005 * deg, 0.05 * deg),
-                   a=robot.a + draw(0.05 * mm, 0.5 * mm),
-                   beta=robot.beta + np.where(robot.parallel, draw(0.005 * deg, 0.05 * deg), 0.0),
-                   theta=robot.theta + draw(0.005 * deg, 0.05 * deg),
-                   d=robot.d + draw(0.05 * mm, 0.5 * mm))
+    lengths = [v * mm for v in length_mm]
+    angles = [v * deg for v in angle_deg]
+    return replace(robot, alpha=robot.alpha + draw(*angles), a=robot.a + draw(*lengths),
+                   beta=robot.beta + np.where(robot.parallel, draw(*angles), 0.0),
+                   theta=robot.theta + draw(*angles), d=robot.d + draw(*lengths))
 
 
 def sample_joints(robot, n: int, rng: np.random.Generator, workspace_box=None, tool=None) -> np.ndarray:
@@ -152,16 +155,8 @@ def _solve_plane_contacts(robot, q: np.ndarray, normal: np.ndarray, offset: np.n
     return q, np.einsum("ni,ni->n", normal, p) - offset
 
 
-def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model: str = "isotropic",
-                     outliers: float = 0.0, outlier_mm: tuple[float, float] = (1.0, 5.0), n_smr: int = 1,
-                     workspace_box=None, seed: int = 0, kind: str = "point", n_planes: int = 1,
-                     joint_noise_deg: float = 0.0, rotation_noise_deg: float = 0.0,
-                     error_scale: float = 1.0, tracker_distance_m: tuple[float, float] = (2.0, 4.0),
-                     ) -> SimulationResult:
-    """Simulate ``n_poses`` measured poses of a perturbed copy of ``robot`` (see module docstring).
-
-    Returns a :class:`SimulationResult`; the same arguments and seed give identical results.
-    """
+def _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, joint_noise_deg,
+           rotation_noise_deg) -> None:
     if kind not in SIM_KINDS:
         raise DataError(f"unknown simulation kind {kind!r}: use one of {', '.join(SIM_KINDS)}")
     if noise_model not in NOISE_MODELS:
@@ -172,10 +167,13 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
         raise DataError("outliers must be in [0, 1) and noise levels >= 0")
     if kind != "point" and n_smr != 1:
         raise DataError(f"{kind} simulation uses one tool point: set n_smr = 1")
-    rng = np.random.default_rng(seed)
-    n = robot.n_joints
-    true = perturb_robot(robot, rng, error_scale)
-    # SMR / probe offsets on the flange
+
+
+def _true_robot(robot: Robot, rng: np.random.Generator, kind: str, n_smr: int, error_scale: float,
+                tracker_distance_m: tuple[float, float]) -> Robot:
+    """The perturbed robot with its SMRs (or probe) on the flange and, for tracker data, the
+    tracker frame as base; its nominal is the given robot's links with these frames."""
+    true = perturbed(robot, rng, scale=error_scale)
     tool0 = np.array([*rng.uniform(-0.05, 0.05, 2), rng.uniform(0.05, 0.12)])
     extra = np.zeros((0, 3))
     if n_smr > 1:
@@ -187,15 +185,45 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
         base = robot.base.copy()
     else:
         c = _unit(rng, 1)[0] * rng.uniform(*tracker_distance_m)
-        T_tracker = make_transform(_random_rotation(rng), c)
-        base = invert_transform(T_tracker) @ robot.base
-    tool = make_transform(tool_R, tool0)
-    true = replace(true, base=base, tool=tool, smr=extra, nominal=None)
-    true_nominal_links = robot.nominal[: 5 * n]
-    nominal_vec = true.values
-    nominal_vec[: 5 * n] = true_nominal_links
-    true = replace(true, nominal=nominal_vec)
+        base = invert_transform(make_transform(_random_rotation(rng), c)) @ robot.base
+    true = replace(true, base=base, tool=make_transform(tool_R, tool0), smr=extra, nominal=None)
+    nominal = true.nominal.copy()
+    nominal[: 5 * robot.n_joints] = robot.nominal[: 5 * robot.n_joints]
+    return replace(true, nominal=nominal)
 
+
+def _tracker_readings(kind: str, T: np.ndarray, rng: np.random.Generator, noise_mm: float,
+                      noise_model: str, outliers: float, outlier_mm, rotation_noise_deg: float):
+    """What the tracker reads of TCP poses ``T (N, 4, 4)``: the observation arrays, the noise
+    added ``(N, 3)`` and the outlier rows."""
+    N, p = len(T), T[:, :3, 3]
+    noise = (rng.standard_normal((N, 3)) * noise_mm * 1e-3 if noise_model == "isotropic"
+             else _tracker_noise(p, rng))
+    n_out = int(round(outliers * N))
+    outlier_rows = np.sort(rng.choice(N, n_out, replace=False)) if n_out else np.zeros(0, np.int64)
+    gross = np.zeros((N, 3))
+    gross[outlier_rows] = _unit(rng, n_out) * rng.uniform(*outlier_mm, (n_out, 1)) * 1e-3
+    kw = {"points": p + noise + gross}
+    if kind == "pose":
+        dR = rotvec_to_matrix(rng.standard_normal((N, 3)) * np.deg2rad(rotation_noise_deg))
+        kw["rotations"] = dR @ T[:, :3, :3]
+    return kw, noise, outlier_rows
+
+
+def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model: str = "isotropic",
+                     outliers: float = 0.0, outlier_mm: tuple[float, float] = (1.0, 5.0), n_smr: int = 1,
+                     workspace_box=None, seed: int = 0, kind: str = "point", n_planes: int = 1,
+                     joint_noise_deg: float = 0.0, rotation_noise_deg: float = 0.0,
+                     error_scale: float = 1.0, tracker_distance_m: tuple[float, float] = (2.0, 4.0),
+                     ) -> SimulationResult:
+    """Simulate ``n_poses`` measured poses of a perturbed copy of ``robot`` (see module docstring).
+
+    Returns a :class:`SimulationResult`; the same arguments and seed give identical results.
+    """
+    _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, joint_noise_deg,
+           rotation_noise_deg)
+    rng = np.random.default_rng(seed)
+    true = _true_robot(robot, rng, kind, n_smr, error_scale, tracker_distance_m)
     n_poses = int(n_poses)
     planes = None
     if kind == "plane":
@@ -208,23 +236,11 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
     N = len(q_rows)
     approach = approach_from_order(q_rows, pose_id)  # the poses are measured in this order
     T = true.fk(q_rows, smr=smr, approach=approach)
-    p = T[:, :3, 3]
-    noise = np.zeros((N, 3))
-    outlier_rows = np.zeros(0, np.int64)
-    kw = {}
     if kind in ("point", "pose"):
-        noise = (rng.standard_normal((N, 3)) * noise_mm * 1e-3 if noise_model == "isotropic"
-                 else _tracker_noise(p, rng))
-        n_out = int(round(outliers * N))
-        outlier_rows = np.sort(rng.choice(N, n_out, replace=False)) if n_out else outlier_rows
-        gross = np.zeros((N, 3))
-        gross[outlier_rows] = _unit(rng, n_out) * rng.uniform(*outlier_mm, (n_out, 1)) * 1e-3
-        kw["points"] = p + noise + gross
-        if kind == "pose":
-            dR = rotvec_to_matrix(rng.standard_normal((N, 3)) * np.deg2rad(rotation_noise_deg))
-            kw["rotations"] = dR @ T[:, :3, :3]
+        kw, noise, outlier_rows = _tracker_readings(kind, T, rng, noise_mm, noise_model, outliers,
+                                                    outlier_mm, rotation_noise_deg)
     else:  # probe noise: each true tip ends up noise_mm (1-sigma) off its plane, along the normal
-        kw["plane"] = plane_idx
+        kw, outlier_rows = {"plane": plane_idx}, np.zeros(0, np.int64)
         normal, offset = planes[plane_idx, :3], planes[plane_idx, 3]
         off_plane = rng.standard_normal(N) * noise_mm * 1e-3
         q_rows, _ = _solve_plane_contacts(true, q_rows, normal, offset + off_plane)
@@ -283,9 +299,8 @@ def _plane_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, wo
 
 
 def write_simulation(result: SimulationResult, data_path, truth_path) -> Path:
-    """Write the data CSV, the truth model YAML and the sidecar JSON (returned path), atomically."""
-    from robocal.kinematics.yaml_io import write_atomic
-
+    """Write the data CSV, the truth model YAML and the sidecar JSON (returned path): all three
+    or none."""
     truth_path = Path(truth_path)
     sidecar = truth_path.with_suffix(".sim.json")
     side = dict(result.info)
@@ -294,7 +309,6 @@ def write_simulation(result: SimulationResult, data_path, truth_path) -> Path:
         {"normal": row[:3].tolist(), "offset_m": float(row[3])} for row in result.planes]
     side["data"] = str(data_path)
     side["truth"] = str(truth_path)
-    result.data.save(data_path)
-    result.truth.save(truth_path)
-    write_atomic(sidecar, json.dumps(side, indent=2) + "\n")
+    write_all({data_path: result.data.to_csv(), truth_path: dump_model(result.truth),
+               sidecar: json.dumps(side, indent=2) + "\n"})
     return sidecar

@@ -15,10 +15,13 @@ least-squares solution.
    probability ``crossover`` (0.8), mutation (binary: each bit flips with probability
    ``mutation``; real: each gene with probability ``mutation`` gets Gaussian noise of 10 % of the
    box half-width), ``elite`` best individuals copied unchanged.
-6. Stop when the RMS item error falls to ``threshold`` (m; 0 = never) or after ``generations``.
+6. Stop when the RMS item error falls to ``threshold`` (m; 0 = never; status ``threshold``), when
+   the best mu improved by less than ``ftol`` (relative) over the last ``patience`` generations
+   (the convergence test; 0 = never; status ``converged``), or after ``generations`` (status
+   ``max_iterations``: not a success).
 
-Ctrl-C during the generations returns the best individual so far (``converged=False``,
-message 'interrupted'). The same ``seed`` gives the same result.
+Ctrl-C during the generations returns the best individual so far (status ``interrupted``). The
+same ``seed`` gives the same result.
 """
 
 from __future__ import annotations
@@ -27,76 +30,9 @@ import numpy as np
 
 from robocal.errors import IdentificationError
 from robocal.identify.lsq import gauss_newton
-from robocal.identify.solvers import SolverOutput
-from robocal.progress import Progress
-
-
-class PopulationCost:
-    """Vectorised errors of a population of displacement vectors ``X (P, k)`` of ``names``
-    around ``state`` (shared by ``genetic`` and ``swarm``).
-
-    Observations with nuisance parameters must offer ``profiled_residuals_batch`` (the nuisance
-    is then fitted per individual, e.g. the seed-004 plane fit); the others use
-    ``residuals_batch``.
-    """
-
-    def __init__(self, problem, state, names) -> None:
-        self.problem, self.state, self.names = problem, state, list(names)
-        self.obs = problem.observation
-        self.profiled = bool(problem.nuisance_names)
-        if self.profiled and not hasattr(self.obs, "profiled_residuals_batch"):
-            raise IdentificationError(f"{problem.kind} observations have nuisance parameters but no "
-                                      "per-candidate fit: use method 'lsq' or 'robust' for them")
-        self.rows = problem.rows_per_item
-
-    def residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Weighted residuals ``(P, M)`` and nuisance ``(P, m)`` of each individual."""
-        X = np.atleast_2d(X)
-        if self.profiled:
-            r, nu = self.obs.profiled_residuals_batch(self.state.robot, self.names, X)
-            return r / self.problem.sigma, nu
-        r = self.problem.residuals_batch(self.state, self.names, X)
-        return r, np.broadcast_to(self.state.nuisance, (X.shape[0], self.state.nuisance.size))
-
-    def item_errors(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Per-item error norms ``(P, N)`` and nuisance ``(P, m)``."""
-        r, nu = self.residuals(X)
-        return np.linalg.norm(r.reshape(r.shape[0], -1, self.rows), axis=2), nu
-
-    def state_of(self, x: np.ndarray, nuisance: np.ndarray):
-        """The State of one displacement ``x (k,)`` with its nuisance ``(m,)``."""
-        dx = np.concatenate([x, np.asarray(nuisance, float) - self.state.nuisance])
-        return self.problem.step(self.state, self.names, dx)
-
-
-def check_bounds(robot, names, bounds) -> tuple[np.ndarray, np.ndarray]:
-    """(lower, upper) displacement bounds ``(k,)``; they must contain 0 (the start model)."""
-    k = len(names)
-    lo, hi = robot.bounds(names) if bounds is None else (np.asarray(b, float) for b in bounds)
-    if np.ndim(lo) not in (0, 1) or np.size(lo) not in (1, k) or np.shape(lo) != np.shape(hi):
-        raise IdentificationError(f"bounds must be two scalars or two arrays of {k} values (one per free "
-                                  f"parameter: {', '.join(names)})")
-    lo, hi = np.broadcast_to(lo, (k,)).astype(float), np.broadcast_to(hi, (k,)).astype(float)
-    if not (np.isfinite(lo).all() and np.isfinite(hi).all() and (lo < hi).all()):
-        raise IdentificationError("bounds must be finite with lower < upper for every parameter")
-    outside = [n for n, a, b in zip(names, lo, hi, strict=True) if not a <= 0.0 <= b]
-    if outside:
-        raise IdentificationError(f"the bounds of {outside} exclude the nominal value: bounds are "
-                                  "displacements from the start model (SI) and must contain 0")
-    return lo, hi
-
-
-def progress_reporter(progress, label: str, total: int):
-    """``(bar, report)``: the caller's ``progress(iteration, rms)`` when given (``calibrate(...,
-    progress=True)`` draws its own bar through it), else a :class:`Progress` bar of ``total``
-    steps with the best RMS error (drawn on a terminal only, silent under ``--quiet``)."""
-    bar = Progress(total, label, quiet=True if progress is not None else None)
-
-    def report(iteration: int, rms: float) -> None:
-        bar.update(info=f"best rms {rms * 1e3:.5f} mm")
-        if progress is not None:
-            progress(iteration, rms)
-    return bar, report
+from robocal.identify.population import PopulationCost, evolve, stop_message
+from robocal.identify.solvers import SolverResult
+from robocal.identify.space import ParameterSpace, State
 
 
 def _decode(bits: np.ndarray, k: int, nbits: int, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -111,14 +47,7 @@ def _encode(X: np.ndarray, nbits: int, lo: np.ndarray, hi: np.ndarray) -> np.nda
     return ((ints[..., None] >> shifts) & 1).astype(bool).reshape(X.shape[0], -1)
 
 
-def solve(problem, start, names, *, seed: int = 0, progress=None, population: int = 60,
-          generations: int = 100, crossover: float = 0.8, mutation: float | None = None,
-          elite: int = 2, threshold: float = 0.0, encoding: str = "binary", bits: int = 20,
-          spread: float = 0.01, bounds=None, lsq_iter: int = 50, **_) -> SolverOutput:
-    """Genetic algorithm around the least-squares solution (module docstring); options as named
-    there. ``mutation`` defaults to 1 / chromosome length."""
-    names = list(names)
-    k = len(names)
+def _check(population, generations, crossover, elite, encoding, bits, spread, threshold) -> None:
     if int(population) < 2:
         raise IdentificationError(f"population must be at least 2, got {population}")
     if not 0.0 <= crossover <= 1.0:
@@ -129,81 +58,82 @@ def solve(problem, start, names, *, seed: int = 0, progress=None, population: in
         raise IdentificationError("bits must be in [2, 52], generations >= 0, 0 <= elite < population")
     if not spread > 0 or threshold < 0:
         raise IdentificationError("spread must be > 0 and threshold >= 0")
+
+
+def _offspring(chrom: np.ndarray, mu: np.ndarray, rng: np.random.Generator, *, elite: int,
+               crossover: float, p_mut: float, binary: bool, box_lo, box_hi) -> np.ndarray:
+    """The next generation: the ``elite`` best unchanged, the rest by roulette-wheel selection
+    (fitness 1 / mu), single-point crossover and mutation."""
+    population, genes = chrom.shape
+    fitness = 1.0 / np.maximum(mu, 1e-300)
+    elites = chrom[np.argsort(mu)[:elite]]
+    # roulette wheel: cumulative probabilities, one uniform number per child slot
+    cum = np.cumsum(fitness / fitness.sum())
+    picks = np.minimum(np.searchsorted(cum, rng.random(population - elite + 1)), population - 1)
+    parents = chrom[picks]
+    n_pairs = (population - elite + 1) // 2
+    a, b = parents[0:2 * n_pairs:2], parents[1:2 * n_pairs:2]
+    cut = rng.integers(1, genes, n_pairs) if genes > 1 else np.ones(n_pairs, int)
+    do = rng.random(n_pairs) < crossover
+    tail = (np.arange(genes)[None, :] >= cut[:, None]) & do[:, None]
+    children = np.concatenate([np.where(tail, b, a), np.where(tail, a, b)])[: population - elite]
+    flip = rng.random(children.shape) < p_mut
+    if binary:
+        children = children ^ flip
+    else:
+        noise = rng.standard_normal(children.shape) * 0.1 * (box_hi - box_lo) / 2
+        children = np.clip(np.where(flip, children + noise, children), box_lo, box_hi)
+    return np.concatenate([elites, children])
+
+
+def solve(problem, start: State, space: ParameterSpace, *, seed: int = 0, progress=None,
+          population: int = 60, generations: int = 100, crossover: float = 0.8,
+          mutation: float | None = None, elite: int = 2, threshold: float = 0.0,
+          patience: int = 20, ftol: float = 1e-9, encoding: str = "binary", bits: int = 20,
+          spread: float = 0.01, bounds=None, lsq_iter: int = 50, **_) -> SolverResult:
+    """Genetic algorithm around the least-squares solution (module docstring); options as named
+    there. ``mutation`` defaults to 1 / chromosome length."""
+    _check(population, generations, crossover, elite, encoding, bits, spread, threshold)
     population, generations, elite, bits = int(population), int(generations), int(elite), int(bits)
-    lo, hi = check_bounds(start.robot, names, bounds)
+    k = len(space.robot)
+    lo, hi = space.robot_bounds(start.robot, bounds)
     rng = np.random.default_rng(seed)
-    # 1. the least-squares centre, as a displacement from the start
-    centre_state, _, lsq_iters, _, total = gauss_newton(problem, start, names, max_iter=lsq_iter)
-    centre = np.clip(total[:k], lo, hi)
+    # the least-squares centre, as a displacement from the start
+    centre = np.clip(gauss_newton(problem, start, space, max_iter=lsq_iter).total[:k], lo, hi)
     half = spread * (hi - lo) / 2
     box_lo, box_hi = np.maximum(centre - half, lo), np.minimum(centre + half, hi)
     X = rng.uniform(box_lo, box_hi, (population, k))
     X[0] = centre
-    genes = k * bits if encoding == "binary" else k
+    binary = encoding == "binary"
+    genes = k * bits if binary else k
     p_mut = 1.0 / max(genes, 1) if mutation is None else float(mutation)
     if not 0.0 <= p_mut <= 1.0:
         raise IdentificationError(f"mutation rate must be in [0, 1], got {mutation}")
-    chrom = _encode(X, bits, box_lo, box_hi) if encoding == "binary" else X.copy()
+    chrom = _encode(X, bits, box_lo, box_hi) if binary else X.copy()
 
     def decode(c):
-        return _decode(c, k, bits, box_lo, box_hi) if encoding == "binary" else c
+        return _decode(c, k, bits, box_lo, box_hi) if binary else c
 
-    cost = PopulationCost(problem, start, names)
-    n_items = problem.observation.n_items
+    cost = PopulationCost(problem, start, space)
     err, nu = cost.item_errors(decode(chrom))
     mu = err.sum(axis=1)
-    best = int(np.argmin(mu))
-    best_x, best_nu, best_mu = decode(chrom)[best].copy(), nu[best].copy(), mu[best]
-    best_rms = float(np.sqrt(np.mean(err[best] ** 2)))
-    history = [{"iteration": 0, "cost": float(best_mu), "rms": best_rms}]
-    message, converged, gen = "", False, 0
-    bar, report = progress_reporter(progress, "genetic", generations)
-    with bar:
-        try:
-            for gen in range(1, generations + 1):
-                if threshold and best_rms <= threshold:
-                    break
-                fitness = 1.0 / np.maximum(mu, 1e-300)
-                order = np.argsort(mu)
-                elites = chrom[order[:elite]]
-                # roulette wheel: cumulative probabilities, one uniform number per child slot
-                cum = np.cumsum(fitness / fitness.sum())
-                picks = np.minimum(np.searchsorted(cum, rng.random(population - elite + 1)), population - 1)
-                parents = chrom[picks]
-                n_pairs = (population - elite + 1) // 2
-                a, b = parents[0:2 * n_pairs:2], parents[1:2 * n_pairs:2]
-                cut = rng.integers(1, genes, n_pairs) if genes > 1 else np.ones(n_pairs, int)
-                do = rng.random(n_pairs) < crossover
-                tail = (np.arange(genes)[None, :] >= cut[:, None]) & do[:, None]
-                child1 = np.where(tail, b, a)
-                child2 = np.where(tail, a, b)
-                children = np.concatenate([child1, child2])[: population - elite]
-                flip = rng.random(children.shape) < p_mut
-                if encoding == "binary":
-                    children = children ^ flip
-                else:
-                    noise = rng.standard_normal(children.shape) * 0.1 * (box_hi - box_lo) / 2
-                    children = np.clip(np.where(flip, children + noise, children), box_lo, box_hi)
-                chrom = np.concatenate([elites, children])
-                err, nu = cost.item_errors(decode(chrom))
-                mu = err.sum(axis=1)
-                i = int(np.argmin(mu))
-                if mu[i] < best_mu:
-                    best_x, best_nu, best_mu = decode(chrom)[i].copy(), nu[i].copy(), mu[i]
-                    best_rms = float(np.sqrt(np.mean(err[i] ** 2)))
-                history.append({"iteration": gen, "cost": float(best_mu), "rms": best_rms})
-                report(gen, best_rms)
-            else:
-                gen = generations
-        except KeyboardInterrupt:
-            message = "interrupted"
-    if not message:
-        converged = bool(threshold) and best_rms <= threshold
-        message = (f"error threshold reached after {gen} generations" if converged
-                   else f"generation limit {generations} reached (best rms {best_rms:.6g}, "
-                        f"{n_items} items)")
-    state = cost.state_of(best_x, best_nu)
-    return SolverOutput(state=state, converged=converged or (not threshold and message != "interrupted"),
-                        message=message, history=history,
-                        extra={"lsq_iterations": lsq_iters, "lsq_state": centre_state,
-                               "encoding": encoding, "generations": gen, "best_mu": float(best_mu)})
+    i = int(np.argmin(mu))
+    best = {"x": decode(chrom)[i].copy(), "nu": nu[i].copy(), "mu": mu[i], "ss": float(np.sum(err[i] ** 2))}
+
+    def generation(_: int) -> tuple[float, float]:
+        nonlocal chrom, mu
+        chrom = _offspring(chrom, mu, rng, elite=elite, crossover=crossover, p_mut=p_mut, binary=binary,
+                           box_lo=box_lo, box_hi=box_hi)
+        err, nu = cost.item_errors(decode(chrom))
+        mu = err.sum(axis=1)
+        i = int(np.argmin(mu))
+        if mu[i] < best["mu"]:
+            best.update(x=decode(chrom)[i].copy(), nu=nu[i].copy(), mu=mu[i], ss=float(np.sum(err[i] ** 2)))
+        return best["ss"], best["mu"]
+
+    status, gen, history = evolve(generation, initial_cost=best["ss"], n_items=problem.n_items,
+                                  limit=generations, threshold=threshold, patience=patience, ftol=ftol,
+                                  progress=progress, label="genetic")
+    message = stop_message(status, "generation", gen, generations, history[-1]["rms"], problem.n_items)
+    return SolverResult(state=cost.state_of(best["x"], best["nu"]), status=status, message=message, nit=gen,
+                        history=history)

@@ -3,10 +3,12 @@
 Columns are scaled to unit norm (lengths and angles on one scale), then QR with column
 pivoting orders them by independent information. A parameter whose pivot |R_jj| falls below
 ``rtol * |R_00|`` is not identifiable from these data: it is fixed and reported with the
-parameters whose columns explain it (the confounders). Frame and nuisance parameters are
-selected first, so that of a confounded pair the link parameter is the one dropped (d1 rather
-than base.z). Condition number of the scaled normal matrix with the seed-003 classes, and the
-observability indices O1 (Borm & Menq) .. O4 over the identifiable set.
+parameters whose columns explain it (the confounders). The selection runs in stages (see
+:data:`STAGES`): frame, SMR and nuisance parameters first, then the link parameters, then the
+joint-error terms, each stage on what the kept columns of the earlier stages leave unexplained,
+so that of a confounded pair the earlier stage's parameter is kept (d1 is dropped rather than
+base.z, gear1_c1 rather than theta1). Condition number of the scaled normal matrix with the
+seed-003 classes, and the observability indices O1 (Borm & Menq) .. O4 over the identifiable set.
 """
 
 from __future__ import annotations
@@ -17,7 +19,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
+from robocal.identify.space import block_of
+
 DEFAULT_RTOL = 1e-7
+# the order in which blocks are selected (robocal.identify.space.BLOCKS)
+STAGES = (("base", "tool", "smr", "nuisance"), ("links",), ("joint_errors",))
 NO_EFFECT = 1e-9  # column norm, relative to the largest, below which a parameter has no effect
 
 
@@ -77,11 +83,6 @@ class Identifiability:
         return "\n".join(lines)
 
 
-def _is_frame(name: str) -> bool:
-    """Frame, SMR and nuisance parameter names all contain a dot (base.x, smr1.y, plane0.a)."""
-    return "." in name
-
-
 def _pivoted_rank(A: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
     """Column indices of ``A`` (unit-scale columns) kept by pivoted QR, and an orthonormal
     basis of their span."""
@@ -94,25 +95,23 @@ def _pivoted_rank(A: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
 
 def analyze(J: np.ndarray, names: Sequence[str], n_poses: int,
             rtol: float = DEFAULT_RTOL) -> Identifiability:
-    """Identifiability of ``names`` from the Jacobian ``J (M, k)`` (weighted rows).
-
-    Two stages: frame, SMR and nuisance columns first, then the link columns with the part
-    the kept frame columns explain removed — so of a confounded pair the link parameter is the
-    one fixed (d1 rather than base.z, theta6 rather than tool.x).
-    """
+    """Identifiability of ``names`` from the Jacobian ``J (M, k)`` (weighted rows), selected in
+    the :data:`STAGES` of the module docstring."""
     names = list(names)
     norms = np.linalg.norm(J, axis=0)
     # a column of rounding noise (a parameter these data cannot see at all, e.g. alpha1 for
     # distances) must not be scaled up to a unit column that looks independent
     zero = norms <= NO_EFFECT * norms.max(initial=0.0)
     Js = J / np.where(zero, 1.0, norms)
-    frame = np.array([_is_frame(nm) and not z for nm, z in zip(names, zero, strict=True)], bool)
-    link = ~frame & ~zero
-    groups = [np.flatnonzero(frame), np.flatnonzero(link)]
-    kept_frame, Qf = _pivoted_rank(Js[:, groups[0]], rtol)
-    links = Js[:, groups[1]]
-    kept_link, _ = _pivoted_rank(links - Qf @ (Qf.T @ links), rtol)
-    kept_idx = np.sort(np.concatenate([groups[0][kept_frame], groups[1][kept_link]])).astype(int)
+    blocks = np.array([block_of(nm) for nm in names])
+    kept, basis = [], np.zeros((J.shape[0], 0))
+    for stage in STAGES:
+        group = np.flatnonzero(np.isin(blocks, stage) & ~zero)
+        cols = Js[:, group]
+        picked, Q = _pivoted_rank(cols - basis @ (basis.T @ cols), rtol)
+        kept.append(group[picked])
+        basis = np.hstack([basis, Q])
+    kept_idx = np.sort(np.concatenate(kept)).astype(int)
     rank = kept_idx.size
     drop_idx = sorted(set(range(len(names))) - set(kept_idx.tolist()))
     confounded: dict[str, list[str]] = {}

@@ -2,84 +2,122 @@
 update — with Levenberg-Marquardt damping so it converges from the nominal model.
 
 Each iteration re-linearises at the current model (rotations of base and tool are composed
-multiplicatively), so the iteration is Gauss-Newton on the parameter manifold.
+multiplicatively), so the iteration is Gauss-Newton on the parameter manifold; the damping
+schedule and stopping rules are robocal's one damped least-squares loop
+(:mod:`robocal.damped_least_squares`).
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
+from robocal.damped_least_squares import Status, minimize
 from robocal.identify.linalg import ScaledSVD
-from robocal.identify.solvers import SolverOutput
+from robocal.identify.solvers import SolverResult, history_entry
+from robocal.identify.space import ParameterSpace, State
 
 STEP_TOL = 1e-13  # largest change of a unit-scaled column's contribution that still counts as a step
+FTOL = 1e-10  # converged when the linear model predicts a decrease below this fraction of the cost
 
 
-def gauss_newton(problem, state, names, *, row_weights=None, max_iter: int = 50,
-                 ftol: float = 1e-10, damping: float = 1e-6, ridge: float = 0.0,
-                 prior=None, progress=None):
-    """Damped Gauss-Newton on ``names`` + nuisance with fixed ``row_weights`` ``(M,)``.
+class GaussNewtonResult(NamedTuple):
+    """The final state, how it stopped, accepted steps, history, and the total displacement
+    ``(space.size,)`` from the start (what the robust ridge regularises)."""
+
+    state: State
+    status: Status
+    nit: int
+    history: list[dict]
+    total: np.ndarray
+
+
+class _Calibration:
+    """One calibration problem as the damped loop's single member (see DampedProblem)."""
+
+    size = 1
+
+    def __init__(self, problem, state: State, space: ParameterSpace, row_weights, ridge: float,
+                 prior, ftol: float) -> None:
+        self.problem, self.state, self.space = problem, state, space
+        self.w = 1.0 if row_weights is None else np.sqrt(row_weights)
+        self.ridge, self.ftol = ridge, ftol
+        self.total = np.zeros(space.size) if prior is None else np.asarray(prior, float).copy()
+        self.scale = None
+        self.r = problem.residuals(state) * self.w
+        self.current = float(self.r @ self.r)  # + the ridge term once the scale is known
+
+    def _cost(self, r: np.ndarray, total: np.ndarray) -> float:
+        c = float(r @ r)
+        return c + self.ridge * float(np.sum((total * self.scale) ** 2)) if self.ridge else c
+
+    def cost(self) -> np.ndarray:
+        return np.array([self.current])
+
+    def linearize(self, members) -> None:
+        self.J = self.problem.jacobian(self.state, self.space)
+        self.J = self.J * (self.w[:, None] if np.ndim(self.w) else self.w)
+        first = self.scale is None
+        self.svd = ScaledSVD.of(self.J, self.scale)
+        self.scale = self.svd.scale
+        if first:  # the ridge term is measured in the scaled unknowns
+            self.current = self.initial = self._cost(self.r, self.total)
+
+    def propose(self, members, damping) -> np.ndarray:
+        s0 = self.svd.s[0] ** 2 if self.svd.s.size else 1.0
+        self.dx = self.svd.solve(self.r, damping=damping[0] * s0 + self.ridge,
+                                 prior=self.total if self.ridge else None)
+        return np.array([self.current - self._cost(self.r - self.J @ self.dx, self.total + self.dx)])
+
+    def converged(self, members, predicted) -> np.ndarray:
+        small_step = np.max(np.abs(self.dx * self.scale), initial=0.0) < STEP_TOL
+        return np.array([predicted[0] <= self.ftol * max(self.current, 1e-300) or small_step])
+
+    def trial_cost(self, members) -> np.ndarray:
+        self.trial = self.space.apply(self.state, self.dx)
+        self.r_trial = self.problem.residuals(self.trial) * self.w
+        self.c_trial = self._cost(self.r_trial, self.total + self.dx)
+        return np.array([self.c_trial])
+
+    def accept(self, members) -> None:
+        if len(members):
+            self.state, self.r, self.current = self.trial, self.r_trial, self.c_trial
+            self.total = self.total + self.dx
+
+
+def gauss_newton(problem, state: State, space: ParameterSpace, *, row_weights=None,
+                 max_iter: int = 50, ftol: float = FTOL, ridge: float = 0.0, prior=None,
+                 progress=None) -> GaussNewtonResult:
+    """Damped Gauss-Newton on ``space`` with fixed ``row_weights`` ``(M,)``.
 
     ``ridge`` (scaled units) with ``prior`` (the displacement accumulated so far, unscaled)
     regularises the total displacement (robust ridge). Converged when the linear model predicts
     a decrease below ``ftol`` times the cost, or the step is below rounding (exact data, where the
-    cost itself is at rounding level); no trial evaluation is spent on it. Stalled (not
-    converged) when it predicts a real decrease that no damped step achieves. Returns
-    ``(state, converged, iterations, history, total_displacement)``.
+    cost itself is at rounding level); stalled when it predicts a real decrease that no damped
+    step achieves.
     """
-    w = np.ones_like(problem.residuals(state)) if row_weights is None else np.sqrt(row_weights)
-    k = len(names) + len(problem.nuisance_names)
-    total = np.zeros(k) if prior is None else np.asarray(prior, float).copy()
+    lm = _Calibration(problem, state, space, row_weights, ridge, prior, ftol)
+    n_items = problem.n_items
+    steps = []
 
-    def cost_of(r, tot):
-        c = float(r @ r)
-        return c + ridge * float(np.sum((tot * scale) ** 2)) if ridge else c
-
-    J = problem.jacobian(state, names) * w[:, None]
-    svd = ScaledSVD.of(J)
-    scale = svd.scale
-    r = problem.residuals(state) * w
-    cost = cost_of(r, total)
-    history = [{"iteration": 0, "cost": cost}]
-    lam = damping
-    converged = False
-    for it in range(1, max_iter + 1):
-        s0 = svd.s[0] ** 2 if svd.s.size else 1.0
-        first_prediction = None
-        while True:
-            dx = svd.solve(r, damping=lam * s0 + ridge, prior=total if ridge else None)
-            predicted = cost - cost_of(r - J @ dx, total + dx)
-            first_prediction = predicted if first_prediction is None else first_prediction
-            if predicted <= ftol * max(cost, 1e-300) or np.max(np.abs(dx * scale), initial=0.0) < STEP_TOL:
-                converged = True  # nothing left to gain, or (exact data) a step below rounding
-                break
-            trial = problem.step(state, names, dx)
-            r_new = problem.residuals(trial) * w
-            cost_new = cost_of(r_new, total + dx)
-            if cost_new < cost or lam > 1e8:
-                break
-            lam *= 10.0
-        if converged:
-            break
-        if cost_new >= cost:
-            # no damped step decreases the cost: at the minimum to rounding if the linear model
-            # promised little, else stalled (reported as not converged)
-            converged = first_prediction <= 1e-6 * cost
-            break
-        state, r, cost, total = trial, r_new, cost_new, total + dx
-        lam = max(lam / 10.0, 1e-12)
-        history.append({"iteration": it, "cost": cost, "damping": lam})
+    def on_accept(members, nit) -> None:
+        steps.append(history_entry(nit[0], lm.current, n_items))
         if progress is not None:
-            progress(it, np.sqrt(cost / problem.observation.n_items))
-        J = problem.jacobian(state, names) * w[:, None]
-        svd = ScaledSVD.of(J, scale)
-    return state, converged, len(history) - 1, history, total
+            progress(int(nit[0]), steps[-1]["rms"])
+
+    out = minimize(lm, max_iter, on_accept)
+    history = [history_entry(0, lm.initial, n_items), *steps]
+    return GaussNewtonResult(lm.state, Status(out.status[0]), int(out.nit[0]), history, lm.total)
 
 
-def solve(problem, start, names, *, max_iter: int = 50, progress=None, **_) -> SolverOutput:
-    """Least squares from ``start`` on ``names`` (plus the observation's nuisance)."""
-    state, converged, iters, history, _ = gauss_newton(problem, start, names, max_iter=max_iter,
-                                                       progress=progress)
-    message = (f"converged in {iters} iterations" if converged
-               else f"not converged after {max_iter} iterations")
-    return SolverOutput(state=state, converged=converged, message=message, history=history)
+def solve(problem, start: State, space: ParameterSpace, *, max_iter: int = 50, progress=None,
+          **_) -> SolverResult:
+    """Least squares from ``start`` over ``space``."""
+    gn = gauss_newton(problem, start, space, max_iter=max_iter, progress=progress)
+    message = {Status.CONVERGED: f"converged in {gn.nit} iterations",
+               Status.MAX_ITERATIONS: f"not converged after {max_iter} iterations",
+               Status.STALLED: f"stalled after {gn.nit} iterations: no damped step decreases the cost "
+                               "although the linear model promises a decrease"}[gn.status]
+    return SolverResult(state=gn.state, status=gn.status, message=message, nit=gn.nit,
+                        history=gn.history)

@@ -17,7 +17,9 @@ residual is r_t ~ r_t(mean) - J_t (y_t - mean y). Deviation from the seed, state
 presents one unused target per update; here one update uses the gradient summed over all
 targets (the same index, deterministic, vectorised), with a bold-driver learning rate
 (x1.05 after a decrease of E, x0.5 and the step undone after an increase). Training stops when
-E <= ``threshold`` ``n_consecutive`` times in a row (a405/a407) or after ``epochs``.
+E <= ``threshold`` ``n_consecutive`` times in a row (a405/a407; status ``threshold``), when E
+improved by less than ``ftol`` (relative) over ``patience`` epochs or no step decreases it any
+more (``converged``), or after ``epochs`` (``max_iterations``: not a success).
 
 Compensation (claim 10): measured pose error -> network -> parameter errors -> model + errors
 (:func:`compensate`). The solver's final state is the start model compensated with the mean of
@@ -31,10 +33,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robocal.damped_least_squares import Status
 from robocal.errors import IdentificationError
 from robocal.identify.plain_io import load_plain, save_plain
-from robocal.identify.problem import State
-from robocal.identify.solvers import SolverOutput
+from robocal.identify.population import Stagnation
+from robocal.identify.solvers import SolverResult, history_entry
+from robocal.identify.space import ParameterSpace, State
 
 FORMAT = "robocal-bpnet/1"
 _FIELDS = ("W1", "b1", "W2", "b2")
@@ -112,10 +116,14 @@ def default_outputs(names) -> list[str]:
     return [n for n in names if n.rstrip("0123456789") in ("a", "d", "theta")]
 
 
+MIN_LEARNING_RATE = 1e-14  # below this no steepest-descent step decreases the index: converged
+
+
 def train(problem, start: State, outputs: list[str], *, hidden: int = 9, index: str = "mae",
           learning_rate: float = 0.01, epochs: int = 3000, threshold: float = 0.0,
-          n_consecutive: int = 5, seed: int = 0, progress=None):
-    """Train the network (a401-a407). Returns ``(network, x, history, met)``."""
+          n_consecutive: int = 5, patience: int = 100, ftol: float = 1e-6, seed: int = 0,
+          progress=None):
+    """Train the network (a401-a407). Returns ``(network, x, history, status)``."""
     if not 8 <= hidden <= 10:
         raise IdentificationError(f"hidden must be 8-10 units (seed 002), got {hidden}")
     if index not in ("mae", "mse"):
@@ -124,22 +132,29 @@ def train(problem, start: State, outputs: list[str], *, hidden: int = 9, index: 
         raise IdentificationError("epochs and n_consecutive must be >= 1 and learning_rate > 0")
     x = pose_error_inputs(problem, start)
     net = BPNetwork.init(x.shape[1], hidden, outputs, np.random.default_rng(seed))
-    rows = problem.rows_per_item
+    rows = problem.observation.rows_per_item
     k = len(outputs)
+    space = ParameterSpace(tuple(outputs), tuple(problem.nuisance_names))
+    no_nuisance = np.zeros(len(start.nuisance))
 
     def evaluate(net):
         h, y = net.forward(x)
         ybar = y.mean(axis=0)
-        st = problem.step(start, outputs, np.concatenate([ybar * 1e-3, np.zeros(len(start.nuisance))]))
+        st = space.apply(start, np.concatenate([ybar * 1e-3, no_nuisance]))
         r = problem.residuals(st) * 1e3  # mm
-        J = problem.jacobian(st, outputs)[:, :k].reshape(-1, rows, k)  # d(model)/d(param)
+        J = problem.jacobian(st, space)[:, :k].reshape(-1, rows, k)  # d(model)/d(param)
         rt = r.reshape(-1, rows) - np.einsum("nrk,nk->nr", J, y - ybar)  # mm, (y in mm/mrad)
         cost = float(np.mean(np.abs(rt)) if index == "mae" else np.mean(rt**2))
         return cost, h, rt, J
 
-    history, streak, lr = [], 0, learning_rate
+    def entry(epoch: int, rt: np.ndarray) -> dict:  # rt in mm: the history is SI
+        return history_entry(epoch, float(np.sum(rt**2)) * 1e-6, len(rt))
+
+    streak, lr = 0, learning_rate
     cost, h, rt, J = evaluate(net)
-    met = False
+    history, indices = [entry(0, rt)], [cost]
+    stagnation = Stagnation(patience, ftol)
+    status = Status.MAX_ITERATIONS
     for epoch in range(1, epochs + 1):
         # dE/dr, then dE/dy_t = -(dE/dr_t) J_t  (r = measured - modelled)
         g_r = (np.sign(rt) if index == "mae" else 2.0 * rt) / rt.size
@@ -158,23 +173,27 @@ def train(problem, start: State, outputs: list[str], *, hidden: int = 9, index: 
         else:
             cost, h, rt, J = trial
             lr *= 1.05
-        history.append({"iteration": epoch, "cost": cost, "learning_rate": lr})
+        history.append(entry(epoch, rt))
+        indices.append(cost)
         if progress is not None:
-            progress(epoch, np.sqrt(np.mean(np.sum(rt**2, axis=1))) * 1e-3)
+            progress(epoch, history[-1]["rms"])
         streak = streak + 1 if cost <= threshold else 0
         if streak >= n_consecutive:
-            met = True
+            status = Status.THRESHOLD
             break
-        if lr < 1e-14:
+        if lr < MIN_LEARNING_RATE or stagnation.update(cost):
+            status = Status.CONVERGED
             break
-    return net, x, history, met
+    return net, x, history, indices, status
 
 
-def solve(problem, start, names, *, seed: int = 0, progress=None, outputs=None, hidden: int = 9,
-          index: str = "mae", learning_rate: float = 0.01, epochs: int = 3000,
-          threshold: float = 0.0, n_consecutive: int = 5, **_) -> SolverOutput:
-    """Seed-002 network on ``outputs`` (default :func:`default_outputs` of ``names``);
-    ``threshold`` in mm (mae) or mm^2 (mse)."""
+def solve(problem, start: State, space: ParameterSpace, *, seed: int = 0, progress=None, outputs=None,
+          hidden: int = 9, index: str = "mae", learning_rate: float = 0.01, epochs: int = 3000,
+          threshold: float = 0.0, n_consecutive: int = 5, patience: int = 100, ftol: float = 1e-6,
+          **_) -> SolverResult:
+    """Seed-002 network on ``outputs`` (default :func:`default_outputs` of the free robot
+    parameters); ``threshold`` in mm (mae) or mm^2 (mse)."""
+    names = list(space.robot)
     if outputs is None or outputs == "lengths_angles":
         outputs = default_outputs(names)
     elif outputs == "all":
@@ -185,16 +204,18 @@ def solve(problem, start, names, *, seed: int = 0, progress=None, outputs=None, 
     if missing or not outputs:
         raise IdentificationError(f"network outputs {missing or outputs} are not free identifiable "
                                   f"parameters; choose from {list(names)}")
-    net, x, history, met = train(problem, start, list(outputs), hidden=hidden, index=index,
-                                 learning_rate=learning_rate, epochs=epochs, threshold=threshold,
-                                 n_consecutive=n_consecutive, seed=seed, progress=progress)
+    net, x, history, indices, status = train(
+        problem, start, list(outputs), hidden=hidden, index=index, learning_rate=learning_rate,
+        epochs=epochs, threshold=threshold, n_consecutive=n_consecutive, patience=patience, ftol=ftol,
+        seed=seed, progress=progress)
     ybar = net.parameter_errors(x).mean(axis=0)
-    state = problem.step(start, net.outputs, np.concatenate([ybar, np.zeros(len(start.nuisance))]))
-    if met:
-        message = (f"index {history[-1]['cost']:.4g} <= threshold {threshold} {n_consecutive} times "
-                   f"in a row after {len(history)} epochs")
-    else:
-        message = f"index {history[-1]['cost']:.4g} after {len(history)} epochs (threshold not met)"
-    return SolverOutput(state=state, converged=met or threshold <= 0, message=message, history=history,
-                        extra={"network": net, "inputs_mm": x, "index": index,
-                               "final_index": history[-1]["cost"]})
+    out_space = ParameterSpace(tuple(net.outputs), tuple(problem.nuisance_names))
+    state = out_space.apply(start, np.concatenate([ybar, np.zeros(len(start.nuisance))]))
+    epochs_run = len(history) - 1
+    message = {Status.THRESHOLD: f"index {indices[-1]:.4g} <= threshold {threshold} {n_consecutive} times "
+                                 f"in a row after {epochs_run} epochs",
+               Status.CONVERGED: f"index {indices[-1]:.4g} stopped decreasing after {epochs_run} epochs",
+               Status.MAX_ITERATIONS: f"stopped at the epoch limit {epochs} with index {indices[-1]:.4g} "
+                                      "(threshold not met)"}[status]
+    return SolverResult(state=state, status=status, message=message, nit=epochs_run, history=history,
+                        network=net)

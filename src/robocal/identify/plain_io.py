@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import io
 import json
 from pathlib import Path
 
 import numpy as np
 
 from robocal.errors import DataError
-from robocal.kinematics.yaml_io import write_atomic
+from robocal.io import read_text, write_atomic
 
 
 def save_plain(path, data: dict, what: str) -> None:
@@ -19,12 +20,9 @@ def save_plain(path, data: dict, what: str) -> None:
         return
     if path.suffix != ".npz":
         raise DataError(f"{path}: save a {what} as .json or .npz")
-    tmp = path.with_name(f".{path.name}.tmp.npz")
-    try:
-        np.savez(tmp, **{k: np.asarray(v) for k, v in data.items()})
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    buffer = io.BytesIO()
+    np.savez(buffer, **{k: np.asarray(v) for k, v in data.items()})
+    write_atomic(path, buffer.getvalue())
 
 
 def load_plain(path, what: str, fmt: str) -> dict:
@@ -34,7 +32,7 @@ def load_plain(path, what: str, fmt: str) -> dict:
     path = Path(path)
     try:
         if path.suffix == ".json":
-            data = json.loads(path.read_text(encoding="utf-8"))
+            data = json.loads(read_text(path, f"{what} file"))
         else:
             with np.load(path, allow_pickle=False) as z:
                 data = {k: z[k] for k in z.files}

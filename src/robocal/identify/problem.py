@@ -1,89 +1,149 @@
-"""A calibration problem: a robot, the parameters to identify, and observations.
+"""A calibration problem: a robot, measurement sets, and their weighted residuals and Jacobians.
 
-Residuals are weighted by the measurement uncertainty (``sigma`` of the data, else 1 m, so
-unweighted residuals are in metres). The unknowns are displacements of the named robot
-parameters (see :meth:`Robot.displaced`) followed by the observation's nuisance parameters.
+Each measurement set (a :class:`robocal.Measurements`, one kind) becomes an observation
+(:mod:`robocal.identify.observations`); the problem stacks their residual rows. Residuals are
+divided by the measurement uncertainty (the data's ``sigma``; without it 1 m for a single set, so
+unweighted residuals are in metres). The unknowns are a :class:`ParameterSpace`: robot
+parameters (moved by :meth:`ParameterSpace.apply`) and the observations' nuisance parameters.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
 from robocal.errors import IdentificationError
 from robocal.identify.observations import observation_for
+from robocal.identify.space import ParameterSpace, State, resolve_names
 
-
-@dataclass(frozen=True)
-class State:
-    """A point of the search: the robot model and the nuisance parameters ``(m,)``."""
-
-    robot: object
-    nuisance: np.ndarray
-
-
-def candidate_parameters(robot, observation, params) -> list[str]:
-    """Resolve ``params``: 'auto' (the robot's default free set), 'all' (every parameter),
-    or an explicit list of names. 'auto' and 'all' leave out what the observation can never
-    see (``observation.not_observable``: e.g. the base frame for plane contacts and distances)."""
-    if isinstance(params, str) and params in ("auto", "all"):
-        names = (robot.default_free(orientation=(observation.kind == "pose")) if params == "auto"
-                 else list(robot.parameter_names))
-        blind = set(observation.not_observable(robot))
-        return [n for n in names if n not in blind]
-    if isinstance(params, str):
-        params = [p for p in params.replace(",", " ").split() if p]
-    names = list(params)
-    robot.indices(names)  # validates
-    if len(set(names)) != len(names):
-        raise IdentificationError("a parameter is named twice in params")
-    return names
+DEFAULT_SIGMA = 1.0  # residual scale of a set without sigma (unweighted: residuals in SI units)
 
 
 class CalibrationProblem:
-    """Weighted residuals and Jacobians of a robot against one set of measurements."""
+    """Weighted residuals and Jacobians of a robot against one or more measurement sets."""
 
     def __init__(self, robot, data, **observation_options) -> None:
-        self.observation = observation_for(data, robot, **observation_options)
-        self.sigma = self.observation.residual_scale(1.0)
-        self.data = data
+        self.datasets = list(data) if isinstance(data, list | tuple) else [data]
+        if not self.datasets:
+            raise IdentificationError("a calibration needs at least one measurement set")
+        self.observations = [observation_for(d, robot, **observation_options) for d in self.datasets]
+        self.sigma = np.concatenate([obs.residual_scale(DEFAULT_SIGMA) for obs in self.observations])
+        sizes = [len(obs.nuisance_names) for obs in self.observations]
+        self._nuisance = np.split(np.arange(sum(sizes)), np.cumsum(sizes)[:-1])
+        rows = [obs.n_items * obs.rows_per_item for obs in self.observations]
+        self._rows = np.split(np.arange(sum(rows)), np.cumsum(rows)[:-1])
+
+    @property
+    def observation(self):
+        """The observation of a single-set problem (IdentificationError for several sets)."""
+        if len(self.observations) != 1:
+            raise IdentificationError("this step works on one measurement set at a time")
+        return self.observations[0]
+
+    @property
+    def data(self):
+        """The measurements of a single-set problem."""
+        return self.observation.data
 
     @property
     def kind(self) -> str:
-        return self.observation.kind
+        """The observation kind ('point', 'pose', 'plane', 'distance'; 'mixed' for several kinds)."""
+        kinds = {obs.kind for obs in self.observations}
+        return kinds.pop() if len(kinds) == 1 else "mixed"
 
     @property
     def nuisance_names(self) -> list[str]:
-        return list(self.observation.nuisance_names)
+        return [name for obs in self.observations for name in obs.nuisance_names]
 
     @property
-    def rows_per_item(self) -> int:
-        return self.observation.rows_per_item
+    def n_items(self) -> int:
+        return sum(obs.n_items for obs in self.observations)
+
+    @property
+    def n_poses(self) -> int:
+        return sum(d.n_poses for d in self.datasets)
+
+    def row_blocks(self) -> list[tuple[np.ndarray, int]]:
+        """Per measurement set: its residual row indices and its rows per item."""
+        return [(rows, obs.rows_per_item) for obs, rows in zip(self.observations, self._rows, strict=True)]
+
+    def item_rows(self) -> np.ndarray:
+        """``(n_items,)`` residual rows per item (stacked over the observations)."""
+        return np.concatenate([np.full(obs.n_items, obs.rows_per_item) for obs in self.observations])
+
+    def item_sum_squares(self, r: np.ndarray) -> np.ndarray:
+        """Per-item sum of squares ``(..., n_items)`` of weighted residuals ``(..., M)``."""
+        parts = [(r[..., rows] ** 2).reshape(r.shape[:-1] + (obs.n_items, obs.rows_per_item)).sum(-1)
+                 for obs, rows in zip(self.observations, self._rows, strict=True)]
+        return np.concatenate(parts, axis=-1)
+
+    def space(self, robot, params="auto") -> ParameterSpace:
+        """The parameter space of ``params`` ('auto', 'all' or names; see
+        :func:`robocal.identify.space.resolve_names`) plus every nuisance parameter. 'auto' and
+        'all' leave out what no observation can see (the base frame for planes alone)."""
+        blind = set.intersection(*(set(obs.not_observable(robot)) for obs in self.observations))
+        orientation = any(obs.kind == "pose" for obs in self.observations)
+        names = resolve_names(robot, params, sorted(blind), orientation)
+        return ParameterSpace(tuple(names), tuple(self.nuisance_names))
 
     def start(self, robot) -> State:
-        return State(robot, self.observation.nuisance_start(robot))
+        return State(robot, np.concatenate([obs.nuisance_start(robot) for obs in self.observations]))
+
+    def export_nuisance(self, state: State) -> dict[str, np.ndarray]:
+        """The state's nuisance as physical entities (planes as normal + offset), to judge other
+        measurement sets with them (:meth:`carried_state`)."""
+        out: dict[str, np.ndarray] = {}
+        for obs, nu in zip(self.observations, self._nuisance, strict=True):
+            out.update(obs.export_nuisance(state.nuisance[nu]))
+        return out
+
+    def carried_state(self, robot, entities: dict[str, np.ndarray]) -> State:
+        """``robot`` with the nuisance of ``entities`` (another problem's :meth:`export_nuisance`)
+        where this problem shares them, the rest fitted to ``robot``."""
+        return State(robot, np.concatenate([obs.import_nuisance(robot, entities)
+                                            for obs in self.observations]))
 
     def residuals(self, state: State) -> np.ndarray:
         """Weighted residuals ``(M,)``."""
-        return self.observation.residuals(state.robot, state.nuisance) / self.sigma
+        r = [obs.residuals(state.robot, state.nuisance[nu])
+             for obs, nu in zip(self.observations, self._nuisance, strict=True)]
+        return np.concatenate(r) / self.sigma
 
-    def jacobian(self, state: State, names: Sequence[str]) -> np.ndarray:
-        """Weighted d(modelled)/d(unknowns) ``(M, k + m)``: robot names, then nuisance."""
-        return self.observation.jacobian(state.robot, names, state.nuisance) / self.sigma[:, None]
-
-    def step(self, state: State, names: Sequence[str], dx: np.ndarray) -> State:
-        """Apply a displacement ``dx (k + m,)`` of the robot names and the nuisance."""
-        k = len(names)
-        robot = state.robot.displaced(names, dx[:k]) if k else state.robot
-        return State(robot, state.nuisance + dx[k:])
+    def jacobian(self, state: State, space: ParameterSpace) -> np.ndarray:
+        """Weighted d(modelled)/d(unknowns) ``(M, space.size)``: robot columns, then every
+        nuisance column (block-diagonal over the observations)."""
+        k, m = len(space.robot), len(self.nuisance_names)
+        if tuple(space.nuisance) != tuple(self.nuisance_names):
+            raise IdentificationError("the parameter space must carry every nuisance parameter")
+        J = np.zeros((self.sigma.size, k + m))
+        for obs, rows, nu in zip(self.observations, self._rows, self._nuisance, strict=True):
+            block = obs.jacobian(state.robot, space.robot, state.nuisance[nu])
+            J[rows, :k] = block[:, :k]
+            J[np.ix_(rows, k + nu)] = block[:, k:]
+        return J / self.sigma[:, None]
 
     def residuals_batch(self, state: State, names: Sequence[str], X: np.ndarray) -> np.ndarray:
-        """Weighted residuals ``(P, M)`` for displacement vectors ``X (P, k)`` of ``names``."""
-        r = self.observation.residuals_batch(state.robot, names, X, state.nuisance)
-        return r / self.sigma
+        """Weighted residuals ``(P, M)`` for robot displacements ``X (P, k)`` of ``names`` with the
+        state's nuisance fixed."""
+        r = [obs.residuals_batch(state.robot, names, X, state.nuisance[nu])
+             for obs, nu in zip(self.observations, self._nuisance, strict=True)]
+        return np.concatenate(r, axis=-1) / self.sigma
+
+    def profiled_residuals_batch(self, robot, names: Sequence[str], X: np.ndarray):
+        """Weighted residuals ``(P, M)`` and nuisance ``(P, m)`` for robot displacements ``X (P, k)``
+        with every observation's nuisance fitted per displacement (the seed-004 plane fit)."""
+        r, nu = [], []
+        for obs in self.observations:
+            if obs.nuisance_names:
+                rk, nk = obs.profiled_residuals_batch(robot, names, X)
+            else:
+                rk, nk = obs.residuals_batch(robot, names, X), np.zeros((X.shape[0], 0))
+            r.append(rk)
+            nu.append(nk)
+        return np.concatenate(r, axis=-1) / self.sigma, np.concatenate(nu, axis=-1)
 
     def position_errors(self, state: State) -> np.ndarray:
-        """``(N,)`` unweighted position error of each measurement item (m)."""
-        return self.observation.position_errors(state.robot, state.nuisance)
+        """``(n_items,)`` unweighted position error of each measurement item (m)."""
+        return np.concatenate([obs.position_errors(state.robot, state.nuisance[nu])
+                               for obs, nu in zip(self.observations, self._nuisance, strict=True)])

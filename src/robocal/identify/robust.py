@@ -18,12 +18,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from robocal.damped_least_squares import Status
 from robocal.errors import IdentificationError
 from robocal.identify.linalg import ScaledSVD
 from robocal.identify.lsq import gauss_newton
-from robocal.identify.solvers import SolverOutput
+from robocal.identify.solvers import SolverResult, history_entry
+from robocal.identify.space import ParameterSpace, State
 
 MAD_TO_SIGMA = 1.4826
+WEIGHT_TOL = 1e-4  # the weights have settled when none changes by more than this
 
 
 def igg3_weights(v: np.ndarray, k0: float = 1.5, k1: float = 3.0) -> np.ndarray:
@@ -81,34 +84,49 @@ def ridge_parameter(J: np.ndarray, r: np.ndarray, prior: np.ndarray, rule: str =
     raise IdentificationError(f"unknown ridge rule {rule!r}: double-h, gcv, lcurve or none")
 
 
-def solve(problem, start, names, *, k0: float = 1.5, k1: float = 3.0, ridge: str = "double-h",
-          max_outer: int = 30, progress=None, **_) -> SolverOutput:
-    """Robust ridge estimation from ``start`` on ``names`` (plus nuisance)."""
-    rows = problem.rows_per_item
-    item_w = np.ones(problem.observation.n_items)
+def standardized_items(problem, r: np.ndarray) -> tuple[np.ndarray, float]:
+    """Per-item statistics ``(n_items,)`` of a problem's weighted residuals ``r (M,)``, each
+    measurement set standardised by its own robust scale (IGG3 per kind), and the largest
+    per-item scale (what the progress shows)."""
+    stats, scales = [], []
+    for rows, per_item in problem.row_blocks():
+        v, scale = standardized(r[rows], per_item)
+        stats.append(v)
+        scales.append(scale * np.sqrt(per_item))
+    return np.concatenate(stats), max(scales)
+
+
+def solve(problem, start: State, space: ParameterSpace, *, k0: float = 1.5, k1: float = 3.0,
+          ridge: str = "double-h", max_outer: int = 30, progress=None, **_) -> SolverResult:
+    """Robust ridge estimation from ``start`` over ``space``."""
+    item_rows = problem.item_rows()
+    item_w = np.ones(problem.n_items)
     state, total = start, None
-    history, converged = [], False
+    r = problem.residuals(state)
+    history = [history_entry(0, float(r @ r), problem.n_items)]
+    status = Status.MAX_ITERATIONS
     for outer in range(1, max_outer + 1):
-        row_w = np.repeat(item_w, rows)
+        row_w = np.repeat(item_w, item_rows)
         sw = np.sqrt(row_w)
-        J = problem.jacobian(state, names) * sw[:, None]
-        r = problem.residuals(state) * sw
+        J = problem.jacobian(state, space) * sw[:, None]
         prior = np.zeros(J.shape[1]) if total is None else total
-        h = ridge_parameter(J, r, prior, ridge)
-        state, _, _, _, total = gauss_newton(problem, state, names, row_weights=row_w,
-                                             ridge=h, prior=prior)
-        v, scale = standardized(problem.residuals(state), rows)
+        h = ridge_parameter(J, r * sw, prior, ridge)
+        gn = gauss_newton(problem, state, space, row_weights=row_w, ridge=h, prior=prior)
+        state, total = gn.state, gn.total
+        r = problem.residuals(state)
+        v, scale = standardized_items(problem, r)
         new_w = igg3_weights(v, k0, k1)
         change = float(np.max(np.abs(new_w - item_w)))
         item_w = new_w
-        history.append({"iteration": outer, "ridge": h, "scale": scale,
-                        "rejected": int(np.sum(item_w == 0)), "weight_change": change})
+        history.append(history_entry(outer, float(r @ (r * np.repeat(item_w, item_rows))),
+                                     problem.n_items))
         if progress is not None:  # the robust scale of one item's residual
-            progress(outer, scale * np.sqrt(rows))
-        if change < 1e-4:
-            converged = True
+            progress(outer, scale)
+        if change < WEIGHT_TOL:
+            status = Status.CONVERGED
             break
-    message = (f"IGG3 weights converged in {len(history)} iterations" if converged
+    nit = len(history) - 1
+    message = (f"IGG3 weights converged in {nit} iterations" if status is Status.CONVERGED
                else f"IGG3 weights still changing after {max_outer} iterations")
-    return SolverOutput(state=state, converged=converged, message=message, history=history,
+    return SolverResult(state=state, status=status, message=message, nit=nit, history=history,
                         item_weights=item_w)

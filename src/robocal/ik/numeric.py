@@ -2,8 +2,10 @@
 
 Batched Levenberg-Marquardt on the 6 pose residuals (position m, rotation vector rad, world
 frame) with the joint Jacobian, which is the identification Jacobian w.r.t. theta1..thetan
-(d TCP / d theta_i = d TCP / d q_i). Seeds default to the closed-form solution of the robot's
-nominal model (its OPW form) in the requested branch, with this robot's base and tool.
+(d TCP / d theta_i = d TCP / d q_i); every target is one member of robocal's damped
+least-squares loop (:mod:`robocal.damped_least_squares`, the one calibration uses), with
+Marquardt's diagonal scaling. Seeds default to the closed-form solution of the robot's nominal
+model (its OPW form) in the requested branch, with this robot's base and tool.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robocal.damped_least_squares import minimize
 from robocal.errors import DataError, UnreachableError
 from robocal.ik.opw_ik import check_poses, solve_branches
 from robocal.kinematics.model import Robot
@@ -19,6 +22,7 @@ from robocal.kinematics.transforms import pose_error
 
 POS_TOL = 1e-10  # m
 ROT_TOL = 1e-9  # rad
+_DIAG_FLOOR = 1e-12  # added to J^T J's diagonal before Marquardt scaling (a joint with no effect)
 
 
 @dataclass(frozen=True)
@@ -37,6 +41,51 @@ class IKResult:
     def failed(self) -> np.ndarray:
         """Indices of the poses that did not converge."""
         return np.flatnonzero(~self.converged)
+
+
+class _Targets:
+    """A batch of IK targets as the members of the damped loop (see DampedProblem)."""
+
+    def __init__(self, robot: Robot, T: np.ndarray, q0: np.ndarray, pos_tol: float, rot_tol: float):
+        self.robot, self.T, self.tol = robot, T, (pos_tol, rot_tol)
+        self.names = [f"theta{i + 1}" for i in range(robot.n_joints)]
+        self.size = T.shape[0]
+        self.q = q0.copy()
+        self.err = pose_error(T, robot.fk(self.q))
+        self.c = np.einsum("ij,ij->i", self.err, self.err)
+        self.J = np.zeros((self.size, 6, robot.n_joints))
+        self.step = np.zeros_like(self.q)
+        self.q_trial, self.err_trial, self.c_trial = self.q.copy(), self.err.copy(), self.c.copy()
+
+    def cost(self) -> np.ndarray:
+        return self.c
+
+    def linearize(self, m: np.ndarray) -> None:
+        self.J[m] = self.robot.jacobian(self.q[m], self.names, kind="pose")
+
+    def propose(self, m: np.ndarray, damping: np.ndarray) -> np.ndarray:
+        J, err = self.J[m], self.err[m]
+        JtJ = np.einsum("kri,krj->kij", J, J)
+        g = np.einsum("kri,kr->ki", J, err)
+        diag = np.einsum("kii->ki", JtJ)
+        A = JtJ + (damping[:, None] * (diag + _DIAG_FLOOR))[:, :, None] * np.eye(J.shape[2])
+        self.step[m] = np.linalg.solve(A, g[:, :, None])[:, :, 0]
+        left = err - np.einsum("kri,ki->kr", J, self.step[m])
+        return self.c[m] - np.einsum("kr,kr->k", left, left)
+
+    def converged(self, m: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        err = self.err[m]
+        return ((np.linalg.norm(err[:, :3], axis=1) <= self.tol[0])
+                & (np.linalg.norm(err[:, 3:], axis=1) <= self.tol[1]))
+
+    def trial_cost(self, m: np.ndarray) -> np.ndarray:
+        self.q_trial[m] = self.q[m] + self.step[m]
+        self.err_trial[m] = pose_error(self.T[m], self.robot.fk(self.q_trial[m]))
+        self.c_trial[m] = np.einsum("ij,ij->i", self.err_trial[m], self.err_trial[m])
+        return self.c_trial[m]
+
+    def accept(self, m: np.ndarray) -> None:
+        self.q[m], self.err[m], self.c[m] = self.q_trial[m], self.err_trial[m], self.c_trial[m]
 
 
 def _nominal_model(robot: Robot, nominal: Robot | None) -> Robot:
@@ -114,36 +163,9 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
             q0 = np.broadcast_to(q0, (N, n))
         if q0.shape != (N, n):
             raise DataError(f"seeds must have shape ({N}, {n}), got {q0.shape}")
-    q = np.where(np.isfinite(q0), q0, 0.0).copy()
-    names = [f"theta{i + 1}" for i in range(n)]
-    lam = np.full(N, 1e-6)
-    err = pose_error(T, robot.fk(q))
-    cost = np.einsum("ij,ij->i", err, err)
-    active = np.ones(N, bool)
-    it = 0
-    for it in range(1, max_iter + 1):  # noqa: B007  (the count is reported)
-        done = (np.linalg.norm(err[:, :3], axis=1) <= pos_tol) & (np.linalg.norm(err[:, 3:], axis=1)
-                                                                 <= rot_tol)
-        active &= ~done
-        if not active.any():
-            break
-        idx = np.flatnonzero(active)
-        J = robot.jacobian(q[idx], names, kind="pose")  # (k, 6, n)
-        JtJ = np.einsum("kri,krj->kij", J, J)
-        g = np.einsum("kri,kr->ki", J, err[idx])
-        diag = np.einsum("kii->ki", JtJ)
-        A = JtJ + (lam[idx, None] * (diag + 1e-12))[:, :, None] * np.eye(n)
-        step = np.linalg.solve(A, g[:, :, None])[:, :, 0]
-        q_new = q[idx] + step
-        e_new = pose_error(T[idx], robot.fk(q_new))
-        c_new = np.einsum("ij,ij->i", e_new, e_new)
-        better = c_new < cost[idx]
-        acc = idx[better]
-        q[acc], err[acc], cost[acc] = q_new[better], e_new[better], c_new[better]
-        lam[acc] = np.maximum(lam[acc] * 0.1, 1e-12)
-        rej = idx[~better]
-        lam[rej] *= 10.0
-        active[rej[lam[rej] > 1e8]] = False  # stalled: cannot improve any more
+    targets = _Targets(robot, T, np.where(np.isfinite(q0), q0, 0.0), pos_tol, rot_tol)
+    loop = minimize(targets, max_iter)
+    q, err, it = targets.q, targets.err, int(loop.nit.max(initial=0))
     pe = np.linalg.norm(err[:, :3], axis=1)
     re = np.linalg.norm(err[:, 3:], axis=1)
     converged = (pe <= pos_tol) & (re <= rot_tol) & np.isfinite(q0).all(axis=1)

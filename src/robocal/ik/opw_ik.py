@@ -39,24 +39,28 @@ import numpy as np
 from robocal.errors import DataError, ModelError
 from robocal.kinematics.fk import chain_fk, chain_frames
 from robocal.kinematics.model import Robot
+from robocal.kinematics.opw import OPWParameters
 from robocal.kinematics.transforms import invert_transform, is_rigid
 
-_GEOMETRY = ("a1", "a2", "b", "c1", "c2", "c3", "c4")
 _CHUNK = 1024  # poses per chunk (8 branches each): keeps the temporaries in cache
 _SINGULAR = 1e-12  # |sin theta5| below which the wrist is treated as singular
 _CLAMP = 1e-9  # relative tolerance for clamping acos / sqrt arguments at the edge of reach
 TOL = 1e-9  # m and rad: largest forward-kinematics error of a returned solution
 
 
-def opw_form(robot: Robot) -> dict:
-    """The robot's OPW form (lengths m, offsets rad, signs +-1); ModelError if it has none."""
-    opw = robot.opw
-    if robot.n_joints != 6 or not opw or any(k not in opw for k in (*_GEOMETRY, "offsets", "signs")):
+def opw_form(robot: Robot) -> OPWParameters:
+    """The robot's OPW form; ModelError if its chain does not follow one (:attr:`Robot.has_opw_form`)."""
+    if robot.has_opw_form:
+        return robot.opw
+    if robot.opw is None:
         raise ModelError(
             f"robot {robot.name!r} has no OPW form (ortho-parallel arm with a spherical wrist), so "
             "closed-form inverse kinematics is not available; use the numeric solver "
             "rc.ik.solve(robot, poses, seeds) instead")
-    return opw
+    raise ModelError(
+        f"robot {robot.name!r}: its chain no longer follows its nominal OPW form (a calibrated model "
+        "or one with joint-error terms), so closed-form inverse kinematics does not apply; use the "
+        "numeric solver rc.ik.solve(robot, poses), which is seeded by the nominal closed form")
 
 
 def check_poses(poses) -> np.ndarray:
@@ -74,14 +78,14 @@ def check_poses(poses) -> np.ndarray:
     return T
 
 
-def _flange_correction(robot: Robot, opw: dict) -> np.ndarray:
+def _flange_correction(robot: Robot, opw: OPWParameters) -> np.ndarray:
     """Q with chain(q) = OPW_flange(q) * Q, from the paper's zero pose (identity rotation,
     flange at (a1 + a2, b, c1 + c2 + c3 + c4)); absorbs how the MDH conversion split the flange
     orientation between frame {6} and the tool. Frame {0} is the OPW base frame."""
-    q0 = np.asarray(opw["offsets"], float) * np.asarray(opw["signs"], float)
+    q0 = np.asarray(opw.offsets, float) * np.asarray(opw.signs, float)
     F6 = chain_frames(robot.links, np.eye(4), np.eye(4), q0[None])[0]
     G0 = np.eye(4)
-    G0[:3, 3] = (opw["a1"] + opw["a2"], opw["b"], opw["c1"] + opw["c2"] + opw["c3"] + opw["c4"])
+    G0[:3, 3] = (opw.a1 + opw.a2, opw.b, opw.c1 + opw.c2 + opw.c3 + opw.c4)
     return invert_transform(G0) @ F6
 
 
@@ -91,9 +95,9 @@ def _clamp(x: np.ndarray, lo: float, hi: float, tol: float) -> np.ndarray:
     return np.where((x < lo - tol) | (x > hi + tol), np.nan, out)
 
 
-def paper_branches(opw: dict, flange: np.ndarray) -> np.ndarray:
+def paper_branches(opw: OPWParameters, flange: np.ndarray) -> np.ndarray:
     """Paper angles ``(N, 8, 6)`` (rad) of flange poses ``(N, 4, 4)`` in the OPW base frame."""
-    a1, a2, b, c1, c2, c3, c4 = (float(opw[k]) for k in _GEOMETRY)
+    a1, a2, b, c1, c2, c3, c4 = opw.a1, opw.a2, opw.b, opw.c1, opw.c2, opw.c3, opw.c4
     N = flange.shape[0]
     R = flange[:, :3, :3]
     C = flange[:, :3, 3] - c4 * R[:, :, 2]  # wrist centre
@@ -151,12 +155,12 @@ def _wrap(q: np.ndarray) -> np.ndarray:
     return q - (2 * np.pi) * np.floor((q + np.pi) * (0.5 / np.pi))
 
 
-def _solve_chunk(robot: Robot, opw: dict, pre: np.ndarray, post: np.ndarray, T: np.ndarray,
+def _solve_chunk(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.ndarray, T: np.ndarray,
                  tol: float) -> np.ndarray:
     """Verified branches of world poses ``T``; flange = pre @ T @ post in the OPW base frame."""
     flange = pre @ T @ post
     paper = paper_branches(opw, flange)
-    q = _wrap((paper + np.asarray(opw["offsets"], float)) * np.asarray(opw["signs"], float))
+    q = _wrap((paper + np.asarray(opw.offsets, float)) * np.asarray(opw.signs, float))
     ok = np.isfinite(q).all(axis=2)
     q[~ok] = 0.0
     fk = chain_fk(robot.links, robot.base, robot.tool, q.reshape(-1, 6)).reshape(-1, 8, 16)
@@ -173,8 +177,7 @@ def _solve_chunk(robot: Robot, opw: dict, pre: np.ndarray, post: np.ndarray, T: 
 def solve_branches(robot: Robot, T: np.ndarray, tol: float = TOL, threads: int | None = None) -> np.ndarray:
     """All 8 verified branches ``(N, 8, 6)`` for checked world poses ``T`` (no limit handling).
 
-    Raises ModelError when the robot's MDH chain does not follow its OPW form (then no reachable
-    pose verifies: typically a calibrated model, which needs the numeric solver)."""
+    Raises ModelError when the robot's chain does not follow an OPW form (:func:`opw_form`)."""
     opw = opw_form(robot)
     pre = invert_transform(robot.base)
     post = invert_transform(robot.tool) @ invert_transform(_flange_correction(robot, opw))
@@ -192,14 +195,6 @@ def solve_branches(robot: Robot, T: np.ndarray, tol: float = TOL, threads: int |
     else:
         for part in parts:
             run(part)
-    found = np.isfinite(out).all(axis=2).any(axis=1)
-    if N and not found.any():
-        raw = paper_branches(opw, pre @ T[:64] @ post)
-        if np.isfinite(raw).all(axis=2).any():
-            raise ModelError(
-                f"robot {robot.name!r}: its MDH chain does not match its OPW form (closed-form "
-                "solutions fail the forward-kinematics check; a calibrated model?); use the "
-                "numeric solver rc.ik.solve(robot, poses) instead")
     return out
 
 

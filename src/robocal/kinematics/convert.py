@@ -11,15 +11,16 @@ every frame whose z axis is that line.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 
 import numpy as np
 
-from robocal.errors import ModelError
+from robocal.errors import DataError, ModelError
+from robocal.io import ANGLE_UNITS, length_scale
 from robocal.kinematics.opw import OPWParameters
 
-_LENGTH_UNITS = {"m": 1.0, "mm": 1e-3}
-_PARALLEL_TOL = 1e-9  # |sin| of the angle between two axes below which they count as parallel
+PARALLEL_TOL = 1e-9  # |sin| of the angle between two axes below which they count as parallel
 _DIST_TOL = 1e-12  # m: axes closer than this intersect
 
 
@@ -92,7 +93,7 @@ def mdh_from_axes(joint_frames: np.ndarray, flange: np.ndarray) -> dict:
     n = len(u)
     ez = np.array([0.0, 0.0, 1.0])
     # frame {0}: the world frame when axis 1 is the world z line, else a frame on axis 1
-    if np.linalg.norm(np.cross(u[0], ez)) < _PARALLEL_TOL and np.linalg.norm(p[0, :2]) < _DIST_TOL:
+    if np.linalg.norm(np.cross(u[0], ez)) < PARALLEL_TOL and np.linalg.norm(p[0, :2]) < _DIST_TOL:
         F = [np.eye(4)]
     else:
         x0 = _perp(np.array([1.0, 0, 0]), u[0])
@@ -110,7 +111,7 @@ def mdh_from_axes(joint_frames: np.ndarray, flange: np.ndarray) -> dict:
                       if np.linalg.norm(_perp(v, z)) > 1e-6)
         else:
             w = np.cross(z, u[i + 1])
-            if np.linalg.norm(w) < _PARALLEL_TOL:  # parallel: normal from the hit point
+            if np.linalg.norm(w) < PARALLEL_TOL:  # parallel: normal from the hit point
                 o = hit
                 v = _perp(p[i + 1] - o, z)
                 x = _unit(v) if np.linalg.norm(v) > _DIST_TOL else _unit(_perp(x_prev, z))
@@ -137,7 +138,7 @@ def mdh_from_axes(joint_frames: np.ndarray, flange: np.ndarray) -> dict:
     a, d = _snap(a, 1.0, 1e-15), _snap(d, 1.0, 1e-15)
     tool = np.linalg.solve(F[-1], flange)
     tool[:3] = _snap(tool[:3], 1.0, 1e-15)
-    parallel = np.abs(np.sin(alpha)) < _PARALLEL_TOL
+    parallel = np.abs(np.sin(alpha)) < PARALLEL_TOL
     parallel[0] = False
     return {"alpha": alpha, "a": a, "beta": np.zeros(n), "theta": theta, "d": d,
             "base": F[0], "tool": tool, "parallel": parallel}
@@ -154,36 +155,38 @@ def _table(values, n: int | None, what: str) -> np.ndarray:
     return arr
 
 
-def _length_scale(length_unit: str) -> float:
-    scale = _LENGTH_UNITS.get(length_unit)
-    if scale is None:
-        raise ModelError(f"unknown length unit {length_unit!r}: use 'm' or 'mm'")
-    return scale
+def model_length_scale(length_unit: str) -> float:
+    """Metres per ``length_unit`` of a model table ('m' or 'mm'); ModelError otherwise."""
+    try:
+        return length_scale(length_unit)
+    except DataError as exc:
+        raise ModelError(str(exc)) from None
 
 
-def _finish(cls, mdh: dict, degrees: bool, kw: dict):
-    """Build the Robot: user base/tool wrap the converted ones, limits converted from deg."""
+def _finish(mdh: dict, degrees: bool, kw: dict) -> dict:
+    """Robot keyword arguments: user base/tool wrap the converted ones, limits converted from deg."""
     base = mdh["base"] if kw.get("base") is None else np.asarray(kw["base"], float) @ mdh["base"]
     tool = mdh["tool"] if kw.get("tool") is None else mdh["tool"] @ np.asarray(kw["tool"], float)
     kw = {**kw, "base": base, "tool": tool}
     kw.setdefault("parallel", mdh["parallel"])
     if kw.get("limits") is not None:
         limits = np.asarray(kw["limits"], dtype=float)
-        kw["limits"] = np.deg2rad(limits) if degrees else limits
-    return cls(alpha=mdh["alpha"], a=mdh["a"], beta=mdh["beta"], theta=mdh["theta"], d=mdh["d"],
-               **kw)
+        kw["limits"] = limits * ANGLE_UNITS["deg"] if degrees else limits
+    return {"alpha": mdh["alpha"], "a": mdh["a"], "beta": mdh["beta"], "theta": mdh["theta"],
+            "d": mdh["d"], **kw}
 
 
-def robot_from_dh(cls, theta_offsets: Sequence[float], d: Sequence[float], a: Sequence[float],
-                  alpha: Sequence[float], *, degrees: bool = False, length_unit: str = "m", **kw):
-    """Robot from a standard DH table (A_i = Rz(theta_i + q_i) Tz(d_i) Tx(a_i) Rx(alpha_i)).
+def dh_kwargs(theta_offsets: Sequence[float], d: Sequence[float], a: Sequence[float],
+              alpha: Sequence[float], *, degrees: bool = False, length_unit: str = "m", **kw) -> dict:
+    """Robot keyword arguments from a standard DH table (A_i = Rz(theta_i + q_i) Tz(d_i) Tx(a_i)
+    Rx(alpha_i)).
 
     The DH base frame is the world frame and the DH frame n is the flange; ``base`` / ``tool`` in
     ``kw`` (4x4, m) are world -> DH base and DH flange -> TCP. ``limits`` ``(n, 2)`` are in degrees
     when ``degrees``.
     """
-    scale = _length_scale(length_unit)
-    ang = np.pi / 180.0 if degrees else 1.0
+    scale = model_length_scale(length_unit)
+    ang = ANGLE_UNITS["deg"] if degrees else 1.0
     th = _table(theta_offsets, None, "DH theta offsets") * ang
     n = th.size
     dd = _table(d, n, "DH d") * scale
@@ -192,7 +195,7 @@ def robot_from_dh(cls, theta_offsets: Sequence[float], d: Sequence[float], a: Se
     elements = []
     for i in range(n):
         elements += [_rot("z", th[i]), None, _trans(z=dd[i]) @ _trans(x=aa[i]) @ _rot("x", al[i])]
-    return _finish(cls, mdh_from_axes(*_zero_pose(elements)), degrees, kw)
+    return _finish(mdh_from_axes(*_zero_pose(elements)), degrees, kw)
 
 
 def opw_elements(params: OPWParameters) -> list:
@@ -207,17 +210,29 @@ def opw_elements(params: OPWParameters) -> list:
     return elements
 
 
-def robot_from_opw(cls, a1: float, a2: float, b: float, c1: float, c2: float, c3: float, c4: float,
+def opw_parameters(a1: float, a2: float, b: float, c1: float, c2: float, c3: float, c4: float,
                    offsets: Sequence[float] = (0.0,) * 6, signs: Sequence[int] = (1,) * 6, *,
-                   degrees: bool = False, length_unit: str = "m", **kw):
-    """Robot from an OPW parameter set (opw_kinematics convention, theta = q * sign - offset).
-
-    ``offsets`` (and ``limits``) are in degrees when ``degrees``; lengths in ``length_unit``.
-    The robot keeps the OPW form in SI as ``robot.opw`` for closed-form inverse kinematics.
-    """
-    scale = _length_scale(length_unit)
+                   degrees: bool = False, length_unit: str = "m") -> OPWParameters:
+    """An OPW parameter set in SI from values in ``length_unit`` and (offsets) deg or rad."""
+    scale = model_length_scale(length_unit)
     lengths = _table([a1, a2, b, c1, c2, c3, c4], 7, "OPW lengths (a1, a2, b, c1, c2, c3, c4)") * scale
-    off = _table(offsets, 6, "OPW offsets") * (np.pi / 180.0 if degrees else 1.0)
-    params = OPWParameters(*lengths, offsets=tuple(off), signs=tuple(_table(signs, 6, "OPW signs")))
-    kw.setdefault("opw", params.to_dict())
-    return _finish(cls, mdh_from_axes(*_zero_pose(opw_elements(params))), degrees, kw)
+    off = _table(offsets, 6, "OPW offsets") * (ANGLE_UNITS["deg"] if degrees else 1.0)
+    return OPWParameters(*lengths, offsets=tuple(off), signs=tuple(_table(signs, 6, "OPW signs")))
+
+
+@functools.cache
+def opw_chain(params: OPWParameters) -> dict:
+    """The exact MDH + beta chain (alpha, a, beta, theta, d, base, tool, parallel) of an OPW set
+    (cached: its arrays are read-only)."""
+    chain = mdh_from_axes(*_zero_pose(opw_elements(params)))
+    for value in chain.values():
+        value.flags.writeable = False
+    return chain
+
+
+def opw_kwargs(params: OPWParameters, *, degrees: bool = False, **kw) -> dict:
+    """Robot keyword arguments from an OPW parameter set (opw_kinematics convention, theta =
+    q * sign - offset); ``limits`` in ``kw`` are in degrees when ``degrees``. The robot keeps the
+    set as ``robot.opw`` for closed-form inverse kinematics."""
+    kw.setdefault("opw", params)
+    return _finish(opw_chain(params), degrees, kw)

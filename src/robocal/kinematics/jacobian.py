@@ -13,6 +13,7 @@ import numpy as np
 
 from robocal.errors import ModelError
 from robocal.kinematics.fk import LinkArrays, chain_frames
+from robocal.kinematics.joint_errors import joint_error_basis
 
 
 def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray):
@@ -56,17 +57,18 @@ def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nda
 
 def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
                       approach: np.ndarray | None = None):
-    """:func:`motion_axes` for a robot, with the columns of its extra SMRs appended.
+    """:func:`motion_axes` for a robot, with the columns of its extra SMRs and of its joint-error
+    terms appended (the order of :attr:`Robot.parameter_names`).
 
     ``smr`` ``(N,)`` is each row's SMR index (0 = the tool). An SMR's translation moves only
-    the rows measured with it; the tool translation moves only the rows of SMR 0. A robot's
-    joint-error model is applied first (at the joints it really reaches, as in ``fk``; the
+    the rows measured with it; the tool translation moves only the rows of SMR 0. The axes are
+    those at the joints the robot really reaches (``robot.reached_joints``, as in ``fk``; the
     small dependence of the joint errors on the link parameters is second order and left out).
+    A joint-error parameter p of joint i turns the TCP about axis i by B_p(q) per unit
+    (:func:`joint_error_basis`): its axis is joint i's scaled by B_p, pose by pose.
     """
-    if robot.joint_errors is not None:
-        q = q + robot.joint_errors.offsets(robot, q, approach)
     tools = robot.tool if smr is None else robot.tools_for(smr)
-    tcp, u, o, rotation = motion_axes(robot.links, robot.base, tools, q)
+    tcp, u, o, rotation = motion_axes(robot.links, robot.base, tools, robot.reached_joints(q, approach))
     k = len(robot.smr)
     if k:
         L = 5 * robot.n_joints
@@ -78,6 +80,12 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
         u = np.concatenate([u, u_smr], axis=1)
         o = np.concatenate([o, np.zeros_like(u_smr)], axis=1)
         rotation = np.concatenate([rotation, np.zeros(3 * k, bool)])
+    if robot.joint_errors is not None:
+        B, joint = joint_error_basis(robot, q, robot.joint_errors.names, approach)  # (N, m), (m,)
+        theta = 5 * joint + 3
+        u = np.concatenate([u, u[:, theta] * B.T], axis=1)
+        o = np.concatenate([o, o[:, theta]], axis=1)
+        rotation = np.concatenate([rotation, np.ones(len(joint), bool)])
     return tcp, u, o, rotation
 
 

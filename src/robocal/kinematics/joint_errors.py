@@ -31,10 +31,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.errors import ModelError
+from robocal.errors import IdentificationError, ModelError
 from robocal.kinematics.fk import chain_frames
 
 TERMS = ("compliance", "gear", "backlash")
+UNITS = {"comp": "rad/m", "gear": "rad", "backlash": "rad"}  # SI unit of each kind's parameters
 _COMP = re.compile(r"^comp(\d+)_(\d+)$")
 _GEAR = re.compile(r"^gear(\d+)_([sc][12])$")
 _BACKLASH = re.compile(r"^backlash(\d+)$")
@@ -49,6 +50,21 @@ def term_names(n: int, term: str) -> list[str]:
     if term == "backlash":
         return [f"backlash{i}" for i in range(1, n + 1)]
     raise ModelError(f"unknown non-geometric term {term!r}; choose from {', '.join(TERMS)}")
+
+
+def parse_terms(spec) -> list[str]:
+    """``'compliance,gear'`` / a list -> validated term names (order kept, no repeats)."""
+    items = spec.replace(",", " ").split() if isinstance(spec, str) else list(spec or [])
+    bad = [t for t in items if t not in TERMS]
+    if bad:
+        raise IdentificationError(f"unknown non-geometric term(s) {bad}; choose from {', '.join(TERMS)} "
+                         "(comma separated)")
+    return list(dict.fromkeys(items))
+
+
+def candidate_names(n: int, terms) -> list[str]:
+    """Every parameter name of the terms ``terms`` (see :func:`parse_terms`) for ``n`` joints."""
+    return [name for term in parse_terms(terms) for name in term_names(n, term)]
 
 
 def _parse(name: str, n: int) -> tuple[int, str, int | str]:
@@ -103,11 +119,12 @@ class JointErrorModel:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "names", tuple(str(n) for n in self.names))
-        values = np.asarray(self.values, dtype=float).reshape(-1)
+        values = np.array(self.values, dtype=float).reshape(-1)
         if values.shape != (len(self.names),) or not np.isfinite(values).all():
             raise ModelError(f"joint-error model needs {len(self.names)} finite values")
         if len(set(self.names)) != len(self.names):
             raise ModelError("a joint-error parameter is named twice")
+        values.flags.writeable = False
         object.__setattr__(self, "values", values)
 
     @property
@@ -116,6 +133,10 @@ class JointErrorModel:
         prefix = {"comp": "compliance", "gear": "gear", "backl": "backlash"}
         kinds = {prefix[n[:5] if n.startswith("backl") else n[:4]] for n in self.names}
         return [t for t in TERMS if t in kinds]
+
+    def units(self) -> list[str]:
+        """SI unit of each parameter ('rad/m' for compliance, 'rad' for gear and backlash)."""
+        return [UNITS["backlash" if nm.startswith("backl") else nm[:4]] for nm in self.names]
 
     def offsets(self, robot, q: np.ndarray, approach: np.ndarray | None = None) -> np.ndarray:
         """Joint offsets ``dq (N, n)`` (rad) at commanded joints ``q (N, n)`` reached from the

@@ -5,27 +5,50 @@ Parameter vector (the view every solver uses), in this order with these stable n
     alpha1 a1 beta1 theta1 d1 ... alphan an betan thetan dn
     base.x base.y base.z base.rx base.ry base.rz  tool.x tool.y tool.z tool.rx tool.ry tool.rz
     smr1.x smr1.y smr1.z ...   (only when the tool carries extra SMRs)
+    comp2_3 gear1_s1 backlash2 ...   (only the joint-error terms the model declares)
 
-Values are SI (m, rad). ``base.r*``/``tool.r*`` hold the rotation vector of the frame's rotation
-for reading and writing; solvers never add to them: :meth:`Robot.displaced` applies rotation
-increments multiplicatively (base: about world axes through the world origin, tool: about flange
-axes through the TCP), which is what the identification Jacobian differentiates.
+The first three groups are the geometry; the joint-error terms (compliance, gear, backlash: see
+:mod:`robocal.kinematics.joint_errors`) are parameters like any other, nominally zero (the
+controller's model has none). Values are SI (m, rad). ``base.r*``/``tool.r*`` hold the rotation
+vector of the frame's rotation for reading and writing; solvers never add to them:
+:meth:`Robot.displaced` applies rotation increments multiplicatively (base: about world axes
+through the world origin, tool: about flange axes through the TCP), which is what the
+identification Jacobian differentiates.
+
+A model is immutable: its arrays are read-only, and every change (:meth:`displaced`,
+:meth:`with_values`, :meth:`with_frames`, ...) returns a new robot.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
-from robocal.errors import ModelError
+from robocal.errors import DataError, ModelError
+from robocal.io import ANGLE_UNITS, write_atomic
+from robocal.kinematics.catalog import catalog_kwargs
+from robocal.kinematics.convert import (
+    PARALLEL_TOL,
+    dh_kwargs,
+    model_length_scale,
+    opw_chain,
+    opw_kwargs,
+    opw_parameters,
+)
 from robocal.kinematics.fk import LinkArrays, chain_fk, chain_frames
-from robocal.kinematics.transforms import make_transform, matrix_to_rotvec, rotvec_to_matrix
+from robocal.kinematics.jacobian import identification_jacobian
+from robocal.kinematics.joint_errors import JointErrorModel
+from robocal.kinematics.model_file import LINK_FIELDS, dump_model, read_model_file
+from robocal.kinematics.opw import OPWParameters
+from robocal.kinematics.transforms import ROTATION_TOL, make_transform, matrix_to_rotvec, rotvec_to_matrix
 
-LINK_FIELDS = ("alpha", "a", "beta", "theta", "d")
 FRAME_FIELDS = ("x", "y", "z", "rx", "ry", "rz")
 _LINK_IS_LENGTH = {"alpha": False, "a": True, "beta": False, "theta": False, "d": True}
+OPW_MATCH_TOL = 1e-12  # m / rad: links this close to their OPW form's chain still have that form
 
 # Default search half-widths around nominal (bounds for metaheuristics and sanity checks).
 DEFAULT_SPAN = {"length": 0.005, "angle": np.deg2rad(1.0), "frame_length": 0.05,
@@ -44,13 +67,25 @@ def _as_vector(values, n: int, what: str) -> np.ndarray:
 def _as_frame(T, what: str) -> np.ndarray:
     if T is None:
         return np.eye(4)
-    T = np.asarray(T, dtype=float)
+    T = np.array(T, dtype=float)
     if T.shape != (4, 4) or not np.isfinite(T).all():
         raise ModelError(f"{what} must be a finite 4x4 transform")
     R = T[:3, :3]
-    if np.abs(R @ R.T - np.eye(3)).max() > 1e-9 or abs(np.linalg.det(R) - 1) > 1e-9:
+    if np.abs(R @ R.T - np.eye(3)).max() > ROTATION_TOL or abs(np.linalg.det(R) - 1) > ROTATION_TOL:
         raise ModelError(f"{what} rotation is not orthonormal with det +1")
-    return T.copy()
+    return T
+
+
+class DisplacedArrays(NamedTuple):
+    """What :meth:`Robot.displaced_arrays` returns for displacements ``(..., k)``: link arrays
+    ``(..., n)``, base and tool ``(..., 4, 4)``, SMR offsets ``(..., s, 3)`` and the joint-error
+    values ``(..., m)`` (None when the robot declares no joint-error terms)."""
+
+    links: LinkArrays
+    base: np.ndarray
+    tool: np.ndarray
+    smr: np.ndarray
+    joint_errors: np.ndarray | None
 
 
 @dataclass(frozen=True, eq=False)
@@ -59,9 +94,11 @@ class Robot:
 
     Attributes are ``(n,)`` arrays; ``limits`` is ``(n, 2)``; ``parallel[i]`` says that axis i
     is nominally parallel to axis i-1, so ``beta_(i+1)`` is a parameter there. ``nominal`` is the
-    nominal model's parameter vector (the controller's model), ``opw`` an optional OPW form.
-    ``joint_errors`` is an optional non-geometric joint-error model
-    (:class:`robocal.kinematics.joint_errors.JointErrorModel`) that :meth:`fk` applies.
+    nominal model's geometry vector (the controller's model, which has no joint-error terms: their
+    nominal is zero, see :attr:`nominal_values`). ``opw`` is the OPW form of the nominal model
+    (catalog robots), which travels with the model like ``nominal``; :attr:`has_opw_form` says
+    whether this robot's own chain still follows it (closed-form IK needs that). ``joint_errors``
+    holds the non-geometric terms that :meth:`fk` applies.
     """
 
     alpha: np.ndarray
@@ -76,9 +113,9 @@ class Robot:
     nominal: np.ndarray | None = None
     name: str = "robot"
     description: str = ""
-    opw: dict | None = None
+    opw: OPWParameters | None = None
     smr: np.ndarray | None = None
-    joint_errors: object | None = None
+    joint_errors: JointErrorModel | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.alpha).size
@@ -98,18 +135,50 @@ class Robot:
             if (limits[:, 0] > limits[:, 1]).any():
                 raise ModelError("a joint's lower limit is above its upper limit")
         set_(self, "limits", limits)
-        parallel = np.zeros(n, bool) if self.parallel is None else np.asarray(self.parallel, bool)
+        parallel = np.zeros(n, bool) if self.parallel is None else np.array(self.parallel, bool)
         if parallel.shape != (n,):
             raise ModelError(f"parallel flags must have {n} values")
         set_(self, "parallel", parallel)
-        smr = np.zeros((0, 3)) if self.smr is None else np.asarray(self.smr, dtype=float)
+        smr = np.zeros((0, 3)) if self.smr is None else np.array(self.smr, dtype=float)
         if smr.ndim != 2 or smr.shape[1] != 3 or not np.isfinite(smr).all():
             raise ModelError("extra SMR offsets must be a finite (k, 3) array")
         set_(self, "smr", smr)
-        size = 5 * n + 12 + smr.size
-        nominal = self._values() if self.nominal is None else _as_vector(self.nominal, size,
-                                                                          "nominal parameters")
-        set_(self, "nominal", nominal)
+        if self.opw is not None and not isinstance(self.opw, OPWParameters):
+            raise ModelError("opw must be an OPWParameters (robocal.kinematics.opw)")
+        if self.joint_errors is not None and not isinstance(self.joint_errors, JointErrorModel):
+            raise ModelError("joint_errors must be a JointErrorModel (robocal.kinematics.joint_errors)")
+        set_(self, "nominal", self._nominal_vector(self.nominal))
+        for f in (*LINK_FIELDS, "base", "tool", "limits", "parallel", "smr", "nominal"):
+            getattr(self, f).flags.writeable = False
+        set_(self, "_has_opw_form", self._follows_opw())
+
+    def _nominal_vector(self, nominal) -> np.ndarray:
+        """The nominal geometry vector: the current values when None; a mapping name -> value
+        (SI) must name every geometry parameter."""
+        names = self.geometry_names
+        if nominal is None:
+            return self._values()[: len(names)]
+        if isinstance(nominal, Mapping):
+            if set(nominal) != set(names):
+                missing = sorted(set(names) - set(nominal))
+                unknown = sorted(set(nominal) - set(names))
+                raise ModelError(f"nominal must give every geometry parameter (SI): missing {missing}, "
+                                 f"unknown {unknown}")
+            values = []
+            for name in names:
+                v = nominal[name]
+                if isinstance(v, bool) or not isinstance(v, int | float):
+                    raise ModelError(f"nominal.{name}: expected a number, got {v!r}")
+                values.append(v)
+            nominal = values
+        return _as_vector(nominal, len(names), "nominal parameters")
+
+    def _follows_opw(self) -> bool:
+        if self.opw is None or self.n_joints != 6 or self.joint_errors is not None:
+            return False
+        chain = opw_chain(self.opw)
+        return all(np.allclose(getattr(self, f), chain[f], rtol=0.0, atol=OPW_MATCH_TOL)
+                   for f in LINK_FIELDS)
 
     # ----------------------------------------------------------------- construction
     @classmethod
@@ -121,50 +190,42 @@ class Robot:
         ``degrees`` and ``length_unit`` ('m' or 'mm') state the units of the given values;
         axes i-1, i are flagged parallel where alpha_i = 0 (then beta_i is a parameter).
         """
-        ang = np.deg2rad if degrees else np.asarray
-        scale = {"m": 1.0, "mm": 1e-3}.get(length_unit)
-        if scale is None:
-            raise ModelError(f"unknown length unit {length_unit!r}: use 'm' or 'mm'")
-        alpha = np.asarray(ang(np.asarray(alpha, float)), float)
-        beta = np.zeros_like(alpha) if beta is None else np.asarray(ang(np.asarray(beta, float)))
+        ang = ANGLE_UNITS["deg"] if degrees else 1.0
+        scale = model_length_scale(length_unit)
+        alpha = np.asarray(alpha, float) * ang
+        beta = np.zeros_like(alpha) if beta is None else np.asarray(beta, float) * ang
         if "parallel" not in kwargs:
-            parallel = np.abs(np.sin(alpha)) < 1e-12
+            parallel = np.abs(np.sin(alpha)) < PARALLEL_TOL
             parallel[0] = False
             kwargs["parallel"] = parallel
-        if "limits" in kwargs and kwargs["limits"] is not None and degrees:
-            kwargs["limits"] = np.deg2rad(np.asarray(kwargs["limits"], float))
+        if kwargs.get("limits") is not None:
+            kwargs["limits"] = np.asarray(kwargs["limits"], float) * ang
         return cls(alpha=alpha, a=np.asarray(a, float) * scale, beta=beta,
-                   theta=np.asarray(ang(np.asarray(theta, float)), float),
-                   d=np.asarray(d, float) * scale, **kwargs)
+                   theta=np.asarray(theta, float) * ang, d=np.asarray(d, float) * scale, **kwargs)
 
     @classmethod
     def from_dh(cls, theta_offsets: Sequence[float], d: Sequence[float], a: Sequence[float],
                 alpha: Sequence[float], *, degrees: bool = False, length_unit: str = "m",
                 **kwargs) -> Robot:
         """Robot from a standard DH table, converted exactly (see
-        :func:`robocal.kinematics.convert.robot_from_dh`)."""
-        from robocal.kinematics.convert import robot_from_dh
-
-        return robot_from_dh(cls, theta_offsets, d, a, alpha, degrees=degrees,
-                             length_unit=length_unit, **kwargs)
+        :func:`robocal.kinematics.convert.dh_kwargs`)."""
+        return cls(**dh_kwargs(theta_offsets, d, a, alpha, degrees=degrees, length_unit=length_unit,
+                               **kwargs))
 
     @classmethod
     def from_opw(cls, a1: float, a2: float, b: float, c1: float, c2: float, c3: float, c4: float,
                  offsets: Sequence[float] = (0.0,) * 6, signs: Sequence[int] = (1,) * 6, *,
                  degrees: bool = False, length_unit: str = "m", **kwargs) -> Robot:
         """Robot from an OPW parameter set, converted exactly (see
-        :func:`robocal.kinematics.convert.robot_from_opw`)."""
-        from robocal.kinematics.convert import robot_from_opw
-
-        return robot_from_opw(cls, a1, a2, b, c1, c2, c3, c4, offsets, signs, degrees=degrees,
-                              length_unit=length_unit, **kwargs)
+        :func:`robocal.kinematics.convert.opw_kwargs`)."""
+        params = opw_parameters(a1, a2, b, c1, c2, c3, c4, offsets, signs, degrees=degrees,
+                                length_unit=length_unit)
+        return cls(**opw_kwargs(params, degrees=degrees, **kwargs))
 
     @classmethod
     def from_catalog(cls, name: str) -> Robot:
         """A catalog robot by name (``robocal robots`` lists them)."""
-        from robocal.kinematics.catalog import load_catalog_robot
-
-        return load_catalog_robot(name)
+        return cls(**catalog_kwargs(name))
 
     # ----------------------------------------------------------------- parameter view
     @property
@@ -172,18 +233,37 @@ class Robot:
         return self.alpha.size
 
     @property
-    def parameter_names(self) -> list[str]:
-        """All parameter names, in vector order."""
+    def has_opw_form(self) -> bool:
+        """Whether this robot's chain is exactly its OPW form (closed-form IK applies): true for a
+        nominal catalog robot with any base and tool, false once a link parameter is displaced
+        or joint-error terms are declared."""
+        return self._has_opw_form
+
+    @property
+    def geometry_names(self) -> list[str]:
+        """Link, base, tool and SMR parameter names, in vector order."""
         names = [f"{f}{i + 1}" for i in range(self.n_joints) for f in LINK_FIELDS]
         names += [f"base.{f}" for f in FRAME_FIELDS] + [f"tool.{f}" for f in FRAME_FIELDS]
         names += [f"smr{s + 1}.{c}" for s in range(len(self.smr)) for c in "xyz"]
         return names
 
+    @property
+    def joint_error_names(self) -> list[str]:
+        """The declared joint-error parameter names, in vector order."""
+        return [] if self.joint_errors is None else list(self.joint_errors.names)
+
+    @property
+    def parameter_names(self) -> list[str]:
+        """All parameter names, in vector order (geometry, then joint-error terms)."""
+        return self.geometry_names + self.joint_error_names
+
     def parameter_units(self) -> list[str]:
-        """'m' or 'rad' for each parameter, in vector order."""
+        """'m' or 'rad' for each parameter, in vector order (joint-error terms: their own unit,
+        see :meth:`JointErrorModel.units`)."""
         units = ["m" if _LINK_IS_LENGTH[f] else "rad" for _ in range(self.n_joints)
                  for f in LINK_FIELDS]
-        return units + (["m"] * 3 + ["rad"] * 3) * 2 + ["m"] * self.smr.size
+        units += (["m"] * 3 + ["rad"] * 3) * 2 + ["m"] * self.smr.size
+        return units + ([] if self.joint_errors is None else self.joint_errors.units())
 
     def indices(self, names: Iterable[str]) -> np.ndarray:
         """Vector indices of parameter names; unknown names raise ModelError."""
@@ -192,18 +272,27 @@ class Robot:
         unknown = [nm for nm in names if nm not in lookup]
         if unknown:
             raise ModelError(f"unknown parameter name(s) {unknown}; known: alpha1 a1 beta1 "
-                             f"theta1 d1 ... d{self.n_joints}, base.x..base.rz, tool.x..tool.rz")
+                             f"theta1 d1 ... d{self.n_joints}, base.x..base.rz, tool.x..tool.rz"
+                             + (", smr1.x.." if len(self.smr) else "")
+                             + (f", {' '.join(self.joint_error_names)}" if self.joint_errors else ""))
         return np.array([lookup[nm] for nm in names], dtype=int)
 
     def _values(self) -> np.ndarray:
         links = np.stack([getattr(self, f) for f in LINK_FIELDS], axis=1).reshape(-1)
         frames = [np.concatenate([T[:3, 3], matrix_to_rotvec(T[:3, :3])])
                   for T in (self.base, self.tool)]
-        return np.concatenate([links, *frames, self.smr.reshape(-1)])
+        errors = np.zeros(0) if self.joint_errors is None else self.joint_errors.values
+        return np.concatenate([links, *frames, self.smr.reshape(-1), errors])
+
+    @property
+    def nominal_values(self) -> np.ndarray:
+        """The nominal value of every parameter (order of :attr:`parameter_names`; joint-error
+        terms zero)."""
+        return np.concatenate([self.nominal, np.zeros(len(self.joint_error_names))])
 
     @property
     def values(self) -> np.ndarray:
-        """Current parameter vector ``(5n + 12 + 3k,)`` in SI units (k extra SMRs)."""
+        """Current parameter vector (SI), a new array in the order of :attr:`parameter_names`."""
         return self._values()
 
     def get(self, name: str) -> float:
@@ -222,13 +311,27 @@ class Robot:
         links = vec[: 5 * n].reshape(n, 5)
         frames = [make_transform(rotvec_to_matrix(v[3:]), v[:3])
                   for v in (vec[5 * n : 5 * n + 6], vec[5 * n + 6 : 5 * n + 12])]
+        geo = len(self.geometry_names)
         kw = {f: links[:, k] for k, f in enumerate(LINK_FIELDS)}
-        return replace(self, base=frames[0], tool=frames[1], smr=vec[5 * n + 12 :].reshape(-1, 3),
-                       **kw)
+        errors = None if self.joint_errors is None else \
+            JointErrorModel(self.joint_errors.names, vec[geo:])
+        return replace(self, base=frames[0], tool=frames[1], smr=vec[5 * n + 12 : geo].reshape(-1, 3),
+                       joint_errors=errors, **kw)
+
+    def with_joint_errors(self, names: Sequence[str]) -> Robot:
+        """A copy that declares the joint-error terms ``names`` (new ones at zero, the nominal
+        zero) and no others; values of terms kept from this robot are kept."""
+        names = list(dict.fromkeys(names))
+        if not names:
+            return replace(self, joint_errors=None)
+        old = dict(zip(self.joint_error_names, self.values[len(self.geometry_names):], strict=True))
+        errors = JointErrorModel(tuple(names), np.array([old.get(nm, 0.0) for nm in names]))
+        return replace(self, joint_errors=errors)
 
     def default_free(self, orientation: bool = False) -> list[str]:
         """Parameters a calibration frees by default: every link parameter (beta only on
-        parallel axes), the base frame, the tool translation (and rotation for pose data)."""
+        parallel axes), the base frame, the tool translation (and rotation for pose data), the
+        extra SMRs and the declared joint-error terms."""
         names = []
         for i in range(self.n_joints):
             for f in LINK_FIELDS:
@@ -238,14 +341,15 @@ class Robot:
         if orientation:
             names += ["tool.rx", "tool.ry", "tool.rz"]
         names += [f"smr{s + 1}.{c}" for s in range(len(self.smr)) for c in "xyz"]
-        return names
+        return names + self.joint_error_names
 
     def default_spans(self, names: Iterable[str]) -> np.ndarray:
-        """Default search half-widths (m or rad) of the named parameters."""
+        """Default search half-widths (m or rad) of the named geometry parameters."""
+        units = self.parameter_units()
         spans = []
         for name in names:
             frame = name.startswith(("base.", "tool.", "smr"))
-            length = self.parameter_units()[self.indices([name])[0]] == "m"
+            length = units[self.indices([name])[0]] == "m"
             key = ("frame_" if frame else "") + ("length" if length else "angle")
             spans.append(DEFAULT_SPAN[key])
         return np.array(spans)
@@ -257,19 +361,18 @@ class Robot:
         return -spans, spans
 
     # ----------------------------------------------------------------- displacements
-    def displaced_arrays(self, names: Sequence[str], delta: np.ndarray):
-        """Link arrays, base, tool and SMRs for displacements ``delta`` ``(..., k)`` of ``names``.
+    def displaced_arrays(self, names: Sequence[str], delta: np.ndarray) -> DisplacedArrays:
+        """The model's arrays for displacements ``delta`` ``(..., k)`` of ``names``.
 
-        Returns ``(LinkArrays (..., n), base (..., 4, 4), tool (..., 4, 4), smr (..., s, 3))``.
-        Link parameters and frame translations add; frame rotations compose (base:
-        R <- exp(d) R about the world origin; tool: R <- exp(d) R in flange axes), matching the
-        identification Jacobian.
+        Link parameters, frame translations, SMR offsets and joint-error terms add; frame
+        rotations compose (base: R <- exp(d) R about the world origin; tool: R <- exp(d) R in
+        flange axes), matching the identification Jacobian.
         """
         delta = np.asarray(delta, dtype=float)
         batch = delta.shape[:-1]
         n = self.n_joints
         idx = self.indices(names)
-        full = np.zeros(batch + (self.nominal.size,))
+        full = np.zeros(batch + (len(self.parameter_names),))
         full[..., idx] = delta
         links = np.stack([getattr(self, f) for f in LINK_FIELDS], axis=1).reshape(-1)
         links = links + full[..., : 5 * n]
@@ -281,14 +384,19 @@ class Robot:
                               np.einsum("...ij,j->...i", Rb, self.base[:3, 3]) + db[..., :3])
         tool = make_transform(rotvec_to_matrix(dt[..., 3:]) @ self.tool[:3, :3],
                               self.tool[:3, 3] + dt[..., :3])
-        smr = self.smr + full[..., 5 * n + 12 :].reshape(batch + self.smr.shape)
-        return link_arrays, base, tool, smr
+        geo = len(self.geometry_names)
+        smr = self.smr + full[..., 5 * n + 12 : geo].reshape(batch + self.smr.shape)
+        errors = None if self.joint_errors is None else self.joint_errors.values + full[..., geo:]
+        return DisplacedArrays(link_arrays, base, tool, smr, errors)
 
     def displaced(self, names: Sequence[str], delta: np.ndarray) -> Robot:
         """A copy displaced by ``delta`` ``(k,)`` on ``names`` (see :meth:`displaced_arrays`)."""
         delta = _as_vector(delta, len(names), "parameter displacement")
-        links, base, tool, smr = self.displaced_arrays(names, delta)
-        return replace(self, base=base, tool=tool, smr=smr, **links._asdict())
+        moved = self.displaced_arrays(names, delta)
+        errors = None if moved.joint_errors is None else \
+            JointErrorModel(self.joint_errors.names, moved.joint_errors)
+        return replace(self, base=moved.base, tool=moved.tool, smr=moved.smr, joint_errors=errors,
+                       **moved.links._asdict())
 
     def with_frames(self, base: np.ndarray | None = None, tool: np.ndarray | None = None) -> Robot:
         """A copy with a new base and/or tool frame (4x4)."""
@@ -307,8 +415,9 @@ class Robot:
         return tools
 
     def nominal_robot(self) -> Robot:
-        """The nominal model (the controller's), with this robot's nominal as its own."""
-        return replace(self._from_vector(self.nominal.copy()), joint_errors=None)
+        """The nominal model (the controller's: no joint-error terms), with this robot's nominal
+        as its own."""
+        return self._from_vector(self.nominal_values).with_joint_errors([])
 
     # ----------------------------------------------------------------- kinematics
     @property
@@ -317,8 +426,6 @@ class Robot:
 
     def check_joints(self, q) -> np.ndarray:
         """Joints as a ``(N, n)`` float array; raises DataError on wrong shape or NaN."""
-        from robocal.errors import DataError
-
         q = np.asarray(q, dtype=float)
         if q.ndim == 1:
             q = q[None, :]
@@ -330,18 +437,23 @@ class Robot:
             raise DataError(f"joints contain NaN or infinite values in row(s) {bad[:10].tolist()}")
         return q
 
+    def reached_joints(self, q: np.ndarray, approach: np.ndarray | None = None) -> np.ndarray:
+        """The joints ``(N, n)`` the robot really turns to for commanded ``q`` (rad): ``q + dq(q)``
+        with the declared joint-error terms (``approach`` ``(N, n)``: each joint's approach
+        direction, for backlash)."""
+        if self.joint_errors is None:
+            return q
+        return q + self.joint_errors.offsets(self, q, approach)
+
     def fk(self, q, frames: bool = False, smr=None, approach=None):
         """TCP poses ``(N, 4, 4)`` (world frame, m) for joints ``(N, n)`` in rad.
 
         ``smr`` ``(N,)`` picks each row's SMR (default: the tool). With ``frames=True`` returns
         ``(tcp, frames)`` where frames ``(N, n + 1, 4, 4)`` are the world poses of frames
-        {0}..{n} (frame {n} is the flange, before the tool). A ``joint_errors`` model turns the
-        commanded joints into the joints the robot really reaches (``q + dq(q)``) first;
-        ``approach`` ``(N, n)`` gives the direction each joint came from (its backlash term).
+        {0}..{n} (frame {n} is the flange, before the tool). Joint-error terms turn the commanded
+        joints into the joints the robot really reaches first (:meth:`reached_joints`).
         """
-        q = self.check_joints(q)
-        if self.joint_errors is not None:
-            q = q + self.joint_errors.offsets(self, q, approach)
+        q = self.reached_joints(self.check_joints(q), approach)
         tool = self.tool if smr is None else self.tools_for(smr)
         if frames:
             return chain_frames(self.links, self.base, tool, q, frames=True)
@@ -351,8 +463,6 @@ class Robot:
                  approach=None):
         """Identification Jacobian ``(N, 3|6, k)``; see
         :func:`robocal.kinematics.jacobian.identification_jacobian`."""
-        from robocal.kinematics.jacobian import identification_jacobian
-
         names = self.default_free(kind == "pose") if params is None else list(params)
         return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach)
 
@@ -363,17 +473,21 @@ class Robot:
 
     # ----------------------------------------------------------------- files
     def save(self, path) -> None:
-        """Write the model as YAML (SI units, exact round trip), atomically."""
-        from robocal.kinematics.yaml_io import save_robot
-
-        save_robot(self, path)
+        """Write the model YAML (SI units, exact round trip), atomically."""
+        write_atomic(path, dump_model(self))
 
     @classmethod
     def load(cls, path) -> Robot:
-        """Read a model YAML written by :meth:`save` or by hand (units declared in the file)."""
-        from robocal.kinematics.yaml_io import load_robot
-
-        return load_robot(path)
+        """Read a model YAML (docs/model-yaml.md: the catalog's format, hand-written or saved)."""
+        return cls(**read_model_file(path))
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, {self.n_joints} joints)"
+
+
+def load_model(spec: str) -> Robot:
+    """A robot from a model YAML path or a catalog name (what every ``--robot`` option takes)."""
+    path = Path(spec)
+    if path.suffix.lower() in (".yaml", ".yml") or path.exists():
+        return Robot.load(path)
+    return Robot.from_catalog(spec)

@@ -3,6 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial.transform import Rotation
+
+# Largest deviation from orthonormality (and of det from 1) of a rotation matrix that counts as a
+# rotation: files give rotations to a few decimals (a quaternion to 6 digits is 1e-6 off).
+ROTATION_TOL = 1e-6
 
 
 def skew(v: np.ndarray) -> np.ndarray:
@@ -29,8 +34,6 @@ def rotvec_to_matrix(rv: np.ndarray) -> np.ndarray:
 
 def matrix_to_rotvec(R: np.ndarray) -> np.ndarray:
     """Rotation matrices ``(..., 3, 3)`` -> rotation vectors ``(..., 3)`` (rad), valid up to pi."""
-    from scipy.spatial.transform import Rotation
-
     R = np.asarray(R, dtype=float)
     flat = R.reshape(-1, 3, 3)
     return Rotation.from_matrix(flat).as_rotvec().reshape(R.shape[:-2] + (3,))
@@ -65,7 +68,7 @@ def pose_error(T_measured: np.ndarray, T_model: np.ndarray) -> np.ndarray:
     return np.concatenate([dp, matrix_to_rotvec(dR)], axis=-1)
 
 
-def is_rigid(T: np.ndarray, tol: float = 1e-6) -> np.ndarray:
+def is_rigid(T: np.ndarray, tol: float = ROTATION_TOL) -> np.ndarray:
     """Whether each ``(..., 4, 4)`` matrix is a proper rigid transform (to ``tol``)."""
     T = np.asarray(T, dtype=float)
     c = [T[..., :3, k] for k in range(3)]  # rotation columns

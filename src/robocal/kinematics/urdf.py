@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from robocal.errors import ModelError
+from robocal.io import read_text, write_atomic
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import make_transform
 
@@ -104,19 +105,13 @@ def to_urdf(robot: Robot, name: str | None = None) -> str:
 
 def write_urdf(robot: Robot, path, name: str | None = None) -> None:
     """Write :func:`to_urdf` to ``path`` atomically."""
-    from robocal.kinematics.yaml_io import write_atomic
-
     write_atomic(path, to_urdf(robot, name))
 
 
 # ----------------------------------------------------------------- import
 def _parse(source) -> ET.Element:
     if isinstance(source, Path) or (isinstance(source, str) and "<" not in source):
-        path = Path(source)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise ModelError(f"cannot read URDF file {path}: {exc.strerror}") from exc
+        text = read_text(source, "URDF file", ModelError)
     else:
         text = source.decode("utf-8") if isinstance(source, bytes) else str(source)
     upper = text.upper()

@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from robocal.errors import DataError
+from robocal.io import write_atomic
+from robocal.report.iso9283 import pose_accuracy_repeatability
 
 MAX_3D_POINTS = 4000
 WORST = 10
@@ -29,7 +31,7 @@ h1{font-size:24px;margin:0 0 4px}h2{font-size:18px;margin:32px 0 8px;border-bott
 table{border-collapse:collapse;margin:6px 0 12px;font-size:13px}
 th,td{padding:3px 9px;border-bottom:1px solid #e3e3e3;text-align:right;white-space:nowrap}
 th{background:#f0f2f4;font-weight:600}td.l,th.l{text-align:left}
-tr.fixed td{color:#999}tr.dropped td{background:#fff4e5}
+tr.dropped td{background:#fff4e5}
 .kpi{display:flex;gap:14px;flex-wrap:wrap;margin:10px 0}
 .kpi div{border:1px solid #dde;border-radius:6px;padding:8px 14px;min-width:150px}
 .kpi b{display:block;font-size:22px}.kpi span{color:#666;font-size:12px}
@@ -264,12 +266,12 @@ def _parameters(result: dict) -> str:
         rows.append([esc(p.get("name")), esc(status), esc(p.get("unit")), _num(p.get("nominal"), digits),
                      _num(p.get("estimate"), digits), _num(p.get("correction"), digits),
                      _num(p.get("sigma"), digits), note])
-        classes.append(status if status in ("fixed", "dropped") else "")
+        classes.append("dropped" if status == "dropped" else "")
     if not rows:
         return "<p>No parameter table in this result.</p>"
     n_est = sum(p.get("status") == "estimated" for p in params)
     text = (f"<p>{n_est} parameters estimated, {len(dropped)} not identifiable from these data "
-            "(kept at their start value; highlighted), the others fixed (grey). Correction = estimate "
+            "(kept at their start value; highlighted). Correction = estimate "
             "&minus; nominal; 1&sigma; from the covariance of the estimate.</p>")
     table = _table(["name", "status", "unit", "nominal", "estimate", "correction", "1&sigma;",
                     "note"], rows, left=3, row_class=classes).replace(
@@ -353,7 +355,6 @@ def _rejected(result: dict) -> str:
 
 
 def _iso(blocks: list[tuple[str, _ObsErrors]]) -> str:
-    from robocal.report.iso9283 import pose_accuracy_repeatability
 
     parts = []
     for name, ob in blocks:
@@ -441,8 +442,6 @@ def render_report(result: dict, *, title: str | None = None) -> str:
 
 def write_report(result: dict, path, *, title: str | None = None) -> Path:
     """Render the report and write it to ``path`` atomically; returns the path."""
-    from robocal.kinematics.yaml_io import write_atomic
-
     path = Path(path)
     write_atomic(path, render_report(result, title=title))
     return path

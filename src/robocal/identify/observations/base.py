@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from robocal.kinematics.fk import chain_frames
+from robocal.kinematics.joint_errors import joint_error_basis
 
 
 class Observation:
@@ -51,6 +52,16 @@ class Observation:
         """Starting values of the nuisance parameters ``(m,)``."""
         return np.zeros(len(self.nuisance_names))
 
+    def export_nuisance(self, nuisance: np.ndarray) -> dict[str, np.ndarray]:
+        """The nuisance parameters as physical entities independent of this data set's
+        parametrisation (e.g. ``{"plane3": [nx, ny, nz, c]}``), to judge other data with them."""
+        return {}
+
+    def import_nuisance(self, robot, entities: dict[str, np.ndarray]) -> np.ndarray:
+        """Nuisance values ``(m,)`` taking the ``entities`` this data set shares (see
+        :meth:`export_nuisance`) and fitting the others to ``robot``."""
+        return self.nuisance_start(robot)
+
     def residual_scale(self, default_sigma: float = 1.0) -> np.ndarray:
         """Per-residual standard deviation ``(N * rows_per_item,)`` used for weighting."""
         sigma = np.full(self.n_items, default_sigma) if self.item_sigma is None else self.item_sigma
@@ -81,11 +92,17 @@ class Observation:
 
     # shared by point-like observations ------------------------------------------------
     def batch_tcp(self, robot, names, X) -> np.ndarray:
-        """TCP poses ``(P, N, 4, 4)`` of the displaced robots (each row with its SMR)."""
-        links, base, tool, smr = robot.displaced_arrays(names, X)
-        P = X.shape[0]
-        offsets = np.concatenate([tool[:, None, :3, 3], smr], axis=1)[:, self.smr]  # (P, N, 3)
-        tools = np.broadcast_to(tool[:, None], (P, self.q.shape[0], 4, 4)).copy()
+        """TCP poses ``(P, N, 4, 4)`` of the displaced robots (each row with its SMR, joint-error
+        terms applied with their basis at the undisplaced robot: exact at X = 0)."""
+        moved = robot.displaced_arrays(names, X)
+        P, (N, n) = X.shape[0], self.q.shape
+        offsets = np.concatenate([moved.tool[:, None, :3, 3], moved.smr], axis=1)[:, self.smr]  # (P, N, 3)
+        tools = np.broadcast_to(moved.tool[:, None], (P, N, 4, 4)).copy()
         tools[..., :3, 3] = offsets
-        links = type(links)(*(v[:, None, :] for v in links))
-        return chain_frames(links, base[:, None], tools, self.q[None])
+        links = type(moved.links)(*(v[:, None, :] for v in moved.links))
+        q = np.broadcast_to(self.q, (P, N, n))
+        if moved.joint_errors is not None:
+            B, joint = joint_error_basis(robot, self.q, robot.joint_errors.names, self.approach)
+            onehot = np.eye(n)[joint]  # (m, n): which joint each term turns
+            q = q + (B[None] * moved.joint_errors[:, None, :]) @ onehot
+        return chain_frames(links, moved.base[:, None], tools, q)

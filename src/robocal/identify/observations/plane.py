@@ -44,6 +44,9 @@ from robocal.identify.observations.base import Observation
 from robocal.kinematics.jacobian import identification_jacobian
 
 MIN_CONTACTS_PER_PLANE = 3
+# |normal component| along a plane's dependent axis below which another data set's plane cannot be
+# expressed in this set's parametrisation (it stands on edge): it is fitted instead
+MIN_DEPENDENT_COMPONENT = 1e-6
 _AXES = "xyz"
 
 
@@ -158,6 +161,28 @@ class PlaneObservation(Observation):
     def nuisance_start(self, robot) -> np.ndarray:
         """The planes fitted to the tip points of ``robot`` (so the start is consistent)."""
         return self.fit_planes(self.modelled_points(robot))
+
+    def export_nuisance(self, nuisance: np.ndarray) -> dict[str, np.ndarray]:
+        """Each plane as ``{"plane<id>": [nx, ny, nz, c]}``: unit normal and offset, n . p = c (m)."""
+        coef = np.asarray(nuisance, float).reshape(-1, 3)
+        normals = self.plane_normals(nuisance)
+        scale = normals[np.arange(len(coef)), self.dependent_axis]  # n_d = 1 / sqrt(1 + a^2 + b^2)
+        return {f"plane{pid}": np.append(normals[k], coef[k, 2] * scale[k])
+                for k, pid in enumerate(self.plane_ids)}
+
+    def import_nuisance(self, robot, entities: dict[str, np.ndarray]) -> np.ndarray:
+        """Coefficients of the shared planes (in this data set's own dependent axes), the other
+        planes fitted to ``robot``'s tips."""
+        coef = self.nuisance_start(robot).reshape(-1, 3)
+        for k, pid in enumerate(self.plane_ids):
+            plane = entities.get(f"plane{pid}")
+            if plane is None:
+                continue
+            n_u, n_v, n_d = np.asarray(plane[:3])[self.perm[k]]
+            if abs(n_d) < MIN_DEPENDENT_COMPONENT:
+                continue
+            coef[k] = (-n_u / n_d, -n_v / n_d, plane[3] / n_d)
+        return coef.reshape(-1)
 
     def residuals(self, robot, nuisance) -> np.ndarray:
         return -self.signed_distance(self.modelled_points(robot), nuisance)

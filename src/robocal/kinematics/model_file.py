@@ -1,0 +1,258 @@
+"""The robot model file (YAML, loaded with ``yaml.safe_load``): one format for the catalog, for the
+user's own robot and for :meth:`Robot.save`. docs/model-yaml.md documents it; in short::
+
+    name: my_robot                      # optional: description, format
+    units: {length: mm, angle: deg}     # required: the units of every number below
+    # the geometry, exactly one of:
+    opw:  {a1, a2, b, c1, c2, c3, c4, offsets: [6], signs: [6]}    # an OPW set
+    dh:   {theta: [n], d: [n], a: [n], alpha: [n]}                 # standard DH table
+    mdh:  {alpha: [n], a: [n], theta: [n], d: [n], beta: [n]}      # Craig's modified DH (+ beta)
+    joints: [{alpha, a, theta, d, beta, limits, parallel_to_previous}, ...]  # MDH rows (save)
+    limits: [[lower, upper], ...]       # table forms (joints rows carry their own)
+    base: {xyz: [3], rotation | rpy | rotvec: ...}   # optional, see below
+    tool: {...}                         # optional
+    smr: [[x, y, z], ...]               # optional extra SMR offsets on the flange
+    nominal: {name: value, ...}         # optional: the nominal model (every parameter)
+    joint_errors: {parameters: {name: value}}         # optional non-geometric terms (SI)
+
+With a table form, ``base`` and ``tool`` wrap the frames the conversion produces (world ->
+the table's base frame, the table's flange -> TCP); with ``joints`` rows they are the model's
+frames themselves. ``opw`` next to ``joints`` is the OPW form of the nominal model (what
+:meth:`Robot.save` writes for closed-form IK). Unknown and missing keys are errors that name the
+key (and the joint).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import yaml
+from scipy.spatial.transform import Rotation
+
+from robocal.errors import ModelError
+from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
+from robocal.kinematics.convert import PARALLEL_TOL, dh_kwargs, opw_kwargs, opw_parameters
+from robocal.kinematics.joint_errors import JointErrorModel
+from robocal.kinematics.opw import GEOMETRY, OPWParameters
+from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
+
+FORMAT = "robocal-model/1"
+LINK_FIELDS = ("alpha", "a", "beta", "theta", "d")
+FORMS = ("opw", "dh", "mdh", "joints")
+_TOP_KEYS = {"format", "name", "description", "units", "limits", "base", "tool", "smr", "nominal",
+             "joint_errors", *FORMS}
+_JOINT_KEYS = {*LINK_FIELDS, "limits", "parallel_to_previous"}
+_TABLE_KEYS = {"dh": ("theta", "d", "a", "alpha"), "mdh": ("alpha", "a", "theta", "d")}
+
+
+def _number(value, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ModelError(f"{where}: expected a number, got {value!r}")
+    if not np.isfinite(value):
+        raise ModelError(f"{where}: {value!r} is not finite")
+    return float(value)
+
+
+def _numbers(values, where: str, count: int | None = None) -> np.ndarray:
+    if not isinstance(values, list):
+        raise ModelError(f"{where}: expected a list of numbers, got {values!r}")
+    if count is not None and len(values) != count:
+        raise ModelError(f"{where}: expected {count} values, got {len(values)}")
+    return np.array([_number(v, f"{where}[{i}]") for i, v in enumerate(values)])
+
+
+def _mapping(value, where: str, allowed: set, required: set = frozenset()) -> dict:
+    if not isinstance(value, dict):
+        raise ModelError(f"{where}: expected a mapping, got {value!r}")
+    unknown = sorted(set(map(str, value)) - allowed)
+    if unknown:
+        raise ModelError(f"{where}: unknown key(s) {unknown}; known: {sorted(allowed)}")
+    missing = sorted(required - set(value))
+    if missing:
+        raise ModelError(f"{where}: missing key(s) {missing}")
+    return value
+
+
+def _frame(spec, length: float, angle: float, where: str) -> np.ndarray | None:
+    if spec is None:
+        return None
+    spec = _mapping(spec, where, {"xyz", "rotation", "rpy", "rotvec"})
+    xyz = _numbers(spec.get("xyz", [0, 0, 0]), f"{where}.xyz", 3) * length
+    keys = [k for k in ("rotation", "rpy", "rotvec") if k in spec]
+    if len(keys) > 1:
+        raise ModelError(f"{where}: give only one of rotation, rpy, rotvec")
+    if not keys:
+        R = np.eye(3)
+    elif keys[0] == "rotation":
+        rows = spec["rotation"]
+        if not isinstance(rows, list) or len(rows) != 3:
+            raise ModelError(f"{where}.rotation must be 3 rows of 3 numbers")
+        R = np.array([_numbers(r, f"{where}.rotation[{i}]", 3) for i, r in enumerate(rows)])
+    else:
+        v = _numbers(spec[keys[0]], f"{where}.{keys[0]}", 3) * angle
+        R = rotvec_to_matrix(v) if keys[0] == "rotvec" else Rotation.from_euler("xyz", v).as_matrix()
+    return make_transform(R, xyz)
+
+
+def _limits(values, n: int, angle: float, where: str) -> np.ndarray:
+    if not isinstance(values, list) or len(values) != n:
+        raise ModelError(f"{where}: expected {n} [lower, upper] pairs (one per joint)")
+    return np.array([_numbers(v, f"{where}[{i}]", 2) for i, v in enumerate(values)]) * angle
+
+
+def _units(data: dict) -> tuple[float, float, bool]:
+    units = _mapping(data.get("units"), "units", {"length", "angle"}, {"length", "angle"}) \
+        if "units" in data else None
+    if units is None:
+        raise ModelError("the model must declare its units: units: {length: m|mm, angle: rad|deg}")
+    if units["length"] not in LENGTH_UNITS or units["angle"] not in ANGLE_UNITS:
+        raise ModelError(f"unknown units {units}: length m|mm, angle rad|deg")
+    return LENGTH_UNITS[units["length"]], ANGLE_UNITS[units["angle"]], units["angle"] == "deg"
+
+
+def _opw(spec, length: float, degrees: bool) -> OPWParameters:
+    spec = _mapping(spec, "opw", {*GEOMETRY, "offsets", "signs"}, {*GEOMETRY, "offsets", "signs"})
+    values = [_number(spec[k], f"opw.{k}") for k in GEOMETRY]
+    return opw_parameters(*values, _numbers(spec["offsets"], "opw.offsets", 6),
+                          _numbers(spec["signs"], "opw.signs", 6), degrees=degrees,
+                          length_unit="mm" if length == LENGTH_UNITS["mm"] else "m")
+
+
+def _joint_rows(rows, length: float, angle: float) -> dict:
+    if not isinstance(rows, list) or not rows:
+        raise ModelError("joints: expected a non-empty list of joint mappings")
+    cols = {f: [] for f in LINK_FIELDS}
+    limits, parallel = [], []
+    for i, row in enumerate(rows, 1):
+        where = f"joints[{i}] (joint {i})"
+        row = _mapping(row, where, _JOINT_KEYS, {"alpha", "a", "theta", "d"})
+        for f in LINK_FIELDS:
+            scale = length if f in ("a", "d") else angle
+            cols[f].append(_number(row.get(f, 0.0), f"{where}.{f}") * scale)
+        lim = row.get("limits")
+        limits.append([-np.pi, np.pi] if lim is None else _numbers(lim, f"{where}.limits", 2) * angle)
+        default_parallel = bool(i > 1 and abs(np.sin(cols["alpha"][-1])) < PARALLEL_TOL)
+        flag = row.get("parallel_to_previous", default_parallel)
+        if not isinstance(flag, bool):
+            raise ModelError(f"{where}.parallel_to_previous: expected true or false, got {flag!r}")
+        parallel.append(flag)
+    return {**{f: np.array(v) for f, v in cols.items()}, "limits": np.array(limits),
+            "parallel": np.array(parallel)}
+
+
+def _table(form: str, spec, length: float, angle: float, degrees: bool, n_limits) -> dict:
+    keys = _TABLE_KEYS[form]
+    optional = {"beta"} if form == "mdh" else set()
+    spec = _mapping(spec, form, {*keys, *optional}, set(keys))
+    n = len(spec[keys[0]]) if isinstance(spec[keys[0]], list) else 0
+    cols = {k: _numbers(spec[k], f"{form}.{k}", n) for k in (*keys, *optional) if k in spec}
+    if n == 0:
+        raise ModelError(f"{form}: the table needs at least one joint")
+    limits = None if n_limits is None else _limits(n_limits, n, 1.0, "limits")
+    if form == "dh":
+        return dh_kwargs(cols["theta"], cols["d"], cols["a"], cols["alpha"], degrees=degrees,
+                         length_unit="mm" if length == LENGTH_UNITS["mm"] else "m", limits=limits)
+    alpha = cols["alpha"] * angle
+    parallel = np.abs(np.sin(alpha)) < PARALLEL_TOL
+    parallel[0] = False
+    return {"alpha": alpha, "a": cols["a"] * length, "theta": cols["theta"] * angle,
+            "d": cols["d"] * length, "beta": cols.get("beta", np.zeros(n)) * angle,
+            "parallel": parallel, "limits": None if limits is None else limits * angle}
+
+
+def robot_kwargs(data) -> dict:
+    """Keyword arguments of :class:`robocal.kinematics.model.Robot` from a model mapping (the
+    module docstring's format); ModelError naming the key for anything malformed."""
+    if not isinstance(data, dict):
+        raise ModelError("a robot model must be a YAML mapping (see docs/model-yaml.md)")
+    _mapping(data, "the model", _TOP_KEYS)
+    length, angle, degrees = _units(data)
+    forms = [f for f in ("joints", "mdh", "dh") if f in data] or (["opw"] if "opw" in data else [])
+    if len(forms) != 1:
+        raise ModelError("the model needs exactly one geometry: opw, dh, mdh or joints "
+                         f"(found {[f for f in FORMS if f in data] or 'none'})")
+    form = forms[0]
+    opw = _opw(data["opw"], length, degrees) if "opw" in data else None
+    base = _frame(data.get("base"), length, angle, "base")
+    tool = _frame(data.get("tool"), length, angle, "tool")
+    if form == "joints":
+        if "limits" in data:
+            raise ModelError("limits: with joints rows, give each joint's limits in its row")
+        kw = _joint_rows(data["joints"], length, angle)
+        kw.update(base=base, tool=tool, opw=opw)
+    elif form == "opw":
+        limits = data.get("limits")
+        kw = opw_kwargs(opw, degrees=degrees, base=base, tool=tool,
+                        limits=None if limits is None else _limits(limits, 6, 1.0, "limits"))
+    else:
+        kw = _table(form, data[form], length, angle, degrees, data.get("limits"))
+        if form == "dh":
+            kw.update(base=base, tool=tool)
+        else:
+            kw.update(base=base if base is not None else np.eye(4),
+                      tool=tool if tool is not None else np.eye(4))
+        kw["opw"] = opw
+    n = len(kw["alpha"])
+    if data.get("smr") is not None:
+        smr = data["smr"]
+        if not isinstance(smr, list):
+            raise ModelError("smr: expected a list of [x, y, z] flange-frame offsets")
+        kw["smr"] = np.array([_numbers(r, f"smr[{i}]", 3) for i, r in enumerate(smr)]).reshape(-1, 3) * length
+    if data.get("joint_errors") is not None:
+        kw["joint_errors"] = JointErrorModel.from_dict(data["joint_errors"], n)
+    kw["name"] = str(data.get("name", "robot"))
+    kw["description"] = str(data.get("description", ""))
+    if data.get("nominal") is not None:
+        kw["nominal"] = data["nominal"]  # a name -> value mapping (SI), resolved by the Robot
+    return {k: v for k, v in kw.items() if v is not None}
+
+
+def _frame_dict(T: np.ndarray) -> dict:
+    return {"xyz": T[:3, 3].tolist(), "rotation": T[:3, :3].tolist()}
+
+
+def robot_to_dict(robot) -> dict:
+    """Plain-data form of a robot (SI units, ``joints`` rows: the calibrated MDH + beta)."""
+    joints = []
+    for i in range(robot.n_joints):
+        j = {f: float(getattr(robot, f)[i]) for f in LINK_FIELDS}
+        j["parallel_to_previous"] = bool(robot.parallel[i])
+        j["limits"] = robot.limits[i].tolist()
+        joints.append(j)
+    out = {
+        "format": FORMAT,
+        "name": robot.name,
+        "description": robot.description,
+        "units": {"length": "m", "angle": "rad"},
+        "joints": joints,
+        "base": _frame_dict(robot.base),
+        "tool": _frame_dict(robot.tool),
+    }
+    if len(robot.smr):
+        out["smr"] = robot.smr.tolist()
+    out["nominal"] = dict(zip(robot.geometry_names, robot.nominal.tolist(), strict=True))
+    if robot.opw is not None:
+        out["opw"] = robot.opw.to_dict()
+    if robot.joint_errors is not None:
+        out["joint_errors"] = robot.joint_errors.to_dict()
+    return out
+
+
+def dump_model(robot) -> str:
+    """The model YAML text (SI, full precision: an exact round trip)."""
+    return yaml.safe_dump(robot_to_dict(robot), sort_keys=False)
+
+
+def read_model_file(path) -> dict:
+    """Robot keyword arguments from a model YAML file (``yaml.safe_load``); errors name the file."""
+    path = Path(path)
+    text = read_text(path, "robot model YAML file", ModelError)
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ModelError(f"{path}: not valid (safe) YAML: {exc}") from None
+    try:
+        return robot_kwargs(data)
+    except ModelError as exc:
+        raise ModelError(f"{path}: {exc}") from None
