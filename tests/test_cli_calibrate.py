@@ -86,8 +86,10 @@ def test_nongeometric_terms_and_network_out(campaign):
                  "gear", "-o", str(d / "ng.yaml"), "--json", str(d / "ng.json")]) == 0
     assert "joint_errors" in (d / "ng.yaml").read_text()
     assert json.loads((d / "ng.json").read_text())["nongeometric"]
-    assert main(["--quiet", "calibrate", str(d / "cal.csv"), "--robot", "abb_irb2600", "--method", "neural",
-                 "--set", "epochs=20", "--network-out", str(d / "net.npz")]) == 0
+    neural = ["--quiet", "calibrate", str(d / "cal.csv"), "--robot", "abb_irb2600", "--method", "neural",
+              "--set", "epochs=20", "--network-out", str(d / "net.npz")]
+    assert main(neural) == 2 and not (d / "net.npz").exists()  # the epoch limit is not convergence
+    assert main([*neural, "--force"]) == 0
     from robocal.identify.neural import BPNetwork
 
     assert BPNetwork.load(d / "net.npz").outputs

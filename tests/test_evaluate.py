@@ -9,7 +9,7 @@ import pytest
 from conftest import random_robot, require_datasets
 from test_measurements import MECA
 
-from robocal import DataError, Robot
+from robocal import DataError, PlausibilityError, Robot
 from robocal.cli import main
 from robocal.data import Measurements, simulate_tracker
 from robocal.data.importer import import_tracker
@@ -60,7 +60,9 @@ def test_distance_and_plane_errors(rng):
     np.testing.assert_allclose(evaluate(MECA, data)["errors_mm"], np.repeat([-0.1, 0.2, 0.0], 2), atol=1e-9)
     sim = simulate_tracker(MECA, 40, kind="plane", n_planes=2, seed=3, noise_mm=0.0)
     assert evaluate(sim.truth, sim.data)["max"] < 1e-9
-    assert evaluate(MECA, sim.data)["max"] > 1e-3  # the nominal tip is off the planes
+    with pytest.raises(PlausibilityError, match="misses the measurements"):  # the probe is not the flange
+        evaluate(MECA, sim.data)
+    assert evaluate(MECA, sim.data, force=True)["max"] > 1e-3  # the nominal tip is off the planes
 
 
 def test_cli_evaluate_json(tmp_path):

@@ -8,6 +8,7 @@ the estimate and the before/after position statistics.
 
 from __future__ import annotations
 
+import datetime
 import json
 from dataclasses import dataclass, field
 
@@ -18,6 +19,7 @@ from robocal.data.registration import register
 from robocal.errors import DataError, IdentificationError
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability
 from robocal.identify.identifiability import analyze as analyze_jacobian
+from robocal.identify.plausibility import check_corrections, check_residual, check_spread
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
 from robocal.identify.space import ParameterSpace, State, block_of
@@ -68,6 +70,7 @@ class CalibrationResult:
     warnings: list[str] = field(default_factory=list)
     settings: dict = field(default_factory=dict)
     nongeometric: dict | None = None
+    provenance: dict = field(default_factory=dict)
 
     @property
     def state(self) -> State:
@@ -173,6 +176,7 @@ class CalibrationResult:
         out = {
             "format": RESULT_FORMAT,
             "robocal_version": __version__,
+            "provenance": self.provenance,
             "robot": {"name": self.robot.name, "description": self.robot.description,
                       "n_joints": self.robot.n_joints},
             "data": {"file": data.source, "kind": problem.kind, "n_poses": int(data.n_poses),
@@ -199,6 +203,8 @@ class CalibrationResult:
             "observations": self._observations(problem, (self.initial, self.state),
                                                self.solver.item_weights),
             "history": self.solver.history,
+            "history_units": ({"cost": "m^2", "rms": "m"} if all(d.sigma is None for d in problem.datasets)
+                              else {"cost": "1", "rms": "1 (residuals divided by sigma)"}),
             "warnings": self.warnings,
         }
         if self.nongeometric is not None:
@@ -211,8 +217,12 @@ class CalibrationResult:
                                                                 None)
         return out
 
+    def to_json(self) -> str:
+        """The result JSON text (docs/result-json.md)."""
+        return json.dumps(self.to_dict(), indent=1, allow_nan=False)
+
     def save_json(self, path) -> None:
-        write_atomic(path, json.dumps(self.to_dict(), indent=1, allow_nan=False))
+        write_atomic(path, self.to_json())
 
     def summary(self) -> str:
         """A short human summary: before -> after, largest corrections, dropped parameters."""
@@ -231,10 +241,15 @@ class CalibrationResult:
             if top:
                 lines.append(f"largest corrections ({unit}): " + ", ".join(
                     f"{r['name']} {r['correction']:+.4f} ± {r['sigma']:.4f}" for r in top))
-        if self.identifiability.dropped:
+        dropped = [n for n in self.identifiability.dropped if block_of(n) != "joint_errors"]
+        if dropped:
             lines.append("not identifiable (fixed): " + ", ".join(
-                f"{n} (~{'/'.join(self.identifiability.confounded_with[n]) or 'no effect'})"
-                for n in self.identifiability.dropped))
+                f"{n} (~{'/'.join(self.identifiability.confounded_with[n]) or 'no effect'})" for n in dropped))
+        if self.nongeometric is not None:
+            ng = self.nongeometric
+            lines.append(f"non-geometric terms {', '.join(ng['terms'])}: {len(ng['kept'])} parameters "
+                         f"estimated, {len(ng['dropped'])} left out (no effect or not separable from the "
+                         "geometry)")
         if len(self.rejected):
             lines.append(f"rejected observations: {len(self.rejected)}; without them the calibration "
                          f"set's RMS is {self.after_inliers['rms']:.4f} mm")
@@ -242,10 +257,15 @@ class CalibrationResult:
         return "\n".join(lines)
 
 
-def _start_model(robot, data, register_frames: bool):
+def _start_model(robot, data, register_frames: bool, force: bool, warnings: list[str]):
+    """The nominal model with the tracker frame and SMR offsets fitted to point or pose data; the
+    measured points must spread like the fitted model's (a unit or robot mix-up otherwise)."""
     if data.kind not in ("point", "pose") or not register_frames:
         return robot
-    return register(robot, data)
+    start = register(robot, data)
+    check_spread(data.points, start.fk(data.joints, smr=data.smr)[:, :3, 3], "the calibration data",
+                 force=force, warnings=warnings)
+    return start
 
 
 def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: float,
@@ -300,17 +320,21 @@ def _covariance(problem: CalibrationProblem, out: SolverResult, space: Parameter
     return covariance(J * sw[:, None], r * sw, int(np.count_nonzero(row_w)))
 
 
-def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data) -> Judged:
-    """Statistics of ``data`` with the two states' robots, the nuisance (planes) carried over."""
+def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data, force: bool,
+           warnings: list[str]) -> Judged:
+    """Statistics of ``data`` with the two states' robots, the nuisance (planes) carried over;
+    the calibrated model must fit them as a robot can (another robot's data otherwise)."""
     vproblem = CalibrationProblem(start, data)
     judged = tuple(vproblem.carried_state(s.robot, problem.export_nuisance(s)) for s in states)
     before, after = (position_stats(vproblem.position_errors(s)) for s in judged)
+    check_residual(after["rms"], vproblem.modelled_points(judged[1]), "the validation data", force=force,
+                   warnings=warnings)
     return Judged(data=data, problem=vproblem, states=judged, before=before, after=after)
 
 
 def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
               register_frames: bool = True, rtol: float = DEFAULT_RTOL, seed: int = 0,
-              progress=None, nongeometric=None, **options) -> CalibrationResult:
+              progress=None, nongeometric=None, force: bool = False, **options) -> CalibrationResult:
     """Calibrate ``robot`` (nominal model) against ``data`` (Measurements).
 
     method: 'lsq' (default), 'robust', or another registered solver; params: 'auto' (the
@@ -320,7 +344,9 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     k0, k1, ridge for 'robust'; checked against its signature). ``nongeometric``: joint-error
     terms identified with the geometry by lsq or robust, e.g. 'compliance,gear,backlash' (see
     robocal.kinematics.joint_errors); the calibrated robot carries them and its fk applies them.
-    Raises IdentificationError when the data cannot support the calibration.
+    Raises IdentificationError when the data cannot support the calibration, and
+    PlausibilityError when data and model disagree beyond what real robots do
+    (:mod:`robocal.identify.plausibility`; ``force=True`` turns those into warnings).
     """
     check_options(method, options)
     terms = parse_terms(nongeometric) if nongeometric else []
@@ -332,12 +358,21 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     data.check_against(robot)
     if validation is not None:
         validation.check_against(robot)
-    start = _start_model(robot, data, register_frames)
+        if validation.n_smr > data.n_smr:
+            raise DataError(f"the validation data use {validation.n_smr} SMRs but the calibration data "
+                            f"{data.n_smr}: judge a calibration on data measured with the same SMRs")
+    warnings: list[str] = []
+    start = _start_model(robot, data, register_frames, force, warnings)
     declared = start.joint_error_names + candidate_names(start.n_joints, terms)
     problem = CalibrationProblem(start.with_joint_errors(declared), data)
     state0 = problem.start(start.with_joint_errors(declared))
-    space, ident, warnings = _estimated_space(problem, state0, params, rtol, data.n_poses)
+    before = position_stats(problem.position_errors(state0))
+    check_residual(before["rms"], problem.modelled_points(state0), "the calibration data (nominal model, "
+                   "frames fitted)", force=force, warnings=warnings)
+    space, ident, more = _estimated_space(problem, state0, params, rtol, data.n_poses)
+    warnings += more
     out = _run_solver(method, problem, state0, space, seed, progress, options)
+    check_corrections(state0.robot, out.state.robot, space.robot, force=force, warnings=warnings)
     if not out.success:
         warnings.append(out.message)
     if ident.condition_class == "strong":
@@ -349,14 +384,18 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         n for n in estimated_terms if n not in start.joint_error_names])
     result = CalibrationResult(
         robot=final_robot, start=start, method=method, identifiability=ident, space=space,
-        covariance=_covariance(problem, out, space), solver=out,
-        before=position_stats(problem.position_errors(state0)),
+        covariance=_covariance(problem, out, space), solver=out, before=before,
         after=position_stats(problem.position_errors(out.state)), problem=problem, initial=state0,
         warnings=warnings, settings={"params": params if isinstance(params, str) else list(params),
-                                     "seed": seed, "rtol": rtol, **_plain(options)})
+                                     "seed": seed, "rtol": rtol, "nongeometric": ",".join(terms) or "none",
+                                     "register_frames": register_frames, "force": force, **_plain(options)},
+        provenance={"created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+                    "robocal_version": __version__,
+                    "robot": {"name": robot.name, "description": robot.description},
+                    "data": data.source, "validation": None if validation is None else validation.source})
     if validation is not None:
         result.judged = _judge(problem, start, (state0, State(final_robot, out.state.nuisance)),
-                               validation)
+                               validation, force, warnings)
     if terms:
         sigma = dict(zip(result.unknowns, result.sigma, strict=True))
         values = dict(zip(final_robot.parameter_names, final_robot.values, strict=True))

@@ -17,8 +17,10 @@ from robocal.calibration import calibrate
 from robocal.compensate import compensate
 from robocal.data.measurements import Measurements
 from robocal.ik import plan_path
+from robocal.io import write_all
 from robocal.kinematics.model import Robot
-from robocal.report.html import write_report
+from robocal.kinematics.model_file import dump_model
+from robocal.report.html import render_report
 
 
 def demo_files() -> dict[str, Path]:
@@ -87,9 +89,9 @@ def run_demo(out_dir: Path, quiet: bool = False) -> dict[str, Path]:
     out_dir.mkdir(parents=True, exist_ok=True)
     outputs = {"model": out_dir / "calibrated.yaml", "json": out_dir / "result.json",
                "report": out_dir / "report.html"}
-    robust.robot.save(outputs["model"])
-    robust.save_json(outputs["json"])
-    write_report(robust.to_dict(), outputs["report"], title="robocal demo: ABB IRB 2600, robust calibration")
+    write_all({outputs["model"]: dump_model(robust.robot), outputs["json"]: robust.to_json(),
+               outputs["report"]: render_report(robust.to_dict(),
+                                                title="robocal demo: ABB IRB 2600, robust calibration")})
     _line("")
     for label, path_ in outputs.items():
         _line(f"wrote {label:<6} {path_}")

@@ -17,6 +17,11 @@ class UnitError(DataError):
     """Units are missing, unknown or implausible for the values."""
 
 
+class PlausibilityError(DataError):
+    """Data and model disagree beyond what real robots do (a unit, the wrong robot, the wrong
+    file); ``force`` overrides it."""
+
+
 class IdentificationError(RobocalError):
     """A calibration problem cannot be solved: too few observations, rank collapse."""
 

@@ -7,6 +7,7 @@ import numpy as np
 from robocal.data.registration import apply_registration, register_frame
 from robocal.errors import DataError
 from robocal.identify.observations import observation_for
+from robocal.identify.plausibility import check_residual, check_spread
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.metrics import position_stats
 
@@ -27,23 +28,32 @@ def model_errors(robot, data) -> np.ndarray:
     return -r[obs.item_of_rows(), 0]
 
 
-def evaluate(robot, data, fit_frame: bool = False) -> dict:
+def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bool = False) -> dict:
     """Position error statistics (mm) of ``robot`` against ``data``.
 
-    ``fit_frame`` first registers the base frame and SMR offsets (for a nominal model). Returns
+    ``fit_frame`` first registers the base frame and SMR offsets on ``data`` (for a nominal
+    model); ``frame_from`` (Measurements) registers them on another data set and judges ``data``
+    with them (registered on a calibration set, judged on a validation set). Returns
     ``{"n", "rms", "mean", "max", "p95"}`` plus ``"errors_mm"`` (N,) per-row error magnitudes
     (plane/distance: signed), ``"error_vectors_mm"`` (N, 3) for point/pose data, ``"kind"``,
-    ``"n_poses"`` and, with ``fit_frame``, ``"robot"`` (the registered model) and
-    ``"registration_rms_mm"``.
+    ``"n_poses"`` and, with a fitted frame, ``"robot"`` (the registered model) and
+    ``"registration_rms_mm"``. PlausibilityError when the model misses the data by more than a
+    robot's errors can explain (``force=True``: a warning in ``"warnings"``).
     """
-    out = {}
-    if fit_frame:
-        reg = register_frame(robot, data)
+    out, warnings = {}, []
+    if fit_frame or frame_from is not None:
+        fitted_on = data if frame_from is None else frame_from
+        reg = register_frame(robot, fitted_on)
         robot = apply_registration(robot, reg)
+        check_spread(fitted_on.points, robot.fk(fitted_on.joints, smr=fitted_on.smr)[:, :3, 3],
+                     "the data the frame is fitted on", force=force, warnings=warnings)
         out["robot"] = robot
         out["registration_rms_mm"] = reg.rms * 1e3
     err = model_errors(robot, data)
     stats = position_stats(err)
+    modelled = robot.fk(data.joints, smr=data.smr if data.kind in ("point", "pose") else None,
+                        approach=data.approach)[:, :3, 3]
+    check_residual(stats["rms"], modelled, "the evaluated data", force=force, warnings=warnings)
     stats["kind"] = data.kind
     stats["n_poses"] = data.n_poses
     if err.ndim == 2:
@@ -58,4 +68,5 @@ def evaluate(robot, data, fit_frame: bool = False) -> dict:
         stats["rotation_deg"] = {"rms": float(np.sqrt(np.mean(deg**2))), "mean": float(deg.mean()),
                                  "max": float(deg.max()), "p95": float(np.percentile(deg, 95))}
     stats.update(out)
+    stats["warnings"] = warnings
     return stats

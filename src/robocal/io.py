@@ -66,6 +66,24 @@ def check_writable(paths) -> None:
                             "read-only files; make it writable or choose another name)")
 
 
+def check_outputs(outputs, inputs=()) -> None:
+    """Before any work: the output paths (None entries skipped) are distinct, none is one of the
+    ``inputs`` (a user's file is never overwritten by its own results) and all are writable
+    (:func:`check_writable`). DataError names the path and the reason."""
+    outs = [Path(p) for p in outputs if p is not None]
+    ins = {Path(p).resolve() for p in inputs if p is not None and Path(p).exists()}
+    seen = set()
+    for path in outs:
+        where = path.resolve()
+        if where in ins:
+            raise DataError(f"cannot write {path}: it is one of this command's input files (robocal "
+                            "never overwrites its inputs); choose another output name")
+        if where in seen:
+            raise DataError(f"cannot write {path} twice: give each output its own file name")
+        seen.add(where)
+    check_writable(outs)
+
+
 def _temp_for(path: Path, data: str | bytes) -> str:
     """A finished temporary file next to ``path`` holding ``data``; returns its name."""
     fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.",

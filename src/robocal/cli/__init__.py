@@ -10,8 +10,12 @@ import argparse
 import importlib
 import os
 import sys
+import traceback
 
 from robocal.errors import RobocalError
+from robocal.version import __version__
+
+DEBUG_ENV = "ROBOCAL_DEBUG"  # set to 1 to see the traceback of an internal error
 
 # subcommand name -> module in robocal.cli (one file per command)
 COMMANDS = {
@@ -23,14 +27,23 @@ COMMANDS = {
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors: what is wrong and where the help is."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="robocal",
         description="Kinematic calibration of serial industrial robots.",
         epilog="Example: robocal robots",
     )
+    parser.add_argument("--version", action="version", version=f"robocal {__version__}")
     parser.add_argument("--quiet", action="store_true", help="no progress output")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
+                                parser_class=_Parser)
     for module in COMMANDS.values():
         importlib.import_module(f"robocal.cli.{module}").add_parser(sub)
     return parser
@@ -38,7 +51,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)
+    args.argv = argv  # the command line as given (the result's provenance)
     from robocal.progress import set_quiet
 
     set_quiet(args.quiet)
@@ -53,6 +68,13 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into e.g. head, which stopped reading
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except Exception as exc:  # a bug: one line for the user, the traceback on request
+        if os.environ.get(DEBUG_ENV):
+            traceback.print_exc()
+        print(f"robocal {args.command}: internal error ({type(exc).__name__}: {exc}); this is a bug in "
+              f"robocal: please report it with the command line (set {DEBUG_ENV}=1 for the traceback)",
+              file=sys.stderr)
+        return 3
 
 
 if __name__ == "__main__":

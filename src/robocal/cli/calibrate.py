@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 EPILOG = """Examples:
   robocal calibrate data.csv --robot abb_irb2600 --validate val.csv -o calibrated.yaml --json result.json
@@ -22,7 +21,7 @@ outputs.
 
 
 RESERVED = ("seed", "method", "params", "validation", "progress", "nongeometric", "register_frames",
-            "rtol", "robot", "data")
+            "rtol", "robot", "data", "force")
 
 
 def _option(text: str):
@@ -64,6 +63,9 @@ def add_parser(sub) -> None:
                    help="method neural: save the trained network (.npz or .json, plain arrays)")
     p.add_argument("--set", dest="options", type=_option, action="append", default=[],
                    metavar="KEY=VALUE", help="a method option, e.g. k0=1.5, ridge=gcv, population=60")
+    p.add_argument("--force", action="store_true",
+                   help="proceed past the plausibility checks (units, robot, corrections) and write the "
+                        "results of a solve that did not converge, with loud warnings")
     p.set_defaults(func=run)
 
 
@@ -73,15 +75,18 @@ def run(args) -> int:
     from robocal.calibration import calibrate
     from robocal.data.measurements import Measurements
     from robocal.errors import DataError, IdentificationError
+    from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
+    from robocal.kinematics.model_file import dump_model
 
-    for out in (args.output, args.json, args.report, args.network_out):  # fail before the work
-        if out and not Path(out).resolve().parent.is_dir():
-            raise DataError(f"cannot write {out}: its folder does not exist")
+    outputs = (args.output, args.json, args.report, args.network_out)
+    check_outputs(outputs, (args.data, args.validate, args.robot))  # fail before the work
+    if args.network_out and (args.method != "neural" or not args.network_out.endswith((".npz", ".json"))):
+        raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
     robot = load_model(args.robot)
     data = Measurements.load(args.data, robot=robot)
     validation = Measurements.load(args.validate, robot=robot) if args.validate else None
-    if args.hold_out:
+    if args.hold_out is not None:
         if validation is not None:
             raise DataError("give either --validate or --hold-out, not both")
         if not 0 < args.hold_out < data.n_poses:
@@ -90,29 +95,30 @@ def run(args) -> int:
         calibration = data.first_poses(data.n_poses - args.hold_out)
         validation = data.subset(~np.isin(data.pose_id, calibration.pose_id))
         data = calibration
-    if args.network_out and (args.method != "neural" or not args.network_out.endswith((".npz", ".json"))):
-        raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
     result = calibrate(robot, data, method=args.method, params=args.params, validation=validation,
                        seed=args.seed, progress=not args.quiet, nongeometric=args.nongeometric,
-                       **dict(args.options))
-    # every output is computed before the first is written: a failure leaves nothing behind
-    report = None
+                       force=args.force, **dict(args.options))
+    result.provenance.update(command="robocal " + " ".join(args.argv), robot_spec=args.robot,
+                             data_file=args.data, validation_file=args.validate,
+                             hold_out=args.hold_out)
+    print(result.summary())
+    if not result.solver.success and not args.force:
+        raise IdentificationError(f"the solver did not converge ({result.solver.status.value}): nothing "
+                                  "written; adjust the method's options, or rerun with --force to write "
+                                  "the results anyway")
+    # every output is computed before the first is written: all are written, or none
+    texts = {}
+    if args.output:
+        texts[args.output] = dump_model(result.robot)
+    if args.json:
+        texts[args.json] = result.to_json()
     if args.report:
         from robocal.report.html import render_report
 
-        report = render_report(result.to_dict())
-    if args.output:
-        result.robot.save(args.output)
-    if args.json:
-        result.save_json(args.json)
+        texts[args.report] = render_report(result.to_dict())
     if args.network_out:
-        result.solver.network.save(args.network_out)
-    if report is not None:
-        from robocal.io import write_atomic
-
-        write_atomic(args.report, report)
-    print(result.summary())
-    for path in (args.output, args.json, args.report, args.network_out):
-        if path:
-            print(f"wrote {path}")
+        texts[args.network_out] = result.solver.network.file_content(args.network_out)
+    write_all(texts)
+    for path in texts:
+        print(f"wrote {path}")
     return 0

@@ -42,9 +42,10 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.compensate import compensate, format_csv, pose_columns, read_poses_csv
-    from robocal.io import write_atomic
+    from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import Robot, load_model
 
+    check_outputs([args.output, args.parameters], [args.calibrated, args.targets, args.nominal])
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)
     targets, layout = read_poses_csv(args.targets)
@@ -52,7 +53,7 @@ def run(args) -> int:
     names, values = pose_columns(res.corrected_targets, layout)
     joints = [f"q{i + 1}_deg" for i in range(calibrated.n_joints)]
     table = np.hstack([np.rad2deg(res.joints), values, res.converged[:, None].astype(float)])
-    text = format_csv(joints + names + ["converged"], table).replace(".0\n", "\n")
+    texts = {args.output: format_csv(joints + names + ["converged"], table).replace(".0\n", "\n")}
     if args.parameters:
         rows = []
         for r in res.parameters:
@@ -61,8 +62,8 @@ def run(args) -> int:
                          r["nominal"] * k, r["calibrated"] * k, r["delta"] * k])
         lines = ["name,unit,nominal,calibrated,delta"]
         lines += [",".join([a, u] + [repr(float(v)) for v in vals]) for a, u, *vals in rows]
-        write_atomic(args.parameters, "\n".join(lines) + "\n")
-    write_atomic(args.output, text)
+        texts[args.parameters] = "\n".join(lines) + "\n"
+    write_all(texts)
     bad = np.flatnonzero(~res.converged)
     if not args.quiet:
         print(f"compensated {len(targets)} target(s); largest model residual "

@@ -6,7 +6,8 @@ import argparse
 
 EPILOG = """Examples:
   robocal evaluate calibrated.yaml validation.csv --json val.json
-  robocal evaluate meca500.yaml meca_val.csv --fit-frame      # nominal model: fit base and SMRs first
+  robocal evaluate meca500 meca_val.csv --fit-frame                   # nominal model: fit base and SMRs first
+  robocal evaluate meca500 meca_val.csv --frame-from meca_cal.csv     # fit them on one file, judge another
 """
 
 
@@ -17,9 +18,14 @@ def add_parser(sub) -> None:
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("model", help="model YAML or catalog name")
     p.add_argument("data", help="canonical measurement CSV")
-    p.add_argument("--fit-frame", action="store_true",
-                   help="first fit only the base frame and SMR offsets (for a nominal model)")
+    frame = p.add_mutually_exclusive_group()
+    frame.add_argument("--fit-frame", action="store_true",
+                       help="first fit only the base frame and SMR offsets on DATA (for a nominal model)")
+    frame.add_argument("--frame-from", metavar="FIT.csv",
+                       help="fit the base frame and SMR offsets on FIT.csv and judge DATA with them")
     p.add_argument("--json", metavar="OUT", help="write the statistics as JSON")
+    p.add_argument("--force", action="store_true",
+                   help="report statistics the plausibility checks refuse (errors beyond any robot's)")
     p.set_defaults(func=run)
 
 
@@ -28,21 +34,25 @@ def run(args) -> int:
 
     from robocal.data.measurements import Measurements
     from robocal.evaluate import evaluate
-    from robocal.io import write_atomic
+    from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
 
+    check_outputs([args.json], [args.model, args.data, args.frame_from])
     robot = load_model(args.model)
     data = Measurements.load(args.data, robot=robot)
-    stats = evaluate(robot, data, fit_frame=args.fit_frame)
+    frame_from = Measurements.load(args.frame_from, robot=robot) if args.frame_from else None
+    stats = evaluate(robot, data, fit_frame=args.fit_frame, frame_from=frame_from, force=args.force)
     keys = ("n", "rms", "mean", "max", "p95")
     summary = {k: stats[k] for k in keys}
     out = {"model": args.model, "data": args.data, "kind": stats["kind"], "n_poses": stats["n_poses"],
-           "fit_frame": bool(args.fit_frame), "units": "mm", "evaluation": summary,
-           "errors_mm": stats["errors_mm"].tolist()}
+           "fit_frame": bool(args.fit_frame), "frame_from": args.frame_from, "units": "mm",
+           "evaluation": summary, "errors_mm": stats["errors_mm"].tolist(), "warnings": stats["warnings"]}
     if "rotation_deg" in stats:
         out["rotation_deg"] = stats["rotation_deg"]
     if args.json:
-        write_atomic(args.json, json.dumps(out, indent=2) + "\n")
+        write_all({args.json: json.dumps(out, indent=2) + "\n"})
+    for warning in stats["warnings"]:
+        print(f"WARNING: {warning}")
     if not args.quiet:
         print(f"{stats['kind']} errors of {args.model} on {args.data} ({stats['n_poses']} poses): "
               + ", ".join(f"{k} {summary[k]:.4f} mm" if k != "n" else f"n {summary[k]}" for k in keys))

@@ -28,22 +28,26 @@ def run(args) -> int:
     from pathlib import Path
 
     from robocal.errors import DataError
+    from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
-    from robocal.kinematics.urdf import from_urdf, write_urdf
+    from robocal.kinematics.model_file import dump_model
+    from robocal.kinematics.urdf import from_urdf, not_carried, to_urdf
 
     if not args.urdf and not args.yaml:
         raise DataError("nothing to write: give --urdf OUT and/or --yaml OUT")
+    check_outputs([args.urdf, args.yaml], [args.model])
     if Path(args.model).suffix.lower() == ".urdf":
         robot = from_urdf(Path(args.model), tip=args.tip)
     else:
         robot = load_model(args.model)
-    written = []
+    texts = {}
     if args.urdf:
-        write_urdf(robot, args.urdf)
-        written.append(args.urdf)
+        texts[args.urdf] = to_urdf(robot)
+        if not_carried(robot):
+            print(f"WARNING: {not_carried(robot)}")
     if args.yaml:
-        robot.save(args.yaml)
-        written.append(args.yaml)
+        texts[args.yaml] = dump_model(robot)
+    write_all(texts)
     if not args.quiet:
-        print(f"{robot.name} ({robot.n_joints} joints): wrote {', '.join(written)}")
+        print(f"{robot.name} ({robot.n_joints} joints): wrote {', '.join(texts)}")
     return 0

@@ -38,7 +38,10 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from robocal.data.importer import import_tracker
+    from robocal.io import check_outputs
 
+    specs = [spec.split(":cols=")[0] for spec in [args.joints, *args.points, *args.base] if ":" in spec]
+    check_outputs([args.output], [*args.raw, *specs])
     result = import_tracker(args.raw, joints=args.joints, points=args.points, base=args.base,
                             average=not args.keep_repeats, skip_rows=args.skip_rows)
     result.data.save(args.output)

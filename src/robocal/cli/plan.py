@@ -40,9 +40,10 @@ def run(args) -> int:
 
     from robocal.compensate import format_csv, read_poses_csv
     from robocal.ik.path import plan_path
-    from robocal.io import write_atomic
+    from robocal.io import check_outputs, write_atomic
     from robocal.kinematics.model import load_model
 
+    check_outputs([args.output], [args.poses, args.robot])
     robot = load_model(args.robot)
     poses, _ = read_poses_csv(args.poses)
     weights = None if args.weights is None else _floats(args.weights)

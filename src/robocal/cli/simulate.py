@@ -39,11 +39,15 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    from pathlib import Path
+
     import numpy as np
 
     from robocal.data.simulate import simulate_tracker, write_simulation
+    from robocal.io import check_outputs
     from robocal.kinematics.model import load_model
 
+    check_outputs([args.output, args.truth, Path(args.truth).with_suffix(".sim.json")], [args.robot])
     robot = load_model(args.robot)
     box = None if args.box is None else np.array(args.box).reshape(2, 3) * 1e-3
     result = simulate_tracker(robot, args.poses, noise_mm=args.noise_mm, noise_model=args.noise_model,

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.data.measurements import Measurements
+from robocal.data.measurements import MAX_JOINT_RAD, MAX_TRACKER_RANGE_M, Measurements
 from robocal.errors import DataError, UnitError
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 
@@ -104,11 +104,17 @@ def read_table(path, skip_rows: int = 0) -> tuple[np.ndarray, np.ndarray]:
         if ln <= skip_rows or not s or s.startswith("#"):
             continue
         cells = [c for c in _SPLIT.split(s) if c]
-        try:
-            rows.append([float(c) for c in cells])
-        except ValueError:
-            raise DataError(f"{path}, line {ln}: non-numeric value in {s[:60]!r}; if the file has a "
-                            "header, skip it with --skip-rows") from None
+        values = []
+        for col, cell in enumerate(cells):
+            try:
+                values.append(float(cell))
+            except ValueError:
+                raise DataError(f"{path}, line {ln}, column {col}: {cell[:40]!r} is not a number; if the "
+                                "file has a header, skip it with --skip-rows") from None
+            if np.isinf(values[-1]):
+                raise DataError(f"{path}, line {ln}, column {col}: {cell[:40]!r} is infinite; fix or "
+                                "remove that reading (a failed reading may be NaN or all zeros)")
+        rows.append(values)
         lines.append(ln)
         if len(rows[-1]) != len(rows[0]):
             raise DataError(f"{path}, line {ln}: {len(rows[-1])} values but the first data line has "
@@ -118,11 +124,23 @@ def read_table(path, skip_rows: int = 0) -> tuple[np.ndarray, np.ndarray]:
     return np.array(rows, dtype=float), np.array(lines, dtype=np.int64)
 
 
-def _columns(table: np.ndarray, spec: ColumnSpec, path, role: str) -> np.ndarray:
+def _columns(table: np.ndarray, lines: np.ndarray, spec: ColumnSpec, path, role: str) -> np.ndarray:
+    """The spec's columns in SI; a value no robot or tracker can produce is a unit error naming
+    its file, line, column and value."""
     if max(spec.cols) >= table.shape[1]:
         raise DataError(f"{path}: {role} columns {list(spec.cols)} but the file has only "
                         f"{table.shape[1]} columns (0..{table.shape[1] - 1})")
-    return table[:, list(spec.cols)] * spec.scale
+    values = table[:, list(spec.cols)] * spec.scale
+    limit, what = ((MAX_JOINT_RAD, "joint angle beyond two turns") if spec.unit in ANGLE_UNITS
+                   else (MAX_TRACKER_RANGE_M, "point beyond any tracker's range"))
+    with np.errstate(invalid="ignore"):
+        absurd = np.abs(values) > limit
+    if absurd.any():
+        r, c = np.argwhere(absurd)[0]
+        raise UnitError(f"{path}, line {lines[r]}, column {spec.cols[c]}: {table[r, spec.cols[c]]:.6g} "
+                        f"{spec.unit} is a {what}: the unit ({spec.unit}) is probably wrong, or the "
+                        "reading is corrupt")
+    return values
 
 
 @dataclass
@@ -209,18 +227,18 @@ def _read_blocks(raw: list[str], jspec: ColumnSpec, pspecs: list[ColumnSpec], sk
     blocks = []
     if jspec.file is not None:
         jt, jl = read_table(jspec.file, skip_rows)
-        q = _columns(jt, jspec, jspec.file, "joints")
+        q = _columns(jt, jl, jspec, jspec.file, "joints")
         for s, ps in enumerate(pspecs):
             pt, pl = read_table(ps.file, skip_rows)
             if len(pt) != len(jt):
                 raise DataError(f"{ps.file} has {len(pt)} rows but {jspec.file} has {len(jt)}: a points "
                                 "file needs one row per joints row")
-            blocks.append((q, _columns(pt, ps, ps.file, "points"), s, jl, pl, ps.file, jspec.file))
+            blocks.append((q, _columns(pt, pl, ps, ps.file, "points"), s, jl, pl, ps.file, jspec.file))
     else:
         for f in raw:
             t, lines = read_table(f, skip_rows)
-            blocks.append((_columns(t, jspec, f, "joints"), _columns(t, pspecs[0], f, "points"), 0, lines,
-                           lines, f, f))
+            q, p = _columns(t, lines, jspec, f, "joints"), _columns(t, lines, pspecs[0], f, "points")
+            blocks.append((q, p, 0, lines, lines, f, f))
     return blocks
 
 
@@ -297,7 +315,7 @@ def _drift(spec: ColumnSpec, skip_rows: int) -> dict:
     if spec.file is None:
         raise DataError("a --base spec needs its FILE, e.g. measured_base_1.txt:cols=0-2:mm")
     t, lines = read_table(spec.file, skip_rows)
-    p = _columns(t, spec, spec.file, "base points")
+    p = _columns(t, lines, spec, spec.file, "base points")
     bad, _ = _failed(p, np.zeros((len(p), 1)))
     p, lines = p[~bad], lines[~bad]
     if len(p) == 0:

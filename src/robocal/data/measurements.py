@@ -52,6 +52,7 @@ _PLAIN_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row", "qw", "qx", "
 _INT_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row")
 # A laser tracker's range is below ~80 m; anything farther is a unit mistake whatever the robot.
 MAX_TRACKER_RANGE_M = 100.0
+MAX_JOINT_RAD = 4 * np.pi  # no joint turns more than two turns either way
 
 
 def _int_array(values, name: str, n: int) -> np.ndarray:
@@ -555,7 +556,7 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     table, line_no = _table(rows[1:], header, name, header_line)
     col = {h: table[:, i] for i, h in enumerate(header)}
     joints = np.stack([col[h] * roles[h][2] for h in joint_cols], axis=1)
-    if np.abs(joints).max() > 4 * np.pi and roles[joint_cols[0]][2] == 1.0:
+    if np.abs(joints).max() > MAX_JOINT_RAD and roles[joint_cols[0]][2] == 1.0:
         ln = line_no[int(np.argmax(np.abs(joints).max(axis=1)))]
         raise UnitError(f"{name}, line {ln}: joint values up to {np.abs(joints).max():.4g} rad (> 2 turns): "
                         "these look like degrees; name the columns q1_deg..")

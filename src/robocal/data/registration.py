@@ -17,8 +17,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.errors import DataError, IdentificationError
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix, skew
+
+# Smallest singular value (relative to the largest) of the column-normalised registration Jacobian
+# for which the poses still fix the frame and the SMR offsets (identical or collinear poses do not).
+REGISTRATION_RCOND = 1e-6
 
 
 @dataclass(frozen=True)
@@ -103,6 +107,13 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
         t = t + dx[6:].reshape(k, 3)
         if np.abs(dx).max() < 1e-13:
             break
+    Jn = J.reshape(-1, 6 + 3 * k)
+    sv = np.linalg.svd(Jn / np.maximum(np.linalg.norm(Jn, axis=0), 1e-300), compute_uv=False)
+    if sv[-1] < REGISTRATION_RCOND * sv[0]:
+        raise IdentificationError(
+            f"the pose set is degenerate: its {data.n_poses} poses cannot fix the tracker frame and the SMR "
+            "offsets (they barely change the flange's orientation or position): measure poses spread "
+            "over the workspace and over the wrist's orientations")
     local = np.einsum("nij,nj->ni", Rf, t[smr]) + of
     res = p - (local @ B[:3, :3].T + B[:3, 3])
     tool_R = None

@@ -35,10 +35,11 @@ import numpy as np
 
 from robocal.damped_least_squares import Status
 from robocal.errors import IdentificationError
-from robocal.identify.plain_io import load_plain, save_plain
+from robocal.identify.plain_io import encode_plain, load_plain
 from robocal.identify.population import Stagnation
 from robocal.identify.solvers import SolverResult, history_entry
 from robocal.identify.space import ParameterSpace, State
+from robocal.io import write_atomic
 
 FORMAT = "robocal-bpnet/1"
 _FIELDS = ("W1", "b1", "W2", "b2")
@@ -80,9 +81,13 @@ class BPNetwork:
                 "units": "inputs mm (position) and mrad (orientation); outputs mm and mrad",
                 **{f: getattr(self, f).tolist() for f in _FIELDS}}
 
+    def file_content(self, path) -> str | bytes:
+        """What :meth:`save` writes to ``path`` (``.json`` text or ``.npz`` bytes, plain arrays)."""
+        return encode_plain(path, self.to_dict(), "BP network")
+
     def save(self, path) -> None:
         """Write ``.json`` or ``.npz`` (plain arrays) atomically."""
-        save_plain(path, self.to_dict(), "BP network")
+        write_atomic(path, self.file_content(path))
 
     @classmethod
     def load(cls, path) -> BPNetwork:

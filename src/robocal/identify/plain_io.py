@@ -12,17 +12,22 @@ from robocal.errors import DataError
 from robocal.io import read_text, write_atomic
 
 
-def save_plain(path, data: dict, what: str) -> None:
-    """Write ``data`` (numbers, strings, lists/arrays of them) to ``.json`` or ``.npz``."""
+def encode_plain(path, data: dict, what: str) -> str | bytes:
+    """The file content of ``data`` (numbers, strings, lists/arrays of them) for ``path``'s
+    suffix: JSON text for ``.json``, npz bytes for ``.npz``."""
     path = Path(path)
     if path.suffix == ".json":
-        write_atomic(path, json.dumps(data, indent=1))
-        return
+        return json.dumps(data, indent=1)
     if path.suffix != ".npz":
         raise DataError(f"{path}: save a {what} as .json or .npz")
     buffer = io.BytesIO()
     np.savez(buffer, **{k: np.asarray(v) for k, v in data.items()})
-    write_atomic(path, buffer.getvalue())
+    return buffer.getvalue()
+
+
+def save_plain(path, data: dict, what: str) -> None:
+    """Write ``data`` to ``.json`` or ``.npz`` atomically (:func:`encode_plain`)."""
+    write_atomic(path, encode_plain(path, data, what))
 
 
 def load_plain(path, what: str, fmt: str) -> dict:

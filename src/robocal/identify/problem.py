@@ -143,6 +143,11 @@ class CalibrationProblem:
             nu.append(nk)
         return np.concatenate(r, axis=-1) / self.sigma, np.concatenate(nu, axis=-1)
 
+    def modelled_points(self, state: State) -> np.ndarray:
+        """``(N, 3)`` modelled TCP (SMR, probe tip) positions of every data row (m)."""
+        return np.concatenate([obs.modelled_points(state.robot, state.nuisance[nu])
+                               for obs, nu in zip(self.observations, self._nuisance, strict=True)])
+
     def position_errors(self, state: State) -> np.ndarray:
         """``(n_items,)`` unweighted position error of each measurement item (m)."""
         return np.concatenate([obs.position_errors(state.robot, state.nuisance[nu])

@@ -72,15 +72,33 @@ def _attr(text: str) -> str:
 
 
 # ----------------------------------------------------------------- export
+def not_carried(robot: Robot) -> str | None:
+    """What a URDF cannot hold of ``robot`` (its joint-error terms and extra SMRs), as a sentence;
+    None when it holds everything."""
+    parts = []
+    if robot.joint_errors is not None:
+        parts.append(f"the non-geometric joint-error terms {', '.join(robot.joint_errors.names)} "
+                     "(a URDF has rigid links and exact joints)")
+    if len(robot.smr):
+        parts.append(f"the {len(robot.smr)} extra SMR offset(s)")
+    if not parts:
+        return None
+    return ("the URDF carries the geometry only, not " + " nor ".join(parts)
+            + ": its forward kinematics is the model's without them")
+
+
 def to_urdf(robot: Robot, name: str | None = None) -> str:
     """URDF text of ``robot`` (lengths m, angles rad) whose ``world`` -> ``tool0`` forward
-    kinematics equals ``robot.fk``; joint limits are the model's."""
+    kinematics equals ``robot.fk`` without what :func:`not_carried` names; joint limits are the
+    model's."""
     name = robot.name if name is None else name
+    missing = not_carried(robot)
     lines = ['<?xml version="1.0"?>',
              f"<!-- written by robocal from model {_attr(robot.name).replace('-', '&#45;')}: "
              "frames are the model's "
              "MDH+beta frames; effort and velocity limits are not part of a kinematic model "
              "(0 here), set them for your robot -->",
+             *([] if missing is None else [f"<!-- NOTE: {_attr(missing).replace('-', '&#45;')} -->"]),
              f'<robot name="{_attr(name)}">', '  <link name="world"/>',
              '  <joint name="base_joint" type="fixed">', '    <parent link="world"/>',
              '    <child link="base_link"/>', f"    {_origin(robot.base)}", "  </joint>",

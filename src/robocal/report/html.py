@@ -19,6 +19,7 @@ from robocal.io import write_atomic
 from robocal.report.iso9283 import pose_accuracy_repeatability
 
 MAX_3D_POINTS = 4000
+MAX_CORRELATION_NAMES = 36  # a larger heat map's labels cannot be read
 WORST = 10
 
 _CSS = """
@@ -120,6 +121,8 @@ class _ObsErrors:
         self.pose_id = np.asarray(_or(obs.get("pose_id"), np.arange(n)))
         self.source_row = np.asarray(_or(obs.get("source_row"), np.arange(n)))
         self.smr = np.asarray(_or(obs.get("smr"), np.zeros(n, int)))
+        weight = obs.get("weight")
+        self.rejected = np.zeros(n, bool) if weight is None else np.asarray(weight, float) == 0
         self.vectors = None
         if self.after_pts is None or self.before_pts is None:
             self.before = self.after = None
@@ -158,7 +161,9 @@ def _summary(result: dict) -> str:
     n_obs = data.get("n_observations")
     used = None if n_obs is None or n_rej is None else n_obs - n_rej
     settings = result.get("settings") or {}
+    prov = result.get("provenance") or {}
     facts = [("robot", f"{esc(robot.get('name'))} <span class='note'>{esc(robot.get('description'))}</span>"),
+             *_provenance(prov),
              ("joints", esc(robot.get("n_joints"))),
              ("data set", f"{esc(data.get('file'))} ({esc(data.get('kind'))})"),
              ("poses / observations", f"{esc(data.get('n_poses'))} / {esc(n_obs)}"),
@@ -168,7 +173,7 @@ def _summary(result: dict) -> str:
              ("settings", ", ".join(f"{esc(k)}={esc(v)}" for k, v in settings.items()) or "&ndash;")]
     if "converged" in result or "message" in result:
         state = "converged" if result.get("converged") else "<b class='bad'>not converged</b>"
-        facts.append(("solver", f"{state} ({esc(result.get('message'))})"))
+        facts.append(("solver", f"{state} ({esc(result.get('status'))}: {esc(result.get('message'))})"))
     facts.append(("robocal", esc(result.get("robocal_version"))))
     out = [_table(["", ""], [[f"<b>{k}</b>", v] for k, v in facts], left=2)]
     b, a = result.get("before") or {}, result.get("after") or {}
@@ -183,9 +188,10 @@ def _summary(result: dict) -> str:
             start = f"{_num(s0.get('rms'))} &rarr; " if s0 else ""
             kpis.append(f"<div><span>{label}</span><b class='good'>{_num(s1['rms'])} mm</b>"
                         f"<span>{start}{_num(s1['rms'])} mm{gain}</span></div>")
-    if a.get("max") is not None:
-        kpis.append(f"<div><span>calibration max</span><b>{_num(a['max'])} mm</b>"
-                    f"<span>before {_num(b.get('max'))} mm</span></div>")
+    headline = a_in or a  # rejected observations are not the robot's accuracy
+    if headline.get("max") is not None:
+        kpis.append(f"<div><span>calibration max{', inliers' if a_in else ''}</span>"
+                    f"<b>{_num(headline['max'])} mm</b><span>before {_num(b.get('max'))} mm</span></div>")
     rows = [r for r in (_stats_row("calibration set, before", b), _stats_row("calibration set, after", a),
                         _stats_row("calibration set, after, rejected left out", a_in),
                         _stats_row("validation set, before", result.get("validation_before")),
@@ -195,6 +201,24 @@ def _summary(result: dict) -> str:
     warnings = result.get("warnings") or []
     out += [f"<div class='warn'>{esc(w)}</div>" for w in warnings]
     return "".join(out)
+
+
+def _provenance(prov: dict) -> list[tuple[str, str]]:
+    """Where the numbers came from: when, which inputs, which split (pre-escaped rows)."""
+    rows = []
+    if prov.get("created"):
+        rows.append(("created", esc(prov["created"])))
+    if prov.get("command"):
+        rows.append(("command", f"<code>{esc(prov['command'])}</code>"))
+    if prov.get("robot_spec"):
+        rows.append(("robot model from", esc(prov["robot_spec"])))
+    for key, label in (("data_file", "calibration file"), ("validation_file", "validation file")):
+        if prov.get(key):
+            rows.append((label, esc(prov[key])))
+    if prov.get("hold_out"):
+        rows.append(("hold-out split", f"the last {esc(prov['hold_out'])} poses of the calibration file "
+                                       "judge the calibration on the others"))
+    return rows
 
 
 def _subsample(n: int) -> np.ndarray:
@@ -222,13 +246,15 @@ def _errors_section(cal: _ObsErrors, val: _ObsErrors | None) -> str:
     idx = _subsample(len(pts))
     note = "" if idx.size == len(pts) else f" ({idx.size} of {len(pts)} points shown)"
     what = "measured points" if cal.measured is not None else "modelled probe-tip points (no measured points)"
-    figs = [_figure(plots.points_3d(pts[idx], cal.after[idx], f"after: {cal.label}"),
-                    f"3-D view of the {what} coloured by the residual after calibration{note}.")]
+    rejected = ("; rejected observations (robust) are marked &times; and left out of the colour scale"
+                if cal.rejected.any() else "")
+    figs = [_figure(plots.points_3d(pts[idx], cal.after[idx], f"after: {cal.label}", cal.rejected[idx]),
+                    f"3-D view of the {what} coloured by the residual after calibration{note}{rejected}.")]
     if cal.vectors is not None:
-        worst = np.argsort(-cal.after, kind="stable")[:WORST]
+        worst = np.argsort(np.where(cal.rejected, -np.inf, -cal.after), kind="stable")[:WORST]
         figs.append(_figure(plots.worst_vectors(pts[idx], cal.vectors, worst),
                             f"Residual vectors (measured &minus; calibrated model) of the {worst.size} "
-                            "worst observations, magnified."))
+                            "worst observations that were not rejected, magnified."))
     out.append(f"<div class='row'>{''.join(figs)}</div>")
     out.append(_worst_table(cal))
     return "".join(out)
@@ -239,7 +265,8 @@ def _worst_table(cal: _ObsErrors) -> str:
     header = ["pose id", "source row", "smr", "before (mm)", "after (mm)"]
     rows = []
     for i in worst:
-        row = [esc(cal.pose_id[i]), esc(cal.source_row[i]), esc(cal.smr[i]), _num(float(cal.before[i])),
+        row = [esc(cal.pose_id[i]) + (" <b class='bad'>rejected</b>" if cal.rejected[i] else ""),
+               esc(cal.source_row[i]), esc(cal.smr[i]), _num(float(cal.before[i])),
                _num(float(cal.after[i]))]
         if cal.vectors is not None:
             row += [_num(float(v)) for v in cal.vectors[i]]
@@ -335,9 +362,17 @@ def _correlation(result: dict) -> str:
     iu = np.triu_indices(len(names), 1)
     order = np.argsort(-np.abs(m[iu]), kind="stable")[:10]
     rows = [[esc(names[iu[0][k]]), esc(names[iu[1][k]]), f"{m[iu][k]:+.3f}"] for k in order]
-    return (_figure(plots.correlation([str(n) for n in names], m),
+    shown = np.arange(len(names))
+    note = ""
+    if len(names) > MAX_CORRELATION_NAMES:  # the parameters most correlated with another one
+        strongest = np.abs(m - np.eye(len(names))).max(axis=1)
+        shown = np.sort(np.argsort(-strongest, kind="stable")[:MAX_CORRELATION_NAMES])
+        note = (f" The {shown.size} of {len(names)} parameters with the strongest correlation to another "
+                f"one are shown (each |r| &ge; {strongest[shown].min():.2f}); the others are less "
+                "correlated.")
+    return (_figure(plots.correlation([str(names[i]) for i in shown], m[np.ix_(shown, shown)]),
                     "Correlation of the estimated parameters "
-                    "(1: fully correlated, &minus;1: anti-correlated).")
+                    f"(1: fully correlated, &minus;1: anti-correlated).{note}")
             + "<h3>Strongest correlations</h3>" + _table(["parameter", "parameter", "correlation"], rows,
                                                           left=2))
 
@@ -382,15 +417,15 @@ def _history(result: dict) -> str:
     from robocal.report import plots
 
     hist = result.get("history") or []
-    if len(hist) < 2:
+    values = [h.get("rms") for h in hist]
+    if len(hist) < 2 or not all(isinstance(v, int | float) and math.isfinite(v) for v in values):
         return ""
-    for key in ("rms", "cost", "best", "scale"):
-        values = [h.get(key) for h in hist]
-        if all(isinstance(v, int | float) and math.isfinite(v) for v in values):
-            it = np.asarray([h.get("iteration", k) for k, h in enumerate(hist)], dtype=float)
-            return _figure(plots.history(it, np.asarray(values, float), key),
-                           f"Solver history: {esc(key)} per iteration.")
-    return ""
+    unit = (result.get("history_units") or {}).get("rms", "m")
+    scale, label = (1e3, "RMS item error (mm)") if unit == "m" else (1.0, f"RMS item error ({esc(unit)})")
+    it = np.asarray([h.get("iteration", k) for k, h in enumerate(hist)], dtype=int)
+    return _figure(plots.history(it, np.asarray(values, float) * scale, label),
+                   f"Solver history: the {label} of the best estimate per iteration "
+                   f"({esc(result.get('method'))}).")
 
 
 # ----------------------------------------------------------------- page

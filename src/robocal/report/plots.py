@@ -15,12 +15,18 @@ import numpy as np
 try:
     from matplotlib import colors as mcolors
     from matplotlib.figure import Figure
+    from matplotlib.ticker import MaxNLocator
 except ImportError as exc:  # pragma: no cover - exercised only without the extra
     from robocal.errors import RobocalError
 
     raise RobocalError("the HTML report needs matplotlib: pip install 'robocal[report]'") from exc
 
 BEFORE, AFTER, VALIDATION = "#d95f02", "#1b9e77", "#7570b3"
+REJECTED = "#e7298a"
+# Scatters with more points than this are drawn as an embedded image (SVG paths of thousands of
+# markers made a 1500-point report 3 MB), at RASTER_DPI; axes, labels and text stay vector.
+MAX_VECTOR_POINTS = 400
+RASTER_DPI = 100
 CMAP = "viridis"
 _RC = {"svg.fonttype": "none", "svg.hashsalt": "robocal", "font.size": 9, "axes.grid": True,
        "grid.alpha": 0.3, "axes.spines.top": False, "axes.spines.right": False}
@@ -42,7 +48,7 @@ def to_svg(fig: Figure) -> str:
 
     buf = io.StringIO()
     with matplotlib.rc_context(_RC):
-        fig.savefig(buf, format="svg", metadata={"Date": None, "Creator": None})
+        fig.savefig(buf, format="svg", dpi=RASTER_DPI, metadata={"Date": None, "Creator": None})
     text = buf.getvalue()
     text = text[text.index("<svg"):]
     prefix = f"f{next(_counter)}-"
@@ -85,8 +91,11 @@ def sorted_errors(before: np.ndarray, after: np.ndarray, label: str = "position 
         ax.bar(x, np.sort(before)[::-1], width=0.9, color=BEFORE, alpha=0.55, label="before")
         ax.bar(x, np.sort(after)[::-1], width=0.9, color=AFTER, label="after")
     else:
-        ax.fill_between(x, np.sort(before)[::-1], step="mid", color=BEFORE, alpha=0.45, label="before")
-        ax.fill_between(x, np.sort(after)[::-1], step="mid", color=AFTER, alpha=0.9, label="after")
+        dense = before.size > MAX_VECTOR_POINTS
+        ax.fill_between(x, np.sort(before)[::-1], step="mid", color=BEFORE, alpha=0.45, label="before",
+                        rasterized=dense)
+        ax.fill_between(x, np.sort(after)[::-1], step="mid", color=AFTER, alpha=0.9, label="after",
+                        rasterized=dense)
     _log_if_wide(ax, np.concatenate([before, after]), "y")
     ax.set_xlabel("observations, sorted by error")
     ax.set_ylabel(label)
@@ -136,8 +145,11 @@ def error_vs_joints(joints_deg: np.ndarray, before: np.ndarray, after: np.ndarra
         if j >= n:
             ax.set_visible(False)
             continue
-        ax.scatter(joints_deg[:, j], before, s=6, color=BEFORE, alpha=0.6, lw=0, label="before")
-        ax.scatter(joints_deg[:, j], after, s=6, color=AFTER, alpha=0.9, lw=0, label="after")
+        dense = before.size > MAX_VECTOR_POINTS
+        ax.scatter(joints_deg[:, j], before, s=6, color=BEFORE, alpha=0.6, lw=0, label="before",
+                   rasterized=dense)
+        ax.scatter(joints_deg[:, j], after, s=6, color=AFTER, alpha=0.9, lw=0, label="after",
+                   rasterized=dense)
         _log_if_wide(ax, np.concatenate([before, after]), "y")
         ax.set_xlabel(f"q{j + 1} (deg)")
         if j % cols == 0:
@@ -148,12 +160,21 @@ def error_vs_joints(joints_deg: np.ndarray, before: np.ndarray, after: np.ndarra
 
 
 @_styled
-def points_3d(points: np.ndarray, values: np.ndarray, label: str) -> Figure:
-    """3-D scatter of ``points`` ``(N, 3)`` (mm) coloured by ``values`` ``(N,)``."""
+def points_3d(points: np.ndarray, values: np.ndarray, label: str,
+              rejected: np.ndarray | None = None) -> Figure:
+    """3-D scatter of ``points`` ``(N, 3)`` (mm) coloured by ``values`` ``(N,)``; ``rejected`` (N,)
+    marks points drawn as crosses and left out of the colour scale."""
     fig = _figure(6.0, 4.6, left=0.0, right=0.0, bottom=0.0, top=0.0)
     ax = fig.add_subplot(projection="3d")
-    sc = ax.scatter(points[:, 0], points[:, 1], points[:, 2], c=values, cmap=CMAP, s=9,
-                    depthshade=False)
+    rejected = np.zeros(len(points), bool) if rejected is None else np.asarray(rejected, bool)
+    keep = ~rejected if (~rejected).any() else np.ones(len(points), bool)
+    norm = mcolors.Normalize(float(values[keep].min()), float(values[keep].max()))
+    sc = ax.scatter(points[keep, 0], points[keep, 1], points[keep, 2], c=values[keep], cmap=CMAP, norm=norm,
+                    s=9, depthshade=False, rasterized=bool(keep.sum() > MAX_VECTOR_POINTS))
+    if rejected.any():
+        ax.scatter(points[rejected, 0], points[rejected, 1], points[rejected, 2], marker="x", s=25,
+                   color=REJECTED, depthshade=False, label="rejected")
+        ax.legend(frameon=False, loc="upper left")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
     ax.set_zlabel("z (mm)")
@@ -176,7 +197,8 @@ def worst_vectors(points: np.ndarray, residuals: np.ndarray, worst: np.ndarray) 
     (measured - model, mm) scaled so the longest is 15 % of the workspace size."""
     fig = _figure(5.2, 4.6, left=0.0, right=0.0, bottom=0.0, top=0.3)
     ax = fig.add_subplot(projection="3d")
-    ax.scatter(points[:, 0], points[:, 1], points[:, 2], color="#bbbbbb", s=4, depthshade=False)
+    ax.scatter(points[:, 0], points[:, 1], points[:, 2], color="#bbbbbb", s=4, depthshade=False,
+               rasterized=bool(len(points) > MAX_VECTOR_POINTS))
     p, r = points[worst], residuals[worst]
     longest = float(np.linalg.norm(r, axis=1).max()) if worst.size else 0.0
     size = float((points.max(axis=0) - points.min(axis=0)).max()) or 1.0
@@ -217,6 +239,7 @@ def history(iterations: np.ndarray, values: np.ndarray, label: str) -> Figure:
     ax.plot(iterations, values, "o-", color=AFTER, ms=3)
     if (values > 0).all() and values.max() / max(values.min(), 1e-300) > 20:
         ax.set_yscale("log")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("iteration")
     ax.set_ylabel(label)
     return fig

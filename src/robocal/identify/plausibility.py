@@ -1,0 +1,116 @@
+"""Plausibility guards: data and model that disagree beyond what real robots do are a mistake
+(a unit, the wrong robot, the wrong file), not a calibration to report.
+
+What real robots' errors can be, and the limits derived from it (named once here):
+
+- An industrial arm's nominal model misses absolute targets by 0.5-3 mm (10 mm after a crash or
+  a bad remastering: a joint zero 0.5 deg off at 1 m). After the tracker frame and the SMR
+  offsets are fitted, no geometric error leaves more than ``MAX_NOMINAL_ERROR_MM`` of RMS
+  residual, nor more than ``MAX_NOMINAL_ERROR_FRACTION`` of the spread of the measured points (the
+  RMS distance from their centroid: a big robot's errors grow with its size). The real data sets
+  leave 0.19 mm (Meca500) and 0.93 mm (IRB 120); the mistakes this catches leave 50-240 mm.
+- A length unit error scales the measured points by 1000 (or 1/1000) against the model; the
+  wrong robot or joint angles in the wrong unit change the spread by factors of 2-40. The
+  measured spread must be within ``SPREAD_RATIO`` of the fitted model's at the same joints.
+- Calibration corrects link lengths by fractions of a millimetre (a few mm at most on big
+  robots) and angles by hundredths of a degree (a degree for a badly mastered joint zero). A
+  correction of a link length beyond ``MAX_LENGTH_CORRECTION_MM`` or
+  ``MAX_LENGTH_CORRECTION_FRACTION`` of the robot's reach, or of a joint or axis angle beyond
+  ``MAX_ANGLE_CORRECTION_DEG``, is the solver absorbing a mistake.
+
+Each check raises :class:`robocal.errors.PlausibilityError` naming what is probably wrong;
+``force=True`` (``--force``) turns it into a warning for users who know better.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robocal.errors import PlausibilityError
+from robocal.identify.space import block_of
+
+MAX_NOMINAL_ERROR_MM = 10.0
+MAX_NOMINAL_ERROR_FRACTION = 0.05
+SPREAD_RATIO = 3.0
+UNIT_RATIO = 300.0  # a spread ratio beyond this (either way) is a length unit (x1000)
+MAX_LENGTH_CORRECTION_MM = 5.0
+MAX_LENGTH_CORRECTION_FRACTION = 0.01
+MAX_ANGLE_CORRECTION_DEG = 5.0
+FORCE_HINT = "if you are sure the data and the model are right, rerun with --force (force=True)"
+
+
+def spread(points: np.ndarray) -> float:
+    """RMS distance of points ``(N, 3)`` from their centroid (m)."""
+    return float(np.sqrt(np.mean(np.sum((points - points.mean(axis=0)) ** 2, axis=1))))
+
+
+def error_limit_mm(points: np.ndarray) -> float:
+    """The largest RMS residual (mm) a robot's geometric errors can leave on these points."""
+    return max(MAX_NOMINAL_ERROR_MM, MAX_NOMINAL_ERROR_FRACTION * spread(points) * 1e3)
+
+
+def _fail(message: str, force: bool, warnings: list[str] | None) -> None:
+    if not force:
+        raise PlausibilityError(f"{message}; {FORCE_HINT}")
+    if warnings is not None:
+        warnings.append(f"FORCED past a plausibility check: {message}")
+
+
+def check_spread(measured: np.ndarray, modelled: np.ndarray, what: str, *, force: bool = False,
+                 warnings: list[str] | None = None) -> None:
+    """The measured points ``(N, 3)`` must spread like the model's points at the same joints."""
+    ratio = spread(measured) / max(spread(modelled), 1e-12)
+    if 1 / SPREAD_RATIO <= ratio <= SPREAD_RATIO:
+        return
+    if ratio > UNIT_RATIO or ratio < 1 / UNIT_RATIO:
+        cause = ("the length unit is probably wrong (values in metres under x_mm, y_mm, z_mm headers, "
+                 "or millimetres under _m)")
+    elif ratio > SPREAD_RATIO and spread(modelled) < 0.1 * spread(measured):
+        cause = ("the model hardly moves at these joints: the joint angles are probably radians "
+                 "under q_deg headers (or the joints belong to another robot)")
+    else:
+        cause = "the data probably belong to another robot, or the model is the wrong one"
+    _fail(f"{what}: the measured points spread {ratio:.3g} times as far as the model predicts at the "
+          f"same joints (measured {spread(measured) * 1e3:.4g} mm, model {spread(modelled) * 1e3:.4g} mm "
+          f"RMS from the centroid): {cause}", force, warnings)
+
+
+def check_residual(rms_mm: float, points: np.ndarray, what: str, *, force: bool = False,
+                   warnings: list[str] | None = None) -> None:
+    """An RMS residual ``rms_mm`` of the nominal (or calibrated) model on data whose points are
+    ``points (N, 3)`` must be within what geometric errors can leave (:func:`error_limit_mm`)."""
+    limit = error_limit_mm(points)
+    if rms_mm <= limit:
+        return
+    _fail(f"{what}: the model misses the measurements by {rms_mm:.4g} mm RMS, far beyond what a "
+          f"robot's geometric errors can explain (at most ~{limit:.3g} mm here): the data probably "
+          "belong to another robot or another file, or a unit (length or joint angle) is wrong",
+          force, warnings)
+
+
+def robot_reach(robot) -> float:
+    """The robot's reach for the correction limits: its summed link lengths (m)."""
+    return float(np.abs(robot.a).sum() + np.abs(robot.d).sum())
+
+
+def check_corrections(start, final, names, *, force: bool = False,
+                      warnings: list[str] | None = None) -> None:
+    """Corrections of the estimated link parameters ``names`` from ``start`` to ``final`` (robots)
+    must be of the size real robots' errors have (module docstring)."""
+    length_limit = max(MAX_LENGTH_CORRECTION_MM * 1e-3, MAX_LENGTH_CORRECTION_FRACTION * robot_reach(start))
+    angle_limit = np.deg2rad(MAX_ANGLE_CORRECTION_DEG)
+    units = dict(zip(start.parameter_names, start.parameter_units(), strict=True))
+    bad = []
+    for name in names:
+        if block_of(name) != "links":
+            continue
+        delta = final.get(name) - start.get(name)
+        if units[name] == "m" and abs(delta) > length_limit:
+            bad.append(f"{name} by {delta * 1e3:+.4g} mm")
+        elif units[name] == "rad" and abs(delta) > angle_limit:
+            bad.append(f"{name} by {np.rad2deg(delta):+.4g} deg")
+    if bad:
+        _fail(f"the calibration corrected {', '.join(bad)}: more than real robots' errors can be (link "
+              f"lengths {length_limit * 1e3:.3g} mm, angles {MAX_ANGLE_CORRECTION_DEG:g} deg); the solver is "
+              "absorbing a mistake: a unit (length or joint angle), the wrong robot or the wrong data",
+              force, warnings)
