@@ -32,31 +32,37 @@ Every solution is checked with ``robot.fk``; one whose TCP is more than ``tol`` 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from functools import partial
 
 import numpy as np
 
 from robocal.errors import DataError, ModelError
 from robocal.kinematics.fk import chain_fk, chain_frames
+from robocal.kinematics.kernels import compiled
 from robocal.kinematics.model import Robot
+from robocal.kinematics.opw import GEOMETRY, OPWParameters
 from robocal.kinematics.transforms import invert_transform, is_rigid
 
-_GEOMETRY = ("a1", "a2", "b", "c1", "c2", "c3", "c4")
-_CHUNK = 1024  # poses per chunk (8 branches each): keeps the temporaries in cache
+_CHUNK = 1024  # poses per chunk (8 branches each): keeps the numpy temporaries in cache
+_COMPILED_CHUNK = 16384  # poses per call of the compiled kernel (it blocks internally)
 _SINGULAR = 1e-12  # |sin theta5| below which the wrist is treated as singular
 _CLAMP = 1e-9  # relative tolerance for clamping acos / sqrt arguments at the edge of reach
 TOL = 1e-9  # m and rad: largest forward-kinematics error of a returned solution
 
 
-def opw_form(robot: Robot) -> dict:
-    """The robot's OPW form (lengths m, offsets rad, signs +-1); ModelError if it has none."""
+def opw_form(robot: Robot) -> OPWParameters:
+    """The robot's OPW form (lengths m, offsets rad, signs +-1); ModelError if it has none.
+
+    The one place that reads ``robot.opw``; everything else uses the attributes of the result."""
     opw = robot.opw
-    if robot.n_joints != 6 or not opw or any(k not in opw for k in (*_GEOMETRY, "offsets", "signs")):
+    if robot.n_joints != 6 or not opw or any(k not in opw for k in (*GEOMETRY, "offsets", "signs")):
         raise ModelError(
             f"robot {robot.name!r} has no OPW form (ortho-parallel arm with a spherical wrist), so "
             "closed-form inverse kinematics is not available; use the numeric solver "
             "rc.ik.solve(robot, poses, seeds) instead")
-    return opw
+    return OPWParameters.from_dict(opw)
 
 
 def check_poses(poses) -> np.ndarray:
@@ -74,14 +80,14 @@ def check_poses(poses) -> np.ndarray:
     return T
 
 
-def _flange_correction(robot: Robot, opw: dict) -> np.ndarray:
+def _flange_correction(robot: Robot, opw: OPWParameters) -> np.ndarray:
     """Q with chain(q) = OPW_flange(q) * Q, from the paper's zero pose (identity rotation,
     flange at (a1 + a2, b, c1 + c2 + c3 + c4)); absorbs how the MDH conversion split the flange
     orientation between frame {6} and the tool. Frame {0} is the OPW base frame."""
-    q0 = np.asarray(opw["offsets"], float) * np.asarray(opw["signs"], float)
+    q0 = np.asarray(opw.offsets, float) * np.asarray(opw.signs, float)
     F6 = chain_frames(robot.links, np.eye(4), np.eye(4), q0[None])[0]
     G0 = np.eye(4)
-    G0[:3, 3] = (opw["a1"] + opw["a2"], opw["b"], opw["c1"] + opw["c2"] + opw["c3"] + opw["c4"])
+    G0[:3, 3] = (opw.a1 + opw.a2, opw.b, opw.c1 + opw.c2 + opw.c3 + opw.c4)
     return invert_transform(G0) @ F6
 
 
@@ -91,9 +97,9 @@ def _clamp(x: np.ndarray, lo: float, hi: float, tol: float) -> np.ndarray:
     return np.where((x < lo - tol) | (x > hi + tol), np.nan, out)
 
 
-def paper_branches(opw: dict, flange: np.ndarray) -> np.ndarray:
+def paper_branches(opw: OPWParameters, flange: np.ndarray) -> np.ndarray:
     """Paper angles ``(N, 8, 6)`` (rad) of flange poses ``(N, 4, 4)`` in the OPW base frame."""
-    a1, a2, b, c1, c2, c3, c4 = (float(opw[k]) for k in _GEOMETRY)
+    a1, a2, b, c1, c2, c3, c4 = (float(getattr(opw, k)) for k in GEOMETRY)
     N = flange.shape[0]
     R = flange[:, :3, :3]
     C = flange[:, :3, 3] - c4 * R[:, :, 2]  # wrist centre
@@ -151,12 +157,12 @@ def _wrap(q: np.ndarray) -> np.ndarray:
     return q - (2 * np.pi) * np.floor((q + np.pi) * (0.5 / np.pi))
 
 
-def _solve_chunk(robot: Robot, opw: dict, pre: np.ndarray, post: np.ndarray, T: np.ndarray,
+def _solve_chunk(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.ndarray, T: np.ndarray,
                  tol: float) -> np.ndarray:
     """Verified branches of world poses ``T``; flange = pre @ T @ post in the OPW base frame."""
     flange = pre @ T @ post
     paper = paper_branches(opw, flange)
-    q = _wrap((paper + np.asarray(opw["offsets"], float)) * np.asarray(opw["signs"], float))
+    q = _wrap((paper + np.asarray(opw.offsets, float)) * np.asarray(opw.signs, float))
     ok = np.isfinite(q).all(axis=2)
     q[~ok] = 0.0
     fk = chain_fk(robot.links, robot.base, robot.tool, q.reshape(-1, 6)).reshape(-1, 8, 16)
@@ -170,6 +176,17 @@ def _solve_chunk(robot: Robot, opw: dict, pre: np.ndarray, post: np.ndarray, T: 
     return q
 
 
+def _chunk_solver(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.ndarray,
+                  tol: float) -> tuple[Callable[[np.ndarray], np.ndarray], int]:
+    """The chunk solver of the kernels in use (numpy or the compiled twin) and its chunk size."""
+    kernel = compiled("robocal.ik.opw_numba")
+    if kernel is None:
+        return partial(_solve_chunk, robot, opw, pre, post, tol=tol), _CHUNK
+    geometry = np.array([getattr(opw, k) for k in GEOMETRY], dtype=float)
+    return kernel.chunk_solver(robot, geometry, np.asarray(opw.offsets, float),
+                               np.asarray(opw.signs, float), pre, post, tol), _COMPILED_CHUNK
+
+
 def solve_branches(robot: Robot, T: np.ndarray, tol: float = TOL, threads: int | None = None) -> np.ndarray:
     """All 8 verified branches ``(N, 8, 6)`` for checked world poses ``T`` (no limit handling).
 
@@ -178,13 +195,14 @@ def solve_branches(robot: Robot, T: np.ndarray, tol: float = TOL, threads: int |
     opw = opw_form(robot)
     pre = invert_transform(robot.base)
     post = invert_transform(robot.tool) @ invert_transform(_flange_correction(robot, opw))
+    solve, size = _chunk_solver(robot, opw, pre, post, tol)
     N = T.shape[0]
-    parts = [slice(s, min(s + _CHUNK, N)) for s in range(0, N, _CHUNK)]
+    parts = [slice(s, min(s + size, N)) for s in range(0, N, size)]
     out = np.empty((N, 8, 6))
     workers = threads or min(os.cpu_count() or 1, 8)
 
     def run(part: slice) -> None:
-        out[part] = _solve_chunk(robot, opw, pre, post, T[part], tol)
+        out[part] = solve(T[part])
 
     if workers > 1 and len(parts) > 1:
         with ThreadPoolExecutor(workers) as pool:
@@ -230,7 +248,7 @@ def turn_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = False,
-              tol: float = TOL) -> np.ndarray:
+              tol: float = TOL, threads: int | None = None) -> np.ndarray:
     """Closed-form IK: all branches of world TCP poses ``(N, 4, 4)`` (m) -> joints (rad).
 
     Default: ``(N, 8, 6)`` in the slot order of the module docstring, NaN where a branch does
@@ -239,10 +257,10 @@ def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = 
     inside the limits including +-2 pi copies for joints with more than 360 deg of travel,
     ``(N, K, 6)`` with K the largest count over the poses, valid rows first, NaN padding.
     Base and tool of the model are removed first; each solution is verified by ``robot.fk`` to
-    ``tol`` (m, rad).
+    ``tol`` (m, rad). ``threads``: worker threads (default: the CPU count, at most 8).
     """
     T = check_poses(poses)
-    q = solve_branches(robot, T, tol)
+    q = solve_branches(robot, T, tol, threads)
     if extra_turns:
         return turn_copies(robot, q)[0]
     if limits:
