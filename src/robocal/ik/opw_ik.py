@@ -116,9 +116,9 @@ def paper_branches(opw: OPWParameters, flange: np.ndarray) -> np.ndarray:
     s2 = xs * xs + zs * zs
     D = (s2 - c2 * c2 - k * k) / (2.0 * c2 * k) if c2 * k > 0 else np.full_like(s2, np.nan)
     phi = np.arccos(_clamp(D, -1.0, 1.0, _CLAMP))  # (N, 2)
-    phi = np.stack([phi, -phi], axis=2)  # (N, 2 shoulder, 2 elbow)
-    q2 = np.arctan2(xs, zs)[:, :, None] - np.arctan2(k * np.sin(phi), c2 + k * np.cos(phi))
-    q3 = phi - psi3
+    bend = np.arctan2(k * np.sin(phi), c2 + k * np.cos(phi))  # atan2 is odd in y: -bend for -phi
+    q2 = np.arctan2(xs, zs)[:, :, None] - np.stack([bend, -bend], axis=2)  # (N, 2 shoulder, 2 elbow)
+    q3 = np.stack([phi, -phi], axis=2) - psi3
     q1 = np.broadcast_to(q1[:, :, None], q2.shape)
     # wrist: M = (Rz(q1) Ry(q2 + q3))^T R = Rz(q4) Ry(q5) Rz(q6)
     c1_, s1_ = np.cos(q1), np.sin(q1)
@@ -134,7 +134,7 @@ def paper_branches(opw: OPWParameters, flange: np.ndarray) -> np.ndarray:
 
     M02, M12, M22 = m(u0, 2), m(u1, 2), m(u2, 2)
     M00, M10, M01, M11 = m(u0, 0), m(u1, 0), m(u0, 1), m(u1, 1)
-    singular = np.hypot(M02, M12) < _SINGULAR
+    singular = M02 * M02 + M12 * M12 < _SINGULAR * _SINGULAR
     q4 = np.where(singular, 0.0, np.arctan2(M12, M02))
     c4_, s4_ = np.cos(q4), np.sin(q4)
     # remaining rotation Rz(-q4) M = Ry(q5) Rz(q6): exact for whatever q4 was chosen
@@ -143,7 +143,7 @@ def paper_branches(opw: OPWParameters, flange: np.ndarray) -> np.ndarray:
     p11 = c4_ * M11 - s4_ * M01
     q5 = np.arctan2(p02, M22)
     q6 = np.arctan2(p10, p11)
-    q5f = np.arctan2(-p02, M22)
+    q5f = -q5  # = arctan2(-p02, M22)
     q6f = np.arctan2(-p10, -p11)
     out = np.empty((N, 2, 2, 2, 6))  # (flip, shoulder, elbow)
     for f, (w4, w5, w6) in enumerate(((q4, q5, q6), (q4 + np.pi, q5f, q6f))):

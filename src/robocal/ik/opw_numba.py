@@ -24,7 +24,7 @@ _POSES = 64  # poses per verification block (8 solutions each)
 _JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 
-@numba.njit(inline="always")
+@numba.njit
 def _clamp(x: float, lo: float, hi: float, tol: float) -> float:
     """x clipped into [lo, hi] when within tol outside, NaN further out (NaN stays NaN)."""
     if x < lo:
@@ -34,12 +34,12 @@ def _clamp(x: float, lo: float, hi: float, tol: float) -> float:
     return x
 
 
-@numba.njit(inline="always")
+@numba.njit
 def _wrap(q: float) -> float:
     return q - (2 * np.pi) * np.floor((q + np.pi) * (0.5 / np.pi))
 
 
-@numba.njit(inline="always")
+@numba.njit
 def _affine(A, B, C):
     """``C`` <- A @ B for 4x4 rigid transforms (last row 0 0 0 1)."""
     for i in range(3):
@@ -50,11 +50,10 @@ def _affine(A, B, C):
 
 @numba.njit(**_JIT)
 def _paper_pose(F, geom, out, lane):
-    """Paper angles of flange ``F`` (4x4, OPW base frame) into ``out[:, lane:lane + 8]``."""
-    a1, a2, b, c1, c2, c3, c4 = geom[0], geom[1], geom[2], geom[3], geom[4], geom[5], geom[6]
-    k = math.hypot(a2, c3)
-    psi3 = math.atan2(a2, c3)
-    scale = max(a1 * a1 + b * b + c2 * c2 + k * k, 1e-12)
+    """Paper angles of flange ``F`` (4x4, OPW base frame) into ``out[:, lane:lane + 8]``; geom:
+    a1 a2 b c1 c2 c3 c4, then k = hypot(a2, c3), psi3 = atan2(a2, c3) and the clamp scale."""
+    a1, b, c1, c2, c4 = geom[0], geom[2], geom[3], geom[4], geom[6]
+    k, psi3, scale = geom[7], geom[8], geom[9]
     C0, C1, C2 = F[0, 3] - c4 * F[0, 2], F[1, 3] - c4 * F[1, 2], F[2, 3] - c4 * F[2, 2]
     rho2 = C0 ** 2 + C1 ** 2
     r = math.sqrt(_clamp(rho2 - b * b, 0.0, np.inf, _CLAMP * scale))
@@ -66,14 +65,14 @@ def _paper_pose(F, geom, out, lane):
         xs = r - a1 if sh == 0 else -r - a1
         s2 = xs * xs + zs * zs
         D = (s2 - c2 * c2 - k * k) / (2.0 * c2 * k) if c2 * k > 0 else np.nan
-        acos_d = math.acos(_clamp(D, -1.0, 1.0, _CLAMP))
+        phi = math.acos(_clamp(D, -1.0, 1.0, _CLAMP))
+        cp, sp = sin_cos(phi)
+        bend = math.atan2(k * sp, c2 + k * cp)
         reach = math.atan2(xs, zs)
         c1_, s1_ = sin_cos(q1)
         for el in range(2):
-            phi = acos_d if el == 0 else -acos_d
-            cp, sp = sin_cos(phi)
-            q2 = reach - math.atan2(k * sp, c2 + k * cp)
-            q3 = phi - psi3
+            q2 = reach - (bend if el == 0 else -bend)
+            q3 = (phi if el == 0 else -phi) - psi3
             c23, s23 = sin_cos(q2 + q3)
             # M = (Rz(q1) Ry(q2 + q3))^T R with rows u0, u1, u2 of (Rz(q1) Ry(q2 + q3))^T
             u00, u01, u02 = c1_ * c23, s1_ * c23, -s23
@@ -86,22 +85,18 @@ def _paper_pose(F, geom, out, lane):
             M10 = u10 * F[0, 0] + u11 * F[1, 0] + u12 * F[2, 0]
             M01 = u00 * F[0, 1] + u01 * F[1, 1] + u02 * F[2, 1]
             M11 = u10 * F[0, 1] + u11 * F[1, 1] + u12 * F[2, 1]
-            q4 = 0.0 if math.hypot(M02, M12) < _SINGULAR else math.atan2(M12, M02)
+            q4 = 0.0 if M02 * M02 + M12 * M12 < _SINGULAR * _SINGULAR else math.atan2(M12, M02)
             c4_, s4_ = sin_cos(q4)
             p02 = c4_ * M02 + s4_ * M12
             p10 = c4_ * M10 - s4_ * M00
             p11 = c4_ * M11 - s4_ * M01
-            for flip in range(2):
-                col = lane + 4 * flip + 2 * sh + el
-                out[0, col], out[1, col], out[2, col] = q1, q2, q3
-                if flip == 0:
-                    out[3, col] = q4
-                    out[4, col] = math.atan2(p02, M22)
-                    out[5, col] = math.atan2(p10, p11)
-                else:
-                    out[3, col] = q4 + np.pi
-                    out[4, col] = math.atan2(-p02, M22)
-                    out[5, col] = math.atan2(-p10, -p11)
+            q5 = math.atan2(p02, M22)
+            slot = lane + 2 * sh + el
+            flip = slot + 4
+            out[0, slot], out[1, slot], out[2, slot] = q1, q2, q3
+            out[0, flip], out[1, flip], out[2, flip] = q1, q2, q3
+            out[3, slot], out[4, slot], out[5, slot] = q4, q5, math.atan2(p10, p11)
+            out[3, flip], out[4, flip], out[5, flip] = q4 + np.pi, -q5, math.atan2(-p10, -p11)
 
 
 @numba.njit(**_JIT)
@@ -153,8 +148,12 @@ def chunk_solver(robot: Robot, geometry: np.ndarray, offsets: np.ndarray, signs:
                  pre: np.ndarray, post: np.ndarray, tol: float) -> Callable[[np.ndarray], np.ndarray]:
     """The compiled ``opw_ik._solve_chunk``: world poses ``(N, 4, 4)`` -> verified branches
     ``(N, 8, 6)``. geometry: a1 a2 b c1 c2 c3 c4 (m); offsets (rad), signs of the OPW form."""
+    a1, a2, b, c2, c3 = (float(geometry[i]) for i in (0, 1, 2, 4, 5))
+    k = np.hypot(a2, c3)
+    scale = max(a1 * a1 + b * b + c2 * c2 + k * k, 1e-12)  # as in opw_ik.paper_branches
+    geom = np.array([*geometry, k, np.arctan2(a2, c3), scale], dtype=float)
     consts = (np.ascontiguousarray(pre, dtype=float), np.ascontiguousarray(post, dtype=float),
-              geometry, offsets, signs, *link_constants(robot.links),
+              geom, offsets, signs, *link_constants(robot.links),
               np.ascontiguousarray(robot.base, dtype=float), np.ascontiguousarray(robot.tool, dtype=float),
               float(tol))
 

@@ -21,7 +21,7 @@ S1, S2, S3, S4, S5, S6, S7, S8, S9, S10 = _SIN
 C1, C2, C3, C4, C5, C6, C7, C8, C9, C10 = _COS
 
 
-@numba.njit(inline="always")
+@numba.njit
 def sin_cos(x: float) -> tuple[float, float]:
     """cos(x), sin(x) for |x| <= _POLY_MAX: the polynomial of ``fk._sin_cos``, one value."""
     n = np.rint(x * (1 / np.pi))
