@@ -9,7 +9,7 @@ import resource
 import tracemalloc
 
 import numpy as np
-from timing import best_time, first_call, interleaved
+from timing import best_time, first_call, interleaved, print_times
 
 from robocal import Robot
 from robocal.ik.opw_ik import opw_form
@@ -78,22 +78,17 @@ def main() -> None:
     if opw is not None:
         fns["py-opw"] = lambda: opw.batch_forward(q)
     best = interleaved(fns, REPEAT)
-    for k in kernels:
-        wall, cpu = best[k]
-        line = f"  robocal Robot.fk ({k:5s})    {wall:7.3f} s  {wall / N * 1e9:5.0f} ns/pose  CPU {cpu:.3f} s"
-        if opw is not None:
-            pw, pc = best["py-opw"]
-            line += f"   {pw / wall:4.1f}x py-opw by wall clock, {pc / cpu:4.1f}x by CPU time"
-        print(line)
+    rows = {k: f"  robocal Robot.fk ({k:5s})   " for k in kernels}
+    if opw is not None:
+        rows["py-opw"] = "  py-opw batch_forward (Rust)"
+    print_times(best, rows, N, "ns", "py-opw" if opw is not None else None)
     if len(kernels) > 1:
         print(f"  numpy vs numba kernels: max |diff| {np.abs(ours['numpy'] - ours['numba']).max():.1e}")
     if opw is None:
         print("  py-opw-kinematics           not installed (pip install '.[bench]')")
     else:
-        wall, cpu = best["py-opw"]
         err = np.abs(opw.batch_forward(q).as_matrix() - ours["numpy"]).max()
-        print(f"  py-opw batch_forward (Rust) {wall:7.3f} s  {wall / N * 1e9:5.0f} ns/pose  CPU {cpu:.3f} s"
-              f"   (max |diff| to robocal {err:.1e})")
+        print(f"  max |diff| robocal vs py-opw {err:.1e}")
     costs = first_call("import numpy as np, robocal as rc\nr = rc.Robot.from_catalog('abb_irb2600')",
                        "r.fk(np.zeros((10, 6)))")
     if costs is not None:

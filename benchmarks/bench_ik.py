@@ -6,7 +6,7 @@ accuracy; first-call (compile) cost; plan_path on 10,000 waypoints x 8 candidate
 from __future__ import annotations
 
 import numpy as np
-from timing import best_time, first_call, interleaved
+from timing import best_time, first_call, interleaved, print_times
 
 import robocal as rc
 from robocal.ik.opw_ik import opw_form
@@ -50,16 +50,10 @@ def _speed(robot: rc.Robot, T: np.ndarray, n: int, kernels: list[str], peer) -> 
             fns["py-opw"] = lambda th=threads or 0: peer.reach(poses, threads=th)
         best = interleaved(fns, REPEAT)
         print(f"  {label} (best of {REPEAT}, interleaved; CPU time counts every thread):")
-        for k in kernels:
-            wall, cpu = best[k]
-            line = f"    solve_all ({k:5s})   {wall:6.3f} s  {wall / n * 1e6:5.2f} us/pose  CPU {cpu:6.3f} s"
-            if peer is not None:
-                pw, pc = best["py-opw"]
-                line += f"   {pw / wall:4.1f}x py-opw by wall clock, {pc / cpu:4.1f}x by CPU time"
-            print(line)
+        rows = {k: f"    solve_all ({k:5s})" for k in kernels}
         if peer is not None:
-            wall, cpu = best["py-opw"]
-            print(f"    py-opw reach       {wall:6.3f} s  {wall / n * 1e6:5.2f} us/pose  CPU {cpu:6.3f} s")
+            rows["py-opw"] = "    py-opw reach      "
+        print_times(best, rows, n, "us", "py-opw" if peer is not None else None)
 
 
 def _coverage(robot: rc.Robot, T: np.ndarray, kernels: list[str], peer) -> None:

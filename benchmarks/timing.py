@@ -48,3 +48,17 @@ def first_call(setup: str, call: str) -> tuple[float, float] | None:
         runs = [subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                                check=True) for _ in range(2)]
     return float(runs[0].stdout.split()[-1]), float(runs[1].stdout.split()[-1])
+
+
+def print_times(best: dict[str, tuple[float, float]], rows: dict[str, str], n: int, per: str,
+                peer: str | None) -> None:
+    """One line per ``rows`` entry (key in ``best`` -> label): wall clock, time per item in ``per``
+    (``"ns"`` or ``"us"``), CPU time and, except for the peer's own row, the ratios to ``peer``."""
+    scale = {"ns": 1e9, "us": 1e6}[per]
+    for key, label in rows.items():
+        wall, cpu = best[key]
+        line = f"{label} {wall:7.3f} s  {wall / n * scale:6.2f} {per}/pose  CPU {cpu:6.3f} s"
+        if peer is not None and key != peer:
+            pw, pc = best[peer]
+            line += f"   {pw / wall:4.1f}x {peer} by wall clock, {pc / cpu:4.1f}x by CPU time"
+        print(line)

@@ -27,6 +27,9 @@ Singular poses get a documented exact answer instead of noise:
 Every solution is checked with ``robot.fk``; one whose TCP is more than ``tol`` (1e-9 m /
 1e-9 rad) off the target becomes NaN. Output joints are in the robot's convention, wrapped to
 [-pi, pi).
+
+With the optional numba extra, :mod:`robocal.ik.opw_numba` runs the same formulas and the same
+check compiled, pose by pose (see :mod:`robocal.kinematics.kernels` for the choice).
 """
 
 from __future__ import annotations
