@@ -91,9 +91,9 @@ def test_core_runs_without_numba():
 
 @requires_numba
 def test_fk_backends_agree(rng):
-    for _ in range(4):
-        robot = random_robot(rng)
-        q = rng.uniform(-4, 4, (3000, 6))
+    for n in (6, 6, 3, 7):
+        robot = random_robot(rng, n)
+        q = rng.uniform(-4, 4, (3000, n))
         a, b = both(lambda r=robot, q=q: r.fk(q))
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-13)
         # the general broadcasting path (links with a batch dim) is a third implementation
