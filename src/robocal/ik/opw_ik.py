@@ -60,12 +60,12 @@ def opw_form(robot: Robot) -> OPWParameters:
 
     The one place that reads ``robot.opw``; everything else uses the attributes of the result."""
     opw = robot.opw
-    if robot.n_joints != 6 or not opw or any(k not in opw for k in (*GEOMETRY, "offsets", "signs")):
+    if robot.n_joints != 6 or not opw:
         raise ModelError(
             f"robot {robot.name!r} has no OPW form (ortho-parallel arm with a spherical wrist), so "
             "closed-form inverse kinematics is not available; use the numeric solver "
             "rc.ik.solve(robot, poses, seeds) instead")
-    return OPWParameters.from_dict(opw)
+    return OPWParameters.from_dict(opw)  # once Robot.opw holds OPWParameters: return opw
 
 
 def check_poses(poses) -> np.ndarray:
