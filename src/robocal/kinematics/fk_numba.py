@@ -5,7 +5,10 @@ extra). Same formulas and the same sin/cos polynomial as the numpy path: poses g
 blocks of ``BLOCK``, the frames of a block held as 12 rows (the top 3x4 of each pose, row-major)
 so that every loop over poses is a plain vectorisable loop; the constant part of each link,
 Rx(alpha) Ry(beta), is one 3x3 matrix. :func:`chain_block` is shared with the closed-form IK
-kernel, which verifies its solutions with it. Compiled on first use and cached on disk.
+kernel, which verifies its solutions with it. Compiled on first use and cached on disk
+(``__pycache__``). numba's cache is keyed on each kernel's own source file only: after editing the
+constants taken from fk.py, or this file, delete the ``*.nbi``/``*.nbc`` files of this folder and of
+``robocal/ik/__pycache__`` (the IK kernel compiles :func:`chain_block` into itself).
 """
 
 from __future__ import annotations
