@@ -100,16 +100,22 @@ def _clamp(x: np.ndarray, lo: float, hi: float, tol: float) -> np.ndarray:
     return np.where((x < lo - tol) | (x > hi + tol), np.nan, out)
 
 
+def _geometry(opw: OPWParameters) -> np.ndarray:
+    """a1 a2 b c1 c2 c3 c4 (m), then k = |J3 -> wrist centre| (m), its angle psi3 (rad) and the
+    squared length (m^2) that scales the edge-of-reach clamp of the sqrt argument."""
+    a1, a2, b, c1, c2, c3, c4 = (float(getattr(opw, k)) for k in GEOMETRY)
+    k = float(np.hypot(a2, c3))
+    scale = max(a1 * a1 + b * b + c2 * c2 + k * k, 1e-12)
+    return np.array([a1, a2, b, c1, c2, c3, c4, k, np.arctan2(a2, c3), scale])
+
+
 def paper_branches(opw: OPWParameters, flange: np.ndarray) -> np.ndarray:
     """Paper angles ``(N, 8, 6)`` (rad) of flange poses ``(N, 4, 4)`` in the OPW base frame."""
-    a1, a2, b, c1, c2, c3, c4 = (float(getattr(opw, k)) for k in GEOMETRY)
+    a1, a2, b, c1, c2, c3, c4, k, psi3, scale = _geometry(opw)
     N = flange.shape[0]
     R = flange[:, :3, :3]
     C = flange[:, :3, 3] - c4 * R[:, :, 2]  # wrist centre
-    k = np.hypot(a2, c3)
-    psi3 = np.arctan2(a2, c3)
     rho2 = C[:, 0] ** 2 + C[:, 1] ** 2
-    scale = max(a1 * a1 + b * b + c2 * c2 + k * k, 1e-12)
     r = np.sqrt(_clamp(rho2 - b * b, 0.0, np.inf, _CLAMP * scale))
     phi_c = np.arctan2(C[:, 1], C[:, 0])
     beta_b = np.arctan2(b, r)
@@ -185,8 +191,7 @@ def _chunk_solver(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.nd
     kernel = compiled("robocal.ik.opw_numba")
     if kernel is None:
         return partial(_solve_chunk, robot, opw, pre, post, tol=tol), _CHUNK
-    geometry = np.array([getattr(opw, k) for k in GEOMETRY], dtype=float)
-    return kernel.chunk_solver(robot, geometry, np.asarray(opw.offsets, float),
+    return kernel.chunk_solver(robot, _geometry(opw), np.asarray(opw.offsets, float),
                                np.asarray(opw.signs, float), pre, post, tol), _COMPILED_CHUNK
 
 

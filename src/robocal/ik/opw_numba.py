@@ -51,7 +51,7 @@ def _affine(A, B, C):
 @numba.njit(**_JIT)
 def _paper_pose(F, geom, out, lane):
     """Paper angles of flange ``F`` (4x4, OPW base frame) into ``out[:, lane:lane + 8]``; geom:
-    a1 a2 b c1 c2 c3 c4, then k = hypot(a2, c3), psi3 = atan2(a2, c3) and the clamp scale."""
+    a1 a2 b c1 c2 c3 c4, k, psi3, clamp scale (``opw_ik._geometry``)."""
     a1, b, c1, c2, c4 = geom[0], geom[2], geom[3], geom[4], geom[6]
     k, psi3, scale = geom[7], geom[8], geom[9]
     C0, C1, C2 = F[0, 3] - c4 * F[0, 2], F[1, 3] - c4 * F[1, 2], F[2, 3] - c4 * F[2, 2]
@@ -147,13 +147,9 @@ def _solve_kernel(T, pre, post, geom, offsets, signs, theta, A, a, d, base, tool
 def chunk_solver(robot: Robot, geometry: np.ndarray, offsets: np.ndarray, signs: np.ndarray,
                  pre: np.ndarray, post: np.ndarray, tol: float) -> Callable[[np.ndarray], np.ndarray]:
     """The compiled ``opw_ik._solve_chunk``: world poses ``(N, 4, 4)`` -> verified branches
-    ``(N, 8, 6)``. geometry: a1 a2 b c1 c2 c3 c4 (m); offsets (rad), signs of the OPW form."""
-    a1, a2, b, c2, c3 = (float(geometry[i]) for i in (0, 1, 2, 4, 5))
-    k = np.hypot(a2, c3)
-    scale = max(a1 * a1 + b * b + c2 * c2 + k * k, 1e-12)  # as in opw_ik.paper_branches
-    geom = np.array([*geometry, k, np.arctan2(a2, c3), scale], dtype=float)
+    ``(N, 8, 6)``. geometry: ``opw_ik._geometry``; offsets (rad), signs of the OPW form."""
     consts = (np.ascontiguousarray(pre, dtype=float), np.ascontiguousarray(post, dtype=float),
-              geom, offsets, signs, *link_constants(robot.links),
+              geometry, offsets, signs, *link_constants(robot.links),
               np.ascontiguousarray(robot.base, dtype=float), np.ascontiguousarray(robot.tool, dtype=float),
               float(tol))
 
