@@ -1,17 +1,19 @@
-"""Forward kinematics speed: robocal vs py-opw-kinematics ``batch_forward`` (Rust) vs pinocchio
-(per-call loop), same robot (ABB IRB 2600 from the catalog), same random joints, same run.
-Also the peak memory of robocal for 1,000,000 configurations."""
+"""Forward kinematics speed: robocal ``Robot.fk`` (numpy kernels, and the compiled numba kernels of
+the ``fast`` extra) vs py-opw-kinematics ``batch_forward`` (Rust) vs pinocchio (per-call loop), same
+robot (ABB IRB 2600 from the catalog), same random joints, same run, one thread each. Also the
+first-call (compile) cost of the numba kernel and the peak memory for 1,000,000 configurations."""
 
 from __future__ import annotations
 
 import resource
-import time
 import tracemalloc
 
 import numpy as np
-from timing import best_time
+from timing import best_time, first_call, interleaved, print_times
 
 from robocal import Robot
+from robocal.ik.opw_ik import opw_form
+from robocal.kinematics.kernels import compiled, use_kernels
 
 N = 200_000
 N_PIN = 20_000
@@ -24,11 +26,22 @@ def _py_opw(robot: Robot):
         import py_opw_kinematics as po
     except ImportError:
         return None
-    p = robot.opw
-    model = po.KinematicModel(a1=p["a1"], a2=p["a2"], b=p["b"], c1=p["c1"], c2=p["c2"], c3=p["c3"],
-                              c4=p["c4"], offsets=tuple(p["offsets"]),
-                              flip_axes=tuple(s < 0 for s in p["signs"]))
+    p = opw_form(robot)
+    model = po.KinematicModel(a1=p.a1, a2=p.a2, b=p.b, c1=p.c1, c2=p.c2, c3=p.c3, c4=p.c4,
+                              offsets=tuple(p.offsets), flip_axes=tuple(s < 0 for s in p.signs))
     return po.Robot(model, degrees=False)
+
+
+def _kernels() -> list[str]:
+    with use_kernels("auto"):
+        return ["numpy"] + (["numba"] if compiled("robocal.kinematics.fk_numba") is not None else [])
+
+
+def _timed_fk(robot: Robot, q: np.ndarray, kernels: str):
+    def run():
+        with use_kernels(kernels):
+            return robot.fk(q)
+    return run
 
 
 def _pinocchio(robot: Robot):
@@ -56,26 +69,31 @@ def main() -> None:
     robot = Robot.from_catalog("abb_irb2600")
     rng = np.random.default_rng(0)
     q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (N, 6))
-    print(f"forward kinematics, {robot.name}, {N:,} random configurations, best of {REPEAT} "
-          "(robocal and py-opw runs interleaved)")
-    ours = robot.fk(q)
+    print(f"forward kinematics, {robot.name}, {N:,} random configurations, one thread each, best of "
+          f"{REPEAT} (all runs interleaved; CPU time counts every thread)")
+    kernels = _kernels()
+    fns = {k: _timed_fk(robot, q, k) for k in kernels}
+    ours = {k: fn() for k, fn in fns.items()}  # also compiles (or loads) the numba kernel
     opw = _py_opw(robot)
-    t_ours, t_opw, c_ours, c_opw = (np.inf,) * 4
-    for _ in range(REPEAT):  # interleaved, so that a busy machine slows both alike
-        t_ours = min(t_ours, best_time(lambda: robot.fk(q), 1)[0])
-        c_ours = min(c_ours, best_time(lambda: robot.fk(q), 1, time.process_time)[0])
-        if opw is not None:
-            t_opw = min(t_opw, best_time(lambda: opw.batch_forward(q), 1)[0])
-            c_opw = min(c_opw, best_time(lambda: opw.batch_forward(q), 1, time.process_time)[0])
-    print(f"  robocal Robot.fk            {t_ours:7.3f} s  {t_ours / N * 1e9:7.0f} ns/pose   "
-          f"(CPU time {c_ours:.3f} s)")
+    if opw is not None:
+        fns["py-opw"] = lambda: opw.batch_forward(q)
+    best = interleaved(fns, REPEAT)
+    rows = {k: f"  robocal Robot.fk ({k:5s})   " for k in kernels}
+    if opw is not None:
+        rows["py-opw"] = "  py-opw batch_forward (Rust)"
+    print_times(best, rows, N, "ns", "py-opw" if opw is not None else None)
+    if len(kernels) > 1:
+        print(f"  numpy vs numba kernels: max |diff| {np.abs(ours['numpy'] - ours['numba']).max():.1e}")
     if opw is None:
         print("  py-opw-kinematics           not installed (pip install '.[bench]')")
     else:
-        err = np.abs(opw.batch_forward(q).as_matrix() - ours).max()
-        print(f"  py-opw batch_forward (Rust) {t_opw:7.3f} s  {t_opw / N * 1e9:7.0f} ns/pose   "
-              f"(CPU time {c_opw:.3f} s)   robocal is {t_opw / t_ours:.1f}x faster by wall clock, "
-              f"{c_opw / c_ours:.1f}x by CPU time   (max |diff| {err:.1e})")
+        err = np.abs(opw.batch_forward(q).as_matrix() - ours["numpy"]).max()
+        print(f"  max |diff| robocal vs py-opw {err:.1e}")
+    costs = first_call("import numpy as np, robocal as rc\nr = rc.Robot.from_catalog('abb_irb2600')",
+                       "r.fk(np.zeros((10, 6)))")
+    if costs is not None:
+        print(f"  first call of the numba kernel in a new process (import numba + compile): {costs[0]:.2f} s "
+              f"with an empty cache, {costs[1]:.2f} s with the on-disk cache")
 
     pin_setup = _pinocchio(robot)
     if pin_setup is None:
@@ -91,21 +109,22 @@ def main() -> None:
                 out[k] = pin.updateFramePlacement(model, data, fid).homogeneous
             return out
 
-        err = np.abs(pin_loop() - ours[:N_PIN]).max()
+        err = np.abs(pin_loop() - ours["numpy"][:N_PIN]).max()
         t_pin = best_time(pin_loop, 3)[0] / N_PIN * N
-        print(f"  pinocchio per-call loop     {t_pin:7.3f} s  {t_pin / N * 1e9:7.0f} ns/pose   "
-              f"robocal is {t_pin / t_ours:.1f}x faster   (timed on {N_PIN:,} calls, "
-              f"max |diff| {err:.1e})")
+        ratios = ", ".join(f"{t_pin / best[k][0]:.1f}x ({k})" for k in kernels)
+        print(f"  pinocchio per-call loop     {t_pin:7.3f} s  {t_pin / N * 1e9:5.0f} ns/pose   "
+              f"robocal is {ratios} faster   (timed on {N_PIN:,} calls, max |diff| {err:.1e})")
 
     q_big = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (N_MEM, 6))
-    tracemalloc.start()
-    robot.fk(q_big)
-    _, peak = tracemalloc.get_traced_memory()
-    tracemalloc.stop()
+    for k in kernels:
+        tracemalloc.start()
+        _timed_fk(robot, q_big, k)()
+        _, peak = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+        print(f"  memory for {N_MEM:,} poses ({k}): peak allocated {peak / 2**20:.0f} MiB (output alone "
+              f"{N_MEM * 128 / 2**20:.0f} MiB, joints {N_MEM * 48 / 2**20:.0f} MiB)")
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    print(f"  memory for {N_MEM:,} poses: peak allocated {peak / 2**20:.0f} MiB (output alone "
-          f"{N_MEM * 128 / 2**20:.0f} MiB, joints {N_MEM * 48 / 2**20:.0f} MiB); process max RSS "
-          f"{rss:.0f} MiB")
+    print(f"  process max RSS {rss:.0f} MiB")
 
 
 if __name__ == "__main__":

@@ -1,53 +1,88 @@
-"""IK benchmark: rc.ik.solve_all vs py-opw-kinematics Robot.reach on 100,000 random abb_irb2600 poses
-(all 8 branches), branch coverage and FK accuracy; plan_path on 10,000 waypoints x 8 candidates."""
+"""IK benchmark: rc.ik.solve_all (numpy kernels, and the compiled numba kernels of the ``fast`` extra)
+vs py-opw-kinematics Robot.reach on 100,000 random abb_irb2600 poses (all 8 branches), one thread
+each (the headline) and all threads, wall clock and CPU time, same run; branch coverage and FK
+accuracy; first-call (compile) cost; plan_path on 10,000 waypoints x 8 candidates."""
 
 from __future__ import annotations
 
 import numpy as np
-from timing import best_time
+from timing import best_time, first_call, interleaved, print_times
 
 import robocal as rc
+from robocal.ik.opw_ik import opw_form
+from robocal.kinematics.kernels import compiled, use_kernels
 from robocal.kinematics.transforms import pose_error
 
+REPEAT = 5
 
-def main(n: int = 100_000, waypoints: int = 10_000) -> None:
-    robot = rc.Robot.from_catalog("abb_irb2600")
-    rng = np.random.default_rng(0)
-    q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (n, 6))
-    T = robot.fk(q)
-    t_ours, sols = best_time(lambda: rc.ik.solve_all(robot, T))
-    ok = np.isfinite(sols).all(axis=2)
-    ni, bi = np.nonzero(ok)
-    e = pose_error(T[ni], robot.fk(sols[ni, bi]))
-    print(f"solve_all: {n} poses in {t_ours:.3f} s ({t_ours / n * 1e6:.2f} us/pose), "
-          f"{ok.sum()} solutions, {ok.sum(axis=1).mean():.2f} per pose")
-    print(f"  FK error of every solution: max position {np.linalg.norm(e[:, :3], axis=1).max():.2e} m, "
-          f"max rotation {np.linalg.norm(e[:, 3:], axis=1).max():.2e} rad")
+
+def _kernels() -> list[str]:
+    with use_kernels("auto"):
+        return ["numpy"] + (["numba"] if compiled("robocal.ik.opw_numba") is not None else [])
+
+
+def _peer(robot: rc.Robot):
     try:
         from py_opw_kinematics import KinematicModel, Robot
-        from scipy.spatial.transform import RigidTransform
     except ImportError:
-        print("py-opw-kinematics not installed (pip install -e '.[bench]'): no peer comparison")
-    else:
-        o = robot.opw
-        model = KinematicModel(a1=o["a1"], a2=o["a2"], b=o["b"], c1=o["c1"], c2=o["c2"], c3=o["c3"],
-                               c4=o["c4"], offsets=tuple(o["offsets"]),
-                               flip_axes=tuple(s < 0 for s in o["signs"]))
-        peer = Robot(model, degrees=False)
-        poses = RigidTransform.from_matrix(np.linalg.inv(robot.base) @ T)
-        for threads in (1, 0):
-            t_peer, res = best_time(lambda th=threads: peer.reach(poses, threads=th))
-            print(f"py-opw-kinematics reach (threads={threads or 'all'}): {t_peer:.3f} s; "
-                  f"solve_all is {t_peer / t_ours:.2f}x faster")
-        found = np.isfinite(res.joints).all(axis=2)
-        d = np.abs(np.remainder(sols - res.joints + np.pi, 2 * np.pi) - np.pi).max(axis=2)
-        missing = found & ~(d < 1e-7)
-        print(f"  branches py-opw finds: {found.sum()}; also found by solve_all in the same slot "
-              f"(mod 2 pi): {(found & (d < 1e-7)).sum()}; missing: {missing.sum()}; "
-              f"only in solve_all: {(ok & ~found).sum()}")
-    # plan_path: a smooth 10,000-waypoint path, limits +-180 deg so each waypoint has <= 8 candidates
-    r8 = rc.Robot.from_opw(**{k: robot.opw[k] for k in ("a1", "a2", "b", "c1", "c2", "c3", "c4")},
-                           offsets=robot.opw["offsets"], signs=robot.opw["signs"],
+        return None
+    o = opw_form(robot)
+    model = KinematicModel(a1=o.a1, a2=o.a2, b=o.b, c1=o.c1, c2=o.c2, c3=o.c3, c4=o.c4,
+                           offsets=tuple(o.offsets), flip_axes=tuple(s < 0 for s in o.signs))
+    return Robot(model, degrees=False)
+
+
+def _solver(robot: rc.Robot, T: np.ndarray, kernels: str, threads: int | None):
+    def run():
+        with use_kernels(kernels):
+            return rc.ik.solve_all(robot, T, threads=threads)
+    return run
+
+
+def _speed(robot: rc.Robot, T: np.ndarray, n: int, kernels: list[str], peer) -> None:
+    """One thread each (headline), then all threads, interleaved, ratios against the peer."""
+    from scipy.spatial.transform import RigidTransform
+
+    poses = RigidTransform.from_matrix(np.linalg.inv(robot.base) @ T)  # catalog TCP = OPW flange
+    for threads, label in ((1, "one thread each"), (None, "all threads")):
+        fns = {k: _solver(robot, T, k, threads) for k in kernels}
+        if peer is not None:
+            fns["py-opw"] = lambda th=threads or 0: peer.reach(poses, threads=th)
+        best = interleaved(fns, REPEAT)
+        print(f"  {label} (best of {REPEAT}, interleaved; CPU time counts every thread):")
+        rows = {k: f"    solve_all ({k:5s})" for k in kernels}
+        if peer is not None:
+            rows["py-opw"] = "    py-opw reach      "
+        print_times(best, rows, n, "us", "py-opw" if peer is not None else None)
+
+
+def _coverage(robot: rc.Robot, T: np.ndarray, kernels: list[str], peer) -> None:
+    """Every returned solution re-checked by robot.fk; branches against py-opw, slot by slot."""
+    from scipy.spatial.transform import RigidTransform
+
+    theirs = None
+    if peer is not None:
+        theirs = peer.reach(RigidTransform.from_matrix(np.linalg.inv(robot.base) @ T)).joints
+    for k in kernels:
+        sols = _solver(robot, T, k, None)()
+        ok = np.isfinite(sols).all(axis=2)
+        ni, bi = np.nonzero(ok)
+        e = pose_error(T[ni], robot.fk(sols[ni, bi]))
+        print(f"  {k}: {ok.sum()} solutions ({ok.sum(axis=1).mean():.2f} per pose); FK error of every "
+              f"solution: max position {np.linalg.norm(e[:, :3], axis=1).max():.2e} m, "
+              f"max rotation {np.linalg.norm(e[:, 3:], axis=1).max():.2e} rad")
+        if theirs is not None:
+            found = np.isfinite(theirs).all(axis=2)
+            d = np.abs(np.remainder(sols - theirs + np.pi, 2 * np.pi) - np.pi).max(axis=2)
+            print(f"    branches py-opw finds: {found.sum()}; also found by solve_all in the same slot "
+                  f"(mod 2 pi): {(found & (d < 1e-7)).sum()}; missing: {(found & ~(d < 1e-7)).sum()}; "
+                  f"only in solve_all: {(ok & ~found).sum()}")
+
+
+def _plan(robot: rc.Robot, waypoints: int) -> None:
+    """plan_path: a smooth path, limits +-180 deg so each waypoint has <= 8 candidates."""
+    o = opw_form(robot)
+    r8 = rc.Robot.from_opw(o.a1, o.a2, o.b, o.c1, o.c2, o.c3, o.c4, offsets=o.offsets, signs=o.signs,
                            limits=np.tile([-np.pi, np.pi], (6, 1)), name="irb2600_pm180")
     t = np.linspace(0, 1, waypoints)[:, None]
     qp = np.array([0.8, 0.3, 0.4, 2.5, 0.9, 3.0]) * np.sin(2 * np.pi * np.array([1, 2, 1, 3, 2, 1]) * t
@@ -57,6 +92,27 @@ def main(n: int = 100_000, waypoints: int = 10_000) -> None:
     print(f"plan_path: {waypoints} waypoints, {path.candidates.mean():.2f} candidates each (max "
           f"{path.candidates.max()}), {t_plan:.3f} s; optimal cost {path.cost:.4f}, greedy "
           f"{path.greedy_cost:.4f}")
+
+
+def main(n: int = 100_000, waypoints: int = 10_000) -> None:
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    rng = np.random.default_rng(0)
+    T = robot.fk(rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (n, 6)))
+    kernels = _kernels()
+    peer = _peer(robot)
+    print(f"solve_all vs py-opw-kinematics reach: {n:,} random {robot.name} poses, all 8 branches")
+    if peer is None:
+        print("  py-opw-kinematics not installed (pip install -e '.[bench]'): no peer comparison")
+    _coverage(robot, T, kernels, peer)  # also compiles (or loads) the numba kernels
+    _speed(robot, T, n, kernels, peer)
+    costs = first_call("import numpy as np, robocal as rc\n"
+                       "from robocal.kinematics.kernels import use_kernels\n"
+                       "r = rc.Robot.from_catalog('abb_irb2600')\n"
+                       "with use_kernels('numpy'):\n    T = r.fk(np.zeros((10, 6)))", "rc.ik.solve_all(r, T)")
+    if costs is not None:
+        print(f"  first solve_all with numba in a new process (import numba + compile): {costs[0]:.2f} s "
+              f"with an empty cache, {costs[1]:.2f} s with the on-disk cache")
+    _plan(robot, waypoints)
 
 
 if __name__ == "__main__":

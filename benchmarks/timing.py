@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 
 def best_time(fn, repeat: int = 3, clock=time.perf_counter) -> tuple[float, object]:
@@ -13,3 +18,47 @@ def best_time(fn, repeat: int = 3, clock=time.perf_counter) -> tuple[float, obje
         out = fn()
         best = min(best, clock() - t)
     return best, out
+
+
+def interleaved(fns: dict, repeat: int) -> dict[str, tuple[float, float]]:
+    """``{name: (best wall-clock s, best CPU s)}`` of ``repeat`` rounds calling every ``fns`` entry
+    once per round, so that a busy (shared) machine slows them alike. CPU time counts all threads."""
+    best = {name: (float("inf"), float("inf")) for name in fns}
+    for _ in range(repeat):
+        for name, fn in fns.items():
+            wall, cpu = time.perf_counter(), time.process_time()
+            fn()
+            wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+            best[name] = (min(best[name][0], wall), min(best[name][1], cpu))
+    return best
+
+
+def first_call(setup: str, call: str) -> tuple[float, float] | None:
+    """Seconds of the first ``call`` in a fresh interpreter after ``setup`` (numba: import, then
+    compile), with an empty numba cache and then with the cache that run left; None without numba."""
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return None
+    code = f"{setup}\nimport time\nt = time.perf_counter()\n{call}\nprint(time.perf_counter() - t)"
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache, "ROBOCAL_KERNELS": "numba",
+               "PYTHONPATH": os.pathsep.join(filter(None, [src, os.environ.get("PYTHONPATH")]))}
+        runs = [subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                               check=True) for _ in range(2)]
+    return float(runs[0].stdout.split()[-1]), float(runs[1].stdout.split()[-1])
+
+
+def print_times(best: dict[str, tuple[float, float]], rows: dict[str, str], n: int, per: str,
+                peer: str | None) -> None:
+    """One line per ``rows`` entry (key in ``best`` -> label): wall clock, time per item in ``per``
+    (``"ns"`` or ``"us"``), CPU time and, except for the peer's own row, the ratios to ``peer``."""
+    scale = {"ns": 1e9, "us": 1e6}[per]
+    for key, label in rows.items():
+        wall, cpu = best[key]
+        line = f"{label} {wall:7.3f} s  {wall / n * scale:6.2f} {per}/pose  CPU {cpu:6.3f} s"
+        if peer is not None and key != peer:
+            pw, pc = best[peer]
+            line += f"   {pw / wall:4.1f}x {peer} by wall clock, {pc / cpu:4.1f}x by CPU time"
+        print(line)

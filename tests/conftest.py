@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from robocal import Robot
+from robocal.kinematics.kernels import compiled, use_kernels
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
 
 SHARED = Path(__file__).resolve().parents[2] / "shared"
@@ -25,6 +26,24 @@ def random_robot(rng: np.random.Generator, n: int = 6) -> Robot:
                  beta=rng.uniform(-0.2, 0.2, n), theta=rng.uniform(-np.pi, np.pi, n),
                  d=rng.uniform(-0.5, 0.5, n), base=random_frame(rng, 2.0),
                  tool=random_frame(rng, 0.2), parallel=np.ones(n, bool), name="random")
+
+
+def _numba_importable() -> bool:
+    with use_kernels("auto"):
+        return compiled("robocal.kinematics.fk_numba") is not None
+
+
+requires_numba = pytest.mark.skipif(not _numba_importable(),
+                                    reason="numba not installed (pip install '.[fast]')")
+# both implementations of the hot kernels (robocal.kinematics.kernels); numba only with the extra
+KERNELS = ["numpy", pytest.param("numba", marks=requires_numba)]
+
+
+@pytest.fixture(params=KERNELS)
+def kernels(request) -> str:
+    """Runs the test once with the numpy kernels and once with the compiled ones."""
+    with use_kernels(request.param):
+        yield request.param
 
 
 @pytest.fixture

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import random_robot
+from conftest import KERNELS, random_robot
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -13,6 +13,7 @@ import robocal as rc
 from robocal.data.simulate import perturbed
 from robocal.errors import DataError, ModelError, UnreachableError
 from robocal.ik.opw_ik import solve_all
+from robocal.kinematics.kernels import use_kernels
 from robocal.kinematics.transforms import make_transform, pose_error, rotvec_to_matrix
 
 OPW_ROBOTS = ["abb_irb2600", "kuka_kr6_r700", "fanuc_lrmate200id", "puma560"]
@@ -36,7 +37,7 @@ def recovered(sols, q):
 
 
 @pytest.mark.parametrize("name", OPW_ROBOTS)
-def test_random_round_trip(name):
+def test_random_round_trip(name, kernels):
     robot = rc.Robot.from_catalog(name)
     rng = np.random.default_rng(7)
     q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (3000, 6))
@@ -49,7 +50,7 @@ def test_random_round_trip(name):
 
 
 @pytest.mark.parametrize("name", OPW_ROBOTS)
-def test_slots_match_py_opw(name):
+def test_slots_match_py_opw(name, kernels):
     popw = pytest.importorskip("py_opw_kinematics")
     from scipy.spatial.transform import RigidTransform
 
@@ -78,7 +79,7 @@ def _with_q5(robot, q, paper5):
 
 @pytest.mark.parametrize("name", OPW_ROBOTS)
 @pytest.mark.parametrize("paper5", [0.0, np.pi, -np.pi, 1e-13, np.pi - 1e-13])
-def test_wrist_singularity(name, paper5):
+def test_wrist_singularity(name, paper5, kernels):
     robot = rc.Robot.from_catalog(name)
     rng = np.random.default_rng(11)
     q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (1000, 6))
@@ -100,7 +101,7 @@ def test_wrist_singularity(name, paper5):
 
 
 @pytest.mark.parametrize("name", ["abb_irb2600", "kuka_kr6_r700"])
-def test_shoulder_singularity(name):
+def test_shoulder_singularity(name, kernels):
     robot = rc.Robot.from_catalog(name)
     o = robot.opw
     rng = np.random.default_rng(5)
@@ -116,7 +117,7 @@ def test_shoulder_singularity(name):
 
 
 @pytest.mark.parametrize("name", OPW_ROBOTS)
-def test_edge_of_reach(name):
+def test_edge_of_reach(name, kernels):
     robot = rc.Robot.from_catalog(name)
     o = robot.opw
     rng = np.random.default_rng(2)
@@ -139,11 +140,13 @@ def test_edge_of_reach(name):
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.sampled_from([0.0, np.pi / 2, -np.pi, np.pi, 1e-9, -1e-9, 0.3, -2.5, 3.0]),
                 min_size=6, max_size=6), st.integers(0, 3))
-def test_property_special_angles(values, which):
+@pytest.mark.parametrize("choice", KERNELS)
+def test_property_special_angles(choice, values, which):
     robot = rc.Robot.from_catalog(OPW_ROBOTS[which])
     q = np.clip(np.array(values)[None], robot.limits[:, 0], robot.limits[:, 1])
     T = robot.fk(q)
-    sols = solve_all(robot, T)
+    with use_kernels(choice):
+        sols = solve_all(robot, T)
     # the arm joints are recovered; at a singular wrist theta4/theta6 are split by convention
     arm = np.abs(wrapped(sols[:, :, :3] - q[:, None, :3])).max(axis=2)
     assert np.nanmin(arm) < 1e-6
@@ -151,7 +154,7 @@ def test_property_special_angles(values, which):
     assert dp.max() < 1e-9 and dr.max() < 1e-9
 
 
-def test_limits_and_turn_copies():
+def test_limits_and_turn_copies(kernels):
     robot = rc.Robot.from_catalog("abb_irb2600")  # J4, J6: +-400 deg
     rng = np.random.default_rng(1)
     q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (300, 6))
@@ -179,7 +182,7 @@ def test_limits_and_turn_copies():
     assert (ok.sum(axis=1) == expected).all()
 
 
-def test_unreachable_is_nan():
+def test_unreachable_is_nan(kernels):
     robot = rc.Robot.from_catalog("abb_irb2600")
     T = np.eye(4)[None].repeat(2, 0)
     T[0, :3, 3] = (5.0, 0, 0.5)  # 5 m away
@@ -188,7 +191,7 @@ def test_unreachable_is_nan():
     assert np.isnan(sols[0]).all() and np.isfinite(sols[1]).all(axis=1).any()
 
 
-def test_bad_input():
+def test_bad_input(kernels):
     robot = rc.Robot.from_catalog("abb_irb2600")
     T = robot.fk(np.zeros((1, 6)))
     bad = T.copy()

@@ -39,7 +39,7 @@ def naive_fk(robot: Robot, q: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
-def test_fk_matches_naive_product(rng):
+def test_fk_matches_naive_product(rng, kernels):
     for _ in range(5):
         robot = random_robot(rng)
         q = rng.uniform(-np.pi, np.pi, (50, 6))
@@ -55,7 +55,7 @@ def test_fk_frames_end_at_flange(rng):
     np.testing.assert_allclose(frames[:, -1] @ robot.tool, tcp, atol=1e-12)
 
 
-def test_fk_chunks_large_batches(rng):
+def test_fk_chunks_large_batches(rng, kernels):
     robot = random_robot(rng)
     q = rng.uniform(-np.pi, np.pi, (70000, 6))
     T = robot.fk(q)
@@ -63,7 +63,7 @@ def test_fk_chunks_large_batches(rng):
                                atol=1e-12)
 
 
-def test_ur10_external_reference():
+def test_ur10_external_reference(kernels):
     """pybotics' UR10 MDH poses (shared/reference) reproduced by Robot.from_mdh."""
     path = SHARED / "reference" / "ur10-mdh-fk.csv"
     if not path.exists():
@@ -209,7 +209,7 @@ def test_invert_transform(rng):
     np.testing.assert_allclose(T @ invert_transform(T), np.eye(4), atol=1e-12)
 
 
-def test_jacobian_with_extra_smrs(rng):
+def test_jacobian_with_extra_smrs(rng, kernels):
     robot = random_robot(rng)
     robot = Robot(**{f: getattr(robot, f) for f in ("alpha", "a", "beta", "theta", "d")},
                   base=robot.base, tool=robot.tool, smr=rng.uniform(-0.1, 0.1, (2, 3)))
@@ -227,7 +227,7 @@ def test_jacobian_with_extra_smrs(rng):
     np.testing.assert_allclose(robot.fk(q, smr=smr)[smr == 0], robot.fk(q[smr == 0]))
 
 
-def test_empty_batches(rng):
+def test_empty_batches(rng, kernels):
     for robot in (random_robot(rng), Robot.from_catalog("abb_irb2600")):
         assert robot.fk(np.zeros((0, 6))).shape == (0, 4, 4)
         assert robot.fk(np.zeros((0, 6)), frames=True)[1].shape == (0, 7, 4, 4)

@@ -243,8 +243,9 @@ class CalibrationResult:
                     f"{r['name']} {r['correction']:+.4f} ± {r['sigma']:.4f}" for r in top))
         dropped = [n for n in self.identifiability.dropped if block_of(n) != "joint_errors"]
         if dropped:
+            confounded = self.identifiability.confounded_with
             lines.append("not identifiable (fixed): " + ", ".join(
-                f"{n} (~{'/'.join(self.identifiability.confounded_with[n]) or 'no effect'})" for n in dropped))
+                f"{n} (~{'/'.join(confounded[n]) or 'no effect'})" for n in dropped))
         if self.nongeometric is not None:
             ng = self.nongeometric
             lines.append(f"non-geometric terms {', '.join(ng['terms'])}: {len(ng['kept'])} parameters "

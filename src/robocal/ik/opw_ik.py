@@ -27,22 +27,29 @@ Singular poses get a documented exact answer instead of noise:
 Every solution is checked with ``robot.fk``; one whose TCP is more than ``tol`` (1e-9 m /
 1e-9 rad) off the target becomes NaN. Output joints are in the robot's convention, wrapped to
 [-pi, pi).
+
+With the optional numba extra, :mod:`robocal.ik.opw_numba` runs the same formulas and the same
+check compiled, pose by pose (see :mod:`robocal.kinematics.kernels` for the choice).
 """
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from functools import partial
 
 import numpy as np
 
 from robocal.errors import DataError, ModelError
 from robocal.kinematics.fk import chain_fk, chain_frames
+from robocal.kinematics.kernels import compiled
 from robocal.kinematics.model import Robot
-from robocal.kinematics.opw import OPWParameters
+from robocal.kinematics.opw import GEOMETRY, OPWParameters
 from robocal.kinematics.transforms import invert_transform, is_rigid
 
-_CHUNK = 1024  # poses per chunk (8 branches each): keeps the temporaries in cache
+_CHUNK = 1024  # poses per chunk (8 branches each): keeps the numpy temporaries in cache
+_COMPILED_CHUNK = 16384  # poses per call of the compiled kernel (it blocks internally)
 _SINGULAR = 1e-12  # |sin theta5| below which the wrist is treated as singular
 _CLAMP = 1e-9  # relative tolerance for clamping acos / sqrt arguments at the edge of reach
 TOL = 1e-9  # m and rad: largest forward-kinematics error of a returned solution
@@ -95,16 +102,22 @@ def _clamp(x: np.ndarray, lo: float, hi: float, tol: float) -> np.ndarray:
     return np.where((x < lo - tol) | (x > hi + tol), np.nan, out)
 
 
+def _geometry(opw: OPWParameters) -> np.ndarray:
+    """a1 a2 b c1 c2 c3 c4 (m), then k = |J3 -> wrist centre| (m), its angle psi3 (rad) and the
+    squared length (m^2) that scales the edge-of-reach clamp of the sqrt argument."""
+    a1, a2, b, c1, c2, c3, c4 = (float(getattr(opw, k)) for k in GEOMETRY)
+    k = float(np.hypot(a2, c3))
+    scale = max(a1 * a1 + b * b + c2 * c2 + k * k, 1e-12)
+    return np.array([a1, a2, b, c1, c2, c3, c4, k, np.arctan2(a2, c3), scale])
+
+
 def paper_branches(opw: OPWParameters, flange: np.ndarray) -> np.ndarray:
     """Paper angles ``(N, 8, 6)`` (rad) of flange poses ``(N, 4, 4)`` in the OPW base frame."""
-    a1, a2, b, c1, c2, c3, c4 = opw.a1, opw.a2, opw.b, opw.c1, opw.c2, opw.c3, opw.c4
+    a1, a2, b, c1, c2, c3, c4, k, psi3, scale = _geometry(opw)
     N = flange.shape[0]
     R = flange[:, :3, :3]
     C = flange[:, :3, 3] - c4 * R[:, :, 2]  # wrist centre
-    k = np.hypot(a2, c3)
-    psi3 = np.arctan2(a2, c3)
     rho2 = C[:, 0] ** 2 + C[:, 1] ** 2
-    scale = max(a1 * a1 + b * b + c2 * c2 + k * k, 1e-12)
     r = np.sqrt(_clamp(rho2 - b * b, 0.0, np.inf, _CLAMP * scale))
     phi_c = np.arctan2(C[:, 1], C[:, 0])
     beta_b = np.arctan2(b, r)
@@ -114,9 +127,9 @@ def paper_branches(opw: OPWParameters, flange: np.ndarray) -> np.ndarray:
     s2 = xs * xs + zs * zs
     D = (s2 - c2 * c2 - k * k) / (2.0 * c2 * k) if c2 * k > 0 else np.full_like(s2, np.nan)
     phi = np.arccos(_clamp(D, -1.0, 1.0, _CLAMP))  # (N, 2)
-    phi = np.stack([phi, -phi], axis=2)  # (N, 2 shoulder, 2 elbow)
-    q2 = np.arctan2(xs, zs)[:, :, None] - np.arctan2(k * np.sin(phi), c2 + k * np.cos(phi))
-    q3 = phi - psi3
+    bend = np.arctan2(k * np.sin(phi), c2 + k * np.cos(phi))  # atan2 is odd in y: -bend for -phi
+    q2 = np.arctan2(xs, zs)[:, :, None] - np.stack([bend, -bend], axis=2)  # (N, 2 shoulder, 2 elbow)
+    q3 = np.stack([phi, -phi], axis=2) - psi3
     q1 = np.broadcast_to(q1[:, :, None], q2.shape)
     # wrist: M = (Rz(q1) Ry(q2 + q3))^T R = Rz(q4) Ry(q5) Rz(q6)
     c1_, s1_ = np.cos(q1), np.sin(q1)
@@ -132,7 +145,7 @@ def paper_branches(opw: OPWParameters, flange: np.ndarray) -> np.ndarray:
 
     M02, M12, M22 = m(u0, 2), m(u1, 2), m(u2, 2)
     M00, M10, M01, M11 = m(u0, 0), m(u1, 0), m(u0, 1), m(u1, 1)
-    singular = np.hypot(M02, M12) < _SINGULAR
+    singular = M02 * M02 + M12 * M12 < _SINGULAR * _SINGULAR
     q4 = np.where(singular, 0.0, np.arctan2(M12, M02))
     c4_, s4_ = np.cos(q4), np.sin(q4)
     # remaining rotation Rz(-q4) M = Ry(q5) Rz(q6): exact for whatever q4 was chosen
@@ -141,7 +154,7 @@ def paper_branches(opw: OPWParameters, flange: np.ndarray) -> np.ndarray:
     p11 = c4_ * M11 - s4_ * M01
     q5 = np.arctan2(p02, M22)
     q6 = np.arctan2(p10, p11)
-    q5f = np.arctan2(-p02, M22)
+    q5f = -q5  # = arctan2(-p02, M22)
     q6f = np.arctan2(-p10, -p11)
     out = np.empty((N, 2, 2, 2, 6))  # (flip, shoulder, elbow)
     for f, (w4, w5, w6) in enumerate(((q4, q5, q6), (q4 + np.pi, q5f, q6f))):
@@ -174,6 +187,16 @@ def _solve_chunk(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.nda
     return q
 
 
+def _chunk_solver(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.ndarray,
+                  tol: float) -> tuple[Callable[[np.ndarray], np.ndarray], int]:
+    """The chunk solver of the kernels in use (numpy or the compiled twin) and its chunk size."""
+    kernel = compiled("robocal.ik.opw_numba")
+    if kernel is None:
+        return partial(_solve_chunk, robot, opw, pre, post, tol=tol), _CHUNK
+    return kernel.chunk_solver(robot, _geometry(opw), np.asarray(opw.offsets, float),
+                               np.asarray(opw.signs, float), pre, post, tol), _COMPILED_CHUNK
+
+
 def solve_branches(robot: Robot, T: np.ndarray, tol: float = TOL, threads: int | None = None) -> np.ndarray:
     """All 8 verified branches ``(N, 8, 6)`` for checked world poses ``T`` (no limit handling).
 
@@ -181,13 +204,14 @@ def solve_branches(robot: Robot, T: np.ndarray, tol: float = TOL, threads: int |
     opw = opw_form(robot)
     pre = invert_transform(robot.base)
     post = invert_transform(robot.tool) @ invert_transform(_flange_correction(robot, opw))
+    solve, size = _chunk_solver(robot, opw, pre, post, tol)
     N = T.shape[0]
-    parts = [slice(s, min(s + _CHUNK, N)) for s in range(0, N, _CHUNK)]
+    parts = [slice(s, min(s + size, N)) for s in range(0, N, size)]
     out = np.empty((N, 8, 6))
     workers = threads or min(os.cpu_count() or 1, 8)
 
     def run(part: slice) -> None:
-        out[part] = _solve_chunk(robot, opw, pre, post, T[part], tol)
+        out[part] = solve(T[part])
 
     if workers > 1 and len(parts) > 1:
         with ThreadPoolExecutor(workers) as pool:
@@ -225,7 +249,7 @@ def turn_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = False,
-              tol: float = TOL) -> np.ndarray:
+              tol: float = TOL, threads: int | None = None) -> np.ndarray:
     """Closed-form IK: all branches of world TCP poses ``(N, 4, 4)`` (m) -> joints (rad).
 
     Default: ``(N, 8, 6)`` in the slot order of the module docstring, NaN where a branch does
@@ -234,10 +258,10 @@ def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = 
     inside the limits including +-2 pi copies for joints with more than 360 deg of travel,
     ``(N, K, 6)`` with K the largest count over the poses, valid rows first, NaN padding.
     Base and tool of the model are removed first; each solution is verified by ``robot.fk`` to
-    ``tol`` (m, rad).
+    ``tol`` (m, rad). ``threads``: worker threads (default: the CPU count, at most 8).
     """
     T = check_poses(poses)
-    q = solve_branches(robot, T, tol)
+    q = solve_branches(robot, T, tol, threads)
     if extra_turns:
         return turn_copies(robot, q)[0]
     if limits:

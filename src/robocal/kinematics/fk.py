@@ -6,7 +6,9 @@ times faster in numpy than stacked 4x4 matrix products. One robot with a batch o
 common case) takes a faster path: cache-sized chunks, the frame kept as four (3, M) column blocks,
 the link's constant rotations Rx(alpha) Ry(beta) applied as scalar column mixes (skipped or turned
 into a column swap when alpha, beta are 0 or multiples of pi/2) and sin/cos of every joint from
-one vectorised polynomial evaluation per chunk.
+one vectorised polynomial evaluation per chunk. With the optional numba extra, the TCP poses of
+that path come from its compiled twin, :mod:`robocal.kinematics.fk_numba` (see
+:mod:`robocal.kinematics.kernels`).
 """
 
 from __future__ import annotations
@@ -15,6 +17,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+
+from robocal.kinematics.kernels import compiled
 
 CHUNK = 65536  # poses per chunk of the general path: bounds peak memory for very large batches
 FAST_CHUNK = 4096  # poses per chunk of the one-robot path: its temporaries stay in the CPU cache
@@ -77,6 +81,9 @@ def chain_frames(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nd
     {0}..{n} as ``(..., n + 1, 4, 4)`` (frame {n} is the flange).
     """
     if _fast_ok(links, base, tool, q):
+        kernel = None if frames else compiled("robocal.kinematics.fk_numba")
+        if kernel is not None:
+            return kernel.chain_fk(links, base, tool, q)
         return _fast_chain(links, base, tool, q, frames)
     n = q.shape[-1]
     shape = np.broadcast_shapes(q.shape[:-1], links.alpha.shape[:-1], base.shape[:-2], tool.shape[:-2])
