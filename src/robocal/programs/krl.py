@@ -101,6 +101,8 @@ class KRLDialect(Dialect):
 
     def _target(self, src, masked, at, name, kind, prog) -> Target | None:
         comps, _ = self._aggregate(src, masked, at)
+        if "A1" in comps:  # an axis position (E6AXIS/AXIS): left alone
+            return None
         missing = [k for k in _POSE_KEYS if k not in comps]
         if missing:
             prog.warnings.append(f"{src.path.name}:{src.line_of(at)}: {name} lacks {', '.join(missing)} "
