@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robocal.compensate import controller_model
 from robocal.errors import DataError, ModelError
 from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
@@ -38,8 +39,9 @@ from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.output import write_all
 from robocal.programs.source import ProgramText, format_number
 
-MAX_SWEEPS = 50  # passes of the nearest-to-previous joint search (programs without configuration)
+SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
 LISTED = 20  # problems listed in one error message
+JUMP_DEG = 60.0  # a joint moving more than this from the previous target's joints gets a warning
 
 
 @dataclass
@@ -159,19 +161,12 @@ def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
     return dialects[found.pop()]()
 
 
-def _as_frames(dialect: Dialect, given) -> dict[str, np.ndarray]:
+def as_frames(dialect: Dialect, given) -> dict[str, np.ndarray]:
+    """name -> 4x4 (m) from name -> 4x4 or text in the dialect's pose notation."""
     out = {}
     for key, val in (given or {}).items():
         out[str(key)] = dialect.frame_from_text(val) if isinstance(val, str) else np.asarray(val, float)
     return out
-
-
-def _controller_model(calibrated: Robot, nominal: Robot, robot_base) -> Robot:
-    if calibrated.n_joints != nominal.n_joints:
-        raise ModelError(f"calibrated model has {calibrated.n_joints} joints, nominal "
-                         f"{nominal.n_joints}: they must describe the same robot")
-    base = nominal.base if robot_base is None else invert_transform(np.asarray(robot_base, float)) @ calibrated.base
-    return calibrated.with_frames(base=base, tool=nominal.tool)
 
 
 def _configured_joints(dialect, nominal, F, targets, problems):
@@ -205,8 +200,12 @@ def _configured_joints(dialect, nominal, F, targets, problems):
     return q
 
 
-def _nearest_joints(nominal, F, targets, program: Program, warnings):
-    """Nominal joints nearest the previous target's (or the given qnear / joint target)."""
+def _nearest_joints(nominal, F, targets, program: Program, problems, warnings):
+    """Nominal joints nearest the previous target's (or the given qnear / joint target).
+
+    Batched sweeps seed every target with its predecessor's solution of the sweep before; then
+    one pass in program order re-solves, from its predecessor's final joints, each target whose
+    solution is not within ``JUMP_DEG`` of them (a sweep can settle on another branch)."""
     N, n = F.shape[0], nominal.n_joints
     anchor = np.full((N, n), np.nan)  # joints that come right before target i, if any
     for index, qj in program.joint_targets:
@@ -218,18 +217,60 @@ def _nearest_joints(nominal, F, targets, program: Program, warnings):
         fixed[0] = np.clip(0.0, nominal.limits[:, 0], nominal.limits[:, 1])
         warnings.append(f"{targets[0].where}: no joint position before the first target: the controller's "
                         "solution is taken as the one nearest zero joints")
-    seeds = np.where(np.isfinite(fixed), fixed, 0.0)
-    seeds[1:] = np.where(np.isfinite(fixed[1:]), fixed[1:], seeds[:-1])
-    for _ in range(MAX_SWEEPS):
-        q = ik_solve(nominal, F, seeds).joints
-        new = np.where(np.isfinite(fixed), fixed, np.vstack([fixed[:1], q[:-1]]))
+    given = np.isfinite(fixed).all(axis=1)
+    seeds = fixed.copy()
+    for i in range(1, N):  # propagate the last known joints
+        if not given[i]:
+            seeds[i] = seeds[i - 1]
+    for _ in range(SWEEPS):
+        res = ik_solve(nominal, F, seeds)
+        new = np.where(given[:, None], fixed, np.vstack([fixed[:1], res.joints[:-1]]))
         if np.allclose(new, seeds, atol=1e-9):
             break
         seeds = new
+    q, converged = res.joints.copy(), res.converged.copy()
+    jump = np.zeros(N)
+    limit = np.deg2rad(JUMP_DEG)
+    for i in range(N):  # in program order: each target from its predecessor's final joints
+        ref = fixed[i] if given[i] else q[i - 1]
+        jump[i] = np.abs(q[i] - ref).max()
+        if converged[i] and jump[i] <= limit:
+            continue
+        one = ik_solve(nominal, F[i:i + 1], ref[None])
+        if one.converged[0] or not converged[i]:
+            q[i], converged[i] = one.joints[0], one.converged[0]
+            jump[i] = np.abs(q[i] - ref).max()
+    for i in np.flatnonzero(converged & (jump > limit)):
+        warnings.append(f"{targets[i].where}: the controller's solution is {np.rad2deg(jump[i]):.0f} deg away "
+                        "from the previous joints in one joint: it may take another solution than assumed "
+                        "here; add a joint move (or qnear) before this target")
+    inside = ((q >= nominal.limits[:, 0]) & (q <= nominal.limits[:, 1])).all(axis=1)
+    for i in np.flatnonzero(~converged | ~inside):
+        problems.append((int(i), "the nominal controller has no solution near the previous joints inside "
+                                 "the limits (out of reach)"))
+        q[i] = np.nan
     return q
 
 
-def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None,
+def controller_joints(dialect: Dialect, program: Program, targets: list[Target], nominal: Robot,
+                      F: np.ndarray, problems: list, warnings: list) -> np.ndarray:
+    """The nominal controller's joints ``(N, n)`` (rad) for flange poses ``F`` of ``targets``:
+    in the configuration their data select, else nearest the previous joints. Targets without
+    a solution are NaN and appended to ``problems`` as ``(index, why)``."""
+    if dialect.scheme is not None and any(t.config is not None for t in targets):
+        return _configured_joints(dialect, nominal, F, targets, problems)
+    return _nearest_joints(nominal, F, targets, program, problems, warnings)
+
+
+def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
+    """``(P, W, tool)``: target poses in their frames, the frames and the tools, each ``(N, 4, 4)`` m."""
+    P = dialect.to_pose(np.array([t.values() for t in targets]))
+    W = np.array([program.frames[t.frame] for t in targets])
+    tool = np.array([program.tools[t.tool] for t in targets])
+    return P, W, tool
+
+
+def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
                    robot_base=None, dialect: str | None = None, references=(),
                    keep_unreached: bool = False) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
@@ -238,7 +279,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     for their tool / frame declarations only (KUKA $config.dat, ABB modules declaring
     tooldata / wobjdata), never written. ``tools`` / ``frames``: name ->
     4x4 (m) or text in the program's pose notation (``dialect.frame_help``), completing or
-    overriding what the files declare. ``robot_base``: the controller's base frame (4x4, m) in
+    overriding what the files declare: the tools as the controller knows them. ``tcp``: tool
+    name -> 4x4 (m), the real TCP identified on the calibrated model (``robocal tool``), used
+    with the calibrated flange instead of the controller's tool data. ``robot_base``: the controller's base frame (4x4, m) in
     the calibrated model's world frame (default: the calibrated frame {0} is the controller's
     base). Targets that cannot be corrected (out of reach, out of the joint limits, a
     configuration they cannot have, not converged) raise DataError naming each one; with
@@ -251,7 +294,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     d = dialect_for(paths, dialect)
     sources = [ProgramText(p) for p in paths]
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
-    program = d.parse(sources, _as_frames(d, frames), _as_frames(d, tools), refs)
+    program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
     warnings = list(program.warnings)
     targets: list[Target] = []
     for t in program.targets:
@@ -270,20 +313,22 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     if not targets:
         warnings.append("no Cartesian target to filter")
         return FilterResult(d.name, outputs, [], warnings)
-    controller = _controller_model(calibrated, nominal, robot_base)
+    controller = controller_model(calibrated, nominal, robot_base)
     old = np.array([t.values() for t in targets])
-    P = d.to_pose(old)
-    W = np.array([program.frames[t.frame] for t in targets])
-    tool = np.array([program.tools[t.tool] for t in targets])
+    P, W, tool = target_poses(d, program, targets)
     X = W @ P
     F = X @ invert_transform(tool)
+    real = dict(tcp or {})
+    unknown_tcp = sorted(set(real) - {t.tool for t in targets})
+    if unknown_tcp:
+        raise DataError(f"--tcp names tool(s) {unknown_tcp} that no filtered target uses; the targets use "
+                        f"{sorted({t.tool for t in targets})}")
+    real_tool = np.array([np.asarray(real[t.tool], float) if t.tool in real else program.tools[t.tool]
+                          for t in targets])
     problems: list[tuple[int, str]] = []
-    if d.scheme is not None and any(t.config is not None for t in targets):
-        q_nom = _configured_joints(d, nominal, F, targets, problems)
-    else:
-        q_nom = _nearest_joints(nominal, F, targets, program, warnings)
+    q_nom = controller_joints(d, program, targets, nominal, F, problems, warnings)
     ok = np.isfinite(q_nom).all(axis=1)
-    res = ik_solve(controller, F, np.where(ok[:, None], q_nom, 0.0))
+    res = ik_solve(controller, X @ invert_transform(real_tool), np.where(ok[:, None], q_nom, 0.0))
     q = res.joints
     converged = res.converged & ok
     inside = ((q >= nominal.limits[:, 0]) & (q <= nominal.limits[:, 1])).all(axis=1)
