@@ -129,6 +129,24 @@ def perturbed(robot: Robot, seed: int | np.random.Generator | None = None, *,
     return robot.displaced(names, delta)
 
 
+def frame_from_text(text: str, what: str = "frame") -> np.ndarray:
+    """A frame written ``x,y,z,rx,ry,rz`` (mm, deg; fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx), as the
+    targets' ``rx_deg..`` columns) -> 4x4 (m)."""
+    try:
+        vals = np.array([float(v) for v in text.replace(" ", "").split(",") if v], dtype=float)
+    except ValueError:
+        vals = np.zeros(0)
+    if vals.size != 6 or not np.isfinite(vals).all():
+        raise DataError(f"{what} {text!r}: expected x,y,z,rx,ry,rz (mm, deg; fixed-axis XYZ)")
+    return make_transform(Rotation.from_euler("xyz", vals[3:], degrees=True).as_matrix(), vals[:3] * 1e-3)
+
+
+def frame_to_text(T: np.ndarray) -> str:
+    """4x4 (m) -> ``x,y,z,rx,ry,rz`` (mm, deg, fixed-axis XYZ), the inverse of :func:`frame_from_text`."""
+    r = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)
+    return ",".join(f"{v:.4f}" for v in (*(T[:3, 3] * 1e3), *r))
+
+
 # ----------------------------------------------------------------------------- pose CSV files
 def _column_unit(header: list[str], stem: str, units: dict) -> tuple[str, float] | None:
     hits = [(f"{stem}_{u}", s) for u, s in units.items() if f"{stem}_{u}" in header]

@@ -14,7 +14,7 @@ _WORD = re.compile(r"[^\s,\[\]]+")
 
 @dataclass(frozen=True)
 class Word:
-    """A non-numeric item (identifier, TRUE/FALSE, masked string) at ``start``."""
+    """A non-numeric item (identifier, TRUE/FALSE, a masked string ``"___"``) at ``start``."""
 
     start: int
     text: str
@@ -45,9 +45,7 @@ def parse_aggregate(src: ProgramText, masked: str, pos: int, end: int, what: str
         m = _WORD.match(masked, i, end)
         if m:
             return Word(m.start(), m.group()), m.end()
-        if masked[i] in ",]":  # an empty item (a blanked string)
-            return Word(i, ""), i
-        fail(i, f"unexpected {masked[i]!r}")
+        fail(i, "empty item" if masked[i] in ",]" else f"unexpected {masked[i]!r}")
 
     def seq(i: int):
         out = []

@@ -113,10 +113,11 @@ class FilterResult:
             lines.append(f"  ... {len(self.warnings) - LISTED} more warning(s) in the table")
         return "\n".join(lines)
 
-    def write(self, outputs: dict[Path, Path] | Path | str, table: str | Path | None = None) -> None:
+    def write(self, outputs: dict[Path, Path] | Path | str, table: str | Path | None = None) -> list[Path]:
         """Write the filtered files (input path -> output path, or one output path for a single
         input) and the table (``table`` ending .csv or .json: that one; otherwise both
-        ``table.csv`` and ``table.json``), all together or none. Refuses to overwrite an input."""
+        ``table.csv`` and ``table.json``), all together or none. Refuses to overwrite an input.
+        Returns the paths written."""
         if not isinstance(outputs, dict):
             if len(self.outputs) != 1:
                 raise DataError("several program files: give one output path per input")
@@ -136,9 +137,10 @@ class FilterResult:
             elif t.suffix.lower() == ".json":
                 files[t] = self.table_json().encode()
             else:
-                files[t.with_suffix(t.suffix + ".csv")] = self.table_csv().encode()
-                files[t.with_suffix(t.suffix + ".json")] = self.table_json().encode()
+                files[t.with_name(t.name + ".csv")] = self.table_csv().encode()
+                files[t.with_name(t.name + ".json")] = self.table_json().encode()
         write_all(files)
+        return list(files)
 
 
 def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:

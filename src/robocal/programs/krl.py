@@ -128,7 +128,7 @@ class KRLDialect(Dialect):
         prog.tools[NULL] = np.eye(4)
         masks = {}
         for src in [*references, *sources]:
-            masked = masks[src.path] = mask(src.text, [_COMMENT, _STRING])
+            masked = masks[src.path] = mask(src.text, [_COMMENT], [_STRING])
             for m in _DATA.finditer(masked):
                 comps, _ = self._aggregate(src, masked, m.end())
                 if any(k not in comps for k in _POSE_KEYS):

@@ -108,7 +108,7 @@ class RapidDialect(Dialect):
         wobj_decl: dict[str, tuple[np.ndarray, bool, str]] = {}
         uses: list[tuple[str, Target | None, str, str, int, ProgramText]] = []
         for src in [*references, *sources]:
-            masked = mask(src.text, [_COMMENT, _STRING])
+            masked = mask(src.text, [_COMMENT], [_STRING])
             only_frames = src not in sources
             for s, e in _split_top(masked, 0, len(masked), ";"):
                 self._statement(src, masked, s, e, prog, declared, tool_decl, wobj_decl, uses, only_frames)

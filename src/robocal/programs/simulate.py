@@ -115,14 +115,15 @@ def fanuc_frame_text(T: np.ndarray) -> str:
     return ",".join(f"{v:.6f}" for v in (*(T[:3, 3] * 1e3), c, b, a))
 
 
-def execute(paths, robot: Robot, nominal: Robot, *, tools=None, frames=None,
+def execute(paths, robot: Robot, nominal: Robot, *, tools=None, frames=None, references=(),
             dialect: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Run program file(s) on ``robot`` (its links and base in the controller's base frame, its
     tool the flange) through ``nominal``'s IK in the program's configuration. Returns the TCP
     poses reached and the poses the program asks for, both ``(N, 4, 4)`` (m, base frame)."""
     paths = [Path(p) for p in ([paths] if isinstance(paths, str | Path) else paths)]
     d = dialect_for(paths, dialect)
-    program = d.parse([ProgramText(p) for p in paths], as_frames(d, frames), as_frames(d, tools))
+    program = d.parse([ProgramText(p) for p in paths], as_frames(d, frames), as_frames(d, tools),
+                      [ProgramText(p) for p in references])
     targets = program.targets
     P, W, tool = target_poses(d, program, targets)
     X = W @ P

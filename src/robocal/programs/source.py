@@ -88,15 +88,19 @@ class ProgramText:
         return "".join(out).encode("latin-1")
 
 
-def mask(text: str, patterns: list[re.Pattern]) -> str:
-    """``text`` with every match of ``patterns`` (comments, strings) blanked to spaces, newlines
-    kept, so structure can be searched without being fooled and offsets stay the same."""
+def mask(text: str, blank: list[re.Pattern], quoted: list[re.Pattern] = ()) -> str:
+    """``text`` with every match of ``blank`` (comments) turned to spaces and of ``quoted``
+    (strings) to ``"___"``, newlines kept: structure can be searched without being fooled, a
+    string still reads as one item, and offsets stay the same."""
     chars = list(text)
-    combined = re.compile("|".join(f"(?:{p.pattern})" for p in patterns), re.MULTILINE)
-    for m in combined.finditer(text):
-        for i in range(m.start(), m.end()):
-            if chars[i] not in "\r\n":
-                chars[i] = " "
+    for patterns, fill in ((blank, " "), (quoted, "_")):
+        if not patterns:
+            continue
+        combined = re.compile("|".join(f"(?:{p.pattern})" for p in patterns), re.MULTILINE)
+        for m in combined.finditer("".join(chars)):
+            for i in range(m.start() + (fill == "_"), m.end() - (fill == "_")):
+                if chars[i] not in "\r\n":
+                    chars[i] = fill
     return "".join(chars)
 
 

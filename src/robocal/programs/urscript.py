@@ -96,7 +96,7 @@ class URScriptDialect(Dialect):
         self._defaulted = False
         order = [0]
         for src in sources:
-            masked = mask(src.text, [_COMMENT, _STRING])
+            masked = mask(src.text, [_COMMENT], [_STRING])
             poses, joints = self._variables(src, masked)
             tool = DEFAULT_TOOL
             used: dict[int, tuple[str, str, str]] = {}
