@@ -4,7 +4,6 @@ hand-written programs (byte-identical round trip, only numbers change), simulate
 from __future__ import annotations
 
 import json
-import re
 import shutil
 from pathlib import Path
 
@@ -84,10 +83,14 @@ def test_vendor_configuration_conventions():
     assert ABBConfig().encode(abb, np.deg2rad([[100, 0, 0, -10, 30, 200]])).tolist() == [[0, 1, -1, 2]]
     assert ABBConfig().encode(abb, np.deg2rad([[0, 0, 0, 0, -30, 0]]))[0, 0] == 1  # axis 5 negative
     assert KUKAConfig().encode(kuka, np.deg2rad([[0, -90, 90, 0, 30, 0]])).tolist() == [[2, 2]]
-    assert KUKAConfig().encode(kuka, np.deg2rad([[-10, -90, 90, -5, -30, 20]])).tolist() == [[6, 2 + 1 + 8 + 16]]
-    assert FANUCConfig().text(FANUCConfig().encode(fanuc, np.deg2rad([[0, 0, 0, 0, -90, 0]]))[0]) == "N U T, 0, 0, 0"
-    assert FANUCConfig().text(FANUCConfig().encode(fanuc, np.deg2rad([[190, 0, 0, 0, 30, -200]]))[0]) == \
-        "F U T, 1, 0, -1"
+    negative = 1 + 2 + 8 + 16  # A1, A2, A4, A5 < 0
+    assert KUKAConfig().encode(kuka, np.deg2rad([[-10, -90, 90, -5, -30, 20]])).tolist() == [[6, negative]]
+
+    def fanuc_text(q_deg):
+        return FANUCConfig().text(FANUCConfig().encode(fanuc, np.deg2rad([q_deg]))[0])
+
+    assert fanuc_text([0, 0, 0, 0, -90, 0]) == "N U T, 0, 0, 0"
+    assert fanuc_text([190, 0, 0, 0, 30, -200]) == "F U T, 1, 0, -1"
 
 
 # ----------------------------------------------------------------------------- notations
@@ -241,7 +244,8 @@ def test_cli_filter_writes_all_or_nothing(tmp_path, capsys):
     far = tmp_path / "far.mod"
     far.write_bytes(files[0].read_bytes().replace(b"[[392.37,421.20,120.43]", b"[[3392.37,421.20,120.43]"))
     out2 = tmp_path / "far_cal.mod"
-    assert main(["filter", str(far), "--calibrated", str(cal), "--nominal", "abb_irb2600", "-o", str(out2)]) == 2
+    assert main(["filter", str(far), "--calibrated", str(cal), "--nominal", "abb_irb2600",
+                 "-o", str(out2)]) == 2
     assert "far.mod:14 (pApproach)" in capsys.readouterr().err
     assert not out2.exists() and not list(tmp_path.glob("far_cal*")) and not list(tmp_path.glob(".*tmp"))
     # never onto an input
@@ -257,8 +261,8 @@ def test_cli_filter_kuka_folder_and_fanuc_frames(tmp_path, capsys):
     outdir.mkdir()
     assert main(["filter", *map(str, files), "--references", str(refs[0]), "--calibrated", str(cal),
                  "--nominal", "kuka_kr16_2", "-o", str(outdir)]) == 0
-    assert sorted(p.name for p in outdir.iterdir()) == ["palletize.dat", "palletize.src", "palletize.targets.csv",
-                                                        "palletize.targets.json"]
+    assert sorted(p.name for p in outdir.iterdir()) == [
+        "palletize.dat", "palletize.src", "palletize.targets.csv", "palletize.targets.json"]
     fan, ffiles, *_ = _fixture("fanuc", tmp_path)
     # the FANUC user and tool frames live in the controller: without them the filter says so
     assert main(["filter", str(ffiles[0]), "--calibrated", str(cal), "--nominal", "fanuc_lrmate200id",

@@ -18,7 +18,8 @@ from robocal.kinematics.transforms import make_transform
 from robocal.programs.simulate import touch_poses
 from robocal.tcp import identify_tcp
 
-TOOL = make_transform(Rotation.from_euler("xyz", [0, 30, 0], degrees=True).as_matrix(), np.array([0.05, -0.01, 0.2]))
+TOOL = make_transform(Rotation.from_euler("xyz", [0, 30, 0], degrees=True).as_matrix(),
+                      np.array([0.05, -0.01, 0.2]))
 
 
 def test_tcp_identification_is_exact_on_the_true_model_and_realistic_on_a_calibrated_one():
@@ -56,7 +57,8 @@ def test_cli_tool(tmp_path, capsys):
     (tmp_path / "touch.csv").write_text("q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg\n" + "\n".join(
         ",".join(repr(float(v)) for v in row) for row in np.rad2deg(q)) + "\n")
     assert main(["tool", str(tmp_path / "touch.csv"), "--calibrated", str(tmp_path / "cal.yaml"), "--nominal",
-                 "abb_irb2600", "--name", "tGun", "--rotation", "0,30,0", "--json", str(tmp_path / "t.json")]) == 0
+                 "abb_irb2600", "--name", "tGun", "--rotation", "0,30,0",
+                 "--json", str(tmp_path / "t.json")]) == 0
     out = capsys.readouterr().out
     assert "use: --tcp tGun=50.0000,-10.0000,200.0000,0.0000,30.0000,0.0000" in out
     assert json.loads((tmp_path / "t.json").read_text())["rms_mm"] < 1e-6
@@ -104,16 +106,17 @@ def test_cli_plan_and_compensate_take_a_tool(tmp_path, capsys):
     cal.save(tmp_path / "cal.yaml")
     q = np.deg2rad([[0, 10, 10, 0, 40, 0], [10, 15, 5, 10, 45, 5], [20, 20, 0, 20, 50, 10]])
     T = controller_model(cal, nominal, tool=TOOL).fk(q)
-    rows = [",".join(repr(float(v)) for v in (*(t[:3, 3] * 1e3), *Rotation.from_matrix(t[:3, :3]).as_quat(scalar_first=True)))
-            for t in T]
+    quat = Rotation.from_matrix(T[:, :3, :3]).as_quat(scalar_first=True)
+    rows = [",".join(repr(float(v)) for v in (*(t[:3, 3] * 1e3), *qt)) for t, qt in zip(T, quat, strict=True)]
     (tmp_path / "p.csv").write_text("x_mm,y_mm,z_mm,qw,qx,qy,qz\n" + "\n".join(rows) + "\n")
     tool = "50,-10,200,0,30,0"
     assert main(["plan", "--robot", str(tmp_path / "cal.yaml"), "--nominal", "abb_irb2600", "--tool", tool,
                  str(tmp_path / "p.csv"), "-o", str(tmp_path / "j.csv")]) == 0
     joints = np.loadtxt(tmp_path / "j.csv", delimiter=",", skiprows=1)
     assert np.abs(np.remainder(joints - np.rad2deg(q) + 180, 360) - 180).max() < 1e-6  # axes 4, 6: +-400 deg
-    assert main(["compensate", str(tmp_path / "cal.yaml"), str(tmp_path / "p.csv"), "--nominal", "abb_irb2600",
-                 "--targets-in", "robot", "--tool", tool, "-o", str(tmp_path / "c.csv")]) == 0
+    assert main(["compensate", str(tmp_path / "cal.yaml"), str(tmp_path / "p.csv"),
+                 "--nominal", "abb_irb2600", "--targets-in", "robot", "--tool", tool,
+                 "-o", str(tmp_path / "c.csv")]) == 0
     out = np.loadtxt(tmp_path / "c.csv", delimiter=",", skiprows=1)
     assert np.abs(out[:, :6] - np.rad2deg(q)).max() < 1e-6
     capsys.readouterr()

@@ -73,7 +73,9 @@ def controller_model(calibrated: Robot, nominal: Robot, robot_base=None, tool=No
     if calibrated.n_joints != nominal.n_joints:
         raise DataError(f"calibrated model has {calibrated.n_joints} joints, nominal "
                         f"{nominal.n_joints}: they must describe the same robot")
-    base = nominal.base if robot_base is None else invert_transform(np.asarray(robot_base, float)) @ calibrated.base
+    base = nominal.base
+    if robot_base is not None:
+        base = invert_transform(np.asarray(robot_base, float)) @ calibrated.base
     flange = nominal.tool if tool is None else nominal.tool @ np.asarray(tool, float)
     return calibrated.with_frames(base=base, tool=flange)
 

@@ -35,7 +35,8 @@ def add_parser(sub) -> None:
     p.add_argument("--robot", required=True, help="catalog name or model YAML with an OPW form")
     p.add_argument("--weights", help="w1,...,w6 (cost per rad of each joint)")
     p.add_argument("--start", help="fixed start configuration q1..q6 in deg")
-    p.add_argument("--nominal", help="the controller's model (catalog name or YAML) when --robot is calibrated")
+    p.add_argument("--nominal",
+                   help="the controller's model (catalog name or YAML) when --robot is calibrated")
     p.add_argument("--tool", metavar="x,y,z,rx,ry,rz", help="the user's tool on the flange (mm, deg)")
     p.add_argument("-o", "--output", required=True, help="joints CSV to write")
     p.set_defaults(func=run)

@@ -76,7 +76,8 @@ def numbers_of(node, sizes: tuple[int, ...], src: ProgramText, at: int, what: st
     ok = isinstance(node, list) and len(node) >= len(sizes)
     if ok:
         for part, size in zip(node, sizes, strict=False):
-            if not (isinstance(part, list) and len(part) == size and all(isinstance(x, Number) for x in part)):
+            numbers = isinstance(part, list) and all(isinstance(x, Number) for x in part)
+            if not (numbers and len(part) == size):
                 ok = False
     if not ok:
         raise DataError(f"{src.path.name}:{src.line_of(at)}: malformed {what}: expected groups of "

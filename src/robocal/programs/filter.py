@@ -243,9 +243,9 @@ def _nearest_joints(nominal, F, targets, program: Program, problems, warnings):
             q[i], converged[i] = one.joints[0], one.converged[0]
             jump[i] = np.abs(q[i] - ref).max()
     for i in np.flatnonzero(converged & (jump > limit)):
-        warnings.append(f"{targets[i].where}: the controller's solution is {np.rad2deg(jump[i]):.0f} deg away "
-                        "from the previous joints in one joint: it may take another solution than assumed "
-                        "here; add a joint move (or qnear) before this target")
+        warnings.append(f"{targets[i].where}: the controller's solution is {np.rad2deg(jump[i]):.0f} deg "
+                        "away from the previous joints in one joint: it may take another solution than "
+                        "assumed here; add a joint move (or qnear) before this target")
     inside = ((q >= nominal.limits[:, 0]) & (q <= nominal.limits[:, 1])).all(axis=1)
     for i in np.flatnonzero(~converged | ~inside):
         problems.append((int(i), "the nominal controller has no solution near the previous joints inside "
@@ -279,12 +279,12 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
     for their tool / frame declarations only (KUKA $config.dat, ABB modules declaring
-    tooldata / wobjdata), never written. ``tools`` / ``frames``: name ->
-    4x4 (m) or text in the program's pose notation (``dialect.frame_help``), completing or
-    overriding what the files declare: the tools as the controller knows them. ``tcp``: tool
-    name -> 4x4 (m), the real TCP identified on the calibrated model (``robocal tool``), used
-    with the calibrated flange instead of the controller's tool data. ``robot_base``: the controller's base frame (4x4, m) in
-    the calibrated model's world frame (default: the calibrated frame {0} is the controller's
+    tooldata / wobjdata), never written. ``tools`` / ``frames``: name -> 4x4 (m) or text in the
+    program's pose notation (``dialect.frame_help``), completing or overriding what the files
+    declare: the tools as the controller knows them. ``tcp``: tool name -> 4x4 (m), the real TCP
+    identified on the calibrated model (``robocal tool``), used with the calibrated flange
+    instead of the controller's tool data. ``robot_base``: the controller's base frame (4x4, m)
+    in the calibrated model's world frame (default: the calibrated frame {0} is the controller's
     base). Targets that cannot be corrected (out of reach, out of the joint limits, a
     configuration they cannot have, not converged) raise DataError naming each one; with
     ``keep_unreached`` they are left unchanged with a warning. Nothing is written here: see

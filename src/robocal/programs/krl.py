@@ -38,9 +38,10 @@ _COMPONENT = re.compile(r"\b([A-Za-z]\w*)\s+([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]
 _DECL = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(E6POS|POS|FRAME)\s+([A-Za-z_$]\w*)"
                    r"(?:\s*\[[^\]]*\])?\s*=\s*(?=\{)", re.IGNORECASE | re.MULTILINE)
 _ELEMENT = re.compile(r"^[ \t]*([A-Za-z_]\w*\s*\[\s*\d+(?:\s*,\s*\d+)*\s*\])\s*=\s*(?=\{)", re.MULTILINE)
-_FDAT = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?FDAT\s+(\w+)\s*=\s*(?=\{)", re.IGNORECASE | re.MULTILINE)
-_DATA = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:FRAME\s+)?(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]\s*=\s*(?=\{)",
+_FDAT = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?FDAT\s+(\w+)\s*=\s*(?=\{)",
                    re.IGNORECASE | re.MULTILINE)
+_DATA = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:FRAME\s+)?(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]"
+                   r"\s*=\s*(?=\{)", re.IGNORECASE | re.MULTILINE)
 _MOTION = re.compile(r"^[ \t]*(PTP|LIN|CIRC|SPTP|SLIN|SCIRC)\s+(.+)$", re.IGNORECASE | re.MULTILINE)
 _STATE = re.compile(r"(\$TOOL|\$BASE)\s*=\s*([^\n]+)|BAS\s*\(\s*#(TOOL|BASE)\s*,\s*(\d+)\s*\)|"
                     r"FDAT_ACT\s*=\s*(\w+)", re.IGNORECASE)
@@ -167,7 +168,8 @@ class KRLDialect(Dialect):
             masked = masks[src.path]
             tool, base = "?", "?"  # unknown until the program sets them
             events = sorted([(m.start(), "state", m) for m in _STATE.finditer(masked)]
-                            + [(m.start(), "motion", m) for m in _MOTION.finditer(masked)], key=lambda e: e[0])
+                            + [(m.start(), "motion", m) for m in _MOTION.finditer(masked)],
+                            key=lambda e: e[0])
             for at, kind, m in events:
                 here = f"{src.path.name}:{src.line_of(at)}"
                 if kind == "state":
@@ -210,10 +212,11 @@ class KRLDialect(Dialect):
                     if key not in declared:
                         continue
                     if key in used:
-                        if used[key][:2] != (tool, base):
+                        first_tool, first_base, first_at = used[key]
+                        if (first_tool, first_base) != (tool, base):
                             raise DataError(
-                                f"{here}: {declared[key].name} is used with tool {tool} and base {base}, but at "
-                                f"{used[key][2]} with tool {used[key][0]} and base {used[key][1]}: one corrected "
+                                f"{here}: {declared[key].name} is used with tool {tool} and base {base}, but "
+                                f"at {first_at} with tool {first_tool} and base {first_base}: one corrected "
                                 "position cannot serve both; declare a copy for each use")
                         continue
                     used[key] = (tool, base, here)

@@ -56,8 +56,9 @@ def write_program(dialect: str, folder, nominal: Robot, q: np.ndarray, tool: np.
             lines.append(f"    CONST robtarget p{i}:=[[{p_mm[i, 0]:.2f},{p_mm[i, 1]:.2f},{p_mm[i, 2]:.2f}],["
                          + ",".join(f"{v:.8f}" for v in quat[i]) + f"],[{c1},{c4},{c6},{cx}],"
                          "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];")
-        lines += ["    PROC main()"] + [f"        Move{'J' if i % 5 == 0 else 'L'} p{i}, v500, z1, tReal"
-                                         "\\WObj:=wCell;" for i in range(n)] + ["    ENDPROC", "ENDMODULE", ""]
+        moves = [f"        Move{'J' if i % 5 == 0 else 'L'} p{i}, v500, z1, tReal\\WObj:=wCell;"
+                 for i in range(n)]
+        lines += ["    PROC main()", *moves, "    ENDPROC", "ENDMODULE", ""]
         path = folder / f"{name}.mod"
         path.write_text("\r\n".join(lines))
         return [path], {}, {}
@@ -67,7 +68,8 @@ def write_program(dialect: str, folder, nominal: Robot, q: np.ndarray, tool: np.
         src += [f"  {'PTP' if i % 5 == 0 else 'LIN'} XP{i}" for i in range(n)] + ["END", ""]
         dat = [f"DEFDAT {name}"] + [
             f"DECL E6POS XP{i}={{X {p_mm[i, 0]:.3f},Y {p_mm[i, 1]:.3f},Z {p_mm[i, 2]:.3f},A {abc[i, 0]:.3f},"
-            f"B {abc[i, 1]:.3f},C {abc[i, 2]:.3f},S {cfg[i, 0]},T {cfg[i, 1]},E1 0.0,E2 0.0}}" for i in range(n)]
+            f"B {abc[i, 1]:.3f},C {abc[i, 2]:.3f},S {cfg[i, 0]},T {cfg[i, 1]},E1 0.0,E2 0.0}}"
+            for i in range(n)]
         dat += ["ENDDAT", ""]
         paths = [folder / f"{name}.src", folder / f"{name}.dat"]
         paths[0].write_text("\n".join(src))
@@ -176,10 +178,11 @@ def truth_experiment(dialect: str, robot_name: str, n_targets: int = 200, seed: 
     truth = sim.truth.with_frames(base=nominal.base @ invert_transform(cal.base) @ sim.truth.base,
                                   tool=nominal.tool)
     rng = np.random.default_rng(seed)
-    tool = make_transform(Rotation.from_euler("xyz", [5, 25, 10], degrees=True).as_matrix(),
-                          np.array([0.06, -0.02, 0.18]) * (0.5 if "lrmate" in robot_name or "ur" in robot_name else 1))
     reach = np.linalg.norm(nominal.fk(np.zeros((1, 6)))[0, :3, 3])
-    frame = make_transform(Rotation.from_euler("z", 20, degrees=True).as_matrix(), np.array([0.3, -0.2, 0.1]) * reach)
+    tool = make_transform(Rotation.from_euler("xyz", [5, 25, 10], degrees=True).as_matrix(),
+                          np.array([0.06, -0.02, 0.18]) * min(1.0, reach / 1.5))
+    frame = make_transform(Rotation.from_euler("z", 20, degrees=True).as_matrix(),
+                           np.array([0.3, -0.2, 0.1]) * reach)
     # the real tool's TCP on the calibrated flange, from 8 poses touching one point
     home = np.deg2rad([0, -90, 90, -90, -90, 0]) if nominal.opw is None else None
     touch = touch_poses(truth, tool, np.array([0.55, 0.1, 0.25]) * reach, 8, rng, home)

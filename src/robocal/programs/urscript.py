@@ -93,13 +93,13 @@ class URScriptDialect(Dialect):
         prog.tools.update(tools)
         if user_default is not None:
             prog.tools[DEFAULT_TOOL] = user_default
-        self._defaulted = False
         order = [0]
         for src in sources:
             masked = mask(src.text, [_COMMENT], [_STRING])
             poses, joints = self._variables(src, masked)
             tool = DEFAULT_TOOL
-            used: dict[int, tuple[str, str, str]] = {}
+            used: dict[int, tuple[str, str, str]] = {}  # id(target) -> (tool, frame, where)
+            as_frame: set[int] = set()  # pose variables that serve as features
             for m in _CALL.finditer(masked):
                 open_at = m.end() - 1
                 close = _close(masked, open_at)
@@ -120,13 +120,15 @@ class URScriptDialect(Dialect):
                     continue
                 n_targets = 2 if fn == "movec" else 1
                 for a, b in args[:n_targets]:
-                    self._target_arg(src, masked, a, b, m.start(), tool, here, poses, joints, prog, used, order)
-            for key, (t, _) in poses.items():
-                if id(t) not in used and not t.name.startswith("frame:"):
+                    self._target_arg(src, masked, (a, b), m.start(), (tool, here), poses, joints, prog,
+                                     (used, as_frame), order)
+            for t, _ in poses.values():
+                if id(t) not in used and id(t) not in as_frame:
                     prog.warnings.append(f"{t.where}: pose variable not used by a motion: left as it is")
         for t in prog.targets:
             if t.tool.startswith("?"):
-                prog.unsupported[f"tool:{t.tool}"] = f"set_tcp({t.tool[1:]}) is not a pose this filter can read"
+                prog.unsupported[f"tool:{t.tool}"] = (f"set_tcp({t.tool[1:]}) is not a pose this filter can "
+                                                      "read")
         if any(t.tool == DEFAULT_TOOL for t in prog.targets) and DEFAULT_TOOL not in prog.tools:
             prog.tools[DEFAULT_TOOL] = np.eye(4)
             prog.warnings.append("no set_tcp before the first motion and no --tool: the installation's "
@@ -158,7 +160,9 @@ class URScriptDialect(Dialect):
         hits = [(off, v) for (nm, off), v in table.items() if nm == name and off < before]
         return max(hits, key=lambda h: h[0])[1] if hits else None
 
-    def _target_arg(self, src, masked, a, b, at, tool, here, poses, joints, prog, used, order):
+    def _target_arg(self, src, masked, span, at, tool_here, poses, joints, prog, seen, order):
+        """One target argument of a motion: record the Cartesian target it names, or the joints."""
+        (a, b), (tool, here), (used, as_frame) = span, tool_here, seen
         text = masked[a:b]
         lead = a + len(text) - len(text.lstrip())
         frame, qnear = IDENTITY, None
@@ -189,16 +193,15 @@ class URScriptDialect(Dialect):
                 ref = self._latest(poses, fname, at)
                 if ref is not None:
                     prog.frames[fname] = self.to_pose(ref[0].values()[None])[0]
-                    ref[0].name = "frame:" + ref[0].name
+                    as_frame.add(id(ref[0]))
             a, b = inner[1]
             text = masked[a:b]
             lead = a + len(text) - len(text.lstrip())
-        if fn_joint := (masked[lead:lead + 1] == "["):
+        if masked[lead:lead + 1] == "[":  # movej([...]): joints, left alone
             tree, _ = parse_aggregate(src, masked, lead, b, "joint target")
             if len(tree) == 6 and all(isinstance(x, Number) for x in tree):
                 prog.joint_targets.append((order[0], np.array([x.value for x in tree])))
             return
-        del fn_joint
         pm = _POSE.match(masked, lead)
         if pm:
             tree, _ = parse_aggregate(src, masked, pm.end(), b, "pose")
@@ -218,9 +221,10 @@ class URScriptDialect(Dialect):
             t = ref[0]
             if id(t) in used:
                 if used[id(t)][:2] != (tool, frame):
+                    first_tool, first_frame, first_at = used[id(t)]
                     raise DataError(f"{here}: {t.name} is used with tool {tool} and frame {frame}, but at "
-                                    f"{used[id(t)][2]} with {used[id(t)][0]} / {used[id(t)][1]}: one corrected "
-                                    "pose cannot serve both; assign a copy for each use")
+                                    f"{first_at} with {first_tool} / {first_frame}: one corrected pose "
+                                    "cannot serve both; assign a copy for each use")
                 return
         used[id(t)] = (tool, frame, here)
         t.tool, t.frame, t.qnear, t.order = tool, frame, qnear, order[0]
