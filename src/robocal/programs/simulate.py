@@ -154,7 +154,8 @@ def touch_poses(robot: Robot, tool: np.ndarray, point: np.ndarray, n: int, rng, 
 def truth_experiment(dialect: str, robot_name: str, n_targets: int = 200, seed: int = 0,
                      folder=None) -> dict:
     """The filter on simulated truth: a robot with random errors measured by a virtual tracker
-    (120 poses, 0.02 mm noise), calibrated with ``rc.calibrate``; its real tool's TCP identified
+    (120 poses, 3 SMRs on the tool so that the flange's orientation is seen, 0.02 mm noise),
+    calibrated with ``rc.calibrate``; its real tool's TCP identified
     on the calibrated model by the 4-point method (8 poses); a program of ``n_targets`` targets
     in a work object; the program filtered; both programs executed on the true robot through
     the nominal controller. Returns RMS / max errors (mm, deg) from the intended targets of the
@@ -172,7 +173,7 @@ def truth_experiment(dialect: str, robot_name: str, n_targets: int = 200, seed: 
     from robocal.tcp import identify_tcp
 
     nominal = Robot.from_catalog(robot_name)
-    sim = simulate_tracker(nominal, 120, seed=seed)
+    sim = simulate_tracker(nominal, 120, n_smr=3, seed=seed)
     cal = calibrate(nominal, sim.data).robot
     # the true robot as the controller sees it: the calibrated frame {0} is the base, tool0 the flange
     truth = sim.truth.with_frames(base=nominal.base @ invert_transform(cal.base) @ sim.truth.base,
