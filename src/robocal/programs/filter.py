@@ -320,7 +320,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     P, W, tool = target_poses(d, program, targets)
     X = W @ P
     F = X @ invert_transform(tool)
-    real = dict(tcp or {})
+    real = {d.name_key(k): v for k, v in (tcp or {}).items()}
     unknown_tcp = sorted(set(real) - {t.tool for t in targets})
     if unknown_tcp:
         raise DataError(f"--tcp names tool(s) {unknown_tcp} that no filtered target uses; the targets use "

@@ -63,6 +63,9 @@ class KRLDialect(Dialect):
     scheme = KUKAConfig()
     frame_help = "X,Y,Z in mm and A,B,C in deg (ZYX Euler), as in TOOL_DATA/BASE_DATA"
 
+    def name_key(self, name):
+        return _canonical(_canonical(name, "TOOL"), "BASE")
+
     def to_pose(self, values):
         values = np.asarray(values, float)
         return make_transform(zyx_to_matrix(values[:, 3:6]), values[:, :3] * 1e-3)
@@ -156,8 +159,8 @@ class KRLDialect(Dialect):
                 t = self._target(src, masked, m.end(), name, "E6POS", prog)
                 if t is not None:
                     declared[name.upper()] = t
-        prog.tools.update({_canonical(k, "TOOL"): v for k, v in tools.items()})
-        prog.frames.update({_canonical(k, "BASE"): v for k, v in frames.items()})
+        prog.tools.update({self.name_key(k): v for k, v in tools.items()})
+        prog.frames.update({self.name_key(k): v for k, v in frames.items()})
         self._motions(prog, sources, masks, declared, fdat)
         return prog
 

@@ -100,6 +100,10 @@ class Dialect:
         """Span -> text edits writing configuration row ``new`` into ``target``."""
         raise NotImplementedError
 
+    def name_key(self, name: str) -> str:
+        """The key a tool or frame name has in :class:`Program` (RAPID names ignore case)."""
+        return name
+
     def frame_from_text(self, text: str) -> np.ndarray:
         """A ``--tool``/``--frame`` value (comma-separated numbers in this dialect's pose
         notation) -> 4x4 (m)."""

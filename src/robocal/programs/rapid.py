@@ -80,6 +80,9 @@ class RapidDialect(Dialect):
     n_values = 7
     frame_help = "x,y,z in mm and the quaternion q1,q2,q3,q4 (w first), as in tooldata/wobjdata"
 
+    def name_key(self, name):
+        return name.lower()
+
     def to_pose(self, values):
         values = np.asarray(values, float)
         q = values[:, 3:7]
@@ -122,8 +125,8 @@ class RapidDialect(Dialect):
             prog.tools.setdefault(name, np.eye(4))
         for name in BUILTIN_WOBJS:
             prog.frames.setdefault(name, np.eye(4))
-        prog.tools.update({k.lower(): v for k, v in tools.items()})
-        prog.frames.update({k.lower(): v for k, v in frames.items()})
+        prog.tools.update({self.name_key(k): v for k, v in tools.items()})
+        prog.frames.update({self.name_key(k): v for k, v in frames.items()})
         self._assign(prog, declared, uses)
         return prog
 
