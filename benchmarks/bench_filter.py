@@ -18,7 +18,8 @@ from robocal.kinematics.transforms import make_transform
 from robocal.programs import filter_program
 from robocal.programs.simulate import truth_experiment, write_program
 
-CASES = [("rapid", "abb_irb2600"), ("krl", "kuka_kr16_2"), ("fanuc", "fanuc_lrmate200id"), ("urscript", "ur5")]
+CASES = [("rapid", "abb_irb2600"), ("krl", "kuka_kr16_2"), ("fanuc", "fanuc_lrmate200id"),
+         ("urscript", "ur5")]
 
 
 def _joints(nominal, n, rng, dialect):
@@ -64,8 +65,8 @@ def truth(seeds=(0, 1, 2)) -> None:
             mm = ", ".join(f"{r[key]['rms_mm']:.4f} ({r[key]['max_mm']:.3f})" for r in rows)
             deg = ", ".join(f"{r[key]['rms_deg']:.4f}" for r in rows)
             print(f"  {dialect:9s} {key:10s} mm: {mm}; deg RMS: {deg}")
-        print(f"  {dialect:9s} filtered / perfect {min(ratio):.3f}-{max(ratio):.3f} (goal <= 1.2), unfiltered / "
-              f"filtered {min(gain):.1f}-{max(gain):.1f}x (goal >= 10)")
+        print(f"  {dialect:9s} filtered / perfect {min(ratio):.3f}-{max(ratio):.3f} (goal <= 1.2), "
+              f"unfiltered / filtered {min(gain):.1f}-{max(gain):.1f}x (goal >= 10)")
 
 
 def main() -> None:

@@ -17,11 +17,15 @@ from robocal.errors import (
 )
 from robocal.evaluate import evaluate
 from robocal.kinematics.model import Robot
+from robocal.programs import FilterResult, filter_program
+from robocal.tcp import ToolCalibration, identify_tcp
 
 __version__ = "0.1.0"
 
 __all__ = [
     "CalibrationResult",
+    "FilterResult",
+    "ToolCalibration",
     "Measurements",
     "analyze",
     "calibrate",
@@ -37,5 +41,7 @@ __all__ = [
     "UnitError",
     "UnreachableError",
     "compensate",
+    "filter_program",
+    "identify_tcp",
     "ik",
 ]

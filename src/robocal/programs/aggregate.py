@@ -83,3 +83,19 @@ def numbers_of(node, sizes: tuple[int, ...], src: ProgramText, at: int, what: st
         raise DataError(f"{src.path.name}:{src.line_of(at)}: malformed {what}: expected groups of "
                         f"{', '.join(map(str, sizes))} numbers")
     return [node[k] for k in range(len(sizes))]
+
+
+def split_top(text: str, start: int, end: int, sep: str = ",") -> list[tuple[int, int]]:
+    """Spans of ``text[start:end]`` split at ``sep`` outside brackets, braces and parentheses."""
+    out, depth, last = [], 0, start
+    for i in range(start, end):
+        ch = text[i]
+        if ch in "([{":
+            depth += 1
+        elif ch in ")]}":
+            depth -= 1
+        elif ch == sep and depth == 0:
+            out.append((last, i))
+            last = i + 1
+    out.append((last, end))
+    return out

@@ -26,6 +26,7 @@ import numpy as np
 
 from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
+from robocal.programs.aggregate import split_top
 from robocal.programs.config import KUKAConfig
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.rotations import matrix_to_zyx, zyx_to_matrix
@@ -198,9 +199,8 @@ class KRLDialect(Dialect):
                             if f[2] == "#TCP":
                                 tool = base = "external TCP"
                     continue
-                args = m.group(2)
                 arg_start = m.start(2)
-                parts = _split_args(masked, arg_start, m.end(2))
+                parts = split_top(masked, arg_start, m.end(2))
                 names = parts[:2] if m.group(1).upper() in ("CIRC", "SCIRC") else parts[:1]
                 for a, b in names:
                     text = masked[a:b].strip()
@@ -225,7 +225,6 @@ class KRLDialect(Dialect):
                     used[key] = (tool, base, here)
                     self._use(prog, declared[key], tool, base, here, order)
                     order += 1
-                del args
         for key, t in declared.items():
             if key not in used:
                 prog.warnings.append(f"{t.where}: not used by a motion in these files: left as it is")
@@ -237,21 +236,6 @@ class KRLDialect(Dialect):
                                                 "($TOOL/$BASE, BAS or FDAT_ACT before the motion)")
         t.tool, t.frame, t.order = tool, base, order
         prog.targets.append(t)
-
-
-def _split_args(masked: str, start: int, end: int) -> list[tuple[int, int]]:
-    out, depth, last = [], 0, start
-    for i in range(start, end):
-        ch = masked[i]
-        if ch in "{[(":
-            depth += 1
-        elif ch in "}])":
-            depth -= 1
-        elif ch == "," and depth == 0:
-            out.append((last, i))
-            last = i + 1
-    out.append((last, end))
-    return out
 
 
 def _int(text: str, src: ProgramText | None = None, at: int = 0) -> int:

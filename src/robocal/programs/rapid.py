@@ -26,7 +26,7 @@ import numpy as np
 
 from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
-from robocal.programs.aggregate import Word, numbers_of, parse_aggregate
+from robocal.programs.aggregate import Word, numbers_of, parse_aggregate, split_top
 from robocal.programs.config import ABBConfig
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.rotations import matrix_to_quat, quat_to_matrix
@@ -50,22 +50,6 @@ _POSITION_MM = 1e-3  # mm: 1 um
 _QUATERNION = 1e-7
 BUILTIN_TOOLS = ("tool0",)
 BUILTIN_WOBJS = ("wobj0",)
-
-
-def _split_top(text: str, start: int, end: int, sep: str) -> list[tuple[int, int]]:
-    """Spans of ``text[start:end]`` split at ``sep`` outside brackets/parentheses."""
-    out, depth, last = [], 0, start
-    for i in range(start, end):
-        ch = text[i]
-        if ch in "([{":
-            depth += 1
-        elif ch in ")]}":
-            depth -= 1
-        elif ch == sep and depth == 0:
-            out.append((last, i))
-            last = i + 1
-    out.append((last, end))
-    return out
 
 
 def _pose_numbers(node, src, at, what) -> list[Number]:
@@ -113,7 +97,7 @@ class RapidDialect(Dialect):
         for src in [*references, *sources]:
             masked = mask(src.text, [_COMMENT], [_STRING])
             only_frames = src not in sources
-            for s, e in _split_top(masked, 0, len(masked), ";"):
+            for s, e in split_top(masked, 0, len(masked), ";"):
                 self._statement(src, masked, s, e, prog, declared, tool_decl, wobj_decl, uses, only_frames)
         for kind, decl, known in (("tool", tool_decl, prog.tools), ("frame", wobj_decl, prog.frames)):
             for name, (pose, ok, why) in decl.items():
@@ -151,8 +135,8 @@ class RapidDialect(Dialect):
         where_line = m.start()
         target_pos, tool_pos = _MOVES[m.group(1).lower()]
         positional, optional = [], {}
-        for ps, pe in _split_top(masked, m.end(), e, ","):
-            parts = _split_top(masked, ps, pe, "\\")
+        for ps, pe in split_top(masked, m.end(), e, ","):
+            parts = split_top(masked, ps, pe, "\\")
             if masked[parts[0][0]:parts[0][1]].strip():
                 positional.append(parts[0])
             for os_, oe in parts[1:]:

@@ -22,7 +22,7 @@ import numpy as np
 
 from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
-from robocal.programs.aggregate import numbers_of, parse_aggregate
+from robocal.programs.aggregate import numbers_of, parse_aggregate, split_top
 from robocal.programs.model import IDENTITY, Dialect, Program, Target
 from robocal.programs.rotations import matrix_to_rotvec, rotvec_to_matrix
 from robocal.programs.source import Number, mask
@@ -51,21 +51,6 @@ def _close(masked: str, open_at: int) -> int:
             if depth == 0:
                 return i
     raise DataError("unbalanced brackets")
-
-
-def _args(masked: str, start: int, end: int) -> list[tuple[int, int]]:
-    out, depth, last = [], 0, start
-    for i in range(start, end):
-        ch = masked[i]
-        if ch in "([":
-            depth += 1
-        elif ch in ")]":
-            depth -= 1
-        elif ch == "," and depth == 0:
-            out.append((last, i))
-            last = i + 1
-    out.append((last, end))
-    return out
 
 
 class URScriptDialect(Dialect):
@@ -103,7 +88,7 @@ class URScriptDialect(Dialect):
             for m in _CALL.finditer(masked):
                 open_at = m.end() - 1
                 close = _close(masked, open_at)
-                args = _args(masked, open_at + 1, close)
+                args = split_top(masked, open_at + 1, close)
                 here = f"{src.path.name}:{src.line_of(m.start())}"
                 fn = m.group(1)
                 if fn == "set_tcp":
@@ -168,7 +153,7 @@ class URScriptDialect(Dialect):
         frame, qnear = IDENTITY, None
         ik = _IK.match(masked, lead)
         if ik:
-            inner = _args(masked, ik.end(), _close(masked, ik.end() - 1))
+            inner = split_top(masked, ik.end(), _close(masked, ik.end() - 1))
             for qa, qb in inner[1:]:
                 key, _, val = masked[qa:qb].partition("=")
                 val = (val if key.strip() == "qnear" else masked[qa:qb]).strip()
@@ -182,7 +167,7 @@ class URScriptDialect(Dialect):
             lead = a + len(text) - len(text.lstrip())
         pt = _POSE_TRANS.match(masked, lead)
         if pt:
-            inner = _args(masked, pt.end(), _close(masked, pt.end() - 1))
+            inner = split_top(masked, pt.end(), _close(masked, pt.end() - 1))
             if len(inner) != 2:
                 return
             fname = masked[slice(*inner[0])].strip()
