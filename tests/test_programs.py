@@ -268,3 +268,98 @@ def test_cli_filter_kuka_folder_and_fanuc_frames(tmp_path, capsys):
     assert main(["filter", str(ffiles[0]), "--calibrated", str(cal), "--nominal", "fanuc_lrmate200id",
                  "-o", str(tmp_path / "s.ls")]) == 2
     assert "unknown frame '1'" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- boundaries and warnings
+def _program(tmp_path, dialect, robot, q, name="edge"):
+    from robocal.programs.simulate import write_program
+
+    tool = np.eye(4)
+    tool[:3, 3] = [0.02, 0.0, 0.1]
+    folder = tmp_path / name
+    folder.mkdir()
+    return write_program(dialect, folder, robot, np.deg2rad(q), tool, np.eye(4), name)
+
+
+def test_configuration_rewritten_only_across_a_boundary(tmp_path):
+    """Axis 4 taught at +-0.001 deg: where the correction takes it to the other side of zero, cf4
+    changes quadrant with a warning; elsewhere the data stay as written."""
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    q = np.array([[10 + 5 * k, 20 + 3 * k, 10 - 4 * k, 0.001 * (-1) ** k, 40 + 5 * k, -20 + 10 * k]
+                  for k in range(12)])
+    paths, _, _ = _program(tmp_path, "rapid", robot, q)
+    res = filter_program(paths, perturbed(robot, 0), robot)
+    changed = [r for r in res.rows if r["configuration"] == "changed"]
+    assert len(changed) == 6 and sum(r["configuration"] == "kept" for r in res.rows) == 6
+    lines = res.outputs[paths[0]].decode().splitlines()
+    for r in changed:
+        before, after = (list(map(int, r[k].strip("[]").split(","))) for k in ("config_before",
+                                                                                "config_after"))
+        assert after[1] == before[1] - 1 and after[0] == before[0] and after[2:] == before[2:]  # only cf4
+        assert f",[{r['config_after'].strip('[]')}],[9E+09" in lines[r["line"] - 1]
+        message = f"({r['name']}): configuration changed from {r['config_before']} to {r['config_after']}"
+        assert any(message in w for w in res.warnings)
+    for r in res.rows:
+        if r["configuration"] == "kept":
+            assert f",[{r['config_before'].strip('[]')}],[9E+09" in lines[r["line"] - 1]
+
+
+def test_near_singular_targets_are_named(tmp_path):
+    robot = rc.Robot.from_catalog("kuka_kr16_2")
+    q = np.array([[10, -80, 100, 10, 40, -20], [15, -70, 95, 30, 0.2, 10]])
+    paths, tools, frames = _program(tmp_path, "krl", robot, q)
+    res = filter_program(paths, perturbed(robot, 2), robot, tools=tools, frames=frames)
+    assert res.rows[1]["nearest_singularity"] == "wrist" and res.rows[1]["sigma_rel"] < 0.01
+    assert res.rows[0]["sigma_rel"] > 0.01
+    assert [w for w in res.warnings if "singularity" in w] == [
+        w for w in res.warnings if "(XP1): close to the wrist singularity" in w]
+    assert "nearest singularity: XP1 (wrist" in res.summary()
+
+
+def test_out_of_the_limits_after_correction(tmp_path):
+    """A target taught at a joint limit: corrected joints beyond it are an error naming target and joint."""
+    robot = rc.Robot.from_catalog("fanuc_lrmate200id")
+    lim = np.rad2deg(robot.limits)
+    q = np.array([[0, 10, 10, 0, -40, 0]] * 4, float)
+    q[0, 0], q[1, 0], q[2, 4], q[3, 4] = lim[0, 1], lim[0, 0], lim[4, 1], lim[4, 0]
+    paths, tools, frames = _program(tmp_path, "fanuc", robot, q)
+    with pytest.raises(DataError, match=r"edge.ls:\d+ \(P\[\d\]\): the corrected joints leave the limits "
+                                        r"\(joint [15] by"):
+        filter_program(paths, perturbed(robot, 3), robot, tools=tools, frames=frames)
+
+
+def test_robot_base_given_explicitly(tmp_path):
+    """--robot-base = the controller's base in the tracker frame gives what the default (identified
+    frame {0} = controller base) gives when it is that frame."""
+    robot, files, *_ = _fixture("rapid", tmp_path)
+    cal = perturbed(robot, 7).with_frames(base=TRACKER)
+    a = filter_program(files, cal, robot)
+    b = filter_program(files, cal, robot, robot_base=TRACKER)
+    c = filter_program(files, cal, robot, robot_base=TRACKER @ _shift(0.001))
+    assert a.outputs == b.outputs and a.outputs != c.outputs
+
+
+def _shift(metres):
+    T = np.eye(4)
+    T[0, 3] = metres
+    return T
+
+
+TRACKER = np.array([[0.0, -1.0, 0.0, 2.5], [1.0, 0.0, 0.0, -0.4], [0.0, 0.0, 1.0, 0.3], [0.0, 0.0, 0.0, 1.0]])
+
+
+def test_krl_and_fanuc_configuration_edits():
+    from robocal.programs.fanuc_ls import FanucDialect
+    from robocal.programs.krl import KRLDialect
+    from robocal.programs.model import Target
+    from robocal.programs.source import ProgramText
+
+    src = ProgramText("x.dat", b"S 'B1010',T 35")
+    t = Target(src, 0, "P", [], config_spans=(Number(2, 9, "'B1010'"), Number(12, 14, "35")))
+    # bit 3 of S is kept, bits 0-2 come from the joints; T written as a decimal
+    assert KRLDialect().config_edits(t, np.array([6, 3])) == {(2, 9): "'B1110'", (12, 14): "3"}
+    ls = ProgramText("x.ls", b"'N U T, 0, 0, 0'")
+    spans = [(1, 2, "N"), (3, 4, "U"), (5, 6, "T"), (8, 9, "0"), (11, 12, "0"), (14, 15, "0")]
+    t = Target(ls, 0, "P[1]", [], config_spans=spans)
+    assert FanucDialect().config_edits(t, np.array([1, 0, 0, 0, -1, 0])) == {(1, 2): "F", (11, 12): "-1"}
+    assert ls.replaced({(1, 2): "F", (11, 12): "-1"}) == b"'F U T, 0, -1, 0'"
