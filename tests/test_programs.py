@@ -348,6 +348,15 @@ def _shift(metres):
 TRACKER = np.array([[0.0, -1.0, 0.0, 2.5], [1.0, 0.0, 0.0, -0.4], [0.0, 0.0, 1.0, 0.3], [0.0, 0.0, 0.0, 1.0]])
 
 
+def test_krl_needs_the_tool_and_base_in_effect(tmp_path):
+    robot, files, refs, *_ = _fixture("krl", tmp_path)
+    src = files[0].read_bytes().replace(b"  $TOOL = TOOL_DATA[2]\r\n", b"")
+    src = src.replace(b"FDAT_ACT=FP1", b"FDAT_ACT=FUNKNOWN")
+    files[0].write_bytes(src)
+    with pytest.raises(DataError, match=r"palletize.src:\d+ \(XP1\): the program does not set the tool"):
+        filter_program(files, robot, robot, references=refs)
+
+
 def test_krl_and_fanuc_configuration_edits():
     from robocal.programs.fanuc_ls import FanucDialect
     from robocal.programs.krl import KRLDialect

@@ -15,8 +15,9 @@ a warning).
 Frames: the calibrated model's identified frame {0} is the controller's base frame (the nominal
 model's base; ``robot_base`` gives the controller's base in the calibrated model's world frame
 instead). The calibrated model's tool (the SMR or probe that was measured) is replaced by the
-nominal model's flange (``nominal.tool``, ROS-I ``tool0``), and the program's tools are mounted
-on it.
+nominal model's flange (``nominal.tool``, ROS-I ``tool0``). The controller computes with the
+program's tool data on the nominal flange; the real TCP on the calibrated flange is the tool data
+too unless ``tcp`` gives the one identified on the calibrated model (``robocal tool``).
 """
 
 from __future__ import annotations
@@ -298,6 +299,55 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
     warnings = list(program.warnings)
+    targets = _filterable(d, program, warnings)
+    if not targets:
+        warnings.append("no Cartesian target to filter")
+        return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings)
+    P, W, tool = target_poses(d, program, targets)
+    X = W @ P
+    real = {d.name_key(k): v for k, v in (tcp or {}).items()}
+    unknown_tcp = sorted(set(real) - {t.tool for t in targets})
+    if unknown_tcp:
+        raise DataError(f"--tcp names tool(s) {unknown_tcp} that no filtered target uses; the targets use "
+                        f"{sorted({t.tool for t in targets})}")
+    real_tool = np.array([np.asarray(real[t.tool], float) if t.tool in real else program.tools[t.tool]
+                          for t in targets])
+    problems: list[tuple[int, str]] = []
+    q_nom = controller_joints(d, program, targets, nominal, X @ invert_transform(tool), problems, warnings)
+    ok = np.isfinite(q_nom).all(axis=1)
+    controller = controller_model(calibrated, nominal, robot_base)
+    res = ik_solve(controller, X @ invert_transform(real_tool), np.where(ok[:, None], q_nom, 0.0))
+    q = res.joints
+    sing = singularity_distance(controller, q)
+    _check_joints(nominal, res, ok, sing, problems)
+    bad = {i for i, _ in problems}
+    if problems and not keep_unreached:
+        problems.sort()
+        lines = [f"{targets[i].where}: {why}" for i, why in problems[:LISTED]]
+        more = f"\n... and {len(problems) - LISTED} more" if len(problems) > LISTED else ""
+        raise DataError(f"{len(bad)} target(s) cannot be corrected:\n" + "\n".join(lines) + more +
+                        "\nnothing was written; fix or remove these targets (or use --keep-unreached "
+                        "to leave them unchanged)")
+    warnings += [f"{targets[i].where}: left unchanged: {why}" for i, why in sorted(problems)]
+    good = np.array([i not in bad for i in range(len(targets))])
+    Pc = invert_transform(W) @ nominal.fk(np.where(good[:, None], q, 0.0)) @ tool
+    Pc[~good] = P[~good]
+    cfg = None
+    if d.scheme is not None:
+        cfg = (d.scheme.encode(nominal, np.where(ok[:, None], q_nom, 0.0)), d.scheme.encode(nominal, q))
+    edits, changed = _edits(d, targets, good, Pc, cfg, warnings)
+    for i in np.flatnonzero(good & sing.close):
+        warnings.append(f"{targets[i].where}: close to the {sing.nearest[i]} singularity (sigma_rel "
+                        f"{sing.sigma_rel[i]:.4f}, wrist {sing.wrist_deg[i]:.2f} deg, elbow "
+                        f"{sing.elbow_deg[i]:.2f} deg, shoulder {sing.shoulder_mm[i]:.1f} mm): the "
+                        "controller may not realise its correction")
+    rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, res.converged & ok, changed, cfg, sing)
+    outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
+    return FilterResult(d.name, outputs, rows, warnings)
+
+
+def _filterable(d: Dialect, program: Program, warnings: list) -> list[Target]:
+    """The targets to filter: those with a supported tool and frame, all of them known."""
     targets: list[Target] = []
     for t in program.targets:
         why = program.unsupported.get(f"tool:{t.tool}") or program.unsupported.get(f"frame:{t.frame}")
@@ -311,101 +361,71 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     if unknown:
         raise DataError("\n".join(unknown[:LISTED]) + f"\ndeclare them in the program or give them with "
                         f"--tool NAME=... / --frame NAME=... ({d.frame_help})")
-    outputs = {s.path: s.data for s in sources}
-    if not targets:
-        warnings.append("no Cartesian target to filter")
-        return FilterResult(d.name, outputs, [], warnings)
-    controller = controller_model(calibrated, nominal, robot_base)
-    old = np.array([t.values() for t in targets])
-    P, W, tool = target_poses(d, program, targets)
-    X = W @ P
-    F = X @ invert_transform(tool)
-    real = {d.name_key(k): v for k, v in (tcp or {}).items()}
-    unknown_tcp = sorted(set(real) - {t.tool for t in targets})
-    if unknown_tcp:
-        raise DataError(f"--tcp names tool(s) {unknown_tcp} that no filtered target uses; the targets use "
-                        f"{sorted({t.tool for t in targets})}")
-    real_tool = np.array([np.asarray(real[t.tool], float) if t.tool in real else program.tools[t.tool]
-                          for t in targets])
-    problems: list[tuple[int, str]] = []
-    q_nom = controller_joints(d, program, targets, nominal, F, problems, warnings)
-    ok = np.isfinite(q_nom).all(axis=1)
-    res = ik_solve(controller, X @ invert_transform(real_tool), np.where(ok[:, None], q_nom, 0.0))
+    return targets
+
+
+def _check_joints(nominal: Robot, res, ok: np.ndarray, sing, problems: list) -> None:
+    """Append the targets the calibrated IK did not reach, or reached outside the limits."""
     q = res.joints
     converged = res.converged & ok
-    inside = ((q >= nominal.limits[:, 0]) & (q <= nominal.limits[:, 1])).all(axis=1)
-    sing = singularity_distance(controller, q)
-    bad = {i for i, _ in problems}
     for i in np.flatnonzero(ok & ~converged):
         problems.append((int(i), f"the calibrated model does not reach it (IK stopped "
                                  f"{res.position_error[i] * 1e3:.3g} mm away; nearest singularity "
                                  f"{sing.nearest[i]}, sigma_rel {sing.sigma_rel[i]:.4f})"))
+    inside = ((q >= nominal.limits[:, 0]) & (q <= nominal.limits[:, 1])).all(axis=1)
     for i in np.flatnonzero(converged & ~inside):
         margin = np.rad2deg(np.minimum(q[i] - nominal.limits[:, 0], nominal.limits[:, 1] - q[i]))
         j = int(np.argmin(margin))
         problems.append((int(i), f"the corrected joints leave the limits (joint {j + 1} by "
                                  f"{-margin[j]:.3f} deg)"))
-    bad = {i for i, _ in problems}
-    if problems and not keep_unreached:
-        problems.sort()
-        lines = [f"{targets[i].where}: {why}" for i, why in problems[:LISTED]]
-        more = f"\n... and {len(problems) - LISTED} more" if len(problems) > LISTED else ""
-        raise DataError(f"{len(bad)} target(s) cannot be corrected:\n" + "\n".join(lines) + more +
-                        "\nnothing was written; fix or remove these targets (or use --keep-unreached "
-                        "to leave them unchanged)")
-    for i, why in sorted(problems):
-        warnings.append(f"{targets[i].where}: left unchanged: {why}")
-    good = np.array([i not in bad for i in range(len(targets))])
-    Fc = nominal.fk(np.where(good[:, None], q, 0.0))
-    Pc = invert_transform(W) @ Fc @ tool
-    Pc[~good] = P[~good]
-    new = d.from_pose(Pc, old)
-    cfg_old = cfg_new = None
-    if d.scheme is not None and ok.any():
-        cfg_old = d.scheme.encode(nominal, np.where(ok[:, None], q_nom, 0.0))
-        cfg_new = d.scheme.encode(nominal, q)
-    res_num = d.resolutions()
-    edits: dict[Path, dict] = {s.path: {} for s in sources}
-    rows = []
-    Xc = W @ Pc
+
+
+def _edits(d: Dialect, targets: list[Target], good: np.ndarray, Pc: np.ndarray, cfg, warnings: list):
+    """Span edits per file for the corrected poses ``Pc`` and, where the correction crossed a
+    configuration boundary, the configuration data; and which targets' configuration changed.
+    ``cfg``: (rows of the nominal joints, rows of the corrected joints) or None."""
+    new = d.from_pose(Pc, np.array([t.values() for t in targets]))
+    resolution = d.resolutions()
+    edits: dict[Path, dict] = {}
+    changed = np.zeros(len(targets), bool)
+    for i in np.flatnonzero(good):
+        t = targets[i]
+        mine = edits.setdefault(t.source.path, {})
+        for j, num in enumerate(t.numbers):
+            text = format_number(float(new[i, j]), num, float(resolution[j]))
+            if text != num.text:
+                mine[(num.start, num.end)] = text
+        # rewritten only when the written data describe the corrected joints worse than the nominal ones
+        if cfg is not None and t.config is not None and (
+                d.scheme.score(cfg[1][i], t.config) > d.scheme.score(cfg[0][i], t.config)):
+            changed[i] = True
+            mine.update(d.config_edits(t, cfg[1][i]))
+            warnings.append(f"{t.where}: configuration changed from {d.scheme.text(cfg[0][i])} to "
+                            f"{d.scheme.text(cfg[1][i])}: the corrected joints cross a configuration "
+                            "boundary; check the motion into and out of this target")
+    return edits, changed
+
+
+def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing) -> list[dict]:
+    """The per-target table (see docs/programs.md)."""
     dpos = np.linalg.norm(Xc[:, :3, 3] - X[:, :3, 3], axis=1) * 1e3
     drot = np.rad2deg(np.linalg.norm(matrix_to_rotvec(Xc[:, :3, :3] @ np.swapaxes(X[:, :3, :3], 1, 2)),
                                      axis=1))
     lim = np.rad2deg(np.minimum(q - nominal.limits[:, 0], nominal.limits[:, 1] - q))
+    rows = []
     for i, t in enumerate(targets):
-        mine = edits[t.source.path]
-        changed = False
-        if good[i]:
-            for j, num in enumerate(t.numbers):
-                text = format_number(float(new[i, j]), num, float(res_num[j]))
-                if text != num.text:
-                    mine[(num.start, num.end)] = text
-            if cfg_new is not None and t.config is not None and (
-                    d.scheme.score(cfg_new[i], t.config) > d.scheme.score(cfg_old[i], t.config)):
-                # the written data describe the corrected joints worse than the nominal ones
-                changed = True
-                mine.update(d.config_edits(t, cfg_new[i]))
-                warnings.append(f"{t.where}: configuration changed from {d.scheme.text(cfg_old[i])} to "
-                                f"{d.scheme.text(cfg_new[i])}: the corrected joints cross a configuration "
-                                "boundary; check the motion into and out of this target")
-            if sing.close[i]:
-                warnings.append(f"{t.where}: close to the {sing.nearest[i]} singularity (sigma_rel "
-                                f"{sing.sigma_rel[i]:.4f}, wrist {sing.wrist_deg[i]:.2f} deg, elbow "
-                                f"{sing.elbow_deg[i]:.2f} deg, shoulder {sing.shoulder_mm[i]:.1f} mm): the "
-                                "controller may not realise its correction")
         j = int(np.argmin(lim[i]))
         rows.append({
             "file": t.source.path.name, "line": t.line, "name": t.name, "frame": t.frame, "tool": t.tool,
             "filtered": bool(good[i]),
             "correction_mm": float(dpos[i]), "correction_deg": float(drot[i]),
-            "configuration": "changed" if changed else ("kept" if t.config is not None else "none"),
-            "config_before": d.scheme.text(cfg_old[i]) if cfg_old is not None and ok[i] else "",
-            "config_after": d.scheme.text(cfg_new[i]) if cfg_new is not None and good[i] else "",
+            "configuration": "changed" if changed[i] else ("kept" if t.config is not None else "none"),
+            "config_before": d.scheme.text(cfg[0][i]) if cfg is not None and ok[i] else "",
+            "config_after": d.scheme.text(cfg[1][i]) if cfg is not None and good[i] else "",
             "reachable": bool(good[i]), "converged": bool(converged[i]),
             "limit_margin_deg": float(lim[i, j]), "limit_joint": j + 1,
             "sigma_rel": float(sing.sigma_rel[i]), "nearest_singularity": str(sing.nearest[i]),
             "wrist_deg": float(sing.wrist_deg[i]), "elbow_deg": float(sing.elbow_deg[i]),
             "shoulder_mm": float(sing.shoulder_mm[i]),
         })
-    outputs = {s.path: s.replaced(edits[s.path]) for s in sources}
-    return FilterResult(d.name, outputs, rows, warnings)
+    return rows

@@ -230,10 +230,13 @@ class KRLDialect(Dialect):
                 prog.warnings.append(f"{t.where}: not used by a motion in these files: left as it is")
 
     def _use(self, prog, t, tool, base, here, order):
-        if "?" in (tool, base) or tool == "external TCP":
-            what = "an external TCP" if tool == "external TCP" else "which tool and base are active"
-            prog.unsupported[f"tool:{tool}"] = (f"at {here} the program does not show {what} "
-                                                "($TOOL/$BASE, BAS or FDAT_ACT before the motion)")
+        if "?" in (tool, base):
+            which = "tool" if tool == "?" else "base"
+            raise DataError(f"{here} ({t.name}): the program does not set the {which} "
+                            "before this motion ($TOOL=TOOL_DATA[n], $BASE=BASE_DATA[n], BAS(#TOOL,n) or "
+                            "FDAT_ACT with TOOL_NO/BASE_NO): without it the target's frame is unknown")
+        if tool == "external TCP":
+            prog.unsupported[f"tool:{tool}"] = "an external TCP (IPO_FRAME #TCP) is not filtered"
         t.tool, t.frame, t.order = tool, base, order
         prog.targets.append(t)
 
