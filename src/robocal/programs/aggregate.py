@@ -9,8 +9,6 @@ from dataclasses import dataclass
 from robocal.errors import DataError
 from robocal.programs.source import NUMBER_RE, Number, ProgramText
 
-_WORD = re.compile(r"[^\s,\[\]]+")
-
 
 @dataclass(frozen=True)
 class Word:
@@ -18,6 +16,10 @@ class Word:
 
     start: int
     text: str
+
+
+_TOKEN = re.compile(r"\s*(?:(\[)|(\])|(,)|(" + NUMBER_RE.pattern + r")(?=[\s,\]])|([^\s,\[\]]+))")
+_OPEN, _CLOSE, _COMMA, _NUMBER, _WORD_TOKEN = 1, 2, 3, 4, 5
 
 
 def parse_aggregate(src: ProgramText, masked: str, pos: int, end: int, what: str):
@@ -28,47 +30,40 @@ def parse_aggregate(src: ProgramText, masked: str, pos: int, end: int, what: str
     def fail(at: int, why: str):
         raise DataError(f"{src.path.name}:{src.line_of(at)}: malformed {what}: {why}")
 
-    def skip(i: int) -> int:
-        while i < end and masked[i].isspace():
-            i += 1
-        return i
-
-    def item(i: int):
-        i = skip(i)
-        if i >= end:
-            fail(i, "unexpected end")
-        if masked[i] == "[":
-            return seq(i)
-        m = NUMBER_RE.match(masked, i, end)
-        if m and (m.end() >= end or masked[m.end()] in " \t\r\n,]"):
-            return Number(m.start(), m.end(), src.text[m.start():m.end()]), m.end()
-        m = _WORD.match(masked, i, end)
-        if m:
-            return Word(m.start(), m.group()), m.end()
-        fail(i, "empty item" if masked[i] in ",]" else f"unexpected {masked[i]!r}")
-
-    def seq(i: int):
-        out = []
-        i = skip(i + 1)
-        if i < end and masked[i] == "]":
-            return out, i + 1
-        while True:
-            node, i = item(i)
-            out.append(node)
-            i = skip(i)
-            if i >= end:
-                fail(i, "missing ']'")
-            if masked[i] == ",":
-                i += 1
-                continue
-            if masked[i] == "]":
-                return out, i + 1
-            fail(i, f"expected ',' or ']', found {masked[i]!r}")
-
-    start = skip(pos)
-    if start >= end or masked[start] != "[":
-        fail(start, "expected '['")
-    return seq(start)
+    stack: list[list] = [[]]
+    expect_item = True  # after '[' or ','
+    i = pos
+    while True:
+        m = _TOKEN.match(masked, i, end)
+        if m is None:
+            rest = masked[i:end].strip()
+            fail(min(i, end), f"unexpected {rest[:1]!r}" if rest else "missing ']'")
+        kind, i = m.lastindex, m.end()
+        if kind == _OPEN:
+            if not expect_item:
+                fail(m.start(kind), "expected ',' or ']'")
+            stack[-1].append([])
+            stack.append(stack[-1][-1])
+        elif kind == _CLOSE:
+            if len(stack) == 1:
+                fail(m.start(kind), "unexpected ']'")
+            if expect_item and stack[-1]:
+                fail(m.start(kind), "empty item")
+            stack.pop()
+            expect_item = False
+            if len(stack) == 1:
+                return stack[0][0], i
+        elif kind == _COMMA:
+            if expect_item:
+                fail(m.start(kind), "empty item")
+            expect_item = True
+        else:
+            if not expect_item or len(stack) == 1:
+                fail(m.start(kind), "expected '['" if len(stack) == 1 else "expected ',' or ']'")
+            start = m.start(kind)
+            item = Number(start, i, src.text[start:i]) if kind == _NUMBER else Word(start, m.group(kind))
+            stack[-1].append(item)
+            expect_item = False
 
 
 def numbers_of(node, sizes: tuple[int, ...], src: ProgramText, at: int, what: str) -> list[list[Number]]:

@@ -384,21 +384,24 @@ def _edits(d: Dialect, targets: list[Target], good: np.ndarray, Pc: np.ndarray, 
     """Span edits per file for the corrected poses ``Pc`` and, where the correction crossed a
     configuration boundary, the configuration data; and which targets' configuration changed.
     ``cfg``: (rows of the nominal joints, rows of the corrected joints) or None."""
-    new = d.from_pose(Pc, np.array([t.values() for t in targets]))
+    old = np.array([t.values() for t in targets])
+    new = d.from_pose(Pc, old)
     resolution = d.resolutions()
-    edits: dict[Path, dict] = {}
+    moved = good[:, None] & (np.abs(new - old) > resolution / 2)  # numbers that must be rewritten
     changed = np.zeros(len(targets), bool)
-    for i in np.flatnonzero(good):
+    if cfg is not None:
+        has = np.array([t.config is not None for t in targets])
+        want = np.array([t.config if t.config is not None else cfg[0][i] for i, t in enumerate(targets)])
+        # rewritten only when the written data describe the corrected joints worse than the nominal ones
+        changed = good & has & (d.scheme.score(cfg[1], want) > d.scheme.score(cfg[0], want))
+    edits: dict[Path, dict] = {}
+    for i in np.flatnonzero(moved.any(axis=1) | changed):
         t = targets[i]
         mine = edits.setdefault(t.source.path, {})
-        for j, num in enumerate(t.numbers):
-            text = format_number(float(new[i, j]), num, float(resolution[j]))
-            if text != num.text:
-                mine[(num.start, num.end)] = text
-        # rewritten only when the written data describe the corrected joints worse than the nominal ones
-        if cfg is not None and t.config is not None and (
-                d.scheme.score(cfg[1][i], t.config) > d.scheme.score(cfg[0][i], t.config)):
-            changed[i] = True
+        for j in np.flatnonzero(moved[i]):
+            num = t.numbers[j]
+            mine[(num.start, num.end)] = format_number(float(new[i, j]), num, float(resolution[j]))
+        if changed[i]:
             mine.update(d.config_edits(t, cfg[1][i]))
             warnings.append(f"{t.where}: configuration changed from {d.scheme.text(cfg[0][i])} to "
                             f"{d.scheme.text(cfg[1][i])}: the corrected joints cross a configuration "

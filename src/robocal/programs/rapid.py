@@ -44,6 +44,7 @@ for _base, _spec in (("movel", ((0,), 3)), ("movej", ((0,), 3)), ("movec", ((0, 
     for _suffix in ("do", "ao", "go", "sync"):
         _MOVES[_base + _suffix] = _spec
 _MOVE = re.compile(r"\b(" + "|".join(_MOVES) + r")\b", re.IGNORECASE)
+_STATEMENT = re.compile(r"[^;]+")
 _NAME = re.compile(r"\s*([A-Za-z]\w*)\s*(\{[^}]*\})?\s*$")
 _FUNC = re.compile(r"\s*(?:Offs|RelTool)\s*\(\s*([A-Za-z]\w*)", re.IGNORECASE)
 _POSITION_MM = 1e-3  # mm: 1 um
@@ -97,7 +98,8 @@ class RapidDialect(Dialect):
         for src in [*references, *sources]:
             masked = mask(src.text, [_COMMENT], [_STRING])
             only_frames = src not in sources
-            for s, e in split_top(masked, 0, len(masked), ";"):
+            for m in _STATEMENT.finditer(masked):  # ';' only ends statements: strings are masked
+                s, e = m.span()
                 self._statement(src, masked, s, e, prog, declared, tool_decl, wobj_decl, uses, only_frames)
         for kind, decl, known in (("tool", tool_decl, prog.tools), ("frame", wobj_decl, prog.frames)):
             for name, (pose, ok, why) in decl.items():

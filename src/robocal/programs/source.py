@@ -36,8 +36,8 @@ class Number:
     @property
     def decimals(self) -> int:
         """Digits after the decimal point as written (0 for an integer or exponent form)."""
-        mantissa = re.split(r"[eE]", self.text)[0]
-        return len(mantissa.split(".")[1]) if "." in mantissa else 0
+        mantissa = self.text.lower().partition("e")[0]
+        return len(mantissa) - mantissa.index(".") - 1 if "." in mantissa else 0
 
 
 class ProgramText:
