@@ -69,6 +69,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    import sys
     from pathlib import Path
 
     from robocal.compensate import frame_from_text
@@ -95,6 +96,10 @@ def run(args) -> int:
         targets = {p: out / p.name for p in inputs}
         table = args.table or str(out / (inputs[0].stem + ".targets"))
     written = res.write(targets, table)
+    if args.quiet:  # the warnings still matter
+        for w in res.warnings:
+            print(f"robocal filter: warning: {w}", file=sys.stderr)
+        return 0
     print(res.summary())
     print("wrote " + ", ".join(str(p) for p in written))
     return 0
