@@ -17,10 +17,14 @@ from robocal.errors import (
 )
 from robocal.evaluate import evaluate
 from robocal.kinematics.model import Robot
+from robocal.programs import FilterResult, filter_program
+from robocal.tcp import ToolCalibration, identify_tcp
 from robocal.version import __version__
 
 __all__ = [
     "CalibrationResult",
+    "FilterResult",
+    "ToolCalibration",
     "Measurements",
     "analyze",
     "calibrate",
@@ -37,5 +41,7 @@ __all__ = [
     "UnreachableError",
     "__version__",
     "compensate",
+    "filter_program",
+    "identify_tcp",
     "ik",
 ]

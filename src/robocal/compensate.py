@@ -31,7 +31,7 @@ from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.kinematics.model import Robot
-from robocal.kinematics.transforms import ROTATION_TOL, make_transform, pose_error
+from robocal.kinematics.transforms import ROTATION_TOL, invert_transform, make_transform, pose_error
 
 
 @dataclass(frozen=True)
@@ -63,8 +63,23 @@ def parameter_table(calibrated: Robot, nominal: Robot) -> list[dict]:
             for nm, u, a, b in zip(names, units, nom, cal, strict=True)]
 
 
+def controller_model(calibrated: Robot, nominal: Robot, robot_base=None, tool=None) -> Robot:
+    """The calibrated model as the controller sees the robot: its identified frame {0} as the
+    controller's base (the nominal model's base), or ``robot_base`` (4x4, m: the controller's
+    base in the calibrated model's world frame); the measured SMR/probe replaced by the
+    nominal flange (``nominal.tool``) carrying ``tool`` (4x4, m; default none)."""
+    if calibrated.n_joints != nominal.n_joints:
+        raise DataError(f"calibrated model has {calibrated.n_joints} joints, nominal "
+                        f"{nominal.n_joints}: they must describe the same robot")
+    base = nominal.base
+    if robot_base is not None:
+        base = invert_transform(np.asarray(robot_base, float)) @ calibrated.base
+    flange = nominal.tool if tool is None else nominal.tool @ np.asarray(tool, float)
+    return calibrated.with_frames(base=base, tool=flange)
+
+
 def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None = None,
-               seeds=None, targets_frame: str = "model") -> Compensation:
+               seeds=None, targets_frame: str = "model", tool=None) -> Compensation:
     """Corrected joints and Cartesian targets for target poses ``(N, 4, 4)`` (m) of the
     calibrated model's TCP.
 
@@ -72,6 +87,10 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     (after a tracker calibration, the tracker frame); 'robot' - they are in the robot's base frame
     as the controller sees it: the calibrated model is first re-expressed with the nominal
     model's base frame (its identified frame {0} taken as the controller's frame {0}).
+
+    ``tool`` (4x4, m): the user's real tool on the flange; the targets are then poses of that
+    TCP, the calibrated flange (its measured SMR/probe replaced by ``nominal.tool``) carries it,
+    and the corrected targets are for that tool on the nominal flange.
 
     Seeds: the closed-form solution of ``nominal`` (needs its OPW form) in slot ``branch``
     (None: per target the lowest slot inside the limits, then the next ones where the calibrated
@@ -83,12 +102,35 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
         raise DataError(f"targets_frame must be 'model' or 'robot', got {targets_frame!r}")
     if targets_frame == "robot":
         calibrated = calibrated.with_frames(base=nominal.base)
+    parameters = parameter_table(calibrated, nominal)
+    model, controller = calibrated, nominal
+    if tool is not None:
+        flange_tool = nominal.tool @ check_poses(tool)[0]
+        model, controller = calibrated.with_frames(tool=flange_tool), nominal.with_frames(tool=flange_tool)
     T = check_poses(targets)
-    res = ik_solve(calibrated, T, seeds, branch=branch, nominal=nominal)
-    return Compensation(joints=res.joints, corrected_targets=nominal.fk(res.joints),
+    res = ik_solve(model, T, seeds, branch=branch, nominal=controller)
+    return Compensation(joints=res.joints, corrected_targets=controller.fk(res.joints),
                         converged=res.converged, position_error=res.position_error,
                         orientation_error=res.orientation_error,
-                        parameters=parameter_table(calibrated, nominal), corrected_model=calibrated)
+                        parameters=parameters, corrected_model=calibrated)
+
+
+def frame_from_text(text: str, what: str = "frame") -> np.ndarray:
+    """A frame written ``x,y,z,rx,ry,rz`` (mm, deg; fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx), as the
+    targets' ``rx_deg..`` columns) -> 4x4 (m)."""
+    try:
+        vals = np.array([float(v) for v in text.replace(" ", "").split(",") if v], dtype=float)
+    except ValueError:
+        vals = np.zeros(0)
+    if vals.size != 6 or not np.isfinite(vals).all():
+        raise DataError(f"{what} {text!r}: expected x,y,z,rx,ry,rz (mm, deg; fixed-axis XYZ)")
+    return make_transform(Rotation.from_euler("xyz", vals[3:], degrees=True).as_matrix(), vals[:3] * 1e-3)
+
+
+def frame_to_text(T: np.ndarray) -> str:
+    """4x4 (m) -> ``x,y,z,rx,ry,rz`` (mm, deg, fixed-axis XYZ), the inverse of :func:`frame_from_text`."""
+    r = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)
+    return ",".join(f"{v:.4f}" for v in (*(T[:3, 3] * 1e3), *r))
 
 
 # ----------------------------------------------------------------------------- pose CSV files

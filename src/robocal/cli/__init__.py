@@ -24,6 +24,7 @@ COMMANDS = {
     "import": "importer", "simulate": "simulate", "evaluate": "evaluate",
     "calibrate": "calibrate", "analyze": "analyze",
     "plan": "plan", "compensate": "compensate",
+    "filter": "filter", "tool": "tool",
 }
 
 

@@ -33,6 +33,9 @@ def add_parser(sub) -> None:
     p.add_argument("--targets-in", choices=("model", "robot"), default="model",
                    help="frame of the targets: the calibrated model's world frame (default) or the "
                         "robot's base frame")
+    p.add_argument("--tool", metavar="x,y,z,rx,ry,rz",
+                   help="the user's real tool on the flange (mm, deg, fixed-axis XYZ; e.g. from robocal "
+                        "tool): targets and corrected targets are then for its TCP")
     p.add_argument("--parameters", help="also write the corrected-parameter table (CSV) here")
     p.add_argument("-o", "--output", required=True, help="commands CSV to write")
     p.set_defaults(func=run)
@@ -41,7 +44,7 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from robocal.compensate import compensate, format_csv, pose_columns, read_poses_csv
+    from robocal.compensate import compensate, format_csv, frame_from_text, pose_columns, read_poses_csv
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import Robot, load_model
 
@@ -49,7 +52,9 @@ def run(args) -> int:
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)
     targets, layout = read_poses_csv(args.targets)
-    res = compensate(calibrated, nominal, targets, branch=args.branch, targets_frame=args.targets_in)
+    tool = None if args.tool is None else frame_from_text(args.tool, "--tool")
+    res = compensate(calibrated, nominal, targets, branch=args.branch, targets_frame=args.targets_in,
+                     tool=tool)
     names, values = pose_columns(res.corrected_targets, layout)
     joints = [f"q{i + 1}_deg" for i in range(calibrated.n_joints)]
     table = np.hstack([np.rad2deg(res.joints), values, res.converged[:, None].astype(float)])

@@ -7,9 +7,13 @@ import argparse
 EPILOG = """Examples:
   robocal plan --robot abb_irb2600 poses.csv -o joints.csv
   robocal plan --robot abb_irb2600 poses.csv --weights 2,2,2,1,1,1 --start 0,0,0,0,30,0 -o joints.csv
+  robocal plan --robot calibrated.yaml --nominal abb_irb2600 --tool 50,0,200,0,30,0 poses.csv -o joints.csv
 poses.csv: x_mm,y_mm,z_mm (or _m) and qw,qx,qy,qz or rx_deg,ry_deg,rz_deg (fixed-axis XYZ), one
 waypoint per row in order. joints.csv: q1_deg..q6_deg. Default weights: 1 + lever arm (m) of
-joints 1-3, 1 for the wrist."""
+joints 1-3, 1 for the wrist. A calibrated model (with --nominal, the controller's model) is planned
+in the robot's base frame (its identified frame {0}) with its flange carrying --tool (x,y,z,rx,ry,rz,
+mm, deg, fixed-axis XYZ; default: the model's own tool, e.g. the measured SMR); candidates are the
+nominal closed form in each branch refined by numeric IK on the calibrated model."""
 
 
 def _floats(text: str) -> list[float]:
@@ -31,6 +35,9 @@ def add_parser(sub) -> None:
     p.add_argument("--robot", required=True, help="catalog name or model YAML with an OPW form")
     p.add_argument("--weights", help="w1,...,w6 (cost per rad of each joint)")
     p.add_argument("--start", help="fixed start configuration q1..q6 in deg")
+    p.add_argument("--nominal",
+                   help="the controller's model (catalog name or YAML) when --robot is calibrated")
+    p.add_argument("--tool", metavar="x,y,z,rx,ry,rz", help="the user's tool on the flange (mm, deg)")
     p.add_argument("-o", "--output", required=True, help="joints CSV to write")
     p.set_defaults(func=run)
 
@@ -38,17 +45,24 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from robocal.compensate import format_csv, read_poses_csv
+    from robocal.compensate import controller_model, format_csv, frame_from_text, read_poses_csv
     from robocal.ik.path import plan_path
     from robocal.io import check_outputs, write_atomic
     from robocal.kinematics.model import load_model
 
     check_outputs([args.output], [args.poses, args.robot])
     robot = load_model(args.robot)
+    nominal = None if args.nominal is None else load_model(args.nominal)
+    if nominal is not None:
+        tool = None if args.tool is None else frame_from_text(args.tool, "--tool")
+        robot = controller_model(robot, nominal, tool=tool) if tool is not None else \
+            robot.with_frames(base=nominal.base)
+    elif args.tool is not None:
+        robot = robot.with_frames(tool=robot.tool @ frame_from_text(args.tool, "--tool"))
     poses, _ = read_poses_csv(args.poses)
     weights = None if args.weights is None else _floats(args.weights)
     start = None if args.start is None else np.deg2rad(_floats(args.start))
-    res = plan_path(robot, poses, weights=weights, start=start)
+    res = plan_path(robot, poses, weights=weights, start=start, nominal=nominal)
     cols = [f"q{i + 1}_deg" for i in range(robot.n_joints)]
     write_atomic(args.output, format_csv(cols, np.rad2deg(res.joints)))
     gain = 100.0 * (1.0 - res.cost / res.greedy_cost) if res.greedy_cost > 0 else 0.0

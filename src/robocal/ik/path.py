@@ -4,7 +4,9 @@ Per waypoint, every closed-form solution inside the joint limits (with the +-2 p
 joints that travel more than 360 deg) is a node; nodes of consecutive waypoints are joined by
 directed edges of cost ``sum_i w_i |dq_i|``; a start node S joins the first layer and an end node
 T the last; Dijkstra (``scipy.sparse.csgraph``) from S to T picks one node per waypoint so that
-the whole trajectory's weighted joint travel is minimal.
+the whole trajectory's weighted joint travel is minimal. A calibrated model (whose chain no
+longer follows its OPW form) gets its candidates from the nominal closed form in each branch,
+refined by numeric IK on the calibrated model.
 
 Default weights (:func:`default_weights`): ``w_i = 1 + rho_i`` for the three arm joints, with
 rho_i (m) the distance from joint axis i to the flange origin at zero joints (the lever the
@@ -21,7 +23,8 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from robocal.errors import DataError, UnreachableError
+from robocal.errors import DataError, ModelError, UnreachableError
+from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses, solve_branches, turn_copies
 from robocal.kinematics.model import Robot
 
@@ -86,12 +89,36 @@ def _greedy(cand: np.ndarray, valid: np.ndarray, w: np.ndarray, first: np.ndarra
     return out
 
 
-def plan_path(robot: Robot, poses, weights=None, start=None) -> PathResult:
+def branch_candidates(robot: Robot, T: np.ndarray, nominal: Robot | None = None) -> np.ndarray:
+    """The 8 branches ``(M, 8, 6)`` (rad, NaN where absent) of checked poses ``T``: closed form
+    when the robot follows its OPW form, else (a calibrated model) the nominal closed form
+    (``nominal``, default the robot's own nominal model, with this robot's base and tool) in
+    each branch refined by numeric IK on the robot; branches it does not reach are NaN."""
+    try:
+        return solve_branches(robot, T)
+    except ModelError:
+        if nominal is None and robot.opw is None:
+            raise
+    model = robot.nominal_robot() if nominal is None else nominal
+    seeds = solve_branches(model.with_frames(base=robot.base, tool=robot.tool), T)
+    flat = seeds.reshape(-1, robot.n_joints)
+    ok = np.flatnonzero(np.isfinite(flat).all(axis=1))
+    out = np.full(flat.shape, np.nan)
+    if ok.size:
+        res = ik_solve(robot, np.repeat(T, 8, axis=0)[ok], flat[ok])
+        q = np.remainder(res.joints + np.pi, 2 * np.pi) - np.pi  # as the closed form: [-pi, pi)
+        out[ok[res.converged]] = q[res.converged]
+    return out.reshape(seeds.shape)
+
+
+def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | None = None) -> PathResult:
     """Globally optimal joints for world TCP poses ``(M, 4, 4)`` (m); see the module docstring.
 
     ``weights`` ``(6,)`` (default :func:`default_weights`); ``start`` ``(6,)`` rad: a fixed
     starting configuration whose distance to the first waypoint counts in the cost (else the
-    first waypoint is free). UnreachableError lists the waypoints without any candidate.
+    first waypoint is free). A calibrated model gets its candidates from :func:`branch_candidates`
+    (``nominal``: the controller's model for the seeds). UnreachableError lists the waypoints
+    without any candidate.
     """
     T = check_poses(poses)
     n = robot.n_joints
@@ -100,7 +127,7 @@ def plan_path(robot: Robot, poses, weights=None, start=None) -> PathResult:
         start = np.asarray(start, dtype=float).reshape(-1)
         if start.shape != (n,) or not np.isfinite(start).all():
             raise DataError(f"start must be {n} finite joint values (rad), got {start.tolist()}")
-    cand, src = turn_copies(robot, solve_branches(robot, T))
+    cand, src = turn_copies(robot, branch_candidates(robot, T, nominal))
     valid = src >= 0
     M, K, _ = cand.shape
     empty = np.flatnonzero(~valid.any(axis=1))

@@ -1,0 +1,116 @@
+"""``robocal filter``: a robot program with every Cartesian target corrected by the calibrated model."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from robocal.errors import DataError
+
+EPILOG = """Examples:
+  robocal filter weld.mod --calibrated cal.yaml --nominal abb_irb2600 -o weld_cal.mod
+  robocal filter weld.mod --calibrated cal.yaml --nominal abb_irb2600 --tcp tGun=50.12,0.03,199.71,0,30,0 \\
+      -o weld_cal.mod --table weld_targets
+  robocal filter pal.src pal.dat --references KRC/R1/System/$config.dat --calibrated cal.yaml \\
+      --nominal kuka_kr16_2 -o filtered/
+  robocal filter seal.ls --frame 1=450,-150,100,0,0,-10 --tool 2=0,0,120,0,0,0 --calibrated cal.yaml \\
+      --nominal fanuc_lrmate200id -o seal_cal.ls
+  robocal filter pick.script --tool 0,0.02,0.15,0,0,0.5 --calibrated cal.yaml --nominal ur5 -o pick_cal.script
+Formats (from the suffix, or --format): rapid (.mod .modx .prg .sys), krl (.src .dat .sub), fanuc (.ls),
+urscript (.script .urscript). --tool / --frame give the controller's tool and frame data the files do
+not hold, NAME=values in the program's own notation: ABB x,y,z (mm),q1,q2,q3,q4; KUKA X,Y,Z (mm),A,B,C
+(deg); FANUC X,Y,Z (mm),W,P,R (deg); URScript x,y,z (m),rx,ry,rz (rad); names are the tooldata/wobjdata
+names, the KUKA TOOL_DATA/BASE_DATA and FANUC UT/UF numbers, URScript feature variables (an unnamed
+URScript --tool is the installation's TCP). --tcp NAME=x,y,z,rx,ry,rz (mm, deg, fixed-axis XYZ) is the
+real TCP of that tool identified on the calibrated model (robocal tool); default: the tool data.
+The calibrated model's identified frame {0} is the controller's base unless --robot-base gives the
+controller's base in the calibrated model's world frame (x,y,z,rx,ry,rz, mm, deg).
+Writes the filtered program(s) and the per-target table (CSV and JSON) together, or nothing."""
+
+
+def _named(values, what: str) -> dict[str, str]:
+    from robocal.errors import DataError
+
+    out = {}
+    for v in values or []:
+        name, sep, text = v.partition("=")
+        if not sep:
+            name, text = "default", v
+        if not name.strip() or not text.strip():
+            raise DataError(f"{what} {v!r}: expected NAME=values")
+        out[name.strip()] = text
+    return out
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("filter", help="correct a robot program's Cartesian targets with the calibrated model",
+                       description="Every Cartesian target of an ABB RAPID, KUKA KRL, FANUC TP (.ls) or "
+                                   "URScript program is replaced by the target the controller's nominal "
+                                   "model must be given so that the real robot lands where the program "
+                                   "meant; everything else in the file stays byte for byte.",
+                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("programs", nargs="+", help="program file(s); a KUKA .src with its .dat")
+    p.add_argument("--calibrated", required=True, help="calibrated model YAML")
+    p.add_argument("--nominal", required=True, help="catalog name or model YAML of the controller's model")
+    p.add_argument("-o", "--output", required=True,
+                   help="filtered program (one input) or an existing folder (several inputs)")
+    p.add_argument("--tool", action="append", metavar="NAME=VALUES", help="controller tool data (repeatable)")
+    p.add_argument("--frame", action="append", metavar="NAME=VALUES",
+                   help="work object / base / user frame / feature (repeatable)")
+    p.add_argument("--tcp", action="append", metavar="NAME=x,y,z,rx,ry,rz",
+                   help="real TCP on the calibrated flange, mm and deg (repeatable)")
+    p.add_argument("--robot-base", metavar="x,y,z,rx,ry,rz",
+                   help="the controller's base in the calibrated model's world frame (mm, deg)")
+    p.add_argument("--references", nargs="+", default=[], metavar="FILE",
+                   help="files read for tool/frame declarations only ($config.dat, system modules)")
+    p.add_argument("--format", choices=("rapid", "krl", "fanuc", "urscript"), help="program format")
+    p.add_argument("--table", help="per-target table: PATH.csv, PATH.json, or a prefix for both "
+                                   "(default: OUTPUT.targets.csv/.json)")
+    p.add_argument("--keep-unreached", action="store_true",
+                   help="leave targets that cannot be corrected unchanged (warning) instead of failing")
+    p.set_defaults(func=run)
+
+
+def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[dict, str, list[Path]]:
+    """(program -> output path, the table's path or prefix, every file that will be written)."""
+    out = Path(output)
+    inputs = [Path(p) for p in programs]
+    if len(inputs) == 1 and not out.is_dir():
+        targets = {inputs[0]: out}
+        table = table or str(out) + ".targets"
+    else:
+        if not out.is_dir():
+            raise DataError(f"{out} is not a folder: with several program files, -o names an existing folder")
+        targets = {p: out / p.name for p in inputs}
+        table = table or str(out / (inputs[0].stem + ".targets"))
+    t = Path(table)
+    tables = [t] if t.suffix.lower() in (".csv", ".json") else [t.with_name(t.name + ".csv"),
+                                                               t.with_name(t.name + ".json")]
+    return targets, table, [*targets.values(), *tables]
+
+
+def run(args) -> int:
+    import sys
+
+    from robocal.compensate import frame_from_text
+    from robocal.io import check_outputs
+    from robocal.kinematics.model import Robot, load_model
+    from robocal.programs import filter_program
+
+    targets, table, written = _output_paths(args.programs, args.output, args.table)
+    check_outputs(written, [*args.programs, args.calibrated, args.nominal, *args.references])
+    calibrated = Robot.load(args.calibrated)
+    nominal = load_model(args.nominal)
+    tcp = {k: frame_from_text(v, "--tcp") for k, v in _named(args.tcp, "--tcp").items()}
+    base = None if args.robot_base is None else frame_from_text(args.robot_base, "--robot-base")
+    res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),
+                         frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,
+                         dialect=args.format, references=args.references, keep_unreached=args.keep_unreached)
+    written = res.write({p: targets[Path(p)] for p in res.outputs}, table)
+    if args.quiet:  # the warnings still matter
+        for w in res.warnings:
+            print(f"robocal filter: warning: {w}", file=sys.stderr)
+        return 0
+    print(res.summary())
+    print("wrote " + ", ".join(str(p) for p in written))
+    return 0

@@ -1,0 +1,96 @@
+"""Bracketed aggregates of robot program literals, e.g. RAPID ``[[1,2,3],[1,0,0,0],...]`` or URScript
+``p[0.1, 0.2, ...]``, parsed into nested lists of :class:`Number` and word tokens with spans."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from robocal.errors import DataError
+from robocal.programs.source import NUMBER_RE, Number, ProgramText
+
+
+@dataclass(frozen=True)
+class Word:
+    """A non-numeric item (identifier, TRUE/FALSE, a masked string ``"___"``) at ``start``."""
+
+    start: int
+    text: str
+
+
+_TOKEN = re.compile(r"\s*(?:(\[)|(\])|(,)|(" + NUMBER_RE.pattern + r")(?=[\s,\]])|([^\s,\[\]]+))")
+_OPEN, _CLOSE, _COMMA, _NUMBER, _WORD_TOKEN = 1, 2, 3, 4, 5
+
+
+def parse_aggregate(src: ProgramText, masked: str, pos: int, end: int, what: str):
+    """Parse the aggregate starting at the '[' at or after ``pos`` (before ``end``) in ``masked``
+    (comments/strings blanked). Returns ``(tree, stop)``: nested lists of Number / Word and the
+    offset after the closing ']'. Malformed text raises DataError naming file and line."""
+
+    def fail(at: int, why: str):
+        raise DataError(f"{src.path.name}:{src.line_of(at)}: malformed {what}: {why}")
+
+    stack: list[list] = [[]]
+    expect_item = True  # after '[' or ','
+    i = pos
+    while True:
+        m = _TOKEN.match(masked, i, end)
+        if m is None:
+            rest = masked[i:end].strip()
+            fail(min(i, end), f"unexpected {rest[:1]!r}" if rest else "missing ']'")
+        kind, i = m.lastindex, m.end()
+        if kind == _OPEN:
+            if not expect_item:
+                fail(m.start(kind), "expected ',' or ']'")
+            stack[-1].append([])
+            stack.append(stack[-1][-1])
+        elif kind == _CLOSE:
+            if len(stack) == 1:
+                fail(m.start(kind), "unexpected ']'")
+            if expect_item and stack[-1]:
+                fail(m.start(kind), "empty item")
+            stack.pop()
+            expect_item = False
+            if len(stack) == 1:
+                return stack[0][0], i
+        elif kind == _COMMA:
+            if expect_item:
+                fail(m.start(kind), "empty item")
+            expect_item = True
+        else:
+            if not expect_item or len(stack) == 1:
+                fail(m.start(kind), "expected '['" if len(stack) == 1 else "expected ',' or ']'")
+            start = m.start(kind)
+            item = Number(start, i, src.text[start:i]) if kind == _NUMBER else Word(start, m.group(kind))
+            stack[-1].append(item)
+            expect_item = False
+
+
+def numbers_of(node, sizes: tuple[int, ...], src: ProgramText, at: int, what: str) -> list[list[Number]]:
+    """Check that ``node`` is a list of lists of numbers of the given sizes; return them."""
+    ok = isinstance(node, list) and len(node) >= len(sizes)
+    if ok:
+        for part, size in zip(node, sizes, strict=False):
+            numbers = isinstance(part, list) and all(isinstance(x, Number) for x in part)
+            if not (numbers and len(part) == size):
+                ok = False
+    if not ok:
+        raise DataError(f"{src.path.name}:{src.line_of(at)}: malformed {what}: expected groups of "
+                        f"{', '.join(map(str, sizes))} numbers")
+    return [node[k] for k in range(len(sizes))]
+
+
+def split_top(text: str, start: int, end: int, sep: str = ",") -> list[tuple[int, int]]:
+    """Spans of ``text[start:end]`` split at ``sep`` outside brackets, braces and parentheses."""
+    out, depth, last = [], 0, start
+    for i in range(start, end):
+        ch = text[i]
+        if ch in "([{":
+            depth += 1
+        elif ch in ")]}":
+            depth -= 1
+        elif ch == sep and depth == 0:
+            out.append((last, i))
+            last = i + 1
+    out.append((last, end))
+    return out

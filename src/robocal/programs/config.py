@@ -1,0 +1,143 @@
+"""Vendor configuration data <-> the closed-form branch slot and the +-2 pi turn of each joint.
+
+The branch slot of :func:`robocal.ik.solve_all` is ``s = 4 * wrist_flip + 2 * shoulder + elbow``
+(see :mod:`robocal.ik.opw_ik`). :func:`branch_bits` computes the three bits of any joint vector
+from the OPW paper angles ``theta = q * sign - offset`` of the nominal model:
+
+* shoulder 1: the wrist centre is behind the axis of joint 1 (its x in the frame that turns
+  with joint 1 is negative): ABB cfx "behind axis 1", KUKA S bit 0 "overhead area", FANUC "B";
+* elbow 1: the elbow angle theta3 + psi3 is negative, the arm bent the other way than in the
+  zero pose of every vendor (elbow up): ABB cfx "wrist centre behind the lower arm", KUKA S
+  bit 1 = 0 ("A3 < phi"), FANUC "D";
+* the wrist is read from the vendor's own joint 5 sign (ABB cfx bit 0: axis 5 negative, KUKA S
+  bit 2: A5 <= 0, FANUC "F": J5 > 0).
+
+Each scheme turns joints ``(..., 6)`` into integer configuration rows and scores how far a
+candidate's row is from the one a target asks for: ``BRANCH_MISMATCH`` per differing branch
+bit plus the turn (quadrant, turn number, sign bit) mismatches. The candidate with the lowest
+score is what the vendor's controller would choose.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robocal.ik.opw_ik import opw_form
+from robocal.kinematics.model import Robot
+
+BRANCH_MISMATCH = 1000  # score of one differing branch bit: always worse than any turn mismatch
+
+
+def branch_bits(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(shoulder, elbow, flip)`` bool arrays of joints ``(..., 6)`` (rad) on ``robot``'s OPW
+    form (the nominal one a calibrated model carries); flip is the paper wrist flip (sin theta5 < 0)."""
+    opw = robot.opw if robot.opw is not None else opw_form(robot)  # opw_form raises the error
+    theta = np.asarray(q, float) * np.asarray(opw.signs, float) - np.asarray(opw.offsets, float)
+    a1, a2, c2, c3 = opw.a1, opw.a2, opw.c2, opw.c3
+    psi3, k = np.arctan2(a2, c3), np.hypot(a2, c3)
+    t2, t3 = theta[..., 1], theta[..., 2]
+    elbow_angle = np.remainder(t3 + psi3 + np.pi, 2 * np.pi) - np.pi
+    reach_x = a1 + c2 * np.sin(t2) + k * np.sin(t2 + t3 + psi3)  # wrist centre x, joint-1 frame
+    return reach_x < 0, elbow_angle < 0, np.sin(theta[..., 4]) < 0
+
+
+def slot_of(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """Closed-form branch slot ``(...,)`` of joints ``(..., 6)``: 4 * flip + 2 * shoulder + elbow."""
+    shoulder, elbow, flip = branch_bits(robot, q)
+    return 4 * flip.astype(int) + 2 * shoulder.astype(int) + elbow.astype(int)
+
+
+def _floor_div(q: np.ndarray, step: float, shift: float = 0.0) -> np.ndarray:
+    # a hair of tolerance so that values printed as exactly 90.000 deg stay in their quadrant
+    return np.floor((q + shift) / step + 1e-12).astype(int)
+
+
+class ConfigScheme:
+    """A vendor's configuration data: ``fields`` names, :meth:`encode` joints -> int rows,
+    :meth:`score` candidate rows against wanted rows, :meth:`text` for messages."""
+
+    name = ""
+    fields: tuple[str, ...] = ()
+    branch_fields = 0  # the first fields that select the branch; the rest select turns
+
+    def encode(self, robot: Robot, q: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def score(self, have: np.ndarray, want: np.ndarray) -> np.ndarray:
+        """``(...)`` mismatch of candidate rows ``have`` ``(..., m)`` against ``want``."""
+        b = self.branch_fields
+        return (BRANCH_MISMATCH * (have[..., :b] != want[..., :b]).sum(axis=-1)
+                + np.abs(have[..., b:] - want[..., b:]).sum(axis=-1))
+
+    def text(self, row) -> str:
+        return "[" + ",".join(str(int(v)) for v in row) + "]"
+
+
+class ABBConfig(ConfigScheme):
+    """ABB confdata [cf1, cf4, cf6, cfx]: quadrants floor(q / 90 deg) of axes 1, 4, 6 and
+    cfx = 4 * behind axis 1 + 2 * behind the lower arm + (axis 5 negative)."""
+
+    name = "ABB confdata"
+    fields = ("cfx", "cf1", "cf4", "cf6")
+    branch_fields = 1
+
+    def encode(self, robot, q):
+        q = np.asarray(q, float)
+        shoulder, elbow, _ = branch_bits(robot, q)
+        cfx = 4 * shoulder.astype(int) + 2 * elbow.astype(int) + (q[..., 4] < 0).astype(int)
+        quad = _floor_div(q[..., [0, 3, 5]], np.pi / 2)
+        return np.concatenate([cfx[..., None], quad], axis=-1)
+
+    def score(self, have, want):
+        # cfx compared bit by bit
+        diff = np.bitwise_xor(have[..., 0], want[..., 0])
+        bits = (diff & 1) + ((diff >> 1) & 1) + ((diff >> 2) & 1)
+        return BRANCH_MISMATCH * bits + np.abs(have[..., 1:] - want[..., 1:]).sum(axis=-1)
+
+    def text(self, row):
+        return f"[{int(row[1])},{int(row[2])},{int(row[3])},{int(row[0])}]"
+
+
+class KUKAConfig(ConfigScheme):
+    """KUKA Status and Turn: S bit 0 overhead area, bit 1 A3 >= phi (elbow as in the zero
+    pose), bit 2 A5 <= 0; T bit i set when axis i+1 is negative."""
+
+    name = "KUKA S/T"
+    fields = ("S", "T")
+
+    def encode(self, robot, q):
+        q = np.asarray(q, float)
+        shoulder, elbow, _ = branch_bits(robot, q)
+        S = shoulder.astype(int) + 2 * (~elbow).astype(int) + 4 * (q[..., 4] <= 0).astype(int)
+        T = ((q < 0).astype(int) << np.arange(q.shape[-1])).sum(axis=-1)
+        return np.stack([S, T], axis=-1)
+
+    def score(self, have, want):
+        # T = -1: the target gives no turn, any turn will do
+        ds = np.bitwise_xor(have[..., 0], want[..., 0] & 7)
+        dt = np.where(want[..., 1] < 0, 0, np.bitwise_xor(have[..., 1], want[..., 1] & 63))
+        count = sum((dt >> i) & 1 for i in range(6))
+        return BRANCH_MISMATCH * ((ds & 1) + ((ds >> 1) & 1) + ((ds >> 2) & 1)) + count
+
+    def text(self, row):
+        return f"S {int(row[0])} T {int(row[1])}"
+
+
+class FANUCConfig(ConfigScheme):
+    """FANUC CONFIG 'F|N U|D T|B, t1, t4, t6': flip (J5 > 0), elbow down, back (wrist centre
+    behind J1), and the turn numbers of J1, J4, J6 (0 for -180..180 deg, 1 for 180..540 ...)."""
+
+    name = "FANUC CONFIG"
+    fields = ("flip", "down", "back", "turn1", "turn4", "turn6")
+    branch_fields = 3
+
+    def encode(self, robot, q):
+        q = np.asarray(q, float)
+        shoulder, elbow, _ = branch_bits(robot, q)
+        turns = _floor_div(q[..., [0, 3, 5]], 2 * np.pi, np.pi)
+        bits = np.stack([q[..., 4] > 0, elbow, shoulder], axis=-1).astype(int)
+        return np.concatenate([bits, turns], axis=-1)
+
+    def text(self, row):
+        f, d, b, t1, t4, t6 = (int(v) for v in row)
+        return f"{'F' if f else 'N'} {'D' if d else 'U'} {'B' if b else 'T'}, {t1}, {t4}, {t6}"

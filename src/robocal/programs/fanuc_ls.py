@@ -1,0 +1,112 @@
+"""FANUC TP source programs (.ls).
+
+Positions in the ``/POS`` section::
+
+    P[n] or P[n:"comment"]{
+       GP1:
+        UF : u, UT : t,     CONFIG : 'N U T, 0, 0, 0',
+        X = x mm, Y = y mm, Z = z mm,
+        W = w deg, P = p deg, R = r deg
+    };
+
+W, P, R are fixed-axis XYZ angles: R = Rz(R) Ry(P) Rx(W) (deg). CONFIG: flip (F/N), elbow
+(U/D), front/back (T/B) and the turn numbers of J1, J4, J6 (see
+:class:`robocal.programs.config.FANUCConfig`). Each position carries its user frame UF and tool
+frame UT; their values live in the controller, so they are given on the command line
+(``--frame u=X,Y,Z,W,P,R``, ``--tool t=...``, mm and deg); UF 0 is the world (= robot base)
+frame, UT 0 the faceplate. Joint representations (J1 = ...), other motion groups (GP2 ...) and
+extended axes are left alone.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from robocal.errors import DataError
+from robocal.kinematics.transforms import make_transform
+from robocal.programs.config import FANUCConfig
+from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.rotations import matrix_to_zyx, zyx_to_matrix
+from robocal.programs.source import Number
+
+_POS = re.compile(r"\bP\[\s*(\d+)\s*(?::\s*\"([^\"]*)\")?\s*\]\s*\{(.*?)\}\s*;", re.DOTALL)
+_GROUP = re.compile(r"\bGP(\d+)\s*:")
+_FRAME_NO = re.compile(r"\b(UF|UT)\s*:\s*(\w+)")
+_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d+)\s*,\s*([-+]?\d+)\s*,"
+                     r"\s*([-+]?\d+)\s*'")
+_VALUE = r"\b{}\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*(?:mm|deg)"
+_KEYS = ("X", "Y", "Z", "W", "P", "R")
+_POSITION_MM = 1e-3
+_ANGLE_DEG = 1e-4
+
+
+class FanucDialect(Dialect):
+    name = "FANUC TP"
+    suffixes = (".ls",)
+    scheme = FANUCConfig()
+    frame_help = "X,Y,Z in mm and W,P,R in deg, as on the teach pendant's frame screen"
+
+    def to_pose(self, values):
+        values = np.asarray(values, float)
+        return make_transform(zyx_to_matrix(values[:, [5, 4, 3]]), values[:, :3] * 1e-3)
+
+    def from_pose(self, T, old):
+        rpw = matrix_to_zyx(T[:, :3, :3], old[:, [5, 4, 3]])
+        return np.hstack([T[:, :3, 3] * 1e3, rpw[:, [2, 1, 0]]])
+
+    def resolutions(self):
+        return np.array([_POSITION_MM] * 3 + [_ANGLE_DEG] * 3)
+
+    def config_edits(self, target, new):
+        spans = target.config_spans  # (flip, up, front, t1, t4, t6) as (start, end, text)
+        letters = ("NF"[int(new[0])], "UD"[int(new[1])], "TB"[int(new[2])])
+        texts = [*letters, *(str(int(v)) for v in new[3:])]
+        return {(a, b): t for (a, b, old), t in zip(spans, texts, strict=True) if old != t}
+
+    def parse(self, sources, frames, tools, references=()):
+        prog = Program(sources, [], frames={"0": np.eye(4)}, tools={"0": np.eye(4)})
+        prog.frames.update(frames)
+        prog.tools.update(tools)
+        order = 0
+        for src in sources:
+            text = src.text
+            start = text.find("/POS")
+            if start < 0:
+                prog.warnings.append(f"{src.path.name}: no /POS section: no positions")
+                continue
+            for m in _POS.finditer(text, start):
+                name = f"P[{m.group(1)}{':' + m.group(2) if m.group(2) else ''}]"
+                body_start = m.start(3)
+                body = m.group(3)
+                groups = list(_GROUP.finditer(body))
+                if not groups or groups[0].group(1) != "1":
+                    continue
+                g_end = groups[1].start() if len(groups) > 1 else len(body)
+                a, b = body_start + groups[0].end(), body_start + g_end
+                gp = text[a:b]
+                where = f"{src.path.name}:{src.line_of(m.start())}"
+                if re.search(r"\bJ1\s*=", gp):
+                    continue  # joint representation
+                nums = []
+                for k in _KEYS:
+                    v = re.search(_VALUE.format(k), gp)
+                    if not v:
+                        raise DataError(f"{where}: malformed position {name}: no {k} = ... "
+                                        f"{'mm' if k in 'XYZ' else 'deg'}")
+                    nums.append(Number(a + v.start(1), a + v.end(1), v.group(1)))
+                fr = dict(_FRAME_NO.findall(gp))
+                if "UF" not in fr or "UT" not in fr or not (fr["UF"].isdigit() and fr["UT"].isdigit()):
+                    raise DataError(f"{where}: position {name} needs numeric UF and UT, got {fr}")
+                c = _CONFIG.search(gp)
+                if not c:
+                    raise DataError(f"{where}: position {name}: CONFIG must read 'N|F U|D T|B, t1, t4, t6'")
+                row = np.array(["NF".index(c.group(1)), "UD".index(c.group(2)), "TB".index(c.group(3)),
+                                int(c.group(4)), int(c.group(5)), int(c.group(6))])
+                spans = [(a + c.start(k), a + c.end(k), c.group(k)) for k in range(1, 7)]
+                prog.targets.append(Target(src, m.start(), name, nums, frame=str(int(fr["UF"])),
+                                           tool=str(int(fr["UT"])), config=row, config_spans=spans,
+                                           order=order))
+                order += 1
+        return prog

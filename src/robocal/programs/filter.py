@@ -1,0 +1,428 @@
+"""Filter robot programs through a calibrated model: every Cartesian target is replaced by the
+target the controller's nominal model must be given so that the real robot lands where the
+program meant.
+
+Per target: the pose the program wants, ``X = frame * pose`` (work object / base / user frame),
+with its tool; the flange pose ``F = X * tool^-1``; the nominal controller's joints in the
+configuration the target asks for (closed form, the branch and turns its configuration data
+select; without configuration data the solution nearest the previous target's joints, as the
+controller does); the joints ``q`` that reach ``F`` on the calibrated model (numeric IK seeded
+with them); the corrected target ``frame^-1 * F_nominal(q) * tool``, written back in the same
+frame and notation. Configuration data are rewritten only when they describe ``q`` worse than
+they described the nominal joints, i.e. the correction crossed a configuration boundary (then
+a warning).
+
+Frames: the calibrated model's identified frame {0} is the controller's base frame (the nominal
+model's base; ``robot_base`` gives the controller's base in the calibrated model's world frame
+instead). The calibrated model's tool (the SMR or probe that was measured) is replaced by the
+nominal model's flange (``nominal.tool``, ROS-I ``tool0``). The controller computes with the
+program's tool data on the nominal flange; the real TCP on the calibrated flange is the tool data
+too unless ``tcp`` gives the one identified on the calibrated model (``robocal tool``).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from robocal.compensate import controller_model
+from robocal.errors import DataError, ModelError
+from robocal.ik import solve as ik_solve
+from robocal.ik import solve_all
+from robocal.ik.singularity import singularity_distance
+from robocal.io import check_outputs, write_all
+from robocal.kinematics.model import Robot
+from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
+from robocal.programs.config import BRANCH_MISMATCH
+from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.source import ProgramText, format_number
+
+SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
+LISTED = 20  # problems listed in one error message
+JUMP_DEG = 60.0  # a joint moving more than this from the previous target's joints gets a warning
+
+
+@dataclass
+class FilterResult:
+    """``outputs``: input path -> filtered bytes; ``rows``: the per-target table; ``warnings``."""
+
+    dialect: str
+    outputs: dict[Path, bytes]
+    rows: list[dict]
+    warnings: list[str] = field(default_factory=list)
+
+    def table_csv(self) -> str:
+        if not self.rows:
+            return "file,line,name\n"
+        cols = list(self.rows[0])
+        lines = [",".join(cols)]
+        for r in self.rows:
+            cells = []
+            for c in cols:
+                v = r[c]
+                text = f"{v:.6g}" if isinstance(v, float) else str(v)
+                cells.append(f'"{text}"' if ("," in text or '"' in text) else text)
+            lines.append(",".join(cells))
+        return "\n".join(lines) + "\n"
+
+    def table_json(self) -> str:
+        return json.dumps({"dialect": self.dialect, "files": [str(p) for p in self.outputs],
+                           "summary": self.summary_dict(), "warnings": self.warnings,
+                           "targets": self.rows}, indent=1)
+
+    def summary_dict(self) -> dict:
+        rows = [r for r in self.rows if r["filtered"]]
+        pos = np.array([r["correction_mm"] for r in rows]) if rows else np.zeros(0)
+        rot = np.array([r["correction_deg"] for r in rows]) if rows else np.zeros(0)
+        margin = [r["limit_margin_deg"] for r in rows]
+        sig = [r["sigma_rel"] for r in rows]
+        out = {"targets": len(self.rows), "filtered": len(rows),
+               "configuration_changed": sum(r["configuration"] == "changed" for r in rows),
+               "correction_mm": {"median": float(np.median(pos)) if pos.size else 0.0,
+                                 "max": float(pos.max(initial=0.0))},
+               "correction_deg": {"median": float(np.median(rot)) if rot.size else 0.0,
+                                  "max": float(rot.max(initial=0.0))},
+               "warnings": len(self.warnings)}
+        if rows:
+            i, j = int(np.argmin(margin)), int(np.argmin(sig))
+            out["smallest_limit_margin"] = {"name": rows[i]["name"], "deg": margin[i],
+                                            "joint": rows[i]["limit_joint"]}
+            out["nearest_singularity"] = {"name": rows[j]["name"], "kind": rows[j]["nearest_singularity"],
+                                          "sigma_rel": sig[j]}
+        return out
+
+    def summary(self) -> str:
+        s = self.summary_dict()
+        lines = [f"{self.dialect}: {s['filtered']} of {s['targets']} Cartesian target(s) filtered in "
+                 f"{', '.join(p.name for p in self.outputs)}"]
+        if s["filtered"]:
+            lines += [f"  correction  median {s['correction_mm']['median']:.3f} mm, max "
+                      f"{s['correction_mm']['max']:.3f} mm; orientation median "
+                      f"{s['correction_deg']['median']:.4f} deg, max {s['correction_deg']['max']:.4f} deg",
+                      f"  configuration changed on {s['configuration_changed']} target(s)",
+                      f"  smallest joint-limit margin {s['smallest_limit_margin']['deg']:.2f} deg "
+                      f"({s['smallest_limit_margin']['name']}, joint {s['smallest_limit_margin']['joint']})",
+                      f"  nearest singularity: {s['nearest_singularity']['name']} "
+                      f"({s['nearest_singularity']['kind']}, sigma_rel "
+                      f"{s['nearest_singularity']['sigma_rel']:.4f})"]
+        for w in self.warnings[:LISTED]:
+            lines.append(f"  warning: {w}")
+        if len(self.warnings) > LISTED:
+            lines.append(f"  ... {len(self.warnings) - LISTED} more warning(s) in the table")
+        return "\n".join(lines)
+
+    def write(self, outputs: dict[Path, Path] | Path | str, table: str | Path | None = None) -> list[Path]:
+        """Write the filtered files (input path -> output path, or one output path for a single
+        input) and the table (``table`` ending .csv or .json: that one; otherwise both
+        ``table.csv`` and ``table.json``), all together or none. Refuses to overwrite an input.
+        Returns the paths written."""
+        if not isinstance(outputs, dict):
+            if len(self.outputs) != 1:
+                raise DataError("several program files: give one output path per input")
+            outputs = {next(iter(self.outputs)): Path(outputs)}
+        files: dict[Path, bytes] = {Path(dst): self.outputs[Path(src)] for src, dst in outputs.items()}
+        if table is not None:
+            t = Path(table)
+            if t.suffix.lower() == ".csv":
+                files[t] = self.table_csv().encode()
+            elif t.suffix.lower() == ".json":
+                files[t] = self.table_json().encode()
+            else:
+                files[t.with_name(t.name + ".csv")] = self.table_csv().encode()
+                files[t.with_name(t.name + ".json")] = self.table_json().encode()
+        check_outputs(files, self.outputs)
+        write_all(files)
+        return list(files)
+
+
+def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
+    """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript') or the suffixes."""
+    from robocal.programs.fanuc_ls import FanucDialect
+    from robocal.programs.krl import KRLDialect
+    from robocal.programs.rapid import RapidDialect
+    from robocal.programs.urscript import URScriptDialect
+
+    dialects = {"rapid": RapidDialect, "krl": KRLDialect, "fanuc": FanucDialect, "urscript": URScriptDialect}
+    if name is not None:
+        if name not in dialects:
+            raise DataError(f"unknown program format {name!r}: use one of {', '.join(dialects)}")
+        return dialects[name]()
+    found = {key for p in paths for key, d in dialects.items() if p.suffix.lower() in d.suffixes}
+    if len(found) != 1:
+        known = ", ".join(f"{k}: {' '.join(d.suffixes)}" for k, d in dialects.items())
+        raise DataError(f"cannot tell the program format of {[p.name for p in paths]} from the file "
+                        f"suffixes ({known}); name it with --format")
+    return dialects[found.pop()]()
+
+
+def as_frames(dialect: Dialect, given) -> dict[str, np.ndarray]:
+    """name -> 4x4 (m) from name -> 4x4 or text in the dialect's pose notation."""
+    out = {}
+    for key, val in (given or {}).items():
+        out[str(key)] = dialect.frame_from_text(val) if isinstance(val, str) else np.asarray(val, float)
+    return out
+
+
+def _configured_joints(dialect, nominal, F, targets, problems):
+    """Nominal joints ``(N, 6)`` in each target's configuration (NaN where impossible)."""
+    scheme = dialect.scheme
+    try:
+        cands = solve_all(nominal, F, extra_turns=True)
+    except ModelError as exc:
+        raise ModelError(f"{dialect.name} configuration data need the nominal model's closed form: "
+                         f"{exc}") from None
+    valid = np.isfinite(cands).all(axis=2)
+    have = scheme.encode(nominal, np.where(valid[..., None], cands, 0.0))
+    want = np.array([t.config if t.config is not None else np.zeros(have.shape[-1], int) for t in targets])
+    score = np.where(valid, scheme.score(have, want[:, None]), np.iinfo(np.int64).max)
+    q = np.full(F.shape[:1] + (nominal.n_joints,), np.nan)
+    prev = None
+    for i, t in enumerate(targets):
+        if not valid[i].any():
+            problems.append((i, "no solution of the nominal model inside the joint limits (out of reach)"))
+            continue
+        if t.config is None:  # no configuration data: the candidate nearest the previous joints
+            d = np.where(valid[i], np.abs(cands[i] - (prev if prev is not None else 0.0)).sum(axis=1), np.inf)
+            k = int(np.argmin(d))
+        else:
+            k = int(np.argmin(score[i]))
+            if score[i, k] >= BRANCH_MISMATCH:
+                problems.append((i, f"configuration {scheme.text(t.config)} is not possible for this pose "
+                                    "inside the joint limits"))
+                continue
+        q[i] = prev = cands[i, k]
+    return q
+
+
+def _nearest_joints(nominal, F, targets, program: Program, problems, warnings):
+    """Nominal joints nearest the previous target's (or the given qnear / joint target).
+
+    Batched sweeps seed every target with its predecessor's solution of the sweep before; then
+    one pass in program order re-solves, from its predecessor's final joints, each target whose
+    solution is not within ``JUMP_DEG`` of them (a sweep can settle on another branch)."""
+    N, n = F.shape[0], nominal.n_joints
+    anchor = np.full((N, n), np.nan)  # joints that come right before target i, if any
+    for index, qj in program.joint_targets:
+        if index < N:
+            anchor[index] = qj
+    qnear = np.array([t.qnear if t.qnear is not None else np.full(n, np.nan) for t in targets])
+    fixed = np.where(np.isfinite(qnear), qnear, anchor)
+    if not np.isfinite(fixed[0]).all():
+        fixed[0] = np.clip(0.0, nominal.limits[:, 0], nominal.limits[:, 1])
+        warnings.append(f"{targets[0].where}: no joint position before the first target: the controller's "
+                        "solution is taken as the one nearest zero joints")
+    given = np.isfinite(fixed).all(axis=1)
+    seeds = fixed.copy()
+    for i in range(1, N):  # propagate the last known joints
+        if not given[i]:
+            seeds[i] = seeds[i - 1]
+    for _ in range(SWEEPS):
+        res = ik_solve(nominal, F, seeds)
+        new = np.where(given[:, None], fixed, np.vstack([fixed[:1], res.joints[:-1]]))
+        if np.allclose(new, seeds, atol=1e-9):
+            break
+        seeds = new
+    q, converged = res.joints.copy(), res.converged.copy()
+    jump = np.zeros(N)
+    limit = np.deg2rad(JUMP_DEG)
+    for i in range(N):  # in program order: each target from its predecessor's final joints
+        ref = fixed[i] if given[i] else q[i - 1]
+        jump[i] = np.abs(q[i] - ref).max()
+        if converged[i] and jump[i] <= limit:
+            continue
+        one = ik_solve(nominal, F[i:i + 1], ref[None])
+        if one.converged[0] or not converged[i]:
+            q[i], converged[i] = one.joints[0], one.converged[0]
+            jump[i] = np.abs(q[i] - ref).max()
+    for i in np.flatnonzero(converged & (jump > limit)):
+        warnings.append(f"{targets[i].where}: the controller's solution is {np.rad2deg(jump[i]):.0f} deg "
+                        "away from the previous joints in one joint: it may take another solution than "
+                        "assumed here; add a joint move (or qnear) before this target")
+    inside = ((q >= nominal.limits[:, 0]) & (q <= nominal.limits[:, 1])).all(axis=1)
+    for i in np.flatnonzero(~converged | ~inside):
+        problems.append((int(i), "the nominal controller has no solution near the previous joints inside "
+                                 "the limits (out of reach)"))
+        q[i] = np.nan
+    return q
+
+
+def controller_joints(dialect: Dialect, program: Program, targets: list[Target], nominal: Robot,
+                      F: np.ndarray, problems: list, warnings: list) -> np.ndarray:
+    """The nominal controller's joints ``(N, n)`` (rad) for flange poses ``F`` of ``targets``:
+    in the configuration their data select, else nearest the previous joints. Targets without
+    a solution are NaN and appended to ``problems`` as ``(index, why)``."""
+    if dialect.scheme is not None and any(t.config is not None for t in targets):
+        return _configured_joints(dialect, nominal, F, targets, problems)
+    return _nearest_joints(nominal, F, targets, program, problems, warnings)
+
+
+def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
+    """``(P, W, tool)``: target poses in their frames, the frames and the tools, each ``(N, 4, 4)`` m."""
+    P = dialect.to_pose(np.array([t.values() for t in targets]))
+    W = np.array([program.frames[t.frame] for t in targets])
+    tool = np.array([program.tools[t.tool] for t in targets])
+    return P, W, tool
+
+
+def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
+                   robot_base=None, dialect: str | None = None, references=(),
+                   keep_unreached: bool = False) -> FilterResult:
+    """Filter robot program file(s) through ``calibrated`` (see the module docstring).
+
+    ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
+    for their tool / frame declarations only (KUKA $config.dat, ABB modules declaring
+    tooldata / wobjdata), never written. ``tools`` / ``frames``: name -> 4x4 (m) or text in the
+    program's pose notation (``dialect.frame_help``), completing or overriding what the files
+    declare: the tools as the controller knows them. ``tcp``: tool name -> 4x4 (m), the real TCP
+    identified on the calibrated model (``robocal tool``), used with the calibrated flange
+    instead of the controller's tool data. ``robot_base``: the controller's base frame (4x4, m)
+    in the calibrated model's world frame (default: the calibrated frame {0} is the controller's
+    base). Targets that cannot be corrected (out of reach, out of the joint limits, a
+    configuration they cannot have, not converged) raise DataError naming each one; with
+    ``keep_unreached`` they are left unchanged with a warning. Nothing is written here: see
+    :meth:`FilterResult.write`.
+    """
+    paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
+    if not paths:
+        raise DataError("no program file given")
+    d = dialect_for(paths, dialect)
+    sources = [ProgramText(p) for p in paths]
+    refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
+    program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
+    warnings = list(program.warnings)
+    targets = _filterable(d, program, warnings)
+    if not targets:
+        warnings.append("no Cartesian target to filter")
+        return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings)
+    P, W, tool = target_poses(d, program, targets)
+    X = W @ P
+    real = {d.name_key(k): v for k, v in (tcp or {}).items()}
+    unknown_tcp = sorted(set(real) - {t.tool for t in targets})
+    if unknown_tcp:
+        raise DataError(f"--tcp names tool(s) {unknown_tcp} that no filtered target uses; the targets use "
+                        f"{sorted({t.tool for t in targets})}")
+    real_tool = np.array([np.asarray(real[t.tool], float) if t.tool in real else program.tools[t.tool]
+                          for t in targets])
+    problems: list[tuple[int, str]] = []
+    q_nom = controller_joints(d, program, targets, nominal, X @ invert_transform(tool), problems, warnings)
+    ok = np.isfinite(q_nom).all(axis=1)
+    controller = controller_model(calibrated, nominal, robot_base)
+    res = ik_solve(controller, X @ invert_transform(real_tool), np.where(ok[:, None], q_nom, 0.0))
+    q = res.joints
+    sing = singularity_distance(controller, q)
+    _check_joints(nominal, res, ok, sing, problems)
+    bad = {i for i, _ in problems}
+    if problems and not keep_unreached:
+        problems.sort()
+        lines = [f"{targets[i].where}: {why}" for i, why in problems[:LISTED]]
+        more = f"\n... and {len(problems) - LISTED} more" if len(problems) > LISTED else ""
+        raise DataError(f"{len(bad)} target(s) cannot be corrected:\n" + "\n".join(lines) + more +
+                        "\nnothing was written; fix or remove these targets (or use --keep-unreached "
+                        "to leave them unchanged)")
+    warnings += [f"{targets[i].where}: left unchanged: {why}" for i, why in sorted(problems)]
+    good = np.array([i not in bad for i in range(len(targets))])
+    Pc = invert_transform(W) @ nominal.fk(np.where(good[:, None], q, 0.0)) @ tool
+    Pc[~good] = P[~good]
+    cfg = None
+    if d.scheme is not None:
+        cfg = (d.scheme.encode(nominal, np.where(ok[:, None], q_nom, 0.0)), d.scheme.encode(nominal, q))
+    edits, changed = _edits(d, targets, good, Pc, cfg, warnings)
+    for i in np.flatnonzero(good & sing.close):
+        warnings.append(f"{targets[i].where}: close to the {sing.nearest[i]} singularity (sigma_rel "
+                        f"{sing.sigma_rel[i]:.4f}, wrist {sing.wrist_deg[i]:.2f} deg, elbow "
+                        f"{sing.elbow_deg[i]:.2f} deg, shoulder {sing.shoulder_mm[i]:.1f} mm): the "
+                        "controller may not realise its correction")
+    rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, res.converged & ok, changed, cfg, sing)
+    outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
+    return FilterResult(d.name, outputs, rows, warnings)
+
+
+def _filterable(d: Dialect, program: Program, warnings: list) -> list[Target]:
+    """The targets to filter: those with a supported tool and frame, all of them known."""
+    targets: list[Target] = []
+    for t in program.targets:
+        why = program.unsupported.get(f"tool:{t.tool}") or program.unsupported.get(f"frame:{t.frame}")
+        if why:
+            warnings.append(f"{t.where}: not filtered: {why}")
+        else:
+            targets.append(t)
+    unknown = [f"{t.where}: unknown {kind} {name!r}" for t in targets
+               for kind, name, known in (("tool", t.tool, program.tools), ("frame", t.frame, program.frames))
+               if name not in known]
+    if unknown:
+        raise DataError("\n".join(unknown[:LISTED]) + f"\ndeclare them in the program or give them with "
+                        f"--tool NAME=... / --frame NAME=... ({d.frame_help})")
+    return targets
+
+
+def _check_joints(nominal: Robot, res, ok: np.ndarray, sing, problems: list) -> None:
+    """Append the targets the calibrated IK did not reach, or reached outside the limits."""
+    q = res.joints
+    converged = res.converged & ok
+    for i in np.flatnonzero(ok & ~converged):
+        problems.append((int(i), f"the calibrated model does not reach it (IK stopped "
+                                 f"{res.position_error[i] * 1e3:.3g} mm away; nearest singularity "
+                                 f"{sing.nearest[i]}, sigma_rel {sing.sigma_rel[i]:.4f})"))
+    inside = ((q >= nominal.limits[:, 0]) & (q <= nominal.limits[:, 1])).all(axis=1)
+    for i in np.flatnonzero(converged & ~inside):
+        margin = np.rad2deg(np.minimum(q[i] - nominal.limits[:, 0], nominal.limits[:, 1] - q[i]))
+        j = int(np.argmin(margin))
+        problems.append((int(i), f"the corrected joints leave the limits (joint {j + 1} by "
+                                 f"{-margin[j]:.3f} deg)"))
+
+
+def _edits(d: Dialect, targets: list[Target], good: np.ndarray, Pc: np.ndarray, cfg, warnings: list):
+    """Span edits per file for the corrected poses ``Pc`` and, where the correction crossed a
+    configuration boundary, the configuration data; and which targets' configuration changed.
+    ``cfg``: (rows of the nominal joints, rows of the corrected joints) or None."""
+    old = np.array([t.values() for t in targets])
+    new = d.from_pose(Pc, old)
+    resolution = d.resolutions()
+    moved = good[:, None] & (np.abs(new - old) > resolution / 2)  # numbers that must be rewritten
+    changed = np.zeros(len(targets), bool)
+    if cfg is not None:
+        has = np.array([t.config is not None for t in targets])
+        want = np.array([t.config if t.config is not None else cfg[0][i] for i, t in enumerate(targets)])
+        # rewritten only when the written data describe the corrected joints worse than the nominal ones
+        changed = good & has & (d.scheme.score(cfg[1], want) > d.scheme.score(cfg[0], want))
+    edits: dict[Path, dict] = {}
+    for i in np.flatnonzero(moved.any(axis=1) | changed):
+        t = targets[i]
+        mine = edits.setdefault(t.source.path, {})
+        for j in np.flatnonzero(moved[i]):
+            num = t.numbers[j]
+            mine[(num.start, num.end)] = format_number(float(new[i, j]), num, float(resolution[j]))
+        if changed[i]:
+            mine.update(d.config_edits(t, cfg[1][i]))
+            warnings.append(f"{t.where}: configuration changed from {d.scheme.text(cfg[0][i])} to "
+                            f"{d.scheme.text(cfg[1][i])}: the corrected joints cross a configuration "
+                            "boundary; check the motion into and out of this target")
+    return edits, changed
+
+
+def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing) -> list[dict]:
+    """The per-target table (see docs/programs.md)."""
+    dpos = np.linalg.norm(Xc[:, :3, 3] - X[:, :3, 3], axis=1) * 1e3
+    drot = np.rad2deg(np.linalg.norm(matrix_to_rotvec(Xc[:, :3, :3] @ np.swapaxes(X[:, :3, :3], 1, 2)),
+                                     axis=1))
+    lim = np.rad2deg(np.minimum(q - nominal.limits[:, 0], nominal.limits[:, 1] - q))
+    rows = []
+    for i, t in enumerate(targets):
+        j = int(np.argmin(lim[i]))
+        rows.append({
+            "file": t.source.path.name, "line": t.line, "name": t.name, "frame": t.frame, "tool": t.tool,
+            "filtered": bool(good[i]),
+            "correction_mm": float(dpos[i]), "correction_deg": float(drot[i]),
+            "configuration": "changed" if changed[i] else ("kept" if t.config is not None else "none"),
+            "config_before": d.scheme.text(cfg[0][i]) if cfg is not None and ok[i] else "",
+            "config_after": d.scheme.text(cfg[1][i]) if cfg is not None and good[i] else "",
+            "reachable": bool(good[i]), "converged": bool(converged[i]),
+            "limit_margin_deg": float(lim[i, j]), "limit_joint": j + 1,
+            "sigma_rel": float(sing.sigma_rel[i]), "nearest_singularity": str(sing.nearest[i]),
+            "wrist_deg": float(sing.wrist_deg[i]), "elbow_deg": float(sing.elbow_deg[i]),
+            "shoulder_mm": float(sing.shoulder_mm[i]),
+        })
+    return rows

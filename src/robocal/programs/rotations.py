@@ -1,0 +1,84 @@
+"""Rotation notations of robot programs, vectorised, each read back in the form nearest to
+the numbers a file already holds (so an unchanged pose keeps its numbers).
+
+* quaternion w-first (ABB): the sign nearest the old quaternion;
+* ZYX Euler ``R = Rz(a) Ry(b) Rx(c)`` in deg (KUKA A, B, C; FANUC W, P, R is the same matrix
+  with (a, b, c) = (R, P, W)): of the two solutions the one nearest the old angles, each angle
+  in [-180, 180]; within ``GIMBAL`` of b = +-90 deg, a keeps its old value;
+* rotation vector in rad (URScript): r or its 2 pi complement, whichever is nearer.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+GIMBAL = 1e-6  # |cos b| below which the ZYX Euler angles a and c are not separable
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Quaternions ``(N, 4)`` w-first (normalised here) -> ``(N, 3, 3)``."""
+    return Rotation.from_quat(np.asarray(q, float), scalar_first=True).as_matrix()
+
+
+def matrix_to_quat(R: np.ndarray, old: np.ndarray) -> np.ndarray:
+    """``(N, 3, 3)`` -> quaternions ``(N, 4)`` w-first with the sign of ``old``."""
+    q = Rotation.from_matrix(R).as_quat(scalar_first=True)
+    flip = np.einsum("ij,ij->i", q, old) < 0
+    q[flip] *= -1
+    return q
+
+
+def zyx_to_matrix(abc_deg: np.ndarray) -> np.ndarray:
+    """ZYX Euler ``(N, 3)`` deg, R = Rz(a) Ry(b) Rx(c) -> ``(N, 3, 3)``."""
+    a, b, c = np.deg2rad(np.asarray(abc_deg, float)).T
+    ca, sa, cb, sb, cc, sc = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(c), np.sin(c)
+    R = np.empty((len(a), 3, 3))
+    R[:, 0] = np.stack([ca * cb, ca * sb * sc - sa * cc, ca * sb * cc + sa * sc], axis=1)
+    R[:, 1] = np.stack([sa * cb, sa * sb * sc + ca * cc, sa * sb * cc - ca * sc], axis=1)
+    R[:, 2] = np.stack([-sb, cb * sc, cb * cc], axis=1)
+    return R
+
+
+def _wrap_deg(x: np.ndarray) -> np.ndarray:
+    return x - 360.0 * np.round(x / 360.0)
+
+
+def matrix_to_zyx(R: np.ndarray, old: np.ndarray) -> np.ndarray:
+    """``(N, 3, 3)`` -> ZYX Euler ``(N, 3)`` deg nearest ``old`` (see the module docstring)."""
+    old = np.asarray(old, float)
+    cb = np.hypot(R[:, 0, 0], R[:, 1, 0])
+    b = np.arctan2(-R[:, 2, 0], cb)
+    a = np.arctan2(R[:, 1, 0], R[:, 0, 0])
+    c = np.arctan2(R[:, 2, 1], R[:, 2, 2])
+    one = np.rad2deg(np.stack([a, b, c], axis=1))
+    two = np.stack([one[:, 0] + 180.0, 180.0 - one[:, 1], one[:, 2] + 180.0], axis=1)
+    gimbal = cb < GIMBAL
+    if gimbal.any():  # a keeps its old value, c takes the rest of the rotation about z
+        a_old = np.deg2rad(old[gimbal, 0])
+        up = -R[gimbal, 2, 0] > 0
+        r01, r11 = R[gimbal, 0, 1], R[gimbal, 1, 1]
+        c_g = np.where(up, a_old + np.arctan2(r01, r11), np.arctan2(-r01, r11) - a_old)
+        b_g = np.where(up, 90.0, -90.0)
+        one[gimbal] = two[gimbal] = np.stack([np.rad2deg(a_old), b_g, np.rad2deg(c_g)], axis=1)
+    one, two = _wrap_deg(one), _wrap_deg(two)
+    d1 = np.abs(_wrap_deg(one - old)).sum(axis=1)
+    d2 = np.abs(_wrap_deg(two - old)).sum(axis=1)
+    best = np.where((d2 < d1)[:, None], two, one)
+    # the representative of each angle nearest the old number, kept inside [-180, 180]
+    near = old + _wrap_deg(best - old)
+    return np.where(np.abs(near) <= 180.0, near, best)
+
+
+def rotvec_to_matrix(r: np.ndarray) -> np.ndarray:
+    """Rotation vectors ``(N, 3)`` rad -> ``(N, 3, 3)``."""
+    return Rotation.from_rotvec(np.asarray(r, float)).as_matrix()
+
+
+def matrix_to_rotvec(R: np.ndarray, old: np.ndarray) -> np.ndarray:
+    """``(N, 3, 3)`` -> rotation vectors ``(N, 3)`` rad, r or (|r| - 2 pi) r / |r|, nearest old."""
+    r = Rotation.from_matrix(R).as_rotvec()
+    angle = np.linalg.norm(r, axis=1, keepdims=True)
+    alt = r * np.where(angle > 0, (angle - 2 * np.pi) / np.where(angle > 0, angle, 1.0), 1.0)
+    use_alt = np.linalg.norm(alt - old, axis=1) < np.linalg.norm(r - old, axis=1)
+    return np.where(use_alt[:, None], alt, r)

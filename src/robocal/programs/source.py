@@ -1,0 +1,120 @@
+"""A robot program's text with the byte spans of the numbers that filtering may rewrite.
+
+The file is read as bytes and decoded as latin-1, which maps every byte to one character: string
+offsets are byte offsets, any 8-bit or UTF-8 file round-trips byte for byte, and only ASCII numbers
+are ever replaced (comments, whitespace, CRLF line endings and encoding stay as they were).
+UTF-16 files are refused with a message. A :class:`Number` keeps its span, text and decimals;
+:func:`format_number` writes a corrected value with the file's decimals when they resolve the
+correction, more otherwise.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from robocal.errors import DataError
+
+NUMBER_RE = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+@dataclass(frozen=True)
+class Number:
+    """A number in the program text: ``start:end`` byte span, its ``text`` and value."""
+
+    start: int
+    end: int
+    text: str
+
+    @property
+    def value(self) -> float:
+        return float(self.text)
+
+    @property
+    def decimals(self) -> int:
+        """Digits after the decimal point as written (0 for an integer or exponent form)."""
+        mantissa = self.text.lower().partition("e")[0]
+        return len(mantissa) - mantissa.index(".") - 1 if "." in mantissa else 0
+
+
+class ProgramText:
+    """The text of one program file (latin-1 decoded bytes) and its line starts."""
+
+    def __init__(self, path: str | Path, data: bytes | None = None):
+        self.path = Path(path)
+        if data is None:
+            try:
+                data = self.path.read_bytes()
+            except OSError as exc:
+                raise DataError(f"cannot read program {self.path}: {exc.strerror}") from None
+        if data[:2] in (b"\xff\xfe", b"\xfe\xff") or b"\x00" in data[:4096]:
+            raise DataError(f"{self.path}: the file looks UTF-16 encoded; save it as UTF-8 or ASCII "
+                            "(the controllers' own export format) and run again")
+        self.data = data
+        self.text = data.decode("latin-1")
+        self._lines = [0] + [m.end() for m in re.finditer("\n", self.text)]
+
+    def line_of(self, offset: int) -> int:
+        """1-based line number of a byte offset."""
+        return bisect.bisect_right(self._lines, offset)
+
+    def number_at(self, start: int, end: int) -> Number:
+        """The number occupying exactly ``start:end``, else DataError naming the line."""
+        text = self.text[start:end]
+        if not NUMBER_RE.fullmatch(text):
+            raise DataError(f"{self.path}:{self.line_of(start)}: expected a number, found {text!r}")
+        return Number(start, end, text)
+
+    def numbers_in(self, start: int, end: int) -> list[Number]:
+        """Every number inside ``start:end`` in order."""
+        return [Number(m.start(), m.end(), m.group()) for m in NUMBER_RE.finditer(self.text, start, end)]
+
+    def where(self, offset: int) -> str:
+        """``file:line`` of a byte offset, for messages."""
+        return f"{self.path.name}:{self.line_of(offset)}"
+
+    def replaced(self, edits: dict[tuple[int, int], str]) -> bytes:
+        """The file's bytes with the spans ``(start, end)`` replaced by new ASCII text."""
+        out, pos = [], 0
+        for (start, end), new in sorted(edits.items()):
+            if start < pos:
+                raise AssertionError(f"overlapping edits at byte {start}")
+            out += [self.text[pos:start], new]
+            pos = end
+        out.append(self.text[pos:])
+        return "".join(out).encode("latin-1")
+
+
+def mask(text: str, blank: list[re.Pattern], quoted: list[re.Pattern] = ()) -> str:
+    """``text`` with every match of ``blank`` (comments) turned to spaces and of ``quoted``
+    (strings) to ``"___"``, newlines kept: structure can be searched without being fooled, a
+    string still reads as one item, and offsets stay the same."""
+    chars = list(text)
+    for patterns, fill in ((blank, " "), (quoted, "_")):
+        if not patterns:
+            continue
+        combined = re.compile("|".join(f"(?:{p.pattern})" for p in patterns), re.MULTILINE)
+        for m in combined.finditer("".join(chars)):
+            for i in range(m.start() + (fill == "_"), m.end() - (fill == "_")):
+                if chars[i] not in "\r\n":
+                    chars[i] = fill
+    return "".join(chars)
+
+
+def format_number(value: float, old: Number, resolution: float) -> str:
+    """Text for ``value`` replacing ``old``: unchanged when within ``resolution / 2`` of the old
+    value; else with the old number's decimals, or as many more as ``resolution`` needs (the
+    quantisation error stays below resolution / 2). Never '-0'."""
+    if abs(value - old.value) <= resolution / 2:
+        return old.text
+    needed = max(0, math.ceil(-math.log10(resolution) - 1e-9))  # 10**-needed <= resolution
+    decimals = max(old.decimals, needed)
+    text = f"{value:.{decimals}f}"
+    if float(text) == 0.0:
+        text = text.lstrip("-")
+    if old.text.startswith("+") and not text.startswith("-"):
+        text = "+" + text
+    return text

@@ -1,0 +1,374 @@
+"""Robot program filtering: configuration <-> branch mapping, notations, the four vendor formats on
+hand-written programs (byte-identical round trip, only numbers change), simulated truth, bad input."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import robocal as rc
+from robocal.cli import main
+from robocal.data.simulate import perturbed
+from robocal.errors import DataError
+from robocal.kinematics.catalog import catalog_names
+from robocal.programs import filter_program
+from robocal.programs.config import ABBConfig, FANUCConfig, KUKAConfig, slot_of
+from robocal.programs.rotations import (
+    matrix_to_quat,
+    matrix_to_rotvec,
+    matrix_to_zyx,
+    quat_to_matrix,
+    rotvec_to_matrix,
+    zyx_to_matrix,
+)
+from robocal.programs.simulate import execute, truth_experiment
+from robocal.programs.source import NUMBER_RE, Number, format_number
+
+DATA = Path(__file__).parent / "data" / "programs"
+OPW_ROBOTS = [n for n in catalog_names() if rc.Robot.from_catalog(n).opw]
+
+# the hand-written programs: robot, files, references, controller frames/tools not in the files
+FIXTURES = {
+    "rapid": ("abb_irb2600", ["weld_cell.mod"], [], {}, {}),
+    "krl": ("kuka_kr16_2", ["palletize.src", "palletize.dat"], ["config.dat"], {}, {}),
+    "fanuc": ("fanuc_lrmate200id", ["sealing.ls"], [], {"1": "450,-150,100,0,0,-10"}, {"2": "0,0,120,0,0,0"}),
+    "urscript": ("ur5", ["pick_place.script"], [], {}, {}),
+}
+
+
+def _fixture(name, tmp_path):
+    robot, files, refs, frames, tools = FIXTURES[name]
+    for f in files + refs:
+        shutil.copy(DATA / f, tmp_path / f)
+    return (rc.Robot.from_catalog(robot), [tmp_path / f for f in files], [tmp_path / f for f in refs],
+            frames, tools)
+
+
+# ----------------------------------------------------------------------------- configuration
+@pytest.mark.parametrize("name", OPW_ROBOTS)
+def test_slot_of_is_the_closed_form_slot(name):
+    robot = rc.Robot.from_catalog(name)
+    q = np.random.default_rng(1).uniform(robot.limits[:, 0], robot.limits[:, 1], (500, 6))
+    sols = rc.ik.solve_all(robot, robot.fk(q))
+    picked = sols[np.arange(len(q)), slot_of(robot, q)]
+    assert np.abs(np.remainder(picked - q + np.pi, 2 * np.pi) - np.pi).max() < 1e-7
+
+
+@pytest.mark.parametrize("scheme", [ABBConfig(), KUKAConfig(), FANUCConfig()], ids=lambda s: s.name)
+@pytest.mark.parametrize("name", OPW_ROBOTS)
+def test_configuration_data_select_the_joints(name, scheme):
+    """config_of(q) picks, among all closed-form candidates and their turns, exactly q."""
+    robot = rc.Robot.from_catalog(name)
+    if isinstance(scheme, KUKAConfig) and (np.abs(robot.limits) > np.pi * 2).any():
+        pytest.skip("KUKA's sign bits tell turns apart only within +-360 deg")
+    q = np.random.default_rng(2).uniform(robot.limits[:, 0], robot.limits[:, 1], (400, 6))
+    cands = rc.ik.solve_all(robot, robot.fk(q), extra_turns=True)
+    valid = np.isfinite(cands).all(axis=2)
+    have = scheme.encode(robot, np.where(valid[..., None], cands, 0.0))
+    score = np.where(valid, scheme.score(have, scheme.encode(robot, q)[:, None]), 10**9)
+    assert (score.min(axis=1) == 0).all()
+    picked = cands[np.arange(len(q)), score.argmin(axis=1)]
+    assert np.abs(picked - q).max() < 1e-7
+
+
+def test_vendor_configuration_conventions():
+    """Zero-pose conventions: ABB cfx 0, KUKA S bit 1 set at home, FANUC 'N U T'."""
+    abb, kuka, fanuc = (rc.Robot.from_catalog(n) for n in ("abb_irb2600", "kuka_kr16_2", "fanuc_lrmate200id"))
+    assert ABBConfig().encode(abb, np.deg2rad([[100, 0, 0, -10, 30, 200]])).tolist() == [[0, 1, -1, 2]]
+    assert ABBConfig().encode(abb, np.deg2rad([[0, 0, 0, 0, -30, 0]]))[0, 0] == 1  # axis 5 negative
+    assert KUKAConfig().encode(kuka, np.deg2rad([[0, -90, 90, 0, 30, 0]])).tolist() == [[2, 2]]
+    negative = 1 + 2 + 8 + 16  # A1, A2, A4, A5 < 0
+    assert KUKAConfig().encode(kuka, np.deg2rad([[-10, -90, 90, -5, -30, 20]])).tolist() == [[6, negative]]
+
+    def fanuc_text(q_deg):
+        return FANUCConfig().text(FANUCConfig().encode(fanuc, np.deg2rad([q_deg]))[0])
+
+    assert fanuc_text([0, 0, 0, 0, -90, 0]) == "N U T, 0, 0, 0"
+    assert fanuc_text([190, 0, 0, 0, 30, -200]) == "F U T, 1, 0, -1"
+
+
+# ----------------------------------------------------------------------------- notations
+@settings(max_examples=200, deadline=None)
+@given(st.floats(-180, 180), st.floats(-89.9, 89.9), st.floats(-180, 180))
+def test_zyx_round_trip(a, b, c):
+    abc = np.array([[a, b, c]])
+    back = matrix_to_zyx(zyx_to_matrix(abc), abc)
+    assert np.abs(np.remainder(back - abc + 180, 360) - 180).max() < 1e-7
+
+
+def test_notations_keep_the_old_form():
+    rng = np.random.default_rng(3)
+    q = rng.standard_normal((50, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    assert np.allclose(matrix_to_quat(quat_to_matrix(q), q), q)
+    assert np.allclose(matrix_to_quat(quat_to_matrix(-q), -q), -q)
+    # gimbal lock: a keeps its value, c takes the rest; off it, scipy's matrix agrees
+    g = np.array([[30.0, 90.0, 10.0], [-40.0, -90.0, 25.0]])
+    assert np.allclose(matrix_to_zyx(zyx_to_matrix(g), g), g)
+    r = np.array([[0.0, 0.0, np.pi - 1e-9], [0.0, 3.0, 0.0]])
+    old = np.array([[0.0, 0.0, -np.pi], [0.0, 3.0, 0.0]])  # the complement of the first
+    got = matrix_to_rotvec(rotvec_to_matrix(r), old)
+    assert np.allclose(got, [[0, 0, -np.pi - 1e-9], [0, 3, 0]], atol=1e-8)
+    assert np.allclose(rotvec_to_matrix(got), rotvec_to_matrix(r))
+
+
+def test_format_number():
+    old = Number(0, 6, "500.00")
+    assert format_number(500.0004, old, 1e-3) == "500.00"  # within half the resolution: unchanged
+    assert format_number(500.123456, old, 1e-3) == "500.123"  # more decimals where needed
+    assert format_number(500.12, Number(0, 8, "500.0000"), 1e-3) == "500.1200"  # the file's decimals
+    assert format_number(-0.0001, Number(0, 1, "3"), 1e-3) == "0.000"  # never -0
+    assert format_number(2.5, Number(0, 2, "+1"), 1e-3) == "+2.500"
+
+
+# ----------------------------------------------------------------------------- the four formats
+def _numbers_masked(data: bytes) -> str:
+    return NUMBER_RE.sub("#", data.decode("latin-1"))
+
+
+@pytest.mark.parametrize("fmt", list(FIXTURES))
+def test_identity_is_byte_identical(fmt, tmp_path):
+    robot, files, refs, frames, tools = _fixture(fmt, tmp_path)
+    res = filter_program(files, robot, robot, frames=frames, tools=tools, references=refs)
+    assert all(res.outputs[p] == p.read_bytes() for p in files)
+    assert all(r["correction_mm"] < 1e-6 and r["configuration"] != "changed" for r in res.rows)
+
+
+@pytest.mark.parametrize("fmt", list(FIXTURES))
+def test_hand_written_program_lands_on_its_targets(fmt, tmp_path):
+    """With a model of the true robot, the filtered program puts the true robot on the program's
+    targets; only numbers change; CRLF line endings and the inputs are kept."""
+    nominal, files, refs, frames, tools = _fixture(fmt, tmp_path)
+    before = {p: p.read_bytes() for p in files}
+    true = perturbed(nominal, 7)
+    res = filter_program(files, true, nominal, frames=frames, tools=tools, references=refs)
+    expected = {"rapid": 5, "krl": 5, "fanuc": 6, "urscript": 5}[fmt]
+    assert len(res.rows) == expected and all(r["filtered"] for r in res.rows)
+    out = []
+    for p in files:
+        data = res.outputs[p]
+        assert data != before[p] and p.read_bytes() == before[p]
+        assert _numbers_masked(data) == _numbers_masked(before[p])
+        assert data.count(b"\r\n") == before[p].count(b"\r\n")
+        o = tmp_path / "out" / p.name
+        o.parent.mkdir(exist_ok=True)
+        o.write_bytes(data)
+        out.append(o)
+    reached, X = execute(out, true, nominal, frames=frames, tools=tools, references=refs)
+    unfiltered, X0 = execute(files, true, nominal, frames=frames, tools=tools, references=refs)
+    err = np.linalg.norm(reached[:, :3, 3] - X0[:, :3, 3], axis=1) * 1e3
+    err0 = np.linalg.norm(unfiltered[:, :3, 3] - X0[:, :3, 3], axis=1) * 1e3
+    assert err.max() < 0.005 and err0.min() > 0.3  # written to 1 um; the robot was 0.3-2 mm off
+
+
+def test_rapid_details(tmp_path):
+    robot, files, *_ = _fixture("rapid", tmp_path)
+    res = filter_program(files, perturbed(robot, 7), robot)
+    names = [r["name"] for r in res.rows]
+    assert names == ["pApproach", "pSeamStart", "pSeam{1}", "pSeam{2}", "inline@40"]
+    assert {r["tool"] for r in res.rows} == {"tgun"} and {r["frame"] for r in res.rows} == {"wtable"}
+    text = res.outputs[files[0]].decode()
+    # the commented-out target, the string and the jointtarget are untouched
+    assert "pOld:=[[1,2,3],[1,0,0,0]" in text and '"Weld seam 1 [left] ! done"' in text
+    assert "jHome:=[[0,0,0,0,30,0]" in text
+    summary = res.summary()
+    assert "5 of 5" in summary and "correction" in summary
+
+
+# ----------------------------------------------------------------------------- simulated truth
+@pytest.mark.parametrize("fmt,robot", [("rapid", "abb_irb2600"), ("krl", "kuka_kr16_2"),
+                                       ("fanuc", "fanuc_lrmate200id"), ("urscript", "ur5")])
+def test_filter_on_simulated_truth(fmt, robot, tmp_path):
+    """200 targets with a work object and a real tool (TCP identified on the calibrated model):
+    the filtered program is within 1.2x of a perfect filter and 10x better than unfiltered."""
+    r = truth_experiment(fmt, robot, n_targets=200, seed=3, folder=tmp_path)
+    assert r["targets"] == 200
+    f, u, p = r["filtered"], r["unfiltered"], r["perfect"]
+    assert f["rms_mm"] <= 1.2 * p["rms_mm"] and f["max_mm"] <= 1.2 * p["max_mm"] + 0.002
+    assert 10 * f["rms_mm"] <= u["rms_mm"]
+    assert f["rms_deg"] <= 1.2 * p["rms_deg"] < u["rms_deg"]
+
+
+# ----------------------------------------------------------------------------- bad input
+def test_malformed_and_unknown(tmp_path):
+    robot, files, *_ = _fixture("rapid", tmp_path)
+    bad = tmp_path / "bad.mod"
+    bad.write_bytes(files[0].read_bytes().replace(b"[[392.37,421.20,120.43]", b"[[392.37,421.20,,120.43]"))
+    with pytest.raises(DataError, match=r"bad.mod:14: malformed robtarget pApproach: empty item"):
+        filter_program(bad, robot, robot)
+    bad.write_bytes(files[0].read_bytes().replace(b"[[392.37,421.20,120.43]", b"[[392.37,421.20]"))
+    with pytest.raises(DataError, match=r"bad.mod:14: malformed robtarget pApproach: expected groups"):
+        filter_program(bad, robot, robot)
+    bad.write_bytes(files[0].read_bytes().replace(b"z1, tGun \\WObj", b"z1, tNone \\WObj"))
+    with pytest.raises(DataError, match=r"bad.mod:\d+ \(pSeam\{1\}\): unknown tool 'tnone'"):
+        filter_program(bad, robot, robot)
+    bad.write_bytes(files[0].read_bytes().replace(b"v200, z10, tGun", b"v200, z10, tGripper"))
+    with pytest.raises(DataError, match=r"bad.mod:\d+: robtarget papproach is used with tool tgripper"):
+        filter_program(bad, robot, robot)
+
+
+def test_unreachable_and_impossible_configuration(tmp_path):
+    robot, files, *_ = _fixture("rapid", tmp_path)
+    data = files[0].read_bytes()
+    bad = tmp_path / "far.mod"
+    bad.write_bytes(data.replace(b"[[392.37,421.20,120.43]", b"[[3392.37,421.20,120.43]"))
+    with pytest.raises(DataError, match=r"far.mod:14 \(pApproach\): no solution .*\(out of reach\)"):
+        filter_program(bad, robot, robot)
+    res = filter_program(bad, perturbed(robot, 1), robot, keep_unreached=True)
+    assert b"[[3392.37,421.20,120.43]" in res.outputs[bad]
+    assert any("left unchanged" in w for w in res.warnings) and not res.rows[0]["filtered"]
+    # pApproach in the 'behind axis 1' configuration: not inside the IRB 2600's limits
+    bad.write_bytes(data.replace(b"[0,0,-1,0],[9E+09", b"[0,0,-1,4],[9E+09", 1))
+    with pytest.raises(DataError, match=r"pApproach\): configuration \[0,0,-1,4\] is not possible"):
+        filter_program(bad, robot, robot)
+
+
+def test_cli_filter_writes_all_or_nothing(tmp_path, capsys):
+    robot, files, *_ = _fixture("rapid", tmp_path)
+    cal = tmp_path / "cal.yaml"
+    perturbed(robot, 7).save(cal)
+    out = tmp_path / "weld_cal.mod"
+    args = ["filter", str(files[0]), "--calibrated", str(cal), "--nominal", "abb_irb2600", "-o", str(out)]
+    assert main(args) == 0
+    assert "5 of 5 Cartesian target(s) filtered" in capsys.readouterr().out
+    table = json.loads((tmp_path / "weld_cal.mod.targets.json").read_text())
+    assert len(table["targets"]) == 5 and table["summary"]["filtered"] == 5
+    assert (tmp_path / "weld_cal.mod.targets.csv").read_text().count("\n") == 6
+    # an unreachable target: exit 2, message names file, line and target, nothing written
+    far = tmp_path / "far.mod"
+    far.write_bytes(files[0].read_bytes().replace(b"[[392.37,421.20,120.43]", b"[[3392.37,421.20,120.43]"))
+    out2 = tmp_path / "far_cal.mod"
+    assert main(["filter", str(far), "--calibrated", str(cal), "--nominal", "abb_irb2600",
+                 "-o", str(out2)]) == 2
+    assert "far.mod:14 (pApproach)" in capsys.readouterr().err
+    assert not out2.exists() and not list(tmp_path.glob("far_cal*")) and not list(tmp_path.glob(".*tmp"))
+    # never onto an input
+    assert main(args[:-1] + [str(files[0])]) == 2
+    assert "never overwrites its inputs" in capsys.readouterr().err
+
+
+def test_cli_filter_kuka_folder_and_fanuc_frames(tmp_path, capsys):
+    robot, files, refs, *_ = _fixture("krl", tmp_path)
+    cal = tmp_path / "cal.yaml"
+    perturbed(robot, 7).save(cal)
+    outdir = tmp_path / "filtered"
+    outdir.mkdir()
+    assert main(["filter", *map(str, files), "--references", str(refs[0]), "--calibrated", str(cal),
+                 "--nominal", "kuka_kr16_2", "-o", str(outdir)]) == 0
+    assert sorted(p.name for p in outdir.iterdir()) == [
+        "palletize.dat", "palletize.src", "palletize.targets.csv", "palletize.targets.json"]
+    fan, ffiles, *_ = _fixture("fanuc", tmp_path)
+    # the FANUC user and tool frames live in the controller: without them the filter says so
+    assert main(["filter", str(ffiles[0]), "--calibrated", str(cal), "--nominal", "fanuc_lrmate200id",
+                 "-o", str(tmp_path / "s.ls")]) == 2
+    assert "unknown frame '1'" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- boundaries and warnings
+def _program(tmp_path, dialect, robot, q, name="edge"):
+    from robocal.programs.simulate import write_program
+
+    tool = np.eye(4)
+    tool[:3, 3] = [0.02, 0.0, 0.1]
+    folder = tmp_path / name
+    folder.mkdir()
+    return write_program(dialect, folder, robot, np.deg2rad(q), tool, np.eye(4), name)
+
+
+def test_configuration_rewritten_only_across_a_boundary(tmp_path):
+    """Axis 4 taught at +-0.001 deg: where the correction takes it to the other side of zero, cf4
+    changes quadrant with a warning; elsewhere the data stay as written."""
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    q = np.array([[10 + 5 * k, 20 + 3 * k, 10 - 4 * k, 0.001 * (-1) ** k, 40 + 5 * k, -20 + 10 * k]
+                  for k in range(12)])
+    paths, _, _ = _program(tmp_path, "rapid", robot, q)
+    res = filter_program(paths, perturbed(robot, 0), robot)
+    changed = [r for r in res.rows if r["configuration"] == "changed"]
+    assert len(changed) == 6 and sum(r["configuration"] == "kept" for r in res.rows) == 6
+    lines = res.outputs[paths[0]].decode().splitlines()
+    for r in changed:
+        before, after = (list(map(int, r[k].strip("[]").split(","))) for k in ("config_before",
+                                                                                "config_after"))
+        assert after[1] == before[1] - 1 and after[0] == before[0] and after[2:] == before[2:]  # only cf4
+        assert f",[{r['config_after'].strip('[]')}],[9E+09" in lines[r["line"] - 1]
+        message = f"({r['name']}): configuration changed from {r['config_before']} to {r['config_after']}"
+        assert any(message in w for w in res.warnings)
+    for r in res.rows:
+        if r["configuration"] == "kept":
+            assert f",[{r['config_before'].strip('[]')}],[9E+09" in lines[r["line"] - 1]
+
+
+def test_near_singular_targets_are_named(tmp_path):
+    robot = rc.Robot.from_catalog("kuka_kr16_2")
+    q = np.array([[10, -80, 100, 10, 40, -20], [15, -70, 95, 30, 0.2, 10]])
+    paths, tools, frames = _program(tmp_path, "krl", robot, q)
+    res = filter_program(paths, perturbed(robot, 2), robot, tools=tools, frames=frames)
+    assert res.rows[1]["nearest_singularity"] == "wrist" and res.rows[1]["sigma_rel"] < 0.01
+    assert res.rows[0]["sigma_rel"] > 0.01
+    assert [w for w in res.warnings if "singularity" in w] == [
+        w for w in res.warnings if "(XP1): close to the wrist singularity" in w]
+    assert "nearest singularity: XP1 (wrist" in res.summary()
+
+
+def test_out_of_the_limits_after_correction(tmp_path):
+    """A target taught at a joint limit: corrected joints beyond it are an error naming target and joint."""
+    robot = rc.Robot.from_catalog("fanuc_lrmate200id")
+    lim = np.rad2deg(robot.limits)
+    q = np.array([[0, 10, 10, 0, -40, 0]] * 4, float)
+    q[0, 0], q[1, 0], q[2, 4], q[3, 4] = lim[0, 1], lim[0, 0], lim[4, 1], lim[4, 0]
+    paths, tools, frames = _program(tmp_path, "fanuc", robot, q)
+    with pytest.raises(DataError, match=r"edge.ls:\d+ \(P\[\d\]\): the corrected joints leave the limits "
+                                        r"\(joint [15] by"):
+        filter_program(paths, perturbed(robot, 3), robot, tools=tools, frames=frames)
+
+
+def test_robot_base_given_explicitly(tmp_path):
+    """--robot-base = the controller's base in the tracker frame gives what the default (identified
+    frame {0} = controller base) gives when it is that frame."""
+    robot, files, *_ = _fixture("rapid", tmp_path)
+    cal = perturbed(robot, 7).with_frames(base=TRACKER)
+    a = filter_program(files, cal, robot)
+    b = filter_program(files, cal, robot, robot_base=TRACKER)
+    c = filter_program(files, cal, robot, robot_base=TRACKER @ _shift(0.001))
+    assert a.outputs == b.outputs and a.outputs != c.outputs
+
+
+def _shift(metres):
+    T = np.eye(4)
+    T[0, 3] = metres
+    return T
+
+
+TRACKER = np.array([[0.0, -1.0, 0.0, 2.5], [1.0, 0.0, 0.0, -0.4], [0.0, 0.0, 1.0, 0.3], [0.0, 0.0, 0.0, 1.0]])
+
+
+def test_krl_needs_the_tool_and_base_in_effect(tmp_path):
+    robot, files, refs, *_ = _fixture("krl", tmp_path)
+    src = files[0].read_bytes().replace(b"  $TOOL = TOOL_DATA[2]\r\n", b"")
+    src = src.replace(b"FDAT_ACT=FP1", b"FDAT_ACT=FUNKNOWN")
+    files[0].write_bytes(src)
+    with pytest.raises(DataError, match=r"palletize.src:\d+ \(XP1\): the program does not set the tool"):
+        filter_program(files, robot, robot, references=refs)
+
+
+def test_krl_and_fanuc_configuration_edits():
+    from robocal.programs.fanuc_ls import FanucDialect
+    from robocal.programs.krl import KRLDialect
+    from robocal.programs.model import Target
+    from robocal.programs.source import ProgramText
+
+    src = ProgramText("x.dat", b"S 'B1010',T 35")
+    t = Target(src, 0, "P", [], config_spans=(Number(2, 9, "'B1010'"), Number(12, 14, "35")))
+    # bit 3 of S is kept, bits 0-2 come from the joints; T written as a decimal
+    assert KRLDialect().config_edits(t, np.array([6, 3])) == {(2, 9): "'B1110'", (12, 14): "3"}
+    ls = ProgramText("x.ls", b"'N U T, 0, 0, 0'")
+    spans = [(1, 2, "N"), (3, 4, "U"), (5, 6, "T"), (8, 9, "0"), (11, 12, "0"), (14, 15, "0")]
+    t = Target(ls, 0, "P[1]", [], config_spans=spans)
+    assert FanucDialect().config_edits(t, np.array([1, 0, 0, 0, -1, 0])) == {(1, 2): "F", (11, 12): "-1"}
+    assert ls.replaced({(1, 2): "F", (11, 12): "-1"}) == b"'F U T, 0, -1, 0'"
