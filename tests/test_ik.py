@@ -259,3 +259,54 @@ def test_numeric_ik_keeps_the_seed_turn():
     res = rc.ik.solve(robot, robot.fk(q_true), seeds=q_true + 0.01)
     assert res.converged.all()
     np.testing.assert_allclose(res.joints, q_true, atol=1e-8)
+
+
+def _calibrated_cell(seed: int):
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    tool = make_transform(rotvec_to_matrix([0.1, -0.2, 0.3]), [0.05, 0.02, 0.2])
+    return nominal.with_frames(tool=tool), perturbed(nominal, seed).with_frames(tool=tool)
+
+
+def test_numeric_ik_reaches_every_reachable_target_in_its_branch():
+    """1,000 random targets of a calibrated model away from singularities, each asked in the branch
+    of the joints that reach it: every one converges, to those joints."""
+    from robocal.ik.opw_ik import branch_slot
+    from robocal.ik.singularity import singularity_distance
+
+    nominal, calibrated = _calibrated_cell(11)
+    rng = np.random.default_rng(11)
+    q = rng.uniform(nominal.limits[:, 0], nominal.limits[:, 1], (3000, 6))
+    q = q[singularity_distance(calibrated, q).sigma_rel > 0.02][:1000]
+    assert len(q) == 1000
+    T = calibrated.fk(q)
+    slots = branch_slot(nominal.opw, q)
+    found = np.zeros_like(q)
+    for s in np.unique(slots):
+        rows = slots == s
+        res = rc.ik.solve(calibrated, T[rows], branch=int(s), nominal=nominal)
+        assert res.converged.all()
+        found[rows] = res.joints
+    assert np.abs(wrapped(found - q)).max() < 1e-6
+
+
+@pytest.mark.parametrize("elbow_deg", [0.5, 1.0, 1.5])
+def test_numeric_ik_reaches_targets_next_to_the_stretched_elbow(elbow_deg):
+    """Targets whose joints are within 1.5 deg of the calibrated arm's stretched elbow (where the
+    nominal closed form may have no solution in the branch) are reached in the asked branch."""
+    from robocal.ik.opw_ik import branch_slot
+
+    nominal, calibrated = _calibrated_cell(3)
+    o = nominal.opw
+    rng = np.random.default_rng(4)
+    q = rng.uniform(nominal.limits[:, 0] * 0.8, nominal.limits[:, 1] * 0.8, (60, 6))
+    sign = rng.choice([-1.0, 1.0], 60)
+    q[:, 2] = (sign * np.deg2rad(elbow_deg) - np.arctan2(o.a2, o.c3) + o.offsets[2]) * o.signs[2]
+    inside = nominal.within_limits(q)
+    q = q[inside]
+    T = calibrated.fk(q)
+    slots = branch_slot(nominal.opw, q)
+    for s in np.unique(slots):
+        rows = slots == s
+        res = rc.ik.solve(calibrated, T[rows], branch=int(s), nominal=nominal)
+        assert res.converged.all()
+        assert (branch_slot(nominal.opw, res.joints) == s).all()

@@ -312,7 +312,7 @@ def test_near_singular_targets_are_named(tmp_path):
     assert res.rows[1]["nearest_singularity"] == "wrist" and res.rows[1]["sigma_rel"] < 0.01
     assert res.rows[0]["sigma_rel"] > 0.01
     assert [w for w in res.warnings if "singularity" in w] == [
-        w for w in res.warnings if "(XP1): close to the wrist singularity" in w]
+        w for w in res.warnings if "(XP1): close to a singularity, nearest the wrist singularity" in w]
     assert "nearest singularity: XP1 (wrist" in res.summary()
 
 

@@ -29,6 +29,7 @@ from scipy.spatial.transform import Rotation
 from robocal.errors import DataError
 from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
+from robocal.ik.singularity import SingularityDistance, singularity_distance
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import ROTATION_TOL, invert_transform, make_transform, pose_error
@@ -39,7 +40,8 @@ class Compensation:
     """``joints`` ``(N, n)`` rad for the controller; ``corrected_targets`` ``(N, 4, 4)`` m;
     ``converged`` ``(N,)``; ``position_error`` ``(N,)`` m / ``orientation_error`` ``(N,)`` rad
     left on the calibrated model; ``parameters``: rows (name, unit, nominal, calibrated, delta)
-    in SI with delta = nominal - calibrated; ``corrected_model`` the calibrated robot."""
+    in SI with delta = nominal - calibrated; ``corrected_model`` the calibrated robot;
+    ``singularity``: each target's distance from the singularities at its joints (6-axis arms)."""
 
     joints: np.ndarray
     corrected_targets: np.ndarray
@@ -48,6 +50,21 @@ class Compensation:
     orientation_error: np.ndarray
     parameters: list[dict]
     corrected_model: Robot
+    singularity: SingularityDistance | None = None
+
+    def warnings(self) -> list[str]:
+        """One line per target that was not reached or sits close to a singularity (index from 0)."""
+        out = []
+        for i in range(len(self.converged)):
+            where = "" if self.singularity is None else f"; {self.singularity.describe(i)}"
+            if not self.converged[i]:
+                out.append(f"target {i}: not reached on the calibrated model (best "
+                           f"{self.position_error[i] * 1e3:.3g} mm off){where}: its correction cannot be "
+                           "realised in this configuration")
+            elif self.singularity is not None and self.singularity.close[i]:
+                out.append(f"target {i}: close to a singularity{where}: the controller may not realise its "
+                           "correction")
+        return out
 
 
 def parameter_table(calibrated: Robot, nominal: Robot) -> list[dict]:
@@ -109,10 +126,11 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
         model, controller = calibrated.with_frames(tool=flange_tool), nominal.with_frames(tool=flange_tool)
     T = check_poses(targets)
     res = ik_solve(model, T, seeds, branch=branch, nominal=controller)
+    sing = singularity_distance(model, res.joints) if model.n_joints == 6 else None
     return Compensation(joints=res.joints, corrected_targets=controller.fk(res.joints),
                         converged=res.converged, position_error=res.position_error,
                         orientation_error=res.orientation_error,
-                        parameters=parameters, corrected_model=calibrated)
+                        parameters=parameters, corrected_model=calibrated, singularity=sing)
 
 
 def frame_from_text(text: str, what: str = "frame") -> np.ndarray:

@@ -57,8 +57,14 @@ def run(args) -> int:
                      tool=tool)
     names, values = pose_columns(res.corrected_targets, layout)
     joints = [f"q{i + 1}_deg" for i in range(calibrated.n_joints)]
-    table = np.hstack([np.rad2deg(res.joints), values, res.converged[:, None].astype(float)])
-    texts = {args.output: format_csv(joints + names + ["converged"], table).replace(".0\n", "\n")}
+    columns = joints + names + ["converged"]
+    cells = [np.rad2deg(res.joints), values, res.converged[:, None].astype(int)]
+    if res.singularity is not None:  # how far each target is from a singularity
+        sing = res.singularity.columns()
+        columns += list(sing)
+        cells += [np.column_stack(list(sing.values()))]
+    text = format_csv(columns, np.concatenate([np.asarray(c, dtype=object) for c in cells], axis=1))
+    texts = {args.output: text}
     if args.parameters:
         rows = []
         for r in res.parameters:
@@ -69,11 +75,9 @@ def run(args) -> int:
         lines += [",".join([a, u] + [repr(float(v)) for v in vals]) for a, u, *vals in rows]
         texts[args.parameters] = "\n".join(lines) + "\n"
     write_all(texts)
-    bad = np.flatnonzero(~res.converged)
     if not args.quiet:
         print(f"compensated {len(targets)} target(s); largest model residual "
               f"{res.position_error.max() * 1e3:.3g} mm -> {args.output}")
-    if bad.size:
-        print(f"warning: {bad.size} target(s) did not converge (converged=0): rows {bad[:20].tolist()}")
-        return 1
-    return 0
+    for warning in res.warnings()[:20]:
+        print(f"warning: {warning}")
+    return 0 if res.converged.all() else 1

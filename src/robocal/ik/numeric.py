@@ -16,13 +16,14 @@ import numpy as np
 
 from robocal.damped_least_squares import minimize
 from robocal.errors import DataError, UnreachableError
-from robocal.ik.opw_ik import check_poses, solve_branches
+from robocal.ik.opw_ik import branch_slot, check_poses, seed_branches, solve_branches
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import pose_error
 
 POS_TOL = 1e-10  # m
 ROT_TOL = 1e-9  # rad
 _DIAG_FLOOR = 1e-12  # added to J^T J's diagonal before Marquardt scaling (a joint with no effect)
+RESTART_DEG = 3.0  # how far restarts move a start off a singular elbow or wrist (deg)
 
 
 @dataclass(frozen=True)
@@ -93,11 +94,23 @@ def _nominal_model(robot: Robot, nominal: Robot | None) -> Robot:
                                                                                 tool=robot.tool)
 
 
-def _nominal_candidates(robot: Robot, T: np.ndarray, nominal: Robot | None = None) -> np.ndarray:
-    """Nominal closed-form solutions ``(N, 8, 6)`` ordered per pose: inside the limits first,
-    then the rest that exist, each in slot order; NaN rows last."""
-    sols = solve_branches(_nominal_model(robot, nominal), T)
+def _nominal_branches(robot: Robot, T: np.ndarray, nominal: Robot | None) -> tuple[np.ndarray, np.ndarray]:
+    """Seeds ``(N, 8, 6)`` per branch slot: the nominal closed-form solution where it exists, else
+    the clamped closed form (:func:`robocal.ik.opw_ik.seed_branches`: the target is a little beyond
+    the nominal reach, which the robot may still reach); and ``(N, 8)`` whether the exact one exists."""
+    model = _nominal_model(robot, nominal)
+    sols = solve_branches(model, T)
     exists = np.isfinite(sols).all(axis=2)
+    missing = np.flatnonzero(~exists.all(axis=1))
+    if missing.size:
+        sols[missing] = np.where(exists[missing, :, None], sols[missing], seed_branches(model, T[missing]))
+    return sols, exists
+
+
+def _nominal_candidates(robot: Robot, T: np.ndarray, nominal: Robot | None = None) -> np.ndarray:
+    """Seeds ``(N, 8, 6)`` ordered per pose: the nominal solutions inside the limits first, then
+    the other existing ones, then the clamped seeds, each group in slot order."""
+    sols, exists = _nominal_branches(robot, T, nominal)
     inside = exists & ((sols >= robot.limits[:, 0]) & (sols <= robot.limits[:, 1])).all(axis=2)
     rank = np.where(inside, 0, np.where(exists, 1, 2)) * 8 + np.arange(8)
     order = np.argsort(rank, axis=1)
@@ -110,15 +123,95 @@ def nominal_seeds(robot: Robot, T: np.ndarray, branch: int | None = None,
     nominal model) with this robot's base and tool.
 
     ``branch`` picks the slot (0..7, see :mod:`robocal.ik.opw_ik`); None takes, per pose, the
-    lowest slot inside the joint limits, else the lowest that exists. Rows without a closed-form
-    solution are NaN (those poses are then reported as not converged).
+    lowest slot inside the joint limits, else the lowest that exists. Where the nominal model has
+    no solution in the slot, the clamped closed form seeds it (see :func:`_nominal_branches`).
     """
     if branch is not None:
         if not 0 <= int(branch) < 8:
             raise DataError(f"branch must be 0..7 (slot = 4 * wrist_flip + 2 * shoulder + elbow), "
                             f"got {branch}")
-        return solve_branches(_nominal_model(robot, nominal), T)[:, int(branch)]
+        return _nominal_branches(robot, T, nominal)[0][:, int(branch)]
     return _nominal_candidates(robot, T, nominal)[:, 0]
+
+
+def _errors(robot: Robot, T: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    err = pose_error(T, robot.fk(q))
+    return np.linalg.norm(err[:, :3], axis=1), np.linalg.norm(err[:, 3:], axis=1)
+
+
+def _descend(robot: Robot, T: np.ndarray, q0: np.ndarray, max_iter: int, tol: tuple[float, float]):
+    """The damped loop from ``q0`` ``(N, n)``: (joints, converged, iterations)."""
+    targets = _Targets(robot, T, q0, *tol)
+    out = minimize(targets, max_iter)
+    pe, re = _errors(robot, T, targets.q)
+    return targets.q, (pe <= tol[0]) & (re <= tol[1]), int(out.nit.max(initial=0))
+
+
+def _restart_offsets(n: int) -> np.ndarray:
+    """``(K, n)`` joint offsets (rad) that move a start off a singular configuration: +-RESTART_DEG
+    on the shoulder, elbow and wrist-bend joints (2, 3, 5), one at a time and the elbow with each."""
+    step = np.deg2rad(RESTART_DEG)
+    offsets = []
+    for joints in ((1,), (2,), (4,), (1, 2), (2, 4)):
+        for sign in (1.0, -1.0):
+            d = np.zeros(n)
+            d[[j for j in joints if j < n]] = sign * step
+            offsets.append(d)
+    return np.unique(np.array(offsets), axis=0)
+
+
+def _retry(robot: Robot, T: np.ndarray, q0: np.ndarray, q: np.ndarray, ok: np.ndarray, max_iter: int,
+           tol: tuple[float, float], opw) -> tuple[np.ndarray, np.ndarray]:
+    """Targets not reached from their seeds: first continue from the best joints found (slow
+    convergence near a singular wrist or elbow), then restart from the seed moved off the nearby
+    singularity (:func:`_restart_offsets`), keeping solutions in the seed's branch (by the nominal
+    OPW form ``opw`` when there is one) and taking the one nearest the seed."""
+    todo = np.flatnonzero(~ok & np.isfinite(q0).all(axis=1))
+    if todo.size:
+        q[todo], ok[todo], _ = _descend(robot, T[todo], q[todo], max_iter, tol)
+    todo = todo[~ok[todo]]
+    if not todo.size:
+        return q, ok
+    offsets = _restart_offsets(robot.n_joints)
+    K = len(offsets)
+    starts = (q0[todo][:, None, :] + offsets[None]).reshape(-1, robot.n_joints)
+    qs, oks, _ = _descend(robot, np.repeat(T[todo], K, axis=0), starts, max_iter, tol)
+    qs, oks = qs.reshape(todo.size, K, -1), oks.reshape(todo.size, K)
+    if opw is not None:  # the controller asked for the seed's branch
+        oks &= branch_slot(opw, qs) == branch_slot(opw, q0[todo])[:, None]
+    dist = np.where(oks, np.abs(np.remainder(qs - q0[todo][:, None] + np.pi, 2 * np.pi) - np.pi).sum(-1),
+                    np.inf)
+    best = np.argmin(dist, axis=1)
+    found = oks[np.arange(todo.size), best]
+    q[todo[found]] = qs[found, best[found]]
+    ok[todo[found]] = True
+    return q, ok
+
+
+def _solve_from(robot: Robot, T: np.ndarray, q0: np.ndarray, nominal: Robot | None, max_iter: int,
+                tol: tuple[float, float], retry: bool) -> IKResult:
+    """IK from seeds ``q0`` ``(N, n)`` (NaN rows: no seed, not converged), with the singular-case
+    retries of :func:`_retry` when ``retry``."""
+    start = np.where(np.isfinite(q0), q0, 0.0)
+    q, converged, it = _descend(robot, T, start, max_iter, tol)
+    if retry:
+        opw = (robot.opw if nominal is None else nominal.opw) if robot.n_joints == 6 else None
+        q, converged = _retry(robot, T, start, q, converged, max_iter, tol, opw)
+    converged &= np.isfinite(q0).all(axis=1)
+    pe, re = _errors(robot, T, q)
+    # stay on the seed's turn (joints with more than 360 deg of travel), then into the limits
+    q = start + (np.remainder(q - start + np.pi, 2 * np.pi) - np.pi)
+    q = np.where(q < robot.limits[:, 0], q + 2 * np.pi, np.where(q > robot.limits[:, 1], q - 2 * np.pi, q))
+    return IKResult(q, converged, pe, re, np.array(q0), it)
+
+
+def _update(res: IKResult, rows: np.ndarray, alt: IKResult) -> None:
+    """Take ``alt``'s converged rows into ``res`` at ``rows``."""
+    take = rows[alt.converged]
+    for field in ("joints", "seeds", "position_error", "orientation_error"):
+        arr, new = getattr(res, field), getattr(alt, field)
+        arr[take] = new[alt.converged]
+    res.converged[take] = True
 
 
 def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal: Robot | None = None,
@@ -128,32 +221,28 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
 
     ``seeds``: ``(N, n)`` starting joints (rad), or None for the nominal closed-form solution
     in ``branch`` (see :func:`nominal_seeds`; needs an OPW form on the nominal model, ``nominal``
-    or the robot's own); with
-    neither, each pose starts from its preferred nominal branch and, if that fails, tries the
-    next ones (inside the limits first, then slot order). Converged
-    means position error <= ``pos_tol`` (1e-10 m) and rotation error <= ``rot_tol`` (1e-9 rad).
-    Poses that do not converge are flagged in ``converged``; ``strict=True`` raises
+    or the robot's own); with neither, each pose starts from its preferred nominal branch and,
+    if that fails, tries the next ones (inside the limits first, then slot order). Targets still
+    not reached are retried from their seed moved off a nearby singularity (:func:`_retry`).
+    Converged means position error <= ``pos_tol`` (1e-10 m) and rotation error <= ``rot_tol``
+    (1e-9 rad). Poses that do not converge are flagged in ``converged``; ``strict=True`` raises
     UnreachableError listing them instead.
     """
     T = check_poses(poses)
     N, n = T.shape[0], robot.n_joints
+    tol = (pos_tol, rot_tol)
     if seeds is None and branch is None:
-        # per pose the preferred nominal branch; where the calibrated model has no solution in
-        # it (e.g. near a stretched arm), the next branch in preference order
+        # per pose the preferred nominal branch; where the robot has no solution in it, the next
+        # branch in preference order; the singular-case retries only where every branch failed
         cands = _nominal_candidates(robot, T, nominal)
-        res = solve(robot, T, cands[:, 0], max_iter=max_iter, pos_tol=pos_tol, rot_tol=rot_tol)
+        res = _solve_from(robot, T, cands[:, 0], nominal, max_iter, tol, retry=False)
         for b in range(1, 8):
-            retry = np.flatnonzero(~res.converged & np.isfinite(cands[:, b]).all(axis=1))
-            if retry.size == 0:
-                break
-            alt = solve(robot, T[retry], cands[retry, b], max_iter=max_iter, pos_tol=pos_tol,
-                        rot_tol=rot_tol)
-            take = retry[alt.converged]
-            for arr, new in ((res.joints, alt.joints), (res.seeds, alt.seeds)):
-                arr[take] = new[alt.converged]
-            res.converged[take] = True
-            res.position_error[take] = alt.position_error[alt.converged]
-            res.orientation_error[take] = alt.orientation_error[alt.converged]
+            rows = np.flatnonzero(~res.converged & np.isfinite(cands[:, b]).all(axis=1))
+            if rows.size:
+                _update(res, rows, _solve_from(robot, T[rows], cands[rows, b], nominal, max_iter, tol, False))
+        rows = res.failed
+        if rows.size:
+            _update(res, rows, _solve_from(robot, T[rows], cands[rows, 0], nominal, max_iter, tol, True))
         return _finish(res, N, pos_tol, rot_tol, strict)
     if seeds is None:
         q0 = nominal_seeds(robot, T, branch, nominal)
@@ -163,17 +252,7 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
             q0 = np.broadcast_to(q0, (N, n))
         if q0.shape != (N, n):
             raise DataError(f"seeds must have shape ({N}, {n}), got {q0.shape}")
-    targets = _Targets(robot, T, np.where(np.isfinite(q0), q0, 0.0), pos_tol, rot_tol)
-    loop = minimize(targets, max_iter)
-    q, err, it = targets.q, targets.err, int(loop.nit.max(initial=0))
-    pe = np.linalg.norm(err[:, :3], axis=1)
-    re = np.linalg.norm(err[:, 3:], axis=1)
-    converged = (pe <= pos_tol) & (re <= rot_tol) & np.isfinite(q0).all(axis=1)
-    # stay on the seed's turn (joints with more than 360 deg of travel), then into the limits
-    seed = np.where(np.isfinite(q0), q0, 0.0)
-    q = seed + (np.remainder(q - seed + np.pi, 2 * np.pi) - np.pi)
-    q = np.where(q < robot.limits[:, 0], q + 2 * np.pi, np.where(q > robot.limits[:, 1], q - 2 * np.pi, q))
-    return _finish(IKResult(q, converged, pe, re, np.array(q0), it), N, pos_tol, rot_tol, strict)
+    return _finish(_solve_from(robot, T, q0, nominal, max_iter, tol, retry=True), N, pos_tol, rot_tol, strict)
 
 
 def _finish(result: IKResult, N: int, pos_tol: float, rot_tol: float, strict: bool) -> IKResult:

@@ -53,6 +53,7 @@ _COMPILED_CHUNK = 16384  # poses per call of the compiled kernel (it blocks inte
 _SINGULAR = 1e-12  # |sin theta5| below which the wrist is treated as singular
 _CLAMP = 1e-9  # relative tolerance for clamping acos / sqrt arguments at the edge of reach
 TOL = 1e-9  # m and rad: largest forward-kinematics error of a returned solution
+SEED_MARGIN = 1e-3  # seeds keep the elbow's cosine this far inside +-1 (the arm ~2.6 deg off straight)
 
 
 def opw_form(robot: Robot) -> OPWParameters:
@@ -111,14 +112,18 @@ def _geometry(opw: OPWParameters) -> np.ndarray:
     return np.array([a1, a2, b, c1, c2, c3, c4, k, np.arctan2(a2, c3), scale])
 
 
-def paper_branches(opw: OPWParameters, flange: np.ndarray) -> np.ndarray:
-    """Paper angles ``(N, 8, 6)`` (rad) of flange poses ``(N, 4, 4)`` in the OPW base frame."""
+def paper_branches(opw: OPWParameters, flange: np.ndarray, seed_margin: float | None = None) -> np.ndarray:
+    """Paper angles ``(N, 8, 6)`` (rad) of flange poses ``(N, 4, 4)`` in the OPW base frame.
+
+    ``seed_margin`` (for seeds, not solutions): every out-of-reach argument is clamped instead of
+    giving NaN, and the elbow's cosine is kept ``seed_margin`` inside +-1, so a pose a little
+    beyond the nominal reach still gets its branches, off the stretched or folded arm."""
     a1, a2, b, c1, c2, c3, c4, k, psi3, scale = _geometry(opw)
     N = flange.shape[0]
     R = flange[:, :3, :3]
     C = flange[:, :3, 3] - c4 * R[:, :, 2]  # wrist centre
     rho2 = C[:, 0] ** 2 + C[:, 1] ** 2
-    r = np.sqrt(_clamp(rho2 - b * b, 0.0, np.inf, _CLAMP * scale))
+    r = np.sqrt(_clamp(rho2 - b * b, 0.0, np.inf, _CLAMP * scale if seed_margin is None else np.inf))
     phi_c = np.arctan2(C[:, 1], C[:, 0])
     beta_b = np.arctan2(b, r)
     q1 = np.stack([phi_c - beta_b, phi_c + beta_b - np.pi], axis=1)  # (N, 2) shoulder
@@ -126,7 +131,10 @@ def paper_branches(opw: OPWParameters, flange: np.ndarray) -> np.ndarray:
     zs = (C[:, 2] - c1)[:, None]
     s2 = xs * xs + zs * zs
     D = (s2 - c2 * c2 - k * k) / (2.0 * c2 * k) if c2 * k > 0 else np.full_like(s2, np.nan)
-    phi = np.arccos(_clamp(D, -1.0, 1.0, _CLAMP))  # (N, 2)
+    if seed_margin is None:
+        phi = np.arccos(_clamp(D, -1.0, 1.0, _CLAMP))  # (N, 2)
+    else:
+        phi = np.arccos(np.clip(D, -1.0 + seed_margin, 1.0 - seed_margin))
     bend = np.arctan2(k * np.sin(phi), c2 + k * np.cos(phi))  # atan2 is odd in y: -bend for -phi
     q2 = np.arctan2(xs, zs)[:, :, None] - np.stack([bend, -bend], axis=2)  # (N, 2 shoulder, 2 elbow)
     q3 = np.stack([phi, -phi], axis=2) - psi3
@@ -220,6 +228,36 @@ def solve_branches(robot: Robot, T: np.ndarray, tol: float = TOL, threads: int |
         for part in parts:
             run(part)
     return out
+
+
+def seed_branches(robot: Robot, T: np.ndarray) -> np.ndarray:
+    """Seeds ``(N, 8, 6)`` for numeric IK in every branch slot: the closed form of the robot's OPW
+    form with out-of-reach arguments clamped (:func:`paper_branches` with ``SEED_MARGIN``), not
+    verified: a pose just beyond the nominal reach (a calibrated robot may reach it) still gets a
+    seed in each branch, off the singular stretched arm where the reach's gradient vanishes."""
+    opw = opw_form(robot)
+    pre = invert_transform(robot.base)
+    post = invert_transform(robot.tool) @ invert_transform(_flange_correction(robot, opw))
+    paper = paper_branches(opw, pre @ T @ post, seed_margin=SEED_MARGIN)
+    return _wrap((paper + np.asarray(opw.offsets, float)) * np.asarray(opw.signs, float))
+
+
+def branch_bits(opw: OPWParameters, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(shoulder, elbow, flip)`` bool arrays of joints ``(..., 6)`` (rad) by the OPW form ``opw``
+    (a calibrated robot's branches are those of its nominal form): the wrist centre behind the
+    J1 axis, the elbow angle negative, sin(theta5) < 0 (the slot of the module docstring)."""
+    theta = np.asarray(q, float) * np.asarray(opw.signs, float) - np.asarray(opw.offsets, float)
+    psi3, k = np.arctan2(opw.a2, opw.c3), np.hypot(opw.a2, opw.c3)
+    t2, t3 = theta[..., 1], theta[..., 2]
+    elbow_angle = np.remainder(t3 + psi3 + np.pi, 2 * np.pi) - np.pi
+    reach_x = opw.a1 + opw.c2 * np.sin(t2) + k * np.sin(t2 + t3 + psi3)  # wrist centre x, J1 frame
+    return reach_x < 0, elbow_angle < 0, np.sin(theta[..., 4]) < 0
+
+
+def branch_slot(opw: OPWParameters, q: np.ndarray) -> np.ndarray:
+    """Closed-form branch slot ``(...,)`` of joints ``(..., 6)``: 4 * flip + 2 * shoulder + elbow."""
+    shoulder, elbow, flip = branch_bits(opw, q)
+    return 4 * flip.astype(int) + 2 * shoulder.astype(int) + elbow.astype(int)
 
 
 def turn_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

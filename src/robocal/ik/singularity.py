@@ -43,6 +43,17 @@ class SingularityDistance:
         """``(N,)`` bool: sigma_rel below SINGULAR_SIGMA."""
         return self.sigma_rel < SINGULAR_SIGMA
 
+    def describe(self, i: int) -> str:
+        """Configuration ``i``'s nearest singularity and the distances, for messages."""
+        return (f"nearest the {self.nearest[i]} singularity (sigma_rel {self.sigma_rel[i]:.4f}, wrist "
+                f"{self.wrist_deg[i]:.2f} deg, elbow {self.elbow_deg[i]:.2f} deg, shoulder "
+                f"{self.shoulder_mm[i]:.1f} mm)")
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The per-configuration columns of a target table."""
+        return {"sigma_rel": self.sigma_rel, "nearest_singularity": self.nearest,
+                "wrist_deg": self.wrist_deg, "elbow_deg": self.elbow_deg, "shoulder_mm": self.shoulder_mm}
+
 
 def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-15)

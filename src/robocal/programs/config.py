@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.ik.opw_ik import opw_form
+from robocal.ik.opw_ik import branch_bits as opw_branch_bits
+from robocal.ik.opw_ik import branch_slot, opw_form
 from robocal.kinematics.model import Robot
 
 BRANCH_MISMATCH = 1000  # score of one differing branch bit: always worse than any turn mismatch
@@ -30,21 +31,13 @@ BRANCH_MISMATCH = 1000  # score of one differing branch bit: always worse than a
 
 def branch_bits(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(shoulder, elbow, flip)`` bool arrays of joints ``(..., 6)`` (rad) on ``robot``'s OPW
-    form (the nominal one a calibrated model carries); flip is the paper wrist flip (sin theta5 < 0)."""
-    opw = robot.opw if robot.opw is not None else opw_form(robot)  # opw_form raises the error
-    theta = np.asarray(q, float) * np.asarray(opw.signs, float) - np.asarray(opw.offsets, float)
-    a1, a2, c2, c3 = opw.a1, opw.a2, opw.c2, opw.c3
-    psi3, k = np.arctan2(a2, c3), np.hypot(a2, c3)
-    t2, t3 = theta[..., 1], theta[..., 2]
-    elbow_angle = np.remainder(t3 + psi3 + np.pi, 2 * np.pi) - np.pi
-    reach_x = a1 + c2 * np.sin(t2) + k * np.sin(t2 + t3 + psi3)  # wrist centre x, joint-1 frame
-    return reach_x < 0, elbow_angle < 0, np.sin(theta[..., 4]) < 0
+    form (the nominal one a calibrated model carries): :func:`robocal.ik.opw_ik.branch_bits`."""
+    return opw_branch_bits(robot.opw if robot.opw is not None else opw_form(robot), q)
 
 
 def slot_of(robot: Robot, q: np.ndarray) -> np.ndarray:
     """Closed-form branch slot ``(...,)`` of joints ``(..., 6)``: 4 * flip + 2 * shoulder + elbow."""
-    shoulder, elbow, flip = branch_bits(robot, q)
-    return 4 * flip.astype(int) + 2 * shoulder.astype(int) + elbow.astype(int)
+    return branch_slot(robot.opw if robot.opw is not None else opw_form(robot), q)
 
 
 def _floor_div(q: np.ndarray, step: float, shift: float = 0.0) -> np.ndarray:

@@ -331,9 +331,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         cfg = (d.scheme.encode(nominal, np.where(ok[:, None], q_nom, 0.0)), d.scheme.encode(nominal, q))
     edits, changed = _edits(d, targets, good, Pc, cfg, warnings)
     for i in np.flatnonzero(good & sing.close):
-        warnings.append(f"{targets[i].where}: close to the {sing.nearest[i]} singularity (sigma_rel "
-                        f"{sing.sigma_rel[i]:.4f}, wrist {sing.wrist_deg[i]:.2f} deg, elbow "
-                        f"{sing.elbow_deg[i]:.2f} deg, shoulder {sing.shoulder_mm[i]:.1f} mm): the "
+        warnings.append(f"{targets[i].where}: close to a singularity, {sing.describe(i)}: the "
                         "controller may not realise its correction")
     rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, res.converged & ok, changed, cfg, sing)
     outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
