@@ -60,8 +60,8 @@ def main(argv: list[str] | None = None) -> int:
     set_quiet(args.quiet)
     try:
         return int(args.func(args) or 0)
-    except RobocalError as exc:
-        print(f"robocal {args.command}: error: {exc}", file=sys.stderr)
+    except RobocalError as exc:  # one line, whatever the message holds (e.g. a YAML parser's)
+        print(f"robocal {args.command}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"robocal {args.command}: interrupted", file=sys.stderr)

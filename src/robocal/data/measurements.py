@@ -319,8 +319,9 @@ def _check_plausible(data: Measurements, reach: float, where: str) -> None:
     if extent > limit:
         row = int(data.source_row[np.argmax(np.abs(data.points - np.median(data.points, 0)).max(1))])
         raise UnitError(f"{where}the points span {extent:.4g} m but a robot of {reach:.3g} m reach can move "
-                        f"an SMR over at most ~{limit:.3g} m (e.g. row {row}): the length unit is "
-                        "probably wrong; if the values are millimetres, name the columns x_mm, y_mm, z_mm")
+                        f"an SMR over at most ~{limit:.3g} m (e.g. row {row}): the data belong to a bigger "
+                        "robot, or the length unit is wrong (values in millimetres need the columns x_mm, "
+                        "y_mm, z_mm)")
 
 
 def approach_from_order(joints: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
