@@ -40,7 +40,7 @@ tr.dropped td{background:#fff4e5}
  padding:6px 10px;margin:6px 0}
 figure{margin:10px 0 18px}figure svg{width:100%;height:auto}figcaption{color:#555;font-size:12px}
 .row{display:flex;flex-wrap:wrap;gap:12px}.row figure{flex:1 1 460px}
-.note{color:#666;font-size:12px}
+.note{color:#666;font-size:12px}td code{white-space:pre-wrap;word-break:break-all}
 @media print{body{background:#fff}main{padding:0}h2{break-after:avoid}figure{break-inside:avoid}}
 """
 
