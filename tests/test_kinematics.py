@@ -232,3 +232,21 @@ def test_empty_batches(rng, kernels):
         assert robot.fk(np.zeros((0, 6))).shape == (0, 4, 4)
         assert robot.fk(np.zeros((0, 6)), frames=True)[1].shape == (0, 7, 4, 4)
         assert robot.jacobian(np.zeros((0, 6)), ["a2", "d4"]).shape == (0, 3, 2)
+
+
+def test_model_yaml_doc_examples_load(tmp_path):
+    """Every YAML example of docs/model-yaml.md is a valid model; the catalog's are the catalog's."""
+    import re
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "model-yaml.md").read_text()
+    blocks = re.findall(r"```yaml\n(.*?)```", doc, re.S)
+    assert len(blocks) >= 4
+    q = np.random.default_rng(0).uniform(-1, 1, (5, 6))
+    for k, block in enumerate(blocks):
+        path = tmp_path / f"m{k}.yaml"
+        path.write_text("\n".join(line[2:] if line.startswith("  ") else line for line in block.splitlines()))
+        robot = Robot.load(path)
+        name = robot.name
+        if name in ("abb_irb2600", "ur5", "meca500"):
+            np.testing.assert_allclose(robot.fk(q), Robot.from_catalog(name).fk(q), atol=1e-12)
