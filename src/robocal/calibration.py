@@ -66,7 +66,7 @@ class CalibrationResult:
     after: dict
     problem: CalibrationProblem = field(repr=False)
     initial: State = field(repr=False)
-    judged: Judged | None = field(default=None, repr=False)
+    judged: list[Judged] = field(default_factory=list, repr=False)
     warnings: list[str] = field(default_factory=list)
     settings: dict = field(default_factory=dict)
     nongeometric: dict | None = None
@@ -88,11 +88,38 @@ class CalibrationResult:
 
     @property
     def validation_before(self) -> dict | None:
-        return None if self.judged is None else self.judged.before
+        """Statistics (mm) of every validation item with the start model (all files together)."""
+        return _combined([j.problem.position_errors(j.states[0]) for j in self.judged])
 
     @property
     def validation(self) -> dict | None:
-        return None if self.judged is None else self.judged.after
+        """Statistics (mm) of every validation item with the calibrated model (all files)."""
+        return _combined([j.problem.position_errors(j.states[1]) for j in self.judged])
+
+    def per_file(self) -> list[dict]:
+        """Per measurement file (calibration, then validation): its kind and its statistics (mm)
+        before and after; the errors of each kind are in mm (position, plane deviation, distance)."""
+        rows = []
+        blocks = self.problem.item_blocks()
+        before, after = (self.problem.position_errors(s) for s in (self.initial, self.state))
+        for data, items in zip(self.problem.datasets, blocks, strict=True):
+            rows.append({"role": "calibration", "file": data.source, "kind": data.kind,
+                         "before": position_stats(before[items]), "after": position_stats(after[items])})
+        for j in self.judged:
+            rows.append({"role": "validation", "file": j.data.source, "kind": j.data.kind,
+                         "before": j.before, "after": j.after})
+        return rows
+
+    def per_kind(self) -> dict[str, dict]:
+        """Per role and kind (e.g. ``calibration plane``): statistics (mm) after calibration."""
+        out: dict[str, list] = {}
+        blocks = self.problem.item_blocks()
+        after = self.problem.position_errors(self.state)
+        for data, items in zip(self.problem.datasets, blocks, strict=True):
+            out.setdefault(f"calibration {data.kind}", []).append(after[items])
+        for j in self.judged:
+            out.setdefault(f"validation {j.data.kind}", []).append(j.problem.position_errors(j.states[1]))
+        return {key: _combined(parts) for key, parts in out.items()}
 
     @property
     def sigma(self) -> np.ndarray:
@@ -150,14 +177,16 @@ class CalibrationResult:
                          "status": "dropped" if name in dropped else "estimated"})
         return rows
 
-    def _observations(self, problem: CalibrationProblem, states: tuple[State, State],
-                      weights: np.ndarray | None) -> dict:
-        obs, data = problem.observation, problem.data
+    @staticmethod
+    def _observations(obs, states: tuple[State, State], weights: np.ndarray | None) -> dict:
+        """The per-row section of one file (observation ``obs``): joints, measured and modelled."""
+        data = obs.data
+        nu = [s.nuisance[: len(obs.nuisance_names)] for s in states]  # the first file's nuisance
         measured = getattr(obs, "measured", None)
         measured = None if measured is None or measured.ndim != 2 else measured * 1e3
         if weights is not None:
             weights = weights[obs.item_of_rows()]  # one per data row
-        before, after = (obs.modelled_points(s.robot, s.nuisance) * 1e3 for s in states)
+        before, after = (obs.modelled_points(s.robot, n) * 1e3 for s, n in zip(states, nu, strict=True))
         return {
             "pose_id": data.pose_id.tolist(), "source_row": data.source_row.tolist(),
             "smr": data.smr.tolist(), "joints_deg": np.rad2deg(data.joints).tolist(),
@@ -172,15 +201,19 @@ class CalibrationResult:
         ident, problem = self.identifiability, self.problem
         k = len(self.unknowns)
         errors = problem.position_errors(self.state)
-        data = problem.data
+        data, first = problem.datasets[0], problem.observations[0]  # the per-row sections: the first file
         out = {
             "format": RESULT_FORMAT,
             "robocal_version": __version__,
             "provenance": self.provenance,
             "robot": {"name": self.robot.name, "description": self.robot.description,
                       "n_joints": self.robot.n_joints},
-            "data": {"file": data.source, "kind": problem.kind, "n_poses": int(data.n_poses),
-                     "n_observations": int(len(data))},
+            "data": {"file": data.source, "kind": problem.kind, "n_poses": int(problem.n_poses),
+                     "n_observations": int(sum(len(d) for d in problem.datasets)),
+                     "files": [{"file": d.source, "kind": d.kind, "n_poses": int(d.n_poses),
+                                "n_observations": len(d),
+                                "sigma_mm": None if d.sigma is not None or not problem.weighted else s * 1e3}
+                               for d, s in zip(problem.datasets, problem.set_sigma, strict=True)]},
             "method": self.method,
             "settings": self.settings,
             "converged": self.solver.success,
@@ -196,25 +229,41 @@ class CalibrationResult:
                                 if key not in ("kept", "dropped", "confounded_with")},
             "correlation": {"names": self.unknowns,
                             "matrix": np.round(self.correlation, 6).reshape(k, k).tolist()},
-            "rejected": [{"source_row": int(data.source_row[row]), "pose_id": int(data.pose_id[row]),
-                          "residual": float(errors[item] * 1e3), "weight": 0.0}
-                         for item in self.rejected
-                         for row in np.flatnonzero(problem.observation.item_of_rows() == item)],
-            "observations": self._observations(problem, (self.initial, self.state),
-                                               self.solver.item_weights),
+            "per_file": self.per_file(),
+            "per_kind": self.per_kind(),
+            "rejected": self._rejected(errors),
+            "observations": self._observations(first, (self.initial, self.state), self._first_weights()),
             "history": self.solver.history,
-            "history_units": ({"cost": "m^2", "rms": "m"} if all(d.sigma is None for d in problem.datasets)
-                              else {"cost": "1", "rms": "1 (residuals divided by sigma)"}),
+            "history_units": ({"cost": "1", "rms": "1 (residuals divided by sigma)"} if problem.weighted
+                              else {"cost": "m^2", "rms": "m"}),
             "warnings": self.warnings,
         }
         if self.nongeometric is not None:
             out["nongeometric"] = self.nongeometric
-        if self.judged is not None:
-            out["data"]["validation_file"] = self.judged.data.source
-            out["validation_before"] = self.judged.before
-            out["validation"] = self.judged.after
-            out["validation_observations"] = self._observations(self.judged.problem, self.judged.states,
-                                                                None)
+        if self.judged:
+            out["data"]["validation_file"] = ", ".join(j.data.source for j in self.judged)
+            out["validation_before"] = self.validation_before
+            out["validation"] = self.validation
+            j = self.judged[0]
+            out["validation_observations"] = self._observations(j.problem.observations[0], j.states, None)
+        return out
+
+    def _first_weights(self) -> np.ndarray | None:
+        """The robust weights of the first file's items."""
+        w = self.solver.item_weights
+        return None if w is None else w[self.problem.item_blocks()[0]]
+
+    def _rejected(self, errors: np.ndarray) -> list[dict]:
+        """Every item a robust method rejected: its file, rows, residual (mm)."""
+        out = []
+        for obs, items in zip(self.problem.observations, self.problem.item_blocks(), strict=True):
+            for k, item in enumerate(items):
+                if item not in self.rejected:
+                    continue
+                for row in np.flatnonzero(obs.item_of_rows() == k):
+                    out.append({"file": obs.data.source, "source_row": int(obs.data.source_row[row]),
+                                "pose_id": int(obs.data.pose_id[row]), "residual": float(errors[item] * 1e3),
+                                "weight": 0.0})
         return out
 
     def to_json(self) -> str:
@@ -230,10 +279,15 @@ class CalibrationResult:
         lines = [f"{self.method}: {self.solver.message}",
                  f"calibration set ({b['n']} obs): RMS {b['rms']:.4f} -> {a['rms']:.4f} mm, "
                  f"max {b['max']:.4f} -> {a['max']:.4f} mm"]
-        if self.judged is not None:
-            vb, va = self.judged.before, self.judged.after
+        if self.judged:
+            vb, va = self.validation_before, self.validation
             lines.append(f"validation set  ({va['n']} obs): RMS {vb['rms']:.4f} -> {va['rms']:.4f} mm, "
                          f"max {vb['max']:.4f} -> {va['max']:.4f} mm")
+        if len(self.problem.datasets) + len(self.judged) > 1:
+            for row in self.per_file():
+                b, a = row["before"], row["after"]
+                lines.append(f"  {row['role']} {row['kind']} {row['file'][:50]!r} ({a['n']} obs): RMS "
+                             f"{b['rms']:.4f} -> {a['rms']:.4f} mm")
         links = [r for r in self.parameter_table()
                  if r["status"] == "estimated" and block_of(r["name"]) == "links"]
         for unit in ("mm", "deg"):
@@ -258,10 +312,11 @@ class CalibrationResult:
         return "\n".join(lines)
 
 
-def _start_model(robot, data, register_frames: bool, force: bool, warnings: list[str]):
-    """The nominal model with the tracker frame and SMR offsets fitted to point or pose data; the
-    measured points must spread like the fitted model's (a unit or robot mix-up otherwise)."""
-    if data.kind not in ("point", "pose") or not register_frames:
+def _start_model(robot, datasets: list, register_frames: bool, force: bool, warnings: list[str]):
+    """The nominal model with the tracker frame and SMR offsets fitted to the first point or pose
+    set; the measured points must spread like the fitted model's (a unit or robot mix-up else)."""
+    data = next((d for d in datasets if d.kind in ("point", "pose")), None)
+    if data is None or not register_frames:
         return robot
     start = register(robot, data)
     check_spread(data.points, start.fk(data.joints, smr=data.smr)[:, :3, 3], "the calibration data",
@@ -321,6 +376,23 @@ def _covariance(problem: CalibrationProblem, out: SolverResult, space: Parameter
     return covariance(J * sw[:, None], r * sw, int(np.count_nonzero(row_w)))
 
 
+def _combined(errors: list[np.ndarray]) -> dict | None:
+    """Statistics (mm) of several files' item errors (m) together; None for no file."""
+    return position_stats(np.concatenate(errors)) if errors else None
+
+
+def _as_sets(data, what: str) -> list:
+    """One Measurements or a list of them -> a non-empty list."""
+    sets = [] if data is None else list(data) if isinstance(data, list | tuple) else [data]
+    if what == "calibration" and not sets:
+        raise IdentificationError("a calibration needs at least one measurement set")
+    bad = [type(d).__name__ for d in sets if not isinstance(d, Measurements)]
+    if bad:
+        raise DataError(f"the {what} data must be robocal Measurements (rc.Measurements.load(...)), "
+                        f"got {bad}")
+    return sets
+
+
 def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data, force: bool,
            warnings: list[str]) -> Judged:
     """Statistics of ``data`` with the two states' robots, the nuisance (planes) carried over;
@@ -335,16 +407,21 @@ def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data
 
 def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
               register_frames: bool = True, rtol: float = DEFAULT_RTOL, seed: int = 0,
-              progress=None, nongeometric=None, force: bool = False, **options) -> CalibrationResult:
-    """Calibrate ``robot`` (nominal model) against ``data`` (Measurements).
+              progress=None, nongeometric=None, force: bool = False, sigma: dict | None = None,
+              **options) -> CalibrationResult:
+    """Calibrate ``robot`` (nominal model) against ``data``: Measurements, or a list of them of
+    any kinds (points, poses, planes, distances) identified together in one problem, each set
+    weighted by its noise (its sigma column, else ``sigma`` {kind: m}, else
+    :data:`robocal.identify.problem.KIND_SIGMA`).
 
     method: 'lsq' (default), 'robust', or another registered solver; params: 'auto' (the
     default free set, unidentifiable ones dropped), 'all', or a list of names. ``validation``
-    (Measurements) is judged with the calibrated model. ``progress``: True shows a bar on a
-    terminal, or a callable ``progress(iteration, rms)``. ``options`` go to the solver (e.g.
-    k0, k1, ridge for 'robust'; checked against its signature). ``nongeometric``: joint-error
-    terms identified with the geometry by lsq or robust, e.g. 'compliance,gear,backlash' (see
-    robocal.kinematics.joint_errors); the calibrated robot carries them and its fk applies them.
+    (Measurements or a list) is judged with the calibrated model, each set in its own unit.
+    ``progress``: True shows a bar on a terminal, or a callable ``progress(iteration, rms)``.
+    ``options`` go to the solver (e.g. k0, k1, ridge for 'robust'; checked against its signature).
+    ``nongeometric``: joint-error terms identified with the geometry by lsq or robust, e.g.
+    'compliance,gear,backlash' (see robocal.kinematics.joint_errors); the calibrated robot carries
+    them and its fk applies them.
     Raises IdentificationError when the data cannot support the calibration, and
     PlausibilityError when data and model disagree beyond what real robots do
     (:mod:`robocal.identify.plausibility`; ``force=True`` turns those into warnings).
@@ -356,21 +433,23 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
             f"non-geometric terms are identified by the methods {', '.join(NONGEOMETRIC_METHODS)}; "
             f"{method!r} searches the geometric parameters only (calibrate with lsq first, or "
             "drop --nongeometric)")
-    data.check_against(robot)
-    if validation is not None:
-        validation.check_against(robot)
-        if validation.n_smr > data.n_smr:
-            raise DataError(f"the validation data use {validation.n_smr} SMRs but the calibration data "
-                            f"{data.n_smr}: judge a calibration on data measured with the same SMRs")
+    datasets, validations = _as_sets(data, "calibration"), _as_sets(validation, "validation")
+    for d in datasets + validations:
+        d.check_against(robot)
+    n_smr = max(d.n_smr for d in datasets)
+    for v in validations:
+        if v.n_smr > n_smr:
+            raise DataError(f"the validation data use {v.n_smr} SMRs but the calibration data "
+                            f"{n_smr}: judge a calibration on data measured with the same SMRs")
     warnings: list[str] = []
-    start = _start_model(robot, data, register_frames, force, warnings)
+    start = _start_model(robot, datasets, register_frames, force, warnings)
     declared = start.joint_error_names + candidate_names(start.n_joints, terms)
-    problem = CalibrationProblem(start.with_joint_errors(declared), data)
+    problem = CalibrationProblem(start.with_joint_errors(declared), datasets, sigma=sigma)
     state0 = problem.start(start.with_joint_errors(declared))
     before = position_stats(problem.position_errors(state0))
     check_residual(before["rms"], problem.modelled_points(state0), "the calibration data (nominal model, "
                    "frames fitted)", force=force, warnings=warnings)
-    space, ident, more = _estimated_space(problem, state0, params, rtol, data.n_poses)
+    space, ident, more = _estimated_space(problem, state0, params, rtol, problem.n_poses)
     warnings += more
     out = _run_solver(method, problem, state0, space, seed, progress, options)
     check_corrections(state0.robot, out.state.robot, space.robot, force=force, warnings=warnings)
@@ -393,10 +472,10 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         provenance={"created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
                     "robocal_version": __version__,
                     "robot": {"name": robot.name, "description": robot.description},
-                    "data": data.source, "validation": None if validation is None else validation.source})
-    if validation is not None:
-        result.judged = _judge(problem, start, (state0, State(final_robot, out.state.nuisance)),
-                               validation, force, warnings)
+                    "data": [d.source for d in datasets], "validation": [v.source for v in validations],
+                    "sigma_mm": {k: v * 1e3 for k, v in (sigma or {}).items()}})
+    states = (state0, State(final_robot, out.state.nuisance))
+    result.judged = [_judge(problem, start, states, v, force, warnings) for v in validations]
     if terms:
         sigma = dict(zip(result.unknowns, result.sigma, strict=True))
         values = dict(zip(final_robot.parameter_names, final_robot.values, strict=True))

@@ -11,6 +11,7 @@ EPILOG = """Examples:
   robocal calibrate irb120.csv --robot abb_irb120 --hold-out 500 --nongeometric compliance,gear,backlash
   robocal calibrate data.csv --robot abb_irb2600 --method genetic --set population=60 --set generations=100
   robocal calibrate data.csv --robot abb_irb2600 --method neural --set hidden=10 --network-out net.npz
+  robocal calibrate contacts.csv scalebar.csv --robot abb_irb2600 --sigma plane=0.01 --sigma distance=0.005
 
 Method options (--set KEY=VALUE, SI units): robust: k0, k1, ridge (double-h|gcv|lcurve|none);
 genetic: population, generations, crossover, mutation, elite, encoding (binary|real), bits,
@@ -39,17 +40,38 @@ def _option(text: str):
     return key, value
 
 
+def _sigma(items: list[str]) -> dict:
+    """``KIND=MM`` options -> {kind: m}."""
+    from robocal.errors import DataError
+
+    out = {}
+    for item in items:
+        kind, sep, value = item.partition("=")
+        try:
+            out[kind.strip()] = float(value) * 1e-3
+        except ValueError:
+            sep = ""
+        if not sep:
+            raise DataError(f"--sigma {item!r}: expected KIND=MM, e.g. plane=0.01")
+    return out
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser("calibrate", help="identify the parameters from measurements",
                        description="Register the tracker frame, select the identifiable parameters, "
                                    "identify them, and report accuracy before and after (mm).",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("data", help="canonical measurement CSV (robocal import / simulate)")
+    p.add_argument("data", nargs="+", help="canonical measurement CSV(s) (robocal import / simulate); "
+                                           "several files of any kinds are identified together")
     p.add_argument("--robot", required=True, help="nominal model: catalog name or model YAML")
     p.add_argument("--method", default="lsq", help="lsq (default), robust, genetic, swarm, neural")
     p.add_argument("--params", default="auto",
                    help="auto (identifiable default set), all, or names separated by spaces/commas")
-    p.add_argument("--validate", metavar="VAL.csv", help="measurements to judge the result on")
+    p.add_argument("--validate", metavar="VAL.csv", nargs="+",
+                   help="measurements to judge the result on (several files: each judged in its unit)")
+    p.add_argument("--sigma", action="append", default=[], metavar="KIND=MM",
+                   help="1-sigma noise of a kind's files without a sigma_mm column, e.g. plane=0.01, "
+                        "distance=0.005 (defaults: point 0.02, pose 0.02, plane 0.01, distance 0.005)")
     p.add_argument("--hold-out", type=int, metavar="N",
                    help="judge on the last N poses of DATA (file order) and calibrate on the rest")
     p.add_argument("-o", "--output", metavar="calibrated.yaml", help="write the calibrated model")
@@ -80,26 +102,28 @@ def run(args) -> int:
     from robocal.kinematics.model_file import dump_model
 
     outputs = (args.output, args.json, args.report, args.network_out)
-    check_outputs(outputs, (args.data, args.validate, args.robot))  # fail before the work
+    validate = args.validate or []
+    check_outputs(outputs, (*args.data, *validate, args.robot))  # fail before the work
     if args.network_out and (args.method != "neural" or not args.network_out.endswith((".npz", ".json"))):
         raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
+    sigma = _sigma(args.sigma)
     robot = load_model(args.robot)
-    data = Measurements.load(args.data, robot=robot)
-    validation = Measurements.load(args.validate, robot=robot) if args.validate else None
+    data = [Measurements.load(f, robot=robot) for f in args.data]
+    validation = [Measurements.load(f, robot=robot) for f in validate]
     if args.hold_out is not None:
-        if validation is not None:
-            raise DataError("give either --validate or --hold-out, not both")
-        if not 0 < args.hold_out < data.n_poses:
-            raise DataError(f"--hold-out must be between 1 and {data.n_poses - 1} (the data have "
-                            f"{data.n_poses} poses)")
-        calibration = data.first_poses(data.n_poses - args.hold_out)
-        validation = data.subset(~np.isin(data.pose_id, calibration.pose_id))
-        data = calibration
-    result = calibrate(robot, data, method=args.method, params=args.params, validation=validation,
+        if validation or len(data) > 1:
+            raise DataError("--hold-out splits one calibration file: give one file and no --validate")
+        if not 0 < args.hold_out < data[0].n_poses:
+            raise DataError(f"--hold-out must be between 1 and {data[0].n_poses - 1} (the data have "
+                            f"{data[0].n_poses} poses)")
+        calibration = data[0].first_poses(data[0].n_poses - args.hold_out)
+        validation = [data[0].subset(~np.isin(data[0].pose_id, calibration.pose_id))]
+        data = [calibration]
+    result = calibrate(robot, data, method=args.method, params=args.params, validation=validation or None,
                        seed=args.seed, progress=not args.quiet, nongeometric=args.nongeometric,
-                       force=args.force, **dict(args.options))
+                       force=args.force, sigma=sigma, **dict(args.options))
     result.provenance.update(command="robocal " + " ".join(args.argv), robot_spec=args.robot,
-                             data_file=args.data, validation_file=args.validate,
+                             data_file=", ".join(args.data), validation_file=", ".join(validate) or None,
                              hold_out=args.hold_out)
     print(result.summary())
     if not result.solver.success and not args.force:

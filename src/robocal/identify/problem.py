@@ -2,9 +2,12 @@
 
 Each measurement set (a :class:`robocal.Measurements`, one kind) becomes an observation
 (:mod:`robocal.identify.observations`); the problem stacks their residual rows. Residuals are
-divided by the measurement uncertainty (the data's ``sigma``; without it 1 m for a single set, so
-unweighted residuals are in metres). The unknowns are a :class:`ParameterSpace`: robot
-parameters (moved by :meth:`ParameterSpace.apply`) and the observations' nuisance parameters.
+divided by the measurement uncertainty, so sets of different kinds (positions, plane deviations,
+distances, rotations) combine in one least-squares norm: the data's ``sigma`` column, else the
+``sigma`` given per kind, else :data:`KIND_SIGMA`. A single set without either is left unweighted
+(residuals in SI units, what the solvers' thresholds and histories then show). The unknowns are a
+:class:`ParameterSpace`: robot parameters (moved by :meth:`ParameterSpace.apply`) and the
+observations' nuisance parameters (plane coefficients: plane ids name plates across all sets).
 """
 
 from __future__ import annotations
@@ -17,22 +20,60 @@ from robocal.errors import IdentificationError
 from robocal.identify.observations import observation_for
 from robocal.identify.space import ParameterSpace, State, resolve_names
 
-DEFAULT_SIGMA = 1.0  # residual scale of a set without sigma (unweighted: residuals in SI units)
+DEFAULT_SIGMA = 1.0  # residual scale of a lone set without sigma (unweighted: residuals in SI units)
+# 1-sigma noise (m) of each kind when a set of several has no sigma column and none is given: a
+# laser tracker 2-4 m away (points, 6-DOF pose positions), a touch probe, a scale bar or ball bar
+KIND_SIGMA = {"point": 20e-6, "pose": 20e-6, "plane": 10e-6, "distance": 5e-6}
+
+
+def _check_sigma(sigma: dict | None) -> dict:
+    sigma = dict(sigma or {})
+    for kind, value in sigma.items():
+        if kind not in KIND_SIGMA:
+            raise IdentificationError(f"sigma for unknown kind {kind!r}; kinds are {', '.join(KIND_SIGMA)}")
+        if isinstance(value, bool) or not isinstance(value, int | float) or not 0 < value < 1:
+            raise IdentificationError(f"sigma of {kind} must be a positive length in m (below 1 m), "
+                                      f"got {value!r}")
+    return sigma
 
 
 class CalibrationProblem:
     """Weighted residuals and Jacobians of a robot against one or more measurement sets."""
 
-    def __init__(self, robot, data, **observation_options) -> None:
+    def __init__(self, robot, data, sigma: dict | None = None, **observation_options) -> None:
         self.datasets = list(data) if isinstance(data, list | tuple) else [data]
         if not self.datasets:
             raise IdentificationError("a calibration needs at least one measurement set")
+        given = _check_sigma(sigma)
         self.observations = [observation_for(d, robot, **observation_options) for d in self.datasets]
-        self.sigma = np.concatenate([obs.residual_scale(DEFAULT_SIGMA) for obs in self.observations])
+        self._check_planes()
+        lone = len(self.datasets) == 1 and not given
+        self.set_sigma = [DEFAULT_SIGMA if lone else given.get(d.kind, KIND_SIGMA[d.kind])
+                          for d in self.datasets]  # for sets without a sigma column
+        self.weighted = not lone or any(d.sigma is not None for d in self.datasets)
+        self.sigma = np.concatenate([obs.residual_scale(s) for obs, s in
+                                     zip(self.observations, self.set_sigma, strict=True)])
         sizes = [len(obs.nuisance_names) for obs in self.observations]
         self._nuisance = np.split(np.arange(sum(sizes)), np.cumsum(sizes)[:-1])
         rows = [obs.n_items * obs.rows_per_item for obs in self.observations]
         self._rows = np.split(np.arange(sum(rows)), np.cumsum(rows)[:-1])
+
+    def _check_planes(self) -> None:
+        """A plane id names one plate in every set of a calibration: the sets' ids must not repeat."""
+        seen: dict[str, str] = {}
+        for obs in self.observations:
+            for name in obs.nuisance_names:
+                if name in seen:
+                    raise IdentificationError(
+                        f"{name.split('.')[0]} is in two measurement sets ({seen[name]!r} and "
+                        f"{obs.data.source!r}): number the plates uniquely across the files of one "
+                        "calibration")
+                seen[name] = obs.data.source
+
+    def item_blocks(self) -> list[np.ndarray]:
+        """Per measurement set: the indices of its items in :meth:`position_errors`."""
+        sizes = [obs.n_items for obs in self.observations]
+        return np.split(np.arange(sum(sizes)), np.cumsum(sizes)[:-1])
 
     @property
     def observation(self):

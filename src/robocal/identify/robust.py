@@ -2,8 +2,12 @@
 
 Each outer iteration fits the model with the current item weights and a ridge term on the
 (column-scaled) parameter errors, then recomputes the weights from the standardised
-residuals. The standardisation uses the median absolute deviation of the residual
-components; an item's statistic is its residual norm over (scale * sqrt(rows per item)).
+residuals: each residual divided by sqrt(1 - h_ii), h_ii its leverage (the diagonal of the hat
+matrix of the weighted Jacobian: the residual's cofactor q_vv of geodesy's IGG3), so rows the fit
+absorbs more (a small file of a kind that alone sees a parameter) are not mistaken for outliers.
+The scale is the median absolute deviation of those residuals, per measurement set (so each
+kind is judged by its own noise); an item's statistic is its residual norm over (scale *
+sqrt(rows per item)).
 IGG3: weight 1 up to k0, (k0/|v|)((k1-|v|)/(k1-k0))^2 between k0 and k1, 0 beyond k1.
 
 Ridge parameter (in the scaled problem):
@@ -36,6 +40,20 @@ def igg3_weights(v: np.ndarray, k0: float = 1.5, k1: float = 3.0) -> np.ndarray:
     a = np.abs(v)
     mid = (k0 / np.maximum(a, 1e-300)) * ((k1 - a) / (k1 - k0)) ** 2
     return np.where(a <= k0, 1.0, np.where(a <= k1, mid, 0.0))
+
+
+MAX_LEVERAGE = 0.99  # a row the fit reproduces exactly carries no test of itself: capped
+MIN_REDUNDANCY = 0.3  # local redundancy (1 - leverage) below which a row's residual tests nothing
+
+
+def leverage(J: np.ndarray, row_weights: np.ndarray) -> np.ndarray:
+    """``(M,)`` leverage h_ii of each residual row of the weighted least-squares fit with Jacobian
+    ``J (M, k)`` and row weights ``(M,)`` (0 for rejected rows: leverage 0), capped below 1."""
+    sw = np.sqrt(row_weights)
+    svd = ScaledSVD.of(J * sw[:, None])
+    keep = svd.s > 1e-12 * svd.s[0] if svd.s.size else svd.s.astype(bool)
+    U = (svd.Js @ (svd.Vt[keep].T / svd.s[keep])) if svd.U is None else svd.U[:, keep]
+    return np.minimum(np.sum(U**2, axis=1), MAX_LEVERAGE)
 
 
 def standardized(r: np.ndarray, rows: int) -> tuple[np.ndarray, float]:
@@ -114,8 +132,13 @@ def solve(problem, start: State, space: ParameterSpace, *, k0: float = 1.5, k1: 
         gn = gauss_newton(problem, state, space, row_weights=row_w, ridge=h, prior=prior)
         state, total = gn.state, gn.total
         r = problem.residuals(state)
-        v, scale = standardized_items(problem, r)
-        new_w = igg3_weights(v, k0, k1)
+        redundancy = 1.0 - leverage(problem.jacobian(state, space), row_w)
+        v, scale = standardized_items(problem, r / np.sqrt(redundancy))
+        # an item the fit almost reproduces (local redundancy below MIN_REDUNDANCY) is not
+        # controlled by the others: a gross error there cannot be told from the fit, so it keeps
+        # its weight rather than being judged on a residual that says nothing
+        uncontrolled = np.maximum.reduceat(redundancy < MIN_REDUNDANCY, np.r_[0, np.cumsum(item_rows)[:-1]])
+        new_w = np.where(uncontrolled, 1.0, igg3_weights(v, k0, k1))
         change = float(np.max(np.abs(new_w - item_w)))
         item_w = new_w
         history.append(history_entry(outer, float(r @ (r * np.repeat(item_w, item_rows))),

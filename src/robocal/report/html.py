@@ -198,9 +198,32 @@ def _summary(result: dict) -> str:
                         _stats_row("validation set, after", result.get("validation"))) if r]
     out.append(f"<div class='kpi'>{''.join(kpis)}</div>")
     out.append(_table(["", "n", "RMS (mm)", "mean (mm)", "max (mm)", "p95 (mm)"], rows))
+    out.append(_per_file(result))
     warnings = result.get("warnings") or []
     out += [f"<div class='warn'>{esc(w)}</div>" for w in warnings]
     return "".join(out)
+
+
+_KIND_ERROR = {"point": "position", "pose": "position", "plane": "distance to the plane",
+               "distance": "distance error"}
+
+
+def _per_file(result: dict) -> str:
+    """Statistics per measurement file and per kind when a calibration used several files."""
+    files = result.get("per_file") or []
+    if len(files) < 2:
+        return ""
+    rows = []
+    for f in files:
+        before, after = f.get("before") or {}, f.get("after") or {}
+        rows.append([esc(f.get("role")), esc(f.get("kind")), esc(_KIND_ERROR.get(f.get("kind"), "error")),
+                     esc(f.get("file")), _num(before.get("rms")), _num(after.get("rms")),
+                     _num(after.get("max")), esc(after.get("n"))])
+    kinds = [[esc(k), _num(v.get("rms")), _num(v.get("max")), esc(v.get("n"))]
+             for k, v in (result.get("per_kind") or {}).items()]
+    return ("<h3>Per file</h3><p>Each file judged in its own kind of error (all in mm).</p>"
+            + _table(["", "kind", "error", "file", "RMS before", "RMS after", "max after", "n"], rows, left=4)
+            + "<h3>Per kind, after calibration</h3>" + _table(["", "RMS (mm)", "max (mm)", "n"], kinds))
 
 
 def _provenance(prov: dict) -> list[tuple[str, str]]:
