@@ -152,16 +152,27 @@ def _solve_plane_contacts(robot, q: np.ndarray, normal: np.ndarray, offset: np.n
     return q, np.einsum("ni,ni->n", normal, p) - offset
 
 
-def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model: str = "isotropic",
-                     outliers: float = 0.0, outlier_mm: tuple[float, float] = (1.0, 5.0), n_smr: int = 1,
+def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.02,
+                     noise_model: str = "isotropic", outliers: float = 0.0,
+                     outlier_mm: tuple[float, float] = (1.0, 5.0), n_smr: int = 1,
                      workspace_box=None, seed: int = 0, kind: str = "point", n_planes: int = 1,
                      joint_noise_deg: float = 0.0, rotation_noise_deg: float = 0.0,
                      error_scale: float = 1.0, tracker_distance_m: tuple[float, float] = (2.0, 4.0),
+                     joints=None, visible=None, smr_offsets=None, tracker_position=None,
                      ) -> SimulationResult:
     """Simulate ``n_poses`` measured poses of a perturbed copy of ``robot`` (see module docstring).
 
+    ``joints (N, n)`` rad: measure these poses (a planned campaign) instead of random ones;
+    ``visible (N, n_smr)`` bool: the SMRs the tracker sees at each pose (default all);
+    ``smr_offsets (k, 3)`` m: the SMR positions in the flange (tool) frame instead of random ones
+    (k SMRs, the first is the tool); ``tracker_position (3,)`` m: the tracker's position in the
+    robot's base frame instead of a random one (its orientation stays random). The robot errors
+    drawn for a seed do not depend on these options.
     Returns a :class:`SimulationResult`; the same arguments and seed give identical results.
     """
+    joints, visible, smr_offsets, n_poses, n_smr = _check_given(
+        robot, n_poses, n_smr, kind, joints, visible, smr_offsets)
+    tracker_position = _check_position(tracker_position)
     if kind not in SIM_KINDS:
         raise DataError(f"unknown simulation kind {kind!r}: use one of {', '.join(SIM_KINDS)}")
     if noise_model not in NOISE_MODELS:
@@ -181,12 +192,17 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
     if n_smr > 1:
         directions = _unit(rng, n_smr - 1)
         extra = tool0 + directions * rng.uniform(0.10, 0.15, (n_smr - 1, 1))
+    if smr_offsets is not None:  # given in the flange frame: into the last link frame
+        placed = smr_offsets @ robot.tool[:3, :3].T + robot.tool[:3, 3]
+        tool0, extra = placed[0], placed[1:]
     tool_R = _random_rotation(rng) if kind == "pose" else robot.tool[:3, :3]
     # the tracker frame: random position 2-4 m from the base origin, random orientation
     if kind == "plane":
         base = robot.base.copy()
     else:
         c = _unit(rng, 1)[0] * rng.uniform(*tracker_distance_m)
+        if tracker_position is not None:
+            c = robot.base[:3, :3] @ tracker_position + robot.base[:3, 3]
         T_tracker = make_transform(_random_rotation(rng), c)
         base = invert_transform(T_tracker) @ robot.base
     tool = make_transform(tool_R, tool0)
@@ -196,14 +212,18 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
     nominal_vec[: 5 * n] = true_nominal_links
     true = replace(true, nominal=nominal_vec)
 
-    n_poses = int(n_poses)
     planes = None
     if kind == "plane":
         q, plane_idx, planes = _plane_poses(true, n_poses, int(n_planes), rng, workspace_box)
+    elif joints is not None:
+        q = joints
     else:
         q = sample_joints(true, n_poses, rng, workspace_box, tool=true.tool)
     smr = np.tile(np.arange(n_smr), n_poses) if kind == "point" else np.zeros(n_poses, np.int64)
     pose_id = np.repeat(np.arange(n_poses), n_smr if kind == "point" else 1)
+    if visible is not None:
+        seen = visible.reshape(-1)
+        smr, pose_id = smr[seen], pose_id[seen]
     q_rows = q[pose_id]
     N = len(q_rows)
     approach = approach_from_order(q_rows, pose_id)  # the poses are measured in this order
@@ -246,6 +266,46 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
                                 f"{floor:.6g} mm (3-D RMS of the added noise)")
     return SimulationResult(data=data, truth=truth, noise=noise, noise_floor_mm=floor,
                             outlier_rows=outlier_rows, true_joints=q_rows, planes=planes, info=info)
+
+
+def _check_given(robot, n_poses, n_smr, kind, joints, visible, smr_offsets):
+    """Validate the planned-campaign options; returns them as arrays with ``n_poses``, ``n_smr``."""
+    if joints is not None:
+        if kind == "plane":
+            raise DataError("plane contacts are simulated on random planes; given joints work for "
+                            "point and pose measurements")
+        joints = robot.check_joints(joints)
+        if n_poses is not None and int(n_poses) != len(joints):
+            raise DataError(f"n_poses = {n_poses} but {len(joints)} joint rows are given")
+        n_poses = len(joints)
+    if n_poses is None:
+        raise DataError("give the number of poses or the joints to measure")
+    if smr_offsets is not None:
+        smr_offsets = np.asarray(smr_offsets, dtype=float).reshape(-1, 3)
+        if not np.isfinite(smr_offsets).all() or not len(smr_offsets):
+            raise DataError("smr_offsets must be finite (k, 3) positions in m")
+        if n_smr not in (1, len(smr_offsets)):
+            raise DataError(f"n_smr = {n_smr} but {len(smr_offsets)} SMR offsets are given")
+        n_smr = len(smr_offsets)
+    if visible is not None:
+        visible = np.asarray(visible, dtype=bool)
+        if kind != "point" or joints is None or visible.shape != (len(joints), n_smr):
+            raise DataError(f"visible must be ({n_poses}, {n_smr}) booleans for given joints of "
+                            "point measurements (one per pose and SMR)")
+        blind = np.flatnonzero(~visible.any(axis=1))
+        if blind.size:
+            raise DataError(f"pose(s) {blind[:10].tolist()} see no SMR: drop them or make an SMR visible")
+    return joints, visible, smr_offsets, int(n_poses), int(n_smr)
+
+
+def _check_position(position):
+    """A tracker position as a finite ``(3,)`` array in m (or None)."""
+    if position is None:
+        return None
+    position = np.asarray(position, dtype=float).reshape(-1)
+    if position.shape != (3,) or not np.isfinite(position).all():
+        raise DataError("the tracker position must be three finite coordinates in m")
+    return position
 
 
 def _plane_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, workspace_box):
