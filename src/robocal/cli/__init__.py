@@ -19,7 +19,7 @@ COMMANDS = {
     "report": "report", "export": "export",
     "import": "importer", "simulate": "simulate", "evaluate": "evaluate",
     "calibrate": "calibrate", "analyze": "analyze",
-    "plan": "plan", "compensate": "compensate",
+    "plan": "plan", "poses": "poses", "compensate": "compensate",
 }
 
 
