@@ -138,7 +138,8 @@ def write_together(outputs: dict) -> None:
                 os.close(fd)
                 os.replace(p, bak)  # a rename: the old content is kept whole until the end
                 backups[p] = bak
-            os.replace(temps.pop(p), p)
+            os.replace(temps[p], p)
+            del temps[p]
             replaced.append(p)
     except BaseException as exc:  # roll back whatever the failure (an interrupt included)
         for p in replaced:

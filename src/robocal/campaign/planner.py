@@ -21,6 +21,7 @@ from robocal.campaign.exchange import CRITERIA, criterion_value, exchange
 from robocal.campaign.files import CandidateFile, poses_csv
 from robocal.campaign.information import GENERATED_KINDS, Information, Noise, candidate_data, information
 from robocal.campaign.order import measuring_order
+from robocal.campaign.programs import DEGREE_DECIMALS, format_number
 from robocal.data.measurements import KINDS, Measurements
 from robocal.errors import DataError
 from robocal.identify.identifiability import Identifiability
@@ -120,7 +121,8 @@ class CampaignResult:
             "kind": self.kind, "criterion": self.criterion, "n_poses": self.n,
             "predicted_rms_mm": self.predicted_rms_mm,
             "noise": {"model": self.noise.model, "sigma_mm": self.noise.sigma_m * 1e3},
-            "joints_deg": np.rad2deg(self.joints).tolist(),
+            "joints_deg": [[float(format_number(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv
+                           for row in np.rad2deg(self.joints)],
             "candidate_index": self.candidate_index.tolist(),
             "visible": self.visible.astype(int).tolist(),
             "tcp_mm": (self.robot.fk(self.joints)[:, :3, 3] * 1e3).tolist(),

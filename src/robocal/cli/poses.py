@@ -13,7 +13,8 @@ EPILOG = """Examples:
   robocal poses --robot meca500 -n 20 --from taught.csv --region taught.csv -o poses.csv
   robocal simulate --robot abb_irb2600 --joints poses.csv --smr-mm 20,-30,80 -o data.csv --truth truth.yaml
 Lengths in mm in the robot's base frame (SMR positions and facing directions in the flange frame),
-angles in deg. poses.csv: q1_deg..q6_deg in measuring order (with --from: the chosen rows' joint
+angles in deg; write a value that starts with a minus as --smr-mm=-50,50,60.
+poses.csv: q1_deg..q6_deg in measuring order (with --from: the chosen rows' joint
 cells exactly as read, and their line numbers); visible_smr0.. with several SMRs. The programs
 move to each pose (MoveAbsJ / PTP / movej), wait --settle-s, and call --procedure: replace its
 body with your tracker trigger. Every output is written, or none.
