@@ -156,6 +156,15 @@ def test_candidates_given_as_measurements_are_chosen_exactly():
     assert len(set(res.candidate_index.tolist())) == 15
 
 
+def test_poses_from_a_file_keep_their_limits_unless_a_margin_is_asked_for():
+    q = np.random.default_rng(6).uniform(MECA.limits[:, 0], MECA.limits[:, 1], (60, 6))
+    q[:5, 4] = MECA.limits[4, 1]  # taught at the J5 limit
+    kept = plan_poses(MECA, 12, candidates=q, starts=1)
+    assert kept.funnel.left == 60 and kept.settings["margin_deg"] == 0.0
+    trimmed = plan_poses(MECA, 12, candidates=q, starts=1, constraints=Constraints(margin_deg=1.0))
+    assert trimmed.funnel.left == 55 and not np.isin(trimmed.candidate_index, np.arange(5)).any()
+
+
 @pytest.mark.parametrize(("kwargs", "message"), [
     ({"constraints": Constraints(margin_deg=200.0)}, "margin of 200 deg leaves no room on joint"),
     ({"constraints": Constraints(boxes=(((5.0, 5.0, 5.0), (6.0, 6.0, 6.0)),))}, "removed by the TCP box"),

@@ -38,7 +38,7 @@ from robocal.errors import DataError
 DEFAULT_ACCEPTANCE_DEG = 30.0
 DEFAULT_RANGE_M = (0.5, 40.0)      # a typical tracker's measuring range; set your instrument's
 DEFAULT_CLEARANCE_M = 0.3          # free space kept between the arm's axis lines and the tracker
-DEFAULT_MARGIN_DEG = 1.0           # away from the joint limits (the controller's soft limits)
+DEFAULT_MARGIN_DEG = 1.0           # generated poses stay this far inside the joint limits
 WRIST_AXES = (4, 6)                # joints whose aligned axes make the wrist singularity
 WRIST_POINT_FRAME = 4              # origin of frame {4}: the wrist centre of a spherical wrist
 
@@ -73,9 +73,11 @@ class Tracker:
 
 @dataclass(frozen=True)
 class Constraints:
-    """The optional constraints (see the module docstring); lengths in m, angles in deg."""
+    """The optional constraints (see the module docstring); lengths in m, angles in deg.
+    ``margin_deg`` None: 1 deg for generated candidates, 0 for given ones (poses already taught
+    or measured are known to be reachable, at a limit too)."""
 
-    margin_deg: float = DEFAULT_MARGIN_DEG
+    margin_deg: float | None = None
     boxes: tuple = ()
     min_joint_distance_deg: float = 0.0
     min_wrist_deg: float = 0.0
@@ -95,6 +97,8 @@ class Constraints:
         for name in ("margin_deg", "min_joint_distance_deg", "min_wrist_deg", "min_elbow_deg",
                      "min_shoulder_m"):
             value = getattr(self, name)
+            if value is None and name == "margin_deg":
+                continue
             if not np.isfinite(value) or value < 0:
                 raise DataError(f"{name} must be a finite value >= 0, got {value}")
         if self.min_wrist_deg >= 90 or self.min_elbow_deg >= 90:

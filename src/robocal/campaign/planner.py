@@ -253,6 +253,9 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     if int(starts) < 1 or int(n_candidates) < 1 or int(region_size) < 1:
         raise DataError("starts, n_candidates and region_size must be >= 1")
     constraints = cons.Constraints() if constraints is None else constraints
+    if constraints.margin_deg is None:
+        margin = cons.DEFAULT_MARGIN_DEG if candidates is None else 0.0
+        constraints = replace(constraints, margin_deg=margin)
     tracker = constraints.tracker
     noise = Noise(sigma_m=float(noise_mm) * 1e-3, model=noise_model,
                   tracker_position=None if tracker is None else tracker.position,

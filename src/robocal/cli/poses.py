@@ -82,7 +82,8 @@ def add_parser(sub) -> None:
     g.add_argument("--smr-normal", type=_numbers(3), action="append", metavar="X,Y,Z",
                    help="its facing direction on the flange (one per --smr-mm; default flange z)")
     g = p.add_argument_group("constraints")
-    g.add_argument("--margin-deg", type=float, default=1.0, help="stay this far inside the joint limits")
+    g.add_argument("--margin-deg", type=float,
+                   help="stay this far inside the joint limits (default 1 deg; 0 for --from poses)")
     g.add_argument("--box", type=float, nargs=6, action="append",
                    metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
                    help="the TCP must be inside this box (mm; repeat for several boxes)")
