@@ -50,8 +50,11 @@ class CurvePoint:
 
 @dataclass
 class CampaignResult:
-    """A planned campaign: ``joints (N, n)`` rad in measuring order, the candidate each came from
-    ``candidate_index (N,)``, which SMRs the tracker sees ``visible (N, k)``, the predicted
+    """A planned campaign: ``joints (N, n)`` rad in measuring order (one row per pose; per contact
+    or distance end for plane and distance data), ``candidate_index (N,)`` the row of each in the
+    given candidates (joints array rows, the file's distinct poses, or the contact / distance rows
+    of Measurements; for generated candidates, the row among those that met the constraints),
+    which SMRs the tracker sees ``visible (N, k)``, the predicted
     accuracy ``predicted_rms_mm``, the identifiability of the chosen set, the measuring route's
     weighted travel (and the travel in the order the search found them), the accuracy curve,
     the candidate funnel, and the settings."""
@@ -91,8 +94,8 @@ class CampaignResult:
         o = ident.observability
         noise = (f"isotropic {self.noise.sigma_m * 1e3:g} mm" if self.noise.model == "isotropic"
                  else "the tracker's anisotropic model")
-        lines = [f"{self.n} {self.kind} poses of {self.robot.name} chosen from {self.n_candidates} "
-                 f"candidates ({self.criterion}-optimal)",
+        lines = [f"{self.n} poses of {self.robot.name} ({self.kind} measurements) chosen from "
+                 f"{self.n_candidates} candidates ({self.criterion}-optimal)",
                  f"predicted accuracy: {self.predicted_rms_mm:.4f} mm RMS of the TCP position over the "
                  f"region (noise {noise})",
                  f"identifiable: {ident.rank} parameters; condition number {ident.condition_number:.3g} "
@@ -330,6 +333,9 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     index = given[data.pose_id[rows]] if file_data is None else given[rows]
     joints = data.joints[rows]
     warnings = []
+    if candidates is None and int(n_candidates) > C:
+        warnings.append(f"only {C} of the {int(n_candidates)} candidates asked for met the constraints in "
+                        f"{funnel.start} random poses: the constraints leave a small part of the workspace")
     if len(smr) == 1 and np.linalg.norm(smr[0, :2]) < 1e-6 and kind == "point":
         warnings.append("the SMR is on the flange axis: the last joint's zero offset cannot be identified; "
                         "give the SMR's position on the flange (smr / --smr-mm) if it is off the axis")
