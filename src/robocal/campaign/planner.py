@@ -164,18 +164,20 @@ def _planning_robot(robot, smr, normals):
     return plan, smr, normals
 
 
-def _curve_values(curve, n_min: int, n_max: int) -> list[int]:
+def _curve_values(curve, n: int, n_min: int, n_max: int) -> list[int]:
+    """Pose counts of the accuracy curve: a tuple ``(start, stop[, step])`` (default step: about
+    ``CURVE_POINTS`` values; the start is raised to the fewest poses that identify the parameters,
+    and the planned ``n`` is added), or a list of counts."""
     if curve is None:
         return []
-    values = list(curve)
-    integers = all(isinstance(v, int | np.integer) for v in values)
-    if len(values) in (2, 3) and integers and values[0] < values[1]:
-        lo, hi = int(values[0]), int(values[1])
-        step = int(values[2]) if len(values) == 3 else max(1, int(np.ceil((hi - lo) / (CURVE_POINTS - 1))))
-        values = list(range(lo, hi + 1, max(step, 1)))
-        if values[-1] != hi:
-            values.append(hi)
-    out = sorted({int(v) for v in values if n_min <= int(v) <= n_max})
+    values = [int(v) for v in curve]
+    if isinstance(curve, tuple):
+        if len(values) not in (2, 3) or values[0] >= values[1] or (len(values) == 3 and values[2] < 1):
+            raise DataError(f"a curve range is (start, stop[, step]) with start < stop, got {curve}")
+        start, stop = values[:2]
+        step = values[2] if len(values) == 3 else max(1, int(np.ceil((stop - start) / (CURVE_POINTS - 1))))
+        values = list(range(max(start, n_min), stop + 1, step)) + [stop] + ([n] if start <= n <= stop else [])
+    out = sorted({v for v in values if n_min <= v <= n_max})
     if not out:
         raise DataError(f"no curve point between {n_min} (the fewest poses that can identify the parameters) "
                         f"and {n_max} (the candidates available)")
@@ -244,8 +246,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     the model's TCP facing along the flange z axis). noise_mm / noise_model ('isotropic' or
     'tracker', which needs the tracker) / rotation_noise_deg: the measurement noise. criterion:
     'I' (default), 'D' or 'O4'. region: joints ``(R, n)`` rad or a box ``((3,), (3,))`` m (default
-    ``region_size`` random poses in the limits and TCP boxes). curve: ``(start, stop[, step])``
-    or a list of pose counts for the accuracy curve. ``progress``: True shows a bar on a terminal.
+    ``region_size`` random poses in the limits and TCP boxes). curve: a tuple ``(start, stop[,
+    step])`` or a list of pose counts for the accuracy curve. ``progress``: True shows a bar on a terminal.
     """
     if not isinstance(n, int | np.integer) or n < 1:
         raise DataError(f"the number of poses must be a positive integer, got {n!r}")
@@ -315,7 +317,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     cand_q = data.joints[first_row]                           # one joint vector per candidate
     conflicts = (cons.conflict_rows(cand_q, constraints.min_joint_distance_deg)
                  if constraints.min_joint_distance_deg > 0 else None)
-    values = _curve_values(curve, n_min, C)
+    values = _curve_values(curve, n, n_min, C)
     with Progress(int(starts) + len(values), "poses", quiet=progress is not True) as bar:
         found = exchange(info.G, A, n, criterion=criterion, starts=int(starts), seed=seed,
                          conflicts=conflicts, progress=bar)
