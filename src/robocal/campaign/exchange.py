@@ -15,7 +15,9 @@ For I and D one candidate scan costs a few numpy operations over all candidates:
 adding block ``H`` as ``trace(B A) - trace((I + H B H^T)^-1 H D H^T)`` (and ``-log det`` falls by
 ``log det(I + H B H^T)``), so the search keeps ``QB_j = G_j B G_j^T`` and ``QD_j = G_j D G_j^T``
 for every candidate and updates them by a rank-r correction after each change of the design
-(one ``(C r, p) x (p, 2r)`` product). O4 has no such update: its scan ranks the candidates by the
+(one ``(C r, p) x (p, 2r)`` product; with the optional ``threadpoolctl`` these run on one BLAS
+thread: many small products gain nothing from threads and lose much when the machine is busy).
+O4 has no such update: its scan ranks the candidates by the
 first-order gain of the smallest eigenvalue and evaluates the best ``O4_SCREEN`` exactly.
 
 The search (Fedorov / DETMAX family), from each of ``starts`` random starts: a random minimal
@@ -29,12 +31,18 @@ itself, or one closer than a minimum joint distance) are never added.
 from __future__ import annotations
 
 from collections.abc import Callable
+from contextlib import nullcontext
 from dataclasses import dataclass
 
 import numpy as np
 
 from robocal.errors import DataError
 from robocal.progress import Progress
+
+try:  # optional (extra 'threads'): the search's many small BLAS products run best on one thread
+    from threadpoolctl import threadpool_limits
+except ImportError:  # pragma: no cover - without it the BLAS library keeps its own thread count
+    threadpool_limits = None
 
 CRITERIA = ("I", "D", "O4")
 RIDGE = 1e-9            # ridge on the scaled information matrix: B stays finite before full rank
@@ -381,6 +389,12 @@ def exchange(G: np.ndarray, A: np.ndarray | None, n: int, *, criterion: str = "I
             out = np.zeros(C, np.int64)
             out[j] = 1
             return out
+    with threadpool_limits(1, user_api="blas") if threadpool_limits else nullcontext():
+        return _search(G, A, n, criterion, starts, seed, conflicts, init, progress)
+
+
+def _search(G, A, n, criterion, starts, seed, conflicts, init, progress) -> ExchangeResult:
+    C, r, p = G.shape
     rng = np.random.default_rng(seed)
     design = _Design(G, A, criterion, conflicts)
     n0 = min(n, int(np.ceil((p + 1) / r)))
