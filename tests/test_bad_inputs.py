@@ -162,6 +162,17 @@ def _cases() -> list[tuple[str, list[str], list[str], str]]:
         ("tool-three-poses", ["tool", "{d}/three.csv", "--calibrated", "{d}/irb2600.yaml", "--nominal",
                               "abb_irb2600"], [], "4"),
         ("bad-argument", ["calibrate", "{d}/meca.csv"], [], "--robot"),
+        ("poses-too-few", ["poses", "--robot", "meca500", "-n", "3", "-o", "{o}/p.csv", "--rapid",
+                           "{o}/c.mod"], ["p.csv", "c.mod"], "identif"),
+        ("poses-tracker-inside", ["poses", "--robot", "abb_irb2600", "-n", "20", "--tracker-mm", "0,0,500",
+                                  "-o", "{o}/p.csv"], ["p.csv"], "tracker"),
+        ("poses-empty-box", ["poses", "--robot", "abb_irb2600", "-n", "20", "--box", "5000", "5000", "5000",
+                             "5100", "5100", "5100", "-o", "{o}/p.csv"], ["p.csv"], "box"),
+        ("poses-krl-not-src", ["poses", "--robot", "abb_irb2600", "-n", "20", "-o", "{o}/p.csv", "--krl",
+                               "{o}/c.dat"], ["p.csv"], ".src"),
+        ("simulate-bar-too-long", ["simulate", "--robot", "meca500", "--kind", "distance", "--poses", "4",
+                                   "--bar-mm", "20000", "-o", "{o}/s.csv", "--truth", "{o}/t.yaml"],
+         ["s.csv", "t.yaml"], "scale bar"),
     ]
 
 

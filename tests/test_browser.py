@@ -129,3 +129,18 @@ def test_real_reports_open_with_every_section(browser, tmp_path, tmp_path_factor
     assert console_messages(proc.stderr) == []
     img = np.asarray(Image.open(shot).convert("RGB"))
     assert len(np.unique(img.reshape(-1, 3) // 8, axis=0)) > 300
+
+
+def test_campaign_page_renders_without_console_messages(browser, tmp_path):
+    from robocal import Robot, plan_poses
+    from robocal.report.campaign import render_campaign
+
+    plan = plan_poses(Robot.from_catalog("meca500"), 14, smr=[0.01, 0.0, 0.03], n_candidates=400,
+                      starts=1, curve=(11, 20))
+    page = tmp_path / "campaign.html"
+    page.write_text(render_campaign(plan.to_dict()), encoding="utf-8")
+    proc = run_browser(browser, tmp_path, page.as_uri(), "--dump-dom")
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert console_messages(proc.stderr) == []
+    assert svg_count(proc.stdout) == svg_count(page.read_text(encoding="utf-8")) == 2
+    assert section_ids(proc.stdout) == ["summary", "curve", "identifiability", "poses"]

@@ -132,3 +132,20 @@ def test_cli_several_files_and_validations(planes, tmp_path):
                                        "validation distance"}
     assert result["per_kind"]["validation distance"]["rms"] < 0.02
     assert "Per file" in (tmp_path / "r.html").read_text()
+
+
+def test_simulated_scale_bar_of_a_plane_campaigns_truth(planes, tmp_path):
+    """`simulate --kind distance --as-is` on the truth of a plane campaign: placements of a bar whose
+    certified length both rows record, the true tips that length plus the noise apart."""
+    sim, _ = planes
+    bar = simulate_tracker(sim.truth, 8, kind="distance", noise_mm=0.005, bar_length_m=0.5, seed=3,
+                           as_is=True)
+    tips = sim.truth.fk(bar.data.joints)[:, :3, 3]
+    true = np.linalg.norm(tips[0::2] - tips[1::2], axis=1)
+    assert np.allclose(bar.data.distance, 0.5) and np.allclose(true - 0.5, bar.noise[0::2, 0], atol=1e-12)
+    assert 0.001 < bar.noise_floor_mm < 0.012
+    sim.truth.save(tmp_path / "truth.yaml")
+    assert main(["--quiet", "simulate", "--robot", str(tmp_path / "truth.yaml"), "--as-is", "--kind",
+                 "distance", "--poses", "8", "--noise-mm", "0.005", "--seed", "3", "-o",
+                 str(tmp_path / "bar.csv"), "--truth", str(tmp_path / "bar_truth.yaml")]) == 0
+    assert np.array_equal(rc.Measurements.load(tmp_path / "bar.csv").joints, bar.data.joints)

@@ -2,6 +2,7 @@
 
 from robocal import ik  # rc.ik.solve_all, rc.ik.solve, rc.ik.plan_path
 from robocal.calibration import CalibrationResult, analyze, calibrate
+from robocal.campaign import CampaignResult, Constraints, Tracker, plan_poses
 from robocal.compensate import compensate
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
@@ -25,10 +26,14 @@ __all__ = [
     "CalibrationResult",
     "FilterResult",
     "ToolCalibration",
+    "CampaignResult",
+    "Constraints",
+    "Tracker",
     "Measurements",
     "analyze",
     "calibrate",
     "evaluate",
+    "plan_poses",
     "register",
     "simulate_tracker",
     "DataError",

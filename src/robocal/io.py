@@ -103,36 +103,41 @@ def _temp_for(path: Path, data: str | bytes) -> str:
 def write_all(outputs: Mapping) -> None:
     """Write every ``{path: text or bytes}`` or none of them.
 
-    All paths are checked first (:func:`check_writable`), every content goes to a temporary file
-    next to its target, and only then are the temporaries renamed over the targets; if a rename
-    fails, the targets already replaced get their previous content back. Errors are DataErrors
-    naming the path and the reason.
+    All paths are checked first (:func:`check_writable`); every content goes to a temporary file
+    next to its target; then each existing target is renamed aside (its old content kept whole)
+    and the temporary file renamed into place. If any step fails (an interrupt included), the
+    targets already replaced get their old files back and nothing is left behind. Errors are
+    DataErrors naming the path and the reason.
     """
     items = [(Path(p), data) for p, data in outputs.items()]
     check_writable(p for p, _ in items)
-    temps: list[tuple[Path, str]] = []
+    temps: dict[Path, str] = {}
+    backups: dict[Path, str] = {}
+    replaced: list[Path] = []
+    path = None
     try:
         for path, data in items:
-            try:
-                temps.append((path, _temp_for(path, data)))
-            except OSError as exc:
-                raise _write_error(path, exc) from None
-        backups: list[tuple[Path, bytes | None]] = []
-        for path, tmp in temps:
-            try:
-                old = path.read_bytes() if path.exists() else None
-                os.replace(tmp, path)
-            except OSError as exc:
-                for done, previous in reversed(backups):  # restore what was already replaced
-                    if previous is None:
-                        done.unlink(missing_ok=True)
-                    else:
-                        done.write_bytes(previous)
-                raise _write_error(path, exc) from None
-            backups.append((path, old))
+            temps[path] = _temp_for(path, data)
+        for path, _ in items:
+            if path.exists():
+                fd, backups[path] = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".bak")
+                os.close(fd)
+                os.replace(path, backups[path])
+            os.replace(temps[path], path)
+            del temps[path]
+            replaced.append(path)
+    except BaseException as exc:
+        for done in replaced:
+            done.unlink(missing_ok=True)
+        for target, backup in backups.items():
+            os.replace(backup, target)
+        backups.clear()
+        if isinstance(exc, OSError):
+            raise _write_error(path, exc) from None
+        raise
     finally:
-        for _, tmp in temps:
-            Path(tmp).unlink(missing_ok=True)
+        for leftover in [*temps.values(), *backups.values()]:
+            Path(leftover).unlink(missing_ok=True)
 
 
 def write_atomic(path, data: str | bytes) -> None:

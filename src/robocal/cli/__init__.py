@@ -23,7 +23,7 @@ COMMANDS = {
     "report": "report", "export": "export",
     "import": "importer", "simulate": "simulate", "evaluate": "evaluate",
     "calibrate": "calibrate", "analyze": "analyze",
-    "plan": "plan", "compensate": "compensate",
+    "plan": "plan", "poses": "poses", "compensate": "compensate",
     "filter": "filter", "tool": "tool",
 }
 

@@ -10,6 +10,10 @@ EPILOG = """Examples:
       -o data.csv --truth truth.yaml
   robocal simulate --robot model.yaml --poses 300 --kind plane --planes 3 --joint-noise-deg 0.001 \\
       -o contacts.csv --truth truth.yaml
+  robocal simulate --robot abb_irb2600 --joints poses.csv --smr-mm 20,-30,80 --tracker-mm 2500,500,300 \\
+      -o data.csv --truth truth.yaml       # rehearse a campaign planned by `robocal poses`
+  robocal simulate --robot truth.yaml --as-is --kind distance --poses 8 --noise-mm 0.005 \\
+      -o scalebar.csv --truth truth_bar.yaml   # a 500 mm scale bar touched by the probe of truth.yaml
 The truth YAML is the true robot (tracker frame as base, SMR 0 as tool); TRUTH.sim.json next to it
 holds the noise floor (3-D RMS of the added noise, mm), outlier rows and plane coefficients.
 """
@@ -21,8 +25,13 @@ def add_parser(sub) -> None:
                                    "errors, seen from a tracker at a random pose 2-4 m away.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--robot", required=True, help="catalog name or model YAML (the nominal robot)")
-    p.add_argument("--poses", type=int, required=True, help="number of poses")
-    p.add_argument("--kind", choices=("point", "pose", "plane"), default="point")
+    which = p.add_mutually_exclusive_group(required=True)
+    which.add_argument("--poses", type=int, help="number of random poses")
+    which.add_argument("--joints", metavar="CSV",
+                       help="measure these poses (q1_deg.., e.g. the poses.csv of `robocal poses`; "
+                            "visible_smr* columns are honoured)")
+    p.add_argument("--kind", choices=("point", "pose", "plane", "distance"), default="point",
+                   help="tracker points, 6-DOF poses, plane contacts, or scale-bar placements (distance)")
     p.add_argument("--noise-mm", type=float, default=0.02, help="isotropic noise sigma per axis, mm")
     p.add_argument("--noise-model", choices=("isotropic", "tracker"), default="isotropic")
     p.add_argument("--outliers", type=float, default=0.0, help="fraction of rows with a 1-5 mm gross error")
@@ -32,6 +41,17 @@ def add_parser(sub) -> None:
     p.add_argument("--rotation-noise-deg", type=float, default=0.0, help="orientation noise (pose data), deg")
     p.add_argument("--box", type=float, nargs=6, metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
                    help="keep poses whose tool point is in this box (robot base frame, mm)")
+    p.add_argument("--smr-mm", action="append", metavar="X,Y,Z",
+                   help="an SMR position on the flange in mm (repeat for several; default random)")
+    p.add_argument("--tool-mm", metavar="X,Y,Z",
+                   help="the probe tip (SMR 0) on the flange in mm, e.g. for plane and distance kinds")
+    p.add_argument("--bar-mm", type=float, default=500.0,
+                   help="distance kind: the scale bar's certified length, mm (default 500)")
+    p.add_argument("--as-is", action="store_true",
+                   help="measure the model exactly as it is (no errors drawn, its own base and tool): "
+                        "e.g. a scale bar of the truth.yaml of an earlier simulation")
+    p.add_argument("--tracker-mm", metavar="X,Y,Z",
+                   help="the tracker's position in the robot base frame, mm (default random, 2-4 m away)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("-o", "--output", required=True, help="measurement CSV to write")
     p.add_argument("--truth", required=True, help="true robot model YAML to write")
@@ -44,19 +64,47 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.data.simulate import simulate_tracker, write_simulation
+    from robocal.errors import DataError
     from robocal.io import check_outputs
     from robocal.kinematics.model import load_model
 
-    check_outputs([args.output, args.truth, Path(args.truth).with_suffix(".sim.json")], [args.robot])
+    check_outputs([args.output, args.truth, Path(args.truth).with_suffix(".sim.json")],
+                  [args.robot, args.joints])
     robot = load_model(args.robot)
     box = None if args.box is None else np.array(args.box).reshape(2, 3) * 1e-3
+    joints = visible = None
+    if args.joints:
+        from robocal.campaign.files import read_planned
+
+        joints, visible = read_planned(args.joints, robot)
+    smr = None if not args.smr_mm else np.array([_xyz(v, "--smr-mm") for v in args.smr_mm]) * 1e-3
+    if args.tool_mm is not None:
+        if smr is not None:
+            raise DataError("give the probe either as --tool-mm or as --smr-mm, not both")
+        smr = np.array([_xyz(args.tool_mm, "--tool-mm")]) * 1e-3
+    n_smr = args.smr if smr is None and visible is None else len(smr) if smr is not None else visible.shape[1]
+    tracker = None if args.tracker_mm is None else np.array(_xyz(args.tracker_mm, "--tracker-mm")) * 1e-3
     result = simulate_tracker(robot, args.poses, noise_mm=args.noise_mm, noise_model=args.noise_model,
-                              outliers=args.outliers, n_smr=args.smr, workspace_box=box, seed=args.seed,
+                              outliers=args.outliers, n_smr=n_smr, workspace_box=box, seed=args.seed,
                               kind=args.kind, n_planes=args.planes, joint_noise_deg=args.joint_noise_deg,
-                              rotation_noise_deg=args.rotation_noise_deg)
+                              rotation_noise_deg=args.rotation_noise_deg, joints=joints, visible=visible,
+                              smr_offsets=smr, tracker_position=tracker, bar_length_m=args.bar_mm * 1e-3,
+                              as_is=args.as_is)
     sidecar = write_simulation(result, args.output, args.truth)
     if not args.quiet:
-        print(f"simulated {len(result.data)} {args.kind} observations of {args.poses} poses; noise floor "
-              f"{result.noise_floor_mm:.4f} mm; {len(result.outlier_rows)} outlier(s)")
+        print(f"simulated {len(result.data)} {args.kind} observations of {result.info['n_poses']} poses; "
+              f"noise floor {result.noise_floor_mm:.4f} mm; {len(result.outlier_rows)} outlier(s)")
         print(f"wrote {args.output}, {args.truth}, {sidecar}")
     return 0
+
+
+def _xyz(text: str, option: str) -> list[float]:
+    from robocal.errors import DataError
+
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 3:
+        raise DataError(f"{option} needs three numbers X,Y,Z in mm, got {text!r}")
+    return values

@@ -333,15 +333,35 @@ def approach_from_order(joints: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
     return step[np.cumsum(new_pose) - 1]
 
 
-def read_joints(path, robot=None) -> np.ndarray:
-    """Only the joint columns (q1_deg.. or _rad) of a CSV, ``(N, n)`` rad — for planning a pose
-    set before anything is measured. Other columns are ignored."""
+@dataclass(frozen=True)
+class JointTable:
+    """The joint columns of a CSV as read: ``joints (N, n)`` rad, ``header`` (lower-case names),
+    ``joint_columns`` their indices (q1..qn), ``cells`` every row's text cells, ``lines`` each
+    row's 1-based line number in the file."""
+
+    joints: np.ndarray
+    header: list[str]
+    joint_columns: list[int]
+    cells: list[list[str]]
+    lines: np.ndarray
+
+    def column(self, name: str) -> list[str] | None:
+        """The text cells of column ``name`` (None when absent)."""
+        if name not in self.header:
+            return None
+        c = self.header.index(name)
+        return [row[c] if c < len(row) else "" for row in self.cells]
+
+
+def read_joint_table(path) -> JointTable:
+    """Read the joint columns (q1_deg.. or _rad) of any CSV with a header, keeping the text of
+    every cell (e.g. to copy joints exactly as given). Other columns are not interpreted."""
     path = Path(path)
-    text = read_text(path, "joints CSV file")
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
-    if not lines:
+    numbered = [(k, ln) for k, ln in enumerate(read_text(path, "joints CSV file").splitlines(), start=1)
+                if ln.strip() and not ln.lstrip().startswith("#")]
+    if not numbered:
         raise DataError(f"{path}: the file is empty; it needs a header (q1_deg,...) and joint rows")
-    rows = list(csv.reader(lines))
+    rows = list(csv.reader([ln for _, ln in numbered]))
     header = [h.strip().lower() for h in rows[0]]
     cols = {}
     for c, name in enumerate(header):
@@ -352,13 +372,25 @@ def read_joints(path, robot=None) -> np.ndarray:
     if n == 0 or sorted(cols) != list(range(1, n + 1)):
         raise DataError(f"{path}: joint columns must be q1_deg..qn_deg (or _rad), found {header}")
     q = np.empty((len(rows) - 1, n))
-    for i, row in enumerate(rows[1:], start=2):
+    for i, row in enumerate(rows[1:]):
         try:
-            q[i - 2] = [float(row[cols[j][0]]) * cols[j][1] for j in range(1, n + 1)]
+            q[i] = [float(row[cols[j][0]]) * cols[j][1] for j in range(1, n + 1)]
         except (ValueError, IndexError):
-            raise DataError(f"{path}, line {i}: expected {n} numeric joint values") from None
+            raise DataError(f"{path}, line {numbered[i + 1][0]}: expected {n} numeric joint values") from None
     if len(q) == 0:
         raise DataError(f"{path}: no joint rows below the header")
+    if not np.isfinite(q).all():
+        bad = int(np.flatnonzero(~np.isfinite(q).all(axis=1))[0])
+        raise DataError(f"{path}, line {numbered[bad + 1][0]}: joint values must be finite")
+    return JointTable(joints=q, header=header, joint_columns=[cols[j][0] for j in range(1, n + 1)],
+                      cells=[[c.strip() for c in row] for row in rows[1:]],
+                      lines=np.array([k for k, _ in numbered[1:]]))
+
+
+def read_joints(path, robot=None) -> np.ndarray:
+    """Only the joint columns (q1_deg.. or _rad) of a CSV, ``(N, n)`` rad — for planning a pose
+    set before anything is measured. Other columns are ignored."""
+    q = read_joint_table(path).joints
     return q if robot is None else robot.check_joints(q)
 
 

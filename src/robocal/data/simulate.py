@@ -26,7 +26,14 @@ Kinds: ``point`` (n_smr SMRs per pose), ``pose`` (6-DOF probe; ``rotation_noise_
 ``plane`` (a probe tip touching ``n_planes`` planes with random normals; the world frame is the
 robot base, only joints are recorded, with ``joint_noise_deg`` reading noise; probe noise: each
 true tip lies ``noise_mm`` (1-sigma, along the normal) off its plane, so the noise floor is that
-distance's RMS; plane coefficients go to the sidecar). ``joint_noise_deg`` adds reading noise to
+distance's RMS; plane coefficients go to the sidecar), ``distance`` (``n_poses`` placements of
+a scale bar of certified length ``bar_length_m`` touched by the probe tip at its two nests: the
+two rows of a pair record the certified length, the true tips are that length plus noise_mm
+(1-sigma) apart; no tracker, the world frame is the robot base).
+
+``as_is=True`` measures the given robot exactly as it is (no errors drawn, its own base and
+tool): a second data set of the truth of an earlier simulation (e.g. the scale bar of a plane
+campaign: ``--robot truth.yaml --as-is``). ``joint_noise_deg`` adds reading noise to
 the recorded joints of every kind.
 """
 
@@ -50,7 +57,9 @@ TRACKER_RADIAL_MM = 0.010        # ADM range noise at zero distance (1 sigma)
 TRACKER_RADIAL_UM_PER_M = 0.5    # growth of the range noise with distance
 TRACKER_ANGULAR_URAD = 2.5       # angle-encoder noise (1 sigma, each transverse axis)
 NOISE_MODELS = ("isotropic", "tracker")
-SIM_KINDS = ("point", "pose", "plane")
+SIM_KINDS = ("point", "pose", "plane", "distance")
+SCALE_BAR_M = 0.5  # default certified length of a simulated scale bar (distance kind), m
+MIN_BAR_ANGLE_DEG = 20.0  # the two poses of a bar placement differ by at least this much (joint 1 or 2)
 
 
 @dataclass(frozen=True, eq=False)
@@ -170,7 +179,7 @@ def _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, join
 
 
 def _true_robot(robot: Robot, rng: np.random.Generator, kind: str, n_smr: int, error_scale: float,
-                tracker_distance_m: tuple[float, float]) -> Robot:
+                tracker_distance_m: tuple[float, float], smr_offsets=None, tracker_position=None) -> Robot:
     """The perturbed robot with its SMRs (or probe) on the flange and, for tracker data, the
     tracker frame as base; its nominal is the given robot's links with these frames."""
     true = perturbed(robot, rng, scale=error_scale)
@@ -179,12 +188,17 @@ def _true_robot(robot: Robot, rng: np.random.Generator, kind: str, n_smr: int, e
     if n_smr > 1:
         directions = _unit(rng, n_smr - 1)
         extra = tool0 + directions * rng.uniform(0.10, 0.15, (n_smr - 1, 1))
+    if smr_offsets is not None:  # given in the flange frame: into the last link frame
+        placed = smr_offsets @ robot.tool[:3, :3].T + robot.tool[:3, 3]
+        tool0, extra = placed[0], placed[1:]
     tool_R = _random_rotation(rng) if kind == "pose" else robot.tool[:3, :3]
     # the tracker frame: random position 2-4 m from the base origin, random orientation
-    if kind == "plane":
+    if kind in ("plane", "distance"):
         base = robot.base.copy()
     else:
         c = _unit(rng, 1)[0] * rng.uniform(*tracker_distance_m)
+        if tracker_position is not None:
+            c = robot.base[:3, :3] @ tracker_position + robot.base[:3, 3]
         base = invert_transform(make_transform(_random_rotation(rng), c)) @ robot.base
     true = replace(true, base=base, tool=make_transform(tool_R, tool0), smr=extra, nominal=None)
     nominal = true.nominal.copy()
@@ -210,28 +224,49 @@ def _tracker_readings(kind: str, T: np.ndarray, rng: np.random.Generator, noise_
     return kw, noise, outlier_rows
 
 
-def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model: str = "isotropic",
-                     outliers: float = 0.0, outlier_mm: tuple[float, float] = (1.0, 5.0), n_smr: int = 1,
+def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.02,
+                     noise_model: str = "isotropic", outliers: float = 0.0,
+                     outlier_mm: tuple[float, float] = (1.0, 5.0), n_smr: int = 1,
                      workspace_box=None, seed: int = 0, kind: str = "point", n_planes: int = 1,
                      joint_noise_deg: float = 0.0, rotation_noise_deg: float = 0.0,
                      error_scale: float = 1.0, tracker_distance_m: tuple[float, float] = (2.0, 4.0),
-                     ) -> SimulationResult:
+                     joints=None, visible=None, smr_offsets=None, tracker_position=None,
+                     bar_length_m: float = SCALE_BAR_M, as_is: bool = False) -> SimulationResult:
     """Simulate ``n_poses`` measured poses of a perturbed copy of ``robot`` (see module docstring).
 
+    ``joints (N, n)`` rad: measure these poses (a planned campaign) instead of random ones;
+    ``visible (N, n_smr)`` bool: the SMRs the tracker sees at each pose (default all);
+    ``smr_offsets (k, 3)`` m: the SMR positions in the flange (tool) frame instead of random ones
+    (k SMRs, the first is the tool); ``tracker_position (3,)`` m: the tracker's position in the
+    robot's base frame instead of a random one (its orientation stays random). The robot errors
+    drawn for a seed do not depend on these options.
     Returns a :class:`SimulationResult`; the same arguments and seed give identical results.
     """
+    joints, visible, smr_offsets, n_poses, n_smr = _check_given(
+        robot, n_poses, n_smr, kind, joints, visible, smr_offsets)
+    tracker_position = _check_position(tracker_position)
     _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, joint_noise_deg,
            rotation_noise_deg)
+    if kind == "distance" and not 0 < bar_length_m < 10:
+        raise DataError(f"the scale bar's length must be between 0 and 10 m, got {bar_length_m} m")
     rng = np.random.default_rng(seed)
-    true = _true_robot(robot, rng, kind, n_smr, error_scale, tracker_distance_m)
-    n_poses = int(n_poses)
+    true = robot if as_is else _true_robot(robot, rng, kind, n_smr, error_scale, tracker_distance_m,
+                                           smr_offsets, tracker_position)
     planes = None
     if kind == "plane":
         q, plane_idx, planes = _plane_poses(true, n_poses, int(n_planes), rng, workspace_box)
+    elif kind == "distance":
+        q, bar_noise = _bar_placements(true, n_poses, bar_length_m, noise_mm, rng, workspace_box)
+    elif joints is not None:
+        q = joints
     else:
         q = sample_joints(true, n_poses, rng, workspace_box, tool=true.tool)
-    smr = np.tile(np.arange(n_smr), n_poses) if kind == "point" else np.zeros(n_poses, np.int64)
-    pose_id = np.repeat(np.arange(n_poses), n_smr if kind == "point" else 1)
+    per_pose = n_smr if kind == "point" else 2 if kind == "distance" else 1
+    smr = np.tile(np.arange(n_smr), n_poses) if kind == "point" else np.zeros(n_poses * per_pose, np.int64)
+    pose_id = np.repeat(np.arange(n_poses), n_smr) if kind == "point" else np.arange(n_poses * per_pose)
+    if visible is not None:
+        seen = visible.reshape(-1)
+        smr, pose_id = smr[seen], pose_id[seen]
     q_rows = q[pose_id]
     N = len(q_rows)
     approach = approach_from_order(q_rows, pose_id)  # the poses are measured in this order
@@ -239,6 +274,10 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
     if kind in ("point", "pose"):
         kw, noise, outlier_rows = _tracker_readings(kind, T, rng, noise_mm, noise_model, outliers,
                                                     outlier_mm, rotation_noise_deg)
+    elif kind == "distance":  # the two nests of a placement: the bar's certified length on both rows
+        kw = {"pair": np.repeat(np.arange(n_poses), 2), "distance": np.full(N, float(bar_length_m))}
+        outlier_rows, noise = np.zeros(0, np.int64), np.zeros((N, 3))
+        noise[:, 0] = np.repeat(bar_noise, 2)  # both rows: the true tips' distance minus the certified
     else:  # probe noise: each true tip ends up noise_mm (1-sigma) off its plane, along the normal
         kw, outlier_rows = {"plane": plane_idx}, np.zeros(0, np.int64)
         normal, offset = planes[plane_idx, :3], planes[plane_idx, 3]
@@ -262,6 +301,84 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
                                 f"{floor:.6g} mm (3-D RMS of the added noise)")
     return SimulationResult(data=data, truth=truth, noise=noise, noise_floor_mm=floor,
                             outlier_rows=outlier_rows, true_joints=q_rows, planes=planes, info=info)
+
+
+def _check_given(robot, n_poses, n_smr, kind, joints, visible, smr_offsets):
+    """Validate the planned-campaign options; returns them as arrays with ``n_poses``, ``n_smr``."""
+    if joints is not None:
+        if kind not in ("point", "pose"):
+            raise DataError(f"{kind} measurements place their own poses; given joints work for point "
+                            "and pose measurements")
+        joints = robot.check_joints(joints)
+        if n_poses is not None and int(n_poses) != len(joints):
+            raise DataError(f"n_poses = {n_poses} but {len(joints)} joint rows are given")
+        n_poses = len(joints)
+    if n_poses is None:
+        raise DataError("give the number of poses or the joints to measure")
+    if smr_offsets is not None:
+        smr_offsets = np.asarray(smr_offsets, dtype=float).reshape(-1, 3)
+        if not np.isfinite(smr_offsets).all() or not len(smr_offsets):
+            raise DataError("smr_offsets must be finite (k, 3) positions in m")
+        if n_smr not in (1, len(smr_offsets)):
+            raise DataError(f"n_smr = {n_smr} but {len(smr_offsets)} SMR offsets are given")
+        n_smr = len(smr_offsets)
+    if visible is not None:
+        visible = np.asarray(visible, dtype=bool)
+        if kind != "point" or joints is None or visible.shape != (len(joints), n_smr):
+            raise DataError(f"visible must be ({n_poses}, {n_smr}) booleans for given joints of "
+                            "point measurements (one per pose and SMR)")
+        blind = np.flatnonzero(~visible.any(axis=1))
+        if blind.size:
+            raise DataError(f"pose(s) {blind[:10].tolist()} see no SMR: drop them or make an SMR visible")
+    return joints, visible, smr_offsets, int(n_poses), int(n_smr)
+
+
+def _check_position(position):
+    """A tracker position as a finite ``(3,)`` array in m (or None)."""
+    if position is None:
+        return None
+    position = np.asarray(position, dtype=float).reshape(-1)
+    if position.shape != (3,) or not np.isfinite(position).all():
+        raise DataError("the tracker position must be three finite coordinates in m")
+    return position
+
+
+def _move_tips(robot, q: np.ndarray, target: np.ndarray, iterations: int = 30, damping: float = 1e-9):
+    """Joints near ``q (N, n)`` whose tips are at ``target (N, 3)`` (m): damped minimum-norm
+    Gauss-Newton on the position; returns the joints and the remaining distance ``(N,)``."""
+    names = [f"theta{i + 1}" for i in range(robot.n_joints)]
+    for _ in range(iterations):
+        r = target - robot.fk(q)[:, :3, 3]
+        if np.abs(r).max() < 1e-13:
+            break
+        J = robot.jacobian(q, names, kind="point")  # (N, 3, n)
+        A = np.einsum("nik,njk->nij", J, J) + damping * np.eye(3)
+        q = q + np.einsum("nik,ni->nk", J, np.linalg.solve(A, r[:, :, None])[:, :, 0])
+    return q, np.linalg.norm(target - robot.fk(q)[:, :3, 3], axis=1)
+
+
+def _bar_placements(true, n: int, length: float, noise_mm: float, rng: np.random.Generator,
+                    workspace_box) -> tuple[np.ndarray, np.ndarray]:
+    """Joints ``(2n, dof)`` of ``n`` scale-bar placements (rows 2i, 2i+1: the two nests) whose true
+    tips are ``length`` plus noise ``(n,)`` (m, 1-sigma ``noise_mm``) apart: the second pose of a
+    pair is moved on the true robot until its tip sits that far from the first's, along a random
+    direction."""
+    q_out, noise_out = [], []
+    for _ in range(100):
+        m = 4 * (n - len(noise_out))
+        qa = sample_joints(true, m, rng, workspace_box, tool=true.tool)
+        qb = sample_joints(true, m, rng, workspace_box, tool=true.tool)
+        noise = rng.standard_normal(m) * noise_mm * 1e-3
+        target = true.fk(qa)[:, :3, 3] + _unit(rng, m) * (length + noise)[:, None]
+        qb, miss = _move_tips(true, qb, target)
+        apart = np.abs(qa[:, :2] - qb[:, :2]).max(axis=1) > np.deg2rad(MIN_BAR_ANGLE_DEG)
+        ok = np.flatnonzero((miss < 1e-12) & true.within_limits(qb) & apart)[: n - len(noise_out)]
+        q_out += [np.stack([qa[ok], qb[ok]], axis=1).reshape(-1, true.n_joints)]
+        noise_out += noise[ok].tolist()
+        if len(noise_out) == n:
+            return np.concatenate(q_out), np.array(noise_out)
+    raise UnreachableError(f"could place the {length} m scale bar only {len(noise_out)} of {n} times in "
+                           "the workspace: use a shorter bar, fewer placements or a larger workspace box")
 
 
 def _plane_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, workspace_box):

@@ -243,3 +243,20 @@ def history(iterations: np.ndarray, values: np.ndarray, label: str) -> Figure:
     ax.set_xlabel("iteration")
     ax.set_ylabel(label)
     return fig
+
+
+@_styled
+def accuracy_curve(n: np.ndarray, planned: np.ndarray, random: np.ndarray,
+                   chosen: int | None = None) -> Figure:
+    """Predicted accuracy (mm) against the number of poses ``n``: planned and random designs."""
+    fig = _figure(7.5, 3.2)
+    ax = fig.add_subplot()
+    ax.plot(n, random, "o-", color=BEFORE, ms=3, label="random poses (median)")
+    ax.plot(n, planned, "o-", color=AFTER, ms=3, label="planned poses")
+    if chosen is not None:
+        ax.axvline(chosen, color="grey", lw=0.8, ls="--")
+    _log_if_wide(ax, np.concatenate([planned, random]), "y")
+    ax.set_xlabel("number of poses")
+    ax.set_ylabel("predicted RMS error (mm)")
+    ax.legend(frameon=False)
+    return fig

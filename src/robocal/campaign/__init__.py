@@ -1,0 +1,13 @@
+"""Planning a calibration campaign: optimal poses, the tracker's line of sight, the robot program.
+
+``plan_poses`` chooses the poses (:mod:`robocal.campaign.planner`); the constraints and the
+tracker are :class:`Constraints` and :class:`Tracker`; candidates from a file are read with
+:func:`read_candidates`; :mod:`robocal.campaign.programs` writes RAPID, KRL and URScript.
+"""
+
+from robocal.campaign.constraints import Constraints, Tracker, singularity_measures
+from robocal.campaign.files import read_candidates, read_planned
+from robocal.campaign.planner import CampaignResult, CurvePoint, plan_poses
+
+__all__ = ["CampaignResult", "Constraints", "CurvePoint", "Tracker", "plan_poses", "read_candidates",
+           "read_planned", "singularity_measures"]

@@ -1,0 +1,111 @@
+"""Campaign files: candidate poses read from a CSV, the planned ``poses.csv``, and writing every
+output of a run together (all files or none).
+
+``poses.csv`` has the measurement CSV's joint columns, one row per pose in measuring order:
+``q1_deg..qn_deg`` (degrees with up to 10 decimals; generated candidates are rounded to 1e-4
+deg, so the file holds them exactly); with
+candidates from a file, the file's own joint columns and the chosen rows' cells exactly as read,
+plus ``source_row`` (the row's line in that file). With several SMRs, ``visible_smr0..`` (1/0)
+say which SMRs the tracker sees at each pose; plane contacts and distances keep their ``plane``
+and ``pair`` columns (one row per contact or distance end).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robocal.campaign.programs import DEGREE_DECIMALS, format_number
+from robocal.data.measurements import JointTable, Measurements, read_joint_table
+from robocal.errors import DataError
+
+VISIBLE_PREFIX = "visible_smr"
+
+
+@dataclass(frozen=True)
+class CandidateFile:
+    """Candidates read from a CSV: ``joints (C, n)`` rad (one per distinct pose, or the rows of
+    contacts / distance ends for ``data``), ``rows (C,)`` the table row of each, ``table`` the
+    file's joint table, ``data`` the Measurements (plane contacts and distances only)."""
+
+    joints: np.ndarray
+    rows: np.ndarray
+    table: JointTable
+    data: Measurements | None = None
+    path: str = ""
+
+
+def read_candidates(path, robot, kind: str = "point") -> CandidateFile:
+    """Candidate poses from any measurement CSV or a joints-only CSV. Repeated readings (rows with
+    one ``pose_id``, or consecutive rows with identical joints, e.g. several SMRs) are one pose.
+    Plane contacts and distances must come from a measurement CSV of that kind (its plane or
+    pair columns place them; the measured values are not used)."""
+    table = read_joint_table(path)
+    q = robot.check_joints(table.joints)
+    if kind in ("plane", "distance"):
+        data = Measurements.load(path, robot=robot)
+        if data.kind != kind or len(data) != len(q):
+            raise DataError(f"{path}: {kind} candidates need a {kind} measurement CSV (joints with "
+                            f"{'a plane' if kind == 'plane' else 'pair and distance_mm'} column), got "
+                            f"{data.kind} data")
+        return CandidateFile(joints=q, rows=np.arange(len(q)), table=table, data=data, path=str(path))
+    ids = table.column("pose_id")
+    if ids is not None:
+        try:
+            key = np.array([int(float(v)) for v in ids])
+        except ValueError:
+            raise DataError(f"{path}: the pose_id column must hold integers") from None
+        new = np.r_[True, key[1:] != key[:-1]]
+    else:
+        new = np.r_[True, (q[1:] != q[:-1]).any(axis=1)]
+    first = np.flatnonzero(new)
+    return CandidateFile(joints=q[first], rows=first, table=table, path=str(path))
+
+
+def _cells(values: np.ndarray) -> list[str]:
+    return [format_number(v, DEGREE_DECIMALS) for v in values]
+
+
+def poses_csv(joints: np.ndarray, visible: np.ndarray | None = None, source: CandidateFile | None = None,
+              rows: np.ndarray | None = None) -> str:
+    """The text of ``poses.csv`` (see the module docstring) for ``joints (N, n)`` rad in measuring
+    order; ``source`` and ``rows (N,)`` (table rows) when the candidates came from a file."""
+    if source is None:
+        header = [f"q{i + 1}_deg" for i in range(joints.shape[1])]
+        body = [_cells(row) for row in np.rad2deg(joints)]
+    else:
+        t = source.table
+        header = [t.header[c] for c in t.joint_columns] + ["source_row"]
+        body = [[t.cells[r][c] for c in t.joint_columns] + [str(int(t.lines[r]))] for r in rows]
+        for extra in ("plane", "pair"):
+            cells = t.column(extra)
+            if source.data is not None and cells is not None:
+                header.append(extra)
+                for line, r in zip(body, rows, strict=True):
+                    line.append(cells[r])
+    if visible is not None and visible.shape[1] > 1:
+        header += [f"{VISIBLE_PREFIX}{k}" for k in range(visible.shape[1])]
+        for line, seen in zip(body, visible, strict=True):
+            line += ["1" if s else "0" for s in seen]
+    return "\n".join([",".join(header)] + [",".join(line) for line in body]) + "\n"
+
+
+def read_planned(path, robot) -> tuple[np.ndarray, np.ndarray | None]:
+    """Joints ``(N, n)`` rad of a planned ``poses.csv`` (any joints CSV) and, when it has
+    ``visible_smr*`` columns, which SMRs each pose shows ``(N, k)`` bool (else None)."""
+    table = read_joint_table(path)
+    q = robot.check_joints(table.joints)
+    names = sorted((h for h in table.header if h.startswith(VISIBLE_PREFIX)),
+                   key=lambda h: int(h[len(VISIBLE_PREFIX):]) if h[len(VISIBLE_PREFIX):].isdigit() else -1)
+    if not names:
+        return q, None
+    if names != [f"{VISIBLE_PREFIX}{k}" for k in range(len(names))]:
+        raise DataError(f"{path}: visibility columns must be {VISIBLE_PREFIX}0..{VISIBLE_PREFIX}k, "
+                        f"got {names}")
+    cells = np.array([table.column(h) for h in names]).T
+    if not np.isin(cells, ["0", "1"]).all():
+        raise DataError(f"{path}: {VISIBLE_PREFIX}* values must be 0 or 1")
+    return q, cells == "1"
+
+

@@ -1,0 +1,175 @@
+"""What each candidate pose would tell the identification: noise-weighted Jacobian blocks.
+
+The parameters are those ``params='auto'`` identifies on the chosen kind of data: the robot's
+default free set without what the kind can never see, reduced by the identifiability analysis
+(pivoted QR) on the candidates together (at most ``IDENTIFIABILITY_ROWS`` residual rows from
+measurements spread over all of them: what is identifiable is structural). A candidate's block
+holds the identification-Jacobian rows of every measurement it gives (one per SMR the tracker
+sees for points, a 6-DOF pose, a plane contact, a distance), each whitened by its noise model so
+that ``G^T G`` is the information in 1/unit^2:
+
+- isotropic: ``sigma`` (m) on each coordinate;
+- tracker: the virtual tracker's model (:mod:`robocal.data.simulate`): radial
+  ``10 um + 0.5 um/m * r`` and transverse ``2.5 urad * r`` at distance ``r`` from the tracker;
+- pose orientations: ``rotation_sigma`` (rad) per axis; plane contacts and distances: ``sigma``.
+
+The region of interest enters through ``A = mean_region(J_r^T J_r)`` with ``J_r`` the TCP
+position rows (the first SMR) of the identified robot parameters, so ``trace(M^-1 A)`` is the mean
+predicted variance (m^2) of the TCP position over the region after calibration.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robocal.data.measurements import Measurements
+from robocal.data.simulate import TRACKER_ANGULAR_URAD, TRACKER_RADIAL_MM, TRACKER_RADIAL_UM_PER_M
+from robocal.errors import DataError
+from robocal.identify.identifiability import Identifiability, analyze
+from robocal.identify.problem import CalibrationProblem
+from robocal.identify.space import ParameterSpace
+
+NOISE_MODELS = ("isotropic", "tracker")
+GENERATED_KINDS = ("point", "pose")  # kinds whose candidates robocal can generate from joints
+IDENTIFIABILITY_ROWS = 12000         # residual rows (items spread over all candidates) analysed
+
+
+@dataclass(frozen=True)
+class Noise:
+    """The measurement noise: ``sigma_m`` (isotropic, per coordinate; plane and distance data),
+    ``model`` ('isotropic' or 'tracker', which needs ``tracker_position``), and the orientation
+    noise ``rotation_sigma_rad`` of 6-DOF poses."""
+
+    sigma_m: float = 2e-5
+    model: str = "isotropic"
+    tracker_position: np.ndarray | None = None
+    rotation_sigma_rad: float = np.deg2rad(0.001)
+
+    def __post_init__(self) -> None:
+        if self.model not in NOISE_MODELS:
+            raise DataError(f"unknown noise model {self.model!r}: use 'isotropic' or 'tracker'")
+        if self.model == "tracker" and self.tracker_position is None:
+            raise DataError("the tracker noise model needs the tracker's position")
+        if not (self.sigma_m > 0 and self.rotation_sigma_rad > 0):
+            raise DataError("noise levels must be > 0 (a noise-free measurement has no optimal design)")
+
+    def whitener(self, points: np.ndarray) -> np.ndarray:
+        """``(N, 3, 3)`` matrices W with ``W^T W = Sigma^-1`` for points ``(N, 3)`` (m)."""
+        N = len(points)
+        if self.model == "isotropic":
+            return np.broadcast_to(np.eye(3) / self.sigma_m, (N, 3, 3))
+        d = points - self.tracker_position
+        r = np.linalg.norm(d, axis=1)
+        u = d / np.maximum(r, 1e-12)[:, None]
+        radial = TRACKER_RADIAL_MM * 1e-3 + TRACKER_RADIAL_UM_PER_M * 1e-6 * r
+        transverse = np.maximum(TRACKER_ANGULAR_URAD * 1e-6 * r, 1e-12)
+        uu = u[:, :, None] * u[:, None, :]
+        return uu / radial[:, None, None] + (np.eye(3) - uu) / transverse[:, None, None]
+
+
+@dataclass
+class Information:
+    """Candidate blocks ``G (C, r, p)`` (columns scaled by ``scale``) of the identified unknowns
+    ``names`` (``robot_names`` without the nuisance), ``rows (C,)`` the residual rows each
+    candidate gives, the analysis of all candidates ``identifiability``, the candidates'
+    measurement data ``data`` (``labels (C,)`` the pose id, or distance pair index, of each
+    candidate; ``group`` the candidate of each data row, ``row_group`` of each residual row), and
+    the unweighted Jacobian ``J_raw`` of all rows over ``all_names`` (for the identifiability
+    analysis of a chosen set, as ``robocal analyze`` computes it)."""
+
+    G: np.ndarray
+    scale: np.ndarray
+    names: list[str]
+    robot_names: list[str]
+    rows: np.ndarray
+    identifiability: Identifiability
+    data: Measurements
+    labels: np.ndarray
+    group: np.ndarray
+    row_group: np.ndarray
+    J_raw: np.ndarray
+    all_names: list[str]
+
+    def region_matrix(self, robot, q_region: np.ndarray) -> np.ndarray:
+        """``A (p, p)`` in the scaled unknowns: the mean ``J^T J`` of the TCP position over the
+        region joints ``q_region (R, n)``; zero on nuisance unknowns."""
+        J = robot.jacobian(q_region, self.robot_names, kind="point")
+        k = len(self.robot_names)
+        A = np.zeros((len(self.names), len(self.names)))
+        A[:k, :k] = np.einsum("rik,ril->kl", J, J) / len(q_region)
+        return A / np.outer(self.scale, self.scale)
+
+    def analyze_subset(self, candidates: np.ndarray) -> Identifiability:
+        """The identifiability analysis (as ``robocal analyze`` does it) of the chosen candidates."""
+        rows = np.isin(self.row_group, candidates)
+        n_poses = int(np.unique(self.data.pose_id[np.isin(self.group, candidates)]).size)
+        return analyze(self.J_raw[rows], self.all_names, n_poses)
+
+
+def candidate_data(robot, kind: str, q: np.ndarray, visible: np.ndarray) -> Measurements:
+    """Measurements a campaign at joints ``q (C, n)`` would give, with the model's own
+    predictions as the measured values: one row per candidate and SMR it sees (points), one per
+    candidate (poses)."""
+    if kind not in GENERATED_KINDS:
+        raise DataError(f"{kind} candidates come from a file of contacts or pairs (--from): robocal "
+                        "cannot place them without the fixture")
+    cand, smr = np.nonzero(visible) if kind == "point" else (np.arange(len(q)), np.zeros(len(q), int))
+    T = robot.fk(q[cand], smr=smr)
+    extra = {"rotations": T[:, :3, :3]} if kind == "pose" else {}
+    return Measurements.from_arrays(kind, q[cand], points=T[:, :3, 3], smr=smr, pose_id=cand, **extra)
+
+
+def _whitened_jacobian(robot, problem: CalibrationProblem, space: ParameterSpace, noise: Noise) -> np.ndarray:
+    """Rows ``(M, k + m)`` of the observation Jacobian divided by their noise (whitened)."""
+    obs = problem.observation
+    state = problem.start(robot)
+    J = problem.jacobian(state, space)  # the data carry no sigma: unit weights
+    r = obs.rows_per_item
+    if obs.kind in ("plane", "distance"):
+        return J / noise.sigma_m
+    blocks = J.reshape(obs.n_items, r, -1)
+    W = noise.whitener(obs.modelled_points(robot, state.nuisance))
+    out = np.empty_like(blocks)
+    out[:, :3] = np.einsum("nij,njk->nik", W, blocks[:, :3])
+    if r == 6:
+        out[:, 3:] = blocks[:, 3:] / (noise.rotation_sigma_rad * obs.scale[3])
+    return out.reshape(J.shape)
+
+
+def information(robot, data: Measurements, noise: Noise, params="auto") -> Information:
+    """The candidate blocks of ``data`` (rows grouped into candidates by ``pose_id``; distances by
+    pair) for the unknowns ``params`` identifies (see the module docstring)."""
+    problem = CalibrationProblem(robot, data)
+    obs = problem.observation
+    space = problem.space(robot, params)
+    robot_names, all_names = list(space.robot), space.names
+    Jw = _whitened_jacobian(robot, problem, space, noise)
+    J_raw = problem.jacobian(problem.start(robot), space)
+    r = obs.rows_per_item
+    # which parameters are identifiable is structural: items spread over all candidates suffice
+    count = min(obs.n_items, IDENTIFIABILITY_ROWS // r)
+    sample = np.unique(np.linspace(0, obs.n_items - 1, count).astype(int))
+    rows = (sample[:, None] * r + np.arange(r)).reshape(-1)
+    ident = analyze(Jw[rows], all_names, data.n_poses)
+    keep = [all_names.index(nm) for nm in ident.kept]
+    item_of_rows = obs.item_of_rows()
+    # a candidate is a pose (all its SMRs' rows), or one pair of a distance measurement
+    item_group = np.arange(obs.n_items) if obs.kind == "distance" else data.pose_id
+    labels, cand_of_item = np.unique(item_group, return_inverse=True)
+    per = np.bincount(cand_of_item, minlength=labels.size)
+    order = np.argsort(cand_of_item, kind="stable")
+    slot = np.empty(obs.n_items, int)
+    slot[order] = np.arange(obs.n_items) - np.repeat(np.cumsum(per) - per, per)
+    G = np.zeros((labels.size, per.max() * r, len(keep)))
+    items = Jw.reshape(obs.n_items, r, -1)[:, :, keep]
+    for k in range(r):  # a loop over the rows of one item only
+        G[cand_of_item, slot * r + k] = items[:, k]
+    scale = np.sqrt(np.sum(G**2, axis=(0, 1)) / labels.size)
+    scale = np.where(scale > 0, scale, 1.0)
+    kept_robot = [nm for nm in ident.kept if nm in robot_names]
+    return Information(G=G / scale, scale=scale, names=list(ident.kept), robot_names=kept_robot,
+                       rows=per * r, identifiability=ident, data=data, labels=labels,
+                       group=cand_of_item[item_of_rows], row_group=np.repeat(cand_of_item, r),
+                       J_raw=J_raw, all_names=all_names)

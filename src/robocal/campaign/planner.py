@@ -1,0 +1,394 @@
+"""``rc.plan_poses``: choose the poses of a calibration campaign before anything is measured.
+
+From the nominal model alone: candidate poses (generated inside the joint limits, or read from a
+file) are filtered by the constraints (:mod:`robocal.campaign.constraints`), each candidate's
+information about the identifiable parameters is computed (:mod:`robocal.campaign.information`),
+an exchange search picks the best ``n`` (:mod:`robocal.campaign.exchange`), and the chosen poses
+are put in a short measuring order (:mod:`robocal.campaign.order`). The predicted accuracy is
+``sqrt(trace(M^-1 A))``: the expected RMS of the calibrated model's TCP position error over the
+region of interest due to the measurement noise (m; reported in mm). Parameters that stay
+unidentifiable are held at their values and their own errors are not part of that figure.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from robocal.campaign import constraints as cons
+from robocal.campaign.exchange import CRITERIA, criterion_value, exchange
+from robocal.campaign.files import CandidateFile, poses_csv
+from robocal.campaign.information import GENERATED_KINDS, Information, Noise, candidate_data, information
+from robocal.campaign.order import measuring_order
+from robocal.campaign.programs import DEGREE_DECIMALS, format_number
+from robocal.data.measurements import KINDS, Measurements
+from robocal.errors import DataError
+from robocal.identify.identifiability import Identifiability
+from robocal.ik.path import default_weights, travel
+from robocal.kinematics.transforms import make_transform
+from robocal.progress import Progress
+
+DEFAULT_CANDIDATES = 5000
+DEFAULT_REGION_SIZE = 2000
+DEFAULT_STARTS = 4
+MAX_DRAWS = 50              # candidate batches drawn before constraints are declared too tight
+ROUND_DECIMALS_DEG = 4      # generated joints are rounded to 1e-4 deg (what the programs say)
+CURVE_POINTS = 12           # N values of an accuracy curve given as start:stop
+CURVE_RANDOM_DESIGNS = 9    # random designs per N for the curve's random baseline
+FORMAT = "robocal-campaign/1"
+
+
+@dataclass(frozen=True)
+class CurvePoint:
+    """Predicted accuracy (mm) with ``n`` planned poses and the median of random designs."""
+
+    n: int
+    predicted_rms_mm: float
+    random_median_mm: float
+
+
+@dataclass
+class CampaignResult:
+    """A planned campaign: ``joints (N, n)`` rad in measuring order (one row per pose; per contact
+    or distance end for plane and distance data), ``candidate_index (N,)`` the row of each in the
+    given candidates (joints array rows, the file's distinct poses, or the contact / distance rows
+    of Measurements; for generated candidates, the row among those that met the constraints),
+    which SMRs the tracker sees ``visible (N, k)``, the predicted
+    accuracy ``predicted_rms_mm``, the identifiability of the chosen set, the measuring route's
+    weighted travel (and the travel in the order the search found them), the accuracy curve,
+    the candidate funnel, and the settings."""
+
+    robot: object
+    kind: str
+    joints: np.ndarray
+    candidate_index: np.ndarray
+    visible: np.ndarray
+    predicted_rms_mm: float
+    criterion: str
+    criterion_value: float
+    identifiability: Identifiability
+    parameters: list[str]
+    travel: float
+    travel_unordered: float
+    weights: np.ndarray
+    curve: list[CurvePoint]
+    funnel: cons.Funnel
+    noise: Noise
+    settings: dict
+    n_candidates: int
+    source: CandidateFile | None = None
+    source_rows: np.ndarray | None = None
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def n(self) -> int:
+        return len(self.joints)
+
+    def poses_csv(self) -> str:
+        """The text of ``poses.csv`` (see :mod:`robocal.campaign.files`)."""
+        return poses_csv(self.joints, self.visible, self.source, self.source_rows)
+
+    def summary(self) -> str:
+        ident = self.identifiability
+        o = ident.observability
+        noise = (f"isotropic {self.noise.sigma_m * 1e3:g} mm" if self.noise.model == "isotropic"
+                 else "the tracker's anisotropic model")
+        lines = [f"{self.n} poses of {self.robot.name} ({self.kind} measurements) chosen from "
+                 f"{self.n_candidates} candidates ({self.criterion}-optimal)",
+                 f"predicted accuracy: {self.predicted_rms_mm:.4f} mm RMS of the TCP position over the "
+                 f"region (noise {noise})",
+                 f"identifiable: {ident.rank} parameters; condition number {ident.condition_number:.3g} "
+                 f"({ident.condition_class}); " + " ".join(f"{k} {v:.3g}" for k, v in o.items()),
+                 f"measuring order: weighted travel {self.travel:.4g} (in the search's order "
+                 f"{self.travel_unordered:.4g})",
+                 f"candidates: {self.funnel.text()}"]
+        for name in ident.dropped:
+            conf = "/".join(ident.confounded_with[name]) or "no effect"
+            lines.append(f"  not identifiable from these poses: {name} (~{conf})")
+        if self.curve:
+            lines.append("poses  predicted RMS (mm)  random poses, median (mm)")
+            lines += [f"{p.n:5d}  {p.predicted_rms_mm:18.4f}  {p.random_median_mm:25.4f}" for p in self.curve]
+        lines += [f"WARNING: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """Plain data (mm, deg) for JSON and the HTML page."""
+        from robocal import __version__
+
+        ident = self.identifiability
+        return {
+            "format": FORMAT, "robocal_version": __version__,
+            "robot": {"name": self.robot.name, "description": self.robot.description,
+                      "n_joints": self.robot.n_joints},
+            "kind": self.kind, "criterion": self.criterion, "n_poses": self.n,
+            "predicted_rms_mm": self.predicted_rms_mm,
+            "noise": {"model": self.noise.model, "sigma_mm": self.noise.sigma_m * 1e3},
+            "joints_deg": [[float(format_number(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv
+                           for row in np.rad2deg(self.joints)],
+            "candidate_index": self.candidate_index.tolist(),
+            "visible": self.visible.astype(int).tolist(),
+            "tcp_mm": (self.robot.fk(self.joints)[:, :3, 3] * 1e3).tolist(),
+            "travel": self.travel, "travel_unordered": self.travel_unordered,
+            "travel_weights": self.weights.tolist(),
+            "identifiability": {key: v for key, v in ident.to_dict().items()
+                                if key not in ("kept", "dropped", "confounded_with")},
+            "parameters": self.parameters,
+            "dropped": [{"name": nm, "reason": "not identifiable from these poses",
+                         "confounded_with": ident.confounded_with[nm]} for nm in ident.dropped],
+            "curve": [{"n": p.n, "predicted_rms_mm": p.predicted_rms_mm,
+                       "random_median_mm": p.random_median_mm} for p in self.curve],
+            "candidates": self.funnel.to_dict(),
+            "settings": self.settings,
+            "warnings": self.warnings,
+        }
+
+
+def _planning_robot(robot, smr, normals):
+    """The robot with its TCP on the first SMR and the others as extra SMRs; SMR positions and
+    facing directions ``(k, 3)`` in the flange (tool) frame."""
+    R, t = robot.tool[:3, :3], robot.tool[:3, 3]
+    if smr is None:
+        smr = np.vstack([np.zeros(3), (robot.smr - t) @ R])
+    smr = np.asarray(smr, dtype=float).reshape(-1, 3)
+    if not len(smr) or not np.isfinite(smr).all():
+        raise DataError("SMR positions must be finite (k, 3) coordinates in m (flange frame)")
+    normals = np.tile([0.0, 0.0, 1.0], (len(smr), 1)) if normals is None else \
+        np.asarray(normals, dtype=float).reshape(-1, 3)
+    if normals.shape != smr.shape or not np.isfinite(normals).all() or \
+            (np.linalg.norm(normals, axis=1) < 1e-9).any():
+        raise DataError(f"give one non-zero facing direction per SMR ({len(smr)} SMRs)")
+    normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    placed = smr @ R.T + t  # SMR positions in the last link frame
+    plan = replace(robot, tool=make_transform(R, placed[0]), smr=placed[1:], nominal=None, joint_errors=None)
+    return plan, smr, normals
+
+
+def _curve_values(curve, n: int, n_min: int, n_max: int) -> list[int]:
+    """Pose counts of the accuracy curve: a tuple ``(start, stop[, step])`` (default step: about
+    ``CURVE_POINTS`` values; the start is raised to the fewest poses that identify the parameters,
+    and the planned ``n`` is added), or a list of counts."""
+    if curve is None:
+        return []
+    values = [int(v) for v in curve]
+    if isinstance(curve, tuple):
+        if len(values) not in (2, 3) or values[0] >= values[1] or (len(values) == 3 and values[2] < 1):
+            raise DataError(f"a curve range is (start, stop[, step]) with start < stop, got {curve}")
+        start, stop = values[:2]
+        step = values[2] if len(values) == 3 else max(1, int(np.ceil((stop - start) / (CURVE_POINTS - 1))))
+        values = list(range(max(start, n_min), stop + 1, step)) + [stop] + ([n] if start <= n <= stop else [])
+    out = sorted({v for v in values if n_min <= v <= n_max})
+    if not out:
+        raise DataError(f"no curve point between {n_min} (the fewest poses that can identify the parameters) "
+                        f"and {n_max} (the candidates available)")
+    return out
+
+
+def _draw(robot, count: int, limits: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    q = rng.uniform(limits[:, 0], limits[:, 1], (count, robot.n_joints))
+    return np.deg2rad(np.round(np.rad2deg(q), ROUND_DECIMALS_DEG))
+
+
+def _generate(robot, count, constraints, smr, normals, limits, rng, funnel):
+    """Candidates drawn uniformly in the limits until ``count`` pass the constraints."""
+    kept_q, kept_v = [], []
+    total = 0
+    for _ in range(MAX_DRAWS):
+        q = _draw(robot, count, limits, rng)
+        funnel.start += len(q)
+        keep, visible = cons.apply(robot, q, constraints, smr, normals, funnel, limits)
+        kept_q.append(q[keep])
+        kept_v.append(visible[keep])
+        total += int(keep.sum())
+        if total >= count:
+            break
+    return np.concatenate(kept_q)[:count], np.concatenate(kept_v)[:count]
+
+
+def _region(robot, region, size, constraints, limits, rng, smr, normals):
+    """Joints ``(R, n)`` of the region of interest: given joints, or random poses in the limits
+    (inside the TCP boxes; inside ``region`` when it is a box)."""
+    if region is not None:
+        arr = np.asarray(region, dtype=float)
+        if arr.shape == (2, 3):
+            constraints = cons.Constraints(margin_deg=constraints.margin_deg, boxes=(arr,))
+        else:
+            return robot.check_joints(arr)
+    else:
+        constraints = cons.Constraints(margin_deg=constraints.margin_deg, boxes=constraints.boxes)
+    funnel = cons.Funnel()
+    q, _ = _generate(robot, size, constraints, smr[:1], normals[:1], limits, rng, funnel)
+    if len(q) < min(size, 100):
+        raise DataError(f"only {len(q)} random poses fall inside the region box: check the box (m, robot "
+                        "base frame) or give the region as joints")
+    return q
+
+
+def _fail_empty(funnel: cons.Funnel, what: str) -> None:
+    last = next((name for name, count in reversed(funnel.steps) if count), "the joint limits")
+    raise DataError(f"{what}: {funnel.text()}. The last candidates were removed by {last}: relax it "
+                    "(or, for the tracker, move it or the SMRs)")
+
+
+def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candidates: int = DEFAULT_CANDIDATES,
+               constraints: cons.Constraints | None = None, smr=None, smr_normals=None,
+               noise_mm: float = 0.02, noise_model: str = "isotropic", rotation_noise_deg: float = 0.001,
+               criterion: str = "I", region=None, region_size: int = DEFAULT_REGION_SIZE,
+               starts: int = DEFAULT_STARTS, curve=None, seed: int = 0, progress=None) -> CampaignResult:
+    """Choose ``n`` calibration poses for ``robot`` (the nominal model).
+
+    kind: what is measured ('point', 'pose'; 'plane' and 'distance' from ``candidates``).
+    candidates: None (generate ``n_candidates`` inside the limits), joints ``(C, n)`` rad, a
+    :class:`CandidateFile` or Measurements (contacts / distances). constraints:
+    :class:`~robocal.campaign.constraints.Constraints` (limits margin, TCP boxes, joint distance,
+    singularity distances, :class:`~robocal.campaign.constraints.Tracker`). smr, smr_normals:
+    SMR positions (m) and facing directions ``(k, 3)`` in the flange frame (default: one SMR at
+    the model's TCP facing along the flange z axis). noise_mm / noise_model ('isotropic' or
+    'tracker', which needs the tracker) / rotation_noise_deg: the measurement noise. criterion:
+    'I' (default), 'D' or 'O4'. region: joints ``(R, n)`` rad or a box ``((3,), (3,))`` m (default
+    ``region_size`` random poses in the limits and TCP boxes). curve: a tuple ``(start, stop[,
+    step])`` or a list of pose counts for the accuracy curve. ``progress``: True shows a bar on a terminal.
+    """
+    if not isinstance(n, int | np.integer) or n < 1:
+        raise DataError(f"the number of poses must be a positive integer, got {n!r}")
+    if kind not in KINDS:
+        raise DataError(f"unknown measurement kind {kind!r}: use one of {', '.join(KINDS)}")
+    if criterion not in CRITERIA:
+        raise DataError(f"unknown criterion {criterion!r}: use one of {', '.join(CRITERIA)}")
+    if int(starts) < 1 or int(n_candidates) < 1 or int(region_size) < 1:
+        raise DataError("starts, n_candidates and region_size must be >= 1")
+    constraints = cons.Constraints() if constraints is None else constraints
+    if constraints.margin_deg is None:
+        margin = cons.DEFAULT_MARGIN_DEG if candidates is None else 0.0
+        constraints = replace(constraints, margin_deg=margin)
+    tracker = constraints.tracker
+    noise = Noise(sigma_m=float(noise_mm) * 1e-3, model=noise_model,
+                  tracker_position=None if tracker is None else tracker.position,
+                  rotation_sigma_rad=np.deg2rad(float(rotation_noise_deg)))
+    plan_robot, smr, normals = _planning_robot(robot, smr, smr_normals)
+    geometry = replace(robot, smr=np.zeros((0, 3)), nominal=None, joint_errors=None)  # flange = tool
+    rng = np.random.default_rng(seed)
+    limits = cons.limits_with_margin(robot, constraints.margin_deg)
+    if tracker is not None:
+        from robocal.data.measurements import robot_reach
+
+        cons.check_tracker_placement(robot, tracker, robot_reach(plan_robot))
+    funnel = cons.Funnel()
+    source = candidates if isinstance(candidates, CandidateFile) else None
+    file_data = source.data if source is not None else \
+        candidates if isinstance(candidates, Measurements) else None
+    if kind in GENERATED_KINDS:
+        file_data = None
+    elif file_data is None or file_data.kind != kind:
+        raise DataError(f"{kind} candidates come from a measurement file of {kind} data (contacts or pairs): "
+                        "give them as candidates (robocal poses --from FILE)")
+    if candidates is None:
+        q, visible = _generate(geometry, int(n_candidates), constraints, smr, normals, limits, rng, funnel)
+        given = np.arange(len(q))
+    else:
+        q_all = robot.check_joints(_given_joints(candidates, file_data))
+        funnel.start = len(q_all)
+        keep, visible = cons.apply(geometry, q_all, constraints, smr, normals, funnel, limits)
+        given = np.flatnonzero(keep)
+        q, visible = q_all[given], visible[given]
+    if not len(q):
+        _fail_empty(funnel, "no candidate pose is left")
+    if file_data is None:
+        data = candidate_data(plan_robot, kind, q, visible)   # pose_id = row of q
+    else:
+        data = file_data.subset(given)
+        if kind == "distance":  # a pair needs both ends
+            pair_of = np.unique(data.pair, return_inverse=True)[1]
+            whole = np.flatnonzero(np.bincount(pair_of)[pair_of] == 2)
+            data, given = data.subset(whole), given[whole]
+    info = information(plan_robot, data, noise)
+    C, _, p = info.G.shape
+    rows_min = int(info.rows.min())
+    n_min = p // rows_min + 1
+    if n < n_min:
+        raise DataError(f"{n} poses cannot identify the {p} parameters that {kind} data determine here "
+                        f"({rows_min} residual(s) per pose; more residuals than unknowns are needed): "
+                        f"plan at least {n_min} poses")
+    if n > C:
+        _fail_empty(funnel, f"only {C} candidates meet the constraints, fewer than the {n} poses asked for")
+    q_region = _region(geometry, region, int(region_size), constraints, limits, rng, smr, normals)
+    A = info.region_matrix(plan_robot, q_region)
+    first_row = np.unique(info.group, return_index=True)[1]
+    cand_q = data.joints[first_row]                           # one joint vector per candidate
+    conflicts = (cons.conflict_rows(cand_q, constraints.min_joint_distance_deg)
+                 if constraints.min_joint_distance_deg > 0 else None)
+    values = _curve_values(curve, n, n_min, C)
+    with Progress(int(starts) + len(values), "poses", quiet=progress is not True) as bar:
+        found = exchange(info.G, A, n, criterion=criterion, starts=int(starts), seed=seed,
+                         conflicts=conflicts, progress=bar)
+        points = _curve(info, A, values, criterion, seed, conflicts, bar, (n, found.indices))
+    weights = default_weights(robot)
+    chosen = found.indices[measuring_order(robot, cand_q[found.indices], weights)]
+    if file_data is None:  # one output row per pose, with the SMRs it shows
+        rows = first_row[chosen]
+        visible_out = np.zeros((n, len(smr)), bool)
+        sel = np.isin(info.group, chosen)
+        visible_out[_positions(chosen, info.group[sel]), data.smr[sel]] = True
+    else:  # every contact / distance end of the chosen candidates (a loop over the N chosen only)
+        rows = np.concatenate([np.flatnonzero(info.group == c) for c in chosen])
+        visible_out = np.ones((len(rows), 1), bool)
+    index = given[data.pose_id[rows]] if file_data is None else given[rows]
+    joints = data.joints[rows]
+    warnings = []
+    if candidates is None and int(n_candidates) > C:
+        warnings.append(f"only {C} of the {int(n_candidates)} candidates asked for met the constraints in "
+                        f"{funnel.start} random poses: the constraints leave a small part of the workspace")
+    if len(smr) == 1 and np.linalg.norm(smr[0, :2]) < 1e-6 and kind == "point":
+        warnings.append("the SMR is on the flange axis: the last joint's zero offset cannot be identified; "
+                        "give the SMR's position on the flange (smr / --smr-mm) if it is off the axis")
+    return CampaignResult(
+        robot=plan_robot, kind=kind, joints=joints, candidate_index=index, visible=visible_out,
+        predicted_rms_mm=float(np.sqrt(criterion_value(info.G, A, chosen, "I")) * 1e3),
+        criterion=criterion, criterion_value=found.value, identifiability=info.analyze_subset(chosen),
+        parameters=list(info.names),
+        travel=travel(joints, weights), travel_unordered=travel(cand_q[found.indices], weights),
+        weights=weights, curve=points, funnel=funnel, noise=noise, n_candidates=C,
+        settings={"seed": int(seed), "starts": int(starts), "criterion": criterion,
+                  "region_size": len(q_region), "margin_deg": constraints.margin_deg,
+                  "min_joint_distance_deg": constraints.min_joint_distance_deg,
+                  "smr_mm": (smr * 1e3).tolist(), "smr_normals": normals.tolist(),
+                  "tracker_mm": None if tracker is None else (tracker.position * 1e3).tolist()},
+        source=source, source_rows=None if source is None else source.rows[index], warnings=warnings)
+
+
+def _given_joints(candidates, file_data) -> np.ndarray:
+    """Candidate joints: every row of contact / distance data, else one row per distinct pose."""
+    if isinstance(candidates, CandidateFile):
+        return candidates.joints
+    if isinstance(candidates, Measurements):
+        if file_data is not None:
+            return candidates.joints
+        return candidates.joints[np.unique(candidates.pose_id, return_index=True)[1]]
+    return candidates
+
+
+def _positions(chosen: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Position in ``chosen`` of each of ``values`` (all present in ``chosen``)."""
+    order = np.argsort(chosen)
+    return order[np.searchsorted(chosen, values, sorter=order)]
+
+
+def _curve(info: Information, A, values, criterion, seed, conflicts, bar, main) -> list[CurvePoint]:
+    """Predicted accuracy against the number of poses: each N warm-started from the previous."""
+    points = []
+    rng = np.random.default_rng([seed, 1])
+    previous = None
+    for n in values:
+        if n == main[0]:
+            idx = main[1]
+        else:
+            init = previous if previous is not None and len(previous) <= n else None
+            idx = exchange(info.G, A, n, criterion=criterion, starts=DEFAULT_STARTS, seed=seed,
+                           conflicts=conflicts, init=init).indices
+        random = [criterion_value(info.G, A, rng.choice(len(info.G), n, replace=False), "I")
+                  for _ in range(CURVE_RANDOM_DESIGNS)]
+        points.append(CurvePoint(n, float(np.sqrt(criterion_value(info.G, A, idx, "I")) * 1e3),
+                                 float(np.sqrt(np.median(random)) * 1e3)))
+        previous = idx
+        bar.update(info=f"curve {n} poses")
+    return points

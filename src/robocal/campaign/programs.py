@@ -1,0 +1,139 @@
+"""Robot programs that drive a measurement campaign: ABB RAPID, KUKA KRL, Universal Robots URScript.
+
+Each program moves to the planned joint positions in the measuring order, waits ``settle_s``
+seconds for the robot to come to rest, and calls a named procedure at each pose where the user
+triggers the tracker (the generated procedure only shows a message: replace its body with the
+cell's trigger, a digital output or a socket message). Joint values are written in the robot's
+own joint convention: the catalog's joint zeros and signs are the controller's, so the planned
+values go out unchanged (degrees for RAPID and KRL, radians for URScript).
+
+- RAPID: one module with ``CONST jointtarget`` data, ``PROC main()`` (``VelSet`` to the speed
+  percentage, then ``MoveAbsJ ... fine, tool0``, ``WaitTime``, the procedure call per pose) and the
+  procedure ``PROC name(num pose)``; external axes are 9E9 (none).
+- KRL: a ``.src`` (``BAS(#INITMOV,0)``, ``BAS(#VEL_PTP, speed)``, then per pose ``PTP XPk``,
+  ``WAIT SEC``, the procedure call) and its ``.dat`` declaring ``DECL AXIS XPk={A1 ..,A6 ..}``
+  (AXIS, not E6AXIS, so that no external axis moves).
+- URScript: a program ``def name(): ... end`` with ``movej([q1, .., q6], a=.., v=..)``, where
+  ``v`` is the speed percentage of pi rad/s (Universal Robots' joint speed limit) and ``a`` 1.4
+  rad/s^2, ``sleep`` and the procedure, defined inside the program.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from robocal.errors import DataError
+
+PROGRAM_JOINTS = 6                 # every language here drives a six-axis arm (A1..A6, robax_a..f)
+UR_MAX_JOINT_SPEED = np.pi         # rad/s, Universal Robots' joint speed limit
+UR_ACCELERATION = 1.4              # rad/s^2, Polyscope's default joint acceleration
+RAPID_NAME_MAX = 32
+KRL_NAME_MAX = 24
+DEGREE_DECIMALS = 10               # written precision of joint values in degrees
+RADIAN_DECIMALS = 12               # ... in radians
+DEFAULT_SPEED_PERCENT = 20.0
+DEFAULT_SETTLE_S = 1.0
+DEFAULT_PROCEDURE = "MeasurePose"
+
+
+def format_number(value: float, decimals: int) -> str:
+    """Fixed-point text without exponent or trailing zeros (every controller parses it)."""
+    text = f"{value:.{decimals}f}".rstrip("0").rstrip(".")
+    return "0" if text in ("-0", "") else text
+
+
+def _identifier(name: str, what: str, limit: int) -> str:
+    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", name or "") or len(name) > limit:
+        raise DataError(f"{what} {name!r} is not a valid identifier: a letter, then letters, digits or "
+                        f"underscores, at most {limit} characters")
+    return name
+
+
+def _check(joints_deg: np.ndarray, speed_percent: float, settle_s: float, language: str) -> np.ndarray:
+    q = np.asarray(joints_deg, dtype=float)
+    if q.ndim != 2 or q.shape[1] != PROGRAM_JOINTS:
+        raise DataError(f"a {language} campaign program drives a {PROGRAM_JOINTS}-axis robot; this robot has "
+                        f"{q.shape[-1]} joints")
+    if not np.isfinite(q).all():
+        raise DataError("joint values must be finite")
+    if not 0 < speed_percent <= 100:
+        raise DataError(f"the speed must be a percentage in (0, 100], got {speed_percent}")
+    if not 0 <= settle_s < 3600:
+        raise DataError(f"the settle time must be in [0, 3600) s, got {settle_s}")
+    return q
+
+
+def rapid_module(joints_deg, name: str = "RobocalCampaign", *, speed_percent: float = DEFAULT_SPEED_PERCENT,
+                 settle_s: float = DEFAULT_SETTLE_S, procedure: str = DEFAULT_PROCEDURE,
+                 comment: str = "") -> str:
+    """ABB RAPID program module visiting ``joints_deg (N, 6)`` in order (see module docstring)."""
+    q = _check(joints_deg, speed_percent, settle_s, "RAPID")
+    name = _identifier(name, "the RAPID module name", RAPID_NAME_MAX)
+    procedure = _identifier(procedure, "the procedure name", RAPID_NAME_MAX)
+    lines = [f"MODULE {name}"]
+    lines += [f"    ! {line}" for line in _comment_lines(comment, len(q))]
+    for k, row in enumerate(q, start=1):
+        values = ",".join(format_number(v, DEGREE_DECIMALS) for v in row)
+        lines.append(f"    CONST jointtarget jt{k} := [[{values}],[9E9,9E9,9E9,9E9,9E9,9E9]];")
+    lines += ["", "    PROC main()", f"        VelSet {format_number(speed_percent, 3)}, 5000;"]
+    for k in range(1, len(q) + 1):
+        lines += [f"        MoveAbsJ jt{k}\\NoEOffs, v1000, fine, tool0;",
+                  f"        WaitTime {format_number(settle_s, 3)};", f"        {procedure} {k};"]
+    lines += ["    ENDPROC", "", f"    PROC {procedure}(num pose)",
+              "        ! trigger the tracker measurement here (e.g. SetDO, a socket message)",
+              '        TPWrite "robocal: measure pose "\\Num:=pose;', "    ENDPROC", "ENDMODULE", ""]
+    return "\n".join(lines)
+
+
+def krl_program(joints_deg, name: str = "robocal_campaign", *, speed_percent: float = DEFAULT_SPEED_PERCENT,
+                settle_s: float = DEFAULT_SETTLE_S, procedure: str = DEFAULT_PROCEDURE,
+                comment: str = "") -> tuple[str, str]:
+    """KUKA KRL ``(.src text, .dat text)`` visiting ``joints_deg (N, 6)`` in order."""
+    q = _check(joints_deg, speed_percent, settle_s, "KRL")
+    name = _identifier(name, "the KRL program name (the file name)", KRL_NAME_MAX)
+    procedure = _identifier(procedure, "the procedure name", KRL_NAME_MAX)
+    head = ["&ACCESS RVP", "&REL 1"]
+    src = head + [f"DEF {name}( )"] + [f"  ; {line}" for line in _comment_lines(comment, len(q))]
+    src += [";FOLD INI", "  BAS (#INITMOV,0 )", ";ENDFOLD",
+            f"  BAS (#VEL_PTP,{format_number(speed_percent, 3)} )"]
+    for k in range(1, len(q) + 1):
+        src += [f"  PTP XP{k}", f"  WAIT SEC {format_number(settle_s, 3)}", f"  {procedure}({k})"]
+    src += ["END", "", f"DEF {procedure}(POSE:IN )", "  INT POSE",
+            "  ; trigger the tracker measurement of pose POSE here (e.g. $OUT[...] = TRUE)", "END", ""]
+    dat = head + [f"DEFDAT {name}"]
+    for k, row in enumerate(q, start=1):
+        axes = ",".join(f"A{i + 1} {format_number(v, DEGREE_DECIMALS)}" for i, v in enumerate(row))
+        dat.append(f"  DECL AXIS XP{k}={{{axes}}}")
+    dat += ["ENDDAT", ""]
+    return "\n".join(src), "\n".join(dat)
+
+
+def urscript_program(joints_rad, name: str = "robocal_campaign", *,
+                     speed_percent: float = DEFAULT_SPEED_PERCENT, settle_s: float = DEFAULT_SETTLE_S,
+                     procedure: str = DEFAULT_PROCEDURE, comment: str = "") -> str:
+    """URScript program visiting ``joints_rad (N, 6)`` (radians) in order."""
+    q = _check(joints_rad, speed_percent, settle_s, "URScript")
+    name = _identifier(name, "the URScript program name", RAPID_NAME_MAX)
+    procedure = _identifier(procedure, "the procedure name", RAPID_NAME_MAX)
+    v = UR_MAX_JOINT_SPEED * speed_percent / 100.0
+    lines = [f"def {name}():"] + [f"  # {line}" for line in _comment_lines(comment, len(q))]
+    lines += [f"  def {procedure}(pose):",
+              "    # trigger the tracker measurement here (e.g. set_digital_out)",
+              '    textmsg("robocal: measure pose ", pose)', "  end"]
+    for k, row in enumerate(q, start=1):
+        values = ", ".join(format_number(x, RADIAN_DECIMALS) for x in row)
+        lines += [f"  movej([{values}], a={format_number(UR_ACCELERATION, 3)}, v={format_number(v, 4)})",
+                  f"  sleep({format_number(settle_s, 3)})", f"  {procedure}({k})"]
+    lines += ["end", ""]
+    return "\n".join(lines)
+
+
+def _comment_lines(comment: str, n: int) -> list[str]:
+    """Comment text for a program header: printable ASCII only (controllers' comment charset)."""
+    text = comment or f"robocal measurement campaign: {n} poses"
+    clean = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in text)
+    return [clean[i : i + 100] for i in range(0, len(clean), 100)] + [
+        "joint values in the controller's joint convention; replace the measure procedure's body "
+        "with your tracker trigger"]
