@@ -103,10 +103,10 @@ class CalibrationResult:
         blocks = self.problem.item_blocks()
         before, after = (self.problem.position_errors(s) for s in (self.initial, self.state))
         for data, items in zip(self.problem.datasets, blocks, strict=True):
-            rows.append({"role": "calibration", "file": data.source, "kind": data.kind,
+            rows.append({"role": "calibration", "file": data.label, "kind": data.kind,
                          "before": position_stats(before[items]), "after": position_stats(after[items])})
         for j in self.judged:
-            rows.append({"role": "validation", "file": j.data.source, "kind": j.data.kind,
+            rows.append({"role": "validation", "file": j.data.label, "kind": j.data.kind,
                          "before": j.before, "after": j.after})
         return rows
 
@@ -210,7 +210,7 @@ class CalibrationResult:
                       "n_joints": self.robot.n_joints},
             "data": {"file": data.source, "kind": problem.kind, "n_poses": int(problem.n_poses),
                      "n_observations": int(sum(len(d) for d in problem.datasets)),
-                     "files": [{"file": d.source, "kind": d.kind, "n_poses": int(d.n_poses),
+                     "files": [{"file": d.label, "kind": d.kind, "n_poses": int(d.n_poses),
                                 "n_observations": len(d),
                                 "sigma_mm": None if d.sigma is not None or not problem.weighted else s * 1e3}
                                for d, s in zip(problem.datasets, problem.set_sigma, strict=True)]},
@@ -261,7 +261,7 @@ class CalibrationResult:
                 if item not in self.rejected:
                     continue
                 for row in np.flatnonzero(obs.item_of_rows() == k):
-                    out.append({"file": obs.data.source, "source_row": int(obs.data.source_row[row]),
+                    out.append({"file": obs.data.label, "source_row": int(obs.data.source_row[row]),
                                 "pose_id": int(obs.data.pose_id[row]), "residual": float(errors[item] * 1e3),
                                 "weight": 0.0})
         return out
@@ -286,7 +286,7 @@ class CalibrationResult:
         if len(self.problem.datasets) + len(self.judged) > 1:
             for row in self.per_file():
                 b, a = row["before"], row["after"]
-                lines.append(f"  {row['role']} {row['kind']} {row['file'][:50]!r} ({a['n']} obs): RMS "
+                lines.append(f"  {row['role']} {row['kind']} {row['file'][-50:]!r} ({a['n']} obs): RMS "
                              f"{b['rms']:.4f} -> {a['rms']:.4f} mm")
         links = [r for r in self.parameter_table()
                  if r["status"] == "estimated" and block_of(r["name"]) == "links"]

@@ -97,6 +97,12 @@ class Measurements:
     distance: np.ndarray | None = None
     source: str = ""
     approach: np.ndarray | None = None
+    file: str = ""  # the file it was read from (set by :meth:`load`)
+
+    @property
+    def label(self) -> str:
+        """How messages and reports name the set: its file, else its provenance text."""
+        return self.file or self.source
 
     def __post_init__(self) -> None:
         for f in _ARRAY_FIELDS:  # frozen all the way down: the validated arrays cannot change
@@ -256,7 +262,7 @@ class Measurements:
         """Read a canonical measurement CSV. ``robot`` (or ``reach`` in m) enables the joint count and
         length plausibility checks; every problem is a DataError/UnitError naming file and row."""
         path = Path(path)
-        data = parse_csv(read_text(path, "measurement file"), str(path))
+        data = replace(parse_csv(read_text(path, "measurement file"), str(path)), file=str(path))
         if robot is not None:
             data.check_against(robot, reach, str(path))
         elif reach is not None:

@@ -66,9 +66,9 @@ class CalibrationProblem:
                 if name in seen:
                     raise IdentificationError(
                         f"{name.split('.')[0]} is in two measurement sets ({seen[name]!r} and "
-                        f"{obs.data.source!r}): number the plates uniquely across the files of one "
+                        f"{obs.data.label!r}): number the plates uniquely across the files of one "
                         "calibration")
-                seen[name] = obs.data.source
+                seen[name] = obs.data.label
 
     def item_blocks(self) -> list[np.ndarray]:
         """Per measurement set: the indices of its items in :meth:`position_errors`."""
