@@ -24,6 +24,7 @@ POS_TOL = 1e-10  # m
 ROT_TOL = 1e-9  # rad
 _DIAG_FLOOR = 1e-12  # added to J^T J's diagonal before Marquardt scaling (a joint with no effect)
 RESTART_DEG = 3.0  # how far restarts move a start off a singular elbow or wrist (deg)
+WRIST_SPIN_DEG = 30.0  # how far restarts turn joints 4 and 6 about an almost aligned wrist (deg)
 
 
 @dataclass(frozen=True)
@@ -149,13 +150,19 @@ def _descend(robot: Robot, T: np.ndarray, q0: np.ndarray, max_iter: int, tol: tu
 
 def _restart_offsets(n: int) -> np.ndarray:
     """``(K, n)`` joint offsets (rad) that move a start off a singular configuration: +-RESTART_DEG
-    on the shoulder, elbow and wrist-bend joints (2, 3, 5), one at a time and the elbow with each."""
-    step = np.deg2rad(RESTART_DEG)
+    on the shoulder, elbow and wrist-bend joints (2, 3, 5), one at a time and the elbow with each;
+    and, for a wrist near alignment (where only the sum or the difference of joints 4 and 6
+    matters and the split between them is barely determined), joints 4 and 6 turned by
+    +-WRIST_SPIN_DEG the same and the opposite way."""
+    step, spin = np.deg2rad(RESTART_DEG), np.deg2rad(WRIST_SPIN_DEG)
     offsets = []
-    for joints in ((1,), (2,), (4,), (1, 2), (2, 4)):
+    for joints, steps in (((1,), (step,)), ((2,), (step,)), ((4,), (step,)), ((1, 2), (step, step)),
+                          ((2, 4), (step, step)), ((3, 5), (spin, spin)), ((3, 5), (spin, -spin))):
         for sign in (1.0, -1.0):
             d = np.zeros(n)
-            d[[j for j in joints if j < n]] = sign * step
+            for j, v in zip(joints, steps, strict=True):
+                if j < n:
+                    d[j] = sign * v
             offsets.append(d)
     return np.unique(np.array(offsets), axis=0)
 
