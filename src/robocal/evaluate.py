@@ -54,7 +54,7 @@ def evaluate(robot, data, fit_frame: bool = False) -> dict:
     if data.kind == "pose":
         from robocal.kinematics.transforms import matrix_to_rotvec
 
-        R = robot.fk(data.joints, smr=data.smr, approach=data.approach)[:, :3, :3]
+        R = robot.fk(data.joints, smr=data.smr, approach=data.approach, travel=data.travel)[:, :3, :3]
         ang = np.linalg.norm(matrix_to_rotvec(data.rotations @ np.swapaxes(R, 1, 2)), axis=1)
         deg = np.rad2deg(ang)
         stats["rotation_deg"] = {"rms": float(np.sqrt(np.mean(deg**2))), "mean": float(deg.mean()),

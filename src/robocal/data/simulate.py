@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.data.measurements import Measurements, approach_from_order
+from robocal.data.measurements import Measurements, approach_from_order, travel_from_order
 from robocal.errors import DataError, UnreachableError
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
 
@@ -207,7 +207,8 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
     q_rows = q[pose_id]
     N = len(q_rows)
     approach = approach_from_order(q_rows, pose_id)  # the poses are measured in this order
-    T = true.fk(q_rows, smr=smr, approach=approach)
+    travel = travel_from_order(q_rows, pose_id)
+    T = true.fk(q_rows, smr=smr, approach=approach, travel=travel)
     p = T[:, :3, 3]
     noise = np.zeros((N, 3))
     outlier_rows = np.zeros(0, np.int64)
@@ -240,6 +241,7 @@ def simulate_tracker(robot, n_poses: int, *, noise_mm: float = 0.02, noise_model
             "noise_floor_mm": floor}
     source = f"simulated by robocal: robot {robot.name}, seed {seed}, {kind}, noise floor {floor:.6g} mm"
     data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id, approach=approach,
+                                    travel=travel,
                                     source_row=np.arange(2, N + 2), source=source, **kw)
     truth = replace(true, name=f"{robot.name}_true",
                     description=f"true robot of a robocal simulation (seed {seed}); noise floor "

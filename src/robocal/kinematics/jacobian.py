@@ -55,7 +55,7 @@ def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nda
 
 
 def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
-                      approach: np.ndarray | None = None):
+                      approach: np.ndarray | None = None, travel: np.ndarray | None = None):
     """:func:`motion_axes` for a robot, with the columns of its extra SMRs appended.
 
     ``smr`` ``(N,)`` is each row's SMR index (0 = the tool). An SMR's translation moves only
@@ -64,7 +64,7 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
     small dependence of the joint errors on the link parameters is second order and left out).
     """
     if robot.joint_errors is not None:
-        q = q + robot.joint_errors.offsets(robot, q, approach)
+        q = q + robot.joint_errors.offsets(robot, q, approach, travel)
     tools = robot.tool if smr is None else robot.tools_for(smr)
     tcp, u, o, rotation = motion_axes(robot.links, robot.base, tools, q)
     k = len(robot.smr)
@@ -82,9 +82,11 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
 
 
 def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: str = "point",
-                            smr: np.ndarray | None = None, approach: np.ndarray | None = None):
+                            smr: np.ndarray | None = None, approach: np.ndarray | None = None,
+                            travel: np.ndarray | None = None):
     """d(TCP)/d(params) for joints ``q`` ``(N, n)`` (``smr`` ``(N,)``: each row's SMR index;
-    ``approach`` ``(N, n)``: joint approach directions for a backlash model).
+    ``approach`` ``(N, n)``: joint approach directions for a backlash model; ``travel`` ``(N, n)``
+    rad: joint moves for a travel model).
 
     kind 'point': ``(N, 3, k)`` position rows (m per m or m per rad);
     kind 'pose': ``(N, 6, k)`` position rows then orientation rows (rad per unit).
@@ -92,7 +94,7 @@ def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: s
     if kind not in ("point", "pose"):
         raise ModelError(f"unknown observation kind {kind!r}: use 'point' or 'pose'")
     idx = robot.indices(params)
-    tcp, u, o, rotation = robot_motion_axes(robot, q, smr, approach)
+    tcp, u, o, rotation = robot_motion_axes(robot, q, smr, approach, travel)
     return jacobian_from_axes(tcp, u[:, idx], o[:, idx], rotation[idx], kind)
 
 

@@ -330,31 +330,32 @@ class Robot:
             raise DataError(f"joints contain NaN or infinite values in row(s) {bad[:10].tolist()}")
         return q
 
-    def fk(self, q, frames: bool = False, smr=None, approach=None):
+    def fk(self, q, frames: bool = False, smr=None, approach=None, travel=None):
         """TCP poses ``(N, 4, 4)`` (world frame, m) for joints ``(N, n)`` in rad.
 
         ``smr`` ``(N,)`` picks each row's SMR (default: the tool). With ``frames=True`` returns
         ``(tcp, frames)`` where frames ``(N, n + 1, 4, 4)`` are the world poses of frames
         {0}..{n} (frame {n} is the flange, before the tool). A ``joint_errors`` model turns the
         commanded joints into the joints the robot really reaches (``q + dq(q)``) first;
-        ``approach`` ``(N, n)`` gives the direction each joint came from (its backlash term).
+        ``approach`` ``(N, n)`` gives the direction each joint came from (its backlash term) and
+        ``travel`` ``(N, n)`` rad each joint's last move (its travel term).
         """
         q = self.check_joints(q)
         if self.joint_errors is not None:
-            q = q + self.joint_errors.offsets(self, q, approach)
+            q = q + self.joint_errors.offsets(self, q, approach, travel)
         tool = self.tool if smr is None else self.tools_for(smr)
         if frames:
             return chain_frames(self.links, self.base, tool, q, frames=True)
         return chain_fk(self.links, self.base, tool, q)
 
     def jacobian(self, q, params: Sequence[str] | None = None, kind: str = "point", smr=None,
-                 approach=None):
+                 approach=None, travel=None):
         """Identification Jacobian ``(N, 3|6, k)``; see
         :func:`robocal.kinematics.jacobian.identification_jacobian`."""
         from robocal.kinematics.jacobian import identification_jacobian
 
         names = self.default_free(kind == "pose") if params is None else list(params)
-        return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach)
+        return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach, travel)
 
     def within_limits(self, q) -> np.ndarray:
         """``(N,)`` bool: every joint inside its limits."""
