@@ -52,6 +52,7 @@ class CalibrationResult:
     warnings: list[str] = field(default_factory=list)
     settings: dict = field(default_factory=dict)
     nongeometric: dict | None = None
+    model_selection: dict | None = None
 
     @property
     def state(self) -> State:
@@ -172,6 +173,8 @@ class CalibrationResult:
         }
         if self.nongeometric is not None:
             out["nongeometric"] = self.nongeometric
+        if self.model_selection is not None:
+            out["model_selection"] = self.model_selection
         if self.validation is not None:
             out["data"]["validation_file"] = self.validation_data.source
             out["validation_before"] = self.validation_before
@@ -206,6 +209,10 @@ class CalibrationResult:
             lines.append("not identifiable (fixed): " + ", ".join(
                 f"{n} (~{'/'.join(self.identifiability.confounded_with[n]) or 'no effect'})"
                 for n in self.identifiability.dropped))
+        if self.model_selection is not None:
+            from robocal.model_selection import selection_table
+
+            lines.append(selection_table(self.model_selection))
         if len(self.rejected):
             lines.append(f"rejected observations: {len(self.rejected)}; without them the calibration "
                          f"set's RMS is {self.after_inliers['rms']:.4f} mm")
@@ -223,7 +230,7 @@ def _start_model(robot, data, register_frames: bool):
 
 def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
               register_frames: bool = True, rtol: float = DEFAULT_RTOL, seed: int = 0,
-              progress=None, nongeometric=None, **options) -> CalibrationResult:
+              progress=None, nongeometric=None, warm_start=None, **options) -> CalibrationResult:
     """Calibrate ``robot`` (nominal model) against ``data`` (Measurements).
 
     method: 'lsq' (default), 'robust', or another registered solver; params: 'auto' (the
@@ -231,9 +238,15 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     (Measurements) is judged with the calibrated model. ``progress``: True shows a bar on a
     terminal, or a callable ``progress(iteration, rms)``. ``options`` go to the solver (e.g.
     k0, k1, ridge for 'robust'; checked against its signature). ``nongeometric``: terms
-    identified with the geometry by lsq or robust, e.g. 'compliance,gear,backlash' (see
-    robocal.identify.nongeometric); the calibrated robot carries them and its fk applies them.
-    Raises IdentificationError when the data cannot support the calibration.
+    identified with the geometry by lsq or robust, e.g. 'compliance,gear,backlash,travel' or
+    explicit parameter names (see robocal.identify.nongeometric); 'cyclic' searches the
+    frequencies of cyclic errors in the data first (robocal.identify.frequency_search); 'auto'
+    chooses the terms by cross-validation on ``data`` (robocal.model_selection; the result's
+    ``model_selection`` holds the table). The calibrated robot carries the terms and its fk
+    applies them. ``warm_start``: a CalibrationResult of the same robot and kind of data whose
+    start model (no new registration) and final estimate start this one (the parameter selection
+    is the same as without it). Raises IdentificationError when the data cannot support the
+    calibration.
     """
     solve = get_solver(method)
     check_options(method, solve, options)
@@ -242,10 +255,19 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
             f"non-geometric terms are identified by the methods {', '.join(NONGEOMETRIC_METHODS)}; "
             f"{method!r} searches the geometric parameters only (calibrate with lsq first, or "
             "drop --nongeometric)")
+    if nongeometric:
+        from robocal.model_selection import calibrate_auto, calibrate_cyclic, needs_selection
+
+        mode = needs_selection(nongeometric)
+        if mode:
+            run = calibrate_auto if mode == "auto" else calibrate_cyclic
+            return run(robot, data, method, params, validation, nongeometric=nongeometric,
+                       register_frames=register_frames, rtol=rtol, seed=seed, progress=progress,
+                       **options)
     data.check_against(robot)
     if validation is not None:
         validation.check_against(robot)
-    start = _start_model(robot, data, register_frames)
+    start = _start_model(robot, data, register_frames) if warm_start is None else warm_start.start
     problem = CalibrationProblem(start, data)
     candidates = candidate_parameters(start, problem.observation, params)
     state0 = problem.start(start)
@@ -281,7 +303,8 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         if progress is True:
             def progress(iteration, rms):  # noqa: E306 - the bar's callback
                 bar.update(info=f"rms {rms * 1e3:.4f} mm")
-        out = solve(problem, state0, names, seed=seed, progress=progress or None, **options)
+        first = state0 if warm_start is None else _warm_state(problem, warm_start, ng_info)
+        out = solve(problem, first, names, seed=seed, progress=progress or None, **options)
     if not out.converged:
         warnings.append(out.message)
     if ident.condition_class == "strong":
@@ -318,6 +341,25 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
                                                   strict=True)]
         result.nongeometric = ng_info
     return result
+
+
+def _warm_state(problem: CalibrationProblem, warm, ng_info: dict | None) -> State:
+    """The start of a warm-started solve: ``warm``'s final geometry and nuisance, its joint-error
+    values for the names this problem identifies too (0 for the others)."""
+    obs = problem.observation
+    inner = len(obs.nuisance_names) - (0 if ng_info is None else len(ng_info["kept"]))
+    warm_obs = warm.problem.observation
+    warm_inner = len(warm_obs.nuisance_names) - len(getattr(warm_obs, "names", []))
+    if warm.robot.n_joints != problem.observation.q.shape[1] or warm.problem.kind != problem.kind \
+            or warm_inner != inner:
+        raise IdentificationError("warm_start must be a calibration of the same robot with the same "
+                                  "kind of data (and the same planes or SMRs)")
+    nuisance = np.array(warm.state.nuisance[:inner], dtype=float)
+    if ng_info is not None:
+        previous = {} if warm.robot.joint_errors is None else dict(
+            zip(warm.robot.joint_errors.names, warm.robot.joint_errors.values, strict=True))
+        nuisance = np.concatenate([nuisance, [previous.get(nm, 0.0) for nm in ng_info["kept"]]])
+    return State(warm.state.robot, nuisance)
 
 
 def analyze(robot, joints_or_data, kind: str = "point", params="auto",
