@@ -19,7 +19,10 @@ tests/test_model_selection.py checks against full nonlinear fold calibrations. T
 frequencies are searched again inside each fold on its training poses only, so the
 cross-validated error of a candidate with cyclic terms includes the search (nested; a search on
 all the data would favour it wrongly). Finally the chosen model is calibrated from the
-superset's estimate (``calibrate(..., warm_start=)``), a few iterations.
+superset's estimate (``calibrate(..., warm_start=)``), a few iterations, with the joint-error
+parameters the candidate kept named explicitly (the model cross-validated is the model
+delivered; its own third identifiability stage may still drop one that is confounded at the
+nominal model).
 
 Choice (one-standard-error rule): the candidate with the lowest cross-validated RMS position
 error, unless a simpler one — fewer identified parameters — is within one standard error of it
@@ -126,6 +129,7 @@ class _Candidate:
     columns: np.ndarray   # indices into the linearised A (geometric + the kept joint errors)
     zeroed: np.ndarray    # joint-error columns held at zero (left out or dropped)
     cyclic: bool
+    ng_names: list[str]   # the kept joint-error parameters (without the cyclic ones)
 
 
 def _solve(G: np.ndarray, h: np.ndarray) -> np.ndarray:
@@ -213,7 +217,8 @@ def _candidates(lin: _Linearised, terms: list[str], has_cyclic: bool, rtol: floa
                            dtype=np.int64)
             kept = idx[independent_columns(lin.A[:, np.r_[geo, idx]], lin.k0, rtol)] if idx.size else idx
             zeroed = np.setdiff1d(np.arange(lin.k0, lin.A.shape[1]), kept)
-            out.append(_Candidate(combo, np.r_[geo, kept], zeroed, "cyclic" in combo))
+            out.append(_Candidate(combo, np.r_[geo, kept], zeroed, "cyclic" in combo,
+                                  [lin.ng_names[j - lin.k0] for j in kept]))
     return out
 
 
@@ -271,14 +276,11 @@ def calibrate_auto(robot, data, method, params, validation, *, nongeometric="aut
     scan, full_cyclic, fold_cyclic = _search(lin, fold, folds)
     cv = _CrossValidation(lin, fold, folds, scan, fold_cyclic, full_cyclic)
     cyclic_params = [nm for i, f in full_cyclic for nm in cyclic_names(i + 1, f)]
-    rows = []
-    for cand in _candidates(lin, fixed, bool(full_cyclic), rtol):
-        row = {"terms": list(cand.terms), **cv.evaluate(cand)}
-        rows.append(row)
+    cands = _candidates(lin, fixed, bool(full_cyclic), rtol)
+    rows = [{"terms": list(c.terms), **cv.evaluate(c),
+             "parameters": c.ng_names + (cyclic_params if c.cyclic else [])} for c in cands]
     chosen, best, reason = _choose(rows)
-    spec = [t for t in rows[chosen]["terms"] if t != "cyclic"]
-    if "cyclic" in rows[chosen]["terms"]:
-        spec += cyclic_params
+    spec = rows[chosen]["parameters"]  # the model cross-validated is the model delivered
     t_select = time.perf_counter() - t0
     if spec:
         final = calibrate(robot, data, method, params, validation, nongeometric=",".join(spec),
