@@ -153,7 +153,7 @@ def test_auto_chooses_geometric_on_a_robot_without_joint_errors(seed):
     sim = simulate_tracker(robot, 160, noise_mm=0.02, seed=seed)
     cal, val = sim.data.split_poses(0.6, seed=0)
     auto = calibrate(robot, cal, validation=val, nongeometric="auto")
-    plain = calibrate(robot, cal, validation=val)
+    plain = calibrate(robot, cal, validation=val, nongeometric=None)
     assert auto.model_selection["chosen_terms"] == [] and auto.robot.joint_errors is None
     assert auto.validation["rms"] == pytest.approx(plain.validation["rms"], rel=1e-6)
 
@@ -236,3 +236,21 @@ def test_auto_result_json_report_and_command_line(tmp_path, capsys):
         calibrate(robot, sim.data, method="swarm", nongeometric="auto")
     with pytest.raises(IdentificationError, match="unknown non-geometric"):
         calibrate(robot, sim.data, nongeometric="auto,gear")
+
+
+def test_auto_is_the_default_for_lsq_and_robust_on_tracker_data_with_enough_poses():
+    from robocal.calibration import AUTO_DEFAULT_MIN_POSES, resolve_nongeometric
+
+    robot = Robot.from_catalog("abb_irb2600")
+    many = simulate_tracker(robot, AUTO_DEFAULT_MIN_POSES, noise_mm=0.02, seed=1).data
+    few = many.first_poses(AUTO_DEFAULT_MIN_POSES - 1)
+    planes = simulate_tracker(robot, AUTO_DEFAULT_MIN_POSES, kind="plane", noise_mm=0.01, seed=1).data
+    assert resolve_nongeometric("default", "lsq", many) == "auto"
+    assert resolve_nongeometric("default", "robust", many) == "auto"
+    assert resolve_nongeometric("default", "lsq", few) is None
+    assert resolve_nongeometric("default", "genetic", many) is None
+    assert resolve_nongeometric("default", "lsq", planes) is None
+    assert resolve_nongeometric("none", "lsq", many) is None
+    assert resolve_nongeometric("gear", "lsq", few) == "gear"
+    result = calibrate(robot, many)
+    assert result.model_selection is not None and result.settings["nongeometric"] == "auto"

@@ -16,6 +16,7 @@ import numpy as np
 from robocal.errors import IdentificationError
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability
 from robocal.identify.identifiability import analyze as analyze_jacobian
+from robocal.identify.nongeometric import parse_terms
 from robocal.identify.problem import CalibrationProblem, State, candidate_parameters
 from robocal.identify.solvers import SolverOutput, check_options, get_solver
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
@@ -25,6 +26,8 @@ from robocal.report.metrics import position_stats
 
 RESULT_FORMAT = "robocal-result/1"
 NONGEOMETRIC_METHODS = ("lsq", "robust")  # the methods that estimate the joint-error terms
+AUTO_DEFAULT_KINDS = ("point", "pose")  # tracker data: where nongeometric="auto" is the default ...
+AUTO_DEFAULT_MIN_POSES = 100  # ... from this many poses on (20 held out per cross-validation fold)
 
 
 def _display(unit: str) -> tuple[str, float]:
@@ -230,7 +233,7 @@ def _start_model(robot, data, register_frames: bool):
 
 def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
               register_frames: bool = True, rtol: float = DEFAULT_RTOL, seed: int = 0,
-              progress=None, nongeometric=None, warm_start=None, **options) -> CalibrationResult:
+              progress=None, nongeometric="default", warm_start=None, **options) -> CalibrationResult:
     """Calibrate ``robot`` (nominal model) against ``data`` (Measurements).
 
     method: 'lsq' (default), 'robust', or another registered solver; params: 'auto' (the
@@ -242,14 +245,17 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     explicit parameter names (see robocal.identify.nongeometric); 'cyclic' searches the
     frequencies of cyclic errors in the data first (robocal.identify.frequency_search); 'auto'
     chooses the terms by cross-validation on ``data`` (robocal.model_selection; the result's
-    ``model_selection`` holds the table). The calibrated robot carries the terms and its fk
-    applies them. ``warm_start``: a CalibrationResult of the same robot and kind of data whose
-    start model (no new registration) and final estimate start this one (the parameter selection
-    is the same as without it). Raises IdentificationError when the data cannot support the
+    ``model_selection`` holds the table); 'default' is 'auto' for lsq and robust on tracker data
+    (points or poses) with at least AUTO_DEFAULT_MIN_POSES poses, else none; None or 'none': the
+    geometric model only. The calibrated robot carries the terms and its fk applies them.
+    ``warm_start``: a CalibrationResult of the same robot and kind of data whose start model (no
+    new registration) and final estimate start this one (the parameter selection is the same as
+    without it). Raises IdentificationError when the data cannot support the
     calibration.
     """
     solve = get_solver(method)
     check_options(method, solve, options)
+    nongeometric = resolve_nongeometric(nongeometric, method, data)
     if nongeometric and method not in NONGEOMETRIC_METHODS:
         raise IdentificationError(
             f"non-geometric terms are identified by the methods {', '.join(NONGEOMETRIC_METHODS)}; "
@@ -295,7 +301,7 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
                                   "each plane needs contacts spread over its surface")
     ng_info = None
     if nongeometric:
-        from robocal.identify.nongeometric import attach, parse_terms
+        from robocal.identify.nongeometric import attach
 
         state0, ng_info = attach(problem, state0, names, parse_terms(nongeometric), rtol)
     total = options.get("generations") or options.get("iterations") or options.get("epochs")
@@ -327,7 +333,8 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         before=position_stats(problem.position_errors(state0)),
         after=position_stats(problem.position_errors(final)), problem=problem,
         warnings=warnings, settings={"params": params if isinstance(params, str) else list(params),
-                                     "seed": seed, "rtol": rtol, **_plain(options)})
+                                     "seed": seed, "rtol": rtol, **_plain(options),
+                                     "nongeometric": ",".join(parse_terms(nongeometric)) or "none"})
     if validation is not None:
         vproblem = CalibrationProblem(start, validation)
         result.validation_data = validation
@@ -341,6 +348,17 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
                                                   strict=True)]
         result.nongeometric = ng_info
     return result
+
+
+def resolve_nongeometric(spec, method: str, data):
+    """The terms ``spec`` asks for: 'default' becomes 'auto' for lsq/robust on tracker data with
+    at least AUTO_DEFAULT_MIN_POSES poses (else None), 'none' becomes None."""
+    if isinstance(spec, str) and spec.strip().lower() == "none":
+        return None
+    if isinstance(spec, str) and spec.strip().lower() == "default":
+        enough = data.kind in AUTO_DEFAULT_KINDS and data.n_poses >= AUTO_DEFAULT_MIN_POSES
+        return "auto" if method in NONGEOMETRIC_METHODS and enough else None
+    return spec
 
 
 def _warm_state(problem: CalibrationProblem, warm, ng_info: dict | None) -> State:

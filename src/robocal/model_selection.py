@@ -38,6 +38,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
 
 from robocal.calibration import CalibrationResult, calibrate
 from robocal.errors import IdentificationError
@@ -55,6 +56,7 @@ AUTO_TERMS = TERMS  # compliance, gear, backlash, travel, cyclic
 FIXED_TERMS = tuple(t for t in TERMS if t != "cyclic")
 MIN_POSES_PER_FOLD = 5
 EIGEN_RCOND = 1e-13  # relative cut-off of the scaled normal matrix's eigenvalues in a fold fit
+CHOLESKY_MIN_PIVOT = 1e-10  # smallest squared Cholesky pivot (unit diagonal) trusted without cut-off
 
 
 def needs_selection(spec) -> str:
@@ -133,12 +135,19 @@ class _Candidate:
 
 
 def _solve(G: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """Least-squares step from the normal equations ``G x = h`` (column-scaled, eigen cut-off)."""
+    """Least-squares step from the normal equations ``G x = h`` (column-scaled; Cholesky, or an
+    eigen-decomposition with a cut-off when a fold leaves the columns nearly dependent)."""
     d = np.sqrt(np.maximum(np.diag(G), 1e-300))
-    w, V = np.linalg.eigh(G / np.outer(d, d))
+    Gs, hs = G / np.outer(d, d), h / d
+    try:
+        factor = scipy.linalg.cho_factor(Gs)
+        if np.min(np.abs(np.diag(factor[0]))) ** 2 > CHOLESKY_MIN_PIVOT:
+            return scipy.linalg.cho_solve(factor, hs) / d
+    except np.linalg.LinAlgError:
+        pass
+    w, V = np.linalg.eigh(Gs)
     keep = w > EIGEN_RCOND * max(w[-1], 1e-300)
-    y = V[:, keep] @ ((V[:, keep].T @ (h / d)) / w[keep])
-    return y / d
+    return (V[:, keep] @ ((V[:, keep].T @ hs) / w[keep])) / d
 
 
 class _CrossValidation:
@@ -159,13 +168,15 @@ class _CrossValidation:
         self.extra_fold = [np.zeros((A.shape[0], 0)) if scan is None else
                            scan.columns(lin.Jtheta, rows, found) * self.row_weight[:, None]
                            for found in fold_cyclic]
-        self.gram = []  # per fold: G, h over the training rows, with that fold's cyclic columns
+        self.gram, self.test = [], []  # per fold: normal equations of the training rows, test rows
         for f in range(k):
-            train = self.row_fold != f
+            train, test = self.row_fold != f, self.row_fold == f
             B = np.hstack([A[train], self.extra_fold[f][train]])
             self.gram.append((B.T @ B, B.T @ self.r[train], B.T @ A[train]))
+            self.test.append((test, np.hstack([A[test], self.extra_fold[f][test]])))
         B = np.hstack([A, self.extra_full])
         self.gram_full = (B.T @ B, B.T @ self.r, B.T @ A)
+        self.test_full = (np.ones(A.shape[0], bool), B)
 
     def _fit(self, gram, cand: _Candidate, n_extra: int) -> np.ndarray:
         """Step ``x`` on the candidate's columns (then the cyclic ones) for one Gram set."""
@@ -176,12 +187,11 @@ class _CrossValidation:
         rhs = h[cols] + GA[np.ix_(cols, cand.zeroed)] @ v  # residual with the left-out terms at zero
         return cols, _solve(G[np.ix_(cols, cols)], rhs)
 
-    def _errors(self, rows: np.ndarray, cand: _Candidate, cols: np.ndarray, x: np.ndarray,
-                extra: np.ndarray) -> np.ndarray:
-        """Position error (m) of the items of ``rows`` after the step."""
-        B = np.hstack([self.A[rows], extra[rows]])
+    def _errors(self, test, cand: _Candidate, cols: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Position error (m) of the items of the ``test`` rows (mask, their columns) after the step."""
+        rows, B = test
         v = self.lin.ng_values[cand.zeroed - self.lin.k0]
-        e = self.r[rows] + self.A[rows][:, cand.zeroed] @ v - B[:, cols] @ x
+        e = self.r[rows] + B[:, cand.zeroed] @ v - B[:, cols] @ x
         e = e / np.where(self.row_weight[rows] > 0, self.row_weight[rows], 1.0) * self.lin.sigma[rows]
         per_item = e.reshape(-1, self.lin.rows)[:, :3]
         return np.linalg.norm(per_item, axis=1)
@@ -192,13 +202,12 @@ class _CrossValidation:
         items = np.arange(self.lin.group.size)
         for f in range(self.k):
             cols, x = self._fit(self.gram[f], cand, self.extra_fold[f].shape[1])
-            rows = self.row_fold == f
-            err = self._errors(rows, cand, cols, x, self.extra_fold[f])
-            scored = self.scored[items[rows[:: self.lin.rows]]]
+            err = self._errors(self.test[f], cand, cols, x)
+            scored = self.scored[items[self.test[f][0][:: self.lin.rows]]]
             squares.append(err[scored] ** 2)
             fold_rms.append(np.sqrt(np.mean(err[scored] ** 2)))
         cols, x = self._fit(self.gram_full, cand, self.extra_full.shape[1])
-        fit = self._errors(np.ones(self.A.shape[0], bool), cand, cols, x, self.extra_full)[self.scored]
+        fit = self._errors(self.test_full, cand, cols, x)[self.scored]
         return {"cv_rms_mm": float(np.sqrt(np.mean(np.concatenate(squares))) * 1e3),
                 "cv_se_mm": float(np.std(fold_rms, ddof=1) / np.sqrt(self.k) * 1e3),
                 "fold_rms_mm": [float(v * 1e3) for v in fold_rms],
@@ -209,13 +218,14 @@ class _CrossValidation:
 def _candidates(lin: _Linearised, terms: list[str], has_cyclic: bool, rtol: float) -> list[_Candidate]:
     """Every combination of ``terms`` (cyclic last), its kept joint-error columns (third stage)."""
     geo = np.arange(lin.k0)
+    R = scipy.linalg.qr(lin.A, mode="r")[0][: lin.A.shape[1]]  # same column geometry as A, K x K
     present = [t for t in terms if t != "cyclic"] + (["cyclic"] if has_cyclic else [])
     out = []
     for size in range(len(present) + 1):
         for combo in itertools.combinations(present, size):
             idx = np.array([lin.k0 + j for j, nm in enumerate(lin.ng_names) if term_of(nm) in combo],
                            dtype=np.int64)
-            kept = idx[independent_columns(lin.A[:, np.r_[geo, idx]], lin.k0, rtol)] if idx.size else idx
+            kept = idx[independent_columns(R[:, np.r_[geo, idx]], lin.k0, rtol)] if idx.size else idx
             zeroed = np.setdiff1d(np.arange(lin.k0, lin.A.shape[1]), kept)
             out.append(_Candidate(combo, np.r_[geo, kept], zeroed, "cyclic" in combo,
                                   [lin.ng_names[j - lin.k0] for j in kept]))
@@ -282,12 +292,8 @@ def calibrate_auto(robot, data, method, params, validation, *, nongeometric="aut
     chosen, best, reason = _choose(rows)
     spec = rows[chosen]["parameters"]  # the model cross-validated is the model delivered
     t_select = time.perf_counter() - t0
-    if spec:
-        final = calibrate(robot, data, method, params, validation, nongeometric=",".join(spec),
-                          warm_start=superset, progress=progress, **common)
-    else:
-        final = calibrate(robot, data, method, params, validation, warm_start=superset,
-                          progress=progress, **common)
+    final = calibrate(robot, data, method, params, validation, nongeometric=",".join(spec) or None,
+                      warm_start=superset, progress=progress, **common)
     total = time.perf_counter() - t0
     final.model_selection = {
         "method": f"{folds}-fold cross-validation by pose on the calibration data, one-standard-error rule",

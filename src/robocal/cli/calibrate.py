@@ -58,11 +58,12 @@ def add_parser(sub) -> None:
     p.add_argument("--json", metavar="result.json", help="write the full result as JSON")
     p.add_argument("--report", metavar="report.html", help="write the HTML report")
     p.add_argument("--seed", type=int, default=0, help="random seed of stochastic methods")
-    p.add_argument("--nongeometric", metavar="TERMS",
+    p.add_argument("--nongeometric", metavar="TERMS", default="default",
                    help="non-geometric terms identified with the geometry (methods lsq, robust): "
-                        "compliance, gear, backlash, travel, cyclic (comma separated), or auto: the "
+                        "compliance, gear, backlash, travel, cyclic (comma separated); auto: the "
                         "terms chosen by cross-validation on the calibration data (the candidate "
-                        "table is printed)")
+                        "table is printed); none: the geometric model only. Default: auto for "
+                        "lsq/robust with at least 100 poses of tracker data, else none")
     p.add_argument("--network-out", metavar="net.npz",
                    help="method neural: save the trained network (.npz or .json, plain arrays)")
     p.add_argument("--set", dest="options", type=_option, action="append", default=[],

@@ -12,13 +12,13 @@ linearised problem at a fitted model (a periodogram in the joint angle):
    residuals of the SMRs of one pose are one error of the flange, and the residuals are
    heavy-tailed), so the statistic is chi-square with 2 degrees of freedom when there is no
    such error, whatever the noise.
-2. The best three peaks are refined to the least-squares frequency within one grid step
-   (columns made orthogonal to the model's) and their statistic is computed exactly; the best
-   is kept when its statistic exceeds ``2 ln(n_independent / alpha)`` — the level a pure-noise
-   periodogram exceeds with probability ``alpha`` over the n_independent frequencies searched
-   (Bonferroni) — and when its column is not confounded with the model's (variance inflation
-   below NG_MAX_VIF).
-3. The kept columns join the model and the search repeats, until no peak is significant.
+2. Each joint's highest peak is refined to the least-squares frequency within one grid step. In
+   decreasing order of the peaks, each is tested exactly (columns made orthogonal to the model
+   with the ones kept before it) and kept when
+   its statistic exceeds ``2 ln(n_independent / alpha)`` — the level a pure-noise periodogram
+   exceeds with probability ``alpha`` over the n_independent frequencies searched (Bonferroni)
+   — and its column is not confounded with the model's (variance inflation below NG_MAX_VIF).
+3. The kept columns join the model and the search repeats, until a round keeps nothing.
 
 Whole-campaign cost: the sine/cosine tables (poses x frequencies) are computed once per pose set
 (:class:`FrequencyScan`) and shared by the cross-validation folds, which search on their
@@ -37,8 +37,8 @@ MAX_FREQUENCY = 400.0        # cycles per revolution: twice the largest common r
 FALSE_ALARM = 0.01           # probability that noise alone yields one frequency
 MAX_PER_JOINT = 3            # frequencies kept per joint at most
 MIN_SPAN = np.deg2rad(20.0)  # a joint that moves less is not searched
-_REFINE_POINTS = 41          # least-squares refinement grid over +-1 grid step around a peak
-_TOP = 3                     # peaks checked exactly per round
+_SCREEN = 0.25               # peaks whose screening statistic is below this x threshold are not tested
+_REFINE_POINTS = 21          # least-squares refinement grid over +-1 grid step around a peak
 
 
 class FrequencyScan:
@@ -57,11 +57,12 @@ class FrequencyScan:
         self.grids = [np.arange(CYCLIC_MIN_FREQUENCY + self.step[i], max_frequency, self.step[i])
                       if span[i] >= MIN_SPAN else np.zeros(0) for i in range(q_pose.shape[1])]
         self.n_independent = max(sum(g.size for g in self.grids) / 2.0, 1.0)
+        self.q_pose = q_pose
         self.tables = []  # per joint: [sin, cos] and [sin 2x, cos 2x] of f q, (poses, 2F) float32
         for i, grid in enumerate(self.grids):
-            phase = np.outer(q_pose[:, i], grid)
-            self.tables.append((np.hstack([np.sin(phase), np.cos(phase)]).astype(np.float32),
-                                np.hstack([np.sin(2 * phase), np.cos(2 * phase)]).astype(np.float32)))
+            phase = np.outer(q_pose[:, i], grid).astype(np.float32)  # a screening: 1e-4 rad is plenty
+            s, c = np.sin(phase), np.cos(phase)
+            self.tables.append((np.hstack([s, c]), np.hstack([2 * s * c, c * c - s * s])))
 
     def columns(self, Jtheta: np.ndarray, rows: int, found) -> np.ndarray:
         """``(M, 2k)`` columns ``Jtheta[:, i] * (sin f q_i, cos f q_i)`` of ``found`` [(i, f)]."""
@@ -82,6 +83,8 @@ class FrequencyScan:
         row_keep = np.repeat(keep, rows)[:, None]
         J, r, Jtheta = J * row_keep, r * row_keep[:, 0], Jtheta * row_keep
         pose_of_row = np.repeat(self.pose_of_item, rows)
+        weight = np.zeros((self.n_poses, n))  # sum of squared theta columns per pose (refinement)
+        np.add.at(weight, pose_of_row, Jtheta**2)
         rows_all = np.arange(pose_of_row.size)
         to_pose = scipy.sparse.csr_matrix((np.ones(rows_all.size), (pose_of_row, rows_all)),
                                           shape=(self.n_poses, rows_all.size))  # sums rows per pose
@@ -89,39 +92,40 @@ class FrequencyScan:
         r = r - U @ (U.T @ r)
         threshold = 2.0 * np.log(self.n_independent / alpha)
         found: list[tuple[int, float]] = []
-        while len(found) < MAX_PER_JOINT * n:
+        while True:
             y = to_pose @ (Jtheta * r[:, None])  # (poses, n): residual along each joint's motion
             peaks = []
             for i, grid in enumerate(self.grids):
                 if grid.size and sum(j == i for j, _ in found) < MAX_PER_JOINT:
                     w = _wald_scan(y[:, i], self.tables[i])
                     t = int(np.argmax(w))
-                    peaks.append((float(w[t]), i, float(grid[t])))
-            best = None
-            for _, i, f0 in sorted(peaks, reverse=True)[:_TOP]:
-                f = self._refine(i, f0, Jtheta, rows, U, r)
+                    peaks.append((float(w[t]), i, self._refine(i, float(grid[t]), y[:, i], weight[:, i])))
+            added = 0
+            for screen, i, f in sorted(peaks, reverse=True):  # each joint's best, re-tested after each
+                if screen < _SCREEN * threshold:
+                    break  # far below significance already in the screening statistic
                 stat, cp = self._exact(i, f, Jtheta, rows, U, r, to_pose)
-                if cp is not None and (best is None or stat > best[0]):
-                    best = (stat, i, f, cp)
-            if best is None or best[0] < threshold:
+                if cp is None or stat < threshold:
+                    continue
+                found.append((i, f))
+                added += 1
+                Q = _orthonormal(cp - U @ (U.T @ cp))
+                U = np.hstack([U, Q])
+                r = r - Q @ (Q.T @ r)
+            if not added:
                 break
-            _, i, f, cp = best
-            found.append((i, f))
-            Q = _orthonormal(cp - U @ (U.T @ cp))
-            U = np.hstack([U, Q])
-            r = r - Q @ (Q.T @ r)
         return found
 
-    def _refine(self, i: int, f0: float, Jtheta, rows: int, U, r) -> float:
-        """The least-squares frequency near the peak ``f0`` (within one grid step), to 0.01."""
+    def _refine(self, i: int, f0: float, y: np.ndarray, weight: np.ndarray) -> float:
+        """The least-squares frequency near the peak ``f0`` (within one grid step), to 0.01.
+
+        ``y (poses,)`` is the residual along joint i's motion per pose, ``weight (poses,)`` the
+        squared norm of its column; the columns' small overlap with the model's is neglected
+        here (the statistic of the refined frequency is then computed exactly)."""
         grid = f0 + np.linspace(-1.0, 1.0, _REFINE_POINTS) * self.step[i]
-        qi = np.repeat(self.q_item[:, i], rows)[:, None]
-        phase = qi * grid[None]
-        S, C = Jtheta[:, [i]] * np.sin(phase), Jtheta[:, [i]] * np.cos(phase)
-        S, C = S - U @ (U.T @ S), C - U @ (U.T @ C)
-        ss, cc, sc = (S * S).sum(0), (C * C).sum(0), (S * C).sum(0)
-        sr, cr = S.T @ r, C.T @ r
-        gain = _quadratic_form(sr, cr, ss, cc, sc)  # residual sum of squares the two columns remove
+        phase = np.outer(self.q_pose[:, i], grid)
+        s, c = np.sin(phase), np.cos(phase)
+        gain = _quadratic_form(y @ s, y @ c, weight @ (s * s), weight @ (c * c), weight @ (s * c))
         t = int(np.argmax(gain))
         if 0 < t < grid.size - 1:  # parabola through the best point and its neighbours
             a, b, c = gain[t - 1], gain[t], gain[t + 1]

@@ -101,11 +101,11 @@ class NonGeometricObservation:
 
     def jacobian(self, robot, names, nuisance) -> np.ndarray:
         obs, robot, nu, B, joint = self._at(robot, nuisance)
-        J = obs.jacobian(robot, names, nu)
-        n = robot.n_joints
-        Jq = obs.jacobian(robot, [f"theta{i + 1}" for i in range(n)], nu)[:, :n]
+        n, k = robot.n_joints, len(names)
+        J = obs.jacobian(robot, list(names) + [f"theta{i + 1}" for i in range(n)], nu)  # one pass
+        Jq = J[:, k : k + n]
         Bq = np.repeat(B, self.rows_per_item, axis=0)
-        return np.hstack([J, Jq[:, joint] * Bq])
+        return np.hstack([J[:, :k], J[:, k + n :], Jq[:, joint] * Bq])
 
     def residuals_batch(self, robot, names, X, nuisance=None) -> np.ndarray:
         obs, robot, nu, *_ = self._at(robot, nuisance)
