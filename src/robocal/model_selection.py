@@ -18,7 +18,9 @@ displacements; the second-order error of the step is below a micrometre), which
 tests/test_model_selection.py checks against full nonlinear fold calibrations. The cyclic
 frequencies are searched again inside each fold on its training poses only, so the
 cross-validated error of a candidate with cyclic terms includes the search (nested; a search on
-all the data would favour it wrongly). Finally the chosen model is calibrated from the
+all the data would favour it wrongly); the frequencies of the full data are then polished to
+their exact least-squares values (:meth:`FrequencyScan.polish`; the folds skip this, which can
+only make their error a little pessimistic). Finally the chosen model is calibrated from the
 superset's estimate (``calibrate(..., warm_start=)``), a few iterations, with the joint-error
 parameters the candidate kept named explicitly (the model cross-validated is the model
 delivered; its own third identifiability stage may still drop one that is confounded at the
@@ -261,7 +263,7 @@ def _search(lin: _Linearised, cv_fold: np.ndarray | None, k: int):
     args = (lin.A * w, lin.r * w[:, 0], lin.Jtheta * w, lin.rows)
     full = scan.search(*args)
     folds = [scan.search(*args, mask=cv_fold != f) for f in range(k)] if full else [[] for _ in range(k)]
-    return scan, full, folds
+    return scan, scan.polish(full, *args), folds
 
 
 def calibrate_auto(robot, data, method, params, validation, *, nongeometric="auto", folds: int = FOLDS,

@@ -19,6 +19,8 @@ linearised problem at a fitted model (a periodogram in the joint angle):
    exceeds with probability ``alpha`` over the n_independent frequencies searched (Bonferroni)
    — and its column is not confounded with the model's (variance inflation below NG_MAX_VIF).
 3. The kept columns join the model and the search repeats, until a round keeps nothing.
+4. (:meth:`FrequencyScan.polish`, for the model delivered) each frequency is moved to its exact
+   least-squares value with all the others in the model.
 
 Whole-campaign cost: the sine/cosine tables (poses x frequencies) are computed once per pose set
 (:class:`FrequencyScan`) and shared by the cross-validation folds, which search on their
@@ -39,6 +41,7 @@ MAX_PER_JOINT = 3            # frequencies kept per joint at most
 MIN_SPAN = np.deg2rad(20.0)  # a joint that moves less is not searched
 _SCREEN = 0.25               # peaks whose screening statistic is below this x threshold are not tested
 _REFINE_POINTS = 21          # least-squares refinement grid over +-1 grid step around a peak
+_POLISH_POINTS = 9           # exact refinement grid over +-1/2 grid step (polish)
 
 
 class FrequencyScan:
@@ -116,6 +119,23 @@ class FrequencyScan:
                 break
         return found
 
+    def polish(self, found, J: np.ndarray, r: np.ndarray, Jtheta: np.ndarray,
+               rows: int) -> list[tuple[int, float]]:
+        """``found`` with each frequency moved to its exact least-squares value given the model and
+        the other frequencies (one backfitting pass; the search refines each peak before the later
+        ones join the model, which biases overlapping ones by a few hundredths)."""
+        out = list(found)
+        for k, (i, f0) in enumerate(out):
+            U = _orthonormal(np.hstack([J, self.columns(Jtheta, rows, out[:k] + out[k + 1 :])]))
+            rp = r - U @ (U.T @ r)
+            grid = f0 + np.linspace(-0.5, 0.5, _POLISH_POINTS) * self.step[i]
+            qi = np.repeat(self.q_item[:, i], rows)[:, None] * grid[None]
+            S, C = Jtheta[:, [i]] * np.sin(qi), Jtheta[:, [i]] * np.cos(qi)
+            S, C = S - U @ (U.T @ S), C - U @ (U.T @ C)
+            gain = _quadratic_form(S.T @ rp, C.T @ rp, (S * S).sum(0), (C * C).sum(0), (S * C).sum(0))
+            out[k] = (i, _peak(grid, gain))
+        return out
+
     def _refine(self, i: int, f0: float, y: np.ndarray, weight: np.ndarray) -> float:
         """The least-squares frequency near the peak ``f0`` (within one grid step), to 0.01.
 
@@ -126,12 +146,7 @@ class FrequencyScan:
         phase = np.outer(self.q_pose[:, i], grid)
         s, c = np.sin(phase), np.cos(phase)
         gain = _quadratic_form(y @ s, y @ c, weight @ (s * s), weight @ (c * c), weight @ (s * c))
-        t = int(np.argmax(gain))
-        if 0 < t < grid.size - 1:  # parabola through the best point and its neighbours
-            a, b, c = gain[t - 1], gain[t], gain[t + 1]
-            shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c < 0 else 0.0
-            return round(float(grid[t] + shift * (grid[1] - grid[0])), 2)
-        return round(float(grid[t]), 2)
+        return _peak(grid, gain)
 
     def _exact(self, i: int, f: float, Jtheta, rows: int, U, r, to_pose):
         """Exact cluster-robust Wald statistic of joint ``i`` at ``f`` with the columns made
@@ -146,6 +161,16 @@ class FrequencyScan:
         if np.linalg.det(V) <= 0:
             return 0.0, None
         return float(b @ np.linalg.solve(V, b)), cp
+
+
+def _peak(grid: np.ndarray, gain: np.ndarray) -> float:
+    """The grid's best frequency, refined by a parabola through its neighbours, to 0.01."""
+    t = int(np.argmax(gain))
+    if 0 < t < grid.size - 1:
+        a, b, c = gain[t - 1], gain[t], gain[t + 1]
+        shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c < 0 else 0.0
+        return round(float(grid[t] + shift * (grid[1] - grid[0])), 2)
+    return round(float(grid[t]), 2)
 
 
 def _orthonormal(A: np.ndarray) -> np.ndarray:
