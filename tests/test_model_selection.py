@@ -254,3 +254,23 @@ def test_auto_is_the_default_for_lsq_and_robust_on_tracker_data_with_enough_pose
     assert resolve_nongeometric("gear", "lsq", few) == "gear"
     result = calibrate(robot, many)
     assert result.model_selection is not None and result.settings["nongeometric"] == "auto"
+
+
+def test_explicit_cyclic_term_searches_the_data_and_the_model_round_trips(tmp_path):
+    robot = Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(_with_errors(robot, *TRAVEL_CYCLIC), 120, noise_mm=0.02, seed=2)
+    result = calibrate(robot, sim.data, nongeometric="travel,cyclic")
+    cyclic = [nm.split("_") for nm in result.nongeometric["kept"] if nm.startswith("cyc")]
+    assert {(joint, round(float(f))) for joint, f, _ in cyclic} == {("cyc1", 120), ("cyc4", 80)}
+    assert len(cyclic) == 4
+    assert result.after["rms"] <= 1.1 * sim.noise_floor_mm
+    result.robot.save(tmp_path / "m.yaml")
+    back = Robot.load(tmp_path / "m.yaml")
+    d = sim.data
+    assert back.joint_errors.names == result.robot.joint_errors.names
+    assert np.array_equal(back.fk(d.joints, approach=d.approach, travel=d.travel),
+                          result.robot.fk(d.joints, approach=d.approach, travel=d.travel))
+    clean = simulate_tracker(robot, 60, noise_mm=0.02, seed=2).data
+    plain = calibrate(robot, clean, nongeometric="cyclic")
+    assert plain.robot.joint_errors is None
+    assert any("no significant cyclic error" in w for w in plain.warnings)
