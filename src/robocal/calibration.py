@@ -265,11 +265,12 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         from robocal.model_selection import calibrate_auto, calibrate_cyclic, needs_selection
 
         mode = needs_selection(nongeometric)
-        if mode:
-            run = calibrate_auto if mode == "auto" else calibrate_cyclic
-            return run(robot, data, method, params, validation, nongeometric=nongeometric,
-                       register_frames=register_frames, rtol=rtol, seed=seed, progress=progress,
-                       **options)
+        common = dict(register_frames=register_frames, rtol=rtol, seed=seed, progress=progress, **options)
+        if mode == "auto":
+            return calibrate_auto(robot, data, method, params, validation, **common)
+        if mode == "cyclic":
+            return calibrate_cyclic(robot, data, method, params, validation, nongeometric=nongeometric,
+                                    **common)
     data.check_against(robot)
     if validation is not None:
         validation.check_against(robot)

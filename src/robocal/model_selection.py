@@ -54,7 +54,6 @@ from robocal.identify.nongeometric import (
 from robocal.kinematics.joint_errors import TERMS, cyclic_names, term_of
 
 FOLDS = 5
-AUTO_TERMS = TERMS  # compliance, gear, backlash, travel, cyclic
 FIXED_TERMS = tuple(t for t in TERMS if t != "cyclic")
 MIN_POSES_PER_FOLD = 5
 EIGEN_RCOND = 1e-13  # relative cut-off of the scaled normal matrix's eigenvalues in a fold fit
@@ -100,8 +99,10 @@ def _linearise(result: CalibrationResult, ng_names: list[str]) -> _Linearised:
     n = result.robot.n_joints
     thetas = [f"theta{i + 1}" for i in range(n)]
     sigma = problem.sigma
-    A = trial.jacobian(state.robot, result.names, nu) / sigma[:, None]
-    Jtheta = trial.jacobian(state.robot, thetas, nu)[:, :n] / sigma[:, None]
+    k = len(result.names)
+    J = trial.jacobian(state.robot, result.names + thetas, nu) / sigma[:, None]  # names, thetas, rest
+    A = np.hstack([J[:, :k], J[:, k + n :]])
+    Jtheta = J[:, k : k + n]
     r = trial.residuals(state.robot, nu) / sigma
     data, rows = problem.data, problem.rows_per_item
     item_of_rows = inner.item_of_rows()
@@ -266,7 +267,7 @@ def _search(lin: _Linearised, cv_fold: np.ndarray | None, k: int):
     return scan, scan.polish(full, *args), folds
 
 
-def calibrate_auto(robot, data, method, params, validation, *, nongeometric="auto", folds: int = FOLDS,
+def calibrate_auto(robot, data, method, params, validation, *, folds: int = FOLDS,
                    register_frames: bool = True, rtol: float, seed: int = 0, progress=None,
                    **options) -> CalibrationResult:
     """Calibrate with the joint-error model chosen by cross-validation (see the module docstring);
@@ -331,14 +332,12 @@ def calibrate_cyclic(robot, data, method, params, validation, *, nongeometric, r
     lin = _linearise(base, candidate_names(robot.n_joints, others))
     scan, found, _ = _search(lin, None, 0)
     names = [nm for i, f in found for nm in cyclic_names(i + 1, f)]
+    result = calibrate(robot, data, method, params, validation, nongeometric=",".join(others + names) or None,
+                       warm_start=base, progress=progress, **common)
     if not names:
-        result = calibrate(robot, data, method, params, validation, nongeometric=",".join(others) or None,
-                           warm_start=base, progress=progress, **common)
         result.warnings.append("no significant cyclic error found in the data; calibrated without "
                                "the cyclic term")
-        return result
-    return calibrate(robot, data, method, params, validation, nongeometric=",".join(others + names),
-                     warm_start=base, progress=progress, **common)
+    return result
 
 
 def selection_table(ms: dict) -> str:
