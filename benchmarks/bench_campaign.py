@@ -41,7 +41,7 @@ def model_error_mm(calibrated, truth, q) -> float:
 
 def true_error(robot, joints, seed, q_eval) -> float:
     sim = simulate_tracker(robot, joints=joints, smr_offsets=SMR, noise_mm=NOISE_MM, seed=seed)
-    return model_error_mm(rc.calibrate(robot, sim.data).robot, sim.truth, q_eval)
+    return model_error_mm(rc.calibrate(robot, sim.data, nongeometric=None).robot, sim.truth, q_eval)
 
 
 def continuous_bound(G: np.ndarray, A: np.ndarray, iterations: int = 3000) -> float:
@@ -116,7 +116,7 @@ def meca500() -> None:
 
     def judged(index) -> float:
         chosen = cal.subset(np.flatnonzero(np.isin(cal.pose_id, cal.pose_id[index])))
-        return rc.calibrate(robot, chosen, validation=val).validation["rms"]
+        return rc.calibrate(robot, chosen, validation=val, nongeometric=None).validation["rms"]
 
     smr = [0.0, 0.0, 0.05]
     rng = np.random.default_rng(5)
@@ -131,7 +131,7 @@ def meca500() -> None:
               f"for 0.02 mm tracker noise alone {plans[0].predicted_rms_mm:.4f}")
     for n, v in random.items():
         print(f"  random {n}: median {np.median(v):.4f} (25 draws, {np.min(v):.4f}-{np.max(v):.4f})")
-    print(f"  all 490: {rc.calibrate(robot, cal, validation=val).validation['rms']:.4f}")
+    print(f"  all 490: {rc.calibrate(robot, cal, validation=val, nongeometric=None).validation['rms']:.4f}")
 
 
 def speed() -> None:

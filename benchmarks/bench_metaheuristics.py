@@ -72,7 +72,7 @@ def tracker_problem() -> None:
     lsq_rms = None
     for label, opts in runs:
         t = time.perf_counter()
-        res = calibrate(robot, cal, validation=val, **opts)
+        res = calibrate(robot, cal, validation=val, nongeometric=None, **opts)
         dt = time.perf_counter() - t
         lsq_rms = lsq_rms or res.validation["rms"]
         print(f"  {label:18s} {dt:7.2f} s  validation RMS {res.validation['rms']:.4f} mm "
@@ -112,7 +112,7 @@ def plane_problem() -> None:
             ("genetic binary", {"method": "genetic", "population": 60, "generations": 100})]
     for label, opts in runs:
         t = time.perf_counter()
-        res = calibrate(nominal, cal, **opts)
+        res = calibrate(nominal, cal, nongeometric=None, **opts)
         line(label, res.robot, res.state.nuisance, time.perf_counter() - t)
         if label == "lsq":
             lsq_result = res
@@ -121,7 +121,7 @@ def plane_problem() -> None:
     line("scipy DE", state.robot, state.nuisance, time.perf_counter() - t)
 
     _, one, nominal1 = plane_campaign(60, 1, noise, seed=3)
-    res = calibrate(nominal1, one)
+    res = calibrate(nominal1, one, nongeometric=None)
     ident = res.identifiability
     print("one plane (60 contacts): not identifiable: " + ", ".join(
         f"{n} (~{'/'.join(ident.confounded_with[n]) or 'no effect'})" for n in ident.dropped))

@@ -3,7 +3,10 @@
 The pipeline: fit the tracker frame and SMR offsets to the nominal model (registration), declare
 the joint-error terms asked for, pick the identifiable parameters (QR with pivoting: the
 :class:`ParameterSpace` that is estimated), run the chosen method, then compute the covariance of
-the estimate and the before/after position statistics.
+the estimate and the before/after position statistics. Which joint-error terms: named by the
+user, or chosen by cross-validation (:mod:`robocal.model_selection`, ``nongeometric='auto'``,
+the default on tracker data of enough poses), with cyclic frequencies searched in the data
+(:mod:`robocal.identify.frequency_search`).
 """
 
 from __future__ import annotations
@@ -11,6 +14,7 @@ from __future__ import annotations
 import datetime
 import json
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
@@ -25,14 +29,18 @@ from robocal.identify.solvers import SolverResult, check_options, get_solver, it
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
 from robocal.io import read_text, write_atomic
-from robocal.kinematics.joint_errors import candidate_names, parse_terms
+from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
+from robocal.model_selection import calibrate_cyclic, select_error_model, selection_table
 from robocal.progress import Progress
 from robocal.report.metrics import position_stats
 from robocal.version import __version__
 
 RESULT_FORMAT = "robocal-result/1"
 NONGEOMETRIC_METHODS = ("lsq", "robust")  # the methods that estimate the joint-error terms
-_DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 180.0 / np.pi)}
+AUTO_DEFAULT_KINDS = ("point", "pose")  # tracker data: where nongeometric="auto" is the default ...
+AUTO_DEFAULT_MIN_POSES = 100  # ... from this many poses on (20 held out per cross-validation fold)
+_DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 180.0 / np.pi),
+            "rad/rad": ("mdeg/deg", 1e3)}
 
 
 @dataclass
@@ -70,6 +78,7 @@ class CalibrationResult:
     warnings: list[str] = field(default_factory=list)
     settings: dict = field(default_factory=dict)
     nongeometric: dict | None = None
+    model_selection: dict | None = None
     provenance: dict = field(default_factory=dict)
 
     @property
@@ -240,6 +249,8 @@ class CalibrationResult:
         }
         if self.nongeometric is not None:
             out["nongeometric"] = self.nongeometric
+        if self.model_selection is not None:
+            out["model_selection"] = self.model_selection
         if self.judged:
             out["data"]["validation_file"] = ", ".join(j.data.source for j in self.judged)
             out["validation_before"] = self.validation_before
@@ -305,6 +316,8 @@ class CalibrationResult:
             lines.append(f"non-geometric terms {', '.join(ng['terms'])}: {len(ng['kept'])} parameters "
                          f"estimated, {len(ng['dropped'])} left out (no effect or not separable from the "
                          "geometry)")
+        if self.model_selection is not None:
+            lines.append(selection_table(self.model_selection))
         if len(self.rejected):
             lines.append(f"rejected observations: {len(self.rejected)}; without them the calibration "
                          f"set's RMS is {self.after_inliers['rms']:.4f} mm")
@@ -407,8 +420,8 @@ def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data
 
 def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
               register_frames: bool = True, rtol: float = DEFAULT_RTOL, seed: int = 0,
-              progress=None, nongeometric=None, force: bool = False, sigma: dict | None = None,
-              **options) -> CalibrationResult:
+              progress=None, nongeometric="default", force: bool = False, sigma: dict | None = None,
+              warm_start: CalibrationResult | None = None, **options) -> CalibrationResult:
     """Calibrate ``robot`` (nominal model) against ``data``: Measurements, or a list of them of
     any kinds (points, poses, planes, distances) identified together in one problem, each set
     weighted by its noise (its sigma column, else ``sigma`` {kind: m}, else
@@ -419,21 +432,66 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     (Measurements or a list) is judged with the calibrated model, each set in its own unit.
     ``progress``: True shows a bar on a terminal, or a callable ``progress(iteration, rms)``.
     ``options`` go to the solver (e.g. k0, k1, ridge for 'robust'; checked against its signature).
-    ``nongeometric``: joint-error terms identified with the geometry by lsq or robust, e.g.
-    'compliance,gear,backlash' (see robocal.kinematics.joint_errors); the calibrated robot carries
-    them and its fk applies them.
+
+    ``nongeometric``: the joint-error terms identified with the geometry by lsq or robust (see
+    :mod:`robocal.kinematics.joint_errors`): term names and explicit parameter names, e.g.
+    'compliance,backlash,travel' or 'gear2_c1,cyc4_50_s,cyc4_50_c'; 'cyclic' searches the
+    frequencies of cyclic errors in the data first; 'auto' chooses the terms by cross-validation
+    on ``data`` (:mod:`robocal.model_selection`; the result's ``model_selection`` holds the
+    table); 'default' is 'auto' for lsq and robust on one tracker data set (points or poses) of
+    at least :data:`AUTO_DEFAULT_MIN_POSES` poses, else none; None or 'none': the geometric model
+    only. The calibrated robot carries the terms and its fk applies them.
+    ``warm_start``: a result of the same robot and data whose start model (no new registration)
+    and final estimate start this one; the parameter selection is the one without it.
+
     Raises IdentificationError when the data cannot support the calibration, and
     PlausibilityError when data and model disagree beyond what real robots do
     (:mod:`robocal.identify.plausibility`; ``force=True`` turns those into warnings).
     """
     check_options(method, options)
-    terms = parse_terms(nongeometric) if nongeometric else []
-    if terms and method not in NONGEOMETRIC_METHODS:
+    datasets, validations = _as_sets(data, "calibration"), _as_sets(validation, "validation")
+    spec = resolve_nongeometric(nongeometric, method, datasets)
+    if spec and method not in NONGEOMETRIC_METHODS:
         raise IdentificationError(
             f"non-geometric terms are identified by the methods {', '.join(NONGEOMETRIC_METHODS)}; "
             f"{method!r} searches the geometric parameters only (calibrate with lsq first, or "
             "drop --nongeometric)")
-    datasets, validations = _as_sets(data, "calibration"), _as_sets(validation, "validation")
+    fit = partial(_calibrate, robot, datasets, method, params, register_frames=register_frames,
+                  rtol=rtol, seed=seed, progress=progress, force=force, sigma=sigma, options=options)
+    if spec == "auto":
+        if len(datasets) != 1 or warm_start is not None:
+            raise IdentificationError("nongeometric='auto' chooses the error model on one calibration "
+                                      "data set, from nominal: name the terms for several sets")
+        # robust's IGG3 weights follow its path: its final fit starts from nominal, like the robust
+        # calibration of the chosen model named explicitly (lsq reaches the same minimum either way)
+        result = select_error_model(fit, datasets[0], validations, seed=seed, rtol=rtol,
+                                    warm_final=method == "lsq")
+        result.settings["nongeometric"] = "auto"
+        return result
+    terms = parse_terms(spec) if spec else []
+    if "cyclic" in terms:
+        return calibrate_cyclic(fit, [t for t in terms if t != "cyclic"], validations)
+    return fit(terms, validations, warm_start)
+
+
+def resolve_nongeometric(spec, method: str, datasets: list) -> str | list | None:
+    """The joint-error terms ``spec`` asks for: 'default' becomes 'auto' for lsq/robust on one
+    tracker data set of at least AUTO_DEFAULT_MIN_POSES poses (else None), 'none' becomes None."""
+    word = spec.strip().lower() if isinstance(spec, str) else None
+    if word in ("none", ""):
+        return None
+    if word == "default":
+        enough = len(datasets) == 1 and datasets[0].kind in AUTO_DEFAULT_KINDS \
+            and datasets[0].n_poses >= AUTO_DEFAULT_MIN_POSES
+        return "auto" if method in NONGEOMETRIC_METHODS and enough else None
+    return word if word == "auto" else spec
+
+
+def _calibrate(robot, datasets: list, method: str, params, terms: list[str], validations: list,
+               warm_start: CalibrationResult | None = None, *, register_frames: bool, rtol: float,
+               seed: int, progress, force: bool, sigma: dict | None, options: dict) -> CalibrationResult:
+    """One calibration with the joint-error terms (and explicit parameter names) ``terms``; the
+    arguments of :func:`calibrate`."""
     for d in datasets + validations:
         d.check_against(robot)
     n_smr = max(d.n_smr for d in datasets)
@@ -442,8 +500,9 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
             raise DataError(f"the validation data use {v.n_smr} SMRs but the calibration data "
                             f"{n_smr}: judge a calibration on data measured with the same SMRs")
     warnings: list[str] = []
-    start = _start_model(robot, datasets, register_frames, force, warnings)
-    declared = start.joint_error_names + candidate_names(start.n_joints, terms)
+    start = _start_model(robot, datasets, register_frames, force, warnings) if warm_start is None \
+        else warm_start.start
+    declared = list(dict.fromkeys(start.joint_error_names + candidate_names(start.n_joints, terms)))
     problem = CalibrationProblem(start.with_joint_errors(declared), datasets, sigma=sigma)
     state0 = problem.start(start.with_joint_errors(declared))
     before = position_stats(problem.position_errors(state0))
@@ -451,7 +510,8 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
                    "frames fitted)", force=force, warnings=warnings)
     space, ident, more = _estimated_space(problem, state0, params, rtol, problem.n_poses)
     warnings += more
-    out = _run_solver(method, problem, state0, space, seed, progress, options)
+    first = state0 if warm_start is None else _warm_state(problem, warm_start, declared)
+    out = _run_solver(method, problem, first, space, seed, progress, options)
     check_corrections(state0.robot, out.state.robot, space.robot, force=force, warnings=warnings)
     if not out.success:
         warnings.append(out.message)
@@ -477,14 +537,31 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     states = (state0, State(final_robot, out.state.nuisance))
     result.judged = [_judge(problem, start, states, v, force, warnings) for v in validations]
     if terms:
-        sigma = dict(zip(result.unknowns, result.sigma, strict=True))
-        values = dict(zip(final_robot.parameter_names, final_robot.values, strict=True))
-        result.nongeometric = {
-            "terms": terms, "kept": estimated_terms,
-            "dropped": [n for n in ident.names if block_of(n) == "joint_errors" and n not in space.robot],
-            "parameters": [{"name": n, "estimate": float(values[n]), "sigma": float(sigma[n])}
-                           for n in estimated_terms]}
+        result.nongeometric = _nongeometric_section(result, terms, estimated_terms)
     return result
+
+
+def _warm_state(problem: CalibrationProblem, warm: CalibrationResult, declared: list[str]) -> State:
+    """The start of a warm-started solve: ``warm``'s final geometry and nuisance, its joint-error
+    values for the ``declared`` terms it has (0 for the others)."""
+    if warm.robot.n_joints != problem.observations[0].q.shape[1] or warm.problem.kind != problem.kind \
+            or warm.problem.nuisance_names != problem.nuisance_names:
+        raise IdentificationError("warm_start must be a calibration of the same robot with the same "
+                                  "kind of data (and the same planes or SMRs)")
+    return State(warm.state.robot.with_joint_errors(declared), warm.state.nuisance)
+
+
+def _nongeometric_section(result: CalibrationResult, terms: list[str], estimated: list[str]) -> dict:
+    """The result's joint-error summary: the terms asked for, the parameters estimated (with
+    their 1-sigma, SI) and those left out."""
+    sigma = dict(zip(result.unknowns, result.sigma, strict=True))
+    values = dict(zip(result.robot.parameter_names, result.robot.values, strict=True))
+    asked = {t if t in TERMS else term_of(t) for t in terms}
+    return {"terms": [t for t in TERMS if t in asked], "kept": estimated,
+            "dropped": [n for n in result.identifiability.names
+                        if block_of(n) == "joint_errors" and n not in estimated],
+            "parameters": [{"name": n, "estimate": float(values[n]), "sigma": float(sigma[n])}
+                           for n in estimated]}
 
 
 def analyze(robot, joints_or_data, kind: str = "point", params="auto",

@@ -56,6 +56,11 @@ def run_demo(out_dir: Path, quiet: bool = False) -> dict[str, Path]:
         _line(f"  {method:<8} {res.before['rms']:>22.4f} {after['rms']:>10.4f} "
               f"{res.validation_before['rms']:>18.4f} {res.validation['rms']:>10.4f}"
               + (f"   ({len(res.rejected)} rejected observations left out)" if len(res.rejected) else ""))
+    chosen = robust.model_selection
+    if chosen is not None:
+        terms = ", ".join(chosen["chosen_terms"]) or "geometric"
+        _line(f"  joint-error model chosen by cross-validation on the calibration data: {terms} "
+              f"(of {len(chosen['candidates'])} candidates)")
     q_val = val.joints
     model_vs_truth = np.linalg.norm(robust.robot.fk(q_val)[:, :3, 3] - truth.fk(q_val)[:, :3, 3], axis=1)
     _line(f"  robust model vs the true robot on the validation poses: RMS "

@@ -52,7 +52,7 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     err = model_errors(robot, data)
     stats = position_stats(err)
     modelled = robot.fk(data.joints, smr=data.smr if data.kind in ("point", "pose") else None,
-                        approach=data.approach)[:, :3, 3]
+                        approach=data.approach, travel=data.travel)[:, :3, 3]
     check_residual(stats["rms"], modelled, "the evaluated data", force=force, warnings=warnings)
     stats["kind"] = data.kind
     stats["n_poses"] = data.n_poses
@@ -62,7 +62,7 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     else:
         stats["errors_mm"] = err * 1e3
     if data.kind == "pose":
-        R = robot.fk(data.joints, smr=data.smr, approach=data.approach)[:, :3, :3]
+        R = robot.fk(data.joints, smr=data.smr, approach=data.approach, travel=data.travel)[:, :3, :3]
         ang = np.linalg.norm(matrix_to_rotvec(data.rotations @ np.swapaxes(R, 1, 2)), axis=1)
         deg = np.rad2deg(ang)
         stats["rotation_deg"] = {"rms": float(np.sqrt(np.mean(deg**2))), "mean": float(deg.mean()),

@@ -8,7 +8,8 @@ EPILOG = """Examples:
   robocal calibrate data.csv --robot abb_irb2600 --validate val.csv -o calibrated.yaml --json result.json
   robocal calibrate data.csv --robot nominal.yaml --method robust --set k0=1.5 --set k1=3.0
   robocal calibrate data.csv --robot meca500 --params "a2 a3 d4 theta2 theta3" --report report.html
-  robocal calibrate irb120.csv --robot abb_irb120 --hold-out 500 --nongeometric compliance,gear,backlash
+  robocal calibrate irb120.csv --robot abb_irb120 --hold-out 500 --nongeometric auto
+  robocal calibrate irb120.csv --robot abb_irb120 --hold-out 500 --nongeometric compliance,backlash,travel
   robocal calibrate data.csv --robot abb_irb2600 --method genetic --set population=60 --set generations=100
   robocal calibrate data.csv --robot abb_irb2600 --method neural --set hidden=10 --network-out net.npz
   robocal calibrate contacts.csv scalebar.csv --robot abb_irb2600 --sigma plane=0.01 --sigma distance=0.005
@@ -22,7 +23,7 @@ outputs.
 
 
 RESERVED = ("seed", "method", "params", "validation", "progress", "nongeometric", "register_frames",
-            "rtol", "robot", "data", "force")
+            "rtol", "robot", "data", "force", "warm_start", "sigma")
 
 
 def _option(text: str):
@@ -78,9 +79,13 @@ def add_parser(sub) -> None:
     p.add_argument("--json", metavar="result.json", help="write the full result as JSON")
     p.add_argument("--report", metavar="report.html", help="write the HTML report")
     p.add_argument("--seed", type=int, default=0, help="random seed of stochastic methods")
-    p.add_argument("--nongeometric", metavar="TERMS",
+    p.add_argument("--nongeometric", metavar="TERMS", default="default",
                    help="non-geometric terms identified with the geometry (methods lsq, robust): "
-                        "compliance, gear, backlash (comma separated)")
+                        "compliance, gear, backlash, travel, cyclic (comma separated); auto: the "
+                        "terms chosen by cross-validation on the calibration data (the candidate "
+                        "table is printed); none: the geometric model only. Default: auto for "
+                        "lsq/robust on one file of tracker data (points or poses) with at least 100 "
+                        "poses, else none")
     p.add_argument("--network-out", metavar="net.npz",
                    help="method neural: save the trained network (.npz or .json, plain arrays)")
     p.add_argument("--set", dest="options", type=_option, action="append", default=[],

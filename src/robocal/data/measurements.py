@@ -11,8 +11,10 @@ One :class:`Measurements` holds one observation kind for all its rows:
 
 Every row also has ``approach (N, n)`` in {-1, 0, +1}: the direction each joint moved to reach
 the row's pose from the previous pose (the rows are in measurement order; 0 for the first pose
-and joints that did not move) — what a backlash model needs. It is derived from the row order
-when the data are created and travels with subsets, so random splits keep the true directions.
+and joints that did not move) — what a backlash model needs — and ``travel (N, n)`` rad, the signed
+move of each joint from the previous pose to this one (0 for the first pose) — what the travel
+model needs. Both are derived from the row order when the data are created and travel with
+subsets, so random splits and cross-validation folds keep the true measuring order's values.
 Every row also has ``joints (N, n)`` rad, ``pose_id (N,)`` (rows sharing one commanded pose: the
 SMRs of one pose, or repeated readings kept without averaging), ``smr (N,)`` (0 = the tool,
 s > 0 = ``Robot.smr[s - 1]``), an optional ``sigma (N,)`` m, and ``source_row (N,)``: the 1-based
@@ -24,7 +26,8 @@ Canonical CSV (DESIGN.md "Files"): optional leading ``#`` comment lines (the fir
 units: ``q1_deg..qn_deg`` or ``q1_rad..qn_rad``; ``x_mm y_mm z_mm`` or ``x_m y_m z_m``; optional
 ``smr``, ``sigma_mm``/``sigma_m``, ``qw qx qy qz`` (pose), ``plane`` (plane contacts, then no
 x/y/z), ``pair`` and ``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``,
-``approach1..approachn`` (written only where they differ from what the row order implies).
+``approach1..approachn`` and ``travel1_rad..traveln_rad`` (or ``_deg``) (each written only where
+it differs from what the row order implies).
 :meth:`Measurements.save` writes SI columns (``_rad``, ``_m``) with 17 significant digits, so a
 save/load round trip is exact (rotations through the quaternion to 1e-15).
 """
@@ -46,7 +49,7 @@ from robocal.kinematics.transforms import ROTATION_TOL
 
 KINDS = ("point", "pose", "plane", "distance")
 _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
-                 "pair", "distance", "approach")
+                 "pair", "distance", "approach", "travel")
 _LENGTH_COLUMNS = ("x", "y", "z", "sigma", "distance")
 _PLAIN_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row", "qw", "qx", "qy", "qz")
 _INT_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row")
@@ -97,6 +100,7 @@ class Measurements:
     distance: np.ndarray | None = None
     source: str = ""
     approach: np.ndarray | None = None
+    travel: np.ndarray | None = None
     file: str = ""  # the file it was read from (set by :meth:`load`)
 
     @property
@@ -116,11 +120,12 @@ class Measurements:
     @classmethod
     def from_arrays(cls, kind: str, joints, *, points=None, rotations=None, plane=None, pair=None,
                     distance=None, smr=None, sigma=None, pose_id=None, source_row=None,
-                    source: str = "", approach=None) -> Measurements:
+                    source: str = "", approach=None, travel=None) -> Measurements:
         """Validated measurements from arrays in SI units (rad, m).
 
         Defaults: ``smr`` 0, ``pose_id`` one per row (``0..N-1``), ``source_row`` ``1..N``,
-        ``approach`` from the row order (:func:`approach_from_order`).
+        ``approach`` and ``travel`` from the row order (:func:`approach_from_order`,
+        :func:`travel_from_order`).
         """
         if kind not in KINDS:
             raise DataError(f"unknown measurement kind {kind!r}: use one of {', '.join(KINDS)}")
@@ -180,8 +185,11 @@ class Measurements:
             approach = _int_array(approach.reshape(-1), "approach", N * n).reshape(N, n)
             if np.abs(approach).max(initial=0) > 1:
                 raise DataError("approach directions must be -1, 0 or +1")
+        travel = travel_from_order(joints, pose_id) if travel is None else \
+            _float_array(travel, "travel", (N, n))
         return cls(kind=kind, joints=joints, pose_id=pose_id, smr=smr, source_row=source_row,
-                   sigma=sigma, source=str(source).replace("\n", " "), approach=approach, **kw)
+                   sigma=sigma, source=str(source).replace("\n", " "), approach=approach,
+                   travel=travel, **kw)
 
     # ----------------------------------------------------------------- views
     def __len__(self) -> int:
@@ -294,6 +302,9 @@ class Measurements:
         if not np.array_equal(self.approach, approach_from_order(self.joints, self.pose_id)):
             for i in range(n):
                 cols[f"approach{i + 1}"] = self.approach[:, i]
+        if not np.array_equal(self.travel, travel_from_order(self.joints, self.pose_id)):
+            for i in range(n):
+                cols[f"travel{i + 1}_rad"] = self.travel[:, i]
         out = io.StringIO()
         if self.source:
             out.write(f"# {self.source}\n")
@@ -330,13 +341,18 @@ def _check_plausible(data: Measurements, reach: float, where: str) -> None:
                         "y_mm, z_mm)")
 
 
-def approach_from_order(joints: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
-    """``(N, n)`` sign of each joint's move from the previous pose to this row's pose, poses taken
-    in row order (consecutive rows with the same pose_id are one pose); 0 for the first pose."""
+def travel_from_order(joints: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
+    """``(N, n)`` rad: each joint's signed move from the previous pose to this row's pose, poses
+    taken in row order (consecutive rows with the same pose_id are one pose); 0 for the first pose."""
     new_pose = np.r_[True, pose_id[1:] != pose_id[:-1]]
     q = joints[new_pose]
-    step = np.sign(np.diff(q, axis=0, prepend=q[:1])).astype(np.int64)
-    return step[np.cumsum(new_pose) - 1]
+    return np.diff(q, axis=0, prepend=q[:1])[np.cumsum(new_pose) - 1]
+
+
+def approach_from_order(joints: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
+    """``(N, n)`` sign of each joint's move from the previous pose to this row's pose (the sign of
+    :func:`travel_from_order`); 0 for the first pose and joints that did not move."""
+    return np.sign(travel_from_order(joints, pose_id)).astype(np.int64)
 
 
 @dataclass(frozen=True)
@@ -402,12 +418,12 @@ def read_joints(path, robot=None) -> np.ndarray:
 
 def _header_role(name: str):
     """(role, index or None, scale) of one header name, or raise UnitError/None for unknown."""
-    m = re.fullmatch(r"q(\d+)_([a-z]+)", name)
+    m = re.fullmatch(r"(q|travel)(\d+)_([a-z]+)", name)
     if m:
-        unit = m.group(2)
+        unit = m.group(3)
         if unit not in ANGLE_UNITS:
             raise UnitError(f"unknown angle unit {unit!r} in column {name!r}: use _deg or _rad")
-        return "q", int(m.group(1)), ANGLE_UNITS[unit]
+        return m.group(1), int(m.group(2)), ANGLE_UNITS[unit]
     m = re.fullmatch(r"approach(\d+)", name)
     if m:
         return "approach", int(m.group(1)), 1.0
@@ -462,8 +478,8 @@ def _column_roles(header: list[str], name: str, header_line: int) -> dict:
         if role is None:
             raise DataError(f"{name}, line {header_line}: unknown column {h!r}; known columns are "
                             "q1_deg..qn_deg (or _rad), x_mm,y_mm,z_mm (or _m), smr, sigma_mm, qw,qx,qy,qz, "
-                            "plane, pair, distance_mm, pose_id, source_row. For another layout use "
-                            "`robocal import`")
+                            "plane, pair, distance_mm, pose_id, source_row, approach1..n, "
+                            "travel1_deg..n. For another layout use `robocal import`")
         roles[h] = role
     return roles
 
@@ -607,10 +623,18 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
             raise DataError(f"{name}: approach columns must be approach1..approach{len(joint_cols)}, one "
                             "per joint")
         approach = np.stack([col[h] for _, h in approach_cols], axis=1).astype(np.int64)
+    travel_cols = sorted((r[1], h) for h, r in roles.items() if r[0] == "travel")
+    travel = None
+    if travel_cols:
+        if [i for i, _ in travel_cols] != list(range(1, len(joint_cols) + 1)):
+            raise DataError(f"{name}: travel columns must be travel1..travel{len(joint_cols)} (_rad or "
+                            "_deg), one per joint")
+        travel = np.stack([col[h] * roles[h][2] for _, h in travel_cols], axis=1)
     ints = {c: (col[c].astype(np.int64) if c in col else None) for c in ("smr", "pose_id")}
     source_row = col["source_row"].astype(np.int64) if "source_row" in col else np.array(line_no)
     try:
         return Measurements.from_arrays(kind, joints, smr=ints["smr"], pose_id=ints["pose_id"],
-                                        source_row=source_row, source=source, approach=approach, **kw)
+                                        source_row=source_row, source=source, approach=approach,
+                                        travel=travel, **kw)
     except DataError as exc:
         raise DataError(f"{name}: {exc}") from None

@@ -46,7 +46,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.data.measurements import Measurements, approach_from_order
+from robocal.data.measurements import Measurements, approach_from_order, travel_from_order
 from robocal.errors import DataError, UnreachableError
 from robocal.io import write_all
 from robocal.kinematics.model import Robot
@@ -270,7 +270,8 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     q_rows = q[pose_id]
     N = len(q_rows)
     approach = approach_from_order(q_rows, pose_id)  # the poses are measured in this order
-    T = true.fk(q_rows, smr=smr, approach=approach)
+    travel = travel_from_order(q_rows, pose_id)
+    T = true.fk(q_rows, smr=smr, approach=approach, travel=travel)
     if kind in ("point", "pose"):
         kw, noise, outlier_rows = _tracker_readings(kind, T, rng, noise_mm, noise_model, outliers,
                                                     outlier_mm, rotation_noise_deg)
@@ -295,6 +296,7 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
             "noise_floor_mm": floor}
     source = f"simulated by robocal: robot {robot.name}, seed {seed}, {kind}, noise floor {floor:.6g} mm"
     data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id, approach=approach,
+                                    travel=travel,
                                     source_row=np.arange(2, N + 2), source=source, **kw)
     truth = replace(true, name=f"{robot.name}_true",
                     description=f"true robot of a robocal simulation (seed {seed}); noise floor "

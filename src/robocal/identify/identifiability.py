@@ -7,7 +7,11 @@ parameters whose columns explain it (the confounders). The selection runs in sta
 :data:`STAGES`): frame, SMR and nuisance parameters first, then the link parameters, then the
 joint-error terms, each stage on what the kept columns of the earlier stages leave unexplained,
 so that of a confounded pair the earlier stage's parameter is kept (d1 is dropped rather than
-base.z, gear1_c1 rather than theta1). Condition number of the scaled normal matrix with the
+base.z, gear1_c1 rather than theta1). A joint-error parameter must be more clearly independent:
+at least 1/sqrt(NG_MAX_VIF) of its column beyond what the kept columns explain, i.e. a variance
+inflation factor below NG_MAX_VIF, because a nearly confounded term (the harmonics of a joint
+that moves over a narrow range, pinned down by a few extreme poses) fits those poses and
+predicts new ones badly. Condition number of the scaled normal matrix with the
 seed-003 classes, and the observability indices O1 (Borm & Menq) .. O4 over the identifiable set.
 """
 
@@ -22,8 +26,11 @@ import scipy.linalg
 from robocal.identify.space import block_of
 
 DEFAULT_RTOL = 1e-7
-# the order in which blocks are selected (robocal.identify.space.BLOCKS)
-STAGES = (("base", "tool", "smr", "nuisance"), ("links",), ("joint_errors",))
+NG_MAX_VIF = 1000.0  # largest variance inflation factor of a kept joint-error parameter
+NG_RTOL = float(1.0 / np.sqrt(NG_MAX_VIF))  # the smallest relative pivot that allows
+# the order in which blocks are selected (robocal.identify.space.BLOCKS), each with the smallest
+# relative pivot it keeps whatever the rtol asked for
+STAGES = ((("base", "tool", "smr", "nuisance"), 0.0), (("links",), 0.0), (("joint_errors",), NG_RTOL))
 NO_EFFECT = 1e-9  # column norm, relative to the largest, below which a parameter has no effect
 
 
@@ -93,25 +100,46 @@ def _pivoted_rank(A: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
     return piv[:rank], Q[:, :rank]
 
 
+def _unit_columns(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``J`` with unit-norm columns, and the mask of columns with no effect. A column of rounding
+    noise (a parameter these data cannot see at all, e.g. alpha1 for distances) must not be
+    scaled up to a unit column that looks independent."""
+    norms = np.linalg.norm(J, axis=0)
+    zero = norms <= NO_EFFECT * norms.max(initial=0.0)
+    return J / np.where(zero, 1.0, norms), zero
+
+
+def _select(Js: np.ndarray, groups: Sequence[tuple[np.ndarray, float]], rtol: float) -> np.ndarray:
+    """Sorted indices of the columns of ``Js`` (unit columns) kept stage by stage: each group of
+    column indices on what the kept columns of the earlier groups leave unexplained, with its
+    own smallest relative pivot."""
+    kept, basis = [], np.zeros((Js.shape[0], 0))
+    for group, floor in groups:
+        cols = Js[:, group]
+        picked, Q = _pivoted_rank(cols - basis @ (basis.T @ cols), max(rtol, floor))
+        kept.append(group[picked])
+        basis = np.hstack([basis, Q])
+    return np.sort(np.concatenate(kept)).astype(int)
+
+
+def independent_columns(J: np.ndarray, k0: int, rtol: float = DEFAULT_RTOL) -> np.ndarray:
+    """Sorted indices (0-based among the columns ``k0:``) of the joint-error columns of ``J (M, k)``
+    that the joint-error stage keeps after the geometric columns ``J[:, :k0]`` (all kept)."""
+    Js, zero = _unit_columns(J)
+    geometric, terms = np.arange(k0), np.arange(k0, J.shape[1])
+    kept = _select(Js, [(geometric[~zero[:k0]], 0.0), (terms[~zero[k0:]], STAGES[-1][1])], rtol)
+    return kept[kept >= k0] - k0
+
+
 def analyze(J: np.ndarray, names: Sequence[str], n_poses: int,
             rtol: float = DEFAULT_RTOL) -> Identifiability:
     """Identifiability of ``names`` from the Jacobian ``J (M, k)`` (weighted rows), selected in
     the :data:`STAGES` of the module docstring."""
     names = list(names)
-    norms = np.linalg.norm(J, axis=0)
-    # a column of rounding noise (a parameter these data cannot see at all, e.g. alpha1 for
-    # distances) must not be scaled up to a unit column that looks independent
-    zero = norms <= NO_EFFECT * norms.max(initial=0.0)
-    Js = J / np.where(zero, 1.0, norms)
+    Js, zero = _unit_columns(J)
     blocks = np.array([block_of(nm) for nm in names])
-    kept, basis = [], np.zeros((J.shape[0], 0))
-    for stage in STAGES:
-        group = np.flatnonzero(np.isin(blocks, stage) & ~zero)
-        cols = Js[:, group]
-        picked, Q = _pivoted_rank(cols - basis @ (basis.T @ cols), rtol)
-        kept.append(group[picked])
-        basis = np.hstack([basis, Q])
-    kept_idx = np.sort(np.concatenate(kept)).astype(int)
+    kept_idx = _select(Js, [(np.flatnonzero(np.isin(blocks, stage) & ~zero), floor)
+                            for stage, floor in STAGES], rtol)
     rank = kept_idx.size
     drop_idx = sorted(set(range(len(names))) - set(kept_idx.tolist()))
     confounded: dict[str, list[str]] = {}

@@ -17,11 +17,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from robocal.errors import IdentificationError
+from robocal.kinematics.joint_errors import is_parameter_name
 from robocal.kinematics.model import Robot
 
 BLOCKS = ("links", "base", "tool", "smr", "joint_errors", "nuisance")
 _LINK = re.compile(r"^(alpha|a|beta|theta|d)\d+$")
-_JOINT_ERROR = re.compile(r"^(comp\d+_\d+|gear\d+_[sc][12]|backlash\d+)$")
 
 
 def block_of(name: str) -> str:
@@ -32,7 +32,7 @@ def block_of(name: str) -> str:
         return name.split(".")[0]
     if re.match(r"^smr\d+\.", name):
         return "smr"
-    if _JOINT_ERROR.match(name):
+    if is_parameter_name(name):
         return "joint_errors"
     return "nuisance"
 

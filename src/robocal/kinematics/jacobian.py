@@ -56,7 +56,7 @@ def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nda
 
 
 def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
-                      approach: np.ndarray | None = None):
+                      approach: np.ndarray | None = None, travel: np.ndarray | None = None):
     """:func:`motion_axes` for a robot, with the columns of its extra SMRs and of its joint-error
     terms appended (the order of :attr:`Robot.parameter_names`).
 
@@ -68,7 +68,8 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
     (:func:`joint_error_basis`): its axis is joint i's scaled by B_p, pose by pose.
     """
     tools = robot.tool if smr is None else robot.tools_for(smr)
-    tcp, u, o, rotation = motion_axes(robot.links, robot.base, tools, robot.reached_joints(q, approach))
+    reached = robot.reached_joints(q, approach, travel)
+    tcp, u, o, rotation = motion_axes(robot.links, robot.base, tools, reached)
     k = len(robot.smr)
     if k:
         L = 5 * robot.n_joints
@@ -81,7 +82,7 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
         o = np.concatenate([o, np.zeros_like(u_smr)], axis=1)
         rotation = np.concatenate([rotation, np.zeros(3 * k, bool)])
     if robot.joint_errors is not None:
-        B, joint = joint_error_basis(robot, q, robot.joint_errors.names, approach)  # (N, m), (m,)
+        B, joint = joint_error_basis(robot, q, robot.joint_errors.names, approach, travel)  # (N, m), (m,)
         theta = 5 * joint + 3
         u = np.concatenate([u, u[:, theta] * B.T], axis=1)
         o = np.concatenate([o, o[:, theta]], axis=1)
@@ -90,9 +91,11 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
 
 
 def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: str = "point",
-                            smr: np.ndarray | None = None, approach: np.ndarray | None = None):
+                            smr: np.ndarray | None = None, approach: np.ndarray | None = None,
+                            travel: np.ndarray | None = None):
     """d(TCP)/d(params) for joints ``q`` ``(N, n)`` (``smr`` ``(N,)``: each row's SMR index;
-    ``approach`` ``(N, n)``: joint approach directions for a backlash model).
+    ``approach`` ``(N, n)``: joint approach directions for a backlash model; ``travel`` ``(N, n)``
+    rad: joint moves for a travel model).
 
     kind 'point': ``(N, 3, k)`` position rows (m per m or m per rad);
     kind 'pose': ``(N, 6, k)`` position rows then orientation rows (rad per unit).
@@ -100,7 +103,7 @@ def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: s
     if kind not in ("point", "pose"):
         raise ModelError(f"unknown observation kind {kind!r}: use 'point' or 'pose'")
     idx = robot.indices(params)
-    tcp, u, o, rotation = robot_motion_axes(robot, q, smr, approach)
+    tcp, u, o, rotation = robot_motion_axes(robot, q, smr, approach, travel)
     return jacobian_from_axes(tcp, u[:, idx], o[:, idx], rotation[idx], kind)
 
 

@@ -1,4 +1,5 @@
-"""Non-geometric joint errors: compliance under gravity, gear (harmonic) errors, backlash.
+"""Non-geometric joint errors: compliance under gravity, gear (harmonic) errors, backlash,
+travel-proportional errors and cyclic (reducer) errors.
 
 The joint a robot really turns to is ``q + dq(q)`` with ``dq`` linear in the parameters::
 
@@ -6,11 +7,25 @@ The joint a robot really turns to is ``q + dq(q)`` with ``dq`` linear in the par
     gear        gear{i}_s1, gear{i}_c1, gear{i}_s2, gear{i}_c2:
                 dq_i += s1 sin q_i + c1 cos q_i + s2 sin 2q_i + c2 cos 2q_i
     backlash    backlash{i}:  dq_i += b_i * s_i
+    travel      travel{i}:    dq_i += t_i * m_i
+    cyclic      cyc{i}_{f}_s, cyc{i}_{f}_c:  dq_i += s sin(f q_i) + c cos(f q_i)
 
 Backlash (lost motion): a joint stops b_i short of or beyond its command depending on the
 direction s_i in {-1, 0, +1} from which it approached the pose (the sign of its last move; 0
 where unknown, which predicts the middle of the band). ``approach`` arrays carry s (N, n);
 :func:`robocal.data.measurements.approach_from_order` derives them from the measurement order.
+
+Travel: the joint ends ``t_i`` (dimensionless) times its last move ``m_i`` (rad, signed: this
+pose's joint minus the previous pose's, from the measurement order) away from its command; it is
+what remains of a settling / wind-up error that grows with the length of the move. ``travel``
+arrays carry m (N, n) (:func:`robocal.data.measurements.travel_from_order`; zeros when not given:
+a model used without them predicts a pose reached without moving).
+
+Cyclic: a transmission's periodic error at ``f`` cycles per revolution of the joint (``f`` > 2, a
+reducer's ratio or a multiple of it: an error that repeats with every turn of the motor or an
+intermediate shaft). The frequency is part of the parameter name (up to 2 decimals, e.g.
+``cyc4_50.14_s``), so a name alone fixes its basis; the frequencies are found from the data by
+:mod:`robocal.identify.frequency_search`.
 
 Mass model of the compliance term: the links beyond joint i are lumped into point masses at the
 origins o_j of the distal frames {j}, j = i+1..n (frame {n} is the flange, which also carries
@@ -20,7 +35,8 @@ all computed from the frames at the commanded joints (the deflection is small: f
 c_ij = k_i m_j |g| (rad/m) is the compliance k_i of joint i (rad/(N m)) times the weight of
 the lumped mass m_j (N): the product is what position data identify, and keeping one
 coefficient per (joint, mass) keeps the model linear (no scale ambiguity between k and m).
-Gear and backlash parameters are in rad. Joints are 1-based in the names.
+Gear, backlash and cyclic parameters are in rad, travel in rad per rad. Joints are 1-based in
+the names.
 """
 
 from __future__ import annotations
@@ -34,40 +50,79 @@ import numpy as np
 from robocal.errors import IdentificationError, ModelError
 from robocal.kinematics.fk import chain_frames
 
-TERMS = ("compliance", "gear", "backlash")
-UNITS = {"comp": "rad/m", "gear": "rad", "backlash": "rad"}  # SI unit of each kind's parameters
+TERMS = ("compliance", "gear", "backlash", "travel", "cyclic")
+UNITS = {"compliance": "rad/m", "gear": "rad", "backlash": "rad", "travel": "rad/rad",
+         "cyclic": "rad"}  # SI unit of each term's parameters
+CYCLIC_MIN_FREQUENCY = 2.0  # cycles per joint revolution; 1 and 2 are the gear term's harmonics
 _COMP = re.compile(r"^comp(\d+)_(\d+)$")
 _GEAR = re.compile(r"^gear(\d+)_([sc][12])$")
 _BACKLASH = re.compile(r"^backlash(\d+)$")
+_TRAVEL = re.compile(r"^travel(\d+)$")
+_CYCLIC = re.compile(r"^cyc(\d+)_(\d+(?:\.\d{1,2})?)_([sc])$")
+_PATTERNS = {"compliance": _COMP, "gear": _GEAR, "backlash": _BACKLASH, "travel": _TRAVEL,
+             "cyclic": _CYCLIC}
 
 
 def term_names(n: int, term: str) -> list[str]:
-    """All parameter names of one term for an ``n``-joint robot."""
+    """All parameter names of one term for an ``n``-joint robot (none for ``cyclic``, whose
+    frequencies come from the data: see :func:`cyclic_names`)."""
     if term == "compliance":
         return [f"comp{i}_{j}" for i in range(1, n + 1) for j in range(i + 1, n + 1)]
     if term == "gear":
         return [f"gear{i}_{h}" for i in range(1, n + 1) for h in ("s1", "c1", "s2", "c2")]
     if term == "backlash":
         return [f"backlash{i}" for i in range(1, n + 1)]
+    if term == "travel":
+        return [f"travel{i}" for i in range(1, n + 1)]
+    if term == "cyclic":
+        return []
     raise ModelError(f"unknown non-geometric term {term!r}; choose from {', '.join(TERMS)}")
 
 
+def cyclic_names(joint: int, frequency: float) -> list[str]:
+    """The two parameter names (sine, cosine) of a cyclic error of ``joint`` (1-based) at
+    ``frequency`` cycles per revolution, rounded to 0.01."""
+    f = round(float(frequency), 2)
+    if not f > CYCLIC_MIN_FREQUENCY:
+        raise ModelError(f"a cyclic error needs a frequency above {CYCLIC_MIN_FREQUENCY:g} cycles per "
+                         f"revolution (lower ones are the gear term), got {frequency!r}")
+    text = f"{f:.2f}".rstrip("0").rstrip(".")
+    return [f"cyc{joint}_{text}_s", f"cyc{joint}_{text}_c"]
+
+
+def term_of(name: str) -> str:
+    """The term ('compliance', 'gear', ...) a joint-error parameter name belongs to."""
+    for term, pattern in _PATTERNS.items():
+        if pattern.match(name):
+            return term
+    raise ModelError(f"{name!r} is not a joint-error parameter name")
+
+
+def is_parameter_name(name: str) -> bool:
+    """Whether ``name`` has the form of a joint-error parameter (for some joint count)."""
+    return any(rx.match(name) for rx in _PATTERNS.values())
+
+
 def parse_terms(spec) -> list[str]:
-    """``'compliance,gear'`` / a list -> validated term names (order kept, no repeats)."""
+    """``'compliance,gear'`` / a list -> validated term names and explicit joint-error parameter
+    names (e.g. ``cyc4_50_s``), order kept, no repeats."""
     items = spec.replace(",", " ").split() if isinstance(spec, str) else list(spec or [])
-    bad = [t for t in items if t not in TERMS]
+    bad = [t for t in items if t not in TERMS and not is_parameter_name(str(t))]
     if bad:
-        raise IdentificationError(f"unknown non-geometric term(s) {bad}; choose from {', '.join(TERMS)} "
-                         "(comma separated)")
+        raise IdentificationError(f"unknown non-geometric term(s) {bad}; choose from {', '.join(TERMS)}, "
+                                  "auto or none (comma separated), or name joint-error parameters "
+                                  "such as backlash2 or cyc4_50_s")
     return list(dict.fromkeys(items))
 
 
 def candidate_names(n: int, terms) -> list[str]:
-    """Every parameter name of the terms ``terms`` (see :func:`parse_terms`) for ``n`` joints."""
-    return [name for term in parse_terms(terms) for name in term_names(n, term)]
+    """The parameter names of terms and explicit names ``terms`` (see :func:`parse_terms`) for an
+    ``n``-joint robot, without repeats."""
+    names = [nm for t in parse_terms(terms) for nm in (term_names(n, t) if t in TERMS else [t])]
+    return list(dict.fromkeys(names))
 
 
-def _parse(name: str, n: int) -> tuple[int, str, int | str]:
+def _parse(name: str, n: int) -> tuple[int, str, int | str | tuple | None]:
     """(joint index 0-based, kind, detail) of a parameter name; ModelError if unknown."""
     m = _COMP.match(name)
     if m and 1 <= int(m[1]) < int(m[2]) <= n:
@@ -78,17 +133,25 @@ def _parse(name: str, n: int) -> tuple[int, str, int | str]:
     m = _BACKLASH.match(name)
     if m and 1 <= int(m[1]) <= n:
         return int(m[1]) - 1, "backlash", None
+    m = _TRAVEL.match(name)
+    if m and 1 <= int(m[1]) <= n:
+        return int(m[1]) - 1, "travel", None
+    m = _CYCLIC.match(name)
+    if m and 1 <= int(m[1]) <= n and float(m[2]) > CYCLIC_MIN_FREQUENCY:
+        return int(m[1]) - 1, "cyclic", (m[3], float(m[2]))
     raise ModelError(f"unknown joint-error parameter {name!r} for a {n}-joint robot: "
-                     "use comp{i}_{j} (i < j <= n), gear{i}_s1|c1|s2|c2 or backlash{i}")
+                     "use comp{i}_{j} (i < j <= n), gear{i}_s1|c1|s2|c2, backlash{i}, travel{i} or "
+                     f"cyc{{i}}_{{f}}_s|c (f > {CYCLIC_MIN_FREQUENCY:g} cycles per revolution)")
 
 
-def joint_error_basis(robot, q: np.ndarray, names: Sequence[str],
-                      approach: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def joint_error_basis(robot, q: np.ndarray, names: Sequence[str], approach: np.ndarray | None = None,
+                      travel: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(B (N, k), joint (k,))``: d(dq_joint[p])/d(param p) at joints ``q (N, n)`` (rad).
 
     ``dq[:, joint[p]] += B[:, p] * value[p]``. Compliance columns use the robot's frames at ``q``
     (its link parameters and base; the robot's own joint-error model is not applied); backlash
-    columns are the approach directions ``approach (N, n)`` (zeros when not given)."""
+    columns are the approach directions ``approach (N, n)`` and travel columns the joint moves
+    ``travel (N, n)`` rad (zeros when not given)."""
     n = robot.n_joints
     parsed = [_parse(nm, n) for nm in names]
     B = np.empty((q.shape[0], len(parsed)))
@@ -98,8 +161,14 @@ def joint_error_basis(robot, q: np.ndarray, names: Sequence[str],
             h = 2.0 if detail[1] == "2" else 1.0
             B[:, p] = np.sin(h * q[:, i]) if detail[0] == "s" else np.cos(h * q[:, i])
             continue
+        if kind == "cyclic":
+            B[:, p] = np.sin(detail[1] * q[:, i]) if detail[0] == "s" else np.cos(detail[1] * q[:, i])
+            continue
         if kind == "backlash":
             B[:, p] = 0.0 if approach is None else approach[:, i]
+            continue
+        if kind == "travel":
+            B[:, p] = 0.0 if travel is None else travel[:, i]
             continue
         if frames is None:
             _, frames = chain_frames(robot.links, robot.base, robot.tool, q, frames=True)
@@ -112,7 +181,7 @@ def joint_error_basis(robot, q: np.ndarray, names: Sequence[str],
 
 @dataclass(frozen=True, eq=False)
 class JointErrorModel:
-    """Named joint-error parameters and their values (rad/m for comp, rad for gear)."""
+    """Named joint-error parameters and their values (SI units of :data:`UNITS`)."""
 
     names: tuple[str, ...]
     values: np.ndarray
@@ -129,26 +198,28 @@ class JointErrorModel:
 
     @property
     def terms(self) -> list[str]:
-        """The terms present ('compliance', 'gear', 'backlash')."""
-        prefix = {"comp": "compliance", "gear": "gear", "backl": "backlash"}
-        kinds = {prefix[n[:5] if n.startswith("backl") else n[:4]] for n in self.names}
+        """The terms present, in the order of :data:`TERMS`."""
+        kinds = {term_of(n) for n in self.names}
         return [t for t in TERMS if t in kinds]
 
     def units(self) -> list[str]:
-        """SI unit of each parameter ('rad/m' for compliance, 'rad' for gear and backlash)."""
-        return [UNITS["backlash" if nm.startswith("backl") else nm[:4]] for nm in self.names]
+        """SI unit of each parameter (:data:`UNITS` of its term)."""
+        return [UNITS[term_of(nm)] for nm in self.names]
 
-    def offsets(self, robot, q: np.ndarray, approach: np.ndarray | None = None) -> np.ndarray:
+    def offsets(self, robot, q: np.ndarray, approach: np.ndarray | None = None,
+                travel: np.ndarray | None = None) -> np.ndarray:
         """Joint offsets ``dq (N, n)`` (rad) at commanded joints ``q (N, n)`` reached from the
-        directions ``approach (N, n)`` (backlash; None: unknown, mid-band)."""
-        B, joint = joint_error_basis(robot, q, self.names, approach)
+        directions ``approach (N, n)`` (backlash; None: unknown, mid-band) by the moves
+        ``travel (N, n)`` rad (None: no move)."""
+        B, joint = joint_error_basis(robot, q, self.names, approach, travel)
         dq = np.zeros_like(q)
         np.add.at(dq.T, joint, (B * self.values).T)
         return dq
 
     def to_dict(self) -> dict:
-        """Plain data for the model YAML (SI: rad/m for comp*, rad for gear*)."""
-        return {"units": "SI (comp: rad per m of unit-weight moment arm; gear, backlash: rad)",
+        """Plain data for the model YAML (SI units of :data:`UNITS`)."""
+        return {"units": "SI (comp: rad per m of unit-weight moment arm; gear, backlash, cyc: rad; "
+                         "travel: rad per rad of move)",
                 "parameters": dict(zip(self.names, self.values.tolist(), strict=True))}
 
     @classmethod

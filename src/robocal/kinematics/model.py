@@ -437,15 +437,16 @@ class Robot:
             raise DataError(f"joints contain NaN or infinite values in row(s) {bad[:10].tolist()}")
         return q
 
-    def reached_joints(self, q: np.ndarray, approach: np.ndarray | None = None) -> np.ndarray:
+    def reached_joints(self, q: np.ndarray, approach: np.ndarray | None = None,
+                       travel: np.ndarray | None = None) -> np.ndarray:
         """The joints ``(N, n)`` the robot really turns to for commanded ``q`` (rad): ``q + dq(q)``
         with the declared joint-error terms (``approach`` ``(N, n)``: each joint's approach
-        direction, for backlash)."""
+        direction, for backlash; ``travel`` ``(N, n)`` rad: each joint's last move, for travel)."""
         if self.joint_errors is None:
             return q
-        return q + self.joint_errors.offsets(self, q, approach)
+        return q + self.joint_errors.offsets(self, q, approach, travel)
 
-    def fk(self, q, frames: bool = False, smr=None, approach=None):
+    def fk(self, q, frames: bool = False, smr=None, approach=None, travel=None):
         """TCP poses ``(N, 4, 4)`` (world frame, m) for joints ``(N, n)`` in rad.
 
         ``smr`` ``(N,)`` picks each row's SMR (default: the tool). With ``frames=True`` returns
@@ -453,18 +454,18 @@ class Robot:
         {0}..{n} (frame {n} is the flange, before the tool). Joint-error terms turn the commanded
         joints into the joints the robot really reaches first (:meth:`reached_joints`).
         """
-        q = self.reached_joints(self.check_joints(q), approach)
+        q = self.reached_joints(self.check_joints(q), approach, travel)
         tool = self.tool if smr is None else self.tools_for(smr)
         if frames:
             return chain_frames(self.links, self.base, tool, q, frames=True)
         return chain_fk(self.links, self.base, tool, q)
 
     def jacobian(self, q, params: Sequence[str] | None = None, kind: str = "point", smr=None,
-                 approach=None):
+                 approach=None, travel=None):
         """Identification Jacobian ``(N, 3|6, k)``; see
         :func:`robocal.kinematics.jacobian.identification_jacobian`."""
         names = self.default_free(kind == "pose") if params is None else list(params)
-        return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach)
+        return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach, travel)
 
     def within_limits(self, q) -> np.ndarray:
         """``(N,)`` bool: every joint inside its limits."""

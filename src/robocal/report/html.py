@@ -32,7 +32,7 @@ h1{font-size:24px;margin:0 0 4px}h2{font-size:18px;margin:32px 0 8px;border-bott
 table{border-collapse:collapse;margin:6px 0 12px;font-size:13px}
 th,td{padding:3px 9px;border-bottom:1px solid #e3e3e3;text-align:right;white-space:nowrap}
 th{background:#f0f2f4;font-weight:600}td.l,th.l{text-align:left}
-tr.dropped td{background:#fff4e5}
+tr.dropped td{background:#fff4e5}tr.chosen td{background:#e8f4ea;font-weight:600}
 .kpi{display:flex;gap:14px;flex-wrap:wrap;margin:10px 0}
 .kpi div{border:1px solid #dde;border-radius:6px;padding:8px 14px;min-width:150px}
 .kpi b{display:block;font-size:22px}.kpi span{color:#666;font-size:12px}
@@ -336,15 +336,43 @@ def _nongeometric(ng: dict | None) -> str:
     rows = []
     for p in ng["parameters"]:
         name = str(p.get("name", ""))
-        unit = "deg/m" if name.startswith("comp") else "deg"
-        rows.append([esc(name), unit, _num(np.rad2deg(p.get("estimate", np.nan)), 5),
-                     _num(np.rad2deg(p.get("sigma", np.nan)), 5)])
+        unit, f = ("mdeg/deg", 1e3) if name.startswith("travel") else \
+            ("deg/m" if name.startswith("comp") else "deg", 180.0 / np.pi)
+        rows.append([esc(name), unit, _num(f * p.get("estimate", np.nan), 5),
+                     _num(f * p.get("sigma", np.nan), 5)])
     dropped = ng.get("dropped") or []
     return (f"<h3>Non-geometric terms: {esc(', '.join(ng.get('terms', [])))}</h3>"
             "<p>Joint errors the model adds to the commanded joints: compliance (per metre of "
-            "unit-weight moment arm), gear harmonics and backlash (half lost motion, by approach "
-            f"direction). {len(dropped)} candidate(s) the data cannot separate from the geometry "
+            "unit-weight moment arm), gear harmonics, backlash (half lost motion, by approach "
+            "direction), travel (error per degree of the joint's last move) and cyclic errors "
+            "(cyc{joint}_{cycles per revolution}). "
+            f"{len(dropped)} candidate(s) the data cannot separate from the geometry "
             "were left out.</p>" + _table(["name", "unit", "estimate", "1&sigma;"], rows, left=2))
+
+
+def _model_selection(ms: dict | None) -> str:
+    """The candidate error models with their cross-validated error, and the choice."""
+    if not ms or not ms.get("candidates"):
+        return ""
+    cands = ms["candidates"]
+    order = sorted(range(len(cands)), key=lambda i: cands[i].get("cv_rms_mm", np.inf))
+    rows, classes = [], []
+    for i in order:
+        c = cands[i]
+        mark = "chosen" if i == ms.get("chosen") else ("lowest CV error" if i == ms.get("best") else "")
+        rows.append([esc(", ".join(c.get("terms") or []) or "geometric"), esc(mark), _num(c.get("n_params")),
+                     _num(c.get("cv_rms_mm"), 4), _num(c.get("cv_se_mm"), 4),
+                     _num(c.get("calibration_rms_mm"), 4)])
+        classes.append("chosen" if i == ms.get("chosen") else "")
+    text = (f"<p>{esc(ms.get('method'))}, {_num(ms.get('n_poses'))} poses. Chosen: "
+            f"<b>{esc(', '.join(ms.get('chosen_terms') or []) or 'geometric')}</b> &mdash; "
+            f"{esc(ms.get('reason'))}.</p>")
+    freqs = ms.get("cyclic_frequencies") or []
+    if freqs:
+        text += ("<p>Cyclic errors found (joint: cycles per revolution): " + esc(", ".join(
+            f"J{c.get('joint')}: {c.get('cycles_per_rev')}" for c in freqs)) + ".</p>")
+    return text + _table(["model", "", "parameters", "CV RMS (mm)", "&plusmn; SE (mm)",
+                          "calibration fit RMS (mm)"], rows, left=2, row_class=classes)
 
 
 _IDENT_LABELS = {"n_params": "candidate parameters", "rank": "rank (identifiable)",
@@ -470,8 +498,11 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     sections = [("summary", "Summary", _summary(result))]
     if cal.ok:
         sections.append(("errors", "Errors before and after", _errors_section(cal, val)))
-    sections += [("parameters", "Parameters", _parameters(result)),
-                 ("identifiability", "Identifiability and observability", _identifiability(result))]
+    sections.append(("parameters", "Parameters", _parameters(result)))
+    selection = _model_selection(result.get("model_selection"))
+    if selection:
+        sections.append(("model-selection", "Error model selection", selection))
+    sections.append(("identifiability", "Identifiability and observability", _identifiability(result)))
     corr = _correlation(result)
     if corr:
         sections.append(("correlation", "Parameter correlation", corr))

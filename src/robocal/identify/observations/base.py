@@ -29,6 +29,7 @@ class Observation:
         self.q = robot.check_joints(data.joints)
         self.smr = np.asarray(data.smr, dtype=int)
         self.approach = getattr(data, "approach", None)  # joint approach directions (backlash)
+        self.travel = getattr(data, "travel", None)  # joint moves from the previous pose (travel)
         sigma = getattr(data, "sigma", None)
         self.item_sigma = None if sigma is None else np.asarray(sigma, dtype=float)
 
@@ -83,7 +84,7 @@ class Observation:
 
     def modelled_points(self, robot, nuisance: np.ndarray) -> np.ndarray:
         """``(N, 3)`` modelled positions (TCP / SMR / probe tip) in the world frame, m."""
-        return robot.fk(self.q, smr=self.smr, approach=self.approach)[:, :3, 3]
+        return robot.fk(self.q, smr=self.smr, approach=self.approach, travel=self.travel)[:, :3, 3]
 
     def position_errors(self, robot, nuisance: np.ndarray) -> np.ndarray:
         """``(N,)`` position error of each item in m (what the statistics report)."""
@@ -102,7 +103,7 @@ class Observation:
         links = type(moved.links)(*(v[:, None, :] for v in moved.links))
         q = np.broadcast_to(self.q, (P, N, n))
         if moved.joint_errors is not None:
-            B, joint = joint_error_basis(robot, self.q, robot.joint_errors.names, self.approach)
+            B, joint = joint_error_basis(robot, self.q, robot.joint_errors.names, self.approach, self.travel)
             onehot = np.eye(n)[joint]  # (m, n): which joint each term turns
             q = q + (B[None] * moved.joint_errors[:, None, :]) @ onehot
         return chain_frames(links, moved.base[:, None], tools, q)

@@ -55,7 +55,7 @@ class DistanceObservation(Observation):
     def jacobian(self, robot, names, nuisance=None) -> np.ndarray:
         v = self._vectors(self.modelled_points(robot, nuisance))
         e = v / np.linalg.norm(v, axis=1, keepdims=True)
-        J = identification_jacobian(robot, self.q, names, "point", self.smr, self.approach)
+        J = identification_jacobian(robot, self.q, names, "point", self.smr, self.approach, self.travel)
         return np.einsum("pi,pik->pk", e, J[self.ends[0]] - J[self.ends[1]])
 
     def residuals_batch(self, robot, names, X, nuisance=None) -> np.ndarray:

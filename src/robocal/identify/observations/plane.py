@@ -120,7 +120,7 @@ class PlaneObservation(Observation):
 
     def modelled_points(self, robot, nuisance=None) -> np.ndarray:
         """``(N, 3)`` modelled probe tip positions (base frame), m."""
-        return robot.fk(self.q, approach=self.approach)[:, :3, 3]
+        return robot.fk(self.q, approach=self.approach, travel=self.travel)[:, :3, 3]
 
     def _local(self, points: np.ndarray) -> np.ndarray:
         """Points ``(..., N, 3)`` reordered per contact to ``(u, v, d)`` of its plane."""
@@ -193,7 +193,8 @@ class PlaneObservation(Observation):
         p = self.modelled_points(robot)
         h = self.signed_distance(p, nuisance)
         normal = self.plane_normals(nuisance)[self.plane_of]  # (N, 3)
-        J_tip = identification_jacobian(robot, self.q, names, "point", approach=self.approach)
+        J_tip = identification_jacobian(robot, self.q, names, "point", approach=self.approach,
+                                       travel=self.travel)
         J_robot = np.einsum("ni,nik->nk", normal, J_tip) if len(names) else np.zeros((self.n_items, 0))
         coef = nuisance.reshape(-1, 3)[self.plane_of]
         a, b = coef[:, 0], coef[:, 1]

@@ -20,7 +20,7 @@ class PointObservation(Observation):
         return (self.measured - self.modelled_points(robot, nuisance)).reshape(-1)
 
     def jacobian(self, robot, names, nuisance=None) -> np.ndarray:
-        J = identification_jacobian(robot, self.q, names, "point", self.smr, self.approach)
+        J = identification_jacobian(robot, self.q, names, "point", self.smr, self.approach, self.travel)
         return J.reshape(-1, len(names))
 
     def residuals_batch(self, robot, names, X, nuisance=None) -> np.ndarray:

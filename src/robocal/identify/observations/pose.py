@@ -29,11 +29,11 @@ class PoseObservation(Observation):
         self.scale = np.array([1.0, 1.0, 1.0, length_scale, length_scale, length_scale])
 
     def residuals(self, robot, nuisance=None) -> np.ndarray:
-        T = robot.fk(self.q, smr=self.smr, approach=self.approach)
+        T = robot.fk(self.q, smr=self.smr, approach=self.approach, travel=self.travel)
         return (pose_error(self.measured, T) * self.scale).reshape(-1)
 
     def jacobian(self, robot, names, nuisance=None) -> np.ndarray:
-        J = identification_jacobian(robot, self.q, names, "pose", self.smr, self.approach)
+        J = identification_jacobian(robot, self.q, names, "pose", self.smr, self.approach, self.travel)
         return (J * self.scale[None, :, None]).reshape(-1, len(names))
 
     def residuals_batch(self, robot, names, X, nuisance=None) -> np.ndarray:

@@ -1,0 +1,203 @@
+"""Find the frequencies of cyclic joint errors (term ``cyclic``) in a calibration's residuals.
+
+A transmission repeats its error with every turn of its motor or of an intermediate shaft, so a
+joint's error holds a sinusoid in ``f q_i`` with ``f`` the reduction ratio (or a multiple) in
+cycles per joint revolution: dq_i = s sin(f q_i) + c cos(f q_i). The search is greedy, on the
+linearised problem at a fitted model (a periodogram in the joint angle):
+
+1. For each joint and each frequency on a grid from CYCLIC_MIN_FREQUENCY to ``max_frequency``
+   (step pi / (2 span_i), half the width of a peak over the joint's span in the data), the Wald
+   statistic of adding the two columns ``d(TCP)/d(theta_i) * (sin f q_i, cos f q_i)`` to the
+   fitted model, vectorised over frequencies. The variance is cluster-robust by pose (the
+   residuals of the SMRs of one pose are one error of the flange, and the residuals are
+   heavy-tailed), so the statistic is chi-square with 2 degrees of freedom when there is no
+   such error, whatever the noise.
+2. Each joint's highest peak is refined to the least-squares frequency within one grid step. In
+   decreasing order of the peaks, each is tested exactly (columns made orthogonal to the model
+   with the ones kept before it) and kept when
+   its statistic exceeds ``2 ln(n_independent / alpha)`` — the level a pure-noise periodogram
+   exceeds with probability ``alpha`` over the n_independent frequencies searched (Bonferroni)
+   — and its column is not confounded with the model's (variance inflation below NG_MAX_VIF).
+3. The kept columns join the model and the search repeats, until a round keeps nothing.
+4. (:meth:`FrequencyScan.polish`, for the model delivered) each frequency is moved to its exact
+   least-squares value with all the others in the model.
+
+Whole-campaign cost: the sine/cosine tables (poses x frequencies) are computed once per pose set
+(:class:`FrequencyScan`) and shared by the cross-validation folds, which search on their
+training poses only (``mask``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse
+
+from robocal.identify.identifiability import NG_RTOL
+from robocal.kinematics.joint_errors import CYCLIC_MIN_FREQUENCY
+
+MAX_FREQUENCY = 400.0        # cycles per revolution: twice the largest common reducer ratio
+FALSE_ALARM = 0.01           # probability that noise alone yields one frequency
+MAX_PER_JOINT = 3            # frequencies kept per joint at most
+MIN_SPAN = np.deg2rad(20.0)  # a joint that moves less is not searched
+_SCREEN = 0.25               # peaks whose screening statistic is below this x threshold are not tested
+_REFINE_POINTS = 21          # least-squares refinement grid over +-1 grid step around a peak
+_POLISH_POINTS = 9           # exact refinement grid over +-1/2 grid step (polish)
+
+
+class FrequencyScan:
+    """Sine/cosine tables of the poses' joint angles on each joint's frequency grid.
+
+    ``q (N, n)`` joints of the measurement items (rad), ``group (N,)`` their pose labels (items
+    of one pose share the joints); ``max_frequency`` in cycles per revolution."""
+
+    def __init__(self, q: np.ndarray, group: np.ndarray, max_frequency: float = MAX_FREQUENCY) -> None:
+        _, first, self.pose_of_item = np.unique(group, return_index=True, return_inverse=True)
+        self.q_item = np.asarray(q, float)
+        q_pose = self.q_item[first]
+        self.n_poses = q_pose.shape[0]
+        span = np.ptp(q_pose, axis=0)
+        self.step = np.pi / (2.0 * np.maximum(span, 1e-12))
+        self.grids = [np.arange(CYCLIC_MIN_FREQUENCY + self.step[i], max_frequency, self.step[i])
+                      if span[i] >= MIN_SPAN else np.zeros(0) for i in range(q_pose.shape[1])]
+        self.n_independent = max(sum(g.size for g in self.grids) / 2.0, 1.0)
+        self.q_pose = q_pose
+        self.tables = []  # per joint: [sin, cos] and [sin 2x, cos 2x] of f q, (poses, 2F) float32
+        for i, grid in enumerate(self.grids):
+            phase = np.outer(q_pose[:, i], grid).astype(np.float32)  # a screening: 1e-4 rad is plenty
+            s, c = np.sin(phase), np.cos(phase)
+            self.tables.append((np.hstack([s, c]), np.hstack([2 * s * c, c * c - s * s])))
+
+    def columns(self, Jtheta: np.ndarray, rows: int, found) -> np.ndarray:
+        """``(M, 2k)`` columns ``Jtheta[:, i] * (sin f q_i, cos f q_i)`` of ``found`` [(i, f)]."""
+        cols = []
+        for i, f in found:
+            qi = np.repeat(self.q_item[:, i], rows)
+            cols += [Jtheta[:, i] * np.sin(f * qi), Jtheta[:, i] * np.cos(f * qi)]
+        return np.stack(cols, axis=1) if cols else np.zeros((Jtheta.shape[0], 0))
+
+    def search(self, J: np.ndarray, r: np.ndarray, Jtheta: np.ndarray, rows: int,
+               mask: np.ndarray | None = None, alpha: float = FALSE_ALARM) -> list[tuple[int, float]]:
+        """Significant cyclic errors ``[(joint 0-based, frequency)]`` of the model with weighted
+        Jacobian ``J (M, p)`` and residuals ``r (M,)`` at its fit; ``Jtheta (M, n)`` are the
+        weighted theta columns there, ``rows`` the residual rows per item, ``mask (N,)`` the items
+        to use (default all)."""
+        n_items, n = self.q_item.shape
+        keep = np.ones(n_items, bool) if mask is None else np.asarray(mask, bool)
+        row_keep = np.repeat(keep, rows)[:, None]
+        J, r, Jtheta = J * row_keep, r * row_keep[:, 0], Jtheta * row_keep
+        pose_of_row = np.repeat(self.pose_of_item, rows)
+        weight = np.zeros((self.n_poses, n))  # sum of squared theta columns per pose (refinement)
+        np.add.at(weight, pose_of_row, Jtheta**2)
+        rows_all = np.arange(pose_of_row.size)
+        to_pose = scipy.sparse.csr_matrix((np.ones(rows_all.size), (pose_of_row, rows_all)),
+                                          shape=(self.n_poses, rows_all.size))  # sums rows per pose
+        U = _orthonormal(J)
+        r = r - U @ (U.T @ r)
+        threshold = 2.0 * np.log(self.n_independent / alpha)
+        found: list[tuple[int, float]] = []
+        while True:
+            y = to_pose @ (Jtheta * r[:, None])  # (poses, n): residual along each joint's motion
+            peaks = []
+            for i, grid in enumerate(self.grids):
+                if grid.size and sum(j == i for j, _ in found) < MAX_PER_JOINT:
+                    w = _wald_scan(y[:, i], self.tables[i])
+                    t = int(np.argmax(w))
+                    peaks.append((float(w[t]), i, self._refine(i, float(grid[t]), y[:, i], weight[:, i])))
+            added = 0
+            for screen, i, f in sorted(peaks, reverse=True):  # each joint's best, re-tested after each
+                if screen < _SCREEN * threshold:
+                    break  # far below significance already in the screening statistic
+                stat, cp = self._exact(i, f, Jtheta, rows, U, r, to_pose)
+                if cp is None or stat < threshold:
+                    continue
+                found.append((i, f))
+                added += 1
+                Q = _orthonormal(cp - U @ (U.T @ cp))
+                U = np.hstack([U, Q])
+                r = r - Q @ (Q.T @ r)
+            if not added:
+                break
+        return found
+
+    def polish(self, found, J: np.ndarray, r: np.ndarray, Jtheta: np.ndarray,
+               rows: int) -> list[tuple[int, float]]:
+        """``found`` with each frequency moved to its exact least-squares value given the model and
+        the other frequencies (one backfitting pass; the search refines each peak before the later
+        ones join the model, which biases overlapping ones by a few hundredths)."""
+        out = list(found)
+        for k, (i, f0) in enumerate(out):
+            U = _orthonormal(np.hstack([J, self.columns(Jtheta, rows, out[:k] + out[k + 1 :])]))
+            rp = r - U @ (U.T @ r)
+            grid = f0 + np.linspace(-0.5, 0.5, _POLISH_POINTS) * self.step[i]
+            qi = np.repeat(self.q_item[:, i], rows)[:, None] * grid[None]
+            S, C = Jtheta[:, [i]] * np.sin(qi), Jtheta[:, [i]] * np.cos(qi)
+            S, C = S - U @ (U.T @ S), C - U @ (U.T @ C)
+            gain = _quadratic_form(S.T @ rp, C.T @ rp, (S * S).sum(0), (C * C).sum(0), (S * C).sum(0))
+            out[k] = (i, _peak(grid, gain))
+        return out
+
+    def _refine(self, i: int, f0: float, y: np.ndarray, weight: np.ndarray) -> float:
+        """The least-squares frequency near the peak ``f0`` (within one grid step), to 0.01.
+
+        ``y (poses,)`` is the residual along joint i's motion per pose, ``weight (poses,)`` the
+        squared norm of its column; the columns' small overlap with the model's is neglected
+        here (the statistic of the refined frequency is then computed exactly)."""
+        grid = f0 + np.linspace(-1.0, 1.0, _REFINE_POINTS) * self.step[i]
+        phase = np.outer(self.q_pose[:, i], grid)
+        s, c = np.sin(phase), np.cos(phase)
+        gain = _quadratic_form(y @ s, y @ c, weight @ (s * s), weight @ (c * c), weight @ (s * c))
+        return _peak(grid, gain)
+
+    def _exact(self, i: int, f: float, Jtheta, rows: int, U, r, to_pose):
+        """Exact cluster-robust Wald statistic of joint ``i`` at ``f`` with the columns made
+        orthogonal to the model's ``U``; (0, None) when they are confounded with it."""
+        c = self.columns(Jtheta, rows, [(i, f)])
+        cp = c - U @ (U.T @ c)
+        if (np.linalg.norm(cp, axis=0) < NG_RTOL * np.maximum(np.linalg.norm(c, axis=0), 1e-300)).any():
+            return 0.0, None
+        g = to_pose @ (cp * r[:, None])
+        b = cp.T @ r
+        V = g.T @ g * self.n_poses / max(self.n_poses - 1, 1)
+        if np.linalg.det(V) <= 0:
+            return 0.0, None
+        return float(b @ np.linalg.solve(V, b)), cp
+
+
+def _peak(grid: np.ndarray, gain: np.ndarray) -> float:
+    """The grid's best frequency, refined by a parabola through its neighbours, to 0.01."""
+    t = int(np.argmax(gain))
+    if 0 < t < grid.size - 1:
+        a, b, c = gain[t - 1], gain[t], gain[t + 1]
+        shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c < 0 else 0.0
+        return round(float(grid[t] + shift * (grid[1] - grid[0])), 2)
+    return round(float(grid[t]), 2)
+
+
+def _orthonormal(A: np.ndarray) -> np.ndarray:
+    """Orthonormal basis of the column space of ``A`` (columns scaled first)."""
+    if A.shape[1] == 0:
+        return np.zeros((A.shape[0], 0))
+    norms = np.linalg.norm(A, axis=0)
+    U, s, _ = np.linalg.svd(A / np.where(norms > 0, norms, 1.0), full_matrices=False)
+    return U[:, s > 1e-10 * max(s[0], 1e-300)]
+
+
+def _wald_scan(y: np.ndarray, table) -> np.ndarray:
+    """Cluster-robust Wald statistic of (sin, cos) at every grid frequency; ``y (poses,)``.
+
+    A screening statistic in float32 (the best peaks are checked exactly); the variance sums use
+    sin^2 = (1 - cos 2x) / 2, cos^2 = (1 + cos 2x) / 2, sin cos = sin 2x / 2."""
+    first, double = table
+    y2 = y * y
+    bs, bc = np.split((y.astype(np.float32) @ first).astype(float), 2)
+    s2, c2 = np.split((y2.astype(np.float32) @ double).astype(float), 2)
+    total = float(y2.sum())
+    return _quadratic_form(bs, bc, (total - c2) / 2.0, (total + c2) / 2.0, s2 / 2.0)
+
+
+def _quadratic_form(a, b, gaa, gbb, gab) -> np.ndarray:
+    """``[a b] G^-1 [a b]^T`` for the 2x2 matrices ``G = [[gaa, gab], [gab, gbb]]`` (vectorised);
+    0 where G is singular."""
+    det = gaa * gbb - gab * gab
+    ok = det > 1e-30 * np.maximum(gaa * gbb, 1e-300)
+    return np.where(ok, (gbb * a * a - 2.0 * gab * a * b + gaa * b * b) / np.where(ok, det, 1.0), 0.0)

@@ -1,0 +1,347 @@
+"""``nongeometric="auto"``: choose the joint-error model by cross-validation on the calibration data.
+
+Candidates: the geometric model and every combination of the joint-error terms the data can
+carry (compliance, gear, backlash, travel, and cyclic when the frequency search finds any).
+Each is judged by K-fold cross-validation on the calibration data alone, folds by whole poses
+(every SMR of a pose in the same fold; distance data: by pair). The approach directions and
+moves each row carries come from the full measuring order (``Measurements.approach`` and
+``.travel`` are kept through subsets), so a pose's backlash direction is the one of the pose
+measured before it, whichever fold that one is in.
+
+Cost: one calibration of the largest model (all fixed terms; the *superset*), from nominal. Every
+candidate's fold fits then start from that full-data fit: the problem is linearised there once
+(one Jacobian with the columns of every candidate term) and each fold fit is the Gauss-Newton
+step from it on the fold's training poses — with the terms a candidate leaves out set to zero —
+computed from per-fold normal matrices, so 32 candidates x K folds cost a few small solves each.
+The calibration is close to linear over the differences between candidates (sub-millimetre
+displacements; the second-order error of the step is below a micrometre), which
+tests/test_model_selection.py checks against full nonlinear fold calibrations. The cyclic
+frequencies are searched again inside each fold on its training poses only, so the
+cross-validated error of a candidate with cyclic terms includes the search (nested; a search on
+all the data would favour it wrongly); the frequencies of the full data are then polished to
+their exact least-squares values (:meth:`FrequencyScan.polish`; the folds skip this, which can
+only make their error a little pessimistic). Finally the chosen model is calibrated with the
+joint-error parameters the candidate kept named explicitly (the model cross-validated is the
+model delivered; its own third identifiability stage may still drop one that is confounded at
+the nominal model): for lsq from the superset's estimate (``calibrate(..., warm_start=)``, a few
+iterations to the same minimum), for robust from nominal (its IGG3 weights depend on the path, so
+the result is the robust calibration of that model named explicitly).
+
+The calibrations themselves are the caller's (:func:`robocal.calibration.calibrate` passes its
+``fit(terms, validations, warm_start)``), so this module sits below the API layer.
+
+Choice (one-standard-error rule): the candidate with the lowest cross-validated RMS position
+error, unless a simpler one — fewer identified parameters — is within one standard error of it
+(the standard error of the best candidate's error over the K folds); then the simplest such one.
+Robust calibrations: the fold fits use the superset's IGG3 weights and the error is scored on
+the observations it kept.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from robocal.errors import IdentificationError
+from robocal.identify.frequency_search import FrequencyScan
+from robocal.identify.identifiability import independent_columns
+from robocal.identify.space import ParameterSpace, State, block_of
+from robocal.kinematics.joint_errors import TERMS, candidate_names, cyclic_names, term_of
+
+FOLDS = 5
+FIXED_TERMS = tuple(t for t in TERMS if t != "cyclic")
+MIN_POSES_PER_FOLD = 5
+# fit(terms, validations, warm_start) -> CalibrationResult: one calibration with those terms
+Fit = Callable[[list, list, object], object]
+EIGEN_RCOND = 1e-13  # relative cut-off of the scaled normal matrix's eigenvalues in a fold fit
+CHOLESKY_MIN_PIVOT = 1e-10  # smallest squared Cholesky pivot (unit diagonal) trusted without cut-off
+
+
+@dataclass
+class _Linearised:
+    """The superset fit linearised: weighted columns of every candidate unknown, residuals."""
+
+    A: np.ndarray          # (M, k) weighted columns: geometric + nuisance, then joint errors
+    r: np.ndarray          # (M,) weighted residuals at the superset estimate
+    k0: int                # geometric + nuisance columns
+    ng_names: list[str]    # names of the joint-error columns A[:, k0:]
+    ng_values: np.ndarray  # their values at the superset estimate (0 where it dropped them)
+    Jtheta: np.ndarray     # (M, n) weighted theta columns (cyclic columns are built from them)
+    sigma: np.ndarray      # (M,) residual scale of each row (m)
+    rows: int              # residual rows per item
+    group: np.ndarray      # (N,) fold group of each item
+    weight: np.ndarray     # (N,) item weight (robust; 1 otherwise)
+    q_item: np.ndarray | None  # (N, n) joints of each item (None: items span two poses)
+
+
+def _linearise(result, ng_names: list[str]) -> _Linearised:
+    """Columns of the (one-set) result's unknowns plus every name of ``ng_names`` at its estimate."""
+    problem, state = result.problem, result.state
+    obs = problem.observation
+    robot = state.robot.with_joint_errors(list(dict.fromkeys(state.robot.joint_error_names + ng_names)))
+    values = np.array([robot.get(nm) for nm in ng_names])
+    n = robot.n_joints
+    geometric = [nm for nm in result.names if block_of(nm) != "joint_errors"]
+    thetas = [f"theta{i + 1}" for i in range(n)]
+    space = ParameterSpace((*geometric, *[t for t in thetas if t not in geometric], *ng_names),
+                           tuple(problem.nuisance_names))
+    state = State(robot, state.nuisance)
+    J = problem.jacobian(state, space)  # one pass: robot columns (with the thetas), then nuisance
+    column = {nm: j for j, nm in enumerate(space.names)}
+    A = J[:, [column[nm] for nm in (*geometric, *space.nuisance, *ng_names)]]
+    Jtheta = J[:, [column[t] for t in thetas]]
+    r = problem.residuals(state)
+    data, rows = obs.data, obs.rows_per_item
+    item_of_rows = obs.item_of_rows()
+    group = np.empty(obs.n_items, dtype=np.int64)
+    one_pose = obs.n_items == len(data)
+    group[item_of_rows] = data.pose_id if one_pose else item_of_rows
+    q_item = None
+    if one_pose:
+        q_item = np.empty((obs.n_items, n))
+        q_item[item_of_rows] = data.joints
+    weights = result.solver.item_weights
+    weight = np.ones(obs.n_items) if weights is None else np.asarray(weights, float)
+    return _Linearised(A, r, A.shape[1] - len(ng_names), list(ng_names), values, Jtheta, problem.sigma,
+                       rows, group, weight, q_item)
+
+
+def _folds(group: np.ndarray, k: int, seed: int) -> np.ndarray:
+    """Fold index ``(N,)`` of each item: whole groups, assigned at random in equal numbers."""
+    labels = np.unique(group)
+    order = np.random.default_rng(seed).permutation(labels.size)
+    fold_of_label = np.empty(labels.size, dtype=np.int64)
+    fold_of_label[order] = np.arange(labels.size) % k
+    return fold_of_label[np.searchsorted(labels, group)]
+
+
+@dataclass
+class _Candidate:
+    terms: tuple[str, ...]
+    columns: np.ndarray   # indices into the linearised A (geometric + the kept joint errors)
+    zeroed: np.ndarray    # joint-error columns held at zero (left out or dropped)
+    cyclic: bool
+    ng_names: list[str]   # the kept joint-error parameters (without the cyclic ones)
+
+
+def _solve(G: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Least-squares step from the normal equations ``G x = h`` (column-scaled; Cholesky, or an
+    eigen-decomposition with a cut-off when a fold leaves the columns nearly dependent)."""
+    d = np.sqrt(np.maximum(np.diag(G), 1e-300))
+    Gs, hs = G / np.outer(d, d), h / d
+    try:
+        factor = scipy.linalg.cho_factor(Gs)
+        if np.min(np.abs(np.diag(factor[0]))) ** 2 > CHOLESKY_MIN_PIVOT:
+            return scipy.linalg.cho_solve(factor, hs) / d
+    except np.linalg.LinAlgError:
+        pass
+    w, V = np.linalg.eigh(Gs)
+    keep = w > EIGEN_RCOND * max(w[-1], 1e-300)
+    return (V[:, keep] @ ((V[:, keep].T @ hs) / w[keep])) / d
+
+
+class _CrossValidation:
+    """K-fold fits of candidate column sets from the linearised superset, by normal equations."""
+
+    def __init__(self, lin: _Linearised, fold: np.ndarray, k: int, scan: FrequencyScan | None,
+                 fold_cyclic: list[list[tuple[int, float]]], full_cyclic: list[tuple[int, float]]):
+        self.lin, self.k = lin, k
+        rows = lin.rows
+        self.row_fold = np.repeat(fold, rows)
+        self.row_weight = np.sqrt(np.repeat(lin.weight, rows))
+        self.scored = lin.weight > 0
+        A = lin.A * self.row_weight[:, None]
+        self.r = lin.r * self.row_weight
+        self.A = A
+        self.extra_full = np.zeros((A.shape[0], 0)) if scan is None else \
+            scan.columns(lin.Jtheta, rows, full_cyclic) * self.row_weight[:, None]
+        self.extra_fold = [np.zeros((A.shape[0], 0)) if scan is None else
+                           scan.columns(lin.Jtheta, rows, found) * self.row_weight[:, None]
+                           for found in fold_cyclic]
+        self.gram, self.test = [], []  # per fold: normal equations of the training rows, test rows
+        for f in range(k):
+            train, test = self.row_fold != f, self.row_fold == f
+            B = np.hstack([A[train], self.extra_fold[f][train]])
+            self.gram.append((B.T @ B, B.T @ self.r[train], B.T @ A[train]))
+            self.test.append((test, np.hstack([A[test], self.extra_fold[f][test]])))
+        B = np.hstack([A, self.extra_full])
+        self.gram_full = (B.T @ B, B.T @ self.r, B.T @ A)
+        self.test_full = (np.ones(A.shape[0], bool), B)
+
+    def _fit(self, gram, cand: _Candidate, n_extra: int) -> np.ndarray:
+        """Step ``x`` on the candidate's columns (then the cyclic ones) for one Gram set."""
+        G, h, GA = gram
+        k = self.A.shape[1]
+        cols = np.r_[cand.columns, np.arange(k, k + n_extra)] if cand.cyclic else cand.columns
+        v = self.lin.ng_values[cand.zeroed - self.lin.k0]
+        rhs = h[cols] + GA[np.ix_(cols, cand.zeroed)] @ v  # residual with the left-out terms at zero
+        return cols, _solve(G[np.ix_(cols, cols)], rhs)
+
+    def _errors(self, test, cand: _Candidate, cols: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Position error (m) of the items of the ``test`` rows (mask, their columns) after the step."""
+        rows, B = test
+        v = self.lin.ng_values[cand.zeroed - self.lin.k0]
+        e = self.r[rows] + B[:, cand.zeroed] @ v - B[:, cols] @ x
+        e = e / np.where(self.row_weight[rows] > 0, self.row_weight[rows], 1.0) * self.lin.sigma[rows]
+        per_item = e.reshape(-1, self.lin.rows)[:, :3]
+        return np.linalg.norm(per_item, axis=1)
+
+    def evaluate(self, cand: _Candidate) -> dict:
+        """Cross-validated RMS (mm), its standard error over the folds, and the full-data fit's RMS."""
+        squares, fold_rms = [], []
+        items = np.arange(self.lin.group.size)
+        for f in range(self.k):
+            cols, x = self._fit(self.gram[f], cand, self.extra_fold[f].shape[1])
+            err = self._errors(self.test[f], cand, cols, x)
+            scored = self.scored[items[self.test[f][0][:: self.lin.rows]]]
+            squares.append(err[scored] ** 2)
+            fold_rms.append(np.sqrt(np.mean(err[scored] ** 2)))
+        cols, x = self._fit(self.gram_full, cand, self.extra_full.shape[1])
+        fit = self._errors(self.test_full, cand, cols, x)[self.scored]
+        return {"cv_rms_mm": float(np.sqrt(np.mean(np.concatenate(squares))) * 1e3),
+                "cv_se_mm": float(np.std(fold_rms, ddof=1) / np.sqrt(self.k) * 1e3),
+                "fold_rms_mm": [float(v * 1e3) for v in fold_rms],
+                "calibration_rms_mm": float(np.sqrt(np.mean(fit ** 2)) * 1e3),
+                "n_params": int(cols.size)}
+
+
+def _candidates(lin: _Linearised, terms: list[str], has_cyclic: bool, rtol: float) -> list[_Candidate]:
+    """Every combination of ``terms`` (cyclic last), its kept joint-error columns (third stage)."""
+    geo = np.arange(lin.k0)
+    R = scipy.linalg.qr(lin.A, mode="r")[0][: lin.A.shape[1]]  # same column geometry as A, K x K
+    present = [t for t in terms if t != "cyclic"] + (["cyclic"] if has_cyclic else [])
+    out = []
+    for size in range(len(present) + 1):
+        for combo in itertools.combinations(present, size):
+            idx = np.array([lin.k0 + j for j, nm in enumerate(lin.ng_names) if term_of(nm) in combo],
+                           dtype=np.int64)
+            kept = idx[independent_columns(R[:, np.r_[geo, idx]], lin.k0, rtol)] if idx.size else idx
+            zeroed = np.setdiff1d(np.arange(lin.k0, lin.A.shape[1]), kept)
+            out.append(_Candidate(combo, np.r_[geo, kept], zeroed, "cyclic" in combo,
+                                  [lin.ng_names[j - lin.k0] for j in kept]))
+    return out
+
+
+def _choose(rows: list[dict]) -> tuple[int, int, str]:
+    """(chosen, best) indices by the one-standard-error rule, and the reason in words."""
+    best = min(range(len(rows)), key=lambda i: rows[i]["cv_rms_mm"])
+    limit = rows[best]["cv_rms_mm"] + rows[best]["cv_se_mm"]
+    eligible = [i for i in range(len(rows)) if rows[i]["cv_rms_mm"] <= limit]
+    chosen = min(eligible, key=lambda i: (rows[i]["n_params"], rows[i]["cv_rms_mm"]))
+    if chosen == best:
+        reason = (f"lowest cross-validated error ({rows[best]['cv_rms_mm']:.4f} mm); no model with "
+                  f"fewer parameters within one standard error ({rows[best]['cv_se_mm']:.4f} mm)")
+    else:
+        reason = (f"fewest parameters ({rows[chosen]['n_params']}) within one standard error of the "
+                  f"lowest cross-validated error ({rows[best]['cv_rms_mm']:.4f} + "
+                  f"{rows[best]['cv_se_mm']:.4f} mm, {_label(rows[best]['terms'])})")
+    return chosen, best, reason
+
+
+def _label(terms) -> str:
+    return ", ".join(terms) if terms else "geometric"
+
+
+def _search(lin: _Linearised, cv_fold: np.ndarray | None, k: int):
+    """The cyclic frequencies of the full data and of each fold's training items."""
+    if lin.q_item is None:
+        return None, [], [[] for _ in range(k)]
+    scan = FrequencyScan(lin.q_item, lin.group)
+    w = np.sqrt(np.repeat(lin.weight, lin.rows))[:, None]
+    args = (lin.A * w, lin.r * w[:, 0], lin.Jtheta * w, lin.rows)
+    full = scan.search(*args)
+    folds = [scan.search(*args, mask=cv_fold != f) for f in range(k)] if full else [[] for _ in range(k)]
+    return scan, scan.polish(full, *args), folds
+
+
+def select_error_model(fit: Fit, data, validations: list, *, folds: int = FOLDS, seed: int = 0,
+                       rtol: float, warm_final: bool = True):
+    """The calibration (``fit``, see :data:`Fit`) of ``data`` with the joint-error model chosen by
+    cross-validation (module docstring); its ``model_selection`` holds the candidate table, the
+    choice and the cost. ``warm_final``: the final fit starts from the superset's estimate (else
+    from nominal, as the calibration of the chosen model named explicitly)."""
+    t0 = time.perf_counter()
+    n_groups = np.unique(data.pair if data.kind == "distance" else data.pose_id).size
+    if n_groups < folds * MIN_POSES_PER_FOLD:
+        raise IdentificationError(
+            f"choosing the error model by {folds}-fold cross-validation needs at least "
+            f"{folds * MIN_POSES_PER_FOLD} poses, the data have {n_groups}: name the terms instead "
+            "(e.g. --nongeometric compliance,backlash) or leave them out")
+    fixed = [t for t in FIXED_TERMS if _term_has_data(t, data)]
+    superset = fit(fixed, [], None)
+    t_superset = time.perf_counter() - t0
+    lin = _linearise(superset, candidate_names(superset.robot.n_joints, fixed))
+    fold = _folds(lin.group, folds, seed)
+    scan, full_cyclic, fold_cyclic = _search(lin, fold, folds)
+    cv = _CrossValidation(lin, fold, folds, scan, fold_cyclic, full_cyclic)
+    cyclic_params = [nm for i, f in full_cyclic for nm in cyclic_names(i + 1, f)]
+    cands = _candidates(lin, fixed, bool(full_cyclic), rtol)
+    rows = [{"terms": list(c.terms), **cv.evaluate(c),
+             "parameters": c.ng_names + (cyclic_params if c.cyclic else [])} for c in cands]
+    chosen, best, reason = _choose(rows)
+    t_select = time.perf_counter() - t0
+    final = fit(rows[chosen]["parameters"], validations, superset if warm_final else None)
+    total = time.perf_counter() - t0
+    final.model_selection = {
+        "method": f"{folds}-fold cross-validation by pose on the calibration data, one-standard-error rule",
+        "folds": folds, "seed": seed, "n_poses": n_groups,
+        "candidates": rows, "chosen": chosen, "best": best, "reason": reason,
+        "chosen_terms": rows[chosen]["terms"],
+        "cyclic_frequencies": [{"joint": i + 1, "cycles_per_rev": f} for i, f in full_cyclic],
+        "cyclic_frequencies_per_fold": [len(f) for f in fold_cyclic],
+        "terms_without_data": [t for t in FIXED_TERMS if t not in fixed],
+        "time_s": {"superset_fit": t_superset, "selection": t_select - t_superset,
+                   "final_fit": total - t_select, "total": total},
+    }
+    return final
+
+
+def _term_has_data(term: str, data) -> bool:
+    """Backlash needs approach directions and travel needs moves (the measuring order)."""
+    if term == "backlash":
+        return data.approach is not None and bool(np.any(data.approach))
+    if term == "travel":
+        return data.travel is not None and bool(np.any(data.travel))
+    return True
+
+
+def calibrate_cyclic(fit: Fit, others: list[str], validations: list):
+    """The term ``cyclic`` with the terms ``others``: calibrate ``others``, search the cyclic
+    frequencies in that fit's residuals, calibrate again with them (from the first fit)."""
+    base = fit(others, [], None)
+    lin = _linearise(base, candidate_names(base.robot.n_joints, others))
+    _, found, _ = _search(lin, None, 0)
+    names = [nm for i, f in found for nm in cyclic_names(i + 1, f)]
+    result = fit(others + names, validations, base)
+    if not names:
+        result.warnings.append("no significant cyclic error found in the data; calibrated without "
+                               "the cyclic term")
+    return result
+
+
+def selection_table(ms: dict) -> str:
+    """The candidate table as text (CLI and summary)."""
+    lines = [f"error model chosen by {ms['method']} ({ms['n_poses']} poses):",
+             f"  {'model':44s} {'params':>6s} {'CV RMS mm':>10s} {'+- SE':>8s} {'fit RMS mm':>10s}"]
+    order = sorted(range(len(ms["candidates"])), key=lambda i: ms["candidates"][i]["cv_rms_mm"])
+    for i in order:
+        c = ms["candidates"][i]
+        mark = "*" if i == ms["chosen"] else ("b" if i == ms["best"] else " ")
+        lines.append(f"{mark} {_label(c['terms']):44s} {c['n_params']:6d} {c['cv_rms_mm']:10.4f} "
+                     f"{c['cv_se_mm']:8.4f} {c['calibration_rms_mm']:10.4f}")
+    lines.append(f"  chosen (*): {_label(ms['chosen_terms'])} — {ms['reason']}")
+    if ms.get("cyclic_frequencies"):
+        lines.append("  cyclic errors found (joint: cycles/rev): " + ", ".join(
+            f"J{c['joint']}: {c['cycles_per_rev']:g}" for c in ms["cyclic_frequencies"]))
+    if ms.get("terms_without_data"):
+        lines.append("  not tried (the data carry no measuring order): "
+                     + ", ".join(ms["terms_without_data"]))
+    t = ms["time_s"]
+    lines.append(f"  time: superset fit {t['superset_fit']:.2f} s, selection {t['selection']:.2f} s, "
+                 f"final fit {t['final_fit']:.2f} s")
+    return "\n".join(lines)

@@ -1,0 +1,286 @@
+"""Joint-error terms travel and cyclic, the cyclic frequency search, and ``nongeometric="auto"``
+(cross-validated model choice) on simulated robots with known injected errors."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from robocal import Robot
+from robocal.calibration import calibrate
+from robocal.damped_least_squares import Status
+from robocal.data.measurements import Measurements, approach_from_order, parse_csv, travel_from_order
+from robocal.data.simulate import simulate_tracker
+from robocal.errors import IdentificationError, ModelError
+from robocal.identify.frequency_search import FrequencyScan
+from robocal.identify.lsq import gauss_newton
+from robocal.identify.problem import CalibrationProblem
+from robocal.identify.space import ParameterSpace
+from robocal.kinematics.joint_errors import JointErrorModel, candidate_names, cyclic_names
+from robocal.model_selection import _candidates, _choose, _CrossValidation, _folds, _linearise
+
+COMPLIANCE_GEAR_BACKLASH = (["comp2_3", "comp2_6", "comp3_6", "gear1_s1", "gear2_c1", "gear3_s2", "backlash1",
+                             "backlash2", "backlash4"],
+                            [4e-4, 3e-4, 5e-4, 2e-4, -1.5e-4, 1e-4, 2e-4, -1.5e-4, 3e-4])
+TRAVEL_CYCLIC = (["travel1", "travel2", "travel3", *cyclic_names(1, 120), *cyclic_names(4, 80)],
+                 [1e-3, -8e-4, 6e-4, 1.5e-4, -1e-4, 2e-4, 1e-4])
+
+
+def _with_errors(robot, names, values):
+    return replace(robot, joint_errors=JointErrorModel(tuple(names), np.array(values, float)))
+
+
+def _panda_like() -> Robot:
+    """A 7-joint MDH arm (Franka-Panda-like geometry), mm and deg."""
+    return Robot.from_mdh(alpha=[0, -90, 90, 90, -90, 90, 90], a=[0, 0, 0, 82.5, -82.5, 0, 88],
+                          theta=[0] * 7, d=[333, 0, 316, 0, 384, 0, 107], degrees=True, length_unit="mm",
+                          name="panda_like", limits=[[-166, 166], [-101, 101], [-166, 166], [-176, -4],
+                                                     [-166, 166], [-1, 215], [-166, 166]])
+
+
+def test_travel_is_the_move_from_the_previous_pose_and_survives_subsets_and_files(rng):
+    q = rng.uniform(-2, 2, (6, 3))
+    pose_id = np.array([0, 0, 1, 2, 2, 3])
+    travel = travel_from_order(q[[0, 0, 2, 3, 3, 5]], pose_id)
+    data = Measurements.from_arrays("point", q[[0, 0, 2, 3, 3, 5]], points=rng.normal(size=(6, 3)),
+                                    pose_id=pose_id, smr=[0, 1, 0, 0, 1, 0])
+    qp = q[[0, 2, 3, 5]]
+    expected = np.vstack([np.zeros(3), np.diff(qp, axis=0)])[[0, 0, 1, 2, 2, 3]]
+    assert np.allclose(data.travel, expected) and np.allclose(travel, expected)
+    assert np.array_equal(data.approach, approach_from_order(data.joints, pose_id))
+    assert np.array_equal(np.sign(data.travel).astype(int), data.approach)
+    part = data.subset(data.pose_id != 1)  # pose 2 keeps its move from pose 1 (now absent)
+    assert np.allclose(part.travel, expected[data.pose_id != 1])
+    back = parse_csv(part.to_csv())
+    assert "travel1_rad" in part.to_csv() and np.array_equal(back.travel, part.travel)
+    assert "travel1_rad" not in data.to_csv()  # implied by the row order: not written
+
+
+@pytest.mark.parametrize("kind", ["point", "pose"])
+def test_travel_and_cyclic_columns_match_finite_differences(kind):
+    robot = Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(robot, 12, kind=kind, noise_mm=0.0, seed=5)
+    names = ["travel1", "travel3", *cyclic_names(2, 101.5), *cyclic_names(5, 7)]
+    # pose rows differentiate the rotation-vector error exactly only at zero error
+    nu = np.array([1e-3, -2e-3, 2e-4, -1e-4, 3e-4, 1e-4]) * (1.0 if kind == "point" else 1e-5)
+    truth = sim.truth.with_joint_errors(names).with_values(dict(zip(names, nu, strict=True)))
+    problem = CalibrationProblem(truth, sim.data)
+    space = ParameterSpace(("a2", "d4", *names))
+    state = problem.start(truth)
+    J = problem.jacobian(state, space)
+    h = 1e-7 if kind == "point" else 1e-6
+    for c in range(2, space.size):
+        e = np.zeros(space.size)
+        e[c] = h
+        fd = -(problem.residuals(space.apply(state, e)) - problem.residuals(space.apply(state, -e))) / (2 * h)
+        assert np.allclose(J[:, c], fd, rtol=1e-5, atol=1e-7)
+    # the model the calibration returns applies the same offsets in fk
+    model = JointErrorModel(tuple(names), nu)
+    d = sim.data
+    dq = model.offsets(sim.truth, d.joints, d.approach, d.travel)
+    assert np.allclose(dq[:, 0], nu[0] * d.travel[:, 0])
+    q2 = d.joints[:, 1]
+    assert np.allclose(dq[:, 1], nu[2] * np.sin(101.5 * q2) + nu[3] * np.cos(101.5 * q2))
+    with pytest.raises(ModelError, match="frequency above"):
+        cyclic_names(1, 2.0)
+    with pytest.raises(ModelError, match="cyc"):
+        JointErrorModel.from_dict({"parameters": {"cyc7_50_s": 1.0}}, 6)
+
+
+def test_frequency_search_finds_the_injected_frequencies_and_nothing_in_noise():
+    robot = Robot.from_catalog("abb_irb2600")
+    for errors, expected in ((TRAVEL_CYCLIC, {(0, 120.0), (3, 80.0)}), (([], []), set())):
+        sim = simulate_tracker(_with_errors(robot, *errors) if errors[0] else robot, 150,
+                               noise_mm=0.02, seed=11)
+        travel = [nm for nm in errors[0] if nm.startswith("travel")]
+        base = calibrate(robot, sim.data, nongeometric=",".join(travel) or None)
+        problem, state = base.problem, base.state
+        n = robot.n_joints
+        J = problem.jacobian(state, base.space)
+        Jtheta = problem.jacobian(state, ParameterSpace([f"theta{i + 1}" for i in range(n)]))
+        found = FrequencyScan(sim.data.joints, sim.data.pose_id).search(
+            J, problem.residuals(state), Jtheta, problem.observation.rows_per_item)
+        assert {(i, round(f)) for i, f in found} == expected
+        for i, f in found:
+            assert f == pytest.approx(120.0 if i == 0 else 80.0, abs=0.1)  # peak width ~0.5
+
+
+def test_one_standard_error_rule_prefers_fewer_parameters_within_one_se():
+    rows = [{"terms": [], "n_params": 30, "cv_rms_mm": 0.50, "cv_se_mm": 0.01},
+            {"terms": ["gear"], "n_params": 54, "cv_rms_mm": 0.40, "cv_se_mm": 0.02},
+            {"terms": ["backlash"], "n_params": 36, "cv_rms_mm": 0.415, "cv_se_mm": 0.01},
+            {"terms": ["gear", "backlash"], "n_params": 60, "cv_rms_mm": 0.39, "cv_se_mm": 0.03}]
+    chosen, best, reason = _choose(rows)
+    assert best == 3 and chosen == 2 and "fewest parameters" in reason
+    rows[2]["cv_rms_mm"] = 0.43  # no longer within 0.39 + 0.03 of the best
+    chosen, best, _ = _choose(rows)
+    assert chosen == 1
+    rows[3]["cv_se_mm"] = 0.001
+    assert _choose(rows)[0] == 3
+
+
+def test_folds_keep_whole_poses_and_the_measuring_order():
+    group = np.repeat(np.arange(40), 3)
+    fold = _folds(group, 5, seed=2)
+    for g in range(40):
+        assert np.unique(fold[group == g]).size == 1
+    assert np.array_equal(np.bincount(fold), [24] * 5)
+    assert np.array_equal(fold, _folds(group, 5, seed=2))
+
+
+@pytest.mark.parametrize("errors, expected", [
+    (COMPLIANCE_GEAR_BACKLASH, ["compliance", "gear", "backlash"]),
+    ((["backlash2", "backlash3"], [2e-4, -2e-4]), ["backlash"]),
+    (TRAVEL_CYCLIC, ["travel", "cyclic"]),
+], ids=["compliance-gear-backlash", "backlash", "travel-cyclic"])
+def test_auto_picks_the_injected_terms_and_leaves_out_the_others(errors, expected):
+    robot = Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(_with_errors(robot, *errors), 160, noise_mm=0.02, n_smr=2, seed=7)
+    result = calibrate(robot, sim.data, nongeometric="auto")
+    ms = result.model_selection
+    assert ms["chosen_terms"] == expected
+    assert result.nongeometric["terms"] == expected
+    assert len(ms["candidates"]) == 2 ** (4 + ("cyclic" in expected))
+    if "cyclic" in expected:
+        found = {(c["joint"], round(c["cycles_per_rev"])) for c in ms["cyclic_frequencies"]}
+        assert found == {(1, 120), (4, 80)}
+    assert result.after["rms"] <= 1.1 * sim.noise_floor_mm
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_auto_chooses_geometric_on_a_robot_without_joint_errors(seed):
+    robot = Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(robot, 160, noise_mm=0.02, seed=seed)
+    cal, val = sim.data.split_poses(0.6, seed=0)
+    auto = calibrate(robot, cal, validation=val, nongeometric="auto")
+    plain = calibrate(robot, cal, validation=val, nongeometric=None)
+    assert auto.model_selection["chosen_terms"] == [] and auto.robot.joint_errors is None
+    assert auto.validation["rms"] == pytest.approx(plain.validation["rms"], rel=1e-6)
+    if seed == 1:  # robust's final fit starts from nominal: the robust geometric calibration itself
+        auto = calibrate(robot, cal, method="robust", nongeometric="auto")
+        plain = calibrate(robot, cal, method="robust", nongeometric=None)
+        assert auto.model_selection["chosen_terms"] == []
+        assert np.array_equal(auto.robot.values, plain.robot.values)
+
+
+def test_linearised_fold_fits_match_nonlinear_fold_calibrations():
+    """A candidate's fold error (one Gauss-Newton step from the superset fit, by normal equations)
+    agrees with iterating each fold's training poses to convergence with the same parameters."""
+    robot = Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(_with_errors(robot, *COMPLIANCE_GEAR_BACKLASH), 100, noise_mm=0.02, seed=4)
+    fixed = ["compliance", "gear", "backlash", "travel"]
+    superset = calibrate(robot, sim.data, nongeometric=",".join(fixed))
+    lin = _linearise(superset, candidate_names(6, fixed))
+    fold = _folds(lin.group, 5, 0)
+    cv = _CrossValidation(lin, fold, 5, None, [[]] * 5, [])
+    for cand in _candidates(lin, fixed, False, 1e-7):
+        if list(cand.terms) not in (["compliance", "backlash"], [], ["gear", "travel"]):
+            continue
+        linear = cv.evaluate(cand)["fold_rms_mm"]
+        # the candidate's robot: the superset's estimate with the other joint-error terms at zero
+        robot_f = superset.state.robot.with_joint_errors(cand.ng_names)
+        geometric = [nm for nm in superset.names if nm in robot_f.geometry_names]
+        space = ParameterSpace((*geometric, *cand.ng_names))
+        for f in range(5):
+            train, test = (CalibrationProblem(robot_f, sim.data.subset(rows))
+                           for rows in (fold != f, fold == f))
+            fitted = gauss_newton(train, train.start(robot_f), space)
+            errors = test.position_errors(test.start(fitted.state.robot))
+            assert fitted.status == Status.CONVERGED
+            assert np.sqrt(np.mean(errors**2)) * 1e3 == pytest.approx(linear[f], rel=1e-2)
+
+
+def test_auto_works_for_a_seven_axis_arm():
+    robot = _panda_like()
+    true = _with_errors(robot, ["backlash2", "backlash7", "travel1", *cyclic_names(6, 100)],
+                        [2e-4, -3e-4, 1e-3, 1.5e-4, 1e-4])
+    sim = simulate_tracker(true, 200, noise_mm=0.02, n_smr=2, seed=3)
+    result = calibrate(robot, sim.data, nongeometric="auto")
+    assert result.model_selection["chosen_terms"] == ["backlash", "travel", "cyclic"]
+    assert [(c["joint"], round(c["cycles_per_rev"])) for c in result.model_selection["cyclic_frequencies"]] \
+        == [(6, 100)]
+    assert result.after["rms"] <= 1.1 * sim.noise_floor_mm
+
+
+def test_warm_start_reaches_the_cold_solution_and_checks_its_input():
+    robot = Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(_with_errors(robot, *COMPLIANCE_GEAR_BACKLASH), 80, noise_mm=0.02, seed=9)
+    cold = calibrate(robot, sim.data, nongeometric="compliance,gear,backlash")
+    geometric = calibrate(robot, sim.data)
+    warm = calibrate(robot, sim.data, nongeometric="compliance,gear,backlash", warm_start=geometric)
+    assert warm.names == cold.names and warm.nongeometric["kept"] == cold.nongeometric["kept"]
+    assert warm.after["rms"] == pytest.approx(cold.after["rms"], rel=1e-6)
+    assert warm.before == cold.before  # judged from the same start model
+    planes = simulate_tracker(robot, 40, kind="plane", noise_mm=0.01, seed=1)
+    with pytest.raises(IdentificationError, match="same robot"):
+        calibrate(robot, planes.data, warm_start=geometric)
+
+
+def test_auto_result_json_report_and_command_line(tmp_path, capsys):
+    from robocal.cli import main
+
+    robot = Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(_with_errors(robot, ["backlash2", "backlash3"], [2e-4, -2e-4]), 130,
+                           noise_mm=0.02, seed=5)
+    sim.data.save(tmp_path / "cal.csv")
+    rc = main(["--quiet", "calibrate", str(tmp_path / "cal.csv"), "--robot", "abb_irb2600",
+               "--nongeometric", "auto", "--hold-out", "30", "--json", str(tmp_path / "r.json"),
+               "--report", str(tmp_path / "r.html")])
+    out = capsys.readouterr().out
+    assert rc == 0 and "error model chosen by 5-fold cross-validation" in out
+    assert "chosen (*): backlash" in out
+    result = json.loads((tmp_path / "r.json").read_text())
+    ms = result["model_selection"]
+    assert ms["chosen_terms"] == ["backlash"] and ms["candidates"][ms["chosen"]]["terms"] == ["backlash"]
+    assert {"cv_rms_mm", "cv_se_mm", "n_params", "calibration_rms_mm"} <= set(ms["candidates"][0])
+    html = (tmp_path / "r.html").read_text()
+    assert "Error model selection" in html and "one-standard-error rule" in html
+    few = sim.data.first_poses(20)
+    with pytest.raises(IdentificationError, match="at least 25 poses"):
+        calibrate(robot, few, nongeometric="auto")
+    with pytest.raises(IdentificationError, match="lsq, robust"):
+        calibrate(robot, sim.data, method="swarm", nongeometric="auto")
+    with pytest.raises(IdentificationError, match="unknown non-geometric"):
+        calibrate(robot, sim.data, nongeometric="auto,gear")
+
+
+def test_auto_is_the_default_for_lsq_and_robust_on_tracker_data_with_enough_poses():
+    from robocal.calibration import AUTO_DEFAULT_MIN_POSES, resolve_nongeometric
+
+    robot = Robot.from_catalog("abb_irb2600")
+    many = simulate_tracker(robot, AUTO_DEFAULT_MIN_POSES, noise_mm=0.02, seed=1).data
+    few = many.first_poses(AUTO_DEFAULT_MIN_POSES - 1)
+    planes = simulate_tracker(robot, AUTO_DEFAULT_MIN_POSES, kind="plane", noise_mm=0.01, seed=1).data
+    assert resolve_nongeometric("default", "lsq", [many]) == "auto"
+    assert resolve_nongeometric("default", "robust", [many]) == "auto"
+    assert resolve_nongeometric("default", "lsq", [few]) is None
+    assert resolve_nongeometric("default", "genetic", [many]) is None
+    assert resolve_nongeometric("default", "lsq", [planes]) is None
+    assert resolve_nongeometric("default", "lsq", [many, planes]) is None  # several sets: name the terms
+    assert resolve_nongeometric("none", "lsq", [many]) is None
+    assert resolve_nongeometric("gear", "lsq", [few]) == "gear"
+    result = calibrate(robot, many)
+    assert result.model_selection is not None and result.settings["nongeometric"] == "auto"
+
+
+def test_explicit_cyclic_term_searches_the_data_and_the_model_round_trips(tmp_path):
+    robot = Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(_with_errors(robot, *TRAVEL_CYCLIC), 120, noise_mm=0.02, seed=2)
+    result = calibrate(robot, sim.data, nongeometric="travel,cyclic")
+    cyclic = [nm.split("_") for nm in result.nongeometric["kept"] if nm.startswith("cyc")]
+    assert {(joint, round(float(f))) for joint, f, _ in cyclic} == {("cyc1", 120), ("cyc4", 80)}
+    assert len(cyclic) == 4
+    assert result.after["rms"] <= 1.1 * sim.noise_floor_mm
+    result.robot.save(tmp_path / "m.yaml")
+    back = Robot.load(tmp_path / "m.yaml")
+    d = sim.data
+    assert back.joint_errors.names == result.robot.joint_errors.names
+    assert np.array_equal(back.fk(d.joints, approach=d.approach, travel=d.travel),
+                          result.robot.fk(d.joints, approach=d.approach, travel=d.travel))
+    clean = simulate_tracker(robot, 60, noise_mm=0.02, seed=2).data
+    plain = calibrate(robot, clean, nongeometric="cyclic")
+    assert plain.robot.joint_errors is None
+    assert any("no significant cyclic error" in w for w in plain.warnings)
