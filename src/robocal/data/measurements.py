@@ -601,6 +601,16 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
     return kw
 
 
+def _per_joint(col: dict, roles: dict, role: str, n: int, name: str) -> np.ndarray | None:
+    """``(N, n)`` values (SI) of the columns ``{role}1..{role}n`` (approach, travel), or None."""
+    cols = sorted((r[1], h) for h, r in roles.items() if r[0] == role)
+    if not cols:
+        return None
+    if [i for i, _ in cols] != list(range(1, n + 1)):
+        raise DataError(f"{name}: {role} columns must be {role}1..{role}{n}, one per joint")
+    return np.stack([col[h] * roles[h][2] for _, h in cols], axis=1)
+
+
 def parse_csv(text: str, name: str = "<text>") -> Measurements:
     """Parse canonical CSV text; ``name`` is used in error messages."""
     source, header_line, rows = _split_csv(text, name)
@@ -616,20 +626,9 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
         raise UnitError(f"{name}, line {ln}: joint values up to {np.abs(joints).max():.4g} rad (> 2 turns): "
                         "these look like degrees; name the columns q1_deg..")
     kw = _observed(kind, col, roles, line_no, name)
-    approach_cols = sorted((r[1], h) for h, r in roles.items() if r[0] == "approach")
-    approach = None
-    if approach_cols:
-        if [i for i, _ in approach_cols] != list(range(1, len(joint_cols) + 1)):
-            raise DataError(f"{name}: approach columns must be approach1..approach{len(joint_cols)}, one "
-                            "per joint")
-        approach = np.stack([col[h] for _, h in approach_cols], axis=1).astype(np.int64)
-    travel_cols = sorted((r[1], h) for h, r in roles.items() if r[0] == "travel")
-    travel = None
-    if travel_cols:
-        if [i for i, _ in travel_cols] != list(range(1, len(joint_cols) + 1)):
-            raise DataError(f"{name}: travel columns must be travel1..travel{len(joint_cols)} (_rad or "
-                            "_deg), one per joint")
-        travel = np.stack([col[h] * roles[h][2] for _, h in travel_cols], axis=1)
+    approach = _per_joint(col, roles, "approach", len(joint_cols), name)
+    approach = None if approach is None else approach.astype(np.int64)
+    travel = _per_joint(col, roles, "travel", len(joint_cols), name)
     ints = {c: (col[c].astype(np.int64) if c in col else None) for c in ("smr", "pose_id")}
     source_row = col["source_row"].astype(np.int64) if "source_row" in col else np.array(line_no)
     try:
