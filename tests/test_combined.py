@@ -149,3 +149,27 @@ def test_simulated_scale_bar_of_a_plane_campaigns_truth(planes, tmp_path):
                  "distance", "--poses", "8", "--noise-mm", "0.005", "--seed", "3", "-o",
                  str(tmp_path / "bar.csv"), "--truth", str(tmp_path / "bar_truth.yaml")]) == 0
     assert np.array_equal(rc.Measurements.load(tmp_path / "bar.csv").joints, bar.data.joints)
+
+
+def test_joint_error_terms_on_a_combined_problem():
+    """Tracker points and a ball bar identify gear and compliance errors together: the terms'
+    columns stack like the geometric ones, and the model reaches the truth only with them."""
+    names, values = ["gear2_s1", "gear3_c1", "comp2_6"], [2e-4, -1.5e-4, 4e-4]
+    true_robot = ROBOT.with_joint_errors(names).with_values(dict(zip(names, values, strict=True)))
+    sim = simulate_tracker(true_robot, 80, noise_mm=0.02, seed=9)
+    bar = ballbar(sim.truth, 40, 0.005, seed=10)
+    q = sample_joints(sim.truth, 200, np.random.default_rng(4))
+
+    def model_error(res):
+        err = res.robot.fk(q)[:, :3, 3] - sim.truth.fk(q)[:, :3, 3]
+        return float(np.sqrt(np.mean(np.sum(err**2, axis=1))) * 1e3)
+
+    plain = rc.calibrate(ROBOT, [sim.data, bar])
+    terms = rc.calibrate(ROBOT, [sim.data, bar], nongeometric="compliance,gear")
+    assert plain.model_selection is None and plain.robot.joint_errors is None  # several files: none
+    assert terms.nongeometric["terms"] == ["compliance", "gear"]
+    sigma = dict(zip(terms.unknowns, terms.sigma, strict=True))
+    for name, value in zip(names, values, strict=True):
+        assert abs(terms.robot.get(name) - value) < 5 * sigma[name]
+    assert model_error(terms) < 0.5 * model_error(plain)
+    assert model_error(terms) < 0.02
