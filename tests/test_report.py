@@ -170,7 +170,9 @@ def test_plane_data_without_measured_points():
     xy = rng.uniform(-200, 200, (40, 2))
     before = np.column_stack([xy, 300 + 0.002 * xy[:, 0] + rng.normal(scale=0.2, size=40)])
     after = np.column_stack([xy, 300 + rng.normal(scale=0.005, size=40)])
-    obs.update(measured=None, model_before=before.tolist(), model_after=after.tolist())
+    obs.update(measured=None, model_before=before.tolist(), model_after=after.tolist(), kind="plane",
+               error_before=np.abs(before[:, 2] - 300).tolist(),
+               error_after=np.abs(after[:, 2] - 300).tolist())
     text = render_report(result)
     assert "distance to fitted plane (mm)" in text and "no measured points" in text
     assert "iso9283" not in section_ids(text)
@@ -236,3 +238,21 @@ def test_nongeometric_terms_are_tabled():
     text = render_report(result)
     assert "Non-geometric terms: gear, backlash" in text and "backlash1" in text
     assert "0.01146" in text  # 2e-4 rad in deg
+
+
+def test_distance_data_report_the_pairs_length_errors(tmp_path):
+    """A ball-bar (distance-only) calibration: the report's per-row errors are the pairs' length
+    errors the result states, not distances to a plane through the modelled tips."""
+    from test_distance import _truth, ballbar
+
+    from robocal import calibrate
+
+    nominal, truth = _truth()
+    res = calibrate(nominal, ballbar(truth, 60, 0.005, seed=3))
+    result = res.to_dict()
+    obs = result["observations"]
+    assert obs["kind"] == "distance"
+    after = np.asarray(obs["error_after"])
+    assert np.sqrt(np.mean(after**2)) == pytest.approx(result["after"]["rms"], rel=1e-9)
+    text = render_report(result)
+    assert "the pair&#x27;s distance (mm)" in text and "distance to fitted plane" not in text

@@ -195,8 +195,11 @@ class CalibrationResult:
         measured = None if measured is None or measured.ndim != 2 else measured * 1e3
         if weights is not None:
             weights = weights[obs.item_of_rows()]  # one per data row
-        before, after = (obs.modelled_points(s.robot, n) * 1e3 for s, n in zip(states, nu, strict=True))
+        pairs = list(zip(states, nu, strict=True))
+        before, after = (obs.modelled_points(s.robot, n) * 1e3 for s, n in pairs)
+        errors = [obs.position_errors(s.robot, n)[obs.item_of_rows()] * 1e3 for s, n in pairs]
         return {
+            "kind": obs.kind, "error_before": errors[0].tolist(), "error_after": errors[1].tolist(),
             "pose_id": data.pose_id.tolist(), "source_row": data.source_row.tolist(),
             "smr": data.smr.tolist(), "joints_deg": np.rad2deg(data.joints).tolist(),
             "measured": None if measured is None else measured.tolist(),

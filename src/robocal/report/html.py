@@ -92,21 +92,13 @@ def _array(obs: dict, key: str, cols: int | None = None) -> np.ndarray | None:
     return arr
 
 
-def _plane_distances(points: np.ndarray, plane: np.ndarray) -> np.ndarray:
-    """Signed distance (mm) of each point to the least-squares plane of its plane group."""
-    out = np.zeros(len(points))
-    for p in np.unique(plane):
-        sel = plane == p
-        if sel.sum() < 3:
-            continue
-        centred = points[sel] - points[sel].mean(axis=0)
-        normal = np.linalg.svd(centred, full_matrices=False)[2][-1]
-        out[sel] = centred @ normal
-    return out
-
-
 def _or(value, default):
     return default if value is None else value
+
+
+# what one observation's error is, by kind (the result's per-row error_before / error_after, mm)
+ERROR_LABELS = {"point": "position error (mm)", "pose": "position error (mm)",
+                "plane": "distance to fitted plane (mm)", "distance": "error of the pair's distance (mm)"}
 
 
 class _ObsErrors:
@@ -123,20 +115,13 @@ class _ObsErrors:
         self.smr = np.asarray(_or(obs.get("smr"), np.zeros(n, int)))
         weight = obs.get("weight")
         self.rejected = np.zeros(n, bool) if weight is None else np.asarray(weight, float) == 0
-        self.vectors = None
-        if self.after_pts is None or self.before_pts is None:
-            self.before = self.after = None
-            self.label = ""
-        elif self.measured is not None:
-            self.vectors = self.measured - self.after_pts
+        self.label = ERROR_LABELS.get(obs.get("kind"), ERROR_LABELS["point"])
+        self.vectors = None if self.measured is None or self.after_pts is None \
+            else self.measured - self.after_pts
+        self.before, self.after = _array(obs, "error_before"), _array(obs, "error_after")
+        if self.after is None and self.vectors is not None and self.before_pts is not None:  # older results
             self.before = np.linalg.norm(self.measured - self.before_pts, axis=1)
             self.after = np.linalg.norm(self.vectors, axis=1)
-            self.label = "position error (mm)"
-        else:
-            plane = np.asarray(_or(obs.get("plane"), np.zeros(n, int)))
-            self.before = np.abs(_plane_distances(self.before_pts, plane))
-            self.after = np.abs(_plane_distances(self.after_pts, plane))
-            self.label = "distance to fitted plane (mm)"
 
     @property
     def ok(self) -> bool:
