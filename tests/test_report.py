@@ -235,6 +235,10 @@ def test_nongeometric_terms_are_tabled():
                               "dropped": ["gear1_c1"],
                               "parameters": [{"name": "gear2_s1", "estimate": 1e-4, "sigma": 1e-5},
                                              {"name": "backlash1", "estimate": 2e-4, "sigma": 2e-5}]}
+    result["parameters"] += [  # the parameter table holds every estimated term in display units
+        {"name": name, "unit": "deg", "nominal": 0.0, "estimate": float(np.rad2deg(v)),
+         "correction": float(np.rad2deg(v)), "sigma": float(np.rad2deg(v / 10)), "status": "estimated"}
+        for name, v in (("gear2_s1", 1e-4), ("backlash1", 2e-4))]
     text = render_report(result)
     assert "Non-geometric terms: gear, backlash" in text and "backlash1" in text
     assert "0.01146" in text  # 2e-4 rad in deg

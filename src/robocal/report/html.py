@@ -311,20 +311,16 @@ def _parameters(result: dict) -> str:
     table = _table(["name", "status", "unit", "nominal", "estimate", "correction", "1&sigma;",
                     "note"], rows, left=3, row_class=classes).replace(
         "<td>confounded", "<td class='l'>confounded")
-    return text + table + _nongeometric(result.get("nongeometric"))
+    return text + table + _nongeometric(result.get("nongeometric"), result.get("parameters"))
 
 
-def _nongeometric(ng: dict | None) -> str:
-    """The non-geometric terms' parameters (rad and rad/m in the JSON, shown in deg)."""
-    if not ng or not ng.get("parameters"):
+def _nongeometric(ng: dict | None, parameters: list) -> str:
+    """The non-geometric terms' parameters, from the parameter table (its display units)."""
+    if not ng or not ng.get("kept"):
         return ""
-    rows = []
-    for p in ng["parameters"]:
-        name = str(p.get("name", ""))
-        unit, f = ("mdeg/deg", 1e3) if name.startswith("travel") else \
-            ("deg/m" if name.startswith("comp") else "deg", 180.0 / np.pi)
-        rows.append([esc(name), unit, _num(f * p.get("estimate", np.nan), 5),
-                     _num(f * p.get("sigma", np.nan), 5)])
+    table = {str(p.get("name")): p for p in parameters or []}
+    rows = [[esc(name), esc(table[name].get("unit", "")), _num(table[name].get("estimate"), 5),
+             _num(table[name].get("sigma"), 5)] for name in ng["kept"] if name in table]
     dropped = ng.get("dropped") or []
     return (f"<h3>Non-geometric terms: {esc(', '.join(ng.get('terms', [])))}</h3>"
             "<p>Joint errors the model adds to the commanded joints: compliance (per metre of "
