@@ -157,7 +157,7 @@ class _CrossValidation:
         self.scored = lin.weight > 0
         A = lin.A * self.row_weight[:, None]
         self.r = lin.r * self.row_weight
-        self.A = A
+        self.n_columns = A.shape[1]
         self.extra_full = np.zeros((A.shape[0], 0)) if scan is None else \
             scan.columns(lin.Jtheta, rows, full_cyclic) * self.row_weight[:, None]
         self.extra_fold = [np.zeros((A.shape[0], 0)) if scan is None else
@@ -167,19 +167,19 @@ class _CrossValidation:
         for f in range(k):
             train, test = self.row_fold != f, self.row_fold == f
             B = np.hstack([A[train], self.extra_fold[f][train]])
-            self.gram.append((B.T @ B, B.T @ self.r[train], B.T @ A[train]))
+            self.gram.append((B.T @ B, B.T @ self.r[train]))
             self.test.append((test, np.hstack([A[test], self.extra_fold[f][test]])))
         B = np.hstack([A, self.extra_full])
-        self.gram_full = (B.T @ B, B.T @ self.r, B.T @ A)
+        self.gram_full = (B.T @ B, B.T @ self.r)
         self.test_full = (np.ones(A.shape[0], bool), B)
 
     def _fit(self, gram, cand: _Candidate, n_extra: int) -> np.ndarray:
         """Step ``x`` on the candidate's columns (then the cyclic ones) for one Gram set."""
-        G, h, GA = gram
-        k = self.A.shape[1]
+        G, h = gram  # G's first n_columns columns are those of A: the left-out terms' too
+        k = self.n_columns
         cols = np.r_[cand.columns, np.arange(k, k + n_extra)] if cand.cyclic else cand.columns
         v = self.lin.ng_values[cand.zeroed - self.lin.k0]
-        rhs = h[cols] + GA[np.ix_(cols, cand.zeroed)] @ v  # residual with the left-out terms at zero
+        rhs = h[cols] + G[np.ix_(cols, cand.zeroed)] @ v  # residual with the left-out terms at zero
         return cols, _solve(G[np.ix_(cols, cols)], rhs)
 
     def _errors(self, test, cand: _Candidate, cols: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -194,11 +194,10 @@ class _CrossValidation:
     def evaluate(self, cand: _Candidate) -> dict:
         """Cross-validated RMS (mm), its standard error over the folds, and the full-data fit's RMS."""
         squares, fold_rms = [], []
-        items = np.arange(self.lin.group.size)
         for f in range(self.k):
             cols, x = self._fit(self.gram[f], cand, self.extra_fold[f].shape[1])
             err = self._errors(self.test[f], cand, cols, x)
-            scored = self.scored[items[self.test[f][0][:: self.lin.rows]]]
+            scored = self.scored[self.test[f][0][:: self.lin.rows]]
             squares.append(err[scored] ** 2)
             fold_rms.append(np.sqrt(np.mean(err[scored] ** 2)))
         cols, x = self._fit(self.gram_full, cand, self.extra_full.shape[1])
@@ -259,26 +258,26 @@ def _search(lin: _Linearised, cv_fold: np.ndarray | None, k: int):
     return scan, scan.polish(full, *args), folds
 
 
-def select_error_model(fit: Fit, data, validations: list, *, folds: int = FOLDS, seed: int = 0,
-                       rtol: float, warm_final: bool = True):
+def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol: float,
+                       warm_final: bool = True):
     """The calibration (``fit``, see :data:`Fit`) of ``data`` with the joint-error model chosen by
     cross-validation (module docstring); its ``model_selection`` holds the candidate table, the
     choice and the cost. ``warm_final``: the final fit starts from the superset's estimate (else
     from nominal, as the calibration of the chosen model named explicitly)."""
     t0 = time.perf_counter()
     n_groups = np.unique(data.pair if data.kind == "distance" else data.pose_id).size
-    if n_groups < folds * MIN_POSES_PER_FOLD:
+    if n_groups < FOLDS * MIN_POSES_PER_FOLD:
         raise IdentificationError(
-            f"choosing the error model by {folds}-fold cross-validation needs at least "
-            f"{folds * MIN_POSES_PER_FOLD} poses, the data have {n_groups}: name the terms instead "
+            f"choosing the error model by {FOLDS}-fold cross-validation needs at least "
+            f"{FOLDS * MIN_POSES_PER_FOLD} poses, the data have {n_groups}: name the terms instead "
             "(e.g. --nongeometric compliance,backlash) or leave them out")
     fixed = [t for t in FIXED_TERMS if _term_has_data(t, data)]
     superset = fit(fixed, [], None)
     t_superset = time.perf_counter() - t0
     lin = _linearise(superset, candidate_names(superset.robot.n_joints, fixed))
-    fold = _folds(lin.group, folds, seed)
-    scan, full_cyclic, fold_cyclic = _search(lin, fold, folds)
-    cv = _CrossValidation(lin, fold, folds, scan, fold_cyclic, full_cyclic)
+    fold = _folds(lin.group, FOLDS, seed)
+    scan, full_cyclic, fold_cyclic = _search(lin, fold, FOLDS)
+    cv = _CrossValidation(lin, fold, FOLDS, scan, fold_cyclic, full_cyclic)
     cyclic_params = [nm for i, f in full_cyclic for nm in cyclic_names(i + 1, f)]
     cands = _candidates(lin, fixed, bool(full_cyclic), rtol)
     rows = [{"terms": list(c.terms), **cv.evaluate(c),
@@ -288,8 +287,8 @@ def select_error_model(fit: Fit, data, validations: list, *, folds: int = FOLDS,
     final = fit(rows[chosen]["parameters"], validations, superset if warm_final else None)
     total = time.perf_counter() - t0
     final.model_selection = {
-        "method": f"{folds}-fold cross-validation by pose on the calibration data, one-standard-error rule",
-        "folds": folds, "seed": seed, "n_poses": n_groups,
+        "method": f"{FOLDS}-fold cross-validation by pose on the calibration data, one-standard-error rule",
+        "folds": FOLDS, "seed": seed, "n_poses": n_groups,
         "candidates": rows, "chosen": chosen, "best": best, "reason": reason,
         "chosen_terms": rows[chosen]["terms"],
         "cyclic_frequencies": [{"joint": i + 1, "cycles_per_rev": f} for i, f in full_cyclic],

@@ -5,7 +5,7 @@ joint's error holds a sinusoid in ``f q_i`` with ``f`` the reduction ratio (or a
 cycles per joint revolution: dq_i = s sin(f q_i) + c cos(f q_i). The search is greedy, on the
 linearised problem at a fitted model (a periodogram in the joint angle):
 
-1. For each joint and each frequency on a grid from CYCLIC_MIN_FREQUENCY to ``max_frequency``
+1. For each joint and each frequency on a grid from CYCLIC_MIN_FREQUENCY to MAX_FREQUENCY
    (step pi / (2 span_i), half the width of a peak over the joint's span in the data), the Wald
    statistic of adding the two columns ``d(TCP)/d(theta_i) * (sin f q_i, cos f q_i)`` to the
    fitted model, vectorised over frequencies. The variance is cluster-robust by pose (the
@@ -48,16 +48,16 @@ class FrequencyScan:
     """Sine/cosine tables of the poses' joint angles on each joint's frequency grid.
 
     ``q (N, n)`` joints of the measurement items (rad), ``group (N,)`` their pose labels (items
-    of one pose share the joints); ``max_frequency`` in cycles per revolution."""
+    of one pose share the joints)."""
 
-    def __init__(self, q: np.ndarray, group: np.ndarray, max_frequency: float = MAX_FREQUENCY) -> None:
+    def __init__(self, q: np.ndarray, group: np.ndarray) -> None:
         _, first, self.pose_of_item = np.unique(group, return_index=True, return_inverse=True)
         self.q_item = np.asarray(q, float)
         q_pose = self.q_item[first]
         self.n_poses = q_pose.shape[0]
         span = np.ptp(q_pose, axis=0)
         self.step = np.pi / (2.0 * np.maximum(span, 1e-12))
-        self.grids = [np.arange(CYCLIC_MIN_FREQUENCY + self.step[i], max_frequency, self.step[i])
+        self.grids = [np.arange(CYCLIC_MIN_FREQUENCY + self.step[i], MAX_FREQUENCY, self.step[i])
                       if span[i] >= MIN_SPAN else np.zeros(0) for i in range(q_pose.shape[1])]
         self.n_independent = max(sum(g.size for g in self.grids) / 2.0, 1.0)
         self.q_pose = q_pose
@@ -76,7 +76,7 @@ class FrequencyScan:
         return np.stack(cols, axis=1) if cols else np.zeros((Jtheta.shape[0], 0))
 
     def search(self, J: np.ndarray, r: np.ndarray, Jtheta: np.ndarray, rows: int,
-               mask: np.ndarray | None = None, alpha: float = FALSE_ALARM) -> list[tuple[int, float]]:
+               mask: np.ndarray | None = None) -> list[tuple[int, float]]:
         """Significant cyclic errors ``[(joint 0-based, frequency)]`` of the model with weighted
         Jacobian ``J (M, p)`` and residuals ``r (M,)`` at its fit; ``Jtheta (M, n)`` are the
         weighted theta columns there, ``rows`` the residual rows per item, ``mask (N,)`` the items
@@ -93,7 +93,7 @@ class FrequencyScan:
                                           shape=(self.n_poses, rows_all.size))  # sums rows per pose
         U = _orthonormal(J)
         r = r - U @ (U.T @ r)
-        threshold = 2.0 * np.log(self.n_independent / alpha)
+        threshold = 2.0 * np.log(self.n_independent / FALSE_ALARM)
         found: list[tuple[int, float]] = []
         while True:
             y = to_pose @ (Jtheta * r[:, None])  # (poses, n): residual along each joint's motion
@@ -125,8 +125,10 @@ class FrequencyScan:
         the other frequencies (one backfitting pass; the search refines each peak before the later
         ones join the model, which biases overlapping ones by a few hundredths)."""
         out = list(found)
+        U0 = _orthonormal(J)  # the model's span once; each frequency adds the others' columns to it
         for k, (i, f0) in enumerate(out):
-            U = _orthonormal(np.hstack([J, self.columns(Jtheta, rows, out[:k] + out[k + 1 :])]))
+            others = self.columns(Jtheta, rows, out[:k] + out[k + 1 :])
+            U = np.hstack([U0, _orthonormal(others - U0 @ (U0.T @ others))])
             rp = r - U @ (U.T @ r)
             grid = f0 + np.linspace(-0.5, 0.5, _POLISH_POINTS) * self.step[i]
             qi = np.repeat(self.q_item[:, i], rows)[:, None] * grid[None]
