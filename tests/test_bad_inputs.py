@@ -110,6 +110,7 @@ def _cases() -> list[tuple[str, list[str], list[str], str]]:
         ("auto-two-files", ["calibrate", "{d}/meca.csv", "{d}/meca.csv", "--robot", "meca500",
                             "--nongeometric", "auto"], [], "one calibration data set"),
         ("terms-with-swarm", [*cal, "--method", "swarm", "--nongeometric", "gear"], [], "lsq, robust"),
+        ("sigma-without-value", [*cal, "--sigma", "plane", "-o", "{o}/m.yaml"], ["m.yaml"], "KIND=MM"),
         ("not-converged", [*cal, "--method", "genetic", "--set", "generations=2", "-o", "{o}/m.yaml"],
          ["m.yaml"], "did not converge"),
         ("empty-csv", ["calibrate", "{d}/empty.csv", "--robot", "meca500"], [], "empty"),

@@ -217,6 +217,8 @@ def test_warm_start_reaches_the_cold_solution_and_checks_its_input():
     planes = simulate_tracker(robot, 40, kind="plane", noise_mm=0.01, seed=1)
     with pytest.raises(IdentificationError, match="same robot"):
         calibrate(robot, planes.data, warm_start=geometric)
+    with pytest.raises(IdentificationError, match="warm start goes with named"):
+        calibrate(robot, sim.data, nongeometric="cyclic", warm_start=geometric)
 
 
 def test_auto_result_json_report_and_command_line(tmp_path, capsys):

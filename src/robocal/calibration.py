@@ -46,13 +46,22 @@ _DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 
 @dataclass
 class Judged:
     """A measurement set judged with the start and the calibrated model: its problem, the two
-    states (nuisance carried over from the calibration) and their position statistics (mm)."""
+    states (nuisance carried over from the calibration) and each item's error with them (m)."""
 
     data: Measurements
     problem: CalibrationProblem
     states: tuple[State, State]
-    before: dict
-    after: dict
+    errors: tuple[np.ndarray, np.ndarray]
+
+    @property
+    def before(self) -> dict:
+        """Statistics (mm) with the start model."""
+        return position_stats(self.errors[0])
+
+    @property
+    def after(self) -> dict:
+        """Statistics (mm) with the calibrated model."""
+        return position_stats(self.errors[1])
 
 
 @dataclass
@@ -60,7 +69,8 @@ class CalibrationResult:
     """Everything a calibration found; ``to_dict()`` is the JSON of docs/result-json.md.
 
     ``space`` is what was estimated (robot parameters, then nuisance), ``covariance`` its
-    covariance (SI), ``initial`` the start state (registered model, nuisance fitted to it).
+    covariance (SI), ``initial`` the start state (registered model, nuisance fitted to it),
+    ``errors`` each calibration item's error (m) in the start and the final state.
     """
 
     robot: object
@@ -70,8 +80,7 @@ class CalibrationResult:
     space: ParameterSpace
     covariance: np.ndarray
     solver: SolverResult
-    before: dict
-    after: dict
+    errors: tuple[np.ndarray, np.ndarray] = field(repr=False)
     problem: CalibrationProblem = field(repr=False)
     initial: State = field(repr=False)
     judged: list[Judged] = field(default_factory=list, repr=False)
@@ -96,38 +105,43 @@ class CalibrationResult:
         return self.space.names
 
     @property
+    def before(self) -> dict:
+        """Statistics (mm) of the calibration items with the start model."""
+        return position_stats(self.errors[0])
+
+    @property
+    def after(self) -> dict:
+        """Statistics (mm) of the calibration items with the calibrated model."""
+        return position_stats(self.errors[1])
+
+    @property
     def validation_before(self) -> dict | None:
         """Statistics (mm) of every validation item with the start model (all files together)."""
-        return _combined([j.problem.position_errors(j.states[0]) for j in self.judged])
+        return _combined([j.errors[0] for j in self.judged])
 
     @property
     def validation(self) -> dict | None:
         """Statistics (mm) of every validation item with the calibrated model (all files)."""
-        return _combined([j.problem.position_errors(j.states[1]) for j in self.judged])
+        return _combined([j.errors[1] for j in self.judged])
+
+    def _files(self) -> list[tuple[str, Measurements, np.ndarray, np.ndarray]]:
+        """(role, data, errors before, errors after) of every file, calibration then validation."""
+        before, after = self.errors
+        return [("calibration", data, before[items], after[items])
+                for data, items in zip(self.problem.datasets, self.problem.item_blocks(), strict=True)] + \
+            [("validation", j.data, *j.errors) for j in self.judged]
 
     def per_file(self) -> list[dict]:
         """Per measurement file (calibration, then validation): its kind and its statistics (mm)
         before and after; the errors of each kind are in mm (position, plane deviation, distance)."""
-        rows = []
-        blocks = self.problem.item_blocks()
-        before, after = (self.problem.position_errors(s) for s in (self.initial, self.state))
-        for data, items in zip(self.problem.datasets, blocks, strict=True):
-            rows.append({"role": "calibration", "file": data.label, "kind": data.kind,
-                         "before": position_stats(before[items]), "after": position_stats(after[items])})
-        for j in self.judged:
-            rows.append({"role": "validation", "file": j.data.label, "kind": j.data.kind,
-                         "before": j.before, "after": j.after})
-        return rows
+        return [{"role": role, "file": data.label, "kind": data.kind, "before": position_stats(before),
+                 "after": position_stats(after)} for role, data, before, after in self._files()]
 
     def per_kind(self) -> dict[str, dict]:
         """Per role and kind (e.g. ``calibration plane``): statistics (mm) after calibration."""
         out: dict[str, list] = {}
-        blocks = self.problem.item_blocks()
-        after = self.problem.position_errors(self.state)
-        for data, items in zip(self.problem.datasets, blocks, strict=True):
-            out.setdefault(f"calibration {data.kind}", []).append(after[items])
-        for j in self.judged:
-            out.setdefault(f"validation {j.data.kind}", []).append(j.problem.position_errors(j.states[1]))
+        for role, data, _, after in self._files():
+            out.setdefault(f"{role} {data.kind}", []).append(after)
         return {key: _combined(parts) for key, parts in out.items()}
 
     @property
@@ -138,11 +152,10 @@ class CalibrationResult:
     @property
     def after_inliers(self) -> dict | None:
         """Statistics after calibration without the rejected observations (robust), else None."""
-        rejected = self.rejected
-        if not len(rejected):
+        w = self.solver.item_weights
+        if w is None or not (w == 0).any():
             return None
-        keep = np.setdiff1d(np.arange(self.problem.n_items), rejected)
-        return position_stats(self.problem.position_errors(self.state)[keep])
+        return position_stats(self.errors[1][w != 0])
 
     @property
     def correlation(self) -> np.ndarray:
@@ -212,7 +225,6 @@ class CalibrationResult:
         """The result as plain data (mm, deg), per docs/result-json.md."""
         ident, problem = self.identifiability, self.problem
         k = len(self.unknowns)
-        errors = problem.position_errors(self.state)
         data, first = problem.datasets[0], problem.observations[0]  # the per-row sections: the first file
         out = {
             "format": RESULT_FORMAT,
@@ -233,7 +245,7 @@ class CalibrationResult:
             "message": self.solver.message,
             "before": self.before,
             "after": self.after,
-            **({"after_inliers": self.after_inliers} if self.after_inliers else {}),
+            **({"after_inliers": inliers} if (inliers := self.after_inliers) else {}),
             "parameters": self.parameter_table(),
             "dropped": [{"name": n, "reason": "not identifiable from these data",
                          "confounded_with": ident.confounded_with[n]} for n in ident.dropped],
@@ -243,7 +255,7 @@ class CalibrationResult:
                             "matrix": np.round(self.correlation, 6).reshape(k, k).tolist()},
             "per_file": self.per_file(),
             "per_kind": self.per_kind(),
-            "rejected": self._rejected(errors),
+            "rejected": self._rejected(),
             "observations": self._observations(first, (self.initial, self.state), self._first_weights()),
             "history": self.solver.history,
             "history_units": ({"cost": "1", "rms": "1 (residuals divided by sigma)"} if problem.weighted
@@ -267,22 +279,23 @@ class CalibrationResult:
         w = self.solver.item_weights
         return None if w is None else w[self.problem.item_blocks()[0]]
 
-    def _rejected(self, errors: np.ndarray) -> list[dict]:
-        """Every item a robust method rejected: its file, rows, residual (mm)."""
+    def _rejected(self) -> list[dict]:
+        """Every row of an item a robust method rejected: its file, row, residual (mm)."""
+        w = self.solver.item_weights
+        if w is None:
+            return []
         out = []
         for obs, items in zip(self.problem.observations, self.problem.item_blocks(), strict=True):
-            for k, item in enumerate(items):
-                if item not in self.rejected:
-                    continue
-                for row in np.flatnonzero(obs.item_of_rows() == k):
-                    out.append({"file": obs.data.label, "source_row": int(obs.data.source_row[row]),
-                                "pose_id": int(obs.data.pose_id[row]), "residual": float(errors[item] * 1e3),
-                                "weight": 0.0})
+            item = items[obs.item_of_rows()]  # each data row's item
+            for row in np.flatnonzero(w[item] == 0):
+                out.append({"file": obs.data.label, "source_row": int(obs.data.source_row[row]),
+                            "pose_id": int(obs.data.pose_id[row]),
+                            "residual": float(self.errors[1][item[row]] * 1e3), "weight": 0.0})
         return out
 
     def to_json(self) -> str:
         """The result JSON text (docs/result-json.md)."""
-        return json.dumps(self.to_dict(), indent=1, allow_nan=False)
+        return json_text(self.to_dict())
 
     def save_json(self, path) -> None:
         write_atomic(path, self.to_json())
@@ -326,6 +339,11 @@ class CalibrationResult:
                          f"set's RMS is {self.after_inliers['rms']:.4f} mm")
         lines += [f"WARNING: {w}" for w in self.warnings]
         return "\n".join(lines)
+
+
+def json_text(content: dict) -> str:
+    """The text of a result JSON from :meth:`CalibrationResult.to_dict` (NaN refused)."""
+    return json.dumps(content, indent=1, allow_nan=False)
 
 
 def _start_model(robot, datasets: list, register_frames: bool, force: bool, warnings: list[str]):
@@ -415,10 +433,11 @@ def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data
     the calibrated model must fit them as a robot can (another robot's data otherwise)."""
     vproblem = CalibrationProblem(start, data)
     judged = tuple(vproblem.carried_state(s.robot, problem.export_nuisance(s)) for s in states)
-    before, after = (position_stats(vproblem.position_errors(s)) for s in judged)
-    check_residual(after["rms"], vproblem.modelled_points(judged[1]), "the validation data", force=force,
-                   warnings=warnings)
-    return Judged(data=data, problem=vproblem, states=judged, before=before, after=after)
+    result = Judged(data=data, problem=vproblem, states=judged,
+                    errors=tuple(vproblem.position_errors(s) for s in judged))
+    check_residual(result.after["rms"], vproblem.modelled_points(judged[1]), "the validation data",
+                   force=force, warnings=warnings)
+    return result
 
 
 def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
@@ -461,17 +480,20 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
             "drop --nongeometric)")
     fit = partial(_calibrate, robot, datasets, method, params, register_frames=register_frames,
                   rtol=rtol, seed=seed, progress=progress, force=force, sigma=sigma, options=options)
+    terms = [] if not spec or spec == "auto" else parse_terms(spec)
+    if warm_start is not None and (spec == "auto" or "cyclic" in terms):
+        raise IdentificationError("a warm start goes with named joint-error terms; nongeometric='auto' "
+                                  "and 'cyclic' make their own start")
     if spec == "auto":
-        if len(datasets) != 1 or warm_start is not None:
+        if len(datasets) != 1:
             raise IdentificationError("nongeometric='auto' chooses the error model on one calibration "
-                                      "data set, from nominal: name the terms for several sets")
+                                      "data set: name the terms for several sets")
         # robust's IGG3 weights follow its path: its final fit starts from nominal, like the robust
         # calibration of the chosen model named explicitly (lsq reaches the same minimum either way)
         result = select_error_model(fit, datasets[0], validations, seed=seed, rtol=rtol,
                                     warm_final=method == "lsq")
         result.settings["nongeometric"] = "auto"
         return result
-    terms = parse_terms(spec) if spec else []
     if "cyclic" in terms:
         return calibrate_cyclic(fit, [t for t in terms if t != "cyclic"], validations)
     return fit(terms, validations, warm_start)
@@ -506,14 +528,15 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     start = _start_model(robot, datasets, register_frames, force, warnings) if warm_start is None \
         else warm_start.start
     declared = list(dict.fromkeys(start.joint_error_names + candidate_names(start.n_joints, terms)))
-    problem = CalibrationProblem(start.with_joint_errors(declared), datasets, sigma=sigma)
-    state0 = problem.start(start.with_joint_errors(declared))
-    before = position_stats(problem.position_errors(state0))
-    check_residual(before["rms"], problem.modelled_points(state0), "the calibration data (nominal model, "
-                   "frames fitted)", force=force, warnings=warnings)
+    declared_start = start.with_joint_errors(declared)
+    problem = CalibrationProblem(declared_start, datasets, sigma=sigma)
+    state0 = problem.start(declared_start)
+    errors0 = problem.position_errors(state0)
+    check_residual(position_stats(errors0)["rms"], problem.modelled_points(state0),
+                   "the calibration data (nominal model, frames fitted)", force=force, warnings=warnings)
     space, ident, more = _estimated_space(problem, state0, params, rtol, problem.n_poses)
     warnings += more
-    first = state0 if warm_start is None else _warm_state(problem, warm_start, declared)
+    first = state0 if warm_start is None else _warm_state(problem, warm_start, declared_start)
     out = _run_solver(method, problem, first, space, seed, progress, options)
     check_corrections(state0.robot, out.state.robot, space.robot, force=force, warnings=warnings)
     if not out.success:
@@ -527,8 +550,8 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
         n for n in estimated_terms if n not in start.joint_error_names])
     result = CalibrationResult(
         robot=final_robot, start=start, method=method, identifiability=ident, space=space,
-        covariance=_covariance(problem, out, space), solver=out, before=before,
-        after=position_stats(problem.position_errors(out.state)), problem=problem, initial=state0,
+        covariance=_covariance(problem, out, space), solver=out,
+        errors=(errors0, problem.position_errors(out.state)), problem=problem, initial=state0,
         warnings=warnings, settings={"params": params if isinstance(params, str) else list(params),
                                      "seed": seed, "rtol": rtol, "nongeometric": ",".join(terms) or "none",
                                      "register_frames": register_frames, "force": force, **_plain(options)},
@@ -544,14 +567,14 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     return result
 
 
-def _warm_state(problem: CalibrationProblem, warm: CalibrationResult, declared: list[str]) -> State:
+def _warm_state(problem: CalibrationProblem, warm: CalibrationResult, start) -> State:
     """The start of a warm-started solve: ``warm``'s final geometry and nuisance, its joint-error
-    values for the ``declared`` terms it has (0 for the others)."""
-    if warm.robot.n_joints != problem.observations[0].q.shape[1] or warm.problem.kind != problem.kind \
+    values for the terms ``start`` (the start model) declares (0 for the others)."""
+    if warm.robot.n_joints != start.n_joints or warm.problem.kind != problem.kind \
             or warm.problem.nuisance_names != problem.nuisance_names:
         raise IdentificationError("warm_start must be a calibration of the same robot with the same "
                                   "kind of data (and the same planes or SMRs)")
-    return State(warm.state.robot.with_joint_errors(declared), warm.state.nuisance)
+    return State(warm.state.robot.with_joint_errors(start.joint_error_names), warm.state.nuisance)
 
 
 def _nongeometric_section(result: CalibrationResult, terms: list[str], estimated: list[str]) -> dict:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.calibration import calibrate
+from robocal.calibration import calibrate, json_text
 from robocal.compensate import compensate
 from robocal.data.measurements import Measurements
 from robocal.ik import plan_path
@@ -94,8 +94,9 @@ def run_demo(out_dir: Path, quiet: bool = False) -> dict[str, Path]:
     out_dir.mkdir(parents=True, exist_ok=True)
     outputs = {"model": out_dir / "calibrated.yaml", "json": out_dir / "result.json",
                "report": out_dir / "report.html"}
-    write_all({outputs["model"]: dump_model(robust.robot), outputs["json"]: robust.to_json(),
-               outputs["report"]: render_report(robust.to_dict(),
+    content = robust.to_dict()
+    write_all({outputs["model"]: dump_model(robust.robot), outputs["json"]: json_text(content),
+               outputs["report"]: render_report(content,
                                                 title="robocal demo: ABB IRB 2600, robust calibration")})
     _line("")
     for label, path_ in outputs.items():

@@ -17,12 +17,22 @@ def model_errors(robot, data) -> np.ndarray:
     point/pose ``(N, 3)`` measured - modelled position; plane ``(N,)`` signed distance of the
     modelled tip to the least-squares plane (of the model's tips) of its plane index; distance
     ``(N,)`` modelled - measured distance (both rows of a pair carry it)."""
+    obs = _observation(robot, data)
+    return _row_errors(obs, robot, obs.nuisance_start(robot))
+
+
+def _observation(robot, data):
+    """The observation of ``data`` for ``robot`` (checked: joints, SMRs)."""
     data.check_against(robot)
     if data.n_smr > len(robot.smr) + 1:
         raise DataError(f"the data use {data.n_smr} SMRs but the model has {len(robot.smr) + 1}: "
                         "register the frame first (--fit-frame) or use a model with these SMRs")
-    obs = observation_for(data, robot)
-    r = obs.residuals(robot, obs.nuisance_start(robot)).reshape(obs.n_items, obs.rows_per_item)
+    return observation_for(data, robot)
+
+
+def _row_errors(obs, robot, nuisance: np.ndarray) -> np.ndarray:
+    """:func:`model_errors` of an observation with its nuisance."""
+    r = obs.residuals(robot, nuisance).reshape(obs.n_items, obs.rows_per_item)
     if obs.rows_per_item > 1:
         return r[:, :3]
     return -r[obs.item_of_rows(), 0]
@@ -49,11 +59,12 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
                      "the data the frame is fitted on", force=force, warnings=warnings)
         out["robot"] = robot
         out["registration_rms_mm"] = reg.rms * 1e3
-    err = model_errors(robot, data)
+    obs = _observation(robot, data)
+    nuisance = obs.nuisance_start(robot)
+    err = _row_errors(obs, robot, nuisance)
     stats = position_stats(err)
-    modelled = robot.fk(data.joints, smr=data.smr if data.kind in ("point", "pose") else None,
-                        approach=data.approach, travel=data.travel)[:, :3, 3]
-    check_residual(stats["rms"], modelled, "the evaluated data", force=force, warnings=warnings)
+    check_residual(stats["rms"], obs.modelled_points(robot, nuisance), "the evaluated data", force=force,
+                   warnings=warnings)
     stats["kind"] = data.kind
     stats["n_poses"] = data.n_poses
     if err.ndim == 2:

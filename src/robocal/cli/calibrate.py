@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from robocal.io import LENGTH_UNITS
+
 EPILOG = """Examples:
   robocal calibrate data.csv --robot abb_irb2600 --validate val.csv -o calibrated.yaml --json result.json
   robocal calibrate data.csv --robot nominal.yaml --method robust --set k0=1.5 --set k1=3.0
@@ -41,20 +43,16 @@ def _option(text: str):
     return key, value
 
 
-def _sigma(items: list[str]) -> dict:
-    """``KIND=MM`` options -> {kind: m}."""
-    from robocal.errors import DataError
-
-    out = {}
-    for item in items:
-        kind, sep, value = item.partition("=")
-        try:
-            out[kind.strip()] = float(value) * 1e-3
-        except ValueError:
-            sep = ""
-        if not sep:
-            raise DataError(f"--sigma {item!r}: expected KIND=MM, e.g. plane=0.01")
-    return out
+def _sigma(text: str) -> tuple[str, float]:
+    """``KIND=MM`` -> (kind, m): an argparse type (calibrate checks the kind and the value)."""
+    kind, sep, value = text.partition("=")
+    try:
+        mm = float(value)
+    except ValueError:
+        mm = None
+    if not sep or not kind.strip() or mm is None:
+        raise argparse.ArgumentTypeError(f"expected KIND=MM, e.g. plane=0.01, got {text!r}")
+    return kind.strip(), mm * LENGTH_UNITS["mm"]
 
 
 def add_parser(sub) -> None:
@@ -70,7 +68,7 @@ def add_parser(sub) -> None:
                    help="auto (identifiable default set), all, or names separated by spaces/commas")
     p.add_argument("--validate", metavar="VAL.csv", nargs="+",
                    help="measurements to judge the result on (several files: each judged in its unit)")
-    p.add_argument("--sigma", action="append", default=[], metavar="KIND=MM",
+    p.add_argument("--sigma", action="append", default=[], metavar="KIND=MM", type=_sigma,
                    help="1-sigma noise of a kind's files without a sigma_mm column, e.g. plane=0.01, "
                         "distance=0.005 (defaults: point 0.02, pose 0.02, plane 0.01, distance 0.005)")
     p.add_argument("--hold-out", type=int, metavar="N",
@@ -99,7 +97,7 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from robocal.calibration import calibrate
+    from robocal.calibration import calibrate, json_text
     from robocal.data.measurements import Measurements
     from robocal.errors import DataError, IdentificationError
     from robocal.io import check_outputs, write_all
@@ -111,7 +109,7 @@ def run(args) -> int:
     check_outputs(outputs, (*args.data, *validate, args.robot))  # fail before the work
     if args.network_out and (args.method != "neural" or not args.network_out.endswith((".npz", ".json"))):
         raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
-    sigma = _sigma(args.sigma)
+    sigma = dict(args.sigma)
     robot = load_model(args.robot)
     data = [Measurements.load(f, robot=robot) for f in args.data]
     validation = [Measurements.load(f, robot=robot) for f in validate]
@@ -139,12 +137,13 @@ def run(args) -> int:
     texts = {}
     if args.output:
         texts[args.output] = dump_model(result.robot)
+    content = result.to_dict() if args.json or args.report else None
     if args.json:
-        texts[args.json] = result.to_json()
+        texts[args.json] = json_text(content)
     if args.report:
         from robocal.report.html import render_report
 
-        texts[args.report] = render_report(result.to_dict())
+        texts[args.report] = render_report(content)
     if args.network_out:
         texts[args.network_out] = result.solver.network.file_content(args.network_out)
     write_all(texts)
