@@ -385,18 +385,14 @@ def read_joint_table(path) -> JointTable:
         raise DataError(f"{path}: the file is empty; it needs a header (q1_deg,...) and joint rows")
     rows = list(csv.reader([ln for _, ln in numbered]))
     header = [h.strip().lower() for h in rows[0]]
-    cols = {}
-    for c, name in enumerate(header):
-        role = _header_role(name) if re.fullmatch(r"q\d+_[a-z]+", name) else None
-        if role is not None:
-            cols[role[1]] = (c, role[2])
-    n = len(cols)
-    if n == 0 or sorted(cols) != list(range(1, n + 1)):
-        raise DataError(f"{path}: joint columns must be q1_deg..qn_deg (or _rad), found {header}")
+    roles = {name: _header_role(name) for name in header if re.fullmatch(r"q\d+_[a-z]+", name)}
+    joint_cols = _joint_columns(roles, str(path))
+    index, scale = [header.index(h) for h in joint_cols], roles[joint_cols[0]][2]
+    n = len(index)
     q = np.empty((len(rows) - 1, n))
     for i, row in enumerate(rows[1:]):
         try:
-            q[i] = [float(row[cols[j][0]]) * cols[j][1] for j in range(1, n + 1)]
+            q[i] = [float(row[c]) * scale for c in index]
         except (ValueError, IndexError):
             raise DataError(f"{path}, line {numbered[i + 1][0]}: expected {n} numeric joint values") from None
     if len(q) == 0:
@@ -404,7 +400,7 @@ def read_joint_table(path) -> JointTable:
     if not np.isfinite(q).all():
         bad = int(np.flatnonzero(~np.isfinite(q).all(axis=1))[0])
         raise DataError(f"{path}, line {numbered[bad + 1][0]}: joint values must be finite")
-    return JointTable(joints=q, header=header, joint_columns=[cols[j][0] for j in range(1, n + 1)],
+    return JointTable(joints=q, header=header, joint_columns=index,
                       cells=[[c.strip() for c in row] for row in rows[1:]],
                       lines=np.array([k for k, _ in numbered[1:]]))
 
