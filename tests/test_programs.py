@@ -181,6 +181,29 @@ def test_rapid_details(tmp_path):
     assert "5 of 5" in summary and "correction" in summary
 
 
+def test_urscript_variable_is_its_latest_assignment():
+    """A motion through a variable takes the variable's last assignment before it in text order,
+    whatever other names share its prefix; a use before any assignment is not a target."""
+    from robocal.programs.source import ProgramText
+    from robocal.programs.urscript import URScriptDialect
+
+    text = b"""def prog():
+  movel(Waypoint_1_p, a=1.2, v=0.25)
+  global Waypoint_1_p=p[0.1, 0.2, 0.3, 0, 3.1, 0]
+  global Waypoint_10_p=p[0.4, 0.5, 0.6, 0, 3.1, 0]
+  movel(Waypoint_1_p, a=1.2, v=0.25)
+  Waypoint_1_p=p[0.7, 0.8, 0.9, 0, 3.1, 0]
+  movel(Waypoint_10_p, a=1.2, v=0.25)
+  movel(Waypoint_1_p, a=1.2, v=0.25)
+  movel(Waypoint_10_p, a=1.2, v=0.25)
+end
+"""
+    prog = URScriptDialect().parse([ProgramText("prog.script", text)], {}, {"default": np.eye(4)})
+    assert [t.line for t in prog.targets] == [3, 4, 6]
+    assert np.allclose([t.values()[:3] for t in prog.targets], [[0.1, 0.2, 0.3], [0.4, 0.5, 0.6],
+                                                                [0.7, 0.8, 0.9]])
+
+
 # ----------------------------------------------------------------------------- simulated truth
 @pytest.mark.parametrize("fmt,robot", [("rapid", "abb_irb2600"), ("krl", "kuka_kr16_2"),
                                        ("fanuc", "fanuc_lrmate200id"), ("urscript", "ur5")])

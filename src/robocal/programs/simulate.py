@@ -32,10 +32,13 @@ def _zyx(R):
 
 
 def write_program(dialect: str, folder, nominal: Robot, q: np.ndarray, tool: np.ndarray,
-                  frame: np.ndarray, name: str = "sim") -> tuple[list[Path], dict, dict]:
+                  frame: np.ndarray, name: str = "sim", variables: bool = False
+                  ) -> tuple[list[Path], dict, dict]:
     """Write a program visiting joints ``q`` ``(N, 6)`` (rad) of ``nominal`` with TCP ``tool``
     in ``frame`` (4x4, m). Returns the files and the ``tools`` / ``frames`` to give the filter
-    (text in the dialect's notation; empty when the program declares them)."""
+    (text in the dialect's notation; empty when the program declares them). ``variables``
+    (URScript): one pose variable per waypoint, ``global Waypoint_i_p=p[...]``, as PolyScope
+    exports them, instead of literals in the motions."""
     folder = Path(folder)
     d = dialect_for([], dialect)
     P = invert_transform(frame) @ nominal.fk(q) @ tool
@@ -93,9 +96,11 @@ def write_program(dialect: str, folder, nominal: Robot, q: np.ndarray, tool: np.
     lines = [f"def {name}():", "  set_tcp(p[" + _frame_text(tool, "rotvec") + "])",
              "  global Cell=p[" + _frame_text(frame, "rotvec") + "]",
              "  movej([" + ", ".join(f"{v:.6f}" for v in q[0]) + "], a=1.4, v=1.05)"]
-    for i in range(n):
-        pose = ", ".join(f"{v:.6f}" for v in (*P[i, :3, 3], *rv[i]))
-        lines.append(f"  movel(pose_trans(Cell, p[{pose}]), a=1.2, v=0.25)")
+    poses = ["p[" + ", ".join(f"{v:.6f}" for v in (*P[i, :3, 3], *rv[i])) + "]" for i in range(n)]
+    if variables:
+        lines += [f"  global Waypoint_{i + 1}_p={pose}" for i, pose in enumerate(poses)]
+        poses = [f"Waypoint_{i + 1}_p" for i in range(n)]
+    lines += [f"  movel(pose_trans(Cell, {pose}), a=1.2, v=0.25)" for pose in poses]
     lines += ["end", f"{name}()", ""]
     path = folder / f"{name}.script"
     path.write_text("\n".join(lines))
