@@ -28,11 +28,10 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.compensate import controller_model
+from robocal.compensate import Compensation, compensate, controller_model
 from robocal.errors import DataError, ModelError
 from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
-from robocal.ik.singularity import singularity_distance
 from robocal.io import check_outputs, write_all
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
@@ -309,11 +308,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     problems: list[tuple[int, str]] = []
     q_nom = controller_joints(d, program, targets, nominal, X @ invert_transform(tool), problems, warnings)
     ok = np.isfinite(q_nom).all(axis=1)
-    controller = controller_model(calibrated, nominal, robot_base)
-    res = ik_solve(controller, X @ invert_transform(real_tool), np.where(ok[:, None], q_nom, 0.0))
-    q = res.joints
-    sing = singularity_distance(controller, q)
-    _check_joints(nominal, res, ok, sing, problems)
+    comp = compensate(controller_model(calibrated, nominal, robot_base), nominal,
+                      X @ invert_transform(real_tool), seeds=np.where(ok[:, None], q_nom, 0.0))
+    q, sing = comp.joints, comp.singularity
+    _check_joints(nominal, comp, ok, problems)
     bad = {i for i, _ in problems}
     if problems and not keep_unreached:
         problems.sort()
@@ -324,16 +322,13 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                         "to leave them unchanged)")
     warnings += [f"{targets[i].where}: left unchanged: {why}" for i, why in sorted(problems)]
     good = np.array([i not in bad for i in range(len(targets))])
-    Pc = invert_transform(W) @ nominal.fk(np.where(good[:, None], q, 0.0)) @ tool
-    Pc[~good] = P[~good]
+    Pc = np.where(good[:, None, None], invert_transform(W) @ comp.corrected_targets @ tool, P)
     cfg = None
     if d.scheme is not None:
         cfg = (d.scheme.encode(nominal, np.where(ok[:, None], q_nom, 0.0)), d.scheme.encode(nominal, q))
     edits, changed = _edits(d, targets, good, Pc, cfg, warnings)
-    for i in np.flatnonzero(good & sing.close):
-        warnings.append(f"{targets[i].where}: close to a singularity, {sing.describe(i)}: the "
-                        "controller may not realise its correction")
-    rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, res.converged & ok, changed, cfg, sing)
+    warnings += comp.warnings([t.where for t in targets], good)  # the corrected ones near a singularity
+    rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, comp.converged & ok, changed, cfg, sing)
     outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
     return FilterResult(d.name, outputs, rows, warnings)
 
@@ -356,14 +351,12 @@ def _filterable(d: Dialect, program: Program, warnings: list) -> list[Target]:
     return targets
 
 
-def _check_joints(nominal: Robot, res, ok: np.ndarray, sing, problems: list) -> None:
+def _check_joints(nominal: Robot, comp: Compensation, ok: np.ndarray, problems: list) -> None:
     """Append the targets the calibrated IK did not reach, or reached outside the limits."""
-    q = res.joints
-    converged = res.converged & ok
+    q = comp.joints
+    converged = comp.converged & ok
     for i in np.flatnonzero(ok & ~converged):
-        problems.append((int(i), f"the calibrated model does not reach it (IK stopped "
-                                 f"{res.position_error[i] * 1e3:.3g} mm away; nearest singularity "
-                                 f"{sing.nearest[i]}, sigma_rel {sing.sigma_rel[i]:.4f})"))
+        problems.append((int(i), comp.not_reached(i)))
     inside = ((q >= nominal.limits[:, 0]) & (q <= nominal.limits[:, 1])).all(axis=1)
     for i in np.flatnonzero(converged & ~inside):
         margin = np.rad2deg(np.minimum(q[i] - nominal.limits[:, 0], nominal.limits[:, 1] - q[i]))
