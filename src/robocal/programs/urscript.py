@@ -22,10 +22,10 @@ from bisect import bisect_left
 import numpy as np
 
 from robocal.errors import DataError
-from robocal.kinematics.transforms import make_transform
+from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
 from robocal.programs.aggregate import numbers_of, parse_aggregate, split_top
 from robocal.programs.model import IDENTITY, Dialect, Program, Target
-from robocal.programs.rotations import matrix_to_rotvec, rotvec_to_matrix
+from robocal.programs.rotations import nearest_rotvec
 from robocal.programs.source import Number, mask
 
 _COMMENT = re.compile(r"#[^\n]*")
@@ -87,7 +87,7 @@ class URScriptDialect(Dialect):
         return make_transform(rotvec_to_matrix(values[:, 3:6]), values[:, :3])
 
     def from_pose(self, T, old):
-        return np.hstack([T[:, :3, 3], matrix_to_rotvec(T[:, :3, :3], old[:, 3:6])])
+        return np.hstack([T[:, :3, 3], nearest_rotvec(T[:, :3, :3], old[:, 3:6])])
 
     def resolutions(self):
         return np.array([_POSITION_M] * 3 + [_ROTVEC] * 3)
