@@ -3,6 +3,8 @@ hand-written programs (byte-identical round trip, only numbers change), simulate
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 import shutil
 from pathlib import Path
@@ -19,7 +21,7 @@ from robocal.data.simulate import perturbed
 from robocal.errors import DataError
 from robocal.kinematics.catalog import catalog_names
 from robocal.kinematics.transforms import rotvec_to_matrix
-from robocal.programs import filter_program
+from robocal.programs import FilterResult, filter_program
 from robocal.programs.config import ABBConfig, FANUCConfig, KUKAConfig, slot_of
 from robocal.programs.rotations import matrix_to_quat, matrix_to_zyx, nearest_rotvec, quat_to_matrix
 from robocal.programs.simulate import execute, truth_experiment
@@ -349,6 +351,19 @@ def test_out_of_the_limits_after_correction(tmp_path):
     with pytest.raises(DataError, match=r"edge.ls:\d+ \(P\[\d\]\): the corrected joints leave the limits "
                                         r"\(joint [15] by"):
         filter_program(paths, perturbed(robot, 3), robot, tools=tools, frames=frames)
+    # kept unchanged instead: 'reachable' says the nominal controller has joints for the target
+    # (the one whose correction leaves the limits), not that it was filtered
+    res = filter_program(paths, perturbed(robot, 3), robot, tools=tools, frames=frames, keep_unreached=True)
+    assert any(r["reachable"] and not r["filtered"] for r in res.rows)
+    assert any(not r["reachable"] for r in res.rows) and any(r["filtered"] for r in res.rows)
+
+
+def test_table_csv_quotes_cells():
+    """Cells holding a comma or a double quote (a file name may) survive the CSV table."""
+    row = {"file": 'we"ld, cell.mod', "line": 3, "name": "p1", "correction_mm": 0.5}
+    text = FilterResult("ABB RAPID", {}, [row]).table_csv()
+    assert list(csv.DictReader(io.StringIO(text))) == [
+        {"file": 'we"ld, cell.mod', "line": "3", "name": "p1", "correction_mm": "0.5"}]
 
 
 def test_robot_base_given_explicitly(tmp_path):

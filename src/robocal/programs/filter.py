@@ -22,6 +22,8 @@ too unless ``tcp`` gives the one identified on the calibrated model (``robocal t
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -54,18 +56,13 @@ class FilterResult:
     warnings: list[str] = field(default_factory=list)
 
     def table_csv(self) -> str:
-        if not self.rows:
-            return "file,line,name\n"
-        cols = list(self.rows[0])
-        lines = [",".join(cols)]
+        out = io.StringIO()
+        writer = csv.writer(out, lineterminator="\n")
+        cols = list(self.rows[0]) if self.rows else ["file", "line", "name"]
+        writer.writerow(cols)
         for r in self.rows:
-            cells = []
-            for c in cols:
-                v = r[c]
-                text = f"{v:.6g}" if isinstance(v, float) else str(v)
-                cells.append(f'"{text}"' if ("," in text or '"' in text) else text)
-            lines.append(",".join(cells))
-        return "\n".join(lines) + "\n"
+            writer.writerow([f"{r[c]:.6g}" if isinstance(r[c], float) else r[c] for c in cols])
+        return out.getvalue()
 
     def table_json(self) -> str:
         return json.dumps({"dialect": self.dialect, "files": [str(p) for p in self.outputs],
@@ -123,18 +120,20 @@ class FilterResult:
                 raise DataError("several program files: give one output path per input")
             outputs = {next(iter(self.outputs)): Path(outputs)}
         files: dict[Path, bytes] = {Path(dst): self.outputs[Path(src)] for src, dst in outputs.items()}
-        if table is not None:
-            t = Path(table)
-            if t.suffix.lower() == ".csv":
-                files[t] = self.table_csv().encode()
-            elif t.suffix.lower() == ".json":
-                files[t] = self.table_json().encode()
-            else:
-                files[t.with_name(t.name + ".csv")] = self.table_csv().encode()
-                files[t.with_name(t.name + ".json")] = self.table_json().encode()
+        for t in table_paths(table) if table is not None else []:
+            files[t] = (self.table_csv() if t.suffix.lower() == ".csv" else self.table_json()).encode()
         check_outputs(files, self.outputs)
         write_all(files)
         return list(files)
+
+
+def table_paths(table: str | Path) -> list[Path]:
+    """The table file(s) :meth:`FilterResult.write` writes for ``table``: that file when it ends
+    .csv or .json, else ``table.csv`` and ``table.json``."""
+    t = Path(table)
+    if t.suffix.lower() in (".csv", ".json"):
+        return [t]
+    return [t.with_name(t.name + ".csv"), t.with_name(t.name + ".json")]
 
 
 def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
@@ -240,7 +239,7 @@ def _nearest_joints(nominal, F, targets, program: Program, problems, warnings):
         warnings.append(f"{targets[i].where}: the controller's solution is {np.rad2deg(jump[i]):.0f} deg "
                         "away from the previous joints in one joint: it may take another solution than "
                         "assumed here; add a joint move (or qnear) before this target")
-    inside = ((q >= nominal.limits[:, 0]) & (q <= nominal.limits[:, 1])).all(axis=1)
+    inside = nominal.within_limits(q)
     for i in np.flatnonzero(~converged | ~inside):
         problems.append((int(i), "the nominal controller has no solution near the previous joints inside "
                                  "the limits (out of reach)"))
@@ -357,7 +356,7 @@ def _check_joints(nominal: Robot, comp: Compensation, ok: np.ndarray, problems: 
     converged = comp.converged & ok
     for i in np.flatnonzero(ok & ~converged):
         problems.append((int(i), comp.not_reached(i)))
-    inside = ((q >= nominal.limits[:, 0]) & (q <= nominal.limits[:, 1])).all(axis=1)
+    inside = nominal.within_limits(q)
     for i in np.flatnonzero(converged & ~inside):
         margin = np.rad2deg(np.minimum(q[i] - nominal.limits[:, 0], nominal.limits[:, 1] - q[i]))
         j = int(np.argmin(margin))
@@ -400,6 +399,7 @@ def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing
     drot = np.rad2deg(np.linalg.norm(matrix_to_rotvec(Xc[:, :3, :3] @ np.swapaxes(X[:, :3, :3], 1, 2)),
                                      axis=1))
     lim = np.rad2deg(np.minimum(q - nominal.limits[:, 0], nominal.limits[:, 1] - q))
+    columns = sing.columns()
     rows = []
     for i, t in enumerate(targets):
         j = int(np.argmin(lim[i]))
@@ -410,10 +410,8 @@ def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing
             "configuration": "changed" if changed[i] else ("kept" if t.config is not None else "none"),
             "config_before": d.scheme.text(cfg[0][i]) if cfg is not None and ok[i] else "",
             "config_after": d.scheme.text(cfg[1][i]) if cfg is not None and good[i] else "",
-            "reachable": bool(good[i]), "converged": bool(converged[i]),
+            "reachable": bool(ok[i]), "converged": bool(converged[i]),
             "limit_margin_deg": float(lim[i, j]), "limit_joint": j + 1,
-            "sigma_rel": float(sing.sigma_rel[i]), "nearest_singularity": str(sing.nearest[i]),
-            "wrist_deg": float(sing.wrist_deg[i]), "elbow_deg": float(sing.elbow_deg[i]),
-            "shoulder_mm": float(sing.shoulder_mm[i]),
+            **{name: values[i].item() for name, values in columns.items()},
         })
     return rows
