@@ -176,22 +176,26 @@ def _configured_joints(dialect, nominal, F, targets, problems):
     have = scheme.encode(nominal, np.where(valid[..., None], cands, 0.0))
     want = np.array([t.config if t.config is not None else np.zeros(have.shape[-1], int) for t in targets])
     score = np.where(valid, scheme.score(have, want[:, None]), np.iinfo(np.int64).max)
+    has = np.array([t.config is not None for t in targets])
+    reach = valid.any(axis=1)
+    for i in np.flatnonzero(~reach):
+        problems.append((int(i), "no solution of the nominal model inside the joint limits (out of reach)"))
     q = np.full(F.shape[:1] + (nominal.n_joints,), np.nan)
-    prev = None
-    for i, t in enumerate(targets):
-        if not valid[i].any():
-            problems.append((i, "no solution of the nominal model inside the joint limits (out of reach)"))
-            continue
-        if t.config is None:  # no configuration data: the candidate nearest the previous joints
-            d = np.where(valid[i], np.abs(cands[i] - (prev if prev is not None else 0.0)).sum(axis=1), np.inf)
-            k = int(np.argmin(d))
-        else:
-            k = int(np.argmin(score[i]))
-            if score[i, k] >= BRANCH_MISMATCH:
-                problems.append((i, f"configuration {scheme.text(t.config)} is not possible for this pose "
-                                    "inside the joint limits"))
-                continue
-        q[i] = prev = cands[i, k]
+    best = np.argmin(score, axis=1)
+    possible = np.take_along_axis(score, best[:, None], axis=1)[:, 0] < BRANCH_MISMATCH
+    for i in np.flatnonzero(has & reach & ~possible):
+        problems.append((int(i), f"configuration {scheme.text(targets[i].config)} is not possible for this "
+                                 "pose inside the joint limits"))
+    configured = np.flatnonzero(has & reach & possible)  # the candidate their data select
+    q[configured] = cands[configured, best[configured]]
+    # no configuration data: in program order, the candidate nearest the previous target's joints
+    last = -1  # the last target without configuration data given joints
+    for i in np.flatnonzero(~has & reach):
+        k = np.searchsorted(configured, i) - 1
+        prev = max(configured[k] if k >= 0 else -1, last)
+        d = np.where(valid[i], np.abs(cands[i] - (q[prev] if prev >= 0 else 0.0)).sum(axis=1), np.inf)
+        q[i] = cands[i, int(np.argmin(d))]
+        last = i
     return q
 
 
@@ -213,10 +217,7 @@ def _nearest_joints(nominal, F, targets, program: Program, problems, warnings):
         warnings.append(f"{targets[0].where}: no joint position before the first target: the controller's "
                         "solution is taken as the one nearest zero joints")
     given = np.isfinite(fixed).all(axis=1)
-    seeds = fixed.copy()
-    for i in range(1, N):  # propagate the last known joints
-        if not given[i]:
-            seeds[i] = seeds[i - 1]
+    seeds = fixed[np.maximum.accumulate(np.where(given, np.arange(N), 0))]  # the last known joints
     for _ in range(SWEEPS):
         res = ik_solve(nominal, F, seeds)
         new = np.where(given[:, None], fixed, np.vstack([fixed[:1], res.joints[:-1]]))
@@ -258,11 +259,12 @@ def controller_joints(dialect: Dialect, program: Program, targets: list[Target],
 
 
 def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
-    """``(P, W, tool)``: target poses in their frames, the frames and the tools, each ``(N, 4, 4)`` m."""
-    P = dialect.to_pose(np.array([t.values() for t in targets]))
+    """``(values, P, W, tool)``: the pose numbers as written ``(N, k)``; target poses in their
+    frames, the frames and the tools, each ``(N, 4, 4)`` m."""
+    values = np.array([t.values() for t in targets])
     W = np.array([program.frames[t.frame] for t in targets])
     tool = np.array([program.tools[t.tool] for t in targets])
-    return P, W, tool
+    return values, dialect.to_pose(values), W, tool
 
 
 def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
@@ -295,7 +297,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     if not targets:
         warnings.append("no Cartesian target to filter")
         return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings)
-    P, W, tool = target_poses(d, program, targets)
+    values, P, W, tool = target_poses(d, program, targets)
     X = W @ P
     real = {d.name_key(k): v for k, v in (tcp or {}).items()}
     unknown_tcp = sorted(set(real) - {t.tool for t in targets})
@@ -325,7 +327,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     cfg = None
     if d.scheme is not None:
         cfg = (d.scheme.encode(nominal, np.where(ok[:, None], q_nom, 0.0)), d.scheme.encode(nominal, q))
-    edits, changed = _edits(d, targets, good, Pc, cfg, warnings)
+    edits, changed = _edits(d, targets, values, good, Pc, cfg, warnings)
     warnings += comp.warnings([t.where for t in targets], good)  # the corrected ones near a singularity
     rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, comp.converged & ok, changed, cfg, sing)
     outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
@@ -364,11 +366,12 @@ def _check_joints(nominal: Robot, comp: Compensation, ok: np.ndarray, problems: 
                                  f"{-margin[j]:.3f} deg)"))
 
 
-def _edits(d: Dialect, targets: list[Target], good: np.ndarray, Pc: np.ndarray, cfg, warnings: list):
-    """Span edits per file for the corrected poses ``Pc`` and, where the correction crossed a
-    configuration boundary, the configuration data; and which targets' configuration changed.
-    ``cfg``: (rows of the nominal joints, rows of the corrected joints) or None."""
-    old = np.array([t.values() for t in targets])
+def _edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray, Pc: np.ndarray, cfg,
+           warnings: list):
+    """Span edits per file for the corrected poses ``Pc`` of targets whose numbers were ``old``
+    and, where the correction crossed a configuration boundary, the configuration data; and which
+    targets' configuration changed. ``cfg``: (rows of the nominal joints, rows of the corrected
+    joints) or None."""
     new = d.from_pose(Pc, old)
     resolution = d.resolutions()
     moved = good[:, None] & (np.abs(new - old) > resolution / 2)  # numbers that must be rewritten

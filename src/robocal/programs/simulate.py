@@ -132,7 +132,7 @@ def execute(paths, robot: Robot, nominal: Robot, *, tools=None, frames=None, ref
     program = d.parse([ProgramText(p) for p in paths], as_frames(d, frames), as_frames(d, tools),
                       [ProgramText(p) for p in references])
     targets = program.targets
-    P, W, tool = target_poses(d, program, targets)
+    _, P, W, tool = target_poses(d, program, targets)
     X = W @ P
     problems, warnings = [], []
     q = controller_joints(d, program, targets, nominal, X @ invert_transform(tool), problems, warnings)
