@@ -19,10 +19,11 @@ import robocal as rc
 from robocal.cli import main
 from robocal.data.simulate import perturbed
 from robocal.errors import DataError
+from robocal.ik.opw_ik import branch_slot
 from robocal.kinematics.catalog import catalog_names
 from robocal.kinematics.transforms import rotvec_to_matrix
 from robocal.programs import FilterResult, filter_program
-from robocal.programs.config import ABBConfig, FANUCConfig, KUKAConfig, slot_of
+from robocal.programs.config import ABBConfig, FANUCConfig, KUKAConfig
 from robocal.programs.rotations import matrix_to_quat, matrix_to_zyx, nearest_rotvec, quat_to_matrix
 from robocal.programs.simulate import execute, truth_experiment
 from robocal.programs.source import NUMBER_RE, Number, format_number
@@ -49,11 +50,11 @@ def _fixture(name, tmp_path):
 
 # ----------------------------------------------------------------------------- configuration
 @pytest.mark.parametrize("name", OPW_ROBOTS)
-def test_slot_of_is_the_closed_form_slot(name):
+def test_branch_slot_is_the_closed_form_slot(name):
     robot = rc.Robot.from_catalog(name)
     q = np.random.default_rng(1).uniform(robot.limits[:, 0], robot.limits[:, 1], (500, 6))
     sols = rc.ik.solve_all(robot, robot.fk(q))
-    picked = sols[np.arange(len(q)), slot_of(robot, q)]
+    picked = sols[np.arange(len(q)), branch_slot(robot.opw, q)]
     assert np.abs(np.remainder(picked - q + np.pi, 2 * np.pi) - np.pi).max() < 1e-7
 
 

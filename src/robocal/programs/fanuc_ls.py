@@ -68,7 +68,7 @@ class FanucDialect(Dialect):
         return {(a, b): t for (a, b, old), t in zip(spans, texts, strict=True) if old != t}
 
     def parse(self, sources, frames, tools, references=()):
-        prog = Program(sources, [], frames={"0": np.eye(4)}, tools={"0": np.eye(4)})
+        prog = Program([], frames={"0": np.eye(4)}, tools={"0": np.eye(4)})
         prog.frames.update(frames)
         prog.tools.update(tools)
         order = 0

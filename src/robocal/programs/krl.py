@@ -128,7 +128,7 @@ class KRLDialect(Dialect):
         return Target(src, at, name, nums, config=config, config_spans=spans)
 
     def parse(self, sources, frames, tools, references=()):
-        prog = Program(sources, [])
+        prog = Program([])
         declared: dict[str, Target] = {}
         fdat: dict[str, tuple[str, str, str]] = {}
         prog.frames[NULL] = np.eye(4)

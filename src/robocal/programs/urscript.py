@@ -96,7 +96,7 @@ class URScriptDialect(Dialect):
         return {}
 
     def parse(self, sources, frames, tools, references=()):
-        prog = Program(sources, [], frames={IDENTITY: np.eye(4)}, tools={IDENTITY: np.eye(4)})
+        prog = Program([], frames={IDENTITY: np.eye(4)}, tools={IDENTITY: np.eye(4)})
         user_default = tools.get(DEFAULT_TOOL, tools.get("", None))
         prog.tools.update(tools)
         if user_default is not None:
