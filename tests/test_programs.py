@@ -7,6 +7,7 @@ import csv
 import io
 import json
 import shutil
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -25,8 +26,11 @@ from robocal.kinematics.transforms import rotvec_to_matrix
 from robocal.programs import FilterResult, filter_program
 from robocal.programs.config import ABBConfig, FANUCConfig, KUKAConfig
 from robocal.programs.rotations import matrix_to_quat, matrix_to_zyx, nearest_rotvec, quat_to_matrix
-from robocal.programs.simulate import execute, truth_experiment
+from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE, Number, format_number
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # the simulated-truth experiment
+from bench_filter import truth_experiment  # noqa: E402
 
 DATA = Path(__file__).parent / "data" / "programs"
 OPW_ROBOTS = [n for n in catalog_names() if rc.Robot.from_catalog(n).opw]

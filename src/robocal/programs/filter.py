@@ -38,8 +38,12 @@ from robocal.io import check_outputs, write_all
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
+from robocal.programs.fanuc_ls import FanucDialect
+from robocal.programs.krl import KRLDialect
 from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.rapid import RapidDialect
 from robocal.programs.source import ProgramText, format_number
+from robocal.programs.urscript import URScriptDialect
 
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
 LISTED = 20  # problems listed in one error message
@@ -138,11 +142,6 @@ def table_paths(table: str | Path) -> list[Path]:
 
 def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
     """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript') or the suffixes."""
-    from robocal.programs.fanuc_ls import FanucDialect
-    from robocal.programs.krl import KRLDialect
-    from robocal.programs.rapid import RapidDialect
-    from robocal.programs.urscript import URScriptDialect
-
     dialects = {"rapid": RapidDialect, "krl": KRLDialect, "fanuc": FanucDialect, "urscript": URScriptDialect}
     if name is not None:
         if name not in dialects:
