@@ -226,20 +226,23 @@ def test_filter_on_simulated_truth(fmt, robot, tmp_path):
 
 
 # ----------------------------------------------------------------------------- bad input
-def test_malformed_and_unknown(tmp_path):
+@pytest.mark.parametrize("old,new,match", [
+    (b"[[392.37,421.20,120.43]", b"[[392.37,421.20,,120.43]",
+     r"bad.mod:14: malformed robtarget pApproach: empty item"),
+    (b"[[392.37,421.20,120.43]", b"[[392.37,421.20]",
+     r"bad.mod:14: malformed robtarget pApproach: expected groups"),
+    (b"z1, tGun \\WObj", b"z1, tNone \\WObj",
+     r"bad.mod:\d+ \(pSeam\{1\}\): unknown tool 'tnone'"),
+    (b"v200, z10, tGun", b"v200, z10, tGripper",
+     r"bad.mod:\d+: robtarget papproach is used with tool tgripper"),
+], ids=["empty item", "short group", "unknown tool", "two tools"])
+def test_malformed_and_unknown(old, new, match, tmp_path):
     robot, files, *_ = _fixture("rapid", tmp_path)
     bad = tmp_path / "bad.mod"
-    bad.write_bytes(files[0].read_bytes().replace(b"[[392.37,421.20,120.43]", b"[[392.37,421.20,,120.43]"))
-    with pytest.raises(DataError, match=r"bad.mod:14: malformed robtarget pApproach: empty item"):
-        filter_program(bad, robot, robot)
-    bad.write_bytes(files[0].read_bytes().replace(b"[[392.37,421.20,120.43]", b"[[392.37,421.20]"))
-    with pytest.raises(DataError, match=r"bad.mod:14: malformed robtarget pApproach: expected groups"):
-        filter_program(bad, robot, robot)
-    bad.write_bytes(files[0].read_bytes().replace(b"z1, tGun \\WObj", b"z1, tNone \\WObj"))
-    with pytest.raises(DataError, match=r"bad.mod:\d+ \(pSeam\{1\}\): unknown tool 'tnone'"):
-        filter_program(bad, robot, robot)
-    bad.write_bytes(files[0].read_bytes().replace(b"v200, z10, tGun", b"v200, z10, tGripper"))
-    with pytest.raises(DataError, match=r"bad.mod:\d+: robtarget papproach is used with tool tgripper"):
+    data = files[0].read_bytes()
+    assert old in data
+    bad.write_bytes(data.replace(old, new))
+    with pytest.raises(DataError, match=match):
         filter_program(bad, robot, robot)
 
 

@@ -142,15 +142,27 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
                         parameters=parameters, corrected_model=calibrated, singularity=sing)
 
 
-def frame_from_text(text: str, what: str = "frame") -> np.ndarray:
-    """A frame written ``x,y,z,rx,ry,rz`` (mm, deg; fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx), as the
-    targets' ``rx_deg..`` columns) -> 4x4 (m)."""
+def _numbers(text: str, count: int, what: str, form: str) -> np.ndarray:
+    """``count`` finite comma-separated numbers from ``text``, else DataError saying ``form``."""
     try:
         vals = np.array([float(v) for v in text.replace(" ", "").split(",") if v], dtype=float)
     except ValueError:
         vals = np.zeros(0)
-    if vals.size != 6 or not np.isfinite(vals).all():
-        raise DataError(f"{what} {text!r}: expected x,y,z,rx,ry,rz (mm, deg; fixed-axis XYZ)")
+    if vals.size != count or not np.isfinite(vals).all():
+        raise DataError(f"{what} {text!r}: expected {form}")
+    return vals
+
+
+def rotation_from_text(text: str, what: str = "rotation") -> np.ndarray:
+    """A rotation written ``rx,ry,rz`` (deg, fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx)) -> 3x3."""
+    return Rotation.from_euler("xyz", _numbers(text, 3, what, "rx,ry,rz (deg, fixed-axis XYZ)"),
+                               degrees=True).as_matrix()
+
+
+def frame_from_text(text: str, what: str = "frame") -> np.ndarray:
+    """A frame written ``x,y,z,rx,ry,rz`` (mm, deg; fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx), as the
+    targets' ``rx_deg..`` columns) -> 4x4 (m)."""
+    vals = _numbers(text, 6, what, "x,y,z,rx,ry,rz (mm, deg; fixed-axis XYZ)")
     return make_transform(Rotation.from_euler("xyz", vals[3:], degrees=True).as_matrix(), vals[:3] * 1e-3)
 
 
