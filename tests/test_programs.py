@@ -3,32 +3,34 @@ hand-written programs (byte-identical round trip, only numbers change), simulate
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 import shutil
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
 
 import robocal as rc
 from robocal.cli import main
 from robocal.data.simulate import perturbed
 from robocal.errors import DataError
+from robocal.ik.opw_ik import branch_slot
 from robocal.kinematics.catalog import catalog_names
-from robocal.programs import filter_program
-from robocal.programs.config import ABBConfig, FANUCConfig, KUKAConfig, slot_of
-from robocal.programs.rotations import (
-    matrix_to_quat,
-    matrix_to_rotvec,
-    matrix_to_zyx,
-    quat_to_matrix,
-    rotvec_to_matrix,
-    zyx_to_matrix,
-)
-from robocal.programs.simulate import execute, truth_experiment
+from robocal.kinematics.transforms import rotvec_to_matrix
+from robocal.programs import FilterResult, filter_program
+from robocal.programs.config import ABBConfig, FANUCConfig, KUKAConfig
+from robocal.programs.rotations import matrix_to_quat, matrix_to_zyx, nearest_rotvec, quat_to_matrix
+from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE, Number, format_number
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # the simulated-truth experiment
+from bench_filter import truth_experiment  # noqa: E402
 
 DATA = Path(__file__).parent / "data" / "programs"
 OPW_ROBOTS = [n for n in catalog_names() if rc.Robot.from_catalog(n).opw]
@@ -52,11 +54,11 @@ def _fixture(name, tmp_path):
 
 # ----------------------------------------------------------------------------- configuration
 @pytest.mark.parametrize("name", OPW_ROBOTS)
-def test_slot_of_is_the_closed_form_slot(name):
+def test_branch_slot_is_the_closed_form_slot(name):
     robot = rc.Robot.from_catalog(name)
     q = np.random.default_rng(1).uniform(robot.limits[:, 0], robot.limits[:, 1], (500, 6))
     sols = rc.ik.solve_all(robot, robot.fk(q))
-    picked = sols[np.arange(len(q)), slot_of(robot, q)]
+    picked = sols[np.arange(len(q)), branch_slot(robot.opw, q)]
     assert np.abs(np.remainder(picked - q + np.pi, 2 * np.pi) - np.pi).max() < 1e-7
 
 
@@ -94,11 +96,16 @@ def test_vendor_configuration_conventions():
 
 
 # ----------------------------------------------------------------------------- notations
+def _zyx_matrix(abc_deg):
+    """R = Rz(a) Ry(b) Rx(c) of ZYX Euler angles ``(N, 3)`` deg, as KUKA and FANUC read them."""
+    return Rotation.from_euler("ZYX", abc_deg, degrees=True).as_matrix()
+
+
 @settings(max_examples=200, deadline=None)
 @given(st.floats(-180, 180), st.floats(-89.9, 89.9), st.floats(-180, 180))
 def test_zyx_round_trip(a, b, c):
     abc = np.array([[a, b, c]])
-    back = matrix_to_zyx(zyx_to_matrix(abc), abc)
+    back = matrix_to_zyx(_zyx_matrix(abc), abc)
     assert np.abs(np.remainder(back - abc + 180, 360) - 180).max() < 1e-7
 
 
@@ -110,10 +117,10 @@ def test_notations_keep_the_old_form():
     assert np.allclose(matrix_to_quat(quat_to_matrix(-q), -q), -q)
     # gimbal lock: a keeps its value, c takes the rest; off it, scipy's matrix agrees
     g = np.array([[30.0, 90.0, 10.0], [-40.0, -90.0, 25.0]])
-    assert np.allclose(matrix_to_zyx(zyx_to_matrix(g), g), g)
+    assert np.allclose(matrix_to_zyx(_zyx_matrix(g), g), g)
     r = np.array([[0.0, 0.0, np.pi - 1e-9], [0.0, 3.0, 0.0]])
     old = np.array([[0.0, 0.0, -np.pi], [0.0, 3.0, 0.0]])  # the complement of the first
-    got = matrix_to_rotvec(rotvec_to_matrix(r), old)
+    got = nearest_rotvec(rotvec_to_matrix(r), old)
     assert np.allclose(got, [[0, 0, -np.pi - 1e-9], [0, 3, 0]], atol=1e-8)
     assert np.allclose(rotvec_to_matrix(got), rotvec_to_matrix(r))
 
@@ -181,6 +188,29 @@ def test_rapid_details(tmp_path):
     assert "5 of 5" in summary and "correction" in summary
 
 
+def test_urscript_variable_is_its_latest_assignment():
+    """A motion through a variable takes the variable's last assignment before it in text order,
+    whatever other names share its prefix; a use before any assignment is not a target."""
+    from robocal.programs.source import ProgramText
+    from robocal.programs.urscript import URScriptDialect
+
+    text = b"""def prog():
+  movel(Waypoint_1_p, a=1.2, v=0.25)
+  global Waypoint_1_p=p[0.1, 0.2, 0.3, 0, 3.1, 0]
+  global Waypoint_10_p=p[0.4, 0.5, 0.6, 0, 3.1, 0]
+  movel(Waypoint_1_p, a=1.2, v=0.25)
+  Waypoint_1_p=p[0.7, 0.8, 0.9, 0, 3.1, 0]
+  movel(Waypoint_10_p, a=1.2, v=0.25)
+  movel(Waypoint_1_p, a=1.2, v=0.25)
+  movel(Waypoint_10_p, a=1.2, v=0.25)
+end
+"""
+    prog = URScriptDialect().parse([ProgramText("prog.script", text)], {}, {"default": np.eye(4)})
+    assert [t.line for t in prog.targets] == [3, 4, 6]
+    assert np.allclose([t.values()[:3] for t in prog.targets], [[0.1, 0.2, 0.3], [0.4, 0.5, 0.6],
+                                                                [0.7, 0.8, 0.9]])
+
+
 # ----------------------------------------------------------------------------- simulated truth
 @pytest.mark.parametrize("fmt,robot", [("rapid", "abb_irb2600"), ("krl", "kuka_kr16_2"),
                                        ("fanuc", "fanuc_lrmate200id"), ("urscript", "ur5")])
@@ -196,20 +226,23 @@ def test_filter_on_simulated_truth(fmt, robot, tmp_path):
 
 
 # ----------------------------------------------------------------------------- bad input
-def test_malformed_and_unknown(tmp_path):
+@pytest.mark.parametrize("old,new,match", [
+    (b"[[392.37,421.20,120.43]", b"[[392.37,421.20,,120.43]",
+     r"bad.mod:14: malformed robtarget pApproach: empty item"),
+    (b"[[392.37,421.20,120.43]", b"[[392.37,421.20]",
+     r"bad.mod:14: malformed robtarget pApproach: expected groups"),
+    (b"z1, tGun \\WObj", b"z1, tNone \\WObj",
+     r"bad.mod:\d+ \(pSeam\{1\}\): unknown tool 'tnone'"),
+    (b"v200, z10, tGun", b"v200, z10, tGripper",
+     r"bad.mod:\d+: robtarget papproach is used with tool tgripper"),
+], ids=["empty item", "short group", "unknown tool", "two tools"])
+def test_malformed_and_unknown(old, new, match, tmp_path):
     robot, files, *_ = _fixture("rapid", tmp_path)
     bad = tmp_path / "bad.mod"
-    bad.write_bytes(files[0].read_bytes().replace(b"[[392.37,421.20,120.43]", b"[[392.37,421.20,,120.43]"))
-    with pytest.raises(DataError, match=r"bad.mod:14: malformed robtarget pApproach: empty item"):
-        filter_program(bad, robot, robot)
-    bad.write_bytes(files[0].read_bytes().replace(b"[[392.37,421.20,120.43]", b"[[392.37,421.20]"))
-    with pytest.raises(DataError, match=r"bad.mod:14: malformed robtarget pApproach: expected groups"):
-        filter_program(bad, robot, robot)
-    bad.write_bytes(files[0].read_bytes().replace(b"z1, tGun \\WObj", b"z1, tNone \\WObj"))
-    with pytest.raises(DataError, match=r"bad.mod:\d+ \(pSeam\{1\}\): unknown tool 'tnone'"):
-        filter_program(bad, robot, robot)
-    bad.write_bytes(files[0].read_bytes().replace(b"v200, z10, tGun", b"v200, z10, tGripper"))
-    with pytest.raises(DataError, match=r"bad.mod:\d+: robtarget papproach is used with tool tgripper"):
+    data = files[0].read_bytes()
+    assert old in data
+    bad.write_bytes(data.replace(old, new))
+    with pytest.raises(DataError, match=match):
         filter_program(bad, robot, robot)
 
 
@@ -326,6 +359,19 @@ def test_out_of_the_limits_after_correction(tmp_path):
     with pytest.raises(DataError, match=r"edge.ls:\d+ \(P\[\d\]\): the corrected joints leave the limits "
                                         r"\(joint [15] by"):
         filter_program(paths, perturbed(robot, 3), robot, tools=tools, frames=frames)
+    # kept unchanged instead: 'reachable' says the nominal controller has joints for the target
+    # (the one whose correction leaves the limits), not that it was filtered
+    res = filter_program(paths, perturbed(robot, 3), robot, tools=tools, frames=frames, keep_unreached=True)
+    assert any(r["reachable"] and not r["filtered"] for r in res.rows)
+    assert any(not r["reachable"] for r in res.rows) and any(r["filtered"] for r in res.rows)
+
+
+def test_table_csv_quotes_cells():
+    """Cells holding a comma or a double quote (a file name may) survive the CSV table."""
+    row = {"file": 'we"ld, cell.mod', "line": 3, "name": "p1", "correction_mm": 0.5}
+    text = FilterResult("ABB RAPID", {}, [row]).table_csv()
+    assert list(csv.DictReader(io.StringIO(text))) == [
+        {"file": 'we"ld, cell.mod', "line": "3", "name": "p1", "correction_mm": "0.5"}]
 
 
 def test_robot_base_given_explicitly(tmp_path):

@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 import robocal as rc
 from robocal.cli import main
-from robocal.compensate import controller_model, frame_from_text, frame_to_text
+from robocal.compensate import controller_model, format_csv, frame_from_text, frame_to_text, pose_columns
 from robocal.data.simulate import perturbed
 from robocal.errors import DataError
 from robocal.ik.singularity import SINGULAR_SIGMA, singularity_distance
@@ -63,6 +63,10 @@ def test_cli_tool(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "use: --tcp tGun=50.0000,-10.0000,200.0000,0.0000,30.0000,0.0000" in out
     assert json.loads((tmp_path / "t.json").read_text())["rms_mm"] < 1e-6
+    # a bad --rotation is told in its own terms (three angles), before any work
+    assert main(["tool", str(tmp_path / "touch.csv"), "--calibrated", str(tmp_path / "cal.yaml"), "--nominal",
+                 "abb_irb2600", "--rotation", "0,30"]) == 2
+    assert "--rotation '0,30': expected rx,ry,rz (deg" in capsys.readouterr().err
 
 
 def test_frame_text_round_trip():
@@ -107,9 +111,7 @@ def test_cli_plan_and_compensate_take_a_tool(tmp_path, capsys):
     cal.save(tmp_path / "cal.yaml")
     q = np.deg2rad([[0, 10, 10, 0, 40, 0], [10, 15, 5, 10, 45, 5], [20, 20, 0, 20, 50, 10]])
     T = controller_model(cal, nominal, tool=TOOL).fk(q)
-    quat = Rotation.from_matrix(T[:, :3, :3]).as_quat(scalar_first=True)
-    rows = [",".join(repr(float(v)) for v in (*(t[:3, 3] * 1e3), *qt)) for t, qt in zip(T, quat, strict=True)]
-    (tmp_path / "p.csv").write_text("x_mm,y_mm,z_mm,qw,qx,qy,qz\n" + "\n".join(rows) + "\n")
+    (tmp_path / "p.csv").write_text(format_csv(*pose_columns(T, {"length": "mm", "orientation": "quat"})))
     tool = "50,-10,200,0,30,0"
     assert main(["plan", "--robot", str(tmp_path / "cal.yaml"), "--nominal", "abb_irb2600", "--tool", tool,
                  str(tmp_path / "p.csv"), "-o", str(tmp_path / "j.csv")]) == 0

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import csv
 import io
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -52,27 +53,37 @@ class Compensation:
     corrected_model: Robot
     singularity: SingularityDistance | None = None
 
-    def warnings(self) -> list[str]:
-        """One line per target that was not reached or sits close to a singularity (index from 0)."""
+    def warnings(self, names: Sequence[str] | None = None, which: np.ndarray | None = None) -> list[str]:
+        """One line per target that was not reached or sits close to a singularity, labelled by
+        ``names`` (default ``target i``, i from 0); ``which`` ``(N,)`` bool: only those targets."""
         out = []
-        for i in range(len(self.converged)):
-            where = "" if self.singularity is None else f"; {self.singularity.describe(i)}"
+        for i in np.flatnonzero(np.ones(len(self.converged), bool) if which is None else which):
+            name = f"target {i}" if names is None else names[i]
             if not self.converged[i]:
-                out.append(f"target {i}: not reached on the calibrated model (best "
-                           f"{self.position_error[i] * 1e3:.3g} mm off){where}: its correction cannot be "
-                           "realised in this configuration")
+                out.append(f"{name}: {self.not_reached(i)}: its correction cannot be realised in this "
+                           "configuration")
             elif self.singularity is not None and self.singularity.close[i]:
-                out.append(f"target {i}: close to a singularity{where}: the controller may not realise its "
-                           "correction")
+                out.append(f"{name}: close to a singularity, {self.singularity.describe(i)}: the controller "
+                           "may not realise its correction")
         return out
+
+    def not_reached(self, i: int) -> str:
+        """Why target ``i`` has no correction (how far the IK stopped, the nearest singularity)."""
+        where = "" if self.singularity is None else f"; {self.singularity.describe(i)}"
+        return f"not reached on the calibrated model (best {self.position_error[i] * 1e3:.3g} mm off){where}"
+
+
+def _check_same_robot(calibrated: Robot, nominal: Robot) -> None:
+    """DataError unless both models have the same joint count."""
+    if calibrated.n_joints != nominal.n_joints:
+        raise DataError(f"calibrated model has {calibrated.n_joints} joints, nominal "
+                        f"{nominal.n_joints}: they must describe the same robot")
 
 
 def parameter_table(calibrated: Robot, nominal: Robot) -> list[dict]:
     """Seed-000 export: every link, base and tool parameter with nominal, calibrated and
     d = nominal - calibrated (SI: m, rad); the controller loads nominal - d."""
-    if calibrated.n_joints != nominal.n_joints:
-        raise DataError(f"calibrated model has {calibrated.n_joints} joints, nominal "
-                        f"{nominal.n_joints}: they must describe the same robot")
+    _check_same_robot(calibrated, nominal)
     k = 5 * calibrated.n_joints + 12
     names, units = calibrated.parameter_names[:k], calibrated.parameter_units()[:k]
     cal, nom = calibrated.values[:k], nominal.values[:k]
@@ -84,14 +95,12 @@ def controller_model(calibrated: Robot, nominal: Robot, robot_base=None, tool=No
     """The calibrated model as the controller sees the robot: its identified frame {0} as the
     controller's base (the nominal model's base), or ``robot_base`` (4x4, m: the controller's
     base in the calibrated model's world frame); the measured SMR/probe replaced by the
-    nominal flange (``nominal.tool``) carrying ``tool`` (4x4, m; default none)."""
-    if calibrated.n_joints != nominal.n_joints:
-        raise DataError(f"calibrated model has {calibrated.n_joints} joints, nominal "
-                        f"{nominal.n_joints}: they must describe the same robot")
+    nominal flange (``nominal.tool``) carrying ``tool`` (4x4, m, rigid; default none)."""
+    _check_same_robot(calibrated, nominal)
     base = nominal.base
     if robot_base is not None:
         base = invert_transform(np.asarray(robot_base, float)) @ calibrated.base
-    flange = nominal.tool if tool is None else nominal.tool @ np.asarray(tool, float)
+    flange = nominal.tool if tool is None else nominal.tool @ check_poses(tool)[0]
     return calibrated.with_frames(base=base, tool=flange)
 
 
@@ -121,9 +130,9 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
         calibrated = calibrated.with_frames(base=nominal.base)
     parameters = parameter_table(calibrated, nominal)
     model, controller = calibrated, nominal
-    if tool is not None:
-        flange_tool = nominal.tool @ check_poses(tool)[0]
-        model, controller = calibrated.with_frames(tool=flange_tool), nominal.with_frames(tool=flange_tool)
+    if tool is not None:  # robot_base identity: the targets' frame (calibrated, re-expressed for 'robot')
+        model = controller_model(calibrated, nominal, np.eye(4), tool)
+        controller = nominal.with_frames(tool=model.tool)
     T = check_poses(targets)
     res = ik_solve(model, T, seeds, branch=branch, nominal=controller)
     sing = singularity_distance(model, res.joints) if model.n_joints == 6 else None
@@ -133,15 +142,27 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
                         parameters=parameters, corrected_model=calibrated, singularity=sing)
 
 
-def frame_from_text(text: str, what: str = "frame") -> np.ndarray:
-    """A frame written ``x,y,z,rx,ry,rz`` (mm, deg; fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx), as the
-    targets' ``rx_deg..`` columns) -> 4x4 (m)."""
+def _numbers(text: str, count: int, what: str, form: str) -> np.ndarray:
+    """``count`` finite comma-separated numbers from ``text``, else DataError saying ``form``."""
     try:
         vals = np.array([float(v) for v in text.replace(" ", "").split(",") if v], dtype=float)
     except ValueError:
         vals = np.zeros(0)
-    if vals.size != 6 or not np.isfinite(vals).all():
-        raise DataError(f"{what} {text!r}: expected x,y,z,rx,ry,rz (mm, deg; fixed-axis XYZ)")
+    if vals.size != count or not np.isfinite(vals).all():
+        raise DataError(f"{what} {text!r}: expected {form}")
+    return vals
+
+
+def rotation_from_text(text: str, what: str = "rotation") -> np.ndarray:
+    """A rotation written ``rx,ry,rz`` (deg, fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx)) -> 3x3."""
+    return Rotation.from_euler("xyz", _numbers(text, 3, what, "rx,ry,rz (deg, fixed-axis XYZ)"),
+                               degrees=True).as_matrix()
+
+
+def frame_from_text(text: str, what: str = "frame") -> np.ndarray:
+    """A frame written ``x,y,z,rx,ry,rz`` (mm, deg; fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx), as the
+    targets' ``rx_deg..`` columns) -> 4x4 (m)."""
+    vals = _numbers(text, 6, what, "x,y,z,rx,ry,rz (mm, deg; fixed-axis XYZ)")
     return make_transform(Rotation.from_euler("xyz", vals[3:], degrees=True).as_matrix(), vals[:3] * 1e-3)
 
 

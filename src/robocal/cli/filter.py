@@ -29,8 +29,6 @@ Writes the filtered program(s) and the per-target table (CSV and JSON) together,
 
 
 def _named(values, what: str) -> dict[str, str]:
-    from robocal.errors import DataError
-
     out = {}
     for v in values or []:
         name, sep, text = v.partition("=")
@@ -73,6 +71,8 @@ def add_parser(sub) -> None:
 
 def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[dict, str, list[Path]]:
     """(program -> output path, the table's path or prefix, every file that will be written)."""
+    from robocal.programs.filter import table_paths
+
     out = Path(output)
     inputs = [Path(p) for p in programs]
     if len(inputs) == 1 and not out.is_dir():
@@ -83,10 +83,7 @@ def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[
             raise DataError(f"{out} is not a folder: with several program files, -o names an existing folder")
         targets = {p: out / p.name for p in inputs}
         table = table or str(out / (inputs[0].stem + ".targets"))
-    t = Path(table)
-    tables = [t] if t.suffix.lower() in (".csv", ".json") else [t.with_name(t.name + ".csv"),
-                                                               t.with_name(t.name + ".json")]
-    return targets, table, [*targets.values(), *tables]
+    return targets, table, [*targets.values(), *table_paths(table)]
 
 
 def run(args) -> int:

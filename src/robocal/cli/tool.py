@@ -35,20 +35,21 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import json
 
-    from robocal.compensate import frame_from_text, frame_to_text
+    from robocal.compensate import frame_from_text, frame_to_text, rotation_from_text
     from robocal.data.measurements import read_joints
     from robocal.io import check_outputs, write_atomic
     from robocal.kinematics.model import Robot, load_model
+    from robocal.kinematics.transforms import make_transform
     from robocal.tcp import identify_tcp
 
+    rotation = rotation_from_text(args.rotation, "--rotation")
     check_outputs([args.json], [args.calibrated, args.joints, args.nominal])
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)
     q = read_joints(args.joints, nominal)
     base = None if args.robot_base is None else frame_from_text(args.robot_base, "--robot-base")
     res = identify_tcp(calibrated, nominal, q, base)
-    T = frame_from_text("0,0,0," + args.rotation, "--rotation")
-    T[:3, 3] = res.tcp
+    T = make_transform(rotation, res.tcp)
     if args.json:
         write_atomic(args.json, json.dumps({
             "tcp_mm": (res.tcp * 1e3).tolist(), "point_mm": (res.point * 1e3).tolist(),

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.ik.opw_ik import branch_bits as opw_branch_bits
-from robocal.ik.opw_ik import branch_slot, opw_form
+from robocal.ik.opw_ik import opw_form
 from robocal.kinematics.model import Robot
 
 BRANCH_MISMATCH = 1000  # score of one differing branch bit: always worse than any turn mismatch
@@ -35,9 +35,9 @@ def branch_bits(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
     return opw_branch_bits(robot.opw if robot.opw is not None else opw_form(robot), q)
 
 
-def slot_of(robot: Robot, q: np.ndarray) -> np.ndarray:
-    """Closed-form branch slot ``(...,)`` of joints ``(..., 6)``: 4 * flip + 2 * shoulder + elbow."""
-    return branch_slot(robot.opw if robot.opw is not None else opw_form(robot), q)
+def _set_bits(x: np.ndarray, n: int) -> np.ndarray:
+    """How many of the lowest ``n`` bits of integers ``x`` are set."""
+    return sum((x >> i) & 1 for i in range(n))
 
 
 def _floor_div(q: np.ndarray, step: float, shift: float = 0.0) -> np.ndarray:
@@ -46,11 +46,10 @@ def _floor_div(q: np.ndarray, step: float, shift: float = 0.0) -> np.ndarray:
 
 
 class ConfigScheme:
-    """A vendor's configuration data: ``fields`` names, :meth:`encode` joints -> int rows,
-    :meth:`score` candidate rows against wanted rows, :meth:`text` for messages."""
+    """A vendor's configuration data: :meth:`encode` joints -> int rows, :meth:`score` candidate
+    rows against wanted rows, :meth:`text` for messages."""
 
     name = ""
-    fields: tuple[str, ...] = ()
     branch_fields = 0  # the first fields that select the branch; the rest select turns
 
     def encode(self, robot: Robot, q: np.ndarray) -> np.ndarray:
@@ -70,8 +69,7 @@ class ABBConfig(ConfigScheme):
     """ABB confdata [cf1, cf4, cf6, cfx]: quadrants floor(q / 90 deg) of axes 1, 4, 6 and
     cfx = 4 * behind axis 1 + 2 * behind the lower arm + (axis 5 negative)."""
 
-    name = "ABB confdata"
-    fields = ("cfx", "cf1", "cf4", "cf6")
+    name = "ABB confdata"  # rows [cfx, cf1, cf4, cf6]
     branch_fields = 1
 
     def encode(self, robot, q):
@@ -83,8 +81,7 @@ class ABBConfig(ConfigScheme):
 
     def score(self, have, want):
         # cfx compared bit by bit
-        diff = np.bitwise_xor(have[..., 0], want[..., 0])
-        bits = (diff & 1) + ((diff >> 1) & 1) + ((diff >> 2) & 1)
+        bits = _set_bits(np.bitwise_xor(have[..., 0], want[..., 0]), 3)
         return BRANCH_MISMATCH * bits + np.abs(have[..., 1:] - want[..., 1:]).sum(axis=-1)
 
     def text(self, row):
@@ -95,8 +92,7 @@ class KUKAConfig(ConfigScheme):
     """KUKA Status and Turn: S bit 0 overhead area, bit 1 A3 >= phi (elbow as in the zero
     pose), bit 2 A5 <= 0; T bit i set when axis i+1 is negative."""
 
-    name = "KUKA S/T"
-    fields = ("S", "T")
+    name = "KUKA S/T"  # rows [S, T]
 
     def encode(self, robot, q):
         q = np.asarray(q, float)
@@ -109,8 +105,7 @@ class KUKAConfig(ConfigScheme):
         # T = -1: the target gives no turn, any turn will do
         ds = np.bitwise_xor(have[..., 0], want[..., 0] & 7)
         dt = np.where(want[..., 1] < 0, 0, np.bitwise_xor(have[..., 1], want[..., 1] & 63))
-        count = sum((dt >> i) & 1 for i in range(6))
-        return BRANCH_MISMATCH * ((ds & 1) + ((ds >> 1) & 1) + ((ds >> 2) & 1)) + count
+        return BRANCH_MISMATCH * _set_bits(ds, 3) + _set_bits(dt, 6)
 
     def text(self, row):
         return f"S {int(row[0])} T {int(row[1])}"
@@ -120,8 +115,7 @@ class FANUCConfig(ConfigScheme):
     """FANUC CONFIG 'F|N U|D T|B, t1, t4, t6': flip (J5 > 0), elbow down, back (wrist centre
     behind J1), and the turn numbers of J1, J4, J6 (0 for -180..180 deg, 1 for 180..540 ...)."""
 
-    name = "FANUC CONFIG"
-    fields = ("flip", "down", "back", "turn1", "turn4", "turn6")
+    name = "FANUC CONFIG"  # rows [flip, down, back, turn1, turn4, turn6]
     branch_fields = 3
 
     def encode(self, robot, q):

@@ -23,12 +23,13 @@ from __future__ import annotations
 import re
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.config import FANUCConfig
 from robocal.programs.model import Dialect, Program, Target
-from robocal.programs.rotations import matrix_to_zyx, zyx_to_matrix
+from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import Number
 
 _POS = re.compile(r"\bP\[\s*(\d+)\s*(?::\s*\"([^\"]*)\")?\s*\]\s*\{(.*?)\}\s*;", re.DOTALL)
@@ -50,7 +51,8 @@ class FanucDialect(Dialect):
 
     def to_pose(self, values):
         values = np.asarray(values, float)
-        return make_transform(zyx_to_matrix(values[:, [5, 4, 3]]), values[:, :3] * 1e-3)
+        R = Rotation.from_euler("ZYX", values[:, [5, 4, 3]], degrees=True).as_matrix()  # Rz(R) Ry(P) Rx(W)
+        return make_transform(R, values[:, :3] * 1e-3)
 
     def from_pose(self, T, old):
         rpw = matrix_to_zyx(T[:, :3, :3], old[:, [5, 4, 3]])
@@ -66,7 +68,7 @@ class FanucDialect(Dialect):
         return {(a, b): t for (a, b, old), t in zip(spans, texts, strict=True) if old != t}
 
     def parse(self, sources, frames, tools, references=()):
-        prog = Program(sources, [], frames={"0": np.eye(4)}, tools={"0": np.eye(4)})
+        prog = Program([], frames={"0": np.eye(4)}, tools={"0": np.eye(4)})
         prog.frames.update(frames)
         prog.tools.update(tools)
         order = 0

@@ -22,23 +22,28 @@ too unless ``tcp`` gives the one identified on the calibrated model (``robocal t
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from robocal.compensate import controller_model
+from robocal.compensate import Compensation, compensate, controller_model
 from robocal.errors import DataError, ModelError
 from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
-from robocal.ik.singularity import singularity_distance
 from robocal.io import check_outputs, write_all
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
+from robocal.programs.fanuc_ls import FanucDialect
+from robocal.programs.krl import KRLDialect
 from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.rapid import RapidDialect
 from robocal.programs.source import ProgramText, format_number
+from robocal.programs.urscript import URScriptDialect
 
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
 LISTED = 20  # problems listed in one error message
@@ -55,18 +60,13 @@ class FilterResult:
     warnings: list[str] = field(default_factory=list)
 
     def table_csv(self) -> str:
-        if not self.rows:
-            return "file,line,name\n"
-        cols = list(self.rows[0])
-        lines = [",".join(cols)]
+        out = io.StringIO()
+        writer = csv.writer(out, lineterminator="\n")
+        cols = list(self.rows[0]) if self.rows else ["file", "line", "name"]
+        writer.writerow(cols)
         for r in self.rows:
-            cells = []
-            for c in cols:
-                v = r[c]
-                text = f"{v:.6g}" if isinstance(v, float) else str(v)
-                cells.append(f'"{text}"' if ("," in text or '"' in text) else text)
-            lines.append(",".join(cells))
-        return "\n".join(lines) + "\n"
+            writer.writerow([f"{r[c]:.6g}" if isinstance(r[c], float) else r[c] for c in cols])
+        return out.getvalue()
 
     def table_json(self) -> str:
         return json.dumps({"dialect": self.dialect, "files": [str(p) for p in self.outputs],
@@ -124,27 +124,24 @@ class FilterResult:
                 raise DataError("several program files: give one output path per input")
             outputs = {next(iter(self.outputs)): Path(outputs)}
         files: dict[Path, bytes] = {Path(dst): self.outputs[Path(src)] for src, dst in outputs.items()}
-        if table is not None:
-            t = Path(table)
-            if t.suffix.lower() == ".csv":
-                files[t] = self.table_csv().encode()
-            elif t.suffix.lower() == ".json":
-                files[t] = self.table_json().encode()
-            else:
-                files[t.with_name(t.name + ".csv")] = self.table_csv().encode()
-                files[t.with_name(t.name + ".json")] = self.table_json().encode()
+        for t in table_paths(table) if table is not None else []:
+            files[t] = (self.table_csv() if t.suffix.lower() == ".csv" else self.table_json()).encode()
         check_outputs(files, self.outputs)
         write_all(files)
         return list(files)
 
 
+def table_paths(table: str | Path) -> list[Path]:
+    """The table file(s) :meth:`FilterResult.write` writes for ``table``: that file when it ends
+    .csv or .json, else ``table.csv`` and ``table.json``."""
+    t = Path(table)
+    if t.suffix.lower() in (".csv", ".json"):
+        return [t]
+    return [t.with_name(t.name + ".csv"), t.with_name(t.name + ".json")]
+
+
 def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
     """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript') or the suffixes."""
-    from robocal.programs.fanuc_ls import FanucDialect
-    from robocal.programs.krl import KRLDialect
-    from robocal.programs.rapid import RapidDialect
-    from robocal.programs.urscript import URScriptDialect
-
     dialects = {"rapid": RapidDialect, "krl": KRLDialect, "fanuc": FanucDialect, "urscript": URScriptDialect}
     if name is not None:
         if name not in dialects:
@@ -178,22 +175,26 @@ def _configured_joints(dialect, nominal, F, targets, problems):
     have = scheme.encode(nominal, np.where(valid[..., None], cands, 0.0))
     want = np.array([t.config if t.config is not None else np.zeros(have.shape[-1], int) for t in targets])
     score = np.where(valid, scheme.score(have, want[:, None]), np.iinfo(np.int64).max)
+    has = np.array([t.config is not None for t in targets])
+    reach = valid.any(axis=1)
+    for i in np.flatnonzero(~reach):
+        problems.append((int(i), "no solution of the nominal model inside the joint limits (out of reach)"))
     q = np.full(F.shape[:1] + (nominal.n_joints,), np.nan)
-    prev = None
-    for i, t in enumerate(targets):
-        if not valid[i].any():
-            problems.append((i, "no solution of the nominal model inside the joint limits (out of reach)"))
-            continue
-        if t.config is None:  # no configuration data: the candidate nearest the previous joints
-            d = np.where(valid[i], np.abs(cands[i] - (prev if prev is not None else 0.0)).sum(axis=1), np.inf)
-            k = int(np.argmin(d))
-        else:
-            k = int(np.argmin(score[i]))
-            if score[i, k] >= BRANCH_MISMATCH:
-                problems.append((i, f"configuration {scheme.text(t.config)} is not possible for this pose "
-                                    "inside the joint limits"))
-                continue
-        q[i] = prev = cands[i, k]
+    best = np.argmin(score, axis=1)
+    possible = np.take_along_axis(score, best[:, None], axis=1)[:, 0] < BRANCH_MISMATCH
+    for i in np.flatnonzero(has & reach & ~possible):
+        problems.append((int(i), f"configuration {scheme.text(targets[i].config)} is not possible for this "
+                                 "pose inside the joint limits"))
+    configured = np.flatnonzero(has & reach & possible)  # the candidate their data select
+    q[configured] = cands[configured, best[configured]]
+    # no configuration data: in program order, the candidate nearest the previous target's joints
+    last = -1  # the last target without configuration data given joints
+    for i in np.flatnonzero(~has & reach):
+        k = np.searchsorted(configured, i) - 1
+        prev = max(configured[k] if k >= 0 else -1, last)
+        d = np.where(valid[i], np.abs(cands[i] - (q[prev] if prev >= 0 else 0.0)).sum(axis=1), np.inf)
+        q[i] = cands[i, int(np.argmin(d))]
+        last = i
     return q
 
 
@@ -215,10 +216,7 @@ def _nearest_joints(nominal, F, targets, program: Program, problems, warnings):
         warnings.append(f"{targets[0].where}: no joint position before the first target: the controller's "
                         "solution is taken as the one nearest zero joints")
     given = np.isfinite(fixed).all(axis=1)
-    seeds = fixed.copy()
-    for i in range(1, N):  # propagate the last known joints
-        if not given[i]:
-            seeds[i] = seeds[i - 1]
+    seeds = fixed[np.maximum.accumulate(np.where(given, np.arange(N), 0))]  # the last known joints
     for _ in range(SWEEPS):
         res = ik_solve(nominal, F, seeds)
         new = np.where(given[:, None], fixed, np.vstack([fixed[:1], res.joints[:-1]]))
@@ -241,7 +239,7 @@ def _nearest_joints(nominal, F, targets, program: Program, problems, warnings):
         warnings.append(f"{targets[i].where}: the controller's solution is {np.rad2deg(jump[i]):.0f} deg "
                         "away from the previous joints in one joint: it may take another solution than "
                         "assumed here; add a joint move (or qnear) before this target")
-    inside = ((q >= nominal.limits[:, 0]) & (q <= nominal.limits[:, 1])).all(axis=1)
+    inside = nominal.within_limits(q)
     for i in np.flatnonzero(~converged | ~inside):
         problems.append((int(i), "the nominal controller has no solution near the previous joints inside "
                                  "the limits (out of reach)"))
@@ -260,11 +258,12 @@ def controller_joints(dialect: Dialect, program: Program, targets: list[Target],
 
 
 def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
-    """``(P, W, tool)``: target poses in their frames, the frames and the tools, each ``(N, 4, 4)`` m."""
-    P = dialect.to_pose(np.array([t.values() for t in targets]))
+    """``(values, P, W, tool)``: the pose numbers as written ``(N, k)``; target poses in their
+    frames, the frames and the tools, each ``(N, 4, 4)`` m."""
+    values = np.array([t.values() for t in targets])
     W = np.array([program.frames[t.frame] for t in targets])
     tool = np.array([program.tools[t.tool] for t in targets])
-    return P, W, tool
+    return values, dialect.to_pose(values), W, tool
 
 
 def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
@@ -297,7 +296,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     if not targets:
         warnings.append("no Cartesian target to filter")
         return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings)
-    P, W, tool = target_poses(d, program, targets)
+    values, P, W, tool = target_poses(d, program, targets)
     X = W @ P
     real = {d.name_key(k): v for k, v in (tcp or {}).items()}
     unknown_tcp = sorted(set(real) - {t.tool for t in targets})
@@ -309,11 +308,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     problems: list[tuple[int, str]] = []
     q_nom = controller_joints(d, program, targets, nominal, X @ invert_transform(tool), problems, warnings)
     ok = np.isfinite(q_nom).all(axis=1)
-    controller = controller_model(calibrated, nominal, robot_base)
-    res = ik_solve(controller, X @ invert_transform(real_tool), np.where(ok[:, None], q_nom, 0.0))
-    q = res.joints
-    sing = singularity_distance(controller, q)
-    _check_joints(nominal, res, ok, sing, problems)
+    comp = compensate(controller_model(calibrated, nominal, robot_base), nominal,
+                      X @ invert_transform(real_tool), seeds=np.where(ok[:, None], q_nom, 0.0))
+    q, sing = comp.joints, comp.singularity
+    _check_joints(nominal, comp, ok, problems)
     bad = {i for i, _ in problems}
     if problems and not keep_unreached:
         problems.sort()
@@ -324,16 +322,13 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                         "to leave them unchanged)")
     warnings += [f"{targets[i].where}: left unchanged: {why}" for i, why in sorted(problems)]
     good = np.array([i not in bad for i in range(len(targets))])
-    Pc = invert_transform(W) @ nominal.fk(np.where(good[:, None], q, 0.0)) @ tool
-    Pc[~good] = P[~good]
+    Pc = np.where(good[:, None, None], invert_transform(W) @ comp.corrected_targets @ tool, P)
     cfg = None
     if d.scheme is not None:
         cfg = (d.scheme.encode(nominal, np.where(ok[:, None], q_nom, 0.0)), d.scheme.encode(nominal, q))
-    edits, changed = _edits(d, targets, good, Pc, cfg, warnings)
-    for i in np.flatnonzero(good & sing.close):
-        warnings.append(f"{targets[i].where}: close to a singularity, {sing.describe(i)}: the "
-                        "controller may not realise its correction")
-    rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, res.converged & ok, changed, cfg, sing)
+    edits, changed = _edits(d, targets, values, good, Pc, cfg, warnings)
+    warnings += comp.warnings([t.where for t in targets], good)  # the corrected ones near a singularity
+    rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, comp.converged & ok, changed, cfg, sing)
     outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
     return FilterResult(d.name, outputs, rows, warnings)
 
@@ -356,15 +351,13 @@ def _filterable(d: Dialect, program: Program, warnings: list) -> list[Target]:
     return targets
 
 
-def _check_joints(nominal: Robot, res, ok: np.ndarray, sing, problems: list) -> None:
+def _check_joints(nominal: Robot, comp: Compensation, ok: np.ndarray, problems: list) -> None:
     """Append the targets the calibrated IK did not reach, or reached outside the limits."""
-    q = res.joints
-    converged = res.converged & ok
+    q = comp.joints
+    converged = comp.converged & ok
     for i in np.flatnonzero(ok & ~converged):
-        problems.append((int(i), f"the calibrated model does not reach it (IK stopped "
-                                 f"{res.position_error[i] * 1e3:.3g} mm away; nearest singularity "
-                                 f"{sing.nearest[i]}, sigma_rel {sing.sigma_rel[i]:.4f})"))
-    inside = ((q >= nominal.limits[:, 0]) & (q <= nominal.limits[:, 1])).all(axis=1)
+        problems.append((int(i), comp.not_reached(i)))
+    inside = nominal.within_limits(q)
     for i in np.flatnonzero(converged & ~inside):
         margin = np.rad2deg(np.minimum(q[i] - nominal.limits[:, 0], nominal.limits[:, 1] - q[i]))
         j = int(np.argmin(margin))
@@ -372,11 +365,12 @@ def _check_joints(nominal: Robot, res, ok: np.ndarray, sing, problems: list) -> 
                                  f"{-margin[j]:.3f} deg)"))
 
 
-def _edits(d: Dialect, targets: list[Target], good: np.ndarray, Pc: np.ndarray, cfg, warnings: list):
-    """Span edits per file for the corrected poses ``Pc`` and, where the correction crossed a
-    configuration boundary, the configuration data; and which targets' configuration changed.
-    ``cfg``: (rows of the nominal joints, rows of the corrected joints) or None."""
-    old = np.array([t.values() for t in targets])
+def _edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray, Pc: np.ndarray, cfg,
+           warnings: list):
+    """Span edits per file for the corrected poses ``Pc`` of targets whose numbers were ``old``
+    and, where the correction crossed a configuration boundary, the configuration data; and which
+    targets' configuration changed. ``cfg``: (rows of the nominal joints, rows of the corrected
+    joints) or None."""
     new = d.from_pose(Pc, old)
     resolution = d.resolutions()
     moved = good[:, None] & (np.abs(new - old) > resolution / 2)  # numbers that must be rewritten
@@ -407,6 +401,7 @@ def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing
     drot = np.rad2deg(np.linalg.norm(matrix_to_rotvec(Xc[:, :3, :3] @ np.swapaxes(X[:, :3, :3], 1, 2)),
                                      axis=1))
     lim = np.rad2deg(np.minimum(q - nominal.limits[:, 0], nominal.limits[:, 1] - q))
+    columns = sing.columns()
     rows = []
     for i, t in enumerate(targets):
         j = int(np.argmin(lim[i]))
@@ -417,10 +412,8 @@ def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing
             "configuration": "changed" if changed[i] else ("kept" if t.config is not None else "none"),
             "config_before": d.scheme.text(cfg[0][i]) if cfg is not None and ok[i] else "",
             "config_after": d.scheme.text(cfg[1][i]) if cfg is not None and good[i] else "",
-            "reachable": bool(good[i]), "converged": bool(converged[i]),
+            "reachable": bool(ok[i]), "converged": bool(converged[i]),
             "limit_margin_deg": float(lim[i, j]), "limit_joint": j + 1,
-            "sigma_rel": float(sing.sigma_rel[i]), "nearest_singularity": str(sing.nearest[i]),
-            "wrist_deg": float(sing.wrist_deg[i]), "elbow_deg": float(sing.elbow_deg[i]),
-            "shoulder_mm": float(sing.shoulder_mm[i]),
+            **{name: values[i].item() for name, values in columns.items()},
         })
     return rows

@@ -23,13 +23,14 @@ from __future__ import annotations
 import re
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.aggregate import split_top
 from robocal.programs.config import KUKAConfig
 from robocal.programs.model import Dialect, Program, Target
-from robocal.programs.rotations import matrix_to_zyx, zyx_to_matrix
+from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import Number, ProgramText, mask
 
 _COMMENT = re.compile(r";[^\n]*")
@@ -69,7 +70,8 @@ class KRLDialect(Dialect):
 
     def to_pose(self, values):
         values = np.asarray(values, float)
-        return make_transform(zyx_to_matrix(values[:, 3:6]), values[:, :3] * 1e-3)
+        R = Rotation.from_euler("ZYX", values[:, 3:6], degrees=True).as_matrix()  # Rz(A) Ry(B) Rx(C)
+        return make_transform(R, values[:, :3] * 1e-3)
 
     def from_pose(self, T, old):
         return np.hstack([T[:, :3, 3] * 1e3, matrix_to_zyx(T[:, :3, :3], old[:, 3:6])])
@@ -126,7 +128,7 @@ class KRLDialect(Dialect):
         return Target(src, at, name, nums, config=config, config_spans=spans)
 
     def parse(self, sources, frames, tools, references=()):
-        prog = Program(sources, [])
+        prog = Program([])
         declared: dict[str, Target] = {}
         fdat: dict[str, tuple[str, str, str]] = {}
         prog.frames[NULL] = np.eye(4)

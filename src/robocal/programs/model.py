@@ -58,7 +58,6 @@ class Program:
     ``(index of the next Cartesian target, joints rad)`` for dialects without configuration, and
     tools / frames whose targets cannot be filtered (a stationary tool, a moving frame)."""
 
-    sources: list[ProgramText]
     targets: list[Target]
     frames: dict[str, np.ndarray] = field(default_factory=dict)
     tools: dict[str, np.ndarray] = field(default_factory=dict)

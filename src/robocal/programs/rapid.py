@@ -90,7 +90,7 @@ class RapidDialect(Dialect):
 
     # ------------------------------------------------------------------ parsing
     def parse(self, sources, frames, tools, references=()):
-        prog = Program(sources, [])
+        prog = Program([])
         declared: dict[str, list[Target]] = {}
         tool_decl: dict[str, tuple[np.ndarray, bool, str]] = {}
         wobj_decl: dict[str, tuple[np.ndarray, bool, str]] = {}

@@ -3,15 +3,19 @@ the numbers a file already holds (so an unchanged pose keeps its numbers).
 
 * quaternion w-first (ABB): the sign nearest the old quaternion;
 * ZYX Euler ``R = Rz(a) Ry(b) Rx(c)`` in deg (KUKA A, B, C; FANUC W, P, R is the same matrix
-  with (a, b, c) = (R, P, W)): of the two solutions the one nearest the old angles, each angle
-  in [-180, 180]; within ``GIMBAL`` of b = +-90 deg, a keeps its old value;
-* rotation vector in rad (URScript): r or its 2 pi complement, whichever is nearer.
+  with (a, b, c) = (R, P, W); scipy's ``Rotation.from_euler("ZYX", (a, b, c), degrees=True)``
+  reads them): of the two solutions the one nearest the old angles, each angle in [-180, 180];
+  within ``GIMBAL`` of b = +-90 deg, a keeps its old value;
+* rotation vector in rad (URScript; :func:`robocal.kinematics.transforms.rotvec_to_matrix`
+  reads it): r or its 2 pi complement, whichever is nearer.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from scipy.spatial.transform import Rotation
+
+from robocal.kinematics.transforms import matrix_to_rotvec
 
 GIMBAL = 1e-6  # |cos b| below which the ZYX Euler angles a and c are not separable
 
@@ -27,17 +31,6 @@ def matrix_to_quat(R: np.ndarray, old: np.ndarray) -> np.ndarray:
     flip = np.einsum("ij,ij->i", q, old) < 0
     q[flip] *= -1
     return q
-
-
-def zyx_to_matrix(abc_deg: np.ndarray) -> np.ndarray:
-    """ZYX Euler ``(N, 3)`` deg, R = Rz(a) Ry(b) Rx(c) -> ``(N, 3, 3)``."""
-    a, b, c = np.deg2rad(np.asarray(abc_deg, float)).T
-    ca, sa, cb, sb, cc, sc = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(c), np.sin(c)
-    R = np.empty((len(a), 3, 3))
-    R[:, 0] = np.stack([ca * cb, ca * sb * sc - sa * cc, ca * sb * cc + sa * sc], axis=1)
-    R[:, 1] = np.stack([sa * cb, sa * sb * sc + ca * cc, sa * sb * cc - ca * sc], axis=1)
-    R[:, 2] = np.stack([-sb, cb * sc, cb * cc], axis=1)
-    return R
 
 
 def _wrap_deg(x: np.ndarray) -> np.ndarray:
@@ -70,14 +63,9 @@ def matrix_to_zyx(R: np.ndarray, old: np.ndarray) -> np.ndarray:
     return np.where(np.abs(near) <= 180.0, near, best)
 
 
-def rotvec_to_matrix(r: np.ndarray) -> np.ndarray:
-    """Rotation vectors ``(N, 3)`` rad -> ``(N, 3, 3)``."""
-    return Rotation.from_rotvec(np.asarray(r, float)).as_matrix()
-
-
-def matrix_to_rotvec(R: np.ndarray, old: np.ndarray) -> np.ndarray:
+def nearest_rotvec(R: np.ndarray, old: np.ndarray) -> np.ndarray:
     """``(N, 3, 3)`` -> rotation vectors ``(N, 3)`` rad, r or (|r| - 2 pi) r / |r|, nearest old."""
-    r = Rotation.from_matrix(R).as_rotvec()
+    r = matrix_to_rotvec(R)
     angle = np.linalg.norm(r, axis=1, keepdims=True)
     alt = r * np.where(angle > 0, (angle - 2 * np.pi) / np.where(angle > 0, angle, 1.0), 1.0)
     use_alt = np.linalg.norm(alt - old, axis=1) < np.linalg.norm(r - old, axis=1)

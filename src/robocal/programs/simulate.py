@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from robocal.ik import solve
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform
 from robocal.programs.filter import as_frames, controller_joints, dialect_for, target_poses
@@ -32,10 +33,13 @@ def _zyx(R):
 
 
 def write_program(dialect: str, folder, nominal: Robot, q: np.ndarray, tool: np.ndarray,
-                  frame: np.ndarray, name: str = "sim") -> tuple[list[Path], dict, dict]:
+                  frame: np.ndarray, name: str = "sim", variables: bool = False
+                  ) -> tuple[list[Path], dict, dict]:
     """Write a program visiting joints ``q`` ``(N, 6)`` (rad) of ``nominal`` with TCP ``tool``
     in ``frame`` (4x4, m). Returns the files and the ``tools`` / ``frames`` to give the filter
-    (text in the dialect's notation; empty when the program declares them)."""
+    (text in the dialect's notation; empty when the program declares them). ``variables``
+    (URScript): one pose variable per waypoint, ``global Waypoint_i_p=p[...]``, as PolyScope
+    exports them, instead of literals in the motions."""
     folder = Path(folder)
     d = dialect_for([], dialect)
     P = invert_transform(frame) @ nominal.fk(q) @ tool
@@ -93,9 +97,11 @@ def write_program(dialect: str, folder, nominal: Robot, q: np.ndarray, tool: np.
     lines = [f"def {name}():", "  set_tcp(p[" + _frame_text(tool, "rotvec") + "])",
              "  global Cell=p[" + _frame_text(frame, "rotvec") + "]",
              "  movej([" + ", ".join(f"{v:.6f}" for v in q[0]) + "], a=1.4, v=1.05)"]
-    for i in range(n):
-        pose = ", ".join(f"{v:.6f}" for v in (*P[i, :3, 3], *rv[i]))
-        lines.append(f"  movel(pose_trans(Cell, p[{pose}]), a=1.2, v=0.25)")
+    poses = ["p[" + ", ".join(f"{v:.6f}" for v in (*P[i, :3, 3], *rv[i])) + "]" for i in range(n)]
+    if variables:
+        lines += [f"  global Waypoint_{i + 1}_p={pose}" for i, pose in enumerate(poses)]
+        poses = [f"Waypoint_{i + 1}_p" for i in range(n)]
+    lines += [f"  movel(pose_trans(Cell, {pose}), a=1.2, v=0.25)" for pose in poses]
     lines += ["end", f"{name}()", ""]
     path = folder / f"{name}.script"
     path.write_text("\n".join(lines))
@@ -127,7 +133,7 @@ def execute(paths, robot: Robot, nominal: Robot, *, tools=None, frames=None, ref
     program = d.parse([ProgramText(p) for p in paths], as_frames(d, frames), as_frames(d, tools),
                       [ProgramText(p) for p in references])
     targets = program.targets
-    P, W, tool = target_poses(d, program, targets)
+    _, P, W, tool = target_poses(d, program, targets)
     X = W @ P
     problems, warnings = [], []
     q = controller_joints(d, program, targets, nominal, X @ invert_transform(tool), problems, warnings)
@@ -140,8 +146,6 @@ def touch_poses(robot: Robot, tool: np.ndarray, point: np.ndarray, n: int, rng, 
     """Joints ``(n, 6)`` at which ``robot`` (flange model) touches ``point`` with ``tool``'s TCP,
     tilted up to +-35 deg about x and y and turned about z (a 4-point tool calibration);
     ``seed`` (6,) rad starts the numeric IK of robots without a closed form."""
-    from robocal.ik import solve
-
     R = Rotation.from_euler("xyz", np.column_stack([180 + rng.uniform(-35, 35, n), rng.uniform(-35, 35, n),
                                                     rng.uniform(-90, 90, n)]), degrees=True).as_matrix()
     F = np.tile(np.eye(4), (n, 1, 1))
@@ -149,90 +153,3 @@ def touch_poses(robot: Robot, tool: np.ndarray, point: np.ndarray, n: int, rng, 
     F[:, :3, 3] = point - R @ tool[:3, 3]
     res = solve(robot, F, None if seed is None else np.tile(seed, (n, 1)))
     return res.joints[res.converged]
-
-
-def truth_experiment(dialect: str, robot_name: str, n_targets: int = 200, seed: int = 0,
-                     folder=None) -> dict:
-    """The filter on simulated truth: a robot with random errors measured by a virtual tracker
-    (120 poses, 3 SMRs on the tool so that the flange's orientation is seen, 0.02 mm noise),
-    calibrated with ``rc.calibrate``; its real tool's TCP identified
-    on the calibrated model by the 4-point method (8 poses); a program of ``n_targets`` targets
-    in a work object; the program filtered; both programs executed on the true robot through
-    the nominal controller. Returns RMS / max errors (mm, deg) from the intended targets of the
-    filtered and unfiltered programs and of a perfect filter (the true robot at the joints where
-    the calibrated model reaches each target), and the filter time (s)."""
-    import tempfile
-    import time
-
-    from robocal.calibration import calibrate
-    from robocal.data.simulate import simulate_tracker
-    from robocal.ik import solve
-    from robocal.ik.singularity import singularity_distance
-    from robocal.kinematics.transforms import make_transform
-    from robocal.programs.filter import filter_program
-    from robocal.tcp import identify_tcp
-
-    nominal = Robot.from_catalog(robot_name)
-    sim = simulate_tracker(nominal, 120, n_smr=3, seed=seed)
-    cal = calibrate(nominal, sim.data).robot
-    # the true robot as the controller sees it: the calibrated frame {0} is the base, tool0 the flange
-    truth = sim.truth.with_frames(base=nominal.base @ invert_transform(cal.base) @ sim.truth.base,
-                                  tool=nominal.tool)
-    rng = np.random.default_rng(seed)
-    reach = np.linalg.norm(nominal.fk(np.zeros((1, 6)))[0, :3, 3])
-    tool = make_transform(Rotation.from_euler("xyz", [5, 25, 10], degrees=True).as_matrix(),
-                          np.array([0.06, -0.02, 0.18]) * min(1.0, reach / 1.5))
-    frame = make_transform(Rotation.from_euler("z", 20, degrees=True).as_matrix(),
-                           np.array([0.3, -0.2, 0.1]) * reach)
-    # the real tool's TCP on the calibrated flange, from 8 poses touching one point
-    home = np.deg2rad([0, -90, 90, -90, -90, 0]) if nominal.opw is None else None
-    touch = touch_poses(truth, tool, np.array([0.55, 0.1, 0.25]) * reach, 8, rng, home)
-    tcp_cal = identify_tcp(cal, nominal, touch)
-    real = tool.copy()
-    real[:3, 3] = tcp_cal.tcp
-    lo, hi = np.maximum(nominal.limits[:, 0], -np.pi) * 0.7, np.minimum(nominal.limits[:, 1], np.pi) * 0.7
-    if dialect == "urscript":  # a continuous path away from singularities: the controller solves
-        q = [home]  # each target near the previous one
-        while len(q) < n_targets:
-            step = q[-1] + rng.uniform(-1, 1, (16, 6)) * np.deg2rad(4)
-            ok = np.flatnonzero(singularity_distance(nominal, step).sigma_rel > 0.02)
-            if ok.size:
-                q.append(np.clip(step[ok[0]], lo, hi))
-        q = np.array(q)
-    else:
-        q = rng.uniform(lo, hi, (4 * n_targets, 6))
-        q = q[singularity_distance(nominal, q).sigma_rel > 0.02][:n_targets]
-    with tempfile.TemporaryDirectory(dir=folder) as tmp:
-        paths, tools, frames = write_program(dialect, tmp, nominal, q, tool, frame)
-        name = {"rapid": "treal"}.get(dialect, "1" if dialect in ("krl", "fanuc") else "default")
-        if dialect == "urscript":
-            name = next(t.tool for t in _parsed(paths, tools, frames).targets)
-        start = time.perf_counter()
-        res = filter_program(paths, cal, nominal, tools=tools, frames=frames, tcp={name: real})
-        elapsed = time.perf_counter() - start
-        out = []
-        for p in paths:
-            o = Path(tmp) / f"filtered_{p.name}"
-            o.write_bytes(res.outputs[p])
-            out.append(o.rename(o.with_name(p.name.replace(p.stem, p.stem + "_f"))))
-        reached_f, X = execute(out, truth, nominal, tools=tools, frames=frames)
-        reached_u, X0 = execute(paths, truth, nominal, tools=tools, frames=frames)
-    flange = cal.with_frames(base=nominal.base, tool=nominal.tool @ real)
-    q_perfect = solve(flange, X0, solve(nominal.with_frames(tool=nominal.tool @ tool), X0, q).joints).joints
-    perfect = truth.fk(q_perfect) @ tool
-
-    def errors(A):
-        pos = np.linalg.norm(A[:, :3, 3] - X0[:, :3, 3], axis=1) * 1e3
-        rot = np.rad2deg(np.linalg.norm(Rotation.from_matrix(
-            A[:, :3, :3] @ np.swapaxes(X0[:, :3, :3], 1, 2)).as_rotvec(), axis=1))
-        return {"rms_mm": float(np.sqrt(np.mean(pos**2))), "max_mm": float(pos.max()),
-                "rms_deg": float(np.sqrt(np.mean(rot**2))), "max_deg": float(rot.max())}
-
-    return {"targets": len(q), "filtered": errors(reached_f), "unfiltered": errors(reached_u),
-            "perfect": errors(perfect), "seconds": elapsed, "tcp_rms_mm": tcp_cal.rms_mm,
-            "warnings": len(res.warnings)}
-
-
-def _parsed(paths, tools, frames):
-    d = dialect_for(paths)
-    return d.parse([ProgramText(p) for p in paths], as_frames(d, frames), as_frames(d, tools))

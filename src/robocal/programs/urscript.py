@@ -17,14 +17,15 @@ Comments (``#`` to the end of the line) and strings are masked first.
 from __future__ import annotations
 
 import re
+from bisect import bisect_left
 
 import numpy as np
 
 from robocal.errors import DataError
-from robocal.kinematics.transforms import make_transform
+from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
 from robocal.programs.aggregate import numbers_of, parse_aggregate, split_top
 from robocal.programs.model import IDENTITY, Dialect, Program, Target
-from robocal.programs.rotations import matrix_to_rotvec, rotvec_to_matrix
+from robocal.programs.rotations import nearest_rotvec
 from robocal.programs.source import Number, mask
 
 _COMMENT = re.compile(r"#[^\n]*")
@@ -38,6 +39,28 @@ _IK = re.compile(r"\s*get_inverse_kin\s*\(")
 _POSITION_M = 1e-6
 _ROTVEC = 1e-7
 DEFAULT_TOOL = "default"
+
+
+class _Assignments:
+    """Values assigned to variable names in text order; :meth:`latest` finds the last assignment
+    before an offset by bisection (a PolyScope export holds one variable per waypoint)."""
+
+    def __init__(self) -> None:
+        self._offsets: dict[str, list[int]] = {}
+        self._values: dict[str, list] = {}
+
+    def add(self, name: str, offset: int, value) -> None:
+        """Record ``name = value`` at ``offset`` (offsets increase per name)."""
+        self._offsets.setdefault(name, []).append(offset)
+        self._values.setdefault(name, []).append(value)
+
+    def latest(self, name: str, before: int):
+        """The value of the last assignment to ``name`` before ``before``, else None."""
+        k = bisect_left(self._offsets.get(name, ()), before)
+        return self._values[name][k - 1] if k else None
+
+    def values(self) -> list:
+        return [v for vals in self._values.values() for v in vals]
 
 
 def _close(masked: str, open_at: int) -> int:
@@ -64,7 +87,7 @@ class URScriptDialect(Dialect):
         return make_transform(rotvec_to_matrix(values[:, 3:6]), values[:, :3])
 
     def from_pose(self, T, old):
-        return np.hstack([T[:, :3, 3], matrix_to_rotvec(T[:, :3, :3], old[:, 3:6])])
+        return np.hstack([T[:, :3, 3], nearest_rotvec(T[:, :3, :3], old[:, 3:6])])
 
     def resolutions(self):
         return np.array([_POSITION_M] * 3 + [_ROTVEC] * 3)
@@ -73,7 +96,7 @@ class URScriptDialect(Dialect):
         return {}
 
     def parse(self, sources, frames, tools, references=()):
-        prog = Program(sources, [], frames={IDENTITY: np.eye(4)}, tools={IDENTITY: np.eye(4)})
+        prog = Program([], frames={IDENTITY: np.eye(4)}, tools={IDENTITY: np.eye(4)})
         user_default = tools.get(DEFAULT_TOOL, tools.get("", None))
         prog.tools.update(tools)
         if user_default is not None:
@@ -107,7 +130,7 @@ class URScriptDialect(Dialect):
                 for a, b in args[:n_targets]:
                     self._target_arg(src, masked, (a, b), m.start(), (tool, here), poses, joints, prog,
                                      (used, as_frame), order)
-            for t, _ in poses.values():
+            for t in poses.values():
                 if id(t) not in used and id(t) not in as_frame:
                     prog.warnings.append(f"{t.where}: pose variable not used by a motion: left as it is")
         for t in prog.targets:
@@ -122,9 +145,8 @@ class URScriptDialect(Dialect):
         return prog
 
     def _variables(self, src, masked):
-        """Pose and joint-list variables: name -> list of (Target, offset) in text order."""
-        poses: dict[tuple[str, int], tuple[Target, int]] = {}
-        joints: dict[tuple[str, int], np.ndarray] = {}
+        """Pose variables (a Target each) and joint-list variables (joints), in text order."""
+        poses, joints = _Assignments(), _Assignments()
         for m in _ASSIGN.finditer(masked):
             rest = m.end()
             pm = _POSE.match(masked, rest)
@@ -132,18 +154,13 @@ class URScriptDialect(Dialect):
                 close = _close(masked, pm.end())
                 tree, _ = parse_aggregate(src, masked, pm.end(), close + 1, f"pose {m.group(1)}")
                 nums = numbers_of([tree], (6,), src, rest, f"pose {m.group(1)}")[0]
-                poses[(m.group(1), m.start())] = (Target(src, m.start(), m.group(1), nums), m.start())
+                poses.add(m.group(1), m.start(), Target(src, m.start(), m.group(1), nums))
             elif masked[rest:rest + 1] == "[":
                 close = _close(masked, rest)
                 tree, _ = parse_aggregate(src, masked, rest, close + 1, f"list {m.group(1)}")
                 if len(tree) == 6 and all(isinstance(x, Number) for x in tree):
-                    joints[(m.group(1), m.start())] = np.array([x.value for x in tree])
+                    joints.add(m.group(1), m.start(), np.array([x.value for x in tree]))
         return poses, joints
-
-    @staticmethod
-    def _latest(table: dict, name: str, before: int):
-        hits = [(off, v) for (nm, off), v in table.items() if nm == name and off < before]
-        return max(hits, key=lambda h: h[0])[1] if hits else None
 
     def _target_arg(self, src, masked, span, at, tool_here, poses, joints, prog, seen, order):
         """One target argument of a motion: record the Cartesian target it names, or the joints."""
@@ -161,7 +178,7 @@ class URScriptDialect(Dialect):
                     tree, _ = parse_aggregate(src, masked, masked.index("[", qa), qb, "qnear")
                     qnear = np.array([x.value for x in tree], float)
                 elif _IDENT.match(val):
-                    qnear = self._latest(joints, val, at)
+                    qnear = joints.latest(val, at)
             a, b = inner[0]
             text = masked[a:b]
             lead = a + len(text) - len(text.lstrip())
@@ -175,10 +192,10 @@ class URScriptDialect(Dialect):
                 return
             frame = fname
             if fname not in prog.frames:
-                ref = self._latest(poses, fname, at)
+                ref = poses.latest(fname, at)
                 if ref is not None:
-                    prog.frames[fname] = self.to_pose(ref[0].values()[None])[0]
-                    as_frame.add(id(ref[0]))
+                    prog.frames[fname] = self.to_pose(ref.values()[None])[0]
+                    as_frame.add(id(ref))
             a, b = inner[1]
             text = masked[a:b]
             lead = a + len(text) - len(text.lstrip())
@@ -196,14 +213,13 @@ class URScriptDialect(Dialect):
             name = _IDENT.match(text)
             if not name:
                 return
-            q = self._latest(joints, name.group(1), at)
+            q = joints.latest(name.group(1), at)
             if q is not None:
                 prog.joint_targets.append((order[0], q))
                 return
-            ref = self._latest(poses, name.group(1), at)
-            if ref is None:
+            t = poses.latest(name.group(1), at)
+            if t is None:
                 return
-            t = ref[0]
             if id(t) in used:
                 if used[id(t)][:2] != (tool, frame):
                     first_tool, first_frame, first_at = used[id(t)]
