@@ -418,3 +418,10 @@ def test_krl_and_fanuc_configuration_edits():
     t = Target(ls, 0, "P[1]", [], config_spans=spans)
     assert FanucDialect().config_edits(t, np.array([1, 0, 0, 0, -1, 0])) == {(1, 2): "F", (11, 12): "-1"}
     assert ls.replaced({(1, 2): "F", (11, 12): "-1"}) == b"'F U T, 0, -1, 0'"
+
+
+def test_a_robot_that_is_not_six_axis_is_refused():
+    arm7 = rc.Robot.from_mdh(alpha=[0, -90, 90, 90, -90, 90, 90], a=[0, 0, 0, 82.5, -82.5, 0, 88],
+                             theta=[0] * 7, d=[333, 0, 316, 0, 384, 0, 107], degrees=True, length_unit="mm")
+    with pytest.raises(DataError, match="6-axis arms; the nominal model .* has 7 joints"):
+        filter_program(DATA / "pick_place.script", arm7, arm7)

@@ -45,6 +45,7 @@ from robocal.programs.rapid import RapidDialect
 from robocal.programs.source import ProgramText, format_number
 from robocal.programs.urscript import URScriptDialect
 
+CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
 LISTED = 20  # problems listed in one error message
 JUMP_DEG = 60.0  # a joint moving more than this from the previous target's joints gets a warning
@@ -287,6 +288,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     if not paths:
         raise DataError("no program file given")
+    if nominal.n_joints != CONTROLLER_JOINTS:
+        raise DataError(f"the programs of these controllers drive {CONTROLLER_JOINTS}-axis arms; the nominal "
+                        f"model {nominal.name!r} has {nominal.n_joints} joints")
     d = dialect_for(paths, dialect)
     sources = [ProgramText(p) for p in paths]
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
