@@ -93,7 +93,7 @@ def add_parser(sub) -> None:
     g.add_argument("--min-elbow-deg", type=float, default=0.0,
                    help="distance from the stretched/folded arm, deg")
     g.add_argument("--min-shoulder-mm", type=float, default=0.0,
-                   help="wrist point's distance from axis 1, mm")
+                   help="frame {5}'s origin from the plane of axis 1 and axis 2, mm")
     g.add_argument("--tracker-mm", type=_numbers(3), metavar="X,Y,Z",
                    help="tracker position (robot base frame)")
     g.add_argument("--acceptance-deg", type=float, default=30.0, help="SMR acceptance half-angle")
