@@ -165,6 +165,18 @@ def test_planned_poses_keep_the_elbow_and_shoulder_distances():
     with pytest.raises(DataError, match="shoulder singularity distance needs a chain of at least 5 joints"):
         plan_poses(short, 12, n_candidates=200, constraints=Constraints(min_shoulder_m=0.1))
 
+
+def test_the_funnel_counts_the_candidates_the_search_chose_from():
+    # the last batch of drawn candidates overshoots the count asked for: the surplus is a funnel
+    # step, so what the funnel leaves is what the search saw (it said "1012 left" of 1000)
+    box = ((0.4, -1.2, 0.0), (1.8, 1.2, 1.9))
+    res = plan_poses(IRB, 12, smr=SMR, n_candidates=1000, starts=1, constraints=Constraints(boxes=(box,)))
+    steps = dict(res.funnel.steps)
+    assert steps["keeping the 1000 asked for"] > 0
+    assert res.funnel.left == res.n_candidates == 1000
+    assert res.funnel.text().endswith("; 1000 left") and "from 1000 candidates" in res.summary()
+    assert res.to_dict()["candidates"]["left"] == 1000
+
 def test_segment_distances_against_sampling():
     rng = np.random.default_rng(3)
     for _ in range(20):

@@ -57,7 +57,8 @@ class CampaignResult:
     which SMRs the tracker sees ``visible (N, k)``, the predicted
     accuracy ``predicted_rms_mm``, the identifiability of the chosen set, the measuring route's
     weighted travel (and the travel in the order the search found them), the accuracy curve,
-    the candidate funnel, and the settings."""
+    the candidate funnel (``funnel.left``, also ``n_candidates``: the candidates the search chose
+    from), and the settings."""
 
     robot: object
     kind: str
@@ -76,7 +77,6 @@ class CampaignResult:
     funnel: cons.Funnel
     noise: Noise
     settings: dict
-    n_candidates: int
     source: CandidateFile | None = None
     source_rows: np.ndarray | None = None
     warnings: list[str] = field(default_factory=list)
@@ -84,6 +84,11 @@ class CampaignResult:
     @property
     def n(self) -> int:
         return len(self.joints)
+
+    @property
+    def n_candidates(self) -> int:
+        """The candidates the search chose from (what the funnel left)."""
+        return self.funnel.left
 
     def poses_csv(self) -> str:
         """The text of ``poses.csv`` (see :mod:`robocal.campaign.files`)."""
@@ -190,7 +195,8 @@ def _draw(robot, count: int, limits: np.ndarray, rng: np.random.Generator) -> np
 
 
 def _generate(robot, count, constraints, smr, normals, limits, rng, funnel):
-    """Candidates drawn uniformly in the limits until ``count`` pass the constraints."""
+    """Candidates drawn uniformly in the limits until ``count`` pass the constraints (the last
+    batch's surplus is recorded in ``funnel`` as removed)."""
     kept_q, kept_v = [], []
     total = 0
     for _ in range(MAX_DRAWS):
@@ -202,6 +208,8 @@ def _generate(robot, count, constraints, smr, normals, limits, rng, funnel):
         total += int(keep.sum())
         if total >= count:
             break
+    if total > count:
+        funnel.record(f"keeping the {count} asked for", total - count)
     return np.concatenate(kept_q)[:count], np.concatenate(kept_v)[:count]
 
 
@@ -300,6 +308,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         if kind == "distance":  # a pair needs both ends
             pair_of = np.unique(data.pair, return_inverse=True)[1]
             whole = np.flatnonzero(np.bincount(pair_of)[pair_of] == 2)
+            if len(whole) < len(given):
+                funnel.record("distances missing an end", len(given) - len(whole))
             data, given = data.subset(whole), given[whole]
     info = information(plan_robot, data, noise)
     C, _, p = info.G.shape
@@ -347,7 +357,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         criterion=criterion, criterion_value=found.value, identifiability=info.analyze_subset(chosen),
         parameters=list(info.names),
         travel=travel(joints, weights), travel_unordered=travel(cand_q[found.indices], weights),
-        weights=weights, curve=points, funnel=funnel, noise=noise, n_candidates=C,
+        weights=weights, curve=points, funnel=funnel, noise=noise,
         settings={"seed": int(seed), "starts": int(starts), "criterion": criterion,
                   "region_size": len(q_region), "margin_deg": constraints.margin_deg,
                   "min_joint_distance_deg": constraints.min_joint_distance_deg,
