@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from robocal.data.simulate import check_tracker_position
 from robocal.errors import DataError
 from robocal.ik.singularity import MEASURE_JOINTS, classic_distances
 
@@ -50,10 +51,7 @@ class Tracker:
     arm_radius_m: float | None = None
 
     def __post_init__(self) -> None:
-        pos = np.asarray(self.position, dtype=float).reshape(-1)
-        if pos.shape != (3,) or not np.isfinite(pos).all():
-            raise DataError("the tracker position must be three finite coordinates (m)")
-        object.__setattr__(self, "position", pos)
+        object.__setattr__(self, "position", check_tracker_position(self.position))
         lo, hi = (float(v) for v in self.range_m)
         if not 0 <= lo < hi:
             raise DataError(f"the tracker range must be 0 <= min < max (m), got {self.range_m}")

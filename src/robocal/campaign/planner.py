@@ -23,6 +23,7 @@ from robocal.campaign.information import GENERATED_KINDS, Information, Noise, ca
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, format_number
 from robocal.data.measurements import KINDS, Measurements
+from robocal.data.simulate import smr_in_link_frame
 from robocal.errors import DataError
 from robocal.identify.identifiability import Identifiability
 from robocal.ik.path import default_weights, travel
@@ -164,7 +165,7 @@ def _planning_robot(robot, smr, normals):
             (np.linalg.norm(normals, axis=1) < 1e-9).any():
         raise DataError(f"give one non-zero facing direction per SMR ({len(smr)} SMRs)")
     normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
-    placed = smr @ R.T + t  # SMR positions in the last link frame
+    placed = smr_in_link_frame(robot, smr)
     plan = replace(robot, tool=make_transform(R, placed[0]), smr=placed[1:], nominal=None, joint_errors=None)
     return plan, smr, normals
 
