@@ -259,7 +259,7 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     """Simulate ``n_poses`` measured poses of a perturbed copy of ``robot`` (see module docstring).
 
     ``joints (N, n)`` rad: measure these poses (a planned campaign) instead of random ones;
-    ``visible (N, n_smr)`` bool: the SMRs the tracker sees at each pose (default all);
+    ``visible (N, k)`` bool: the SMRs the tracker sees at each pose (default all; k sets n_smr);
     ``smr_offsets (k, 3)`` m: the SMR positions in the flange (tool) frame instead of random ones
     (k SMRs, the first is the tool); ``tracker_position (3,)`` m: the tracker's position in the
     robot's base frame instead of a random one (its orientation stays random). The robot errors
@@ -351,6 +351,8 @@ def _check_given(robot, n_poses, n_smr, kind, joints, visible, smr_offsets):
         n_smr = len(smr_offsets)
     if visible is not None:
         visible = np.asarray(visible, dtype=bool)
+        if visible.ndim == 2 and n_smr == 1:  # the SMR count from the visibility columns
+            n_smr = visible.shape[1]
         if kind != "point" or joints is None or visible.shape != (len(joints), n_smr):
             raise DataError(f"visible must be ({n_poses}, {n_smr}) booleans for given joints of "
                             "point measurements (one per pose and SMR)")
