@@ -28,6 +28,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
+from common import model_error_mm
 from threadpoolctl import threadpool_limits
 from timing import best_time
 
@@ -45,11 +46,6 @@ NOISE_MM = 0.02
 SMR = np.array([0.02, -0.03, 0.08])
 SMR3 = np.array([[0.02, -0.03, 0.08], [-0.06, 0.05, 0.07], [0.07, 0.06, 0.05]])  # flange, m
 DATASETS = Path(__file__).resolve().parents[2] / "shared" / "datasets"
-
-
-def model_error_mm(calibrated, truth, q) -> float:
-    e = calibrated.fk(q)[:, :3, 3] - truth.fk(q)[:, :3, 3]
-    return float(np.sqrt(np.mean(np.sum(e**2, axis=1))) * 1e3)
 
 
 def true_error(robot, joints, seed, q_eval) -> float:
