@@ -99,29 +99,27 @@ class Constraints:
 
 @dataclass
 class Funnel:
-    """How many candidates each constraint removed, in the order applied."""
+    """How many candidates each constraint removed (``steps``: name -> count, in the order
+    first applied)."""
 
     start: int = 0
-    steps: list[tuple[str, int]] = field(default_factory=list)
+    steps: dict[str, int] = field(default_factory=dict)
 
     def record(self, name: str, removed: int) -> None:
-        for k, (step, count) in enumerate(self.steps):
-            if step == name:
-                self.steps[k] = (step, count + int(removed))
-                return
-        self.steps.append((name, int(removed)))
+        self.steps[name] = self.steps.get(name, 0) + int(removed)
 
     @property
     def left(self) -> int:
-        return self.start - sum(count for _, count in self.steps)
+        return self.start - sum(self.steps.values())
 
     def text(self) -> str:
         parts = [f"{self.start} candidate poses"]
-        parts += [f"{name} removed {count}" for name, count in self.steps]
+        parts += [f"{name} removed {count}" for name, count in self.steps.items()]
         return "; ".join(parts) + f"; {self.left} left"
 
     def to_dict(self) -> dict:
-        return {"candidates": self.start, "removed": [{"constraint": n, "count": c} for n, c in self.steps],
+        return {"candidates": self.start,
+                "removed": [{"constraint": n, "count": c} for n, c in self.steps.items()],
                 "left": self.left}
 
 

@@ -21,14 +21,15 @@ from robocal.campaign.exchange import CRITERIA, criterion_value, exchange
 from robocal.campaign.files import CandidateFile, poses_csv
 from robocal.campaign.information import GENERATED_KINDS, Information, Noise, candidate_data, information
 from robocal.campaign.order import measuring_order
-from robocal.campaign.programs import DEGREE_DECIMALS, format_number
-from robocal.data.measurements import KINDS, Measurements
+from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
+from robocal.data.measurements import KINDS, Measurements, robot_reach
 from robocal.data.simulate import smr_in_link_frame
 from robocal.errors import DataError
 from robocal.identify.identifiability import Identifiability
 from robocal.ik.path import default_weights, travel
 from robocal.kinematics.transforms import make_transform
 from robocal.progress import Progress
+from robocal.version import __version__
 
 DEFAULT_CANDIDATES = 5000
 DEFAULT_REGION_SIZE = 2000
@@ -120,8 +121,6 @@ class CampaignResult:
 
     def to_dict(self) -> dict:
         """Plain data (mm, deg) for JSON and the HTML page."""
-        from robocal import __version__
-
         ident = self.identifiability
         return {
             "format": FORMAT, "robocal_version": __version__,
@@ -130,7 +129,7 @@ class CampaignResult:
             "kind": self.kind, "criterion": self.criterion, "n_poses": self.n,
             "predicted_rms_mm": self.predicted_rms_mm,
             "noise": {"model": self.noise.model, "sigma_mm": self.noise.sigma_m * 1e3},
-            "joints_deg": [[float(format_number(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv
+            "joints_deg": [[float(fixed_point(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv
                            for row in np.rad2deg(self.joints)],
             "candidate_index": self.candidate_index.tolist(),
             "visible": self.visible.astype(int).tolist(),
@@ -234,7 +233,7 @@ def _region(robot, region, size, constraints, limits, rng, smr, normals):
 
 
 def _fail_empty(funnel: cons.Funnel, what: str) -> None:
-    last = next((name for name, count in reversed(funnel.steps) if count), "the joint limits")
+    last = next((name for name, count in reversed(funnel.steps.items()) if count), "the joint limits")
     raise DataError(f"{what}: {funnel.text()}. The last candidates were removed by {last}: relax it "
                     "(or, for the tracker, move it or the SMRs)")
 
@@ -279,8 +278,6 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     rng = np.random.default_rng(seed)
     limits = cons.limits_with_margin(robot, constraints.margin_deg)
     if tracker is not None:
-        from robocal.data.measurements import robot_reach
-
         cons.check_tracker_placement(robot, tracker, robot_reach(plan_robot))
     funnel = cons.Funnel()
     source = candidates if isinstance(candidates, CandidateFile) else None
