@@ -5,23 +5,35 @@
    for each seed, a robot with random errors measures the planned poses and random poses
    (uniform in the joint limits, several draws per seed); lsq calibrates each; the true model
    error is the 3-D RMS of the calibrated TCP against the truth, noise free, over 2000 random
-   poses. Also the continuous I-optimal design on the same candidates (multiplicative algorithm):
-   ``trace(M^-1 A) / N`` of it bounds from below what any N poses can reach.
+   poses. Also the continuous I-optimal design (multiplicative algorithm) on 5,000 candidates
+   drawn as the planner draws them (uniform within the limits less the 1 deg margin; not the
+   plan's own draw) and a region of 2,000 random poses: ``trace(M^-1 A) / N`` of it bounds from
+   below what any N poses of such candidates can reach.
 2. Meca500 (real, FARO): 20 of the 490 calibration poses chosen from their joints alone (SMR
    assumed on the flange axis 50 mm out; region of interest: the calibration poses, or the joint
    limits), calibrated, judged on the 70 validation poses; against random 20 / 30 and all 490.
-3. Speed: ``plan_poses`` 20 of 5,000 and 100 of 20,000 candidates, and one candidate scan with the
-   Woodbury forms against direct evaluation of every candidate's criterion (solve per candidate).
+3. Speed: ``plan_poses`` 20 of 5,000 and 100 of 20,000 candidates; one candidate scan with the
+   Woodbury forms against direct evaluation of every candidate's criterion (solve per candidate);
+   3 SMRs (9 rows per pose), 30 of 5,000, and one Woodbury update of that design, with the
+   search on one BLAS thread (threadpoolctl, as ``plan_poses`` runs it) and with the BLAS
+   library's own threads (the machine's load average is printed: the difference is what a busy
+   machine makes of many small threaded products).
 """
 
 from __future__ import annotations
 
+import os
+import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
+from common import model_error_mm
+from threadpoolctl import threadpool_limits
 from timing import best_time
 
 import robocal as rc
+from robocal.campaign import exchange
 from robocal.campaign.exchange import _Design, criterion_value
 from robocal.campaign.information import Noise, candidate_data, information
 from robocal.data.simulate import simulate_tracker
@@ -29,14 +41,11 @@ from robocal.data.simulate import simulate_tracker
 SEEDS = 40
 PLANNER_SEEDS = 6  # Meca500: the planner's seed picks among near-equal designs; their median
 RANDOM_DRAWS = 5
+UPDATE_RUNS = 20  # Woodbury updates timed per setting
 NOISE_MM = 0.02
 SMR = np.array([0.02, -0.03, 0.08])
+SMR3 = np.array([[0.02, -0.03, 0.08], [-0.06, 0.05, 0.07], [0.07, 0.06, 0.05]])  # flange, m
 DATASETS = Path(__file__).resolve().parents[2] / "shared" / "datasets"
-
-
-def model_error_mm(calibrated, truth, q) -> float:
-    e = calibrated.fk(q)[:, :3, 3] - truth.fk(q)[:, :3, 3]
-    return float(np.sqrt(np.mean(np.sum(e**2, axis=1))) * 1e3)
 
 
 def true_error(robot, joints, seed, q_eval) -> float:
@@ -90,7 +99,7 @@ def simulated() -> None:
     print(f"planned 20 / random 30 (medians): {med['I-optimal, 20'] / np.median(randoms[30]):.3f}; "
           f"planned 12 / random 20: {med['I-optimal, 12'] / np.median(randoms[20]):.3f}; "
           f"I-20 / D-20: {med['I-optimal, 20'] / med['D-optimal, 20']:.3f}")
-    # the limit any design on these candidates can reach (same candidates and region as the plan)
+    # the limit any design on such candidates can reach (drawn like the plan's, not the same ones)
     plan_robot = plans["I-optimal, 20"].robot
     q = np.random.default_rng(0).uniform(lo + 0.0175, hi - 0.0175, (5000, 6))
     info = information(plan_robot, candidate_data(plan_robot, "point", q, np.ones((5000, 1), bool)),
@@ -161,6 +170,53 @@ def speed() -> None:
     assert np.allclose(fast[ok], slow[ok], rtol=1e-6)
     print(f"one scan of 5,000 candidates: Woodbury {t_scan * 1e3:.1f} ms, direct inverse per candidate "
           f"{t_direct * 1e3:.0f} ms ({t_direct / t_scan:.0f}x)")
+    several_smrs(robot, q)
+
+
+@contextmanager
+def blas_threads():
+    """``plan_poses`` / ``exchange`` without their one-BLAS-thread limit."""
+    saved = exchange.threadpool_limits
+    exchange.threadpool_limits = None
+    try:
+        yield
+    finally:
+        exchange.threadpool_limits = saved
+
+
+def several_smrs(robot, q: np.ndarray) -> None:
+    load = os.getloadavg()[0]
+
+    def plan():
+        return rc.plan_poses(robot, 30, smr=SMR3, n_candidates=5000)
+
+    t_one, one = best_time(plan, repeat=1)
+    with blas_threads():
+        t_many, many = best_time(plan, repeat=1)
+    assert np.array_equal(one.joints, many.joints)
+    plan_robot = one.robot
+    info = information(plan_robot, candidate_data(plan_robot, "point", q, np.ones((len(q), 3), bool)),
+                       Noise(sigma_m=2e-5))
+    A = info.region_matrix(plan_robot, q[:2000])
+    design = _Design(info.G, A, "I", lambda j: np.eye(1, len(q), j, dtype=np.int64)[0])
+    design.reset(list(range(30)))
+    with threadpool_limits(1, user_api="blas"):
+        u_one = median_time(lambda: design._updated(30, 1.0))
+    u_many = median_time(lambda: design._updated(30, 1.0))
+    print(f"3 SMRs (9 rows per pose), plan_poses 30 of 5,000: {t_one:.1f} s on one BLAS thread, "
+          f"{t_many:.1f} s with the BLAS library's threads ({t_many / t_one:.1f}x); one Woodbury update "
+          f"{u_one * 1e3:.1f} ms against {u_many * 1e3:.1f} ms (median of {UPDATE_RUNS}); load average "
+          f"{load:.1f} -> {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+
+
+def median_time(fn) -> float:
+    """Median seconds of ``UPDATE_RUNS`` calls (a busy machine's typical cost, not its best)."""
+    times = []
+    for _ in range(UPDATE_RUNS):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return float(np.median(times))
 
 
 def main() -> None:

@@ -12,26 +12,14 @@
 from __future__ import annotations
 
 import numpy as np
+from common import model_error_mm, rigid_error_mm
 
 import robocal as rc
-from robocal.data.registration import umeyama
 from robocal.data.simulate import sample_joints, simulate_tracker
 
 SEEDS = 5
 ROBOT = rc.Robot.from_catalog("abb_irb2600")
 PROBE_NOISE_MM = 0.01
-
-
-def rigid_rms_mm(model, truth, q) -> float:
-    """TCP of ``model`` against ``truth`` after the best rigid motion (mm RMS)."""
-    p, t = model.fk(q)[:, :3, 3], truth.fk(q)[:, :3, 3]
-    T = umeyama(p, t)
-    return float(np.sqrt(np.mean(np.sum((p @ T[:3, :3].T + T[:3, 3] - t) ** 2, axis=1))) * 1e3)
-
-
-def true_rms_mm(model, truth, q) -> float:
-    e = model.fk(q)[:, :3, 3] - truth.fk(q)[:, :3, 3]
-    return float(np.sqrt(np.mean(np.sum(e**2, axis=1))) * 1e3)
 
 
 def planes_and_scale_bar() -> None:
@@ -52,8 +40,8 @@ def planes_and_scale_bar() -> None:
         alone = rc.calibrate(start, cal, validation=val)
         both = rc.calibrate(start, [cal, bar], validation=val)
         floor = float(np.sqrt(np.mean(np.sum(sim.noise[60:90] ** 2, axis=1)))) * 1e3  # held-out noise
-        row = [rigid_rms_mm(start, sim.truth, q), rigid_rms_mm(alone.robot, sim.truth, q),
-               rigid_rms_mm(both.robot, sim.truth, q), alone.validation["rms"] / PROBE_NOISE_MM,
+        row = [rigid_error_mm(start, sim.truth, q), rigid_error_mm(alone.robot, sim.truth, q),
+               rigid_error_mm(both.robot, sim.truth, q), alone.validation["rms"] / PROBE_NOISE_MM,
                both.validation["rms"] / PROBE_NOISE_MM, alone.validation["rms"] / floor,
                both.validation["rms"] / floor]
         rows.append(row)
@@ -74,8 +62,8 @@ def points_and_ball_bar() -> None:
         bar = simulate_tracker(sim.truth.with_frames(base=np.eye(4)), 40, kind="distance", noise_mm=0.005,
                                bar_length_m=0.8, seed=200 + seed, as_is=True).data
         q = sample_joints(sim.truth, 300, np.random.default_rng(2000 + seed))
-        points = true_rms_mm(rc.calibrate(ROBOT, sim.data).robot, sim.truth, q)
-        both = true_rms_mm(rc.calibrate(ROBOT, [sim.data, bar]).robot, sim.truth, q)
+        points = model_error_mm(rc.calibrate(ROBOT, sim.data).robot, sim.truth, q)
+        both = model_error_mm(rc.calibrate(ROBOT, [sim.data, bar]).robot, sim.truth, q)
         ratios.append(both / points)
         print(f"  seed {seed}: points {points:.4f}, points + ball bar {both:.4f} ({both / points:.3f} x)")
     print(f"points + ball bar / points alone: {min(ratios):.3f}-{max(ratios):.3f}")

@@ -18,11 +18,11 @@ import time
 from dataclasses import replace
 
 import numpy as np
+from common import rigid_error_mm
 from scipy.optimize import differential_evolution
 
 from robocal import Robot
 from robocal.calibration import calibrate
-from robocal.data.registration import umeyama
 from robocal.data.simulate import sample_joints, simulate_tracker
 from robocal.identify.observations.plane import PlaneObservation
 from robocal.identify.population import PopulationCost
@@ -50,12 +50,6 @@ def plane_campaign(n: int, n_planes: int, noise_mm: float, seed: int):
     sim = simulate_tracker(robot, n, kind="plane", n_planes=n_planes, seed=seed, noise_mm=noise_mm)
     data = sim.data
     return sim, data, replace(robot, tool=sim.truth.tool.round(3), nominal=None)
-
-
-def tracker_rms_mm(model, truth, q) -> float:
-    p, t = model.fk(q)[:, :3, 3], truth.fk(q)[:, :3, 3]
-    T = umeyama(p, t)
-    return float(np.sqrt(np.mean(np.sum((p @ T[:3, :3].T + T[:3, 3] - t) ** 2, axis=1))) * 1e3)
 
 
 def tracker_problem() -> None:
@@ -94,14 +88,14 @@ def plane_problem() -> None:
     sim, data, nominal = plane_campaign(90, 3, noise, seed=1)
     cal, val = data.subset(np.arange(60)), data.subset(np.arange(60, 90))
     q = sample_joints(sim.truth, 200, np.random.default_rng(5))
-    nominal_err = tracker_rms_mm(nominal, sim.truth, q)
+    nominal_err = rigid_error_mm(nominal, sim.truth, q)
     print(f"plane contacts: 3 planes, 60 contacts (+30 held out), probe noise {noise} mm; "
           f"nominal tip error at 200 held-out poses {nominal_err:.4f} mm (after a rigid fit)")
 
     def line(label, robot, nuisance, dt):
         obs = PlaneObservation(val, robot)
         held = float(np.sqrt(np.mean(obs.residuals(robot, nuisance) ** 2)) * 1e3)
-        err = tracker_rms_mm(robot, sim.truth, q)
+        err = rigid_error_mm(robot, sim.truth, q)
         print(f"  {label:18s} {dt:7.2f} s  held-out plane deviation {held:.4f} mm "
               f"({held / noise:.2f} x noise)"
               f"  tip error {err:.4f} mm ({nominal_err / err:.1f}x below nominal)")

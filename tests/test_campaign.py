@@ -9,11 +9,12 @@ from conftest import require_datasets
 
 import robocal as rc
 from robocal import DataError, Robot
-from robocal.campaign import Constraints, Tracker, plan_poses, singularity_measures
+from robocal.campaign import Constraints, Tracker, plan_poses
 from robocal.campaign.constraints import _segment_point_distance, _segment_segment_distance, smr_geometry
 from robocal.campaign.information import Noise
 from robocal.data.measurements import Measurements
 from robocal.data.simulate import _tracker_noise, simulate_tracker
+from robocal.ik.singularity import classic_distances, singularity_distance
 
 IRB = Robot.from_catalog("abb_irb2600")
 MECA = Robot.from_catalog("meca500")
@@ -77,17 +78,21 @@ def test_tracker_line_of_sight_and_boxes_hold_for_every_chosen_pose():
     qd = np.rad2deg(res.joints)
     gaps = np.linalg.norm(qd[:, None] - qd[None], axis=2) + np.eye(len(qd)) * 1e9
     assert gaps.min() >= 15.0
-    assert singularity_measures(IRB, res.joints)["wrist_deg"].min() >= 10.0
+    assert _measures(IRB, res.joints)["wrist_deg"].min() >= 10.0
     assert res.funnel.steps and res.funnel.left >= res.n_candidates
+
+
+def _measures(robot, q) -> dict:
+    return classic_distances(robot.fk(q, frames=True)[1])
 
 
 def test_singularity_measures_against_the_arm_jacobian():
     q = np.random.default_rng(2).uniform(IRB.limits[:, 0], IRB.limits[:, 1], (200, 6))
-    m = singularity_measures(IRB, q)
+    m = _measures(IRB, q)
     folded = np.minimum(np.abs(np.rad2deg(q[:, 4])) % 180, 180 - np.abs(np.rad2deg(q[:, 4])) % 180)
     np.testing.assert_allclose(m["wrist_deg"], folded, atol=1e-6)  # ABB: J5 = 0 is the wrist singularity
     # every configuration where the wrist point's 3x3 Jacobian (joints 1-3) is singular is either
-    # an elbow (stretched / folded arm) or a shoulder (wrist point on axis 1) singularity
+    # an elbow (stretched / folded arm) or a shoulder (wrist centre on axis 1) singularity
     names = ["theta1", "theta2", "theta3"]
 
     def det(q3):
@@ -104,12 +109,73 @@ def test_singularity_measures_against_the_arm_jacobian():
         for _ in range(60):  # bisection on the sign change of det
             mid = 0.5 * (lo + hi)
             lo, hi = (mid, hi) if np.sign(det(mid)) == np.sign(det(lo)) else (lo, mid)
-        s = singularity_measures(IRB, np.array([[0.3, 0.2, lo, 0.1, 0.5, 0.2]]))
-        assert min(s["elbow_deg"][0], s["shoulder_m"][0] * 1e3) < 1e-6
+        s = _measures(IRB, np.array([[0.3, 0.2, lo, 0.1, 0.5, 0.2]]))
+        assert min(s["elbow_deg"][0], s["shoulder_mm"][0]) < 1e-6
         kinds.add("elbow" if s["elbow_deg"][0] < 1e-6 else "shoulder")
     assert kinds == {"elbow", "shoulder"}
-    assert np.median(m["elbow_deg"]) > 10 and np.median(m["shoulder_m"]) > 0.1
+    assert np.median(m["elbow_deg"]) > 10 and np.median(m["shoulder_mm"]) > 100
 
+
+
+@pytest.mark.parametrize("name", ["ur5", "puma560", "abb_irb2600"])
+def test_every_zero_of_the_jacobian_determinant_is_a_classic_singularity(name):
+    # offset wrists (UR: frames {4} and {5} apart) and sideways offsets (UR d4, PUMA 560 d3): along
+    # sweeps of joints 2-4, det J (6 x 6) changes sign only where a classic distance is zero
+    robot = Robot.from_catalog(name)
+    names = [f"theta{i + 1}" for i in range(6)]
+
+    def det(q):
+        return np.linalg.det(robot.jacobian(q, names, kind="pose"))
+
+    rng = np.random.default_rng(4)
+    kinds = set()
+    for q0 in rng.uniform(0.7 * robot.limits[:, 0], 0.7 * robot.limits[:, 1], (3, 6)):
+        for j in (1, 2, 3):
+            sweep = np.repeat(q0[None], 721, axis=0)
+            sweep[:, j] = np.linspace(*robot.limits[j], 721)
+            d = det(sweep)
+            for k in np.flatnonzero(np.sign(d[:-1]) != np.sign(d[1:])):
+                lo, hi = sweep[k].copy(), sweep[k + 1].copy()
+                for _ in range(60):  # bisection on the sign change of det
+                    mid = 0.5 * (lo + hi)
+                    lo, hi = (mid, hi) if np.sign(det(mid[None])[0]) == np.sign(d[k]) else (lo, mid)
+                m = _measures(robot, lo[None])
+                score = {"wrist": m["wrist_deg"][0], "elbow": m["elbow_deg"][0],
+                         "shoulder": m["shoulder_mm"][0]}
+                assert min(score.values()) < 1e-6, (name, j, score)
+                kinds.add(min(score, key=score.get))
+    assert kinds == {"elbow", "shoulder"}
+    far = rng.uniform(0.7 * robot.limits[:, 0], 0.7 * robot.limits[:, 1], (50, 6))
+    s, m = singularity_distance(robot, far), _measures(robot, far)
+    for key in ("wrist_deg", "elbow_deg", "shoulder_mm"):
+        np.testing.assert_array_equal(getattr(s, key), m[key])
+
+
+def test_planned_poses_keep_the_elbow_and_shoulder_distances():
+    res = plan_poses(Robot.from_catalog("ur5"), 12, smr=[0.01, 0.02, 0.05], n_candidates=400, starts=1,
+                     constraints=Constraints(min_elbow_deg=20.0, min_shoulder_m=0.15))
+    m = _measures(res.robot, res.joints)
+    assert m["elbow_deg"].min() >= 20.0 and m["shoulder_mm"].min() >= 150.0
+    removed = dict(res.funnel.steps)
+    assert removed["the elbow singularity distance (>= 20 deg)"] > 0
+    assert removed["the shoulder singularity distance (>= 150 mm)"] > 0
+    ur5 = Robot.from_catalog("ur5")
+    short = Robot(alpha=ur5.alpha[:4], a=ur5.a[:4], beta=ur5.beta[:4], theta=ur5.theta[:4], d=ur5.d[:4],
+                  limits=ur5.limits[:4])
+    with pytest.raises(DataError, match="shoulder singularity distance needs a chain of at least 5 joints"):
+        plan_poses(short, 12, n_candidates=200, constraints=Constraints(min_shoulder_m=0.1))
+
+
+def test_the_funnel_counts_the_candidates_the_search_chose_from():
+    # the last batch of drawn candidates overshoots the count asked for: the surplus is a funnel
+    # step, so what the funnel leaves is what the search saw (it said "1012 left" of 1000)
+    box = ((0.4, -1.2, 0.0), (1.8, 1.2, 1.9))
+    res = plan_poses(IRB, 12, smr=SMR, n_candidates=1000, starts=1, constraints=Constraints(boxes=(box,)))
+    steps = dict(res.funnel.steps)
+    assert steps["keeping the 1000 asked for"] > 0
+    assert res.funnel.left == res.n_candidates == 1000
+    assert res.funnel.text().endswith("; 1000 left") and "from 1000 candidates" in res.summary()
+    assert res.to_dict()["candidates"]["left"] == 1000
 
 def test_segment_distances_against_sampling():
     rng = np.random.default_rng(3)

@@ -141,6 +141,31 @@ def test_bad_input_is_refused_and_nothing_is_written(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["poses.csv"]
 
 
+
+@pytest.mark.parametrize("command", [
+    ["poses", "--robot", "abb_irb2600", "-n", "20", "--smr-mm", "20,-30"],
+    ["poses", "--robot", "abb_irb2600", "-n", "20", "--tracker-mm", "2500,x,300"],
+    ["simulate", "--robot", "abb_irb2600", "--poses", "20", "--smr-mm", "20,-30", "--truth", "t.yaml"],
+    ["simulate", "--robot", "abb_irb2600", "--poses", "20", "--tool-mm", "1,2,3,4", "--truth", "t.yaml"],
+    ["simulate", "--robot", "abb_irb2600", "--poses", "20", "--tracker-mm", "2500,500", "--truth", "t.yaml"],
+])
+def test_coordinates_are_parsed_by_one_argument_type(command, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main([*command, "-o", str(tmp_path / "out.csv")])
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and "expected 3 comma-separated numbers (X,Y,Z in mm)" in err
+    assert not list(tmp_path.iterdir())
+
+
+def test_simulate_takes_the_smr_count_from_the_planned_visibility(planned):
+    out = planned / "data_visible.csv"
+    assert main(["--quiet", "simulate", "--robot", "abb_irb2600", "--joints", str(planned / "poses.csv"),
+                 "-o", str(out), "--truth", str(planned / "truth_visible.yaml")]) == 0
+    data = Measurements.load(out)
+    table = read_joint_table(planned / "poses.csv")
+    seen = np.array([table.column(f"visible_smr{k}") for k in range(2)]).T == "1"
+    assert len(data) == seen.sum() and set(np.unique(data.smr)) == {0, 1}
+
 def test_write_all_rolls_back_when_a_later_file_fails(tmp_path, monkeypatch):
     first, second = tmp_path / "a.txt", tmp_path / "b.txt"
     first.write_text("old a")

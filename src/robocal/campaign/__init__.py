@@ -5,9 +5,9 @@ tracker are :class:`Constraints` and :class:`Tracker`; candidates from a file ar
 :func:`read_candidates`; :mod:`robocal.campaign.programs` writes RAPID, KRL and URScript.
 """
 
-from robocal.campaign.constraints import Constraints, Tracker, singularity_measures
+from robocal.campaign.constraints import Constraints, Tracker
 from robocal.campaign.files import read_candidates, read_planned
 from robocal.campaign.planner import CampaignResult, CurvePoint, plan_poses
 
 __all__ = ["CampaignResult", "Constraints", "CurvePoint", "Tracker", "plan_poses", "read_candidates",
-           "read_planned", "singularity_measures"]
+           "read_planned"]

@@ -7,15 +7,9 @@ base frame; SMR positions and facing directions are in the flange frame (``tool0
 
 - joint limits with a margin (deg) on both ends;
 - Cartesian boxes: the TCP (the first SMR) must lie inside at least one box;
-- singularity distances (:func:`singularity_measures`), each a minimum:
-
-  - wrist: the angle between the axes of joints 4 and 6 (0 when they are aligned; for a
-    spherical wrist this is ``|q5|`` from the nearest singular value), deg;
-  - elbow: the angle at axis 3, in the plane normal to it, between the directions to axis 2 and
-    to the wrist point (the origin of frame {4}, the wrist centre of a spherical wrist),
-    0 when the arm is stretched or folded onto itself (boundary singularity), deg;
-  - shoulder: the distance of the wrist point from the axis of joint 1, m;
-
+- singularity distances (:func:`robocal.ik.singularity.classic_distances`), each a minimum: the
+  wrist's (angle between the axes of joints 4 and 6, deg), the elbow's (arm stretched or folded,
+  deg) and the shoulder's (m);
 - the laser tracker (:class:`Tracker`): an SMR is seen when it faces the tracker within the
   reflector's acceptance half-angle, its distance is inside the tracker's range and, when an
   arm radius is given, the beam clears the arm (the segments joining the origins of frames
@@ -33,14 +27,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from robocal.data.simulate import check_tracker_position
 from robocal.errors import DataError
+from robocal.ik.singularity import MEASURE_JOINTS, classic_distances
 
 DEFAULT_ACCEPTANCE_DEG = 30.0
 DEFAULT_RANGE_M = (0.5, 40.0)      # a typical tracker's measuring range; set your instrument's
 DEFAULT_CLEARANCE_M = 0.3          # free space kept between the arm's axis lines and the tracker
 DEFAULT_MARGIN_DEG = 1.0           # generated poses stay this far inside the joint limits
-WRIST_AXES = (4, 6)                # joints whose aligned axes make the wrist singularity
-WRIST_POINT_FRAME = 4              # origin of frame {4}: the wrist centre of a spherical wrist
+BEAM_ARM_FRAME = 4                 # the arm that can block the beam: frames {0}..{4}
 
 
 @dataclass(frozen=True)
@@ -56,10 +51,7 @@ class Tracker:
     arm_radius_m: float | None = None
 
     def __post_init__(self) -> None:
-        pos = np.asarray(self.position, dtype=float).reshape(-1)
-        if pos.shape != (3,) or not np.isfinite(pos).all():
-            raise DataError("the tracker position must be three finite coordinates (m)")
-        object.__setattr__(self, "position", pos)
+        object.__setattr__(self, "position", check_tracker_position(self.position))
         lo, hi = (float(v) for v in self.range_m)
         if not 0 <= lo < hi:
             raise DataError(f"the tracker range must be 0 <= min < max (m), got {self.range_m}")
@@ -107,29 +99,27 @@ class Constraints:
 
 @dataclass
 class Funnel:
-    """How many candidates each constraint removed, in the order applied."""
+    """How many candidates each constraint removed (``steps``: name -> count, in the order
+    first applied)."""
 
     start: int = 0
-    steps: list[tuple[str, int]] = field(default_factory=list)
+    steps: dict[str, int] = field(default_factory=dict)
 
     def record(self, name: str, removed: int) -> None:
-        for k, (step, count) in enumerate(self.steps):
-            if step == name:
-                self.steps[k] = (step, count + int(removed))
-                return
-        self.steps.append((name, int(removed)))
+        self.steps[name] = self.steps.get(name, 0) + int(removed)
 
     @property
     def left(self) -> int:
-        return self.start - sum(count for _, count in self.steps)
+        return self.start - sum(self.steps.values())
 
     def text(self) -> str:
         parts = [f"{self.start} candidate poses"]
-        parts += [f"{name} removed {count}" for name, count in self.steps]
+        parts += [f"{name} removed {count}" for name, count in self.steps.items()]
         return "; ".join(parts) + f"; {self.left} left"
 
     def to_dict(self) -> dict:
-        return {"candidates": self.start, "removed": [{"constraint": n, "count": c} for n, c in self.steps],
+        return {"candidates": self.start,
+                "removed": [{"constraint": n, "count": c} for n, c in self.steps.items()],
                 "left": self.left}
 
 
@@ -144,31 +134,6 @@ def limits_with_margin(robot, margin_deg: float) -> np.ndarray:
         raise DataError(f"a joint-limit margin of {margin_deg:g} deg leaves no room on joint {i + 1} "
                         f"(limits {lo:.4g} to {hi:.4g} deg): lower the margin")
     return lim
-
-
-def singularity_measures(robot, q: np.ndarray) -> dict[str, np.ndarray]:
-    """Distances ``(N,)`` of joints ``q (N, n)`` from the wrist (deg), elbow (deg) and shoulder
-    (m) singularities; see the module docstring. Measures a chain too short for are absent."""
-    _, frames = robot.fk(q, frames=True)
-    n = robot.n_joints
-    out = {}
-    if n >= max(WRIST_AXES):
-        z4, z6 = frames[:, WRIST_AXES[0], :3, 2], frames[:, WRIST_AXES[1], :3, 2]
-        s = np.linalg.norm(np.cross(z4, z6), axis=1)
-        out["wrist_deg"] = np.rad2deg(np.arcsin(np.clip(s, 0.0, 1.0)))
-    if n >= WRIST_POINT_FRAME:
-        w = frames[:, WRIST_POINT_FRAME, :3, 3]
-        o1, z1 = frames[:, 1, :3, 3], frames[:, 1, :3, 2]
-        o2, o3, z3 = frames[:, 2, :3, 3], frames[:, 3, :3, 3], frames[:, 3, :3, 2]
-        u, v = o2 - o3, w - o3
-        u = u - np.sum(u * z3, axis=1, keepdims=True) * z3
-        v = v - np.sum(v * z3, axis=1, keepdims=True) * z3
-        cross = np.linalg.norm(np.cross(u, v), axis=1)
-        angle = np.rad2deg(np.arctan2(cross, np.abs(np.sum(u * v, axis=1))))  # folded to [0, 90]
-        out["elbow_deg"] = angle
-        r = w - o1
-        out["shoulder_m"] = np.linalg.norm(r - np.sum(r * z1, axis=1, keepdims=True) * z1, axis=1)
-    return out
 
 
 def smr_geometry(robot, q: np.ndarray, smr: np.ndarray, normals: np.ndarray):
@@ -254,19 +219,17 @@ def apply(robot, q: np.ndarray, constraints: Constraints, smr: np.ndarray, norma
             inside |= ((tcp >= b[0]) & (tcp <= b[1])).all(axis=1)
         step("the TCP box" + ("es" if len(constraints.boxes) > 1 else ""), inside)
     mins = {"wrist_deg": constraints.min_wrist_deg, "elbow_deg": constraints.min_elbow_deg,
-            "shoulder_m": constraints.min_shoulder_m}
+            "shoulder_mm": constraints.min_shoulder_m * 1e3}
     if any(mins.values()):
-        measures = singularity_measures(robot, q)
+        measures = classic_distances(frames)
         for key, limit in mins.items():
             if not limit:
                 continue
+            kind, unit = key.split("_")
             if key not in measures:
-                raise DataError(f"the {key.split('_')[0]} singularity distance needs a chain of at least "
-                                f"{WRIST_AXES[1] if key == 'wrist_deg' else WRIST_POINT_FRAME} joints")
-            unit = "mm" if key == "shoulder_m" else "deg"
-            shown = limit * 1e3 if key == "shoulder_m" else limit
-            step(f"the {key.split('_')[0]} singularity distance (>= {shown:g} {unit})",
-                 measures[key] >= limit)
+                raise DataError(f"the {kind} singularity distance needs a chain of at least "
+                                f"{MEASURE_JOINTS[key]} joints")
+            step(f"the {kind} singularity distance (>= {limit:g} {unit})", measures[key] >= limit)
     visible = np.ones((len(q), len(smr)), bool)
     tracker = constraints.tracker
     if tracker is not None:
@@ -281,7 +244,7 @@ def apply(robot, q: np.ndarray, constraints: Constraints, smr: np.ndarray, norma
         step(f"the tracker range ({lo:g}-{hi:g} m)", visible.any(axis=1))
         origins = frames[:, :, :3, 3]                               # (N, n + 1, 3)
         if tracker.arm_radius_m is not None:
-            arm = origins[:, : WRIST_POINT_FRAME + 1]
+            arm = origins[:, : BEAM_ARM_FRAME + 1]
             gap = _segment_segment_distance(arm[:, None, :-1], arm[:, None, 1:],
                                             pos[:, :, None], tracker.position)
             visible &= gap.min(axis=2) > tracker.arm_radius_m

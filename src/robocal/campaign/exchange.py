@@ -57,13 +57,10 @@ POLISHED_STARTS = 2     # starts that get Fedorov sweeps after DETMAX (the best 
 @dataclass(frozen=True)
 class ExchangeResult:
     """``indices (n,)`` the chosen candidates (sorted), ``value`` their criterion (exact, no
-    ridge), ``start_values`` each start's value, ``exchanges`` the design changes made after
-    the greedy completion."""
+    ridge)."""
 
     indices: np.ndarray
     value: float
-    start_values: list[float]
-    exchanges: int
 
 
 def criterion_value(G: np.ndarray, A: np.ndarray | None, indices, criterion: str = "I") -> float:
@@ -313,9 +310,8 @@ def _start(design: _Design, n: int, n0: int, rng: np.random.Generator) -> None:
     _complete(design, n, rng)
 
 
-def _detmax(design: _Design, max_steps: int) -> int:
+def _detmax(design: _Design, max_steps: int) -> None:
     """Add the best candidate, remove the cheapest member; until the two coincide."""
-    steps = 0
     for _ in range(max_steps):
         old = design.value
         values = design.add_values(design.allowed())
@@ -328,13 +324,10 @@ def _detmax(design: _Design, max_steps: int) -> int:
         design.remove(i)
         if i == j or not _improves(design.value, old):
             break
-        steps += 1
-    return steps
 
 
-def _fedorov(design: _Design, rng: np.random.Generator, max_sweeps: int) -> int:
+def _fedorov(design: _Design, rng: np.random.Generator, max_sweeps: int) -> None:
     """Sweeps: each member in turn is exchanged for the best candidate if that helps."""
-    steps = 0
     for _ in range(max_sweeps):
         changed = False
         for i in rng.permutation(design.members):
@@ -361,10 +354,8 @@ def _fedorov(design: _Design, rng: np.random.Generator, max_sweeps: int) -> int:
                 design._commit(i, -1.0, (B, D, QB, QD), removed_value)
             design.add(j)
             changed = True
-            steps += 1
         if not changed:
             break
-    return steps
 
 
 def exchange(G: np.ndarray, A: np.ndarray | None, n: int, *, criterion: str = "I", starts: int = 4,
@@ -405,19 +396,17 @@ def _search(G, A, n, criterion, starts, seed, conflicts, init, progress) -> Exch
             _complete(design, n, rng)
         else:
             _start(design, n, n0, rng)
-        steps = _detmax(design, max_steps=4 * n + 20)
-        runs.append((design.value, list(design.members), steps, s))
+        _detmax(design, max_steps=4 * n + 20)
+        runs.append((design.value, list(design.members), s))
         if progress is not None:
             progress.update(info=f"start {s + 1}: {design.value:.6g}")
     runs.sort(key=lambda run: run[0])
     best = None
-    for _, members, steps, s in runs[:POLISHED_STARTS]:
+    for _, members, s in runs[:POLISHED_STARTS]:
         design.reset(members)
-        steps += _fedorov(design, np.random.default_rng([seed, s]), MAX_SWEEPS)
-        steps += _detmax(design, max_steps=4 * n + 20)
+        _fedorov(design, np.random.default_rng([seed, s]), MAX_SWEEPS)
+        _detmax(design, max_steps=4 * n + 20)
         exact = criterion_value(G, A, design.members, criterion)
         if best is None or exact < best[0]:
-            best = (exact, sorted(design.members), steps)
-    start_values = [run[0] for run in sorted(runs, key=lambda run: run[3])]
-    return ExchangeResult(indices=np.asarray(best[1], int), value=best[0],
-                          start_values=start_values, exchanges=best[2])
+            best = (exact, sorted(design.members))
+    return ExchangeResult(indices=np.asarray(best[1], int), value=best[0])

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.campaign.programs import DEGREE_DECIMALS, format_number
+from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
 from robocal.data.measurements import JointTable, Measurements, read_joint_table
 from robocal.errors import DataError
 
@@ -64,7 +64,7 @@ def read_candidates(path, robot, kind: str = "point") -> CandidateFile:
 
 
 def _cells(values: np.ndarray) -> list[str]:
-    return [format_number(v, DEGREE_DECIMALS) for v in values]
+    return [fixed_point(v, DEGREE_DECIMALS) for v in values]
 
 
 def poses_csv(joints: np.ndarray, visible: np.ndarray | None = None, source: CandidateFile | None = None,

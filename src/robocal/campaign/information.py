@@ -25,13 +25,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from robocal.data.measurements import Measurements
-from robocal.data.simulate import TRACKER_ANGULAR_URAD, TRACKER_RADIAL_MM, TRACKER_RADIAL_UM_PER_M
+from robocal.data.simulate import (
+    NOISE_MODELS,
+    TRACKER_ANGULAR_URAD,
+    TRACKER_RADIAL_MM,
+    TRACKER_RADIAL_UM_PER_M,
+)
 from robocal.errors import DataError
 from robocal.identify.identifiability import Identifiability, analyze
 from robocal.identify.problem import CalibrationProblem
-from robocal.identify.space import ParameterSpace
+from robocal.identify.space import State
 
-NOISE_MODELS = ("isotropic", "tracker")
 GENERATED_KINDS = ("point", "pose")  # kinds whose candidates robocal can generate from joints
 IDENTIFIABILITY_ROWS = 12000         # residual rows (items spread over all candidates) analysed
 
@@ -73,20 +77,17 @@ class Noise:
 class Information:
     """Candidate blocks ``G (C, r, p)`` (columns scaled by ``scale``) of the identified unknowns
     ``names`` (``robot_names`` without the nuisance), ``rows (C,)`` the residual rows each
-    candidate gives, the analysis of all candidates ``identifiability``, the candidates'
-    measurement data ``data`` (``labels (C,)`` the pose id, or distance pair index, of each
-    candidate; ``group`` the candidate of each data row, ``row_group`` of each residual row), and
-    the unweighted Jacobian ``J_raw`` of all rows over ``all_names`` (for the identifiability
-    analysis of a chosen set, as ``robocal analyze`` computes it)."""
+    candidate gives, the candidates' measurement data ``data`` (``group`` the candidate of each
+    data row, ``row_group`` of each residual row), and the unweighted Jacobian ``J_raw`` of all
+    rows over ``all_names`` (for the identifiability analysis of a chosen set, as ``robocal
+    analyze`` computes it)."""
 
     G: np.ndarray
     scale: np.ndarray
     names: list[str]
     robot_names: list[str]
     rows: np.ndarray
-    identifiability: Identifiability
     data: Measurements
-    labels: np.ndarray
     group: np.ndarray
     row_group: np.ndarray
     J_raw: np.ndarray
@@ -121,11 +122,11 @@ def candidate_data(robot, kind: str, q: np.ndarray, visible: np.ndarray) -> Meas
     return Measurements.from_arrays(kind, q[cand], points=T[:, :3, 3], smr=smr, pose_id=cand, **extra)
 
 
-def _whitened_jacobian(robot, problem: CalibrationProblem, space: ParameterSpace, noise: Noise) -> np.ndarray:
-    """Rows ``(M, k + m)`` of the observation Jacobian divided by their noise (whitened)."""
+def _whitened_jacobian(robot, problem: CalibrationProblem, state: State, J: np.ndarray,
+                       noise: Noise) -> np.ndarray:
+    """The rows ``J (M, k + m)`` of the observation Jacobian at ``state`` divided by their noise
+    (whitened)."""
     obs = problem.observation
-    state = problem.start(robot)
-    J = problem.jacobian(state, space)  # the data carry no sigma: unit weights
     r = obs.rows_per_item
     if obs.kind in ("plane", "distance"):
         return J / noise.sigma_m
@@ -145,8 +146,9 @@ def information(robot, data: Measurements, noise: Noise, params="auto") -> Infor
     obs = problem.observation
     space = problem.space(robot, params)
     robot_names, all_names = list(space.robot), space.names
-    Jw = _whitened_jacobian(robot, problem, space, noise)
-    J_raw = problem.jacobian(problem.start(robot), space)
+    state = problem.start(robot)
+    J_raw = problem.jacobian(state, space)  # the data carry no sigma: unit weights
+    Jw = _whitened_jacobian(robot, problem, state, J_raw, noise)
     r = obs.rows_per_item
     # which parameters are identifiable is structural: items spread over all candidates suffice
     count = min(obs.n_items, IDENTIFIABILITY_ROWS // r)
@@ -170,6 +172,5 @@ def information(robot, data: Measurements, noise: Noise, params="auto") -> Infor
     scale = np.where(scale > 0, scale, 1.0)
     kept_robot = [nm for nm in ident.kept if nm in robot_names]
     return Information(G=G / scale, scale=scale, names=list(ident.kept), robot_names=kept_robot,
-                       rows=per * r, identifiability=ident, data=data, labels=labels,
-                       group=cand_of_item[item_of_rows], row_group=np.repeat(cand_of_item, r),
-                       J_raw=J_raw, all_names=all_names)
+                       rows=per * r, data=data, group=cand_of_item[item_of_rows],
+                       row_group=np.repeat(cand_of_item, r), J_raw=J_raw, all_names=all_names)

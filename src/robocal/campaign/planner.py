@@ -21,13 +21,15 @@ from robocal.campaign.exchange import CRITERIA, criterion_value, exchange
 from robocal.campaign.files import CandidateFile, poses_csv
 from robocal.campaign.information import GENERATED_KINDS, Information, Noise, candidate_data, information
 from robocal.campaign.order import measuring_order
-from robocal.campaign.programs import DEGREE_DECIMALS, format_number
-from robocal.data.measurements import KINDS, Measurements
+from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
+from robocal.data.measurements import KINDS, Measurements, robot_reach
+from robocal.data.simulate import smr_in_link_frame
 from robocal.errors import DataError
 from robocal.identify.identifiability import Identifiability
 from robocal.ik.path import default_weights, travel
 from robocal.kinematics.transforms import make_transform
 from robocal.progress import Progress
+from robocal.version import __version__
 
 DEFAULT_CANDIDATES = 5000
 DEFAULT_REGION_SIZE = 2000
@@ -57,7 +59,8 @@ class CampaignResult:
     which SMRs the tracker sees ``visible (N, k)``, the predicted
     accuracy ``predicted_rms_mm``, the identifiability of the chosen set, the measuring route's
     weighted travel (and the travel in the order the search found them), the accuracy curve,
-    the candidate funnel, and the settings."""
+    the candidate funnel (``funnel.left``, also ``n_candidates``: the candidates the search chose
+    from), and the settings."""
 
     robot: object
     kind: str
@@ -76,7 +79,6 @@ class CampaignResult:
     funnel: cons.Funnel
     noise: Noise
     settings: dict
-    n_candidates: int
     source: CandidateFile | None = None
     source_rows: np.ndarray | None = None
     warnings: list[str] = field(default_factory=list)
@@ -84,6 +86,11 @@ class CampaignResult:
     @property
     def n(self) -> int:
         return len(self.joints)
+
+    @property
+    def n_candidates(self) -> int:
+        """The candidates the search chose from (what the funnel left)."""
+        return self.funnel.left
 
     def poses_csv(self) -> str:
         """The text of ``poses.csv`` (see :mod:`robocal.campaign.files`)."""
@@ -114,8 +121,6 @@ class CampaignResult:
 
     def to_dict(self) -> dict:
         """Plain data (mm, deg) for JSON and the HTML page."""
-        from robocal import __version__
-
         ident = self.identifiability
         return {
             "format": FORMAT, "robocal_version": __version__,
@@ -124,7 +129,7 @@ class CampaignResult:
             "kind": self.kind, "criterion": self.criterion, "n_poses": self.n,
             "predicted_rms_mm": self.predicted_rms_mm,
             "noise": {"model": self.noise.model, "sigma_mm": self.noise.sigma_m * 1e3},
-            "joints_deg": [[float(format_number(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv
+            "joints_deg": [[float(fixed_point(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv
                            for row in np.rad2deg(self.joints)],
             "candidate_index": self.candidate_index.tolist(),
             "visible": self.visible.astype(int).tolist(),
@@ -159,7 +164,7 @@ def _planning_robot(robot, smr, normals):
             (np.linalg.norm(normals, axis=1) < 1e-9).any():
         raise DataError(f"give one non-zero facing direction per SMR ({len(smr)} SMRs)")
     normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
-    placed = smr @ R.T + t  # SMR positions in the last link frame
+    placed = smr_in_link_frame(robot, smr)
     plan = replace(robot, tool=make_transform(R, placed[0]), smr=placed[1:], nominal=None, joint_errors=None)
     return plan, smr, normals
 
@@ -190,7 +195,8 @@ def _draw(robot, count: int, limits: np.ndarray, rng: np.random.Generator) -> np
 
 
 def _generate(robot, count, constraints, smr, normals, limits, rng, funnel):
-    """Candidates drawn uniformly in the limits until ``count`` pass the constraints."""
+    """Candidates drawn uniformly in the limits until ``count`` pass the constraints (the last
+    batch's surplus is recorded in ``funnel`` as removed)."""
     kept_q, kept_v = [], []
     total = 0
     for _ in range(MAX_DRAWS):
@@ -202,6 +208,8 @@ def _generate(robot, count, constraints, smr, normals, limits, rng, funnel):
         total += int(keep.sum())
         if total >= count:
             break
+    if total > count:
+        funnel.record(f"keeping the {count} asked for", total - count)
     return np.concatenate(kept_q)[:count], np.concatenate(kept_v)[:count]
 
 
@@ -225,7 +233,7 @@ def _region(robot, region, size, constraints, limits, rng, smr, normals):
 
 
 def _fail_empty(funnel: cons.Funnel, what: str) -> None:
-    last = next((name for name, count in reversed(funnel.steps) if count), "the joint limits")
+    last = next((name for name, count in reversed(funnel.steps.items()) if count), "the joint limits")
     raise DataError(f"{what}: {funnel.text()}. The last candidates were removed by {last}: relax it "
                     "(or, for the tracker, move it or the SMRs)")
 
@@ -270,8 +278,6 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     rng = np.random.default_rng(seed)
     limits = cons.limits_with_margin(robot, constraints.margin_deg)
     if tracker is not None:
-        from robocal.data.measurements import robot_reach
-
         cons.check_tracker_placement(robot, tracker, robot_reach(plan_robot))
     funnel = cons.Funnel()
     source = candidates if isinstance(candidates, CandidateFile) else None
@@ -300,6 +306,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         if kind == "distance":  # a pair needs both ends
             pair_of = np.unique(data.pair, return_inverse=True)[1]
             whole = np.flatnonzero(np.bincount(pair_of)[pair_of] == 2)
+            if len(whole) < len(given):
+                funnel.record("distances missing an end", len(given) - len(whole))
             data, given = data.subset(whole), given[whole]
     info = information(plan_robot, data, noise)
     C, _, p = info.G.shape
@@ -347,7 +355,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         criterion=criterion, criterion_value=found.value, identifiability=info.analyze_subset(chosen),
         parameters=list(info.names),
         travel=travel(joints, weights), travel_unordered=travel(cand_q[found.indices], weights),
-        weights=weights, curve=points, funnel=funnel, noise=noise, n_candidates=C,
+        weights=weights, curve=points, funnel=funnel, noise=noise,
         settings={"seed": int(seed), "starts": int(starts), "criterion": criterion,
                   "region_size": len(q_region), "margin_deg": constraints.margin_deg,
                   "min_joint_distance_deg": constraints.min_joint_distance_deg,

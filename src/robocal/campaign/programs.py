@@ -38,7 +38,7 @@ DEFAULT_SETTLE_S = 1.0
 DEFAULT_PROCEDURE = "MeasurePose"
 
 
-def format_number(value: float, decimals: int) -> str:
+def fixed_point(value: float, decimals: int) -> str:
     """Fixed-point text without exponent or trailing zeros (every controller parses it)."""
     text = f"{value:.{decimals}f}".rstrip("0").rstrip(".")
     return "0" if text in ("-0", "") else text
@@ -75,12 +75,12 @@ def rapid_module(joints_deg, name: str = "RobocalCampaign", *, speed_percent: fl
     lines = [f"MODULE {name}"]
     lines += [f"    ! {line}" for line in _comment_lines(comment, len(q))]
     for k, row in enumerate(q, start=1):
-        values = ",".join(format_number(v, DEGREE_DECIMALS) for v in row)
+        values = ",".join(fixed_point(v, DEGREE_DECIMALS) for v in row)
         lines.append(f"    CONST jointtarget jt{k} := [[{values}],[9E9,9E9,9E9,9E9,9E9,9E9]];")
-    lines += ["", "    PROC main()", f"        VelSet {format_number(speed_percent, 3)}, 5000;"]
+    lines += ["", "    PROC main()", f"        VelSet {fixed_point(speed_percent, 3)}, 5000;"]
     for k in range(1, len(q) + 1):
         lines += [f"        MoveAbsJ jt{k}\\NoEOffs, v1000, fine, tool0;",
-                  f"        WaitTime {format_number(settle_s, 3)};", f"        {procedure} {k};"]
+                  f"        WaitTime {fixed_point(settle_s, 3)};", f"        {procedure} {k};"]
     lines += ["    ENDPROC", "", f"    PROC {procedure}(num pose)",
               "        ! trigger the tracker measurement here (e.g. SetDO, a socket message)",
               '        TPWrite "robocal: measure pose "\\Num:=pose;', "    ENDPROC", "ENDMODULE", ""]
@@ -97,14 +97,14 @@ def krl_program(joints_deg, name: str = "robocal_campaign", *, speed_percent: fl
     head = ["&ACCESS RVP", "&REL 1"]
     src = head + [f"DEF {name}( )"] + [f"  ; {line}" for line in _comment_lines(comment, len(q))]
     src += [";FOLD INI", "  BAS (#INITMOV,0 )", ";ENDFOLD",
-            f"  BAS (#VEL_PTP,{format_number(speed_percent, 3)} )"]
+            f"  BAS (#VEL_PTP,{fixed_point(speed_percent, 3)} )"]
     for k in range(1, len(q) + 1):
-        src += [f"  PTP XP{k}", f"  WAIT SEC {format_number(settle_s, 3)}", f"  {procedure}({k})"]
+        src += [f"  PTP XP{k}", f"  WAIT SEC {fixed_point(settle_s, 3)}", f"  {procedure}({k})"]
     src += ["END", "", f"DEF {procedure}(POSE:IN )", "  INT POSE",
             "  ; trigger the tracker measurement of pose POSE here (e.g. $OUT[...] = TRUE)", "END", ""]
     dat = head + [f"DEFDAT {name}"]
     for k, row in enumerate(q, start=1):
-        axes = ",".join(f"A{i + 1} {format_number(v, DEGREE_DECIMALS)}" for i, v in enumerate(row))
+        axes = ",".join(f"A{i + 1} {fixed_point(v, DEGREE_DECIMALS)}" for i, v in enumerate(row))
         dat.append(f"  DECL AXIS XP{k}={{{axes}}}")
     dat += ["ENDDAT", ""]
     return "\n".join(src), "\n".join(dat)
@@ -123,9 +123,9 @@ def urscript_program(joints_rad, name: str = "robocal_campaign", *,
               "    # trigger the tracker measurement here (e.g. set_digital_out)",
               '    textmsg("robocal: measure pose ", pose)', "  end"]
     for k, row in enumerate(q, start=1):
-        values = ", ".join(format_number(x, RADIAN_DECIMALS) for x in row)
-        lines += [f"  movej([{values}], a={format_number(UR_ACCELERATION, 3)}, v={format_number(v, 4)})",
-                  f"  sleep({format_number(settle_s, 3)})", f"  {procedure}({k})"]
+        values = ", ".join(fixed_point(x, RADIAN_DECIMALS) for x in row)
+        lines += [f"  movej([{values}], a={fixed_point(UR_ACCELERATION, 3)}, v={fixed_point(v, 4)})",
+                  f"  sleep({fixed_point(settle_s, 3)})", f"  {procedure}({k})"]
     lines += ["end", ""]
     return "\n".join(lines)
 

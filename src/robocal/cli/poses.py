@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from robocal.cli.args import numbers
+
 EPILOG = """Examples:
   robocal poses --robot abb_irb2600 -n 20 --smr-mm 20,-30,80 -o poses.csv --curve 10:60 --html campaign.html
   robocal poses --robot abb_irb2600 -n 25 --smr-mm 20,-30,80 --tracker-mm 2500,500,300 \\
@@ -19,18 +21,6 @@ cells exactly as read, and their line numbers); visible_smr0.. with several SMRs
 move to each pose (MoveAbsJ / PTP / movej), wait --settle-s, and call --procedure: replace its
 body with your tracker trigger. Every output is written, or none.
 """
-
-
-def _numbers(count: int):
-    def parse(text: str) -> list[float]:
-        try:
-            values = [float(v) for v in text.replace(" ", "").split(",") if v]
-        except ValueError:
-            values = []
-        if len(values) != count:
-            raise argparse.ArgumentTypeError(f"expected {count} comma-separated numbers, got {text!r}")
-        return values
-    return parse
 
 
 def _curve(text: str) -> tuple[int, ...]:
@@ -77,9 +67,9 @@ def add_parser(sub) -> None:
     g.add_argument("--noise-model", choices=("isotropic", "tracker"), default="isotropic",
                    help="tracker: the instrument's anisotropic model (needs --tracker-mm)")
     g.add_argument("--rotation-noise-deg", type=float, default=0.001, help="orientation noise (pose data)")
-    g.add_argument("--smr-mm", type=_numbers(3), action="append", metavar="X,Y,Z",
+    g.add_argument("--smr-mm", type=numbers(3, "X,Y,Z in mm"), action="append", metavar="X,Y,Z",
                    help="an SMR position on the flange (repeat for several; default the model's TCP)")
-    g.add_argument("--smr-normal", type=_numbers(3), action="append", metavar="X,Y,Z",
+    g.add_argument("--smr-normal", type=numbers(3, "a direction X,Y,Z"), action="append", metavar="X,Y,Z",
                    help="its facing direction on the flange (one per --smr-mm; default flange z)")
     g = p.add_argument_group("constraints")
     g.add_argument("--margin-deg", type=float,
@@ -93,12 +83,12 @@ def add_parser(sub) -> None:
     g.add_argument("--min-elbow-deg", type=float, default=0.0,
                    help="distance from the stretched/folded arm, deg")
     g.add_argument("--min-shoulder-mm", type=float, default=0.0,
-                   help="wrist point's distance from axis 1, mm")
-    g.add_argument("--tracker-mm", type=_numbers(3), metavar="X,Y,Z",
+                   help="frame {5}'s origin from the plane of axis 1 and axis 2, mm")
+    g.add_argument("--tracker-mm", type=numbers(3, "X,Y,Z in mm"), metavar="X,Y,Z",
                    help="tracker position (robot base frame)")
     g.add_argument("--acceptance-deg", type=float, default=30.0, help="SMR acceptance half-angle")
-    g.add_argument("--tracker-range-m", type=_numbers(2), metavar="MIN,MAX", default=[0.5, 40.0],
-                   help="tracker measuring range (default 0.5,40)")
+    g.add_argument("--tracker-range-m", type=numbers(2, "MIN,MAX in m"), metavar="MIN,MAX",
+                   default=[0.5, 40.0], help="tracker measuring range (default 0.5,40)")
     g.add_argument("--clearance-mm", type=float, default=300.0, help="arm's distance from the tracker head")
     g.add_argument("--arm-radius-mm", type=float, help="check that the beam clears the arm by this radius")
     g = p.add_argument_group("outputs")

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from robocal.cli.args import numbers
+
 EPILOG = """Examples:
   robocal simulate --robot abb_irb2600 --poses 200 --noise-mm 0.02 --seed 1 -o data.csv --truth truth.yaml
   robocal simulate --robot model.yaml --poses 100 --smr 3 --noise-model tracker --outliers 0.02 \\
@@ -41,16 +43,16 @@ def add_parser(sub) -> None:
     p.add_argument("--rotation-noise-deg", type=float, default=0.0, help="orientation noise (pose data), deg")
     p.add_argument("--box", type=float, nargs=6, metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
                    help="keep poses whose tool point is in this box (robot base frame, mm)")
-    p.add_argument("--smr-mm", action="append", metavar="X,Y,Z",
+    p.add_argument("--smr-mm", type=numbers(3, "X,Y,Z in mm"), action="append", metavar="X,Y,Z",
                    help="an SMR position on the flange in mm (repeat for several; default random)")
-    p.add_argument("--tool-mm", metavar="X,Y,Z",
+    p.add_argument("--tool-mm", type=numbers(3, "X,Y,Z in mm"), metavar="X,Y,Z",
                    help="the probe tip (SMR 0) on the flange in mm, e.g. for plane and distance kinds")
     p.add_argument("--bar-mm", type=float, default=500.0,
                    help="distance kind: the scale bar's certified length, mm (default 500)")
     p.add_argument("--as-is", action="store_true",
                    help="measure the model exactly as it is (no errors drawn, its own base and tool): "
                         "e.g. a scale bar of the truth.yaml of an earlier simulation")
-    p.add_argument("--tracker-mm", metavar="X,Y,Z",
+    p.add_argument("--tracker-mm", type=numbers(3, "X,Y,Z in mm"), metavar="X,Y,Z",
                    help="the tracker's position in the robot base frame, mm (default random, 2-4 m away)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("-o", "--output", required=True, help="measurement CSV to write")
@@ -77,15 +79,13 @@ def run(args) -> int:
         from robocal.campaign.files import read_planned
 
         joints, visible = read_planned(args.joints, robot)
-    smr = None if not args.smr_mm else np.array([_xyz(v, "--smr-mm") for v in args.smr_mm]) * 1e-3
-    if args.tool_mm is not None:
-        if smr is not None:
-            raise DataError("give the probe either as --tool-mm or as --smr-mm, not both")
-        smr = np.array([_xyz(args.tool_mm, "--tool-mm")]) * 1e-3
-    n_smr = args.smr if smr is None and visible is None else len(smr) if smr is not None else visible.shape[1]
-    tracker = None if args.tracker_mm is None else np.array(_xyz(args.tracker_mm, "--tracker-mm")) * 1e-3
+    if args.tool_mm is not None and args.smr_mm:
+        raise DataError("give the probe either as --tool-mm or as --smr-mm, not both")
+    given = args.smr_mm or ([args.tool_mm] if args.tool_mm is not None else None)
+    smr = None if given is None else np.array(given) * 1e-3
+    tracker = None if args.tracker_mm is None else np.array(args.tracker_mm) * 1e-3
     result = simulate_tracker(robot, args.poses, noise_mm=args.noise_mm, noise_model=args.noise_model,
-                              outliers=args.outliers, n_smr=n_smr, workspace_box=box, seed=args.seed,
+                              outliers=args.outliers, n_smr=args.smr, workspace_box=box, seed=args.seed,
                               kind=args.kind, n_planes=args.planes, joint_noise_deg=args.joint_noise_deg,
                               rotation_noise_deg=args.rotation_noise_deg, joints=joints, visible=visible,
                               smr_offsets=smr, tracker_position=tracker, bar_length_m=args.bar_mm * 1e-3,
@@ -96,15 +96,3 @@ def run(args) -> int:
               f"noise floor {result.noise_floor_mm:.4f} mm; {len(result.outlier_rows)} outlier(s)")
         print(f"wrote {args.output}, {args.truth}, {sidecar}")
     return 0
-
-
-def _xyz(text: str, option: str) -> list[float]:
-    from robocal.errors import DataError
-
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        values = []
-    if len(values) != 3:
-        raise DataError(f"{option} needs three numbers X,Y,Z in mm, got {text!r}")
-    return values

@@ -3,11 +3,11 @@
 The true robot is the given (nominal) robot plus random parameter errors (:func:`perturbed`):
 lengths a, d by 0.05-0.5 mm, angles alpha, theta (theta errors are the joint zero offsets) by
 0.005-0.05 deg, beta by the same on nominally parallel axes; random signs, uniform magnitudes
-(``error_scale`` multiplies them). The tracker stands at a random position 2-4 m from the robot's base origin
-with a uniformly random orientation, so the truth's base frame is tracker -> frame {0}.
-SMR 0 sits on the flange at a random offset (|xy| <= 50 mm, z 50-120 mm); extra SMRs are
-100-150 mm from SMR 0. Joints are uniform within the joint limits (optionally kept only where
-the SMR is inside ``workspace_box``, robot base frame, m).
+(``error_scale`` multiplies them). The tracker stands at a random position ``TRACKER_DISTANCE_M``
+(2-4 m) from the robot's base origin with a uniformly random orientation, so the truth's base
+frame is tracker -> frame {0}. SMR 0 sits on the flange at a random offset (|xy| <= 50 mm,
+z 50-120 mm); extra SMRs are 100-150 mm from SMR 0. Joints are uniform within the joint limits
+(optionally kept only where the SMR is inside ``workspace_box``, robot base frame, m).
 
 Noise, added to each point in the tracker frame:
 
@@ -16,8 +16,8 @@ Noise, added to each point in the tracker frame:
   transverse (angle encoders) sigma = 2.5 urad * r on each of the two transverse axes
   (r = distance from the tracker, m). ``noise_mm`` is ignored.
 
-A fraction ``outliers`` of the rows gets an extra gross error of uniform size ``outlier_mm`` in a
-random direction. The *noise floor* is the 3-D RMS (sqrt(mean |n|^2), mm) of the noise actually
+A fraction ``outliers`` of the rows gets an extra gross error of uniform size ``OUTLIER_MM``
+(1-5 mm) in a random direction. The *noise floor* is the 3-D RMS (sqrt(mean |n|^2), mm) of the noise actually
 added, outliers excluded: the figure a perfect calibration's RMS residual would reach. It is in
 ``SimulationResult.noise_floor_mm``, in the truth YAML's description and in the sidecar JSON
 that :func:`write_simulation` writes next to the truth (``truth.yaml`` -> ``truth.sim.json``).
@@ -57,6 +57,8 @@ TRACKER_RADIAL_MM = 0.010        # ADM range noise at zero distance (1 sigma)
 TRACKER_RADIAL_UM_PER_M = 0.5    # growth of the range noise with distance
 TRACKER_ANGULAR_URAD = 2.5       # angle-encoder noise (1 sigma, each transverse axis)
 NOISE_MODELS = ("isotropic", "tracker")
+TRACKER_DISTANCE_M = (2.0, 4.0)  # a random tracker stands this far from the robot's base origin, m
+OUTLIER_MM = (1.0, 5.0)          # size of a gross error (uniform), mm
 SIM_KINDS = ("point", "pose", "plane", "distance")
 SCALE_BAR_M = 0.5  # default certified length of a simulated scale bar (distance kind), m
 MIN_BAR_ANGLE_DEG = 20.0  # the two poses of a bar placement differ by at least this much (joint 1 or 2)
@@ -135,6 +137,20 @@ def sample_joints(robot, n: int, rng: np.random.Generator, workspace_box=None, t
                            "(robot base frame): enlarge the box or check its units")
 
 
+def check_tracker_position(position) -> np.ndarray:
+    """A tracker position as a finite ``(3,)`` array in m (DataError otherwise)."""
+    pos = np.asarray(position, dtype=float).reshape(-1)
+    if pos.shape != (3,) or not np.isfinite(pos).all():
+        raise DataError("the tracker position must be three finite coordinates (m)")
+    return pos
+
+
+def smr_in_link_frame(robot: Robot, smr: np.ndarray) -> np.ndarray:
+    """SMR positions ``(k, 3)`` m given in the flange frame (the robot's ``tool``), in the last
+    link frame."""
+    return smr @ robot.tool[:3, :3].T + robot.tool[:3, 3]
+
+
 def _tracker_noise(p: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     r = np.linalg.norm(p, axis=1, keepdims=True)
     u = p / r
@@ -148,20 +164,29 @@ def _tracker_noise(p: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return radial * u + transverse * (z[:, 1:2] * e1 + z[:, 2:3] * e2)
 
 
-def _solve_plane_contacts(robot, q: np.ndarray, normal: np.ndarray, offset: np.ndarray,
-                          iterations: int = 30, damping: float = 1e-9):
-    """Move each pose's tip onto its plane (n . p = c) with damped Gauss-Newton on the joints
-    (minimum-norm step); the joint Jacobian is the theta_i column of the identification Jacobian."""
+def _move_tips(robot, q: np.ndarray, target: np.ndarray, normal: np.ndarray | None = None,
+               iterations: int = 30, damping: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
+    """Joints near ``q (N, n)`` whose tips are at ``target (N, 3)`` (m), or with ``normal (N, 3)``
+    (unit) on the planes ``normal . p = target`` (``target (N,)``, m): damped minimum-norm
+    Gauss-Newton on the joints (the joint Jacobian is the theta_i columns of the identification
+    Jacobian, projected on the normal for planes). Returns the joints and the distance ``(N,)``
+    left to the target."""
     names = [f"theta{i + 1}" for i in range(robot.n_joints)]
-    for _ in range(iterations):
+
+    def residual(q):  # (N, 3) from the points, (N, 1) from the planes
         p = robot.fk(q)[:, :3, 3]
-        r = np.einsum("ni,ni->n", normal, p) - offset
+        return p - target if normal is None else (np.einsum("ni,ni->n", normal, p) - target)[:, None]
+
+    for _ in range(iterations):
+        r = residual(q)
         if np.abs(r).max() < 1e-13:
             break
-        g = np.einsum("ni,nij->nj", normal, robot.jacobian(q, names, kind="point"))
-        q = q - g * (r / (np.einsum("nj,nj->n", g, g) + damping))[:, None]
-    p = robot.fk(q)[:, :3, 3]
-    return q, np.einsum("ni,ni->n", normal, p) - offset
+        J = robot.jacobian(q, names, kind="point")  # (N, 3, n)
+        if normal is not None:
+            J = np.einsum("ni,nij->nj", normal, J)[:, None]
+        A = np.einsum("nik,njk->nij", J, J) + damping * np.eye(r.shape[1])
+        q = q - np.einsum("nik,ni->nk", J, np.linalg.solve(A, r[:, :, None])[:, :, 0])
+    return q, np.linalg.norm(residual(q), axis=1)
 
 
 def _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, joint_noise_deg,
@@ -179,7 +204,7 @@ def _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, join
 
 
 def _true_robot(robot: Robot, rng: np.random.Generator, kind: str, n_smr: int, error_scale: float,
-                tracker_distance_m: tuple[float, float], smr_offsets=None, tracker_position=None) -> Robot:
+                smr_offsets=None, tracker_position=None) -> Robot:
     """The perturbed robot with its SMRs (or probe) on the flange and, for tracker data, the
     tracker frame as base; its nominal is the given robot's links with these frames."""
     true = perturbed(robot, rng, scale=error_scale)
@@ -188,15 +213,15 @@ def _true_robot(robot: Robot, rng: np.random.Generator, kind: str, n_smr: int, e
     if n_smr > 1:
         directions = _unit(rng, n_smr - 1)
         extra = tool0 + directions * rng.uniform(0.10, 0.15, (n_smr - 1, 1))
-    if smr_offsets is not None:  # given in the flange frame: into the last link frame
-        placed = smr_offsets @ robot.tool[:3, :3].T + robot.tool[:3, 3]
+    if smr_offsets is not None:
+        placed = smr_in_link_frame(robot, smr_offsets)
         tool0, extra = placed[0], placed[1:]
     tool_R = _random_rotation(rng) if kind == "pose" else robot.tool[:3, :3]
     # the tracker frame: random position 2-4 m from the base origin, random orientation
     if kind in ("plane", "distance"):
         base = robot.base.copy()
     else:
-        c = _unit(rng, 1)[0] * rng.uniform(*tracker_distance_m)
+        c = _unit(rng, 1)[0] * rng.uniform(*TRACKER_DISTANCE_M)
         if tracker_position is not None:
             c = robot.base[:3, :3] @ tracker_position + robot.base[:3, 3]
         base = invert_transform(make_transform(_random_rotation(rng), c)) @ robot.base
@@ -207,7 +232,7 @@ def _true_robot(robot: Robot, rng: np.random.Generator, kind: str, n_smr: int, e
 
 
 def _tracker_readings(kind: str, T: np.ndarray, rng: np.random.Generator, noise_mm: float,
-                      noise_model: str, outliers: float, outlier_mm, rotation_noise_deg: float):
+                      noise_model: str, outliers: float, rotation_noise_deg: float):
     """What the tracker reads of TCP poses ``T (N, 4, 4)``: the observation arrays, the noise
     added ``(N, 3)`` and the outlier rows."""
     N, p = len(T), T[:, :3, 3]
@@ -216,7 +241,7 @@ def _tracker_readings(kind: str, T: np.ndarray, rng: np.random.Generator, noise_
     n_out = int(round(outliers * N))
     outlier_rows = np.sort(rng.choice(N, n_out, replace=False)) if n_out else np.zeros(0, np.int64)
     gross = np.zeros((N, 3))
-    gross[outlier_rows] = _unit(rng, n_out) * rng.uniform(*outlier_mm, (n_out, 1)) * 1e-3
+    gross[outlier_rows] = _unit(rng, n_out) * rng.uniform(*OUTLIER_MM, (n_out, 1)) * 1e-3
     kw = {"points": p + noise + gross}
     if kind == "pose":
         dR = rotvec_to_matrix(rng.standard_normal((N, 3)) * np.deg2rad(rotation_noise_deg))
@@ -225,17 +250,16 @@ def _tracker_readings(kind: str, T: np.ndarray, rng: np.random.Generator, noise_
 
 
 def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.02,
-                     noise_model: str = "isotropic", outliers: float = 0.0,
-                     outlier_mm: tuple[float, float] = (1.0, 5.0), n_smr: int = 1,
+                     noise_model: str = "isotropic", outliers: float = 0.0, n_smr: int = 1,
                      workspace_box=None, seed: int = 0, kind: str = "point", n_planes: int = 1,
                      joint_noise_deg: float = 0.0, rotation_noise_deg: float = 0.0,
-                     error_scale: float = 1.0, tracker_distance_m: tuple[float, float] = (2.0, 4.0),
-                     joints=None, visible=None, smr_offsets=None, tracker_position=None,
-                     bar_length_m: float = SCALE_BAR_M, as_is: bool = False) -> SimulationResult:
+                     error_scale: float = 1.0, joints=None, visible=None, smr_offsets=None,
+                     tracker_position=None, bar_length_m: float = SCALE_BAR_M,
+                     as_is: bool = False) -> SimulationResult:
     """Simulate ``n_poses`` measured poses of a perturbed copy of ``robot`` (see module docstring).
 
     ``joints (N, n)`` rad: measure these poses (a planned campaign) instead of random ones;
-    ``visible (N, n_smr)`` bool: the SMRs the tracker sees at each pose (default all);
+    ``visible (N, k)`` bool: the SMRs the tracker sees at each pose (default all; k sets n_smr);
     ``smr_offsets (k, 3)`` m: the SMR positions in the flange (tool) frame instead of random ones
     (k SMRs, the first is the tool); ``tracker_position (3,)`` m: the tracker's position in the
     robot's base frame instead of a random one (its orientation stays random). The robot errors
@@ -244,14 +268,15 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     """
     joints, visible, smr_offsets, n_poses, n_smr = _check_given(
         robot, n_poses, n_smr, kind, joints, visible, smr_offsets)
-    tracker_position = _check_position(tracker_position)
+    if tracker_position is not None:
+        tracker_position = check_tracker_position(tracker_position)
     _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, joint_noise_deg,
            rotation_noise_deg)
     if kind == "distance" and not 0 < bar_length_m < 10:
         raise DataError(f"the scale bar's length must be between 0 and 10 m, got {bar_length_m} m")
     rng = np.random.default_rng(seed)
-    true = robot if as_is else _true_robot(robot, rng, kind, n_smr, error_scale, tracker_distance_m,
-                                           smr_offsets, tracker_position)
+    true = robot if as_is else _true_robot(robot, rng, kind, n_smr, error_scale, smr_offsets,
+                                           tracker_position)
     planes = None
     if kind == "plane":
         q, plane_idx, planes = _plane_poses(true, n_poses, int(n_planes), rng, workspace_box)
@@ -274,7 +299,7 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     T = true.fk(q_rows, smr=smr, approach=approach, travel=travel)
     if kind in ("point", "pose"):
         kw, noise, outlier_rows = _tracker_readings(kind, T, rng, noise_mm, noise_model, outliers,
-                                                    outlier_mm, rotation_noise_deg)
+                                                    rotation_noise_deg)
     elif kind == "distance":  # the two nests of a placement: the bar's certified length on both rows
         kw = {"pair": np.repeat(np.arange(n_poses), 2), "distance": np.full(N, float(bar_length_m))}
         outlier_rows, noise = np.zeros(0, np.int64), np.zeros((N, 3))
@@ -283,7 +308,7 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         kw, outlier_rows = {"plane": plane_idx}, np.zeros(0, np.int64)
         normal, offset = planes[plane_idx, :3], planes[plane_idx, 3]
         off_plane = rng.standard_normal(N) * noise_mm * 1e-3
-        q_rows, _ = _solve_plane_contacts(true, q_rows, normal, offset + off_plane)
+        q_rows, _ = _move_tips(true, q_rows, offset + off_plane, normal)
         noise = normal * off_plane[:, None]
     joint_noise = rng.standard_normal(q_rows.shape) * np.deg2rad(joint_noise_deg)
     clean = np.ones(N, bool)
@@ -291,7 +316,7 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     floor = float(np.sqrt(np.mean(np.sum(noise[clean] ** 2, axis=1)))) * 1e3 if clean.any() else 0.0
     info = {"seed": int(seed), "kind": kind, "n_poses": n_poses, "n_smr": int(n_smr),
             "noise_model": noise_model, "noise_mm": float(noise_mm), "outliers": float(outliers),
-            "outlier_mm": [float(v) for v in outlier_mm], "joint_noise_deg": float(joint_noise_deg),
+            "outlier_mm": list(OUTLIER_MM), "joint_noise_deg": float(joint_noise_deg),
             "rotation_noise_deg": float(rotation_noise_deg), "error_scale": float(error_scale),
             "noise_floor_mm": floor}
     source = f"simulated by robocal: robot {robot.name}, seed {seed}, {kind}, noise floor {floor:.6g} mm"
@@ -326,6 +351,8 @@ def _check_given(robot, n_poses, n_smr, kind, joints, visible, smr_offsets):
         n_smr = len(smr_offsets)
     if visible is not None:
         visible = np.asarray(visible, dtype=bool)
+        if visible.ndim == 2 and n_smr == 1:  # the SMR count from the visibility columns
+            n_smr = visible.shape[1]
         if kind != "point" or joints is None or visible.shape != (len(joints), n_smr):
             raise DataError(f"visible must be ({n_poses}, {n_smr}) booleans for given joints of "
                             "point measurements (one per pose and SMR)")
@@ -333,30 +360,6 @@ def _check_given(robot, n_poses, n_smr, kind, joints, visible, smr_offsets):
         if blind.size:
             raise DataError(f"pose(s) {blind[:10].tolist()} see no SMR: drop them or make an SMR visible")
     return joints, visible, smr_offsets, int(n_poses), int(n_smr)
-
-
-def _check_position(position):
-    """A tracker position as a finite ``(3,)`` array in m (or None)."""
-    if position is None:
-        return None
-    position = np.asarray(position, dtype=float).reshape(-1)
-    if position.shape != (3,) or not np.isfinite(position).all():
-        raise DataError("the tracker position must be three finite coordinates in m")
-    return position
-
-
-def _move_tips(robot, q: np.ndarray, target: np.ndarray, iterations: int = 30, damping: float = 1e-9):
-    """Joints near ``q (N, n)`` whose tips are at ``target (N, 3)`` (m): damped minimum-norm
-    Gauss-Newton on the position; returns the joints and the remaining distance ``(N,)``."""
-    names = [f"theta{i + 1}" for i in range(robot.n_joints)]
-    for _ in range(iterations):
-        r = target - robot.fk(q)[:, :3, 3]
-        if np.abs(r).max() < 1e-13:
-            break
-        J = robot.jacobian(q, names, kind="point")  # (N, 3, n)
-        A = np.einsum("nik,njk->nij", J, J) + damping * np.eye(3)
-        q = q + np.einsum("nik,ni->nk", J, np.linalg.solve(A, r[:, :, None])[:, :, 0])
-    return q, np.linalg.norm(target - robot.fk(q)[:, :3, 3], axis=1)
 
 
 def _bar_placements(true, n: int, length: float, noise_mm: float, rng: np.random.Generator,
@@ -403,8 +406,8 @@ def _plane_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, wo
         q, k = q[near], k[near]
         if not len(q):  # no sample near a plane this round: draw again
             continue
-        q, res = _solve_plane_contacts(true, q, normals[k], offsets[k])
-        ok = (np.abs(res) < 1e-12) & true.within_limits(q)
+        q, res = _move_tips(true, q, offsets[k], normals[k])
+        ok = (res < 1e-12) & true.within_limits(q)
         for plane in range(n_planes):  # fill each plane's open slots (a loop over planes only)
             slots = todo[plane_idx[todo] == plane]
             cand = q[ok & (k == plane)][: slots.size]

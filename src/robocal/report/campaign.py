@@ -88,12 +88,8 @@ def _poses(c: dict) -> str:
 
 
 def render_campaign(campaign: dict, *, title: str | None = None) -> str:
-    """The page of a campaign dict as one self-contained HTML string."""
-    try:
-        import matplotlib  # noqa: F401 - the figures
-    except ImportError:
-        raise DataError("the campaign page draws its figures with matplotlib: "
-                        "pip install 'robocal[report]'") from None
+    """The page of a campaign dict as one self-contained HTML string (the figures need matplotlib:
+    :mod:`robocal.report.plots` says so when it is missing)."""
     if not isinstance(campaign, dict) or "joints_deg" not in campaign:
         raise DataError("a campaign page needs a planned campaign (robocal poses --json)")
     robot = (campaign.get("robot") or {}).get("name", "robot")
