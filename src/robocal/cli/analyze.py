@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from robocal.cli.args import numbers
+
 EPILOG = """Examples:
   robocal analyze planned_poses.csv --robot abb_irb2600 --tool-mm 30,20,80   # joints only is enough
   robocal analyze data.csv --robot meca500 --kind pose
@@ -20,28 +22,24 @@ def add_parser(sub) -> None:
     p.add_argument("--kind", choices=("point", "pose"), default="point",
                    help="what will be measured at each pose (default: point)")
     p.add_argument("--params", default="auto", help="auto, all, or names")
-    p.add_argument("--tool-mm", metavar="X,Y,Z",
+    p.add_argument("--tool-mm", metavar="X,Y,Z", type=numbers(3, "X,Y,Z in mm"),
                    help="the SMR/tool position on the flange in mm (default: the model's tool); "
                         "an SMR on the flange axis leaves the last joint's offset unobservable")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    import numpy as np
+
     from robocal.calibration import analyze
     from robocal.data.measurements import read_joints
-    from robocal.errors import DataError
+    from robocal.io import LENGTH_UNITS
     from robocal.kinematics.model import load_model
 
     robot = load_model(args.robot)
     if args.tool_mm:
-        try:
-            xyz = [float(v) * 1e-3 for v in args.tool_mm.split(",")]
-        except ValueError:
-            xyz = []
-        if len(xyz) != 3:
-            raise DataError(f"--tool-mm needs three numbers X,Y,Z, got {args.tool_mm!r}")
         tool = robot.tool.copy()
-        tool[:3, 3] = xyz
+        tool[:3, 3] = np.array(args.tool_mm) * LENGTH_UNITS["mm"]
         robot = robot.with_frames(tool=tool)
     joints = read_joints(args.data, robot)
     ident = analyze(robot, joints, kind=args.kind, params=args.params)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from robocal.cli.args import numbers
+
 EPILOG = """Examples:
   robocal plan --robot abb_irb2600 poses.csv -o joints.csv
   robocal plan --robot abb_irb2600 poses.csv --weights 2,2,2,1,1,1 --start 0,0,0,0,30,0 -o joints.csv
@@ -16,15 +18,6 @@ mm, deg, fixed-axis XYZ; default: the model's own tool, e.g. the measured SMR); 
 nominal closed form in each branch refined by numeric IK on the calibrated model."""
 
 
-def _floats(text: str) -> list[float]:
-    from robocal.errors import DataError
-
-    try:
-        return [float(v) for v in text.replace(" ", "").split(",") if v]
-    except ValueError as exc:
-        raise DataError(f"expected comma-separated numbers, got {text!r}") from exc
-
-
 def add_parser(sub) -> None:
     p = sub.add_parser("plan", help="globally optimal joint path through Cartesian waypoints",
                        description="Closed-form IK of every waypoint, candidates inside the joint "
@@ -33,8 +26,10 @@ def add_parser(sub) -> None:
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("poses", help="waypoints CSV")
     p.add_argument("--robot", required=True, help="catalog name or model YAML with an OPW form")
-    p.add_argument("--weights", help="w1,...,w6 (cost per rad of each joint)")
-    p.add_argument("--start", help="fixed start configuration q1..q6 in deg")
+    p.add_argument("--weights", type=numbers(None, "w1,...,wn"),
+                   help="w1,...,w6 (cost per rad of each joint)")
+    p.add_argument("--start", type=numbers(None, "q1,...,qn in deg"),
+                   help="fixed start configuration q1..q6 in deg")
     p.add_argument("--nominal",
                    help="the controller's model (catalog name or YAML) when --robot is calibrated")
     p.add_argument("--tool", metavar="x,y,z,rx,ry,rz", help="the user's tool on the flange (mm, deg)")
@@ -60,9 +55,8 @@ def run(args) -> int:
     elif args.tool is not None:
         robot = robot.with_frames(tool=robot.tool @ frame_from_text(args.tool, "--tool"))
     poses, _ = read_poses_csv(args.poses)
-    weights = None if args.weights is None else _floats(args.weights)
-    start = None if args.start is None else np.deg2rad(_floats(args.start))
-    res = plan_path(robot, poses, weights=weights, start=start, nominal=nominal)
+    start = None if args.start is None else np.deg2rad(args.start)
+    res = plan_path(robot, poses, weights=args.weights, start=start, nominal=nominal)
     cols = [f"q{i + 1}_deg" for i in range(robot.n_joints)]
     write_atomic(args.output, format_csv(cols, np.rad2deg(res.joints)))
     gain = 100.0 * (1.0 - res.cost / res.greedy_cost) if res.greedy_cost > 0 else 0.0
