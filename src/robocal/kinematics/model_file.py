@@ -141,7 +141,7 @@ def _joint_rows(rows, length: float, angle: float) -> dict:
             "parallel": np.array(parallel)}
 
 
-def _table(form: str, spec, length: float, angle: float, degrees: bool, n_limits) -> dict:
+def _table(form: str, spec, length: float, angle: float, degrees: bool, n_limits, base, tool) -> dict:
     keys = _TABLE_KEYS[form]
     optional = {"beta"} if form == "mdh" else set()
     spec = _mapping(spec, form, {*keys, *optional}, set(keys))
@@ -152,7 +152,8 @@ def _table(form: str, spec, length: float, angle: float, degrees: bool, n_limits
     limits = None if n_limits is None else _limits(n_limits, n, 1.0, "limits")
     if form == "dh":
         return dh_kwargs(cols["theta"], cols["d"], cols["a"], cols["alpha"], degrees=degrees,
-                         length_unit="mm" if length == LENGTH_UNITS["mm"] else "m", limits=limits)
+                         length_unit="mm" if length == LENGTH_UNITS["mm"] else "m", limits=limits,
+                         base=base, tool=tool)
     alpha = cols["alpha"] * angle
     parallel = np.abs(np.sin(alpha)) < PARALLEL_TOL
     parallel[0] = False
@@ -186,10 +187,8 @@ def robot_kwargs(data) -> dict:
         kw = opw_kwargs(opw, degrees=degrees, base=base, tool=tool,
                         limits=None if limits is None else _limits(limits, 6, 1.0, "limits"))
     else:
-        kw = _table(form, data[form], length, angle, degrees, data.get("limits"))
-        if form == "dh":
-            kw.update(base=base, tool=tool)
-        else:
+        kw = _table(form, data[form], length, angle, degrees, data.get("limits"), base, tool)
+        if form == "mdh":
             kw.update(base=base if base is not None else np.eye(4),
                       tool=tool if tool is not None else np.eye(4))
         kw["opw"] = opw
