@@ -29,16 +29,9 @@ from typing import NamedTuple
 import numpy as np
 
 from robocal.errors import DataError, ModelError
-from robocal.io import ANGLE_UNITS, write_atomic
+from robocal.io import write_atomic
 from robocal.kinematics.catalog import catalog_kwargs
-from robocal.kinematics.convert import (
-    PARALLEL_TOL,
-    dh_kwargs,
-    model_length_scale,
-    opw_chain,
-    opw_kwargs,
-    opw_parameters,
-)
+from robocal.kinematics.convert import dh_kwargs, mdh_kwargs, opw_chain, opw_kwargs, opw_parameters
 from robocal.kinematics.fk import LinkArrays, chain_fk, chain_frames
 from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import JointErrorModel
@@ -188,20 +181,11 @@ class Robot:
         """Robot from Craig's modified DH rows (alpha_{i-1}, a_{i-1}, theta offset, d_i).
 
         ``degrees`` and ``length_unit`` ('m' or 'mm') state the units of the given values;
-        axes i-1, i are flagged parallel where alpha_i = 0 (then beta_i is a parameter).
+        axes i-1, i are flagged parallel where alpha_i = 0 (then beta_i is a parameter); see
+        :func:`robocal.kinematics.convert.mdh_kwargs`.
         """
-        ang = ANGLE_UNITS["deg"] if degrees else 1.0
-        scale = model_length_scale(length_unit)
-        alpha = np.asarray(alpha, float) * ang
-        beta = np.zeros_like(alpha) if beta is None else np.asarray(beta, float) * ang
-        if "parallel" not in kwargs:
-            parallel = np.abs(np.sin(alpha)) < PARALLEL_TOL
-            parallel[0] = False
-            kwargs["parallel"] = parallel
-        if kwargs.get("limits") is not None:
-            kwargs["limits"] = np.asarray(kwargs["limits"], float) * ang
-        return cls(alpha=alpha, a=np.asarray(a, float) * scale, beta=beta,
-                   theta=np.asarray(theta, float) * ang, d=np.asarray(d, float) * scale, **kwargs)
+        return cls(**mdh_kwargs(alpha, a, theta, d, beta, degrees=degrees, length_unit=length_unit,
+                                **kwargs))
 
     @classmethod
     def from_dh(cls, theta_offsets: Sequence[float], d: Sequence[float], a: Sequence[float],
