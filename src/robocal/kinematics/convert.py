@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from robocal.errors import DataError, ModelError
+from robocal.errors import ModelError
 from robocal.io import ANGLE_UNITS, length_scale
 from robocal.kinematics.opw import OPWParameters
 
@@ -161,14 +161,6 @@ def _table(values, n: int | None, what: str) -> np.ndarray:
     return arr
 
 
-def model_length_scale(length_unit: str) -> float:
-    """Metres per ``length_unit`` of a model table ('m' or 'mm'); ModelError otherwise."""
-    try:
-        return length_scale(length_unit)
-    except DataError as exc:
-        raise ModelError(str(exc)) from None
-
-
 def _finish(mdh: dict, degrees: bool, kw: dict) -> dict:
     """Robot keyword arguments: user base/tool wrap the converted ones, limits converted from deg."""
     base = mdh["base"] if kw.get("base") is None else np.asarray(kw["base"], float) @ mdh["base"]
@@ -196,7 +188,7 @@ def mdh_kwargs(alpha: Sequence[float], a: Sequence[float], theta: Sequence[float
     ``parallel`` defaults to :func:`default_parallel`; ``base`` / ``tool`` in ``kw`` (4x4, m) are
     the model's own frames; ``limits`` ``(n, 2)`` are in degrees when ``degrees``.
     """
-    scale = model_length_scale(length_unit)
+    scale = length_scale(length_unit, ModelError)
     ang = ANGLE_UNITS["deg"] if degrees else 1.0
     al = _table(alpha, None, "MDH alpha") * ang
     n = al.size
@@ -217,7 +209,7 @@ def dh_kwargs(theta_offsets: Sequence[float], d: Sequence[float], a: Sequence[fl
     ``kw`` (4x4, m) are world -> DH base and DH flange -> TCP. ``limits`` ``(n, 2)`` are in degrees
     when ``degrees``.
     """
-    scale = model_length_scale(length_unit)
+    scale = length_scale(length_unit, ModelError)
     ang = ANGLE_UNITS["deg"] if degrees else 1.0
     th = _table(theta_offsets, None, "DH theta offsets") * ang
     n = th.size
@@ -246,7 +238,7 @@ def opw_parameters(a1: float, a2: float, b: float, c1: float, c2: float, c3: flo
                    offsets: Sequence[float] = (0.0,) * 6, signs: Sequence[int] = (1,) * 6, *,
                    degrees: bool = False, length_unit: str = "m") -> OPWParameters:
     """An OPW parameter set in SI from values in ``length_unit`` and (offsets) deg or rad."""
-    scale = model_length_scale(length_unit)
+    scale = length_scale(length_unit, ModelError)
     lengths = _table([a1, a2, b, c1, c2, c3, c4], 7, "OPW lengths (a1, a2, b, c1, c2, c3, c4)") * scale
     off = _table(offsets, 6, "OPW offsets") * (ANGLE_UNITS["deg"] if degrees else 1.0)
     return OPWParameters(*lengths, offsets=tuple(off), signs=tuple(_table(signs, 6, "OPW signs")))
