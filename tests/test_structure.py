@@ -3,6 +3,9 @@ result, the OPW form a robot says it has, immutable models and data, atomic outp
 
 from __future__ import annotations
 
+import pickle
+from dataclasses import FrozenInstanceError, replace
+
 import numpy as np
 import pytest
 
@@ -112,6 +115,12 @@ def test_a_robot_says_whether_it_keeps_its_opw_form():
         rc.ik.solve_all(calibrated, T)
     assert rc.ik.solve(calibrated, T).converged.all()  # numeric IK, seeded by the nominal form
     assert not rc.Robot.from_catalog("ur5").has_opw_form
+    # computed once per model (cached): copies made by replace/pickle recompute or keep the right one
+    assert pickle.loads(pickle.dumps(nominal)).has_opw_form
+    assert not pickle.loads(pickle.dumps(calibrated)).has_opw_form
+    assert replace(calibrated, **nominal.links._asdict()).has_opw_form
+    with pytest.raises(FrozenInstanceError):
+        nominal.has_opw_form = False
 
 
 def test_models_and_measurements_are_immutable(rng):

@@ -21,6 +21,7 @@ A model is immutable: its arrays are read-only, and every change (:meth:`displac
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -143,7 +144,6 @@ class Robot:
         set_(self, "nominal", self._nominal_vector(self.nominal))
         for f in (*LINK_FIELDS, "base", "tool", "limits", "parallel", "smr", "nominal"):
             getattr(self, f).flags.writeable = False
-        set_(self, "_has_opw_form", self._follows_opw())
 
     def _nominal_vector(self, nominal) -> np.ndarray:
         """The nominal geometry vector: the current values when None; a mapping name -> value
@@ -166,7 +166,11 @@ class Robot:
             nominal = values
         return _as_vector(nominal, len(names), "nominal parameters")
 
-    def _follows_opw(self) -> bool:
+    @functools.cached_property
+    def has_opw_form(self) -> bool:
+        """Whether this robot's chain is exactly its OPW form (closed-form IK applies): true for a
+        nominal catalog robot with any base and tool, false once a link parameter is displaced
+        or joint-error terms are declared (computed on first use: the model is immutable)."""
         if self.opw is None or self.n_joints != 6 or self.joint_errors is not None:
             return False
         chain = opw_chain(self.opw)
@@ -215,13 +219,6 @@ class Robot:
     @property
     def n_joints(self) -> int:
         return self.alpha.size
-
-    @property
-    def has_opw_form(self) -> bool:
-        """Whether this robot's chain is exactly its OPW form (closed-form IK applies): true for a
-        nominal catalog robot with any base and tool, false once a link parameter is displaced
-        or joint-error terms are declared."""
-        return self._has_opw_form
 
     @property
     def geometry_names(self) -> list[str]:
