@@ -25,7 +25,7 @@ C1, C2, C3, C4, C5, C6, C7, C8, C9, C10 = _COS
 
 
 @numba.njit
-def sin_cos(x: float) -> tuple[float, float]:
+def cos_sin(x: float) -> tuple[float, float]:
     """cos(x), sin(x) for |x| <= _POLY_MAX: the polynomial of ``fk._sin_cos``, one value."""
     n = np.rint(x * (1 / np.pi))
     r = (x - n * _P1) - n * _P1T  # x = n pi + r, |r| <= pi/2
@@ -53,7 +53,7 @@ def chain_block(phi, m, A, a, d, base, c, s, F):
     for j in range(n):
         if small:
             for i in range(m):
-                c[j, i], s[j, i] = sin_cos(phi[j, i])
+                c[j, i], s[j, i] = cos_sin(phi[j, i])
         else:
             for i in range(m):
                 c[j, i], s[j, i] = np.cos(phi[j, i]), np.sin(phi[j, i])
