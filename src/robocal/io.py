@@ -24,6 +24,16 @@ def length_scale(unit: str, error: type[RobocalError] = DataError) -> float:
     return LENGTH_UNITS[unit]
 
 
+def as_number(value, where: str, error: type[RobocalError] = DataError) -> float:
+    """``value`` (an int or float read from a user's file, not a bool) as a finite float; else
+    ``error`` (a RobocalError type) naming ``where``."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise error(f"{where}: expected a number, got {value!r}")
+    if not math.isfinite(value):
+        raise error(f"{where}: {value!r} is not finite")
+    return float(value)
+
+
 def read_text(path, what: str, error: type[RobocalError] = DataError) -> str:
     """The text of a user's file (UTF-8, a byte-order mark allowed); ``error`` (a RobocalError
     type) names the file, ``what`` it should be and the reason when it cannot be read."""

@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from robocal.errors import DataError, ModelError
-from robocal.io import write_atomic
+from robocal.io import as_number, write_atomic
 from robocal.kinematics.catalog import catalog_kwargs
 from robocal.kinematics.convert import dh_kwargs, mdh_kwargs, opw_chain, opw_kwargs, opw_parameters
 from robocal.kinematics.fk import LinkArrays, chain_fk, chain_frames
@@ -157,13 +157,7 @@ class Robot:
                 unknown = sorted(set(nominal) - set(names))
                 raise ModelError(f"nominal must give every geometry parameter (SI): missing {missing}, "
                                  f"unknown {unknown}")
-            values = []
-            for name in names:
-                v = nominal[name]
-                if isinstance(v, bool) or not isinstance(v, int | float):
-                    raise ModelError(f"nominal.{name}: expected a number, got {v!r}")
-                values.append(v)
-            nominal = values
+            nominal = [as_number(nominal[name], f"nominal.{name}", ModelError) for name in names]
         return _as_vector(nominal, len(names), "nominal parameters")
 
     @functools.cached_property
@@ -287,17 +281,20 @@ class Robot:
         vec[idx] = _as_vector(list(updates.values()), len(idx), "parameter values")
         return self._from_vector(vec)
 
-    def _from_vector(self, vec: np.ndarray) -> Robot:
+    def _geometry_kwargs(self, vec: np.ndarray) -> dict:
+        """Link arrays, base, tool and SMR offsets of the geometry part of a parameter vector."""
         n = self.n_joints
         links = vec[: 5 * n].reshape(n, 5)
-        frames = [make_transform(rotvec_to_matrix(v[3:]), v[:3])
-                  for v in (vec[5 * n : 5 * n + 6], vec[5 * n + 6 : 5 * n + 12])]
-        geo = len(self.geometry_names)
-        kw = {f: links[:, k] for k, f in enumerate(LINK_FIELDS)}
+        base, tool = (make_transform(rotvec_to_matrix(v[3:]), v[:3])
+                      for v in (vec[5 * n : 5 * n + 6], vec[5 * n + 6 : 5 * n + 12]))
+        smr = vec[5 * n + 12 : len(self.geometry_names)].reshape(-1, 3)
+        return {**{f: links[:, k] for k, f in enumerate(LINK_FIELDS)}, "base": base, "tool": tool,
+                "smr": smr}
+
+    def _from_vector(self, vec: np.ndarray) -> Robot:
         errors = None if self.joint_errors is None else \
-            JointErrorModel(self.joint_errors.names, vec[geo:])
-        return replace(self, base=frames[0], tool=frames[1], smr=vec[5 * n + 12 : geo].reshape(-1, 3),
-                       joint_errors=errors, **kw)
+            JointErrorModel(self.joint_errors.names, vec[len(self.geometry_names):])
+        return replace(self, joint_errors=errors, **self._geometry_kwargs(vec))
 
     def with_joint_errors(self, names: Sequence[str]) -> Robot:
         """A copy that declares the joint-error terms ``names`` (new ones at zero, the nominal
@@ -305,7 +302,8 @@ class Robot:
         names = list(dict.fromkeys(names))
         if not names:
             return replace(self, joint_errors=None)
-        old = dict(zip(self.joint_error_names, self.values[len(self.geometry_names):], strict=True))
+        old = {} if self.joint_errors is None else \
+            dict(zip(self.joint_errors.names, self.joint_errors.values.tolist(), strict=True))
         errors = JointErrorModel(tuple(names), np.array([old.get(nm, 0.0) for nm in names]))
         return replace(self, joint_errors=errors)
 
@@ -398,7 +396,7 @@ class Robot:
     def nominal_robot(self) -> Robot:
         """The nominal model (the controller's: no joint-error terms), with this robot's nominal
         as its own."""
-        return self._from_vector(self.nominal_values).with_joint_errors([])
+        return replace(self, joint_errors=None, **self._geometry_kwargs(self.nominal))
 
     # ----------------------------------------------------------------- kinematics
     @property

@@ -31,7 +31,7 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 from robocal.errors import ModelError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
+from robocal.io import ANGLE_UNITS, LENGTH_UNITS, as_number, read_text
 from robocal.kinematics.convert import default_parallel, dh_kwargs, mdh_kwargs, opw_kwargs, opw_parameters
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.opw import GEOMETRY, OPWParameters
@@ -46,20 +46,12 @@ _JOINT_KEYS = {*LINK_FIELDS, "limits", "parallel_to_previous"}
 _TABLE_KEYS = {"dh": ("theta", "d", "a", "alpha"), "mdh": ("alpha", "a", "theta", "d")}
 
 
-def _number(value, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ModelError(f"{where}: expected a number, got {value!r}")
-    if not np.isfinite(value):
-        raise ModelError(f"{where}: {value!r} is not finite")
-    return float(value)
-
-
 def _numbers(values, where: str, count: int | None = None) -> np.ndarray:
     if not isinstance(values, list):
         raise ModelError(f"{where}: expected a list of numbers, got {values!r}")
     if count is not None and len(values) != count:
         raise ModelError(f"{where}: expected {count} values, got {len(values)}")
-    return np.array([_number(v, f"{where}[{i}]") for i, v in enumerate(values)])
+    return np.array([as_number(v, f"{where}[{i}]", ModelError) for i, v in enumerate(values)])
 
 
 def _mapping(value, where: str, allowed: set, required: set = frozenset()) -> dict:
@@ -115,7 +107,7 @@ def _units(data: dict) -> tuple[str, str]:
 
 def _opw(spec, length_unit: str, degrees: bool) -> OPWParameters:
     spec = _mapping(spec, "opw", {*GEOMETRY, "offsets", "signs"}, {*GEOMETRY, "offsets", "signs"})
-    values = [_number(spec[k], f"opw.{k}") for k in GEOMETRY]
+    values = [as_number(spec[k], f"opw.{k}", ModelError) for k in GEOMETRY]
     return opw_parameters(*values, _numbers(spec["offsets"], "opw.offsets", 6),
                           _numbers(spec["signs"], "opw.signs", 6), degrees=degrees,
                           length_unit=length_unit)
@@ -131,7 +123,7 @@ def _joint_rows(rows, length: float, angle: float) -> dict:
         row = _mapping(row, where, _JOINT_KEYS, {"alpha", "a", "theta", "d"})
         for f in LINK_FIELDS:
             scale = length if f in ("a", "d") else angle
-            cols[f].append(_number(row.get(f, 0.0), f"{where}.{f}") * scale)
+            cols[f].append(as_number(row.get(f, 0.0), f"{where}.{f}", ModelError) * scale)
         lim = row.get("limits")
         limits.append([-np.pi, np.pi] if lim is None else _numbers(lim, f"{where}.limits", 2) * angle)
         flag = row.get("parallel_to_previous")
