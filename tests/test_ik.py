@@ -244,6 +244,7 @@ def test_numeric_reports_unreachable():
     res = rc.ik.solve(robot, T, np.zeros((3, 6)))
     assert res.converged.tolist() == [True, False, True]
     assert res.failed.tolist() == [1]
+    assert res.iterations > 100  # one run has at most max_iter = 100 steps: the retries' count too
     with pytest.raises(UnreachableError, match=r"\[1\]"):
         rc.ik.solve(robot, T, np.zeros((3, 6)), strict=True)
     with pytest.raises(DataError, match="seeds"):
