@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import KERNELS, random_robot
+from conftest import KERNELS, random_robot, wrapped
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -17,10 +17,6 @@ from robocal.kinematics.kernels import use_kernels
 from robocal.kinematics.transforms import make_transform, pose_error, rotvec_to_matrix
 
 OPW_ROBOTS = ["abb_irb2600", "kuka_kr6_r700", "fanuc_lrmate200id", "puma560"]
-
-
-def wrapped(a):
-    return np.remainder(a + np.pi, 2 * np.pi) - np.pi
 
 
 def fk_errors(robot, sols, T):

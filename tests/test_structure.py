@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import robocal as rc
-from robocal.damped_least_squares import DAMPING_MAX, Status, minimize
+from robocal.damped_least_squares import DAMPING_FACTOR, DAMPING_MAX, DAMPING_START, Status, minimize
 from robocal.data.simulate import perturbed, simulate_tracker
 from robocal.errors import DataError, IdentificationError, ModelError
 from robocal.identify.problem import CalibrationProblem
@@ -50,6 +50,7 @@ class _Quadratics:
         self.size = self.t.size
         self.x = np.zeros(self.size)
         self.broken = set(broken)  # members whose trial cost never decreases (a stall)
+        self.trials = np.zeros(self.size, int)  # trial points evaluated per member
 
     def cost(self):
         return 0.5 * (self.x - self.t) ** 2
@@ -66,6 +67,7 @@ class _Quadratics:
         return np.abs(self.x[m] - self.t[m]) < 1e-12
 
     def trial_cost(self, m):
+        self.trials[m] += 1
         new = 0.5 * (self.x[m] + self.step[m] - self.t[m]) ** 2
         return np.where([i in self.broken for i in m], np.inf, new)
 
@@ -81,7 +83,12 @@ def test_damped_loop_converges_stalls_and_counts_per_member():
     assert out.nit[2] == 0 and out.nit[0] >= 1
     limited = minimize(_Quadratics([1.0]), max_iter=1)
     assert limited.status[0] == Status.MAX_ITERATIONS and limited.nit[0] == 1
-    assert DAMPING_MAX > 1.0
+    # the broken member gives up once its damping passes DAMPING_MAX, not before or after
+    damping, rejected = DAMPING_START, 0
+    while damping <= DAMPING_MAX:
+        damping *= DAMPING_FACTOR
+        rejected += 1
+    assert problem.trials[3] == rejected
 
 
 def test_every_method_returns_the_same_result_type():
