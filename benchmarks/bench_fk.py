@@ -9,32 +9,16 @@ import resource
 import tracemalloc
 
 import numpy as np
-from timing import best_time, first_call, interleaved, print_times
+from timing import best_time, first_call, interleaved, kernel_choices, print_times, py_opw_robot
 
 from robocal import Robot
-from robocal.ik.opw_ik import opw_form
-from robocal.kinematics.kernels import compiled, use_kernels
+from robocal.kinematics.fk import _POLY_MAX, FAST_CHUNK, _sin_cos
+from robocal.kinematics.kernels import use_kernels
 
 N = 200_000
 N_PIN = 20_000
 N_MEM = 1_000_000
 REPEAT = 7
-
-
-def _py_opw(robot: Robot):
-    try:
-        import py_opw_kinematics as po
-    except ImportError:
-        return None
-    p = opw_form(robot)
-    model = po.KinematicModel(a1=p.a1, a2=p.a2, b=p.b, c1=p.c1, c2=p.c2, c3=p.c3, c4=p.c4,
-                              offsets=tuple(p.offsets), flip_axes=tuple(s < 0 for s in p.signs))
-    return po.Robot(model, degrees=False)
-
-
-def _kernels() -> list[str]:
-    with use_kernels("auto"):
-        return ["numpy"] + (["numba"] if compiled("robocal.kinematics.fk_numba") is not None else [])
 
 
 def _timed_fk(robot: Robot, q: np.ndarray, kernels: str):
@@ -65,16 +49,40 @@ def _pinocchio(robot: Robot):
     return pin, model, model.createData(), fid
 
 
+def _sin_cos_speed(rng: np.random.Generator, calls: int = 200) -> None:
+    """The numpy kernel's sin/cos polynomial against np.sin + np.cos on one chunk of joint angles
+    (6 x FAST_CHUNK), CPU time, best of REPEAT rounds of ``calls`` calls each, interleaved."""
+    x = rng.uniform(-2 * np.pi, 2 * np.pi, (6, FAST_CHUNK))
+    assert np.abs(x).max() <= _POLY_MAX
+    c, s, work = np.empty_like(x), np.empty_like(x), np.empty((4,) + x.shape)
+
+    def poly():
+        for _ in range(calls):
+            _sin_cos(x, c, s, work)
+
+    def libm():
+        for _ in range(calls):
+            np.cos(x, out=c)
+            np.sin(x, out=s)
+
+    best = interleaved({"poly": poly, "libm": libm}, REPEAT)
+    t_poly, t_libm = best["poly"][1] / calls, best["libm"][1] / calls
+    _sin_cos(x, c, s, work)
+    err = max(np.abs(c - np.cos(x)).max(), np.abs(s - np.sin(x)).max())
+    print(f"  sin/cos of a 6 x {FAST_CHUNK} chunk (numpy kernel): polynomial {t_poly * 1e6:.0f} us, "
+          f"np.sin + np.cos {t_libm * 1e6:.0f} us (CPU), {t_libm / t_poly:.1f}x faster, max |diff| {err:.1e}")
+
+
 def main() -> None:
     robot = Robot.from_catalog("abb_irb2600")
     rng = np.random.default_rng(0)
     q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (N, 6))
     print(f"forward kinematics, {robot.name}, {N:,} random configurations, one thread each, best of "
           f"{REPEAT} (all runs interleaved; CPU time counts every thread)")
-    kernels = _kernels()
+    kernels = kernel_choices("robocal.kinematics.fk_numba")
     fns = {k: _timed_fk(robot, q, k) for k in kernels}
     ours = {k: fn() for k, fn in fns.items()}  # also compiles (or loads) the numba kernel
-    opw = _py_opw(robot)
+    opw = py_opw_robot(robot)
     if opw is not None:
         fns["py-opw"] = lambda: opw.batch_forward(q)
     best = interleaved(fns, REPEAT)
@@ -94,6 +102,8 @@ def main() -> None:
     if costs is not None:
         print(f"  first call of the numba kernel in a new process (import numba + compile): {costs[0]:.2f} s "
               f"with an empty cache, {costs[1]:.2f} s with the on-disk cache")
+
+    _sin_cos_speed(rng)
 
     pin_setup = _pinocchio(robot)
     if pin_setup is None:

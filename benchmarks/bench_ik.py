@@ -7,30 +7,14 @@ accuracy; first-call (compile) cost; plan_path on 10,000 waypoints x 8 candidate
 from __future__ import annotations
 
 import numpy as np
-from timing import best_time, first_call, interleaved, print_times
+from timing import best_time, first_call, interleaved, kernel_choices, print_times, py_opw_robot
 
 import robocal as rc
-from robocal.ik.opw_ik import opw_form
-from robocal.kinematics.kernels import compiled, use_kernels
+from robocal.ik.opw_ik import check_poses, opw_form
+from robocal.kinematics.kernels import use_kernels
 from robocal.kinematics.transforms import pose_error
 
 REPEAT = 5
-
-
-def _kernels() -> list[str]:
-    with use_kernels("auto"):
-        return ["numpy"] + (["numba"] if compiled("robocal.ik.opw_numba") is not None else [])
-
-
-def _peer(robot: rc.Robot):
-    try:
-        from py_opw_kinematics import KinematicModel, Robot
-    except ImportError:
-        return None
-    o = opw_form(robot)
-    model = KinematicModel(a1=o.a1, a2=o.a2, b=o.b, c1=o.c1, c2=o.c2, c3=o.c3, c4=o.c4,
-                           offsets=tuple(o.offsets), flip_axes=tuple(s < 0 for s in o.signs))
-    return Robot(model, degrees=False)
 
 
 def _solver(robot: rc.Robot, T: np.ndarray, kernels: str, threads: int | None):
@@ -49,12 +33,18 @@ def _speed(robot: rc.Robot, T: np.ndarray, n: int, kernels: list[str], peer) -> 
         fns = {k: _solver(robot, T, k, threads) for k in kernels}
         if peer is not None:
             fns["py-opw"] = lambda th=threads or 0: peer.reach(poses, threads=th)
+        if threads == 1:  # the input check every solve_all call starts with
+            fns["check_poses"] = lambda: check_poses(T)
         best = interleaved(fns, REPEAT)
         print(f"  {label} (best of {REPEAT}, interleaved; CPU time counts every thread):")
         rows = {k: f"    solve_all ({k:5s})" for k in kernels}
         if peer is not None:
             rows["py-opw"] = "    py-opw reach      "
         print_times(best, rows, n, "us", "py-opw" if peer is not None else None)
+        if threads == 1:
+            check = best["check_poses"][1]
+            print(f"    of which check_poses (pose validation): {check / n * 1e6:.2f} us/pose CPU, "
+                  + ", ".join(f"{check / best[k][1]:.0%} of solve_all ({k})" for k in kernels))
 
 
 def _coverage(robot: rc.Robot, T: np.ndarray, kernels: list[str], peer) -> None:
@@ -99,8 +89,8 @@ def main(n: int = 100_000, waypoints: int = 10_000) -> None:
     robot = rc.Robot.from_catalog("abb_irb2600")
     rng = np.random.default_rng(0)
     T = robot.fk(rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (n, 6)))
-    kernels = _kernels()
-    peer = _peer(robot)
+    kernels = kernel_choices("robocal.ik.opw_numba")
+    peer = py_opw_robot(robot)
     print(f"solve_all vs py-opw-kinematics reach: {n:,} random {robot.name} poses, all 8 branches")
     if peer is None:
         print("  py-opw-kinematics not installed (pip install -e '.[bench]'): no peer comparison")

@@ -1,4 +1,4 @@
-"""Best-of-n timing shared by the benchmarks."""
+"""Best-of-n timing, the kernels to time and the py-opw-kinematics peer, shared by the benchmarks."""
 
 from __future__ import annotations
 
@@ -8,6 +8,10 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from robocal import Robot
+from robocal.ik.opw_ik import opw_form
+from robocal.kinematics.kernels import compiled, use_kernels
 
 
 def best_time(fn, repeat: int = 3, clock=time.perf_counter) -> tuple[float, object]:
@@ -62,3 +66,23 @@ def print_times(best: dict[str, tuple[float, float]], rows: dict[str, str], n: i
             pw, pc = best[peer]
             line += f"   {pw / wall:4.1f}x {peer} by wall clock, {pc / cpu:4.1f}x by CPU time"
         print(line)
+
+
+def kernel_choices(module: str) -> list[str]:
+    """The kernels to time: ``numpy``, and ``numba`` when the compiled twin ``module`` (e.g.
+    ``"robocal.kinematics.fk_numba"``) can be imported."""
+    with use_kernels("auto"):
+        return ["numpy"] + (["numba"] if compiled(module) is not None else [])
+
+
+def py_opw_robot(robot: Robot):
+    """py-opw-kinematics' ``Robot`` for the OPW form of ``robot`` (radians), or None when the peer
+    is not installed."""
+    try:
+        import py_opw_kinematics as po
+    except ImportError:
+        return None
+    p = opw_form(robot)
+    model = po.KinematicModel(a1=p.a1, a2=p.a2, b=p.b, c1=p.c1, c2=p.c2, c3=p.c3, c4=p.c4,
+                              offsets=tuple(p.offsets), flip_axes=tuple(s < 0 for s in p.signs))
+    return po.Robot(model, degrees=False)

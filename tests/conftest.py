@@ -20,6 +20,11 @@ def random_frame(rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
                           rng.uniform(-scale, scale, 3))
 
 
+def wrapped(a: np.ndarray) -> np.ndarray:
+    """Angles (rad) into [-pi, pi)."""
+    return np.remainder(a + np.pi, 2 * np.pi) - np.pi
+
+
 def random_robot(rng: np.random.Generator, n: int = 6) -> Robot:
     """A random MDH + beta robot with non-zero beta everywhere and arbitrary base/tool."""
     return Robot(alpha=rng.uniform(-np.pi, np.pi, n), a=rng.uniform(-0.5, 0.5, n),

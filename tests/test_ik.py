@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import KERNELS, random_robot
+from conftest import KERNELS, random_robot, wrapped
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -17,10 +17,6 @@ from robocal.kinematics.kernels import use_kernels
 from robocal.kinematics.transforms import make_transform, pose_error, rotvec_to_matrix
 
 OPW_ROBOTS = ["abb_irb2600", "kuka_kr6_r700", "fanuc_lrmate200id", "puma560"]
-
-
-def wrapped(a):
-    return np.remainder(a + np.pi, 2 * np.pi) - np.pi
 
 
 def fk_errors(robot, sols, T):
@@ -244,6 +240,7 @@ def test_numeric_reports_unreachable():
     res = rc.ik.solve(robot, T, np.zeros((3, 6)))
     assert res.converged.tolist() == [True, False, True]
     assert res.failed.tolist() == [1]
+    assert res.iterations > 100  # one run has at most max_iter = 100 steps: the retries' count too
     with pytest.raises(UnreachableError, match=r"\[1\]"):
         rc.ik.solve(robot, T, np.zeros((3, 6)), strict=True)
     with pytest.raises(DataError, match="seeds"):
@@ -310,3 +307,27 @@ def test_numeric_ik_reaches_targets_next_to_the_stretched_elbow(elbow_deg):
         res = rc.ik.solve(calibrated, T[rows], branch=int(s), nominal=nominal)
         assert res.converged.all()
         assert (branch_slot(nominal.opw, res.joints) == s).all()
+
+
+def test_path_candidates_of_a_calibrated_model_next_to_the_stretched_elbow():
+    """plan_path's candidates of a calibrated model: numeric IK seeded in every branch, also where
+    only the clamped nominal closed form seeds it (targets just beyond the nominal reach); every
+    candidate reaches its pose in its own slot, and the slot of the joints that made the target is
+    always among them."""
+    from robocal.ik.opw_ik import branch_slot
+    from robocal.ik.path import branch_candidates
+
+    nominal, calibrated = _calibrated_cell(3)
+    o = nominal.opw
+    rng = np.random.default_rng(4)
+    q = rng.uniform(nominal.limits[:, 0] * 0.8, nominal.limits[:, 1] * 0.8, (40, 6))
+    elbow = rng.choice([-1.0, 1.0], 40) * np.deg2rad(rng.uniform(0, 0.5, 40))
+    q[:, 2] = (elbow - np.arctan2(o.a2, o.c3) + o.offsets[2]) * o.signs[2]
+    T = calibrated.fk(q)
+    cand = branch_candidates(calibrated, T, nominal)
+    found = np.isfinite(cand).all(axis=2)
+    assert found[np.arange(len(q)), branch_slot(o, q)].all()
+    n_idx, b_idx = np.nonzero(found)
+    assert (branch_slot(o, cand[n_idx, b_idx]) == b_idx).all()
+    e = pose_error(T[n_idx], calibrated.fk(cand[n_idx, b_idx]))
+    assert np.linalg.norm(e[:, :3], axis=1).max() <= 1e-10

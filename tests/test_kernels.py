@@ -9,7 +9,7 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import random_frame, random_robot, requires_numba
+from conftest import random_frame, random_robot, requires_numba, wrapped
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -21,10 +21,6 @@ from robocal.kinematics.fk import _POLY_MAX, chain_frames
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
 
 OPW_ROBOTS = ["abb_irb2600", "kuka_kr6_r700", "fanuc_lrmate200id", "puma560"]
-
-
-def wrapped(a):
-    return np.remainder(a + np.pi, 2 * np.pi) - np.pi
 
 
 def both(fn):

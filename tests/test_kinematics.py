@@ -169,6 +169,30 @@ def test_yaml_hand_written_mm_deg(tmp_path):
     np.testing.assert_allclose(robot.tool[:3, 0], [0, 1, 0], atol=1e-12)
 
 
+def test_yaml_dh_table_keeps_its_conversion_frames(tmp_path, rng):
+    """A ``dh:`` file = the DH product, with a last link (a6, alpha6) whose frame the conversion
+    must put into the tool, and the file's base/tool wrapped around it."""
+    theta, d = [0, 10, 0, 0, 0, 0], [400, 0, 0, 300, 0, 80]
+    a, alpha = [25, 400, 30, 0, 0, 20], [90, 0, 90, -90, 90, 45]
+    path = tmp_path / "dh.yaml"
+    path.write_text(f"units: {{length: mm, angle: deg}}\n"
+                    f"dh: {{theta: {theta}, d: {d}, a: {a}, alpha: {alpha}}}\n"
+                    "base: {xyz: [100, -50, 20], rpy: [0, 0, 30]}\n"
+                    "tool: {xyz: [0, 0, 120], rpy: [10, 0, 0]}\n")
+    robot = Robot.load(path)
+    q = rng.uniform(-np.pi, np.pi, (20, 6))
+    base = _trans("x", 0.1) @ _trans("y", -0.05) @ _trans("z", 0.02) @ _rot("z", np.radians(30))
+    tool = _trans("z", 0.12) @ _rot("x", np.radians(10))
+    expected = []
+    for row in q:
+        T = base
+        for i in range(6):
+            T = T @ _rot("z", np.radians(theta[i]) + row[i]) @ _trans("z", d[i] * 1e-3) \
+                @ _trans("x", a[i] * 1e-3) @ _rot("x", np.radians(alpha[i]))
+        expected.append(T @ tool)
+    np.testing.assert_allclose(robot.fk(q), np.array(expected), rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("text,match", [
     ("joints: [1, 2]\nunits: {length: m, angle: rad}\n", r"joints\[1\] \(joint 1\): expected a mapping"),
     ("joints: []\nunits: {length: m, angle: rad}\n", "non-empty"),

@@ -3,11 +3,14 @@ result, the OPW form a robot says it has, immutable models and data, atomic outp
 
 from __future__ import annotations
 
+import pickle
+from dataclasses import FrozenInstanceError, replace
+
 import numpy as np
 import pytest
 
 import robocal as rc
-from robocal.damped_least_squares import DAMPING_MAX, Status, minimize
+from robocal.damped_least_squares import DAMPING_FACTOR, DAMPING_MAX, DAMPING_START, Status, minimize
 from robocal.data.simulate import perturbed, simulate_tracker
 from robocal.errors import DataError, IdentificationError, ModelError
 from robocal.identify.problem import CalibrationProblem
@@ -47,6 +50,7 @@ class _Quadratics:
         self.size = self.t.size
         self.x = np.zeros(self.size)
         self.broken = set(broken)  # members whose trial cost never decreases (a stall)
+        self.trials = np.zeros(self.size, int)  # trial points evaluated per member
 
     def cost(self):
         return 0.5 * (self.x - self.t) ** 2
@@ -63,6 +67,7 @@ class _Quadratics:
         return np.abs(self.x[m] - self.t[m]) < 1e-12
 
     def trial_cost(self, m):
+        self.trials[m] += 1
         new = 0.5 * (self.x[m] + self.step[m] - self.t[m]) ** 2
         return np.where([i in self.broken for i in m], np.inf, new)
 
@@ -78,7 +83,12 @@ def test_damped_loop_converges_stalls_and_counts_per_member():
     assert out.nit[2] == 0 and out.nit[0] >= 1
     limited = minimize(_Quadratics([1.0]), max_iter=1)
     assert limited.status[0] == Status.MAX_ITERATIONS and limited.nit[0] == 1
-    assert DAMPING_MAX > 1.0
+    # the broken member gives up once its damping passes DAMPING_MAX, not before or after
+    damping, rejected = DAMPING_START, 0
+    while damping <= DAMPING_MAX:
+        damping *= DAMPING_FACTOR
+        rejected += 1
+    assert problem.trials[3] == rejected
 
 
 def test_every_method_returns_the_same_result_type():
@@ -112,6 +122,12 @@ def test_a_robot_says_whether_it_keeps_its_opw_form():
         rc.ik.solve_all(calibrated, T)
     assert rc.ik.solve(calibrated, T).converged.all()  # numeric IK, seeded by the nominal form
     assert not rc.Robot.from_catalog("ur5").has_opw_form
+    # computed once per model (cached): copies made by replace/pickle recompute or keep the right one
+    assert pickle.loads(pickle.dumps(nominal)).has_opw_form
+    assert not pickle.loads(pickle.dumps(calibrated)).has_opw_form
+    assert replace(calibrated, **nominal.links._asdict()).has_opw_form
+    with pytest.raises(FrozenInstanceError):
+        nominal.has_opw_form = False
 
 
 def test_models_and_measurements_are_immutable(rng):

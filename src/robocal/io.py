@@ -17,18 +17,21 @@ ANGLE_UNITS = {"rad": 1.0, "deg": math.pi / 180.0}  # unit name -> radians per u
 _WRITE_BITS = stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH  # a file without any is read-only, even for root
 
 
-def length_scale(unit: str, what: str = "length unit") -> float:
-    """Metres per ``unit`` ('m' or 'mm'); DataError for anything else."""
+def length_scale(unit: str, error: type[RobocalError] = DataError) -> float:
+    """Metres per ``unit`` ('m' or 'mm'); ``error`` (a RobocalError type) for anything else."""
     if unit not in LENGTH_UNITS:
-        raise DataError(f"unknown {what} {unit!r}: use 'm' or 'mm'")
+        raise error(f"unknown length unit {unit!r}: use 'm' or 'mm'")
     return LENGTH_UNITS[unit]
 
 
-def angle_scale(unit: str, what: str = "angle unit") -> float:
-    """Radians per ``unit`` ('rad' or 'deg'); DataError for anything else."""
-    if unit not in ANGLE_UNITS:
-        raise DataError(f"unknown {what} {unit!r}: use 'rad' or 'deg'")
-    return ANGLE_UNITS[unit]
+def as_number(value, where: str, error: type[RobocalError] = DataError) -> float:
+    """``value`` (an int or float read from a user's file, not a bool) as a finite float; else
+    ``error`` (a RobocalError type) naming ``where``."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise error(f"{where}: expected a number, got {value!r}")
+    if not math.isfinite(value):
+        raise error(f"{where}: {value!r} is not finite")
+    return float(value)
 
 
 def read_text(path, what: str, error: type[RobocalError] = DataError) -> str:

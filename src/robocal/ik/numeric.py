@@ -10,11 +10,12 @@ model (its OPW form) in the requested branch, with this robot's base and tool.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 
-from robocal.damped_least_squares import minimize
+from robocal.damped_least_squares import Status, minimize
 from robocal.errors import DataError, UnreachableError
 from robocal.ik.opw_ik import branch_slot, check_poses, seed_branches, solve_branches
 from robocal.kinematics.model import Robot
@@ -30,7 +31,8 @@ WRIST_SPIN_DEG = 30.0  # how far restarts turn joints 4 and 6 about an almost al
 @dataclass(frozen=True)
 class IKResult:
     """Joints ``(N, n)`` rad, ``converged`` ``(N,)``, final ``position_error`` ``(N,)`` m and
-    ``orientation_error`` ``(N,)`` rad, the seeds used ``(N, n)`` and the iteration count."""
+    ``orientation_error`` ``(N,)`` rad, the seeds used ``(N, n)`` and ``iterations``, the most
+    accepted steps any target took over all its runs (see :func:`solve`)."""
 
     joints: np.ndarray
     converged: np.ndarray
@@ -76,9 +78,7 @@ class _Targets:
         return self.c[m] - np.einsum("kr,kr->k", left, left)
 
     def converged(self, m: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-        err = self.err[m]
-        return ((np.linalg.norm(err[:, :3], axis=1) <= self.tol[0])
-                & (np.linalg.norm(err[:, 3:], axis=1) <= self.tol[1]))
+        return _within(self.err[m], self.tol)
 
     def trial_cost(self, m: np.ndarray) -> np.ndarray:
         self.q_trial[m] = self.q[m] + self.step[m]
@@ -95,10 +95,13 @@ def _nominal_model(robot: Robot, nominal: Robot | None) -> Robot:
                                                                                 tool=robot.tool)
 
 
-def _nominal_branches(robot: Robot, T: np.ndarray, nominal: Robot | None) -> tuple[np.ndarray, np.ndarray]:
-    """Seeds ``(N, 8, 6)`` per branch slot: the nominal closed-form solution where it exists, else
-    the clamped closed form (:func:`robocal.ik.opw_ik.seed_branches`: the target is a little beyond
-    the nominal reach, which the robot may still reach); and ``(N, 8)`` whether the exact one exists."""
+def nominal_branches(robot: Robot, T: np.ndarray,
+                     nominal: Robot | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Seeds ``(N, 8, 6)`` (rad) per branch slot for checked world poses ``T``: the closed-form
+    solution of the nominal model (``nominal``, default the robot's own, with this robot's base
+    and tool) where it exists, else the clamped closed form (:func:`robocal.ik.opw_ik.seed_branches`:
+    the target is a little beyond the nominal reach, which the robot may still reach); and
+    ``(N, 8)`` whether the exact one exists."""
     model = _nominal_model(robot, nominal)
     sols = solve_branches(model, T)
     exists = np.isfinite(sols).all(axis=2)
@@ -111,7 +114,7 @@ def _nominal_branches(robot: Robot, T: np.ndarray, nominal: Robot | None) -> tup
 def _nominal_candidates(robot: Robot, T: np.ndarray, nominal: Robot | None = None) -> np.ndarray:
     """Seeds ``(N, 8, 6)`` ordered per pose: the nominal solutions inside the limits first, then
     the other existing ones, then the clamped seeds, each group in slot order."""
-    sols, exists = _nominal_branches(robot, T, nominal)
+    sols, exists = nominal_branches(robot, T, nominal)
     inside = exists & ((sols >= robot.limits[:, 0]) & (sols <= robot.limits[:, 1])).all(axis=2)
     rank = np.where(inside, 0, np.where(exists, 1, 2)) * 8 + np.arange(8)
     order = np.argsort(rank, axis=1)
@@ -125,27 +128,48 @@ def nominal_seeds(robot: Robot, T: np.ndarray, branch: int | None = None,
 
     ``branch`` picks the slot (0..7, see :mod:`robocal.ik.opw_ik`); None takes, per pose, the
     lowest slot inside the joint limits, else the lowest that exists. Where the nominal model has
-    no solution in the slot, the clamped closed form seeds it (see :func:`_nominal_branches`).
+    no solution in the slot, the clamped closed form seeds it (see :func:`nominal_branches`).
     """
     if branch is not None:
         if not 0 <= int(branch) < 8:
             raise DataError(f"branch must be 0..7 (slot = 4 * wrist_flip + 2 * shoulder + elbow), "
                             f"got {branch}")
-        return _nominal_branches(robot, T, nominal)[0][:, int(branch)]
+        return nominal_branches(robot, T, nominal)[0][:, int(branch)]
     return _nominal_candidates(robot, T, nominal)[:, 0]
 
 
-def _errors(robot: Robot, T: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    err = pose_error(T, robot.fk(q))
-    return np.linalg.norm(err[:, :3], axis=1), np.linalg.norm(err[:, 3:], axis=1)
+def _within(err: np.ndarray, tol: tuple[float, float]) -> np.ndarray:
+    """``(N,)`` bool: pose errors ``(N, 6)`` within (position m, rotation rad) ``tol``."""
+    return (np.linalg.norm(err[:, :3], axis=1) <= tol[0]) & (np.linalg.norm(err[:, 3:], axis=1) <= tol[1])
 
 
-def _descend(robot: Robot, T: np.ndarray, q0: np.ndarray, max_iter: int, tol: tuple[float, float]):
-    """The damped loop from ``q0`` ``(N, n)``: (joints, converged, iterations)."""
+class _Run(NamedTuple):
+    """Where damped runs left their targets: joints ``(N, n)``, pose errors ``(N, 6)``, converged
+    ``(N,)`` (errors within the tolerances), how the last run stopped ``(N,)`` (:class:`Status`)
+    and accepted steps ``(N,)`` over all runs."""
+
+    q: np.ndarray
+    err: np.ndarray
+    ok: np.ndarray
+    status: np.ndarray
+    nit: np.ndarray
+
+    def rows(self, rows: np.ndarray) -> _Run:
+        """A copy of the targets ``rows``."""
+        return _Run(*(v[rows].copy() for v in self))
+
+    def take(self, rows: np.ndarray, other: _Run, which: np.ndarray) -> None:
+        """Targets ``rows[which]`` <- ``other``'s ``which`` (steps: ``other``'s are added to all ``rows``)."""
+        self.nit[rows] += other.nit
+        for have, new in zip(self[:4], other[:4], strict=True):
+            have[rows[which]] = new[which]
+
+
+def _descend(robot: Robot, T: np.ndarray, q0: np.ndarray, max_iter: int, tol: tuple[float, float]) -> _Run:
+    """The damped loop from ``q0`` ``(N, n)``."""
     targets = _Targets(robot, T, q0, *tol)
     out = minimize(targets, max_iter)
-    pe, re = _errors(robot, T, targets.q)
-    return targets.q, (pe <= tol[0]) & (re <= tol[1]), int(out.nit.max(initial=0))
+    return _Run(targets.q, targets.err, _within(targets.err, tol), out.status, out.nit)
 
 
 def _restart_offsets(n: int) -> np.ndarray:
@@ -167,49 +191,65 @@ def _restart_offsets(n: int) -> np.ndarray:
     return np.unique(np.array(offsets), axis=0)
 
 
-def _retry(robot: Robot, T: np.ndarray, q0: np.ndarray, q: np.ndarray, ok: np.ndarray, max_iter: int,
-           tol: tuple[float, float], opw) -> tuple[np.ndarray, np.ndarray]:
-    """Targets not reached from their seeds: first continue from the best joints found (slow
-    convergence near a singular wrist or elbow), then restart from the seed moved off the nearby
-    singularity (:func:`_restart_offsets`), keeping solutions in the seed's branch (by the nominal
-    OPW form ``opw`` when there is one) and taking the one nearest the seed."""
-    todo = np.flatnonzero(~ok & np.isfinite(q0).all(axis=1))
-    if todo.size:
-        q[todo], ok[todo], _ = _descend(robot, T[todo], q[todo], max_iter, tol)
-    todo = todo[~ok[todo]]
-    if not todo.size:
-        return q, ok
+def _restarts(robot: Robot, T: np.ndarray, q0: np.ndarray, max_iter: int, tol: tuple[float, float],
+              opw) -> _Run:
+    """Targets restarted from their seeds ``q0`` ``(N, n)`` moved off a nearby singularity
+    (:func:`_restart_offsets`): per target the converged restart nearest the seed, in the seed's
+    branch (by the nominal OPW form ``opw`` when there is one); ``nit`` counts each target's
+    longest restart."""
     offsets = _restart_offsets(robot.n_joints)
-    K = len(offsets)
-    starts = (q0[todo][:, None, :] + offsets[None]).reshape(-1, robot.n_joints)
-    qs, oks, _ = _descend(robot, np.repeat(T[todo], K, axis=0), starts, max_iter, tol)
-    qs, oks = qs.reshape(todo.size, K, -1), oks.reshape(todo.size, K)
+    N, K = len(q0), len(offsets)
+    starts = (q0[:, None, :] + offsets[None]).reshape(-1, robot.n_joints)
+    run = _descend(robot, np.repeat(T, K, axis=0), starts, max_iter, tol)
+    qs, oks = run.q.reshape(N, K, -1), run.ok.reshape(N, K)
     if opw is not None:  # the controller asked for the seed's branch
-        oks &= branch_slot(opw, qs) == branch_slot(opw, q0[todo])[:, None]
-    dist = np.where(oks, np.abs(np.remainder(qs - q0[todo][:, None] + np.pi, 2 * np.pi) - np.pi).sum(-1),
-                    np.inf)
-    best = np.argmin(dist, axis=1)
-    found = oks[np.arange(todo.size), best]
-    q[todo[found]] = qs[found, best[found]]
-    ok[todo[found]] = True
-    return q, ok
+        oks &= branch_slot(opw, qs) == branch_slot(opw, q0)[:, None]
+    dist = np.where(oks, np.abs(np.remainder(qs - q0[:, None] + np.pi, 2 * np.pi) - np.pi).sum(-1), np.inf)
+    pick = np.arange(N) * K + np.argmin(dist, axis=1)
+    return _Run(run.q[pick], run.err[pick], oks.reshape(-1)[pick], run.status[pick],
+                run.nit.reshape(N, K).max(axis=1))
+
+
+def _retry(robot: Robot, T: np.ndarray, q0: np.ndarray, run: _Run, max_iter: int, tol: tuple[float, float],
+           opw) -> None:
+    """The targets of ``run`` (from seeds ``q0``) not reached, in place: those stopped at the
+    iteration limit (slow convergence near a singular wrist or elbow) continue for another
+    ``max_iter`` steps (continuing a stalled one would repeat its stall); those still not reached
+    restart from the seed moved off the singularity (:func:`_restarts`)."""
+    seeded = np.isfinite(q0).all(axis=1)
+    rows = np.flatnonzero(~run.ok & seeded & (run.status == Status.MAX_ITERATIONS))
+    if rows.size:
+        run.take(rows, _descend(robot, T[rows], run.q[rows], max_iter, tol), np.ones(rows.size, bool))
+    rows = np.flatnonzero(~run.ok & seeded)
+    if rows.size:
+        again = _restarts(robot, T[rows], q0[rows], max_iter, tol, opw)
+        run.take(rows, again, again.ok)
+
+
+def _branch_form(robot: Robot, nominal: Robot | None):
+    """The OPW form that names the branches of this robot's joints (its nominal model's), or None."""
+    return (robot.opw if nominal is None else nominal.opw) if robot.n_joints == 6 else None
+
+
+def _result(robot: Robot, q0: np.ndarray, run: _Run) -> IKResult:
+    """The IKResult of ``run`` from seeds ``q0`` (NaN rows: no seed, not converged): joints on the
+    seed's turn (joints with more than 360 deg of travel), then moved into the limits."""
+    seeded = np.isfinite(q0).all(axis=1)
+    start = np.where(np.isfinite(q0), q0, 0.0)
+    q = start + (np.remainder(run.q - start + np.pi, 2 * np.pi) - np.pi)
+    q = np.where(q < robot.limits[:, 0], q + 2 * np.pi, np.where(q > robot.limits[:, 1], q - 2 * np.pi, q))
+    return IKResult(q, run.ok & seeded, np.linalg.norm(run.err[:, :3], axis=1),
+                    np.linalg.norm(run.err[:, 3:], axis=1), np.array(q0), int(run.nit.max(initial=0)))
 
 
 def _solve_from(robot: Robot, T: np.ndarray, q0: np.ndarray, nominal: Robot | None, max_iter: int,
-                tol: tuple[float, float], retry: bool) -> IKResult:
+                tol: tuple[float, float], retry: bool) -> tuple[IKResult, _Run]:
     """IK from seeds ``q0`` ``(N, n)`` (NaN rows: no seed, not converged), with the singular-case
-    retries of :func:`_retry` when ``retry``."""
-    start = np.where(np.isfinite(q0), q0, 0.0)
-    q, converged, it = _descend(robot, T, start, max_iter, tol)
+    retries of :func:`_retry` when ``retry``; also the run (raw joints, steps) behind the result."""
+    run = _descend(robot, T, np.where(np.isfinite(q0), q0, 0.0), max_iter, tol)
     if retry:
-        opw = (robot.opw if nominal is None else nominal.opw) if robot.n_joints == 6 else None
-        q, converged = _retry(robot, T, start, q, converged, max_iter, tol, opw)
-    converged &= np.isfinite(q0).all(axis=1)
-    pe, re = _errors(robot, T, q)
-    # stay on the seed's turn (joints with more than 360 deg of travel), then into the limits
-    q = start + (np.remainder(q - start + np.pi, 2 * np.pi) - np.pi)
-    q = np.where(q < robot.limits[:, 0], q + 2 * np.pi, np.where(q > robot.limits[:, 1], q - 2 * np.pi, q))
-    return IKResult(q, converged, pe, re, np.array(q0), it)
+        _retry(robot, T, q0, run, max_iter, tol, _branch_form(robot, nominal))
+    return _result(robot, q0, run), run
 
 
 def _update(res: IKResult, rows: np.ndarray, alt: IKResult) -> None:
@@ -230,10 +270,13 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
     in ``branch`` (see :func:`nominal_seeds`; needs an OPW form on the nominal model, ``nominal``
     or the robot's own); with neither, each pose starts from its preferred nominal branch and,
     if that fails, tries the next ones (inside the limits first, then slot order). Targets still
-    not reached are retried from their seed moved off a nearby singularity (:func:`_retry`).
-    Converged means position error <= ``pos_tol`` (1e-10 m) and rotation error <= ``rot_tol``
-    (1e-9 rad). Poses that do not converge are flagged in ``converged``; ``strict=True`` raises
-    UnreachableError listing them instead.
+    not reached are retried (:func:`_retry`): continued if they stopped at ``max_iter`` (accepted
+    steps per run of the damped loop), then restarted from their seed moved off a nearby
+    singularity. Converged means position error <= ``pos_tol`` (1e-10 m) and rotation error <=
+    ``rot_tol`` (1e-9 rad). Poses that do not converge are flagged in ``converged``;
+    ``strict=True`` raises UnreachableError listing them instead.
+    ``iterations`` is the most accepted steps any target took over all its runs (branches tried,
+    continuation, restarts: the longest restart of each).
     """
     T = check_poses(poses)
     N, n = T.shape[0], robot.n_joints
@@ -242,15 +285,21 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
         # per pose the preferred nominal branch; where the robot has no solution in it, the next
         # branch in preference order; the singular-case retries only where every branch failed
         cands = _nominal_candidates(robot, T, nominal)
-        res = _solve_from(robot, T, cands[:, 0], nominal, max_iter, tol, retry=False)
+        res, first = _solve_from(robot, T, cands[:, 0], nominal, max_iter, tol, retry=False)
+        nit = first.nit.copy()
         for b in range(1, 8):
             rows = np.flatnonzero(~res.converged & np.isfinite(cands[:, b]).all(axis=1))
             if rows.size:
-                _update(res, rows, _solve_from(robot, T[rows], cands[rows, b], nominal, max_iter, tol, False))
+                alt, run = _solve_from(robot, T[rows], cands[rows, b], nominal, max_iter, tol, False)
+                _update(res, rows, alt)
+                nit[rows] += run.nit
         rows = res.failed
-        if rows.size:
-            _update(res, rows, _solve_from(robot, T[rows], cands[rows, 0], nominal, max_iter, tol, True))
-        return _finish(res, N, pos_tol, rot_tol, strict)
+        if rows.size:  # the preferred branch's retries, from where its first run stopped
+            run = first.rows(rows)
+            _retry(robot, T[rows], cands[rows, 0], run, max_iter, tol, _branch_form(robot, nominal))
+            _update(res, rows, _result(robot, cands[rows, 0], run))
+            nit[rows] += run.nit - first.nit[rows]
+        return _finish(replace(res, iterations=int(nit.max(initial=0))), N, pos_tol, rot_tol, strict)
     if seeds is None:
         q0 = nominal_seeds(robot, T, branch, nominal)
     else:
@@ -259,7 +308,8 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
             q0 = np.broadcast_to(q0, (N, n))
         if q0.shape != (N, n):
             raise DataError(f"seeds must have shape ({N}, {n}), got {q0.shape}")
-    return _finish(_solve_from(robot, T, q0, nominal, max_iter, tol, retry=True), N, pos_tol, rot_tol, strict)
+    return _finish(_solve_from(robot, T, q0, nominal, max_iter, tol, retry=True)[0], N, pos_tol, rot_tol,
+                   strict)
 
 
 def _finish(result: IKResult, N: int, pos_tol: float, rot_tol: float, strict: bool) -> IKResult:

@@ -176,12 +176,22 @@ def _wrap(q: np.ndarray) -> np.ndarray:
     return q - (2 * np.pi) * np.floor((q + np.pi) * (0.5 / np.pi))
 
 
+def _robot_joints(opw: OPWParameters, paper: np.ndarray) -> np.ndarray:
+    """Robot joints (rad, wrapped to [-pi, pi)) of paper angles ``(..., 6)``: q = (theta + offset) * sign."""
+    return _wrap((paper + np.asarray(opw.offsets, float)) * np.asarray(opw.signs, float))
+
+
+def _opw_frames(robot: Robot, opw: OPWParameters) -> tuple[np.ndarray, np.ndarray]:
+    """``(pre, post)`` 4x4 with flange (OPW base frame) = pre @ T @ post for world TCP poses T."""
+    pre = invert_transform(robot.base)
+    post = invert_transform(robot.tool) @ invert_transform(_flange_correction(robot, opw))
+    return pre, post
+
+
 def _solve_chunk(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.ndarray, T: np.ndarray,
                  tol: float) -> np.ndarray:
     """Verified branches of world poses ``T``; flange = pre @ T @ post in the OPW base frame."""
-    flange = pre @ T @ post
-    paper = paper_branches(opw, flange)
-    q = _wrap((paper + np.asarray(opw.offsets, float)) * np.asarray(opw.signs, float))
+    q = _robot_joints(opw, paper_branches(opw, pre @ T @ post))
     ok = np.isfinite(q).all(axis=2)
     q[~ok] = 0.0
     fk = chain_fk(robot.links, robot.base, robot.tool, q.reshape(-1, 6)).reshape(-1, 8, 16)
@@ -210,9 +220,7 @@ def solve_branches(robot: Robot, T: np.ndarray, tol: float = TOL, threads: int |
 
     Raises ModelError when the robot's chain does not follow an OPW form (:func:`opw_form`)."""
     opw = opw_form(robot)
-    pre = invert_transform(robot.base)
-    post = invert_transform(robot.tool) @ invert_transform(_flange_correction(robot, opw))
-    solve, size = _chunk_solver(robot, opw, pre, post, tol)
+    solve, size = _chunk_solver(robot, opw, *_opw_frames(robot, opw), tol)
     N = T.shape[0]
     parts = [slice(s, min(s + size, N)) for s in range(0, N, size)]
     out = np.empty((N, 8, 6))
@@ -236,10 +244,8 @@ def seed_branches(robot: Robot, T: np.ndarray) -> np.ndarray:
     verified: a pose just beyond the nominal reach (a calibrated robot may reach it) still gets a
     seed in each branch, off the singular stretched arm where the reach's gradient vanishes."""
     opw = opw_form(robot)
-    pre = invert_transform(robot.base)
-    post = invert_transform(robot.tool) @ invert_transform(_flange_correction(robot, opw))
-    paper = paper_branches(opw, pre @ T @ post, seed_margin=SEED_MARGIN)
-    return _wrap((paper + np.asarray(opw.offsets, float)) * np.asarray(opw.signs, float))
+    pre, post = _opw_frames(robot, opw)
+    return _robot_joints(opw, paper_branches(opw, pre @ T @ post, seed_margin=SEED_MARGIN))
 
 
 def branch_bits(opw: OPWParameters, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

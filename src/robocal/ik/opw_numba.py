@@ -5,7 +5,9 @@ formulas of :func:`robocal.ik.opw_ik.paper_branches` in the same order (same cla
 singular-wrist rule, same slot order), turns them into robot joints as ``_solve_chunk`` does, then
 verifies all 8 solutions of a block of poses with the robot's MDH chain
 (:func:`robocal.kinematics.fk_numba.chain_block`, the compiled ``robot.fk``) against the target to
-``tol`` (m, rad): nothing is returned unchecked.
+``tol`` (m, rad): nothing is returned unchecked. The kernel compiles ``opw_ik._wrap`` and
+``fk_numba.chain_block`` into itself, and numba's on-disk cache is keyed on this file only: after
+editing those, delete the cache files (see :mod:`robocal.kinematics.fk_numba`).
 """
 
 from __future__ import annotations
@@ -16,12 +18,13 @@ from collections.abc import Callable
 import numba
 import numpy as np
 
-from robocal.ik.opw_ik import _CLAMP, _SINGULAR
-from robocal.kinematics.fk_numba import chain_block, link_constants, sin_cos
+from robocal.ik.opw_ik import _CLAMP, _SINGULAR, _wrap
+from robocal.kinematics.fk_numba import chain_block, cos_sin, link_constants
 from robocal.kinematics.model import Robot
 
 _POSES = 64  # poses per verification block (8 solutions each)
 _JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
+_wrap_one = numba.njit(_wrap)  # the numpy path's wrap into [-pi, pi), compiled for one value
 
 
 @numba.njit
@@ -32,11 +35,6 @@ def _clamp(x: float, lo: float, hi: float, tol: float) -> float:
     if x > hi:
         return hi if x <= hi + tol else np.nan
     return x
-
-
-@numba.njit
-def _wrap(q: float) -> float:
-    return q - (2 * np.pi) * np.floor((q + np.pi) * (0.5 / np.pi))
 
 
 @numba.njit
@@ -66,14 +64,14 @@ def _paper_pose(F, geom, out, lane):
         s2 = xs * xs + zs * zs
         D = (s2 - c2 * c2 - k * k) / (2.0 * c2 * k) if c2 * k > 0 else np.nan
         phi = math.acos(_clamp(D, -1.0, 1.0, _CLAMP))
-        cp, sp = sin_cos(phi)
+        cp, sp = cos_sin(phi)
         bend = math.atan2(k * sp, c2 + k * cp)
         reach = math.atan2(xs, zs)
-        c1_, s1_ = sin_cos(q1)
+        c1_, s1_ = cos_sin(q1)
         for el in range(2):
             q2 = reach - (bend if el == 0 else -bend)
             q3 = (phi if el == 0 else -phi) - psi3
-            c23, s23 = sin_cos(q2 + q3)
+            c23, s23 = cos_sin(q2 + q3)
             # M = (Rz(q1) Ry(q2 + q3))^T R with rows u0, u1, u2 of (Rz(q1) Ry(q2 + q3))^T
             u00, u01, u02 = c1_ * c23, s1_ * c23, -s23
             u10, u11, u12 = -s1_, c1_, 0.0
@@ -86,7 +84,7 @@ def _paper_pose(F, geom, out, lane):
             M01 = u00 * F[0, 1] + u01 * F[1, 1] + u02 * F[2, 1]
             M11 = u10 * F[0, 1] + u11 * F[1, 1] + u12 * F[2, 1]
             q4 = 0.0 if M02 * M02 + M12 * M12 < _SINGULAR * _SINGULAR else math.atan2(M12, M02)
-            c4_, s4_ = sin_cos(q4)
+            c4_, s4_ = cos_sin(q4)
             p02 = c4_ * M02 + s4_ * M12
             p10 = c4_ * M10 - s4_ * M00
             p11 = c4_ * M11 - s4_ * M01
@@ -119,7 +117,7 @@ def _solve_kernel(T, pre, post, geom, offsets, signs, theta, A, a, d, base, tool
         for L in range(8 * m):
             ok = True
             for j in range(6):
-                q[j, L] = _wrap((q[j, L] + offsets[j]) * signs[j])
+                q[j, L] = _wrap_one((q[j, L] + offsets[j]) * signs[j])
                 ok &= np.isfinite(q[j, L])
             valid[L] = ok
             for j in range(6):

@@ -24,8 +24,9 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from robocal.errors import DataError, ModelError, UnreachableError
+from robocal.ik.numeric import nominal_branches
 from robocal.ik.numeric import solve as ik_solve
-from robocal.ik.opw_ik import check_poses, solve_branches, turn_copies
+from robocal.ik.opw_ik import branch_slot, check_poses, solve_branches, turn_copies
 from robocal.kinematics.model import Robot
 
 _EDGE_CHUNK = 4_000_000  # pair evaluations per block when building edges (bounds memory)
@@ -91,23 +92,25 @@ def _greedy(cand: np.ndarray, valid: np.ndarray, w: np.ndarray, first: np.ndarra
 
 def branch_candidates(robot: Robot, T: np.ndarray, nominal: Robot | None = None) -> np.ndarray:
     """The 8 branches ``(M, 8, 6)`` (rad, NaN where absent) of checked poses ``T``: closed form
-    when the robot follows its OPW form, else (a calibrated model) the nominal closed form
-    (``nominal``, default the robot's own nominal model, with this robot's base and tool) in
-    each branch refined by numeric IK on the robot; branches it does not reach are NaN."""
+    when the robot follows its OPW form, else (a calibrated model) numeric IK on the robot seeded
+    in each branch by the nominal model (``nominal``, default the robot's own nominal model, with
+    this robot's base and tool: :func:`robocal.ik.numeric.nominal_branches`); branches it does not
+    reach in their slot (by the nominal OPW form) are NaN."""
     try:
         return solve_branches(robot, T)
     except ModelError:
         if nominal is None and robot.opw is None:
             raise
-    model = robot.nominal_robot() if nominal is None else nominal
-    seeds = solve_branches(model.with_frames(base=robot.base, tool=robot.tool), T)
+    seeds = nominal_branches(robot, T, nominal)[0]
     flat = seeds.reshape(-1, robot.n_joints)
     ok = np.flatnonzero(np.isfinite(flat).all(axis=1))
     out = np.full(flat.shape, np.nan)
     if ok.size:
-        res = ik_solve(robot, np.repeat(T, 8, axis=0)[ok], flat[ok])
+        res = ik_solve(robot, np.repeat(T, 8, axis=0)[ok], flat[ok], nominal=nominal)
         q = np.remainder(res.joints + np.pi, 2 * np.pi) - np.pi  # as the closed form: [-pi, pi)
-        out[ok[res.converged]] = q[res.converged]
+        opw = robot.opw if nominal is None else nominal.opw
+        own = res.converged & (branch_slot(opw, q) == ok % 8)  # a solution of another slot is that slot's
+        out[ok[own]] = q[own]
     return out.reshape(seeds.shape)
 
 

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from robocal.errors import DataError, ModelError
+from robocal.errors import ModelError
 from robocal.io import ANGLE_UNITS, length_scale
 from robocal.kinematics.opw import OPWParameters
 
@@ -73,6 +73,14 @@ def _frame(x: np.ndarray, z: np.ndarray, o: np.ndarray) -> np.ndarray:
     T = np.eye(4)
     T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = x, np.cross(z, x), z, o
     return T
+
+
+def default_parallel(alpha) -> np.ndarray:
+    """``(n,)`` bool: axis i is nominally parallel to axis i-1 (so beta_i is a parameter) where
+    ``|sin alpha_i| < PARALLEL_TOL``; never the first axis (rad)."""
+    parallel = np.abs(np.sin(np.asarray(alpha, dtype=float))) < PARALLEL_TOL
+    parallel[:1] = False
+    return parallel
 
 
 def _snap(values: np.ndarray, grid: float, tol: float) -> np.ndarray:
@@ -138,10 +146,8 @@ def mdh_from_axes(joint_frames: np.ndarray, flange: np.ndarray) -> dict:
     a, d = _snap(a, 1.0, 1e-15), _snap(d, 1.0, 1e-15)
     tool = np.linalg.solve(F[-1], flange)
     tool[:3] = _snap(tool[:3], 1.0, 1e-15)
-    parallel = np.abs(np.sin(alpha)) < PARALLEL_TOL
-    parallel[0] = False
     return {"alpha": alpha, "a": a, "beta": np.zeros(n), "theta": theta, "d": d,
-            "base": F[0], "tool": tool, "parallel": parallel}
+            "base": F[0], "tool": tool, "parallel": default_parallel(alpha)}
 
 
 def _table(values, n: int | None, what: str) -> np.ndarray:
@@ -155,25 +161,43 @@ def _table(values, n: int | None, what: str) -> np.ndarray:
     return arr
 
 
-def model_length_scale(length_unit: str) -> float:
-    """Metres per ``length_unit`` of a model table ('m' or 'mm'); ModelError otherwise."""
-    try:
-        return length_scale(length_unit)
-    except DataError as exc:
-        raise ModelError(str(exc)) from None
-
-
 def _finish(mdh: dict, degrees: bool, kw: dict) -> dict:
     """Robot keyword arguments: user base/tool wrap the converted ones, limits converted from deg."""
     base = mdh["base"] if kw.get("base") is None else np.asarray(kw["base"], float) @ mdh["base"]
     tool = mdh["tool"] if kw.get("tool") is None else mdh["tool"] @ np.asarray(kw["tool"], float)
     kw = {**kw, "base": base, "tool": tool}
     kw.setdefault("parallel", mdh["parallel"])
+    _limits(kw, degrees)
+    return {"alpha": mdh["alpha"], "a": mdh["a"], "beta": mdh["beta"], "theta": mdh["theta"],
+            "d": mdh["d"], **kw}
+
+
+def _limits(kw: dict, degrees: bool) -> None:
+    """``kw["limits"]`` (when given) from degrees to rad when ``degrees``."""
     if kw.get("limits") is not None:
         limits = np.asarray(kw["limits"], dtype=float)
         kw["limits"] = limits * ANGLE_UNITS["deg"] if degrees else limits
-    return {"alpha": mdh["alpha"], "a": mdh["a"], "beta": mdh["beta"], "theta": mdh["theta"],
-            "d": mdh["d"], **kw}
+
+
+def mdh_kwargs(alpha: Sequence[float], a: Sequence[float], theta: Sequence[float], d: Sequence[float],
+               beta: Sequence[float] | None = None, *, degrees: bool = False, length_unit: str = "m",
+               **kw) -> dict:
+    """Robot keyword arguments from Craig's modified DH rows (alpha_{i-1}, a_{i-1}, theta offset,
+    d_i) and Hayati's beta (default 0), in ``length_unit`` and deg or rad.
+
+    ``parallel`` defaults to :func:`default_parallel`; ``base`` / ``tool`` in ``kw`` (4x4, m) are
+    the model's own frames; ``limits`` ``(n, 2)`` are in degrees when ``degrees``.
+    """
+    scale = length_scale(length_unit, ModelError)
+    ang = ANGLE_UNITS["deg"] if degrees else 1.0
+    al = _table(alpha, None, "MDH alpha") * ang
+    n = al.size
+    kw = {"alpha": al, "a": _table(a, n, "MDH a") * scale, "theta": _table(theta, n, "MDH theta") * ang,
+          "d": _table(d, n, "MDH d") * scale,
+          "beta": np.zeros(n) if beta is None else _table(beta, n, "MDH beta") * ang, **kw}
+    kw.setdefault("parallel", default_parallel(al))
+    _limits(kw, degrees)
+    return kw
 
 
 def dh_kwargs(theta_offsets: Sequence[float], d: Sequence[float], a: Sequence[float],
@@ -185,7 +209,7 @@ def dh_kwargs(theta_offsets: Sequence[float], d: Sequence[float], a: Sequence[fl
     ``kw`` (4x4, m) are world -> DH base and DH flange -> TCP. ``limits`` ``(n, 2)`` are in degrees
     when ``degrees``.
     """
-    scale = model_length_scale(length_unit)
+    scale = length_scale(length_unit, ModelError)
     ang = ANGLE_UNITS["deg"] if degrees else 1.0
     th = _table(theta_offsets, None, "DH theta offsets") * ang
     n = th.size
@@ -214,7 +238,7 @@ def opw_parameters(a1: float, a2: float, b: float, c1: float, c2: float, c3: flo
                    offsets: Sequence[float] = (0.0,) * 6, signs: Sequence[int] = (1,) * 6, *,
                    degrees: bool = False, length_unit: str = "m") -> OPWParameters:
     """An OPW parameter set in SI from values in ``length_unit`` and (offsets) deg or rad."""
-    scale = model_length_scale(length_unit)
+    scale = length_scale(length_unit, ModelError)
     lengths = _table([a1, a2, b, c1, c2, c3, c4], 7, "OPW lengths (a1, a2, b, c1, c2, c3, c4)") * scale
     off = _table(offsets, 6, "OPW offsets") * (ANGLE_UNITS["deg"] if degrees else 1.0)
     return OPWParameters(*lengths, offsets=tuple(off), signs=tuple(_table(signs, 6, "OPW signs")))

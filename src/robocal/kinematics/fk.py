@@ -135,13 +135,14 @@ def _fast_ok(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarra
 
 # sin/cos by reduction modulo pi (Cody-Waite: P1 has 33 significant bits, so n * P1 is exact for
 # |n| < 2**20) and Taylor polynomials on [-pi/2, pi/2] to r**21 / r**22 (truncation < 3e-16).
-# In numpy this is about twice as fast as np.sin + np.cos (libm, not vectorised) and agrees with
-# them to 3e-16; used while |angle| <= _POLY_MAX.
+# In numpy this is about 4x as fast as np.sin + np.cos (libm, not vectorised; bench_fk prints the
+# ratio on a 6 x FAST_CHUNK block) and agrees with them to 3e-16; used while |angle| <= _POLY_MAX.
 _P1 = 2 * 1.57079632673412561417e00
 _P1T = 2 * 6.07710050650619224932e-11
 _SIN = [(-1) ** k / math.factorial(2 * k + 1) for k in range(1, 11)]
 _COS = [(-1) ** k / math.factorial(2 * k) for k in range(2, 12)]
 _POLY_MAX = 1e5
+_RESIDUE = 1e-15  # |cos|, |sin| of a link's constant angle below this are rounding residue: 0
 
 
 def _sin_cos(x: np.ndarray, c: np.ndarray, s: np.ndarray, work: np.ndarray) -> None:
@@ -177,10 +178,11 @@ def _sin_cos(x: np.ndarray, c: np.ndarray, s: np.ndarray, work: np.ndarray) -> N
     np.multiply(c, z, out=c)
 
 
-def _cos_sin(angle: float) -> tuple[float, float]:
-    """cos, sin with the 1e-17 residue at multiples of pi/2 removed (so those become swaps)."""
-    c, s = float(np.cos(angle)), float(np.sin(angle))
-    return (0.0 if abs(c) < 1e-15 else c), (0.0 if abs(s) < 1e-15 else s)
+def _cos_sin(angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """cos, sin of ``angles`` (rad) with the 1e-17 residue at multiples of pi/2 removed (so those
+    become swaps)."""
+    c, s = np.cos(angles), np.sin(angles)
+    return np.where(np.abs(c) < _RESIDUE, 0.0, c), np.where(np.abs(s) < _RESIDUE, 0.0, s)
 
 
 class _Frame:
@@ -291,8 +293,8 @@ def _fast_chain(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nda
         saved = np.empty((N, n + 1, 4, 4))
         saved[:, :, 3, :] = (0.0, 0.0, 0.0, 1.0)
         saved[:, 0] = base
-    alpha_cs = [_cos_sin(v) for v in links.alpha]
-    beta_cs = [_cos_sin(v) for v in links.beta]
+    alpha_cs = np.stack(_cos_sin(links.alpha), axis=1).tolist()  # [[cos, sin], ...] as floats
+    beta_cs = np.stack(_cos_sin(links.beta), axis=1).tolist()
     a, d, theta = (np.asarray(v, dtype=float) for v in (links.a, links.d, links.theta))
     # joint 1 starts from a constant frame: base * Rx(alpha1) Tx(a1) Ry(beta1)
     R1 = _rx_ry(base[:3, :3], *alpha_cs[0], *beta_cs[0])

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from robocal.kinematics.fk import _COS, _P1, _P1T, _POLY_MAX, _SIN, LinkArrays, _cos_sin, _rx_ry
+from robocal.kinematics.fk import _COS, _P1, _P1T, _POLY_MAX, _SIN, LinkArrays, _cos_sin
 
 BLOCK = 512  # poses per block: the block's rows stay in the L1/L2 cache
 _JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
@@ -25,7 +25,7 @@ C1, C2, C3, C4, C5, C6, C7, C8, C9, C10 = _COS
 
 
 @numba.njit
-def sin_cos(x: float) -> tuple[float, float]:
+def cos_sin(x: float) -> tuple[float, float]:
     """cos(x), sin(x) for |x| <= _POLY_MAX: the polynomial of ``fk._sin_cos``, one value."""
     n = np.rint(x * (1 / np.pi))
     r = (x - n * _P1) - n * _P1T  # x = n pi + r, |r| <= pi/2
@@ -53,7 +53,7 @@ def chain_block(phi, m, A, a, d, base, c, s, F):
     for j in range(n):
         if small:
             for i in range(m):
-                c[j, i], s[j, i] = sin_cos(phi[j, i])
+                c[j, i], s[j, i] = cos_sin(phi[j, i])
         else:
             for i in range(m):
                 c[j, i], s[j, i] = np.cos(phi[j, i]), np.sin(phi[j, i])
@@ -107,8 +107,10 @@ def _fk_kernel(q, theta, A, a, d, base, tool, out):
 def link_constants(links: LinkArrays) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``theta, A, a, d`` of one robot for :func:`chain_block` (A_j = Rx(alpha_j) Ry(beta_j), with
     the rounding residue at multiples of 90 deg removed as in the numpy path)."""
-    A = np.array([_rx_ry(np.eye(3), *_cos_sin(al), *_cos_sin(be))
-                  for al, be in zip(links.alpha, links.beta, strict=True)]).reshape(-1, 3, 3)
+    ca, sa = _cos_sin(links.alpha)
+    cb, sb = _cos_sin(links.beta)
+    zero = np.zeros_like(ca)
+    A = np.stack([cb, zero, sb, sa * sb, ca, -sa * cb, -ca * sb, sa, ca * cb], axis=-1).reshape(-1, 3, 3)
     theta, a, d = (np.ascontiguousarray(v, dtype=float) for v in (links.theta, links.a, links.d))
     return theta, A, a, d
 

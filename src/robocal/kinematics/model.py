@@ -21,6 +21,7 @@ A model is immutable: its arrays are read-only, and every change (:meth:`displac
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -29,16 +30,9 @@ from typing import NamedTuple
 import numpy as np
 
 from robocal.errors import DataError, ModelError
-from robocal.io import ANGLE_UNITS, write_atomic
+from robocal.io import as_number, write_atomic
 from robocal.kinematics.catalog import catalog_kwargs
-from robocal.kinematics.convert import (
-    PARALLEL_TOL,
-    dh_kwargs,
-    model_length_scale,
-    opw_chain,
-    opw_kwargs,
-    opw_parameters,
-)
+from robocal.kinematics.convert import dh_kwargs, mdh_kwargs, opw_chain, opw_kwargs, opw_parameters
 from robocal.kinematics.fk import LinkArrays, chain_fk, chain_frames
 from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import JointErrorModel
@@ -150,7 +144,6 @@ class Robot:
         set_(self, "nominal", self._nominal_vector(self.nominal))
         for f in (*LINK_FIELDS, "base", "tool", "limits", "parallel", "smr", "nominal"):
             getattr(self, f).flags.writeable = False
-        set_(self, "_has_opw_form", self._follows_opw())
 
     def _nominal_vector(self, nominal) -> np.ndarray:
         """The nominal geometry vector: the current values when None; a mapping name -> value
@@ -164,16 +157,14 @@ class Robot:
                 unknown = sorted(set(nominal) - set(names))
                 raise ModelError(f"nominal must give every geometry parameter (SI): missing {missing}, "
                                  f"unknown {unknown}")
-            values = []
-            for name in names:
-                v = nominal[name]
-                if isinstance(v, bool) or not isinstance(v, int | float):
-                    raise ModelError(f"nominal.{name}: expected a number, got {v!r}")
-                values.append(v)
-            nominal = values
+            nominal = [as_number(nominal[name], f"nominal.{name}", ModelError) for name in names]
         return _as_vector(nominal, len(names), "nominal parameters")
 
-    def _follows_opw(self) -> bool:
+    @functools.cached_property
+    def has_opw_form(self) -> bool:
+        """Whether this robot's chain is exactly its OPW form (closed-form IK applies): true for a
+        nominal catalog robot with any base and tool, false once a link parameter is displaced
+        or joint-error terms are declared (computed on first use: the model is immutable)."""
         if self.opw is None or self.n_joints != 6 or self.joint_errors is not None:
             return False
         chain = opw_chain(self.opw)
@@ -188,20 +179,11 @@ class Robot:
         """Robot from Craig's modified DH rows (alpha_{i-1}, a_{i-1}, theta offset, d_i).
 
         ``degrees`` and ``length_unit`` ('m' or 'mm') state the units of the given values;
-        axes i-1, i are flagged parallel where alpha_i = 0 (then beta_i is a parameter).
+        axes i-1, i are flagged parallel where alpha_i = 0 (then beta_i is a parameter); see
+        :func:`robocal.kinematics.convert.mdh_kwargs`.
         """
-        ang = ANGLE_UNITS["deg"] if degrees else 1.0
-        scale = model_length_scale(length_unit)
-        alpha = np.asarray(alpha, float) * ang
-        beta = np.zeros_like(alpha) if beta is None else np.asarray(beta, float) * ang
-        if "parallel" not in kwargs:
-            parallel = np.abs(np.sin(alpha)) < PARALLEL_TOL
-            parallel[0] = False
-            kwargs["parallel"] = parallel
-        if kwargs.get("limits") is not None:
-            kwargs["limits"] = np.asarray(kwargs["limits"], float) * ang
-        return cls(alpha=alpha, a=np.asarray(a, float) * scale, beta=beta,
-                   theta=np.asarray(theta, float) * ang, d=np.asarray(d, float) * scale, **kwargs)
+        return cls(**mdh_kwargs(alpha, a, theta, d, beta, degrees=degrees, length_unit=length_unit,
+                                **kwargs))
 
     @classmethod
     def from_dh(cls, theta_offsets: Sequence[float], d: Sequence[float], a: Sequence[float],
@@ -231,13 +213,6 @@ class Robot:
     @property
     def n_joints(self) -> int:
         return self.alpha.size
-
-    @property
-    def has_opw_form(self) -> bool:
-        """Whether this robot's chain is exactly its OPW form (closed-form IK applies): true for a
-        nominal catalog robot with any base and tool, false once a link parameter is displaced
-        or joint-error terms are declared."""
-        return self._has_opw_form
 
     @property
     def geometry_names(self) -> list[str]:
@@ -306,17 +281,20 @@ class Robot:
         vec[idx] = _as_vector(list(updates.values()), len(idx), "parameter values")
         return self._from_vector(vec)
 
-    def _from_vector(self, vec: np.ndarray) -> Robot:
+    def _geometry_kwargs(self, vec: np.ndarray) -> dict:
+        """Link arrays, base, tool and SMR offsets of the geometry part of a parameter vector."""
         n = self.n_joints
         links = vec[: 5 * n].reshape(n, 5)
-        frames = [make_transform(rotvec_to_matrix(v[3:]), v[:3])
-                  for v in (vec[5 * n : 5 * n + 6], vec[5 * n + 6 : 5 * n + 12])]
-        geo = len(self.geometry_names)
-        kw = {f: links[:, k] for k, f in enumerate(LINK_FIELDS)}
+        base, tool = (make_transform(rotvec_to_matrix(v[3:]), v[:3])
+                      for v in (vec[5 * n : 5 * n + 6], vec[5 * n + 6 : 5 * n + 12]))
+        smr = vec[5 * n + 12 : len(self.geometry_names)].reshape(-1, 3)
+        return {**{f: links[:, k] for k, f in enumerate(LINK_FIELDS)}, "base": base, "tool": tool,
+                "smr": smr}
+
+    def _from_vector(self, vec: np.ndarray) -> Robot:
         errors = None if self.joint_errors is None else \
-            JointErrorModel(self.joint_errors.names, vec[geo:])
-        return replace(self, base=frames[0], tool=frames[1], smr=vec[5 * n + 12 : geo].reshape(-1, 3),
-                       joint_errors=errors, **kw)
+            JointErrorModel(self.joint_errors.names, vec[len(self.geometry_names):])
+        return replace(self, joint_errors=errors, **self._geometry_kwargs(vec))
 
     def with_joint_errors(self, names: Sequence[str]) -> Robot:
         """A copy that declares the joint-error terms ``names`` (new ones at zero, the nominal
@@ -324,7 +302,8 @@ class Robot:
         names = list(dict.fromkeys(names))
         if not names:
             return replace(self, joint_errors=None)
-        old = dict(zip(self.joint_error_names, self.values[len(self.geometry_names):], strict=True))
+        old = {} if self.joint_errors is None else \
+            dict(zip(self.joint_errors.names, self.joint_errors.values.tolist(), strict=True))
         errors = JointErrorModel(tuple(names), np.array([old.get(nm, 0.0) for nm in names]))
         return replace(self, joint_errors=errors)
 
@@ -417,7 +396,7 @@ class Robot:
     def nominal_robot(self) -> Robot:
         """The nominal model (the controller's: no joint-error terms), with this robot's nominal
         as its own."""
-        return self._from_vector(self.nominal_values).with_joint_errors([])
+        return replace(self, joint_errors=None, **self._geometry_kwargs(self.nominal))
 
     # ----------------------------------------------------------------- kinematics
     @property

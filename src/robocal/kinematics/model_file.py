@@ -31,8 +31,8 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 from robocal.errors import ModelError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
-from robocal.kinematics.convert import PARALLEL_TOL, dh_kwargs, opw_kwargs, opw_parameters
+from robocal.io import ANGLE_UNITS, LENGTH_UNITS, as_number, read_text
+from robocal.kinematics.convert import default_parallel, dh_kwargs, mdh_kwargs, opw_kwargs, opw_parameters
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.opw import GEOMETRY, OPWParameters
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
@@ -46,20 +46,12 @@ _JOINT_KEYS = {*LINK_FIELDS, "limits", "parallel_to_previous"}
 _TABLE_KEYS = {"dh": ("theta", "d", "a", "alpha"), "mdh": ("alpha", "a", "theta", "d")}
 
 
-def _number(value, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ModelError(f"{where}: expected a number, got {value!r}")
-    if not np.isfinite(value):
-        raise ModelError(f"{where}: {value!r} is not finite")
-    return float(value)
-
-
 def _numbers(values, where: str, count: int | None = None) -> np.ndarray:
     if not isinstance(values, list):
         raise ModelError(f"{where}: expected a list of numbers, got {values!r}")
     if count is not None and len(values) != count:
         raise ModelError(f"{where}: expected {count} values, got {len(values)}")
-    return np.array([_number(v, f"{where}[{i}]") for i, v in enumerate(values)])
+    return np.array([as_number(v, f"{where}[{i}]", ModelError) for i, v in enumerate(values)])
 
 
 def _mapping(value, where: str, allowed: set, required: set = frozenset()) -> dict:
@@ -95,53 +87,58 @@ def _frame(spec, length: float, angle: float, where: str) -> np.ndarray | None:
     return make_transform(R, xyz)
 
 
-def _limits(values, n: int, angle: float, where: str) -> np.ndarray:
+def _limits(values, n: int, where: str) -> np.ndarray:
+    """``(n, 2)`` limits as written (in the file's angle unit)."""
     if not isinstance(values, list) or len(values) != n:
         raise ModelError(f"{where}: expected {n} [lower, upper] pairs (one per joint)")
-    return np.array([_numbers(v, f"{where}[{i}]", 2) for i, v in enumerate(values)]) * angle
+    return np.array([_numbers(v, f"{where}[{i}]", 2) for i, v in enumerate(values)])
 
 
-def _units(data: dict) -> tuple[float, float, bool]:
+def _units(data: dict) -> tuple[str, str]:
+    """The file's (length, angle) unit names."""
     units = _mapping(data.get("units"), "units", {"length", "angle"}, {"length", "angle"}) \
         if "units" in data else None
     if units is None:
         raise ModelError("the model must declare its units: units: {length: m|mm, angle: rad|deg}")
     if units["length"] not in LENGTH_UNITS or units["angle"] not in ANGLE_UNITS:
         raise ModelError(f"unknown units {units}: length m|mm, angle rad|deg")
-    return LENGTH_UNITS[units["length"]], ANGLE_UNITS[units["angle"]], units["angle"] == "deg"
+    return units["length"], units["angle"]
 
 
-def _opw(spec, length: float, degrees: bool) -> OPWParameters:
+def _opw(spec, length_unit: str, degrees: bool) -> OPWParameters:
     spec = _mapping(spec, "opw", {*GEOMETRY, "offsets", "signs"}, {*GEOMETRY, "offsets", "signs"})
-    values = [_number(spec[k], f"opw.{k}") for k in GEOMETRY]
+    values = [as_number(spec[k], f"opw.{k}", ModelError) for k in GEOMETRY]
     return opw_parameters(*values, _numbers(spec["offsets"], "opw.offsets", 6),
                           _numbers(spec["signs"], "opw.signs", 6), degrees=degrees,
-                          length_unit="mm" if length == LENGTH_UNITS["mm"] else "m")
+                          length_unit=length_unit)
 
 
 def _joint_rows(rows, length: float, angle: float) -> dict:
     if not isinstance(rows, list) or not rows:
         raise ModelError("joints: expected a non-empty list of joint mappings")
     cols = {f: [] for f in LINK_FIELDS}
-    limits, parallel = [], []
+    limits, flags = [], []
     for i, row in enumerate(rows, 1):
         where = f"joints[{i}] (joint {i})"
         row = _mapping(row, where, _JOINT_KEYS, {"alpha", "a", "theta", "d"})
         for f in LINK_FIELDS:
             scale = length if f in ("a", "d") else angle
-            cols[f].append(_number(row.get(f, 0.0), f"{where}.{f}") * scale)
+            cols[f].append(as_number(row.get(f, 0.0), f"{where}.{f}", ModelError) * scale)
         lim = row.get("limits")
         limits.append([-np.pi, np.pi] if lim is None else _numbers(lim, f"{where}.limits", 2) * angle)
-        default_parallel = bool(i > 1 and abs(np.sin(cols["alpha"][-1])) < PARALLEL_TOL)
-        flag = row.get("parallel_to_previous", default_parallel)
-        if not isinstance(flag, bool):
+        flag = row.get("parallel_to_previous")
+        if flag is not None and not isinstance(flag, bool):
             raise ModelError(f"{where}.parallel_to_previous: expected true or false, got {flag!r}")
-        parallel.append(flag)
-    return {**{f: np.array(v) for f, v in cols.items()}, "limits": np.array(limits),
-            "parallel": np.array(parallel)}
+        flags.append(flag)
+    kw = {f: np.array(v) for f, v in cols.items()}
+    default = default_parallel(kw["alpha"])
+    parallel = [bool(p) if f is None else f for f, p in zip(flags, default, strict=True)]
+    return {**kw, "limits": np.array(limits), "parallel": np.array(parallel)}
 
 
-def _table(form: str, spec, length: float, angle: float, degrees: bool, n_limits) -> dict:
+def _table(form: str, spec, length_unit: str, degrees: bool, n_limits, base, tool) -> dict:
+    """Robot keyword arguments of a ``dh`` or ``mdh`` table (in the file's units), with the
+    file's ``limits`` and frames (see the module docstring)."""
     keys = _TABLE_KEYS[form]
     optional = {"beta"} if form == "mdh" else set()
     spec = _mapping(spec, form, {*keys, *optional}, set(keys))
@@ -149,16 +146,13 @@ def _table(form: str, spec, length: float, angle: float, degrees: bool, n_limits
     cols = {k: _numbers(spec[k], f"{form}.{k}", n) for k in (*keys, *optional) if k in spec}
     if n == 0:
         raise ModelError(f"{form}: the table needs at least one joint")
-    limits = None if n_limits is None else _limits(n_limits, n, 1.0, "limits")
+    units = {"degrees": degrees, "length_unit": length_unit}
+    limits = None if n_limits is None else _limits(n_limits, n, "limits")
     if form == "dh":
-        return dh_kwargs(cols["theta"], cols["d"], cols["a"], cols["alpha"], degrees=degrees,
-                         length_unit="mm" if length == LENGTH_UNITS["mm"] else "m", limits=limits)
-    alpha = cols["alpha"] * angle
-    parallel = np.abs(np.sin(alpha)) < PARALLEL_TOL
-    parallel[0] = False
-    return {"alpha": alpha, "a": cols["a"] * length, "theta": cols["theta"] * angle,
-            "d": cols["d"] * length, "beta": cols.get("beta", np.zeros(n)) * angle,
-            "parallel": parallel, "limits": None if limits is None else limits * angle}
+        return dh_kwargs(cols["theta"], cols["d"], cols["a"], cols["alpha"], **units, limits=limits,
+                         base=base, tool=tool)
+    return mdh_kwargs(cols["alpha"], cols["a"], cols["theta"], cols["d"], cols.get("beta"), **units,
+                      limits=limits, base=base, tool=tool)
 
 
 def robot_kwargs(data) -> dict:
@@ -167,13 +161,14 @@ def robot_kwargs(data) -> dict:
     if not isinstance(data, dict):
         raise ModelError("a robot model must be a YAML mapping (see docs/model-yaml.md)")
     _mapping(data, "the model", _TOP_KEYS)
-    length, angle, degrees = _units(data)
+    length_unit, angle_unit = _units(data)
+    length, angle, degrees = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit], angle_unit == "deg"
     forms = [f for f in ("joints", "mdh", "dh") if f in data] or (["opw"] if "opw" in data else [])
     if len(forms) != 1:
         raise ModelError("the model needs exactly one geometry: opw, dh, mdh or joints "
                          f"(found {[f for f in FORMS if f in data] or 'none'})")
     form = forms[0]
-    opw = _opw(data["opw"], length, degrees) if "opw" in data else None
+    opw = _opw(data["opw"], length_unit, degrees) if "opw" in data else None
     base = _frame(data.get("base"), length, angle, "base")
     tool = _frame(data.get("tool"), length, angle, "tool")
     if form == "joints":
@@ -184,14 +179,9 @@ def robot_kwargs(data) -> dict:
     elif form == "opw":
         limits = data.get("limits")
         kw = opw_kwargs(opw, degrees=degrees, base=base, tool=tool,
-                        limits=None if limits is None else _limits(limits, 6, 1.0, "limits"))
+                        limits=None if limits is None else _limits(limits, 6, "limits"))
     else:
-        kw = _table(form, data[form], length, angle, degrees, data.get("limits"))
-        if form == "dh":
-            kw.update(base=base, tool=tool)
-        else:
-            kw.update(base=base if base is not None else np.eye(4),
-                      tool=tool if tool is not None else np.eye(4))
+        kw = _table(form, data[form], length_unit, degrees, data.get("limits"), base, tool)
         kw["opw"] = opw
     n = len(kw["alpha"])
     if data.get("smr") is not None:

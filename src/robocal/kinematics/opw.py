@@ -47,16 +47,8 @@ class OPWParameters:
         object.__setattr__(self, "offsets", tuple(float(v) for v in offsets))
         object.__setattr__(self, "signs", tuple(int(v) for v in signs))
 
-    @classmethod
-    def from_dict(cls, data: dict) -> OPWParameters:
-        """From the ``Robot.opw`` form (lengths in m, offsets in rad, signs +-1)."""
-        missing = [k for k in (*GEOMETRY, "offsets", "signs") if k not in data]
-        if missing:
-            raise ModelError(f"OPW parameters lack {missing}")
-        return cls(**{k: data[k] for k in (*GEOMETRY, "offsets", "signs")})
-
     def to_dict(self) -> dict:
-        """Plain-data form stored as ``Robot.opw``."""
+        """Plain data for the model YAML's ``opw`` (SI: lengths m, offsets rad, signs +-1)."""
         out = {k: getattr(self, k) for k in GEOMETRY}
         out["offsets"] = list(self.offsets)
         out["signs"] = list(self.signs)
