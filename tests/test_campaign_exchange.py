@@ -7,7 +7,7 @@ import itertools
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from robocal import Robot
@@ -64,6 +64,7 @@ def test_exchange_with_a_minimum_distance_finds_the_feasible_optimum(seed):
 
 @settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 10_000), r=st.integers(1, 4), p=st.integers(2, 7), criterion=st.sampled_from("ID"))
+@example(seed=1, r=1, p=7, criterion="I")  # a removal with leverage near 1
 def test_woodbury_scans_equal_direct_computation(seed, r, p, criterion):
     rng = np.random.default_rng(seed)
     C = 30
@@ -86,7 +87,12 @@ def test_woodbury_scans_equal_direct_computation(seed, r, p, criterion):
     for j in range(C):
         if j not in design.members:
             assert added[j] == pytest.approx(direct_add[j], rel=1e-6, abs=1e-6)
-    np.testing.assert_allclose(removed, direct_remove, rtol=1e-6, atol=1e-6)
+    # a removal that nearly loses rank (leverage near 1) amplifies the updates' rounding by
+    # 1 / lambda_min(I - G_m M^-1 G_m^T): the tolerance carries that condition number
+    Minv = np.linalg.inv(sum(G[m].T @ G[m] for m in design.members))
+    amplification = [1.0 / np.linalg.eigvalsh(np.eye(r) - G[m] @ Minv @ G[m].T)[0] for m in design.members]
+    np.testing.assert_array_less(np.abs(np.subtract(removed, direct_remove)),
+                                 1e-6 * np.maximum(amplification, 1.0) * (np.abs(direct_remove) + 1.0))
     assert design.value == pytest.approx(criterion_value(G, A, design.members, criterion), rel=1e-6, abs=1e-6)
 
 
