@@ -10,8 +10,11 @@ import pytest
 from robocal import DataError, IdentificationError, Robot
 from robocal.calibration import calibrate
 from robocal.data.measurements import Measurements
+from robocal.data.registration import register
 from robocal.data.simulate import simulate_tracker
+from robocal.identify import robust
 from robocal.identify.identifiability import analyze, condition_class
+from robocal.identify.problem import CalibrationProblem
 from robocal.identify.robust import igg3_weights
 
 PI = np.pi
@@ -70,6 +73,23 @@ def test_robust_rejects_gross_outliers():
     outlier_items = set(np.flatnonzero(np.isin(cal.source_row, sim.data.source_row[sim.outlier_rows])))
     assert outlier_items <= set(robust.rejected.tolist())
     assert len(robust.rejected) <= len(outlier_items) + 3
+
+
+def test_robust_builds_the_jacobian_once_per_state(monkeypatch):
+    _, cal, _, _ = campaign(60, 1, seed=5, outliers=0.05)
+    start = register(irb2600(), cal)
+    problem = CalibrationProblem(start, cal)
+    states = []
+    original = CalibrationProblem.jacobian
+
+    def counting(self, state, space):
+        states.append(state.robot.values.tobytes() + state.nuisance.tobytes())
+        return original(self, state, space)
+
+    monkeypatch.setattr(CalibrationProblem, "jacobian", counting)
+    out = robust.solve(problem, problem.start(start), problem.space(start), max_outer=4)
+    assert out.nit == 4 and len(states) > 4
+    assert len(states) == len(set(states))
 
 
 @pytest.mark.parametrize("rule", ["gcv", "lcurve", "none"])
