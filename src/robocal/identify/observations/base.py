@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from robocal.kinematics.fk import chain_frames
+from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import joint_error_basis
 
 
@@ -28,10 +29,9 @@ class Observation:
         self.data = data
         self.q = robot.check_joints(data.joints)
         self.smr = np.asarray(data.smr, dtype=int)
-        self.approach = getattr(data, "approach", None)  # joint approach directions (backlash)
-        self.travel = getattr(data, "travel", None)  # joint moves from the previous pose (travel)
-        sigma = getattr(data, "sigma", None)
-        self.item_sigma = None if sigma is None else np.asarray(sigma, dtype=float)
+        self.approach = data.approach  # joint approach directions (backlash)
+        self.travel = data.travel  # joint moves from the previous pose (travel)
+        self.item_sigma = None if data.sigma is None else np.asarray(data.sigma, dtype=float)
 
     @property
     def n_items(self) -> int:
@@ -82,9 +82,9 @@ class Observation:
         ``names`` around ``robot`` — one vectorised evaluation for a whole population."""
         raise NotImplementedError
 
-    def modelled_points(self, robot, nuisance: np.ndarray) -> np.ndarray:
+    def modelled_points(self, robot, nuisance: np.ndarray | None = None) -> np.ndarray:
         """``(N, 3)`` modelled positions (TCP / SMR / probe tip) in the world frame, m."""
-        return robot.fk(self.q, smr=self.smr, approach=self.approach, travel=self.travel)[:, :3, 3]
+        return self._fk(robot)[:, :3, 3]
 
     def position_errors(self, robot, nuisance: np.ndarray) -> np.ndarray:
         """``(N,)`` position error of each item in m (what the statistics report)."""
@@ -92,6 +92,16 @@ class Observation:
         return np.linalg.norm(r[:, :3], axis=1)
 
     # shared by point-like observations ------------------------------------------------
+    def _fk(self, robot) -> np.ndarray:
+        """TCP poses ``(N, 4, 4)`` of the data rows: each with its SMR, joint-error terms from
+        the rows' approach directions and moves."""
+        return robot.fk(self.q, smr=self.smr, approach=self.approach, travel=self.travel)
+
+    def _tcp_jacobian(self, robot, names: Sequence[str], kind: str = "point") -> np.ndarray:
+        """d(TCP of each row)/d(``names``) ``(N, 3|6, k)`` (:func:`identification_jacobian`,
+        ``kind`` 'point' or 'pose'), with the rows' SMRs, approach directions and moves."""
+        return identification_jacobian(robot, self.q, names, kind, self.smr, self.approach, self.travel)
+
     def batch_tcp(self, robot, names, X) -> np.ndarray:
         """TCP poses ``(P, N, 4, 4)`` of the displaced robots (each row with its SMR, joint-error
         terms applied with their basis at the undisplaced robot: exact at X = 0)."""
