@@ -51,13 +51,13 @@ def test_genetic_validation_rms_is_within_10_percent_of_lsq(encoding):
 def test_fitness_is_one_vectorised_evaluation_per_generation(monkeypatch):
     robot, cal, _ = tracker_campaign(40, 2)
     calls = []
-    original = CalibrationProblem.residuals_batch
+    original = CalibrationProblem.profiled_residuals_batch
 
-    def counting(self, state, names, X):
+    def counting(self, robot, names, X):
         calls.append(X.shape[0])
-        return original(self, state, names, X)
+        return original(self, robot, names, X)
 
-    monkeypatch.setattr(CalibrationProblem, "residuals_batch", counting)
+    monkeypatch.setattr(CalibrationProblem, "profiled_residuals_batch", counting)
     calibrate(robot, cal, method="genetic", population=16, generations=7)
     assert calls == [16] * 8
 

@@ -9,8 +9,8 @@ least-squares solution.
    the chromosome is the concatenated bit string) or ``real`` (one float gene per parameter).
 4. Fitness = 1 / mu, mu the summed error: sum over measurement items of the norm of the item's
    (weighted) residuals — for tracker points the summed position error (m). The whole population
-   is ONE vectorised evaluation (``residuals_batch``; plane data: the seed's plane fit per
-   individual, ``profiled_residuals_batch``).
+   is ONE vectorised evaluation (``profiled_residuals_batch``; plane data: the seed's plane fit
+   per individual).
 5. Roulette-wheel selection on the fitness, single-point crossover of parent pairs with
    probability ``crossover`` (0.8), mutation (binary: each bit flips with probability
    ``mutation``; real: each gene with probability ``mutation`` gets Gaussian noise of 10 % of the

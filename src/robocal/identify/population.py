@@ -17,20 +17,15 @@ from robocal.progress import Progress
 class PopulationCost:
     """Vectorised errors of a population of robot displacements ``X (P, k)`` (the robot names of
     ``space``) around ``state``. Measurement sets with nuisance parameters (plane coefficients)
-    have them fitted per individual (the seed-004 plane fit); the others keep the state's."""
+    have them fitted per individual (the seed-004 plane fit)."""
 
     def __init__(self, problem, state: State, space: ParameterSpace) -> None:
         self.problem, self.state, self.space = problem, state, space
         self.names = list(space.robot)
-        self.profiled = bool(problem.nuisance_names)
 
     def residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Weighted residuals ``(P, M)`` and nuisance ``(P, m)`` of each individual."""
-        X = np.atleast_2d(X)
-        if self.profiled:
-            return self.problem.profiled_residuals_batch(self.state.robot, self.names, X)
-        r = self.problem.residuals_batch(self.state, self.names, X)
-        return r, np.broadcast_to(self.state.nuisance, (X.shape[0], self.state.nuisance.size))
+        return self.problem.profiled_residuals_batch(self.state.robot, self.names, np.atleast_2d(X))
 
     def item_errors(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Per-item error norms ``(P, N)`` and nuisance ``(P, m)``."""

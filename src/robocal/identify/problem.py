@@ -174,14 +174,8 @@ class CalibrationProblem:
     def profiled_residuals_batch(self, robot, names: Sequence[str], X: np.ndarray):
         """Weighted residuals ``(P, M)`` and nuisance ``(P, m)`` for robot displacements ``X (P, k)``
         with every observation's nuisance fitted per displacement (the seed-004 plane fit)."""
-        r, nu = [], []
-        for obs in self.observations:
-            if obs.nuisance_names:
-                rk, nk = obs.profiled_residuals_batch(robot, names, X)
-            else:
-                rk, nk = obs.residuals_batch(robot, names, X), np.zeros((X.shape[0], 0))
-            r.append(rk)
-            nu.append(nk)
+        r, nu = zip(*(obs.profiled_residuals_batch(robot, names, X) for obs in self.observations),
+                    strict=True)
         return np.concatenate(r, axis=-1) / self.sigma, np.concatenate(nu, axis=-1)
 
     def modelled_points(self, state: State) -> np.ndarray:

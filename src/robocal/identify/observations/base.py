@@ -82,6 +82,13 @@ class Observation:
         ``names`` around ``robot`` — one vectorised evaluation for a whole population."""
         raise NotImplementedError
 
+    def profiled_residuals_batch(self, robot, names: Sequence[str], X: np.ndarray
+                                 ) -> tuple[np.ndarray, np.ndarray]:
+        """Residuals ``(P, N * rows_per_item)`` of P displacements ``X (P, k)`` with the nuisance
+        parameters fitted per displacement, and those ``(P, m)``: here there are none (kinds with
+        nuisance override this)."""
+        return self.residuals_batch(robot, names, X), np.zeros((X.shape[0], 0))
+
     def modelled_points(self, robot, nuisance: np.ndarray | None = None) -> np.ndarray:
         """``(N, 3)`` modelled positions (TCP / SMR / probe tip) in the world frame, m."""
         return self._fk(robot)[:, :3, 3]
