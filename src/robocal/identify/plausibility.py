@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from robocal.data.measurements import robot_reach
 from robocal.errors import PlausibilityError
 from robocal.identify.space import block_of
 
@@ -86,11 +87,6 @@ def check_residual(rms_mm: float, points: np.ndarray, what: str, *, force: bool 
           f"robot's geometric errors can explain (at most ~{limit:.3g} mm here): the data probably "
           "belong to another robot or another file, or a unit (length or joint angle) is wrong",
           force, warnings)
-
-
-def robot_reach(robot) -> float:
-    """The robot's reach for the correction limits: its summed link lengths (m)."""
-    return float(np.abs(robot.a).sum() + np.abs(robot.d).sum())
 
 
 def check_corrections(start, final, names, *, force: bool = False,
