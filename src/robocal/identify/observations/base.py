@@ -8,7 +8,7 @@ import numpy as np
 
 from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.jacobian import identification_jacobian
-from robocal.kinematics.joint_errors import joint_error_basis
+from robocal.kinematics.joint_errors import joint_error_basis, scatter_offsets
 
 
 class Observation:
@@ -32,6 +32,7 @@ class Observation:
         self.approach = data.approach  # joint approach directions (backlash)
         self.travel = data.travel  # joint moves from the previous pose (travel)
         self.item_sigma = None if data.sigma is None else np.asarray(data.sigma, dtype=float)
+        self._basis = None  # (robot, B, joint): the joint-error basis batch_tcp last used
 
     @property
     def n_items(self) -> int:
@@ -120,7 +121,8 @@ class Observation:
         links = type(moved.links)(*(v[:, None, :] for v in moved.links))
         q = np.broadcast_to(self.q, (P, N, n))
         if moved.joint_errors is not None:
-            B, joint = joint_error_basis(robot, self.q, robot.joint_errors.names, self.approach, self.travel)
-            onehot = np.eye(n)[joint]  # (m, n): which joint each term turns
-            q = q + (B[None] * moved.joint_errors[:, None, :]) @ onehot
+            if self._basis is None or self._basis[0] is not robot:  # once per robot, not per call
+                self._basis = (robot, *joint_error_basis(robot, self.q, robot.joint_errors.names,
+                                                         self.approach, self.travel))
+            q = q + scatter_offsets(*self._basis[1:], moved.joint_errors, n)
         return chain_frames(links, moved.base[:, None], tools, q)
