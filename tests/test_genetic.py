@@ -103,8 +103,13 @@ def test_genetic_works_on_plane_contacts():
     ({"encoding": "gray"}, "encoding"),
     ({"mutation": 2.0}, "mutation"),
 ])
-def test_bad_options_raise(options, match):
+def test_bad_options_raise(options, match, monkeypatch):
     robot, cal, _ = tracker_campaign(40, 2)
+
+    def no_lsq(*args, **kwargs):
+        raise AssertionError("options are checked before the least-squares centre is computed")
+
+    monkeypatch.setattr(genetic, "gauss_newton", no_lsq)
     with pytest.raises(IdentificationError, match=match):
         calibrate(robot, cal, method="genetic", **options)
 

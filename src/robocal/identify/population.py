@@ -32,6 +32,11 @@ class PopulationCost:
         r, nu = self.residuals(X)
         return np.sqrt(self.problem.item_sum_squares(r)), nu
 
+    def sum_squares(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Weighted sum of squares ``(P,)`` (the history's cost) and nuisance ``(P, m)``."""
+        r, nu = self.residuals(X)
+        return np.sum(r**2, axis=-1), nu
+
     def state_of(self, x: np.ndarray, nuisance: np.ndarray) -> State:
         """The State of one displacement ``x (k,)`` with its nuisance ``(m,)``."""
         dx = np.concatenate([x, np.asarray(nuisance, float) - self.state.nuisance])
