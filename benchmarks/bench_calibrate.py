@@ -1,23 +1,32 @@
-"""Calibration speed: robocal lsq vs scipy least_squares with a finite-difference Jacobian on the
-same residual (what pybotics does) vs pybotics itself, simulated ABB IRB 2600, same run."""
+"""Calibration accuracy (simulated and real data); the plausibility checks on the real data and
+on the mistakes they refuse; speed: robocal lsq vs scipy least_squares with a finite-difference
+Jacobian on the same residual (what pybotics does) vs pybotics itself, simulated ABB IRB 2600.
+
+``python benchmarks/bench_calibrate.py [accuracy] [plausibility] [speed]`` runs the parts named
+(all without arguments)."""
 
 from __future__ import annotations
 
+import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 from scipy.optimize import least_squares
 from timing import best_time
 
-from robocal import Robot
+from robocal import RobocalError, Robot
 from robocal.calibration import calibrate
 from robocal.data.registration import register
 from robocal.data.simulate import simulate_tracker
 from robocal.identify.lsq import gauss_newton
+from robocal.identify.plausibility import spread
 from robocal.identify.problem import CalibrationProblem
+from robocal.kinematics.catalog import catalog_names
 from robocal.report.metrics import position_stats
 
 PYBOTICS_MAX_POSES = 100  # pybotics loops over poses in Python: ~minutes per 100-pose fit
+DATASETS = Path(__file__).resolve().parents[2] / "shared" / "datasets"
 
 
 def _validation_rms(robot, val) -> float:
@@ -116,20 +125,67 @@ def accuracy_goals(seeds=range(5)) -> None:
             r = np.array(ratios[m])
             print(f"{label:<34} {m:<7} mean {r.mean():6.3f} max {r.max():6.3f}  "
                   + " ".join(f"{v:.3f}" for v in r))
-    root = Path(__file__).resolve().parents[2] / "shared" / "datasets"
-    if not root.is_dir():
-        print(f"(real data sets not found at {root}: skipped)")
+    if not DATASETS.is_dir():
+        print(f"(real data sets not found at {DATASETS}: skipped)")
         return
     from robocal.data.datasets import irb120, meca500
 
     print("\nreal data: held-out position error, mm (geometric model; joint errors: bench_nongeometric)")
-    for name, robot, (cal, val) in (("Meca500 490/70", "meca500", meca500(root)),
-                                    ("IRB 120 500/500 x 3 SMRs", "abb_irb120", irb120(root))):
+    for name, robot, (cal, val) in (("Meca500 490/70", "meca500", meca500(DATASETS)),
+                                    ("IRB 120 500/500 x 3 SMRs", "abb_irb120", irb120(DATASETS))):
         for m in ("lsq", "robust"):
             res = calibrate(Robot.from_catalog(robot), cal, method=m, validation=val, nongeometric=None)
             v, vb = res.validation, res.validation_before
             print(f"{name:<26} {m:<7} nominal+frame {vb['rms']:.4f} -> RMS {v['rms']:.4f} "
                   f"mean {v['mean']:.4f} max {v['max']:.4f}")
+
+
+# each plausibility check by the words of its message
+CHECKS = {"spread": "points spread", "residual": "frames fitted): the model misses",
+          "corrections": "the calibration corrected", "validation": "the validation data: the model misses"}
+
+
+def _plausibility_row(label: str, robot, cal, validation=None) -> None:
+    """One calibration forced past the plausibility checks: the measured-over-model spread ratio
+    and the nominal model's residual (frames fitted) that the checks judge, the validation
+    residual of the calibrated model, and the checks that fired."""
+    try:
+        res = calibrate(robot, cal, validation=validation, nongeometric=None, force=True)
+    except RobocalError as exc:
+        print(f"  {label:<44} refused before the checks: {str(exc)[:90]}")
+        return
+    ratio = spread(cal.points) / spread(res.start.fk(cal.joints, smr=cal.smr)[:, :3, 3])
+    forced = [w for w in res.warnings if w.startswith("FORCED")]
+    fired = [check for check, words in CHECKS.items() if any(words in w for w in forced)]
+    val = f"{res.validation['rms']:9.4g}" if validation is not None else " " * 9
+    print(f"  {label:<44} {ratio:8.4f} {res.before['rms']:10.4g} {val}   {', '.join(fired) or 'none'}")
+
+
+def plausibility_checks() -> None:
+    """The real data sets and issue 12's mistakes through rc.calibrate with force=True: what the
+    plausibility checks (robocal.identify.plausibility) measure on each."""
+    if not DATASETS.is_dir():
+        print(f"(real data sets not found at {DATASETS}: plausibility skipped)")
+        return
+    from robocal.data.datasets import irb120, meca500
+
+    (meca_cal, meca_val), (irb_cal, _) = meca500(DATASETS), irb120(DATASETS)
+    meca = Robot.from_catalog("meca500")
+    print("\nplausibility checks, forced (spread ratio: measured / registered nominal model; limits "
+          "1/3-3, unit beyond 300)")
+    print(f"  {'case':<44} {'spread':>8} {'nominal mm':>10} {'val mm':>9}   checks that fire")
+    _plausibility_row("Meca500 data, meca500", meca, meca_cal)
+    _plausibility_row("IRB 120 data, abb_irb120", Robot.from_catalog("abb_irb120"), irb_cal)
+    _plausibility_row("Meca500, metres under _mm (points / 1000)", meca,
+                      replace(meca_cal, points=meca_cal.points * 1e-3))
+    _plausibility_row("Meca500, radians under _deg (joints / 57.3)", meca,
+                      replace(meca_cal, joints=np.deg2rad(meca_cal.joints)))
+    for name in catalog_names():
+        robot = Robot.from_catalog(name)
+        if name != "meca500" and robot.n_joints == meca.n_joints:
+            _plausibility_row(f"Meca500 data, wrong robot {name}", robot, meca_cal)
+    _plausibility_row("IRB 120, validation = Meca500 data", Robot.from_catalog("abb_irb120"), irb_cal,
+                      meca_val)
 
 
 def speed_rows(nominal, n: int) -> list:
@@ -147,8 +203,7 @@ def speed_rows(nominal, n: int) -> list:
     return rows + _pybotics_rows(nominal, cal, val)
 
 
-def main() -> None:
-    accuracy_goals()
+def speed() -> None:
     nominal = Robot.from_catalog("abb_irb2600")
     print("\ncalibration speed: simulated abb_irb2600, noise 0.02 mm, 200 validation poses, best of 5")
     print("(the solve rows start from the same registered model with the same identifiable parameters)")
@@ -159,5 +214,13 @@ def main() -> None:
             print(f"{n:>6} {label:<44} {t * 1e3:>8.1f}ms {rms:>11.4f} {t / rows[0][1]:>16.1f}x")
 
 
+PARTS = {"accuracy": accuracy_goals, "plausibility": plausibility_checks, "speed": speed}
+
+
+def main(parts: list[str] | None = None) -> None:
+    for name in parts or PARTS:
+        PARTS[name]()
+
+
 if __name__ == "__main__":
-    main()
+    main(sys.argv[1:])

@@ -36,8 +36,7 @@ def differential_evolution_fit(result, seed: int = 0, maxiter: int = 300):
     lo, hi = space.robot_bounds(start.robot)
 
     def f(X):  # X (k, S) -> (S,)
-        err, _ = cost.item_errors(X.T)
-        return np.sum(err**2, axis=1)
+        return cost.sum_squares(X.T)[0]
 
     out = differential_evolution(f, list(zip(lo, hi, strict=True)), seed=seed, maxiter=maxiter,
                                  vectorized=True, updating="deferred", polish=False, tol=1e-12)

@@ -51,13 +51,13 @@ def test_genetic_validation_rms_is_within_10_percent_of_lsq(encoding):
 def test_fitness_is_one_vectorised_evaluation_per_generation(monkeypatch):
     robot, cal, _ = tracker_campaign(40, 2)
     calls = []
-    original = CalibrationProblem.residuals_batch
+    original = CalibrationProblem.profiled_residuals_batch
 
-    def counting(self, state, names, X):
+    def counting(self, robot, names, X):
         calls.append(X.shape[0])
-        return original(self, state, names, X)
+        return original(self, robot, names, X)
 
-    monkeypatch.setattr(CalibrationProblem, "residuals_batch", counting)
+    monkeypatch.setattr(CalibrationProblem, "profiled_residuals_batch", counting)
     calibrate(robot, cal, method="genetic", population=16, generations=7)
     assert calls == [16] * 8
 
@@ -103,8 +103,13 @@ def test_genetic_works_on_plane_contacts():
     ({"encoding": "gray"}, "encoding"),
     ({"mutation": 2.0}, "mutation"),
 ])
-def test_bad_options_raise(options, match):
+def test_bad_options_raise(options, match, monkeypatch):
     robot, cal, _ = tracker_campaign(40, 2)
+
+    def no_lsq(*args, **kwargs):
+        raise AssertionError("options are checked before the least-squares centre is computed")
+
+    monkeypatch.setattr(genetic, "gauss_newton", no_lsq)
     with pytest.raises(IdentificationError, match=match):
         calibrate(robot, cal, method="genetic", **options)
 

@@ -3,15 +3,20 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
 
-from robocal import DataError, IdentificationError, Robot
+from robocal import DataError, IdentificationError, PlausibilityError, Robot
 from robocal.calibration import calibrate
 from robocal.data.measurements import Measurements
+from robocal.data.registration import register
 from robocal.data.simulate import simulate_tracker
+from robocal.identify import robust
 from robocal.identify.identifiability import analyze, condition_class
+from robocal.identify.plausibility import check_corrections
+from robocal.identify.problem import CalibrationProblem
 from robocal.identify.robust import igg3_weights
 
 PI = np.pi
@@ -70,6 +75,23 @@ def test_robust_rejects_gross_outliers():
     outlier_items = set(np.flatnonzero(np.isin(cal.source_row, sim.data.source_row[sim.outlier_rows])))
     assert outlier_items <= set(robust.rejected.tolist())
     assert len(robust.rejected) <= len(outlier_items) + 3
+
+
+def test_robust_builds_the_jacobian_once_per_state(monkeypatch):
+    _, cal, _, _ = campaign(60, 1, seed=5, outliers=0.05)
+    start = register(irb2600(), cal)
+    problem = CalibrationProblem(start, cal)
+    states = []
+    original = CalibrationProblem.jacobian
+
+    def counting(self, state, space):
+        states.append(state.robot.values.tobytes() + state.nuisance.tobytes())
+        return original(self, state, space)
+
+    monkeypatch.setattr(CalibrationProblem, "jacobian", counting)
+    out = robust.solve(problem, problem.start(start), problem.space(start), max_outer=4)
+    assert out.nit == 4 and len(states) > 4
+    assert len(states) == len(set(states))
 
 
 @pytest.mark.parametrize("rule", ["gcv", "lcurve", "none"])
@@ -163,6 +185,29 @@ def test_bad_input():
         calibrate(five, sim.data)
     with pytest.raises(IdentificationError, match="unknown method"):
         calibrate(irb2600(), sim.data, method="magic")
+
+
+def test_check_corrections_limits_link_corrections_to_real_robots_errors():
+    """Link lengths within max(5 mm, 1 % of the reach incl. the tool), angles within 5 deg."""
+    tool = np.eye(4)
+    tool[2, 3] = 0.2  # reach 2.29 m + 0.2 m: the limit is 24.9 mm
+    big = irb2600().with_frames(tool=tool)
+    small = Robot.from_catalog("meca500")  # reach 0.498 m: 1 % is below 5 mm
+    names = ["a2", "theta3", "base.x"]
+
+    def corrected(robot, **delta):
+        return robot.displaced(list(delta), list(delta.values()))
+
+    check_corrections(big, corrected(big, a2=0.0245, theta3=np.deg2rad(4.9)), names)
+    check_corrections(small, corrected(small, a2=0.0049), names)
+    check_corrections(big, big.displaced(["base.x"], [1.0]), names)  # frames are not judged
+    for robot, delta, what in ((big, {"a2": 0.030}, "a2 by +30 mm"), (small, {"a2": -0.006}, "a2 by -6 mm"),
+                               (big, {"theta3": np.deg2rad(6.0)}, "theta3 by +6 deg")):
+        with pytest.raises(PlausibilityError, match=re.escape(what)):
+            check_corrections(robot, corrected(robot, **delta), names)
+    warnings = []
+    check_corrections(big, corrected(big, a2=0.030), names, force=True, warnings=warnings)
+    assert len(warnings) == 1 and warnings[0].startswith("FORCED") and "24.9 mm" in warnings[0]
 
 
 def test_analyze_on_its_own_zero_column():

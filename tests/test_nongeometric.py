@@ -15,7 +15,7 @@ from robocal.data.simulate import simulate_tracker
 from robocal.errors import IdentificationError, ModelError
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.residual import ResidualModel
-from robocal.identify.space import ParameterSpace
+from robocal.identify.space import ParameterSpace, State
 from robocal.kinematics.joint_errors import JointErrorModel, parse_terms, term_names
 
 NAMES = ["comp2_3", "comp2_6", "comp3_6", "comp5_6", "gear1_s1", "gear2_c1", "gear3_s2", "gear5_c2",
@@ -73,6 +73,21 @@ def test_jacobian_columns_match_finite_differences(kind):
         e[c] = h
         fd = -(problem.residuals(space.apply(state, e)) - problem.residuals(space.apply(state, -e))) / (2 * h)
         assert np.allclose(J[:, c], fd, rtol=1e-5, atol=1e-7)
+
+
+def test_population_residuals_of_joint_error_displacements_equal_one_at_a_time(rng):
+    """batch_tcp's joint errors (basis kept per robot) give the residuals of each displaced robot."""
+    names = ["comp2_3", "gear2_s1", "backlash2", "travel3", "cyc4_50_c"]
+    start = Robot.from_catalog("abb_irb2600").with_joint_errors(names)
+    problem = CalibrationProblem(start, simulate_tracker(start, 20, noise_mm=0.0, seed=4).data)
+    space = ParameterSpace((*names, "a3"))  # a3 not displaced: the compliance basis moves with it
+    other = start.displaced([*names, "a3"], [2e-3, 1e-3, -2e-4, 1e-3, 5e-5, 0.05])
+    for robot in (start, other, start):
+        X = rng.normal(0.0, 1e-3, (4, space.size)) * np.r_[np.ones(len(names)), 0.0]
+        r, _ = problem.profiled_residuals_batch(robot, space.robot, X)
+        for x, rx in zip(X, r, strict=True):
+            one = problem.residuals(State(robot.displaced(space.robot, x), np.zeros(0)))
+            np.testing.assert_allclose(rx, one, rtol=0, atol=1e-13)
 
 
 def test_simulated_truth_reaches_noise_floor_only_with_the_terms():

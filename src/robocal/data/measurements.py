@@ -56,6 +56,10 @@ _INT_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row")
 # A laser tracker's range is below ~80 m; anything farther is a unit mistake whatever the robot.
 MAX_TRACKER_RANGE_M = 100.0
 MAX_JOINT_RAD = 4 * np.pi  # no joint turns more than two turns either way
+# One robot's measured points span at most MAX_SPAN_REACHES times its reach (both sides of the
+# base) plus SPAN_MARGIN_M; a wider span is a length unit mistake or a bigger robot's data.
+MAX_SPAN_REACHES = 2.0
+SPAN_MARGIN_M = 0.5
 
 
 def _int_array(values, name: str, n: int) -> np.ndarray:
@@ -332,7 +336,7 @@ def _check_plausible(data: Measurements, reach: float, where: str) -> None:
     if data.points is None or len(data) < 2:
         return
     extent = float((data.points.max(axis=0) - data.points.min(axis=0)).max())
-    limit = 2.0 * reach + 0.5
+    limit = MAX_SPAN_REACHES * reach + SPAN_MARGIN_M
     if extent > limit:
         row = int(data.source_row[np.argmax(np.abs(data.points - np.median(data.points, 0)).max(1))])
         raise UnitError(f"{where}the points span {extent:.4g} m but a robot of {reach:.3g} m reach can move "

@@ -9,8 +9,8 @@ least-squares solution.
    the chromosome is the concatenated bit string) or ``real`` (one float gene per parameter).
 4. Fitness = 1 / mu, mu the summed error: sum over measurement items of the norm of the item's
    (weighted) residuals — for tracker points the summed position error (m). The whole population
-   is ONE vectorised evaluation (``residuals_batch``; plane data: the seed's plane fit per
-   individual, ``profiled_residuals_batch``).
+   is ONE vectorised evaluation (``profiled_residuals_batch``; plane data: the seed's plane fit
+   per individual).
 5. Roulette-wheel selection on the fitness, single-point crossover of parent pairs with
    probability ``crossover`` (0.8), mutation (binary: each bit flips with probability
    ``mutation``; real: each gene with probability ``mutation`` gets Gaussian noise of 10 % of the
@@ -47,11 +47,13 @@ def _encode(X: np.ndarray, nbits: int, lo: np.ndarray, hi: np.ndarray) -> np.nda
     return ((ints[..., None] >> shifts) & 1).astype(bool).reshape(X.shape[0], -1)
 
 
-def _check(population, generations, crossover, elite, encoding, bits, spread, threshold) -> None:
+def _check(population, generations, crossover, mutation, elite, encoding, bits, spread, threshold) -> None:
     if int(population) < 2:
         raise IdentificationError(f"population must be at least 2, got {population}")
     if not 0.0 <= crossover <= 1.0:
         raise IdentificationError(f"crossover probability must be in [0, 1], got {crossover}")
+    if mutation is not None and not 0.0 <= mutation <= 1.0:
+        raise IdentificationError(f"mutation rate must be in [0, 1], got {mutation}")
     if encoding not in ("binary", "real"):
         raise IdentificationError(f"encoding must be 'binary' or 'real', got {encoding!r}")
     if not 2 <= int(bits) <= 52 or int(generations) < 0 or not 0 <= int(elite) < int(population):
@@ -93,7 +95,7 @@ def solve(problem, start: State, space: ParameterSpace, *, seed: int = 0, progre
           spread: float = 0.01, bounds=None, lsq_iter: int = 50, **_) -> SolverResult:
     """Genetic algorithm around the least-squares solution (module docstring); options as named
     there. ``mutation`` defaults to 1 / chromosome length."""
-    _check(population, generations, crossover, elite, encoding, bits, spread, threshold)
+    _check(population, generations, crossover, mutation, elite, encoding, bits, spread, threshold)
     population, generations, elite, bits = int(population), int(generations), int(elite), int(bits)
     k = len(space.robot)
     lo, hi = space.robot_bounds(start.robot, bounds)
@@ -107,28 +109,31 @@ def solve(problem, start: State, space: ParameterSpace, *, seed: int = 0, progre
     binary = encoding == "binary"
     genes = k * bits if binary else k
     p_mut = 1.0 / max(genes, 1) if mutation is None else float(mutation)
-    if not 0.0 <= p_mut <= 1.0:
-        raise IdentificationError(f"mutation rate must be in [0, 1], got {mutation}")
     chrom = _encode(X, bits, box_lo, box_hi) if binary else X.copy()
 
     def decode(c):
         return _decode(c, k, bits, box_lo, box_hi) if binary else c
 
     cost = PopulationCost(problem, start, space)
-    err, nu = cost.item_errors(decode(chrom))
-    mu = err.sum(axis=1)
-    i = int(np.argmin(mu))
-    best = {"x": decode(chrom)[i].copy(), "nu": nu[i].copy(), "mu": mu[i], "ss": float(np.sum(err[i] ** 2))}
+    best: dict = {}
+
+    def evaluate() -> np.ndarray:
+        """mu ``(population,)`` of the current chromosomes; keeps the best individual so far."""
+        X = decode(chrom)
+        err, nu = cost.item_errors(X)
+        mu = err.sum(axis=1)
+        i = int(np.argmin(mu))
+        if not best or mu[i] < best["mu"]:
+            best.update(x=X[i].copy(), nu=nu[i].copy(), mu=mu[i], ss=float(np.sum(err[i] ** 2)))
+        return mu
+
+    mu = evaluate()
 
     def generation(_: int) -> tuple[float, float]:
         nonlocal chrom, mu
         chrom = _offspring(chrom, mu, rng, elite=elite, crossover=crossover, p_mut=p_mut, binary=binary,
                            box_lo=box_lo, box_hi=box_hi)
-        err, nu = cost.item_errors(decode(chrom))
-        mu = err.sum(axis=1)
-        i = int(np.argmin(mu))
-        if mu[i] < best["mu"]:
-            best.update(x=decode(chrom)[i].copy(), nu=nu[i].copy(), mu=mu[i], ss=float(np.sum(err[i] ** 2)))
+        mu = evaluate()
         return best["ss"], best["mu"]
 
     status, gen, history = evolve(generation, initial_cost=best["ss"], n_items=problem.n_items,

@@ -8,10 +8,12 @@ parameters whose columns explain it (the confounders). The selection runs in sta
 joint-error terms, each stage on what the kept columns of the earlier stages leave unexplained,
 so that of a confounded pair the earlier stage's parameter is kept (d1 is dropped rather than
 base.z, gear1_c1 rather than theta1). A joint-error parameter must be more clearly independent:
-at least 1/sqrt(NG_MAX_VIF) of its column beyond what the kept columns explain, i.e. a variance
-inflation factor below NG_MAX_VIF, because a nearly confounded term (the harmonics of a joint
-that moves over a narrow range, pinned down by a few extreme poses) fits those poses and
-predicts new ones badly. Condition number of the scaled normal matrix with the
+at least 1/sqrt(NG_MAX_VIF) of its (unit) column beyond what the columns kept before it explain
+(the earlier stages' and the terms the greedy pivoting picked ahead of it), i.e. a variance
+inflation factor below NG_MAX_VIF against those columns — not against the final set, where
+terms picked after it can raise its VIF further — because a nearly confounded term (the
+harmonics of a joint that moves over a narrow range, pinned down by a few extreme poses) fits
+those poses and predicts new ones badly. Condition number of the scaled normal matrix with the
 seed-003 classes, and the observability indices O1 (Borm & Menq) .. O4 over the identifiable set.
 """
 
@@ -26,8 +28,8 @@ import scipy.linalg
 from robocal.identify.space import block_of
 
 DEFAULT_RTOL = 1e-7
-NG_MAX_VIF = 1000.0  # largest variance inflation factor of a kept joint-error parameter
-NG_RTOL = float(1.0 / np.sqrt(NG_MAX_VIF))  # the smallest relative pivot that allows
+NG_MAX_VIF = 1000.0  # largest VIF of a kept joint-error term against the columns picked before it
+NG_RTOL = float(1.0 / np.sqrt(NG_MAX_VIF))  # the smallest relative pivot a joint-error term keeps
 # the order in which blocks are selected (robocal.identify.space.BLOCKS), each with the smallest
 # relative pivot it keeps whatever the rtol asked for
 STAGES = ((("base", "tool", "smr", "nuisance"), 0.0), (("links",), 0.0), (("joint_errors",), NG_RTOL))
@@ -119,7 +121,7 @@ def _select(Js: np.ndarray, groups: Sequence[tuple[np.ndarray, float]], rtol: fl
         picked, Q = _pivoted_rank(cols - basis @ (basis.T @ cols), max(rtol, floor))
         kept.append(group[picked])
         basis = np.hstack([basis, Q])
-    return np.sort(np.concatenate(kept)).astype(int)
+    return np.sort(np.concatenate(kept))
 
 
 def independent_columns(J: np.ndarray, k0: int, rtol: float = DEFAULT_RTOL) -> np.ndarray:
@@ -127,7 +129,7 @@ def independent_columns(J: np.ndarray, k0: int, rtol: float = DEFAULT_RTOL) -> n
     that the joint-error stage keeps after the geometric columns ``J[:, :k0]`` (all kept)."""
     Js, zero = _unit_columns(J)
     geometric, terms = np.arange(k0), np.arange(k0, J.shape[1])
-    kept = _select(Js, [(geometric[~zero[:k0]], 0.0), (terms[~zero[k0:]], STAGES[-1][1])], rtol)
+    kept = _select(Js, [(geometric[~zero[:k0]], 0.0), (terms[~zero[k0:]], NG_RTOL)], rtol)
     return kept[kept >= k0] - k0
 
 

@@ -23,14 +23,17 @@ FTOL = 1e-10  # converged when the linear model predicts a decrease below this f
 
 
 class GaussNewtonResult(NamedTuple):
-    """The final state, how it stopped, accepted steps, history, and the total displacement
-    ``(space.size,)`` from the start (what the robust ridge regularises)."""
+    """The final state, how it stopped, accepted steps, history, the total displacement
+    ``(space.size,)`` from the start (what the robust ridge regularises) and the problem's
+    (unweighted) Jacobian ``(M, space.size)`` at the final state when the loop computed it there
+    (None after stopping at the iteration limit), so a caller never builds it twice."""
 
     state: State
     status: Status
     nit: int
     history: list[dict]
     total: np.ndarray
+    jacobian: np.ndarray | None
 
 
 class _Calibration:
@@ -39,12 +42,14 @@ class _Calibration:
     size = 1
 
     def __init__(self, problem, state: State, space: ParameterSpace, row_weights, ridge: float,
-                 prior, ftol: float) -> None:
+                 prior, ftol: float, jacobian=None, svd=None) -> None:
         self.problem, self.state, self.space = problem, state, space
         self.w = 1.0 if row_weights is None else np.sqrt(row_weights)
         self.ridge, self.ftol = ridge, ftol
         self.total = np.zeros(space.size) if prior is None else np.asarray(prior, float).copy()
         self.scale = None
+        self.J_raw, self.J_state = jacobian, state  # the unweighted Jacobian and its state
+        self.given_svd = svd  # of the weighted J_raw at the start, when the caller has it
         self.r = problem.residuals(state) * self.w
         self.current = float(self.r @ self.r)  # + the ridge term once the scale is known
 
@@ -56,10 +61,13 @@ class _Calibration:
         return np.array([self.current])
 
     def linearize(self, members) -> None:
-        self.J = self.problem.jacobian(self.state, self.space)
-        self.J = self.J * (self.w[:, None] if np.ndim(self.w) else self.w)
+        if self.J_raw is None or self.J_state is not self.state:
+            self.J_raw, self.J_state = self.problem.jacobian(self.state, self.space), self.state
+            self.given_svd = None
+        self.J = self.J_raw * (self.w[:, None] if np.ndim(self.w) else self.w)
         first = self.scale is None
-        self.svd = ScaledSVD.of(self.J, self.scale)
+        self.svd = ScaledSVD.of(self.J, self.scale) if self.given_svd is None else self.given_svd
+        self.given_svd = None
         self.scale = self.svd.scale
         if first:  # the ridge term is measured in the scaled unknowns
             self.current = self.initial = self._cost(self.r, self.total)
@@ -88,16 +96,18 @@ class _Calibration:
 
 def gauss_newton(problem, state: State, space: ParameterSpace, *, row_weights=None,
                  max_iter: int = 50, ftol: float = FTOL, ridge: float = 0.0, prior=None,
-                 progress=None) -> GaussNewtonResult:
+                 progress=None, jacobian: np.ndarray | None = None,
+                 svd: ScaledSVD | None = None) -> GaussNewtonResult:
     """Damped Gauss-Newton on ``space`` with fixed ``row_weights`` ``(M,)``.
 
     ``ridge`` (scaled units) with ``prior`` (the displacement accumulated so far, unscaled)
     regularises the total displacement (robust ridge). Converged when the linear model predicts
     a decrease below ``ftol`` times the cost, or the step is below rounding (exact data, where the
     cost itself is at rounding level); stalled when it predicts a real decrease that no damped
-    step achieves.
+    step achieves. ``jacobian`` ``(M, space.size)``: the problem's Jacobian at ``state`` when the
+    caller has it, and ``svd`` its :class:`ScaledSVD` after the row weights (own column scale).
     """
-    lm = _Calibration(problem, state, space, row_weights, ridge, prior, ftol)
+    lm = _Calibration(problem, state, space, row_weights, ridge, prior, ftol, jacobian, svd)
     n_items = problem.n_items
     steps = []
 
@@ -108,7 +118,8 @@ def gauss_newton(problem, state: State, space: ParameterSpace, *, row_weights=No
 
     out = minimize(lm, max_iter, on_accept)
     history = [history_entry(0, lm.initial, n_items), *steps]
-    return GaussNewtonResult(lm.state, Status(out.status[0]), int(out.nit[0]), history, lm.total)
+    return GaussNewtonResult(lm.state, Status(out.status[0]), int(out.nit[0]), history, lm.total,
+                             lm.J_raw if lm.J_state is lm.state else None)
 
 
 def solve(problem, start: State, space: ParameterSpace, *, max_iter: int = 50, progress=None,

@@ -35,11 +35,10 @@ import numpy as np
 
 from robocal.damped_least_squares import Status
 from robocal.errors import IdentificationError
-from robocal.identify.plain_io import encode_plain, load_plain
+from robocal.identify.plain_io import encode_plain, load_plain, save_plain
 from robocal.identify.population import Stagnation
 from robocal.identify.solvers import SolverResult, history_entry
 from robocal.identify.space import ParameterSpace, State
-from robocal.io import write_atomic
 
 FORMAT = "robocal-bpnet/1"
 _FIELDS = ("W1", "b1", "W2", "b2")
@@ -87,7 +86,7 @@ class BPNetwork:
 
     def save(self, path) -> None:
         """Write ``.json`` or ``.npz`` (plain arrays) atomically."""
-        write_atomic(path, self.file_content(path))
+        save_plain(path, self.to_dict(), "BP network")
 
     @classmethod
     def load(cls, path) -> BPNetwork:
@@ -128,7 +127,8 @@ def train(problem, start: State, outputs: list[str], *, hidden: int = 9, index: 
           learning_rate: float = 0.01, epochs: int = 3000, threshold: float = 0.0,
           n_consecutive: int = 5, patience: int = 100, ftol: float = 1e-6, seed: int = 0,
           progress=None):
-    """Train the network (a401-a407). Returns ``(network, x, history, status)``."""
+    """Train the network (a401-a407). Returns ``(network, x, history, indices, status)``: the
+    inputs ``x (N, 3|6)`` (mm / mrad), the SI history, the index E of every epoch (mm or mm^2)."""
     if not 8 <= hidden <= 10:
         raise IdentificationError(f"hidden must be 8-10 units (seed 002), got {hidden}")
     if index not in ("mae", "mse"):
@@ -213,9 +213,7 @@ def solve(problem, start: State, space: ParameterSpace, *, seed: int = 0, progre
         problem, start, list(outputs), hidden=hidden, index=index, learning_rate=learning_rate,
         epochs=epochs, threshold=threshold, n_consecutive=n_consecutive, patience=patience, ftol=ftol,
         seed=seed, progress=progress)
-    ybar = net.parameter_errors(x).mean(axis=0)
-    out_space = ParameterSpace(tuple(net.outputs), tuple(problem.nuisance_names))
-    state = out_space.apply(start, np.concatenate([ybar, np.zeros(len(start.nuisance))]))
+    state = State(compensate(net, start.robot, x), start.nuisance)  # the mean output over the targets
     epochs_run = len(history) - 1
     message = {Status.THRESHOLD: f"index {indices[-1]:.4g} <= threshold {threshold} {n_consecutive} times "
                                  f"in a row after {epochs_run} epochs",

@@ -8,10 +8,14 @@ What real robots' errors can be, and the limits derived from it (named once here
   offsets are fitted, no geometric error leaves more than ``MAX_NOMINAL_ERROR_MM`` of RMS
   residual, nor more than ``MAX_NOMINAL_ERROR_FRACTION`` of the spread of the measured points (the
   RMS distance from their centroid: a big robot's errors grow with its size). The real data sets
-  leave 0.19 mm (Meca500) and 0.93 mm (IRB 120); the mistakes this catches leave 50-240 mm.
-- A length unit error scales the measured points by 1000 (or 1/1000) against the model; the
-  wrong robot or joint angles in the wrong unit change the spread by factors of 2-40. The
-  measured spread must be within ``SPREAD_RATIO`` of the fitted model's at the same joints.
+  leave 0.19 mm (Meca500) and 0.90 mm (IRB 120); the mistakes this catches leave 49-340 mm on the
+  Meca500 data (metres under _mm headers 49 mm, radians under _deg 89 mm, each of the 11 other
+  6-axis catalog robots 60-340 mm: ``benchmarks/bench_calibrate.py plausibility``).
+- A length unit error scales the measured points by 1000 (or 1/1000) against the model (1/880
+  after the frame fit on the Meca500 data); the wrong robot changes the spread by factors of
+  3.2-6.5 there, except the IRB 120 and the PUMA 560 (2.0 and 2.7: within the limit, the residual
+  check catches them), and radians under _deg by 1.6. The measured spread must be within
+  ``SPREAD_RATIO`` of the fitted model's at the same joints.
 - Calibration corrects link lengths by fractions of a millimetre (a few mm at most on big
   robots) and angles by hundredths of a degree (a degree for a badly mastered joint zero). A
   correction of a link length beyond ``MAX_LENGTH_CORRECTION_MM`` or
@@ -26,6 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from robocal.data.measurements import robot_reach
 from robocal.errors import PlausibilityError
 from robocal.identify.space import block_of
 
@@ -86,11 +91,6 @@ def check_residual(rms_mm: float, points: np.ndarray, what: str, *, force: bool 
           f"robot's geometric errors can explain (at most ~{limit:.3g} mm here): the data probably "
           "belong to another robot or another file, or a unit (length or joint angle) is wrong",
           force, warnings)
-
-
-def robot_reach(robot) -> float:
-    """The robot's reach for the correction limits: its summed link lengths (m)."""
-    return float(np.abs(robot.a).sum() + np.abs(robot.d).sum())
 
 
 def check_corrections(start, final, names, *, force: bool = False,

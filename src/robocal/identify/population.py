@@ -17,25 +17,25 @@ from robocal.progress import Progress
 class PopulationCost:
     """Vectorised errors of a population of robot displacements ``X (P, k)`` (the robot names of
     ``space``) around ``state``. Measurement sets with nuisance parameters (plane coefficients)
-    have them fitted per individual (the seed-004 plane fit); the others keep the state's."""
+    have them fitted per individual (the seed-004 plane fit)."""
 
     def __init__(self, problem, state: State, space: ParameterSpace) -> None:
         self.problem, self.state, self.space = problem, state, space
         self.names = list(space.robot)
-        self.profiled = bool(problem.nuisance_names)
 
     def residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Weighted residuals ``(P, M)`` and nuisance ``(P, m)`` of each individual."""
-        X = np.atleast_2d(X)
-        if self.profiled:
-            return self.problem.profiled_residuals_batch(self.state.robot, self.names, X)
-        r = self.problem.residuals_batch(self.state, self.names, X)
-        return r, np.broadcast_to(self.state.nuisance, (X.shape[0], self.state.nuisance.size))
+        return self.problem.profiled_residuals_batch(self.state.robot, self.names, np.atleast_2d(X))
 
     def item_errors(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Per-item error norms ``(P, N)`` and nuisance ``(P, m)``."""
         r, nu = self.residuals(X)
         return np.sqrt(self.problem.item_sum_squares(r)), nu
+
+    def sum_squares(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Weighted sum of squares ``(P,)`` (the history's cost) and nuisance ``(P, m)``."""
+        r, nu = self.residuals(X)
+        return np.sum(r**2, axis=-1), nu
 
     def state_of(self, x: np.ndarray, nuisance: np.ndarray) -> State:
         """The State of one displacement ``x (k,)`` with its nuisance ``(m,)``."""

@@ -26,6 +26,14 @@ DEFAULT_SIGMA = 1.0  # residual scale of a lone set without sigma (unweighted: r
 KIND_SIGMA = {"point": 20e-6, "pose": 20e-6, "plane": 10e-6, "distance": 5e-6}
 
 
+def _consecutive(sizes: Sequence[int]) -> list[np.ndarray]:
+    """Consecutive index blocks of the given ``sizes`` (read-only)."""
+    blocks = np.split(np.arange(sum(sizes)), np.cumsum(sizes)[:-1])
+    for b in blocks:
+        b.flags.writeable = False
+    return blocks
+
+
 def _check_sigma(sigma: dict | None) -> dict:
     sigma = dict(sigma or {})
     for kind, value in sigma.items():
@@ -53,10 +61,9 @@ class CalibrationProblem:
         self.weighted = not lone or any(d.sigma is not None for d in self.datasets)
         self.sigma = np.concatenate([obs.residual_scale(s) for obs, s in
                                      zip(self.observations, self.set_sigma, strict=True)])
-        sizes = [len(obs.nuisance_names) for obs in self.observations]
-        self._nuisance = np.split(np.arange(sum(sizes)), np.cumsum(sizes)[:-1])
-        rows = [obs.n_items * obs.rows_per_item for obs in self.observations]
-        self._rows = np.split(np.arange(sum(rows)), np.cumsum(rows)[:-1])
+        self._nuisance = _consecutive([len(obs.nuisance_names) for obs in self.observations])
+        self._rows = _consecutive([obs.n_items * obs.rows_per_item for obs in self.observations])
+        self._items = _consecutive([obs.n_items for obs in self.observations])
 
     def _check_planes(self) -> None:
         """A plane id names one plate in every set of a calibration: the sets' ids must not repeat."""
@@ -70,10 +77,14 @@ class CalibrationProblem:
                         "calibration")
                 seen[name] = obs.data.label
 
+    def _with_nuisance(self, nuisance: np.ndarray):
+        """Each observation with its part of the stacked ``nuisance (m,)``."""
+        for obs, nu in zip(self.observations, self._nuisance, strict=True):
+            yield obs, nuisance[nu]
+
     def item_blocks(self) -> list[np.ndarray]:
         """Per measurement set: the indices of its items in :meth:`position_errors`."""
-        sizes = [obs.n_items for obs in self.observations]
-        return np.split(np.arange(sum(sizes)), np.cumsum(sizes)[:-1])
+        return list(self._items)
 
     @property
     def observation(self):
@@ -135,8 +146,8 @@ class CalibrationProblem:
         """The state's nuisance as physical entities (planes as normal + offset), to judge other
         measurement sets with them (:meth:`carried_state`)."""
         out: dict[str, np.ndarray] = {}
-        for obs, nu in zip(self.observations, self._nuisance, strict=True):
-            out.update(obs.export_nuisance(state.nuisance[nu]))
+        for obs, nuisance in self._with_nuisance(state.nuisance):
+            out.update(obs.export_nuisance(nuisance))
         return out
 
     def carried_state(self, robot, entities: dict[str, np.ndarray]) -> State:
@@ -147,8 +158,7 @@ class CalibrationProblem:
 
     def residuals(self, state: State) -> np.ndarray:
         """Weighted residuals ``(M,)``."""
-        r = [obs.residuals(state.robot, state.nuisance[nu])
-             for obs, nu in zip(self.observations, self._nuisance, strict=True)]
+        r = [obs.residuals(state.robot, nuisance) for obs, nuisance in self._with_nuisance(state.nuisance)]
         return np.concatenate(r) / self.sigma
 
     def jacobian(self, state: State, space: ParameterSpace) -> np.ndarray:
@@ -167,29 +177,23 @@ class CalibrationProblem:
     def residuals_batch(self, state: State, names: Sequence[str], X: np.ndarray) -> np.ndarray:
         """Weighted residuals ``(P, M)`` for robot displacements ``X (P, k)`` of ``names`` with the
         state's nuisance fixed."""
-        r = [obs.residuals_batch(state.robot, names, X, state.nuisance[nu])
-             for obs, nu in zip(self.observations, self._nuisance, strict=True)]
+        r = [obs.residuals_batch(state.robot, names, X, nuisance)
+             for obs, nuisance in self._with_nuisance(state.nuisance)]
         return np.concatenate(r, axis=-1) / self.sigma
 
     def profiled_residuals_batch(self, robot, names: Sequence[str], X: np.ndarray):
         """Weighted residuals ``(P, M)`` and nuisance ``(P, m)`` for robot displacements ``X (P, k)``
         with every observation's nuisance fitted per displacement (the seed-004 plane fit)."""
-        r, nu = [], []
-        for obs in self.observations:
-            if obs.nuisance_names:
-                rk, nk = obs.profiled_residuals_batch(robot, names, X)
-            else:
-                rk, nk = obs.residuals_batch(robot, names, X), np.zeros((X.shape[0], 0))
-            r.append(rk)
-            nu.append(nk)
+        r, nu = zip(*(obs.profiled_residuals_batch(robot, names, X) for obs in self.observations),
+                    strict=True)
         return np.concatenate(r, axis=-1) / self.sigma, np.concatenate(nu, axis=-1)
 
     def modelled_points(self, state: State) -> np.ndarray:
         """``(N, 3)`` modelled TCP (SMR, probe tip) positions of every data row (m)."""
-        return np.concatenate([obs.modelled_points(state.robot, state.nuisance[nu])
-                               for obs, nu in zip(self.observations, self._nuisance, strict=True)])
+        return np.concatenate([obs.modelled_points(state.robot, nuisance)
+                               for obs, nuisance in self._with_nuisance(state.nuisance)])
 
     def position_errors(self, state: State) -> np.ndarray:
         """``(n_items,)`` unweighted position error of each measurement item (m)."""
-        return np.concatenate([obs.position_errors(state.robot, state.nuisance[nu])
-                               for obs, nu in zip(self.observations, self._nuisance, strict=True)])
+        return np.concatenate([obs.position_errors(state.robot, nuisance)
+                               for obs, nuisance in self._with_nuisance(state.nuisance)])

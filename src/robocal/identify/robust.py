@@ -64,11 +64,13 @@ def standardized(r: np.ndarray, rows: int) -> tuple[np.ndarray, float]:
     return per_item / (scale * np.sqrt(rows)), scale
 
 
-def ridge_parameter(J: np.ndarray, r: np.ndarray, prior: np.ndarray, rule: str = "double-h") -> float:
-    """Ridge parameter (scaled units) for the linearised problem J x = r around ``prior``."""
+def ridge_parameter(J: np.ndarray, r: np.ndarray, prior: np.ndarray, rule: str = "double-h",
+                    svd: ScaledSVD | None = None) -> float:
+    """Ridge parameter (scaled units) for the linearised problem J x = r around ``prior``
+    (``svd``: ``ScaledSVD.of(J)`` when the caller has it)."""
     if rule == "none":
         return 0.0
-    svd = ScaledSVD.of(J)
+    svd = ScaledSVD.of(J) if svd is None else svd
     m, k = J.shape
     x_ls = svd.solve(r) + prior
     res = r - J @ (x_ls - prior)
@@ -121,18 +123,22 @@ def solve(problem, start: State, space: ParameterSpace, *, k0: float = 1.5, k1: 
     item_w = np.ones(problem.n_items)
     state, total = start, None
     r = problem.residuals(state)
+    J = problem.jacobian(state, space)  # at ``state``: built once per state, reused below
     history = [history_entry(0, float(r @ r), problem.n_items)]
     status = Status.MAX_ITERATIONS
     for outer in range(1, max_outer + 1):
         row_w = np.repeat(item_w, item_rows)
         sw = np.sqrt(row_w)
-        J = problem.jacobian(state, space) * sw[:, None]
+        Jw = J * sw[:, None]
+        svd = ScaledSVD.of(Jw)
         prior = np.zeros(J.shape[1]) if total is None else total
-        h = ridge_parameter(J, r * sw, prior, ridge)
-        gn = gauss_newton(problem, state, space, row_weights=row_w, ridge=h, prior=prior)
+        h = ridge_parameter(Jw, r * sw, prior, ridge, svd)
+        gn = gauss_newton(problem, state, space, row_weights=row_w, ridge=h, prior=prior,
+                          jacobian=J, svd=svd)
         state, total = gn.state, gn.total
         r = problem.residuals(state)
-        redundancy = 1.0 - leverage(problem.jacobian(state, space), row_w)
+        J = problem.jacobian(state, space) if gn.jacobian is None else gn.jacobian
+        redundancy = 1.0 - leverage(J, row_w)
         v, scale = standardized_items(problem, r / np.sqrt(redundancy))
         # an item the fit almost reproduces (local redundancy below MIN_REDUNDANCY) is not
         # controlled by the others: a gross error there cannot be told from the fit, so it keeps

@@ -130,7 +130,5 @@ def resolve_names(robot: Robot, params, blind: Sequence[str] = (), orientation: 
     if isinstance(params, str):
         params = [p for p in params.replace(",", " ").split() if p]
     names = list(params)
-    robot.indices(names)  # validates
-    if len(set(names)) != len(names):
-        raise IdentificationError("a parameter is named twice in params")
+    robot.indices(names)  # validates (a name given twice: ParameterSpace refuses it)
     return names

@@ -56,27 +56,26 @@ def solve(problem, start: State, space: ParameterSpace, *, seed: int = 0, progre
     X = rng.uniform(lo, hi, (particles, k))
     X[0] = 0.0
     V = rng.uniform(-vclamp, vclamp, (particles, k))
+    pbest, pbest_f = X.copy(), np.full(particles, np.inf)
+    best: dict = {}
 
-    def evaluate(X):
-        err, nu = cost.item_errors(X)
-        return np.sum(err**2, axis=1), nu
+    def evaluate() -> None:
+        """Cost of the current positions: update the personal and the global bests."""
+        f, nu = cost.sum_squares(X)
+        better = f < pbest_f
+        pbest[better], pbest_f[better] = X[better], f[better]
+        g = int(np.argmin(f))
+        if not best or f[g] < best["f"]:
+            best.update(x=X[g].copy(), f=f[g], nu=nu[g].copy())
 
-    f, nu = evaluate(X)
-    pbest, pbest_f = X.copy(), f.copy()
-    g = int(np.argmin(f))
-    best = {"x": X[g].copy(), "f": f[g], "nu": nu[g].copy()}
+    evaluate()
 
     def fly(_: int) -> tuple[float, float]:
         nonlocal X, V
         r1, r2 = rng.random((particles, k)), rng.random((particles, k))
         V = np.clip(inertia * V + c1 * r1 * (pbest - X) + c2 * r2 * (best["x"] - X), -vclamp, vclamp)
         X = np.clip(X + V, lo, hi)
-        f, nu = evaluate(X)
-        better = f < pbest_f
-        pbest[better], pbest_f[better] = X[better], f[better]
-        g = int(np.argmin(f))
-        if f[g] < best["f"]:
-            best.update(x=X[g].copy(), f=f[g], nu=nu[g].copy())
+        evaluate()
         return best["f"], best["f"]
 
     status, it, history = evolve(fly, initial_cost=best["f"], n_items=problem.n_items, limit=iterations,

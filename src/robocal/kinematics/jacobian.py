@@ -13,7 +13,7 @@ import numpy as np
 
 from robocal.errors import ModelError
 from robocal.kinematics.fk import LinkArrays, chain_frames
-from robocal.kinematics.joint_errors import joint_error_basis
+from robocal.kinematics.joint_errors import joint_error_basis, scatter_offsets
 
 
 def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray):
@@ -68,7 +68,11 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
     (:func:`joint_error_basis`): its axis is joint i's scaled by B_p, pose by pose.
     """
     tools = robot.tool if smr is None else robot.tools_for(smr)
-    reached = robot.reached_joints(q, approach, travel)
+    if robot.joint_errors is None:
+        reached = q
+    else:  # the basis once: for the reached joints (as robot.reached_joints) and the axes
+        B, joint = joint_error_basis(robot, q, robot.joint_errors.names, approach, travel)  # (N, m), (m,)
+        reached = q + scatter_offsets(B, joint, robot.joint_errors.values, robot.n_joints)
     tcp, u, o, rotation = motion_axes(robot.links, robot.base, tools, reached)
     k = len(robot.smr)
     if k:
@@ -82,7 +86,6 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
         o = np.concatenate([o, np.zeros_like(u_smr)], axis=1)
         rotation = np.concatenate([rotation, np.zeros(3 * k, bool)])
     if robot.joint_errors is not None:
-        B, joint = joint_error_basis(robot, q, robot.joint_errors.names, approach, travel)  # (N, m), (m,)
         theta = 5 * joint + 3
         u = np.concatenate([u, u[:, theta] * B.T], axis=1)
         o = np.concatenate([o, o[:, theta]], axis=1)

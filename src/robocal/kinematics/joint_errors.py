@@ -179,6 +179,16 @@ def joint_error_basis(robot, q: np.ndarray, names: Sequence[str], approach: np.n
     return B, np.array([t[0] for t in parsed], dtype=int)
 
 
+def scatter_offsets(B: np.ndarray, joint: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
+    """Joint offsets ``dq (..., N, n)`` rad of the terms with basis ``B (N, k)`` on joints
+    ``joint (k,)`` (:func:`joint_error_basis`) and values ``(..., k)`` (one set, or a batch
+    ``(P, k)``): ``dq[..., joint[p]] += B[:, p] * values[..., p]``, terms added in order."""
+    contrib = B * np.asarray(values, float)[..., None, :]  # (..., N, k)
+    dq = np.zeros(contrib.shape[:-1] + (n,))
+    np.add.at(np.moveaxis(dq, -1, 0), joint, np.moveaxis(contrib, -1, 0))
+    return dq
+
+
 @dataclass(frozen=True, eq=False)
 class JointErrorModel:
     """Named joint-error parameters and their values (SI units of :data:`UNITS`)."""
@@ -212,9 +222,7 @@ class JointErrorModel:
         directions ``approach (N, n)`` (backlash; None: unknown, mid-band) by the moves
         ``travel (N, n)`` rad (None: no move)."""
         B, joint = joint_error_basis(robot, q, self.names, approach, travel)
-        dq = np.zeros_like(q)
-        np.add.at(dq.T, joint, (B * self.values).T)
-        return dq
+        return scatter_offsets(B, joint, self.values, q.shape[-1])
 
     def to_dict(self) -> dict:
         """Plain data for the model YAML (SI units of :data:`UNITS`)."""

@@ -7,7 +7,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from robocal.kinematics.fk import chain_frames
-from robocal.kinematics.joint_errors import joint_error_basis
+from robocal.kinematics.jacobian import identification_jacobian
+from robocal.kinematics.joint_errors import joint_error_basis, scatter_offsets
 
 
 class Observation:
@@ -28,10 +29,10 @@ class Observation:
         self.data = data
         self.q = robot.check_joints(data.joints)
         self.smr = np.asarray(data.smr, dtype=int)
-        self.approach = getattr(data, "approach", None)  # joint approach directions (backlash)
-        self.travel = getattr(data, "travel", None)  # joint moves from the previous pose (travel)
-        sigma = getattr(data, "sigma", None)
-        self.item_sigma = None if sigma is None else np.asarray(sigma, dtype=float)
+        self.approach = data.approach  # joint approach directions (backlash)
+        self.travel = data.travel  # joint moves from the previous pose (travel)
+        self.item_sigma = None if data.sigma is None else np.asarray(data.sigma, dtype=float)
+        self._basis = None  # (robot, B, joint): the joint-error basis batch_tcp last used
 
     @property
     def n_items(self) -> int:
@@ -82,9 +83,16 @@ class Observation:
         ``names`` around ``robot`` — one vectorised evaluation for a whole population."""
         raise NotImplementedError
 
-    def modelled_points(self, robot, nuisance: np.ndarray) -> np.ndarray:
+    def profiled_residuals_batch(self, robot, names: Sequence[str], X: np.ndarray
+                                 ) -> tuple[np.ndarray, np.ndarray]:
+        """Residuals ``(P, N * rows_per_item)`` of P displacements ``X (P, k)`` with the nuisance
+        parameters fitted per displacement, and those ``(P, m)``: here there are none (kinds with
+        nuisance override this)."""
+        return self.residuals_batch(robot, names, X), np.zeros((X.shape[0], 0))
+
+    def modelled_points(self, robot, nuisance: np.ndarray | None = None) -> np.ndarray:
         """``(N, 3)`` modelled positions (TCP / SMR / probe tip) in the world frame, m."""
-        return robot.fk(self.q, smr=self.smr, approach=self.approach, travel=self.travel)[:, :3, 3]
+        return self._fk(robot)[:, :3, 3]
 
     def position_errors(self, robot, nuisance: np.ndarray) -> np.ndarray:
         """``(N,)`` position error of each item in m (what the statistics report)."""
@@ -92,6 +100,16 @@ class Observation:
         return np.linalg.norm(r[:, :3], axis=1)
 
     # shared by point-like observations ------------------------------------------------
+    def _fk(self, robot) -> np.ndarray:
+        """TCP poses ``(N, 4, 4)`` of the data rows: each with its SMR, joint-error terms from
+        the rows' approach directions and moves."""
+        return robot.fk(self.q, smr=self.smr, approach=self.approach, travel=self.travel)
+
+    def _tcp_jacobian(self, robot, names: Sequence[str], kind: str = "point") -> np.ndarray:
+        """d(TCP of each row)/d(``names``) ``(N, 3|6, k)`` (:func:`identification_jacobian`,
+        ``kind`` 'point' or 'pose'), with the rows' SMRs, approach directions and moves."""
+        return identification_jacobian(robot, self.q, names, kind, self.smr, self.approach, self.travel)
+
     def batch_tcp(self, robot, names, X) -> np.ndarray:
         """TCP poses ``(P, N, 4, 4)`` of the displaced robots (each row with its SMR, joint-error
         terms applied with their basis at the undisplaced robot: exact at X = 0)."""
@@ -103,7 +121,8 @@ class Observation:
         links = type(moved.links)(*(v[:, None, :] for v in moved.links))
         q = np.broadcast_to(self.q, (P, N, n))
         if moved.joint_errors is not None:
-            B, joint = joint_error_basis(robot, self.q, robot.joint_errors.names, self.approach, self.travel)
-            onehot = np.eye(n)[joint]  # (m, n): which joint each term turns
-            q = q + (B[None] * moved.joint_errors[:, None, :]) @ onehot
+            if self._basis is None or self._basis[0] is not robot:  # once per robot, not per call
+                self._basis = (robot, *joint_error_basis(robot, self.q, robot.joint_errors.names,
+                                                         self.approach, self.travel))
+            q = q + scatter_offsets(*self._basis[1:], moved.joint_errors, n)
         return chain_frames(links, moved.base[:, None], tools, q)

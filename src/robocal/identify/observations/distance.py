@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.identify.observations.base import Observation
-from robocal.kinematics.jacobian import identification_jacobian
 
 
 def not_observable(robot) -> list[str]:
@@ -55,7 +54,7 @@ class DistanceObservation(Observation):
     def jacobian(self, robot, names, nuisance=None) -> np.ndarray:
         v = self._vectors(self.modelled_points(robot, nuisance))
         e = v / np.linalg.norm(v, axis=1, keepdims=True)
-        J = identification_jacobian(robot, self.q, names, "point", self.smr, self.approach, self.travel)
+        J = self._tcp_jacobian(robot, names)
         return np.einsum("pi,pik->pk", e, J[self.ends[0]] - J[self.ends[1]])
 
     def residuals_batch(self, robot, names, X, nuisance=None) -> np.ndarray:

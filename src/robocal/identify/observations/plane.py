@@ -41,13 +41,11 @@ import numpy as np
 
 from robocal.errors import IdentificationError
 from robocal.identify.observations.base import Observation
-from robocal.kinematics.jacobian import identification_jacobian
 
 MIN_CONTACTS_PER_PLANE = 3
 # |normal component| along a plane's dependent axis below which another data set's plane cannot be
 # expressed in this set's parametrisation (it stands on edge): it is fitted instead
 MIN_DEPENDENT_COMPONENT = 1e-6
-_AXES = "xyz"
 
 
 def scale_reference(robot) -> str:
@@ -117,10 +115,6 @@ class PlaneObservation(Observation):
         cov = np.einsum("nk,ni,nj->kij", self.onehot, dev, dev)
         _, vec = np.linalg.eigh(cov)
         return np.argmax(np.abs(vec[:, :, 0]), axis=1).reshape(K)
-
-    def modelled_points(self, robot, nuisance=None) -> np.ndarray:
-        """``(N, 3)`` modelled probe tip positions (base frame), m."""
-        return robot.fk(self.q, approach=self.approach, travel=self.travel)[:, :3, 3]
 
     def _local(self, points: np.ndarray) -> np.ndarray:
         """Points ``(..., N, 3)`` reordered per contact to ``(u, v, d)`` of its plane."""
@@ -193,8 +187,7 @@ class PlaneObservation(Observation):
         p = self.modelled_points(robot)
         h = self.signed_distance(p, nuisance)
         normal = self.plane_normals(nuisance)[self.plane_of]  # (N, 3)
-        J_tip = identification_jacobian(robot, self.q, names, "point", approach=self.approach,
-                                       travel=self.travel)
+        J_tip = self._tcp_jacobian(robot, names)
         J_robot = np.einsum("ni,nik->nk", normal, J_tip) if len(names) else np.zeros((self.n_items, 0))
         coef = nuisance.reshape(-1, 3)[self.plane_of]
         a, b = coef[:, 0], coef[:, 1]

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.identify.observations.base import Observation
-from robocal.kinematics.jacobian import identification_jacobian
 
 
 class PointObservation(Observation):
@@ -20,8 +19,7 @@ class PointObservation(Observation):
         return (self.measured - self.modelled_points(robot, nuisance)).reshape(-1)
 
     def jacobian(self, robot, names, nuisance=None) -> np.ndarray:
-        J = identification_jacobian(robot, self.q, names, "point", self.smr, self.approach, self.travel)
-        return J.reshape(-1, len(names))
+        return self._tcp_jacobian(robot, names).reshape(-1, len(names))
 
     def residuals_batch(self, robot, names, X, nuisance=None) -> np.ndarray:
         tcp = self.batch_tcp(robot, names, X)

@@ -10,7 +10,6 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.identify.observations.base import Observation
-from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.transforms import pose_error
 
 DEFAULT_LENGTH_SCALE = 0.1
@@ -29,11 +28,10 @@ class PoseObservation(Observation):
         self.scale = np.array([1.0, 1.0, 1.0, length_scale, length_scale, length_scale])
 
     def residuals(self, robot, nuisance=None) -> np.ndarray:
-        T = robot.fk(self.q, smr=self.smr, approach=self.approach, travel=self.travel)
-        return (pose_error(self.measured, T) * self.scale).reshape(-1)
+        return (pose_error(self.measured, self._fk(robot)) * self.scale).reshape(-1)
 
     def jacobian(self, robot, names, nuisance=None) -> np.ndarray:
-        J = identification_jacobian(robot, self.q, names, "pose", self.smr, self.approach, self.travel)
+        J = self._tcp_jacobian(robot, names, "pose")
         return (J * self.scale[None, :, None]).reshape(-1, len(names))
 
     def residuals_batch(self, robot, names, X, nuisance=None) -> np.ndarray:
