@@ -48,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robocal.errors import IdentificationError, ModelError
+from robocal.io import as_number
 from robocal.kinematics.fk import chain_frames
 
 TERMS = ("compliance", "gear", "backlash", "travel", "cyclic")
@@ -235,8 +236,7 @@ class JointErrorModel:
         if not isinstance(data, dict) or not isinstance(data.get("parameters"), dict):
             raise ModelError("joint_errors must be a mapping with 'parameters: {name: value}'")
         params = data["parameters"]
-        for name, v in params.items():
+        for name in params:
             _parse(str(name), n)
-            if isinstance(v, bool) or not isinstance(v, int | float):
-                raise ModelError(f"joint_errors.parameters.{name}: expected a number, got {v!r}")
-        return cls(tuple(params), np.array(list(params.values()), dtype=float))
+        values = [as_number(v, f"joint_errors.parameters.{name}", ModelError) for name, v in params.items()]
+        return cls(tuple(params), np.array(values))
