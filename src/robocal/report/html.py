@@ -462,12 +462,8 @@ def _history(result: dict) -> str:
 
 # ----------------------------------------------------------------- page
 def render_report(result: dict, *, title: str | None = None) -> str:
-    """The report of a calibration result dict as one self-contained HTML page."""
-    try:
-        import matplotlib  # noqa: F401 - the figures
-    except ImportError:
-        raise DataError("the HTML report draws its figures with matplotlib: "
-                        "pip install 'robocal[report]'") from None
+    """The report of a calibration result dict as one self-contained HTML page (its figures need
+    matplotlib: :mod:`robocal.report.plots` says so when it is missing)."""
     if not isinstance(result, dict):
         raise DataError("a report needs a calibration result (a JSON object)")
     robot = (result.get("robot") or {}).get("name", "robot")
