@@ -331,3 +331,13 @@ def test_path_candidates_of_a_calibrated_model_next_to_the_stretched_elbow():
     assert (branch_slot(o, cand[n_idx, b_idx]) == b_idx).all()
     e = pose_error(T[n_idx], calibrated.fk(cand[n_idx, b_idx]))
     assert np.linalg.norm(e[:, :3], axis=1).max() <= 1e-10
+
+
+def test_a_joint_just_past_a_limit_is_not_turned_past_the_other():
+    """Numeric IK moves a joint into its limits by a full turn only where that turn lands inside
+    them: 0.01 deg past -170 deg stays there (it was returned as +189.99 deg, 20 deg past +170)."""
+    robot = rc.Robot.from_catalog("fanuc_lrmate200id")
+    q = np.deg2rad([[np.rad2deg(robot.limits[0, 0]) - 0.01, 10, 10, 0, -40, 0]])
+    res = rc.ik.solve(robot, robot.fk(q), seeds=q)
+    assert res.converged.all()
+    np.testing.assert_allclose(res.joints, q, atol=1e-9)

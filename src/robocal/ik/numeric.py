@@ -233,11 +233,14 @@ def _branch_form(robot: Robot, nominal: Robot | None):
 
 def _result(robot: Robot, q0: np.ndarray, run: _Run) -> IKResult:
     """The IKResult of ``run`` from seeds ``q0`` (NaN rows: no seed, not converged): joints on the
-    seed's turn (joints with more than 360 deg of travel), then moved into the limits."""
+    seed's turn (joints with more than 360 deg of travel), then moved into the limits by a turn
+    where that turn lands inside them (a joint just past a limit stays there, to be reported)."""
     seeded = np.isfinite(q0).all(axis=1)
     start = np.where(np.isfinite(q0), q0, 0.0)
     q = start + (np.remainder(run.q - start + np.pi, 2 * np.pi) - np.pi)
-    q = np.where(q < robot.limits[:, 0], q + 2 * np.pi, np.where(q > robot.limits[:, 1], q - 2 * np.pi, q))
+    lo, hi = robot.limits[:, 0], robot.limits[:, 1]
+    up, down = q + 2 * np.pi, q - 2 * np.pi
+    q = np.where((q < lo) & (up <= hi), up, np.where((q > hi) & (down >= lo), down, q))
     return IKResult(q, run.ok & seeded, np.linalg.norm(run.err[:, :3], axis=1),
                     np.linalg.norm(run.err[:, 3:], axis=1), np.array(q0), int(run.nit.max(initial=0)))
 
