@@ -44,7 +44,7 @@ def test_jacobian_and_batch_match_the_residuals():
         fd = -(problem.residuals(space.apply(state, e)) - problem.residuals(space.apply(state, -e))) / (2 * h)
         np.testing.assert_allclose(J[:, k], fd, atol=1e-7)
     X = np.random.default_rng(3).normal(0, 1e-4, (4, space.size))
-    batch = problem.residuals_batch(state, space.robot, X)
+    batch, _ = problem.profiled_residuals_batch(state.robot, space.robot, X)  # the population solvers' path
     for i in range(4):
         np.testing.assert_allclose(batch[i], problem.residuals(space.apply(state, X[i])), atol=1e-12)
 

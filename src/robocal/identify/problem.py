@@ -174,13 +174,6 @@ class CalibrationProblem:
             J[np.ix_(rows, k + nu)] = block[:, k:]
         return J / self.sigma[:, None]
 
-    def residuals_batch(self, state: State, names: Sequence[str], X: np.ndarray) -> np.ndarray:
-        """Weighted residuals ``(P, M)`` for robot displacements ``X (P, k)`` of ``names`` with the
-        state's nuisance fixed."""
-        r = [obs.residuals_batch(state.robot, names, X, nuisance)
-             for obs, nuisance in self._with_nuisance(state.nuisance)]
-        return np.concatenate(r, axis=-1) / self.sigma
-
     def profiled_residuals_batch(self, robot, names: Sequence[str], X: np.ndarray):
         """Weighted residuals ``(P, M)`` and nuisance ``(P, m)`` for robot displacements ``X (P, k)``
         with every observation's nuisance fitted per displacement (the seed-004 plane fit)."""
