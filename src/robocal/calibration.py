@@ -43,14 +43,9 @@ _DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 
             "rad/rad": ("mdeg/deg", 1e3)}
 
 
-@dataclass
-class Judged:
-    """A measurement set judged with the start and the calibrated model: its problem, the two
-    states (nuisance carried over from the calibration) and each item's error with them (m)."""
+class _BeforeAfter:
+    """Statistics (mm) of ``errors`` (each item's error with the start and the calibrated model, m)."""
 
-    data: Measurements
-    problem: CalibrationProblem
-    states: tuple[State, State]
     errors: tuple[np.ndarray, np.ndarray]
 
     @property
@@ -65,7 +60,18 @@ class Judged:
 
 
 @dataclass
-class CalibrationResult:
+class Judged(_BeforeAfter):
+    """A measurement set judged with the start and the calibrated model: its problem, the two
+    states (nuisance carried over from the calibration) and each item's error with them (m)."""
+
+    data: Measurements
+    problem: CalibrationProblem
+    states: tuple[State, State]
+    errors: tuple[np.ndarray, np.ndarray]
+
+
+@dataclass
+class CalibrationResult(_BeforeAfter):
     """Everything a calibration found; ``to_dict()`` is the JSON of docs/result-json.md.
 
     ``space`` is what was estimated (robot parameters, then nuisance), ``covariance`` its
@@ -103,16 +109,6 @@ class CalibrationResult:
     def unknowns(self) -> list[str]:
         """Every estimated unknown (robot parameters, then nuisance)."""
         return self.space.names
-
-    @property
-    def before(self) -> dict:
-        """Statistics (mm) of the calibration items with the start model."""
-        return position_stats(self.errors[0])
-
-    @property
-    def after(self) -> dict:
-        """Statistics (mm) of the calibration items with the calibrated model."""
-        return position_stats(self.errors[1])
 
     @property
     def validation_before(self) -> dict | None:
