@@ -55,8 +55,9 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
         fitted_on = data if frame_from is None else frame_from
         reg = register_frame(robot, fitted_on)
         robot = apply_registration(robot, reg)
-        check_spread(fitted_on.points, robot.fk(fitted_on.joints, smr=fitted_on.smr)[:, :3, 3],
-                     "the data the frame is fitted on", force=force, warnings=warnings)
+        modelled = robot.fk(fitted_on.joints, smr=fitted_on.smr, approach=fitted_on.approach,
+                            travel=fitted_on.travel)[:, :3, 3]
+        check_spread(fitted_on.points, modelled, "the data the frame is fitted on", force=force, warnings=warnings)
         out["robot"] = robot
         out["registration_rms_mm"] = reg.rms * 1e3
     obs = _observation(robot, data)

@@ -21,3 +21,15 @@ def numbers(count: int | None, unit_hint: str) -> Callable[[str], list[float]]:
         return values
 
     return parse
+
+
+def load_measurements(path: str, robot, quiet: bool = False):
+    """:meth:`Measurements.load` of ``path`` checked against ``robot``, printing how the reader
+    interpreted the file (repeated readings grouped into poses; warnings always)."""
+    from robocal.data.measurements import Measurements
+
+    data = Measurements.load(path, robot=robot)
+    for note in data.notes:
+        if not quiet or note.startswith("WARNING"):
+            print(note if note.startswith("WARNING") else f"note: {note}")
+    return data

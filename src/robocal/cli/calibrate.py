@@ -98,7 +98,7 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.calibration import calibrate, json_text
-    from robocal.data.measurements import Measurements
+    from robocal.cli.args import load_measurements
     from robocal.errors import DataError, IdentificationError
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
@@ -111,8 +111,8 @@ def run(args) -> int:
         raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
     sigma = dict(args.sigma)
     robot = load_model(args.robot)
-    data = [Measurements.load(f, robot=robot) for f in args.data]
-    validation = [Measurements.load(f, robot=robot) for f in validate]
+    data = [load_measurements(f, robot, args.quiet) for f in args.data]
+    validation = [load_measurements(f, robot, args.quiet) for f in validate]
     if args.hold_out is not None:
         if validation or len(data) > 1:
             raise DataError("--hold-out splits one calibration file: give one file and no --validate")

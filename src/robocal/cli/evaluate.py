@@ -32,15 +32,15 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import json
 
-    from robocal.data.measurements import Measurements
+    from robocal.cli.args import load_measurements
     from robocal.evaluate import evaluate
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
 
     check_outputs([args.json], [args.model, args.data, args.frame_from])
     robot = load_model(args.model)
-    data = Measurements.load(args.data, robot=robot)
-    frame_from = Measurements.load(args.frame_from, robot=robot) if args.frame_from else None
+    data = load_measurements(args.data, robot, args.quiet)
+    frame_from = load_measurements(args.frame_from, robot, args.quiet) if args.frame_from else None
     stats = evaluate(robot, data, fit_frame=args.fit_frame, frame_from=frame_from, force=args.force)
     keys = ("n", "rms", "mean", "max", "p95")
     summary = {k: stats[k] for k in keys}

@@ -60,6 +60,13 @@ MAX_JOINT_RAD = 4 * np.pi  # no joint turns more than two turns either way
 # base) plus SPAN_MARGIN_M; a wider span is a length unit mistake or a bigger robot's data.
 MAX_SPAN_REACHES = 2.0
 SPAN_MARGIN_M = 0.5
+# Consecutive rows whose joints all agree within this (rad) are readings of one pose (a tracker
+# export that repeats each reading, or the SMRs of one pose) when the file has no pose_id: a
+# robot standing still reads its encoders to well below it; two planned poses never differ less.
+REPEAT_JOINT_TOL_RAD = np.deg2rad(1e-3)
+# Consecutive poses closer than this (rad, every joint) but beyond the tolerance above look like
+# repeated readings with a jittering joint reading: worth a warning (a backlash model needs to know).
+NEAR_REPEAT_RAD = np.deg2rad(0.05)
 
 
 def _int_array(values, name: str, n: int) -> np.ndarray:
@@ -106,6 +113,7 @@ class Measurements:
     approach: np.ndarray | None = None
     travel: np.ndarray | None = None
     file: str = ""  # the file it was read from (set by :meth:`load`)
+    notes: tuple[str, ...] = ()  # how the reader interpreted the file (e.g. repeated readings)
 
     @property
     def label(self) -> str:
@@ -351,6 +359,13 @@ def travel_from_order(joints: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
     new_pose = np.r_[True, pose_id[1:] != pose_id[:-1]]
     q = joints[new_pose]
     return np.diff(q, axis=0, prepend=q[:1])[np.cumsum(new_pose) - 1]
+
+
+def repeat_groups(joints: np.ndarray) -> np.ndarray:
+    """``(N,)`` pose ids from the row order: consecutive rows whose joints ``(N, n)`` agree within
+    :data:`REPEAT_JOINT_TOL_RAD` share one id (repeated readings, or several SMRs of one pose)."""
+    same = np.r_[False, (np.abs(np.diff(joints, axis=0)) <= REPEAT_JOINT_TOL_RAD).all(axis=1)]
+    return np.cumsum(~same) - 1
 
 
 def approach_from_order(joints: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
@@ -631,9 +646,25 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     travel = _per_joint(col, roles, "travel", len(joint_cols), name)
     ints = {c: (col[c].astype(np.int64) if c in col else None) for c in ("smr", "pose_id")}
     source_row = col["source_row"].astype(np.int64) if "source_row" in col else np.array(line_no)
+    notes = ()
+    if ints["pose_id"] is None and kind != "distance":
+        ints["pose_id"] = repeat_groups(joints)
+        if ints["pose_id"][-1] + 1 < len(joints):
+            notes = (f"{name}: {len(joints)} rows hold {ints['pose_id'][-1] + 1} poses (consecutive rows with the "
+                     f"same joints, within {np.rad2deg(REPEAT_JOINT_TOL_RAD):g} deg, are repeated readings or "
+                     "the SMRs of one pose); give a pose_id column to group the rows otherwise",)
+        first = np.r_[True, ints["pose_id"][1:] != ints["pose_id"][:-1]]
+        step = np.abs(np.diff(joints[first], axis=0)).max(axis=1)
+        near = np.flatnonzero(step <= NEAR_REPEAT_RAD)
+        if near.size:
+            ln = np.array(line_no)[first][near + 1]
+            notes += (f"WARNING: {name}: {near.size} pose(s) (line(s) {', '.join(map(str, ln[:5]))}) differ from "
+                      f"the previous one by at most {np.rad2deg(step[near].max()):.3g} deg: if they are repeated "
+                      "readings of one pose, give a pose_id column (rows of one pose share it)",)
     try:
-        return Measurements.from_arrays(kind, joints, smr=ints["smr"], pose_id=ints["pose_id"],
+        data = Measurements.from_arrays(kind, joints, smr=ints["smr"], pose_id=ints["pose_id"],
                                         source_row=source_row, source=source, approach=approach,
                                         travel=travel, **kw)
     except DataError as exc:
         raise DataError(f"{name}: {exc}") from None
+    return replace(data, notes=notes)
