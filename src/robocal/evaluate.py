@@ -57,7 +57,8 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
         robot = apply_registration(robot, reg)
         modelled = robot.fk(fitted_on.joints, smr=fitted_on.smr, approach=fitted_on.approach,
                             travel=fitted_on.travel)[:, :3, 3]
-        check_spread(fitted_on.points, modelled, "the data the frame is fitted on", force=force, warnings=warnings)
+        check_spread(fitted_on.points, modelled, "the data the frame is fitted on", force=force,
+                     warnings=warnings)
         out["robot"] = robot
         out["registration_rms_mm"] = reg.rms * 1e3
     obs = _observation(robot, data)

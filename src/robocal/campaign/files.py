@@ -7,7 +7,10 @@ deg, so the file holds them exactly); with
 candidates from a file, the file's own joint columns and the chosen rows' cells exactly as read,
 plus ``source_row`` (the row's line in that file). With several SMRs, ``visible_smr0..`` (1/0)
 say which SMRs the tracker sees at each pose; plane contacts and distances keep their ``plane``
-and ``pair`` columns (one row per contact or distance end).
+and ``pair`` columns (one row per contact or distance end). The SMRs the plan assumed,
+``smr{k}_x_mm, smr{k}_y_mm, smr{k}_z_mm`` (flange frame), and the tracker's position when one was
+given, ``tracker_x_mm, tracker_y_mm, tracker_z_mm`` (robot base frame), repeat on every row, so a
+rehearsal (``robocal simulate --joints``) measures the campaign that was planned.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from robocal.data.measurements import JointTable, Measurements, read_joint_table
 from robocal.errors import DataError
 
 VISIBLE_PREFIX = "visible_smr"
+_XYZ = ("x", "y", "z")
 
 
 @dataclass(frozen=True)
@@ -68,9 +72,10 @@ def _cells(values: np.ndarray) -> list[str]:
 
 
 def poses_csv(joints: np.ndarray, visible: np.ndarray | None = None, source: CandidateFile | None = None,
-              rows: np.ndarray | None = None) -> str:
+              rows: np.ndarray | None = None, smr_mm=None, tracker_mm=None) -> str:
     """The text of ``poses.csv`` (see the module docstring) for ``joints (N, n)`` rad in measuring
-    order; ``source`` and ``rows (N,)`` (table rows) when the candidates came from a file."""
+    order; ``source`` and ``rows (N,)`` (table rows) when the candidates came from a file;
+    ``smr_mm (k, 3)`` and ``tracker_mm (3,)`` the planned SMRs and tracker position (mm)."""
     if source is None:
         header = [f"q{i + 1}_deg" for i in range(joints.shape[1])]
         body = [_cells(row) for row in np.rad2deg(joints)]
@@ -88,24 +93,67 @@ def poses_csv(joints: np.ndarray, visible: np.ndarray | None = None, source: Can
         header += [f"{VISIBLE_PREFIX}{k}" for k in range(visible.shape[1])]
         for line, seen in zip(body, visible, strict=True):
             line += ["1" if s else "0" for s in seen]
+    points = [] if smr_mm is None else [(f"smr{k}", xyz) for k, xyz in enumerate(np.reshape(smr_mm, (-1, 3)))]
+    points += [] if tracker_mm is None else [("tracker", tracker_mm)]
+    fixed = [(f"{what}_{c}_mm", v) for what, xyz in points for c, v in zip(_XYZ, xyz, strict=True)]
+    header += [name for name, _ in fixed]
+    for line in body:
+        line += [repr(float(v)) for _, v in fixed]
     return "\n".join([",".join(header)] + [",".join(line) for line in body]) + "\n"
 
 
-def read_planned(path, robot) -> tuple[np.ndarray, np.ndarray | None]:
-    """Joints ``(N, n)`` rad of a planned ``poses.csv`` (any joints CSV) and, when it has
-    ``visible_smr*`` columns, which SMRs each pose shows ``(N, k)`` bool (else None)."""
+@dataclass(frozen=True)
+class Planned:
+    """A planned ``poses.csv``: ``joints (N, n)`` rad, ``visible (N, k)`` bool (None without
+    ``visible_smr*`` columns), ``smr (k, 3)`` m and ``tracker (3,)`` m as planned (None when the
+    file does not carry them)."""
+
+    joints: np.ndarray
+    visible: np.ndarray | None
+    smr: np.ndarray | None
+    tracker: np.ndarray | None
+
+
+def _fixed_columns(table: JointTable, names: list[str], path) -> np.ndarray | None:
+    """The one value per column ``names`` that every row repeats (m, from mm), or None when absent."""
+    cells = [table.column(h) for h in names]
+    if all(c is None for c in cells):
+        return None
+    if any(c is None for c in cells):
+        raise DataError(f"{path}: columns {', '.join(names)} go together; one is missing")
+    try:
+        values = np.array(cells, dtype=float).T
+    except ValueError:
+        raise DataError(f"{path}: columns {', '.join(names)} must hold numbers (mm)") from None
+    if not np.isfinite(values).all() or (values != values[0]).any():
+        raise DataError(f"{path}: columns {', '.join(names)} must repeat one finite value on every row "
+                        "(the plan's SMR or tracker position, mm)")
+    return values[0] * 1e-3
+
+
+def read_planned(path, robot) -> Planned:
+    """A planned ``poses.csv`` (any joints CSV): its joints, the ``visible_smr*`` columns and the
+    SMRs and tracker it was planned with (see the module docstring)."""
     table = read_joint_table(path)
     q = robot.check_joints(table.joints)
+    smr = []
+    while table.column(f"smr{len(smr)}_x_mm") is not None:
+        smr.append(_fixed_columns(table, [f"smr{len(smr)}_{c}_mm" for c in _XYZ], path))
+    tracker = _fixed_columns(table, [f"tracker_{c}_mm" for c in _XYZ], path)
+    smr = np.array(smr) if smr else None
     names = sorted((h for h in table.header if h.startswith(VISIBLE_PREFIX)),
                    key=lambda h: int(h[len(VISIBLE_PREFIX):]) if h[len(VISIBLE_PREFIX):].isdigit() else -1)
     if not names:
-        return q, None
+        return Planned(q, None, smr, tracker)
     if names != [f"{VISIBLE_PREFIX}{k}" for k in range(len(names))]:
         raise DataError(f"{path}: visibility columns must be {VISIBLE_PREFIX}0..{VISIBLE_PREFIX}k, "
                         f"got {names}")
     cells = np.array([table.column(h) for h in names]).T
     if not np.isin(cells, ["0", "1"]).all():
         raise DataError(f"{path}: {VISIBLE_PREFIX}* values must be 0 or 1")
-    return q, cells == "1"
+    visible = cells == "1"
+    if smr is not None and len(smr) != visible.shape[1]:
+        raise DataError(f"{path}: {visible.shape[1]} visible_smr columns but {len(smr)} planned SMRs")
+    return Planned(q, visible, smr, tracker)
 
 

@@ -94,7 +94,8 @@ class CampaignResult:
 
     def poses_csv(self) -> str:
         """The text of ``poses.csv`` (see :mod:`robocal.campaign.files`)."""
-        return poses_csv(self.joints, self.visible, self.source, self.source_rows)
+        return poses_csv(self.joints, self.visible, self.source, self.source_rows,
+                         smr_mm=self.settings["smr_mm"], tracker_mm=self.settings["tracker_mm"])
 
     def summary(self) -> str:
         ident = self.identifiability

@@ -60,6 +60,30 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
+def _planned(args, robot, smr, tracker):
+    """Joints, visibility, SMRs and tracker of the planned campaign ``--joints``: the plan's SMRs
+    and tracker unless given here (a WARNING when they differ from the plan's)."""
+    import numpy as np
+
+    from robocal.campaign.files import read_planned
+
+    plan = read_planned(args.joints, robot)
+    for what, mine, theirs, option in (("SMR positions", smr, plan.smr, "--smr-mm"),
+                                       ("tracker position", tracker, plan.tracker, "--tracker-mm")):
+        if theirs is None:
+            if mine is None:
+                print(f"note: {args.joints} does not carry a planned {what}: a random one is simulated")
+        elif mine is None:
+            print(f"using the plan's {what} (mm): {np.round(theirs * 1e3, 4).tolist()} from {args.joints}")
+        elif np.shape(mine) != np.shape(theirs) or not np.allclose(mine, theirs, atol=1e-6):
+            print(f"WARNING: {option} {np.round(np.asarray(mine) * 1e3, 4).tolist()} differs from the "
+                  f"{what} the campaign {args.joints} was planned with ({np.round(theirs * 1e3, 4).tolist()} "
+                  "mm): the rehearsal measures another campaign")
+    smr = plan.smr if smr is None else smr
+    tracker = plan.tracker if tracker is None else tracker
+    return plan.joints, plan.visible, smr, tracker
+
+
 def run(args) -> int:
     from pathlib import Path
 
@@ -74,16 +98,14 @@ def run(args) -> int:
                   [args.robot, args.joints])
     robot = load_model(args.robot)
     box = None if args.box is None else np.array(args.box).reshape(2, 3) * 1e-3
-    joints = visible = None
-    if args.joints:
-        from robocal.campaign.files import read_planned
-
-        joints, visible = read_planned(args.joints, robot)
     if args.tool_mm is not None and args.smr_mm:
         raise DataError("give the probe either as --tool-mm or as --smr-mm, not both")
     given = args.smr_mm or ([args.tool_mm] if args.tool_mm is not None else None)
     smr = None if given is None else np.array(given) * 1e-3
     tracker = None if args.tracker_mm is None else np.array(args.tracker_mm) * 1e-3
+    joints = visible = None
+    if args.joints:
+        joints, visible, smr, tracker = _planned(args, robot, smr, tracker)
     result = simulate_tracker(robot, args.poses, noise_mm=args.noise_mm, noise_model=args.noise_model,
                               outliers=args.outliers, n_smr=args.smr, workspace_box=box, seed=args.seed,
                               kind=args.kind, n_planes=args.planes, joint_noise_deg=args.joint_noise_deg,

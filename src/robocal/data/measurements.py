@@ -626,6 +626,27 @@ def _per_joint(col: dict, roles: dict, role: str, n: int, name: str) -> np.ndarr
     return np.stack([col[h] * roles[h][2] for _, h in cols], axis=1)
 
 
+def _repeats(joints: np.ndarray, line_no: np.ndarray, name: str) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Pose ids of a file without a pose_id column (:func:`repeat_groups`) and notes that say how
+    the rows were grouped, or warn of consecutive poses that look like jittering repeats."""
+    pose_id = repeat_groups(joints)
+    n_poses = int(pose_id[-1]) + 1
+    notes = ()
+    if n_poses < len(joints):
+        notes = (f"{name}: {len(joints)} rows hold {n_poses} poses (consecutive rows with the same joints, "
+                 f"within {np.rad2deg(REPEAT_JOINT_TOL_RAD):g} deg, are repeated readings or the SMRs of "
+                 "one pose); give a pose_id column to group the rows otherwise",)
+    first = np.r_[True, pose_id[1:] != pose_id[:-1]]
+    step = np.abs(np.diff(joints[first], axis=0)).max(axis=1)
+    near = np.flatnonzero(step <= NEAR_REPEAT_RAD)
+    if near.size:
+        lines = ", ".join(map(str, line_no[first][near + 1][:5]))
+        notes += (f"WARNING: {name}: {near.size} pose(s) (line(s) {lines}) differ from the previous one by "
+                  f"at most {np.rad2deg(step[near].max()):.3g} deg: if they are repeated readings of one "
+                  "pose, give a pose_id column (rows of one pose share it)",)
+    return pose_id, notes
+
+
 def parse_csv(text: str, name: str = "<text>") -> Measurements:
     """Parse canonical CSV text; ``name`` is used in error messages."""
     source, header_line, rows = _split_csv(text, name)
@@ -648,19 +669,7 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     source_row = col["source_row"].astype(np.int64) if "source_row" in col else np.array(line_no)
     notes = ()
     if ints["pose_id"] is None and kind != "distance":
-        ints["pose_id"] = repeat_groups(joints)
-        if ints["pose_id"][-1] + 1 < len(joints):
-            notes = (f"{name}: {len(joints)} rows hold {ints['pose_id'][-1] + 1} poses (consecutive rows with the "
-                     f"same joints, within {np.rad2deg(REPEAT_JOINT_TOL_RAD):g} deg, are repeated readings or "
-                     "the SMRs of one pose); give a pose_id column to group the rows otherwise",)
-        first = np.r_[True, ints["pose_id"][1:] != ints["pose_id"][:-1]]
-        step = np.abs(np.diff(joints[first], axis=0)).max(axis=1)
-        near = np.flatnonzero(step <= NEAR_REPEAT_RAD)
-        if near.size:
-            ln = np.array(line_no)[first][near + 1]
-            notes += (f"WARNING: {name}: {near.size} pose(s) (line(s) {', '.join(map(str, ln[:5]))}) differ from "
-                      f"the previous one by at most {np.rad2deg(step[near].max()):.3g} deg: if they are repeated "
-                      "readings of one pose, give a pose_id column (rows of one pose share it)",)
+        ints["pose_id"], notes = _repeats(joints, np.array(line_no), name)
     try:
         data = Measurements.from_arrays(kind, joints, smr=ints["smr"], pose_id=ints["pose_id"],
                                         source_row=source_row, source=source, approach=approach,
