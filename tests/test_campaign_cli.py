@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from robocal import DataError, Robot
-from robocal.campaign import programs
+from robocal.campaign import programs, read_planned
 from robocal.cli import main
 from robocal.data.measurements import Measurements, read_joint_table, read_joints
 from robocal.io import write_all
@@ -70,7 +70,10 @@ def test_programs_recover_every_joint_in_the_planned_order(planned):
 def test_poses_csv_json_and_page(planned):
     table = read_joint_table(planned / "poses.csv")
     assert table.header[:6] == [f"q{i}_deg" for i in range(1, 7)]
-    assert table.header[6:] == ["visible_smr0", "visible_smr1"]
+    assert table.header[6:8] == ["visible_smr0", "visible_smr1"]
+    planned_with = read_planned(planned / "poses.csv", Robot.from_catalog("abb_irb2600"))
+    np.testing.assert_array_equal(planned_with.smr * 1e3, [[20, -30, 80], [-50, 50, 60]])
+    np.testing.assert_array_equal(planned_with.tracker * 1e3, [2500, 500, 300])
     campaign = json.loads((planned / "c.json").read_text())
     np.testing.assert_array_equal(np.deg2rad(campaign["joints_deg"]), read_joints(planned / "poses.csv"))
     assert campaign["predicted_rms_mm"] > 0 and len(campaign["curve"]) >= 2
@@ -113,7 +116,8 @@ def test_candidates_from_a_file_are_copied_exactly(tmp_path):
                  "-o", str(out)]) == 0
     assert src.read_bytes() == before
     chosen = read_joint_table(out)
-    assert chosen.header == [f"q{i}_deg" for i in range(1, 7)] + ["source_row"]
+    assert chosen.header[:7] == [f"q{i}_deg" for i in range(1, 7)] + ["source_row"]
+    assert chosen.header[7:] == ["smr0_x_mm", "smr0_y_mm", "smr0_z_mm"]  # the planned SMR
     original = src.read_text().splitlines()
     for row in chosen.cells:
         line = original[int(row[6]) - 1].split(",")
