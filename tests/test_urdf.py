@@ -9,6 +9,7 @@ import pytest
 from conftest import random_frame, random_robot
 
 from robocal import ModelError, Robot
+from robocal.kinematics.transforms import make_transform
 from robocal.kinematics.urdf import from_urdf, matrix_to_rpy, rpy_to_matrix, to_urdf, write_urdf
 
 yourdfpy = pytest.importorskip("yourdfpy", reason="yourdfpy (test extra) is needed to parse URDF")
@@ -220,7 +221,7 @@ def test_cli_export_and_import(tmp_path):
     robot.save(model)
     before = model.read_bytes()
     urdf = tmp_path / "m.urdf"
-    assert main(["--quiet", "export", str(model), "--urdf", str(urdf)]) == 0
+    assert main(["--quiet", "export", str(model), "--urdf", str(urdf), "--frames", "model"]) == 0
     assert model.read_bytes() == before
     q = np.random.default_rng(1).uniform(-2, 2, (8, 6))
     np.testing.assert_allclose(urdf_fk(urdf.read_text(), q), robot.fk(q), atol=1e-9, rtol=0)
@@ -228,3 +229,24 @@ def test_cli_export_and_import(tmp_path):
     assert main(["--quiet", "export", str(urdf), "--yaml", str(back)]) == 0
     np.testing.assert_allclose(Robot.load(back).fk(q), robot.fk(q), atol=1e-9, rtol=0)
     assert main(["export", str(model)]) == 2
+
+
+def test_cli_export_for_ros_puts_base_link_at_the_base_and_tool0_at_the_flange(tmp_path):
+    """A tracker-calibrated model: the default URDF's root is base_link at frame {0} and tool0 the
+    catalog's flange (not the tracker frame and the SMR, which are in a comment)."""
+    from robocal.cli import main
+
+    nominal = Robot.from_catalog("kuka_kr16_2")
+    tracker = make_transform(rpy_to_matrix([0.3, -0.2, 1.0]), [2.5, 0.4, 1.1])
+    smr = make_transform(np.eye(3), [0.02, -0.03, 0.08])
+    measured = nominal.with_frames(base=tracker, tool=nominal.tool @ smr)
+    measured.save(tmp_path / "cal.yaml")
+    assert main(["--quiet", "export", str(tmp_path / "cal.yaml"), "--urdf", str(tmp_path / "r.urdf")]) == 0
+    text = (tmp_path / "r.urdf").read_text()
+    assert '<link name="world"/>' not in text and "laser tracker" in text
+    q = np.random.default_rng(2).uniform(-1, 1, (6, 6))
+    np.testing.assert_allclose(urdf_fk(text, q, root="base_link"), nominal.fk(q), atol=1e-9, rtol=0)
+    assert main(["--quiet", "export", str(tmp_path / "cal.yaml"), "--urdf", str(tmp_path / "m.urdf"),
+                 "--frames", "model"]) == 0
+    back = urdf_fk((tmp_path / "m.urdf").read_text(), q)
+    np.testing.assert_allclose(back, measured.fk(q), atol=1e-9, rtol=0)

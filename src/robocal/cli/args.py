@@ -33,3 +33,48 @@ def load_measurements(path: str, robot, quiet: bool = False):
         if not quiet or note.startswith("WARNING"):
             print(note if note.startswith("WARNING") else f"note: {note}")
     return data
+
+
+TWICE = "each reading would count twice (the noise estimate shrinks, the result looks better than it is)"
+
+
+def check_distinct_inputs(paths, what: str = "input files", why: str = TWICE) -> None:
+    """Refuse a file given twice (the same path, or two files with identical contents): each of
+    its readings would count twice, the noise estimate shrink by sqrt 2 and the judgement lie."""
+    import hashlib
+    from pathlib import Path
+
+    from robocal.errors import DataError
+
+    seen: dict = {}
+    for path in (p for p in paths if p is not None):
+        p = Path(path)
+        if not p.is_file():
+            continue  # the reader names a missing file
+        key = hashlib.sha256(p.read_bytes()).hexdigest()
+        if key in seen:
+            same = "is given twice" if p.resolve() == Path(seen[key]).resolve() else \
+                f"has the same contents as {seen[key]}"
+            raise DataError(f"{path} {same} among the {what}: {why}; give each file once")
+        seen[key] = path
+
+
+# output suffix -> the format written there; an output named for another format is refused
+FORMATS = {".json": "JSON", ".yaml": "YAML", ".yml": "YAML", ".csv": "CSV", ".html": "HTML", ".htm": "HTML",
+           ".urdf": "URDF", ".npz": "npz", ".mod": "RAPID", ".src": "KRL", ".script": "URScript", ".ls": "TP"}
+
+
+def check_format(path, kind: str, option: str, hint: str = "") -> None:
+    """Refuse writing ``kind`` (a FORMATS value) into ``path`` named for another known format
+    (``-o result.json`` for a model YAML); unknown or no suffixes are allowed."""
+    from pathlib import Path
+
+    from robocal.errors import DataError
+
+    if path is None:
+        return
+    named = FORMATS.get(Path(path).suffix.lower())
+    if named is not None and named != kind:
+        suffix = next(s for s, k in FORMATS.items() if k == kind)
+        raise DataError(f"{option} {path}: {option} writes {kind}, but the name says {named}; name it "
+                        f"{Path(path).with_suffix(suffix).name}{hint}")

@@ -98,7 +98,7 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.calibration import calibrate, json_text
-    from robocal.cli.args import load_measurements
+    from robocal.cli.args import check_distinct_inputs, check_format, load_measurements
     from robocal.errors import DataError, IdentificationError
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
@@ -106,7 +106,13 @@ def run(args) -> int:
 
     outputs = (args.output, args.json, args.report, args.network_out)
     validate = args.validate or []
+    check_format(args.output, "YAML", "-o", " (or use --json for the result)")
+    check_format(args.json, "JSON", "--json")
+    check_format(args.report, "HTML", "--report")
     check_outputs(outputs, (*args.data, *validate, args.robot))  # fail before the work
+    check_distinct_inputs(args.data, "calibration files")
+    check_distinct_inputs([*args.data, *validate], "calibration and validation files",
+                          "a validation on the calibration data says nothing of the accuracy elsewhere")
     if args.network_out and (args.method != "neural" or not args.network_out.endswith((".npz", ".json"))):
         raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
     sigma = dict(args.sigma)

@@ -44,10 +44,13 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import numpy as np
 
+    from robocal.cli.args import check_format
     from robocal.compensate import compensate, format_csv, frame_from_text, pose_columns, read_poses_csv
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import Robot, load_model
 
+    check_format(args.output, "CSV", "-o")
+    check_format(args.parameters, "CSV", "--parameters")
     check_outputs([args.output, args.parameters], [args.calibrated, args.targets, args.nominal])
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)

@@ -32,11 +32,12 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import json
 
-    from robocal.cli.args import load_measurements
+    from robocal.cli.args import check_format, load_measurements
     from robocal.evaluate import evaluate
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
 
+    check_format(args.json, "JSON", "--json")
     check_outputs([args.json], [args.model, args.data, args.frame_from])
     robot = load_model(args.model)
     data = load_measurements(args.data, robot, args.quiet)

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 
 EPILOG = """Examples:
-  robocal export calibrated.yaml --urdf calibrated.urdf      # calibrated model for ROS
+  robocal export calibrated.yaml --urdf calibrated.urdf      # calibrated model for ROS (base_link, tool0)
+  robocal export calibrated.yaml --urdf measured.urdf --frames model   # world = tracker frame, tool0 = SMR
   robocal export abb_irb2600 --urdf irb2600.urdf             # catalog robot
   robocal export my_robot.urdf --yaml my_robot.yaml          # import a serial revolute URDF
 """
@@ -13,20 +14,52 @@ EPILOG = """Examples:
 
 def add_parser(sub) -> None:
     p = sub.add_parser("export", help="export a model as URDF (or import a URDF as model YAML)",
-                       description="Write a robot model as URDF whose forward kinematics from `world` "
-                                   "to `tool0` equals the model's (base and tool as fixed joints), or "
-                                   "convert a serial revolute URDF into a model YAML (MDH + beta).",
+                       description="Write a robot model as URDF for ROS: root `base_link` at the robot's "
+                                   "base, `tool0` at the flange, the (calibrated) geometry in between; "
+                                   "the model's measurement frame and tool (tracker frame, SMR) in a "
+                                   "comment, or as the URDF's `world` and `tool0` with --frames model. "
+                                   "Or convert a serial revolute URDF into a model YAML (MDH + beta).",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("model", help="model YAML, catalog name, or URDF file (.urdf)")
     p.add_argument("--urdf", metavar="OUT", help="URDF file to write")
     p.add_argument("--yaml", metavar="OUT", help="model YAML file to write")
+    p.add_argument("--frames", choices=("robot", "model"), default="robot",
+                   help="robot (default): base_link at the robot base, tool0 at the flange; model: a "
+                        "world link at the model's world frame (after a tracker calibration, the tracker) "
+                        "and tool0 at the model's tool (the measured SMR)")
+    p.add_argument("--nominal", metavar="R",
+                   help="--frames robot: the controller's model (catalog name or YAML) whose base and "
+                        "flange (tool0) the URDF takes (default: the catalog robot of the model's name)")
     p.add_argument("--tip", help="URDF input: end link of the chain (default: the deepest leaf)")
     p.set_defaults(func=run)
+
+
+def _nominal(args, robot):
+    """The controller's model whose base and flange a --frames robot URDF uses: --nominal, else the
+    catalog robot of the model's name, else None (tool0: the model's tool rotation; said so)."""
+    from robocal.kinematics.catalog import catalog_names
+    from robocal.kinematics.model import load_model
+
+    if args.nominal:
+        nominal = load_model(args.nominal)
+    elif robot.name in catalog_names():
+        nominal = load_model(robot.name)
+    else:
+        print(f"note: {robot.name} is not a catalog robot and no --nominal is given: base_link is the "
+              "model's frame {0}, tool0 the flange centre with the model's tool rotation")
+        return None
+    if nominal.n_joints != robot.n_joints:
+        from robocal.errors import DataError
+
+        raise DataError(f"--nominal {nominal.name} has {nominal.n_joints} joints, the model "
+                        f"{robot.n_joints}: give the controller's model of this robot")
+    return nominal
 
 
 def run(args) -> int:
     from pathlib import Path
 
+    from robocal.cli.args import check_format
     from robocal.errors import DataError
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
@@ -35,6 +68,8 @@ def run(args) -> int:
 
     if not args.urdf and not args.yaml:
         raise DataError("nothing to write: give --urdf OUT and/or --yaml OUT")
+    check_format(args.urdf, "URDF", "--urdf")
+    check_format(args.yaml, "YAML", "--yaml")
     check_outputs([args.urdf, args.yaml], [args.model])
     if Path(args.model).suffix.lower() == ".urdf":
         robot = from_urdf(Path(args.model), tip=args.tip)
@@ -42,9 +77,16 @@ def run(args) -> int:
         robot = load_model(args.model)
     texts = {}
     if args.urdf:
-        texts[args.urdf] = to_urdf(robot)
+        nominal = _nominal(args, robot) if args.frames == "robot" else None
+        texts[args.urdf] = to_urdf(robot, frames=args.frames, nominal=nominal)
         if not_carried(robot):
             print(f"WARNING: {not_carried(robot)}")
+        if not args.quiet:
+            print("URDF frames: " + (
+                "base_link = the robot's base (frame {0}), tool0 = the flange; the model's world frame "
+                "and tool are in a comment (--frames model to use them)" if args.frames == "robot" else
+                "world = the model's world frame (e.g. the tracker), tool0 = the model's tool (e.g. the "
+                "measured SMR)"))
     if args.yaml:
         texts[args.yaml] = dump_model(robot)
     write_all(texts)

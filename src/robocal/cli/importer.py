@@ -37,11 +37,14 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    from robocal.cli.args import check_distinct_inputs, check_format
     from robocal.data.importer import import_tracker
     from robocal.io import check_outputs
 
     specs = [spec.split(":cols=")[0] for spec in [args.joints, *args.points, *args.base] if ":" in spec]
+    check_format(args.output, "CSV", "-o")
     check_outputs([args.output], [*args.raw, *specs])
+    check_distinct_inputs(args.raw, "raw files")
     result = import_tracker(args.raw, joints=args.joints, points=args.points, base=args.base,
                             average=not args.keep_repeats, skip_rows=args.skip_rows)
     result.data.save(args.output)

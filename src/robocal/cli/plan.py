@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import numbers
+from robocal.cli.args import check_format, numbers
 
 EPILOG = """Examples:
   robocal plan --robot abb_irb2600 poses.csv -o joints.csv
@@ -45,6 +45,7 @@ def run(args) -> int:
     from robocal.io import check_outputs, write_atomic
     from robocal.kinematics.model import load_model
 
+    check_format(args.output, "CSV", "-o")
     check_outputs([args.output], [args.poses, args.robot])
     robot = load_model(args.robot)
     nominal = None if args.nominal is None else load_model(args.nominal)

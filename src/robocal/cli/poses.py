@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from robocal.cli.args import numbers
+from robocal.cli.args import check_format, numbers
 
 EPILOG = """Examples:
   robocal poses --robot abb_irb2600 -n 20 --smr-mm 20,-30,80 -o poses.csv --curve 10:60 --html campaign.html
@@ -145,6 +145,10 @@ def run(args) -> int:
     if args.krl and Path(args.krl).suffix.lower() != ".src":
         raise DataError(f"--krl names the .src file (its .dat is written next to it), got {args.krl}")
     dat = args.krl and Path(args.krl).with_suffix(".dat")
+    for path, kind, option in ((args.output, "CSV", "-o"), (args.json, "JSON", "--json"),
+                               (args.html, "HTML", "--html"), (args.rapid, "RAPID", "--rapid"),
+                               (args.urscript, "URScript", "--urscript")):
+        check_format(path, kind, option)
     check_outputs([args.output, args.json, args.html, args.rapid, args.urscript, args.krl, dat],
                   [args.robot, args.candidates, args.region])
     robot = load_model(args.robot)

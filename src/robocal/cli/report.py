@@ -23,9 +23,11 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from robocal.calibration import load_result
+    from robocal.cli.args import check_format
     from robocal.io import check_outputs
     from robocal.report.html import write_report
 
+    check_format(args.output, "HTML", "-o")
     check_outputs([args.output], [args.result])
     path = write_report(load_result(args.result), args.output, title=args.title)
     if not args.quiet:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import numbers
+from robocal.cli.args import check_format, numbers
 
 EPILOG = """Examples:
   robocal simulate --robot abb_irb2600 --poses 200 --noise-mm 0.02 --seed 1 -o data.csv --truth truth.yaml
@@ -94,6 +94,8 @@ def run(args) -> int:
     from robocal.io import check_outputs
     from robocal.kinematics.model import load_model
 
+    check_format(args.output, "CSV", "-o")
+    check_format(args.truth, "YAML", "--truth")
     check_outputs([args.output, args.truth, Path(args.truth).with_suffix(".sim.json")],
                   [args.robot, args.joints])
     robot = load_model(args.robot)
