@@ -87,7 +87,8 @@ def test_cli_compensate(tmp_path, capsys):
     (tmp_path / "targets.csv").write_text(format_csv(cols, vals))
     out, par = tmp_path / "commands.csv", tmp_path / "params.csv"
     code = main(["compensate", str(tmp_path / "cal.yaml"), str(tmp_path / "targets.csv"), "--nominal",
-                 "abb_irb2600", "--parameters", str(par), "-o", str(out)])
+                 "abb_irb2600", "--parameters", str(par), "-o", str(out), "--targets-in", "model",
+                 "--tool", "measured"])
     assert code == 0
     header = out.read_text().splitlines()[0].split(",")
     assert header == [f"q{i}_deg" for i in range(1, 7)] + cols + [

@@ -78,3 +78,72 @@ def check_format(path, kind: str, option: str, hint: str = "") -> None:
         suffix = next(s for s, k in FORMATS.items() if k == kind)
         raise DataError(f"{option} {path}: {option} writes {kind}, but the name says {named}; name it "
                         f"{Path(path).with_suffix(suffix).name}{hint}")
+
+
+def controller_for(robot, nominal: str | None):
+    """The controller's model of ``robot`` (its base and flange, tool0): ``nominal`` (catalog name
+    or YAML), else the catalog robot of the model's name, else None."""
+    from robocal.errors import DataError
+    from robocal.kinematics.catalog import catalog_names
+    from robocal.kinematics.model import load_model
+
+    if nominal is None and robot.name not in catalog_names():
+        return None
+    model = load_model(nominal or robot.name)
+    if model.n_joints != robot.n_joints:
+        raise DataError(f"--nominal {model.name} has {model.n_joints} joints, the model {robot.n_joints}: "
+                        "give the controller's model of this robot")
+    return model
+
+
+# a tool or TCP offset (mm) whose every coordinate is below this but not all zero is in metres
+TOOL_MM_FLOOR = 2.0
+TOOL_MM_CEILING = 5000.0  # no tool reaches 5 m from the flange: the values are not mm
+
+
+def check_tool_mm(xyz, option: str) -> None:
+    """Refuse a tool translation (mm) whose magnitude says another unit (metres, micrometres)."""
+    import numpy as np
+
+    from robocal.errors import UnitError
+
+    xyz = np.abs(np.asarray(xyz, dtype=float))
+    if 0 < xyz.max() < TOOL_MM_FLOOR:
+        raise UnitError(f"{option}: a tool {np.linalg.norm(xyz):.3g} mm from the flange centre: these "
+                        f"values look like metres; give mm (e.g. {','.join(f'{v * 1e3:g}' for v in xyz)})")
+    if xyz.max() > TOOL_MM_CEILING:
+        raise UnitError(f"{option}: a tool {np.linalg.norm(xyz) / 1e3:.3g} m from the flange: these values "
+                        "are not mm; give the offset in mm")
+
+
+# angles (deg) within this of a multiple of pi/12 *in radians* (0.2618, 0.5236, 0.7854, 1.5708..)
+# are radians typed where degrees belong
+RADIAN_LIKE_TOL = 5e-4
+
+
+def check_degrees(angles, option: str) -> None:
+    """Refuse rotation angles given in degrees that are clearly radians (pi/4 = 0.785, pi/2 = 1.571)."""
+    import numpy as np
+
+    from robocal.errors import UnitError
+
+    a = np.asarray(angles, dtype=float)
+    steps = a / (np.pi / 12)
+    radian_like = (np.abs(a) > 0.1) & (np.abs(a) <= 2 * np.pi + 1e-9) & \
+        (np.abs(steps - np.round(steps)) * np.pi / 12 < RADIAN_LIKE_TOL)
+    if radian_like.any():
+        raise UnitError(f"{option}: {', '.join(f'{v:g}' for v in a[radian_like])} look like radians "
+                        f"({', '.join(f'{v:g} rad = {np.rad2deg(v):g} deg' for v in a[radian_like])}); the "
+                        "angles are in degrees")
+
+
+def tool_frame(text: str, option: str):
+    """A tool frame ``x,y,z,rx,ry,rz`` (mm, deg) -> 4x4 (m), refused when its magnitudes say
+    another unit (:func:`check_tool_mm`, :func:`check_degrees`)."""
+    from robocal.compensate import frame_from_text
+
+    T = frame_from_text(text, option)
+    values = [float(v) for v in text.replace(" ", "").split(",") if v]
+    check_tool_mm(values[:3], f"{option} {text}")
+    check_degrees(values[3:], f"{option} {text}")
+    return T

@@ -9,8 +9,9 @@ EPILOG = """Examples:
   robocal compensate calibrated.yaml targets.csv --nominal nominal.yaml --branch 0 \\
       --parameters corrected_parameters.csv -o commands.csv
 targets.csv: x_mm,y_mm,z_mm (or _m) and qw,qx,qy,qz or rx_deg,ry_deg,rz_deg (fixed-axis XYZ:
-R = Rz(rz) Ry(ry) Rx(rx)), for the calibrated model's TCP, in its world frame (after a tracker
-calibration: the tracker frame) or, with --targets-in robot, in the robot's base frame.
+R = Rz(rz) Ry(ry) Rx(rx)), by default for the flange (tool0) in the robot's base frame; --tool gives
+the real tool, --tool measured the calibrated model's own tool (the measured SMR), --targets-in model
+its world frame (after a tracker calibration: the tracker frame).
 commands.csv: q1_deg..q6_deg (joints to command), the corrected Cartesian targets (in the
 nominal model's base frame and for its TCP: what the controller is given) in the targets'
 units, and converged (1/0).
@@ -30,22 +31,41 @@ def add_parser(sub) -> None:
     p.add_argument("--branch", type=int, default=None,
                    help="IK branch slot 0..7 (4*wrist_flip + 2*shoulder + elbow); default: per target "
                         "the lowest slot inside the joint limits")
-    p.add_argument("--targets-in", choices=("model", "robot"), default="model",
-                   help="frame of the targets: the calibrated model's world frame (default) or the "
-                        "robot's base frame")
-    p.add_argument("--tool", metavar="x,y,z,rx,ry,rz",
-                   help="the user's real tool on the flange (mm, deg, fixed-axis XYZ; e.g. from robocal "
-                        "tool): targets and corrected targets are then for its TCP")
+    p.add_argument("--targets-in", choices=("robot", "model"), default="robot",
+                   help="frame of the targets: the robot's base frame (default; the calibrated model's "
+                        "identified frame {0}) or the calibrated model's world frame (the tracker's)")
+    p.add_argument("--tool", metavar="x,y,z,rx,ry,rz", default="flange",
+                   help="the TCP the targets are for: flange (default, tool0), x,y,z,rx,ry,rz (the user's "
+                        "real tool on the flange, mm, deg, fixed-axis XYZ; e.g. from robocal tool), or "
+                        "measured (the calibrated model's own tool: the SMR or probe it was measured with)")
     p.add_argument("--parameters", help="also write the corrected-parameter table (CSV) here")
     p.add_argument("-o", "--output", required=True, help="commands CSV to write")
     p.set_defaults(func=run)
 
 
+def _statistics(res, targets, calibrated, nominal, args) -> str:
+    """``: corrections largest .. mm, median .. mm (.. deg)``: how far each corrected target is from
+    the target the controller would be given without compensation (empty for --tool measured, whose
+    corrected targets are for another TCP)."""
+    import numpy as np
+
+    from robocal.kinematics.transforms import invert_transform, pose_error
+
+    if args.tool == "measured":
+        return ""
+    to_robot = nominal.base @ invert_transform(calibrated.base)
+    plain = targets if args.targets_in == "robot" else to_robot @ targets
+    err = pose_error(res.corrected_targets, plain)
+    mm, deg = np.linalg.norm(err[:, :3], axis=1) * 1e3, np.rad2deg(np.linalg.norm(err[:, 3:], axis=1))
+    return (f": corrections largest {mm.max():.4g} mm, median {np.median(mm):.4g} mm; orientation largest "
+            f"{deg.max():.4g} deg, median {np.median(deg):.4g} deg")
+
+
 def run(args) -> int:
     import numpy as np
 
-    from robocal.cli.args import check_format
-    from robocal.compensate import compensate, format_csv, frame_from_text, pose_columns, read_poses_csv
+    from robocal.cli.args import check_format, tool_frame
+    from robocal.compensate import compensate, format_csv, pose_columns, read_poses_csv
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import Robot, load_model
 
@@ -55,7 +75,9 @@ def run(args) -> int:
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)
     targets, layout = read_poses_csv(args.targets)
-    tool = None if args.tool is None else frame_from_text(args.tool, "--tool")
+    tool = {"measured": None, "flange": np.eye(4)}.get(args.tool)
+    if args.tool not in ("measured", "flange"):
+        tool = tool_frame(args.tool, "--tool")
     res = compensate(calibrated, nominal, targets, branch=args.branch, targets_frame=args.targets_in,
                      tool=tool)
     names, values = pose_columns(res.corrected_targets, layout)
@@ -79,8 +101,13 @@ def run(args) -> int:
         texts[args.parameters] = "\n".join(lines) + "\n"
     write_all(texts)
     if not args.quiet:
-        print(f"compensated {len(targets)} target(s); largest model residual "
-              f"{res.position_error.max() * 1e3:.3g} mm -> {args.output}")
+        where = {"robot": "the robot's base frame (the calibrated frame {0})",
+                 "model": "the calibrated model's world frame (where it was measured)"}[args.targets_in]
+        what = {"flange": "the flange (tool0)", "measured": "the calibrated model's own tool (the measured "
+                "SMR or probe)"}.get(args.tool, f"the tool {args.tool} (mm, deg) on the flange")
+        print(f"targets: {what} in {where}")
+        print(f"compensated {len(targets)} target(s){_statistics(res, targets, calibrated, nominal, args)}; "
+              f"largest model residual {res.position_error.max() * 1e3:.3g} mm -> {args.output}")
     for warning in res.warnings()[:20]:
         print(f"warning: {warning}")
     return 0 if res.converged.all() else 1

@@ -34,32 +34,10 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _nominal(args, robot):
-    """The controller's model whose base and flange a --frames robot URDF uses: --nominal, else the
-    catalog robot of the model's name, else None (tool0: the model's tool rotation; said so)."""
-    from robocal.kinematics.catalog import catalog_names
-    from robocal.kinematics.model import load_model
-
-    if args.nominal:
-        nominal = load_model(args.nominal)
-    elif robot.name in catalog_names():
-        nominal = load_model(robot.name)
-    else:
-        print(f"note: {robot.name} is not a catalog robot and no --nominal is given: base_link is the "
-              "model's frame {0}, tool0 the flange centre with the model's tool rotation")
-        return None
-    if nominal.n_joints != robot.n_joints:
-        from robocal.errors import DataError
-
-        raise DataError(f"--nominal {nominal.name} has {nominal.n_joints} joints, the model "
-                        f"{robot.n_joints}: give the controller's model of this robot")
-    return nominal
-
-
 def run(args) -> int:
     from pathlib import Path
 
-    from robocal.cli.args import check_format
+    from robocal.cli.args import check_format, controller_for
     from robocal.errors import DataError
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
@@ -77,7 +55,10 @@ def run(args) -> int:
         robot = load_model(args.model)
     texts = {}
     if args.urdf:
-        nominal = _nominal(args, robot) if args.frames == "robot" else None
+        nominal = controller_for(robot, args.nominal) if args.frames == "robot" else None
+        if args.frames == "robot" and nominal is None:
+            print(f"note: {robot.name} is not a catalog robot and no --nominal is given: base_link is the "
+                  "model's frame {0}, tool0 the flange centre with the model's tool rotation")
         texts[args.urdf] = to_urdf(robot, frames=args.frames, nominal=nominal)
         if not_carried(robot):
             print(f"WARNING: {not_carried(robot)}")

@@ -12,10 +12,11 @@ EPILOG = """Examples:
   robocal plan --robot calibrated.yaml --nominal abb_irb2600 --tool 50,0,200,0,30,0 poses.csv -o joints.csv
 poses.csv: x_mm,y_mm,z_mm (or _m) and qw,qx,qy,qz or rx_deg,ry_deg,rz_deg (fixed-axis XYZ), one
 waypoint per row in order. joints.csv: q1_deg..q6_deg. Default weights: 1 + lever arm (m) of
-joints 1-3, 1 for the wrist. A calibrated model (with --nominal, the controller's model) is planned
-in the robot's base frame (its identified frame {0}) with its flange carrying --tool (x,y,z,rx,ry,rz,
-mm, deg, fixed-axis XYZ; default: the model's own tool, e.g. the measured SMR); candidates are the
-nominal closed form in each branch refined by numeric IK on the calibrated model."""
+joints 1-3, 1 for the wrist. A calibrated model (with --nominal, the controller's model; default the
+catalog robot of the model's name) is planned in the robot's base frame (its identified frame {0})
+with its flange (tool0) carrying --tool (x,y,z,rx,ry,rz, mm, deg, fixed-axis XYZ; default: none, the
+poses are flange poses; --tool measured: the model's own tool, e.g. the measured SMR); candidates are
+the nominal closed form in each branch refined by numeric IK on the calibrated model."""
 
 
 def add_parser(sub) -> None:
@@ -32,7 +33,9 @@ def add_parser(sub) -> None:
                    help="fixed start configuration q1..q6 in deg")
     p.add_argument("--nominal",
                    help="the controller's model (catalog name or YAML) when --robot is calibrated")
-    p.add_argument("--tool", metavar="x,y,z,rx,ry,rz", help="the user's tool on the flange (mm, deg)")
+    p.add_argument("--tool", metavar="x,y,z,rx,ry,rz", default="flange",
+                   help="the TCP of the poses: flange (default, tool0), the user's tool on the flange "
+                        "x,y,z,rx,ry,rz (mm, deg), or measured (the model's own tool, e.g. the SMR)")
     p.add_argument("-o", "--output", required=True, help="joints CSV to write")
     p.set_defaults(func=run)
 
@@ -40,7 +43,8 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from robocal.compensate import controller_model, format_csv, frame_from_text, read_poses_csv
+    from robocal.cli.args import controller_for, tool_frame
+    from robocal.compensate import controller_model, format_csv, read_poses_csv
     from robocal.ik.path import plan_path
     from robocal.io import check_outputs, write_atomic
     from robocal.kinematics.model import load_model
@@ -48,19 +52,27 @@ def run(args) -> int:
     check_format(args.output, "CSV", "-o")
     check_outputs([args.output], [args.poses, args.robot])
     robot = load_model(args.robot)
-    nominal = None if args.nominal is None else load_model(args.nominal)
-    if nominal is not None:
-        tool = None if args.tool is None else frame_from_text(args.tool, "--tool")
-        robot = controller_model(robot, nominal, tool=tool) if tool is not None else \
-            robot.with_frames(base=nominal.base)
-    elif args.tool is not None:
-        robot = robot.with_frames(tool=robot.tool @ frame_from_text(args.tool, "--tool"))
+    nominal = controller_for(robot, args.nominal)
+    tool = None if args.tool in ("flange", "measured") else tool_frame(args.tool, "--tool")
+    if nominal is not None and args.tool != "measured":
+        robot = controller_model(robot, nominal, tool=tool)
+        frames = "the robot's base frame, " + ("the flange (tool0)" if tool is None else
+                                               f"the tool {args.tool}")
+    elif nominal is not None:
+        robot = robot.with_frames(base=nominal.base)
+        frames = "the robot's base frame, the model's own tool (e.g. the measured SMR)"
+    else:
+        robot = robot if tool is None else robot.with_frames(tool=robot.tool @ tool)
+        carried = "its own tool" if tool is None else f"its tool carrying {args.tool}"
+        frames = (f"the model's world frame and {carried} ({robot.name} is not a catalog robot: give "
+                  "--nominal for the robot's base and flange)")
     poses, _ = read_poses_csv(args.poses)
     start = None if args.start is None else np.deg2rad(args.start)
     res = plan_path(robot, poses, weights=args.weights, start=start, nominal=nominal)
     cols = [f"q{i + 1}_deg" for i in range(robot.n_joints)]
     write_atomic(args.output, format_csv(cols, np.rad2deg(res.joints)))
     gain = 100.0 * (1.0 - res.cost / res.greedy_cost) if res.greedy_cost > 0 else 0.0
+    print(f"poses: {frames}")
     print(f"weights {np.round(res.weights, 4).tolist()}")
     print(f"optimal total weighted travel {res.cost:.6g}")
     print(f"greedy  total weighted travel {res.greedy_cost:.6g} (optimal saves {gain:.1f}%)")
