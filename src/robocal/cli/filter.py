@@ -86,9 +86,30 @@ def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[
     return targets, table, [*targets.values(), *table_paths(table)]
 
 
+def _check_tool_units(args) -> None:
+    """Refuse --tool data whose translation says another unit than the program's notation (mm;
+    URScript m)."""
+    from robocal.cli.args import check_tool_mm
+    from robocal.errors import UnitError
+
+    metres = args.format == "urscript" or (args.format is None and any(
+        Path(p).suffix.lower() in (".script", ".urscript") for p in args.programs))
+    for name, text in _named(args.tool, "--tool").items():
+        try:
+            xyz = [float(v) for v in text.replace(" ", "").split(",")[:3]]
+        except ValueError:
+            continue  # the program reader names malformed values
+        if not metres:
+            check_tool_mm(xyz, f"--tool {name}={text}")
+        elif max(abs(v) for v in xyz) > 5.0:
+            raise UnitError(f"--tool {name}={text}: a URScript TCP {max(abs(v) for v in xyz):g} m from the "
+                            "flange: URScript lengths are metres (these look like mm)")
+
+
 def run(args) -> int:
     import sys
 
+    from robocal.cli.args import tool_frame
     from robocal.compensate import frame_from_text
     from robocal.io import check_outputs
     from robocal.kinematics.model import Robot, load_model
@@ -98,7 +119,8 @@ def run(args) -> int:
     check_outputs(written, [*args.programs, args.calibrated, args.nominal, *args.references])
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)
-    tcp = {k: frame_from_text(v, "--tcp") for k, v in _named(args.tcp, "--tcp").items()}
+    tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
+    _check_tool_units(args)
     base = None if args.robot_base is None else frame_from_text(args.robot_base, "--robot-base")
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),
                          frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,

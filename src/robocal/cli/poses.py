@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from robocal.cli.args import check_format, numbers
+from robocal.cli.args import check_format, check_tool_mm, numbers
 
 EPILOG = """Examples:
   robocal poses --robot abb_irb2600 -n 20 --smr-mm 20,-30,80 -o poses.csv --curve 10:60 --html campaign.html
@@ -151,6 +151,8 @@ def run(args) -> int:
         check_format(path, kind, option)
     check_outputs([args.output, args.json, args.html, args.rapid, args.urscript, args.krl, dat],
                   [args.robot, args.candidates, args.region])
+    for smr in args.smr_mm or []:
+        check_tool_mm(smr, f"--smr-mm {','.join(f'{v:g}' for v in smr)}")
     robot = load_model(args.robot)
     if args.smr_normal and len(args.smr_normal) != len(args.smr_mm or []):
         raise DataError("give one --smr-normal per --smr-mm")

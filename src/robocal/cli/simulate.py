@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import check_format, numbers
+from robocal.cli.args import check_format, check_tool_mm, numbers
 
 EPILOG = """Examples:
   robocal simulate --robot abb_irb2600 --poses 200 --noise-mm 0.02 --seed 1 -o data.csv --truth truth.yaml
@@ -103,6 +103,8 @@ def run(args) -> int:
     if args.tool_mm is not None and args.smr_mm:
         raise DataError("give the probe either as --tool-mm or as --smr-mm, not both")
     given = args.smr_mm or ([args.tool_mm] if args.tool_mm is not None else None)
+    for smr in given or []:
+        check_tool_mm(smr, f"--smr-mm/--tool-mm {','.join(f'{v:g}' for v in smr)}")
     smr = None if given is None else np.array(given) * 1e-3
     tracker = None if args.tracker_mm is None else np.array(args.tracker_mm) * 1e-3
     joints = visible = None

@@ -35,6 +35,7 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import json
 
+    from robocal.cli.args import check_degrees
     from robocal.compensate import frame_from_text, frame_to_text, rotation_from_text
     from robocal.data.measurements import read_joints
     from robocal.io import check_outputs, write_atomic
@@ -43,6 +44,8 @@ def run(args) -> int:
     from robocal.tcp import identify_tcp
 
     rotation = rotation_from_text(args.rotation, "--rotation")
+    angles = [float(v) for v in args.rotation.replace(" ", "").split(",") if v]
+    check_degrees(angles, f"--rotation {args.rotation}")
     check_outputs([args.json], [args.calibrated, args.joints, args.nominal])
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)

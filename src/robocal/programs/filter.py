@@ -49,6 +49,10 @@ CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
 LISTED = 20  # problems listed in one error message
 JUMP_DEG = 60.0  # a joint moving more than this from the previous target's joints gets a warning
+# A real TCP (--tcp) turned more than this from the program's tool data is another tool or a wrong
+# --rotation (the 4-point method finds the position only): refused. Moved more: a warning.
+TCP_TURN_MAX_DEG = 5.0
+TCP_SHIFT_WARN_MM = 10.0
 
 
 @dataclass
@@ -307,6 +311,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     if unknown_tcp:
         raise DataError(f"--tcp names tool(s) {unknown_tcp} that no filtered target uses; the targets use "
                         f"{sorted({t.tool for t in targets})}")
+    _check_tcp(real, program.tools, warnings)
     real_tool = np.array([np.asarray(real[t.tool], float) if t.tool in real else program.tools[t.tool]
                           for t in targets])
     problems: list[tuple[int, str]] = []
@@ -335,6 +340,22 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, comp.converged & ok, changed, cfg, sing)
     outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
     return FilterResult(d.name, outputs, rows, warnings)
+
+
+def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
+    """Refuse a --tcp turned more than TCP_TURN_MAX_DEG from its tool's data; warn when it is more
+    than TCP_SHIFT_WARN_MM away."""
+    for name, T in real.items():
+        data = np.asarray(tools[name], float)
+        turn = np.rad2deg(np.linalg.norm(matrix_to_rotvec(T[:3, :3] @ data[:3, :3].T)))
+        shift = np.linalg.norm(T[:3, 3] - data[:3, 3]) * 1e3
+        if turn > TCP_TURN_MAX_DEG:
+            raise DataError(f"--tcp {name} is turned {turn:.1f} deg from the program's tool data {name}: "
+                            "the 4-point method finds the position only: give the tool data's orientation "
+                            "(robocal tool --rotation, deg) in --tcp")
+        if shift > TCP_SHIFT_WARN_MM:
+            warnings.append(f"--tcp {name} is {shift:.1f} mm from the program's tool data {name}: check that "
+                            "it is the same tool")
 
 
 def _filterable(d: Dialect, program: Program, warnings: list) -> list[Target]:
