@@ -28,6 +28,47 @@ controller's base in the calibrated model's world frame (x,y,z,rx,ry,rz, mm, deg
 Writes the filtered program(s) and the per-target table (CSV and JSON) together, or nothing."""
 
 
+# what each language's files look like, and its motion instructions to a named point
+SUFFIXES = {"rapid": (".mod", ".modx", ".prg", ".sys"), "krl": (".src", ".dat", ".sub"),
+            "fanuc": (".ls",), "urscript": (".script", ".urscript")}
+LANGUAGES = {"rapid": "ABB RAPID", "krl": "KUKA KRL", "fanuc": "FANUC TP (.ls)", "urscript": "URScript"}
+SIGNATURES = {"rapid": r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)",
+              "krl": r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)",
+              "fanuc": r"^/(?:PROG|MN|POS)\b", "urscript": r"^\s*def\s+\w+\s*\(.*\)\s*:|\bmove[ljpc]\s*\("}
+MOTION = {"krl": r"^\s*(?:S?PTP|S?LIN|S?CIRC)\s+([A-Za-z_$][\w$]*)",
+          "rapid": r"^\s*Move[LJC]\s+([A-Za-z_]\w*)"}
+
+
+def _diagnose_empty(args) -> None:
+    """No Cartesian target was found: refuse when the files say why (another language than the
+    suffix says, or motions to points declared in no file given, e.g. a KRL .src without its .dat)."""
+    import re
+
+    texts = {p: Path(p).read_text(encoding="utf-8", errors="replace")
+             for p in [*args.programs, *args.references]}
+    suffix = Path(args.programs[0]).suffix.lower()
+    language = args.format or next((k for k, s in SUFFIXES.items() if suffix in s), None)
+    if language is None:
+        return
+    for path in args.programs:
+        text = texts[path]
+        if re.search(SIGNATURES[language], text, re.M | re.I):
+            continue
+        other = [k for k in SIGNATURES if k != language and re.search(SIGNATURES[k], text, re.M | re.I)]
+        if other:
+            raise DataError(f"{path} looks like {LANGUAGES[other[0]]}, not {LANGUAGES[language]} as its name "
+                            f"says: give --format {other[0]} (or name it {SUFFIXES[other[0]][0]})")
+    if language not in MOTION:
+        return
+    names = {m for p in args.programs for m in re.findall(MOTION[language], texts[p], re.M | re.I)}
+    every = "\n".join(texts.values())
+    undeclared = sorted(n for n in names if not re.search(rf"\b{re.escape(n)}\s*(?::=|=)", every, re.I))
+    if undeclared:
+        hint = " (a KUKA .src's points are in its .dat: give both files)" if language == "krl" else ""
+        raise DataError(f"{', '.join(args.programs)} move(s) to {', '.join(undeclared[:8])}, declared in none "
+                        f"of the files given{hint}; give the files that declare them (or --references)")
+
+
 def _named(values, what: str) -> dict[str, str]:
     out = {}
     for v in values or []:
@@ -125,6 +166,8 @@ def run(args) -> int:
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),
                          frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,
                          dialect=args.format, references=args.references, keep_unreached=args.keep_unreached)
+    if not res.rows:
+        _diagnose_empty(args)
     written = res.write({p: targets[Path(p)] for p in res.outputs}, table)
     if args.quiet:  # the warnings still matter
         for w in res.warnings:
