@@ -65,8 +65,9 @@ def _diagnose_empty(args) -> None:
     undeclared = sorted(n for n in names if not re.search(rf"\b{re.escape(n)}\s*(?::=|=)", every, re.I))
     if undeclared:
         hint = " (a KUKA .src's points are in its .dat: give both files)" if language == "krl" else ""
-        raise DataError(f"{', '.join(args.programs)} move(s) to {', '.join(undeclared[:8])}, declared in none "
-                        f"of the files given{hint}; give the files that declare them (or --references)")
+        files, points = ", ".join(args.programs), ", ".join(undeclared[:8])
+        raise DataError(f"{files} move(s) to {points}, declared in none of the files given{hint}; give the "
+                        "files that declare them (or --references)")
 
 
 def _named(values, what: str) -> dict[str, str]:
