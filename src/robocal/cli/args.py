@@ -147,3 +147,13 @@ def tool_frame(text: str, option: str):
     check_tool_mm(values[:3], f"{option} {text}")
     check_degrees(values[3:], f"{option} {text}")
     return T
+
+
+def diagnosed(error, robot, datasets, frame_fitted: bool = True):
+    """``error`` (a PlausibilityError) with the data's own diagnosis (:func:`robocal.diagnose.diagnose`)
+    put first when they tell more (a swapped or sign-flipped joint column, a mirrored frame, the odd
+    file, a frame that needs --fit-frame)."""
+    from robocal.diagnose import diagnose
+
+    why = diagnose(robot, datasets, frame_fitted=frame_fitted)
+    return error if why is None else type(error)(f"{why} (the check: {error})")

@@ -98,8 +98,8 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.calibration import calibrate, json_text
-    from robocal.cli.args import check_distinct_inputs, check_format, load_measurements
-    from robocal.errors import DataError, IdentificationError
+    from robocal.cli.args import check_distinct_inputs, check_format, diagnosed, load_measurements
+    from robocal.errors import DataError, IdentificationError, PlausibilityError
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
     from robocal.kinematics.model_file import dump_model
@@ -128,9 +128,12 @@ def run(args) -> int:
         calibration = data[0].first_poses(data[0].n_poses - args.hold_out)
         validation = [data[0].subset(~np.isin(data[0].pose_id, calibration.pose_id))]
         data = [calibration]
-    result = calibrate(robot, data, method=args.method, params=args.params, validation=validation or None,
-                       seed=args.seed, progress=not args.quiet, nongeometric=args.nongeometric,
-                       force=args.force, sigma=sigma, **dict(args.options))
+    try:
+        result = calibrate(robot, data, method=args.method, params=args.params, validation=validation or None,
+                           seed=args.seed, progress=not args.quiet, nongeometric=args.nongeometric,
+                           force=args.force, sigma=sigma, **dict(args.options))
+    except PlausibilityError as exc:
+        raise diagnosed(exc, robot, [*data, *validation]) from None
     result.provenance.update(command="robocal " + " ".join(args.argv), robot_spec=args.robot,
                              data_file=", ".join(args.data), validation_file=", ".join(validate) or None,
                              hold_out=args.hold_out)

@@ -32,7 +32,8 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import json
 
-    from robocal.cli.args import check_format, load_measurements
+    from robocal.cli.args import check_format, diagnosed, load_measurements
+    from robocal.errors import PlausibilityError
     from robocal.evaluate import evaluate
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
@@ -42,7 +43,11 @@ def run(args) -> int:
     robot = load_model(args.model)
     data = load_measurements(args.data, robot, args.quiet)
     frame_from = load_measurements(args.frame_from, robot, args.quiet) if args.frame_from else None
-    stats = evaluate(robot, data, fit_frame=args.fit_frame, frame_from=frame_from, force=args.force)
+    try:
+        stats = evaluate(robot, data, fit_frame=args.fit_frame, frame_from=frame_from, force=args.force)
+    except PlausibilityError as exc:
+        fitted = args.fit_frame or frame_from is not None
+        raise diagnosed(exc, robot, [d for d in (frame_from, data) if d is not None], fitted) from None
     keys = ("n", "rms", "mean", "max", "p95")
     summary = {k: stats[k] for k in keys}
     out = {"model": args.model, "data": args.data, "kind": stats["kind"], "n_poses": stats["n_poses"],
