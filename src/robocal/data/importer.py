@@ -31,6 +31,9 @@ from robocal.errors import DataError, UnitError
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 
 _SPLIT = re.compile(r"[,;\s]+")
+# a digit, a comma, a digit, inside a value: a decimal comma when the line is split by ';' or
+# whitespace (``12,5;3,25`` or ``12,5 3,25``), or when it has no decimal point at all
+_DECIMAL_COMMA = re.compile(r"(?:^|[;\s])[-+]?\d+,\d+(?=$|[;\s])")
 # A drift-monitor reading farther than this from its median is a stray (the tracker caught another
 # target), reported by line and left out of the drift figures.
 STRAY_MM = 1.0
@@ -103,6 +106,9 @@ def read_table(path, skip_rows: int = 0) -> tuple[np.ndarray, np.ndarray]:
         s = line.strip()
         if ln <= skip_rows or not s or s.startswith("#"):
             continue
+        if _DECIMAL_COMMA.search(s) and ("." not in s or ";" in s):
+            raise DataError(f"{path}, line {ln}: {s[:40]!r} has decimal commas: robocal reads numbers with a "
+                            "decimal point (commas separate values); convert the file to '.' decimals")
         cells = [c for c in _SPLIT.split(s) if c]
         values = []
         for col, cell in enumerate(cells):

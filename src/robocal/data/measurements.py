@@ -60,6 +60,7 @@ MAX_JOINT_RAD = 4 * np.pi  # no joint turns more than two turns either way
 # base) plus SPAN_MARGIN_M; a wider span is a length unit mistake or a bigger robot's data.
 MAX_SPAN_REACHES = 2.0
 SPAN_MARGIN_M = 0.5
+DECIMAL_COMMA = re.compile(r"[-+]?\d+,\d+")  # a number written with a decimal comma (12,5)
 # Consecutive rows whose joints all agree within this (rad) are readings of one pose (a tracker
 # export that repeats each reading, or the SMRs of one pose) when the file has no pose_id: a
 # robot standing still reads its encoders to well below it; two planned poses never differ less.
@@ -552,6 +553,9 @@ def _cell(cell: str, column: str, where: str) -> float:
     try:
         v = float(cell)
     except ValueError:
+        if DECIMAL_COMMA.fullmatch(text):
+            raise DataError(f"{where}, column {column}: {text!r} has a decimal comma: robocal reads numbers "
+                            "with a decimal point; save the file with '.' as the decimal separator") from None
         raise DataError(f"{where}, column {column}: {text!r} is not a number; fix or remove that "
                         "row") from None
     if not np.isfinite(v):
@@ -651,6 +655,9 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     """Parse canonical CSV text; ``name`` is used in error messages."""
     source, header_line, rows = _split_csv(text, name)
     header = [h.strip().lower() for h in rows[0]]
+    if len(header) == 1 and ";" in header[0]:
+        raise DataError(f"{name}, line {header_line}: the columns are separated by ';' (a decimal-comma "
+                        "export): save the file comma-separated with '.' as the decimal separator")
     roles = _column_roles(header, name, header_line)
     joint_cols = _joint_columns(roles, name)
     kind = _data_kind(roles, name)
