@@ -466,8 +466,22 @@ class Robot:
 
 
 def load_model(spec: str) -> Robot:
-    """A robot from a model YAML path or a catalog name (what every ``--robot`` option takes)."""
+    """A robot from a model YAML path, a URDF (a serial revolute chain:
+    :func:`robocal.kinematics.urdf.from_urdf`) or a catalog name (what every ``--robot`` takes)."""
     path = Path(spec)
+    if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (path.is_file() and _looks_like_xml(path)):
+        from robocal.kinematics.urdf import from_urdf  # urdf builds on this module
+
+        if path.suffix.lower() == ".xacro":
+            raise ModelError(f"{spec} is a xacro macro file: expand it first (xacro {path.name} > "
+                             "robot.urdf) and give the URDF")
+        return from_urdf(path)
     if path.suffix.lower() in (".yaml", ".yml") or path.exists():
         return Robot.load(path)
     return Robot.from_catalog(spec)
+
+
+def _looks_like_xml(path: Path) -> bool:
+    """The file starts like XML (a URDF given without its suffix)."""
+    with open(path, "rb") as fh:
+        return fh.read(64).lstrip().startswith(b"<")
