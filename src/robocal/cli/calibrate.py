@@ -94,6 +94,28 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
+def error_model_line(args, data: list) -> str | None:
+    """Which error model the default gave and why, when it is not the cross-validated choice (whose
+    table the summary prints): the geometric model for a method, several files or too few poses."""
+    from robocal.calibration import AUTO_DEFAULT_KINDS, AUTO_DEFAULT_MIN_POSES, NONGEOMETRIC_METHODS
+
+    if args.nongeometric.strip().lower() != "default":
+        return None
+    if args.method not in NONGEOMETRIC_METHODS:
+        why = f"method {args.method} estimates the geometric parameters only"
+    elif len(data) != 1:
+        why = (f"{len(data)} calibration files: the default chooses non-geometric terms on one tracker data "
+               "set; name them with --nongeometric to identify them")
+    elif data[0].kind not in AUTO_DEFAULT_KINDS:
+        why = f"{data[0].kind} data: the default chooses non-geometric terms on tracker data (points, poses)"
+    elif data[0].n_poses < AUTO_DEFAULT_MIN_POSES:
+        why = (f"{data[0].n_poses} poses: the default chooses non-geometric terms by cross-validation from "
+               f"{AUTO_DEFAULT_MIN_POSES} poses on; name them with --nongeometric to identify them anyway")
+    else:
+        return None
+    return f"error model: geometric ({why})"
+
+
 def run(args) -> int:
     import numpy as np
 
@@ -138,6 +160,9 @@ def run(args) -> int:
                              data_file=", ".join(args.data), validation_file=", ".join(validate) or None,
                              hold_out=args.hold_out)
     print(result.summary())
+    line = error_model_line(args, data)
+    if line:
+        print(line)
     if not result.solver.success and not args.force:
         raise IdentificationError(f"the solver did not converge ({result.solver.status.value}): nothing "
                                   "written; adjust the method's options, or rerun with --force to write "
