@@ -433,6 +433,11 @@ def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data
                     errors=tuple(vproblem.position_errors(s) for s in judged))
     check_residual(result.after["rms"], vproblem.modelled_points(judged[1]), "the validation data",
                    force=force, warnings=warnings)
+    if result.after["rms"] > result.before["rms"]:
+        warnings.append(f"the calibrated model is worse than the nominal on the validation data "
+                        f"{data.label} ({result.before['rms']:.4g} -> {result.after['rms']:.4g} mm RMS): the "
+                        "calibration does not carry over (too few or clustered poses, or validation data "
+                        "from another setup)")
     return result
 
 

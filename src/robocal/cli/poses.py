@@ -12,14 +12,16 @@ EPILOG = """Examples:
   robocal poses --robot abb_irb2600 -n 25 --smr-mm 20,-30,80 --tracker-mm 2500,500,300 \\
       --box 500 -1000 0 1800 1000 1800 --min-joint-distance-deg 10 -o poses.csv \\
       --rapid campaign.mod --krl campaign.src --urscript campaign.script
+  robocal poses --robot fanuc_lrmate200id -n 20 --smr-mm 20,-30,60 -o poses.csv --fanuc campaign.ls
   robocal poses --robot meca500 -n 20 --from taught.csv --region taught.csv -o poses.csv
   robocal simulate --robot abb_irb2600 --joints poses.csv --smr-mm 20,-30,80 -o data.csv --truth truth.yaml
 Lengths in mm in the robot's base frame (SMR positions and facing directions in the flange frame),
 angles in deg; write a value that starts with a minus as --smr-mm=-50,50,60.
 poses.csv: q1_deg..q6_deg in measuring order (with --from: the chosen rows' joint
 cells exactly as read, and their line numbers); visible_smr0.. with several SMRs. The programs
-move to each pose (MoveAbsJ / PTP / movej), wait --settle-s, and call --procedure: replace its
-body with your tracker trigger. Every output is written, or none.
+move to each pose (MoveAbsJ / PTP / movej / J P[k]), wait --settle-s, and call --procedure: replace
+its body with your tracker trigger (FANUC: a TP program of that name, taking the pose number).
+Every output is written, or none.
 """
 
 
@@ -97,6 +99,7 @@ def add_parser(sub) -> None:
     g.add_argument("--rapid", metavar="F.mod", help="ABB RAPID module")
     g.add_argument("--krl", metavar="F.src", help="KUKA KRL program (.src, and .dat next to it)")
     g.add_argument("--urscript", metavar="F.script", help="URScript program")
+    g.add_argument("--fanuc", metavar="F.ls", help="FANUC TP program (ASCII .ls; J3 in FANUC's convention)")
     g.add_argument("--speed-percent", type=float, default=20.0, help="programs' speed, %% of maximum")
     g.add_argument("--settle-s", type=float, default=1.0, help="wait at each pose before measuring, s")
     g.add_argument("--procedure", default="MeasurePose", help="procedure called at each pose")
@@ -130,6 +133,8 @@ def _outputs(args, result) -> dict:
         texts[str(Path(args.krl).with_suffix(".dat"))] = dat
     if args.urscript:
         texts[args.urscript] = programs.urscript_program(result.joints, Path(args.urscript).stem, **kw)
+    if args.fanuc:
+        texts[args.fanuc] = programs.fanuc_ls_program(deg, Path(args.fanuc).stem, **kw)
     return texts
 
 
@@ -147,9 +152,9 @@ def run(args) -> int:
     dat = args.krl and Path(args.krl).with_suffix(".dat")
     for path, kind, option in ((args.output, "CSV", "-o"), (args.json, "JSON", "--json"),
                                (args.html, "HTML", "--html"), (args.rapid, "RAPID", "--rapid"),
-                               (args.urscript, "URScript", "--urscript")):
+                               (args.urscript, "URScript", "--urscript"), (args.fanuc, "TP", "--fanuc")):
         check_format(path, kind, option)
-    check_outputs([args.output, args.json, args.html, args.rapid, args.urscript, args.krl, dat],
+    check_outputs([args.output, args.json, args.html, args.rapid, args.urscript, args.krl, dat, args.fanuc],
                   [args.robot, args.candidates, args.region])
     for smr in args.smr_mm or []:
         check_tool_mm(smr, f"--smr-mm {','.join(f'{v:g}' for v in smr)}")
