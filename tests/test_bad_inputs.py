@@ -14,6 +14,8 @@ import pytest
 import robocal as rc
 from robocal.cli import main
 from robocal.compensate import format_csv, pose_columns
+from robocal.data.measurements import read_joints
+from robocal.kinematics.urdf import from_urdf, to_urdf
 
 PROGRAMS = Path(__file__).parent / "data" / "programs"
 MECA = rc.Robot.from_catalog("meca500")
@@ -73,10 +75,42 @@ def files(tmp_path_factory) -> Path:
         "tool:=tGun", "tool:=tNoSuchTool").replace("tGun", "tNoSuchTool", 1))
     rc.Robot.from_catalog("abb_irb2600").save(d / "irb2600.yaml")
     (d / "three.csv").write_text("q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg\n0,0,0,0,0,0\n10,0,0,0,0,0\n")
+    _workflow_files(d, q, p * 1e3, table, T)
     ro = d / "readonly.yaml"
     ro.write_text("keep me\n")
     ro.chmod(0o444)
     return d
+
+
+def _workflow_files(d: Path, q: np.ndarray, p_mm: np.ndarray, table, T: np.ndarray) -> None:
+    """Files of the workflow mistakes (issue 24): a file copied, joint columns exchanged or
+    sign-flipped, a mirrored tracker frame, two tracker stations, decimal commas, programs without
+    their points or in another language, flange targets, a URDF and a xacro file."""
+    shutil.copy(d / "meca.csv", d / "meca_copy.csv")
+    rc.simulate_tracker(MECA, 40, noise_mm=0.01, seed=5).data.save(d / "meca_b.csv")
+    swapped, flipped = q.copy(), q.copy()
+    swapped[:, [1, 2]] = swapped[:, [2, 1]]
+    flipped[:, 3] *= -1
+    (d / "swapped.csv").write_text(table(swapped, p_mm))
+    (d / "flipped.csv").write_text(table(flipped, p_mm))
+    (d / "mirrored.csv").write_text(table(q, p_mm * [1, -1, 1]))
+    turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # the tracker moved
+    (d / "station1.csv").write_text(table(q[:20], p_mm[:20]))
+    (d / "station2.csv").write_text(table(q[20:], p_mm[20:] @ turn.T + [800.0, 300.0, 0.0]))
+    text = table(q, p_mm)
+    (d / "semicolon.csv").write_text(text.replace(",", ";").replace(".", ","))
+    head, *rows = text.splitlines()
+    quoted = [",".join(f'"{c.replace(".", ",")}"' for c in r.split(",")) for r in rows]
+    (d / "quoted.csv").write_text("\n".join([head, *quoted]) + "\n")
+    (d / "comma.txt").write_text("10,5 20 30 40 50 60 1 2 3\n11,5 20 30 40 50 60 1 2 3\n")
+    (d / "drill.src").write_text("DEF drill( )\n  $TOOL = TOOL_DATA[1]\n  $BASE = BASE_DATA[1]\n"
+                                 "  LIN XP1\n  LIN XP2 C_DIS\nEND\n")
+    shutil.copy(PROGRAMS / "weld_cell.mod", d / "weld.src")
+    names, vals = pose_columns(T, {"length": "mm", "orientation": "deg"})
+    (d / "flange.csv").write_text(format_csv(names, vals))
+    (d / "meca.urdf").write_text(to_urdf(MECA))
+    (d / "meca.xacro").write_text('<?xml version="1.0"?><robot xmlns:xacro="x"/>\n')
+    from_urdf(to_urdf(rc.Robot.from_catalog("abb_irb2600"))).save(d / "irb2600_from_urdf.yaml")
 
 
 def _cases() -> list[tuple[str, list[str], list[str], str]]:
@@ -107,7 +141,7 @@ def _cases() -> list[tuple[str, list[str], list[str], str]]:
          "6-joint"),
         ("auto-too-few-poses", [*cal, "--hold-out", "20", "--nongeometric", "auto", "-o", "{o}/m.yaml"],
          ["m.yaml"], "25 poses"),
-        ("auto-two-files", ["calibrate", "{d}/meca.csv", "{d}/meca.csv", "--robot", "meca500",
+        ("auto-two-files", ["calibrate", "{d}/meca.csv", "{d}/meca_b.csv", "--robot", "meca500",
                             "--nongeometric", "auto"], [], "one calibration data set"),
         ("terms-with-swarm", [*cal, "--method", "swarm", "--nongeometric", "gear"], [], "lsq, robust"),
         ("sigma-without-value", [*cal, "--sigma", "plane", "-o", "{o}/m.yaml"], ["m.yaml"], "KIND=MM"),
@@ -178,9 +212,71 @@ def _cases() -> list[tuple[str, list[str], list[str], str]]:
                              "5100", "5100", "5100", "-o", "{o}/p.csv"], ["p.csv"], "box"),
         ("poses-krl-not-src", ["poses", "--robot", "abb_irb2600", "-n", "20", "-o", "{o}/p.csv", "--krl",
                                "{o}/c.dat"], ["p.csv"], ".src"),
+        *_workflow_cases(),
         ("simulate-bar-too-long", ["simulate", "--robot", "meca500", "--kind", "distance", "--poses", "4",
                                    "--bar-mm", "20000", "-o", "{o}/s.csv", "--truth", "{o}/t.yaml"],
          ["s.csv", "t.yaml"], "scale bar"),
+    ]
+
+
+def _workflow_cases() -> list[tuple[str, list[str], list[str], str]]:
+    """The whole workflow as a newcomer drives it (issue 24): each mistake refused, naming it."""
+    cal = ["calibrate", "{d}/meca.csv", "--robot", "meca500"]
+    comp = ["compensate", "{d}/meca.yaml", "{d}/flange.csv", "--nominal", "meca500", "-o", "{o}/c.csv"]
+    irb = ["--calibrated", "{d}/irb2600_truth.yaml", "--nominal", "abb_irb2600"]
+    weld = ["filter", "{d}/weld_cell.mod", *irb, "-o", "{o}/f.mod"]
+    return [
+        ("same-file-twice", ["calibrate", "{d}/meca.csv", "{d}/meca.csv", "--robot", "meca500", "-o",
+                             "{o}/m.yaml"], ["m.yaml"], "given twice"),
+        ("same-contents-twice", ["calibrate", "{d}/meca.csv", "{d}/meca_copy.csv", "--robot", "meca500"], [],
+         "same contents"),
+        ("validate-on-calibration-data", [*cal, "--validate", "{d}/meca_copy.csv"], [], "validation"),
+        ("model-yaml-named-json", [*cal, "-o", "{o}/result.json"], ["result.json"], "writes YAML"),
+        ("json-named-yaml", [*cal, "--json", "{o}/r.yaml"], ["r.yaml"], "writes JSON"),
+        ("simulate-csv-named-yaml", ["simulate", "--robot", "meca500", "--poses", "10", "-o", "{o}/s.yaml",
+                                     "--truth", "{o}/t.yaml"], ["s.yaml", "t.yaml"], "writes CSV"),
+        ("export-urdf-named-yaml", ["export", "meca500", "--urdf", "{o}/x.yaml"], ["x.yaml"], "URDF"),
+        ("report-html-named-json", ["report", "{d}/not_result.json", "-o", "{o}/r.json"], ["r.json"], "HTML"),
+        ("import-same-raw-twice", ["import", "{d}/big.txt", "{d}/big.txt", "--joints", "cols=0-5:deg",
+                                   "--points", "cols=6-8:mm", "-o", "{o}/i.csv"], ["i.csv"], "twice"),
+        ("compensate-tool-in-metres", [*comp, "--tool", "0.12,0,0.18,0,45,0"], ["c.csv"], "metres"),
+        ("compensate-tool-in-radians", [*comp, "--tool", "120,0,180,0,0.785,0"], ["c.csv"], "radians"),
+        ("plan-tool-in-metres", ["plan", "--robot", "meca500", "{d}/flange.csv", "--tool", "0.05,0,0.1,0,0,0",
+                                 "-o", "{o}/p.csv"], ["p.csv"], "metres"),
+        ("poses-smr-in-metres", ["poses", "--robot", "meca500", "-n", "20", "--smr-mm", "0.03,-0.02,0.06",
+                                 "-o", "{o}/p.csv"], ["p.csv"], "metres"),
+        ("simulate-smr-in-metres", ["simulate", "--robot", "meca500", "--poses", "10", "--smr-mm",
+                                    "0.03,-0.02,0.06", "-o", "{o}/s.csv", "--truth", "{o}/t.yaml"],
+         ["s.csv", "t.yaml"], "metres"),
+        ("tool-rotation-in-radians", ["tool", "{d}/three.csv", "--calibrated", "{d}/irb2600.yaml",
+                                      "--nominal", "abb_irb2600", "--rotation", "0,0.785,0"], [], "radians"),
+        ("filter-tool-in-metres", [*weld, "--tool", "tX=0.1,0,0.2,1,0,0,0"], ["f.mod"], "metres"),
+        ("filter-tcp-44-deg-from-tool-data", [*weld, "--tcp", "tGun=50,0,200,0,74,0"], ["f.mod"], "44.0 deg"),
+        ("filter-tcp-in-radians", [*weld, "--tcp", "tGun=50,0,200,0,0.5236,0"], ["f.mod"], "radians"),
+        ("filter-krl-without-dat", ["filter", "{d}/drill.src", "--calibrated", "{d}/irb2600_truth.yaml",
+                                    "--nominal", "kuka_kr16_2", "-o", "{o}/d.src"], ["d.src"], ".dat"),
+        ("filter-rapid-named-src", ["filter", "{d}/weld.src", *irb, "-o", "{o}/w.src"], ["w.src"],
+         "looks like ABB RAPID"),
+        ("joint-columns-exchanged", ["calibrate", "{d}/swapped.csv", "--robot", "meca500"], [],
+         "q2 and q3 look exchanged"),
+        ("joint-sign-flipped", ["calibrate", "{d}/flipped.csv", "--robot", "meca500"], [], "q4's sign"),
+        ("tracker-frame-mirrored", ["calibrate", "{d}/mirrored.csv", "--robot", "meca500"], [], "mirrored"),
+        ("two-tracker-stations", ["calibrate", "{d}/station1.csv", "{d}/station2.csv", "--robot", "meca500"],
+         [], "different tracker positions"),
+        ("odd-file-of-two", ["calibrate", "{d}/meca.csv", "{d}/swapped.csv", "--robot", "meca500"], [],
+         "swapped.csv is the odd file"),
+        ("odd-validation-file", [*cal, "--validate", "{d}/mirrored.csv"], [], "mirrored.csv is the odd file"),
+        ("evaluate-nominal-without-fit-frame", ["evaluate", "meca500", "{d}/meca.csv"], [], "--fit-frame"),
+        ("evaluate-exchanged-columns", ["evaluate", "meca500", "{d}/swapped.csv", "--fit-frame"], [],
+         "exchanged"),
+        ("decimal-comma-semicolons", ["calibrate", "{d}/semicolon.csv", "--robot", "meca500"], [], "decimal"),
+        ("decimal-comma-quoted", ["calibrate", "{d}/quoted.csv", "--robot", "meca500"], [], "decimal comma"),
+        ("import-decimal-comma", ["import", "{d}/comma.txt", "--joints", "cols=0-5:deg", "--points",
+                                  "cols=6-8:mm", "-o", "{o}/i.csv"], ["i.csv"], "decimal commas"),
+        ("xacro-as-robot", ["calibrate", "{d}/meca.csv", "--robot", "{d}/meca.xacro"], [], "xacro"),
+        ("compensate-other-parametrisation", ["compensate", "{d}/irb2600_from_urdf.yaml", "{d}/flange.csv",
+                                              "--nominal", "abb_irb2600", "-o", "{o}/c.csv"], ["c.csv"],
+         "another parametrisation"),
     ]
 
 
@@ -212,3 +308,129 @@ def test_bad_input_is_one_line_and_writes_nothing(files, tmp_path, capsys, argv,
     assert not [p for p in tmp_path.rglob("*") if p.name.endswith(".tmp")]
     assert _digest(files) == before  # no input changed, nothing written next to them
     assert os.access(files / "readonly.yaml", os.F_OK)
+
+
+# ---------------------------------------------------------------- handled right, or flagged
+def _doubled(q_deg: np.ndarray, p_mm: np.ndarray, jitter_deg: float, rng) -> str:
+    """Every reading on two consecutive rows (a tracker export), no pose_id; the second row's
+    joints jittered by ``jitter_deg``, its point by 5 um."""
+    rows = []
+    for qi, pi in zip(q_deg, p_mm, strict=True):
+        rows += [np.r_[qi, pi], np.r_[qi + rng.normal(0, jitter_deg, qi.shape) * (jitter_deg > 0),
+                                      pi + rng.normal(0, 0.005, 3)]]
+    head = "q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,x_mm,y_mm,z_mm\n"
+    return head + "".join(",".join(repr(float(v)) for v in r) + "\n" for r in rows)
+
+
+@pytest.fixture(scope="module")
+def flagged(files) -> Path:
+    """Inputs that may be legitimate but look wrong (a WARNING), or that are handled right."""
+    d = files.parent / "flagged"
+    d.mkdir()
+    rng = np.random.default_rng(3)
+    meca = rc.Measurements.load(files / "meca.csv")
+    q, p = np.rad2deg(meca.joints), meca.points * 1e3
+    (d / "repeated.csv").write_text(_doubled(q, p, 0.0, rng))
+    (d / "jittered.csv").write_text(_doubled(q, p, 0.01, rng))
+    sim = rc.simulate_tracker(MECA, 40, noise_mm=0.01, seed=1)
+    as_nominal = MECA.with_frames(base=sim.truth.base, tool=sim.truth.tool)  # the nominal robot measured
+    rc.simulate_tracker(as_nominal, 30, noise_mm=0.01, seed=8, as_is=True).data.save(d / "nominal_val.csv")
+    assert main(["--quiet", "poses", "--robot", "meca500", "-n", "12", "--candidates", "600", "--starts", "1",
+                 "--smr-mm", "20,-30,40", "-o", str(d / "plan.csv")]) == 0
+    return d
+
+
+WARNINGS = [  # (case id, argv with {d} inputs, {f} flagged inputs, {o} outputs, a word of the WARNING line)
+    ("near-repeats-without-pose-id", ["calibrate", "{f}/jittered.csv", "--robot", "meca500", "--nongeometric",
+                                      "none"], "pose_id"),
+    ("simulate-smr-unlike-the-plan", ["simulate", "--robot", "meca500", "--joints", "{f}/plan.csv",
+                                      "--smr-mm", "0,0,50", "-o", "{o}/s.csv", "--truth", "{o}/t.yaml"],
+     "planned with"),
+    ("calibrated-worse-on-validation", ["calibrate", "{d}/meca.csv", "--robot", "meca500", "--validate",
+                                        "{f}/nominal_val.csv"], "worse than the nominal"),
+]
+
+
+@pytest.mark.parametrize("argv, word", [c[1:] for c in WARNINGS], ids=[c[0] for c in WARNINGS])
+def test_what_looks_wrong_is_a_warning(files, flagged, tmp_path, capsys, argv, word):
+    before = _digest(files), _digest(flagged)
+    code = main([a.format(d=files, f=flagged, o=tmp_path) for a in argv])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert [ln for ln in out.splitlines() if ln.startswith("WARNING") and word in ln], out
+    assert (_digest(files), _digest(flagged)) == before
+
+
+def test_repeated_readings_without_pose_id_are_one_pose(files, flagged, capsys):
+    """Each reading on two rows and no pose_id: the rows pair into poses (backlash directions and
+    cross-validation folds by pose stay right) and the run says so."""
+    data = rc.Measurements.load(flagged / "repeated.csv")
+    one = rc.Measurements.load(files / "meca.csv")
+    assert data.n_poses == one.n_poses == len(data) // 2
+    np.testing.assert_array_equal(data.approach[1::2], data.approach[::2])
+    np.testing.assert_array_equal(data.approach[::2], one.approach)
+    assert main(["evaluate", "meca500", str(flagged / "repeated.csv"), "--fit-frame"]) == 0
+    assert "80 rows hold 40 poses" in capsys.readouterr().out
+
+
+def test_frame_fit_of_a_backlash_model_uses_the_approach_directions(tmp_path):
+    """evaluate --fit-frame / --frame-from judges a model with backlash as calibrate does: the
+    errors of the true model are the noise, with or without the frame fit (4x before)."""
+    import yaml
+
+    truth = rc.simulate_tracker(rc.Robot.from_catalog("kuka_kr16_2"), 10, seed=3).truth
+    truth.save(tmp_path / "t.yaml")
+    doc = yaml.safe_load((tmp_path / "t.yaml").read_text())
+    doc["joint_errors"] = {"parameters": {"backlash2": 3e-4, "backlash3": -3e-4, "backlash5": 4e-4}}
+    (tmp_path / "bl.yaml").write_text(yaml.safe_dump(doc))
+    robot = rc.Robot.load(tmp_path / "bl.yaml")
+    cal = rc.simulate_tracker(robot, 150, noise_mm=0.02, seed=4, as_is=True).data
+    val = rc.simulate_tracker(robot, 80, noise_mm=0.02, seed=5, as_is=True).data
+    plain = rc.evaluate(robot, val)["rms"]
+    for kw in ({"fit_frame": True}, {"frame_from": cal}):
+        assert rc.evaluate(robot, val, **kw)["rms"] < 1.2 * plain < 0.06
+
+
+def test_a_rehearsal_measures_the_planned_smr(flagged, tmp_path):
+    assert main(["--quiet", "simulate", "--robot", "meca500", "--joints", str(flagged / "plan.csv"), "-o",
+                 str(tmp_path / "s.csv"), "--truth", str(tmp_path / "t.yaml")]) == 0
+    truth = rc.Robot.load(tmp_path / "t.yaml")
+    np.testing.assert_allclose(truth.tool[:3, 3], [0.02, -0.03, 0.04], atol=1e-12)
+
+
+def test_a_urdf_is_a_robot(files, tmp_path):
+    assert main(["--quiet", "calibrate", str(files / "meca.csv"), "--robot", str(files / "meca.urdf"),
+                 "-o", str(tmp_path / "m.yaml")]) == 0
+    assert rc.Robot.load(tmp_path / "m.yaml").n_joints == 6
+
+
+def test_compensate_defaults_to_the_flange_in_the_robot_base(files, tmp_path, capsys):
+    irb = rc.Robot.from_catalog("abb_irb2600")
+    q = np.deg2rad([[10, 20, 10, 30, 40, 20], [-20, 10, 20, -30, 50, 10], [30, 0, 30, 10, 60, -20]])
+    names, vals = pose_columns(irb.fk(q), {"length": "mm", "orientation": "deg"})
+    (tmp_path / "flange.csv").write_text(format_csv(names, vals))
+    assert main(["compensate", str(files / "irb2600_truth.yaml"), str(tmp_path / "flange.csv"), "--nominal",
+                 "abb_irb2600", "-o", str(tmp_path / "c.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "targets: the flange (tool0) in the robot's base frame" in out
+    assert "corrections largest" in out and "median" in out
+    # flange targets move by the robot's errors (a few mm at most), not by the SMR offset
+    corrected = np.loadtxt(tmp_path / "c.csv", delimiter=",", skiprows=1, usecols=(6, 7, 8))
+    assert np.abs(corrected - vals[:, :3]).max() < 5.0
+
+
+def test_the_fanuc_campaign_program_holds_the_planned_joints(tmp_path):
+    """poses --fanuc: one P[k] per pose in order, J3 in FANUC's convention (catalog J3 + J2)."""
+    import re
+
+    assert main(["--quiet", "poses", "--robot", "fanuc_lrmate200id", "-n", "10", "--candidates", "600",
+                 "--starts", "1", "--smr-mm", "20,-30,40", "-o", str(tmp_path / "p.csv"), "--fanuc",
+                 str(tmp_path / "campaign.ls")]) == 0
+    text = (tmp_path / "campaign.ls").read_text()
+    assert text.startswith("/PROG  CAMPAIGN") and text.rstrip().endswith("/END")
+    values = np.array([[float(v) for v in re.findall(r"J\d= (-?[\d.]+) deg", block)]
+                       for block in re.findall(r"P\[\d+\]\{(.*?)\};", text, re.S)])
+    planned = np.rad2deg(read_joints(tmp_path / "p.csv"))
+    planned[:, 2] += planned[:, 1]
+    np.testing.assert_allclose(values, planned, atol=1e-4)
+    assert len(re.findall(r"^\s*\d+:J P\[\d+\] 20% FINE", text, re.M)) == 10

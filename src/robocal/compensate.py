@@ -27,7 +27,13 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from robocal.data.measurements import robot_reach
 from robocal.errors import DataError
+from robocal.identify.plausibility import (
+    MAX_ANGLE_CORRECTION_DEG,
+    MAX_LENGTH_CORRECTION_FRACTION,
+    MAX_LENGTH_CORRECTION_MM,
+)
 from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
 from robocal.ik.singularity import SingularityDistance, singularity_distance
@@ -74,10 +80,27 @@ class Compensation:
 
 
 def _check_same_robot(calibrated: Robot, nominal: Robot) -> None:
-    """DataError unless both models have the same joint count."""
+    """DataError unless both models have the same joint count and links no further apart than a
+    calibration moves them (:mod:`robocal.identify.plausibility`): another robot, or the same robot
+    in another parametrisation (e.g. calibrated from its URDF), whose frame {0} is not the nominal's."""
     if calibrated.n_joints != nominal.n_joints:
         raise DataError(f"calibrated model has {calibrated.n_joints} joints, nominal "
                         f"{nominal.n_joints}: they must describe the same robot")
+    k = 5 * nominal.n_joints
+    lengths = np.array([u == "m" for u in nominal.parameter_units()[:k]])
+    diff = calibrated.values[:k] - nominal.values[:k]
+    delta = np.abs(np.where(lengths, diff, np.remainder(diff + np.pi, 2 * np.pi) - np.pi))
+    length_limit = max(MAX_LENGTH_CORRECTION_MM * 1e-3,
+                       MAX_LENGTH_CORRECTION_FRACTION * robot_reach(nominal))
+    limit = np.where(lengths, length_limit, np.deg2rad(MAX_ANGLE_CORRECTION_DEG))
+    bad = np.flatnonzero(delta > limit)
+    if bad.size:
+        i = int(bad[np.argmax(np.where(lengths, delta * 1e3, np.rad2deg(delta))[bad])])
+        size = f"{delta[i] * 1e3:.4g} mm" if lengths[i] else f"{np.rad2deg(delta[i]):.4g} deg"
+        raise DataError(f"the calibrated model's {nominal.parameter_names[i]} differs from the nominal "
+                        f"{nominal.name}'s by {size}, more than a calibration corrects: another robot, or a "
+                        "calibration of another parametrisation (calibrate with the controller's model as "
+                        "--robot, and give that model as --nominal)")
 
 
 def parameter_table(calibrated: Robot, nominal: Robot) -> list[dict]:

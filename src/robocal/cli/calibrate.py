@@ -128,10 +128,10 @@ def run(args) -> int:
 
     outputs = (args.output, args.json, args.report, args.network_out)
     validate = args.validate or []
+    check_outputs(outputs, (*args.data, *validate, args.robot))  # fail before the work
     check_format(args.output, "YAML", "-o", " (or use --json for the result)")
     check_format(args.json, "JSON", "--json")
     check_format(args.report, "HTML", "--report")
-    check_outputs(outputs, (*args.data, *validate, args.robot))  # fail before the work
     check_distinct_inputs(args.data, "calibration files")
     check_distinct_inputs([*args.data, *validate], "calibration and validation files",
                           "a validation on the calibration data says nothing of the accuracy elsewhere")
