@@ -211,6 +211,9 @@ def read_poses_csv(path) -> tuple[np.ndarray, dict]:
     if not rows:
         raise DataError(f"{path} is empty: expected a header x_mm,y_mm,z_mm,qw,qx,qy,qz (or rx_deg..)")
     header = [h.strip().lower() for h in rows[0]]
+    if len(header) == 1 and ";" in header[0]:
+        raise DataError(f"{path}: the columns are separated by ';' (a decimal-comma export): save the file "
+                        "comma-separated with '.' as the decimal separator")
     body = [r for r in rows[1:] if any(c.strip() for c in r)]
     pos = [_column_unit(header, c, LENGTH_UNITS) for c in "xyz"]
     if None in pos or len({p[0].split("_")[1] for p in pos}) != 1:

@@ -6,6 +6,8 @@ import argparse
 
 from robocal.cli.args import check_format, check_tool_mm, numbers
 
+TRACKER_MIN_DISTANCE_M = 0.3  # a tracker closer to the robot's base is inside the robot (a unit slip)
+
 EPILOG = """Examples:
   robocal simulate --robot abb_irb2600 --poses 200 --noise-mm 0.02 --seed 1 -o data.csv --truth truth.yaml
   robocal simulate --robot model.yaml --poses 100 --smr 3 --noise-model tracker --outliers 0.02 \\
@@ -107,6 +109,10 @@ def run(args) -> int:
         check_tool_mm(smr, f"--smr-mm/--tool-mm {','.join(f'{v:g}' for v in smr)}")
     smr = None if given is None else np.array(given) * 1e-3
     tracker = None if args.tracker_mm is None else np.array(args.tracker_mm) * 1e-3
+    if tracker is not None and np.linalg.norm(tracker) < TRACKER_MIN_DISTANCE_M:
+        raise DataError(f"--tracker-mm {','.join(f'{v:g}' for v in args.tracker_mm)}: a tracker "
+                        f"{np.linalg.norm(tracker) * 1e3:.3g} mm from the robot's base is inside the robot; "
+                        "the values look like metres: give mm (e.g. 2500,500,300)")
     joints = visible = None
     if args.joints:
         joints, visible, smr, tracker = _planned(args, robot, smr, tracker)
