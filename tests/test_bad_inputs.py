@@ -15,6 +15,7 @@ import robocal as rc
 from robocal.cli import main
 from robocal.compensate import format_csv, pose_columns
 from robocal.data.measurements import read_joints
+from robocal.kinematics.transforms import make_transform
 from robocal.kinematics.urdf import from_urdf, to_urdf
 
 PROGRAMS = Path(__file__).parent / "data" / "programs"
@@ -340,6 +341,9 @@ def flagged(files) -> Path:
     sim = rc.simulate_tracker(MECA, 40, noise_mm=0.01, seed=1)
     as_nominal = MECA.with_frames(base=sim.truth.base, tool=sim.truth.tool)  # the nominal robot measured
     rc.simulate_tracker(as_nominal, 30, noise_mm=0.01, seed=8, as_is=True).data.save(d / "nominal_val.csv")
+    truth = rc.Robot.load(files / "irb2600_truth.yaml")
+    moved = truth.with_frames(tool=truth.tool @ make_transform(np.eye(3), [3e-3, 0.0, 0.0]))  # SMR moved
+    rc.simulate_tracker(moved, 30, noise_mm=0.01, seed=9, as_is=True).data.save(d / "smr_moved.csv")
     assert main(["--quiet", "poses", "--robot", "meca500", "-n", "12", "--candidates", "600", "--starts", "1",
                  "--smr-mm", "20,-30,40", "-o", str(d / "plan.csv")]) == 0
     return d
@@ -351,6 +355,7 @@ WARNINGS = [  # (case id, argv with {d} inputs, {f} flagged inputs, {o} outputs,
     ("simulate-smr-unlike-the-plan", ["simulate", "--robot", "meca500", "--joints", "{f}/plan.csv",
                                       "--smr-mm", "0,0,50", "-o", "{o}/s.csv", "--truth", "{o}/t.yaml"],
      "planned with"),
+    ("evaluate-smr-moved", ["evaluate", "{d}/irb2600_truth.yaml", "{f}/smr_moved.csv"], "SMR moved"),
     ("calibrated-worse-on-validation", ["calibrate", "{d}/meca.csv", "--robot", "meca500", "--validate",
                                         "{f}/nominal_val.csv"], "worse than the nominal"),
 ]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.data.registration import apply_registration, register_frame
+from robocal.diagnose import fit_rms_mm
 from robocal.errors import DataError
 from robocal.identify.observations import observation_for
 from robocal.identify.plausibility import check_residual, check_spread
@@ -38,6 +39,21 @@ def _row_errors(obs, robot, nuisance: np.ndarray) -> np.ndarray:
     return -r[obs.item_of_rows(), 0]
 
 
+# The model's own frame and SMR miss the data by more than this (mm RMS) and this many times what a
+# refitted frame and SMR leave: the tracker or the SMR moved since the model was made.
+FRAME_MOVED_MM = 0.1
+FRAME_MOVED_GAIN = 5.0
+
+
+def _check_frame_moved(robot, data, rms_mm: float, warnings: list[str]) -> None:
+    """Warn when refitting only the tracker frame and SMR offsets explains most of the error."""
+    refit = fit_rms_mm(robot, data)
+    if rms_mm > FRAME_MOVED_MM and rms_mm > FRAME_MOVED_GAIN * refit:
+        warnings.append(f"with the tracker frame and SMR offsets refitted the model misses these data by "
+                        f"{refit:.3g} mm RMS instead of {rms_mm:.3g} mm: the tracker or the SMR moved since "
+                        "the model was made (--fit-frame judges the links alone)")
+
+
 def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bool = False) -> dict:
     """Position error statistics (mm) of ``robot`` against ``data``.
 
@@ -67,6 +83,8 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     stats = position_stats(err)
     check_residual(stats["rms"], obs.modelled_points(robot, nuisance), "the evaluated data", force=force,
                    warnings=warnings)
+    if not (fit_frame or frame_from is not None) and data.kind in ("point", "pose"):
+        _check_frame_moved(robot, data, stats["rms"], warnings)
     stats["kind"] = data.kind
     stats["n_poses"] = data.n_poses
     if err.ndim == 2:
