@@ -615,10 +615,14 @@ def _plain(options: dict) -> dict:
 
 def load_result(path) -> dict:
     """Read a result JSON written by :meth:`CalibrationResult.save_json`."""
+    text = read_text(path, "result JSON file")
+    hint = "; give the JSON `robocal calibrate --json` wrote"
+    if text.lstrip().startswith("format: robocal-model"):
+        raise DataError(f"{path} is a robot model YAML, not a result JSON{hint}")
     try:
-        data = json.loads(read_text(path, "result JSON file"))
+        data = json.loads(text)
     except json.JSONDecodeError as exc:
         raise DataError(f"{path} is not a robocal result JSON: {exc}") from None
     if not isinstance(data, dict) or data.get("format") != RESULT_FORMAT:
-        raise DataError(f"{path} is not a robocal result JSON (format {RESULT_FORMAT})")
+        raise DataError(f"{path} is not a robocal result JSON (format {RESULT_FORMAT}){hint}")
     return data

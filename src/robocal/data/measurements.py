@@ -655,6 +655,10 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     """Parse canonical CSV text; ``name`` is used in error messages."""
     source, header_line, rows = _split_csv(text, name)
     header = [h.strip().lower() for h in rows[0]]
+    if header[0].startswith("format: robocal-"):
+        kind = header[0].split("-", 1)[1].split("/")[0]
+        raise DataError(f"{name} is a robocal {kind} file, not measurements: give it to the option that "
+                        "takes it (a model: --robot, or the command's model argument)")
     if len(header) == 1 and ";" in header[0]:
         raise DataError(f"{name}, line {header_line}: the columns are separated by ';' (a decimal-comma "
                         "export): save the file comma-separated with '.' as the decimal separator")
