@@ -1,4 +1,5 @@
-"""Argument types shared by the subcommands."""
+"""Argument types and checks shared by the subcommands: numbers, loading measurements with the
+reader's notes, distinct inputs, output formats, tool units, the controller's model, diagnoses."""
 
 from __future__ import annotations
 
