@@ -2,7 +2,9 @@
 vs py-opw-kinematics Robot.reach on 100,000 random abb_irb2600 poses (all 8 branches), one thread
 each (the headline) and all threads, wall clock and CPU time, same run; branch coverage and FK
 accuracy; first-call (compile) cost; plan_path on 10,000 waypoints x 8 candidates; numeric IK
-(rc.ik.solve) of 10,000 targets of a calibrated model with a tool, seeded by the nominal closed form."""
+(rc.ik.solve) of 10,000 targets of a calibrated model with a tool, seeded by the nominal closed form;
+the closed-form UR solver on every UR of the catalog against ur-analytic-ik (20,000 random joint vectors
+each: FK, solutions, misses, recovery, per-pose time against the peer called pose by pose from Python)."""
 
 from __future__ import annotations
 
@@ -105,6 +107,49 @@ def main(n: int = 100_000, waypoints: int = 10_000) -> None:
               f"with an empty cache, {costs[1]:.2f} s with the on-disk cache")
     _plan(robot, waypoints)
     _numeric(robot, 10_000)
+    _ur(20_000)
+
+
+def _ur(n: int) -> None:
+    """Every UR of the catalog: n random joint vectors in [-pi, pi); FK and IK against ur-analytic-ik
+    (a C++ UR solver), the peer called pose by pose from Python (its API takes one pose)."""
+    from robocal.kinematics.catalog import catalog_names
+
+    try:
+        import ur_analytic_ik as peer
+    except ImportError:
+        print("UR IK: ur-analytic-ik not installed (pip install -e '.[bench]'): no peer comparison")
+        return
+    kernels = kernel_choices("robocal.ik.ur_numba")
+    names = [nm for nm in catalog_names() if rc.Robot.from_catalog(nm).has_ur_form and hasattr(peer, nm)]
+    print(f"UR closed form vs ur-analytic-ik: {n:,} random joint vectors per arm; solve_all batched "
+          f"(one thread) vs the peer's inverse_kinematics called per pose from Python (goal >= 3x)")
+    for name in names:
+        robot, model = rc.Robot.from_catalog(name), getattr(peer, name)
+        q = np.random.default_rng(21).uniform(-np.pi, np.pi, (n, 6))
+        T = robot.fk(q)
+        fk_diff = max(np.abs(model.forward_kinematics(*row) - T[i]).max() for i, row in enumerate(q))
+        t_peer, theirs = best_time(lambda m=model, T=T: [m.inverse_kinematics(t) for t in T], 2)
+        times = {}
+        for k in kernels:
+            run = _solver(robot, T, k, 1)
+            run()  # compile / warm up
+            times[k], ours = best_time(run, 3)
+        owner = np.repeat(np.arange(n), [len(s) for s in theirs])
+        flat = np.array([row for s in theirs for row in s]).reshape(-1, 6)
+        real = np.abs(robot.fk(flat) - T[owner]).max(axis=(1, 2)) <= 1e-9
+        d = np.abs(np.remainder(ours[owner] - flat[:, None] + np.pi, 2 * np.pi) - np.pi).max(axis=2)
+        missed = int((real & ~(np.nanmin(np.where(np.isfinite(d), d, np.inf), axis=1) < 1e-7)).sum())
+        ok = np.isfinite(ours).all(axis=2)
+        ni, bi = np.nonzero(ok)
+        e = pose_error(T[ni], robot.fk(ours[ni, bi]))
+        back = np.abs(np.remainder(ours - q[:, None] + np.pi, 2 * np.pi) - np.pi).max(axis=2)
+        recovered = int((np.nanmin(np.where(np.isfinite(back), back, np.inf), axis=1) < 1e-7).sum())
+        speed = ", ".join(f"{k} {times[k] / n * 1e6:.2f} us/pose ({t_peer / times[k]:.1f}x)" for k in kernels)
+        print(f"  {name:6s} FK max |diff| {fk_diff:.1e}; {ok.sum()} solutions, FK error max "
+              f"{max(np.linalg.norm(e[:, :3], axis=1).max(), np.linalg.norm(e[:, 3:], axis=1).max()):.1e}; "
+              f"peer solutions {len(flat)} ({int((~real).sum())} not FK-exact), missed {missed}; original "
+              f"recovered {recovered}/{n}; peer {t_peer / n * 1e6:.2f} us/pose, solve_all {speed}")
 
 
 def _numeric(robot: rc.Robot, n: int) -> None:

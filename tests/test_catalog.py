@@ -2,18 +2,25 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
+import yaml
+from scipy.spatial.transform import Rotation
 from test_convert import dh_product
 
 from robocal import ModelError, Robot
 from robocal.cli import main
-from robocal.kinematics.catalog import catalog_descriptions, catalog_names
+from robocal.kinematics.catalog import catalog_descriptions, catalog_entry, catalog_names, catalog_specs
 from robocal.kinematics.opw import opw_fk
 
 REQUIRED = ["abb_irb120", "abb_irb1600", "abb_irb2400", "abb_irb2600", "abb_irb4600", "kuka_kr6_r700",
-            "kuka_kr16_2", "fanuc_lrmate200id", "staubli_tx2_140", "puma560", "meca500", "ur5", "ur10"]
-OPW_ROBOTS = [n for n in REQUIRED if n not in ("meca500", "ur5", "ur10")]
+            "kuka_kr16_2", "fanuc_lrmate200id", "staubli_tx2_140", "puma560", "meca500", "ur5", "ur10",
+            "ur3e", "ur5e", "ur10e", "ur16e", "ur20", "ur30", "kuka_kr210_r2700", "kuka_kr120_r2500",
+            "fanuc_m20ia", "fanuc_m710ic50", "fanuc_r2000ic_165f", "abb_irb6700", "yaskawa_gp25"]
+OPW_ROBOTS = [n for n in catalog_names() if "opw" in catalog_entry(n)]
+CHAINS = yaml.safe_load((Path(__file__).parent / "data" / "ros_industrial_chains.yaml").read_text())
 
 
 def random_joints(robot: Robot, rng, n: int = 200) -> np.ndarray:
@@ -21,9 +28,48 @@ def random_joints(robot: Robot, rng, n: int = 200) -> np.ndarray:
 
 
 def test_catalog_lists_required_robots():
-    assert set(REQUIRED) <= set(catalog_names())
+    assert set(REQUIRED) <= set(catalog_names()) and len(catalog_names()) >= 25
     for name, text in catalog_descriptions().items():
         assert text and "\n" not in text, name
+    specs = catalog_specs()
+    assert all(specs[n][0] > 0 and specs[n][1] > 0 for n in catalog_names() if n != "puma560")
+
+
+def _urdf_fk(chain: dict, q: np.ndarray) -> np.ndarray:
+    """URDF forward kinematics of a transcribed chain: per joint T(xyz) R(rpy) then the rotation
+    by q about its axis, then the fixed joints to tool0 (rpy: fixed-axis XYZ, R = Rz Ry Rx)."""
+    def fixed(row):
+        T = np.eye(4)
+        T[:3, :3] = Rotation.from_euler("xyz", row["rpy"]).as_matrix()
+        T[:3, 3] = row["xyz"]
+        return T
+
+    out = np.broadcast_to(np.eye(4), (len(q), 4, 4)).copy()
+    for j, row in enumerate(chain["joints"]):
+        turn = np.zeros((len(q), 4, 4))
+        turn[:, :3, :3] = Rotation.from_rotvec(np.outer(q[:, j], row["axis"])).as_matrix()
+        turn[:, 3, 3] = 1.0
+        out = out @ fixed(row) @ turn
+    for row in chain["tool0"]:
+        out = out @ fixed(row)
+    return out
+
+
+@pytest.mark.parametrize("name", sorted(CHAINS))
+def test_entry_equals_its_ros_industrial_urdf(name, rng):
+    """Arms derived from a ROS-Industrial URDF (or with both an opw file and a URDF): the flange
+    (tool0) pose of the catalog entry is the URDF's, over the joint limits."""
+    robot = Robot.from_catalog(name)
+    q = random_joints(robot, rng, 300)
+    np.testing.assert_allclose(robot.fk(q), _urdf_fk(CHAINS[name], q), rtol=0, atol=CHAINS[name]["tolerance"])
+
+
+def test_every_entry_is_checked_against_a_source():
+    """Each catalog robot meets an independent source in some test: py-opw-kinematics on its OPW
+    set, a ROS-I URDF chain, Universal Robots' DH (ur-analytic-ik, test_ur_ik), or a dedicated test."""
+    dedicated = {"puma560", "abb_irb120", "meca500", "ur5", "ur10"}
+    ur = {n for n in catalog_names() if Robot.from_catalog(n).has_ur_form}
+    assert set(catalog_names()) <= set(OPW_ROBOTS) | set(CHAINS) | ur | dedicated
 
 
 @pytest.mark.parametrize("name", OPW_ROBOTS)
@@ -107,9 +153,13 @@ def test_meca500_matches_dataset_mdh(rng):
 def test_limits_are_vendor_values():
     assert np.allclose(np.rad2deg(Robot.from_catalog("abb_irb2600").limits[2]), [-180, 75])
     assert np.allclose(np.rad2deg(Robot.from_catalog("kuka_kr6_r700").limits[1]), [-190, 45])
-    for name in REQUIRED:
+    # the KR 210 R2700 extra's A2 works in [-140, -5] deg (its URDF): zero is outside its range
+    assert np.allclose(np.rad2deg(Robot.from_catalog("kuka_kr210_r2700").limits[1]), [-140, -5])
+    for name in catalog_names():
         lim = Robot.from_catalog(name).limits
-        assert lim.shape == (6, 2) and (lim[:, 0] < 0).all() and (lim[:, 1] > 0).all(), name
+        assert lim.shape == (6, 2) and (lim[:, 0] < lim[:, 1]).all(), name
+        if name != "kuka_kr210_r2700":
+            assert (lim[:, 0] < 0).all() and (lim[:, 1] > 0).all(), name
 
 
 def test_unknown_name_lists_the_catalog():
@@ -171,3 +221,21 @@ def test_fk_polynomial_sin_cos_and_large_angle_fallback(rng):
     q = random_joints(robot, rng, 50)
     big = q + 2 * np.pi * np.round(2 * _POLY_MAX / (2 * np.pi))
     np.testing.assert_allclose(robot.fk(big), robot.fk(q), rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", [n for n in catalog_names() if n not in ("meca500",)])
+def test_closed_form_ik_round_trip_on_every_arm(name, rng):
+    """Every catalog arm but the Meca500 (no closed form: its OPW set is not carried) has the OPW or
+    UR form; its closed-form IK recovers random joints, each solution FK-exact."""
+    from robocal.ik import solve_all
+
+    robot = Robot.from_catalog(name)
+    assert robot.has_opw_form or robot.has_ur_form
+    q = random_joints(robot, rng, 300)
+    T = robot.fk(q)
+    sols = solve_all(robot, T)
+    d = np.abs(np.remainder(sols - q[:, None] + np.pi, 2 * np.pi) - np.pi).max(axis=2)
+    assert (np.nanmin(np.where(np.isfinite(d), d, np.inf), axis=1) < 1e-7).all()
+    ok = np.isfinite(sols).all(axis=2)
+    err = np.abs(robot.fk(sols[ok]) - T[np.nonzero(ok)[0]]).max()
+    assert err < 1e-9

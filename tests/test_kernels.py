@@ -15,7 +15,8 @@ from hypothesis import strategies as st
 
 import robocal as rc
 from robocal.errors import RobocalError
-from robocal.ik.opw_ik import opw_form, solve_all
+from robocal.ik import solve_all
+from robocal.ik.opw_ik import opw_form
 from robocal.kinematics import kernels as kn
 from robocal.kinematics.fk import _POLY_MAX, chain_frames
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix

@@ -10,7 +10,7 @@ import pytest
 import robocal as rc
 from robocal.cli import main
 from robocal.errors import DataError, UnreachableError
-from robocal.ik.opw_ik import solve_all
+from robocal.ik import solve_all
 from robocal.ik.path import default_weights, travel
 
 

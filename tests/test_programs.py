@@ -69,6 +69,10 @@ def test_configuration_data_select_the_joints(name, scheme):
     robot = rc.Robot.from_catalog(name)
     if isinstance(scheme, KUKAConfig) and (np.abs(robot.limits) > np.pi * 2).any():
         pytest.skip("KUKA's sign bits tell turns apart only within +-360 deg")
+    if not isinstance(scheme, KUKAConfig) and (np.diff(robot.limits[[1, 2, 4]], axis=1) > 2 * np.pi).any():
+        # the ROS-I FANUC M-20iA and M-710iC/50 give J3 more than a turn (the union of its ranges
+        # over J2, FANUC's J2/J3 coupling undone): ABB and FANUC data carry turns of J1, J4, J6 only
+        pytest.skip("a joint whose turn the configuration data do not carry has more than 360 deg of travel")
     q = np.random.default_rng(2).uniform(robot.limits[:, 0], robot.limits[:, 1], (400, 6))
     cands = rc.ik.solve_all(robot, robot.fk(q), extra_turns=True)
     valid = np.isfinite(cands).all(axis=2)

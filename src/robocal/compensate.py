@@ -34,6 +34,7 @@ from robocal.identify.plausibility import (
     MAX_LENGTH_CORRECTION_FRACTION,
     MAX_LENGTH_CORRECTION_MM,
 )
+from robocal.ik.controller import ControllerChoice, nearest_solutions
 from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
 from robocal.ik.singularity import SingularityDistance, singularity_distance
@@ -48,7 +49,8 @@ class Compensation:
     ``converged`` ``(N,)``; ``position_error`` ``(N,)`` m / ``orientation_error`` ``(N,)`` rad
     left on the calibrated model; ``parameters``: rows (name, unit, nominal, calibrated, delta)
     in SI with delta = nominal - calibrated; ``corrected_model`` the calibrated robot;
-    ``singularity``: each target's distance from the singularities at its joints (6-axis arms)."""
+    ``singularity``: each target's distance from the singularities at its joints (6-axis arms);
+    ``controller``: the nominal controller's own choice of solutions, when seeded from it."""
 
     joints: np.ndarray
     corrected_targets: np.ndarray
@@ -58,6 +60,7 @@ class Compensation:
     parameters: list[dict]
     corrected_model: Robot
     singularity: SingularityDistance | None = None
+    controller: ControllerChoice | None = None
 
     def warnings(self, names: Sequence[str] | None = None, which: np.ndarray | None = None) -> list[str]:
         """One line per target that was not reached or sits close to a singularity, labelled by
@@ -71,6 +74,10 @@ class Compensation:
             elif self.singularity is not None and self.singularity.close[i]:
                 out.append(f"{name}: close to a singularity, {self.singularity.describe(i)}: the controller "
                            "may not realise its correction")
+            if self.controller is not None and i in self.controller.jumps:
+                out.append(f"{name}: the controller's solution nearest the previous joints moves a joint "
+                           f"by {np.rad2deg(self.controller.move[i]):.0f} deg (no nearer solution exists): "
+                           "it may take another solution than assumed here")
         return out
 
     def not_reached(self, i: int) -> str:
@@ -128,7 +135,7 @@ def controller_model(calibrated: Robot, nominal: Robot, robot_base=None, tool=No
 
 
 def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None = None,
-               seeds=None, targets_frame: str = "model", tool=None) -> Compensation:
+               seeds=None, start=None, targets_frame: str = "model", tool=None) -> Compensation:
     """Corrected joints and Cartesian targets for target poses ``(N, 4, 4)`` (m) of the
     calibrated model's TCP.
 
@@ -144,7 +151,11 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     Seeds: the closed-form solution of ``nominal`` (needs its OPW form) in slot ``branch``
     (None: per target the lowest slot inside the limits, then the next ones where the calibrated
     model has no solution in it), with the calibrated base and tool; or
-    explicit ``seeds`` ``(N, n)`` rad. Targets the calibrated model cannot reach to 1e-10 m /
+    explicit ``seeds`` ``(N, n)`` rad; or, with ``start`` ``(n,)`` rad (the joints before the
+    first target), the controller's own choice for targets without configuration data: per
+    target, in order, the nominal closed-form solution nearest the previous target's joints
+    (:func:`robocal.ik.controller.nearest_solutions`; ``controller`` in the result, its large
+    joint moves among the warnings). Targets the calibrated model cannot reach to 1e-10 m /
     1e-9 rad are flagged in ``converged`` (their joints are the best found).
     """
     if targets_frame not in ("model", "robot"):
@@ -157,12 +168,19 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
         model = controller_model(calibrated, nominal, np.eye(4), tool)
         controller = nominal.with_frames(tool=model.tool)
     T = check_poses(targets)
+    choice = None
+    if start is not None:
+        if seeds is not None or branch is not None:
+            raise DataError("give one of branch, seeds and start (the controller's nearest-solution choice)")
+        choice = nearest_solutions(controller.with_frames(base=model.base, tool=model.tool), T, start)
+        seeds = choice.joints  # NaN rows (no nominal solution inside the limits): not converged
     res = ik_solve(model, T, seeds, branch=branch, nominal=controller)
     sing = singularity_distance(model, res.joints) if model.n_joints == 6 else None
     return Compensation(joints=res.joints, corrected_targets=controller.fk(res.joints),
                         converged=res.converged, position_error=res.position_error,
                         orientation_error=res.orientation_error,
-                        parameters=parameters, corrected_model=calibrated, singularity=sing)
+                        parameters=parameters, corrected_model=calibrated, singularity=sing,
+                        controller=choice)
 
 
 def _numbers(text: str, count: int, what: str, form: str) -> np.ndarray:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from robocal.cli.args import numbers
+
 EPILOG = """Examples:
   robocal compensate calibrated.yaml targets.csv --nominal abb_irb2600 -o commands.csv
   robocal compensate calibrated.yaml targets.csv --nominal nominal.yaml --branch 0 \\
@@ -31,6 +33,10 @@ def add_parser(sub) -> None:
     p.add_argument("--branch", type=int, default=None,
                    help="IK branch slot 0..7 (4*wrist_flip + 2*shoulder + elbow); default: per target "
                         "the lowest slot inside the joint limits")
+    p.add_argument("--start", type=numbers(None, "q1,...,qn in deg"),
+                   help="joints before the first target (deg): each target takes the nominal solution "
+                        "nearest the previous target's, as a controller does for targets without "
+                        "configuration data (URScript); excludes --branch")
     p.add_argument("--targets-in", choices=("robot", "model"), default="robot",
                    help="frame of the targets: the robot's base frame (default; the calibrated model's "
                         "identified frame {0}) or the calibrated model's world frame (the tracker's)")
@@ -78,8 +84,9 @@ def run(args) -> int:
     tool = {"measured": None, "flange": np.eye(4)}.get(args.tool)
     if args.tool not in ("measured", "flange"):
         tool = tool_frame(args.tool, "--tool")
-    res = compensate(calibrated, nominal, targets, branch=args.branch, targets_frame=args.targets_in,
-                     tool=tool)
+    start = None if args.start is None else np.deg2rad(args.start)
+    res = compensate(calibrated, nominal, targets, branch=args.branch, start=start,
+                     targets_frame=args.targets_in, tool=tool)
     names, values = pose_columns(res.corrected_targets, layout)
     joints = [f"q{i + 1}_deg" for i in range(calibrated.n_joints)]
     columns = joints + names + ["converged"]

@@ -23,13 +23,32 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     if args.name is None:
-        from robocal.kinematics.catalog import catalog_descriptions
+        from robocal.kinematics.catalog import catalog_descriptions, catalog_specs
 
+        specs = catalog_specs()
+        print(f"{'name':20s} {'reach mm':>8s} {'payload':>9s}  {'class':12s} description")
         for name, text in catalog_descriptions().items():
-            print(f"{name:20s} {text}")
+            reach, payload = specs[name]
+            print(f"{name:20s} {_figure(reach, '', 8)} {_figure(payload, ' kg', 9)}  "
+                  f"{payload_class(payload):12s} {text}")
         return 0
     show(args.name)
     return 0
+
+
+PAYLOAD_CLASSES = ((3.0, "light"), (20.0, "small"), (80.0, "medium"), (300.0, "heavy"))
+
+
+def payload_class(kg: float | None) -> str:
+    """The payload class of a vendor payload (kg): light <= 3, small <= 20, medium <= 80, heavy
+    <= 300, else very heavy; '-' when unknown."""
+    if kg is None:
+        return "-"
+    return next((label for top, label in PAYLOAD_CLASSES if kg <= top), "very heavy")
+
+
+def _figure(value, unit: str, width: int) -> str:
+    return f"{'-' if value is None else f'{value:g}{unit}':>{width}s}"
 
 
 def show(spec: str) -> None:

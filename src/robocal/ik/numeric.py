@@ -5,7 +5,8 @@ frame) with the joint Jacobian, which is the identification Jacobian w.r.t. thet
 (d TCP / d theta_i = d TCP / d q_i); every target is one member of robocal's damped
 least-squares loop (:mod:`robocal.damped_least_squares`, the one calibration uses), with
 Marquardt's diagonal scaling. Seeds default to the closed-form solution of the robot's nominal
-model (its OPW form) in the requested branch, with this robot's base and tool.
+model (its OPW or UR form, :mod:`robocal.ik.closed_form`) in the requested branch, with this
+robot's base and tool.
 """
 
 from __future__ import annotations
@@ -17,7 +18,8 @@ import numpy as np
 
 from robocal.damped_least_squares import Status, minimize
 from robocal.errors import DataError, UnreachableError
-from robocal.ik.opw_ik import branch_slot, check_poses, seed_branches, solve_branches
+from robocal.ik.closed_form import branch_model, branch_slot, seed_branches, solve_branches
+from robocal.ik.opw_ik import check_poses
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import pose_error
 
@@ -99,7 +101,7 @@ def nominal_branches(robot: Robot, T: np.ndarray,
                      nominal: Robot | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Seeds ``(N, 8, 6)`` (rad) per branch slot for checked world poses ``T``: the closed-form
     solution of the nominal model (``nominal``, default the robot's own, with this robot's base
-    and tool) where it exists, else the clamped closed form (:func:`robocal.ik.opw_ik.seed_branches`:
+    and tool) where it exists, else the clamped closed form (:func:`robocal.ik.closed_form.seed_branches`:
     the target is a little beyond the nominal reach, which the robot may still reach); and
     ``(N, 8)`` whether the exact one exists."""
     model = _nominal_model(robot, nominal)
@@ -126,7 +128,7 @@ def nominal_seeds(robot: Robot, T: np.ndarray, branch: int | None = None,
     """Closed-form seeds ``(N, 6)`` from the nominal links (``nominal``, default the robot's own
     nominal model) with this robot's base and tool.
 
-    ``branch`` picks the slot (0..7, see :mod:`robocal.ik.opw_ik`); None takes, per pose, the
+    ``branch`` picks the slot (0..7, see :mod:`robocal.ik.closed_form`); None takes, per pose, the
     lowest slot inside the joint limits, else the lowest that exists. Where the nominal model has
     no solution in the slot, the clamped closed form seeds it (see :func:`nominal_branches`).
     """
@@ -192,18 +194,18 @@ def _restart_offsets(n: int) -> np.ndarray:
 
 
 def _restarts(robot: Robot, T: np.ndarray, q0: np.ndarray, max_iter: int, tol: tuple[float, float],
-              opw) -> _Run:
+              form: Robot | None) -> _Run:
     """Targets restarted from their seeds ``q0`` ``(N, n)`` moved off a nearby singularity
     (:func:`_restart_offsets`): per target the converged restart nearest the seed, in the seed's
-    branch (by the nominal OPW form ``opw`` when there is one); ``nit`` counts each target's
+    branch (by the closed form of the nominal model ``form`` when there is one); ``nit`` counts each target's
     longest restart."""
     offsets = _restart_offsets(robot.n_joints)
     N, K = len(q0), len(offsets)
     starts = (q0[:, None, :] + offsets[None]).reshape(-1, robot.n_joints)
     run = _descend(robot, np.repeat(T, K, axis=0), starts, max_iter, tol)
     qs, oks = run.q.reshape(N, K, -1), run.ok.reshape(N, K)
-    if opw is not None:  # the controller asked for the seed's branch
-        oks &= branch_slot(opw, qs) == branch_slot(opw, q0)[:, None]
+    if form is not None:  # the controller asked for the seed's branch
+        oks &= branch_slot(form, qs) == branch_slot(form, q0)[:, None]
     dist = np.where(oks, np.abs(np.remainder(qs - q0[:, None] + np.pi, 2 * np.pi) - np.pi).sum(-1), np.inf)
     pick = np.arange(N) * K + np.argmin(dist, axis=1)
     return _Run(run.q[pick], run.err[pick], oks.reshape(-1)[pick], run.status[pick],
@@ -211,7 +213,7 @@ def _restarts(robot: Robot, T: np.ndarray, q0: np.ndarray, max_iter: int, tol: t
 
 
 def _retry(robot: Robot, T: np.ndarray, q0: np.ndarray, run: _Run, max_iter: int, tol: tuple[float, float],
-           opw) -> None:
+           form: Robot | None) -> None:
     """The targets of ``run`` (from seeds ``q0``) not reached, in place: those stopped at the
     iteration limit (slow convergence near a singular wrist or elbow) continue for another
     ``max_iter`` steps (continuing a stalled one would repeat its stall); those still not reached
@@ -222,13 +224,8 @@ def _retry(robot: Robot, T: np.ndarray, q0: np.ndarray, run: _Run, max_iter: int
         run.take(rows, _descend(robot, T[rows], run.q[rows], max_iter, tol), np.ones(rows.size, bool))
     rows = np.flatnonzero(~run.ok & seeded)
     if rows.size:
-        again = _restarts(robot, T[rows], q0[rows], max_iter, tol, opw)
+        again = _restarts(robot, T[rows], q0[rows], max_iter, tol, form)
         run.take(rows, again, again.ok)
-
-
-def _branch_form(robot: Robot, nominal: Robot | None):
-    """The OPW form that names the branches of this robot's joints (its nominal model's), or None."""
-    return (robot.opw if nominal is None else nominal.opw) if robot.n_joints == 6 else None
 
 
 def _result(robot: Robot, q0: np.ndarray, run: _Run) -> IKResult:
@@ -251,7 +248,7 @@ def _solve_from(robot: Robot, T: np.ndarray, q0: np.ndarray, nominal: Robot | No
     retries of :func:`_retry` when ``retry``; also the run (raw joints, steps) behind the result."""
     run = _descend(robot, T, np.where(np.isfinite(q0), q0, 0.0), max_iter, tol)
     if retry:
-        _retry(robot, T, q0, run, max_iter, tol, _branch_form(robot, nominal))
+        _retry(robot, T, q0, run, max_iter, tol, branch_model(robot, nominal))
     return _result(robot, q0, run), run
 
 
@@ -270,7 +267,7 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
     """Numeric IK: joints (rad) putting the TCP of ``robot`` at world ``poses`` ``(N, 4, 4)`` (m).
 
     ``seeds``: ``(N, n)`` starting joints (rad), or None for the nominal closed-form solution
-    in ``branch`` (see :func:`nominal_seeds`; needs an OPW form on the nominal model, ``nominal``
+    in ``branch`` (see :func:`nominal_seeds`; needs an OPW or UR form on the nominal model, ``nominal``
     or the robot's own); with neither, each pose starts from its preferred nominal branch and,
     if that fails, tries the next ones (inside the limits first, then slot order). Targets still
     not reached are retried (:func:`_retry`): continued if they stopped at ``max_iter`` (accepted
@@ -299,7 +296,7 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
         rows = res.failed
         if rows.size:  # the preferred branch's retries, from where its first run stopped
             run = first.rows(rows)
-            _retry(robot, T[rows], cands[rows, 0], run, max_iter, tol, _branch_form(robot, nominal))
+            _retry(robot, T[rows], cands[rows, 0], run, max_iter, tol, branch_model(robot, nominal))
             _update(res, rows, _result(robot, cands[rows, 0], run))
             nit[rows] += run.nit - first.nit[rows]
         return _finish(replace(res, iterations=int(nit.max(initial=0))), N, pos_tol, rot_tol, strict)

@@ -34,9 +34,7 @@ check compiled, pose by pose (see :mod:`robocal.kinematics.kernels` for the choi
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 
 import numpy as np
@@ -188,13 +186,13 @@ def _opw_frames(robot: Robot, opw: OPWParameters) -> tuple[np.ndarray, np.ndarra
     return pre, post
 
 
-def _solve_chunk(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.ndarray, T: np.ndarray,
-                 tol: float) -> np.ndarray:
-    """Verified branches of world poses ``T``; flange = pre @ T @ post in the OPW base frame."""
-    q = _robot_joints(opw, paper_branches(opw, pre @ T @ post))
+def keep_verified(robot: Robot, q: np.ndarray, T: np.ndarray, tol: float) -> np.ndarray:
+    """Solutions ``q`` ``(N, B, 6)`` of world poses ``T`` ``(N, 4, 4)``, in place: rows with NaN or
+    whose ``robot.fk`` is more than ``tol`` (m, rad) off their pose become NaN."""
+    B = q.shape[1]
     ok = np.isfinite(q).all(axis=2)
     q[~ok] = 0.0
-    fk = chain_fk(robot.links, robot.base, robot.tool, q.reshape(-1, 6)).reshape(-1, 8, 16)
+    fk = chain_fk(robot.links, robot.base, robot.tool, q.reshape(-1, 6)).reshape(-1, B, 16)
     # position error, and ||R_fk - R_target||_F / sqrt(2) = 2 sin(angle / 2) ~ the rotation angle
     diff = fk - T.reshape(-1, 1, 16)
     sq = diff * diff
@@ -205,37 +203,22 @@ def _solve_chunk(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.nda
     return q
 
 
-def _chunk_solver(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.ndarray,
-                  tol: float) -> tuple[Callable[[np.ndarray], np.ndarray], int]:
-    """The chunk solver of the kernels in use (numpy or the compiled twin) and its chunk size."""
+def _solve_chunk(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.ndarray, T: np.ndarray,
+                 tol: float) -> np.ndarray:
+    """Verified branches of world poses ``T``; flange = pre @ T @ post in the OPW base frame."""
+    return keep_verified(robot, _robot_joints(opw, paper_branches(opw, pre @ T @ post)), T, tol)
+
+
+def chunk_solver(robot: Robot, tol: float = TOL) -> tuple[Callable[[np.ndarray], np.ndarray], int]:
+    """The chunk solver of the kernels in use (numpy or the compiled twin) and its chunk size:
+    world poses ``(M, 4, 4)`` -> verified branches ``(M, 8, 6)``. ModelError without an OPW form."""
+    opw = opw_form(robot)
+    pre, post = _opw_frames(robot, opw)
     kernel = compiled("robocal.ik.opw_numba")
     if kernel is None:
         return partial(_solve_chunk, robot, opw, pre, post, tol=tol), _CHUNK
     return kernel.chunk_solver(robot, _geometry(opw), np.asarray(opw.offsets, float),
                                np.asarray(opw.signs, float), pre, post, tol), _COMPILED_CHUNK
-
-
-def solve_branches(robot: Robot, T: np.ndarray, tol: float = TOL, threads: int | None = None) -> np.ndarray:
-    """All 8 verified branches ``(N, 8, 6)`` for checked world poses ``T`` (no limit handling).
-
-    Raises ModelError when the robot's chain does not follow an OPW form (:func:`opw_form`)."""
-    opw = opw_form(robot)
-    solve, size = _chunk_solver(robot, opw, *_opw_frames(robot, opw), tol)
-    N = T.shape[0]
-    parts = [slice(s, min(s + size, N)) for s in range(0, N, size)]
-    out = np.empty((N, 8, 6))
-    workers = threads or min(os.cpu_count() or 1, 8)
-
-    def run(part: slice) -> None:
-        out[part] = solve(T[part])
-
-    if workers > 1 and len(parts) > 1:
-        with ThreadPoolExecutor(workers) as pool:
-            list(pool.map(run, parts))
-    else:
-        for part in parts:
-            run(part)
-    return out
 
 
 def seed_branches(robot: Robot, T: np.ndarray) -> np.ndarray:
@@ -264,51 +247,3 @@ def branch_slot(opw: OPWParameters, q: np.ndarray) -> np.ndarray:
     """Closed-form branch slot ``(...,)`` of joints ``(..., 6)``: 4 * flip + 2 * shoulder + elbow."""
     shoulder, elbow, flip = branch_bits(opw, q)
     return 4 * flip.astype(int) + 2 * shoulder.astype(int) + elbow.astype(int)
-
-
-def turn_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Candidates inside the joint limits, including the +-2 pi copies of each solution.
-
-    q ``(N, B, 6)`` (NaN rows absent) -> ``(N, K, 6)`` candidates (NaN padded, valid first, in
-    slot order then copy order) and ``(N, K)`` source slot index (-1 for padding)."""
-    lo, hi = robot.limits[:, 0], robot.limits[:, 1]
-    # q in [-pi, pi): a copy q + 2 pi k can be inside [lo, hi] only for these k
-    kmin = np.floor((lo - np.pi) / (2 * np.pi)).astype(int) + 1
-    kmax = np.ceil((hi + np.pi) / (2 * np.pi)).astype(int) - 1
-    grids = np.meshgrid(*[np.arange(a, b + 1) for a, b in zip(kmin, kmax, strict=True)], indexing="ij")
-    shifts = 2 * np.pi * np.stack([g.reshape(-1) for g in grids], axis=1)  # (C, 6)
-    N, B, _ = q.shape
-    cand = q[:, :, None, :] + shifts[None, None]  # (N, B, C, 6)
-    ok = np.isfinite(cand).all(axis=3) & ((cand >= lo) & (cand <= hi)).all(axis=3)
-    cand = cand.reshape(N, -1, 6)
-    ok = ok.reshape(N, -1)
-    slot = np.broadcast_to(np.repeat(np.arange(B), shifts.shape[0]), ok.shape)
-    K = max(int(ok.sum(axis=1).max(initial=0)), 1)
-    order = np.argsort(~ok, axis=1, kind="stable")[:, :K]
-    taken = np.take_along_axis(ok, order, axis=1)
-    out = np.take_along_axis(cand, order[:, :, None], axis=1)
-    out[~taken] = np.nan
-    src = np.where(taken, np.take_along_axis(slot, order, axis=1), -1)
-    return out, src
-
-
-def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = False,
-              tol: float = TOL, threads: int | None = None) -> np.ndarray:
-    """Closed-form IK: all branches of world TCP poses ``(N, 4, 4)`` (m) -> joints (rad).
-
-    Default: ``(N, 8, 6)`` in the slot order of the module docstring, NaN where a branch does
-    not exist, joints wrapped to [-pi, pi). ``limits=True``: branches outside the joint limits
-    become NaN (still ``(N, 8, 6)``). ``extra_turns=True`` (implies limits): every candidate
-    inside the limits including +-2 pi copies for joints with more than 360 deg of travel,
-    ``(N, K, 6)`` with K the largest count over the poses, valid rows first, NaN padding.
-    Base and tool of the model are removed first; each solution is verified by ``robot.fk`` to
-    ``tol`` (m, rad). ``threads``: worker threads (default: the CPU count, at most 8).
-    """
-    T = check_poses(poses)
-    q = solve_branches(robot, T, tol, threads)
-    if extra_turns:
-        return turn_copies(robot, q)[0]
-    if limits:
-        inside = ((q >= robot.limits[:, 0]) & (q <= robot.limits[:, 1])).all(axis=2)
-        q[~inside] = np.nan
-    return q

@@ -5,7 +5,7 @@ joints that travel more than 360 deg) is a node; nodes of consecutive waypoints 
 directed edges of cost ``sum_i w_i |dq_i|``; a start node S joins the first layer and an end node
 T the last; Dijkstra (``scipy.sparse.csgraph``) from S to T picks one node per waypoint so that
 the whole trajectory's weighted joint travel is minimal. A calibrated model (whose chain no
-longer follows its OPW form) gets its candidates from the nominal closed form in each branch,
+longer follows its OPW or UR form) gets its candidates from the nominal closed form in each branch,
 refined by numeric IK on the calibrated model.
 
 Default weights (:func:`default_weights`): ``w_i = 1 + rho_i`` for the three arm joints, with
@@ -24,9 +24,10 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from robocal.errors import DataError, ModelError, UnreachableError
+from robocal.ik.closed_form import branch_model, branch_slot, solve_branches, turn_copies
 from robocal.ik.numeric import nominal_branches
 from robocal.ik.numeric import solve as ik_solve
-from robocal.ik.opw_ik import branch_slot, check_poses, solve_branches, turn_copies
+from robocal.ik.opw_ik import check_poses
 from robocal.kinematics.model import Robot
 
 _EDGE_CHUNK = 4_000_000  # pair evaluations per block when building edges (bounds memory)
@@ -92,14 +93,15 @@ def _greedy(cand: np.ndarray, valid: np.ndarray, w: np.ndarray, first: np.ndarra
 
 def branch_candidates(robot: Robot, T: np.ndarray, nominal: Robot | None = None) -> np.ndarray:
     """The 8 branches ``(M, 8, 6)`` (rad, NaN where absent) of checked poses ``T``: closed form
-    when the robot follows its OPW form, else (a calibrated model) numeric IK on the robot seeded
+    when the robot has a closed form (OPW or UR), else (a calibrated model) numeric IK on the robot seeded
     in each branch by the nominal model (``nominal``, default the robot's own nominal model, with
     this robot's base and tool: :func:`robocal.ik.numeric.nominal_branches`); branches it does not
-    reach in their slot (by the nominal OPW form) are NaN."""
+    reach in their slot (by the nominal closed form) are NaN."""
     try:
         return solve_branches(robot, T)
     except ModelError:
-        if nominal is None and robot.opw is None:
+        form = branch_model(robot, nominal)
+        if form is None:
             raise
     seeds = nominal_branches(robot, T, nominal)[0]
     flat = seeds.reshape(-1, robot.n_joints)
@@ -108,8 +110,7 @@ def branch_candidates(robot: Robot, T: np.ndarray, nominal: Robot | None = None)
     if ok.size:
         res = ik_solve(robot, np.repeat(T, 8, axis=0)[ok], flat[ok], nominal=nominal)
         q = np.remainder(res.joints + np.pi, 2 * np.pi) - np.pi  # as the closed form: [-pi, pi)
-        opw = robot.opw if nominal is None else nominal.opw
-        own = res.converged & (branch_slot(opw, q) == ok % 8)  # a solution of another slot is that slot's
+        own = res.converged & (branch_slot(form, q) == ok % 8)  # a solution of another slot is that slot's
         out[ok[own]] = q[own]
     return out.reshape(seeds.shape)
 

@@ -38,6 +38,12 @@ def catalog_descriptions() -> dict[str, str]:
     return {name: _entries()[name]["description"] for name in catalog_names()}
 
 
+def catalog_specs() -> dict[str, tuple[float | None, float | None]]:
+    """name -> (reach mm, payload kg) as the vendor quotes them (None where the entry gives none)."""
+    return {name: (_entries()[name].get("reach_mm"), _entries()[name].get("payload_kg"))
+            for name in catalog_names()}
+
+
 def catalog_entry(name: str) -> dict:
     """The raw mapping of catalog robot ``name``; an unknown name raises ModelError listing the
     known ones."""

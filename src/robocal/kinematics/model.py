@@ -39,6 +39,7 @@ from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.model_file import LINK_FIELDS, dump_model, read_model_file
 from robocal.kinematics.opw import OPWParameters
 from robocal.kinematics.transforms import ROTATION_TOL, make_transform, matrix_to_rotvec, rotvec_to_matrix
+from robocal.kinematics.ur import URForm, ur_form
 
 FRAME_FIELDS = ("x", "y", "z", "rx", "ry", "rz")
 _LINK_IS_LENGTH = {"alpha": False, "a": True, "beta": False, "theta": False, "d": True}
@@ -170,6 +171,20 @@ class Robot:
         chain = opw_chain(self.opw)
         return all(np.allclose(getattr(self, f), chain[f], rtol=0.0, atol=OPW_MATCH_TOL)
                    for f in LINK_FIELDS)
+
+    @functools.cached_property
+    def ur_form(self) -> URForm | None:
+        """The UR form of this robot's own chain (three parallel axes, offset wrist:
+        :mod:`robocal.kinematics.ur`), detected from its links; None without it (a calibrated
+        model, joint-error terms, another geometry)."""
+        if self.n_joints != 6 or self.joint_errors is not None:
+            return None
+        return ur_form(*self.links)
+
+    @property
+    def has_ur_form(self) -> bool:
+        """Whether closed-form UR inverse kinematics applies to this robot's chain (see :attr:`ur_form`)."""
+        return self.ur_form is not None
 
     # ----------------------------------------------------------------- construction
     @classmethod

@@ -2,6 +2,8 @@
 user's own robot and for :meth:`Robot.save`. docs/model-yaml.md documents it; in short::
 
     name: my_robot                      # optional: description, format
+    reach_mm: 850                       # optional: the vendor's reach and payload, listed by
+    payload_kg: 5                       #   `robocal robots` (no effect on the model)
     units: {length: mm, angle: deg}     # required: the units of every number below
     # the geometry, exactly one of:
     opw:  {a1, a2, b, c1, c2, c3, c4, offsets: [6], signs: [6]}    # an OPW set
@@ -40,8 +42,9 @@ from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
 FORMAT = "robocal-model/1"
 LINK_FIELDS = ("alpha", "a", "beta", "theta", "d")
 FORMS = ("opw", "dh", "mdh", "joints")
+INFO_KEYS = ("reach_mm", "payload_kg")  # the vendor's figures (catalog listing only; no effect on the model)
 _TOP_KEYS = {"format", "name", "description", "units", "limits", "base", "tool", "smr", "nominal",
-             "joint_errors", *FORMS}
+             "joint_errors", *INFO_KEYS, *FORMS}
 _JOINT_KEYS = {*LINK_FIELDS, "limits", "parallel_to_previous"}
 _TABLE_KEYS = {"dh": ("theta", "d", "a", "alpha"), "mdh": ("alpha", "a", "theta", "d")}
 
@@ -161,6 +164,9 @@ def robot_kwargs(data) -> dict:
     if not isinstance(data, dict):
         raise ModelError("a robot model must be a YAML mapping (see docs/model-yaml.md)")
     _mapping(data, "the model", _TOP_KEYS)
+    for key in INFO_KEYS:
+        if key in data and as_number(data[key], key, ModelError) <= 0:
+            raise ModelError(f"{key} must be a positive number, got {data[key]!r}")
     length_unit, angle_unit = _units(data)
     length, angle, degrees = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit], angle_unit == "deg"
     forms = [f for f in ("joints", "mdh", "dh") if f in data] or (["opw"] if "opw" in data else [])

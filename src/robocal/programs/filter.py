@@ -34,6 +34,8 @@ from robocal.compensate import Compensation, compensate, controller_model
 from robocal.errors import DataError, ModelError
 from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
+from robocal.ik.closed_form import has_closed_form
+from robocal.ik.controller import JUMP_DEG, nearest_solutions
 from robocal.io import check_outputs, write_all
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
@@ -48,7 +50,6 @@ from robocal.programs.urscript import URScriptDialect
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
 LISTED = 20  # problems listed in one error message
-JUMP_DEG = 60.0  # a joint moving more than this from the previous target's joints gets a warning
 # A real TCP (--tcp) turned more than this from the program's tool data is another tool or a wrong
 # --rotation (the 4-point method finds the position only): refused. Moved more: a warning.
 TCP_TURN_MAX_DEG = 5.0
@@ -203,13 +204,10 @@ def _configured_joints(dialect, nominal, F, targets, problems):
     return q
 
 
-def _nearest_joints(nominal, F, targets, program: Program, problems, warnings):
-    """Nominal joints nearest the previous target's (or the given qnear / joint target).
-
-    Batched sweeps seed every target with its predecessor's solution of the sweep before; then
-    one pass in program order re-solves, from its predecessor's final joints, each target whose
-    solution is not within ``JUMP_DEG`` of them (a sweep can settle on another branch)."""
-    N, n = F.shape[0], nominal.n_joints
+def _anchors(nominal, N: int, targets, program: Program, warnings) -> np.ndarray:
+    """``(N, n)`` joints the robot is at right before target i (a qnear or a joint target; the
+    first target: zero joints, with a warning, when the program gives none), NaN rows elsewhere."""
+    n = nominal.n_joints
     anchor = np.full((N, n), np.nan)  # joints that come right before target i, if any
     for index, qj in program.joint_targets:
         if index < N:
@@ -220,6 +218,34 @@ def _nearest_joints(nominal, F, targets, program: Program, problems, warnings):
         fixed[0] = np.clip(0.0, nominal.limits[:, 0], nominal.limits[:, 1])
         warnings.append(f"{targets[0].where}: no joint position before the first target: the controller's "
                         "solution is taken as the one nearest zero joints")
+    return fixed
+
+
+def _nearest_solutions(nominal, F, targets, program: Program, problems, warnings):
+    """The controller's own choice (:func:`robocal.ik.controller.nearest_solutions`): per target
+    the closed-form solution of the nominal model nearest the previous joints (or the given qnear
+    / joint target), inside the limits."""
+    fixed = _anchors(nominal, F.shape[0], targets, program, warnings)
+    choice = nearest_solutions(nominal, F, fixed[0], fixed, JUMP_DEG)
+    for i in choice.jumps:
+        warnings.append(f"{targets[i].where}: the controller's solution nearest the previous joints moves a "
+                        f"joint by {np.rad2deg(choice.move[i]):.0f} deg (no nearer solution exists): a small "
+                        "change before this target can make the controller take another one; add a joint "
+                        "move (or qnear) before it")
+    for i in choice.unreachable:
+        problems.append((int(i), "no solution of the nominal model inside the joint limits (out of reach)"))
+    return choice.joints
+
+
+def _nearest_joints(nominal, F, targets, program: Program, problems, warnings):
+    """Nominal joints nearest the previous target's (or the given qnear / joint target), by
+    numeric IK (a nominal model without a closed form).
+
+    Batched sweeps seed every target with its predecessor's solution of the sweep before; then
+    one pass in program order re-solves, from its predecessor's final joints, each target whose
+    solution is not within ``JUMP_DEG`` of them (a sweep can settle on another branch)."""
+    N = F.shape[0]
+    fixed = _anchors(nominal, N, targets, program, warnings)
     given = np.isfinite(fixed).all(axis=1)
     seeds = fixed[np.maximum.accumulate(np.where(given, np.arange(N), 0))]  # the last known joints
     for _ in range(SWEEPS):
@@ -255,10 +281,13 @@ def _nearest_joints(nominal, F, targets, program: Program, problems, warnings):
 def controller_joints(dialect: Dialect, program: Program, targets: list[Target], nominal: Robot,
                       F: np.ndarray, problems: list, warnings: list) -> np.ndarray:
     """The nominal controller's joints ``(N, n)`` (rad) for flange poses ``F`` of ``targets``:
-    in the configuration their data select, else nearest the previous joints. Targets without
+    in the configuration their data select, else nearest the previous joints (among the closed-form
+    solutions where the nominal model has a closed form, as the controller does). Targets without
     a solution are NaN and appended to ``problems`` as ``(index, why)``."""
     if dialect.scheme is not None and any(t.config is not None for t in targets):
         return _configured_joints(dialect, nominal, F, targets, problems)
+    if has_closed_form(nominal):
+        return _nearest_solutions(nominal, F, targets, program, problems, warnings)
     return _nearest_joints(nominal, F, targets, program, problems, warnings)
 
 

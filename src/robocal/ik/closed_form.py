@@ -1,0 +1,140 @@
+"""Closed-form inverse kinematics of every form robocal solves: OPW arms (spherical wrist,
+:mod:`robocal.ik.opw_ik`) and UR arms (three parallel axes, offset wrist, :mod:`robocal.ik.ur_ik`).
+
+The form is the robot's own: an OPW set the model carries and its chain still follows
+(:attr:`Robot.has_opw_form`), or the UR structure of its links (:attr:`Robot.has_ur_form`). Both
+give up to 8 solutions in the same slot order, ``s = 4 * wrist_flip + 2 * shoulder + elbow``,
+each verified by ``robot.fk``. A calibrated model has neither: numeric IK
+(:func:`robocal.ik.numeric.solve`) seeds it from its nominal model's closed form
+(:func:`seed_branches`, :func:`branch_slot` on the nominal model).
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from robocal.errors import ModelError
+from robocal.ik import opw_ik, ur_ik
+from robocal.ik.opw_ik import SEED_MARGIN, TOL, check_poses
+from robocal.kinematics.model import Robot
+
+
+def has_closed_form(robot: Robot) -> bool:
+    """Whether closed-form IK applies to this robot's own chain (OPW or UR form)."""
+    return robot.has_opw_form or robot.has_ur_form
+
+
+def _module(robot: Robot):
+    """The solver module of the robot's own form; ModelError naming why there is none."""
+    if robot.has_opw_form:
+        return opw_ik
+    if robot.has_ur_form:
+        return ur_ik
+    if robot.opw is not None:
+        opw_ik.opw_form(robot)  # raises its message (a calibrated model of an OPW arm)
+    raise ModelError(
+        f"robot {robot.name!r} has no closed form (neither an OPW arm with a spherical wrist nor a UR "
+        "arm with three parallel axes and an offset wrist, or a calibrated model whose chain left its "
+        "nominal form), so closed-form inverse kinematics is not available; use the numeric solver "
+        "rc.ik.solve(robot, poses, seeds), which is seeded by the nominal closed form where there is one")
+
+
+def solve_branches(robot: Robot, T: np.ndarray, tol: float = TOL, threads: int | None = None) -> np.ndarray:
+    """All 8 verified solutions ``(N, 8, 6)`` for checked world poses ``T`` (no limit handling).
+
+    Raises ModelError when the robot's chain has no closed form (:func:`has_closed_form`)."""
+    solve, size = _module(robot).chunk_solver(robot, tol)
+    N = T.shape[0]
+    parts = [slice(s, min(s + size, N)) for s in range(0, N, size)]
+    out = np.empty((N, 8, 6))
+    workers = threads or min(os.cpu_count() or 1, 8)
+
+    def run(part: slice) -> None:
+        out[part] = solve(T[part])
+
+    if workers > 1 and len(parts) > 1:
+        with ThreadPoolExecutor(workers) as pool:
+            list(pool.map(run, parts))
+    else:
+        for part in parts:
+            run(part)
+    return out
+
+
+def seed_branches(robot: Robot, T: np.ndarray) -> np.ndarray:
+    """Seeds ``(N, 8, 6)`` for numeric IK in every slot: the closed form of the robot's form with
+    out-of-reach arguments clamped, not verified (a pose a little beyond the nominal reach, which
+    a calibrated robot may still reach, gets a seed in each slot, off the stretched arm)."""
+    module = _module(robot)
+    if module is opw_ik:
+        return opw_ik.seed_branches(robot, T)
+    return ur_ik.seed_branches(robot, T, SEED_MARGIN)
+
+
+def branch_slot(nominal: Robot, q: np.ndarray) -> np.ndarray:
+    """Closed-form slot ``(...,)`` of joints ``(..., 6)`` on ``nominal`` (a nominal model: its OPW
+    set, else the UR form of its chain); a calibrated robot's slots are its nominal model's."""
+    if nominal.opw is not None:
+        return opw_ik.branch_slot(nominal.opw, q)
+    shoulder, elbow, flip = ur_ik.branch_bits(nominal, q)
+    return 4 * flip.astype(int) + 2 * shoulder.astype(int) + elbow.astype(int)
+
+
+def branch_model(robot: Robot, nominal: Robot | None = None) -> Robot | None:
+    """The nominal model whose closed form names the branches of ``robot``'s joints (``nominal``,
+    default the robot's own nominal model), or None when it has no closed form."""
+    model = robot.nominal_robot() if nominal is None else nominal
+    if model.n_joints != 6 or robot.n_joints != 6:
+        return None
+    return model if model.opw is not None or model.has_ur_form else None
+
+
+def turn_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Candidates inside the joint limits, including the +-2 pi copies of each solution.
+
+    q ``(N, B, 6)`` (NaN rows absent) -> ``(N, K, 6)`` candidates (NaN padded, valid first, in
+    slot order then copy order) and ``(N, K)`` source slot index (-1 for padding)."""
+    lo, hi = robot.limits[:, 0], robot.limits[:, 1]
+    # q in [-pi, pi): a copy q + 2 pi k can be inside [lo, hi] only for these k
+    kmin = np.floor((lo - np.pi) / (2 * np.pi)).astype(int) + 1
+    kmax = np.ceil((hi + np.pi) / (2 * np.pi)).astype(int) - 1
+    grids = np.meshgrid(*[np.arange(a, b + 1) for a, b in zip(kmin, kmax, strict=True)], indexing="ij")
+    shifts = 2 * np.pi * np.stack([g.reshape(-1) for g in grids], axis=1)  # (C, 6)
+    N, B, _ = q.shape
+    cand = q[:, :, None, :] + shifts[None, None]  # (N, B, C, 6)
+    ok = np.isfinite(cand).all(axis=3) & ((cand >= lo) & (cand <= hi)).all(axis=3)
+    cand = cand.reshape(N, -1, 6)
+    ok = ok.reshape(N, -1)
+    slot = np.broadcast_to(np.repeat(np.arange(B), shifts.shape[0]), ok.shape)
+    K = max(int(ok.sum(axis=1).max(initial=0)), 1)
+    order = np.argsort(~ok, axis=1, kind="stable")[:, :K]
+    taken = np.take_along_axis(ok, order, axis=1)
+    out = np.take_along_axis(cand, order[:, :, None], axis=1)
+    out[~taken] = np.nan
+    src = np.where(taken, np.take_along_axis(slot, order, axis=1), -1)
+    return out, src
+
+
+def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = False,
+              tol: float = TOL, threads: int | None = None) -> np.ndarray:
+    """Closed-form IK (OPW or UR form): all solutions of world TCP poses ``(N, 4, 4)`` (m) -> joints (rad).
+
+    Default: ``(N, 8, 6)`` in the slot order of the module docstring, NaN where a solution does
+    not exist, joints wrapped to [-pi, pi). ``limits=True``: solutions outside the joint limits
+    become NaN (still ``(N, 8, 6)``). ``extra_turns=True`` (implies limits): every candidate
+    inside the limits including +-2 pi copies for joints with more than 360 deg of travel,
+    ``(N, K, 6)`` with K the largest count over the poses, valid rows first, NaN padding.
+    Base and tool of the model are removed first; each solution is verified by ``robot.fk`` to
+    ``tol`` (m, rad). ``threads``: worker threads (default: the CPU count, at most 8).
+    """
+    T = check_poses(poses)
+    q = solve_branches(robot, T, tol, threads)
+    if extra_turns:
+        return turn_copies(robot, q)[0]
+    if limits:
+        inside = ((q >= robot.limits[:, 0]) & (q <= robot.limits[:, 1])).all(axis=2)
+        q[~inside] = np.nan
+    return q

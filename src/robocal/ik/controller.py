@@ -1,0 +1,85 @@
+"""The IK solution a robot controller takes for Cartesian targets without configuration data.
+
+A UR controller (movel / movej to a pose in URScript), and any controller given a target with no
+configuration, takes the inverse-kinematics solution nearest the joints it is at. This module
+emulates that on the controller's nominal model: per target, in program order, every closed-form
+solution (:func:`robocal.ik.solve_all`, OPW or UR form) inside the joint limits, with the +-2 pi
+copies of joints that travel more than a turn, is a candidate; the one nearest the previous
+target's joints (sum of squared joint differences, rad^2) is taken. "Wrap-aware" here means what
+the joints are: a joint at 350 deg is 20 deg from one at -350 deg only when both lie in its
+limits; the copies a turn apart are separate candidates, as on the robot.
+
+A target whose nearest solution still moves some joint by more than ``jump_deg`` from the
+previous joints is reported (``jumps``): the controller reaches it by a large joint motion, and
+a small change of the previous joints can make it take another solution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robocal.errors import DataError
+from robocal.ik.closed_form import branch_slot, solve_branches, turn_copies
+from robocal.ik.opw_ik import check_poses
+from robocal.kinematics.model import Robot
+
+JUMP_DEG = 60.0  # a joint moving more than this from the previous target's joints is reported
+
+
+@dataclass(frozen=True)
+class ControllerChoice:
+    """``joints`` ``(N, n)`` rad (NaN where no solution inside the limits), ``slots`` ``(N,)`` the
+    closed-form slot taken (-1: none), ``move`` ``(N,)`` rad the largest joint move from the
+    previous joints, ``unreachable`` and ``jumps`` indices, ``candidates`` ``(N,)`` how many
+    solutions each target had."""
+
+    joints: np.ndarray
+    slots: np.ndarray
+    move: np.ndarray
+    unreachable: np.ndarray
+    jumps: np.ndarray
+    candidates: np.ndarray
+
+
+def nearest_solutions(robot: Robot, poses, start, anchors=None,
+                      jump_deg: float = JUMP_DEG) -> ControllerChoice:
+    """The controller's choice for world TCP poses ``(N, 4, 4)`` (m) of ``robot`` (the controller's
+    model; it must have a closed form) visited in order from joints ``start`` ``(n,)`` (rad).
+
+    ``anchors`` ``(N, n)`` (rad, NaN rows: none): joints the robot is known to be at right before
+    target i (a joint move, or a qnear the program gives), which replace the previous target's.
+    A target without a solution inside the limits is NaN and listed in ``unreachable``; the next
+    one is chosen from the last joints the robot had."""
+    T = check_poses(poses)
+    N, n = T.shape[0], robot.n_joints
+    start = np.asarray(start, dtype=float).reshape(-1)
+    if start.shape != (n,) or not np.isfinite(start).all():
+        raise DataError(f"start joints must be {n} finite values (rad), got {start.tolist()}")
+    anchors = np.full((N, n), np.nan) if anchors is None else np.asarray(anchors, dtype=float)
+    if anchors.shape != (N, n):
+        raise DataError(f"anchors must have shape ({N}, {n}), got {anchors.shape}")
+    cand, src = turn_copies(robot, solve_branches(robot, T))
+    valid = src >= 0
+    joints = np.full((N, n), np.nan)
+    move = np.full(N, np.nan)
+    taken = np.full(N, -1)
+    prev = start
+    for i in range(N):  # sequential by nature: each choice depends on the previous one
+        if np.isfinite(anchors[i]).all():
+            prev = anchors[i]
+        if not valid[i].any():
+            continue
+        d = np.where(valid[i], np.sum((cand[i] - prev) ** 2, axis=1), np.inf)
+        k = int(np.argmin(d))
+        joints[i], taken[i] = cand[i, k], k
+        move[i] = np.abs(cand[i, k] - prev).max()
+        prev = joints[i]
+    ok = taken >= 0
+    slots = np.full(N, -1)
+    if ok.any():
+        slots[ok] = branch_slot(robot, joints[ok])
+    return ControllerChoice(joints=joints, slots=slots, move=move, unreachable=np.flatnonzero(~ok),
+                            jumps=np.flatnonzero(ok & (move > np.deg2rad(jump_deg))),
+                            candidates=valid.sum(axis=1))
