@@ -30,6 +30,7 @@ from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
 from robocal.kinematics.model import Robot
 
+_TIE_BREAK = 1e-9  # weight of the first waypoint's distance from zero (rad): breaks exact ties only
 _EDGE_CHUNK = 4_000_000  # pair evaluations per block when building edges (bounds memory)
 
 
@@ -142,9 +143,14 @@ def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | No
     node = 1 + np.arange(M * K).reshape(M, K)
     t_node = 1 + M * K
     rows, cols, data = [], [], []
-    # S -> first layer: 1 (seed 001), or 1 + distance from the fixed start
+    # S -> first layer: 1 (seed 001), or 1 + distance from the fixed start; without a start, paths
+    # of equal travel (the same path shifted by whole turns on joints with more than a turn of
+    # travel) are told apart by the first waypoint's distance from zero, scaled by _TIE_BREAK
     k0 = np.flatnonzero(valid[0])
-    c0 = np.ones(k0.size) if start is None else 1.0 + np.abs(cand[0, k0] - start) @ w
+    if start is None:
+        c0 = 1.0 + _TIE_BREAK * (np.abs(cand[0, k0]) @ w)
+    else:
+        c0 = 1.0 + np.abs(cand[0, k0] - start) @ w
     rows.append(np.zeros(k0.size, int)), cols.append(node[0, k0]), data.append(c0)
     # layer m -> m + 1: every valid pair; +1 on every edge keeps zero-travel edges explicit and
     # shifts every S-T path by the same M - 1, so the optimum is unchanged
