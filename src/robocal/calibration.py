@@ -23,7 +23,9 @@ from robocal.data.registration import register
 from robocal.errors import DataError, IdentificationError
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability
 from robocal.identify.identifiability import analyze as analyze_jacobian
+from robocal.identify.identifiability import hold
 from robocal.identify.plausibility import check_corrections, check_residual, check_spread
+from robocal.identify.priors import linear_analysis, prior_sigma, undetermined
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
 from robocal.identify.space import ParameterSpace, State, block_of
@@ -323,6 +325,12 @@ class CalibrationResult(_BeforeAfter):
             confounded = self.identifiability.confounded_with
             lines.append("not identifiable (fixed): " + ", ".join(
                 f"{n} (~{'/'.join(confounded[n]) or 'no effect'})" for n in dropped))
+        held = self.identifiability.undetermined
+        if held:
+            confounded = self.identifiability.confounded_with
+            lines.append("not determined by these data (held at nominal; measure poses that move them "
+                         "apart from their confounders): " + ", ".join(
+                             f"{n} (~{'/'.join(confounded[n]) or 'no effect'})" for n in held))
         if self.nongeometric is not None:
             ng = self.nongeometric
             lines.append(f"non-geometric terms {', '.join(ng['terms'])}: {len(ng['kept'])} parameters "
@@ -380,7 +388,16 @@ def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: f
     if lost:
         raise IdentificationError(f"the nuisance parameters {lost} are not identifiable: "
                                   "each plane needs contacts spread over its surface")
-    return candidates.restricted(ident.kept), ident, warnings
+    kept = candidates.restricted(ident.kept)
+    robot = state0.robot
+    sigma = np.r_[prior_sigma(robot, kept.robot), np.full(len(kept.nuisance), np.inf)]
+    mean = np.r_[robot.values[robot.indices(kept.robot)], state0.nuisance]
+    columns = [candidates.names.index(n) for n in kept.names]
+    lin = linear_analysis(J0[:, columns], problem.residuals(state0), sigma, problem.noise_guess)
+    held, ratio = undetermined(J0[:, columns], sigma, lin.noise)
+    ident = hold(ident, J0, [kept.names[j] for j in held],
+                 {n: float(q) for n, q in zip(kept.names, ratio, strict=True) if np.isfinite(q)})
+    return kept.with_prior(sigma, mean, lin.noise).restricted(ident.kept), ident, warnings
 
 
 def _run_solver(method: str, problem, state0: State, space: ParameterSpace, seed: int, progress,
@@ -396,14 +413,16 @@ def _run_solver(method: str, problem, state0: State, space: ParameterSpace, seed
 
 
 def _covariance(problem: CalibrationProblem, out: SolverResult, space: ParameterSpace) -> np.ndarray:
-    """s0^2 (J^T W J)^-1 at the solution; rows a robust method rejected carry no information."""
+    """The posterior covariance s0^2 (J^T W J + P)^-1 at the solution (P: the prior rows' weights
+    squared, :mod:`robocal.identify.priors`), s0 from the data's residuals; rows a robust method
+    rejected carry no information."""
     J = problem.jacobian(out.state, space)
     r = problem.residuals(out.state)
-    if out.item_weights is None:
-        return covariance(J, r)
-    row_w = np.repeat(out.item_weights, problem.item_rows())
-    sw = np.sqrt(row_w)
-    return covariance(J * sw[:, None], r * sw, int(np.count_nonzero(row_w)))
+    n_rows = None
+    if out.item_weights is not None:
+        sw = np.sqrt(np.repeat(out.item_weights, problem.item_rows()))
+        J, r, n_rows = J * sw[:, None], r * sw, int(np.count_nonzero(sw))
+    return covariance(J, r, n_rows, space.prior_weight)
 
 
 def _combined(errors: list[np.ndarray]) -> dict | None:
