@@ -425,6 +425,18 @@ def _covariance(problem: CalibrationProblem, out: SolverResult, space: Parameter
     return covariance(J, r, n_rows, space.prior_weight)
 
 
+PARTNER_CORRELATION = 0.9  # |correlation| above which two estimates are reported as confounded
+
+
+def _partners(cov: np.ndarray, names: list[str]) -> dict[str, list[str]]:
+    """Per unknown: the (up to 4) others its estimate is most correlated with beyond
+    :data:`PARTNER_CORRELATION`."""
+    corr = np.abs(correlation(cov))
+    np.fill_diagonal(corr, 0.0)
+    return {n: [names[j] for j in np.argsort(-corr[i])[:4] if corr[i, j] > PARTNER_CORRELATION]
+            for i, n in enumerate(names)}
+
+
 def _combined(errors: list[np.ndarray]) -> dict | None:
     """Statistics (mm) of several files' item errors (m) together; None for no file."""
     return position_stats(np.concatenate(errors)) if errors else None
@@ -553,19 +565,19 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     warnings += more
     first = state0 if warm_start is None else _warm_state(problem, warm_start, declared_start)
     out = _run_solver(method, problem, first, space, seed, progress, options)
-    check_corrections(state0.robot, out.state.robot, space.robot, force=force, warnings=warnings)
+    cov = _covariance(problem, out, space)
+    check_corrections(state0.robot, out.state.robot, space.robot,
+                      sigma=dict(zip(space.names, np.sqrt(np.maximum(np.diag(cov), 0.0)), strict=True)),
+                      confounded={**_partners(cov, space.names), **ident.confounded_with}, force=force,
+                      warnings=warnings)
     if not out.success:
         warnings.append(out.message)
-    if ident.condition_class == "strong":
-        warnings.append(f"the normal matrix is strongly ill-conditioned (condition number "
-                        f"{ident.condition_number:.3g}): some parameters are poorly determined; "
-                        "see the correlation matrix")
     estimated_terms = [n for n in space.robot if block_of(n) == "joint_errors"]
     final_robot = out.state.robot.with_joint_errors(start.joint_error_names + [
         n for n in estimated_terms if n not in start.joint_error_names])
     result = CalibrationResult(
         robot=final_robot, start=start, method=method, identifiability=ident, space=space,
-        covariance=_covariance(problem, out, space), solver=out,
+        covariance=cov, solver=out,
         errors=(errors0, problem.position_errors(out.state)), problem=problem, initial=state0,
         warnings=warnings, settings={"params": params if isinstance(params, str) else list(params),
                                      "seed": seed, "rtol": rtol, "nongeometric": ",".join(terms) or "none",
