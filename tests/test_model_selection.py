@@ -17,6 +17,7 @@ from robocal.data.simulate import simulate_tracker
 from robocal.errors import IdentificationError, ModelError
 from robocal.identify.frequency_search import FrequencyScan
 from robocal.identify.lsq import gauss_newton
+from robocal.identify.priors import prior_sigma
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.space import ParameterSpace
 from robocal.kinematics.joint_errors import JointErrorModel, candidate_names, cyclic_names
@@ -168,7 +169,8 @@ def test_auto_chooses_geometric_on_a_robot_without_joint_errors(seed):
 
 def test_linearised_fold_fits_match_nonlinear_fold_calibrations():
     """A candidate's fold error (one Gauss-Newton step from the superset fit, by normal equations)
-    agrees with iterating each fold's training poses to convergence with the same parameters."""
+    agrees with iterating each fold's training poses to convergence with the same parameters and
+    the same priors."""
     robot = Robot.from_catalog("abb_irb2600")
     sim = simulate_tracker(_with_errors(robot, *COMPLIANCE_GEAR_BACKLASH), 100, noise_mm=0.02, seed=4)
     fixed = ["compliance", "gear", "backlash", "travel"]
@@ -183,7 +185,11 @@ def test_linearised_fold_fits_match_nonlinear_fold_calibrations():
         # the candidate's robot: the superset's estimate with the other joint-error terms at zero
         robot_f = superset.state.robot.with_joint_errors(cand.ng_names)
         geometric = [nm for nm in superset.names if nm in robot_f.geometry_names]
-        space = ParameterSpace((*geometric, *cand.ng_names))
+        est = superset.space
+        mean = dict(zip(est.names, est.prior_mean, strict=True))
+        space = ParameterSpace((*geometric, *cand.ng_names)).with_prior(
+            prior_sigma(robot_f, [*geometric, *cand.ng_names]),
+            [mean[nm] if nm in mean else 0.0 for nm in (*geometric, *cand.ng_names)], est.noise)
         for f in range(5):
             train, test = (CalibrationProblem(robot_f, sim.data.subset(rows))
                            for rows in (fold != f, fold == f))

@@ -21,9 +21,8 @@ import numpy as np
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
 from robocal.errors import DataError, IdentificationError
-from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability
+from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, hold
 from robocal.identify.identifiability import analyze as analyze_jacobian
-from robocal.identify.identifiability import hold
 from robocal.identify.plausibility import check_corrections, check_residual, check_spread
 from robocal.identify.priors import linear_analysis, prior_sigma, undetermined
 from robocal.identify.problem import CalibrationProblem

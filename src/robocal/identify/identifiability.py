@@ -195,8 +195,8 @@ def hold(ident: Identifiability, J: np.ndarray, undetermined: list[str],
     Js, zero = _unit_columns(J)
     kept = [nm for nm in ident.kept if nm not in undetermined]
     kept_idx = np.array([ident.names.index(nm) for nm in kept], dtype=np.int64)
-    confounded = {**ident.confounded_with,
-                  **_confounders(Js, zero, ident.names, kept_idx, [ident.names.index(nm) for nm in undetermined])}
+    targets = [ident.names.index(nm) for nm in undetermined]
+    confounded = {**ident.confounded_with, **_confounders(Js, zero, ident.names, kept_idx, targets)}
     s, cond = _spectrum(Js[:, kept_idx])
     return Identifiability(names=ident.names, kept=kept, dropped=ident.dropped, confounded_with=confounded,
                            rank=ident.rank, condition_number=cond, singular_values=s,
