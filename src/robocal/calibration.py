@@ -180,7 +180,7 @@ class CalibrationResult(_BeforeAfter):
         nominal = dict(zip(start.parameter_names, start.nominal_values, strict=True))
         estimate = dict(zip(self.robot.parameter_names, self.robot.values, strict=True))
         nuisance = self.problem.nuisance_names
-        dropped = set(self.identifiability.dropped)
+        dropped, held = set(self.identifiability.dropped), set(self.identifiability.undetermined)
         rows = []
         for name in self.identifiability.names:
             if name in nuisance:  # e.g. plane coefficients: reported in their own unit
@@ -193,7 +193,8 @@ class CalibrationResult(_BeforeAfter):
             s = sigma.get(name)
             rows.append({"name": name, "unit": unit, "nominal": float(nom), "estimate": float(est),
                          "correction": float(est - nom), "sigma": None if s is None else float(s * f),
-                         "status": "dropped" if name in dropped else "estimated"})
+                         "status": "dropped" if name in dropped else
+                         "not determined" if name in held else "estimated"})
         return rows
 
     @staticmethod
@@ -245,9 +246,13 @@ class CalibrationResult(_BeforeAfter):
             **({"after_inliers": inliers} if (inliers := self.after_inliers) else {}),
             "parameters": self.parameter_table(),
             "dropped": [{"name": n, "reason": "not identifiable from these data",
-                         "confounded_with": ident.confounded_with[n]} for n in ident.dropped],
+                         "confounded_with": ident.confounded_with[n]} for n in ident.dropped] + [
+                {"name": n, "reason": f"not determined by these data: posterior sigma "
+                                      f"{ident.prior_ratio[n]:.0%} of its prior; held at nominal",
+                 "confounded_with": ident.confounded_with[n]} for n in ident.undetermined],
+            "priors": self._priors(),
             "identifiability": {key: v for key, v in ident.to_dict().items()
-                                if key not in ("kept", "dropped", "confounded_with")},
+                                if key not in ("kept", "dropped", "undetermined", "confounded_with")},
             "correlation": {"names": self.unknowns,
                             "matrix": np.round(self.correlation, 6).reshape(k, k).tolist()},
             "per_file": self.per_file(),
@@ -270,6 +275,21 @@ class CalibrationResult(_BeforeAfter):
             j = self.judged[0]
             out["validation_observations"] = self._observations(j.problem.observations[0], j.states, None)
         return out
+
+    def _priors(self) -> dict:
+        """The priors of the estimate (docs/priors.md): the noise scale they were weighed with and
+        each parameter's 1-sigma prior in display units (mm, deg; null without a prior)."""
+        space, robot = self.space, self.initial.robot
+        units = dict(zip(robot.parameter_names, robot.parameter_units(), strict=True))
+        names = [*space.robot, *self.identifiability.undetermined]
+        sigma = dict(zip(space.names, space.prior_sigma or [np.inf] * space.size, strict=True))
+        sigma.update(zip(self.identifiability.undetermined,
+                         prior_sigma(robot, self.identifiability.undetermined), strict=True))
+        return {"source": "robocal.identify.priors (docs/priors.md)",
+                "noise": space.noise, "noise_unit": "1 (residuals divided by sigma)"
+                if self.problem.weighted else "m",
+                "sigma": {n: float(sigma[n] * _DISPLAY[units[n]][1]) if np.isfinite(sigma[n]) else None
+                          for n in names}}
 
     def _first_weights(self) -> np.ndarray | None:
         """The robust weights of the first file's items."""
