@@ -189,7 +189,7 @@ def test_linearised_fold_fits_match_nonlinear_fold_calibrations():
         mean = dict(zip(est.names, est.prior_mean, strict=True))
         space = ParameterSpace((*geometric, *cand.ng_names)).with_prior(
             prior_sigma(robot_f, [*geometric, *cand.ng_names]),
-            [mean[nm] if nm in mean else 0.0 for nm in (*geometric, *cand.ng_names)], est.noise)
+            [mean.get(nm, 0.0) for nm in (*geometric, *cand.ng_names)], est.noise)
         for f in range(5):
             train, test = (CalibrationProblem(robot_f, sim.data.subset(rows))
                            for rows in (fold != f, fold == f))
