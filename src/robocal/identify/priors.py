@@ -46,6 +46,7 @@ JOINT_ERROR_SIGMA = {"gear": np.deg2rad(0.2), "cyclic": np.deg2rad(0.2), "backla
 NOT_DETERMINED_RATIO = 0.5  # posterior sigma / prior sigma above which the data do not determine it
 NOISE_RTOL = 0.05  # the noise estimate has settled when it changes by less than this fraction
 NOISE_MAX_PASSES = 10
+MAD_TO_SIGMA = 1.4826  # median absolute residual -> sigma of normal noise
 
 
 def prior_sigma(robot, names) -> np.ndarray:
@@ -91,7 +92,8 @@ def posterior_covariance(J: np.ndarray, weight: np.ndarray, s0: float) -> np.nda
 def linear_analysis(J: np.ndarray, r: np.ndarray, sigma: np.ndarray, noise0: float) -> LinearAnalysis:
     """One linear MAP step from the start (the prior mean) on ``J (M, k)``, ``r (M,)`` with prior
     scales ``sigma (k,)`` (SI, inf: none): the residual scale is re-estimated from the step's
-    residuals (dof M - k) until it settles (starting from ``noise0``), then the posterior."""
+    residuals (their median absolute value, so outliers do not inflate it; dof M - k) until it
+    settles (starting from ``noise0``), then the posterior."""
     M, k = J.shape
     has = np.isfinite(sigma)
     inv = np.where(has, 1.0 / np.where(has, sigma, 1.0), 0.0)
@@ -101,8 +103,8 @@ def linear_analysis(J: np.ndarray, r: np.ndarray, sigma: np.ndarray, noise0: flo
         A = np.vstack([J, np.diag(w)[has]])
         b = np.concatenate([r, np.zeros(int(has.sum()))])
         step = ScaledSVD.of(A).solve(b)
-        rest = r - J @ step
-        new = float(np.sqrt((rest @ rest) / max(M - k, 1)))
+        rest = r - J @ step  # its robust scale (MAD): a few gross errors must not weaken the data
+        new = MAD_TO_SIGMA * float(np.median(np.abs(rest))) * np.sqrt(M / max(M - k, 1))
         settled = abs(new - noise) <= NOISE_RTOL * noise
         noise = max(new, 1e-12 * noise0)
         if settled:
