@@ -412,7 +412,8 @@ def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: f
     sigma = np.r_[prior_sigma(robot, kept.robot), np.full(len(kept.nuisance), np.inf)]
     mean = np.r_[robot.values[robot.indices(kept.robot)], state0.nuisance]
     columns = [candidates.names.index(n) for n in kept.names]
-    lin = linear_analysis(J0[:, columns], problem.residuals(state0), sigma, problem.noise_guess)
+    lin = linear_analysis(J0[:, columns], problem.residuals(state0), sigma, problem.noise_guess,
+                          [rows for rows, _ in problem.row_blocks()])
     held, ratio = undetermined(J0[:, columns], sigma, lin.noise)
     ident = hold(ident, J0, [kept.names[j] for j in held],
                  {n: float(q) for n, q in zip(kept.names, ratio, strict=True) if np.isfinite(q)})

@@ -89,12 +89,27 @@ def posterior_covariance(J: np.ndarray, weight: np.ndarray, s0: float) -> np.nda
     return s0**2 * (V @ V.T) / np.outer(svd.scale, svd.scale)
 
 
-def linear_analysis(J: np.ndarray, r: np.ndarray, sigma: np.ndarray, noise0: float) -> LinearAnalysis:
+def _scale(rest: np.ndarray, J: np.ndarray, blocks) -> float:
+    """Robust residual scale of ``rest (M,)``: per block of rows (measurement set) the median
+    absolute value (to sigma, for the block's share of the k unknowns: dof M_b - k_b), combined
+    weighted by each block's information ``|J_b|^2`` (a set that carries no information, e.g. a
+    huge sigma, does not pull the scale)."""
+    info = np.array([float(np.sum(J[rows] ** 2)) for rows in blocks])
+    share = J.shape[1] * info / max(info.sum(), 1e-300)
+    var = [(MAD_TO_SIGMA * float(np.median(np.abs(rest[rows])))) ** 2 * len(rows) / max(len(rows) - k, 1)
+           if len(rows) else 0.0 for rows, k in zip(blocks, share, strict=True)]
+    return float(np.sqrt(np.sum(info * np.asarray(var)) / max(info.sum(), 1e-300)))
+
+
+def linear_analysis(J: np.ndarray, r: np.ndarray, sigma: np.ndarray, noise0: float,
+                    blocks=None) -> LinearAnalysis:
     """One linear MAP step from the start (the prior mean) on ``J (M, k)``, ``r (M,)`` with prior
     scales ``sigma (k,)`` (SI, inf: none): the residual scale is re-estimated from the step's
     residuals (their median absolute value, so outliers do not inflate it; dof M - k) until it
-    settles (starting from ``noise0``), then the posterior."""
+    settles (starting from ``noise0``), then the posterior. ``blocks``: the row indices of each
+    measurement set (default: one set)."""
     M, k = J.shape
+    blocks = [np.arange(M)] if blocks is None else blocks
     has = np.isfinite(sigma)
     inv = np.where(has, 1.0 / np.where(has, sigma, 1.0), 0.0)
     noise = noise0
@@ -104,7 +119,7 @@ def linear_analysis(J: np.ndarray, r: np.ndarray, sigma: np.ndarray, noise0: flo
         b = np.concatenate([r, np.zeros(int(has.sum()))])
         step = ScaledSVD.of(A).solve(b)
         rest = r - J @ step  # its robust scale (MAD): a few gross errors must not weaken the data
-        new = MAD_TO_SIGMA * float(np.median(np.abs(rest))) * np.sqrt(M / max(M - k, 1))
+        new = _scale(rest, J, blocks)
         settled = abs(new - noise) <= NOISE_RTOL * noise
         noise = max(new, 1e-12 * noise0)
         if settled:
