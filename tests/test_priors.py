@@ -3,10 +3,9 @@ simulations of the held-back campaigns: a UR5 with the SMR on the flange axis on
 and cyclic errors), a 7-axis arm from a standard DH table with unmodelled joint coupling, and
 planned 25-pose KR 16-2 campaigns for the robust method."""
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
+from simulated_campaigns import seven_axis_campaign, ur5_campaign
 
 import robocal as rc
 from robocal.campaign.planner import plan_poses
@@ -14,38 +13,6 @@ from robocal.data.simulate import simulate_tracker
 from robocal.errors import PlausibilityError
 from robocal.identify.plausibility import check_corrections
 from robocal.identify.priors import linear_analysis, posterior_covariance, prior_sigma, undetermined
-
-UR_TERMS = ["gear2_s1", "gear2_c1", "gear3_s1", "gear3_c1", "cyc2_101_s", "cyc2_101_c", "cyc3_101_s",
-            "cyc3_101_c"]
-UR_VALUES = np.deg2rad([0.01, -0.008, 0.012, 0.006, 0.004, -0.003, 0.003, 0.004])
-
-
-def _ur5_campaign(n=1000, n_val=200, seed=0):
-    """A UR5 on a 15-deg joint grid, the SMR 34 mm out on the flange axis, gear and cyclic errors."""
-    nominal = rc.Robot.from_catalog("ur5")
-    rng = np.random.default_rng(seed)
-    q = rng.choice(np.deg2rad(np.arange(-165, 166, 15)), (n + n_val, 6))
-    true = nominal.with_joint_errors(UR_TERMS).with_values(dict(zip(UR_TERMS, UR_VALUES, strict=True)))
-    sim = simulate_tracker(true, joints=q, smr_offsets=[[0, 0, 0.034]], noise_mm=0.02, seed=seed)
-    return nominal, sim.data.subset(sim.data.pose_id < n), sim.data.subset(sim.data.pose_id >= n), sim
-
-
-def _seven_axis_campaign(n=216, n_val=100, seed=0):
-    """A Barrett-WAM-like 7-axis arm (standard DH), 4x the simulator's geometric errors, joints over
-    30 % of their ranges, and 0.3 deg of joint coupling no robocal term models (a few mm)."""
-    robot = rc.Robot.from_dh([0] * 7, [0, 0, 0.55, 0, 0.3, 0, 0.06], [0, 0, 0.045, -0.045, 0, 0, 0],
-                             [-90, 90, -90, 90, -90, 90, 0], degrees=True, name="wam",
-                             limits=[[-150, 150], [-113, 113], [-157, 157], [-50, 180], [-275, 75],
-                                     [-90, 90], [-172, 172]])
-    rng = np.random.default_rng(seed)
-    lo, hi = robot.limits[:, 0], robot.limits[:, 1]
-    mid, half = (lo + hi) / 2, 0.3 * (hi - lo) / 2
-    q = rng.uniform(mid - half, mid + half, (n + n_val, 7))
-    dq = np.deg2rad(0.3) * np.sin(np.roll(q, 1, axis=1) + 0.7 * np.roll(q, -1, axis=1) + np.arange(7))
-    sim = simulate_tracker(robot, joints=q + dq, smr_offsets=[[0, 0, 0.05]], noise_mm=0.05, seed=seed,
-                           error_scale=4.0)
-    data = replace(sim.data, joints=sim.data.joints - dq[sim.data.pose_id])  # the commanded joints
-    return robot, data.subset(data.pose_id < n), data.subset(data.pose_id >= n)
 
 
 def _link_rows(result):
@@ -55,7 +22,7 @@ def _link_rows(result):
 
 @pytest.fixture(scope="module")
 def ur5():
-    return _ur5_campaign()
+    return ur5_campaign()
 
 
 @pytest.mark.parametrize("nongeometric", ["default", "none"])
@@ -96,7 +63,7 @@ def test_twenty_planned_ur5_poses_calibrate_and_validate_without_force(ur5):
 def test_seven_axis_arm_with_unmodelled_errors_calibrates_with_defaults():
     """Before: PlausibilityError (d6 by -17 mm, alpha7 by +20 deg: 'a unit, the wrong robot');
     the forced geometric fit did not converge. Now: no exception, a held-out improvement."""
-    robot, cal, val = _seven_axis_campaign()
+    robot, cal, val = seven_axis_campaign()
     result = rc.calibrate(robot, cal, validation=val)
     assert result.solver.success
     assert result.validation["mean"] < 0.6 * result.validation_before["mean"]
