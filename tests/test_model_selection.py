@@ -17,10 +17,18 @@ from robocal.data.simulate import simulate_tracker
 from robocal.errors import IdentificationError, ModelError
 from robocal.identify.frequency_search import FrequencyScan
 from robocal.identify.lsq import gauss_newton
+from robocal.identify.priors import prior_sigma
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.space import ParameterSpace
 from robocal.kinematics.joint_errors import JointErrorModel, candidate_names, cyclic_names
-from robocal.model_selection import _candidates, _choose, _CrossValidation, _folds, _linearise
+from robocal.model_selection import (
+    _candidates,
+    _choose,
+    _CrossValidation,
+    _folds,
+    _linearise,
+    selection_table,
+)
 
 COMPLIANCE_GEAR_BACKLASH = (["comp2_3", "comp2_6", "comp3_6", "gear1_s1", "gear2_c1", "gear3_s2", "backlash1",
                              "backlash2", "backlash4"],
@@ -168,7 +176,8 @@ def test_auto_chooses_geometric_on_a_robot_without_joint_errors(seed):
 
 def test_linearised_fold_fits_match_nonlinear_fold_calibrations():
     """A candidate's fold error (one Gauss-Newton step from the superset fit, by normal equations)
-    agrees with iterating each fold's training poses to convergence with the same parameters."""
+    agrees with iterating each fold's training poses to convergence with the same parameters and
+    the same priors."""
     robot = Robot.from_catalog("abb_irb2600")
     sim = simulate_tracker(_with_errors(robot, *COMPLIANCE_GEAR_BACKLASH), 100, noise_mm=0.02, seed=4)
     fixed = ["compliance", "gear", "backlash", "travel"]
@@ -183,7 +192,11 @@ def test_linearised_fold_fits_match_nonlinear_fold_calibrations():
         # the candidate's robot: the superset's estimate with the other joint-error terms at zero
         robot_f = superset.state.robot.with_joint_errors(cand.ng_names)
         geometric = [nm for nm in superset.names if nm in robot_f.geometry_names]
-        space = ParameterSpace((*geometric, *cand.ng_names))
+        est = superset.space
+        mean = dict(zip(est.names, est.prior_mean, strict=True))
+        space = ParameterSpace((*geometric, *cand.ng_names)).with_prior(
+            prior_sigma(robot_f, [*geometric, *cand.ng_names]),
+            [mean.get(nm, 0.0) for nm in (*geometric, *cand.ng_names)], est.noise)
         for f in range(5):
             train, test = (CalibrationProblem(robot_f, sim.data.subset(rows))
                            for rows in (fold != f, fold == f))
@@ -286,3 +299,32 @@ def test_explicit_cyclic_term_searches_the_data_and_the_model_round_trips(tmp_pa
     plain = calibrate(robot, clean, nongeometric="cyclic")
     assert plain.robot.joint_errors is None
     assert any("no significant cyclic error" in w for w in plain.warnings)
+
+
+def test_a_chosen_model_that_does_not_converge_is_not_chosen(monkeypatch):
+    """auto's final fit must converge: a candidate whose final calibration stops at the limit is
+    marked in the table (x, not_converged) and the one-standard-error rule picks among the rest."""
+    import robocal.calibration as calibration
+
+    robot = Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(_with_errors(robot, ["backlash2", "backlash3"], [2e-4, -2e-4]), 130,
+                           noise_mm=0.02, seed=5)
+    real, finals = calibration._calibrate, []
+
+    def first_final_fails(robot, datasets, method, params, terms, validations, warm_start=None, **kw):
+        result = real(robot, datasets, method, params, terms, validations, warm_start, **kw)
+        if warm_start is not None:  # a final fit (the superset starts cold)
+            finals.append(list(terms))
+            if len(finals) == 1:
+                result.solver = replace(result.solver, status=Status.MAX_ITERATIONS,
+                                        message="not converged after 50 iterations")
+        return result
+
+    monkeypatch.setattr(calibration, "_calibrate", first_final_fails)
+    result = calibrate(robot, sim.data, nongeometric="auto")
+    ms = result.model_selection
+    failed = [i for i, c in enumerate(ms["candidates"]) if "not_converged" in c]
+    assert len(failed) == 1 and ms["chosen"] != failed[0] and len(finals) == 2
+    assert ms["candidates"][failed[0]]["parameters"] == finals[0]
+    assert result.solver.success and "did not converge" in ms["reason"]
+    assert "\nx " in selection_table(ms)

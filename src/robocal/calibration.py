@@ -21,9 +21,10 @@ import numpy as np
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
 from robocal.errors import DataError, IdentificationError
-from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability
+from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, hold
 from robocal.identify.identifiability import analyze as analyze_jacobian
 from robocal.identify.plausibility import check_corrections, check_residual, check_spread
+from robocal.identify.priors import linear_analysis, prior_sigma, undetermined
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
 from robocal.identify.space import ParameterSpace, State, block_of
@@ -179,7 +180,7 @@ class CalibrationResult(_BeforeAfter):
         nominal = dict(zip(start.parameter_names, start.nominal_values, strict=True))
         estimate = dict(zip(self.robot.parameter_names, self.robot.values, strict=True))
         nuisance = self.problem.nuisance_names
-        dropped = set(self.identifiability.dropped)
+        dropped, held = set(self.identifiability.dropped), set(self.identifiability.undetermined)
         rows = []
         for name in self.identifiability.names:
             if name in nuisance:  # e.g. plane coefficients: reported in their own unit
@@ -192,7 +193,8 @@ class CalibrationResult(_BeforeAfter):
             s = sigma.get(name)
             rows.append({"name": name, "unit": unit, "nominal": float(nom), "estimate": float(est),
                          "correction": float(est - nom), "sigma": None if s is None else float(s * f),
-                         "status": "dropped" if name in dropped else "estimated"})
+                         "status": "dropped" if name in dropped else
+                         "not determined" if name in held else "estimated"})
         return rows
 
     @staticmethod
@@ -244,9 +246,13 @@ class CalibrationResult(_BeforeAfter):
             **({"after_inliers": inliers} if (inliers := self.after_inliers) else {}),
             "parameters": self.parameter_table(),
             "dropped": [{"name": n, "reason": "not identifiable from these data",
-                         "confounded_with": ident.confounded_with[n]} for n in ident.dropped],
+                         "confounded_with": ident.confounded_with[n]} for n in ident.dropped] + [
+                {"name": n, "reason": f"not determined by these data: posterior sigma "
+                                      f"{ident.prior_ratio[n]:.0%} of its prior; held at nominal",
+                 "confounded_with": ident.confounded_with[n]} for n in ident.undetermined],
+            "priors": self._priors(),
             "identifiability": {key: v for key, v in ident.to_dict().items()
-                                if key not in ("kept", "dropped", "confounded_with")},
+                                if key not in ("kept", "dropped", "undetermined", "confounded_with")},
             "correlation": {"names": self.unknowns,
                             "matrix": np.round(self.correlation, 6).reshape(k, k).tolist()},
             "per_file": self.per_file(),
@@ -269,6 +275,21 @@ class CalibrationResult(_BeforeAfter):
             j = self.judged[0]
             out["validation_observations"] = self._observations(j.problem.observations[0], j.states, None)
         return out
+
+    def _priors(self) -> dict:
+        """The priors of the estimate (docs/priors.md): the noise scale they were weighed with and
+        each parameter's 1-sigma prior in display units (mm, deg; null without a prior)."""
+        space, robot = self.space, self.initial.robot
+        units = dict(zip(robot.parameter_names, robot.parameter_units(), strict=True))
+        names = [*space.robot, *self.identifiability.undetermined]
+        sigma = dict(zip(space.names, space.prior_sigma or [np.inf] * space.size, strict=True))
+        sigma.update(zip(self.identifiability.undetermined,
+                         prior_sigma(robot, self.identifiability.undetermined), strict=True))
+        return {"source": "robocal.identify.priors (docs/priors.md)",
+                "noise": space.noise, "noise_unit": "1 (residuals divided by sigma)"
+                if self.problem.weighted else "m",
+                "sigma": {n: float(sigma[n] * _DISPLAY[units[n]][1]) if np.isfinite(sigma[n]) else None
+                          for n in names}}
 
     def _first_weights(self) -> np.ndarray | None:
         """The robust weights of the first file's items."""
@@ -323,6 +344,12 @@ class CalibrationResult(_BeforeAfter):
             confounded = self.identifiability.confounded_with
             lines.append("not identifiable (fixed): " + ", ".join(
                 f"{n} (~{'/'.join(confounded[n]) or 'no effect'})" for n in dropped))
+        held = self.identifiability.undetermined
+        if held:
+            confounded = self.identifiability.confounded_with
+            lines.append("not determined by these data (held at nominal; measure poses that move them "
+                         "apart from their confounders): " + ", ".join(
+                             f"{n} (~{'/'.join(confounded[n]) or 'no effect'})" for n in held))
         if self.nongeometric is not None:
             ng = self.nongeometric
             lines.append(f"non-geometric terms {', '.join(ng['terms'])}: {len(ng['kept'])} parameters "
@@ -380,7 +407,17 @@ def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: f
     if lost:
         raise IdentificationError(f"the nuisance parameters {lost} are not identifiable: "
                                   "each plane needs contacts spread over its surface")
-    return candidates.restricted(ident.kept), ident, warnings
+    kept = candidates.restricted(ident.kept)
+    robot = state0.robot
+    sigma = np.r_[prior_sigma(robot, kept.robot), np.full(len(kept.nuisance), np.inf)]
+    mean = np.r_[robot.values[robot.indices(kept.robot)], state0.nuisance]
+    columns = [candidates.names.index(n) for n in kept.names]
+    lin = linear_analysis(J0[:, columns], problem.residuals(state0), sigma, problem.noise_guess,
+                          [rows for rows, _ in problem.row_blocks()])
+    held, ratio = undetermined(J0[:, columns], sigma, lin.noise)
+    ident = hold(ident, J0, [kept.names[j] for j in held],
+                 {n: float(q) for n, q in zip(kept.names, ratio, strict=True) if np.isfinite(q)})
+    return kept.with_prior(sigma, mean, lin.noise).restricted(ident.kept), ident, warnings
 
 
 def _run_solver(method: str, problem, state0: State, space: ParameterSpace, seed: int, progress,
@@ -396,14 +433,28 @@ def _run_solver(method: str, problem, state0: State, space: ParameterSpace, seed
 
 
 def _covariance(problem: CalibrationProblem, out: SolverResult, space: ParameterSpace) -> np.ndarray:
-    """s0^2 (J^T W J)^-1 at the solution; rows a robust method rejected carry no information."""
+    """The posterior covariance s0^2 (J^T W J + P)^-1 at the solution (P: the prior rows' weights
+    squared, :mod:`robocal.identify.priors`), s0 from the data's residuals; rows a robust method
+    rejected carry no information."""
     J = problem.jacobian(out.state, space)
     r = problem.residuals(out.state)
-    if out.item_weights is None:
-        return covariance(J, r)
-    row_w = np.repeat(out.item_weights, problem.item_rows())
-    sw = np.sqrt(row_w)
-    return covariance(J * sw[:, None], r * sw, int(np.count_nonzero(row_w)))
+    n_rows = None
+    if out.item_weights is not None:
+        sw = np.sqrt(np.repeat(out.item_weights, problem.item_rows()))
+        J, r, n_rows = J * sw[:, None], r * sw, int(np.count_nonzero(sw))
+    return covariance(J, r, n_rows, space.prior_weight)
+
+
+PARTNER_CORRELATION = 0.9  # |correlation| above which two estimates are reported as confounded
+
+
+def _partners(cov: np.ndarray, names: list[str]) -> dict[str, list[str]]:
+    """Per unknown: the (up to 4) others its estimate is most correlated with beyond
+    :data:`PARTNER_CORRELATION`."""
+    corr = np.abs(correlation(cov))
+    np.fill_diagonal(corr, 0.0)
+    return {n: [names[j] for j in np.argsort(-corr[i])[:4] if corr[i, j] > PARTNER_CORRELATION]
+            for i, n in enumerate(names)}
 
 
 def _combined(errors: list[np.ndarray]) -> dict | None:
@@ -539,19 +590,19 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     warnings += more
     first = state0 if warm_start is None else _warm_state(problem, warm_start, declared_start)
     out = _run_solver(method, problem, first, space, seed, progress, options)
-    check_corrections(state0.robot, out.state.robot, space.robot, force=force, warnings=warnings)
+    cov = _covariance(problem, out, space)
+    check_corrections(state0.robot, out.state.robot, space.robot,
+                      sigma=dict(zip(space.names, np.sqrt(np.maximum(np.diag(cov), 0.0)), strict=True)),
+                      confounded={**_partners(cov, space.names), **ident.confounded_with}, force=force,
+                      warnings=warnings)
     if not out.success:
         warnings.append(out.message)
-    if ident.condition_class == "strong":
-        warnings.append(f"the normal matrix is strongly ill-conditioned (condition number "
-                        f"{ident.condition_number:.3g}): some parameters are poorly determined; "
-                        "see the correlation matrix")
     estimated_terms = [n for n in space.robot if block_of(n) == "joint_errors"]
     final_robot = out.state.robot.with_joint_errors(start.joint_error_names + [
         n for n in estimated_terms if n not in start.joint_error_names])
     result = CalibrationResult(
         robot=final_robot, start=start, method=method, identifiability=ident, space=space,
-        covariance=_covariance(problem, out, space), solver=out,
+        covariance=cov, solver=out,
         errors=(errors0, problem.position_errors(out.state)), problem=problem, initial=state0,
         warnings=warnings, settings={"params": params if isinstance(params, str) else list(params),
                                      "seed": seed, "rtol": rtol, "nongeometric": ",".join(terms) or "none",

@@ -33,6 +33,10 @@ The calibrations themselves are the caller's (:func:`robocal.calibration.calibra
 Choice (one-standard-error rule): the candidate with the lowest cross-validated RMS position
 error, unless a simpler one — fewer identified parameters — is within one standard error of it
 (the standard error of the best candidate's error over the K folds); then the simplest such one.
+The chosen model's final calibration must converge: one that does not is marked in the table
+(``not_converged``, ``x``) and the rule is applied to the others. Every fit (superset, folds,
+final) carries the same parameter priors (:mod:`robocal.identify.priors`): the fold fits add the
+prior rows to their normal equations.
 Robust calibrations: the fold fits use the superset's IGG3 weights and the error is scored on
 the observations it kept.
 """
@@ -50,6 +54,7 @@ import scipy.linalg
 from robocal.errors import IdentificationError
 from robocal.identify.frequency_search import FrequencyScan
 from robocal.identify.identifiability import independent_columns
+from robocal.identify.priors import JOINT_ERROR_SIGMA, prior_sigma
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.kinematics.joint_errors import TERMS, candidate_names, cyclic_names, term_of
 
@@ -77,6 +82,9 @@ class _Linearised:
     group: np.ndarray      # (N,) fold group of each item
     weight: np.ndarray     # (N,) item weight (robust; 1 otherwise)
     q_item: np.ndarray | None  # (N, n) joints of each item (None: items span two poses)
+    prior_w2: np.ndarray   # (k,) squared prior weight of each column of A (0: no prior)
+    prior_offset: np.ndarray  # (k,) each column's value minus its prior mean (SI)
+    cyclic_w2: float       # squared prior weight of a cyclic column
 
 
 def _linearise(result, ng_names: list[str]) -> _Linearised:
@@ -107,8 +115,20 @@ def _linearise(result, ng_names: list[str]) -> _Linearised:
         q_item[item_of_rows] = data.joints
     weights = result.solver.item_weights
     weight = np.ones(obs.n_items) if weights is None else np.asarray(weights, float)
+    # the priors of the superset's space (robocal.identify.priors), for every column of A
+    est = result.space
+    w_of = dict(zip(est.names, est.prior_weight, strict=True))
+    mean_of = dict(zip(est.names, est.prior_mean or [0.0] * est.size, strict=True))
+    noise = est.noise
+    geo_w = np.array([w_of.get(nm, 0.0) for nm in geometric])
+    geo_offset = np.array([state.robot.get(nm) - mean_of.get(nm, 0.0) for nm in geometric])
+    ng_w = noise / prior_sigma(robot, ng_names) if ng_names else np.zeros(0)
+    w2 = np.r_[geo_w, np.zeros(len(space.nuisance)), ng_w] ** 2
+    offset = np.r_[geo_offset, np.zeros(len(space.nuisance)), values]
+    cyclic_w2 = float((noise / JOINT_ERROR_SIGMA["cyclic"]) ** 2) if est.has_prior else 0.0
     return _Linearised(A, r, A.shape[1] - len(ng_names), list(ng_names), values, Jtheta, problem.sigma,
-                       rows, group, weight, q_item)
+                       rows, group, weight, q_item, w2 if est.has_prior else np.zeros_like(w2), offset,
+                       cyclic_w2)
 
 
 def _folds(group: np.ndarray, k: int, seed: int) -> np.ndarray:
@@ -180,7 +200,10 @@ class _CrossValidation:
         cols = np.r_[cand.columns, np.arange(k, k + n_extra)] if cand.cyclic else cand.columns
         v = self.lin.ng_values[cand.zeroed - self.lin.k0]
         rhs = h[cols] + G[np.ix_(cols, cand.zeroed)] @ v  # residual with the left-out terms at zero
-        return cols, _solve(G[np.ix_(cols, cols)], rhs)
+        # the priors (MAP): each column's prior row pulls its total value towards the prior mean
+        w2 = np.r_[self.lin.prior_w2, np.full(n_extra, self.lin.cyclic_w2)][cols]
+        offset = np.r_[self.lin.prior_offset, np.zeros(n_extra)][cols]
+        return cols, _solve(G[np.ix_(cols, cols)] + np.diag(w2), rhs - w2 * offset)
 
     def _errors(self, test, cand: _Candidate, cols: np.ndarray, x: np.ndarray) -> np.ndarray:
         """Position error (m) of the items of the ``test`` rows (mask, their columns) after the step."""
@@ -284,7 +307,17 @@ def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol
              "parameters": c.ng_names + (cyclic_params if c.cyclic else [])} for c in cands]
     chosen, best, reason = _choose(rows)
     t_select = time.perf_counter() - t0
-    final = fit(rows[chosen]["parameters"], validations, superset if warm_final else None)
+    while True:  # the chosen model must converge: one that does not is marked and the rule rerun
+        final = fit(rows[chosen]["parameters"], validations, superset if warm_final else None)
+        if final.solver.success:
+            break
+        rows[chosen]["not_converged"] = final.solver.message
+        open_rows = [i for i in range(len(rows)) if "not_converged" not in rows[i]]
+        if not open_rows:
+            break
+        sub, best_sub, reason = _choose([rows[i] for i in open_rows])
+        chosen, best = open_rows[sub], open_rows[best_sub]
+        reason += " (the candidates marked x did not converge)"
     total = time.perf_counter() - t0
     final.model_selection = {
         "method": f"{FOLDS}-fold cross-validation by pose on the calibration data, one-standard-error rule",
@@ -330,7 +363,7 @@ def selection_table(ms: dict) -> str:
     order = sorted(range(len(ms["candidates"])), key=lambda i: ms["candidates"][i]["cv_rms_mm"])
     for i in order:
         c = ms["candidates"][i]
-        mark = "*" if i == ms["chosen"] else ("b" if i == ms["best"] else " ")
+        mark = "*" if i == ms["chosen"] else "x" if "not_converged" in c else "b" if i == ms["best"] else " "
         lines.append(f"{mark} {_label(c['terms']):44s} {c['n_params']:6d} {c['cv_rms_mm']:10.4f} "
                      f"{c['cv_se_mm']:8.4f} {c['calibration_rms_mm']:10.4f}")
     lines.append(f"  chosen (*): {_label(ms['chosen_terms'])} — {ms['reason']}")

@@ -138,7 +138,7 @@ class CampaignResult:
             "travel": self.travel, "travel_unordered": self.travel_unordered,
             "travel_weights": self.weights.tolist(),
             "identifiability": {key: v for key, v in ident.to_dict().items()
-                                if key not in ("kept", "dropped", "confounded_with")},
+                                if key not in ("kept", "dropped", "undetermined", "confounded_with")},
             "parameters": self.parameters,
             "dropped": [{"name": nm, "reason": "not identifiable from these poses",
                          "confounded_with": ident.confounded_with[nm]} for nm in ident.dropped],

@@ -16,11 +16,17 @@ EPILOG = """Examples:
   robocal calibrate data.csv --robot abb_irb2600 --method neural --set hidden=10 --network-out net.npz
   robocal calibrate contacts.csv scalebar.csv --robot abb_irb2600 --sigma plane=0.01 --sigma distance=0.005
 
-Method options (--set KEY=VALUE, SI units): robust: k0, k1, ridge (double-h|gcv|lcurve|none);
-genetic: population, generations, crossover, mutation, elite, encoding (binary|real), bits,
-spread, threshold (m); swarm: particles, iterations, inertia, c1, c2, vmax, polish (0|1),
-threshold (m); neural: hidden, index (mae|mse), learning_rate, epochs, threshold, n_consecutive,
-outputs.
+Method options (--set KEY=VALUE, SI units): lsq: max_iter (50); robust: k0, k1, ridge
+(double-h|gcv|lcurve|none), max_outer (30); genetic: population, generations (100), crossover,
+mutation, elite, encoding (binary|real), bits, spread, threshold (m), patience (20), ftol; swarm:
+particles, iterations (300), inertia, c1, c2, vmax, polish (0|1), polish_iter, threshold (m),
+patience (50), ftol; neural: hidden, index (mae|mse), learning_rate, epochs, threshold,
+n_consecutive, outputs.
+Stopping: lsq stops when converged (the linear model promises less than 1e-10 of the cost) or at
+max_iter; robust when the IGG3 weights or the fit settle, or at max_outer; genetic and swarm when
+the best error improved by less than ftol (relative) over the last patience generations
+(iterations), when it reaches threshold, or at the limit (not a success). Every estimate carries
+the parameter priors (docs/priors.md); parameters the data do not determine are held at nominal.
 """
 
 

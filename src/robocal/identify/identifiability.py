@@ -15,6 +15,12 @@ terms picked after it can raise its VIF further — because a nearly confounded 
 harmonics of a joint that moves over a narrow range, pinned down by a few extreme poses) fits
 those poses and predicts new ones badly. Condition number of the scaled normal matrix with the
 seed-003 classes, and the observability indices O1 (Borm & Menq) .. O4 over the identifiable set.
+
+Rank is not the whole story: a parameter can pass the rank test and still be nearly confounded
+(the UR wrist d5, a6, theta5, alpha6 beside the SMR offset). :func:`hold` moves such parameters,
+those the data do not determine beyond their prior (:mod:`robocal.identify.priors`), from
+``kept`` to ``undetermined``, each with its confounders; the condition number and the
+observability indices then describe the set that is estimated.
 """
 
 from __future__ import annotations
@@ -57,6 +63,8 @@ class Identifiability:
     condition_number: float
     singular_values: np.ndarray = field(repr=False)
     n_poses: int = 0
+    undetermined: list[str] = field(default_factory=list)
+    prior_ratio: dict[str, float] = field(default_factory=dict)  # posterior / prior sigma
 
     @property
     def condition_class(self) -> str:
@@ -78,7 +86,7 @@ class Identifiability:
         return {"n_params": len(self.names), "rank": self.rank,
                 "condition_number": self.condition_number,
                 "condition_class": self.condition_class, **self.observability,
-                "kept": self.kept, "dropped": self.dropped,
+                "kept": self.kept, "dropped": self.dropped, "undetermined": self.undetermined,
                 "confounded_with": self.confounded_with}
 
     def summary(self) -> str:
@@ -89,6 +97,10 @@ class Identifiability:
         for name in self.dropped:
             conf = ", ".join(self.confounded_with[name]) or "nothing (no effect on these data)"
             lines.append(f"  not identifiable: {name}  (confounded with {conf})")
+        for name in self.undetermined:
+            conf = ", ".join(self.confounded_with[name]) or "nothing"
+            lines.append(f"  not determined by these data (held at nominal): {name}  (posterior sigma "
+                         f"{self.prior_ratio[name]:.0%} of its prior; confounded with {conf})")
         return "\n".join(lines)
 
 
@@ -144,20 +156,49 @@ def analyze(J: np.ndarray, names: Sequence[str], n_poses: int,
                             for stage, floor in STAGES], rtol)
     rank = kept_idx.size
     drop_idx = sorted(set(range(len(names))) - set(kept_idx.tolist()))
-    confounded: dict[str, list[str]] = {}
-    if drop_idx:
-        coef, *_ = np.linalg.lstsq(Js[:, kept_idx], Js[:, drop_idx], rcond=None)
-        for c, j in enumerate(drop_idx):
-            weights = np.abs(coef[:, c])
-            if zero[j] or weights.max(initial=0) == 0:
-                confounded[names[j]] = []
-                continue
-            order = np.argsort(-weights)
-            confounded[names[j]] = [names[kept_idx[i]] for i in order
-                                    if weights[i] > 0.1 * weights[order[0]]][:4]
-    s = np.linalg.svd(Js[:, kept_idx], compute_uv=False) if rank else np.zeros(0)
-    cond = float((s[0] / s[-1]) ** 2) if rank and s[-1] > 0 else float("inf")
+    s, cond = _spectrum(Js[:, kept_idx])
     return Identifiability(names=names, kept=[names[j] for j in kept_idx],
                            dropped=[names[j] for j in drop_idx],
-                           confounded_with=confounded, rank=rank, condition_number=cond,
-                           singular_values=s, n_poses=n_poses)
+                           confounded_with=_confounders(Js, zero, names, kept_idx, drop_idx),
+                           rank=rank, condition_number=cond, singular_values=s, n_poses=n_poses)
+
+
+def _spectrum(Js: np.ndarray) -> tuple[np.ndarray, float]:
+    """Singular values of unit columns ``Js`` and the condition number of their normal matrix."""
+    s = np.linalg.svd(Js, compute_uv=False) if Js.shape[1] else np.zeros(0)
+    return s, float((s[0] / s[-1]) ** 2) if s.size and s[-1] > 0 else float("inf")
+
+
+def _confounders(Js: np.ndarray, zero: np.ndarray, names: Sequence[str], kept_idx: np.ndarray,
+                 targets: Sequence[int]) -> dict[str, list[str]]:
+    """For each target column: the (up to 4) kept parameters whose columns explain it most."""
+    out: dict[str, list[str]] = {}
+    if not len(targets):
+        return out
+    coef, *_ = np.linalg.lstsq(Js[:, kept_idx], Js[:, list(targets)], rcond=None)
+    for c, j in enumerate(targets):
+        weights = np.abs(coef[:, c])
+        if zero[j] or weights.max(initial=0) == 0:
+            out[names[j]] = []
+            continue
+        order = np.argsort(-weights)
+        out[names[j]] = [names[kept_idx[i]] for i in order if weights[i] > 0.1 * weights[order[0]]][:4]
+    return out
+
+
+def hold(ident: Identifiability, J: np.ndarray, undetermined: list[str],
+         ratio: dict[str, float]) -> Identifiability:
+    """``ident`` (of the columns ``J (M, len(ident.names))``) with the kept parameters
+    ``undetermined`` (by the data beyond their prior; ``ratio``: posterior / prior sigma of the
+    kept ones) moved to ``undetermined``, with their confounders among the parameters still kept;
+    spectrum of the rest."""
+    Js, zero = _unit_columns(J)
+    kept = [nm for nm in ident.kept if nm not in undetermined]
+    kept_idx = np.array([ident.names.index(nm) for nm in kept], dtype=np.int64)
+    targets = [ident.names.index(nm) for nm in undetermined]
+    confounded = {**ident.confounded_with, **_confounders(Js, zero, ident.names, kept_idx, targets)}
+    s, cond = _spectrum(Js[:, kept_idx])
+    return Identifiability(names=ident.names, kept=kept, dropped=ident.dropped, confounded_with=confounded,
+                           rank=ident.rank, condition_number=cond, singular_values=s,
+                           n_poses=ident.n_poses, undetermined=undetermined,
+                           prior_ratio={nm: float(ratio[nm]) for nm in ident.kept if nm in ratio})

@@ -37,7 +37,9 @@ class GaussNewtonResult(NamedTuple):
 
 
 class _Calibration:
-    """One calibration problem as the damped loop's single member (see DampedProblem)."""
+    """One calibration problem as the damped loop's single member (see DampedProblem). With a
+    prior (``space.has_prior``), the residual vector is the data rows then one row per unknown
+    with a prior (:meth:`ParameterSpace.prior_residuals`): the MAP estimate."""
 
     size = 1
 
@@ -49,9 +51,19 @@ class _Calibration:
         self.total = np.zeros(space.size) if prior is None else np.asarray(prior, float).copy()
         self.scale = None
         self.J_raw, self.J_state = jacobian, state  # the unweighted Jacobian and its state
-        self.given_svd = svd  # of the weighted J_raw at the start, when the caller has it
-        self.r = problem.residuals(state) * self.w
+        weight = space.prior_weight
+        self.prior_rows = np.flatnonzero(weight > 0)
+        self.prior_block = np.diag(weight)[self.prior_rows]  # (p, size): d(w value)/d(unknowns)
+        # the caller's SVD is of the weighted data rows only: usable when there are no prior rows
+        self.given_svd = svd if not self.prior_rows.size else None
+        self.r = self._residuals(state)
         self.current = float(self.r @ self.r)  # + the ridge term once the scale is known
+
+    def _residuals(self, state: State) -> np.ndarray:
+        r = self.problem.residuals(state) * self.w
+        if not self.prior_rows.size:
+            return r
+        return np.concatenate([r, self.space.prior_residuals(state)[self.prior_rows]])
 
     def _cost(self, r: np.ndarray, total: np.ndarray) -> float:
         c = float(r @ r)
@@ -65,6 +77,8 @@ class _Calibration:
             self.J_raw, self.J_state = self.problem.jacobian(self.state, self.space), self.state
             self.given_svd = None
         self.J = self.J_raw * (self.w[:, None] if np.ndim(self.w) else self.w)
+        if self.prior_rows.size:  # r = mean - value: the same sign convention as the data's rows
+            self.J = np.vstack([self.J, self.prior_block])
         first = self.scale is None
         self.svd = ScaledSVD.of(self.J, self.scale) if self.given_svd is None else self.given_svd
         self.given_svd = None
@@ -84,7 +98,7 @@ class _Calibration:
 
     def trial_cost(self, members) -> np.ndarray:
         self.trial = self.space.apply(self.state, self.dx)
-        self.r_trial = self.problem.residuals(self.trial) * self.w
+        self.r_trial = self._residuals(self.trial)
         self.c_trial = self._cost(self.r_trial, self.total + self.dx)
         return np.array([self.c_trial])
 

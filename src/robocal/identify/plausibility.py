@@ -20,7 +20,10 @@ What real robots' errors can be, and the limits derived from it (named once here
   robots) and angles by hundredths of a degree (a degree for a badly mastered joint zero). A
   correction of a link length beyond ``MAX_LENGTH_CORRECTION_MM`` or
   ``MAX_LENGTH_CORRECTION_FRACTION`` of the robot's reach, or of a joint or axis angle beyond
-  ``MAX_ANGLE_CORRECTION_DEG``, is the solver absorbing a mistake.
+  ``MAX_ANGLE_CORRECTION_DEG``, that the data determine (beyond ``DETERMINED_SIGMAS`` of its
+  1-sigma) is the solver absorbing a mistake (a unit, the wrong robot). One the data do not
+  determine (within that many sigma of zero) is weak identifiability: the message names what to
+  measure instead of blaming the input.
 
 Each check raises :class:`robocal.errors.PlausibilityError` naming what is probably wrong;
 ``force=True`` (``--force``) turns it into a warning for users who know better.
@@ -41,6 +44,7 @@ UNIT_RATIO = 300.0  # a spread ratio beyond this (either way) is a length unit (
 MAX_LENGTH_CORRECTION_MM = 5.0
 MAX_LENGTH_CORRECTION_FRACTION = 0.01
 MAX_ANGLE_CORRECTION_DEG = 5.0
+DETERMINED_SIGMAS = 3.0  # a correction beyond this many sigma is what the data say
 FORCE_HINT = "if you are sure the data and the model are right, rerun with --force (force=True)"
 
 
@@ -93,24 +97,43 @@ def check_residual(rms_mm: float, points: np.ndarray, what: str, *, force: bool 
           force, warnings)
 
 
-def check_corrections(start, final, names, *, force: bool = False,
+def check_corrections(start, final, names, *, sigma: dict[str, float] | None = None,
+                      confounded: dict[str, list[str]] | None = None, force: bool = False,
                       warnings: list[str] | None = None) -> None:
     """Corrections of the estimated link parameters ``names`` from ``start`` to ``final`` (robots)
-    must be of the size real robots' errors have (module docstring)."""
+    must be of the size real robots' errors have (module docstring). ``sigma`` (SI, by name): the
+    corrections' 1-sigma, to tell a determined correction from one the data cannot pin down;
+    ``confounded``: what each parameter is confounded with (for the message)."""
     length_limit = max(MAX_LENGTH_CORRECTION_MM * 1e-3, MAX_LENGTH_CORRECTION_FRACTION * robot_reach(start))
     angle_limit = np.deg2rad(MAX_ANGLE_CORRECTION_DEG)
     units = dict(zip(start.parameter_names, start.parameter_units(), strict=True))
-    bad = []
+    sigma, confounded = sigma or {}, confounded or {}
+    determined, loose = [], []
     for name in names:
         if block_of(name) != "links":
             continue
         delta = final.get(name) - start.get(name)
         if units[name] == "m" and abs(delta) > length_limit:
-            bad.append(f"{name} by {delta * 1e3:+.4g} mm")
+            text = f"{name} by {delta * 1e3:+.4g} mm"
+            s = sigma.get(name, 0.0) * 1e3
         elif units[name] == "rad" and abs(delta) > angle_limit:
-            bad.append(f"{name} by {np.rad2deg(delta):+.4g} deg")
-    if bad:
-        _fail(f"the calibration corrected {', '.join(bad)}: more than real robots' errors can be (link "
-              f"lengths {length_limit * 1e3:.3g} mm, angles {MAX_ANGLE_CORRECTION_DEG:g} deg); the solver is "
-              "absorbing a mistake: a unit (length or joint angle), the wrong robot or the wrong data",
+            text = f"{name} by {np.rad2deg(delta):+.4g} deg"
+            s = np.rad2deg(sigma.get(name, 0.0))
+        else:
+            continue
+        if abs(delta) > DETERMINED_SIGMAS * sigma.get(name, 0.0):
+            determined.append(text)
+        else:
+            partners = "/".join(confounded.get(name, [])) or "the other parameters"
+            loose.append(f"{text} (+- {s:.3g}, confounded with {partners})")
+    limits = f"link lengths {length_limit * 1e3:.3g} mm, angles {MAX_ANGLE_CORRECTION_DEG:g} deg"
+    if determined:
+        _fail(f"the calibration corrected {', '.join(determined)}: more than real robots' errors can be "
+              f"({limits}) and determined by the data; the solver is absorbing a mistake: a unit (length "
+              "or joint angle), the wrong robot or the wrong data", force, warnings)
+    if loose:
+        _fail(f"the calibration moved {', '.join(loose)}: beyond real robots' errors ({limits}) but within "
+              f"{DETERMINED_SIGMAS:g} sigma of zero, so these data cannot pin them down (not a unit or robot "
+              "mix-up): measure poses that move these parameters apart from their confounders (wider wrist "
+              "and elbow angles, several SMRs spread on the tool), or leave them out with --params",
               force, warnings)

@@ -17,11 +17,20 @@ from robocal.progress import Progress
 class PopulationCost:
     """Vectorised errors of a population of robot displacements ``X (P, k)`` (the robot names of
     ``space``) around ``state``. Measurement sets with nuisance parameters (plane coefficients)
-    have them fitted per individual (the seed-004 plane fit)."""
+    have them fitted per individual (the seed-004 plane fit). The space's prior
+    (:meth:`ParameterSpace.prior_residuals`) adds its rows to every individual's cost: to the sum
+    of squares, and as one more item (the norm of the prior rows) to the summed item error."""
 
     def __init__(self, problem, state: State, space: ParameterSpace) -> None:
         self.problem, self.state, self.space = problem, state, space
         self.names = list(space.robot)
+        k = len(self.names)
+        self.prior_weight = space.prior_weight[:k]
+        self.prior_at_start = space.prior_residuals(state)[:k]  # prior rows at X = 0
+
+    def prior_rows(self, X: np.ndarray) -> np.ndarray:
+        """``(P, k)`` prior rows of each displacement (0 where a parameter has no prior)."""
+        return self.prior_at_start - self.prior_weight * np.atleast_2d(X)
 
     def residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Weighted residuals ``(P, M)`` and nuisance ``(P, m)`` of each individual."""
@@ -30,12 +39,13 @@ class PopulationCost:
     def item_errors(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Per-item error norms ``(P, N)`` and nuisance ``(P, m)``."""
         r, nu = self.residuals(X)
-        return np.sqrt(self.problem.item_sum_squares(r)), nu
+        prior = np.linalg.norm(self.prior_rows(X), axis=1)[:, None]
+        return np.hstack([np.sqrt(self.problem.item_sum_squares(r)), prior]), nu
 
     def sum_squares(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Weighted sum of squares ``(P,)`` (the history's cost) and nuisance ``(P, m)``."""
         r, nu = self.residuals(X)
-        return np.sum(r**2, axis=-1), nu
+        return np.sum(r**2, axis=-1) + np.sum(self.prior_rows(X) ** 2, axis=-1), nu
 
     def state_of(self, x: np.ndarray, nuisance: np.ndarray) -> State:
         """The State of one displacement ``x (k,)`` with its nuisance ``(m,)``."""

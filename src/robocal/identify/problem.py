@@ -65,6 +65,12 @@ class CalibrationProblem:
         self._rows = _consecutive([obs.n_items * obs.rows_per_item for obs in self.observations])
         self._items = _consecutive([obs.n_items for obs in self.observations])
 
+    @property
+    def noise_guess(self) -> float:
+        """The residual scale of one row expected before any fit (residual unit): 1 for weighted
+        residuals, else the kind's :data:`KIND_SIGMA` (m); the priors' start value."""
+        return 1.0 if self.weighted else KIND_SIGMA[self.observations[0].kind]
+
     def _check_planes(self) -> None:
         """A plane id names one plate in every set of a calibration: the sets' ids must not repeat."""
         seen: dict[str, str] = {}

@@ -10,6 +10,14 @@ kind is judged by its own noise); an item's statistic is its residual norm over 
 sqrt(rows per item)).
 IGG3: weight 1 up to k0, (k0/|v|)((k1-|v|)/(k1-k0))^2 between k0 and k1, 0 beyond k1.
 
+Stopping (convergence by construction): the outer loop has converged when no weight changes by
+more than WEIGHT_TOL, or when the fit no longer moves (no residual changed by more than FIT_TOL of
+the residuals' robust scale: a weight still settling slowly near k0 or k1 then changes nothing the
+data can see). An item whose weight change reverses direction (its weight pushes the fit across k0
+or k1 and back: a cycle, no fixed point) has its further weight steps halved at each reversal, so
+it settles at a weight in between instead of cycling until ``max_outer``. The estimate carries the
+parameter priors of its space (MAP rows, :mod:`robocal.identify.priors`) besides the ridge.
+
 Ridge parameter (in the scaled problem):
 - ``double-h`` (default): h1 = k s^2 / |x_LS|^2 (Hoerl-Kennard-Baldwin), then
   h2 = k s^2 / |x(h1)|^2 from the ridge solution with h1;
@@ -30,7 +38,8 @@ from robocal.identify.solvers import SolverResult, history_entry
 from robocal.identify.space import ParameterSpace, State
 
 MAD_TO_SIGMA = 1.4826
-WEIGHT_TOL = 1e-4  # the weights have settled when none changes by more than this
+WEIGHT_TOL = 1e-4  # the weights have settled when none changes by more than this ...
+FIT_TOL = 1e-2  # ... or the fit has: no residual moved by more than this fraction of the noise scale
 
 
 def igg3_weights(v: np.ndarray, k0: float = 1.5, k1: float = 3.0) -> np.ndarray:
@@ -121,8 +130,10 @@ def solve(problem, start: State, space: ParameterSpace, *, k0: float = 1.5, k1: 
     """Robust ridge estimation from ``start`` over ``space``."""
     item_rows = problem.item_rows()
     item_w = np.ones(problem.n_items)
+    relax, last_step = np.ones(problem.n_items), np.zeros(problem.n_items)
     state, total = start, None
     r = problem.residuals(state)
+    r_before = r
     J = problem.jacobian(state, space)  # at ``state``: built once per state, reused below
     history = [history_entry(0, float(r @ r), problem.n_items)]
     status = Status.MAX_ITERATIONS
@@ -144,18 +155,28 @@ def solve(problem, start: State, space: ParameterSpace, *, k0: float = 1.5, k1: 
         # controlled by the others: a gross error there cannot be told from the fit, so it keeps
         # its weight rather than being judged on a residual that says nothing
         uncontrolled = np.maximum.reduceat(redundancy < MIN_REDUNDANCY, np.r_[0, np.cumsum(item_rows)[:-1]])
-        new_w = np.where(uncontrolled, 1.0, igg3_weights(v, k0, k1))
+        step = np.where(uncontrolled, 1.0, igg3_weights(v, k0, k1)) - item_w
+        # an item whose weight change reverses direction is oscillating (its weight moves the fit
+        # across k0 or k1 and back): each reversal halves its steps, so it settles in between
+        reversed_ = step * last_step < 0
+        relax = np.where(reversed_, relax / 2, relax)
+        last_step = np.where(step != 0, step, last_step)
+        new_w = item_w + relax * step
         change = float(np.max(np.abs(new_w - item_w)))
+        # a weight settling slowly (an item near k0 or k1: its weight converges linearly) no longer
+        # moves the estimate: the fit, not the last digit of a weight, is what must settle
+        moved = float(np.max(np.abs(r - r_before))) / max(MAD_TO_SIGMA * float(np.median(np.abs(r))), 1e-300)
+        r_before = r
         item_w = new_w
         history.append(history_entry(outer, float(r @ (r * np.repeat(item_w, item_rows))),
                                      problem.n_items))
         if progress is not None:  # the robust scale of one item's residual
             progress(outer, scale)
-        if change < WEIGHT_TOL:
+        if change < WEIGHT_TOL or (outer > 1 and moved < FIT_TOL):
             status = Status.CONVERGED
             break
     nit = len(history) - 1
-    message = (f"IGG3 weights converged in {nit} iterations" if status is Status.CONVERGED
+    message = (f"IGG3 weights and fit converged in {nit} iterations" if status is Status.CONVERGED
                else f"IGG3 weights still changing after {max_outer} iterations")
     return SolverResult(state=state, status=status, message=message, nit=nit, history=history,
                         item_weights=item_w)

@@ -6,6 +6,10 @@ observations' nuisance parameters (plane coefficients ``plane0.a``...), in the o
 unknown vector every solver works on. A :class:`State` is a point of that space: a robot and
 the nuisance values. :meth:`ParameterSpace.apply` is the one way a step moves a state (robot
 parameters through :meth:`Robot.displaced`: frame rotations compose, the rest adds).
+
+A space may carry a prior (:mod:`robocal.identify.priors`): per unknown a mean (SI) and a 1-sigma
+scale (inf: none), and the residual scale ``noise`` of one measurement row. Every solver then adds
+the pseudo-observations :meth:`ParameterSpace.prior_residuals` to the data's residuals (MAP).
 """
 
 from __future__ import annotations
@@ -52,14 +56,26 @@ class State:
 
 @dataclass(frozen=True)
 class ParameterSpace:
-    """The unknown vector: ``robot`` names (robot parameters) then ``nuisance`` names."""
+    """The unknown vector: ``robot`` names (robot parameters) then ``nuisance`` names; optionally a
+    prior: ``prior_sigma`` and ``prior_mean`` (one per unknown, SI; sigma inf where there is none,
+    e.g. frames and nuisance) and ``noise``, the residual scale of one measurement row (residual
+    unit) that weighs the prior against the data."""
 
     robot: tuple[str, ...]
     nuisance: tuple[str, ...] = ()
+    prior_sigma: tuple[float, ...] = ()
+    prior_mean: tuple[float, ...] = ()
+    noise: float = 1.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "robot", tuple(self.robot))
         object.__setattr__(self, "nuisance", tuple(self.nuisance))
+        object.__setattr__(self, "prior_sigma", tuple(float(v) for v in self.prior_sigma))
+        object.__setattr__(self, "prior_mean", tuple(float(v) for v in self.prior_mean))
+        if self.prior_sigma and not len(self.prior_sigma) == len(self.prior_mean) == self.size:
+            raise IdentificationError("a prior needs one sigma and one mean per unknown")
+        if self.prior_sigma and (min(self.prior_sigma) <= 0 or not self.noise > 0):
+            raise IdentificationError("prior sigmas and the noise scale must be positive")
         names = self.names
         if len(set(names)) != len(names):
             twice = sorted({n for n in names if names.count(n) > 1})
@@ -85,10 +101,39 @@ class ParameterSpace:
         return {b: out[b] for b in BLOCKS if b in out}
 
     def restricted(self, keep: Iterable[str]) -> ParameterSpace:
-        """The same space with only the names in ``keep`` (order kept)."""
+        """The same space (and prior) with only the names in ``keep`` (order kept)."""
         keep = set(keep)
+        mask = [n in keep for n in self.names]
+        pick = (lambda values: tuple(v for v, m in zip(values, mask, strict=True) if m)) \
+            if self.prior_sigma else (lambda values: ())
         return ParameterSpace(tuple(n for n in self.robot if n in keep),
-                              tuple(n for n in self.nuisance if n in keep))
+                              tuple(n for n in self.nuisance if n in keep),
+                              pick(self.prior_sigma), pick(self.prior_mean), self.noise)
+
+    def with_prior(self, sigma, mean, noise: float) -> ParameterSpace:
+        """This space with a prior (see the class)."""
+        return ParameterSpace(self.robot, self.nuisance, tuple(sigma), tuple(mean), noise)
+
+    @property
+    def has_prior(self) -> bool:
+        return bool(self.prior_sigma) and bool(np.isfinite(self.prior_sigma).any())
+
+    @property
+    def prior_weight(self) -> np.ndarray:
+        """``(size,)`` weight of each unknown's prior row, ``noise / sigma`` (residual unit per SI
+        unit; 0 without a prior)."""
+        if not self.prior_sigma:
+            return np.zeros(self.size)
+        return self.noise / np.asarray(self.prior_sigma)
+
+    def prior_residuals(self, state: State) -> np.ndarray:
+        """``(size,)`` prior rows at ``state``: weight * (mean - value) (0 without a prior; robot
+        parameters only: nuisance and frames carry none)."""
+        w = self.prior_weight
+        if not w.any():
+            return w
+        values = np.concatenate([state.robot.values[state.robot.indices(self.robot)], state.nuisance])
+        return np.where(w > 0, w * (np.asarray(self.prior_mean) - values), 0.0)
 
     def split(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``x (..., size)`` -> (robot part ``(..., k)``, nuisance part ``(..., m)``)."""

@@ -14,7 +14,11 @@ planes are fitted per particle inside the cost (the seed's least-squares plane f
 observation type works. Stops when the RMS item error reaches ``threshold`` (m; 0 = never;
 status ``threshold``), when the best cost improved by less than ``ftol`` (relative) over the last
 ``patience`` iterations (the convergence test; 0 = never; ``converged``), or at ``iterations``
-(``max_iterations``: not a success).
+(``max_iterations``: not a success). With ``polish`` the cost the convergence test watches is the
+global best's *basin*: the cost a least-squares polish from it reaches (recomputed every
+``POLISH_EVERY`` iterations): a swarm in 30-odd dimensions creeps towards the bottom for
+thousands of iterations, but it has done its job (a global search) once ``patience`` iterations
+find no better basin than the one it has.
 
 ``polish`` (default True): a short least-squares run (:func:`robocal.identify.lsq.gauss_newton`,
 at most ``polish_iter`` iterations) from the best particle. A swarm finds the basin but converges
@@ -34,6 +38,8 @@ from robocal.identify.lsq import gauss_newton
 from robocal.identify.population import PopulationCost, evolve, stop_message
 from robocal.identify.solvers import SolverResult
 from robocal.identify.space import ParameterSpace, State
+
+POLISH_EVERY = 10  # iterations between two polishes of the global best (the basin test)
 
 
 def solve(problem, start: State, space: ParameterSpace, *, seed: int = 0, progress=None,
@@ -69,24 +75,38 @@ def solve(problem, start: State, space: ParameterSpace, *, seed: int = 0, progre
             best.update(x=X[g].copy(), f=f[g], nu=nu[g].copy())
 
     evaluate()
+    basin: dict = {}
 
-    def fly(_: int) -> tuple[float, float]:
+    def polished():
+        """The least-squares polish from the global best (kept until the best changes)."""
+        if basin.get("x") is not best["x"]:
+            basin.update(x=best["x"], gn=gauss_newton(problem, cost.state_of(best["x"], best["nu"]), space,
+                                                      max_iter=polish_iter))
+        return basin["gn"]
+
+    def fly(it: int) -> tuple[float, float]:
         nonlocal X, V
         r1, r2 = rng.random((particles, k)), rng.random((particles, k))
         V = np.clip(inertia * V + c1 * r1 * (pbest - X) + c2 * r2 * (best["x"] - X), -vclamp, vclamp)
         X = np.clip(X + V, lo, hi)
         evaluate()
-        return best["f"], best["f"]
+        if not polish:
+            return best["f"], best["f"]
+        if it % POLISH_EVERY == 1 or "gn" not in basin:
+            basin["cost"] = polished().history[-1]["cost"]
+        return best["f"], basin["cost"]
 
     status, it, history = evolve(fly, initial_cost=best["f"], n_items=problem.n_items, limit=iterations,
                                  threshold=threshold, patience=patience, ftol=ftol, progress=progress,
                                  label="swarm")
     state = cost.state_of(best["x"], best["nu"])
-    message = "swarm: " + stop_message(status, "iteration", it, iterations, history[-1]["rms"],
-                                       problem.n_items)
+    message = "swarm: " + (
+        f"converged after {it} iterations (no better basin found in the last {patience})"
+        if polish and status is Status.CONVERGED else
+        stop_message(status, "iteration", it, iterations, history[-1]["rms"], problem.n_items))
     if status is Status.INTERRUPTED or not polish:
         return SolverResult(state=state, status=status, message=message, nit=it, history=history)
-    gn = gauss_newton(problem, state, space, max_iter=polish_iter)
+    gn = polished()
     history += [{**h, "iteration": it + h["iteration"]} for h in gn.history[1:]]
     message += f"; least-squares polish: {gn.status.value} after {gn.nit} iterations"
     return SolverResult(state=gn.state, status=gn.status, message=message, nit=it + gn.nit,

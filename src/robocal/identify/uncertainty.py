@@ -1,4 +1,5 @@
-"""Parameter uncertainty: covariance s0^2 (J^T W J)^-1 on the identifiable set.
+"""Parameter uncertainty: covariance s0^2 (J^T W J + P)^-1 on the estimated set, P the priors'
+pseudo-observations (their weights squared on the diagonal; 0 without priors).
 
 s0^2 = r^T W r / (M - k) is the a-posteriori variance factor, so the figures hold whether or
 not the data gave per-point sigma. Propagated to the predicted TCP position anywhere.
@@ -8,20 +9,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.identify.linalg import ScaledSVD
+from robocal.identify.priors import posterior_covariance
 
 
-def covariance(J: np.ndarray, r: np.ndarray, n_rows: int | None = None) -> np.ndarray:
+def covariance(J: np.ndarray, r: np.ndarray, n_rows: int | None = None,
+               prior_weight: np.ndarray | None = None) -> np.ndarray:
     """Covariance ``(k, k)`` of the estimate from the weighted Jacobian ``(M, k)`` and
     weighted residuals ``(M,)`` at the solution; ``n_rows`` counts the rows that carry
-    information (default M; fewer when a robust fit gave some zero weight)."""
+    information (default M; fewer when a robust fit gave some zero weight); ``prior_weight``
+    ``(k,)`` the prior rows' weights (0: none)."""
     M, k = J.shape
     dof = max((M if n_rows is None else n_rows) - k, 1)
-    s0_sq = float(r @ r) / dof
-    svd = ScaledSVD.of(J)
-    inv_s = np.where(svd.s > 1e-12 * svd.s[0], 1.0 / svd.s, 0.0)
-    V = svd.Vt.T * inv_s
-    return s0_sq * (V @ V.T) / np.outer(svd.scale, svd.scale)
+    weight = np.zeros(k) if prior_weight is None else np.asarray(prior_weight, float)
+    return posterior_covariance(J, weight, float(np.sqrt(float(r @ r) / dof)))
 
 
 def correlation(cov: np.ndarray) -> np.ndarray:

@@ -301,13 +301,14 @@ def _parameters(result: dict) -> str:
         rows.append([esc(p.get("name")), esc(status), esc(p.get("unit")), _num(p.get("nominal"), digits),
                      _num(p.get("estimate"), digits), _num(p.get("correction"), digits),
                      _num(p.get("sigma"), digits), note])
-        classes.append("dropped" if status == "dropped" else "")
+        classes.append("dropped" if status in ("dropped", "not determined") else "")
     if not rows:
         return "<p>No parameter table in this result.</p>"
     n_est = sum(p.get("status") == "estimated" for p in params)
-    text = (f"<p>{n_est} parameters estimated, {len(dropped)} not identifiable from these data "
-            "(kept at their start value; highlighted). Correction = estimate "
-            "&minus; nominal; 1&sigma; from the covariance of the estimate.</p>")
+    text = (f"<p>{n_est} parameters estimated, {len(dropped)} not identifiable or not determined by "
+            "these data (kept at their start value; highlighted). Correction = estimate "
+            "&minus; nominal; 1&sigma; from the posterior covariance of the estimate (with the "
+            "parameter priors, docs/priors.md).</p>")
     table = _table(["name", "status", "unit", "nominal", "estimate", "correction", "1&sigma;",
                     "note"], rows, left=3, row_class=classes).replace(
         "<td>confounded", "<td class='l'>confounded")
@@ -374,7 +375,7 @@ def _identifiability(result: dict) -> str:
     out = _table(["", ""], rows, left=1) if rows else "<p>No identifiability analysis in this result.</p>"
     dropped = result.get("dropped") or []
     if dropped:
-        out += "<h3>Parameters not identifiable from these data</h3>" + _table(
+        out += "<h3>Parameters not identifiable or not determined by these data</h3>" + _table(
             ["parameter", "reason", "confounded with"],
             [[esc(d.get("name")), esc(d.get("reason")), esc(", ".join(d.get("confounded_with") or []))
               or "no effect on the measurements"] for d in dropped], left=3)
