@@ -91,9 +91,11 @@ def main(argv: list[str] | None = None) -> int:
     files = sorted(HERE.glob("bench_*.py"))
     if args.names:
         files = [f for f in files if f.stem.removeprefix("bench_") in args.names]
-    runs = json.loads(args.json.read_text())["benchmarks"] if args.json.exists() else {}
     for path in files:
-        runs[path.stem] = run_one(path)
+        entry = run_one(path)
+        # read again just before writing: another run may have added its benchmarks meanwhile
+        runs = json.loads(args.json.read_text())["benchmarks"] if args.json.exists() else {}
+        runs[path.stem] = entry
         write_atomic(args.json, json.dumps({"benchmarks": runs}, indent=1) + "\n")  # after each one
     return 0
 

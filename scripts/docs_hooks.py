@@ -111,6 +111,7 @@ def benchmarks_markdown(path: Path) -> str:
                 f"Python {machine['python']}, numpy {machine['numpy']}.", ""]
         for table in run.get("tables", []):
             out += _table(table)
-        out += ["??? abstract \"Output of the run\"", "", "    ```text",
+        fold = "???" if run.get("tables") else "???+"  # open when the output is all there is
+        out += [f"{fold} abstract \"Output of the run\"", "", "    ```text",
                 *("    " + line for line in run["output"].rstrip().splitlines()), "    ```", ""]
     return "\n".join(out)
