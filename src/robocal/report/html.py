@@ -266,7 +266,8 @@ _KIND_ERROR = {"point": "position", "pose": "position", "plane": "distance to th
 def _per_file(result: dict) -> str:
     """Statistics per measurement file and per kind when a calibration used several files."""
     files = result.get("per_file") or []
-    if len(files) < 2:
+    roles = [f.get("role") for f in files]
+    if max(roles.count("calibration"), roles.count("validation"), 0) < 2:  # the statistics table says it
         return ""
     rows = []
     for f in files:
@@ -277,7 +278,8 @@ def _per_file(result: dict) -> str:
     kinds = [[esc(k), _num(v.get("rms")), _num(v.get("max")), esc(v.get("n"))]
              for k, v in (result.get("per_kind") or {}).items()]
     return ("<h3>Per file</h3><p>Each file judged in its own kind of error (all in mm).</p>"
-            + _table(["", "kind", "error", "file", "RMS before", "RMS after", "max after", "n"], rows, left=4)
+            + _table(["", "kind", "error", "file", "RMS before", "RMS after", "max after", "n"], rows,
+                     align="lllwrrrr")
             + "<h3>Per kind, after calibration</h3>" + _table(["", "RMS (mm)", "max (mm)", "n"], kinds))
 
 
@@ -329,8 +331,8 @@ def _errors_section(cal: _ObsErrors, val: _ObsErrors | None) -> str:
     if cal.joints is not None and cal.joints.ndim == 2 and len(cal.joints) == len(cal.after):
         figs.append(_figure(
             plots.error_vs_joints(cal.joints, cal.after, cal.label, rejected=cal.rejected),
-            "Error after calibration against each joint angle (linear scale); the line is the mean per "
-            "bin of the joint's range.",
+            "Error after calibration against each joint angle (linear scale); the line is the mean of "
+            f"{plots.JOINT_BINS} groups of equally many observations, in the order of the joint's angle.",
             "a trend, wave or step of the line: an effect of that joint the model lacks (compliance, "
             "gear or cyclic errors, backlash); a flat line at the noise level is what a good model leaves."))
     pts = cal.measured if cal.measured is not None else cal.after_pts

@@ -141,25 +141,25 @@ def distribution(series: list[tuple[str, np.ndarray, str]], label: str = "positi
     return fig
 
 
-JOINT_BINS = 12  # bins of each joint's range for the mean-error line of error_vs_joints
+JOINT_BINS = 12  # bins (equal counts) of each joint's angles for the mean-error line of error_vs_joints
 
 
 def _binned_mean(x: np.ndarray, y: np.ndarray, bins: int) -> tuple[np.ndarray, np.ndarray]:
-    """Bin centres and the mean of ``y`` in each of ``bins`` equal bins of ``x``'s range (empty
-    bins left out)."""
-    edges = np.linspace(x.min(), x.max(), bins + 1)
+    """The mean of ``x`` and of ``y`` in each of ``bins`` bins of ``x`` holding equal numbers of
+    points (quantiles: a bin of the range with one or two poses would make the line jump)."""
+    edges = np.quantile(x, np.linspace(0.0, 1.0, bins + 1))
     k = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
     count = np.bincount(k, minlength=bins)
-    mean = np.bincount(k, weights=y, minlength=bins) / np.maximum(count, 1)
     keep = count > 0
-    return ((edges[:-1] + edges[1:]) / 2)[keep], mean[keep]
+    mean_x = np.bincount(k, weights=x, minlength=bins)[keep] / count[keep]
+    return mean_x, np.bincount(k, weights=y, minlength=bins)[keep] / count[keep]
 
 
 @_styled
 def error_vs_joints(joints_deg: np.ndarray, after: np.ndarray, label: str = "error (mm)",
                     rejected: np.ndarray | None = None) -> Figure:
     """Error after calibration ``(N,)`` against each joint angle of ``joints_deg`` ``(N, n)``, on a
-    linear scale, with the mean per bin of the joint's range; ``rejected`` observations are left
+    linear scale, with the mean per bin of equally many poses; ``rejected`` observations are left
     out (their errors would set the scale)."""
     keep = np.ones(after.size, bool) if rejected is None else ~np.asarray(rejected, bool)
     q, e = joints_deg[keep], after[keep]
