@@ -29,7 +29,8 @@ test: $(STAMP)
 
 # the documentation site in build/site; --strict: any warning (a broken link, a missing page) fails
 docs: $(STAMP)
-	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --quiet
+	@# not --quiet: mkdocs then drops the warnings that --strict counts
+	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict
 
 bench: $(STAMP)
 	$(PY) -m pip install --quiet -e '.[bench]'
