@@ -1,16 +1,17 @@
-# Two commands on a fresh clone: `make demo` and `make test`. Each builds .venv itself.
+# Two commands on a fresh clone: `make demo` and `make test` (ruff, the docs site, the tests).
+# Each builds .venv itself. `make docs` builds the site alone, `make bench` runs the benchmarks.
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench lint clean
+.PHONY: demo test docs bench lint clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 11), "robocal needs Python >= 3.11"'
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip install --quiet -e '.[test,docs]'
 	touch $@
 
 demo: $(STAMP)
@@ -23,7 +24,13 @@ test: $(STAMP)
 	    (apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium) >/dev/null 2>&1; } || \
 	  echo "chromium not installed (no apt-get or no permission): the browser test will be skipped"
 	$(PY) -m ruff check .
+	$(MAKE) --no-print-directory docs
 	$(PY) -m pytest -q
+
+# the documentation site in build/site; --strict: any warning (a broken link, a missing page) fails
+docs: $(STAMP)
+	@# not --quiet: mkdocs then drops the warnings that --strict counts
+	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict
 
 bench: $(STAMP)
 	$(PY) -m pip install --quiet -e '.[bench]'

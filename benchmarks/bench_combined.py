@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 from common import model_error_mm, rigid_error_mm
+from results import table
 
 import robocal as rc
 from robocal.data.simulate import sample_joints, simulate_tracker
@@ -23,12 +24,6 @@ PROBE_NOISE_MM = 0.01
 
 
 def planes_and_scale_bar() -> None:
-    print("plane campaign (3 planes, 60 contacts, probe noise 0.01 mm) + 8 placements of a 500 mm scale bar "
-          "(5 um)")
-    print(f"{'seed':>4} {'tip vs truth, rigid fit (mm)':>30} {'held-out plane deviation / noise':>34}"
-          f" {'/ held-out floor':>17}")
-    print(f"{'':>4} {'nominal':>9} {'planes':>9} {'+ bar':>9} {'planes':>13} {'+ bar':>13} {'planes':>10} "
-          f"{'+ bar':>8}")
     rows = []
     for seed in range(SEEDS):
         sim = simulate_tracker(ROBOT, 90, kind="plane", n_planes=3, noise_mm=PROBE_NOISE_MM, seed=seed)
@@ -45,8 +40,13 @@ def planes_and_scale_bar() -> None:
                both.validation["rms"] / PROBE_NOISE_MM, alone.validation["rms"] / floor,
                both.validation["rms"] / floor]
         rows.append(row)
-        print(f"{seed:>4} {row[0]:9.4f} {row[1]:9.4f} {row[2]:9.4f} {row[3]:13.3f} {row[4]:13.3f} "
-              f"{row[5]:10.3f} {row[6]:8.3f}")
+    table("plane campaign (3 planes, 60 contacts, probe noise 0.01 mm) + 8 placements of a 500 mm scale bar "
+          "(5 um): probe tip vs truth after a rigid fit (mm), held-out plane deviation / probe noise and / "
+          "the held-out contacts' own noise",
+          ["seed", "tip, nominal", "tip, planes", "tip, planes + bar", "deviation / noise, planes",
+           "/ noise, + bar", "/ floor, planes", "/ floor, + bar"],
+          [[seed, *(f"{v:.4f}" for v in row[:3]), *(f"{v:.3f}" for v in row[3:])]
+           for seed, row in enumerate(rows)])
     r = np.array(rows)
     print(f"range: tip + bar {r[:, 2].min():.4f}-{r[:, 2].max():.4f} mm (planes alone {r[:, 1].min():.4f}-"
           f"{r[:, 1].max():.4f}); held-out deviation + bar {r[:, 4].min():.3f}-{r[:, 4].max():.3f} x the "
@@ -55,8 +55,7 @@ def planes_and_scale_bar() -> None:
 
 
 def points_and_ball_bar() -> None:
-    print("\ntracker points (60 poses, 0.02 mm) and a ball bar (40 pairs, 5 um): true model error (mm)")
-    ratios = []
+    ratios, rows = [], []
     for seed in range(SEEDS):
         sim = simulate_tracker(ROBOT, 60, noise_mm=0.02, seed=seed)
         bar = simulate_tracker(sim.truth.with_frames(base=np.eye(4)), 40, kind="distance", noise_mm=0.005,
@@ -65,7 +64,9 @@ def points_and_ball_bar() -> None:
         points = model_error_mm(rc.calibrate(ROBOT, sim.data).robot, sim.truth, q)
         both = model_error_mm(rc.calibrate(ROBOT, [sim.data, bar]).robot, sim.truth, q)
         ratios.append(both / points)
-        print(f"  seed {seed}: points {points:.4f}, points + ball bar {both:.4f} ({both / points:.3f} x)")
+        rows.append([seed, f"{points:.4f}", f"{both:.4f}", f"{both / points:.3f}"])
+    table("tracker points (60 poses, 0.02 mm) and a ball bar (40 pairs, 5 um): true model error over 300 "
+          "random poses (mm)", ["seed", "points", "points + ball bar", "ratio"], rows)
     print(f"points + ball bar / points alone: {min(ratios):.3f}-{max(ratios):.3f}")
 
 

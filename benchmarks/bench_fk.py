@@ -89,7 +89,8 @@ def main() -> None:
     rows = {k: f"  robocal Robot.fk ({k:5s})   " for k in kernels}
     if opw is not None:
         rows["py-opw"] = "  py-opw batch_forward (Rust)"
-    print_times(best, rows, N, "ns", "py-opw" if opw is not None else None)
+    print_times(best, rows, N, "ns", "py-opw" if opw is not None else None,
+                f"forward kinematics, {N:,} configurations of {robot.name}, one thread each")
     if len(kernels) > 1:
         print(f"  numpy vs numba kernels: max |diff| {np.abs(ours['numpy'] - ours['numba']).max():.1e}")
     if opw is None:

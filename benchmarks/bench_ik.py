@@ -42,7 +42,8 @@ def _speed(robot: rc.Robot, T: np.ndarray, n: int, kernels: list[str], peer) -> 
         rows = {k: f"    solve_all ({k:5s})" for k in kernels}
         if peer is not None:
             rows["py-opw"] = "    py-opw reach      "
-        print_times(best, rows, n, "us", "py-opw" if peer is not None else None)
+        print_times(best, rows, n, "us", "py-opw" if peer is not None else None,
+                    f"solve_all, {n:,} poses of {robot.name}, all 8 branches, {label}")
         if threads == 1:
             check = best["check_poses"][1]
             print(f"    of which check_poses (pose validation): {check / n * 1e6:.2f} us/pose CPU, "

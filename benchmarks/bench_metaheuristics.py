@@ -19,6 +19,7 @@ from dataclasses import replace
 
 import numpy as np
 from common import rigid_error_mm
+from results import table
 from scipy.optimize import differential_evolution
 
 from robocal import Robot
@@ -56,30 +57,31 @@ def tracker_problem() -> None:
     sim = simulate_tracker(robot, 300, seed=1, noise_mm=0.02)
     cal = sim.data.subset(np.flatnonzero(sim.data.pose_id < 100))
     val = sim.data.subset(np.flatnonzero(sim.data.pose_id >= 100))
-    print("tracker: abb_irb2600, 100 calibration poses, noise 0.02 mm, 200 validation poses")
     runs = [("lsq", {}),
             ("genetic binary", {"method": "genetic", "population": 60, "generations": 100}),
             ("genetic real", {"method": "genetic", "population": 60, "generations": 100, "encoding": "real"}),
             ("swarm + polish", {"method": "swarm", "particles": 60, "iterations": 300}),
             ("swarm (pure PSO)", {"method": "swarm", "particles": 60, "iterations": 300, "polish": False})]
-    lsq_rms = None
+    lsq_rms, rows = None, []
     for label, opts in runs:
         t = time.perf_counter()
         res = calibrate(robot, cal, validation=val, nongeometric=None, **opts)
         dt = time.perf_counter() - t
         lsq_rms = lsq_rms or res.validation["rms"]
-        print(f"  {label:18s} {dt:7.2f} s  validation RMS {res.validation['rms']:.4f} mm "
-              f"({res.validation['rms'] / lsq_rms:.3f} x lsq)")
         if label == "lsq":
             lsq_result = res
-            print(f"  {'nominal':18s}            validation RMS {res.validation_before['rms']:.4f} mm")
+            rows.append(["nominal", "", f"{res.validation_before['rms']:.4f}", ""])
+        rms = res.validation["rms"]
+        rows.append([label, f"{dt:.2f}", f"{rms:.4f}", f"{rms / lsq_rms:.3f}"])
     t = time.perf_counter()
     state = differential_evolution_fit(lsq_result)
     dt = time.perf_counter() - t
     vproblem = CalibrationProblem(lsq_result.start, val)
     rms = float(np.sqrt(np.mean(vproblem.position_errors(vproblem.start(state.robot)) ** 2)) * 1e3)
-    print(f"  {'scipy DE':18s} {dt:7.2f} s  validation RMS {rms:.4f} mm ({rms / lsq_rms:.3f} x lsq), "
-          "300 generations")
+    rows.append(["scipy differential_evolution (300 generations)", f"{dt:.2f}", f"{rms:.4f}",
+                 f"{rms / lsq_rms:.3f}"])
+    table("tracker: abb_irb2600, 100 calibration poses, noise 0.02 mm, 200 validation poses",
+          ["method", "time (s)", "validation RMS (mm)", "/ lsq"], rows)
 
 
 def plane_problem() -> None:
@@ -88,16 +90,14 @@ def plane_problem() -> None:
     cal, val = data.subset(np.arange(60)), data.subset(np.arange(60, 90))
     q = sample_joints(sim.truth, 200, np.random.default_rng(5))
     nominal_err = rigid_error_mm(nominal, sim.truth, q)
-    print(f"plane contacts: 3 planes, 60 contacts (+30 held out), probe noise {noise} mm; "
-          f"nominal tip error at 200 held-out poses {nominal_err:.4f} mm (after a rigid fit)")
+    rows = [["nominal", "", "", "", f"{nominal_err:.4f}", ""]]
 
     def line(label, robot, nuisance, dt):
         obs = PlaneObservation(val, robot)
         held = float(np.sqrt(np.mean(obs.residuals(robot, nuisance) ** 2)) * 1e3)
         err = rigid_error_mm(robot, sim.truth, q)
-        print(f"  {label:18s} {dt:7.2f} s  held-out plane deviation {held:.4f} mm "
-              f"({held / noise:.2f} x noise)"
-              f"  tip error {err:.4f} mm ({nominal_err / err:.1f}x below nominal)")
+        rows.append([label, f"{dt:.2f}", f"{held:.4f}", f"{held / noise:.2f}", f"{err:.4f}",
+                     f"{nominal_err / err:.1f}x"])
 
     runs = [("lsq", {}),
             ("swarm + polish", {"method": "swarm", "particles": 60, "iterations": 300}),
@@ -112,6 +112,10 @@ def plane_problem() -> None:
     t = time.perf_counter()
     state = differential_evolution_fit(lsq_result)
     line("scipy DE", state.robot, state.nuisance, time.perf_counter() - t)
+    table(f"plane contacts: 3 planes, 60 contacts (+30 held out), probe noise {noise} mm; tip error at 200 "
+          "held-out poses after a rigid fit",
+          ["method", "time (s)", "held-out plane deviation (mm)", "/ noise", "tip error (mm)",
+           "below nominal"], rows)
 
     _, one, nominal1 = plane_campaign(60, 1, noise, seed=3)
     res = calibrate(nominal1, one, nongeometric=None)

@@ -1,32 +1,102 @@
-"""Run every ``benchmarks/bench_*.py`` (each exposes ``main()`` that prints its results).
+"""Run every ``benchmarks/bench_*.py`` (each exposes ``main()`` that prints its results) and write
+what each printed, its recorded tables, the machine and the date to ``benchmarks/results.json``,
+from which the documentation's benchmark page is built.
 
-Usage: ``python benchmarks/run.py [NAME ...]`` -- names filter the files (``fk`` runs bench_fk.py).
+Usage: ``python benchmarks/run.py [NAME ...] [--json PATH]`` -- names filter the files (``fk`` runs
+bench_fk.py); the JSON keeps the other benchmarks' earlier entries (each carries its own date).
 """
 
 from __future__ import annotations
 
+import argparse
+import datetime
 import importlib.util
+import io
+import json
+import os
+import platform
 import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))  # the benchmarks share benchmarks/timing.py
+sys.path.insert(0, str(HERE))  # the benchmarks share benchmarks/timing.py and results.py
+
+import results  # noqa: E402
+
+from robocal.io import write_atomic  # noqa: E402
+from robocal.version import __version__  # noqa: E402
+
+RESULTS = HERE / "results.json"
+
+
+class _Tee(io.TextIOBase):
+    """stdout that also keeps what was written."""
+
+    def __init__(self, stream) -> None:
+        self.stream, self.kept = stream, io.StringIO()
+
+    def write(self, text: str) -> int:
+        self.kept.write(text)
+        return self.stream.write(text)
+
+    def flush(self) -> None:
+        self.stream.flush()
+
+
+def machine() -> dict:
+    """What the timings depend on: CPU, cores, load, platform, Python and numpy versions."""
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
+    return {"cpu": cpu, "cores": os.cpu_count(), "load_average": [round(x, 2) for x in load],
+            "platform": platform.platform(), "python": platform.python_version(), "numpy": np.__version__}
+
+
+def run_one(path: Path) -> dict:
+    """Run one benchmark file's ``main()``, printing as it goes; its JSON entry."""
+    spec = importlib.util.spec_from_file_location(path.stem, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    results.TABLES.clear()
+    entry = {"date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M"),
+             "machine": machine(), "robocal_version": __version__,
+             "description": " ".join((module.__doc__ or "").split("\n\n")[0].split())}
+    print(f"== {path.name}", flush=True)
+    tee, stdout = _Tee(sys.stdout), sys.stdout
+    start = time.perf_counter()
+    sys.stdout = tee
+    try:
+        module.main()
+    finally:
+        sys.stdout = stdout
+    entry["seconds"] = round(time.perf_counter() - start, 1)
+    print(f"== {path.name} done in {entry['seconds']:.1f} s\n", flush=True)
+    return {**entry, "tables": list(results.TABLES), "output": tee.kept.getvalue()}
 
 
 def main(argv: list[str] | None = None) -> int:
-    wanted = sys.argv[1:] if argv is None else argv
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("names", nargs="*", help="benchmarks to run (fk runs bench_fk.py); default all")
+    parser.add_argument("--json", type=Path, default=RESULTS, help="results file (default %(default)s)")
+    args = parser.parse_args(argv)
     files = sorted(HERE.glob("bench_*.py"))
-    if wanted:
-        files = [f for f in files if f.stem.removeprefix("bench_") in wanted]
+    if args.names:
+        files = [f for f in files if f.stem.removeprefix("bench_") in args.names]
     for path in files:
-        spec = importlib.util.spec_from_file_location(path.stem, path)
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        print(f"== {path.name}", flush=True)
-        start = time.perf_counter()
-        module.main()
-        print(f"== {path.name} done in {time.perf_counter() - start:.1f} s\n", flush=True)
+        entry = run_one(path)
+        # read again just before writing: another run may have added its benchmarks meanwhile
+        runs = json.loads(args.json.read_text())["benchmarks"] if args.json.exists() else {}
+        runs[path.stem] = entry
+        write_atomic(args.json, json.dumps({"benchmarks": runs}, indent=1) + "\n")  # after each one
     return 0
 
 

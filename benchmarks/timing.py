@@ -9,6 +9,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from results import table
+
 from robocal import Robot
 from robocal.ik.opw_ik import opw_form
 from robocal.kinematics.kernels import compiled, use_kernels
@@ -55,17 +57,23 @@ def first_call(setup: str, call: str) -> tuple[float, float] | None:
 
 
 def print_times(best: dict[str, tuple[float, float]], rows: dict[str, str], n: int, per: str,
-                peer: str | None) -> None:
-    """One line per ``rows`` entry (key in ``best`` -> label): wall clock, time per item in ``per``
-    (``"ns"`` or ``"us"``), CPU time and, except for the peer's own row, the ratios to ``peer``."""
+                peer: str | None, title: str) -> None:
+    """The table ``title`` (recorded for results.json, and printed), one row per ``rows`` entry
+    (key in ``best`` -> label): wall clock, time per item in ``per`` (``"ns"`` or ``"us"``), CPU
+    time and, except for the peer's own row, the ratios to ``peer``."""
     scale = {"ns": 1e9, "us": 1e6}[per]
+    columns = ["", "wall (s)", f"wall {per}/item", "CPU (s)"]
+    if peer is not None:
+        columns += [f"faster than {peer}, wall", "by CPU time"]
+    lines = []
     for key, label in rows.items():
         wall, cpu = best[key]
-        line = f"{label} {wall:7.3f} s  {wall / n * scale:6.2f} {per}/pose  CPU {cpu:6.3f} s"
-        if peer is not None and key != peer:
+        line = [label.strip(), f"{wall:.3f}", f"{wall / n * scale:.2f}", f"{cpu:.3f}"]
+        if peer is not None:
             pw, pc = best[peer]
-            line += f"   {pw / wall:4.1f}x {peer} by wall clock, {pc / cpu:4.1f}x by CPU time"
-        print(line)
+            line += ["", ""] if key == peer else [f"{pw / wall:.1f}x", f"{pc / cpu:.1f}x"]
+        lines.append(line)
+    table(title, columns, lines)
 
 
 def kernel_choices(module: str) -> list[str]:

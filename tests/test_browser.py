@@ -1,5 +1,6 @@
 """The HTML report in a real browser (headless Chromium): renders without console messages,
-every figure is in the DOM, and the screenshot is a rich, non-blank page."""
+every figure is in the DOM, and screenshots 1400 px wide show a rich page that uses the width
+(figures side by side) and stays short."""
 
 from __future__ import annotations
 
@@ -71,25 +72,52 @@ def test_report_renders_without_console_messages(browser, tmp_path, report):
     assert len(re.findall(r"<table", dom)) >= 8
 
 
-def test_screenshot_shows_the_plots(browser, tmp_path, report):
+WIDTH = 1400  # the screen width the layout is checked at
+TALL = 7000  # a window taller than the synthetic report, so the screenshot shows all of it
+
+
+def screenshot(browser: str, tmp_path, page, height: int = TALL) -> np.ndarray:
     from PIL import Image
 
-    shot = tmp_path / "report.png"
-    proc = run_browser(browser, tmp_path, report.as_uri(), f"--screenshot={shot}",
-                       "--window-size=1280,4000")
+    shot = tmp_path / "shot.png"
+    proc = run_browser(browser, tmp_path, page.as_uri(), f"--screenshot={shot}",
+                       f"--window-size={WIDTH},{height}")
     assert shot.exists(), proc.stderr[-2000:]
     assert console_messages(proc.stderr) == []
-    img = np.asarray(Image.open(shot).convert("RGB"))
-    assert img.shape == (4000, 1280, 3)
+    return np.asarray(Image.open(shot).convert("RGB"))
+
+
+def series_masks(img: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pixels of the 'before' (orange) and 'after' (green) series colours."""
+    r, g, b = (img[..., k].astype(int) for k in range(3))
+    return (r - b > 80) & (r > g + 30), (g - r > 60) & (g > b)
+
+
+def page_height(img: np.ndarray) -> int:
+    """The last row of the page holding anything but background and white."""
+    return int(np.nonzero((img[:, 40:WIDTH - 40].min(axis=2) < 230).any(axis=1))[0].max()) + 1
+
+
+def test_screenshot_shows_the_plots_across_the_width(browser, tmp_path, report):
+    img = screenshot(browser, tmp_path, report)
+    assert img.shape == (TALL, WIDTH, 3)
     colours = np.unique(img.reshape(-1, 3) // 8, axis=0)  # 32 levels per channel
     assert len(colours) > 300, f"only {len(colours)} distinct colours: blank or unstyled page"
-    ink = (img.min(axis=2) < 200).mean()
-    assert ink > 0.05, f"only {ink:.1%} of the page is drawn on"
-    # the 'before' (orange, partly transparent) and 'after' (green) series are on screen
-    r, g, b = (img[..., k].astype(int) for k in range(3))
-    orange = ((r - b > 80) & (r > g + 30)).sum()
-    green = ((g - r > 60) & (g > b)).sum()
-    assert orange > 5000 and green > 2000, (orange, green)
+    orange, green = series_masks(img)
+    assert orange.sum() > 5000 and green.sum() > 2000, (orange.sum(), green.sum())
+    # the figures use the width: two of them side by side, the 'after' series drawn in both
+    # halves of the same rows with the grid's gutter between them blank (one wide figure would
+    # draw across the middle)
+    half = WIDTH // 2
+    ink = img.min(axis=2) < 200
+    left, right = green[:, 40:half - 20].sum(axis=1) > 3, green[:, half + 20:WIDTH - 40].sum(axis=1) > 3
+    side_by_side = left & right & ~ink[:, half - 10:half + 10].any(axis=1)
+    assert side_by_side.sum() > 100, f"{side_by_side.sum()} rows with figures side by side"
+    quarter = ink[:, int(WIDTH * 0.75):WIDTH - 40].any(axis=0).mean()
+    assert quarter > 0.9, f"only {quarter:.0%} of the right quarter's columns are drawn on"
+    # a page that reads at a glance: the 8-section report in well under the 8,000 px of one column
+    height = page_height(img)
+    assert height < 6500, height
 
 
 def _demo_report(tmp_path_factory):
@@ -118,17 +146,12 @@ def _meca500_report(tmp_path_factory):
 def test_real_reports_open_with_every_section(browser, tmp_path, tmp_path_factory, make, sections):
     """The demo's report and a real Meca500 calibration's: no console message, every section and
     figure rendered, a screenshot that is not blank."""
-    from PIL import Image
-
     path = make(tmp_path_factory)
     proc = run_browser(browser, tmp_path, path.as_uri(), "--dump-dom")
     assert proc.returncode == 0 and console_messages(proc.stderr) == []
     assert section_ids(proc.stdout) == sections
     assert svg_count(proc.stdout) == svg_count(path.read_text(encoding="utf-8")) >= 7
-    shot = tmp_path / "shot.png"
-    proc = run_browser(browser, tmp_path, path.as_uri(), f"--screenshot={shot}", "--window-size=1280,3000")
-    assert console_messages(proc.stderr) == []
-    img = np.asarray(Image.open(shot).convert("RGB"))
+    img = screenshot(browser, tmp_path, path, height=3000)
     assert len(np.unique(img.reshape(-1, 3) // 8, axis=0)) > 300
 
 

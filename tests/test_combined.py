@@ -63,7 +63,7 @@ def test_a_scale_bar_makes_the_scale_identifiable(planes):
     sim, start = planes
     cal, val = sim.data.subset(np.arange(60)), sim.data.subset(np.arange(60, 90))
     truth = sim.truth
-    bar = ballbar(truth, 8, 0.005, seed=9)  # measured pairs; the scale bar's certified length in README
+    bar = ballbar(truth, 8, 0.005, seed=9)  # measured pairs; the scale bar of docs/how-to/planes-scale-bar.md
     alone = rc.calibrate(start, cal, validation=val)
     both = rc.calibrate(start, [cal, bar], validation=val)
     assert "d4" not in alone.names and "d4" in both.names

@@ -84,8 +84,8 @@ def synthetic_result(seed: int = 0, n_poses: int = 60, repeats: int = 5, validat
         "rejected": [{"source_row": obs["source_row"][i], "pose_id": obs["pose_id"][i],
                       "residual": float(e1[i]), "weight": 0.0} for i in worst],
         "observations": obs,
-        "history": [{"iteration": i, "rms": float(e0.mean() * 0.3**i + 0.02), "damping": 1e-3}
-                    for i in range(6)],
+        "history": [{"iteration": i, "rms": float((_stats(e0)["rms"] * 0.3**i + 0.02) / 1e3), "damping": 1e-3}
+                    for i in range(6)],  # m, from the error before calibration
         "warnings": [],
     }
     if validation:
@@ -239,9 +239,87 @@ def test_nongeometric_terms_are_tabled():
         {"name": name, "unit": "deg", "nominal": 0.0, "estimate": float(np.rad2deg(v)),
          "correction": float(np.rad2deg(v)), "sigma": float(np.rad2deg(v / 10)), "status": "estimated"}
         for name, v in (("gear2_s1", 1e-4), ("backlash1", 2e-4))]
+    result["parameters"].append({"name": "gear1_c1", "unit": "deg", "nominal": 0.0, "estimate": 0.0,
+                                 "correction": 0.0, "sigma": None, "status": "dropped"})
+    result["dropped"].append({"name": "gear1_c1", "reason": "not identifiable from these data",
+                              "confounded_with": ["theta1"]})
     text = render_report(result)
-    assert "Non-geometric terms: gear, backlash" in text and "backlash1" in text
+    assert "Joint errors: gear, backlash" in text
     assert "0.01146" in text  # 2e-4 rad in deg
+    params = text[text.index('id="parameters"'):text.index("</section>", text.index('id="parameters"'))]
+    for name in ("gear2_s1", "backlash1", "gear1_c1"):  # in the joint-error table only, not twice
+        assert params.count(f">{name}</td>") == 1, name
+    joint = params[params.index("Joint errors"):]
+    assert "confounded with theta1" in joint and ">alpha1</td>" not in joint
+
+
+def test_summary_leads_with_error_model_accuracy_and_warnings():
+    result = synthetic_result(3, n_poses=30, repeats=0)
+    result["warnings"] = ["the normal matrix is strongly ill-conditioned"]
+    result["nongeometric"] = {"terms": ["compliance", "travel"], "kept": [], "dropped": []}
+    summary = render_report(result)
+    summary = summary[summary.index('id="summary"'):summary.index("</section>")]
+    model, accuracy = summary.index("Error model:"), summary.index("Accuracy held out")
+    warning, table = summary.index("strongly ill-conditioned"), summary.index("<table")
+    assert model < accuracy < warning < table
+    assert "joint errors: compliance, travel" in summary[model:accuracy]
+    assert f"{result['validation']['rms']:.4f} mm RMS" in summary[accuracy:warning]
+    assert summary.index("Where these numbers come from") > table
+
+
+def test_summary_without_validation_says_the_accuracy_is_the_fits_own():
+    result = synthetic_result(4, n_poses=30, repeats=0, validation=False)
+    summary = render_report(result)
+    summary = summary[summary.index('id="summary"'):summary.index("</section>")]
+    assert "Accuracy on the calibration set" in summary and "optimistic" in summary
+    assert "geometric (MDH + beta)" in summary and "No warnings." in summary
+
+
+def test_every_figure_says_what_to_look_for(full):
+    text = full[1]
+    assert text.count("<figure>") == svg_count(text) == text.count("<b>Look for:</b>")
+
+
+def test_figures_state_scale_and_density_in_words(full):
+    from robocal.report import plots
+
+    assert plots.magnification(7290.4) == "7290x" and plots.magnification(12.54) == "12.5x"
+    text = full[1]
+    assert re.search(r"arrows magnified [0-9.]+x", text)
+    assert "residual vectors x" not in text
+    # 72 calibration observations against 40 validation ones: histogram as shares
+    assert "share of the set (%)" in text and "as the share of each set per bin" in text
+
+
+def test_binned_mean_matches_a_loop():
+    from robocal.report.plots import _binned_mean
+
+    rng = np.random.default_rng(0)
+    x, y = rng.uniform(-90, 90, 600), rng.uniform(0, 1, 600)
+    centres, mean = _binned_mean(x, y, 12)
+    order = np.argsort(x)
+    groups = np.array_split(order, 12)  # 600 distinct angles: 12 bins of 50
+    np.testing.assert_allclose(mean, [y[g].mean() for g in groups])
+    np.testing.assert_allclose(centres, [x[g].mean() for g in groups])
+
+
+def test_history_that_starts_below_before_is_explained():
+    result = synthetic_result(6, n_poses=30, repeats=0)
+    before_m = result["before"]["rms"] / 1e3
+    result["method"] = "lsq"
+    result["model_selection"] = {"candidates": []}
+    result["history"] = [{"iteration": k, "rms": before_m / 50 / (k + 1)} for k in range(4)]
+    text = render_report(result)
+    history = text[text.index('id="history"'):]
+    assert "not at the error before calibration" in history and "largest candidate" in history
+    assert "before calibration" in history  # the dashed line's legend
+
+
+def test_an_unknown_parameter_status_is_shown_as_it_is():
+    result = synthetic_result(7, n_poses=20, repeats=0, validation=False)
+    result["parameters"][0]["status"] = "undetermined <x>"
+    text = render_report(result)
+    assert ">undetermined &lt;x&gt;</td>" in text
 
 
 def test_distance_data_report_the_pairs_length_errors(tmp_path):

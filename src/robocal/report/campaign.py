@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.errors import DataError
-from robocal.report.html import _figure, _identifiability, _num, _table, esc, page
+from robocal.report.html import _figure, _grid, _identifiability, _num, _table, esc, page
 
 
 def _summary(c: dict) -> str:
@@ -58,10 +58,12 @@ def _curve(c: dict) -> str:
     fig = _figure(plots.accuracy_curve(n, planned, random, c.get("n_poses")),
                   "Predicted RMS error of the calibrated model's TCP position over the region of interest "
                   "against the number of poses: planned poses and the median of random choices among the "
-                  "same candidates. The dashed line marks the planned campaign.")
+                  "same candidates. The dashed line marks the planned campaign.",
+                  "where the planned curve flattens: more poses beyond it buy little accuracy; the gap "
+                  "to the random curve is what planning gains.")
     rows = [[esc(int(k)), _num(float(a)), _num(float(b)), f"{float(b) / float(a):.2f}"]
             for k, a, b in zip(n, planned, random, strict=True)]
-    return fig + _table(["poses", "planned (mm)", "random, median (mm)", "random / planned"], rows)
+    return _grid(fig, _table(["poses", "planned (mm)", "random, median (mm)", "random / planned"], rows))
 
 
 def _poses(c: dict) -> str:
@@ -73,7 +75,9 @@ def _poses(c: dict) -> str:
         raise DataError("a campaign page needs joints_deg (N, n) and tcp_mm (N, 3)")
     visible = np.asarray(c.get("visible") or np.ones((len(q), 1)), int)
     fig = _figure(plots.points_3d(tcp, np.arange(1, len(q) + 1, dtype=float), "measuring order"),
-                  "TCP (first SMR) positions of the planned poses, coloured by measuring order.")
+                  "TCP (first SMR) positions of the planned poses, coloured by measuring order.",
+                  "poses spread over the whole region the robot will work in; a region without poses is "
+                  "a region the calibration does not vouch for.")
     header = ["#"] + [f"q{i + 1} (deg)" for i in range(q.shape[1])] + ["x (mm)", "y (mm)", "z (mm)"]
     multi = visible.shape[1] > 1
     if multi:

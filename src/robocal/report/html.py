@@ -25,21 +25,25 @@ WORST = 10
 _CSS = """
 body{font:14px/1.45 system-ui,-apple-system,"Segoe UI",Roboto,Helvetica,Arial,sans-serif;color:#222;
  margin:0;background:#f6f7f9}
-main{max-width:1120px;margin:0 auto;padding:24px 32px 60px;background:#fff}
-h1{font-size:24px;margin:0 0 4px}h2{font-size:18px;margin:32px 0 8px;border-bottom:2px solid #1b9e77;
- padding-bottom:3px}h3{font-size:15px;margin:18px 0 6px}
-.sub{color:#666;margin:0 0 16px}nav{margin:8px 0 16px;font-size:13px}nav a{margin-right:12px;color:#1b6e5a}
+main{max-width:1400px;margin:0 auto;padding:20px 28px 48px;background:#fff}
+h1{font-size:24px;margin:0 0 4px}h2{font-size:18px;margin:28px 0 8px;border-bottom:2px solid #1b9e77;
+ padding-bottom:3px}h3{font-size:15px;margin:14px 0 6px}
+.sub{color:#666;margin:0 0 12px}nav{margin:8px 0 12px;font-size:13px}nav a{margin-right:12px;color:#1b6e5a}
 table{border-collapse:collapse;margin:6px 0 12px;font-size:13px}
-th,td{padding:3px 9px;border-bottom:1px solid #e3e3e3;text-align:right;white-space:nowrap}
-th{background:#f0f2f4;font-weight:600}td.l,th.l{text-align:left}
+th,td{padding:3px 6px;border-bottom:1px solid #e3e3e3;text-align:right;white-space:nowrap}
+th{background:#f0f2f4;font-weight:600}td.l,th.l{text-align:left}td.wrap{white-space:normal}
 tr.dropped td{background:#fff4e5}tr.chosen td{background:#e8f4ea;font-weight:600}
-.kpi{display:flex;gap:14px;flex-wrap:wrap;margin:10px 0}
+.lead{font-size:16px;margin:4px 0 10px}.lead b{font-size:17px}
+.kpi{display:flex;gap:12px;flex-wrap:wrap;margin:10px 0}
 .kpi div{border:1px solid #dde;border-radius:6px;padding:8px 14px;min-width:150px}
 .kpi b{display:block;font-size:22px}.kpi span{color:#666;font-size:12px}
+.kpi div.main{border:2px solid #1b9e77}
 .good{color:#1b9e77}.bad{color:#d95f02}.warn{background:#fff4e5;border-left:4px solid #d95f02;
  padding:6px 10px;margin:6px 0}
-figure{margin:10px 0 18px}figure svg{width:100%;height:auto}figcaption{color:#555;font-size:12px}
-.row{display:flex;flex-wrap:wrap;gap:12px}.row figure{flex:1 1 460px}
+figure{margin:4px 0 10px}figure svg{width:100%;height:auto}
+figcaption{color:#555;font-size:12px}figcaption b{color:#222}
+.grid{display:grid;grid-template-columns:repeat(auto-fit,minmax(560px,1fr));gap:8px 28px;align-items:start}
+.grid>*{min-width:0}.scroll{overflow-x:auto}section.narrow>figure{max-width:680px}
 .note{color:#666;font-size:12px}td code{white-space:pre-wrap;word-break:break-all}
 @media print{body{background:#fff}main{padding:0}h2{break-after:avoid}figure{break-inside:avoid}}
 """
@@ -64,21 +68,34 @@ def _num(value, digits: int = 4) -> str:
     return f"{value:.{digits}f}"
 
 
-def _table(header: list[str], rows: list[list[str]], left: int = 1, row_class=None) -> str:
-    """Rows of pre-escaped cells; the first ``left`` columns are left-aligned."""
+def _table(header: list[str], rows: list[list[str]], left: int = 1, row_class=None,
+           align: str | None = None) -> str:
+    """Rows of pre-escaped cells; the first ``left`` columns are left-aligned, or ``align`` gives
+    each column's alignment (``"l"`` left, ``"r"`` right, ``"w"`` left and wrapping)."""
+    align = align or "l" * left + "r" * max(len(header) - left, 0)
+    css = {"l": ' class="l"', "w": ' class="l wrap"', "r": ""}
+
     def cls(k: int) -> str:
-        return ' class="l"' if k < left else ""
+        return css[align[k]] if k < len(align) else ""
 
     head = "".join(f"<th{cls(k)}>{h}</th>" for k, h in enumerate(header))
     body = []
     for i, r in enumerate(rows):
         rc = f' class="{row_class[i]}"' if row_class and row_class[i] else ""
         body.append(f"<tr{rc}>" + "".join(f"<td{cls(k)}>{c}</td>" for k, c in enumerate(r)) + "</tr>")
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
+    table = f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
+    return f"<div class='scroll'>{table}</div>"
 
 
-def _figure(svg: str, caption: str) -> str:
-    return f"<figure>{svg}<figcaption>{caption}</figcaption></figure>"
+def _figure(svg: str, caption: str, look: str | None = None) -> str:
+    """A figure with its caption, led by one line saying what to look for (pre-escaped text)."""
+    lead = f"<b>Look for:</b> {look} " if look else ""
+    return f"<figure>{svg}<figcaption>{lead}{caption}</figcaption></figure>"
+
+
+def _grid(*parts: str) -> str:
+    """Blocks side by side where the page is wide enough (one column on a narrow screen)."""
+    return "<div class='grid'>" + "".join(f"<div>{p}</div>" for p in parts if p) + "</div>"
 
 
 # ----------------------------------------------------------------- observation errors
@@ -135,6 +152,75 @@ def _stats_row(name: str, s: dict | None) -> list[str] | None:
     return [esc(name)] + [_num(s.get(k), 0 if k == "n" else 4) for k in ("n", "rms", "mean", "max", "p95")]
 
 
+def error_model(result: dict) -> tuple[str, str]:
+    """The error model in words and how it was chosen (both pre-escaped)."""
+    ng, ms = result.get("nongeometric") or {}, result.get("model_selection") or {}
+    terms = ng.get("terms") or ms.get("chosen_terms") or []
+    name = ("MDH + beta with joint errors: " + esc(", ".join(terms))) if terms else "geometric (MDH + beta)"
+    if ms.get("candidates"):
+        how = f"chosen by cross-validation among {len(ms['candidates'])} models (auto)"
+    elif terms:
+        how = "as named in the settings"
+    else:
+        how = "joint errors not modelled"
+    return name, how
+
+
+def _headline(result: dict) -> tuple[str, dict, dict, bool]:
+    """``(what, after, before, held_out)``: the accuracy to quote, held out when there is a
+    validation set, else the calibration set's without rejected observations."""
+    val = result.get("validation") or {}
+    if val.get("rms") is not None:
+        return f"held out ({_num(val.get('n'))} validation observations)", val, \
+            result.get("validation_before") or {}, True
+    after = result.get("after_inliers") or result.get("after") or {}
+    return "on the calibration set", after, result.get("before") or {}, False
+
+
+def _lead(result: dict) -> str:
+    """The summary's first lines: error model, headline accuracy, warnings."""
+    name, how = error_model(result)
+    what, after, before, held_out = _headline(result)
+    warnings = result.get("warnings") or []
+    lines = [f"Error model: <b>{name}</b> <span class='note'>({how})</span>"]
+    if after.get("rms") is not None:
+        start = f" (before calibration {_num(before.get('rms'))} mm)" if before.get("rms") is not None else ""
+        caveat = "" if held_out else (" <span class='bad'>&mdash; no validation set: this is the fit's own "
+                                      "error, optimistic; judge on poses the fit did not see</span>")
+        lines.append(f"Accuracy {what}: <b class='good'>{_num(after['rms'])} mm RMS</b>{start}, "
+                     f"max {_num(after.get('max'))} mm, p95 {_num(after.get('p95'))} mm{caveat}")
+    if "converged" in result and not result.get("converged"):
+        lines.append("<b class='bad'>The solver did not converge</b>: "
+                     f"{esc(result.get('status'))}, {esc(result.get('message'))}")
+    lines.append(f"<b class='bad'>{len(warnings)} warning(s)</b>, read them before the numbers:"
+                 if warnings else "No warnings.")
+    out = "".join(f"<p class='lead'>{line}</p>" for line in lines)
+    out += "".join(f"<div class='warn'>{esc(w)}</div>" for w in warnings)
+    return out
+
+
+def _kpis(result: dict) -> str:
+    b, a = result.get("before") or {}, result.get("after") or {}
+    a_in = result.get("after_inliers")
+    cards = []
+    for label, s0, s1, main in (("validation RMS (held out)", result.get("validation_before"),
+                                 result.get("validation"), True),
+                                ("calibration RMS" + (", inliers" if a_in else ""), b, a_in or a, False)):
+        if s1 and s1.get("rms") is not None:
+            gain = ""
+            if s0 and s0.get("rms"):
+                gain = f" &middot; {100 * (1 - s1['rms'] / s0['rms']):.0f}% lower"
+            start = f"before {_num(s0.get('rms'))} mm{gain}" if s0 else ""
+            cls = " class='main'" if main else ""
+            cards.append(f"<div{cls}><span>{label}</span><b class='good'>{_num(s1['rms'])} mm</b>"
+                         f"<span>{start}</span></div>")
+    headline = a_in or a  # rejected observations are not the robot's accuracy
+    if headline.get("max") is not None:
+        cards.append(f"<div><span>calibration max{', inliers' if a_in else ''}</span>"
+                     f"<b>{_num(headline['max'])} mm</b><span>before {_num(b.get('max'))} mm</span></div>")
+    return f"<div class='kpi'>{''.join(cards)}</div>"
+
+
 def _summary(result: dict) -> str:
     robot, data = result.get("robot") or {}, result.get("data") or {}
     obs = result.get("observations") or {}
@@ -148,45 +234,29 @@ def _summary(result: dict) -> str:
     settings = result.get("settings") or {}
     prov = result.get("provenance") or {}
     facts = [("robot", f"{esc(robot.get('name'))} <span class='note'>{esc(robot.get('description'))}</span>"),
-             *_provenance(prov),
              ("joints", esc(robot.get("n_joints"))),
              ("data set", f"{esc(data.get('file'))} ({esc(data.get('kind'))})"),
              ("poses / observations", f"{esc(data.get('n_poses'))} / {esc(n_obs)}"),
              ("observations used / rejected", f"{esc(used)} / {esc(n_rej)}"),
              ("validation set", esc(data.get("validation_file")) if data.get("validation_file") else "none"),
              ("method", esc(result.get("method"))),
+             *_provenance(prov),
              ("settings", ", ".join(f"{esc(k)}={esc(v)}" for k, v in settings.items()) or "&ndash;")]
     if "converged" in result or "message" in result:
         state = "converged" if result.get("converged") else "<b class='bad'>not converged</b>"
         facts.append(("solver", f"{state} ({esc(result.get('status'))}: {esc(result.get('message'))})"))
     facts.append(("robocal", esc(result.get("robocal_version"))))
-    out = [_table(["", ""], [[f"<b>{k}</b>", v] for k, v in facts], left=2)]
     b, a = result.get("before") or {}, result.get("after") or {}
-    a_in = result.get("after_inliers")
-    kpis = []
-    for label, s0, s1 in (("calibration RMS" + (", inliers" if a_in else ""), b, a_in or a),
-                          ("validation RMS", result.get("validation_before"), result.get("validation"))):
-        if s1 and s1.get("rms") is not None:
-            gain = ""
-            if s0 and s0.get("rms"):
-                gain = f" &middot; {100 * (1 - s1['rms'] / s0['rms']):.0f}% lower"
-            start = f"{_num(s0.get('rms'))} &rarr; " if s0 else ""
-            kpis.append(f"<div><span>{label}</span><b class='good'>{_num(s1['rms'])} mm</b>"
-                        f"<span>{start}{_num(s1['rms'])} mm{gain}</span></div>")
-    headline = a_in or a  # rejected observations are not the robot's accuracy
-    if headline.get("max") is not None:
-        kpis.append(f"<div><span>calibration max{', inliers' if a_in else ''}</span>"
-                    f"<b>{_num(headline['max'])} mm</b><span>before {_num(b.get('max'))} mm</span></div>")
     rows = [r for r in (_stats_row("calibration set, before", b), _stats_row("calibration set, after", a),
-                        _stats_row("calibration set, after, rejected left out", a_in),
+                        _stats_row("calibration set, after, rejected left out", result.get("after_inliers")),
                         _stats_row("validation set, before", result.get("validation_before")),
                         _stats_row("validation set, after", result.get("validation"))) if r]
-    out.append(f"<div class='kpi'>{''.join(kpis)}</div>")
-    out.append(_table(["", "n", "RMS (mm)", "mean (mm)", "max (mm)", "p95 (mm)"], rows))
-    out.append(_per_file(result))
-    warnings = result.get("warnings") or []
-    out += [f"<div class='warn'>{esc(w)}</div>" for w in warnings]
-    return "".join(out)
+    stats = ("<h3>Before and after calibration</h3>"
+             + _table(["", "n", "RMS (mm)", "mean (mm)", "max (mm)", "p95 (mm)"], rows))
+    provenance = "<h3>Where these numbers come from</h3>" + _table(
+        ["", ""], [[f"<b>{k}</b>", v] for k, v in facts], align="lw")
+    return (_lead(result) + _grid(_kpis(result) + stats, provenance)
+            + _per_file(result))
 
 
 _KIND_ERROR = {"point": "position", "pose": "position", "plane": "distance to the plane",
@@ -196,7 +266,8 @@ _KIND_ERROR = {"point": "position", "pose": "position", "plane": "distance to th
 def _per_file(result: dict) -> str:
     """Statistics per measurement file and per kind when a calibration used several files."""
     files = result.get("per_file") or []
-    if len(files) < 2:
+    roles = [f.get("role") for f in files]
+    if max(roles.count("calibration"), roles.count("validation"), 0) < 2:  # the statistics table says it
         return ""
     rows = []
     for f in files:
@@ -207,7 +278,8 @@ def _per_file(result: dict) -> str:
     kinds = [[esc(k), _num(v.get("rms")), _num(v.get("max")), esc(v.get("n"))]
              for k, v in (result.get("per_kind") or {}).items()]
     return ("<h3>Per file</h3><p>Each file judged in its own kind of error (all in mm).</p>"
-            + _table(["", "kind", "error", "file", "RMS before", "RMS after", "max after", "n"], rows, left=4)
+            + _table(["", "kind", "error", "file", "RMS before", "RMS after", "max after", "n"], rows,
+                     align="lllwrrrr")
             + "<h3>Per kind, after calibration</h3>" + _table(["", "RMS (mm)", "max (mm)", "n"], kinds))
 
 
@@ -236,36 +308,53 @@ def _subsample(n: int) -> np.ndarray:
 def _errors_section(cal: _ObsErrors, val: _ObsErrors | None) -> str:
     from robocal.report import plots
 
-    out = [_figure(plots.sorted_errors(cal.before, cal.after, cal.label),
-                   f"Per-observation {esc(cal.label)} on the calibration set, before (nominal model) "
-                   "and after calibration, each sorted from the largest.")]
-    series = [("before", cal.before, plots.BEFORE), ("after", cal.after, plots.AFTER)]
+    sorted_fig = _figure(
+        plots.sorted_errors(cal.before, cal.after, cal.label),
+        f"Per-observation {esc(cal.label)} on the calibration set, before (nominal model) and after "
+        "calibration, each sorted from the largest.",
+        "a low, flat &lsquo;after&rsquo; curve; a few tall bars at the left are single bad "
+        "observations (outliers, a knocked reflector).")
+    series = [("calibration, before", cal.before, plots.BEFORE),
+              ("calibration, after", cal.after, plots.AFTER)]
     if val is not None and val.ok:
         series.append(("validation, after", val.after, plots.VALIDATION))
-    out.append(_figure(plots.distribution(series, cal.label),
-                       "Error distribution: histogram and cumulative share of observations "
-                       "(dashed line: 95 %)."))
+    shares = len({len(v) for _, v, _ in series}) > 1
+    dist_fig = _figure(
+        plots.distribution(series, cal.label, shares=shares),
+        "Histogram "
+        + ("as the share of each set per bin (the sets differ in size)" if shares else "(counts)")
+        + " and cumulative share of observations below an error (dashed line: 95 %).",
+        "the validation curve close to the calibration one: far to its right, the model does not carry "
+        "over to poses it was not fitted on; a long right tail means outliers." if val is not None and val.ok
+        else "a narrow &lsquo;after&rsquo; distribution; a long right tail means outliers.")
+    figs = [sorted_fig, dist_fig]
     if cal.joints is not None and cal.joints.ndim == 2 and len(cal.joints) == len(cal.after):
-        out.append(_figure(plots.error_vs_joints(cal.joints, cal.before, cal.after, cal.label),
-                           "Error against each joint angle: a trend left after calibration points "
-                           "to an unmodelled effect of that joint (e.g. compliance, gear error). "
-                           "Log scale when errors span more than a factor 20."))
+        figs.append(_figure(
+            plots.error_vs_joints(cal.joints, cal.after, cal.label, rejected=cal.rejected),
+            "Error after calibration against each joint angle (linear scale); the line is the mean of "
+            f"{plots.JOINT_BINS} groups of equally many observations, in the order of the joint's angle.",
+            "a trend, wave or step of the line: an effect of that joint the model lacks (compliance, "
+            "gear or cyclic errors, backlash); a flat line at the noise level is what a good model leaves."))
     pts = cal.measured if cal.measured is not None else cal.after_pts
     idx = _subsample(len(pts))
     note = "" if idx.size == len(pts) else f" ({idx.size} of {len(pts)} points shown)"
     what = "measured points" if cal.measured is not None else "modelled probe-tip points (no measured points)"
     rejected = ("; rejected observations (robust) are marked &times; and left out of the colour scale"
                 if cal.rejected.any() else "")
-    figs = [_figure(plots.points_3d(pts[idx], cal.after[idx], f"after: {cal.label}", cal.rejected[idx]),
-                    f"3-D view of the {what} coloured by the residual after calibration{note}{rejected}.")]
+    figs.append(_figure(plots.points_3d(pts[idx], cal.after[idx], f"after: {cal.label}", cal.rejected[idx]),
+                        f"3-D view of the {what} coloured by the residual after calibration{note}{rejected}.",
+                        "regions of large residuals (yellow): where the model is weakest, often at the "
+                        "edge of the measured workspace."))
     if cal.vectors is not None:
         worst = np.argsort(np.where(cal.rejected, -np.inf, -cal.after), kind="stable")[:WORST]
         figs.append(_figure(plots.worst_vectors(pts[idx], cal.vectors, worst),
                             f"Residual vectors (measured &minus; calibrated model) of the {worst.size} "
-                            "worst observations that were not rejected, magnified."))
-    out.append(f"<div class='row'>{''.join(figs)}</div>")
-    out.append(_worst_table(cal))
-    return "".join(out)
+                            "worst observations that were not rejected, magnified (the title says by how "
+                            "much).",
+                            "arrows pointing the same way: a systematic error is left; random directions "
+                            "are noise."))
+    figs.append(_worst_table(cal))
+    return _grid(*figs)
 
 
 def _worst_table(cal: _ObsErrors) -> str:
@@ -288,48 +377,83 @@ def _unit_digits(unit) -> int:
     return 5 if unit in ("deg", "rad") else 4
 
 
+# A parameter's status in the result -> (row class, how the table shows it). A status not listed
+# here is shown as it is, without highlighting; a new status needs one entry.
+PARAMETER_STATUS = {"estimated": ("", "estimated"), "fixed": ("", "fixed"),
+                    "dropped": ("dropped", "not identifiable"),
+                    "not determined": ("dropped", "not determined by these data")}
+
+
+def _note(p: dict, dropped: dict) -> str:
+    """Why a parameter is not estimated: its confounders or the reason given (pre-escaped)."""
+    d = dropped.get(p.get("name"))
+    if not d:
+        return ""
+    conf = d.get("confounded_with")
+    return "confounded with " + ", ".join(esc(c) for c in conf) if conf else esc(d.get("reason"))
+
+
+# column -> (header, alignment, cell of a parameter dict given the dropped table; pre-escaped)
+PARAMETER_COLUMNS = {
+    "name": ("name", "l", lambda p, d: esc(p.get("name"))),
+    "status": ("status", "l", lambda p, d: esc(PARAMETER_STATUS.get(p.get("status"),
+                                                                    ("", p.get("status")))[1])),
+    "unit": ("unit", "l", lambda p, d: esc(p.get("unit"))),
+    "nominal": ("nominal", "r", lambda p, d: _num(p.get("nominal"), _unit_digits(p.get("unit")))),
+    "estimate": ("estimate", "r", lambda p, d: _num(p.get("estimate"), _unit_digits(p.get("unit")))),
+    "correction": ("correction", "r", lambda p, d: _num(p.get("correction"), _unit_digits(p.get("unit")))),
+    "sigma": ("1&sigma;", "r", lambda p, d: _num(p.get("sigma"), _unit_digits(p.get("unit")))),
+    "note": ("note", "w", _note),
+}
+GEOMETRY_COLUMNS = ("name", "status", "unit", "nominal", "estimate", "correction", "sigma", "note")
+JOINT_ERROR_COLUMNS = ("name", "status", "unit", "estimate", "sigma", "note")
+
+
+def _parameter_table(params: list[dict], dropped: dict, columns: tuple[str, ...]) -> str:
+    """One row per parameter dict, the ``columns`` of :data:`PARAMETER_COLUMNS`, rows of the
+    statuses :data:`PARAMETER_STATUS` highlights marked."""
+    spec = [PARAMETER_COLUMNS[c] for c in columns]
+    rows = [[cell(p, dropped) for _, _, cell in spec] for p in params]
+    classes = [PARAMETER_STATUS.get(p.get("status"), ("", ""))[0] for p in params]
+    return _table([h for h, _, _ in spec], rows, row_class=classes, align="".join(a for _, a, _ in spec))
+
+
+def _joint_error_names(result: dict) -> set[str]:
+    ng = result.get("nongeometric") or {}
+    return {str(n) for n in (ng.get("kept") or []) + (ng.get("dropped") or [])}
+
+
 def _parameters(result: dict) -> str:
     params = result.get("parameters") or []
-    dropped = {d.get("name"): d for d in result.get("dropped") or []}
-    rows, classes = [], []
-    for p in params:
-        digits = _unit_digits(p.get("unit"))
-        status = p.get("status", "")
-        conf = dropped.get(p.get("name"), {}).get("confounded_with")
-        note = ("confounded with " + ", ".join(esc(c) for c in conf)) if conf else (
-            esc(dropped[p.get("name")].get("reason")) if p.get("name") in dropped else "")
-        rows.append([esc(p.get("name")), esc(status), esc(p.get("unit")), _num(p.get("nominal"), digits),
-                     _num(p.get("estimate"), digits), _num(p.get("correction"), digits),
-                     _num(p.get("sigma"), digits), note])
-        classes.append("dropped" if status in ("dropped", "not determined") else "")
-    if not rows:
+    if not params:
         return "<p>No parameter table in this result.</p>"
-    n_est = sum(p.get("status") == "estimated" for p in params)
-    text = (f"<p>{n_est} parameters estimated, {len(dropped)} not identifiable or not determined by "
-            "these data (kept at their start value; highlighted). Correction = estimate "
-            "&minus; nominal; 1&sigma; from the posterior covariance of the estimate (with the "
-            "parameter priors, docs/priors.md).</p>")
-    table = _table(["name", "status", "unit", "nominal", "estimate", "correction", "1&sigma;",
-                    "note"], rows, left=3, row_class=classes).replace(
-        "<td>confounded", "<td class='l'>confounded")
-    return text + table + _nongeometric(result.get("nongeometric"), result.get("parameters"))
+    dropped = {d.get("name"): d for d in result.get("dropped") or []}
+    joint = _joint_error_names(result)
+    geometry = [p for p in params if p.get("name") not in joint]
+    n_est = sum(p.get("status") == "estimated" for p in geometry)
+    n_not = sum(p.get("name") in dropped for p in geometry)
+    text = (f"<p>Geometry, frames and reflectors: {n_est} parameters estimated, {n_not} not identifiable "
+            "or not determined by these data (kept at their start value, highlighted: never read their "
+            "value as measured). Correction = estimate &minus; nominal; 1&sigma; from the posterior "
+            "covariance of the estimate (with the parameter priors: see the priors page of the "
+            "documentation): a correction of the order of its 1&sigma; is noise.</p>")
+    return _grid(text + _parameter_table(geometry, dropped, GEOMETRY_COLUMNS),
+                 _nongeometric(result.get("nongeometric"), [p for p in params if p.get("name") in joint],
+                               dropped))
 
 
-def _nongeometric(ng: dict | None, parameters: list) -> str:
-    """The non-geometric terms' parameters, from the parameter table (its display units)."""
-    if not ng or not ng.get("kept"):
+def _nongeometric(ng: dict | None, params: list[dict], dropped: dict) -> str:
+    """The joint-error terms' parameters (their display units), shown here and only here."""
+    if not ng or not params:
         return ""
-    table = {str(p.get("name")): p for p in parameters or []}
-    rows = [[esc(name), esc(table[name].get("unit", "")), _num(table[name].get("estimate"), 5),
-             _num(table[name].get("sigma"), 5)] for name in ng["kept"] if name in table]
-    dropped = ng.get("dropped") or []
-    return (f"<h3>Non-geometric terms: {esc(', '.join(ng.get('terms', [])))}</h3>"
-            "<p>Joint errors the model adds to the commanded joints: compliance (per metre of "
-            "unit-weight moment arm), gear harmonics, backlash (half lost motion, by approach "
-            "direction), travel (error per degree of the joint's last move) and cyclic errors "
+    n_out = sum(p.get("name") in dropped for p in params)
+    return (f"<h3>Joint errors: {esc(', '.join(ng.get('terms', [])))}</h3>"
+            "<p>Errors the model adds to the commanded joints: compliance (per metre of unit-weight "
+            "moment arm), gear harmonics, backlash (half lost motion, by approach direction), travel "
+            "(error per degree of the joint's last move) and cyclic errors "
             "(cyc{joint}_{cycles per revolution}). "
-            f"{len(dropped)} candidate(s) the data cannot separate from the geometry "
-            "were left out.</p>" + _table(["name", "unit", "estimate", "1&sigma;"], rows, left=2))
+            f"{n_out} term(s) the data cannot separate from the geometry were left out (highlighted).</p>"
+            + _parameter_table(params, dropped, JOINT_ERROR_COLUMNS))
 
 
 def _model_selection(ms: dict | None) -> str:
@@ -354,7 +478,7 @@ def _model_selection(ms: dict | None) -> str:
         text += ("<p>Cyclic errors found (joint: cycles per revolution): " + esc(", ".join(
             f"J{c.get('joint')}: {c.get('cycles_per_rev')}" for c in freqs)) + ".</p>")
     return text + _table(["model", "", "parameters", "CV RMS (mm)", "&plusmn; SE (mm)",
-                          "calibration fit RMS (mm)"], rows, left=2, row_class=classes)
+                          "fit RMS (mm)"], rows, left=2, row_class=classes)
 
 
 _IDENT_LABELS = {"n_params": "candidate parameters", "rank": "rank (identifiable)",
@@ -374,12 +498,12 @@ def _identifiability(result: dict) -> str:
              else (f"{ident[k]:.4g}")] for k in keys if not isinstance(ident[k], list | dict)]
     out = _table(["", ""], rows, left=1) if rows else "<p>No identifiability analysis in this result.</p>"
     dropped = result.get("dropped") or []
-    if dropped:
-        out += "<h3>Parameters not identifiable or not determined by these data</h3>" + _table(
-            ["parameter", "reason", "confounded with"],
-            [[esc(d.get("name")), esc(d.get("reason")), esc(", ".join(d.get("confounded_with") or []))
-              or "no effect on the measurements"] for d in dropped], left=3)
-    return out
+    if not dropped:
+        return out
+    return _grid(out, "<h3>Parameters not identifiable or not determined by these data</h3>" + _table(
+        ["parameter", "reason", "confounded with"],
+        [[esc(d.get("name")), esc(d.get("reason")), esc(", ".join(d.get("confounded_with") or []))
+          or "no effect on the measurements"] for d in dropped], align="llw"))
 
 
 def _correlation(result: dict) -> str:
@@ -403,11 +527,14 @@ def _correlation(result: dict) -> str:
         note = (f" The {shown.size} of {len(names)} parameters with the strongest correlation to another "
                 f"one are shown (each |r| &ge; {strongest[shown].min():.2f}); the others are less "
                 "correlated.")
-    return (_figure(plots.correlation([str(names[i]) for i in shown], m[np.ix_(shown, shown)]),
-                    "Correlation of the estimated parameters "
-                    f"(1: fully correlated, &minus;1: anti-correlated).{note}")
-            + "<h3>Strongest correlations</h3>" + _table(["parameter", "parameter", "correlation"], rows,
-                                                          left=2))
+    return _grid(_figure(plots.correlation([str(names[i]) for i in shown], m[np.ix_(shown, shown)]),
+                         "Correlation of the estimated parameters "
+                         f"(1: fully correlated, &minus;1: anti-correlated).{note}",
+                         "dark red or blue cells off the diagonal: the data barely separate those two "
+                         "parameters, so each one's value is uncertain even where their joint effect is "
+                         "well determined."),
+                 "<h3>Strongest correlations</h3>" + _table(["parameter", "parameter", "correlation"], rows,
+                                                            left=2))
 
 
 def _rejected(result: dict) -> str:
@@ -446,6 +573,9 @@ def _iso(blocks: list[tuple[str, _ObsErrors]]) -> str:
             "(ISO 9283 style; the standard asks for 30 cycles per pose).</p>" + "".join(parts))
 
 
+START_MISMATCH = 0.01  # relative difference of the history's first RMS and "before" worth explaining
+
+
 def _history(result: dict) -> str:
     from robocal.report import plots
 
@@ -456,9 +586,24 @@ def _history(result: dict) -> str:
     unit = (result.get("history_units") or {}).get("rms", "m")
     scale, label = (1e3, "RMS item error (mm)") if unit == "m" else (1.0, f"RMS item error ({esc(unit)})")
     it = np.asarray([h.get("iteration", k) for k, h in enumerate(hist)], dtype=int)
-    return _figure(plots.history(it, np.asarray(values, float) * scale, label),
+    rms = np.asarray(values, float) * scale
+    before = (result.get("before") or {}).get("rms")
+    comparable = unit == "m" and (result.get("data") or {}).get("kind") == "point" and before is not None
+    start = ""
+    if comparable and abs(rms[0] - before) > START_MISMATCH * before:
+        warm = "model_selection" in result and result.get("method") == "lsq"
+        start = (f" It starts at {_num(float(rms[0]))} mm, not at the error before calibration "
+                 f"({_num(before)} mm, dashed line): "
+                 + ("with the auto error model the chosen model's fit starts from the largest candidate "
+                    "model's estimate, which the selection already fitted." if warm else
+                    "the solver started from an estimate, not from the nominal model."))
+    else:
+        before = None
+    return _figure(plots.history(it, rms, label, before=before),
                    f"Solver history: the {label} of the best estimate per iteration "
-                   f"({esc(result.get('method'))}).")
+                   f"({esc(result.get('method'))}).{start}",
+                   "a fall that levels off; a curve still falling at the last iteration means the solve "
+                   "stopped early.")
 
 
 # ----------------------------------------------------------------- page
@@ -493,24 +638,38 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     if hist:
         sections.append(("history", "Solver history", hist))
     data = result.get("data") or {}
-    subtitle = f"{esc(data.get('file'))} &middot; method {esc(result.get('method'))}"
-    return page(title, subtitle, sections, result.get("robocal_version"))
+    subtitle = (f"{esc(data.get('file'))} &middot; error model {error_model(result)[0]} &middot; "
+                f"method {esc(result.get('method'))}")
+    narrow = {"model-selection", "identifiability", "rejected", "iso9283", "history"}
+    if not _joint_error_names(result):  # the parameter table alone: half the width is enough
+        narrow.add("parameters")
+    return page(title, subtitle, sections, result.get("robocal_version"), frozenset(narrow))
 
 
-def page(title: str, subtitle: str, sections: list[tuple[str, str, str]], version) -> str:
+def page(title: str, subtitle: str, sections: list[tuple[str, str, str]], version,
+         narrow: frozenset[str] = frozenset()) -> str:
     """One self-contained HTML page (inline CSS, a CSP that forbids loading anything) with a
-    navigation bar over ``sections`` (id, heading, pre-escaped content); ``title`` is escaped
-    here, ``subtitle`` must be escaped by the caller."""
+    navigation bar over ``sections`` (id, heading, pre-escaped content); two consecutive sections
+    whose ids are in ``narrow`` sit side by side on a wide screen. ``title`` is escaped here,
+    ``subtitle`` must be escaped by the caller."""
     nav = "".join(f'<a href="#{sid}">{name}</a>' for sid, name, _ in sections)
-    body = "".join(f'<section id="{sid}"><h2>{name}</h2>{content}</section>'
-                   for sid, name, content in sections)
+    html_sections = [f'<section id="{sid}"{" class=narrow" if sid in narrow else ""}><h2>{name}</h2>'
+                     f"{content}</section>" for sid, name, content in sections]
+    body, k = [], 0
+    while k < len(sections):
+        if k + 1 < len(sections) and sections[k][0] in narrow and sections[k + 1][0] in narrow:
+            body.append(f"<div class='grid'>{html_sections[k]}{html_sections[k + 1]}</div>")
+            k += 2
+        else:
+            body.append(html_sections[k])
+            k += 1
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; "
             "style-src 'unsafe-inline'; img-src data:\">"
             "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
             f"<title>{esc(title)}</title><style>{_CSS}</style></head><body><main>"
             f"<h1>{esc(title)}</h1><p class='sub'>{subtitle} &middot; lengths in mm, angles in deg</p>"
-            f"<nav>{nav}</nav>{body}<p class='note'>Generated by robocal {esc(version)}.</p>"
+            f"<nav>{nav}</nav>{''.join(body)}<p class='note'>Generated by robocal {esc(version)}.</p>"
             "</main></body></html>\n")
 
 

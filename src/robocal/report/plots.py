@@ -81,10 +81,17 @@ def _log_if_wide(ax, values: np.ndarray, which: str) -> None:
         (ax.set_yscale if which == "y" else ax.set_xscale)("log")
 
 
+def _legend_above(ax, **kwargs) -> None:
+    """The legend in a row above the axes, on the white margin: never over the data, so no
+    swatch is seen through another series' fill."""
+    ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncols=4, frameon=False, borderaxespad=0.2,
+              **kwargs)
+
+
 @_styled
 def sorted_errors(before: np.ndarray, after: np.ndarray, label: str = "position error (mm)") -> Figure:
     """Per-observation errors ``(N,)`` before and after, each sorted descending (bars/lines)."""
-    fig = _figure(7.5, 2.8)
+    fig = _figure(6.4, 3.0, top=0.35)
     ax = fig.add_subplot()
     x = np.arange(1, before.size + 1)
     if before.size <= 120:
@@ -100,60 +107,81 @@ def sorted_errors(before: np.ndarray, after: np.ndarray, label: str = "position 
     ax.set_xlabel("observations, sorted by error")
     ax.set_ylabel(label)
     ax.set_xlim(0.4, before.size + 0.6)
-    ax.legend(frameon=False)
+    _legend_above(ax)
     return fig
 
 
 @_styled
-def distribution(series: list[tuple[str, np.ndarray, str]], label: str = "position error (mm)") -> Figure:
-    """Histogram and cumulative distribution of error series ``(name, values (N,), colour)``."""
-    fig = _figure(7.5, 2.8, wspace=0.3)
+def distribution(series: list[tuple[str, np.ndarray, str]], label: str = "position error (mm)",
+                 shares: bool = False) -> Figure:
+    """Histogram and cumulative distribution of error series ``(name, values (N,), colour)``;
+    ``shares``: each set's histogram as its share per bin (%), so sets of different sizes compare."""
+    fig = _figure(6.4, 3.0, wspace=0.32, top=0.35)
     hist, cdf = fig.subplots(1, 2)
     allv = np.concatenate([values for _, values, _ in series])
     pos = allv[allv > 0]
     if _wide(allv):
-        bins = np.geomspace(pos.min() * 0.98, pos.max() * 1.02, 50)
+        bins = np.geomspace(pos.min() * 0.98, pos.max() * 1.02, 40)
         hist.set_xscale("log")
         cdf.set_xscale("log")
     else:
         bins = np.linspace(0.0, float(allv.max()) * 1.02 if allv.size and allv.max() > 0 else 1.0, 40)
     for name, values, colour in series:
-        hist.hist(values, bins=bins, color=colour, alpha=0.6, label=name)
+        weights = np.full(values.size, 100.0 / max(values.size, 1)) if shares else None
+        hist.hist(values, bins=bins, weights=weights, color=colour, alpha=0.6, label=name)
         xs = np.sort(values)
-        cdf.step(xs, np.arange(1, xs.size + 1) / xs.size * 100.0, where="post", color=colour,
-                 label=name)
+        cdf.step(xs, np.arange(1, xs.size + 1) / xs.size * 100.0, where="post", color=colour, label=name)
     hist.set_xlabel(label)
-    hist.set_ylabel("count")
+    hist.set_ylabel("share of the set (%)" if shares else "count")
     cdf.set_xlabel(label)
-    cdf.set_ylabel("cumulative (%)")
+    cdf.set_ylabel("observations below (%)")
     cdf.set_ylim(0, 101)
     cdf.axhline(95, color="grey", lw=0.8, ls="--")
-    hist.legend(frameon=False)
+    _legend_above(cdf, fontsize=8)
     return fig
 
 
+JOINT_BINS = 12  # bins (equal counts) of each joint's angles for the mean-error line of error_vs_joints
+
+
+def _binned_mean(x: np.ndarray, y: np.ndarray, bins: int) -> tuple[np.ndarray, np.ndarray]:
+    """The mean of ``x`` and of ``y`` in each of ``bins`` bins of ``x`` holding equal numbers of
+    points (quantiles: a bin of the range with one or two poses would make the line jump)."""
+    edges = np.quantile(x, np.linspace(0.0, 1.0, bins + 1))
+    k = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
+    count = np.bincount(k, minlength=bins)
+    keep = count > 0
+    mean_x = np.bincount(k, weights=x, minlength=bins)[keep] / count[keep]
+    return mean_x, np.bincount(k, weights=y, minlength=bins)[keep] / count[keep]
+
+
 @_styled
-def error_vs_joints(joints_deg: np.ndarray, before: np.ndarray, after: np.ndarray,
-                    label: str = "error (mm)") -> Figure:
-    """Error ``(N,)`` before/after against each joint angle of ``joints_deg`` ``(N, n)``."""
+def error_vs_joints(joints_deg: np.ndarray, after: np.ndarray, label: str = "error (mm)",
+                    rejected: np.ndarray | None = None) -> Figure:
+    """Error after calibration ``(N,)`` against each joint angle of ``joints_deg`` ``(N, n)``, on a
+    linear scale, with the mean per bin of equally many poses; ``rejected`` observations are left
+    out (their errors would set the scale)."""
+    keep = np.ones(after.size, bool) if rejected is None else ~np.asarray(rejected, bool)
+    q, e = joints_deg[keep], after[keep]
     n = joints_deg.shape[1]
     cols = 3
     rows = -(-n // cols)
-    fig = _figure(7.5, 2.0 * rows + 0.3, top=0.35, hspace=0.6, wspace=0.1)
+    fig = _figure(6.4, 1.75 * rows + 0.35, top=0.3, hspace=0.65, wspace=0.08, left=0.75)
     axes = np.atleast_1d(fig.subplots(rows, cols, sharey=True)).reshape(-1)
+    dense = e.size > MAX_VECTOR_POINTS
     for j, ax in enumerate(axes):
         if j >= n:
             ax.set_visible(False)
             continue
-        dense = before.size > MAX_VECTOR_POINTS
-        ax.scatter(joints_deg[:, j], before, s=6, color=BEFORE, alpha=0.6, lw=0, label="before",
-                   rasterized=dense)
-        ax.scatter(joints_deg[:, j], after, s=6, color=AFTER, alpha=0.9, lw=0, label="after",
-                   rasterized=dense)
-        _log_if_wide(ax, np.concatenate([before, after]), "y")
+        ax.scatter(q[:, j], e, s=5, color=AFTER, alpha=0.55, lw=0, label="after", rasterized=dense)
+        if e.size:
+            xc, mean = _binned_mean(q[:, j], e, JOINT_BINS)
+            ax.plot(xc, mean, color="#0b4f3c", lw=1.6, label="mean per bin")
         ax.set_xlabel(f"q{j + 1} (deg)")
         if j % cols == 0:
             ax.set_ylabel(label)
+    if e.size:
+        axes[0].set_ylim(0, float(np.percentile(e, 99.5)) * 1.1 or 1.0)
     fig.legend(*axes[0].get_legend_handles_labels(), loc="upper right", ncols=2, frameon=False,
                markerscale=2)
     return fig
@@ -191,6 +219,11 @@ def _equal_3d(ax, points: np.ndarray) -> None:
     ax.set_zlim(centre[2] - half, centre[2] + half)
 
 
+def magnification(scale: float) -> str:
+    """A drawing scale factor in words, 3 significant digits: ``7290x``, ``12.5x``."""
+    return f"{float(f'{scale:.3g}'):g}x"
+
+
 @_styled
 def worst_vectors(points: np.ndarray, residuals: np.ndarray, worst: np.ndarray) -> Figure:
     """All ``points`` (N, 3) in grey and, at the ``worst`` indices, the residual vectors
@@ -209,7 +242,7 @@ def worst_vectors(points: np.ndarray, residuals: np.ndarray, worst: np.ndarray) 
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
     ax.set_zlabel("z (mm)")
-    ax.set_title(f"residual vectors x{scale:.3g}", fontsize=9)
+    ax.set_title(f"arrows magnified {magnification(scale)}", fontsize=9)
     _equal_3d(ax, points)
     return fig
 
@@ -232,16 +265,21 @@ def correlation(names: list[str], matrix: np.ndarray) -> Figure:
 
 
 @_styled
-def history(iterations: np.ndarray, values: np.ndarray, label: str) -> Figure:
-    """Solver history: ``values`` ``(m,)`` against ``iterations`` (log scale when positive)."""
-    fig = _figure(7.5, 2.4)
+def history(iterations: np.ndarray, values: np.ndarray, label: str, before: float | None = None) -> Figure:
+    """Solver history: ``values`` ``(m,)`` against ``iterations`` (log scale when positive and
+    wide), with the error ``before`` calibration as a dashed line when given."""
+    fig = _figure(6.4, 2.6, top=0.35)
     ax = fig.add_subplot()
-    ax.plot(iterations, values, "o-", color=AFTER, ms=3)
-    if (values > 0).all() and values.max() / max(values.min(), 1e-300) > 20:
+    ax.plot(iterations, values, "o-", color=AFTER, ms=3, label="best estimate")
+    span = values if before is None else np.append(values, before)
+    if before is not None:
+        ax.axhline(before, color=BEFORE, lw=1.2, ls="--", label="before calibration")
+    if (span > 0).all() and span.max() / max(span.min(), 1e-300) > 20:
         ax.set_yscale("log")
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("iteration")
     ax.set_ylabel(label)
+    _legend_above(ax)
     return fig
 
 
