@@ -38,6 +38,8 @@ class Target:
     config_spans: object = None
     qnear: np.ndarray | None = None
     order: int = 0  # position in execution order (text order of first use)
+    monitored: bool = True  # False: the motion runs with configuration monitoring off (RAPID ConfL Off)
+    external: str = ""  # external-axis values the target carries (a track, gantry or positioner)
 
     @property
     def line(self) -> int:
@@ -64,6 +66,15 @@ class Program:
     warnings: list[str] = field(default_factory=list)
     joint_targets: list[tuple[int, np.ndarray]] = field(default_factory=list)
     unsupported: dict[str, str] = field(default_factory=dict)  # 'tool:NAME' / 'frame:NAME' -> why
+    uncorrected: list[str] = field(default_factory=list)  # motions left as they are, each also a warning
+
+    def skip(self, where: str, instruction: str, why: str) -> None:
+        """Account for a motion to a Cartesian pose this filter cannot correct: a warning naming
+        ``where`` (file:line), the instruction and why."""
+        text = f"{where}: {instruction}: not corrected: {why}"
+        if text not in self.uncorrected:
+            self.uncorrected.append(text)
+            self.warnings.append(text)
 
 
 class Dialect:
