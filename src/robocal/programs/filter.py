@@ -381,16 +381,17 @@ def _filterable(d: Dialect, program: Program, warnings: list, keep_unreached: bo
             warnings.append(f"{t.where}: not filtered: {why}")
             program.uncorrected.append(f"{t.where}: not filtered: {why}")
         elif t.external:
-            moving.append(f"{t.where}: external axes {t.external}: a track or gantry moving the robot, or "
-                          "an axis moving the work, changes where this target is; the filter assumes a fixed "
-                          "base and work")
+            moving.append(f"{t.where}: external axes {t.external}")
         else:
             targets.append(t)
     if moving and not keep_unreached:
-        lines = collapse(moving)
-        raise DataError(f"{len(moving)} target(s) carry external axes:\n" + "\n".join(lines[:LISTED]) +
+        more = f"\n... and {len(moving) - LISTED} more" if len(moving) > LISTED else ""
+        raise DataError(f"{len(moving)} target(s) carry external-axis values: a track or gantry moving the "
+                        "robot, or an axis moving the work, changes where they are, and the filter assumes a "
+                        "fixed base and work:\n" + "\n".join(moving[:LISTED]) + more +
                         "\nnothing was written (--keep-unreached leaves them unchanged with a warning)")
-    warnings += [f"{w}: left unchanged" for w in moving]
+    moving = [f"{w}: not corrected: a fixed base and work are assumed" for w in moving]
+    warnings += moving
     program.uncorrected += moving
     unknown = [f"{t.where}: unknown {kind} {name!r}" for t in targets
                for kind, name, known in (("tool", t.tool, program.tools), ("frame", t.frame, program.frames))

@@ -63,6 +63,8 @@ _ASSIGN = re.compile(r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*((?:\.\s*[A-Za-z]\w*)*)\s*
                      re.IGNORECASE)
 _CONSTANT = re.compile(r"\bCONST\s+num\s+([A-Za-z]\w*)\s*:=\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*;",
                        re.IGNORECASE)
+_RECORD = re.compile(r"\bRECORD\s+([A-Za-z]\w*)([\s\S]*?)\bENDRECORD\b", re.IGNORECASE)
+_COMPONENT = re.compile(r"([A-Za-z]\w*)\s+([A-Za-z]\w*)\s*;")
 _CONF = re.compile(r"\bConf([LJ])\s*\\\s*(On|Off)\b", re.IGNORECASE)
 # block keywords a statement may begin with before its instruction
 _LEAD = re.compile(r"\s*(?:(?:LOCAL\s+)?(?:PROC|TRAP)\s+\w+\s*(?:\([^)]*\))?|(?:LOCAL\s+)?FUNC\s+\w+\s+\w+\s*"
@@ -128,6 +130,11 @@ class RapidDialect(Dialect):
                     st.procs[m.group(2).lower()] = _params(m.group(3) or "")
             for m in _CONSTANT.finditer(masked):
                 st.constants.add(m.group(1).lower())
+            for m in _RECORD.finditer(masked):
+                st.records[m.group(1).lower()] = [(t.lower(), f) for t, f in _COMPONENT.findall(m.group(2))]
+            record_decl = None if not st.records else re.compile(
+                r"\b(?:(?:LOCAL|TASK)\s+)?(?:CONST|PERS|VAR)\s+(" + "|".join(st.records) +
+                r")\s+([A-Za-z]\w*)\s*(\{[^}]*\})?\s*:=", re.IGNORECASE)
             conf = {"l": True, "j": True}
             k = -1
             for m in _STATEMENT.finditer(masked):  # ';' only ends statements: strings are masked
@@ -137,7 +144,11 @@ class RapidDialect(Dialect):
                 proc = routines[k][2] if k >= 0 and s < routines[k][1] else ""
                 for c in _CONF.finditer(masked, s, e):
                     conf[c.group(1).lower()] = c.group(2).lower() == "on"
-                self._statement(src, masked, s, e, prog, st, src not in sources, proc, conf)
+                r = record_decl.search(masked, s, e) if record_decl else None
+                if r:
+                    self._record(src, masked, r, e, st, src not in sources)
+                else:
+                    self._statement(src, masked, s, e, prog, st, src not in sources, proc, conf)
         for kind, decl, known in (("tool", st.tools, prog.tools), ("frame", st.wobjs, prog.frames)):
             for name, (pose, ok, why) in decl.items():
                 if ok:
@@ -207,6 +218,26 @@ class RapidDialect(Dialect):
         if c and c.group(1).lower() in st.procs:
             positional, optional = _arguments(masked, lead + c.end(), e)
             st.calls.setdefault(c.group(1).lower(), []).append((src, lead, positional, optional, proc))
+
+    def _record(self, src, masked, m, e, st, only_frames):
+        """A declaration of a RECORD type: its robtarget components become targets
+        ``name{i}.field`` (the key ``name.field`` holds every element's)."""
+        components = st.records[m.group(1).lower()]
+        tree, _ = parse_aggregate(src, masked, m.end(), e, f"{m.group(1)} {m.group(2)}")
+        for k, (kind, field) in enumerate(components):
+            if kind != "robtarget":
+                continue
+            targets = []
+            for suffix, node in _elements(tree, m.group(3), src, m.start(), f"{m.group(1)} {m.group(2)}"):
+                if not (isinstance(node, list) and len(node) == len(components)):
+                    raise DataError(f"{src.path.name}:{src.line_of(m.start())}: malformed {m.group(1)} "
+                                    f"{m.group(2)}: expected {len(components)} components")
+                at = node[k][0][0].start if isinstance(node[k], list) and node[k] and \
+                    isinstance(node[k][0], list) and node[k][0] else m.start()
+                targets.append(self._robtarget(src, node[k], f"{m.group(2)}{suffix}.{field}", at))
+            st.declared[f"{m.group(2).lower()}.{field.lower()}"] = targets
+            if only_frames:
+                st.reference |= {id(t) for t in targets}
 
     def _robtarget(self, src, tree, name, at) -> Target:
         xyz, quat, conf = numbers_of(tree, (3, 4, 4), src, at, f"robtarget {name}")
@@ -331,7 +362,8 @@ class RapidDialect(Dialect):
             if arg_src is None:
                 return [f"parameter {r.group(1)} of routine {proc} is not given by its call"]
             return self._follow(st, arg_src, x, y, caller, outer, depth + 1)
-        if fields:
+        fields = re.sub(r"\s+", "", fields).lower()
+        if fields and name + fields not in st.declared:
             return [f"{' '.join(text.split())} is a field of a RECORD or robtarget: its value is not "
                     "followed"]
         out: list = [f"{r.group(1)} is modified at run time ({r.group(1)}.<field> := ... at {w})"
@@ -342,7 +374,7 @@ class RapidDialect(Dialect):
                 for sc in scopes:
                     out += self._follow(st, arg_src, x, y, where_proc, sc, depth + 1)
             return out
-        targets = st.declared.get(name)
+        targets = st.declared.get(name + fields)
         if targets is None:
             return out + [f"robtarget {r.group(1)} is not declared in these files (give the module that "
                           "declares it as a program file)"]
@@ -351,9 +383,8 @@ class RapidDialect(Dialect):
         if index:
             literal = re.fullmatch(r"\{\s*(\d+(?:\s*,\s*\d+)*)\s*\}", index)
             if literal:
-                want = "{" + ",".join(v.strip() for v in literal.group(1).split(",")) + "}"
-                chosen = [t for t in targets if t.name.lower().endswith(want) or
-                          t.name.split(" (")[0].lower().endswith(want)]
+                want = name + "{" + ",".join(v.strip() for v in literal.group(1).split(",")) + "}" + fields
+                chosen = [t for t in targets if t.name.split(" (")[0].lower() == want]
                 return out + (chosen or [f"{r.group(1)}{index} is outside the array"])
         return out + list(targets)  # a variable index: every element of the array
 
@@ -385,6 +416,7 @@ class _State:
         self.inline: dict = {}
         self.multimove: set = set()
         self.constants: set[str] = set()  # CONST num names
+        self.records: dict[str, list[tuple[str, str]]] = {}  # RECORD type -> [(type, field)]
         self._scopes: dict[str, list] = {}
 
     def scopes(self, proc: str, depth: int = 0) -> list[dict]:
