@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import re
 import shutil
 import sys
 from pathlib import Path
@@ -399,8 +400,11 @@ def test_krl_needs_the_tool_and_base_in_effect(tmp_path):
     src = files[0].read_bytes().replace(b"  $TOOL = TOOL_DATA[2]\r\n", b"")
     src = src.replace(b"FDAT_ACT=FP1", b"FDAT_ACT=FUNKNOWN")
     files[0].write_bytes(src)
-    with pytest.raises(DataError, match=r"palletize.src:\d+ \(XP1\): the program does not set the tool"):
-        filter_program(files, robot, robot, references=refs)
+    res = filter_program(files, robot, robot, references=refs)
+    assert "XP1" not in [r["name"] for r in res.rows]
+    assert any(re.fullmatch(r"palletize.src:\d+: PTP: not corrected: XP1: FDAT_ACT=FUNKNOWN names no FDAT .*", w)
+               for w in res.uncorrected)
+    assert "1 motion(s) to a Cartesian pose NOT corrected" in res.summary()
 
 
 def test_krl_and_fanuc_configuration_edits():
