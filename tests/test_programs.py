@@ -402,8 +402,8 @@ def test_krl_needs_the_tool_and_base_in_effect(tmp_path):
     files[0].write_bytes(src)
     res = filter_program(files, robot, robot, references=refs)
     assert "XP1" not in [r["name"] for r in res.rows]
-    assert any(re.fullmatch(r"palletize.src:\d+: PTP: not corrected: XP1: FDAT_ACT=FUNKNOWN names no FDAT .*", w)
-               for w in res.uncorrected)
+    expected = r"palletize.src:\d+: PTP: not corrected: XP1: FDAT_ACT=FUNKNOWN names no FDAT .*"
+    assert any(re.fullmatch(expected, w) for w in res.uncorrected)
     assert "1 motion(s) to a Cartesian pose NOT corrected" in res.summary()
 
 
