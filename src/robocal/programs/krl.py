@@ -55,7 +55,9 @@ _ROUTINE = re.compile(r"^[ \t]*(?:GLOBAL\s+)?DEF\s+([A-Za-z_]\w*)\s*\(([^)]*)\)"
                       re.IGNORECASE | re.MULTILINE)
 _ASSIGN = re.compile(r"^[ \t]*([A-Za-z_]\w*)\s*(\[[^\]\n]*\])?((?:\.\w+)*)\s*=(?!=)\s*([^\n]+)$",
                      re.MULTILINE)
-_CALL = re.compile(r"^[ \t]*([A-Za-z_]\w*)\s*\(([^\n]*)\)[ \t]*$", re.MULTILINE)
+_CALL = re.compile(r"^[ \t]*([A-Za-z_]\w*)\s*\(([^\n]*)\)[ \t\r]*$", re.MULTILINE)
+_APPROX = re.compile(r"(?:\s+(?:C_[A-Z]+|CA\s+[-+]?[\d.]+))+\s*$", re.IGNORECASE)  # C_DIS, CA 45 ...
+_JOINT_SYSTEM = ("$H_POS", "$AXIS_ACT", "$AXIS_HOME", "$AXIS_BACK", "$AXIS_RET", "$AXIS_FOR")
 _WITH = re.compile(r"\bWITH\b", re.IGNORECASE)
 _REF = re.compile(r"([A-Za-z_$]\w*)\s*(\[[^\]]*\])?((?:\.\w+)*)")
 _FRAME_FN = re.compile(r"(STOOL2|SBASE)\s*\(\s*(\w+)(?:\.\w+)?\s*\)", re.IGNORECASE)
@@ -264,7 +266,7 @@ class KRLDialect(Dialect):
                         first = a + masked[a:b].index("{")
                         found = [self._target(src, masked, first, f"inline@{src.line_of(a)}", "E6POS", prog)]
                     else:
-                        head = text.split()[0] if text else ""
+                        head = _APPROX.sub("", text)
                         found = self._follow(st, head, proc, {}, 0) if head else []
                     for f in found:
                         if f is None:
@@ -324,6 +326,9 @@ class KRLDialect(Dialect):
         if depth > _DEPTH:
             return [f"{text} is defined through more than {_DEPTH} assignments or calls"]
         if ":" in text:
+            left, _, right = text.partition(":")
+            if re.fullmatch(r"\s*\{(?:\s*[A-Za-z]\w*\s+[-+]?(?:\d+\.?\d*|\.\d+)\s*,?)*\}\s*", right):
+                return self._follow(st, left.strip(), proc, scope, depth + 1)  # a constant offset
             return [f"{text} is computed at run time by the geometric operator ':'"]
         r = _REF.fullmatch(text.strip())
         if not r:
@@ -331,8 +336,8 @@ class KRLDialect(Dialect):
         name, fields = r.group(1).upper(), r.group(3)
         index = re.sub(r"\s+", "", r.group(2) or "")
         if name.startswith("$"):
-            return [] if "AXIS" in name else [f"{text} is a system variable (the current or a computed "
-                                              "position)"]
+            return [] if name.split("[")[0] in _JOINT_SYSTEM else [
+                f"{text} is a system variable (the current or a computed position)"]
         if name in st.axes:
             return []
         params = st.params.get(proc, [])
