@@ -452,13 +452,21 @@ def _edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray,
         want = np.array([t.config if has[i] else cfg[0][i] for i, t in enumerate(targets)])
         # rewritten only when the written data describe the corrected joints worse than the nominal ones
         changed = good & has & (d.scheme.score(cfg[1], want) > d.scheme.score(cfg[0], want))
+    finest: dict[tuple[Path, int], int] = {}  # (file, column) -> the file's decimals for shared columns
+    for group in d.shared_decimals:
+        for t in targets:
+            most = max(t.numbers[j].decimals for j in group)
+            for j in group:
+                key = (t.source.path, j)
+                finest[key] = max(finest.get(key, 0), most)
     edits: dict[Path, dict] = {}
     for i in np.flatnonzero(moved.any(axis=1) | changed):
         t = targets[i]
         mine = edits.setdefault(t.source.path, {})
         for j in np.flatnonzero(moved[i]):
             num = t.numbers[j]
-            mine[(num.start, num.end)] = format_number(float(new[i, j]), num, float(resolution[j]))
+            mine[(num.start, num.end)] = format_number(float(new[i, j]), num, float(resolution[j]),
+                                                       finest.get((t.source.path, int(j)), 0))
         if changed[i]:
             mine.update(d.config_edits(t, cfg[1][i]))
             warnings.append(f"{t.where}: configuration changed from {d.scheme.text(cfg[0][i])} to "

@@ -84,6 +84,7 @@ class Dialect:
     suffixes: tuple[str, ...] = ()
     scheme: ConfigScheme | None = None
     n_values = 6  # pose numbers per target
+    shared_decimals: tuple[tuple[int, ...], ...] = ()  # pose columns written at the file's finest decimals
     frame_help = ""  # how --tool/--frame values are written for this dialect
 
     def parse(self, sources: list[ProgramText], frames: dict[str, np.ndarray],

@@ -74,7 +74,7 @@ _LEAD = re.compile(r"\s*(?:(?:LOCAL\s+)?(?:PROC|TRAP)\s+\w+\s*(?:\([^)]*\))?|(?:
 _NUMERIC = re.compile(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*$")
 _UNUSED_AXIS = 8e9  # external-axis values at or above this are 9E9: the axis is not used
 _POSITION_MM = 1e-3  # mm: 1 um
-_QUATERNION = 1e-7
+_QUATERNION = 1e-6  # about 2e-6 rad: 0.4 um at 200 mm from the flange
 BUILTIN_TOOLS = ("tool0",)
 BUILTIN_WOBJS = ("wobj0",)
 _DEPTH = 12  # routine calls and assignments followed at most this deep
@@ -90,6 +90,7 @@ class RapidDialect(Dialect):
     suffixes = (".mod", ".modx", ".prg", ".sys")
     scheme = ABBConfig()
     n_values = 7
+    shared_decimals = ((3, 4, 5, 6),)  # a quaternion is written at the file's precision
     frame_help = "x,y,z in mm and the quaternion q1,q2,q3,q4 (w first), as in tooldata/wobjdata"
 
     def name_key(self, name):
