@@ -47,13 +47,14 @@ _POSITION = re.compile(r"\b(PR|P)\[\s*((?:[A-Z]+\[\s*\d+\s*\])|\d+)\s*(?::[^\]]*
 _OFFSET = re.compile(r"\b(Tool_Offset|Offset|VOFFSET)\b(?:\s*,\s*(\w+\[[^\]]*\]))?", re.IGNORECASE)
 _INCREMENTAL = re.compile(r"\bINC\b")
 _POSITION_MM = 1e-3
-_ANGLE_DEG = 1e-4
+_ANGLE_DEG = 1e-3  # the controller writes 3 decimals: 1e-3 deg is 2 um at 120 mm from the flange
 
 
 class FanucDialect(Dialect):
     name = "FANUC TP"
     suffixes = (".ls",)
     scheme = FANUCConfig()
+    keep_width = True
     frame_help = "X,Y,Z in mm and W,P,R in deg, as on the teach pendant's frame screen"
 
     def to_pose(self, values):

@@ -465,14 +465,27 @@ def _edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray,
         mine = edits.setdefault(t.source.path, {})
         for j in np.flatnonzero(moved[i]):
             num = t.numbers[j]
-            mine[(num.start, num.end)] = format_number(float(new[i, j]), num, float(resolution[j]),
-                                                       finest.get((t.source.path, int(j)), 0))
+            text = format_number(float(new[i, j]), num, float(resolution[j]),
+                                 finest.get((t.source.path, int(j)), 0))
+            mine.update(_aligned(t.source.text, num, text) if d.keep_width else {(num.start, num.end): text})
         if changed[i]:
             mine.update(d.config_edits(t, cfg[1][i]))
             warnings.append(f"{t.where}: configuration changed from {d.scheme.text(cfg[0][i])} to "
                             f"{d.scheme.text(cfg[1][i])}: the corrected joints cross a configuration "
                             "boundary; check the motion into and out of this target")
     return edits, changed
+
+
+def _aligned(text: str, num, new: str) -> dict[tuple[int, int], str]:
+    """The edit writing ``new`` over number ``num`` of ``text`` in the same width when the number is
+    right-aligned after spaces: padded with spaces, or taking spaces before it (one is kept)."""
+    if text[num.start - 1:num.start] != " " or len(new) == len(num.text):
+        return {(num.start, num.end): new}
+    if len(new) < len(num.text):
+        return {(num.start, num.end): new.rjust(len(num.text))}
+    spaces = len(text[:num.start]) - len(text[:num.start].rstrip(" "))
+    take = min(len(new) - len(num.text), spaces - 1)
+    return {(num.start - take, num.end): new}
 
 
 def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing) -> list[dict]:

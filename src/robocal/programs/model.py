@@ -85,6 +85,7 @@ class Dialect:
     scheme: ConfigScheme | None = None
     n_values = 6  # pose numbers per target
     shared_decimals: tuple[tuple[int, ...], ...] = ()  # pose columns written at the file's finest decimals
+    keep_width = False  # numbers right-aligned after spaces keep their width (FANUC)
     frame_help = ""  # how --tool/--frame values are written for this dialect
 
     def parse(self, sources: list[ProgramText], frames: dict[str, np.ndarray],
