@@ -170,12 +170,12 @@ class FanucDialect(Dialect):
                         prog.skip(here, instr, f"P[{ref.group(2)}] is not a Cartesian position of group 1 in "
                                                "/POS (missing or malformed)")
                         continue
-                    if _INCREMENTAL.search(options):
+                    if "INC" in options and _INCREMENTAL.search(options):
                         incremental.add(key)
                         prog.skip(here, instr, f"{label} is an incremental move (INC): a displacement, not a "
                                                "pose")
                         continue
-                    off = _OFFSET.search(options)
+                    off = _OFFSET.search(options) if "OFFSET" in options.upper() else None
                     if off:
                         prog.warnings.append(f"{here}: {instr} {label}: shifted at run time by "
                                              f"{off.group(0)}: {label} is corrected for its own pose, the "

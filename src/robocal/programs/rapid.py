@@ -54,18 +54,19 @@ for _base, _spec in (("movel", ((0,), 3)), ("movej", ((0,), 3)), ("movec", ((0, 
         _MOVES[_base + _suffix] = _spec
 _MOVE = re.compile(r"\b(" + "|".join(_MOVES) + r")\b", re.IGNORECASE)
 _STATEMENT = re.compile(r"[^;]+")
+_WORD = re.compile(r"\s*([A-Za-z]\w*)")
 _REF = re.compile(r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*((?:\.\s*[A-Za-z]\w*)*)")
 _CALLED = re.compile(r"\s*(Offs|RelTool)\s*\(", re.IGNORECASE)
 _FUNCTION = re.compile(r"\s*([A-Za-z]\w*)\s*\(")
-_ROUTINE = re.compile(r"\b(PROC|FUNC\s+\w+|TRAP)\s+([A-Za-z]\w*)\s*(?:\(([^)]*)\))?", re.IGNORECASE)
-_ROUTINE_END = re.compile(r"\bEND(?:PROC|FUNC|TRAP)\b", re.IGNORECASE)
+_ROUTINE = re.compile(r"\b(proc|func\s+\w+|trap)\s+([a-z]\w*)\s*(?:\(([^)]*)\))?")  # lower-cased text
+_ROUTINE_END = re.compile(r"\bend(?:proc|func|trap)\b")
 _ASSIGN = re.compile(r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*((?:\.\s*[A-Za-z]\w*)*)\s*:=",
                      re.IGNORECASE)
-_CONSTANT = re.compile(r"\bCONST\s+num\s+([A-Za-z]\w*)\s*:=\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*;",
-                       re.IGNORECASE)
-_RECORD = re.compile(r"\bRECORD\s+([A-Za-z]\w*)([\s\S]*?)\bENDRECORD\b", re.IGNORECASE)
+# searched in the lower-cased text
+_CONSTANT = re.compile(r"\bconst\s+num\s+([a-z]\w*)\s*:=\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?\s*;")
+_RECORD = re.compile(r"\brecord\s+([a-z]\w*)([\s\S]*?)\bendrecord\b")
 _COMPONENT = re.compile(r"([A-Za-z]\w*)\s+([A-Za-z]\w*)\s*;")
-_CONF = re.compile(r"\bConf([LJ])\s*\\\s*(On|Off)\b", re.IGNORECASE)
+_CONF = re.compile(r"\bconf([lj])\s*\\\s*(on|off)\b")
 # block keywords a statement may begin with before its instruction
 _LEAD = re.compile(r"\s*(?:(?:LOCAL\s+)?(?:PROC|TRAP)\s+\w+\s*(?:\([^)]*\))?|(?:LOCAL\s+)?FUNC\s+\w+\s+\w+\s*"
                    r"\([^)]*\)|ENDPROC|ENDFUNC|ENDTRAP|ENDIF|ELSE|ENDFOR|ENDWHILE|ENDTEST|DEFAULT\s*:|"
@@ -123,28 +124,34 @@ class RapidDialect(Dialect):
         for src in [*references, *sources]:
             masked = mask(src.text, [_COMMENT], [_STRING])
             st.masked[src.path] = masked
+            low = masked.lower()  # case-insensitive searches run on this, without the slow flag
             routines = []  # (start, end, name)
-            for m in _ROUTINE.finditer(masked):
-                stop = _ROUTINE_END.search(masked, m.end())
-                routines.append((m.start(), stop.end() if stop else len(masked), m.group(2).lower()))
-                if m.group(1).upper() == "PROC":
-                    st.procs[m.group(2).lower()] = _params(m.group(3) or "")
-            for m in _CONSTANT.finditer(masked):
-                st.constants.add(m.group(1).lower())
-            for m in _RECORD.finditer(masked):
-                st.records[m.group(1).lower()] = [(t.lower(), f) for t, f in _COMPONENT.findall(m.group(2))]
+            for m in _ROUTINE.finditer(low):
+                stop = _ROUTINE_END.search(low, m.end())
+                routines.append((m.start(), stop.end() if stop else len(low), m.group(2)))
+                if m.group(1) == "proc":
+                    st.procs[m.group(2)] = _params(m.group(3) or "")
+            if "const" in low:
+                st.constants |= {m.group(1) for m in _CONSTANT.finditer(low)}
+            if "record" in low:
+                for m in _RECORD.finditer(low):
+                    st.records[m.group(1)] = [(c.group(1).lower(), c.group(2)) for c in
+                                              _COMPONENT.finditer(masked, m.start(2), m.end(2))]
             record_decl = None if not st.records else re.compile(
                 r"\b(?:(?:LOCAL|TASK)\s+)?(?:CONST|PERS|VAR)\s+(" + "|".join(st.records) +
                 r")\s+([A-Za-z]\w*)\s*(\{[^}]*\})?\s*:=", re.IGNORECASE)
+            switches = [(c.start(), c.group(1), c.group(2) == "on") for c in _CONF.finditer(low)] \
+                if "conf" in low else []
             conf = {"l": True, "j": True}
-            k = -1
+            k, n_sw = -1, 0
             for m in _STATEMENT.finditer(masked):  # ';' only ends statements: strings are masked
                 s, e = m.span()
                 while k + 1 < len(routines) and routines[k + 1][0] < e:
                     k += 1
                 proc = routines[k][2] if k >= 0 and s < routines[k][1] else ""
-                for c in _CONF.finditer(masked, s, e):
-                    conf[c.group(1).lower()] = c.group(2).lower() == "on"
+                while n_sw < len(switches) and switches[n_sw][0] < e:
+                    conf[switches[n_sw][1]] = switches[n_sw][2]
+                    n_sw += 1
                 r = record_decl.search(masked, s, e) if record_decl else None
                 if r:
                     self._record(src, masked, r, e, st, src not in sources)
@@ -188,25 +195,28 @@ class RapidDialect(Dialect):
                 (st.tools if kind == "tooldata" else st.wobjs)[name.lower() + suffix] = read(
                     src, node, name + suffix, m.start(), where)
             return
-        mv = _MOVE.search(masked, s, e)
+        lead = _after_lead(masked, s, e)
+        word = _WORD.match(masked, lead)
+        mv = word if word and word.group(1).lower() in _MOVES else None
+        if mv is None and word and word.group(1).upper() == "IF":  # IF condition MoveL ...; (no THEN)
+            mv = _MOVE.search(masked, word.end(), e)
         if mv:
             positional, optional = _arguments(masked, mv.end(), e)
-            instr = mv.group(1)
+            instr, at = mv.group(1), mv.start(1)
             target_pos, tool_pos = _MOVES[instr.lower()]
             if len(positional) <= tool_pos:
-                raise DataError(f"{src.path.name}:{src.line_of(mv.start())}: {instr} has "
+                raise DataError(f"{src.path.name}:{src.line_of(at)}: {instr} has "
                                 f"{len(positional)} arguments, expected at least {tool_pos + 1}")
             if "id" in optional and src.path not in st.multimove:
                 st.multimove.add(src.path)
-                prog.warnings.append(f"{src.path.name}:{src.line_of(mv.start())}: MultiMove synchronized "
+                prog.warnings.append(f"{src.path.name}:{src.line_of(at)}: MultiMove synchronized "
                                      "motions (\\ID): this task's robot is filtered with this calibration "
                                      "only; each robot of the cell needs its own calibration and filter run")
             joint = instr.lower().rstrip("sdoagync").endswith("j") or instr.lower() in ("triggjios", "spotj")
-            st.motions.append(_Motion(instr, src, mv.start(), [positional[k] for k in target_pos],
+            st.motions.append(_Motion(instr, src, at, [positional[k] for k in target_pos],
                                       positional[tool_pos], optional.get("wobj"), proc,
                                       conf["j" if joint else "l"]))
             return
-        lead = _after_lead(masked, s, e)
         a = _ASSIGN.match(masked, lead + len(masked[lead:e]) - len(masked[lead:e].lstrip()), e)
         if a:
             name = a.group(1).lower()
