@@ -235,8 +235,14 @@ class _Script:
                 if node.id == "pi":
                     return np.pi
                 span = self.assigned.latest(node.id, at)
-                if span is None or depth > _DEPTH:
+                if depth > _DEPTH:
                     raise ValueError(node.id)
+                if span is None:  # a function's parameter: the value every call gives, if one
+                    given = {self.number(self.masked[a:b], call_at, depth + 1)
+                             for call_at, (a, b) in self._arguments(node.id, at)}
+                    if len(given) != 1 or None in given:
+                        raise ValueError(node.id)
+                    return given.pop()
                 v = self.number(self.masked[span[0]:span[1]], span[0], depth + 1)
                 if v is None:
                     raise ValueError(node.id)
@@ -365,22 +371,31 @@ class _Script:
                     out.append((kind_a, value_a, frame_a, q) if kind_a != "joints" else
                                ("skip", f"{fn} of a joint list", IDENTITY, None))
             elif kind_b == "skip":
-                out.append(("skip", value_b, IDENTITY, None))
+                moved = [v.name for k, v, _, _ in first if k == "target"] or [first_text]
+                out.append(("skip", f"{fn}({', '.join(moved)}, ...) moves it at run time: {value_b}", IDENTITY,
+                            None))
             else:
                 out.append(("skip", f"{fn}: the second pose is neither a literal nor a constant", IDENTITY,
                             None))
         return out
 
-    def _parameter(self, ident: str, at: int, depth: int) -> list | None:
-        """``ident`` as a parameter of the function whose definition comes last before ``at``
-        with that parameter: what every call of the function passes."""
+    def _arguments(self, ident: str, at: int) -> list[tuple[int, tuple[int, int]]]:
+        """``(call offset, argument span)`` of every call passing parameter ``ident`` of the
+        function whose definition with that parameter comes last before ``at`` ([] if none)."""
         for start, fn, names in reversed(self.params):
             if start < at and ident in names:
                 k = names.index(ident)
+                return [(call_at, args[k]) for call_at, args in self.calls.get(fn, []) if k < len(args)]
+        return []
+
+    def _parameter(self, ident: str, at: int, depth: int) -> list | None:
+        """``ident`` as a parameter of a function: what every call of the function passes (None:
+        not a parameter)."""
+        for start, fn, names in reversed(self.params):
+            if start < at and ident in names:
                 out = []
-                for call_at, args in self.calls.get(fn, []):
-                    if k < len(args):
-                        out += self.resolve(*args[k], call_at, depth + 1)
+                for call_at, span in self._arguments(ident, at):
+                    out += self.resolve(*span, call_at, depth + 1)
                 return out or [("skip", f"{ident} is a parameter of {fn}, which no call in this script "
                                         "gives", IDENTITY, None)]
         return None
