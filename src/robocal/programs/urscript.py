@@ -372,8 +372,8 @@ class _Script:
                                ("skip", f"{fn} of a joint list", IDENTITY, None))
             elif kind_b == "skip":
                 moved = [v.name for k, v, _, _ in first if k == "target"] or [first_text]
-                out.append(("skip", f"{fn}({', '.join(moved)}, ...) moves it at run time: {value_b}", IDENTITY,
-                            None))
+                out.append(("skip", f"{fn}({', '.join(moved)}, ...) moves it at run time: {value_b}",
+                            IDENTITY, None))
             else:
                 out.append(("skip", f"{fn}: the second pose is neither a literal nor a constant", IDENTITY,
                             None))
