@@ -106,7 +106,9 @@ class RapidDialect(Dialect):
         return make_transform(quat_to_matrix(q), values[:, :3] * 1e-3)
 
     def from_pose(self, T, old):
-        return np.hstack([T[:, :3, 3] * 1e3, matrix_to_quat(T[:, :3, :3], old[:, 3:7])])
+        # at the old quaternion's norm: a file's rounding (|q| = 1 +- 1e-6) is not a change
+        norm = np.linalg.norm(old[:, 3:7], axis=1, keepdims=True)
+        return np.hstack([T[:, :3, 3] * 1e3, matrix_to_quat(T[:, :3, :3], old[:, 3:7]) * norm])
 
     def resolutions(self):
         return np.array([_POSITION_MM] * 3 + [_QUATERNION] * 4)
