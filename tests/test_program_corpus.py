@@ -374,3 +374,27 @@ def test_repeated_errors_are_collapsed_one_item_a_line(tmp_path):
                         r"\(8 places: far.mod:2 \(p0\), far.mod:3 \(p1\), far.mod:4 \(p2\), far.mod:5 \(p3\) "
                         r"and 4 more\)",
                         lines[1])
+
+
+def test_urscript_relative_waypoint_export(tmp_path):
+    """PolyScope writes a waypoint relative to a feature point as pose_trans(F, pose_trans(
+    pose_inv(A), B)): B is corrected in the frame F * A^-1; a motion to F itself then cannot be
+    corrected (F is a frame) and is named; a move relative to the current pose is named."""
+    path = tmp_path / "relative.script"
+    path.write_bytes(b"def Prog():\n  global Feat_7=p[.40430, -.26587, .21250, .00027, 3.14144, -.00022]\n"
+                     b"  movel(pose_trans(Feat_7, pose_trans(pose_inv(p[.40461, -.26488, .21343, .00025, "
+                     b"3.14143, -.00010]), p[.40543, -.26239, .32808, .00052, 3.14145, -.00005])), a=2.5, "
+                     b"v=0.3)\n"
+                     b"  movel(Feat_7, a=2.5, v=0.3)\n"
+                     b"  movel(pose_trans(get_actual_tcp_pose(), p[0, 0, 0.01, 0, 0, 0]), a=0.1, v=0.1)\n"
+                     b"end\n")
+    robot = rc.Robot.from_catalog("ur5")
+    res = filter_program(path, perturbed(robot, 7), robot)
+    assert [(r["name"], r["frame"]) for r in res.rows] == [("p@3", "Feat_7*pose@3")]
+    assert re.match(r"relative.script:4: motion: not corrected: Feat_7 serves as a feature",
+                    res.uncorrected[1])
+    assert re.match(r"relative.script:5: movel: .*relative to a pose known at run time only",
+                    res.uncorrected[0])
+    text = res.outputs[path].decode()
+    assert "p[.40543, -.26239, .32808" not in text
+    assert re.search(r"p\[\.4\d+, -\.2\d+, \.3\d+, \.\d+", text)  # the leading-dot style is kept

@@ -23,7 +23,7 @@ from bisect import bisect_left
 import numpy as np
 
 from robocal.errors import DataError
-from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
+from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
 from robocal.programs.aggregate import numbers_of, parse_aggregate, split_top
 from robocal.programs.model import IDENTITY, Dialect, Program, Target
 from robocal.programs.rotations import nearest_rotvec
@@ -135,11 +135,11 @@ class URScriptDialect(Dialect):
             for t in list(prog.targets):
                 if id(t) in sc.as_frame:  # a feature that a motion also moves to (with an offset)
                     prog.targets.remove(t)
-                    prog.skip(used[id(t)][2], "move", f"{t.name} serves as a feature (pose_trans) and as "
+                    prog.skip(used[id(t)][2], "motion", f"{t.name} serves as a feature (pose_trans) and as "
                                                       "a target: correcting it would move the poses in its "
                                                       "frame")
             for t in sc.poses.values():
-                if id(t) not in used and id(t) not in sc.as_frame:
+                if id(t) in sc.variables and id(t) not in used and id(t) not in sc.as_frame:
                     prog.warnings.append(f"{t.where}: pose variable not used by a motion: left as it is")
         for t in prog.targets:
             if t.tool.startswith("?"):
@@ -189,6 +189,7 @@ class _Script:
         self.assigned = _Assignments()  # name -> (start, end) of the value assigned
         self.poses: dict[int, Target] = {}  # offset of a literal pose -> its target
         self.as_frame: set[int] = set()
+        self.variables: set[int] = set()  # targets assigned to a variable (unused ones are named)
         self.params: list[tuple[int, str, list[str]]] = []  # (offset, def name, parameters)
         self.calls: dict[str, list[tuple[int, list]]] = {}
         literals = []
@@ -210,7 +211,9 @@ class _Script:
                 args = split_top(masked, m.end(), _close(masked, m.end() - 1))
                 self.calls.setdefault(m.group(1), []).append((m.start(), args))
         for a, b in literals:  # every pose variable is a target, used or not
-            self._literal(a, b)
+            found = self._literal(a, b)
+            if found[0] == "target":
+                self.variables.add(id(found[1]))
 
     def number(self, text: str, at: int, depth: int) -> float | None:
         """The value of a constant numeric expression (numbers, + - * /, pi, sqrt/sin/cos/d2r and
@@ -288,6 +291,11 @@ class _Script:
             first = self.resolve(*inner[0], at, depth + 1)
             second = self.resolve(*inner[1], at, depth + 1)
             return self._compose(call.group(1), first, second, masked[slice(*inner[0])].strip())
+        if call and call.group(1) == "pose_inv":
+            inner = split_top(masked, call.end(), _close(masked, call.end() - 1))
+            found = self.resolve(*inner[0], at, depth + 1) if len(inner) == 1 else []
+            if len(found) == 1 and found[0][0] in ("pose", "target") and found[0][2] == IDENTITY:
+                return [("pose", invert_transform(self._pose(found[0])), IDENTITY, None)]
         if call and call.group(1) != "p":
             return [("skip", f"the pose is computed at run time by {call.group(1)}()", IDENTITY, None)]
         if _POSE.match(masked, lead):
@@ -340,6 +348,10 @@ class _Script:
         varying = ", ".join(t for t, v in zip(texts, values, strict=False) if v is None)
         return ("skip", f"p[...] holds values known at run time only ({varying[:60]})", IDENTITY, None)
 
+    def _pose(self, found: tuple) -> np.ndarray:
+        """The 4x4 of a resolved 'pose' or 'target' (its numbers as written)."""
+        return found[1] if found[0] == "pose" else self.d.to_pose(found[1].values()[None])[0]
+
     def _name_at(self, lead: int) -> str:
         """The variable a literal pose is assigned to (``name = p[...]``), else ``p@line``."""
         before = self.masked[max(0, lead - 80):lead]
@@ -351,21 +363,32 @@ class _Script:
         with A a fixed feature), or A a target moved by a constant B; else a skip."""
         out = []
         for kind_b, value_b, frame_b, _ in second:
-            if kind_b == "target" and fn == "pose_trans" and frame_b == IDENTITY:
+            if kind_b == "target" and fn == "pose_trans" and frame_b != IDENTITY:  # a frame in a frame
+                if len(first) == 1 and first[0][0] in ("pose", "target") and first[0][2] == IDENTITY:
+                    frame = f"{first_text}*{frame_b}"
+                    self.prog.frames.setdefault(frame, self._pose(first[0]) @ self.prog.frames[frame_b])
+                    if first[0][0] == "target":
+                        self.as_frame.add(id(first[0][1]))
+                    out.append(("target", value_b, frame, None))
+                else:
+                    out.append(("skip", f"{fn}({first_text}, ...): the outer frame is not a pose this filter "
+                                        "can read", IDENTITY, None))
+            elif kind_b == "target" and fn == "pose_trans" and frame_b == IDENTITY:
                 if first_text in self.prog.frames:
                     out.append(("target", value_b, first_text, None))
                 elif len(first) == 1 and first[0][0] in ("pose", "target") and first[0][2] == IDENTITY:
-                    pose = first[0][1] if first[0][0] == "pose" else \
-                        self.d.to_pose(first[0][1].values()[None])[0]
+                    pose = self._pose(first[0])
                     frame = first_text if _IDENT.match(first_text) else f"pose@{value_b.line}"
                     self.prog.frames.setdefault(frame, pose)
                     if first[0][0] == "target":
                         self.as_frame.add(id(first[0][1]))
                     out.append(("target", value_b, frame, None))
                 else:
-                    out.append(("skip", f"{fn}({first_text}, ...): the feature {first_text} is not a pose "
-                                        "this filter can read (give it with --frame NAME=...)", IDENTITY,
-                                None))
+                    runtime = [v for k, v, _, _ in first if k == "skip"]
+                    why = (f"relative to a pose known at run time only ({runtime[0]})" if runtime else
+                           f"the feature {first_text} is not a pose this filter can read (give it with "
+                           "--frame NAME=...)")
+                    out.append(("skip", f"{fn}({first_text}, ...): {why}", IDENTITY, None))
             elif kind_b == "pose":
                 for kind_a, value_a, frame_a, q in first:  # A moved by a constant offset: a use of A
                     out.append((kind_a, value_a, frame_a, q) if kind_a != "joints" else
