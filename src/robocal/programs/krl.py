@@ -208,9 +208,11 @@ class KRLDialect(Dialect):
         masked = st.masked[src.path]
         routines = [(m.start(), m.group(1).upper()) for m in _ROUTINE.finditer(masked)]
         st.routines[src.path] = routines
+        data_list = src.path.suffix.lower() == ".dat"
         for m in _ASSIGN.finditer(masked):
             name = m.group(1).upper()
-            if name in _KEYWORDS or name.endswith("_ACT") or _MOTION.match(masked, m.start()):
+            if name in _KEYWORDS or name.endswith("_ACT") or _MOTION.match(masked, m.start()) \
+                    or data_list and m.group(4).lstrip().startswith("{"):  # a .dat's initial value
                 continue
             proc = _routine_at(routines, m.start())
             if m.group(3) or m.group(2) and not re.fullmatch(r"\[\s*\d+(?:\s*,\s*\d+)*\s*\]", m.group(2)):

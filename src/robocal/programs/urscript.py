@@ -275,10 +275,9 @@ class _Script:
             inner = split_top(masked, ik.end(), _close(masked, ik.end() - 1))
             qnear = None
             for qa, qb in inner[1:]:
-                key, _, val = masked[qa:qb].partition("=")
-                val_text = (val if key.strip() == "qnear" else masked[qa:qb]).strip()
-                start = qa + masked[qa:qb].index(val_text[:1]) if val_text else qa
-                for kind, value, _, _ in self.resolve(start, start + len(val_text), at, depth + 1):
+                key, eq, _ = masked[qa:qb].partition("=")
+                start = qa + len(key) + len(eq) if key.strip() == "qnear" else qa
+                for kind, value, _, _ in self.resolve(start, qb, at, depth + 1):
                     if kind == "joints":
                         qnear = value
             return [(k, v, f, qnear if k == "target" else q) for k, v, f, q in
