@@ -8,6 +8,7 @@ import re
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import robocal as rc
@@ -398,3 +399,23 @@ def test_urscript_relative_waypoint_export(tmp_path):
     text = res.outputs[path].decode()
     assert "p[.40543, -.26239, .32808" not in text
     assert re.search(r"p\[\.4\d+, -\.2\d+, \.3\d+, \.\d+", text)  # the leading-dot style is kept
+
+
+def test_krl_literal_index_is_that_element(tmp_path):
+    files = _copy(["deburr_cell.src", "deburr_cell.dat"], tmp_path)
+    files[0].write_bytes(files[0].read_bytes().replace(b"SLIN XHOLE[i]", b"SLIN XHOLE[2]"))
+    robot = rc.Robot.from_catalog("kuka_kr16_2")
+    res = filter_program(files, perturbed(robot, 7), robot, references=_copy(["$config.dat"], tmp_path))
+    names = [r["name"] for r in res.rows]
+    assert "XHOLE[2]" in names and "XHOLE[1]" not in names
+
+
+def test_urscript_qnear_variable_is_read():
+    """get_inverse_kin(pose, qnear=q_home): the joints the controller starts from."""
+    from robocal.programs.source import ProgramText
+    from robocal.programs.urscript import URScriptDialect
+
+    text = (b"def f():\n  q_home = [0.1, -1.5, 1.5, -1.5, -1.5, 0.2]\n  P1 = p[0.4, -0.2, 0.3, 0, 3.1, 0]\n"
+            b"  movej(get_inverse_kin(P1, qnear=q_home))\nend\n")
+    prog = URScriptDialect().parse([ProgramText("f.script", text)], {}, {"default": np.eye(4)})
+    assert np.allclose(prog.targets[0].qnear, [0.1, -1.5, 1.5, -1.5, -1.5, 0.2])
