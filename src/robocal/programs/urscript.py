@@ -40,6 +40,7 @@ _IK = re.compile(r"\s*get_inverse_kin\s*\(")
 _FUNCTION = re.compile(r"([A-Za-z_]\w*)\s*\(")
 _DEF = re.compile(r"\bdef\s+([A-Za-z_]\w*)\s*\(([^)]*)\)\s*:")
 _DEPTH = 12  # assignments and calls followed at most this deep
+_BRACKET = re.compile(r"[\[\]()]")
 _POSITION_M = 1e-6
 _ROTVEC = 1e-7
 DEFAULT_TOOL = "default"
@@ -70,13 +71,13 @@ class _Assignments:
 def _close(masked: str, open_at: int) -> int:
     """Index of the bracket closing the one at ``open_at``."""
     depth = 0
-    for i in range(open_at, len(masked)):
-        if masked[i] in "([":
+    for m in _BRACKET.finditer(masked, open_at):
+        if m.group() in "([":
             depth += 1
-        elif masked[i] in ")]":
+        else:
             depth -= 1
             if depth == 0:
-                return i
+                return m.start()
     raise DataError("unbalanced brackets")
 
 
