@@ -419,3 +419,18 @@ def test_urscript_qnear_variable_is_read():
             b"  movej(get_inverse_kin(P1, qnear=q_home))\nend\n")
     prog = URScriptDialect().parse([ProgramText("f.script", text)], {}, {"default": np.eye(4)})
     assert np.allclose(prog.targets[0].qnear, [0.1, -1.5, 1.5, -1.5, -1.5, 0.2])
+
+
+def test_rapid_routine_without_a_call_in_these_files(tmp_path):
+    """A PROC with parameters called from a module not given: its motions to declared targets are
+    corrected, the one through its parameter is named."""
+    path = tmp_path / "lib.mod"
+    path.write_bytes(b"MODULE Lib\n  CONST robtarget pFix:=[[900,0,900],[0,0,1,0],[0,0,0,0],"
+                     b"[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];\n  PROC Go(robtarget pT, num nSpeed)\n"
+                     b"    MoveL pFix, v100, fine, tool0;\n    MoveL pT, v100, fine, tool0;\n  ENDPROC\n"
+                     b"ENDMODULE\n")
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    res = filter_program(path, perturbed(robot, 7), robot)
+    assert [r["name"] for r in res.rows] == ["pFix"]
+    assert res.uncorrected == ["lib.mod:5: MoveL: not corrected: pT is a parameter of routine go that no "
+                               "call in these files gives"]

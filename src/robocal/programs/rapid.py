@@ -327,9 +327,6 @@ class RapidDialect(Dialect):
                         found.monitored = mv.monitored
                         order += 1
                         prog.targets.append(found)
-            if not st.scopes(mv.proc):
-                prog.skip(here, mv.instr, f"it is in routine {mv.proc}, which no call in these files runs "
-                                          "with its parameters")
         for targets in st.declared.values():
             if targets and not any(id(t) in first for t in targets) and id(targets[0]) not in st.reference:
                 prog.warnings.append(f"{targets[0].source.path.name}:{targets[0].line}: robtarget "
@@ -373,7 +370,7 @@ class RapidDialect(Dialect):
         if name in scope:
             arg_src, x, y, caller, outer = scope[name]
             if arg_src is None:
-                return [f"parameter {r.group(1)} of routine {proc} is not given by its call"]
+                return [f"{r.group(1)} is a parameter of routine {proc} that no call in these files gives"]
             return self._follow(st, arg_src, x, y, caller, outer, depth + 1)
         fields = re.sub(r"\s+", "", fields).lower()
         if fields and name + fields not in st.declared:
@@ -455,6 +452,8 @@ class _State:
                             (None, 0, 0, caller, outer)
                         k += 1
                 out.append(bound)
+        if not out:  # no call in these files: the parameters are unknown, the rest is followed
+            out = [{name: (None, 0, 0, "", {}) for name, _ in self.procs[proc]}]
         self._scopes[proc] = out
         return out
 
@@ -469,7 +468,7 @@ class _State:
         if name in scope:
             arg_src, x, y, _, outer = scope[name]
             if arg_src is None:
-                return "", f"the {what} is a parameter its call does not give"
+                return "", f"the {what} {text} is a routine parameter that no call in these files gives"
             return self.name_of(arg_src, (x, y), outer, what)
         index = r.group(2)
         if index:
