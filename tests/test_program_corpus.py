@@ -30,7 +30,7 @@ CASES = {
                            r":65: MoveL: .*computed at run time by CRobT\(\)",
                            r":66: MoveJ: .*robtarget pService is not declared"]),
     "rapid multimove palletizing": (["pallet_multimove.mod"], [], "abb_irb2600", {},
-                                    ["pPickUp", "pPick", "wp{1}.pos", "wp{2}.pos", "pHandOver"],
+                                    ["pPickUp", "wp{1}.pos", "wp{2}.pos", "pHandOver", "pPick"],
                                     [r":32: MoveL: .*Offs\(pPalletCorner, nCol\*nPitch.*run time only",
                                      r":35: MoveL: .*pLayer is modified at run time .*:34\)"]),
     "krl kss8 spline": (["deburr_cell.src", "deburr_cell.dat"], ["$config.dat"], "kuka_kr16_2", {},
@@ -434,3 +434,24 @@ def test_rapid_routine_without_a_call_in_these_files(tmp_path):
     assert [r["name"] for r in res.rows] == ["pFix"]
     assert res.uncorrected == ["lib.mod:5: MoveL: not corrected: pT is a parameter of routine go that no "
                                "call in these files gives"]
+
+
+def test_rapid_seam_finding_and_routines_of_other_modules():
+    """SeamFind's ToPoint is a target; a robtarget passed to a routine no file given defines is
+    named; a robtarget whose field is changed at run time is named, not corrected."""
+    from robocal.programs.rapid import RapidDialect
+    from robocal.programs.source import ProgramText
+
+    rt = "[[500,-200,400],[0,0,1,0],[-1,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    text = (f"MODULE Touch\n  PERS robtarget pSearch:={rt};\n  PERS robtarget pFound:={rt};\n"
+            f"  PERS robtarget pLaser:={rt};\n  PERS robtarget pCheck:={rt};\n  PROC main()\n"
+            "    SeamFind 2\\FoundPoint:=pFound,pSearch,v100,js1,sched1,tGun\\WObj:=wobj0;\n"
+            "    ScanSeam pLaser,v100,tLaser;\n    pCheck.trans:=pFound.trans;\n"
+            "    MoveJ pCheck,v100,fine,tGun;\n  ENDPROC\nENDMODULE\n").encode()
+    prog = RapidDialect().parse([ProgramText("touch.mod", text)], {}, {})
+    assert [(t.name, t.tool) for t in prog.targets] == [("pSearch", "tgun")]
+    assert prog.uncorrected == [
+        "touch.mod:10: MoveJ: not corrected: pCheck is modified at run time (pCheck.<field> := ... at "
+        "touch.mod:9)",
+        "touch.mod:8: ScanSeam: not corrected: robtarget pLaser is passed to ScanSeam, a routine not in "
+        "these files: if it moves there, give its module as a program file"]

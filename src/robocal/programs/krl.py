@@ -356,8 +356,10 @@ class KRLDialect(Dialect):
             return out
         if fields:
             return [f"{text} is a field of a structure: its value is not followed"]
-        out: list = [f"{name} is modified at run time ({name}.<field> or {name}[i] = ... at {w})"
-                     for w in st.modified.get(name, [])[:1]]
+        if st.modified.get(name):  # the pose reached is partly computed at run time
+            return [f"{name} is modified at run time ({name}.<field> or {name}[i] = ... at "
+                    f"{st.modified[name][0]})"]
+        out: list = []
         key = name + index
         sources = st.assigned.get(key, []) + (st.assigned.get(name, []) if index else [])
         if sources:

@@ -48,7 +48,9 @@ _MOVES = {"movel": ((0,), 3), "movej": ((0,), 3), "movec": ((0, 1), 4),
           # spot welding, dispensing, painting, continuous application platform
           "spotl": ((0,), 3), "spotj": ((0,), 3), "spotml": ((0,), 3),
           "displ": ((0,), 4), "dispc": ((0, 1), 5), "paintl": ((0,), 3), "paintc": ((0, 1), 4),
-          "capl": ((0,), 6), "capc": ((0, 1), 7)}
+          "capl": ((0,), 6), "capc": ((0, 1), 7),
+          # SeamFind (laser / touch sensing): Joint \FoundPoint, ToPoint, Speed, JointData, Schedule, Tool
+          "seamfind": ((1,), 5)}
 for _base, _spec in (("movel", ((0,), 3)), ("movej", ((0,), 3)), ("movec", ((0, 1), 4))):
     for _suffix in ("do", "ao", "go", "sync"):
         _MOVES[_base + _suffix] = _spec
@@ -123,16 +125,18 @@ class RapidDialect(Dialect):
     def parse(self, sources, frames, tools, references=()):
         prog = Program([])
         st = _State()
-        for src in [*references, *sources]:
-            masked = mask(src.text, [_COMMENT], [_STRING])
-            st.masked[src.path] = masked
-            low = masked.lower()  # case-insensitive searches run on this, without the slow flag
-            routines = []  # (start, end, name)
+        lowered, spans = {}, {}
+        for src in [*references, *sources]:  # every module's routines first: calls cross modules
+            masked = st.masked[src.path] = mask(src.text, [_COMMENT], [_STRING])
+            low = lowered[src.path] = masked.lower()  # case-insensitive searches, without the slow flag
+            routines = spans[src.path] = []  # (start, end, name)
             for m in _ROUTINE.finditer(low):
                 stop = _ROUTINE_END.search(low, m.end())
                 routines.append((m.start(), stop.end() if stop else len(low), m.group(2)))
                 if m.group(1) == "proc":
                     st.procs[m.group(2)] = _params(m.group(3) or "")
+        for src in [*references, *sources]:
+            masked, low, routines = st.masked[src.path], lowered[src.path], spans[src.path]
             if "const" in low:
                 st.constants |= {m.group(1) for m in _CONSTANT.finditer(low)}
             if "record" in low:
@@ -231,6 +235,9 @@ class RapidDialect(Dialect):
         if c and c.group(1).lower() in st.procs:
             positional, optional = _arguments(masked, lead + c.end(), e)
             st.calls.setdefault(c.group(1).lower(), []).append((src, lead, positional, optional, proc))
+        elif c and masked[lead + c.end():e].strip():  # a routine of another module, or a built-in
+            positional, _ = _arguments(masked, lead + c.end(), e)
+            st.foreign.append((src, lead + c.start(1), c.group(1), positional))
 
     def _record(self, src, masked, m, e, st, only_frames):
         """A declaration of a RECORD type: its robtarget components become targets
@@ -327,7 +334,21 @@ class RapidDialect(Dialect):
                         found.monitored = mv.monitored
                         order += 1
                         prog.targets.append(found)
-        for targets in st.declared.values():
+        passed = set()
+        for src, at, routine, positional in st.foreign:  # a robtarget given to a routine not in these files
+            for a, b in positional:
+                r = _REF.fullmatch(st.masked[src.path][a:b].strip())
+                name = r.group(1).lower() if r and not r.group(3) else ""
+                targets = st.declared.get(name)
+                unused = targets and not any(id(t) in first for t in targets)
+                if unused and id(targets[0]) not in st.reference:
+                    prog.skip(f"{src.path.name}:{src.line_of(at)}", routine,
+                              f"robtarget {r.group(1)} is passed to {routine}, a routine not in these files: "
+                              "if it moves there, give its module as a program file")
+                    passed.add(name)
+        for key, targets in st.declared.items():
+            if key in passed:
+                continue
             if targets and not any(id(t) in first for t in targets) and id(targets[0]) not in st.reference:
                 prog.warnings.append(f"{targets[0].source.path.name}:{targets[0].line}: robtarget "
                                      f"{targets[0].name.split('{')[0]} is not used by a motion instruction "
@@ -376,8 +397,10 @@ class RapidDialect(Dialect):
         if fields and name + fields not in st.declared:
             return [f"{' '.join(text.split())} is a field of a RECORD or robtarget: its value is not "
                     "followed"]
-        out: list = [f"{r.group(1)} is modified at run time ({r.group(1)}.<field> := ... at {w})"
-                     for w in st.modified.get(name, [])[:1]]
+        if st.modified.get(name):  # the pose reached is partly computed at run time
+            return [f"{r.group(1)} is modified at run time ({r.group(1)}.<field> := ... at "
+                    f"{st.modified[name][0]})"]
+        out: list = []
         if name in st.assigned:
             for arg_src, x, y, where_proc in st.assigned[name]:
                 scopes = [scope] if where_proc == proc else st.scopes(where_proc)
@@ -425,6 +448,7 @@ class _State:
         self.motions: list[_Motion] = []
         self.inline: dict = {}
         self.multimove: set = set()
+        self.foreign: list = []  # (src, at, routine, positional spans): calls of routines not in these files
         self.constants: set[str] = set()  # CONST num names
         self.records: dict[str, list[tuple[str, str]]] = {}  # RECORD type -> [(type, field)]
         self._scopes: dict[str, list] = {}
