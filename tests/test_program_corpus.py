@@ -455,3 +455,23 @@ def test_rapid_seam_finding_and_routines_of_other_modules():
         "touch.mod:9)",
         "touch.mod:8: ScanSeam: not corrected: robtarget pLaser is passed to ScanSeam, a routine not in "
         "these files: if it moves there, give its module as a program file"]
+
+
+def test_positions_passed_to_routines_not_given_are_named():
+    """KRL UserMove(XP9) with UserMove in another file; URScript rq_move_to(Drop_p) of a URCap: the
+    positions are named, not reported as unused."""
+    from robocal.programs.krl import KRLDialect
+    from robocal.programs.source import ProgramText
+    from robocal.programs.urscript import URScriptDialect
+
+    src = b"DEF cell( )\r\n  $TOOL = TOOL_DATA[1]\r\n  $BASE = BASE_DATA[1]\r\n  UserMove(XP9)\r\nEND\r\n"
+    dat = b"DEFDAT cell\r\nDECL E6POS XP9={X 500,Y 0,Z 600,A 0,B 90,C 0,S 2,T 2}\r\nENDDAT\r\n"
+    prog = KRLDialect().parse([ProgramText("cell.src", src), ProgramText("cell.dat", dat)], {}, {})
+    assert prog.uncorrected == ["cell.src:4: UserMove: not corrected: XP9 is passed to UserMove, a routine "
+                                "not in these files: if it moves there, give its file as a program file"]
+    assert not any("not used" in w for w in prog.warnings)
+    script = b"def f():\n  Drop_p = p[0.4, -0.2, 0.3, 0, 3.1, 0]\n  rq_move_to(Drop_p, 0.1)\nend\n"
+    prog = URScriptDialect().parse([ProgramText("f.script", script)], {}, {"default": np.eye(4)})
+    assert prog.uncorrected == ["f.script:3: rq_move_to: not corrected: Drop_p is passed to rq_move_to(), "
+                                "which this filter does not follow: if it moves there, the pose is not "
+                                "corrected"]

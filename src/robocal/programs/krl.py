@@ -222,9 +222,11 @@ class KRLDialect(Dialect):
                 st.assigned.setdefault(key, []).append((src, m.start(4), m.end(4), proc))
         for m in _CALL.finditer(masked):
             name = m.group(1).upper()
+            args = split_top(masked, m.start(2), m.end(2))
             if name in st.params and st.params[name]:
-                args = split_top(masked, m.start(2), m.end(2))
                 st.calls.setdefault(name, []).append((src, args, _routine_at(routines, m.start())))
+            elif name not in st.params and name not in _KEYWORDS:  # a routine of a file not given
+                st.foreign.append((src, m.start(1), m.group(1), args))
 
     def _motions(self, prog, sources, st):
         used: dict[int, tuple[str, str, str]] = {}
@@ -300,8 +302,18 @@ class KRLDialect(Dialect):
                         f.tool, f.frame, f.order = tool, base, order
                         order += 1
                         prog.targets.append(f)
+        passed = set()
+        for src, at, routine, args in st.foreign:
+            for a, b in args:
+                key = re.sub(r"\s+", "", st.masked[src.path][a:b]).upper()
+                for t in st.declared.get(key, []):
+                    if id(t) not in used and id(t) not in st.reference:
+                        prog.skip(f"{src.path.name}:{src.line_of(at)}", routine,
+                                  f"{t.name} is passed to {routine}, a routine not in these files: if it "
+                                  "moves there, give its file as a program file")
+                        passed.add(id(t))
         for t in st.all_targets():
-            if id(t) not in used and id(t) not in st.reference:
+            if id(t) not in used and id(t) not in st.reference and id(t) not in passed:
                 prog.warnings.append(f"{t.where}: not used by a motion in these files: left as it is")
 
     def _state(self, m, state, st):
@@ -392,6 +404,7 @@ class _State:
         self.assigned: dict[str, list] = {}
         self.modified: dict[str, list[str]] = {}
         self.routines: dict = {}
+        self.foreign: list = []  # (src, at, routine, argument spans): calls of routines not in these files
 
     def declare(self, key: str, t: Target, reference: bool) -> None:
         self.declared[key] = [t]

@@ -41,6 +41,11 @@ _FUNCTION = re.compile(r"([A-Za-z_]\w*)\s*\(")
 _DEF = re.compile(r"\bdef\s+([A-Za-z_]\w*)\s*\(([^)]*)\)\s*:")
 _DEPTH = 12  # assignments and calls followed at most this deep
 _BRACKET = re.compile(r"[\[\]()]")
+# functions whose pose arguments are followed, or that do not move the robot to a pose argument
+_KNOWN = {"movel", "movep", "movec", "movej", "set_tcp", "pose_trans", "pose_add", "pose_inv", "pose_sub",
+          "get_inverse_kin", "p", "def", "textmsg", "popup", "to_str", "str_cat", "pose_dist", "point_dist",
+          "is_within_safety_limits", "get_forward_kin", "sleep", "sync", "socket_send_string", "while", "if",
+          "elif", "len", "norm"}
 _POSITION_M = 1e-6
 _ROTVEC = 1e-7
 DEFAULT_TOOL = "default"
@@ -139,8 +144,14 @@ class URScriptDialect(Dialect):
                     prog.skip(used[id(t)][2], "motion", f"{t.name} serves as a feature (pose_trans) and as "
                                                       "a target: correcting it would move the poses in its "
                                                       "frame")
-            for t in sc.poses.values():
-                if id(t) in sc.variables and id(t) not in used and id(t) not in sc.as_frame:
+            unused = [t for t in sc.poses.values()
+                      if id(t) in sc.variables and id(t) not in used and id(t) not in sc.as_frame]
+            passed = sc.passed({t.name for t in unused})
+            for name, where, fn in passed:  # given to a function of a URCap or of another file
+                prog.skip(where, fn, f"{name} is passed to {fn}(), which this filter does not follow: if "
+                                     "it moves there, the pose is not corrected")
+            for t in unused:
+                if t.name not in {name for name, _, _ in passed}:
                     prog.warnings.append(f"{t.where}: pose variable not used by a motion: left as it is")
         for t in prog.targets:
             if t.tool.startswith("?"):
@@ -347,6 +358,22 @@ class _Script:
             return ("pose", self.d.to_pose(np.array([values]))[0], IDENTITY, None)
         varying = ", ".join(t for t, v in zip(texts, values, strict=False) if v is None)
         return ("skip", f"p[...] holds values known at run time only ({varying[:60]})", IDENTITY, None)
+
+    def passed(self, variables: set[str]) -> list[tuple[str, str, str]]:
+        """``(variable, where, function)`` for each of ``variables`` given as an argument to a
+        function that is not a motion, a pose operation or a function of this script."""
+        if not variables:
+            return []
+        out = []
+        defined = {name for _, name, _ in self.params}
+        for m in re.finditer(r"\b([A-Za-z_]\w*)\s*\(", self.masked):
+            if m.group(1) in _KNOWN or m.group(1) in defined:
+                continue
+            for a, b in split_top(self.masked, m.end(), _close(self.masked, m.end() - 1)):
+                name = self.masked[a:b].strip()
+                if name in variables:
+                    out.append((name, f"{self.src.path.name}:{self.src.line_of(m.start())}", m.group(1)))
+        return out
 
     def _pose(self, found: tuple) -> np.ndarray:
         """The 4x4 of a resolved 'pose' or 'target' (its numbers as written)."""
