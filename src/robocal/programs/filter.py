@@ -218,7 +218,6 @@ def _configured_joints(dialect, nominal, F, targets, problems):
                                  "pose inside the joint limits"))
     configured = np.flatnonzero(has & reach & possible)  # the candidate their data select
     q[configured] = cands[configured, best[configured]]
-
     # no configuration data: in program order, the candidate nearest the previous target's joints
     last = -1  # the last target without configuration data given joints
     for i in np.flatnonzero(~has & reach):

@@ -229,8 +229,7 @@ class KRLDialect(Dialect):
                 st.foreign.append((src, m.start(1), m.group(1), args))
 
     def _motions(self, prog, sources, st):
-        used: dict[int, tuple[str, str, str]] = {}
-        order = 0
+        used = prog.used
         for src in sources:
             masked = st.masked[src.path]
             state = {"tool": ("?", "the program does not set the tool before this motion "
@@ -287,21 +286,9 @@ class KRLDialect(Dialect):
                         if "?" in (tool, base):
                             prog.skip(here, instr, f"{f.name}: {why_tool if tool == '?' else why_base}")
                             continue
-                        if id(f) in used:
-                            first_tool, first_base, first_at = used[id(f)]
-                            if (first_tool, first_base) != (tool, base):
-                                raise DataError(
-                                    f"{here}: {f.name} is used with tool {tool} and base {base}, but at "
-                                    f"{first_at} with tool {first_tool} and base {first_base}: one corrected "
-                                    "position cannot serve both; declare a copy for each use")
-                            continue
-                        used[id(f)] = (tool, base, here)
-                        if tool == "external TCP":
+                        if prog.use(f, tool, base, here, f.name, "base") and tool == "external TCP":
                             prog.unsupported[f"tool:{tool}"] = ("an external TCP (IPO_FRAME #TCP) is not "
                                                                 "filtered")
-                        f.tool, f.frame, f.order = tool, base, order
-                        order += 1
-                        prog.targets.append(f)
         passed = set()
         for src, at, routine, args in st.foreign:
             for a, b in args:

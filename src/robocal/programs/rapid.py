@@ -300,8 +300,7 @@ class RapidDialect(Dialect):
         assignments, array indices, Offs/RelTool with constant offsets) and give each its tool
         and work object (one per target); name every motion that reaches a pose this cannot
         follow."""
-        first: dict[int, tuple[str, str, str]] = {}
-        order = 0
+        first = prog.used
         for mv in st.motions:
             here = f"{mv.src.path.name}:{mv.src.line_of(mv.at)}"
             for scope in st.scopes(mv.proc):
@@ -321,19 +320,9 @@ class RapidDialect(Dialect):
                                                       f"{found.source.path.name}, given as a reference: give "
                                                       "that module as a program file to correct it")
                             continue
-                        if id(found) in first:
-                            if first[id(found)][:2] != (tool, wobj):
-                                t0, w0, at0 = first[id(found)]
-                                raise DataError(
-                                    f"{here}: robtarget {found.name.lower()} is used with tool {tool} and "
-                                    f"work object {wobj}, but at {at0} with {t0} / {w0}: one corrected "
-                                    "target cannot serve both; declare a copy for each use")
-                            continue
-                        first[id(found)] = (tool, wobj, here)
-                        found.tool, found.frame, found.order = tool, wobj, order
-                        found.monitored = mv.monitored
-                        order += 1
-                        prog.targets.append(found)
+                        label = f"robtarget {found.name.lower()}"
+                        if prog.use(found, tool, wobj, here, label, "work object"):
+                            found.monitored = mv.monitored
         passed = set()
         for src, at, routine, positional in st.foreign:  # a robtarget given to a routine not in these files
             for a, b in positional:

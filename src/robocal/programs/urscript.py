@@ -111,12 +111,11 @@ class URScriptDialect(Dialect):
         prog.tools.update(tools)
         if user_default is not None:
             prog.tools[DEFAULT_TOOL] = user_default
-        order = [0]
         for src in sources:
             masked = mask(src.text, [_COMMENT], [_STRING])
             sc = _Script(self, src, masked, prog)
             tool = DEFAULT_TOOL
-            used: dict[int, tuple[str, str, str]] = {}  # id(target) -> (tool, frame, where)
+            used = prog.used
             for m in _CALL.finditer(masked):
                 open_at = m.end() - 1
                 close = _close(masked, open_at)
@@ -130,14 +129,14 @@ class URScriptDialect(Dialect):
                 for a, b in args[:n_targets]:
                     for kind, value, frame, qnear in sc.resolve(a, b, m.start(), 0):
                         if kind == "joints":
-                            prog.joint_targets.append((order[0], value))
+                            prog.joint_targets.append((len(prog.targets), value))
                         elif kind == "skip":
                             prog.skip(here, fn, value)
                         elif kind == "pose" and fn != "movej":
                             prog.skip(here, fn, "the pose is computed from values this filter cannot rewrite "
                                                 "(expressions or another function's result)")
-                        elif kind == "target":
-                            self._use(value, tool, frame, qnear, here, used, order, prog)
+                        elif kind == "target" and prog.use(value, tool, frame, here, value.name, "frame"):
+                            value.qnear = qnear
             for t in list(prog.targets):
                 if id(t) in sc.as_frame:  # a feature that a motion also moves to (with an offset)
                     prog.targets.remove(t)
@@ -177,20 +176,6 @@ class URScriptDialect(Dialect):
             return name
         name = " ".join(sc.masked[a:b].split())
         return name if name in tools else f"?{name}"
-
-    def _use(self, t, tool, frame, qnear, here, used, order, prog):
-        if id(t) in used:
-            if used[id(t)][:2] != (tool, frame):
-                first_tool, first_frame, first_at = used[id(t)]
-                raise DataError(f"{here}: {t.name} is used with tool {tool} and frame {frame}, but at "
-                                f"{first_at} with {first_tool} / {first_frame}: one corrected pose "
-                                "cannot serve both; assign a copy for each use")
-            return
-        used[id(t)] = (tool, frame, here)
-        t.tool, t.frame, t.qnear, t.order = tool, frame, qnear, order[0]
-        order[0] += 1
-        prog.targets.append(t)
-
 
 class _Script:
     """One script's assignments in text order and the resolution of a motion's argument to the
