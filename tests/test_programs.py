@@ -233,7 +233,7 @@ def test_filter_on_simulated_truth(fmt, robot, tmp_path):
     (b"[[392.37,421.20,120.43]", b"[[392.37,421.20]",
      r"bad.mod:14: malformed robtarget pApproach: expected groups"),
     (b"z1, tGun \\WObj", b"z1, tNone \\WObj",
-     r"bad.mod:\d+ \(pSeam\{1\}\): unknown tool 'tnone'"),
+     r"unknown tool 'tnone' \(2 places: bad.mod:\d+ \(pSeam\{1\}\), bad.mod:\d+ \(pSeam\{2\}\)\)"),
     (b"v200, z10, tGun", b"v200, z10, tGripper",
      r"bad.mod:\d+: robtarget papproach is used with tool tgripper"),
 ], ids=["empty item", "short group", "unknown tool", "two tools"])

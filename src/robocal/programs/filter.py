@@ -396,8 +396,10 @@ def _filterable(d: Dialect, program: Program, warnings: list, keep_unreached: bo
                for kind, name, known in (("tool", t.tool, program.tools), ("frame", t.frame, program.frames))
                if name not in known]
     if unknown:
-        raise DataError("\n".join(unknown[:LISTED]) + f"\ndeclare them in the program or give them with "
-                        f"--tool NAME=... / --frame NAME=... ({d.frame_help})")
+        lines = collapse(unknown)
+        more = f"\n... and {len(lines) - LISTED} more" if len(lines) > LISTED else ""
+        raise DataError("\n".join(lines[:LISTED]) + more + "\ndeclare them in the program or give them "
+                        f"with --tool NAME=... / --frame NAME=... ({d.frame_help})")
     return targets
 
 
