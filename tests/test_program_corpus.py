@@ -475,3 +475,17 @@ def test_positions_passed_to_routines_not_given_are_named():
     assert prog.uncorrected == ["f.script:3: rq_move_to: not corrected: Drop_p is passed to rq_move_to(), "
                                 "which this filter does not follow: if it moves there, the pose is not "
                                 "corrected"]
+
+
+def test_cli_lists_refused_targets_one_a_line(tmp_path, capsys):
+    path = _copy(["track_mill.mod"], tmp_path)[0]
+    cal = tmp_path / "cal.yaml"
+    perturbed(rc.Robot.from_catalog("abb_irb2600"), 7).save(cal)
+    code = main(["filter", str(path), "--calibrated", str(cal), "--nominal", "abb_irb2600",
+                 "-o", str(tmp_path / "out.mod")])
+    err = capsys.readouterr().err.splitlines()
+    assert code == 2 and err[0].startswith("robocal filter: error: 3 target(s) carry external-axis values")
+    assert err[1:4] == ["  track_mill.mod:4 (pMill10): external axes eax_a = 800",
+                        "  track_mill.mod:5 (pMill20): external axes eax_a = 1450",
+                        "  track_mill.mod:6 (pMill30): external axes eax_a = 2100"]
+    assert not (tmp_path / "out.mod").exists()

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from robocal.compensate import Compensation, compensate, controller_model
-from robocal.errors import DataError, ModelError
+from robocal.errors import DataError, ListedError, ModelError
 from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
 from robocal.io import check_outputs, write_all
@@ -353,7 +353,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         problems.sort()
         lines = collapse([f"{targets[i].where}: {why}" for i, why in problems])
         more = f"\n... and {len(lines) - LISTED} more" if len(lines) > LISTED else ""
-        raise DataError(f"{len(bad)} target(s) cannot be corrected:\n" + "\n".join(lines[:LISTED]) + more +
+        raise ListedError(f"{len(bad)} target(s) cannot be corrected:\n" + "\n".join(lines[:LISTED]) + more +
                         "\nnothing was written; fix or remove these targets (or use --keep-unreached "
                         "to leave them unchanged)")
     warnings += [f"{targets[i].where}: left unchanged: {why}" for i, why in sorted(problems)]
@@ -385,7 +385,7 @@ def _filterable(d: Dialect, program: Program, warnings: list, keep_unreached: bo
             targets.append(t)
     if moving and not keep_unreached:
         more = f"\n... and {len(moving) - LISTED} more" if len(moving) > LISTED else ""
-        raise DataError(f"{len(moving)} target(s) carry external-axis values: a track or gantry moving the "
+        raise ListedError(f"{len(moving)} target(s) carry external-axis values: a track or gantry moving the "
                         "robot, or an axis moving the work, changes where they are, and the filter assumes a "
                         "fixed base and work:\n" + "\n".join(moving[:LISTED]) + more +
                         "\nnothing was written (--keep-unreached leaves them unchanged with a warning)")
@@ -398,7 +398,7 @@ def _filterable(d: Dialect, program: Program, warnings: list, keep_unreached: bo
     if unknown:
         lines = collapse(unknown)
         more = f"\n... and {len(lines) - LISTED} more" if len(lines) > LISTED else ""
-        raise DataError("\n".join(lines[:LISTED]) + more + "\ndeclare them in the program or give them "
+        raise ListedError("\n".join(lines[:LISTED]) + more + "\ndeclare them in the program or give them "
                         f"with --tool NAME=... / --frame NAME=... ({d.frame_help})")
     return targets
 
