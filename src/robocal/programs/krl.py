@@ -230,6 +230,7 @@ class KRLDialect(Dialect):
 
     def _motions(self, prog, sources, st):
         used = prog.used
+        named: set[int] = set()  # targets of motions named as not corrected
         for src in sources:
             masked = st.masked[src.path]
             state = {"tool": ("?", "the program does not set the tool before this motion "
@@ -285,6 +286,7 @@ class KRLDialect(Dialect):
                         (tool, why_tool), (base, why_base) = state["tool"], state["base"]
                         if "?" in (tool, base):
                             prog.skip(here, instr, f"{f.name}: {why_tool if tool == '?' else why_base}")
+                            named.add(id(f))
                             continue
                         if prog.use(f, tool, base, here, f.name, "base") and tool == "external TCP":
                             prog.unsupported[f"tool:{tool}"] = ("an external TCP (IPO_FRAME #TCP) is not "
@@ -300,7 +302,7 @@ class KRLDialect(Dialect):
                                   "moves there, give its file as a program file")
                         passed.add(id(t))
         for t in st.all_targets():
-            if id(t) not in used and id(t) not in st.reference and id(t) not in passed:
+            if id(t) not in used and id(t) not in st.reference and id(t) not in passed | named:
                 prog.warnings.append(f"{t.where}: not used by a motion in these files: left as it is")
 
     def _state(self, m, state, st):
