@@ -489,3 +489,15 @@ def test_cli_lists_refused_targets_one_a_line(tmp_path, capsys):
                         "  track_mill.mod:5 (pMill20): external axes eax_a = 1450",
                         "  track_mill.mod:6 (pMill30): external axes eax_a = 2100"]
     assert not (tmp_path / "out.mod").exists()
+
+
+def test_rapid_error_handler_motions_are_read():
+    from robocal.programs.rapid import RapidDialect
+    from robocal.programs.source import ProgramText
+
+    rt = "[[500,-200,400],[0,0,1,0],[-1,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    text = (f"MODULE E\n  CONST robtarget pA:={rt};\n  CONST robtarget pB:={rt};\n  PROC main()\n"
+            "    MoveL pA, v100, fine, tool0;\n  ERROR\n    MoveL pB, v100, fine, tool0;\n    RETRY;\n"
+            "  ENDPROC\nENDMODULE\n").encode()
+    prog = RapidDialect().parse([ProgramText("e.mod", text)], {}, {})
+    assert [t.name for t in prog.targets] == ["pA", "pB"] and not prog.warnings

@@ -73,7 +73,8 @@ _CONF = re.compile(r"\bconf([lj])\s*\\\s*(on|off)\b")
 _LEAD = re.compile(r"\s*(?:(?:LOCAL\s+)?(?:PROC|TRAP)\s+\w+\s*(?:\([^)]*\))?|(?:LOCAL\s+)?FUNC\s+\w+\s+\w+\s*"
                    r"\([^)]*\)|ENDPROC|ENDFUNC|ENDTRAP|ENDIF|ELSE|ENDFOR|ENDWHILE|ENDTEST|DEFAULT\s*:|"
                    r"CASE\s+[^:]+:|(?:ELSE)?IF\s+[\s\S]*?\bTHEN|FOR\s+[\s\S]*?\bDO|WHILE\s+[\s\S]*?\bDO|"
-                   r"TEST\s+[^\n]+|MODULE\s+\w+(?:\s*\([^)]*\))?|[A-Za-z]\w*:(?!=))", re.IGNORECASE)
+                   r"TEST\s+[^\n]+|MODULE\s+\w+(?:\s*\([^)]*\))?|ERROR(?:\s*\([^)]*\))?|UNDO|BACKWARD|"
+                   r"[A-Za-z]\w*:(?!=))", re.IGNORECASE)
 _NUMERIC = re.compile(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*$")
 _UNUSED_AXIS = 8e9  # external-axis values at or above this are 9E9: the axis is not used
 _POSITION_MM = 1e-3  # mm: 1 um
