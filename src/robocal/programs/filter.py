@@ -351,11 +351,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     bad = {i for i, _ in problems}
     if problems and not keep_unreached:
         problems.sort()
-        lines = collapse([f"{targets[i].where}: {why}" for i, why in problems])
-        more = f"\n... and {len(lines) - LISTED} more" if len(lines) > LISTED else ""
-        raise ListedError(f"{len(bad)} target(s) cannot be corrected:\n" + "\n".join(lines[:LISTED]) + more +
-                        "\nnothing was written; fix or remove these targets (or use --keep-unreached "
-                        "to leave them unchanged)")
+        raise _listed(f"{len(bad)} target(s) cannot be corrected:",
+                      collapse([f"{targets[i].where}: {why}" for i, why in problems]),
+                      "nothing was written; fix or remove these targets (or use --keep-unreached to leave "
+                      "them unchanged)")
     warnings += [f"{targets[i].where}: left unchanged: {why}" for i, why in sorted(problems)]
     good = np.array([i not in bad for i in range(len(targets))])
     Pc = np.where(good[:, None, None], invert_transform(W) @ comp.corrected_targets @ tool, P)
@@ -384,11 +383,10 @@ def _filterable(d: Dialect, program: Program, warnings: list, keep_unreached: bo
         else:
             targets.append(t)
     if moving and not keep_unreached:
-        more = f"\n... and {len(moving) - LISTED} more" if len(moving) > LISTED else ""
-        raise ListedError(f"{len(moving)} target(s) carry external-axis values: a track or gantry moving the "
-                        "robot, or an axis moving the work, changes where they are, and the filter assumes a "
-                        "fixed base and work:\n" + "\n".join(moving[:LISTED]) + more +
-                        "\nnothing was written (--keep-unreached leaves them unchanged with a warning)")
+        raise _listed(f"{len(moving)} target(s) carry external-axis values: a track or gantry moving the "
+                      "robot, or an axis moving the work, changes where they are, and the filter assumes a "
+                      "fixed base and work:", moving,
+                      "nothing was written (--keep-unreached leaves them unchanged with a warning)")
     moving = [f"{w}: not corrected: a fixed base and work are assumed" for w in moving]
     warnings += moving
     program.uncorrected += moving
@@ -396,11 +394,18 @@ def _filterable(d: Dialect, program: Program, warnings: list, keep_unreached: bo
                for kind, name, known in (("tool", t.tool, program.tools), ("frame", t.frame, program.frames))
                if name not in known]
     if unknown:
-        lines = collapse(unknown)
-        more = f"\n... and {len(lines) - LISTED} more" if len(lines) > LISTED else ""
-        raise ListedError("\n".join(lines[:LISTED]) + more + "\ndeclare them in the program or give them "
-                        f"with --tool NAME=... / --frame NAME=... ({d.frame_help})")
+        raise _listed("unknown tool(s) or frame(s):", collapse(unknown), "declare them in the program or "
+                      f"give them with --tool NAME=... / --frame NAME=... ({d.frame_help})")
     return targets
+
+
+def _listed(headline: str, items: list[str], advice: str) -> DataError:
+    """The error naming ``items`` (at most ``LISTED``): one line for one item, else a
+    :class:`ListedError` the CLI prints one item a line."""
+    if len(items) == 1:
+        return DataError(f"{headline} {items[0]}; {advice}")
+    more = [f"... and {len(items) - LISTED} more"] if len(items) > LISTED else []
+    return ListedError("\n".join([headline, *items[:LISTED], *more, advice]))
 
 
 def _monitored(targets: list[Target]) -> np.ndarray:
