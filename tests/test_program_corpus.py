@@ -372,7 +372,8 @@ def test_repeated_errors_are_collapsed_one_item_a_line(tmp_path):
     # one reason: one line naming the first places
     assert re.fullmatch(r"8 target\(s\) cannot be corrected: no solution of the nominal model inside the "
                         r"joint limits \(out of reach\) \(8 places: far.mod:2 \(p0\), far.mod:3 \(p1\), "
-                        r"far.mod:4 \(p2\), far.mod:5 \(p3\) and 4 more\); nothing was written.*", str(err.value))
+                        r"far.mod:4 \(p2\), far.mod:5 \(p3\) and 4 more\); nothing was written.*",
+                        str(err.value))
 
 
 def test_urscript_relative_waypoint_export(tmp_path):
