@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import re
 import shutil
 import sys
 from pathlib import Path
@@ -236,7 +237,7 @@ def test_filter_on_simulated_truth(fmt, robot, tmp_path):
     (b"[[392.37,421.20,120.43]", b"[[392.37,421.20]",
      r"bad.mod:14: malformed robtarget pApproach: expected groups"),
     (b"z1, tGun \\WObj", b"z1, tNone \\WObj",
-     r"bad.mod:\d+ \(pSeam\{1\}\): unknown tool 'tnone'"),
+     r"unknown tool 'tnone' \(2 places: bad.mod:\d+ \(pSeam\{1\}\), bad.mod:\d+ \(pSeam\{2\}\)\)"),
     (b"v200, z10, tGun", b"v200, z10, tGripper",
      r"bad.mod:\d+: robtarget papproach is used with tool tgripper"),
 ], ids=["empty item", "short group", "unknown tool", "two tools"])
@@ -403,8 +404,11 @@ def test_krl_needs_the_tool_and_base_in_effect(tmp_path):
     src = files[0].read_bytes().replace(b"  $TOOL = TOOL_DATA[2]\r\n", b"")
     src = src.replace(b"FDAT_ACT=FP1", b"FDAT_ACT=FUNKNOWN")
     files[0].write_bytes(src)
-    with pytest.raises(DataError, match=r"palletize.src:\d+ \(XP1\): the program does not set the tool"):
-        filter_program(files, robot, robot, references=refs)
+    res = filter_program(files, robot, robot, references=refs)
+    assert "XP1" not in [r["name"] for r in res.rows]
+    expected = r"palletize.src:\d+: PTP: not corrected: XP1: FDAT_ACT=FUNKNOWN names no FDAT .*"
+    assert any(re.fullmatch(expected, w) for w in res.uncorrected)
+    assert "1 motion(s) to a Cartesian pose NOT corrected" in res.summary()
 
 
 def test_krl_and_fanuc_configuration_edits():

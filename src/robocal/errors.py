@@ -13,6 +13,11 @@ class DataError(RobocalError):
     """A measurement file or array is malformed: columns, units, NaN, joint count."""
 
 
+class ListedError(DataError):
+    """An error naming several items (targets, motions): the CLI prints its first line and then
+    one item a line, as the message holds them."""
+
+
 class UnitError(DataError):
     """Units are missing, unknown or implausible for the values."""
 

@@ -12,7 +12,7 @@ import os
 import sys
 import traceback
 
-from robocal.errors import RobocalError
+from robocal.errors import ListedError, RobocalError
 from robocal.version import __version__
 
 DEBUG_ENV = "ROBOCAL_DEBUG"  # set to 1 to see the traceback of an internal error
@@ -60,6 +60,11 @@ def main(argv: list[str] | None = None) -> int:
     set_quiet(args.quiet)
     try:
         return int(args.func(args) or 0)
+    except ListedError as exc:  # a headline, then one item a line
+        lines = [" ".join(line.split()) for line in str(exc).splitlines() if line.strip()]
+        print(f"robocal {args.command}: error: {lines[0]}", *(f"  {line}" for line in lines[1:]),
+              sep="\n", file=sys.stderr)
+        return 2
     except RobocalError as exc:  # one line, whatever the message holds (e.g. a YAML parser's)
         print(f"robocal {args.command}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return 2

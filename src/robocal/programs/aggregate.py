@@ -80,17 +80,23 @@ def numbers_of(node, sizes: tuple[int, ...], src: ProgramText, at: int, what: st
     return [node[k] for k in range(len(sizes))]
 
 
+_SPLITTERS: dict[str, re.Pattern] = {}
+
+
 def split_top(text: str, start: int, end: int, sep: str = ",") -> list[tuple[int, int]]:
     """Spans of ``text[start:end]`` split at ``sep`` outside brackets, braces and parentheses."""
+    splitter = _SPLITTERS.get(sep)
+    if splitter is None:
+        splitter = _SPLITTERS[sep] = re.compile(r"[\[\](){}" + re.escape(sep) + "]")
     out, depth, last = [], 0, start
-    for i in range(start, end):
-        ch = text[i]
+    for m in splitter.finditer(text, start, end):  # only the brackets and separators, in C
+        ch = m.group()
         if ch in "([{":
             depth += 1
         elif ch in ")]}":
             depth -= 1
-        elif ch == sep and depth == 0:
-            out.append((last, i))
-            last = i + 1
+        elif depth == 0:
+            out.append((last, m.start()))
+            last = m.start() + 1
     out.append((last, end))
     return out

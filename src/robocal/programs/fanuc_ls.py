@@ -39,14 +39,22 @@ _CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d+
                      r"\s*([-+]?\d+)\s*'")
 _VALUE = r"\b{}\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*(?:mm|deg)"
 _KEYS = ("X", "Y", "Z", "W", "P", "R")
+_EXTENDED = re.compile(r"\b(E\d)\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))")
+_LINE = re.compile(r"^[ \t]*\d*[ \t]*:(.*)$", re.MULTILINE)
+_MOVE = re.compile(r"\s*([JLCA])\s+(.*)$")
+_ARC_END = re.compile(r"\s*(P|PR)\[")
+_POSITION = re.compile(r"\b(PR|P)\[\s*((?:[A-Z]+\[\s*\d+\s*\])|\d+)\s*(?::[^\]]*)?\]")
+_OFFSET = re.compile(r"\b(Tool_Offset|Offset|VOFFSET)\b(?:\s*,\s*(\w+\[[^\]]*\]))?", re.IGNORECASE)
+_INCREMENTAL = re.compile(r"\bINC\b")
 _POSITION_MM = 1e-3
-_ANGLE_DEG = 1e-4
+_ANGLE_DEG = 1e-3  # the controller writes 3 decimals: 1e-3 deg is 2 um at 120 mm from the flange
 
 
 class FanucDialect(Dialect):
     name = "FANUC TP"
     suffixes = (".ls",)
     scheme = FANUCConfig()
+    keep_width = True
     frame_help = "X,Y,Z in mm and W,P,R in deg, as on the teach pendant's frame screen"
 
     def to_pose(self, values):
@@ -72,6 +80,7 @@ class FanucDialect(Dialect):
         prog.frames.update(frames)
         prog.tools.update(tools)
         order = 0
+        joint: set = set()
         for src in sources:
             text = src.text
             start = text.find("/POS")
@@ -90,6 +99,7 @@ class FanucDialect(Dialect):
                 gp = text[a:b]
                 where = f"{src.path.name}:{src.line_of(m.start())}"
                 if re.search(r"\bJ1\s*=", gp):
+                    joint.add((src.path, int(m.group(1))))
                     continue  # joint representation
                 nums = []
                 for k in _KEYS:
@@ -107,8 +117,67 @@ class FanucDialect(Dialect):
                 row = np.array(["NF".index(c.group(1)), "UD".index(c.group(2)), "TB".index(c.group(3)),
                                 int(c.group(4)), int(c.group(5)), int(c.group(6))])
                 spans = [(a + c.start(k), a + c.end(k), c.group(k)) for k in range(1, 7)]
+                external = [f"{e} = {v}" for e, v in _EXTENDED.findall(gp) if float(v) != 0.0]
+                external += [f"motion group GP{g.group(1)}" for g in groups[1:]]
                 prog.targets.append(Target(src, m.start(), name, nums, frame=str(int(fr["UF"])),
                                            tool=str(int(fr["UT"])), config=row, config_spans=spans,
-                                           order=order))
+                                           order=order, external=", ".join(external)))
                 order += 1
+        self._motions(sources, prog, joint)
         return prog
+
+    def _motions(self, sources, prog, joint):
+        """Account for every motion of the /MN sections: positions every motion reaches are the
+        /POS targets (each carries its own UF and UT, so all are corrected); an incremental
+        motion's position is a displacement (left alone); position registers, missing positions
+        and run-time offsets are named."""
+        numbers = {(t.source.path, int(re.match(r"P\[(\d+)", t.name).group(1))): t for t in prog.targets}
+        incremental = set()
+        for src in sources:
+            text = src.text
+            start, stop = text.find("/MN"), text.find("/POS")
+            if start < 0:
+                continue
+            lines = list(_LINE.finditer(text, start, stop if stop > 0 else len(text)))
+            for k, line in enumerate(lines):
+                body = line.group(1)
+                mv = _MOVE.match(body)
+                if not mv or body.lstrip().startswith(("//", "!")):
+                    continue
+                here = f"{src.path.name}:{src.line_of(line.start())}"
+                refs = [_POSITION.search(mv.group(2))]
+                options = mv.group(2)
+                if mv.group(1) == "C" and k + 1 < len(lines) and _ARC_END.match(lines[k + 1].group(1)):
+                    refs.append(_POSITION.search(lines[k + 1].group(1)))  # the end point on the next line
+                    options += " " + lines[k + 1].group(1)
+                instr = mv.group(1)
+                for ref in refs:
+                    if ref is None:
+                        continue
+                    label = ref.group(0)
+                    if ref.group(1) == "PR":
+                        prog.skip(here, instr, f"{label} is a position register: its value lives in the "
+                                               "controller (correct it there, e.g. from a filtered copy)")
+                        continue
+                    if not ref.group(2).isdigit():
+                        prog.warnings.append(f"{here}: {instr} {label}: the position number is known at run "
+                                             "time only; every position of /POS is corrected")
+                        continue
+                    key = (src.path, int(ref.group(2)))
+                    if key in joint:
+                        continue
+                    if key not in numbers:
+                        prog.skip(here, instr, f"P[{ref.group(2)}] is not a Cartesian position of group 1 in "
+                                               "/POS (missing or malformed)")
+                        continue
+                    if "INC" in options and _INCREMENTAL.search(options):
+                        incremental.add(key)
+                        prog.skip(here, instr, f"{label} is an incremental move (INC): a displacement, not a "
+                                               "pose")
+                        continue
+                    off = _OFFSET.search(options) if "OFFSET" in options.upper() else None
+                    if off:
+                        prog.warnings.append(f"{here}: {instr} {label}: shifted at run time by "
+                                             f"{off.group(0)}: {label} is corrected for its own pose, the "
+                                             "shifted pose by the same amount")
+        prog.targets = [t for key, t in numbers.items() if key not in incremental]

@@ -25,13 +25,14 @@ from __future__ import annotations
 import csv
 import io
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from robocal.compensate import Compensation, compensate, controller_model
-from robocal.errors import DataError, ModelError
+from robocal.errors import DataError, ListedError, ModelError
 from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
 from robocal.ik.closed_form import has_closed_form
@@ -64,6 +65,7 @@ class FilterResult:
     outputs: dict[Path, bytes]
     rows: list[dict]
     warnings: list[str] = field(default_factory=list)
+    uncorrected: list[str] = field(default_factory=list)  # motions left as they are (also warnings)
 
     def table_csv(self) -> str:
         out = io.StringIO()
@@ -91,7 +93,7 @@ class FilterResult:
                                  "max": float(pos.max(initial=0.0))},
                "correction_deg": {"median": float(np.median(rot)) if rot.size else 0.0,
                                   "max": float(rot.max(initial=0.0))},
-               "warnings": len(self.warnings)}
+               "uncorrected_motions": len(self.uncorrected), "warnings": len(self.warnings)}
         if rows:
             i, j = int(np.argmin(margin)), int(np.argmin(sig))
             out["smallest_limit_margin"] = {"name": rows[i]["name"], "deg": margin[i],
@@ -104,6 +106,9 @@ class FilterResult:
         s = self.summary_dict()
         lines = [f"{self.dialect}: {s['filtered']} of {s['targets']} Cartesian target(s) filtered in "
                  f"{', '.join(p.name for p in self.outputs)}"]
+        if self.uncorrected:
+            lines.append(f"  {len(self.uncorrected)} motion(s) to a Cartesian pose NOT corrected (each "
+                         "named in a warning below)")
         if s["filtered"]:
             lines += [f"  correction  median {s['correction_mm']['median']:.3f} mm, max "
                       f"{s['correction_mm']['max']:.3f} mm; orientation median "
@@ -114,10 +119,11 @@ class FilterResult:
                       f"  nearest singularity: {s['nearest_singularity']['name']} "
                       f"({s['nearest_singularity']['kind']}, sigma_rel "
                       f"{s['nearest_singularity']['sigma_rel']:.4f})"]
-        for w in self.warnings[:LISTED]:
+        shown = collapse(self.warnings)
+        for w in shown[:LISTED]:
             lines.append(f"  warning: {w}")
-        if len(self.warnings) > LISTED:
-            lines.append(f"  ... {len(self.warnings) - LISTED} more warning(s) in the table")
+        if len(shown) > LISTED:
+            lines.append(f"  ... {len(shown) - LISTED} more warning(s) in the table")
         return "\n".join(lines)
 
     def write(self, outputs: dict[Path, Path] | Path | str, table: str | Path | None = None) -> list[Path]:
@@ -135,6 +141,30 @@ class FilterResult:
         check_outputs(files, self.outputs)
         write_all(files)
         return list(files)
+
+
+_WHERE = re.compile(r"^(\S+:\d+(?: \([^)]*\))?): (.*)$", re.DOTALL)
+SHOWN_PLACES = 4  # places named in one collapsed line
+
+
+def collapse(lines: list[str]) -> list[str]:
+    """Messages ``file:line (name): why`` with the same ``why`` collapsed into one line naming the
+    first places and how many there are; other messages as they are, in order of first
+    appearance."""
+    groups: dict[str, list[str]] = {}
+    for line in lines:
+        m = _WHERE.match(line)
+        where, why = (m.group(1), m.group(2)) if m else ("", line)
+        groups.setdefault(why, []).append(where)
+    out = []
+    for why, places in groups.items():
+        places = [p for p in places if p]
+        if len(places) <= 1:
+            out.append(f"{places[0]}: {why}" if places else why)
+        else:
+            more = f" and {len(places) - SHOWN_PLACES} more" if len(places) > SHOWN_PLACES else ""
+            out.append(f"{why} ({len(places)} places: {', '.join(places[:SHOWN_PLACES])}{more})")
+    return out
 
 
 def table_paths(table: str | Path) -> list[Path]:
@@ -181,7 +211,7 @@ def _configured_joints(dialect, nominal, F, targets, problems):
     have = scheme.encode(nominal, np.where(valid[..., None], cands, 0.0))
     want = np.array([t.config if t.config is not None else np.zeros(have.shape[-1], int) for t in targets])
     score = np.where(valid, scheme.score(have, want[:, None]), np.iinfo(np.int64).max)
-    has = np.array([t.config is not None for t in targets])
+    has = np.array([t.config is not None and t.monitored for t in targets])
     reach = valid.any(axis=1)
     for i in np.flatnonzero(~reach):
         problems.append((int(i), "no solution of the nominal model inside the joint limits (out of reach)"))
@@ -329,10 +359,11 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
     warnings = list(program.warnings)
-    targets = _filterable(d, program, warnings)
+    targets = _filterable(d, program, warnings, keep_unreached)
     if not targets:
-        warnings.append("no Cartesian target to filter")
-        return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings)
+        if not program.uncorrected:
+            warnings.append("no motion to a Cartesian pose in these files")
+        return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings, program.uncorrected)
     values, P, W, tool = target_poses(d, program, targets)
     X = W @ P
     real = {d.name_key(k): v for k, v in (tcp or {}).items()}
@@ -346,6 +377,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     problems: list[tuple[int, str]] = []
     q_nom = controller_joints(d, program, targets, nominal, X @ invert_transform(tool), problems, warnings)
     ok = np.isfinite(q_nom).all(axis=1)
+    warnings += _inexact_configurations(d, nominal, targets, q_nom, ok)
     comp = compensate(controller_model(calibrated, nominal, robot_base), nominal,
                       X @ invert_transform(real_tool), seeds=np.where(ok[:, None], q_nom, 0.0))
     q, sing = comp.joints, comp.singularity
@@ -353,11 +385,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     bad = {i for i, _ in problems}
     if problems and not keep_unreached:
         problems.sort()
-        lines = [f"{targets[i].where}: {why}" for i, why in problems[:LISTED]]
-        more = f"\n... and {len(problems) - LISTED} more" if len(problems) > LISTED else ""
-        raise DataError(f"{len(bad)} target(s) cannot be corrected:\n" + "\n".join(lines) + more +
-                        "\nnothing was written; fix or remove these targets (or use --keep-unreached "
-                        "to leave them unchanged)")
+        raise _listed(f"{len(bad)} target(s) cannot be corrected:",
+                      collapse([f"{targets[i].where}: {why}" for i, why in problems]),
+                      "nothing was written; fix or remove these targets (or use --keep-unreached to leave "
+                      "them unchanged)")
     warnings += [f"{targets[i].where}: left unchanged: {why}" for i, why in sorted(problems)]
     good = np.array([i not in bad for i in range(len(targets))])
     Pc = np.where(good[:, None, None], invert_transform(W) @ comp.corrected_targets @ tool, P)
@@ -368,7 +399,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     warnings += comp.warnings([t.where for t in targets], good)  # the corrected ones near a singularity
     rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, comp.converged & ok, changed, cfg, sing)
     outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
-    return FilterResult(d.name, outputs, rows, warnings)
+    return FilterResult(d.name, outputs, rows, warnings, program.uncorrected)
 
 
 def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
@@ -387,22 +418,65 @@ def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
                             "it is the same tool")
 
 
-def _filterable(d: Dialect, program: Program, warnings: list) -> list[Target]:
-    """The targets to filter: those with a supported tool and frame, all of them known."""
+def _filterable(d: Dialect, program: Program, warnings: list, keep_unreached: bool) -> list[Target]:
+    """The targets to filter: those with a supported tool and frame, all of them known, and
+    without external axes (refused, or left alone with ``keep_unreached``)."""
     targets: list[Target] = []
+    moving = []
     for t in program.targets:
         why = program.unsupported.get(f"tool:{t.tool}") or program.unsupported.get(f"frame:{t.frame}")
         if why:
             warnings.append(f"{t.where}: not filtered: {why}")
+            program.uncorrected.append(f"{t.where}: not filtered: {why}")
+        elif t.external:
+            moving.append(f"{t.where}: external axes {t.external}")
         else:
             targets.append(t)
+    if moving and not keep_unreached:
+        raise _listed(f"{len(moving)} target(s) carry external-axis values: a track or gantry moving the "
+                      "robot, or an axis moving the work, changes where they are, and the filter assumes a "
+                      "fixed base and work:", moving,
+                      "nothing was written (--keep-unreached leaves them unchanged with a warning)")
+    moving = [f"{w}: not corrected: a fixed base and work are assumed" for w in moving]
+    warnings += moving
+    program.uncorrected += moving
     unknown = [f"{t.where}: unknown {kind} {name!r}" for t in targets
                for kind, name, known in (("tool", t.tool, program.tools), ("frame", t.frame, program.frames))
                if name not in known]
     if unknown:
-        raise DataError("\n".join(unknown[:LISTED]) + f"\ndeclare them in the program or give them with "
-                        f"--tool NAME=... / --frame NAME=... ({d.frame_help})")
+        raise _listed("unknown tool(s) or frame(s):", collapse(unknown), "declare them in the program or "
+                      f"give them with --tool NAME=... / --frame NAME=... ({d.frame_help})")
     return targets
+
+
+def _listed(headline: str, items: list[str], advice: str) -> DataError:
+    """The error naming ``items`` (at most ``LISTED``): one line for one item, else a
+    :class:`ListedError` the CLI prints one item a line."""
+    if len(items) == 1:
+        return DataError(f"{headline} {items[0]}; {advice}")
+    more = [f"... and {len(items) - LISTED} more"] if len(items) > LISTED else []
+    return ListedError("\n".join([headline, *items[:LISTED], *more, advice]))
+
+
+def _monitored(targets: list[Target]) -> np.ndarray:
+    """Which targets' configuration data the controller follows (they have some, monitored)."""
+    return np.array([t.config is not None and t.monitored for t in targets])
+
+
+def _inexact_configurations(d: Dialect, nominal: Robot, targets: list[Target], q_nom, ok) -> list[str]:
+    """Warnings for targets whose configuration data match no solution exactly (a quadrant or
+    turn no joint vector inside the limits has): the nearest solution was taken."""
+    if d.scheme is None:
+        return []
+    has = _monitored(targets) & ok
+    if not has.any():
+        return []
+    rows = d.scheme.encode(nominal, q_nom[has])
+    want = np.array([targets[i].config for i in np.flatnonzero(has)])
+    off = np.flatnonzero(has)[d.scheme.score(rows, want) > 0]
+    return [f"{targets[i].where}: configuration {d.scheme.text(targets[i].config)} matches no solution "
+            f"inside the joint limits; the nearest, {d.scheme.text(d.scheme.encode(nominal, q_nom[i]))}, "
+            "was taken" for i in off]
 
 
 def _check_joints(nominal: Robot, comp: Compensation, ok: np.ndarray, problems: list) -> None:
@@ -430,23 +504,44 @@ def _edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray,
     moved = good[:, None] & (np.abs(new - old) > resolution / 2)  # numbers that must be rewritten
     changed = np.zeros(len(targets), bool)
     if cfg is not None:
-        has = np.array([t.config is not None for t in targets])
-        want = np.array([t.config if t.config is not None else cfg[0][i] for i, t in enumerate(targets)])
+        has = _monitored(targets)
+        want = np.array([t.config if has[i] else cfg[0][i] for i, t in enumerate(targets)])
         # rewritten only when the written data describe the corrected joints worse than the nominal ones
         changed = good & has & (d.scheme.score(cfg[1], want) > d.scheme.score(cfg[0], want))
+    finest: dict[tuple[Path, int], int] = {}  # (file, column) -> the file's decimals for shared columns
+    for group in d.shared_decimals:
+        for t in targets:
+            most = max(t.numbers[j].decimals for j in group)
+            for j in group:
+                key = (t.source.path, j)
+                finest[key] = max(finest.get(key, 0), most)
     edits: dict[Path, dict] = {}
     for i in np.flatnonzero(moved.any(axis=1) | changed):
         t = targets[i]
         mine = edits.setdefault(t.source.path, {})
         for j in np.flatnonzero(moved[i]):
             num = t.numbers[j]
-            mine[(num.start, num.end)] = format_number(float(new[i, j]), num, float(resolution[j]))
+            text = format_number(float(new[i, j]), num, float(resolution[j]),
+                                 finest.get((t.source.path, int(j)), 0))
+            mine.update(_aligned(t.source.text, num, text) if d.keep_width else {(num.start, num.end): text})
         if changed[i]:
             mine.update(d.config_edits(t, cfg[1][i]))
             warnings.append(f"{t.where}: configuration changed from {d.scheme.text(cfg[0][i])} to "
                             f"{d.scheme.text(cfg[1][i])}: the corrected joints cross a configuration "
                             "boundary; check the motion into and out of this target")
     return edits, changed
+
+
+def _aligned(text: str, num, new: str) -> dict[tuple[int, int], str]:
+    """The edit writing ``new`` over number ``num`` of ``text`` in the same width when the number is
+    right-aligned after spaces: padded with spaces, or taking spaces before it (one is kept)."""
+    if text[num.start - 1:num.start] != " " or len(new) == len(num.text):
+        return {(num.start, num.end): new}
+    if len(new) < len(num.text):
+        return {(num.start, num.end): new.rjust(len(num.text))}
+    spaces = len(text[:num.start]) - len(text[:num.start].rstrip(" "))
+    take = min(len(new) - len(num.text), spaces - 1)
+    return {(num.start - take, num.end): new}
 
 
 def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing) -> list[dict]:
@@ -463,8 +558,10 @@ def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing
             "file": t.source.path.name, "line": t.line, "name": t.name, "frame": t.frame, "tool": t.tool,
             "filtered": bool(good[i]),
             "correction_mm": float(dpos[i]), "correction_deg": float(drot[i]),
-            "configuration": "changed" if changed[i] else ("kept" if t.config is not None else "none"),
-            "config_before": d.scheme.text(cfg[0][i]) if cfg is not None and ok[i] else "",
+            "configuration": "changed" if changed[i] else ("none" if t.config is None else
+                                                           "kept" if t.monitored else "not monitored"),
+            "config_before": (d.scheme.text(t.config) if cfg is not None and t.config is not None else
+                              d.scheme.text(cfg[0][i]) if cfg is not None and ok[i] else ""),
             "config_after": d.scheme.text(cfg[1][i]) if cfg is not None and good[i] else "",
             "reachable": bool(ok[i]), "converged": bool(converged[i]),
             "limit_margin_deg": float(lim[i, j]), "limit_joint": j + 1,

@@ -38,6 +38,8 @@ class Target:
     config_spans: object = None
     qnear: np.ndarray | None = None
     order: int = 0  # position in execution order (text order of first use)
+    monitored: bool = True  # False: the motion runs with configuration monitoring off (RAPID ConfL Off)
+    external: str = ""  # external-axis values the target carries (a track, gantry or positioner)
 
     @property
     def line(self) -> int:
@@ -64,6 +66,34 @@ class Program:
     warnings: list[str] = field(default_factory=list)
     joint_targets: list[tuple[int, np.ndarray]] = field(default_factory=list)
     unsupported: dict[str, str] = field(default_factory=dict)  # 'tool:NAME' / 'frame:NAME' -> why
+    uncorrected: list[str] = field(default_factory=list)  # motions left as they are, each also a warning
+    used: dict[int, tuple[str, str, str]] = field(default_factory=dict)  # id(target) -> tool, frame, where
+
+    def use(self, t: Target, tool: str, frame: str, here: str, label: str, frame_word: str) -> bool:
+        """A motion at ``here`` reaches target ``t`` with ``tool`` in ``frame``: the first use
+        appends it to :attr:`targets` in execution order (True); a later use with the same tool
+        and frame adds nothing (False); one with another tool or frame is refused (one corrected
+        target cannot serve both). ``label`` names the target and ``frame_word`` its kind of frame
+        in the message."""
+        if id(t) in self.used:
+            tool0, frame0, at0 = self.used[id(t)]
+            if (tool0, frame0) != (tool, frame):
+                raise DataError(f"{here}: {label} is used with tool {tool} and {frame_word} {frame}, but at "
+                                f"{at0} with tool {tool0} and {frame_word} {frame0}: one corrected target "
+                                "cannot serve both; declare a copy for each use")
+            return False
+        self.used[id(t)] = (tool, frame, here)
+        t.tool, t.frame, t.order = tool, frame, len(self.targets)
+        self.targets.append(t)
+        return True
+
+    def skip(self, where: str, instruction: str, why: str) -> None:
+        """Account for a motion to a Cartesian pose this filter cannot correct: a warning naming
+        ``where`` (file:line), the instruction and why."""
+        text = f"{where}: {instruction}: not corrected: {why}"
+        if text not in self.uncorrected:
+            self.uncorrected.append(text)
+            self.warnings.append(text)
 
 
 class Dialect:
@@ -73,6 +103,8 @@ class Dialect:
     suffixes: tuple[str, ...] = ()
     scheme: ConfigScheme | None = None
     n_values = 6  # pose numbers per target
+    shared_decimals: tuple[tuple[int, ...], ...] = ()  # pose columns written at the file's finest decimals
+    keep_width = False  # numbers right-aligned after spaces keep their width (FANUC)
     frame_help = ""  # how --tool/--frame values are written for this dialect
 
     def parse(self, sources: list[ProgramText], frames: dict[str, np.ndarray],

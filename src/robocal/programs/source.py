@@ -104,17 +104,21 @@ def mask(text: str, blank: list[re.Pattern], quoted: list[re.Pattern] = ()) -> s
     return "".join(chars)
 
 
-def format_number(value: float, old: Number, resolution: float) -> str:
+def format_number(value: float, old: Number, resolution: float, decimals: int = 0) -> str:
     """Text for ``value`` replacing ``old``: unchanged when within ``resolution / 2`` of the old
-    value; else with the old number's decimals, or as many more as ``resolution`` needs (the
-    quantisation error stays below resolution / 2). Never '-0'."""
+    value; else with the old number's decimals (at least ``decimals``: the file's precision for
+    this kind of number), or as many more as ``resolution`` needs (the quantisation error stays
+    below resolution / 2), in the old number's style (a leading '+', '.5' without its zero).
+    Never '-0'."""
     if abs(value - old.value) <= resolution / 2:
         return old.text
     needed = max(0, math.ceil(-math.log10(resolution) - 1e-9))  # 10**-needed <= resolution
-    decimals = max(old.decimals, needed)
+    decimals = max(old.decimals, needed, decimals)
     text = f"{value:.{decimals}f}"
     if float(text) == 0.0:
         text = text.lstrip("-")
+    if old.text.lstrip("+-").startswith(".") and text.lstrip("-").startswith("0."):
+        text = text.replace("0.", ".", 1)  # FANUC's '.044' style
     if old.text.startswith("+") and not text.startswith("-"):
         text = "+" + text
     return text

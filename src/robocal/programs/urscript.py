@@ -16,13 +16,14 @@ Comments (``#`` to the end of the line) and strings are masked first.
 
 from __future__ import annotations
 
+import ast
 import re
 from bisect import bisect_left
 
 import numpy as np
 
 from robocal.errors import DataError
-from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
+from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
 from robocal.programs.aggregate import numbers_of, parse_aggregate, split_top
 from robocal.programs.model import IDENTITY, Dialect, Program, Target
 from robocal.programs.rotations import nearest_rotvec
@@ -36,6 +37,15 @@ _CALL = re.compile(r"\b(movel|movep|movec|movej|set_tcp)\s*\(")
 _IDENT = re.compile(r"\s*([A-Za-z_]\w*)\s*$")
 _POSE_TRANS = re.compile(r"\s*pose_trans\s*\(", re.IGNORECASE)
 _IK = re.compile(r"\s*get_inverse_kin\s*\(")
+_FUNCTION = re.compile(r"([A-Za-z_]\w*)\s*\(")
+_DEF = re.compile(r"\bdef\s+([A-Za-z_]\w*)\s*\(([^)]*)\)\s*:")
+_DEPTH = 12  # assignments and calls followed at most this deep
+_BRACKET = re.compile(r"[\[\]()]")
+# functions whose pose arguments are followed, or that do not move the robot to a pose argument
+_KNOWN = {"movel", "movep", "movec", "movej", "set_tcp", "pose_trans", "pose_add", "pose_inv", "pose_sub",
+          "get_inverse_kin", "p", "def", "textmsg", "popup", "to_str", "str_cat", "pose_dist", "point_dist",
+          "is_within_safety_limits", "get_forward_kin", "sleep", "sync", "socket_send_string", "while", "if",
+          "elif", "len", "norm"}
 _POSITION_M = 1e-6
 _ROTVEC = 1e-7
 DEFAULT_TOOL = "default"
@@ -66,13 +76,13 @@ class _Assignments:
 def _close(masked: str, open_at: int) -> int:
     """Index of the bracket closing the one at ``open_at``."""
     depth = 0
-    for i in range(open_at, len(masked)):
-        if masked[i] in "([":
+    for m in _BRACKET.finditer(masked, open_at):
+        if m.group() in "([":
             depth += 1
-        elif masked[i] in ")]":
+        else:
             depth -= 1
             if depth == 0:
-                return i
+                return m.start()
     raise DataError("unbalanced brackets")
 
 
@@ -96,18 +106,16 @@ class URScriptDialect(Dialect):
         return {}
 
     def parse(self, sources, frames, tools, references=()):
-        prog = Program([], frames={IDENTITY: np.eye(4)}, tools={IDENTITY: np.eye(4)})
+        prog = Program([], frames={IDENTITY: np.eye(4), **frames}, tools={IDENTITY: np.eye(4)})
         user_default = tools.get(DEFAULT_TOOL, tools.get("", None))
         prog.tools.update(tools)
         if user_default is not None:
             prog.tools[DEFAULT_TOOL] = user_default
-        order = [0]
         for src in sources:
             masked = mask(src.text, [_COMMENT], [_STRING])
-            poses, joints = self._variables(src, masked)
+            sc = _Script(self, src, masked, prog)
             tool = DEFAULT_TOOL
-            used: dict[int, tuple[str, str, str]] = {}  # id(target) -> (tool, frame, where)
-            as_frame: set[int] = set()  # pose variables that serve as features
+            used = prog.used
             for m in _CALL.finditer(masked):
                 open_at = m.end() - 1
                 close = _close(masked, open_at)
@@ -115,23 +123,34 @@ class URScriptDialect(Dialect):
                 here = f"{src.path.name}:{src.line_of(m.start())}"
                 fn = m.group(1)
                 if fn == "set_tcp":
-                    a, b = args[0]
-                    pm = _POSE.match(masked, a + len(masked[a:b]) - len(masked[a:b].lstrip()))
-                    if pm:
-                        tree, _ = parse_aggregate(src, masked, pm.end(), b, "set_tcp pose")
-                        vals = [n.value for n in numbers_of([tree], (6,), src, a, "set_tcp pose")[0]]
-                        tool = f"set_tcp@{src.line_of(m.start())}"
-                        prog.tools[tool] = self.to_pose(np.array([vals]))[0]
-                    else:
-                        name = masked[a:b].strip()
-                        tool = name if name in tools else f"?{name}"
+                    tool = self._set_tcp(sc, args[0], m.start(), tools)
                     continue
                 n_targets = 2 if fn == "movec" else 1
                 for a, b in args[:n_targets]:
-                    self._target_arg(src, masked, (a, b), m.start(), (tool, here), poses, joints, prog,
-                                     (used, as_frame), order)
-            for t in poses.values():
-                if id(t) not in used and id(t) not in as_frame:
+                    for kind, value, frame, qnear in sc.resolve(a, b, m.start(), 0):
+                        if kind == "joints":
+                            prog.joint_targets.append((len(prog.targets), value))
+                        elif kind == "skip":
+                            prog.skip(here, fn, value)
+                        elif kind == "pose" and fn != "movej":
+                            prog.skip(here, fn, "the pose is computed from values this filter cannot rewrite "
+                                                "(expressions or another function's result)")
+                        elif kind == "target" and prog.use(value, tool, frame, here, value.name, "frame"):
+                            value.qnear = qnear
+            for t in list(prog.targets):
+                if id(t) in sc.as_frame:  # a feature that a motion also moves to (with an offset)
+                    prog.targets.remove(t)
+                    prog.skip(used[id(t)][2], "motion", f"{t.name} serves as a feature (pose_trans) and as "
+                                                      "a target: correcting it would move the poses in its "
+                                                      "frame")
+            unused = [t for t in sc.poses.values()
+                      if id(t) in sc.variables and id(t) not in used and id(t) not in sc.as_frame]
+            passed = sc.passed({t.name for t in unused})
+            for name, where, fn in passed:  # given to a function of a URCap or of another file
+                prog.skip(where, fn, f"{name} is passed to {fn}(), which this filter does not follow: if "
+                                     "it moves there, the pose is not corrected")
+            for t in unused:
+                if t.name not in {name for name, _, _ in passed}:
                     prog.warnings.append(f"{t.where}: pose variable not used by a motion: left as it is")
         for t in prog.targets:
             if t.tool.startswith("?"):
@@ -144,90 +163,302 @@ class URScriptDialect(Dialect):
         prog.targets.sort(key=lambda t: t.order)
         return prog
 
-    def _variables(self, src, masked):
-        """Pose variables (a Target each) and joint-list variables (joints), in text order."""
-        poses, joints = _Assignments(), _Assignments()
-        for m in _ASSIGN.finditer(masked):
-            rest = m.end()
-            pm = _POSE.match(masked, rest)
-            if pm:
-                close = _close(masked, pm.end())
-                tree, _ = parse_aggregate(src, masked, pm.end(), close + 1, f"pose {m.group(1)}")
-                nums = numbers_of([tree], (6,), src, rest, f"pose {m.group(1)}")[0]
-                poses.add(m.group(1), m.start(), Target(src, m.start(), m.group(1), nums))
-            elif masked[rest:rest + 1] == "[":
-                close = _close(masked, rest)
-                tree, _ = parse_aggregate(src, masked, rest, close + 1, f"list {m.group(1)}")
-                if len(tree) == 6 and all(isinstance(x, Number) for x in tree):
-                    joints.add(m.group(1), m.start(), np.array([x.value for x in tree]))
-        return poses, joints
+    def _set_tcp(self, sc, span, at, tools) -> str:
+        """The tool name a ``set_tcp(...)`` sets (a pose it can read is registered)."""
+        a, b = span
+        found = sc.resolve(a, b, at, 0)
+        if len(found) == 1 and found[0][0] in ("target", "pose") and found[0][2] == IDENTITY:
+            pose = found[0][1] if found[0][0] == "pose" else self.to_pose(found[0][1].values()[None])[0]
+            name = f"set_tcp@{sc.src.line_of(at)}"
+            sc.prog.tools[name] = pose
+            if found[0][0] == "target":
+                sc.as_frame.add(id(found[0][1]))
+            return name
+        name = " ".join(sc.masked[a:b].split())
+        return name if name in tools else f"?{name}"
 
-    def _target_arg(self, src, masked, span, at, tool_here, poses, joints, prog, seen, order):
-        """One target argument of a motion: record the Cartesian target it names, or the joints."""
-        (a, b), (tool, here), (used, as_frame) = span, tool_here, seen
+class _Script:
+    """One script's assignments in text order and the resolution of a motion's argument to the
+    targets (literal poses) it comes from."""
+
+    def __init__(self, dialect, src, masked, prog):
+        self.d, self.src, self.masked, self.prog = dialect, src, masked, prog
+        self.assigned = _Assignments()  # name -> (start, end) of the value assigned
+        self.poses: dict[int, Target] = {}  # offset of a literal pose -> its target
+        self.as_frame: set[int] = set()
+        self.variables: set[int] = set()  # targets assigned to a variable (unused ones are named)
+        self.params: list[tuple[int, str, list[str]]] = []  # (offset, def name, parameters)
+        self.calls: dict[str, list[tuple[int, list]]] = {}
+        literals = []
+        for m in _ASSIGN.finditer(masked):
+            if _before(masked, m.start()) in ("(", ","):
+                continue  # a keyword argument: movel(p, a=1.2, v=0.25)
+            end = _statement_end(masked, m.end())
+            self.assigned.add(m.group(1), m.start(), (m.end(), end))
+            value_at = m.end() + len(masked[m.end():end]) - len(masked[m.end():end].lstrip())
+            if _POSE.match(masked, value_at):
+                literals.append((value_at, end))
+        for m in _DEF.finditer(masked):
+            names = [x.strip() for x in m.group(2).split(",") if x.strip()]
+            if names:
+                self.params.append((m.start(), m.group(1), names))
+        defined = {name for _, name, _ in self.params}
+        for m in re.finditer(r"\b([A-Za-z_]\w*)\s*\(", masked) if defined else ():
+            if m.group(1) in defined and not masked[max(0, m.start() - 4):m.start()].endswith("def "):
+                args = split_top(masked, m.end(), _close(masked, m.end() - 1))
+                self.calls.setdefault(m.group(1), []).append((m.start(), args))
+        for a, b in literals:  # every pose variable is a target, used or not
+            found = self._literal(a, b)
+            if found[0] == "target":
+                self.variables.add(id(found[1]))
+
+    def number(self, text: str, at: int, depth: int) -> float | None:
+        """The value of a constant numeric expression (numbers, + - * /, pi, sqrt/sin/cos/d2r and
+        variables last assigned such a value before ``at``), else None."""
+        try:
+            tree = ast.parse(text.strip(), mode="eval")
+        except SyntaxError:
+            return None
+
+        def ev(node):
+            if isinstance(node, ast.Constant) and isinstance(node.value, int | float):
+                return float(node.value)
+            if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
+                v = ev(node.operand)
+                return -v if isinstance(node.op, ast.USub) else v
+            if isinstance(node, ast.BinOp) and type(node.op) in _ARITHMETIC:
+                return _ARITHMETIC[type(node.op)](ev(node.left), ev(node.right))
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _FUNCTIONS \
+                    and len(node.args) == 1:
+                return _FUNCTIONS[node.func.id](ev(node.args[0]))
+            if isinstance(node, ast.Name):
+                if node.id == "pi":
+                    return np.pi
+                span = self.assigned.latest(node.id, at)
+                if depth > _DEPTH:
+                    raise ValueError(node.id)
+                if span is None:  # a function's parameter: the value every call gives, if one
+                    given = {self.number(self.masked[a:b], call_at, depth + 1)
+                             for call_at, (a, b) in self._arguments(node.id, at)}
+                    if len(given) != 1 or None in given:
+                        raise ValueError(node.id)
+                    return given.pop()
+                v = self.number(self.masked[span[0]:span[1]], span[0], depth + 1)
+                if v is None:
+                    raise ValueError(node.id)
+                return v
+            raise ValueError(ast.dump(node)[:40])
+
+        try:
+            v = ev(tree.body)
+        except (ValueError, ZeroDivisionError, TypeError):
+            return None
+        return v if np.isfinite(v) else None
+
+    def resolve(self, a: int, b: int, at: int, depth: int) -> list[tuple]:
+        """What the expression ``masked[a:b]`` (evaluated at offset ``at``) moves to, as
+        ``(kind, value, frame, qnear)``: 'target' (a literal pose to rewrite), 'pose' (a constant
+        4x4 not written as literal numbers), 'joints', or 'skip' (value: why)."""
+        masked = self.masked
         text = masked[a:b]
         lead = a + len(text) - len(text.lstrip())
-        frame, qnear = IDENTITY, None
+        b = lead + len(text.strip())
+        text = masked[lead:b]
+        if depth > _DEPTH:
+            return [("skip", f"{text[:40]} is defined through more than {_DEPTH} assignments", IDENTITY,
+                     None)]
         ik = _IK.match(masked, lead)
         if ik:
             inner = split_top(masked, ik.end(), _close(masked, ik.end() - 1))
+            qnear = None
             for qa, qb in inner[1:]:
-                key, _, val = masked[qa:qb].partition("=")
-                val = (val if key.strip() == "qnear" else masked[qa:qb]).strip()
-                if val.startswith("["):
-                    tree, _ = parse_aggregate(src, masked, masked.index("[", qa), qb, "qnear")
-                    qnear = np.array([x.value for x in tree], float)
-                elif _IDENT.match(val):
-                    qnear = joints.latest(val, at)
-            a, b = inner[0]
-            text = masked[a:b]
-            lead = a + len(text) - len(text.lstrip())
-        pt = _POSE_TRANS.match(masked, lead)
-        if pt:
-            inner = split_top(masked, pt.end(), _close(masked, pt.end() - 1))
+                key, eq, _ = masked[qa:qb].partition("=")
+                start = qa + len(key) + len(eq) if key.strip() == "qnear" else qa
+                for kind, value, _, _ in self.resolve(start, qb, at, depth + 1):
+                    if kind == "joints":
+                        qnear = value
+            return [(k, v, f, qnear if k == "target" else q) for k, v, f, q in
+                    self.resolve(*inner[0], at, depth + 1)]
+        call = _FUNCTION.match(masked, lead)
+        if call and call.group(1) in ("pose_trans", "pose_add"):
+            inner = split_top(masked, call.end(), _close(masked, call.end() - 1))
             if len(inner) != 2:
-                return
-            fname = masked[slice(*inner[0])].strip()
-            if not _IDENT.match(fname):
-                return
-            frame = fname
-            if fname not in prog.frames:
-                ref = poses.latest(fname, at)
-                if ref is not None:
-                    prog.frames[fname] = self.to_pose(ref.values()[None])[0]
-                    as_frame.add(id(ref))
-            a, b = inner[1]
-            text = masked[a:b]
-            lead = a + len(text) - len(text.lstrip())
-        if masked[lead:lead + 1] == "[":  # movej([...]): joints, left alone
-            tree, _ = parse_aggregate(src, masked, lead, b, "joint target")
-            if len(tree) == 6 and all(isinstance(x, Number) for x in tree):
-                prog.joint_targets.append((order[0], np.array([x.value for x in tree])))
-            return
+                return [("skip", f"{call.group(1)} with {len(inner)} arguments", IDENTITY, None)]
+            first = self.resolve(*inner[0], at, depth + 1)
+            second = self.resolve(*inner[1], at, depth + 1)
+            return self._compose(call.group(1), first, second, masked[slice(*inner[0])].strip())
+        if call and call.group(1) == "pose_inv":
+            inner = split_top(masked, call.end(), _close(masked, call.end() - 1))
+            found = self.resolve(*inner[0], at, depth + 1) if len(inner) == 1 else []
+            if len(found) == 1 and found[0][0] in ("pose", "target") and found[0][2] == IDENTITY:
+                return [("pose", invert_transform(self._pose(found[0])), IDENTITY, None)]
+        if call and call.group(1) != "p":
+            return [("skip", f"the pose is computed at run time by {call.group(1)}()", IDENTITY, None)]
+        if _POSE.match(masked, lead):
+            return [self._literal(lead, b)]
+        if text.startswith("["):
+            try:
+                tree, _ = parse_aggregate(self.src, masked, lead, b, "joint target")
+            except DataError:
+                tree = None
+            if isinstance(tree, list) and len(tree) == 6 and all(isinstance(x, Number) for x in tree):
+                return [("joints", np.array([x.value for x in tree]), IDENTITY, None)]
+            values = [self.number(masked[x:y], at, depth) for x, y in split_top(masked, lead + 1, b - 1)]
+            if len(values) == 6 and all(v is not None for v in values):
+                return [("joints", np.array(values), IDENTITY, None)]
+            return [("skip", f"{' '.join(text.split())[:50]} is a list computed at run time", IDENTITY, None)]
+        name = _IDENT.match(text)
+        if not name:
+            return [("skip", f"{' '.join(text.split())[:50]} is not a pose this filter can follow", IDENTITY,
+                     None)]
+        ident = name.group(1)
+        span = self.assigned.latest(ident, at)
+        if span is None:
+            param = self._parameter(ident, at, depth)
+            if param is not None:
+                return param
+            return [("skip", f"{ident} is not assigned a pose before this motion in this script", IDENTITY,
+                     None)]
+        return self.resolve(span[0], span[1], span[0], depth + 1)
+
+    def _literal(self, lead: int, b: int) -> tuple:
+        """A ``p[...]`` literal: a target when its items are numbers, a constant pose when they
+        are constant expressions, else a skip."""
+        masked = self.masked
         pm = _POSE.match(masked, lead)
-        if pm:
-            tree, _ = parse_aggregate(src, masked, pm.end(), b, "pose")
-            nums = numbers_of([tree], (6,), src, lead, "pose")[0]
-            t = Target(src, lead, f"p@{src.line_of(lead)}", nums)
-        else:
-            name = _IDENT.match(text)
-            if not name:
-                return
-            q = joints.latest(name.group(1), at)
-            if q is not None:
-                prog.joint_targets.append((order[0], q))
-                return
-            t = poses.latest(name.group(1), at)
-            if t is None:
-                return
-            if id(t) in used:
-                if used[id(t)][:2] != (tool, frame):
-                    first_tool, first_frame, first_at = used[id(t)]
-                    raise DataError(f"{here}: {t.name} is used with tool {tool} and frame {frame}, but at "
-                                    f"{first_at} with {first_tool} / {first_frame}: one corrected pose "
-                                    "cannot serve both; assign a copy for each use")
-                return
-        used[id(t)] = (tool, frame, here)
-        t.tool, t.frame, t.qnear, t.order = tool, frame, qnear, order[0]
-        order[0] += 1
-        prog.targets.append(t)
+        if lead in self.poses:
+            return ("target", self.poses[lead], IDENTITY, None)
+        close = _close(masked, pm.end())
+        try:
+            tree, _ = parse_aggregate(self.src, masked, pm.end(), close + 1, "pose")
+            nums = numbers_of([tree], (6,), self.src, lead, "pose")[0]
+        except DataError:  # not six literal numbers: expressions, perhaps constant ones
+            nums = None
+        if nums is not None:
+            t = self.poses[lead] = Target(self.src, lead, self._name_at(lead), nums)
+            return ("target", t, IDENTITY, None)
+        texts = [masked[x:y].strip() for x, y in split_top(masked, pm.end() + 1, close)]
+        values = [self.number(t, lead, 0) for t in texts]
+        if len(values) == 6 and all(v is not None for v in values):
+            return ("pose", self.d.to_pose(np.array([values]))[0], IDENTITY, None)
+        varying = ", ".join(t for t, v in zip(texts, values, strict=False) if v is None)
+        return ("skip", f"p[...] holds values known at run time only ({varying[:60]})", IDENTITY, None)
+
+    def passed(self, variables: set[str]) -> list[tuple[str, str, str]]:
+        """``(variable, where, function)`` for each of ``variables`` given as an argument to a
+        function that is not a motion, a pose operation or a function of this script."""
+        if not variables:
+            return []
+        out = []
+        defined = {name for _, name, _ in self.params}
+        for m in re.finditer(r"\b([A-Za-z_]\w*)\s*\(", self.masked):
+            if m.group(1) in _KNOWN or m.group(1) in defined:
+                continue
+            for a, b in split_top(self.masked, m.end(), _close(self.masked, m.end() - 1)):
+                name = self.masked[a:b].strip()
+                if name in variables:
+                    out.append((name, f"{self.src.path.name}:{self.src.line_of(m.start())}", m.group(1)))
+        return out
+
+    def _pose(self, found: tuple) -> np.ndarray:
+        """The 4x4 of a resolved 'pose' or 'target' (its numbers as written)."""
+        return found[1] if found[0] == "pose" else self.d.to_pose(found[1].values()[None])[0]
+
+    def _name_at(self, lead: int) -> str:
+        """The variable a literal pose is assigned to (``name = p[...]``), else ``p@line``."""
+        before = self.masked[max(0, lead - 80):lead]
+        m = re.search(r"\b([A-Za-z_]\w*)\s*=\s*$", before)
+        return m.group(1) if m else f"p@{self.src.line_of(lead)}"
+
+    def _compose(self, fn: str, first: list, second: list, first_text: str) -> list:
+        """``pose_trans(A, B)`` / ``pose_add(A, B)``: B a literal target in frame A (pose_trans
+        with A a fixed feature), or A a target moved by a constant B; else a skip."""
+        out = []
+        for kind_b, value_b, frame_b, _ in second:
+            if kind_b == "target" and fn == "pose_trans" and frame_b != IDENTITY:  # a frame in a frame
+                if len(first) == 1 and first[0][0] in ("pose", "target") and first[0][2] == IDENTITY:
+                    frame = f"{first_text}*{frame_b}"
+                    self.prog.frames.setdefault(frame, self._pose(first[0]) @ self.prog.frames[frame_b])
+                    if first[0][0] == "target":
+                        self.as_frame.add(id(first[0][1]))
+                    out.append(("target", value_b, frame, None))
+                else:
+                    out.append(("skip", f"{fn}({first_text}, ...): the outer frame is not a pose this filter "
+                                        "can read", IDENTITY, None))
+            elif kind_b == "target" and fn == "pose_trans" and frame_b == IDENTITY:
+                if first_text in self.prog.frames:
+                    out.append(("target", value_b, first_text, None))
+                elif len(first) == 1 and first[0][0] in ("pose", "target") and first[0][2] == IDENTITY:
+                    pose = self._pose(first[0])
+                    frame = first_text if _IDENT.match(first_text) else f"pose@{value_b.line}"
+                    self.prog.frames.setdefault(frame, pose)
+                    if first[0][0] == "target":
+                        self.as_frame.add(id(first[0][1]))
+                    out.append(("target", value_b, frame, None))
+                else:
+                    runtime = [v for k, v, _, _ in first if k == "skip"]
+                    why = (f"relative to a pose known at run time only ({runtime[0]})" if runtime else
+                           f"the feature {first_text} is not a pose this filter can read (give it with "
+                           "--frame NAME=...)")
+                    out.append(("skip", f"{fn}({first_text}, ...): {why}", IDENTITY, None))
+            elif kind_b == "pose":
+                for kind_a, value_a, frame_a, q in first:  # A moved by a constant offset: a use of A
+                    out.append((kind_a, value_a, frame_a, q) if kind_a != "joints" else
+                               ("skip", f"{fn} of a joint list", IDENTITY, None))
+            elif kind_b == "skip":
+                moved = [v.name for k, v, _, _ in first if k == "target"] or [first_text]
+                out.append(("skip", f"{fn}({', '.join(moved)}, ...) moves it at run time: {value_b}",
+                            IDENTITY, None))
+            else:
+                out.append(("skip", f"{fn}: the second pose is neither a literal nor a constant", IDENTITY,
+                            None))
+        return out
+
+    def _arguments(self, ident: str, at: int) -> list[tuple[int, tuple[int, int]]]:
+        """``(call offset, argument span)`` of every call passing parameter ``ident`` of the
+        function whose definition with that parameter comes last before ``at`` ([] if none)."""
+        for start, fn, names in reversed(self.params):
+            if start < at and ident in names:
+                k = names.index(ident)
+                return [(call_at, args[k]) for call_at, args in self.calls.get(fn, []) if k < len(args)]
+        return []
+
+    def _parameter(self, ident: str, at: int, depth: int) -> list | None:
+        """``ident`` as a parameter of a function: what every call of the function passes (None:
+        not a parameter)."""
+        for start, fn, names in reversed(self.params):
+            if start < at and ident in names:
+                out = []
+                for call_at, span in self._arguments(ident, at):
+                    out += self.resolve(*span, call_at, depth + 1)
+                return out or [("skip", f"{ident} is a parameter of {fn}, which no call in this script "
+                                        "gives", IDENTITY, None)]
+        return None
+
+
+_ARITHMETIC = {ast.Add: lambda x, y: x + y, ast.Sub: lambda x, y: x - y, ast.Mult: lambda x, y: x * y,
+               ast.Div: lambda x, y: x / y}
+_FUNCTIONS = {"sqrt": np.sqrt, "sin": np.sin, "cos": np.cos, "tan": np.tan, "d2r": np.deg2rad,
+              "r2d": np.rad2deg, "norm": abs}
+
+
+def _before(masked: str, at: int) -> str:
+    """The last character before ``at`` that is not a space or tab ('' at the start)."""
+    i = at - 1
+    while i >= 0 and masked[i] in " \t":
+        i -= 1
+    return masked[i] if i >= 0 else ""
+
+
+def _statement_end(masked: str, start: int) -> int:
+    """End of the value assigned at ``start``: the end of the line, brackets balanced."""
+    depth = 0
+    for i in range(start, len(masked)):
+        ch = masked[i]
+        if ch in "([":
+            depth += 1
+        elif ch in ")]":
+            depth -= 1
+        elif ch == "\n" and depth <= 0:
+            return i
+    return len(masked)
