@@ -1,5 +1,5 @@
-"""The robot model file (YAML, loaded with ``yaml.safe_load``): one format for the catalog, for the
-user's own robot and for :meth:`Robot.save`. docs/model-yaml.md documents it; in short::
+"""The robot model file (YAML, read by :func:`robocal.yaml_load.load_yaml`): one format for the
+catalog, for the user's own robot and for :meth:`Robot.save`. docs/model-yaml.md documents it; in short::
 
     name: my_robot                      # optional: description, format
     units: {length: mm, angle: deg}     # required: the units of every number below
@@ -27,7 +27,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import yaml
 from scipy.spatial.transform import Rotation
 
 from robocal.errors import ModelError
@@ -36,6 +35,7 @@ from robocal.kinematics.convert import default_parallel, dh_kwargs, mdh_kwargs, 
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.opw import GEOMETRY, OPWParameters
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
+from robocal.yaml_load import dump_yaml, load_yaml
 
 FORMAT = "robocal-model/1"
 LINK_FIELDS = ("alpha", "a", "beta", "theta", "d")
@@ -100,7 +100,8 @@ def _units(data: dict) -> tuple[str, str]:
         if "units" in data else None
     if units is None:
         raise ModelError("the model must declare its units: units: {length: m|mm, angle: rad|deg}")
-    if units["length"] not in LENGTH_UNITS or units["angle"] not in ANGLE_UNITS:
+    if not (isinstance(units["length"], str) and units["length"] in LENGTH_UNITS
+            and isinstance(units["angle"], str) and units["angle"] in ANGLE_UNITS):
         raise ModelError(f"unknown units {units}: length m|mm, angle rad|deg")
     return units["length"], units["angle"]
 
@@ -231,17 +232,14 @@ def robot_to_dict(robot) -> dict:
 
 def dump_model(robot) -> str:
     """The model YAML text (SI, full precision: an exact round trip)."""
-    return yaml.safe_dump(robot_to_dict(robot), sort_keys=False)
+    return dump_yaml(robot_to_dict(robot))
 
 
 def read_model_file(path) -> dict:
-    """Robot keyword arguments from a model YAML file (``yaml.safe_load``); errors name the file."""
+    """Robot keyword arguments from a model YAML file (:func:`robocal.yaml_load.load_yaml`: safe,
+    YAML 1.2 numbers, no duplicate keys, bounded); errors name the file."""
     path = Path(path)
-    text = read_text(path, "robot model YAML file", ModelError)
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ModelError(f"{path}: not valid (safe) YAML: {exc}") from None
+    data = load_yaml(read_text(path, "robot model YAML file", ModelError), str(path), ModelError)
     try:
         return robot_kwargs(data)
     except ModelError as exc:
