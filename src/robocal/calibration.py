@@ -28,11 +28,12 @@ from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
-from robocal.io import read_text, write_atomic
+from robocal.io import load_json, write_atomic
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
 from robocal.model_selection import calibrate_cyclic, select_error_model, selection_table
 from robocal.progress import Progress
 from robocal.report.metrics import position_stats
+from robocal.schema import RESULT_SCHEMA, validate
 from robocal.version import __version__
 
 RESULT_FORMAT = "robocal-result/1"
@@ -609,11 +610,12 @@ def _plain(options: dict) -> dict:
 
 
 def load_result(path) -> dict:
-    """Read a result JSON written by :meth:`CalibrationResult.save_json`."""
-    try:
-        data = json.loads(read_text(path, "result JSON file"))
-    except json.JSONDecodeError as exc:
-        raise DataError(f"{path} is not a robocal result JSON: {exc}") from None
+    """Read a result JSON written by :meth:`CalibrationResult.save_json`, validated field by
+    field (:data:`robocal.schema.RESULT_SCHEMA`); DataError names the file and the field."""
+    data = load_json(path, "result JSON file")
     if not isinstance(data, dict) or data.get("format") != RESULT_FORMAT:
         raise DataError(f"{path} is not a robocal result JSON (format {RESULT_FORMAT})")
-    return data
+    try:
+        return validate(data, RESULT_SCHEMA)
+    except DataError as exc:
+        raise DataError(f"{path}: {exc}") from None

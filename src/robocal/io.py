@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import json
 import math
 import os
 import shutil
@@ -50,6 +51,25 @@ def read_text(path, what: str, error: type[RobocalError] = DataError) -> str:
         raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
     except UnicodeDecodeError:
         raise error(f"{path}: not a UTF-8 text file (expected a {what})") from None
+
+
+def _refuse_constant(name: str):
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def load_json(path, what: str, error: type[RobocalError] = DataError):
+    """The data of a user's JSON file (:func:`read_text`); ``error`` with one line naming the file
+    for invalid JSON, NaN/Infinity, an integer of thousands of digits or nesting deeper than the
+    parser can follow. Validate the structure at the caller (:mod:`robocal.schema`)."""
+    text = read_text(path, what, error)
+    try:
+        return json.loads(text, parse_constant=_refuse_constant)
+    except json.JSONDecodeError as exc:
+        raise error(f"{path} is not a valid {what}: {exc}") from None
+    except ValueError as exc:  # NaN, or an integer beyond Python's digit limit
+        raise error(f"{path} is not a valid {what}: {' '.join(str(exc).split())[:200]}") from None
+    except RecursionError:
+        raise error(f"{path} is not a valid {what}: nested too deeply") from None
 
 
 def _write_error(path: Path, exc: OSError) -> DataError:

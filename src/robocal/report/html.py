@@ -336,7 +336,7 @@ def _model_selection(ms: dict | None) -> str:
     if not ms or not ms.get("candidates"):
         return ""
     cands = ms["candidates"]
-    order = sorted(range(len(cands)), key=lambda i: cands[i].get("cv_rms_mm", np.inf))
+    order = sorted(range(len(cands)), key=lambda i: _or(cands[i].get("cv_rms_mm"), np.inf))
     rows, classes = [], []
     for i in order:
         c = cands[i]
