@@ -195,8 +195,9 @@ def load_yaml(text: str, where: str, error: type[RobocalError] = DataError, *, m
     if len(text) > max_bytes:
         raise error(f"{where}: {len(text)} characters is larger than a data file can be "
                     f"({max_bytes}); is it the right file?")
-    loader = EngineeringLoader(text)
+    loader = None
     try:
+        loader = EngineeringLoader(text)  # the reader refuses control characters here
         node = loader.get_single_node()
         if node is None:
             return None
@@ -210,4 +211,5 @@ def load_yaml(text: str, where: str, error: type[RobocalError] = DataError, *, m
     except (ValueError, OverflowError, TypeError) as exc:  # e.g. a merge key on a non-mapping
         raise error(f"{where}: not valid YAML: {exc}") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()

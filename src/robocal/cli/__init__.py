@@ -11,6 +11,7 @@ import importlib
 import os
 import sys
 import traceback
+import warnings
 
 from robocal.errors import RobocalError
 from robocal.version import __version__
@@ -50,31 +51,52 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# numpy's floating-point warnings ("overflow encountered in matmul") become the one-line error they
+# announce: a computation that overflowed or produced NaN from the input cannot be trusted
+_FLOAT_WARNING = r"(overflow|invalid value|divide by zero) encountered"
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    argv = sys.argv[1:] if argv is None else list(argv)
-    args = parser.parse_args(argv)
+    """Run the command line; the exit code: 0 done, 2 the user's input refused (one line on
+    stderr), 3 an internal error (a bug), 130 interrupted (Ctrl-C at any moment)."""
+    command = "robocal"
+    try:
+        parser = build_parser()
+        argv = sys.argv[1:] if argv is None else list(argv)
+        args = parser.parse_args(argv)
+        command = f"robocal {args.command}"
+        return _run(args, argv)
+    except KeyboardInterrupt:
+        print(f"{command}: interrupted", file=sys.stderr)
+        return 130
+
+
+def _run(args, argv: list[str]) -> int:
     args.argv = argv  # the command line as given (the result's provenance)
     from robocal.progress import set_quiet
 
     set_quiet(args.quiet)
     try:
-        return int(args.func(args) or 0)
+        with warnings.catch_warnings():
+            warnings.filterwarnings("error", message=_FLOAT_WARNING, category=RuntimeWarning)
+            return int(args.func(args) or 0)
     except RobocalError as exc:  # one line, whatever the message holds (e.g. a YAML parser's)
         print(f"robocal {args.command}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"robocal {args.command}: interrupted", file=sys.stderr)
-        return 130
+    except RuntimeWarning as exc:
+        print(f"robocal {args.command}: error: a computation on the input overflowed or gave no number "
+              f"({' '.join(str(exc).split())}): a value in the input is far beyond what a robot has",
+              file=sys.stderr)
+        return 2
     except BrokenPipeError:  # output piped into e.g. head, which stopped reading
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except Exception as exc:  # a bug: one line for the user, the traceback on request
         if os.environ.get(DEBUG_ENV):
             traceback.print_exc()
-        print(f"robocal {args.command}: internal error ({type(exc).__name__}: {exc}); this is a bug in "
-              f"robocal: please report it with the command line (set {DEBUG_ENV}=1 for the traceback)",
-              file=sys.stderr)
+        print(f"robocal {args.command}: internal error ({type(exc).__name__}: {' '.join(str(exc).split())}); "
+              f"this is a bug in robocal: please report it with the command line (set {DEBUG_ENV}=1 for the "
+              "traceback)", file=sys.stderr)
         return 3
 
 

@@ -82,8 +82,7 @@ def solve(problem, start: State, space: ParameterSpace, *, seed: int = 0, progre
                                  threshold=threshold, patience=patience, ftol=ftol, progress=progress,
                                  label="swarm")
     state = cost.state_of(best["x"], best["nu"])
-    message = "swarm: " + stop_message(status, "iteration", it, iterations, history[-1]["rms"],
-                                       problem.n_items)
+    message = stop_message(status, "iteration", it, iterations, history[-1]["rms"], problem.n_items)
     if status is Status.INTERRUPTED or not polish:
         return SolverResult(state=state, status=status, message=message, nit=it, history=history)
     gn = gauss_newton(problem, state, space, max_iter=polish_iter)
