@@ -20,12 +20,16 @@ from fuzzing import build_readers, check, mutate, run_case  # noqa: E402
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("-n", type=int, default=1000, help="mutants per reader")
     parser.add_argument("--out", type=Path, required=True, help="work folder (seeds, cases, reproducers)")
     parser.add_argument("--readers", help="comma-separated reader names (default: all)")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--budget-s", type=float, default=float("inf"), help="stop each reader after this time")
+    parser.add_argument(
+        "--budget-s", type=float, default=float("inf"), help="stop each reader after this time"
+    )
     parser.add_argument("--memory-gib", type=float, default=6.0, help="address-space cap of this process")
     args = parser.parse_args()
     cap = int(args.memory_gib * 2**30)
@@ -40,7 +44,7 @@ def main() -> int:
         sites: dict[str, int] = collections.Counter()
         start = time.monotonic()
         done = 0
-        for k in range(args.n):
+        for _ in range(args.n):
             if time.monotonic() - start > args.budget_s:
                 break
             target, data = mutate(reader, rng)
@@ -57,8 +61,12 @@ def main() -> int:
                     (keep / "problem.txt").write_text(f"{problem}\n\n{stderr}")
                 sites[problem] += 1
         total_bad += sum(sites.values())
-        print(f"{name}: {done} mutants in {time.monotonic() - start:.0f} s, exit codes {dict(sorted(codes.items()))}, "
-              f"{sum(sites.values())} contract breaks at {len(sites)} site(s)", flush=True)
+        print(
+            f"{name}: {done} mutants in {time.monotonic() - start:.0f} s, "
+            f"exit codes {dict(sorted(codes.items()))}, "
+            f"{sum(sites.values())} contract breaks at {len(sites)} site(s)",
+            flush=True,
+        )
         for problem, count in sites.most_common():
             print(f"  {count:5d}  {problem}", flush=True)
     return 1 if total_bad else 0

@@ -29,11 +29,46 @@ from pathlib import Path
 import numpy as np
 
 from robocal.cli import main
+from robocal.data.simulate import perturbed
+from robocal.kinematics.model import Robot
 
 PROGRAMS = Path(__file__).resolve().parent / "data" / "programs"
-EXTREMES = [b"1e308", b"-1e308", b"1e-320", b"nan", b"NaN", b"inf", b"-inf", b"0", b"-0", b"0135", b"0x1F",
-            b"1:30", b"1_000", b"2e9", b"12", b"-7", b"720", b"99999999", b"3.5", b'""', b"$x$", b"$\\frac{",
-            b"[]", b"{}", b"null", b"true", b"~", b"1" * 5000, b"1e", b"--1", b"1..2", b"", b"*a", b"&a"]
+EXTREMES = [
+    b"1e308",
+    b"-1e308",
+    b"1e-320",
+    b"nan",
+    b"NaN",
+    b"inf",
+    b"-inf",
+    b"0",
+    b"-0",
+    b"0135",
+    b"0x1F",
+    b"1:30",
+    b"1_000",
+    b"2e9",
+    b"12",
+    b"-7",
+    b"720",
+    b"99999999",
+    b"3.5",
+    b'""',
+    b"$x$",
+    b"$\\frac{",
+    b"[]",
+    b"{}",
+    b"null",
+    b"true",
+    b"~",
+    b"1" * 5000,
+    b"1e",
+    b"--1",
+    b"1..2",
+    b"",
+    b"*a",
+    b"&a",
+]
 CHARS = b" ,;:[]{}()\"'$-+.0123456789eE\n\t#*&!xX\\/<>=%@|\x00\xff\xe9"
 NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 WORD = re.compile(rb"[A-Za-z_][A-Za-z0-9_]*")
@@ -77,69 +112,182 @@ def build_readers(folder: Path) -> dict[str, Reader]:
     truth = folder / "truth.yaml"
     for kind in ("point", "pose", "plane", "distance"):
         data = folder / f"{kind}.csv"
-        _run(["simulate", "--robot", "abb_irb2600", "--poses", "12", "--kind", kind, "--seed", "1",
-              "-o", str(data), "--truth", str(folder / f"truth_{kind}.yaml")])
+        _run(
+            [
+                "simulate",
+                "--robot",
+                "abb_irb2600",
+                "--poses",
+                "12",
+                "--kind",
+                kind,
+                "--seed",
+                "1",
+                "-o",
+                str(data),
+                "--truth",
+                str(folder / f"truth_{kind}.yaml"),
+            ]
+        )
         files = {"data.csv": data.read_bytes(), "truth.yaml": (folder / f"truth_{kind}.yaml").read_bytes()}
         readers[f"csv_{kind}"] = Reader(
-            f"csv_{kind}", files, ["data.csv"],
+            f"csv_{kind}",
+            files,
+            ["data.csv"],
             lambda d: ["evaluate", str(d / "truth.yaml"), str(d / "data.csv"), "--json", str(d / "out.json")],
-            ["out.json"])
+            ["out.json"],
+        )
     shutil.copy(folder / "truth_point.yaml", truth)
     # import, layout 1: one file per pose reading, joints and points on each row (Meca500 style)
     rng = np.random.default_rng(0)
     q = rng.uniform(-90, 90, (6, 6))
     p = rng.uniform(-1, 1, (6, 3))
-    rows = [",".join(f"{v:.6f}" for v in (*qq, *(pp + rng.normal(0, 1e-5, 3)))) for qq, pp in zip(q, p, strict=True)
-            for _ in range(3)]
+    rows = [
+        ",".join(f"{v:.6f}" for v in (*qq, *(pp + rng.normal(0, 1e-5, 3))))
+        for qq, pp in zip(q, p, strict=True)
+        for _ in range(3)
+    ]
     readers["import_rows"] = Reader(
-        "import_rows", {"raw.csv": ("\n".join(rows) + "\n").encode()}, ["raw.csv"],
-        lambda d: ["import", str(d / "raw.csv"), "--joints", "cols=0-5:deg", "--points", "cols=6-8:m",
-                   "-o", str(d / "out.csv")], ["out.csv"])
+        "import_rows",
+        {"raw.csv": ("\n".join(rows) + "\n").encode()},
+        ["raw.csv"],
+        lambda d: [
+            "import",
+            str(d / "raw.csv"),
+            "--joints",
+            "cols=0-5:deg",
+            "--points",
+            "cols=6-8:m",
+            "-o",
+            str(d / "out.csv"),
+        ],
+        ["out.csv"],
+    )
     # import, layout 2: a joints file, one file per SMR (mm) and a base drift monitor (IRB 120 style)
     joints = "\n".join(" ".join(f"{v:.4f}" for v in qq) for qq in q) + "\n"
     smr = ["\n".join(" ".join(f"{v:.4f}" for v in pp * 1000 + k * 50) for pp in p) + "\n" for k in range(2)]
-    base = "\n".join(" ".join(f"{v:.4f}" for v in np.array([100.0, 200, 300]) + rng.normal(0, 0.005, 3))
-                     for _ in range(6)) + "\n"
+    base = (
+        "\n".join(
+            " ".join(f"{v:.4f}" for v in np.array([100.0, 200, 300]) + rng.normal(0, 0.005, 3))
+            for _ in range(6)
+        )
+        + "\n"
+    )
     readers["import_files"] = Reader(
-        "import_files", {"joints.txt": joints.encode(), "smr1.txt": smr[0].encode(), "smr2.txt": smr[1].encode(),
-                         "base.txt": base.encode()}, ["joints.txt", "smr1.txt", "smr2.txt", "base.txt"],
-        lambda d: ["import", "--joints", f"{d / 'joints.txt'}:cols=0-5:deg", "--points", f"{d / 'smr1.txt'}:mm",
-                   "--points", f"{d / 'smr2.txt'}:mm", "--base", f"{d / 'base.txt'}:mm", "-o", str(d / "out.csv")],
-        ["out.csv"])
+        "import_files",
+        {
+            "joints.txt": joints.encode(),
+            "smr1.txt": smr[0].encode(),
+            "smr2.txt": smr[1].encode(),
+            "base.txt": base.encode(),
+        },
+        ["joints.txt", "smr1.txt", "smr2.txt", "base.txt"],
+        lambda d: [
+            "import",
+            "--joints",
+            f"{d / 'joints.txt'}:cols=0-5:deg",
+            "--points",
+            f"{d / 'smr1.txt'}:mm",
+            "--points",
+            f"{d / 'smr2.txt'}:mm",
+            "--base",
+            f"{d / 'base.txt'}:mm",
+            "-o",
+            str(d / "out.csv"),
+        ],
+        ["out.csv"],
+    )
     catalog = Path(__import__("robocal").__file__).parent / "catalog"
     for name in ("abb_irb2600", "ur5", "puma560"):  # an OPW set, a UR DH table, a modified DH table
         readers[f"model_{name}"] = Reader(
-            f"model_{name}", {"m.yaml": (catalog / f"{name}.yaml").read_bytes()}, ["m.yaml"],
-            lambda d: ["export", str(d / "m.yaml"), "--urdf", str(d / "out.urdf")], ["out.urdf"])
-    readers["model_saved"] = Reader("model_saved", {"m.yaml": truth.read_bytes()}, ["m.yaml"],
-                                    lambda d: ["export", str(d / "m.yaml"), "--urdf", str(d / "out.urdf")],
-                                    ["out.urdf"])
+            f"model_{name}",
+            {"m.yaml": (catalog / f"{name}.yaml").read_bytes()},
+            ["m.yaml"],
+            lambda d: ["export", str(d / "m.yaml"), "--urdf", str(d / "out.urdf")],
+            ["out.urdf"],
+        )
+    readers["model_saved"] = Reader(
+        "model_saved",
+        {"m.yaml": truth.read_bytes()},
+        ["m.yaml"],
+        lambda d: ["export", str(d / "m.yaml"), "--urdf", str(d / "out.urdf")],
+        ["out.urdf"],
+    )
     _run(["export", "abb_irb2600", "--urdf", str(folder / "r.urdf")])
-    readers["urdf"] = Reader("urdf", {"r.urdf": (folder / "r.urdf").read_bytes()}, ["r.urdf"],
-                             lambda d: ["export", str(d / "r.urdf"), "--yaml", str(d / "out.yaml")], ["out.yaml"])
-    _run(["calibrate", str(folder / "point.csv"), "--robot", "abb_irb2600", "--params", "auto",
-          "--validate", str(folder / "point.csv"), "--method", "robust", "--json", str(folder / "result.json"),
-          "-o", str(folder / "cal.yaml")])
+    readers["urdf"] = Reader(
+        "urdf",
+        {"r.urdf": (folder / "r.urdf").read_bytes()},
+        ["r.urdf"],
+        lambda d: ["export", str(d / "r.urdf"), "--yaml", str(d / "out.yaml")],
+        ["out.yaml"],
+    )
+    _run(
+        [
+            "calibrate",
+            str(folder / "point.csv"),
+            "--robot",
+            "abb_irb2600",
+            "--params",
+            "auto",
+            "--validate",
+            str(folder / "point.csv"),
+            "--method",
+            "robust",
+            "--json",
+            str(folder / "result.json"),
+            "-o",
+            str(folder / "cal.yaml"),
+        ]
+    )
     result = _trim_result(json.loads((folder / "result.json").read_text()))
     readers["result_json"] = Reader(
-        "result_json", {"result.json": json.dumps(result, indent=1).encode()}, ["result.json"],
-        lambda d: ["report", str(d / "result.json"), "-o", str(d / "out.html")], ["out.html"], kind="json")
-    cal = (folder / "cal.yaml").read_bytes()
+        "result_json",
+        {"result.json": json.dumps(result, indent=1).encode()},
+        ["result.json"],
+        lambda d: ["report", str(d / "result.json"), "-o", str(d / "out.html")],
+        ["out.html"],
+        kind="json",
+    )
     for name, robot, files, extra in (
-            ("rapid", "abb_irb2600", ["weld_cell.mod"], []),
-            ("krl", "kuka_kr16_2", ["palletize.src", "palletize.dat"], []),
-            ("fanuc", "fanuc_lrmate200id", ["sealing.ls"], ["--frame", "1=450,-150,100,0,0,-10",
-                                                            "--tool", "2=0,0,120,0,0,0"]),
-            ("urscript", "ur5", ["pick_place.script"], [])):
+        ("rapid", "abb_irb2600", ["weld_cell.mod"], []),
+        ("krl", "kuka_kr16_2", ["palletize.src", "palletize.dat", "config.dat"], []),
+        (
+            "fanuc",
+            "fanuc_lrmate200id",
+            ["sealing.ls"],
+            ["--frame", "1=450,-150,100,0,0,-10", "--tool", "2=0,0,120,0,0,0"],
+        ),
+        ("urscript", "ur5", ["pick_place.script"], []),
+    ):
         content = {f: (PROGRAMS / f).read_bytes() for f in files}
         out = "out" + Path(files[0]).suffix
+        programs, references = files[:2] if name == "krl" else files, files[2:]
+        perturbed(Robot.from_catalog(robot), 7).save(folder / f"cal_{robot}.yaml")
+        cal = (folder / f"cal_{robot}.yaml").read_bytes()
 
-        def argv(d, files=files, robot=robot, extra=extra, out=out):
-            return ["filter", *(str(d / f) for f in files), "--calibrated", str(d / "cal.yaml"),
-                    "--nominal", robot, *extra, "-o", str(d / (out if len(files) == 1 else "outdir"))]
+        def argv(d, programs=programs, references=references, robot=robot, extra=extra, out=out):
+            refs = ["--references", *(str(d / f) for f in references)] if references else []
+            return [
+                "filter",
+                *(str(d / f) for f in programs),
+                *refs,
+                "--calibrated",
+                str(d / "cal.yaml"),
+                "--nominal",
+                robot,
+                *extra,
+                "-o",
+                str(d / (out if len(programs) == 1 else "outdir")),
+            ]
 
-        readers[name] = Reader(name, {**content, "cal.yaml": cal}, files, argv,
-                               [out] if len(files) == 1 else ["outdir"], extra={"outdir": len(files) > 1})
+        readers[name] = Reader(
+            name,
+            {**content, "cal.yaml": cal},
+            files,
+            argv,
+            [out] if len(programs) == 1 else ["outdir"],
+            extra={"outdir": len(programs) > 1},
+        )
     return readers
 
 
@@ -159,15 +307,15 @@ def _text_op(data: bytes, rng: random.Random) -> bytes:
     elif op == 2:
         lines[i], lines[j] = lines[j], lines[i]
     elif op == 3:
-        return data[:rng.randrange(len(data) + 1)]
+        return data[: rng.randrange(len(data) + 1)]
     elif op in (4, 5, 6):  # a number replaced by an extreme or ambiguous form
         found = list(NUMBER.finditer(data))
         if found:
             m = rng.choice(found)
-            return data[:m.start()] + rng.choice(EXTREMES) + data[m.end():]
+            return data[: m.start()] + rng.choice(EXTREMES) + data[m.end() :]
     elif op == 7 and data:
         k = rng.randrange(len(data))
-        return data[:k] + data[k + 1:]
+        return data[:k] + data[k + 1 :]
     elif op == 8:
         k = rng.randrange(len(data) + 1)
         return data[:k] + bytes([rng.choice(CHARS)]) + data[k:]
@@ -175,8 +323,10 @@ def _text_op(data: bytes, rng: random.Random) -> bytes:
         words = list(WORD.finditer(data))
         if words:
             m = rng.choice(words)
-            new = rng.choice(words).group() if rng.random() < 0.7 else b"Xyz" + str(rng.randrange(99)).encode()
-            return data[:m.start()] + new + data[m.end():]
+            new = (
+                rng.choice(words).group() if rng.random() < 0.7 else b"Xyz" + str(rng.randrange(99)).encode()
+            )
+            return data[: m.start()] + new + data[m.end() :]
     elif op == 10:
         lines[i:i] = [lines[j]] * rng.choice((50, 500))
     elif op == 11:
@@ -186,14 +336,35 @@ def _text_op(data: bytes, rng: random.Random) -> bytes:
         found = [m.start() for m in re.finditer(rb"[,;:\[\]{}()=]", data)]
         if found:
             k = rng.choice(found)
-            return data[:k] + data[k + 1:]
+            return data[:k] + data[k + 1 :]
     else:
         lines[i] = lines[i].swapcase()
     return b"".join(lines)
 
 
-_SHAPES = [1e308, -1e308, 0, -1, 1e15, 10**20, True, None, "", "$x^$", "$\\frac{a$", "a" * 10, [], {}, [1, 2],
-           [[1, 2], [3]], {"a": 1}, [[[[1]]]], 0.5, "1.5", -5]
+_SHAPES = [
+    1e308,
+    -1e308,
+    0,
+    -1,
+    1e15,
+    10**20,
+    True,
+    None,
+    "",
+    "$x^$",
+    "$\\frac{a$",
+    "a" * 10,
+    [],
+    {},
+    [1, 2],
+    [[1, 2], [3]],
+    {"a": 1},
+    [[[[1]]]],
+    0.5,
+    "1.5",
+    -5,
+]
 
 
 def _json_op(data: bytes, rng: random.Random) -> bytes:
@@ -306,6 +477,8 @@ def _site(stderr: str) -> str:
     frames = re.findall(r'File "([^"]*robocal[^"]*)", line (\d+), in (\w+)', stderr)
     last = [ln for ln in stderr.splitlines() if ln.strip()]
     where = f"{Path(frames[-1][0]).name}:{frames[-1][1]} {frames[-1][2]}" if frames else "?"
-    exc = next((ln for ln in reversed(last) if re.match(r"\w+(Error|Exception|Warning)\b", ln)), last[-1] if last
-               else "")
+    exc = next(
+        (ln for ln in reversed(last) if re.match(r"\w+(Error|Exception|Warning)\b", ln)),
+        last[-1] if last else "",
+    )
     return f"{where}: {exc[:200]}"

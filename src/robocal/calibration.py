@@ -23,7 +23,12 @@ from robocal.data.registration import register
 from robocal.errors import DataError, IdentificationError
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability
 from robocal.identify.identifiability import analyze as analyze_jacobian
-from robocal.identify.plausibility import check_corrections, check_residual, check_spread
+from robocal.identify.plausibility import (
+    check_corrections,
+    check_joint_limits,
+    check_residual,
+    check_spread,
+)
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
 from robocal.identify.space import ParameterSpace, State, block_of
@@ -522,6 +527,10 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
             raise DataError(f"the validation data use {v.n_smr} SMRs but the calibration data "
                             f"{n_smr}: judge a calibration on data measured with the same SMRs")
     warnings: list[str] = []
+    for role, sets in (("calibration", datasets), ("validation", validations)):
+        for d in sets:
+            check_joint_limits(robot, d, f"the {role} data {d.label or ''}".strip(), force=force,
+                               warnings=warnings)
     start = _start_model(robot, datasets, register_frames, force, warnings) if warm_start is None \
         else warm_start.start
     declared = list(dict.fromkeys(start.joint_error_names + candidate_names(start.n_joints, terms)))

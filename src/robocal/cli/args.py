@@ -21,3 +21,12 @@ def numbers(count: int | None, unit_hint: str) -> Callable[[str], list[float]]:
         return values
 
     return parse
+
+
+def print_warnings(command: str, warnings) -> None:
+    """The warnings of a quiet run on stderr, one line each (``--quiet`` silences progress and
+    summaries, never a warning)."""
+    import sys
+
+    for warning in warnings:
+        print(f"robocal {command}: warning: {' '.join(str(warning).split())}", file=sys.stderr)

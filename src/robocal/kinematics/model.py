@@ -59,8 +59,8 @@ def _check_magnitude(arr: np.ndarray, bound: float, what: str, unit: str) -> Non
     big = np.flatnonzero(np.abs(arr) > bound)
     if big.size:
         k = big[0]
-        raise ModelError(f"{what}[{k}] = {arr.flat[k]:.6g} {unit} is beyond +-{bound:g} {unit}: no real robot "
-                         "model has it (a unit or typing error?)")
+        raise ModelError(f"{what}[{k}] = {arr.flat[k]:.6g} {unit} is beyond +-{bound:g} {unit}: no real "
+                         "robot model has it (a unit or typing error?)")
 
 
 def _as_vector(values, n: int, what: str) -> np.ndarray:
@@ -133,7 +133,8 @@ class Robot:
         for f in LINK_FIELDS:
             set_(self, f, _as_vector(getattr(self, f), n, f))
             length = f in ("a", "d")
-            _check_magnitude(getattr(self, f), MAX_LINK_M if length else MAX_ANGLE_RAD, f, "m" if length else "rad")
+            _check_magnitude(getattr(self, f), MAX_LINK_M if length else MAX_ANGLE_RAD, f,
+                             "m" if length else "rad")
         set_(self, "base", _as_frame(self.base, "base"))
         set_(self, "tool", _as_frame(self.tool, "tool"))
         for f in ("base", "tool"):
