@@ -9,7 +9,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
+import threading
 import traceback
 import warnings
 
@@ -56,22 +58,51 @@ def build_parser() -> argparse.ArgumentParser:
 _FLOAT_WARNING = r"(overflow|invalid value|divide by zero) encountered"
 
 
+class _Interrupts:
+    """SIGINT raises KeyboardInterrupt as usual and is also remembered: a library that turns the
+    interrupt into another exception (numpy's C extensions make an ImportError of it during their
+    import) still ends as an interrupt. Main thread only; the previous handler is restored."""
+
+    def __init__(self) -> None:
+        self.seen = False
+        self.previous = None
+
+    def _handler(self, signum, frame):
+        self.seen = True
+        raise KeyboardInterrupt
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread() \
+                and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            self.previous = signal.signal(signal.SIGINT, self._handler)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.previous is not None:
+            signal.signal(signal.SIGINT, self.previous)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; the exit code: 0 done, 2 the user's input refused (one line on
     stderr), 3 an internal error (a bug), 130 interrupted (Ctrl-C at any moment)."""
     command = "robocal"
-    try:
-        parser = build_parser()
-        argv = sys.argv[1:] if argv is None else list(argv)
-        args = parser.parse_args(argv)
-        command = f"robocal {args.command}"
-        return _run(args, argv)
-    except KeyboardInterrupt:
-        print(f"{command}: interrupted", file=sys.stderr)
-        return 130
+    with _Interrupts() as interrupts:
+        try:
+            parser = build_parser()
+            argv = sys.argv[1:] if argv is None else list(argv)
+            args = parser.parse_args(argv)
+            command = f"robocal {args.command}"
+            return _run(args, argv, interrupts)
+        except KeyboardInterrupt:
+            pass
+        except Exception:
+            if not interrupts.seen:
+                raise
+    print(f"{command}: interrupted", file=sys.stderr)
+    return 130
 
 
-def _run(args, argv: list[str]) -> int:
+def _run(args, argv: list[str], interrupts: _Interrupts) -> int:
     args.argv = argv  # the command line as given (the result's provenance)
     from robocal.progress import set_quiet
 
@@ -92,6 +123,8 @@ def _run(args, argv: list[str]) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except Exception as exc:  # a bug: one line for the user, the traceback on request
+        if interrupts.seen:  # an interrupt another library turned into its own exception
+            raise KeyboardInterrupt from None
         if os.environ.get(DEBUG_ENV):
             traceback.print_exc()
         print(f"robocal {args.command}: internal error ({type(exc).__name__}: {' '.join(str(exc).split())}); "

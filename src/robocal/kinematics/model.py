@@ -64,7 +64,10 @@ def _check_magnitude(arr: np.ndarray, bound: float, what: str, unit: str) -> Non
 
 
 def _as_vector(values, n: int, what: str) -> np.ndarray:
-    arr = np.array(values, dtype=float).reshape(-1)  # a copy: the robot never aliases user arrays
+    try:
+        arr = np.array(values, dtype=float).reshape(-1)  # a copy: the robot never aliases user arrays
+    except (TypeError, ValueError):
+        raise ModelError(f"{what} must be {n} numbers") from None
     if arr.shape != (n,):
         raise ModelError(f"{what} must have {n} values, got {arr.size}")
     if not np.isfinite(arr).all():
@@ -479,8 +482,13 @@ class Robot:
 
     @classmethod
     def load(cls, path) -> Robot:
-        """Read a model YAML (docs/model-yaml.md: the catalog's format, hand-written or saved)."""
-        return cls(**read_model_file(path))
+        """Read a model YAML (docs/model-yaml.md: the catalog's format, hand-written or saved);
+        ModelError names the file."""
+        kwargs = read_model_file(path)
+        try:
+            return cls(**kwargs)
+        except ModelError as exc:
+            raise ModelError(f"{path}: {exc}") from None
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, {self.n_joints} joints)"

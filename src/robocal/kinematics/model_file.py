@@ -194,8 +194,12 @@ def robot_kwargs(data) -> dict:
         kw["joint_errors"] = JointErrorModel.from_dict(data["joint_errors"], n)
     kw["name"] = str(data.get("name", "robot"))
     kw["description"] = str(data.get("description", ""))
-    if data.get("nominal") is not None:
-        kw["nominal"] = data["nominal"]  # a name -> value mapping (SI), resolved by the Robot
+    if data.get("nominal") is not None:  # a name -> value mapping (SI), resolved by the Robot
+        nominal = data["nominal"]
+        if not isinstance(nominal, dict):
+            raise ModelError(f"nominal: expected a mapping {{parameter name: value (SI)}}, got "
+                             f"{nominal!r:.60}")
+        kw["nominal"] = {str(k): as_number(v, f"nominal.{k}", ModelError) for k, v in nominal.items()}
     return {k: v for k, v in kw.items() if v is not None}
 
 

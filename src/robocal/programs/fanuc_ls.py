@@ -78,12 +78,18 @@ class FanucDialect(Dialect):
             if start < 0:
                 prog.warnings.append(f"{src.path.name}: no /POS section: no positions")
                 continue
-            for m in _POS.finditer(text, start):
+            end = text.find("/END", start)
+            end = len(text) if end < 0 else end
+            after = start + len("/POS")  # the /POS section holds position blocks and nothing else
+            for m in _POS.finditer(text, after, end):
+                _nothing_between(src, text, after, m.start())
+                after = m.end()
                 name = f"P[{m.group(1)}{':' + m.group(2) if m.group(2) else ''}]"
                 body_start = m.start(3)
                 body = m.group(3)
                 groups = list(_GROUP.finditer(body))
-                if not groups or groups[0].group(1) != "1":
+                _check_body(src, m.start(), name, body, groups)
+                if groups[0].group(1) != "1":
                     continue
                 g_end = groups[1].start() if len(groups) > 1 else len(body)
                 a, b = body_start + groups[0].end(), body_start + g_end
@@ -111,4 +117,27 @@ class FanucDialect(Dialect):
                                            tool=str(int(fr["UT"])), config=row, config_spans=spans,
                                            order=order))
                 order += 1
+            _nothing_between(src, text, after, end)
         return prog
+
+
+def _nothing_between(src, text: str, a: int, b: int) -> None:
+    """Only blanks may stand between position blocks: a block whose head does not read
+    ``P[n]{`` or ``P[n:"comment"]{`` would otherwise be skipped without a word."""
+    gap = text[a:b]
+    if gap.strip():
+        k = a + len(gap) - len(gap.lstrip())
+        first = gap.strip().splitlines()[0][:60]
+        raise DataError(f"{src.path.name}:{src.line_of(k)}: malformed position block {first!r}: expected "
+                        "P[n]{ or P[n:\"comment\"]{, the group GPn:, the values and }; (nothing else in "
+                        "/POS)")
+
+
+def _check_body(src, at: int, name: str, body: str, groups: list) -> None:
+    """A position block starts with its first group header and holds one position."""
+    where = f"{src.path.name}:{src.line_of(at)}"
+    if not groups or body[:groups[0].start()].strip():
+        raise DataError(f"{where}: position {name}: expected a group header GP1: (GPn:) first, got "
+                        f"{' '.join(body.split())[:40]!r}")
+    if re.search(r"\bP\[", body):
+        raise DataError(f"{where}: position {name} is not closed with }}; before the next position")

@@ -46,6 +46,7 @@ for _base, _spec in (("movel", ((0,), 3)), ("movej", ((0,), 3)), ("movec", ((0, 
 _MOVE = re.compile(r"\b(" + "|".join(_MOVES) + r")\b", re.IGNORECASE)
 _STATEMENT = re.compile(r"[^;]+")
 _NAME = re.compile(r"\s*([A-Za-z]\w*)\s*(\{[^}]*\})?\s*$")
+_ANY_ROBTARGET = re.compile(r"\brobtarget\s+([A-Za-z]\w*)", re.IGNORECASE)  # declarations and parameters
 _FUNC = re.compile(r"\s*(?:Offs|RelTool)\s*\(\s*([A-Za-z]\w*)", re.IGNORECASE)
 _POSITION_MM = 1e-3  # mm: 1 um
 _QUATERNION = 1e-7
@@ -113,7 +114,9 @@ class RapidDialect(Dialect):
             prog.frames.setdefault(name, np.eye(4))
         prog.tools.update({self.name_key(k): v for k, v in tools.items()})
         prog.frames.update({self.name_key(k): v for k, v in frames.items()})
-        self._assign(prog, declared, uses)
+        named = {n.lower() for src in [*references, *sources]
+                 for n in _ANY_ROBTARGET.findall(mask(src.text, [_COMMENT], [_STRING]))}
+        self._assign(prog, declared, uses, named)
         return prog
 
     def _statement(self, src, masked, s, e, prog, declared, tool_decl, wobj_decl, uses, only_frames):
@@ -208,8 +211,9 @@ class RapidDialect(Dialect):
         return (uf[0] @ of[0], fixed,
                 f"{where}: wobjdata {name} is held by the robot or moved by a mechanical unit")
 
-    def _assign(self, prog, declared, uses):
-        """Give each used robtarget its tool and work object (one per target)."""
+    def _assign(self, prog, declared, uses, named):
+        """Give each used robtarget its tool and work object (one per target); a name that no
+        robtarget declaration or parameter of these files (``named``) gives is refused."""
         first: dict[str, tuple[str, str, str]] = {}
         order = 0
         for name, inline, tool, wobj, at, src in uses:
@@ -221,7 +225,10 @@ class RapidDialect(Dialect):
                 prog.targets.append(inline)
                 continue
             if name not in declared:
-                continue  # CRobT(), a parameter, or declared in another module: not in these files
+                if name not in named:
+                    raise DataError(f"{here}: robtarget {name} is declared nowhere in these files (a typo? "
+                                    "give the module that declares it with --references)")
+                continue  # a parameter, set at run time (CRobT()), or from a reference module
             if name in first:
                 if first[name][:2] != (tool, wobj):
                     raise DataError(

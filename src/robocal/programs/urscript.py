@@ -186,7 +186,8 @@ class URScriptDialect(Dialect):
         if pt:
             inner = split_top(masked, pt.end(), _close(masked, pt.end() - 1))
             if len(inner) != 2:
-                return
+                raise DataError(f"{here}: pose_trans takes two arguments (FEATURE, pose), got {len(inner)}: "
+                                f"{' '.join(masked[lead:b].split())[:80]}")
             fname = masked[slice(*inner[0])].strip()
             if not _IDENT.match(fname):
                 return
