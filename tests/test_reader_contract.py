@@ -183,8 +183,9 @@ def test_rapid_target_declared_nowhere_is_refused_and_parameters_pass(tmp_path):
     with pytest.raises(DataError, match=r"w.mod:34: robtarget pseamstrat is declared nowhere"):
         filter_program(bad, perturbed(robot, 7), robot)
     # a robtarget parameter of a routine, or a variable set at run time, is not a typo
-    good = text.replace("    PROC Leave()", "    PROC Via(robtarget pVia)\n        MoveL pVia, v100, z1, tGun;\n"
-                        "        MoveL pScratch, v100, z1, tGun;\n    ENDPROC\n\n    PROC Leave()", 1)
+    via = ("    PROC Via(robtarget pVia)\n        MoveL pVia, v100, z1, tGun;\n"
+           "        MoveL pScratch, v100, z1, tGun;\n    ENDPROC\n\n    PROC Leave()")
+    good = text.replace("    PROC Leave()", via, 1)
     bad.write_text(good)
     assert filter_program(bad, perturbed(robot, 7), robot).rows
 
@@ -200,7 +201,8 @@ def test_quiet_import_still_lists_dropped_readings(tmp_path, capsys):
                  "-o", str(tmp_path / "out.csv")]) == 0
     captured = capsys.readouterr()
     assert captured.out == ""
-    assert captured.err.startswith("robocal import: warning: dropped 1 failed reading(s)") and "line 3" in captured.err
+    assert captured.err.startswith("robocal import: warning: dropped 1 failed reading(s)")
+    assert "line 3" in captured.err
 
 
 def test_a_drift_monitor_with_every_reading_stray_is_one_line(tmp_path, capsys):

@@ -43,7 +43,20 @@ FORMS = ("opw", "dh", "mdh", "joints")
 _TOP_KEYS = {"format", "name", "description", "units", "limits", "base", "tool", "smr", "nominal",
              "joint_errors", *FORMS}
 _JOINT_KEYS = {*LINK_FIELDS, "limits", "parallel_to_previous"}
+MAX_NAME = 200  # characters of a model's name
+MAX_DESCRIPTION = 10_000
+MAX_VALUES = 100_000  # YAML values in a model file once aliases are expanded (a model has hundreds)
 _TABLE_KEYS = {"dh": ("theta", "d", "a", "alpha"), "mdh": ("alpha", "a", "theta", "d")}
+
+
+def _text(value, where: str, max_len: int) -> str:
+    """A name or description: a text (a plain number is read as its text) of at most ``max_len``."""
+    if isinstance(value, bool) or not isinstance(value, str | int | float):
+        raise ModelError(f"{where}: expected a text, got a {type(value).__name__}")
+    text = str(value)
+    if len(text) > max_len:
+        raise ModelError(f"{where}: {len(text)} characters, more than {max_len}")
+    return text
 
 
 def _numbers(values, where: str, count: int | None = None) -> np.ndarray:
@@ -192,8 +205,8 @@ def robot_kwargs(data) -> dict:
         kw["smr"] = np.array([_numbers(r, f"smr[{i}]", 3) for i, r in enumerate(smr)]).reshape(-1, 3) * length
     if data.get("joint_errors") is not None:
         kw["joint_errors"] = JointErrorModel.from_dict(data["joint_errors"], n)
-    kw["name"] = str(data.get("name", "robot"))
-    kw["description"] = str(data.get("description", ""))
+    kw["name"] = _text(data.get("name", "robot"), "name", MAX_NAME)
+    kw["description"] = _text(data.get("description", ""), "description", MAX_DESCRIPTION)
     if data.get("nominal") is not None:  # a name -> value mapping (SI), resolved by the Robot
         nominal = data["nominal"]
         if not isinstance(nominal, dict):
@@ -243,7 +256,8 @@ def read_model_file(path) -> dict:
     """Robot keyword arguments from a model YAML file (:func:`robocal.yaml_load.load_yaml`: safe,
     YAML 1.2 numbers, no duplicate keys, bounded); errors name the file."""
     path = Path(path)
-    data = load_yaml(read_text(path, "robot model YAML file", ModelError), str(path), ModelError)
+    data = load_yaml(read_text(path, "robot model YAML file", ModelError), str(path), ModelError,
+                     max_nodes=MAX_VALUES)
     try:
         return robot_kwargs(data)
     except ModelError as exc:
