@@ -195,7 +195,7 @@ def test_stale_temporaries_of_a_killed_run_are_removed_and_others_kept(tmp_path)
     out.write_text("old")
     suffixes = (rio.TEMP_SUFFIX, rio.BACKUP_SUFFIX)
     stale = [tmp_path / f".cal.yaml.x{i}{suffix}" for i, suffix in enumerate(suffixes)]
-    mine = [tmp_path / ".cal.yaml.swp", tmp_path / ".other.yaml.x1.robocal-tmp", tmp_path / "notes.txt"]
+    mine = [tmp_path / ".cal.yaml.swp", tmp_path / ".other.yaml.x1.robocal.tmp", tmp_path / "notes.txt"]
     for p in (*stale, *mine):
         p.write_text("x")
     write_all({out: "new"})
@@ -246,6 +246,7 @@ def test_real_signals_at_random_moments_leave_a_consistent_set(tmp_path, sig):
     rng = random.Random(sig)
     names = ["cal.yaml", "result.json", "report.html"]
     runs = 12 if sig == signal.SIGINT else 6
+    write_all({tmp_path / n: f"0 {n}\n" * 2000 for n in names})  # the outputs before the runs
     child = None
     for run in range(runs):
         if child is None or child.poll() is not None:

@@ -113,8 +113,8 @@ def check_outputs(outputs, inputs=()) -> None:
     check_writable(outs)
 
 
-TEMP_SUFFIX = ".robocal-tmp"  # a new content not yet renamed over its target: ".<name>.<random>.robocal-tmp"
-BACKUP_SUFFIX = ".robocal-bak"  # a hard link to a target's old content while a set is committed
+TEMP_SUFFIX = ".robocal.tmp"  # a new content not yet renamed over its target: ".<name>.<random>.robocal.tmp"
+BACKUP_SUFFIX = ".robocal.bak"  # a hard link to a target's old content while a set is committed
 LOCK_TIMEOUT_S = 60.0  # how long a writer waits for another robocal process writing in the same folder
 _LOCK_POLL_S = 0.02
 
@@ -300,7 +300,7 @@ def write_all(outputs: Mapping) -> None:
     several files is not one atomic step: a program reading the outputs *during* step 3 can see
     some new and some old (each one whole), and if the machine loses power or the process is
     killed with SIGKILL in step 3, that mix stays (the old content of the replaced files is left in
-    hidden ``.<name>.*.robocal-bak`` files until the next write of the same outputs). Temporaries
+    hidden ``.<name>.*.robocal.bak`` files until the next write of the same outputs). Temporaries
     are removed on every exit path that runs Python code. Errors are DataErrors naming the path and
     the reason.
     """

@@ -98,7 +98,6 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.calibration import calibrate, json_text
-    from robocal.cli.args import print_warnings
     from robocal.data.measurements import Measurements
     from robocal.errors import DataError, IdentificationError
     from robocal.io import check_outputs, write_all
@@ -129,10 +128,7 @@ def run(args) -> int:
     result.provenance.update(command="robocal " + " ".join(args.argv), robot_spec=args.robot,
                              data_file=", ".join(args.data), validation_file=", ".join(validate) or None,
                              hold_out=args.hold_out)
-    if args.quiet:
-        print_warnings("calibrate", result.warnings)
-    else:
-        print(result.summary())
+    print(result.summary())
     if not result.solver.success and not args.force:
         raise IdentificationError(f"the solver did not converge ({result.solver.status.value}): nothing "
                                   "written; adjust the method's options, or rerun with --force to write "
@@ -151,7 +147,6 @@ def run(args) -> int:
     if args.network_out:
         texts[args.network_out] = result.solver.network.file_content(args.network_out)
     write_all(texts)
-    if not args.quiet:
-        for path in texts:
-            print(f"wrote {path}")
+    for path in texts:
+        print(f"wrote {path}")
     return 0

@@ -174,11 +174,6 @@ def run(args) -> int:
         curve=args.curve, seed=args.seed, progress=not args.quiet)
     texts = _outputs(args, result)
     write_all(texts)
-    if args.quiet:
-        from robocal.cli.args import print_warnings
-
-        print_warnings("poses", result.warnings)
-        return 0
     print(result.summary())
     for path in texts:
         print(f"wrote {path}")
