@@ -121,6 +121,13 @@ def test_model_files_refuse_absurd_values_and_malformed_units(tmp_path, capsys):
                         "mdh: {alpha: [0], a: [0], theta: [0], d: [0]}\n", "nominal")):
         m.write_text(bad)
         assert match in _one_line_error(capsys, ["export", str(m), "--urdf", str(tmp_path / "o.urdf")])
+    laughs = "units: {length: m, angle: rad}\nmdh: {alpha: [0], a: [0], theta: [0], d: [0]}\n" + \
+        "x0: &a0 [1, 1]\n" + "".join(f"x{i}: &a{i} [*a{i - 1}, *a{i - 1}]\n" for i in range(1, 21)) + \
+        "description: *a20\n"
+    assert len(laughs) < 700
+    m.write_text(laughs)
+    err = _one_line_error(capsys, ["export", str(m), "--urdf", str(tmp_path / "o.urdf")])
+    assert "once its aliases are expanded" in err and len(err) < 300
 
 
 # ----------------------------------------------------------------- joint readings and limits

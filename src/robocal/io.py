@@ -31,11 +31,22 @@ def length_scale(unit: str, error: type[RobocalError] = DataError) -> float:
     return LENGTH_UNITS[unit]
 
 
+def short_repr(value, limit: int = 60) -> str:
+    """``repr(value)`` cut to ``limit`` characters (an error message quotes a user's value, never
+    megabytes of it); containers are not rendered in full first."""
+    if isinstance(value, list | tuple | dict | set):
+        head = list(value.items())[:8] if isinstance(value, dict) else list(value)[:8]
+        text = f"{type(value).__name__} of {len(value)}: {head!r}"
+    else:
+        text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
 def as_number(value, where: str, error: type[RobocalError] = DataError) -> float:
     """``value`` (an int or float read from a user's file, not a bool) as a finite float; else
     ``error`` (a RobocalError type) naming ``where``."""
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise error(f"{where}: expected a number, got {value!r}")
+        raise error(f"{where}: expected a number, got {short_repr(value)}")
     if not math.isfinite(value):
         raise error(f"{where}: {value!r} is not finite")
     return float(value)

@@ -58,6 +58,14 @@ def build_parser() -> argparse.ArgumentParser:
 _FLOAT_WARNING = r"(overflow|invalid value|divide by zero) encountered"
 
 
+MAX_MESSAGE = 2000  # characters of an error line (a message quoting a huge value is cut)
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc)[:100 * MAX_MESSAGE].split())
+    return text if len(text) <= MAX_MESSAGE else text[:MAX_MESSAGE] + " ... (cut)"
+
+
 class _Interrupts:
     """SIGINT raises KeyboardInterrupt as usual and is also remembered: a library that turns the
     interrupt into another exception (numpy's C extensions make an ImportError of it during their
@@ -112,11 +120,11 @@ def _run(args, argv: list[str], interrupts: _Interrupts) -> int:
             warnings.filterwarnings("error", message=_FLOAT_WARNING, category=RuntimeWarning)
             return int(args.func(args) or 0)
     except RobocalError as exc:  # one line, whatever the message holds (e.g. a YAML parser's)
-        print(f"robocal {args.command}: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        print(f"robocal {args.command}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
     except RuntimeWarning as exc:
         print(f"robocal {args.command}: error: a computation on the input overflowed or gave no number "
-              f"({' '.join(str(exc).split())}): a value in the input is far beyond what a robot has",
+              f"({_one_line(exc)}): a value in the input is far beyond what a robot has",
               file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into e.g. head, which stopped reading
@@ -127,7 +135,7 @@ def _run(args, argv: list[str], interrupts: _Interrupts) -> int:
             raise KeyboardInterrupt from None
         if os.environ.get(DEBUG_ENV):
             traceback.print_exc()
-        print(f"robocal {args.command}: internal error ({type(exc).__name__}: {' '.join(str(exc).split())}); "
+        print(f"robocal {args.command}: internal error ({type(exc).__name__}: {_one_line(exc)}); "
               f"this is a bug in robocal: please report it with the command line (set {DEBUG_ENV}=1 for the "
               "traceback)", file=sys.stderr)
         return 3

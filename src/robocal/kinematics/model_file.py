@@ -30,7 +30,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from robocal.errors import ModelError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, as_number, read_text
+from robocal.io import ANGLE_UNITS, LENGTH_UNITS, as_number, read_text, short_repr
 from robocal.kinematics.convert import default_parallel, dh_kwargs, mdh_kwargs, opw_kwargs, opw_parameters
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.opw import GEOMETRY, OPWParameters
@@ -61,7 +61,7 @@ def _text(value, where: str, max_len: int) -> str:
 
 def _numbers(values, where: str, count: int | None = None) -> np.ndarray:
     if not isinstance(values, list):
-        raise ModelError(f"{where}: expected a list of numbers, got {values!r}")
+        raise ModelError(f"{where}: expected a list of numbers, got {short_repr(values)}")
     if count is not None and len(values) != count:
         raise ModelError(f"{where}: expected {count} values, got {len(values)}")
     return np.array([as_number(v, f"{where}[{i}]", ModelError) for i, v in enumerate(values)])
@@ -69,7 +69,7 @@ def _numbers(values, where: str, count: int | None = None) -> np.ndarray:
 
 def _mapping(value, where: str, allowed: set, required: set = frozenset()) -> dict:
     if not isinstance(value, dict):
-        raise ModelError(f"{where}: expected a mapping, got {value!r}")
+        raise ModelError(f"{where}: expected a mapping, got {short_repr(value)}")
     unknown = sorted(set(map(str, value)) - allowed)
     if unknown:
         raise ModelError(f"{where}: unknown key(s) {unknown}; known: {sorted(allowed)}")
@@ -142,7 +142,7 @@ def _joint_rows(rows, length: float, angle: float) -> dict:
         limits.append([-np.pi, np.pi] if lim is None else _numbers(lim, f"{where}.limits", 2) * angle)
         flag = row.get("parallel_to_previous")
         if flag is not None and not isinstance(flag, bool):
-            raise ModelError(f"{where}.parallel_to_previous: expected true or false, got {flag!r}")
+            raise ModelError(f"{where}.parallel_to_previous: expected true or false, got {short_repr(flag)}")
         flags.append(flag)
     kw = {f: np.array(v) for f, v in cols.items()}
     default = default_parallel(kw["alpha"])
