@@ -193,7 +193,10 @@ class _FolderLocks:
             return self
         try:
             for folder in self.folders:
-                fd = os.open(folder, os.O_RDONLY)
+                try:
+                    fd = os.open(folder, os.O_RDONLY)
+                except OSError:  # e.g. a folder without read permission: unserialised
+                    continue
                 self.fds.append(fd)
                 deadline = time.monotonic() + LOCK_TIMEOUT_S
                 while True:
