@@ -70,6 +70,7 @@ EXTREMES = [
     b"&a",
 ]
 CHARS = b" ,;:[]{}()\"'$-+.0123456789eE\n\t#*&!xX\\/<>=%@|\x00\xff\xe9"
+MAX_MUTANT = 20_000_000  # bytes: a mutant larger than this is not grown further
 NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 WORD = re.compile(rb"[A-Za-z_][A-Za-z0-9_]*")
 
@@ -328,7 +329,7 @@ def _text_op(data: bytes, rng: random.Random) -> bytes:
             )
             return data[: m.start()] + new + data[m.end() :]
     elif op == 10:
-        lines[i:i] = [lines[j]] * rng.choice((50, 500))
+        lines[i:i] = [lines[j]] * min(rng.choice((50, 500)), MAX_MUTANT // (len(lines[j]) + 1))
     elif op == 11:
         k, depth = rng.randrange(len(data) + 1), rng.choice((40, 2000))
         return data[:k] + b"[" * depth + b"1" + b"]" * depth + data[k:]
@@ -407,7 +408,8 @@ def mutate(reader: Reader, rng: random.Random) -> tuple[str, bytes]:
     target = rng.choice(reader.targets)
     data = reader.files[target]
     for _ in range(rng.choice((1, 1, 2, 3))):
-        data = _json_op(data, rng) if reader.kind == "json" and rng.random() < 0.6 else _text_op(data, rng)
+        new = _json_op(data, rng) if reader.kind == "json" and rng.random() < 0.6 else _text_op(data, rng)
+        data = new if len(new) <= MAX_MUTANT else data  # repeated blocks of repeated blocks stay bounded
     return target, data
 
 

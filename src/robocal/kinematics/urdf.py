@@ -189,6 +189,8 @@ def _chain(root: ET.Element, tip: str | None) -> list[ET.Element]:
             raise ModelError(f"URDF link {child.get('link')!r} has two parent joints (not a tree)")
         by_child[child.get("link")] = j
     parents = {j.find("parent").get("link") for j in joints}
+    if any(lk.get("name") is None for lk in root.findall("link")):
+        raise ModelError("URDF has a <link> without a name")
     links = {lk.get("name") for lk in root.findall("link")} | parents | set(by_child)
 
     def path_to(link: str) -> list[ET.Element]:

@@ -425,7 +425,8 @@ def _iso(blocks: list[tuple[str, _ObsErrors]]) -> str:
 
     parts = []
     for name, ob in blocks:
-        if ob is None or ob.measured is None or ob.joints is None:
+        if ob is None or ob.measured is None or ob.after_pts is None or ob.joints is None \
+                or ob.joints.ndim != 2:
             continue
         g = pose_accuracy_repeatability(ob.measured, ob.after_pts, ob.pose_id, ob.joints, ob.smr)
         if not len(g):
