@@ -86,6 +86,14 @@ def test_result_json_huge_integer_deep_nesting_and_nan(result_json, tmp_path, ca
         assert match in _one_line_error(capsys, ["report", str(src), "-o", str(tmp_path / "r.html")])
 
 
+def test_a_result_without_modelled_points_still_renders(result_json, tmp_path, capsys):
+    data = _broken(result_json, "observations.model_after", None)
+    data["observations"]["pose_id"] = [0] * len(data["observations"]["pose_id"])  # all repeats of one pose
+    src = tmp_path / "r.json"
+    src.write_text(json.dumps(data))
+    assert main(["--quiet", "report", str(src), "-o", str(tmp_path / "r.html")]) == 0
+
+
 def test_mathtext_in_result_strings_is_shown_as_text(result_json, tmp_path, capsys):
     data = _broken(result_json, "history_units.rms", "$\\frac{a$")
     data["correlation"]["names"][0] = "$x^$"
@@ -101,6 +109,7 @@ def test_mathtext_in_result_strings_is_shown_as_text(result_json, tmp_path, caps
     ('origin xyz="0.15 0.0 0.0"', 'origin xyz="1e308 0.0 0.0"', "beyond"),
     ('lower="-1.6580627893946132"', 'lower="abc"', "is not a list of numbers"),
     ('<axis xyz="0 0 1"/>', '<axis xyz="0 0 1e308"/>', "beyond"),
+    ('<link name="link_2"/>', "<link/>", "without a name"),
 ])
 def test_urdf_values_are_numbers_of_a_robot(old, new, match):
     text = to_urdf(rc.Robot.from_catalog("abb_irb2600"))
