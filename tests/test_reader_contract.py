@@ -86,8 +86,11 @@ def test_result_json_huge_integer_deep_nesting_and_nan(result_json, tmp_path, ca
         assert match in _one_line_error(capsys, ["report", str(src), "-o", str(tmp_path / "r.html")])
 
 
-def test_a_result_without_modelled_points_still_renders(result_json, tmp_path, capsys):
-    data = _broken(result_json, "observations.model_after", None)
+@pytest.mark.parametrize("absent", [("model_after",), ("model_after", "measured", "error_before")])
+def test_a_result_without_optional_rows_still_renders(result_json, tmp_path, absent):
+    data = json.loads(json.dumps(result_json))
+    for key in absent:
+        data["observations"][key] = None
     data["observations"]["pose_id"] = [0] * len(data["observations"]["pose_id"])  # all repeats of one pose
     src = tmp_path / "r.json"
     src.write_text(json.dumps(data))

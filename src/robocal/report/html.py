@@ -126,7 +126,8 @@ class _ObsErrors:
 
     @property
     def ok(self) -> bool:
-        return self.after is not None and self.after.size > 0
+        """Whether there are per-row errors before and after to show."""
+        return self.after is not None and self.after.size > 0 and self.before is not None
 
 
 # ----------------------------------------------------------------- sections
@@ -252,6 +253,16 @@ def _errors_section(cal: _ObsErrors, val: _ObsErrors | None) -> str:
                            "to an unmodelled effect of that joint (e.g. compliance, gear error). "
                            "Log scale when errors span more than a factor 20."))
     pts = cal.measured if cal.measured is not None else cal.after_pts
+    if pts is not None:
+        out.append(_points_figures(cal, pts))
+    out.append(_worst_table(cal))
+    return "".join(out)
+
+
+def _points_figures(cal: _ObsErrors, pts: np.ndarray) -> str:
+    """The 3-D view coloured by the error after, and the worst residual vectors."""
+    from robocal.report import plots
+
     idx = _subsample(len(pts))
     note = "" if idx.size == len(pts) else f" ({idx.size} of {len(pts)} points shown)"
     what = "measured points" if cal.measured is not None else "modelled probe-tip points (no measured points)"
@@ -264,9 +275,7 @@ def _errors_section(cal: _ObsErrors, val: _ObsErrors | None) -> str:
         figs.append(_figure(plots.worst_vectors(pts[idx], cal.vectors, worst),
                             f"Residual vectors (measured &minus; calibrated model) of the {worst.size} "
                             "worst observations that were not rejected, magnified."))
-    out.append(f"<div class='row'>{''.join(figs)}</div>")
-    out.append(_worst_table(cal))
-    return "".join(out)
+    return f"<div class='row'>{''.join(figs)}</div>"
 
 
 def _worst_table(cal: _ObsErrors) -> str:
