@@ -172,7 +172,9 @@ def test_joint_readings_past_the_limits_are_named_or_refused(tmp_path, capsys):
 @pytest.mark.parametrize("old, new, line", [
     ("P[3]{", "P[3!]{", 49), ("P[3]{\n   GP1:", "P[3]{\n   gp1:", 49),
     ("P[3]{\n   GP1:", "P[3]{\n   GP1_000:", 49), ("R =   -21.423 deg\n};", "R =   -21.423 deg\n", 49),
-], ids=["P[3!]", "gp1", "GP1_000", "no };"])
+    ("'F U T, 0, 0, 0'", "'F U T, 0, 0, " + "1" * 5000 + "'", 49),
+    ("UF : 1, UT : 2,\t\tCONFIG : 'F", "UF : " + "1" * 5000 + ", UT : 2,\t\tCONFIG : 'F", 49),
+], ids=["P[3!]", "gp1", "GP1_000", "no };", "5000-digit turn", "5000-digit UF"])
 def test_fanuc_position_block_typos_are_refused(tmp_path, old, new, line):
     text = (PROGRAMS / "sealing.ls").read_text()
     assert old in text
@@ -191,6 +193,16 @@ def test_urscript_pose_trans_without_comma_is_refused(tmp_path):
     bad.write_text(text.replace("pose_trans(Tray, p[-0.465729", "pose_trans(Tray p[-0.465729", 1))
     robot = rc.Robot.from_catalog("ur5")
     with pytest.raises(DataError, match=r"p.script:17: pose_trans takes two arguments"):
+        filter_program(bad, perturbed(robot, 7), robot)
+
+
+def test_urscript_qnear_must_be_six_numbers(tmp_path):
+    text = (PROGRAMS / "pick_place.script").read_text()
+    bad = tmp_path / "p.script"
+    bad.write_text(text.replace("global Waypoint_1_q=[0.0,", "global Waypoint_1_q=[[0.0],", 1).replace(
+        "qnear=Waypoint_1_q", "qnear=[[0.0], -1.5708, 1.5708, -1.5708, -1.5708, 0.0]", 1))
+    robot = rc.Robot.from_catalog("ur5")
+    with pytest.raises(DataError, match=r"p.script:11: qnear must be a list of 6 joint values"):
         filter_program(bad, perturbed(robot, 7), robot)
 
 

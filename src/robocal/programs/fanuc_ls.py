@@ -35,8 +35,8 @@ from robocal.programs.source import Number
 _POS = re.compile(r"\bP\[\s*(\d+)\s*(?::\s*\"([^\"]*)\")?\s*\]\s*\{(.*?)\}\s*;", re.DOTALL)
 _GROUP = re.compile(r"\bGP(\d+)\s*:")
 _FRAME_NO = re.compile(r"\b(UF|UT)\s*:\s*(\w+)")
-_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d+)\s*,\s*([-+]?\d+)\s*,"
-                     r"\s*([-+]?\d+)\s*'")
+_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d{1,3})\s*,"
+                     r"\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*'")
 _VALUE = r"\b{}\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*(?:mm|deg)"
 _KEYS = ("X", "Y", "Z", "W", "P", "R")
 _POSITION_MM = 1e-3
@@ -105,7 +105,8 @@ class FanucDialect(Dialect):
                                         f"{'mm' if k in 'XYZ' else 'deg'}")
                     nums.append(Number(a + v.start(1), a + v.end(1), v.group(1)))
                 fr = dict(_FRAME_NO.findall(gp))
-                if "UF" not in fr or "UT" not in fr or not (fr["UF"].isdigit() and fr["UT"].isdigit()):
+                if "UF" not in fr or "UT" not in fr \
+                        or not all(fr[k].isdigit() and len(fr[k]) <= 3 for k in ("UF", "UT")):
                     raise DataError(f"{where}: position {name} needs numeric UF and UT, got {fr}")
                 c = _CONFIG.search(gp)
                 if not c:

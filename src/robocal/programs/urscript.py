@@ -176,6 +176,8 @@ class URScriptDialect(Dialect):
                 val = (val if key.strip() == "qnear" else masked[qa:qb]).strip()
                 if val.startswith("["):
                     tree, _ = parse_aggregate(src, masked, masked.index("[", qa), qb, "qnear")
+                    if len(tree) != 6 or not all(isinstance(x, Number) for x in tree):
+                        raise DataError(f"{here}: qnear must be a list of 6 joint values")
                     qnear = np.array([x.value for x in tree], float)
                 elif _IDENT.match(val):
                     qnear = joints.latest(val, at)
