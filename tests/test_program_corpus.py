@@ -317,17 +317,15 @@ def test_fanuc_track_positions_are_refused(tmp_path):
 
 
 def test_fanuc_malformed_position_block_is_not_silent(tmp_path):
-    """A position block that does not parse as one (here without its closing '};') leaves its
-    motion named, never '0 of 0'."""
+    """A position block that does not parse as one (here without its closing '};') is refused
+    with its line (the /POS section holds position blocks and nothing else), never '0 of 0'."""
     path = tmp_path / "short.ls"
     data = (CORPUS / "weld_bracket.ls").read_bytes()
     data = data[:data.index(b"/POS")] + b"/POS\nP[1:\"approach\"]{\n   GP1:\n\tUF : 1, UT : 2,\n/END\n"
     path.write_bytes(data)
     robot = rc.Robot.from_catalog("fanuc_lrmate200id")
-    res = filter_program(path, robot, robot, **FANUC_FRAMES)
-    assert not res.rows
-    assert any(re.match(r"short.ls:26: J: not corrected: P\[1\] is not a Cartesian position", w)
-               for w in res.uncorrected)
+    with pytest.raises(DataError, match=r"short.ls:\d+: malformed position block"):
+        filter_program(path, robot, robot, **FANUC_FRAMES)
 
 
 # ----------------------------------------------------------------------------- URScript constructs

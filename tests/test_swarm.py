@@ -63,6 +63,7 @@ def test_reproducible_and_interruptible():
     res = calibrate(nominal, data, method="swarm", progress=ctrl_c, particles=12, iterations=50)
     assert res.solver.status == "interrupted" and not res.solver.success
     assert res.solver.history[-1]["iteration"] == 3 and "polish" not in res.solver.message
+    assert res.summary().startswith("swarm: interrupted")  # the method named once
     assert res.after["rms"] <= res.before["rms"] * (1 + 1e-9)  # never worse than the start
 
 

@@ -1,12 +1,11 @@
 """robocal: kinematic calibration, compensation and trajectory IK for serial industrial robots."""
 
-from robocal import ik  # rc.ik.solve_all, rc.ik.solve, rc.ik.plan_path
-from robocal.calibration import CalibrationResult, analyze, calibrate
-from robocal.campaign import CampaignResult, Constraints, Tracker, plan_poses
-from robocal.compensate import compensate
-from robocal.data.measurements import Measurements
-from robocal.data.registration import register
-from robocal.data.simulate import simulate_tracker
+from __future__ import annotations
+
+import importlib
+import sys
+import types
+
 from robocal.errors import (
     DataError,
     IdentificationError,
@@ -16,11 +15,52 @@ from robocal.errors import (
     UnitError,
     UnreachableError,
 )
-from robocal.evaluate import evaluate
-from robocal.kinematics.model import Robot
-from robocal.programs import FilterResult, filter_program
-from robocal.tcp import ToolCalibration, identify_tcp
 from robocal.version import __version__
+
+# The API is imported on first use (PEP 562): `import robocal` and the command line start fast, and
+# Ctrl-C during the heavy imports reaches the command line's handler (one line, exit 130).
+_LAZY = {
+    "ik": "robocal.ik",  # rc.ik.solve_all, rc.ik.solve, rc.ik.plan_path
+    "CalibrationResult": "robocal.calibration", "analyze": "robocal.calibration",
+    "calibrate": "robocal.calibration",
+    "CampaignResult": "robocal.campaign", "Constraints": "robocal.campaign", "Tracker": "robocal.campaign",
+    "plan_poses": "robocal.campaign",
+    "compensate": "robocal.compensate",
+    "Measurements": "robocal.data.measurements",
+    "register": "robocal.data.registration",
+    "simulate_tracker": "robocal.data.simulate",
+    "evaluate": "robocal.evaluate",
+    "Robot": "robocal.kinematics.model",
+    "FilterResult": "robocal.programs", "filter_program": "robocal.programs",
+    "ToolCalibration": "robocal.tcp", "identify_tcp": "robocal.tcp",
+}
+
+
+def __getattr__(name: str):
+    if name not in _LAZY:
+        raise AttributeError(f"module 'robocal' has no attribute {name!r}")
+    module = importlib.import_module(_LAZY[name])
+    value = module if name == "ik" else getattr(module, name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
+
+class _Package(types.ModuleType):
+    """Keeps ``rc.evaluate`` and ``rc.compensate`` the functions: loading their modules
+    (robocal/evaluate.py, robocal/compensate.py) would otherwise bind the module to the name."""
+
+    def __setattr__(self, name: str, value) -> None:
+        if name in _LAZY and name != "ik" and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
 
 __all__ = [
     "CalibrationResult",

@@ -23,17 +23,23 @@ from robocal.data.registration import register
 from robocal.errors import DataError, IdentificationError
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, hold
 from robocal.identify.identifiability import analyze as analyze_jacobian
-from robocal.identify.plausibility import check_corrections, check_residual, check_spread
+from robocal.identify.plausibility import (
+    check_corrections,
+    check_joint_limits,
+    check_residual,
+    check_spread,
+)
 from robocal.identify.priors import linear_analysis, prior_sigma, undetermined
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
-from robocal.io import read_text, write_atomic
+from robocal.io import load_json, read_text, write_atomic
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
 from robocal.model_selection import calibrate_cyclic, select_error_model, selection_table
 from robocal.progress import Progress
 from robocal.report.metrics import position_stats
+from robocal.schema import RESULT_SCHEMA, validate
 from robocal.version import __version__
 
 RESULT_FORMAT = "robocal-result/1"
@@ -577,6 +583,10 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
             raise DataError(f"the validation data use {v.n_smr} SMRs but the calibration data "
                             f"{n_smr}: judge a calibration on data measured with the same SMRs")
     warnings: list[str] = []
+    for role, sets in (("calibration", datasets), ("validation", validations)):
+        for d in sets:
+            check_joint_limits(robot, d, f"the {role} data {d.label or ''}".strip(), force=force,
+                               warnings=warnings)
     start = _start_model(robot, datasets, register_frames, force, warnings) if warm_start is None \
         else warm_start.start
     declared = list(dict.fromkeys(start.joint_error_names + candidate_names(start.n_joints, terms)))
@@ -665,15 +675,15 @@ def _plain(options: dict) -> dict:
 
 
 def load_result(path) -> dict:
-    """Read a result JSON written by :meth:`CalibrationResult.save_json`."""
-    text = read_text(path, "result JSON file")
+    """Read a result JSON written by :meth:`CalibrationResult.save_json`, validated field by
+    field (:data:`robocal.schema.RESULT_SCHEMA`); DataError names the file and the field."""
     hint = "; give the JSON `robocal calibrate --json` wrote"
-    if text.lstrip().startswith("format: robocal-model"):
+    if read_text(path, "result JSON file").lstrip().startswith("format: robocal-model"):
         raise DataError(f"{path} is a robot model YAML, not a result JSON{hint}")
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise DataError(f"{path} is not a robocal result JSON: {exc}") from None
+    data = load_json(path, "result JSON file")
     if not isinstance(data, dict) or data.get("format") != RESULT_FORMAT:
         raise DataError(f"{path} is not a robocal result JSON (format {RESULT_FORMAT}){hint}")
-    return data
+    try:
+        return validate(data, RESULT_SCHEMA)
+    except DataError as exc:
+        raise DataError(f"{path}: {exc}") from None

@@ -8,7 +8,7 @@ from robocal.data.registration import apply_registration, register_frame
 from robocal.diagnose import fit_rms_mm
 from robocal.errors import DataError
 from robocal.identify.observations import observation_for
-from robocal.identify.plausibility import check_residual, check_spread
+from robocal.identify.plausibility import check_joint_limits, check_residual, check_spread
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.metrics import position_stats
 
@@ -67,6 +67,9 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     robot's errors can explain (``force=True``: a warning in ``"warnings"``).
     """
     out, warnings = {}, []
+    for d in (data, frame_from):
+        if d is not None:
+            check_joint_limits(robot, d, f"the data {d.label or ''}".strip(), force=force, warnings=warnings)
     if fit_frame or frame_from is not None:
         fitted_on = data if frame_from is None else frame_from
         reg = register_frame(robot, fitted_on)

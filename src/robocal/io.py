@@ -3,10 +3,17 @@ unit tables that files and the command line use (internal units are SI: m, rad).
 
 from __future__ import annotations
 
+import contextlib
+import errno
+import json
 import math
 import os
+import shutil
+import signal
 import stat
 import tempfile
+import threading
+import time
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -24,11 +31,22 @@ def length_scale(unit: str, error: type[RobocalError] = DataError) -> float:
     return LENGTH_UNITS[unit]
 
 
+def short_repr(value, limit: int = 60) -> str:
+    """``repr(value)`` cut to ``limit`` characters (an error message quotes a user's value, never
+    megabytes of it); containers are not rendered in full first."""
+    if isinstance(value, list | tuple | dict | set):
+        head = list(value.items())[:8] if isinstance(value, dict) else list(value)[:8]
+        text = f"{type(value).__name__} of {len(value)}: {head!r}"
+    else:
+        text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
 def as_number(value, where: str, error: type[RobocalError] = DataError) -> float:
     """``value`` (an int or float read from a user's file, not a bool) as a finite float; else
     ``error`` (a RobocalError type) naming ``where``."""
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise error(f"{where}: expected a number, got {value!r}")
+        raise error(f"{where}: expected a number, got {short_repr(value)}")
     if not math.isfinite(value):
         raise error(f"{where}: {value!r} is not finite")
     return float(value)
@@ -44,6 +62,25 @@ def read_text(path, what: str, error: type[RobocalError] = DataError) -> str:
         raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
     except UnicodeDecodeError:
         raise error(f"{path}: not a UTF-8 text file (expected a {what})") from None
+
+
+def _refuse_constant(name: str):
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def load_json(path, what: str, error: type[RobocalError] = DataError):
+    """The data of a user's JSON file (:func:`read_text`); ``error`` with one line naming the file
+    for invalid JSON, NaN/Infinity, an integer of thousands of digits or nesting deeper than the
+    parser can follow. Validate the structure at the caller (:mod:`robocal.schema`)."""
+    text = read_text(path, what, error)
+    try:
+        return json.loads(text, parse_constant=_refuse_constant)
+    except json.JSONDecodeError as exc:
+        raise error(f"{path} is not a valid {what}: {exc}") from None
+    except ValueError as exc:  # NaN, or an integer beyond Python's digit limit
+        raise error(f"{path} is not a valid {what}: {' '.join(str(exc).split())[:200]}") from None
+    except RecursionError:
+        raise error(f"{path} is not a valid {what}: nested too deeply") from None
 
 
 def _write_error(path: Path, exc: OSError) -> DataError:
@@ -87,13 +124,146 @@ def check_outputs(outputs, inputs=()) -> None:
     check_writable(outs)
 
 
+TEMP_SUFFIX = ".robocal.tmp"  # a new content not yet renamed over its target: ".<name>.<random>.robocal.tmp"
+BACKUP_SUFFIX = ".robocal.bak"  # a hard link to a target's old content while a set is committed
+LOCK_TIMEOUT_S = 60.0  # how long a writer waits for another robocal process writing in the same folder
+_LOCK_POLL_S = 0.02
+
+
+def _folder(path: Path) -> Path:
+    return path.parent if str(path.parent) else Path(".")
+
+
+def _fsync_folder(folder: Path) -> None:
+    """Make the renames in ``folder`` durable; OSError when the disk fails (a file system that
+    cannot fsync a folder, or open one, is not an error)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError as exc:
+        if exc.errno not in (errno.EINVAL, errno.ENOTSUP, errno.EBADF):
+            raise
+    finally:
+        os.close(fd)
+
+
+def _is_ours(name: str, target: str) -> bool:
+    """Whether ``name`` is one of robocal's temporary or backup files for the file ``target``."""
+    return name.startswith(f".{target}.") and name.endswith((TEMP_SUFFIX, BACKUP_SUFFIX))
+
+
+def _remove_stale(paths) -> None:
+    """Remove robocal's temporaries and backups of ``paths`` left by a killed run (kill -9, power
+    loss). Called under the folder lock, when no live writer can own them."""
+    for folder, names in _by_folder(paths).items():
+        try:
+            entries = os.listdir(folder)
+        except OSError:
+            continue
+        for entry in entries:
+            if any(_is_ours(entry, name) for name in names):
+                (folder / entry).unlink(missing_ok=True)
+
+
+def _by_folder(paths) -> dict[Path, set[str]]:
+    folders: dict[Path, set[str]] = {}
+    for path in paths:
+        folders.setdefault(_folder(path), set()).add(path.name)
+    return folders
+
+
+class _FolderLocks:
+    """Exclusive ``flock`` on each output folder (its own file descriptor: no lock file is left
+    in the user's folder), taken in a fixed order so that two writers never deadlock. Another
+    robocal process writing in the same folder is waited for up to ``LOCK_TIMEOUT_S``; then a
+    DataError says so. Where folders cannot be locked (no ``fcntl``, some network file systems),
+    writes are not serialised."""
+
+    def __init__(self, paths) -> None:
+        self.folders = sorted({_folder(p).resolve() for p in paths})
+        self.fds: list[int] = []
+
+    def __enter__(self):
+        try:
+            import fcntl
+        except ImportError:  # not POSIX
+            return self
+        try:
+            for folder in self.folders:
+                try:
+                    fd = os.open(folder, os.O_RDONLY)
+                except OSError:  # e.g. a folder without read permission: unserialised
+                    continue
+                self.fds.append(fd)
+                deadline = time.monotonic() + LOCK_TIMEOUT_S
+                while True:
+                    try:
+                        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                        break
+                    except BlockingIOError:
+                        if time.monotonic() > deadline:
+                            raise DataError(f"cannot write in {folder}: another robocal process has been "
+                                            f"writing there for {LOCK_TIMEOUT_S:.0f} s; try again when it "
+                                            "has finished") from None
+                        time.sleep(_LOCK_POLL_S)
+                    except OSError:  # the file system cannot lock: unserialised
+                        break
+        except BaseException:
+            self.__exit__(None, None, None)
+            raise
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for fd in self.fds:
+            os.close(fd)  # closing the descriptor releases its lock
+        self.fds.clear()
+
+
+class _DeferSignals:
+    """While a set of outputs is written, SIGINT and SIGTERM are noted instead of acted on
+    (``pending``); the writer checks ``pending`` between its steps and abandons the write (old
+    outputs kept) when one came before the last rename. On exit the previous handlers are back and
+    a noted signal is delivered to them (SIGINT: KeyboardInterrupt; SIGTERM: the process ends as it
+    would have). Only in the main thread (signals cannot be handled elsewhere)."""
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.pending: list[int] = []
+        self.previous: dict[int, object] = {}
+
+    def _note(self, signum, frame) -> None:
+        self.pending.append(signum)
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for sig in self.SIGNALS:
+                self.previous[sig] = signal.signal(sig, self._note)
+        return self
+
+    def check(self) -> None:
+        """Raise KeyboardInterrupt when a signal was noted (the writer then cleans up)."""
+        if self.pending:
+            raise KeyboardInterrupt
+
+    def __exit__(self, *exc) -> None:
+        for sig, handler in self.previous.items():
+            signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
+        for sig in dict.fromkeys(self.pending):
+            signal.raise_signal(sig)
+
+
 def _temp_for(path: Path, data: str | bytes) -> str:
-    """A finished temporary file next to ``path`` holding ``data``; returns its name."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.",
-                               suffix=".tmp")
+    """A finished, fsynced temporary file next to ``path`` holding ``data``; returns its name."""
+    fd, tmp = tempfile.mkstemp(dir=_folder(path), prefix=f".{path.name}.", suffix=TEMP_SUFFIX)
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data.encode("utf-8") if isinstance(data, str) else data)
+            fh.flush()
+            os.fsync(fh.fileno())
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes the file private; outputs follow the umask
@@ -103,46 +273,121 @@ def _temp_for(path: Path, data: str | bytes) -> str:
     return tmp
 
 
+def _backup_of(path: Path) -> str:
+    """A second name for ``path``'s current content (a hard link: the file itself never moves;
+    a fsynced copy where the file system has no hard links); returns it."""
+    fd, backup = tempfile.mkstemp(dir=_folder(path), prefix=f".{path.name}.", suffix=BACKUP_SUFFIX)
+    os.close(fd)
+    try:
+        try:
+            os.unlink(backup)
+            os.link(path, backup)
+        except OSError as exc:
+            if exc.errno not in (errno.EPERM, errno.ENOTSUP, errno.EXDEV, errno.EMLINK, errno.ENOSYS):
+                raise
+            shutil.copy2(path, backup)
+            with open(backup, "rb") as fh:
+                os.fsync(fh.fileno())
+    except BaseException:
+        Path(backup).unlink(missing_ok=True)
+        raise
+    return backup
+
+
 def write_all(outputs: Mapping) -> None:
     """Write every ``{path: text or bytes}`` or none of them.
 
-    All paths are checked first (:func:`check_writable`); every content goes to a temporary file
-    next to its target; then each existing target is renamed aside (its old content kept whole)
-    and the temporary file renamed into place. If any step fails (an interrupt included), the
-    targets already replaced get their old files back and nothing is left behind. Errors are
-    DataErrors naming the path and the reason.
+    1. All paths are checked (:func:`check_writable`) and their folders locked (another robocal
+       process writing there waits; see :class:`_FolderLocks`); robocal's temporaries left there
+       by a killed run are removed.
+    2. Every content is written to a temporary file in its target's folder, flushed and fsynced;
+       the old content of each existing target gets a second name (a hard link). No target is
+       touched yet: a failure here (full disk, I/O error, Ctrl-C, SIGTERM) leaves every output
+       as it was.
+    3. Each temporary file is renamed over its target in turn (``os.replace``: each file is at
+       every moment either whole old or whole new, never missing), then the folders are fsynced.
+       If a rename fails or a signal comes, the targets already replaced get their old content
+       back by the same kind of rename (new files are removed).
+
+    Guarantee and its limit: after write_all returns, every output is new; after it raises, every
+    output is as before (unless restoring itself fails: the error then names the files). Renaming
+    several files is not one atomic step: a program reading the outputs *during* step 3 can see
+    some new and some old (each one whole), and if the machine loses power or the process is
+    killed with SIGKILL in step 3, that mix stays (the old content of the replaced files is left in
+    hidden ``.<name>.*.robocal.bak`` files until the next write of the same outputs). Temporaries
+    are removed on every exit path that runs Python code. Errors are DataErrors naming the path and
+    the reason.
     """
     items = [(Path(p), data) for p, data in outputs.items()]
     check_writable(p for p, _ in items)
+    paths = [p for p, _ in items]
+    with _FolderLocks(paths), _DeferSignals() as signals:
+        _remove_stale(paths)
+        _commit(items, signals)
+
+
+def _commit(items, signals: _DeferSignals) -> None:
+    """Steps 2 and 3 of :func:`write_all` (the folders are locked)."""
     temps: dict[Path, str] = {}
-    backups: dict[Path, str] = {}
+    backups: dict[Path, str | None] = {}  # target -> its old content's second name (None: new file)
     replaced: list[Path] = []
     path = None
     try:
         for path, data in items:
+            signals.check()
             temps[path] = _temp_for(path, data)
+            signals.check()
+            backups[path] = _backup_of(path) if path.exists() else None
         for path, _ in items:
-            if path.exists():
-                fd, backups[path] = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".bak")
-                os.close(fd)
-                os.replace(path, backups[path])
+            signals.check()
             os.replace(temps[path], path)
             del temps[path]
             replaced.append(path)
+        for folder in _by_folder(replaced):
+            _fsync_folder(folder)
+        signals.check()
     except BaseException as exc:
-        for done in replaced:
-            done.unlink(missing_ok=True)
-        for target, backup in backups.items():
-            os.replace(backup, target)
-        backups.clear()
+        failed = _roll_back(replaced, backups)
+        if failed:
+            raise DataError(f"cannot write {path}: {_reason(exc)}; restoring the old content failed "
+                            f"for {', '.join(failed)}") from None
         if isinstance(exc, OSError):
             raise _write_error(path, exc) from None
         raise
     finally:
-        for leftover in [*temps.values(), *backups.values()]:
-            Path(leftover).unlink(missing_ok=True)
+        for leftover in [*temps.values(), *(b for b in backups.values() if b is not None)]:
+            with contextlib.suppress(OSError):
+                Path(leftover).unlink(missing_ok=True)
+
+
+def _roll_back(replaced: list[Path], backups: dict[Path, str | None]) -> list[str]:
+    """Give the replaced targets their old content back; returns the ones that could not be
+    (their old content stays in the backup file named)."""
+    failed = []
+    for target in replaced:
+        backup = backups[target]
+        try:
+            if backup is None:
+                target.unlink(missing_ok=True)
+            else:
+                os.replace(backup, target)
+                backups[target] = None
+        except OSError as exc:
+            failed.append(f"{target} ({exc.strerror or exc}; old content kept in {backup})")
+            backups[target] = None  # keep the backup file: it holds the only old copy
+    for folder in _by_folder(replaced):
+        with contextlib.suppress(OSError):  # the renames back are done; durable as the disk allows
+            _fsync_folder(folder)
+    return failed
+
+
+def _reason(exc: BaseException) -> str:
+    if isinstance(exc, OSError):
+        return exc.strerror or str(exc)
+    return "interrupted" if isinstance(exc, KeyboardInterrupt) else type(exc).__name__
 
 
 def write_atomic(path, data: str | bytes) -> None:
-    """Write one file via a temporary file and a rename (never a half-written file)."""
+    """Write one file via a fsynced temporary file and a rename (never a half-written file; see
+    :func:`write_all`)."""
     write_all({path: data})

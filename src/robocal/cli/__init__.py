@@ -9,8 +9,11 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
+import threading
 import traceback
+import warnings
 
 from robocal.errors import ListedError, RobocalError
 from robocal.version import __version__
@@ -50,36 +53,96 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# numpy's floating-point warnings ("overflow encountered in matmul") become the one-line error they
+# announce: a computation that overflowed or produced NaN from the input cannot be trusted
+_FLOAT_WARNING = r"(overflow|invalid value|divide by zero) encountered"
+
+
+MAX_MESSAGE = 2000  # characters of an error line (a message quoting a huge value is cut)
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc)[:100 * MAX_MESSAGE].split())
+    return text if len(text) <= MAX_MESSAGE else text[:MAX_MESSAGE] + " ... (cut)"
+
+
+class _Interrupts:
+    """SIGINT raises KeyboardInterrupt as usual and is also remembered: a library that turns the
+    interrupt into another exception (numpy's C extensions make an ImportError of it during their
+    import) still ends as an interrupt. Main thread only; the previous handler is restored."""
+
+    def __init__(self) -> None:
+        self.seen = False
+        self.previous = None
+
+    def _handler(self, signum, frame):
+        self.seen = True
+        raise KeyboardInterrupt
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread() \
+                and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            self.previous = signal.signal(signal.SIGINT, self._handler)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.previous is not None:
+            signal.signal(signal.SIGINT, self.previous)
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    argv = sys.argv[1:] if argv is None else list(argv)
-    args = parser.parse_args(argv)
+    """Run the command line; the exit code: 0 done, 2 the user's input refused (one line on
+    stderr), 3 an internal error (a bug), 130 interrupted (Ctrl-C at any moment)."""
+    command = "robocal"
+    with _Interrupts() as interrupts:
+        try:
+            parser = build_parser()
+            argv = sys.argv[1:] if argv is None else list(argv)
+            args = parser.parse_args(argv)
+            command = f"robocal {args.command}"
+            return _run(args, argv, interrupts)
+        except KeyboardInterrupt:
+            pass
+        except Exception:
+            if not interrupts.seen:
+                raise
+    print(f"{command}: interrupted", file=sys.stderr)
+    return 130
+
+
+def _run(args, argv: list[str], interrupts: _Interrupts) -> int:
     args.argv = argv  # the command line as given (the result's provenance)
     from robocal.progress import set_quiet
 
     set_quiet(args.quiet)
     try:
-        return int(args.func(args) or 0)
+        with warnings.catch_warnings():
+            warnings.filterwarnings("error", message=_FLOAT_WARNING, category=RuntimeWarning)
+            return int(args.func(args) or 0)
     except ListedError as exc:  # a headline, then one item a line
         lines = [" ".join(line.split()) for line in str(exc).splitlines() if line.strip()]
         print(f"robocal {args.command}: error: {lines[0]}", *(f"  {line}" for line in lines[1:]),
               sep="\n", file=sys.stderr)
         return 2
     except RobocalError as exc:  # one line, whatever the message holds (e.g. a YAML parser's)
-        print(f"robocal {args.command}: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        print(f"robocal {args.command}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"robocal {args.command}: interrupted", file=sys.stderr)
-        return 130
+    except RuntimeWarning as exc:
+        print(f"robocal {args.command}: error: a computation on the input overflowed or gave no number "
+              f"({_one_line(exc)}): a value in the input is far beyond what a robot has",
+              file=sys.stderr)
+        return 2
     except BrokenPipeError:  # output piped into e.g. head, which stopped reading
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except Exception as exc:  # a bug: one line for the user, the traceback on request
+        if interrupts.seen:  # an interrupt another library turned into its own exception
+            raise KeyboardInterrupt from None
         if os.environ.get(DEBUG_ENV):
             traceback.print_exc()
-        print(f"robocal {args.command}: internal error ({type(exc).__name__}: {exc}); this is a bug in "
-              f"robocal: please report it with the command line (set {DEBUG_ENV}=1 for the traceback)",
-              file=sys.stderr)
+        print(f"robocal {args.command}: internal error ({type(exc).__name__}: {_one_line(exc)}); "
+              f"this is a bug in robocal: please report it with the command line (set {DEBUG_ENV}=1 for the "
+              "traceback)", file=sys.stderr)
         return 3
 
 

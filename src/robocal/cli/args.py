@@ -158,3 +158,12 @@ def diagnosed(error, robot, datasets, frame_fitted: bool = True):
 
     why = diagnose(robot, datasets, frame_fitted=frame_fitted)
     return error if why is None else type(error)(f"{why} (the check: {error})")
+
+
+def print_warnings(command: str, warnings) -> None:
+    """The warnings of a quiet run on stderr, one line each (``--quiet`` silences progress and
+    summaries, never a warning)."""
+    import sys
+
+    for warning in warnings:
+        print(f"robocal {command}: warning: {' '.join(str(warning).split())}", file=sys.stderr)

@@ -37,7 +37,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from robocal.cli.args import check_distinct_inputs, check_format
+    from robocal.cli.args import check_distinct_inputs, check_format, print_warnings
     from robocal.data.importer import import_tracker
     from robocal.io import check_outputs
 
@@ -48,7 +48,9 @@ def run(args) -> int:
     result = import_tracker(args.raw, joints=args.joints, points=args.points, base=args.base,
                             average=not args.keep_repeats, skip_rows=args.skip_rows)
     result.data.save(args.output)
-    if not args.quiet:
+    if args.quiet:
+        print_warnings("import", result.warnings())
+    else:
         print(result.summary())
         print(f"wrote {args.output}")
     return 0

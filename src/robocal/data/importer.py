@@ -164,6 +164,20 @@ class ImportResult:
     drift: list = field(default_factory=list)
     files: list = field(default_factory=list)
 
+    def warnings(self) -> list[str]:
+        """What the user must know even with ``--quiet``: dropped readings, stray base readings."""
+        out = []
+        if self.dropped:
+            shown = "; ".join(f"{f}, line {ln}: {why}" for f, ln, why in self.dropped[:20])
+            more = f"; ... and {len(self.dropped) - 20} more" if len(self.dropped) > 20 else ""
+            out.append(f"dropped {len(self.dropped)} failed reading(s): {shown}{more}")
+        for dr in self.drift:
+            if dr["stray_lines"]:
+                out.append(f"{dr['file']}: {len(dr['stray_lines'])} base reading(s) more than {STRAY_MM:g} "
+                           "mm from their median left out of the drift figures (lines "
+                           f"{dr['stray_lines'][:10]})")
+        return out
+
     def summary(self) -> str:
         """Human-readable summary: counts, dropped rows, repeat spread, drift."""
         d = self.data
@@ -328,6 +342,10 @@ def _drift(spec: ColumnSpec, skip_rows: int) -> dict:
         raise DataError(f"{spec.file}: every base reading failed")
     dev = np.linalg.norm(p - np.median(p, axis=0), axis=1)
     stray = dev > STRAY_MM * 1e-3
+    if stray.all():
+        raise DataError(f"{spec.file}: every base reading is more than {STRAY_MM:g} mm from their median "
+                        "position (the drift monitor moved, or the file holds another target): check the "
+                        "file")
     stray_lines = lines[stray].tolist()
     dev, lines = dev[~stray], lines[~stray]
     return {"file": spec.file, "max_mm": float(dev.max() * 1e3),

@@ -434,13 +434,13 @@ def read_joints(path, robot=None) -> np.ndarray:
 
 def _header_role(name: str):
     """(role, index or None, scale) of one header name, or raise UnitError/None for unknown."""
-    m = re.fullmatch(r"(q|travel)(\d+)_([a-z]+)", name)
+    m = re.fullmatch(r"(q|travel)(\d{1,4})_([a-z]+)", name)
     if m:
         unit = m.group(3)
         if unit not in ANGLE_UNITS:
             raise UnitError(f"unknown angle unit {unit!r} in column {name!r}: use _deg or _rad")
         return m.group(1), int(m.group(2)), ANGLE_UNITS[unit]
-    m = re.fullmatch(r"approach(\d+)", name)
+    m = re.fullmatch(r"approach(\d{1,4})", name)
     if m:
         return "approach", int(m.group(1)), 1.0
     m = re.fullmatch(r"(x|y|z|sigma|distance)_([a-z]+)", name)

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from robocal.errors import DataError
-from robocal.io import read_text, write_atomic
+from robocal.io import load_json, write_atomic
 
 
 def encode_plain(path, data: dict, what: str) -> str | bytes:
@@ -37,7 +37,7 @@ def load_plain(path, what: str, fmt: str) -> dict:
     path = Path(path)
     try:
         if path.suffix == ".json":
-            data = json.loads(read_text(path, f"{what} file"))
+            data = load_json(path, f"{what} file")
         else:
             with np.load(path, allow_pickle=False) as z:
                 data = {k: z[k] for k in z.files}

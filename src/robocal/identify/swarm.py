@@ -100,7 +100,7 @@ def solve(problem, start: State, space: ParameterSpace, *, seed: int = 0, progre
                                  threshold=threshold, patience=patience, ftol=ftol, progress=progress,
                                  label="swarm")
     state = cost.state_of(best["x"], best["nu"])
-    message = "swarm: " + (
+    message = (
         f"converged after {it} iterations (no better basin found in the last {patience})"
         if polish and status is Status.CONVERGED else
         stop_message(status, "iteration", it, iterations, history[-1]["rms"], problem.n_items))

@@ -11,10 +11,9 @@ from __future__ import annotations
 from functools import cache
 from importlib import resources
 
-import yaml
-
 from robocal.errors import ModelError
 from robocal.kinematics.model_file import robot_kwargs
+from robocal.yaml_load import load_yaml
 
 
 @cache
@@ -23,7 +22,7 @@ def _entries() -> dict[str, dict]:
     out = {}
     for item in sorted(resources.files("robocal").joinpath("catalog").iterdir(), key=lambda p: p.name):
         if item.name.endswith(".yaml"):
-            data = yaml.safe_load(item.read_text(encoding="utf-8"))
+            data = load_yaml(item.read_text(encoding="utf-8"), item.name, ModelError)
             out[data["name"]] = data
     return out
 

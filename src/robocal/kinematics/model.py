@@ -50,8 +50,25 @@ DEFAULT_SPAN = {"length": 0.005, "angle": np.deg2rad(1.0), "frame_length": 0.05,
                 "frame_angle": np.deg2rad(5.0)}
 
 
+# Magnitudes no real robot model has (a unit or typing error, or a corrupted file): refused.
+MAX_LINK_M = 100.0  # a_i, d_i, SMR offsets
+MAX_FRAME_M = 10_000.0  # base and tool translations (a tracker can stand far away, not 10 km)
+MAX_ANGLE_RAD = 100.0  # alpha, beta, theta, finite joint limits (16 turns)
+
+
+def _check_magnitude(arr: np.ndarray, bound: float, what: str, unit: str) -> None:
+    big = np.flatnonzero(np.abs(arr) > bound)
+    if big.size:
+        k = big[0]
+        raise ModelError(f"{what}[{k}] = {arr.flat[k]:.6g} {unit} is beyond +-{bound:g} {unit}: no real "
+                         "robot model has it (a unit or typing error?)")
+
+
 def _as_vector(values, n: int, what: str) -> np.ndarray:
-    arr = np.array(values, dtype=float).reshape(-1)  # a copy: the robot never aliases user arrays
+    try:
+        arr = np.array(values, dtype=float).reshape(-1)  # a copy: the robot never aliases user arrays
+    except (TypeError, ValueError):
+        raise ModelError(f"{what} must be {n} numbers") from None
     if arr.shape != (n,):
         raise ModelError(f"{what} must have {n} values, got {arr.size}")
     if not np.isfinite(arr).all():
@@ -119,8 +136,13 @@ class Robot:
         set_ = object.__setattr__
         for f in LINK_FIELDS:
             set_(self, f, _as_vector(getattr(self, f), n, f))
+            length = f in ("a", "d")
+            _check_magnitude(getattr(self, f), MAX_LINK_M if length else MAX_ANGLE_RAD, f,
+                             "m" if length else "rad")
         set_(self, "base", _as_frame(self.base, "base"))
         set_(self, "tool", _as_frame(self.tool, "tool"))
+        for f in ("base", "tool"):
+            _check_magnitude(getattr(self, f)[:3, 3], MAX_FRAME_M, f"{f} translation", "m")
         if self.limits is None:
             limits = np.tile([-np.pi, np.pi], (n, 1))
         else:
@@ -129,6 +151,7 @@ class Robot:
                 raise ModelError(f"joint limits must be {n} (lower, upper) pairs without NaN")
             if (limits[:, 0] > limits[:, 1]).any():
                 raise ModelError("a joint's lower limit is above its upper limit")
+            _check_magnitude(np.where(np.isfinite(limits), limits, 0.0), MAX_ANGLE_RAD, "joint limits", "rad")
         set_(self, "limits", limits)
         parallel = np.zeros(n, bool) if self.parallel is None else np.array(self.parallel, bool)
         if parallel.shape != (n,):
@@ -137,6 +160,7 @@ class Robot:
         smr = np.zeros((0, 3)) if self.smr is None else np.array(self.smr, dtype=float)
         if smr.ndim != 2 or smr.shape[1] != 3 or not np.isfinite(smr).all():
             raise ModelError("extra SMR offsets must be a finite (k, 3) array")
+        _check_magnitude(smr, MAX_LINK_M, "SMR offsets", "m")
         set_(self, "smr", smr)
         if self.opw is not None and not isinstance(self.opw, OPWParameters):
             raise ModelError("opw must be an OPWParameters (robocal.kinematics.opw)")
@@ -473,8 +497,13 @@ class Robot:
 
     @classmethod
     def load(cls, path) -> Robot:
-        """Read a model YAML (docs/model-yaml.md: the catalog's format, hand-written or saved)."""
-        return cls(**read_model_file(path))
+        """Read a model YAML (docs/model-yaml.md: the catalog's format, hand-written or saved);
+        ModelError names the file."""
+        kwargs = read_model_file(path)
+        try:
+            return cls(**kwargs)
+        except ModelError as exc:
+            raise ModelError(f"{path}: {exc}") from None
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, {self.n_joints} joints)"

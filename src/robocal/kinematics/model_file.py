@@ -1,5 +1,5 @@
-"""The robot model file (YAML, loaded with ``yaml.safe_load``): one format for the catalog, for the
-user's own robot and for :meth:`Robot.save`. docs/model-yaml.md documents it; in short::
+"""The robot model file (YAML, read by :func:`robocal.yaml_load.load_yaml`): one format for the
+catalog, for the user's own robot and for :meth:`Robot.save`. docs/model-yaml.md documents it; in short::
 
     name: my_robot                      # optional: description, format
     reach_mm: 850                       # optional: the vendor's reach and payload, listed by
@@ -29,15 +29,15 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import yaml
 from scipy.spatial.transform import Rotation
 
 from robocal.errors import ModelError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, as_number, read_text
+from robocal.io import ANGLE_UNITS, LENGTH_UNITS, as_number, read_text, short_repr
 from robocal.kinematics.convert import default_parallel, dh_kwargs, mdh_kwargs, opw_kwargs, opw_parameters
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.opw import GEOMETRY, OPWParameters
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
+from robocal.yaml_load import dump_yaml, load_yaml
 
 FORMAT = "robocal-model/1"
 LINK_FIELDS = ("alpha", "a", "beta", "theta", "d")
@@ -46,12 +46,25 @@ INFO_KEYS = ("reach_mm", "payload_kg")  # the vendor's figures (catalog listing 
 _TOP_KEYS = {"format", "name", "description", "units", "limits", "base", "tool", "smr", "nominal",
              "joint_errors", *INFO_KEYS, *FORMS}
 _JOINT_KEYS = {*LINK_FIELDS, "limits", "parallel_to_previous"}
+MAX_NAME = 200  # characters of a model's name
+MAX_DESCRIPTION = 10_000
+MAX_VALUES = 100_000  # YAML values in a model file once aliases are expanded (a model has hundreds)
 _TABLE_KEYS = {"dh": ("theta", "d", "a", "alpha"), "mdh": ("alpha", "a", "theta", "d")}
+
+
+def _text(value, where: str, max_len: int) -> str:
+    """A name or description: a text (a plain number is read as its text) of at most ``max_len``."""
+    if isinstance(value, bool) or not isinstance(value, str | int | float):
+        raise ModelError(f"{where}: expected a text, got a {type(value).__name__}")
+    text = str(value)
+    if len(text) > max_len:
+        raise ModelError(f"{where}: {len(text)} characters, more than {max_len}")
+    return text
 
 
 def _numbers(values, where: str, count: int | None = None) -> np.ndarray:
     if not isinstance(values, list):
-        raise ModelError(f"{where}: expected a list of numbers, got {values!r}")
+        raise ModelError(f"{where}: expected a list of numbers, got {short_repr(values)}")
     if count is not None and len(values) != count:
         raise ModelError(f"{where}: expected {count} values, got {len(values)}")
     return np.array([as_number(v, f"{where}[{i}]", ModelError) for i, v in enumerate(values)])
@@ -59,7 +72,7 @@ def _numbers(values, where: str, count: int | None = None) -> np.ndarray:
 
 def _mapping(value, where: str, allowed: set, required: set = frozenset()) -> dict:
     if not isinstance(value, dict):
-        raise ModelError(f"{where}: expected a mapping, got {value!r}")
+        raise ModelError(f"{where}: expected a mapping, got {short_repr(value)}")
     unknown = sorted(set(map(str, value)) - allowed)
     if unknown:
         raise ModelError(f"{where}: unknown key(s) {unknown}; known: {sorted(allowed)}")
@@ -103,7 +116,8 @@ def _units(data: dict) -> tuple[str, str]:
         if "units" in data else None
     if units is None:
         raise ModelError("the model must declare its units: units: {length: m|mm, angle: rad|deg}")
-    if units["length"] not in LENGTH_UNITS or units["angle"] not in ANGLE_UNITS:
+    if not (isinstance(units["length"], str) and units["length"] in LENGTH_UNITS
+            and isinstance(units["angle"], str) and units["angle"] in ANGLE_UNITS):
         raise ModelError(f"unknown units {units}: length m|mm, angle rad|deg")
     return units["length"], units["angle"]
 
@@ -131,7 +145,7 @@ def _joint_rows(rows, length: float, angle: float) -> dict:
         limits.append([-np.pi, np.pi] if lim is None else _numbers(lim, f"{where}.limits", 2) * angle)
         flag = row.get("parallel_to_previous")
         if flag is not None and not isinstance(flag, bool):
-            raise ModelError(f"{where}.parallel_to_previous: expected true or false, got {flag!r}")
+            raise ModelError(f"{where}.parallel_to_previous: expected true or false, got {short_repr(flag)}")
         flags.append(flag)
     kw = {f: np.array(v) for f, v in cols.items()}
     default = default_parallel(kw["alpha"])
@@ -197,10 +211,14 @@ def robot_kwargs(data) -> dict:
         kw["smr"] = np.array([_numbers(r, f"smr[{i}]", 3) for i, r in enumerate(smr)]).reshape(-1, 3) * length
     if data.get("joint_errors") is not None:
         kw["joint_errors"] = JointErrorModel.from_dict(data["joint_errors"], n)
-    kw["name"] = str(data.get("name", "robot"))
-    kw["description"] = str(data.get("description", ""))
-    if data.get("nominal") is not None:
-        kw["nominal"] = data["nominal"]  # a name -> value mapping (SI), resolved by the Robot
+    kw["name"] = _text(data.get("name", "robot"), "name", MAX_NAME)
+    kw["description"] = _text(data.get("description", ""), "description", MAX_DESCRIPTION)
+    if data.get("nominal") is not None:  # a name -> value mapping (SI), resolved by the Robot
+        nominal = data["nominal"]
+        if not isinstance(nominal, dict):
+            raise ModelError(f"nominal: expected a mapping {{parameter name: value (SI)}}, got "
+                             f"{nominal!r:.60}")
+        kw["nominal"] = {str(k): as_number(v, f"nominal.{k}", ModelError) for k, v in nominal.items()}
     return {k: v for k, v in kw.items() if v is not None}
 
 
@@ -237,17 +255,15 @@ def robot_to_dict(robot) -> dict:
 
 def dump_model(robot) -> str:
     """The model YAML text (SI, full precision: an exact round trip)."""
-    return yaml.safe_dump(robot_to_dict(robot), sort_keys=False)
+    return dump_yaml(robot_to_dict(robot))
 
 
 def read_model_file(path) -> dict:
-    """Robot keyword arguments from a model YAML file (``yaml.safe_load``); errors name the file."""
+    """Robot keyword arguments from a model YAML file (:func:`robocal.yaml_load.load_yaml`: safe,
+    YAML 1.2 numbers, no duplicate keys, bounded); errors name the file."""
     path = Path(path)
-    text = read_text(path, "robot model YAML file", ModelError)
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ModelError(f"{path}: not valid (safe) YAML: {exc}") from None
+    data = load_yaml(read_text(path, "robot model YAML file", ModelError), str(path), ModelError,
+                     max_nodes=MAX_VALUES)
     try:
         return robot_kwargs(data)
     except ModelError as exc:

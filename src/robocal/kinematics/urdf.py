@@ -29,6 +29,9 @@ from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import make_transform
 
 _ZERO = 1e-12
+MAX_OFFSET_M = 100.0  # a joint origin farther than this from its parent is no robot's (URDF is in m)
+MAX_ANGLE_RAD = 100.0  # origin angles and joint limits beyond (16 turns) are a unit or typing error
+_MAX_AXIS = 1e6  # an axis vector is normalised; components beyond are refused
 
 
 # ----------------------------------------------------------------- small rotation helpers
@@ -186,22 +189,32 @@ def _parse(source) -> ET.Element:
     return root
 
 
-def _floats(text: str | None, default, what: str) -> np.ndarray:
+def _short(text: str) -> str:
+    return repr(text) if len(text) <= 60 else repr(text[:57] + "...")
+
+
+def _floats(text: str | None, default, what: str, bound: float, unit: str, count: int = 3) -> np.ndarray:
+    """``count`` finite numbers of an attribute, each within +-``bound`` (``unit``)."""
     if text is None:
         return np.array(default, dtype=float)
     try:
         values = np.array([float(v) for v in text.split()])
-    except ValueError as exc:
-        raise ModelError(f"{what}: {text!r} is not a list of numbers") from exc
-    if values.size != 3 or not np.isfinite(values).all():
-        raise ModelError(f"{what}: expected 3 finite numbers, got {text!r}")
+    except ValueError:
+        raise ModelError(f"{what}: {_short(text)} is not a list of numbers") from None
+    if values.size != count or not np.isfinite(values).all():
+        raise ModelError(f"{what}: expected {count} finite numbers, got {_short(text)}")
+    if np.abs(values).max() > bound:
+        raise ModelError(f"{what}: {_short(text)} is beyond +-{bound:g} {unit} (no real robot; "
+                         "URDF lengths are in m and angles in rad)")
     return values
 
 
 def _joint_origin(joint: ET.Element, where: str) -> np.ndarray:
     origin = joint.find("origin")
-    xyz = _floats(None if origin is None else origin.get("xyz"), [0, 0, 0], f"{where} origin xyz")
-    rpy = _floats(None if origin is None else origin.get("rpy"), [0, 0, 0], f"{where} origin rpy")
+    xyz = _floats(None if origin is None else origin.get("xyz"), [0, 0, 0], f"{where} origin xyz",
+                  MAX_OFFSET_M, "m")
+    rpy = _floats(None if origin is None else origin.get("rpy"), [0, 0, 0], f"{where} origin rpy",
+                  MAX_ANGLE_RAD, "rad")
     return make_transform(rpy_to_matrix(rpy), xyz)
 
 
@@ -217,6 +230,8 @@ def _chain(root: ET.Element, tip: str | None) -> list[ET.Element]:
             raise ModelError(f"URDF link {child.get('link')!r} has two parent joints (not a tree)")
         by_child[child.get("link")] = j
     parents = {j.find("parent").get("link") for j in joints}
+    if any(lk.get("name") is None for lk in root.findall("link")):
+        raise ModelError("URDF has a <link> without a name")
     links = {lk.get("name") for lk in root.findall("link")} | parents | set(by_child)
 
     def path_to(link: str) -> list[ET.Element]:
@@ -284,14 +299,18 @@ def from_urdf(source, tip: str | None = None, name: str | None = None,
             raise ModelError(f"URDF joint {jname!r} mimics another joint: not a serial robot joint")
         axis_el = j.find("axis")
         axis = _floats(None if axis_el is None else axis_el.get("xyz"), [1, 0, 0],
-                       f"joint {jname!r} axis")
+                       f"joint {jname!r} axis", _MAX_AXIS, "(a direction)")
         if np.linalg.norm(axis) < 1e-12:
             raise ModelError(f"URDF joint {jname!r} has a zero axis")
         points.append(T[:3, 3].copy())
         dirs.append(T[:3, :3] @ _unit(axis))
         lim = j.find("limit")
         if jtype == "revolute" and lim is not None and lim.get("lower") and lim.get("upper"):
-            limits.append([float(lim.get("lower")), float(lim.get("upper"))])
+            lower, upper = _floats(f"{lim.get('lower')} {lim.get('upper')}", None, f"joint {jname!r} limit",
+                                   MAX_ANGLE_RAD, "rad", count=2)
+            if lower >= upper:
+                raise ModelError(f"joint {jname!r} limit: lower {lower:g} is not below upper {upper:g}")
+            limits.append([lower, upper])
         else:
             limits.append([-2 * np.pi, 2 * np.pi])
     if not dirs:

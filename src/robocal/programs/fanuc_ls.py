@@ -26,6 +26,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from robocal.errors import DataError
+from robocal.io import short_repr
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.config import FANUCConfig
 from robocal.programs.model import Dialect, Program, Target
@@ -35,8 +36,8 @@ from robocal.programs.source import Number
 _POS = re.compile(r"\bP\[\s*(\d+)\s*(?::\s*\"([^\"]*)\")?\s*\]\s*\{(.*?)\}\s*;", re.DOTALL)
 _GROUP = re.compile(r"\bGP(\d+)\s*:")
 _FRAME_NO = re.compile(r"\b(UF|UT)\s*:\s*(\w+)")
-_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d+)\s*,\s*([-+]?\d+)\s*,"
-                     r"\s*([-+]?\d+)\s*'")
+_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d{1,3})\s*,"
+                     r"\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*'")
 _VALUE = r"\b{}\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*(?:mm|deg)"
 _KEYS = ("X", "Y", "Z", "W", "P", "R")
 _EXTENDED = re.compile(r"\b(E\d)\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))")
@@ -87,12 +88,18 @@ class FanucDialect(Dialect):
             if start < 0:
                 prog.warnings.append(f"{src.path.name}: no /POS section: no positions")
                 continue
-            for m in _POS.finditer(text, start):
+            end = text.find("/END", start)
+            end = len(text) if end < 0 else end
+            after = start + len("/POS")  # the /POS section holds position blocks and nothing else
+            for m in _POS.finditer(text, after, end):
+                _nothing_between(src, text, after, m.start())
+                after = m.end()
                 name = f"P[{m.group(1)}{':' + m.group(2) if m.group(2) else ''}]"
                 body_start = m.start(3)
                 body = m.group(3)
                 groups = list(_GROUP.finditer(body))
-                if not groups or groups[0].group(1) != "1":
+                _check_body(src, m.start(), name, body, groups)
+                if groups[0].group(1) != "1":
                     continue
                 g_end = groups[1].start() if len(groups) > 1 else len(body)
                 a, b = body_start + groups[0].end(), body_start + g_end
@@ -109,8 +116,9 @@ class FanucDialect(Dialect):
                                         f"{'mm' if k in 'XYZ' else 'deg'}")
                     nums.append(Number(a + v.start(1), a + v.end(1), v.group(1)))
                 fr = dict(_FRAME_NO.findall(gp))
-                if "UF" not in fr or "UT" not in fr or not (fr["UF"].isdigit() and fr["UT"].isdigit()):
-                    raise DataError(f"{where}: position {name} needs numeric UF and UT, got {fr}")
+                if "UF" not in fr or "UT" not in fr \
+                        or not all(fr[k].isdigit() and len(fr[k]) <= 3 for k in ("UF", "UT")):
+                    raise DataError(f"{where}: position {name} needs numeric UF and UT, got {short_repr(fr)}")
                 c = _CONFIG.search(gp)
                 if not c:
                     raise DataError(f"{where}: position {name}: CONFIG must read 'N|F U|D T|B, t1, t4, t6'")
@@ -123,6 +131,7 @@ class FanucDialect(Dialect):
                                            tool=str(int(fr["UT"])), config=row, config_spans=spans,
                                            order=order, external=", ".join(external)))
                 order += 1
+            _nothing_between(src, text, after, end)
         self._motions(sources, prog, joint)
         return prog
 
@@ -181,3 +190,25 @@ class FanucDialect(Dialect):
                                              f"{off.group(0)}: {label} is corrected for its own pose, the "
                                              "shifted pose by the same amount")
         prog.targets = [t for key, t in numbers.items() if key not in incremental]
+
+
+def _nothing_between(src, text: str, a: int, b: int) -> None:
+    """Only blanks may stand between position blocks: a block whose head does not read
+    ``P[n]{`` or ``P[n:"comment"]{`` would otherwise be skipped without a word."""
+    gap = text[a:b]
+    if gap.strip():
+        k = a + len(gap) - len(gap.lstrip())
+        first = gap.strip().splitlines()[0][:60]
+        raise DataError(f"{src.path.name}:{src.line_of(k)}: malformed position block {first!r}: expected "
+                        "P[n]{ or P[n:\"comment\"]{, the group GPn:, the values and }; (nothing else in "
+                        "/POS)")
+
+
+def _check_body(src, at: int, name: str, body: str, groups: list) -> None:
+    """A position block starts with its first group header and holds one position."""
+    where = f"{src.path.name}:{src.line_of(at)}"
+    if not groups or body[:groups[0].start()].strip():
+        raise DataError(f"{where}: position {name}: expected a group header GP1: (GPn:) first, got "
+                        f"{' '.join(body.split())[:40]!r}")
+    if re.search(r"\bP\[", body):
+        raise DataError(f"{where}: position {name} is not closed with }}; before the next position")

@@ -274,16 +274,21 @@ class _Script:
             for qa, qb in inner[1:]:
                 key, eq, _ = masked[qa:qb].partition("=")
                 start = qa + len(key) + len(eq) if key.strip() == "qnear" else qa
-                for kind, value, _, _ in self.resolve(start, qb, at, depth + 1):
+                found = self.resolve(start, qb, at, depth + 1)
+                for kind, value, _, _ in found:
                     if kind == "joints":
                         qnear = value
+                if masked[start:qb].strip().startswith("[") and not any(k == "joints" for k, *_ in found):
+                    raise DataError(f"{self.src.path.name}:{self.src.line_of(start)}: qnear must be a list "
+                                    f"of 6 joint values, got {' '.join(masked[start:qb].split())[:60]}")
             return [(k, v, f, qnear if k == "target" else q) for k, v, f, q in
                     self.resolve(*inner[0], at, depth + 1)]
         call = _FUNCTION.match(masked, lead)
         if call and call.group(1) in ("pose_trans", "pose_add"):
             inner = split_top(masked, call.end(), _close(masked, call.end() - 1))
             if len(inner) != 2:
-                return [("skip", f"{call.group(1)} with {len(inner)} arguments", IDENTITY, None)]
+                return [("skip", f"{call.group(1)} takes two arguments (a missing comma?), got {len(inner)}",
+                         IDENTITY, None)]
             first = self.resolve(*inner[0], at, depth + 1)
             second = self.resolve(*inner[1], at, depth + 1)
             return self._compose(call.group(1), first, second, masked[slice(*inner[0])].strip())

@@ -125,7 +125,8 @@ class _ObsErrors:
         self.before_pts = _array(obs, "model_before", 3)
         self.after_pts = _array(obs, "model_after", 3)
         self.measured = _array(obs, "measured", 3)
-        n = 0 if self.after_pts is None else len(self.after_pts)
+        n = next((len(obs[k]) for k in ("error_after", "model_after", "error_before", "measured")
+                  if obs.get(k) is not None), 0)  # rows (one length: robocal.schema checks it)
         self.joints = _array(obs, "joints_deg")
         self.pose_id = np.asarray(_or(obs.get("pose_id"), np.arange(n)))
         self.source_row = np.asarray(_or(obs.get("source_row"), np.arange(n)))
@@ -142,7 +143,8 @@ class _ObsErrors:
 
     @property
     def ok(self) -> bool:
-        return self.after is not None and self.after.size > 0
+        """Whether there are per-row errors before and after to show."""
+        return self.after is not None and self.after.size > 0 and self.before is not None
 
 
 # ----------------------------------------------------------------- sections
@@ -336,6 +338,17 @@ def _errors_section(cal: _ObsErrors, val: _ObsErrors | None) -> str:
             "a trend, wave or step of the line: an effect of that joint the model lacks (compliance, "
             "gear or cyclic errors, backlash); a flat line at the noise level is what a good model leaves."))
     pts = cal.measured if cal.measured is not None else cal.after_pts
+    if pts is not None:
+        figs += _points_figures(cal, pts)
+    figs.append(_worst_table(cal))
+    return _grid(*figs)
+
+
+def _points_figures(cal: _ObsErrors, pts: np.ndarray) -> list[str]:
+    """The 3-D view coloured by the error after, and the worst residual vectors."""
+    from robocal.report import plots
+
+    figs = []
     idx = _subsample(len(pts))
     note = "" if idx.size == len(pts) else f" ({idx.size} of {len(pts)} points shown)"
     what = "measured points" if cal.measured is not None else "modelled probe-tip points (no measured points)"
@@ -353,8 +366,7 @@ def _errors_section(cal: _ObsErrors, val: _ObsErrors | None) -> str:
                             "much).",
                             "arrows pointing the same way: a systematic error is left; random directions "
                             "are noise."))
-    figs.append(_worst_table(cal))
-    return _grid(*figs)
+    return figs
 
 
 def _worst_table(cal: _ObsErrors) -> str:
@@ -461,7 +473,7 @@ def _model_selection(ms: dict | None) -> str:
     if not ms or not ms.get("candidates"):
         return ""
     cands = ms["candidates"]
-    order = sorted(range(len(cands)), key=lambda i: cands[i].get("cv_rms_mm", np.inf))
+    order = sorted(range(len(cands)), key=lambda i: _or(cands[i].get("cv_rms_mm"), np.inf))
     rows, classes = [], []
     for i in order:
         c = cands[i]
@@ -553,7 +565,8 @@ def _iso(blocks: list[tuple[str, _ObsErrors]]) -> str:
 
     parts = []
     for name, ob in blocks:
-        if ob is None or ob.measured is None or ob.joints is None:
+        if ob is None or ob.measured is None or ob.after_pts is None or ob.joints is None \
+                or ob.joints.ndim != 2:
             continue
         g = pose_accuracy_repeatability(ob.measured, ob.after_pts, ob.pose_id, ob.joints, ob.smr)
         if not len(g):

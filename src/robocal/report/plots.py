@@ -28,8 +28,10 @@ REJECTED = "#e7298a"
 MAX_VECTOR_POINTS = 400
 RASTER_DPI = 100
 CMAP = "viridis"
-_RC = {"svg.fonttype": "none", "svg.hashsalt": "robocal", "font.size": 9, "axes.grid": True,
-       "grid.alpha": 0.3, "axes.spines.top": False, "axes.spines.right": False}
+# text.parse_math off: a "$" in a user's text (a parameter, file or unit name) is shown as it is,
+# never parsed as mathtext (which fails on unbalanced or unknown $...$ input)
+_RC = {"text.parse_math": False, "svg.fonttype": "none", "svg.hashsalt": "robocal", "font.size": 9,
+       "axes.grid": True, "grid.alpha": 0.3, "axes.spines.top": False, "axes.spines.right": False}
 _counter = itertools.count()
 
 

@@ -1,0 +1,493 @@
+"""Mutation fuzzing of every reader of the command line (shared by tests/test_fuzz_readers.py and
+the long run scripts/fuzz_readers.py).
+
+A reader is a command that reads one kind of user file; its seed files are real robocal files
+(simulated measurements, a catalog model, a result JSON, the hand-written programs of
+tests/data/programs). A mutant changes the seed file by one to three operators (lines deleted,
+duplicated or swapped, numbers replaced by extreme or ambiguous forms, characters inserted or
+deleted, the file truncated, a structure nested deeply, a JSON node given another type or shape).
+The contract of the CLI on any input (:func:`check`): exit 0 with every output written, or exit 2
+with one line on stderr (a warning line before it allowed); never exit 3 (internal error), never
+a traceback or a stray warning line, never an input modified.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import os
+import random
+import re
+import shutil
+import signal
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from robocal.cli import main
+from robocal.data.simulate import perturbed
+from robocal.kinematics.model import Robot
+
+PROGRAMS = Path(__file__).resolve().parent / "data" / "programs"
+EXTREMES = [
+    b"1e308",
+    b"-1e308",
+    b"1e-320",
+    b"nan",
+    b"NaN",
+    b"inf",
+    b"-inf",
+    b"0",
+    b"-0",
+    b"0135",
+    b"0x1F",
+    b"1:30",
+    b"1_000",
+    b"2e9",
+    b"12",
+    b"-7",
+    b"720",
+    b"99999999",
+    b"3.5",
+    b'""',
+    b"$x$",
+    b"$\\frac{",
+    b"[]",
+    b"{}",
+    b"null",
+    b"true",
+    b"~",
+    b"1" * 5000,
+    b"1e",
+    b"--1",
+    b"1..2",
+    b"",
+    b"*a",
+    b"&a",
+]
+CHARS = b" ,;:[]{}()\"'$-+.0123456789eE\n\t#*&!xX\\/<>=%@|\x00\xff\xe9"
+MAX_MUTANT = 20_000_000  # bytes: a mutant larger than this is not grown further
+NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+WORD = re.compile(rb"[A-Za-z_][A-Za-z0-9_]*")
+
+
+@dataclass
+class Reader:
+    """A command reading ``targets`` (one is mutated per case) among ``files`` in a case folder."""
+
+    name: str
+    files: dict[str, bytes]
+    targets: list[str]
+    argv: Callable[[Path], list[str]]
+    outputs: list[str]
+    kind: str = "text"  # 'json' adds structural mutations
+    extra: dict = field(default_factory=dict)
+
+
+# ----------------------------------------------------------------- seeds
+def _run(argv: list[str]) -> None:
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        code = main(["--quiet", *argv])
+    assert code == 0, argv
+
+
+def _trim_result(data: dict, rows: int = 25) -> dict:
+    """A smaller result (fewer observation rows): the report renders it faster."""
+    for key in ("observations", "validation_observations"):
+        obs = data.get(key)
+        if isinstance(obs, dict):
+            for k, v in obs.items():
+                if isinstance(v, list):
+                    obs[k] = v[:rows]
+    return data
+
+
+def build_readers(folder: Path) -> dict[str, Reader]:
+    """Every reader with its seed files (made in ``folder`` by simulate/calibrate/export)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    readers: dict[str, Reader] = {}
+    truth = folder / "truth.yaml"
+    for kind in ("point", "pose", "plane", "distance"):
+        data = folder / f"{kind}.csv"
+        _run(
+            [
+                "simulate",
+                "--robot",
+                "abb_irb2600",
+                "--poses",
+                "12",
+                "--kind",
+                kind,
+                "--seed",
+                "1",
+                "-o",
+                str(data),
+                "--truth",
+                str(folder / f"truth_{kind}.yaml"),
+            ]
+        )
+        files = {"data.csv": data.read_bytes(), "truth.yaml": (folder / f"truth_{kind}.yaml").read_bytes()}
+        readers[f"csv_{kind}"] = Reader(
+            f"csv_{kind}",
+            files,
+            ["data.csv"],
+            lambda d: ["evaluate", str(d / "truth.yaml"), str(d / "data.csv"), "--json", str(d / "out.json")],
+            ["out.json"],
+        )
+    shutil.copy(folder / "truth_point.yaml", truth)
+    # import, layout 1: one file per pose reading, joints and points on each row (Meca500 style)
+    rng = np.random.default_rng(0)
+    q = rng.uniform(-90, 90, (6, 6))
+    p = rng.uniform(-1, 1, (6, 3))
+    rows = [
+        ",".join(f"{v:.6f}" for v in (*qq, *(pp + rng.normal(0, 1e-5, 3))))
+        for qq, pp in zip(q, p, strict=True)
+        for _ in range(3)
+    ]
+    readers["import_rows"] = Reader(
+        "import_rows",
+        {"raw.csv": ("\n".join(rows) + "\n").encode()},
+        ["raw.csv"],
+        lambda d: [
+            "import",
+            str(d / "raw.csv"),
+            "--joints",
+            "cols=0-5:deg",
+            "--points",
+            "cols=6-8:m",
+            "-o",
+            str(d / "out.csv"),
+        ],
+        ["out.csv"],
+    )
+    # import, layout 2: a joints file, one file per SMR (mm) and a base drift monitor (IRB 120 style)
+    joints = "\n".join(" ".join(f"{v:.4f}" for v in qq) for qq in q) + "\n"
+    smr = ["\n".join(" ".join(f"{v:.4f}" for v in pp * 1000 + k * 50) for pp in p) + "\n" for k in range(2)]
+    base = (
+        "\n".join(
+            " ".join(f"{v:.4f}" for v in np.array([100.0, 200, 300]) + rng.normal(0, 0.005, 3))
+            for _ in range(6)
+        )
+        + "\n"
+    )
+    readers["import_files"] = Reader(
+        "import_files",
+        {
+            "joints.txt": joints.encode(),
+            "smr1.txt": smr[0].encode(),
+            "smr2.txt": smr[1].encode(),
+            "base.txt": base.encode(),
+        },
+        ["joints.txt", "smr1.txt", "smr2.txt", "base.txt"],
+        lambda d: [
+            "import",
+            "--joints",
+            f"{d / 'joints.txt'}:cols=0-5:deg",
+            "--points",
+            f"{d / 'smr1.txt'}:mm",
+            "--points",
+            f"{d / 'smr2.txt'}:mm",
+            "--base",
+            f"{d / 'base.txt'}:mm",
+            "-o",
+            str(d / "out.csv"),
+        ],
+        ["out.csv"],
+    )
+    catalog = Path(__import__("robocal").__file__).parent / "catalog"
+    for name in ("abb_irb2600", "ur5", "puma560"):  # an OPW set, a UR DH table, a modified DH table
+        readers[f"model_{name}"] = Reader(
+            f"model_{name}",
+            {"m.yaml": (catalog / f"{name}.yaml").read_bytes()},
+            ["m.yaml"],
+            lambda d: ["export", str(d / "m.yaml"), "--urdf", str(d / "out.urdf")],
+            ["out.urdf"],
+        )
+    readers["model_saved"] = Reader(
+        "model_saved",
+        {"m.yaml": truth.read_bytes()},
+        ["m.yaml"],
+        lambda d: ["export", str(d / "m.yaml"), "--urdf", str(d / "out.urdf")],
+        ["out.urdf"],
+    )
+    _run(["export", "abb_irb2600", "--urdf", str(folder / "r.urdf")])
+    readers["urdf"] = Reader(
+        "urdf",
+        {"r.urdf": (folder / "r.urdf").read_bytes()},
+        ["r.urdf"],
+        lambda d: ["export", str(d / "r.urdf"), "--yaml", str(d / "out.yaml")],
+        ["out.yaml"],
+    )
+    # a validation file of the same readings in another order (one file given twice is refused)
+    lines = (folder / "point.csv").read_text().splitlines(keepends=True)
+    k = next(i for i, line in enumerate(lines) if not line.startswith("#")) + 1  # after the header row
+    (folder / "point_val.csv").write_text("".join(lines[:k] + lines[:k - 1:-1]))
+    _run(
+        [
+            "calibrate",
+            str(folder / "point.csv"),
+            "--robot",
+            "abb_irb2600",
+            "--params",
+            "auto",
+            "--validate",
+            str(folder / "point_val.csv"),
+            "--method",
+            "robust",
+            "--json",
+            str(folder / "result.json"),
+            "-o",
+            str(folder / "cal.yaml"),
+        ]
+    )
+    result = _trim_result(json.loads((folder / "result.json").read_text()))
+    readers["result_json"] = Reader(
+        "result_json",
+        {"result.json": json.dumps(result, indent=1).encode()},
+        ["result.json"],
+        lambda d: ["report", str(d / "result.json"), "-o", str(d / "out.html")],
+        ["out.html"],
+        kind="json",
+    )
+    for name, robot, files, extra in (
+        ("rapid", "abb_irb2600", ["weld_cell.mod"], []),
+        ("krl", "kuka_kr16_2", ["palletize.src", "palletize.dat", "config.dat"], []),
+        (
+            "fanuc",
+            "fanuc_lrmate200id",
+            ["sealing.ls"],
+            ["--frame", "1=450,-150,100,0,0,-10", "--tool", "2=0,0,120,0,0,0"],
+        ),
+        ("urscript", "ur5", ["pick_place.script"], []),
+    ):
+        content = {f: (PROGRAMS / f).read_bytes() for f in files}
+        out = "out" + Path(files[0]).suffix
+        programs, references = files[:2] if name == "krl" else files, files[2:]
+        perturbed(Robot.from_catalog(robot), 7).save(folder / f"cal_{robot}.yaml")
+        cal = (folder / f"cal_{robot}.yaml").read_bytes()
+
+        def argv(d, programs=programs, references=references, robot=robot, extra=extra, out=out):
+            refs = ["--references", *(str(d / f) for f in references)] if references else []
+            return [
+                "filter",
+                *(str(d / f) for f in programs),
+                *refs,
+                "--calibrated",
+                str(d / "cal.yaml"),
+                "--nominal",
+                robot,
+                *extra,
+                "-o",
+                str(d / (out if len(programs) == 1 else "outdir")),
+            ]
+
+        readers[name] = Reader(
+            name,
+            {**content, "cal.yaml": cal},
+            files,
+            argv,
+            [out] if len(programs) == 1 else ["outdir"],
+            extra={"outdir": len(programs) > 1},
+        )
+    return readers
+
+
+# ----------------------------------------------------------------- mutations
+def _lines(data: bytes) -> list[bytes]:
+    return data.splitlines(keepends=True) or [b""]
+
+
+def _text_op(data: bytes, rng: random.Random) -> bytes:
+    lines = _lines(data)
+    op = rng.randrange(14)
+    i, j = rng.randrange(len(lines)), rng.randrange(len(lines))
+    if op == 0:
+        del lines[i]
+    elif op == 1:
+        lines.insert(i, lines[j])
+    elif op == 2:
+        lines[i], lines[j] = lines[j], lines[i]
+    elif op == 3:
+        return data[: rng.randrange(len(data) + 1)]
+    elif op in (4, 5, 6):  # a number replaced by an extreme or ambiguous form
+        found = list(NUMBER.finditer(data))
+        if found:
+            m = rng.choice(found)
+            return data[: m.start()] + rng.choice(EXTREMES) + data[m.end() :]
+    elif op == 7 and data:
+        k = rng.randrange(len(data))
+        return data[:k] + data[k + 1 :]
+    elif op == 8:
+        k = rng.randrange(len(data) + 1)
+        return data[:k] + bytes([rng.choice(CHARS)]) + data[k:]
+    elif op == 9:  # an identifier replaced by another one of the file (or a new one)
+        words = list(WORD.finditer(data))
+        if words:
+            m = rng.choice(words)
+            new = (
+                rng.choice(words).group() if rng.random() < 0.7 else b"Xyz" + str(rng.randrange(99)).encode()
+            )
+            return data[: m.start()] + new + data[m.end() :]
+    elif op == 10:
+        lines[i:i] = [lines[j]] * min(rng.choice((50, 500)), MAX_MUTANT // (len(lines[j]) + 1))
+    elif op == 11:
+        k, depth = rng.randrange(len(data) + 1), rng.choice((40, 2000))
+        return data[:k] + b"[" * depth + b"1" + b"]" * depth + data[k:]
+    elif op == 12:  # a punctuation character deleted (separators, brackets, semicolons)
+        found = [m.start() for m in re.finditer(rb"[,;:\[\]{}()=]", data)]
+        if found:
+            k = rng.choice(found)
+            return data[:k] + data[k + 1 :]
+    else:
+        lines[i] = lines[i].swapcase()
+    return b"".join(lines)
+
+
+_SHAPES = [
+    1e308,
+    -1e308,
+    0,
+    -1,
+    1e15,
+    10**20,
+    True,
+    None,
+    "",
+    "$x^$",
+    "$\\frac{a$",
+    "a" * 10,
+    [],
+    {},
+    [1, 2],
+    [[1, 2], [3]],
+    {"a": 1},
+    [[[[1]]]],
+    0.5,
+    "1.5",
+    -5,
+]
+
+
+def _json_op(data: bytes, rng: random.Random) -> bytes:
+    """A node of the JSON document replaced, removed or reshaped."""
+    try:
+        doc = json.loads(data)
+    except (ValueError, RecursionError):
+        return _text_op(data, rng)
+    nodes = []
+    stack = [(doc, None, None)]
+    while stack:
+        node, parent, key = stack.pop()
+        nodes.append((node, parent, key))
+        if isinstance(node, dict):
+            stack.extend((v, node, k) for k, v in node.items())
+        elif isinstance(node, list) and len(nodes) < 20000:
+            stack.extend((v, node, k) for k, v in enumerate(node[:50]))
+    node, parent, key = rng.choice(nodes[1:] or nodes)
+    if parent is None:
+        return _text_op(data, rng)
+    op = rng.randrange(5)
+    if op == 0:
+        new = rng.choice(_SHAPES)
+    elif op == 1 and isinstance(node, list) and node:  # ragged or shorter
+        new = node[:-1] if rng.random() < 0.5 else [*node, node[0]]
+    elif op == 2:
+        new = [node] if rng.random() < 0.5 else {"x": node}
+    elif op == 3 and isinstance(parent, dict):
+        del parent[key]
+        return json.dumps(doc).encode()
+    else:
+        new = "HUGE" if rng.random() < 0.5 else "DEEP"
+    parent[key] = new
+    text = json.dumps(doc).encode()
+    return text.replace(b'"HUGE"', b"1" * 5000).replace(b'"DEEP"', b"[" * 5000 + b"]" * 5000)
+
+
+def mutate(reader: Reader, rng: random.Random) -> tuple[str, bytes]:
+    """A mutant of one of the reader's target files: (file name, content)."""
+    target = rng.choice(reader.targets)
+    data = reader.files[target]
+    for _ in range(rng.choice((1, 1, 2, 3))):
+        new = _json_op(data, rng) if reader.kind == "json" and rng.random() < 0.6 else _text_op(data, rng)
+        data = new if len(new) <= MAX_MUTANT else data  # repeated blocks of repeated blocks stay bounded
+    return target, data
+
+
+# ----------------------------------------------------------------- one case
+class _Timeout(BaseException):
+    pass
+
+
+def _alarm(signum, frame):
+    raise _Timeout
+
+
+def run_case(reader: Reader, target: str, data: bytes, folder: Path, timeout_s: int = 60) -> tuple[int, str]:
+    """Write the case into an empty ``folder`` and run the reader's command in this process:
+    (exit code, stderr). Exit code -1 is a timeout, -2 an exception escaping main."""
+    if folder.exists():
+        shutil.rmtree(folder)
+    folder.mkdir(parents=True)
+    for name, content in reader.files.items():
+        (folder / name).write_bytes(data if name == target else content)
+    if reader.extra.get("outdir"):
+        (folder / "outdir").mkdir()
+    err = io.StringIO()
+    previous = signal.signal(signal.SIGALRM, _alarm)
+    signal.alarm(timeout_s)
+    try:
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+            os.environ["ROBOCAL_DEBUG"] = "1"
+            code = main(["--quiet", *reader.argv(folder)])
+    except _Timeout:
+        code = -1
+    except BaseException:  # noqa: BLE001 - anything escaping main breaks the contract
+        code = -2
+        err.write(traceback.format_exc())
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+        os.environ.pop("ROBOCAL_DEBUG", None)
+    return code, err.getvalue()
+
+
+def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, stderr: str) -> str | None:
+    """None when the case kept the contract, else what broke it (one line, with the site)."""
+    for name, content in reader.files.items():
+        if (folder / name).read_bytes() != (data if name == target else content):
+            return f"input {name} modified"
+    lines = [ln for ln in stderr.splitlines() if ln.strip()]
+    if code == 0:
+        missing = [o for o in reader.outputs if not (folder / o).exists()]
+        if reader.extra.get("outdir") and not any((folder / "outdir").iterdir()):
+            missing.append("outdir/*")
+        return f"exit 0 without {missing}" if missing else None
+    if code == 2:
+        # the error: one line, or a headline and one indented item a line (a list of places)
+        while len(lines) > 1 and lines[-1].startswith("  ") and ": error: " not in lines[-1]:
+            lines.pop()
+        noise = [ln for ln in lines[:-1] if not ln.lower().startswith(("warning", "robocal"))]
+        if not lines or not lines[-1].startswith("robocal ") or noise:
+            return f"exit 2 with stray output: {(noise or lines or [''])[0][:160]}"
+        return None
+    if code == 3:
+        return f"internal error: {_site(stderr)}"
+    if code == -1:
+        return "timeout"
+    return f"exit {code}: {_site(stderr)}"
+
+
+def _site(stderr: str) -> str:
+    """The innermost robocal frame of a traceback and the exception line."""
+    frames = re.findall(r'File "([^"]*robocal[^"]*)", line (\d+), in (\w+)', stderr)
+    last = [ln for ln in stderr.splitlines() if ln.strip()]
+    where = f"{Path(frames[-1][0]).name}:{frames[-1][1]} {frames[-1][2]}" if frames else "?"
+    exc = next(
+        (ln for ln in reversed(last) if re.match(r"\w+(Error|Exception|Warning)\b", ln)),
+        last[-1] if last else "",
+    )
+    return f"{where}: {exc[:200]}"
