@@ -29,6 +29,7 @@ CLI_MARK = "<!-- generated: cli -->"
 BENCH_MARK = "<!-- generated: benchmarks -->"
 BENCH_REF = re.compile(r"<!--\s*bench:\s*([a-z0-9_]+)(?:\.([A-Za-z0-9_]+))?\s*-->")
 BENCH_FIGURE = re.compile(r"\{\{\s*bench\.([a-z0-9_]+)\.([A-Za-z0-9_]+)\s*\}\}")
+BENCH_ANY = re.compile(r"\{\{\s*bench\b|<!--\s*bench:")  # well formed or not
 
 
 class BenchReferenceError(ValueError):
@@ -40,7 +41,7 @@ def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001
         markdown = markdown.replace(CLI_MARK, cli_markdown())
     if BENCH_MARK in markdown:
         markdown = markdown.replace(BENCH_MARK, benchmarks_markdown(BENCH_RESULTS))
-    if BENCH_REF.search(markdown) or BENCH_FIGURE.search(markdown):
+    if BENCH_ANY.search(markdown):
         where = f" (page {page.file.src_path})" if page is not None else ""
         try:
             markdown = bench_references(markdown, BENCH_RESULTS)
@@ -157,7 +158,13 @@ def bench_references(markdown: str, path: Path) -> str:
                                       f"results.figure({key!r}, ...) and run the benchmark")
         return _cell(figures[key])
 
-    return BENCH_FIGURE.sub(figure, BENCH_REF.sub(ref, markdown))
+    out = BENCH_FIGURE.sub(figure, BENCH_REF.sub(ref, markdown))
+    bad = BENCH_ANY.search(out)
+    if bad:
+        line = out[bad.start():].splitlines()[0]
+        raise BenchReferenceError(f"malformed benchmark reference {line!r}: write <!-- bench: NAME.KEY -->, "
+                                  "<!-- bench: NAME --> or {{ bench.NAME.KEY }}")
+    return out
 
 
 def benchmarks_markdown(path: Path) -> str:
