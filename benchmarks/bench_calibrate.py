@@ -12,6 +12,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from results import table
 from scipy.optimize import least_squares
 from timing import best_time
 
@@ -107,8 +108,7 @@ def _floor_mm(sim, rows) -> float:
 def accuracy_goals(seeds=range(5)) -> None:
     """Validation RMS against the noise floor on simulated data, and the real data sets."""
     nominal = Robot.from_catalog("abb_irb2600")
-    print("\naccuracy: simulated abb_irb2600, 100 calibration / 200 validation poses, noise 0.02 mm")
-    print(f"{'case':<34} {'method':<7} {'val RMS / floor':>16} (per seed)")
+    rows = []
     for label, outliers, methods in (("isotropic noise", 0.0, ("lsq",)),
                                      ("5% outliers of 1-5 mm", 0.05, ("robust", "lsq"))):
         ratios = {m: [] for m in methods}
@@ -123,21 +123,24 @@ def accuracy_goals(seeds=range(5)) -> None:
                 ratios[m].append(res.validation["rms"] / _floor_mm(sim, val_rows))
         for m in methods:
             r = np.array(ratios[m])
-            print(f"{label:<34} {m:<7} mean {r.mean():6.3f} max {r.max():6.3f}  "
-                  + " ".join(f"{v:.3f}" for v in r))
+            rows.append([label, m, f"{r.mean():.3f}", f"{r.max():.3f}", " ".join(f"{v:.3f}" for v in r)])
+    table("accuracy: simulated abb_irb2600, 100 calibration / 200 validation poses, noise 0.02 mm: "
+          "validation RMS / noise floor", ["case", "method", "mean", "max", "per seed"], rows, key="accuracy")
     if not DATASETS.is_dir():
         print(f"(real data sets not found at {DATASETS}: skipped)")
         return
     from robocal.data.datasets import irb120, meca500
 
-    print("\nreal data: held-out position error, mm (geometric model; joint errors: bench_nongeometric)")
+    rows = []
     for name, robot, (cal, val) in (("Meca500 490/70", "meca500", meca500(DATASETS)),
                                     ("IRB 120 500/500 x 3 SMRs", "abb_irb120", irb120(DATASETS))):
         for m in ("lsq", "robust"):
             res = calibrate(Robot.from_catalog(robot), cal, method=m, validation=val, nongeometric=None)
             v, vb = res.validation, res.validation_before
-            print(f"{name:<26} {m:<7} nominal+frame {vb['rms']:.4f} -> RMS {v['rms']:.4f} "
-                  f"mean {v['mean']:.4f} max {v['max']:.4f}")
+            rows.append([name, m, f"{vb['rms']:.4f}", f"{v['rms']:.4f}", f"{v['mean']:.4f}",
+                         f"{v['max']:.4f}"])
+    table("real data: held-out position error, mm (geometric model; joint errors: bench_nongeometric)",
+          ["data", "method", "nominal + frame RMS", "RMS", "mean", "max"], rows, key="real")
 
 
 # each plausibility check by the words of its message
@@ -145,20 +148,19 @@ CHECKS = {"spread": "points spread", "residual": "frames fitted): the model miss
           "corrections": "the calibration corrected", "validation": "the validation data: the model misses"}
 
 
-def _plausibility_row(label: str, robot, cal, validation=None) -> None:
+def _plausibility_row(label: str, robot, cal, validation=None) -> list:
     """One calibration forced past the plausibility checks: the measured-over-model spread ratio
     and the nominal model's residual (frames fitted) that the checks judge, the validation
     residual of the calibrated model, and the checks that fired."""
     try:
         res = calibrate(robot, cal, validation=validation, nongeometric=None, force=True)
     except RobocalError as exc:
-        print(f"  {label:<44} refused before the checks: {str(exc)[:90]}")
-        return
+        return [label, "", "", "", f"refused before the checks: {str(exc)[:90]}"]
     ratio = spread(cal.points) / spread(res.start.fk(cal.joints, smr=cal.smr)[:, :3, 3])
     forced = [w for w in res.warnings if w.startswith("FORCED")]
     fired = [check for check, words in CHECKS.items() if any(words in w for w in forced)]
-    val = f"{res.validation['rms']:9.4g}" if validation is not None else " " * 9
-    print(f"  {label:<44} {ratio:8.4f} {res.before['rms']:10.4g} {val}   {', '.join(fired) or 'none'}")
+    val = f"{res.validation['rms']:.4g}" if validation is not None else ""
+    return [label, f"{ratio:.4f}", f"{res.before['rms']:.4g}", val, ", ".join(fired) or "none"]
 
 
 def plausibility_checks() -> None:
@@ -171,21 +173,21 @@ def plausibility_checks() -> None:
 
     (meca_cal, meca_val), (irb_cal, _) = meca500(DATASETS), irb120(DATASETS)
     meca = Robot.from_catalog("meca500")
-    print("\nplausibility checks, forced (spread ratio: measured / registered nominal model; limits "
-          "1/3-3, unit beyond 300)")
-    print(f"  {'case':<44} {'spread':>8} {'nominal mm':>10} {'val mm':>9}   checks that fire")
-    _plausibility_row("Meca500 data, meca500", meca, meca_cal)
-    _plausibility_row("IRB 120 data, abb_irb120", Robot.from_catalog("abb_irb120"), irb_cal)
-    _plausibility_row("Meca500, metres under _mm (points / 1000)", meca,
-                      replace(meca_cal, points=meca_cal.points * 1e-3))
-    _plausibility_row("Meca500, radians under _deg (joints / 57.3)", meca,
-                      replace(meca_cal, joints=np.deg2rad(meca_cal.joints)))
+    rows = [_plausibility_row("Meca500 data, meca500", meca, meca_cal),
+            _plausibility_row("IRB 120 data, abb_irb120", Robot.from_catalog("abb_irb120"), irb_cal),
+            _plausibility_row("Meca500, metres under _mm (points / 1000)", meca,
+                              replace(meca_cal, points=meca_cal.points * 1e-3)),
+            _plausibility_row("Meca500, radians under _deg (joints / 57.3)", meca,
+                              replace(meca_cal, joints=np.deg2rad(meca_cal.joints)))]
     for name in catalog_names():
         robot = Robot.from_catalog(name)
         if name != "meca500" and robot.n_joints == meca.n_joints:
-            _plausibility_row(f"Meca500 data, wrong robot {name}", robot, meca_cal)
-    _plausibility_row("IRB 120, validation = Meca500 data", Robot.from_catalog("abb_irb120"), irb_cal,
-                      meca_val)
+            rows.append(_plausibility_row(f"Meca500 data, wrong robot {name}", robot, meca_cal))
+    rows.append(_plausibility_row("IRB 120, validation = Meca500 data", Robot.from_catalog("abb_irb120"),
+                                  irb_cal, meca_val))
+    table("plausibility checks, forced (spread ratio: measured / registered nominal model; limits 1/3-3, "
+          "unit beyond 300)", ["case", "spread", "nominal mm", "validation mm", "checks that fire"], rows,
+          key="plausibility")
 
 
 def speed_rows(nominal, n: int) -> list:
@@ -205,13 +207,14 @@ def speed_rows(nominal, n: int) -> list:
 
 def speed() -> None:
     nominal = Robot.from_catalog("abb_irb2600")
-    print("\ncalibration speed: simulated abb_irb2600, noise 0.02 mm, 200 validation poses, best of 5")
-    print("(the solve rows start from the same registered model with the same identifiable parameters)")
-    print(f"{'poses':>6} {'what':<44} {'time':>10} {'val RMS mm':>11} {'vs robocal solve':>17}")
+    out = []
     for n in (100, 1000):
         rows = speed_rows(nominal, n)
-        for label, t, rms in rows:
-            print(f"{n:>6} {label:<44} {t * 1e3:>8.1f}ms {rms:>11.4f} {t / rows[0][1]:>16.1f}x")
+        out += [[n, label, f"{t * 1e3:.1f}", f"{rms:.4f}", f"{t / rows[0][1]:.1f}x"]
+                for label, t, rms in rows]
+    table("calibration speed: simulated abb_irb2600, noise 0.02 mm, 200 validation poses, best of 5 (the "
+          "solve rows start from the same registered model with the same identifiable parameters)",
+          ["poses", "what", "time (ms)", "validation RMS (mm)", "vs robocal solve"], out, key="speed")
 
 
 PARTS = {"accuracy": accuracy_goals, "plausibility": plausibility_checks, "speed": speed}

@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from results import figure, table
 from scipy.spatial.transform import Rotation
 from timing import best_time
 
@@ -126,6 +127,7 @@ def _parsed(paths, tools, frames):
 def speed(n: int = 10_000) -> None:
     tool = make_transform(np.eye(3), np.array([0.03, 0.0, 0.12]))
     frame = make_transform(np.eye(3), np.array([0.4, -0.1, 0.05]))
+    rows, slowest = [], 0.0
     for dialect, name, variables in SPEED_CASES:
         nominal = rc.Robot.from_catalog(name)
         cal = perturbed(nominal, 0)
@@ -141,10 +143,16 @@ def speed(n: int = 10_000) -> None:
         t_comp, _ = best_time(lambda tg=targets, s=seeds, c=cal, nm=nominal:
                               rc.compensate(c, nm, tg, seeds=s, targets_frame="robot", tool=tool), repeat=3)
         filtered = sum(r["filtered"] for r in res.rows)
-        label = dialect + (" (a variable per waypoint)" if variables else "")
-        print(f"{label:9s} {name:18s} {len(q)} targets ({size / 1e6:.1f} MB): filter {t:.2f} s "
-              f"({t / len(q) * 1e6:.0f} us/target, goal < 5 s: {'met' if t < 5 else 'NOT met'}), {filtered} "
-              f"filtered; rc.compensate alone {t_comp:.2f} s (filter / compensate {t / t_comp:.1f}x)")
+        slowest = max(slowest, t)
+        rows.append([dialect + (" (a variable per waypoint)" if variables else ""), name, len(q),
+                     f"{size / 1e6:.1f}", f"{t:.2f}", f"{t / len(q) * 1e6:.0f}",
+                     "met" if t < 5 else "NOT met", filtered, f"{t_comp:.2f}", f"{t / t_comp:.1f}x"])
+    figure("speed_targets", f"{n:,}")
+    figure("speed_slowest_s", f"{slowest:.2f}")
+    table(f"filter speed, {n:,}-target programs, best of 3",
+          ["format", "robot", "targets", "MB", "filter (s)", "us/target", "goal < 5 s", "filtered",
+           "rc.compensate alone (s)", "filter / compensate"], rows,
+          key="speed")
 
 
 def _ratios(rows: list[dict]) -> tuple[list[float], list[float]]:
@@ -153,26 +161,46 @@ def _ratios(rows: list[dict]) -> tuple[list[float], list[float]]:
             [r["unfiltered"]["rms_mm"] / r["filtered"]["rms_mm"] for r in rows])
 
 
+def _span(values, fmt: str) -> str:
+    return f"{min(values):{fmt}}-{max(values):{fmt}}"
+
+
 def truth(seeds=(0, 1, 2)) -> None:
     print("simulated truth, 200 targets, work object + real tool (TCP by the 4-point method on the "
           "calibrated model); RMS (max) error from the intended targets")
+    rows = []
     for dialect, name in CASES:
-        rows = [truth_experiment(dialect, name, 200, seed) for seed in seeds]
-        ratio, gain = _ratios(rows)
+        runs = [truth_experiment(dialect, name, 200, seed) for seed in seeds]
+        ratio, gain = _ratios(runs)
         for key in ("filtered", "perfect", "unfiltered"):
-            mm = ", ".join(f"{r[key]['rms_mm']:.4f} ({r[key]['max_mm']:.3f})" for r in rows)
-            deg = ", ".join(f"{r[key]['rms_deg']:.4f}" for r in rows)
-            print(f"  {dialect:9s} {key:10s} mm: {mm}; deg RMS: {deg}")
-        print(f"  {dialect:9s} filtered / perfect {min(ratio):.3f}-{max(ratio):.3f} (goal <= 1.2), "
-              f"unfiltered / filtered {min(gain):.1f}-{max(gain):.1f}x (goal >= 10)")
-    print("the same with a single-SMR campaign (the flange's orientation not seen)")
+            mm = ", ".join(f"{r[key]['rms_mm']:.4f} ({r[key]['max_mm']:.3f})" for r in runs)
+            print(f"  {dialect:9s} {key:10s} mm: {mm}")
+        rms = {key: [r[key]["rms_mm"] for r in runs] for key in ("filtered", "perfect", "unfiltered")}
+        deg = {key: [r[key]["rms_deg"] for r in runs] for key in ("filtered", "unfiltered")}
+        rows.append([f"{dialect}, {name}", _span(rms["filtered"], ".4f"), _span(rms["perfect"], ".4f"),
+                     _span(rms["unfiltered"], ".2f"), _span(ratio, ".3f"), _span(gain, ".0f") + "x",
+                     f"{_span(deg['filtered'], '.3f')} / {_span(deg['unfiltered'], '.3f')}"])
+    table(f"simulated truth, 200-target programs, seeds {', '.join(map(str, seeds))}: RMS error from "
+          "the intended targets (ranges over the seeds)",
+          ["format, robot", "filtered mm", "perfect mm", "unfiltered mm",
+           "filtered / perfect (goal <= 1.2)", "unfiltered / filtered (goal >= 10)",
+           "orientation filtered / unfiltered deg"], rows, key="truth")
+    rows, all_ratio, all_perfect, all_gain = [], [], [], []
     for dialect, name in CASES:
-        rows = [truth_experiment(dialect, name, 200, seed, n_smr=1) for seed in seeds]
-        ratio, gain = _ratios(rows)
-        perfect = [r["perfect"]["rms_mm"] for r in rows]
-        print(f"  {dialect:9s} filtered / perfect {min(ratio):.3f}-{max(ratio):.3f}, perfect RMS "
-              f"{min(perfect):.3f}-{max(perfect):.3f} mm, unfiltered / filtered "
-              f"{min(gain):.1f}-{max(gain):.1f}x")
+        runs = [truth_experiment(dialect, name, 200, seed, n_smr=1) for seed in seeds]
+        ratio, gain = _ratios(runs)
+        perfect = [r["perfect"]["rms_mm"] for r in runs]
+        all_ratio += ratio
+        all_perfect += perfect
+        all_gain += gain
+        rows.append([f"{dialect}, {name}", _span(ratio, ".3f"), _span(perfect, ".3f"),
+                     _span(gain, ".1f") + "x"])
+    table("the same with a single-SMR campaign (the flange's orientation not seen)",
+          ["format, robot", "filtered / perfect", "perfect mm", "unfiltered / filtered"], rows,
+          key="truth_one_smr")
+    figure("one_smr_ratio", _span(all_ratio, ".2f"))
+    figure("one_smr_perfect_mm", _span(all_perfect, ".3f"))
+    figure("one_smr_gain", _span(all_gain, ".1f") + "x")
 
 
 # ----------------------------------------------------------------------------- UR5 drilling
@@ -271,17 +299,36 @@ def drilling_experiment(folder, seed: int = 4) -> dict:
 
 
 def drilling(seeds=(4, 5, 6)) -> None:
-    print("UR5 drilling, URScript (100 holes x approach / drill / retract, movel, set_tcp, elbow 17-38 deg): "
-          "RMS error at the drill (mm)")
+    _, _, taught, _ = drilling_cell()
+    step = figure("drilling_step_deg", f"{np.rad2deg(np.abs(np.diff(taught, axis=0)).max()):.1f}")
+    elbow = figure("drilling_elbow_deg", _span(np.rad2deg(np.abs(taught[:, 2])), ".0f"))
+    rows, found = [], {"own": [], "filtered": [], "ratio": [], "unfiltered": [], "gain": []}
+    hops = numeric = 0
     for seed in seeds:
         with tempfile.TemporaryDirectory() as tmp:
             r = drilling_experiment(tmp, seed)
-        slots = branch_slot(r["nominal"], r["filtered_joints"]) != branch_slot(r["nominal"], r["taught"])
-        print(f"  seed {seed}: model's own {r['own_mm']:.4f}, filtered {r['filtered_mm']:.4f} "
-              f"({r['filtered_mm'] / r['own_mm']:.2f}x the model's, goal <= 1.2), unfiltered "
-              f"{r['unfiltered_mm']:.3f} ({r['unfiltered_mm'] / r['filtered_mm']:.0f}x, goal >= 10); "
-              f"filtered targets on another branch than the controller's: {int(slots.sum())}; the numeric "
-              f"nearest-joints search: {r['numeric_hops']} of {r['targets']} on another branch")
+        nominal = r["nominal"]
+        slots = int((branch_slot(nominal, r["filtered_joints"]) != branch_slot(nominal, r["taught"])).sum())
+        hops, numeric = hops + slots, numeric + r["numeric_hops"]
+        own, fil, unf = r["own_mm"], r["filtered_mm"], r["unfiltered_mm"]
+        for key, value in (("own", own), ("filtered", fil), ("unfiltered", unf), ("ratio", fil / own),
+                           ("gain", unf / fil)):
+            found[key].append(value)
+        rows.append([seed, f"{own:.4f}", f"{fil:.4f}", f"{fil / own:.2f}", f"{unf:.3f}", f"{unf / fil:.0f}x",
+                     slots,
+                     f"{r['numeric_hops']} of {r['targets']}"])
+    table(f"UR5 drilling, URScript (100 holes x approach / drill / retract, movel, set_tcp; joints move "
+          f"at most {step} deg between targets, elbow {elbow} deg from stretched): RMS error at the drill "
+          "(mm)",
+          ["seed", "model's own", "filtered", "filtered / own (goal <= 1.2)", "unfiltered",
+           "unfiltered / filtered (goal >= 10)", "filtered targets on another branch than the controller's",
+           "numeric nearest-joints search on another branch"], rows, key="drilling")
+    figure("drilling_filtered_mm", " / ".join(f"{v:.4f}" for v in found["filtered"]))
+    figure("drilling_unfiltered_mm", " / ".join(f"{v:.2f}" for v in found["unfiltered"]))
+    figure("drilling_ratio", _span(found["ratio"], ".2f") + "x")
+    figure("drilling_gain", _span(found["gain"], ".0f") + "x")
+    figure("drilling_branch_hops", str(hops))
+    figure("drilling_numeric_hops", f"{numeric} of {len(seeds) * len(taught)}")
 
 
 def main() -> None:

@@ -9,6 +9,7 @@ each: FK, solutions, misses, recovery, per-pose time against the peer called pos
 from __future__ import annotations
 
 import numpy as np
+from results import figure, table
 from timing import best_time, first_call, interleaved, kernel_choices, print_times, py_opw_robot
 
 import robocal as rc
@@ -125,6 +126,7 @@ def _ur(n: int) -> None:
     names = [nm for nm in catalog_names() if rc.Robot.from_catalog(nm).has_ur_form and hasattr(peer, nm)]
     print(f"UR closed form vs ur-analytic-ik: {n:,} random joint vectors per arm; solve_all batched "
           f"(one thread) vs the peer's inverse_kinematics called per pose from Python (goal >= 3x)")
+    rows, stats = [], {"fk": [], "err": [], "peer": [], "missed": [], "recovered": [], "t_peer": []}
     for name in names:
         robot, model = rc.Robot.from_catalog(name), getattr(peer, name)
         q = np.random.default_rng(21).uniform(-np.pi, np.pi, (n, 6))
@@ -146,11 +148,31 @@ def _ur(n: int) -> None:
         e = pose_error(T[ni], robot.fk(ours[ni, bi]))
         back = np.abs(np.remainder(ours - q[:, None] + np.pi, 2 * np.pi) - np.pi).max(axis=2)
         recovered = int((np.nanmin(np.where(np.isfinite(back), back, np.inf), axis=1) < 1e-7).sum())
-        speed = ", ".join(f"{k} {times[k] / n * 1e6:.2f} us/pose ({t_peer / times[k]:.1f}x)" for k in kernels)
-        print(f"  {name:6s} FK max |diff| {fk_diff:.1e}; {ok.sum()} solutions, FK error max "
-              f"{max(np.linalg.norm(e[:, :3], axis=1).max(), np.linalg.norm(e[:, 3:], axis=1).max()):.1e}; "
-              f"peer solutions {len(flat)} ({int((~real).sum())} not FK-exact), missed {missed}; original "
-              f"recovered {recovered}/{n}; peer {t_peer / n * 1e6:.2f} us/pose, solve_all {speed}")
+        err = max(np.linalg.norm(e[:, :3], axis=1).max(), np.linalg.norm(e[:, 3:], axis=1).max())
+        for key, value in (("fk", fk_diff), ("err", err), ("peer", len(flat)), ("missed", missed),
+                           ("recovered", recovered), ("t_peer", t_peer / n * 1e6)):
+            stats[key].append(value)
+        for k in kernels:
+            stats.setdefault(k, []).append(times[k] / n * 1e6)
+            stats.setdefault(k + "_ratio", []).append(t_peer / times[k])
+        rows.append([name, f"{fk_diff:.1e}", int(ok.sum()), f"{err:.1e}", len(flat), int((~real).sum()),
+                     missed,
+                     f"{recovered}/{n}", f"{t_peer / n * 1e6:.2f}",
+                     *(f"{times[k] / n * 1e6:.2f} ({t_peer / times[k]:.1f}x)" for k in kernels)])
+    table(f"UR closed form vs ur-analytic-ik, {n:,} random joint vectors per arm, one thread",
+          ["arm", "FK max |diff|", "solutions", "FK error max", "peer solutions", "peer not FK-exact",
+           "missed", "original recovered", "peer us/pose",
+           *(f"solve_all {k} us/pose (vs peer)" for k in kernels)], rows, key="ur")
+    figure("ur_poses", f"{n:,}")
+    figure("ur_fk_diff", f"{max(stats['fk']):.1e}")
+    figure("ur_fk_error", f"{max(stats['err']):.1e}")
+    figure("ur_peer_solutions", f"{min(stats['peer']):,}-{max(stats['peer']):,}")
+    figure("ur_missed", str(sum(stats["missed"])))
+    figure("ur_recovered", f"{min(stats['recovered']):,}")
+    figure("ur_peer_us", f"{min(stats['t_peer']):.3g}-{max(stats['t_peer']):.3g}")
+    for k in kernels:
+        figure(f"ur_{k}_us", f"{min(stats[k]):.3g}-{max(stats[k]):.3g}")
+        figure(f"ur_{k}_ratio", f"{min(stats[k + '_ratio']):.2g}-{max(stats[k + '_ratio']):.2g}x")
 
 
 def _numeric(robot: rc.Robot, n: int) -> None:

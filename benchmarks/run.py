@@ -1,5 +1,5 @@
 """Run every ``benchmarks/bench_*.py`` (each exposes ``main()`` that prints its results) and write
-what each printed, its recorded tables, the machine and the date to ``benchmarks/results.json``,
+what each printed, its recorded tables and figures, the machine and the date to ``benchmarks/results.json``,
 from which the documentation's benchmark page is built.
 
 Usage: ``python benchmarks/run.py [NAME ...] [--json PATH]`` -- names filter the files (``fk`` runs
@@ -67,6 +67,7 @@ def run_one(path: Path) -> dict:
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     results.TABLES.clear()
+    results.FIGURES.clear()
     entry = {"date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M"),
              "machine": machine(), "robocal_version": __version__,
              "description": " ".join((module.__doc__ or "").split("\n\n")[0].split())}
@@ -80,7 +81,8 @@ def run_one(path: Path) -> dict:
         sys.stdout = stdout
     entry["seconds"] = round(time.perf_counter() - start, 1)
     print(f"== {path.name} done in {entry['seconds']:.1f} s\n", flush=True)
-    return {**entry, "tables": list(results.TABLES), "output": tee.kept.getvalue()}
+    return {**entry, "tables": list(results.TABLES), "figures": dict(results.FIGURES),
+            "output": tee.kept.getvalue()}
 
 
 def main(argv: list[str] | None = None) -> int:

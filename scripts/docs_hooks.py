@@ -5,7 +5,13 @@ A page holds a marker comment that the hook replaces when the site is built:
 
 - ``<!-- generated: cli -->``: every ``robocal`` command, from the argparse parser itself;
 - ``<!-- generated: benchmarks -->``: the tables and output of ``benchmarks/results.json``, which
-  ``benchmarks/run.py`` (``make bench``) writes.
+  ``benchmarks/run.py`` (``make bench``) writes;
+- ``<!-- bench: NAME.KEY -->``: the table recorded under ``KEY`` by ``benchmarks/bench_NAME.py``,
+  with the machine and date it ran on; ``<!-- bench: NAME -->``: that machine and date alone;
+- ``{{ bench.NAME.KEY }}``: the single figure recorded under ``KEY`` by ``bench_NAME.py``.
+
+A reference to a benchmark, table or figure that ``results.json`` does not hold fails the build:
+no measured figure in the documentation is typed by hand.
 """
 
 from __future__ import annotations
@@ -14,12 +20,20 @@ import argparse
 import html
 import json
 import os
+import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCH_RESULTS = ROOT / "benchmarks" / "results.json"
 CLI_MARK = "<!-- generated: cli -->"
 BENCH_MARK = "<!-- generated: benchmarks -->"
+BENCH_REF = re.compile(r"<!--\s*bench:\s*([a-z0-9_]+)(?:\.([A-Za-z0-9_]+))?\s*-->")
+BENCH_FIGURE = re.compile(r"\{\{\s*bench\.([a-z0-9_]+)\.([A-Za-z0-9_]+)\s*\}\}")
+BENCH_ANY = re.compile(r"\{\{\s*bench\b|<!--\s*bench:")  # well formed or not
+
+
+class BenchReferenceError(ValueError):
+    """A page refers to a benchmark, table or figure that the results file does not hold."""
 
 
 def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001 - MkDocs' signature
@@ -27,6 +41,12 @@ def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001
         markdown = markdown.replace(CLI_MARK, cli_markdown())
     if BENCH_MARK in markdown:
         markdown = markdown.replace(BENCH_MARK, benchmarks_markdown(BENCH_RESULTS))
+    if BENCH_ANY.search(markdown):
+        where = f" (page {page.file.src_path})" if page is not None else ""
+        try:
+            markdown = bench_references(markdown, BENCH_RESULTS)
+        except BenchReferenceError as exc:
+            raise BenchReferenceError(f"{exc}{where}") from None
     return markdown
 
 
@@ -93,6 +113,60 @@ def _table(table: dict) -> list[str]:
     return out + [""]
 
 
+def _ran(run: dict) -> str:
+    machine = run["machine"]
+    return (f"Ran {run['date']} (UTC) in {run['seconds']:.0f} s with robocal {run['robocal_version']} "
+            f"on {_cell(machine['cpu'])}, {machine['cores']} cores, load average "
+            f"{machine['load_average']} at the start, {_cell(machine['platform'])}, "
+            f"Python {machine['python']}, numpy {machine['numpy']}.")
+
+
+def _run(runs: dict, name: str, path: Path) -> dict:
+    run = runs.get(f"bench_{name}")
+    if run is None:
+        raise BenchReferenceError(f"no benchmark 'bench_{name}' in {path.name}: run "
+                                  f"`python benchmarks/run.py {name}`")
+    return run
+
+
+def bench_references(markdown: str, path: Path) -> str:
+    """``markdown`` with its benchmark references (``<!-- bench: NAME.KEY -->``, ``<!-- bench: NAME
+    -->``, ``{{ bench.NAME.KEY }}``) replaced by what ``path`` (run.py's JSON) recorded;
+    :class:`BenchReferenceError` naming the first one it does not hold."""
+    if not path.exists():
+        raise BenchReferenceError(f"{path.name} does not exist: run `make bench` (or "
+                                  "`python benchmarks/run.py NAME ...`) before building the documentation")
+    runs = json.loads(path.read_text(encoding="utf-8"))["benchmarks"]
+
+    def ref(match: re.Match) -> str:
+        name, key = match.groups()
+        run = _run(runs, name, path)
+        source = f"Measured by `benchmarks/bench_{name}.py`: {_ran(run)}"
+        if key is None:
+            return source
+        table = next((t for t in run.get("tables", []) if t.get("key") == key), None)
+        if table is None:
+            raise BenchReferenceError(f"no table '{key}' in bench_{name}'s results: record it with "
+                                      f"results.table(..., key={key!r}) and run the benchmark")
+        return "\n".join([*_table(table), source, ""])
+
+    def figure(match: re.Match) -> str:
+        name, key = match.groups()
+        figures = _run(runs, name, path).get("figures", {})
+        if key not in figures:
+            raise BenchReferenceError(f"no figure '{key}' in bench_{name}'s results: record it with "
+                                      f"results.figure({key!r}, ...) and run the benchmark")
+        return _cell(figures[key])
+
+    out = BENCH_FIGURE.sub(figure, BENCH_REF.sub(ref, markdown))
+    bad = BENCH_ANY.search(out)
+    if bad:
+        line = out[bad.start():].splitlines()[0]
+        raise BenchReferenceError(f"malformed benchmark reference {line!r}: write <!-- bench: NAME.KEY -->, "
+                                  "<!-- bench: NAME --> or {{ bench.NAME.KEY }}")
+    return out
+
+
 def benchmarks_markdown(path: Path) -> str:
     """Every benchmark of ``path`` (``benchmarks/run.py``'s JSON): where and when it ran, its
     tables and its printed output; a note saying so when there is no such file."""
@@ -103,14 +177,12 @@ def benchmarks_markdown(path: Path) -> str:
     out = []
     for name in sorted(runs):
         run = runs[name]
-        machine = run["machine"]
-        out += [f"## {name}", "", _cell(run.get("description", "")), "",
-                f"Ran {run['date']} (UTC) in {run['seconds']:.0f} s with robocal {run['robocal_version']} "
-                f"on {_cell(machine['cpu'])}, {machine['cores']} cores, load average "
-                f"{machine['load_average']} at the start, {_cell(machine['platform'])}, "
-                f"Python {machine['python']}, numpy {machine['numpy']}.", ""]
+        out += [f"## {name}", "", _cell(run.get("description", "")), "", _ran(run), ""]
         for table in run.get("tables", []):
             out += _table(table)
+        if run.get("figures"):
+            out += ["**Figures the documentation quotes**", "", "| key | figure |", "|---|---|",
+                    *(f"| `{k}` | {_cell(v)} |" for k, v in run["figures"].items()), ""]
         fold = "???" if run.get("tables") else "???+"  # open when the output is all there is
         out += [f"{fold} abstract \"Output of the run\"", "", "    ```text",
                 *("    " + line for line in run["output"].rstrip().splitlines()), "    ```", ""]

@@ -10,6 +10,8 @@ import re
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
 
@@ -61,3 +63,44 @@ def test_readme_is_short_and_its_links_exist():
     for link in links:
         if "://" not in link:
             assert (ROOT / link).exists(), link
+
+
+def _results(tmp_path):
+    run = {"date": "2026-01-02 03:04", "seconds": 12.3, "robocal_version": "9.9", "output": "",
+           "machine": {"cpu": "Test CPU", "cores": 2, "load_average": [1.0, 0.5, 0.2], "platform": "Linux",
+                       "python": "3.11", "numpy": "2.0"},
+           "tables": [{"title": "UR5", "key": "ur5", "columns": ["case", "RMS"],
+                       "rows": [["default", "0.0350"]]}],
+           "figures": {"ur5_rms": "0.0350"}}
+    path = tmp_path / "results.json"
+    path.write_text(json.dumps({"benchmarks": {"bench_priors": run}}))
+    return path
+
+
+def test_bench_references_are_replaced_by_recorded_tables_and_figures(tmp_path):
+    page = "RMS {{ bench.priors.ur5_rms }} mm.\n\n<!-- bench: priors.ur5 -->\n\n<!-- bench: priors -->\n"
+    text = docs_hooks.bench_references(page, _results(tmp_path))
+    assert text.startswith("RMS 0.0350 mm.")
+    assert "| default | 0.0350 |" in text and "**UR5**" in text
+    assert text.count("Measured by `benchmarks/bench_priors.py`: Ran 2026-01-02 03:04") == 2
+    assert "Test CPU" in text and "bench:" not in text and "{{" not in text
+
+
+@pytest.mark.parametrize("page", ["{{ bench.priors.ur5_mean }}", "<!-- bench: priors.seven_axis -->",
+                                  "<!-- bench: ik -->", "{{ bench.filter.speed_slowest_s }}",
+                                  "{{ bench.priors }}", "<!-- bench: priors.ur5.rms -->"])
+def test_bench_reference_to_a_missing_key_fails_the_build(tmp_path, page):
+    path = _results(tmp_path)
+    with pytest.raises(docs_hooks.BenchReferenceError, match="no (figure|table|benchmark)|malformed"):
+        docs_hooks.bench_references(page, path)
+    with pytest.raises(docs_hooks.BenchReferenceError, match="does not exist"):
+        docs_hooks.bench_references(page, tmp_path / "missing.json")
+
+
+def test_every_bench_reference_in_the_docs_is_in_the_committed_results():
+    """What `make docs` (mkdocs --strict) would refuse, checked without building the site."""
+    path = ROOT / "benchmarks" / "results.json"
+    for page in (ROOT / "docs").rglob("*.md"):
+        text = page.read_text(encoding="utf-8")
+        if docs_hooks.BENCH_ANY.search(text):
+            docs_hooks.bench_references(text, path)
