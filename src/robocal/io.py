@@ -250,8 +250,16 @@ class _DeferSignals:
             raise KeyboardInterrupt
 
     def __exit__(self, *exc) -> None:
-        for sig, handler in self.previous.items():
-            signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
+        # a signal arriving while the handlers are swapped back stays pending (blocked) and reaches
+        # the restored handler, instead of being caught by the C handler and dropped
+        mask = hasattr(signal, "pthread_sigmask") and self.previous
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, self.SIGNALS) if mask else None
+        try:
+            for sig, handler in self.previous.items():
+                signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
+        finally:
+            if mask:
+                signal.pthread_sigmask(signal.SIG_SETMASK, old)
         for sig in dict.fromkeys(self.pending):
             signal.raise_signal(sig)
 
