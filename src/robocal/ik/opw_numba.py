@@ -46,6 +46,31 @@ def _affine(A, B, C):
     C[3, 0], C[3, 1], C[3, 2], C[3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
+@numba.njit
+def write_checked(F, q, valid, T, tool, start, m, tol2, out):
+    """Copy the 8 * ``m`` solutions ``q`` (6, 8m) of poses ``T[start:start + m]`` into ``out``
+    (N, 8, 6), NaN where a lane is not ``valid`` or its forward kinematics (link frames ``F``
+    (12, 8m) from chain_block, times ``tool``) misses the pose by more than sqrt(``tol2``)
+    in position (m) or in rotation (the matrix difference's Frobenius norm / sqrt 2)."""
+    for L in range(8 * m):
+        target = T[start + L // 8]
+        dp2, dr2 = 0.0, 0.0
+        for row in range(3):
+            x0, x1, x2 = F[4 * row, L], F[4 * row + 1, L], F[4 * row + 2, L]
+            for col in range(4):
+                e = x0 * tool[0, col] + x1 * tool[1, col] + x2 * tool[2, col]
+                if col == 3:
+                    e = (e + F[4 * row + 3, L]) - target[row, 3]
+                    dp2 += e * e
+                else:
+                    e = e - target[row, col]
+                    dr2 += e * e
+        ok = valid[L] and dp2 <= tol2 and dr2 / 2.0 <= tol2
+        row_out = out[start + L // 8, L % 8]
+        for j in range(6):
+            row_out[j] = q[j, L] if ok else np.nan
+
+
 @numba.njit(**_JIT)
 def _paper_pose(F, geom, out, lane):
     """Paper angles of flange ``F`` (4x4, OPW base frame) into ``out[:, lane:lane + 8]``; geom:
@@ -123,23 +148,7 @@ def _solve_kernel(T, pre, post, geom, offsets, signs, theta, A, a, d, base, tool
             for j in range(6):
                 phi[j, L] = (q[j, L] if ok else 0.0) + theta[j]
         chain_block(phi, 8 * m, A, a, d, base, c, s, F)
-        for L in range(8 * m):
-            target = T[start + L // 8]
-            dp2, dr2 = 0.0, 0.0
-            for row in range(3):
-                x0, x1, x2 = F[4 * row, L], F[4 * row + 1, L], F[4 * row + 2, L]
-                for col in range(4):
-                    e = x0 * tool[0, col] + x1 * tool[1, col] + x2 * tool[2, col]
-                    if col == 3:
-                        e = (e + F[4 * row + 3, L]) - target[row, 3]
-                        dp2 += e * e
-                    else:
-                        e = e - target[row, col]
-                        dr2 += e * e
-            ok = valid[L] and dp2 <= tol2 and dr2 / 2.0 <= tol2
-            row_out = out[start + L // 8, L % 8]
-            for j in range(6):
-                row_out[j] = q[j, L] if ok else np.nan
+        write_checked(F, q, valid, T, tool, start, m, tol2, out)
 
 
 def chunk_solver(robot: Robot, geometry: np.ndarray, offsets: np.ndarray, signs: np.ndarray,

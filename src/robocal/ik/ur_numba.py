@@ -18,7 +18,7 @@ import numba
 import numpy as np
 
 from robocal.ik.opw_ik import _CLAMP, _SINGULAR
-from robocal.ik.opw_numba import _affine, _clamp, _wrap_one
+from robocal.ik.opw_numba import _affine, _clamp, _wrap_one, write_checked
 from robocal.ik.ur_ik import _NEAR
 from robocal.kinematics.fk_numba import chain_block, link_constants
 from robocal.kinematics.model import Robot
@@ -136,23 +136,7 @@ def _solve_kernel(T, pre, post, geom, theta, A, a, d, base, tool, tol, out):
             for j in range(6):
                 phi[j, L] = (q[j, L] if ok else 0.0) + theta[j]
         chain_block(phi, 8 * m, A, a, d, base, c, s, G)
-        for L in range(8 * m):
-            target = T[start + L // 8]
-            dp2, dr2 = 0.0, 0.0
-            for row in range(3):
-                x0, x1, x2 = G[4 * row, L], G[4 * row + 1, L], G[4 * row + 2, L]
-                for col in range(4):
-                    e = x0 * tool[0, col] + x1 * tool[1, col] + x2 * tool[2, col]
-                    if col == 3:
-                        e = (e + G[4 * row + 3, L]) - target[row, 3]
-                        dp2 += e * e
-                    else:
-                        e = e - target[row, col]
-                        dr2 += e * e
-            ok = valid[L] and dp2 <= tol2 and dr2 / 2.0 <= tol2
-            row_out = out[start + L // 8, L % 8]
-            for j in range(6):
-                row_out[j] = q[j, L] if ok else np.nan
+        write_checked(G, q, valid, T, tool, start, m, tol2, out)
 
 
 def chunk_solver(robot: Robot, form: URForm, pre: np.ndarray, post: np.ndarray,
