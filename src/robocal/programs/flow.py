@@ -72,7 +72,7 @@ def _segments(flow: Flow) -> list[tuple[Path, int, int, str]] | None:
             out.append((path, a, b, via))
 
     def walk(r: Routine, stack: tuple[str, ...], via: str) -> bool:
-        nested = sorted((x for x in bodies if x.path == r.path and r.start < x.start and x.end <= r.end
+        nested = sorted((x for x in bodies if x.path == r.path and r.start <= x.start and x.end <= r.end
                          and x is not r), key=lambda x: x.start)
         here = calls.get(r.path, [])
         pos = r.start
