@@ -490,7 +490,7 @@ def test_rapid_routine_before_main_is_chained_in_execution_order(tmp_path):
     robot = rc.Robot.from_catalog("abb_irb2600")
     q_far = np.deg2rad([100, 40, 10, -120, 60, 150])
     (gen,), _, _ = _program(tmp_path, "rapid", robot, np.rad2deg([q_far, q_far + 0.05, q_far + 0.1]))
-    decls = "\n".join(line for line in gen.read_text().splitlines() if ":=" in line)
+    decls = "\n".join(line for line in gen.read_text().splitlines() if re.match(r"\s*(PERS|CONST) ", line))
     move = "v500, fine, tReal\\WObj:=wCell;"
     path = tmp_path / "order.mod"
     path.write_text(f"MODULE order\n{decls}\n  PROC path()\n    ConfL\\Off;\n    MoveL p1, {move}\n"
