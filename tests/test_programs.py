@@ -467,13 +467,14 @@ def test_urscript_targets_are_chained_in_execution_order(tmp_path):
     robot = rc.Robot.from_catalog("ur5")
     q_far = np.array([1.2, -2.0, 2.0, -1.5, -1.4, 0.5])
     T = robot.fk(np.array([q_far + 0.05, q_far + 0.1]))
-    pose = [", ".join(f"{v:.6f}" for v in (*t[:3, 3], *Rotation.from_matrix(t[:3, :3]).as_rotvec())) for t in T]
+    pose = [", ".join(f"{v:.6f}" for v in (*t[:3, 3], *Rotation.from_matrix(t[:3, :3]).as_rotvec()))
+            for t in T]
     q_other = _nearest_by_hand(robot, T[0], np.zeros(6), 2)  # the branch zero joints would give
     joints = [", ".join(f"{v:.6f}" for v in q) for q in (q_far, q_other)]
     path = tmp_path / "order.script"
-    path.write_text(f"def approach():\n  movel(p[{pose[0]}], a=1.2, v=0.25)\n  movel(p[{pose[1]}], a=1.2, v=0.25)\n"
-                    f"end\nmovej([{joints[0]}], a=1.4, v=1.05)\napproach()\nmovej([{joints[1]}], a=1.4, v=1.05)\n"
-                    "approach()\n")
+    path.write_text(f"def approach():\n  movel(p[{pose[0]}], a=1.2, v=0.25)\n"
+                    f"  movel(p[{pose[1]}], a=1.2, v=0.25)\nend\nmovej([{joints[0]}], a=1.4, v=1.05)\n"
+                    f"approach()\nmovej([{joints[1]}], a=1.4, v=1.05)\napproach()\n")
     names, F, q, warnings = _controller([path], robot)
     assert names == ["p@2", "p@3"]
     q_a = _nearest_by_hand(robot, F[0], q_far, 2)
