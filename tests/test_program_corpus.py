@@ -30,7 +30,7 @@ CASES = {
                            r":65: MoveL: .*computed at run time by CRobT\(\)",
                            r":66: MoveJ: .*robtarget pService is not declared"]),
     "rapid multimove palletizing": (["pallet_multimove.mod"], [], "abb_irb2600", {},
-                                    ["pPickUp", "wp{1}.pos", "wp{2}.pos", "pHandOver", "pPick"],
+                                    ["pPickUp", "pPick", "wp{1}.pos", "wp{2}.pos", "pHandOver"],
                                     [r":32: MoveL: .*Offs\(pPalletCorner, nCol\*nPitch.*run time only",
                                      r":35: MoveL: .*pLayer is modified at run time .*:34\)"]),
     "krl kss8 spline": (["deburr_cell.src", "deburr_cell.dat"], ["$config.dat"], "kuka_kr16_2", {},
@@ -46,7 +46,7 @@ CASES = {
                            r":39: L: .*PR\[5:service\] is a position reg",
                            r":40: L: .*P\[12\] is not a Cartesian position of group 1"]),
     "urscript palletizing": (["palletizing_ur5.script"], [], "ur5", {},
-                             ["Inspect_p", "Pick_p", "p@40", "p@41", "p@41", "Gauge_p"],
+                             ["Pick_p", "Inspect_p", "p@40", "p@41", "p@41", "Gauge_p"],
                              [r":28: movel: .*pose_add\(Place_base_p, \.\.\.\) moves it at run time",
                               r":39: movel: .*computed at run time by get_actual_tcp_pose\(\)"]),
 }

@@ -433,3 +433,105 @@ def test_a_robot_that_is_not_six_axis_is_refused():
                              theta=[0] * 7, d=[333, 0, 316, 0, 384, 0, 107], degrees=True, length_unit="mm")
     with pytest.raises(DataError, match="6-axis arms; the nominal model .* has 7 joints"):
         filter_program(DATA / "pick_place.script", arm7, arm7)
+
+
+# ----------------------------------------------------------------------------- execution order
+def _controller(paths, robot, tools=None, frames=None):
+    """Target names in the filter's order, their flange poses and the filter's controller joints."""
+    from robocal.kinematics.transforms import invert_transform
+    from robocal.programs.filter import as_frames, controller_joints, dialect_for, target_poses
+    from robocal.programs.source import ProgramText
+
+    d = dialect_for(paths)
+    program = d.parse([ProgramText(p) for p in paths], as_frames(d, frames or {}), as_frames(d, tools or {}))
+    _, P, W, tool = target_poses(d, program, program.targets)
+    F = W @ P @ invert_transform(tool)
+    problems, warnings = [], []
+    q = controller_joints(d, program, program.targets, robot, F, problems, warnings)
+    assert not problems
+    return [t.name for t in program.targets], F, q, program.warnings + warnings
+
+
+def _nearest_by_hand(robot, F, prev, power):
+    """The controller's choice computed by hand: among all closed-form solutions inside the limits
+    (rc.ik.solve_all with the turn copies), the one nearest ``prev`` (sum of |dq|**power)."""
+    cands = rc.ik.solve_all(robot, F[None], extra_turns=True)[0]
+    d = np.where(np.isfinite(cands).all(axis=1), (np.abs(cands - prev) ** power).sum(axis=1), np.inf)
+    return cands[int(np.argmin(d))]
+
+
+def test_urscript_targets_are_chained_in_execution_order(tmp_path):
+    """A def with movel targets written before the main code that calls it after a far movej: the
+    controller reaches them from the movej's joints (not from zero joints, their text order); a
+    second call coming from other joints, where the controller takes another branch, is named."""
+    robot = rc.Robot.from_catalog("ur5")
+    q_far = np.array([1.2, -2.0, 2.0, -1.5, -1.4, 0.5])
+    T = robot.fk(np.array([q_far + 0.05, q_far + 0.1]))
+    pose = [", ".join(f"{v:.6f}" for v in (*t[:3, 3], *Rotation.from_matrix(t[:3, :3]).as_rotvec()))
+            for t in T]
+    q_other = _nearest_by_hand(robot, T[0], np.zeros(6), 2)  # the branch zero joints would give
+    joints = [", ".join(f"{v:.6f}" for v in q) for q in (q_far, q_other)]
+    path = tmp_path / "order.script"
+    path.write_text(f"def approach():\n  movel(p[{pose[0]}], a=1.2, v=0.25)\n"
+                    f"  movel(p[{pose[1]}], a=1.2, v=0.25)\nend\nmovej([{joints[0]}], a=1.4, v=1.05)\n"
+                    f"approach()\nmovej([{joints[1]}], a=1.4, v=1.05)\napproach()\n")
+    names, F, q, warnings = _controller([path], robot)
+    assert names == ["p@2", "p@3"]
+    q_a = _nearest_by_hand(robot, F[0], q_far, 2)
+    np.testing.assert_allclose(q, [q_a, _nearest_by_hand(robot, F[1], q_a, 2)], atol=1e-9)
+    assert np.abs(q_a - q_other).max() > 1.0  # text order (from zero joints) would take another branch
+    assert any(re.match(r"order\.script:2 \(p@2\): executed again through the call at order\.script:8, .*"
+                        r"first execution \(through order\.script:6\)", w) for w in warnings)
+    assert not any("no joint position before the first target" in w for w in warnings)
+
+
+def test_rapid_routine_before_main_is_chained_in_execution_order(tmp_path):
+    """PROC path (ConfL\\Off) written before PROC main, which calls it after MoveJ pFar: the
+    targets of path are solved nearest pFar's joints."""
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    q_far = np.deg2rad([100, 40, 10, -120, 60, 150])
+    (gen,), _, _ = _program(tmp_path, "rapid", robot, np.rad2deg([q_far, q_far + 0.05, q_far + 0.1]))
+    decls = "\n".join(line for line in gen.read_text().splitlines() if re.match(r"\s*(PERS|CONST) ", line))
+    move = "v500, fine, tReal\\WObj:=wCell;"
+    path = tmp_path / "order.mod"
+    path.write_text(f"MODULE order\n{decls}\n  PROC path()\n    ConfL\\Off;\n    MoveL p1, {move}\n"
+                    f"    MoveL p2, {move}\n  ENDPROC\n  PROC main()\n    MoveJ p0, {move}\n    path;\n"
+                    "  ENDPROC\nENDMODULE\n")
+    names, F, q, _ = _controller([path], robot)
+    assert names == ["p0", "p1", "p2"]
+    np.testing.assert_allclose(q[0], q_far, atol=1e-4)  # the written numbers are rounded
+    q_a = _nearest_by_hand(robot, F[1], q[0], 1)
+    np.testing.assert_allclose(q[1:], [q_a, _nearest_by_hand(robot, F[2], q_a, 1)], atol=1e-9)
+    assert np.abs(q_a - _nearest_by_hand(robot, F[1], np.zeros(6), 1)).max() > 1.0  # text order differs
+
+
+def test_krl_subroutine_is_chained_in_execution_order(tmp_path):
+    """A DEF after the main DEF of the .src, called between two targets on different wrist
+    branches: its targets without S/T follow the one before the call, not the one before it in
+    the text."""
+    robot = rc.Robot.from_catalog("kuka_kr16_2")
+    q_far = np.array([40, -60, 100, 60, -50, 30.0])
+    q_end = np.array([40, -60, 100, -120, 50, -150.0])
+    (src, dat), tools, frames = _program(tmp_path, "krl", robot, [q_far, q_far + 3, q_far + 6, q_end])
+    dat.write_text(re.sub(r"(XP[12]=\{[^}]*?),S \d+,T \d+", r"\1", dat.read_text()))
+    src.write_text("DEF edge( )\n  $TOOL = TOOL_DATA[1]\n  $BASE = BASE_DATA[1]\n  PTP XP0\n  PICK( )\n"
+                   "  PTP XP3\nEND\n\nDEF PICK( )\n  LIN XP1\n  LIN XP2\nEND\n")
+    names, F, q, _ = _controller([src, dat], robot, tools, frames)
+    assert names == ["XP0", "XP1", "XP2", "XP3"]
+    np.testing.assert_allclose(q[[0, 3]], np.deg2rad([q_far, q_end]), atol=1e-4)
+    q_a = _nearest_by_hand(robot, F[1], q[0], 1)
+    np.testing.assert_allclose(q[1:3], [q_a, _nearest_by_hand(robot, F[2], q_a, 1)], atol=1e-9)
+    assert np.abs(q_a - _nearest_by_hand(robot, F[1], q[3], 1)).max() > 1.0  # text order differs
+
+
+def test_no_entry_keeps_text_order_with_a_warning(tmp_path):
+    """Two top-level defs and nothing calling either: the entry is unknown, text order is kept
+    and said; a script without routines says nothing."""
+    pose = "p[0.4, 0.1, 0.4, 0.0, 3.14, 0.0]"
+    two = tmp_path / "two.script"
+    two.write_text(f"def a():\n  movel({pose})\nend\ndef b():\n  movel({pose})\nend\n")
+    flat = tmp_path / "flat.script"
+    flat.write_text(f"movel({pose})\n")
+    robot = rc.Robot.from_catalog("ur5")
+    assert any("no entry routine found" in w for w in _controller([two], robot)[3])
+    assert not any("no entry routine found" in w for w in _controller([flat], robot)[3])

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robocal.errors import DataError
-from robocal.ik.closed_form import branch_slot, solve_branches, turn_copies
+from robocal.ik.closed_form import branch_slot, solve_branches
 from robocal.ik.opw_ik import check_poses
 from robocal.kinematics.model import Robot
 
@@ -60,21 +60,24 @@ def nearest_solutions(robot: Robot, poses, start, anchors=None,
     anchors = np.full((N, n), np.nan) if anchors is None else np.asarray(anchors, dtype=float)
     if anchors.shape != (N, n):
         raise DataError(f"anchors must have shape ({N}, {n}), got {anchors.shape}")
-    cand, src = turn_copies(robot, solve_branches(robot, T))
-    valid = src >= 0
+    copies, valid = _joint_copies(robot, solve_branches(robot, T))
     joints = np.full((N, n), np.nan)
     move = np.full(N, np.nan)
     taken = np.full(N, -1)
     prev = start
+    cols = np.arange(n)
     for i in range(N):  # sequential by nature: each choice depends on the previous one
         if np.isfinite(anchors[i]).all():
             prev = anchors[i]
-        if not valid[i].any():
+        # the distance is a sum over joints: per branch, each joint's nearest copy inside its limits
+        d = np.where(valid[i], (copies[i] - prev[None, :, None]) ** 2, np.inf)  # (B, n, C)
+        near = np.argmin(d, axis=2)
+        cost = np.take_along_axis(d, near[:, :, None], axis=2)[:, :, 0].sum(axis=1)
+        if not np.isfinite(cost).any():
             continue
-        d = np.where(valid[i], np.sum((cand[i] - prev) ** 2, axis=1), np.inf)
-        k = int(np.argmin(d))
-        joints[i], taken[i] = cand[i, k], k
-        move[i] = np.abs(cand[i, k] - prev).max()
+        k = int(np.argmin(cost))
+        joints[i], taken[i] = copies[i, k, cols, near[k]], k
+        move[i] = np.abs(joints[i] - prev).max()
         prev = joints[i]
     ok = taken >= 0
     slots = np.full(N, -1)
@@ -82,4 +85,18 @@ def nearest_solutions(robot: Robot, poses, start, anchors=None,
         slots[ok] = branch_slot(robot, joints[ok])
     return ControllerChoice(joints=joints, slots=slots, move=move, unreachable=np.flatnonzero(~ok),
                             jumps=np.flatnonzero(ok & (move > np.deg2rad(jump_deg))),
-                            candidates=valid.sum(axis=1))
+                            candidates=valid.sum(axis=3).prod(axis=2).sum(axis=1))
+
+
+def _joint_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per branch and joint, the solution's value and its +-2 pi copies: ``(N, B, n, C)`` rad and
+    whether each lies inside the joint's limits (a branch without a solution: none does). The
+    candidates of :func:`robocal.ik.closed_form.turn_copies` are every combination of them."""
+    lo, hi = robot.limits[:, 0], robot.limits[:, 1]
+    kmin = np.floor((lo - np.pi) / (2 * np.pi)).astype(int) + 1  # q in [-pi, pi): the copies that can fit
+    kmax = np.ceil((hi + np.pi) / (2 * np.pi)).astype(int) - 1
+    k = np.arange(kmin.min(), kmax.max() + 1)
+    copies = q[..., None] + 2 * np.pi * k  # (N, B, n, C)
+    valid = (np.isfinite(copies) & (copies >= lo[:, None]) & (copies <= hi[:, None])
+             & np.isfinite(q).all(axis=2)[:, :, None, None])
+    return copies, valid

@@ -49,6 +49,7 @@ from robocal.programs.source import ProgramText, format_number
 from robocal.programs.urscript import URScriptDialect
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
+SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
 LISTED = 20  # problems listed in one error message
 # A real TCP (--tcp) turned more than this from the program's tool data is another tool or a wrong
@@ -242,8 +243,17 @@ def _anchors(nominal, N: int, targets, program: Program, warnings) -> np.ndarray
     for index, qj in program.joint_targets:
         if index < N:
             anchor[index] = qj
+    return _first_anchor(nominal, targets, _qnear(targets, n, anchor), warnings)
+
+
+def _qnear(targets, n: int, anchor: np.ndarray) -> np.ndarray:
+    """``anchor`` with the rows of targets that give a qnear replaced by it."""
     qnear = np.array([t.qnear if t.qnear is not None else np.full(n, np.nan) for t in targets])
-    fixed = np.where(np.isfinite(qnear), qnear, anchor)
+    return np.where(np.isfinite(qnear), qnear, anchor)
+
+
+def _first_anchor(nominal, targets, fixed: np.ndarray, warnings) -> np.ndarray:
+    """``fixed`` with zero joints (and a warning) in its first row when the program gives none."""
     if not np.isfinite(fixed[0]).all():
         fixed[0] = np.clip(0.0, nominal.limits[:, 0], nominal.limits[:, 1])
         warnings.append(f"{targets[0].where}: no joint position before the first target: the controller's "
@@ -251,20 +261,61 @@ def _anchors(nominal, N: int, targets, program: Program, warnings) -> np.ndarray
     return fixed
 
 
+def _executions(nominal, targets, program: Program, warnings):
+    """``(rows, anchors, via)``: the targets (indices) in the order the controller runs them,
+    every execution (:attr:`Program.sequence`; without one, each target once in list order), the
+    joints known right before each (NaN rows: none) and the call each execution comes through."""
+    n, N = nominal.n_joints, len(targets)
+    if not program.sequence:
+        return np.arange(N), _anchors(nominal, N, targets, program, warnings), [""] * N
+    index = {id(t): i for i, t in enumerate(targets)}
+    rows, anchors, via, pending = [], [], [], np.full(n, np.nan)
+    for item, call in program.sequence:
+        if not isinstance(item, Target):
+            pending = np.asarray(item, float)
+        elif id(item) in index:
+            rows.append(index[id(item)])
+            anchors.append(pending)
+            via.append(call)
+            pending = np.full(n, np.nan)
+    rows = np.array(rows, dtype=int)
+    fixed = _qnear([targets[i] for i in rows], n, np.array(anchors).reshape(len(rows), n))
+    return rows, _first_anchor(nominal, [targets[i] for i in rows], fixed, warnings), via
+
+
 def _nearest_solutions(nominal, F, targets, program: Program, problems, warnings):
     """The controller's own choice (:func:`robocal.ik.controller.nearest_solutions`): per target
     the closed-form solution of the nominal model nearest the previous joints (or the given qnear
-    / joint target), inside the limits."""
-    fixed = _anchors(nominal, F.shape[0], targets, program, warnings)
-    choice = nearest_solutions(nominal, F, fixed[0], fixed, JUMP_DEG)
-    for i in choice.jumps:
-        warnings.append(f"{targets[i].where}: the controller's solution nearest the previous joints moves a "
-                        f"joint by {np.rad2deg(choice.move[i]):.0f} deg (no nearer solution exists): a small "
-                        "change before this target can make the controller take another one; add a joint "
-                        "move (or qnear) before it")
-    for i in choice.unreachable:
+    / joint target), inside the limits, in execution order. A target executed several times
+    (a routine called from several places) is corrected for its first execution; a warning names
+    the calls where the controller takes another solution for it."""
+    rows, fixed, via = _executions(nominal, targets, program, warnings)
+    choice = nearest_solutions(nominal, F[rows], fixed[0], fixed, JUMP_DEG)
+    first = np.full(len(targets), -1)
+    for k in range(len(rows) - 1, -1, -1):
+        first[rows[k]] = k
+    for k in choice.jumps[first[rows[choice.jumps]] == choice.jumps]:
+        warnings.append(f"{targets[rows[k]].where}: the controller's solution nearest the previous joints "
+                        f"moves a joint by {np.rad2deg(choice.move[k]):.0f} deg (no nearer solution exists): "
+                        "a small change before this target can make the controller take another one; add a "
+                        "joint move (or qnear) before it")
+    for i in np.flatnonzero(first < 0):  # not in the sequence: NaN (out of reach) as reported below
+        problems.append((int(i), "no execution of this target was found"))
+    for i in rows[choice.unreachable[first[rows[choice.unreachable]] == choice.unreachable]]:
         problems.append((int(i), "no solution of the nominal model inside the joint limits (out of reach)"))
-    return choice.joints
+    q = np.where((first >= 0)[:, None], choice.joints[np.maximum(first, 0)], np.nan)
+    for k in np.flatnonzero(first[rows] != np.arange(len(rows))):  # a later execution
+        i, k0 = rows[k], first[rows[k]]
+        if np.isfinite(choice.joints[k]).all() and np.isfinite(q[i]).all() and \
+                np.abs(choice.joints[k] - q[i]).max() > SAME_JOINTS:
+            again = f"through the call at {via[k]}" if via[k] else "by a later motion"
+            was = f"through {via[k0]}" if via[k0] else "in the main routine"
+            moved = np.rad2deg(np.abs(choice.joints[k] - q[i]).max())
+            warnings.append(f"{targets[i].where}: executed again {again}, coming from other joints, "
+                            f"where the controller takes another solution ({moved:.0f} deg away in a "
+                            f"joint) than at its first execution ({was}): it is corrected for the first; "
+                            "declare a copy of the target for each call")
+    return q
 
 
 def _nearest_joints(nominal, F, targets, program: Program, problems, warnings):

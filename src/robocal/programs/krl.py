@@ -30,6 +30,7 @@ from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.aggregate import split_top
 from robocal.programs.config import KUKAConfig
+from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import Number, ProgramText, mask
@@ -198,16 +199,24 @@ class KRLDialect(Dialect):
                                                  for p in m.group(2).split(",") if p.strip()]
         prog.tools.update({self.name_key(k): v for k, v in tools.items()})
         prog.frames.update({self.name_key(k): v for k, v in frames.items()})
+        flow = Flow()
         for src in sources:
-            self._flow(src, st)
+            self._flow(src, st, flow)
         self._motions(prog, sources, st)
+        names = {src.path.stem.upper() for src in sources if src.path.suffix.lower() == ".src"}
+        flow.entry = next((flow.routines[n] for n in names if n in flow.routines), None) \
+            if len(names) == 1 else None
+        order_by_execution(prog, flow)
         return prog
 
-    def _flow(self, src, st):
-        """Routine calls, assignments and the routine each offset is in, of one file."""
+    def _flow(self, src, st, flow):
+        """Routine calls, assignments and the routine each offset is in, of one file; its
+        routines (a DEF runs to the next one) and calls into ``flow``."""
         masked = st.masked[src.path]
         routines = [(m.start(), m.group(1).upper()) for m in _ROUTINE.finditer(masked)]
         st.routines[src.path] = routines
+        for (start, name), end in zip(routines, [r[0] for r in routines[1:]] + [len(masked)], strict=False):
+            flow.routines[name] = Routine(name, src, start, end)
         data_list = src.path.suffix.lower() == ".dat"
         for m in _ASSIGN.finditer(masked):
             name = m.group(1).upper()
@@ -223,6 +232,8 @@ class KRLDialect(Dialect):
         for m in _CALL.finditer(masked):
             name = m.group(1).upper()
             args = split_top(masked, m.start(2), m.end(2))
+            if name in st.params:
+                flow.calls.append((src, m.start(1), name))
             if name in st.params and st.params[name]:
                 st.calls.setdefault(name, []).append((src, args, _routine_at(routines, m.start())))
             elif name not in st.params and name not in _KEYWORDS:  # a routine of a file not given
@@ -288,7 +299,8 @@ class KRLDialect(Dialect):
                             prog.skip(here, instr, f"{f.name}: {why_tool if tool == '?' else why_base}")
                             named.add(id(f))
                             continue
-                        if prog.use(f, tool, base, here, f.name, "base") and tool == "external TCP":
+                        if prog.use(f, tool, base, here, f.name, "base", (src.path, a)) \
+                                and tool == "external TCP":
                             prog.unsupported[f"tool:{tool}"] = ("an external TCP (IPO_FRAME #TCP) is not "
                                                                 "filtered")
         passed = set()

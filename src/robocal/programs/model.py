@@ -10,6 +10,7 @@ write them with, its configuration scheme, and how to rewrite a target's configu
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -37,7 +38,7 @@ class Target:
     config: np.ndarray | None = None
     config_spans: object = None
     qnear: np.ndarray | None = None
-    order: int = 0  # position in execution order (text order of first use)
+    order: int = 0  # position in execution order (first execution, :mod:`robocal.programs.flow`)
     monitored: bool = True  # False: the motion runs with configuration monitoring off (RAPID ConfL Off)
     external: str = ""  # external-axis values the target carries (a track, gantry or positioner)
 
@@ -58,7 +59,10 @@ class Program:
     """Parsed program files: targets in execution order, named frames and tools (4x4, m, in the
     robot's base frame / on the flange), warnings about what was left alone, and joint targets
     ``(index of the next Cartesian target, joints rad)`` for dialects without configuration, and
-    tools / frames whose targets cannot be filtered (a stationary tool, a moving frame)."""
+    tools / frames whose targets cannot be filtered (a stationary tool, a moving frame).
+    ``motions``: each motion's target or joints ``(file, offset, Target | joints)`` in text order;
+    ``sequence``: the same in execution order, every execution (a routine called twice runs its
+    motions twice), with the call that entered its routine (``file:line``, '' at the entry)."""
 
     targets: list[Target]
     frames: dict[str, np.ndarray] = field(default_factory=dict)
@@ -68,13 +72,17 @@ class Program:
     unsupported: dict[str, str] = field(default_factory=dict)  # 'tool:NAME' / 'frame:NAME' -> why
     uncorrected: list[str] = field(default_factory=list)  # motions left as they are, each also a warning
     used: dict[int, tuple[str, str, str]] = field(default_factory=dict)  # id(target) -> tool, frame, where
+    motions: list[tuple[Path, int, Target | np.ndarray]] = field(default_factory=list)
+    sequence: list[tuple[Target | np.ndarray, str]] = field(default_factory=list)
 
-    def use(self, t: Target, tool: str, frame: str, here: str, label: str, frame_word: str) -> bool:
-        """A motion at ``here`` reaches target ``t`` with ``tool`` in ``frame``: the first use
-        appends it to :attr:`targets` in execution order (True); a later use with the same tool
-        and frame adds nothing (False); one with another tool or frame is refused (one corrected
-        target cannot serve both). ``label`` names the target and ``frame_word`` its kind of frame
-        in the message."""
+    def use(self, t: Target, tool: str, frame: str, here: str, label: str, frame_word: str,
+            motion: tuple[Path, int]) -> bool:
+        """A motion at ``here`` (``motion``: its file and offset) reaches target ``t`` with ``tool`` in
+        ``frame``: the first use appends it to :attr:`targets` (True); a later use with the same
+        tool and frame adds nothing (False); one with another tool or frame is refused (one
+        corrected target cannot serve both). Every use is a step of :attr:`motions`. ``label``
+        names the target and ``frame_word`` its kind of frame in the message."""
+        self.motions.append((*motion, t))
         if id(t) in self.used:
             tool0, frame0, at0 = self.used[id(t)]
             if (tool0, frame0) != (tool, frame):

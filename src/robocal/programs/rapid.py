@@ -28,6 +28,7 @@ from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.aggregate import Word, numbers_of, parse_aggregate, split_top
 from robocal.programs.config import ABBConfig
+from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.rotations import matrix_to_quat, quat_to_matrix
 from robocal.programs.source import Number, mask
@@ -126,6 +127,7 @@ class RapidDialect(Dialect):
     def parse(self, sources, frames, tools, references=()):
         prog = Program([])
         st = _State()
+        flow = Flow()
         lowered, spans = {}, {}
         for src in [*references, *sources]:  # every module's routines first: calls cross modules
             masked = st.masked[src.path] = mask(src.text, [_COMMENT], [_STRING])
@@ -134,6 +136,7 @@ class RapidDialect(Dialect):
             for m in _ROUTINE.finditer(low):
                 stop = _ROUTINE_END.search(low, m.end())
                 routines.append((m.start(), stop.end() if stop else len(low), m.group(2)))
+                flow.routines[m.group(2)] = Routine(m.group(2), src, m.start(), routines[-1][1])
                 if m.group(1) == "proc":
                     st.procs[m.group(2)] = _params(m.group(3) or "")
         for src in [*references, *sources]:
@@ -177,6 +180,9 @@ class RapidDialect(Dialect):
         prog.tools.update({self.name_key(k): v for k, v in tools.items()})
         prog.frames.update({self.name_key(k): v for k, v in frames.items()})
         self._assign(prog, st)
+        flow.calls = [(src, at, name) for name, calls in st.calls.items() for src, at, *_ in calls]
+        flow.entry = flow.routines.get("main")
+        order_by_execution(prog, flow)
         return prog
 
     def _statement(self, src, masked, s, e, prog, st, only_frames, proc, conf):
@@ -322,7 +328,7 @@ class RapidDialect(Dialect):
                                                       "that module as a program file to correct it")
                             continue
                         label = f"robtarget {found.name.lower()}"
-                        if prog.use(found, tool, wobj, here, label, "work object"):
+                        if prog.use(found, tool, wobj, here, label, "work object", (mv.src.path, a)):
                             found.monitored = mv.monitored
         passed = set()
         for src, at, routine, positional in st.foreign:  # a robtarget given to a routine not in these files
@@ -343,7 +349,6 @@ class RapidDialect(Dialect):
                 prog.warnings.append(f"{targets[0].source.path.name}:{targets[0].line}: robtarget "
                                      f"{targets[0].name.split('{')[0]} is not used by a motion instruction "
                                      "in these files: left as it is")
-        prog.targets.sort(key=lambda t: t.order)
 
     def _follow(self, st, src, a, b, proc, scope, depth) -> list:
         """The robtargets (Target) the expression ``src[a:b]`` takes its value from, or a string

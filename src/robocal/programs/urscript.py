@@ -25,6 +25,7 @@ import numpy as np
 from robocal.errors import DataError
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
 from robocal.programs.aggregate import numbers_of, parse_aggregate, split_top
+from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import IDENTITY, Dialect, Program, Target
 from robocal.programs.rotations import nearest_rotvec
 from robocal.programs.source import Number, mask
@@ -111,6 +112,7 @@ class URScriptDialect(Dialect):
         prog.tools.update(tools)
         if user_default is not None:
             prog.tools[DEFAULT_TOOL] = user_default
+        scripts = []
         for src in sources:
             masked = mask(src.text, [_COMMENT], [_STRING])
             sc = _Script(self, src, masked, prog)
@@ -129,14 +131,16 @@ class URScriptDialect(Dialect):
                 for a, b in args[:n_targets]:
                     for kind, value, frame, qnear in sc.resolve(a, b, m.start(), 0):
                         if kind == "joints":
-                            prog.joint_targets.append((len(prog.targets), value))
+                            prog.motions.append((src.path, a, value))
                         elif kind == "skip":
                             prog.skip(here, fn, value)
                         elif kind == "pose" and fn != "movej":
                             prog.skip(here, fn, "the pose is computed from values this filter cannot rewrite "
                                                 "(expressions or another function's result)")
-                        elif kind == "target" and prog.use(value, tool, frame, here, value.name, "frame"):
+                        elif kind == "target" and prog.use(value, tool, frame, here, value.name, "frame",
+                                                           (src.path, a)):
                             value.qnear = qnear
+            scripts.append(sc)
             for t in list(prog.targets):
                 if id(t) in sc.as_frame:  # a feature that a motion also moves to (with an offset)
                     prog.targets.remove(t)
@@ -160,7 +164,7 @@ class URScriptDialect(Dialect):
             prog.tools[DEFAULT_TOOL] = np.eye(4)
             prog.warnings.append("no set_tcp before the first motion and no --tool: the installation's "
                                  "TCP is taken as the flange (give it with --tool x,y,z,rx,ry,rz in m, rad)")
-        prog.targets.sort(key=lambda t: t.order)
+        order_by_execution(prog, _flow(scripts, prog))
         return prog
 
     def _set_tcp(self, sc, span, at, tools) -> str:
@@ -202,7 +206,8 @@ class _Script:
             names = [x.strip() for x in m.group(2).split(",") if x.strip()]
             if names:
                 self.params.append((m.start(), m.group(1), names))
-        defined = {name for _, name, _ in self.params}
+        self.defs = _defs(masked)  # (name, start, end) of every def
+        defined = {name for name, _, _ in self.defs}
         for m in re.finditer(r"\b([A-Za-z_]\w*)\s*\(", masked) if defined else ():
             if m.group(1) in defined and not masked[max(0, m.start() - 4):m.start()].endswith("def "):
                 args = split_top(masked, m.end(), _close(masked, m.end() - 1))
@@ -445,6 +450,55 @@ _ARITHMETIC = {ast.Add: lambda x, y: x + y, ast.Sub: lambda x, y: x - y, ast.Mul
                ast.Div: lambda x, y: x / y}
 _FUNCTIONS = {"sqrt": np.sqrt, "sin": np.sin, "cos": np.cos, "tan": np.tan, "d2r": np.deg2rad,
               "r2d": np.rad2deg, "norm": abs}
+
+
+_BLOCK = re.compile(r"\b(def|thread|if|while|end)\b")
+
+
+def _defs(masked: str) -> list[tuple[str, int, int]]:
+    """``(name, start, end)`` of every ``def`` (end: after its ``end``; the file's end if the
+    blocks do not balance). ``def``, ``thread``, and ``if``/``while`` beginning a statement open a
+    block; ``end`` closes one."""
+    out, stack = [], []
+    for m in _BLOCK.finditer(masked):
+        word = m.group(1)
+        if word == "end":
+            if stack:
+                name, start = stack.pop()
+                if name is not None:
+                    out.append((name, start, m.end()))
+        elif word in ("def", "thread"):
+            d = _DEF.match(masked, m.start()) if word == "def" else None
+            stack.append((d.group(1) if d else None, m.start()))
+        elif _before(masked, m.start()) in ("", "\n", ":", ";"):
+            stack.append((None, m.start()))
+    out += [(name, start, len(masked)) for name, start in stack if name is not None]
+    return sorted(out, key=lambda d: d[1])
+
+
+def _flow(scripts: list[_Script], prog: Program) -> Flow:
+    """The scripts' functions and calls; the entry (one script): its top-level statements when a
+    motion or a call stands there, else its one top-level def that no call runs."""
+    flow = Flow()
+    for sc in scripts:
+        for name, start, end in sc.defs:
+            flow.routines[name] = Routine(name, sc.src, start, end)
+        flow.calls += [(sc.src, at, name) for name, found in sc.calls.items() for at, _ in found]
+    if len(scripts) != 1:
+        return flow
+    sc = scripts[0]
+    top = [(start, end) for _, start, end in sc.defs
+           if not any(s < start and end <= e for _, s, e in sc.defs)]
+    inside = [at for _, at, _ in prog.motions] + [at for _, at, _ in flow.calls]
+    if any(not any(s <= at < e for s, e in top) for at in inside):
+        flow.entry = Routine("", sc.src, 0, len(sc.masked))
+        return flow
+    called = {name for _, _, name in flow.calls}
+    uncalled = [name for name, start, _ in sc.defs if (start, flow.routines[name].end) in top
+                and name not in called]
+    if len(uncalled) == 1:
+        flow.entry = flow.routines[uncalled[0]]
+    return flow
 
 
 def _before(masked: str, at: int) -> str:
