@@ -127,6 +127,8 @@ def test_full_report_has_every_section_and_plot(full):
     iso = text[text.index('id="iso9283"'):]
     assert "3 repeated pose(s)" in iso
     assert len(re.findall(r"<tr><td>[0-2]</td><td>5</td>", iso)) == 3
+    # log axes are labelled with plain numbers (mathtext is off for users' strings)
+    assert "\\mathdefault" not in text and "10^{" not in text
 
 
 def test_self_contained_no_network_no_script(full):

@@ -15,7 +15,7 @@ import numpy as np
 try:
     from matplotlib import colors as mcolors
     from matplotlib.figure import Figure
-    from matplotlib.ticker import MaxNLocator
+    from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 except ImportError as exc:  # pragma: no cover - exercised only without the extra
     from robocal.errors import RobocalError
 
@@ -44,10 +44,24 @@ def _figure(w: float, h: float, left: float = 0.8, right: float = 0.2, bottom: f
     return fig
 
 
+def _plain_log_labels(fig: Figure) -> None:
+    """Log axes labelled 0.01, 0.1, 1 (matplotlib's default labels are mathtext, which
+    text.parse_math off would print raw); minor ticks labelled only on an axis under a decade."""
+    plain = FuncFormatter(lambda v, _: f"{v:g}")
+    for ax in fig.axes:
+        for axis, scale in ((ax.xaxis, ax.get_xscale()), (ax.yaxis, ax.get_yscale())):
+            if scale != "log":
+                continue
+            lo, hi = sorted(axis.get_view_interval())
+            axis.set_major_formatter(plain)
+            axis.set_minor_formatter(plain if lo > 0 and hi / lo < 10 else NullFormatter())
+
+
 def to_svg(fig: Figure) -> str:
     """One figure as an ``<svg>`` element with figure-unique ids (no XML prolog, no dates)."""
     import matplotlib
 
+    _plain_log_labels(fig)
     buf = io.StringIO()
     with matplotlib.rc_context(_RC):
         fig.savefig(buf, format="svg", dpi=RASTER_DPI, metadata={"Date": None, "Creator": None})
