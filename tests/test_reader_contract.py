@@ -294,3 +294,19 @@ def test_ctrl_c_at_any_moment_of_a_real_run(tmp_path):
         assert child.returncode in (0, 130), err
         if child.returncode == 130:
             assert err.strip().count("\n") == 0 and err.strip().endswith("interrupted"), err
+
+
+@pytest.mark.parametrize("old, new", [
+    ("        [[580.79,302.20,20.66],", "        [580.79,302.20,20.66],"),  # an element's brackets lost
+    ("[[404.95,558.12,", "[[[],558.12,"),  # an empty aggregate where a number stands
+], ids=["lost brackets", "empty aggregate"])
+def test_rapid_malformed_array_element_is_refused(tmp_path, old, new):
+    """Found by the long fuzz on the data-flow parser: a robtarget array element that is not an
+    aggregate of aggregates was an internal error."""
+    text = (PROGRAMS / "weld_cell.mod").read_text()
+    assert old in text
+    bad = tmp_path / "w.mod"
+    bad.write_text(text.replace(old, new, 1))
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    with pytest.raises(DataError, match=r"w.mod:\d+: malformed robtarget pSeam\{\d\}"):
+        filter_program(bad, perturbed(robot, 7), robot)

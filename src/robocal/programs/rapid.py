@@ -85,6 +85,13 @@ BUILTIN_WOBJS = ("wobj0",)
 _DEPTH = 12  # routine calls and assignments followed at most this deep
 
 
+def _first_offset(node, default: int) -> int:
+    """Offset of the first item of a parsed aggregate (``default`` when it holds none)."""
+    while isinstance(node, list) and node:
+        node = node[0]
+    return getattr(node, "start", default)
+
+
 def _pose_numbers(node, src, at, what) -> list[Number]:
     xyz, quat = numbers_of(node, (3, 4), src, at, what)
     return xyz + quat
@@ -259,8 +266,7 @@ class RapidDialect(Dialect):
                 if not (isinstance(node, list) and len(node) == len(components)):
                     raise DataError(f"{src.path.name}:{src.line_of(m.start())}: malformed {m.group(1)} "
                                     f"{m.group(2)}: expected {len(components)} components")
-                at = node[k][0][0].start if isinstance(node[k], list) and node[k] and \
-                    isinstance(node[k][0], list) and node[k][0] else m.start()
+                at = _first_offset(node[k], m.start())
                 targets.append(self._robtarget(src, node[k], f"{m.group(2)}{suffix}.{field}", at))
             st.declared[f"{m.group(2).lower()}.{field.lower()}"] = targets
             if only_frames:
@@ -280,7 +286,7 @@ class RapidDialect(Dialect):
                       external=", ".join(used))
 
     def _robtargets(self, src, tree, name, at, array: str | None) -> list[Target]:
-        return [self._robtarget(src, node, name + suffix, node[0][0].start if array else at)
+        return [self._robtarget(src, node, name + suffix, _first_offset(node, at) if array else at)
                 for suffix, node in _elements(tree, array, src, at, f"robtarget {name}")]
 
     def _tool(self, src, tree, name, at, where):
