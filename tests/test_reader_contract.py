@@ -310,3 +310,19 @@ def test_rapid_malformed_array_element_is_refused(tmp_path, old, new):
     robot = rc.Robot.from_catalog("abb_irb2600")
     with pytest.raises(DataError, match=r"w.mod:\d+: malformed robtarget pSeam\{\d\}"):
         filter_program(bad, perturbed(robot, 7), robot)
+
+
+def test_fanuc_position_numbers_of_thousands_of_digits(tmp_path):
+    """Found by the long fuzz: a 5,000-digit position number was an internal error (Python's
+    int conversion limit); in /POS it is refused, in a motion the motion is named."""
+    text = (PROGRAMS / "sealing.ls").read_text()
+    robot = rc.Robot.from_catalog("fanuc_lrmate200id")
+    kw = {"frames": {"1": "450,-150,100,0,0,-10"}, "tools": {"2": "0,0,120,0,0,0"}}
+    bad = tmp_path / "sealing.ls"
+    bad.write_text(text.replace("P[3]{", "P[" + "1" * 5000 + "]{", 1))
+    with pytest.raises(DataError, match=r"sealing.ls:49: position number '1+\.\.\. has more than 5 digits"):
+        filter_program(bad, perturbed(robot, 7), robot, **kw)
+    motion = text.index("P[3]", text.index("/MN"))
+    bad.write_text(text[:motion] + "P[" + "1" * 5000 + "]" + text[motion + 4:])
+    res = filter_program(bad, perturbed(robot, 7), robot, **kw)
+    assert any("is not a position number (more than 5 digits)" in u for u in res.uncorrected)

@@ -48,6 +48,7 @@ _POSITION = re.compile(r"\b(PR|P)\[\s*((?:[A-Z]+\[\s*\d+\s*\])|\d+)\s*(?::[^\]]*
 _OFFSET = re.compile(r"\b(Tool_Offset|Offset|VOFFSET)\b(?:\s*,\s*(\w+\[[^\]]*\]))?", re.IGNORECASE)
 _INCREMENTAL = re.compile(r"\bINC\b")
 _POSITION_MM = 1e-3
+_POSITION_DIGITS = 5  # position numbers P[n] (the controller's are far below 100,000)
 _ANGLE_DEG = 1e-3  # the controller writes 3 decimals: 1e-3 deg is 2 um at 120 mm from the flange
 
 
@@ -94,6 +95,9 @@ class FanucDialect(Dialect):
             for m in _POS.finditer(text, after, end):
                 _nothing_between(src, text, after, m.start())
                 after = m.end()
+                if len(m.group(1)) > _POSITION_DIGITS:
+                    raise DataError(f"{src.path.name}:{src.line_of(m.start())}: position number "
+                                    f"{short_repr(m.group(1))} has more than {_POSITION_DIGITS} digits")
                 name = f"P[{m.group(1)}{':' + m.group(2) if m.group(2) else ''}]"
                 body_start = m.start(3)
                 body = m.group(3)
@@ -171,6 +175,10 @@ class FanucDialect(Dialect):
                     if not ref.group(2).isdigit():
                         prog.warnings.append(f"{here}: {instr} {label}: the position number is known at run "
                                              "time only; every position of /POS is corrected")
+                        continue
+                    if len(ref.group(2)) > _POSITION_DIGITS:
+                        prog.skip(here, instr, f"P[{short_repr(ref.group(2))}] is not a position number "
+                                               f"(more than {_POSITION_DIGITS} digits)")
                         continue
                     key = (src.path, int(ref.group(2)))
                     if key in joint:
