@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robocal.identify.linalg import ScaledSVD
+from robocal.identify.robust import MAD_TO_SIGMA
 from robocal.identify.space import block_of
 from robocal.kinematics.joint_errors import term_of
 
@@ -46,7 +47,6 @@ JOINT_ERROR_SIGMA = {"gear": np.deg2rad(0.2), "cyclic": np.deg2rad(0.2), "backla
 NOT_DETERMINED_RATIO = 0.5  # posterior sigma / prior sigma above which the data do not determine it
 NOISE_RTOL = 0.05  # the noise estimate has settled when it changes by less than this fraction
 NOISE_MAX_PASSES = 10
-MAD_TO_SIGMA = 1.4826  # median absolute residual -> sigma of normal noise
 
 
 def prior_sigma(robot, names) -> np.ndarray:
@@ -111,7 +111,7 @@ def linear_analysis(J: np.ndarray, r: np.ndarray, sigma: np.ndarray, noise0: flo
     M, k = J.shape
     blocks = [np.arange(M)] if blocks is None else blocks
     has = np.isfinite(sigma)
-    inv = np.where(has, 1.0 / np.where(has, sigma, 1.0), 0.0)
+    inv = 1.0 / np.asarray(sigma, float)  # 0 where there is no prior (sigma inf)
     noise = noise0
     for _ in range(NOISE_MAX_PASSES):
         w = noise * inv
@@ -137,7 +137,7 @@ def undetermined(J: np.ndarray, sigma: np.ndarray, noise: float) -> tuple[list[i
     determined combinations stay estimated). Returns the held indices and every column's ratio at
     the step it was held (or in the final set; nan without a prior)."""
     has = np.isfinite(sigma)
-    inv = np.where(has, 1.0 / np.where(has, sigma, 1.0), 0.0)
+    inv = 1.0 / np.asarray(sigma, float)  # 0 where there is no prior (sigma inf)
     free = np.arange(J.shape[1])
     held: list[int] = []
     ratio = np.full(J.shape[1], np.nan)
