@@ -345,17 +345,15 @@ class CalibrationResult(_BeforeAfter):
             if top:
                 lines.append(f"largest corrections ({unit}): " + ", ".join(
                     f"{r['name']} {r['correction']:+.4f} ± {r['sigma']:.4f}" for r in top))
-        dropped = [n for n in self.identifiability.dropped if block_of(n) != "joint_errors"]
-        if dropped:
-            confounded = self.identifiability.confounded_with
-            lines.append("not identifiable (fixed): " + ", ".join(
-                f"{n} (~{'/'.join(confounded[n]) or 'no effect'})" for n in dropped))
-        held = self.identifiability.undetermined
-        if held:
-            confounded = self.identifiability.confounded_with
-            lines.append("not determined by these data (held at nominal; measure poses that move them "
-                         "apart from their confounders): " + ", ".join(
-                             f"{n} (~{'/'.join(confounded[n]) or 'no effect'})" for n in held))
+        confounded = self.identifiability.confounded_with
+        for label, fixed in (
+                ("not identifiable (fixed)",
+                 [n for n in self.identifiability.dropped if block_of(n) != "joint_errors"]),
+                ("not determined by these data (held at nominal; measure poses that move them "
+                 "apart from their confounders)", self.identifiability.undetermined)):
+            if fixed:
+                lines.append(f"{label}: " + ", ".join(
+                    f"{n} (~{'/'.join(confounded[n]) or 'no effect'})" for n in fixed))
         if self.nongeometric is not None:
             ng = self.nongeometric
             lines.append(f"non-geometric terms {', '.join(ng['terms'])}: {len(ng['kept'])} parameters "
