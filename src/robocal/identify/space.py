@@ -17,6 +17,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from itertools import compress
 
 import numpy as np
 
@@ -103,12 +104,11 @@ class ParameterSpace:
     def restricted(self, keep: Iterable[str]) -> ParameterSpace:
         """The same space (and prior) with only the names in ``keep`` (order kept)."""
         keep = set(keep)
-        mask = [n in keep for n in self.names]
-        pick = (lambda values: tuple(v for v, m in zip(values, mask, strict=True) if m)) \
-            if self.prior_sigma else (lambda values: ())
+        mask = [n in keep for n in self.names]  # no prior: compress keeps the empty tuples empty
         return ParameterSpace(tuple(n for n in self.robot if n in keep),
                               tuple(n for n in self.nuisance if n in keep),
-                              pick(self.prior_sigma), pick(self.prior_mean), self.noise)
+                              tuple(compress(self.prior_sigma, mask)), tuple(compress(self.prior_mean, mask)),
+                              self.noise)
 
     def with_prior(self, sigma, mean, noise: float) -> ParameterSpace:
         """This space with a prior (see the class)."""
