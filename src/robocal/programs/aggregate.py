@@ -81,6 +81,20 @@ def numbers_of(node, sizes: tuple[int, ...], src: ProgramText, at: int, what: st
 
 
 _SPLITTERS: dict[str, re.Pattern] = {}
+_BRACKETS = re.compile(r"[\[\](){}]")
+
+
+def close_bracket(text: str, open_at: int) -> int:
+    """Index of the bracket, brace or parenthesis closing the one at ``open_at``."""
+    depth = 0
+    for m in _BRACKETS.finditer(text, open_at):  # only the brackets, in C
+        if m.group() in "([{":
+            depth += 1
+        else:
+            depth -= 1
+            if depth == 0:
+                return m.start()
+    raise DataError("unbalanced brackets")
 
 
 def split_top(text: str, start: int, end: int, sep: str = ",") -> list[tuple[int, int]]:

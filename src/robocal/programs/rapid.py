@@ -26,7 +26,7 @@ import numpy as np
 
 from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
-from robocal.programs.aggregate import Word, numbers_of, parse_aggregate, split_top
+from robocal.programs.aggregate import Word, close_bracket, numbers_of, parse_aggregate, split_top
 from robocal.programs.config import ABBConfig
 from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import Dialect, Program, Target
@@ -375,7 +375,7 @@ class RapidDialect(Dialect):
             return [f"{text[:40]} is not a robtarget literal"]
         f = _CALLED.match(masked, lead, b)
         if f:
-            inner = split_top(masked, f.end(), _close(masked, f.end() - 1))
+            inner = split_top(masked, f.end(), close_bracket(masked, f.end() - 1))
             amounts = [masked[x:y].strip() for x, y in inner[1:]]
             varying = ", ".join(v for v in amounts if not (_NUMERIC.match(v) or v.lower() in st.constants))
             if not varying:
@@ -502,19 +502,6 @@ class _State:
                 return "", f"the {what} {text} is chosen at run time (a variable index)"
             name += "{" + ",".join(v.strip() for v in literal.group(1).split(",")) + "}"
         return name, ""
-
-
-def _close(masked: str, open_at: int) -> int:
-    """Index of the parenthesis closing the one at ``open_at``."""
-    depth = 0
-    for i in range(open_at, len(masked)):
-        if masked[i] in "([{":
-            depth += 1
-        elif masked[i] in ")]}":
-            depth -= 1
-            if depth == 0:
-                return i
-    return len(masked)
 
 
 def _arguments(masked: str, start: int, end: int) -> tuple[list[tuple[int, int]], dict]:

@@ -24,7 +24,7 @@ import numpy as np
 
 from robocal.errors import DataError
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
-from robocal.programs.aggregate import numbers_of, parse_aggregate, split_top
+from robocal.programs.aggregate import close_bracket, numbers_of, parse_aggregate, split_top
 from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import IDENTITY, Dialect, Program, Target
 from robocal.programs.rotations import nearest_rotvec
@@ -36,12 +36,10 @@ _POSE = re.compile(r"(?<![\w.])p\s*(?=\[)")
 _ASSIGN = re.compile(r"(?:\b(?:global|local)\s+)?\b([A-Za-z_]\w*)\s*=\s*(?!=)")
 _CALL = re.compile(r"\b(movel|movep|movec|movej|set_tcp)\s*\(")
 _IDENT = re.compile(r"\s*([A-Za-z_]\w*)\s*$")
-_POSE_TRANS = re.compile(r"\s*pose_trans\s*\(", re.IGNORECASE)
 _IK = re.compile(r"\s*get_inverse_kin\s*\(")
 _FUNCTION = re.compile(r"([A-Za-z_]\w*)\s*\(")
 _DEF = re.compile(r"\bdef\s+([A-Za-z_]\w*)\s*\(([^)]*)\)\s*:")
 _DEPTH = 12  # assignments and calls followed at most this deep
-_BRACKET = re.compile(r"[\[\]()]")
 # functions whose pose arguments are followed, or that do not move the robot to a pose argument
 _KNOWN = {"movel", "movep", "movec", "movej", "set_tcp", "pose_trans", "pose_add", "pose_inv", "pose_sub",
           "get_inverse_kin", "p", "def", "textmsg", "popup", "to_str", "str_cat", "pose_dist", "point_dist",
@@ -72,19 +70,6 @@ class _Assignments:
 
     def values(self) -> list:
         return [v for vals in self._values.values() for v in vals]
-
-
-def _close(masked: str, open_at: int) -> int:
-    """Index of the bracket closing the one at ``open_at``."""
-    depth = 0
-    for m in _BRACKET.finditer(masked, open_at):
-        if m.group() in "([":
-            depth += 1
-        else:
-            depth -= 1
-            if depth == 0:
-                return m.start()
-    raise DataError("unbalanced brackets")
 
 
 class URScriptDialect(Dialect):
@@ -120,7 +105,7 @@ class URScriptDialect(Dialect):
             used = prog.used
             for m in _CALL.finditer(masked):
                 open_at = m.end() - 1
-                close = _close(masked, open_at)
+                close = close_bracket(masked, open_at)
                 args = split_top(masked, open_at + 1, close)
                 here = f"{src.path.name}:{src.line_of(m.start())}"
                 fn = m.group(1)
@@ -210,7 +195,7 @@ class _Script:
         defined = {name for name, _, _ in self.defs}
         for m in re.finditer(r"\b([A-Za-z_]\w*)\s*\(", masked) if defined else ():
             if m.group(1) in defined and not masked[max(0, m.start() - 4):m.start()].endswith("def "):
-                args = split_top(masked, m.end(), _close(masked, m.end() - 1))
+                args = split_top(masked, m.end(), close_bracket(masked, m.end() - 1))
                 self.calls.setdefault(m.group(1), []).append((m.start(), args))
         for a, b in literals:  # every pose variable is a target, used or not
             found = self._literal(a, b)
@@ -274,7 +259,7 @@ class _Script:
                      None)]
         ik = _IK.match(masked, lead)
         if ik:
-            inner = split_top(masked, ik.end(), _close(masked, ik.end() - 1))
+            inner = split_top(masked, ik.end(), close_bracket(masked, ik.end() - 1))
             qnear = None
             for qa, qb in inner[1:]:
                 key, eq, _ = masked[qa:qb].partition("=")
@@ -290,7 +275,7 @@ class _Script:
                     self.resolve(*inner[0], at, depth + 1)]
         call = _FUNCTION.match(masked, lead)
         if call and call.group(1) in ("pose_trans", "pose_add"):
-            inner = split_top(masked, call.end(), _close(masked, call.end() - 1))
+            inner = split_top(masked, call.end(), close_bracket(masked, call.end() - 1))
             if len(inner) != 2:
                 return [("skip", f"{call.group(1)} takes two arguments (a missing comma?), got {len(inner)}",
                          IDENTITY, None)]
@@ -298,7 +283,7 @@ class _Script:
             second = self.resolve(*inner[1], at, depth + 1)
             return self._compose(call.group(1), first, second, masked[slice(*inner[0])].strip())
         if call and call.group(1) == "pose_inv":
-            inner = split_top(masked, call.end(), _close(masked, call.end() - 1))
+            inner = split_top(masked, call.end(), close_bracket(masked, call.end() - 1))
             found = self.resolve(*inner[0], at, depth + 1) if len(inner) == 1 else []
             if len(found) == 1 and found[0][0] in ("pose", "target") and found[0][2] == IDENTITY:
                 return [("pose", invert_transform(self._pose(found[0])), IDENTITY, None)]
@@ -338,7 +323,7 @@ class _Script:
         pm = _POSE.match(masked, lead)
         if lead in self.poses:
             return ("target", self.poses[lead], IDENTITY, None)
-        close = _close(masked, pm.end())
+        close = close_bracket(masked, pm.end())
         try:
             tree, _ = parse_aggregate(self.src, masked, pm.end(), close + 1, "pose")
             nums = numbers_of([tree], (6,), self.src, lead, "pose")[0]
@@ -364,7 +349,7 @@ class _Script:
         for m in re.finditer(r"\b([A-Za-z_]\w*)\s*\(", self.masked):
             if m.group(1) in _KNOWN or m.group(1) in defined:
                 continue
-            for a, b in split_top(self.masked, m.end(), _close(self.masked, m.end() - 1)):
+            for a, b in split_top(self.masked, m.end(), close_bracket(self.masked, m.end() - 1)):
                 name = self.masked[a:b].strip()
                 if name in variables:
                     out.append((name, f"{self.src.path.name}:{self.src.line_of(m.start())}", m.group(1)))
