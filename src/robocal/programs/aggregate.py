@@ -94,7 +94,8 @@ def close_bracket(text: str, open_at: int) -> int:
             depth -= 1
             if depth == 0:
                 return m.start()
-    raise DataError("unbalanced brackets")
+    line = text.count("\n", 0, open_at) + 1
+    raise DataError(f"line {line}: unbalanced brackets: the {text[open_at]!r} opened there is never closed")
 
 
 def split_top(text: str, start: int, end: int, sep: str = ",") -> list[tuple[int, int]]:
