@@ -9,6 +9,7 @@ EPILOG = """Examples:
   robocal export calibrated.yaml --urdf measured.urdf --frames model   # world = tracker frame, tool0 = SMR
   robocal export abb_irb2600 --urdf irb2600.urdf             # catalog robot
   robocal export my_robot.urdf --yaml my_robot.yaml          # import a serial revolute URDF
+  robocal export calibrated.yaml --nominal factory.yaml --ur-calibration ur.yaml   # for the UR ROS driver
 """
 
 
@@ -23,6 +24,9 @@ def add_parser(sub) -> None:
     p.add_argument("model", help="model YAML, catalog name, or URDF file (.urdf)")
     p.add_argument("--urdf", metavar="OUT", help="URDF file to write")
     p.add_argument("--yaml", metavar="OUT", help="model YAML file to write")
+    p.add_argument("--ur-calibration", metavar="OUT",
+                   help="ur_calibration YAML to write (Universal Robots: the geometry from the controller's "
+                        "base to the flange, as ur_description's xacro composes it)")
     p.add_argument("--frames", choices=("robot", "model"), default="robot",
                    help="robot (default): base_link at the robot base, tool0 at the flange; model: a "
                         "world link at the model's world frame (after a tracker calibration, the tracker) "
@@ -44,11 +48,12 @@ def run(args) -> int:
     from robocal.kinematics.model_file import dump_model
     from robocal.kinematics.urdf import from_urdf, not_carried, to_urdf
 
-    if not args.urdf and not args.yaml:
-        raise DataError("nothing to write: give --urdf OUT and/or --yaml OUT")
+    if not args.urdf and not args.yaml and not args.ur_calibration:
+        raise DataError("nothing to write: give --urdf OUT, --yaml OUT and/or --ur-calibration OUT")
     check_format(args.urdf, "URDF", "--urdf")
     check_format(args.yaml, "YAML", "--yaml")
-    check_outputs([args.urdf, args.yaml], [args.model])
+    check_format(args.ur_calibration, "YAML", "--ur-calibration")
+    check_outputs([args.urdf, args.yaml, args.ur_calibration], [args.model])
     if Path(args.model).suffix.lower() == ".urdf":
         robot = from_urdf(Path(args.model), tip=args.tip)
     else:
@@ -70,6 +75,20 @@ def run(args) -> int:
                 "measured SMR)"))
     if args.yaml:
         texts[args.yaml] = dump_model(robot)
+    if args.ur_calibration:
+        from robocal.kinematics.vendor.ur import not_representable, to_ur_calibration
+
+        nominal = controller_for(robot, args.nominal)
+        if nominal is None:
+            raise DataError(f"--ur-calibration: {robot.name} is not a catalog robot: give --nominal, the "
+                            "controller's model (e.g. ur5e, or factory.yaml from robocal import-calibration)")
+        texts[args.ur_calibration] = to_ur_calibration(robot, nominal)
+        if not_representable(robot):
+            print(f"WARNING: {not_representable(robot)}")
+        if not args.quiet:
+            print("ur_calibration YAML: the geometry from the controller's base to the flange (tool0); the "
+                  "model's world frame and tool are not part of it; its hash is robocal's, so the ROS driver "
+                  "reports that it differs from the robot's own calibration")
     write_all(texts)
     if not args.quiet:
         print(f"{robot.name} ({robot.n_joints} joints): wrote {', '.join(texts)}")

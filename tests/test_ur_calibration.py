@@ -1,0 +1,178 @@
+"""UR factory calibration: calibration.conf and the ROS driver's ur_calibration YAML, both ways,
+checked against independent compositions (tests/ur_tools.py: the controller's DH chain, the
+xacro's joint origins, a port of the driver's algorithm)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import yaml
+from ur_tools import DATA, dh_fk, driver_yaml, lines_to_dh, true_arm_dh, xacro_fk
+
+import robocal as rc
+from robocal.cli import main
+from robocal.errors import ModelError
+from robocal.kinematics.vendor import ur as vur
+
+CONF = DATA / "ur5e_calibration.conf"
+YAML10 = DATA / "ur10e_calibration.yaml"
+POS_TOL = 1e-9  # m (1e-6 mm)
+ROT_TOL = 1e-8  # rad
+
+
+def _rotation_error(A, B):
+    R = np.einsum("nji,njk->nik", A[:, :3, :3], B[:, :3, :3])
+    vee = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], axis=1)
+    return np.arctan2(np.linalg.norm(vee, axis=1) / 2, (np.trace(R, axis1=1, axis2=2) - 1) / 2)
+
+
+def _assert_same(A, B):
+    assert np.linalg.norm(A[:, :3, 3] - B[:, :3, 3], axis=1).max() < POS_TOL
+    assert np.abs(A[:, :3, :3] - B[:, :3, :3]).max() < ROT_TOL
+    assert _rotation_error(A, B).max() < ROT_TOL
+
+
+def _controller_table(text, name):
+    deltas = vur.parse_calibration_conf(text, "t")
+    nom = vur.nominal_dh(name)
+    return nom.theta + deltas.theta, nom.d + deltas.d, nom.a + deltas.a, nom.alpha + deltas.alpha
+
+
+def _joints(n=1000, seed=0):
+    return np.random.default_rng(seed).uniform(-2 * np.pi, 2 * np.pi, (n, 6))
+
+
+def test_conf_import_equals_the_controllers_dh_at_1000_joint_vectors():
+    text = CONF.read_text()
+    theta, d, a, alpha = _controller_table(text, "ur5e")
+    assert np.abs(d).max() > 100  # the real files' near-parallel description
+    robot = vur.import_calibration(CONF, "ur5e").robot
+    q = _joints()
+    _assert_same(robot.fk(q), dh_fk(theta, d, a, alpha, q))
+    assert np.abs(robot.d).max() < 0.2
+    assert robot.parallel.tolist() == rc.Robot.from_catalog("ur5e").parallel.tolist()
+
+
+def test_zero_deltas_give_the_catalog_model_exactly():
+    zero = "[mounting]\n" + "\n".join(f"{k} = [0, 0, 0, 0, 0, 0]" for k in vur.DELTA_KEYS) + "\n"
+    for name in ("ur5e", "ur10e", "ur3", "ur30"):
+        robot = vur.from_calibration_conf(zero, name).robot
+        cat = rc.Robot.from_catalog(name)
+        assert np.allclose(robot.values, cat.values, rtol=0, atol=1e-15)
+        assert cat.has_ur_form
+
+
+@pytest.mark.parametrize("tilt", [1e-7, 1e-6, 1e-5, 3e-4, 3e-3])
+def test_near_parallel_dh_pair_converts_exactly_whatever_d(tilt):
+    """Axes 2-4 tilted out of parallel by ``tilt`` rad: DH d grows as 1/tilt (to 10^5 m and
+    beyond); MDH + beta keeps the arm's sizes and the DH chain's forward kinematics."""
+    nom = rc.Robot.from_catalog("ur10e")
+    moved = nom.with_values({"alpha3": tilt, "beta3": -2 * tilt, "alpha4": -tilt, "beta4": 1.5 * tilt,
+                             "a3": nom.get("a3") + 1e-4, "theta3": 1e-3})
+    tcp, frames = moved.fk(np.zeros((1, 6)), frames=True)
+    theta, d, a, alpha = lines_to_dh(frames[0, 1:, :3, 2], frames[0, 1:, :3, 3], tcp[0])
+    mdh = vur.mdh_beta_from_lines(*vur._dh_lines(vur.DHTable(theta, d, a, alpha)), nom.parallel)
+    robot = rc.Robot(**{k: mdh[k] for k in ("alpha", "a", "beta", "theta", "d", "base", "tool")})
+    q = _joints(200, 1)
+    ref = dh_fk(theta, d, a, alpha, q)
+    scale = max(1.0, np.abs(d).max() * 1e-3)  # the DH chain itself rounds at |d| * eps
+    assert np.linalg.norm(robot.fk(q)[:, :3, 3] - ref[:, :3, 3], axis=1).max() < POS_TOL * scale
+    assert _rotation_error(robot.fk(q), ref).max() < ROT_TOL
+    assert np.allclose(robot.links.beta, moved.beta, atol=1e-9) and np.abs(robot.d).max() < 0.2
+
+
+def test_ur_calibration_yaml_is_read_as_the_xacro_composes_it():
+    kin = yaml.safe_load(YAML10.read_text())["kinematics"]
+    robot = vur.import_calibration(YAML10, "ur10e").robot
+    q = _joints()
+    _assert_same(robot.fk(q), xacro_fk(kin, q))
+
+
+def test_driver_yaml_and_controller_differ_by_the_euler_convention():
+    """The driver's YAML composed by the xacro is not the controller's arm: measured here."""
+    theta, d, a, alpha = true_arm_dh("ur10e", 32)
+    kin = driver_yaml(theta, d, a, alpha)
+    q = _joints(1000, 3)
+    ctrl = dh_fk(theta, d, a, alpha, q)
+    ros = xacro_fk(kin, q)
+    gap = np.linalg.norm(ctrl[:, :3, 3] - ros[:, :3, 3], axis=1)
+    assert gap.max() > 1e-5  # ROS is off by more than 0.01 mm somewhere
+    # with the driver's angles read as Eigen composes them (Rx Ry Rz), the chain is the controller's
+    fixed = {k: dict(v) for k, v in kin.items()}
+    origins = []
+    for link in fixed.values():
+        R = (vur._rx(link["roll"]) @ vur._ry(link["pitch"]) @ vur._rz(link["yaw"]))
+        origins.append(vur.make_transform(R, (link["x"], link["y"], link["z"])))
+    eig = vur.origins_fk(np.array(origins), q, np.eye(4))
+    last = np.array([vur.make_transform(vur._rx(alpha[5]), (a[5], 0, 0))])
+    assert np.linalg.norm(eig[:, :3, 3] - (ctrl @ np.linalg.inv(last[0]))[:, :3, 3], axis=1).max() < 1e-9
+
+
+def _calibrated(seed=4):
+    factory = vur.import_calibration(CONF, "ur5e").robot
+    rng = np.random.default_rng(seed)
+    names = [n for n in factory.default_free() if not n.startswith(("base", "tool"))]
+    cal = factory.displaced(names, rng.normal(0, 3e-4, len(names)))
+    tracker = vur.make_transform(vur._rz(0.7) @ vur._rx(0.1), (2.0, -1.0, 0.3))
+    smr = vur.make_transform(np.eye(3), (0, 0.05, 0.2))
+    return cal.with_frames(base=tracker @ cal.base, tool=cal.tool @ smr), factory
+
+
+def test_export_composes_to_the_calibrated_arm(tmp_path):
+    cal, factory = _calibrated()
+    text = vur.to_ur_calibration(cal, factory)
+    kin = yaml.safe_load(text)["kinematics"]
+    assert kin["hash"].startswith("calib_")
+    q = _joints()
+    arm = cal.with_frames(base=factory.base, tool=factory.tool)  # base -> flange (--frames robot)
+    _assert_same(xacro_fk(kin, q), arm.fk(q))
+    back = vur.from_ur_calibration(text, "ur5e").robot  # and read back
+    _assert_same(back.fk(q), arm.fk(q))
+
+
+def test_cli_export_warns_naming_joint_error_terms(tmp_path, capsys):
+    cal, factory = _calibrated()
+    cal = cal.with_joint_errors(["comp2_3", "backlash2"])
+    cal.save(tmp_path / "cal.yaml")
+    factory.save(tmp_path / "factory.yaml")
+    out = tmp_path / "out.yaml"
+    assert main(["export", str(tmp_path / "cal.yaml"), "--nominal", str(tmp_path / "factory.yaml"),
+                 "--ur-calibration", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "comp2_3" in printed and "backlash2" in printed and "not representable" in printed
+    kin = yaml.safe_load(out.read_text())["kinematics"]
+    q = _joints(100)
+    _assert_same(xacro_fk(kin, q), cal.with_joint_errors([]).with_frames(base=factory.base,
+                                                                          tool=factory.tool).fk(q))
+
+
+def test_cli_import_calibration_writes_a_model_usable_as_robot(tmp_path, capsys):
+    out = tmp_path / "factory.yaml"
+    assert main(["import-calibration", str(CONF), "--robot", "ur5e", "-o", str(out)]) == 0
+    robot = rc.Robot.load(out)
+    theta, d, a, alpha = _controller_table(CONF.read_text(), "ur5e")
+    q = _joints(50)
+    _assert_same(robot.fk(q), dh_fk(theta, d, a, alpha, q))
+
+
+@pytest.mark.parametrize("text, match", [
+    ("[mounting]\ndelta_theta = [0, 0, 0, 0, 0, 0]\n", "lacks delta_a, delta_d, delta_alpha"),
+    ("[mounting]\n" + "\n".join(f"{k} = [0, 0, 0, 0, 0]" for k in vur.DELTA_KEYS), "6 finite numbers"),
+    ("[mounting]\n" + "\n".join(f"{k} = [0, 0, 0, 0, 0, x]" for k in vur.DELTA_KEYS), "not a number"),
+    ("[mounting]\n" + "\n".join(f"{k} = [0, 0, 0, 0, 0, 0]" for k in vur.DELTA_KEYS)
+     + "\ncalibration_status = 0\n", "not initialised"),
+    ("[mounting]\n" + "\n".join(f"{k} = [0, 0, 0, 0, 0, 1e9]" for k in vur.DELTA_KEYS), "beyond"),
+])
+def test_malformed_conf_is_refused_naming_the_problem(text, match):
+    with pytest.raises(ModelError, match=match):
+        vur.from_calibration_conf(text, "ur5e")
+
+
+def test_calibration_of_another_model_is_refused(tmp_path, capsys):
+    assert main(["import-calibration", str(CONF), "--robot", "ur10e", "-o", str(tmp_path / "x.yaml")]) == 2
+    assert "another robot model" in capsys.readouterr().err
+    with pytest.raises(ModelError, match="not a Universal Robots"):
+        vur.from_calibration_conf(CONF.read_text(), "abb_irb2600")
+    bad = YAML10.read_text().replace("    yaw:", "    yawn:", 1)
+    with pytest.raises(ModelError, match="expected the keys"):
+        vur.from_ur_calibration(bad, "ur10e")
