@@ -176,3 +176,62 @@ def test_calibration_of_another_model_is_refused(tmp_path, capsys):
     bad = YAML10.read_text().replace("    yaw:", "    yawn:", 1)
     with pytest.raises(ModelError, match="expected the keys"):
         vur.from_ur_calibration(bad, "ur10e")
+
+
+def _factory_and_truth(tmp_path):
+    """The factory model (the controller's) and a recalibrated arm whose nominal it is."""
+    factory = vur.import_calibration(CONF, "ur5e").robot
+    names = [n for n in factory.default_free() if not n.startswith(("base", "tool"))]
+    cal = factory.displaced(names, np.random.default_rng(9).normal(0, 2e-4, len(names)))
+    assert np.allclose(cal.nominal, factory.values)  # calibrated from the factory model
+    factory.save(tmp_path / "factory.yaml")
+    cal.save(tmp_path / "cal.yaml")
+    return factory, cal
+
+
+def _walk(n=12):
+    base = np.array([0.3, -1.4, 1.6, -1.8, -1.5, 0.4])
+    return base + np.linspace(0, 1, n)[:, None] * np.array([0.5, 0.3, -0.4, 0.3, 0.2, 0.6])
+
+
+def test_factory_model_as_nominal_seeds_ik_compensate_and_plan(tmp_path):
+    factory, cal = _factory_and_truth(tmp_path)
+    assert not factory.has_ur_form  # the factory arm itself has no closed form ...
+    q = _walk()
+    T = cal.fk(q)
+    for robot, nominal in ((factory, None), (cal, None), (cal, factory)):  # ... it is seeded by the UR one
+        res = rc.ik.solve(robot, robot.fk(q) if robot is factory else T, nominal=nominal)
+        assert res.converged.all() and res.position_error.max() < 1e-9
+    from robocal.compensate import compensate, format_csv, pose_columns
+
+    comp = compensate(cal, factory, T, start=q[0])
+    assert comp.converged.all()
+    _assert_same(cal.fk(comp.joints), T)
+    _assert_same(factory.fk(comp.joints), comp.corrected_targets)
+    cols, vals = pose_columns(T, {"length": "mm", "orientation": "deg"})
+    (tmp_path / "targets.csv").write_text(format_csv(cols, vals))
+    out = tmp_path / "commands.csv"
+    assert main(["compensate", str(tmp_path / "cal.yaml"), str(tmp_path / "targets.csv"), "--nominal",
+                 str(tmp_path / "factory.yaml"), "-o", str(out)]) == 0
+    got = np.deg2rad(np.loadtxt(out, delimiter=",", skiprows=1, usecols=range(6)))
+    assert np.linalg.norm(cal.fk(got)[:, :3, 3] - T[:, :3, 3], axis=1).max() < 1e-9
+    flange = cal.with_frames(base=factory.base, tool=factory.tool)
+    cols, vals = pose_columns(flange.fk(q), {"length": "mm", "orientation": "deg"})
+    (tmp_path / "poses.csv").write_text(format_csv(cols, vals))
+    assert main(["plan", "--robot", str(tmp_path / "cal.yaml"), "--nominal", str(tmp_path / "factory.yaml"),
+                 str(tmp_path / "poses.csv"), "-o", str(tmp_path / "joints.csv")]) == 0
+    planned = np.deg2rad(np.loadtxt(tmp_path / "joints.csv", delimiter=",", skiprows=1))
+    assert np.linalg.norm(flange.fk(planned)[:, :3, 3] - flange.fk(q)[:, :3, 3], axis=1).max() < 1e-6
+
+
+def test_factory_model_as_nominal_filters_a_urscript_program(tmp_path):
+    from robocal.programs.filter import filter_program
+
+    factory, cal = _factory_and_truth(tmp_path)
+    res = filter_program(DATA / "programs" / "pick_place.script", cal, factory)
+    assert len(res.rows) == 5 and not res.uncorrected and not res.warnings
+    assert all(r["converged"] and r["reachable"] and 0.01 < r["correction_mm"] < 2 for r in res.rows)
+    out, program = tmp_path / "out.script", DATA / "programs" / "pick_place.script"
+    assert main(["filter", str(program), "--calibrated", str(tmp_path / "cal.yaml"),
+                 "--nominal", str(tmp_path / "factory.yaml"), "-o", str(out)]) == 0
+    assert out.read_text() != (DATA / "programs" / "pick_place.script").read_text()

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import os
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 
 import numpy as np
 
@@ -20,11 +21,26 @@ from robocal.errors import ModelError
 from robocal.ik import opw_ik, ur_ik
 from robocal.ik.opw_ik import SEED_MARGIN, TOL, check_poses
 from robocal.kinematics.model import Robot
+from robocal.kinematics.model_file import LINK_FIELDS
+from robocal.kinematics.ur import nearest_ur_links
 
 
 def has_closed_form(robot: Robot) -> bool:
     """Whether closed-form IK applies to this robot's own chain (OPW or UR form)."""
     return robot.has_opw_form or robot.has_ur_form
+
+
+def seed_model(model: Robot) -> Robot:
+    """The model whose closed form seeds numeric IK on ``model``: ``model`` itself when it has a
+    closed form; for a calibrated UR chain without one (e.g. a factory calibration imported with
+    ``robocal import-calibration``, beta on its parallel axes) the nearest UR-form chain
+    (:func:`robocal.kinematics.ur.nearest_ur_links`, same base and tool); else ``model``."""
+    if has_closed_form(model) or model.n_joints != 6:
+        return model
+    links = nearest_ur_links(*model.links)
+    if links is None:
+        return model
+    return replace(model, joint_errors=None, **dict(zip(LINK_FIELDS, links, strict=True)))
 
 
 def _module(robot: Robot):
@@ -86,7 +102,7 @@ def branch_slot(nominal: Robot, q: np.ndarray) -> np.ndarray:
 def branch_model(robot: Robot, nominal: Robot | None = None) -> Robot | None:
     """The nominal model whose closed form names the branches of ``robot``'s joints (``nominal``,
     default the robot's own nominal model), or None when it has no closed form."""
-    model = robot.nominal_robot() if nominal is None else nominal
+    model = seed_model(robot.nominal_robot() if nominal is None else nominal)
     if model.n_joints != 6 or robot.n_joints != 6:
         return None
     return model if model.opw is not None or model.has_ur_form else None

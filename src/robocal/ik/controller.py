@@ -21,7 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from robocal.errors import DataError
-from robocal.ik.closed_form import branch_slot, solve_branches
+from robocal.ik.closed_form import branch_slot, seed_model
+from robocal.ik.numeric import seeded_branches
 from robocal.ik.opw_ik import check_poses
 from robocal.kinematics.model import Robot
 
@@ -46,7 +47,8 @@ class ControllerChoice:
 def nearest_solutions(robot: Robot, poses, start, anchors=None,
                       jump_deg: float = JUMP_DEG) -> ControllerChoice:
     """The controller's choice for world TCP poses ``(N, 4, 4)`` (m) of ``robot`` (the controller's
-    model; it must have a closed form) visited in order from joints ``start`` ``(n,)`` (rad).
+    model; it must have a closed form, or a seed model's refined numerically:
+    :func:`robocal.ik.numeric.seeded_branches`) visited in order from joints ``start`` ``(n,)`` (rad).
 
     ``anchors`` ``(N, n)`` (rad, NaN rows: none): joints the robot is known to be at right before
     target i (a joint move, or a qnear the program gives), which replace the previous target's.
@@ -60,7 +62,7 @@ def nearest_solutions(robot: Robot, poses, start, anchors=None,
     anchors = np.full((N, n), np.nan) if anchors is None else np.asarray(anchors, dtype=float)
     if anchors.shape != (N, n):
         raise DataError(f"anchors must have shape ({N}, {n}), got {anchors.shape}")
-    copies, valid = _joint_copies(robot, solve_branches(robot, T))
+    copies, valid = _joint_copies(robot, seeded_branches(robot, T))
     joints = np.full((N, n), np.nan)
     move = np.full(N, np.nan)
     taken = np.full(N, -1)
@@ -82,7 +84,7 @@ def nearest_solutions(robot: Robot, poses, start, anchors=None,
     ok = taken >= 0
     slots = np.full(N, -1)
     if ok.any():
-        slots[ok] = branch_slot(robot, joints[ok])
+        slots[ok] = branch_slot(seed_model(robot), joints[ok])
     return ControllerChoice(joints=joints, slots=slots, move=move, unreachable=np.flatnonzero(~ok),
                             jumps=np.flatnonzero(ok & (move > np.deg2rad(jump_deg))),
                             candidates=valid.sum(axis=3).prod(axis=2).sum(axis=1))

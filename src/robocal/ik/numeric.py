@@ -18,7 +18,7 @@ import numpy as np
 
 from robocal.damped_least_squares import Status, minimize
 from robocal.errors import DataError, UnreachableError
-from robocal.ik.closed_form import branch_model, branch_slot, seed_branches, solve_branches
+from robocal.ik.closed_form import branch_model, branch_slot, seed_branches, seed_model, solve_branches
 from robocal.ik.opw_ik import check_poses
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import pose_error
@@ -93,8 +93,27 @@ class _Targets:
 
 
 def _nominal_model(robot: Robot, nominal: Robot | None) -> Robot:
-    return (robot.nominal_robot() if nominal is None else nominal).with_frames(base=robot.base,
-                                                                                tool=robot.tool)
+    """The closed-form model seeding IK on ``robot`` (:func:`robocal.ik.closed_form.seed_model` of
+    ``nominal``, default the robot's own nominal model) with the robot's base and tool."""
+    model = seed_model(robot.nominal_robot() if nominal is None else nominal)
+    return model.with_frames(base=robot.base, tool=robot.tool)
+
+
+def seeded_branches(robot: Robot, T: np.ndarray) -> np.ndarray:
+    """All 8 solutions ``(N, 8, 6)`` (rad, NaN where none) for checked world poses ``T``: the
+    robot's own closed form, or for a robot without one whose :func:`robocal.ik.closed_form.seed_model`
+    has one (a factory-calibrated UR), that model's solutions refined by numeric IK on the robot
+    (slot by slot: each stays in its branch)."""
+    form = seed_model(robot)
+    if form is robot:
+        return solve_branches(robot, T)  # its own closed form (or the error saying it has none)
+    seeds = solve_branches(form, T).reshape(-1, robot.n_joints)
+    has = np.isfinite(seeds).all(axis=1)
+    out = np.full_like(seeds, np.nan)
+    if has.any():
+        res = solve(robot, np.repeat(T, 8, axis=0)[has], seeds[has], nominal=robot)
+        out[np.flatnonzero(has)[res.converged]] = res.joints[res.converged]
+    return out.reshape(T.shape[0], 8, robot.n_joints)
 
 
 def nominal_branches(robot: Robot, T: np.ndarray,

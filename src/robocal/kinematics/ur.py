@@ -85,3 +85,32 @@ def ur_form(alpha, a, beta, theta, d) -> URForm | None:
                   sg3=sg3, sg4=sg4, a3=float(a[2]), a4=float(a[3]), c2=c2,
                   s5=float(np.round(s[4])), a5=float(a[4]), d5=float(d[4]), s6=float(np.round(s[5])),
                   d6=float(d[5]))
+
+
+# A chain this close to the UR structure (its constrained angles within UR_SEED_TOL rad of their
+# values, a6 within UR_SEED_LENGTH m of 0) is a calibrated UR arm: its nearest UR-form chain seeds it
+UR_SEED_TOL = 0.05
+UR_SEED_LENGTH = 0.01
+
+
+def nearest_ur_links(alpha, a, beta, theta, d) -> tuple[np.ndarray, ...] | None:
+    """The UR-form chain nearest MDH link arrays ``(6,)`` (rad, m) -- alpha2, alpha5, alpha6 on
+    +-90 deg, alpha3, alpha4 on 0 or 180 deg, beta2..beta6 and a6 zero, the rest kept -- as
+    (alpha, a, beta, theta, d), or None when the chain is not that close to the form (a calibrated
+    or factory-calibrated UR is: its deviations are milliradians and millimetres). Its closed form
+    seeds numeric inverse kinematics on the chain; it is no model of the arm."""
+    alpha, a, beta, theta, d = (np.array(v, float) for v in (alpha, a, beta, theta, d))
+    if alpha.shape != (6,):
+        return None
+    snapped = alpha.copy()
+    for i, grid in ((1, np.pi / 2), (2, np.pi), (3, np.pi), (4, np.pi / 2), (5, np.pi / 2)):
+        k = np.round(alpha[i] / grid)
+        if (grid == np.pi / 2 and k % 2 == 0) or abs(alpha[i] - k * grid) > UR_SEED_TOL:
+            return None
+        snapped[i] = k * grid
+    if np.abs(beta[1:]).max() > UR_SEED_TOL or abs(a[5]) > UR_SEED_LENGTH:
+        return None
+    beta[1:] = 0.0
+    a[5] = 0.0
+    links = (snapped, a, beta, theta, d)
+    return links if ur_form(*links) is not None else None
