@@ -88,24 +88,34 @@ def test_ur_calibration_yaml_is_read_as_the_xacro_composes_it():
     _assert_same(robot.fk(q), xacro_fk(kin, q))
 
 
-def test_driver_yaml_and_controller_differ_by_the_euler_convention():
-    """The driver's YAML composed by the xacro is not the controller's arm: measured here."""
+def _driver_tables():
     theta, d, a, alpha = true_arm_dh("ur10e", 32)
+    text = "[mounting]\n" + "\n".join(f"{k} = [ {', '.join(repr(v) for v in vals)}]"
+                                      for k, vals in DRIVER_DELTAS_2.items()) + "\n"
+    return [(theta, d, a, alpha), _controller_table(text, "ur10")]
+
+
+@pytest.mark.parametrize("case", [0, 1])
+def test_driver_yaml_and_controller_differ_by_the_euler_convention(case):
+    """The driver's YAML composed by the xacro is not the controller's arm (measured here); read
+    with Eigen's convention (Rx Ry Rz) it is, but for the last row's Rx(alpha6) Tx(a6)."""
+    theta, d, a, alpha = _driver_tables()[case]
     kin = driver_yaml(theta, d, a, alpha)
     q = _joints(1000, 3)
     ctrl = dh_fk(theta, d, a, alpha, q)
-    ros = xacro_fk(kin, q)
-    gap = np.linalg.norm(ctrl[:, :3, 3] - ros[:, :3, 3], axis=1)
-    assert gap.max() > 1e-5  # ROS is off by more than 0.01 mm somewhere
-    # with the driver's angles read as Eigen composes them (Rx Ry Rz), the chain is the controller's
-    fixed = {k: dict(v) for k, v in kin.items()}
-    origins = []
-    for link in fixed.values():
-        R = (vur._rx(link["roll"]) @ vur._ry(link["pitch"]) @ vur._rz(link["yaw"]))
-        origins.append(vur.make_transform(R, (link["x"], link["y"], link["z"])))
-    eig = vur.origins_fk(np.array(origins), q, np.eye(4))
-    last = np.array([vur.make_transform(vur._rx(alpha[5]), (a[5], 0, 0))])
-    assert np.linalg.norm(eig[:, :3, 3] - (ctrl @ np.linalg.inv(last[0]))[:, :3, 3], axis=1).max() < 1e-9
+    gap = np.linalg.norm(ctrl[:, :3, 3] - xacro_fk(kin, q)[:, :3, 3], axis=1)
+    assert gap.max() > 1e-4  # ROS is off by more than 0.1 mm somewhere
+
+    def eigen_reading(kin):
+        origins = [vur.make_transform(vur._rx(k["roll"]) @ vur._ry(k["pitch"]) @ vur._rz(k["yaw"]),
+                                      (k["x"], k["y"], k["z"])) for k in kin.values()]
+        return vur.origins_fk(np.array(origins), q, np.eye(4))
+
+    without_last = ctrl @ np.linalg.inv(vur.make_transform(vur._rx(alpha[5]), (a[5], 0, 0)))
+    assert np.abs(eigen_reading(kin) - without_last).max() < 1e-9
+    if case == 1:  # the earlier correctAxis (atan) put this arm's elbow half a turn off
+        old = eigen_reading(driver_yaml(theta, d, a, alpha, release="atan"))
+        assert np.linalg.norm(old[:, :3, 3] - without_last[:, :3, 3], axis=1).max() > 1.0
 
 
 def _calibrated(seed=4):
@@ -235,3 +245,36 @@ def test_factory_model_as_nominal_filters_a_urscript_program(tmp_path):
     assert main(["filter", str(program), "--calibrated", str(tmp_path / "cal.yaml"),
                  "--nominal", str(tmp_path / "factory.yaml"), "-o", str(out)]) == 0
     assert out.read_text() != (DATA / "programs" / "pick_place.script").read_text()
+
+
+# Deltas from the ROS 2 driver's ur_calibration test (UniversalRobots/Universal_Robots_ROS2_Driver,
+# ur_calibration/test/calibration_test.cpp), added there to a UR10: d of 439 and -446 m, theta 7.1 rad
+DRIVER_DELTAS = {
+    "delta_d": [-0.000144894975118076141, 303.469135666158195, -309.88394307789747, 6.41459904397394975,
+                -4.48232900190081995e-05, -0.00087071402790364627],
+    "delta_a": [0.000108651068627930392, 0.240324175250532346, 0.00180628180213493472,
+                2.63076149165684402e-05, 3.96638632500012715e-06, 0],
+    "delta_theta": [1.59613525316931737e-07, -0.917209621528830232, 7.12936131346499469,
+                    0.0710299029424392298, -1.64258976526054923e-06, 9.17286101034808787e-08],
+    "delta_alpha": [-0.000444781952841921679, -0.00160215112531214153, 0.00631917793331091861,
+                    -0.00165055247340828437, 0.000763682515545038854, 0]}
+DRIVER_DELTAS_2 = {
+    "delta_d": [-0.000160188285741325043, 439.140974079900957, -446.027059806332147, 6.88618689642360149,
+                -3.86588496858186748e-05, -0.00087908274257374186],
+    "delta_a": [2.12234865571205891e-05, 0.632017132627700651, 0.00229833638891230319,
+                -4.61409023720933908e-05, -6.39280053471801522e-05, 0],
+    "delta_theta": [-2.41478068943590252e-07, 1.60233952386694556, -1.68607190752171299,
+                    0.0837331147700118711, -1.01260355871157781e-07, 3.91986209186123702e-08],
+    "delta_alpha": [-0.000650246557584166496, 0.00139416666825590402, 0.00693818880325995126,
+                    -0.000811641562390219562, 0.000411120504570705592, 0]}
+
+
+@pytest.mark.parametrize("deltas", [DRIVER_DELTAS, DRIVER_DELTAS_2])
+def test_the_ros_drivers_own_test_deltas_import_exactly(deltas):
+    text = "[mounting]\n" + "\n".join(f"{k} = [ {', '.join(repr(v) for v in vals)}]"
+                                      for k, vals in deltas.items()) + "\n"
+    robot = vur.from_calibration_conf(text, "ur10").robot
+    theta, d, a, alpha = _controller_table(text, "ur10")
+    q = _joints(1000, 7)
+    _assert_same(robot.fk(q), dh_fk(theta, d, a, alpha, q))
+    assert np.abs(robot.d).max() < 0.2 and np.abs(robot.beta).max() < 0.01

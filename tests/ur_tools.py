@@ -78,8 +78,11 @@ def eigen_euler_012(R: np.ndarray) -> np.ndarray:
     return -res
 
 
-def driver_yaml(theta, d, a, alpha) -> dict:
-    """What ur_calibration writes for the controller's DH table (its algorithm, ported)."""
+def driver_yaml(theta, d, a, alpha, release: str = "current") -> dict:
+    """What ur_calibration writes for the controller's DH table (its algorithm, ported):
+    ``release`` "current" (Universal_Robots_ROS2_Driver since "Fix calibration (#1017)", 2024:
+    new theta = atan2(y, x) - pi) or "atan" (the earlier code, still in the ROS 1 driver:
+    new theta = atan(y / x), which lands half a turn off when the axis crosses the plane at x > 0)."""
     chain = []
     for i in range(6):
         chain.append(rot("z", theta[i]) @ trans(z=d[i]))
@@ -92,7 +95,10 @@ def driver_yaml(theta, d, a, alpha) -> dict:
         direction = (nxt - start) / np.linalg.norm(nxt - start)
         param = -start[2] / direction[2]  # the line through start, nxt meets z = 0
         hit = start + param * direction
-        new_theta = np.arctan(hit[1] / hit[0])
+        if release == "atan":
+            new_theta = np.arctan(hit[1] / hit[0])
+        else:
+            new_theta = np.arctan2(hit[1], hit[0]) - (np.pi if abs(a[link]) > 0 else 0.0)
         new_length = -np.linalg.norm(hit)
         correction = param * (1.0 if direction[2] > 0 else -1.0)
         chain[2 * link] = rot("z", new_theta)
