@@ -140,6 +140,22 @@ def test_export_composes_to_the_calibrated_arm(tmp_path):
     _assert_same(back.fk(q), arm.fk(q))
 
 
+def test_export_refuses_what_the_xacro_cannot_hold():
+    cal, factory = _calibrated()
+    off_axis = factory.with_frames(tool=factory.tool @ vur.make_transform(np.eye(3), (0.001, 0, 0)))
+    with pytest.raises(ModelError, match="off joint 6's axis"):
+        vur.to_ur_calibration(cal, off_axis)
+    abb = rc.Robot.from_catalog("abb_irb2600")
+    with pytest.raises(ModelError, match="not a Universal Robots arm"):
+        vur.to_ur_calibration(abb, abb)
+
+
+def test_not_linearised_status_is_imported_with_a_note():
+    text = CONF.read_text().replace("calibration_status = 2", "calibration_status = 1")
+    result = vur.from_calibration_conf(text, "ur5e")
+    assert "not linearised" in result.notes[0]
+
+
 def test_cli_export_warns_naming_joint_error_terms(tmp_path, capsys):
     cal, factory = _calibrated()
     cal = cal.with_joint_errors(["comp2_3", "backlash2"])
@@ -180,9 +196,17 @@ def test_malformed_conf_is_refused_naming_the_problem(text, match):
 
 def test_calibration_of_another_model_is_refused(tmp_path, capsys):
     assert main(["import-calibration", str(CONF), "--robot", "ur10e", "-o", str(tmp_path / "x.yaml")]) == 2
-    assert "another robot model" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "another robot model (it fits ur5, ur5e)" in err
+    # the ROS driver's UR10 deltas: refused as a UR5e, recognised as a UR10 (or the close UR10e)
+    text = "[mounting]\n" + "\n".join(f"{k} = [ {', '.join(repr(v) for v in vals)}]"
+                                      for k, vals in DRIVER_DELTAS.items())
+    with pytest.raises(ModelError, match=r"it fits ur10, ur10e\)"):
+        vur.from_calibration_conf(text, "ur5e")
     with pytest.raises(ModelError, match="not a Universal Robots"):
         vur.from_calibration_conf(CONF.read_text(), "abb_irb2600")
+    with pytest.raises(ModelError, match="it fits ur10e"):
+        vur.from_ur_calibration(YAML10.read_text(), "ur5e")
     bad = YAML10.read_text().replace("    yaw:", "    yawn:", 1)
     with pytest.raises(ModelError, match="expected the keys"):
         vur.from_ur_calibration(bad, "ur10e")

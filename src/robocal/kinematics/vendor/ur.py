@@ -36,6 +36,7 @@ from robocal.kinematics.catalog import catalog_entry
 from robocal.kinematics.convert import PARALLEL_TOL
 from robocal.kinematics.model import MAX_ANGLE_RAD, Robot
 from robocal.kinematics.transforms import make_transform
+from robocal.kinematics.ur import nearest_ur_links
 from robocal.kinematics.urdf import matrix_to_rpy, rpy_to_matrix
 from robocal.yaml_load import load_yaml
 
@@ -274,22 +275,43 @@ def _check_against(robot: Robot, reference, what: str) -> None:
                          f"{dp:.3g} m / {dr:.3g} rad; please report this file")
 
 
-def _check_nominal(robot: Robot, nominal: Robot, source: str) -> None:
-    """The imported arm is the nominal model's within what a factory calibration changes."""
+def _largest_gap(robot: Robot, nominal: Robot) -> tuple[str, float, bool]:
+    """The link parameter farthest from the nominal's (relative to NOMINAL_GAP_M / _RAD): its
+    name, its gap (m or rad) and whether it is beyond what a factory calibration changes."""
+    worst = ("", 0.0, 0.0)
     for i in range(6):
         for f in ("alpha", "a", "beta", "theta", "d"):
             gap = getattr(robot, f)[i] - getattr(nominal, f)[i]
             if f in ("a", "d"):
-                bad = abs(gap) > NOMINAL_GAP_M
-                size = f"{gap * 1e3:+.1f} mm"
+                ratio = abs(gap) / NOMINAL_GAP_M
             else:
                 gap = (gap + np.pi) % (2 * np.pi) - np.pi
-                bad = abs(gap) > NOMINAL_GAP_RAD
-                size = f"{np.rad2deg(gap):+.2f} deg"
-            if bad:
-                raise ModelError(f"{source}: {f}{i + 1} is {size} from the nominal {nominal.name}'s, more "
-                                 "than a factory calibration changes: is it the calibration of another robot "
-                                 "model (give the right --robot)?")
+                ratio = abs(gap) / NOMINAL_GAP_RAD
+            if ratio > worst[2]:
+                worst = (f"{f}{i + 1}", float(gap), ratio)
+    return worst[0], worst[1], worst[2] > 1.0
+
+
+def _check_nominal(robot: Robot, nominal: Robot, source: str, fits) -> None:
+    """The imported arm is the nominal model's within what a factory calibration changes; else
+    ModelError naming the parameter and the catalog URs it fits (``fits(name)``: the file's arm
+    for catalog robot ``name``, or None)."""
+    name, gap, bad = _largest_gap(robot, nominal)
+    if not bad:
+        return
+    size = f"{gap * 1e3:+.1f} mm" if name[0] in "ad" else f"{np.rad2deg(gap):+.2f} deg"
+    others = [other for other in _ur_names() if other != nominal.name
+              and (arm := fits(other)) is not None and not _largest_gap(arm, Robot.from_catalog(other))[2]]
+    hint = f"it fits {', '.join(others)}" if others else "it fits no UR of the catalog"
+    raise ModelError(f"{source}: {name} is {size} from the nominal {nominal.name}'s, more than a factory "
+                     f"calibration changes: is it the calibration of another robot model ({hint})?")
+
+
+def _ur_names() -> list[str]:
+    """The catalog's Universal Robots arms (those with a nominal DH table)."""
+    from robocal.kinematics.catalog import catalog_names
+
+    return [n for n in catalog_names() if n.startswith("ur") and "dh" in catalog_entry(n)]
 
 
 # ----------------------------------------------------------------- calibration.conf
@@ -360,14 +382,20 @@ def from_calibration_conf(text: str, nominal_name: str, where: str = "calibratio
     """The factory-calibrated arm of a calibration.conf for catalog UR robot ``nominal_name``:
     flange (DH frame 6) in the controller's base frame, joints as the controller counts them."""
     deltas = parse_calibration_conf(text, where)
+
+    def arm(catalog_name: str) -> Robot:
+        cat = Robot.from_catalog(catalog_name)
+        lines = _dh_lines(controller_table(deltas, nominal_dh(catalog_name)))
+        mdh = mdh_beta_from_lines(*lines, cat.parallel)
+        return _robot(mdh, cat, name or f"{catalog_name}-factory",
+                      f"factory calibration of a {catalog_name} read from {Path(where).name} (the "
+                      "controller's DH + deltas, converted exactly to MDH + beta)")
+
     table = controller_table(deltas, nominal_dh(nominal_name))
     nominal = Robot.from_catalog(nominal_name)
-    mdh = mdh_beta_from_lines(*_dh_lines(table), nominal.parallel)
-    robot = _robot(mdh, nominal, name or f"{nominal_name}-factory",
-                   f"factory calibration of a {nominal_name} read from {Path(where).name} (the controller's "
-                   "DH + deltas, converted exactly to MDH + beta)")
+    robot = arm(nominal_name)
     _check_against(robot, lambda q: dh_fk(table, q), "controller's DH table")
-    _check_nominal(robot, nominal, where)
+    _check_nominal(robot, nominal, where, arm)
     notes = []
     if deltas.status not in (None, LINEARISED):
         notes.append(f"calibration_status = {deltas.status} (1: not linearised): the controller may not use "
@@ -417,12 +445,17 @@ def from_ur_calibration(text: str, nominal_name: str, where: str = "calibration.
     nominal = Robot.from_catalog(nominal_name)
     nominal_dh(nominal_name)  # a UR of the catalog
     origins, digest = read_ur_calibration(load_yaml(text, where, ModelError), where)
-    mdh = mdh_beta_from_lines(*_origin_lines(origins, XACRO_TOOL0), nominal.parallel)
-    robot = _robot(mdh, nominal, name or f"{nominal_name}-ros",
-                   f"{nominal_name} as ur_description composes the ur_calibration YAML {Path(where).name}"
-                   + (f" (hash {digest})" if digest else ""))
+    lines = _origin_lines(origins, XACRO_TOOL0)
+
+    def arm(catalog_name: str) -> Robot:
+        cat = Robot.from_catalog(catalog_name)
+        return _robot(mdh_beta_from_lines(*lines, cat.parallel), cat, name or f"{catalog_name}-ros",
+                      f"{catalog_name} as ur_description composes the ur_calibration YAML "
+                      f"{Path(where).name}" + (f" (hash {digest})" if digest else ""))
+
+    robot = arm(nominal_name)
     _check_against(robot, lambda q: origins_fk(origins, q, XACRO_TOOL0), "ur_calibration YAML")
-    _check_nominal(robot, nominal, where)
+    _check_nominal(robot, nominal, where, arm)
     return ImportedCalibration(robot, "ur_calibration YAML", [
         "read as ur_description's xacro composes it (URDF rpy = Rz(yaw) Ry(pitch) Rx(roll), tool0 on "
         "wrist_3): what ROS computes, which can differ from the controller's own model (import the "
@@ -447,8 +480,9 @@ def xacro_origins(robot: Robot, nominal: Robot) -> np.ndarray:
     from the controller's base (``nominal.base``: frame {0} there) to its flange (``nominal.tool``
     in frame {6}, ROS tool0); ModelError when that flange is off joint 6's axis (the xacro fixes
     tool0 on wrist_3_link, so the YAML cannot hold it)."""
-    if robot.n_joints != 6:
-        raise ModelError(f"{robot.name} has {robot.n_joints} joints: a ur_calibration YAML describes 6")
+    if robot.n_joints != 6 or nearest_ur_links(*robot.links) is None:
+        raise ModelError(f"{robot.name} is not a Universal Robots arm (six joints, axes 2-4 parallel, offset "
+                         "wrist): a ur_calibration YAML describes one")
     links = [make_transform(_rx(robot.alpha[i]) @ _ry(robot.beta[i]) @ _rz(robot.theta[i]),
                             _rx(robot.alpha[i]) @ np.array([robot.a[i], 0.0, 0.0])) for i in range(6)]
     origins = [nominal.base @ links[0]]
