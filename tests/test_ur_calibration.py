@@ -302,3 +302,27 @@ def test_the_ros_drivers_own_test_deltas_import_exactly(deltas):
     q = _joints(1000, 7)
     _assert_same(robot.fk(q), dh_fk(theta, d, a, alpha, q))
     assert np.abs(robot.d).max() < 0.2 and np.abs(robot.beta).max() < 0.01
+
+
+# ur_description's config/ur5e/default_kinematics.yaml (ros-industrial/universal_robot)
+UR5E_DEFAULT_KINEMATICS = {
+    "shoulder": {"x": 0, "y": 0, "z": 0.1625, "roll": 0, "pitch": 0, "yaw": 0},
+    "upper_arm": {"x": 0, "y": 0, "z": 0, "roll": 1.570796327, "pitch": 0, "yaw": 0},
+    "forearm": {"x": -0.425, "y": 0, "z": 0, "roll": 0, "pitch": 0, "yaw": 0},
+    "wrist_1": {"x": -0.3922, "y": 0, "z": 0.1333, "roll": 0, "pitch": 0, "yaw": 0},
+    "wrist_2": {"x": 0, "y": -0.0997, "z": -2.044881182297852e-11, "roll": 1.570796327, "pitch": 0, "yaw": 0},
+    "wrist_3": {"x": 0, "y": 0.09959999999999999, "z": -2.042830148012698e-11, "roll": 1.570796326589793,
+                "pitch": 3.141592653589793, "yaw": 3.141592653589793}}
+
+
+def test_nominal_export_puts_every_link_frame_where_ur_description_has_it():
+    """The links' frames (where ur_description hangs the meshes), not only tool0, are the same."""
+    ur5e = rc.Robot.from_catalog("ur5e")
+    mine = yaml.safe_load(vur.to_ur_calibration(ur5e, ur5e))["kinematics"]
+
+    def origin(k):
+        R = vur.rpy_to_matrix((k["roll"], k["pitch"], k["yaw"]))
+        return vur.make_transform(R, (k["x"], k["y"], k["z"]))
+
+    for link, theirs in UR5E_DEFAULT_KINEMATICS.items():
+        assert np.abs(origin(mine[link]) - origin(theirs)).max() < 1e-9, link

@@ -479,17 +479,21 @@ def xacro_origins(robot: Robot, nominal: Robot) -> np.ndarray:
     """The six joint origins ``(6, 4, 4)`` (m) with which the xacro composes ``robot``'s geometry
     from the controller's base (``nominal.base``: frame {0} there) to its flange (``nominal.tool``
     in frame {6}, ROS tool0); ModelError when that flange is off joint 6's axis (the xacro fixes
-    tool0 on wrist_3_link, so the YAML cannot hold it)."""
+    tool0 on wrist_3_link, so the YAML cannot hold it).
+
+    Joint i's origin is ``Rx(alpha_i) Tx(a_i) Ry(beta_i) Rz(theta_i) Tz(d_i)`` (``Tz(d_i)`` commutes
+    with the joint's ``Rz(q_i)``), so link i's frame is the model's frame {i}: for a UR that is
+    where ur_description and the driver put it (shoulder_link d1 above the base, ...), and the
+    meshes attached to the links stay in place."""
     if robot.n_joints != 6 or nearest_ur_links(*robot.links) is None:
         raise ModelError(f"{robot.name} is not a Universal Robots arm (six joints, axes 2-4 parallel, offset "
                          "wrist): a ur_calibration YAML describes one")
-    links = [make_transform(_rx(robot.alpha[i]) @ _ry(robot.beta[i]) @ _rz(robot.theta[i]),
-                            _rx(robot.alpha[i]) @ np.array([robot.a[i], 0.0, 0.0])) for i in range(6)]
-    origins = [nominal.base @ links[0]]
-    for i in range(1, 6):
-        origins.append(make_transform(np.eye(3), (0.0, 0.0, robot.d[i - 1])) @ links[i])
+    origins = [make_transform(_rx(robot.alpha[i]) @ _ry(robot.beta[i]) @ _rz(robot.theta[i]),
+                              _rx(robot.alpha[i]) @ np.array([robot.a[i], 0.0, 0.0]))
+               @ make_transform(np.eye(3), (0.0, 0.0, robot.d[i])) for i in range(6)]
+    origins[0] = nominal.base @ origins[0]
     # what follows joint 6 up to tool0, moved before Rz(q6): possible when it turns about z only
-    rest = make_transform(np.eye(3), (0.0, 0.0, robot.d[5])) @ nominal.tool @ np.linalg.inv(XACRO_TOOL0)
+    rest = nominal.tool @ np.linalg.inv(XACRO_TOOL0)
     off = max(np.abs(rest[:2, 3]).max(), np.abs(rest[2, :2]).max(), np.abs(rest[:2, 2]).max())
     if off > FLANGE_ON_AXIS_TOL:
         raise ModelError(f"the flange (tool0) of {nominal.name} is off joint 6's axis by {off:.3g} m/rad: "
