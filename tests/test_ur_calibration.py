@@ -7,6 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from ur_tools import DATA, dh_fk, driver_yaml, lines_to_dh, true_arm_dh, xacro_fk
 
 import robocal as rc
@@ -75,10 +77,40 @@ def test_near_parallel_dh_pair_converts_exactly_whatever_d(tilt):
     robot = rc.Robot(**{k: mdh[k] for k in ("alpha", "a", "beta", "theta", "d", "base", "tool")})
     q = _joints(200, 1)
     ref = dh_fk(theta, d, a, alpha, q)
-    scale = max(1.0, np.abs(d).max() * 1e-3)  # the DH chain itself rounds at |d| * eps
-    assert np.linalg.norm(robot.fk(q)[:, :3, 3] - ref[:, :3, 3], axis=1).max() < POS_TOL * scale
-    assert _rotation_error(robot.fk(q), ref).max() < ROT_TOL
+    slack = 20 * np.finfo(float).eps * np.abs(d).max()  # the DH rows place their lines to |d| eps
+    assert np.linalg.norm(robot.fk(q)[:, :3, 3] - ref[:, :3, 3], axis=1).max() < POS_TOL + slack
+    assert _rotation_error(robot.fk(q), ref).max() < ROT_TOL + slack / 0.1
     assert np.allclose(robot.links.beta, moved.beta, atol=1e-9) and np.abs(robot.d).max() < 0.2
+
+
+@settings(max_examples=25, deadline=None)
+@given(name=st.sampled_from(["ur3e", "ur5e", "ur10e", "ur16e", "ur20", "ur30"]),
+       tilts=st.lists(st.floats(-8.0, -2.5), min_size=4, max_size=4),
+       signs=st.lists(st.sampled_from([-1.0, 1.0]), min_size=4, max_size=4),
+       seed=st.integers(0, 2**16))
+def test_any_near_parallel_ur_converts_exactly(name, tilts, signs, seed):
+    """Catalog URs tilted out of parallel by 1e-8..3e-3 rad on axes 2-4 (DH d up to ~10^7 m),
+    with sub-millimetre errors elsewhere: DH -> MDH + beta keeps the DH chain's kinematics."""
+    nom = rc.Robot.from_catalog(name)
+    rng = np.random.default_rng(seed)
+    t = np.array(signs) * 10.0 ** np.array(tilts)
+    moved = nom.with_values({"alpha3": t[0], "beta3": t[1], "alpha4": t[2], "beta4": t[3],
+                             **{f"a{i}": nom.get(f"a{i}") + rng.normal(0, 3e-4) for i in range(2, 6)},
+                             **{f"theta{i}": nom.get(f"theta{i}") + rng.normal(0, 1e-3)
+                                for i in range(1, 7)}})
+    tcp, frames = moved.fk(np.zeros((1, 6)), frames=True)
+    theta, d, a, alpha = lines_to_dh(frames[0, 1:, :3, 2], frames[0, 1:, :3, 3], tcp[0])
+    mdh = vur.mdh_beta_from_lines(*vur._dh_lines(vur.DHTable(theta, d, a, alpha)), nom.parallel)
+    robot = rc.Robot(**{k: mdh[k] for k in ("alpha", "a", "beta", "theta", "d", "base", "tool")})
+    q = _joints(50, seed)
+    ref = dh_fk(theta, d, a, alpha, q)
+    # a DH row with d = 10^7 m places its line only to |d| eps = 2e-9 m, and the arm's direction
+    # (over ~0.1 m) to |d| eps / 0.1 m: the bounds grow by that (nothing for real files' |d| < 1e3 m)
+    slack = 20 * np.finfo(float).eps * np.abs(d).max()
+    assert np.linalg.norm(robot.fk(q)[:, :3, 3] - ref[:, :3, 3], axis=1).max() < POS_TOL + slack
+    assert _rotation_error(robot.fk(q), ref).max() < ROT_TOL + slack / 0.1
+    # and it is the arm that was tilted (same lines, same frames placement)
+    assert np.abs(robot.fk(q)[:, :3, 3] - moved.fk(q)[:, :3, 3]).max() < POS_TOL + slack
 
 
 def test_ur_calibration_yaml_is_read_as_the_xacro_composes_it():
