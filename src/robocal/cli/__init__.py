@@ -25,10 +25,10 @@ COMMANDS = {
     "robots": "robots", "demo": "demo",
     "report": "report", "export": "export",
     "import": "importer", "simulate": "simulate", "evaluate": "evaluate",
+    "import-calibration": "import_calibration",
     "calibrate": "calibrate", "analyze": "analyze",
     "plan": "plan", "poses": "poses", "compensate": "compensate",
     "filter": "filter", "tool": "tool",
-    "import-calibration": "import_calibration",
 }
 
 
