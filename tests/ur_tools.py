@@ -80,9 +80,9 @@ def eigen_euler_012(R: np.ndarray) -> np.ndarray:
 
 def driver_yaml(theta, d, a, alpha, release: str = "current") -> dict:
     """What ur_calibration writes for the controller's DH table (its algorithm, ported):
-    ``release`` "current" (Universal_Robots_ROS2_Driver since "Fix calibration (#1017)", 2024:
-    new theta = atan2(y, x) - pi) or "atan" (the earlier code, still in the ROS 1 driver:
-    new theta = atan(y / x), which lands half a turn off when the axis crosses the plane at x > 0)."""
+    ``release`` "current" (both drivers since "Fix calibration", June 2024: ROS 2 #1017, ROS 1
+    #704: new theta = atan2(y, x) - pi) or "atan" (the code before: new theta = atan(y / x),
+    which lands half a turn off when the axis crosses the plane at x > 0)."""
     chain = []
     for i in range(6):
         chain.append(rot("z", theta[i]) @ trans(z=d[i]))
