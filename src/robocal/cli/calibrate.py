@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from robocal.cli.history_options import add_history_options, check_history_options, record
 from robocal.io import LENGTH_UNITS
 
 EPILOG = """Examples:
@@ -97,6 +98,7 @@ def add_parser(sub) -> None:
     p.add_argument("--force", action="store_true",
                    help="proceed past the plausibility checks (units, robot, corrections) and write the "
                         "results of a solve that did not converge, with loud warnings")
+    add_history_options(p)
     p.set_defaults(func=run)
 
 
@@ -143,6 +145,7 @@ def run(args) -> int:
                           "a validation on the calibration data says nothing of the accuracy elsewhere")
     if args.network_out and (args.method != "neural" or not args.network_out.endswith((".npz", ".json"))):
         raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
+    check_history_options(args)
     sigma = dict(args.sigma)
     robot = load_model(args.robot)
     data = [load_measurements(f, robot, args.quiet) for f in args.data]
@@ -189,4 +192,9 @@ def run(args) -> int:
     write_all(texts)
     for path in texts:
         print(f"wrote {path}")
+    if args.history:  # after the files: the history is never the only copy
+        from robocal.history.record import calibration_record
+
+        files = [(f, "calibration") for f in args.data] + [(f, "validation") for f in validate]
+        record(args, calibration_record(result, args.robot_id, files))
     return 0

@@ -1,0 +1,38 @@
+"""``--history PATH_OR_URL --robot-id ID``: the options that record a command's result in a robot's
+history (:mod:`robocal.history.store`), shared by calibrate, check and evaluate."""
+
+from __future__ import annotations
+
+HISTORY_HELP = ("record the result in this history: a SQLite file (created if missing) or a "
+                "postgresql:// URL; needs --robot-id. The outputs are written as files all the same")
+
+
+def add_history_options(p, history_help: str = HISTORY_HELP) -> None:
+    p.add_argument("--history", metavar="PATH_OR_URL", help=history_help)
+    p.add_argument("--robot-id", metavar="ID", help="the robot's id in the history (e.g. its serial number)")
+
+
+def check_history_options(args, required: bool = False) -> None:
+    """Both options or neither (both when ``required``); the robot id's form; the history opens
+    (its schema created or migrated) before any work is done."""
+    from robocal.errors import DataError
+    from robocal.history.store import History, check_robot_id
+
+    if required and not args.history:
+        raise DataError("--history and --robot-id are required here")
+    if bool(args.history) != bool(args.robot_id):
+        raise DataError("--history and --robot-id go together: give both to record in a robot's history")
+    if args.history:
+        args.robot_id = check_robot_id(args.robot_id)
+        History(args.history).close()
+
+
+def record(args, entry) -> int:
+    """Store ``entry`` in ``args.history`` and say so; its id."""
+    from robocal.history.store import History, shown
+
+    with History(args.history) as history:
+        ident = history.record(entry)
+    if not args.quiet:
+        print(f"recorded {entry.kind} #{ident} of robot {entry.robot_id!r} in {shown(args.history)}")
+    return ident
