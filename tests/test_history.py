@@ -66,7 +66,7 @@ def test_records_round_trip_in_recording_order(location):
         assert got[0].date.endswith("+00:00") and got[0].robocal_version
         assert h.calibration(robot).id == first
         assert h.calibration(robot, "name: r\n").id == first
-        with pytest.raises(DataError, match="no calibration with this model"):
+        with pytest.raises(DataError, match="none of the calibrations of robot id"):
             h.calibration(robot, "name: other\n")
         with pytest.raises(DataError, match="no calibration of robot id 'nobody'"):
             h.calibration("nobody")

@@ -27,7 +27,7 @@ COMMANDS = {
     "import": "importer", "simulate": "simulate", "evaluate": "evaluate",
     "calibrate": "calibrate", "analyze": "analyze",
     "plan": "plan", "poses": "poses", "compensate": "compensate",
-    "filter": "filter", "tool": "tool",
+    "filter": "filter", "tool": "tool", "check": "check",
 }
 
 

@@ -258,13 +258,18 @@ class History:
         """The latest calibration of ``robot_id`` (whose model is ``model_yaml`` when given);
         DataError naming the robot id when there is none."""
         found = self.entries(robot_id, "calibration")
+        if not found:
+            raise DataError(f"the history {shown(self.location)} has no calibration of robot id "
+                            f"{robot_id!r}: record one with robocal calibrate ... --history ... "
+                            "--robot-id ...")
         if model_yaml is not None:
             digest = sha256_text(model_yaml)
+            latest = found[-1]
             found = [r for r in found if r.model_sha256 == digest]
-        if not found:
-            what = "no calibration" if model_yaml is None else "no calibration with this model"
-            raise DataError(f"the history {shown(self.location)} has {what} of robot id {robot_id!r}: "
-                            "record one with calibrate --history ... --robot-id ...")
+            if not found:
+                raise DataError(f"none of the calibrations of robot id {robot_id!r} in the history has this "
+                                f"model (the latest is #{latest.id} of {latest.date}): give the calibrated "
+                                "model that calibration wrote")
         return found[-1]
 
 

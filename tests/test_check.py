@@ -1,0 +1,129 @@
+"""The check of a calibration: the test statistic against its closed form, the verdict on simulated
+campaigns of an unchanged and a changed robot, what moved, and the command line with a history."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy import stats
+
+import robocal as rc
+from robocal.cli import main
+from robocal.data.simulate import sample_joints, simulate_tracker
+from robocal.errors import DataError
+from robocal.history.check import ALPHA, Uncertainty, _p_value, _Whitened, check
+from robocal.history.record import calibration_uncertainty
+from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
+
+
+@pytest.fixture(scope="module")
+def calibrated():
+    """A calibrated IRB 2600 (80 poses, 0.02 mm noise) with its truth and result."""
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(nominal, 80, seed=21)
+    result = rc.calibrate(nominal, sim.data, nongeometric="none", progress=False)
+    return sim.truth, result
+
+
+def _campaign(truth, seed: int, n: int = 20, **changes):
+    """A check campaign of ``truth`` (changed by ``changes``: name -> shift, deg) with the tracker moved."""
+    rng = np.random.default_rng(seed)
+    robot = truth.with_values({k: truth.get(k) + np.deg2rad(v) for k, v in changes.items()})
+    moved = make_transform(rotvec_to_matrix(np.deg2rad(5.0) * np.array([0.6, 0.0, 0.8])), [0.3, -0.2, 0.1])
+    return simulate_tracker(replace(robot, base=moved @ robot.base), joints=sample_joints(truth, n, rng),
+                            as_is=True, seed=seed).data
+
+
+def test_the_statistic_is_the_generalised_least_squares_residual(rng):
+    M, k = 30, 4
+    J, r = rng.normal(size=(M, k)), rng.normal(size=M)
+    A = rng.normal(size=(M, M))
+    C = A @ A.T + M * np.eye(M)
+    T = _Whitened(r, J, C).fit()[0]
+    Ci = np.linalg.inv(C)
+    expected = r @ (Ci - Ci @ J @ np.linalg.inv(J.T @ Ci @ J) @ J.T @ Ci) @ r
+    assert pytest.approx(expected, rel=1e-9) == T
+    assert _p_value(T, M - k, None) == pytest.approx(stats.chi2.sf(T, M - k))
+    assert _p_value(T, M - k, 200) == pytest.approx(stats.f.sf(T / (M - k), M - k, 200))
+
+
+def test_unchanged_robot_holds_and_a_moved_joint_zero_is_named(calibrated):
+    truth, result = calibrated
+    unc = Uncertainty.from_dict(calibration_uncertainty(result))
+    same = check(result.robot, _campaign(truth, 1), unc)
+    assert same.verdict == "holds" and same.p_value >= ALPHA and not same.to_dict().get("changed_parameters")
+    assert any("theta1, theta6" in n for n in same.notes)
+    moved = check(result.robot, _campaign(truth, 2, theta3=0.01), unc)
+    assert moved.verdict == "changed" and moved.p_value < ALPHA
+    first = moved.changed_parameters[0]
+    assert first["name"] == "theta3" and first["unit"] == "deg"
+    assert abs(first["shift"] - 0.01) < 3 * first["sigma"]
+    assert moved.to_dict()["changed_parameters"] == moved.changed_parameters
+    # theta1 turns the robot about its base axis: the refitted frame absorbs it, without a frame fit not
+    hidden = check(result.robot, _campaign(truth, 3, theta1=0.02), unc)
+    assert hidden.verdict == "holds"
+    in_place = _campaign(truth, 4, theta1=0.02)
+    in_place = simulate_tracker(truth.with_values({"theta1": truth.get("theta1") + np.deg2rad(0.02)}),
+                                joints=in_place.joints, as_is=True, seed=4).data
+    seen = check(result.robot, in_place, unc, fit_frame=False)
+    assert seen.verdict == "changed" and seen.changed_parameters[0]["name"] == "theta1"
+
+
+def test_stated_noise_gives_a_chi_square_test_and_bad_input_is_refused(calibrated):
+    truth, result = calibrated
+    unc = Uncertainty.from_dict(calibration_uncertainty(result))
+    data = _campaign(truth, 5)
+    out = check(result.robot, data, unc, noise_mm=0.02).to_dict()
+    assert out["test"]["kind"] == "chi2" and out["test"]["noise_dof"] is None and out["verdict"] == "holds"
+    # a far noisier instrument stated than the data show: the residuals are smaller than expected
+    assert check(result.robot, data, unc, noise_mm=0.2).p_value > 0.999
+    with pytest.raises(DataError, match="at least 8 poses"):
+        check(result.robot, _campaign(truth, 6, n=5), unc)
+    with pytest.raises(DataError, match="noise-mm"):
+        check(result.robot, data, unc, noise_mm=-1)
+    with pytest.raises(DataError, match="does not have"):
+        check(result.robot, data, replace(unc, names=("gear2_s1", *unc.names[1:])))
+
+
+def test_check_command_with_a_history(calibrated, tmp_path, capsys):
+    truth, result = calibrated
+    model, res_json, hist = tmp_path / "cal.yaml", tmp_path / "result.json", str(tmp_path / "h.sqlite")
+    result.problem.datasets[0].save(tmp_path / "cal.csv")
+    assert main(["--quiet", "calibrate", str(tmp_path / "cal.csv"), "--robot", "abb_irb2600",
+                 "--nongeometric", "none", "-o", str(model), "--json", str(res_json), "--history", hist,
+                 "--robot-id", "IRB-7"]) == 0
+    assert model.exists() and res_json.exists()  # the history is never the only copy
+    assert main(["calibrate", str(tmp_path / "cal.csv"), "--robot", "abb_irb2600", "--history", hist]) == 2
+    assert "go together" in capsys.readouterr().err
+    for name, campaign in (("same", _campaign(truth, 7)), ("moved", _campaign(truth, 8, theta2=0.01))):
+        campaign.save(tmp_path / f"{name}.csv")
+    out = tmp_path / "check.json"
+    base = ["check", str(model), str(tmp_path / "moved.csv"), "--fit-frame"]
+    assert main([*base, "--history", hist, "--robot-id", "IRB-7", "--json", str(out)]) == 0
+    moved = json.loads(out.read_text())
+    assert moved["verdict"] == "changed" and moved["changed_parameters"][0]["name"] == "theta2"
+    assert moved["calibration_record"] == 1
+    # the same test from the result JSON instead of the history
+    assert main([*base, "--result", str(res_json), "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["verdict"] == "changed"
+    assert main(["check", str(model), str(tmp_path / "same.csv"), "--fit-frame", "--history", hist,
+                 "--robot-id", "IRB-7"]) == 0
+    assert "holds" in capsys.readouterr().out
+    capsys.readouterr()
+    assert main([*base, "--history", hist, "--robot-id", "nobody"]) == 2
+    assert "no calibration of robot id 'nobody'" in capsys.readouterr().err
+    assert main(base) == 2
+    assert "uncertainty" in capsys.readouterr().err
+    from robocal.history.store import History, file_sha256
+
+    with History(hist) as h:
+        kinds = [(r.kind, r.summary.get("verdict"), r.parent) for r in h.entries("IRB-7")]
+        calibration = h.entries("IRB-7")[0]
+    assert kinds == [("calibration", None, None), ("check", "changed", 1), ("check", "holds", 1)]
+    assert calibration.data == [{"file": str(tmp_path / "cal.csv"), "role": "calibration",
+                                 "sha256": file_sha256(tmp_path / "cal.csv")}]
+    a2 = next(p for p in calibration.parameters if p["name"] == "a2")
+    assert a2["unit"] == "mm" and a2["sigma"] > 0 and calibration.summary["held_out_rms"] is None
