@@ -127,3 +127,24 @@ def test_check_command_with_a_history(calibrated, tmp_path, capsys):
                                  "sha256": file_sha256(tmp_path / "cal.csv")}]
     a2 = next(p for p in calibration.parameters if p["name"] == "a2")
     assert a2["unit"] == "mm" and a2["sigma"] > 0 and calibration.summary["held_out_rms"] is None
+    # an evaluation on held-out data is recorded as derived from that calibration; then the timeline
+    assert main(["--quiet", "evaluate", str(model), str(tmp_path / "same.csv"), "--fit-frame",
+                 "--history", hist, "--robot-id", "IRB-7"]) == 0
+    timeline, page = tmp_path / "timeline.json", tmp_path / "history.html"
+    assert main(["history", hist, "--robot-id", "IRB-7", "--json", str(timeline), "--report", str(page)]) == 0
+    entries = json.loads(timeline.read_text())["entries"]
+    assert [e["kind"] for e in entries] == ["calibration", "check", "check", "evaluation"]
+    assert [e["verdict"] for e in entries] == [None, "changed", "holds", None]
+    assert entries[1]["p_value"] < ALPHA <= entries[2]["p_value"] and entries[0]["p_value"] is None
+    assert entries[0]["held_out_rms"] is None and entries[3]["held_out_rms"] == pytest.approx(
+        entries[2]["rms"], rel=1e-9)  # the same data, the same frame fit: the same RMS
+    assert entries[3]["parent"] == 1
+    assert entries[1]["data"][0]["sha256"] == file_sha256(tmp_path / "moved.csv")
+    assert all(e["date"].endswith("+00:00") for e in entries)
+    html = page.read_text()
+    assert html.count("<svg") == 1 and "IRB-7" in html and "changed" in html
+    capsys.readouterr()
+    assert main(["history", hist, "--robot-id", "IRB-8"]) == 2
+    assert "no record of robot id 'IRB-8'" in capsys.readouterr().err
+    assert main(["history", str(tmp_path / "none.sqlite"), "--robot-id", "IRB-7"]) == 2
+    assert not (tmp_path / "none.sqlite").exists()

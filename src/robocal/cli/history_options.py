@@ -27,6 +27,24 @@ def check_history_options(args, required: bool = False) -> None:
         History(args.history).close()
 
 
+def record_evaluation(args, robot, summary: dict, files: list[tuple[str, str]]) -> int:
+    """Record an evaluation of ``robot`` (``summary``: its statistics, mm) as derived from the
+    calibration of the same model when the history holds one."""
+    from robocal.errors import DataError
+    from robocal.history.record import fingerprints
+    from robocal.history.store import History, Record
+    from robocal.kinematics.model_file import dump_model
+
+    model_yaml = dump_model(robot)
+    with History(args.history) as history:
+        try:
+            parent = history.calibration(args.robot_id, model_yaml).id
+        except DataError:  # a model calibrated elsewhere, or a nominal one: no parent
+            parent = None
+    return record(args, Record(robot_id=args.robot_id, kind="evaluation", model_yaml=model_yaml,
+                               summary=summary, data=fingerprints(files), parent=parent))
+
+
 def record(args, entry) -> int:
     """Store ``entry`` in ``args.history`` and say so; its id."""
     from robocal.history.store import History, shown

@@ -27,7 +27,7 @@ from pathlib import Path
 from robocal.errors import DataError
 from robocal.version import __version__
 
-KINDS = ("calibration", "check")
+KINDS = ("calibration", "check", "evaluation")  # evaluation: a model judged on held-out data
 POSTGRES_SCHEMES = ("postgresql://", "postgres://")
 BUSY_TIMEOUT_S = 30.0  # SQLite waits this long for another writer's lock before retrying
 RETRY_DEADLINE_S = 120.0  # give up (one clear error) after retrying a locked database this long
@@ -40,7 +40,7 @@ MIGRATIONS: tuple[tuple[str, ...], ...] = (
     ("""CREATE TABLE records (
             id {id},
             robot_id TEXT NOT NULL,
-            kind TEXT NOT NULL CHECK (kind IN ('calibration', 'check')),
+            kind TEXT NOT NULL CHECK (kind IN ('calibration', 'check', 'evaluation')),
             recorded_at TEXT NOT NULL,
             robocal_version TEXT NOT NULL,
             model_yaml TEXT NOT NULL,
@@ -81,6 +81,22 @@ class Record:
     @property
     def model_sha256(self) -> str:
         return sha256_text(self.model_yaml)
+
+    def timeline_entry(self) -> dict:
+        """This record as one entry of ``robocal history --json`` (docs/reference/history-json.md):
+        ``held_out_rms`` (mm) of a calibration with validation or of an evaluation, else null;
+        ``verdict`` and ``p_value`` of a check, else null; ``rms`` the record's own figure (mm)."""
+        s = self.summary
+        held_out = s.get("held_out_rms") if self.kind == "calibration" else \
+            s.get("rms") if self.kind == "evaluation" else None
+        rms = s.get("rms_mm") if self.kind == "check" else (s.get("after") or {}).get("rms") \
+            if self.kind == "calibration" else s.get("rms")
+        return {"id": self.id, "kind": self.kind, "date": self.date, "held_out_rms": held_out, "rms": rms,
+                "verdict": s.get("verdict"), "p_value": s.get("p_value"),
+                "changed_parameters": s.get("changed_parameters") if self.kind == "check" else None,
+                "parent": self.parent, "model_sha256": self.model_sha256, "data": self.data,
+                "robocal_version": self.robocal_version,
+                **({"offsets_only": True} if s.get("offsets_only") else {})}
 
 
 def now_utc() -> str:
