@@ -148,3 +148,51 @@ def test_check_command_with_a_history(calibrated, tmp_path, capsys):
     assert "no record of robot id 'IRB-8'" in capsys.readouterr().err
     assert main(["history", str(tmp_path / "none.sqlite"), "--robot-id", "IRB-7"]) == 2
     assert not (tmp_path / "none.sqlite").exists()
+
+
+def test_offsets_only_recalibration_moves_only_the_joint_zeros(calibrated):
+    from robocal.history.offsets import recalibrate_offsets, zero_shifts
+
+    truth, result = calibrated
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    data = _campaign(truth, 9, n=60, theta2=0.01, theta3=-0.05)
+    short = data.first_poses(20)
+    held_out = data.subset(~np.isin(data.pose_id, short.pose_id))
+    out = recalibrate_offsets(nominal, result.robot, short, validation=held_out, progress=False)
+    assert out.settings["offsets_only"] and set(out.identifiability.dropped) == {"theta1", "theta6"}
+    shifts = {r["name"]: r for r in zero_shifts(out, result.robot)}
+    for name, shift in (("theta2", 0.01), ("theta3", -0.05)):
+        assert abs(shifts[name]["shift"] - shift) < 3 * shifts[name]["sigma"] + 2e-4, name
+    links = [n for n in result.robot.geometry_names if n[0] in "ad" or n.startswith("beta")]
+    kept = out.robot.values[out.robot.indices(links)]
+    assert np.array_equal(kept, result.robot.values[result.robot.indices(links)])
+    assert out.validation["rms"] < 1.3 * 0.04  # the instrument's noise level: the change is undone
+    with pytest.raises(DataError, match="not a calibration of"):
+        recalibrate_offsets(rc.Robot.from_catalog("abb_irb4600"), result.robot, short)
+    with pytest.raises(DataError, match="chooses its own params"):
+        recalibrate_offsets(nominal, result.robot, short, params="all")
+
+
+def test_offsets_only_command_records_a_derived_calibration(calibrated, tmp_path, capsys):
+    from robocal.history.store import History
+
+    truth, result = calibrated
+    model, hist = tmp_path / "cal.yaml", str(tmp_path / "h.sqlite")
+    result.problem.datasets[0].save(tmp_path / "cal.csv")
+    _campaign(truth, 10, theta2=0.02).save(tmp_path / "check.csv")
+    assert main(["--quiet", "calibrate", str(tmp_path / "cal.csv"), "--robot", "abb_irb2600",
+                 "--nongeometric", "none", "-o", str(model), "--history", hist, "--robot-id", "R"]) == 0
+    new = tmp_path / "recal.yaml"
+    assert main(["calibrate", str(tmp_path / "check.csv"), "--robot", "abb_irb2600", "--offsets-only",
+                 "--start", str(model), "-o", str(new), "--history", hist, "--robot-id", "R"]) == 0
+    out = capsys.readouterr().out
+    assert "joint zeros changed from the start: theta2 +0.0" in out and new.exists()
+    with History(hist) as h:
+        first, derived = h.entries("R")
+    assert derived.parent == first.id and derived.summary["offsets_only"]
+    assert derived.summary["zero_shifts"][0]["name"] == "theta2"
+    for bad, message in ((["--offsets-only"], "go together"), (["--start", str(model)], "go together"),
+                         (["--offsets-only", "--start", str(model), "--params", "all"],
+                          "its own parameters")):
+        assert main(["calibrate", str(tmp_path / "check.csv"), "--robot", "abb_irb2600", *bad]) == 2
+        assert message in capsys.readouterr().err
