@@ -196,3 +196,21 @@ def test_offsets_only_command_records_a_derived_calibration(calibrated, tmp_path
                           "its own parameters")):
         assert main(["calibrate", str(tmp_path / "check.csv"), "--robot", "abb_irb2600", *bad]) == 2
         assert message in capsys.readouterr().err
+
+
+def test_poses_check_plans_a_campaign_for_the_joint_zeros(tmp_path, capsys):
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    q = sample_joints(robot, 40, np.random.default_rng(3))
+    rc.Measurements.from_arrays("point", q, points=robot.fk(q)[:, :3, 3]).save(tmp_path / "poses.csv")
+    out, program, plan = tmp_path / "check.csv", tmp_path / "check.mod", tmp_path / "check.json"
+    assert main(["--quiet", "poses", "--robot", "abb_irb2600", "--check", "-n", "12", "--from",
+                 str(tmp_path / "poses.csv"), "--smr-mm", "20,-30,80", "-o", str(out), "--rapid",
+                 str(program), "--json", str(plan), "--starts", "1"]) == 0
+    campaign = json.loads(plan.read_text())
+    assert campaign["parameters"] == ["theta2", "theta3", "theta4", "theta5", "base.x", "base.y", "base.z",
+                                      "base.rx", "base.ry", "base.rz", "tool.x", "tool.y", "tool.z"]
+    assert {d["name"] for d in campaign["dropped"]} == {"theta1", "theta6"}
+    assert len(out.read_text().splitlines()) == 13 and "MoveAbsJ" in program.read_text()
+    assert main(["poses", "--robot", "abb_irb2600", "--check", "-n", "12", "--kind", "plane", "--from",
+                 str(tmp_path / "poses.csv"), "-o", str(tmp_path / "x.csv")]) == 2
+    assert "--check plans a tracker campaign" in capsys.readouterr().err
