@@ -8,6 +8,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy import stats
 
 import robocal as rc
@@ -37,8 +39,10 @@ def _campaign(truth, seed: int, n: int = 20, **changes):
                             as_is=True, seed=seed).data
 
 
-def test_the_statistic_is_the_generalised_least_squares_residual(rng):
-    M, k = 30, 4
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(10, 40), st.integers(1, 9))
+def test_the_statistic_is_the_generalised_least_squares_residual(seed, M, k):
+    rng = np.random.default_rng(seed)
     J, r = rng.normal(size=(M, k)), rng.normal(size=M)
     A = rng.normal(size=(M, M))
     C = A @ A.T + M * np.eye(M)
@@ -70,6 +74,20 @@ def test_unchanged_robot_holds_and_a_moved_joint_zero_is_named(calibrated):
                                 joints=in_place.joints, as_is=True, seed=4).data
     seen = check(result.robot, in_place, unc, fit_frame=False)
     assert seen.verdict == "changed" and seen.changed_parameters[0]["name"] == "theta1"
+
+
+def test_a_calibration_with_several_smrs_and_joint_error_terms_is_checked():
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(nominal, 60, seed=5, n_smr=2)
+    result = rc.calibrate(nominal, sim.data, nongeometric="compliance", progress=False)
+    unc = Uncertainty.from_dict(calibration_uncertainty(result))
+    assert any(n.startswith("comp") for n in unc.names)
+    q = sample_joints(nominal, 20, np.random.default_rng(1))
+    same = simulate_tracker(sim.truth, joints=q, as_is=True, seed=3, n_smr=2).data
+    assert check(result.robot, same, unc).verdict == "holds"
+    moved = sim.truth.with_values({"theta4": sim.truth.get("theta4") + np.deg2rad(0.05)})
+    out = check(result.robot, simulate_tracker(moved, joints=q, as_is=True, seed=3, n_smr=2).data, unc)
+    assert out.verdict == "changed" and out.changed_parameters[0]["name"] == "theta4"
 
 
 def test_stated_noise_gives_a_chi_square_test_and_bad_input_is_refused(calibrated):
