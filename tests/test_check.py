@@ -76,6 +76,18 @@ def test_unchanged_robot_holds_and_a_moved_joint_zero_is_named(calibrated):
     assert seen.verdict == "changed" and seen.changed_parameters[0]["name"] == "theta1"
 
 
+def test_the_result_json_carries_the_same_uncertainty_as_the_history(calibrated):
+    _, result = calibrated
+    recorded = Uncertainty.from_dict(calibration_uncertainty(result))
+    from_json = Uncertainty.from_result(json.loads(result.to_json()))
+    assert from_json.names == recorded.names and from_json.dof == recorded.dof
+    assert from_json.noise_m == pytest.approx(recorded.noise_m, rel=1e-9)
+    np.testing.assert_allclose(from_json.covariance, recorded.covariance, rtol=1e-5,
+                               atol=1e-5 * np.abs(recorded.covariance).max())
+    with pytest.raises(DataError, match="lacks what a check needs"):
+        Uncertainty.from_result({"parameters": []})
+
+
 def test_a_calibration_with_several_smrs_and_joint_error_terms_is_checked():
     nominal = rc.Robot.from_catalog("abb_irb2600")
     sim = simulate_tracker(nominal, 60, seed=5, n_smr=2)
