@@ -147,6 +147,8 @@ def test_check_command_with_a_history(calibrated, tmp_path, capsys):
     assert "no calibration of robot id 'nobody'" in capsys.readouterr().err
     assert main(base) == 2
     assert "uncertainty" in capsys.readouterr().err
+    assert main([*base, "--history", str(tmp_path / "none.sqlite"), "--robot-id", "IRB-7"]) == 2
+    assert "does not exist" in capsys.readouterr().err and not (tmp_path / "none.sqlite").exists()
     from robocal.history.store import History, file_sha256
 
     with History(hist) as h:

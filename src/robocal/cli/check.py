@@ -56,7 +56,7 @@ def run(args) -> int:
 
     check_format(args.json, "JSON", "--json")
     check_outputs([args.json], [args.model, args.data, args.result])
-    check_history_options(args)
+    check_history_options(args, existing=True)
     if not args.history and not args.result:
         raise DataError("the check needs the calibration's uncertainty: give --history and --robot-id (where "
                         "calibrate recorded it) or --result RESULT.json (calibrate --json)")

@@ -26,20 +26,19 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     import json
-    from pathlib import Path
 
     from robocal.cli.args import check_format
+    from robocal.cli.history_options import check_history_options
     from robocal.errors import DataError
-    from robocal.history.store import History, check_robot_id, is_postgres
+    from robocal.history.store import History, is_postgres
     from robocal.io import check_outputs, write_all
     from robocal.version import __version__
 
     check_format(args.json, "JSON", "--json")
     check_format(args.report, "HTML", "--report")
     check_outputs([args.json, args.report], [] if is_postgres(args.history) else [args.history])
-    if not is_postgres(args.history) and not Path(args.history).is_file():
-        raise DataError(f"the history {args.history} does not exist")
-    robot_id = check_robot_id(args.robot_id)
+    check_history_options(args, existing=True)
+    robot_id = args.robot_id
     with History(args.history) as history:
         records = history.entries(robot_id)
     if not records:

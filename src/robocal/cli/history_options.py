@@ -12,16 +12,19 @@ def add_history_options(p, history_help: str = HISTORY_HELP) -> None:
     p.add_argument("--robot-id", metavar="ID", help="the robot's id in the history (e.g. its serial number)")
 
 
-def check_history_options(args, required: bool = False) -> None:
-    """Both options or neither (both when ``required``); the robot id's form; the history opens
-    (its schema created or migrated) before any work is done."""
-    from robocal.errors import DataError
-    from robocal.history.store import History, check_robot_id
+def check_history_options(args, existing: bool = False) -> None:
+    """Both options or neither; the robot id's form; the history opens (its schema created or
+    migrated) before any work is done; ``existing``: a SQLite history must exist already (it holds
+    what the command reads)."""
+    from pathlib import Path
 
-    if required and not args.history:
-        raise DataError("--history and --robot-id are required here")
+    from robocal.errors import DataError
+    from robocal.history.store import History, check_robot_id, is_postgres
+
     if bool(args.history) != bool(args.robot_id):
         raise DataError("--history and --robot-id go together: give both to record in a robot's history")
+    if args.history and existing and not is_postgres(args.history) and not Path(args.history).is_file():
+        raise DataError(f"the history {args.history} does not exist")
     if args.history:
         args.robot_id = check_robot_id(args.robot_id)
         History(args.history).close()

@@ -141,7 +141,11 @@ class History:
         self.location = str(location)
         self.postgres = is_postgres(self.location)
         self._conn = self._connect_postgres() if self.postgres else self._connect_sqlite()
-        self._migrate()
+        try:
+            self._migrate()
+        except BaseException:
+            self._conn.close()
+            raise
 
     # -- connections -------------------------------------------------------------------------
     def _connect_sqlite(self):
@@ -150,12 +154,13 @@ class History:
             raise DataError(f"the history {path} is a folder: give a file name (e.g. history.sqlite)")
         if not path.parent.is_dir():
             raise DataError(f"the history's folder {path.parent} does not exist")
+        conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
         try:
-            conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
             self._retry(lambda: conn.execute("PRAGMA journal_mode=WAL"))
             conn.execute(f"PRAGMA busy_timeout={int(BUSY_TIMEOUT_S * 1000)}")
             conn.execute("PRAGMA foreign_keys=ON")
         except sqlite3.DatabaseError as exc:
+            conn.close()
             raise DataError(f"{path} is not a robocal history (SQLite: {exc})") from None
         return conn
 
