@@ -8,7 +8,9 @@ false-alarm rate over 5 calibrations x 40 unchanged campaigns, with the noise es
 calibration (F-test) and stated (chi-square). The time of one check. Offsets-only recalibration on
 five such 20-pose campaigns of the changed robot, judged on 40 held-out poses of it (goal: held-out
 RMS <= 1.3x the original calibration's). Four ``robocal calibrate --history`` processes started
-together on one SQLite file (goal: all recorded).
+together on one SQLite file (goal: all recorded). A check campaign planned for the joint zeros
+(``robocal poses --check``: 20 of 200 candidate poses) against 20 random poses of the same
+candidates, on changes smaller than the goals' (how often each says ``changed``).
 
 ``python benchmarks/bench_check.py``
 """
@@ -26,9 +28,10 @@ import numpy as np
 from results import figure, table
 
 import robocal as rc
+from robocal.campaign.planner import plan_poses
 from robocal.data.simulate import sample_joints, simulate_tracker
 from robocal.history.check import Uncertainty, check
-from robocal.history.offsets import recalibrate_offsets
+from robocal.history.offsets import offsets_params, recalibrate_offsets
 from robocal.history.record import calibration_uncertainty
 from robocal.history.store import History
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
@@ -91,6 +94,7 @@ def main() -> None:
     figure("check_seconds", f"{seconds:.2f}")
     print(f"one check of {CHECK_POSES} poses: {seconds:.2f} s")
     offsets_only(truth, changed, result, rng)
+    planned_vs_random(truth, result, unc, rng)
     false_alarms(rng)
     concurrent_writers(result)
 
@@ -133,6 +137,29 @@ def offsets_only(truth, changed, result, rng: np.random.Generator) -> None:
            "theta2 shift found (deg)"], rows, key="offsets")
     figure("offsets_ratio", f"{max(ratios):.2f}")
     figure("original_rms", f"{original:.4f}")
+
+
+def planned_vs_random(truth, result, unc: Uncertainty, rng: np.random.Generator) -> None:
+    """Detection of small zero changes by a planned check campaign and by random poses."""
+    nominal = rc.Robot.from_catalog(NOMINAL)
+    pool = sample_joints(truth, 200, rng)
+    planned = plan_poses(nominal, CHECK_POSES, candidates=pool, params=offsets_params(nominal),
+                         smr=truth.tool[:3, 3][None], seed=0).joints  # the SMR as the user knows it
+    rows = []
+    for name, shift in (("theta2", 0.002), ("theta3", 0.002), ("theta5", 0.03)):
+        changed = truth.with_values({name: truth.get(name) + np.deg2rad(shift)})
+        row = [f"{name} + {shift} deg"]
+        for label in ("planned", "random"):
+            hits = 0
+            for _ in range(CAMPAIGNS):
+                q = planned if label == "planned" else pool[rng.choice(len(pool), CHECK_POSES, replace=False)]
+                data = simulate_tracker(tracker_moved(changed, rng), joints=q, as_is=True,
+                                        seed=int(rng.integers(2**31))).data
+                hits += check(result.robot, data, unc).verdict == "changed"
+            row.append(f"{hits} of {CAMPAIGNS}")
+        rows.append(row)
+    table("Changed found by 20 poses planned for the joint zeros (poses --check) and by 20 random poses",
+          ["change", "planned", "random"], rows, key="planned")
 
 
 def false_alarms(rng: np.random.Generator) -> None:
