@@ -57,5 +57,6 @@ def render_history(timeline: dict, version: str) -> str:
                      "a check RMS well above the held-out RMS, and checks marked changed.")
     robot = esc(timeline["robot_id"])
     return page(f"History of {timeline['robot_id']}", f"robot id {robot} &middot; {len(entries)} records",
-                [("accuracy", "Accuracy over time", figure), ("timeline", "Timeline", table)], version)
+                [("accuracy", "Accuracy over time", figure), ("timeline", "Timeline", table)], version,
+                narrow=frozenset({"accuracy"}))
 
