@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.history_options import add_history_options, check_history_options, record
+from robocal.cli.history_options import (
+    add_history_options,
+    check_history_options,
+    offsets_start,
+    record,
+    start_record,
+)
 from robocal.io import LENGTH_UNITS
 
 EPILOG = """Examples:
@@ -108,35 +114,6 @@ def add_parser(sub) -> None:
                         "the nominal one)")
     add_history_options(p)
     p.set_defaults(func=run)
-
-
-def offsets_start(args):
-    """The start model of ``--offsets-only --start`` (None without them); the options that cannot go
-    with it refused."""
-    from robocal.errors import DataError
-    from robocal.kinematics.model import load_model
-
-    if bool(args.offsets_only) != bool(args.start):
-        raise DataError("--offsets-only and --start go together: the joint zeros of the calibrated model "
-                        "--start are re-identified")
-    if not args.offsets_only:
-        return None
-    if args.params != "auto" or args.nongeometric.strip().lower() != "default":
-        raise DataError("--offsets-only chooses its own parameters: drop --params and --nongeometric")
-    return load_model(args.start)
-
-
-def start_record(args, start) -> int | None:
-    """The history's record of the calibration ``start`` came from (None when it holds none)."""
-    from robocal.errors import DataError
-    from robocal.history.store import History
-    from robocal.kinematics.model_file import dump_model
-
-    with History(args.history) as history:
-        try:
-            return history.calibration(args.robot_id, dump_model(start)).id
-        except DataError:
-            return None
 
 
 def error_model_line(args, data: list) -> str | None:

@@ -1,5 +1,6 @@
 """``--history PATH_OR_URL --robot-id ID``: the options that record a command's result in a robot's
-history (:mod:`robocal.history.store`), shared by calibrate, check and evaluate."""
+history (:mod:`robocal.history.store`), shared by calibrate, check and evaluate; calibrate's
+``--offsets-only --start``."""
 
 from __future__ import annotations
 
@@ -46,6 +47,35 @@ def record_evaluation(args, robot, summary: dict, files: list[tuple[str, str]]) 
             parent = None
     return record(args, Record(robot_id=args.robot_id, kind="evaluation", model_yaml=model_yaml,
                                summary=summary, data=fingerprints(files), parent=parent))
+
+
+def offsets_start(args):
+    """The start model of ``--offsets-only --start`` (None without them); the options that cannot go
+    with it refused."""
+    from robocal.errors import DataError
+    from robocal.kinematics.model import load_model
+
+    if bool(args.offsets_only) != bool(args.start):
+        raise DataError("--offsets-only and --start go together: the joint zeros of the calibrated model "
+                        "--start are re-identified")
+    if not args.offsets_only:
+        return None
+    if args.params != "auto" or args.nongeometric.strip().lower() != "default":
+        raise DataError("--offsets-only chooses its own parameters: drop --params and --nongeometric")
+    return load_model(args.start)
+
+
+def start_record(args, start) -> int | None:
+    """The history's record of the calibration ``start`` came from (None when it holds none)."""
+    from robocal.errors import DataError
+    from robocal.history.store import History
+    from robocal.kinematics.model_file import dump_model
+
+    with History(args.history) as history:
+        try:
+            return history.calibration(args.robot_id, dump_model(start)).id
+        except DataError:
+            return None
 
 
 def record(args, entry) -> int:
