@@ -116,6 +116,9 @@ def test_stated_noise_gives_a_chi_square_test_and_bad_input_is_refused(calibrate
         check(result.robot, data, unc, noise_mm=-1)
     with pytest.raises(DataError, match="does not have"):
         check(result.robot, data, replace(unc, names=("gear2_s1", *unc.names[1:])))
+    with pytest.raises(DataError, match="plane data, whose noise is not the tracker's"):
+        check(result.robot, data, replace(unc, kind="plane"))
+    assert check(result.robot, data, replace(unc, kind="plane"), noise_mm=0.02).verdict == "holds"
 
 
 def test_check_command_with_a_history(calibrated, tmp_path, capsys):

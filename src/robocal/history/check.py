@@ -44,25 +44,28 @@ FRAME_NAMES = ("base.x", "base.y", "base.z", "base.rx", "base.ry", "base.rz", "t
 UNSEEN_WITH_FRAME = ("the zeros of the first and last joints (theta1, theta{n}) cannot be told from the "
                      "refitted tracker frame and SMR offset: a change of theirs does not show in a check")
 _LINK_KINDS = ("alpha", "a", "beta", "d")
+TRACKER_KINDS = ("point",)  # calibrations whose residuals give the tracker's noise per coordinate
 
 
 @dataclass(frozen=True)
 class Uncertainty:
     """What a check needs of a calibration: ``names`` of its estimated link (and joint-error)
     parameters, their ``covariance`` ``(k, k)`` (SI), the noise ``noise_m`` (m per coordinate) its
-    residuals showed and the degrees of freedom ``dof`` of that estimate."""
+    residuals showed, the degrees of freedom ``dof`` of that estimate and the ``kind`` of data the
+    calibration used (its noise is the tracker's per coordinate only on point data)."""
 
     names: tuple[str, ...]
     covariance: np.ndarray
     noise_m: float
     dof: int
+    kind: str = "point"
 
     @classmethod
     def from_dict(cls, d: dict) -> Uncertainty:
         """From a history record's ``uncertainty``
         (:func:`robocal.history.record.calibration_uncertainty`)."""
         cov = np.asarray(d["covariance"], float).reshape(len(d["names"]), len(d["names"]))
-        return cls(tuple(d["names"]), cov, float(d["noise_m"]), int(d["dof"]))
+        return cls(tuple(d["names"]), cov, float(d["noise_m"]), int(d["dof"]), str(d.get("kind", "point")))
 
     @classmethod
     def from_result(cls, result: dict) -> Uncertainty:
@@ -77,15 +80,14 @@ class Uncertainty:
         except (KeyError, TypeError, ValueError) as exc:
             raise DataError(f"the result JSON lacks what a check needs ({exc}): give the --json of "
                             "robocal calibrate") from None
-        if result.get("data", {}).get("kind") != "point":
-            raise DataError("a check needs a calibration on point (laser tracker) data")
         keep = [i for i, n in enumerate(corr_names) if block_of(n) in ("links", "joint_errors")]
         names = [corr_names[i] for i in keep]
         scale = np.array([rows[n]["sigma"] / (1e3 if rows[n]["unit"] == "mm" else 180 / np.pi)
                           for n in names])
         cov = corr[np.ix_(keep, keep)] * np.outer(scale, scale)
         dof = max(3 * n_points - len(corr_names), 1)
-        return cls(tuple(names), cov, float(np.sqrt(n_points * (rms_mm * 1e-3) ** 2 / dof)), dof)
+        kind = str(result.get("data", {}).get("kind"))
+        return cls(tuple(names), cov, float(np.sqrt(n_points * (rms_mm * 1e-3) ** 2 / dof)), dof, kind)
 
 
 @dataclass
@@ -201,6 +203,9 @@ def check(robot, data, uncertainty: Uncertainty, *, fit_frame: bool = True, nois
     def columns(names) -> np.ndarray:
         return start.jacobian(data.joints, list(names), **kw).reshape(len(r), len(names))
 
+    if noise_mm is None and uncertainty.kind not in TRACKER_KINDS:
+        raise DataError(f"the calibration used {uncertainty.kind} data, whose noise is not the tracker's "
+                        "per coordinate: state the tracker's noise with --noise-mm")
     if noise_mm is None:
         noise, noise_dof, source = uncertainty.noise_m, uncertainty.dof, "calibration"
     else:

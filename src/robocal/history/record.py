@@ -20,14 +20,15 @@ def fingerprints(files: list[tuple[str, str]]) -> list[dict]:
 def calibration_uncertainty(result) -> dict:
     """What a check needs of a calibration: the covariance (SI) of its estimated link and
     joint-error parameters, and the noise (m, per coordinate) its residuals show with their
-    degrees of freedom (rows minus unknowns)."""
+    degrees of freedom (rows minus unknowns), and the kind of data it came from."""
     names = result.names
     keep = [i for i, n in enumerate(names) if block_of(n) in CHECKED_BLOCKS]
     cov = result.covariance[np.ix_(keep, keep)]
     rows = int(sum(len(r) for r, _ in result.problem.row_blocks()))
     dof = max(rows - result.space.size, 1)
     noise = float(np.sqrt(np.sum(result.errors[1] ** 2) / dof))
-    return {"names": [names[i] for i in keep], "covariance": cov.tolist(), "noise_m": noise, "dof": dof}
+    return {"names": [names[i] for i in keep], "covariance": cov.tolist(), "noise_m": noise, "dof": dof,
+            "kind": result.problem.kind}
 
 
 def calibration_record(result, robot_id: str, files: list[tuple[str, str]], parent: int | None = None,
