@@ -34,6 +34,14 @@ def test_zero_noise_recovers_random_tracker_frame(seed, n_smr):
     assert reg.rms < 1e-9
 
 
+def test_a_model_that_carries_several_smrs_registers_again():
+    # a calibrated model saved with its SMR offsets, fitted to new data (the tracker moved)
+    sim = simulate_tracker(MECA, 30, noise_mm=0.0, n_smr=2, seed=4, error_scale=0.0)
+    again = register(sim.truth, sim.data)
+    np.testing.assert_allclose(again.smr, sim.truth.smr, atol=1e-9)
+    np.testing.assert_allclose(again.base, sim.truth.base, atol=1e-9)
+
+
 def test_any_tracker_orientation_including_upside_down(rng):
     q = rng.uniform(MECA.limits[:, 0], MECA.limits[:, 1], (30, 6))
     tool = np.array([0.02, -0.03, 0.09])

@@ -243,7 +243,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                constraints: cons.Constraints | None = None, smr=None, smr_normals=None,
                noise_mm: float = 0.02, noise_model: str = "isotropic", rotation_noise_deg: float = 0.001,
                criterion: str = "I", region=None, region_size: int = DEFAULT_REGION_SIZE,
-               starts: int = DEFAULT_STARTS, curve=None, seed: int = 0, progress=None) -> CampaignResult:
+               starts: int = DEFAULT_STARTS, curve=None, seed: int = 0, progress=None,
+               params="auto") -> CampaignResult:
     """Choose ``n`` calibration poses for ``robot`` (the nominal model).
 
     kind: what is measured ('point', 'pose'; 'plane' and 'distance' from ``candidates``).
@@ -257,6 +258,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     'I' (default), 'D' or 'O4'. region: joints ``(R, n)`` rad or a box ``((3,), (3,))`` m (default
     ``region_size`` random poses in the limits and TCP boxes). curve: a tuple ``(start, stop[,
     step])`` or a list of pose counts for the accuracy curve. ``progress``: True shows a bar on a terminal.
+    params: the unknowns the campaign is to determine ('auto': the calibration's default set; a list
+    of names, e.g. the joint zeros with the frame and SMR for a check campaign).
     """
     if not isinstance(n, int | np.integer) or n < 1:
         raise DataError(f"the number of poses must be a positive integer, got {n!r}")
@@ -310,7 +313,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
             if len(whole) < len(given):
                 funnel.record("distances missing an end", len(given) - len(whole))
             data, given = data.subset(whole), given[whole]
-    info = information(plan_robot, data, noise)
+    info = information(plan_robot, data, noise, params)
     C, _, p = info.G.shape
     rows_min = int(info.rows.min())
     n_min = p // rows_min + 1

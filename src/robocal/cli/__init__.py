@@ -28,7 +28,8 @@ COMMANDS = {
     "import-calibration": "import_calibration",
     "calibrate": "calibrate", "analyze": "analyze",
     "plan": "plan", "poses": "poses", "compensate": "compensate",
-    "filter": "filter", "tool": "tool",
+    "filter": "filter", "tool": "tool", "check": "check",
+    "history": "history",
 }
 
 

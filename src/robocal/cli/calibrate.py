@@ -4,6 +4,13 @@ from __future__ import annotations
 
 import argparse
 
+from robocal.cli.history_options import (
+    add_history_options,
+    check_history_options,
+    offsets_start,
+    record,
+    start_record,
+)
 from robocal.io import LENGTH_UNITS
 
 EPILOG = """Examples:
@@ -15,6 +22,7 @@ EPILOG = """Examples:
   robocal calibrate data.csv --robot abb_irb2600 --method genetic --set population=60 --set generations=100
   robocal calibrate data.csv --robot abb_irb2600 --method neural --set hidden=10 --network-out net.npz
   robocal calibrate contacts.csv scalebar.csv --robot abb_irb2600 --sigma plane=0.01 --sigma distance=0.005
+  robocal calibrate check.csv --robot abb_irb2600 --offsets-only --start calibrated.yaml -o recalibrated.yaml
 
 Method options (--set KEY=VALUE, SI units): lsq: max_iter (50); robust: k0, k1, ridge
 (double-h|gcv|lcurve|none), max_outer (30); genetic: population, generations (100), crossover,
@@ -97,6 +105,14 @@ def add_parser(sub) -> None:
     p.add_argument("--force", action="store_true",
                    help="proceed past the plausibility checks (units, robot, corrections) and write the "
                         "results of a solve that did not converge, with loud warnings")
+    p.add_argument("--offsets-only", action="store_true",
+                   help="re-identify only the joint zeros (with the tracker frame and SMR offsets) of the "
+                        "calibrated model --start, every other parameter kept: after a motor or encoder "
+                        "change, from a short campaign")
+    p.add_argument("--start", metavar="CALIBRATED.yaml",
+                   help="with --offsets-only: the earlier calibrated model of this robot (--robot names "
+                        "the nominal one)")
+    add_history_options(p)
     p.set_defaults(func=run)
 
 
@@ -128,13 +144,14 @@ def run(args) -> int:
     from robocal.calibration import calibrate, json_text
     from robocal.cli.args import check_distinct_inputs, check_format, diagnosed, load_measurements
     from robocal.errors import DataError, IdentificationError, PlausibilityError
+    from robocal.history.offsets import zero_shifts
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
     from robocal.kinematics.model_file import dump_model
 
     outputs = (args.output, args.json, args.report, args.network_out)
     validate = args.validate or []
-    check_outputs(outputs, (*args.data, *validate, args.robot))  # fail before the work
+    check_outputs(outputs, (*args.data, *validate, args.robot, args.start))  # fail before the work
     check_format(args.output, "YAML", "-o", " (or use --json for the result)")
     check_format(args.json, "JSON", "--json")
     check_format(args.report, "HTML", "--report")
@@ -143,6 +160,8 @@ def run(args) -> int:
                           "a validation on the calibration data says nothing of the accuracy elsewhere")
     if args.network_out and (args.method != "neural" or not args.network_out.endswith((".npz", ".json"))):
         raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
+    check_history_options(args)
+    start = offsets_start(args)
     sigma = dict(args.sigma)
     robot = load_model(args.robot)
     data = [load_measurements(f, robot, args.quiet) for f in args.data]
@@ -157,16 +176,26 @@ def run(args) -> int:
         validation = [data[0].subset(~np.isin(data[0].pose_id, calibration.pose_id))]
         data = [calibration]
     try:
-        result = calibrate(robot, data, method=args.method, params=args.params, validation=validation or None,
-                           seed=args.seed, progress=not args.quiet, nongeometric=args.nongeometric,
-                           force=args.force, sigma=sigma, **dict(args.options))
+        if start is None:
+            result = calibrate(robot, data, method=args.method, params=args.params,
+                               validation=validation or None, seed=args.seed, progress=not args.quiet,
+                               nongeometric=args.nongeometric, force=args.force, sigma=sigma,
+                               **dict(args.options))
+        else:
+            from robocal.history.offsets import recalibrate_offsets
+
+            result = recalibrate_offsets(robot, start, data, validation=validation or None,
+                                         method=args.method, seed=args.seed, progress=not args.quiet,
+                                         force=args.force, sigma=sigma, **dict(args.options))
     except PlausibilityError as exc:
         raise diagnosed(exc, robot, [*data, *validation]) from None
     result.provenance.update(command="robocal " + " ".join(args.argv), robot_spec=args.robot,
                              data_file=", ".join(args.data), validation_file=", ".join(validate) or None,
                              hold_out=args.hold_out)
     print(result.summary())
-    line = error_model_line(args, data)
+    derived = {} if start is None else {"offsets_only": True, "zero_shifts": zero_shifts(result, start)}
+    line = error_model_line(args, data) if start is None else "joint zeros changed from the start: " + \
+        ", ".join(f"{r['name']} {r['shift']:+.4f} ± {r['sigma']:.4f} deg" for r in derived["zero_shifts"])
     if line:
         print(line)
     if not result.solver.success and not args.force:
@@ -189,4 +218,10 @@ def run(args) -> int:
     write_all(texts)
     for path in texts:
         print(f"wrote {path}")
+    if args.history:  # after the files: the history is never the only copy
+        from robocal.history.record import calibration_record
+
+        files = [(f, "calibration") for f in args.data] + [(f, "validation") for f in validate]
+        parent = None if start is None else start_record(args, start)
+        record(args, calibration_record(result, args.robot_id, files, parent, **derived))
     return 0

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from robocal.cli.history_options import add_history_options
+
 EPILOG = """Examples:
   robocal evaluate calibrated.yaml validation.csv --json val.json
   robocal evaluate meca500 meca_val.csv --fit-frame                   # nominal model: fit base and SMRs first
@@ -26,6 +28,8 @@ def add_parser(sub) -> None:
     p.add_argument("--json", metavar="OUT", help="write the statistics as JSON")
     p.add_argument("--force", action="store_true",
                    help="report statistics the plausibility checks refuse (errors beyond any robot's)")
+    add_history_options(p, "record the evaluation (its RMS as the model's held-out error) in this history: a "
+                           "SQLite file or a postgresql:// URL; needs --robot-id")
     p.set_defaults(func=run)
 
 
@@ -40,6 +44,9 @@ def run(args) -> int:
 
     check_format(args.json, "JSON", "--json")
     check_outputs([args.json], [args.model, args.data, args.frame_from])
+    from robocal.cli.history_options import check_history_options
+
+    check_history_options(args)
     robot = load_model(args.model)
     data = load_measurements(args.data, robot, args.quiet)
     frame_from = load_measurements(args.frame_from, robot, args.quiet) if args.frame_from else None
@@ -64,4 +71,10 @@ def run(args) -> int:
               + ", ".join(f"{k} {summary[k]:.4f} mm" if k != "n" else f"n {summary[k]}" for k in keys))
         if args.json:
             print(f"wrote {args.json}")
+    if args.history:  # after the files: the history is never the only copy
+        from robocal.cli.history_options import record_evaluation
+
+        files = [(args.data, "evaluation")] + ([(args.frame_from, "frame")] if args.frame_from else [])
+        record_evaluation(args, robot, {**summary, "n_poses": stats["n_poses"], "kind": stats["kind"],
+                                        "fit_frame": bool(args.fit_frame)}, files)
     return 0

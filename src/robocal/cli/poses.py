@@ -14,6 +14,7 @@ EPILOG = """Examples:
       --rapid campaign.mod --krl campaign.src --urscript campaign.script
   robocal poses --robot fanuc_lrmate200id -n 20 --smr-mm 20,-30,60 -o poses.csv --fanuc campaign.ls
   robocal poses --robot meca500 -n 20 --from taught.csv --region taught.csv -o poses.csv
+  robocal poses --robot abb_irb2600 --check -n 20 --from poses.csv -o check_poses.csv --rapid check.mod
   robocal simulate --robot abb_irb2600 --joints poses.csv --smr-mm 20,-30,80 -o data.csv --truth truth.yaml
 Lengths in mm in the robot's base frame (SMR positions and facing directions in the flange frame),
 angles in deg; write a value that starts with a minus as --smr-mm=-50,50,60.
@@ -53,6 +54,10 @@ def add_parser(sub) -> None:
                    help="choose among these poses (any measurement CSV or a joints-only CSV)")
     g.add_argument("--candidates", dest="n_candidates", type=int, default=5000,
                    help="candidate poses to generate inside the limits (default 5000)")
+    g.add_argument("--check", action="store_true",
+                   help="a short check campaign (robocal check, calibrate --offsets-only): poses chosen "
+                        "to determine the joint zeros with the tracker frame and SMR offsets, the "
+                        "parameters that move in service")
     g.add_argument("--criterion", choices=("I", "D", "O4"), default="I",
                    help="I: accuracy over the region (default); D: determinant (O1); O4")
     g.add_argument("--starts", type=int, default=4, help="random starts of the exchange search")
@@ -138,6 +143,19 @@ def _outputs(args, result) -> dict:
     return texts
 
 
+def _params(args, robot):
+    """The unknowns the campaign determines: the default set, or with --check the joint zeros, the
+    tracker frame and the SMR offsets."""
+    if not args.check:
+        return "auto"
+    from robocal.errors import DataError
+    from robocal.history.offsets import offsets_params
+
+    if args.kind not in ("point", "pose"):
+        raise DataError("--check plans a tracker campaign: --kind point or pose")
+    return offsets_params(robot, max(1, len(args.smr_mm or [])))
+
+
 def run(args) -> int:
     import numpy as np
 
@@ -159,6 +177,7 @@ def run(args) -> int:
     for smr in args.smr_mm or []:
         check_tool_mm(smr, f"--smr-mm {','.join(f'{v:g}' for v in smr)}")
     robot = load_model(args.robot)
+    params = _params(args, robot)
     if args.smr_normal and len(args.smr_normal) != len(args.smr_mm or []):
         raise DataError("give one --smr-normal per --smr-mm")
     if args.region and args.region_box:
@@ -182,7 +201,7 @@ def run(args) -> int:
         smr_normals=None if not args.smr_normal else np.array(args.smr_normal),
         noise_mm=args.noise_mm, noise_model=args.noise_model, rotation_noise_deg=args.rotation_noise_deg,
         criterion=args.criterion, region=region, region_size=args.region_size, starts=args.starts,
-        curve=args.curve, seed=args.seed, progress=not args.quiet)
+        curve=args.curve, seed=args.seed, progress=not args.quiet, params=params)
     texts = _outputs(args, result)
     write_all(texts)
     print(result.summary())

@@ -73,7 +73,7 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
         raise DataError(f"SMR index(es) {missing.tolist()} have no measurement; renumber the SMRs 0..k-1")
     # the joints the robot really reached (a model with backlash or travel terms needs the
     # directions and moves of the measuring order, as calibration and evaluation judge it)
-    flange = replace(robot, base=np.eye(4), tool=np.eye(4), smr=np.zeros((0, 3))).fk(
+    flange = replace(robot, base=np.eye(4), tool=np.eye(4), smr=np.zeros((0, 3)), nominal=None).fk(
         data.joints, approach=data.approach, travel=data.travel)
     Rf, of = flange[:, :3, :3], flange[:, :3, 3]
     p = data.points

@@ -1,0 +1,91 @@
+"""``robocal check``: does a calibration still hold? A short campaign judged by a stated test."""
+
+from __future__ import annotations
+
+import argparse
+
+from robocal.cli.history_options import add_history_options
+
+EPILOG = """Examples:
+  robocal check calibrated.yaml check.csv --fit-frame --history robots.sqlite --robot-id IRB-17 \
+      --json check.json
+  robocal check calibrated.yaml check.csv --fit-frame --result result.json --noise-mm 0.02
+
+The calibration's own uncertainty (its covariance) comes from the history (--history, --robot-id:
+the calibration recorded with this model) or from its result JSON (--result). The verdict is
+"changed" exactly when p_value < 0.01; both verdicts exit 0.
+"""
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("check", help="judge a calibration on a short check campaign (holds / changed)",
+                       description="Refit the tracker frame and SMR offsets, then test the check residuals "
+                                   "against the instrument noise plus the calibration's own predicted "
+                                   "error; when changed, name the parameters that most likely moved.",
+                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("model", metavar="CALIBRATED.yaml", help="the calibrated model (calibrate -o)")
+    p.add_argument("data", metavar="CHECK.csv", help="point measurements of the check campaign (10-30 poses)")
+    p.add_argument("--fit-frame", action="store_true",
+                   help="refit the tracker frame and SMR offsets on the check data (the tracker moved "
+                        "since the calibration); without it the model's own frame is used")
+    p.add_argument("--result", metavar="RESULT.json",
+                   help="the calibration's result JSON (calibrate --json), when it is not in a history")
+    p.add_argument("--noise-mm", type=float, metavar="MM",
+                   help="the instrument's 1-sigma noise per coordinate (mm); default: the calibration's "
+                        "noise estimate, with its uncertainty counted (F-test)")
+    p.add_argument("--json", metavar="out.json", help="write the verdict as JSON")
+    p.add_argument("--force", action="store_true",
+                   help="judge data the plausibility checks refuse (errors beyond any robot's)")
+    add_history_options(p, "the history holding the calibration (a SQLite file or postgresql:// URL); the "
+                           "check is recorded there too")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    import json
+
+    from robocal.cli.args import check_format, load_measurements
+    from robocal.cli.history_options import check_history_options, record
+    from robocal.errors import DataError
+    from robocal.history.check import Uncertainty, check
+    from robocal.history.record import fingerprints
+    from robocal.history.store import History, Record
+    from robocal.io import check_outputs, load_json, write_all
+    from robocal.kinematics.model import Robot
+    from robocal.kinematics.model_file import dump_model
+
+    check_format(args.json, "JSON", "--json")
+    check_outputs([args.json], [args.model, args.data, args.result])
+    check_history_options(args, existing=True)
+    if not args.history and not args.result:
+        raise DataError("the check needs the calibration's uncertainty: give --history and --robot-id (where "
+                        "calibrate recorded it) or --result RESULT.json (calibrate --json)")
+    robot = Robot.load(args.model)
+    model_yaml = dump_model(robot)
+    parent = None
+    if args.result:
+        uncertainty = Uncertainty.from_result(load_json(args.result, "a calibration result JSON"))
+    if args.history:
+        with History(args.history) as history:
+            calibration = history.calibration(args.robot_id, model_yaml)
+        parent = calibration.id
+        if not args.result:
+            uncertainty = Uncertainty.from_dict(calibration.uncertainty)
+    data = load_measurements(args.data, robot, args.quiet)
+    result = check(robot, data, uncertainty, fit_frame=args.fit_frame, noise_mm=args.noise_mm,
+                   force=args.force)
+    content = {"model": args.model, "data": args.data, "fit_frame": bool(args.fit_frame),
+               "calibration_record": parent, **result.to_dict()}
+    if args.json:
+        write_all({args.json: json.dumps(content, indent=2, allow_nan=False) + "\n"})
+        print(f"wrote {args.json}")
+    print(result.summary())
+    for note in result.notes:
+        print(f"note: {note}")
+    if args.history:
+        keys = ("verdict", "p_value", "n_poses", "rms_mm", "predicted_rms_mm")
+        summary = {key: content[key] for key in keys}
+        summary["changed_parameters"] = result.changed_parameters
+        record(args, Record(robot_id=args.robot_id, kind="check", model_yaml=model_yaml, summary=summary,
+                            data=fingerprints([(args.data, "check")]), parent=parent))
+    return 0

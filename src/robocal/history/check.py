@@ -1,0 +1,268 @@
+"""Does a calibration still hold? A short check campaign judged against it by a stated test.
+
+Model of the check residuals ``r = y - f(q)`` (``3N`` coordinates, tracker frame) under the
+hypothesis that the robot did not change since its calibration::
+
+    r ~ N(0, C),   C = s^2 I + J_c Sigma J_c^T
+
+``s`` the instrument's noise per coordinate, ``J_c`` the Jacobian of the calibrated link (and
+joint-error) parameters at the check poses and ``Sigma`` their covariance from the calibration (its
+own predicted error). The tracker frame and the SMR offsets are refitted (the tracker moved since):
+first by the nonlinear registration, then one generalised least-squares step in the metric
+``C^-1``. The statistic ``T = min |L^-1 (r - J_f d)|^2`` (``L L^T = C``) has ``m = 3N - k_f``
+degrees of freedom. With the noise estimated by the calibration (``s`` from its residuals, ``nu``
+degrees of freedom, and ``Sigma`` proportional to ``s^2``), ``T / m ~ F(m, nu)``: the test counts
+the uncertainty of the noise estimate. With the noise stated (``noise_mm``), ``T ~ chi2(m)``.
+The verdict is ``changed`` exactly when ``p_value < ALPHA``.
+
+What moved: re-identify a small set of parameters on the check data, in the same metric, greedily
+(the one that lowers ``T`` most, joint zeros first, other link parameters only when no joint zero
+explains a significant part), until the rest is consistent with the hypothesis. Each carries its
+shift (new minus calibrated) and a 1-sigma that includes the calibration's uncertainty. With the
+frame refitted, the zeros of the first and last joints are not identifiable: a change of theta1
+turns the whole robot about the base axis, which the refitted tracker frame absorbs, and one of
+theta6 turns the SMR about the flange axis, which the refitted SMR offset absorbs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import linalg, stats
+
+from robocal.data.registration import register
+from robocal.errors import DataError
+from robocal.identify.plausibility import check_residual
+from robocal.identify.space import block_of
+
+ALPHA = 0.01  # the false-alarm rate the verdict is taken at: changed exactly when p_value < ALPHA
+MIN_CHECK_POSES = 8  # fewer poses leave too few degrees of freedom after the frame fit
+MAX_CHANGED = 3  # parameters re-identified at most to explain a change
+RANK_RTOL = 1e-9  # relative singular value below which a refitted column adds nothing
+FRAME_NAMES = ("base.x", "base.y", "base.z", "base.rx", "base.ry", "base.rz", "tool.x", "tool.y", "tool.z")
+UNSEEN_WITH_FRAME = ("the zeros of the first and last joints (theta1, theta{n}) cannot be told from the "
+                     "refitted tracker frame and SMR offset: a change of theirs does not show in a check")
+_LINK_KINDS = ("alpha", "a", "beta", "d")
+TRACKER_KINDS = ("point",)  # calibrations whose residuals give the tracker's noise per coordinate
+
+
+@dataclass(frozen=True)
+class Uncertainty:
+    """What a check needs of a calibration: ``names`` of its estimated link (and joint-error)
+    parameters, their ``covariance`` ``(k, k)`` (SI), the noise ``noise_m`` (m per coordinate) its
+    residuals showed, the degrees of freedom ``dof`` of that estimate and the ``kind`` of data the
+    calibration used (its noise is the tracker's per coordinate only on point data)."""
+
+    names: tuple[str, ...]
+    covariance: np.ndarray
+    noise_m: float
+    dof: int
+    kind: str = "point"
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Uncertainty:
+        """From a history record's ``uncertainty``
+        (:func:`robocal.history.record.calibration_uncertainty`)."""
+        cov = np.asarray(d["covariance"], float).reshape(len(d["names"]), len(d["names"]))
+        return cls(tuple(d["names"]), cov, float(d["noise_m"]), int(d["dof"]), str(d.get("kind", "point")))
+
+    @classmethod
+    def from_result(cls, result: dict) -> Uncertainty:
+        """From a calibration's result JSON (docs/result-json.md): the covariance from the
+        parameters' sigma and the correlation matrix, the noise from the calibration residuals
+        (point data)."""
+        try:
+            corr_names = list(result["correlation"]["names"])
+            corr = np.asarray(result["correlation"]["matrix"], float)
+            rows = {r["name"]: r for r in result["parameters"]}
+            n_points, rms_mm = int(result["after"]["n"]), float(result["after"]["rms"])
+        except (KeyError, TypeError, ValueError) as exc:
+            raise DataError(f"the result JSON lacks what a check needs ({exc}): give the --json of "
+                            "robocal calibrate") from None
+        keep = [i for i, n in enumerate(corr_names) if block_of(n) in ("links", "joint_errors")]
+        names = [corr_names[i] for i in keep]
+        scale = np.array([rows[n]["sigma"] / (1e3 if rows[n]["unit"] == "mm" else 180 / np.pi)
+                          for n in names])
+        cov = corr[np.ix_(keep, keep)] * np.outer(scale, scale)
+        dof = max(3 * n_points - len(corr_names), 1)
+        kind = str(result.get("data", {}).get("kind"))
+        return cls(tuple(names), cov, float(np.sqrt(n_points * (rms_mm * 1e-3) ** 2 / dof)), dof, kind)
+
+
+@dataclass
+class CheckResult:
+    """The verdict of a check; :meth:`to_dict` is its JSON (docs/reference/check-json.md)."""
+
+    verdict: str
+    p_value: float
+    statistic: float
+    dof: int
+    noise_dof: int | None
+    noise_m: float
+    noise_source: str
+    n_poses: int
+    rms_mm: float
+    predicted_rms_mm: float
+    changed_parameters: list[dict] = field(default_factory=list)
+    explained_p_value: float | None = None
+    notes: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        out = {"verdict": self.verdict, "p_value": self.p_value, "alpha": ALPHA,
+               "test": {"kind": "F" if self.noise_dof else "chi2", "statistic": self.statistic,
+                        "dof": self.dof, "noise_dof": self.noise_dof, "noise_mm": self.noise_m * 1e3,
+                        "noise_source": self.noise_source},
+               "n_poses": self.n_poses, "rms_mm": self.rms_mm, "predicted_rms_mm": self.predicted_rms_mm,
+               "notes": self.notes}
+        if self.verdict == "changed":
+            out["changed_parameters"] = self.changed_parameters
+            out["explained_p_value"] = self.explained_p_value
+        return out
+
+    def summary(self) -> str:
+        line = (f"check of {self.n_poses} poses: {self.verdict} (p = {self.p_value:.3g}; "
+                f"RMS {self.rms_mm:.4f} mm, expected {self.predicted_rms_mm:.4f} mm if unchanged)")
+        moved = [f"{c['name']} {c['shift']:+.4f} ± {c['sigma']:.4f} {c['unit']}"
+                 for c in self.changed_parameters]
+        return line + ("\nmost likely moved: " + ", ".join(moved) if moved else "")
+
+
+class _Whitened:
+    """The check's residuals and refitted columns in the metric of ``C`` (whitened by its Cholesky
+    factor); :meth:`fit` is the generalised least-squares fit of extra columns with the frame."""
+
+    def __init__(self, r: np.ndarray, J_frame: np.ndarray, C: np.ndarray) -> None:
+        self.L = linalg.cholesky(C, lower=True)
+        self.r = linalg.solve_triangular(self.L, r, lower=True)
+        self.F = self._whiten(J_frame)
+        self.rank = int(np.linalg.matrix_rank(self.F, tol=None)) if self.F.shape[1] else 0
+
+    def _whiten(self, J: np.ndarray) -> np.ndarray:
+        return linalg.solve_triangular(self.L, J, lower=True)
+
+    def fit(self, J_extra: np.ndarray | None = None) -> tuple[float, int, np.ndarray, np.ndarray]:
+        """``(T, rank, estimate, covariance)`` of the frame columns plus ``J_extra`` (unwhitened)."""
+        A = self.F if J_extra is None else np.hstack([self.F, self._whiten(J_extra)])
+        U, s, Vt = linalg.svd(A, full_matrices=False)
+        keep = s > RANK_RTOL * s[0]
+        x = Vt[keep].T @ ((U[:, keep].T @ self.r) / s[keep])
+        e = self.r - A @ x
+        cov = (Vt[keep].T / s[keep] ** 2) @ Vt[keep]
+        return float(e @ e), int(keep.sum()), x, cov
+
+
+def _p_value(T: float, dof: int, noise_dof: int | None) -> float:
+    if noise_dof is None:
+        return float(stats.chi2.sf(T, dof))
+    return float(stats.f.sf(T / dof, dof, noise_dof))
+
+
+def _display(name: str, robot) -> tuple[str, float]:
+    unit = robot.parameter_units()[robot.parameter_names.index(name)]
+    return ("deg", 180.0 / np.pi) if unit == "rad" else ("mm", 1e3)
+
+
+def candidates(robot, fit_frame: bool) -> tuple[list[str], list[str]]:
+    """The parameters a change is looked for in: joint zeros first, then the other link
+    parameters (beta only on nominally parallel axes); with the frame refitted, without theta1 and
+    theta{n} (absorbed by the frame and the SMR offset)."""
+    n = robot.n_joints
+    joints = range(2, n) if fit_frame else range(1, n + 1)
+    zeros = [f"theta{i}" for i in joints]
+    others = [f"{k}{i}" for i in range(1, n + 1) for k in _LINK_KINDS
+              if k != "beta" or robot.parallel[i - 1]]
+    return zeros, others
+
+
+def check(robot, data, uncertainty: Uncertainty, *, fit_frame: bool = True, noise_mm: float | None = None,
+          force: bool = False) -> CheckResult:
+    """Judge the calibrated ``robot`` on the check campaign ``data`` (point measurements) with the
+    calibration's ``uncertainty``; ``fit_frame``: refit the tracker frame and SMR offsets first (the
+    tracker moved since); ``noise_mm``: the instrument's 1-sigma per coordinate (mm), else the
+    calibration's noise estimate (an F-test then). See the module docstring."""
+    if data.kind != "point":
+        raise DataError(f"a check needs point (laser tracker) measurements, not {data.kind}")
+    data.check_against(robot)
+    if data.n_poses < MIN_CHECK_POSES:
+        raise DataError(f"a check needs at least {MIN_CHECK_POSES} poses, the data have {data.n_poses}")
+    unknown = [n for n in uncertainty.names if n not in robot.parameter_names]
+    if unknown:
+        raise DataError(f"the calibration's uncertainty names {unknown}, which this model does not have: "
+                        "give the calibrated model that calibration wrote")
+    if noise_mm is not None and not 0 < noise_mm < 10:
+        raise DataError(f"--noise-mm must be between 0 and 10 mm, got {noise_mm}")
+    start = register(robot, data) if fit_frame else robot
+    kw = {"smr": data.smr, "approach": data.approach, "travel": data.travel}
+    modelled = start.fk(data.joints, **kw)[:, :3, 3]
+    r = (data.points - modelled).reshape(-1)
+    rms_mm = float(np.sqrt(np.mean(np.sum((data.points - modelled) ** 2, axis=1)))) * 1e3
+    check_residual(rms_mm, modelled, "the check data (calibrated model, frame fitted)", force=force)
+    frame = [*FRAME_NAMES, *(f"smr{k}.{c}" for k in range(1, data.n_smr) for c in "xyz")] if fit_frame else []
+
+    def columns(names) -> np.ndarray:
+        return start.jacobian(data.joints, list(names), **kw).reshape(len(r), len(names))
+
+    if noise_mm is None and uncertainty.kind not in TRACKER_KINDS:
+        raise DataError(f"the calibration used {uncertainty.kind} data, whose noise is not the tracker's "
+                        "per coordinate: state the tracker's noise with --noise-mm")
+    if noise_mm is None:
+        noise, noise_dof, source = uncertainty.noise_m, uncertainty.dof, "calibration"
+    else:
+        noise, noise_dof, source = noise_mm * 1e-3, None, "stated"
+    Jc = columns(uncertainty.names)
+    C = noise ** 2 * np.eye(len(r)) + Jc @ uncertainty.covariance @ Jc.T
+    space = _Whitened(r, columns(frame) if frame else np.zeros((len(r), 0)), C)
+    T = space.fit()[0] if frame else float(space.r @ space.r)
+    dof = len(r) - space.rank
+    p = _p_value(T, dof, noise_dof)
+    predicted = float(np.sqrt(np.trace(C) / data.n_poses)) * 1e3
+    result = CheckResult(verdict="changed" if p < ALPHA else "holds", p_value=p, statistic=T, dof=dof,
+                         noise_dof=noise_dof, noise_m=noise, noise_source=source, n_poses=data.n_poses,
+                         rms_mm=rms_mm, predicted_rms_mm=predicted)
+    if fit_frame:
+        result.notes.append(UNSEEN_WITH_FRAME.format(n=robot.n_joints))
+    if result.verdict == "changed":
+        _explain(result, space, columns, start, candidates(start, fit_frame), noise_dof, dof)
+    return result
+
+
+def _explain(result: CheckResult, space: _Whitened, columns, robot, pools, noise_dof, dof: int) -> None:
+    """Greedy re-identification of what moved (module docstring): fills ``changed_parameters``."""
+    chosen: list[str] = []
+    T, p = result.statistic, result.p_value
+    blocks = {n: columns([n]) for pool in pools for n in pool}
+    while p < ALPHA and len(chosen) < MAX_CHANGED:
+        for pool in pools:
+            trials = {}
+            for name in pool:
+                if name not in chosen:
+                    J = np.hstack([blocks[c] for c in (*chosen, name)])
+                    T_new, rank, _, _ = space.fit(J)
+                    if rank == space.rank + len(chosen) + 1:  # the column adds information
+                        trials[name] = T_new
+            if not trials:
+                continue
+            best = min(trials, key=trials.get)
+            m = dof - len(chosen) - 1
+            scale = max(trials[best] / m, 1.0)
+            if (T - trials[best]) / scale > stats.chi2.isf(ALPHA, 1):  # a significant part explained
+                break
+        else:
+            break
+        chosen.append(best)
+        T = trials[best]
+        p = _p_value(T, dof - len(chosen), noise_dof)
+    if not chosen:
+        result.notes.append("no single link parameter explains the change: the robot moved in a way "
+                            "its geometric model does not describe (or the check data are wrong)")
+        return
+    T, _, x, cov = space.fit(np.hstack([blocks[c] for c in chosen]))
+    m = dof - len(chosen)
+    scale = max(T / m, 1.0)  # what the chosen set leaves unexplained widens the intervals
+    k = space.F.shape[1]
+    for j, name in enumerate(chosen):
+        unit, f = _display(name, robot)
+        result.changed_parameters.append({"name": name, "unit": unit, "shift": float(x[k + j] * f),
+                                          "sigma": float(np.sqrt(cov[k + j, k + j] * scale) * f)})
+    result.explained_p_value = p

@@ -1,0 +1,59 @@
+"""Offsets-only recalibration: after a motor or encoder change the joint zeros move and the rest of
+the robot does not. Re-identify only the joint zeros (with the tracker frame and the SMR offsets)
+from a short campaign, every other parameter of the earlier calibration kept as it is."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robocal.calibration import calibrate
+from robocal.errors import DataError
+
+FRAME_PARAMS = ("base.x", "base.y", "base.z", "base.rx", "base.ry", "base.rz", "tool.x", "tool.y", "tool.z")
+SAME_NOMINAL_TOL = 1e-9  # m or rad: the calibrated model must carry the nominal robot's links
+
+
+def offsets_params(robot, n_smr: int = 1) -> list[str]:
+    """The unknowns of an offsets-only recalibration: every joint zero, the tracker frame and the
+    SMR offsets (the zeros the frame absorbs, theta1 and theta{n} on point data, are dropped by
+    the identifiability analysis as usual)."""
+    return [*(f"theta{i}" for i in range(1, robot.n_joints + 1)), *FRAME_PARAMS,
+            *(f"smr{k}.{c}" for k in range(1, n_smr) for c in "xyz")]
+
+
+def check_same_robot(nominal, start) -> None:
+    """``start`` (a calibrated model) must be a calibration of ``nominal``: same joints, same
+    nominal link parameters (DataError naming both otherwise)."""
+    n = nominal.n_joints
+    if start.n_joints != n or not np.allclose(start.nominal[: 5 * n], nominal.nominal[: 5 * n],
+                                              atol=SAME_NOMINAL_TOL, rtol=0):
+        raise DataError(f"the start model ({start.name}) is not a calibration of {nominal.name}: its nominal "
+                        "links differ; give the calibrated model of this robot")
+
+
+def recalibrate_offsets(nominal, start, data, validation=None, **options):
+    """A :class:`~robocal.calibration.CalibrationResult` whose robot is ``start`` (an earlier
+    calibration of ``nominal``) with only its joint zeros re-identified on ``data`` (point or pose
+    measurements; the tracker frame and SMR offsets fitted with them); ``validation`` and
+    ``options`` as :func:`robocal.calibrate` takes them (not ``params`` nor ``nongeometric``)."""
+    check_same_robot(nominal, start)
+    sets = data if isinstance(data, list | tuple) else [data]
+    if any(d.kind not in ("point", "pose") for d in sets):
+        raise DataError("an offsets-only recalibration needs tracker data (points or poses)")
+    for key in ("params", "nongeometric"):
+        if key in options:
+            raise DataError(f"an offsets-only recalibration chooses its own {key}")
+    n_smr = max(d.n_smr for d in sets)
+    result = calibrate(start, data, params=offsets_params(start, n_smr), validation=validation,
+                       nongeometric="none", **options)
+    result.settings["offsets_only"] = True
+    return result
+
+
+def zero_shifts(result, start) -> list[dict]:
+    """The re-identified joint zeros' change from ``start`` (the earlier calibration):
+    ``[{name, shift, sigma, unit}]`` in deg, largest first."""
+    sigma = dict(zip(result.unknowns, result.sigma, strict=True))
+    rows = [{"name": n, "unit": "deg", "shift": float(np.rad2deg(result.robot.get(n) - start.get(n))),
+             "sigma": float(np.rad2deg(sigma[n]))} for n in result.names if n.startswith("theta")]
+    return sorted(rows, key=lambda r: -abs(r["shift"]))
