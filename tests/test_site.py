@@ -80,3 +80,16 @@ def test_search_finds_pages_from_disk(site, tmp_path):
     assert found and int(found.group(1)) > 3, "the search found nothing from file://"
     assert proc.stdout.count("md-search-result__item") > 3
     assert not [m for m in console_messages(proc.stderr) if "iframe" in m or "Worker" in m]
+
+
+def test_changelog_glossary_licence_and_citation(site):
+    import yaml
+
+    assert "Unreleased" in (site / "changelog.html").read_text(encoding="utf-8")
+    assert (site / "glossary.html").read_text(encoding="utf-8").count("<dt>") >= 15
+    citation = yaml.safe_load((ROOT / "CITATION.cff").read_text(encoding="utf-8"))
+    from robocal.version import __version__
+
+    assert citation["cff-version"] and citation["version"] == __version__
+    assert "MIT License" in (ROOT / "LICENSE").read_text(encoding="utf-8")
+    assert 'license = "MIT"' in (ROOT / "pyproject.toml").read_text(encoding="utf-8")
