@@ -61,8 +61,13 @@ def speed_rows(runs: dict) -> list[tuple[str, list[tuple[str, float]]]]:
         tables = [t for t in _tables(runs, name) if unit in t["columns"]]
         if tables:
             i = tables[0]["columns"].index(unit)
-            out.append((f"{name.removeprefix('bench_').upper()} ({unit.removeprefix('wall ')})",
-                        [(str(r[0]), float(r[i])) for r in tables[0]["rows"]]))
+            bars = [(str(r[0]), float(r[i])) for r in tables[0]["rows"]]
+            for extra in _tables(runs, name):  # peers timed apart (pinocchio: one call per pose)
+                if extra.get("key") == "pinocchio" and unit in extra["columns"]:
+                    j = extra["columns"].index(unit)
+                    bars += [(str(r[0]), float(r[j])) for r in extra["rows"]
+                             if not str(r[0]).startswith("robocal")]
+            out.append((f"{name.removeprefix('bench_').upper()} ({unit.removeprefix('wall ')})", bars))
     return out
 
 
