@@ -19,7 +19,7 @@ from robocal.io import write_atomic
 from robocal.report.iso9283 import pose_accuracy_repeatability
 
 MAX_3D_POINTS = 4000
-MAX_CORRELATION_NAMES = 36  # a larger heat map's labels cannot be read
+MAX_CORRELATION_NAMES = 24  # a larger heat map's labels cannot be read at the page's width
 WORST = 10
 
 _CSS = """
@@ -42,10 +42,17 @@ tr.dropped td{background:#fff4e5}tr.chosen td{background:#e8f4ea;font-weight:600
  padding:6px 10px;margin:6px 0}
 figure{margin:4px 0 10px}figure svg{width:100%;height:auto}
 figcaption{color:#555;font-size:12px}figcaption b{color:#222}
-.grid{display:grid;grid-template-columns:repeat(auto-fit,minmax(560px,1fr));gap:8px 28px;align-items:start}
+.grid{display:grid;grid-template-columns:repeat(auto-fit,minmax(min(560px,100%),1fr));gap:8px 28px;
+ align-items:start}
 .grid>*{min-width:0}.scroll{overflow-x:auto}section.narrow>figure{max-width:680px}
 .note{color:#666;font-size:12px}td code{white-space:pre-wrap;word-break:break-all}
-@media print{body{background:#fff}main{padding:0}h2{break-after:avoid}figure{break-inside:avoid}}
+@media (max-width:600px){main{padding:12px 10px 32px}.kpi div{min-width:0;flex:1 1 40%}
+ table{font-size:12px}th,td{padding:2px 4px}}
+@page{size:A4;margin:12mm}
+@media print{body{background:#fff;font-size:11px}main{padding:0;max-width:none}h2{break-after:avoid}
+ figure,table,.kpi{break-inside:avoid}nav{display:none}.scroll{overflow:visible}
+ table{font-size:9px;max-width:100%}th,td{padding:1px 3px;white-space:normal}
+ .grid{grid-template-columns:1fr}}
 """
 
 
@@ -463,7 +470,8 @@ def _nongeometric(ng: dict | None, params: list[dict], dropped: dict) -> str:
             "<p>Errors the model adds to the commanded joints: compliance (per metre of unit-weight "
             "moment arm), gear harmonics, backlash (half lost motion, by approach direction), travel "
             "(error per degree of the joint's last move) and cyclic errors "
-            "(cyc{joint}_{cycles per revolution}). "
+            "(named cyc, the joint, then the cycles per revolution: <code>cyc3_2</code> is joint 3, twice "
+            "per turn). "
             f"{n_out} term(s) the data cannot separate from the geometry were left out (highlighted).</p>"
             + _parameter_table(params, dropped, JOINT_ERROR_COLUMNS))
 
