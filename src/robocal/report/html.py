@@ -629,8 +629,39 @@ def _history(result: dict) -> str:
 
 # ----------------------------------------------------------------- page
 def render_report(result: dict, *, title: str | None = None) -> str:
-    """The report of a calibration result dict as one self-contained HTML page (its figures need
-    matplotlib: :mod:`robocal.report.plots` says so when it is missing)."""
+    """The report of a calibration result as one self-contained HTML page.
+
+    No script, no network: the figures are inline SVG (they need matplotlib, the ``report``
+    extra), and every string from the user's files is escaped.
+
+    Parameters
+    ----------
+    result : dict
+        A calibration result as `CalibrationResult.to_dict` gives it (or as read from the
+        ``--json`` file of ``robocal calibrate``).
+    title : str, optional
+        The page's title (default: "Calibration report: " and the robot's name).
+
+    Returns
+    -------
+    str
+        The HTML page.
+
+    Raises
+    ------
+    DataError
+        ``result`` is not a calibration result (or a field of it is malformed, named).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> result = rc.calibrate(robot, rc.simulate_tracker(robot, 40, seed=2).data)
+    >>> from robocal.report.html import render_report
+    >>> page = render_report(result.to_dict())
+    >>> page.startswith("<!DOCTYPE html>"), "<script" in page
+    (True, False)
+    """
     if not isinstance(result, dict):
         raise DataError("a report needs a calibration result (a JSON object)")
     robot = (result.get("robot") or {}).get("name", "robot")
@@ -695,7 +726,33 @@ def page(title: str, subtitle: str, sections: list[tuple[str, str, str]], versio
 
 
 def write_report(result: dict, path, *, title: str | None = None) -> Path:
-    """Render the report and write it to ``path`` atomically; returns the path."""
+    """Render the report (see `render_report`) and write it to ``path`` atomically.
+
+    Parameters
+    ----------
+    result : dict
+        A calibration result (`CalibrationResult.to_dict`).
+    path : str or pathlib.Path
+        The HTML file to write; its folder must exist.
+    title : str, optional
+        The page's title.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.report.html import write_report
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> result = rc.calibrate(robot, rc.simulate_tracker(robot, 40, seed=2).data)
+    >>> import tempfile, pathlib
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> write_report(result.to_dict(), folder / "report.html").name
+    'report.html'
+    """
     path = Path(path)
     write_atomic(path, render_report(result, title=title))
     return path
