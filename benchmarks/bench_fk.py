@@ -9,6 +9,7 @@ import resource
 import tracemalloc
 
 import numpy as np
+from results import table
 from timing import best_time, first_call, interleaved, kernel_choices, print_times, py_opw_robot
 
 from robocal import Robot
@@ -125,6 +126,11 @@ def main() -> None:
         ratios = ", ".join(f"{t_pin / best[k][0]:.1f}x ({k})" for k in kernels)
         print(f"  pinocchio per-call loop     {t_pin:7.3f} s  {t_pin / N * 1e9:5.0f} ns/pose   "
               f"robocal is {ratios} faster   (timed on {N_PIN:,} calls, max |diff| {err:.1e})")
+        table(f"forward kinematics against pinocchio (C++, one call per pose from Python), {robot.name}",
+              ["", "wall ns/item", "robocal faster", "max |diff|"],
+              [["pinocchio per-call loop", f"{t_pin / N * 1e9:.2f}", "", f"{err:.1e}"],
+               *([f"robocal Robot.fk ({k})", f"{best[k][0] / N * 1e9:.2f}", f"{t_pin / best[k][0]:.1f}x", ""]
+                 for k in kernels)], key="pinocchio")
 
     q_big = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (N_MEM, 6))
     for k in kernels:

@@ -15,6 +15,7 @@ import io
 import json
 import os
 import platform
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -61,6 +62,18 @@ def machine() -> dict:
             "platform": platform.platform(), "python": platform.python_version(), "numpy": np.__version__}
 
 
+def git_commit() -> str | None:
+    """The checkout's commit (with ``+changes`` when the work tree differs from it), None outside git."""
+    def git(*args: str) -> str:
+        return subprocess.run(["git", *args], cwd=HERE, capture_output=True, text=True, check=True,
+                              timeout=30).stdout.strip()
+    try:
+        commit = git("rev-parse", "--short=12", "HEAD")
+        return commit + ("+changes" if git("status", "--porcelain", "--untracked-files=no") else "")
+    except (OSError, subprocess.SubprocessError):
+        return None
+
+
 def run_one(path: Path) -> dict:
     """Run one benchmark file's ``main()``, printing as it goes; its JSON entry."""
     spec = importlib.util.spec_from_file_location(path.stem, path)
@@ -69,7 +82,7 @@ def run_one(path: Path) -> dict:
     results.TABLES.clear()
     results.FIGURES.clear()
     entry = {"date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M"),
-             "machine": machine(), "robocal_version": __version__,
+             "machine": machine(), "robocal_version": __version__, "git_commit": git_commit(),
              "description": " ".join((module.__doc__ or "").split("\n\n")[0].split())}
     print(f"== {path.name}", flush=True)
     tee, stdout = _Tee(sys.stdout), sys.stdout

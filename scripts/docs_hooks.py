@@ -115,7 +115,9 @@ def _table(table: dict) -> list[str]:
 
 def _ran(run: dict) -> str:
     machine = run["machine"]
-    return (f"Ran {run['date']} (UTC) in {run['seconds']:.0f} s with robocal {run['robocal_version']} "
+    commit = f" (commit {run['git_commit']})" if run.get("git_commit") else " (commit not recorded)"
+    return (f"Ran {run['date']} (UTC) in {run['seconds']:.0f} s with robocal {run['robocal_version']}"
+            f"{commit} "
             f"on {_cell(machine['cpu'])}, {machine['cores']} cores, load average "
             f"{machine['load_average']} at the start, {_cell(machine['platform'])}, "
             f"Python {machine['python']}, numpy {machine['numpy']}.")

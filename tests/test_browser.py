@@ -168,3 +168,27 @@ def test_campaign_page_renders_without_console_messages(browser, tmp_path):
     assert console_messages(proc.stderr) == []
     assert svg_count(proc.stdout) == svg_count(page.read_text(encoding="utf-8")) == 2
     assert section_ids(proc.stdout) == ["summary", "curve", "identifiability", "poses"]
+
+
+PHONE = 390  # px: a phone's screen width
+
+
+def _page_width(browser: str, tmp_path, report, width: int) -> int:
+    """The report's full scroll width (px) when shown ``width`` px wide: in an iframe of that width
+    (headless Chromium's window is at least 500 px wide), read by the outer page's script."""
+    probe = tmp_path / "probe.html"
+    probe.write_text(f"<!DOCTYPE html><html><body style='margin:0'><iframe id='f' src='{report.as_uri()}' "
+                     f"style='width:{width}px;height:900px;border:0'></iframe><script>"
+                     "document.getElementById('f').addEventListener('load',e=>document.body.setAttribute("
+                     "'data-width',e.target.contentDocument.documentElement.scrollWidth))</script></body></html>",
+                     encoding="utf-8")
+    proc = run_browser(browser, tmp_path, probe.as_uri(), "--dump-dom", "--allow-file-access-from-files",
+                       "--window-size=1400,900", "--virtual-time-budget=5000")
+    found = re.search(r'data-width="(\d+)"', proc.stdout)
+    assert found, proc.stderr[-2000:]
+    return int(found.group(1))
+
+
+def test_report_fits_a_phone(browser, tmp_path, report):
+    assert _page_width(browser, tmp_path, report, PHONE) <= PHONE + 10
+    assert _page_width(browser, tmp_path, report, WIDTH) <= WIDTH + 10  # and the wide layout still fits

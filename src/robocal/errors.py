@@ -1,8 +1,34 @@
-"""Errors a user can cause. The CLI prints their message (no traceback) and exits non-zero."""
+"""Errors a user can cause. The CLI prints their message (no traceback) and exits non-zero.
+
+Catch `RobocalError` to handle every one of them; the subclasses say what kind of input was wrong.
+
+Examples
+--------
+>>> import robocal as rc
+>>> try:
+...     rc.Robot.from_catalog("no_such_robot")
+... except rc.RobocalError as exc:
+...     print(type(exc).__name__)
+ModelError
+"""
 
 
 class RobocalError(Exception):
-    """Base class of every error robocal raises because of its input."""
+    """Base class of every error robocal raises because of its input.
+
+    Its message says what is wrong and what to do; the command line prints it alone and exits 2.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> try:
+    ...     robot.fk(np.zeros((3, 5)))  # five joints for a six-joint robot
+    ... except rc.RobocalError as exc:
+    ...     isinstance(exc, rc.DataError)
+    True
+    """
 
 
 class ModelError(RobocalError):

@@ -26,9 +26,28 @@ MAX_RESIDUAL_MM = 2.0  # poses further than this from one common point did not t
 
 @dataclass(frozen=True)
 class ToolCalibration:
-    """``tcp`` (3,) m in the flange frame (ROS-I tool0); ``point`` (3,) m, the touched point in
-    the controller's base frame; ``residuals`` (N,) m per pose; ``spread_deg`` the orientation
-    spread about the weakest axis."""
+    """The result of `robocal.identify_tcp`.
+
+    Attributes
+    ----------
+    tcp : numpy.ndarray, shape (3,)
+        The tool's TCP in the flange frame (ROS-I ``tool0``), metres.
+    point : numpy.ndarray, shape (3,)
+        The touched point in the controller's base frame, metres.
+    residuals : numpy.ndarray, shape (N,)
+        Distance of each pose's tip from the common point, metres.
+    spread_deg : float
+        The orientations' spread about their weakest axis, degrees.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from robocal.tcp import ToolCalibration
+    >>> result = ToolCalibration(tcp=np.array([0.0, 0.0, 0.2]), point=np.array([1.0, 0.0, 0.5]),
+    ...                          residuals=np.array([1e-5, 2e-5, 1e-5, 2e-5]), spread_deg=35.0)
+    >>> round(result.rms_mm, 4)
+    0.0158
+    """
 
     tcp: np.ndarray
     point: np.ndarray
@@ -50,8 +69,54 @@ class ToolCalibration:
 
 
 def identify_tcp(calibrated: Robot, nominal: Robot, q, robot_base=None) -> ToolCalibration:
-    """TCP of a tool from joints ``(N, 6)`` (rad) at which it touched one fixed point, on the
-    calibrated model's flange (see the module docstring and :func:`controller_model`)."""
+    """The TCP of a real tool on the calibrated flange, by the 4-point method.
+
+    The tool's tip touches one fixed point from several orientations; the tip's offset on the
+    flange and the point are the least-squares solution of ``R_k t + p_k = P`` over the poses,
+    with the flange poses ``(R_k, p_k)`` of the calibrated model (see the module docstring).
+
+    Parameters
+    ----------
+    calibrated : Robot
+        The calibrated model.
+    nominal : Robot
+        The controller's nominal model (its flange, ROS-I ``tool0``, replaces the calibrated
+        model's measured SMR).
+    q : array_like, shape (N, 6)
+        Joints at which the tip touched the point, radians; N >= 4, tilted about two axes.
+    robot_base : array_like, shape (4, 4), optional
+        The controller's base frame in the calibrated model's world, metres.
+
+    Returns
+    -------
+    ToolCalibration
+        The ``tcp`` (m, flange frame), the touched ``point`` (m, base frame), the residual per
+        pose and the orientation spread.
+
+    Raises
+    ------
+    DataError
+        Fewer than 4 poses, orientations too alike to determine the TCP, or a pose far from the
+        common point (a slipped tip), each named.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> from robocal.kinematics.transforms import make_transform
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> tip = np.array([0.01, -0.02, 0.15])  # the tool's tip on the flange, m
+    >>> tool = robot.with_frames(tool=make_transform(np.eye(3), tip))
+    >>> q0 = np.array([0.1, 0.2, 0.1, 0.0, 0.5, 0.0])
+    >>> target = tool.fk(q0[None])[0].copy()
+    >>> turns = [np.eye(3), [[1, 0, 0], [0, .8, -.6], [0, .6, .8]],  # the tip stays on the point
+    ...          [[.8, 0, .6], [0, 1, 0], [-.6, 0, .8]], [[.8, -.6, 0], [.6, .8, 0], [0, 0, 1]]]
+    >>> poses = np.array([target @ make_transform(np.array(r, float), np.zeros(3)) for r in turns])
+    >>> tilts = rc.ik.solve(tool, poses, seeds=np.tile(q0, (4, 1))).joints
+    >>> result = rc.identify_tcp(robot, robot, tilts)
+    >>> bool(np.allclose(result.tcp, tip, atol=1e-6))
+    True
+    """
     flange = controller_model(calibrated, nominal, robot_base)
     q = flange.check_joints(q)
     N = q.shape[0]

@@ -136,15 +136,52 @@ def turn_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = False,
               tol: float = TOL, threads: int | None = None) -> np.ndarray:
-    """Closed-form IK (OPW or UR form): all solutions of world TCP poses ``(N, 4, 4)`` (m) -> joints (rad).
+    """All closed-form inverse-kinematics solutions of world TCP poses (OPW or UR form).
 
-    Default: ``(N, 8, 6)`` in the slot order of the module docstring, NaN where a solution does
-    not exist, joints wrapped to [-pi, pi). ``limits=True``: solutions outside the joint limits
-    become NaN (still ``(N, 8, 6)``). ``extra_turns=True`` (implies limits): every candidate
-    inside the limits including +-2 pi copies for joints with more than 360 deg of travel,
-    ``(N, K, 6)`` with K the largest count over the poses, valid rows first, NaN padding.
-    Base and tool of the model are removed first; each solution is verified by ``robot.fk`` to
-    ``tol`` (m, rad). ``threads``: worker threads (default: the CPU count, at most 8).
+    Base and tool of the model are removed first; each solution is verified by ``robot.fk``.
+
+    Parameters
+    ----------
+    robot : Robot
+        A model with an OPW form (ortho-parallel arm with a spherical wrist) or a UR form
+        (Universal Robots geometry); its base and tool frames are taken into account.
+    poses : array_like, shape (N, 4, 4) or (4, 4)
+        World poses of the TCP, metres.
+    limits : bool, default False
+        Set the solutions outside the joint limits to NaN (the shape stays ``(N, 8, 6)``).
+    extra_turns : bool, default False
+        Every candidate inside the limits, including the +-2 pi copies of joints with more than
+        a full turn of travel; implies ``limits``.
+    tol : float
+        Tolerance of the forward-kinematics check, metres and radians.
+    threads : int, optional
+        Worker threads (default: the CPU count, at most 8).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 8, 6) or (N, K, 6)
+        Joints, radians, wrapped to [-pi, pi); NaN where a branch does not exist. The 8 slots are
+        the branches in a fixed order (shoulder, elbow, wrist). With ``extra_turns``, K is the
+        largest candidate count over the poses, valid rows first, NaN padding.
+
+    Raises
+    ------
+    ModelError
+        The model has neither an OPW nor a UR form.
+    DataError
+        ``poses`` are not rigid transforms.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> q = np.array([[0.1, -0.2, 0.3, 0.4, 0.5, 0.6]])
+    >>> solutions = rc.ik.solve_all(robot, robot.fk(q))
+    >>> solutions.shape
+    (1, 8, 6)
+    >>> bool(np.isclose(solutions[0], q).all(axis=1).any())  # the joints we started from are a branch
+    True
     """
     T = check_poses(poses)
     q = solve_branches(robot, T, tol, threads)

@@ -32,9 +32,32 @@ WRIST_SPIN_DEG = 30.0  # how far restarts turn joints 4 and 6 about an almost al
 
 @dataclass(frozen=True)
 class IKResult:
-    """Joints ``(N, n)`` rad, ``converged`` ``(N,)``, final ``position_error`` ``(N,)`` m and
-    ``orientation_error`` ``(N,)`` rad, the seeds used ``(N, n)`` and ``iterations``, the most
-    accepted steps any target took over all its runs (see :func:`solve`)."""
+    """The result of `robocal.ik.solve`.
+
+    Attributes
+    ----------
+    joints : numpy.ndarray, shape (N, n)
+        Joints, radians.
+    converged : numpy.ndarray of bool, shape (N,)
+        Whether each pose was reached within the tolerances.
+    position_error : numpy.ndarray, shape (N,)
+        Final position error, metres.
+    orientation_error : numpy.ndarray, shape (N,)
+        Final orientation error, radians.
+    seeds : numpy.ndarray, shape (N, n)
+        The starting joints used, radians.
+    iterations : int
+        The most accepted steps any target took over all its runs.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> result = rc.ik.solve(robot, robot.fk(np.zeros((2, 6))), seeds=np.full((2, 6), 0.1))
+    >>> result.joints.shape, result.failed.size
+    ((2, 6), 0)
+    """
 
     joints: np.ndarray
     converged: np.ndarray
@@ -283,19 +306,55 @@ def _update(res: IKResult, rows: np.ndarray, alt: IKResult) -> None:
 def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal: Robot | None = None,
           max_iter: int = 100,
           pos_tol: float = POS_TOL, rot_tol: float = ROT_TOL, strict: bool = False) -> IKResult:
-    """Numeric IK: joints (rad) putting the TCP of ``robot`` at world ``poses`` ``(N, 4, 4)`` (m).
+    """Numeric inverse kinematics of any model, calibrated ones included.
 
-    ``seeds``: ``(N, n)`` starting joints (rad), or None for the nominal closed-form solution
-    in ``branch`` (see :func:`nominal_seeds`; needs an OPW or UR form on the nominal model, ``nominal``
-    or the robot's own); with neither, each pose starts from its preferred nominal branch and,
-    if that fails, tries the next ones (inside the limits first, then slot order). Targets still
-    not reached are retried (:func:`_retry`): continued if they stopped at ``max_iter`` (accepted
-    steps per run of the damped loop), then restarted from their seed moved off a nearby
-    singularity. Converged means position error <= ``pos_tol`` (1e-10 m) and rotation error <=
-    ``rot_tol`` (1e-9 rad). Poses that do not converge are flagged in ``converged``;
-    ``strict=True`` raises UnreachableError listing them instead.
-    ``iterations`` is the most accepted steps any target took over all its runs (branches tried,
-    continuation, restarts: the longest restart of each).
+    Damped least squares from a seed per pose. Targets not reached are retried: continued if they
+    stopped at ``max_iter``, then restarted from their seed moved off a nearby singularity.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model whose TCP is to reach the poses (any serial chain).
+    poses : array_like, shape (N, 4, 4) or (4, 4)
+        World poses of the TCP, metres.
+    seeds : array_like, shape (N, n), optional
+        Starting joints, radians. Default: the nominal closed-form solution in ``branch`` (needs
+        an OPW or UR form on ``nominal`` or on the robot's own nominal model); with neither
+        ``seeds`` nor ``branch``, each pose starts from its preferred nominal branch and tries the
+        next ones where that fails (inside the limits first).
+    branch : int, optional
+        Closed-form branch slot (0-7) of the seeds.
+    nominal : Robot, optional
+        The model whose closed form seeds the search (e.g. the controller's nominal model).
+    max_iter : int, default 100
+        Accepted steps per run of the damped loop.
+    pos_tol, rot_tol : float
+        Convergence: position error <= ``pos_tol`` (m, default 1e-10) and rotation error <=
+        ``rot_tol`` (rad, default 1e-9).
+    strict : bool, default False
+        Raise instead of flagging poses that do not converge.
+
+    Returns
+    -------
+    IKResult
+        ``joints`` (N, n) rad, ``converged`` (N,), the final ``position_error`` (m) and
+        ``orientation_error`` (rad) per pose, the ``seeds`` used and ``iterations`` (the most
+        accepted steps any target took over all its runs).
+
+    Raises
+    ------
+    UnreachableError
+        With ``strict=True``: the poses that did not converge, listed.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("ur5e")
+    >>> q = np.array([[0.3, -1.2, 1.4, -0.5, 1.1, 0.2]])
+    >>> result = rc.ik.solve(robot, robot.fk(q), seeds=q + 0.05)
+    >>> bool(result.converged.all()), bool(np.allclose(result.joints, q))
+    (True, True)
     """
     T = check_poses(poses)
     N, n = T.shape[0], robot.n_joints

@@ -36,10 +36,35 @@ _EDGE_CHUNK = 4_000_000  # pair evaluations per block when building edges (bound
 
 @dataclass(frozen=True)
 class PathResult:
-    """Optimal joints ``(M, 6)`` rad and their weighted travel ``cost``; the greedy choice
-    (nearest candidate step by step) ``greedy_joints`` and ``greedy_cost``; ``weights`` (6,);
-    ``slots`` ``(M,)`` the closed-form branch slot of each chosen joint vector; ``candidates``
-    ``(M,)`` how many candidates each waypoint had."""
+    """The result of `robocal.ik.plan_path`.
+
+    Attributes
+    ----------
+    joints : numpy.ndarray, shape (M, n)
+        The optimal joints, radians.
+    cost : float
+        Their weighted joint travel.
+    greedy_joints : numpy.ndarray, shape (M, n)
+        The greedy choice (nearest candidate step by step), radians, for comparison.
+    greedy_cost : float
+        Its weighted joint travel.
+    weights : numpy.ndarray, shape (n,)
+        The weights used.
+    slots : numpy.ndarray of int, shape (M,)
+        The closed-form branch slot of each chosen joint vector.
+    candidates : numpy.ndarray of int, shape (M,)
+        How many candidates each waypoint had.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("ur5e")
+    >>> q = np.linspace([0.0, -1.2, 1.3, -0.4, 1.2, 0.0], [0.6, -1.0, 1.5, -0.2, 1.4, 0.5], 4)
+    >>> path = rc.ik.plan_path(robot, robot.fk(q))
+    >>> path.slots.shape, int(path.candidates.min()) >= 1
+    ((4,), True)
+    """
 
     joints: np.ndarray
     cost: float
@@ -117,13 +142,46 @@ def branch_candidates(robot: Robot, T: np.ndarray, nominal: Robot | None = None)
 
 
 def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | None = None) -> PathResult:
-    """Globally optimal joints for world TCP poses ``(M, 4, 4)`` (m); see the module docstring.
+    """The globally best joints along a whole path of TCP poses (Dijkstra over the IK branches).
 
-    ``weights`` ``(6,)`` (default :func:`default_weights`); ``start`` ``(6,)`` rad: a fixed
-    starting configuration whose distance to the first waypoint counts in the cost (else the
-    first waypoint is free). A calibrated model gets its candidates from :func:`branch_candidates`
-    (``nominal``: the controller's model for the seeds). UnreachableError lists the waypoints
-    without any candidate.
+    Per waypoint, the inverse-kinematics candidates inside the joint limits (the 8 closed-form
+    branches and their +-2 pi copies) become the nodes of a layer; consecutive layers are joined
+    by edges weighted by the weighted joint travel ``sum_i w_i |dq_i|``; the shortest path from the
+    first layer to the last is the optimum over the whole trajectory.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model (closed-form nominal models, or calibrated ones through their nominal's seeds).
+    poses : array_like, shape (M, 4, 4)
+        World TCP poses of the waypoints, metres.
+    weights : array_like, shape (n,), optional
+        Cost per radian of each joint; default `default_weights` (big joints cost more).
+    start : array_like, shape (n,), optional
+        A fixed starting configuration, radians, whose distance to the first waypoint counts.
+    nominal : Robot, optional
+        The controller's model whose closed form seeds a calibrated model's candidates.
+
+    Returns
+    -------
+    PathResult
+        The optimal ``joints`` (M, n) rad and their ``cost``, the greedy choice for comparison,
+        the ``weights``, the branch ``slots`` and the candidate count per waypoint.
+
+    Raises
+    ------
+    UnreachableError
+        Waypoints without any candidate inside the limits, listed by index.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> q = np.linspace([0.0, -0.3, 0.2, 0.0, 0.6, 0.0], [0.8, 0.1, 0.4, 0.5, 0.9, 1.0], 5)
+    >>> path = rc.ik.plan_path(robot, robot.fk(q))
+    >>> path.joints.shape, bool(path.cost <= path.greedy_cost)
+    ((5, 6), True)
     """
     T = check_poses(poses)
     n = robot.n_joints

@@ -19,7 +19,7 @@ from robocal.io import write_atomic
 from robocal.report.iso9283 import pose_accuracy_repeatability
 
 MAX_3D_POINTS = 4000
-MAX_CORRELATION_NAMES = 36  # a larger heat map's labels cannot be read
+MAX_CORRELATION_NAMES = 24  # a larger heat map's labels cannot be read at the page's width
 WORST = 10
 
 _CSS = """
@@ -42,10 +42,17 @@ tr.dropped td{background:#fff4e5}tr.chosen td{background:#e8f4ea;font-weight:600
  padding:6px 10px;margin:6px 0}
 figure{margin:4px 0 10px}figure svg{width:100%;height:auto}
 figcaption{color:#555;font-size:12px}figcaption b{color:#222}
-.grid{display:grid;grid-template-columns:repeat(auto-fit,minmax(560px,1fr));gap:8px 28px;align-items:start}
+.grid{display:grid;grid-template-columns:repeat(auto-fit,minmax(min(560px,100%),1fr));gap:8px 28px;
+ align-items:start}
 .grid>*{min-width:0}.scroll{overflow-x:auto}section.narrow>figure{max-width:680px}
 .note{color:#666;font-size:12px}td code{white-space:pre-wrap;word-break:break-all}
-@media print{body{background:#fff}main{padding:0}h2{break-after:avoid}figure{break-inside:avoid}}
+@media (max-width:600px){main{padding:12px 10px 32px}.kpi div{min-width:0;flex:1 1 40%}
+ table{font-size:12px}th,td{padding:2px 4px}}
+@page{size:A4;margin:12mm}
+@media print{body{background:#fff;font-size:11px}main{padding:0;max-width:none}h2{break-after:avoid}
+ figure,table,.kpi{break-inside:avoid}nav{display:none}.scroll{overflow:visible}
+ table{font-size:9px;max-width:100%}th,td{padding:1px 3px;white-space:normal}
+ .grid{grid-template-columns:1fr}}
 """
 
 
@@ -463,7 +470,8 @@ def _nongeometric(ng: dict | None, params: list[dict], dropped: dict) -> str:
             "<p>Errors the model adds to the commanded joints: compliance (per metre of unit-weight "
             "moment arm), gear harmonics, backlash (half lost motion, by approach direction), travel "
             "(error per degree of the joint's last move) and cyclic errors "
-            "(cyc{joint}_{cycles per revolution}). "
+            "(named cyc, the joint, then the cycles per revolution: <code>cyc3_2</code> is joint 3, twice "
+            "per turn). "
             f"{n_out} term(s) the data cannot separate from the geometry were left out (highlighted).</p>"
             + _parameter_table(params, dropped, JOINT_ERROR_COLUMNS))
 
@@ -621,8 +629,39 @@ def _history(result: dict) -> str:
 
 # ----------------------------------------------------------------- page
 def render_report(result: dict, *, title: str | None = None) -> str:
-    """The report of a calibration result dict as one self-contained HTML page (its figures need
-    matplotlib: :mod:`robocal.report.plots` says so when it is missing)."""
+    """The report of a calibration result as one self-contained HTML page.
+
+    No script, no network: the figures are inline SVG (they need matplotlib, the ``report``
+    extra), and every string from the user's files is escaped.
+
+    Parameters
+    ----------
+    result : dict
+        A calibration result as `CalibrationResult.to_dict` gives it (or as read from the
+        ``--json`` file of ``robocal calibrate``).
+    title : str, optional
+        The page's title (default: "Calibration report: " and the robot's name).
+
+    Returns
+    -------
+    str
+        The HTML page.
+
+    Raises
+    ------
+    DataError
+        ``result`` is not a calibration result (or a field of it is malformed, named).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> result = rc.calibrate(robot, rc.simulate_tracker(robot, 40, seed=2).data)
+    >>> from robocal.report.html import render_report
+    >>> page = render_report(result.to_dict())
+    >>> page.startswith("<!DOCTYPE html>"), "<script" in page
+    (True, False)
+    """
     if not isinstance(result, dict):
         raise DataError("a report needs a calibration result (a JSON object)")
     robot = (result.get("robot") or {}).get("name", "robot")
@@ -687,7 +726,33 @@ def page(title: str, subtitle: str, sections: list[tuple[str, str, str]], versio
 
 
 def write_report(result: dict, path, *, title: str | None = None) -> Path:
-    """Render the report and write it to ``path`` atomically; returns the path."""
+    """Render the report (see `render_report`) and write it to ``path`` atomically.
+
+    Parameters
+    ----------
+    result : dict
+        A calibration result (`CalibrationResult.to_dict`).
+    path : str or pathlib.Path
+        The HTML file to write; its folder must exist.
+    title : str, optional
+        The page's title.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.report.html import write_report
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> result = rc.calibrate(robot, rc.simulate_tracker(robot, 40, seed=2).data)
+    >>> import tempfile, pathlib
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> write_report(result.to_dict(), folder / "report.html").name
+    'report.html'
+    """
     path = Path(path)
     write_atomic(path, render_report(result, title=title))
     return path

@@ -273,7 +273,7 @@ def correlation(names: list[str], matrix: np.ndarray) -> Figure:
     ax = fig.add_subplot()
     im = ax.imshow(matrix, cmap="RdBu_r", norm=mcolors.Normalize(-1, 1), interpolation="nearest")
     ax.grid(False)
-    fontsize = 8 if k <= 30 else 6 if k <= 50 else 4
+    fontsize = 9 if k <= 24 else 7 if k <= 40 else 5  # 9 pt reads at the report's column width
     ax.set_xticks(range(k), names, rotation=90, fontsize=fontsize)
     ax.set_yticks(range(k), names, fontsize=fontsize)
     fig.colorbar(im, ax=ax, shrink=0.8, label="correlation")
