@@ -109,3 +109,101 @@ def test_plan_refuses_a_chain_without_branches_in_one_line(arms, tmp_path, capsy
     _refused(["plan", "--robot", str(arms / f"{arm}.yaml"), str(arms / f"{arm}_way.csv"),
               "-o", str(tmp_path / "j.csv")], capsys, *words)
     assert not (tmp_path / "j.csv").exists() and _digest(arms) == before
+
+
+# ------------------------------------------------------------------ provenance of outputs
+PROGRAMS = Path(__file__).parent / "data" / "programs"
+FILTER_CASES = {  # format: (nominal, program files, references, extra options)
+    "rapid": ("abb_irb2600", ["weld_cell.mod"], [], []),
+    "krl": ("kuka_kr16_2", ["palletize.src", "palletize.dat"], ["config.dat"], []),
+    "fanuc": ("fanuc_lrmate200id", ["sealing.ls"], [],
+              ["--frame", "1=450,-150,100,0,0,-10", "--tool", "2=0,0,120,0,0,0"]),
+    "urscript": ("ur5", ["pick_place.script"], [], []),
+}
+COMMENT = {"rapid": "!", "krl": ";", "fanuc": "!", "urscript": "#"}
+
+
+def _filter_argv(fmt: str, folder: Path, cal: Path, files: list[str], out: Path) -> list[str]:
+    nominal, _, refs, extra = FILTER_CASES[fmt]
+    argv = ["filter", *[str(folder / f) for f in files], "--calibrated", str(cal), "--nominal", nominal,
+            "-o", str(out), *extra]
+    return argv + (["--references", *[str(PROGRAMS / r) for r in refs]] if refs else [])
+
+
+@pytest.mark.parametrize("fmt", list(FILTER_CASES))
+def test_a_filtered_program_is_marked_and_filtering_it_again_is_refused(fmt, tmp_path, capsys):
+    from robocal.data.simulate import perturbed
+    from robocal.programs.source import NUMBER_RE
+    from robocal.trust.output_marker import find_marker, model_fingerprint
+
+    nominal, files, _, _ = FILTER_CASES[fmt]
+    cal = perturbed(rc.Robot.from_catalog(nominal), 7)
+    cal.save(tmp_path / "cal.yaml")
+    fp = model_fingerprint(rc.Robot.load(tmp_path / "cal.yaml"))
+    first, second = tmp_path / "first", tmp_path / "second"
+    first.mkdir(), second.mkdir()
+    out = first if len(files) > 1 else first / files[0]
+    code, _, err = _run(_filter_argv(fmt, PROGRAMS, tmp_path / "cal.yaml", files, out), capsys)
+    assert code == 0, err
+    for f in files:
+        before, after = (PROGRAMS / f).read_bytes(), (first / f).read_bytes()
+        lines = after.decode("latin-1").splitlines(keepends=True)
+        added = [i for i, ln in enumerate(lines) if "robocal " in ln]
+        assert len(added) == 1 and f"model {fp}" in lines[added[0]], lines
+        marker = find_marker(after.decode("latin-1"))
+        assert marker is not None and marker.model == fp and marker.version == rc.__version__
+        line = lines.pop(added[0])
+        assert line.split(":")[-1 if fmt == "fanuc" else 0].lstrip().startswith(COMMENT[fmt])
+        assert line.endswith("\r\n") == (b"\r\n" in before)  # the file's own line ends
+        # byte for byte outside numbers: the marker line is the only added text
+        assert NUMBER_RE.sub("#", "".join(lines)) == NUMBER_RE.sub("#", before.decode("latin-1"))
+    if fmt == "fanuc":  # the remark is the last /MN line, numbered after it; LINE_COUNT counts it
+        text = (first / files[0]).read_text()
+        assert "LINE_COUNT\t= 15;" in text and "LINE_COUNT\t= 14;" in (PROGRAMS / files[0]).read_text()
+        mn = text[text.index("/MN"):text.index("/POS")].splitlines()
+        assert mn[-1] == f"  13:  !robocal {rc.__version__} model {fp} ;"
+        assert len(mn[-1].split("!")[1][:-2]) <= 32  # a TP remark's length
+    # fed back in: refused naming the earlier run, nothing written
+    out2 = second if len(files) > 1 else second / files[0]
+    line = _refused(_filter_argv(fmt, first, tmp_path / "cal.yaml", files, out2), capsys,
+                    "already filtered", f"robocal {rc.__version__}", fp, "--force")
+    assert "twice" in line and not list(second.iterdir())
+    code, _, err = _run([*_filter_argv(fmt, first, tmp_path / "cal.yaml", files, out2), "--force"], capsys)
+    assert code == 0 and (second / files[0]).exists(), err
+
+
+def test_the_fingerprint_names_the_parameters_not_the_file(tmp_path):
+    from robocal.trust.output_marker import model_fingerprint
+
+    irb = rc.Robot.from_catalog("abb_irb2600")
+    irb.save(tmp_path / "irb.yaml")
+    assert model_fingerprint(rc.Robot.load(tmp_path / "irb.yaml")) == model_fingerprint(irb)
+    moved = irb.with_values({"a2": irb.get("a2") + 1e-6})  # one micrometre
+    assert model_fingerprint(moved) != model_fingerprint(irb)
+    assert len(model_fingerprint(irb)) == 12 and int(model_fingerprint(irb), 16) >= 0
+
+
+def test_compensated_targets_are_marked_and_compensating_them_again_is_refused(tmp_path, capsys):
+    from robocal.compensate import pose_columns, read_poses_csv
+    from robocal.data.simulate import perturbed
+    from robocal.trust.output_marker import model_fingerprint
+
+    irb = rc.Robot.from_catalog("abb_irb2600")
+    cal = perturbed(irb, 3)
+    cal.save(tmp_path / "cal.yaml")
+    q = np.deg2rad([[10, 20, 10, 30, 40, 20], [-20, 10, 20, -30, 50, 10], [30, 0, 30, 10, 60, -20]])
+    layout = {"length": "mm", "orientation": "deg"}
+    (tmp_path / "t.csv").write_text(format_csv(*pose_columns(irb.fk(q), layout)))
+    base = ["compensate", str(tmp_path / "cal.yaml"), "--nominal", "abb_irb2600"]
+    code, _, err = _run([*base, str(tmp_path / "t.csv"), "-o", str(tmp_path / "c.csv")], capsys)
+    assert code == 0, err
+    fp = model_fingerprint(rc.Robot.load(tmp_path / "cal.yaml"))
+    first = (tmp_path / "c.csv").read_text().splitlines()[0]
+    assert first == f"# robocal {rc.__version__} model {fp}: targets compensated, do not compensate again"
+    T, layout = read_poses_csv(tmp_path / "c.csv")  # robocal's reader skips the marker
+    assert T.shape == (3, 4, 4) and layout == {"length": "mm", "orientation": "deg"}
+    _refused([*base, str(tmp_path / "c.csv"), "-o", str(tmp_path / "c2.csv")], capsys,
+             "already compensated", fp, "--force")
+    assert not (tmp_path / "c2.csv").exists()
+    code, _, err = _run([*base, str(tmp_path / "c.csv"), "-o", str(tmp_path / "c2.csv"), "--force"], capsys)
+    assert code == 0 and (tmp_path / "c2.csv").exists(), err

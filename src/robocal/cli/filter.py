@@ -25,7 +25,9 @@ URScript --tool is the installation's TCP). --tcp NAME=x,y,z,rx,ry,rz (mm, deg, 
 real TCP of that tool identified on the calibrated model (robocal tool); default: the tool data.
 The calibrated model's identified frame {0} is the controller's base unless --robot-base gives the
 controller's base in the calibrated model's world frame (x,y,z,rx,ry,rz, mm, deg).
-Writes the filtered program(s) and the per-target table (CSV and JSON) together, or nothing."""
+Writes the filtered program(s) and the per-target table (CSV and JSON) together, or nothing. A filtered
+program carries one comment line naming the calibrated model (fingerprint) and robocal's version;
+filtering it again is refused unless --force."""
 
 
 # what each language's files look like, and its motion instructions to a named point
@@ -106,6 +108,9 @@ def add_parser(sub) -> None:
     p.add_argument("--format", choices=("rapid", "krl", "fanuc", "urscript"), help="program format")
     p.add_argument("--table", help="per-target table: PATH.csv, PATH.json, or a prefix for both "
                                    "(default: OUTPUT.targets.csv/.json)")
+    p.add_argument("--force", action="store_true",
+                   help="filter a program robocal already filtered (its marker comment names the run): "
+                        "the corrections are applied again")
     p.add_argument("--keep-unreached", action="store_true",
                    help="leave targets that cannot be corrected unchanged (warning) instead of failing")
     p.set_defaults(func=run)
@@ -166,7 +171,8 @@ def run(args) -> int:
     base = None if args.robot_base is None else frame_from_text(args.robot_base, "--robot-base")
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),
                          frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,
-                         dialect=args.format, references=args.references, keep_unreached=args.keep_unreached)
+                         dialect=args.format, references=args.references, keep_unreached=args.keep_unreached,
+                         force=args.force)
     if not res.rows:
         _diagnose_empty(args)
     written = res.write({p: targets[Path(p)] for p in res.outputs}, table)
