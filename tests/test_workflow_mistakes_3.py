@@ -207,3 +207,87 @@ def test_compensated_targets_are_marked_and_compensating_them_again_is_refused(t
     assert not (tmp_path / "c2.csv").exists()
     code, _, err = _run([*base, str(tmp_path / "c.csv"), "-o", str(tmp_path / "c2.csv"), "--force"], capsys)
     assert code == 0 and (tmp_path / "c2.csv").exists(), err
+
+
+# ------------------------------------------------------------------ magnitudes everywhere
+@pytest.fixture(scope="module")
+def cell(tmp_path_factory) -> Path:
+    """A calibrated ABB model, flange targets in mm/deg and the same in the wrong units."""
+    from robocal.compensate import pose_columns
+    from robocal.data.simulate import perturbed
+
+    d = tmp_path_factory.mktemp("cell")
+    irb = rc.Robot.from_catalog("abb_irb2600")
+    perturbed(irb, 3).save(d / "cal.yaml")
+    q = np.deg2rad([[10, 20, 10, 30, 40, 20], [-20, 10, 20, -30, 50, 10], [30, 0, 30, 10, 60, -20]])
+    names, vals = pose_columns(irb.fk(q), {"length": "mm", "orientation": "deg"})
+    for name, scale, angle in (("mm", 1.0, 1.0), ("m_as_mm", 1e-3, 1.0), ("inch_as_mm", 1 / 25.4, 1.0),
+                               ("rad_as_deg", 1.0, np.pi / 180)):
+        table = np.hstack([vals[:, :3] * scale, vals[:, 3:] * angle])
+        (d / f"{name}.csv").write_text(format_csv(names, table))
+    cal = (d / "cal.yaml").read_text()
+    assert "angle: rad" in cal
+    (d / "cal_deg.yaml").write_text(cal.replace("angle: rad", "angle: deg"))  # a hand edit
+    (d / "panda_m.yaml").write_text(PANDA_YAML.replace("length: mm", "length: m"))
+    (d / "panda_rad.yaml").write_text(PANDA_YAML.replace("angle: deg", "angle: rad"))
+    sim = rc.simulate_tracker(irb, 30, noise_mm=0.01, seed=4)
+    sim.data.save(d / "irb.csv")
+    return d
+
+
+FANUC = ["filter", str(PROGRAMS / "sealing.ls"), "--calibrated", "{d}/fcal.yaml", "--nominal",
+         "fanuc_lrmate200id"]
+UR = ["filter", str(PROGRAMS / "pick_place.script"), "--calibrated", "{d}/ucal.yaml", "--nominal", "ur5"]
+COMP = ["compensate", "{c}/cal.yaml", "--nominal", "abb_irb2600"]
+
+
+@pytest.mark.parametrize("case, argv, words", [
+    ("filter-frame-in-metres", [*FANUC, "--frame", "1=0.45,-0.15,0.1,0,0,-10", "--tool", "2=0,0,120,0,0,0"],
+     ("--frame 1=", "look like metres", "give millimetres")),
+    ("filter-frame-rotation-in-radians", [*FANUC, "--frame", "1=450,-150,100,0,0,-0.7854",
+                                          "--tool", "2=0,0,120,0,0,0"], ("--frame 1=", "radians")),
+    ("filter-tool-in-metres", [*FANUC, "--frame", "1=450,-150,100,0,0,-10", "--tool", "2=0,0,0.12,0,0,0"],
+     ("--tool 2=", "look like metres")),
+    ("filter-urscript-tool-in-mm", [*UR, "--tool", "0,20,150,0,0,0.5"],
+     ("--tool", "look like millimetres", "give metres")),
+    ("filter-urscript-tool-rotation-in-degrees", [*UR, "--tool", "0,0.02,0.15,0,0,30"],
+     ("--tool", "look like degrees")),
+    ("compensate-targets-in-metres", [*COMP, "{c}/m_as_mm.csv"],
+     ("m_as_mm.csv", "look like metres", "give millimetres")),
+    ("compensate-targets-in-inches", [*COMP, "{c}/inch_as_mm.csv"], ("inch_as_mm.csv", "look like inches")),
+    ("compensate-target-angles-in-radians", [*COMP, "{c}/rad_as_deg.csv"],
+     ("rx, ry, rz", "look like radians")),
+    ("plan-targets-in-metres", ["plan", "--robot", "abb_irb2600", "{c}/m_as_mm.csv"], ("look like metres",)),
+    ("model-angle-rad-edited-to-deg", ["evaluate", "{c}/cal_deg.yaml", "{c}/irb.csv"],
+     ("cal_deg.yaml", "model file's units look wrong", "look like radians", "angle: rad")),
+    ("model-lengths-mm-declared-m", ["evaluate", "{c}/panda_m.yaml", "{c}/irb.csv"],
+     ("panda_m.yaml", "model file's units look wrong", "look like millimetres", "length: mm")),
+    ("model-angles-deg-declared-rad", ["evaluate", "{c}/panda_rad.yaml", "{c}/irb.csv"],
+     ("panda_rad.yaml", "model file's units look wrong", "look like degrees", "angle: deg")),
+])
+def test_a_magnitude_in_another_unit_is_refused_naming_the_unit(case, argv, words, cell, tmp_path, capsys):
+    from robocal.data.simulate import perturbed
+
+    for name, robot in (("fcal", "fanuc_lrmate200id"), ("ucal", "ur5")):
+        perturbed(rc.Robot.from_catalog(robot), 7).save(tmp_path / f"{name}.yaml")
+    before = _digest(cell)
+    argv = [a.format(d=tmp_path, c=cell) for a in argv]
+    out = "--json" if argv[0] == "evaluate" else "-o"
+    _refused([*argv, out, str(tmp_path / "out.x")], capsys, *words)
+    assert not (tmp_path / "out.x").exists() and _digest(cell) == before
+
+
+def test_magnitudes_in_the_right_units_pass(cell, tmp_path, capsys):
+    from robocal.magnitudes import check_frame, check_length, check_targets, check_tool
+
+    check_tool([0.0, 0.0, 0.12], "mm", "t")
+    check_frame([0.0, 0.0, 0.0], "mm", 1.0, "f")  # the identity frame
+    check_frame([0.45, -0.15, 0.1], "mm", 1.0, "f")
+    check_targets(np.array([[0.8, 0.1, 0.5]]), "m", 1.5, "t")
+    check_length(1.0, "mm", 2.0, 3.0, "far", "a thing", strict=False)  # fits no unit: left to others
+    argv = [a.format(c=cell) for a in COMP]
+    code, _, err = _run([*argv, str(cell / "mm.csv"), "-o", str(tmp_path / "c.csv")], capsys)
+    assert code == 0, err
+    code, _, err = _run(["evaluate", str(PROGRAMS.parent.parent.parent / "src" / "robocal" / "catalog" /
+                                         "puma560.yaml"), str(cell / "irb.csv")], capsys)
+    assert "units look wrong" not in err

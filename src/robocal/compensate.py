@@ -42,6 +42,7 @@ from robocal.ik.singularity import SingularityDistance, singularity_distance
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import ROTATION_TOL, invert_transform, make_transform, pose_error
+from robocal.magnitudes import check_degree_set, check_radians, check_targets
 
 
 @dataclass(frozen=True)
@@ -270,6 +271,19 @@ def read_poses_csv(path) -> tuple[np.ndarray, dict]:
         orient = rot[0][0].split("_")[1]
     layout = {"length": pos[0][0].split("_")[1], "orientation": orient}
     return make_transform(R, p), layout
+
+
+def check_target_units(T: np.ndarray, layout: dict, reach_m: float, what: str,
+                       origin_m=(0.0, 0.0, 0.0)) -> None:
+    """Refuse targets ``(N, 4, 4)`` (m) read in ``layout`` (:func:`read_poses_csv`) whose magnitudes
+    say another unit than their headers, for a robot of ``reach_m`` whose base is at ``origin_m``:
+    positions (:func:`robocal.magnitudes.check_targets`) and Euler angles in degrees that are
+    radians or in radians beyond a turn."""
+    check_targets(T[:, :3, 3], layout["length"], reach_m, what, origin_m)
+    if layout["orientation"] in ANGLE_UNITS:
+        angles = Rotation.from_matrix(T[:, :3, :3]).as_euler("xyz") / ANGLE_UNITS[layout["orientation"]]
+        check = check_degree_set if layout["orientation"] == "deg" else check_radians
+        check(angles.reshape(-1), f"{what}: rx, ry, rz")
 
 
 def pose_columns(T: np.ndarray, layout: dict) -> tuple[list[str], np.ndarray]:

@@ -97,51 +97,21 @@ def controller_for(robot, nominal: str | None):
     return model
 
 
-# a tool or TCP offset (mm) whose every coordinate is below this but not all zero is in metres
-TOOL_MM_FLOOR = 2.0
-TOOL_MM_CEILING = 5000.0  # no tool reaches 5 m from the flange: the values are not mm
-
-
 def check_tool_mm(xyz, option: str) -> None:
-    """Refuse a tool translation (mm) whose magnitude says another unit (metres, micrometres)."""
+    """Refuse a tool translation (mm) whose magnitude says another unit (metres, or not a length
+    a tool has): :func:`robocal.magnitudes.check_tool`."""
     import numpy as np
 
-    from robocal.errors import UnitError
+    from robocal.magnitudes import check_tool
 
-    xyz = np.abs(np.asarray(xyz, dtype=float))
-    if 0 < xyz.max() < TOOL_MM_FLOOR:
-        raise UnitError(f"{option}: a tool {np.linalg.norm(xyz):.3g} mm from the flange centre: these "
-                        f"values look like metres; give mm (e.g. {','.join(f'{v * 1e3:g}' for v in xyz)})")
-    if xyz.max() > TOOL_MM_CEILING:
-        raise UnitError(f"{option}: a tool {np.linalg.norm(xyz) / 1e3:.3g} m from the flange: these values "
-                        "are not mm; give the offset in mm")
-
-
-# angles (deg) within this of a multiple of pi/12 *in radians* (0.2618, 0.5236, 0.7854, 1.5708..)
-# are radians typed where degrees belong
-RADIAN_LIKE_TOL = 5e-4
-
-
-def check_degrees(angles, option: str) -> None:
-    """Refuse rotation angles given in degrees that are clearly radians (pi/4 = 0.785, pi/2 = 1.571)."""
-    import numpy as np
-
-    from robocal.errors import UnitError
-
-    a = np.asarray(angles, dtype=float)
-    steps = a / (np.pi / 12)
-    radian_like = (np.abs(a) > 0.1) & (np.abs(a) <= 2 * np.pi + 1e-9) & \
-        (np.abs(steps - np.round(steps)) * np.pi / 12 < RADIAN_LIKE_TOL)
-    if radian_like.any():
-        raise UnitError(f"{option}: {', '.join(f'{v:g}' for v in a[radian_like])} look like radians "
-                        f"({', '.join(f'{v:g} rad = {np.rad2deg(v):g} deg' for v in a[radian_like])}); the "
-                        "angles are in degrees")
+    check_tool(np.asarray(xyz, dtype=float) * 1e-3, "mm", option)
 
 
 def tool_frame(text: str, option: str):
     """A tool frame ``x,y,z,rx,ry,rz`` (mm, deg) -> 4x4 (m), refused when its magnitudes say
-    another unit (:func:`check_tool_mm`, :func:`check_degrees`)."""
+    another unit (:func:`check_tool_mm`, :func:`robocal.magnitudes.check_degrees`)."""
     from robocal.compensate import frame_from_text
+    from robocal.magnitudes import check_degrees
 
     T = frame_from_text(text, option)
     values = [float(v) for v in text.replace(" ", "").split(",") if v]

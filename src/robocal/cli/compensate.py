@@ -76,7 +76,8 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.cli.args import check_format, tool_frame
-    from robocal.compensate import compensate, format_csv, pose_columns, read_poses_csv
+    from robocal.compensate import check_target_units, compensate, format_csv, pose_columns, read_poses_csv
+    from robocal.data.measurements import robot_reach
     from robocal.io import check_outputs, read_text, write_all
     from robocal.kinematics.model import Robot, load_model
     from robocal.trust.output_marker import check_unmarked, mark_csv
@@ -88,6 +89,8 @@ def run(args) -> int:
     nominal = load_model(args.nominal)
     check_unmarked(read_text(Path(args.targets), "pose CSV file"), args.targets, "compensated", args.force)
     targets, layout = read_poses_csv(args.targets)
+    origin = calibrated.base[:3, 3] if args.targets_in == "model" else np.zeros(3)
+    check_target_units(targets, layout, robot_reach(nominal), args.targets, origin)
     tool = {"measured": None, "flange": np.eye(4)}.get(args.tool)
     if args.tool not in ("measured", "flange"):
         tool = tool_frame(args.tool, "--tool")

@@ -133,24 +133,33 @@ def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[
     return targets, table, [*targets.values(), *table_paths(table)]
 
 
-def _check_tool_units(args) -> None:
-    """Refuse --tool data whose translation says another unit than the program's notation (mm;
-    URScript m)."""
-    from robocal.cli.args import check_tool_mm
-    from robocal.errors import UnitError
+def _check_magnitudes(args, reach_m: float) -> None:
+    """Refuse --tool / --frame values whose magnitudes say another unit than the program's notation
+    (lengths mm, URScript m; KRL and FANUC angles deg, URScript rad) for a robot of ``reach_m``
+    (:mod:`robocal.magnitudes`)."""
+    import numpy as np
 
-    metres = args.format == "urscript" or (args.format is None and any(
-        Path(p).suffix.lower() in (".script", ".urscript") for p in args.programs))
-    for name, text in _named(args.tool, "--tool").items():
-        try:
-            xyz = [float(v) for v in text.replace(" ", "").split(",")[:3]]
-        except ValueError:
-            continue  # the program reader names malformed values
-        if not metres:
-            check_tool_mm(xyz, f"--tool {name}={text}")
-        elif max(abs(v) for v in xyz) > 5.0:
-            raise UnitError(f"--tool {name}={text}: a URScript TCP {max(abs(v) for v in xyz):g} m from the "
-                            "flange: URScript lengths are metres (these look like mm)")
+    from robocal.magnitudes import LENGTH_SCALES_M, check_degrees, check_frame, check_radians, check_tool
+
+    suffix = Path(args.programs[0]).suffix.lower()
+    language = args.format or next((k for k, s in SUFFIXES.items() if suffix in s), None)
+    unit = "m" if language == "urscript" else "mm"
+    for option, given in (("--tool", args.tool), ("--frame", args.frame)):
+        for name, text in _named(given, option).items():
+            try:
+                values = [float(v) for v in text.replace(" ", "").split(",")]
+            except ValueError:
+                continue  # the program reader names malformed values
+            what = f"{option} {name}={text}"
+            xyz = np.asarray(values[:3]) * LENGTH_SCALES_M[unit]
+            if option == "--tool":
+                check_tool(xyz, unit, what)
+            else:
+                check_frame(xyz, unit, reach_m, what)
+            if language in ("krl", "fanuc"):
+                check_degrees(values[3:6], what)
+            elif language == "urscript":
+                check_radians(values[3:6], what)
 
 
 def run(args) -> int:
@@ -158,6 +167,7 @@ def run(args) -> int:
 
     from robocal.cli.args import tool_frame
     from robocal.compensate import frame_from_text
+    from robocal.data.measurements import robot_reach
     from robocal.io import check_outputs
     from robocal.kinematics.model import Robot, load_model
     from robocal.programs import filter_program
@@ -167,7 +177,7 @@ def run(args) -> int:
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
-    _check_tool_units(args)
+    _check_magnitudes(args, robot_reach(nominal))
     base = None if args.robot_base is None else frame_from_text(args.robot_base, "--robot-base")
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),
                          frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,
