@@ -291,3 +291,76 @@ def test_magnitudes_in_the_right_units_pass(cell, tmp_path, capsys):
     code, _, err = _run(["evaluate", str(PROGRAMS.parent.parent.parent / "src" / "robocal" / "catalog" /
                                          "puma560.yaml"), str(cell / "irb.csv")], capsys)
     assert "units look wrong" not in err
+
+
+# ------------------------------------------------------------------ messages that name the cause
+@pytest.fixture(scope="module")
+def fanuc(tmp_path_factory) -> Path:
+    """A FANUC M-20iA measured: as it should be, in inches under _mm, and as the controller logs
+    its joints (J3 from the horizontal), the latter only on poses where both conventions are inside
+    the limits (so no joint-limit check can tell, only the fit)."""
+    from dataclasses import replace
+
+    from robocal.data.joint_conventions import fanuc_coupled
+
+    d = tmp_path_factory.mktemp("fanuc")
+    robot = rc.Robot.from_catalog("fanuc_m20ia")
+    sim = rc.simulate_tracker(robot, 120, noise_mm=0.02, seed=5)
+    sim.truth.save(d / "truth.yaml")
+    sim.data.save(d / "good.csv")
+    replace(sim.data, points=sim.data.points / 25.4 * 1e3 * 1e-3).save(d / "inches.csv")
+    q = fanuc_coupled(sim.data.joints)
+    inside = robot.within_limits(q) & robot.within_limits(sim.data.joints)
+    assert inside.sum() >= 30
+    replace(sim.data, joints=q).subset(np.flatnonzero(inside)).save(d / "coupled.csv")
+    return d
+
+
+@pytest.mark.parametrize("command", ["calibrate", "evaluate"])
+def test_a_tracker_export_in_inches_is_named(fanuc, tmp_path, capsys, command):
+    argv = (["calibrate", str(fanuc / "inches.csv"), "--robot", "fanuc_m20ia", "-o", str(tmp_path / "c.yaml")]
+            if command == "calibrate" else ["evaluate", str(fanuc / "truth.yaml"), str(fanuc / "inches.csv")])
+    line = _refused(argv, capsys, "inch")
+    assert "another robot" not in line.split("(the check")[0]
+
+
+@pytest.mark.parametrize("command", ["calibrate", "evaluate"])
+def test_a_fanuc_joint_log_with_j3_coupled_to_j2_names_the_option(fanuc, tmp_path, capsys, command):
+    data = str(fanuc / "coupled.csv")
+    argv = (["calibrate", data, "--robot", "fanuc_m20ia", "-o", str(tmp_path / "c.yaml")]
+            if command == "calibrate" else ["evaluate", str(fanuc / "truth.yaml"), data])
+    _refused(argv, capsys, "J3 looks coupled to J2", "--fanuc-j2j3-coupled")
+    code, out, err = _run([*argv, "--fanuc-j2j3-coupled"], capsys)
+    assert code == 0, err
+    if command == "evaluate":  # read right, the truth fits to the noise (0.02 mm per axis)
+        from robocal.data.joint_conventions import fanuc_decoupled_data
+
+        data = fanuc_decoupled_data(rc.Measurements.load(fanuc / "coupled.csv"))
+        assert rc.evaluate(rc.Robot.load(fanuc / "truth.yaml"), data)["rms"] < 0.06
+
+
+def test_the_fanuc_conventions_are_inverse(rng):
+    from robocal.campaign.programs import J23_FACTOR as CAMPAIGN_FACTOR
+    from robocal.data.joint_conventions import J23_FACTOR, fanuc_coupled, fanuc_decoupled
+
+    q = rng.uniform(-3, 3, (20, 6))
+    assert np.allclose(fanuc_decoupled(fanuc_coupled(q)), q)
+    assert np.allclose(fanuc_coupled(q)[:, 2], q[:, 2] + q[:, 1]) and CAMPAIGN_FACTOR == J23_FACTOR
+
+
+@pytest.mark.parametrize("command", ["filter", "compensate"])
+def test_calibrated_and_nominal_swapped_are_named(cell, tmp_path, capsys, command):
+    from robocal.data.simulate import perturbed
+
+    perturbed(rc.Robot.from_catalog("fanuc_lrmate200id"), 7).save(tmp_path / "fcal.yaml")
+    rc.Robot.from_catalog("fanuc_lrmate200id").save(tmp_path / "fnom.yaml")
+    frames = ["--frame", "1=450,-150,100,0,0,-10", "--tool", "2=0,0,120,0,0,0"]
+    for cal, nom in (("fanuc_lrmate200id", tmp_path / "fcal.yaml"),
+                     (tmp_path / "fnom.yaml", tmp_path / "fcal.yaml")):
+        if command == "filter":
+            argv = ["filter", str(PROGRAMS / "sealing.ls"), "--calibrated", str(cal), "--nominal", str(nom),
+                    *frames]
+        else:
+            argv = ["compensate", str(cal), str(cell / "mm.csv"), "--nominal", str(nom)]
+        _refused([*argv, "-o", str(tmp_path / "o.x")], capsys, "look swapped", f"--nominal {cal}")
+        assert not (tmp_path / "o.x").exists()

@@ -9,6 +9,8 @@ data as given is named:
 
 - two joint columns exchanged (every pair) or one joint's sign flipped (every joint);
 - a mirrored tracker frame (a left-handed frame: one axis's sign flipped in the export);
+- a length unit: the points in inches (or metres, or mm under _m) where the headers say otherwise;
+- FANUC's J2/J3 coupling: a controller's joint log counts J3 from the horizontal (J3 + J2);
 - several files: the odd one (the others fit, it does not), or every file fitting alone but not
   together (a second tracker station, or the tracker moved between files);
 - a model judged in another frame than the data's (a nominal model without ``--fit-frame``).
@@ -21,6 +23,7 @@ from itertools import combinations
 
 import numpy as np
 
+from robocal.data.joint_conventions import COUPLED_OPTION, fanuc_decoupled
 from robocal.data.registration import register_frame
 from robocal.errors import RobocalError
 from robocal.identify.plausibility import error_limit_mm
@@ -76,6 +79,40 @@ def mirrored(robot, data, given_mm: float) -> str | None:
     return None
 
 
+# the length-unit mistakes a tracker export makes: factor applied to the points as given -> the unit
+UNIT_FACTORS = {25.4: "inches under x_mm, y_mm, z_mm headers (a tracker export in inches)",
+                1e3: "metres under x_mm, y_mm, z_mm headers", 1e-3: "millimetres under x_m, y_m, z_m headers"}
+
+
+def length_unit(robot, data, given_mm: float) -> str | None:
+    """The sentence naming a length unit under which the model fits the points, or None."""
+    for factor, what in UNIT_FACTORS.items():
+        rms = fit_rms_mm(robot, replace(data, points=data.points * factor))
+        if rms <= error_limit_mm(data.points * factor) and rms * GAIN < given_mm:
+            return (f"the points look like {what}: multiplied by {factor:g} the nominal model fits to "
+                    f"{rms:.3g} mm RMS ({given_mm:.3g} mm as given); export them in the unit the headers say")
+    return None
+
+
+def fanuc_coupled(robot, data, given_mm: float) -> str | None:
+    """The sentence naming FANUC's J2/J3 coupling (J3 counted from the horizontal, as a FANUC
+    controller logs it) when the model fits with J3 decoupled, or None."""
+    if data.n_joints < 3:
+        return None
+    rms = fit_rms_mm(robot, _columns(data, fanuc_decoupled(data.joints)))
+    if rms <= error_limit_mm(data.points) and rms * GAIN < given_mm:
+        return (f"J3 looks coupled to J2 (FANUC's convention: J3 counted from the horizontal, as a FANUC "
+                f"controller logs it and robocal's --fanuc programs take it): with J3 - J2 the nominal model "
+                f"fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as given); read the file with "
+                f"{COUPLED_OPTION}")
+    return None
+
+
+def _cause(robot, data, given_mm: float) -> str | None:
+    return (joint_mixup(robot, data, given_mm) or mirrored(robot, data, given_mm)
+            or length_unit(robot, data, given_mm) or fanuc_coupled(robot, data, given_mm))
+
+
 def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
     """The most likely mistake behind data that ``robot`` (nominal or calibrated links) misses,
     as one sentence, or None when the data do not tell. ``datasets``: Measurements (only point
@@ -100,11 +137,11 @@ def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
         odd = [d.label or str(k) for k, (d, ok) in enumerate(zip(sets, fits, strict=True)) if not ok]
         worst = max(a for a, ok in zip(alone, fits, strict=True) if not ok)
         reason = next((r for d, ok in zip(sets, fits, strict=True) if not ok
-                       for r in [joint_mixup(robot, d, worst) or mirrored(robot, d, worst)] if r), None)
+                       for r in [_cause(robot, d, worst)] if r), None)
         return (f"{', '.join(odd)} is the odd file: the others fit the model, it misses by {worst:.4g} mm RMS"
                 + (f"; {reason}" if reason else " (another robot's data, another file, or a unit)"))
     for d, a in zip(sets, alone, strict=True):
-        reason = joint_mixup(robot, d, a) or mirrored(robot, d, a)
+        reason = _cause(robot, d, a)
         if reason:
             return (f"{d.label}: " if len(sets) > 1 and d.label else "") + reason
     return None

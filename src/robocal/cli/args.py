@@ -24,12 +24,16 @@ def numbers(count: int | None, unit_hint: str) -> Callable[[str], list[float]]:
     return parse
 
 
-def load_measurements(path: str, robot, quiet: bool = False):
+def load_measurements(path: str, robot, quiet: bool = False, fanuc_coupled: bool = False):
     """:meth:`Measurements.load` of ``path`` checked against ``robot``, printing how the reader
-    interpreted the file (repeated readings grouped into poses; warnings always)."""
+    interpreted the file (repeated readings grouped into poses; warnings always); ``fanuc_coupled``:
+    the joints are a FANUC controller's (J3 from the horizontal), converted to the catalog's."""
+    from robocal.data.joint_conventions import fanuc_decoupled_data
     from robocal.data.measurements import Measurements
 
     data = Measurements.load(path, robot=robot)
+    if fanuc_coupled:
+        data = fanuc_decoupled_data(data)
     for note in data.notes:
         if not quiet or note.startswith("WARNING"):
             print(note if note.startswith("WARNING") else f"note: {note}")
@@ -137,3 +141,43 @@ def print_warnings(command: str, warnings) -> None:
 
     for warning in warnings:
         print(f"robocal {command}: warning: {' '.join(str(warning).split())}", file=sys.stderr)
+
+
+def load_calibrated_and_nominal(calibrated: str, nominal: str, option: str = "--calibrated"):
+    """(calibrated Robot from a model file, the controller's nominal Robot from a catalog name or
+    model file), refused in one line when the two look swapped: a catalog name given as the
+    calibrated model and a model file as the nominal one, or a calibrated file (its parameters
+    moved from its own nominal values) given as the nominal model and an uncalibrated one as the
+    calibrated model."""
+    from pathlib import Path
+
+    import numpy as np
+
+    from robocal.errors import DataError
+    from robocal.kinematics.catalog import catalog_names
+    from robocal.kinematics.model import Robot, load_model
+
+    swapped = (f"{option} {calibrated} and --nominal {nominal} look swapped: give {option} {nominal} "
+               f"--nominal {calibrated}")
+    if not Path(calibrated).exists() and calibrated in catalog_names() and Path(nominal).is_file():
+        raise DataError(f"{swapped} ({calibrated} is a catalog robot, the controller's model; {nominal} a "
+                        "model file)")
+    cal, nom = Robot.load(calibrated), load_model(nominal)
+    n = len(cal.nominal)
+
+    def moved(robot) -> bool:
+        return not np.allclose(robot.values[:n], robot.nominal, rtol=0.0, atol=1e-12)
+
+    if Path(nominal).is_file() and moved(nom) and not moved(cal):
+        raise DataError(f"{swapped} ({nominal} holds a calibration: its parameters moved from its nominal "
+                        f"values; {calibrated} holds none)")
+    return cal, nom
+
+
+def add_fanuc_coupled(parser) -> None:
+    """The option that reads joint logs of a FANUC controller (J3 counted from the horizontal)."""
+    from robocal.data.joint_conventions import COUPLED_OPTION
+
+    parser.add_argument(COUPLED_OPTION, dest="fanuc_coupled", action="store_true",
+                        help="the joints are a FANUC controller's (J3 counted from the horizontal, J3 + J2 "
+                             "of the catalog's; robocal's --fanuc programs take them so): convert them")

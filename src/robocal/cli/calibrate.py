@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from robocal.cli.args import add_fanuc_coupled
 from robocal.io import LENGTH_UNITS
 
 EPILOG = """Examples:
@@ -97,6 +98,7 @@ def add_parser(sub) -> None:
     p.add_argument("--force", action="store_true",
                    help="proceed past the plausibility checks (units, robot, corrections) and write the "
                         "results of a solve that did not converge, with loud warnings")
+    add_fanuc_coupled(p)
     p.set_defaults(func=run)
 
 
@@ -145,8 +147,8 @@ def run(args) -> int:
         raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
     sigma = dict(args.sigma)
     robot = load_model(args.robot)
-    data = [load_measurements(f, robot, args.quiet) for f in args.data]
-    validation = [load_measurements(f, robot, args.quiet) for f in validate]
+    data = [load_measurements(f, robot, args.quiet, args.fanuc_coupled) for f in args.data]
+    validation = [load_measurements(f, robot, args.quiet, args.fanuc_coupled) for f in validate]
     if args.hold_out is not None:
         if validation or len(data) > 1:
             raise DataError("--hold-out splits one calibration file: give one file and no --validate")

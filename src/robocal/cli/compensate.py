@@ -75,18 +75,16 @@ def _statistics(res, targets, calibrated, nominal, args) -> str:
 def run(args) -> int:
     import numpy as np
 
-    from robocal.cli.args import check_format, tool_frame
+    from robocal.cli.args import check_format, load_calibrated_and_nominal, tool_frame
     from robocal.compensate import check_target_units, compensate, format_csv, pose_columns, read_poses_csv
     from robocal.data.measurements import robot_reach
     from robocal.io import check_outputs, read_text, write_all
-    from robocal.kinematics.model import Robot, load_model
     from robocal.trust.output_marker import check_unmarked, mark_csv
 
     check_format(args.output, "CSV", "-o")
     check_format(args.parameters, "CSV", "--parameters")
     check_outputs([args.output, args.parameters], [args.calibrated, args.targets, args.nominal])
-    calibrated = Robot.load(args.calibrated)
-    nominal = load_model(args.nominal)
+    calibrated, nominal = load_calibrated_and_nominal(args.calibrated, args.nominal, "calibrated model")
     check_unmarked(read_text(Path(args.targets), "pose CSV file"), args.targets, "compensated", args.force)
     targets, layout = read_poses_csv(args.targets)
     origin = calibrated.base[:3, 3] if args.targets_in == "model" else np.zeros(3)

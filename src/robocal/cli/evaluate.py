@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from robocal.cli.args import add_fanuc_coupled
+
 EPILOG = """Examples:
   robocal evaluate calibrated.yaml validation.csv --json val.json
   robocal evaluate meca500 meca_val.csv --fit-frame                   # nominal model: fit base and SMRs first
@@ -26,6 +28,7 @@ def add_parser(sub) -> None:
     p.add_argument("--json", metavar="OUT", help="write the statistics as JSON")
     p.add_argument("--force", action="store_true",
                    help="report statistics the plausibility checks refuse (errors beyond any robot's)")
+    add_fanuc_coupled(p)
     p.set_defaults(func=run)
 
 
@@ -41,8 +44,9 @@ def run(args) -> int:
     check_format(args.json, "JSON", "--json")
     check_outputs([args.json], [args.model, args.data, args.frame_from])
     robot = load_model(args.model)
-    data = load_measurements(args.data, robot, args.quiet)
-    frame_from = load_measurements(args.frame_from, robot, args.quiet) if args.frame_from else None
+    data = load_measurements(args.data, robot, args.quiet, args.fanuc_coupled)
+    frame_from = None if args.frame_from is None else \
+        load_measurements(args.frame_from, robot, args.quiet, args.fanuc_coupled)
     try:
         stats = evaluate(robot, data, fit_frame=args.fit_frame, frame_from=frame_from, force=args.force)
     except PlausibilityError as exc:

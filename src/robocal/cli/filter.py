@@ -165,17 +165,15 @@ def _check_magnitudes(args, reach_m: float) -> None:
 def run(args) -> int:
     import sys
 
-    from robocal.cli.args import tool_frame
+    from robocal.cli.args import load_calibrated_and_nominal, tool_frame
     from robocal.compensate import frame_from_text
     from robocal.data.measurements import robot_reach
     from robocal.io import check_outputs
-    from robocal.kinematics.model import Robot, load_model
     from robocal.programs import filter_program
 
     targets, table, written = _output_paths(args.programs, args.output, args.table)
     check_outputs(written, [*args.programs, args.calibrated, args.nominal, *args.references])
-    calibrated = Robot.load(args.calibrated)
-    nominal = load_model(args.nominal)
+    calibrated, nominal = load_calibrated_and_nominal(args.calibrated, args.nominal)
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
     _check_magnitudes(args, robot_reach(nominal))
     base = None if args.robot_base is None else frame_from_text(args.robot_base, "--robot-base")
