@@ -17,8 +17,8 @@ Where the marker goes (one added line; the rest of the file is byte for byte the
   without one);
 * KUKA KRL: ``; ...`` on the line after the first ``DEF`` / ``DEFDAT`` / ``DEFFCT`` line;
 * FANUC TP (.ls): a remark ``!...`` as the last line of ``/MN``, numbered after the last line,
-  with ``LINE_COUNT`` raised by one (a TP remark holds 32 characters: the marker's text is 32
-  with a five-character version);
+  with ``LINE_COUNT`` raised by one; a remark line holds :data:`TP_REMARK_WIDTH` characters, so
+  the fingerprint is cut to fit (10 hex digits with a five-character version);
 * URScript: ``# ...`` as the first line;
 * CSV: ``# ...`` as the first line (robocal's CSV readers skip leading ``#`` lines).
 """
@@ -34,8 +34,11 @@ from robocal.kinematics.model import Robot
 from robocal.version import __version__
 
 FINGERPRINT_HEX = 12  # hex digits of the SHA-256 kept: 48 bits, a collision 1 in 2.8e14
+TP_REMARK_WIDTH = 30  # characters of one FANUC TP remark line (! ...)
+_SHORTEST_HEX = 8  # a FANUC remark keeps at least this many hex digits of the fingerprint
 _SIGNIFICANT = 12  # significant digits of each parameter in the canonical text
-MARKER_RE = re.compile(rf"robocal (?P<version>\d[\w.+-]*) model (?P<model>[0-9a-f]{{{FINGERPRINT_HEX}}})\b")
+MARKER_RE = re.compile(rf"robocal (?P<version>\d[\w.+-]*) "
+                       rf"model (?P<model>[0-9a-f]{{{_SHORTEST_HEX},{FINGERPRINT_HEX}}})\b")
 _NOTE = {"filtered": "targets filtered, do not filter again",
          "compensated": "targets compensated, do not compensate again"}
 _RAPID_ANCHOR = re.compile(r"^[ \t]*MODULE\b[^\r\n]*(\r?\n)", re.M | re.I)
@@ -107,6 +110,8 @@ def _mark_fanuc(text: str, body: str) -> str:
     stop = len(text) if stop < start else stop
     numbers = [int(n) for n in _FANUC_LINE.findall(text, start, stop)]
     nl = _newline(text)
+    cut = max(_SHORTEST_HEX, FINGERPRINT_HEX - max(0, len(body) - TP_REMARK_WIDTH))
+    body = body[:len(body) - FINGERPRINT_HEX + cut]
     remark = f"{max(numbers, default=0) + 1:>4}:  !{body} ;{nl}"
     if stop < len(text) and not text[:stop].endswith("\n"):
         remark = nl + remark
