@@ -365,3 +365,15 @@ def test_calibrated_and_nominal_swapped_are_named(cell, tmp_path, capsys, comman
             argv = ["compensate", str(cal), str(cell / "mm.csv"), "--nominal", str(nom)]
         _refused([*argv, "-o", str(tmp_path / "o.x")], capsys, "look swapped", f"--nominal {cal}")
         assert not (tmp_path / "o.x").exists()
+
+
+def test_a_tool_that_disagrees_with_the_programs_own_tool_data_is_warned(cell, tmp_path, capsys):
+    weld = ["filter", str(PROGRAMS / "weld_cell.mod"), "--calibrated", str(cell / "cal.yaml"), "--nominal",
+            "abb_irb2600"]
+    turn = "0.96592583,0,0.25881905,0"
+    code, _, err = _run([*weld, "--tool", f"tGun=60,0,200,{turn}", "-o", str(tmp_path / "a.mod")], capsys)
+    warned = [ln for ln in err.splitlines() if "warning" in ln and "own tool data tGun" in ln]
+    assert code == 0 and len(warned) == 1, err
+    assert "tGun=60,0,200" in warned[0] and "50, 0, 200 mm" in warned[0] and "10 mm" in warned[0]
+    code, _, err = _run([*weld, "--tool", f"tGun=50,0,200,{turn}", "-o", str(tmp_path / "b.mod")], capsys)
+    assert code == 0 and "own tool data" not in err, err

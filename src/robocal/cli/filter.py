@@ -162,6 +162,48 @@ def _check_magnitudes(args, reach_m: float) -> None:
                 check_radians(values[3:6], what)
 
 
+# a --tool this far from the program's own tool data of the same name is another tool: a warning
+TOOL_DISAGREE_MM = 0.5
+TOOL_DISAGREE_DEG = 0.1
+
+
+def _tool_disagreements(args) -> list[str]:
+    """One warning per --tool that overrides tool data the program files declare differently
+    (naming both); none when the files cannot be read without the overrides."""
+    import numpy as np
+
+    from robocal.errors import RobocalError
+    from robocal.kinematics.transforms import pose_error
+    from robocal.programs.filter import as_frames, dialect_for
+    from robocal.programs.source import ProgramText
+
+    given = _named(args.tool, "--tool")
+    if not given:
+        return []
+    try:
+        d = dialect_for([Path(p) for p in args.programs], args.format)
+        frames = as_frames(d, _named(args.frame, "--frame"))
+        program = d.parse([ProgramText(p) for p in args.programs], frames, {},
+                          [ProgramText(p) for p in args.references])
+        tools = {d.name_key(k): v for k, v in as_frames(d, given).items()}
+    except RobocalError:
+        return []
+    out = []
+    for key, T in tools.items():
+        own = program.tools.get(key)
+        if own is None:
+            continue
+        err = pose_error(np.asarray(own)[None], np.asarray(T)[None])[0]
+        mm, deg = np.linalg.norm(err[:3]) * 1e3, np.rad2deg(np.linalg.norm(err[3:]))
+        if mm > TOOL_DISAGREE_MM or deg > TOOL_DISAGREE_DEG:
+            name = next(k for k in given if d.name_key(k) == key)
+            own_text = ", ".join(f"{v:.4g}" for v in np.r_[own[:3, 3] * 1e3])
+            out.append(f"--tool {name}={given[name]} replaces the program's own tool data {name} (TCP at "
+                       f"{own_text} mm on the flange) and differs from it by {mm:.3g} mm, {deg:.3g} deg: the "
+                       "controller moves with the tool data it holds; make sure --tool is what it holds")
+    return out
+
+
 def run(args) -> int:
     import sys
 
@@ -183,6 +225,7 @@ def run(args) -> int:
                          force=args.force)
     if not res.rows:
         _diagnose_empty(args)
+    res.warnings[:0] = _tool_disagreements(args)
     written = res.write({p: targets[Path(p)] for p in res.outputs}, table)
     if args.quiet:  # the warnings still matter
         for w in res.warnings:
