@@ -9,11 +9,11 @@ data as given is named:
 
 - two joint columns exchanged (every pair) or one joint's sign flipped (every joint);
 - a mirrored tracker frame (a left-handed frame: one axis's sign flipped in the export);
-- a length unit: the points in inches (or metres, or mm under _m) where the headers say otherwise;
-- FANUC's J2/J3 coupling: a controller's joint log counts J3 from the horizontal (J3 + J2);
 - several files: the odd one (the others fit, it does not), or every file fitting alone but not
   together (a second tracker station, or the tracker moved between files);
-- a model judged in another frame than the data's (a nominal model without ``--fit-frame``).
+- a model judged in another frame than the data's (a nominal model without ``--fit-frame``);
+- a length unit: the points read as millimetres but written in metres or inches (or the other way);
+- FANUC's J2/J3 coupling: a controller's joint log counts J3 from the horizontal (J3 + J2).
 """
 
 from __future__ import annotations
@@ -79,18 +79,22 @@ def mirrored(robot, data, given_mm: float) -> str | None:
     return None
 
 
-# the length-unit mistakes a tracker export makes: factor applied to the points as given -> the unit
-UNIT_FACTORS = {25.4: "inches under x_mm, y_mm, z_mm headers (a tracker export in inches)",
-                1e3: "metres under x_mm, y_mm, z_mm headers", 1e-3: "millimetres under x_m, y_m, z_m headers"}
+# factor the points as read must be multiplied by to be right, and the mistake it undoes
+UNIT_SCALES = ((1e3, "the points look like metres under _mm headers (or the file's unit is m)"),
+               (1e-3, "the points look like millimetres under _m headers"),
+               (25.4, "the points look like inches under _mm headers (the tracker exported inches)"),
+               (25.4e-3, "the points look like inches under _m headers (the tracker exported inches)"))
 
 
 def length_unit(robot, data, given_mm: float) -> str | None:
-    """The sentence naming a length unit under which the model fits the points, or None."""
-    for factor, what in UNIT_FACTORS.items():
-        rms = fit_rms_mm(robot, replace(data, points=data.points * factor))
-        if rms <= error_limit_mm(data.points * factor) and rms * GAIN < given_mm:
-            return (f"the points look like {what}: multiplied by {factor:g} the nominal model fits to "
-                    f"{rms:.3g} mm RMS ({given_mm:.3g} mm as given); export them in the unit the headers say")
+    """A length unit under which the model fits ``data``'s points (:data:`UNIT_SCALES`), as a
+    sentence, or None."""
+    best = min(((fit_rms_mm(robot, replace(data, points=data.points * f)), f, what)
+                for f, what in UNIT_SCALES), key=lambda t: t[0])
+    rms, f, what = best
+    if rms <= error_limit_mm(data.points * f) and rms * GAIN < given_mm:
+        return (f"{what}: scaled by {f:g} the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as "
+                "given); fix the unit of the file's x, y, z columns (their header's _mm or _m)")
     return None
 
 
@@ -106,11 +110,6 @@ def fanuc_coupled(robot, data, given_mm: float) -> str | None:
                 f"fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as given); read the file with "
                 f"{COUPLED_OPTION}")
     return None
-
-
-def _cause(robot, data, given_mm: float) -> str | None:
-    return (joint_mixup(robot, data, given_mm) or mirrored(robot, data, given_mm)
-            or length_unit(robot, data, given_mm) or fanuc_coupled(robot, data, given_mm))
 
 
 def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
@@ -137,11 +136,12 @@ def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
         odd = [d.label or str(k) for k, (d, ok) in enumerate(zip(sets, fits, strict=True)) if not ok]
         worst = max(a for a, ok in zip(alone, fits, strict=True) if not ok)
         reason = next((r for d, ok in zip(sets, fits, strict=True) if not ok
-                       for r in [_cause(robot, d, worst)] if r), None)
+                       for r in [joint_mixup(robot, d, worst) or mirrored(robot, d, worst)] if r), None)
         return (f"{', '.join(odd)} is the odd file: the others fit the model, it misses by {worst:.4g} mm RMS"
                 + (f"; {reason}" if reason else " (another robot's data, another file, or a unit)"))
     for d, a in zip(sets, alone, strict=True):
-        reason = _cause(robot, d, a)
+        reason = (joint_mixup(robot, d, a) or mirrored(robot, d, a) or length_unit(robot, d, a)
+                  or fanuc_coupled(robot, d, a))
         if reason:
             return (f"{d.label}: " if len(sets) > 1 and d.label else "") + reason
     return None
