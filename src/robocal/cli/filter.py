@@ -211,6 +211,7 @@ def run(args) -> int:
     from robocal.compensate import frame_from_text
     from robocal.data.measurements import robot_reach
     from robocal.io import check_outputs
+    from robocal.magnitudes import check_degrees, check_frame
     from robocal.programs import filter_program
 
     targets, table, written = _output_paths(args.programs, args.output, args.table)
@@ -219,6 +220,10 @@ def run(args) -> int:
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
     _check_magnitudes(args, robot_reach(nominal))
     base = None if args.robot_base is None else frame_from_text(args.robot_base, "--robot-base")
+    if base is not None:  # a frame in the calibrated model's world frame (mm, deg)
+        what = f"--robot-base {args.robot_base}"
+        check_frame(base[:3, 3], "mm", robot_reach(nominal), what)
+        check_degrees([float(v) for v in args.robot_base.replace(" ", "").split(",")][3:], what)
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),
                          frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,
                          dialect=args.format, references=args.references, keep_unreached=args.keep_unreached,
