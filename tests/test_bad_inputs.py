@@ -428,7 +428,7 @@ def test_compensate_defaults_to_the_flange_in_the_robot_base(files, tmp_path, ca
     assert "targets: the flange (tool0) in the robot's base frame" in out
     assert "corrections largest" in out and "median" in out
     # flange targets move by the robot's errors (a few mm at most), not by the SMR offset
-    corrected = np.loadtxt(tmp_path / "c.csv", delimiter=",", skiprows=1, usecols=(6, 7, 8))
+    corrected = np.loadtxt(tmp_path / "c.csv", delimiter=",", skiprows=2, usecols=(6, 7, 8))  # marker, header
     assert np.abs(corrected - vals[:, :3]).max() < 5.0
 
 

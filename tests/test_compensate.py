@@ -90,10 +90,12 @@ def test_cli_compensate(tmp_path, capsys):
                  "abb_irb2600", "--parameters", str(par), "-o", str(out), "--targets-in", "model",
                  "--tool", "measured"])
     assert code == 0
-    header = out.read_text().splitlines()[0].split(",")
+    marker, header = out.read_text().splitlines()[:2]  # the provenance marker, then the header
+    assert marker.startswith("# robocal ") and "model " in marker
+    header = header.split(",")
     assert header == [f"q{i}_deg" for i in range(1, 7)] + cols + [
         "converged", "sigma_rel", "nearest_singularity", "wrist_deg", "elbow_deg", "shoulder_mm"]
-    table = np.loadtxt(out, delimiter=",", skiprows=1, usecols=range(len(header) - 5))
+    table = np.loadtxt(out, delimiter=",", skiprows=2, usecols=range(len(header) - 5))
     comp = rc.compensate(rc.Robot.load(tmp_path / "cal.yaml"), nominal, targets)
     assert np.allclose(np.deg2rad(table[:, :6]), comp.joints, atol=1e-12)
     assert (table[:, -1] == 1).all()

@@ -169,7 +169,7 @@ def test_cli_compensate_start(tmp_path, capsys):
     out = tmp_path / "commands.csv"
     assert main(["compensate", str(cal_path), str(tmp_path / "targets.csv"), "--nominal", "ur5",
                  "--start", start, "-o", str(out)]) == 0
-    got = np.loadtxt(out, delimiter=",", skiprows=1, usecols=range(6))
+    got = np.loadtxt(out, delimiter=",", skiprows=2, usecols=range(6))  # marker, header
     np.testing.assert_allclose(np.deg2rad(got), compensate(cal, nominal, T, start=q[0]).joints, atol=1e-9)
     assert main(["compensate", str(cal_path), str(tmp_path / "targets.csv"), "--nominal", "ur5",
                  "--start", "1,2,3", "-o", str(tmp_path / "c2.csv")]) == 2

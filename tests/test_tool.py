@@ -120,7 +120,7 @@ def test_cli_plan_and_compensate_take_a_tool(tmp_path, capsys):
     assert main(["compensate", str(tmp_path / "cal.yaml"), str(tmp_path / "p.csv"),
                  "--nominal", "abb_irb2600", "--targets-in", "robot", "--tool", tool,
                  "-o", str(tmp_path / "c.csv")]) == 0
-    out = np.loadtxt(tmp_path / "c.csv", delimiter=",", skiprows=1, usecols=range(14))
+    out = np.loadtxt(tmp_path / "c.csv", delimiter=",", skiprows=2, usecols=range(14))  # marker, header
     assert np.abs(out[:, :6] - np.rad2deg(q)).max() < 1e-6
     capsys.readouterr()
 

@@ -13,7 +13,8 @@
 
 Target files: CSV with a header; position ``x_mm, y_mm, z_mm`` (or ``x_m, y_m, z_m``) and
 orientation either a unit quaternion ``qw, qx, qy, qz`` or fixed-axis XYZ roll-pitch-yaw
-``rx_deg, ry_deg, rz_deg`` (or ``_rad``): R = Rz(rz) Ry(ry) Rx(rx), scipy's ``"xyz"``.
+``rx_deg, ry_deg, rz_deg`` (or ``_rad``): R = Rz(rz) Ry(ry) Rx(rx), scipy's ``"xyz"``. Lines
+starting with ``#`` before the header are comments (a compensated file's provenance marker).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from robocal.ik.singularity import SingularityDistance, singularity_distance
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import ROTATION_TOL, invert_transform, make_transform, pose_error
+from robocal.magnitudes import check_degree_set, check_radians, check_targets
 
 
 @dataclass(frozen=True)
@@ -225,7 +227,10 @@ def read_poses_csv(path) -> tuple[np.ndarray, dict]:
     """Poses ``(N, 4, 4)`` (m) from a targets CSV (see the module docstring) and its layout
     (``length``: 'mm'|'m', ``orientation``: 'quat'|'deg'|'rad'), to write results alike."""
     path = Path(path)
-    rows = list(csv.reader(io.StringIO(read_text(path, "pose CSV file"))))
+    text = read_text(path, "pose CSV file")
+    lines = text.splitlines(keepends=True)
+    skip = next((i for i, ln in enumerate(lines) if not ln.lstrip().startswith("#")), len(lines))
+    rows = list(csv.reader(io.StringIO("".join(lines[skip:]))))  # leading '#' lines are comments
     if not rows:
         raise DataError(f"{path} is empty: expected a header x_mm,y_mm,z_mm,qw,qx,qy,qz (or rx_deg..)")
     header = [h.strip().lower() for h in rows[0]]
@@ -249,14 +254,14 @@ def read_poses_csv(path) -> tuple[np.ndarray, dict]:
     except (ValueError, IndexError) as exc:
         raise DataError(f"{path}: a row is short or not numeric ({exc})") from exc
     if not np.isfinite(data).all():
-        bad = np.flatnonzero(~np.isfinite(data).all(axis=1)) + 2
+        bad = np.flatnonzero(~np.isfinite(data).all(axis=1)) + 2 + skip
         raise DataError(f"{path}: NaN or infinite values in line(s) {bad[:10].tolist()}")
     if data.shape[0] == 0:
         raise DataError(f"{path} has a header but no poses")
     p = data[:, :3] * pos[0][1]
     if quat:
         qn = np.linalg.norm(data[:, 3:], axis=1)
-        bad = np.flatnonzero(np.abs(qn - 1.0) > ROTATION_TOL) + 2
+        bad = np.flatnonzero(np.abs(qn - 1.0) > ROTATION_TOL) + 2 + skip
         if bad.size:
             raise DataError(f"{path}: quaternion not of unit length in line(s) {bad[:10].tolist()}")
         R = Rotation.from_quat(data[:, 3:], scalar_first=True).as_matrix()
@@ -266,6 +271,19 @@ def read_poses_csv(path) -> tuple[np.ndarray, dict]:
         orient = rot[0][0].split("_")[1]
     layout = {"length": pos[0][0].split("_")[1], "orientation": orient}
     return make_transform(R, p), layout
+
+
+def check_target_units(T: np.ndarray, layout: dict, reach_m: float, what: str,
+                       origin_m=(0.0, 0.0, 0.0)) -> None:
+    """Refuse targets ``(N, 4, 4)`` (m) read in ``layout`` (:func:`read_poses_csv`) whose magnitudes
+    say another unit than their headers, for a robot of ``reach_m`` whose base is at ``origin_m``:
+    positions (:func:`robocal.magnitudes.check_targets`) and Euler angles in degrees that are
+    radians or in radians beyond a turn."""
+    check_targets(T[:, :3, 3], layout["length"], reach_m, what, origin_m)
+    if layout["orientation"] in ANGLE_UNITS:
+        angles = Rotation.from_matrix(T[:, :3, :3]).as_euler("xyz") / ANGLE_UNITS[layout["orientation"]]
+        check = check_degree_set if layout["orientation"] == "deg" else check_radians
+        check(angles.reshape(-1), f"{what}: rx, ry, rz")
 
 
 def pose_columns(T: np.ndarray, layout: dict) -> tuple[list[str], np.ndarray]:

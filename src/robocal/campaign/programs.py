@@ -32,7 +32,9 @@ import textwrap
 
 import numpy as np
 
+from robocal.data.joint_conventions import J23_FACTOR  # FANUC J3 (TP) = J3 (catalog) + J23_FACTOR * J2
 from robocal.errors import DataError
+from robocal.trust.output_marker import TP_REMARK_WIDTH  # characters of one TP remark line (! ...)
 
 PROGRAM_JOINTS = 6                 # every language here drives a six-axis arm (A1..A6, robax_a..f)
 UR_MAX_JOINT_SPEED = np.pi         # rad/s, Universal Robots' joint speed limit
@@ -40,8 +42,6 @@ UR_ACCELERATION = 1.4              # rad/s^2, Polyscope's default joint accelera
 RAPID_NAME_MAX = 32
 TP_NAME_MAX = 36                   # R-30iB program names
 TP_DECIMALS = 4                    # TP stores single-precision joint values
-TP_REMARK_WIDTH = 30               # characters of one TP remark line (! ...)
-J23_FACTOR = 1.0                   # FANUC J3 (TP) = J3 (catalog, ROS-I) + J23_FACTOR * J2
 KRL_NAME_MAX = 24
 DEGREE_DECIMALS = 10               # written precision of joint values in degrees
 RADIAN_DECIMALS = 12               # ... in radians

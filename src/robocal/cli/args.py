@@ -24,12 +24,16 @@ def numbers(count: int | None, unit_hint: str) -> Callable[[str], list[float]]:
     return parse
 
 
-def load_measurements(path: str, robot, quiet: bool = False):
+def load_measurements(path: str, robot, quiet: bool = False, fanuc_coupled: bool = False):
     """:meth:`Measurements.load` of ``path`` checked against ``robot``, printing how the reader
-    interpreted the file (repeated readings grouped into poses; warnings always)."""
+    interpreted the file (repeated readings grouped into poses; warnings always); ``fanuc_coupled``:
+    the joints are a FANUC controller's (J3 from the horizontal), converted to the catalog's."""
+    from robocal.data.joint_conventions import fanuc_decoupled_data
     from robocal.data.measurements import Measurements
 
     data = Measurements.load(path, robot=robot)
+    if fanuc_coupled:
+        data = fanuc_decoupled_data(data)
     for note in data.notes:
         if not quiet or note.startswith("WARNING"):
             print(note if note.startswith("WARNING") else f"note: {note}")
@@ -97,51 +101,21 @@ def controller_for(robot, nominal: str | None):
     return model
 
 
-# a tool or TCP offset (mm) whose every coordinate is below this but not all zero is in metres
-TOOL_MM_FLOOR = 2.0
-TOOL_MM_CEILING = 5000.0  # no tool reaches 5 m from the flange: the values are not mm
-
-
 def check_tool_mm(xyz, option: str) -> None:
-    """Refuse a tool translation (mm) whose magnitude says another unit (metres, micrometres)."""
+    """Refuse a tool translation (mm) whose magnitude says another unit (metres, or not a length
+    a tool has): :func:`robocal.magnitudes.check_tool`."""
     import numpy as np
 
-    from robocal.errors import UnitError
+    from robocal.magnitudes import check_tool
 
-    xyz = np.abs(np.asarray(xyz, dtype=float))
-    if 0 < xyz.max() < TOOL_MM_FLOOR:
-        raise UnitError(f"{option}: a tool {np.linalg.norm(xyz):.3g} mm from the flange centre: these "
-                        f"values look like metres; give mm (e.g. {','.join(f'{v * 1e3:g}' for v in xyz)})")
-    if xyz.max() > TOOL_MM_CEILING:
-        raise UnitError(f"{option}: a tool {np.linalg.norm(xyz) / 1e3:.3g} m from the flange: these values "
-                        "are not mm; give the offset in mm")
-
-
-# angles (deg) within this of a multiple of pi/12 *in radians* (0.2618, 0.5236, 0.7854, 1.5708..)
-# are radians typed where degrees belong
-RADIAN_LIKE_TOL = 5e-4
-
-
-def check_degrees(angles, option: str) -> None:
-    """Refuse rotation angles given in degrees that are clearly radians (pi/4 = 0.785, pi/2 = 1.571)."""
-    import numpy as np
-
-    from robocal.errors import UnitError
-
-    a = np.asarray(angles, dtype=float)
-    steps = a / (np.pi / 12)
-    radian_like = (np.abs(a) > 0.1) & (np.abs(a) <= 2 * np.pi + 1e-9) & \
-        (np.abs(steps - np.round(steps)) * np.pi / 12 < RADIAN_LIKE_TOL)
-    if radian_like.any():
-        raise UnitError(f"{option}: {', '.join(f'{v:g}' for v in a[radian_like])} look like radians "
-                        f"({', '.join(f'{v:g} rad = {np.rad2deg(v):g} deg' for v in a[radian_like])}); the "
-                        "angles are in degrees")
+    check_tool(np.asarray(xyz, dtype=float) * 1e-3, "mm", option)
 
 
 def tool_frame(text: str, option: str):
     """A tool frame ``x,y,z,rx,ry,rz`` (mm, deg) -> 4x4 (m), refused when its magnitudes say
-    another unit (:func:`check_tool_mm`, :func:`check_degrees`)."""
+    another unit (:func:`check_tool_mm`, :func:`robocal.magnitudes.check_degrees`)."""
     from robocal.compensate import frame_from_text
+    from robocal.magnitudes import check_degrees
 
     T = frame_from_text(text, option)
     values = [float(v) for v in text.replace(" ", "").split(",") if v]
@@ -167,3 +141,43 @@ def print_warnings(command: str, warnings) -> None:
 
     for warning in warnings:
         print(f"robocal {command}: warning: {' '.join(str(warning).split())}", file=sys.stderr)
+
+
+def load_calibrated_and_nominal(calibrated: str, nominal: str, option: str = "--calibrated"):
+    """(calibrated Robot from a model file, the controller's nominal Robot from a catalog name or
+    model file), refused in one line when the two look swapped: a catalog name given as the
+    calibrated model and a model file as the nominal one, or a calibrated file (its parameters
+    moved from its own nominal values) given as the nominal model and an uncalibrated one as the
+    calibrated model."""
+    from pathlib import Path
+
+    import numpy as np
+
+    from robocal.errors import DataError
+    from robocal.kinematics.catalog import catalog_names
+    from robocal.kinematics.model import Robot, load_model
+
+    swapped = (f"{option} {calibrated} and --nominal {nominal} look swapped: give {option} {nominal} "
+               f"--nominal {calibrated}")
+    if not Path(calibrated).exists() and calibrated in catalog_names() and Path(nominal).is_file():
+        raise DataError(f"{swapped} ({calibrated} is a catalog robot, the controller's model; {nominal} a "
+                        "model file)")
+    cal, nom = Robot.load(calibrated), load_model(nominal)
+    n = len(cal.nominal)
+
+    def moved(robot) -> bool:
+        return not np.allclose(robot.values[:n], robot.nominal, rtol=0.0, atol=1e-12)
+
+    if Path(nominal).is_file() and moved(nom) and not moved(cal):
+        raise DataError(f"{swapped} ({nominal} holds a calibration: its parameters moved from its nominal "
+                        f"values; {calibrated} holds none)")
+    return cal, nom
+
+
+def add_fanuc_coupled(parser) -> None:
+    """The option that reads joint logs of a FANUC controller (J3 counted from the horizontal)."""
+    from robocal.data.joint_conventions import COUPLED_OPTION
+
+    parser.add_argument(COUPLED_OPTION, dest="fanuc_coupled", action="store_true",
+                        help="the joints are a FANUC controller's (J3 counted from the horizontal, J3 + J2 "
+                             "of the catalog's; robocal's --fanuc programs take them so): convert them")

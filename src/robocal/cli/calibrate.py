@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from robocal.cli.args import add_fanuc_coupled
 from robocal.cli.history_options import (
     add_history_options,
     check_history_options,
@@ -113,6 +114,7 @@ def add_parser(sub) -> None:
                    help="with --offsets-only: the earlier calibrated model of this robot (--robot names "
                         "the nominal one)")
     add_history_options(p)
+    add_fanuc_coupled(p)
     p.set_defaults(func=run)
 
 
@@ -164,8 +166,8 @@ def run(args) -> int:
     start = offsets_start(args)
     sigma = dict(args.sigma)
     robot = load_model(args.robot)
-    data = [load_measurements(f, robot, args.quiet) for f in args.data]
-    validation = [load_measurements(f, robot, args.quiet) for f in validate]
+    data = [load_measurements(f, robot, args.quiet, args.fanuc_coupled) for f in args.data]
+    validation = [load_measurements(f, robot, args.quiet, args.fanuc_coupled) for f in validate]
     if args.hold_out is not None:
         if validation or len(data) > 1:
             raise DataError("--hold-out splits one calibration file: give one file and no --validate")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from robocal.cli.args import numbers
 
@@ -18,7 +19,9 @@ commands.csv: q1_deg..q6_deg (joints to command), the corrected Cartesian target
 nominal model's base frame and for its TCP: what the controller is given) in the targets'
 units, and converged (1/0).
 --parameters writes name, unit (mm/deg), nominal, calibrated, delta = nominal - calibrated
-(seed 000: the controller loads nominal - delta)."""
+(seed 000: the controller loads nominal - delta).
+commands.csv starts with a # line naming the calibrated model (fingerprint) and robocal's version;
+compensating such a file again is refused unless --force."""
 
 
 def add_parser(sub) -> None:
@@ -44,6 +47,8 @@ def add_parser(sub) -> None:
                    help="the TCP the targets are for: flange (default, tool0), x,y,z,rx,ry,rz (the user's "
                         "real tool on the flange, mm, deg, fixed-axis XYZ; e.g. from robocal tool), or "
                         "measured (the calibrated model's own tool: the SMR or probe it was measured with)")
+    p.add_argument("--force", action="store_true",
+                   help="compensate targets robocal already compensated (their marker line names the run)")
     p.add_argument("--parameters", help="also write the corrected-parameter table (CSV) here")
     p.add_argument("-o", "--output", required=True, help="commands CSV to write")
     p.set_defaults(func=run)
@@ -70,17 +75,20 @@ def _statistics(res, targets, calibrated, nominal, args) -> str:
 def run(args) -> int:
     import numpy as np
 
-    from robocal.cli.args import check_format, tool_frame
-    from robocal.compensate import compensate, format_csv, pose_columns, read_poses_csv
-    from robocal.io import check_outputs, write_all
-    from robocal.kinematics.model import Robot, load_model
+    from robocal.cli.args import check_format, load_calibrated_and_nominal, tool_frame
+    from robocal.compensate import check_target_units, compensate, format_csv, pose_columns, read_poses_csv
+    from robocal.data.measurements import robot_reach
+    from robocal.io import check_outputs, read_text, write_all
+    from robocal.trust.output_marker import check_unmarked, mark_csv
 
     check_format(args.output, "CSV", "-o")
     check_format(args.parameters, "CSV", "--parameters")
     check_outputs([args.output, args.parameters], [args.calibrated, args.targets, args.nominal])
-    calibrated = Robot.load(args.calibrated)
-    nominal = load_model(args.nominal)
+    calibrated, nominal = load_calibrated_and_nominal(args.calibrated, args.nominal, "calibrated model")
+    check_unmarked(read_text(Path(args.targets), "pose CSV file"), args.targets, "compensated", args.force)
     targets, layout = read_poses_csv(args.targets)
+    origin = calibrated.base[:3, 3] if args.targets_in == "model" else np.zeros(3)
+    check_target_units(targets, layout, robot_reach(nominal), args.targets, origin)
     tool = {"measured": None, "flange": np.eye(4)}.get(args.tool)
     if args.tool not in ("measured", "flange"):
         tool = tool_frame(args.tool, "--tool")
@@ -96,7 +104,7 @@ def run(args) -> int:
         columns += list(sing)
         cells += [np.column_stack(list(sing.values()))]
     text = format_csv(columns, np.concatenate([np.asarray(c, dtype=object) for c in cells], axis=1))
-    texts = {args.output: text}
+    texts = {args.output: mark_csv(text, calibrated)}
     if args.parameters:
         rows = []
         for r in res.parameters:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from robocal.cli.args import add_fanuc_coupled
 from robocal.cli.history_options import add_history_options
 
 EPILOG = """Examples:
@@ -30,6 +31,7 @@ def add_parser(sub) -> None:
                    help="report statistics the plausibility checks refuse (errors beyond any robot's)")
     add_history_options(p, "record the evaluation (its RMS as the model's held-out error) in this history: a "
                            "SQLite file or a postgresql:// URL; needs --robot-id")
+    add_fanuc_coupled(p)
     p.set_defaults(func=run)
 
 
@@ -48,8 +50,9 @@ def run(args) -> int:
 
     check_history_options(args)
     robot = load_model(args.model)
-    data = load_measurements(args.data, robot, args.quiet)
-    frame_from = load_measurements(args.frame_from, robot, args.quiet) if args.frame_from else None
+    data = load_measurements(args.data, robot, args.quiet, args.fanuc_coupled)
+    frame_from = None if args.frame_from is None else \
+        load_measurements(args.frame_from, robot, args.quiet, args.fanuc_coupled)
     try:
         stats = evaluate(robot, data, fit_frame=args.fit_frame, frame_from=frame_from, force=args.force)
     except PlausibilityError as exc:

@@ -25,7 +25,9 @@ URScript --tool is the installation's TCP). --tcp NAME=x,y,z,rx,ry,rz (mm, deg, 
 real TCP of that tool identified on the calibrated model (robocal tool); default: the tool data.
 The calibrated model's identified frame {0} is the controller's base unless --robot-base gives the
 controller's base in the calibrated model's world frame (x,y,z,rx,ry,rz, mm, deg).
-Writes the filtered program(s) and the per-target table (CSV and JSON) together, or nothing."""
+Writes the filtered program(s) and the per-target table (CSV and JSON) together, or nothing. A filtered
+program carries one comment line naming the calibrated model (fingerprint) and robocal's version;
+filtering it again is refused unless --force."""
 
 
 # what each language's files look like, and its motion instructions to a named point
@@ -106,6 +108,9 @@ def add_parser(sub) -> None:
     p.add_argument("--format", choices=("rapid", "krl", "fanuc", "urscript"), help="program format")
     p.add_argument("--table", help="per-target table: PATH.csv, PATH.json, or a prefix for both "
                                    "(default: OUTPUT.targets.csv/.json)")
+    p.add_argument("--force", action="store_true",
+                   help="filter a program robocal already filtered (its marker comment names the run): "
+                        "the corrections are applied again")
     p.add_argument("--keep-unreached", action="store_true",
                    help="leave targets that cannot be corrected unchanged (warning) instead of failing")
     p.set_defaults(func=run)
@@ -128,47 +133,104 @@ def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[
     return targets, table, [*targets.values(), *table_paths(table)]
 
 
-def _check_tool_units(args) -> None:
-    """Refuse --tool data whose translation says another unit than the program's notation (mm;
-    URScript m)."""
-    from robocal.cli.args import check_tool_mm
-    from robocal.errors import UnitError
+def _check_magnitudes(args, reach_m: float) -> None:
+    """Refuse --tool / --frame values whose magnitudes say another unit than the program's notation
+    (lengths mm, URScript m; KRL and FANUC angles deg, URScript rad) for a robot of ``reach_m``
+    (:mod:`robocal.magnitudes`)."""
+    import numpy as np
 
-    metres = args.format == "urscript" or (args.format is None and any(
-        Path(p).suffix.lower() in (".script", ".urscript") for p in args.programs))
-    for name, text in _named(args.tool, "--tool").items():
-        try:
-            xyz = [float(v) for v in text.replace(" ", "").split(",")[:3]]
-        except ValueError:
-            continue  # the program reader names malformed values
-        if not metres:
-            check_tool_mm(xyz, f"--tool {name}={text}")
-        elif max(abs(v) for v in xyz) > 5.0:
-            raise UnitError(f"--tool {name}={text}: a URScript TCP {max(abs(v) for v in xyz):g} m from the "
-                            "flange: URScript lengths are metres (these look like mm)")
+    from robocal.magnitudes import LENGTH_SCALES_M, check_degrees, check_frame, check_radians, check_tool
+
+    suffix = Path(args.programs[0]).suffix.lower()
+    language = args.format or next((k for k, s in SUFFIXES.items() if suffix in s), None)
+    unit = "m" if language == "urscript" else "mm"
+    for option, given in (("--tool", args.tool), ("--frame", args.frame)):
+        for name, text in _named(given, option).items():
+            try:
+                values = [float(v) for v in text.replace(" ", "").split(",")]
+            except ValueError:
+                continue  # the program reader names malformed values
+            what = f"{option} {name}={text}"
+            xyz = np.asarray(values[:3]) * LENGTH_SCALES_M[unit]
+            if option == "--tool":
+                check_tool(xyz, unit, what)
+            else:
+                check_frame(xyz, unit, reach_m, what)
+            if language in ("krl", "fanuc"):
+                check_degrees(values[3:6], what)
+            elif language == "urscript":
+                check_radians(values[3:6], what)
+
+
+# a --tool this far from the program's own tool data of the same name is another tool: a warning
+TOOL_DISAGREE_MM = 0.5
+TOOL_DISAGREE_DEG = 0.1
+
+
+def _tool_disagreements(args) -> list[str]:
+    """One warning per --tool that overrides tool data the program files declare differently
+    (naming both); none when the files cannot be read without the overrides."""
+    import numpy as np
+
+    from robocal.errors import RobocalError
+    from robocal.kinematics.transforms import pose_error
+    from robocal.programs.filter import as_frames, dialect_for
+    from robocal.programs.source import ProgramText
+
+    given = _named(args.tool, "--tool")
+    if not given:
+        return []
+    try:
+        d = dialect_for([Path(p) for p in args.programs], args.format)
+        frames = as_frames(d, _named(args.frame, "--frame"))
+        program = d.parse([ProgramText(p) for p in args.programs], frames, {},
+                          [ProgramText(p) for p in args.references])
+        tools = {d.name_key(k): v for k, v in as_frames(d, given).items()}
+    except RobocalError:
+        return []
+    out = []
+    for key, T in tools.items():
+        own = program.tools.get(key)
+        if own is None:
+            continue
+        err = pose_error(np.asarray(own)[None], np.asarray(T)[None])[0]
+        mm, deg = np.linalg.norm(err[:3]) * 1e3, np.rad2deg(np.linalg.norm(err[3:]))
+        if mm > TOOL_DISAGREE_MM or deg > TOOL_DISAGREE_DEG:
+            name = next(k for k in given if d.name_key(k) == key)
+            own_text = ", ".join(f"{v:.4g}" for v in np.r_[own[:3, 3] * 1e3])
+            out.append(f"--tool {name}={given[name]} replaces the program's own tool data {name} (TCP at "
+                       f"{own_text} mm on the flange) and differs from it by {mm:.3g} mm, {deg:.3g} deg: the "
+                       "controller moves with the tool data it holds; make sure --tool is what it holds")
+    return out
 
 
 def run(args) -> int:
     import sys
 
-    from robocal.cli.args import tool_frame
+    from robocal.cli.args import load_calibrated_and_nominal, tool_frame
     from robocal.compensate import frame_from_text
+    from robocal.data.measurements import robot_reach
     from robocal.io import check_outputs
-    from robocal.kinematics.model import Robot, load_model
+    from robocal.magnitudes import check_degrees, check_frame
     from robocal.programs import filter_program
 
     targets, table, written = _output_paths(args.programs, args.output, args.table)
     check_outputs(written, [*args.programs, args.calibrated, args.nominal, *args.references])
-    calibrated = Robot.load(args.calibrated)
-    nominal = load_model(args.nominal)
+    calibrated, nominal = load_calibrated_and_nominal(args.calibrated, args.nominal)
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
-    _check_tool_units(args)
+    _check_magnitudes(args, robot_reach(nominal))
     base = None if args.robot_base is None else frame_from_text(args.robot_base, "--robot-base")
+    if base is not None:  # a frame in the calibrated model's world frame (mm, deg)
+        what = f"--robot-base {args.robot_base}"
+        check_frame(base[:3, 3], "mm", robot_reach(nominal), what)
+        check_degrees([float(v) for v in args.robot_base.replace(" ", "").split(",")][3:], what)
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),
                          frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,
-                         dialect=args.format, references=args.references, keep_unreached=args.keep_unreached)
+                         dialect=args.format, references=args.references, keep_unreached=args.keep_unreached,
+                         force=args.force)
     if not res.rows:
         _diagnose_empty(args)
+    res.warnings[:0] = _tool_disagreements(args)
     written = res.write({p: targets[Path(p)] for p in res.outputs}, table)
     if args.quiet:  # the warnings still matter
         for w in res.warnings:

@@ -44,7 +44,8 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.cli.args import controller_for, tool_frame
-    from robocal.compensate import controller_model, format_csv, read_poses_csv
+    from robocal.compensate import check_target_units, controller_model, format_csv, read_poses_csv
+    from robocal.data.measurements import robot_reach
     from robocal.ik.path import plan_path
     from robocal.io import check_outputs, write_atomic
     from robocal.kinematics.model import load_model
@@ -66,7 +67,8 @@ def run(args) -> int:
         carried = "its own tool" if tool is None else f"its tool carrying {args.tool}"
         frames = (f"the model's world frame and {carried} ({robot.name} is not a catalog robot: give "
                   "--nominal for the robot's base and flange)")
-    poses, _ = read_poses_csv(args.poses)
+    poses, layout = read_poses_csv(args.poses)
+    check_target_units(poses, layout, robot_reach(robot), args.poses, robot.base[:3, 3])
     start = None if args.start is None else np.deg2rad(args.start)
     res = plan_path(robot, poses, weights=args.weights, start=start, nominal=nominal)
     cols = [f"q{i + 1}_deg" for i in range(robot.n_joints)]

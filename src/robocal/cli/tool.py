@@ -35,12 +35,12 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import json
 
-    from robocal.cli.args import check_degrees
     from robocal.compensate import frame_from_text, frame_to_text, rotation_from_text
     from robocal.data.measurements import read_joints
     from robocal.io import check_outputs, write_atomic
     from robocal.kinematics.model import Robot, load_model
     from robocal.kinematics.transforms import make_transform
+    from robocal.magnitudes import check_degrees
     from robocal.tcp import identify_tcp
 
     rotation = rotation_from_text(args.rotation, "--rotation")

@@ -14,7 +14,8 @@ What real robots' errors can be, and the limits derived from it (named once here
 - A length unit error scales the measured points by 1000 (or 1/1000) against the model (1/880
   after the frame fit on the Meca500 data); the wrong robot changes the spread by factors of
   3.2-6.5 there, except the IRB 120 and the PUMA 560 (2.0 and 2.7: within the limit, the residual
-  check catches them), and radians under _deg by 1.6. The measured spread must be within
+  check catches them), and radians under _deg by 1.6; inches under _mm by 1/25.4 (named when the
+  ratio is within ``INCH_RATIO_TOL`` of it). The measured spread must be within
   ``SPREAD_RATIO`` of the fitted model's at the same joints.
 - Calibration corrects link lengths by fractions of a millimetre (a few mm at most on big
   robots) and angles by hundredths of a degree (a degree for a badly mastered joint zero). A
@@ -40,6 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from robocal.data.joint_conventions import COUPLED_OPTION, fanuc_decoupled
 from robocal.data.measurements import robot_reach
 from robocal.errors import DataError, PlausibilityError
 from robocal.identify.space import block_of
@@ -48,6 +50,8 @@ MAX_NOMINAL_ERROR_MM = 10.0
 MAX_NOMINAL_ERROR_FRACTION = 0.05
 SPREAD_RATIO = 3.0
 UNIT_RATIO = 300.0  # a spread ratio beyond this (either way) is a length unit (x1000)
+INCH_MM = 25.4
+INCH_RATIO_TOL = 0.2  # a spread ratio within 20 % of 1/25.4 (or 25.4) is inches (another robot: 1.6-6.5)
 MAX_LENGTH_CORRECTION_MM = 5.0
 MAX_LENGTH_CORRECTION_FRACTION = 0.01
 MAX_ANGLE_CORRECTION_DEG = 5.0
@@ -82,7 +86,12 @@ def check_spread(measured: np.ndarray, modelled: np.ndarray, what: str, *, force
     ratio = spread(measured) / max(spread(modelled), 1e-12)
     if 1 / SPREAD_RATIO <= ratio <= SPREAD_RATIO:
         return
-    if ratio > UNIT_RATIO or ratio < 1 / UNIT_RATIO:
+    inch = min(abs(np.log(ratio * INCH_MM)), abs(np.log(ratio / INCH_MM)))
+    if inch < np.log1p(INCH_RATIO_TOL):
+        cause = (f"the length unit is probably wrong by the factor of an inch ({INCH_MM:g}): "
+                 + ("a tracker export in inches under x_mm, y_mm, z_mm headers: export millimetres, or "
+                    f"multiply x, y, z by {INCH_MM:g}" if ratio < 1 else "millimetres given as inches"))
+    elif ratio > UNIT_RATIO or ratio < 1 / UNIT_RATIO:
         cause = ("the length unit is probably wrong (values in metres under x_mm, y_mm, z_mm headers, "
                  "or millimetres under _m)")
     elif ratio > SPREAD_RATIO and spread(modelled) < 0.1 * spread(measured):
@@ -177,9 +186,16 @@ def check_joint_limits(robot, data, what: str, *, force: bool = False,
     past = np.maximum(robot.limits[:, 0] - q, q - robot.limits[:, 1])  # (N, n) rad past a limit
     far = past > np.deg2rad(JOINT_LIMIT_MARGIN_DEG)
     if far.any():
+        cause = "another robot's data, radians under _deg headers, a shifted column?"
+        if q.shape[1] >= 3:
+            q_dec = fanuc_decoupled(q)
+            if (np.maximum(robot.limits[:, 0] - q_dec, q_dec - robot.limits[:, 1])
+                    <= np.deg2rad(JOINT_LIMIT_TOL_DEG)).all():
+                cause = ("J3 looks coupled to J2: with J3 - J2 every reading is inside the limits (a FANUC "
+                         "controller's joint log counts J3 from the horizontal): read it with "
+                         f"{COUPLED_OPTION}")
         _fail(f"{what}: joint readings more than {JOINT_LIMIT_MARGIN_DEG:g} deg outside {robot.name}'s "
-              f"joint limits (another robot's data, radians under _deg headers, a shifted column?): "
-              f"{_readings(data, robot, far)}", force, warnings)
+              f"joint limits ({cause}): {_readings(data, robot, far)}", force, warnings)
     near = (past > np.deg2rad(JOINT_LIMIT_TOL_DEG)) & ~far
     if near.any() and warnings is not None:
         warnings.append(f"{what}: joint readings outside {robot.name}'s joint limits (check the model's "

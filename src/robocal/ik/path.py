@@ -10,9 +10,9 @@ refined by numeric IK on the calibrated model.
 
 Default weights (:func:`default_weights`): ``w_i = 1 + rho_i`` for the three arm joints, with
 rho_i (m) the distance from joint axis i to the flange origin at zero joints (the lever the
-joint swings), and ``w_4..w_6 = 1``: the cost is joint travel in rad plus, for the big joints,
-roughly the arc the flange sweeps in m, so big joints cost more ("move the small joints, spare
-the big ones").
+joint swings), and ``w_4..w_n = 1`` (a chain of any length n): the cost is joint travel in rad
+plus, for the big joints, roughly the arc the flange sweeps in m, so big joints cost more ("move
+the small joints, spare the big ones").
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ from robocal.ik.opw_ik import check_poses
 from robocal.kinematics.model import Robot
 
 _TIE_BREAK = 1e-9  # weight of the first waypoint's distance from zero (rad): breaks exact ties only
+_BRANCH_JOINTS = 6  # the closed forms (OPW, UR) and so the branches exist for 6-joint arms only
 _EDGE_CHUNK = 4_000_000  # pair evaluations per block when building edges (bounds memory)
 
 
@@ -75,9 +76,9 @@ class PathResult:
     candidates: np.ndarray
 
 
-def default_weights(robot: Robot, wrist=(1.0, 1.0, 1.0)) -> np.ndarray:
-    """``(n,)`` weights: 1 + lever arm (m) from axis i to the flange at zero joints for the first
-    three joints, ``wrist`` for the others."""
+def default_weights(robot: Robot, wrist: float = 1.0) -> np.ndarray:
+    """``(n,)`` weights for a chain of any length n: 1 + lever arm (m) from axis i to the flange at
+    zero joints for the first three joints, ``wrist`` for every joint after the third."""
     n = robot.n_joints
     _, frames = robot.fk(np.zeros((1, n)), frames=True)
     flange = frames[0, n, :3, 3]
@@ -86,7 +87,7 @@ def default_weights(robot: Robot, wrist=(1.0, 1.0, 1.0)) -> np.ndarray:
         o, z = frames[0, i + 1, :3, 3], frames[0, i + 1, :3, 2]
         v = flange - o
         w[i] = 1.0 + np.linalg.norm(v - (v @ z) * z)
-    w[3:] = np.asarray(wrist, dtype=float)[: n - 3]
+    w[3:] = float(wrist)
     return w
 
 
@@ -185,6 +186,12 @@ def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | No
     """
     T = check_poses(poses)
     n = robot.n_joints
+    if n != _BRANCH_JOINTS:
+        raise ModelError(
+            f"plan chooses among the inverse-kinematics branches of a 6-joint arm; {robot.name} has {n} "
+            "joints (" + ("redundant: infinitely many joint solutions per pose" if n > _BRANCH_JOINTS else
+                          "fewer than 6: it cannot reach an arbitrary pose") +
+            "), so there are no branches to choose from: plan its joint path in the robot's own software")
     w = default_weights(robot) if weights is None else check_weights(weights, n)
     if start is not None:
         start = np.asarray(start, dtype=float).reshape(-1)

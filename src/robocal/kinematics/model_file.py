@@ -31,12 +31,13 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.errors import ModelError
+from robocal.errors import ModelError, UnitError
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, as_number, read_text, short_repr
 from robocal.kinematics.convert import default_parallel, dh_kwargs, mdh_kwargs, opw_kwargs, opw_parameters
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.opw import GEOMETRY, OPWParameters
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
+from robocal.magnitudes import check_model_units
 from robocal.yaml_load import dump_yaml, load_yaml
 
 FORMAT = "robocal-model/1"
@@ -204,6 +205,10 @@ def robot_kwargs(data) -> dict:
         kw = _table(form, data[form], length_unit, degrees, data.get("limits"), base, tool)
         kw["opw"] = opw
     n = len(kw["alpha"])
+    given = "limits" in data or (form == "joints" and any(isinstance(r, dict) and "limits" in r
+                                                          for r in data["joints"]))
+    check_model_units(np.r_[kw["a"], kw["d"]], np.r_[kw["alpha"], kw["theta"], kw.get("beta", [])],
+                      kw["limits"] if given else [], length_unit, angle_unit)
     if data.get("smr") is not None:
         smr = data["smr"]
         if not isinstance(smr, list):
@@ -266,5 +271,5 @@ def read_model_file(path) -> dict:
                      max_nodes=MAX_VALUES)
     try:
         return robot_kwargs(data)
-    except ModelError as exc:
+    except (ModelError, UnitError) as exc:  # the model file's fault, whatever the check
         raise ModelError(f"{path}: {exc}") from None

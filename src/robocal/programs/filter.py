@@ -47,6 +47,7 @@ from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.rapid import RapidDialect
 from robocal.programs.source import ProgramText, format_number
 from robocal.programs.urscript import URScriptDialect
+from robocal.trust.output_marker import check_unmarked, mark_program
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
@@ -67,6 +68,7 @@ class FilterResult:
     rows: list[dict]
     warnings: list[str] = field(default_factory=list)
     uncorrected: list[str] = field(default_factory=list)  # motions left as they are (also warnings)
+    calibrated: Robot | None = None  # the model that corrected the targets: its marker goes on the files
 
     def table_csv(self) -> str:
         out = io.StringIO()
@@ -131,12 +133,17 @@ class FilterResult:
         """Write the filtered files (input path -> output path, or one output path for a single
         input) and the table (``table`` ending .csv or .json: that one; otherwise both
         ``table.csv`` and ``table.json``), all together or none. Refuses to overwrite an input.
+        Program files carry the calibrated model's marker (:func:`robocal.trust.output_marker.mark_program`).
         Returns the paths written."""
         if not isinstance(outputs, dict):
             if len(self.outputs) != 1:
                 raise DataError("several program files: give one output path per input")
             outputs = {next(iter(self.outputs)): Path(outputs)}
-        files: dict[Path, bytes] = {Path(dst): self.outputs[Path(src)] for src, dst in outputs.items()}
+        files: dict[Path, bytes] = {}
+        for src, dst in outputs.items():  # marked with the calibrated model that corrected them
+            data = self.outputs[Path(src)]
+            marked = data if self.calibrated is None else mark_program(self.dialect, data, self.calibrated)
+            files[Path(dst)] = marked
         for t in table_paths(table) if table is not None else []:
             files[t] = (self.table_csv() if t.suffix.lower() == ".csv" else self.table_json()).encode()
         check_outputs(files, self.outputs)
@@ -383,7 +390,7 @@ def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
 
 def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
                    robot_base=None, dialect: str | None = None, references=(),
-                   keep_unreached: bool = False) -> FilterResult:
+                   keep_unreached: bool = False, force: bool = False) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -397,7 +404,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     base). Targets that cannot be corrected (out of reach, out of the joint limits, a
     configuration they cannot have, not converged) raise DataError naming each one; with
     ``keep_unreached`` they are left unchanged with a warning. Nothing is written here: see
-    :meth:`FilterResult.write`.
+    :meth:`FilterResult.write`, which marks the files with the calibrated model's fingerprint
+    (:mod:`robocal.trust.output_marker`); a marked input (already filtered) raises DataError
+    naming the earlier run unless ``force``.
     """
     paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     if not paths:
@@ -407,6 +416,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                         f"model {nominal.name!r} has {nominal.n_joints} joints")
     d = dialect_for(paths, dialect)
     sources = [ProgramText(p) for p in paths]
+    for s in sources:
+        check_unmarked(s.text, str(s.path), "filtered", force)
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
     warnings = list(program.warnings)
@@ -450,7 +461,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     warnings += comp.warnings([t.where for t in targets], good)  # the corrected ones near a singularity
     rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, comp.converged & ok, changed, cfg, sing)
     outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
-    return FilterResult(d.name, outputs, rows, warnings, program.uncorrected)
+    return FilterResult(d.name, outputs, rows, warnings, program.uncorrected, calibrated)
 
 
 def _check_tcp(real: dict, tools: dict, warnings: list) -> None:

@@ -1,0 +1,41 @@
+"""Joint conventions of controllers that differ from the catalog's (ROS-Industrial's) joints.
+
+FANUC controllers count J3 from the horizontal, not from the upper arm: the value a FANUC
+controller shows, logs and takes in a TP program is ``J3 + J23_FACTOR * J2`` of the catalog's
+joints (ROS-Industrial fanuc_driver: ``J3_out = J3_in + J23_factor * J2_in``, J23_factor 1 for its
+arms). A joint log from a FANUC controller is read with :func:`fanuc_decoupled` (CLI
+``--fanuc-j2j3-coupled``); robocal's ``--fanuc`` campaign programs write :func:`fanuc_coupled`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+J23_FACTOR = 1.0  # FANUC J3 (controller) = J3 (catalog, ROS-I) + J23_FACTOR * J2
+COUPLED_OPTION = "--fanuc-j2j3-coupled"  # the command-line option that reads a FANUC joint log
+
+
+def fanuc_coupled(q: np.ndarray) -> np.ndarray:
+    """Catalog joints ``(N, n)`` (n >= 3) -> the FANUC controller's (J3 from the horizontal)."""
+    out = np.array(q, dtype=float, copy=True)
+    out[:, 2] += J23_FACTOR * out[:, 1]
+    return out
+
+
+def fanuc_decoupled(q: np.ndarray) -> np.ndarray:
+    """A FANUC controller's joints ``(N, n)`` (J3 from the horizontal) -> the catalog's."""
+    out = np.array(q, dtype=float, copy=True)
+    out[:, 2] -= J23_FACTOR * out[:, 1]
+    return out
+
+
+def fanuc_decoupled_data(data):
+    """Measurements whose joints are a FANUC controller's -> the same with the catalog's joints
+    (the approach directions and travel re-derived from the row order)."""
+    from dataclasses import replace
+
+    from robocal.data.measurements import approach_from_order, travel_from_order
+
+    q = fanuc_decoupled(data.joints)
+    return replace(data, joints=q, approach=approach_from_order(q, data.pose_id),
+                   travel=travel_from_order(q, data.pose_id))

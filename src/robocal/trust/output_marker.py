@@ -1,0 +1,145 @@
+"""Provenance markers on robocal's outputs.
+
+A filtered robot program and a compensated targets file say, in the format's own comment syntax,
+which calibrated model corrected them and which robocal version did it::
+
+    robocal <version> model <fingerprint>
+
+``fingerprint`` is the first :data:`FINGERPRINT_HEX` hex digits of the SHA-256 of the calibrated
+model's canonical parameters (every parameter name with its SI value to 12 significant digits:
+the same model loaded from any of its files gives the same fingerprint). Reading a marked file
+back in (filtering a filtered program, compensating compensated targets: the corrections applied
+twice) is refused, naming the earlier run, unless the caller forces it.
+
+Where the marker goes (one added line; the rest of the file is byte for byte the same):
+
+* ABB RAPID: ``! ...`` on the line after the first ``MODULE`` line (the file's first line
+  without one);
+* KUKA KRL: ``; ...`` on the line after the first ``DEF`` / ``DEFDAT`` / ``DEFFCT`` line;
+* FANUC TP (.ls): a remark ``!...`` as the last line of ``/MN``, numbered after the last line,
+  with ``LINE_COUNT`` raised by one; a remark line holds :data:`TP_REMARK_WIDTH` characters, so
+  the fingerprint is cut to fit (10 hex digits with a five-character version);
+* URScript: ``# ...`` as the first line;
+* CSV: ``# ...`` as the first line (robocal's CSV readers skip leading ``#`` lines).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from dataclasses import dataclass
+
+from robocal.errors import DataError
+from robocal.kinematics.model import Robot
+from robocal.version import __version__
+
+FINGERPRINT_HEX = 12  # hex digits of the SHA-256 kept: 48 bits, a collision 1 in 2.8e14
+TP_REMARK_WIDTH = 30  # characters of one FANUC TP remark line (! ...)
+_SHORTEST_HEX = 8  # a FANUC remark keeps at least this many hex digits of the fingerprint
+_SIGNIFICANT = 12  # significant digits of each parameter in the canonical text
+MARKER_RE = re.compile(rf"robocal (?P<version>\d[\w.+-]*) "
+                       rf"model (?P<model>[0-9a-f]{{{_SHORTEST_HEX},{FINGERPRINT_HEX}}})\b")
+_NOTE = {"filtered": "targets filtered, do not filter again",
+         "compensated": "targets compensated, do not compensate again"}
+_RAPID_ANCHOR = re.compile(r"^[ \t]*MODULE\b[^\r\n]*(\r?\n)", re.M | re.I)
+_KRL_ANCHOR = re.compile(r"^[ \t]*(?:GLOBAL[ \t]+)?(?:DEF|DEFDAT|DEFFCT)\b[^\r\n]*(\r?\n)", re.M | re.I)
+_FANUC_LINE = re.compile(r"^[ \t]*(\d+):", re.M)
+_FANUC_COUNT = re.compile(r"^(LINE_COUNT\s*=\s*)(\d+)", re.M)
+
+
+@dataclass(frozen=True)
+class Marker:
+    """A marker found in a file: the robocal ``version`` and the calibrated ``model`` fingerprint."""
+
+    version: str
+    model: str
+
+    def describe(self) -> str:
+        return f"robocal {self.version} with the calibrated model {self.model}"
+
+
+def model_fingerprint(robot: Robot) -> str:
+    """The :data:`FINGERPRINT_HEX` hex digits naming ``robot``'s parameters (see the module
+    docstring)."""
+    canon = "\n".join(f"{name}={value:.{_SIGNIFICANT}g}"
+                      for name, value in zip(robot.parameter_names, robot.values.tolist(), strict=True))
+    return hashlib.sha256(canon.encode()).hexdigest()[:FINGERPRINT_HEX]
+
+
+def marker_text(robot: Robot) -> str:
+    """``robocal <version> model <fingerprint>`` of this robocal and ``robot``."""
+    return f"robocal {__version__} model {model_fingerprint(robot)}"
+
+
+def find_marker(text: str) -> Marker | None:
+    """The first marker in ``text``, else None."""
+    m = MARKER_RE.search(text)
+    return None if m is None else Marker(m.group("version"), m.group("model"))
+
+
+def check_unmarked(text: str, where: str, action: str, force: bool = False) -> Marker | None:
+    """Refuse (DataError) a file that carries a marker: ``action`` ('filtered' or 'compensated') was
+    already done to it by the run the marker names; ``force`` lets it through (the marker is
+    returned, for a warning)."""
+    found = find_marker(text)
+    if found is not None and not force:
+        verb = action[:-2] if action.endswith("ed") else action
+        raise DataError(f"{where} was already {action} by {found.describe()}: {verb}ing its output again "
+                        f"applies the corrections twice; start from the original file (or give --force "
+                        "if this one really is uncorrected)")
+    return found
+
+
+def _newline(text: str) -> str:
+    return "\r\n" if "\r\n" in text else "\n"
+
+
+def _insert_after(text: str, anchor: re.Pattern, line: str) -> str:
+    m = anchor.search(text)
+    nl = m.group(1) if m else _newline(text)
+    at = m.end() if m else 0
+    rest = text[at:]
+    indent = re.match(r"[ \t]*", rest).group() if m and rest.strip() else ""
+    return text[:at] + indent + line + nl + rest
+
+
+def _mark_fanuc(text: str, body: str) -> str:
+    start, stop = text.find("/MN"), text.find("/POS")
+    if start < 0:
+        raise DataError("a FANUC .ls program without /MN cannot carry a provenance marker")
+    stop = len(text) if stop < start else stop
+    numbers = [int(n) for n in _FANUC_LINE.findall(text, start, stop)]
+    nl = _newline(text)
+    cut = max(_SHORTEST_HEX, FINGERPRINT_HEX - max(0, len(body) - TP_REMARK_WIDTH))
+    body = body[:len(body) - FINGERPRINT_HEX + cut]
+    remark = f"{max(numbers, default=0) + 1:>4}:  !{body} ;{nl}"
+    if stop < len(text) and not text[:stop].endswith("\n"):
+        remark = nl + remark
+    out = text[:stop] + remark + text[stop:]
+    return _FANUC_COUNT.sub(lambda m: f"{m.group(1)}{int(m.group(2)) + 1}", out, count=1)
+
+
+def mark_program(dialect: str, data: bytes, robot: Robot) -> bytes:
+    """A filtered program's bytes with the marker of ``robot`` (the calibrated model) added in
+    ``dialect``'s comment syntax (a name holding 'rapid', 'krl', 'fanuc' or 'urscript', as the
+    dialects' own names do; see the module docstring)."""
+    text = data.decode("latin-1")
+    dialect = next((k for k in ("rapid", "krl", "fanuc", "urscript") if k in dialect.lower()), dialect)
+    body = marker_text(robot)
+    note = f"{body}: {_NOTE['filtered']}"
+    if dialect == "rapid":
+        out = _insert_after(text, _RAPID_ANCHOR, f"! {note}")
+    elif dialect == "krl":
+        out = _insert_after(text, _KRL_ANCHOR, f"; {note}")
+    elif dialect == "fanuc":
+        out = _mark_fanuc(text, body)
+    elif dialect == "urscript":
+        out = f"# {note}{_newline(text)}{text}"
+    else:
+        raise DataError(f"no provenance marker for program format {dialect!r}")
+    return out.encode("latin-1")
+
+
+def mark_csv(text: str, robot: Robot) -> str:
+    """A compensated targets CSV with the marker of ``robot`` as a ``#`` first line."""
+    return f"# {marker_text(robot)}: {_NOTE['compensated']}\n{text}"
