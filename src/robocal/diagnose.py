@@ -11,7 +11,8 @@ data as given is named:
 - a mirrored tracker frame (a left-handed frame: one axis's sign flipped in the export);
 - several files: the odd one (the others fit, it does not), or every file fitting alone but not
   together (a second tracker station, or the tracker moved between files);
-- a model judged in another frame than the data's (a nominal model without ``--fit-frame``).
+- a model judged in another frame than the data's (a nominal model without ``--fit-frame``);
+- a length unit: the points read as millimetres but written in metres or inches (or the other way).
 """
 
 from __future__ import annotations
@@ -76,6 +77,25 @@ def mirrored(robot, data, given_mm: float) -> str | None:
     return None
 
 
+# factor the points as read must be multiplied by to be right, and the mistake it undoes
+UNIT_SCALES = ((1e3, "the points look like metres under _mm headers (or the file's unit is m)"),
+               (1e-3, "the points look like millimetres under _m headers"),
+               (25.4, "the points look like inches under _mm headers (the tracker exported inches)"),
+               (25.4e-3, "the points look like inches under _m headers (the tracker exported inches)"))
+
+
+def length_unit(robot, data, given_mm: float) -> str | None:
+    """A length unit under which the model fits ``data``'s points (:data:`UNIT_SCALES`), as a
+    sentence, or None."""
+    best = min(((fit_rms_mm(robot, replace(data, points=data.points * f)), f, what)
+                for f, what in UNIT_SCALES), key=lambda t: t[0])
+    rms, f, what = best
+    if rms <= error_limit_mm(data.points * f) and rms * GAIN < given_mm:
+        return (f"{what}: scaled by {f:g} the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as "
+                "given); fix the unit of the file's x, y, z columns (their header's _mm or _m)")
+    return None
+
+
 def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
     """The most likely mistake behind data that ``robot`` (nominal or calibrated links) misses,
     as one sentence, or None when the data do not tell. ``datasets``: Measurements (only point
@@ -104,7 +124,7 @@ def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
         return (f"{', '.join(odd)} is the odd file: the others fit the model, it misses by {worst:.4g} mm RMS"
                 + (f"; {reason}" if reason else " (another robot's data, another file, or a unit)"))
     for d, a in zip(sets, alone, strict=True):
-        reason = joint_mixup(robot, d, a) or mirrored(robot, d, a)
+        reason = joint_mixup(robot, d, a) or mirrored(robot, d, a) or length_unit(robot, d, a)
         if reason:
             return (f"{d.label}: " if len(sets) > 1 and d.label else "") + reason
     return None

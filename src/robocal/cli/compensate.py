@@ -45,6 +45,9 @@ def add_parser(sub) -> None:
                         "real tool on the flange, mm, deg, fixed-axis XYZ; e.g. from robocal tool), or "
                         "measured (the calibrated model's own tool: the SMR or probe it was measured with)")
     p.add_argument("--parameters", help="also write the corrected-parameter table (CSV) here")
+    p.add_argument("--result", metavar="result.json",
+                   help="the calibration's result JSON (calibrate --json): warn per target where its "
+                        "predicted error exceeds 3 x the validated one (outside the calibrated region)")
     p.add_argument("-o", "--output", required=True, help="commands CSV to write")
     p.set_defaults(func=run)
 
@@ -67,6 +70,23 @@ def _statistics(res, targets, calibrated, nominal, args) -> str:
             f"{deg.max():.4g} deg, median {np.median(deg):.4g} deg")
 
 
+def _prediction(path, calibrated):
+    """The accuracy prediction of a result JSON (None without ``--result``), checked against the
+    calibrated model (the same parameters)."""
+    if path is None:
+        return None
+    from robocal.calibration import load_result
+    from robocal.errors import DataError
+    from robocal.trust.coverage import Prediction
+
+    section = load_result(path).get("predicted_accuracy")
+    if not isinstance(section, dict) or not isinstance(section.get("model"), dict):
+        raise DataError(f"{path} has no predicted_accuracy section: calibrate again with --json to get one")
+    prediction = Prediction.from_dict(section["model"])
+    prediction.error_mm(calibrated, calibrated.limits.mean(axis=1)[None])  # DataError: another model's
+    return prediction
+
+
 def run(args) -> int:
     import numpy as np
 
@@ -77,9 +97,10 @@ def run(args) -> int:
 
     check_format(args.output, "CSV", "-o")
     check_format(args.parameters, "CSV", "--parameters")
-    check_outputs([args.output, args.parameters], [args.calibrated, args.targets, args.nominal])
+    check_outputs([args.output, args.parameters], [args.calibrated, args.targets, args.nominal, args.result])
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)
+    prediction = _prediction(args.result, calibrated)
     targets, layout = read_poses_csv(args.targets)
     tool = {"measured": None, "flange": np.eye(4)}.get(args.tool)
     if args.tool not in ("measured", "flange"):
@@ -115,6 +136,11 @@ def run(args) -> int:
         print(f"targets: {what} in {where}")
         print(f"compensated {len(targets)} target(s){_statistics(res, targets, calibrated, nominal, args)}; "
               f"largest model residual {res.position_error.max() * 1e3:.3g} mm -> {args.output}")
-    for warning in res.warnings()[:20]:
+    warnings = res.warnings()[:20]
+    if prediction is not None:
+        from robocal.trust.coverage import target_warnings
+
+        warnings += target_warnings(prediction, calibrated, res.joints)
+    for warning in warnings:
         print(f"warning: {warning}")
     return 0 if res.converged.all() else 1
