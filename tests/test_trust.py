@@ -233,3 +233,15 @@ def test_evaluate_reports_the_residual_test(sim):
     moved = evaluate(ROBOT, _moved(sim, 30, delta_tracker=np.array([0.002, 0.0, 0.0])), fit_frame=True)
     assert moved["consistency"]["change_points"][0]["frame"] == "tracker"
     assert any("bumped" in w for w in moved["warnings"])
+
+
+def test_information_covariance_equals_the_svd_posterior():
+    from robocal.identify.priors import posterior_covariance
+    from robocal.trust.coverage import information_covariance
+
+    rng = np.random.default_rng(5)
+    J = rng.normal(size=(300, 8)) * np.logspace(-4, 2, 8)
+    J[:, 7] = J[:, 6] * 3.0  # a confounded pair, separated by the prior on one of them
+    w = np.array([0, 0, 1e-3, 0, 2.0, 0, 0.5, 0])
+    np.testing.assert_allclose(information_covariance(J, w, 0.7), posterior_covariance(J, w, 0.7),
+                               rtol=1e-6, atol=1e-14)

@@ -18,6 +18,7 @@ from functools import partial
 
 import numpy as np
 
+from robocal.damped_least_squares import Status
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
 from robocal.errors import DataError, IdentificationError
@@ -670,8 +671,10 @@ def _check_consistency(result: CalibrationResult, sigma: dict | None, seed: int,
                                    result.space.size, sigma=sigma, seed=seed)
     kept = slice(None) if result.solver.item_weights is None else result.solver.item_weights != 0
     before, after_rms = (position_stats(e[kept])["rms"] for e in result.errors)
+    # a solve stopped by a limit or the user's threshold may end anywhere: that is said elsewhere;
+    # a converged fit worse than nominal absorbed a mistake in the data
     check_not_worse(before, after_rms, "the calibration data", result.consistency.diagnosis, force=force,
-                    warnings=result.warnings)
+                    warnings=result.warnings, refuse=result.solver.status == Status.CONVERGED)
     result.warnings += result.consistency.warnings("the calibration")
 
 

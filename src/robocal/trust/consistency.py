@@ -322,13 +322,20 @@ def check_fit(robot, start, observations, errors: list[np.ndarray], n_unknowns: 
 
 
 def check_not_worse(before_mm: float, after_mm: float, what: str, diagnosis: list[str], *,
-                    force: bool = False, warnings: list[str] | None = None) -> None:
+                    force: bool = False, warnings: list[str] | None = None, refuse: bool = True) -> None:
     """A fitted model must not miss its own data by more than the nominal one (RMS, mm): the fit
-    absorbed a mistake (PlausibilityError naming ``diagnosis``; ``force``: a warning)."""
+    absorbed a mistake (PlausibilityError naming ``diagnosis``; ``force``: a warning). ``refuse``
+    False (a solve stopped by a limit or a threshold, not converged): a warning only."""
     if after_mm <= WORSE_TOLERANCE * before_mm:
         return
     why = "; ".join(diagnosis) if diagnosis else ("a mistake in the data (a convention, a unit, a moved "
                                                   "SMR) or data the model cannot describe")
+    if not refuse:
+        if warnings is not None:
+            warnings.append(f"{what}: the fitted model is worse than the nominal one on its own data "
+                            f"({before_mm:.4g} -> {after_mm:.4g} mm RMS): the solve stopped before it "
+                            "converged, or " + why)
+        return
     message = (f"{what}: the fitted model is worse than the nominal one on its own data ({before_mm:.4g} -> "
                f"{after_mm:.4g} mm RMS), so it is not written: {why}")
     if not force:

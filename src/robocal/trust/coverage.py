@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robocal.errors import DataError
-from robocal.identify.priors import posterior_covariance, prior_sigma
+from robocal.identify.priors import prior_sigma
 
 WORKSPACE_SAMPLES = 1000  # joint vectors of the workspace sample
 WORKSPACE_SEED = 0  # its seed: the same model gives the same figures
@@ -89,6 +89,24 @@ class Prediction:
         return out
 
 
+GRAM_RCOND = 1e-12  # eigenvalues of the scaled information below this (relative) carry no information
+
+
+def information_covariance(J: np.ndarray, weight: np.ndarray, s0: float) -> np.ndarray:
+    """``s0^2 (J^T J + diag(weight^2))^-1`` ``(k, k)`` through the scaled ``(k, k)`` information
+    matrix (the posterior of :func:`robocal.identify.priors.posterior_covariance` without an SVD of
+    the tall ``J (M, k)``: a calibration's thousands of rows cost one product), pseudo-inverse on
+    the directions neither the data nor a prior determine."""
+    scale = np.sqrt(np.sum(J**2, axis=0) + weight**2)
+    scale = np.where(scale > 0, scale, 1.0)
+    Js = J / scale
+    info = Js.T @ Js + np.diag((weight / scale) ** 2)
+    w, V = np.linalg.eigh(info)
+    keep = w > GRAM_RCOND * max(w.max(initial=0.0), 1e-300)
+    inv = (V[:, keep] / w[keep]) @ V[:, keep].T
+    return s0**2 * inv / np.outer(scale, scale)
+
+
 def posterior(problem, state, names: list[str], s0: float) -> np.ndarray:
     """The MAP posterior covariance ``(k, k)`` (SI) of the robot parameters ``names`` from the
     problem's information at ``state`` (nuisance marginalised) and the parameters' priors, with
@@ -96,7 +114,7 @@ def posterior(problem, state, names: list[str], s0: float) -> np.ndarray:
     space = problem.space(state.robot, names)
     J = problem.jacobian(state, space)
     sigma = np.r_[prior_sigma(state.robot, space.robot), np.full(len(space.nuisance), np.inf)]
-    cov = posterior_covariance(J, np.where(np.isfinite(sigma), s0 / sigma, 0.0), s0)
+    cov = information_covariance(J, np.where(np.isfinite(sigma), s0 / sigma, 0.0), s0)
     k = len(space.robot)
     return cov[:k, :k]
 
