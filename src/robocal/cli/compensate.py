@@ -45,10 +45,10 @@ def add_parser(sub) -> None:
                         "real tool on the flange, mm, deg, fixed-axis XYZ; e.g. from robocal tool), or "
                         "measured (the calibrated model's own tool: the SMR or probe it was measured with)")
     p.add_argument("--parameters", help="also write the corrected-parameter table (CSV) here")
+    p.add_argument("-o", "--output", required=True, help="commands CSV to write")
     p.add_argument("--result", metavar="result.json",
                    help="the calibration's result JSON (calibrate --json): warn per target where its "
                         "predicted error exceeds 3 x the validated one (outside the calibrated region)")
-    p.add_argument("-o", "--output", required=True, help="commands CSV to write")
     p.set_defaults(func=run)
 
 
@@ -70,15 +70,17 @@ def _statistics(res, targets, calibrated, nominal, args) -> str:
             f"{deg.max():.4g} deg, median {np.median(deg):.4g} deg")
 
 
-def _prediction(path, calibrated):
+def _prediction(path, calibrated, outputs: list):
     """The accuracy prediction of a result JSON (None without ``--result``), checked against the
-    calibrated model (the same parameters)."""
+    calibrated model (the same parameters) and the ``outputs`` (none of them is the JSON)."""
     if path is None:
         return None
     from robocal.calibration import load_result
     from robocal.errors import DataError
+    from robocal.io import check_outputs
     from robocal.trust.coverage import Prediction
 
+    check_outputs(outputs, [path])
     section = load_result(path).get("predicted_accuracy")
     if not isinstance(section, dict) or not isinstance(section.get("model"), dict):
         raise DataError(f"{path} has no predicted_accuracy section: calibrate again with --json to get one")
@@ -97,15 +99,15 @@ def run(args) -> int:
 
     check_format(args.output, "CSV", "-o")
     check_format(args.parameters, "CSV", "--parameters")
-    check_outputs([args.output, args.parameters], [args.calibrated, args.targets, args.nominal, args.result])
+    check_outputs([args.output, args.parameters], [args.calibrated, args.targets, args.nominal])
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)
-    prediction = _prediction(args.result, calibrated)
     targets, layout = read_poses_csv(args.targets)
     tool = {"measured": None, "flange": np.eye(4)}.get(args.tool)
     if args.tool not in ("measured", "flange"):
         tool = tool_frame(args.tool, "--tool")
     start = None if args.start is None else np.deg2rad(args.start)
+    prediction = _prediction(args.result, calibrated, [args.output, args.parameters])
     res = compensate(calibrated, nominal, targets, branch=args.branch, start=start,
                      targets_frame=args.targets_in, tool=tool)
     names, values = pose_columns(res.corrected_targets, layout)
