@@ -637,12 +637,12 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     sections = [("summary", "Summary", _summary(result))]
     if cal.ok:
         sections.append(("errors", "Errors before and after", _errors_section(cal, val)))
-    sections.append(("parameters", "Parameters", _parameters(result)))
     from robocal.report.trust import section
 
     accuracy = section(result)
     if accuracy:
         sections.append(("predicted-accuracy", "Predicted accuracy over the workspace", accuracy))
+    sections.append(("parameters", "Parameters", _parameters(result)))
     selection = _model_selection(result.get("model_selection"))
     if selection:
         sections.append(("model-selection", "Error model selection", selection))
