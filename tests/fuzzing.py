@@ -222,10 +222,10 @@ def build_readers(folder: Path) -> dict[str, Reader]:
         lambda d: ["export", str(d / "r.urdf"), "--yaml", str(d / "out.yaml")],
         ["out.yaml"],
     )
-    # a validation file of the same readings in another order (one file given twice is refused)
-    lines = (folder / "point.csv").read_text().splitlines(keepends=True)
-    k = next(i for i, line in enumerate(lines) if not line.startswith("#")) + 1  # after the header row
-    (folder / "point_val.csv").write_text("".join(lines[:k] + lines[:k - 1:-1]))
+    # a validation file of the same simulated robot at other poses (a validation repeating the
+    # calibration poses is judged on none of them: refused)
+    _run(["simulate", "--robot", str(folder / "truth_point.yaml"), "--as-is", "--poses", "12", "--seed", "2",
+          "-o", str(folder / "point_val.csv"), "--truth", str(folder / "truth_point_val.yaml")])
     _run(
         [
             "calibrate",

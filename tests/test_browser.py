@@ -138,10 +138,10 @@ def _meca500_report(tmp_path_factory):
 
 
 @pytest.mark.parametrize("make, sections", [
-    (_demo_report, ["summary", "errors", "parameters", "model-selection", "identifiability", "correlation",
-                    "rejected", "history"]),
-    (_meca500_report, ["summary", "errors", "parameters", "model-selection", "identifiability", "correlation",
-                       "history"]),
+    (_demo_report, ["summary", "errors", "predicted-accuracy", "parameters", "model-selection",
+                    "identifiability", "correlation", "rejected", "history"]),
+    (_meca500_report, ["summary", "errors", "predicted-accuracy", "parameters", "model-selection",
+                       "identifiability", "correlation", "history"]),
 ], ids=["demo", "real-meca500"])
 def test_real_reports_open_with_every_section(browser, tmp_path, tmp_path_factory, make, sections):
     """The demo's report and a real Meca500 calibration's: no console message, every section and

@@ -279,7 +279,7 @@ def test_factory_model_as_nominal_seeds_ik_compensate_and_plan(tmp_path):
     out = tmp_path / "commands.csv"
     assert main(["compensate", str(tmp_path / "cal.yaml"), str(tmp_path / "targets.csv"), "--nominal",
                  str(tmp_path / "factory.yaml"), "-o", str(out)]) == 0
-    got = np.deg2rad(np.loadtxt(out, delimiter=",", skiprows=1, usecols=range(6)))
+    got = np.deg2rad(np.loadtxt(out, delimiter=",", skiprows=2, usecols=range(6)))  # marker, header
     assert np.linalg.norm(cal.fk(got)[:, :3, 3] - T[:, :3, 3], axis=1).max() < 1e-9
     flange = cal.with_frames(base=factory.base, tool=factory.tool)
     cols, vals = pose_columns(flange.fk(q), {"length": "mm", "orientation": "deg"})

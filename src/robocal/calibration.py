@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import datetime
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import partial
 
 import numpy as np
 
+from robocal.damped_least_squares import Status
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
 from robocal.errors import DataError, IdentificationError
@@ -40,6 +41,9 @@ from robocal.model_selection import calibrate_cyclic, select_error_model, select
 from robocal.progress import Progress
 from robocal.report.metrics import position_stats
 from robocal.schema import RESULT_SCHEMA, validate
+from robocal.trust.consistency import Consistency, check_fit, check_not_worse
+from robocal.trust.coverage import accuracy_line, predict, prediction
+from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, independent
 from robocal.version import __version__
 
 RESULT_FORMAT = "robocal-result/1"
@@ -75,6 +79,7 @@ class Judged(_BeforeAfter):
     problem: CalibrationProblem
     states: tuple[State, State]
     errors: tuple[np.ndarray, np.ndarray]
+    repeated: int = 0  # rows left out: they repeat calibration poses (robocal.trust.provenance)
 
 
 @dataclass
@@ -102,6 +107,8 @@ class CalibrationResult(_BeforeAfter):
     nongeometric: dict | None = None
     model_selection: dict | None = None
     provenance: dict = field(default_factory=dict)
+    consistency: Consistency | None = None
+    predicted_accuracy: dict | None = None
 
     @property
     def state(self) -> State:
@@ -270,11 +277,18 @@ class CalibrationResult(_BeforeAfter):
                               else {"cost": "m^2", "rms": "m"}),
             "warnings": self.warnings,
         }
+        if self.consistency is not None:
+            out["consistency"] = self.consistency.to_dict()
+        if self.predicted_accuracy is not None:
+            out["predicted_accuracy"] = self.predicted_accuracy
         if self.nongeometric is not None:
             out["nongeometric"] = self.nongeometric
         if self.model_selection is not None:
             out["model_selection"] = self.model_selection
         if self.judged:
+            out["validation_independence"] = [
+                {"file": j.data.label, "rows": len(j.data) + j.repeated, "repeated_rows": j.repeated,
+                 "rows_judged": len(j.data), "tolerance_deg": JOINT_REPEAT_TOL_DEG} for j in self.judged]
             out["data"]["validation_file"] = ", ".join(j.data.source for j in self.judged)
             out["validation_before"] = self.validation_before
             out["validation"] = self.validation
@@ -364,6 +378,8 @@ class CalibrationResult(_BeforeAfter):
         if len(self.rejected):
             lines.append(f"rejected observations: {len(self.rejected)}; without them the calibration "
                          f"set's RMS is {self.after_inliers['rms']:.4f} mm")
+        if self.predicted_accuracy is not None:
+            lines.append(accuracy_line(self.predicted_accuracy))
         lines += [f"WARNING: {w}" for w in self.warnings]
         return "\n".join(lines)
 
@@ -481,13 +497,25 @@ def _as_sets(data, what: str) -> list:
 def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data, force: bool,
            warnings: list[str]) -> Judged:
     """Statistics of ``data`` with the two states' robots, the nuisance (planes) carried over;
-    the calibrated model must fit them as a robot can (another robot's data otherwise)."""
-    vproblem = CalibrationProblem(start, data)
-    judged = tuple(vproblem.carried_state(s.robot, problem.export_nuisance(s)) for s in states)
-    result = Judged(data=data, problem=vproblem, states=judged,
-                    errors=tuple(vproblem.position_errors(s) for s in judged))
-    check_residual(result.after["rms"], vproblem.modelled_points(judged[1]), "the validation data",
-                   force=force, warnings=warnings)
+    the calibrated model must fit them as a robot can (another robot's data otherwise). Rows that
+    repeat calibration poses are then left out (warned; DataError when all do)."""
+
+    def judged(rows) -> Judged:
+        vproblem = CalibrationProblem(start, rows)
+        carried = tuple(vproblem.carried_state(s.robot, problem.export_nuisance(s)) for s in states)
+        return Judged(data=rows, problem=vproblem, states=carried,
+                      errors=tuple(vproblem.position_errors(s) for s in carried))
+
+    result = judged(data)
+    check_residual(result.after["rms"], result.problem.modelled_points(result.states[1]),
+                   "the validation data", force=force, warnings=warnings)
+    what = f"the validation data {data.label or ''}".strip()
+    rows, repeated = independent(data, problem.datasets, what)
+    if repeated:
+        warnings.append(f"{what}: {repeated} of its {len(data)} rows repeat calibration poses (joints within "
+                        f"{JOINT_REPEAT_TOL_DEG:g} deg): the held-out figures are computed on the other "
+                        f"{len(rows)} rows only")
+        result = replace(judged(rows), repeated=repeated)
     if result.after["rms"] > result.before["rms"]:
         warnings.append(f"the calibrated model is worse than the nominal on the validation data "
                         f"{data.label} ({result.before['rms']:.4g} -> {result.after['rms']:.4g} mm RMS): the "
@@ -549,10 +577,14 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         result = select_error_model(fit, datasets[0], validations, seed=seed, rtol=rtol,
                                     warm_final=method == "lsq")
         result.settings["nongeometric"] = "auto"
-        return result
-    if "cyclic" in terms:
-        return calibrate_cyclic(fit, [t for t in terms if t != "cyclic"], validations)
-    return fit(terms, validations, warm_start)
+    elif "cyclic" in terms:
+        result = calibrate_cyclic(fit, [t for t in terms if t != "cyclic"], validations)
+    else:
+        result = fit(terms, validations, warm_start)
+    result.predicted_accuracy, more = predict(result.robot, prediction(result),
+                                              np.vstack([d.joints for d in result.problem.datasets]))
+    result.warnings += more
+    return result
 
 
 def resolve_nongeometric(spec, method: str, datasets: list) -> str | list | None:
@@ -619,12 +651,31 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
                     "robocal_version": __version__,
                     "robot": {"name": robot.name, "description": robot.description},
                     "data": [d.source for d in datasets], "validation": [v.source for v in validations],
+                    "fingerprints": {"data": [fingerprint(d.joints) for d in datasets],
+                                     "validation": [fingerprint(v.joints) for v in validations]},
                     "sigma_mm": {k: v * 1e3 for k, v in (sigma or {}).items()}})
+    _check_consistency(result, sigma, seed, force)
     states = (state0, State(final_robot, out.state.nuisance))
     result.judged = [_judge(problem, start, states, v, force, warnings) for v in validations]
     if terms:
         result.nongeometric = _nongeometric_section(result, terms, estimated_terms)
     return result
+
+
+def _check_consistency(result: CalibrationResult, sigma: dict | None, seed: int, force: bool) -> None:
+    """The residual test of the fit (:mod:`robocal.trust.consistency`) into the result and its
+    warnings; PlausibilityError (``force``: a warning) when the fit is worse than nominal."""
+    problem = result.problem
+    result.consistency = check_fit(result.state.robot, result.start, problem.observations,
+                                   problem.item_error_vectors(result.state),
+                                   result.space.size, sigma=sigma, seed=seed)
+    kept = slice(None) if result.solver.item_weights is None else result.solver.item_weights != 0
+    before, after_rms = (position_stats(e[kept])["rms"] for e in result.errors)
+    # a solve stopped by a limit or the user's threshold may end anywhere: that is said elsewhere;
+    # a converged fit worse than nominal absorbed a mistake in the data
+    check_not_worse(before, after_rms, "the calibration data", result.consistency.diagnosis, force=force,
+                    warnings=result.warnings, refuse=result.solver.status == Status.CONVERGED)
+    result.warnings += result.consistency.warnings("the calibration")
 
 
 def _warm_state(problem: CalibrationProblem, warm: CalibrationResult, start) -> State:

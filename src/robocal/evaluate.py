@@ -11,6 +11,7 @@ from robocal.identify.observations import observation_for
 from robocal.identify.plausibility import check_joint_limits, check_residual, check_spread
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.metrics import position_stats
+from robocal.trust.consistency import check_fit
 
 
 def model_errors(robot, data) -> np.ndarray:
@@ -63,8 +64,10 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     ``{"n", "rms", "mean", "max", "p95"}`` plus ``"errors_mm"`` (N,) per-row error magnitudes
     (plane/distance: signed), ``"error_vectors_mm"`` (N, 3) for point/pose data, ``"kind"``,
     ``"n_poses"`` and, with a fitted frame, ``"robot"`` (the registered model) and
-    ``"registration_rms_mm"``. PlausibilityError when the model misses the data by more than a
-    robot's errors can explain (``force=True``: a warning in ``"warnings"``).
+    ``"registration_rms_mm"``, and ``"consistency"``: the residual test against the instrument's noise
+    (:mod:`robocal.trust.consistency`; its warnings join ``"warnings"``). PlausibilityError when the
+    model misses the data by more than a robot's errors can explain (``force=True``: a warning in
+    ``"warnings"``).
     """
     out, warnings = {}, []
     for d in (data, frame_from):
@@ -88,6 +91,10 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
                    warnings=warnings)
     if not (fit_frame or frame_from is not None) and data.kind in ("point", "pose"):
         _check_frame_moved(robot, data, stats["rms"], warnings)
+    unknowns = 6 + 3 * data.n_smr if fit_frame and frame_from is None else 0
+    consistency = check_fit(robot, robot, [obs], [err], unknowns)
+    warnings += consistency.warnings("the model")
+    stats["consistency"] = consistency.to_dict()
     stats["kind"] = data.kind
     stats["n_poses"] = data.n_poses
     if err.ndim == 2:

@@ -51,6 +51,9 @@ def add_parser(sub) -> None:
                    help="compensate targets robocal already compensated (their marker line names the run)")
     p.add_argument("--parameters", help="also write the corrected-parameter table (CSV) here")
     p.add_argument("-o", "--output", required=True, help="commands CSV to write")
+    p.add_argument("--result", metavar="result.json",
+                   help="the calibration's result JSON (calibrate --json): warn per target where its "
+                        "predicted error exceeds 3 x the validated one (outside the calibrated region)")
     p.set_defaults(func=run)
 
 
@@ -70,6 +73,25 @@ def _statistics(res, targets, calibrated, nominal, args) -> str:
     mm, deg = np.linalg.norm(err[:, :3], axis=1) * 1e3, np.rad2deg(np.linalg.norm(err[:, 3:], axis=1))
     return (f": corrections largest {mm.max():.4g} mm, median {np.median(mm):.4g} mm; orientation largest "
             f"{deg.max():.4g} deg, median {np.median(deg):.4g} deg")
+
+
+def _prediction(path, calibrated, outputs: list):
+    """The accuracy prediction of a result JSON (None without ``--result``), checked against the
+    calibrated model (the same parameters) and the ``outputs`` (none of them is the JSON)."""
+    if path is None:
+        return None
+    from robocal.calibration import load_result
+    from robocal.errors import DataError
+    from robocal.io import check_outputs
+    from robocal.trust.coverage import Prediction
+
+    check_outputs(outputs, [path])
+    section = load_result(path).get("predicted_accuracy")
+    if not isinstance(section, dict) or not isinstance(section.get("model"), dict):
+        raise DataError(f"{path} has no predicted_accuracy section: calibrate again with --json to get one")
+    prediction = Prediction.from_dict(section["model"])
+    prediction.error_mm(calibrated, calibrated.limits.mean(axis=1)[None])  # DataError: another model's
+    return prediction
 
 
 def run(args) -> int:
@@ -93,6 +115,7 @@ def run(args) -> int:
     if args.tool not in ("measured", "flange"):
         tool = tool_frame(args.tool, "--tool")
     start = None if args.start is None else np.deg2rad(args.start)
+    prediction = _prediction(args.result, calibrated, [args.output, args.parameters])
     res = compensate(calibrated, nominal, targets, branch=args.branch, start=start,
                      targets_frame=args.targets_in, tool=tool)
     names, values = pose_columns(res.corrected_targets, layout)
@@ -123,6 +146,11 @@ def run(args) -> int:
         print(f"targets: {what} in {where}")
         print(f"compensated {len(targets)} target(s){_statistics(res, targets, calibrated, nominal, args)}; "
               f"largest model residual {res.position_error.max() * 1e3:.3g} mm -> {args.output}")
-    for warning in res.warnings()[:20]:
+    warnings = res.warnings()[:20]
+    if prediction is not None:
+        from robocal.trust.coverage import target_warnings
+
+        warnings += target_warnings(prediction, calibrated, res.joints)
+    for warning in warnings:
         print(f"warning: {warning}")
     return 0 if res.converged.all() else 1

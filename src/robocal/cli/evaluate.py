@@ -62,7 +62,8 @@ def run(args) -> int:
     summary = {k: stats[k] for k in keys}
     out = {"model": args.model, "data": args.data, "kind": stats["kind"], "n_poses": stats["n_poses"],
            "fit_frame": bool(args.fit_frame), "frame_from": args.frame_from, "units": "mm",
-           "evaluation": summary, "errors_mm": stats["errors_mm"].tolist(), "warnings": stats["warnings"]}
+           "evaluation": summary, "errors_mm": stats["errors_mm"].tolist(),
+           "consistency": stats["consistency"], "warnings": stats["warnings"]}
     if "rotation_deg" in stats:
         out["rotation_deg"] = stats["rotation_deg"]
     if args.json:

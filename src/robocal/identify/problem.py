@@ -88,6 +88,13 @@ class CalibrationProblem:
         for obs, nu in zip(self.observations, self._nuisance, strict=True):
             yield obs, nuisance[nu]
 
+    def item_error_vectors(self, state: State) -> list[np.ndarray]:
+        """Per measurement set: each item's unweighted error ``(n_items, d)`` (m): measured minus
+        modelled position (d = 3) for points and poses, the signed deviation (d = 1) for planes and
+        distances."""
+        return [obs.residuals(state.robot, nu).reshape(obs.n_items, obs.rows_per_item)[:, :3]
+                for obs, nu in self._with_nuisance(state.nuisance)]
+
     def item_blocks(self) -> list[np.ndarray]:
         """Per measurement set: the indices of its items in :meth:`position_errors`."""
         return list(self._items)

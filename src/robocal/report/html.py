@@ -198,6 +198,9 @@ def _lead(result: dict) -> str:
                                       "error, optimistic; judge on poses the fit did not see</span>")
         lines.append(f"Accuracy {what}: <b class='good'>{_num(after['rms'])} mm RMS</b>{start}, "
                      f"max {_num(after.get('max'))} mm, p95 {_num(after.get('p95'))} mm{caveat}")
+    from robocal.report.trust import headline
+
+    lines += headline(result)
     if "converged" in result and not result.get("converged"):
         lines.append("<b class='bad'>The solver did not converge</b>: "
                      f"{esc(result.get('status'))}, {esc(result.get('message'))}")
@@ -673,6 +676,11 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     sections = [("summary", "Summary", _summary(result))]
     if cal.ok:
         sections.append(("errors", "Errors before and after", _errors_section(cal, val)))
+    from robocal.report.trust import section
+
+    accuracy = section(result)
+    if accuracy:
+        sections.append(("predicted-accuracy", "Predicted accuracy over the workspace", accuracy))
     sections.append(("parameters", "Parameters", _parameters(result)))
     selection = _model_selection(result.get("model_selection"))
     if selection:

@@ -314,3 +314,19 @@ def accuracy_curve(n: np.ndarray, planned: np.ndarray, random: np.ndarray,
     ax.set_ylabel("predicted RMS error (mm)")
     ax.legend(frameon=False)
     return fig
+
+
+@_styled
+def error_vs_distance(distance: np.ndarray, predicted: np.ndarray, validated: float, factor: float) -> Figure:
+    """Predicted RMS error (mm) of the workspace sample against its joint distance (deg) to the
+    nearest calibration pose, with the validated error and ``factor`` times it as lines."""
+    fig = _figure(6.4, 2.8, top=0.35)
+    ax = fig.add_subplot()
+    ax.plot(distance, predicted, "o-", color=BEFORE, ms=3, label="predicted over the workspace")
+    ax.axhline(validated, color=AFTER, lw=1.2, label="validated")
+    ax.axhline(factor * validated, color="grey", lw=0.8, ls="--", label=f"{factor:g} x validated")
+    _log_if_wide(ax, np.append(predicted, validated), "y")
+    ax.set_xlabel("joint distance to the nearest calibration pose (deg)")
+    ax.set_ylabel("predicted RMS error (mm)")
+    _legend_above(ax)
+    return fig

@@ -1,0 +1,344 @@
+"""Residuals against the instrument: does a fitted model miss its data by more than the measurement
+noise and the error model's unmodelled budget explain, and if so, why?
+
+**The residual test.** Each residual item (a point's 3-D error, a plane deviation, a distance) is
+expected to scatter with variance ``sigma_i^2 + b^2`` per coordinate: ``sigma_i`` the
+instrument's 1-sigma (the file's ``sigma_mm`` column, else the ``sigma`` given per kind, else the
+documented default of the instrument, :data:`robocal.identify.problem.KIND_SIGMA`: a laser tracker
+20 um, a touch probe 10 um, a ball bar 5 um) and ``b`` the unmodelled-error budget of the error
+model: what a real robot's errors outside the model (compliance, gears, temperature) can leave
+after a fit, :data:`UNMODELLED_MM_PER_M` per metre of the robot's reach per coordinate
+(generous: the real IRB 120 data leave 0.36 mm per coordinate at 0.66 m after a geometric fit, the
+Meca500 data 0.025 mm at 0.36 m). The statistic is ``X = sum_i |e_i|^2 / (sigma_i^2 + b^2)`` with
+``dof = (residual components) - (estimated unknowns)``; the fit is *inconsistent* when the
+chi-square upper tail ``P(chi2(dof) >= X)`` is below :data:`ALPHA`.
+
+**Change points along the row order.** Per point or pose file, a mean shift of the 3-D residual
+along the measuring order (binary segmentation's first split, CUSUM statistic
+``max_k |S_k|^2 / (k (N - k) / N)`` with ``S_k`` the cumulative sum of the centred residuals),
+in the tracker frame (the tracker or the base moved) and in the flange frame (the SMR was moved
+to another nest or re-seated). Its p-value is a permutation test (:data:`PERMUTATIONS` seeded
+shuffles of the rows, both frames in each; exact when the rows are exchangeable, as they are
+for a model that fits). A change point is reported when ``p <`` :data:`STEP_ALPHA` and the step
+is larger than :data:`STEP_MIN_SIGMAS` noise sigmas and :data:`STEP_MIN_RESIDUAL_RATIO` of the
+residual's 3-D RMS (a real, but negligible, drift is not a finding). A linear trend that explains
+the residual better than the step is called a drift.
+
+**Diagnosis** of an inconsistent fit, in order: the change point; the orientation convention of a
+6-DOF pose file (quaternions scalar-last under ``qw,qx,qy,qz`` headers, or the inverse rotation:
+each tried, the one that fits named); the length unit (:func:`robocal.diagnose.length_unit`); a
+joint column exchange or sign flip (:func:`robocal.diagnose.joint_mixup`).
+
+**Worse than nominal.** A fitted model that misses its own data by more than the nominal model
+with the frames fitted (beyond :data:`WORSE_TOLERANCE`) is not written
+(:func:`check_not_worse`, PlausibilityError; ``force`` turns it into a warning).
+
+False alarms measured on clean simulated campaigns: ``benchmarks/bench_trust.py``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+from scipy.stats import chi2
+
+from robocal.data.measurements import robot_reach
+from robocal.data.registration import register_frame
+from robocal.diagnose import GAIN, fit_rms_mm, joint_mixup, length_unit
+from robocal.errors import PlausibilityError, RobocalError
+from robocal.identify.plausibility import FORCE_HINT
+from robocal.identify.problem import KIND_SIGMA
+
+ALPHA = 1e-3  # the residual test's false-alarm probability per fit (model and noise right)
+UNMODELLED_MM_PER_M = 0.5  # unmodelled-error budget: mm (1 sigma, per coordinate) per metre of reach
+STEP_ALPHA = 0.01  # a change point is reported below this permutation p-value ...
+STEP_MIN_SIGMAS = 5.0  # ... when the step exceeds this many noise sigmas ...
+STEP_MIN_RESIDUAL_RATIO = 0.5  # ... and this fraction of the residual's 3-D RMS
+PERMUTATIONS = 199  # shuffles of the change-point permutation test (seeded)
+MIN_SEGMENT_FRACTION = 0.05  # a change point leaves at least this fraction of the rows on each side ...
+MIN_SEGMENT_ROWS = 3  # ... and at least this many rows
+MIN_CHANGE_ROWS = 12  # files with fewer point/pose rows are not searched for change points
+ORIENTATION_FIT_DEG = 1.0  # a pose file's orientation convention fits when it leaves at most this RMS
+WORSE_TOLERANCE = 1.001  # a fit whose RMS exceeds the nominal's by this factor is worse than nominal
+_PERMUTATION_BATCH = 20  # shuffles evaluated together (bounds the memory to 20 x rows x 6 floats)
+
+
+@dataclass(frozen=True)
+class ChangePoint:
+    """A mean shift of the residual along the row order of one file: the first row after it
+    (``index`` 0-based among the file's rows; ``row`` the 1-based source row), the frame it is
+    constant in (``"tracker"`` or ``"flange"``), the step (mm, 3-D norm of the mean difference),
+    the permutation p-value and whether a step or a linear drift explains it better."""
+
+    file: str
+    index: int
+    row: int
+    n_rows: int
+    frame: str
+    step_mm: float
+    p_value: float
+    shape: str
+
+    def sentence(self) -> str:
+        name = self.file or "the data"
+        where = f"{name} row {self.row} (of {self.n_rows})"
+        if self.shape == "drift":
+            return (f"the residuals drift along the measuring order of {name} ({self.step_mm:.3g} mm "
+                    f"between the halves split at row {self.row}, in the {self.frame} frame, permutation "
+                    f"p = {self.p_value:.2g}): the tracker, the SMR or the robot drifted during the campaign "
+                    "(temperature, a loose nest); re-measure, or calibrate the stable part")
+        cause = ("the SMR was moved to another nest or re-seated on the tool" if self.frame == "flange"
+                 else "the tracker or the robot base moved (bumped)")
+        return (f"the residuals step by {self.step_mm:.3g} mm at {where}, constant in the {self.frame} frame "
+                f"(permutation p = {self.p_value:.2g}): {cause} there; calibrate the two parts as separate "
+                "files (another SMR index or another tracker station) or re-measure")
+
+    def to_dict(self) -> dict:
+        return {"file": self.file, "index": self.index, "row": self.row, "n_rows": self.n_rows,
+                "frame": self.frame, "step_mm": self.step_mm, "p_value": self.p_value, "shape": self.shape}
+
+
+@dataclass
+class Consistency:
+    """The residual test of one fit (module docstring): the statistic, its degrees of freedom and
+    upper-tail p-value, the residual and expected RMS (mm, per item: 3-D for points), the noise and
+    budget (mm, per coordinate), the verdict, change points and the diagnosis sentences."""
+
+    statistic: float
+    dof: int
+    p_value: float
+    rms_mm: float
+    expected_rms_mm: float
+    noise_mm: float
+    budget_mm: float
+    change_points: list[ChangePoint] = field(default_factory=list)
+    diagnosis: list[str] = field(default_factory=list)
+
+    @property
+    def misfit(self) -> bool:
+        """The residuals exceed what the noise and the budget explain (the chi-square test)."""
+        return self.p_value < ALPHA
+
+    @property
+    def verdict(self) -> str:
+        """'consistent', 'step' (a change point, the residual test passes) or 'inconsistent'."""
+        return "inconsistent" if self.misfit else "step" if self.change_points else "consistent"
+
+    def warnings(self, what: str = "the fit") -> list[str]:
+        """The warning lines of this test (none when consistent)."""
+        out = []
+        if self.misfit:
+            out.append(f"{what} misses its data by more than the instrument and the error model explain: "
+                       f"{self.rms_mm:.4g} mm RMS against {self.expected_rms_mm:.3g} mm expected (noise "
+                       f"{self.noise_mm:.3g} mm, unmodelled budget {self.budget_mm:.3g} mm per coordinate; "
+                       f"chi-square {self.statistic:.4g} on {self.dof} dof, p = {self.p_value:.2g})"
+                       + ("" if self.diagnosis else ": the data do not tell why (another robot, a mistake in "
+                          "the file, or errors the model lacks)"))
+        out += [f"{what}: {d}" for d in self.diagnosis]
+        return out
+
+    def to_dict(self) -> dict:
+        return {"test": "chi-square of the weighted residual sum", "statistic": self.statistic,
+                "dof": self.dof, "p_value": self.p_value, "alpha": ALPHA, "rms_mm": self.rms_mm,
+                "expected_rms_mm": self.expected_rms_mm, "noise_mm": self.noise_mm,
+                "budget_mm": self.budget_mm, "verdict": self.verdict,
+                "change_points": [c.to_dict() for c in self.change_points], "diagnosis": self.diagnosis}
+
+
+def budget_m(robot) -> float:
+    """The unmodelled-error budget (m, 1 sigma per coordinate) of ``robot``'s error model."""
+    return UNMODELLED_MM_PER_M * 1e-3 * robot_reach(robot)
+
+
+def item_noise(data, kind: str, n_items: int, item_of_rows: np.ndarray,
+               sigma: dict | None = None) -> np.ndarray:
+    """1-sigma (m) of each of ``n_items`` residual items of ``data``: its sigma column (per row,
+    ``item_of_rows`` maps rows to items), else ``sigma[kind]``, else :data:`KIND_SIGMA`."""
+    default = (sigma or {}).get(kind, KIND_SIGMA[kind])
+    out = np.full(n_items, float(default))
+    if data.sigma is not None:
+        out[item_of_rows] = data.sigma
+    return out
+
+
+def residual_test(errors: list[np.ndarray], noise: list[np.ndarray], n_unknowns: int,
+                  budget: float) -> Consistency:
+    """The chi-square test of item errors ``errors`` (per file: ``(N, 3)`` or ``(N,)``, m) against
+    their noise ``(N,)`` (m, 1 sigma per coordinate) and the budget (m), with ``n_unknowns``
+    estimated unknowns."""
+    stat, comps, sq, expected, n = 0.0, 0, 0.0, 0.0, 0
+    noise_sq = 0.0
+    for e, s in zip(errors, noise, strict=True):
+        e = e.reshape(len(e), -1)
+        var = s**2 + budget**2
+        stat += float(np.sum(np.sum(e**2, axis=1) / var))
+        comps += e.size
+        sq += float(np.sum(e**2))
+        expected += float(np.sum(var) * e.shape[1])
+        noise_sq += float(np.sum(s**2))
+        n += len(e)
+    dof = max(comps - n_unknowns, 1)
+    return Consistency(statistic=stat, dof=dof, p_value=float(chi2.sf(stat, dof)),
+                       rms_mm=float(np.sqrt(sq / max(n, 1))) * 1e3,
+                       expected_rms_mm=float(np.sqrt(expected / max(n, 1))) * 1e3,
+                       noise_mm=float(np.sqrt(noise_sq / max(n, 1))) * 1e3, budget_mm=budget * 1e3)
+
+
+def _cusum(X: np.ndarray, splits: np.ndarray) -> np.ndarray:
+    """CUSUM statistic ``(..., K)`` of residuals ``X (..., N, 3)`` at the splits (first rows of the
+    second segment)."""
+    N = X.shape[-2]
+    S = np.cumsum(X - X.mean(axis=-2, keepdims=True), axis=-2)[..., splits - 1, :]
+    return np.sum(S**2, axis=-1) / (splits * (N - splits) / N)
+
+
+def change_point(errors: np.ndarray, rotations: np.ndarray, noise: float, seed: int = 0):
+    """The most significant mean shift of residuals ``errors (N, 3)`` (m) along the row order, in
+    the tracker frame and in the flange frame (``rotations (N, 3, 3)``: flange orientation per
+    row), as ``(index, frame, step_m, p_value, shape)``, or None when it is not reported (module
+    docstring: p-value, step size against ``noise`` (m, 1 sigma) and the residual)."""
+    N = len(errors)
+    m = max(MIN_SEGMENT_ROWS, int(MIN_SEGMENT_FRACTION * N))
+    if max(MIN_CHANGE_ROWS, 2 * m + 1) > N:
+        return None
+    X = np.stack([errors, np.einsum("nji,nj->ni", rotations, errors)])  # tracker, flange frame
+    splits = np.arange(m, N - m + 1)
+    observed = _cusum(X, splits)  # (2, K)
+    f, j = np.unravel_index(np.argmax(observed), observed.shape)
+    best = observed[f, j]
+    rng = np.random.default_rng(seed)
+    exceed = 0
+    for start in range(0, PERMUTATIONS, _PERMUTATION_BATCH):
+        P = min(_PERMUTATION_BATCH, PERMUTATIONS - start)
+        order = np.argsort(rng.random((P, N)), axis=1)
+        exceed += int(np.count_nonzero(_cusum(X[:, order], splits).max(axis=(0, 2)) >= best))
+    p = (1 + exceed) / (PERMUTATIONS + 1)
+    k = int(splits[j])
+    Y = X[f]
+    step = float(np.linalg.norm(Y[k:].mean(axis=0) - Y[:k].mean(axis=0)))
+    rms = float(np.sqrt(np.mean(np.sum(errors**2, axis=1))))
+    if p >= STEP_ALPHA or step < STEP_MIN_SIGMAS * noise or step < STEP_MIN_RESIDUAL_RATIO * rms:
+        return None
+    sse_step = float(np.sum((Y[:k] - Y[:k].mean(axis=0)) ** 2) + np.sum((Y[k:] - Y[k:].mean(axis=0)) ** 2))
+    t = np.arange(N) - (N - 1) / 2
+    coef = (t @ (Y - Y.mean(axis=0))) / (t @ t)
+    sse_trend = float(np.sum((Y - Y.mean(axis=0) - np.outer(t, coef)) ** 2))
+    return k, ("tracker", "flange")[f], step, p, "drift" if sse_trend < sse_step else "step"
+
+
+def find_change_points(robot, observations, errors: list[np.ndarray], noise: list[np.ndarray],
+                       seed: int = 0) -> list[ChangePoint]:
+    """The change points (:func:`change_point`) of every point or pose file: ``observations`` their
+    observation models (``.data``, ``.kind``), ``errors`` their item errors (m) with ``robot``."""
+    out = []
+    for obs, e, s in zip(observations, errors, noise, strict=True):
+        if obs.kind not in ("point", "pose"):
+            continue
+        data = obs.data
+        R = robot.fk(data.joints, smr=data.smr, approach=data.approach, travel=data.travel)[:, :3, :3]
+        found = change_point(e, R, float(np.sqrt(np.mean(s**2))), seed)
+        if found is not None:
+            k, frame, step, p, shape = found
+            out.append(ChangePoint(file=data.label, index=k, row=int(data.source_row[k]), n_rows=len(data),
+                                   frame=frame, step_mm=step * 1e3, p_value=p, shape=shape))
+    return out
+
+
+def _tool_rotation(A: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """The rotation ``T`` minimising sum |A_i T - R_i| (``A, R (N, 3, 3)``)."""
+    U, _, Vt = np.linalg.svd(np.einsum("nji,njk->ik", A, R))
+    return U @ np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))]) @ Vt
+
+
+def _angle_rms_deg(A: np.ndarray, R: np.ndarray) -> float:
+    """RMS angle (deg) of ``R_i`` from ``A_i T`` with the best tool rotation ``T``."""
+    D = np.swapaxes(A @ _tool_rotation(A, R), 1, 2) @ R
+    ang = Rotation.from_matrix(D).magnitude()
+    return float(np.rad2deg(np.sqrt(np.mean(ang**2))))
+
+
+def orientation_convention(robot, data) -> str | None:
+    """For a 6-DOF pose file: another reading of its quaternions (scalar-last under
+    ``qw,qx,qy,qz`` headers, the inverse rotation, both) under which the model's orientations fit
+    (within :data:`ORIENTATION_FIT_DEG` and :data:`robocal.diagnose.GAIN` times better than as
+    given), as a sentence; None otherwise."""
+    if data.kind != "pose" or data.rotations is None:
+        return None
+    try:
+        reg = register_frame(robot, data)
+    except (RobocalError, np.linalg.LinAlgError):
+        return None
+    links = replace(robot, base=np.eye(4), tool=np.eye(4), smr=np.zeros((0, 3)))
+    A = reg.base[:3, :3] @ links.fk(data.joints, approach=data.approach, travel=data.travel)[:, :3, :3]
+    R = data.rotations
+    q = Rotation.from_matrix(R).as_quat()  # x, y, z, w: the file's qx, qy, qz, qw as read
+    last = Rotation.from_quat(q[:, [3, 0, 1, 2]]).as_matrix()  # the file's columns held x, y, z, w
+    inverse = "the inverse rotations (tool to tracker where tracker to tool was meant)"
+    readings = {"as given": R, "scalar-last (x, y, z, w) under the qw, qx, qy, qz headers": last,
+                inverse: np.swapaxes(R, 1, 2), "scalar-last and inverse": np.swapaxes(last, 1, 2)}
+    fits = {what: _angle_rms_deg(A, Rv) for what, Rv in readings.items()}
+    given = fits.pop("as given")
+    what, best = min(fits.items(), key=lambda t: t[1])
+    if best <= ORIENTATION_FIT_DEG and best * GAIN < given:
+        return (f"the quaternions look {what}: read so, the orientations fit the model to {best:.3g} deg RMS "
+                f"({given:.3g} deg as given); fix the column order or the rotation's direction in the file")
+    return None
+
+
+def diagnose_misfit(robot, datasets) -> list[str]:
+    """Why ``robot`` (nominal links, frames fitted or not) misses ``datasets`` (Measurements), after
+    the change points: orientation convention, length unit, joint columns (first that fits per
+    file). Empty when the data do not tell."""
+    out = []
+    for d in datasets:
+        if d.kind not in ("point", "pose") or len(d) < 6:
+            continue
+        given = fit_rms_mm(robot, d)
+        reason = orientation_convention(robot, d)
+        if reason is None and given > 0 and np.isfinite(given):
+            reason = length_unit(robot, d, given) or joint_mixup(robot, d, given)
+        if reason:
+            out.append((f"{d.label}: " if len(datasets) > 1 and d.label else "") + reason)
+    return out
+
+
+def check_fit(robot, start, observations, errors: list[np.ndarray], n_unknowns: int, *,
+              sigma: dict | None = None, seed: int = 0) -> Consistency:
+    """The residual test, change points and (when the test fails or a change point is found) the
+    diagnosis of a fit: ``robot`` the fitted model, ``start`` the nominal model (frames fitted) the
+    diagnosis tries its hypotheses on, ``observations`` the files' observation models, ``errors``
+    their item errors with ``robot`` (m), ``n_unknowns`` the unknowns estimated, ``sigma`` the noise
+    per kind (m) given for files without a sigma column."""
+    noise = [item_noise(obs.data, obs.kind, len(e), obs.item_of_rows(), sigma)
+             for obs, e in zip(observations, errors, strict=True)]
+    result = residual_test(errors, noise, n_unknowns, budget_m(robot))
+    result.change_points = find_change_points(robot, observations, errors, noise, seed)
+    result.diagnosis = [c.sentence() for c in result.change_points]
+    if result.misfit and not result.change_points:
+        result.diagnosis += diagnose_misfit(start, [obs.data for obs in observations])
+    return result
+
+
+def check_not_worse(before_mm: float, after_mm: float, what: str, diagnosis: list[str], *,
+                    force: bool = False, warnings: list[str] | None = None, refuse: bool = True) -> None:
+    """A fitted model must not miss its own data by more than the nominal one (RMS, mm): the fit
+    absorbed a mistake (PlausibilityError naming ``diagnosis``; ``force``: a warning). ``refuse``
+    False (a solve stopped by a limit or a threshold, not converged): a warning only."""
+    if after_mm <= WORSE_TOLERANCE * before_mm:
+        return
+    why = "; ".join(diagnosis) if diagnosis else ("a mistake in the data (a convention, a unit, a moved "
+                                                  "SMR) or data the model cannot describe")
+    if not refuse:
+        if warnings is not None:
+            warnings.append(f"{what}: the fitted model is worse than the nominal one on its own data "
+                            f"({before_mm:.4g} -> {after_mm:.4g} mm RMS): the solve stopped before it "
+                            "converged, or " + why)
+        return
+    message = (f"{what}: the fitted model is worse than the nominal one on its own data ({before_mm:.4g} -> "
+               f"{after_mm:.4g} mm RMS), so it is not written: {why}")
+    if not force:
+        raise PlausibilityError(f"{message}; {FORCE_HINT}")
+    if warnings is not None:
+        warnings.append(f"FORCED past a plausibility check: {message}")

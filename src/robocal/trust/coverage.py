@@ -1,0 +1,241 @@
+"""Accuracy over the workspace: where does a calibration hold?
+
+The predicted TCP position error of a calibrated model at joints ``q`` is
+
+    e(q) = sqrt( trace( G(q) C G(q)^T ) + u^2 )
+
+with ``G(q) (3, k)`` the identification Jacobian of the TCP point over the robot parameters,
+``C`` their posterior covariance and ``u`` the unmodelled error (3-D RMS). ``C`` is the MAP
+posterior of *every* candidate parameter of the calibration (not only the estimated ones): the
+data's information ``J^T J / s0^2`` (``s0`` the a-posteriori residual scale) plus each
+parameter's prior precision ``1 / sigma_prior^2`` (:func:`robocal.identify.priors.prior_sigma`;
+frames have none). A parameter the data do not determine keeps its prior's uncertainty, which is
+what a model learnt from clustered poses carries elsewhere. ``u`` is the cross-validated error of
+the chosen error model when the calibration chose one (``nongeometric="auto"``), else the
+calibration residual's RMS corrected for the degrees of freedom (``sqrt(sum |e|^2 / (n - k/3))``);
+it includes the tracker noise, as the validation figures do.
+
+Two regions are reported: the robot's workspace, :data:`WORKSPACE_SAMPLES` joint vectors uniform
+within the joint limits (seed :data:`WORKSPACE_SEED`, the model's tool), and the calibration
+poses themselves. When the workspace RMS exceeds :data:`EXTRAPOLATION_FACTOR` times the
+validated error (the validation RMS, else ``u``), the calibration holds only near its poses: the
+warning names the joints whose calibration poses span less than :data:`COVERAGE_MIN_FRACTION` of
+their range. :meth:`Prediction.error_mm` is the per-target API (``compensate --result``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robocal.errors import DataError
+from robocal.identify.priors import prior_sigma
+
+WORKSPACE_SAMPLES = 1000  # joint vectors of the workspace sample
+WORKSPACE_SEED = 0  # its seed: the same model gives the same figures
+EXTRAPOLATION_FACTOR = 3.0  # workspace RMS beyond this x the validated error: holds only near its poses
+COVERAGE_MIN_FRACTION = 0.5  # a joint whose calibration poses span less of its range is not covered
+DISTANCE_BINS = 8  # bins of the predicted error against the joint distance to the calibration poses
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """What predicts the TCP error anywhere: the robot parameters ``names`` and their posterior
+    covariance ``(k, k)`` (SI), the unmodelled error ``unmodelled_mm`` (3-D RMS) and the validated
+    error ``validated_mm`` it is compared with (and where that figure comes from)."""
+
+    names: tuple[str, ...]
+    covariance: np.ndarray
+    unmodelled_mm: float
+    validated_mm: float
+    validated_from: str
+
+    def error_mm(self, robot, q) -> np.ndarray:
+        """Predicted RMS TCP position error ``(N,)`` (mm) of ``robot`` (the calibrated model) at
+        joints ``q (N, n)`` (rad)."""
+        q = robot.check_joints(q)
+        missing = [n for n in self.names if n not in robot.parameter_names]
+        if missing:
+            raise DataError(f"the prediction's parameters {missing[:4]} are not in model {robot.name}: "
+                            "use the result JSON written with this calibrated model")
+        G = robot.jacobian(q, list(self.names), kind="point")  # (N, 3, k)
+        var = np.einsum("nik,kl,nil->n", G, self.covariance, G)
+        return np.sqrt(np.maximum(var, 0.0) + (self.unmodelled_mm * 1e-3) ** 2) * 1e3
+
+    def beyond(self, robot, q) -> np.ndarray:
+        """``(N,)`` bool: targets where the predicted error exceeds :data:`EXTRAPOLATION_FACTOR`
+        times the validated error."""
+        return self.error_mm(robot, q) > EXTRAPOLATION_FACTOR * self.validated_mm
+
+    def to_dict(self) -> dict:
+        return {"names": list(self.names), "covariance_si": self.covariance.tolist(),
+                "unmodelled_mm": self.unmodelled_mm, "validated_mm": self.validated_mm,
+                "validated_from": self.validated_from}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Prediction:
+        """From :meth:`to_dict` (a result JSON's ``predicted_accuracy.model``); DataError if malformed."""
+        try:
+            names = tuple(str(n) for n in d["names"])
+            cov = np.asarray(d["covariance_si"], dtype=float).reshape(len(names), len(names))
+            out = cls(names, cov, float(d["unmodelled_mm"]), float(d["validated_mm"]),
+                      str(d["validated_from"]))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise DataError(f"the result's predicted_accuracy.model is malformed ({exc}): use a result "
+                            "JSON written by robocal calibrate") from None
+        if not np.isfinite(cov).all() or out.unmodelled_mm < 0 or not out.validated_mm > 0:
+            raise DataError("the result's predicted_accuracy.model has non-finite or negative figures")
+        return out
+
+
+GRAM_RCOND = 1e-12  # eigenvalues of the scaled information below this (relative) carry no information
+
+
+def information_covariance(J: np.ndarray, weight: np.ndarray, s0: float) -> np.ndarray:
+    """``s0^2 (J^T J + diag(weight^2))^-1`` ``(k, k)`` through the scaled ``(k, k)`` information
+    matrix (the posterior of :func:`robocal.identify.priors.posterior_covariance` without an SVD of
+    the tall ``J (M, k)``: a calibration's thousands of rows cost one product), pseudo-inverse on
+    the directions neither the data nor a prior determine."""
+    scale = np.sqrt(np.sum(J**2, axis=0) + weight**2)
+    scale = np.where(scale > 0, scale, 1.0)
+    Js = J / scale
+    info = Js.T @ Js + np.diag((weight / scale) ** 2)
+    w, V = np.linalg.eigh(info)
+    keep = w > GRAM_RCOND * max(w.max(initial=0.0), 1e-300)
+    inv = (V[:, keep] / w[keep]) @ V[:, keep].T
+    return s0**2 * inv / np.outer(scale, scale)
+
+
+def posterior(problem, state, names: list[str], s0: float) -> np.ndarray:
+    """The MAP posterior covariance ``(k, k)`` (SI) of the robot parameters ``names`` from the
+    problem's information at ``state`` (nuisance marginalised) and the parameters' priors, with
+    the residual scale ``s0`` (the problem's residual unit)."""
+    space = problem.space(state.robot, names)
+    J = problem.jacobian(state, space)
+    sigma = np.r_[prior_sigma(state.robot, space.robot), np.full(len(space.nuisance), np.inf)]
+    cov = information_covariance(J, np.where(np.isfinite(sigma), s0 / sigma, 0.0), s0)
+    k = len(space.robot)
+    return cov[:k, :k]
+
+
+def prediction(result) -> Prediction:
+    """The :class:`Prediction` of a calibration result (``robocal.calibration.CalibrationResult``): the
+    posterior of its candidate robot parameters the calibrated model carries (extra SMR offsets
+    marginalised), ``u`` from its cross-validation or its dof-corrected residual, the validated
+    error from its validation data when there are any."""
+    problem, state, robot = result.problem, result.state, result.robot
+    nuisance = set(problem.nuisance_names)
+    names = [n for n in result.identifiability.names if n not in nuisance and n in robot.parameter_names]
+    r = problem.residuals(state)
+    s0 = float(np.sqrt(r @ r / max(r.size - result.space.size, 1)))
+    cov = posterior(problem, state, names, s0)
+    keep = [i for i, n in enumerate(names) if not n.startswith("smr")]
+    errors = problem.item_error_vectors(state)
+    comps = sum(e.size for e in errors)
+    u = float(np.sqrt(3 * sum(float(np.sum(e**2)) for e in errors) / max(comps - result.space.size, 1))) * 1e3
+    source = "calibration residual (dof-corrected)"
+    ms = result.model_selection
+    if ms is not None:
+        u, source = float(ms["candidates"][ms["chosen"]]["cv_rms_mm"]), "cross-validated"
+    validated, vsource = (result.validation["rms"], "on the validation data") if result.judged \
+        else (u, source)
+    return Prediction(tuple(names[i] for i in keep), cov[np.ix_(keep, keep)], u, max(validated, 1e-6),
+                      vsource)
+
+
+def accuracy_line(section: dict) -> str:
+    """The one-line summary of a ``predicted_accuracy`` section."""
+    ws, cal = section["workspace"], section["calibration_region"]
+    return (f"predicted accuracy: {ws['rms']:.4f} mm RMS (p95 {ws['p95']:.4f}) over the workspace, "
+            f"{cal['rms']:.4f} mm RMS at the calibration poses; validated {section['validated_mm']:.4f} mm "
+            f"({section['validated_from']})")
+
+
+def workspace_sample(robot, n: int = WORKSPACE_SAMPLES, seed: int = WORKSPACE_SEED) -> np.ndarray:
+    """``(n, dof)`` joint vectors uniform within ``robot``'s joint limits (rad), seeded."""
+    lo, hi = robot.limits[:, 0], robot.limits[:, 1]
+    return np.random.default_rng(seed).uniform(lo, hi, (n, robot.n_joints))
+
+
+def _stats(e: np.ndarray) -> dict:
+    return {"n": int(e.size), "rms": float(np.sqrt(np.mean(e**2))), "p95": float(np.percentile(e, 95)),
+            "max": float(e.max())}
+
+
+def coverage(robot, q_cal: np.ndarray) -> list[dict]:
+    """Per joint: its limits and the range the calibration poses ``q_cal (N, n)`` span (deg), and
+    the fraction of the limits that is."""
+    lo, hi = np.rad2deg(robot.limits.T)
+    a, b = np.rad2deg(q_cal.min(axis=0)), np.rad2deg(q_cal.max(axis=0))
+    return [{"joint": j + 1, "limits_deg": [float(lo[j]), float(hi[j])],
+             "covered_deg": [float(a[j]), float(b[j])],
+             "fraction": float(min(1.0, (b[j] - a[j]) / max(hi[j] - lo[j], 1e-12)))}
+            for j in range(robot.n_joints)]
+
+
+def _by_distance(q_ws: np.ndarray, q_cal: np.ndarray, err: np.ndarray) -> dict:
+    """The workspace sample's predicted error binned by its joint-space distance (deg, Euclidean
+    over the joints) to the nearest calibration pose: bin centres and the RMS per bin."""
+    from scipy.spatial import cKDTree
+
+    dist = np.rad2deg(cKDTree(q_cal).query(q_ws)[0])
+    edges = np.quantile(dist, np.linspace(0, 1, DISTANCE_BINS + 1))
+    idx = np.clip(np.searchsorted(edges, dist, side="right") - 1, 0, DISTANCE_BINS - 1)
+    centres, rms = [], []
+    for b in range(DISTANCE_BINS):
+        sel = idx == b
+        if sel.any():
+            centres.append(float(np.mean(dist[sel])))
+            rms.append(float(np.sqrt(np.mean(err[sel] ** 2))))
+    return {"distance_deg": centres, "rms_mm": rms}
+
+
+def predict(robot, prediction: Prediction, q_cal: np.ndarray) -> tuple[dict, list[str]]:
+    """The ``predicted_accuracy`` section (module docstring) of a calibrated ``robot`` with its
+    ``prediction`` and calibration joints ``q_cal (N, n)`` (rad), and its warnings."""
+    q_ws = workspace_sample(robot)
+    ws, cal = prediction.error_mm(robot, q_ws), prediction.error_mm(robot, q_cal)
+    joints = coverage(robot, q_cal)
+    ratio = float(np.sqrt(np.mean(ws**2))) / prediction.validated_mm
+    out = {"workspace": {**_stats(ws), "samples": WORKSPACE_SAMPLES, "seed": WORKSPACE_SEED,
+                         "sampling": "uniform within the joint limits, the model's tool"},
+           "calibration_region": {**_stats(cal), "sampling": "the calibration poses"},
+           "validated_mm": prediction.validated_mm, "validated_from": prediction.validated_from,
+           "unmodelled_mm": prediction.unmodelled_mm, "ratio": ratio, "factor": EXTRAPOLATION_FACTOR,
+           "holds_only_near_poses": ratio > EXTRAPOLATION_FACTOR, "coverage": joints,
+           "by_distance": _by_distance(q_ws, q_cal, ws), "model": prediction.to_dict()}
+    warnings = []
+    if out["holds_only_near_poses"]:
+        narrow = [j for j in joints if j["fraction"] < COVERAGE_MIN_FRACTION]
+        where = ("; measure poses over the rest of " + ", ".join(
+            f"q{j['joint']} (covered {j['covered_deg'][0]:.0f}..{j['covered_deg'][1]:.0f} of "
+            f"{j['limits_deg'][0]:.0f}..{j['limits_deg'][1]:.0f} deg)" for j in narrow)) if narrow else \
+            "; measure poses spread over the workspace"
+        ws_rms, ws_p95 = out["workspace"]["rms"], out["workspace"]["p95"]
+        warnings.append(f"the calibration holds only near its poses: predicted {ws_rms:.3g} mm RMS (p95 "
+                        f"{ws_p95:.3g}) over the workspace against {prediction.validated_mm:.3g} mm "
+                        f"{prediction.validated_from} ({ratio:.3g} x, beyond {EXTRAPOLATION_FACTOR:g} x)"
+                        + where)
+    return out, warnings
+
+
+_LISTED = 10  # targets named in a per-target warning
+
+
+def target_warnings(prediction: Prediction, robot, q: np.ndarray, what: str = "target") -> list[str]:
+    """The warning (a list of at most one line) for the joint vectors ``q (N, n)`` (rad) of targets
+    where ``robot``'s predicted error exceeds :data:`EXTRAPOLATION_FACTOR` times the validated
+    one: their 1-based numbers and predicted errors (mm)."""
+    q = np.asarray(q, dtype=float)
+    ok = np.isfinite(q).all(axis=1)
+    err = np.full(len(q), np.nan)
+    err[ok] = prediction.error_mm(robot, q[ok])
+    bad = np.flatnonzero(err > EXTRAPOLATION_FACTOR * prediction.validated_mm)
+    if not bad.size:
+        return []
+    named = ", ".join(f"{i + 1} ({err[i]:.3g} mm)" for i in bad[:_LISTED])
+    more = f" and {bad.size - _LISTED} more" if bad.size > _LISTED else ""
+    return [f"{bad.size} of {len(q)} {what}s lie where the calibration's predicted error exceeds "
+            f"{EXTRAPOLATION_FACTOR:g} x the validated {prediction.validated_mm:.3g} mm "
+            f"({prediction.validated_from}): {what}s {named}{more}; measure poses near them and recalibrate"]

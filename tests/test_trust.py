@@ -1,0 +1,247 @@
+"""Knowing the limits of an answer: the residual test, change points, conventions and units, the
+independence of validation data, the predicted accuracy over the workspace (robocal.trust)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import robocal as rc
+from robocal.data.simulate import simulate_tracker
+from robocal.diagnose import diagnose
+from robocal.errors import DataError, PlausibilityError
+from robocal.identify.space import block_of
+from robocal.trust.consistency import ALPHA, change_point, orientation_convention, residual_test
+from robocal.trust.coverage import Prediction, workspace_sample
+from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, repeated_rows
+
+ROBOT = rc.Robot.from_catalog("abb_irb2600")
+
+
+@pytest.fixture(scope="module")
+def sim():
+    return simulate_tracker(ROBOT, 60, seed=4)
+
+
+def _moved(sim, k: int, delta_flange=None, delta_tracker=None):
+    """The simulated data with the SMR moved by ``delta_flange`` (m, flange frame) or the tracker
+    shifted by ``delta_tracker`` (m) from row ``k`` on."""
+    T = sim.truth.fk(sim.true_joints, smr=sim.data.smr)
+    points = sim.data.points.copy()
+    if delta_flange is not None:
+        points[k:] += np.einsum("nij,j->ni", T[k:, :3, :3], delta_flange)
+    if delta_tracker is not None:
+        points[k:] += delta_tracker
+    return replace(sim.data, points=points)
+
+
+def _calibrate(data, **kw):
+    return rc.calibrate(ROBOT, data, nongeometric="none", **kw)
+
+
+def test_clean_campaign_is_consistent(sim):
+    res = _calibrate(sim.data)
+    c = res.to_dict()["consistency"]
+    assert c["verdict"] == "consistent" and c["change_points"] == [] and c["diagnosis"] == []
+    assert c["p_value"] > ALPHA and c["dof"] == 3 * 60 - res.space.size
+    assert not any("misses its data" in w for w in res.warnings)
+
+
+def test_residual_test_against_brute_force_chi_square():
+    rng = np.random.default_rng(0)
+    e = rng.normal(size=(400, 3)) * 1e-3
+    out = residual_test([e], [np.full(400, 1e-3)], 0, 0.0)
+    assert out.dof == 1200 and out.statistic == pytest.approx(float(np.sum(e**2)) / 1e-6)
+    assert ALPHA < out.p_value < 1 - ALPHA
+    worse = residual_test([2 * e], [np.full(400, 1e-3)], 10, 0.0)
+    assert worse.misfit and worse.dof == 1190
+    assert not residual_test([2 * e], [np.full(400, 1e-3)], 10, 2e-3).misfit  # the budget explains it
+
+
+@pytest.mark.parametrize("k", [20, 41])
+def test_smr_moved_to_another_nest_is_found_at_its_row(sim, k):
+    res = _calibrate(_moved(sim, k, delta_flange=np.array([0.04, 0.0, 0.0])))
+    c = res.consistency
+    assert c.verdict == "inconsistent" and len(c.change_points) == 1
+    cp = c.change_points[0]
+    assert abs(cp.index - k) <= 1 and cp.frame == "flange" and cp.step_mm > 20
+    assert cp.row == sim.data.source_row[cp.index]
+    assert any(f"row {cp.row}" in w and "SMR was moved" in w for w in res.warnings)
+
+
+def test_smr_reseated_and_tracker_bumped_are_found(sim):
+    reseated = _calibrate(_moved(sim, 30, delta_flange=np.array([0.0, 0.0, -0.003]))).consistency
+    assert [(abs(c.index - 30) <= 1, c.frame) for c in reseated.change_points] == [(True, "flange")]
+    bumped = _calibrate(_moved(sim, 45, delta_tracker=np.array([0.001, 0.0005, 0.0]))).consistency
+    assert [(abs(c.index - 45) <= 1, c.frame) for c in bumped.change_points] == [(True, "tracker")]
+    assert "bumped" in bumped.diagnosis[0]
+
+
+def test_change_point_of_pure_noise_is_not_reported():
+    rng = np.random.default_rng(1)
+    R = Rotation.random(200, random_state=2).as_matrix()
+    noise = rng.normal(size=(20, 200, 3)) * 2e-5
+    fired = sum(change_point(e, R, 2e-5, seed=s) is not None for s, e in enumerate(noise))
+    assert fired <= 1
+    e = rng.normal(size=(200, 3)) * 2e-5
+    e[120:] += [1e-3, 0, 0]  # a 1 mm step in the tracker frame at row 120
+    k, frame, step, p, shape = change_point(e, R, 2e-5)
+    assert k == 120 and frame == "tracker" and step == pytest.approx(1e-3, rel=0.05) and shape == "step"
+    drift = rng.normal(size=(200, 3)) * 2e-5 + np.outer(np.linspace(0, 1e-3, 200), [0, 1, 0])
+    assert change_point(drift, R, 2e-5)[4] == "drift"
+
+
+def test_scalar_last_quaternions_are_refused_and_named():
+    sim = simulate_tracker(ROBOT, 40, seed=4, kind="pose", rotation_noise_deg=0.01)
+    q = Rotation.from_matrix(sim.data.rotations).as_quat()  # x, y, z, w
+    bad = replace(sim.data, rotations=Rotation.from_quat(q[:, [1, 2, 3, 0]]).as_matrix())  # file: x,y,z,w
+    assert orientation_convention(sim.truth, sim.data) is None
+    with pytest.raises(PlausibilityError, match="worse than the nominal.*scalar-last"):
+        _calibrate(bad)
+    forced = _calibrate(bad, force=True)
+    assert forced.after["rms"] > forced.before["rms"]
+    assert any("FORCED" in w and "scalar-last" in w for w in forced.warnings)
+    inverse = replace(sim.data, rotations=np.swapaxes(sim.data.rotations, 1, 2))
+    assert "inverse rotations" in orientation_convention(ROBOT, inverse)
+
+
+def test_inches_are_diagnosed(sim):
+    inches = replace(sim.data, points=sim.data.points / 25.4)
+    assert "inches under _mm" in diagnose(ROBOT, [inches])
+    forced = _calibrate(inches, force=True)
+    assert forced.consistency.misfit and "inches under _mm" in forced.consistency.diagnosis[0]
+
+
+def test_fingerprints_and_repeated_rows():
+    rng = np.random.default_rng(3)
+    q = rng.uniform(-2, 2, (30, 6))
+    assert fingerprint(q) == fingerprint(q.copy()) != fingerprint(q[::-1])
+    near = q[:5] + np.deg2rad(JOINT_REPEAT_TOL_DEG) * 0.5
+    far = q[:5] + np.deg2rad(JOINT_REPEAT_TOL_DEG) * 2
+    found = repeated_rows(q, np.vstack([near, far, rng.uniform(-2, 2, (3, 6))]))
+    assert found.tolist() == [True] * 5 + [False] * 8
+    # brute force: any reference row within the tolerance on every joint
+    other = np.vstack([q[::3] + rng.normal(0, 1e-5, (10, 6)), rng.uniform(-2, 2, (10, 6))])
+    brute = (np.abs(other[:, None] - q[None]).max(axis=2) <= np.deg2rad(JOINT_REPEAT_TOL_DEG)).any(axis=1)
+    assert repeated_rows(q, other).tolist() == brute.tolist()
+
+
+def test_validation_repeating_calibration_poses_is_judged_on_the_rest(sim):
+    cal, val = sim.data.subset(np.arange(40)), sim.data.subset(np.arange(28, 60))  # 12 rows shared
+    res = _calibrate(cal, validation=val)
+    indep = res.to_dict()["validation_independence"][0]
+    assert (indep["rows"], indep["repeated_rows"], indep["rows_judged"]) == (32, 12, 20)
+    assert res.validation["n"] == 20
+    assert any("12 of its 32 rows repeat calibration poses" in w for w in res.warnings)
+    independent = _calibrate(cal, validation=sim.data.subset(np.arange(40, 60)))
+    assert res.validation["rms"] == pytest.approx(independent.validation["rms"])
+    with pytest.raises(DataError, match="every one of its 10 rows repeats a calibration pose"):
+        _calibrate(cal, validation=sim.data.subset(np.arange(10)))
+
+
+def _clustered(n: int, seed: int, truth=None):
+    """Poses within +-3 deg of one pose (of ``truth``, else a new perturbed robot)."""
+    rng = np.random.default_rng(seed)
+    q = np.deg2rad([10, 20, 10, 30, 40, 50]) + np.deg2rad(rng.uniform(-3, 3, (n, 6)))
+    if truth is None:
+        return simulate_tracker(ROBOT, joints=q, seed=seed)
+    return simulate_tracker(truth, joints=q, seed=seed, as_is=True)
+
+
+def test_clustered_poses_hold_only_near_them():
+    cal = _clustered(60, 5)
+    res = _calibrate(cal.data, validation=_clustered(20, 6, cal.truth).data)
+    pa = res.to_dict()["predicted_accuracy"]
+    assert pa["holds_only_near_poses"] and pa["validated_from"] == "on the validation data"
+    assert pa["calibration_region"]["rms"] < 0.1 < 1.0 < pa["workspace"]["rms"]
+    assert pa["ratio"] > pa["factor"] == 3.0
+    assert any(w.startswith("the calibration holds only near its poses") and "q5 (covered 37..43" in w
+               for w in res.warnings)
+    # the truth: the calibrated model is far off over the workspace, the prediction says so
+    q = workspace_sample(ROBOT)
+    true = np.linalg.norm(cal.truth.fk(q)[:, :3, 3] - res.robot.fk(q)[:, :3, 3], axis=1) * 1e3
+    assert np.sqrt(np.mean(true**2)) > 10 * res.validation["rms"]
+    assert pa["by_distance"]["rms_mm"][-1] > pa["by_distance"]["rms_mm"][0]
+
+
+def test_spread_poses_hold_over_the_workspace(sim):
+    val = simulate_tracker(sim.truth, 20, seed=9, as_is=True).data
+    res = _calibrate(sim.data, validation=val)
+    pa = res.predicted_accuracy
+    assert not pa["holds_only_near_poses"] and pa["ratio"] < 2
+    assert not any("holds only near" in w for w in res.warnings)
+    q = workspace_sample(ROBOT)
+    true = np.linalg.norm(sim.truth.fk(q)[:, :3, 3] - res.robot.fk(q)[:, :3, 3], axis=1) * 1e3
+    assert np.sqrt(np.mean(true**2)) < pa["workspace"]["rms"]  # prediction includes the tracker noise
+
+
+def test_prediction_round_trips_and_matches_the_propagation(sim):
+    res = _calibrate(sim.data)
+    pred = Prediction.from_dict(res.to_dict()["predicted_accuracy"]["model"])
+    q = workspace_sample(ROBOT, 50, seed=3)
+    beyond = pred.error_mm(res.robot, q) > 3.0 * pred.validated_mm
+    assert pred.beyond(res.robot, q).tolist() == beyond.tolist()
+    # brute force: per pose, the 3x3 covariance from the finite-difference Jacobian (link parameters:
+    # with_values moves them additively; the frames are multiplicative)
+    keep = [i for i, n in enumerate(pred.names) if block_of(n) == "links"]
+    pred = replace(pred, names=tuple(pred.names[i] for i in keep),
+                   covariance=pred.covariance[np.ix_(keep, keep)])
+    e = pred.error_mm(res.robot, q)
+    names, C = list(pred.names), pred.covariance
+    G = np.zeros((50, 3, len(names)))
+    for j, n in enumerate(names):
+        h = 1e-7
+        plus, minus = (res.robot.with_values({n: res.robot.get(n) + s}) for s in (h, -h))
+        G[:, :, j] = (plus.fk(q)[:, :3, 3] - minus.fk(q)[:, :3, 3]) / (2 * h)
+    brute = np.sqrt(np.einsum("nik,kl,nil->n", G, C, G) + (pred.unmodelled_mm * 1e-3) ** 2) * 1e3
+    np.testing.assert_allclose(e, brute, rtol=1e-4)
+    with pytest.raises(DataError, match="malformed"):
+        Prediction.from_dict({"names": ["a2"], "covariance_si": [[1.0, 2.0]]})
+
+
+def test_cli_clustered_calibration_warns_and_compensate_warns_per_target(tmp_path, capsys):
+    from robocal.cli import main
+    from robocal.compensate import format_csv, pose_columns
+
+    cal = _clustered(60, 5)
+    cal.data.save(tmp_path / "cal.csv")
+    _clustered(20, 6, cal.truth).data.save(tmp_path / "val.csv")
+    assert main(["calibrate", str(tmp_path / "cal.csv"), "--robot", "abb_irb2600", "--validate",
+                 str(tmp_path / "val.csv"), "--nongeometric", "none", "-o", str(tmp_path / "cal.yaml"),
+                 "--json", str(tmp_path / "r.json"), "--report", str(tmp_path / "r.html")]) == 0
+    out = capsys.readouterr().out
+    assert "predicted accuracy:" in out and "WARNING: the calibration holds only near its poses" in out
+    assert "Predicted accuracy over the workspace" in (tmp_path / "r.html").read_text()
+    # targets: one near the calibration poses, one far from them (flange poses of the nominal model)
+    q = np.deg2rad([[10, 20, 10, 30, 40, 50], [-90, 60, -40, -100, -70, 120]])
+    names, values = pose_columns(ROBOT.fk(q), {"length": "mm", "orientation": "quat"})
+    (tmp_path / "t.csv").write_text(format_csv(names, values))
+    assert main(["compensate", str(tmp_path / "cal.yaml"), str(tmp_path / "t.csv"), "--nominal",
+                 "abb_irb2600", "--result", str(tmp_path / "r.json"), "-o", str(tmp_path / "c.csv")]) == 0
+    line = [ln for ln in capsys.readouterr().out.splitlines() if "predicted error exceeds" in ln]
+    assert len(line) == 1 and "1 of 2 targets" in line[0] and "targets 2 (" in line[0]
+
+
+def test_evaluate_reports_the_residual_test(sim):
+    from robocal.evaluate import evaluate
+
+    stats = evaluate(ROBOT, sim.data, fit_frame=True)
+    assert stats["consistency"]["dof"] == 3 * 60 - 9 and stats["consistency"]["verdict"] == "consistent"
+    moved = evaluate(ROBOT, _moved(sim, 30, delta_tracker=np.array([0.002, 0.0, 0.0])), fit_frame=True)
+    assert moved["consistency"]["change_points"][0]["frame"] == "tracker"
+    assert any("bumped" in w for w in moved["warnings"])
+
+
+def test_information_covariance_equals_the_svd_posterior():
+    from robocal.identify.priors import posterior_covariance
+    from robocal.trust.coverage import information_covariance
+
+    rng = np.random.default_rng(5)
+    J = rng.normal(size=(300, 8)) * np.logspace(-4, 2, 8)
+    J[:, 7] = J[:, 6] * 3.0  # a confounded pair, separated by the prior on one of them
+    w = np.array([0, 0, 1e-3, 0, 2.0, 0, 0.5, 0])
+    np.testing.assert_allclose(information_covariance(J, w, 0.7), posterior_covariance(J, w, 0.7),
+                               rtol=1e-6, atol=1e-14)
