@@ -47,6 +47,12 @@ from robocal.kinematics.model_file import MAX_DESCRIPTION, MAX_NAME, _frame, _ma
 from robocal.kinematics.transforms import make_transform
 
 CELL_KEYS = {"format", "name", "description", "units", "robot", "track", "mount"}
+# What a calibration of a cell reports about the track's direction and the mount (module docstring).
+TRACK_IDENTIFIABILITY = (
+    "track: its direction and the mount's rotation describe one freedom (only their relation to the "
+    "arm is identifiable): the track axis is the base frame's z (base.*), the arm's first axis seen "
+    "from the carriage is alpha2/theta2/d2, the encoder scale is scale1; theta1, d1 and the carriage "
+    "offset across the track are the base frame's own freedom")
 DIRECTION_TOL = 1e-6  # |norm - 1| of the track direction: a unit vector written to 6 digits
 TRACK_SCALE = "scale1"  # the track encoder's scale error (a joint-error term of joint 1)
 
@@ -136,3 +142,62 @@ def cell_from_data(data: dict, path: Path | None = None) -> Robot:
                        name=_text(data.get("name", f"{arm.name} on a track"), "name", MAX_NAME),
                        description=_text(data.get("description", ""), "description", MAX_DESCRIPTION))
 
+
+
+def is_track_cell(robot: Robot) -> bool:
+    """Whether ``robot`` is an arm on a track: a prismatic joint 1 carrying revolute joints 2..n."""
+    return robot.n_joints >= 2 and bool(robot.prismatic[0]) and not robot.prismatic[1:].any()
+
+
+def _check_cell(robot: Robot) -> None:
+    if not is_track_cell(robot):
+        raise ModelError(f"{robot.name} is not an arm on a track (joint 1 prismatic, the others revolute)")
+
+
+def track_scale(robot: Robot) -> float:
+    """The track encoder's scale error ``scale1`` of a cell (0 when not declared)."""
+    names = robot.joint_error_names
+    return float(robot.joint_errors.values[names.index(TRACK_SCALE)]) if TRACK_SCALE in names else 0.0
+
+
+def _link_fixed(alpha: float, a: float, beta: float, theta: float) -> np.ndarray:
+    """Rx(alpha) Tx(a) Ry(beta) Rz(theta): the constant part of a link before its joint."""
+    return make_transform(_rx(alpha) @ _ry(beta) @ _rz(theta), _rx(alpha) @ np.array([a, 0.0, 0.0]))
+
+
+def _arm_link1(robot: Robot) -> tuple[float, float, float, float]:
+    """The arm's own link 1 constants (alpha, a, beta, theta): its OPW form's (so that the arm model
+    keeps its closed form), else those of a link that starts on joint 1's axis (0, 0, 0, the chain's
+    link-2 theta)."""
+    if robot.opw is not None:
+        from robocal.kinematics.convert import opw_chain
+
+        chain = opw_chain(robot.opw)
+        return tuple(float(chain[f][0]) for f in ("alpha", "a", "beta", "theta"))
+    return 0.0, 0.0, 0.0, float(robot.theta[1])
+
+
+def carriage_frames(robot: Robot, e1) -> np.ndarray:
+    """World poses ``(N, 4, 4)`` of the arm's base (the frame :func:`arm_model` is built on) with the
+    carriage at ``e1`` ``(N,)`` m (the track's scale error applied, as the cell's forward kinematics
+    does)."""
+    _check_cell(robot)
+    e1 = np.atleast_1d(np.asarray(e1, float))
+    q = np.zeros((e1.size, robot.n_joints))
+    q[:, 0] = e1
+    frames = robot.fk(q, frames=True)[1]  # frames {0}..{n}; {1} is the carriage
+    chain_link = _link_fixed(robot.alpha[1], robot.a[1], robot.beta[1], robot.theta[1])
+    return frames[:, 1] @ chain_link @ np.linalg.inv(_link_fixed(*_arm_link1(robot)))
+
+
+def arm_model(robot: Robot) -> Robot:
+    """The arm of a track cell as a 6-joint robot whose base frame is the identity: placed at
+    :func:`carriage_frames` it is the cell with the carriage at that e1 (its tool, SMRs and the
+    cell's OPW form kept; a nominal catalog arm keeps its closed-form IK)."""
+    _check_cell(robot)
+    links = {f: np.array(getattr(robot, f)[1:]) for f in ("alpha", "a", "beta", "theta", "d")}
+    for f, v in zip(("alpha", "a", "beta", "theta"), _arm_link1(robot), strict=True):
+        links[f][0] = v
+    return Robot(**links, base=np.eye(4), tool=robot.tool, limits=robot.limits[1:],
+                 parallel=np.r_[False, robot.parallel[2:]], smr=robot.smr, opw=robot.opw,
+                 name=f"{robot.name} (arm)", description=robot.description)

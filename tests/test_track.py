@@ -1,0 +1,86 @@
+"""A robot on a linear track: the e1 measurement column, simulated track campaigns, the arm and the
+track calibrated together (known truth), the calibrated cell in every command."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import robocal as rc
+from robocal.data.measurements import Measurements, parse_csv
+from robocal.data.simulate import TRACK_SCALE_ERROR, simulate_tracker
+from robocal.errors import DataError, UnitError
+from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, cell_from_data
+from robocal.kinematics.model import Robot
+
+CELL = {"units": {"length": "mm", "angle": "deg"}, "name": "kr210 on a 6 m track",
+        "robot": "kuka_kr210_r2700", "track": {"direction": [1, 0, 0], "limits": [0, 6000]},
+        "mount": {"xyz": [0, 0, 0], "rpy": [0, 0, 0]}}
+
+
+@pytest.fixture(scope="module")
+def cell() -> Robot:
+    return cell_from_data(CELL)
+
+
+def test_e1_column_is_the_first_joint_in_metres(cell):
+    text = ("q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,e1_mm,x_mm,y_mm,z_mm\n"
+            "0,-90,90,0,10,0,1500,1,2,3\n10,-80,80,5,20,5,2500.5,4,5,6\n")
+    data = parse_csv(text, "t.csv")
+    assert data.external == 1 and data.linear.tolist() == [True] + [False] * 6
+    np.testing.assert_allclose(data.joints[:, 0], [1.5, 2.5005])
+    np.testing.assert_allclose(data.joints[1, 1:], np.deg2rad([10, -80, 80, 5, 20, 5]))
+    data.check_against(cell)
+    again = parse_csv(data.to_csv(), "again")
+    assert "e1_m," in data.to_csv()
+    np.testing.assert_array_equal(again.joints, data.joints)
+    assert again.external == 1 and again.linear.tolist() == data.linear.tolist()
+    with pytest.raises(DataError, match="7 joint columns.*6 joints"):
+        data.check_against(Robot.from_catalog("kuka_kr210_r2700"))
+
+
+def test_track_in_angle_units_or_missing_is_refused(cell):
+    deg = parse_csv("e1_deg,q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,x_mm,y_mm,z_mm\n0,0,0,0,0,0,0,1,2,3\n")
+    with pytest.raises(UnitError, match="e1.*angle units.*prismatic"):
+        deg.check_against(cell)
+    with pytest.raises(UnitError, match="unknown angle unit 'in'"):
+        parse_csv("e1_in,q1_deg,x_mm,y_mm,z_mm\n0,0,1,2,3\n")
+    with pytest.raises(DataError, match="6 joint columns.*7 joints.*e1"):
+        parse_csv("q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,x_mm,y_mm,z_mm\n0,0,0,0,0,0,1,2,3\n"
+                  ).check_against(cell)
+
+
+def test_arm_at_a_carriage_position_is_the_cell(cell):
+    moved = cell.with_values({TRACK_SCALE: 2e-4})
+    arm = arm_model(moved)
+    assert arm_model(cell).has_opw_form  # a nominal catalog arm keeps its closed form
+    q = np.c_[np.linspace(0, 6, 5), np.random.default_rng(0).uniform(-1, 1, (5, 6))]
+    B = carriage_frames(moved, q[:, 0])
+    for k in range(5):
+        np.testing.assert_allclose(arm.with_frames(base=B[k]).fk(q[k, 1:]), moved.fk(q[k]), atol=1e-12)
+
+
+def test_track_campaign_calibrates_arm_and_track_together(cell):
+    sim = simulate_tracker(cell, 240, noise_mm=0.02, seed=4)
+    truth = sim.truth
+    assert abs(abs(truth.get(TRACK_SCALE)) - TRACK_SCALE_ERROR) < 1e-15
+    assert sim.data.external == 1 and np.ptp(sim.data.joints[:, 0]) > 5.0  # spread along the track
+    cal, val = sim.data.first_poses(160), sim.data.subset(np.arange(160, 240))
+    result = rc.calibrate(cell, cal, validation=[val], nongeometric="none")
+    est = result.robot.get(TRACK_SCALE)
+    assert abs(est - truth.get(TRACK_SCALE)) < 5e-6  # 2e-4 identified to a few ppm
+    stats = rc.evaluate(result.robot, val)  # held out: its own tracker frame, no refit
+    assert stats["rms"] <= 1.3 * sim.noise_floor_mm
+    assert "track: its direction and the mount's rotation" in result.summary()
+    nominal_stats = rc.evaluate(cell, val, fit_frame=True)
+    assert nominal_stats["rms"] > 20 * stats["rms"]  # the track errors are large before
+
+
+def test_joint_noise_leaves_the_track_reading_alone(cell):
+    sim = simulate_tracker(cell, 20, noise_mm=0.0, seed=1, joint_noise_deg=0.01)
+    np.testing.assert_array_equal(sim.data.joints[:, 0], sim.true_joints[:, 0])
+
+
+def test_measurements_from_arrays_validates_flags():
+    with pytest.raises(DataError, match="linear"):
+        Measurements.from_arrays("point", np.zeros((2, 3)), points=np.zeros((2, 3)), linear=[True, False])
