@@ -84,3 +84,29 @@ def test_joint_noise_leaves_the_track_reading_alone(cell):
 def test_measurements_from_arrays_validates_flags():
     with pytest.raises(DataError, match="linear"):
         Measurements.from_arrays("point", np.zeros((2, 3)), points=np.zeros((2, 3)), linear=[True, False])
+
+
+def test_closed_form_on_the_track_and_compensation_keep_e1(cell):
+    from robocal.compensate import compensate
+    from robocal.ik import track
+
+    rng = np.random.default_rng(7)
+    q = np.c_[rng.uniform(0.2, 5.8, 12), rng.uniform(-0.8, 0.8, (12, 6))]
+    T = cell.fk(q)
+    sols = track.solve_all(cell, T, q[:, 0])  # (N, 8, 6): the arm's closed form at each e1
+    found = np.isfinite(sols).all(axis=2)
+    for k in range(12):
+        assert found[k].any()
+        err = [np.abs(cell.fk(track.with_track(q[k:k + 1, 0], sols[k, b][None])) - T[k]).max()
+               for b in np.flatnonzero(found[k])]
+        assert max(err) < 1e-9
+        assert min(np.abs(sols[k, found[k]] - q[k, 1:]).max(axis=1)) < 1e-8  # the original is one
+    truth = simulate_tracker(cell, 5, seed=2).truth  # a cell with track and arm errors
+    res = compensate(truth, cell, truth.fk(q), e1=q[:, 0])
+    assert res.converged.all()
+    np.testing.assert_array_equal(res.joints[:, 0], q[:, 0])  # the program's e1 is kept
+    np.testing.assert_allclose(truth.fk(res.joints)[:, :3, 3], truth.fk(q)[:, :3, 3], atol=1e-9)
+    with pytest.raises(DataError, match="carriage position"):
+        compensate(truth, cell, truth.fk(q))
+    with pytest.raises(DataError, match="outside the track"):
+        track.solve(truth, truth.fk(q), q[:, 0] + 7.0)
