@@ -110,3 +110,46 @@ def test_closed_form_on_the_track_and_compensation_keep_e1(cell):
         compensate(truth, cell, truth.fk(q))
     with pytest.raises(DataError, match="outside the track"):
         track.solve(truth, truth.fk(q), q[:, 0] + 7.0)
+
+
+def test_cell_through_the_command_line(tmp_path, cell):
+    """simulate -> calibrate -o -> evaluate, compensate, plan, export with the calibrated cell."""
+    import yaml
+    from scipy.spatial.transform import Rotation
+
+    from robocal.cli import main
+    from robocal.compensate import read_poses_csv
+
+    (tmp_path / "track.yaml").write_text(yaml.safe_dump(CELL))
+    d = str(tmp_path)
+    assert main(["--quiet", "simulate", "--robot", f"{d}/track.yaml", "--poses", "150", "--seed", "5",
+                 "-o", f"{d}/all.csv", "--truth", f"{d}/truth.yaml"]) == 0
+    data = Measurements.load(f"{d}/all.csv")
+    assert "e1_m" in (tmp_path / "all.csv").read_text().splitlines()[1]
+    data.first_poses(100).save(f"{d}/cal.csv")
+    data.subset(np.arange(100, 150)).save(f"{d}/val.csv")
+    assert main(["--quiet", "calibrate", f"{d}/cal.csv", "--robot", f"{d}/track.yaml", "--nongeometric",
+                 "none", "-o", f"{d}/cal.yaml", "--json", f"{d}/r.json"]) == 0
+    assert main(["--quiet", "evaluate", f"{d}/cal.yaml", f"{d}/val.csv", "--json", f"{d}/e.json"]) == 0
+    import json
+    assert json.loads((tmp_path / "e.json").read_text())["evaluation"]["rms"] < 0.06
+    lo, hi = cell.limits[:, 0], cell.limits[:, 1]
+    q = np.random.default_rng(3).uniform(0.5 * (lo + hi) - 0.3 * (hi - lo), 0.5 * (lo + hi) + 0.3 * (hi - lo),
+                                         (6, 7))
+    T = cell.fk(q)  # flange poses in the cell's world (the controller's)
+    quat = Rotation.from_matrix(T[:, :3, :3]).as_quat(scalar_first=True)
+    rows = ["x_mm,y_mm,z_mm,qw,qx,qy,qz,e1_mm"] + [
+        ",".join(repr(float(v)) for v in [*(T[k, :3, 3] * 1e3), *quat[k], q[k, 0] * 1e3]) for k in range(6)]
+    (tmp_path / "targets.csv").write_text("\n".join(rows) + "\n")
+    assert read_poses_csv(tmp_path / "targets.csv")[1]["e1"].shape == (6,)
+    assert main(["--quiet", "compensate", f"{d}/cal.yaml", f"{d}/targets.csv", "--nominal",
+                 f"{d}/track.yaml", "-o", f"{d}/cmd.csv"]) == 0
+    cmd = np.loadtxt(tmp_path / "cmd.csv", delimiter=",", skiprows=1)
+    assert (tmp_path / "cmd.csv").read_text().startswith("e1_mm,q1_deg")
+    np.testing.assert_allclose(cmd[:, 0], q[:, 0] * 1e3, rtol=0, atol=1e-9)  # e1 as the program has it
+    assert main(["--quiet", "plan", "--robot", f"{d}/cal.yaml", "--nominal", f"{d}/track.yaml",
+                 f"{d}/targets.csv", "-o", f"{d}/plan.csv"]) == 0
+    planned = np.loadtxt(tmp_path / "plan.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(planned[:, 0], q[:, 0] * 1e3, atol=1e-9)
+    assert main(["--quiet", "export", f"{d}/cal.yaml", "--urdf", f"{d}/cell.urdf"]) == 0
+    assert 'type="prismatic"' in (tmp_path / "cell.urdf").read_text()

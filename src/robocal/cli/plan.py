@@ -45,8 +45,11 @@ def run(args) -> int:
 
     from robocal.cli.args import controller_for, tool_frame
     from robocal.compensate import controller_model, format_csv, read_poses_csv
+    from robocal.errors import DataError
+    from robocal.ik import track
     from robocal.ik.path import plan_path
     from robocal.io import check_outputs, write_atomic
+    from robocal.kinematics.cell import is_track_cell
     from robocal.kinematics.model import load_model
 
     check_format(args.output, "CSV", "-o")
@@ -66,11 +69,22 @@ def run(args) -> int:
         carried = "its own tool" if tool is None else f"its tool carrying {args.tool}"
         frames = (f"the model's world frame and {carried} ({robot.name} is not a catalog robot: give "
                   "--nominal for the robot's base and flange)")
-    poses, _ = read_poses_csv(args.poses)
+    poses, layout = read_poses_csv(args.poses)
     start = None if args.start is None else np.deg2rad(args.start)
-    res = plan_path(robot, poses, weights=args.weights, start=start, nominal=nominal)
-    cols = [f"q{i + 1}_deg" for i in range(robot.n_joints)]
-    write_atomic(args.output, format_csv(cols, np.rad2deg(res.joints)))
+    if is_track_cell(robot):  # the arm's path with the carriage where the poses put it
+        if "e1" not in layout:
+            raise DataError(f"{robot.name} is an arm on a track: give each pose's carriage position in an "
+                            "e1_mm column")
+        if start is not None:
+            start = np.r_[layout["e1"][0], start]
+        res = track.plan(robot, poses, layout["e1"], weights=args.weights, start=start, nominal=nominal)
+        cols = ["e1_mm"] + [f"q{i + 1}_deg" for i in range(robot.n_joints - 1)]
+        shown = np.c_[res.joints[:, 0] * 1e3, np.rad2deg(res.joints[:, 1:])]
+    else:
+        res = plan_path(robot, poses, weights=args.weights, start=start, nominal=nominal)
+        cols = [f"q{i + 1}_deg" for i in range(robot.n_joints)]
+        shown = np.rad2deg(res.joints)
+    write_atomic(args.output, format_csv(cols, shown))
     gain = 100.0 * (1.0 - res.cost / res.greedy_cost) if res.greedy_cost > 0 else 0.0
     print(f"poses: {frames}")
     print(f"weights {np.round(res.weights, 4).tolist()}")

@@ -7,10 +7,13 @@ world target T is the pose ``inv(carriage(e1)) @ T`` for the arm alone
 :func:`solve_all` is the arm's closed form (all branches, vectorised over the targets, each with
 its own e1); :func:`solve` reaches the targets on a calibrated cell by numeric IK over the arm's
 joints with the track held at e1 (the program's own value), seeded by the nominal closed form in
-the requested branch. Joints are ``(N, 7)``: e1 (m) then the arm's six (rad).
+the requested branch; :func:`plan` chooses the arm's branches along a path (seed 001's graph) at the
+program's e1. Joints are ``(N, 7)``: e1 (m) then the arm's six (rad).
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -19,6 +22,7 @@ from robocal.ik import closed_form
 from robocal.ik.numeric import IKResult, nominal_seeds
 from robocal.ik.numeric import solve as numeric_solve
 from robocal.ik.opw_ik import check_poses
+from robocal.ik.path import PathResult, plan_path
 from robocal.kinematics.cell import arm_model, carriage_frames, is_track_cell
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform
@@ -82,3 +86,22 @@ def solve(robot: Robot, poses, e1, *, nominal: Robot | None = None, branch: int 
     if seeds.shape != (len(T), 6):
         raise DataError(f"seeds of the arm must have shape ({len(T)}, 6), got {seeds.shape}")
     return numeric_solve(robot, T, with_track(e1, seeds), locked=[0], **kwargs)
+
+
+def plan(robot: Robot, poses, e1, *, weights=None, start=None, nominal: Robot | None = None) -> PathResult:
+    """The globally optimal arm joints along waypoints ``(M, 4, 4)`` (m) with the carriage at ``e1``
+    ``(M,)`` m (:func:`robocal.ik.path.plan_path` on the arm, the track taken off); ``start`` and the
+    joints of the result are the cell's ``(7,)`` / ``(M, 7)`` (e1 first, as given); ``weights``
+    are the arm's ``(6,)``; ``nominal``: the controller's cell model (its arm seeds a calibrated one)."""
+    T, e1 = _check(robot, poses, e1)
+    arm, local = arm_targets(robot, T, e1)
+    arm_nominal = None if nominal is None else arm_model(nominal)
+    arm_start = None
+    if start is not None:
+        arm_start = np.asarray(start, dtype=float).reshape(-1)
+        if arm_start.shape != (robot.n_joints,):
+            raise DataError(f"start must be the cell's {robot.n_joints} joints (e1 first), got "
+                            f"{arm_start.size}")
+        arm_start = arm_start[1:]
+    res = plan_path(arm, local, weights=weights, start=arm_start, nominal=arm_nominal)
+    return replace(res, joints=with_track(e1, res.joints), greedy_joints=with_track(e1, res.greedy_joints))

@@ -26,9 +26,9 @@ Identifiability: the cell file's ``direction`` and ``mount`` rotation describe o
 (turning the track direction and counter-turning the mount leaves the arm where it was), so a
 calibration identifies the chain's parameters instead: the base frame (the track's direction and
 position in the tracker frame), the track scale ``scale1``, and the mount as the arm's first
-link seen from the carriage (``alpha2``, ``a2``, ``theta2``, ``d2``); ``theta1`` and ``d1`` (a turn
-of the carriage frame about the track and a shift along it) are confounded with the base frame
-and dropped, which the result reports. The calibrated cell is written as that chain (a model file
+axis seen from the carriage (``alpha2``, ``theta2``); ``theta1``, ``d1``, ``a2`` and ``d2`` (where the
+carriage frame sits on the track) are confounded with the base frame and dropped, which the result
+reports. The calibrated cell is written as that chain (a model file
 with ``type: prismatic`` on joint 1), which every command reads.
 """
 
@@ -51,8 +51,8 @@ CELL_KEYS = {"format", "name", "description", "units", "robot", "track", "mount"
 TRACK_IDENTIFIABILITY = (
     "track: its direction and the mount's rotation describe one freedom (only their relation to the "
     "arm is identifiable): the track axis is the base frame's z (base.*), the arm's first axis seen "
-    "from the carriage is alpha2/theta2/d2, the encoder scale is scale1; theta1, d1 and the carriage "
-    "offset across the track are the base frame's own freedom")
+    "from the carriage is alpha2/theta2, the encoder scale is scale1; where the carriage frame sits on "
+    "the track (theta1, d1, a2, d2) is the base frame's own freedom")
 DIRECTION_TOL = 1e-6  # |norm - 1| of the track direction: a unit vector written to 6 digits
 TRACK_SCALE = "scale1"  # the track encoder's scale error (a joint-error term of joint 1)
 
