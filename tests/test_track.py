@@ -153,3 +153,27 @@ def test_cell_through_the_command_line(tmp_path, cell):
     np.testing.assert_allclose(planned[:, 0], q[:, 0] * 1e3, atol=1e-9)
     assert main(["--quiet", "export", f"{d}/cal.yaml", "--urdf", f"{d}/cell.urdf"]) == 0
     assert 'type="prismatic"' in (tmp_path / "cell.urdf").read_text()
+
+
+def test_poses_plans_a_campaign_along_the_track(tmp_path):
+    import json
+
+    import yaml
+
+    from robocal.cli import main
+    from robocal.data.measurements import read_joints
+
+    (tmp_path / "track.yaml").write_text(yaml.safe_dump(CELL))
+    d = str(tmp_path)
+    assert main(["--quiet", "poses", "--robot", f"{d}/track.yaml", "-n", "20", "-o", f"{d}/p.csv",
+                 "--json", f"{d}/p.json", "--candidates", "800", "--starts", "1", "--region-size",
+                 "300"]) == 0
+    assert (tmp_path / "p.csv").read_text().startswith("e1_mm,q1_deg")
+    q = read_joints(tmp_path / "p.csv", cell_from_data(CELL))
+    assert q.shape == (20, 7) and np.ptp(q[:, 0]) > 4.0  # e1 in m, spread along the track
+    plan = json.loads((tmp_path / "p.json").read_text())
+    np.testing.assert_allclose(plan["e1_mm"], q[:, 0] * 1e3, atol=1e-6)
+    assert len(plan["joints_deg"][0]) == 6
+    assert main(["--quiet", "poses", "--robot", f"{d}/track.yaml", "-n", "30", "-o", f"{d}/p2.csv",
+                 "--rapid", f"{d}/p.mod"]) == 2
+    assert not (tmp_path / "p2.csv").exists()
