@@ -30,6 +30,12 @@ CASES = {
                           [r":63: MoveL: .*Offs\(pCheck,0,0,nDepth\) .*run time only \(nDepth\)",
                            r":65: MoveL: .*computed at run time by CRobT\(\)",
                            r":66: MoveJ: .*robtarget pService is not declared"]),
+    "rapid offsets and expressions": (["glue_offsets.mod"], [], "abb_irb2600", {}, ["pLid", "pCorner"],
+                                      [r":22: MoveL: .*Offs\(pCorner, nBead\{nRow, 1\}, 0, 0\) .*run time",
+                                       r":26: MoveL: .*computed at run time by CRobT\(\)",
+                                       r":27: MoveJ: .*robtarget pPurge is not declared",
+                                       r":33: MoveL: .*pSpot is a parameter of routine rework that no call",
+                                       r":34: MoveL: .*pSpot is a parameter of routine rework that no call"]),
     "rapid multimove palletizing": (["pallet_multimove.mod"], [], "abb_irb2600", {},
                                     ["pPickUp", "pPick", "wp{1}.pos", "wp{2}.pos", "pHandOver"],
                                     [r":32: MoveL: .*Offs\(pPalletCorner, nCol\*nPitch.*run time only",
@@ -41,6 +47,12 @@ CASES = {
                          r":58: SLIN: .*XLIFT is modified at run time .*:57\)",
                          r":61: SLIN: .*XOTHER is not declared in these files",
                          r":64: SPTP: .*XHANDOVER is declared in \$config.dat, given as a reference"]),
+    "krl sealer without $config.dat": (["sealer_cell.src", "sealer_cell.dat"], [], "kuka_kr16_2",
+                                       {"tools": {"3": "0,0,200,0,0,0"},
+                                        "frames": {"2": "700,-300,400,90,0,0"}},
+                                       ["XGLUE1", "XGLUE2", "XGLUE3", "XGLUE4", "inline@28"],
+                                       [r":30: LIN: .*\$POS_ACT is a system variable",
+                                        r":32: LIN: .*XAPP is not declared in these files"]),
     "fanuc arc welding": (["weld_bracket.ls"], [], "fanuc_lrmate200id", FANUC_FRAMES,
                           ["P[1:approach]", "P[2]", "P[3]", "P[4]", "P[5]", "P[6]", "P[7]", "P[8]"],
                           [r":36: L: .*P\[6\] is shifted at run time by Offset,PR\[2\]",
@@ -58,8 +70,11 @@ CASES = {
 # the motion instructions to a Cartesian pose, counted by hand in each program (joint motions such
 # as MoveAbsJ, SPTP $H_POS / XHOME, movej(Home_q) are not counted): (total, corrected)
 HAND_COUNT = {"rapid arc welding": (13, 10),  # lines 41-66; Offs(pCheck, .., nDepth), CRobT, pService named
+              "rapid offsets and expressions": (10, 5),  # 19-34 but MoveAbsJ (18, 28); Offs/RelTool with
+              # constant expressions (19, 21, 23, 24) are corrected
               "rapid multimove palletizing": (7, 5),  # lines 29-44; 32 (run-time Offs) and 35 named
               "krl kss8 spline": (15, 10),  # 27-72 but 20 ($H_POS) and 66 (XHOME)
+              "krl sealer without $config.dat": (7, 5),  # 25-33 but PTP XHOME (20, 34), PTP $AXIS_ACT (31)
               "fanuc arc welding": (11, 6),  # /MN lines 3-18 with a P[] or PR[]
               "urscript palletizing": (10, 8)}  # every movel/movep/movec; movej(Home_q) is a joint move
 
@@ -334,6 +349,27 @@ def test_fanuc_position_used_plain_and_incremental(tmp_path):
     assert s["corrected"] + s["named"] == s["total"] == 11
 
 
+def test_strict_refuses_names_declared_nowhere(tmp_path, capsys):
+    """By default a motion to a name no file declares is named with the declaration it needs;
+    --strict refuses the run, naming each."""
+    res, _ = _run("krl sealer without $config.dat", tmp_path)
+    needs = "DECL E6POS/POS/FRAME XAPP (in a .dat or $config.dat)"
+    assert [m.needs for m in res.motions if m.needs] == [needs]
+    with pytest.raises(DataError, match=r"1 motion\(s\) move to names declared in none of the files given: "
+                                        r"sealer_cell.src:32 \(LIN\): needs " + re.escape(needs)):
+        _run("krl sealer without $config.dat", tmp_path, strict=True)
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    cal = tmp_path / "cal.yaml"
+    perturbed(nominal, 7).save(cal)
+    src = _copy(["glue_offsets.mod"], tmp_path)[0]
+    args = ["filter", str(src), "--calibrated", str(cal), "--nominal", "abb_irb2600",
+            "-o", str(tmp_path / "o.mod")]
+    assert main([*args, "--strict"]) == 2
+    assert "needs robtarget pPurge" in capsys.readouterr().err
+    assert main(args) == 0
+    assert "10 motions: 5 corrected, 5 not corrected (each named)" in capsys.readouterr().out
+
+
 def test_motion_records_in_the_table(tmp_path):
     """The table JSON carries one record per motion and the motion summary."""
     import json
@@ -343,7 +379,7 @@ def test_motion_records_in_the_table(tmp_path):
     assert table["summary"]["motions"] == {"total": 13, "corrected": 10, "named": 3}
     assert len(table["motions"]) == 13
     assert table["motions"][0] == {"file": "arc_station.mod", "line": 41, "instruction": "MoveJ",
-                                   "target": "pApproach", "status": "corrected", "reason": ""}
+                                   "target": "pApproach", "status": "corrected", "reason": "", "needs": ""}
     assert table["motions"][-1]["status"] == "named" and table["motions"][-1]["target"] == "pService"
 
 

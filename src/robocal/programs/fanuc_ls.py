@@ -30,6 +30,7 @@ from robocal.io import short_repr
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.config import FANUCConfig
 from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import Number
 
@@ -193,8 +194,9 @@ class FanucDialect(Dialect):
                         continue
                     key = (src.path, int(ref.group(2)))
                     if key not in numbers:
-                        prog.skip(here, instr, f"P[{ref.group(2)}] is not a Cartesian position of group 1 in "
-                                               "/POS (missing or malformed)", acc, label)
+                        prog.skip(here, instr, Undeclared(f"P[{ref.group(2)}] is not a Cartesian position of "
+                                                          "group 1 in /POS (missing or malformed)",
+                                                          f"P[{ref.group(2)}] in /POS"), acc, label)
                         continue
                     acc.reach(numbers[key], label)
                     if "INC" in options and _INCREMENTAL.search(options):

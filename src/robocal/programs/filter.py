@@ -38,6 +38,7 @@ from robocal.programs.config import BRANCH_MISMATCH
 from robocal.programs.fanuc_ls import FanucDialect
 from robocal.programs.krl import KRLDialect
 from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.motions import undeclared
 from robocal.programs.rapid import RapidDialect
 from robocal.programs.result import LISTED, FilterResult, collapse
 from robocal.programs.source import ProgramText, format_number
@@ -258,7 +259,7 @@ def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
 
 def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
                    robot_base=None, dialect: str | None = None, references=(),
-                   keep_unreached: bool = False) -> FilterResult:
+                   keep_unreached: bool = False, strict: bool = False) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -271,8 +272,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     in the calibrated model's world frame (default: the calibrated frame {0} is the controller's
     base). Targets that cannot be corrected (out of reach, out of the joint limits, a
     configuration they cannot have, not converged) raise DataError naming each one; with
-    ``keep_unreached`` they are left unchanged with a warning. Nothing is written here: see
-    :meth:`FilterResult.write`.
+    ``keep_unreached`` they are left unchanged with a warning. A motion to a name declared in none
+    of the files given is named (its record says the declaration it needs); with ``strict`` the
+    run is refused instead. Nothing is written here: see :meth:`FilterResult.write`.
     """
     paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     if not paths:
@@ -284,6 +286,11 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     sources = [ProgramText(p) for p in paths]
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
+    missing = undeclared(program.ledger)
+    if strict and missing:
+        raise _listed(f"{len(missing)} motion(s) move to names declared in none of the files given:", missing,
+                      "give the files that declare them (or --references), or run without --strict to "
+                      "name these motions and correct the rest")
     warnings = list(program.warnings)
     targets = _filterable(d, program, warnings, keep_unreached)
     if not targets:
