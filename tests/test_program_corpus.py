@@ -208,20 +208,17 @@ def test_rapid_configuration_matching_no_solution_is_warned(tmp_path):
                         r"the nearest, \[0,-1,0,0\]", w) for w in res.warnings)
 
 
-def test_rapid_track_targets_are_refused(tmp_path):
-    """Robtargets with eax_a values (a robot on a track): refused naming each; with
-    keep_unreached left unchanged and named."""
+def test_rapid_track_targets_are_named_per_motion(tmp_path):
+    """Robtargets with eax_a values (a robot on a track): left as they are, and each motion that
+    reaches one is named with the axis value (3 motions, counted by hand)."""
     robot = rc.Robot.from_catalog("abb_irb2600")
     path = _copy(["track_mill.mod"], tmp_path)[0]
-    with pytest.raises(DataError) as err:
-        filter_program(path, perturbed(robot, 7), robot)
-    lines = str(err.value).splitlines()
-    assert "track or gantry" in lines[0]
-    assert lines[1:4] == ["track_mill.mod:4 (pMill10): external axes eax_a = 800",
-                          "track_mill.mod:5 (pMill20): external axes eax_a = 1450",
-                          "track_mill.mod:6 (pMill30): external axes eax_a = 2100"]
-    res = filter_program(path, perturbed(robot, 7), robot, keep_unreached=True)
-    assert res.outputs[path] == path.read_bytes() and len(res.uncorrected) == 3 and not res.rows
+    res = filter_program(path, perturbed(robot, 7), robot)
+    assert res.outputs[path] == path.read_bytes() and not res.rows
+    assert res.summary_dict()["motions"] == {"total": 3, "corrected": 0, "named": 3}
+    assert [(m.line, m.target) for m in res.motions] == [(9, "pMill10"), (10, "pMill20"), (11, "pMill30")]
+    assert all("external axes eax_a = " in m.reason for m in res.motions)
+    assert "external axes eax_a = 1450" in res.motions[1].reason
 
 
 def test_rapid_quaternions_keep_the_files_precision(tmp_path):
@@ -308,14 +305,15 @@ def test_krl_tool_from_a_variable_is_named(tmp_path):
                                "TOOL_DATA[nT] (a variable index known at run time only)"]
 
 
-def test_krl_external_axis_values_are_refused(tmp_path):
+def test_krl_external_axis_values_are_named(tmp_path):
     files = _copy(["deburr_cell.src", "deburr_cell.dat"], tmp_path)
     dat = files[1].read_bytes()
     files[1].write_bytes(dat.replace(b"E1 0.0", b"E1 1250.0", 1))
     robot = rc.Robot.from_catalog("kuka_kr16_2")
-    with pytest.raises(DataError, match=r"(?s)external-axis values.*deburr_cell.dat:7 \(XP1\): external axes "
-                                        r"E1 1250.0"):
-        filter_program(files, perturbed(robot, 7), robot, references=_copy(["$config.dat"], tmp_path))
+    res = filter_program(files, perturbed(robot, 7), robot, references=_copy(["$config.dat"], tmp_path))
+    sptp = next(m for m in res.motions if m.line == 27)
+    assert sptp.status == "named" and "external axes E1 1250.0" in sptp.reason
+    assert "XP1" not in [r["name"] for r in res.rows] and res.summary_dict()["motions"]["total"] == 15
 
 
 # ----------------------------------------------------------------------------- FANUC constructs
@@ -395,12 +393,13 @@ def test_fanuc_numbers_keep_their_style(tmp_path):
     assert tabbed and all(len(v.split(".")[1]) == 6 for v in tabbed)
 
 
-def test_fanuc_track_positions_are_refused(tmp_path):
+def test_fanuc_track_positions_are_named(tmp_path):
     robot = rc.Robot.from_catalog("fanuc_lrmate200id")
     path = _copy(["track_pick.ls"], tmp_path)[0]
-    with pytest.raises(DataError, match=r"(?s)track or gantry.*track_pick.ls:\d+ \(P\[1\]\): external axes "
-                                        r"E1 = 1500.000"):
-        filter_program(path, perturbed(robot, 7), robot, **FANUC_FRAMES)
+    res = filter_program(path, perturbed(robot, 7), robot, **FANUC_FRAMES)
+    first = res.motions[0]
+    assert first.target == "P[1]" and first.status == "named"
+    assert "external axes E1 = 1500.000" in first.reason
 
 
 def test_fanuc_malformed_position_block_is_not_silent(tmp_path):
@@ -561,18 +560,17 @@ def test_positions_passed_to_routines_not_given_are_named():
                                 "corrected"]
 
 
-def test_cli_lists_refused_targets_one_a_line(tmp_path, capsys):
-    path = _copy(["track_mill.mod"], tmp_path)[0]
+def test_cli_lists_refused_motions_one_a_line(tmp_path, capsys):
+    """--strict on a KRL .src without its .dat: every motion named in the error, one a line."""
+    path = _copy(["deburr_cell.src"], tmp_path)[0]
     cal = tmp_path / "cal.yaml"
-    perturbed(rc.Robot.from_catalog("abb_irb2600"), 7).save(cal)
-    code = main(["filter", str(path), "--calibrated", str(cal), "--nominal", "abb_irb2600",
-                 "-o", str(tmp_path / "out.mod")])
+    perturbed(rc.Robot.from_catalog("kuka_kr16_2"), 7).save(cal)
+    code = main(["filter", str(path), "--calibrated", str(cal), "--nominal", "kuka_kr16_2",
+                 "-o", str(tmp_path / "out.src"), "--strict"])
     err = capsys.readouterr().err.splitlines()
-    assert code == 2 and err[0].startswith("robocal filter: error: 3 target(s) carry external-axis values")
-    assert err[1:4] == ["  track_mill.mod:4 (pMill10): external axes eax_a = 800",
-                        "  track_mill.mod:5 (pMill20): external axes eax_a = 1450",
-                        "  track_mill.mod:6 (pMill30): external axes eax_a = 2100"]
-    assert not (tmp_path / "out.mod").exists()
+    assert code == 2 and err[0].startswith("robocal filter: error: ") and "declared in none" in err[0]
+    assert err[1].startswith("  deburr_cell.src:27 (SPTP): needs DECL E6POS/POS/FRAME XP1")
+    assert not (tmp_path / "out.src").exists()
 
 
 def test_rapid_error_handler_motions_are_read():

@@ -35,6 +35,7 @@ from robocal.ik.controller import JUMP_DEG, nearest_solutions
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
+from robocal.programs.external import set_aside_external
 from robocal.programs.fanuc_ls import FanucDialect
 from robocal.programs.krl import KRLDialect
 from robocal.programs.model import Dialect, Program, Target
@@ -292,7 +293,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                       "give the files that declare them (or --references), or run without --strict to "
                       "name these motions and correct the rest")
     warnings = list(program.warnings)
-    targets = _filterable(d, program, warnings, keep_unreached)
+    targets = _filterable(d, program, warnings)
     if not targets:
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
@@ -355,30 +356,19 @@ def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
                             "it is the same tool")
 
 
-def _filterable(d: Dialect, program: Program, warnings: list, keep_unreached: bool) -> list[Target]:
+def _filterable(d: Dialect, program: Program, warnings: list) -> list[Target]:
     """The targets to filter: those with a supported tool and frame, all of them known, and
-    without external axes (refused, or left alone with ``keep_unreached``)."""
+    without external axes (:func:`robocal.programs.external.set_aside_external`)."""
+    set_aside_external(program, warnings)
     targets: list[Target] = []
-    moving = []
     for t in program.targets:
         why = program.unsupported.get(f"tool:{t.tool}") or program.unsupported.get(f"frame:{t.frame}")
         if why:
             warnings.append(f"{t.where}: not filtered: {why}")
             program.uncorrected.append(f"{t.where}: not filtered: {why}")
             program.not_corrected[id(t)] = f"not filtered: {why}"
-        elif t.external:
-            moving.append(f"{t.where}: external axes {t.external}")
-            program.not_corrected[id(t)] = f"external axes {t.external}: a fixed base and work are assumed"
         else:
             targets.append(t)
-    if moving and not keep_unreached:
-        raise _listed(f"{len(moving)} target(s) carry external-axis values: a track or gantry moving the "
-                      "robot, or an axis moving the work, changes where they are, and the filter assumes a "
-                      "fixed base and work:", moving,
-                      "nothing was written (--keep-unreached leaves them unchanged with a warning)")
-    moving = [f"{w}: not corrected: a fixed base and work are assumed" for w in moving]
-    warnings += moving
-    program.uncorrected += moving
     unknown = [f"{t.where}: unknown {kind} {name!r}" for t in targets
                for kind, name, known in (("tool", t.tool, program.tools), ("frame", t.frame, program.frames))
                if name not in known]
