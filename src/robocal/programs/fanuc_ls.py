@@ -66,7 +66,7 @@ class FanucDialect(Dialect):
         return make_transform(R, values[:, :3] * 1e-3)
 
     def from_pose(self, T, old):
-        rpw = matrix_to_zyx(T[:, :3, :3], old[:, [5, 4, 3]])
+        rpw = matrix_to_zyx(T[:, :3, :3], old[:, [5, 4, 3]], _ANGLE_DEG / 2)
         return np.hstack([T[:, :3, 3] * 1e3, rpw[:, [2, 1, 0]]])
 
     def resolutions(self):

@@ -99,7 +99,7 @@ class KRLDialect(Dialect):
         return make_transform(R, values[:, :3] * 1e-3)
 
     def from_pose(self, T, old):
-        return np.hstack([T[:, :3, 3] * 1e3, matrix_to_zyx(T[:, :3, :3], old[:, 3:6])])
+        return np.hstack([T[:, :3, 3] * 1e3, matrix_to_zyx(T[:, :3, :3], old[:, 3:6], _ANGLE_DEG / 2)])
 
     def resolutions(self):
         return np.array([_POSITION_MM] * 3 + [_ANGLE_DEG] * 3)
