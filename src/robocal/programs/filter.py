@@ -43,6 +43,7 @@ from robocal.programs.motions import undeclared
 from robocal.programs.rapid import RapidDialect
 from robocal.programs.result import LISTED, FilterResult, collapse
 from robocal.programs.source import ProgramText, format_number
+from robocal.programs.track import track_program
 from robocal.programs.urscript import URScriptDialect
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
@@ -280,9 +281,12 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     if not paths:
         raise DataError("no program file given")
-    if nominal.n_joints != CONTROLLER_JOINTS:
+    track = track_program(nominal)  # an arm on a track: programs/track.py
+    if nominal.n_joints != CONTROLLER_JOINTS and track is None:
         raise DataError(f"the programs of these controllers drive {CONTROLLER_JOINTS}-axis arms; the nominal "
-                        f"model {nominal.name!r} has {nominal.n_joints} joints")
+                        f"model {nominal.name!r} has {nominal.n_joints} joints (an arm on a track: give "
+                        "its cell model)")
+    controller = nominal if track is None else track.arm  # the arm the controller solves for
     d = dialect_for(paths, dialect)
     sources = [ProgramText(p) for p in paths]
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
@@ -293,6 +297,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                       "give the files that declare them (or --references), or run without --strict to "
                       "name these motions and correct the rest")
     warnings = list(program.warnings)
+    if track is not None:
+        track.take(program, warnings)
     targets = _filterable(d, program, warnings)
     if not targets:
         if not program.uncorrected:
@@ -310,13 +316,17 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     real_tool = np.array([np.asarray(real[t.tool], float) if t.tool in real else program.tools[t.tool]
                           for t in targets])
     problems: list[tuple[int, str]] = []
-    q_nom = controller_joints(d, program, targets, nominal, X @ invert_transform(tool), problems, warnings)
+    F = X @ invert_transform(tool)
+    q_nom = controller_joints(d, program, targets, controller, F if track is None else track.in_arm_frame(
+        targets, F), problems, warnings)
     ok = np.isfinite(q_nom).all(axis=1)
-    warnings += _inexact_configurations(d, nominal, targets, q_nom, ok)
-    comp = compensate(controller_model(calibrated, nominal, robot_base), nominal,
-                      X @ invert_transform(real_tool), seeds=np.where(ok[:, None], q_nom, 0.0))
+    warnings += _inexact_configurations(d, controller, targets, q_nom, ok)
+    seeds = np.where(ok[:, None], q_nom, 0.0)
+    real_model = controller_model(calibrated, nominal, robot_base)
+    comp = compensate(real_model, nominal, X @ invert_transform(real_tool), seeds=seeds) if track is None \
+        else track.compensate(real_model, targets, X @ invert_transform(real_tool), seeds)
     q, sing = comp.joints, comp.singularity
-    _check_joints(nominal, comp, ok, problems)
+    _check_joints(controller, comp, ok, problems)
     bad = {i for i, _ in problems}
     if problems and not keep_unreached:
         problems.sort()
@@ -330,10 +340,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     Pc = np.where(good[:, None, None], invert_transform(W) @ comp.corrected_targets @ tool, P)
     cfg = None
     if d.scheme is not None:
-        cfg = (d.scheme.encode(nominal, np.where(ok[:, None], q_nom, 0.0)), d.scheme.encode(nominal, q))
+        cfg = (d.scheme.encode(controller, seeds), d.scheme.encode(controller, q))
     edits, changed = _edits(d, targets, values, good, Pc, cfg, warnings)
     warnings += comp.warnings([t.where for t in targets], good)  # the corrected ones near a singularity
-    rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, comp.converged & ok, changed, cfg, sing)
+    rows = _rows(d, targets, X, W @ Pc, controller, q, ok, good, comp.converged & ok, changed, cfg, sing)
     outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,
