@@ -124,3 +124,36 @@ def test_a_six_axis_nominal_still_names_track_targets(tmp_path):
     seven = Robot(alpha=[0.0] * 7, a=[0.0] * 7, beta=[0.0] * 7, theta=[0.0] * 7, d=[0.1] * 7)
     with pytest.raises(DataError, match="on a track: give its cell model"):
         filter_program(path, seven, seven)
+
+
+def _corpus(names, tmp_path):
+    import shutil
+    from pathlib import Path
+
+    src = Path(__file__).parent / "data" / "programs" / "corpus"
+    out = []
+    for name in names:
+        shutil.copy(src / name, tmp_path / name)
+        out.append(tmp_path / name)
+    return out
+
+
+@pytest.mark.parametrize("robot, files, mount_x, corrected", [
+    ("fanuc_lrmate200id", ["track_pick.ls"], -1650, 2),  # E1 1500 and 2000 mm: the base near the targets
+    ("kuka_kr16_2", ["deburr_cell.src", "deburr_cell.dat"], 0, 1),
+])
+def test_fanuc_and_krl_track_positions_are_corrected(tmp_path, robot, files, mount_x, corrected):
+    """FANUC E1 = 1500.000 mm and KRL E1 0.0: the track's value is read (a zero too) and kept."""
+    from test_program_corpus import FANUC_FRAMES
+
+    cell = cell_from_data({**CELL, "robot": robot, "track": {"direction": [1, 0, 0], "limits": [0, 3000]},
+                           "mount": {"xyz": [mount_x, 0, 0], "rpy": [0, 0, 0]}})
+    paths = _corpus(files, tmp_path)
+    kw = FANUC_FRAMES if robot.startswith("fanuc") else {"references": _corpus(["$config.dat"], tmp_path)}
+    res = filter_program(paths, simulate_tracker(cell, 5, seed=2).truth, cell, keep_unreached=True, **kw)
+    assert res.summary_dict()["motions"]["corrected"] >= corrected
+    assert not any("external axes E1" in m.reason for m in res.motions if m.reason)
+    old = b"".join(p.read_bytes() for p in paths)
+    new = b"".join(res.outputs[p] for p in paths)
+    e1 = re.compile(rb"E1\s*=?\s*[-+.\d]+")
+    assert e1.findall(old) == e1.findall(new)  # the track values as written

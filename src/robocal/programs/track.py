@@ -31,8 +31,13 @@ from robocal.programs.model import Program, Target
 
 # The track's value in a target's external-axis summary (the dialects write "eax_a = 1500",
 # "E1 1500.0", "E1 = 1500.000"), in mm; any other axis named there is not the track's.
-_TRACK_VALUE = re.compile(r"^\s*(?:eax_a|E1)\s*=?\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*$")
+_NUMBER = r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
+_TRACK_VALUE = re.compile(r"^\s*(?:eax_a|E1)\s*=?\s*" + _NUMBER + r"\s*$")
+# A zero track value is not in the summary (the dialects list only non-zero axes): a KRL E6POS
+# ``E1 0.0`` or a FANUC ``E1 = 0.000 mm`` in the target's own text, up to its closing brace.
+_ZERO_IN_TEXT = re.compile(r"\bE1\s*=?\s*" + _NUMBER)
 MM = 1e-3  # track values in programs are millimetres
+_BLOCK_CHARS = 2000  # a target's brace block (KRL aggregate, FANUC P[] position) is shorter than this
 
 
 @dataclass
@@ -54,7 +59,7 @@ class TrackProgram:
         them); set aside the targets without one."""
         kept = []
         for t in program.targets:
-            value = _TRACK_VALUE.match(t.external) if t.external else None
+            value = _TRACK_VALUE.match(t.external) if t.external else _written_zero(t)
             if value is not None:
                 self.e1[id(t)] = float(value.group(1)) * MM
                 t.external = ""
@@ -87,6 +92,16 @@ class TrackProgram:
         comp = compensate(calibrated, self.cell, flanges, seeds=seeds, e1=self.values(targets))
         arm_q = comp.joints[:, 1:]
         return replace(comp, joints=arm_q, singularity=singularity_distance(arm_model(calibrated), arm_q))
+
+
+def _written_zero(t: Target) -> re.Match | None:
+    """The track value written in target ``t``'s own text (a zero the summary leaves out), else None."""
+    text = t.source.text
+    end = text.find("}", t.offset)
+    if end < 0 or end - t.offset > _BLOCK_CHARS:  # no brace block (RAPID): the target's line
+        end = text.find("\n", t.offset) % (len(text) + 1)
+    found = _ZERO_IN_TEXT.search(text, t.offset, end)
+    return found if found is not None and float(found.group(1)) == 0.0 else None
 
 
 def track_program(nominal: Robot) -> TrackProgram | None:
