@@ -179,11 +179,12 @@ _TORSO = """<?xml version="1.0"?>
 </robot>
 """
 
-# A 3-axis gantry with a wrist: prismatic x, y, z on a portal (origins and axes as exported by CAD).
+# A gantry with a 2-axis wrist: prismatic x, y, z on a portal, then C and B (origins and axes as
+# exported by CAD).
 _GANTRY_URDF = """<?xml version="1.0"?>
 <robot name="portal_gantry">
   <link name="world"/><link name="x_carriage"/><link name="y_carriage"/><link name="z_ram"/>
-  <link name="wrist"/><link name="flange"/>
+  <link name="wrist"/><link name="hand"/><link name="flange"/>
   <joint name="x_axis" type="prismatic"><parent link="world"/><child link="x_carriage"/>
     <origin xyz="0.25 0.1 2.4" rpy="0 0 0"/><axis xyz="1 0 0"/>
     <limit lower="0.0" upper="4.0" effort="2000" velocity="1.0"/></joint>
@@ -196,8 +197,11 @@ _GANTRY_URDF = """<?xml version="1.0"?>
   <joint name="a_axis" type="revolute"><parent link="z_ram"/><child link="wrist"/>
     <origin xyz="0 0 -0.4" rpy="0 0 0"/><axis xyz="0 0 1"/>
     <limit lower="-3.14" upper="3.14" effort="100" velocity="2.0"/></joint>
-  <joint name="flange_joint" type="fixed"><parent link="wrist"/><child link="flange"/>
-    <origin xyz="0 0 -0.1" rpy="3.141592653589793 0 0"/></joint>
+  <joint name="b_axis" type="revolute"><parent link="wrist"/><child link="hand"/>
+    <origin xyz="0 0 -0.15" rpy="0 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2.0" upper="2.0" effort="80" velocity="2.0"/></joint>
+  <joint name="flange_joint" type="fixed"><parent link="hand"/><child link="flange"/>
+    <origin xyz="0.02 0 -0.1" rpy="3.141592653589793 0 0"/></joint>
 </robot>
 """
 
@@ -229,7 +233,7 @@ def _urdf_fk(text: str, q: np.ndarray) -> np.ndarray:
     return T
 
 
-@pytest.mark.parametrize("text, n", [(_TORSO, 8), (_GANTRY_URDF, 4)])
+@pytest.mark.parametrize("text, n", [(_TORSO, 8), (_GANTRY_URDF, 5)])
 def test_urdf_with_prismatic_joints_imports_and_exports(text, n):
     robot = from_urdf(text)
     assert robot.n_joints == n and robot.prismatic[0]
@@ -313,3 +317,21 @@ def test_cell_robot_file_relative_to_the_cell(tmp_path):
     (tmp_path / "bad.yaml").write_text(_CELL % ("kuka_kr210_r2700", "[1, 0, 0.1]"))
     with pytest.raises(ModelError, match="bad.yaml.*not a unit vector"):
         load_model(str(tmp_path / "bad.yaml"))
+
+
+@pytest.mark.parametrize("text, kind", [(_TORSO, "point"), (_GANTRY_URDF, "pose")])
+def test_urdf_with_prismatic_joints_calibrates(text, kind):
+    """Simulated campaigns of the imported models (their prismatic joints' columns in m) calibrate
+    to the noise; the calibrated model exports."""
+    import robocal as rc
+    from robocal.data.measurements import parse_csv
+    from robocal.data.simulate import simulate_tracker
+
+    robot = from_urdf(text)
+    sim = simulate_tracker(robot, 120, seed=1, kind=kind, rotation_noise_deg=0.001)
+    data = parse_csv(sim.data.to_csv(), "sim")
+    assert data.linear.tolist() == robot.prismatic.tolist()
+    cal, val = data.first_poses(80), data.subset(np.arange(80, 120))
+    result = rc.calibrate(robot, cal, nongeometric="none")
+    assert rc.evaluate(result.robot, val)["rms"] < 1.5 * sim.noise_floor_mm
+    assert 'type="prismatic"' in to_urdf(result.robot)
