@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from robocal.errors import ModelError
-from robocal.io import LENGTH_UNITS, short_repr
+from robocal.io import ANGLE_UNITS, LENGTH_UNITS, short_repr
 from robocal.kinematics.convert import PARALLEL_TOL, default_parallel
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.model import Robot, load_model
@@ -65,6 +65,11 @@ def _rx(t: float) -> np.ndarray:
 def _ry(t: float) -> np.ndarray:
     c, s = np.cos(t), np.sin(t)
     return np.array([[c, 0, s], [0, 1.0, 0], [-s, 0, c]])
+
+
+def _rz(t: float) -> np.ndarray:
+    c, s = np.cos(t), np.sin(t)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
 
 
 def track_chain(arm: Robot, direction, mount: np.ndarray, limits, name: str | None = None,
@@ -111,18 +116,13 @@ def _chain_arrays(arm: Robot, direction, mount: np.ndarray) -> dict:
     return {**links, "base": F1, "tool": arm.tool, "parallel": parallel, "smr": arm.smr}
 
 
-def _rz(t: float) -> np.ndarray:
-    c, s = np.cos(t), np.sin(t)
-    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
-
-
 def cell_from_data(data: dict, path: Path | None = None) -> Robot:
     """The chain of a cell mapping (the module docstring's file); ``robot:`` is a catalog name or
     a model file relative to ``path``'s folder. ModelError names the key."""
     _mapping(data, "the cell", CELL_KEYS, {"units", "robot", "track"})
     length_unit, angle_unit = _units(data)
     length = LENGTH_UNITS[length_unit]
-    angle = np.pi / 180.0 if angle_unit == "deg" else 1.0
+    angle = ANGLE_UNITS[angle_unit]
     spec = data["robot"]
     if not isinstance(spec, str) or not spec.strip():
         raise ModelError(f"robot: expected a catalog name or a model file, got {short_repr(spec)}")

@@ -532,7 +532,7 @@ class Robot:
 
 
 def load_model(spec: str) -> Robot:
-    """A robot from a model YAML path, a URDF (a serial revolute chain:
+    """A robot from a model YAML path (or a cell file: a robot on a track), a URDF (a serial chain:
     :func:`robocal.kinematics.urdf.from_urdf`) or a catalog name (what every ``--robot`` takes)."""
     path = Path(spec)
     if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (path.is_file() and _looks_like_xml(path)):
