@@ -219,7 +219,9 @@ class CalibrationResult(_BeforeAfter):
         return {
             "kind": obs.kind, "error_before": errors[0].tolist(), "error_after": errors[1].tolist(),
             "pose_id": data.pose_id.tolist(), "source_row": data.source_row.tolist(),
-            "smr": data.smr.tolist(), "joints_deg": np.rad2deg(data.joints).tolist(),
+            "smr": data.smr.tolist(),  # a prismatic joint (a track's e1) in mm, not deg:
+            "joints_deg": np.where(False if data.linear is None else data.linear, data.joints * 1e3,
+                                   np.rad2deg(data.joints)).tolist(),
             "measured": None if measured is None else measured.tolist(),
             "model_before": before.tolist(), "model_after": after.tolist(),
             "weight": None if weights is None else weights.tolist(),
