@@ -36,6 +36,7 @@ from robocal.identify.solvers import SolverResult, check_options, get_solver, it
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
 from robocal.io import load_json, read_text, write_atomic
+from robocal.kinematics.cell import TRACK_IDENTIFIABILITY, is_track_cell
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
 from robocal.model_selection import calibrate_cyclic, select_error_model, selection_table
 from robocal.progress import Progress
@@ -51,7 +52,7 @@ NONGEOMETRIC_METHODS = ("lsq", "robust")  # the methods that estimate the joint-
 AUTO_DEFAULT_KINDS = ("point", "pose")  # tracker data: where nongeometric="auto" is the default ...
 AUTO_DEFAULT_MIN_POSES = 100  # ... from this many poses on (20 held out per cross-validation fold)
 _DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 180.0 / np.pi),
-            "rad/rad": ("mdeg/deg", 1e3)}
+            "rad/rad": ("mdeg/deg", 1e3), "1": ("ppm", 1e6)}  # "1": a scale (dimensionless)
 
 
 class _BeforeAfter:
@@ -225,7 +226,9 @@ class CalibrationResult(_BeforeAfter):
         return {
             "kind": obs.kind, "error_before": errors[0].tolist(), "error_after": errors[1].tolist(),
             "pose_id": data.pose_id.tolist(), "source_row": data.source_row.tolist(),
-            "smr": data.smr.tolist(), "joints_deg": np.rad2deg(data.joints).tolist(),
+            "smr": data.smr.tolist(),  # a prismatic joint (a track's e1) in mm, not deg:
+            "joints_deg": np.where(False if data.linear is None else data.linear, data.joints * 1e3,
+                                   np.rad2deg(data.joints)).tolist(),
             "measured": None if measured is None else measured.tolist(),
             "model_before": before.tolist(), "model_after": after.tolist(),
             "weight": None if weights is None else weights.tolist(),
@@ -368,6 +371,8 @@ class CalibrationResult(_BeforeAfter):
             if fixed:
                 lines.append(f"{label}: " + ", ".join(
                     f"{n} (~{'/'.join(confounded[n]) or 'no effect'})" for n in fixed))
+        if is_track_cell(self.robot):
+            lines.append(TRACK_IDENTIFIABILITY)
         if self.nongeometric is not None:
             ng = self.nongeometric
             lines.append(f"non-geometric terms {', '.join(ng['terms'])}: {len(ng['kept'])} parameters "

@@ -13,7 +13,9 @@
 
 Target files: CSV with a header; position ``x_mm, y_mm, z_mm`` (or ``x_m, y_m, z_m``) and
 orientation either a unit quaternion ``qw, qx, qy, qz`` or fixed-axis XYZ roll-pitch-yaw
-``rx_deg, ry_deg, rz_deg`` (or ``_rad``): R = Rz(rz) Ry(ry) Rx(rx), scipy's ``"xyz"``. Lines
+``rx_deg, ry_deg, rz_deg`` (or ``_rad``): R = Rz(rz) Ry(ry) Rx(rx), scipy's ``"xyz"``. For an arm
+on a track, ``e1_mm`` (or ``e1_m``) gives each target's carriage position, which the compensation
+keeps (the arm's joints reach the target with the track where the program puts it). Lines
 starting with ``#`` before the header are comments (a compensated file's provenance marker).
 """
 
@@ -39,7 +41,9 @@ from robocal.ik.controller import ControllerChoice, nearest_solutions
 from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
 from robocal.ik.singularity import SingularityDistance, singularity_distance
+from robocal.ik.track import solve as track_solve
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
+from robocal.kinematics.cell import is_track_cell
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import ROTATION_TOL, invert_transform, make_transform, pose_error
 from robocal.magnitudes import check_degree_set, check_radians, check_targets
@@ -137,7 +141,7 @@ def controller_model(calibrated: Robot, nominal: Robot, robot_base=None, tool=No
 
 
 def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None = None,
-               seeds=None, start=None, targets_frame: str = "model", tool=None) -> Compensation:
+               seeds=None, start=None, targets_frame: str = "model", tool=None, e1=None) -> Compensation:
     """Corrected joints and Cartesian targets for target poses ``(N, 4, 4)`` (m) of the
     calibrated model's TCP.
 
@@ -159,6 +163,10 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     (:func:`robocal.ik.controller.nearest_solutions`; ``controller`` in the result, its large
     joint moves among the warnings). Targets the calibrated model cannot reach to 1e-10 m /
     1e-9 rad are flagged in ``converged`` (their joints are the best found).
+
+    An arm on a track (:mod:`robocal.kinematics.cell`) needs ``e1`` ``(N,)`` m, each target's
+    carriage position, which stays as given (:func:`robocal.ik.track.solve`; ``seeds`` are then the
+    arm's ``(N, 6)``); the joints are ``(N, 7)``, e1 first.
     """
     if targets_frame not in ("model", "robot"):
         raise DataError(f"targets_frame must be 'model' or 'robot', got {targets_frame!r}")
@@ -176,7 +184,15 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
             raise DataError("give one of branch, seeds and start (the controller's nearest-solution choice)")
         choice = nearest_solutions(controller.with_frames(base=model.base, tool=model.tool), T, start)
         seeds = choice.joints  # NaN rows (no nominal solution inside the limits): not converged
-    res = ik_solve(model, T, seeds, branch=branch, nominal=controller)
+    if is_track_cell(model):
+        if e1 is None or start is not None:
+            raise DataError(f"{model.name} is an arm on a track: give each target's carriage position "
+                            "(an e1_mm column) and a branch or seeds (not start)")
+        res = track_solve(model, T, e1, nominal=controller, branch=branch, seeds=seeds)
+    elif e1 is not None:
+        raise DataError(f"the targets give e1 (a track) but {model.name} has no track: give the cell model")
+    else:
+        res = ik_solve(model, T, seeds, branch=branch, nominal=controller)
     sing = singularity_distance(model, res.joints) if model.n_joints == 6 else None
     return Compensation(joints=res.joints, corrected_targets=controller.fk(res.joints),
                         converged=res.converged, position_error=res.position_error,
@@ -225,7 +241,8 @@ def _column_unit(header: list[str], stem: str, units: dict) -> tuple[str, float]
 
 def read_poses_csv(path) -> tuple[np.ndarray, dict]:
     """Poses ``(N, 4, 4)`` (m) from a targets CSV (see the module docstring) and its layout
-    (``length``: 'mm'|'m', ``orientation``: 'quat'|'deg'|'rad'), to write results alike."""
+    (``length``: 'mm'|'m', ``orientation``: 'quat'|'deg'|'rad', to write results alike; ``e1``: the
+    carriage positions ``(N,)`` m of a track, when the file has an e1 column)."""
     path = Path(path)
     text = read_text(path, "pose CSV file")
     lines = text.splitlines(keepends=True)
@@ -247,7 +264,9 @@ def read_poses_csv(path) -> tuple[np.ndarray, dict]:
     if quat == (None not in rot):
         raise DataError(f"{path}: give the orientation as qw,qx,qy,qz or as rx_deg,ry_deg,rz_deg "
                         f"(fixed-axis XYZ; or _rad), exactly one of them; header is {rows[0]}")
-    cols = [p[0] for p in pos] + (["qw", "qx", "qy", "qz"] if quat else [r[0] for r in rot])
+    track = _column_unit(header, "e1", LENGTH_UNITS)
+    cols = [p[0] for p in pos] + (["qw", "qx", "qy", "qz"] if quat else [r[0] for r in rot]) \
+        + ([track[0]] if track else [])
     idx = [header.index(c) for c in cols]
     try:
         data = np.array([[float(r[i]) for i in idx] for r in body], dtype=float).reshape(-1, len(cols))
@@ -259,6 +278,10 @@ def read_poses_csv(path) -> tuple[np.ndarray, dict]:
     if data.shape[0] == 0:
         raise DataError(f"{path} has a header but no poses")
     p = data[:, :3] * pos[0][1]
+    layout = {"length": pos[0][0].split("_")[1]}
+    if track:
+        layout["e1"] = data[:, -1] * track[1]
+        data = data[:, :-1]
     if quat:
         qn = np.linalg.norm(data[:, 3:], axis=1)
         bad = np.flatnonzero(np.abs(qn - 1.0) > ROTATION_TOL) + 2 + skip
@@ -269,7 +292,7 @@ def read_poses_csv(path) -> tuple[np.ndarray, dict]:
     else:
         R = Rotation.from_euler("xyz", data[:, 3:] * rot[0][1]).as_matrix()
         orient = rot[0][0].split("_")[1]
-    layout = {"length": pos[0][0].split("_")[1], "orientation": orient}
+    layout["orientation"] = orient
     return make_transform(R, p), layout
 
 

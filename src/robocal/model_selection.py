@@ -59,7 +59,8 @@ from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.kinematics.joint_errors import TERMS, candidate_names, cyclic_names, term_of
 
 FOLDS = 5
-FIXED_TERMS = tuple(t for t in TERMS if t != "cyclic")
+# cyclic: searched for; scale: declared by a model with a track, never tried by the selection
+FIXED_TERMS = tuple(t for t in TERMS if t not in ("cyclic", "scale"))
 MIN_POSES_PER_FOLD = 5
 # fit(terms, validations, warm_start) -> CalibrationResult: one calibration with those terms
 Fit = Callable[[list, list, object], object]

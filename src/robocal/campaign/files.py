@@ -72,13 +72,15 @@ def _cells(values: np.ndarray) -> list[str]:
 
 
 def poses_csv(joints: np.ndarray, visible: np.ndarray | None = None, source: CandidateFile | None = None,
-              rows: np.ndarray | None = None, smr_mm=None, tracker_mm=None) -> str:
+              rows: np.ndarray | None = None, smr_mm=None, tracker_mm=None, track: bool = False) -> str:
     """The text of ``poses.csv`` (see the module docstring) for ``joints (N, n)`` rad in measuring
     order; ``source`` and ``rows (N,)`` (table rows) when the candidates came from a file;
-    ``smr_mm (k, 3)`` and ``tracker_mm (3,)`` the planned SMRs and tracker position (mm)."""
+    ``smr_mm (k, 3)`` and ``tracker_mm (3,)`` the planned SMRs and tracker position (mm); ``track``:
+    joint 1 is a track's carriage (m), written as ``e1_mm``."""
     if source is None:
-        header = [f"q{i + 1}_deg" for i in range(joints.shape[1])]
-        body = [_cells(row) for row in np.rad2deg(joints)]
+        k = int(track)
+        header = ["e1_mm"] * k + [f"q{i + 1}_deg" for i in range(joints.shape[1] - k)]
+        body = [_cells(row) for row in np.c_[joints[:, :k] * 1e3, np.rad2deg(joints[:, k:])]]
     else:
         t = source.table
         header = [t.header[c] for c in t.joint_columns] + ["source_row"]

@@ -27,6 +27,7 @@ from robocal.data.simulate import smr_in_link_frame
 from robocal.errors import DataError
 from robocal.identify.identifiability import Identifiability
 from robocal.ik.path import default_weights, travel
+from robocal.kinematics.cell import is_track_cell
 from robocal.kinematics.transforms import make_transform
 from robocal.progress import Progress
 from robocal.version import __version__
@@ -92,10 +93,16 @@ class CampaignResult:
         """The candidates the search chose from (what the funnel left)."""
         return self.funnel.left
 
+    @property
+    def _track(self) -> int:
+        """1 when joint 1 is a track's carriage (m, written apart as e1_mm), else 0."""
+        return int(is_track_cell(self.robot))
+
     def poses_csv(self) -> str:
         """The text of ``poses.csv`` (see :mod:`robocal.campaign.files`)."""
         return poses_csv(self.joints, self.visible, self.source, self.source_rows,
-                         smr_mm=self.settings["smr_mm"], tracker_mm=self.settings["tracker_mm"])
+                         smr_mm=self.settings["smr_mm"], tracker_mm=self.settings["tracker_mm"],
+                         track=bool(self._track))
 
     def summary(self) -> str:
         ident = self.identifiability
@@ -131,7 +138,9 @@ class CampaignResult:
             "predicted_rms_mm": self.predicted_rms_mm,
             "noise": {"model": self.noise.model, "sigma_mm": self.noise.sigma_m * 1e3},
             "joints_deg": [[float(fixed_point(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv
-                           for row in np.rad2deg(self.joints)],
+                           for row in np.rad2deg(self.joints[:, self._track:])],
+            **({"e1_mm": [float(fixed_point(v, DEGREE_DECIMALS)) for v in self.joints[:, 0] * 1e3]}
+               if self._track else {}),
             "candidate_index": self.candidate_index.tolist(),
             "visible": self.visible.astype(int).tolist(),
             "tcp_mm": (self.robot.fk(self.joints)[:, :3, 3] * 1e3).tolist(),

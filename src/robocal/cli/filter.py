@@ -30,20 +30,18 @@ program carries one comment line naming the calibrated model (fingerprint) and r
 filtering it again is refused unless --force."""
 
 
-# what each language's files look like, and its motion instructions to a named point
+# what each language's files look like
 SUFFIXES = {"rapid": (".mod", ".modx", ".prg", ".sys"), "krl": (".src", ".dat", ".sub"),
             "fanuc": (".ls",), "urscript": (".script", ".urscript")}
 LANGUAGES = {"rapid": "ABB RAPID", "krl": "KUKA KRL", "fanuc": "FANUC TP (.ls)", "urscript": "URScript"}
 SIGNATURES = {"rapid": r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)",
               "krl": r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)",
               "fanuc": r"^/(?:PROG|MN|POS)\b", "urscript": r"^\s*def\s+\w+\s*\(.*\)\s*:|\bmove[ljpc]\s*\("}
-MOTION = {"krl": r"^\s*(?:S?PTP|S?LIN|S?CIRC)\s+([A-Za-z_$][\w$]*)",
-          "rapid": r"^\s*Move[LJC]\s+([A-Za-z_]\w*)"}
 
 
 def _diagnose_empty(args) -> None:
-    """No Cartesian target was found: refuse when the files say why (another language than the
-    suffix says, or motions to points declared in no file given, e.g. a KRL .src without its .dat)."""
+    """No Cartesian target was found: refuse when the files are in another language than their
+    suffix says (motions to points declared in no file given are named, or refused with --strict)."""
     import re
 
     texts = {p: Path(p).read_text(encoding="utf-8", errors="replace")
@@ -60,16 +58,6 @@ def _diagnose_empty(args) -> None:
         if other:
             raise DataError(f"{path} looks like {LANGUAGES[other[0]]}, not {LANGUAGES[language]} as its name "
                             f"says: give --format {other[0]} (or name it {SUFFIXES[other[0]][0]})")
-    if language not in MOTION:
-        return
-    names = {m for p in args.programs for m in re.findall(MOTION[language], texts[p], re.M | re.I)}
-    every = "\n".join(texts.values())
-    undeclared = sorted(n for n in names if not re.search(rf"\b{re.escape(n)}\s*(?::=|=)", every, re.I))
-    if undeclared:
-        hint = " (a KUKA .src's points are in its .dat: give both files)" if language == "krl" else ""
-        files, points = ", ".join(args.programs), ", ".join(undeclared[:8])
-        raise DataError(f"{files} move(s) to {points}, declared in none of the files given{hint}; give the "
-                        "files that declare them (or --references)")
 
 
 def _named(values, what: str) -> dict[str, str]:
@@ -113,12 +101,15 @@ def add_parser(sub) -> None:
                         "the corrections are applied again")
     p.add_argument("--keep-unreached", action="store_true",
                    help="leave targets that cannot be corrected unchanged (warning) instead of failing")
+    p.add_argument("--strict", action="store_true",
+                   help="refuse when a motion moves to a name declared in none of the files given (default: "
+                        "each such motion is named, with the declaration it needs, and the rest corrected)")
     p.set_defaults(func=run)
 
 
 def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[dict, str, list[Path]]:
     """(program -> output path, the table's path or prefix, every file that will be written)."""
-    from robocal.programs.filter import table_paths
+    from robocal.programs.result import table_paths
 
     out = Path(output)
     inputs = [Path(p) for p in programs]
@@ -227,7 +218,7 @@ def run(args) -> int:
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),
                          frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,
                          dialect=args.format, references=args.references, keep_unreached=args.keep_unreached,
-                         force=args.force)
+                         force=args.force, strict=args.strict)
     if not res.rows:
         _diagnose_empty(args)
     res.warnings[:0] = _tool_disagreements(args)

@@ -178,6 +178,11 @@ def run(args) -> int:
         check_tool_mm(smr, f"--smr-mm {','.join(f'{v:g}' for v in smr)}")
     robot = load_model(args.robot)
     params = _params(args, robot)
+    wanted = [f for f in (args.rapid, args.krl, args.urscript, args.fanuc) if f]
+    if wanted and robot.has_prismatic:
+        raise DataError(f"{robot.name} has a prismatic joint (a track): campaign programs with external "
+                        f"axes are not written ({', '.join(wanted)}); drive the poses of {args.output} "
+                        "(e1_mm and the arm's joints) with your own program")
     if args.smr_normal and len(args.smr_normal) != len(args.smr_mm or []):
         raise DataError("give one --smr-normal per --smr-mm")
     if args.region and args.region_box:

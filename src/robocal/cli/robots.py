@@ -63,23 +63,27 @@ def show(spec: str) -> None:
     print(f"{robot.name}: {robot.description}")
     print("\nmodified DH + beta (T_i = Rx(alpha) Tx(a) Ry(beta) Rz(theta + q) Tz(d))")
     print(f"{'joint':>5} {'alpha deg':>10} {'a mm':>10} {'beta deg':>9} {'theta deg':>10} {'d mm':>10}"
-          f"  {'limits deg':>17}  parallel")
+          f"  {'limits deg (mm)':>17}  parallel")
     for i in range(robot.n_joints):
-        lo, hi = np.rad2deg(robot.limits[i])
+        slide = robot.prismatic[i]  # a prismatic joint: limits in mm, its value adds to d
+        lo, hi = robot.limits[i] * 1e3 if slide else np.rad2deg(robot.limits[i])
         print(f"{i + 1:5d} {np.rad2deg(robot.alpha[i]):10.3f} {robot.a[i] * 1e3:10.3f} "
               f"{np.rad2deg(robot.beta[i]):9.3f} {np.rad2deg(robot.theta[i]):10.3f} {robot.d[i] * 1e3:10.3f}"
-              f"  {lo:8.1f} {hi:8.1f}  {'yes' if robot.parallel[i] else ''}")
+              f"  {lo:8.1f} {hi:8.1f}  {'yes' if robot.parallel[i] else ''}"
+              + ("  prismatic (mm)" if slide else ""))
     for label, T in (("base", robot.base), ("tool", robot.tool)):
         rpy = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)
         print(f"{label}: xyz {np.round(T[:3, 3] * 1e3, 3).tolist()} mm, rpy {np.round(rpy, 3).tolist()} deg")
     q = np.zeros((len(SHOW_JOINTS_DEG), robot.n_joints))
-    k = min(robot.n_joints, SHOW_JOINTS_DEG.shape[1])
-    q[:, :k] = SHOW_JOINTS_DEG[:, :k]
-    T = robot.fk(np.deg2rad(q))
+    turning = np.flatnonzero(~robot.prismatic)  # the sample angles go to the revolute joints
+    k = min(turning.size, SHOW_JOINTS_DEG.shape[1])
+    q[:, turning[:k]] = SHOW_JOINTS_DEG[:, :k]
+    T = robot.fk(np.deg2rad(q))  # prismatic joints at 0
     with warnings.catch_warnings():  # gimbal lock at pitch +-90 deg: scipy then sets yaw to 0
         warnings.simplefilter("ignore", UserWarning)
         rpy = Rotation.from_matrix(T[:, :3, :3]).as_euler("xyz", degrees=True)
-    print("\ntool pose (x y z mm, fixed-axis roll pitch yaw deg)")
+    print("\ntool pose (x y z mm, fixed-axis roll pitch yaw deg)"
+          + ("; prismatic joints at 0" if robot.has_prismatic else ""))
     for j in range(len(q)):
         print(f"q = {np.array2string(q[j], precision=1, separator=', ')} deg  ->  "
               f"xyz {np.array2string(T[j, :3, 3] * 1e3, precision=3, separator=', ')}  "

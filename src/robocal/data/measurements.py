@@ -23,7 +23,9 @@ held its joints, or the first reading of an averaged group).
 
 Canonical CSV (DESIGN.md "Files"): optional leading ``#`` comment lines (the first one is kept as
 ``source``, the provenance text), then a header, then one line per row. Column names carry their
-units: ``q1_deg..qn_deg`` or ``q1_rad..qn_rad``; ``x_mm y_mm z_mm`` or ``x_m y_m z_m``; optional
+units: ``q1_deg..qn_deg`` or ``q1_rad..qn_rad`` (a prismatic joint's ``q{i}_mm`` / ``q{i}_m``); external
+axes ``e1_mm`` / ``e1_m`` (a linear track) or ``e1_deg`` / ``e1_rad``, which come first in ``joints``
+(a track carries the arm: joints ``(e1, q1..q6)``); ``x_mm y_mm z_mm`` or ``x_m y_m z_m``; optional
 ``smr``, ``sigma_mm``/``sigma_m``, ``qw qx qy qz`` (pose), ``plane`` (plane contacts, then no
 x/y/z), ``pair`` and ``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``,
 ``approach1..approachn`` and ``travel1_rad..traveln_rad`` (or ``_deg``) (each written only where
@@ -49,7 +51,7 @@ from robocal.kinematics.transforms import ROTATION_TOL
 
 KINDS = ("point", "pose", "plane", "distance")
 _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
-                 "pair", "distance", "approach", "travel")
+                 "pair", "distance", "approach", "travel")  # row-indexed (subsets take their rows)
 _LENGTH_COLUMNS = ("x", "y", "z", "sigma", "distance")
 _PLAIN_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row", "qw", "qx", "qy", "qz")
 _INT_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row")
@@ -115,6 +117,8 @@ class Measurements:
     travel: np.ndarray | None = None
     file: str = ""  # the file it was read from (set by :meth:`load`)
     notes: tuple[str, ...] = ()  # how the reader interpreted the file (e.g. repeated readings)
+    linear: np.ndarray | None = None  # (n,) bool: joints in length units (m: prismatic); None: all angles
+    external: int = 0  # the first ``external`` joints are external axes (e1..): a track carrying the arm
 
     @property
     def label(self) -> str:
@@ -122,6 +126,8 @@ class Measurements:
         return self.file or self.source
 
     def __post_init__(self) -> None:
+        if self.linear is not None:
+            self.linear.flags.writeable = False
         for f in _ARRAY_FIELDS:  # frozen all the way down: the validated arrays cannot change
             value = getattr(self, f)
             if value is not None:
@@ -133,12 +139,14 @@ class Measurements:
     @classmethod
     def from_arrays(cls, kind: str, joints, *, points=None, rotations=None, plane=None, pair=None,
                     distance=None, smr=None, sigma=None, pose_id=None, source_row=None,
-                    source: str = "", approach=None, travel=None) -> Measurements:
+                    source: str = "", approach=None, travel=None, linear=None,
+                    external: int = 0) -> Measurements:
         """Validated measurements from arrays in SI units (rad, m).
 
         Defaults: ``smr`` 0, ``pose_id`` one per row (``0..N-1``), ``source_row`` ``1..N``,
         ``approach`` and ``travel`` from the row order (:func:`approach_from_order`,
-        :func:`travel_from_order`).
+        :func:`travel_from_order`). ``linear`` ``(n,)`` bool marks joints in m (prismatic, e.g. a
+        track), ``external`` how many leading joints are external axes (written as e1.. columns).
         """
         if kind not in KINDS:
             raise DataError(f"unknown measurement kind {kind!r}: use one of {', '.join(KINDS)}")
@@ -200,9 +208,14 @@ class Measurements:
                 raise DataError("approach directions must be -1, 0 or +1")
         travel = travel_from_order(joints, pose_id) if travel is None else \
             _float_array(travel, "travel", (N, n))
+        linear = None if linear is None or not np.any(linear) else np.array(linear, bool).reshape(-1)
+        if linear is not None and linear.shape != (n,):
+            raise DataError(f"linear (prismatic joint flags) must have {n} values")
+        if not 0 <= int(external) <= n:
+            raise DataError(f"external axes must be 0..{n}, got {external}")
         return cls(kind=kind, joints=joints, pose_id=pose_id, smr=smr, source_row=source_row,
                    sigma=sigma, source=str(source).replace("\n", " "), approach=approach,
-                   travel=travel, **kw)
+                   travel=travel, linear=linear, external=int(external), **kw)
 
     # ----------------------------------------------------------------- views
     def __len__(self) -> int:
@@ -269,9 +282,18 @@ class Measurements:
         """Check joint count, SMR indices and unit plausibility against a robot; returns self."""
         where = f"{path}: " if path else (f"{self.source}: " if self.source else "")
         if self.n_joints != robot.n_joints:
+            track = " (e1 for its track, then q1..q6)" if robot.prismatic[0] else ""
             raise DataError(f"{where}the data have {self.n_joints} joint columns but {robot.name} has "
-                            f"{robot.n_joints} joints: use a file with q1..q{robot.n_joints} or the "
-                            "matching robot model")
+                            f"{robot.n_joints} joints{track}: use a file with {robot.n_joints} joint "
+                            "columns or the matching robot model")
+        linear = np.zeros(self.n_joints, bool) if self.linear is None else self.linear
+        wrong = np.flatnonzero(linear != robot.prismatic)
+        if wrong.size:
+            k = int(wrong[0])
+            kind = "prismatic (give it in mm or m)" if robot.prismatic[k] else "revolute (deg or rad)"
+            raise UnitError(f"{where}joint column {k + 1} ({self.joint_column(k, '')}) is in "
+                            f"{'length' if linear[k] else 'angle'} units but {robot.name}'s joint {k + 1} is "
+                            f"{kind}" + (": a track's column is e1_mm" if robot.prismatic[0] else ""))
         if reach is None:
             reach = robot_reach(robot)
         _check_plausible(self, reach, where)
@@ -290,12 +312,18 @@ class Measurements:
             _check_plausible(data, reach, f"{path}: ")
         return data
 
+    def joint_column(self, k: int, unit: str) -> str:
+        """The CSV name of joint ``k`` (0-based) with ``unit`` (e.g. ``_rad``): ``e{k+1}`` for an
+        external axis, else ``q{i}`` counted after them."""
+        return f"e{k + 1}{unit}" if k < self.external else f"q{k - self.external + 1}{unit}"
+
     def to_csv(self) -> str:
         """Canonical CSV text in SI columns (exact round trip)."""
         n = self.n_joints
         cols = {"pose_id": self.pose_id, "source_row": self.source_row}
+        linear = np.zeros(n, bool) if self.linear is None else self.linear
         for i in range(n):
-            cols[f"q{i + 1}_rad"] = self.joints[:, i]
+            cols[self.joint_column(i, "_m" if linear[i] else "_rad")] = self.joints[:, i]
         if self.points is not None:
             for k, c in enumerate("xyz"):
                 cols[f"{c}_m"] = self.points[:, k]
@@ -335,9 +363,13 @@ class Measurements:
 
 
 def robot_reach(robot) -> float:
-    """A generous reach (m) of a robot: sum of link lengths plus tool and SMR offsets."""
+    """A generous reach (m) of a robot: sum of link lengths plus tool and SMR offsets, plus the travel
+    of its prismatic joints (a track)."""
     tool = max([np.linalg.norm(robot.tool[:3, 3])] + [np.linalg.norm(s) for s in robot.smr])
-    return float(np.abs(robot.a).sum() + np.abs(robot.d).sum() + tool)
+    slides = robot.limits[robot.prismatic]
+    travel = float(np.sum(np.where(np.isfinite(slides), np.abs(slides), 0.0).max(axis=1))) \
+        if len(slides) else 0.0
+    return float(np.abs(robot.a).sum() + np.abs(robot.d).sum() + tool + travel)
 
 
 def _check_plausible(data: Measurements, reach: float, where: str) -> None:
@@ -405,14 +437,14 @@ def read_joint_table(path) -> JointTable:
         raise DataError(f"{path}: the file is empty; it needs a header (q1_deg,...) and joint rows")
     rows = list(csv.reader([ln for _, ln in numbered]))
     header = [h.strip().lower() for h in rows[0]]
-    roles = {name: _header_role(name) for name in header if re.fullmatch(r"q\d+_[a-z]+", name)}
+    roles = {name: _header_role(name) for name in header if re.fullmatch(r"[qe]\d+_[a-z]+", name)}
     joint_cols = _joint_columns(roles, str(path))
-    index, scale = [header.index(h) for h in joint_cols], roles[joint_cols[0]][2]
+    index, scale = [header.index(h) for h in joint_cols], np.array([roles[h][2] for h in joint_cols])
     n = len(index)
     q = np.empty((len(rows) - 1, n))
     for i, row in enumerate(rows[1:]):
         try:
-            q[i] = [float(row[c]) * scale for c in index]
+            q[i] = np.array([float(row[c]) for c in index]) * scale
         except (ValueError, IndexError):
             raise DataError(f"{path}, line {numbered[i + 1][0]}: expected {n} numeric joint values") from None
     if len(q) == 0:
@@ -433,8 +465,17 @@ def read_joints(path, robot=None) -> np.ndarray:
 
 
 def _header_role(name: str):
-    """(role, index or None, scale) of one header name, or raise UnitError/None for unknown."""
-    m = re.fullmatch(r"(q|travel)(\d{1,4})_([a-z]+)", name)
+    """(role, index or None, scale) of one header name, or raise UnitError/None for unknown. A joint
+    (``q``) or external-axis (``e``) column may be in length units (a prismatic joint, m)."""
+    m = re.fullmatch(r"([qe])(\d{1,4})_([a-z]+)", name)
+    if m and m.group(3) in LENGTH_UNITS:
+        return m.group(1), int(m.group(2)), LENGTH_UNITS[m.group(3)]
+    if m and m.group(3) not in ANGLE_UNITS:
+        raise UnitError(f"unknown angle unit {m.group(3)!r} in column {name!r}: use _deg or _rad "
+                        "(a prismatic joint or a track: _mm or _m)")
+    if m:
+        return m.group(1), int(m.group(2)), ANGLE_UNITS[m.group(3)]
+    m = re.fullmatch(r"(travel)(\d{1,4})_([a-z]+)", name)
     if m:
         unit = m.group(3)
         if unit not in ANGLE_UNITS:
@@ -451,7 +492,7 @@ def _header_role(name: str):
         return m.group(1), None, LENGTH_UNITS[unit]
     if name in _PLAIN_COLUMNS:
         return name, None, 1.0
-    if name in _LENGTH_COLUMNS or re.fullmatch(r"q\d+", name):
+    if name in _LENGTH_COLUMNS or re.fullmatch(r"[qe]\d+", name):
         raise UnitError(f"column {name!r} has no unit: name it {name}_mm or {name}_m"
                         if name in _LENGTH_COLUMNS else f"column {name!r} has no unit: name it "
                         f"{name}_deg or {name}_rad")
@@ -493,25 +534,35 @@ def _column_roles(header: list[str], name: str, header_line: int) -> dict:
             raise UnitError(f"{name}, line {header_line}: {exc}") from None
         if role is None:
             raise DataError(f"{name}, line {header_line}: unknown column {h!r}; known columns are "
-                            "q1_deg..qn_deg (or _rad), x_mm,y_mm,z_mm (or _m), smr, sigma_mm, qw,qx,qy,qz, "
+                            "q1_deg..qn_deg (or _rad), e1_mm (a track), x_mm,y_mm,z_mm (or _m), smr, "
+                            "sigma_mm, "
+                            "qw,qx,qy,qz, "
                             "plane, pair, distance_mm, pose_id, source_row, approach1..n, "
                             "travel1_deg..n. For another layout use `robocal import`")
         roles[h] = role
     return roles
 
 
+def _is_length(header: str) -> bool:
+    """Whether a joint or external-axis column is in length units (a prismatic joint)."""
+    return header.rsplit("_", 1)[-1] in LENGTH_UNITS
+
+
 def _joint_columns(roles: dict, name: str) -> list[str]:
-    """The joint columns q1..qn in order (one angle unit, no gaps)."""
-    joint_cols = sorted((r[1], h) for h, r in roles.items() if r[0] == "q")
-    n = len(joint_cols)
-    if n == 0:
+    """The joint columns in ``joints`` order: external axes e1..ek, then q1..qn (no gaps; the
+    angle columns in one unit)."""
+    out = []
+    for role in ("e", "q"):
+        cols = sorted((r[1], h) for h, r in roles.items() if r[0] == role)
+        if [i for i, _ in cols] != list(range(1, len(cols) + 1)):
+            raise DataError(f"{name}: {'external axis' if role == 'e' else 'joint'} columns must be "
+                            f"{role}1..{role}{len(cols)} without gaps, got {[h for _, h in cols]}")
+        out += [h for _, h in cols]
+    if not any(roles[h][0] == "q" for h in out):
         raise DataError(f"{name}: no joint columns; add q1_deg..qn_deg (or q1_rad..qn_rad)")
-    if [i for i, _ in joint_cols] != list(range(1, n + 1)):
-        raise DataError(f"{name}: joint columns must be q1..q{n} without gaps, got "
-                        f"{[h for _, h in joint_cols]}")
-    if len({roles[h][2] for _, h in joint_cols}) > 1:
+    if len({roles[h][2] for h in out if not _is_length(h)}) > 1:
         raise UnitError(f"{name}: joint columns mix _deg and _rad; use one unit for all joints")
-    return [h for _, h in joint_cols]
+    return out
 
 
 def _data_kind(roles: dict, name: str) -> str:
@@ -668,8 +719,10 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     table, line_no = _table(rows[1:], header, name, header_line)
     col = {h: table[:, i] for i, h in enumerate(header)}
     joints = np.stack([col[h] * roles[h][2] for h in joint_cols], axis=1)
-    if np.abs(joints).max() > MAX_JOINT_RAD and roles[joint_cols[0]][2] == 1.0:
-        ln = line_no[int(np.argmax(np.abs(joints).max(axis=1)))]
+    linear = np.array([_is_length(h) for h in joint_cols])
+    angles = np.abs(np.where(linear, 0.0, joints))
+    if angles.max() > MAX_JOINT_RAD and any(roles[h][2] == 1.0 for h in joint_cols if not _is_length(h)):
+        ln = line_no[int(np.argmax(angles.max(axis=1)))]
         raise UnitError(f"{name}, line {ln}: joint values up to {np.abs(joints).max():.4g} rad (> 2 turns): "
                         "these look like degrees; name the columns q1_deg..")
     kw = _observed(kind, col, roles, line_no, name)
@@ -684,7 +737,8 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     try:
         data = Measurements.from_arrays(kind, joints, smr=ints["smr"], pose_id=ints["pose_id"],
                                         source_row=source_row, source=source, approach=approach,
-                                        travel=travel, **kw)
+                                        travel=travel, linear=linear,
+                                        external=sum(roles[h][0] == "e" for h in joint_cols), **kw)
     except DataError as exc:
         raise DataError(f"{name}: {exc}") from None
     return replace(data, notes=notes)

@@ -8,6 +8,8 @@ lengths a, d by 0.05-0.5 mm, angles alpha, theta (theta errors are the joint zer
 frame is tracker -> frame {0}. SMR 0 sits on the flange at a random offset (|xy| <= 50 mm,
 z 50-120 mm); extra SMRs are 100-150 mm from SMR 0. Joints are uniform within the joint limits
 (optionally kept only where the SMR is inside ``workspace_box``, robot base frame, m).
+An arm on a track (:mod:`robocal.kinematics.cell`) also gets track errors: direction tilt, encoder
+scale and mount (:func:`_true_cell`); its carriage positions are uniform along the track.
 
 Noise, added to each point in the tracker frame:
 
@@ -49,6 +51,7 @@ from scipy.spatial.transform import Rotation
 from robocal.data.measurements import Measurements, approach_from_order, travel_from_order
 from robocal.errors import DataError, UnreachableError
 from robocal.io import write_all
+from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, is_track_cell, track_chain
 from robocal.kinematics.model import Robot
 from robocal.kinematics.model_file import dump_model
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
@@ -62,6 +65,12 @@ OUTLIER_MM = (1.0, 5.0)          # size of a gross error (uniform), mm
 SIM_KINDS = ("point", "pose", "plane", "distance")
 SCALE_BAR_M = 0.5  # default certified length of a simulated scale bar (distance kind), m
 MIN_BAR_ANGLE_DEG = 20.0  # the two poses of a bar placement differ by at least this much (joint 1 or 2)
+# A true arm on a track (error_scale 1): the track's direction tilted, the encoder's scale and the
+# mount (carriage -> robot base) off by these (a rack-and-pinion track as installed, uncompensated).
+TRACK_TILT_DEG = 0.04
+TRACK_SCALE_ERROR = 2e-4
+MOUNT_ERROR_MM = 1.0
+MOUNT_ERROR_DEG = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -207,7 +216,8 @@ def _true_robot(robot: Robot, rng: np.random.Generator, kind: str, n_smr: int, e
                 smr_offsets=None, tracker_position=None) -> Robot:
     """The perturbed robot with its SMRs (or probe) on the flange and, for tracker data, the
     tracker frame as base; its nominal is the given robot's links with these frames."""
-    true = perturbed(robot, rng, scale=error_scale)
+    true = _true_cell(robot, rng, error_scale) if is_track_cell(robot) else \
+        perturbed(robot, rng, scale=error_scale)
     tool0 = np.array([*rng.uniform(-0.05, 0.05, 2), rng.uniform(0.05, 0.12)])
     extra = np.zeros((0, 3))
     if n_smr > 1:
@@ -229,6 +239,23 @@ def _true_robot(robot: Robot, rng: np.random.Generator, kind: str, n_smr: int, e
     nominal = true.nominal.copy()
     nominal[: 5 * robot.n_joints] = robot.nominal[: 5 * robot.n_joints]
     return replace(true, nominal=nominal)
+
+
+def _true_cell(robot: Robot, rng: np.random.Generator, error_scale: float) -> Robot:
+    """A true arm on a track: the arm perturbed as :func:`perturbed` does, the track direction tilted
+    by TRACK_TILT_DEG about a random normal, the mount off by MOUNT_ERROR_MM / MOUNT_ERROR_DEG
+    (random directions), the encoder scale off by TRACK_SCALE_ERROR (random sign), all times
+    ``error_scale``; rebuilt exactly as a cell file's chain (:func:`robocal.kinematics.cell.track_chain`)."""
+    arm = arm_model(robot).with_frames(base=carriage_frames(robot, 0.0)[0])
+    true_arm = perturbed(arm, rng, scale=error_scale)
+    u = robot.fk(np.zeros((1, robot.n_joints)), frames=True)[1][0, 1, :3, 2]  # the track's direction
+    normal = np.cross(u, _unit(rng, 1)[0])
+    tilt = rotvec_to_matrix(normal / np.linalg.norm(normal) * np.deg2rad(TRACK_TILT_DEG) * error_scale)
+    mount = make_transform(rotvec_to_matrix(_unit(rng, 1)[0] * np.deg2rad(MOUNT_ERROR_DEG) * error_scale),
+                           _unit(rng, 1)[0] * MOUNT_ERROR_MM * 1e-3 * error_scale)
+    true = track_chain(true_arm, tilt @ u, mount, robot.limits[0], name=robot.name)
+    scale = TRACK_SCALE_ERROR * error_scale * rng.choice([-1.0, 1.0])
+    return true.with_values({TRACK_SCALE: scale})
 
 
 def _tracker_readings(kind: str, T: np.ndarray, rng: np.random.Generator, noise_mm: float,
@@ -310,7 +337,7 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         off_plane = rng.standard_normal(N) * noise_mm * 1e-3
         q_rows, _ = _move_tips(true, q_rows, offset + off_plane, normal)
         noise = normal * off_plane[:, None]
-    joint_noise = rng.standard_normal(q_rows.shape) * np.deg2rad(joint_noise_deg)
+    joint_noise = rng.standard_normal(q_rows.shape) * np.deg2rad(joint_noise_deg) * ~robot.prismatic
     clean = np.ones(N, bool)
     clean[outlier_rows] = False
     floor = float(np.sqrt(np.mean(np.sum(noise[clean] ** 2, axis=1)))) * 1e3 if clean.any() else 0.0
@@ -321,8 +348,8 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
             "noise_floor_mm": floor}
     source = f"simulated by robocal: robot {robot.name}, seed {seed}, {kind}, noise floor {floor:.6g} mm"
     data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id, approach=approach,
-                                    travel=travel,
-                                    source_row=np.arange(2, N + 2), source=source, **kw)
+                                    travel=travel, source_row=np.arange(2, N + 2), source=source,
+                                    linear=robot.prismatic, external=int(is_track_cell(robot)), **kw)
     truth = replace(true, name=f"{robot.name}_true",
                     description=f"true robot of a robocal simulation (seed {seed}); noise floor "
                                 f"{floor:.6g} mm (3-D RMS of the added noise)")

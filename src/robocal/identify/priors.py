@@ -42,8 +42,13 @@ LINK_LENGTH_MIN_MM = 0.5  # a, d: at least this (1 sigma) ...
 LINK_LENGTH_MM_PER_M = 1.0  # ... and this per metre of the arm's summed link lengths (size class)
 LINK_ANGLE_DEG = 0.2  # alpha, beta: axis misalignments
 JOINT_ZERO_DEG = 0.5  # theta: joint zero offsets (mastering)
+# Scale (a joint's encoder / transmission ratio, mostly a linear track's): 1 sigma 5e-4 m/m. A
+# track's rack pitch and encoder scale are within ~1e-4 (ISO 230-2 positioning accuracy of long
+# machine axes: 0.1-0.3 mm per metre before compensation) and steel grows 1.2e-5 per kelvin (1e-4
+# for a 10 K warmer hall); 5e-4 covers both with margin (the simulator's 2e-4 is inside).
 JOINT_ERROR_SIGMA = {"gear": np.deg2rad(0.2), "cyclic": np.deg2rad(0.2), "backlash": np.deg2rad(0.2),
-                     "travel": 0.01, "compliance": 0.01}  # SI units of each term (rad, rad/rad, rad/m)
+                     "travel": 0.01, "compliance": 0.01,
+                     "scale": 5e-4}  # SI units of each term (rad, rad/rad, rad/m, 1)
 NOT_DETERMINED_RATIO = 0.5  # posterior sigma / prior sigma above which the data do not determine it
 NOISE_RTOL = 0.05  # the noise estimate has settled when it changes by less than this fraction
 NOISE_MAX_PASSES = 10

@@ -2,7 +2,8 @@
 
 Batched Levenberg-Marquardt on the 6 pose residuals (position m, rotation vector rad, world
 frame) with the joint Jacobian, which is the identification Jacobian w.r.t. theta1..thetan
-(d TCP / d theta_i = d TCP / d q_i); every target is one member of robocal's damped
+(d TCP / d theta_i = d TCP / d q_i; d_i for a prismatic joint, whose value adds to d_i);
+every target is one member of robocal's damped
 least-squares loop (:mod:`robocal.damped_least_squares`, the one calibration uses), with
 Marquardt's diagonal scaling. Seeds default to the closed-form solution of the robot's nominal
 model (its OPW or UR form, :mod:`robocal.ik.closed_form`) in the requested branch, with this
@@ -75,14 +76,16 @@ class IKResult:
 class _Targets:
     """A batch of IK targets as the members of the damped loop (see DampedProblem)."""
 
-    def __init__(self, robot: Robot, T: np.ndarray, q0: np.ndarray, pos_tol: float, rot_tol: float):
+    def __init__(self, robot: Robot, T: np.ndarray, q0: np.ndarray, pos_tol: float, rot_tol: float,
+                 free: np.ndarray):
         self.robot, self.T, self.tol = robot, T, (pos_tol, rot_tol)
-        self.names = [f"theta{i + 1}" for i in range(robot.n_joints)]
+        self.free = free
+        self.names = [f"{'d' if robot.prismatic[i] else 'theta'}{i + 1}" for i in free]
         self.size = T.shape[0]
         self.q = q0.copy()
         self.err = pose_error(T, robot.fk(self.q))
         self.c = np.einsum("ij,ij->i", self.err, self.err)
-        self.J = np.zeros((self.size, 6, robot.n_joints))
+        self.J = np.zeros((self.size, 6, len(free)))
         self.step = np.zeros_like(self.q)
         self.q_trial, self.err_trial, self.c_trial = self.q.copy(), self.err.copy(), self.c.copy()
 
@@ -98,8 +101,9 @@ class _Targets:
         g = np.einsum("kri,kr->ki", J, err)
         diag = np.einsum("kii->ki", JtJ)
         A = JtJ + (damping[:, None] * (diag + _DIAG_FLOOR))[:, :, None] * np.eye(J.shape[2])
-        self.step[m] = np.linalg.solve(A, g[:, :, None])[:, :, 0]
-        left = err - np.einsum("kri,ki->kr", J, self.step[m])
+        step = np.linalg.solve(A, g[:, :, None])[:, :, 0]
+        self.step[np.ix_(m, self.free)] = step
+        left = err - np.einsum("kri,ki->kr", J, step)
         return self.c[m] - np.einsum("kr,kr->k", left, left)
 
     def converged(self, m: np.ndarray, predicted: np.ndarray) -> np.ndarray:
@@ -209,9 +213,19 @@ class _Run(NamedTuple):
             have[rows[which]] = new[which]
 
 
-def _descend(robot: Robot, T: np.ndarray, q0: np.ndarray, max_iter: int, tol: tuple[float, float]) -> _Run:
-    """The damped loop from ``q0`` ``(N, n)``."""
-    targets = _Targets(robot, T, q0, *tol)
+def _free_joints(robot: Robot, locked) -> np.ndarray:
+    """Indices of the joints IK moves: all but ``locked`` (0-based indices, e.g. a track's joint
+    held at the program's own value)."""
+    locked = set() if locked is None else {int(i) for i in locked}
+    if not locked <= set(range(robot.n_joints)):
+        raise DataError(f"locked joints must be indices 0..{robot.n_joints - 1}, got {sorted(locked)}")
+    return np.array([i for i in range(robot.n_joints) if i not in locked], dtype=int)
+
+
+def _descend(robot: Robot, T: np.ndarray, q0: np.ndarray, max_iter: int, tol: tuple[float, float],
+             locked=None) -> _Run:
+    """The damped loop from ``q0`` ``(N, n)``, the ``locked`` joints held at their start."""
+    targets = _Targets(robot, T, q0, *tol, _free_joints(robot, locked))
     out = minimize(targets, max_iter)
     return _Run(targets.q, targets.err, _within(targets.err, tol), out.status, out.nit)
 
@@ -236,15 +250,17 @@ def _restart_offsets(n: int) -> np.ndarray:
 
 
 def _restarts(robot: Robot, T: np.ndarray, q0: np.ndarray, max_iter: int, tol: tuple[float, float],
-              form: Robot | None) -> _Run:
+              form: Robot | None, locked=None) -> _Run:
     """Targets restarted from their seeds ``q0`` ``(N, n)`` moved off a nearby singularity
     (:func:`_restart_offsets`): per target the converged restart nearest the seed, in the seed's
     branch (by the closed form of the nominal model ``form`` when there is one); ``nit`` counts each target's
     longest restart."""
     offsets = _restart_offsets(robot.n_joints)
+    if locked is not None:
+        offsets[:, list(locked)] = 0.0
     N, K = len(q0), len(offsets)
     starts = (q0[:, None, :] + offsets[None]).reshape(-1, robot.n_joints)
-    run = _descend(robot, np.repeat(T, K, axis=0), starts, max_iter, tol)
+    run = _descend(robot, np.repeat(T, K, axis=0), starts, max_iter, tol, locked)
     qs, oks = run.q.reshape(N, K, -1), run.ok.reshape(N, K)
     if form is not None:  # the controller asked for the seed's branch
         oks &= branch_slot(form, qs) == branch_slot(form, q0)[:, None]
@@ -255,7 +271,7 @@ def _restarts(robot: Robot, T: np.ndarray, q0: np.ndarray, max_iter: int, tol: t
 
 
 def _retry(robot: Robot, T: np.ndarray, q0: np.ndarray, run: _Run, max_iter: int, tol: tuple[float, float],
-           form: Robot | None) -> None:
+           form: Robot | None, locked=None) -> None:
     """The targets of ``run`` (from seeds ``q0``) not reached, in place: those stopped at the
     iteration limit (slow convergence near a singular wrist or elbow) continue for another
     ``max_iter`` steps (continuing a stalled one would repeat its stall); those still not reached
@@ -263,10 +279,11 @@ def _retry(robot: Robot, T: np.ndarray, q0: np.ndarray, run: _Run, max_iter: int
     seeded = np.isfinite(q0).all(axis=1)
     rows = np.flatnonzero(~run.ok & seeded & (run.status == Status.MAX_ITERATIONS))
     if rows.size:
-        run.take(rows, _descend(robot, T[rows], run.q[rows], max_iter, tol), np.ones(rows.size, bool))
+        run.take(rows, _descend(robot, T[rows], run.q[rows], max_iter, tol, locked),
+                 np.ones(rows.size, bool))
     rows = np.flatnonzero(~run.ok & seeded)
     if rows.size:
-        again = _restarts(robot, T[rows], q0[rows], max_iter, tol, form)
+        again = _restarts(robot, T[rows], q0[rows], max_iter, tol, form, locked)
         run.take(rows, again, again.ok)
 
 
@@ -276,7 +293,7 @@ def _result(robot: Robot, q0: np.ndarray, run: _Run) -> IKResult:
     where that turn lands inside them (a joint just past a limit stays there, to be reported)."""
     seeded = np.isfinite(q0).all(axis=1)
     start = np.where(np.isfinite(q0), q0, 0.0)
-    q = start + (np.remainder(run.q - start + np.pi, 2 * np.pi) - np.pi)
+    q = np.where(robot.prismatic, run.q, start + (np.remainder(run.q - start + np.pi, 2 * np.pi) - np.pi))
     lo, hi = robot.limits[:, 0], robot.limits[:, 1]
     up, down = q + 2 * np.pi, q - 2 * np.pi
     q = np.where((q < lo) & (up <= hi), up, np.where((q > hi) & (down >= lo), down, q))
@@ -285,12 +302,13 @@ def _result(robot: Robot, q0: np.ndarray, run: _Run) -> IKResult:
 
 
 def _solve_from(robot: Robot, T: np.ndarray, q0: np.ndarray, nominal: Robot | None, max_iter: int,
-                tol: tuple[float, float], retry: bool) -> tuple[IKResult, _Run]:
+                tol: tuple[float, float], retry: bool, locked=None) -> tuple[IKResult, _Run]:
     """IK from seeds ``q0`` ``(N, n)`` (NaN rows: no seed, not converged), with the singular-case
-    retries of :func:`_retry` when ``retry``; also the run (raw joints, steps) behind the result."""
-    run = _descend(robot, T, np.where(np.isfinite(q0), q0, 0.0), max_iter, tol)
+    retries of :func:`_retry` when ``retry``; also the run (raw joints, steps) behind the result.
+    The ``locked`` joints stay at their seed."""
+    run = _descend(robot, T, np.where(np.isfinite(q0), q0, 0.0), max_iter, tol, locked)
     if retry:
-        _retry(robot, T, q0, run, max_iter, tol, branch_model(robot, nominal))
+        _retry(robot, T, q0, run, max_iter, tol, branch_model(robot, nominal), locked)
     return _result(robot, q0, run), run
 
 
@@ -304,8 +322,8 @@ def _update(res: IKResult, rows: np.ndarray, alt: IKResult) -> None:
 
 
 def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal: Robot | None = None,
-          max_iter: int = 100,
-          pos_tol: float = POS_TOL, rot_tol: float = ROT_TOL, strict: bool = False) -> IKResult:
+          max_iter: int = 100, pos_tol: float = POS_TOL, rot_tol: float = ROT_TOL, strict: bool = False,
+          locked=None) -> IKResult:
     """Numeric inverse kinematics of any model, calibrated ones included.
 
     Damped least squares from a seed per pose. Targets not reached are retried: continued if they
@@ -333,6 +351,9 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
         ``rot_tol`` (rad, default 1e-9).
     strict : bool, default False
         Raise instead of flagging poses that do not converge.
+    locked : sequence of int, optional
+        0-based indices of joints held at their seed (needs ``seeds``), e.g. a track's joint at the
+        program's own value (see `robocal.ik.track`). A chain with a prismatic joint needs ``seeds``.
 
     Returns
     -------
@@ -359,6 +380,9 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
     T = check_poses(poses)
     N, n = T.shape[0], robot.n_joints
     tol = (pos_tol, rot_tol)
+    if seeds is None and (locked is not None or robot.has_prismatic):
+        raise DataError(f"{robot.name}: IK of a chain with prismatic or locked joints needs seeds (for an "
+                        "arm on a track: robocal.ik.track.solve)")
     if seeds is None and branch is None:
         # per pose the preferred nominal branch; where the robot has no solution in it, the next
         # branch in preference order; the singular-case retries only where every branch failed
@@ -386,8 +410,8 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
             q0 = np.broadcast_to(q0, (N, n))
         if q0.shape != (N, n):
             raise DataError(f"seeds must have shape ({N}, {n}), got {q0.shape}")
-    return _finish(_solve_from(robot, T, q0, nominal, max_iter, tol, retry=True)[0], N, pos_tol, rot_tol,
-                   strict)
+    return _finish(_solve_from(robot, T, q0, nominal, max_iter, tol, retry=True, locked=locked)[0], N,
+                   pos_tol, rot_tol, strict)
 
 
 def _finish(result: IKResult, N: int, pos_tol: float, rot_tol: float, strict: bool) -> IKResult:

@@ -76,18 +76,21 @@ class PathResult:
     candidates: np.ndarray
 
 
-def default_weights(robot: Robot, wrist: float = 1.0) -> np.ndarray:
-    """``(n,)`` weights for a chain of any length n: 1 + lever arm (m) from axis i to the flange at
-    zero joints for the first three joints, ``wrist`` for every joint after the third."""
+def default_weights(robot: Robot, wrist=(1.0, 1.0, 1.0)) -> np.ndarray:
+    """``(n,)`` weights: 1 + lever arm (m) from axis i to the flange at zero joints for the first
+    three revolute joints, ``wrist`` for the next ones (repeated on a longer chain); a prismatic
+    joint (a track) 1 per metre of travel."""
     n = robot.n_joints
     _, frames = robot.fk(np.zeros((1, n)), frames=True)
     flange = frames[0, n, :3, 3]
     w = np.ones(n)
-    for i in range(min(3, n)):
+    turning = np.flatnonzero(~robot.prismatic)
+    for i in turning[:3]:
         o, z = frames[0, i + 1, :3, 3], frames[0, i + 1, :3, 2]
         v = flange - o
         w[i] = 1.0 + np.linalg.norm(v - (v @ z) * z)
-    w[3:] = float(wrist)
+    if turning.size > 3:
+        w[turning[3:]] = np.resize(np.asarray(wrist, dtype=float), turning.size - 3)
     return w
 
 

@@ -71,22 +71,38 @@ def _to_matrix(R, t, shape):
     return out
 
 
+def prismatic_split(links: LinkArrays, q: np.ndarray,
+                    prismatic: np.ndarray | None) -> tuple[LinkArrays, np.ndarray]:
+    """Move the values of prismatic joints into d: links with ``d + q`` ``(..., n)`` there and
+    joints with 0 there, so that the revolute formulas compute the chain with prismatic joints
+    (``prismatic`` ``(n,)`` bool; None or all False: unchanged)."""
+    if prismatic is None or not np.any(prismatic):
+        return links, q
+    mask = np.asarray(prismatic, bool)
+    d = links.d + np.where(mask, q, 0.0)
+    return links._replace(d=d), np.where(mask, 0.0, q)
+
+
 def chain_frames(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray,
-                 frames: bool = False):
+                 frames: bool = False, prismatic: np.ndarray | None = None):
     """Forward kinematics of a chain.
 
-    links: link parameters ``(..., n)``; base, tool ``(..., 4, 4)``; q ``(..., n)`` joints (rad).
+    links: link parameters ``(..., n)``; base, tool ``(..., 4, 4)``; q ``(..., n)`` joints (rad for
+    a revolute joint, m for a prismatic one, which adds to d: ``prismatic`` ``(n,)`` bool).
     All leading dims broadcast together (e.g. params ``(P, 1, n)`` with q ``(N, n)`` -> ``(P, N)``).
     Returns the TCP poses ``(..., 4, 4)``; with ``frames=True`` also the world poses of frames
-    {0}..{n} as ``(..., n + 1, 4, 4)`` (frame {n} is the flange).
+    {0}..{n} as ``(..., n + 1, 4, 4)`` (frame {n} is the flange). A chain with prismatic joints
+    runs the general numpy path (its d varies per pose; the one-robot fast paths need constant links).
     """
+    links, q = prismatic_split(links, q, prismatic)
     if _fast_ok(links, base, tool, q):
         kernel = None if frames else compiled("robocal.kinematics.fk_numba")
         if kernel is not None:
             return kernel.chain_fk(links, base, tool, q)
         return _fast_chain(links, base, tool, q, frames)
     n = q.shape[-1]
-    shape = np.broadcast_shapes(q.shape[:-1], links.alpha.shape[:-1], base.shape[:-2], tool.shape[:-2])
+    shape = np.broadcast_shapes(q.shape[:-1], links.alpha.shape[:-1], links.d.shape[:-1], base.shape[:-2],
+                                tool.shape[:-2])
     base = np.broadcast_to(base, shape + (4, 4))
     R = tuple(base[..., i, j] for i in range(3) for j in range(3))
     t = tuple(base[..., i, 3] for i in range(3))
@@ -111,18 +127,21 @@ def chain_frames(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nd
     return tcp, all_frames
 
 
-def chain_fk(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray) -> np.ndarray:
+def chain_fk(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray,
+             prismatic: np.ndarray | None = None) -> np.ndarray:
     """TCP poses ``(N, 4, 4)`` for joints ``(N, n)`` of one robot, in chunks to bound memory.
 
-    ``tool`` is one ``(4, 4)`` frame or one per row ``(N, 4, 4)``."""
+    ``tool`` is one ``(4, 4)`` frame or one per row ``(N, 4, 4)``; ``prismatic`` as in
+    :func:`chain_frames`."""
     N = q.shape[0]
-    if N <= CHUNK or _fast_ok(links, base, tool, q):
-        return chain_frames(links, base, tool, q)
+    if N <= CHUNK or _fast_ok(links, base, tool, q) and not np.any(prismatic):
+        return chain_frames(links, base, tool, q, prismatic=prismatic)
     out = np.empty((N, 4, 4))
     per_row_tool = tool.ndim == 3
     for start in range(0, N, CHUNK):
         part = slice(start, start + CHUNK)
-        out[part] = chain_frames(links, base, tool[part] if per_row_tool else tool, q[part])
+        out[part] = chain_frames(links, base, tool[part] if per_row_tool else tool, q[part],
+                                 prismatic=prismatic)
     return out
 
 

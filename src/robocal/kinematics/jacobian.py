@@ -16,14 +16,17 @@ from robocal.kinematics.fk import LinkArrays, chain_frames
 from robocal.kinematics.joint_errors import joint_error_basis, scatter_offsets
 
 
-def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray):
+def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray,
+                prismatic: np.ndarray | None = None):
     """TCP poses and, for every parameter, its motion axis, component-major for speed.
 
     Returns ``tcp (N, 4, 4)``, ``u (3, P, N)`` unit axes, ``o (3, P, N)`` points on the axes and
     ``rotation (P,)`` bool, P = 5n + 12 in the order of :attr:`Robot.parameter_names`.
-    For tool rotations o is the TCP itself (they turn the TCP without moving it).
+    For tool rotations o is the TCP itself (they turn the TCP without moving it). A prismatic
+    joint (``prismatic`` ``(n,)`` bool) changes nothing here: its value adds to d, whose axis is
+    z_i either way.
     """
-    tcp, frames = chain_frames(links, base, tool, q, frames=True)
+    tcp, frames = chain_frames(links, base, tool, q, frames=True, prismatic=prismatic)
     N, n = q.shape[0], q.shape[-1]
     F = np.ascontiguousarray(frames.transpose(2, 3, 1, 0))  # (4, 4, n + 1, N): row, column, frame
     P = 5 * n + 12
@@ -65,7 +68,8 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
     those at the joints the robot really reaches (``robot.reached_joints``, as in ``fk``; the
     small dependence of the joint errors on the link parameters is second order and left out).
     A joint-error parameter p of joint i turns the TCP about axis i by B_p(q) per unit
-    (:func:`joint_error_basis`): its axis is joint i's scaled by B_p, pose by pose.
+    (:func:`joint_error_basis`): its axis is joint i's scaled by B_p, pose by pose; on a prismatic
+    joint it moves the TCP along axis i (the d_i column scaled by B_p).
     """
     tools = robot.tool if smr is None else robot.tools_for(smr)
     if robot.joint_errors is None:
@@ -73,7 +77,7 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
     else:  # the basis once: for the reached joints (as robot.reached_joints) and the axes
         B, joint = joint_error_basis(robot, q, robot.joint_errors.names, approach, travel)  # (N, m), (m,)
         reached = q + scatter_offsets(B, joint, robot.joint_errors.values, robot.n_joints)
-    tcp, u, o, rotation = motion_axes(robot.links, robot.base, tools, reached)
+    tcp, u, o, rotation = motion_axes(robot.links, robot.base, tools, reached, robot.prismatic)
     k = len(robot.smr)
     if k:
         L = 5 * robot.n_joints
@@ -86,10 +90,11 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
         o = np.concatenate([o, np.zeros_like(u_smr)], axis=1)
         rotation = np.concatenate([rotation, np.zeros(3 * k, bool)])
     if robot.joint_errors is not None:
-        theta = 5 * joint + 3
-        u = np.concatenate([u, u[:, theta] * B.T], axis=1)
-        o = np.concatenate([o, o[:, theta]], axis=1)
-        rotation = np.concatenate([rotation, np.ones(len(joint), bool)])
+        slides = robot.prismatic[joint]
+        column = 5 * joint + np.where(slides, 4, 3)  # d_i of a prismatic joint, else theta_i
+        u = np.concatenate([u, u[:, column] * B.T], axis=1)
+        o = np.concatenate([o, o[:, column]], axis=1)
+        rotation = np.concatenate([rotation, ~slides])
     return tcp, u, o, rotation
 
 

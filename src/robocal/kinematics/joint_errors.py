@@ -9,6 +9,11 @@ The joint a robot really turns to is ``q + dq(q)`` with ``dq`` linear in the par
     backlash    backlash{i}:  dq_i += b_i * s_i
     travel      travel{i}:    dq_i += t_i * m_i
     cyclic      cyc{i}_{f}_s, cyc{i}_{f}_c:  dq_i += s sin(f q_i) + c cos(f q_i)
+    scale       scale{i}:     dq_i += k_i * q_i
+
+Scale: the joint's encoder (or transmission ratio) is off by the factor 1 + k_i (dimensionless):
+a prismatic joint's (a linear track's) scale error, in m per m; on a revolute joint, the gear
+ratio error. Its zero is the joint's d_i (prismatic) or theta_i (revolute).
 
 Backlash (lost motion): a joint stops b_i short of or beyond its command depending on the
 direction s_i in {-1, 0, +1} from which it approached the pose (the sign of its last move; 0
@@ -51,17 +56,18 @@ from robocal.errors import IdentificationError, ModelError
 from robocal.io import as_number
 from robocal.kinematics.fk import chain_frames
 
-TERMS = ("compliance", "gear", "backlash", "travel", "cyclic")
+TERMS = ("compliance", "gear", "backlash", "travel", "cyclic", "scale")
 UNITS = {"compliance": "rad/m", "gear": "rad", "backlash": "rad", "travel": "rad/rad",
-         "cyclic": "rad"}  # SI unit of each term's parameters
+         "cyclic": "rad", "scale": "1"}  # SI unit of each term's parameters
 CYCLIC_MIN_FREQUENCY = 2.0  # cycles per joint revolution; 1 and 2 are the gear term's harmonics
 _COMP = re.compile(r"^comp(\d+)_(\d+)$")
 _GEAR = re.compile(r"^gear(\d+)_([sc][12])$")
 _BACKLASH = re.compile(r"^backlash(\d+)$")
 _TRAVEL = re.compile(r"^travel(\d+)$")
 _CYCLIC = re.compile(r"^cyc(\d+)_(\d+(?:\.\d{1,2})?)_([sc])$")
+_SCALE = re.compile(r"^scale(\d+)$")
 _PATTERNS = {"compliance": _COMP, "gear": _GEAR, "backlash": _BACKLASH, "travel": _TRAVEL,
-             "cyclic": _CYCLIC}
+             "cyclic": _CYCLIC, "scale": _SCALE}
 
 
 def term_names(n: int, term: str) -> list[str]:
@@ -75,6 +81,8 @@ def term_names(n: int, term: str) -> list[str]:
         return [f"backlash{i}" for i in range(1, n + 1)]
     if term == "travel":
         return [f"travel{i}" for i in range(1, n + 1)]
+    if term == "scale":
+        return [f"scale{i}" for i in range(1, n + 1)]
     if term == "cyclic":
         return []
     raise ModelError(f"unknown non-geometric term {term!r}; choose from {', '.join(TERMS)}")
@@ -140,8 +148,11 @@ def _parse(name: str, n: int) -> tuple[int, str, int | str | tuple | None]:
     m = _CYCLIC.match(name)
     if m and 1 <= int(m[1]) <= n and float(m[2]) > CYCLIC_MIN_FREQUENCY:
         return int(m[1]) - 1, "cyclic", (m[3], float(m[2]))
+    m = _SCALE.match(name)
+    if m and 1 <= int(m[1]) <= n:
+        return int(m[1]) - 1, "scale", None
     raise ModelError(f"unknown joint-error parameter {name!r} for a {n}-joint robot: "
-                     "use comp{i}_{j} (i < j <= n), gear{i}_s1|c1|s2|c2, backlash{i}, travel{i} or "
+                     "use comp{i}_{j} (i < j <= n), gear{i}_s1|c1|s2|c2, backlash{i}, travel{i}, scale{i} or "
                      f"cyc{{i}}_{{f}}_s|c (f > {CYCLIC_MIN_FREQUENCY:g} cycles per revolution)")
 
 
@@ -171,8 +182,12 @@ def joint_error_basis(robot, q: np.ndarray, names: Sequence[str], approach: np.n
         if kind == "travel":
             B[:, p] = 0.0 if travel is None else travel[:, i]
             continue
+        if kind == "scale":
+            B[:, p] = q[:, i]
+            continue
         if frames is None:
-            _, frames = chain_frames(robot.links, robot.base, robot.tool, q, frames=True)
+            _, frames = chain_frames(robot.links, robot.base, robot.tool, q, frames=True,
+                                     prismatic=robot.prismatic)
             g = -frames[:, 0, :3, 2]
         z_i, o_i = frames[:, i + 1, :3, 2], frames[:, i + 1, :3, 3]
         arm = frames[:, detail, :3, 3] - o_i
@@ -228,7 +243,7 @@ class JointErrorModel:
     def to_dict(self) -> dict:
         """Plain data for the model YAML (SI units of :data:`UNITS`)."""
         return {"units": "SI (comp: rad per m of unit-weight moment arm; gear, backlash, cyc: rad; "
-                         "travel: rad per rad of move)",
+                         "travel: rad per rad of move; scale: per unit of joint value)",
                 "parameters": dict(zip(self.names, self.values.tolist(), strict=True))}
 
     @classmethod

@@ -29,14 +29,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from robocal.errors import DataError, ModelError
+from robocal.errors import DataError, ModelError, UnitError
 from robocal.io import as_number, write_atomic
 from robocal.kinematics.catalog import catalog_kwargs
 from robocal.kinematics.convert import dh_kwargs, mdh_kwargs, opw_chain, opw_kwargs, opw_parameters
 from robocal.kinematics.fk import LinkArrays, chain_fk, chain_frames
 from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import JointErrorModel
-from robocal.kinematics.model_file import LINK_FIELDS, dump_model, read_model_file
+from robocal.kinematics.model_file import LINK_FIELDS, dump_model, is_cell, read_model_data, robot_kwargs
 from robocal.kinematics.opw import OPWParameters
 from robocal.kinematics.transforms import ROTATION_TOL, make_transform, matrix_to_rotvec, rotvec_to_matrix
 from robocal.kinematics.ur import URForm, ur_form
@@ -102,7 +102,7 @@ class DisplacedArrays(NamedTuple):
 
 @dataclass(frozen=True, eq=False)
 class Robot:
-    """A serial revolute robot in modified DH + beta. Lengths in m, angles in rad.
+    """A serial robot in modified DH + beta. Lengths in m, angles in rad.
 
     Attributes are ``(n,)`` arrays; ``limits`` is ``(n, 2)``; ``parallel[i]`` says that axis i
     is nominally parallel to axis i-1, so ``beta_(i+1)`` is a parameter there. ``nominal`` is the
@@ -110,7 +110,9 @@ class Robot:
     nominal is zero, see :attr:`nominal_values`). ``opw`` is the OPW form of the nominal model
     (catalog robots), which travels with the model like ``nominal``; :attr:`has_opw_form` says
     whether this robot's own chain still follows it (closed-form IK needs that). ``joint_errors``
-    holds the non-geometric terms that :meth:`fk` applies.
+    holds the non-geometric terms that :meth:`fk` applies. ``prismatic[i]`` makes joint i
+    prismatic: its value (m) adds to ``d_i`` (``theta_i`` stays a constant angle); d_i is its zero
+    and a ``scale{i}`` joint-error term its encoder scale.
     """
 
     alpha: np.ndarray
@@ -128,6 +130,7 @@ class Robot:
     opw: OPWParameters | None = None
     smr: np.ndarray | None = None
     joint_errors: JointErrorModel | None = None
+    prismatic: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.alpha).size
@@ -143,8 +146,13 @@ class Robot:
         set_(self, "tool", _as_frame(self.tool, "tool"))
         for f in ("base", "tool"):
             _check_magnitude(getattr(self, f)[:3, 3], MAX_FRAME_M, f"{f} translation", "m")
+        prismatic = np.zeros(n, bool) if self.prismatic is None else np.array(self.prismatic, bool)
+        if prismatic.shape != (n,):
+            raise ModelError(f"joint types (prismatic flags) must have {n} values")
+        set_(self, "prismatic", prismatic)
         if self.limits is None:
             limits = np.tile([-np.pi, np.pi], (n, 1))
+            limits[prismatic] = (-np.inf, np.inf)
         else:
             limits = np.array(self.limits, dtype=float)
             if limits.shape != (n, 2) or np.isnan(limits).any():
@@ -167,7 +175,7 @@ class Robot:
         if self.joint_errors is not None and not isinstance(self.joint_errors, JointErrorModel):
             raise ModelError("joint_errors must be a JointErrorModel (robocal.kinematics.joint_errors)")
         set_(self, "nominal", self._nominal_vector(self.nominal))
-        for f in (*LINK_FIELDS, "base", "tool", "limits", "parallel", "smr", "nominal"):
+        for f in (*LINK_FIELDS, "base", "tool", "limits", "parallel", "smr", "nominal", "prismatic"):
             getattr(self, f).flags.writeable = False
 
     def _nominal_vector(self, nominal) -> np.ndarray:
@@ -190,7 +198,7 @@ class Robot:
         """Whether this robot's chain is exactly its OPW form (closed-form IK applies): true for a
         nominal catalog robot with any base and tool, false once a link parameter is displaced
         or joint-error terms are declared (computed on first use: the model is immutable)."""
-        if self.opw is None or self.n_joints != 6 or self.joint_errors is not None:
+        if self.opw is None or self.n_joints != 6 or self.joint_errors is not None or self.has_prismatic:
             return False
         chain = opw_chain(self.opw)
         return all(np.allclose(getattr(self, f), chain[f], rtol=0.0, atol=OPW_MATCH_TOL)
@@ -201,9 +209,18 @@ class Robot:
         """The UR form of this robot's own chain (three parallel axes, offset wrist:
         :mod:`robocal.kinematics.ur`), detected from its links; None without it (a calibrated
         model, joint-error terms, another geometry)."""
-        if self.n_joints != 6 or self.joint_errors is not None:
+        if self.n_joints != 6 or self.joint_errors is not None or self.has_prismatic:
             return None
         return ur_form(*self.links)
+
+    @property
+    def has_prismatic(self) -> bool:
+        """Whether a joint of the chain is prismatic (its value, in m, adds to its d)."""
+        return bool(self.prismatic.any())
+
+    def joint_units(self) -> list[str]:
+        """'m' (prismatic) or 'rad' (revolute) for each joint."""
+        return ["m" if p else "rad" for p in self.prismatic]
 
     @property
     def has_ur_form(self) -> bool:
@@ -443,7 +460,8 @@ class Robot:
         return LinkArrays(self.alpha, self.a, self.beta, self.theta, self.d)
 
     def check_joints(self, q) -> np.ndarray:
-        """Joints as a ``(N, n)`` float array; raises DataError on wrong shape or NaN."""
+        """Joints as a ``(N, n)`` float array (rad; m for prismatic joints); raises DataError on
+        wrong shape or NaN."""
         q = np.asarray(q, dtype=float)
         if q.ndim == 1:
             q = q[None, :]
@@ -475,8 +493,8 @@ class Robot:
         q = self.reached_joints(self.check_joints(q), approach, travel)
         tool = self.tool if smr is None else self.tools_for(smr)
         if frames:
-            return chain_frames(self.links, self.base, tool, q, frames=True)
-        return chain_fk(self.links, self.base, tool, q)
+            return chain_frames(self.links, self.base, tool, q, frames=True, prismatic=self.prismatic)
+        return chain_fk(self.links, self.base, tool, q, prismatic=self.prismatic)
 
     def jacobian(self, q, params: Sequence[str] | None = None, kind: str = "point", smr=None,
                  approach=None, travel=None):
@@ -497,12 +515,16 @@ class Robot:
 
     @classmethod
     def load(cls, path) -> Robot:
-        """Read a model YAML (docs/model-yaml.md: the catalog's format, hand-written or saved);
-        ModelError names the file."""
-        kwargs = read_model_file(path)
+        """Read a model YAML (docs/model-yaml.md: the catalog's format, hand-written or saved, or a
+        cell file: a robot on a track, :mod:`robocal.kinematics.cell`); ModelError names the file."""
+        data = read_model_data(path)
         try:
-            return cls(**kwargs)
-        except ModelError as exc:
+            if is_cell(data):
+                from robocal.kinematics.cell import cell_from_data  # the cell builds on this module
+
+                return cell_from_data(data, Path(path))
+            return cls(**robot_kwargs(data))
+        except (ModelError, UnitError) as exc:  # the model file's fault, whatever the check
             raise ModelError(f"{path}: {exc}") from None
 
     def __repr__(self) -> str:
@@ -510,7 +532,7 @@ class Robot:
 
 
 def load_model(spec: str) -> Robot:
-    """A robot from a model YAML path, a URDF (a serial revolute chain:
+    """A robot from a model YAML path (or a cell file: a robot on a track), a URDF (a serial chain:
     :func:`robocal.kinematics.urdf.from_urdf`) or a catalog name (what every ``--robot`` takes)."""
     path = Path(spec)
     if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (path.is_file() and _looks_like_xml(path)):

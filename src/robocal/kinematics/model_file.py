@@ -7,9 +7,9 @@ catalog, for the user's own robot and for :meth:`Robot.save`. docs/model-yaml.md
     units: {length: mm, angle: deg}     # required: the units of every number below
     # the geometry, exactly one of:
     opw:  {a1, a2, b, c1, c2, c3, c4, offsets: [6], signs: [6]}    # an OPW set
-    dh:   {theta: [n], d: [n], a: [n], alpha: [n]}                 # standard DH table
-    mdh:  {alpha: [n], a: [n], theta: [n], d: [n], beta: [n]}      # Craig's modified DH (+ beta)
-    joints: [{alpha, a, theta, d, beta, limits, parallel_to_previous}, ...]  # MDH rows (save)
+    dh:   {theta: [n], d: [n], a: [n], alpha: [n], type: [n]}      # standard DH table
+    mdh:  {alpha: [n], a: [n], theta: [n], d: [n], beta: [n], type: [n]}  # modified DH (+ beta)
+    joints: [{alpha, a, theta, d, beta, type, limits, parallel_to_previous}, ...]  # MDH rows (save)
     limits: [[lower, upper], ...]       # table forms (joints rows carry their own)
     base: {xyz: [3], rotation | rpy | rotvec: ...}   # optional, see below
     tool: {...}                         # optional
@@ -22,6 +22,10 @@ the table's base frame, the table's flange -> TCP); with ``joints`` rows they ar
 frames themselves. ``opw`` next to ``joints`` is the OPW form of the nominal model (what
 :meth:`Robot.save` writes for closed-form IK). Unknown and missing keys are errors that name the
 key (and the joint).
+
+``type`` (a row's, or a table's list with one entry per joint) is ``revolute`` (the default) or
+``prismatic``: a prismatic joint's value (m) adds to its d, and its limits are lengths (the file's
+length unit).
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.errors import ModelError, UnitError
+from robocal.errors import ModelError
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, as_number, read_text, short_repr
 from robocal.kinematics.convert import default_parallel, dh_kwargs, mdh_kwargs, opw_kwargs, opw_parameters
 from robocal.kinematics.joint_errors import JointErrorModel
@@ -46,7 +50,8 @@ FORMS = ("opw", "dh", "mdh", "joints")
 INFO_KEYS = ("reach_mm", "payload_kg")  # the vendor's figures (catalog listing only; no effect on the model)
 _TOP_KEYS = {"format", "name", "description", "units", "limits", "base", "tool", "smr", "nominal",
              "joint_errors", *INFO_KEYS, *FORMS}
-_JOINT_KEYS = {*LINK_FIELDS, "limits", "parallel_to_previous"}
+_JOINT_KEYS = {*LINK_FIELDS, "type", "limits", "parallel_to_previous"}
+JOINT_TYPES = ("revolute", "prismatic")
 MAX_NAME = 200  # characters of a model's name
 MAX_DESCRIPTION = 10_000
 MAX_VALUES = 100_000  # YAML values in a model file once aliases are expanded (a model has hundreds)
@@ -111,6 +116,21 @@ def _limits(values, n: int, where: str) -> np.ndarray:
     return np.array([_numbers(v, f"{where}[{i}]", 2) for i, v in enumerate(values)])
 
 
+def _joint_type(value, where: str) -> bool:
+    """Whether a joint ``type`` entry says prismatic (revolute: False)."""
+    if value not in JOINT_TYPES:
+        raise ModelError(f"{where}: joint type must be one of {', '.join(JOINT_TYPES)}, got "
+                         f"{short_repr(value)}")
+    return value == "prismatic"
+
+
+def _types(values, n: int, where: str) -> np.ndarray:
+    """``(n,)`` prismatic flags of a table's ``type`` list."""
+    if not isinstance(values, list) or len(values) != n:
+        raise ModelError(f"{where}: expected {n} joint types (revolute or prismatic), one per joint")
+    return np.array([_joint_type(v, f"{where}[{i}]") for i, v in enumerate(values)], bool)
+
+
 def _units(data: dict) -> tuple[str, str]:
     """The file's (length, angle) unit names."""
     units = _mapping(data.get("units"), "units", {"length", "angle"}, {"length", "angle"}) \
@@ -135,15 +155,18 @@ def _joint_rows(rows, length: float, angle: float) -> dict:
     if not isinstance(rows, list) or not rows:
         raise ModelError("joints: expected a non-empty list of joint mappings")
     cols = {f: [] for f in LINK_FIELDS}
-    limits, flags = [], []
+    limits, flags, prismatic = [], [], []
     for i, row in enumerate(rows, 1):
         where = f"joints[{i}] (joint {i})"
         row = _mapping(row, where, _JOINT_KEYS, {"alpha", "a", "theta", "d"})
         for f in LINK_FIELDS:
             scale = length if f in ("a", "d") else angle
             cols[f].append(as_number(row.get(f, 0.0), f"{where}.{f}", ModelError) * scale)
+        prismatic.append(_joint_type(row.get("type", "revolute"), f"{where}.type"))
         lim = row.get("limits")
-        limits.append([-np.pi, np.pi] if lim is None else _numbers(lim, f"{where}.limits", 2) * angle)
+        default = [-np.inf, np.inf] if prismatic[-1] else [-np.pi, np.pi]
+        limits.append(default if lim is None else
+                      _numbers(lim, f"{where}.limits", 2) * (length if prismatic[-1] else angle))
         flag = row.get("parallel_to_previous")
         if flag is not None and not isinstance(flag, bool):
             raise ModelError(f"{where}.parallel_to_previous: expected true or false, got {short_repr(flag)}")
@@ -151,26 +174,32 @@ def _joint_rows(rows, length: float, angle: float) -> dict:
     kw = {f: np.array(v) for f, v in cols.items()}
     default = default_parallel(kw["alpha"])
     parallel = [bool(p) if f is None else f for f, p in zip(flags, default, strict=True)]
-    return {**kw, "limits": np.array(limits), "parallel": np.array(parallel)}
+    return {**kw, "limits": np.array(limits), "parallel": np.array(parallel),
+            "prismatic": np.array(prismatic)}
 
 
 def _table(form: str, spec, length_unit: str, degrees: bool, n_limits, base, tool) -> dict:
     """Robot keyword arguments of a ``dh`` or ``mdh`` table (in the file's units), with the
     file's ``limits`` and frames (see the module docstring)."""
     keys = _TABLE_KEYS[form]
-    optional = {"beta"} if form == "mdh" else set()
+    optional = {"beta", "type"} if form == "mdh" else {"type"}
     spec = _mapping(spec, form, {*keys, *optional}, set(keys))
     n = len(spec[keys[0]]) if isinstance(spec[keys[0]], list) else 0
-    cols = {k: _numbers(spec[k], f"{form}.{k}", n) for k in (*keys, *optional) if k in spec}
+    cols = {k: _numbers(spec[k], f"{form}.{k}", n) for k in (*keys, *optional) if k in spec and k != "type"}
     if n == 0:
         raise ModelError(f"{form}: the table needs at least one joint")
     units = {"degrees": degrees, "length_unit": length_unit}
-    limits = None if n_limits is None else _limits(n_limits, n, "limits")
+    prismatic = _types(spec["type"], n, f"{form}.type") if "type" in spec else np.zeros(n, bool)
+    limits = None
+    if n_limits is not None:  # in SI here: a prismatic joint's limits are lengths
+        limits = _limits(n_limits, n, "limits") * np.where(prismatic, LENGTH_UNITS[length_unit],
+                                                           ANGLE_UNITS["deg" if degrees else "rad"])[:, None]
     if form == "dh":
-        return dh_kwargs(cols["theta"], cols["d"], cols["a"], cols["alpha"], **units, limits=limits,
-                         base=base, tool=tool)
-    return mdh_kwargs(cols["alpha"], cols["a"], cols["theta"], cols["d"], cols.get("beta"), **units,
-                      limits=limits, base=base, tool=tool)
+        kw = dh_kwargs(cols["theta"], cols["d"], cols["a"], cols["alpha"], **units, base=base, tool=tool)
+    else:
+        kw = mdh_kwargs(cols["alpha"], cols["a"], cols["theta"], cols["d"], cols.get("beta"), **units,
+                        base=base, tool=tool)
+    return {**kw, "limits": limits, "prismatic": prismatic}
 
 
 def robot_kwargs(data) -> dict:
@@ -236,6 +265,8 @@ def robot_to_dict(robot) -> dict:
     joints = []
     for i in range(robot.n_joints):
         j = {f: float(getattr(robot, f)[i]) for f in LINK_FIELDS}
+        if robot.prismatic[i]:
+            j["type"] = "prismatic"
         j["parallel_to_previous"] = bool(robot.parallel[i])
         j["limits"] = robot.limits[i].tolist()
         joints.append(j)
@@ -263,13 +294,15 @@ def dump_model(robot) -> str:
     return dump_yaml(robot_to_dict(robot))
 
 
-def read_model_file(path) -> dict:
-    """Robot keyword arguments from a model YAML file (:func:`robocal.yaml_load.load_yaml`: safe,
-    YAML 1.2 numbers, no duplicate keys, bounded); errors name the file."""
+def is_cell(data) -> bool:
+    """Whether a loaded model mapping is a cell file, a robot on a track (it names a ``robot`` and
+    a ``track``: :mod:`robocal.kinematics.cell`)."""
+    return isinstance(data, dict) and "track" in data and "robot" in data
+
+
+def read_model_data(path):
+    """The parsed mapping of a model YAML file (:func:`robocal.yaml_load.load_yaml`: safe, YAML 1.2
+    numbers, no duplicate keys, bounded)."""
     path = Path(path)
-    data = load_yaml(read_text(path, "robot model YAML file", ModelError), str(path), ModelError,
+    return load_yaml(read_text(path, "robot model YAML file", ModelError), str(path), ModelError,
                      max_nodes=MAX_VALUES)
-    try:
-        return robot_kwargs(data)
-    except (ModelError, UnitError) as exc:  # the model file's fault, whatever the check
-        raise ModelError(f"{path}: {exc}") from None

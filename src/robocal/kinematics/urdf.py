@@ -1,4 +1,4 @@
-"""URDF export and import of serial revolute robots.
+"""URDF export and import of serial robots (revolute and prismatic joints).
 
 Export (:func:`to_urdf`): ``world`` -> fixed joint ``base_joint`` (the model's base frame) ->
 ``base_link`` (frame {0}) -> revolute ``joint_i`` -> ``link_i`` (frame {i}) -> fixed
@@ -7,13 +7,17 @@ as ROS-Industrial's URDFs): the root is ``base_link`` at the robot's base (frame
 is the flange; the model's base frame (after a tracker calibration: the tracker's frame) and tool
 (the measured SMR or probe) are given in comments only. Joint i's origin is Rx(alpha_i) Tx(a_i) Ry(beta_i)
 Rz(theta_i) Tz(d_i) (Rz(q) and Tz(d) commute) and its axis is z, so URDF forward kinematics is
-exactly the model's. Floats are written with ``repr`` (shortest exact round trip).
+exactly the model's; a prismatic joint is a URDF ``prismatic`` joint along z (Tz(q) after Tz(d)),
+its limits in m. Floats are written with ``repr`` (shortest exact round trip).
 
 Import (:func:`from_urdf`): the joints' lines at the zero configuration (point and direction in
 the root frame) are converted to MDH + beta: consecutive axes that are not (nearly) parallel get
 the common normal (alpha, a, beta = 0); nearly parallel ones get Hayati's construction (x along
 the perpendicular to the next axis in the plane normal to the current one; beta non-zero). The
 root-to-frame-{0} transform becomes the base frame and the flange-to-tip transform the tool.
+A prismatic joint (a mobile manipulator's torso lift, a gantry's axes, a linear track) slides along
+its axis: where its line lies is free (a translation moves every point alike), so the same
+construction places it, and the joint is flagged prismatic (its value, m, adds to its d).
 """
 
 from __future__ import annotations
@@ -153,7 +157,8 @@ def to_urdf(robot: Robot, name: str | None = None, frames: str = "model",
         t = _rx(robot.alpha[i]) @ np.array([robot.a[i], 0.0, 0.0]) + R @ np.array([0, 0, robot.d[i]])
         lo, hi = robot.limits[i]
         child = f"link_{i + 1}"
-        lines += [f'  <joint name="joint_{i + 1}" type="revolute">', f'    <parent link="{parent}"/>',
+        kind = "prismatic" if robot.prismatic[i] else "revolute"
+        lines += [f'  <joint name="joint_{i + 1}" type="{kind}">', f'    <parent link="{parent}"/>',
                   f'    <child link="{child}"/>', f"    {_origin(make_transform(R, t))}",
                   '    <axis xyz="0 0 1"/>',
                   f'    <limit lower="{float(lo)!r}" upper="{float(hi)!r}" effort="0" velocity="0"/>',
@@ -276,7 +281,8 @@ def _angle_about(u: np.ndarray, v: np.ndarray, axis: np.ndarray) -> float:
 
 def from_urdf(source, tip: str | None = None, name: str | None = None,
               parallel_tol_deg: float = 5.0) -> Robot:
-    """A :class:`Robot` from a serial revolute URDF (text, or a path to a file).
+    """A :class:`Robot` from a serial URDF (revolute, continuous, prismatic and fixed joints; text,
+    or a path to a file).
 
     ``tip`` is the end link (default: the leaf link reached through the most moving joints,
     e.g. ``tool0``); fixed joints along the chain are folded into the geometry. Consecutive
@@ -286,14 +292,14 @@ def from_urdf(source, tip: str | None = None, name: str | None = None,
     root = _parse(source)
     chain = _chain(root, tip)
     T = np.eye(4)
-    points, dirs, limits = [], [], []
+    points, dirs, limits, prismatic = [], [], [], []
     for j in chain:
         jname, jtype = j.get("name"), j.get("type")
         T = T @ _joint_origin(j, f"joint {jname!r}")
         if jtype == "fixed":
             continue
-        if jtype not in ("revolute", "continuous"):
-            raise ModelError(f"URDF joint {jname!r} is {jtype!r}: only revolute/continuous joints "
+        if jtype not in ("revolute", "continuous", "prismatic"):
+            raise ModelError(f"URDF joint {jname!r} is {jtype!r}: only revolute, continuous, prismatic "
                              "and fixed joints are supported")
         if j.find("mimic") is not None:
             raise ModelError(f"URDF joint {jname!r} mimics another joint: not a serial robot joint")
@@ -305,18 +311,25 @@ def from_urdf(source, tip: str | None = None, name: str | None = None,
         points.append(T[:3, 3].copy())
         dirs.append(T[:3, :3] @ _unit(axis))
         lim = j.find("limit")
-        if jtype == "revolute" and lim is not None and lim.get("lower") and lim.get("upper"):
+        slides = jtype == "prismatic"
+        prismatic.append(slides)
+        if jtype != "continuous" and lim is not None and lim.get("lower") and lim.get("upper"):
+            bound, unit = (MAX_OFFSET_M, "m") if slides else (MAX_ANGLE_RAD, "rad")
             lower, upper = _floats(f"{lim.get('lower')} {lim.get('upper')}", None, f"joint {jname!r} limit",
-                                   MAX_ANGLE_RAD, "rad", count=2)
+                                   bound, unit, count=2)
             if lower >= upper:
                 raise ModelError(f"joint {jname!r} limit: lower {lower:g} is not below upper {upper:g}")
             limits.append([lower, upper])
+        elif slides:
+            raise ModelError(f"URDF prismatic joint {jname!r} has no <limit lower upper> (m): a slide's "
+                             "travel must be given")
         else:
             limits.append([-2 * np.pi, 2 * np.pi])
     if not dirs:
-        raise ModelError("URDF chain has no revolute joint")
+        raise ModelError("URDF chain has no moving joint")
     return _lines_to_robot(np.array(points), np.array(dirs), T, np.array(limits),
-                           name or root.get("name") or "robot", np.sin(np.deg2rad(parallel_tol_deg)))
+                           name or root.get("name") or "robot", np.sin(np.deg2rad(parallel_tol_deg)),
+                           np.array(prismatic))
 
 
 def _closest_on_line(p: np.ndarray, z: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -324,9 +337,9 @@ def _closest_on_line(p: np.ndarray, z: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def _lines_to_robot(P: np.ndarray, Z: np.ndarray, T_tip: np.ndarray, limits: np.ndarray, name: str,
-                    sin_tol: float) -> Robot:
+                    sin_tol: float, prismatic: np.ndarray) -> Robot:
     """MDH + beta from joint lines (points ``P`` (n, 3), unit directions ``Z`` (n, 3)) and the
-    tip pose ``T_tip`` at q = 0, all in the root frame."""
+    tip pose ``T_tip`` at q = 0, all in the root frame; ``prismatic`` ``(n,)`` flags slides."""
     n = len(Z)
     hayati = np.zeros(n, bool)  # hayati[i]: pair (i-1, i) modelled with beta
     origins, xs, feet = [], [], [None] * n  # feet[i]: where x_{i-1} meets axis i
@@ -376,5 +389,5 @@ def _lines_to_robot(P: np.ndarray, Z: np.ndarray, T_tip: np.ndarray, limits: np.
     tool = np.linalg.solve(frames[-1], T_tip)
     tool[3] = [0.0, 0.0, 0.0, 1.0]
     return Robot(alpha=alpha, a=a, beta=beta, theta=theta, d=d, base=frames[0], tool=tool,
-                 limits=limits, parallel=hayati, name=name,
+                 limits=limits, parallel=hayati, name=name, prismatic=prismatic,
                  description="imported from URDF")

@@ -27,6 +27,7 @@ from robocal.kinematics.transforms import invert_transform, make_transform, rotv
 from robocal.programs.aggregate import close_bracket, numbers_of, parse_aggregate, split_top
 from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import IDENTITY, Dialect, Program, Target
+from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import nearest_rotvec
 from robocal.programs.source import Number, mask
 
@@ -117,21 +118,25 @@ class URScriptDialect(Dialect):
                     for kind, value, frame, qnear in sc.resolve(a, b, m.start(), 0):
                         if kind == "joints":
                             prog.motions.append((src.path, a, value))
-                        elif kind == "skip":
-                            prog.skip(here, fn, value)
-                        elif kind == "pose" and fn != "movej":
+                            continue
+                        acc = prog.motion(src, m.start(), fn)
+                        if kind == "skip":
+                            prog.skip(here, fn, value, acc, masked[a:b][:60])
+                        elif kind == "pose":
                             prog.skip(here, fn, "the pose is computed from values this filter cannot rewrite "
-                                                "(expressions or another function's result)")
+                                                "(expressions or another function's result)", acc,
+                                      masked[a:b][:60])
                         elif kind == "target" and prog.use(value, tool, frame, here, value.name, "frame",
-                                                           (src.path, a)):
+                                                           (src.path, a), acc):
                             value.qnear = qnear
             scripts.append(sc)
             for t in list(prog.targets):
                 if id(t) in sc.as_frame:  # a feature that a motion also moves to (with an offset)
                     prog.targets.remove(t)
-                    prog.skip(used[id(t)][2], "motion", f"{t.name} serves as a feature (pose_trans) and as "
-                                                      "a target: correcting it would move the poses in its "
-                                                      "frame")
+                    why = (f"{t.name} serves as a feature (pose_trans) and as a target: correcting it would "
+                           "move the poses in its frame")
+                    prog.not_corrected[id(t)] = why
+                    prog.skip(used[id(t)][2], "motion", why)
             unused = [t for t in sc.poses.values()
                       if id(t) in sc.variables and id(t) not in used and id(t) not in sc.as_frame]
             passed = sc.passed({t.name for t in unused})
@@ -312,8 +317,8 @@ class _Script:
             param = self._parameter(ident, at, depth)
             if param is not None:
                 return param
-            return [("skip", f"{ident} is not assigned a pose before this motion in this script", IDENTITY,
-                     None)]
+            return [("skip", Undeclared(f"{ident} is not assigned a pose before this motion in this script",
+                                        f"the pose variable {ident}"), IDENTITY, None)]
         return self.resolve(span[0], span[1], span[0], depth + 1)
 
     def _literal(self, lead: int, b: int) -> tuple:

@@ -125,4 +125,4 @@ class Observation:
                 self._basis = (robot, *joint_error_basis(robot, self.q, robot.joint_errors.names,
                                                          self.approach, self.travel))
             q = q + scatter_offsets(*self._basis[1:], moved.joint_errors, n)
-        return chain_frames(links, moved.base[:, None], tools, q)
+        return chain_frames(links, moved.base[:, None], tools, q, prismatic=robot.prismatic)
