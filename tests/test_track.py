@@ -144,8 +144,8 @@ def test_cell_through_the_command_line(tmp_path, cell):
     assert read_poses_csv(tmp_path / "targets.csv")[1]["e1"].shape == (6,)
     assert main(["--quiet", "compensate", f"{d}/cal.yaml", f"{d}/targets.csv", "--nominal",
                  f"{d}/track.yaml", "-o", f"{d}/cmd.csv"]) == 0
-    cmd = np.loadtxt(tmp_path / "cmd.csv", delimiter=",", skiprows=1)
-    assert (tmp_path / "cmd.csv").read_text().startswith("e1_mm,q1_deg")
+    cmd = np.loadtxt(tmp_path / "cmd.csv", delimiter=",", skiprows=2)  # the provenance marker, the header
+    assert (tmp_path / "cmd.csv").read_text().splitlines()[1].startswith("e1_mm,q1_deg")
     np.testing.assert_allclose(cmd[:, 0], q[:, 0] * 1e3, rtol=0, atol=1e-9)  # e1 as the program has it
     assert main(["--quiet", "plan", "--robot", f"{d}/cal.yaml", "--nominal", f"{d}/track.yaml",
                  f"{d}/targets.csv", "-o", f"{d}/plan.csv"]) == 0
