@@ -8,7 +8,6 @@ observations, measured points, repeated poses, history) add sections when presen
 
 from __future__ import annotations
 
-import html
 import math
 from pathlib import Path
 
@@ -16,7 +15,10 @@ import numpy as np
 
 from robocal.errors import DataError
 from robocal.io import write_atomic
+from robocal.report.format import esc
+from robocal.report.format import num as _num
 from robocal.report.iso9283 import pose_accuracy_repeatability
+from robocal.report.verdict import held_parameters, verdict_box
 
 MAX_3D_POINTS = 4000
 MAX_CORRELATION_NAMES = 24  # a larger heat map's labels cannot be read at the page's width
@@ -38,6 +40,9 @@ tr.dropped td{background:#fff4e5}tr.chosen td{background:#e8f4ea;font-weight:600
 .kpi div{border:1px solid #dde;border-radius:6px;padding:8px 14px;min-width:150px}
 .kpi b{display:block;font-size:22px}.kpi span{color:#666;font-size:12px}
 .kpi div.main{border:2px solid #1b9e77}
+.verdict{border:2px solid #1b9e77;border-radius:8px;padding:4px 16px;margin:8px 0 14px}
+.verdict h3{margin:8px 0 4px}.verdict p{margin:4px 0}.verdict.care{border-color:#e6a700}
+.verdict.bad{border-color:#d95f02;background:#fff4e5}
 .good{color:#1b9e77}.bad{color:#d95f02}.warn{background:#fff4e5;border-left:4px solid #d95f02;
  padding:6px 10px;margin:6px 0}
 figure{margin:4px 0 10px}figure svg{width:100%;height:auto}
@@ -54,25 +59,6 @@ figcaption{color:#555;font-size:12px}figcaption b{color:#222}
  table{font-size:9px;max-width:100%}th,td{padding:1px 3px;white-space:normal}
  .grid{grid-template-columns:1fr}}
 """
-
-
-def esc(value) -> str:
-    """HTML-escaped text of any value (user strings, numbers, None)."""
-    return html.escape("" if value is None else str(value), quote=True)
-
-
-def _num(value, digits: int = 4) -> str:
-    if value is None:
-        return "&ndash;"
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        return esc(value)
-    if not math.isfinite(value):
-        return esc(value)
-    if isinstance(value, int):
-        return str(value)
-    if value != 0 and (abs(value) >= 1e6 or abs(value) < 10 ** (-digits)):
-        return f"{value:.{min(digits, 4)}g}" if abs(value) >= 1e6 else f"{value:.3e}"
-    return f"{value:.{digits}f}"
 
 
 def _table(header: list[str], rows: list[list[str]], left: int = 1, row_class=None,
@@ -204,8 +190,13 @@ def _lead(result: dict) -> str:
     if "converged" in result and not result.get("converged"):
         lines.append("<b class='bad'>The solver did not converge</b>: "
                      f"{esc(result.get('status'))}, {esc(result.get('message'))}")
-    lines.append(f"<b class='bad'>{len(warnings)} warning(s)</b>, read them before the numbers:"
-                 if warnings else "No warnings.")
+    held = held_parameters(result)
+    if warnings or held:
+        lines.append(f"<b class='bad'>{len(warnings)} warning(s)</b>"
+                     + (f" and {len(held)} parameter(s) held at nominal (see Parameters)" if held else "")
+                     + ", read them before the numbers" + (":" if warnings else "."))
+    else:
+        lines.append("No warnings.")
     out = "".join(f"<p class='lead'>{line}</p>" for line in lines)
     out += "".join(f"<div class='warn'>{esc(w)}</div>" for w in warnings)
     return out
@@ -267,7 +258,7 @@ def _summary(result: dict) -> str:
              + _table(["", "n", "RMS (mm)", "mean (mm)", "max (mm)", "p95 (mm)"], rows))
     provenance = "<h3>Where these numbers come from</h3>" + _table(
         ["", ""], [[f"<b>{k}</b>", v] for k, v in facts], align="lw")
-    return (_lead(result) + _grid(_kpis(result) + stats, provenance)
+    return (verdict_box(result) + _lead(result) + _grid(_kpis(result) + stats, provenance)
             + _per_file(result))
 
 

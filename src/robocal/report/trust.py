@@ -6,8 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.report.html import _num as num
-from robocal.report.html import esc
+from robocal.report.format import esc, num
 
 
 def headline(result: dict) -> list[str]:

@@ -1,0 +1,95 @@
+"""The report's verdict box: in one place at the top, whether the calibration can be used and what
+to do next. It reads the result JSON (docs/result-json.md) and judges:
+
+- the held-out accuracy against the noise floor (``consistency.noise_mm``, the instrument's noise per
+  coordinate: a perfect model's point errors have an RMS of sqrt(3) times it on point data);
+- the predicted accuracy over the workspace (``predicted_accuracy``);
+- the warnings, counting the parameters held at nominal (``dropped``: not determined by the data);
+- the next step, one sentence chosen by the first rule that applies (see `next_step`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from robocal.report.format import esc, num
+
+FLOOR_FACTOR = 1.5  # held-out RMS within this factor of the noise floor: the model explains the data
+POINT_DIMENSIONS = 3  # a point error's RMS is sqrt(3) times the per-coordinate noise
+
+
+def noise_floor_mm(result: dict) -> float | None:
+    """The RMS a perfect model would show on point data (mm), from the residual test's noise."""
+    noise = (result.get("consistency") or {}).get("noise_mm")
+    return None if noise is None else math.sqrt(POINT_DIMENSIONS) * float(noise)
+
+
+def held_parameters(result: dict) -> list[str]:
+    """The parameters held at nominal because the data do not determine them."""
+    return [str(d.get("name")) for d in result.get("dropped") or []]
+
+
+def next_step(result: dict) -> tuple[str, str]:
+    """``(level, sentence)``: level 'good', 'care' or 'bad', and what the user should do next."""
+    consistency = result.get("consistency") or {}
+    predicted = result.get("predicted_accuracy") or {}
+    held_out = (result.get("validation") or {}).get("rms")
+    floor = noise_floor_mm(result)
+    if "converged" in result and not result.get("converged"):
+        return "bad", ("The solver did not converge: do not use this model; read the warnings and calibrate "
+                       "again.")
+    if consistency.get("verdict") == "inconsistent":
+        return "bad", ("The model misses its own data by more than the instrument explains: find the cause "
+                       "named in the warnings (units, a moved reflector or tracker, the wrong robot) before "
+                       "using it.")
+    if consistency.get("verdict") == "step":
+        return "bad", ("The residuals change part-way through the measuring order (a reflector or the "
+                       "tracker moved): measure again, or calibrate on the rows before the change.")
+    if held_out is None:
+        return "care", ("No poses were held out: measure 20 or more poses the calibration did not see and "
+                        "judge the model on them (robocal calibrate --validate, or robocal evaluate).")
+    if predicted.get("holds_only_near_poses"):
+        return "care", ("The calibration holds only near its poses: measure poses across the joint ranges "
+                        "the table under Predicted accuracy shows as not covered, and calibrate again.")
+    if floor is not None and held_out > FLOOR_FACTOR * floor:
+        return "care", (f"The held-out error is more than {FLOOR_FACTOR:g} times the noise floor: errors the "
+                        "model lacks remain; try --nongeometric auto (joint errors) or more poses.")
+    return "good", ("Ready to use: correct your programs with robocal filter (or targets with robocal "
+                    "compensate), and check the robot with a short campaign from time to time.")
+
+
+def verdict_box(result: dict) -> str:
+    """The verdict box as pre-escaped HTML."""
+    level, step = next_step(result)
+    title = {"good": "Verdict: ready to use", "care": "Verdict: use with care",
+             "bad": "Verdict: do not use yet"}[level]
+    lines = []
+    val = result.get("validation") or {}
+    floor = noise_floor_mm(result)
+    if val.get("rms") is not None:
+        own = ""
+        if floor is not None:
+            model = math.sqrt(max(float(val["rms"]) ** 2 - floor**2, 0.0))
+            own = (f" against a noise floor of {num(floor)} mm (the instrument alone); the model's own "
+                   f"error is about {num(model)} mm")
+        lines.append(f"Held out: <b>{num(val['rms'])} mm RMS</b> on {esc(val.get('n'))} observations the "
+                     f"calibration did not see{own}.")
+    else:
+        lines.append("Held out: <b class='bad'>none</b> &mdash; the calibration set's own error is "
+                     "optimistic.")
+    ws = (result.get("predicted_accuracy") or {}).get("workspace") or {}
+    if ws.get("rms") is not None:
+        lines.append(f"Predicted over the whole workspace: <b>{num(ws['rms'])} mm RMS</b> "
+                     f"(p95 {num(ws.get('p95'))} mm).")
+    warnings, held = result.get("warnings") or [], held_parameters(result)
+    parts = []
+    if warnings:
+        parts.append(f"{len(warnings)} warning(s) below")
+    if held:
+        shown = ", ".join(esc(n) for n in held[:8]) + (" ..." if len(held) > 8 else "")
+        parts.append(f"{len(held)} parameter(s) held at nominal, not determined by these data ({shown})")
+    lines.append(("<b class='bad'>Read first:</b> " + "; ".join(parts) + ".") if parts
+                 else "No warnings, and every parameter was determined by the data.")
+    lines.append(f"<b>Next:</b> {esc(step)}")
+    body = "".join(f"<p>{line}</p>" for line in lines)
+    return f"<div class='verdict {level}'><h3>{title}</h3>{body}</div>"
