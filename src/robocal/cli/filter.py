@@ -30,11 +30,13 @@ Writes the filtered program(s) and the per-target table (CSV and JSON) together,
 
 # what each language's files look like, and its motion instructions to a named point
 SUFFIXES = {"rapid": (".mod", ".modx", ".prg", ".sys"), "krl": (".src", ".dat", ".sub"),
-            "fanuc": (".ls",), "urscript": (".script", ".urscript")}
-LANGUAGES = {"rapid": "ABB RAPID", "krl": "KUKA KRL", "fanuc": "FANUC TP (.ls)", "urscript": "URScript"}
+            "fanuc": (".ls",), "urscript": (".script", ".urscript"), "inform": (".jbi",)}
+LANGUAGES = {"rapid": "ABB RAPID", "krl": "KUKA KRL", "fanuc": "FANUC TP (.ls)", "urscript": "URScript",
+             "inform": "Yaskawa INFORM (.JBI)"}
 SIGNATURES = {"rapid": r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)",
               "krl": r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)",
-              "fanuc": r"^/(?:PROG|MN|POS)\b", "urscript": r"^\s*def\s+\w+\s*\(.*\)\s*:|\bmove[ljpc]\s*\("}
+              "fanuc": r"^/(?:PROG|MN|POS)\b", "urscript": r"^\s*def\s+\w+\s*\(.*\)\s*:|\bmove[ljpc]\s*\(",
+              "inform": r"^/JOB\b|^//(?:NAME|POS|INST)\b"}
 MOTION = {"krl": r"^\s*(?:S?PTP|S?LIN|S?CIRC)\s+([A-Za-z_$][\w$]*)",
           "rapid": r"^\s*Move[LJC]\s+([A-Za-z_]\w*)"}
 
@@ -103,7 +105,7 @@ def add_parser(sub) -> None:
                    help="the controller's base in the calibrated model's world frame (mm, deg)")
     p.add_argument("--references", nargs="+", default=[], metavar="FILE",
                    help="files read for tool/frame declarations only ($config.dat, system modules)")
-    p.add_argument("--format", choices=("rapid", "krl", "fanuc", "urscript"), help="program format")
+    p.add_argument("--format", choices=("rapid", "krl", "fanuc", "urscript", "inform"), help="program format")
     p.add_argument("--table", help="per-target table: PATH.csv, PATH.json, or a prefix for both "
                                    "(default: OUTPUT.targets.csv/.json)")
     p.add_argument("--keep-unreached", action="store_true",

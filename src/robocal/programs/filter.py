@@ -42,6 +42,7 @@ from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
 from robocal.programs.fanuc_ls import FanucDialect
+from robocal.programs.inform import InformDialect, looks_like_inform
 from robocal.programs.krl import KRLDialect
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.rapid import RapidDialect
@@ -177,19 +178,36 @@ def table_paths(table: str | Path) -> list[Path]:
     return [t.with_name(t.name + ".csv"), t.with_name(t.name + ".json")]
 
 
+DIALECTS = {"rapid": RapidDialect, "krl": KRLDialect, "fanuc": FanucDialect, "urscript": URScriptDialect,
+            "inform": InformDialect}
+
+
 def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
-    """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript') or the suffixes."""
-    dialects = {"rapid": RapidDialect, "krl": KRLDialect, "fanuc": FanucDialect, "urscript": URScriptDialect}
+    """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript', 'inform') or the
+    suffixes; a Yaskawa job or VAR.DAT is also told by its first line (``/JOB``, ``//`` sections)."""
+    dialects = DIALECTS
     if name is not None:
         if name not in dialects:
             raise DataError(f"unknown program format {name!r}: use one of {', '.join(dialects)}")
         return dialects[name]()
     found = {key for p in paths for key, d in dialects.items() if p.suffix.lower() in d.suffixes}
+    if found <= {"krl", "inform"} and all(p.suffix.lower() in (".jbi", ".dat") or _sniff_inform(p)
+                                          for p in paths) and any(_sniff_inform(p) for p in paths):
+        found = {"inform"}  # jobs and VAR.DAT (a .dat that is not KRL)
     if len(found) != 1:
         known = ", ".join(f"{k}: {' '.join(d.suffixes)}" for k, d in dialects.items())
         raise DataError(f"cannot tell the program format of {[p.name for p in paths]} from the file "
                         f"suffixes ({known}); name it with --format")
     return dialects[found.pop()]()
+
+
+def _sniff_inform(path: Path) -> bool:
+    """The file reads as a Yaskawa job or variable file (unreadable: False, reported later)."""
+    try:
+        with open(path, "rb") as f:
+            return looks_like_inform(f.read(4096).decode("latin-1"))
+    except OSError:
+        return False
 
 
 def as_frames(dialect: Dialect, given) -> dict[str, np.ndarray]:

@@ -1,0 +1,400 @@
+"""Yaskawa INFORM jobs (.JBI, as the teach pendant saves them) and the global position variables of
+the controller's ``VAR.DAT``.
+
+A job::
+
+    /JOB
+    //NAME WELD_A
+    //POS
+    ///NPOS 3,0,0,0,0,0          C, BC, EC, P, BP, EX positions in //POS
+    ///USER 2
+    ///TOOL 1
+    ///POSTYPE USER             PULSE (joints, encoder pulses), BASE, ROBOT or USER
+    ///RECTAN                   Cartesian: X, Y, Z (mm), Rx, Ry, Rz (deg)
+    ///RCONF 1,0,0,0,0,0,0,0    the configuration ("form") of the positions that follow
+    C00000=1012.500,-155.000,320.000,180.0000,0.0000,0.0000
+    //INST
+    ///DATE 2024/03/01 10:12
+    ///ATTR SC,RW
+    ///GROUP1 RB1
+    NOP
+    MOVL C00000 V=120.0 PL=0
+    END
+
+The ``///`` header lines are a state: each position takes the TOOL, USER, POSTYPE and RCONF last
+set above it. Rx, Ry, Rz are fixed-axis XYZ angles, ``R = Rz(Rz) Ry(Ry) Rx(Rx)``. RCONF (see
+:class:`YaskawaConfig`): flip, arm, front/back and the ``< 180`` flags of R, T and S; a form that
+the correction must change is written as a ``///RCONF`` line before the position (and the old one
+restored after it). ROBOT positions are in the robot's base frame; BASE positions too (a job
+without base axes: the base and robot coordinates coincide); USER positions in the user frame
+``///USER n``. Tool and user-frame values live in the controller: ``--tool n=X,Y,Z,Rx,Ry,Rz``,
+``--frame n=...`` (mm, deg); tool 0 without data is the flange (a warning).
+
+``VAR.DAT`` holds the global variables; its position section ``//P`` has the same header lines
+and ``P0001=...`` entries. Given as a program file, its Cartesian positions that the jobs' motions
+reach are corrected too; otherwise a motion to ``P001`` is named.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from robocal.errors import DataError
+from robocal.kinematics.transforms import make_transform
+from robocal.programs.config import ConfigScheme, branch_bits
+from robocal.programs.model import IDENTITY, Dialect, Program, Target
+from robocal.programs.rotations import matrix_to_zyx
+from robocal.programs.source import Number, ProgramText
+
+_POSITION_MM = 1e-3  # the pendant writes 3 decimals for mm
+_ANGLE_DEG = 1e-4  # ... and 4 for degrees
+POSE_VALUES = 6
+CONFIG_FIELDS = 6  # RCONF fields the form of a 6-axis arm uses (the rest, 2 or 18, are kept)
+NPOS_KINDS = ("C", "BC", "EC", "P", "BP", "EX")  # the order of ///NPOS
+
+_LINE = re.compile(r"^([^\r\n]*)(\r?\n|$)", re.MULTILINE)
+_SECTION = re.compile(r"^//(?!/)\s*(\w+)")
+_HEADER = re.compile(r"^///\s*(\w+)\s*(.*?)\s*$")
+_ENTRY = re.compile(r"^\s*(C|BC|EC|P|BP|EX|LP|LBP|LEX)(\d+)\s*=\s*(.*?)\s*$")
+_MOTION = re.compile(r"^\s*(MOVJ|MOVL|MOVC|MOVS|IMOV|SMOVJ|SMOVL|SMOVC|SMOV|SYMOVJ|SYMOVL|SYMOVC|EIMOVL|"
+                     r"EIMOVC|EIMOVJ|EMOVJ|EMOVL)\b(.*)$")
+_REF = re.compile(r"\b(C|BC|EC|P|BP|EX|LP|LBP|LEX)(?:(\d+)|\[([^\]]*)\])")
+_SHIFT_ON = re.compile(r"^\s*SFTON\b(.*)$")
+_SHIFT_OFF = re.compile(r"^\s*SFTOF\b")
+_MFRAME = re.compile(r"^\s*MFRAME\s+UF#\(\s*(\d+)\s*\)")
+# instructions that write a position variable at run time (its first operand)
+_WRITES = re.compile(r"^\s*(SET|SETE|GETS|GETE|GETPOS|ADD|SUB|MUL|DIV|CNVRT|CLEAR|SETFILE|GETFILE|MSHIFT|"
+                     r"READ|PXEREAD)\s+(LP|P|LBP|BP|LEX|EX)(\d+)\b")
+_REFP = re.compile(r"^\s*REFP\s+\d+\s+C(\d+)\b")
+_LABELED = re.compile(r"^\s*(?:\*\w+\s+)?")
+_RUNTIME_INDEX = "the position number is computed at run time"
+
+
+class YaskawaConfig(ConfigScheme):
+    """Yaskawa's form (RCONF) ``l, m, n, o, p, q, ...``: l = 1 no flip (B < 0), 0 flip; m = 1 lower
+    arm (the elbow bent the other way than in the zero pose), 0 upper arm; n = 1 back (the wrist
+    centre behind the S axis), 0 front; o, p, q = 1 when R, T, S stand at 180 deg or more
+    (outside -180 < angle <= 180), else 0. Rows carry 2 for an angle beyond +-360 deg (written as
+    1), so that a flag 1 selects the copy within +-360 deg before one beyond it (a T axis of
+    +-455 deg has two copies with the flag set)."""
+
+    name = "Yaskawa RCONF"  # rows [no_flip, lower, back, R, T, S]: 0 | 1 | 2 (beyond a turn)
+    branch_fields = 3
+
+    def encode(self, robot, q):
+        q = np.asarray(q, float)
+        shoulder, elbow, _ = branch_bits(robot, q)
+        a = q[..., [3, 5, 0]]
+        half, turn = np.pi * (1 + 1e-12), 2 * np.pi * (1 + 1e-12)
+        over = (~((a > -half) & (a <= half))).astype(int) + (~((a > -turn) & (a <= turn))).astype(int)
+        bits = np.stack([q[..., 4] < 0, elbow, shoulder], axis=-1).astype(int)
+        return np.concatenate([bits, over], axis=-1)
+
+    def text(self, row):
+        return ",".join(str(min(int(v), 1)) for v in row)
+
+
+@dataclass
+class _Header:
+    """The ``///`` state a position takes."""
+
+    postype: str = ""
+    rectan: bool = False
+    user: str = ""
+    tool: str = "0"
+    rconf: list[Number] | None = None
+    rconf_line: str = ""  # the RCONF line's text (restored after a position whose form is rewritten)
+
+
+@dataclass
+class Position:
+    """One position entry (``C00003=...``): its kind and number, the header state, the numbers and
+    the span of its line (with its line end)."""
+
+    kind: str
+    index: int
+    numbers: list[Number]
+    header: _Header
+    line_start: int
+    line_end: int
+    newline: str
+    target: Target | None = None  # the Cartesian target, when it is one
+
+
+def _lines(text: str):
+    """``(start, line without its end, line end)`` of every line."""
+    for m in _LINE.finditer(text):
+        if m.start() == len(text) and not m.group(0):
+            break
+        yield m.start(), m.group(1), m.group(2)
+
+
+class InformDialect(Dialect):
+    name = "Yaskawa INFORM"
+    suffixes = (".jbi",)
+    scheme = YaskawaConfig()
+    frame_help = "X,Y,Z in mm and Rx,Ry,Rz in deg, as on the pendant's tool and user frame screens"
+
+    def to_pose(self, values):
+        values = np.asarray(values, float)
+        R = Rotation.from_euler("ZYX", values[:, [5, 4, 3]], degrees=True).as_matrix()  # Rz Ry Rx
+        return make_transform(R, values[:, :3] * 1e-3)
+
+    def from_pose(self, T, old):
+        zyx = matrix_to_zyx(T[:, :3, :3], np.asarray(old, float)[:, [5, 4, 3]])
+        return np.hstack([T[:, :3, 3] * 1e3, zyx[:, [2, 1, 0]]])
+
+    def resolutions(self):
+        return np.array([_POSITION_MM] * 3 + [_ANGLE_DEG] * 3)
+
+    def config_edits(self, target, new):
+        pos: Position = target.config_spans
+        old = pos.header.rconf or []
+        fields = [str(min(int(v), 1)) for v in new] + [n.text for n in old[CONFIG_FIELDS:]]
+        text = target.source.text
+        newline = pos.newline or ("\r\n" if "\r\n" in text else "\n")
+        edits = {(pos.line_start, pos.line_start): f"///RCONF {','.join(fields)}{newline}"}
+        following = text[pos.line_end:].split("\n", 1)[0]
+        if pos.header.rconf_line and _ENTRY.match(following.rstrip("\r")):
+            # the positions after it keep their form (a rewritten one right after replaces this line)
+            edits[(pos.line_end, pos.line_end)] = pos.header.rconf_line + newline
+        return edits
+
+    def parse(self, sources, frames, tools, references=()):
+        prog = Program([], frames={IDENTITY: np.eye(4)}, tools={})
+        prog.frames.update(frames)
+        prog.tools.update(tools)
+        positions: dict[tuple, Position] = {}  # (path or 'global', kind, index) -> position
+        jobs = []
+        for src in sources:
+            found = _read_positions(src, prog)
+            scope = "global" if _is_variable_file(src) else src.path
+            for p in found:
+                positions[(scope, p.kind, p.index)] = p
+            if scope != "global":
+                jobs.append(src)
+        used: set[int] = set()  # targets a corrected motion reaches
+        named: set[int] = set()  # ... a named motion reaches
+        for src in jobs:
+            _motions(src, positions, prog, used, named)
+        tool0 = False
+        for p in positions.values():
+            t = p.target
+            if t is None:
+                continue
+            if id(t) in named and id(t) not in used:
+                continue
+            if id(t) not in used:
+                prog.warnings.append(f"{t.where}: no motion of these jobs reaches it: left as it is")
+                continue
+            tool0 |= t.tool == "0" and "0" not in tools
+            t.order = len(prog.targets)
+            prog.targets.append(t)
+        if tool0:
+            prog.tools["0"] = np.eye(4)
+            prog.warnings.append("TOOL 0 has no data given: taken as the flange (give "
+                                 "--tool 0=X,Y,Z,Rx,Ry,Rz if tool file 0 holds a tool)")
+        prog.targets.sort(key=lambda t: (str(t.source.path), t.offset))
+        for k, t in enumerate(prog.targets):
+            t.order = k
+        return prog
+
+
+def _is_variable_file(src: ProgramText) -> bool:
+    """A controller variable file (VAR.DAT): no ``/JOB`` line, position sections ``//P``."""
+    return not re.search(r"^\s*/JOB\b", src.text, re.MULTILINE)
+
+
+def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
+    """The position entries of a job's ``//POS`` (or a VAR.DAT's ``//P``, ``//BP``, ``//EX``)
+    with their header state; Cartesian robot positions become targets. ``///NPOS`` is checked."""
+    out: list[Position] = []
+    section = ""
+    head = _Header()
+    npos: tuple[int, list[int]] | None = None
+    for start, line, end in _lines(src.text):
+        where = f"{src.path.name}:{src.line_of(start)}"
+        sec = _SECTION.match(line)
+        if sec:
+            section = sec.group(1).upper()
+            head = _Header()
+            continue
+        if section not in ("POS", "P", "BP", "EX"):
+            continue
+        h = _HEADER.match(line)
+        if h:
+            key, value = h.group(1).upper(), h.group(2)
+            if key == "NPOS":
+                try:
+                    npos = (start, [int(v) for v in value.split(",")])
+                except ValueError:
+                    raise DataError(f"{where}: malformed ///NPOS {value!r}: expected 6 integers") from None
+            elif key == "POSTYPE":
+                head = _Header(value.upper(), False, head.user, head.tool, head.rconf, head.rconf_line)
+            elif key in ("RECTAN", "PULSE"):
+                head.rectan = key == "RECTAN"
+            elif key in ("USER", "TOOL"):
+                if not value.isdigit():
+                    raise DataError(f"{where}: malformed ///{key} {value!r}: expected a number")
+                setattr(head, key.lower(), str(int(value)))
+            elif key == "RCONF":
+                nums = src.numbers_in(start + line.index(value), start + len(line)) if value else []
+                if len(nums) < CONFIG_FIELDS or any(n.text not in ("0", "1") for n in nums[:CONFIG_FIELDS]):
+                    raise DataError(f"{where}: malformed ///RCONF {value!r}: expected flags 0 or 1 "
+                                    "(flip, arm, front/back, R, T, S, ...)")
+                head.rconf, head.rconf_line = nums, line
+            continue
+        if not line.strip() or line.lstrip().startswith("'"):
+            continue
+        e = _ENTRY.match(line)
+        if not e:
+            raise DataError(f"{where}: malformed position line {line.strip()[:60]!r}: expected "
+                            "///HEADER or NAME=values")
+        a = start + e.start(3)
+        nums = src.numbers_in(a, start + e.end(3))
+        if len(nums) != len(e.group(3).split(",")):
+            raise DataError(f"{where}: malformed position {e.group(1)}{e.group(2)}: values must be numbers "
+                            "separated by commas")
+        header = _Header(**vars(head))
+        pos = Position(e.group(1), int(e.group(2)), nums, header, start, start + len(line) + len(end), end)
+        out.append(pos)
+        if e.group(1) in ("C", "P", "LP") and header.rectan and header.postype in ("BASE", "ROBOT", "USER"):
+            name = f"{e.group(1)}{e.group(2)}"
+            if len(nums) != POSE_VALUES:
+                prog.warnings.append(f"{where}: {name} has {len(nums)} values (a 7-axis arm's form): left as "
+                                     "it is")
+                continue
+            if header.postype == "USER" and not header.user:
+                raise DataError(f"{where}: {name} is a USER position but no ///USER n precedes it")
+            config = None if header.rconf is None else np.array([int(n.text) for n in header.rconf[:6]])
+            pos.target = Target(src, start, name, nums, frame=header.user if header.postype == "USER" else
+                                IDENTITY, tool=header.tool, config=config, config_spans=pos)
+    if npos is not None:
+        counts = [sum(p.kind == k for p in out) for k in NPOS_KINDS]
+        if npos[1] != counts[:len(npos[1])]:
+            prog.warnings.append(f"{src.where(npos[0])}: ///NPOS {','.join(map(str, npos[1]))} but the "
+                                 f"section holds {','.join(map(str, counts))} (C, BC, EC, P, BP, EX)")
+    return out
+
+
+def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named: set) -> None:
+    """Account for every motion of the job's ``//INST`` in text order: a Cartesian C or P position
+    is a corrected target; joint (PULSE) positions need nothing; incremental, shifted, conveyor-
+    or station-synchronised motions, base axes, stations and positions written at run time are
+    named."""
+    shift = ""  # the SFTON in effect
+    runtime: dict[str, str] = {}  # variable -> where the job writes it at run time (anywhere: loops)
+    mframe: dict[str, str] = {}  # user frame -> the MFRAME that sets it
+    inst = [(start, _LABELED.sub("", line, count=1)) for start, line, _ in _instructions(src)]
+    for start, body in inst:
+        w = _WRITES.match(body)
+        if w:
+            runtime.setdefault(f"{w.group(2)}{int(w.group(3))}", f"{w.group(1)} ({src.where(start)})")
+    for start, body in inst:
+        where = src.where(start)
+        if _SHIFT_OFF.match(body):
+            shift = ""
+            continue
+        on = _SHIFT_ON.match(body)
+        if on:
+            shift = f"SFTON{on.group(1).split(chr(39))[0].rstrip()} ({where})"
+            continue
+        mf = _MFRAME.match(body)
+        if mf:
+            mframe[str(int(mf.group(1)))] = where
+            continue
+        ref_point = _REFP.match(body)
+        if ref_point:  # a weaving reference point: a taught position like the motions' (not a motion)
+            pos = positions.get((src.path, "C", int(ref_point.group(1))))
+            if pos is not None and pos.target is not None:
+                used.add(id(pos.target))
+            continue
+        mv = _MOTION.match(body)
+        if not mv:
+            continue
+        instr, rest = mv.group(1), mv.group(2).split("'")[0]
+        robot_part, plus, other = rest.partition("+")
+        refs = list(_REF.finditer(robot_part))
+        robot_refs = [r for r in refs if r.group(1) in ("C", "P", "LP")]
+        if not robot_refs:
+            prog.skip(where, instr, "no robot position (C, P or LP) in the instruction")
+            continue
+        ref = robot_refs[0]
+        label = ref.group(0)
+        why = _named_reason(instr, ref, refs, plus, other, shift, runtime)
+        pos = None
+        if ref.group(2) is not None:
+            kind, index = ref.group(1), int(ref.group(2))
+            pos = positions.get(("global", "P", index) if kind == "P" else (src.path, kind, index))
+        if why:
+            if pos is not None and pos.target is not None:
+                named.add(id(pos.target))
+            prog.skip(where, instr, why)
+            continue
+        if pos is None:
+            prog.skip(where, instr, f"{label} is not in the files given" + (
+                " (a global position variable: give VAR.DAT as a program file)" if kind == "P" else ""))
+            continue
+        if pos.target is None:
+            if pos.header.postype == "PULSE" or not pos.header.rectan:
+                prog.motions.append((src.path, start, np.full(6, np.nan)))  # a joint position: nothing to do
+            else:
+                prog.skip(where, instr, f"{label} is not a 6-value Cartesian position")
+            continue
+        t = pos.target
+        if t.frame in mframe:
+            named.add(id(t))
+            prog.skip(where, instr, f"{label} is in user frame {t.frame}, set at run time by MFRAME at "
+                                    f"{mframe[t.frame]}")
+            continue
+        used.add(id(t))
+        prog.motions.append((src.path, start, t))
+
+
+def _instructions(src: ProgramText):
+    """The lines of the job's ``//INST`` section that are instructions (not headers or comments)."""
+    section = ""
+    for start, line, end in _lines(src.text):
+        sec = _SECTION.match(line)
+        if sec:
+            section = sec.group(1).upper()
+        elif section == "INST" and not line.startswith("///") and not line.lstrip().startswith("'"):
+            yield start, line, end
+
+
+def _named_reason(instr: str, ref, refs, plus: str, other: str, shift: str, runtime: dict) -> str:
+    """Why a motion cannot be corrected ('' when it can)."""
+    label = ref.group(0)
+    if ref.group(2) is None:
+        return f"{label}: {_RUNTIME_INDEX}"
+    if instr == "IMOV":
+        return f"{label} is an increment (IMOV): a displacement, not a pose"
+    if instr.startswith("SMOV"):
+        return f"{label} follows a conveyor (SMOV): the pose moves at run time"
+    if instr.startswith("SYMOV"):
+        return f"{label} is synchronised with a station (SYMOV): the pose moves with the station"
+    if instr.startswith(("EIMOV", "EMOV")):
+        return f"{label}: a motion of an external axis group"
+    axes = [r.group(0) for r in refs if r.group(1) in ("BC", "BP", "LBP", "EC", "EX", "LEX")]
+    if axes or plus:
+        what = ", ".join(axes) if axes else "another control group (+" + other.strip().split(" ")[0] + ")"
+        return f"{label} moves with {what}: base axes and stations are not modelled (a fixed base and work " \
+               "are assumed)"
+    name = f"{ref.group(1)}{int(ref.group(2))}"
+    if name in runtime:
+        return f"{label} is written at run time by {runtime[name]}"
+    if ref.group(1) == "LP":
+        return f"{label} is a local position variable: its value is set at run time"
+    if shift:
+        return f"{label} is shifted at run time by {shift}"
+    return ""
+
+
+def looks_like_inform(text: str) -> bool:
+    """A job (``/JOB`` first) or a VAR.DAT (``//`` sections with ``P0000=`` entries)."""
+    head = text.lstrip("\ufeff \t\r\n")[:4000]
+    return head.startswith("/JOB") or bool(re.match(r"//\w", head) and re.search(r"^P\d+=", head, re.M))
