@@ -13,14 +13,17 @@ EPILOG = """Examples:
       --box 500 -1000 0 1800 1000 1800 --min-joint-distance-deg 10 -o poses.csv \\
       --rapid campaign.mod --krl campaign.src --urscript campaign.script
   robocal poses --robot fanuc_lrmate200id -n 20 --smr-mm 20,-30,60 -o poses.csv --fanuc campaign.ls
+  robocal poses --robot yaskawa_gp25 -n 20 --smr-mm 20,-30,60 -o poses.csv --inform CAMPAIGN.JBI
   robocal poses --robot meca500 -n 20 --from taught.csv --region taught.csv -o poses.csv
   robocal simulate --robot abb_irb2600 --joints poses.csv --smr-mm 20,-30,80 -o data.csv --truth truth.yaml
 Lengths in mm in the robot's base frame (SMR positions and facing directions in the flange frame),
 angles in deg; write a value that starts with a minus as --smr-mm=-50,50,60.
 poses.csv: q1_deg..q6_deg in measuring order (with --from: the chosen rows' joint
 cells exactly as read, and their line numbers); visible_smr0.. with several SMRs. The programs
-move to each pose (MoveAbsJ / PTP / movej / J P[k]), wait --settle-s, and call --procedure: replace
-its body with your tracker trigger (FANUC: a TP program of that name, taking the pose number).
+move to each pose (MoveAbsJ / PTP / movej / J P[k]; INFORM: MOVJ to RECTAN positions in the robot
+frame, TOOL 0, with the planned joints' RCONF), wait --settle-s, and call --procedure: replace its
+body with your tracker trigger (FANUC: a TP program of that name, taking the pose number; INFORM: a
+job of that name, the pose number in I000).
 Every output is written, or none.
 """
 
@@ -100,14 +103,16 @@ def add_parser(sub) -> None:
     g.add_argument("--krl", metavar="F.src", help="KUKA KRL program (.src, and .dat next to it)")
     g.add_argument("--urscript", metavar="F.script", help="URScript program")
     g.add_argument("--fanuc", metavar="F.ls", help="FANUC TP program (ASCII .ls; J3 in FANUC's convention)")
+    g.add_argument("--inform", metavar="F.JBI", help="Yaskawa INFORM job (RECTAN positions with their RCONF)")
     g.add_argument("--speed-percent", type=float, default=20.0, help="programs' speed, %% of maximum")
     g.add_argument("--settle-s", type=float, default=1.0, help="wait at each pose before measuring, s")
     g.add_argument("--procedure", default="MeasurePose", help="procedure called at each pose")
     p.set_defaults(func=run)
 
 
-def _outputs(args, result) -> dict:
-    """Every output's text, computed before anything is written."""
+def _outputs(args, result, robot) -> dict:
+    """Every output's text, computed before anything is written (``robot``: the model as loaded,
+    its tool the flange, for programs with Cartesian positions)."""
     import json
 
     import numpy as np
@@ -135,6 +140,8 @@ def _outputs(args, result) -> dict:
         texts[args.urscript] = programs.urscript_program(result.joints, Path(args.urscript).stem, **kw)
     if args.fanuc:
         texts[args.fanuc] = programs.fanuc_ls_program(deg, Path(args.fanuc).stem, **kw)
+    if args.inform:
+        texts[args.inform] = programs.inform_job(deg, robot, Path(args.inform).stem, **kw)
     return texts
 
 
@@ -152,9 +159,11 @@ def run(args) -> int:
     dat = args.krl and Path(args.krl).with_suffix(".dat")
     for path, kind, option in ((args.output, "CSV", "-o"), (args.json, "JSON", "--json"),
                                (args.html, "HTML", "--html"), (args.rapid, "RAPID", "--rapid"),
-                               (args.urscript, "URScript", "--urscript"), (args.fanuc, "TP", "--fanuc")):
+                               (args.urscript, "URScript", "--urscript"), (args.fanuc, "TP", "--fanuc"),
+                               (args.inform, "JBI", "--inform")):
         check_format(path, kind, option)
-    check_outputs([args.output, args.json, args.html, args.rapid, args.urscript, args.krl, dat, args.fanuc],
+    check_outputs([args.output, args.json, args.html, args.rapid, args.urscript, args.krl, dat, args.fanuc,
+                   args.inform],
                   [args.robot, args.candidates, args.region])
     for smr in args.smr_mm or []:
         check_tool_mm(smr, f"--smr-mm {','.join(f'{v:g}' for v in smr)}")
@@ -183,7 +192,7 @@ def run(args) -> int:
         noise_mm=args.noise_mm, noise_model=args.noise_model, rotation_noise_deg=args.rotation_noise_deg,
         criterion=args.criterion, region=region, region_size=args.region_size, starts=args.starts,
         curve=args.curve, seed=args.seed, progress=not args.quiet)
-    texts = _outputs(args, result)
+    texts = _outputs(args, result, robot)
     write_all(texts)
     print(result.summary())
     for path in texts:

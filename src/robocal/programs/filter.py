@@ -191,9 +191,9 @@ def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
             raise DataError(f"unknown program format {name!r}: use one of {', '.join(dialects)}")
         return dialects[name]()
     found = {key for p in paths for key, d in dialects.items() if p.suffix.lower() in d.suffixes}
-    if found <= {"krl", "inform"} and all(p.suffix.lower() in (".jbi", ".dat") or _sniff_inform(p)
-                                          for p in paths) and any(_sniff_inform(p) for p in paths):
-        found = {"inform"}  # jobs and VAR.DAT (a .dat that is not KRL)
+    if found <= {"krl", "inform"} and paths and all(p.suffix.lower() == ".jbi" or _sniff_inform(p)
+                                                    for p in paths):
+        found = {"inform"}  # jobs and VAR.DAT (a .dat that is not KRL), or a job under another name
     if len(found) != 1:
         known = ", ".join(f"{k}: {' '.join(d.suffixes)}" for k, d in dialects.items())
         raise DataError(f"cannot tell the program format of {[p.name for p in paths]} from the file "

@@ -1,0 +1,246 @@
+"""Yaskawa INFORM jobs: the corpus (tests/data/programs/corpus/*.JBI, VAR.DAT, written for the project
+in the styles pendants and offline tools save), one test per construct; every motion corrected or
+named, only target numbers change, the filtered targets reach the intended poses on the calibrated
+model; the form (RCONF); the campaign job of ``robocal poses --inform`` read back."""
+
+from __future__ import annotations
+
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import robocal as rc
+from robocal.cli import main
+from robocal.data.simulate import perturbed
+from robocal.errors import DataError
+from robocal.programs import filter_program
+from robocal.programs.filter import controller_joints, dialect_for, target_poses
+from robocal.programs.inform import InformDialect
+from robocal.programs.simulate import execute
+from robocal.programs.source import NUMBER_RE, ProgramText
+
+CORPUS = Path(__file__).parent / "data" / "programs" / "corpus"
+FRAMES = {"2": "1250,-300,450,0,0,15"}
+TOOLS = {"1": "0,-35,410,0,-30,0", "3": "0,0,180,0,0,0"}
+
+# files, the targets corrected, the motions named (pattern per motion), motions: (corrected, joint) by hand
+CASES = {
+    "welding job in user frame 2": (
+        ["WELD_UF2.JBI"], ["C00001", "C00002", "C00003", "C00004", "C00005", "C00006", "C00007", "C00009"],
+        [r":41: MOVL: .*C00008 is shifted at run time by SFTON P010 UF#\(2\) \(WELD_UF2.JBI:40\)",
+         r":43: IMOV: .*P011 is an increment \(IMOV\)"], (7, 2)),
+    "pick and place, no VAR.DAT": (
+        ["PICK_PLACE.JBI"], ["C00000", "C00001", "C00002", "C00003", "C00004", "C00005"],
+        [r":35: MOVL: .*P001 is not in the files given \(a global position variable: give VAR.DAT",
+         r":37: MOVL: .*P002 is written at run time by GETPOS \(PICK_PLACE.JBI:36\)",
+         r":39: MOVL: .*LP000 is written at run time by SET \(PICK_PLACE.JBI:38\)",
+         r":40: MOVL: .*P\[I000\]: the position number is computed at run time",
+         r":42: MOVJ: .*P003 is not in the files given"], (8, 0)),
+    "pick and place with VAR.DAT": (
+        ["PICK_PLACE.JBI", "VAR.DAT"], ["C00000", "C00001", "C00002", "C00003", "C00004", "C00005", "P0001"],
+        [r":37: MOVL: .*P002 is written at run time by GETPOS",
+         r":39: MOVL: .*LP000 is written at run time by SET",
+         r":40: MOVL: .*P\[I000\]: the position number is computed at run time"], (9, 1)),
+    "track and station": (
+        ["TRACK_WELD.JBI"], ["C00002"],
+        [r":28: MOVJ: .*C00000 moves with BC00000: base axes and stations are not modelled",
+         r":29: MOVL: .*C00001 moves with BC00001: base axes",
+         r":32: MOVL: .*C00003 is in user frame 5, set at run time by MFRAME at TRACK_WELD.JBI:31",
+         r":33: MOVL: .*C00004 is in user frame 5, set at run time by MFRAME"], (1, 0)),
+}
+NOMINAL = rc.Robot.from_catalog("yaskawa_gp25")
+CALIBRATED = perturbed(NOMINAL, 7)
+
+
+def _copy(names, tmp_path) -> list[Path]:
+    for n in names:
+        shutil.copy(CORPUS / n, tmp_path / n)
+    return [tmp_path / n for n in names]
+
+
+def _outside_numbers(data: bytes) -> str:
+    return re.sub(NUMBER_RE.pattern, "#", data.decode("latin-1"))
+
+
+def _parse(paths):
+    d = InformDialect()
+    return d.parse([ProgramText(p) for p in paths], {}, {})
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_every_motion_is_corrected_or_named(case, tmp_path):
+    files, corrected, named, (n_corrected, n_joint) = CASES[case]
+    paths = _copy(files, tmp_path)
+    res = filter_program(paths, CALIBRATED, NOMINAL, frames=FRAMES, tools=TOOLS)
+    assert [r["name"] for r in res.rows] == corrected and all(r["filtered"] for r in res.rows)
+    assert len(res.uncorrected) == len(named)
+    for pattern, line in zip(named, res.uncorrected, strict=True):
+        assert re.search(pattern, line), (pattern, line)
+    prog = _parse(paths)
+    motions = prog.motions
+    # corrected + named == total == the hand count (joint motions need nothing)
+    assert sum(isinstance(m[2], rc.programs.model.Target) for m in motions) == n_corrected
+    assert len(motions) - n_corrected == n_joint
+    hand = sum(len(re.findall(r"^(?:MOVJ|MOVL|MOVC|MOVS|IMOV) ", p.read_text(), re.M)) for p in paths)
+    assert n_corrected + n_joint + len(named) == hand
+    for p in paths:
+        before = p.read_bytes()
+        assert _outside_numbers(res.outputs[p]) == _outside_numbers(before)
+        assert res.outputs[p].count(b"\r\n") == before.count(b"\r\n")
+        assert p.read_bytes() == before
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_identity_calibration_changes_no_byte(case, tmp_path):
+    paths = _copy(CASES[case][0], tmp_path)
+    res = filter_program(paths, NOMINAL, NOMINAL, frames=FRAMES, tools=TOOLS)
+    assert all(res.outputs[p] == p.read_bytes() for p in paths)
+
+
+@pytest.mark.parametrize("case", ["welding job in user frame 2", "pick and place with VAR.DAT"])
+def test_filtered_targets_reach_the_intended_poses(case, tmp_path):
+    """The controller (nominal IK in each position's RCONF) runs the filtered job on the calibrated
+    robot: the TCP lands on the pose the job meant, to the file's resolution."""
+    paths = _copy(CASES[case][0], tmp_path)
+    res = filter_program(paths, CALIBRATED, NOMINAL, frames=FRAMES, tools=TOOLS)
+    out = []
+    for p in paths:
+        o = tmp_path / "out" / p.name
+        o.parent.mkdir(exist_ok=True)
+        o.write_bytes(res.outputs[p])
+        out.append(o)
+    reached, _ = execute(out, CALIBRATED, NOMINAL, frames=FRAMES, tools=TOOLS)
+    before, X = execute(paths, CALIBRATED, NOMINAL, frames=FRAMES, tools=TOOLS)
+    err = np.linalg.norm(reached[:, :3, 3] - X[:, :3, 3], axis=1) * 1e3
+    err0 = np.linalg.norm(before[:, :3, 3] - X[:, :3, 3], axis=1) * 1e3
+    turn = np.rad2deg(np.linalg.norm(rc.kinematics.transforms.matrix_to_rotvec(
+        reached[:, :3, :3] @ np.swapaxes(X[:, :3, :3], 1, 2)), axis=1))
+    assert err.max() < 0.003 and turn.max() < 0.0005 and err0.min() > 0.5
+
+
+# ----------------------------------------------------------------------------- constructs
+def test_frames_tools_and_forms_of_the_positions(tmp_path):
+    """Each position takes the ///USER, ///TOOL, ///POSTYPE and ///RCONF set above it; PULSE
+    positions are joints; BASE and ROBOT positions are in the robot frame."""
+    prog = _parse(_copy(["WELD_UF2.JBI"], tmp_path))
+    assert {(t.frame, t.tool) for t in prog.targets} == {("2", "1")}
+    assert all(t.config.tolist() == [1, 0, 0, 0, 0, 0] for t in prog.targets)
+    pick = _parse(_copy(["PICK_PLACE.JBI"], tmp_path))
+    assert {(t.frame, t.tool) for t in pick.targets} == {("identity", "3")}
+
+
+def test_unknown_tool_or_user_frame_is_refused(tmp_path):
+    paths = _copy(["WELD_UF2.JBI"], tmp_path)
+    with pytest.raises(DataError, match=r"unknown tool\(s\) or frame\(s\)"):
+        filter_program(paths, CALIBRATED, NOMINAL, tools=TOOLS)
+    with pytest.raises(DataError, match=r"unknown tool\(s\) or frame\(s\)"):
+        filter_program(paths, CALIBRATED, NOMINAL, frames=FRAMES)
+
+
+def test_tool_0_without_data_is_the_flange(tmp_path):
+    path = tmp_path / "T0.JBI"
+    path.write_bytes((CORPUS / "PICK_PLACE.JBI").read_bytes().replace(b"///TOOL 3", b"///TOOL 0"))
+    res = filter_program([path], CALIBRATED, NOMINAL)
+    assert {r["tool"] for r in res.rows} == {"0"}
+    assert any("TOOL 0 has no data given: taken as the flange" in w for w in res.warnings)
+
+
+def test_form_crossing_is_written_before_the_position_and_restored_after(tmp_path):
+    """A correction that carries R across 180 deg needs another RCONF: a ///RCONF line goes before
+    the position and the old one after it; read back, the controller lands on the target."""
+    q = np.deg2rad([[10, 20, -10, 179.999, -60, 0], [12, 22, -8, 150, -60, 0], [14, 24, -6, 120, -60, 0]])
+    d = InformDialect()
+    values = d.from_pose(NOMINAL.fk(q), np.zeros((3, 6)))
+    lines = ["/JOB", "//NAME FORM", "//POS", "///NPOS 3,0,0,0,0,0", "///TOOL 0", "///POSTYPE ROBOT", "///RECTAN",
+             "///RCONF 1,0,0,0,0,0,0,0"]
+    lines += [f"C{k:05d}=" + ",".join([f"{v:.3f}" for v in row[:3]] + [f"{v:.4f}" for v in row[3:]])
+              for k, row in enumerate(values)]
+    lines += ["//INST", "///ATTR SC,RW", "///GROUP1 RB1", "NOP", "MOVJ C00000 VJ=10.00", "MOVL C00001 V=50.0",
+              "MOVL C00002 V=50.0", "END", ""]
+    path = tmp_path / "FORM.JBI"
+    path.write_bytes("\r\n".join(lines).encode())
+    cal = perturbed(NOMINAL, 3)
+    res = filter_program([path], cal, NOMINAL, tools={"0": "0,0,0,0,0,0"})
+    rows = {r["name"]: r for r in res.rows}
+    changed = [n for n, r in rows.items() if r["configuration"] == "changed"]
+    out = res.outputs[path].decode()
+    if not changed:
+        pytest.skip("this perturbation does not carry R across 180 deg")
+    assert changed == ["C00000"] and "///RCONF 1,0,0,1,0,0,0,0\r\nC00000=" in out
+    assert re.search(r"C00000=[^\r]*\r\n///RCONF 1,0,0,0,0,0,0,0\r\nC00001=", out)
+    o = tmp_path / "out.JBI"
+    o.write_bytes(res.outputs[path])
+    reached, X = execute([o], cal, NOMINAL, tools={"0": "0,0,0,0,0,0"})
+    _, X0 = execute([path], cal, NOMINAL, tools={"0": "0,0,0,0,0,0"})
+    assert np.abs(reached[:, :3, 3] - X0[:, :3, 3]).max() * 1e3 < 0.003
+
+
+def test_npos_count_and_malformed_lines(tmp_path):
+    text = (CORPUS / "WELD_UF2.JBI").read_bytes()
+    bad = tmp_path / "BAD.JBI"
+    bad.write_bytes(text.replace(b"///NPOS 10,", b"///NPOS 11,"))
+    res = filter_program([bad], CALIBRATED, NOMINAL, frames=FRAMES, tools=TOOLS)
+    assert any("///NPOS 11,0,0,0,0,0 but the section holds 10,0,0,0,0,0" in w for w in res.warnings)
+    bad.write_bytes(text.replace(b"C00004=", b"C00004 ="[:-1] + b": "))
+    with pytest.raises(DataError, match=r"BAD.JBI:16: malformed position line"):
+        filter_program([bad], CALIBRATED, NOMINAL, frames=FRAMES, tools=TOOLS)
+    bad.write_bytes(text.replace(b"///RCONF 1,0,0,0,0,0,0,0", b"///RCONF 1,0,2"))
+    with pytest.raises(DataError, match=r"BAD.JBI:12: malformed ///RCONF"):
+        filter_program([bad], CALIBRATED, NOMINAL, frames=FRAMES, tools=TOOLS)
+
+
+def test_format_is_told_from_suffix_and_content(tmp_path):
+    paths = _copy(["PICK_PLACE.JBI", "VAR.DAT"], tmp_path)
+    assert dialect_for(paths).name == "Yaskawa INFORM"
+    renamed = tmp_path / "pick.txt"
+    shutil.copy(paths[0], renamed)
+    assert dialect_for([renamed]).name == "Yaskawa INFORM"
+    krl = tmp_path / "cell.dat"
+    krl.write_text("&ACCESS RVP\nDEFDAT cell\nENDDAT\n")
+    with pytest.raises(DataError, match="cannot tell the program format"):
+        dialect_for([paths[0], krl])
+
+
+def test_cli_filters_a_job(tmp_path, capsys):
+    paths = _copy(["WELD_UF2.JBI"], tmp_path)
+    cal = tmp_path / "cal.yaml"
+    CALIBRATED.save(cal)
+    out = tmp_path / "WELD_CAL.JBI"
+    assert main(["filter", str(paths[0]), "--calibrated", str(cal), "--nominal", "yaskawa_gp25", "-o", str(out),
+                 "--frame", "2=1250,-300,450,0,0,15", "--tool", "1=0,-35,410,0,-30,0"]) == 0
+    text = capsys.readouterr().out
+    assert "8 of 8 Cartesian target(s) filtered" in text and "2 motion(s) to a Cartesian pose NOT corrected" in text
+    assert out.read_bytes() != paths[0].read_bytes() and (tmp_path / "WELD_CAL.JBI.targets.json").exists()
+
+
+# ----------------------------------------------------------------------------- campaign
+def test_poses_writes_a_job_the_controller_runs_at_the_planned_joints(tmp_path):
+    """poses --inform: RECTAN positions with the planned joints' RCONF; the nominal controller's
+    IK of each position in its form gives back the planned joints; filtering it with the nominal
+    model changes no byte."""
+    job = tmp_path / "CAMPAIGN.JBI"
+    assert main(["--quiet", "poses", "--robot", "yaskawa_gp25", "-n", "10", "--candidates", "600", "--starts",
+                 "1", "--smr-mm", "20,-30,60", "-o", str(tmp_path / "poses.csv"), "--inform", str(job),
+                 "--speed-percent", "15", "--settle-s", "0.5"]) == 0
+    planned = rc.data.measurements.read_joints(tmp_path / "poses.csv")
+    data = job.read_bytes()
+    assert data.count(b"\r\n") == data.count(b"\n") and data.startswith(b"/JOB\r\n//NAME CAMPAIGN\r\n")
+    text = data.decode()
+    assert "///NPOS 10,0,0,0,0,0" in text and text.count("MOVJ C") == 10 and "VJ=15.00" in text
+    assert re.findall(r"SET I000 (\d+)", text) == [str(k) for k in range(1, 11)]
+    d = InformDialect()
+    prog = d.parse([ProgramText(job)], {}, {"0": np.eye(4)})
+    assert [t.name for t in prog.targets] == [f"C{k:05d}" for k in range(10)]
+    _, P, W, tool = target_poses(d, prog, prog.targets)
+    problems: list = []
+    q = controller_joints(d, prog, prog.targets, NOMINAL, W @ P, problems, [])
+    assert not problems
+    # 3 decimals in mm, 4 in deg; a T beyond +-360 deg comes back as its copy within a turn (same pose)
+    turns = np.round((q - planned) / (2 * np.pi))
+    assert np.all(turns[:, :5] == 0) and np.all((turns[:, 5] == 0) | (np.abs(planned[:, 5]) > 2 * np.pi))
+    assert np.rad2deg(np.abs(q - planned - 2 * np.pi * turns)).max() < 2e-3
+    res = filter_program([job], NOMINAL, NOMINAL, tools={"0": "0,0,0,0,0,0"})
+    assert res.outputs[job] == data and len(res.rows) == 10
