@@ -154,8 +154,8 @@ def test_form_crossing_is_written_before_the_position_and_restored_after(tmp_pat
     q = np.deg2rad([[10, 20, -10, 179.999, -60, 0], [12, 22, -8, 150, -60, 0], [14, 24, -6, 120, -60, 0]])
     d = InformDialect()
     values = d.from_pose(NOMINAL.fk(q), np.zeros((3, 6)))
-    lines = ["/JOB", "//NAME FORM", "//POS", "///NPOS 3,0,0,0,0,0", "///TOOL 0", "///POSTYPE ROBOT", "///RECTAN",
-             "///RCONF 1,0,0,0,0,0,0,0"]
+    lines = ["/JOB", "//NAME FORM", "//POS", "///NPOS 3,0,0,0,0,0", "///TOOL 0", "///POSTYPE ROBOT",
+             "///RECTAN", "///RCONF 1,0,0,0,0,0,0,0"]
     lines += [f"C{k:05d}=" + ",".join([f"{v:.3f}" for v in row[:3]] + [f"{v:.4f}" for v in row[3:]])
               for k, row in enumerate(values)]
     lines += ["//INST", "///ATTR SC,RW", "///GROUP1 RB1", "NOP", "MOVJ C00000 VJ=10.00", "MOVL C00001 V=50.0",
@@ -209,10 +209,11 @@ def test_cli_filters_a_job(tmp_path, capsys):
     cal = tmp_path / "cal.yaml"
     CALIBRATED.save(cal)
     out = tmp_path / "WELD_CAL.JBI"
-    assert main(["filter", str(paths[0]), "--calibrated", str(cal), "--nominal", "yaskawa_gp25", "-o", str(out),
-                 "--frame", "2=1250,-300,450,0,0,15", "--tool", "1=0,-35,410,0,-30,0"]) == 0
+    assert main(["filter", str(paths[0]), "--calibrated", str(cal), "--nominal", "yaskawa_gp25", "-o",
+                 str(out), "--frame", "2=1250,-300,450,0,0,15", "--tool", "1=0,-35,410,0,-30,0"]) == 0
     text = capsys.readouterr().out
-    assert "8 of 8 Cartesian target(s) filtered" in text and "2 motion(s) to a Cartesian pose NOT corrected" in text
+    assert "8 of 8 Cartesian target(s) filtered" in text
+    assert "2 motion(s) to a Cartesian pose NOT corrected" in text
     assert out.read_bytes() != paths[0].read_bytes() and (tmp_path / "WELD_CAL.JBI.targets.json").exists()
 
 

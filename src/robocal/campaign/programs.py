@@ -193,9 +193,10 @@ def inform_job(joints_deg, robot, name: str = "ROBOCAL_CAMPAIGN", *,
             last = text
         digits = [INFORM_DECIMALS[0]] * 3 + [INFORM_DECIMALS[1]] * 3
         pos.append(f"C{k:05d}=" + ",".join(_fixed(v, d) for v, d in zip(row, digits, strict=True)))
-    notes = [line for text in [*_comment_lines(comment, len(q)), f"{procedure} reads the pose number from I000"]
-             for line in textwrap.wrap(_tp_text(text), INFORM_COMMENT_MAX)]
-    inst = ["//INST", "///DATE 2000/01/01 00:00", f"///COMM {notes[0]}", "///ATTR SC,RW", "///GROUP1 RB1", "NOP"]
+    texts = [*_comment_lines(comment, len(q)), f"{procedure} reads the pose number from I000"]
+    notes = [line for text in texts for line in textwrap.wrap(_tp_text(text), INFORM_COMMENT_MAX)]
+    inst = ["//INST", "///DATE 2000/01/01 00:00", f"///COMM {notes[0]}", "///ATTR SC,RW", "///GROUP1 RB1",
+            "NOP"]
     inst += [f"'{line}" for line in notes]
     for k in range(len(q)):
         inst += [f"MOVJ C{k:05d} VJ={speed_percent:.2f}", f"TIMER T={settle_s:.2f}", f"SET I000 {k + 1}",
