@@ -16,13 +16,17 @@ EPILOG = """Examples:
   robocal filter seal.ls --frame 1=450,-150,100,0,0,-10 --tool 2=0,0,120,0,0,0 --calibrated cal.yaml \\
       --nominal fanuc_lrmate200id -o seal_cal.ls
   robocal filter pick.script --tool 0,0.02,0.15,0,0,0.5 --calibrated cal.yaml --nominal ur5 -o pick_cal.script
+  robocal filter WELD.JBI VAR.DAT --frame 2=1250,-300,450,0,0,15 --tool 1=0,-35,410,0,-30,0 \\
+      --calibrated cal.yaml --nominal yaskawa_gp25 -o filtered/
 Formats (from the suffix, or --format): rapid (.mod .modx .prg .sys), krl (.src .dat .sub), fanuc (.ls),
-urscript (.script .urscript). --tool / --frame give the controller's tool and frame data the files do
-not hold, NAME=values in the program's own notation: ABB x,y,z (mm),q1,q2,q3,q4; KUKA X,Y,Z (mm),A,B,C
-(deg); FANUC X,Y,Z (mm),W,P,R (deg); URScript x,y,z (m),rx,ry,rz (rad); names are the tooldata/wobjdata
-names, the KUKA TOOL_DATA/BASE_DATA and FANUC UT/UF numbers, URScript feature variables (an unnamed
-URScript --tool is the installation's TCP). --tcp NAME=x,y,z,rx,ry,rz (mm, deg, fixed-axis XYZ) is the
-real TCP of that tool identified on the calibrated model (robocal tool); default: the tool data.
+urscript (.script .urscript), inform (.JBI, and the controller's VAR.DAT). --tool / --frame give the
+controller's tool and frame data the files do not hold, NAME=values in the program's own notation:
+ABB x,y,z (mm),q1,q2,q3,q4; KUKA X,Y,Z (mm),A,B,C (deg); FANUC X,Y,Z (mm),W,P,R (deg); Yaskawa
+X,Y,Z (mm),Rx,Ry,Rz (deg); URScript x,y,z (m),rx,ry,rz (rad); names are the tooldata/wobjdata names,
+the KUKA TOOL_DATA/BASE_DATA, FANUC UT/UF and Yaskawa TOOL/USER numbers, URScript feature variables
+(an unnamed URScript --tool is the installation's TCP). --tcp NAME=x,y,z,rx,ry,rz (mm, deg, fixed-axis
+XYZ) is the real TCP of that tool identified on the calibrated model (robocal tool); default: the tool
+data.
 The calibrated model's identified frame {0} is the controller's base unless --robot-base gives the
 controller's base in the calibrated model's world frame (x,y,z,rx,ry,rz, mm, deg).
 Writes the filtered program(s) and the per-target table (CSV and JSON) together, or nothing."""
@@ -86,10 +90,10 @@ def _named(values, what: str) -> dict[str, str]:
 
 def add_parser(sub) -> None:
     p = sub.add_parser("filter", help="correct a robot program's Cartesian targets with the calibrated model",
-                       description="Every Cartesian target of an ABB RAPID, KUKA KRL, FANUC TP (.ls) or "
-                                   "URScript program is replaced by the target the controller's nominal "
-                                   "model must be given so that the real robot lands where the program "
-                                   "meant; everything else in the file stays byte for byte.",
+                       description="Every Cartesian target of an ABB RAPID, KUKA KRL, FANUC TP (.ls), "
+                                   "URScript or Yaskawa INFORM program is replaced by the target the "
+                                   "controller's nominal model must be given so that the real robot lands "
+                                   "where the program meant; all else in the file stays byte for byte.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("programs", nargs="+", help="program file(s); a KUKA .src with its .dat")
     p.add_argument("--calibrated", required=True, help="calibrated model YAML")
