@@ -62,6 +62,8 @@ _HEADER = re.compile(r"^///\s*(\w+)\s*(.*?)\s*$")
 _ENTRY = re.compile(r"^\s*(C|BC|EC|P|BP|EX|LP|LBP|LEX)(\d+)\s*=\s*(.*?)\s*$")
 _MOTION = re.compile(r"^\s*(MOVJ|MOVL|MOVC|MOVS|IMOV|SMOVJ|SMOVL|SMOVC|SMOV|SYMOVJ|SYMOVL|SYMOVC|EIMOVL|"
                      r"EIMOVC|EIMOVJ|EMOVJ|EMOVL)\b(.*)$")
+_NUM = r"([-+]?(?:\d+\.?\d*|\.\d+))"
+_SIX = re.compile(r"(C|P)(\d+)=" + ",".join([_NUM] * POSE_VALUES) + r"[ \t]*$")  # the usual entry, fast
 _REF = re.compile(r"\b(C|BC|EC|P|BP|EX|LP|LBP|LEX)(?:(\d+)|\[([^\]]*)\])")
 _SHIFT_ON = re.compile(r"^\s*SFTON\b(.*)$")
 _SHIFT_OFF = re.compile(r"^\s*SFTOF\b")
@@ -215,62 +217,56 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
     out: list[Position] = []
     section = ""
     head = _Header()
+    state: tuple[_Header, np.ndarray | None] | None = None  # a copy of head for the entries, until it changes
     npos: tuple[int, list[int]] | None = None
     for start, line, end in _lines(src.text):
-        where = f"{src.path.name}:{src.line_of(start)}"
         sec = _SECTION.match(line)
         if sec:
             section = sec.group(1).upper()
-            head = _Header()
+            head, state = _Header(), None
             continue
         if section not in ("POS", "P", "BP", "EX"):
             continue
         h = _HEADER.match(line)
         if h:
-            key, value = h.group(1).upper(), h.group(2)
-            if key == "NPOS":
-                try:
-                    npos = (start, [int(v) for v in value.split(",")])
-                except ValueError:
-                    raise DataError(f"{where}: malformed ///NPOS {value!r}: expected 6 integers") from None
-            elif key == "POSTYPE":
-                head = _Header(value.upper(), False, head.user, head.tool, head.rconf, head.rconf_line)
-            elif key in ("RECTAN", "PULSE"):
-                head.rectan = key == "RECTAN"
-            elif key in ("USER", "TOOL"):
-                if not value.isdigit():
-                    raise DataError(f"{where}: malformed ///{key} {value!r}: expected a number")
-                setattr(head, key.lower(), str(int(value)))
-            elif key == "RCONF":
-                nums = src.numbers_in(start + line.index(value), start + len(line)) if value else []
-                if len(nums) < CONFIG_FIELDS or any(n.text not in ("0", "1") for n in nums[:CONFIG_FIELDS]):
-                    raise DataError(f"{where}: malformed ///RCONF {value!r}: expected flags 0 or 1 "
-                                    "(flip, arm, front/back, R, T, S, ...)")
-                head.rconf, head.rconf_line = nums, line
+            _header_line(src, start, line, h, head)
+            state = None
+            if h.group(1).upper() == "NPOS":
+                npos = (start, [int(v) for v in h.group(2).split(",")])
+            elif h.group(1).upper() == "POSTYPE":  # a new coordinate system: RECTAN / PULSE follows
+                head.rectan = False
             continue
         if not line.strip() or line.lstrip().startswith("'"):
             continue
-        e = _ENTRY.match(line)
-        if not e:
-            raise DataError(f"{where}: malformed position line {line.strip()[:60]!r}: expected "
-                            "///HEADER or NAME=values")
-        a = start + e.start(3)
-        nums = src.numbers_in(a, start + e.end(3))
-        if len(nums) != len(e.group(3).split(",")):
-            raise DataError(f"{where}: malformed position {e.group(1)}{e.group(2)}: values must be numbers "
-                            "separated by commas")
-        header = _Header(**vars(head))
-        pos = Position(e.group(1), int(e.group(2)), nums, header, start, start + len(line) + len(end), end)
+        fast = _SIX.match(line)
+        if fast:
+            kind, index = fast.group(1), fast.group(2)
+            nums = [Number(start + fast.start(k), start + fast.end(k), fast.group(k)) for k in range(3, 9)]
+        else:
+            e = _ENTRY.match(line)
+            if not e:
+                raise DataError(f"{src.where(start)}: malformed position line {line.strip()[:60]!r}: "
+                                "expected ///HEADER or NAME=values")
+            kind, index = e.group(1), e.group(2)
+            nums = src.numbers_in(start + e.start(3), start + e.end(3))
+            if len(nums) != len(e.group(3).split(",")):
+                raise DataError(f"{src.where(start)}: malformed position {kind}{index}: values must be "
+                                "numbers separated by commas")
+        if state is None:
+            flags = head.rconf[:CONFIG_FIELDS] if head.rconf is not None else None
+            config = None if flags is None else np.array([int(n.text) for n in flags])
+            state = (_Header(**vars(head)), config)
+        header, config = state
+        pos = Position(kind, int(index), nums, header, start, start + len(line) + len(end), end)
         out.append(pos)
-        if e.group(1) in ("C", "P", "LP") and header.rectan and header.postype in ("BASE", "ROBOT", "USER"):
-            name = f"{e.group(1)}{e.group(2)}"
+        if kind in ("C", "P", "LP") and header.rectan and header.postype in ("BASE", "ROBOT", "USER"):
+            name = f"{kind}{index}"
             if len(nums) != POSE_VALUES:
-                prog.warnings.append(f"{where}: {name} has {len(nums)} values (a 7-axis arm's form): left as "
-                                     "it is")
+                prog.warnings.append(f"{src.where(start)}: {name} has {len(nums)} values (a 7-axis arm's "
+                                     "form): left as it is")
                 continue
             if header.postype == "USER" and not header.user:
-                raise DataError(f"{where}: {name} is a USER position but no ///USER n precedes it")
-            config = None if header.rconf is None else np.array([int(n.text) for n in header.rconf[:6]])
+                raise DataError(f"{src.where(start)}: {name} is a USER position but no ///USER n precedes it")
             pos.target = Target(src, start, name, nums, frame=header.user if header.postype == "USER" else
                                 IDENTITY, tool=header.tool, config=config, config_spans=pos)
     if npos is not None:
@@ -279,6 +275,29 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
             prog.warnings.append(f"{src.where(npos[0])}: ///NPOS {','.join(map(str, npos[1]))} but the "
                                  f"section holds {','.join(map(str, counts))} (C, BC, EC, P, BP, EX)")
     return out
+
+
+def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _Header) -> None:
+    """Apply a ``///KEY value`` line of a position section to ``head`` (malformed: DataError)."""
+    key, value = h.group(1).upper(), h.group(2)
+    where = src.where(start)
+    if key == "NPOS":
+        if not re.fullmatch(r"\d+(?:\s*,\s*\d+)*", value):
+            raise DataError(f"{where}: malformed ///NPOS {value!r}: expected 6 integers")
+    elif key == "POSTYPE":
+        head.postype = value.upper()
+    elif key in ("RECTAN", "PULSE"):
+        head.rectan = key == "RECTAN"
+    elif key in ("USER", "TOOL"):
+        if not value.isdigit():
+            raise DataError(f"{where}: malformed ///{key} {value!r}: expected a number")
+        setattr(head, key.lower(), str(int(value)))
+    elif key == "RCONF":
+        nums = src.numbers_in(start + line.index(value), start + len(line)) if value else []
+        if len(nums) < CONFIG_FIELDS or any(n.text not in ("0", "1") for n in nums[:CONFIG_FIELDS]):
+            raise DataError(f"{where}: malformed ///RCONF {value!r}: expected flags 0 or 1 "
+                            "(flip, arm, front/back, R, T, S, ...)")
+        head.rconf, head.rconf_line = nums, line
 
 
 def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named: set) -> None:
@@ -295,17 +314,16 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         if w:
             runtime.setdefault(f"{w.group(2)}{int(w.group(3))}", f"{w.group(1)} ({src.where(start)})")
     for start, body in inst:
-        where = src.where(start)
         if _SHIFT_OFF.match(body):
             shift = ""
             continue
         on = _SHIFT_ON.match(body)
         if on:
-            shift = f"SFTON{on.group(1).split(chr(39))[0].rstrip()} ({where})"
+            shift = f"SFTON{on.group(1).split(chr(39))[0].rstrip()} ({src.where(start)})"
             continue
         mf = _MFRAME.match(body)
         if mf:
-            mframe[str(int(mf.group(1)))] = where
+            mframe[str(int(mf.group(1)))] = src.where(start)
             continue
         ref_point = _REFP.match(body)
         if ref_point:  # a weaving reference point: a taught position like the motions' (not a motion)
@@ -321,7 +339,7 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         refs = list(_REF.finditer(robot_part))
         robot_refs = [r for r in refs if r.group(1) in ("C", "P", "LP")]
         if not robot_refs:
-            prog.skip(where, instr, "no robot position (C, P or LP) in the instruction")
+            prog.skip(src.where(start), instr, "no robot position (C, P or LP) in the instruction")
             continue
         ref = robot_refs[0]
         label = ref.group(0)
@@ -333,23 +351,23 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         if why:
             if pos is not None and pos.target is not None:
                 named.add(id(pos.target))
-            prog.skip(where, instr, why)
+            prog.skip(src.where(start), instr, why)
             continue
         if pos is None:
-            prog.skip(where, instr, f"{label} is not in the files given" + (
+            prog.skip(src.where(start), instr, f"{label} is not in the files given" + (
                 " (a global position variable: give VAR.DAT as a program file)" if kind == "P" else ""))
             continue
         if pos.target is None:
             if pos.header.postype == "PULSE" or not pos.header.rectan:
                 prog.motions.append((src.path, start, np.full(6, np.nan)))  # a joint position: nothing to do
             else:
-                prog.skip(where, instr, f"{label} is not a 6-value Cartesian position")
+                prog.skip(src.where(start), instr, f"{label} is not a 6-value Cartesian position")
             continue
         t = pos.target
         if t.frame in mframe:
             named.add(id(t))
-            prog.skip(where, instr, f"{label} is in user frame {t.frame}, set at run time by MFRAME at "
-                                    f"{mframe[t.frame]}")
+            prog.skip(src.where(start), instr, f"{label} is in user frame {t.frame}, set at run time by "
+                                               f"MFRAME at {mframe[t.frame]}")
             continue
         used.add(id(t))
         prog.motions.append((src.path, start, t))

@@ -20,7 +20,7 @@ from robocal.kinematics.transforms import invert_transform
 from robocal.programs.filter import as_frames, controller_joints, dialect_for, target_poses
 from robocal.programs.source import ProgramText
 
-SUFFIX = {"rapid": ".mod", "krl": ".src", "fanuc": ".ls", "urscript": ".script"}
+SUFFIX = {"rapid": ".mod", "krl": ".src", "fanuc": ".ls", "urscript": ".script", "inform": ".JBI"}
 
 
 def _quat(R):
@@ -93,6 +93,23 @@ def write_program(dialect: str, folder, nominal: Robot, q: np.ndarray, tool: np.
         path = folder / f"{name}.ls"
         path.write_text("\r\n".join(text))
         return [path], {"1": fanuc_frame_text(tool)}, {"1": fanuc_frame_text(frame)}
+    if dialect == "inform":
+        values = d.from_pose(P, np.zeros((n, 6)))
+        pos, last = [], ""
+        for i in range(n):
+            form = d.scheme.text(cfg[i])
+            if form != last:
+                pos.append(f"///RCONF {form},0,0")
+                last = form
+            pos.append(f"C{i:05d}=" + ",".join([f"{v:.3f}" for v in values[i, :3]]
+                                                + [f"{v:.4f}" for v in values[i, 3:]]))
+        moves = [f"MOVJ C{i:05d} VJ=50.00" if i % 5 == 0 else f"MOVL C{i:05d} V=500.0 PL=3" for i in range(n)]
+        text = ["/JOB", f"//NAME {name.upper()}", "//POS", f"///NPOS {n},0,0,0,0,0", "///USER 1", "///TOOL 1",
+                "///POSTYPE USER", "///RECTAN", *pos, "//INST", "///DATE 2000/01/01 00:00", "///ATTR SC,RW",
+                "///GROUP1 RB1", "NOP", *moves, "END", ""]
+        path = folder / f"{name.upper()}.JBI"
+        path.write_bytes("\r\n".join(text).encode())
+        return [path], {"1": fanuc_frame_text(tool)}, {"1": fanuc_frame_text(frame)}
     rv = Rotation.from_matrix(P[:, :3, :3]).as_rotvec()
     lines = [f"def {name}():", "  set_tcp(p[" + _frame_text(tool, "rotvec") + "])",
              "  global Cell=p[" + _frame_text(frame, "rotvec") + "]",
@@ -118,7 +135,8 @@ def _frame_text(T: np.ndarray, kind: str) -> str:
 
 
 def fanuc_frame_text(T: np.ndarray) -> str:
-    """X,Y,Z,W,P,R (mm, deg) of a 4x4 frame, as FANUC writes user and tool frames."""
+    """X,Y,Z,W,P,R (mm, deg) of a 4x4 frame, as FANUC writes user and tool frames (and Yaskawa
+    X,Y,Z,Rx,Ry,Rz, the same angles)."""
     a, b, c = _zyx(T[None, :3, :3])[0]
     return ",".join(f"{v:.6f}" for v in (*(T[:3, 3] * 1e3), c, b, a))
 
