@@ -5,6 +5,7 @@ model; the form (RCONF); the campaign job of ``robocal poses --inform`` read bac
 
 from __future__ import annotations
 
+import json
 import re
 import shutil
 from pathlib import Path
@@ -79,13 +80,13 @@ def test_every_motion_is_corrected_or_named(case, tmp_path):
     assert len(res.uncorrected) == len(named)
     for pattern, line in zip(named, res.uncorrected, strict=True):
         assert re.search(pattern, line), (pattern, line)
-    prog = _parse(paths)
-    motions = prog.motions
-    # corrected + named == total == the hand count (joint motions need nothing)
-    assert sum(isinstance(m[2], rc.programs.model.Target) for m in motions) == n_corrected
-    assert len(motions) - n_corrected == n_joint
+    counts = json.loads(res.table_json())["summary"]["motions"]
+    # corrected + named == total == the hand count (motions to joint positions have no record)
+    assert counts == {"total": n_corrected + len(named), "corrected": n_corrected, "named": len(named)}
     hand = sum(len(re.findall(r"^(?:MOVJ|MOVL|MOVC|MOVS|IMOV) ", p.read_text(), re.M)) for p in paths)
-    assert n_corrected + n_joint + len(named) == hand
+    assert counts["total"] == hand - n_joint
+    lines = [int(re.match(r":(\d+)", n).group(1)) for n in named]
+    assert [(r.file, r.line) for r in res.motions if r.status == "named"] == [(files[0], k) for k in lines]
     for p in paths:
         before = p.read_bytes()
         assert _outside_numbers(res.outputs[p]) == _outside_numbers(before)
@@ -213,7 +214,7 @@ def test_cli_filters_a_job(tmp_path, capsys):
                  str(out), "--frame", "2=1250,-300,450,0,0,15", "--tool", "1=0,-35,410,0,-30,0"]) == 0
     text = capsys.readouterr().out
     assert "8 of 8 Cartesian target(s) filtered" in text
-    assert "2 motion(s) to a Cartesian pose NOT corrected" in text
+    assert "9 motions: 7 corrected, 2 not corrected (each named)" in text
     assert out.read_bytes() != paths[0].read_bytes() and (tmp_path / "WELD_CAL.JBI.targets.json").exists()
 
 

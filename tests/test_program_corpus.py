@@ -21,7 +21,8 @@ from robocal.programs.source import NUMBER_RE
 CORPUS = Path(__file__).parent / "data" / "programs" / "corpus"
 FANUC_FRAMES = {"frames": {"1": "450,-150,100,0,0,-10"}, "tools": {"2": "0,0,120,0,0,0"}}
 
-# program files, references, robot, filter options, the targets corrected, the motions named
+# program files, references, robot, filter options, the targets corrected, the motions named (in the
+# order of the warnings)
 CASES = {
     "rapid arc welding": (["arc_station.mod"], [], "abb_irb2600", {},
                           ["pApproach", "pSeam{1}", "pSeam{2}", "pSeam{3}", "pCirc1", "pCirc2", "pEnd",
@@ -42,14 +43,25 @@ CASES = {
                          r":64: SPTP: .*XHANDOVER is declared in \$config.dat, given as a reference"]),
     "fanuc arc welding": (["weld_bracket.ls"], [], "fanuc_lrmate200id", FANUC_FRAMES,
                           ["P[1:approach]", "P[2]", "P[3]", "P[4]", "P[5]", "P[6]", "P[7]", "P[8]"],
-                          [r":38: L: .*P\[9\] is an incremental move",
+                          [r":36: L: .*P\[6\] is shifted at run time by Offset,PR\[2\]",
+                           r":37: L: .*P\[7\] is shifted at run time by Tool_Offset,PR\[3\]",
                            r":39: L: .*PR\[5:service\] is a position reg",
-                           r":40: L: .*P\[12\] is not a Cartesian position of group 1"]),
+                           r":40: L: .*P\[12\] is not a Cartesian position of group 1",
+                           r":38: L: .*P\[9\] is an incremental move"]),  # named once all uses are known
     "urscript palletizing": (["palletizing_ur5.script"], [], "ur5", {},
                              ["Pick_p", "Inspect_p", "p@40", "p@41", "p@41", "Gauge_p"],
                              [r":28: movel: .*pose_add\(Place_base_p, \.\.\.\) moves it at run time",
                               r":39: movel: .*computed at run time by get_actual_tcp_pose\(\)"]),
 }
+
+
+# the motion instructions to a Cartesian pose, counted by hand in each program (joint motions such
+# as MoveAbsJ, SPTP $H_POS / XHOME, movej(Home_q) are not counted): (total, corrected)
+HAND_COUNT = {"rapid arc welding": (13, 10),  # lines 41-66; Offs(pCheck, .., nDepth), CRobT, pService named
+              "rapid multimove palletizing": (7, 5),  # lines 29-44; 32 (run-time Offs) and 35 named
+              "krl kss8 spline": (15, 10),  # 27-72 but 20 ($H_POS) and 66 (XHOME)
+              "fanuc arc welding": (11, 6),  # /MN lines 3-18 with a P[] or PR[]
+              "urscript palletizing": (10, 8)}  # every movel/movep/movec; movej(Home_q) is a joint move
 
 
 def _copy(names, tmp_path) -> list[Path]:
@@ -85,7 +97,17 @@ def test_every_motion_is_corrected_or_named(case, tmp_path):
     assert len(res.uncorrected) == len(named)
     for pattern, line in zip(named, res.uncorrected, strict=True):
         assert re.search(pattern, line), (pattern, line)
-    assert f"{len(named)} motion(s) to a Cartesian pose NOT corrected" in res.summary()
+    total, corrected = HAND_COUNT[case]
+    count = res.summary_dict()["motions"]
+    assert count == {"total": total, "corrected": corrected, "named": total - corrected}
+    assert len(res.motions) == total
+    assert f"{total} motions: {corrected} corrected, {total - corrected} not corrected (each named)" \
+        in res.summary()
+    for m in res.motions:  # every named motion's reason is one of the warnings of its line
+        assert (m.status == "corrected") == (not m.reason)
+        if m.reason:
+            head = f"{m.file}:{m.line}: {m.instruction}: not corrected"
+            assert any(w.startswith(head) for w in res.warnings)
     for p in paths:
         assert _outside_numbers(res.outputs[p]) == _outside_numbers(p.read_bytes())
         assert res.outputs[p].count(b"\r\n") == p.read_bytes().count(b"\r\n")
@@ -204,7 +226,7 @@ def test_rapid_undeclared_target_is_named_not_silent(tmp_path):
     robot = rc.Robot.from_catalog("abb_irb2600")
     res = filter_program(path, robot, robot)
     assert not res.rows and len(res.uncorrected) == 2
-    assert "2 motion(s) to a Cartesian pose NOT corrected" in res.summary()
+    assert "2 not corrected (each named)" in res.summary()
     assert re.match(r"calls_only.mod:3: MoveJ: not corrected: robtarget pHome is not declared",
                     res.uncorrected[0])
 
@@ -243,7 +265,7 @@ def test_krl_config_dat_given_as_a_program_is_corrected_and_written(tmp_path, ca
     assert main(["filter", *map(str, files), "--calibrated", str(cal), "--nominal", "kuka_kr16_2",
                  "-o", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "13 of 13" in text and "4 motion(s) to a Cartesian pose NOT corrected" in text
+    assert "13 of 13" in text and "15 motions: 11 corrected, 4 not corrected (each named)" in text
     written = (out / "$config.dat").read_bytes()
     assert written != files[2].read_bytes()
     assert b"LOAD_DATA[1]={M 4.5,CM {X 0.0,Y 0.0,Z 90.0" in written
@@ -258,7 +280,7 @@ def test_krl_src_without_its_dat_names_every_motion(tmp_path):
     assert len(undeclared) >= 12 and any(re.match(r"deburr_cell.src:27: SPTP: .*XP1 is not declared", w)
                                          for w in undeclared)
     # and the summary collapses the repeated reason per motion
-    assert "motion(s) to a Cartesian pose NOT corrected" in res.summary()
+    assert "not corrected (each named)" in res.summary()
 
 
 def test_krl_tool_from_a_variable_is_named(tmp_path):
@@ -284,16 +306,45 @@ def test_krl_external_axis_values_are_refused(tmp_path):
 # ----------------------------------------------------------------------------- FANUC constructs
 def test_fanuc_offsets_are_named_and_corrected(tmp_path):
     res, _ = _run("fanuc arc welding", tmp_path)
-    assert any(re.match(r"weld_bracket.ls:36: L P\[6\]: shifted at run time by Offset,PR\[2\]", w)
-               for w in res.warnings)
-    assert any(re.match(r"weld_bracket.ls:37: L P\[7\]: shifted at run time by Tool_Offset,PR\[3\]", w)
-               for w in res.warnings)
+    named = {(m.line, m.status, m.reason.split(":")[0]) for m in res.motions}
+    assert (36, "named", "P[6] is shifted at run time by Offset,PR[2]") in named
+    assert (37, "named", "P[7] is shifted at run time by Tool_Offset,PR[3]") in named
+    assert (34, "corrected", "") in named  # the plain motion to P[6] is corrected
 
 
 def test_fanuc_incremental_position_is_left_alone(tmp_path):
     res, paths = _run("fanuc arc welding", tmp_path)
     block = re.search(rb"P\[9\]\{.*?\};", res.outputs[paths[0]], re.DOTALL).group(0)
     assert block == re.search(rb"P\[9\]\{.*?\};", paths[0].read_bytes(), re.DOTALL).group(0)
+
+
+def test_fanuc_position_used_plain_and_incremental(tmp_path):
+    """P[2] reached by a plain L and by an L ... INC: the plain motion is corrected (so is P[2]),
+    the incremental one is named: its displacement changes by that correction."""
+    path = _copy(["weld_bracket.ls"], tmp_path)[0]
+    path.write_bytes(path.read_bytes().replace(b"14:L P[9] 50mm", b"14:L P[2] 50mm"))
+    nominal = rc.Robot.from_catalog("fanuc_lrmate200id")
+    # P[9], a displacement now used by no motion, is out of reach as a pose: left unchanged
+    res = filter_program(path, perturbed(nominal, 7), nominal, keep_unreached=True, **FANUC_FRAMES)
+    by_line = {m.line: m for m in res.motions}
+    assert by_line[27].status == "corrected" and by_line[27].target == "P[2]"
+    assert by_line[38].status == "named" and "a pose in other motions, which correct it" in by_line[38].reason
+    assert "P[2]" in [r["name"] for r in res.rows]
+    s = res.summary_dict()["motions"]
+    assert s["corrected"] + s["named"] == s["total"] == 11
+
+
+def test_motion_records_in_the_table(tmp_path):
+    """The table JSON carries one record per motion and the motion summary."""
+    import json
+
+    res, _ = _run("rapid arc welding", tmp_path)
+    table = json.loads(res.table_json())
+    assert table["summary"]["motions"] == {"total": 13, "corrected": 10, "named": 3}
+    assert len(table["motions"]) == 13
+    assert table["motions"][0] == {"file": "arc_station.mod", "line": 41, "instruction": "MoveJ",
+                                   "target": "pApproach", "status": "corrected", "reason": ""}
+    assert table["motions"][-1]["status"] == "named" and table["motions"][-1]["target"] == "pService"
 
 
 def test_fanuc_numbers_keep_their_style(tmp_path):

@@ -428,7 +428,7 @@ def test_krl_needs_the_tool_and_base_in_effect(tmp_path):
     assert "XP1" not in [r["name"] for r in res.rows]
     expected = r"palletize.src:\d+: PTP: not corrected: XP1: FDAT_ACT=FUNKNOWN names no FDAT .*"
     assert any(re.fullmatch(expected, w) for w in res.uncorrected)
-    assert "1 motion(s) to a Cartesian pose NOT corrected" in res.summary()
+    assert "1 not corrected (each named)" in res.summary()
 
 
 def test_krl_and_fanuc_configuration_edits():

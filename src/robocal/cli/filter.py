@@ -119,7 +119,7 @@ def add_parser(sub) -> None:
 
 def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[dict, str, list[Path]]:
     """(program -> output path, the table's path or prefix, every file that will be written)."""
-    from robocal.programs.filter import table_paths
+    from robocal.programs.result import table_paths
 
     out = Path(output)
     inputs = [Path(p) for p in programs]

@@ -142,10 +142,12 @@ class FanucDialect(Dialect):
     def _motions(self, sources, prog, joint):
         """Account for every motion of the /MN sections: positions every motion reaches are the
         /POS targets (each carries its own UF and UT, so all are corrected); an incremental
-        motion's position is a displacement (left alone); position registers, missing positions
-        and run-time offsets are named."""
+        motion's position is a displacement (named; the position is left alone unless another
+        motion uses it as a pose); position registers, missing positions and run-time offsets
+        are named."""
         numbers = {(t.source.path, int(re.match(r"P\[(\d+)", t.name).group(1))): t for t in prog.targets}
-        incremental = set()
+        incremental: dict[tuple, list] = {}  # position -> accounts of the INC motions using it
+        plain = set()  # positions some motion uses as a pose
         for src in sources:
             text = src.text
             start, stop = text.find("/MN"), text.find("/POS")
@@ -164,40 +166,53 @@ class FanucDialect(Dialect):
                     refs.append(_POSITION.search(lines[k + 1].group(1)))  # the end point on the next line
                     options += " " + lines[k + 1].group(1)
                 instr = mv.group(1)
+                off = _OFFSET.search(options) if "OFFSET" in options.upper() else None
                 for ref in refs:
                     if ref is None:
                         continue
                     label = ref.group(0)
+                    acc = None if ref.group(1) == "P" and ref.group(2).isdigit() and \
+                        (src.path, int(ref.group(2))) in joint else prog.motion(src, line.start(1), instr)
+                    if acc is None:
+                        continue  # a joint representation: nothing to correct
                     if ref.group(1) == "PR":
                         prog.skip(here, instr, f"{label} is a position register: its value lives in the "
-                                               "controller (correct it there, e.g. from a filtered copy)")
+                                               "controller (correct it there, e.g. from a filtered copy)",
+                                  acc, label)
                         continue
                     if not ref.group(2).isdigit():
                         prog.warnings.append(f"{here}: {instr} {label}: the position number is known at run "
                                              "time only; every position of /POS is corrected")
+                        for (path, _), t in numbers.items():
+                            if path == src.path:
+                                acc.reach(t, label)
                         continue
                     if len(ref.group(2)) > _POSITION_DIGITS:
                         prog.skip(here, instr, f"P[{short_repr(ref.group(2))}] is not a position number "
-                                               f"(more than {_POSITION_DIGITS} digits)")
+                                               f"(more than {_POSITION_DIGITS} digits)", acc, label)
                         continue
                     key = (src.path, int(ref.group(2)))
-                    if key in joint:
-                        continue
                     if key not in numbers:
                         prog.skip(here, instr, f"P[{ref.group(2)}] is not a Cartesian position of group 1 in "
-                                               "/POS (missing or malformed)")
+                                               "/POS (missing or malformed)", acc, label)
                         continue
+                    acc.reach(numbers[key], label)
                     if "INC" in options and _INCREMENTAL.search(options):
-                        incremental.add(key)
-                        prog.skip(here, instr, f"{label} is an incremental move (INC): a displacement, not a "
-                                               "pose")
+                        incremental.setdefault(key, []).append((here, instr, label, acc))
                         continue
-                    off = _OFFSET.search(options) if "OFFSET" in options.upper() else None
+                    plain.add(key)
                     if off:
-                        prog.warnings.append(f"{here}: {instr} {label}: shifted at run time by "
-                                             f"{off.group(0)}: {label} is corrected for its own pose, the "
-                                             "shifted pose by the same amount")
-        prog.targets = [t for key, t in numbers.items() if key not in incremental]
+                        prog.skip(here, instr, f"{label} is shifted at run time by {off.group(0)}: {label} "
+                                               "is corrected for its own pose, the shifted pose is not", acc)
+        for key, uses in incremental.items():
+            for here, instr, label, acc in uses:
+                why = (f"{label} is an incremental move (INC): a displacement, not a pose" if key not in plain
+                       else f"{label} is an incremental move (INC) here and a pose in other motions, which "
+                            "correct it: this displacement changes by that correction")
+                prog.skip(here, instr, why, acc)
+            if key not in plain:
+                prog.not_corrected[id(numbers[key])] = "used only as an incremental (INC) displacement"
+        prog.targets = [t for key, t in numbers.items() if key in plain or key not in incremental]
 
 
 def _nothing_between(src, text: str, a: int, b: int) -> None:

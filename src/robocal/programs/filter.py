@@ -22,11 +22,6 @@ too unless ``tcp`` gives the one identified on the calibrated model (``robocal t
 
 from __future__ import annotations
 
-import csv
-import io
-import json
-import re
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +32,6 @@ from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
 from robocal.ik.closed_form import has_closed_form
 from robocal.ik.controller import JUMP_DEG, nearest_solutions
-from robocal.io import check_outputs, write_all
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
@@ -46,136 +40,17 @@ from robocal.programs.inform import InformDialect, looks_like_inform
 from robocal.programs.krl import KRLDialect
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.rapid import RapidDialect
+from robocal.programs.result import LISTED, FilterResult, collapse
 from robocal.programs.source import ProgramText, format_number
 from robocal.programs.urscript import URScriptDialect
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
-LISTED = 20  # problems listed in one error message
 # A real TCP (--tcp) turned more than this from the program's tool data is another tool or a wrong
 # --rotation (the 4-point method finds the position only): refused. Moved more: a warning.
 TCP_TURN_MAX_DEG = 5.0
 TCP_SHIFT_WARN_MM = 10.0
-
-
-@dataclass
-class FilterResult:
-    """``outputs``: input path -> filtered bytes; ``rows``: the per-target table; ``warnings``."""
-
-    dialect: str
-    outputs: dict[Path, bytes]
-    rows: list[dict]
-    warnings: list[str] = field(default_factory=list)
-    uncorrected: list[str] = field(default_factory=list)  # motions left as they are (also warnings)
-
-    def table_csv(self) -> str:
-        out = io.StringIO()
-        writer = csv.writer(out, lineterminator="\n")
-        cols = list(self.rows[0]) if self.rows else ["file", "line", "name"]
-        writer.writerow(cols)
-        for r in self.rows:
-            writer.writerow([f"{r[c]:.6g}" if isinstance(r[c], float) else r[c] for c in cols])
-        return out.getvalue()
-
-    def table_json(self) -> str:
-        return json.dumps({"dialect": self.dialect, "files": [str(p) for p in self.outputs],
-                           "summary": self.summary_dict(), "warnings": self.warnings,
-                           "targets": self.rows}, indent=1)
-
-    def summary_dict(self) -> dict:
-        rows = [r for r in self.rows if r["filtered"]]
-        pos = np.array([r["correction_mm"] for r in rows]) if rows else np.zeros(0)
-        rot = np.array([r["correction_deg"] for r in rows]) if rows else np.zeros(0)
-        margin = [r["limit_margin_deg"] for r in rows]
-        sig = [r["sigma_rel"] for r in rows]
-        out = {"targets": len(self.rows), "filtered": len(rows),
-               "configuration_changed": sum(r["configuration"] == "changed" for r in rows),
-               "correction_mm": {"median": float(np.median(pos)) if pos.size else 0.0,
-                                 "max": float(pos.max(initial=0.0))},
-               "correction_deg": {"median": float(np.median(rot)) if rot.size else 0.0,
-                                  "max": float(rot.max(initial=0.0))},
-               "uncorrected_motions": len(self.uncorrected), "warnings": len(self.warnings)}
-        if rows:
-            i, j = int(np.argmin(margin)), int(np.argmin(sig))
-            out["smallest_limit_margin"] = {"name": rows[i]["name"], "deg": margin[i],
-                                            "joint": rows[i]["limit_joint"]}
-            out["nearest_singularity"] = {"name": rows[j]["name"], "kind": rows[j]["nearest_singularity"],
-                                          "sigma_rel": sig[j]}
-        return out
-
-    def summary(self) -> str:
-        s = self.summary_dict()
-        lines = [f"{self.dialect}: {s['filtered']} of {s['targets']} Cartesian target(s) filtered in "
-                 f"{', '.join(p.name for p in self.outputs)}"]
-        if self.uncorrected:
-            lines.append(f"  {len(self.uncorrected)} motion(s) to a Cartesian pose NOT corrected (each "
-                         "named in a warning below)")
-        if s["filtered"]:
-            lines += [f"  correction  median {s['correction_mm']['median']:.3f} mm, max "
-                      f"{s['correction_mm']['max']:.3f} mm; orientation median "
-                      f"{s['correction_deg']['median']:.4f} deg, max {s['correction_deg']['max']:.4f} deg",
-                      f"  configuration changed on {s['configuration_changed']} target(s)",
-                      f"  smallest joint-limit margin {s['smallest_limit_margin']['deg']:.2f} deg "
-                      f"({s['smallest_limit_margin']['name']}, joint {s['smallest_limit_margin']['joint']})",
-                      f"  nearest singularity: {s['nearest_singularity']['name']} "
-                      f"({s['nearest_singularity']['kind']}, sigma_rel "
-                      f"{s['nearest_singularity']['sigma_rel']:.4f})"]
-        shown = collapse(self.warnings)
-        for w in shown[:LISTED]:
-            lines.append(f"  warning: {w}")
-        if len(shown) > LISTED:
-            lines.append(f"  ... {len(shown) - LISTED} more warning(s) in the table")
-        return "\n".join(lines)
-
-    def write(self, outputs: dict[Path, Path] | Path | str, table: str | Path | None = None) -> list[Path]:
-        """Write the filtered files (input path -> output path, or one output path for a single
-        input) and the table (``table`` ending .csv or .json: that one; otherwise both
-        ``table.csv`` and ``table.json``), all together or none. Refuses to overwrite an input.
-        Returns the paths written."""
-        if not isinstance(outputs, dict):
-            if len(self.outputs) != 1:
-                raise DataError("several program files: give one output path per input")
-            outputs = {next(iter(self.outputs)): Path(outputs)}
-        files: dict[Path, bytes] = {Path(dst): self.outputs[Path(src)] for src, dst in outputs.items()}
-        for t in table_paths(table) if table is not None else []:
-            files[t] = (self.table_csv() if t.suffix.lower() == ".csv" else self.table_json()).encode()
-        check_outputs(files, self.outputs)
-        write_all(files)
-        return list(files)
-
-
-_WHERE = re.compile(r"^(\S+:\d+(?: \([^)]*\))?): (.*)$", re.DOTALL)
-SHOWN_PLACES = 4  # places named in one collapsed line
-
-
-def collapse(lines: list[str]) -> list[str]:
-    """Messages ``file:line (name): why`` with the same ``why`` collapsed into one line naming the
-    first places and how many there are; other messages as they are, in order of first
-    appearance."""
-    groups: dict[str, list[str]] = {}
-    for line in lines:
-        m = _WHERE.match(line)
-        where, why = (m.group(1), m.group(2)) if m else ("", line)
-        groups.setdefault(why, []).append(where)
-    out = []
-    for why, places in groups.items():
-        places = [p for p in places if p]
-        if len(places) <= 1:
-            out.append(f"{places[0]}: {why}" if places else why)
-        else:
-            more = f" and {len(places) - SHOWN_PLACES} more" if len(places) > SHOWN_PLACES else ""
-            out.append(f"{why} ({len(places)} places: {', '.join(places[:SHOWN_PLACES])}{more})")
-    return out
-
-
-def table_paths(table: str | Path) -> list[Path]:
-    """The table file(s) :meth:`FilterResult.write` writes for ``table``: that file when it ends
-    .csv or .json, else ``table.csv`` and ``table.json``."""
-    t = Path(table)
-    if t.suffix.lower() in (".csv", ".json"):
-        return [t]
-    return [t.with_name(t.name + ".csv"), t.with_name(t.name + ".json")]
 
 
 DIALECTS = {"rapid": RapidDialect, "krl": KRLDialect, "fanuc": FanucDialect, "urscript": URScriptDialect,
@@ -432,7 +307,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     if not targets:
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
-        return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings, program.uncorrected)
+        return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings, program.uncorrected,
+                            program.ledger.records(set(), program.not_corrected))
     values, P, W, tool = target_poses(d, program, targets)
     X = W @ P
     real = {d.name_key(k): v for k, v in (tcp or {}).items()}
@@ -459,6 +335,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                       "nothing was written; fix or remove these targets (or use --keep-unreached to leave "
                       "them unchanged)")
     warnings += [f"{targets[i].where}: left unchanged: {why}" for i, why in sorted(problems)]
+    program.not_corrected.update({id(targets[i]): f"left unchanged: {why}" for i, why in problems})
     good = np.array([i not in bad for i in range(len(targets))])
     Pc = np.where(good[:, None, None], invert_transform(W) @ comp.corrected_targets @ tool, P)
     cfg = None
@@ -468,7 +345,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     warnings += comp.warnings([t.where for t in targets], good)  # the corrected ones near a singularity
     rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, comp.converged & ok, changed, cfg, sing)
     outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
-    return FilterResult(d.name, outputs, rows, warnings, program.uncorrected)
+    corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
+    return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,
+                        program.ledger.records(corrected, program.not_corrected))
 
 
 def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
@@ -497,8 +376,10 @@ def _filterable(d: Dialect, program: Program, warnings: list, keep_unreached: bo
         if why:
             warnings.append(f"{t.where}: not filtered: {why}")
             program.uncorrected.append(f"{t.where}: not filtered: {why}")
+            program.not_corrected[id(t)] = f"not filtered: {why}"
         elif t.external:
             moving.append(f"{t.where}: external axes {t.external}")
+            program.not_corrected[id(t)] = f"external axes {t.external}: a fixed base and work are assumed"
         else:
             targets.append(t)
     if moving and not keep_unreached:

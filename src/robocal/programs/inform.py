@@ -338,38 +338,42 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         robot_part, plus, other = rest.partition("+")
         refs = list(_REF.finditer(robot_part))
         robot_refs = [r for r in refs if r.group(1) in ("C", "P", "LP")]
-        if not robot_refs:
-            prog.skip(src.where(start), instr, "no robot position (C, P or LP) in the instruction")
-            continue
-        ref = robot_refs[0]
-        label = ref.group(0)
-        why = _named_reason(instr, ref, refs, plus, other, shift, runtime)
+        ref = robot_refs[0] if robot_refs else None
         pos = None
-        if ref.group(2) is not None:
+        if ref is not None and ref.group(2) is not None:
             kind, index = ref.group(1), int(ref.group(2))
             pos = positions.get(("global", "P", index) if kind == "P" else (src.path, kind, index))
+        if pos is not None and pos.target is None and instr != "IMOV" and (
+                pos.header.postype == "PULSE" or not pos.header.rectan):
+            prog.motions.append((src.path, start, np.full(6, np.nan)))  # a joint position: no correction
+            continue
+        acc = prog.motion(src, start, instr)
+        if ref is None:
+            prog.skip(src.where(start), instr, "no robot position (C, P or LP) in the instruction", acc)
+            continue
+        label = ref.group(0)
+        why = _named_reason(instr, ref, refs, plus, other, shift, runtime)
         if why:
             if pos is not None and pos.target is not None:
                 named.add(id(pos.target))
-            prog.skip(src.where(start), instr, why)
+            prog.skip(src.where(start), instr, why, acc, label)
             continue
         if pos is None:
             prog.skip(src.where(start), instr, f"{label} is not in the files given" + (
-                " (a global position variable: give VAR.DAT as a program file)" if kind == "P" else ""))
+                " (a global position variable: give VAR.DAT as a program file)" if kind == "P" else ""),
+                acc, label)
             continue
         if pos.target is None:
-            if pos.header.postype == "PULSE" or not pos.header.rectan:
-                prog.motions.append((src.path, start, np.full(6, np.nan)))  # a joint position: nothing to do
-            else:
-                prog.skip(src.where(start), instr, f"{label} is not a 6-value Cartesian position")
+            prog.skip(src.where(start), instr, f"{label} is not a 6-value Cartesian position", acc, label)
             continue
         t = pos.target
         if t.frame in mframe:
             named.add(id(t))
             prog.skip(src.where(start), instr, f"{label} is in user frame {t.frame}, set at run time by "
-                                               f"MFRAME at {mframe[t.frame]}")
+                                               f"MFRAME at {mframe[t.frame]}", acc, label)
             continue
         used.add(id(t))
+        acc.reach(t, label)
         prog.motions.append((src.path, start, t))
 
 

@@ -269,8 +269,10 @@ class KRLDialect(Dialect):
                             which = lhs.strip().upper()[1:].lower()
                             state[which] = _frame_value(rhs.strip(), which, st.fdat)
                     args_end = w.start()
+                acc = prog.motion(src, at, instr)
                 if m.group(2):
-                    prog.skip(here, instr, "a relative motion: its displacement is not a stored target")
+                    prog.skip(here, instr, "a relative motion: its displacement is not a stored target", acc,
+                              masked[m.start(3):args_end][:60])
                     continue
                 parts = split_top(masked, m.start(3), args_end)
                 names = parts[:2] if instr in ("CIRC", "SCIRC") else parts[:1]
@@ -287,19 +289,19 @@ class KRLDialect(Dialect):
                         if f is None:
                             continue
                         if isinstance(f, str):
-                            prog.skip(here, instr, f)
+                            prog.skip(here, instr, f, acc, text[:60])
                             continue
                         if id(f) in st.reference:
                             prog.skip(here, instr, f"{f.name} is declared in {f.source.path.name}, given "
                                                    "as a reference: give that file as a program file (and -o "
-                                                   "a folder) to correct it")
+                                                   "a folder) to correct it", acc, f.name)
                             continue
                         (tool, why_tool), (base, why_base) = state["tool"], state["base"]
                         if "?" in (tool, base):
-                            prog.skip(here, instr, f"{f.name}: {why_tool if tool == '?' else why_base}")
+                            prog.skip(here, instr, f"{f.name}: {why_tool if tool == '?' else why_base}", acc)
                             named.add(id(f))
                             continue
-                        if prog.use(f, tool, base, here, f.name, "base", (src.path, a)) \
+                        if prog.use(f, tool, base, here, f.name, "base", (src.path, a), acc) \
                                 and tool == "external TCP":
                             prog.unsupported[f"tool:{tool}"] = ("an external TCP (IPO_FRAME #TCP) is not "
                                                                 "filtered")

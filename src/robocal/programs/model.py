@@ -16,6 +16,7 @@ import numpy as np
 
 from robocal.errors import DataError
 from robocal.programs.config import ConfigScheme
+from robocal.programs.motions import Account, Ledger
 from robocal.programs.source import Number, ProgramText
 
 IDENTITY = "identity"  # name of the identity frame / tool (world, wobj0, tool0, $NULLFRAME ...)
@@ -62,7 +63,10 @@ class Program:
     tools / frames whose targets cannot be filtered (a stationary tool, a moving frame).
     ``motions``: each motion's target or joints ``(file, offset, Target | joints)`` in text order;
     ``sequence``: the same in execution order, every execution (a routine called twice runs its
-    motions twice), with the call that entered its routine (``file:line``, '' at the entry)."""
+    motions twice), with the call that entered its routine (``file:line``, '' at the entry).
+    ``ledger``: one :class:`~robocal.programs.motions.Account` per motion instruction to a Cartesian
+    pose (:meth:`motion`); ``not_corrected``: ``id(target)`` -> why, for targets a dialect leaves
+    alone although a motion reaches them (a FANUC position used only as an INC displacement)."""
 
     targets: list[Target]
     frames: dict[str, np.ndarray] = field(default_factory=dict)
@@ -74,15 +78,24 @@ class Program:
     used: dict[int, tuple[str, str, str]] = field(default_factory=dict)  # id(target) -> tool, frame, where
     motions: list[tuple[Path, int, Target | np.ndarray]] = field(default_factory=list)
     sequence: list[tuple[Target | np.ndarray, str]] = field(default_factory=list)
+    ledger: Ledger = field(default_factory=Ledger)
+    not_corrected: dict[int, str] = field(default_factory=dict)
+
+    def motion(self, source: ProgramText, at: int, instruction: str) -> Account:
+        """The account of the motion instruction at offset ``at`` of ``source`` (opened once)."""
+        return self.ledger.open(source, at, instruction)
 
     def use(self, t: Target, tool: str, frame: str, here: str, label: str, frame_word: str,
-            motion: tuple[Path, int]) -> bool:
+            motion: tuple[Path, int], account: Account | None = None) -> bool:
         """A motion at ``here`` (``motion``: its file and offset) reaches target ``t`` with ``tool`` in
         ``frame``: the first use appends it to :attr:`targets` (True); a later use with the same
         tool and frame adds nothing (False); one with another tool or frame is refused (one
         corrected target cannot serve both). Every use is a step of :attr:`motions`. ``label``
-        names the target and ``frame_word`` its kind of frame in the message."""
+        names the target and ``frame_word`` its kind of frame in the message. ``account``: the
+        motion instruction's account, which the target joins."""
         self.motions.append((*motion, t))
+        if account is not None:
+            account.reach(t)
         if id(t) in self.used:
             tool0, frame0, at0 = self.used[id(t)]
             if (tool0, frame0) != (tool, frame):
@@ -95,9 +108,14 @@ class Program:
         self.targets.append(t)
         return True
 
-    def skip(self, where: str, instruction: str, why: str) -> None:
+    def skip(self, where: str, instruction: str, why: str, account: Account | None = None,
+             label: str = "") -> None:
         """Account for a motion to a Cartesian pose this filter cannot correct: a warning naming
-        ``where`` (file:line), the instruction and why."""
+        ``where`` (file:line), the instruction and why; ``account``: the motion instruction's account
+        (None: a call of a routine not in these files, which may move there), ``label``: what the
+        motion moves to as written."""
+        if account is not None:
+            account.name(why, label)
         text = f"{where}: {instruction}: not corrected: {why}"
         if text not in self.uncorrected:
             self.uncorrected.append(text)

@@ -193,7 +193,8 @@ class RapidDialect(Dialect):
         return prog
 
     def _statement(self, src, masked, s, e, prog, st, only_frames, proc, conf):
-        m = _DECL.search(masked, s, e)
+        lead = _after_lead(masked, s, e)
+        m = _DECL.search(masked, lead, e)  # after a PROC header: its PERS tooldata parameter is not one
         if m:
             kind, name = m.group(2).lower(), m.group(3)
             if m.group(5) is None:
@@ -215,7 +216,6 @@ class RapidDialect(Dialect):
                 (st.tools if kind == "tooldata" else st.wobjs)[name.lower() + suffix] = read(
                     src, node, name + suffix, m.start(), where)
             return
-        lead = _after_lead(masked, s, e)
         word = _WORD.match(masked, lead)
         mv = word if word and word.group(1).lower() in _MOVES else None
         if mv is None and word and word.group(1).upper() == "IF":  # IF condition MoveL ...; (no THEN)
@@ -316,6 +316,7 @@ class RapidDialect(Dialect):
         first = prog.used
         for mv in st.motions:
             here = f"{mv.src.path.name}:{mv.src.line_of(mv.at)}"
+            acc = prog.motion(mv.src, mv.at, mv.instr)
             for scope in st.scopes(mv.proc):
                 tool, why_tool = st.name_of(mv.src, mv.tool, scope, "tool")
                 wobj, why_wobj = ("wobj0", "") if mv.wobj is None else st.name_of(
@@ -323,18 +324,18 @@ class RapidDialect(Dialect):
                 for a, b in mv.targets:
                     for found in self._follow(st, mv.src, a, b, mv.proc, scope, 0):
                         if isinstance(found, str):
-                            prog.skip(here, mv.instr, found)
+                            prog.skip(here, mv.instr, found, acc, st.masked[mv.src.path][a:b][:60])
                             continue
                         if why_tool or why_wobj:
-                            prog.skip(here, mv.instr, why_tool or why_wobj)
+                            prog.skip(here, mv.instr, why_tool or why_wobj, acc)
                             continue
                         if id(found) in st.reference:
                             prog.skip(here, mv.instr, f"{found.name.split(' (')[0]} is declared in "
                                                       f"{found.source.path.name}, given as a reference: give "
-                                                      "that module as a program file to correct it")
+                                                      "that module as a program file to correct it", acc)
                             continue
                         label = f"robtarget {found.name.lower()}"
-                        if prog.use(found, tool, wobj, here, label, "work object", (mv.src.path, a)):
+                        if prog.use(found, tool, wobj, here, label, "work object", (mv.src.path, a), acc):
                             found.monitored = mv.monitored
         passed = set()
         for src, at, routine, positional in st.foreign:  # a robtarget given to a routine not in these files

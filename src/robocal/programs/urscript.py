@@ -117,21 +117,25 @@ class URScriptDialect(Dialect):
                     for kind, value, frame, qnear in sc.resolve(a, b, m.start(), 0):
                         if kind == "joints":
                             prog.motions.append((src.path, a, value))
-                        elif kind == "skip":
-                            prog.skip(here, fn, value)
-                        elif kind == "pose" and fn != "movej":
+                            continue
+                        acc = prog.motion(src, m.start(), fn)
+                        if kind == "skip":
+                            prog.skip(here, fn, value, acc, masked[a:b][:60])
+                        elif kind == "pose":
                             prog.skip(here, fn, "the pose is computed from values this filter cannot rewrite "
-                                                "(expressions or another function's result)")
+                                                "(expressions or another function's result)", acc,
+                                      masked[a:b][:60])
                         elif kind == "target" and prog.use(value, tool, frame, here, value.name, "frame",
-                                                           (src.path, a)):
+                                                           (src.path, a), acc):
                             value.qnear = qnear
             scripts.append(sc)
             for t in list(prog.targets):
                 if id(t) in sc.as_frame:  # a feature that a motion also moves to (with an offset)
                     prog.targets.remove(t)
-                    prog.skip(used[id(t)][2], "motion", f"{t.name} serves as a feature (pose_trans) and as "
-                                                      "a target: correcting it would move the poses in its "
-                                                      "frame")
+                    why = (f"{t.name} serves as a feature (pose_trans) and as a target: correcting it would "
+                           "move the poses in its frame")
+                    prog.not_corrected[id(t)] = why
+                    prog.skip(used[id(t)][2], "motion", why)
             unused = [t for t in sc.poses.values()
                       if id(t) in sc.variables and id(t) not in used and id(t) not in sc.as_frame]
             passed = sc.passed({t.name for t in unused})

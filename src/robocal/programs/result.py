@@ -1,0 +1,149 @@
+"""The result of filtering a program: the filtered bytes, the per-target table, the per-motion
+accounting (:mod:`robocal.programs.motions`) and the warnings; how they are summarised and written.
+
+``FilterResult.table_json()`` holds ``summary`` (targets, corrections and ``motions``:
+``{"total", "corrected", "named"}``), ``warnings``, ``targets`` (one row per target) and
+``motions`` (one record per motion instruction to a Cartesian pose). Writing goes through
+:func:`robocal.io.write_all`: the programs and the table together, or nothing.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from robocal.errors import DataError
+from robocal.io import check_outputs, write_all
+from robocal.programs.motions import MotionRecord, summary, summary_line
+
+LISTED = 20  # problems (warnings) listed in one message
+
+
+@dataclass
+class FilterResult:
+    """``outputs``: input path -> filtered bytes; ``rows``: the per-target table; ``warnings``."""
+
+    dialect: str
+    outputs: dict[Path, bytes]
+    rows: list[dict]
+    warnings: list[str] = field(default_factory=list)
+    uncorrected: list[str] = field(default_factory=list)  # motions left as they are (also warnings)
+    motions: list[MotionRecord] = field(default_factory=list)  # every motion to a Cartesian pose
+
+    def table_csv(self) -> str:
+        out = io.StringIO()
+        writer = csv.writer(out, lineterminator="\n")
+        cols = list(self.rows[0]) if self.rows else ["file", "line", "name"]
+        writer.writerow(cols)
+        for r in self.rows:
+            writer.writerow([f"{r[c]:.6g}" if isinstance(r[c], float) else r[c] for c in cols])
+        return out.getvalue()
+
+    def table_json(self) -> str:
+        return json.dumps({"dialect": self.dialect, "files": [str(p) for p in self.outputs],
+                           "summary": self.summary_dict(), "warnings": self.warnings,
+                           "targets": self.rows, "motions": [m.as_dict() for m in self.motions]}, indent=1)
+
+    def summary_dict(self) -> dict:
+        rows = [r for r in self.rows if r["filtered"]]
+        pos = np.array([r["correction_mm"] for r in rows]) if rows else np.zeros(0)
+        rot = np.array([r["correction_deg"] for r in rows]) if rows else np.zeros(0)
+        margin = [r["limit_margin_deg"] for r in rows]
+        sig = [r["sigma_rel"] for r in rows]
+        out = {"targets": len(self.rows), "filtered": len(rows),
+               "configuration_changed": sum(r["configuration"] == "changed" for r in rows),
+               "correction_mm": {"median": float(np.median(pos)) if pos.size else 0.0,
+                                 "max": float(pos.max(initial=0.0))},
+               "correction_deg": {"median": float(np.median(rot)) if rot.size else 0.0,
+                                  "max": float(rot.max(initial=0.0))},
+               "motions": summary(self.motions),
+               "uncorrected_motions": len(self.uncorrected), "warnings": len(self.warnings)}
+        if rows:
+            i, j = int(np.argmin(margin)), int(np.argmin(sig))
+            out["smallest_limit_margin"] = {"name": rows[i]["name"], "deg": margin[i],
+                                            "joint": rows[i]["limit_joint"]}
+            out["nearest_singularity"] = {"name": rows[j]["name"], "kind": rows[j]["nearest_singularity"],
+                                          "sigma_rel": sig[j]}
+        return out
+
+    def summary(self) -> str:
+        s = self.summary_dict()
+        lines = [f"{self.dialect}: {s['filtered']} of {s['targets']} Cartesian target(s) filtered in "
+                 f"{', '.join(p.name for p in self.outputs)}"]
+        lines.append(f"  {summary_line(s['motions'])}")
+        if len(self.uncorrected) > s["motions"]["named"]:
+            lines.append(f"  {len(self.uncorrected)} place(s) where a Cartesian pose is not corrected, calls "
+                         "of routines not in these files included (each named in a warning below)")
+        if s["filtered"]:
+            lines += [f"  correction  median {s['correction_mm']['median']:.3f} mm, max "
+                      f"{s['correction_mm']['max']:.3f} mm; orientation median "
+                      f"{s['correction_deg']['median']:.4f} deg, max {s['correction_deg']['max']:.4f} deg",
+                      f"  configuration changed on {s['configuration_changed']} target(s)",
+                      f"  smallest joint-limit margin {s['smallest_limit_margin']['deg']:.2f} deg "
+                      f"({s['smallest_limit_margin']['name']}, joint {s['smallest_limit_margin']['joint']})",
+                      f"  nearest singularity: {s['nearest_singularity']['name']} "
+                      f"({s['nearest_singularity']['kind']}, sigma_rel "
+                      f"{s['nearest_singularity']['sigma_rel']:.4f})"]
+        shown = collapse(self.warnings)
+        for w in shown[:LISTED]:
+            lines.append(f"  warning: {w}")
+        if len(shown) > LISTED:
+            lines.append(f"  ... {len(shown) - LISTED} more warning(s) in the table")
+        return "\n".join(lines)
+
+    def write(self, outputs: dict[Path, Path] | Path | str, table: str | Path | None = None) -> list[Path]:
+        """Write the filtered files (input path -> output path, or one output path for a single
+        input) and the table (``table`` ending .csv or .json: that one; otherwise both
+        ``table.csv`` and ``table.json``), all together or none. Refuses to overwrite an input.
+        Returns the paths written."""
+        if not isinstance(outputs, dict):
+            if len(self.outputs) != 1:
+                raise DataError("several program files: give one output path per input")
+            outputs = {next(iter(self.outputs)): Path(outputs)}
+        files: dict[Path, bytes] = {Path(dst): self.outputs[Path(src)] for src, dst in outputs.items()}
+        for t in table_paths(table) if table is not None else []:
+            files[t] = (self.table_csv() if t.suffix.lower() == ".csv" else self.table_json()).encode()
+        check_outputs(files, self.outputs)
+        write_all(files)
+        return list(files)
+
+
+_WHERE = re.compile(r"^(\S+:\d+(?: \([^)]*\))?): (.*)$", re.DOTALL)
+SHOWN_PLACES = 4  # places named in one collapsed line
+
+
+def collapse(lines: list[str]) -> list[str]:
+    """Messages ``file:line (name): why`` with the same ``why`` collapsed into one line naming the
+    first places and how many there are; other messages as they are, in order of first
+    appearance."""
+    groups: dict[str, list[str]] = {}
+    for line in lines:
+        m = _WHERE.match(line)
+        where, why = (m.group(1), m.group(2)) if m else ("", line)
+        groups.setdefault(why, []).append(where)
+    out = []
+    for why, places in groups.items():
+        places = [p for p in places if p]
+        if len(places) <= 1:
+            out.append(f"{places[0]}: {why}" if places else why)
+        else:
+            more = f" and {len(places) - SHOWN_PLACES} more" if len(places) > SHOWN_PLACES else ""
+            out.append(f"{why} ({len(places)} places: {', '.join(places[:SHOWN_PLACES])}{more})")
+    return out
+
+
+def table_paths(table: str | Path) -> list[Path]:
+    """The table file(s) :meth:`FilterResult.write` writes for ``table``: that file when it ends
+    .csv or .json, else ``table.csv`` and ``table.json``."""
+    t = Path(table)
+    if t.suffix.lower() in (".csv", ".json"):
+        return [t]
+    return [t.with_name(t.name + ".csv"), t.with_name(t.name + ".json")]
+
+
