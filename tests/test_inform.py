@@ -246,3 +246,34 @@ def test_poses_writes_a_job_the_controller_runs_at_the_planned_joints(tmp_path):
     assert np.rad2deg(np.abs(q - planned - 2 * np.pi * turns)).max() < 2e-3
     res = filter_program([job], NOMINAL, NOMINAL, tools={"0": "0,0,0,0,0,0"})
     assert res.outputs[job] == data and len(res.rows) == 10
+
+
+def test_base_positions_of_a_robot_on_base_axes_are_named(tmp_path):
+    """With base axes in the job's group (RB1,BS1), a BASE position is where the track puts it:
+    named; the ROBOT positions (in the robot's own frame) are still corrected."""
+    path = tmp_path / "PICK_TRACK.JBI"
+    path.write_bytes((CORPUS / "PICK_PLACE.JBI").read_bytes().replace(b"///GROUP1 RB1", b"///GROUP1 RB1,BS1"))
+    res = filter_program([path], CALIBRATED, NOMINAL, tools=TOOLS)
+    assert [r["name"] for r in res.rows] == ["C00000", "C00001", "C00002"]
+    based = [r for r in res.motions if "BASE position of a robot on base axes" in r.reason]
+    assert [r.target for r in based] == ["C00003", "C00004", "C00005", "C00004"]
+
+
+def test_offline_generator_style(tmp_path):
+    """A comment line before /JOB, a trailing blank after ///RECTAN, the 24-field RCONF of the
+    YRC1000, LF line ends, 4-decimal positions: read, filtered, and unchanged by an identity
+    calibration."""
+    q = np.deg2rad([[0, 10, -20, 0, -70, 0], [15, 20, -15, 5, -75, 10]])
+    v = InformDialect().from_pose(NOMINAL.fk(q), np.zeros((2, 6)))
+    lines = ["'PP version: 3.1", "/JOB", "//NAME GEN", "//POS", "///NPOS 2,0,0,0,0,0", "///TOOL 0",
+             "///POSTYPE ROBOT", "///RECTAN ", "///RCONF 1," + ",".join(["0"] * 23)]
+    lines += [f"C{k:05d}=" + ",".join(f"{x:.4f}" for x in row) for k, row in enumerate(v)]
+    lines += ["//INST", "///DATE 2021/01/01 00:00", "///ATTR SC,RW,RJ", "///GROUP1 RB1", "NOP",
+              "MOVJ C00000 VJ=20.00", "MOVL C00001 V=100.0 PL=0", "END", ""]
+    path = tmp_path / "gen.jbi"
+    path.write_text("\n".join(lines))
+    assert dialect_for([path]).name == "Yaskawa INFORM"
+    res = filter_program([path], CALIBRATED, NOMINAL)
+    assert json.loads(res.table_json())["summary"]["motions"] == {"total": 2, "corrected": 2, "named": 0}
+    assert _outside_numbers(res.outputs[path]) == _outside_numbers(path.read_bytes())
+    assert filter_program([path], NOMINAL, NOMINAL).outputs[path] == path.read_bytes()

@@ -53,6 +53,7 @@ from robocal.programs.source import Number, ProgramText
 _POSITION_MM = 1e-3  # the pendant writes 3 decimals for mm
 _ANGLE_DEG = 1e-4  # ... and 4 for degrees
 POSE_VALUES = 6
+BRANCH_FIELDS = 3  # RCONF's flip, arm and front/back: the least a form must give
 CONFIG_FIELDS = 6  # RCONF fields the form of a 6-axis arm uses (the rest, 2 or 18, are kept)
 NPOS_KINDS = ("C", "BC", "EC", "P", "BP", "EX")  # the order of ///NPOS
 
@@ -254,7 +255,9 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
                                 "numbers separated by commas")
         if state is None:
             flags = head.rconf[:CONFIG_FIELDS] if head.rconf is not None else None
-            config = None if flags is None else np.array([int(n.text) for n in flags])
+            # an older form without the R, T, S flags: within -180 < angle <= 180
+            config = None if flags is None else \
+                np.array([int(n.text) for n in flags] + [0] * (CONFIG_FIELDS - len(flags)))
             state = (_Header(**vars(head)), config)
         header, config = state
         pos = Position(kind, int(index), nums, header, start, start + len(line) + len(end), end)
@@ -294,7 +297,7 @@ def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _He
         setattr(head, key.lower(), str(int(value)))
     elif key == "RCONF":
         nums = src.numbers_in(start + line.index(value), start + len(line)) if value else []
-        if len(nums) < CONFIG_FIELDS or any(n.text not in ("0", "1") for n in nums[:CONFIG_FIELDS]):
+        if len(nums) < BRANCH_FIELDS or any(n.text not in ("0", "1") for n in nums[:CONFIG_FIELDS]):
             raise DataError(f"{where}: malformed ///RCONF {value!r}: expected flags 0 or 1 "
                             "(flip, arm, front/back, R, T, S, ...)")
         head.rconf, head.rconf_line = nums, line
@@ -308,6 +311,7 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
     shift = ""  # the SFTON in effect
     runtime: dict[str, str] = {}  # variable -> where the job writes it at run time (anywhere: loops)
     mframe: dict[str, str] = {}  # user frame -> the MFRAME that sets it
+    on_track = bool(re.search(r"^///GROUP\d+\s+[^\r\n]*\bBS\d", src.text, re.MULTILINE))  # robot on base axes
     inst = [(start, _LABELED.sub("", line, count=1)) for start, line, _ in _instructions(src)]
     for start, body in inst:
         w = _WRITES.match(body)
@@ -367,6 +371,12 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
             prog.skip(src.where(start), instr, f"{label} is not a 6-value Cartesian position", acc, label)
             continue
         t = pos.target
+        if on_track and pos.header.postype == "BASE":
+            named.add(id(t))
+            prog.skip(src.where(start), instr, f"{label} is a BASE position of a robot on base axes "
+                                               "(///GROUP ... BS): where it is for the robot depends on "
+                                               "the axes' position", acc, label)
+            continue
         if t.frame in mframe:
             named.add(id(t))
             prog.skip(src.where(start), instr, f"{label} is in user frame {t.frame}, set at run time by "
@@ -419,4 +429,6 @@ def _named_reason(instr: str, ref, refs, plus: str, other: str, shift: str, runt
 def looks_like_inform(text: str) -> bool:
     """A job (``/JOB`` first) or a VAR.DAT (``//`` sections with ``P0000=`` entries)."""
     head = text.lstrip("\ufeff \t\r\n")[:4000]
-    return head.startswith("/JOB") or bool(re.match(r"//\w", head) and re.search(r"^P\d+=", head, re.M))
+    if re.search(r"^/JOB\b", head, re.MULTILINE) and re.search(r"^//(?:NAME|POS|INST)\b", head, re.MULTILINE):
+        return True  # a job (an offline generator may put a ' comment line before /JOB)
+    return bool(re.match(r"//\w", head) and re.search(r"^P\d+=", head, re.M))
