@@ -19,14 +19,15 @@ EPILOG = """Examples:
   robocal filter WELD.JBI VAR.DAT --frame 2=1250,-300,450,0,0,15 --tool 1=0,-35,410,0,-30,0 \\
       --calibrated cal.yaml --nominal yaskawa_gp25 -o filtered/
 Formats (from the suffix, or --format): rapid (.mod .modx .prg .sys), krl (.src .dat .sub), fanuc (.ls),
-urscript (.script .urscript), inform (.JBI, and the controller's VAR.DAT). --tool / --frame give the
-controller's tool and frame data the files do not hold, NAME=values in the program's own notation:
-ABB x,y,z (mm),q1,q2,q3,q4; KUKA X,Y,Z (mm),A,B,C (deg); FANUC X,Y,Z (mm),W,P,R (deg); Yaskawa
-X,Y,Z (mm),Rx,Ry,Rz (deg); URScript x,y,z (m),rx,ry,rz (rad); names are the tooldata/wobjdata names,
-the KUKA TOOL_DATA/BASE_DATA, FANUC UT/UF and Yaskawa TOOL/USER numbers, URScript feature variables
-(an unnamed URScript --tool is the installation's TCP). --tcp NAME=x,y,z,rx,ry,rz (mm, deg, fixed-axis
-XYZ) is the real TCP of that tool identified on the calibrated model (robocal tool); default: the tool
-data.
+urscript (.script .urscript), inform (.JBI, and the controller's VAR.DAT), val3 (an application's
+folder, or its .pgx and .dtx files). --tool / --frame give the controller's tool and frame data the
+files do not hold, NAME=values in the program's own notation: ABB x,y,z (mm),q1,q2,q3,q4; KUKA X,Y,Z
+(mm),A,B,C (deg); FANUC X,Y,Z (mm),W,P,R (deg); Yaskawa X,Y,Z (mm),Rx,Ry,Rz (deg); VAL3 x,y,z (mm),
+rx,ry,rz (deg); URScript x,y,z (m),rx,ry,rz (rad); names are the tooldata/wobjdata names, the KUKA
+TOOL_DATA/BASE_DATA, FANUC UT/UF and Yaskawa TOOL/USER numbers, VAL3 data (fPart[0], tGripper[0]),
+URScript feature variables (an unnamed URScript --tool is the installation's TCP). --tcp
+NAME=x,y,z,rx,ry,rz (mm, deg, fixed-axis XYZ) is the real TCP of that tool identified on the
+calibrated model (robocal tool); default: the tool data.
 The calibrated model's identified frame {0} is the controller's base unless --robot-base gives the
 controller's base in the calibrated model's world frame (x,y,z,rx,ry,rz, mm, deg).
 Writes the filtered program(s) and the per-target table (CSV and JSON) together, or nothing."""
@@ -34,13 +35,14 @@ Writes the filtered program(s) and the per-target table (CSV and JSON) together,
 
 # what each language's files look like, and its motion instructions to a named point
 SUFFIXES = {"rapid": (".mod", ".modx", ".prg", ".sys"), "krl": (".src", ".dat", ".sub"),
-            "fanuc": (".ls",), "urscript": (".script", ".urscript"), "inform": (".jbi",)}
+            "fanuc": (".ls",), "urscript": (".script", ".urscript"), "inform": (".jbi",),
+            "val3": (".pgx", ".dtx", ".pjx")}
 LANGUAGES = {"rapid": "ABB RAPID", "krl": "KUKA KRL", "fanuc": "FANUC TP (.ls)", "urscript": "URScript",
-             "inform": "Yaskawa INFORM (.JBI)"}
+             "inform": "Yaskawa INFORM (.JBI)", "val3": "Staubli VAL3"}
 SIGNATURES = {"rapid": r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)",
               "krl": r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)",
               "fanuc": r"^/(?:PROG|MN|POS)\b", "urscript": r"^\s*def\s+\w+\s*\(.*\)\s*:|\bmove[ljpc]\s*\(",
-              "inform": r"^/JOB\b|^//(?:NAME|POS|INST)\b"}
+              "inform": r"^/JOB\b|^//(?:NAME|POS|INST)\b", "val3": r"staubli\.com/robotics/VAL3"}
 MOTION = {"krl": r"^\s*(?:S?PTP|S?LIN|S?CIRC)\s+([A-Za-z_$][\w$]*)",
           "rapid": r"^\s*Move[LJC]\s+([A-Za-z_]\w*)"}
 
@@ -91,11 +93,13 @@ def _named(values, what: str) -> dict[str, str]:
 def add_parser(sub) -> None:
     p = sub.add_parser("filter", help="correct a robot program's Cartesian targets with the calibrated model",
                        description="Every Cartesian target of an ABB RAPID, KUKA KRL, FANUC TP (.ls), "
-                                   "URScript or Yaskawa INFORM program is replaced by the target the "
-                                   "controller's nominal model must be given so that the real robot lands "
-                                   "where the program meant; all else in the file stays byte for byte.",
+                                   "URScript, Yaskawa INFORM or Staubli VAL3 program is replaced by the "
+                                   "target the controller's nominal model must be given so that the real "
+                                   "robot lands where the program meant; all else in the file stays byte "
+                                   "for byte.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("programs", nargs="+", help="program file(s); a KUKA .src with its .dat")
+    p.add_argument("programs", nargs="+",
+                   help="program file(s); a KUKA .src with its .dat; a VAL3 application's folder")
     p.add_argument("--calibrated", required=True, help="calibrated model YAML")
     p.add_argument("--nominal", required=True, help="catalog name or model YAML of the controller's model")
     p.add_argument("-o", "--output", required=True,
@@ -109,7 +113,8 @@ def add_parser(sub) -> None:
                    help="the controller's base in the calibrated model's world frame (mm, deg)")
     p.add_argument("--references", nargs="+", default=[], metavar="FILE",
                    help="files read for tool/frame declarations only ($config.dat, system modules)")
-    p.add_argument("--format", choices=("rapid", "krl", "fanuc", "urscript", "inform"), help="program format")
+    p.add_argument("--format", choices=("rapid", "krl", "fanuc", "urscript", "inform", "val3"),
+                   help="program format")
     p.add_argument("--table", help="per-target table: PATH.csv, PATH.json, or a prefix for both "
                                    "(default: OUTPUT.targets.csv/.json)")
     p.add_argument("--keep-unreached", action="store_true",
@@ -118,11 +123,13 @@ def add_parser(sub) -> None:
 
 
 def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[dict, str, list[Path]]:
-    """(program -> output path, the table's path or prefix, every file that will be written)."""
+    """(program -> output path, the table's path or prefix, every file that will be written); a
+    folder (a VAL3 application) stands for its files."""
     from robocal.programs.result import table_paths
+    from robocal.programs.val3 import application_files
 
     out = Path(output)
-    inputs = [Path(p) for p in programs]
+    inputs = [f for p in map(Path, programs) for f in (application_files(p) if p.is_dir() else [p])]
     if len(inputs) == 1 and not out.is_dir():
         targets = {inputs[0]: out}
         table = table or str(out) + ".targets"
@@ -164,7 +171,7 @@ def run(args) -> int:
     from robocal.programs import filter_program
 
     targets, table, written = _output_paths(args.programs, args.output, args.table)
-    check_outputs(written, [*args.programs, args.calibrated, args.nominal, *args.references])
+    check_outputs(written, [*targets, args.calibrated, args.nominal, *args.references])
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}

@@ -43,6 +43,7 @@ from robocal.programs.rapid import RapidDialect
 from robocal.programs.result import LISTED, FilterResult, collapse
 from robocal.programs.source import ProgramText, format_number
 from robocal.programs.urscript import URScriptDialect
+from robocal.programs.val3 import Val3Dialect, application_files
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
@@ -54,11 +55,11 @@ TCP_SHIFT_WARN_MM = 10.0
 
 
 DIALECTS = {"rapid": RapidDialect, "krl": KRLDialect, "fanuc": FanucDialect, "urscript": URScriptDialect,
-            "inform": InformDialect}
+            "inform": InformDialect, "val3": Val3Dialect}
 
 
 def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
-    """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript', 'inform') or the
+    """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript', 'inform', 'val3') or the
     suffixes; a Yaskawa job or VAR.DAT is also told by its first line (``/JOB``, ``//`` sections)."""
     dialects = DIALECTS
     if name is not None:
@@ -293,6 +294,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     :meth:`FilterResult.write`.
     """
     paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
+    paths = [f for p in paths for f in (application_files(p) if p.is_dir() else [p])]  # a VAL3 application
     if not paths:
         raise DataError("no program file given")
     if nominal.n_joints != CONTROLLER_JOINTS:
@@ -473,6 +475,10 @@ def _edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray,
             num = t.numbers[j]
             text = format_number(float(new[i, j]), num, float(resolution[j]),
                                  finest.get((t.source.path, int(j)), 0))
+            if num.start == num.end:  # a number the file leaves out: inserted (several in their order)
+                key = (num.start, num.end)
+                mine[key] = mine.get(key, "") + d.number_edit(t, num, text)
+                continue
             mine.update(_aligned(t.source.text, num, text) if d.keep_width else {(num.start, num.end): text})
         if changed[i]:
             mine.update(d.config_edits(t, cfg[1][i]))

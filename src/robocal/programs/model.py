@@ -157,6 +157,12 @@ class Dialect:
         """Span -> text edits writing configuration row ``new`` into ``target``."""
         raise NotImplementedError
 
+    def number_edit(self, target: Target, num: Number, text: str) -> str:
+        """The text that replaces ``num`` (its span) when it is rewritten as ``text``: the number
+        itself, or, for a number the file leaves out (a zero-length span), whatever writes it
+        (VAL3: the attribute)."""
+        return text
+
     def name_key(self, name: str) -> str:
         """The key a tool or frame name has in :class:`Program` (RAPID names ignore case)."""
         return name
