@@ -22,8 +22,8 @@ from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.programs import filter_program
 from robocal.programs.filter import dialect_for
 from robocal.programs.simulate import execute
-from robocal.programs.source import NUMBER_RE
-from robocal.programs.val3 import Val3Dialect, application_files
+from robocal.programs.source import NUMBER_RE, ProgramText
+from robocal.programs.val3 import Val3Dialect, _read_data, application_files
 
 APP = Path(__file__).parent / "data" / "programs" / "val3" / "pick_place"
 NOMINAL = rc.Robot.from_catalog("staubli_tx2_140")
@@ -180,3 +180,26 @@ def test_cli_filters_an_application_folder(tmp_path, capsys):
     assert "12 motions: 7 corrected, 5 not corrected (each named)" in text
     assert sorted(p.name for p in out.iterdir()) == sorted(
         [p.name for p in application_files(folder)] + ["pickPart.targets.csv", "pickPart.targets.json"])
+
+
+def test_poses_writes_an_application_that_visits_the_planned_joints(tmp_path):
+    """poses --val3 FOLDER: jointRx data read back by the VAL3 reader equal the planned joints, the
+    start program visits them in order; no Cartesian motion (nothing to filter)."""
+    folder = tmp_path / "campaign"
+    assert main(["--quiet", "poses", "--robot", "staubli_tx2_140", "-n", "10", "--candidates", "600",
+                 "--starts", "1", "--smr-mm", "20,-30,60", "-o", str(tmp_path / "poses.csv"), "--val3",
+                 str(folder), "--speed-percent", "15", "--settle-s", "0.5"]) == 0
+    planned = np.rad2deg(rc.data.measurements.read_joints(tmp_path / "poses.csv"))
+    files = application_files(folder)
+    assert sorted(p.name for p in files) == ["MeasurePose.pgx", "campaign.dtx", "campaign.pjx", "start.pgx",
+                                             "stop.pgx"]
+    data = _read_data(ProgramText(folder / "campaign.dtx"))
+    joints = np.rad2deg([data[f"jPose[{k}]"].joints for k in range(10)])
+    np.testing.assert_allclose(joints, planned, atol=1e-9)
+    start = (folder / "start.pgx").read_text()
+    assert re.findall(r"movej\(jPose\[(\d+)\], flange, mCampaign\)", start) == [str(k) for k in range(10)]
+    assert re.findall(r"call MeasurePose\((\d+)\)", start) == [str(k) for k in range(1, 11)]
+    assert 'vel="15"' in (folder / "campaign.dtx").read_text() and "delay(0.5)" in start
+    assert (folder / "start.pgx").read_bytes().count(b"\r\n") == start.count("\n")
+    res = filter_program([folder], NOMINAL, NOMINAL)
+    assert res.rows == [] and res.motions == []
