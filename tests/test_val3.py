@@ -28,16 +28,17 @@ from robocal.programs.val3 import Val3Dialect, _read_data, application_files
 APP = Path(__file__).parent / "data" / "programs" / "val3" / "pick_place"
 NOMINAL = rc.Robot.from_catalog("staubli_tx2_140")
 CALIBRATED = perturbed(NOMINAL, 7)
-# motion (file:line) -> named reason pattern; the rest are corrected (hand count: 7 + 5; 1 joint move)
+# motion (file:line) -> named reason pattern; the rest are corrected (hand count: 8 + 6; 1 joint move)
 NAMED = {("pickPart.pgx", 8): r"x_pPart is a parameter or local of the program",
-         ("start.pgx", 23): r"pCam is received at run time \(sioGet\)",
-         ("start.pgx", 25): r"l_pTmp is a parameter or local of the program",
-         ("start.pgx", 26): r"appro\(\.\.\.\) with an unknown trsf l_trOff",
-         ("start.pgx", 27): r"computed at run time by here\(\)"}
+         ("start.pgx", 24): r"pOld\.trsf\.z is assigned in the program at run time",
+         ("start.pgx", 27): r"pCam is received at run time \(sioGet\)",
+         ("start.pgx", 29): r"l_pTmp is a parameter or local of the program",
+         ("start.pgx", 30): r"appro\(\.\.\.\) with an unknown trsf l_trOff",
+         ("start.pgx", 31): r"computed at run time by here\(\)"}
 PICKS = "pPick[0], pPick[1], pPick[2]"  # pPick[l_i] in a loop: every element
 CORRECTED = {("start.pgx", 11): "pApproach[0]", ("start.pgx", 14): PICKS, ("start.pgx", 15): PICKS,
              ("start.pgx", 16): PICKS, ("start.pgx", 18): "pPlace[0]", ("start.pgx", 19): "pPlace[0]",
-             ("start.pgx", 20): "pPlace[1], pPlace[0]"}
+             ("start.pgx", 20): "pPlace[1], pPlace[0]", ("start.pgx", 21): "pPick[0]"}
 
 
 def _app(tmp_path) -> Path:
@@ -60,7 +61,7 @@ def test_every_motion_is_corrected_or_named(tmp_path):
                                                    "pPlace[0]", "pPlace[1]"]
     counts = json.loads(res.table_json())["summary"]["motions"]
     hand = sum(len(re.findall(r"\bmove[jlc]\(", p.read_text())) for p in folder.glob("*.pgx"))
-    assert counts == {"total": 12, "corrected": 7, "named": 5} and counts["total"] == hand - 1  # movej(jHome)
+    assert counts == {"total": 14, "corrected": 8, "named": 6} and counts["total"] == hand - 1  # movej(jHome)
     for r in res.motions:
         key = (r.file, r.line)
         if r.status == "named":
@@ -177,7 +178,7 @@ def test_cli_filters_an_application_folder(tmp_path, capsys):
     assert main(["filter", str(folder), "--calibrated", str(cal), "--nominal", "staubli_tx2_140", "-o",
                  str(out)]) == 0
     text = capsys.readouterr().out
-    assert "12 motions: 7 corrected, 5 not corrected (each named)" in text
+    assert "14 motions: 8 corrected, 6 not corrected (each named)" in text
     assert sorted(p.name for p in out.iterdir()) == sorted(
         [p.name for p in application_files(folder)] + ["pickPart.targets.csv", "pickPart.targets.json"])
 

@@ -242,8 +242,13 @@ class Val3Dialect(Dialect):
         if not programs:
             prog.warnings.append("no .pgx program given: give the application's folder or its .pgx files")
         targets: dict[str, Target] = {}
+        written: dict[str, str] = {}  # a point any program writes is a run-time point in all of them
         for src in programs:
-            _motions(src, data, prog, targets, frames)
+            for code_m in _CODE.finditer(src.text):
+                for name, how in _written(_code(code_m)).items():
+                    written.setdefault(name, how)
+        for src in programs:
+            _motions(src, data, prog, targets, frames, written)
         return prog
 
 
@@ -283,19 +288,30 @@ def _call_args(code: str, open_at: int) -> tuple[list[str], int] | None:
     return None
 
 
-def _motions(src: ProgramText, data: dict, prog: Program, targets: dict, frames: dict) -> None:
+def _motions(src: ProgramText, data: dict, prog: Program, targets: dict, frames: dict, written: dict) -> None:
     """Every movej / movel / movec of the program's code: its points (and the tool) as targets,
     or named."""
     text = src.text
-    code_m = _CODE.search(text)
-    if code_m is None:
-        return
-    header = text[:code_m.start()]
-    kinds = {a["name"][0]: a.get("type", ("",))[0] for m in _LOCAL.finditer(header)
-             if "name" in (a := _attrs(header, m.start(1), m.end(1)))}
+    last = 0
+    for code_m in _CODE.finditer(text):  # one <Code> per <Program> (a .pgx may hold several)
+        header = text[last:code_m.start()]
+        last = code_m.end()
+        kinds = {a["name"][0]: a.get("type", ("",))[0] for m in _LOCAL.finditer(header)
+                 if "name" in (a := _attrs(header, m.start(1), m.end(1)))}
+        _program_motions(src, code_m, kinds, data, prog, targets, frames, written)
+
+
+def _code(code_m: re.Match) -> str:
+    """A program's code with comments blanked and strings masked (offsets kept)."""
+    return mask(code_m.group(1), [_LINE_COMMENT], [_STRING])
+
+
+def _program_motions(src: ProgramText, code_m: re.Match, kinds: dict, data: dict, prog: Program,
+                     targets: dict, frames: dict, written: dict) -> None:
+    """The motions of one program's code (``kinds``: its locals and parameters -> type;
+    ``written``: what the application's code writes at run time)."""
     base = code_m.start(1)
-    code = mask(code_m.group(1), [_LINE_COMMENT], [_STRING])
-    written = _written(code)
+    code = _code(code_m)
     for m in _MOTION.finditer(code):
         call = _call_args(code, m.end() - 1)
         at = base + m.start()
