@@ -254,6 +254,8 @@ class Val3Dialect(Dialect):
 
 def _target(d: Datum, frame: str, tool: str) -> Target:
     config = np.array([-1 if c is None else {**SHOULDER, **ELBOW, **WRIST}[c[0]] for c in d.config])
+    if (config < 0).all():  # ssame / sfree / absent throughout: the solution nearest the joints before
+        config = None
     return Target(d.source, d.offset, d.name, d.numbers, frame=frame, tool=tool, config=config,
                   config_spans=(d.config, d.inserts))
 
