@@ -31,7 +31,7 @@ from robocal.programs.source import ProgramText
 from robocal.tcp import identify_tcp
 
 CASES = [("rapid", "abb_irb2600"), ("krl", "kuka_kr16_2"), ("fanuc", "fanuc_lrmate200id"),
-         ("urscript", "ur5"), ("inform", "yaskawa_gp25")]
+         ("urscript", "ur5"), ("inform", "yaskawa_gp25"), ("val3", "staubli_tx2_140")]
 # speed only: the UR program as PolyScope exports it, one pose variable per waypoint
 SPEED_CASES = [(d, name, False) for d, name in CASES] + [("urscript", "ur5", True)]
 
@@ -89,7 +89,8 @@ def truth_experiment(dialect: str, robot_name: str, n_targets: int = 200, seed: 
         q = q[singularity_distance(nominal, q).sigma_rel > 0.02][:n_targets]
     with tempfile.TemporaryDirectory(dir=folder) as tmp:
         paths, tools, frames = write_program(dialect, tmp, nominal, q, tool, frame)
-        name = {"rapid": "treal"}.get(dialect, "1" if dialect in ("krl", "fanuc", "inform") else "default")
+        name = {"rapid": "treal", "val3": "tReal[0]"}.get(
+            dialect, "1" if dialect in ("krl", "fanuc", "inform") else "default")
         if dialect == "urscript":
             name = next(t.tool for t in _parsed(paths, tools, frames).targets)
         start = time.perf_counter()
