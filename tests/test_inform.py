@@ -277,3 +277,25 @@ def test_offline_generator_style(tmp_path):
     assert json.loads(res.table_json())["summary"]["motions"] == {"total": 2, "corrected": 2, "named": 0}
     assert _outside_numbers(res.outputs[path]) == _outside_numbers(path.read_bytes())
     assert filter_program([path], NOMINAL, NOMINAL).outputs[path] == path.read_bytes()
+
+
+def test_user_frames_from_uframe_cnd_and_p_variables_saved_in_the_job(tmp_path):
+    """--references UFRAME.CND gives the user frames (////BUSER, base coordinates); a job that
+    saves its P variables in //POS (///NPOS 0,0,0,n,0,0) has them corrected from there."""
+    cnd = tmp_path / "UFRAME.CND"
+    cnd.write_bytes(b"//UFRAME 1\r\n///NAME TABLE\r\n///TOOL 0\r\n"
+                    b"////BUSER 0.000,0.000,0.000,0.0000,0.0000,0.0000\r\n"
+                    b"//UFRAME 2\r\n///NAME FIXTURE\r\n///TOOL 1\r\n"
+                    b"////BUSER 1250.000,-300.000,450.000,0.0000,0.0000,15.0000\r\n")
+    job = tmp_path / "CUT.JBI"
+    text = (CORPUS / "WELD_UF2.JBI").read_text()
+    text = text.replace("///NPOS 10,0,0,0,0,0", "///NPOS 1,0,0,9,0,0")
+    text = re.sub(r"^C0000([1-9])=", r"P0010\1=", text, flags=re.M)
+    text = re.sub(r"^(MOV[JLC]|REFP 1) C0000([1-9])", r"\1 P10\2", text, flags=re.M)
+    job.write_bytes(text.replace("\n", "\r\n").encode())
+    res = filter_program([job], CALIBRATED, NOMINAL, tools=TOOLS, references=[cnd])
+    ref = filter_program([CORPUS / "WELD_UF2.JBI"], CALIBRATED, NOMINAL, tools=TOOLS, frames=FRAMES)
+    assert [r["name"] for r in res.rows] == [r["name"].replace("C0000", "P0010") for r in ref.rows]
+    assert [r["correction_mm"] for r in res.rows] == pytest.approx([r["correction_mm"] for r in ref.rows])
+    with pytest.raises(DataError, match="not a UFRAME.CND"):
+        filter_program([job], CALIBRATED, NOMINAL, tools=TOOLS, references=[CORPUS / "VAR.DAT"])

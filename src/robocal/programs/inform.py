@@ -28,7 +28,9 @@ the correction must change is written as a ``///RCONF`` line before the position
 restored after it). ROBOT positions are in the robot's base frame; BASE positions too (a job
 without base axes: the base and robot coordinates coincide); USER positions in the user frame
 ``///USER n``. Tool and user-frame values live in the controller: ``--tool n=X,Y,Z,Rx,Ry,Rz``,
-``--frame n=...`` (mm, deg); tool 0 without data is the flange (a warning).
+``--frame n=...`` (mm, deg), or the user frames of the controller's UFRAME.CND given as a
+reference (:func:`user_frames`); tool 0 without data is the flange (a warning). A job may save the
+P variables it uses in its ``//POS`` (``P00100=...``): those are read before VAR.DAT's.
 
 ``VAR.DAT`` holds the global variables; its position section ``//P`` has the same header lines
 and ``P0001=...`` entries. Given as a program file, its Cartesian positions that the jobs' motions
@@ -72,7 +74,7 @@ _MFRAME = re.compile(r"^\s*MFRAME\s+UF#\(\s*(\d+)\s*\)")
 # instructions that write a position variable at run time (its first operand)
 _WRITES = re.compile(r"^\s*(SET|SETE|GETS|GETE|GETPOS|ADD|SUB|MUL|DIV|CNVRT|CLEAR|SETFILE|GETFILE|MSHIFT|"
                      r"READ|PXEREAD)\s+(LP|P|LBP|BP|LEX|EX)(\d+)\b")
-_REFP = re.compile(r"^\s*REFP\s+\d+\s+C(\d+)\b")
+_REFP = re.compile(r"^\s*REFP\s+\d+\s+(C|P)(\d+)\b")
 _LABELED = re.compile(r"^\s*(?:\*\w+\s+)?")
 _RUNTIME_INDEX = "the position number is computed at run time"
 
@@ -169,6 +171,8 @@ class InformDialect(Dialect):
 
     def parse(self, sources, frames, tools, references=()):
         prog = Program([], frames={IDENTITY: np.eye(4)}, tools={})
+        for ref in references:
+            prog.frames.update(user_frames(ref))
         prog.frames.update(frames)
         prog.tools.update(tools)
         positions: dict[tuple, Position] = {}  # (path or 'global', kind, index) -> position
@@ -331,7 +335,8 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
             continue
         ref_point = _REFP.match(body)
         if ref_point:  # a weaving reference point: a taught position like the motions' (not a motion)
-            pos = positions.get((src.path, "C", int(ref_point.group(1))))
+            kind, index = ref_point.group(1), int(ref_point.group(2))
+            pos = positions.get((src.path, kind, index)) or positions.get(("global", kind, index))
             if pos is not None and pos.target is not None:
                 used.add(id(pos.target))
             continue
@@ -346,7 +351,9 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         pos = None
         if ref is not None and ref.group(2) is not None:
             kind, index = ref.group(1), int(ref.group(2))
-            pos = positions.get(("global", "P", index) if kind == "P" else (src.path, kind, index))
+            pos = positions.get((src.path, kind, index))  # the job's own //POS (P too), else VAR.DAT
+            if pos is None and kind == "P":
+                pos = positions.get(("global", "P", index))
         if pos is not None and pos.target is None and instr != "IMOV" and (
                 pos.header.postype == "PULSE" or not pos.header.rectan):
             prog.motions.append((src.path, start, np.full(6, np.nan)))  # a joint position: no correction
@@ -424,6 +431,34 @@ def _named_reason(instr: str, ref, refs, plus: str, other: str, shift: str, runt
     if shift:
         return f"{label} is shifted at run time by {shift}"
     return ""
+
+
+_UFRAME = re.compile(r"^//UFRAME\s+(\d+)\s*$")
+_BUSER = re.compile(r"^////BUSER\s+(.*?)\s*$")
+
+
+def user_frames(src: ProgramText) -> dict[str, np.ndarray]:
+    """The user frames of a controller's UFRAME.CND (``//UFRAME n`` blocks, each with its frame in
+    the base coordinates ``////BUSER X,Y,Z,Rx,Ry,Rz``, mm and deg): 'n' -> 4x4 (m)."""
+    out: dict[str, np.ndarray] = {}
+    current = None
+    for start, line, _ in _lines(src.text):
+        head = _UFRAME.match(line)
+        if head:
+            current = str(int(head.group(1)))
+            continue
+        b = _BUSER.match(line)
+        if b and current is not None:
+            nums = src.numbers_in(start + b.start(1), start + b.end(1))
+            if len(nums) != POSE_VALUES or len(b.group(1).split(",")) != POSE_VALUES:
+                raise DataError(f"{src.where(start)}: malformed ////BUSER of user frame {current}: expected "
+                                "X,Y,Z,Rx,Ry,Rz")
+            out[current] = InformDialect().to_pose(np.array([[n.value for n in nums]]))[0]
+            current = None
+    if not out:
+        raise DataError(f"{src.path.name}: no //UFRAME n with ////BUSER X,Y,Z,Rx,Ry,Rz: not a UFRAME.CND "
+                        "(tools: --tool n=X,Y,Z,Rx,Ry,Rz; VAR.DAT: give it as a program file)")
+    return out
 
 
 def looks_like_inform(text: str) -> bool:
