@@ -375,7 +375,9 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
                 acc, label)
             continue
         if pos.target is None:
-            prog.skip(src.where(start), instr, f"{label} is not a 6-value Cartesian position", acc, label)
+            why = f"{label} is in an unsupported coordinate system (///POSTYPE {pos.header.postype or '?'})" \
+                if len(pos.numbers) == POSE_VALUES else f"{label} is not a 6-value Cartesian position"
+            prog.skip(src.where(start), instr, why, acc, label)
             continue
         t = pos.target
         if on_track and pos.header.postype == "BASE":

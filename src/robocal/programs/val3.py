@@ -71,6 +71,7 @@ SHOULDER = {"lefty": 0, "righty": 1}
 ELBOW = {"epositive": 0, "enegative": 1}
 WRIST = {"wpositive": 0, "wnegative": 1}
 CONFIG_WORDS = (("shoulder", SHOULDER), ("elbow", ELBOW), ("wrist", WRIST))
+OLD_TYPES = {"point": "pointRx", "joint": "jointRx"}  # the type names of older VAL3 versions
 
 
 class StaubliConfig(ConfigScheme):
@@ -154,6 +155,7 @@ def _read_data(src: ProgramText) -> dict[str, Datum]:
 
 
 def _datum(src: ProgramText, key: str, kind: str, v: re.Match, attrs: dict) -> Datum:
+    kind = OLD_TYPES.get(kind, kind)
     datum = Datum(key, kind, src, v.start(), [], father=attrs.get("fatherId", ("",))[0])
     if kind in ("pointRx", "frame", "tool", "trsf"):
         after = attrs["key"][2] + 1  # an absent coordinate goes right after the one before it
