@@ -263,7 +263,8 @@ class RapidDialect(Dialect):
         c = re.match(r"\s*([A-Za-z]\w*)\b", masked[lead:e])
         if c and c.group(1).lower() in st.procs:
             positional, optional = _arguments(masked, lead + c.end(), e)
-            st.calls.setdefault(c.group(1).lower(), []).append((src, lead, positional, optional, proc))
+            st.calls.setdefault(c.group(1).lower(), []).append((src, lead + c.start(1), positional, optional,
+                                                                 proc))
         elif c and masked[lead + c.end():e].strip():  # a routine of another module, or a built-in
             positional, _ = _arguments(masked, lead + c.end(), e)
             st.foreign.append((src, lead + c.start(1), c.group(1), positional))
