@@ -331,6 +331,46 @@ def test_fanuc_incremental_position_is_left_alone(tmp_path):
     assert block == re.search(rb"P\[9\]\{.*?\};", paths[0].read_bytes(), re.DOTALL).group(0)
 
 
+def test_fanuc_position_registers_from_a_file(tmp_path, capsys):
+    """--position-registers: the motion to PR[5] is corrected in the UF/UT active there, the
+    register file's copy holds the corrected values (only numbers change); without the file the
+    motion is named."""
+    path = _copy(["weld_bracket.ls"], tmp_path)[0]
+    regs = _copy(["weld_registers.csv"], tmp_path)[0]
+    nominal = rc.Robot.from_catalog("fanuc_lrmate200id")
+    cal = perturbed(nominal, 7)
+    res = filter_program(path, cal, nominal, position_registers=regs, **FANUC_FRAMES)
+    pr = next(m for m in res.motions if m.line == 39)
+    assert pr.status == "corrected" and pr.target == "PR[5]"
+    assert res.summary_dict()["motions"] == {"total": 11, "corrected": 7, "named": 4}
+    row = next(r for r in res.rows if r["name"] == "PR[5]")
+    assert row["frame"] == "1" and row["tool"] == "2" and row["correction_mm"] > 0.1
+    out = res.outputs[regs]
+    assert out != regs.read_bytes() and _outside_numbers(out) == _outside_numbers(regs.read_bytes())
+    # the corrected register is the corrected pose of an identical /POS position
+    text = path.read_bytes().replace(b"16:L P[12]", b"16:L P[13]")
+    x, y, z, w, p, r = re.search(rb"\n5,([^\n]*),\"", regs.read_bytes()).group(1).decode().split(",")
+    block = (f"P[13]{{\n   GP1:\n\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',\n\tX = {x} mm, Y = {y} mm, "
+             f"Z = {z} mm,\n\tW = {w} deg, P = {p} deg, R = {r} deg\n}};\n").encode()
+    twin = tmp_path / "twin.ls"
+    twin.write_bytes(text.replace(b"/END", block + b"/END"))
+    res2 = filter_program(twin, cal, nominal, position_registers=regs, **FANUC_FRAMES)
+    got = re.search(rb"P\[13\]\{.*?X = (\S+) mm, Y = (\S+) mm, Z = (\S+) mm", res2.outputs[twin], re.DOTALL)
+    new = re.search(rb"\n5,([^\n]*),\"", out).group(1).decode().split(",")
+    assert [float(v) for v in got.groups()] == pytest.approx([float(v) for v in new[:3]], abs=1e-3)
+    # without the file: named, with how to correct it
+    res = filter_program(path, cal, nominal, **FANUC_FRAMES)
+    assert "--position-registers" in next(m for m in res.motions if m.line == 39).reason
+    # the CLI writes the corrected register file next to the program
+    cal_path = tmp_path / "cal.yaml"
+    cal.save(cal_path)
+    assert main(["filter", str(path), "--calibrated", str(cal_path), "--nominal", "fanuc_lrmate200id",
+                 "--frame", "1=450,-150,100,0,0,-10", "--tool", "2=0,0,120,0,0,0", "--position-registers",
+                 str(regs), "-o", str(tmp_path / "o.ls")]) == 0
+    assert (tmp_path / "o.ls.registers.csv").read_bytes() == out
+    assert "11 motions: 7 corrected, 4 not corrected" in capsys.readouterr().out
+
+
 def test_fanuc_position_used_plain_and_incremental(tmp_path):
     """P[2] reached by a plain L and by an L ... INC: the plain motion is corrected (so is P[2]),
     the incremental one is named: its displacement changes by that correction."""

@@ -96,14 +96,21 @@ def add_parser(sub) -> None:
                                    "(default: OUTPUT.targets.csv/.json)")
     p.add_argument("--keep-unreached", action="store_true",
                    help="leave targets that cannot be corrected unchanged (warning) instead of failing")
+    p.add_argument("--position-registers", metavar="FILE.csv",
+                   help="FANUC: the position registers' values (register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,"
+                        "config): motions to PR[n] are corrected and the corrected registers written to "
+                        "OUTPUT.registers.csv")
     p.add_argument("--strict", action="store_true",
                    help="refuse when a motion moves to a name declared in none of the files given (default: "
                         "each such motion is named, with the declaration it needs, and the rest corrected)")
     p.set_defaults(func=run)
 
 
-def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[dict, str, list[Path]]:
-    """(program -> output path, the table's path or prefix, every file that will be written)."""
+def _output_paths(programs: list[str], output: str, table: str | None,
+                  registers: str | None = None) -> tuple[dict, str, list[Path]]:
+    """(program -> output path, the table's path or prefix, every file that will be written); the
+    corrected copy of a position register file goes to ``OUTPUT.registers.csv`` (one program) or
+    into the output folder under its own name."""
     from robocal.programs.result import table_paths
 
     out = Path(output)
@@ -116,6 +123,10 @@ def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[
             raise DataError(f"{out} is not a folder: with several program files, -o names an existing folder")
         targets = {p: out / p.name for p in inputs}
         table = table or str(out / (inputs[0].stem + ".targets"))
+    if registers is not None:
+        reg = Path(registers)
+        targets[reg] = Path(str(out) + ".registers.csv") if len(inputs) == 1 and not out.is_dir() \
+            else out / reg.name
     return targets, table, [*targets.values(), *table_paths(table)]
 
 
@@ -148,8 +159,9 @@ def run(args) -> int:
     from robocal.kinematics.model import Robot, load_model
     from robocal.programs import filter_program
 
-    targets, table, written = _output_paths(args.programs, args.output, args.table)
-    check_outputs(written, [*args.programs, args.calibrated, args.nominal, *args.references])
+    targets, table, written = _output_paths(args.programs, args.output, args.table, args.position_registers)
+    check_outputs(written, [*args.programs, args.calibrated, args.nominal, *args.references,
+                            *([args.position_registers] if args.position_registers else [])])
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
@@ -158,7 +170,7 @@ def run(args) -> int:
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),
                          frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,
                          dialect=args.format, references=args.references, keep_unreached=args.keep_unreached,
-                         strict=args.strict)
+                         strict=args.strict, position_registers=args.position_registers)
     if not res.rows:
         _diagnose_empty(args)
     written = res.write({p: targets[Path(p)] for p in res.outputs}, table)

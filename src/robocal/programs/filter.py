@@ -260,7 +260,8 @@ def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
 
 def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
                    robot_base=None, dialect: str | None = None, references=(),
-                   keep_unreached: bool = False, strict: bool = False) -> FilterResult:
+                   keep_unreached: bool = False, strict: bool = False,
+                   position_registers: str | Path | None = None) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -275,7 +276,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     configuration they cannot have, not converged) raise DataError naming each one; with
     ``keep_unreached`` they are left unchanged with a warning. A motion to a name declared in none
     of the files given is named (its record says the declaration it needs); with ``strict`` the
-    run is refused instead. Nothing is written here: see :meth:`FilterResult.write`.
+    run is refused instead. ``position_registers``: a FANUC position register file
+    (:mod:`robocal.programs.fanuc_registers`): motions to those registers are corrected and the
+    file's corrected copy is one of the outputs. Nothing is written here: see
+    :meth:`FilterResult.write`.
     """
     paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     if not paths:
@@ -285,6 +289,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                         f"model {nominal.name!r} has {nominal.n_joints} joints")
     d = dialect_for(paths, dialect)
     sources = [ProgramText(p) for p in paths]
+    if position_registers is not None:
+        if not isinstance(d, FanucDialect):
+            raise DataError(f"--position-registers is for FANUC programs, not {d.name}")
+        sources.append(ProgramText(position_registers))
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
     missing = undeclared(program.ledger)
