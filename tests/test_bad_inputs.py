@@ -104,8 +104,6 @@ def _workflow_files(d: Path, q: np.ndarray, p_mm: np.ndarray, table, T: np.ndarr
     quoted = [",".join(f'"{c.replace(".", ",")}"' for c in r.split(",")) for r in rows]
     (d / "quoted.csv").write_text("\n".join([head, *quoted]) + "\n")
     (d / "comma.txt").write_text("10,5 20 30 40 50 60 1 2 3\n11,5 20 30 40 50 60 1 2 3\n")
-    (d / "drill.src").write_text("DEF drill( )\n  $TOOL = TOOL_DATA[1]\n  $BASE = BASE_DATA[1]\n"
-                                 "  LIN XP1\n  LIN XP2 C_DIS\nEND\n")
     shutil.copy(PROGRAMS / "weld_cell.mod", d / "weld.src")
     names, vals = pose_columns(T, {"length": "mm", "orientation": "deg"})
     (d / "flange.csv").write_text(format_csv(names, vals))
@@ -254,8 +252,6 @@ def _workflow_cases() -> list[tuple[str, list[str], list[str], str]]:
         ("filter-tool-in-metres", [*weld, "--tool", "tX=0.1,0,0.2,1,0,0,0"], ["f.mod"], "metres"),
         ("filter-tcp-44-deg-from-tool-data", [*weld, "--tcp", "tGun=50,0,200,0,74,0"], ["f.mod"], "44.0 deg"),
         ("filter-tcp-in-radians", [*weld, "--tcp", "tGun=50,0,200,0,0.5236,0"], ["f.mod"], "radians"),
-        ("filter-krl-without-dat", ["filter", "{d}/drill.src", "--calibrated", "{d}/irb2600_truth.yaml",
-                                    "--nominal", "kuka_kr16_2", "-o", "{o}/d.src"], ["d.src"], ".dat"),
         ("filter-rapid-named-src", ["filter", "{d}/weld.src", *irb, "-o", "{o}/w.src"], ["w.src"],
          "looks like ABB RAPID"),
         ("joint-columns-exchanged", ["calibrate", "{d}/swapped.csv", "--robot", "meca500"], [],

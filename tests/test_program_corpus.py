@@ -30,6 +30,12 @@ CASES = {
                           [r":63: MoveL: .*Offs\(pCheck,0,0,nDepth\) .*run time only \(nDepth\)",
                            r":65: MoveL: .*computed at run time by CRobT\(\)",
                            r":66: MoveJ: .*robtarget pService is not declared"]),
+    "rapid offsets and expressions": (["glue_offsets.mod"], [], "abb_irb2600", {}, ["pLid", "pCorner"],
+                                      [r":22: MoveL: .*Offs\(pCorner, nBead\{nRow, 1\}, 0, 0\) .*run time",
+                                       r":26: MoveL: .*computed at run time by CRobT\(\)",
+                                       r":27: MoveJ: .*robtarget pPurge is not declared",
+                                       r":33: MoveL: .*pSpot is a parameter of routine rework that no call",
+                                       r":34: MoveL: .*pSpot is a parameter of routine rework that no call"]),
     "rapid multimove palletizing": (["pallet_multimove.mod"], [], "abb_irb2600", {},
                                     ["pPickUp", "pPick", "wp{1}.pos", "wp{2}.pos", "pHandOver"],
                                     [r":32: MoveL: .*Offs\(pPalletCorner, nCol\*nPitch.*run time only",
@@ -41,6 +47,12 @@ CASES = {
                          r":58: SLIN: .*XLIFT is modified at run time .*:57\)",
                          r":61: SLIN: .*XOTHER is not declared in these files",
                          r":64: SPTP: .*XHANDOVER is declared in \$config.dat, given as a reference"]),
+    "krl sealer without $config.dat": (["sealer_cell.src", "sealer_cell.dat"], [], "kuka_kr16_2",
+                                       {"tools": {"3": "0,0,200,0,0,0"},
+                                        "frames": {"2": "700,-300,400,90,0,0"}},
+                                       ["XGLUE1", "XGLUE2", "XGLUE3", "XGLUE4", "inline@28"],
+                                       [r":30: LIN: .*\$POS_ACT is a system variable",
+                                        r":32: LIN: .*XAPP is not declared in these files"]),
     "fanuc arc welding": (["weld_bracket.ls"], [], "fanuc_lrmate200id", FANUC_FRAMES,
                           ["P[1:approach]", "P[2]", "P[3]", "P[4]", "P[5]", "P[6]", "P[7]", "P[8]"],
                           [r":36: L: .*P\[6\] is shifted at run time by Offset,PR\[2\]",
@@ -58,8 +70,11 @@ CASES = {
 # the motion instructions to a Cartesian pose, counted by hand in each program (joint motions such
 # as MoveAbsJ, SPTP $H_POS / XHOME, movej(Home_q) are not counted): (total, corrected)
 HAND_COUNT = {"rapid arc welding": (13, 10),  # lines 41-66; Offs(pCheck, .., nDepth), CRobT, pService named
+              "rapid offsets and expressions": (10, 5),  # 19-34 but MoveAbsJ (18, 28); Offs/RelTool with
+              # constant expressions (19, 21, 23, 24) are corrected
               "rapid multimove palletizing": (7, 5),  # lines 29-44; 32 (run-time Offs) and 35 named
               "krl kss8 spline": (15, 10),  # 27-72 but 20 ($H_POS) and 66 (XHOME)
+              "krl sealer without $config.dat": (7, 5),  # 25-33 but PTP XHOME (20, 34), PTP $AXIS_ACT (31)
               "fanuc arc welding": (11, 6),  # /MN lines 3-18 with a P[] or PR[]
               "urscript palletizing": (10, 8)}  # every movel/movep/movec; movej(Home_q) is a joint move
 
@@ -193,20 +208,17 @@ def test_rapid_configuration_matching_no_solution_is_warned(tmp_path):
                         r"the nearest, \[0,-1,0,0\]", w) for w in res.warnings)
 
 
-def test_rapid_track_targets_are_refused(tmp_path):
-    """Robtargets with eax_a values (a robot on a track): refused naming each; with
-    keep_unreached left unchanged and named."""
+def test_rapid_track_targets_are_named_per_motion(tmp_path):
+    """Robtargets with eax_a values (a robot on a track): left as they are, and each motion that
+    reaches one is named with the axis value (3 motions, counted by hand)."""
     robot = rc.Robot.from_catalog("abb_irb2600")
     path = _copy(["track_mill.mod"], tmp_path)[0]
-    with pytest.raises(DataError) as err:
-        filter_program(path, perturbed(robot, 7), robot)
-    lines = str(err.value).splitlines()
-    assert "track or gantry" in lines[0]
-    assert lines[1:4] == ["track_mill.mod:4 (pMill10): external axes eax_a = 800",
-                          "track_mill.mod:5 (pMill20): external axes eax_a = 1450",
-                          "track_mill.mod:6 (pMill30): external axes eax_a = 2100"]
-    res = filter_program(path, perturbed(robot, 7), robot, keep_unreached=True)
-    assert res.outputs[path] == path.read_bytes() and len(res.uncorrected) == 3 and not res.rows
+    res = filter_program(path, perturbed(robot, 7), robot)
+    assert res.outputs[path] == path.read_bytes() and not res.rows
+    assert res.summary_dict()["motions"] == {"total": 3, "corrected": 0, "named": 3}
+    assert [(m.line, m.target) for m in res.motions] == [(9, "pMill10"), (10, "pMill20"), (11, "pMill30")]
+    assert all("external axes eax_a = " in m.reason for m in res.motions)
+    assert "external axes eax_a = 1450" in res.motions[1].reason
 
 
 def test_rapid_quaternions_keep_the_files_precision(tmp_path):
@@ -293,14 +305,15 @@ def test_krl_tool_from_a_variable_is_named(tmp_path):
                                "TOOL_DATA[nT] (a variable index known at run time only)"]
 
 
-def test_krl_external_axis_values_are_refused(tmp_path):
+def test_krl_external_axis_values_are_named(tmp_path):
     files = _copy(["deburr_cell.src", "deburr_cell.dat"], tmp_path)
     dat = files[1].read_bytes()
     files[1].write_bytes(dat.replace(b"E1 0.0", b"E1 1250.0", 1))
     robot = rc.Robot.from_catalog("kuka_kr16_2")
-    with pytest.raises(DataError, match=r"(?s)external-axis values.*deburr_cell.dat:7 \(XP1\): external axes "
-                                        r"E1 1250.0"):
-        filter_program(files, perturbed(robot, 7), robot, references=_copy(["$config.dat"], tmp_path))
+    res = filter_program(files, perturbed(robot, 7), robot, references=_copy(["$config.dat"], tmp_path))
+    sptp = next(m for m in res.motions if m.line == 27)
+    assert sptp.status == "named" and "external axes E1 1250.0" in sptp.reason
+    assert "XP1" not in [r["name"] for r in res.rows] and res.summary_dict()["motions"]["total"] == 15
 
 
 # ----------------------------------------------------------------------------- FANUC constructs
@@ -316,6 +329,46 @@ def test_fanuc_incremental_position_is_left_alone(tmp_path):
     res, paths = _run("fanuc arc welding", tmp_path)
     block = re.search(rb"P\[9\]\{.*?\};", res.outputs[paths[0]], re.DOTALL).group(0)
     assert block == re.search(rb"P\[9\]\{.*?\};", paths[0].read_bytes(), re.DOTALL).group(0)
+
+
+def test_fanuc_position_registers_from_a_file(tmp_path, capsys):
+    """--position-registers: the motion to PR[5] is corrected in the UF/UT active there, the
+    register file's copy holds the corrected values (only numbers change); without the file the
+    motion is named."""
+    path = _copy(["weld_bracket.ls"], tmp_path)[0]
+    regs = _copy(["weld_registers.csv"], tmp_path)[0]
+    nominal = rc.Robot.from_catalog("fanuc_lrmate200id")
+    cal = perturbed(nominal, 7)
+    res = filter_program(path, cal, nominal, position_registers=regs, **FANUC_FRAMES)
+    pr = next(m for m in res.motions if m.line == 39)
+    assert pr.status == "corrected" and pr.target == "PR[5]"
+    assert res.summary_dict()["motions"] == {"total": 11, "corrected": 7, "named": 4}
+    row = next(r for r in res.rows if r["name"] == "PR[5]")
+    assert row["frame"] == "1" and row["tool"] == "2" and row["correction_mm"] > 0.1
+    out = res.outputs[regs]
+    assert out != regs.read_bytes() and _outside_numbers(out) == _outside_numbers(regs.read_bytes())
+    # the corrected register is the corrected pose of an identical /POS position
+    text = path.read_bytes().replace(b"16:L P[12]", b"16:L P[13]")
+    x, y, z, w, p, r = re.search(rb"\n5,([^\n]*),\"", regs.read_bytes()).group(1).decode().split(",")
+    block = (f"P[13]{{\n   GP1:\n\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',\n\tX = {x} mm, Y = {y} mm, "
+             f"Z = {z} mm,\n\tW = {w} deg, P = {p} deg, R = {r} deg\n}};\n").encode()
+    twin = tmp_path / "twin.ls"
+    twin.write_bytes(text.replace(b"/END", block + b"/END"))
+    res2 = filter_program(twin, cal, nominal, position_registers=regs, **FANUC_FRAMES)
+    got = re.search(rb"P\[13\]\{.*?X = (\S+) mm, Y = (\S+) mm, Z = (\S+) mm", res2.outputs[twin], re.DOTALL)
+    new = re.search(rb"\n5,([^\n]*),\"", out).group(1).decode().split(",")
+    assert [float(v) for v in got.groups()] == pytest.approx([float(v) for v in new[:3]], abs=1e-3)
+    # without the file: named, with how to correct it
+    res = filter_program(path, cal, nominal, **FANUC_FRAMES)
+    assert "--position-registers" in next(m for m in res.motions if m.line == 39).reason
+    # the CLI writes the corrected register file next to the program
+    cal_path = tmp_path / "cal.yaml"
+    cal.save(cal_path)
+    assert main(["filter", str(path), "--calibrated", str(cal_path), "--nominal", "fanuc_lrmate200id",
+                 "--frame", "1=450,-150,100,0,0,-10", "--tool", "2=0,0,120,0,0,0", "--position-registers",
+                 str(regs), "-o", str(tmp_path / "o.ls")]) == 0
+    assert (tmp_path / "o.ls.registers.csv").read_bytes() == out
+    assert "11 motions: 7 corrected, 4 not corrected" in capsys.readouterr().out
 
 
 def test_fanuc_position_used_plain_and_incremental(tmp_path):
@@ -334,6 +387,27 @@ def test_fanuc_position_used_plain_and_incremental(tmp_path):
     assert s["corrected"] + s["named"] == s["total"] == 11
 
 
+def test_strict_refuses_names_declared_nowhere(tmp_path, capsys):
+    """By default a motion to a name no file declares is named with the declaration it needs;
+    --strict refuses the run, naming each."""
+    res, _ = _run("krl sealer without $config.dat", tmp_path)
+    needs = "DECL E6POS/POS/FRAME XAPP (in a .dat or $config.dat)"
+    assert [m.needs for m in res.motions if m.needs] == [needs]
+    with pytest.raises(DataError, match=r"1 motion\(s\) move to names declared in none of the files given: "
+                                        r"sealer_cell.src:32 \(LIN\): needs " + re.escape(needs)):
+        _run("krl sealer without $config.dat", tmp_path, strict=True)
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    cal = tmp_path / "cal.yaml"
+    perturbed(nominal, 7).save(cal)
+    src = _copy(["glue_offsets.mod"], tmp_path)[0]
+    args = ["filter", str(src), "--calibrated", str(cal), "--nominal", "abb_irb2600",
+            "-o", str(tmp_path / "o.mod")]
+    assert main([*args, "--strict"]) == 2
+    assert "needs robtarget pPurge" in capsys.readouterr().err
+    assert main(args) == 0
+    assert "10 motions: 5 corrected, 5 not corrected (each named)" in capsys.readouterr().out
+
+
 def test_motion_records_in_the_table(tmp_path):
     """The table JSON carries one record per motion and the motion summary."""
     import json
@@ -343,7 +417,7 @@ def test_motion_records_in_the_table(tmp_path):
     assert table["summary"]["motions"] == {"total": 13, "corrected": 10, "named": 3}
     assert len(table["motions"]) == 13
     assert table["motions"][0] == {"file": "arc_station.mod", "line": 41, "instruction": "MoveJ",
-                                   "target": "pApproach", "status": "corrected", "reason": ""}
+                                   "target": "pApproach", "status": "corrected", "reason": "", "needs": ""}
     assert table["motions"][-1]["status"] == "named" and table["motions"][-1]["target"] == "pService"
 
 
@@ -359,12 +433,13 @@ def test_fanuc_numbers_keep_their_style(tmp_path):
     assert tabbed and all(len(v.split(".")[1]) == 6 for v in tabbed)
 
 
-def test_fanuc_track_positions_are_refused(tmp_path):
+def test_fanuc_track_positions_are_named(tmp_path):
     robot = rc.Robot.from_catalog("fanuc_lrmate200id")
     path = _copy(["track_pick.ls"], tmp_path)[0]
-    with pytest.raises(DataError, match=r"(?s)track or gantry.*track_pick.ls:\d+ \(P\[1\]\): external axes "
-                                        r"E1 = 1500.000"):
-        filter_program(path, perturbed(robot, 7), robot, **FANUC_FRAMES)
+    res = filter_program(path, perturbed(robot, 7), robot, **FANUC_FRAMES)
+    first = res.motions[0]
+    assert first.target == "P[1]" and first.status == "named"
+    assert "external axes E1 = 1500.000" in first.reason
 
 
 def test_fanuc_malformed_position_block_is_not_silent(tmp_path):
@@ -525,18 +600,17 @@ def test_positions_passed_to_routines_not_given_are_named():
                                 "corrected"]
 
 
-def test_cli_lists_refused_targets_one_a_line(tmp_path, capsys):
-    path = _copy(["track_mill.mod"], tmp_path)[0]
+def test_cli_lists_refused_motions_one_a_line(tmp_path, capsys):
+    """--strict on a KRL .src without its .dat: every motion named in the error, one a line."""
+    path = _copy(["deburr_cell.src"], tmp_path)[0]
     cal = tmp_path / "cal.yaml"
-    perturbed(rc.Robot.from_catalog("abb_irb2600"), 7).save(cal)
-    code = main(["filter", str(path), "--calibrated", str(cal), "--nominal", "abb_irb2600",
-                 "-o", str(tmp_path / "out.mod")])
+    perturbed(rc.Robot.from_catalog("kuka_kr16_2"), 7).save(cal)
+    code = main(["filter", str(path), "--calibrated", str(cal), "--nominal", "kuka_kr16_2",
+                 "-o", str(tmp_path / "out.src"), "--strict"])
     err = capsys.readouterr().err.splitlines()
-    assert code == 2 and err[0].startswith("robocal filter: error: 3 target(s) carry external-axis values")
-    assert err[1:4] == ["  track_mill.mod:4 (pMill10): external axes eax_a = 800",
-                        "  track_mill.mod:5 (pMill20): external axes eax_a = 1450",
-                        "  track_mill.mod:6 (pMill30): external axes eax_a = 2100"]
-    assert not (tmp_path / "out.mod").exists()
+    assert code == 2 and err[0].startswith("robocal filter: error: ") and "declared in none" in err[0]
+    assert err[1].startswith("  deburr_cell.src:27 (SPTP): needs DECL E6POS/POS/FRAME XP1")
+    assert not (tmp_path / "out.src").exists()
 
 
 def test_rapid_error_handler_motions_are_read():

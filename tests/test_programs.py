@@ -134,6 +134,26 @@ def test_zyx_round_trip(a, b, c):
     assert np.abs(np.remainder(back - abc + 180, 360) - 180).max() < 1e-7
 
 
+@settings(max_examples=200, deadline=None)
+@given(st.floats(-180, 180), st.floats(-90, -89.99), st.floats(-180, 180), st.floats(-0.05, 0.05),
+       st.floats(-1e-3, 1e-3), st.floats(-1e-3, 1e-3))
+def test_zyx_near_gimbal_lock_keeps_the_files_numbers(a, b, c, turn, tilt_x, tilt_y):
+    """Near P = -90 deg a turn about the pole plus a tilt: the triple represents the rotation within
+    the tolerance, is never farther from the old numbers than the exact one, and keeps the old a
+    whenever the tilt off the old a's plane is below the tolerance."""
+    old = np.array([[a, b, c]])
+    R = Rotation.from_rotvec(np.deg2rad([tilt_x, tilt_y, turn])).as_matrix() @ _zyx_matrix(old)
+    tol = 5e-4
+    got = matrix_to_zyx(R, old, tol)
+    exact = matrix_to_zyx(R, old)
+    err = np.rad2deg(np.linalg.norm(Rotation.from_matrix(_zyx_matrix(got)[0].T @ R[0]).as_rotvec()))
+    assert err <= tol + 1e-9
+    assert np.abs(got - old).sum() <= np.abs(exact - old).sum() + tol
+    assert np.abs(got).max() <= 180.0
+    if max(abs(tilt_x), abs(tilt_y)) < tol / 2:
+        assert abs(got[0, 0] - a) < 1e-9
+
+
 def test_notations_keep_the_old_form():
     rng = np.random.default_rng(3)
     q = rng.standard_normal((50, 4))

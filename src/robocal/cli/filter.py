@@ -33,7 +33,7 @@ controller's base in the calibrated model's world frame (x,y,z,rx,ry,rz, mm, deg
 Writes the filtered program(s) and the per-target table (CSV and JSON) together, or nothing."""
 
 
-# what each language's files look like, and its motion instructions to a named point
+# what each language's files look like
 SUFFIXES = {"rapid": (".mod", ".modx", ".prg", ".sys"), "krl": (".src", ".dat", ".sub"),
             "fanuc": (".ls",), "urscript": (".script", ".urscript"), "inform": (".jbi",),
             "val3": (".pgx", ".dtx", ".pjx")}
@@ -43,22 +43,20 @@ SIGNATURES = {"rapid": r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)",
               "krl": r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)",
               "fanuc": r"^/(?:PROG|MN|POS)\b", "urscript": r"^\s*def\s+\w+\s*\(.*\)\s*:|\bmove[ljpc]\s*\(",
               "inform": r"^/JOB\b|^//(?:NAME|POS|INST)\b", "val3": r"staubli\.com/robotics/VAL3"}
-MOTION = {"krl": r"^\s*(?:S?PTP|S?LIN|S?CIRC)\s+([A-Za-z_$][\w$]*)",
-          "rapid": r"^\s*Move[LJC]\s+([A-Za-z_]\w*)"}
 
 
 def _diagnose_empty(args) -> None:
-    """No Cartesian target was found: refuse when the files say why (another language than the
-    suffix says, or motions to points declared in no file given, e.g. a KRL .src without its .dat)."""
+    """No Cartesian target was found: refuse when the files are in another language than their
+    suffix says (motions to points declared in no file given are named, or refused with --strict)."""
     import re
 
     texts = {p: Path(p).read_text(encoding="utf-8", errors="replace")
-             for p in [*args.programs, *args.references]}
+             for p in [*args.programs, *args.references] if not Path(p).is_dir()}  # a VAL3 folder: its files
     suffix = Path(args.programs[0]).suffix.lower()
     language = args.format or next((k for k, s in SUFFIXES.items() if suffix in s), None)
     if language is None:
         return
-    for path in args.programs:
+    for path in (p for p in args.programs if p in texts):
         text = texts[path]
         if re.search(SIGNATURES[language], text, re.M | re.I):
             continue
@@ -66,16 +64,6 @@ def _diagnose_empty(args) -> None:
         if other:
             raise DataError(f"{path} looks like {LANGUAGES[other[0]]}, not {LANGUAGES[language]} as its name "
                             f"says: give --format {other[0]} (or name it {SUFFIXES[other[0]][0]})")
-    if language not in MOTION:
-        return
-    names = {m for p in args.programs for m in re.findall(MOTION[language], texts[p], re.M | re.I)}
-    every = "\n".join(texts.values())
-    undeclared = sorted(n for n in names if not re.search(rf"\b{re.escape(n)}\s*(?::=|=)", every, re.I))
-    if undeclared:
-        hint = " (a KUKA .src's points are in its .dat: give both files)" if language == "krl" else ""
-        files, points = ", ".join(args.programs), ", ".join(undeclared[:8])
-        raise DataError(f"{files} move(s) to {points}, declared in none of the files given{hint}; give the "
-                        "files that declare them (or --references)")
 
 
 def _named(values, what: str) -> dict[str, str]:
@@ -119,12 +107,22 @@ def add_parser(sub) -> None:
                                    "(default: OUTPUT.targets.csv/.json)")
     p.add_argument("--keep-unreached", action="store_true",
                    help="leave targets that cannot be corrected unchanged (warning) instead of failing")
+    p.add_argument("--position-registers", metavar="FILE.csv",
+                   help="FANUC: the position registers' values (register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,"
+                        "config): motions to PR[n] are corrected and the corrected registers written to "
+                        "OUTPUT.registers.csv")
+    p.add_argument("--strict", action="store_true",
+                   help="refuse when a motion moves to a name declared in none of the files given (default: "
+                        "each such motion is named, with the declaration it needs, and the rest corrected)")
     p.set_defaults(func=run)
 
 
-def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[dict, str, list[Path]]:
+def _output_paths(programs: list[str], output: str, table: str | None,
+                  registers: str | None = None) -> tuple[dict, str, list[Path]]:
     """(program -> output path, the table's path or prefix, every file that will be written); a
-    folder (a VAL3 application) stands for its files."""
+    folder (a VAL3 application) stands for its files; the corrected copy of a position register
+    file goes to ``OUTPUT.registers.csv`` (one program) or into the output folder under its own
+    name."""
     from robocal.programs.result import table_paths
     from robocal.programs.val3 import application_files
 
@@ -138,6 +136,10 @@ def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[
             raise DataError(f"{out} is not a folder: with several program files, -o names an existing folder")
         targets = {p: out / p.name for p in inputs}
         table = table or str(out / (inputs[0].stem + ".targets"))
+    if registers is not None:
+        reg = Path(registers)
+        targets[reg] = Path(str(out) + ".registers.csv") if len(inputs) == 1 and not out.is_dir() \
+            else out / reg.name
     return targets, table, [*targets.values(), *table_paths(table)]
 
 
@@ -170,8 +172,9 @@ def run(args) -> int:
     from robocal.kinematics.model import Robot, load_model
     from robocal.programs import filter_program
 
-    targets, table, written = _output_paths(args.programs, args.output, args.table)
-    check_outputs(written, [*targets, args.calibrated, args.nominal, *args.references])
+    targets, table, written = _output_paths(args.programs, args.output, args.table, args.position_registers)
+    check_outputs(written, [*targets, args.calibrated, args.nominal, *args.references,
+                            *([args.position_registers] if args.position_registers else [])])
     calibrated = Robot.load(args.calibrated)
     nominal = load_model(args.nominal)
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
@@ -179,7 +182,8 @@ def run(args) -> int:
     base = None if args.robot_base is None else frame_from_text(args.robot_base, "--robot-base")
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),
                          frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,
-                         dialect=args.format, references=args.references, keep_unreached=args.keep_unreached)
+                         dialect=args.format, references=args.references, keep_unreached=args.keep_unreached,
+                         strict=args.strict, position_registers=args.position_registers)
     if not res.rows:
         _diagnose_empty(args)
     written = res.write({p: targets[Path(p)] for p in res.outputs}, table)

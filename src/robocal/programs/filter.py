@@ -35,10 +35,12 @@ from robocal.ik.controller import JUMP_DEG, nearest_solutions
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
+from robocal.programs.external import set_aside_external
 from robocal.programs.fanuc_ls import FanucDialect
 from robocal.programs.inform import InformDialect, looks_like_inform
 from robocal.programs.krl import KRLDialect
 from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.motions import undeclared
 from robocal.programs.rapid import RapidDialect
 from robocal.programs.result import LISTED, FilterResult, collapse
 from robocal.programs.source import ProgramText, format_number
@@ -277,7 +279,8 @@ def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
 
 def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
                    robot_base=None, dialect: str | None = None, references=(),
-                   keep_unreached: bool = False) -> FilterResult:
+                   keep_unreached: bool = False, strict: bool = False,
+                   position_registers: str | Path | None = None) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -290,7 +293,11 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     in the calibrated model's world frame (default: the calibrated frame {0} is the controller's
     base). Targets that cannot be corrected (out of reach, out of the joint limits, a
     configuration they cannot have, not converged) raise DataError naming each one; with
-    ``keep_unreached`` they are left unchanged with a warning. Nothing is written here: see
+    ``keep_unreached`` they are left unchanged with a warning. A motion to a name declared in none
+    of the files given is named (its record says the declaration it needs); with ``strict`` the
+    run is refused instead. ``position_registers``: a FANUC position register file
+    (:mod:`robocal.programs.fanuc_registers`): motions to those registers are corrected and the
+    file's corrected copy is one of the outputs. Nothing is written here: see
     :meth:`FilterResult.write`.
     """
     paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
@@ -302,10 +309,19 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                         f"model {nominal.name!r} has {nominal.n_joints} joints")
     d = dialect_for(paths, dialect)
     sources = [ProgramText(p) for p in paths]
+    if position_registers is not None:
+        if not isinstance(d, FanucDialect):
+            raise DataError(f"--position-registers is for FANUC programs, not {d.name}")
+        sources.append(ProgramText(position_registers))
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
+    missing = undeclared(program.ledger)
+    if strict and missing:
+        raise _listed(f"{len(missing)} motion(s) move to names declared in none of the files given:", missing,
+                      "give the files that declare them (or --references), or run without --strict to "
+                      "name these motions and correct the rest")
     warnings = list(program.warnings)
-    targets = _filterable(d, program, warnings, keep_unreached)
+    targets = _filterable(d, program, warnings)
     if not targets:
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
@@ -368,30 +384,19 @@ def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
                             "it is the same tool")
 
 
-def _filterable(d: Dialect, program: Program, warnings: list, keep_unreached: bool) -> list[Target]:
+def _filterable(d: Dialect, program: Program, warnings: list) -> list[Target]:
     """The targets to filter: those with a supported tool and frame, all of them known, and
-    without external axes (refused, or left alone with ``keep_unreached``)."""
+    without external axes (:func:`robocal.programs.external.set_aside_external`)."""
+    set_aside_external(program, warnings)
     targets: list[Target] = []
-    moving = []
     for t in program.targets:
         why = program.unsupported.get(f"tool:{t.tool}") or program.unsupported.get(f"frame:{t.frame}")
         if why:
             warnings.append(f"{t.where}: not filtered: {why}")
             program.uncorrected.append(f"{t.where}: not filtered: {why}")
             program.not_corrected[id(t)] = f"not filtered: {why}"
-        elif t.external:
-            moving.append(f"{t.where}: external axes {t.external}")
-            program.not_corrected[id(t)] = f"external axes {t.external}: a fixed base and work are assumed"
         else:
             targets.append(t)
-    if moving and not keep_unreached:
-        raise _listed(f"{len(moving)} target(s) carry external-axis values: a track or gantry moving the "
-                      "robot, or an axis moving the work, changes where they are, and the filter assumes a "
-                      "fixed base and work:", moving,
-                      "nothing was written (--keep-unreached leaves them unchanged with a warning)")
-    moving = [f"{w}: not corrected: a fixed base and work are assumed" for w in moving]
-    warnings += moving
-    program.uncorrected += moving
     unknown = [f"{t.where}: unknown {kind} {name!r}" for t in targets
                for kind, name, known in (("tool", t.tool, program.tools), ("frame", t.frame, program.frames))
                if name not in known]

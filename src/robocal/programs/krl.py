@@ -32,6 +32,7 @@ from robocal.programs.aggregate import split_top
 from robocal.programs.config import KUKAConfig
 from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import Number, ProgramText, mask
 
@@ -59,6 +60,8 @@ _ASSIGN = re.compile(r"^[ \t]*([A-Za-z_]\w*)\s*(\[[^\]\n]*\])?((?:\.\w+)*)\s*=(?
 _CALL = re.compile(r"^[ \t]*([A-Za-z_]\w*)\s*\(([^\n]*)\)[ \t\r]*$", re.MULTILINE)
 _APPROX = re.compile(r"(?:\s+(?:C_[A-Z]+|CA\s+[-+]?[\d.]+))+\s*$", re.IGNORECASE)  # C_DIS, CA 45 ...
 _JOINT_SYSTEM = ("$H_POS", "$AXIS_ACT", "$AXIS_HOME", "$AXIS_BACK", "$AXIS_RET", "$AXIS_FOR")
+_NULL_OPERAND = re.compile(r"\$NULLFRAME\s*:\s*\{[^{}]*\}\s*$", re.IGNORECASE)
+_HOME = re.compile(r"X?HOME\d?")  # KSS $config.dat: DECL E6AXIS XHOME, XHOME1..XHOME5
 _WITH = re.compile(r"\bWITH\b", re.IGNORECASE)
 _REF = re.compile(r"([A-Za-z_$]\w*)\s*(\[[^\]]*\])?((?:\.\w+)*)")
 _FRAME_FN = re.compile(r"(STOOL2|SBASE)\s*\(\s*(\w+)(?:\.\w+)?\s*\)", re.IGNORECASE)
@@ -96,7 +99,7 @@ class KRLDialect(Dialect):
         return make_transform(R, values[:, :3] * 1e-3)
 
     def from_pose(self, T, old):
-        return np.hstack([T[:, :3, 3] * 1e3, matrix_to_zyx(T[:, :3, :3], old[:, 3:6])])
+        return np.hstack([T[:, :3, 3] * 1e3, matrix_to_zyx(T[:, :3, :3], old[:, 3:6], _ANGLE_DEG / 2)])
 
     def resolutions(self):
         return np.array([_POSITION_MM] * 3 + [_ANGLE_DEG] * 3)
@@ -279,7 +282,7 @@ class KRLDialect(Dialect):
                 proc = _routine_at(st.routines[src.path], at)
                 for a, b in names:
                     text = masked[a:b].strip()
-                    if text.startswith("{"):
+                    if text.startswith("{") or _NULL_OPERAND.match(text):  # $NULLFRAME:{..} is {..}
                         first = a + masked[a:b].index("{")
                         found = [self._target(src, masked, first, f"inline@{src.line_of(a)}", "E6POS", prog)]
                     else:
@@ -315,6 +318,9 @@ class KRLDialect(Dialect):
                                   f"{t.name} is passed to {routine}, a routine not in these files: if it "
                                   "moves there, give its file as a program file")
                         passed.add(id(t))
+        for name in sorted(st.homes):
+            prog.warnings.append(f"{name} is declared in no file given: taken as the home axis position "
+                                 "$config.dat declares (E6AXIS), a joint motion")
         for t in st.all_targets():
             if id(t) not in used and id(t) not in st.reference and id(t) not in passed | named:
                 prog.warnings.append(f"{t.where}: not used by a motion in these files: left as it is")
@@ -388,8 +394,12 @@ class KRLDialect(Dialect):
             return out + elements  # a variable index: every element of the array
         if elements:
             return out + [f"{text} is not declared (the array {name} has no such element in these files)"]
-        return out + [f"{name} is not declared in these files (give the .dat, or $config.dat with "
-                      "--references, that declares it)"]
+        if _HOME.fullmatch(name):
+            st.homes.add(name)  # $config.dat's E6AXIS XHOME1..: a joint position, nothing to correct
+            return out
+        return out + [Undeclared(f"{name} is not declared in these files (give the .dat, or $config.dat with "
+                                 "--references, that declares it)",
+                                 f"DECL E6POS/POS/FRAME {name} (in a .dat or $config.dat)")]
 
 
 class _State:
@@ -408,6 +418,7 @@ class _State:
         self.modified: dict[str, list[str]] = {}
         self.routines: dict = {}
         self.foreign: list = []  # (src, at, routine, argument spans): calls of routines not in these files
+        self.homes: set[str] = set()  # XHOME names declared in no file given, taken as axis positions
 
     def declare(self, key: str, t: Target, reference: bool) -> None:
         self.declared[key] = [t]

@@ -33,11 +33,25 @@ CORRECTED = "corrected"
 NAMED = "named"
 
 
+class Undeclared(str):
+    """A reason a motion is not corrected: a name declared in none of the files given. It reads as
+    the reason; ``needs`` is the declaration the motion needs (``robtarget pService``), which
+    ``filter_program(strict=True)`` refuses to go without."""
+
+    needs: str
+
+    def __new__(cls, why: str, needs: str) -> Undeclared:
+        obj = super().__new__(cls, why)
+        obj.needs = needs
+        return obj
+
+
 @dataclass(frozen=True)
 class MotionRecord:
     """One motion instruction: ``file`` (name), ``line`` (1-based), ``instruction`` as written,
-    ``target`` (the target(s) it reaches, ', '-joined; '' when none could be followed), ``status``
-    (:data:`CORRECTED` or :data:`NAMED`) and ``reason`` ('' when corrected)."""
+    ``target`` (the target(s) it reaches, ', '-joined, or the expression written), ``status``
+    (:data:`CORRECTED` or :data:`NAMED`), ``reason`` ('' when corrected) and ``needs`` (the
+    declaration(s) it needs that no file given holds, '; '-joined, else '')."""
 
     file: str
     line: int
@@ -45,6 +59,7 @@ class MotionRecord:
     target: str
     status: str
     reason: str = ""
+    needs: str = ""
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -62,6 +77,7 @@ class Account:
     targets: list[Target] = field(default_factory=list)
     labels: list[str] = field(default_factory=list)
     named: list[str] = field(default_factory=list)
+    needs: list[str] = field(default_factory=list)
 
     @property
     def where(self) -> str:
@@ -77,6 +93,8 @@ class Account:
         """A part of the motion is not corrected, because ``why`` (``label``: what it moves to)."""
         if why not in self.named:
             self.named.append(why)
+        if isinstance(why, Undeclared) and why.needs not in self.needs:
+            self.needs.append(why.needs)
         if label:
             self.mention(label)
 
@@ -126,8 +144,15 @@ class Ledger:
                     why.append(reason if t.name in reason else f"{t.name}: {reason}")
             why = list(dict.fromkeys(why))
             out.append(MotionRecord(acc.source.path.name, acc.source.line_of(acc.at), acc.instruction,
-                                    ", ".join(acc.labels), NAMED if why else CORRECTED, "; ".join(why)))
+                                    ", ".join(acc.labels), NAMED if why else CORRECTED, "; ".join(why),
+                                    "; ".join(acc.needs)))
         return out
+
+
+def undeclared(ledger: Ledger) -> list[str]:
+    """``file:line (INSTRUCTION): needs DECLARATION`` for each motion that needs a declaration no
+    file given holds."""
+    return [f"{acc.where} ({acc.instruction}): needs {'; '.join(acc.needs)}" for acc in ledger if acc.needs]
 
 
 def summary(records: list[MotionRecord]) -> dict[str, int]:

@@ -28,8 +28,10 @@ from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.aggregate import Word, close_bracket, numbers_of, parse_aggregate, split_top
 from robocal.programs.config import ABBConfig
+from robocal.programs.expressions import constant_value
 from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_quat, quat_to_matrix
 from robocal.programs.source import Number, mask
 
@@ -66,7 +68,8 @@ _ROUTINE_END = re.compile(r"\bend(?:proc|func|trap)\b")
 _ASSIGN = re.compile(r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*((?:\.\s*[A-Za-z]\w*)*)\s*:=",
                      re.IGNORECASE)
 # searched in the lower-cased text
-_CONSTANT = re.compile(r"\bconst\s+num\s+([a-z]\w*)\s*:=\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?\s*;")
+_CONSTANT = re.compile(r"\bconst\s+num\s+([a-z]\w*)\s*(\{[^}]*\})?\s*:=\s*([^;]+);")
+_SUBSCRIPT = re.compile(r"([A-Za-z]\w*)\s*\{\s*(\d+(?:\s*,\s*\d+)*)\s*\}")  # name{1, 2}: a constant element
 _RECORD = re.compile(r"\brecord\s+([a-z]\w*)([\s\S]*?)\bendrecord\b")
 _COMPONENT = re.compile(r"([A-Za-z]\w*)\s+([A-Za-z]\w*)\s*;")
 _CONF = re.compile(r"\bconf([lj])\s*\\\s*(on|off)\b")
@@ -76,7 +79,6 @@ _LEAD = re.compile(r"\s*(?:(?:LOCAL\s+)?(?:PROC|TRAP)\s+\w+\s*(?:\([^)]*\))?|(?:
                    r"CASE\s+[^:]+:|(?:ELSE)?IF\s+[\s\S]*?\bTHEN|FOR\s+[\s\S]*?\bDO|WHILE\s+[\s\S]*?\bDO|"
                    r"TEST\s+[^\n]+|MODULE\s+\w+(?:\s*\([^)]*\))?|ERROR(?:\s*\([^)]*\))?|UNDO|BACKWARD|"
                    r"[A-Za-z]\w*:(?!=))", re.IGNORECASE)
-_NUMERIC = re.compile(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*$")
 _UNUSED_AXIS = 8e9  # external-axis values at or above this are 9E9: the axis is not used
 _POSITION_MM = 1e-3  # mm: 1 um
 _QUATERNION = 1e-6  # about 2e-6 rad: 0.4 um at 200 mm from the flange
@@ -149,7 +151,20 @@ class RapidDialect(Dialect):
         for src in [*references, *sources]:
             masked, low, routines = st.masked[src.path], lowered[src.path], spans[src.path]
             if "const" in low:
-                st.constants |= {m.group(1) for m in _CONSTANT.finditer(low)}
+                for m in _CONSTANT.finditer(low):
+                    if m.group(2):  # CONST num name{n,m} := [[...]]: each element name__i_j
+                        try:
+                            tree, _ = parse_aggregate(src, low, m.start(3), m.end(3), f"num {m.group(1)}")
+                            elements = _elements(tree, m.group(2), src, m.start(), f"num {m.group(1)}")
+                        except DataError:
+                            continue  # an expression inside: not a table of numbers
+                        for suffix, node in elements:
+                            if isinstance(node, Number):
+                                st.constants[_constant_key(m.group(1) + suffix)] = node.value
+                        continue
+                    v = _constant(m.group(3), st.constants)
+                    if v is not None:
+                        st.constants[m.group(1)] = v
             if "record" in low:
                 for m in _RECORD.finditer(low):
                     st.records[m.group(1)] = [(c.group(1).lower(), c.group(2)) for c in
@@ -248,7 +263,8 @@ class RapidDialect(Dialect):
         c = re.match(r"\s*([A-Za-z]\w*)\b", masked[lead:e])
         if c and c.group(1).lower() in st.procs:
             positional, optional = _arguments(masked, lead + c.end(), e)
-            st.calls.setdefault(c.group(1).lower(), []).append((src, lead, positional, optional, proc))
+            st.calls.setdefault(c.group(1).lower(), []).append((src, lead + c.start(1), positional, optional,
+                                                                 proc))
         elif c and masked[lead + c.end():e].strip():  # a routine of another module, or a built-in
             positional, _ = _arguments(masked, lead + c.end(), e)
             st.foreign.append((src, lead + c.start(1), c.group(1), positional))
@@ -377,8 +393,9 @@ class RapidDialect(Dialect):
         f = _CALLED.match(masked, lead, b)
         if f:
             inner = split_top(masked, f.end(), close_bracket(masked, f.end() - 1))
-            amounts = [masked[x:y].strip() for x, y in inner[1:]]
-            varying = ", ".join(v for v in amounts if not (_NUMERIC.match(v) or v.lower() in st.constants))
+            amounts = [masked[u:w].partition(":=")[2] if k else masked[u:w]  # RelTool's \Rx:= \Ry:= \Rz:=
+                       for x, y in inner[1:] for k, (u, w) in enumerate(split_top(masked, x, y, "\\"))]
+            varying = ", ".join(" ".join(v.split()) for v in amounts if _constant(v, st.constants) is None)
             if not varying:
                 return self._follow(st, src, *inner[0], proc, scope, depth + 1)
             return [f"{' '.join(text.split())[:60]} moves the target by amounts known at run time only "
@@ -411,8 +428,8 @@ class RapidDialect(Dialect):
             return out
         targets = st.declared.get(name + fields)
         if targets is None:
-            return out + [f"robtarget {r.group(1)} is not declared in these files (give the module that "
-                          "declares it as a program file)"]
+            return out + [Undeclared(f"robtarget {r.group(1)} is not declared in these files (give the "
+                                     "module that declares it as a program file)", f"robtarget {r.group(1)}")]
         if not targets:
             return out + [f"{r.group(1)} is declared without a value and not assigned in these files"]
         if index:
@@ -451,7 +468,7 @@ class _State:
         self.inline: dict = {}
         self.multimove: set = set()
         self.foreign: list = []  # (src, at, routine, positional spans): calls of routines not in these files
-        self.constants: set[str] = set()  # CONST num names
+        self.constants: dict[str, float] = {}  # CONST num name -> value
         self.records: dict[str, list[tuple[str, str]]] = {}  # RECORD type -> [(type, field)]
         self._scopes: dict[str, list] = {}
 
@@ -548,6 +565,20 @@ def _elements(tree, dims: str | None, src, at, what):
 
     walk(tree, [], dims.count(",") + 1)
     return out
+
+
+def _constant_key(text: str) -> str:
+    """``name{1, 2}`` -> ``name__1_2`` (lower case): a constant array element as one name."""
+    def joined(m: re.Match) -> str:
+        return m.group(1) + "__" + "_".join(re.findall(r"\d+", m.group(2)))
+
+    return _SUBSCRIPT.sub(joined, text).lower()
+
+
+def _constant(text: str, constants: dict[str, float]) -> float | None:
+    """The value of a RAPID num expression of numbers, CONST nums and their constant array
+    elements (``nBead{1, 2} * ((-1) * K)``), else None."""
+    return constant_value(_constant_key(text), constants)
 
 
 def _after_lead(masked: str, start: int, end: int) -> int:

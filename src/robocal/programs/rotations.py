@@ -5,7 +5,10 @@ the numbers a file already holds (so an unchanged pose keeps its numbers).
 * ZYX Euler ``R = Rz(a) Ry(b) Rx(c)`` in deg (KUKA A, B, C; FANUC W, P, R is the same matrix
   with (a, b, c) = (R, P, W); scipy's ``Rotation.from_euler("ZYX", (a, b, c), degrees=True)``
   reads them): of the two solutions the one nearest the old angles, each angle in [-180, 180];
-  within ``GIMBAL`` of b = +-90 deg, a keeps its old value;
+  within ``GIMBAL`` of b = +-90 deg, a keeps its old value. Near b = +-90 deg a tiny turn moves a
+  and c far (a tilt of 0.0005 deg off the pole can swing them by 20 deg): when keeping the old a
+  (and solving b, c) represents the rotation within ``tol_deg`` (the file's resolution), that
+  triple, nearest the file's numbers, is taken;
 * rotation vector in rad (URScript; :func:`robocal.kinematics.transforms.rotvec_to_matrix`
   reads it): r or its 2 pi complement, whichever is nearer.
 """
@@ -37,9 +40,43 @@ def _wrap_deg(x: np.ndarray) -> np.ndarray:
     return x - 360.0 * np.round(x / 360.0)
 
 
-def matrix_to_zyx(R: np.ndarray, old: np.ndarray) -> np.ndarray:
-    """``(N, 3, 3)`` -> ZYX Euler ``(N, 3)`` deg nearest ``old`` (see the module docstring)."""
+def _zyx(abc_deg: np.ndarray) -> np.ndarray:
+    """``R = Rz(a) Ry(b) Rx(c)`` ``(N, 3, 3)`` of ZYX Euler angles ``(N, 3)`` deg."""
+    return Rotation.from_euler("ZYX", abc_deg, degrees=True).as_matrix()
+
+
+def _keeping_a(R: np.ndarray, a_deg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ZYX triple with ``a`` fixed that comes nearest ``R`` (b, c from ``Rz(-a) R``), and how
+    far it is from ``R`` (deg)."""
+    a = np.deg2rad(a_deg)
+    Rz = np.zeros((len(a), 3, 3))
+    Rz[:, 0, 0] = Rz[:, 1, 1] = np.cos(a)
+    Rz[:, 0, 1], Rz[:, 1, 0] = np.sin(a), -np.sin(a)  # Rz(-a)
+    Rz[:, 2, 2] = 1.0
+    P = Rz @ R  # ~ Ry(b) Rx(c)
+    b = np.arctan2(-P[:, 2, 0], P[:, 0, 0])
+    c = np.arctan2(-P[:, 1, 2], P[:, 1, 1])
+    abc = np.stack([a_deg, np.rad2deg(b), np.rad2deg(c)], axis=1)
+    off = matrix_to_rotvec(np.swapaxes(_zyx(abc), 1, 2) @ R)
+    return abc, np.rad2deg(np.linalg.norm(off, axis=1))
+
+
+def matrix_to_zyx(R: np.ndarray, old: np.ndarray, tol_deg: float = 0.0) -> np.ndarray:
+    """``(N, 3, 3)`` -> ZYX Euler ``(N, 3)`` deg nearest ``old`` (see the module docstring);
+    ``tol_deg``: how far from ``R`` a triple that keeps the old a may be (0: exact)."""
     old = np.asarray(old, float)
+    exact = _exact_zyx(R, old)
+    if tol_deg <= 0 or not len(R):
+        return exact
+    kept, off = _keeping_a(R, old[:, 0])
+    kept = old + _wrap_deg(kept - old)
+    use = (off <= tol_deg) & (np.abs(kept) <= 180.0).all(axis=1) & \
+        (np.abs(kept - old).sum(axis=1) <= np.abs(exact - old).sum(axis=1) + tol_deg)
+    return np.where(use[:, None], kept, exact)
+
+
+def _exact_zyx(R: np.ndarray, old: np.ndarray) -> np.ndarray:
+    """The ZYX triple of ``R`` nearest ``old`` among its two exact ones (gimbal lock: a kept)."""
     cb = np.hypot(R[:, 0, 0], R[:, 1, 0])
     b = np.arctan2(-R[:, 2, 0], cb)
     a = np.arctan2(R[:, 1, 0], R[:, 0, 0])

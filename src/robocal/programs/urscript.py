@@ -27,6 +27,7 @@ from robocal.kinematics.transforms import invert_transform, make_transform, rotv
 from robocal.programs.aggregate import close_bracket, numbers_of, parse_aggregate, split_top
 from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import IDENTITY, Dialect, Program, Target
+from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import nearest_rotvec
 from robocal.programs.source import Number, mask
 
@@ -316,8 +317,8 @@ class _Script:
             param = self._parameter(ident, at, depth)
             if param is not None:
                 return param
-            return [("skip", f"{ident} is not assigned a pose before this motion in this script", IDENTITY,
-                     None)]
+            return [("skip", Undeclared(f"{ident} is not assigned a pose before this motion in this script",
+                                        f"the pose variable {ident}"), IDENTITY, None)]
         return self.resolve(span[0], span[1], span[0], depth + 1)
 
     def _literal(self, lead: int, b: int) -> tuple:
