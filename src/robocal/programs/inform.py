@@ -58,6 +58,7 @@ POSE_VALUES = 6
 BRANCH_FIELDS = 3  # RCONF's flip, arm and front/back: the least a form must give
 CONFIG_FIELDS = 6  # RCONF fields the form of a 6-axis arm uses (the rest, 2 or 18, are kept)
 NPOS_KINDS = ("C", "BC", "EC", "P", "BP", "EX")  # the order of ///NPOS
+TURN_TOLERANCE = 1e-12  # relative: an angle printed as exactly 180 deg keeps its R, T, S flag
 
 _LINE = re.compile(r"^([^\r\n]*)(\r?\n|$)", re.MULTILINE)
 _SECTION = re.compile(r"^//(?!/)\s*(\w+)")
@@ -94,7 +95,7 @@ class YaskawaConfig(ConfigScheme):
         q = np.asarray(q, float)
         shoulder, elbow, _ = branch_bits(robot, q)
         a = q[..., [3, 5, 0]]
-        half, turn = np.pi * (1 + 1e-12), 2 * np.pi * (1 + 1e-12)
+        half, turn = np.pi * (1 + TURN_TOLERANCE), 2 * np.pi * (1 + TURN_TOLERANCE)
         over = (~((a > -half) & (a <= half))).astype(int) + (~((a > -turn) & (a <= turn))).astype(int)
         bits = np.stack([q[..., 4] < 0, elbow, shoulder], axis=-1).astype(int)
         return np.concatenate([bits, over], axis=-1)
