@@ -299,3 +299,25 @@ def test_user_frames_from_uframe_cnd_and_p_variables_saved_in_the_job(tmp_path):
     assert [r["correction_mm"] for r in res.rows] == pytest.approx([r["correction_mm"] for r in ref.rows])
     with pytest.raises(DataError, match="not a UFRAME.CND"):
         filter_program([job], CALIBRATED, NOMINAL, tools=TOOLS, references=[CORPUS / "VAR.DAT"])
+
+
+def test_conveyor_station_and_external_group_motions_are_named(tmp_path):
+    """SMOVL (conveyor), SYMOVL (station), EIMOVL (external group), a 7-value position (a 7-axis
+    arm), a motion without a robot position: each named; the plain MOVL corrected."""
+    q = np.deg2rad([[0, 10, -20, 0, -70, 0]])
+    v = ",".join(f"{x:.3f}" for x in InformDialect().from_pose(NOMINAL.fk(q), np.zeros((1, 6)))[0])
+    lines = ["/JOB", "//NAME SYNC", "//POS", "///NPOS 2,0,0,0,0,0", "///TOOL 0", "///POSTYPE ROBOT",
+             "///RECTAN", "///RCONF 1,0,0,0,0,0,0,0", f"C00000={v}", f"C00001={v},0.000", "//INST",
+             "///ATTR SC,RW", "///GROUP1 RB1", "NOP", "SMOVL C00000 V=100.0 CV#(1) CTP=0.000",
+             "SYMOVL C00000 V=100.0", "EIMOVL C00000 V=100.0", "MOVL C00001 V=100.0", "MOVJ VJ=10.00",
+             "MOVL C00000 V=100.0", "END", ""]
+    path = tmp_path / "SYNC.JBI"
+    path.write_bytes("\r\n".join(lines).encode())
+    res = filter_program([path], CALIBRATED, NOMINAL)
+    reasons = [r.reason for r in res.motions if r.status == "named"]
+    assert len(reasons) == 5 and [r.line for r in res.motions if r.status == "corrected"] == [20]
+    patterns = ["follows a conveyor", "synchronised with a station", "external axis group",
+                "not a 6-value Cartesian position", "no robot position"]
+    for pattern, reason in zip(patterns, reasons, strict=True):
+        assert pattern in reason, (pattern, reason)
+    assert any("C00001 has 7 values" in w for w in res.warnings)
