@@ -28,17 +28,17 @@ from robocal.programs.val3 import Val3Dialect, _read_data, application_files
 APP = Path(__file__).parent / "data" / "programs" / "val3" / "pick_place"
 NOMINAL = rc.Robot.from_catalog("staubli_tx2_140")
 CALIBRATED = perturbed(NOMINAL, 7)
-# motion (file:line) -> named reason pattern; the rest are corrected (hand count: 8 + 6; 1 joint move)
-NAMED = {("pickPart.pgx", 8): r"x_pPart is a parameter or local of the program",
-         ("start.pgx", 24): r"pOld\.trsf\.z is assigned in the program at run time",
+# motion (file:line) -> named reason pattern; the rest are corrected (hand count: 9 + 5; 1 joint move)
+NAMED = {("start.pgx", 24): r"pOld\.trsf\.z is assigned in the program at run time",
          ("start.pgx", 27): r"pCam is received at run time \(sioGet\)",
-         ("start.pgx", 29): r"l_pTmp is a parameter or local of the program",
+         ("start.pgx", 29): r"l_pTmp is a local of start \(pointRx\): set at run time",
          ("start.pgx", 30): r"appro\(\.\.\.\) with an unknown trsf l_trOff",
          ("start.pgx", 31): r"computed at run time by here\(\)"}
 PICKS = "pPick[0], pPick[1], pPick[2]"  # pPick[l_i] in a loop: every element
 CORRECTED = {("start.pgx", 11): "pApproach[0]", ("start.pgx", 14): PICKS, ("start.pgx", 15): PICKS,
              ("start.pgx", 16): PICKS, ("start.pgx", 18): "pPlace[0]", ("start.pgx", 19): "pPlace[0]",
-             ("start.pgx", 20): "pPlace[1], pPlace[0]", ("start.pgx", 21): "pPick[0]"}
+             ("start.pgx", 20): "pPlace[1], pPlace[0]", ("start.pgx", 21): "pPick[0]",
+             ("pickPart.pgx", 8): PICKS}  # x_pPart: call pickPart(pPick[l_i])
 
 
 def _app(tmp_path) -> Path:
@@ -61,7 +61,7 @@ def test_every_motion_is_corrected_or_named(tmp_path):
                                                    "pPlace[0]", "pPlace[1]"]
     counts = json.loads(res.table_json())["summary"]["motions"]
     hand = sum(len(re.findall(r"\bmove[jlc]\(", p.read_text())) for p in folder.glob("*.pgx"))
-    assert counts == {"total": 14, "corrected": 8, "named": 6} and counts["total"] == hand - 1  # movej(jHome)
+    assert counts == {"total": 14, "corrected": 9, "named": 5} and counts["total"] == hand - 1  # movej(jHome)
     for r in res.motions:
         key = (r.file, r.line)
         if r.status == "named":
@@ -178,7 +178,7 @@ def test_cli_filters_an_application_folder(tmp_path, capsys):
     assert main(["filter", str(folder), "--calibrated", str(cal), "--nominal", "staubli_tx2_140", "-o",
                  str(out)]) == 0
     text = capsys.readouterr().out
-    assert "14 motions: 8 corrected, 6 not corrected (each named)" in text
+    assert "14 motions: 9 corrected, 5 not corrected (each named)" in text
     assert sorted(p.name for p in out.iterdir()) == sorted(
         [p.name for p in application_files(folder)] + ["pickPart.targets.csv", "pickPart.targets.json"])
 
@@ -204,3 +204,15 @@ def test_poses_writes_an_application_that_visits_the_planned_joints(tmp_path):
     assert (folder / "start.pgx").read_bytes().count(b"\r\n") == start.count("\n")
     res = filter_program([folder], NOMINAL, NOMINAL)
     assert res.rows == [] and res.motions == []
+
+
+def test_a_parameter_no_call_gives_is_named(tmp_path):
+    """A point parameter is followed to every call's argument; a program nobody calls names it."""
+    folder = _app(tmp_path)
+    text = (folder / "pickPart.pgx").read_bytes()
+    (folder / "placePart.pgx").write_bytes(text.replace(b'name="pickPart"', b'name="placePart"'))
+    res = filter_program([folder], CALIBRATED, NOMINAL)
+    named = [r for r in res.motions if r.file == "placePart.pgx"]
+    why = "x_pPart is a parameter of placePart that no call in these files gives"
+    assert [r.reason for r in named] == [why]
+    assert [r.status for r in res.motions if r.file == "pickPart.pgx"] == ["corrected"]

@@ -23,10 +23,10 @@ wnegative; ``ssame``, ``sfree``, ... or absent: any) selects the branch; VAL3 ca
 The motions ``movej``, ``movel`` and ``movec`` of the programs are read from the code: points
 (``pPick``, ``pPick[1]``; ``pPick[i]`` with a run-time index reaches every element),
 ``appro(p, trsf)`` and ``compose(p, frame, trsf)`` with a trsf of the ``.dtx`` or a literal
-``{x, y, z, rx, ry, rz}`` (a use of ``p``), the tool (second argument; third of movec). Joint
-motions (a ``jointRx``) need nothing. ``here()``, points written by the code (an assignment, a
-field, ``sioGet``), program parameters and locals, and ``appro`` / ``compose`` with a run-time
-trsf are named. Only the numbers inside the attribute values change (or an absent coordinate is
+``{x, y, z, rx, ry, rz}`` (a use of ``p``), program parameters (followed to every call's argument),
+the tool (second argument; third of movec). Joint motions (a ``jointRx``) need nothing.
+``here()``, points written by the code (an assignment, a field, ``sioGet``), locals, parameters no
+call gives, and ``appro`` / ``compose`` with a run-time trsf are named. Only the numbers inside the attribute values change (or an absent coordinate is
 added): the XML is never re-serialised.
 """
 
@@ -50,6 +50,7 @@ _POSITION_MM = 1e-3
 _ANGLE_DEG = 1e-4
 WORLD, FLANGE = "world[0]", "flange[0]"
 MAX_CHAIN = 32  # frames in a fatherId chain (a longer one is a loop)
+MAX_CALLS = 16  # calls a point parameter is followed through (deeper: named)
 
 _COMMENT = re.compile(r"<!--.*?-->", re.DOTALL)
 _DATA = re.compile(r"<Data\b([^>]*?)(/?)>")
@@ -64,6 +65,7 @@ _LOCAL = re.compile(r"<(?:Local|Parameter)\b([^>]*?)/?>")
 _LINE_COMMENT = re.compile(r"//[^\r\n]*")
 _STRING = re.compile(r"\"[^\"\r\n]*\"")
 _MOTION = re.compile(r"\b(movej|movel|movec)\s*\(")
+_CALL = re.compile(r"\bcall\s+([A-Za-z_]\w*)\s*\(")
 _ITEM = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\[\s*([^\]]*?)\s*\])?\s*$")
 _LITERAL6 = re.compile(r"^\s*\{\s*" + r"\s*,\s*".join([f"({NUMBER_RE.pattern})"] * 6) + r"\s*\}\s*$")
 _WRAPPER = re.compile(r"^\s*(appro|compose)\s*\((.*)\)\s*$", re.DOTALL)
@@ -244,13 +246,9 @@ class Val3Dialect(Dialect):
         if not programs:
             prog.warnings.append("no .pgx program given: give the application's folder or its .pgx files")
         targets: dict[str, Target] = {}
-        written: dict[str, str] = {}  # a point any program writes is a run-time point in all of them
-        for src in programs:
-            for code_m in _CODE.finditer(src.text):
-                for name, how in _written(_code(code_m)).items():
-                    written.setdefault(name, how)
-        for src in programs:
-            _motions(src, data, prog, targets, frames, written)
+        ctx = _Context(data, [r for src in programs for r in _routines(src)])
+        for r in ctx.routines.values():
+            _program_motions(r, ctx, prog, targets, frames)
         return prog
 
 
@@ -292,17 +290,54 @@ def _call_args(code: str, open_at: int) -> tuple[list[str], int] | None:
     return None
 
 
-def _motions(src: ProgramText, data: dict, prog: Program, targets: dict, frames: dict, written: dict) -> None:
-    """Every movej / movel / movec of the program's code: its points (and the tool) as targets,
-    or named."""
-    text = src.text
-    last = 0
-    for code_m in _CODE.finditer(text):  # one <Code> per <Program> (a .pgx may hold several)
+@dataclass
+class _Routine:
+    """One ``<Program>``: its name, parameters in order, locals and parameters -> type, its code."""
+
+    name: str
+    params: list[str]
+    kinds: dict[str, str]
+    src: ProgramText
+    code_m: re.Match
+
+
+@dataclass
+class _Context:
+    """The application: its data, programs by name, what the code writes at run time (a point any
+    program writes is a run-time point in all of them) and the calls of each program ``(caller,
+    arguments, offset)``."""
+
+    data: dict
+    routines: dict[str, _Routine] = field(default_factory=dict)
+    written: dict[str, str] = field(default_factory=dict)
+    calls: dict[str, list[tuple[_Routine, list[str], int]]] = field(default_factory=dict)
+
+    def __init__(self, data: dict, routines: list[_Routine]):
+        self.data, self.routines, self.written, self.calls = data, {r.name: r for r in routines}, {}, {}
+        for r in routines:
+            code = _code(r.code_m)
+            for name, how in _written(code).items():
+                self.written.setdefault(name, how)
+            for m in _CALL.finditer(code):
+                args = _call_args(code, m.end() - 1)
+                if args is not None:
+                    self.calls.setdefault(m.group(1), []).append((r, args[0], r.code_m.start(1) + m.start()))
+
+
+def _routines(src: ProgramText) -> list[_Routine]:
+    """The ``<Program>`` blocks of a .pgx (a file may hold several)."""
+    text, out, last = src.text, [], 0
+    for code_m in _CODE.finditer(text):
         header = text[last:code_m.start()]
         last = code_m.end()
-        kinds = {a["name"][0]: a.get("type", ("",))[0] for m in _LOCAL.finditer(header)
-                 if "name" in (a := _attrs(header, m.start(1), m.end(1)))}
-        _program_motions(src, code_m, kinds, data, prog, targets, frames, written)
+        heads = list(_PROGRAM.finditer(header))
+        name = _attrs(header, heads[-1].start(1), heads[-1].end(1)).get("name", ("",))[0] if heads else ""
+        decl = [_attrs(header, m.start(1), m.end(1)) for m in _LOCAL.finditer(header)]
+        params = [a["name"][0] for m, a in zip(_LOCAL.finditer(header), decl, strict=True)
+                  if "name" in a and m.group(0).startswith("<Parameter")]
+        kinds = {a["name"][0]: a.get("type", ("",))[0] for a in decl if "name" in a}
+        out.append(_Routine(name or src.path.stem, params, kinds, src, code_m))
+    return out
 
 
 def _code(code_m: re.Match) -> str:
@@ -310,12 +345,11 @@ def _code(code_m: re.Match) -> str:
     return mask(code_m.group(1), [_LINE_COMMENT], [_STRING])
 
 
-def _program_motions(src: ProgramText, code_m: re.Match, kinds: dict, data: dict, prog: Program,
-                     targets: dict, frames: dict, written: dict) -> None:
-    """The motions of one program's code (``kinds``: its locals and parameters -> type;
-    ``written``: what the application's code writes at run time)."""
-    base = code_m.start(1)
-    code = _code(code_m)
+def _program_motions(r: _Routine, ctx: _Context, prog: Program, targets: dict, frames: dict) -> None:
+    """The motions of one program's code: its points (and the tool) as targets, or named."""
+    src, data, kinds, written = r.src, ctx.data, r.kinds, ctx.written
+    base = r.code_m.start(1)
+    code = _code(r.code_m)
     for m in _MOTION.finditer(code):
         call = _call_args(code, m.end() - 1)
         at = base + m.start()
@@ -331,7 +365,7 @@ def _program_motions(src: ProgramText, code_m: re.Match, kinds: dict, data: dict
         tool, why = _tool(tool_arg, data, kinds, written, prog.tools, src.where(at))
         for p in points:
             label = " ".join(p.split())
-            found, reason = _points(p, data, kinds, written)
+            found, reason = _points(p, r, ctx)
             if reason or why:
                 prog.skip(src.where(at), instr, reason or why, acc, label)
                 continue
@@ -372,8 +406,10 @@ def _written(code: str) -> dict[str, str]:
     return out
 
 
-def _points(expr: str, data: dict, kinds: dict, written: dict) -> tuple[list[Datum], str]:
-    """The pointRx data an argument reaches, or why it cannot be followed."""
+def _points(expr: str, r: _Routine, ctx: _Context, depth: int = 0) -> tuple[list[Datum], str]:
+    """The pointRx data an argument of program ``r`` reaches, or why it cannot be followed; a
+    parameter is followed to the arguments of every call of ``r`` (``depth``: calls followed)."""
+    data, kinds, written = ctx.data, r.kinds, ctx.written
     w = _WRAPPER.match(expr)
     if w:
         args = _split_args(w.group(2))
@@ -384,7 +420,7 @@ def _points(expr: str, data: dict, kinds: dict, written: dict) -> tuple[list[Dat
                                 else "trsf")
                 if why:
                     return [], f"{func}(...) with {why}"
-            return _points(args[0], data, kinds, written)
+            return _points(args[0], r, ctx, depth)
         return [], f"{func}(...) with {len(args)} arguments"
     m = _ITEM.match(expr)
     if not m:
@@ -393,9 +429,11 @@ def _points(expr: str, data: dict, kinds: dict, written: dict) -> tuple[list[Dat
             return [], f"computed at run time by {call.group(1)}()"
         return [], "an expression this filter does not follow"
     name, index = m.group(1), m.group(2)
+    if name in r.params and index is None and name not in written:
+        return _through_calls(name, r, ctx, depth)
     if name in kinds:
-        return [], f"{name} is a parameter or local of the program ({kinds[name] or 'no type'}): set at " \
-                   "run time"
+        what = "parameter" if name in r.params else "local"
+        return [], f"{name} is a {what} of {r.name} ({kinds[name] or 'no type'}): set at run time"
     if name in written:
         return [], written[name]
     if index is None or re.fullmatch(r"\d+", index):
@@ -409,6 +447,26 @@ def _points(expr: str, data: dict, kinds: dict, written: dict) -> tuple[list[Dat
     if not elements:
         return [], f"{name}[{index}]: no pointRx {name} in the .dtx files given"
     return elements, ""  # a run-time index: every element
+
+
+def _through_calls(name: str, r: _Routine, ctx: _Context, depth: int) -> tuple[list[Datum], str]:
+    """The points parameter ``name`` of ``r`` receives from every call of ``r``."""
+    calls = ctx.calls.get(r.name, [])
+    if not calls:
+        return [], f"{name} is a parameter of {r.name} that no call in these files gives"
+    if depth >= MAX_CALLS:
+        return [], f"{name} is passed through more than {MAX_CALLS} calls"
+    k = r.params.index(name)
+    found: list[Datum] = []
+    for caller, args, at in calls:
+        where = caller.src.where(at)
+        if k >= len(args):
+            return [], f"{name}: the call of {r.name} at {where} does not give it"
+        got, why = _points(args[k], caller, ctx, depth + 1)
+        if why:
+            return [], f"{name} is a parameter: the call at {where} passes {' '.join(args[k].split())}: {why}"
+        found += [d for d in got if all(d is not e for e in found)]
+    return found, ""
 
 
 def _constant(expr: str, data: dict, kinds: dict, written: dict, what: str) -> str:
