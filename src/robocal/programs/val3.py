@@ -26,8 +26,8 @@ The motions ``movej``, ``movel`` and ``movec`` of the programs are read from the
 ``{x, y, z, rx, ry, rz}`` (a use of ``p``), program parameters (followed to every call's argument),
 the tool (second argument; third of movec). Joint motions (a ``jointRx``) need nothing.
 ``here()``, points written by the code (an assignment, a field, ``sioGet``), locals, parameters no
-call gives, and ``appro`` / ``compose`` with a run-time trsf are named. Only the numbers inside the attribute values change (or an absent coordinate is
-added): the XML is never re-serialised.
+call gives, and ``appro`` / ``compose`` with a run-time trsf are named. Only the numbers inside
+the attribute values change (or an absent coordinate is added): the XML is never re-serialised.
 """
 
 from __future__ import annotations
@@ -43,6 +43,7 @@ from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.config import ConfigScheme, branch_bits
 from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import NUMBER_RE, Number, ProgramText, mask
 
 COORDS = ("x", "y", "z", "rx", "ry", "rz")
@@ -215,8 +216,6 @@ class Val3Dialect(Dialect):
     def from_pose(self, T, old):
         old = np.asarray(old, float)
         # R = Rx(a) Ry(b) Rz(c) is the transpose of Rz(-c) Ry(-b) Rx(-a): the ZYX reader nearest -old
-        from robocal.programs.rotations import matrix_to_zyx
-
         zyx = matrix_to_zyx(np.swapaxes(T[:, :3, :3], 1, 2), -old[:, [5, 4, 3]])
         return np.hstack([T[:, :3, 3] * 1e3, -zyx[:, [2, 1, 0]]])
 
