@@ -122,7 +122,8 @@ def test_rotation_notation_round_trips():
 
 def test_older_cs8_layout_and_tool_chain(tmp_path):
     """Coordinates on an element inside <Value> and the type name point (older VAL3), a tool on a
-    tool, a point in world: read, filtered, unchanged by an identity calibration."""
+    tool, a point in world, a user type beside them: read, filtered, unchanged by an identity
+    calibration."""
     q = np.deg2rad([[10, 20, 80, 5, 60, 0]])
     tool = Val3Dialect().to_pose(np.array([[0, 0, 100, 0, 0, 0]]))[0] @ \
         Val3Dialect().to_pose(np.array([[0, 20, 60, 0, 30, 0]]))[0]
@@ -135,6 +136,7 @@ def test_older_cs8_layout_and_tool_chain(tmp_path):
       </Value></Data>
     <Data name="tTip" type="tool" size="1"><Value key="0">
       <tool y="20" z="60" ry="30" fatherId="tFlange[0]" /></Value></Data>
+    <Data name="sPart" type="tPartInfo" size="1"><Value><Field name="nId" value="3" /></Value></Data>
     <Data name="pA" type="point" size="1"><Value key="0"><point {coords} fatherId="world[0]" />
       <config shoulder="lefty" elbow="epositive" wrist="wpositive" /></Value></Data>
   </Datas>

@@ -75,6 +75,7 @@ ELBOW = {"epositive": 0, "enegative": 1}
 WRIST = {"wpositive": 0, "wnegative": 1}
 CONFIG_WORDS = (("shoulder", SHOULDER), ("elbow", ELBOW), ("wrist", WRIST))
 OLD_TYPES = {"point": "pointRx", "joint": "jointRx"}  # the type names of older VAL3 versions
+KNOWN_TYPES = ("pointRx", "frame", "tool", "trsf", "jointRx")  # the data read from a .dtx
 
 
 class StaubliConfig(ConfigScheme):
@@ -134,8 +135,8 @@ def _read_data(src: ProgramText) -> dict[str, Datum]:
         if "name" not in head or "type" not in head:
             raise DataError(f"{src.where(d.start())}: a <Data> without name or type")
         name, kind = head["name"][0], head["type"][0]
-        if d.group(2) == "/":
-            continue  # no values: every element at its defaults
+        if d.group(2) == "/" or OLD_TYPES.get(kind, kind) not in KNOWN_TYPES:
+            continue  # no values (every element at its defaults), or a type with no pose (num, user types)
         stop = _DATA_END.search(text, d.end())
         if stop is None:
             raise DataError(f"{src.where(d.start())}: <Data name=\"{name}\"> is not closed")
