@@ -63,7 +63,7 @@ TURN_TOLERANCE = 1e-12  # relative: an angle printed as exactly 180 deg keeps it
 _LINE = re.compile(r"^([^\r\n]*)(\r?\n|$)", re.MULTILINE)
 _SECTION = re.compile(r"^//(?!/)\s*(\w+)")
 _HEADER = re.compile(r"^///\s*(\w+)\s*(.*?)\s*$")
-_ENTRY = re.compile(r"^\s*(C|BC|EC|P|BP|EX|LP|LBP|LEX)(\d+)\s*=\s*(.*?)\s*$")
+_ENTRY = re.compile(r"^\s*([A-Z]{1,4})(\d+)\s*=\s*(.*?)\s*$")  # C, BC, EC, P, BP, EX, ... (others kept)
 _MOTION = re.compile(r"^\s*(MOVJ|MOVL|MOVC|MOVS|IMOV|SMOVJ|SMOVL|SMOVC|SMOV|SYMOVJ|SYMOVL|SYMOVC|EIMOVL|"
                      r"EIMOVC|EIMOVJ|EMOVJ|EMOVL)\b(.*)$")
 _NUM = r"([-+]?(?:\d+\.?\d*|\.\d+))"
