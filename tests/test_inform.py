@@ -321,3 +321,13 @@ def test_conveyor_station_and_external_group_motions_are_named(tmp_path):
     for pattern, reason in zip(patterns, reasons, strict=True):
         assert pattern in reason, (pattern, reason)
     assert any("C00001 has 7 values" in w for w in res.warnings)
+
+
+def test_lone_cr_line_ends(tmp_path):
+    """A job saved with lone CR line ends reads the same and keeps them."""
+    path = tmp_path / "CR.JBI"
+    path.write_bytes((CORPUS / "WELD_UF2.JBI").read_bytes().replace(b"\r\n", b"\r"))
+    res = filter_program([path], CALIBRATED, NOMINAL, frames=FRAMES, tools=TOOLS)
+    assert json.loads(res.table_json())["summary"]["motions"] == {"total": 9, "corrected": 7, "named": 2}
+    assert b"\n" not in res.outputs[path] and _outside_numbers(res.outputs[path]) == _outside_numbers(
+        path.read_bytes())

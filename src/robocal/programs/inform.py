@@ -60,7 +60,7 @@ CONFIG_FIELDS = 6  # RCONF fields the form of a 6-axis arm uses (the rest, 2 or 
 NPOS_KINDS = ("C", "BC", "EC", "P", "BP", "EX")  # the order of ///NPOS
 TURN_TOLERANCE = 1e-12  # relative: an angle printed as exactly 180 deg keeps its R, T, S flag
 
-_LINE = re.compile(r"^([^\r\n]*)(\r?\n|$)", re.MULTILINE)
+_LINE = re.compile(r"([^\r\n]*)(\r\n|\n|\r|$)")  # CRLF, LF or a lone CR ends a line
 _SECTION = re.compile(r"^//(?!/)\s*(\w+)")
 _HEADER = re.compile(r"^///\s*(\w+)\s*(.*?)\s*$")
 _ENTRY = re.compile(r"^\s*([A-Z]{1,4})(\d+)\s*=\s*(.*?)\s*$")  # C, BC, EC, P, BP, EX, ... (others kept)
@@ -133,10 +133,13 @@ class Position:
 
 def _lines(text: str):
     """``(start, line without its end, line end)`` of every line."""
-    for m in _LINE.finditer(text):
-        if m.start() == len(text) and not m.group(0):
+    pos = 0
+    while pos < len(text):
+        m = _LINE.match(text, pos)
+        yield pos, m.group(1), m.group(2)
+        if not m.group(2):
             break
-        yield m.start(), m.group(1), m.group(2)
+        pos = m.end()
 
 
 class InformDialect(Dialect):
@@ -164,8 +167,8 @@ class InformDialect(Dialect):
         text = target.source.text
         newline = pos.newline or ("\r\n" if "\r\n" in text else "\n")
         edits = {(pos.line_start, pos.line_start): f"///RCONF {','.join(fields)}{newline}"}
-        following = text[pos.line_end:].split("\n", 1)[0]
-        if pos.header.rconf_line and _ENTRY.match(following.rstrip("\r")):
+        following = _LINE.match(text, pos.line_end).group(1)
+        if pos.header.rconf_line and _ENTRY.match(following):
             # the positions after it keep their form (a rewritten one right after replaces this line)
             edits[(pos.line_end, pos.line_end)] = pos.header.rconf_line + newline
         return edits
