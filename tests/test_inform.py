@@ -331,3 +331,22 @@ def test_lone_cr_line_ends(tmp_path):
     assert json.loads(res.table_json())["summary"]["motions"] == {"total": 9, "corrected": 7, "named": 2}
     assert b"\n" not in res.outputs[path] and _outside_numbers(res.outputs[path]) == _outside_numbers(
         path.read_bytes())
+
+
+def test_p_variable_saved_by_another_job(tmp_path):
+    """P001 used by PICK_PLACE and saved in the //POS of another job given with it: corrected
+    there (VAR.DAT, when given, comes first)."""
+    q = np.deg2rad([[0, 5, -30, 0, -65, 0]])
+    tool = InformDialect().to_pose(np.array([[0, 0, 180, 0, 0, 0]]))[0]
+    v = InformDialect().from_pose(NOMINAL.fk(q) @ tool, np.zeros((1, 6)))[0]
+    text = ",".join([f"{x:.3f}" for x in v[:3]] + [f"{x:.4f}" for x in v[3:]])
+    other = tmp_path / "TEACH.JBI"
+    lines = ["/JOB", "//NAME TEACH", "//POS", "///NPOS 0,0,0,1,0,0", "///TOOL 3", "///POSTYPE ROBOT",
+             "///RECTAN", "///RCONF 1,0,0,0,0,0,0,0", f"P00001={text}", "//INST", "///ATTR SC,RW",
+             "///GROUP1 RB1", "NOP", "END", ""]
+    other.write_bytes("\r\n".join(lines).encode())
+    pick = _copy(["PICK_PLACE.JBI"], tmp_path)[0]
+    res = filter_program([pick, other], CALIBRATED, NOMINAL, tools=TOOLS)
+    assert "P00001" in [r["name"] for r in res.rows]
+    assert [r.status for r in res.motions if r.line == 35 and r.file == "PICK_PLACE.JBI"] == ["corrected"]
+    assert res.outputs[other] != other.read_bytes()

@@ -30,7 +30,8 @@ without base axes: the base and robot coordinates coincide); USER positions in t
 ``///USER n``. Tool and user-frame values live in the controller: ``--tool n=X,Y,Z,Rx,Ry,Rz``,
 ``--frame n=...`` (mm, deg), or the user frames of the controller's UFRAME.CND given as a
 reference (:func:`user_frames`); tool 0 without data is the flange (a warning). A job may save the
-P variables it uses in its ``//POS`` (``P00100=...``): those are read before VAR.DAT's.
+P variables it uses in its ``//POS`` (``P00100=...``): those are read before VAR.DAT's, and
+another job's saved P variables after VAR.DAT's.
 
 ``VAR.DAT`` holds the global variables; its position section ``//P`` has the same header lines
 and ``P0001=...`` entries. Given as a program file, its Cartesian positions that the jobs' motions
@@ -186,6 +187,8 @@ class InformDialect(Dialect):
             scope = "global" if _is_variable_file(src) else src.path
             for p in found:
                 positions[(scope, p.kind, p.index)] = p
+                if scope != "global" and p.kind == "P":  # a P variable another job saves in its //POS
+                    positions.setdefault(("jobs", "P", p.index), p)
             if scope != "global":
                 jobs.append(src)
         used: set[int] = set()  # targets a corrected motion reaches
@@ -193,7 +196,7 @@ class InformDialect(Dialect):
         for src in jobs:
             _motions(src, positions, prog, used, named)
         tool0 = False
-        for p in positions.values():
+        for p in {id(p): p for p in positions.values()}.values():  # a job's P variable is under two keys
             t = p.target
             if t is None:
                 continue
@@ -340,7 +343,8 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         ref_point = _REFP.match(body)
         if ref_point:  # a weaving reference point: a taught position like the motions' (not a motion)
             kind, index = ref_point.group(1), int(ref_point.group(2))
-            pos = positions.get((src.path, kind, index)) or positions.get(("global", kind, index))
+            pos = positions.get((src.path, kind, index)) or positions.get(("global", kind, index)) \
+                or positions.get(("jobs", kind, index))
             if pos is not None and pos.target is not None:
                 used.add(id(pos.target))
             continue
@@ -356,8 +360,8 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         if ref is not None and ref.group(2) is not None:
             kind, index = ref.group(1), int(ref.group(2))
             pos = positions.get((src.path, kind, index))  # the job's own //POS (P too), else VAR.DAT
-            if pos is None and kind == "P":
-                pos = positions.get(("global", "P", index))
+            if pos is None and kind == "P":  # a global variable: VAR.DAT, else another job that saves it
+                pos = positions.get(("global", "P", index)) or positions.get(("jobs", "P", index))
         if pos is not None and pos.target is None and instr != "IMOV" and (
                 pos.header.postype == "PULSE" or not pos.header.rectan):
             prog.motions.append((src.path, start, np.full(6, np.nan)))  # a joint position: no correction
