@@ -47,6 +47,7 @@ from robocal.programs.urscript import URScriptDialect
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
+CHUNK = 5_000  # targets whose closed-form candidates are held at once
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
 # A real TCP (--tcp) turned more than this from the program's tool data is another tool or a wrong
 # --rotation (the 4-point method finds the position only): refused. Moved more: a warning.
@@ -78,36 +79,49 @@ def as_frames(dialect: Dialect, given) -> dict[str, np.ndarray]:
 
 
 def _configured_joints(dialect, nominal, F, targets, problems):
-    """Nominal joints ``(N, 6)`` in each target's configuration (NaN where impossible)."""
+    """Nominal joints ``(N, 6)`` in each target's configuration (NaN where impossible). The
+    candidates are computed ``CHUNK`` targets at a time (all branches and turns of 100,000 targets
+    at once would take gigabytes); only those of targets without configuration data are kept,
+    for the nearest-previous search."""
     scheme = dialect.scheme
-    try:
-        cands = solve_all(nominal, F, extra_turns=True)
-    except ModelError as exc:
-        raise ModelError(f"{dialect.name} configuration data need the nominal model's closed form: "
-                         f"{exc}") from None
-    valid = np.isfinite(cands).all(axis=2)
-    have = scheme.encode(nominal, np.where(valid[..., None], cands, 0.0))
-    want = np.array([t.config if t.config is not None else np.zeros(have.shape[-1], int) for t in targets])
-    score = np.where(valid, scheme.score(have, want[:, None]), np.iinfo(np.int64).max)
+    N = len(targets)
     has = np.array([t.config is not None and t.monitored for t in targets])
-    reach = valid.any(axis=1)
+    q = np.full((N, nominal.n_joints), np.nan)
+    reach, possible = np.zeros(N, bool), np.zeros(N, bool)
+    free: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # row without data -> (candidates, valid)
+    for s in range(0, N, CHUNK):
+        e = min(N, s + CHUNK)
+        try:
+            cands = solve_all(nominal, F[s:e], extra_turns=True)
+        except ModelError as exc:
+            raise ModelError(f"{dialect.name} configuration data need the nominal model's closed form: "
+                             f"{exc}") from None
+        valid = np.isfinite(cands).all(axis=2)
+        have = scheme.encode(nominal, np.where(valid[..., None], cands, 0.0))
+        want = np.array([t.config if t.config is not None else np.zeros(have.shape[-1], int)
+                         for t in targets[s:e]])
+        score = np.where(valid, scheme.score(have, want[:, None]), np.iinfo(np.int64).max)
+        best = np.argmin(score, axis=1)
+        reach[s:e] = valid.any(axis=1)
+        possible[s:e] = np.take_along_axis(score, best[:, None], axis=1)[:, 0] < BRANCH_MISMATCH
+        sel = np.flatnonzero(has[s:e] & reach[s:e] & possible[s:e])  # the candidate their data select
+        q[s + sel] = cands[sel, best[sel]]
+        for i in np.flatnonzero(~has[s:e] & reach[s:e]):
+            free[s + int(i)] = (cands[i], valid[i])
     for i in np.flatnonzero(~reach):
         problems.append((int(i), "no solution of the nominal model inside the joint limits (out of reach)"))
-    q = np.full(F.shape[:1] + (nominal.n_joints,), np.nan)
-    best = np.argmin(score, axis=1)
-    possible = np.take_along_axis(score, best[:, None], axis=1)[:, 0] < BRANCH_MISMATCH
     for i in np.flatnonzero(has & reach & ~possible):
         problems.append((int(i), f"configuration {scheme.text(targets[i].config)} is not possible for this "
                                  "pose inside the joint limits"))
-    configured = np.flatnonzero(has & reach & possible)  # the candidate their data select
-    q[configured] = cands[configured, best[configured]]
+    configured = np.flatnonzero(has & reach & possible)
     # no configuration data: in program order, the candidate nearest the previous target's joints
     last = -1  # the last target without configuration data given joints
     for i in np.flatnonzero(~has & reach):
         k = np.searchsorted(configured, i) - 1
         prev = max(configured[k] if k >= 0 else -1, last)
-        d = np.where(valid[i], np.abs(cands[i] - (q[prev] if prev >= 0 else 0.0)).sum(axis=1), np.inf)
-        q[i] = cands[i, int(np.argmin(d))]
+        cands_i, valid_i = free[int(i)]
+        d = np.where(valid_i, np.abs(cands_i - (q[prev] if prev >= 0 else 0.0)).sum(axis=1), np.inf)
+        q[i] = cands_i[int(np.argmin(d))]
         last = i
     return q
 
