@@ -59,6 +59,7 @@ class FanucDialect(Dialect):
     suffixes = (".ls",)
     scheme = FANUCConfig()
     keep_width = True
+    euler_columns = (3, 4, 5)  # W, P, R
     frame_help = "X,Y,Z in mm and W,P,R in deg, as on the teach pendant's frame screen"
 
     def to_pose(self, values):

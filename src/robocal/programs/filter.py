@@ -47,6 +47,7 @@ from robocal.programs.urscript import URScriptDialect
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
+SWING_DEG = 1.0  # Euler angles moving more than this for a smaller turn: named (gimbal lock)
 CHUNK = 5_000  # targets whose closed-form candidates are held at once
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
 # A real TCP (--tcp) turned more than this from the program's tool data is another tool or a wrong
@@ -451,6 +452,7 @@ def _edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray,
     targets' configuration changed. ``cfg``: (rows of the nominal joints, rows of the corrected
     joints) or None."""
     new = d.from_pose(Pc, old)
+    warnings += _gimbal_swings(d, targets, old, new, good)
     resolution = d.resolutions()
     moved = good[:, None] & (np.abs(new - old) > resolution / 2)  # numbers that must be rewritten
     changed = np.zeros(len(targets), bool)
@@ -481,6 +483,25 @@ def _edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray,
                             f"{d.scheme.text(cfg[1][i])}: the corrected joints cross a configuration "
                             "boundary; check the motion into and out of this target")
     return edits, changed
+
+
+def _gimbal_swings(d: Dialect, targets: list[Target], old: np.ndarray, new: np.ndarray,
+                   good: np.ndarray) -> list[str]:
+    """Warnings for targets whose Euler angles change by more than ``SWING_DEG`` while the
+    orientation turns less: near gimbal lock (middle angle +-90 deg) the outer angles trade, and a
+    turn off the pole needs them to swing (same orientation, other numbers)."""
+    if not d.euler_columns:
+        return []
+    cols = list(d.euler_columns)
+    step = new[:, cols] - old[:, cols]
+    swing = np.abs(step - 360.0 * np.round(step / 360.0)).max(axis=1)
+    R0, R1 = d.to_pose(old)[:, :3, :3], d.to_pose(new)[:, :3, :3]
+    turn = np.rad2deg(np.linalg.norm(matrix_to_rotvec(R1 @ np.swapaxes(R0, 1, 2)), axis=1))
+    pole = np.abs(90.0 - np.abs(new[:, cols[1]]))
+    return [f"{targets[i].where}: its angles change by up to {swing[i]:.1f} deg for an orientation "
+            f"correction of {turn[i]:.3f} deg: it is {pole[i]:.3f} deg from gimbal lock (middle angle "
+            "+-90 deg), where the other two angles trade; the orientation is the corrected one"
+            for i in np.flatnonzero(good & (swing > SWING_DEG) & (turn < SWING_DEG))]
 
 
 def _aligned(text: str, num, new: str) -> dict[tuple[int, int], str]:

@@ -85,6 +85,7 @@ def _canonical(key: str, kind: str) -> str:
 
 
 class KRLDialect(Dialect):
+    euler_columns = (3, 4, 5)  # A, B, C
     name = "KUKA KRL"
     suffixes = (".src", ".dat", ".sub")
     scheme = KUKAConfig()
