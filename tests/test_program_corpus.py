@@ -66,6 +66,9 @@ CASES = {
                                 r":34: L: .*PR\[6:retract\] is a position register",
                                 r":35: L: .*PR\[3:service\] is a position register",
                                 r":32: L: .*P\[7\] is an incremental move"]),
+    "urscript polyscope screw station": (["screw_station.script"], [], "ur5", {}, ["p@14", "p@17", "p@19"],
+                                         [r":21: movel: .*Feeder_p is not assigned a pose before this motion",
+                                          r":23: movel: .*pose_add"]),
     "urscript palletizing": (["palletizing_ur5.script"], [], "ur5", {},
                              ["Pick_p", "Inspect_p", "p@40", "p@41", "p@41", "Gauge_p"],
                              [r":28: movel: .*pose_add\(Place_base_p, \.\.\.\) moves it at run time",
@@ -83,6 +86,7 @@ HAND_COUNT = {"rapid arc welding": (13, 10),  # lines 41-66; Offs(pCheck, .., nD
               "krl sealer without $config.dat": (7, 5),  # 25-33 but PTP XHOME (20, 34), PTP $AXIS_ACT (31)
               "fanuc arc welding": (11, 6),  # /MN lines 3-18 with a P[] or PR[]
               "fanuc near gimbal lock": (8, 4),  # /MN 4-12; J P[1] (3, 13) is a joint representation
+              "urscript polyscope screw station": (5, 3),  # 14-23; movej(Home_q) (12, 25) is a joint move
               "urscript palletizing": (10, 8)}  # every movel/movep/movec; movej(Home_q) is a joint move
 
 
