@@ -110,3 +110,16 @@ def test_recursive_calls_are_named(tmp_path):
     assert "loop.mod:11: a recursive call (a -> b -> a): its motions are ordered from the first entry only" \
         in res.warnings
     assert res.summary_dict()["motions"] == {"total": 1, "corrected": 1, "named": 0}
+
+
+def test_krl_partial_inline_position_is_named(tmp_path):
+    """LIN {Z 950} takes its other components from where the robot is: named, never silent; an
+    axis position is a joint motion (no record)."""
+    path = tmp_path / "part.src"
+    path.write_bytes(b"DEF part( )\r\n  $TOOL = $NULLFRAME\r\n  $BASE = $NULLFRAME\r\n"
+                     b"  LIN {X 800, Y 0, Z 900, A 0, B 80, C 0}\r\n  LIN {Z 950}\r\n"
+                     b"  PTP {A1 0, A2 -90, A3 90, A4 0, A5 0, A6 0}\r\nEND\r\n")
+    nominal = rc.Robot.from_catalog("kuka_kr16_2")
+    res = filter_program(path, perturbed(nominal, 7), nominal)
+    assert [(m.line, m.status) for m in res.motions] == [(4, "corrected"), (5, "named")]
+    assert "a partial position" in res.motions[1].reason

@@ -286,6 +286,10 @@ class KRLDialect(Dialect):
                     if text.startswith("{") or _NULL_OPERAND.match(text):  # $NULLFRAME:{..} is {..}
                         first = a + masked[a:b].index("{")
                         found = [self._target(src, masked, first, f"inline@{src.line_of(a)}", "E6POS", prog)]
+                        parsed = self._aggregate(src, masked, first) if found == [None] else None
+                        if parsed is not None and "A1" not in parsed[0]:  # a partial position
+                            found = ["a partial position: its missing components are taken from the current "
+                                     "position at run time"]
                     else:
                         head = _APPROX.sub("", text)
                         found = self._follow(st, head, proc, {}, 0) if head else []
