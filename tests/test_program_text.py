@@ -123,3 +123,17 @@ def test_krl_partial_inline_position_is_named(tmp_path):
     res = filter_program(path, perturbed(nominal, 7), nominal)
     assert [(m.line, m.status) for m in res.motions] == [(4, "corrected"), (5, "named")]
     assert "a partial position" in res.motions[1].reason
+
+
+def test_fanuc_motion_to_a_vision_register_is_named(tmp_path):
+    path = tmp_path / "vis.ls"
+    path.write_bytes(b"/PROG  VIS\n/ATTR\n/MN\n   1:  UFRAME_NUM=1 ;\n   2:  UTOOL_NUM=2 ;\n"
+                     b"   3:L VR[1].FOUND_POS[1] 100mm/sec FINE    ;\n   4:L P[1] 100mm/sec FINE    ;\n/POS\n"
+                     b"P[1]{\n   GP1:\n\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',\n"
+                     b"\tX = -45.6 mm, Y = 128.8 mm, Z = 315.1 mm,\n"
+                     b"\tW = 178.3 deg, P = -0.6 deg, R = 24.9 deg\n};\n/END\n")
+    nominal = rc.Robot.from_catalog("fanuc_lrmate200id")
+    res = filter_program(path, perturbed(nominal, 7), nominal, frames={"1": "450,-150,100,0,0,-10"},
+                         tools={"2": "0,0,120,0,0,0"})
+    assert [(m.line, m.status, m.target) for m in res.motions] == [(6, "named", "VR[1].FOUND_POS[1]"),
+                                                                   (7, "corrected", "P[1]")]

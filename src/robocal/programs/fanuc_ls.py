@@ -178,7 +178,10 @@ class FanucDialect(Dialect):
                 instr = mv.group(1)
                 off = _OFFSET.search(options) if "OFFSET" in options.upper() else None
                 for ref in refs:
-                    if ref is None:
+                    if ref is None:  # a vision register, an expression ...: the pose is not one of these
+                        prog.skip(here, instr, "its position is not a P[n] or PR[n] this filter reads",
+                                  prog.motion(src, line.start(1), instr), mv.group(2).split()[0] if
+                                  mv.group(2).split() else "")
                         continue
                     label = ref.group(0)
                     acc = None if ref.group(1) == "P" and ref.group(2).isdigit() and \

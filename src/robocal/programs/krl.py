@@ -379,6 +379,8 @@ class KRLDialect(Dialect):
                 if k < len(args):
                     arg = st.masked[src.path][slice(*args[k])].strip()
                     out += self._follow(st, arg, caller, scope, depth + 1)
+                else:
+                    out.append(f"{text} is a parameter of {proc} that the call at {src.path.name} leaves out")
             return out
         if fields:
             return [f"{text} is a field of a structure: its value is not followed"]
