@@ -137,3 +137,14 @@ def test_fanuc_motion_to_a_vision_register_is_named(tmp_path):
                          tools={"2": "0,0,120,0,0,0"})
     assert [(m.line, m.status, m.target) for m in res.motions] == [(6, "named", "VR[1].FOUND_POS[1]"),
                                                                    (7, "corrected", "P[1]")]
+
+
+def test_constant_expressions():
+    from robocal.programs.expressions import constant_value
+
+    k = {"k": 2.5, "nbead__1_2": 2.0}
+    assert constant_value("(-1) * K * 4", k) == -10.0
+    assert constant_value("nBead__1_2 * ((-1) * K)", k) == -5.0
+    assert constant_value("+3 - -2 / 4", k) == 3.5
+    for text in ("nRow * 2", "CRobT()", "2 ** 3", "a.b", "1 / 0", "[1, 2]", "", "1;2"):
+        assert constant_value(text, k) is None, text
