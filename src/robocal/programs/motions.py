@@ -46,7 +46,7 @@ class Undeclared(str):
         return obj
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class MotionRecord:
     """One motion instruction: ``file`` (name), ``line`` (1-based), ``instruction`` as written,
     ``target`` (the target(s) it reaches, ', '-joined, or the expression written), ``status``

@@ -25,7 +25,7 @@ _LONE_CR = re.compile(r"\r(?!\n)")
 NUMBER_RE = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Number:
     """A number in the program text: ``start:end`` byte span, its ``text`` and value."""
 
