@@ -148,3 +148,25 @@ def test_constant_expressions():
     assert constant_value("+3 - -2 / 4", k) == 3.5
     for text in ("nRow * 2", "CRobT()", "2 ** 3", "a.b", "1 / 0", "[1, 2]", "", "1;2"):
         assert constant_value(text, k) is None, text
+
+
+def test_chunked_filtering_gives_the_same_program(tmp_path, monkeypatch):
+    """Large programs are solved CHUNK targets at a time: with chunks of 3 targets the filtered
+    program and its table are those of one pass."""
+    import robocal.programs.filter as flt
+
+    names, robot, options = PROGRAMS["rapid"]
+    paths = []
+    for n in names:
+        shutil.copy(CORPUS / n, tmp_path / n)
+        paths.append(tmp_path / n)
+    nominal = rc.Robot.from_catalog(robot)
+    cal = perturbed(nominal, 7)
+    one = filter_program(paths, cal, nominal, **options)
+    monkeypatch.setattr(flt, "CHUNK", 3)
+    chunked = filter_program(paths, cal, nominal, **options)
+    assert chunked.outputs == one.outputs and chunked.motions == one.motions
+    for a, b in zip(chunked.rows, one.rows, strict=True):
+        assert a.keys() == b.keys()
+        for k in a:
+            assert a[k] == pytest.approx(b[k], abs=1e-9) if isinstance(a[k], float) else a[k] == b[k]

@@ -22,6 +22,7 @@ too unless ``tcp`` gives the one identified on the calibrated model (``robocal t
 
 from __future__ import annotations
 
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +33,7 @@ from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
 from robocal.ik.closed_form import has_closed_form
 from robocal.ik.controller import JUMP_DEG, nearest_solutions
+from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
@@ -48,7 +50,7 @@ from robocal.programs.urscript import URScriptDialect
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
 SWING_DEG = 1.0  # Euler angles moving more than this for a smaller turn: named (gimbal lock)
-CHUNK = 5_000  # targets whose closed-form candidates are held at once
+CHUNK = 5_000  # targets whose IK candidates and numeric IK are computed at once (memory)
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
 # A real TCP (--tcp) turned more than this from the program's tool data is another tool or a wrong
 # --rotation (the 4-point method finds the position only): refused. Moved more: a warning.
@@ -336,8 +338,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     q_nom = controller_joints(d, program, targets, nominal, X @ invert_transform(tool), problems, warnings)
     ok = np.isfinite(q_nom).all(axis=1)
     warnings += _inexact_configurations(d, nominal, targets, q_nom, ok)
-    comp = compensate(controller_model(calibrated, nominal, robot_base), nominal,
-                      X @ invert_transform(real_tool), seeds=np.where(ok[:, None], q_nom, 0.0))
+    comp = _compensate(controller_model(calibrated, nominal, robot_base), nominal,
+                       X @ invert_transform(real_tool), np.where(ok[:, None], q_nom, 0.0))
     q, sing = comp.joints, comp.singularity
     _check_joints(nominal, comp, ok, problems)
     bad = {i for i, _ in problems}
@@ -361,6 +363,27 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,
                         program.ledger.records(corrected, program.not_corrected))
+
+
+def _compensate(model: Robot, nominal: Robot, F: np.ndarray, seeds: np.ndarray) -> Compensation:
+    """:func:`robocal.compensate` of flange poses ``F`` ``(N, 4, 4)`` from ``seeds`` ``(N, n)``,
+    ``CHUNK`` targets at a time (the numeric IK's arrays for 100,000 poses at once take
+    gigabytes); each target's result depends on its own seed only."""
+    parts = [compensate(model, nominal, F[s:s + CHUNK], seeds=seeds[s:s + CHUNK])
+             for s in range(0, len(F), CHUNK)]
+    if len(parts) == 1:
+        return parts[0]
+
+    def joined(items: list) -> np.ndarray:
+        return np.concatenate(items)
+
+    sing = None if parts[0].singularity is None else SingularityDistance(
+        *(joined([getattr(p.singularity, f.name) for p in parts]) for f in fields(SingularityDistance)))
+    return replace(parts[0], joints=joined([p.joints for p in parts]),
+                   corrected_targets=joined([p.corrected_targets for p in parts]),
+                   converged=joined([p.converged for p in parts]),
+                   position_error=joined([p.position_error for p in parts]),
+                   orientation_error=joined([p.orientation_error for p in parts]), singularity=sing)
 
 
 def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
