@@ -39,6 +39,7 @@ if TYPE_CHECKING:
 
 CORRECTED = "corrected"
 NAMED = "named"
+LABEL_CHARS = 60  # a motion's target as written, shortened to this in its record
 
 
 class Undeclared(str):
@@ -109,6 +110,7 @@ class Account:
     def mention(self, label: str) -> None:
         """Name what the motion moves to in its record (a target, or the expression written)."""
         label = " ".join(label.split())
+        label = label if len(label) <= LABEL_CHARS else label[:LABEL_CHARS - 3] + "..."
         if label and label not in self.labels:
             self.labels.append(label)
 
