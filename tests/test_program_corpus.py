@@ -60,6 +60,15 @@ CASES = {
                            r":39: L: .*PR\[5:service\] is a position reg",
                            r":40: L: .*P\[12\] is not a Cartesian position of group 1",
                            r":38: L: .*P\[9\] is an incremental move"]),  # named once all uses are known
+    "fanuc near gimbal lock": (["polish_vertical.ls"], [], "fanuc_lrmate200id", FANUC_FRAMES,
+                               ["P[2:above lid]", "P[3]", "P[4]", "P[5]", "P[6]"],
+                               [r":31: L: .*P\[4\] is shifted at run time by Offset,PR\[4:lift\]",
+                                r":34: L: .*PR\[6:retract\] is a position register",
+                                r":35: L: .*PR\[3:service\] is a position register",
+                                r":32: L: .*P\[7\] is an incremental move"]),
+    "urscript polyscope screw station": (["screw_station.script"], [], "ur5", {}, ["p@14", "p@17", "p@19"],
+                                         [r":21: movel: .*Feeder_p is not assigned a pose before this motion",
+                                          r":23: movel: .*pose_add"]),
     "urscript palletizing": (["palletizing_ur5.script"], [], "ur5", {},
                              ["Pick_p", "Inspect_p", "p@40", "p@41", "p@41", "Gauge_p"],
                              [r":28: movel: .*pose_add\(Place_base_p, \.\.\.\) moves it at run time",
@@ -76,6 +85,8 @@ HAND_COUNT = {"rapid arc welding": (13, 10),  # lines 41-66; Offs(pCheck, .., nD
               "krl kss8 spline": (15, 10),  # 27-72 but 20 ($H_POS) and 66 (XHOME)
               "krl sealer without $config.dat": (7, 5),  # 25-33 but PTP XHOME (20, 34), PTP $AXIS_ACT (31)
               "fanuc arc welding": (11, 6),  # /MN lines 3-18 with a P[] or PR[]
+              "fanuc near gimbal lock": (8, 4),  # /MN 4-12; J P[1] (3, 13) is a joint representation
+              "urscript polyscope screw station": (5, 3),  # 14-23; movej(Home_q) (12, 25) is a joint move
               "urscript palletizing": (10, 8)}  # every movel/movep/movec; movej(Home_q) is a joint move
 
 
@@ -369,6 +380,15 @@ def test_fanuc_position_registers_from_a_file(tmp_path, capsys):
                  str(regs), "-o", str(tmp_path / "o.ls")]) == 0
     assert (tmp_path / "o.ls.registers.csv").read_bytes() == out
     assert "11 motions: 7 corrected, 4 not corrected" in capsys.readouterr().out
+
+
+def test_fanuc_gimbal_lock_swing_is_named(tmp_path):
+    """Positions taught at P = -90 deg: a correction that tilts the tool off the pole needs W and R
+    to swing (the only triples of that orientation); each such target is named with the swing."""
+    res, _ = _run("fanuc near gimbal lock", tmp_path)
+    swings = [w for w in res.warnings if "from gimbal lock" in w]
+    assert swings and all(re.match(r"polish_vertical.ls:\d+ \(P\[\d", w) for w in swings)
+    assert all(float(re.search(r"correction of ([\d.]+) deg", w).group(1)) < 1.0 for w in swings)
 
 
 def test_fanuc_position_used_plain_and_incremental(tmp_path):

@@ -110,3 +110,63 @@ def test_recursive_calls_are_named(tmp_path):
     assert "loop.mod:11: a recursive call (a -> b -> a): its motions are ordered from the first entry only" \
         in res.warnings
     assert res.summary_dict()["motions"] == {"total": 1, "corrected": 1, "named": 0}
+
+
+def test_krl_partial_inline_position_is_named(tmp_path):
+    """LIN {Z 950} takes its other components from where the robot is: named, never silent; an
+    axis position is a joint motion (no record)."""
+    path = tmp_path / "part.src"
+    path.write_bytes(b"DEF part( )\r\n  $TOOL = $NULLFRAME\r\n  $BASE = $NULLFRAME\r\n"
+                     b"  LIN {X 800, Y 0, Z 900, A 0, B 80, C 0}\r\n  LIN {Z 950}\r\n"
+                     b"  PTP {A1 0, A2 -90, A3 90, A4 0, A5 0, A6 0}\r\nEND\r\n")
+    nominal = rc.Robot.from_catalog("kuka_kr16_2")
+    res = filter_program(path, perturbed(nominal, 7), nominal)
+    assert [(m.line, m.status) for m in res.motions] == [(4, "corrected"), (5, "named")]
+    assert "a partial position" in res.motions[1].reason
+
+
+def test_fanuc_motion_to_a_vision_register_is_named(tmp_path):
+    path = tmp_path / "vis.ls"
+    path.write_bytes(b"/PROG  VIS\n/ATTR\n/MN\n   1:  UFRAME_NUM=1 ;\n   2:  UTOOL_NUM=2 ;\n"
+                     b"   3:L VR[1].FOUND_POS[1] 100mm/sec FINE    ;\n   4:L P[1] 100mm/sec FINE    ;\n/POS\n"
+                     b"P[1]{\n   GP1:\n\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',\n"
+                     b"\tX = -45.6 mm, Y = 128.8 mm, Z = 315.1 mm,\n"
+                     b"\tW = 178.3 deg, P = -0.6 deg, R = 24.9 deg\n};\n/END\n")
+    nominal = rc.Robot.from_catalog("fanuc_lrmate200id")
+    res = filter_program(path, perturbed(nominal, 7), nominal, frames={"1": "450,-150,100,0,0,-10"},
+                         tools={"2": "0,0,120,0,0,0"})
+    assert [(m.line, m.status, m.target) for m in res.motions] == [(6, "named", "VR[1].FOUND_POS[1]"),
+                                                                   (7, "corrected", "P[1]")]
+
+
+def test_constant_expressions():
+    from robocal.programs.expressions import constant_value
+
+    k = {"k": 2.5, "nbead__1_2": 2.0}
+    assert constant_value("(-1) * K * 4", k) == -10.0
+    assert constant_value("nBead__1_2 * ((-1) * K)", k) == -5.0
+    assert constant_value("+3 - -2 / 4", k) == 3.5
+    for text in ("nRow * 2", "CRobT()", "2 ** 3", "a.b", "1 / 0", "[1, 2]", "", "1;2"):
+        assert constant_value(text, k) is None, text
+
+
+def test_chunked_filtering_gives_the_same_program(tmp_path, monkeypatch):
+    """Large programs are solved CHUNK targets at a time: with chunks of 3 targets the filtered
+    program and its table are those of one pass."""
+    import robocal.programs.filter as flt
+
+    names, robot, options = PROGRAMS["rapid"]
+    paths = []
+    for n in names:
+        shutil.copy(CORPUS / n, tmp_path / n)
+        paths.append(tmp_path / n)
+    nominal = rc.Robot.from_catalog(robot)
+    cal = perturbed(nominal, 7)
+    one = filter_program(paths, cal, nominal, **options)
+    monkeypatch.setattr(flt, "CHUNK", 3)
+    chunked = filter_program(paths, cal, nominal, **options)
+    assert chunked.outputs == one.outputs and chunked.motions == one.motions
+    for a, b in zip(chunked.rows, one.rows, strict=True):
+        assert a.keys() == b.keys()
+        for k in a:
+            assert a[k] == pytest.approx(b[k], abs=1e-9) if isinstance(a[k], float) else a[k] == b[k]

@@ -59,6 +59,7 @@ class FanucDialect(Dialect):
     suffixes = (".ls",)
     scheme = FANUCConfig()
     keep_width = True
+    euler_columns = (3, 4, 5)  # W, P, R
     frame_help = "X,Y,Z in mm and W,P,R in deg, as on the teach pendant's frame screen"
 
     def to_pose(self, values):
@@ -177,11 +178,15 @@ class FanucDialect(Dialect):
                 instr = mv.group(1)
                 off = _OFFSET.search(options) if "OFFSET" in options.upper() else None
                 for ref in refs:
-                    if ref is None:
+                    if ref is None:  # a vision register, an expression ...: the pose is not one of these
+                        prog.skip(here, instr, "its position is not a P[n] or PR[n] this filter reads",
+                                  prog.motion(src, line.start(1), instr), mv.group(2).split()[0] if
+                                  mv.group(2).split() else "")
                         continue
                     label = ref.group(0)
-                    acc = None if ref.group(1) == "P" and ref.group(2).isdigit() and \
-                        (src.path, int(ref.group(2))) in joint else prog.motion(src, line.start(1), instr)
+                    number = ref.group(2).isdigit() and len(ref.group(2)) <= _POSITION_DIGITS
+                    acc = None if ref.group(1) == "P" and number and (src.path, int(ref.group(2))) in joint \
+                        else prog.motion(src, line.start(1), instr)
                     if acc is None:
                         continue  # a joint representation: nothing to correct
                     if ref.group(1) == "PR":
@@ -242,6 +247,8 @@ def _register(ref, registers, active, at: int):
                 "values with --position-registers to correct it)")
     if not n.isdigit():
         return f"{label}: the register number is known at run time only"
+    if len(n) > _POSITION_DIGITS:
+        return f"PR[{short_repr(n)}] is not a register number (more than {_POSITION_DIGITS} digits)"
     if int(n) in active.assigned:
         return f"{label} is assigned in this program: its value is computed at run time"
     if int(n) not in registers:

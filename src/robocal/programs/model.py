@@ -131,6 +131,7 @@ class Dialect:
     n_values = 6  # pose numbers per target
     shared_decimals: tuple[tuple[int, ...], ...] = ()  # pose columns written at the file's finest decimals
     keep_width = False  # numbers right-aligned after spaces keep their width (FANUC)
+    euler_columns: tuple[int, ...] = ()  # pose columns that are Euler angles in deg (gimbal lock possible)
     frame_help = ""  # how --tool/--frame values are written for this dialect
 
     def parse(self, sources: list[ProgramText], frames: dict[str, np.ndarray],
