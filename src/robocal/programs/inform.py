@@ -113,7 +113,7 @@ class _Header:
     rectan: bool = False
     user: str = ""
     tool: str = "0"
-    rconf: list[Number] | None = None
+    rconf: list[str] | None = None  # the RCONF fields as written
     rconf_line: str = ""  # the RCONF line's text (restored after a position whose form is rewritten)
 
 
@@ -164,7 +164,7 @@ class InformDialect(Dialect):
     def config_edits(self, target, new):
         pos: Position = target.config_spans
         old = pos.header.rconf or []
-        fields = [str(min(int(v), 1)) for v in new] + [n.text for n in old[CONFIG_FIELDS:]]
+        fields = [str(min(int(v), 1)) for v in new] + old[CONFIG_FIELDS:]
         text = target.source.text
         newline = pos.newline or ("\r\n" if "\r\n" in text else "\n")
         edits = {(pos.line_start, pos.line_start): f"///RCONF {','.join(fields)}{newline}"}
@@ -268,7 +268,7 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
             flags = head.rconf[:CONFIG_FIELDS] if head.rconf is not None else None
             # an older form without the R, T, S flags: within -180 < angle <= 180
             config = None if flags is None else \
-                np.array([int(n.text) for n in flags] + [0] * (CONFIG_FIELDS - len(flags)))
+                np.array([int(f) for f in flags] + [0] * (CONFIG_FIELDS - len(flags)))
             state = (_Header(**vars(head)), config)
         header, config = state
         pos = Position(kind, int(index), nums, header, start, start + len(line) + len(end), end)
@@ -294,24 +294,24 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
 def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _Header) -> None:
     """Apply a ``///KEY value`` line of a position section to ``head`` (malformed: DataError)."""
     key, value = h.group(1).upper(), h.group(2)
-    where = src.where(start)
     if key == "NPOS":
         if not re.fullmatch(r"\d+(?:\s*,\s*\d+)*", value):
-            raise DataError(f"{where}: malformed ///NPOS {value!r}: expected 6 integers")
+            raise DataError(f"{src.where(start)}: malformed ///NPOS {value!r}: expected 6 integers")
     elif key == "POSTYPE":
         head.postype = value.upper()
     elif key in ("RECTAN", "PULSE"):
         head.rectan = key == "RECTAN"
     elif key in ("USER", "TOOL"):
         if not value.isdigit():
-            raise DataError(f"{where}: malformed ///{key} {value!r}: expected a number")
+            raise DataError(f"{src.where(start)}: malformed ///{key} {value!r}: expected a number")
         setattr(head, key.lower(), str(int(value)))
     elif key == "RCONF":
-        nums = src.numbers_in(start + line.index(value), start + len(line)) if value else []
-        if len(nums) < BRANCH_FIELDS or any(n.text not in ("0", "1") for n in nums[:CONFIG_FIELDS]):
-            raise DataError(f"{where}: malformed ///RCONF {value!r}: expected flags 0 or 1 "
+        fields = [f.strip() for f in value.split(",")] if value else []
+        if len(fields) < BRANCH_FIELDS or any(f not in ("0", "1") for f in fields[:CONFIG_FIELDS]) \
+                or not all(f.isdigit() for f in fields):
+            raise DataError(f"{src.where(start)}: malformed ///RCONF {value!r}: expected flags 0 or 1 "
                             "(flip, arm, front/back, R, T, S, ...)")
-        head.rconf, head.rconf_line = nums, line
+        head.rconf, head.rconf_line = fields, line
 
 
 def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named: set) -> None:
@@ -323,7 +323,8 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
     runtime: dict[str, str] = {}  # variable -> where the job writes it at run time (anywhere: loops)
     mframe: dict[str, str] = {}  # user frame -> the MFRAME that sets it
     on_track = bool(re.search(r"^///GROUP\d+\s+[^\r\n]*\bBS\d", src.text, re.MULTILINE))  # robot on base axes
-    inst = [(start, _LABELED.sub("", line, count=1)) for start, line, _ in _instructions(src)]
+    inst = [(start, _LABELED.sub("", line, count=1) if "*" in line else line)
+            for start, line, _ in _instructions(src)]
     for start, body in inst:
         w = _WRITES.match(body)
         if w:
