@@ -60,6 +60,15 @@ CASES = {
                            r":39: L: .*PR\[5:service\] is a position reg",
                            r":40: L: .*P\[12\] is not a Cartesian position of group 1",
                            r":38: L: .*P\[9\] is an incremental move"]),  # named once all uses are known
+    "fanuc near gimbal lock": (["polish_vertical.ls"], [], "fanuc_lrmate200id", FANUC_FRAMES,
+                               ["P[2:above lid]", "P[3]", "P[4]", "P[5]", "P[6]"],
+                               [r":31: L: .*P\[4\] is shifted at run time by Offset,PR\[4:lift\]",
+                                r":34: L: .*PR\[6:retract\] is a position register",
+                                r":35: L: .*PR\[3:service\] is a position register",
+                                r":32: L: .*P\[7\] is an incremental move"]),
+    "urscript polyscope screw station": (["screw_station.script"], [], "ur5", {}, ["p@14", "p@17", "p@19"],
+                                         [r":21: movel: .*Feeder_p is not assigned a pose before this motion",
+                                          r":23: movel: .*pose_add"]),
     "urscript palletizing": (["palletizing_ur5.script"], [], "ur5", {},
                              ["Pick_p", "Inspect_p", "p@40", "p@41", "p@41", "Gauge_p"],
                              [r":28: movel: .*pose_add\(Place_base_p, \.\.\.\) moves it at run time",
@@ -76,6 +85,8 @@ HAND_COUNT = {"rapid arc welding": (13, 10),  # lines 41-66; Offs(pCheck, .., nD
               "krl kss8 spline": (15, 10),  # 27-72 but 20 ($H_POS) and 66 (XHOME)
               "krl sealer without $config.dat": (7, 5),  # 25-33 but PTP XHOME (20, 34), PTP $AXIS_ACT (31)
               "fanuc arc welding": (11, 6),  # /MN lines 3-18 with a P[] or PR[]
+              "fanuc near gimbal lock": (8, 4),  # /MN 4-12; J P[1] (3, 13) is a joint representation
+              "urscript polyscope screw station": (5, 3),  # 14-23; movej(Home_q) (12, 25) is a joint move
               "urscript palletizing": (10, 8)}  # every movel/movep/movec; movej(Home_q) is a joint move
 
 
@@ -329,6 +340,55 @@ def test_fanuc_incremental_position_is_left_alone(tmp_path):
     res, paths = _run("fanuc arc welding", tmp_path)
     block = re.search(rb"P\[9\]\{.*?\};", res.outputs[paths[0]], re.DOTALL).group(0)
     assert block == re.search(rb"P\[9\]\{.*?\};", paths[0].read_bytes(), re.DOTALL).group(0)
+
+
+def test_fanuc_position_registers_from_a_file(tmp_path, capsys):
+    """--position-registers: the motion to PR[5] is corrected in the UF/UT active there, the
+    register file's copy holds the corrected values (only numbers change); without the file the
+    motion is named."""
+    path = _copy(["weld_bracket.ls"], tmp_path)[0]
+    regs = _copy(["weld_registers.csv"], tmp_path)[0]
+    nominal = rc.Robot.from_catalog("fanuc_lrmate200id")
+    cal = perturbed(nominal, 7)
+    res = filter_program(path, cal, nominal, position_registers=regs, **FANUC_FRAMES)
+    pr = next(m for m in res.motions if m.line == 39)
+    assert pr.status == "corrected" and pr.target == "PR[5]"
+    assert res.summary_dict()["motions"] == {"total": 11, "corrected": 7, "named": 4}
+    row = next(r for r in res.rows if r["name"] == "PR[5]")
+    assert row["frame"] == "1" and row["tool"] == "2" and row["correction_mm"] > 0.1
+    out = res.outputs[regs]
+    assert out != regs.read_bytes() and _outside_numbers(out) == _outside_numbers(regs.read_bytes())
+    # the corrected register is the corrected pose of an identical /POS position
+    text = path.read_bytes().replace(b"16:L P[12]", b"16:L P[13]")
+    x, y, z, w, p, r = re.search(rb"\n5,([^\n]*),\"", regs.read_bytes()).group(1).decode().split(",")
+    block = (f"P[13]{{\n   GP1:\n\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',\n\tX = {x} mm, Y = {y} mm, "
+             f"Z = {z} mm,\n\tW = {w} deg, P = {p} deg, R = {r} deg\n}};\n").encode()
+    twin = tmp_path / "twin.ls"
+    twin.write_bytes(text.replace(b"/END", block + b"/END"))
+    res2 = filter_program(twin, cal, nominal, position_registers=regs, **FANUC_FRAMES)
+    got = re.search(rb"P\[13\]\{.*?X = (\S+) mm, Y = (\S+) mm, Z = (\S+) mm", res2.outputs[twin], re.DOTALL)
+    new = re.search(rb"\n5,([^\n]*),\"", out).group(1).decode().split(",")
+    assert [float(v) for v in got.groups()] == pytest.approx([float(v) for v in new[:3]], abs=1e-3)
+    # without the file: named, with how to correct it
+    res = filter_program(path, cal, nominal, **FANUC_FRAMES)
+    assert "--position-registers" in next(m for m in res.motions if m.line == 39).reason
+    # the CLI writes the corrected register file next to the program
+    cal_path = tmp_path / "cal.yaml"
+    cal.save(cal_path)
+    assert main(["filter", str(path), "--calibrated", str(cal_path), "--nominal", "fanuc_lrmate200id",
+                 "--frame", "1=450,-150,100,0,0,-10", "--tool", "2=0,0,120,0,0,0", "--position-registers",
+                 str(regs), "-o", str(tmp_path / "o.ls")]) == 0
+    assert (tmp_path / "o.ls.registers.csv").read_bytes() == out
+    assert "11 motions: 7 corrected, 4 not corrected" in capsys.readouterr().out
+
+
+def test_fanuc_gimbal_lock_swing_is_named(tmp_path):
+    """Positions taught at P = -90 deg: a correction that tilts the tool off the pole needs W and R
+    to swing (the only triples of that orientation); each such target is named with the swing."""
+    res, _ = _run("fanuc near gimbal lock", tmp_path)
+    swings = [w for w in res.warnings if "from gimbal lock" in w]
+    assert swings and all(re.match(r"polish_vertical.ls:\d+ \(P\[\d", w) for w in swings)
+    assert all(float(re.search(r"correction of ([\d.]+) deg", w).group(1)) < 1.0 for w in swings)
 
 
 def test_fanuc_position_used_plain_and_incremental(tmp_path):

@@ -26,6 +26,7 @@ from robocal.kinematics.catalog import catalog_names
 from robocal.kinematics.transforms import rotvec_to_matrix
 from robocal.programs import FilterResult, filter_program
 from robocal.programs.config import ABBConfig, FANUCConfig, KUKAConfig
+from robocal.programs.inform import YaskawaConfig
 from robocal.programs.rotations import matrix_to_quat, matrix_to_zyx, nearest_rotvec, quat_to_matrix
 from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE, Number, format_number
@@ -82,6 +83,25 @@ def test_configuration_data_select_the_joints(name, scheme):
     assert (score.min(axis=1) == 0).all()
     picked = cands[np.arange(len(q)), score.argmin(axis=1)]
     assert np.abs(picked - q).max() < 1e-7
+
+
+@pytest.mark.parametrize("name", [n for n in OPW_ROBOTS if n.startswith("yaskawa")])
+def test_yaskawa_form_selects_the_joints(name):
+    """RCONF of q picks q among the candidates within +-360 deg (the flags tell two copies apart),
+    and the copy within a turn before one beyond it."""
+    robot = rc.Robot.from_catalog(name)
+    scheme = YaskawaConfig()
+    lim = np.clip(robot.limits, -2 * np.pi + 1e-3, 2 * np.pi - 1e-3)
+    q = np.random.default_rng(2).uniform(lim[:, 0], lim[:, 1], (400, 6))
+    cands = rc.ik.solve_all(robot, robot.fk(q), extra_turns=True)
+    valid = np.isfinite(cands).all(axis=2)
+    have = scheme.encode(robot, np.where(valid[..., None], cands, 0.0))
+    score = np.where(valid, scheme.score(have, scheme.encode(robot, q)[:, None]), 10**9)
+    assert (score.min(axis=1) == 0).all()
+    assert np.abs(cands[np.arange(len(q)), score.argmin(axis=1)] - q).max() < 1e-7
+    home = scheme.encode(robot, np.deg2rad([[0, 0, 0, 0, -90, 0], [190, 0, 0, -200, 30, 400]]))
+    assert [scheme.text(r) for r in home] == ["1,0,0,0,0,0", "0,0,0,1,1,1"]
+    assert home[1, 4] == 2  # T at 400 deg: beyond a turn
 
 
 def test_vendor_configuration_conventions():

@@ -1,5 +1,5 @@
 """Robot programs that drive a measurement campaign: ABB RAPID, KUKA KRL, FANUC TP (.ls), Universal
-Robots URScript.
+Robots URScript, Yaskawa INFORM (.JBI), Staubli VAL3 (an application folder).
 
 Each program moves to the planned joint positions in the measuring order, waits ``settle_s``
 seconds for the robot to come to rest, and calls a named procedure at each pose where the user
@@ -23,6 +23,21 @@ values go out unchanged (degrees for RAPID and KRL, radians for URScript).
 - URScript: a program ``def name(): ... end`` with ``movej([q1, .., q6], a=.., v=..)``, where
   ``v`` is the speed percentage of pi rad/s (Universal Robots' joint speed limit) and ``a`` 1.4
   rad/s^2, ``sleep`` and the procedure, defined inside the program.
+- INFORM: a job (``/JOB``, ``//POS``, ``//INST``) with one Cartesian position per pose,
+  ``///POSTYPE ROBOT``, ``///RECTAN``, ``///TOOL 0`` (the flange), and the form ``///RCONF`` of the
+  planned joints (written again whenever it changes): the controller's own IK in that form gives
+  back the planned joints. Joint positions (``///PULSE``) would need each axis's encoder pulses per
+  degree, which live in the controller's parameters (ALL.PRM), not in the model. Per pose
+  ``MOVJ Cnnnnn VJ=speed``, ``TIMER T=settle``, ``SET I000 k`` and ``CALL JOB:procedure`` (a job of
+  the cell that triggers the tracker and reads the pose number from I000). X, Y, Z in mm with 3
+  decimals, Rx, Ry, Rz in deg with 4, as the pendant writes them; CRLF line ends. The form tells a
+  joint's copies apart within +-360 deg only: a planned T beyond a turn (the GP arms' T has
+  +-455 deg) is reached as its copy within a turn, the same flange pose.
+- VAL3: an application folder NAME/ with ``NAME.pjx``, ``start.pgx`` (per pose ``movej(jPose[k],
+  flange, mCampaign)``, ``waitEndMove()``, ``delay(settle)``, ``call procedure(k)``), ``stop.pgx``,
+  the procedure's ``.pgx`` (a ``num`` parameter; its body only writes a message) and ``NAME.dtx``
+  declaring ``jPose`` (jointRx, deg) and ``mCampaign`` (mdesc, ``vel`` = the speed percentage,
+  blend off). XML as the Staubli editor writes it (UTF-8, CRLF).
 """
 
 from __future__ import annotations
@@ -43,6 +58,10 @@ RAPID_NAME_MAX = 32
 TP_NAME_MAX = 36                   # R-30iB program names
 TP_DECIMALS = 4                    # TP stores single-precision joint values
 KRL_NAME_MAX = 24
+INFORM_NAME_MAX = 32               # YRC1000 job names
+INFORM_DECIMALS = (3, 4)           # mm, deg: the pendant's RECTAN precision
+INFORM_COMMENT_MAX = 32            # characters of ///COMM and of a ' comment
+VAL3_NAME_MAX = 15                 # VAL3 application and program names (CS8 limit)
 DEGREE_DECIMALS = 10               # written precision of joint values in degrees
 RADIAN_DECIMALS = 12               # ... in radians
 DEFAULT_SPEED_PERCENT = 20.0
@@ -154,6 +173,93 @@ def fanuc_ls_program(joints_deg, name: str = "ROBOCAL_CAMPAIGN", *,
                   f"\tJ1= {v[0]} deg,\tJ2= {v[1]} deg,\tJ3= {v[2]} deg,",
                   f"\tJ4= {v[3]} deg,\tJ5= {v[4]} deg,\tJ6= {v[5]} deg", "};"]
     return "\n".join([*lines, "/END", ""])
+
+
+def inform_job(joints_deg, robot, name: str = "ROBOCAL_CAMPAIGN", *,
+               speed_percent: float = DEFAULT_SPEED_PERCENT, settle_s: float = DEFAULT_SETTLE_S,
+               procedure: str = DEFAULT_PROCEDURE, comment: str = "") -> str:
+    """Yaskawa INFORM job visiting ``joints_deg (N, 6)`` in order on ``robot`` (its nominal model:
+    the RECTAN positions are its flange poses in the robot frame, see the module docstring)."""
+    from robocal.programs.inform import InformDialect
+
+    q = _check(joints_deg, speed_percent, settle_s, "INFORM")
+    name = _identifier(name, "the INFORM job name (the file name)", INFORM_NAME_MAX).upper()
+    procedure = _identifier(procedure, "the procedure (job) name", INFORM_NAME_MAX).upper()
+    dialect = InformDialect()
+    rad = np.deg2rad(q)
+    values = dialect.from_pose(robot.fk(rad), np.zeros((len(q), 6)))
+    form = dialect.scheme.encode(robot, rad)
+    pos = ["/JOB", f"//NAME {name}", "//POS", f"///NPOS {len(q)},0,0,0,0,0", "///TOOL 0", "///POSTYPE ROBOT",
+           "///RECTAN"]
+    last = None
+    for k, (row, cfg) in enumerate(zip(values, form, strict=True)):
+        text = dialect.scheme.text(cfg)
+        if text != last:
+            pos.append(f"///RCONF {text},0,0")
+            last = text
+        digits = [INFORM_DECIMALS[0]] * 3 + [INFORM_DECIMALS[1]] * 3
+        pos.append(f"C{k:05d}=" + ",".join(_fixed(v, d) for v, d in zip(row, digits, strict=True)))
+    texts = [*_comment_lines(comment, len(q)), f"{procedure} reads the pose number from I000"]
+    notes = [line for text in texts for line in textwrap.wrap(_tp_text(text), INFORM_COMMENT_MAX)]
+    inst = ["//INST", "///DATE 2000/01/01 00:00", f"///COMM {notes[0]}", "///ATTR SC,RW", "///GROUP1 RB1",
+            "NOP"]
+    inst += [f"'{line}" for line in notes]
+    for k in range(len(q)):
+        inst += [f"MOVJ C{k:05d} VJ={speed_percent:.2f}", f"TIMER T={settle_s:.2f}", f"SET I000 {k + 1}",
+                 f"CALL JOB:{procedure}"]
+    return "\r\n".join([*pos, *inst, "END", ""])
+
+
+def val3_application(joints_deg, name: str = "robocalCampaign", *,
+                     speed_percent: float = DEFAULT_SPEED_PERCENT, settle_s: float = DEFAULT_SETTLE_S,
+                     procedure: str = DEFAULT_PROCEDURE, comment: str = "") -> dict[str, str]:
+    """Staubli VAL3 application visiting ``joints_deg (N, 6)`` in order: file name -> text (see the
+    module docstring)."""
+    q = _check(joints_deg, speed_percent, settle_s, "VAL3")
+    name = _identifier(name, "the VAL3 application name (the folder name)", VAL3_NAME_MAX)
+    procedure = _identifier(procedure, "the procedure (program) name", VAL3_NAME_MAX)
+    if procedure in ("start", "stop"):
+        raise DataError(f"the procedure cannot be named {procedure}: start and stop are the application's")
+    head = '<?xml version="1.0" encoding="utf-8"?>'
+    ns = 'xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" xmlns="http://www.staubli.com/robotics/VAL3'
+    code = ["begin", *(f"  // {line}" for line in _comment_lines(comment, len(q)))]
+    for k in range(len(q)):
+        code += [f"  movej(jPose[{k}], flange, mCampaign)", "  waitEndMove()",
+                 f"  delay({fixed_point(settle_s, 3)})", f"  call {procedure}({k + 1})"]
+    code.append("end")
+
+    def pgx(prog: str, body: list[str], params: tuple[str, ...] = ()) -> str:
+        return "\n".join([head, f'<Programs {ns}/Program/2">', f'  <Program name="{prog}" access="public">',
+                          *params, "    <Code><![CDATA[" + "\n".join(body), "]]></Code>", "  </Program>",
+                          "</Programs>", ""])
+
+    data = '    <Data name="{}" access="public" xsi:type="array" type="{}" size="{}">'
+    dtx = [head, f'<Database {ns}/Data/2">', "  <Datas>", data.format("jPose", "jointRx", len(q))]
+    for k, row in enumerate(q):
+        joints = " ".join(f'j{i + 1}="{fixed_point(v, DEGREE_DECIMALS)}"' for i, v in enumerate(row))
+        dtx.append(f'      <Value key="{k}" {joints} />')
+    dtx += ["    </Data>", data.format("mCampaign", "mdesc", 1),
+            f'      <Value key="0" vel="{fixed_point(speed_percent, 3)}" blend="off" />', "    </Data>",
+            "  </Datas>", "</Database>", ""]
+    pjx = [head, '<Project xmlns="http://www.staubli.com/robotics/VAL3/Project/3">',
+           '  <Parameters version="s7.11" stackSize="5000" millimeterUnit="true" />', "  <Programs>",
+           *(f'    <Program file="{f}.pgx" />' for f in ("start", "stop", procedure)), "  </Programs>",
+           "  <Database>", f'    <Data file="{name}.dtx" />', "  </Database>", "  <Libraries />",
+           "</Project>", ""]
+    param = ('    <Parameters xmlns="http://www.staubli.com/robotics/VAL3/Param/1">',
+             '      <Parameter name="x_nPose" type="num" xsi:type="element" />', "    </Parameters>")
+    measure = ["begin", "  // trigger the tracker measurement here",
+               '  putln("robocal: measure pose " + toString("", x_nPose))', "end"]
+    files = {f"{name}.pjx": "\n".join(pjx), "start.pgx": pgx("start", code),
+             "stop.pgx": pgx("stop", ["begin", "  resetMotion()", "end"]),
+             f"{procedure}.pgx": pgx(procedure, measure, param), f"{name}.dtx": "\n".join(dtx)}
+    return {k: v.replace("\n", "\r\n") for k, v in files.items()}
+
+
+def _fixed(value: float, decimals: int) -> str:
+    """``value`` with exactly ``decimals`` decimals, never '-0.000'."""
+    text = f"{value:.{decimals}f}"
+    return text.lstrip("-") if float(text) == 0.0 else text
 
 
 def _tp_text(text: str) -> str:

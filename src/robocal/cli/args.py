@@ -66,7 +66,8 @@ def check_distinct_inputs(paths, what: str = "input files", why: str = TWICE) ->
 
 # output suffix -> the format written there; an output named for another format is refused
 FORMATS = {".json": "JSON", ".yaml": "YAML", ".yml": "YAML", ".csv": "CSV", ".html": "HTML", ".htm": "HTML",
-           ".urdf": "URDF", ".npz": "npz", ".mod": "RAPID", ".src": "KRL", ".script": "URScript", ".ls": "TP"}
+           ".urdf": "URDF", ".npz": "npz", ".mod": "RAPID", ".src": "KRL", ".script": "URScript", ".ls": "TP",
+           ".jbi": "JBI"}
 
 
 def check_format(path, kind: str, option: str, hint: str = "") -> None:

@@ -16,13 +16,18 @@ EPILOG = """Examples:
   robocal filter seal.ls --frame 1=450,-150,100,0,0,-10 --tool 2=0,0,120,0,0,0 --calibrated cal.yaml \\
       --nominal fanuc_lrmate200id -o seal_cal.ls
   robocal filter pick.script --tool 0,0.02,0.15,0,0,0.5 --calibrated cal.yaml --nominal ur5 -o pick_cal.script
+  robocal filter WELD.JBI VAR.DAT --frame 2=1250,-300,450,0,0,15 --tool 1=0,-35,410,0,-30,0 \\
+      --calibrated cal.yaml --nominal yaskawa_gp25 -o filtered/
 Formats (from the suffix, or --format): rapid (.mod .modx .prg .sys), krl (.src .dat .sub), fanuc (.ls),
-urscript (.script .urscript). --tool / --frame give the controller's tool and frame data the files do
-not hold, NAME=values in the program's own notation: ABB x,y,z (mm),q1,q2,q3,q4; KUKA X,Y,Z (mm),A,B,C
-(deg); FANUC X,Y,Z (mm),W,P,R (deg); URScript x,y,z (m),rx,ry,rz (rad); names are the tooldata/wobjdata
-names, the KUKA TOOL_DATA/BASE_DATA and FANUC UT/UF numbers, URScript feature variables (an unnamed
-URScript --tool is the installation's TCP). --tcp NAME=x,y,z,rx,ry,rz (mm, deg, fixed-axis XYZ) is the
-real TCP of that tool identified on the calibrated model (robocal tool); default: the tool data.
+urscript (.script .urscript), inform (.JBI, and the controller's VAR.DAT), val3 (an application's
+folder, or its .pgx and .dtx files). --tool / --frame give the controller's tool and frame data the
+files do not hold, NAME=values in the program's own notation: ABB x,y,z (mm),q1,q2,q3,q4; KUKA X,Y,Z
+(mm),A,B,C (deg); FANUC X,Y,Z (mm),W,P,R (deg); Yaskawa X,Y,Z (mm),Rx,Ry,Rz (deg); VAL3 x,y,z (mm),
+rx,ry,rz (deg); URScript x,y,z (m),rx,ry,rz (rad); names are the tooldata/wobjdata names, the KUKA
+TOOL_DATA/BASE_DATA, FANUC UT/UF and Yaskawa TOOL/USER numbers, VAL3 data (fPart[0], tGripper[0]),
+URScript feature variables (an unnamed URScript --tool is the installation's TCP). --tcp
+NAME=x,y,z,rx,ry,rz (mm, deg, fixed-axis XYZ) is the real TCP of that tool identified on the
+calibrated model (robocal tool); default: the tool data.
 The calibrated model's identified frame {0} is the controller's base unless --robot-base gives the
 controller's base in the calibrated model's world frame (x,y,z,rx,ry,rz, mm, deg).
 Writes the filtered program(s) and the per-target table (CSV and JSON) together, or nothing. A filtered
@@ -32,11 +37,14 @@ filtering it again is refused unless --force."""
 
 # what each language's files look like
 SUFFIXES = {"rapid": (".mod", ".modx", ".prg", ".sys"), "krl": (".src", ".dat", ".sub"),
-            "fanuc": (".ls",), "urscript": (".script", ".urscript")}
-LANGUAGES = {"rapid": "ABB RAPID", "krl": "KUKA KRL", "fanuc": "FANUC TP (.ls)", "urscript": "URScript"}
+            "fanuc": (".ls",), "urscript": (".script", ".urscript"), "inform": (".jbi",),
+            "val3": (".pgx", ".dtx", ".pjx")}
+LANGUAGES = {"rapid": "ABB RAPID", "krl": "KUKA KRL", "fanuc": "FANUC TP (.ls)", "urscript": "URScript",
+             "inform": "Yaskawa INFORM (.JBI)", "val3": "Staubli VAL3"}
 SIGNATURES = {"rapid": r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)",
               "krl": r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)",
-              "fanuc": r"^/(?:PROG|MN|POS)\b", "urscript": r"^\s*def\s+\w+\s*\(.*\)\s*:|\bmove[ljpc]\s*\("}
+              "fanuc": r"^/(?:PROG|MN|POS)\b", "urscript": r"^\s*def\s+\w+\s*\(.*\)\s*:|\bmove[ljpc]\s*\(",
+              "inform": r"^/JOB\b|^//(?:NAME|POS|INST)\b", "val3": r"staubli\.com/robotics/VAL3"}
 
 
 def _diagnose_empty(args) -> None:
@@ -45,12 +53,12 @@ def _diagnose_empty(args) -> None:
     import re
 
     texts = {p: Path(p).read_text(encoding="utf-8", errors="replace")
-             for p in [*args.programs, *args.references]}
+             for p in [*args.programs, *args.references] if not Path(p).is_dir()}  # a VAL3 folder: its files
     suffix = Path(args.programs[0]).suffix.lower()
     language = args.format or next((k for k, s in SUFFIXES.items() if suffix in s), None)
     if language is None:
         return
-    for path in args.programs:
+    for path in (p for p in args.programs if p in texts):
         text = texts[path]
         if re.search(SIGNATURES[language], text, re.M | re.I):
             continue
@@ -74,12 +82,14 @@ def _named(values, what: str) -> dict[str, str]:
 
 def add_parser(sub) -> None:
     p = sub.add_parser("filter", help="correct a robot program's Cartesian targets with the calibrated model",
-                       description="Every Cartesian target of an ABB RAPID, KUKA KRL, FANUC TP (.ls) or "
-                                   "URScript program is replaced by the target the controller's nominal "
-                                   "model must be given so that the real robot lands where the program "
-                                   "meant; everything else in the file stays byte for byte.",
+                       description="Every Cartesian target of an ABB RAPID, KUKA KRL, FANUC TP (.ls), "
+                                   "URScript, Yaskawa INFORM or Staubli VAL3 program is replaced by the "
+                                   "target the controller's nominal model must be given so that the real "
+                                   "robot lands where the program meant; all else in the file stays byte "
+                                   "for byte.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("programs", nargs="+", help="program file(s); a KUKA .src with its .dat")
+    p.add_argument("programs", nargs="+",
+                   help="program file(s); a KUKA .src with its .dat; a VAL3 application's folder")
     p.add_argument("--calibrated", required=True, help="calibrated model YAML")
     p.add_argument("--nominal", required=True, help="catalog name or model YAML of the controller's model")
     p.add_argument("-o", "--output", required=True,
@@ -93,7 +103,8 @@ def add_parser(sub) -> None:
                    help="the controller's base in the calibrated model's world frame (mm, deg)")
     p.add_argument("--references", nargs="+", default=[], metavar="FILE",
                    help="files read for tool/frame declarations only ($config.dat, system modules)")
-    p.add_argument("--format", choices=("rapid", "krl", "fanuc", "urscript"), help="program format")
+    p.add_argument("--format", choices=("rapid", "krl", "fanuc", "urscript", "inform", "val3"),
+                   help="program format")
     p.add_argument("--table", help="per-target table: PATH.csv, PATH.json, or a prefix for both "
                                    "(default: OUTPUT.targets.csv/.json)")
     p.add_argument("--force", action="store_true",
@@ -101,18 +112,27 @@ def add_parser(sub) -> None:
                         "the corrections are applied again")
     p.add_argument("--keep-unreached", action="store_true",
                    help="leave targets that cannot be corrected unchanged (warning) instead of failing")
+    p.add_argument("--position-registers", metavar="FILE.csv",
+                   help="FANUC: the position registers' values (register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,"
+                        "config): motions to PR[n] are corrected and the corrected registers written to "
+                        "OUTPUT.registers.csv")
     p.add_argument("--strict", action="store_true",
                    help="refuse when a motion moves to a name declared in none of the files given (default: "
                         "each such motion is named, with the declaration it needs, and the rest corrected)")
     p.set_defaults(func=run)
 
 
-def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[dict, str, list[Path]]:
-    """(program -> output path, the table's path or prefix, every file that will be written)."""
+def _output_paths(programs: list[str], output: str, table: str | None,
+                  registers: str | None = None) -> tuple[dict, str, list[Path]]:
+    """(program -> output path, the table's path or prefix, every file that will be written); a
+    folder (a VAL3 application) stands for its files; the corrected copy of a position register
+    file goes to ``OUTPUT.registers.csv`` (one program) or into the output folder under its own
+    name."""
     from robocal.programs.result import table_paths
+    from robocal.programs.val3 import application_files
 
     out = Path(output)
-    inputs = [Path(p) for p in programs]
+    inputs = [f for p in map(Path, programs) for f in (application_files(p) if p.is_dir() else [p])]
     if len(inputs) == 1 and not out.is_dir():
         targets = {inputs[0]: out}
         table = table or str(out) + ".targets"
@@ -121,6 +141,10 @@ def _output_paths(programs: list[str], output: str, table: str | None) -> tuple[
             raise DataError(f"{out} is not a folder: with several program files, -o names an existing folder")
         targets = {p: out / p.name for p in inputs}
         table = table or str(out / (inputs[0].stem + ".targets"))
+    if registers is not None:
+        reg = Path(registers)
+        targets[reg] = Path(str(out) + ".registers.csv") if len(inputs) == 1 and not out.is_dir() \
+            else out / reg.name
     return targets, table, [*targets.values(), *table_paths(table)]
 
 
@@ -205,8 +229,9 @@ def run(args) -> int:
     from robocal.magnitudes import check_degrees, check_frame
     from robocal.programs import filter_program
 
-    targets, table, written = _output_paths(args.programs, args.output, args.table)
-    check_outputs(written, [*args.programs, args.calibrated, args.nominal, *args.references])
+    targets, table, written = _output_paths(args.programs, args.output, args.table, args.position_registers)
+    check_outputs(written, [*targets, args.calibrated, args.nominal, *args.references,
+                            *([args.position_registers] if args.position_registers else [])])
     calibrated, nominal = load_calibrated_and_nominal(args.calibrated, args.nominal)
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
     _check_magnitudes(args, robot_reach(nominal))
@@ -218,7 +243,7 @@ def run(args) -> int:
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),
                          frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,
                          dialect=args.format, references=args.references, keep_unreached=args.keep_unreached,
-                         force=args.force, strict=args.strict)
+                         force=args.force, strict=args.strict, position_registers=args.position_registers)
     if not res.rows:
         _diagnose_empty(args)
     res.warnings[:0] = _tool_disagreements(args)

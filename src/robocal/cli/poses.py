@@ -13,6 +13,8 @@ EPILOG = """Examples:
       --box 500 -1000 0 1800 1000 1800 --min-joint-distance-deg 10 -o poses.csv \\
       --rapid campaign.mod --krl campaign.src --urscript campaign.script
   robocal poses --robot fanuc_lrmate200id -n 20 --smr-mm 20,-30,60 -o poses.csv --fanuc campaign.ls
+  robocal poses --robot yaskawa_gp25 -n 20 --smr-mm 20,-30,60 -o poses.csv --inform CAMPAIGN.JBI
+  robocal poses --robot staubli_tx2_140 -n 20 --smr-mm 20,-30,60 -o poses.csv --val3 campaign
   robocal poses --robot meca500 -n 20 --from taught.csv --region taught.csv -o poses.csv
   robocal poses --robot abb_irb2600 --check -n 20 --from poses.csv -o check_poses.csv --rapid check.mod
   robocal simulate --robot abb_irb2600 --joints poses.csv --smr-mm 20,-30,80 -o data.csv --truth truth.yaml
@@ -20,8 +22,11 @@ Lengths in mm in the robot's base frame (SMR positions and facing directions in 
 angles in deg; write a value that starts with a minus as --smr-mm=-50,50,60.
 poses.csv: q1_deg..q6_deg in measuring order (with --from: the chosen rows' joint
 cells exactly as read, and their line numbers); visible_smr0.. with several SMRs. The programs
-move to each pose (MoveAbsJ / PTP / movej / J P[k]), wait --settle-s, and call --procedure: replace
-its body with your tracker trigger (FANUC: a TP program of that name, taking the pose number).
+move to each pose (MoveAbsJ / PTP / movej / J P[k]; INFORM: MOVJ to RECTAN positions in the robot
+frame, TOOL 0, with the planned joints' RCONF), wait --settle-s, and call --procedure: replace its
+body with your tracker trigger (FANUC: a TP program of that name, taking the pose number; INFORM: a
+job of that name, the pose number in I000; VAL3: movej(jPose[k], flange, ...) and call of a program
+of that name, the pose number its argument).
 Every output is written, or none.
 """
 
@@ -105,14 +110,18 @@ def add_parser(sub) -> None:
     g.add_argument("--krl", metavar="F.src", help="KUKA KRL program (.src, and .dat next to it)")
     g.add_argument("--urscript", metavar="F.script", help="URScript program")
     g.add_argument("--fanuc", metavar="F.ls", help="FANUC TP program (ASCII .ls; J3 in FANUC's convention)")
+    g.add_argument("--inform", metavar="F.JBI", help="Yaskawa INFORM job (RECTAN positions with their RCONF)")
+    g.add_argument("--val3", metavar="FOLDER", help="Staubli VAL3 application (a folder named like the "
+                                                    "application, created if absent)")
     g.add_argument("--speed-percent", type=float, default=20.0, help="programs' speed, %% of maximum")
     g.add_argument("--settle-s", type=float, default=1.0, help="wait at each pose before measuring, s")
     g.add_argument("--procedure", default="MeasurePose", help="procedure called at each pose")
     p.set_defaults(func=run)
 
 
-def _outputs(args, result) -> dict:
-    """Every output's text, computed before anything is written."""
+def _outputs(args, result, robot) -> dict:
+    """Every output's text, computed before anything is written (``robot``: the model as loaded,
+    its tool the flange, for programs with Cartesian positions)."""
     import json
 
     import numpy as np
@@ -140,6 +149,12 @@ def _outputs(args, result) -> dict:
         texts[args.urscript] = programs.urscript_program(result.joints, Path(args.urscript).stem, **kw)
     if args.fanuc:
         texts[args.fanuc] = programs.fanuc_ls_program(deg, Path(args.fanuc).stem, **kw)
+    if args.inform:
+        texts[args.inform] = programs.inform_job(deg, robot, Path(args.inform).stem, **kw)
+    if args.val3:
+        folder = Path(args.val3)
+        for file, text in programs.val3_application(deg, folder.name, **kw).items():
+            texts[str(folder / file)] = text
     return texts
 
 
@@ -156,6 +171,23 @@ def _params(args, robot):
     return offsets_params(robot, max(1, len(args.smr_mm or [])))
 
 
+def _val3_files(args) -> list[str]:
+    """The files --val3 FOLDER will write (names checked before planning); the folder is created
+    when absent (its parent must exist)."""
+    from robocal.campaign import programs
+    from robocal.errors import DataError
+
+    if args.val3 is None:
+        return []
+    folder = Path(args.val3)
+    if folder.exists() and not folder.is_dir():
+        raise DataError(f"--val3 {folder}: not a folder (a VAL3 application is a folder)")
+    if not folder.exists() and not folder.resolve().parent.is_dir():
+        raise DataError(f"--val3 {folder}: its parent folder does not exist")
+    names = programs.val3_application([[0.0] * 6], folder.name, procedure=args.procedure)
+    return [str(folder / name) for name in names]
+
+
 def run(args) -> int:
     import numpy as np
 
@@ -170,9 +202,12 @@ def run(args) -> int:
     dat = args.krl and Path(args.krl).with_suffix(".dat")
     for path, kind, option in ((args.output, "CSV", "-o"), (args.json, "JSON", "--json"),
                                (args.html, "HTML", "--html"), (args.rapid, "RAPID", "--rapid"),
-                               (args.urscript, "URScript", "--urscript"), (args.fanuc, "TP", "--fanuc")):
+                               (args.urscript, "URScript", "--urscript"), (args.fanuc, "TP", "--fanuc"),
+                               (args.inform, "JBI", "--inform")):
         check_format(path, kind, option)
-    check_outputs([args.output, args.json, args.html, args.rapid, args.urscript, args.krl, dat, args.fanuc],
+    val3 = _val3_files(args)
+    check_outputs([args.output, args.json, args.html, args.rapid, args.urscript, args.krl, dat, args.fanuc,
+                   args.inform, *(val3 if Path(args.val3 or ".").is_dir() else [])],
                   [args.robot, args.candidates, args.region])
     for smr in args.smr_mm or []:
         check_tool_mm(smr, f"--smr-mm {','.join(f'{v:g}' for v in smr)}")
@@ -207,8 +242,16 @@ def run(args) -> int:
         noise_mm=args.noise_mm, noise_model=args.noise_model, rotation_noise_deg=args.rotation_noise_deg,
         criterion=args.criterion, region=region, region_size=args.region_size, starts=args.starts,
         curve=args.curve, seed=args.seed, progress=not args.quiet, params=params)
-    texts = _outputs(args, result)
-    write_all(texts)
+    texts = _outputs(args, result, robot)
+    created = args.val3 is not None and not Path(args.val3).is_dir()
+    if created:
+        Path(args.val3).mkdir()
+    try:
+        write_all(texts)
+    except BaseException:
+        if created and not any(Path(args.val3).iterdir()):
+            Path(args.val3).rmdir()
+        raise
     print(result.summary())
     for path in texts:
         print(f"wrote {path}")

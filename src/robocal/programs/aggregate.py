@@ -10,7 +10,7 @@ from robocal.errors import DataError
 from robocal.programs.source import NUMBER_RE, Number, ProgramText
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Word:
     """A non-numeric item (identifier, TRUE/FALSE, a masked string ``"___"``) at ``start``."""
 

@@ -29,6 +29,7 @@ from robocal.errors import DataError
 from robocal.io import short_repr
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.config import FANUCConfig
+from robocal.programs.fanuc_registers import ActiveFrames, read_registers
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
@@ -58,6 +59,7 @@ class FanucDialect(Dialect):
     suffixes = (".ls",)
     scheme = FANUCConfig()
     keep_width = True
+    euler_columns = (3, 4, 5)  # W, P, R
     frame_help = "X,Y,Z in mm and W,P,R in deg, as on the teach pendant's frame screen"
 
     def to_pose(self, values):
@@ -84,6 +86,10 @@ class FanucDialect(Dialect):
         prog.tools.update(tools)
         order = 0
         joint: set = set()
+        registers = None  # the --position-registers file, given among the sources as a .csv
+        for src in [s for s in sources if s.path.suffix.lower() == ".csv"]:
+            registers = read_registers(src)
+        sources = [s for s in sources if s.path.suffix.lower() != ".csv"]
         for src in sources:
             text = src.text
             start = text.find("/POS")
@@ -137,17 +143,19 @@ class FanucDialect(Dialect):
                                            order=order, external=", ".join(external)))
                 order += 1
             _nothing_between(src, text, after, end)
-        self._motions(sources, prog, joint)
+        self._motions(sources, prog, joint, registers)
         return prog
 
-    def _motions(self, sources, prog, joint):
+    def _motions(self, sources, prog, joint, registers):
         """Account for every motion of the /MN sections: positions every motion reaches are the
         /POS targets (each carries its own UF and UT, so all are corrected); an incremental
         motion's position is a displacement (named; the position is left alone unless another
         motion uses it as a pose); position registers, missing positions and run-time offsets
-        are named."""
+        are named. ``registers``: PR number -> Target from --position-registers (None: not given):
+        a motion to a register given there is corrected in the user and tool frame active there."""
         numbers = {(t.source.path, int(re.match(r"P\[(\d+)", t.name).group(1))): t for t in prog.targets}
         incremental: dict[tuple, list] = {}  # position -> accounts of the INC motions using it
+        used_registers: dict[int, Target] = {}
         plain = set()  # positions some motion uses as a pose
         for src in sources:
             text = src.text
@@ -155,6 +163,7 @@ class FanucDialect(Dialect):
             if start < 0:
                 continue
             lines = list(_LINE.finditer(text, start, stop if stop > 0 else len(text)))
+            active = ActiveFrames(src, start, stop if stop > 0 else len(text))
             for k, line in enumerate(lines):
                 body = line.group(1)
                 mv = _MOVE.match(body)
@@ -169,17 +178,28 @@ class FanucDialect(Dialect):
                 instr = mv.group(1)
                 off = _OFFSET.search(options) if "OFFSET" in options.upper() else None
                 for ref in refs:
-                    if ref is None:
+                    if ref is None:  # a vision register, an expression ...: the pose is not one of these
+                        prog.skip(here, instr, "its position is not a P[n] or PR[n] this filter reads",
+                                  prog.motion(src, line.start(1), instr), mv.group(2).split()[0] if
+                                  mv.group(2).split() else "")
                         continue
                     label = ref.group(0)
-                    acc = None if ref.group(1) == "P" and ref.group(2).isdigit() and \
-                        (src.path, int(ref.group(2))) in joint else prog.motion(src, line.start(1), instr)
+                    number = ref.group(2).isdigit() and len(ref.group(2)) <= _POSITION_DIGITS
+                    acc = None if ref.group(1) == "P" and number and (src.path, int(ref.group(2))) in joint \
+                        else prog.motion(src, line.start(1), instr)
                     if acc is None:
                         continue  # a joint representation: nothing to correct
                     if ref.group(1) == "PR":
-                        prog.skip(here, instr, f"{label} is a position register: its value lives in the "
-                                               "controller (correct it there, e.g. from a filtered copy)",
-                                  acc, label)
+                        why = _register(ref, registers, active, line.start())
+                        if isinstance(why, str):
+                            prog.skip(here, instr, why, acc, label)
+                        elif off or "INC" in options and _INCREMENTAL.search(options):
+                            how = off.group(0) if off else "INC"
+                            prog.skip(here, instr, f"{label} is shifted at run time ({how})", acc, label)
+                        else:
+                            t, uf, ut = why
+                            prog.use(t, ut, uf, here, label, "user frame", (src.path, line.start()), acc)
+                            used_registers.setdefault(id(t), t)
                         continue
                     if not ref.group(2).isdigit():
                         prog.warnings.append(f"{here}: {instr} {label}: the position number is known at run "
@@ -215,6 +235,29 @@ class FanucDialect(Dialect):
             if key not in plain:
                 prog.not_corrected[id(numbers[key])] = "used only as an incremental (INC) displacement"
         prog.targets = [t for key, t in numbers.items() if key in plain or key not in incremental]
+        prog.targets += used_registers.values()
+
+
+def _register(ref, registers, active, at: int):
+    """``(Target, user frame, tool frame)`` of the motion to position register ``ref`` at ``at``,
+    or why it cannot be corrected."""
+    label, n = ref.group(0), ref.group(2)
+    if registers is None:
+        return (f"{label} is a position register: its value lives in the controller (give the registers' "
+                "values with --position-registers to correct it)")
+    if not n.isdigit():
+        return f"{label}: the register number is known at run time only"
+    if len(n) > _POSITION_DIGITS:
+        return f"PR[{short_repr(n)}] is not a register number (more than {_POSITION_DIGITS} digits)"
+    if int(n) in active.assigned:
+        return f"{label} is assigned in this program: its value is computed at run time"
+    if int(n) not in registers:
+        return Undeclared(f"{label} is not in the --position-registers file",
+                          f"PR[{int(n)}] in --position-registers")
+    uf, ut = active.at(at)
+    if uf is None or ut is None:
+        return f"{label}: UFRAME_NUM and UTOOL_NUM are not both set before this motion (the frames it is in)"
+    return registers[int(n)], str(int(uf)), str(int(ut))
 
 
 def _nothing_between(src, text: str, a: int, b: int) -> None:

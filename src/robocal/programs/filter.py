@@ -22,6 +22,7 @@ too unless ``tcp`` gives the one identified on the calibrated model (``robocal t
 
 from __future__ import annotations
 
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -32,11 +33,13 @@ from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
 from robocal.ik.closed_form import has_closed_form
 from robocal.ik.controller import JUMP_DEG, nearest_solutions
+from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
 from robocal.programs.external import set_aside_external
 from robocal.programs.fanuc_ls import FanucDialect
+from robocal.programs.inform import InformDialect, looks_like_inform
 from robocal.programs.krl import KRLDialect
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.motions import undeclared
@@ -45,10 +48,13 @@ from robocal.programs.result import LISTED, FilterResult, collapse
 from robocal.programs.source import ProgramText, format_number
 from robocal.programs.track import track_program
 from robocal.programs.urscript import URScriptDialect
+from robocal.programs.val3 import Val3Dialect, application_files
 from robocal.trust.output_marker import check_unmarked
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
+SWING_DEG = 1.0  # Euler angles moving more than this for a smaller turn: named (gimbal lock)
+CHUNK = 5_000  # targets whose IK candidates and numeric IK are computed at once (memory)
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
 # A real TCP (--tcp) turned more than this from the program's tool data is another tool or a wrong
 # --rotation (the 4-point method finds the position only): refused. Moved more: a warning.
@@ -56,19 +62,36 @@ TCP_TURN_MAX_DEG = 5.0
 TCP_SHIFT_WARN_MM = 10.0
 
 
+DIALECTS = {"rapid": RapidDialect, "krl": KRLDialect, "fanuc": FanucDialect, "urscript": URScriptDialect,
+            "inform": InformDialect, "val3": Val3Dialect}
+
+
 def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
-    """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript') or the suffixes."""
-    dialects = {"rapid": RapidDialect, "krl": KRLDialect, "fanuc": FanucDialect, "urscript": URScriptDialect}
+    """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript', 'inform', 'val3') or the
+    suffixes; a Yaskawa job or VAR.DAT is also told by its first line (``/JOB``, ``//`` sections)."""
+    dialects = DIALECTS
     if name is not None:
         if name not in dialects:
             raise DataError(f"unknown program format {name!r}: use one of {', '.join(dialects)}")
         return dialects[name]()
     found = {key for p in paths for key, d in dialects.items() if p.suffix.lower() in d.suffixes}
+    if found <= {"krl", "inform"} and paths and all(p.suffix.lower() == ".jbi" or _sniff_inform(p)
+                                                    for p in paths):
+        found = {"inform"}  # jobs and VAR.DAT (a .dat that is not KRL), or a job under another name
     if len(found) != 1:
         known = ", ".join(f"{k}: {' '.join(d.suffixes)}" for k, d in dialects.items())
         raise DataError(f"cannot tell the program format of {[p.name for p in paths]} from the file "
                         f"suffixes ({known}); name it with --format")
     return dialects[found.pop()]()
+
+
+def _sniff_inform(path: Path) -> bool:
+    """The file reads as a Yaskawa job or variable file (unreadable: False, reported later)."""
+    try:
+        with open(path, "rb") as f:
+            return looks_like_inform(f.read(4096).decode("latin-1"))
+    except OSError:
+        return False
 
 
 def as_frames(dialect: Dialect, given) -> dict[str, np.ndarray]:
@@ -80,36 +103,49 @@ def as_frames(dialect: Dialect, given) -> dict[str, np.ndarray]:
 
 
 def _configured_joints(dialect, nominal, F, targets, problems):
-    """Nominal joints ``(N, 6)`` in each target's configuration (NaN where impossible)."""
+    """Nominal joints ``(N, 6)`` in each target's configuration (NaN where impossible). The
+    candidates are computed ``CHUNK`` targets at a time (all branches and turns of 100,000 targets
+    at once would take gigabytes); only those of targets without configuration data are kept,
+    for the nearest-previous search."""
     scheme = dialect.scheme
-    try:
-        cands = solve_all(nominal, F, extra_turns=True)
-    except ModelError as exc:
-        raise ModelError(f"{dialect.name} configuration data need the nominal model's closed form: "
-                         f"{exc}") from None
-    valid = np.isfinite(cands).all(axis=2)
-    have = scheme.encode(nominal, np.where(valid[..., None], cands, 0.0))
-    want = np.array([t.config if t.config is not None else np.zeros(have.shape[-1], int) for t in targets])
-    score = np.where(valid, scheme.score(have, want[:, None]), np.iinfo(np.int64).max)
+    N = len(targets)
     has = np.array([t.config is not None and t.monitored for t in targets])
-    reach = valid.any(axis=1)
+    q = np.full((N, nominal.n_joints), np.nan)
+    reach, possible = np.zeros(N, bool), np.zeros(N, bool)
+    free: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # row without data -> (candidates, valid)
+    for s in range(0, N, CHUNK):
+        e = min(N, s + CHUNK)
+        try:
+            cands = solve_all(nominal, F[s:e], extra_turns=True)
+        except ModelError as exc:
+            raise ModelError(f"{dialect.name} configuration data need the nominal model's closed form: "
+                             f"{exc}") from None
+        valid = np.isfinite(cands).all(axis=2)
+        have = scheme.encode(nominal, np.where(valid[..., None], cands, 0.0))
+        want = np.array([t.config if t.config is not None else np.zeros(have.shape[-1], int)
+                         for t in targets[s:e]])
+        score = np.where(valid, scheme.score(have, want[:, None]), np.iinfo(np.int64).max)
+        best = np.argmin(score, axis=1)
+        reach[s:e] = valid.any(axis=1)
+        possible[s:e] = np.take_along_axis(score, best[:, None], axis=1)[:, 0] < BRANCH_MISMATCH
+        sel = np.flatnonzero(has[s:e] & reach[s:e] & possible[s:e])  # the candidate their data select
+        q[s + sel] = cands[sel, best[sel]]
+        for i in np.flatnonzero(~has[s:e] & reach[s:e]):
+            free[s + int(i)] = (cands[i], valid[i])
     for i in np.flatnonzero(~reach):
         problems.append((int(i), "no solution of the nominal model inside the joint limits (out of reach)"))
-    q = np.full(F.shape[:1] + (nominal.n_joints,), np.nan)
-    best = np.argmin(score, axis=1)
-    possible = np.take_along_axis(score, best[:, None], axis=1)[:, 0] < BRANCH_MISMATCH
     for i in np.flatnonzero(has & reach & ~possible):
         problems.append((int(i), f"configuration {scheme.text(targets[i].config)} is not possible for this "
                                  "pose inside the joint limits"))
-    configured = np.flatnonzero(has & reach & possible)  # the candidate their data select
-    q[configured] = cands[configured, best[configured]]
+    configured = np.flatnonzero(has & reach & possible)
     # no configuration data: in program order, the candidate nearest the previous target's joints
     last = -1  # the last target without configuration data given joints
     for i in np.flatnonzero(~has & reach):
         k = np.searchsorted(configured, i) - 1
         prev = max(configured[k] if k >= 0 else -1, last)
-        d = np.where(valid[i], np.abs(cands[i] - (q[prev] if prev >= 0 else 0.0)).sum(axis=1), np.inf)
-        q[i] = cands[i, int(np.argmin(d))]
+        cands_i, valid_i = free[int(i)]
+        d = np.where(valid_i, np.abs(cands_i - (q[prev] if prev >= 0 else 0.0)).sum(axis=1), np.inf)
+        q[i] = cands_i[int(np.argmin(d))]
         last = i
     return q
 
@@ -262,7 +298,8 @@ def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
 
 def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
                    robot_base=None, dialect: str | None = None, references=(),
-                   keep_unreached: bool = False, strict: bool = False, force: bool = False) -> FilterResult:
+                   keep_unreached: bool = False, strict: bool = False, force: bool = False,
+                   position_registers: str | Path | None = None) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -277,11 +314,14 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     configuration they cannot have, not converged) raise DataError naming each one; with
     ``keep_unreached`` they are left unchanged with a warning. A motion to a name declared in none
     of the files given is named (its record says the declaration it needs); with ``strict`` the
-    run is refused instead. Nothing is written here: see `FilterResult.write`, which marks the
-    files with the calibrated model's fingerprint (`robocal.trust.output_marker`); a marked input
-    (already filtered) raises DataError naming the earlier run unless ``force``.
+    run is refused instead. ``position_registers``: a FANUC position register file
+    (`robocal.programs.fanuc_registers`): motions to those registers are corrected and the file's
+    corrected copy is one of the outputs. Nothing is written here: see `FilterResult.write`, which
+    marks the files with the calibrated model's fingerprint (`robocal.trust.output_marker`); a
+    marked input (already filtered) raises DataError naming the earlier run unless ``force``.
     """
     paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
+    paths = [f for p in paths for f in (application_files(p) if p.is_dir() else [p])]  # a VAL3 application
     if not paths:
         raise DataError("no program file given")
     track = track_program(nominal)  # an arm on a track: programs/track.py
@@ -294,6 +334,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     sources = [ProgramText(p) for p in paths]
     for s in sources:
         check_unmarked(s.text, str(s.path), "filtered", force)
+    if position_registers is not None:
+        if not isinstance(d, FanucDialect):
+            raise DataError(f"--position-registers is for FANUC programs, not {d.name}")
+        sources.append(ProgramText(position_registers))
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
     missing = undeclared(program.ledger)
@@ -328,7 +372,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     warnings += _inexact_configurations(d, controller, targets, q_nom, ok)
     seeds = np.where(ok[:, None], q_nom, 0.0)
     real_model = controller_model(calibrated, nominal, robot_base)
-    comp = compensate(real_model, nominal, X @ invert_transform(real_tool), seeds=seeds) if track is None \
+    comp = _compensate(real_model, nominal, X @ invert_transform(real_tool), seeds) if track is None \
         else track.compensate(real_model, targets, X @ invert_transform(real_tool), seeds)
     q, sing = comp.joints, comp.singularity
     _check_joints(controller, comp, ok, problems)
@@ -353,6 +397,27 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,
                         program.ledger.records(corrected, program.not_corrected), calibrated)
+
+
+def _compensate(model: Robot, nominal: Robot, F: np.ndarray, seeds: np.ndarray) -> Compensation:
+    """:func:`robocal.compensate` of flange poses ``F`` ``(N, 4, 4)`` from ``seeds`` ``(N, n)``,
+    ``CHUNK`` targets at a time (the numeric IK's arrays for 100,000 poses at once take
+    gigabytes); each target's result depends on its own seed only."""
+    parts = [compensate(model, nominal, F[s:s + CHUNK], seeds=seeds[s:s + CHUNK])
+             for s in range(0, len(F), CHUNK)]
+    if len(parts) == 1:
+        return parts[0]
+
+    def joined(items: list) -> np.ndarray:
+        return np.concatenate(items)
+
+    sing = None if parts[0].singularity is None else SingularityDistance(
+        *(joined([getattr(p.singularity, f.name) for p in parts]) for f in fields(SingularityDistance)))
+    return replace(parts[0], joints=joined([p.joints for p in parts]),
+                   corrected_targets=joined([p.corrected_targets for p in parts]),
+                   converged=joined([p.converged for p in parts]),
+                   position_error=joined([p.position_error for p in parts]),
+                   orientation_error=joined([p.orientation_error for p in parts]), singularity=sing)
 
 
 def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
@@ -444,6 +509,7 @@ def _edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray,
     targets' configuration changed. ``cfg``: (rows of the nominal joints, rows of the corrected
     joints) or None."""
     new = d.from_pose(Pc, old)
+    warnings += _gimbal_swings(d, targets, old, new, good)
     resolution = d.resolutions()
     moved = good[:, None] & (np.abs(new - old) > resolution / 2)  # numbers that must be rewritten
     changed = np.zeros(len(targets), bool)
@@ -467,6 +533,10 @@ def _edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray,
             num = t.numbers[j]
             text = format_number(float(new[i, j]), num, float(resolution[j]),
                                  finest.get((t.source.path, int(j)), 0))
+            if num.start == num.end:  # a number the file leaves out: inserted (several in their order)
+                key = (num.start, num.end)
+                mine[key] = mine.get(key, "") + d.number_edit(t, num, text)
+                continue
             mine.update(_aligned(t.source.text, num, text) if d.keep_width else {(num.start, num.end): text})
         if changed[i]:
             mine.update(d.config_edits(t, cfg[1][i]))
@@ -474,6 +544,25 @@ def _edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray,
                             f"{d.scheme.text(cfg[1][i])}: the corrected joints cross a configuration "
                             "boundary; check the motion into and out of this target")
     return edits, changed
+
+
+def _gimbal_swings(d: Dialect, targets: list[Target], old: np.ndarray, new: np.ndarray,
+                   good: np.ndarray) -> list[str]:
+    """Warnings for targets whose Euler angles change by more than ``SWING_DEG`` while the
+    orientation turns less: near gimbal lock (middle angle +-90 deg) the outer angles trade, and a
+    turn off the pole needs them to swing (same orientation, other numbers)."""
+    if not d.euler_columns:
+        return []
+    cols = list(d.euler_columns)
+    step = new[:, cols] - old[:, cols]
+    swing = np.abs(step - 360.0 * np.round(step / 360.0)).max(axis=1)
+    R0, R1 = d.to_pose(old)[:, :3, :3], d.to_pose(new)[:, :3, :3]
+    turn = np.rad2deg(np.linalg.norm(matrix_to_rotvec(R1 @ np.swapaxes(R0, 1, 2)), axis=1))
+    pole = np.abs(90.0 - np.abs(new[:, cols[1]]))
+    return [f"{targets[i].where}: its angles change by up to {swing[i]:.1f} deg for an orientation "
+            f"correction of {turn[i]:.3f} deg: it is {pole[i]:.3f} deg from gimbal lock (middle angle "
+            "+-90 deg), where the other two angles trade; the orientation is the corrected one"
+            for i in np.flatnonzero(good & (swing > SWING_DEG) & (turn < SWING_DEG))]
 
 
 def _aligned(text: str, num, new: str) -> dict[tuple[int, int], str]:

@@ -5,10 +5,11 @@ ConfL\\Off) takes per target the IK solution nearest the joints it comes from, s
 motion must be the one executed before, not the one written before. From the program's entry
 (URScript: the top-level statements, else the one top-level ``def`` nothing calls; RAPID: PROC
 main; KRL: the DEF named like its .src file) the statements are walked in text order, and a call
-of a routine of these files walks that routine's body there (inline expansion; a routine already
-on the call stack is not entered again; loops and branches are taken once, in text order). A
-motion inside a routine called several times is executed several times: each execution is a
-step of :attr:`Program.sequence`, tagged with the call that brought control into its routine.
+of a routine of these files walks that routine's body there (inline expansion, to any depth; a
+routine already on the call stack is not entered again, with a warning naming the cycle; loops and
+branches are taken once, in text order). A motion inside a routine called several times is
+executed several times: each execution is a step of :attr:`Program.sequence`, tagged with the call
+that brought control into its routine.
 Motions the walk never reaches (routines no call reaches) follow in text order.
 """
 
@@ -49,9 +50,11 @@ class Flow:
     entry: Routine | None = None
 
 
-def _segments(flow: Flow) -> list[tuple[Path, int, int, str]] | None:
+def _segments(flow: Flow, cycles: list[str]) -> list[tuple[Path, int, int, str]] | None:
     """The executed text pieces ``(file, start, end, via)`` in execution order (``via``: the call
-    that entered the piece's routine, '' for the entry), None when larger than MAX_SEGMENTS."""
+    that entered the piece's routine, '' for the entry), None when larger than MAX_SEGMENTS. Walked
+    with an explicit stack (no recursion limit on the depth of call chains); each recursive call
+    (a routine already being walked) is appended to ``cycles`` as a warning naming the cycle."""
     calls: dict[Path, list[tuple[int, str]]] = {}
     for src, at, name in flow.calls:
         if name in flow.routines:
@@ -71,28 +74,50 @@ def _segments(flow: Flow) -> list[tuple[Path, int, int, str]] | None:
         if a < b:
             out.append((path, a, b, via))
 
-    def walk(r: Routine, stack: tuple[str, ...], via: str) -> bool:
+    def pieces(r: Routine) -> list:
+        """The routine's own text pieces between calls, and its calls: ``('text', a, b)`` and
+        ``('call', at, name)`` in text order."""
         nested = sorted((x for x in bodies if x.path == r.path and r.start <= x.start and x.end <= r.end
                          and x is not r), key=lambda x: x.start)
         here = calls.get(r.path, [])
-        pos = r.start
+        out_, pos = [], r.start
         for at, name in here[bisect.bisect_left(here, (r.start, "")):]:
             if at >= r.end:
                 break
             if any(x.start <= at < x.end for x in nested):
                 continue
-            emit(r.path, pos, at, nested, via)
+            out_ += [("text", pos, at, nested), ("call", at, name)]
             pos = at
-            if len(out) > MAX_SEGMENTS:
-                return False
-            if name not in stack and not walk(flow.routines[name], (*stack, name),
-                                              f"{r.path.name}:{r.source.line_of(at)}"):
-                return False
-        emit(r.path, pos, r.end, nested, via)
-        return len(out) <= MAX_SEGMENTS
+        return [*out_, ("text", pos, r.end, nested)]
 
-    assert flow.entry is not None
-    return out if walk(flow.entry, (flow.entry.name,), "") else None
+    # an explicit stack instead of recursion: call chains of any depth (one frame per routine entered)
+    entry = flow.entry
+    assert entry is not None
+    frames = [(entry, iter(pieces(entry)), "")]
+    active = {entry.name}
+    while frames:
+        r, items, via = frames[-1]
+        item = next(items, None)
+        if item is None:
+            frames.pop()
+            active.discard(r.name)
+            continue
+        if item[0] == "text":
+            emit(r.path, item[1], item[2], item[3], via)
+            if len(out) > MAX_SEGMENTS:
+                return None
+        elif item[2] in active:  # a routine already being walked is not entered again
+            where = f"{r.path.name}:{r.source.line_of(item[1])}"
+            chain = [f[0].name for f in frames]
+            cycle = " -> ".join([*chain[chain.index(item[2]):], item[2]])
+            text = f"{where}: a recursive call ({cycle}): its motions are ordered from the first entry only"
+            if text not in cycles:
+                cycles.append(text)
+        else:
+            callee = flow.routines[item[2]]
+            active.add(callee.name)
+            frames.append((callee, iter(pieces(callee)), f"{r.path.name}:{r.source.line_of(item[1])}"))
+    return out
 
 
 def _executed(steps: list, segments: list) -> list[tuple[int, str]]:
@@ -128,7 +153,9 @@ def order_by_execution(prog: Program, flow: Flow) -> None:
         why = "no entry routine found (URScript: top-level code or one def nothing calls; RAPID: PROC " \
               "main; KRL: the DEF named like the .src file)" if flow.routines else ""
     else:
-        segments = _segments(flow)
+        cycles: list[str] = []
+        segments = _segments(flow, cycles)
+        prog.warnings += cycles
         if segments is None:
             why = f"the routine calls expand to more than {MAX_SEGMENTS} pieces"
         else:

@@ -85,6 +85,7 @@ def _canonical(key: str, kind: str) -> str:
 
 
 class KRLDialect(Dialect):
+    euler_columns = (3, 4, 5)  # A, B, C
     name = "KUKA KRL"
     suffixes = (".src", ".dat", ".sub")
     scheme = KUKAConfig()
@@ -285,6 +286,10 @@ class KRLDialect(Dialect):
                     if text.startswith("{") or _NULL_OPERAND.match(text):  # $NULLFRAME:{..} is {..}
                         first = a + masked[a:b].index("{")
                         found = [self._target(src, masked, first, f"inline@{src.line_of(a)}", "E6POS", prog)]
+                        parsed = self._aggregate(src, masked, first) if found == [None] else None
+                        if parsed is not None and "A1" not in parsed[0]:  # a partial position
+                            found = ["a partial position: its missing components are taken from the current "
+                                     "position at run time"]
                     else:
                         head = _APPROX.sub("", text)
                         found = self._follow(st, head, proc, {}, 0) if head else []
@@ -374,6 +379,8 @@ class KRLDialect(Dialect):
                 if k < len(args):
                     arg = st.masked[src.path][slice(*args[k])].strip()
                     out += self._follow(st, arg, caller, scope, depth + 1)
+                else:
+                    out.append(f"{text} is a parameter of {proc} that the call at {src.path.name} leaves out")
             return out
         if fields:
             return [f"{text} is a field of a structure: its value is not followed"]

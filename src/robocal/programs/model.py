@@ -131,6 +131,7 @@ class Dialect:
     n_values = 6  # pose numbers per target
     shared_decimals: tuple[tuple[int, ...], ...] = ()  # pose columns written at the file's finest decimals
     keep_width = False  # numbers right-aligned after spaces keep their width (FANUC)
+    euler_columns: tuple[int, ...] = ()  # pose columns that are Euler angles in deg (gimbal lock possible)
     frame_help = ""  # how --tool/--frame values are written for this dialect
 
     def parse(self, sources: list[ProgramText], frames: dict[str, np.ndarray],
@@ -156,6 +157,12 @@ class Dialect:
     def config_edits(self, target: Target, new: np.ndarray) -> dict[tuple[int, int], str]:
         """Span -> text edits writing configuration row ``new`` into ``target``."""
         raise NotImplementedError
+
+    def number_edit(self, target: Target, num: Number, text: str) -> str:
+        """The text that replaces ``num`` (its span) when it is rewritten as ``text``: the number
+        itself, or, for a number the file leaves out (a zero-length span), whatever writes it
+        (VAL3: the attribute)."""
+        return text
 
     def name_key(self, name: str) -> str:
         """The key a tool or frame name has in :class:`Program` (RAPID names ignore case)."""

@@ -15,8 +15,16 @@ counts. A motion that applies a corrected target differently (FANUC ``INC``, a r
 names that and is not counted as corrected. :func:`summary` gives ``{"total", "corrected",
 "named"}`` and checks ``corrected + named == total``.
 
-New dialects (INFORM, VAL3 ...) plug in by opening an account per motion instruction and calling
-``Program.use(..., account=acc)`` / ``Program.skip(where, instr, why, account=acc)``.
+New dialects (INFORM, VAL3 ...) plug in by opening an account per motion instruction to a
+Cartesian pose and calling, for each target it reaches::
+
+    acc = prog.motion(src, at, "MOVL")                        # once per instruction
+    prog.use(target, tool, frame, here, label, "user frame", (src.path, offset), acc)
+    prog.skip(here, "MOVL", why, acc, label)                  # a part it cannot correct
+    prog.skip(here, "MOVL", Undeclared(why, "C00012 in the .JBI"), acc, label)  # declared nowhere
+
+A target the dialect itself leaves alone although motions reach it goes in
+``prog.not_corrected[id(target)] = why``. The filter does the rest (statuses, summary, --strict).
 """
 
 from __future__ import annotations
@@ -31,6 +39,7 @@ if TYPE_CHECKING:
 
 CORRECTED = "corrected"
 NAMED = "named"
+LABEL_CHARS = 60  # a motion's target as written, shortened to this in its record
 
 
 class Undeclared(str):
@@ -46,7 +55,7 @@ class Undeclared(str):
         return obj
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class MotionRecord:
     """One motion instruction: ``file`` (name), ``line`` (1-based), ``instruction`` as written,
     ``target`` (the target(s) it reaches, ', '-joined, or the expression written), ``status``
@@ -101,6 +110,7 @@ class Account:
     def mention(self, label: str) -> None:
         """Name what the motion moves to in its record (a target, or the expression written)."""
         label = " ".join(label.split())
+        label = label if len(label) <= LABEL_CHARS else label[:LABEL_CHARS - 3] + "..."
         if label and label not in self.labels:
             self.labels.append(label)
 

@@ -12,8 +12,10 @@
   ToPoint, Speed, Zone, Tool; TriggL/TriggJ: ToPoint, Speed, Trigg, Zone, Tool; TriggC: CirPoint,
   ToPoint, Speed, Trigg, Zone, Tool; SearchL: Signal, SearchPoint (an output: left alone),
   ToPoint, Speed, Tool; SearchC: Signal, SearchPoint, CirPoint, ToPoint, Speed, Tool. The work
-  object is ``\\WObj:=name`` (default wobj0). ``Offs(p, ...)`` and ``RelTool(p, ...)`` count as
-  uses of ``p``. ``MoveAbsJ`` (jointtarget) and every other instruction are left alone.
+  object is ``\\WObj:=name`` (default wobj0). ``Offs(p, ...)`` and ``RelTool(p, ...)`` (any case)
+  whose amounts are constant expressions (numbers, CONST nums and their array elements, + - * /,
+  parentheses; :mod:`robocal.programs.expressions`) count as uses of ``p``; other amounts are
+  named per motion. ``MoveAbsJ`` (jointtarget) and every other instruction are left alone.
 
 Comments (``!`` to the end of the line) and strings are masked before anything is searched.
 """
@@ -263,7 +265,8 @@ class RapidDialect(Dialect):
         c = re.match(r"\s*([A-Za-z]\w*)\b", masked[lead:e])
         if c and c.group(1).lower() in st.procs:
             positional, optional = _arguments(masked, lead + c.end(), e)
-            st.calls.setdefault(c.group(1).lower(), []).append((src, lead, positional, optional, proc))
+            st.calls.setdefault(c.group(1).lower(), []).append((src, lead + c.start(1), positional, optional,
+                                                                 proc))
         elif c and masked[lead + c.end():e].strip():  # a routine of another module, or a built-in
             positional, _ = _arguments(masked, lead + c.end(), e)
             st.foreign.append((src, lead + c.start(1), c.group(1), positional))

@@ -20,7 +20,8 @@ from robocal.kinematics.transforms import invert_transform
 from robocal.programs.filter import as_frames, controller_joints, dialect_for, target_poses
 from robocal.programs.source import ProgramText
 
-SUFFIX = {"rapid": ".mod", "krl": ".src", "fanuc": ".ls", "urscript": ".script"}
+SUFFIX = {"rapid": ".mod", "krl": ".src", "fanuc": ".ls", "urscript": ".script", "inform": ".JBI",
+          "val3": ".pgx"}
 
 
 def _quat(R):
@@ -93,6 +94,25 @@ def write_program(dialect: str, folder, nominal: Robot, q: np.ndarray, tool: np.
         path = folder / f"{name}.ls"
         path.write_text("\r\n".join(text))
         return [path], {"1": fanuc_frame_text(tool)}, {"1": fanuc_frame_text(frame)}
+    if dialect == "inform":
+        values = d.from_pose(P, np.zeros((n, 6)))
+        pos, last = [], ""
+        for i in range(n):
+            form = d.scheme.text(cfg[i])
+            if form != last:
+                pos.append(f"///RCONF {form},0,0")
+                last = form
+            pos.append(f"C{i:05d}=" + ",".join([f"{v:.3f}" for v in values[i, :3]]
+                                                + [f"{v:.4f}" for v in values[i, 3:]]))
+        moves = [f"MOVJ C{i:05d} VJ=50.00" if i % 5 == 0 else f"MOVL C{i:05d} V=500.0 PL=3" for i in range(n)]
+        text = ["/JOB", f"//NAME {name.upper()}", "//POS", f"///NPOS {n},0,0,0,0,0", "///USER 1", "///TOOL 1",
+                "///POSTYPE USER", "///RECTAN", *pos, "//INST", "///DATE 2000/01/01 00:00", "///ATTR SC,RW",
+                "///GROUP1 RB1", "NOP", *moves, "END", ""]
+        path = folder / f"{name.upper()}.JBI"
+        path.write_bytes("\r\n".join(text).encode())
+        return [path], {"1": fanuc_frame_text(tool)}, {"1": fanuc_frame_text(frame)}
+    if dialect == "val3":
+        return _val3(folder, d, P, cfg, tool, frame, name)
     rv = Rotation.from_matrix(P[:, :3, :3]).as_rotvec()
     lines = [f"def {name}():", "  set_tcp(p[" + _frame_text(tool, "rotvec") + "])",
              "  global Cell=p[" + _frame_text(frame, "rotvec") + "]",
@@ -108,6 +128,37 @@ def write_program(dialect: str, folder, nominal: Robot, q: np.ndarray, tool: np.
     return [path], {}, {}
 
 
+def _val3(folder: Path, d, P: np.ndarray, cfg: np.ndarray, tool: np.ndarray, frame: np.ndarray, name: str):
+    """A VAL3 application: points ``P`` in frame fCell, tool tReal, movel / movej to each."""
+    from robocal.programs.val3 import words_of
+
+    def attrs(values) -> str:
+        return " ".join(f'{k}="{v:.3f}"' if k in "xyz" else f'{k}="{v:.4f}"'
+                        for k, v in zip(("x", "y", "z", "rx", "ry", "rz"), values, strict=True))
+
+    zero = np.zeros((1, 6))
+    values = d.from_pose(P, np.zeros((len(P), 6)))
+    words = [words_of(row) for row in cfg]
+    points = [f'      <Value key="{i}" {attrs(v)} shoulder="{w[0]}" elbow="{w[1]}" wrist="{w[2]}" '
+              'fatherId="fCell[0]" />' for i, (v, w) in enumerate(zip(values, words, strict=True))]
+    data = '    <Data name="{}" access="public" xsi:type="array" type="{}" size="{}">'
+    cell, real = attrs(d.from_pose(frame[None], zero)[0]), attrs(d.from_pose(tool[None], zero)[0])
+    dtx = ['<?xml version="1.0" encoding="utf-8"?>', '<Database xmlns:xsi="http://www.w3.org/2001/XMLSchema-'
+           'instance" xmlns="http://www.staubli.com/robotics/VAL3/Data/2">', "  <Datas>",
+           data.format("fCell", "frame", 1), f'      <Value key="0" {cell} fatherId="world[0]" />',
+           "    </Data>", data.format("tReal", "tool", 1),
+           f'      <Value key="0" {real} fatherId="flange[0]" />', "    </Data>",
+           data.format("pP", "pointRx", len(P)), *points, "    </Data>", "  </Datas>", "</Database>", ""]
+    moves = [f"  {'movej' if i % 5 == 0 else 'movel'}(pP[{i}], tReal, mNomSpeed)" for i in range(len(P))]
+    pgx = ['<?xml version="1.0" encoding="utf-8"?>', '<Programs xmlns="http://www.staubli.com/robotics/VAL3/'
+           'Program/2">', '  <Program name="start" access="public">', "    <Code><![CDATA[begin", *moves,
+           "end]]></Code>", "  </Program>", "</Programs>", ""]
+    paths = [folder / f"{name}.dtx", folder / "start.pgx"]
+    paths[0].write_text("\r\n".join(dtx))
+    paths[1].write_text("\r\n".join(pgx))
+    return paths, {}, {}
+
+
 def _frame_text(T: np.ndarray, kind: str) -> str:
     if kind == "rotvec":
         return ", ".join(f"{v:.6f}" for v in (*T[:3, 3], *Rotation.from_matrix(T[:3, :3]).as_rotvec()))
@@ -118,7 +169,8 @@ def _frame_text(T: np.ndarray, kind: str) -> str:
 
 
 def fanuc_frame_text(T: np.ndarray) -> str:
-    """X,Y,Z,W,P,R (mm, deg) of a 4x4 frame, as FANUC writes user and tool frames."""
+    """X,Y,Z,W,P,R (mm, deg) of a 4x4 frame, as FANUC writes user and tool frames (and Yaskawa
+    X,Y,Z,Rx,Ry,Rz, the same angles)."""
     a, b, c = _zyx(T[None, :3, :3])[0]
     return ",".join(f"{v:.6f}" for v in (*(T[:3, 3] * 1e3), c, b, a))
 

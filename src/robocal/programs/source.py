@@ -2,7 +2,10 @@
 
 The file is read as bytes and decoded as latin-1, which maps every byte to one character: string
 offsets are byte offsets, any 8-bit or UTF-8 file round-trips byte for byte, and only ASCII numbers
-are ever replaced (comments, whitespace, CRLF line endings and encoding stay as they were).
+are ever replaced (comments, whitespace, CRLF line endings and encoding stay as they were). Line
+ends are read as the controllers read them: LF, CRLF and a lone CR (CR-only files, or mixed) each
+end a line; :attr:`ProgramText.text` has every lone CR as LF (same offsets) and
+:meth:`ProgramText.replaced` writes the original line ends back.
 UTF-16 files are refused with a message. A :class:`Number` keeps its span, text and decimals;
 :func:`format_number` writes a corrected value with the file's decimals when they resolve the
 correction, more otherwise.
@@ -18,10 +21,11 @@ from pathlib import Path
 
 from robocal.errors import DataError
 
+_LONE_CR = re.compile(r"\r(?!\n)")
 NUMBER_RE = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Number:
     """A number in the program text: ``start:end`` byte span, its ``text`` and value."""
 
@@ -54,7 +58,10 @@ class ProgramText:
             raise DataError(f"{self.path}: the file looks UTF-16 encoded; save it as UTF-8 or ASCII "
                             "(the controllers' own export format) and run again")
         self.data = data
-        self.text = data.decode("latin-1")
+        self.original = data.decode("latin-1")
+        # a lone CR ends a line as LF and CRLF do (old controllers, Mac-era editors): the text the
+        # dialects read has it as LF, same length, so offsets and line numbers hold for both
+        self.text = _LONE_CR.sub("\n", self.original) if "\r" in self.original else self.original
         self._lines = [0] + [m.end() for m in re.finditer("\n", self.text)]
 
     def line_of(self, offset: int) -> int:
@@ -82,26 +89,33 @@ class ProgramText:
         for (start, end), new in sorted(edits.items()):
             if start < pos:
                 raise AssertionError(f"overlapping edits at byte {start}")
-            out += [self.text[pos:start], new]
+            out += [self.original[pos:start], new]
             pos = end
-        out.append(self.text[pos:])
+        out.append(self.original[pos:])
         return "".join(out).encode("latin-1")
+
+
+_NOT_LINE_END = re.compile(r"[^\r\n]")
 
 
 def mask(text: str, blank: list[re.Pattern], quoted: list[re.Pattern] = ()) -> str:
     """``text`` with every match of ``blank`` (comments) turned to spaces and of ``quoted``
     (strings) to ``"___"``, newlines kept: structure can be searched without being fooled, a
-    string still reads as one item, and offsets stay the same."""
-    chars = list(text)
-    for patterns, fill in ((blank, " "), (quoted, "_")):
-        if not patterns:
-            continue
-        combined = re.compile("|".join(f"(?:{p.pattern})" for p in patterns), re.MULTILINE)
-        for m in combined.finditer("".join(chars)):
-            for i in range(m.start() + (fill == "_"), m.end() - (fill == "_")):
-                if chars[i] not in "\r\n":
-                    chars[i] = fill
-    return "".join(chars)
+    string still reads as one item, and offsets stay the same. Only the matches are rebuilt (a
+    100,000-target program is not copied character by character)."""
+
+    def spaces(m: re.Match) -> str:
+        return _NOT_LINE_END.sub(" ", m.group())
+
+    def underscores(m: re.Match) -> str:
+        s = m.group()
+        return s if len(s) < 2 else s[0] + _NOT_LINE_END.sub("_", s[1:-1]) + s[-1]
+
+    for patterns, fill in ((blank, spaces), (quoted, underscores)):
+        if patterns:
+            combined = re.compile("|".join(f"(?:{p.pattern})" for p in patterns), re.MULTILINE)
+            text = combined.sub(fill, text)
+    return text
 
 
 def format_number(value: float, old: Number, resolution: float, decimals: int = 0) -> str:

@@ -20,6 +20,11 @@ Where the marker goes (one added line; the rest of the file is byte for byte the
   with ``LINE_COUNT`` raised by one; a remark line holds :data:`TP_REMARK_WIDTH` characters, so
   the fingerprint is cut to fit (10 hex digits with a five-character version);
 * URScript: ``# ...`` as the first line;
+* Yaskawa INFORM: a comment instruction ``'...`` after the job's ``NOP`` (a comment holds
+  :data:`INFORM_COMMENT_WIDTH` characters: the fingerprint is cut to fit); a VAR.DAT, which holds
+  no instructions, carries none;
+* Staubli VAL3: an XML comment ``<!-- ... -->`` on the line after the XML declaration of each
+  file written (a file without a declaration carries none);
 * CSV: ``# ...`` as the first line (robocal's CSV readers skip leading ``#`` lines).
 """
 
@@ -43,6 +48,10 @@ _NOTE = {"filtered": "targets filtered, do not filter again",
          "compensated": "targets compensated, do not compensate again"}
 _RAPID_ANCHOR = re.compile(r"^[ \t]*MODULE\b[^\r\n]*(\r?\n)", re.M | re.I)
 _KRL_ANCHOR = re.compile(r"^[ \t]*(?:GLOBAL[ \t]+)?(?:DEF|DEFDAT|DEFFCT)\b[^\r\n]*(\r?\n)", re.M | re.I)
+_INFORM_NOP = re.compile(r"^NOP[ \t]*(\r?\n|\r)", re.M)
+_XML_ANCHOR = re.compile(r"^(?:\xef\xbb\xbf)?<\?xml[^>]*\?>[ \t]*(\r?\n)")
+MARKED_FORMATS = ("rapid", "krl", "fanuc", "urscript", "inform", "val3")  # in the dialects' names
+INFORM_COMMENT_WIDTH = 32  # characters of an INFORM comment instruction ('...)
 _FANUC_LINE = re.compile(r"^[ \t]*(\d+):", re.M)
 _FANUC_COUNT = re.compile(r"^(LINE_COUNT\s*=\s*)(\d+)", re.M)
 
@@ -103,6 +112,21 @@ def _insert_after(text: str, anchor: re.Pattern, line: str) -> str:
     return text[:at] + indent + line + nl + rest
 
 
+def _short(body: str, width: int) -> str:
+    """``body`` with its fingerprint cut (to no fewer than _SHORTEST_HEX digits) to fit ``width``."""
+    cut = max(_SHORTEST_HEX, FINGERPRINT_HEX - max(0, len(body) - width))
+    return body[:len(body) - FINGERPRINT_HEX + cut]
+
+
+def _mark_inform(text: str, body: str) -> str:
+    """A comment instruction after the job's NOP (the first instruction); a file without one (the
+    controller's VAR.DAT, which holds no instructions) is left as it is."""
+    m = _INFORM_NOP.search(text)
+    if m is None:
+        return text
+    return text[:m.end()] + f"'{_short(body, INFORM_COMMENT_WIDTH)}{m.group(1)}" + text[m.end():]
+
+
 def _mark_fanuc(text: str, body: str) -> str:
     start, stop = text.find("/MN"), text.find("/POS")
     if start < 0:
@@ -110,8 +134,7 @@ def _mark_fanuc(text: str, body: str) -> str:
     stop = len(text) if stop < start else stop
     numbers = [int(n) for n in _FANUC_LINE.findall(text, start, stop)]
     nl = _newline(text)
-    cut = max(_SHORTEST_HEX, FINGERPRINT_HEX - max(0, len(body) - TP_REMARK_WIDTH))
-    body = body[:len(body) - FINGERPRINT_HEX + cut]
+    body = _short(body, TP_REMARK_WIDTH)
     remark = f"{max(numbers, default=0) + 1:>4}:  !{body} ;{nl}"
     if stop < len(text) and not text[:stop].endswith("\n"):
         remark = nl + remark
@@ -121,10 +144,10 @@ def _mark_fanuc(text: str, body: str) -> str:
 
 def mark_program(dialect: str, data: bytes, robot: Robot) -> bytes:
     """A filtered program's bytes with the marker of ``robot`` (the calibrated model) added in
-    ``dialect``'s comment syntax (a name holding 'rapid', 'krl', 'fanuc' or 'urscript', as the
-    dialects' own names do; see the module docstring)."""
+    ``dialect``'s comment syntax (a name holding one of MARKED_FORMATS, as the dialects' own names
+    do; see the module docstring)."""
     text = data.decode("latin-1")
-    dialect = next((k for k in ("rapid", "krl", "fanuc", "urscript") if k in dialect.lower()), dialect)
+    dialect = next((k for k in MARKED_FORMATS if k in dialect.lower()), dialect)
     body = marker_text(robot)
     note = f"{body}: {_NOTE['filtered']}"
     if dialect == "rapid":
@@ -135,6 +158,10 @@ def mark_program(dialect: str, data: bytes, robot: Robot) -> bytes:
         out = _mark_fanuc(text, body)
     elif dialect == "urscript":
         out = f"# {note}{_newline(text)}{text}"
+    elif dialect == "inform":
+        out = _mark_inform(text, body)
+    elif dialect == "val3":
+        out = _insert_after(text, _XML_ANCHOR, f"<!-- {note} -->") if _XML_ANCHOR.search(text) else text
     else:
         raise DataError(f"no provenance marker for program format {dialect!r}")
     return out.encode("latin-1")
