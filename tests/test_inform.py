@@ -216,6 +216,14 @@ def test_cli_filters_a_job(tmp_path, capsys):
     assert "8 of 8 Cartesian target(s) filtered" in text
     assert "9 motions: 7 corrected, 2 not corrected (each named)" in text
     assert out.read_bytes() != paths[0].read_bytes() and (tmp_path / "WELD_CAL.JBI.targets.json").exists()
+    # the provenance marker: one comment instruction after NOP, 32 characters at most; filtering the
+    # filtered job again is refused
+    added = [ln for ln in out.read_text(encoding="latin-1").splitlines() if ln.startswith("'robocal ")]
+    assert len(added) == 1 and len(added[0]) <= 33
+    assert main(["filter", str(out), "--calibrated", str(cal), "--nominal", "yaskawa_gp25", "-o",
+                 str(tmp_path / "TWICE.JBI"), "--frame", "2=1250,-300,450,0,0,15", "--tool",
+                 "1=0,-35,410,0,-30,0"]) == 2
+    assert "already filtered" in capsys.readouterr().err and not (tmp_path / "TWICE.JBI").exists()
 
 
 # ----------------------------------------------------------------------------- campaign

@@ -183,6 +183,13 @@ def test_cli_filters_an_application_folder(tmp_path, capsys):
     assert "14 motions: 9 corrected, 5 not corrected (each named)" in text
     assert sorted(p.name for p in out.iterdir()) == sorted(
         [p.name for p in application_files(folder)] + ["pickPart.targets.csv", "pickPart.targets.json"])
+    marked = [p for p in out.iterdir() if "<!-- robocal " in p.read_text(encoding="utf-8-sig")]
+    assert marked and all(p.suffix in (".dtx", ".pgx", ".pjx") for p in marked)
+    again = tmp_path / "again"
+    again.mkdir()
+    assert main(["filter", str(out / next(p.name for p in marked)), "--calibrated", str(cal), "--nominal",
+                 "staubli_tx2_140", "-o", str(again)]) == 2
+    assert "already filtered" in capsys.readouterr().err
 
 
 def test_poses_writes_an_application_that_visits_the_planned_joints(tmp_path):
