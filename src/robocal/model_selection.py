@@ -92,7 +92,7 @@ def _linearise(result, ng_names: list[str]) -> _Linearised:
     problem, state = result.problem, result.state
     obs = problem.observation
     robot = state.robot.with_joint_errors(list(dict.fromkeys(state.robot.joint_error_names + ng_names)))
-    values = np.array([robot.get(nm) for nm in ng_names])
+    values = robot.values_of(ng_names)
     n = robot.n_joints
     geometric = [nm for nm in result.names if block_of(nm) != "joint_errors"]
     thetas = [f"theta{i + 1}" for i in range(n)]
@@ -121,7 +121,7 @@ def _linearise(result, ng_names: list[str]) -> _Linearised:
     mean_of = dict(zip(est.names, est.prior_mean or [0.0] * est.size, strict=True))
     noise = est.noise
     geo_w = np.array([w_of.get(nm, 0.0) for nm in geometric])
-    geo_offset = np.array([state.robot.get(nm) - mean_of.get(nm, 0.0) for nm in geometric])
+    geo_offset = state.robot.values_of(geometric) - np.array([mean_of.get(nm, 0.0) for nm in geometric])
     ng_w = noise / prior_sigma(robot, ng_names) if ng_names else np.zeros(0)
     w2 = np.r_[geo_w, np.zeros(len(space.nuisance)), ng_w] ** 2
     offset = np.r_[geo_offset, np.zeros(len(space.nuisance)), values]
