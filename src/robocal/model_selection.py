@@ -175,7 +175,8 @@ class _CrossValidation:
         self.row_fold = np.repeat(fold, rows)
         self.row_weight = np.sqrt(np.repeat(lin.weight, rows))
         self.scored = lin.weight > 0
-        A = lin.A * self.row_weight[:, None]
+        unweighted = bool(np.all(lin.weight == 1.0))  # lsq: no weighted copy of the (M, k) columns
+        A = lin.A if unweighted else lin.A * self.row_weight[:, None]
         self.r = lin.r * self.row_weight
         self.n_columns = A.shape[1]
         self.extra_full = np.zeros((A.shape[0], 0)) if scan is None else \
@@ -306,6 +307,7 @@ def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol
     rows = [{"terms": list(c.terms), **cv.evaluate(c),
              "parameters": c.ng_names + (cyclic_params if c.cyclic else [])} for c in cands]
     chosen, best, reason = _choose(rows)
+    del lin, cv, scan  # the linearised superset's (M, k) arrays are not needed by the final fit
     t_select = time.perf_counter() - t0
     while True:  # the chosen model must converge: one that does not is marked and the rule rerun
         final = fit(rows[chosen]["parameters"], validations, superset if warm_final else None)
