@@ -261,8 +261,8 @@ def test_a_file_longer_than_a_chunk_reads_every_row_with_its_line_number():
         if i == CHUNK - 2:
             lines += ["", "# a comment inside the data"]
     data = parse_csv("\n".join(lines))
-    assert len(data) == n and np.array_equal(data.joints[:, 0], np.array(q)) and np.array_equal(data.points[:, 0],
-                                                                                       np.arange(n) * 1e-3)
+    assert len(data) == n and np.array_equal(data.joints[:, 0], np.array(q))
+    assert np.array_equal(data.points[:, 0], np.arange(n) * 1e-3)
     line_of_row = np.r_[np.arange(CHUNK - 1) + 3, np.arange(CHUNK - 1, n) + 5]
     assert np.array_equal(data.source_row, line_of_row)
     lines[-1] = "0.1,0.2,oops,0.5,0.25"
