@@ -203,6 +203,20 @@ def test_stale_temporaries_of_a_killed_run_are_removed_and_others_kept(tmp_path)
     assert not any(p.exists() for p in stale) and all(p.exists() for p in mine)
 
 
+def test_a_folder_named_like_a_stale_temporary_is_the_users_and_stays(tmp_path):
+    out = tmp_path / "cal.yaml"
+    folders = [tmp_path / f".cal.yaml.keep{suffix}" for suffix in (rio.TEMP_SUFFIX, rio.BACKUP_SUFFIX)]
+    for folder in folders:
+        folder.mkdir()
+        (folder / "data.csv").write_text("the user's")
+    link = tmp_path / f".cal.yaml.link{rio.TEMP_SUFFIX}"
+    link.symlink_to(folders[0], target_is_directory=True)  # a stale link: removed, its folder kept
+    write_all({out: "new"})
+    write_all({out: "newer"})
+    assert out.read_text() == "newer" and not link.is_symlink()
+    assert all((folder / "data.csv").read_text() == "the user's" for folder in folders)
+
+
 def test_the_written_file_is_fsynced_before_it_replaces_the_target(tmp_path, monkeypatch):
     events = []
     real_fsync, real_replace = os.fsync, os.replace

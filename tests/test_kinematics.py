@@ -274,3 +274,19 @@ def test_model_yaml_doc_examples_load(tmp_path):
         name = robot.name
         if name in ("abb_irb2600", "ur5", "meca500"):
             np.testing.assert_allclose(robot.fk(q), Robot.from_catalog(name).fk(q), atol=1e-12)
+
+
+def test_values_are_read_once_and_never_aliased():
+    """values_of / get read the vector computed once per model; values hands out a private copy."""
+    robot = Robot.from_catalog("abb_irb2600").displaced(["a2", "base.rz", "tool.x"], [1e-3, 0.2, 0.01])
+    names = robot.parameter_names
+    vec = robot.values
+    assert np.array_equal(robot.values_of(names), vec)
+    assert [robot.get(nm) for nm in names] == vec.tolist()
+    vec[:] = 0.0  # the caller's copy: the model is unchanged
+    assert robot.get("a2") == robot.values[robot.indices(["a2"])[0]] != 0.0
+    picked = robot.values_of(["a2"])
+    picked[0] = 0.0
+    assert robot.get("a2") != 0.0
+    with pytest.raises(ModelError):
+        robot.values_of(["nope"])

@@ -246,3 +246,25 @@ def test_approach_directions_follow_the_measurement_order_and_survive_subsets(tm
     assert Measurements.load(tmp_path / "part.csv").approach.tolist() == [[-1, 1], [0, 0]]
     with pytest.raises(DataError, match="approach"):
         Measurements.from_arrays("point", q, points=np.zeros((4, 3)), approach=np.full((4, 2), 2))
+
+
+def test_a_file_longer_than_a_chunk_reads_every_row_with_its_line_number():
+    """The CSV body is read in blocks of CHUNK rows: rows, comments and blank lines across the
+    block boundary keep their order and line numbers, and an error past it names its line."""
+    from robocal.kinematics.fk import CHUNK
+
+    n = CHUNK + 7
+    q = np.linspace(-1.0, 1.0, n).tolist()
+    lines = ["# provenance", "q1_rad,q2_rad,x_m,y_m,z_m"]
+    for i in range(n):
+        lines.append(f"{q[i]!r},{-q[i]!r},{i * 1e-3!r},0.5,0.25")
+        if i == CHUNK - 2:
+            lines += ["", "# a comment inside the data"]
+    data = parse_csv("\n".join(lines))
+    assert len(data) == n and np.array_equal(data.joints[:, 0], np.array(q))
+    assert np.array_equal(data.points[:, 0], np.arange(n) * 1e-3)
+    line_of_row = np.r_[np.arange(CHUNK - 1) + 3, np.arange(CHUNK - 1, n) + 5]
+    assert np.array_equal(data.source_row, line_of_row)
+    lines[-1] = "0.1,0.2,oops,0.5,0.25"
+    with pytest.raises(DataError, match=f"line {len(lines)}, column x_m: 'oops' is not a number"):
+        parse_csv("\n".join(lines))

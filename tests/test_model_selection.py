@@ -8,6 +8,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from robocal import Robot
 from robocal.calibration import calibrate
@@ -15,7 +17,7 @@ from robocal.damped_least_squares import Status
 from robocal.data.measurements import Measurements, approach_from_order, parse_csv, travel_from_order
 from robocal.data.simulate import simulate_tracker
 from robocal.errors import IdentificationError, ModelError
-from robocal.identify.frequency_search import FrequencyScan
+from robocal.identify.frequency_search import FrequencyScan, trig_sums
 from robocal.identify.lsq import gauss_newton
 from robocal.identify.priors import prior_sigma
 from robocal.identify.problem import CalibrationProblem
@@ -328,3 +330,15 @@ def test_a_chosen_model_that_does_not_converge_is_not_chosen(monkeypatch):
     assert ms["candidates"][failed[0]]["parameters"] == finals[0]
     assert result.solver.success and "did not converge" in ms["reason"]
     assert "\nx " in selection_table(ms)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(1, 400), st.integers(0, 2**32 - 1), st.booleans())
+def test_gridded_trig_sums_match_the_direct_sums(n_modes, seed, complex_weights):
+    """The frequency scan's non-uniform DFT (gridding + Taylor) against the direct sums."""
+    rng = np.random.default_rng(seed)
+    P = int(rng.integers(1, 300))
+    x = rng.uniform(-20.0, 20.0, P)
+    w = rng.normal(size=P) + (1j * rng.normal(size=P) if complex_weights else 0.0)
+    direct = np.exp(1j * np.outer(np.arange(n_modes), x)) @ w
+    assert np.abs(trig_sums(w, x, n_modes) - direct).max() <= 1e-12 * max(np.abs(w).sum(), 1e-300)

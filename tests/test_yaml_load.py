@@ -97,3 +97,21 @@ _plain = st.recursive(
 @given(_plain)
 def test_what_robocal_writes_reads_back_exactly(data):
     assert load_yaml(dump_yaml(data), "f") == data
+
+
+@pytest.mark.parametrize("path", [("payload_kg",), ("joints", 0, "d"), ("joints", 1, "limits", 0),
+                                  ("base", "xyz", 2), ("nominal", "tool.y")])
+def test_an_integer_beyond_the_float_range_is_refused_naming_the_field(tmp_path, path):
+    """A 401-digit integer in any number field: one ModelError naming the field, never an OverflowError."""
+    robot = Robot.from_catalog("abb_irb2600")
+    robot.save(tmp_path / "m.yaml")
+    data = load_yaml((tmp_path / "m.yaml").read_text(), "model")
+    data["payload_kg"] = 12
+    node = data
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = int("9" * 401)
+    (tmp_path / "big.yaml").write_text(dump_yaml(data))
+    with pytest.raises(ModelError, match=r"401 digits") as err:
+        Robot.load(tmp_path / "big.yaml")
+    assert str(next(k for k in reversed(path) if isinstance(k, str))) in str(err.value)

@@ -41,6 +41,7 @@ from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms,
 from robocal.model_selection import calibrate_cyclic, select_error_model, selection_table
 from robocal.progress import Progress
 from robocal.report.metrics import position_stats
+from robocal.resources import calibration_bytes, check_memory, memory_guard
 from robocal.schema import RESULT_SCHEMA, validate
 from robocal.trust.consistency import Consistency, check_fit, check_not_worse
 from robocal.trust.coverage import accuracy_line, predict, prediction
@@ -529,6 +530,7 @@ def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data
     return result
 
 
+@memory_guard("the calibration")
 def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
               register_frames: bool = True, rtol: float = DEFAULT_RTOL, seed: int = 0,
               progress=None, nongeometric="default", force: bool = False, sigma: dict | None = None,
@@ -562,6 +564,9 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     check_options(method, options)
     datasets, validations = _as_sets(data, "calibration"), _as_sets(validation, "validation")
     spec = resolve_nongeometric(nongeometric, method, datasets)
+    rows = sum(len(d) for d in datasets)
+    check_memory(calibration_bytes(rows, spec == "auto"), f"calibrating {rows} measurement rows"
+                 + (" with the default error-model search" if spec == "auto" else ""))
     if spec and method not in NONGEOMETRIC_METHODS:
         raise IdentificationError(
             f"non-geometric terms are identified by the methods {', '.join(NONGEOMETRIC_METHODS)}; "

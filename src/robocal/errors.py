@@ -59,3 +59,8 @@ class IdentificationError(RobocalError):
 
 class UnreachableError(RobocalError):
     """A target pose has no inverse-kinematics solution."""
+
+
+class ResourceError(RobocalError):
+    """A computation needs more memory than the machine offers (checked before it starts; a
+    MemoryError during it ends the same way)."""

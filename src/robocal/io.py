@@ -47,9 +47,14 @@ def as_number(value, where: str, error: type[RobocalError] = DataError) -> float
     ``error`` (a RobocalError type) naming ``where``."""
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise error(f"{where}: expected a number, got {short_repr(value)}")
-    if not math.isfinite(value):
+    try:
+        number = float(value)
+    except OverflowError:  # an integer of hundreds of digits: beyond any float
+        raise error(f"{where}: an integer of {len(str(abs(value)))} digits is beyond the range of "
+                    "numbers (about 1.8e308)") from None
+    if not math.isfinite(number):
         raise error(f"{where}: {value!r} is not finite")
-    return float(value)
+    return number
 
 
 def read_text(path, what: str, error: type[RobocalError] = DataError) -> str:
@@ -157,15 +162,19 @@ def _is_ours(name: str, target: str) -> bool:
 
 def _remove_stale(paths) -> None:
     """Remove robocal's temporaries and backups of ``paths`` left by a killed run (kill -9, power
-    loss). Called under the folder lock, when no live writer can own them."""
+    loss). Called under the folder lock, when no live writer can own them. Only files: a folder
+    that happens to be named like one is the user's and stays; a file that cannot be removed
+    (permissions) is left (the next temporaries get other random names)."""
     for folder, names in _by_folder(paths).items():
         try:
-            entries = os.listdir(folder)
+            entries = list(os.scandir(folder))
         except OSError:
             continue
         for entry in entries:
-            if any(_is_ours(entry, name) for name in names):
-                (folder / entry).unlink(missing_ok=True)
+            if any(_is_ours(entry.name, name) for name in names):
+                with contextlib.suppress(OSError):
+                    if not entry.is_dir(follow_symlinks=False):
+                        os.unlink(entry.path)
 
 
 def _by_folder(paths) -> dict[Path, set[str]]:

@@ -93,7 +93,7 @@ def _linearise(result, ng_names: list[str]) -> _Linearised:
     problem, state = result.problem, result.state
     obs = problem.observation
     robot = state.robot.with_joint_errors(list(dict.fromkeys(state.robot.joint_error_names + ng_names)))
-    values = np.array([robot.get(nm) for nm in ng_names])
+    values = robot.values_of(ng_names)
     n = robot.n_joints
     geometric = [nm for nm in result.names if block_of(nm) != "joint_errors"]
     thetas = [f"theta{i + 1}" for i in range(n)]
@@ -122,7 +122,7 @@ def _linearise(result, ng_names: list[str]) -> _Linearised:
     mean_of = dict(zip(est.names, est.prior_mean or [0.0] * est.size, strict=True))
     noise = est.noise
     geo_w = np.array([w_of.get(nm, 0.0) for nm in geometric])
-    geo_offset = np.array([state.robot.get(nm) - mean_of.get(nm, 0.0) for nm in geometric])
+    geo_offset = state.robot.values_of(geometric) - np.array([mean_of.get(nm, 0.0) for nm in geometric])
     ng_w = noise / prior_sigma(robot, ng_names) if ng_names else np.zeros(0)
     w2 = np.r_[geo_w, np.zeros(len(space.nuisance)), ng_w] ** 2
     offset = np.r_[geo_offset, np.zeros(len(space.nuisance)), values]
@@ -176,7 +176,8 @@ class _CrossValidation:
         self.row_fold = np.repeat(fold, rows)
         self.row_weight = np.sqrt(np.repeat(lin.weight, rows))
         self.scored = lin.weight > 0
-        A = lin.A * self.row_weight[:, None]
+        unweighted = bool(np.all(lin.weight == 1.0))  # lsq: no weighted copy of the (M, k) columns
+        A = lin.A if unweighted else lin.A * self.row_weight[:, None]
         self.r = lin.r * self.row_weight
         self.n_columns = A.shape[1]
         self.extra_full = np.zeros((A.shape[0], 0)) if scan is None else \
@@ -307,6 +308,7 @@ def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol
     rows = [{"terms": list(c.terms), **cv.evaluate(c),
              "parameters": c.ng_names + (cyclic_params if c.cyclic else [])} for c in cands]
     chosen, best, reason = _choose(rows)
+    del lin, cv, scan  # the linearised superset's (M, k) arrays are not needed by the final fit
     t_select = time.perf_counter() - t0
     while True:  # the chosen model must converge: one that does not is marked and the rule rerun
         final = fit(rows[chosen]["parameters"], validations, superset if warm_final else None)

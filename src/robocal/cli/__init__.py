@@ -16,6 +16,7 @@ import traceback
 import warnings
 
 from robocal.errors import ListedError, RobocalError
+from robocal.resources import out_of_memory
 from robocal.version import __version__
 
 DEBUG_ENV = "ROBOCAL_DEBUG"  # set to 1 to see the traceback of an internal error
@@ -133,6 +134,9 @@ def _run(args, argv: list[str], interrupts: _Interrupts) -> int:
         print(f"robocal {args.command}: error: a computation on the input overflowed or gave no number "
               f"({_one_line(exc)}): a value in the input is far beyond what a robot has",
               file=sys.stderr)
+        return 2
+    except MemoryError:  # what ran out is named; the traceback's arrays are freed by now
+        print(f"robocal {args.command}: error: {out_of_memory('the command')}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into e.g. head, which stopped reading
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -38,7 +38,9 @@ from __future__ import annotations
 
 import csv
 import io
+import itertools
 import re
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -47,6 +49,7 @@ from scipy.spatial.transform import Rotation
 
 from robocal.errors import DataError, UnitError
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
+from robocal.kinematics.fk import CHUNK
 from robocal.kinematics.transforms import ROTATION_TOL
 
 KINDS = ("point", "pose", "plane", "distance")
@@ -499,8 +502,22 @@ def _header_role(name: str):
     return None
 
 
-def _split_csv(text: str, name: str) -> tuple[str, int, list[list[str]]]:
-    """(provenance comment, header line number, CSV rows from the header on)."""
+def _csv_rows(lines, name: str):
+    """The CSV rows of ``lines`` (an iterator), read as they are consumed."""
+    reader = csv.reader(lines)
+    while True:
+        try:
+            row = next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            raise DataError(f"{name}: not a valid CSV file ({exc})") from None
+        yield row
+
+
+def _split_csv(text: str, name: str) -> tuple[str, int, list[str], Iterator[list[str]]]:
+    """(provenance comment, header line number, the header row, the CSV rows below it, read as
+    they are consumed: no list of every row's cells)."""
     lines = text.splitlines()
     source = ""
     start = 0
@@ -511,11 +528,8 @@ def _split_csv(text: str, name: str) -> tuple[str, int, list[list[str]]]:
     if start >= len(lines):
         raise DataError(f"{name}: the file is empty; a measurement CSV needs a header line "
                         "(e.g. q1_deg,...,q6_deg,x_mm,y_mm,z_mm) and data rows")
-    try:
-        rows = list(csv.reader(lines[start:]))
-    except csv.Error as exc:
-        raise DataError(f"{name}: not a valid CSV file ({exc})") from None
-    return source, start + 1, rows
+    rows = _csv_rows(itertools.islice(lines, start, None), name)
+    return source, start + 1, next(rows, []), rows
 
 
 def _column_roles(header: list[str], name: str, header_line: int) -> dict:
@@ -620,10 +634,12 @@ def _cell(cell: str, column: str, where: str) -> float:
     return v
 
 
-def _table(rows: list[list[str]], header: list[str], name: str, header_line: int):
-    """The numeric body ``(R, C)`` and each row's line number; blank and ``#`` rows skipped."""
+def _table(rows: Iterable[list[str]], header: list[str], name: str, header_line: int):
+    """The numeric body ``(R, C)`` and each row's line number ``(R,)``; blank and ``#`` rows
+    skipped. Filled in blocks of CHUNK rows (arrays, not a Python float per cell)."""
     width = len(header)
-    body, line_no = [], []
+    blocks, numbers = [], []
+    block, block_no, used = np.empty((CHUNK, width)), np.empty(CHUNK, np.int64), 0
     for k, row in enumerate(rows):
         ln = header_line + 1 + k
         if not row or all(not c.strip() for c in row) or row[0].lstrip().startswith("#"):
@@ -631,11 +647,18 @@ def _table(rows: list[list[str]], header: list[str], name: str, header_line: int
         if len(row) != width:
             raise DataError(f"{name}, line {ln}: {len(row)} values but the header has {width} columns; "
                             "fix or remove that row")
-        body.append([_cell(cell, h, f"{name}, line {ln}") for h, cell in zip(header, row, strict=True)])
-        line_no.append(ln)
-    if not body:
+        block[used] = [_cell(cell, h, f"{name}, line {ln}") for h, cell in zip(header, row, strict=True)]
+        block_no[used] = ln
+        used += 1
+        if used == CHUNK:
+            blocks.append(block)
+            numbers.append(block_no)
+            block, block_no, used = np.empty((CHUNK, width)), np.empty(CHUNK, np.int64), 0
+    blocks.append(block[:used])
+    numbers.append(block_no[:used])
+    if not sum(len(b) for b in blocks):
         raise DataError(f"{name}: the file has a header but no data rows")
-    return np.array(body, dtype=float), line_no
+    return np.concatenate(blocks), np.concatenate(numbers)
 
 
 def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) -> dict:
@@ -704,8 +727,8 @@ def _repeats(joints: np.ndarray, line_no: np.ndarray, name: str) -> tuple[np.nda
 
 def parse_csv(text: str, name: str = "<text>") -> Measurements:
     """Parse canonical CSV text; ``name`` is used in error messages."""
-    source, header_line, rows = _split_csv(text, name)
-    header = [h.strip().lower() for h in rows[0]]
+    source, header_line, header_row, rows = _split_csv(text, name)
+    header = [h.strip().lower() for h in header_row]
     if header[0].startswith("format: robocal-"):
         kind = header[0].split("-", 1)[1].split("/")[0]
         raise DataError(f"{name} is a robocal {kind} file, not measurements: give it to the option that "
@@ -716,7 +739,7 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     roles = _column_roles(header, name, header_line)
     joint_cols = _joint_columns(roles, name)
     kind = _data_kind(roles, name)
-    table, line_no = _table(rows[1:], header, name, header_line)
+    table, line_no = _table(rows, header, name, header_line)
     col = {h: table[:, i] for i, h in enumerate(header)}
     joints = np.stack([col[h] * roles[h][2] for h in joint_cols], axis=1)
     linear = np.array([_is_length(h) for h in joint_cols])

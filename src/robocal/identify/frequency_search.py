@@ -22,9 +22,13 @@ linearised problem at a fitted model (a periodogram in the joint angle):
 4. (:meth:`FrequencyScan.polish`, for the model delivered) each frequency is moved to its exact
    least-squares value with all the others in the model.
 
-Whole-campaign cost: the sine/cosine tables (poses x frequencies) are computed once per pose set
-(:class:`FrequencyScan`) and shared by the cross-validation folds, which search on their
-training poses only (``mask``).
+Whole-campaign cost: the sums over poses of step 1 at every grid frequency are a non-uniform
+discrete Fourier transform, computed without a (poses x frequencies) table (which would cost
+~170 kB per pose) by gridding with a Taylor expansion (:func:`trig_sums`): each pose's phase is
+split into the nearest point of a regular grid plus a small remainder whose exponential is
+expanded in powers, so the sums are a few FFTs of binned weights — memory linear in the poses and
+in the grid, time nearly independent of the pose count, accurate to ``TRIG_SUM_RTOL`` of the
+summed weights. The cross-validation folds search on their training poses only (``mask``).
 """
 
 from __future__ import annotations
@@ -42,10 +46,45 @@ MIN_SPAN = np.deg2rad(20.0)  # a joint that moves less is not searched
 _SCREEN = 0.25               # peaks whose screening statistic is below this x threshold are not tested
 _REFINE_POINTS = 21          # least-squares refinement grid over +-1 grid step around a peak
 _POLISH_POINTS = 9           # exact refinement grid over +-1/2 grid step (polish)
+TRIG_SUM_RTOL = 1e-13        # truncation of the gridded sums' Taylor series, relative to sum |w|
+_OVERSAMPLING = 4            # FFT length / number of modes: the Taylor remainder's step is pi / 4
+
+
+def trig_sums(w: np.ndarray, x: np.ndarray, n_modes: int) -> np.ndarray:
+    """``G[k] = sum_p w[p] exp(i k x[p])`` for ``k = 0 .. n_modes - 1`` (complex ``(n_modes,)``);
+    ``w (P,)`` real or complex weights, ``x (P,)`` phases in rad per mode.
+
+    Gridding: ``x = v_j + delta`` with ``v_j = 2 pi j / L`` the nearest point of an L-point grid
+    (``L >= _OVERSAMPLING n_modes``, so ``|k delta| <= pi / _OVERSAMPLING``) and
+    ``exp(i k delta) = sum_m (i k delta)^m / m!`` truncated where the next term is below
+    ``TRIG_SUM_RTOL``: then ``G[k] = sum_m (i k)^m / m! * L ifft(H_m)[k]`` with ``H_m[j]`` the sum
+    of ``w delta^m`` binned on the grid. Memory O(P + L), time O(M (P + L log L))."""
+    if n_modes <= 0:
+        return np.zeros(0, complex)
+    L = 1 << int(np.ceil(np.log2(max(_OVERSAMPLING * n_modes, 2))))
+    bound = np.pi * n_modes / L  # |k delta| at most
+    terms, size = 1, 1.0
+    while size > TRIG_SUM_RTOL:
+        size *= bound / terms
+        terms += 1
+    u = np.mod(x, 2.0 * np.pi) * (L / (2.0 * np.pi))
+    j = np.rint(u)
+    delta = (u - j) * (2.0 * np.pi / L)
+    j = j.astype(np.int64) % L
+    k = np.arange(n_modes)
+    total = np.zeros(n_modes, complex)
+    power = np.asarray(w, complex)
+    factor = np.ones(n_modes, complex)  # (i k)^m / m!
+    for m in range(terms):
+        H = np.bincount(j, power.real, L) + 1j * np.bincount(j, power.imag, L)
+        total += factor * (np.fft.ifft(H) * L)[:n_modes]
+        power = power * delta
+        factor = factor * (1j * k) / (m + 1)
+    return total
 
 
 class FrequencyScan:
-    """Sine/cosine tables of the poses' joint angles on each joint's frequency grid.
+    """The poses' joint angles and each joint's frequency grid (step 1 of the module docstring).
 
     ``q (N, n)`` joints of the measurement items (rad), ``group (N,)`` their pose labels (items
     of one pose share the joints)."""
@@ -61,11 +100,6 @@ class FrequencyScan:
                       if span[i] >= MIN_SPAN else np.zeros(0) for i in range(q_pose.shape[1])]
         self.n_independent = max(sum(g.size for g in self.grids) / 2.0, 1.0)
         self.q_pose = q_pose
-        self.tables = []  # per joint: [sin, cos] and [sin 2x, cos 2x] of f q, (poses, 2F) float32
-        for i, grid in enumerate(self.grids):
-            phase = np.outer(q_pose[:, i], grid).astype(np.float32)  # a screening: 1e-4 rad is plenty
-            s, c = np.sin(phase), np.cos(phase)
-            self.tables.append((np.hstack([s, c]), np.hstack([2 * s * c, c * c - s * s])))
 
     def columns(self, Jtheta: np.ndarray, rows: int, found) -> np.ndarray:
         """``(M, 2k)`` columns ``Jtheta[:, i] * (sin f q_i, cos f q_i)`` of ``found`` [(i, f)]."""
@@ -100,7 +134,7 @@ class FrequencyScan:
             peaks = []
             for i, grid in enumerate(self.grids):
                 if grid.size and sum(j == i for j, _ in found) < MAX_PER_JOINT:
-                    w = _wald_scan(y[:, i], self.tables[i])
+                    w = _wald_scan(y[:, i], self.q_pose[:, i], grid[0], self.step[i], grid.size)
                     t = int(np.argmax(w))
                     peaks.append((float(w[t]), i, self._refine(i, float(grid[t]), y[:, i], weight[:, i])))
             added = 0
@@ -184,15 +218,17 @@ def _orthonormal(A: np.ndarray) -> np.ndarray:
     return U[:, s > 1e-10 * max(s[0], 1e-300)]
 
 
-def _wald_scan(y: np.ndarray, table) -> np.ndarray:
-    """Cluster-robust Wald statistic of (sin, cos) at every grid frequency; ``y (poses,)``.
-
-    A screening statistic in float32 (the best peaks are checked exactly); the variance sums use
+def _wald_scan(y: np.ndarray, q: np.ndarray, f0: float, step: float, n_freq: int) -> np.ndarray:
+    """Cluster-robust Wald statistic of (sin, cos) at the grid frequencies ``f0 + k step``
+    (``k < n_freq``); ``y (poses,)`` the residual along the joint's motion, ``q (poses,)`` its
+    angle. A screening statistic (the best peaks are checked exactly); the variance sums use
     sin^2 = (1 - cos 2x) / 2, cos^2 = (1 + cos 2x) / 2, sin cos = sin 2x / 2."""
-    first, double = table
     y2 = y * y
-    bs, bc = np.split((y.astype(np.float32) @ first).astype(float), 2)
-    s2, c2 = np.split((y2.astype(np.float32) @ double).astype(float), 2)
+    # sum y exp(i f q) and sum y^2 exp(2 i f q), f = f0 + k step: the grid's offset as a phase
+    first = trig_sums(y * np.exp(1j * f0 * q), step * q, n_freq)
+    double = trig_sums(y2 * np.exp(2j * f0 * q), 2.0 * step * q, n_freq)
+    bs, bc = first.imag, first.real
+    s2, c2 = double.imag, double.real
     total = float(y2.sum())
     return _quadratic_form(bs, bc, (total - c2) / 2.0, (total + c2) / 2.0, s2 / 2.0)
 

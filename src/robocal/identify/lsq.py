@@ -73,10 +73,13 @@ class _Calibration:
         return np.array([self.current])
 
     def linearize(self, members) -> None:
+        self.J = self.svd = None  # the previous linearisation's (M, k) arrays go before new ones come
         if self.J_raw is None or self.J_state is not self.state:
+            self.J_raw = None
             self.J_raw, self.J_state = self.problem.jacobian(self.state, self.space), self.state
             self.given_svd = None
-        self.J = self.J_raw * (self.w[:, None] if np.ndim(self.w) else self.w)
+        unweighted = not np.ndim(self.w) and self.w == 1.0  # then no weighted copy of the (M, k) array
+        self.J = self.J_raw if unweighted else self.J_raw * (self.w[:, None] if np.ndim(self.w) else self.w)
         if self.prior_rows.size:  # r = mean - value: the same sign convention as the data's rows
             self.J = np.vstack([self.J, self.prior_block])
         first = self.scale is None

@@ -129,10 +129,9 @@ def check_corrections(start, final, names, *, sigma: dict[str, float] | None = N
     units = dict(zip(start.parameter_names, start.parameter_units(), strict=True))
     sigma, confounded = sigma or {}, confounded or {}
     determined, loose = [], []
-    for name in names:
-        if block_of(name) != "links":
-            continue
-        delta = final.get(name) - start.get(name)
+    links = [name for name in names if block_of(name) == "links"]
+    deltas = final.values_of(links) - start.values_of(links)
+    for name, delta in zip(links, deltas.tolist(), strict=True):
         if units[name] == "m" and abs(delta) > length_limit:
             text = f"{name} by {delta * 1e3:+.4g} mm"
             s = sigma.get(name, 0.0) * 1e3

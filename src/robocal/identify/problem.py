@@ -185,7 +185,9 @@ class CalibrationProblem:
             block = obs.jacobian(state.robot, space.robot, state.nuisance[nu])
             J[rows, :k] = block[:, :k]
             J[np.ix_(rows, k + nu)] = block[:, k:]
-        return J / self.sigma[:, None]
+            del block  # one (M, k) array at a time besides J
+        J /= self.sigma[:, None]
+        return J
 
     def profiled_residuals_batch(self, robot, names: Sequence[str], X: np.ndarray):
         """Weighted residuals ``(P, M)`` and nuisance ``(P, m)`` for robot displacements ``X (P, k)``

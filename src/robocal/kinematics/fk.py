@@ -20,7 +20,9 @@ import numpy as np
 
 from robocal.kinematics.kernels import compiled
 
-CHUNK = 65536  # poses per chunk of the general path: bounds peak memory for very large batches
+# poses per chunk wherever a computation over poses holds per-pose temporaries (the general FK
+# path, the identification Jacobian, normal equations, streamed files): bounds their peak memory
+CHUNK = 4096
 FAST_CHUNK = 4096  # poses per chunk of the one-robot path: its temporaries stay in the CPU cache
 
 

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from robocal.errors import ModelError
-from robocal.kinematics.fk import LinkArrays, chain_frames
+from robocal.kinematics.fk import CHUNK, LinkArrays, chain_frames
 from robocal.kinematics.joint_errors import joint_error_basis, scatter_offsets
 
 
@@ -107,10 +107,24 @@ def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: s
 
     kind 'point': ``(N, 3, k)`` position rows (m per m or m per rad);
     kind 'pose': ``(N, 6, k)`` position rows then orientation rows (rad per unit).
+    Computed in chunks of :data:`robocal.kinematics.fk.CHUNK` poses (every row depends on its own
+    pose only), so the temporaries (every parameter's motion axis, ~15 kB per pose) stay bounded.
     """
     if kind not in ("point", "pose"):
         raise ModelError(f"unknown observation kind {kind!r}: use 'point' or 'pose'")
     idx = robot.indices(params)
+    N = q.shape[0]
+    if N <= CHUNK:
+        return _jacobian_rows(robot, q, idx, kind, smr, approach, travel)
+    out = np.empty((N, 3 if kind == "point" else 6, idx.size))
+    for start in range(0, N, CHUNK):
+        part = slice(start, start + CHUNK)
+        out[part] = _jacobian_rows(robot, q[part], idx, kind, *(None if v is None else np.asarray(v)[part]
+                                                                  for v in (smr, approach, travel)))
+    return out
+
+
+def _jacobian_rows(robot, q, idx: np.ndarray, kind: str, smr, approach, travel) -> np.ndarray:
     tcp, u, o, rotation = robot_motion_axes(robot, q, smr, approach, travel)
     return jacobian_from_axes(tcp, u[:, idx], o[:, idx], rotation[idx], kind)
 

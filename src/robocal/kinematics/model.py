@@ -296,9 +296,14 @@ class Robot:
         units += (["m"] * 3 + ["rad"] * 3) * 2 + ["m"] * self.smr.size
         return units + ([] if self.joint_errors is None else self.joint_errors.units())
 
+    @functools.cached_property
+    def _index(self) -> dict[str, int]:
+        """Parameter name -> vector index (computed once: the model is immutable)."""
+        return {name: i for i, name in enumerate(self.parameter_names)}
+
     def indices(self, names: Iterable[str]) -> np.ndarray:
         """Vector indices of parameter names; unknown names raise ModelError."""
-        lookup = {name: i for i, name in enumerate(self.parameter_names)}
+        lookup = self._index
         names = list(names)
         unknown = [nm for nm in names if nm not in lookup]
         if unknown:
@@ -307,6 +312,13 @@ class Robot:
                              + (", smr1.x.." if len(self.smr) else "")
                              + (f", {' '.join(self.joint_error_names)}" if self.joint_errors else ""))
         return np.array([lookup[nm] for nm in names], dtype=int)
+
+    @functools.cached_property
+    def _value_vector(self) -> np.ndarray:
+        """The parameter vector, computed once (the model is immutable; read-only)."""
+        vec = self._values()
+        vec.flags.writeable = False
+        return vec
 
     def _values(self) -> np.ndarray:
         links = np.stack([getattr(self, f) for f in LINK_FIELDS], axis=1).reshape(-1)
@@ -324,11 +336,16 @@ class Robot:
     @property
     def values(self) -> np.ndarray:
         """Current parameter vector (SI), a new array in the order of :attr:`parameter_names`."""
-        return self._values()
+        return self._value_vector.copy()
 
     def get(self, name: str) -> float:
         """One parameter's value (m or rad)."""
-        return float(self.values[self.indices([name])[0]])
+        return float(self._value_vector[self.indices([name])[0]])
+
+    def values_of(self, names: Iterable[str]) -> np.ndarray:
+        """The values ``(k,)`` (m or rad) of the named parameters, read from the vector computed
+        once per model (what a loop over parameters uses instead of :meth:`get` per name)."""
+        return self._value_vector[self.indices(names)]
 
     def with_values(self, updates: dict[str, float]) -> Robot:
         """A copy with parameters set by name to absolute values (m, rad)."""

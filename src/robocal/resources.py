@@ -1,0 +1,107 @@
+"""Memory a calibration will need, checked before it starts; running out as one clean line.
+
+A calibration's memory grows linearly with the poses (its Jacobians and normal equations are
+computed in chunks, so nothing grows faster): per pose, at most ``BYTES_PER_POSE`` with the default
+error-model search (``nongeometric="auto"``, the superset of every joint-error term and its
+cross-validation) and ``GEOMETRIC_BYTES_PER_POSE`` for the geometric model alone, above what the
+process already holds (the interpreter, numpy, the data). ``benchmarks/bench_scale.py`` measures
+the slopes these bound (peak RSS against poses, 1,000 to 100,000 poses).
+
+:func:`check_memory` refuses a computation that cannot fit in what the machine offers: the memory
+the kernel reports available (``MemAvailable`` plus free swap) and the process's address-space
+limit (``ulimit -v``) minus what it has already mapped. Without a way to tell (no ``/proc``), it
+lets the computation run; a ``MemoryError`` then still ends as the same one line (the CLI).
+"""
+
+from __future__ import annotations
+
+import functools
+import resource
+from pathlib import Path
+
+from robocal.errors import ResourceError
+
+BYTES_PER_POSE = 24_000  # default error-model search: bounds the measured 13.9 kB (RSS) and the address space
+GEOMETRIC_BYTES_PER_POSE = 8_000  # geometric model only (--nongeometric none)
+FIXED_BYTES = 300_000_000  # chunked temporaries, BLAS buffers and the result, whatever the poses
+ADVICE = ("calibrate fewer poses (a subset, e.g. every second pose), use --nongeometric none (the "
+          "geometric model needs about a third of the memory) or run on a machine with more memory")
+
+
+def _meminfo() -> dict[str, int]:
+    """``/proc/meminfo`` in bytes (empty where there is none)."""
+    try:
+        lines = Path("/proc/meminfo").read_text().splitlines()
+    except OSError:
+        return {}
+    out = {}
+    for line in lines:
+        key, _, rest = line.partition(":")
+        parts = rest.split()
+        if parts and parts[0].isdigit():
+            out[key] = int(parts[0]) * (1024 if parts[1:] == ["kB"] else 1)
+    return out
+
+
+def _mapped_bytes() -> int | None:
+    """The process's address space in use (VmSize), bytes; None where it cannot be read."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmSize:"):
+                return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
+def available_bytes() -> int | None:
+    """Bytes a computation can still allocate: the smaller of the kernel's available memory (with
+    free swap) and the address-space limit minus what is mapped; None when neither is known."""
+    limits = []
+    info = _meminfo()
+    if "MemAvailable" in info:
+        limits.append(info["MemAvailable"] + info.get("SwapFree", 0))
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    mapped = _mapped_bytes()
+    if soft != resource.RLIM_INFINITY and mapped is not None:
+        limits.append(max(soft - mapped, 0))
+    return min(limits) if limits else None
+
+
+def calibration_bytes(n_poses: int, searched: bool) -> int:
+    """Memory a calibration of ``n_poses`` poses needs beyond what is held already (bytes);
+    ``searched``: the default error-model search (else named terms or the geometric model)."""
+    return FIXED_BYTES + n_poses * (BYTES_PER_POSE if searched else GEOMETRIC_BYTES_PER_POSE)
+
+
+def check_memory(needed: int, what: str) -> None:
+    """ResourceError, before anything starts, when ``needed`` bytes cannot be had (see
+    :func:`available_bytes`); ``what`` names the computation."""
+    have = available_bytes()
+    if have is not None and needed > have:
+        raise ResourceError(f"{what} needs about {_gb(needed)} of memory, this machine offers "
+                            f"{_gb(have)}: {ADVICE}")
+
+
+def out_of_memory(what: str) -> str:
+    """The one line for a computation that ran out of memory anyway."""
+    return f"{what} ran out of memory: {ADVICE}"
+
+
+def memory_guard(what: str):
+    """Decorator: a ``MemoryError`` inside the function becomes a ResourceError saying ``what``
+    ran out of memory and what to do (:func:`out_of_memory`); the memory it held is freed."""
+    def wrap(fn):
+        @functools.wraps(fn)
+        def guarded(*args, **kwargs):
+            try:
+                return fn(*args, **kwargs)
+            except MemoryError:
+                pass  # leave the handler first: the traceback's frames (and their arrays) go with it
+            raise ResourceError(out_of_memory(what))
+        return guarded
+    return wrap
+
+
+def _gb(n: int) -> str:
+    return f"{n / 1e9:.2f} GB"
