@@ -1,5 +1,5 @@
 """Robot programs: read ABB RAPID, KUKA KRL, FANUC TP (.ls) and URScript, and filter their
-Cartesian targets through a calibrated model (see :mod:`robocal.programs.filter`)."""
+Cartesian targets through a calibrated model (see `robocal.programs.filter`)."""
 
 from robocal.programs.filter import FilterResult, dialect_for, filter_program
 

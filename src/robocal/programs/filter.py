@@ -60,7 +60,43 @@ TCP_SHIFT_WARN_MM = 10.0
 
 @dataclass
 class FilterResult:
-    """``outputs``: input path -> filtered bytes; ``rows``: the per-target table; ``warnings``."""
+    """``outputs``: input path -> filtered bytes; ``rows``: the per-target table; ``warnings``.
+
+    Returned by `robocal.filter_program`; nothing is written until `write`.
+
+    Attributes
+    ----------
+    dialect : str
+        The program language (``'ABB RAPID'``, ``'KUKA KRL'``, ``'FANUC TP'``, ``'URScript'``).
+    outputs : dict of pathlib.Path to bytes
+        Each input file's filtered text, byte for byte the input except the corrected numbers.
+    rows : list of dict
+        One row per Cartesian target (the filter target table): file, line, name, frame, tool,
+        ``correction_mm``, ``correction_deg``, configuration before and after, joint-limit margin
+        (deg), singularity distances.
+    warnings : list of str
+        What the user should check (unreached targets kept, changed configurations...).
+    uncorrected : list of str
+        Motions to a Cartesian pose left as they are (also among the warnings).
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> import robocal as rc
+    >>> target = ("[[1139.82,200.98,722.77],[0.1300295,-0.08641011,0.98767211,0.01137611],[0,0,-1,0],"
+    ...           "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")  # mm, quaternion, configuration
+    >>> lines = ["MODULE Cell", f"  CONST robtarget pPick:={target};", "  PROC main()",
+    ...          "    MoveJ pPick, v1000, fine, tool0;", "  ENDPROC", "ENDMODULE", ""]
+    >>> _ = Path("cell.mod").write_text("\\n".join(lines))
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> real = nominal.with_values({"a2": nominal.get("a2") + 0.0005})  # a link 0.5 mm longer
+    >>> result = rc.filter_program("cell.mod", real, nominal)
+    >>> row = result.rows[0]
+    >>> row["name"], round(row["correction_mm"], 3), row["configuration"]
+    ('pPick', 0.5, 'kept')
+    >>> result.summary_dict()["filtered"], result.warnings
+    (1, [])
+    """
 
     dialect: str
     outputs: dict[Path, bytes]
@@ -69,6 +105,7 @@ class FilterResult:
     uncorrected: list[str] = field(default_factory=list)  # motions left as they are (also warnings)
 
     def table_csv(self) -> str:
+        """The per-target table as CSV text (one row per target, `rows`' columns)."""
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")
         cols = list(self.rows[0]) if self.rows else ["file", "line", "name"]
@@ -78,11 +115,14 @@ class FilterResult:
         return out.getvalue()
 
     def table_json(self) -> str:
+        """The per-target table, the summary and the warnings as JSON text."""
         return json.dumps({"dialect": self.dialect, "files": [str(p) for p in self.outputs],
                            "summary": self.summary_dict(), "warnings": self.warnings,
                            "targets": self.rows}, indent=1)
 
     def summary_dict(self) -> dict:
+        """Counts and extremes: targets filtered, configurations changed, corrections (mm, deg),
+        the smallest joint-limit margin and the nearest singularity."""
         rows = [r for r in self.rows if r["filtered"]]
         pos = np.array([r["correction_mm"] for r in rows]) if rows else np.zeros(0)
         rot = np.array([r["correction_deg"] for r in rows]) if rows else np.zeros(0)
@@ -104,6 +144,7 @@ class FilterResult:
         return out
 
     def summary(self) -> str:
+        """A short human summary of `summary_dict` and the warnings."""
         s = self.summary_dict()
         lines = [f"{self.dialect}: {s['filtered']} of {s['targets']} Cartesian target(s) filtered in "
                  f"{', '.join(p.name for p in self.outputs)}"]
@@ -131,7 +172,25 @@ class FilterResult:
         """Write the filtered files (input path -> output path, or one output path for a single
         input) and the table (``table`` ending .csv or .json: that one; otherwise both
         ``table.csv`` and ``table.json``), all together or none. Refuses to overwrite an input.
-        Returns the paths written."""
+        Returns the paths written.
+
+        Parameters
+        ----------
+        outputs : dict of path to path, or str or path-like
+            Input path -> output path, or one output path when there is one input.
+        table : str or path-like, optional
+            The target table: a ``.csv`` or ``.json`` file, or a stem for both.
+
+        Returns
+        -------
+        list of pathlib.Path
+            The files written.
+
+        Raises
+        ------
+        DataError
+            One output path for several inputs, or an output that would overwrite an input.
+        """
         if not isinstance(outputs, dict):
             if len(self.outputs) != 1:
                 raise DataError("several program files: give one output path per input")
@@ -169,7 +228,7 @@ def collapse(lines: list[str]) -> list[str]:
 
 
 def table_paths(table: str | Path) -> list[Path]:
-    """The table file(s) :meth:`FilterResult.write` writes for ``table``: that file when it ends
+    """The table file(s) `FilterResult.write` writes for ``table``: that file when it ends
     .csv or .json, else ``table.csv`` and ``table.json``."""
     t = Path(table)
     if t.suffix.lower() in (".csv", ".json"):
@@ -397,7 +456,59 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     base). Targets that cannot be corrected (out of reach, out of the joint limits, a
     configuration they cannot have, not converged) raise DataError naming each one; with
     ``keep_unreached`` they are left unchanged with a warning. Nothing is written here: see
-    :meth:`FilterResult.write`.
+    `FilterResult.write`.
+
+    Parameters
+    ----------
+    programs : str, path-like or sequence of them
+        The program file(s): ABB RAPID (.mod, .prg), KUKA KRL (a .src with its .dat), FANUC TP
+        (.ls) or URScript (.script).
+    calibrated : Robot
+        The calibrated model.
+    nominal : Robot
+        The controller's nominal model (6 joints).
+    tools, frames : dict of str to array_like, shape (4, 4), or str, optional
+        Name -> transform (metres) or text in the program's pose notation, completing or
+        overriding the tools / frames the files declare (the tools as the controller knows them).
+    tcp : dict of str to array_like, shape (4, 4), optional
+        Tool name -> the real TCP identified on the calibrated model (`robocal.identify_tcp`),
+        metres.
+    robot_base : array_like, shape (4, 4), optional
+        The controller's base frame in the calibrated model's world frame, metres.
+    dialect : str, optional
+        Force the program language (default: from the files).
+    references : sequence of path-like
+        Files read only for their tool / frame declarations, never written.
+    keep_unreached : bool, default False
+        Leave the targets that cannot be corrected unchanged, with a warning, instead of failing.
+
+    Returns
+    -------
+    FilterResult
+        The filtered files' bytes and the per-target table; `FilterResult.write` writes them.
+
+    Raises
+    ------
+    DataError
+        No file, an unknown dialect, a nominal model without 6 joints, an unknown tool or
+        frame, or targets that cannot be corrected (each named).
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> import robocal as rc
+    >>> target = ("[[1139.82,200.98,722.77],[0.1300295,-0.08641011,0.98767211,0.01137611],[0,0,-1,0],"
+    ...           "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")  # mm, quaternion, configuration
+    >>> lines = ["MODULE Cell", f"  CONST robtarget pPick:={target};", "  PROC main()",
+    ...          "    MoveJ pPick, v1000, fine, tool0;", "  ENDPROC", "ENDMODULE", ""]
+    >>> _ = Path("cell.mod").write_text("\\n".join(lines))
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> real = nominal.with_values({"a2": nominal.get("a2") + 0.0005})  # a link 0.5 mm longer
+    >>> result = rc.filter_program("cell.mod", real, nominal)
+    >>> [str(p) for p in result.write("cell_cal.mod")]
+    ['cell_cal.mod']
+    >>> "[[1139.328,200.893,722.77]" in Path("cell_cal.mod").read_text()  # 0.5 mm less reach
+    True
     """
     paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     if not paths:
