@@ -47,7 +47,9 @@ def docstrings(obj) -> list[tuple[str, str]]:
                 doc = getattr(value, "__doc__", None) if not isinstance(value, property) else value.__doc__
                 if isinstance(value, (classmethod, staticmethod)):
                     doc = value.__func__.__doc__
-                if doc and (inspect.isfunction(value) or isinstance(value, (property, classmethod, staticmethod))):
+                wrapped = isinstance(value, property | classmethod | staticmethod)
+                documented = inspect.isfunction(value) or wrapped
+                if doc and documented:
                     out.append((name, doc))
     return out
 
