@@ -50,7 +50,43 @@ class Compensation:
     left on the calibrated model; ``parameters``: rows (name, unit, nominal, calibrated, delta)
     in SI with delta = nominal - calibrated; ``corrected_model`` the calibrated robot;
     ``singularity``: each target's distance from the singularities at its joints (6-axis arms);
-    ``controller``: the nominal controller's own choice of solutions, when seeded from it."""
+    ``controller``: the nominal controller's own choice of solutions, when seeded from it.
+
+    Returned by `robocal.compensate`.
+
+    Attributes
+    ----------
+    joints : numpy.ndarray, shape (N, n)
+        The joints to send to the controller, radians.
+    corrected_targets : numpy.ndarray, shape (N, 4, 4)
+        The poses to program on the nominal controller (its fk of ``joints``), metres.
+    converged : numpy.ndarray of bool, shape (N,)
+        The calibrated model reaches the target at ``joints`` (1e-10 m, 1e-9 rad).
+    position_error, orientation_error : numpy.ndarray, shape (N,)
+        What is left on the calibrated model, metres and radians.
+    parameters : list of dict
+        Name, unit, nominal, calibrated and delta (nominal - calibrated) of each parameter, SI.
+    corrected_model : Robot
+        The calibrated model used.
+    singularity : SingularityDistance or None
+        Each target's distance from the singularities at its joints (6-axis arms).
+    controller : ControllerChoice or None
+        The nominal controller's own choice of solutions, when seeded from ``start``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> real = nominal.with_values({"d1": nominal.get("d1") + 0.001})  # the base 1 mm taller
+    >>> wanted = nominal.fk(np.array([[0.1, 0.2, 0.1, 0.3, 0.4, 0.5]]))
+    >>> comp = rc.compensate(real, nominal, wanted)
+    >>> shift = (comp.corrected_targets - wanted)[0, :3, 3]  # m
+    >>> bool(np.allclose(shift, [0.0, 0.0, -0.001], atol=1e-9))  # program the target 1 mm lower
+    True
+    >>> comp.warnings()  # reached, far from singularities
+    []
+    """
 
     joints: np.ndarray
     corrected_targets: np.ndarray

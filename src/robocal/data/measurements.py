@@ -311,6 +311,7 @@ class Measurements:
 
     @property
     def n_joints(self) -> int:
+        """The number of joint columns n."""
         return self.joints.shape[1]
 
     @property

@@ -71,7 +71,38 @@ class SimulationResult:
     plane data); ``noise_floor_mm`` (see module docstring); ``outlier_rows`` row indices with a
     gross error; ``true_joints`` (N, n) rad before joint reading noise; ``planes`` (P, 4) unit
     normal and offset (n.p = c, m) of plane data (world = robot base), else None; ``info`` the
-    settings and seed."""
+    settings and seed.
+
+    Returned by `robocal.simulate_tracker`.
+
+    Attributes
+    ----------
+    data : Measurements
+        The simulated measurements.
+    truth : Robot
+        The true robot (tracker frame as base, SMR 0 as tool, extra SMRs in ``truth.smr``).
+    noise : numpy.ndarray, shape (N, 3)
+        The noise added to each point, metres (zeros for plane data).
+    noise_floor_mm : float
+        RMS of the noise added (outliers excluded), mm: what a perfect calibration reaches.
+    outlier_rows : numpy.ndarray of int
+        Rows given a gross error.
+    true_joints : numpy.ndarray, shape (N, n)
+        The joints before the reading noise, radians.
+    planes : numpy.ndarray, shape (P, 4), optional
+        Unit normal and offset (n.p = c, m) of each plane (plane data; world = robot base).
+    info : dict
+        The settings and the seed.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> sim = rc.simulate_tracker(rc.Robot.from_catalog("abb_irb2600"), 20, outliers=0.1, seed=4)
+    >>> len(sim.outlier_rows), sim.noise.shape  # 10 % of 20 rows got a gross error
+    (2, (20, 3))
+    >>> sim.info["seed"]
+    4
+    """
 
     data: Measurements
     truth: object

@@ -423,6 +423,7 @@ class Robot:
     # ----------------------------------------------------------------- parameter view
     @property
     def n_joints(self) -> int:
+        """The number of joints n."""
         return self.alpha.size
 
     @property
@@ -650,6 +651,7 @@ class Robot:
     # ----------------------------------------------------------------- kinematics
     @property
     def links(self) -> LinkArrays:
+        """The link arrays (alpha, a, beta, theta, d), each ``(n,)``, as the kinematics kernels take them."""
         return LinkArrays(self.alpha, self.a, self.beta, self.theta, self.d)
 
     def check_joints(self, q) -> np.ndarray:
