@@ -237,7 +237,32 @@ def table_paths(table: str | Path) -> list[Path]:
 
 
 def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
-    """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript') or the suffixes."""
+    """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript') or the suffixes.
+
+    Parameters
+    ----------
+    paths : list of pathlib.Path
+        The program files (their suffixes tell the dialect when ``name`` is None).
+    name : {'rapid', 'krl', 'fanuc', 'urscript'}, optional
+        The dialect by name.
+
+    Returns
+    -------
+    Dialect
+        The reader and writer of that vendor's notation.
+
+    Raises
+    ------
+    DataError
+        An unknown name, or suffixes of no dialect or of several.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from robocal.programs import dialect_for
+    >>> dialect_for([Path("cell.mod")]).name, dialect_for([], "urscript").name
+    ('ABB RAPID', 'URScript')
+    """
     dialects = {"rapid": RapidDialect, "krl": KRLDialect, "fanuc": FanucDialect, "urscript": URScriptDialect}
     if name is not None:
         if name not in dialects:
@@ -475,8 +500,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         metres.
     robot_base : array_like, shape (4, 4), optional
         The controller's base frame in the calibrated model's world frame, metres.
-    dialect : str, optional
-        Force the program language (default: from the files).
+    dialect : {'rapid', 'krl', 'fanuc', 'urscript'}, optional
+        The program language (default: from the files' suffixes, see `dialect_for`).
     references : sequence of path-like
         Files read only for their tool / frame declarations, never written.
     keep_unreached : bool, default False
