@@ -2,11 +2,11 @@
 
 The pipeline: fit the tracker frame and SMR offsets to the nominal model (registration), declare
 the joint-error terms asked for, pick the identifiable parameters (QR with pivoting: the
-:class:`ParameterSpace` that is estimated), run the chosen method, then compute the covariance of
+`ParameterSpace` that is estimated), run the chosen method, then compute the covariance of
 the estimate and the before/after position statistics. Which joint-error terms: named by the
-user, or chosen by cross-validation (:mod:`robocal.model_selection`, ``nongeometric='auto'``,
+user, or chosen by cross-validation (`robocal.model_selection`, ``nongeometric='auto'``,
 the default on tracker data of enough poses), with cyclic frequencies searched in the data
-(:mod:`robocal.identify.frequency_search`).
+(`robocal.identify.frequency_search`).
 """
 
 from __future__ import annotations
@@ -88,9 +88,60 @@ class Judged(_BeforeAfter):
 class CalibrationResult(_BeforeAfter):
     """Everything a calibration found; ``to_dict()`` is the JSON of docs/result-json.md.
 
-    ``space`` is what was estimated (robot parameters, then nuisance), ``covariance`` its
-    covariance (SI), ``initial`` the start state (registered model, nuisance fitted to it),
-    ``errors`` each calibration item's error (m) in the start and the final state.
+    Returned by `robocal.calibrate`; `summary` prints it, `save_json` writes it,
+    ``result.robot.save(path)`` writes the calibrated model.
+
+    Attributes
+    ----------
+    robot : Robot
+        The calibrated model (with the declared joint-error terms, which its ``fk`` applies).
+    start : Robot
+        The registered start model (nominal geometry in the measurement's frame).
+    method : str
+        The solver used (``'lsq'``, ``'robust'``...).
+    identifiability : Identifiability
+        Which parameters the data determine: kept, dropped (not identifiable, with what they are
+        confounded with) and undetermined (held at nominal), the condition number.
+    space : ParameterSpace
+        What was estimated: robot parameters, then nuisance (tracker frame, SMRs, planes...).
+    covariance : numpy.ndarray, shape (k, k)
+        Covariance of the estimated unknowns, SI units (m, rad).
+    solver : SolverResult
+        The solver's outcome: final state, convergence, iteration history, robust weights.
+    errors : tuple of numpy.ndarray, shape (M,) each
+        Each calibration item's error in the start and in the final state, metres.
+    problem : CalibrationProblem
+        The measurement model of the calibration data.
+    initial : State
+        The start state (registered model, nuisance fitted to it).
+    judged : list of Judged
+        Each validation set judged with the start and the calibrated model.
+    warnings : list of str
+        What the user should know (held parameters, implausible corrections with ``force``...).
+    settings : dict
+        The settings of the run (method, params, rtol, seed, solver options).
+    nongeometric : dict or None
+        The joint-error terms identified, when any.
+    model_selection : dict or None
+        The cross-validation table when the terms were chosen automatically.
+    provenance : dict
+        Versions, date and input files.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> sim = rc.simulate_tracker(nominal, 40, noise_mm=0.01, seed=2)
+    >>> result = rc.calibrate(nominal, sim.data, nongeometric=None)
+    >>> result.after["rms"] < 0.05 < 0.5 < result.before["rms"]  # mm: from the errors to the noise
+    True
+    >>> q = sim.data.joints
+    >>> error = result.robot.fk(q)[:, :3, 3] - sim.truth.fk(q)[:, :3, 3]  # against the truth, m
+    >>> bool(np.abs(error).max() < 5e-5)
+    True
+    >>> result.predict_position_sigma(q[:2]).shape  # 1-sigma of the predicted TCP, m
+    (2, 3)
     """
 
     robot: object
@@ -114,6 +165,7 @@ class CalibrationResult(_BeforeAfter):
 
     @property
     def state(self) -> State:
+        """The final state of the solver (calibrated model and nuisance)."""
         return self.solver.state
 
     @property
@@ -171,6 +223,7 @@ class CalibrationResult(_BeforeAfter):
 
     @property
     def correlation(self) -> np.ndarray:
+        """Correlation matrix ``(k, k)`` of the estimated unknowns (order of `unknowns`)."""
         return correlation(self.covariance)
 
     @property
@@ -180,7 +233,19 @@ class CalibrationResult(_BeforeAfter):
         return np.zeros(0, int) if w is None else np.flatnonzero(w == 0)
 
     def predict_position_sigma(self, q) -> np.ndarray:
-        """1-sigma ``(N, 3)`` (m) of the calibrated model's TCP position at joints ``q``."""
+        """1-sigma ``(N, 3)`` (m) of the calibrated model's TCP position at joints ``q``.
+
+        Parameters
+        ----------
+        q : array_like, shape (N, n)
+            Joints, radians.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3)
+            Standard deviation of the predicted TCP's x, y, z in the world frame, metres, from
+            the covariance of the estimated parameters.
+        """
         k = len(self.space.robot)
         cov = tcp_position_covariance(self.robot, self.robot.check_joints(q), self.names,
                                       self.covariance[:k, :k])
@@ -339,6 +404,13 @@ class CalibrationResult(_BeforeAfter):
         return json_text(self.to_dict())
 
     def save_json(self, path) -> None:
+        """Write the result JSON (docs/result-json.md) atomically.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The JSON file to write.
+        """
         write_atomic(path, self.to_json())
 
     def summary(self) -> str:
@@ -391,7 +463,7 @@ class CalibrationResult(_BeforeAfter):
 
 
 def json_text(content: dict) -> str:
-    """The text of a result JSON from :meth:`CalibrationResult.to_dict` (NaN refused)."""
+    """The text of a result JSON from `CalibrationResult.to_dict` (NaN refused)."""
     return json.dumps(content, indent=1, allow_nan=False)
 
 
@@ -460,7 +532,7 @@ def _run_solver(method: str, problem, state0: State, space: ParameterSpace, seed
 
 def _covariance(problem: CalibrationProblem, out: SolverResult, space: ParameterSpace) -> np.ndarray:
     """The posterior covariance s0^2 (J^T W J + P)^-1 at the solution (P: the prior rows' weights
-    squared, :mod:`robocal.identify.priors`), s0 from the data's residuals; rows a robust method
+    squared, `robocal.identify.priors`), s0 from the data's residuals; rows a robust method
     rejected carry no information."""
     J = problem.jacobian(out.state, space)
     r = problem.residuals(out.state)
@@ -476,7 +548,7 @@ PARTNER_CORRELATION = 0.9  # |correlation| above which two estimates are reporte
 
 def _partners(cov: np.ndarray, names: list[str]) -> dict[str, list[str]]:
     """Per unknown: the (up to 4) others its estimate is most correlated with beyond
-    :data:`PARTNER_CORRELATION`."""
+    `PARTNER_CORRELATION`."""
     corr = np.abs(correlation(cov))
     np.fill_diagonal(corr, 0.0)
     return {n: [names[j] for j in np.argsort(-corr[i])[:4] if corr[i, j] > PARTNER_CORRELATION]
@@ -538,28 +610,84 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     """Calibrate ``robot`` (nominal model) against ``data``: Measurements, or a list of them of
     any kinds (points, poses, planes, distances) identified together in one problem, each set
     weighted by its noise (its sigma column, else ``sigma`` {kind: m}, else
-    :data:`robocal.identify.problem.KIND_SIGMA`).
+    `robocal.identify.problem.KIND_SIGMA`).
 
-    method: 'lsq' (default), 'robust', or another registered solver; params: 'auto' (the
-    default free set, unidentifiable ones dropped), 'all', or a list of names. ``validation``
-    (Measurements or a list) is judged with the calibrated model, each set in its own unit.
-    ``progress``: True shows a bar on a terminal, or a callable ``progress(iteration, rms)``.
-    ``options`` go to the solver (e.g. k0, k1, ridge for 'robust'; checked against its signature).
+    The pipeline: register the measurement frame (and SMR offsets) to the nominal model, keep the
+    identifiable parameters, solve, then compute the covariance and the before/after statistics.
 
-    ``nongeometric``: the joint-error terms identified with the geometry by lsq or robust (see
-    :mod:`robocal.kinematics.joint_errors`): term names and explicit parameter names, e.g.
-    'compliance,backlash,travel' or 'gear2_c1,cyc4_50_s,cyc4_50_c'; 'cyclic' searches the
-    frequencies of cyclic errors in the data first; 'auto' chooses the terms by cross-validation
-    on ``data`` (:mod:`robocal.model_selection`; the result's ``model_selection`` holds the
-    table); 'default' is 'auto' for lsq and robust on one tracker data set (points or poses) of
-    at least :data:`AUTO_DEFAULT_MIN_POSES` poses, else none; None or 'none': the geometric model
-    only. The calibrated robot carries the terms and its fk applies them.
-    ``warm_start``: a result of the same robot and data whose start model (no new registration)
-    and final estimate start this one; the parameter selection is the one without it.
+    Parameters
+    ----------
+    robot : Robot
+        The nominal model.
+    data : Measurements or list of Measurements
+        The calibration data; several sets (of any kinds) are identified together.
+    method : str, default 'lsq'
+        ``'lsq'``, ``'robust'`` (outlier rejection), or another registered solver.
+    params : 'auto', 'all' or list of str
+        The free parameters: ``'auto'`` the default free set with the unidentifiable ones
+        dropped, ``'all'``, or names (see ``Robot.parameter_names``).
+    validation : Measurements or list of Measurements, optional
+        Held-out sets judged with the calibrated model, each in its own unit.
+    register_frames : bool, default True
+        Fit the measurement frame and SMR offsets to the nominal model first.
+    rtol : float
+        Relative singular-value threshold below which a parameter is not identifiable.
+    seed : int, default 0
+        Seed of the stochastic solvers and of the cross-validation folds.
+    progress : bool or callable, optional
+        True shows a bar on a terminal; a callable is called as ``progress(iteration, rms)``.
+    nongeometric : str, list of str or None, default 'default'
+        The joint-error terms identified with the geometry by lsq or robust (see
+        `robocal.kinematics.joint_errors`): term names and explicit parameter names, e.g.
+        ``'compliance,backlash,travel'`` or ``'gear2_c1,cyc4_50_s,cyc4_50_c'``; ``'cyclic'``
+        searches the frequencies of cyclic errors in the data first; ``'auto'`` chooses the terms
+        by cross-validation on ``data`` (`robocal.model_selection`; the result's
+        ``model_selection`` holds the table); ``'default'`` is ``'auto'`` for lsq and robust on one
+        tracker data set (points or poses) of at least `AUTO_DEFAULT_MIN_POSES` poses, else none;
+        None or ``'none'``: the geometric model only. The calibrated robot carries the terms and
+        its fk applies them.
+    force : bool, default False
+        Turn the plausibility errors into warnings.
+    sigma : dict of str to float, optional
+        Noise (1 sigma, metres) per data kind for the sets without a sigma column, e.g.
+        ``{"point": 2e-5}``.
+    warm_start : CalibrationResult, optional
+        A result of the same robot and data whose start model (no new registration) and final
+        estimate start this one; the parameter selection is the one without it.
+    **options
+        Solver options (e.g. ``k0``, ``k1``, ``ridge`` for ``'robust'``; checked against its
+        signature).
 
-    Raises IdentificationError when the data cannot support the calibration, and
-    PlausibilityError when data and model disagree beyond what real robots do
-    (:mod:`robocal.identify.plausibility`; ``force=True`` turns those into warnings).
+    Returns
+    -------
+    CalibrationResult
+        The calibrated model (``result.robot``), the statistics before and after (mm), the
+        parameters with their uncertainty, identifiability and warnings.
+
+    Raises
+    ------
+    IdentificationError
+        The data cannot support the calibration (too few poses), or an unknown method or
+        solver option, or a method that cannot take the requested terms.
+    PlausibilityError
+        Data and model disagree beyond what real robots do (`robocal.identify.plausibility`;
+        ``force=True`` turns those into warnings).
+    DataError
+        Invalid data (shapes, joint count, units).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> sim = rc.simulate_tracker(nominal, 40, noise_mm=0.01, seed=2)  # 0.5 mm-size errors
+    >>> fit, check = sim.data.split_poses(0.75, seed=0)
+    >>> result = rc.calibrate(nominal, fit, validation=check, nongeometric=None)
+    >>> result.before["rms"] > 0.5, result.after["rms"] < 0.03  # mm, on the calibration poses
+    (True, True)
+    >>> result.validation["rms"] < 0.03  # mm, on the held-out poses
+    True
+    >>> "d1" in result.identifiability.dropped  # the base frame absorbs d1
+    True
     """
     check_options(method, options)
     datasets, validations = _as_sets(data, "calibration"), _as_sets(validation, "validation")
@@ -614,7 +742,7 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
                warm_start: CalibrationResult | None = None, *, register_frames: bool, rtol: float,
                seed: int, progress, force: bool, sigma: dict | None, options: dict) -> CalibrationResult:
     """One calibration with the joint-error terms (and explicit parameter names) ``terms``; the
-    arguments of :func:`calibrate`."""
+    arguments of `calibrate`."""
     for d in datasets + validations:
         d.check_against(robot)
     n_smr = max(d.n_smr for d in datasets)
@@ -717,6 +845,42 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
 
     ``joints_or_data`` is a ``(N, n)`` array (rad) or Measurements; the observations are taken
     as the model's own predictions, so no measurement is needed.
+
+    Parameters
+    ----------
+    robot : Robot
+        The nominal model.
+    joints_or_data : array_like, shape (N, n), or Measurements
+        The pose set, radians (of Measurements: its joints and SMR indices).
+    kind : {'point', 'pose'}
+        What will be measured at each pose.
+    params : 'auto', 'all' or list of str
+        The candidate free parameters, as in `calibrate`.
+    rtol : float
+        Relative singular-value threshold below which a parameter is not identifiable.
+
+    Returns
+    -------
+    Identifiability
+        ``kept`` and ``dropped`` parameters (with ``confounded_with``), ``rank``,
+        ``condition_number``, ``singular_values`` and ``observability``.
+
+    Raises
+    ------
+    DataError
+        Joints of the wrong shape or with NaN.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> q = np.random.default_rng(0).uniform(robot.limits[:, 0], robot.limits[:, 1], (40, 6))
+    >>> ident = rc.analyze(robot, q)
+    >>> ident.rank == len(ident.kept)
+    True
+    >>> "d1" in ident.dropped  # the base frame's height absorbs d1
+    True
     """
     q = robot.check_joints(getattr(joints_or_data, "joints", joints_or_data))
     smr = getattr(joints_or_data, "smr", None)
@@ -734,8 +898,8 @@ def _plain(options: dict) -> dict:
 
 
 def load_result(path) -> dict:
-    """Read a result JSON written by :meth:`CalibrationResult.save_json`, validated field by
-    field (:data:`robocal.schema.RESULT_SCHEMA`); DataError names the file and the field."""
+    """Read a result JSON written by `CalibrationResult.save_json`, validated field by
+    field (`robocal.schema.RESULT_SCHEMA`); DataError names the file and the field."""
     hint = "; give the JSON `robocal calibrate --json` wrote"
     if read_text(path, "result JSON file").lstrip().startswith("format: robocal-model"):
         raise DataError(f"{path} is a robot model YAML, not a result JSON{hint}")

@@ -56,7 +56,43 @@ class Compensation:
     left on the calibrated model; ``parameters``: rows (name, unit, nominal, calibrated, delta)
     in SI with delta = nominal - calibrated; ``corrected_model`` the calibrated robot;
     ``singularity``: each target's distance from the singularities at its joints (6-axis arms);
-    ``controller``: the nominal controller's own choice of solutions, when seeded from it."""
+    ``controller``: the nominal controller's own choice of solutions, when seeded from it.
+
+    Returned by `robocal.compensate`.
+
+    Attributes
+    ----------
+    joints : numpy.ndarray, shape (N, n)
+        The joints to send to the controller, radians.
+    corrected_targets : numpy.ndarray, shape (N, 4, 4)
+        The poses to program on the nominal controller (its fk of ``joints``), metres.
+    converged : numpy.ndarray of bool, shape (N,)
+        The calibrated model reaches the target at ``joints`` (1e-10 m, 1e-9 rad).
+    position_error, orientation_error : numpy.ndarray, shape (N,)
+        What is left on the calibrated model, metres and radians.
+    parameters : list of dict
+        Name, unit, nominal, calibrated and delta (nominal - calibrated) of each parameter, SI.
+    corrected_model : Robot
+        The calibrated model used.
+    singularity : SingularityDistance or None
+        Each target's distance from the singularities at its joints (6-axis arms).
+    controller : ControllerChoice or None
+        The nominal controller's own choice of solutions, when seeded from ``start``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> real = nominal.with_values({"d1": nominal.get("d1") + 0.001})  # the base 1 mm taller
+    >>> wanted = nominal.fk(np.array([[0.1, 0.2, 0.1, 0.3, 0.4, 0.5]]))
+    >>> comp = rc.compensate(real, nominal, wanted)
+    >>> shift = (comp.corrected_targets - wanted)[0, :3, 3]  # m
+    >>> bool(np.allclose(shift, [0.0, 0.0, -0.001], atol=1e-9))  # program the target 1 mm lower
+    True
+    >>> comp.warnings()  # reached, far from singularities
+    []
+    """
 
     joints: np.ndarray
     corrected_targets: np.ndarray
@@ -94,7 +130,7 @@ class Compensation:
 
 def _check_same_robot(calibrated: Robot, nominal: Robot) -> None:
     """DataError unless both models have the same joint count and links no further apart than a
-    calibration moves them (:mod:`robocal.identify.plausibility`): another robot, or the same robot
+    calibration moves them (`robocal.identify.plausibility`): another robot, or the same robot
     in another parametrisation (e.g. calibrated from its URDF), whose frame {0} is not the nominal's."""
     if calibrated.n_joints != nominal.n_joints:
         raise DataError(f"calibrated model has {calibrated.n_joints} joints, nominal "
@@ -160,13 +196,69 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     explicit ``seeds`` ``(N, n)`` rad; or, with ``start`` ``(n,)`` rad (the joints before the
     first target), the controller's own choice for targets without configuration data: per
     target, in order, the nominal closed-form solution nearest the previous target's joints
-    (:func:`robocal.ik.controller.nearest_solutions`; ``controller`` in the result, its large
+    (`robocal.ik.controller.nearest_solutions`; ``controller`` in the result, its large
     joint moves among the warnings). Targets the calibrated model cannot reach to 1e-10 m /
     1e-9 rad are flagged in ``converged`` (their joints are the best found).
 
-    An arm on a track (:mod:`robocal.kinematics.cell`) needs ``e1`` ``(N,)`` m, each target's
-    carriage position, which stays as given (:func:`robocal.ik.track.solve`; ``seeds`` are then the
+    An arm on a track (`robocal.kinematics.cell`) needs ``e1`` ``(N,)`` m, each target's
+    carriage position, which stays as given (`robocal.ik.track.solve`; ``seeds`` are then the
     arm's ``(N, 6)``); the joints are ``(N, 7)``, e1 first.
+
+    Parameters
+    ----------
+    calibrated : Robot
+        The calibrated model (`robocal.calibrate`'s ``result.robot``).
+    nominal : Robot
+        The controller's nominal model.
+    targets : array_like, shape (N, 4, 4) or (4, 4)
+        Wanted TCP poses, metres, in the frame ``targets_frame`` names.
+    branch : int, optional
+        The closed-form slot (0-7, see `robocal.ik.solve_all`) of the nominal solution used as
+        seed.
+    seeds : array_like, shape (N, n), optional
+        Explicit seed joints, radians.
+    start : array_like, shape (n,), optional
+        The joints before the first target, radians: seed each target with the controller's own
+        nearest solution.
+    targets_frame : {'model', 'robot'}
+        The calibrated model's world frame (after a tracker calibration, the tracker frame), or
+        the robot's base frame as the controller sees it.
+    tool : array_like, shape (4, 4), optional
+        The user's real tool on the flange, metres.
+    e1 : array_like, shape (N,), optional
+        An arm on a track: each target's carriage position, metres (kept as given).
+
+    Returns
+    -------
+    Compensation
+        ``joints`` ``(N, n)`` rad to send to the controller; ``corrected_targets``
+        ``(N, 4, 4)`` m, the poses to program on the nominal controller; ``converged`` ``(N,)``;
+        ``position_error`` ``(N,)`` m and ``orientation_error`` ``(N,)`` rad left on the
+        calibrated model; ``parameters``; ``singularity``; ``controller``; ``warnings()``.
+
+    Raises
+    ------
+    DataError
+        Targets that are not rigid transforms, an unknown ``targets_frame``, a ``branch``
+        outside 0-7, or more than one of ``branch``, ``seeds`` and ``start``.
+    ModelError
+        Closed-form seeds asked of a nominal model without an OPW or UR form.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> real = nominal.with_values({"a2": nominal.get("a2") + 0.0005, "theta3": 0.0004})  # the real arm
+    >>> q = np.array([[0.1, 0.2, 0.1, 0.3, 0.4, 0.5], [0.2, 0.1, 0.2, 0.0, 0.6, 0.1]])
+    >>> wanted = nominal.fk(q)  # the poses the program asks for, m
+    >>> comp = rc.compensate(real, nominal, wanted)
+    >>> bool(comp.converged.all())
+    True
+    >>> bool(np.allclose(real.fk(comp.joints), wanted, atol=1e-9))  # the real arm reaches them
+    True
+    >>> bool(np.allclose(nominal.fk(comp.joints), comp.corrected_targets))  # what to program
+    True
     """
     if targets_frame not in ("model", "robot"):
         raise DataError(f"targets_frame must be 'model' or 'robot', got {targets_frame!r}")
@@ -226,7 +318,7 @@ def frame_from_text(text: str, what: str = "frame") -> np.ndarray:
 
 
 def frame_to_text(T: np.ndarray) -> str:
-    """4x4 (m) -> ``x,y,z,rx,ry,rz`` (mm, deg, fixed-axis XYZ), the inverse of :func:`frame_from_text`."""
+    """4x4 (m) -> ``x,y,z,rx,ry,rz`` (mm, deg, fixed-axis XYZ), the inverse of `frame_from_text`."""
     r = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)
     return ",".join(f"{v:.4f}" for v in (*(T[:3, 3] * 1e3), *r))
 

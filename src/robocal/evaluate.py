@@ -33,7 +33,7 @@ def _observation(robot, data):
 
 
 def _row_errors(obs, robot, nuisance: np.ndarray) -> np.ndarray:
-    """:func:`model_errors` of an observation with its nuisance."""
+    """`model_errors` of an observation with its nuisance."""
     r = obs.residuals(robot, nuisance).reshape(obs.n_items, obs.rows_per_item)
     if obs.rows_per_item > 1:
         return r[:, :3]
@@ -65,9 +65,51 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     (plane/distance: signed), ``"error_vectors_mm"`` (N, 3) for point/pose data, ``"kind"``,
     ``"n_poses"`` and, with a fitted frame, ``"robot"`` (the registered model) and
     ``"registration_rms_mm"``, and ``"consistency"``: the residual test against the instrument's noise
-    (:mod:`robocal.trust.consistency`; its warnings join ``"warnings"``). PlausibilityError when the
+    (`robocal.trust.consistency`; its warnings join ``"warnings"``). PlausibilityError when the
     model misses the data by more than a robot's errors can explain (``force=True``: a warning in
     ``"warnings"``).
+
+    Parameters
+    ----------
+    robot : Robot
+        The model judged (calibrated, or nominal with ``fit_frame``).
+    data : Measurements
+        The measurements it is judged on (any kind; points in the model's world frame unless a
+        frame is fitted).
+    fit_frame : bool, default False
+        First register the base frame and SMR offsets on ``data`` (for a nominal model).
+    frame_from : Measurements, optional
+        Register the frame on this set instead and judge ``data`` with it.
+    force : bool, default False
+        Turn the plausibility errors into warnings.
+
+    Returns
+    -------
+    dict
+        ``n``, ``rms``, ``mean``, ``max``, ``p95`` (mm); ``errors_mm`` ``(N,)`` (plane/distance:
+        signed); ``error_vectors_mm`` ``(N, 3)`` (point/pose); ``rotation_deg`` (pose);
+        ``kind``; ``n_poses``; ``warnings`` (list of str); ``consistency`` (the residual test);
+        with a fitted frame ``robot`` and ``registration_rms_mm``.
+
+    Raises
+    ------
+    PlausibilityError
+        The model misses the data by more than a robot's errors can explain (wrong robot, wrong
+        units, a moved tracker).
+    DataError
+        Data that do not fit the model (joint count, SMR indices, joint readings beyond any
+        real robot's travel).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> sim = rc.simulate_tracker(nominal, 30, noise_mm=0.01, seed=3)
+    >>> rc.evaluate(nominal, sim.data, fit_frame=True)["rms"] > 0.5  # mm: the nominal model's error
+    True
+    >>> stats = rc.evaluate(sim.truth, sim.data)  # the true robot: only the noise is left
+    >>> round(stats["rms"], 6) == round(sim.noise_floor_mm, 6), stats["error_vectors_mm"].shape
+    (True, (30, 3))
     """
     out, warnings = {}, []
     for d in (data, frame_from):

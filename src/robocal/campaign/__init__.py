@@ -1,8 +1,8 @@
 """Planning a calibration campaign: optimal poses, the tracker's line of sight, the robot program.
 
-``plan_poses`` chooses the poses (:mod:`robocal.campaign.planner`); the constraints and the
-tracker are :class:`Constraints` and :class:`Tracker`; candidates from a file are read with
-:func:`read_candidates`; :mod:`robocal.campaign.programs` writes RAPID, KRL and URScript.
+``plan_poses`` chooses the poses (`robocal.campaign.planner`); the constraints and the
+tracker are `Constraints` and `Tracker`; candidates from a file are read with
+`read_candidates`; `robocal.campaign.programs` writes RAPID, KRL and URScript.
 """
 
 from robocal.campaign.constraints import Constraints, Tracker

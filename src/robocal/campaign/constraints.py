@@ -1,16 +1,16 @@
 """Where the robot may measure: the constraints on candidate poses and the tracker's line of sight.
 
 Every constraint is optional; each removes candidate poses and the planner reports how many
-(:class:`Funnel`), so when nothing is left the error names the constraint that removed the last
+(`Funnel`), so when nothing is left the error names the constraint that removed the last
 candidates. Positions are in the model's world frame, which for a catalog robot is the robot's
 base frame; SMR positions and facing directions are in the flange frame (``tool0``).
 
 - joint limits with a margin (deg) on both ends;
 - Cartesian boxes: the TCP (the first SMR) must lie inside at least one box;
-- singularity distances (:func:`robocal.ik.singularity.classic_distances`), each a minimum: the
+- singularity distances (`robocal.ik.singularity.classic_distances`), each a minimum: the
   wrist's (angle between the axes of joints 4 and 6, deg), the elbow's (arm stretched or folded,
   deg) and the shoulder's (m);
-- the laser tracker (:class:`Tracker`): an SMR is seen when it faces the tracker within the
+- the laser tracker (`Tracker`): an SMR is seen when it faces the tracker within the
   reflector's acceptance half-angle, its distance is inside the tracker's range and, when an
   arm radius is given, the beam clears the arm (the segments joining the origins of frames
   {0}..{4}, thickened by the radius); a pose that shows no SMR is not a candidate; the arm
@@ -18,7 +18,7 @@ base frame; SMR positions and facing directions are in the flange frame (``tool0
   from the tracker head.
 
 The minimum joint distance between chosen poses acts during the search (see
-:func:`conflict_rows`), not on single candidates.
+`conflict_rows`), not on single candidates.
 """
 
 from __future__ import annotations
@@ -42,7 +42,42 @@ BEAM_ARM_FRAME = 4                 # the arm that can block the beam: frames {0}
 class Tracker:
     """A laser tracker at ``position (3,)`` m (world frame) with its range ``(min, max)`` m, the
     SMRs' acceptance half-angle (deg), the clearance (m) the arm keeps from it, and an optional
-    arm radius (m) for beam occlusion."""
+    arm radius (m) for beam occlusion.
+
+    Given to `Constraints` (``tracker=``), it keeps only the poses where the tracker sees an SMR.
+
+    Attributes
+    ----------
+    position : array_like, shape (3,)
+        The tracker's position in the model's world frame (a catalog robot's base frame), metres.
+    acceptance_deg : float, default 30
+        The SMR's acceptance half-angle, degrees: an SMR is seen when it faces the tracker
+        within it.
+    range_m : tuple of float, default (0.5, 40)
+        The tracker's measuring range (min, max), metres.
+    clearance_m : float, default 0.3
+        The free space the arm (and the SMRs) keep from the tracker head, metres.
+    arm_radius_m : float, optional
+        The arm's radius, metres: with it, a pose whose beam passes through the arm (frames
+        {0}..{4}) is removed.
+
+    Raises
+    ------
+    DataError
+        A non-finite position, ``range_m`` not 0 <= min < max, an acceptance angle outside
+        (0, 90] degrees, a negative clearance or a non-positive arm radius.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> tracker = rc.Tracker(position=[3.0, 0.0, 0.5], acceptance_deg=25)
+    >>> tracker.range_m
+    (0.5, 40.0)
+    >>> rc.Tracker(position=[3.0, 0.0, 0.5], range_m=(5, 1))
+    Traceback (most recent call last):
+    ...
+    robocal.errors.DataError: the tracker range must be 0 <= min < max (m), got (5, 1)
+    """
 
     position: np.ndarray
     acceptance_deg: float = DEFAULT_ACCEPTANCE_DEG
@@ -67,7 +102,48 @@ class Tracker:
 class Constraints:
     """The optional constraints (see the module docstring); lengths in m, angles in deg.
     ``margin_deg`` None: 1 deg for generated candidates, 0 for given ones (poses already taught
-    or measured are known to be reachable, at a limit too)."""
+    or measured are known to be reachable, at a limit too).
+
+    Each constraint removes candidate poses in `robocal.plan_poses`; the result's ``funnel``
+    says how many each removed.
+
+    Attributes
+    ----------
+    margin_deg : float, optional
+        Distance kept from both joint limits, degrees.
+    boxes : sequence of array_like, shape (2, 3) each
+        Cartesian boxes ``((xmin, ymin, zmin), (xmax, ymax, zmax))`` in the world frame, metres:
+        the TCP (the first SMR) must lie inside at least one.
+    min_joint_distance_deg : float, default 0
+        Smallest joint-space distance between two chosen poses, degrees.
+    min_wrist_deg : float, default 0
+        Smallest angle between the axes of joints 4 and 6, degrees (less than 90).
+    min_elbow_deg : float, default 0
+        Smallest angle from the stretched or folded elbow, degrees (less than 90).
+    min_shoulder_m : float, default 0
+        Smallest shoulder distance (the origin of frame {5} from the plane through axis 1
+        parallel to axis 2, see `robocal.ik.singularity`), metres.
+    tracker : Tracker, optional
+        The laser tracker whose line of sight, range and clearance a pose must respect.
+
+    Raises
+    ------
+    DataError
+        A box that is not ``(2, 3)`` with min < max, a negative or non-finite value, or a
+        singularity angle of 90 degrees or more.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> box = ((0.5, -1.0, 0.2), (2.0, 1.0, 1.8))  # m, robot base frame
+    >>> limits = rc.Constraints(boxes=[box], tracker=rc.Tracker(position=[3.0, 0.0, 0.5]))
+    >>> plan = rc.plan_poses(robot, 20, n_candidates=300, region_size=100, starts=1,
+    ...                      constraints=limits)
+    >>> tcp = robot.fk(plan.joints)[:, :3, 3]
+    >>> bool(((tcp >= box[0]) & (tcp <= box[1])).all()), bool(plan.visible.all())
+    (True, True)
+    """
 
     margin_deg: float | None = None
     boxes: tuple = ()

@@ -44,7 +44,43 @@ def read_candidates(path, robot, kind: str = "point") -> CandidateFile:
     """Candidate poses from any measurement CSV or a joints-only CSV. Repeated readings (rows with
     one ``pose_id``, or consecutive rows with identical joints, e.g. several SMRs) are one pose.
     Plane contacts and distances must come from a measurement CSV of that kind (its plane or
-    pair columns place them; the measured values are not used)."""
+    pair columns place them; the measured values are not used).
+
+    Parameters
+    ----------
+    path : str or path-like
+        A measurement CSV or a CSV with joint columns only (``q1_deg..`` or ``q1_rad..``).
+    robot : Robot
+        The model (checks the joint count).
+    kind : {'point', 'pose', 'plane', 'distance'}
+        What will be measured.
+
+    Returns
+    -------
+    CandidateFile
+        ``joints`` ``(C, n)`` radians, one per distinct pose (or per contact / distance end),
+        ``rows`` ``(C,)`` their rows in the file; give it to `robocal.plan_poses` as
+        ``candidates``.
+
+    Raises
+    ------
+    DataError
+        A malformed file, a wrong joint count, or plane / distance candidates from a file of
+        another kind.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.campaign import read_candidates
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> rc.simulate_tracker(robot, 30, n_smr=2, seed=0).data.save("earlier.csv")  # 2 SMRs a pose
+    >>> candidates = read_candidates("earlier.csv", robot)
+    >>> candidates.joints.shape  # 60 rows, 30 poses
+    (30, 6)
+    >>> plan = rc.plan_poses(robot, 12, candidates=candidates, region_size=50, starts=1)
+    >>> bool(set(plan.candidate_index) <= set(range(30)))
+    True
+    """
     table = read_joint_table(path)
     q = robot.check_joints(table.joints)
     if kind in ("plane", "distance"):
@@ -135,7 +171,40 @@ def _fixed_columns(table: JointTable, names: list[str], path) -> np.ndarray | No
 
 def read_planned(path, robot) -> Planned:
     """A planned ``poses.csv`` (any joints CSV): its joints, the ``visible_smr*`` columns and the
-    SMRs and tracker it was planned with (see the module docstring)."""
+    SMRs and tracker it was planned with (see the module docstring).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``poses.csv`` `robocal.CampaignResult.poses_csv` wrote (or any joints CSV).
+    robot : Robot
+        The model (checks the joint count).
+
+    Returns
+    -------
+    Planned
+        ``joints`` ``(N, n)`` radians; ``visible`` ``(N, k)`` bool, ``smr`` ``(k, 3)`` m
+        (flange frame) and ``tracker`` ``(3,)`` m (robot base frame), each None when the file
+        does not carry it.
+
+    Raises
+    ------
+    DataError
+        A malformed file, a wrong joint count, or inconsistent visibility or SMR columns.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> from robocal.campaign import read_planned
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> plan = rc.plan_poses(robot, 12, n_candidates=200, region_size=50, starts=1)
+    >>> _ = Path("poses.csv").write_text(plan.poses_csv())
+    >>> planned = read_planned("poses.csv", robot)
+    >>> bool(np.allclose(planned.joints, plan.joints, atol=1e-5)), planned.smr  # SMR at the TCP, mm
+    (True, array([[0., 0., 0.]]))
+    """
     table = read_joint_table(path)
     q = robot.check_joints(table.joints)
     smr = []

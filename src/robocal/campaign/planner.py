@@ -44,7 +44,29 @@ FORMAT = "robocal-campaign/1"
 
 @dataclass(frozen=True)
 class CurvePoint:
-    """Predicted accuracy (mm) with ``n`` planned poses and the median of random designs."""
+    """Predicted accuracy (mm) with ``n`` planned poses and the median of random designs.
+
+    One point of `CampaignResult.curve` (``plan_poses(..., curve=...)``).
+
+    Attributes
+    ----------
+    n : int
+        The number of poses.
+    predicted_rms_mm : float
+        Predicted RMS TCP error over the region with the ``n`` best poses, mm.
+    random_median_mm : float
+        The same for random sets of ``n`` poses (median), mm.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> plan = rc.plan_poses(robot, 15, n_candidates=200, region_size=50, starts=1, curve=[12, 15])
+    >>> [point.n for point in plan.curve]
+    [12, 15]
+    >>> all(p.predicted_rms_mm <= p.random_median_mm for p in plan.curve)  # better than chance
+    True
+    """
 
     n: int
     predicted_rms_mm: float
@@ -53,15 +75,66 @@ class CurvePoint:
 
 @dataclass
 class CampaignResult:
-    """A planned campaign: ``joints (N, n)`` rad in measuring order (one row per pose; per contact
-    or distance end for plane and distance data), ``candidate_index (N,)`` the row of each in the
-    given candidates (joints array rows, the file's distinct poses, or the contact / distance rows
-    of Measurements; for generated candidates, the row among those that met the constraints),
-    which SMRs the tracker sees ``visible (N, k)``, the predicted
-    accuracy ``predicted_rms_mm``, the identifiability of the chosen set, the measuring route's
-    weighted travel (and the travel in the order the search found them), the accuracy curve,
-    the candidate funnel (``funnel.left``, also ``n_candidates``: the candidates the search chose
-    from), and the settings."""
+    """A planned campaign: the poses `robocal.plan_poses` chose, in measuring order.
+
+    Attributes
+    ----------
+    robot : Robot
+        The nominal model planned for.
+    kind : str
+        What is measured (``'point'``, ``'pose'``, ``'plane'``, ``'distance'``).
+    joints : numpy.ndarray, shape (N, n)
+        The chosen poses, radians, in measuring order (one row per pose; per contact or distance
+        end for plane and distance data).
+    candidate_index : numpy.ndarray of int, shape (N,)
+        The row of each in the given candidates (joints array rows, the file's distinct poses,
+        or the contact / distance rows of Measurements; for generated candidates, the row among
+        those that met the constraints).
+    visible : numpy.ndarray of bool, shape (N, k)
+        Which SMRs the tracker sees at each pose.
+    predicted_rms_mm : float
+        Predicted RMS error of the calibrated model's TCP position over the region, mm.
+    criterion : str
+        The design criterion (``'I'``, ``'D'`` or ``'O4'``) and ``criterion_value`` its value.
+    identifiability : Identifiability
+        The identifiability of the chosen set (rank, condition number, dropped parameters).
+    parameters : list of str
+        The identifiable parameters the design is for.
+    travel, travel_unordered : float
+        The measuring route's weighted joint travel, and the travel in the order the search found
+        the poses.
+    weights : numpy.ndarray, shape (n,)
+        The joints' travel weights.
+    curve : list of CurvePoint
+        The accuracy curve: predicted RMS (mm) against the pose count, and the median of random
+        designs.
+    funnel : Funnel
+        How many candidates each constraint removed (``funnel.left``: the candidates the search
+        chose from, also ``n_candidates``).
+    noise : Noise
+        The measurement noise model of the prediction.
+    settings : dict
+        The planning settings.
+    source : CandidateFile, optional
+        The candidate file the poses came from.
+    source_rows : numpy.ndarray of int, shape (N,), optional
+        The chosen poses' rows in that file.
+    warnings : list of str
+        What limits the plan (e.g. an SMR on the flange axis).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> plan = rc.plan_poses(robot, 20, n_candidates=300, region_size=100, starts=1,
+    ...                      smr=[[0.03, 0.0, 0.1]])
+    >>> plan.n, plan.joints.shape, plan.visible.shape
+    (20, (20, 6), (20, 1))
+    >>> plan.predicted_rms_mm < 0.05  # mm, with 0.02 mm tracker noise
+    True
+    >>> plan.poses_csv().splitlines()[0]  # the file to measure from: joints and SMR, deg and mm
+    'q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,smr0_x_mm,smr0_y_mm,smr0_z_mm'
+    """
 
     robot: object
     kind: str
@@ -86,6 +159,7 @@ class CampaignResult:
 
     @property
     def n(self) -> int:
+        """The number of planned rows."""
         return len(self.joints)
 
     @property
@@ -99,12 +173,13 @@ class CampaignResult:
         return int(is_track_cell(self.robot))
 
     def poses_csv(self) -> str:
-        """The text of ``poses.csv`` (see :mod:`robocal.campaign.files`)."""
+        """The text of ``poses.csv`` (see `robocal.campaign.files`)."""
         return poses_csv(self.joints, self.visible, self.source, self.source_rows,
                          smr_mm=self.settings["smr_mm"], tracker_mm=self.settings["tracker_mm"],
                          track=bool(self._track))
 
     def summary(self) -> str:
+        """A short human summary: poses, predicted accuracy, identifiability, route, candidates."""
         ident = self.identifiability
         o = ident.observability
         noise = (f"isotropic {self.noise.sigma_m * 1e3:g} mm" if self.noise.model == "isotropic"
@@ -256,19 +331,77 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                params="auto") -> CampaignResult:
     """Choose ``n`` calibration poses for ``robot`` (the nominal model).
 
-    kind: what is measured ('point', 'pose'; 'plane' and 'distance' from ``candidates``).
-    candidates: None (generate ``n_candidates`` inside the limits), joints ``(C, n)`` rad, a
-    :class:`CandidateFile` or Measurements (contacts / distances). constraints:
-    :class:`~robocal.campaign.constraints.Constraints` (limits margin, TCP boxes, joint distance,
-    singularity distances, :class:`~robocal.campaign.constraints.Tracker`). smr, smr_normals:
-    SMR positions (m) and facing directions ``(k, 3)`` in the flange frame (default: one SMR at
-    the model's TCP facing along the flange z axis). noise_mm / noise_model ('isotropic' or
-    'tracker', which needs the tracker) / rotation_noise_deg: the measurement noise. criterion:
-    'I' (default), 'D' or 'O4'. region: joints ``(R, n)`` rad or a box ``((3,), (3,))`` m (default
-    ``region_size`` random poses in the limits and TCP boxes). curve: a tuple ``(start, stop[,
-    step])`` or a list of pose counts for the accuracy curve. ``progress``: True shows a bar on a terminal.
-    params: the unknowns the campaign is to determine ('auto': the calibration's default set; a list
-    of names, e.g. the joint zeros with the frame and SMR for a check campaign).
+    Candidates are filtered by the constraints, an exchange search picks the ``n`` that best
+    determine the identifiable parameters for the chosen criterion, and the poses are put in a
+    short measuring order.
+
+    Parameters
+    ----------
+    robot : Robot
+        The nominal model.
+    n : int
+        Number of poses to choose.
+    kind : {'point', 'pose', 'plane', 'distance'}
+        What is measured; ``'plane'`` and ``'distance'`` need ``candidates``.
+    candidates : array_like, shape (C, n), CandidateFile or Measurements, optional
+        Joints in radians, a candidate file (`robocal.campaign.read_candidates`) or
+        Measurements (contacts / distances); default: generate ``n_candidates`` inside the
+        limits.
+    n_candidates : int, default 5000
+        Number of generated candidates.
+    constraints : Constraints, optional
+        Limits margin, TCP boxes, joint distance, singularity distances, the `Tracker`.
+    smr, smr_normals : array_like, shape (k, 3), optional
+        SMR positions (m) and facing directions in the flange frame (default: one SMR at the
+        model's TCP facing along the flange z axis).
+    noise_mm : float, default 0.02
+        Measurement noise (1 sigma per axis), millimetres.
+    noise_model : {'isotropic', 'tracker'}
+        Isotropic noise, or the tracker's own model (needs ``constraints.tracker``).
+    rotation_noise_deg : float, default 0.001
+        Orientation noise of ``pose`` data, degrees.
+    criterion : {'I', 'D', 'O4'}
+        I-optimal (average predicted TCP variance over the region, default), D-optimal or O4.
+    region : array_like, shape (R, n), or tuple of array_like, shape (3,) each, optional
+        Where the accuracy matters: joints in radians, or a box ``(lower, upper)`` in metres
+        (default ``region_size`` random poses in the limits and TCP boxes).
+    region_size : int, default 2000
+        Number of random region poses.
+    starts : int, default 4
+        Random starts of the exchange search.
+    curve : tuple or list of int, optional
+        ``(start, stop[, step])`` or a list of pose counts for the accuracy curve.
+    seed : int, default 0
+        The random seed.
+    progress : bool, optional
+        True shows a bar on a terminal.
+    params : 'auto' or list of str, default 'auto'
+        The unknowns the campaign is to determine: the calibration's default set, or a list of
+        names (e.g. the joint zeros with the frame and SMR, for a check campaign).
+
+    Returns
+    -------
+    CampaignResult
+        The chosen joints in measuring order, the SMRs seen, the predicted accuracy, the
+        identifiability, the candidate funnel; ``poses_csv()`` gives the file to measure from.
+
+    Raises
+    ------
+    DataError
+        Invalid counts, kind, criterion or shapes, or no candidate left after the constraints
+        (the message names the constraint that removed the last ones).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> plan = rc.plan_poses(robot, 20, n_candidates=300, region_size=100, starts=1,
+    ...                      smr=[[0.03, 0.0, 0.1]])  # the SMR 30 mm off the flange axis
+    >>> plan.joints.shape, bool(robot.within_limits(plan.joints).all())
+    ((20, 6), True)
+    >>> round(plan.predicted_rms_mm, 2)  # mm over the region, 0.02 mm noise
+    0.02
     """
     if not isinstance(n, int | np.integer) or n < 1:
         raise DataError(f"the number of poses must be a positive integer, got {n!r}")

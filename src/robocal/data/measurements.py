@@ -1,6 +1,6 @@
 """Measurements: joints plus what the tracker (or probe) saw, and their canonical CSV file.
 
-One :class:`Measurements` holds one observation kind for all its rows:
+One `Measurements` holds one observation kind for all its rows:
 
 - ``point``: ``points (N, 3)`` m, an SMR position in the tracker frame;
 - ``pose``: ``points (N, 3)`` m and ``rotations (N, 3, 3)``, a 6-DOF probe pose in the tracker frame;
@@ -30,7 +30,7 @@ axes ``e1_mm`` / ``e1_m`` (a linear track) or ``e1_deg`` / ``e1_rad``, which com
 x/y/z), ``pair`` and ``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``,
 ``approach1..approachn`` and ``travel1_rad..traveln_rad`` (or ``_deg``) (each written only where
 it differs from what the row order implies).
-:meth:`Measurements.save` writes SI columns (``_rad``, ``_m``) with 17 significant digits, so a
+`Measurements.save` writes SI columns (``_rad``, ``_m``) with 17 significant digits, so a
 save/load round trip is exact (rotations through the quaternion to 1e-15).
 """
 
@@ -102,7 +102,57 @@ def _float_array(values, name: str, shape: tuple) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Measurements:
-    """One kind of observation for N rows; see the module docstring for every field's meaning."""
+    """One kind of observation for N rows; see the module docstring for every field's meaning.
+
+    Immutable (its arrays are read-only); build it with `from_arrays` or `load`, select rows
+    with `subset`, `split_poses` or `first_poses`, write it with `save`.
+
+    Attributes
+    ----------
+    kind : {'point', 'pose', 'plane', 'distance'}
+        What each row observed.
+    joints : numpy.ndarray, shape (N, n)
+        Commanded joints, radians.
+    pose_id : numpy.ndarray of int, shape (N,)
+        Rows that share one commanded pose (the SMRs of one pose, repeated readings).
+    smr : numpy.ndarray of int, shape (N,)
+        The SMR of each row: 0 the tool, s > 0 ``Robot.smr[s - 1]``.
+    source_row : numpy.ndarray of int, shape (N,)
+        The row's 1-based line number in the file it came from.
+    sigma : numpy.ndarray, shape (N,), optional
+        Each row's measurement uncertainty (1 sigma), metres.
+    points : numpy.ndarray, shape (N, 3), optional
+        SMR or probe positions in the tracker frame, metres (``point``, ``pose``).
+    rotations : numpy.ndarray, shape (N, 3, 3), optional
+        Probe orientations in the tracker frame (``pose``).
+    plane : numpy.ndarray of int, shape (N,), optional
+        The plane the probe tip touched (``plane``).
+    pair, distance : numpy.ndarray, shape (N,), optional
+        The pair id and the measured distance, metres (``distance``): the two rows of a pair are
+        the two ends of one distance.
+    source : str
+        The provenance text (the file's first ``#`` comment).
+    approach : numpy.ndarray of int, shape (N, n)
+        Each joint's approach direction (-1, 0, +1) from the previous pose, for a backlash model.
+    travel : numpy.ndarray, shape (N, n)
+        Each joint's signed move from the previous pose, radians, for a travel model.
+    file : str
+        The file it was read from ("" when built from arrays).
+    notes : tuple of str
+        How the reader interpreted the file (e.g. repeated readings).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> q = np.array([[0.0, 0.1, 0.2, 0.0, 0.3, 0.0], [0.4, 0.2, 0.1, 0.1, 0.2, 0.3]])  # rad
+    >>> data = rc.Measurements.from_arrays("point", q, points=robot.fk(q)[:, :3, 3])
+    >>> len(data), data.n_poses, data.kind
+    (2, 2, 'point')
+    >>> data.approach[1]  # the direction each joint moved to reach the second pose
+    array([ 1,  1, -1,  1, -1,  1])
+    """
 
     kind: str
     joints: np.ndarray
@@ -146,10 +196,64 @@ class Measurements:
                     external: int = 0) -> Measurements:
         """Validated measurements from arrays in SI units (rad, m).
 
-        Defaults: ``smr`` 0, ``pose_id`` one per row (``0..N-1``), ``source_row`` ``1..N``,
-        ``approach`` and ``travel`` from the row order (:func:`approach_from_order`,
-        :func:`travel_from_order`). ``linear`` ``(n,)`` bool marks joints in m (prismatic, e.g. a
-        track), ``external`` how many leading joints are external axes (written as e1.. columns).
+        Parameters
+        ----------
+        kind : {'point', 'pose', 'plane', 'distance'}
+            What each row observed; it says which of the arrays below are required.
+        joints : array_like, shape (N, n)
+            Commanded joints, radians, in measurement order.
+        points : array_like, shape (N, 3), optional
+            Measured positions in the tracker frame, metres (``point`` and ``pose``).
+        rotations : array_like, shape (N, 3, 3), optional
+            Measured orientations, rotation matrices (``pose``).
+        plane : array_like of int, shape (N,), optional
+            Index of the touched plane (``plane``).
+        pair : array_like of int, shape (N,), optional
+            Pair id, two rows each (``distance``).
+        distance : array_like, shape (N,), optional
+            Measured distance of each row's pair, metres (``distance``).
+        smr : array_like of int, shape (N,), optional
+            Each row's SMR (default 0, the tool).
+        sigma : array_like, shape (N,), optional
+            Each row's uncertainty (1 sigma), metres.
+        pose_id : array_like of int, shape (N,), optional
+            Rows of one commanded pose (default: one pose per row, ``0..N-1``).
+        source_row : array_like of int, shape (N,), optional
+            The rows' line numbers in their source file (default ``1..N``).
+        source : str
+            Provenance text, kept in the CSV's first comment line.
+        approach : array_like of int, shape (N, n), optional
+            Joint approach directions (default: from the row order, `approach_from_order`).
+        travel : array_like, shape (N, n), optional
+            Joint moves from the previous pose, radians (default: from the row order,
+            `travel_from_order`).
+        linear : array_like of bool, shape (n,), optional
+            Joints in metres (prismatic, e.g. a track).
+        external : int, optional
+            How many leading joints are external axes (written as e1.. columns).
+
+        Returns
+        -------
+        Measurements
+
+        Raises
+        ------
+        DataError
+            An unknown kind, a missing or extra array for the kind, wrong shapes, NaN, or a
+            distance pair without exactly two rows.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> q = np.zeros((2, 6))
+        >>> data = rc.Measurements.from_arrays("point", q, points=[[1.0, 0.0, 0.5], [1.0, 0.0, 0.6]])
+        >>> data.pose_id, data.smr, data.source_row
+        (array([0, 1]), array([0, 0]), array([1, 2]))
+        >>> rc.Measurements.from_arrays("point", q)
+        Traceback (most recent call last):
+        ...
+        robocal.errors.DataError: ...
         """
         if kind not in KINDS:
             raise DataError(f"unknown measurement kind {kind!r}: use one of {', '.join(KINDS)}")
@@ -226,6 +330,7 @@ class Measurements:
 
     @property
     def n_joints(self) -> int:
+        """The number of joint columns n."""
         return self.joints.shape[1]
 
     @property
@@ -239,7 +344,34 @@ class Measurements:
         return int(self.smr.max()) + 1
 
     def subset(self, index) -> Measurements:
-        """Rows selected by an integer index array or a boolean mask ``(N,)``."""
+        """Rows selected by an integer index array or a boolean mask ``(N,)``.
+
+        Parameters
+        ----------
+        index : array_like of int, shape (k,), or array_like of bool, shape (N,)
+            Row indices (negative ones count from the end) or a row mask.
+
+        Returns
+        -------
+        Measurements
+            The selected rows, with their ``approach`` and ``travel`` of the full set.
+
+        Raises
+        ------
+        DataError
+            An empty selection, an index out of range, a mask of the wrong shape, or a distance
+            subset that splits a pair.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> q = np.zeros((3, 6))
+        >>> data = rc.Measurements.from_arrays("point", q, points=[[1, 0, 0.2], [1, 0, 0.5], [1, 0, 0.9]])
+        >>> high = data.subset(data.points[:, 2] > 0.3)
+        >>> len(high), high.source_row
+        (2, array([2, 3]))
+        """
         index = np.asarray(index)
         if index.dtype == bool:
             if index.shape != (len(self),):
@@ -306,7 +438,42 @@ class Measurements:
     @classmethod
     def load(cls, path, robot=None, reach: float | None = None) -> Measurements:
         """Read a canonical measurement CSV. ``robot`` (or ``reach`` in m) enables the joint count and
-        length plausibility checks; every problem is a DataError/UnitError naming file and row."""
+        length plausibility checks; every problem is a DataError/UnitError naming file and row.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The CSV file (format: the measurement CSV reference page; units in the column names).
+        robot : Robot, optional
+            Check the joint count and SMR indices against this model, and that the points span
+            no more than it can reach.
+        reach : float, optional
+            The reach used for the length plausibility check without a robot, metres.
+
+        Returns
+        -------
+        Measurements
+            In SI units, with ``file`` set to ``path``.
+
+        Raises
+        ------
+        DataError
+            A missing file, a malformed row or cell, or data that do not fit ``robot``.
+        UnitError
+            A column without a known unit, or lengths implausible for the robot's reach (mm
+            read as m).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> q = np.array([[0.0, 0.1, 0.2, 0.0, 0.3, 0.0], [0.4, 0.2, 0.1, 0.1, 0.2, 0.3]])
+        >>> rc.Measurements.from_arrays("point", q, points=robot.fk(q)[:, :3, 3]).save("points.csv")
+        >>> data = rc.Measurements.load("points.csv", robot=robot)
+        >>> data.file, data.points.shape
+        ('points.csv', (2, 3))
+        """
         path = Path(path)
         data = replace(parse_csv(read_text(path, "measurement file"), str(path)), file=str(path))
         if robot is not None:
@@ -361,7 +528,25 @@ class Measurements:
         return out.getvalue()
 
     def save(self, path) -> None:
-        """Write the canonical CSV atomically."""
+        """Write the canonical CSV atomically.
+
+        SI columns (``_rad``, ``_m``) with 17 significant digits: `load` gives the same values back.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The CSV file to write.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> q = np.array([[0.1, 0.2, 0.3, 0.4, 0.5, 0.6]])
+        >>> data = rc.Measurements.from_arrays("point", q, points=[[1.234567, -0.5, 0.75]])
+        >>> data.save("one.csv")
+        >>> bool(np.array_equal(rc.Measurements.load("one.csv").points, data.points))
+        True
+        """
         write_atomic(path, self.to_csv())
 
 
@@ -399,14 +584,14 @@ def travel_from_order(joints: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
 
 def repeat_groups(joints: np.ndarray) -> np.ndarray:
     """``(N,)`` pose ids from the row order: consecutive rows whose joints ``(N, n)`` agree within
-    :data:`REPEAT_JOINT_TOL_RAD` share one id (repeated readings, or several SMRs of one pose)."""
+    `REPEAT_JOINT_TOL_RAD` share one id (repeated readings, or several SMRs of one pose)."""
     same = np.r_[False, (np.abs(np.diff(joints, axis=0)) <= REPEAT_JOINT_TOL_RAD).all(axis=1)]
     return np.cumsum(~same) - 1
 
 
 def approach_from_order(joints: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
     """``(N, n)`` sign of each joint's move from the previous pose to this row's pose (the sign of
-    :func:`travel_from_order`); 0 for the first pose and joints that did not move."""
+    `travel_from_order`); 0 for the first pose and joints that did not move."""
     return np.sign(travel_from_order(joints, pose_id)).astype(np.int64)
 
 
@@ -705,7 +890,7 @@ def _per_joint(col: dict, roles: dict, role: str, n: int, name: str) -> np.ndarr
 
 
 def _repeats(joints: np.ndarray, line_no: np.ndarray, name: str) -> tuple[np.ndarray, tuple[str, ...]]:
-    """Pose ids of a file without a pose_id column (:func:`repeat_groups`) and notes that say how
+    """Pose ids of a file without a pose_id column (`repeat_groups`) and notes that say how
     the rows were grouped, or warn of consecutive poses that look like jittering repeats."""
     pose_id = repeat_groups(joints)
     n_poses = int(pose_id[-1]) + 1

@@ -1,6 +1,6 @@
 """Virtual laser tracker (and plane-contact probe): measurements of a known true robot.
 
-The true robot is the given (nominal) robot plus random parameter errors (:func:`perturbed`):
+The true robot is the given (nominal) robot plus random parameter errors (`perturbed`):
 lengths a, d by 0.05-0.5 mm, angles alpha, theta (theta errors are the joint zero offsets) by
 0.005-0.05 deg, beta by the same on nominally parallel axes; random signs, uniform magnitudes
 (``error_scale`` multiplies them). The tracker stands at a random position ``TRACKER_DISTANCE_M``
@@ -22,7 +22,7 @@ A fraction ``outliers`` of the rows gets an extra gross error of uniform size ``
 (1-5 mm) in a random direction. The *noise floor* is the 3-D RMS (sqrt(mean |n|^2), mm) of the noise actually
 added, outliers excluded: the figure a perfect calibration's RMS residual would reach. It is in
 ``SimulationResult.noise_floor_mm``, in the truth YAML's description and in the sidecar JSON
-that :func:`write_simulation` writes next to the truth (``truth.yaml`` -> ``truth.sim.json``).
+that `write_simulation` writes next to the truth (``truth.yaml`` -> ``truth.sim.json``).
 
 Kinds: ``point`` (n_smr SMRs per pose), ``pose`` (6-DOF probe; ``rotation_noise_deg`` per axis),
 ``plane`` (a probe tip touching ``n_planes`` planes with random normals; the world frame is the
@@ -80,7 +80,38 @@ class SimulationResult:
     plane data); ``noise_floor_mm`` (see module docstring); ``outlier_rows`` row indices with a
     gross error; ``true_joints`` (N, n) rad before joint reading noise; ``planes`` (P, 4) unit
     normal and offset (n.p = c, m) of plane data (world = robot base), else None; ``info`` the
-    settings and seed."""
+    settings and seed.
+
+    Returned by `robocal.simulate_tracker`.
+
+    Attributes
+    ----------
+    data : Measurements
+        The simulated measurements.
+    truth : Robot
+        The true robot (tracker frame as base, SMR 0 as tool, extra SMRs in ``truth.smr``).
+    noise : numpy.ndarray, shape (N, 3)
+        The noise added to each point, metres (zeros for plane data).
+    noise_floor_mm : float
+        RMS of the noise added (outliers excluded), mm: what a perfect calibration reaches.
+    outlier_rows : numpy.ndarray of int
+        Rows given a gross error.
+    true_joints : numpy.ndarray, shape (N, n)
+        The joints before the reading noise, radians.
+    planes : numpy.ndarray, shape (P, 4), optional
+        Unit normal and offset (n.p = c, m) of each plane (plane data; world = robot base).
+    info : dict
+        The settings and the seed.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> sim = rc.simulate_tracker(rc.Robot.from_catalog("abb_irb2600"), 20, outliers=0.1, seed=4)
+    >>> len(sim.outlier_rows), sim.noise.shape  # 10 % of 20 rows got a gross error
+    (2, (20, 3))
+    >>> sim.info["seed"]
+    4
+    """
 
     data: Measurements
     truth: object
@@ -285,13 +316,85 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
                      as_is: bool = False) -> SimulationResult:
     """Simulate ``n_poses`` measured poses of a perturbed copy of ``robot`` (see module docstring).
 
-    ``joints (N, n)`` rad: measure these poses (a planned campaign) instead of random ones;
-    ``visible (N, k)`` bool: the SMRs the tracker sees at each pose (default all; k sets n_smr);
-    ``smr_offsets (k, 3)`` m: the SMR positions in the flange (tool) frame instead of random ones
-    (k SMRs, the first is the tool); ``tracker_position (3,)`` m: the tracker's position in the
-    robot's base frame instead of a random one (its orientation stays random). The robot errors
-    drawn for a seed do not depend on these options.
-    Returns a :class:`SimulationResult`; the same arguments and seed give identical results.
+    The true robot is ``robot`` plus random parameter errors, seen from a randomly placed
+    tracker; the robot errors drawn for a seed do not depend on the options that choose poses,
+    SMRs or the tracker's position. The same arguments and seed give identical results.
+
+    Parameters
+    ----------
+    robot : Robot
+        The nominal model the truth is drawn around (or, with ``as_is``, the truth itself).
+    n_poses : int, optional
+        Number of poses (random within the joint limits); not needed with ``joints``. For
+        ``distance``: the number of scale-bar placements.
+    noise_mm : float, default 0.02
+        Measurement noise, 1 sigma per axis, millimetres (ignored by the ``tracker`` model).
+    noise_model : {'isotropic', 'tracker'}
+        Isotropic noise, or the laser tracker's range and angle noise growing with distance.
+    outliers : float, default 0
+        Fraction of the rows given a gross error of 1-5 mm.
+    n_smr : int, default 1
+        SMRs measured at each pose (``point``).
+    workspace_box : tuple of array_like, shape (3,) each, optional
+        (lower, upper) corners of a box in the robot's base frame, metres: random poses are kept
+        inside it.
+    seed : int, default 0
+        The random seed.
+    kind : {'point', 'pose', 'plane', 'distance'}
+        What is measured (see the module docstring).
+    n_planes : int, default 1
+        Planes touched by the probe (``plane``).
+    joint_noise_deg : float, default 0
+        Reading noise on the recorded joints, degrees (1 sigma).
+    rotation_noise_deg : float, default 0
+        Orientation noise of ``pose`` data, degrees per axis (1 sigma).
+    error_scale : float, default 1
+        Multiplies the drawn robot errors.
+    joints : array_like, shape (N, n), optional
+        Measure these poses (a planned campaign) instead of random ones, radians.
+    visible : array_like of bool, shape (N, k), optional
+        The SMRs the tracker sees at each pose (default all; k sets ``n_smr``).
+    smr_offsets : array_like, shape (k, 3), optional
+        The SMR positions in the flange (tool) frame instead of random ones, metres (k SMRs, the
+        first is the tool).
+    tracker_position : array_like, shape (3,), optional
+        The tracker's position in the robot's base frame, metres, instead of a random one (its
+        orientation stays random).
+    bar_length_m : float, default 0.5
+        Certified length of the scale bar (``distance``), metres.
+    as_is : bool, default False
+        Measure ``robot`` exactly as it is: no errors drawn, its own base and tool.
+
+    Returns
+    -------
+    SimulationResult
+        ``data`` (the `Measurements`), ``truth`` (the true robot, the tracker frame as its
+        base), ``noise`` ``(N, 3)`` m, ``noise_floor_mm`` (the RMS of the noise added, mm: what a
+        perfect calibration's residual reaches), ``outlier_rows``, ``true_joints`` ``(N, n)``
+        rad, ``planes`` and ``info`` (settings and seed).
+
+    Raises
+    ------
+    DataError
+        Invalid counts, fractions, noise levels or shapes of the given arrays.
+    UnreachableError
+        Too few poses found inside ``workspace_box``, scale-bar placements or plane contacts.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> sim = rc.simulate_tracker(robot, 30, noise_mm=0.02, seed=1)
+    >>> sim.data.kind, sim.data.points.shape
+    ('point', (30, 3))
+    >>> sim.truth  # the true robot the data were measured on
+    Robot('abb_irb2600_true', 6 joints)
+    >>> p = sim.truth.fk(sim.data.joints)[:, :3, 3]  # the truth plus the noise is what was measured
+    >>> bool(np.allclose(p + sim.noise, sim.data.points, atol=1e-12))
+    True
+    >>> round(float(np.sqrt((sim.noise ** 2).sum(axis=1).mean()) * 1000), 4) == round(sim.noise_floor_mm, 4)
+    True
     """
     joints, visible, smr_offsets, n_poses, n_smr = _check_given(
         robot, n_poses, n_smr, kind, joints, visible, smr_offsets)

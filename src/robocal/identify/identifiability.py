@@ -53,7 +53,46 @@ def condition_class(cond: float) -> str:
 
 @dataclass
 class Identifiability:
-    """Result of the analysis; ``kept`` and ``dropped`` are parameter names."""
+    """Result of the analysis; ``kept`` and ``dropped`` are parameter names.
+
+    Returned by `robocal.analyze` and held by ``CalibrationResult.identifiability``: which
+    parameters a pose set determines (QR with column pivoting on the scaled Jacobian).
+
+    Attributes
+    ----------
+    names : list of str
+        The candidate parameters.
+    kept : list of str
+        The identifiable ones, estimated.
+    dropped : list of str
+        Not identifiable from these poses (held at nominal).
+    confounded_with : dict of str to list of str
+        For each dropped (or undetermined) parameter, the kept ones it is confounded with.
+    rank : int
+        Numerical rank of the scaled Jacobian.
+    condition_number : float
+        Condition number of the scaled normal matrix (``condition_class`` names its class).
+    singular_values : numpy.ndarray, shape (k,)
+        Singular values of the scaled Jacobian of the kept parameters, largest first.
+    n_poses : int
+        The number of poses.
+    undetermined : list of str
+        Parameters the data barely determine (held at nominal with their prior).
+    prior_ratio : dict of str to float
+        Posterior / prior sigma of each parameter with a prior.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> q = np.random.default_rng(1).uniform(robot.limits[:, 0], robot.limits[:, 1], (30, 6))
+    >>> ident = rc.analyze(robot, q)
+    >>> len(ident.kept) + len(ident.dropped) == len(ident.names), ident.rank == len(ident.kept)
+    (True, True)
+    >>> sorted(ident.observability)  # observability indices of the pose set
+    ['O1', 'O2', 'O3', 'O4']
+    """
 
     names: list[str]
     kept: list[str]
@@ -68,10 +107,12 @@ class Identifiability:
 
     @property
     def condition_class(self) -> str:
+        """The class of ``condition_number`` (see `condition_class`)."""
         return condition_class(self.condition_number)
 
     @property
     def observability(self) -> dict[str, float]:
+        """The observability indices O1-O4 of the pose set (from the singular values)."""
         s = self.singular_values
         if s.size == 0 or s[-1] <= 0:
             return {"O1": 0.0, "O2": 0.0, "O3": 0.0, "O4": 0.0}
@@ -83,6 +124,7 @@ class Identifiability:
         }
 
     def to_dict(self) -> dict:
+        """Plain data for the result JSON."""
         return {"n_params": len(self.names), "rank": self.rank,
                 "condition_number": self.condition_number,
                 "condition_class": self.condition_class, **self.observability,
@@ -90,6 +132,7 @@ class Identifiability:
                 "confounded_with": self.confounded_with}
 
     def summary(self) -> str:
+        """A short human summary: rank, condition number, observability, the dropped parameters."""
         o = self.observability
         lines = [f"rank {self.rank} of {len(self.names)} parameters; condition number of the "
                  f"scaled normal matrix {self.condition_number:.3g} ({self.condition_class})",

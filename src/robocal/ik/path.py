@@ -79,7 +79,28 @@ class PathResult:
 def default_weights(robot: Robot, wrist=(1.0, 1.0, 1.0)) -> np.ndarray:
     """``(n,)`` weights: 1 + lever arm (m) from axis i to the flange at zero joints for the first
     three revolute joints, ``wrist`` for the next ones (repeated on a longer chain); a prismatic
-    joint (a track) 1 per metre of travel."""
+    joint (a track) 1 per metre of travel.
+
+    The big joints move more mass, so `plan_path` charges their travel more.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model (its zero pose gives the lever arms).
+    wrist : sequence of float, default (1, 1, 1)
+        The weights of the revolute joints after the third (repeated on a longer chain).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        Weight per joint, per radian of travel (dimensionless, 1 + metres for the first three).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> rc.ik.default_weights(rc.Robot.from_catalog("abb_irb2600")).round(2)
+    array([2.03, 2.2 , 1.89, 1.  , 1.  , 1.  ])
+    """
     n = robot.n_joints
     _, frames = robot.fk(np.zeros((1, n)), frames=True)
     flange = frames[0, n, :3, 3]

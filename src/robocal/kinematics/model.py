@@ -8,15 +8,15 @@ Parameter vector (the view every solver uses), in this order with these stable n
     comp2_3 gear1_s1 backlash2 ...   (only the joint-error terms the model declares)
 
 The first three groups are the geometry; the joint-error terms (compliance, gear, backlash: see
-:mod:`robocal.kinematics.joint_errors`) are parameters like any other, nominally zero (the
+`robocal.kinematics.joint_errors`) are parameters like any other, nominally zero (the
 controller's model has none). Values are SI (m, rad). ``base.r*``/``tool.r*`` hold the rotation
 vector of the frame's rotation for reading and writing; solvers never add to them:
-:meth:`Robot.displaced` applies rotation increments multiplicatively (base: about world axes
+`Robot.displaced` applies rotation increments multiplicatively (base: about world axes
 through the world origin, tool: about flange axes through the TCP), which is what the
 identification Jacobian differentiates.
 
-A model is immutable: its arrays are read-only, and every change (:meth:`displaced`,
-:meth:`with_values`, :meth:`with_frames`, ...) returns a new robot.
+A model is immutable: its arrays are read-only, and every change (`displaced`,
+`with_values`, `with_frames`, ...) returns a new robot.
 """
 
 from __future__ import annotations
@@ -89,7 +89,7 @@ def _as_frame(T, what: str) -> np.ndarray:
 
 
 class DisplacedArrays(NamedTuple):
-    """What :meth:`Robot.displaced_arrays` returns for displacements ``(..., k)``: link arrays
+    """What `Robot.displaced_arrays` returns for displacements ``(..., k)``: link arrays
     ``(..., n)``, base and tool ``(..., 4, 4)``, SMR offsets ``(..., s, 3)`` and the joint-error
     values ``(..., m)`` (None when the robot declares no joint-error terms)."""
 
@@ -104,15 +104,62 @@ class DisplacedArrays(NamedTuple):
 class Robot:
     """A serial robot in modified DH + beta. Lengths in m, angles in rad.
 
-    Attributes are ``(n,)`` arrays; ``limits`` is ``(n, 2)``; ``parallel[i]`` says that axis i
-    is nominally parallel to axis i-1, so ``beta_(i+1)`` is a parameter there. ``nominal`` is the
-    nominal model's geometry vector (the controller's model, which has no joint-error terms: their
-    nominal is zero, see :attr:`nominal_values`). ``opw`` is the OPW form of the nominal model
-    (catalog robots), which travels with the model like ``nominal``; :attr:`has_opw_form` says
-    whether this robot's own chain still follows it (closed-form IK needs that). ``joint_errors``
-    holds the non-geometric terms that :meth:`fk` applies. ``prismatic[i]`` makes joint i
-    prismatic: its value (m) adds to ``d_i`` (``theta_i`` stays a constant angle); d_i is its zero
-    and a ``scale{i}`` joint-error term its encoder scale.
+    The model is immutable: every change (`with_values`, `with_frames`, `displaced`) returns a
+    copy. Build one with `from_catalog`, `from_mdh`, `from_dh`, `from_opw` or `load`; a
+    calibration returns the calibrated one. Parameters are addressed by name (`parameter_names`:
+    ``alpha1``, ``a1``, ``beta1``, ``theta1``, ``d1``, ... ``base.x`` ... ``tool.rz``, then the
+    joint-error terms).
+
+    Attributes
+    ----------
+    alpha, a, beta, theta, d : numpy.ndarray, shape (n,)
+        Modified DH rows (Craig: alpha_{i-1}, a_{i-1}, theta offset, d_i) and Hayati's beta;
+        metres and radians.
+    base : numpy.ndarray, shape (4, 4)
+        The world -> frame {0} transform, metres.
+    tool : numpy.ndarray, shape (4, 4)
+        The flange -> TCP (or SMR) transform, metres.
+    limits : numpy.ndarray, shape (n, 2)
+        Joint limits (lower, upper), radians.
+    parallel : numpy.ndarray of bool, shape (n,)
+        ``parallel[i]``: axis i is nominally parallel to axis i-1, so ``beta_(i+1)`` is a
+        parameter there.
+    nominal : numpy.ndarray, shape (p,)
+        The nominal model's geometry vector (the controller's model, which has no joint-error
+        terms: their nominal is zero, see `nominal_values`).
+    name, description : str
+        The model's name and a free description.
+    opw : OPWParameters or None
+        The OPW form of the nominal model (catalog robots), which travels with the model like
+        ``nominal``; `has_opw_form` says whether this robot's own chain still follows it
+        (closed-form IK needs that).
+    smr : numpy.ndarray, shape (S, 3), optional
+        Extra SMR offsets on the flange, metres (SMR 0 is the tool).
+    joint_errors : JointErrorModel or None
+        The non-geometric terms that `fk` applies (compliance, backlash, cyclic errors...).
+    prismatic : numpy.ndarray of bool, shape (n,)
+        ``prismatic[i]`` makes joint i prismatic: its value (m) adds to ``d_i`` (``theta_i`` stays
+        a constant angle); ``d_i`` is its zero and a ``scale{i}`` joint-error term its encoder
+        scale.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> robot
+    Robot('abb_irb2600', 6 joints)
+    >>> q = np.zeros((1, 6))  # joints, rad
+    >>> robot.fk(q)[0, :3, 3].round(3)  # TCP position, m
+    array([1.03, 0.  , 1.26])
+    >>> robot.jacobian(q, ["d1", "a2"]).shape  # (poses, x y z, parameters)
+    (1, 3, 2)
+    >>> longer = robot.with_values({"d1": robot.get("d1") + 0.001})  # 1 mm taller
+    >>> round(float(longer.fk(q)[0, 2, 3] - robot.fk(q)[0, 2, 3]), 6)
+    0.001
+    >>> longer.save("irb2600_longer.yaml")
+    >>> bool(np.array_equal(rc.Robot.load("irb2600_longer.yaml").values, longer.values))
+    True
     """
 
     alpha: np.ndarray
@@ -207,7 +254,7 @@ class Robot:
     @functools.cached_property
     def ur_form(self) -> URForm | None:
         """The UR form of this robot's own chain (three parallel axes, offset wrist:
-        :mod:`robocal.kinematics.ur`), detected from its links; None without it (a calibrated
+        `robocal.kinematics.ur`), detected from its links; None without it (a calibrated
         model, joint-error terms, another geometry)."""
         if self.n_joints != 6 or self.joint_errors is not None or self.has_prismatic:
             return None
@@ -224,7 +271,7 @@ class Robot:
 
     @property
     def has_ur_form(self) -> bool:
-        """Whether closed-form UR inverse kinematics applies to this robot's chain (see :attr:`ur_form`)."""
+        """Whether closed-form UR inverse kinematics applies to this robot's chain (see `ur_form`)."""
         return self.ur_form is not None
 
     # ----------------------------------------------------------------- construction
@@ -234,9 +281,40 @@ class Robot:
                  degrees: bool = False, length_unit: str = "m", **kwargs) -> Robot:
         """Robot from Craig's modified DH rows (alpha_{i-1}, a_{i-1}, theta offset, d_i).
 
-        ``degrees`` and ``length_unit`` ('m' or 'mm') state the units of the given values;
-        axes i-1, i are flagged parallel where alpha_i = 0 (then beta_i is a parameter); see
-        :func:`robocal.kinematics.convert.mdh_kwargs`.
+        Axes i-1, i are flagged parallel where alpha_i = 0 (then beta_i is a parameter); see
+        `robocal.kinematics.convert.mdh_kwargs`.
+
+        Parameters
+        ----------
+        alpha, a, theta, d : sequence of float, length n
+            The modified DH rows, in ``length_unit`` and degrees or radians.
+        beta : sequence of float, length n, optional
+            Hayati's beta about the y axis of parallel axes (default 0), degrees or radians.
+        degrees : bool, default False
+            The angles (and ``limits``) are in degrees.
+        length_unit : {'m', 'mm'}
+            The unit of ``a`` and ``d``.
+        **kwargs
+            Other attributes of the model: ``base``, ``tool`` (4x4, m), ``limits`` ``(n, 2)``,
+            ``name``, ``description``...
+
+        Returns
+        -------
+        Robot
+
+        Raises
+        ------
+        ModelError
+            Rows of different lengths, an unknown unit or an implausible value.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> arm = rc.Robot.from_mdh(alpha=[0, 0], a=[0, 500], theta=[0, 0], d=[0, 0],
+        ...                         length_unit="mm")  # a planar arm, one 0.5 m link
+        >>> arm.fk(np.array([[np.pi / 2, 0.0]]))[0, :3, 3].round(3)
+        array([0. , 0.5, 0. ])
         """
         return cls(**mdh_kwargs(alpha, a, theta, d, beta, degrees=degrees, length_unit=length_unit,
                                 **kwargs))
@@ -246,7 +324,40 @@ class Robot:
                 alpha: Sequence[float], *, degrees: bool = False, length_unit: str = "m",
                 **kwargs) -> Robot:
         """Robot from a standard DH table, converted exactly (see
-        :func:`robocal.kinematics.convert.dh_kwargs`)."""
+        `robocal.kinematics.convert.dh_kwargs`).
+
+        Row i is A_i = Rz(theta_i + q_i) Tz(d_i) Tx(a_i) Rx(alpha_i); the DH base frame is the world
+        frame and DH frame n the flange.
+
+        Parameters
+        ----------
+        theta_offsets, d, a, alpha : sequence of float, length n
+            The DH table, in ``length_unit`` and degrees or radians.
+        degrees : bool, default False
+            The angles (and ``limits``) are in degrees.
+        length_unit : {'m', 'mm'}
+            The unit of ``d`` and ``a``.
+        **kwargs
+            Other attributes of the model: ``base`` (world -> DH base), ``tool`` (DH flange ->
+            TCP), 4x4, m; ``limits`` ``(n, 2)``; ``name``...
+
+        Returns
+        -------
+        Robot
+
+        Raises
+        ------
+        ModelError
+            Rows of different lengths, an unknown unit or an implausible value.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> arm = rc.Robot.from_dh(theta_offsets=[0, 0], d=[0.3, 0], a=[0.5, 0.4], alpha=[0, 0])
+        >>> arm.fk(np.zeros((1, 2)))[0, :3, 3].round(3)  # both links stretched along x, m
+        array([0.9, 0. , 0.3])
+        """
         return cls(**dh_kwargs(theta_offsets, d, a, alpha, degrees=degrees, length_unit=length_unit,
                                **kwargs))
 
@@ -255,19 +366,83 @@ class Robot:
                  offsets: Sequence[float] = (0.0,) * 6, signs: Sequence[int] = (1,) * 6, *,
                  degrees: bool = False, length_unit: str = "m", **kwargs) -> Robot:
         """Robot from an OPW parameter set, converted exactly (see
-        :func:`robocal.kinematics.convert.opw_kwargs`)."""
+        `robocal.kinematics.convert.opw_kwargs`).
+
+        The robot keeps the set as ``robot.opw``, so closed-form inverse kinematics
+        (`robocal.ik.solve_all`) applies.
+
+        Parameters
+        ----------
+        a1, a2, b, c1, c2, c3, c4 : float
+            The OPW lengths (opw_kinematics convention), in ``length_unit``.
+        offsets : sequence of float, length 6
+            Joint zero offsets (theta = q * sign - offset), degrees or radians.
+        signs : sequence of int, length 6
+            Joint direction signs, +1 or -1.
+        degrees : bool, default False
+            ``offsets`` (and ``limits``) are in degrees.
+        length_unit : {'m', 'mm'}
+            The unit of the lengths.
+        **kwargs
+            Other attributes of the model: ``base``, ``tool`` (4x4, m), ``limits`` ``(6, 2)``,
+            ``name``...
+
+        Returns
+        -------
+        Robot
+
+        Raises
+        ------
+        ModelError
+            A wrong count of offsets or signs, an unknown unit or an implausible value.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_opw(a1=150, a2=-115, b=0, c1=445, c2=700, c3=795, c4=85,
+        ...                           length_unit="mm")
+        >>> robot.has_opw_form
+        True
+        >>> robot.fk(np.zeros((1, 6)))[0, :3, 3].round(3)  # arm upright at zero, m
+        array([0.035, 0.   , 2.025])
+        """
         params = opw_parameters(a1, a2, b, c1, c2, c3, c4, offsets, signs, degrees=degrees,
                                 length_unit=length_unit)
         return cls(**opw_kwargs(params, degrees=degrees, **kwargs))
 
     @classmethod
     def from_catalog(cls, name: str) -> Robot:
-        """A catalog robot by name (``robocal robots`` lists them)."""
+        """A catalog robot by name (``robocal robots`` lists them).
+
+        Parameters
+        ----------
+        name : str
+            The catalog name, e.g. ``"abb_irb2600"``, ``"ur10e"``.
+
+        Returns
+        -------
+        Robot
+            The nominal model, with its joint limits and (where it has one) its OPW form.
+
+        Raises
+        ------
+        ModelError
+            The name is not in the catalog (the message lists the names).
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> robot.n_joints, robot.has_opw_form
+        (6, True)
+        """
         return cls(**catalog_kwargs(name))
 
     # ----------------------------------------------------------------- parameter view
     @property
     def n_joints(self) -> int:
+        """The number of joints n."""
         return self.alpha.size
 
     @property
@@ -285,12 +460,26 @@ class Robot:
 
     @property
     def parameter_names(self) -> list[str]:
-        """All parameter names, in vector order (geometry, then joint-error terms)."""
+        """All parameter names, in vector order (geometry, then joint-error terms).
+
+        Returns
+        -------
+        list of str
+            ``alpha1, a1, beta1, theta1, d1, ...`` per joint, ``base.x ... base.rz``,
+            ``tool.x ... tool.rz``, the extra SMRs, then the joint-error terms; the order of
+            `values` and `nominal_values`.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> rc.Robot.from_catalog("abb_irb2600").parameter_names[:5]
+        ['alpha1', 'a1', 'beta1', 'theta1', 'd1']
+        """
         return self.geometry_names + self.joint_error_names
 
     def parameter_units(self) -> list[str]:
         """'m' or 'rad' for each parameter, in vector order (joint-error terms: their own unit,
-        see :meth:`JointErrorModel.units`)."""
+        see `JointErrorModel.units`)."""
         units = ["m" if _LINK_IS_LENGTH[f] else "rad" for _ in range(self.n_joints)
                  for f in LINK_FIELDS]
         units += (["m"] * 3 + ["rad"] * 3) * 2 + ["m"] * self.smr.size
@@ -329,13 +518,13 @@ class Robot:
 
     @property
     def nominal_values(self) -> np.ndarray:
-        """The nominal value of every parameter (order of :attr:`parameter_names`; joint-error
+        """The nominal value of every parameter (order of `parameter_names`; joint-error
         terms zero)."""
         return np.concatenate([self.nominal, np.zeros(len(self.joint_error_names))])
 
     @property
     def values(self) -> np.ndarray:
-        """Current parameter vector (SI), a new array in the order of :attr:`parameter_names`."""
+        """Current parameter vector (SI), a new array in the order of `parameter_names`."""
         return self._value_vector.copy()
 
     def get(self, name: str) -> float:
@@ -348,7 +537,31 @@ class Robot:
         return self._value_vector[self.indices(names)]
 
     def with_values(self, updates: dict[str, float]) -> Robot:
-        """A copy with parameters set by name to absolute values (m, rad)."""
+        """A copy with parameters set by name to absolute values (m, rad).
+
+        Parameters
+        ----------
+        updates : dict of str to float
+            Parameter name (see `parameter_names`) -> new value, metres or radians (joint-error
+            terms: their own unit).
+
+        Returns
+        -------
+        Robot
+            A new model; this one is unchanged.
+
+        Raises
+        ------
+        ModelError
+            An unknown parameter name.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> robot.with_values({"a2": 0.151}).get("a2"), robot.get("a2")
+        (0.151, 0.15)
+        """
         vec = self.values
         idx = self.indices(updates)
         vec[idx] = _as_vector(list(updates.values()), len(idx), "parameter values")
@@ -442,7 +655,7 @@ class Robot:
         return DisplacedArrays(link_arrays, base, tool, smr, errors)
 
     def displaced(self, names: Sequence[str], delta: np.ndarray) -> Robot:
-        """A copy displaced by ``delta`` ``(k,)`` on ``names`` (see :meth:`displaced_arrays`)."""
+        """A copy displaced by ``delta`` ``(k,)`` on ``names`` (see `displaced_arrays`)."""
         delta = _as_vector(delta, len(names), "parameter displacement")
         moved = self.displaced_arrays(names, delta)
         errors = None if moved.joint_errors is None else \
@@ -474,6 +687,7 @@ class Robot:
     # ----------------------------------------------------------------- kinematics
     @property
     def links(self) -> LinkArrays:
+        """The link arrays (alpha, a, beta, theta, d), each ``(n,)``, as the kinematics kernels take them."""
         return LinkArrays(self.alpha, self.a, self.beta, self.theta, self.d)
 
     def check_joints(self, q) -> np.ndarray:
@@ -502,10 +716,46 @@ class Robot:
     def fk(self, q, frames: bool = False, smr=None, approach=None, travel=None):
         """TCP poses ``(N, 4, 4)`` (world frame, m) for joints ``(N, n)`` in rad.
 
-        ``smr`` ``(N,)`` picks each row's SMR (default: the tool). With ``frames=True`` returns
-        ``(tcp, frames)`` where frames ``(N, n + 1, 4, 4)`` are the world poses of frames
-        {0}..{n} (frame {n} is the flange, before the tool). Joint-error terms turn the commanded
-        joints into the joints the robot really reaches first (:meth:`reached_joints`).
+        Joint-error terms turn the commanded joints into the joints the robot really reaches
+        first (`reached_joints`).
+
+        Parameters
+        ----------
+        q : array_like, shape (N, n)
+            Commanded joints, radians.
+        frames : bool, default False
+            Also return the world poses of the frames {0}..{n}.
+        smr : array_like of int, shape (N,), optional
+            Each row's SMR index (default: the tool, SMR 0).
+        approach : array_like, shape (N, n), optional
+            Each joint's approach direction (+1 or -1), for a backlash term.
+        travel : array_like, shape (N, n), optional
+            Each joint's last move, radians, for a travel term.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 4, 4)
+            TCP poses in the world frame, metres. With ``frames=True``, ``(tcp, frames)`` where
+            ``frames`` ``(N, n + 1, 4, 4)`` are the world poses of frames {0}..{n} (frame {n} is
+            the flange, before the tool).
+
+        Raises
+        ------
+        DataError
+            ``q`` of the wrong shape or with NaN.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> q = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [np.pi / 2, 0.0, 0.0, 0.0, 0.0, 0.0]])
+        >>> robot.fk(q)[:, :3, 3].round(3)  # joint 1 turns the TCP a quarter turn about z
+        array([[1.03, 0.  , 1.26],
+               [0.  , 1.03, 1.26]])
+        >>> tcp, frames = robot.fk(q, frames=True)
+        >>> frames.shape
+        (2, 7, 4, 4)
         """
         q = self.reached_joints(self.check_joints(q), approach, travel)
         tool = self.tool if smr is None else self.tools_for(smr)
@@ -516,7 +766,49 @@ class Robot:
     def jacobian(self, q, params: Sequence[str] | None = None, kind: str = "point", smr=None,
                  approach=None, travel=None):
         """Identification Jacobian ``(N, 3|6, k)``; see
-        :func:`robocal.kinematics.jacobian.identification_jacobian`."""
+        `robocal.kinematics.jacobian.identification_jacobian`.
+
+        Parameters
+        ----------
+        q : array_like, shape (N, n)
+            Joints, radians.
+        params : sequence of str, optional
+            The k parameter names (default: `default_free`, with orientation for
+            ``kind="pose"``).
+        kind : {'point', 'pose'}
+            Position rows only, or position then orientation rows.
+        smr : array_like of int, shape (N,), optional
+            Each row's SMR index (default: the tool).
+        approach : array_like, shape (N, n), optional
+            Each joint's approach direction (+1 or -1), for a backlash term.
+        travel : array_like, shape (N, n), optional
+            Each joint's last move, radians, for a travel term.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3, k) or (N, 6, k)
+            d(TCP)/d(parameter): position rows in m per m or m per rad; orientation rows in rad
+            per unit.
+
+        Raises
+        ------
+        ModelError
+            An unknown parameter name or ``kind``.
+        DataError
+            ``q`` of the wrong shape or with NaN.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> q = np.array([[0.1, -0.2, 0.3, 0.4, 0.5, 0.6]])
+        >>> J = robot.jacobian(q, ["d1"])
+        >>> J.shape
+        (1, 3, 1)
+        >>> J[0, :, 0].round(6)  # raising joint 2 lifts the TCP straight up
+        array([0., 0., 1.])
+        """
         names = self.default_free(kind == "pose") if params is None else list(params)
         return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach, travel)
 
@@ -527,13 +819,49 @@ class Robot:
 
     # ----------------------------------------------------------------- files
     def save(self, path) -> None:
-        """Write the model YAML (SI units, exact round trip), atomically."""
+        """Write the model YAML (SI units, exact round trip), atomically.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The YAML file to write (its format: the model YAML reference page).
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600").with_values({"a2": 0.1502})
+        >>> robot.save("irb2600.yaml")
+        >>> rc.Robot.load("irb2600.yaml").get("a2")
+        0.1502
+        """
         write_atomic(path, dump_model(self))
 
     @classmethod
     def load(cls, path) -> Robot:
         """Read a model YAML (docs/model-yaml.md: the catalog's format, hand-written or saved, or a
-        cell file: a robot on a track, :mod:`robocal.kinematics.cell`); ModelError names the file."""
+        cell file: a robot on a track, `robocal.kinematics.cell`).
+
+        Parameters
+        ----------
+        path : str or path-like
+            The model YAML file (SI units or the units it declares).
+
+        Returns
+        -------
+        Robot
+
+        Raises
+        ------
+        ModelError
+            A missing or malformed file or an invalid model; the message names the file.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> rc.Robot.from_catalog("ur10e").save("ur10e.yaml")
+        >>> rc.Robot.load("ur10e.yaml")
+        Robot('ur10e', 6 joints)
+        """
         data = read_model_data(path)
         try:
             if is_cell(data):
@@ -550,7 +878,7 @@ class Robot:
 
 def load_model(spec: str) -> Robot:
     """A robot from a model YAML path (or a cell file: a robot on a track), a URDF (a serial chain:
-    :func:`robocal.kinematics.urdf.from_urdf`) or a catalog name (what every ``--robot`` takes)."""
+    `robocal.kinematics.urdf.from_urdf`) or a catalog name (what every ``--robot`` takes)."""
     path = Path(spec)
     if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (path.is_file() and _looks_like_xml(path)):
         from robocal.kinematics.urdf import from_urdf  # urdf builds on this module

@@ -1,5 +1,5 @@
-"""Robot programs: read ABB RAPID, KUKA KRL, FANUC TP (.ls), URScript and Yaskawa INFORM, and filter
-their Cartesian targets through a calibrated model (see :mod:`robocal.programs.filter`)."""
+"""Robot programs: read ABB RAPID, KUKA KRL, FANUC TP (.ls), URScript, Yaskawa INFORM and Staubli
+VAL3, and filter their Cartesian targets through a calibrated model (see `robocal.programs.filter`)."""
 
 from robocal.programs.filter import FilterResult, dialect_for, filter_program
 

@@ -319,6 +319,65 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     corrected copy is one of the outputs. Nothing is written here: see `FilterResult.write`, which
     marks the files with the calibrated model's fingerprint (`robocal.trust.output_marker`); a
     marked input (already filtered) raises DataError naming the earlier run unless ``force``.
+
+    Parameters
+    ----------
+    programs : str, path-like or sequence of them
+        The program file(s): ABB RAPID (.mod, .prg), KUKA KRL (a .src with its .dat), FANUC TP
+        (.ls), URScript (.script), Yaskawa INFORM (.JBI, VAR.DAT) or a Staubli VAL3 application
+        folder.
+    calibrated : Robot
+        The calibrated model.
+    nominal : Robot
+        The controller's nominal model (6 joints, or an arm on a track).
+    tools, frames : dict of str to array_like, shape (4, 4), or str, optional
+        Name -> transform (metres) or text in the program's pose notation, completing or
+        overriding the tools / frames the files declare (the tools as the controller knows them).
+    tcp : dict of str to array_like, shape (4, 4), optional
+        Tool name -> the real TCP identified on the calibrated model (`robocal.identify_tcp`),
+        metres.
+    robot_base : array_like, shape (4, 4), optional
+        The controller's base frame in the calibrated model's world frame, metres.
+    dialect : {'rapid', 'krl', 'fanuc', 'urscript', 'inform', 'val3'}, optional
+        The program language (default: from the files' suffixes, see `dialect_for`).
+    references : sequence of path-like
+        Files read only for their tool / frame declarations, never written.
+    keep_unreached : bool, default False
+        Leave the targets that cannot be corrected unchanged, with a warning, instead of failing.
+    strict : bool, default False
+        Refuse a motion to a name declared in none of the files given, instead of naming it.
+    force : bool, default False
+        Filter a file robocal already filtered (its marker names the run).
+    position_registers : path-like, optional
+        A FANUC position register file: motions to those registers are corrected.
+
+    Returns
+    -------
+    FilterResult
+        The filtered files' bytes and the per-target table; `FilterResult.write` writes them.
+
+    Raises
+    ------
+    DataError
+        No file, an unknown dialect, a nominal model without 6 joints, an unknown tool or
+        frame, or targets that cannot be corrected (each named).
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> import robocal as rc
+    >>> target = ("[[1139.82,200.98,722.77],[0.1300295,-0.08641011,0.98767211,0.01137611],[0,0,-1,0],"
+    ...           "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")  # mm, quaternion, configuration
+    >>> lines = ["MODULE Cell", f"  CONST robtarget pPick:={target};", "  PROC main()",
+    ...          "    MoveJ pPick, v1000, fine, tool0;", "  ENDPROC", "ENDMODULE", ""]
+    >>> _ = Path("cell.mod").write_text("\\n".join(lines))
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> real = nominal.with_values({"a2": nominal.get("a2") + 0.0005})  # a link 0.5 mm longer
+    >>> result = rc.filter_program("cell.mod", real, nominal)
+    >>> [str(p) for p in result.write("cell_cal.mod")]
+    ['cell_cal.mod']
+    >>> "[[1139.328,200.893,722.77]" in Path("cell_cal.mod").read_text()  # 0.5 mm less reach
+    True
     """
     paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     paths = [f for p in paths for f in (application_files(p) if p.is_dir() else [p])]  # a VAL3 application

@@ -29,7 +29,48 @@ LISTED = 20  # problems (warnings) listed in one message
 
 @dataclass
 class FilterResult:
-    """``outputs``: input path -> filtered bytes; ``rows``: the per-target table; ``warnings``."""
+    """``outputs``: input path -> filtered bytes; ``rows``: the per-target table; ``warnings``.
+
+    Returned by `robocal.filter_program`; nothing is written until `write`.
+
+    Attributes
+    ----------
+    dialect : str
+        The program language (``'ABB RAPID'``, ``'KUKA KRL'``, ``'FANUC TP'``, ``'URScript'``,
+        ``'Yaskawa INFORM'``, ``'Staubli VAL3'``).
+    outputs : dict of pathlib.Path to bytes
+        Each input file's filtered text, byte for byte the input except the corrected numbers.
+    rows : list of dict
+        One row per Cartesian target (the filter target table): file, line, name, frame, tool,
+        ``correction_mm``, ``correction_deg``, configuration before and after, joint-limit margin
+        (deg), singularity distances.
+    warnings : list of str
+        What the user should check (unreached targets kept, changed configurations...).
+    uncorrected : list of str
+        Motions to a Cartesian pose left as they are (also among the warnings).
+    motions : list of MotionRecord
+        One record per motion instruction to a Cartesian pose: corrected, or named with why.
+    calibrated : Robot or None
+        The model that corrected the targets; `write` puts its marker on the files.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> import robocal as rc
+    >>> target = ("[[1139.82,200.98,722.77],[0.1300295,-0.08641011,0.98767211,0.01137611],[0,0,-1,0],"
+    ...           "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")  # mm, quaternion, configuration
+    >>> lines = ["MODULE Cell", f"  CONST robtarget pPick:={target};", "  PROC main()",
+    ...          "    MoveJ pPick, v1000, fine, tool0;", "  ENDPROC", "ENDMODULE", ""]
+    >>> _ = Path("cell.mod").write_text("\\n".join(lines))
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> real = nominal.with_values({"a2": nominal.get("a2") + 0.0005})  # a link 0.5 mm longer
+    >>> result = rc.filter_program("cell.mod", real, nominal)
+    >>> row = result.rows[0]
+    >>> row["name"], round(row["correction_mm"], 3), row["configuration"]
+    ('pPick', 0.5, 'kept')
+    >>> result.summary_dict()["filtered"], result.warnings
+    (1, [])
+    """
 
     dialect: str
     outputs: dict[Path, bytes]
@@ -40,6 +81,7 @@ class FilterResult:
     calibrated: Robot | None = None  # the model that corrected the targets: its marker goes on the files
 
     def table_csv(self) -> str:
+        """The per-target table as CSV text (one row per target, `rows`' columns)."""
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")
         cols = list(self.rows[0]) if self.rows else ["file", "line", "name"]
@@ -49,11 +91,14 @@ class FilterResult:
         return out.getvalue()
 
     def table_json(self) -> str:
+        """The per-target table, the summary, the motions and the warnings as JSON text."""
         return json.dumps({"dialect": self.dialect, "files": [str(p) for p in self.outputs],
                            "summary": self.summary_dict(), "warnings": self.warnings,
                            "targets": self.rows, "motions": [m.as_dict() for m in self.motions]}, indent=1)
 
     def summary_dict(self) -> dict:
+        """Counts and extremes: targets filtered, motions corrected and named, configurations
+        changed, corrections (mm, deg), the smallest joint-limit margin and the nearest singularity."""
         rows = [r for r in self.rows if r["filtered"]]
         pos = np.array([r["correction_mm"] for r in rows]) if rows else np.zeros(0)
         rot = np.array([r["correction_deg"] for r in rows]) if rows else np.zeros(0)
@@ -76,6 +121,7 @@ class FilterResult:
         return out
 
     def summary(self) -> str:
+        """A short human summary of `summary_dict` and the warnings."""
         s = self.summary_dict()
         lines = [f"{self.dialect}: {s['filtered']} of {s['targets']} Cartesian target(s) filtered in "
                  f"{', '.join(p.name for p in self.outputs)}"]
@@ -105,7 +151,25 @@ class FilterResult:
         input) and the table (``table`` ending .csv or .json: that one; otherwise both
         ``table.csv`` and ``table.json``), all together or none. Refuses to overwrite an input.
         Program files carry the calibrated model's marker (`robocal.trust.output_marker.mark_program`).
-        Returns the paths written."""
+        Returns the paths written.
+
+        Parameters
+        ----------
+        outputs : dict of path to path, or str or path-like
+            Input path -> output path, or one output path when there is one input.
+        table : str or path-like, optional
+            The target table: a ``.csv`` or ``.json`` file, or a stem for both.
+
+        Returns
+        -------
+        list of pathlib.Path
+            The files written.
+
+        Raises
+        ------
+        DataError
+            One output path for several inputs, or an output that would overwrite an input.
+        """
         if not isinstance(outputs, dict):
             if len(self.outputs) != 1:
                 raise DataError("several program files: give one output path per input")
