@@ -87,7 +87,7 @@ def run_demo(out_dir: Path, quiet: bool = False) -> dict[str, Path]:
     q_from, q_to = np.array([-153, -21, -154, -165, 12, -114]), np.array([-145, 122, -134, -146, 108, 60])
     q_line = np.deg2rad(q_from * (1 - s) + q_to * s)
     path = plan_path(nominal, nominal.fk(q_line))
-    _line(f"\njoint path over {len(q_line)} waypoints (Dijkstra over all IK branches, seed 001): "
+    _line(f"\njoint path over {len(q_line)} waypoints (Dijkstra over all IK branches): "
           f"weighted travel {path.cost:.2f}; the greedy nearest-branch choice: {path.greedy_cost:.2f} "
           f"({path.greedy_cost / path.cost:.1f}x)")
 

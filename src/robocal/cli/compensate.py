@@ -19,7 +19,7 @@ commands.csv: q1_deg..q6_deg (joints to command), the corrected Cartesian target
 nominal model's base frame and for its TCP: what the controller is given) in the targets'
 units, and converged (1/0).
 --parameters writes name, unit (mm/deg), nominal, calibrated, delta = nominal - calibrated
-(seed 000: the controller loads nominal - delta).
+(a controller that loads its own parameters takes nominal - delta).
 commands.csv starts with a # line naming the calibrated model (fingerprint) and robocal's version;
 compensating such a file again is refused unless --force."""
 

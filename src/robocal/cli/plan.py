@@ -1,4 +1,4 @@
-"""``robocal plan``: globally optimal IK branch choice along a trajectory (seed 001)."""
+"""``robocal plan``: globally optimal IK branch choice along a trajectory."""
 
 from __future__ import annotations
 
