@@ -36,6 +36,7 @@ from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
 from robocal.io import load_json, read_text, write_atomic
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
+from robocal.kinematics.thermal import reference_of as thermal_reference
 from robocal.model_selection import calibrate_cyclic, select_error_model, selection_table
 from robocal.progress import Progress
 from robocal.report.metrics import position_stats
@@ -588,7 +589,8 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     start = _start_model(robot, datasets, register_frames, force, warnings) if warm_start is None \
         else warm_start.start
     declared = list(dict.fromkeys(start.joint_error_names + candidate_names(start.n_joints, terms)))
-    declared_start = start.with_joint_errors(declared)
+    declared_start = start.with_joint_errors(declared).with_reference_temperature(
+        thermal_reference([d.temperature for d in datasets]))  # T_ref: the calibration's mean
     problem = CalibrationProblem(declared_start, datasets, sigma=sigma)
     state0 = problem.start(declared_start)
     errors0 = problem.position_errors(state0)

@@ -334,7 +334,13 @@ def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol
 
 
 def _term_has_data(term: str, data) -> bool:
-    """Backlash needs approach directions and travel needs moves (the measuring order)."""
+    """Backlash needs approach directions and travel needs moves (the measuring order); payload
+    and thermal need the recorded payload and temperature, varying over the data (a constant one
+    is indistinguishable from the geometry and the arm's own compliance)."""
+    if term == "payload":
+        return data.payload is not None and np.unique(data.payload, axis=0).shape[0] > 1
+    if term == "thermal":
+        return data.temperature is not None and np.ptp(data.temperature) > 0
     if term == "backlash":
         return data.approach is not None and bool(np.any(data.approach))
     if term == "travel":

@@ -24,13 +24,16 @@ def numbers(count: int | None, unit_hint: str) -> Callable[[str], list[float]]:
     return parse
 
 
-def load_measurements(path: str, robot, quiet: bool = False):
+def load_measurements(path: str, robot, quiet: bool = False, model_used: bool = True):
     """:meth:`Measurements.load` of ``path`` checked against ``robot``, printing how the reader
-    interpreted the file (repeated readings grouped into poses; warnings always)."""
+    interpreted the file (repeated readings grouped into poses; warnings always) and, when
+    ``model_used`` (``robot`` is the model the command applies), the recorded conditions it
+    has no term for."""
     from robocal.data.measurements import Measurements
 
     data = Measurements.load(path, robot=robot)
-    for note in data.notes:
+    notes = [*data.notes, data.unused_conditions(robot) if model_used else None]
+    for note in filter(None, notes):
         if not quiet or note.startswith("WARNING"):
             print(note if note.startswith("WARNING") else f"note: {note}")
     return data

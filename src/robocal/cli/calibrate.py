@@ -85,7 +85,8 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed of stochastic methods")
     p.add_argument("--nongeometric", metavar="TERMS", default="default",
                    help="non-geometric terms identified with the geometry (methods lsq, robust): "
-                        "compliance, gear, backlash, travel, cyclic (comma separated); auto: the "
+                        "compliance, gear, backlash, travel, cyclic, payload, thermal (comma separated; "
+                        "payload and thermal need the payload_kg and temperature_c columns); auto: the "
                         "terms chosen by cross-validation on the calibration data (the candidate "
                         "table is printed); none: the geometric model only. Default: auto for "
                         "lsq/robust on one file of tracker data (points or poses) with at least 100 "
@@ -145,8 +146,8 @@ def run(args) -> int:
         raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
     sigma = dict(args.sigma)
     robot = load_model(args.robot)
-    data = [load_measurements(f, robot, args.quiet) for f in args.data]
-    validation = [load_measurements(f, robot, args.quiet) for f in validate]
+    data = [load_measurements(f, robot, args.quiet, model_used=False) for f in args.data]
+    validation = [load_measurements(f, robot, args.quiet, model_used=False) for f in validate]
     if args.hold_out is not None:
         if validation or len(data) > 1:
             raise DataError("--hold-out splits one calibration file: give one file and no --validate")
@@ -166,6 +167,8 @@ def run(args) -> int:
                              data_file=", ".join(args.data), validation_file=", ".join(validate) or None,
                              hold_out=args.hold_out)
     print(result.summary())
+    for note in filter(None, (d.unused_conditions(result.robot) for d in data)):
+        print(f"note: {note}")
     line = error_model_line(args, data)
     if line:
         print(line)

@@ -43,7 +43,11 @@ LINK_LENGTH_MM_PER_M = 1.0  # ... and this per metre of the arm's summed link le
 LINK_ANGLE_DEG = 0.2  # alpha, beta: axis misalignments
 JOINT_ZERO_DEG = 0.5  # theta: joint zero offsets (mastering)
 JOINT_ERROR_SIGMA = {"gear": np.deg2rad(0.2), "cyclic": np.deg2rad(0.2), "backlash": np.deg2rad(0.2),
-                     "travel": 0.01, "compliance": 0.01}  # SI units of each term (rad, rad/rad, rad/m)
+                     "travel": 0.01, "compliance": 0.01,
+                     # payload: a 10 kg m payload moment turns a joint by up to ~1e-3 rad (small arms
+                     # are the softest per kg m); thermal: steel 11.5e-6/K, aluminium 23e-6/K
+                     "payload": 1e-4, "thermal": 30e-6}  # SI units of each term (rad, rad/rad, rad/m,
+                                                         # rad/(kg m), 1/K)
 NOT_DETERMINED_RATIO = 0.5  # posterior sigma / prior sigma above which the data do not determine it
 NOISE_RTOL = 0.05  # the noise estimate has settled when it changes by less than this fraction
 NOISE_MAX_PASSES = 10

@@ -37,6 +37,12 @@ the lumped mass m_j (N): the product is what position data identify, and keeping
 coefficient per (joint, mass) keeps the model linear (no scale ambiguity between k and m).
 Gear, backlash and cyclic parameters are in rad, travel in rad per rad. Joints are 1-based in
 the names.
+
+Two terms depend on the conditions recorded with each row (``Measurements.payload`` and
+``.temperature``) and live in their own modules: ``payload`` (``payload{i}``, the joints' deflection
+under the payload's gravity moment: :mod:`robocal.kinematics.load`) and ``thermal`` (one parameter,
+the arm's link lengths scaled by ``1 + k (T - T_ref)``: :mod:`robocal.kinematics.thermal`; not a
+joint offset, so its column of the joint-offset basis is zero and the FK and Jacobian apply it).
 """
 
 from __future__ import annotations
@@ -49,19 +55,22 @@ import numpy as np
 
 from robocal.errors import IdentificationError, ModelError
 from robocal.io import as_number
+from robocal.kinematics import load, thermal
 from robocal.kinematics.fk import chain_frames
 
-TERMS = ("compliance", "gear", "backlash", "travel", "cyclic")
+TERMS = ("compliance", "gear", "backlash", "travel", "cyclic", "payload", "thermal")
+CONDITION_TERMS = ("payload", "thermal")  # the terms that use the rows' recorded conditions
 UNITS = {"compliance": "rad/m", "gear": "rad", "backlash": "rad", "travel": "rad/rad",
-         "cyclic": "rad"}  # SI unit of each term's parameters
+         "cyclic": "rad", "payload": load.UNIT, "thermal": thermal.UNIT}  # SI unit of each term's parameters
 CYCLIC_MIN_FREQUENCY = 2.0  # cycles per joint revolution; 1 and 2 are the gear term's harmonics
 _COMP = re.compile(r"^comp(\d+)_(\d+)$")
 _GEAR = re.compile(r"^gear(\d+)_([sc][12])$")
 _BACKLASH = re.compile(r"^backlash(\d+)$")
 _TRAVEL = re.compile(r"^travel(\d+)$")
 _CYCLIC = re.compile(r"^cyc(\d+)_(\d+(?:\.\d{1,2})?)_([sc])$")
+_THERMAL = re.compile(f"^{thermal.NAME}$")
 _PATTERNS = {"compliance": _COMP, "gear": _GEAR, "backlash": _BACKLASH, "travel": _TRAVEL,
-             "cyclic": _CYCLIC}
+             "cyclic": _CYCLIC, "payload": load.PATTERN, "thermal": _THERMAL}
 
 
 def term_names(n: int, term: str) -> list[str]:
@@ -77,6 +86,10 @@ def term_names(n: int, term: str) -> list[str]:
         return [f"travel{i}" for i in range(1, n + 1)]
     if term == "cyclic":
         return []
+    if term == "payload":
+        return load.names(n)
+    if term == "thermal":
+        return [thermal.NAME]
     raise ModelError(f"unknown non-geometric term {term!r}; choose from {', '.join(TERMS)}")
 
 
@@ -140,24 +153,44 @@ def _parse(name: str, n: int) -> tuple[int, str, int | str | tuple | None]:
     m = _CYCLIC.match(name)
     if m and 1 <= int(m[1]) <= n and float(m[2]) > CYCLIC_MIN_FREQUENCY:
         return int(m[1]) - 1, "cyclic", (m[3], float(m[2]))
+    joint = load.joint_of(name, n)
+    if joint is not None:
+        return joint, "payload", None
+    if name == thermal.NAME:
+        return 0, "thermal", None
     raise ModelError(f"unknown joint-error parameter {name!r} for a {n}-joint robot: "
-                     "use comp{i}_{j} (i < j <= n), gear{i}_s1|c1|s2|c2, backlash{i}, travel{i} or "
-                     f"cyc{{i}}_{{f}}_s|c (f > {CYCLIC_MIN_FREQUENCY:g} cycles per revolution)")
+                     "use comp{i}_{j} (i < j <= n), gear{i}_s1|c1|s2|c2, backlash{i}, travel{i}, "
+                     f"cyc{{i}}_{{f}}_s|c (f > {CYCLIC_MIN_FREQUENCY:g} cycles per revolution), "
+                     f"payload{{i}} ({load.FIRST_JOINT} <= i <= n) or {thermal.NAME}")
 
 
 def joint_error_basis(robot, q: np.ndarray, names: Sequence[str], approach: np.ndarray | None = None,
-                      travel: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                      travel: np.ndarray | None = None,
+                      payload: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(B (N, k), joint (k,))``: d(dq_joint[p])/d(param p) at joints ``q (N, n)`` (rad).
 
-    ``dq[:, joint[p]] += B[:, p] * value[p]``. Compliance columns use the robot's frames at ``q``
-    (its link parameters and base; the robot's own joint-error model is not applied); backlash
-    columns are the approach directions ``approach (N, n)`` and travel columns the joint moves
-    ``travel (N, n)`` rad (zeros when not given)."""
+    ``dq[:, joint[p]] += B[:, p] * value[p]``. Compliance and payload columns use the robot's
+    frames at ``q`` (its link parameters and base; the robot's own joint-error model is not
+    applied); backlash columns are the approach directions ``approach (N, n)``, travel columns the
+    joint moves ``travel (N, n)`` rad and payload columns the moments of ``payload (N, 4)``
+    (:func:`robocal.kinematics.load.moment_basis`) (zeros when not given). The thermal column is
+    zero: it scales the links, not a joint."""
     n = robot.n_joints
     parsed = [_parse(nm, n) for nm in names]
     B = np.empty((q.shape[0], len(parsed)))
     frames = None
+    loaded = [p for p, t in enumerate(parsed) if t[1] == "payload"]
+    if loaded and payload is not None:
+        _, frames = chain_frames(robot.links, robot.base, robot.tool, q, frames=True)
+        B[:, loaded] = load.moment_basis(frames, payload, np.array([parsed[p][0] for p in loaded]))
     for p, (i, kind, detail) in enumerate(parsed):
+        if kind == "payload":
+            if payload is None:
+                B[:, p] = 0.0
+            continue
+        if kind == "thermal":
+            B[:, p] = 0.0
+            continue
         if kind == "gear":
             h = 2.0 if detail[1] == "2" else 1.0
             B[:, p] = np.sin(h * q[:, i]) if detail[0] == "s" else np.cos(h * q[:, i])
@@ -173,7 +206,7 @@ def joint_error_basis(robot, q: np.ndarray, names: Sequence[str], approach: np.n
             continue
         if frames is None:
             _, frames = chain_frames(robot.links, robot.base, robot.tool, q, frames=True)
-            g = -frames[:, 0, :3, 2]
+        g = -frames[:, 0, :3, 2]
         z_i, o_i = frames[:, i + 1, :3, 2], frames[:, i + 1, :3, 3]
         arm = frames[:, detail, :3, 3] - o_i
         B[:, p] = np.einsum("ij,ij->i", z_i, np.cross(arm, g))
@@ -190,12 +223,20 @@ def scatter_offsets(B: np.ndarray, joint: np.ndarray, values: np.ndarray, n: int
     return dq
 
 
+def condition_terms(robot) -> set[str]:
+    """The terms of :data:`CONDITION_TERMS` ``robot``'s error model declares."""
+    errors = getattr(robot, "joint_errors", None)
+    return set() if errors is None else set(errors.terms) & set(CONDITION_TERMS)
+
+
 @dataclass(frozen=True, eq=False)
 class JointErrorModel:
-    """Named joint-error parameters and their values (SI units of :data:`UNITS`)."""
+    """Named joint-error parameters and their values (SI units of :data:`UNITS`);
+    ``reference_temperature_c``: the thermal term's T_ref (deg C)."""
 
     names: tuple[str, ...]
     values: np.ndarray
+    reference_temperature_c: float = thermal.DEFAULT_REFERENCE_C
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "names", tuple(str(n) for n in self.names))
@@ -218,18 +259,26 @@ class JointErrorModel:
         return [UNITS[term_of(nm)] for nm in self.names]
 
     def offsets(self, robot, q: np.ndarray, approach: np.ndarray | None = None,
-                travel: np.ndarray | None = None) -> np.ndarray:
+                travel: np.ndarray | None = None, payload: np.ndarray | None = None) -> np.ndarray:
         """Joint offsets ``dq (N, n)`` (rad) at commanded joints ``q (N, n)`` reached from the
         directions ``approach (N, n)`` (backlash; None: unknown, mid-band) by the moves
-        ``travel (N, n)`` rad (None: no move)."""
-        B, joint = joint_error_basis(robot, q, self.names, approach, travel)
+        ``travel (N, n)`` rad (None: no move) carrying ``payload (N, 4)`` (kg, m; None: none)."""
+        B, joint = joint_error_basis(robot, q, self.names, approach, travel, payload)
         return scatter_offsets(B, joint, self.values, q.shape[-1])
+
+    def thermal_k(self) -> float | None:
+        """The thermal expansion coefficient (1/K), or None without the thermal term."""
+        return float(self.values[self.names.index(thermal.NAME)]) if thermal.NAME in self.names else None
 
     def to_dict(self) -> dict:
         """Plain data for the model YAML (SI units of :data:`UNITS`)."""
-        return {"units": "SI (comp: rad per m of unit-weight moment arm; gear, backlash, cyc: rad; "
-                         "travel: rad per rad of move)",
-                "parameters": dict(zip(self.names, self.values.tolist(), strict=True))}
+        out = {"units": "SI (comp: rad per m of unit-weight moment arm; gear, backlash, cyc: rad; "
+                        "travel: rad per rad of move; payload: rad per kg m of payload moment; "
+                        "thermal: 1/K)",
+               "parameters": dict(zip(self.names, self.values.tolist(), strict=True))}
+        if thermal.NAME in self.names:
+            out["reference_temperature_c"] = float(self.reference_temperature_c)
+        return out
 
     @classmethod
     def from_dict(cls, data, n: int) -> JointErrorModel:
@@ -239,4 +288,6 @@ class JointErrorModel:
         for name in params:
             _parse(str(name), n)
         values = [as_number(v, f"joint_errors.parameters.{name}", ModelError) for name, v in params.items()]
-        return cls(tuple(params), np.array(values))
+        t_ref = as_number(data.get("reference_temperature_c", thermal.DEFAULT_REFERENCE_C),
+                          "joint_errors.reference_temperature_c", ModelError)
+        return cls(tuple(params), np.array(values), t_ref)

@@ -38,6 +38,8 @@ from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.model_file import LINK_FIELDS, dump_model, read_model_file
 from robocal.kinematics.opw import OPWParameters
+from robocal.kinematics.thermal import scale as thermal_scale
+from robocal.kinematics.thermal import scaled_links
 from robocal.kinematics.transforms import ROTATION_TOL, make_transform, matrix_to_rotvec, rotvec_to_matrix
 from robocal.kinematics.ur import URForm, ur_form
 
@@ -332,7 +334,7 @@ class Robot:
 
     def _from_vector(self, vec: np.ndarray) -> Robot:
         errors = None if self.joint_errors is None else \
-            JointErrorModel(self.joint_errors.names, vec[len(self.geometry_names):])
+            replace(self.joint_errors, values=vec[len(self.geometry_names):])
         return replace(self, joint_errors=errors, **self._geometry_kwargs(vec))
 
     def with_joint_errors(self, names: Sequence[str]) -> Robot:
@@ -343,8 +345,26 @@ class Robot:
             return replace(self, joint_errors=None)
         old = {} if self.joint_errors is None else \
             dict(zip(self.joint_errors.names, self.joint_errors.values.tolist(), strict=True))
-        errors = JointErrorModel(tuple(names), np.array([old.get(nm, 0.0) for nm in names]))
+        t_ref = {} if self.joint_errors is None else \
+            {"reference_temperature_c": self.joint_errors.reference_temperature_c}
+        errors = JointErrorModel(tuple(names), np.array([old.get(nm, 0.0) for nm in names]), **t_ref)
         return replace(self, joint_errors=errors)
+
+    def with_reference_temperature(self, celsius: float) -> Robot:
+        """A copy whose thermal term's T_ref is ``celsius`` (deg C); self without joint errors."""
+        if self.joint_errors is None:
+            return self
+        return replace(self, joint_errors=replace(self.joint_errors, reference_temperature_c=float(celsius)))
+
+    def links_at(self, temperature: np.ndarray | None = None) -> LinkArrays:
+        """The link parameters, ``a, d`` ``(N, n)`` scaled by the thermal term at ``temperature
+        (N,)`` deg C (:mod:`robocal.kinematics.thermal`); the plain ``(n,)`` links without a
+        thermal term or a temperature."""
+        k = None if self.joint_errors is None else self.joint_errors.thermal_k()
+        if k is None or temperature is None:
+            return self.links
+        t_ref = self.joint_errors.reference_temperature_c
+        return scaled_links(self.links, thermal_scale(k, temperature, t_ref))
 
     def default_free(self, orientation: bool = False) -> list[str]:
         """Parameters a calibration frees by default: every link parameter (beta only on
@@ -412,7 +432,7 @@ class Robot:
         delta = _as_vector(delta, len(names), "parameter displacement")
         moved = self.displaced_arrays(names, delta)
         errors = None if moved.joint_errors is None else \
-            JointErrorModel(self.joint_errors.names, moved.joint_errors)
+            replace(self.joint_errors, values=moved.joint_errors)
         return replace(self, base=moved.base, tool=moved.tool, smr=moved.smr, joint_errors=errors,
                        **moved.links._asdict())
 
@@ -456,34 +476,39 @@ class Robot:
         return q
 
     def reached_joints(self, q: np.ndarray, approach: np.ndarray | None = None,
-                       travel: np.ndarray | None = None) -> np.ndarray:
+                       travel: np.ndarray | None = None, payload: np.ndarray | None = None) -> np.ndarray:
         """The joints ``(N, n)`` the robot really turns to for commanded ``q`` (rad): ``q + dq(q)``
         with the declared joint-error terms (``approach`` ``(N, n)``: each joint's approach
-        direction, for backlash; ``travel`` ``(N, n)`` rad: each joint's last move, for travel)."""
+        direction, for backlash; ``travel`` ``(N, n)`` rad: each joint's last move, for travel;
+        ``payload`` ``(N, 4)`` kg and m: the payload carried, for payload)."""
         if self.joint_errors is None:
             return q
-        return q + self.joint_errors.offsets(self, q, approach, travel)
+        return q + self.joint_errors.offsets(self, q, approach, travel, payload)
 
-    def fk(self, q, frames: bool = False, smr=None, approach=None, travel=None):
+    def fk(self, q, frames: bool = False, smr=None, approach=None, travel=None, payload=None,
+           temperature=None):
         """TCP poses ``(N, 4, 4)`` (world frame, m) for joints ``(N, n)`` in rad.
 
         ``smr`` ``(N,)`` picks each row's SMR (default: the tool). With ``frames=True`` returns
         ``(tcp, frames)`` where frames ``(N, n + 1, 4, 4)`` are the world poses of frames
         {0}..{n} (frame {n} is the flange, before the tool). Joint-error terms turn the commanded
-        joints into the joints the robot really reaches first (:meth:`reached_joints`).
+        joints into the joints the robot really reaches first (:meth:`reached_joints`); a thermal
+        term scales the links at ``temperature (N,)`` deg C (:meth:`links_at`).
         """
-        q = self.reached_joints(self.check_joints(q), approach, travel)
+        q = self.reached_joints(self.check_joints(q), approach, travel, payload)
         tool = self.tool if smr is None else self.tools_for(smr)
+        links = self.links_at(temperature)
         if frames:
-            return chain_frames(self.links, self.base, tool, q, frames=True)
-        return chain_fk(self.links, self.base, tool, q)
+            return chain_frames(links, self.base, tool, q, frames=True)
+        return chain_fk(links, self.base, tool, q)
 
     def jacobian(self, q, params: Sequence[str] | None = None, kind: str = "point", smr=None,
-                 approach=None, travel=None):
+                 approach=None, travel=None, payload=None, temperature=None):
         """Identification Jacobian ``(N, 3|6, k)``; see
         :func:`robocal.kinematics.jacobian.identification_jacobian`."""
         names = self.default_free(kind == "pose") if params is None else list(params)
-        return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach, travel)
+        return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach, travel,
+                                       payload, temperature)
 
     def within_limits(self, q) -> np.ndarray:
         """``(N,)`` bool: every joint inside its limits."""

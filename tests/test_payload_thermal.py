@@ -1,0 +1,145 @@
+"""Payload and temperature: the measurement columns, the payload and thermal error terms against
+independent physics (gravity torque as the derivative of the payload's potential energy, scaled
+link lengths), their Jacobian columns against finite differences, the model file round trip."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from robocal import Robot
+from robocal.data.measurements import Measurements, parse_csv
+from robocal.data.simulate import simulate_tracker
+from robocal.errors import DataError, UnitError
+from robocal.identify.problem import CalibrationProblem
+from robocal.identify.space import ParameterSpace
+from robocal.kinematics.joint_errors import parse_terms, term_names
+
+HEADER = "q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,x_mm,y_mm,z_mm"
+ROW = "0,-90,90,0,30,0,1500.0,20.0,1200.0"
+
+
+def _conditions(rng, n):
+    payload = np.c_[rng.choice([0.0, 75.0, 150.0], n), rng.uniform(-0.1, 0.1, (n, 2)), rng.uniform(0, 0.3, n)]
+    return payload, rng.uniform(20.0, 35.0, n)
+
+
+def test_condition_columns_round_trip_and_units(rng):
+    payload, temperature = _conditions(rng, 6)
+    data = Measurements.from_arrays("point", rng.uniform(-1, 1, (6, 6)), points=rng.uniform(0, 2, (6, 3)),
+                                    payload=payload, temperature=temperature)
+    back = parse_csv(data.to_csv())
+    np.testing.assert_array_equal(back.payload, payload)
+    np.testing.assert_array_equal(back.temperature, temperature)
+    columns = "payload_kg,payload_x_mm,payload_y_mm,payload_z_mm,temperature_c"
+    text = f"{HEADER},{columns}\n{ROW},110,0,10,300,28.5\n"
+    got = parse_csv(text)
+    np.testing.assert_allclose(got.payload, [[110.0, 0.0, 0.01, 0.3]])
+    np.testing.assert_allclose(got.temperature, [28.5])
+    mass_only = parse_csv(f"{HEADER},payload_kg\n{ROW},20\n")  # the centre of mass defaults to the flange
+    np.testing.assert_array_equal(mass_only.payload, [[20.0, 0.0, 0.0, 0.0]])
+    assert parse_csv(f"{HEADER}\n{ROW}\n").payload is None
+    assert parse_csv(f"{HEADER}\n{ROW}\n").temperature is None
+    assert back.subset([1, 3]).temperature.tolist() == temperature[[1, 3]].tolist()
+
+
+@pytest.mark.parametrize("extra, values, error, match", [
+    ("payload_kg,payload_x_mm", "10,5", DataError, "needs all of payload_x"),
+    ("payload_x_mm,payload_y_mm,payload_z_mm", "1,2,3", DataError, "need the payload_kg"),
+    ("temperature_c", "301.2", DataError, "degrees Celsius"),
+    ("payload_kg", "-3", DataError, "outside"),
+    ("payload_lb", "3", DataError, "unknown column 'payload_lb'"),
+    ("payload_kg,payload_x_in,payload_y_in,payload_z_in", "3,1,1,1", UnitError, "unknown length unit"),
+])
+def test_condition_column_errors_are_one_line(extra, values, error, match):
+    with pytest.raises(error, match=match):
+        parse_csv(f"{HEADER},{extra}\n{ROW},{values}\n", "f.csv")
+
+
+def test_a_model_without_the_terms_says_it_did_not_use_the_columns(rng):
+    payload, temperature = _conditions(rng, 3)
+    data = Measurements.from_arrays("point", rng.uniform(-1, 1, (3, 6)), points=rng.uniform(0, 2, (3, 3)),
+                                    payload=payload, temperature=temperature, source="cell")
+    robot = Robot.from_catalog("kuka_kr210_r2700")
+    note = data.unused_conditions(robot)
+    assert "payload and temperature" in note and "no payload or thermal term" in note
+    assert "temperature" in data.unused_conditions(robot.with_joint_errors(["payload2"]))
+    assert data.unused_conditions(robot.with_joint_errors(["payload2", "thermal"])) is None
+    assert replace(data, payload=None, temperature=None).unused_conditions(robot) is None
+
+
+def test_payload_moment_is_the_derivative_of_the_payloads_potential_energy(rng):
+    """tau_i / |g| = -dV/dq_i / |g| with V = m |g| height of the centre of mass: finite differences of
+    the FK of a tool at the centre of mass, independent of the basis's cross products."""
+    robot = Robot.from_catalog("kuka_kr210_r2700")
+    names = term_names(6, "payload")
+    assert names == ["payload2", "payload3", "payload4", "payload5", "payload6"]
+    model = robot.with_joint_errors(names)
+    q = rng.uniform(-1.0, 1.0, (8, 6))
+    payload, _ = _conditions(rng, 8)
+    from robocal.kinematics.joint_errors import joint_error_basis
+    B, joint = joint_error_basis(model, q, names, payload=payload)
+    com = replace(robot, tool=np.eye(4))
+    h = 1e-6
+    for p, i in enumerate(joint):
+        e = np.zeros(6)
+        e[i] = h
+        heights = []  # the centre of mass as the tool, one row at a time
+        for sign in (1, -1):
+            z = []
+            for c, qq in zip(payload[:, 1:], q + sign * e, strict=True):
+                tool = np.eye(4)
+                tool[:3, 3] = c
+                z.append(replace(com, tool=tool).fk(qq[None])[0, 2, 3])
+            heights.append(np.array(z))
+        dV = payload[:, 0] * (heights[0] - heights[1]) / (2 * h)  # m * d(height)/dq_i, per unit g
+        np.testing.assert_allclose(B[:, p], -dV, rtol=1e-6, atol=1e-6)
+
+
+def test_thermal_term_scales_the_arms_link_lengths_base_height_included(rng):
+    k, t_ref = 11.5e-6, 22.0
+    robot = Robot.from_catalog("kuka_kr210_r2700")
+    warm = robot.with_joint_errors(["thermal"]).with_values({"thermal": k}).with_reference_temperature(t_ref)
+    q = rng.uniform(-1.0, 1.0, (5, 6))
+    for t in (12.0, 22.0, 37.0):
+        s = 1 + k * (t - t_ref)
+        scaled = replace(robot, a=robot.a * s, d=robot.d * s)  # d1 is the base height
+        np.testing.assert_allclose(warm.fk(q, temperature=np.full(5, t)), scaled.fk(q), atol=1e-13)
+    np.testing.assert_allclose(warm.fk(q), robot.fk(q), atol=1e-15)  # no temperature: the arm at T_ref
+
+
+@pytest.mark.parametrize("kind", ["point", "pose"])
+def test_payload_and_thermal_columns_match_finite_differences(kind, rng):
+    robot = Robot.from_catalog("kuka_kr210_r2700")
+    sim = simulate_tracker(robot, 15, kind=kind, noise_mm=0.0, seed=3)
+    payload, temperature = _conditions(rng, len(sim.data))
+    data = replace(sim.data, payload=payload, temperature=temperature)
+    names = [*term_names(6, "payload"), "thermal", "comp2_3"]
+    values = (np.array([3e-7, 2e-7, 1e-6, 5e-7, 1e-6, 11.5e-6, 4e-4]) * (1 if kind == "point" else 1e-3))
+    truth = sim.truth.with_joint_errors(names).with_values(dict(zip(names, values, strict=True)))
+    truth = truth.with_reference_temperature(26.0)
+    problem = CalibrationProblem(truth, data)
+    space = ParameterSpace(("a2", "d1", *names))
+    state = problem.start(truth)
+    J = problem.jacobian(state, space)
+    assert np.abs(J[:, 2:]).max(axis=0).min() > 1e-3  # every column moves the TCP
+    for c in range(space.size):
+        h = 1e-9 if c >= 2 else 1e-7
+        e = np.zeros(space.size)
+        e[c] = h
+        fd = -(problem.residuals(space.apply(state, e)) - problem.residuals(space.apply(state, -e))) / (2 * h)
+        np.testing.assert_allclose(J[:, c], fd, rtol=1e-4, atol=1e-6 * np.abs(fd).max())
+
+
+def test_terms_parse_and_reference_temperature_round_trips(tmp_path):
+    assert parse_terms("payload,thermal") == ["payload", "thermal"]
+    robot = Robot.from_catalog("kuka_kr210_r2700").with_joint_errors(["payload3", "thermal"])
+    robot = robot.with_values({"thermal": 1.2e-5, "payload3": 4e-7}).with_reference_temperature(27.25)
+    robot.save(tmp_path / "m.yaml")
+    back = Robot.load(tmp_path / "m.yaml")
+    assert back.joint_errors.reference_temperature_c == 27.25
+    assert back.joint_errors.names == ("payload3", "thermal")
+    np.testing.assert_array_equal(back.joint_errors.values, robot.joint_errors.values)
+    assert back.displaced(["a2"], [1e-4]).joint_errors.reference_temperature_c == 27.25
