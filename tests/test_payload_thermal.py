@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 
 from robocal import Robot
+from robocal.calibration import calibrate
+from robocal.cli import main
 from robocal.data.measurements import Measurements, parse_csv
 from robocal.data.simulate import simulate_tracker
 from robocal.errors import DataError, UnitError
@@ -143,3 +145,49 @@ def test_terms_parse_and_reference_temperature_round_trips(tmp_path):
     assert back.joint_errors.names == ("payload3", "thermal")
     np.testing.assert_array_equal(back.joint_errors.values, robot.joint_errors.values)
     assert back.displaced(["a2"], [1e-4]).joint_errors.reference_temperature_c == 27.25
+
+
+def test_simulated_conditions_physics_agrees_with_the_fitted_terms():
+    """The simulator's own physics (energy derivative, scaled links) and the truth it writes, read
+    through the payload and thermal terms, give the same points."""
+    robot = Robot.from_catalog("kuka_kr210_r2700")
+    sim = simulate_tracker(robot, 40, noise_mm=0.0, seed=5, payloads=[0, 75, 150], temperatures=(20, 35),
+                           payload_com=[0.05, -0.02, 0.3])
+    d = sim.data
+    assert sorted(set(d.payload[:, 0])) == [0.0, 75.0, 150.0] and d.temperature.min() == 20.0
+    assert sim.truth.joint_errors.reference_temperature_c == pytest.approx(d.temperature.mean())
+    p = sim.truth.fk(d.joints, smr=d.smr, approach=d.approach, travel=d.travel, payload=d.payload,
+                     temperature=d.temperature)[:, :3, 3]
+    np.testing.assert_allclose(p, d.points, rtol=0, atol=1e-9)
+    plain = sim.truth.with_joint_errors([]).fk(d.joints, smr=d.smr)[:, :3, 3]
+    assert np.linalg.norm(plain - d.points, axis=1).max() > 1e-4  # the conditions move the TCP
+
+
+def test_payload_and_thermal_terms_reach_the_noise_floor_at_an_unseen_payload_and_temperature():
+    robot = Robot.from_catalog("kuka_kr210_r2700")
+    cal = simulate_tracker(robot, 150, noise_mm=0.02, seed=2, payloads=[0, 75, 150], temperatures=(20, 35))
+    held = simulate_tracker(cal.truth, 60, noise_mm=0.02, seed=9, as_is=True, payloads=[110],
+                            temperatures=(28, 28))
+    geometric = calibrate(robot, cal.data, validation=held.data, nongeometric="none")
+    result = calibrate(robot, cal.data, validation=held.data, nongeometric="payload,thermal")
+    assert result.validation["rms"] <= 1.3 * held.noise_floor_mm < geometric.validation["rms"]
+    assert result.robot.joint_errors.thermal_k() == pytest.approx(11.5e-6, rel=0.1)
+
+
+def test_simulate_cli_writes_the_condition_columns_and_refuses_a_bad_range(tmp_path, capsys):
+    out, truth = tmp_path / "cell.csv", tmp_path / "truth.yaml"
+    assert main(["--quiet", "simulate", "--robot", "kuka_kr210_r2700", "--poses", "12", "--payloads", "0,150",
+                 "--payload-com-mm", "0,0,300", "--temperatures", "20:30", "-o", str(out),
+                 "--truth", str(truth)]) == 0
+    data = Measurements.load(out)
+    np.testing.assert_allclose(data.payload[-1], [150.0, 0.0, 0.0, 0.3])
+    assert data.temperature.max() == 30.0
+    assert Robot.load(truth).joint_errors.reference_temperature_c == pytest.approx(data.temperature.mean())
+    capsys.readouterr()
+    assert main(["evaluate", "kuka_kr210_r2700", str(out), "--fit-frame"]) == 0
+    assert "no payload or thermal term: not used" in capsys.readouterr().out
+    assert main(["evaluate", str(truth), str(out)]) == 0  # the truth has both terms: no note
+    assert "not used" not in capsys.readouterr().out
+    assert main(["simulate", "--robot", "kuka_kr210_r2700", "--poses", "12", "--temperatures", "35:20",
+                 "-o", str(out), "--truth", str(truth)]) == 2
+    assert "LO:HI" in capsys.readouterr().err

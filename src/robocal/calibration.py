@@ -48,7 +48,8 @@ NONGEOMETRIC_METHODS = ("lsq", "robust")  # the methods that estimate the joint-
 AUTO_DEFAULT_KINDS = ("point", "pose")  # tracker data: where nongeometric="auto" is the default ...
 AUTO_DEFAULT_MIN_POSES = 100  # ... from this many poses on (20 held out per cross-validation fold)
 _DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 180.0 / np.pi),
-            "rad/rad": ("mdeg/deg", 1e3)}
+            "rad/rad": ("mdeg/deg", 1e3), "rad/(kg m)": ("deg/(kg m)", 180.0 / np.pi),
+            "1/K": ("1e-6/K", 1e6)}
 
 
 class _BeforeAfter:
