@@ -191,3 +191,83 @@ def test_simulate_cli_writes_the_condition_columns_and_refuses_a_bad_range(tmp_p
     assert main(["simulate", "--robot", "kuka_kr210_r2700", "--poses", "12", "--temperatures", "35:20",
                  "-o", str(out), "--truth", str(truth)]) == 2
     assert "LO:HI" in capsys.readouterr().err
+
+
+def _palletize(tmp_path):
+    import shutil
+    from pathlib import Path
+
+    data = Path(__file__).parent / "data" / "programs"
+    for f in ("palletize.src", "palletize.dat", "config.dat"):
+        shutil.copy(data / f, tmp_path / f)
+    return [tmp_path / "palletize.src", tmp_path / "palletize.dat"], [tmp_path / "config.dat"]
+
+
+def test_filter_and_compensate_use_the_given_conditions_and_warn_of_the_assumed_ones(tmp_path):
+    from robocal.compensate import compensate
+    from robocal.data.simulate import perturbed
+    from robocal.programs import filter_program
+
+    nominal = Robot.from_catalog("kuka_kr16_2")
+    true = perturbed(nominal, 3)
+    k, t_ref, t = 11.5e-6, 24.0, 34.0
+    warm = true.with_joint_errors(["payload2", "payload3", "thermal"]).with_values(
+        {"payload2": 2e-5, "payload3": 3e-5, "thermal": k}).with_reference_temperature(t_ref)
+    files, refs = _palletize(tmp_path)
+    plain = filter_program(files, warm, nominal, references=refs)
+    assumed = [w for w in plain.warnings if "assumed" in w]
+    assert len(assumed) == 2 and "0 kg" in assumed[0] and "24 deg C" in assumed[1]
+    # the thermal term at t: the same as the true links scaled by 1 + k (t - t_ref), no thermal term
+    s = 1 + k * (t - t_ref)
+    scaled = replace(true, a=true.a * s, d=true.d * s).with_joint_errors(["payload2", "payload3"])
+    scaled = scaled.with_values({"payload2": 2e-5, "payload3": 3e-5})
+    hot = filter_program(files, warm, nominal, references=refs, temperature=t, payload=[12.0, 0, 0, 0.1])
+    same = filter_program(files, scaled, nominal, references=refs, payload=[12.0, 0, 0, 0.1])
+    assert not [w for w in hot.warnings if "assumed" in w]
+    assert hot.outputs == same.outputs != plain.outputs
+    # compensate: the corrected joints reach the targets on the model at those conditions
+    q = np.deg2rad([[10, -80, 90, 5, 40, 0], [-20, -60, 70, 0, 60, 30]])
+    targets = nominal.fk(q)
+    res = compensate(warm, nominal, targets, payload=[12.0, 0, 0, 0.1], temperature=t, targets_frame="robot")
+    reached = warm.with_frames(base=nominal.base).fk(res.joints, payload=np.tile([12.0, 0, 0, 0.1], (2, 1)),
+                                                       temperature=np.full(2, t))
+    np.testing.assert_allclose(reached[:, :3, 3], targets[:, :3, 3], atol=1e-9)
+    assert res.assumed == () and len(compensate(warm, nominal, targets, targets_frame="robot").assumed) == 2
+
+
+def test_compensate_cli_takes_payload_and_temperature(tmp_path, capsys):
+    model = tmp_path / "warm.yaml"
+    Robot.from_catalog("kuka_kr210_r2700").with_joint_errors(["payload2", "thermal"]).with_values(
+        {"payload2": 3e-7, "thermal": 11.5e-6}).with_reference_temperature(25.0).save(model)
+    targets = tmp_path / "t.csv"
+    targets.write_text("x_mm,y_mm,z_mm,rx_deg,ry_deg,rz_deg\n1800,200,1400,180,0,180\n")
+    out = tmp_path / "c.csv"
+    args = ["compensate", str(model), str(targets), "--nominal", "kuka_kr210_r2700", "-o", str(out)]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "assumed no payload (0 kg)" in text and "assumed its reference temperature 25 deg C" in text
+    cold = out.read_text()
+    assert main([*args, "--payload", "150,0,0,300", "--temperature", "35"]) == 0
+    assert "assumed" not in capsys.readouterr().out and out.read_text() != cold
+    assert main([*args, "--payload", "150,0"]) == 2
+    assert "KG or KG,X,Y,Z" in capsys.readouterr().err
+    plain = tmp_path / "plain.yaml"
+    Robot.from_catalog("kuka_kr210_r2700").save(plain)
+    capsys.readouterr()
+    assert main(["compensate", str(plain), str(targets), "--nominal", "kuka_kr210_r2700", "-o", str(out),
+                 "--temperature", "30"]) == 0
+    assert "--temperature is not used" in capsys.readouterr().out
+
+
+def test_auto_considers_payload_and_thermal_only_when_the_data_vary_them():
+    from robocal.model_selection import _term_has_data
+
+    robot = Robot.from_catalog("kuka_kr210_r2700")
+    cal = simulate_tracker(robot, 80, noise_mm=0.02, seed=4, payloads=[0, 75, 150], temperatures=(20, 35))
+    assert _term_has_data("payload", cal.data) and _term_has_data("thermal", cal.data)
+    still = replace(cal.data, payload=np.tile([75.0, 0, 0, 0.25], (len(cal.data), 1)),
+                    temperature=np.full(len(cal.data), 25.0))  # constant: indistinguishable from the geometry
+    assert not _term_has_data("payload", still) and not _term_has_data("thermal", still)
+    assert not _term_has_data("payload", replace(cal.data, payload=None))
+    ms = calibrate(robot, cal.data, nongeometric="auto").model_selection
+    assert {"payload", "thermal"} <= set(ms["chosen_terms"]) and not ms["terms_without_data"]

@@ -39,6 +39,28 @@ def load_measurements(path: str, robot, quiet: bool = False, model_used: bool = 
     return data
 
 
+def payload_si(values: list[float] | None) -> list[float] | None:
+    """``--payload KG[,X,Y,Z]`` (kg, mm) -> [kg, x, y, z] (kg, m); None when not given."""
+    from robocal.errors import DataError
+
+    if values is None:
+        return None
+    if len(values) not in (1, 4):
+        raise DataError(f"--payload takes KG or KG,X,Y,Z (centre of mass in mm), got {len(values)} numbers")
+    return [values[0], *(v * 1e-3 for v in values[1:])]
+
+
+def conditions_unused(robot, args) -> list[str]:
+    """Warnings for ``--payload`` / ``--temperature`` given to a model without the term that uses it."""
+    from robocal.kinematics.joint_errors import condition_terms
+
+    terms = condition_terms(robot)
+    return [f"{option} is not used: the model of {robot.name} has no {term} term"
+            for option, term, value in (("--payload", "payload", args.payload),
+                                        ("--temperature", "thermal", args.temperature))
+            if value is not None and term not in terms]
+
+
 TWICE = "each reading would count twice (the noise estimate shrinks, the result looks better than it is)"
 
 

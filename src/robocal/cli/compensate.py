@@ -44,6 +44,12 @@ def add_parser(sub) -> None:
                    help="the TCP the targets are for: flange (default, tool0), x,y,z,rx,ry,rz (the user's "
                         "real tool on the flange, mm, deg, fixed-axis XYZ; e.g. from robocal tool), or "
                         "measured (the calibrated model's own tool: the SMR or probe it was measured with)")
+    p.add_argument("--payload", type=numbers(None, "KG or KG,X,Y,Z with X,Y,Z in mm"), metavar="KG[,X,Y,Z]",
+                   help="the payload the targets are run with: its mass (kg) and centre of mass in the "
+                        "flange frame tool0 (mm; default at the flange), for a model with a payload term")
+    p.add_argument("--temperature", type=float, metavar="C",
+                   help="the arm's temperature (deg C) the targets are run at, for a model with a "
+                        "thermal term")
     p.add_argument("--parameters", help="also write the corrected-parameter table (CSV) here")
     p.add_argument("-o", "--output", required=True, help="commands CSV to write")
     p.set_defaults(func=run)
@@ -70,7 +76,7 @@ def _statistics(res, targets, calibrated, nominal, args) -> str:
 def run(args) -> int:
     import numpy as np
 
-    from robocal.cli.args import check_format, tool_frame
+    from robocal.cli.args import check_format, conditions_unused, payload_si, tool_frame
     from robocal.compensate import compensate, format_csv, pose_columns, read_poses_csv
     from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import Robot, load_model
@@ -86,7 +92,8 @@ def run(args) -> int:
         tool = tool_frame(args.tool, "--tool")
     start = None if args.start is None else np.deg2rad(args.start)
     res = compensate(calibrated, nominal, targets, branch=args.branch, start=start,
-                     targets_frame=args.targets_in, tool=tool)
+                     targets_frame=args.targets_in, tool=tool, payload=payload_si(args.payload),
+                     temperature=args.temperature)
     names, values = pose_columns(res.corrected_targets, layout)
     joints = [f"q{i + 1}_deg" for i in range(calibrated.n_joints)]
     columns = joints + names + ["converged"]
@@ -115,6 +122,6 @@ def run(args) -> int:
         print(f"targets: {what} in {where}")
         print(f"compensated {len(targets)} target(s){_statistics(res, targets, calibrated, nominal, args)}; "
               f"largest model residual {res.position_error.max() * 1e3:.3g} mm -> {args.output}")
-    for warning in res.warnings()[:20]:
+    for warning in [*conditions_unused(calibrated, args), *res.assumed, *res.warnings()[:20]]:
         print(f"warning: {warning}")
     return 0 if res.converged.all() else 1

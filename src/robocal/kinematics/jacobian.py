@@ -13,7 +13,7 @@ import numpy as np
 
 from robocal.errors import ModelError
 from robocal.kinematics.fk import LinkArrays, chain_frames
-from robocal.kinematics.joint_errors import joint_error_basis, scatter_offsets
+from robocal.kinematics.joint_errors import conditions_of, joint_error_basis, scatter_offsets
 from robocal.kinematics.thermal import NAME as THERMAL
 from robocal.kinematics.thermal import translation_axis
 
@@ -75,6 +75,7 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
     per unit of the scaled length: a relative difference of k (T - T_ref), ~1e-4, left out).
     """
     tools = robot.tool if smr is None else robot.tools_for(smr)
+    payload, temperature = conditions_of(robot, q.shape[0], payload, temperature)
     if robot.joint_errors is None:
         reached = q
     else:  # the basis once: for the reached joints (as robot.reached_joints) and the axes

@@ -180,6 +180,7 @@ def joint_error_basis(robot, q: np.ndarray, names: Sequence[str], approach: np.n
     B = np.empty((q.shape[0], len(parsed)))
     frames = None
     loaded = [p for p, t in enumerate(parsed) if t[1] == "payload"]
+    payload = conditions_of(robot, q.shape[0], payload)[0]
     if loaded and payload is not None:
         _, frames = chain_frames(robot.links, robot.base, robot.tool, q, frames=True)
         B[:, loaded] = load.moment_basis(frames, payload, np.array([parsed[p][0] for p in loaded]))
@@ -223,6 +224,35 @@ def scatter_offsets(B: np.ndarray, joint: np.ndarray, values: np.ndarray, n: int
     return dq
 
 
+def conditions_of(robot, N: int, payload: np.ndarray | None = None,
+                  temperature: np.ndarray | None = None) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The rows' ``payload (N, 4)`` and ``temperature (N,)``: as given, else the fixed conditions
+    the robot's error model is used at (:meth:`robocal.kinematics.model.Robot.with_conditions`),
+    else None."""
+    errors = getattr(robot, "joint_errors", None)
+    if errors is not None:
+        if payload is None and errors.payload is not None:
+            payload = np.broadcast_to(np.asarray(errors.payload, float), (N, 4))
+        if temperature is None and errors.temperature_c is not None:
+            temperature = np.full(N, float(errors.temperature_c))
+    return payload, temperature
+
+
+def assumed_conditions(robot) -> list[str]:
+    """One warning per condition term of ``robot`` used without its condition (no rows' values,
+    no :meth:`~robocal.kinematics.model.Robot.with_conditions`), naming the default assumed."""
+    errors, out = robot.joint_errors, []
+    terms = condition_terms(robot)
+    if "payload" in terms and errors.payload is None:
+        out.append(f"the model of {robot.name} has a payload term but no payload was given "
+                   "(--payload KG[,X,Y,Z]): assumed no payload (0 kg)")
+    if "thermal" in terms and errors.temperature_c is None:
+        out.append(f"the model of {robot.name} has a thermal term but no temperature was given "
+                   f"(--temperature C): assumed its reference temperature "
+                   f"{errors.reference_temperature_c:.4g} deg C (the calibration's mean)")
+    return out
+
+
 def condition_terms(robot) -> set[str]:
     """The terms of :data:`CONDITION_TERMS` ``robot``'s error model declares."""
     errors = getattr(robot, "joint_errors", None)
@@ -232,11 +262,15 @@ def condition_terms(robot) -> set[str]:
 @dataclass(frozen=True, eq=False)
 class JointErrorModel:
     """Named joint-error parameters and their values (SI units of :data:`UNITS`);
-    ``reference_temperature_c``: the thermal term's T_ref (deg C)."""
+    ``reference_temperature_c``: the thermal term's T_ref (deg C); ``payload`` (kg, then the
+    centre of mass x, y, z in m in the flange frame) and ``temperature_c``: the fixed conditions the
+    model is used at where the rows give none (None: no payload, the arm at T_ref; not saved)."""
 
     names: tuple[str, ...]
     values: np.ndarray
     reference_temperature_c: float = thermal.DEFAULT_REFERENCE_C
+    payload: tuple[float, float, float, float] | None = None
+    temperature_c: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "names", tuple(str(n) for n in self.names))

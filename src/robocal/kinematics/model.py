@@ -356,11 +356,32 @@ class Robot:
             return self
         return replace(self, joint_errors=replace(self.joint_errors, reference_temperature_c=float(celsius)))
 
+    def with_conditions(self, payload=None, temperature: float | None = None) -> Robot:
+        """A copy used at a fixed payload ``(kg, x, y, z)`` (kg, m: the centre of mass in the flange
+        frame; a mass alone: at the flange) and ``temperature`` deg C wherever the rows give none
+        (compensation, programs); None leaves that condition as it was."""
+        if self.joint_errors is None:
+            return self
+        errors = self.joint_errors
+        if payload is not None:
+            p = np.zeros(4)
+            given = np.asarray(payload, float).reshape(-1)
+            if given.size not in (1, 4) or not np.isfinite(given).all() or given[0] < 0:
+                raise DataError(f"a payload is a mass >= 0 kg, optionally with its centre of mass x, y, z; "
+                                f"got {given.tolist()}")
+            p[: given.size] = given
+            errors = replace(errors, payload=tuple(p.tolist()))
+        if temperature is not None:
+            errors = replace(errors, temperature_c=float(as_number(temperature, "temperature", DataError)))
+        return replace(self, joint_errors=errors)
+
     def links_at(self, temperature: np.ndarray | None = None) -> LinkArrays:
         """The link parameters, ``a, d`` ``(N, n)`` scaled by the thermal term at ``temperature
         (N,)`` deg C (:mod:`robocal.kinematics.thermal`); the plain ``(n,)`` links without a
         thermal term or a temperature."""
         k = None if self.joint_errors is None else self.joint_errors.thermal_k()
+        if k is not None and temperature is None and self.joint_errors.temperature_c is not None:
+            temperature = np.array([self.joint_errors.temperature_c])  # one for all rows
         if k is None or temperature is None:
             return self.links
         t_ref = self.joint_errors.reference_temperature_c

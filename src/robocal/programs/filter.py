@@ -383,7 +383,8 @@ def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
 
 def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
                    robot_base=None, dialect: str | None = None, references=(),
-                   keep_unreached: bool = False) -> FilterResult:
+                   keep_unreached: bool = False, payload=None,
+                   temperature: float | None = None) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -397,8 +398,11 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     base). Targets that cannot be corrected (out of reach, out of the joint limits, a
     configuration they cannot have, not converged) raise DataError naming each one; with
     ``keep_unreached`` they are left unchanged with a warning. Nothing is written here: see
-    :meth:`FilterResult.write`.
+    :meth:`FilterResult.write`. ``payload`` (kg, or kg and the centre of mass x, y, z in m in the
+    flange frame) and ``temperature`` (deg C): the conditions every target is run at, for a model
+    with payload or thermal terms (the defaults such a model assumes without them are warnings).
     """
+    calibrated = calibrated.with_conditions(payload, temperature)
     paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     if not paths:
         raise DataError("no program file given")
@@ -432,6 +436,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     comp = compensate(controller_model(calibrated, nominal, robot_base), nominal,
                       X @ invert_transform(real_tool), seeds=np.where(ok[:, None], q_nom, 0.0))
     q, sing = comp.joints, comp.singularity
+    warnings += comp.assumed
     _check_joints(nominal, comp, ok, problems)
     bad = {i for i, _ in problems}
     if problems and not keep_unreached:
