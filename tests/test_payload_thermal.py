@@ -271,3 +271,14 @@ def test_auto_considers_payload_and_thermal_only_when_the_data_vary_them():
     assert not _term_has_data("payload", replace(cal.data, payload=None))
     ms = calibrate(robot, cal.data, nongeometric="auto").model_selection
     assert {"payload", "thermal"} <= set(ms["chosen_terms"]) and not ms["terms_without_data"]
+
+
+def test_evaluate_warns_when_the_data_lack_the_columns_the_model_uses(tmp_path, capsys):
+    robot = Robot.from_catalog("kuka_kr210_r2700")
+    sim = simulate_tracker(robot, 20, noise_mm=0.0, seed=6, payloads=[0, 150], temperatures=(20, 30))
+    sim.truth.save(tmp_path / "truth.yaml")
+    replace(sim.data, payload=None, temperature=None).save(tmp_path / "plain.csv")
+    assert main(["evaluate", str(tmp_path / "truth.yaml"), str(tmp_path / "plain.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "(the payload_kg column): assumed no payload (0 kg)" in out
+    assert "(the temperature_c column): assumed its reference temperature 25 deg C" in out

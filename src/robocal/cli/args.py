@@ -32,7 +32,8 @@ def load_measurements(path: str, robot, quiet: bool = False, model_used: bool = 
     from robocal.data.measurements import Measurements
 
     data = Measurements.load(path, robot=robot)
-    notes = [*data.notes, data.unused_conditions(robot) if model_used else None]
+    used = [data.unused_conditions(robot), *data.missing_conditions(robot)] if model_used else []
+    notes = [*data.notes, *used]
     for note in filter(None, notes):
         if not quiet or note.startswith("WARNING"):
             print(note if note.startswith("WARNING") else f"note: {note}")

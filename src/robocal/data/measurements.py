@@ -221,6 +221,20 @@ class Measurements:
                    travel=travel, **kw)
 
     # ----------------------------------------------------------------- views
+    def missing_conditions(self, robot) -> list[str]:
+        """Warnings for ``robot``'s payload / thermal terms these data have no column for, naming
+        the default the model assumes (no payload; its reference temperature)."""
+        from robocal.kinematics.joint_errors import assumed_conditions
+
+        errors = robot.joint_errors
+        if errors is None:
+            return []
+        present = replace(errors, payload=None if self.payload is None else (0.0,) * 4,
+                          temperature_c=None if self.temperature is None else 0.0)
+        hints = ("the payload_kg column", "the temperature_c column")
+        return [f"WARNING: {self.label or 'the data'}: {w}"
+                for w in assumed_conditions(replace(robot, joint_errors=present), hints)]
+
     def unused_conditions(self, robot) -> str | None:
         """A note naming the recorded conditions (payload, temperature) ``robot``'s error model
         has no term for, or None when it uses every one recorded."""

@@ -238,17 +238,21 @@ def conditions_of(robot, N: int, payload: np.ndarray | None = None,
     return payload, temperature
 
 
-def assumed_conditions(robot) -> list[str]:
+CONDITION_OPTIONS = ("--payload KG[,X,Y,Z]", "--temperature C")  # how a command is given them
+
+
+def assumed_conditions(robot, hints: tuple[str, str] = CONDITION_OPTIONS) -> list[str]:
     """One warning per condition term of ``robot`` used without its condition (no rows' values,
-    no :meth:`~robocal.kinematics.model.Robot.with_conditions`), naming the default assumed."""
+    no :meth:`~robocal.kinematics.model.Robot.with_conditions`), naming the default assumed;
+    ``hints``: how the user gives the payload and the temperature."""
     errors, out = robot.joint_errors, []
     terms = condition_terms(robot)
     if "payload" in terms and errors.payload is None:
         out.append(f"the model of {robot.name} has a payload term but no payload was given "
-                   "(--payload KG[,X,Y,Z]): assumed no payload (0 kg)")
+                   f"({hints[0]}): assumed no payload (0 kg)")
     if "thermal" in terms and errors.temperature_c is None:
         out.append(f"the model of {robot.name} has a thermal term but no temperature was given "
-                   f"(--temperature C): assumed its reference temperature "
+                   f"({hints[1]}): assumed its reference temperature "
                    f"{errors.reference_temperature_c:.4g} deg C (the calibration's mean)")
     return out
 
