@@ -282,3 +282,56 @@ def test_evaluate_warns_when_the_data_lack_the_columns_the_model_uses(tmp_path, 
     out = capsys.readouterr().out
     assert "(the payload_kg column): assumed no payload (0 kg)" in out
     assert "(the temperature_c column): assumed its reference temperature 25 deg C" in out
+
+
+def test_filter_reads_the_one_load_a_program_sets(tmp_path):
+    from robocal.data.simulate import perturbed
+    from robocal.programs import filter_program
+
+    nominal = Robot.from_catalog("kuka_kr16_2")
+    warm = perturbed(nominal, 3).with_joint_errors(["payload2", "payload3"]).with_values(
+        {"payload2": 2e-5, "payload3": 3e-5})
+    files, refs = _palletize(tmp_path)
+    src = files[0].read_text()
+    given = filter_program(files, warm, nominal, references=refs, payload=[12.0, 0.0, 0.0, 0.3])
+    files[0].write_text(src.replace("DEF palletize( )\n",
+                                    "DEF palletize( )\n$LOAD = {M 12.0, CM {X 0, Y 0, Z 300, A 0, B 0, C 0}, "
+                                    "J {X 0, Y 0, Z 0}}\n", 1))
+    own = filter_program(files, warm, nominal, references=refs)
+    assert any("the program's load 12 kg, centre of mass [0.0, 0.0, 300.0] mm (palletize.src:6)" in w
+               for w in own.warnings)
+    assert not any("assumed" in w for w in own.warnings)
+    def corrections(res):  # the inserted line moves the line numbers: compare what was corrected
+        return [(r["name"].split("@")[0], r["correction_mm"], r["correction_deg"]) for r in res.rows]
+
+    assert corrections(own) == corrections(given)
+    twice = src.replace("DEF palletize( )\n", "DEF palletize( )\n$LOAD = {M 12.0, CM {X 0, Y 0, Z 300}}\n"
+                        "$LOAD = {M 5.0, CM {X 0, Y 0, Z 100}}\n", 1)
+    files[0].write_text(twice)
+    mixed = filter_program(files, warm, nominal, references=refs)
+    assert any("2 different loads" in w for w in mixed.warnings)
+    assert any("assumed no payload (0 kg)" in w for w in mixed.warnings)
+    files[0].write_text(src.replace("DEF palletize( )\n", "DEF palletize( )\n$LOAD = LOAD_DATA[1]\n", 1))
+    unread = filter_program(files, warm, nominal, references=refs)
+    assert any("not read here ($LOAD =" in w for w in unread.warnings)
+    model_without = filter_program(files, perturbed(nominal, 3), nominal, references=refs)
+    assert not any("load" in w.lower() for w in model_without.warnings)
+
+
+def test_filter_reads_urscript_set_payload(tmp_path):
+    import shutil
+    from pathlib import Path
+
+    from robocal.data.simulate import perturbed
+    from robocal.programs import filter_program
+
+    path = tmp_path / "pick_place.script"
+    shutil.copy(Path(__file__).parent / "data" / "programs" / "pick_place.script", path)
+    nominal = Robot.from_catalog("ur5")
+    warm = perturbed(nominal, 2).with_joint_errors(["payload2", "payload3"]).with_values(
+        {"payload2": 1e-4, "payload3": 1e-4})
+    res = filter_program([path], warm, nominal)
+    assert any("the program's load 1.2 kg, centre of mass [0.0, 0.0, 80.0] mm (pick_place.script:4)" in w
+               for w in res.warnings)
+    given = filter_program([path], warm, nominal, payload=[1.2, 0.0, 0.0, 0.08])
+    assert [r["correction_mm"] for r in res.rows] == [r["correction_mm"] for r in given.rows]

@@ -38,11 +38,13 @@ from robocal.ik import solve_all
 from robocal.ik.closed_form import has_closed_form
 from robocal.ik.controller import JUMP_DEG, nearest_solutions
 from robocal.io import check_outputs, write_all
+from robocal.kinematics.joint_errors import condition_terms
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
 from robocal.programs.fanuc_ls import FanucDialect
 from robocal.programs.krl import KRLDialect
+from robocal.programs.load import program_load
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.rapid import RapidDialect
 from robocal.programs.source import ProgramText, format_number
@@ -402,7 +404,6 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     flange frame) and ``temperature`` (deg C): the conditions every target is run at, for a model
     with payload or thermal terms (the defaults such a model assumes without them are warnings).
     """
-    calibrated = calibrated.with_conditions(payload, temperature)
     paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     if not paths:
         raise DataError("no program file given")
@@ -411,9 +412,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                         f"model {nominal.name!r} has {nominal.n_joints} joints")
     d = dialect_for(paths, dialect)
     sources = [ProgramText(p) for p in paths]
+    calibrated, load_notes = _with_load(calibrated, d, sources, payload, temperature)
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
-    warnings = list(program.warnings)
+    warnings = list(program.warnings) + load_notes
     targets = _filterable(d, program, warnings, keep_unreached)
     if not targets:
         if not program.uncorrected:
@@ -456,6 +458,19 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     rows = _rows(d, targets, X, W @ Pc, nominal, q, ok, good, comp.converged & ok, changed, cfg, sing)
     outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected)
+
+
+def _with_load(calibrated: Robot, dialect: Dialect, sources, payload, temperature) -> tuple[Robot, list[str]]:
+    """``calibrated`` at the given payload (else the one load the program sets, if the model has a
+    payload term) and temperature, and the warnings on the program's own load."""
+    if payload is not None or "payload" not in condition_terms(calibrated):
+        return calibrated.with_conditions(payload, temperature), []
+    load, why = program_load(dialect, sources)
+    if load is None:
+        return calibrated.with_conditions(None, temperature), [why] if why else []
+    notes = [f"the program's load {load[0]:g} kg, centre of mass {np.round(load[1:] * 1e3, 3).tolist()} mm "
+             f"({why}) applied to every motion"]
+    return calibrated.with_conditions(load, temperature), notes
 
 
 def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
