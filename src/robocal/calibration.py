@@ -38,6 +38,7 @@ from robocal.identify.uncertainty import correlation, covariance, tcp_position_c
 from robocal.io import load_json, read_text, write_atomic
 from robocal.kinematics.cell import TRACK_IDENTIFIABILITY, is_track_cell
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
+from robocal.kinematics.thermal import reference_of as thermal_reference
 from robocal.model_selection import calibrate_cyclic, select_error_model, selection_table
 from robocal.progress import Progress
 from robocal.report.metrics import position_stats
@@ -53,7 +54,8 @@ NONGEOMETRIC_METHODS = ("lsq", "robust")  # the methods that estimate the joint-
 AUTO_DEFAULT_KINDS = ("point", "pose")  # tracker data: where nongeometric="auto" is the default ...
 AUTO_DEFAULT_MIN_POSES = 100  # ... from this many poses on (20 held out per cross-validation fold)
 _DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 180.0 / np.pi),
-            "rad/rad": ("mdeg/deg", 1e3), "1": ("ppm", 1e6)}  # "1": a scale (dimensionless)
+            "rad/rad": ("mdeg/deg", 1e3), "1": ("ppm", 1e6),  # "1": a scale (dimensionless)
+            "rad/(kg m)": ("deg/(kg m)", 180.0 / np.pi), "1/K": ("1e-6/K", 1e6)}
 
 
 class _BeforeAfter:
@@ -758,7 +760,8 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     start = _start_model(robot, datasets, register_frames, force, warnings) if warm_start is None \
         else warm_start.start
     declared = list(dict.fromkeys(start.joint_error_names + candidate_names(start.n_joints, terms)))
-    declared_start = start.with_joint_errors(declared)
+    declared_start = start.with_joint_errors(declared).with_reference_temperature(
+        thermal_reference([d.temperature for d in datasets]))  # T_ref: the calibration's mean
     problem = CalibrationProblem(declared_start, datasets, sigma=sigma)
     state0 = problem.start(declared_start)
     errors0 = problem.position_errors(state0)

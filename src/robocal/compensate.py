@@ -44,6 +44,7 @@ from robocal.ik.singularity import SingularityDistance, singularity_distance
 from robocal.ik.track import solve as track_solve
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.kinematics.cell import is_track_cell
+from robocal.kinematics.joint_errors import assumed_conditions
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import ROTATION_TOL, invert_transform, make_transform, pose_error
 from robocal.magnitudes import check_degree_set, check_radians, check_targets
@@ -103,6 +104,7 @@ class Compensation:
     corrected_model: Robot
     singularity: SingularityDistance | None = None
     controller: ControllerChoice | None = None
+    assumed: tuple[str, ...] = ()  # the payload / temperature defaults assumed (warnings)
 
     def warnings(self, names: Sequence[str] | None = None, which: np.ndarray | None = None) -> list[str]:
         """One line per target that was not reached or sits close to a singularity, labelled by
@@ -177,7 +179,8 @@ def controller_model(calibrated: Robot, nominal: Robot, robot_base=None, tool=No
 
 
 def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None = None,
-               seeds=None, start=None, targets_frame: str = "model", tool=None, e1=None) -> Compensation:
+               seeds=None, start=None, targets_frame: str = "model", tool=None, e1=None, payload=None,
+               temperature: float | None = None) -> Compensation:
     """Corrected joints and Cartesian targets for target poses ``(N, 4, 4)`` (m) of the
     calibrated model's TCP.
 
@@ -189,6 +192,11 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     ``tool`` (4x4, m): the user's real tool on the flange; the targets are then poses of that
     TCP, the calibrated flange (its measured SMR/probe replaced by ``nominal.tool``) carries it,
     and the corrected targets are for that tool on the nominal flange.
+
+    ``payload`` (kg, or kg and the centre of mass x, y, z in m in the flange frame) and
+    ``temperature`` (deg C): the conditions the targets are run at, for a model with payload or
+    thermal terms (:meth:`Robot.with_conditions`); without them such a model assumes no payload
+    and its reference temperature, said in ``assumed``.
 
     Seeds: the closed-form solution of ``nominal`` (needs its OPW form) in slot ``branch``
     (None: per target the lowest slot inside the limits, then the next ones where the calibrated
@@ -264,6 +272,8 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
         raise DataError(f"targets_frame must be 'model' or 'robot', got {targets_frame!r}")
     if targets_frame == "robot":
         calibrated = calibrated.with_frames(base=nominal.base)
+    calibrated = calibrated.with_conditions(payload, temperature)
+    assumed = tuple(assumed_conditions(calibrated))
     parameters = parameter_table(calibrated, nominal)
     model, controller = calibrated, nominal
     if tool is not None:  # robot_base identity: the targets' frame (calibrated, re-expressed for 'robot')
@@ -290,7 +300,7 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
                         converged=res.converged, position_error=res.position_error,
                         orientation_error=res.orientation_error,
                         parameters=parameters, corrected_model=calibrated, singularity=sing,
-                        controller=choice)
+                        controller=choice, assumed=assumed)
 
 
 def _numbers(text: str, count: int, what: str, form: str) -> np.ndarray:

@@ -1,7 +1,8 @@
 """``nongeometric="auto"``: choose the joint-error model by cross-validation on the calibration data.
 
 Candidates: the geometric model and every combination of the joint-error terms the data can
-carry (compliance, gear, backlash, travel, and cyclic when the frequency search finds any).
+carry (compliance, gear, backlash, travel, and cyclic when the frequency search finds any; payload
+and thermal when the data record payloads and temperatures that vary).
 Each is judged by K-fold cross-validation on the calibration data alone, folds by whole poses
 (every SMR of a pose in the same fold; distance data: by pair). The approach directions and
 moves each row carries come from the full measuring order (``Measurements.approach`` and
@@ -56,7 +57,7 @@ from robocal.identify.frequency_search import FrequencyScan
 from robocal.identify.identifiability import independent_columns
 from robocal.identify.priors import JOINT_ERROR_SIGMA, prior_sigma
 from robocal.identify.space import ParameterSpace, State, block_of
-from robocal.kinematics.joint_errors import TERMS, candidate_names, cyclic_names, term_of
+from robocal.kinematics.joint_errors import CONDITION_TERMS, TERMS, candidate_names, cyclic_names, term_of
 
 FOLDS = 5
 # cyclic: searched for; scale: declared by a model with a track, never tried by the selection
@@ -329,7 +330,8 @@ def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol
         "chosen_terms": rows[chosen]["terms"],
         "cyclic_frequencies": [{"joint": i + 1, "cycles_per_rev": f} for i, f in full_cyclic],
         "cyclic_frequencies_per_fold": [len(f) for f in fold_cyclic],
-        "terms_without_data": [t for t in FIXED_TERMS if t not in fixed],
+        # the order terms the data cannot carry (payload and thermal need recorded conditions: not listed)
+        "terms_without_data": [t for t in FIXED_TERMS if t not in fixed and t not in CONDITION_TERMS],
         "time_s": {"superset_fit": t_superset, "selection": t_select - t_superset,
                    "final_fit": total - t_select, "total": total},
     }
@@ -337,7 +339,13 @@ def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol
 
 
 def _term_has_data(term: str, data) -> bool:
-    """Backlash needs approach directions and travel needs moves (the measuring order)."""
+    """Backlash needs approach directions and travel needs moves (the measuring order); payload
+    and thermal need the recorded payload and temperature, varying over the data (a constant one
+    is indistinguishable from the geometry and the arm's own compliance)."""
+    if term == "payload":
+        return data.payload is not None and np.unique(data.payload, axis=0).shape[0] > 1
+    if term == "thermal":
+        return data.temperature is not None and np.ptp(data.temperature) > 0
     if term == "backlash":
         return data.approach is not None and bool(np.any(data.approach))
     if term == "travel":

@@ -24,20 +24,47 @@ def numbers(count: int | None, unit_hint: str) -> Callable[[str], list[float]]:
     return parse
 
 
-def load_measurements(path: str, robot, quiet: bool = False, fanuc_coupled: bool = False):
+def load_measurements(path: str, robot, quiet: bool = False, fanuc_coupled: bool = False,
+                      model_used: bool = True):
     """:meth:`Measurements.load` of ``path`` checked against ``robot``, printing how the reader
-    interpreted the file (repeated readings grouped into poses; warnings always); ``fanuc_coupled``:
-    the joints are a FANUC controller's (J3 from the horizontal), converted to the catalog's."""
+    interpreted the file (repeated readings grouped into poses; warnings always) and, when
+    ``model_used`` (``robot`` is the model the command applies), the recorded conditions it
+    has no term for; ``fanuc_coupled``: the joints are a FANUC controller's (J3 from the
+    horizontal), converted to the catalog's."""
     from robocal.data.joint_conventions import fanuc_decoupled_data
     from robocal.data.measurements import Measurements
 
     data = Measurements.load(path, robot=robot)
     if fanuc_coupled:
         data = fanuc_decoupled_data(data)
-    for note in data.notes:
+    used = [data.unused_conditions(robot), *data.missing_conditions(robot)] if model_used else []
+    notes = [*data.notes, *used]
+    for note in filter(None, notes):
         if not quiet or note.startswith("WARNING"):
             print(note if note.startswith("WARNING") else f"note: {note}")
     return data
+
+
+def payload_si(values: list[float] | None) -> list[float] | None:
+    """``--payload KG[,X,Y,Z]`` (kg, mm) -> [kg, x, y, z] (kg, m); None when not given."""
+    from robocal.errors import DataError
+
+    if values is None:
+        return None
+    if len(values) not in (1, 4):
+        raise DataError(f"--payload takes KG or KG,X,Y,Z (centre of mass in mm), got {len(values)} numbers")
+    return [values[0], *(v * 1e-3 for v in values[1:])]
+
+
+def conditions_unused(robot, args) -> list[str]:
+    """Warnings for ``--payload`` / ``--temperature`` given to a model without the term that uses it."""
+    from robocal.kinematics.joint_errors import condition_terms
+
+    terms = condition_terms(robot)
+    return [f"{option} is not used: the model of {robot.name} has no {term} term"
+            for option, term, value in (("--payload", "payload", args.payload),
+                                        ("--temperature", "thermal", args.temperature))
+            if value is not None and term not in terms]
 
 
 TWICE = "each reading would count twice (the noise estimate shrinks, the result looks better than it is)"

@@ -94,7 +94,8 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed of stochastic methods")
     p.add_argument("--nongeometric", metavar="TERMS", default="default",
                    help="non-geometric terms identified with the geometry (methods lsq, robust): "
-                        "compliance, gear, backlash, travel, cyclic (comma separated); auto: the "
+                        "compliance, gear, backlash, travel, cyclic, payload, thermal (comma separated; "
+                        "payload and thermal need the payload_kg and temperature_c columns); auto: the "
                         "terms chosen by cross-validation on the calibration data (the candidate "
                         "table is printed); none: the geometric model only. Default: auto for "
                         "lsq/robust on one file of tracker data (points or poses) with at least 100 "
@@ -166,8 +167,9 @@ def run(args) -> int:
     start = offsets_start(args)
     sigma = dict(args.sigma)
     robot = load_model(args.robot)
-    data = [load_measurements(f, robot, args.quiet, args.fanuc_coupled) for f in args.data]
-    validation = [load_measurements(f, robot, args.quiet, args.fanuc_coupled) for f in validate]
+    data = [load_measurements(f, robot, args.quiet, args.fanuc_coupled, model_used=False) for f in args.data]
+    validation = [load_measurements(f, robot, args.quiet, args.fanuc_coupled, model_used=False)
+                  for f in validate]
     if args.hold_out is not None:
         if validation or len(data) > 1:
             raise DataError("--hold-out splits one calibration file: give one file and no --validate")
@@ -195,6 +197,8 @@ def run(args) -> int:
                              data_file=", ".join(args.data), validation_file=", ".join(validate) or None,
                              hold_out=args.hold_out)
     print(result.summary())
+    for note in filter(None, (d.unused_conditions(result.robot) for d in data)):
+        print(f"note: {note}")
     derived = {} if start is None else {"offsets_only": True, "zero_shifts": zero_shifts(result, start)}
     line = error_model_line(args, data) if start is None else "joint zeros changed from the start: " + \
         ", ".join(f"{r['name']} {r['shift']:+.4f} ± {r['sigma']:.4f} deg" for r in derived["zero_shifts"])

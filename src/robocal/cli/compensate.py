@@ -49,6 +49,12 @@ def add_parser(sub) -> None:
                         "measured (the calibrated model's own tool: the SMR or probe it was measured with)")
     p.add_argument("--force", action="store_true",
                    help="compensate targets robocal already compensated (their marker line names the run)")
+    p.add_argument("--payload", type=numbers(None, "KG or KG,X,Y,Z with X,Y,Z in mm"), metavar="KG[,X,Y,Z]",
+                   help="the payload the targets are run with: its mass (kg) and centre of mass in the "
+                        "flange frame tool0 (mm; default at the flange), for a model with a payload term")
+    p.add_argument("--temperature", type=float, metavar="C",
+                   help="the arm's temperature (deg C) the targets are run at, for a model with a "
+                        "thermal term")
     p.add_argument("--parameters", help="also write the corrected-parameter table (CSV) here")
     p.add_argument("-o", "--output", required=True, help="commands CSV to write")
     p.add_argument("--result", metavar="result.json",
@@ -97,7 +103,13 @@ def _prediction(path, calibrated, outputs: list):
 def run(args) -> int:
     import numpy as np
 
-    from robocal.cli.args import check_format, load_calibrated_and_nominal, tool_frame
+    from robocal.cli.args import (
+        check_format,
+        conditions_unused,
+        load_calibrated_and_nominal,
+        payload_si,
+        tool_frame,
+    )
     from robocal.compensate import check_target_units, compensate, format_csv, pose_columns, read_poses_csv
     from robocal.data.measurements import robot_reach
     from robocal.io import check_outputs, read_text, write_all
@@ -118,7 +130,8 @@ def run(args) -> int:
     start = None if args.start is None else np.deg2rad(args.start)
     prediction = _prediction(args.result, calibrated, [args.output, args.parameters])
     res = compensate(calibrated, nominal, targets, branch=args.branch, start=start,
-                     targets_frame=args.targets_in, tool=tool, e1=layout.get("e1"))
+                     targets_frame=args.targets_in, tool=tool, e1=layout.get("e1"),
+                     payload=payload_si(args.payload), temperature=args.temperature)
     names, values = pose_columns(res.corrected_targets, layout)
     track = int(is_track_cell(calibrated))  # an arm on a track: e1 (mm) first, kept as given
     joints = ["e1_mm"] * track + [f"q{i + 1}_{'mm' if calibrated.prismatic[i + track] else 'deg'}"
@@ -150,7 +163,7 @@ def run(args) -> int:
         print(f"targets: {what} in {where}")
         print(f"compensated {len(targets)} target(s){_statistics(res, targets, calibrated, nominal, args)}; "
               f"largest model residual {res.position_error.max() * 1e3:.3g} mm -> {args.output}")
-    warnings = res.warnings()[:20]
+    warnings = [*conditions_unused(calibrated, args), *res.assumed, *res.warnings()[:20]]
     if prediction is not None:
         from robocal.trust.coverage import target_warnings
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from robocal.cli.args import numbers
 from robocal.errors import DataError
 
 EPILOG = """Examples:
@@ -103,6 +104,11 @@ def add_parser(sub) -> None:
                    help="the controller's base in the calibrated model's world frame (mm, deg)")
     p.add_argument("--references", nargs="+", default=[], metavar="FILE",
                    help="files read for tool/frame declarations only ($config.dat, system modules)")
+    p.add_argument("--payload", type=numbers(None, "KG or KG,X,Y,Z with X,Y,Z in mm"), metavar="KG[,X,Y,Z]",
+                   help="the payload every target is run with: its mass (kg) and centre of mass in the "
+                        "flange frame tool0 (mm; default at the flange), for a model with a payload term")
+    p.add_argument("--temperature", type=float, metavar="C",
+                   help="the arm's temperature (deg C) the program runs at, for a model with a thermal term")
     p.add_argument("--format", choices=("rapid", "krl", "fanuc", "urscript", "inform", "val3"),
                    help="program format")
     p.add_argument("--table", help="per-target table: PATH.csv, PATH.json, or a prefix for both "
@@ -222,7 +228,7 @@ def _tool_disagreements(args) -> list[str]:
 def run(args) -> int:
     import sys
 
-    from robocal.cli.args import load_calibrated_and_nominal, tool_frame
+    from robocal.cli.args import conditions_unused, load_calibrated_and_nominal, payload_si, tool_frame
     from robocal.compensate import frame_from_text
     from robocal.data.measurements import robot_reach
     from robocal.io import check_outputs
@@ -243,7 +249,9 @@ def run(args) -> int:
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),
                          frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,
                          dialect=args.format, references=args.references, keep_unreached=args.keep_unreached,
-                         force=args.force, strict=args.strict, position_registers=args.position_registers)
+                         force=args.force, strict=args.strict, position_registers=args.position_registers,
+                         payload=payload_si(args.payload), temperature=args.temperature)
+    res.warnings[:0] = conditions_unused(calibrated, args)
     if not res.rows:
         _diagnose_empty(args)
     res.warnings[:0] = _tool_disagreements(args)

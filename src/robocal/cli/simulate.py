@@ -18,6 +18,8 @@ EPILOG = """Examples:
       -o data.csv --truth truth.yaml       # rehearse a campaign planned by `robocal poses`
   robocal simulate --robot truth.yaml --as-is --kind distance --poses 8 --noise-mm 0.005 \\
       -o scalebar.csv --truth truth_bar.yaml   # a 500 mm scale bar touched by the probe of truth.yaml
+  robocal simulate --robot kuka_kr210_r2700 --poses 300 --payloads 0,75,150 --temperatures 20:35 \
+      -o cell.csv --truth truth.yaml       # a campaign at three payloads while the arm warms up
 The truth YAML is the true robot (tracker frame as base, SMR 0 as tool); TRUTH.sim.json next to it
 holds the noise floor (3-D RMS of the added noise, mm), outlier rows and plane coefficients.
 """
@@ -56,10 +58,28 @@ def add_parser(sub) -> None:
                         "e.g. a scale bar of the truth.yaml of an earlier simulation")
     p.add_argument("--tracker-mm", type=numbers(3, "X,Y,Z in mm"), metavar="X,Y,Z",
                    help="the tracker's position in the robot base frame, mm (default random, 2-4 m away)")
+    p.add_argument("--payloads", type=numbers(None, "masses in kg"), metavar="KG,KG,..",
+                   help="measure the poses in equal consecutive blocks, one per payload (kg): the truth "
+                        "deflects under each (point and pose data; writes the payload_kg columns)")
+    p.add_argument("--payload-com-mm", type=numbers(3, "X,Y,Z in mm"), metavar="X,Y,Z",
+                   help="the payloads' centre of mass in the flange frame, mm (default 0,0,250)")
+    p.add_argument("--temperatures", type=_range, metavar="LO:HI",
+                   help="the arm warms from LO to HI deg C within each payload block (or over the campaign): "
+                        "the truth's links expand (writes the temperature_c column)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("-o", "--output", required=True, help="measurement CSV to write")
     p.add_argument("--truth", required=True, help="true robot model YAML to write")
     p.set_defaults(func=run)
+
+
+def _range(text: str) -> tuple[float, float]:
+    """``'20:35'`` -> (20.0, 35.0)."""
+    try:
+        lo, hi = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a range LO:HI in deg C, e.g. 20:35, got {text!r}") \
+            from None
+    return lo, hi
 
 
 def _planned(args, robot, smr, tracker):
@@ -121,7 +141,9 @@ def run(args) -> int:
                               kind=args.kind, n_planes=args.planes, joint_noise_deg=args.joint_noise_deg,
                               rotation_noise_deg=args.rotation_noise_deg, joints=joints, visible=visible,
                               smr_offsets=smr, tracker_position=tracker, bar_length_m=args.bar_mm * 1e-3,
-                              as_is=args.as_is)
+                              as_is=args.as_is, payloads=args.payloads, temperatures=args.temperatures,
+                              payload_com=None if args.payload_com_mm is None else
+                              np.array(args.payload_com_mm) * 1e-3)
     sidecar = write_simulation(result, args.output, args.truth)
     if not args.quiet:
         print(f"simulated {len(result.data)} {args.kind} observations of {result.info['n_poses']} poses; "

@@ -21,6 +21,13 @@ s > 0 = ``Robot.smr[s - 1]``), an optional ``sigma (N,)`` m, and ``source_row (N
 line number of the row in the file it came from (for an import, the line in the raw file that
 held its joints, or the first reading of an averaged group).
 
+Optional per-row working conditions (None when the file has none): ``payload (N, 4)``, the
+payload's mass (kg) and its centre of mass (m) in the flange frame tool0 (the frame of ``--tool``
+and of the controllers' tool data, not the measured SMR's), and ``temperature (N,)`` deg C, the
+arm's temperature. The payload and thermal error terms (:mod:`robocal.kinematics.load`,
+:mod:`robocal.kinematics.thermal`) use them; any other model ignores them
+(:meth:`Measurements.unused_conditions` says so).
+
 Canonical CSV (DESIGN.md "Files"): optional leading ``#`` comment lines (the first one is kept as
 ``source``, the provenance text), then a header, then one line per row. Column names carry their
 units: ``q1_deg..qn_deg`` or ``q1_rad..qn_rad`` (a prismatic joint's ``q{i}_mm`` / ``q{i}_m``); external
@@ -29,7 +36,9 @@ axes ``e1_mm`` / ``e1_m`` (a linear track) or ``e1_deg`` / ``e1_rad``, which com
 ``smr``, ``sigma_mm``/``sigma_m``, ``qw qx qy qz`` (pose), ``plane`` (plane contacts, then no
 x/y/z), ``pair`` and ``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``,
 ``approach1..approachn`` and ``travel1_rad..traveln_rad`` (or ``_deg``) (each written only where
-it differs from what the row order implies).
+it differs from what the row order implies), ``payload_kg`` with optional ``payload_x_mm,
+payload_y_mm, payload_z_mm`` (or ``_m``; all three or none, default 0: at the flange) and
+``temperature_c``.
 `Measurements.save` writes SI columns (``_rad``, ``_m``) with 17 significant digits, so a
 save/load round trip is exact (rotations through the quaternion to 1e-15).
 """
@@ -54,12 +63,14 @@ from robocal.kinematics.transforms import ROTATION_TOL
 
 KINDS = ("point", "pose", "plane", "distance")
 _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
-                 "pair", "distance", "approach", "travel")  # row-indexed (subsets take their rows)
+                 "pair", "distance", "approach", "travel", "payload", "temperature")  # row-indexed
 _LENGTH_COLUMNS = ("x", "y", "z", "sigma", "distance")
 _PLAIN_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row", "qw", "qx", "qy", "qz")
 _INT_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row")
 # A laser tracker's range is below ~80 m; anything farther is a unit mistake whatever the robot.
 MAX_TRACKER_RANGE_M = 100.0
+MAX_PAYLOAD_KG = 5000.0  # no arm carries more; a larger value is a unit mistake (g, lb)
+TEMPERATURE_RANGE_C = (-40.0, 120.0)  # an arm's working temperature in deg C (K or F are mistakes)
 MAX_JOINT_RAD = 4 * np.pi  # no joint turns more than two turns either way
 # One robot's measured points span at most MAX_SPAN_REACHES times its reach (both sides of the
 # base) plus SPAN_MARGIN_M; a wider span is a length unit mistake or a bigger robot's data.
@@ -168,6 +179,8 @@ class Measurements:
     source: str = ""
     approach: np.ndarray | None = None
     travel: np.ndarray | None = None
+    payload: np.ndarray | None = None  # (N, 4): kg, then centre of mass x, y, z (m) in tool0
+    temperature: np.ndarray | None = None  # (N,) deg C
     file: str = ""  # the file it was read from (set by :meth:`load`)
     notes: tuple[str, ...] = ()  # how the reader interpreted the file (e.g. repeated readings)
     linear: np.ndarray | None = None  # (n,) bool: joints in length units (m: prismatic); None: all angles
@@ -193,7 +206,7 @@ class Measurements:
     def from_arrays(cls, kind: str, joints, *, points=None, rotations=None, plane=None, pair=None,
                     distance=None, smr=None, sigma=None, pose_id=None, source_row=None,
                     source: str = "", approach=None, travel=None, linear=None,
-                    external: int = 0) -> Measurements:
+                    external: int = 0, payload=None, temperature=None) -> Measurements:
         """Validated measurements from arrays in SI units (rad, m).
 
         Parameters
@@ -231,6 +244,11 @@ class Measurements:
             Joints in metres (prismatic, e.g. a track).
         external : int, optional
             How many leading joints are external axes (written as e1.. columns).
+        payload : array_like, shape (N, 4), optional
+            Each row's payload: mass (kg) and centre of mass in the flange frame (m); None: not
+            recorded.
+        temperature : array_like, shape (N,), optional
+            Each row's arm temperature, deg C; None: not recorded.
 
         Returns
         -------
@@ -320,11 +338,40 @@ class Measurements:
             raise DataError(f"linear (prismatic joint flags) must have {n} values")
         if not 0 <= int(external) <= n:
             raise DataError(f"external axes must be 0..{n}, got {external}")
+        kw.update(_conditions(payload, temperature, N))
         return cls(kind=kind, joints=joints, pose_id=pose_id, smr=smr, source_row=source_row,
                    sigma=sigma, source=str(source).replace("\n", " "), approach=approach,
                    travel=travel, linear=linear, external=int(external), **kw)
 
     # ----------------------------------------------------------------- views
+    def missing_conditions(self, robot) -> list[str]:
+        """Warnings for ``robot``'s payload / thermal terms these data have no column for, naming
+        the default the model assumes (no payload; its reference temperature)."""
+        from robocal.kinematics.joint_errors import assumed_conditions
+
+        errors = robot.joint_errors
+        if errors is None:
+            return []
+        present = replace(errors, payload=None if self.payload is None else (0.0,) * 4,
+                          temperature_c=None if self.temperature is None else 0.0)
+        hints = ("the payload_kg column", "the temperature_c column")
+        return [f"WARNING: {self.label or 'the data'}: {w}"
+                for w in assumed_conditions(replace(robot, joint_errors=present), hints)]
+
+    def unused_conditions(self, robot) -> str | None:
+        """A note naming the recorded conditions (payload, temperature) ``robot``'s error model
+        has no term for, or None when it uses every one recorded."""
+        from robocal.kinematics.joint_errors import condition_terms
+
+        used = condition_terms(robot)
+        unused = [c for c, term in (("payload", "payload"), ("temperature", "thermal"))
+                  if getattr(self, c) is not None and term not in used]
+        if not unused:
+            return None
+        terms = " or ".join("thermal" if c == "temperature" else c for c in unused)
+        return (f"{self.label or 'the data'}: the {' and '.join(unused)} column(s) were read but the model "
+                f"of {robot.name} has no {terms} term: not used")
+
     def __len__(self) -> int:
         return self.joints.shape[0]
 
@@ -516,6 +563,11 @@ class Measurements:
         if not np.array_equal(self.travel, travel_from_order(self.joints, self.pose_id)):
             for i in range(n):
                 cols[f"travel{i + 1}_rad"] = self.travel[:, i]
+        if self.payload is not None:
+            cols.update(zip(("payload_kg", "payload_x_m", "payload_y_m", "payload_z_m"), self.payload.T,
+                            strict=True))
+        if self.temperature is not None:
+            cols["temperature_c"] = self.temperature
         out = io.StringIO()
         if self.source:
             out.write(f"# {self.source}\n")
@@ -558,6 +610,31 @@ def robot_reach(robot) -> float:
     travel = float(np.sum(np.where(np.isfinite(slides), np.abs(slides), 0.0).max(axis=1))) \
         if len(slides) else 0.0
     return float(np.abs(robot.a).sum() + np.abs(robot.d).sum() + tool + travel)
+
+
+def _conditions(payload, temperature, N: int) -> dict:
+    """Validated ``payload (N, 4)`` and ``temperature (N,)`` (None: not recorded) as keywords."""
+    out = {}
+    if payload is not None:
+        payload = _float_array(payload, "payload", (N, 4))
+        bad = np.flatnonzero((payload[:, 0] < 0) | (payload[:, 0] > MAX_PAYLOAD_KG))
+        if bad.size:
+            raise DataError(f"payload mass {payload[bad[0], 0]:.6g} kg (row index {bad[0]}) is outside "
+                            f"0..{MAX_PAYLOAD_KG:g} kg: give payload_kg in kilograms")
+        far = np.flatnonzero(np.abs(payload[:, 1:]).max(axis=1) > MAX_TRACKER_RANGE_M)
+        if far.size:
+            raise UnitError(f"payload centre of mass {np.abs(payload[far[0], 1:]).max():.6g} m from the "
+                            f"flange (row index {far[0]}): name the columns payload_x_mm.. for millimetres")
+        out["payload"] = payload
+    if temperature is not None:
+        temperature = _float_array(temperature, "temperature", (N,))
+        lo, hi = TEMPERATURE_RANGE_C
+        bad = np.flatnonzero((temperature < lo) | (temperature > hi))
+        if bad.size:
+            raise UnitError(f"temperature {temperature[bad[0]]:.6g} (row index {bad[0]}) is outside "
+                            f"{lo:g}..{hi:g} deg C: temperature_c is in degrees Celsius")
+        out["temperature"] = temperature
+    return out
 
 
 def _check_plausible(data: Measurements, reach: float, where: str) -> None:
@@ -672,7 +749,9 @@ def _header_role(name: str):
     m = re.fullmatch(r"approach(\d{1,4})", name)
     if m:
         return "approach", int(m.group(1)), 1.0
-    m = re.fullmatch(r"(x|y|z|sigma|distance)_([a-z]+)", name)
+    if name in ("payload_kg", "temperature_c"):
+        return name.split("_")[0], None, 1.0
+    m = re.fullmatch(r"(x|y|z|sigma|distance|payload_x|payload_y|payload_z)_([a-z]+)", name)
     if m:
         unit = m.group(2)
         if unit not in LENGTH_UNITS:
@@ -737,7 +816,8 @@ def _column_roles(header: list[str], name: str, header_line: int) -> dict:
                             "sigma_mm, "
                             "qw,qx,qy,qz, "
                             "plane, pair, distance_mm, pose_id, source_row, approach1..n, "
-                            "travel1_deg..n. For another layout use `robocal import`")
+                            "travel1_deg..n, payload_kg, payload_x_mm..payload_z_mm, temperature_c. "
+                            "For another layout use `robocal import`")
         roles[h] = role
     return roles
 
@@ -889,6 +969,24 @@ def _per_joint(col: dict, roles: dict, role: str, n: int, name: str) -> np.ndarr
     return np.stack([col[h] * roles[h][2] for _, h in cols], axis=1)
 
 
+def _condition_columns(col: dict, roles: dict, name: str) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """``payload (N, 4)`` (kg, m) and ``temperature (N,)`` deg C from their columns, or None."""
+    by_role = {r[0]: h for h, r in roles.items()}
+    com = [by_role.get(f"payload_{c}") for c in "xyz"]
+    if any(com) and not all(com):
+        raise DataError(f"{name}: the payload's centre of mass needs all of payload_x, payload_y, payload_z; "
+                        f"missing {[f'payload_{c}' for c, h in zip('xyz', com, strict=True) if h is None]}")
+    if any(com) and "payload" not in by_role:
+        raise DataError(f"{name}: payload centre-of-mass columns need the payload_kg column (the mass)")
+    payload = None
+    if "payload" in by_role:
+        mass = col[by_role["payload"]]
+        xyz = [col[h] * roles[h][2] if h else np.zeros_like(mass) for h in com]
+        payload = np.stack([mass, *xyz], axis=1)
+    temperature = col[by_role["temperature"]] if "temperature" in by_role else None
+    return payload, temperature
+
+
 def _repeats(joints: np.ndarray, line_no: np.ndarray, name: str) -> tuple[np.ndarray, tuple[str, ...]]:
     """Pose ids of a file without a pose_id column (`repeat_groups`) and notes that say how
     the rows were grouped, or warn of consecutive poses that look like jittering repeats."""
@@ -937,6 +1035,7 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     approach = _per_joint(col, roles, "approach", len(joint_cols), name)
     approach = None if approach is None else approach.astype(np.int64)
     travel = _per_joint(col, roles, "travel", len(joint_cols), name)
+    payload, temperature = _condition_columns(col, roles, name)
     ints = {c: (col[c].astype(np.int64) if c in col else None) for c in ("smr", "pose_id")}
     source_row = col["source_row"].astype(np.int64) if "source_row" in col else np.array(line_no)
     notes = ()
@@ -946,7 +1045,8 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
         data = Measurements.from_arrays(kind, joints, smr=ints["smr"], pose_id=ints["pose_id"],
                                         source_row=source_row, source=source, approach=approach,
                                         travel=travel, linear=linear,
-                                        external=sum(roles[h][0] == "e" for h in joint_cols), **kw)
+                                        external=sum(roles[h][0] == "e" for h in joint_cols),
+                                        payload=payload, temperature=temperature, **kw)
     except DataError as exc:
         raise DataError(f"{name}: {exc}") from None
     return replace(data, notes=notes)

@@ -48,7 +48,8 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.data.measurements import Measurements, approach_from_order, travel_from_order
+from robocal.data import simulate_conditions as conditions
+from robocal.data.measurements import Measurements, approach_from_order, robot_reach, travel_from_order
 from robocal.errors import DataError, UnreachableError
 from robocal.io import write_all
 from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, is_track_cell, track_chain
@@ -313,7 +314,8 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
                      joint_noise_deg: float = 0.0, rotation_noise_deg: float = 0.0,
                      error_scale: float = 1.0, joints=None, visible=None, smr_offsets=None,
                      tracker_position=None, bar_length_m: float = SCALE_BAR_M,
-                     as_is: bool = False) -> SimulationResult:
+                     as_is: bool = False, payloads=None, temperatures=None,
+                     payload_com=None) -> SimulationResult:
     """Simulate ``n_poses`` measured poses of a perturbed copy of ``robot`` (see module docstring).
 
     The true robot is ``robot`` plus random parameter errors, seen from a randomly placed
@@ -364,6 +366,13 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         Certified length of the scale bar (``distance``), metres.
     as_is : bool, default False
         Measure ``robot`` exactly as it is: no errors drawn, its own base and tool.
+    payloads : sequence of float, optional
+        Payload masses, kg, one block of poses each (working conditions: point and pose data,
+        `robocal.data.simulate_conditions`).
+    temperatures : tuple of float, optional
+        ``(lo, hi)`` arm temperatures, deg C, drawn per pose.
+    payload_com : array_like, shape (3,), optional
+        The payload's centre of mass in the flange frame, metres.
 
     Returns
     -------
@@ -402,6 +411,9 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         tracker_position = check_tracker_position(tracker_position)
     _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, joint_noise_deg,
            rotation_noise_deg)
+    payloads, temperatures = conditions.check(payloads, temperatures)
+    if (payloads is not None or temperatures is not None) and kind not in ("point", "pose"):
+        raise DataError("payloads and temperatures are simulated for point and pose data")
     if kind == "distance" and not 0 < bar_length_m < 10:
         raise DataError(f"the scale bar's length must be between 0 and 10 m, got {bar_length_m} m")
     rng = np.random.default_rng(seed)
@@ -426,7 +438,20 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     N = len(q_rows)
     approach = approach_from_order(q_rows, pose_id)  # the poses are measured in this order
     travel = travel_from_order(q_rows, pose_id)
-    T = true.fk(q_rows, smr=smr, approach=approach, travel=travel)
+    payload, temperature = conditions.schedule(n_poses, payloads, temperatures, payload_com)
+    if payload is None and temperature is None:
+        T = true.fk(q_rows, smr=smr, approach=approach, travel=travel)
+    else:  # the conditions' physics, independent of the fitting code; the truth then carries them
+        payload, temperature = (None if x is None else x[pose_id] for x in (payload, temperature))
+        coefficients = conditions.true_terms(true, payloads, temperatures, robot_reach(robot),
+                                             np.random.default_rng([seed, 35]))
+        t_ref = float(np.mean(temperature)) if temperature is not None else 20.0
+        if true.joint_errors is not None and "thermal" in true.joint_errors.names:  # as_is: its own T_ref
+            t_ref = true.joint_errors.reference_temperature_c
+        T = conditions.measured_poses(true, q_rows, smr, approach, travel, payload, temperature,
+                                      coefficients, t_ref)
+        true = true.with_joint_errors([*true.joint_error_names, *coefficients]).with_values(
+            coefficients).with_reference_temperature(t_ref)
     if kind in ("point", "pose"):
         kw, noise, outlier_rows = _tracker_readings(kind, T, rng, noise_mm, noise_model, outliers,
                                                     rotation_noise_deg)
@@ -451,7 +476,8 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
             "noise_floor_mm": floor}
     source = f"simulated by robocal: robot {robot.name}, seed {seed}, {kind}, noise floor {floor:.6g} mm"
     data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id, approach=approach,
-                                    travel=travel, source_row=np.arange(2, N + 2), source=source,
+                                    travel=travel, payload=payload, temperature=temperature,
+                                    source_row=np.arange(2, N + 2), source=source,
                                     linear=robot.prismatic, external=int(is_track_cell(robot)), **kw)
     truth = replace(true, name=f"{robot.name}_true",
                     description=f"true robot of a robocal simulation (seed {seed}); noise floor "

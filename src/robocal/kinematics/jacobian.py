@@ -13,7 +13,9 @@ import numpy as np
 
 from robocal.errors import ModelError
 from robocal.kinematics.fk import CHUNK, LinkArrays, chain_frames
-from robocal.kinematics.joint_errors import joint_error_basis, scatter_offsets
+from robocal.kinematics.joint_errors import conditions_of, joint_error_basis, scatter_offsets
+from robocal.kinematics.thermal import NAME as THERMAL
+from robocal.kinematics.thermal import translation_axis
 
 
 def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray,
@@ -37,7 +39,8 @@ def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nda
     z_cur, o_cur = F[:3, 2, 1:], F[:3, 3, 1:]
     ca = np.cos(links.alpha)[:, None]
     sa = np.sin(links.alpha)[:, None]
-    a = np.asarray(links.a, float)[:, None]
+    a = np.asarray(links.a, float).T  # (n, 1) or, with per-pose (thermal) links, (n, N)
+    a = a[:, None] if a.ndim == 1 else a
     L = 5 * n  # alpha, a, beta, theta, d of link i at 5 i + (0..4)
     u[:, 0:L:5], o[:, 0:L:5] = x_prev, o_prev
     u[:, 1:L:5] = x_prev
@@ -59,7 +62,8 @@ def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nda
 
 
 def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
-                      approach: np.ndarray | None = None, travel: np.ndarray | None = None):
+                      approach: np.ndarray | None = None, travel: np.ndarray | None = None,
+                      payload: np.ndarray | None = None, temperature: np.ndarray | None = None):
     """:func:`motion_axes` for a robot, with the columns of its extra SMRs and of its joint-error
     terms appended (the order of :attr:`Robot.parameter_names`).
 
@@ -69,15 +73,21 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
     small dependence of the joint errors on the link parameters is second order and left out).
     A joint-error parameter p of joint i turns the TCP about axis i by B_p(q) per unit
     (:func:`joint_error_basis`): its axis is joint i's scaled by B_p, pose by pose; on a prismatic
-    joint it moves the TCP along axis i (the d_i column scaled by B_p).
+    joint it moves the TCP along axis i (the d_i column scaled by B_p). The thermal
+    parameter translates the TCP (`robocal.kinematics.thermal.translation_axis`); with it,
+    every axis is that of the links scaled at ``temperature (N,)`` (the link-length columns are
+    per unit of the scaled length: a relative difference of k (T - T_ref), ~1e-4, left out).
     """
     tools = robot.tool if smr is None else robot.tools_for(smr)
+    payload, temperature = conditions_of(robot, q.shape[0], payload, temperature)
     if robot.joint_errors is None:
         reached = q
     else:  # the basis once: for the reached joints (as robot.reached_joints) and the axes
-        B, joint = joint_error_basis(robot, q, robot.joint_errors.names, approach, travel)  # (N, m), (m,)
+        B, joint = joint_error_basis(robot, q, robot.joint_errors.names, approach, travel,
+                                     payload)  # (N, m), (m,)
         reached = q + scatter_offsets(B, joint, robot.joint_errors.values, robot.n_joints)
-    tcp, u, o, rotation = motion_axes(robot.links, robot.base, tools, reached, robot.prismatic)
+    tcp, u, o, rotation = motion_axes(robot.links_at(temperature), robot.base, tools, reached,
+                                      robot.prismatic)
     k = len(robot.smr)
     if k:
         L = 5 * robot.n_joints
@@ -92,18 +102,26 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
     if robot.joint_errors is not None:
         slides = robot.prismatic[joint]
         column = 5 * joint + np.where(slides, 4, 3)  # d_i of a prismatic joint, else theta_i
-        u = np.concatenate([u, u[:, column] * B.T], axis=1)
+        u_err, turn = u[:, column] * B.T, ~slides
+        if THERMAL in robot.joint_errors.names:
+            t = robot.joint_errors.names.index(THERMAL)
+            u_err[:, t] = translation_axis(u[:, : 5 * robot.n_joints], robot.links, temperature,
+                                           robot.joint_errors.reference_temperature_c)
+            turn[t] = False
+        u = np.concatenate([u, u_err], axis=1)
         o = np.concatenate([o, o[:, column]], axis=1)
-        rotation = np.concatenate([rotation, ~slides])
+        rotation = np.concatenate([rotation, turn])
     return tcp, u, o, rotation
 
 
 def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: str = "point",
                             smr: np.ndarray | None = None, approach: np.ndarray | None = None,
-                            travel: np.ndarray | None = None):
+                            travel: np.ndarray | None = None, payload: np.ndarray | None = None,
+                            temperature: np.ndarray | None = None):
     """d(TCP)/d(params) for joints ``q`` ``(N, n)`` (``smr`` ``(N,)``: each row's SMR index;
     ``approach`` ``(N, n)``: joint approach directions for a backlash model; ``travel`` ``(N, n)``
-    rad: joint moves for a travel model).
+    rad: joint moves for a travel model; ``payload`` ``(N, 4)`` kg, m and ``temperature`` ``(N,)``
+    deg C: the rows' conditions for the payload and thermal terms).
 
     kind 'point': ``(N, 3, k)`` position rows (m per m or m per rad);
     kind 'pose': ``(N, 6, k)`` position rows then orientation rows (rad per unit).
@@ -115,17 +133,19 @@ def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: s
     idx = robot.indices(params)
     N = q.shape[0]
     if N <= CHUNK:
-        return _jacobian_rows(robot, q, idx, kind, smr, approach, travel)
+        return _jacobian_rows(robot, q, idx, kind, smr, approach, travel, payload, temperature)
     out = np.empty((N, 3 if kind == "point" else 6, idx.size))
     for start in range(0, N, CHUNK):
         part = slice(start, start + CHUNK)
         out[part] = _jacobian_rows(robot, q[part], idx, kind, *(None if v is None else np.asarray(v)[part]
-                                                                  for v in (smr, approach, travel)))
+                                                                  for v in (smr, approach, travel, payload,
+                                                                            temperature)))
     return out
 
 
-def _jacobian_rows(robot, q, idx: np.ndarray, kind: str, smr, approach, travel) -> np.ndarray:
-    tcp, u, o, rotation = robot_motion_axes(robot, q, smr, approach, travel)
+def _jacobian_rows(robot, q, idx: np.ndarray, kind: str, smr, approach, travel, payload,
+                   temperature) -> np.ndarray:
+    tcp, u, o, rotation = robot_motion_axes(robot, q, smr, approach, travel, payload, temperature)
     return jacobian_from_axes(tcp, u[:, idx], o[:, idx], rotation[idx], kind)
 
 

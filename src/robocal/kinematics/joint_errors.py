@@ -42,6 +42,12 @@ the lumped mass m_j (N): the product is what position data identify, and keeping
 coefficient per (joint, mass) keeps the model linear (no scale ambiguity between k and m).
 Gear, backlash and cyclic parameters are in rad, travel in rad per rad. Joints are 1-based in
 the names.
+
+Two terms depend on the conditions recorded with each row (``Measurements.payload`` and
+``.temperature``) and live in their own modules: ``payload`` (``payload{i}``, the joints' deflection
+under the payload's gravity moment: :mod:`robocal.kinematics.load`) and ``thermal`` (one parameter,
+the arm's link lengths scaled by ``1 + k (T - T_ref)``: :mod:`robocal.kinematics.thermal`; not a
+joint offset, so its column of the joint-offset basis is zero and the FK and Jacobian apply it).
 """
 
 from __future__ import annotations
@@ -54,11 +60,14 @@ import numpy as np
 
 from robocal.errors import IdentificationError, ModelError
 from robocal.io import as_number
+from robocal.kinematics import load, thermal
 from robocal.kinematics.fk import chain_frames
 
-TERMS = ("compliance", "gear", "backlash", "travel", "cyclic", "scale")
+TERMS = ("compliance", "gear", "backlash", "travel", "cyclic", "scale", "payload", "thermal")
+CONDITION_TERMS = ("payload", "thermal")  # the terms that use the rows' recorded conditions
 UNITS = {"compliance": "rad/m", "gear": "rad", "backlash": "rad", "travel": "rad/rad",
-         "cyclic": "rad", "scale": "1"}  # SI unit of each term's parameters
+         "cyclic": "rad", "scale": "1", "payload": load.UNIT,
+         "thermal": thermal.UNIT}  # SI unit of each term's parameters
 CYCLIC_MIN_FREQUENCY = 2.0  # cycles per joint revolution; 1 and 2 are the gear term's harmonics
 _COMP = re.compile(r"^comp(\d+)_(\d+)$")
 _GEAR = re.compile(r"^gear(\d+)_([sc][12])$")
@@ -66,8 +75,9 @@ _BACKLASH = re.compile(r"^backlash(\d+)$")
 _TRAVEL = re.compile(r"^travel(\d+)$")
 _CYCLIC = re.compile(r"^cyc(\d+)_(\d+(?:\.\d{1,2})?)_([sc])$")
 _SCALE = re.compile(r"^scale(\d+)$")
+_THERMAL = re.compile(f"^{thermal.NAME}$")
 _PATTERNS = {"compliance": _COMP, "gear": _GEAR, "backlash": _BACKLASH, "travel": _TRAVEL,
-             "cyclic": _CYCLIC, "scale": _SCALE}
+             "cyclic": _CYCLIC, "scale": _SCALE, "payload": load.PATTERN, "thermal": _THERMAL}
 
 
 def term_names(n: int, term: str) -> list[str]:
@@ -85,6 +95,10 @@ def term_names(n: int, term: str) -> list[str]:
         return [f"scale{i}" for i in range(1, n + 1)]
     if term == "cyclic":
         return []
+    if term == "payload":
+        return load.names(n)
+    if term == "thermal":
+        return [thermal.NAME]
     raise ModelError(f"unknown non-geometric term {term!r}; choose from {', '.join(TERMS)}")
 
 
@@ -151,24 +165,46 @@ def _parse(name: str, n: int) -> tuple[int, str, int | str | tuple | None]:
     m = _SCALE.match(name)
     if m and 1 <= int(m[1]) <= n:
         return int(m[1]) - 1, "scale", None
+    joint = load.joint_of(name, n)
+    if joint is not None:
+        return joint, "payload", None
+    if name == thermal.NAME:
+        return 0, "thermal", None
     raise ModelError(f"unknown joint-error parameter {name!r} for a {n}-joint robot: "
-                     "use comp{i}_{j} (i < j <= n), gear{i}_s1|c1|s2|c2, backlash{i}, travel{i}, scale{i} or "
-                     f"cyc{{i}}_{{f}}_s|c (f > {CYCLIC_MIN_FREQUENCY:g} cycles per revolution)")
+                     "use comp{i}_{j} (i < j <= n), gear{i}_s1|c1|s2|c2, backlash{i}, travel{i}, scale{i}, "
+                     f"cyc{{i}}_{{f}}_s|c (f > {CYCLIC_MIN_FREQUENCY:g} cycles per revolution), "
+                     f"payload{{i}} ({load.FIRST_JOINT} <= i <= n) or {thermal.NAME}")
 
 
 def joint_error_basis(robot, q: np.ndarray, names: Sequence[str], approach: np.ndarray | None = None,
-                      travel: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                      travel: np.ndarray | None = None,
+                      payload: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(B (N, k), joint (k,))``: d(dq_joint[p])/d(param p) at joints ``q (N, n)`` (rad).
 
-    ``dq[:, joint[p]] += B[:, p] * value[p]``. Compliance columns use the robot's frames at ``q``
-    (its link parameters and base; the robot's own joint-error model is not applied); backlash
-    columns are the approach directions ``approach (N, n)`` and travel columns the joint moves
-    ``travel (N, n)`` rad (zeros when not given)."""
+    ``dq[:, joint[p]] += B[:, p] * value[p]``. Compliance and payload columns use the robot's
+    frames at ``q`` (its link parameters and base; the robot's own joint-error model is not
+    applied); backlash columns are the approach directions ``approach (N, n)``, travel columns the
+    joint moves ``travel (N, n)`` rad and payload columns the moments of ``payload (N, 4)``
+    (:func:`robocal.kinematics.load.moment_basis`) (zeros when not given). The thermal column is
+    zero: it scales the links, not a joint."""
     n = robot.n_joints
     parsed = [_parse(nm, n) for nm in names]
     B = np.empty((q.shape[0], len(parsed)))
     frames = None
+    loaded = [p for p, t in enumerate(parsed) if t[1] == "payload"]
+    payload = conditions_of(robot, q.shape[0], payload)[0]
+    if loaded and payload is not None:
+        _, frames = chain_frames(robot.links, robot.base, robot.tool, q, frames=True,
+                                 prismatic=robot.prismatic)
+        B[:, loaded] = load.moment_basis(frames, payload, np.array([parsed[p][0] for p in loaded]))
     for p, (i, kind, detail) in enumerate(parsed):
+        if kind == "payload":
+            if payload is None:
+                B[:, p] = 0.0
+            continue
+        if kind == "thermal":
+            B[:, p] = 0.0
+            continue
         if kind == "gear":
             h = 2.0 if detail[1] == "2" else 1.0
             B[:, p] = np.sin(h * q[:, i]) if detail[0] == "s" else np.cos(h * q[:, i])
@@ -188,7 +224,7 @@ def joint_error_basis(robot, q: np.ndarray, names: Sequence[str], approach: np.n
         if frames is None:
             _, frames = chain_frames(robot.links, robot.base, robot.tool, q, frames=True,
                                      prismatic=robot.prismatic)
-            g = -frames[:, 0, :3, 2]
+        g = -frames[:, 0, :3, 2]
         z_i, o_i = frames[:, i + 1, :3, 2], frames[:, i + 1, :3, 3]
         arm = frames[:, detail, :3, 3] - o_i
         B[:, p] = np.einsum("ij,ij->i", z_i, np.cross(arm, g))
@@ -205,12 +241,57 @@ def scatter_offsets(B: np.ndarray, joint: np.ndarray, values: np.ndarray, n: int
     return dq
 
 
+def conditions_of(robot, N: int, payload: np.ndarray | None = None,
+                  temperature: np.ndarray | None = None) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The rows' ``payload (N, 4)`` and ``temperature (N,)``: as given, else the fixed conditions
+    the robot's error model is used at (:meth:`robocal.kinematics.model.Robot.with_conditions`),
+    else None."""
+    errors = getattr(robot, "joint_errors", None)
+    if errors is not None:
+        if payload is None and errors.payload is not None:
+            payload = np.broadcast_to(np.asarray(errors.payload, float), (N, 4))
+        if temperature is None and errors.temperature_c is not None:
+            temperature = np.full(N, float(errors.temperature_c))
+    return payload, temperature
+
+
+CONDITION_OPTIONS = ("--payload KG[,X,Y,Z]", "--temperature C")  # how a command is given them
+
+
+def assumed_conditions(robot, hints: tuple[str, str] = CONDITION_OPTIONS) -> list[str]:
+    """One warning per condition term of ``robot`` used without its condition (no rows' values,
+    no :meth:`~robocal.kinematics.model.Robot.with_conditions`), naming the default assumed;
+    ``hints``: how the user gives the payload and the temperature."""
+    errors, out = robot.joint_errors, []
+    terms = condition_terms(robot)
+    if "payload" in terms and errors.payload is None:
+        out.append(f"the model of {robot.name} has a payload term but no payload was given "
+                   f"({hints[0]}): assumed no payload (0 kg)")
+    if "thermal" in terms and errors.temperature_c is None:
+        out.append(f"the model of {robot.name} has a thermal term but no temperature was given "
+                   f"({hints[1]}): assumed its reference temperature "
+                   f"{errors.reference_temperature_c:.4g} deg C (the calibration's mean)")
+    return out
+
+
+def condition_terms(robot) -> set[str]:
+    """The terms of :data:`CONDITION_TERMS` ``robot``'s error model declares."""
+    errors = getattr(robot, "joint_errors", None)
+    return set() if errors is None else set(errors.terms) & set(CONDITION_TERMS)
+
+
 @dataclass(frozen=True, eq=False)
 class JointErrorModel:
-    """Named joint-error parameters and their values (SI units of :data:`UNITS`)."""
+    """Named joint-error parameters and their values (SI units of :data:`UNITS`);
+    ``reference_temperature_c``: the thermal term's T_ref (deg C); ``payload`` (kg, then the
+    centre of mass x, y, z in m in the flange frame) and ``temperature_c``: the fixed conditions the
+    model is used at where the rows give none (None: no payload, the arm at T_ref; not saved)."""
 
     names: tuple[str, ...]
     values: np.ndarray
+    reference_temperature_c: float = thermal.DEFAULT_REFERENCE_C
+    payload: tuple[float, float, float, float] | None = None
+    temperature_c: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "names", tuple(str(n) for n in self.names))
@@ -233,18 +314,26 @@ class JointErrorModel:
         return [UNITS[term_of(nm)] for nm in self.names]
 
     def offsets(self, robot, q: np.ndarray, approach: np.ndarray | None = None,
-                travel: np.ndarray | None = None) -> np.ndarray:
+                travel: np.ndarray | None = None, payload: np.ndarray | None = None) -> np.ndarray:
         """Joint offsets ``dq (N, n)`` (rad) at commanded joints ``q (N, n)`` reached from the
         directions ``approach (N, n)`` (backlash; None: unknown, mid-band) by the moves
-        ``travel (N, n)`` rad (None: no move)."""
-        B, joint = joint_error_basis(robot, q, self.names, approach, travel)
+        ``travel (N, n)`` rad (None: no move) carrying ``payload (N, 4)`` (kg, m; None: none)."""
+        B, joint = joint_error_basis(robot, q, self.names, approach, travel, payload)
         return scatter_offsets(B, joint, self.values, q.shape[-1])
+
+    def thermal_k(self) -> float | None:
+        """The thermal expansion coefficient (1/K), or None without the thermal term."""
+        return float(self.values[self.names.index(thermal.NAME)]) if thermal.NAME in self.names else None
 
     def to_dict(self) -> dict:
         """Plain data for the model YAML (SI units of :data:`UNITS`)."""
-        return {"units": "SI (comp: rad per m of unit-weight moment arm; gear, backlash, cyc: rad; "
-                         "travel: rad per rad of move; scale: per unit of joint value)",
-                "parameters": dict(zip(self.names, self.values.tolist(), strict=True))}
+        out = {"units": "SI (comp: rad per m of unit-weight moment arm; gear, backlash, cyc: rad; "
+                        "travel: rad per rad of move; scale: per unit of joint value; payload: rad per kg m "
+                        "of payload moment; thermal: 1/K)",
+               "parameters": dict(zip(self.names, self.values.tolist(), strict=True))}
+        if thermal.NAME in self.names:
+            out["reference_temperature_c"] = float(self.reference_temperature_c)
+        return out
 
     @classmethod
     def from_dict(cls, data, n: int) -> JointErrorModel:
@@ -254,4 +343,6 @@ class JointErrorModel:
         for name in params:
             _parse(str(name), n)
         values = [as_number(v, f"joint_errors.parameters.{name}", ModelError) for name, v in params.items()]
-        return cls(tuple(params), np.array(values))
+        t_ref = as_number(data.get("reference_temperature_c", thermal.DEFAULT_REFERENCE_C),
+                          "joint_errors.reference_temperature_c", ModelError)
+        return cls(tuple(params), np.array(values), t_ref)

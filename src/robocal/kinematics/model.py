@@ -38,6 +38,8 @@ from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.model_file import LINK_FIELDS, dump_model, is_cell, read_model_data, robot_kwargs
 from robocal.kinematics.opw import OPWParameters
+from robocal.kinematics.thermal import scale as thermal_scale
+from robocal.kinematics.thermal import scaled_links
 from robocal.kinematics.transforms import ROTATION_TOL, make_transform, matrix_to_rotvec, rotvec_to_matrix
 from robocal.kinematics.ur import URForm, ur_form
 
@@ -579,7 +581,7 @@ class Robot:
 
     def _from_vector(self, vec: np.ndarray) -> Robot:
         errors = None if self.joint_errors is None else \
-            JointErrorModel(self.joint_errors.names, vec[len(self.geometry_names):])
+            replace(self.joint_errors, values=vec[len(self.geometry_names):])
         return replace(self, joint_errors=errors, **self._geometry_kwargs(vec))
 
     def with_joint_errors(self, names: Sequence[str]) -> Robot:
@@ -590,8 +592,47 @@ class Robot:
             return replace(self, joint_errors=None)
         old = {} if self.joint_errors is None else \
             dict(zip(self.joint_errors.names, self.joint_errors.values.tolist(), strict=True))
-        errors = JointErrorModel(tuple(names), np.array([old.get(nm, 0.0) for nm in names]))
+        t_ref = {} if self.joint_errors is None else \
+            {"reference_temperature_c": self.joint_errors.reference_temperature_c}
+        errors = JointErrorModel(tuple(names), np.array([old.get(nm, 0.0) for nm in names]), **t_ref)
         return replace(self, joint_errors=errors)
+
+    def with_reference_temperature(self, celsius: float) -> Robot:
+        """A copy whose thermal term's T_ref is ``celsius`` (deg C); self without joint errors."""
+        if self.joint_errors is None:
+            return self
+        return replace(self, joint_errors=replace(self.joint_errors, reference_temperature_c=float(celsius)))
+
+    def with_conditions(self, payload=None, temperature: float | None = None) -> Robot:
+        """A copy used at a fixed payload ``(kg, x, y, z)`` (kg, m: the centre of mass in the flange
+        frame; a mass alone: at the flange) and ``temperature`` deg C wherever the rows give none
+        (compensation, programs); None leaves that condition as it was."""
+        if self.joint_errors is None:
+            return self
+        errors = self.joint_errors
+        if payload is not None:
+            p = np.zeros(4)
+            given = np.asarray(payload, float).reshape(-1)
+            if given.size not in (1, 4) or not np.isfinite(given).all() or given[0] < 0:
+                raise DataError(f"a payload is a mass >= 0 kg, optionally with its centre of mass x, y, z; "
+                                f"got {given.tolist()}")
+            p[: given.size] = given
+            errors = replace(errors, payload=tuple(p.tolist()))
+        if temperature is not None:
+            errors = replace(errors, temperature_c=float(as_number(temperature, "temperature", DataError)))
+        return replace(self, joint_errors=errors)
+
+    def links_at(self, temperature: np.ndarray | None = None) -> LinkArrays:
+        """The link parameters, ``a, d`` ``(N, n)`` scaled by the thermal term at ``temperature
+        (N,)`` deg C (:mod:`robocal.kinematics.thermal`); the plain ``(n,)`` links without a
+        thermal term or a temperature."""
+        k = None if self.joint_errors is None else self.joint_errors.thermal_k()
+        if k is not None and temperature is None and self.joint_errors.temperature_c is not None:
+            temperature = np.array([self.joint_errors.temperature_c])  # one for all rows
+        if k is None or temperature is None:
+            return self.links
+        t_ref = self.joint_errors.reference_temperature_c
+        return scaled_links(self.links, thermal_scale(k, temperature, t_ref))
 
     def default_free(self, orientation: bool = False) -> list[str]:
         """Parameters a calibration frees by default: every link parameter (beta only on
@@ -659,7 +700,7 @@ class Robot:
         delta = _as_vector(delta, len(names), "parameter displacement")
         moved = self.displaced_arrays(names, delta)
         errors = None if moved.joint_errors is None else \
-            JointErrorModel(self.joint_errors.names, moved.joint_errors)
+            replace(self.joint_errors, values=moved.joint_errors)
         return replace(self, base=moved.base, tool=moved.tool, smr=moved.smr, joint_errors=errors,
                        **moved.links._asdict())
 
@@ -705,19 +746,21 @@ class Robot:
         return q
 
     def reached_joints(self, q: np.ndarray, approach: np.ndarray | None = None,
-                       travel: np.ndarray | None = None) -> np.ndarray:
+                       travel: np.ndarray | None = None, payload: np.ndarray | None = None) -> np.ndarray:
         """The joints ``(N, n)`` the robot really turns to for commanded ``q`` (rad): ``q + dq(q)``
         with the declared joint-error terms (``approach`` ``(N, n)``: each joint's approach
-        direction, for backlash; ``travel`` ``(N, n)`` rad: each joint's last move, for travel)."""
+        direction, for backlash; ``travel`` ``(N, n)`` rad: each joint's last move, for travel;
+        ``payload`` ``(N, 4)`` kg and m: the payload carried, for payload)."""
         if self.joint_errors is None:
             return q
-        return q + self.joint_errors.offsets(self, q, approach, travel)
+        return q + self.joint_errors.offsets(self, q, approach, travel, payload)
 
-    def fk(self, q, frames: bool = False, smr=None, approach=None, travel=None):
+    def fk(self, q, frames: bool = False, smr=None, approach=None, travel=None, payload=None,
+           temperature=None):
         """TCP poses ``(N, 4, 4)`` (world frame, m) for joints ``(N, n)`` in rad.
 
         Joint-error terms turn the commanded joints into the joints the robot really reaches
-        first (`reached_joints`).
+        first (`reached_joints`); a thermal term scales the links at ``temperature`` (`links_at`).
 
         Parameters
         ----------
@@ -731,6 +774,10 @@ class Robot:
             Each joint's approach direction (+1 or -1), for a backlash term.
         travel : array_like, shape (N, n), optional
             Each joint's last move, radians, for a travel term.
+        payload : array_like, shape (N, 4), optional
+            Each row's payload (kg, centre of mass in the flange frame in m), for a payload term.
+        temperature : array_like, shape (N,), optional
+            Each row's arm temperature, deg C, for a thermal term.
 
         Returns
         -------
@@ -757,14 +804,15 @@ class Robot:
         >>> frames.shape
         (2, 7, 4, 4)
         """
-        q = self.reached_joints(self.check_joints(q), approach, travel)
+        q = self.reached_joints(self.check_joints(q), approach, travel, payload)
         tool = self.tool if smr is None else self.tools_for(smr)
+        links = self.links_at(temperature)
         if frames:
-            return chain_frames(self.links, self.base, tool, q, frames=True, prismatic=self.prismatic)
-        return chain_fk(self.links, self.base, tool, q, prismatic=self.prismatic)
+            return chain_frames(links, self.base, tool, q, frames=True, prismatic=self.prismatic)
+        return chain_fk(links, self.base, tool, q, prismatic=self.prismatic)
 
     def jacobian(self, q, params: Sequence[str] | None = None, kind: str = "point", smr=None,
-                 approach=None, travel=None):
+                 approach=None, travel=None, payload=None, temperature=None):
         """Identification Jacobian ``(N, 3|6, k)``; see
         `robocal.kinematics.jacobian.identification_jacobian`.
 
@@ -810,7 +858,8 @@ class Robot:
         array([0., 0., 1.])
         """
         names = self.default_free(kind == "pose") if params is None else list(params)
-        return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach, travel)
+        return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach, travel,
+                                       payload, temperature)
 
     def within_limits(self, q) -> np.ndarray:
         """``(N,)`` bool: every joint inside its limits."""

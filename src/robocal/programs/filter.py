@@ -34,6 +34,7 @@ from robocal.ik import solve_all
 from robocal.ik.closed_form import has_closed_form
 from robocal.ik.controller import JUMP_DEG, nearest_solutions
 from robocal.ik.singularity import SingularityDistance
+from robocal.kinematics.joint_errors import condition_terms
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
@@ -41,6 +42,7 @@ from robocal.programs.external import set_aside_external
 from robocal.programs.fanuc_ls import FanucDialect
 from robocal.programs.inform import InformDialect, looks_like_inform
 from robocal.programs.krl import KRLDialect
+from robocal.programs.load import program_load
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.motions import undeclared
 from robocal.programs.rapid import RapidDialect
@@ -299,7 +301,8 @@ def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
 def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
                    robot_base=None, dialect: str | None = None, references=(),
                    keep_unreached: bool = False, strict: bool = False, force: bool = False,
-                   position_registers: str | Path | None = None) -> FilterResult:
+                   position_registers: str | Path | None = None, payload=None,
+                   temperature: float | None = None) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -350,6 +353,12 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         Filter a file robocal already filtered (its marker names the run).
     position_registers : path-like, optional
         A FANUC position register file: motions to those registers are corrected.
+    payload : float or array_like, shape (4,), optional
+        The payload every target is run with: kg, or kg and the centre of mass x, y, z in the
+        flange frame (m), for a model with a payload term (default: the program's own load data
+        where it sets one, else none, with a warning).
+    temperature : float, optional
+        The arm's temperature every target is run at, deg C, for a model with a thermal term.
 
     Returns
     -------
@@ -397,6 +406,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         if not isinstance(d, FanucDialect):
             raise DataError(f"--position-registers is for FANUC programs, not {d.name}")
         sources.append(ProgramText(position_registers))
+    calibrated, load_notes = _with_load(calibrated, d, sources, payload, temperature)
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
     missing = undeclared(program.ledger)
@@ -404,7 +414,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         raise _listed(f"{len(missing)} motion(s) move to names declared in none of the files given:", missing,
                       "give the files that declare them (or --references), or run without --strict to "
                       "name these motions and correct the rest")
-    warnings = list(program.warnings)
+    warnings = list(program.warnings) + load_notes
     if track is not None:
         track.take(program, warnings)
     targets = _filterable(d, program, warnings)
@@ -434,6 +444,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     comp = _compensate(real_model, nominal, X @ invert_transform(real_tool), seeds) if track is None \
         else track.compensate(real_model, targets, X @ invert_transform(real_tool), seeds)
     q, sing = comp.joints, comp.singularity
+    warnings += comp.assumed
     _check_joints(controller, comp, ok, problems)
     bad = {i for i, _ in problems}
     if problems and not keep_unreached:
@@ -477,6 +488,19 @@ def _compensate(model: Robot, nominal: Robot, F: np.ndarray, seeds: np.ndarray) 
                    converged=joined([p.converged for p in parts]),
                    position_error=joined([p.position_error for p in parts]),
                    orientation_error=joined([p.orientation_error for p in parts]), singularity=sing)
+
+
+def _with_load(calibrated: Robot, dialect: Dialect, sources, payload, temperature) -> tuple[Robot, list[str]]:
+    """``calibrated`` at the given payload (else the one load the program sets, if the model has a
+    payload term) and temperature, and the warnings on the program's own load."""
+    if payload is not None or "payload" not in condition_terms(calibrated):
+        return calibrated.with_conditions(payload, temperature), []
+    load, why = program_load(dialect, sources)
+    if load is None:
+        return calibrated.with_conditions(None, temperature), [why] if why else []
+    notes = [f"the program's load {load[0]:g} kg, centre of mass {np.round(load[1:] * 1e3, 3).tolist()} mm "
+             f"({why}) applied to every motion"]
+    return calibrated.with_conditions(load, temperature), notes
 
 
 def _check_tcp(real: dict, tools: dict, warnings: list) -> None:

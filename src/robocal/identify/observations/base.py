@@ -9,6 +9,9 @@ import numpy as np
 from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import joint_error_basis, scatter_offsets
+from robocal.kinematics.thermal import NAME as THERMAL
+from robocal.kinematics.thermal import scale as thermal_scale
+from robocal.kinematics.thermal import scaled_links
 
 
 class Observation:
@@ -31,6 +34,8 @@ class Observation:
         self.smr = np.asarray(data.smr, dtype=int)
         self.approach = data.approach  # joint approach directions (backlash)
         self.travel = data.travel  # joint moves from the previous pose (travel)
+        self.payload = data.payload  # (N, 4) kg, m or None (payload)
+        self.temperature = data.temperature  # (N,) deg C or None (thermal)
         self.item_sigma = None if data.sigma is None else np.asarray(data.sigma, dtype=float)
         self._basis = None  # (robot, B, joint): the joint-error basis batch_tcp last used
 
@@ -103,12 +108,14 @@ class Observation:
     def _fk(self, robot) -> np.ndarray:
         """TCP poses ``(N, 4, 4)`` of the data rows: each with its SMR, joint-error terms from
         the rows' approach directions and moves."""
-        return robot.fk(self.q, smr=self.smr, approach=self.approach, travel=self.travel)
+        return robot.fk(self.q, smr=self.smr, approach=self.approach, travel=self.travel,
+                        payload=self.payload, temperature=self.temperature)
 
     def _tcp_jacobian(self, robot, names: Sequence[str], kind: str = "point") -> np.ndarray:
         """d(TCP of each row)/d(``names``) ``(N, 3|6, k)`` (:func:`identification_jacobian`,
         ``kind`` 'point' or 'pose'), with the rows' SMRs, approach directions and moves."""
-        return identification_jacobian(robot, self.q, names, kind, self.smr, self.approach, self.travel)
+        return identification_jacobian(robot, self.q, names, kind, self.smr, self.approach, self.travel,
+                                       self.payload, self.temperature)
 
     def batch_tcp(self, robot, names, X) -> np.ndarray:
         """TCP poses ``(P, N, 4, 4)`` of the displaced robots (each row with its SMR, joint-error
@@ -123,6 +130,10 @@ class Observation:
         if moved.joint_errors is not None:
             if self._basis is None or self._basis[0] is not robot:  # once per robot, not per call
                 self._basis = (robot, *joint_error_basis(robot, self.q, robot.joint_errors.names,
-                                                         self.approach, self.travel))
+                                                         self.approach, self.travel, self.payload))
             q = q + scatter_offsets(*self._basis[1:], moved.joint_errors, n)
+            k_index = [i for i, nm in enumerate(robot.joint_errors.names) if nm == THERMAL]
+            if k_index and self.temperature is not None:  # (P, N) scale of each displaced robot
+                links = scaled_links(links, thermal_scale(moved.joint_errors[:, k_index[0]], self.temperature,
+                                                          robot.joint_errors.reference_temperature_c))
         return chain_frames(links, moved.base[:, None], tools, q, prismatic=robot.prismatic)

@@ -1,0 +1,127 @@
+"""Working conditions of a simulated campaign: payloads and the arm's temperature.
+
+The truth of :func:`robocal.data.simulate.simulate_tracker` with ``payloads`` and
+``temperatures``: the poses are measured in equal consecutive blocks, one per payload (in the
+order given), the arm warming linearly from the lowest to the highest temperature within each
+block; the payload's centre of mass is ``PAYLOAD_COM_M`` in the flange frame unless given.
+
+The true robot deflects under the payload and expands with temperature. The measured points are
+computed here from the physics, independently of the fitting code (:mod:`robocal.kinematics.load`,
+:mod:`robocal.kinematics.thermal`): the gravity moment about each joint is minus the derivative of
+the payload's potential energy, by central differences of the height of its centre of mass (the
+plain FK of the true geometry), and the thermal expansion scales the true link lengths a, d
+(the base height d_1 included) pose by pose before the FK. The written truth carries the same
+effects as the ``payload{i}`` and ``thermal`` terms, so ``robot.fk`` of the truth with the rows'
+conditions reproduces the points (the simulator's test checks that they agree).
+
+True values: joint i (2..n) turns ``c_i`` rad per kg m of payload moment (``c_i = k_i |g|``),
+uniform in ``PAYLOAD_DEFLECTION_MM`` of deflection at the reach for the heaviest payload held at
+the reach, and the arm expands by ``THERMAL_PER_K`` per kelvin (steel). T_ref is the campaign's
+mean temperature. A truth that already carries these terms (``as_is``: the truth of an earlier
+simulation measured again, e.g. at other conditions) keeps its values and T_ref.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from robocal.errors import DataError
+from robocal.kinematics.fk import LinkArrays, chain_fk
+
+PAYLOAD_COM_M = (0.0, 0.0, 0.25)  # default centre of mass in the flange frame, m
+PAYLOAD_DEFLECTION_MM = (0.1, 0.4)  # true deflection (at the reach, heaviest payload at the reach) per joint
+THERMAL_PER_K = 11.5e-6  # steel
+HEIGHT_STEP_RAD = 1e-6  # central-difference step of the potential energy's derivative
+
+
+def check(payloads, temperatures) -> tuple[np.ndarray | None, tuple[float, float] | None]:
+    """Validated payloads ``(m,)`` kg and temperature range ``(lo, hi)`` deg C (None: not simulated)."""
+    if payloads is not None:
+        payloads = np.asarray(payloads, float).reshape(-1)
+        if payloads.size == 0 or not np.isfinite(payloads).all() or (payloads < 0).any():
+            raise DataError("payloads must be one or more masses >= 0 kg")
+    if temperatures is not None:
+        t = np.asarray(temperatures, float).reshape(-1)
+        if t.size != 2 or not np.isfinite(t).all() or t[0] > t[1] or t[0] < -40 or t[1] > 120:
+            raise DataError("temperatures must be a range LO:HI in deg C with -40 <= LO <= HI <= 120")
+        temperatures = (float(t[0]), float(t[1]))
+    return payloads, temperatures
+
+
+def schedule(n_poses: int, payloads: np.ndarray | None, temperatures, com) -> tuple:
+    """Per pose ``payload (n_poses, 4)`` (kg, m) and ``temperature (n_poses,)`` deg C (None where
+    not simulated): one consecutive block per payload, warming within each block."""
+    blocks = len(payloads) if payloads is not None else 1
+    block = np.minimum(np.arange(n_poses) * blocks // n_poses, blocks - 1)
+    payload = None
+    if payloads is not None:
+        com = np.asarray(PAYLOAD_COM_M if com is None else com, float).reshape(3)
+        payload = np.c_[payloads[block], np.tile(com, (n_poses, 1))]
+    temperature = None
+    if temperatures is not None:
+        lo, hi = temperatures
+        starts = np.searchsorted(block, np.arange(blocks))
+        size = np.diff(np.r_[starts, n_poses])
+        within = np.arange(n_poses) - starts[block]
+        temperature = lo + (hi - lo) * within / np.maximum(size[block] - 1, 1)
+    return payload, temperature
+
+
+def true_terms(robot, payloads: np.ndarray | None, temperatures, reach: float,
+               rng: np.random.Generator) -> dict[str, float]:
+    """The true payload{i} (rad per kg m) and thermal (1/K) values, drawn as the module says, or
+    ``robot``'s own where it declares them (``as_is``: a truth measured again)."""
+    errors = robot.joint_errors
+    own = {} if errors is None else {nm: float(v) for nm, v in zip(errors.names, errors.values, strict=True)
+                                     if nm == "thermal" or nm.startswith("payload")}
+    if own:
+        return own
+    values = {}
+    if payloads is not None and payloads.max() > 0:
+        moment = payloads.max() * reach  # kg m: the heaviest payload held at the reach
+        for i in range(2, robot.n_joints + 1):
+            values[f"payload{i}"] = rng.uniform(*PAYLOAD_DEFLECTION_MM) * 1e-3 / reach / moment
+    if temperatures is not None:
+        values["thermal"] = THERMAL_PER_K
+    return values
+
+
+def gravity_moments(plain, q: np.ndarray, payload: np.ndarray) -> np.ndarray:
+    """``(N, n)`` kg m: the payload's gravity moment about each joint per unit g, ``-m dh/dq_i``
+    with ``h`` the height (robot base frame z) of its centre of mass, by central differences of
+    the FK of ``plain`` (a robot without joint errors; its base and tool are ignored)."""
+    N, n = q.shape
+    moments = np.empty((N, n))
+    links = plain.links
+    for i in range(n):
+        step = np.zeros(n)
+        step[i] = HEIGHT_STEP_RAD
+        h = [_com_height(links, q + s * step, payload[:, 1:]) for s in (1.0, -1.0)]
+        moments[:, i] = -payload[:, 0] * (h[0] - h[1]) / (2 * HEIGHT_STEP_RAD)
+    return moments
+
+
+def _com_height(links: LinkArrays, q: np.ndarray, com: np.ndarray) -> np.ndarray:
+    tool = np.broadcast_to(np.eye(4), (len(q), 4, 4)).copy()
+    tool[:, :3, 3] = com
+    return chain_fk(links, np.eye(4), tool, q)[:, 2, 3]
+
+
+def measured_poses(true, q: np.ndarray, smr: np.ndarray, approach, travel, payload, temperature,
+                   coefficients: dict[str, float], reference: float) -> np.ndarray:
+    """TCP poses ``(N, 4, 4)`` of the true robot ``true`` (its own joint errors, without the
+    condition terms) at commanded ``q (N, n)`` carrying ``payload (N, 4)`` at ``temperature (N,)``
+    (either None), with the true ``coefficients`` (:func:`true_terms`)."""
+    n = q.shape[1]
+    reached = true.reached_joints(q, approach, travel)
+    if payload is not None and payload[:, 0].any():
+        plain = replace(true, joint_errors=None)
+        c = np.array([coefficients.get(f"payload{i + 1}", 0.0) for i in range(n)])
+        reached = reached + c * gravity_moments(plain, q, payload)
+    links = true.links
+    if temperature is not None:
+        s = (1.0 + coefficients["thermal"] * (np.asarray(temperature) - reference))[:, None]
+        links = LinkArrays(links.alpha, links.a * s, links.beta, links.theta, links.d * s)
+    return chain_fk(links, true.base, true.tools_for(smr), reached, prismatic=true.prismatic)
