@@ -7,21 +7,21 @@ read in another common unit (m, mm, inch) it is one a robot has, the value is re
 unit. The plausible sizes are named here once, as fractions of the robot's reach where the size
 scales with the robot:
 
-* a tool's TCP offset from the flange: :data:`TOOL_MIN_M` .. :data:`TOOL_MAX_M` (a TCP nearer
+* a tool's TCP offset from the flange: `TOOL_MIN_M` .. `TOOL_MAX_M` (a TCP nearer
   than 2 mm to the flange centre but not on it is metres typed as mm);
-* a frame (work object, user frame, base) translation: 0 or :data:`FRAME_MIN_M` ..
-  :data:`FRAME_MAX_REACHES` reaches;
-* a set of Cartesian targets: the farthest from the robot's base lies :data:`TARGETS_MIN_REACHES`
-  .. :data:`TARGETS_MAX_REACHES` reaches away (the robot reaches its targets);
-* a robot model's reach (sum of its link lengths): :data:`MODEL_MIN_REACH_M` ..
-  :data:`MODEL_MAX_REACH_M`;
-* a robot model file's angles (:func:`check_model_units`): fixed angles all within a turn of
-  'degrees' (largest above :data:`RADIAN_SET_MIN_DEG`), or joint limits all within a turn of
+* a frame (work object, user frame, base) translation: 0 or `FRAME_MIN_M` ..
+  `FRAME_MAX_REACHES` reaches;
+* a set of Cartesian targets: the farthest from the robot's base lies `TARGETS_MIN_REACHES`
+  .. `TARGETS_MAX_REACHES` reaches away (the robot reaches its targets);
+* a robot model's reach (sum of its link lengths): `MODEL_MIN_REACH_M` ..
+  `MODEL_MAX_REACH_M`;
+* a robot model file's angles (`check_model_units`): fixed angles all within a turn of
+  'degrees' (largest above `RADIAN_SET_MIN_DEG`), or joint limits all within a turn of
   'degrees', are radians;
-* angles in degrees that are radians: multiples of pi/12 within :data:`RADIAN_LIKE_TOL`
+* angles in degrees that are radians: multiples of pi/12 within `RADIAN_LIKE_TOL`
   (0.785 = pi/4 typed where 45 belongs) for a value typed once; a set of targets' angles that
-  all lie within pi 'degrees' (:func:`check_degree_set`); angles in radians beyond
-  :data:`MAX_RADIANS` are degrees.
+  all lie within pi 'degrees' (`check_degree_set`); angles in radians beyond
+  `MAX_RADIANS` are degrees.
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ def check_length(size_m: float, declared: str, low_m: float, high_m: float, what
                  zero_ok: bool = True, advice: str = "give {declared}", strict: bool = True) -> None:
     """Refuse ``size_m`` (m, a length read in the ``declared`` unit: 'mm', 'm' or 'inch') outside
     ``low_m .. high_m``, the plausible sizes of ``kind`` (e.g. "a tool's TCP offset"): UnitError
-    naming the unit in which the same number would fit (:data:`LENGTH_SCALES_M`), or saying it
+    naming the unit in which the same number would fit (`LENGTH_SCALES_M`), or saying it
     fits none. ``advice`` ends the message (``{unit}`` / ``{declared}``: the likely / declared unit's
     word); ``strict`` False: a size that fits no unit passes (left to a check that says more)."""
     if (zero_ok and size_m == 0.0) or low_m <= size_m <= high_m:
@@ -132,7 +132,7 @@ def check_degrees(angles_deg: Sequence[float], what: str) -> None:
 
 def check_degree_set(angles_deg: Sequence[float], what: str) -> None:
     """Refuse a set of orientation angles in degrees (targets' rx, ry, rz) that are all within
-    [-pi, pi] 'degrees' while the largest is above :data:`RADIAN_SET_MIN_DEG`: radians (a set of
+    [-pi, pi] 'degrees' while the largest is above `RADIAN_SET_MIN_DEG`: radians (a set of
     real orientations that all lie within 3.14 deg of the identity is not what a program holds)."""
     a = np.abs(np.asarray(angles_deg, dtype=float))
     if RADIAN_SET_MIN_DEG < a.max(initial=0.0) <= math.pi + 1e-6:

@@ -3,8 +3,8 @@
 FANUC controllers count J3 from the horizontal, not from the upper arm: the value a FANUC
 controller shows, logs and takes in a TP program is ``J3 + J23_FACTOR * J2`` of the catalog's
 joints (ROS-Industrial fanuc_driver: ``J3_out = J3_in + J23_factor * J2_in``, J23_factor 1 for its
-arms). A joint log from a FANUC controller is read with :func:`fanuc_decoupled` (CLI
-``--fanuc-j2j3-coupled``); robocal's ``--fanuc`` campaign programs write :func:`fanuc_coupled`.
+arms). A joint log from a FANUC controller is read with `fanuc_decoupled` (CLI
+``--fanuc-j2j3-coupled``); robocal's ``--fanuc`` campaign programs write `fanuc_coupled`.
 """
 
 from __future__ import annotations

@@ -63,7 +63,7 @@ class Uncertainty:
     @classmethod
     def from_dict(cls, d: dict) -> Uncertainty:
         """From a history record's ``uncertainty``
-        (:func:`robocal.history.record.calibration_uncertainty`)."""
+        (`robocal.history.record.calibration_uncertainty`)."""
         cov = np.asarray(d["covariance"], float).reshape(len(d["names"]), len(d["names"]))
         return cls(tuple(d["names"]), cov, float(d["noise_m"]), int(d["dof"]), str(d.get("kind", "point")))
 
@@ -92,7 +92,7 @@ class Uncertainty:
 
 @dataclass
 class CheckResult:
-    """The verdict of a check; :meth:`to_dict` is its JSON (docs/reference/check-json.md)."""
+    """The verdict of a check; `to_dict` is its JSON (docs/reference/check-json.md)."""
 
     verdict: str
     p_value: float
@@ -130,7 +130,7 @@ class CheckResult:
 
 class _Whitened:
     """The check's residuals and refitted columns in the metric of ``C`` (whitened by its Cholesky
-    factor); :meth:`fit` is the generalised least-squares fit of extra columns with the frame."""
+    factor); `fit` is the generalised least-squares fit of extra columns with the frame."""
 
     def __init__(self, r: np.ndarray, J_frame: np.ndarray, C: np.ndarray) -> None:
         self.L = linalg.cholesky(C, lower=True)

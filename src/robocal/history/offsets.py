@@ -32,10 +32,10 @@ def check_same_robot(nominal, start) -> None:
 
 
 def recalibrate_offsets(nominal, start, data, validation=None, **options):
-    """A :class:`~robocal.calibration.CalibrationResult` whose robot is ``start`` (an earlier
+    """A `robocal.calibration.CalibrationResult` whose robot is ``start`` (an earlier
     calibration of ``nominal``) with only its joint zeros re-identified on ``data`` (point or pose
     measurements; the tracker frame and SMR offsets fitted with them); ``validation`` and
-    ``options`` as :func:`robocal.calibrate` takes them (not ``params`` nor ``nongeometric``)."""
+    ``options`` as `robocal.calibrate` takes them (not ``params`` nor ``nongeometric``)."""
     check_same_robot(nominal, start)
     sets = data if isinstance(data, list | tuple) else [data]
     if any(d.kind not in ("point", "pose") for d in sets):

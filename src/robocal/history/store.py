@@ -8,7 +8,7 @@ several engineers share, through psycopg 3: ``pip install robocal[history-pg]``)
 Several writers at once all succeed: SQLite runs in WAL mode with a busy timeout, and every write
 is one short ``BEGIN IMMEDIATE`` transaction retried with backoff while another writer holds the
 lock; PostgreSQL serialises the schema set-up with an advisory lock. The schema carries a version
-(table ``schema_version``); :data:`MIGRATIONS` brings any older database up to date on open.
+(table ``schema_version``); `MIGRATIONS` brings any older database up to date on open.
 """
 
 from __future__ import annotations
@@ -121,7 +121,7 @@ def file_sha256(path) -> str:
 
 
 def check_robot_id(robot_id: str) -> str:
-    """A robot id: printable text of 1 to :data:`MAX_ROBOT_ID` characters (DataError otherwise)."""
+    """A robot id: printable text of 1 to `MAX_ROBOT_ID` characters (DataError otherwise)."""
     if not isinstance(robot_id, str) or not robot_id.strip() or len(robot_id) > MAX_ROBOT_ID \
             or not robot_id.isprintable():
         raise DataError(f"a robot id is printable text of 1 to {MAX_ROBOT_ID} characters, got "
@@ -135,7 +135,7 @@ def is_postgres(location: str) -> bool:
 
 class History:
     """A history database (SQLite file or PostgreSQL URL); use as a context manager or call
-    :meth:`close`. Opening creates the schema, or migrates an older one."""
+    `close`. Opening creates the schema, or migrates an older one."""
 
     def __init__(self, location) -> None:
         self.location = str(location)

@@ -5,7 +5,7 @@ which calibrated model corrected them and which robocal version did it::
 
     robocal <version> model <fingerprint>
 
-``fingerprint`` is the first :data:`FINGERPRINT_HEX` hex digits of the SHA-256 of the calibrated
+``fingerprint`` is the first `FINGERPRINT_HEX` hex digits of the SHA-256 of the calibrated
 model's canonical parameters (every parameter name with its SI value to 12 significant digits:
 the same model loaded from any of its files gives the same fingerprint). Reading a marked file
 back in (filtering a filtered program, compensating compensated targets: the corrections applied
@@ -17,11 +17,11 @@ Where the marker goes (one added line; the rest of the file is byte for byte the
   without one);
 * KUKA KRL: ``; ...`` on the line after the first ``DEF`` / ``DEFDAT`` / ``DEFFCT`` line;
 * FANUC TP (.ls): a remark ``!...`` as the last line of ``/MN``, numbered after the last line,
-  with ``LINE_COUNT`` raised by one; a remark line holds :data:`TP_REMARK_WIDTH` characters, so
+  with ``LINE_COUNT`` raised by one; a remark line holds `TP_REMARK_WIDTH` characters, so
   the fingerprint is cut to fit (10 hex digits with a five-character version);
 * URScript: ``# ...`` as the first line;
 * Yaskawa INFORM: a comment instruction ``'...`` after the job's ``NOP`` (a comment holds
-  :data:`INFORM_COMMENT_WIDTH` characters: the fingerprint is cut to fit); a VAR.DAT, which holds
+  `INFORM_COMMENT_WIDTH` characters: the fingerprint is cut to fit); a VAR.DAT, which holds
   no instructions, carries none;
 * Staubli VAL3: an XML comment ``<!-- ... -->`` on the line after the XML declaration of each
   file written (a file without a declaration carries none);
@@ -68,7 +68,7 @@ class Marker:
 
 
 def model_fingerprint(robot: Robot) -> str:
-    """The :data:`FINGERPRINT_HEX` hex digits naming ``robot``'s parameters (see the module
+    """The `FINGERPRINT_HEX` hex digits naming ``robot``'s parameters (see the module
     docstring)."""
     canon = "\n".join(f"{name}={value:.{_SIGNIFICANT}g}"
                       for name, value in zip(robot.parameter_names, robot.values.tolist(), strict=True))

@@ -1,6 +1,6 @@
 """Universal Robots' factory calibration and the ROS driver's calibration YAML, both ways.
 
-Two formats, one entry each way (:func:`import_calibration`, :func:`to_ur_calibration`):
+Two formats, one entry each way (`import_calibration`, `to_ur_calibration`):
 
 * ``calibration.conf`` (on the controller, ``/root/.urcontrol``): an INI-style ``[mounting]``
   section with ``delta_theta``, ``delta_a``, ``delta_d``, ``delta_alpha`` (six values each, m and
@@ -13,12 +13,12 @@ Two formats, one entry each way (:func:`import_calibration`, :func:`to_ur_calibr
   forearm, wrist_1, wrist_2, wrist_3: {x, y, z, roll, pitch, yaw}, hash}``, which ur_description's
   xacro composes as joint origins ``T(x, y, z) Rz(yaw) Ry(pitch) Rx(roll)`` (URDF rpy), each
   followed by the joint's ``Rz(q)``, in the controller's ``base`` frame; ``tool0`` is fixed on
-  ``wrist_3_link`` by the flange joints (:data:`XACRO_TOOL0`).
+  ``wrist_3_link`` by the flange joints (`XACRO_TOOL0`).
 
-Both are read exactly into MDH + beta (:func:`mdh_beta_from_lines`): the joint lines at zero
+Both are read exactly into MDH + beta (`mdh_beta_from_lines`): the joint lines at zero
 joints, common normals between non-parallel axes and Hayati's construction (beta) between the
 axes the nominal model flags parallel, so no d grows with near-parallelism. Every conversion is
-checked against the composition it came from (:data:`SELF_CHECK_M`, :data:`SELF_CHECK_RAD`).
+checked against the composition it came from (`SELF_CHECK_M`, `SELF_CHECK_RAD`).
 """
 
 from __future__ import annotations
@@ -189,7 +189,7 @@ def mdh_beta_from_lines(u: np.ndarray, p: np.ndarray, flange: np.ndarray, hayati
     frame's x axis meets axis i-1 and its x axis points at the point where axis i crosses the plane
     through that origin normal to axis i-1 (Hayati), so a, d and beta stay of the arm's size however
     nearly parallel the axes are; elsewhere the common normal (beta = 0). The placement, signs
-    (theta near 0) and the flange frame follow :func:`robocal.kinematics.convert.mdh_from_axes`, so
+    (theta near 0) and the flange frame follow `robocal.kinematics.convert.mdh_from_axes`, so
     a nominal table converts to the catalog's values. Exact: the chain's joint lines and flange are
     those given.
     """
@@ -520,8 +520,8 @@ def not_representable(robot: Robot) -> str | None:
 
 def to_ur_calibration(robot: Robot, nominal: Robot) -> str:
     """The ur_calibration YAML text whose xacro composition is ``robot``'s geometry from the
-    controller's base to its flange (see :func:`xacro_origins`; joint-error terms, the model's world
-    frame and tool are not part of it: :func:`not_representable`)."""
+    controller's base to its flange (see `xacro_origins`; joint-error terms, the model's world
+    frame and tool are not part of it: `not_representable`)."""
     origins = xacro_origins(robot, nominal)
     lines = [f"# written by robocal from model {robot.name}: the calibrated geometry from the controller's",
              f"# base to its flange (tool0), for ur_description's xacro (nominal {nominal.name}).",
