@@ -58,7 +58,30 @@ _FANUC_COUNT = re.compile(r"^(LINE_COUNT\s*=\s*)(\d+)", re.M)
 
 @dataclass(frozen=True)
 class Marker:
-    """A marker found in a file: the robocal ``version`` and the calibrated ``model`` fingerprint."""
+    """A marker found in a file: the robocal ``version`` and the calibrated ``model`` fingerprint.
+
+    Attributes
+    ----------
+    version : str
+        The robocal version that wrote the file.
+    model : str
+        The calibrated model's fingerprint: ``FINGERPRINT_HEX`` hex digits of the SHA-256 of its
+        parameters (fewer in a FANUC remark or an INFORM comment, cut to fit).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.trust.output_marker import find_marker, marker_text, model_fingerprint
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> program = "MODULE weld\\n  ! " + marker_text(robot) + "\\nENDMODULE\\n"
+    >>> marker = find_marker(program)
+    >>> marker.model == model_fingerprint(robot), marker.version == rc.__version__
+    (True, True)
+    >>> marker.describe() == f"robocal {rc.__version__} with the calibrated model {marker.model}"
+    True
+    >>> find_marker("MODULE weld\\nENDMODULE\\n") is None  # an unmarked program
+    True
+    """
 
     version: str
     model: str
