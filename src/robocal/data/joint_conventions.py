@@ -3,8 +3,8 @@
 FANUC controllers count J3 from the horizontal, not from the upper arm: the value a FANUC
 controller shows, logs and takes in a TP program is ``J3 + J23_FACTOR * J2`` of the catalog's
 joints (ROS-Industrial fanuc_driver: ``J3_out = J3_in + J23_factor * J2_in``, J23_factor 1 for its
-arms). A joint log from a FANUC controller is read with :func:`fanuc_decoupled` (CLI
-``--fanuc-j2j3-coupled``); robocal's ``--fanuc`` campaign programs write :func:`fanuc_coupled`.
+arms). A joint log from a FANUC controller is read with `fanuc_decoupled` (CLI
+``--fanuc-j2j3-coupled``); robocal's ``--fanuc`` campaign programs write `fanuc_coupled`.
 """
 
 from __future__ import annotations
@@ -16,14 +16,54 @@ COUPLED_OPTION = "--fanuc-j2j3-coupled"  # the command-line option that reads a 
 
 
 def fanuc_coupled(q: np.ndarray) -> np.ndarray:
-    """Catalog joints ``(N, n)`` (n >= 3) -> the FANUC controller's (J3 from the horizontal)."""
+    """Catalog joints ``(N, n)`` (n >= 3) -> the FANUC controller's (J3 from the horizontal).
+
+    Parameters
+    ----------
+    q : ndarray, shape (N, n)
+        Joints in the catalog's (ROS-Industrial) convention, rad; not modified.
+
+    Returns
+    -------
+    ndarray, shape (N, n)
+        The same joints as the controller counts them: J3 + ``J23_FACTOR`` * J2, rad.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from robocal.data.joint_conventions import fanuc_coupled, fanuc_decoupled
+    >>> q = np.array([[0.0, 0.3, -0.2, 0.0, 0.5, 0.0]])  # rad
+    >>> round(float(fanuc_coupled(q)[0, 2]), 6)  # J3 as the controller shows it
+    0.1
+    >>> bool(np.allclose(fanuc_decoupled(fanuc_coupled(q)), q))  # and back
+    True
+    """
     out = np.array(q, dtype=float, copy=True)
     out[:, 2] += J23_FACTOR * out[:, 1]
     return out
 
 
 def fanuc_decoupled(q: np.ndarray) -> np.ndarray:
-    """A FANUC controller's joints ``(N, n)`` (J3 from the horizontal) -> the catalog's."""
+    """A FANUC controller's joints ``(N, n)`` (J3 from the horizontal) -> the catalog's.
+
+    Parameters
+    ----------
+    q : ndarray, shape (N, n)
+        Joints as a FANUC controller logs them, rad; not modified.
+
+    Returns
+    -------
+    ndarray, shape (N, n)
+        The catalog's joints: J3 - ``J23_FACTOR`` * J2, rad.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from robocal.data.joint_conventions import fanuc_decoupled
+    >>> logged = np.array([[0.0, 0.3, 0.1, 0.0, 0.5, 0.0]])  # rad, from the controller
+    >>> round(float(fanuc_decoupled(logged)[0, 2]), 6)
+    -0.2
+    """
     out = np.array(q, dtype=float, copy=True)
     out[:, 2] -= J23_FACTOR * out[:, 1]
     return out

@@ -1,5 +1,6 @@
-"""A robot's history: calibrations and checks recorded in a database (:mod:`.store`), the check of
-a calibration against a short campaign (:mod:`.check`), offsets-only recalibration (:mod:`.offsets`)."""
+"""A robot's history: calibrations and checks recorded in a database (`robocal.history.store`),
+the check of a calibration against a short campaign (`robocal.history.check`), offsets-only
+recalibration (`robocal.history.offsets`)."""
 
 from robocal.history.store import History, Record
 

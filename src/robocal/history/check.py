@@ -63,7 +63,7 @@ class Uncertainty:
     @classmethod
     def from_dict(cls, d: dict) -> Uncertainty:
         """From a history record's ``uncertainty``
-        (:func:`robocal.history.record.calibration_uncertainty`)."""
+        (`robocal.history.record.calibration_uncertainty`)."""
         cov = np.asarray(d["covariance"], float).reshape(len(d["names"]), len(d["names"]))
         return cls(tuple(d["names"]), cov, float(d["noise_m"]), int(d["dof"]), str(d.get("kind", "point")))
 
@@ -92,7 +92,44 @@ class Uncertainty:
 
 @dataclass
 class CheckResult:
-    """The verdict of a check; :meth:`to_dict` is its JSON (docs/reference/check-json.md)."""
+    """The verdict of a check; `to_dict` is its JSON (docs/reference/check-json.md).
+
+    Attributes
+    ----------
+    verdict : str
+        "holds" or "changed" (p-value below ``ALPHA``).
+    p_value, statistic : float
+        The test's p-value and its statistic (whitened sum of squares).
+    dof : int
+        Degrees of freedom of the statistic (rows minus the refitted frame's rank).
+    noise_dof : int or None
+        Degrees of freedom of the noise estimate (F-test), None for a stated noise (chi-square).
+    noise_m : float
+        The noise used, m per coordinate; ``noise_source`` says where it came from.
+    n_poses : int
+        Poses of the check campaign.
+    rms_mm, predicted_rms_mm : float
+        The residual RMS (mm) and the RMS expected if nothing changed (mm).
+    changed_parameters : list of dict
+        ``{name, unit, shift, sigma}`` (mm, deg) of the parameters that most likely moved.
+    explained_p_value : float or None
+        The p-value once those parameters are refitted.
+    notes : list of str
+        Remarks for the reader.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> from robocal.history.check import Uncertainty, check
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> sim = rc.simulate_tracker(nominal, 20, noise_mm=0.01, seed=3)
+    >>> unc = Uncertainty(names=("a2",), covariance=np.array([[1e-10]]), noise_m=1e-5, dof=200)
+    >>> result = check(sim.truth, sim.data, unc)
+    >>> d = result.to_dict()
+    >>> d["verdict"], d["test"]["kind"], d["n_poses"], result.rms_mm < 0.05  # mm
+    ('holds', 'F', 20, True)
+    """
 
     verdict: str
     p_value: float
@@ -130,7 +167,7 @@ class CheckResult:
 
 class _Whitened:
     """The check's residuals and refitted columns in the metric of ``C`` (whitened by its Cholesky
-    factor); :meth:`fit` is the generalised least-squares fit of extra columns with the frame."""
+    factor); `fit` is the generalised least-squares fit of extra columns with the frame."""
 
     def __init__(self, r: np.ndarray, J_frame: np.ndarray, C: np.ndarray) -> None:
         self.L = linalg.cholesky(C, lower=True)
@@ -180,7 +217,53 @@ def check(robot, data, uncertainty: Uncertainty, *, fit_frame: bool = True, nois
     """Judge the calibrated ``robot`` on the check campaign ``data`` (point measurements) with the
     calibration's ``uncertainty``; ``fit_frame``: refit the tracker frame and SMR offsets first (the
     tracker moved since); ``noise_mm``: the instrument's 1-sigma per coordinate (mm), else the
-    calibration's noise estimate (an F-test then). See the module docstring."""
+    calibration's noise estimate (an F-test then). See the module docstring.
+
+    Parameters
+    ----------
+    robot : Robot
+        The calibrated model under check.
+    data : Measurements
+        The check campaign: point (laser tracker) measurements of at least ``MIN_CHECK_POSES``
+        poses, joints ``(n, dof)`` rad, points ``(n, 3)`` m.
+    uncertainty : Uncertainty
+        What the calibration left uncertain: parameter names, covariance ``(k, k)`` (SI), noise
+        (m per coordinate) and its degrees of freedom.
+    fit_frame : bool, optional
+        Refit the tracker frame and SMR offsets before judging (the tracker moved since).
+    noise_mm : float, optional
+        The instrument's 1-sigma noise per coordinate (mm, in (0, 10)); None: the calibration's
+        estimate, tested with an F-test.
+    force : bool, optional
+        Judge even when the residuals are far beyond what the instrument explains.
+
+    Returns
+    -------
+    CheckResult
+        ``verdict`` "holds" or "changed" (at the significance ``ALPHA``), the p-value, the RMS
+        (mm) against the RMS expected if nothing changed, and the parameters that most likely moved.
+
+    Raises
+    ------
+    DataError
+        Not point data, too few poses, uncertainty naming parameters the model lacks, a noise out
+        of range, or residuals no calibration explains (without ``force``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> from robocal.history.check import Uncertainty, check
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> sim = rc.simulate_tracker(nominal, 20, noise_mm=0.01, seed=3)
+    >>> unc = Uncertainty(names=("a2",), covariance=np.array([[1e-10]]), noise_m=1e-5, dof=200)
+    >>> check(sim.truth, sim.data, unc).verdict  # the true model: nothing moved
+    'holds'
+    >>> moved = sim.truth.with_values({"a2": sim.truth.get("a2") + 0.001})  # a model 1 mm off
+    >>> result = check(moved, sim.data, unc)
+    >>> result.verdict, result.changed_parameters[0]["name"], round(result.changed_parameters[0]["shift"])
+    ('changed', 'a2', -1)
+    """
     if data.kind != "point":
         raise DataError(f"a check needs point (laser tracker) measurements, not {data.kind}")
     data.check_against(robot)

@@ -32,10 +32,50 @@ def check_same_robot(nominal, start) -> None:
 
 
 def recalibrate_offsets(nominal, start, data, validation=None, **options):
-    """A :class:`~robocal.calibration.CalibrationResult` whose robot is ``start`` (an earlier
+    """A `robocal.calibration.CalibrationResult` whose robot is ``start`` (an earlier
     calibration of ``nominal``) with only its joint zeros re-identified on ``data`` (point or pose
     measurements; the tracker frame and SMR offsets fitted with them); ``validation`` and
-    ``options`` as :func:`robocal.calibrate` takes them (not ``params`` nor ``nongeometric``)."""
+    ``options`` as `robocal.calibrate` takes them (not ``params`` nor ``nongeometric``).
+
+    Parameters
+    ----------
+    nominal : Robot
+        The nominal model ``start`` was calibrated from (the same robot).
+    start : Robot
+        The earlier calibrated model; only its joint zeros (``theta*``) change.
+    data : Measurements or list of Measurements
+        Point or pose tracker measurements: joints ``(n, dof)`` rad, points ``(n, 3)`` m.
+    validation : Measurements, optional
+        Held-out data to report the recalibrated model's accuracy on.
+    **options
+        Further `robocal.calibrate` options (method, loss ...).
+
+    Returns
+    -------
+    CalibrationResult
+        Its ``robot`` is ``start`` with the re-identified joint zeros; ``settings["offsets_only"]``
+        is True.
+
+    Raises
+    ------
+    DataError
+        Models of different robots, data other than points or poses, or ``params`` /
+        ``nongeometric`` among the options.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.history.offsets import recalibrate_offsets
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> start = nominal  # an earlier calibration (here the nominal model itself)
+    >>> knocked = start.with_values({"theta2": start.get("theta2") + 0.001})  # J2's zero moved 1 mrad
+    >>> sim = rc.simulate_tracker(knocked, 20, noise_mm=0.01, seed=1, as_is=True)
+    >>> result = recalibrate_offsets(nominal, start, sim.data)
+    >>> round((result.robot.get("theta2") - start.get("theta2")) * 1e3, 2)  # mrad: found again
+    1.0
+    >>> result.robot.get("a2") == start.get("a2"), result.after["rms"] < 0.05  # links kept; mm
+    (True, True)
+    """
     check_same_robot(nominal, start)
     sets = data if isinstance(data, list | tuple) else [data]
     if any(d.kind not in ("point", "pose") for d in sets):

@@ -8,7 +8,7 @@ several engineers share, through psycopg 3: ``pip install robocal[history-pg]``)
 Several writers at once all succeed: SQLite runs in WAL mode with a busy timeout, and every write
 is one short ``BEGIN IMMEDIATE`` transaction retried with backoff while another writer holds the
 lock; PostgreSQL serialises the schema set-up with an advisory lock. The schema carries a version
-(table ``schema_version``); :data:`MIGRATIONS` brings any older database up to date on open.
+(table ``schema_version``); `MIGRATIONS` brings any older database up to date on open.
 """
 
 from __future__ import annotations
@@ -64,6 +64,31 @@ class Record:
     calibration (its covariance in SI, the noise estimate), None for a check; ``data``: the input
     files ``{file, role, sha256}``; ``parent``: the record a derived calibration (offsets only) or a
     check started from; ``date``: UTC, ISO 8601 with the offset. ``id`` is set once recorded.
+
+    Parameters
+    ----------
+    robot_id : str
+        The robot's id: printable text of 1 to ``MAX_ROBOT_ID`` characters.
+    kind : str
+        "calibration", "check" or "evaluation".
+    model_yaml : str
+        The model the record is about, as model YAML text (docs/model-yaml.md).
+    summary : dict
+        The figures (mm); of a check, its verdict and p-value.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.history.store import Record
+    >>> from robocal.kinematics.model_file import dump_model
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> entry = Record(robot_id="cell-3", kind="evaluation", model_yaml=dump_model(robot),
+    ...                summary={"rms": 0.42})  # mm, on held-out data
+    >>> entry.id is None, len(entry.model_sha256)  # not recorded yet; SHA-256 of the model
+    (True, 64)
+    >>> row = entry.timeline_entry()  # as in robocal history --json
+    >>> row["kind"], row["held_out_rms"], row["verdict"]
+    ('evaluation', 0.42, None)
     """
 
     robot_id: str
@@ -121,7 +146,7 @@ def file_sha256(path) -> str:
 
 
 def check_robot_id(robot_id: str) -> str:
-    """A robot id: printable text of 1 to :data:`MAX_ROBOT_ID` characters (DataError otherwise)."""
+    """A robot id: printable text of 1 to `MAX_ROBOT_ID` characters (DataError otherwise)."""
     if not isinstance(robot_id, str) or not robot_id.strip() or len(robot_id) > MAX_ROBOT_ID \
             or not robot_id.isprintable():
         raise DataError(f"a robot id is printable text of 1 to {MAX_ROBOT_ID} characters, got "
@@ -135,7 +160,36 @@ def is_postgres(location: str) -> bool:
 
 class History:
     """A history database (SQLite file or PostgreSQL URL); use as a context manager or call
-    :meth:`close`. Opening creates the schema, or migrates an older one."""
+    `close`. Opening creates the schema, or migrates an older one.
+
+    Parameters
+    ----------
+    location : str or path
+        A SQLite file (created if missing; its folder must exist) or a ``postgresql://`` URL
+        (needs the ``history-pg`` extra).
+
+    Raises
+    ------
+    DataError
+        A folder given for a file, a missing folder, a file that is not a robocal history, a
+        database newer than this robocal, or a PostgreSQL URL without psycopg.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import robocal as rc
+    >>> from robocal.history.store import History, Record
+    >>> from robocal.kinematics.model_file import dump_model
+    >>> path = os.path.join(tempfile.mkdtemp(), "history.sqlite")
+    >>> yaml_text = dump_model(rc.Robot.from_catalog("abb_irb2600"))
+    >>> with History(path) as history:
+    ...     history.record(Record(robot_id="cell-3", kind="evaluation", model_yaml=yaml_text,
+    ...                           summary={"rms": 0.42}))
+    1
+    >>> with History(path) as history:  # reopened: the record is kept
+    ...     [(e.id, e.kind, e.summary) for e in history.entries("cell-3")]
+    [(1, 'evaluation', {'rms': 0.42})]
+    """
 
     def __init__(self, location) -> None:
         self.location = str(location)

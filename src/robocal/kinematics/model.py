@@ -535,7 +535,7 @@ class Robot:
 
     def values_of(self, names: Iterable[str]) -> np.ndarray:
         """The values ``(k,)`` (m or rad) of the named parameters, read from the vector computed
-        once per model (what a loop over parameters uses instead of :meth:`get` per name)."""
+        once per model (what a loop over parameters uses instead of `get` per name)."""
         return self._value_vector[self.indices(names)]
 
     def with_values(self, updates: dict[str, float]) -> Robot:

@@ -70,7 +70,41 @@ DIALECTS = {"rapid": RapidDialect, "krl": KRLDialect, "fanuc": FanucDialect, "ur
 
 def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
     """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript', 'inform', 'val3') or the
-    suffixes; a Yaskawa job or VAR.DAT is also told by its first line (``/JOB``, ``//`` sections)."""
+    suffixes; a Yaskawa job or VAR.DAT is also told by its first line (``/JOB``, ``//`` sections).
+
+    Parameters
+    ----------
+    paths : list of Path
+        The program files (a KRL ``.src`` with its ``.dat``, a VAL3 project's files ...); a
+        ``.dat`` is read to tell a Yaskawa VAR.DAT from a KRL data list.
+    name : str, optional
+        The dialect's name, which overrides the suffixes.
+
+    Returns
+    -------
+    Dialect
+        The reader and writer of that program format (``name``, ``suffixes``).
+
+    Raises
+    ------
+    DataError
+        An unknown ``name``, or files whose suffixes name no dialect or more than one.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from robocal.programs import dialect_for
+    >>> dialect_for([Path("weld.mod")]).name
+    'ABB RAPID'
+    >>> ".src" in dialect_for([Path("weld.src"), Path("weld.dat")]).suffixes  # KUKA KRL
+    True
+    >>> dialect_for([Path("a.txt")], "val3").suffixes[0]  # named: the suffix does not matter
+    '.pgx'
+    >>> dialect_for([Path("a.txt")])
+    Traceback (most recent call last):
+    ...
+    robocal.errors.DataError: cannot tell the program format of ['a.txt'] from the file suffixes ...
+    """
     dialects = DIALECTS
     if name is not None:
         if name not in dialects:

@@ -5,7 +5,7 @@ which calibrated model corrected them and which robocal version did it::
 
     robocal <version> model <fingerprint>
 
-``fingerprint`` is the first :data:`FINGERPRINT_HEX` hex digits of the SHA-256 of the calibrated
+``fingerprint`` is the first `FINGERPRINT_HEX` hex digits of the SHA-256 of the calibrated
 model's canonical parameters (every parameter name with its SI value to 12 significant digits:
 the same model loaded from any of its files gives the same fingerprint). Reading a marked file
 back in (filtering a filtered program, compensating compensated targets: the corrections applied
@@ -17,11 +17,11 @@ Where the marker goes (one added line; the rest of the file is byte for byte the
   without one);
 * KUKA KRL: ``; ...`` on the line after the first ``DEF`` / ``DEFDAT`` / ``DEFFCT`` line;
 * FANUC TP (.ls): a remark ``!...`` as the last line of ``/MN``, numbered after the last line,
-  with ``LINE_COUNT`` raised by one; a remark line holds :data:`TP_REMARK_WIDTH` characters, so
+  with ``LINE_COUNT`` raised by one; a remark line holds `TP_REMARK_WIDTH` characters, so
   the fingerprint is cut to fit (10 hex digits with a five-character version);
 * URScript: ``# ...`` as the first line;
 * Yaskawa INFORM: a comment instruction ``'...`` after the job's ``NOP`` (a comment holds
-  :data:`INFORM_COMMENT_WIDTH` characters: the fingerprint is cut to fit); a VAR.DAT, which holds
+  `INFORM_COMMENT_WIDTH` characters: the fingerprint is cut to fit); a VAR.DAT, which holds
   no instructions, carries none;
 * Staubli VAL3: an XML comment ``<!-- ... -->`` on the line after the XML declaration of each
   file written (a file without a declaration carries none);
@@ -58,7 +58,30 @@ _FANUC_COUNT = re.compile(r"^(LINE_COUNT\s*=\s*)(\d+)", re.M)
 
 @dataclass(frozen=True)
 class Marker:
-    """A marker found in a file: the robocal ``version`` and the calibrated ``model`` fingerprint."""
+    """A marker found in a file: the robocal ``version`` and the calibrated ``model`` fingerprint.
+
+    Attributes
+    ----------
+    version : str
+        The robocal version that wrote the file.
+    model : str
+        The calibrated model's fingerprint: ``FINGERPRINT_HEX`` hex digits of the SHA-256 of its
+        parameters (fewer in a FANUC remark or an INFORM comment, cut to fit).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.trust.output_marker import find_marker, marker_text, model_fingerprint
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> program = "MODULE weld\\n  ! " + marker_text(robot) + "\\nENDMODULE\\n"
+    >>> marker = find_marker(program)
+    >>> marker.model == model_fingerprint(robot), marker.version == rc.__version__
+    (True, True)
+    >>> marker.describe() == f"robocal {rc.__version__} with the calibrated model {marker.model}"
+    True
+    >>> find_marker("MODULE weld\\nENDMODULE\\n") is None  # an unmarked program
+    True
+    """
 
     version: str
     model: str
@@ -68,20 +91,50 @@ class Marker:
 
 
 def model_fingerprint(robot: Robot) -> str:
-    """The :data:`FINGERPRINT_HEX` hex digits naming ``robot``'s parameters (see the module
-    docstring)."""
+    """The `FINGERPRINT_HEX` hex digits naming ``robot``'s parameters (see the module
+    docstring).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.trust.output_marker import model_fingerprint
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> len(model_fingerprint(robot)), model_fingerprint(robot) == model_fingerprint(robot)
+    (12, True)
+    >>> longer = robot.with_values({"a2": robot.get("a2") + 1e-6})  # 1 um on one link
+    >>> model_fingerprint(longer) == model_fingerprint(robot)
+    False
+    """
     canon = "\n".join(f"{name}={value:.{_SIGNIFICANT}g}"
                       for name, value in zip(robot.parameter_names, robot.values.tolist(), strict=True))
     return hashlib.sha256(canon.encode()).hexdigest()[:FINGERPRINT_HEX]
 
 
 def marker_text(robot: Robot) -> str:
-    """``robocal <version> model <fingerprint>`` of this robocal and ``robot``."""
+    """``robocal <version> model <fingerprint>`` of this robocal and ``robot``.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.trust.output_marker import marker_text, model_fingerprint
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> marker_text(robot) == f"robocal {rc.__version__} model {model_fingerprint(robot)}"
+    True
+    """
     return f"robocal {__version__} model {model_fingerprint(robot)}"
 
 
 def find_marker(text: str) -> Marker | None:
-    """The first marker in ``text``, else None."""
+    """The first marker in ``text``, else None.
+
+    Examples
+    --------
+    >>> from robocal.trust.output_marker import find_marker
+    >>> find_marker("! robocal 0.1.0 model ebba57c5590e: targets filtered")
+    Marker(version='0.1.0', model='ebba57c5590e')
+    >>> find_marker("! written by hand") is None
+    True
+    """
     m = MARKER_RE.search(text)
     return None if m is None else Marker(m.group("version"), m.group("model"))
 
@@ -89,7 +142,21 @@ def find_marker(text: str) -> Marker | None:
 def check_unmarked(text: str, where: str, action: str, force: bool = False) -> Marker | None:
     """Refuse (DataError) a file that carries a marker: ``action`` ('filtered' or 'compensated') was
     already done to it by the run the marker names; ``force`` lets it through (the marker is
-    returned, for a warning)."""
+    returned, for a warning).
+
+    Examples
+    --------
+    >>> from robocal.trust.output_marker import check_unmarked
+    >>> check_unmarked("x,y,z\\n", "targets.csv", "compensated") is None  # unmarked: go on
+    True
+    >>> marked = "# robocal 0.1.0 model ebba57c5590e: targets compensated\\nx,y,z\\n"
+    >>> check_unmarked(marked, "targets.csv", "compensated")
+    Traceback (most recent call last):
+    ...
+    robocal.errors.DataError: targets.csv was already compensated by robocal 0.1.0 with the ...
+    >>> check_unmarked(marked, "targets.csv", "compensated", force=True).model
+    'ebba57c5590e'
+    """
     found = find_marker(text)
     if found is not None and not force:
         verb = action[:-2] if action.endswith("ed") else action
@@ -145,7 +212,22 @@ def _mark_fanuc(text: str, body: str) -> str:
 def mark_program(dialect: str, data: bytes, robot: Robot) -> bytes:
     """A filtered program's bytes with the marker of ``robot`` (the calibrated model) added in
     ``dialect``'s comment syntax (a name holding one of MARKED_FORMATS, as the dialects' own names
-    do; see the module docstring)."""
+    do; see the module docstring).
+
+    Raises
+    ------
+    DataError
+        A format with no marker, or a FANUC program without ``/MN``.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.trust.output_marker import mark_program, marker_text
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> out = mark_program("ABB RAPID", b"MODULE weld\\nENDMODULE\\n", robot)
+    >>> out.decode().splitlines()[1] == f"! {marker_text(robot)}: targets filtered, do not filter again"
+    True
+    """
     text = data.decode("latin-1")
     dialect = next((k for k in MARKED_FORMATS if k in dialect.lower()), dialect)
     body = marker_text(robot)
@@ -168,5 +250,15 @@ def mark_program(dialect: str, data: bytes, robot: Robot) -> bytes:
 
 
 def mark_csv(text: str, robot: Robot) -> str:
-    """A compensated targets CSV with the marker of ``robot`` as a ``#`` first line."""
+    """A compensated targets CSV with the marker of ``robot`` as a ``#`` first line.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.trust.output_marker import find_marker, mark_csv, model_fingerprint
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> out = mark_csv("x,y,z\\n1.0,0.2,0.5\\n", robot)
+    >>> out.splitlines()[1:], find_marker(out).model == model_fingerprint(robot)
+    (['x,y,z', '1.0,0.2,0.5'], True)
+    """
     return f"# {marker_text(robot)}: {_NOTE['compensated']}\n{text}"

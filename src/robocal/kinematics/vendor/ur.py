@@ -1,6 +1,6 @@
 """Universal Robots' factory calibration and the ROS driver's calibration YAML, both ways.
 
-Two formats, one entry each way (:func:`import_calibration`, :func:`to_ur_calibration`):
+Two formats, one entry each way (`import_calibration`, `to_ur_calibration`):
 
 * ``calibration.conf`` (on the controller, ``/root/.urcontrol``): an INI-style ``[mounting]``
   section with ``delta_theta``, ``delta_a``, ``delta_d``, ``delta_alpha`` (six values each, m and
@@ -13,12 +13,12 @@ Two formats, one entry each way (:func:`import_calibration`, :func:`to_ur_calibr
   forearm, wrist_1, wrist_2, wrist_3: {x, y, z, roll, pitch, yaw}, hash}``, which ur_description's
   xacro composes as joint origins ``T(x, y, z) Rz(yaw) Ry(pitch) Rx(roll)`` (URDF rpy), each
   followed by the joint's ``Rz(q)``, in the controller's ``base`` frame; ``tool0`` is fixed on
-  ``wrist_3_link`` by the flange joints (:data:`XACRO_TOOL0`).
+  ``wrist_3_link`` by the flange joints (`XACRO_TOOL0`).
 
-Both are read exactly into MDH + beta (:func:`mdh_beta_from_lines`): the joint lines at zero
+Both are read exactly into MDH + beta (`mdh_beta_from_lines`): the joint lines at zero
 joints, common normals between non-parallel axes and Hayati's construction (beta) between the
 axes the nominal model flags parallel, so no d grows with near-parallelism. Every conversion is
-checked against the composition it came from (:data:`SELF_CHECK_M`, :data:`SELF_CHECK_RAD`).
+checked against the composition it came from (`SELF_CHECK_M`, `SELF_CHECK_RAD`).
 """
 
 from __future__ import annotations
@@ -102,7 +102,34 @@ class URDeltas:
 
 @dataclass(frozen=True)
 class ImportedCalibration:
-    """An imported factory calibration: the model, the format read and notes for the user."""
+    """An imported factory calibration: the model, the format read and notes for the user.
+
+    Attributes
+    ----------
+    robot : Robot
+        The calibrated model (MDH + beta, the catalog robot's base and tool).
+    kind : str
+        The format read: "calibration.conf" or "ur_calibration YAML".
+    notes : list of str
+        What the user should know about the reading (one sentence each).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> from robocal.kinematics.vendor.ur import import_calibration, to_ur_calibration
+    >>> nominal = rc.Robot.from_catalog("ur5e")
+    >>> real = nominal.with_values({"a2": nominal.get("a2") - 0.0005})  # upper arm 0.5 mm longer
+    >>> path = os.path.join(tempfile.mkdtemp(), "ur5e_calibration.yaml")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write(to_ur_calibration(real, nominal))
+    >>> imported = import_calibration(path, "ur5e")
+    >>> imported.kind, len(imported.notes) > 0
+    ('ur_calibration YAML', True)
+    >>> abs(imported.robot.get("a2") - real.get("a2")) < 1e-9  # m: the longer arm read back
+    True
+    """
 
     robot: Robot
     kind: str  # "calibration.conf" or "ur_calibration YAML"
@@ -189,7 +216,7 @@ def mdh_beta_from_lines(u: np.ndarray, p: np.ndarray, flange: np.ndarray, hayati
     frame's x axis meets axis i-1 and its x axis points at the point where axis i crosses the plane
     through that origin normal to axis i-1 (Hayati), so a, d and beta stay of the arm's size however
     nearly parallel the axes are; elsewhere the common normal (beta = 0). The placement, signs
-    (theta near 0) and the flange frame follow :func:`robocal.kinematics.convert.mdh_from_axes`, so
+    (theta near 0) and the flange frame follow `robocal.kinematics.convert.mdh_from_axes`, so
     a nominal table converts to the catalog's values. Exact: the chain's joint lines and flange are
     those given.
     """
@@ -464,7 +491,46 @@ def from_ur_calibration(text: str, nominal_name: str, where: str = "calibration.
 
 def import_calibration(path, nominal_name: str, name: str | None = None) -> ImportedCalibration:
     """A UR factory calibration file -- calibration.conf or a ur_calibration YAML, told apart by
-    their content -- as a robocal model for catalog UR robot ``nominal_name``."""
+    their content -- as a robocal model for catalog UR robot ``nominal_name``.
+
+    Parameters
+    ----------
+    path : str or path
+        The calibration file: the controller's calibration.conf (a ``[mounting]`` section) or a
+        ur_calibration YAML (a ``kinematics:`` mapping, as ROS's ur_calibration writes).
+    nominal_name : str
+        The catalog UR robot it calibrates (e.g. "ur5e"): base, tool and limits come from it.
+    name : str, optional
+        The model's name; by default derived from the file.
+
+    Returns
+    -------
+    ImportedCalibration
+        The model, exactly the composition the file describes (self-checked to
+        ``SELF_CHECK_M`` m and ``SELF_CHECK_RAD`` rad), the format read and notes.
+
+    Raises
+    ------
+    ModelError
+        An unreadable or malformed file (either format, a line or key named), a nominal that is
+        not a catalog UR arm, or values farther from the nominal than a factory calibration.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> from robocal.kinematics.vendor.ur import import_calibration, to_ur_calibration
+    >>> nominal = rc.Robot.from_catalog("ur5e")
+    >>> real = nominal.with_values({"a2": nominal.get("a2") - 0.0005})  # upper arm 0.5 mm longer
+    >>> path = os.path.join(tempfile.mkdtemp(), "ur5e_calibration.yaml")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write(to_ur_calibration(real, nominal))
+    >>> imported = import_calibration(path, "ur5e")
+    >>> q = np.array([[0.1, -1.2, 1.0, -0.5, 0.3, 0.2]])  # rad
+    >>> bool(np.allclose(imported.robot.fk(q), real.fk(q), atol=1e-12))  # the same arm, m
+    True
+    """
     text = read_text(path, "UR calibration file", ModelError)
     if re.search(r"^\s*\[mounting\]", text, re.MULTILINE):
         return from_calibration_conf(text, nominal_name, str(path), name)
@@ -511,7 +577,28 @@ def ur_calibration_hash(origins: np.ndarray) -> str:
 
 
 def not_representable(robot: Robot) -> str | None:
-    """What a ur_calibration YAML cannot hold of ``robot`` (its joint-error terms), as a sentence."""
+    """What a ur_calibration YAML cannot hold of ``robot`` (its joint-error terms), as a sentence.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model to export.
+
+    Returns
+    -------
+    str or None
+        One sentence naming the joint-error terms lost in the export; None when there are none.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.kinematics.vendor.ur import not_representable
+    >>> nominal = rc.Robot.from_catalog("ur5e")
+    >>> not_representable(nominal) is None  # rigid links, exact joints: all of it fits
+    True
+    >>> not_representable(nominal.with_joint_errors(["k2"]))[:37]
+    'the joint-error terms k2 are not repr'
+    """
     if robot.joint_errors is None:
         return None
     return (f"the joint-error terms {', '.join(robot.joint_errors.names)} are not representable in a "
@@ -520,8 +607,40 @@ def not_representable(robot: Robot) -> str | None:
 
 def to_ur_calibration(robot: Robot, nominal: Robot) -> str:
     """The ur_calibration YAML text whose xacro composition is ``robot``'s geometry from the
-    controller's base to its flange (see :func:`xacro_origins`; joint-error terms, the model's world
-    frame and tool are not part of it: :func:`not_representable`)."""
+    controller's base to its flange (see `xacro_origins`; joint-error terms, the model's world
+    frame and tool are not part of it: `not_representable`).
+
+    Parameters
+    ----------
+    robot : Robot
+        The calibrated model to export (a 6-axis UR geometry).
+    nominal : Robot
+        The catalog UR model it was calibrated from: its base is the controller's base frame,
+        its tool the flange (tool0).
+
+    Returns
+    -------
+    str
+        ur_calibration YAML text: per link its origin ``x y z`` (m) and ``roll pitch yaw`` (rad),
+        and a hash.
+
+    Raises
+    ------
+    ModelError
+        A flange off joint 6's axis (the xacro cannot hold it).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.kinematics.vendor.ur import to_ur_calibration
+    >>> nominal = rc.Robot.from_catalog("ur5e")
+    >>> text = to_ur_calibration(nominal, nominal)  # the nominal arm, exported
+    >>> [line.strip() for line in text.splitlines() if line.startswith("  ") and not
+    ...  line.startswith("    ")][:3]
+    ['shoulder:', 'upper_arm:', 'forearm:']
+    >>> "hash:" in text
+    True
+    """
     origins = xacro_origins(robot, nominal)
     lines = [f"# written by robocal from model {robot.name}: the calibrated geometry from the controller's",
              f"# base to its flange (tool0), for ur_description's xacro (nominal {nominal.name}).",
