@@ -177,8 +177,9 @@ class FilterResult:
         files: dict[Path, bytes] = {}
         for src, dst in outputs.items():  # marked with the calibrated model that corrected them
             data = self.outputs[Path(src)]
-            files[Path(dst)] = data if self.calibrated is None else mark_program(self.dialect, data,
-                                                                                 self.calibrated)
+            data_file = Path(src).suffix.lower() == ".csv"  # FANUC position registers: data, not a program
+            files[Path(dst)] = data if self.calibrated is None or data_file else \
+                mark_program(self.dialect, data, self.calibrated)
         for t in table_paths(table) if table is not None else []:
             files[t] = (self.table_csv() if t.suffix.lower() == ".csv" else self.table_json()).encode()
         check_outputs(files, self.outputs)
