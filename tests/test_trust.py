@@ -245,3 +245,16 @@ def test_information_covariance_equals_the_svd_posterior():
     w = np.array([0, 0, 1e-3, 0, 2.0, 0, 0.5, 0])
     np.testing.assert_allclose(information_covariance(J, w, 0.7), posterior_covariance(J, w, 0.7),
                                rtol=1e-6, atol=1e-14)
+
+
+def test_rejected_outliers_do_not_inflate_the_workspace_prediction():
+    """A robust fit that rejected gross outliers: the prediction's unmodelled error and scale come
+    from the inliers (the demo's campaign warned 'holds only near its poses' at 7x before)."""
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    sim = rc.simulate_tracker(robot, 80, outliers=0.06, seed=5)
+    check = rc.simulate_tracker(sim.truth, 60, as_is=True, seed=6)
+    result = rc.calibrate(robot, sim.data, method="robust", validation=check.data)
+    assert result.rejected.size > 0
+    predicted = result.predicted_accuracy
+    assert not predicted["holds_only_near_poses"]
+    assert predicted["workspace"]["rms"] < 2.0 * result.validation["rms"]

@@ -129,14 +129,23 @@ def prediction(result) -> Prediction:
     names = [n for n in result.identifiability.names if n not in nuisance and n in robot.parameter_names]
     r = problem.residuals(state)
     s0 = float(np.sqrt(r @ r / max(r.size - result.space.size, 1)))
+    errors = problem.item_error_vectors(state)
+    weights = result.solver.item_weights
+    rejected = weights is not None and bool((weights == 0).any())
+    if rejected:  # a robust fit's rejected observations are outliers, not the model's error
+        inlier = np.asarray(weights) != 0
+        kept = [e[inlier[b]] for e, b in zip(errors, problem.item_blocks(), strict=True)]
+        mean_sq = [sum(float(np.sum(e**2)) for e in es) / max(sum(e.size for e in es), 1)
+                   for es in (errors, kept)]
+        s0 *= float(np.sqrt(mean_sq[1] / mean_sq[0])) if mean_sq[0] > 0 else 1.0
+        errors = kept
     cov = posterior(problem, state, names, s0)
     keep = [i for i, n in enumerate(names) if not n.startswith("smr")]
-    errors = problem.item_error_vectors(state)
     comps = sum(e.size for e in errors)
     u = float(np.sqrt(3 * sum(float(np.sum(e**2)) for e in errors) / max(comps - result.space.size, 1))) * 1e3
-    source = "calibration residual (dof-corrected)"
+    source = "calibration residual (dof-corrected" + (", rejected left out)" if rejected else ")")
     ms = result.model_selection
-    if ms is not None:
+    if ms is not None and not rejected:  # the cross-validation's folds hold the outliers too
         u, source = float(ms["candidates"][ms["chosen"]]["cv_rms_mm"]), "cross-validated"
     validated, vsource = (result.validation["rms"], "on the validation data") if result.judged \
         else (u, source)
