@@ -195,7 +195,7 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
 
     ``payload`` (kg, or kg and the centre of mass x, y, z in m in the flange frame) and
     ``temperature`` (deg C): the conditions the targets are run at, for a model with payload or
-    thermal terms (:meth:`Robot.with_conditions`); without them such a model assumes no payload
+    thermal terms (`Robot.with_conditions`); without them such a model assumes no payload
     and its reference temperature, said in ``assumed``.
 
     Seeds: the closed-form solution of ``nominal`` (needs its OPW form) in slot ``branch``

@@ -624,7 +624,7 @@ class Robot:
 
     def links_at(self, temperature: np.ndarray | None = None) -> LinkArrays:
         """The link parameters, ``a, d`` ``(N, n)`` scaled by the thermal term at ``temperature
-        (N,)`` deg C (:mod:`robocal.kinematics.thermal`); the plain ``(n,)`` links without a
+        (N,)`` deg C (`robocal.kinematics.thermal`); the plain ``(n,)`` links without a
         thermal term or a temperature."""
         k = None if self.joint_errors is None else self.joint_errors.thermal_k()
         if k is not None and temperature is None and self.joint_errors.temperature_c is not None:
