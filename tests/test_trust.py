@@ -223,6 +223,20 @@ def test_cli_clustered_calibration_warns_and_compensate_warns_per_target(tmp_pat
                  "abb_irb2600", "--result", str(tmp_path / "r.json"), "-o", str(tmp_path / "c.csv")]) == 0
     line = [ln for ln in capsys.readouterr().out.splitlines() if "predicted error exceeds" in ln]
     assert len(line) == 1 and "1 of 2 targets" in line[0] and "targets 2 (" in line[0]
+    # the same two targets in a RAPID module: filter warns the same way
+    T = ROBOT.fk(q)
+    quats = Rotation.from_matrix(T[:, :3, :3]).as_quat(scalar_first=True)
+    targets = [f"    CONST robtarget p{k}:=[[{','.join(f'{v:.3f}' for v in T[k, :3, 3] * 1e3)}],"
+               f"[{','.join(f'{v:.8f}' for v in quats[k])}],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];"
+               for k in range(2)]
+    module = ["MODULE Cell", *targets, "    PROC main()", "        MoveJ p0, v1000, fine, tool0;",
+              "        MoveL p1, v500, fine, tool0;", "    ENDPROC", "ENDMODULE", ""]
+    (tmp_path / "cell.mod").write_text("\n".join(module))
+    assert main(["filter", str(tmp_path / "cell.mod"), "--calibrated", str(tmp_path / "cal.yaml"),
+                 "--nominal", "abb_irb2600", "--result", str(tmp_path / "r.json"), "-o",
+                 str(tmp_path / "cell_cal.mod")]) == 0
+    line = [ln for ln in capsys.readouterr().out.splitlines() if "predicted error exceeds" in ln]
+    assert len(line) == 1 and "1 of 2 targets" in line[0] and "targets 2 (" in line[0]
 
 
 def test_evaluate_reports_the_residual_test(sim):

@@ -209,3 +209,23 @@ def add_fanuc_coupled(parser) -> None:
     parser.add_argument(COUPLED_OPTION, dest="fanuc_coupled", action="store_true",
                         help="the joints are a FANUC controller's (J3 counted from the horizontal, J3 + J2 "
                              "of the catalog's; robocal's --fanuc programs take them so): convert them")
+
+
+def load_prediction(path, calibrated, outputs: list):
+    """The accuracy prediction of a result JSON (``--result`` of compensate and filter; None
+    without it), checked against the calibrated model (the same parameters) and the ``outputs``
+    (none of them is the JSON)."""
+    if path is None:
+        return None
+    from robocal.calibration import load_result
+    from robocal.errors import DataError
+    from robocal.io import check_outputs
+    from robocal.trust.coverage import Prediction
+
+    check_outputs(outputs, [path])
+    section = load_result(path).get("predicted_accuracy")
+    if not isinstance(section, dict) or not isinstance(section.get("model"), dict):
+        raise DataError(f"{path} has no predicted_accuracy section: calibrate again with --json to get one")
+    prediction = Prediction.from_dict(section["model"])
+    prediction.error_mm(calibrated, calibrated.limits.mean(axis=1)[None])  # DataError: another model's
+    return prediction

@@ -81,25 +81,6 @@ def _statistics(res, targets, calibrated, nominal, args) -> str:
             f"{deg.max():.4g} deg, median {np.median(deg):.4g} deg")
 
 
-def _prediction(path, calibrated, outputs: list):
-    """The accuracy prediction of a result JSON (None without ``--result``), checked against the
-    calibrated model (the same parameters) and the ``outputs`` (none of them is the JSON)."""
-    if path is None:
-        return None
-    from robocal.calibration import load_result
-    from robocal.errors import DataError
-    from robocal.io import check_outputs
-    from robocal.trust.coverage import Prediction
-
-    check_outputs(outputs, [path])
-    section = load_result(path).get("predicted_accuracy")
-    if not isinstance(section, dict) or not isinstance(section.get("model"), dict):
-        raise DataError(f"{path} has no predicted_accuracy section: calibrate again with --json to get one")
-    prediction = Prediction.from_dict(section["model"])
-    prediction.error_mm(calibrated, calibrated.limits.mean(axis=1)[None])  # DataError: another model's
-    return prediction
-
-
 def run(args) -> int:
     import numpy as np
 
@@ -107,6 +88,7 @@ def run(args) -> int:
         check_format,
         conditions_unused,
         load_calibrated_and_nominal,
+        load_prediction,
         payload_si,
         tool_frame,
     )
@@ -128,7 +110,7 @@ def run(args) -> int:
     if args.tool not in ("measured", "flange"):
         tool = tool_frame(args.tool, "--tool")
     start = None if args.start is None else np.deg2rad(args.start)
-    prediction = _prediction(args.result, calibrated, [args.output, args.parameters])
+    prediction = load_prediction(args.result, calibrated, [args.output, args.parameters])
     res = compensate(calibrated, nominal, targets, branch=args.branch, start=start,
                      targets_frame=args.targets_in, tool=tool, e1=layout.get("e1"),
                      payload=payload_si(args.payload), temperature=args.temperature)

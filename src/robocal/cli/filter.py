@@ -116,6 +116,9 @@ def add_parser(sub) -> None:
     p.add_argument("--force", action="store_true",
                    help="filter a program robocal already filtered (its marker comment names the run): "
                         "the corrections are applied again")
+    p.add_argument("--result", metavar="result.json",
+                   help="the calibration's result JSON (calibrate --json): warn where targets lie whose "
+                        "predicted error exceeds 3 x the validated one (outside the calibrated region)")
     p.add_argument("--keep-unreached", action="store_true",
                    help="leave targets that cannot be corrected unchanged (warning) instead of failing")
     p.add_argument("--position-registers", metavar="FILE.csv",
@@ -228,7 +231,13 @@ def _tool_disagreements(args) -> list[str]:
 def run(args) -> int:
     import sys
 
-    from robocal.cli.args import conditions_unused, load_calibrated_and_nominal, payload_si, tool_frame
+    from robocal.cli.args import (
+        conditions_unused,
+        load_calibrated_and_nominal,
+        load_prediction,
+        payload_si,
+        tool_frame,
+    )
     from robocal.compensate import frame_from_text
     from robocal.data.measurements import robot_reach
     from robocal.io import check_outputs
@@ -239,6 +248,7 @@ def run(args) -> int:
     check_outputs(written, [*targets, args.calibrated, args.nominal, *args.references,
                             *([args.position_registers] if args.position_registers else [])])
     calibrated, nominal = load_calibrated_and_nominal(args.calibrated, args.nominal)
+    prediction = load_prediction(args.result, calibrated, written)
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
     _check_magnitudes(args, robot_reach(nominal))
     base = None if args.robot_base is None else frame_from_text(args.robot_base, "--robot-base")
@@ -252,6 +262,10 @@ def run(args) -> int:
                          force=args.force, strict=args.strict, position_registers=args.position_registers,
                          payload=payload_si(args.payload), temperature=args.temperature)
     res.warnings[:0] = conditions_unused(calibrated, args)
+    if prediction is not None and res.joints is not None:
+        from robocal.trust.coverage import target_warnings
+
+        res.warnings += target_warnings(prediction, calibrated, res.joints)
     if not res.rows:
         _diagnose_empty(args)
     res.warnings[:0] = _tool_disagreements(args)

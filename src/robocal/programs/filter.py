@@ -500,7 +500,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,
-                        program.ledger.records(corrected, program.not_corrected), calibrated)
+                        program.ledger.records(corrected, program.not_corrected), calibrated,
+                        joints=np.where(good[:, None], q, np.nan))
 
 
 def _compensate(model: Robot, nominal: Robot, F: np.ndarray, seeds: np.ndarray) -> Compensation:

@@ -52,6 +52,9 @@ class FilterResult:
         One record per motion instruction to a Cartesian pose: corrected, or named with why.
     calibrated : Robot or None
         The model that corrected the targets; `write` puts its marker on the files.
+    joints : numpy.ndarray, shape (T, n), optional
+        Each target's joints on the calibrated model, radians, in the order of `rows`; NaN where
+        a target was not corrected.
 
     Examples
     --------
@@ -79,6 +82,7 @@ class FilterResult:
     uncorrected: list[str] = field(default_factory=list)  # motions left as they are (also warnings)
     motions: list[MotionRecord] = field(default_factory=list)  # every motion to a Cartesian pose
     calibrated: Robot | None = None  # the model that corrected the targets: its marker goes on the files
+    joints: np.ndarray | None = None  # (targets, n) rad on the calibrated model, NaN where not corrected
 
     def table_csv(self) -> str:
         """The per-target table as CSV text (one row per target, `rows`' columns)."""
