@@ -139,11 +139,11 @@ def test_driver_yaml_and_controller_differ_by_the_euler_convention(case):
     assert gap.max() > 1e-4  # ROS is off by more than 0.1 mm somewhere
 
     def eigen_reading(kin):
-        origins = [vur.make_transform(vur._rx(k["roll"]) @ vur._ry(k["pitch"]) @ vur._rz(k["yaw"]),
+        origins = [vur.make_transform(vur.rot_x(k["roll"]) @ vur.rot_y(k["pitch"]) @ vur.rot_z(k["yaw"]),
                                       (k["x"], k["y"], k["z"])) for k in kin.values()]
         return vur.origins_fk(np.array(origins), q, np.eye(4))
 
-    without_last = ctrl @ np.linalg.inv(vur.make_transform(vur._rx(alpha[5]), (a[5], 0, 0)))
+    without_last = ctrl @ np.linalg.inv(vur.make_transform(vur.rot_x(alpha[5]), (a[5], 0, 0)))
     assert np.abs(eigen_reading(kin) - without_last).max() < 1e-9
     if case == 1:  # the earlier correctAxis (atan) put this arm's elbow half a turn off
         old = eigen_reading(driver_yaml(theta, d, a, alpha, release="atan"))
@@ -155,7 +155,7 @@ def _calibrated(seed=4):
     rng = np.random.default_rng(seed)
     names = [n for n in factory.default_free() if not n.startswith(("base", "tool"))]
     cal = factory.displaced(names, rng.normal(0, 3e-4, len(names)))
-    tracker = vur.make_transform(vur._rz(0.7) @ vur._rx(0.1), (2.0, -1.0, 0.3))
+    tracker = vur.make_transform(vur.rot_z(0.7) @ vur.rot_x(0.1), (2.0, -1.0, 0.3))
     smr = vur.make_transform(np.eye(3), (0, 0.05, 0.2))
     return cal.with_frames(base=tracker @ cal.base, tool=cal.tool @ smr), factory
 

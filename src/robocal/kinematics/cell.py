@@ -44,7 +44,7 @@ from robocal.kinematics.convert import PARALLEL_TOL, default_parallel
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.model import Robot, load_model
 from robocal.kinematics.model_file import MAX_DESCRIPTION, MAX_NAME, _frame, _mapping, _numbers, _text, _units
-from robocal.kinematics.transforms import make_transform
+from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 
 CELL_KEYS = {"format", "name", "description", "units", "robot", "track", "mount"}
 # What a calibration of a cell reports about the track's direction and the mount (module docstring).
@@ -55,21 +55,6 @@ TRACK_IDENTIFIABILITY = (
     "the track (theta1, d1, a2, d2) is the base frame's own freedom")
 DIRECTION_TOL = 1e-6  # |norm - 1| of the track direction: a unit vector written to 6 digits
 TRACK_SCALE = "scale1"  # the track encoder's scale error (a joint-error term of joint 1)
-
-
-def _rx(t: float) -> np.ndarray:
-    c, s = np.cos(t), np.sin(t)
-    return np.array([[1.0, 0, 0], [0, c, -s], [0, s, c]])
-
-
-def _ry(t: float) -> np.ndarray:
-    c, s = np.cos(t), np.sin(t)
-    return np.array([[c, 0, s], [0, 1.0, 0], [-s, 0, c]])
-
-
-def _rz(t: float) -> np.ndarray:
-    c, s = np.cos(t), np.sin(t)
-    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
 
 
 def track_chain(arm: Robot, direction, mount: np.ndarray, limits, name: str | None = None,
@@ -97,7 +82,7 @@ def _chain_arrays(arm: Robot, direction, mount: np.ndarray) -> dict:
     P = np.asarray(mount, float) @ arm.base
     G = P.copy()  # the arm's joint-1 frame before its joint: Rx(alpha1) Tx(a1) Ry(beta1) Rz(theta1)
     G[:3, 3] += arm.a[0] * P[:3, 0]
-    G[:3, :3] = P[:3, :3] @ _rx(arm.alpha[0]) @ _ry(arm.beta[0]) @ _rz(arm.theta[0])
+    G[:3, :3] = P[:3, :3] @ rot_x(arm.alpha[0]) @ rot_y(arm.beta[0]) @ rot_z(arm.theta[0])
     gz = G[:3, 2]
     normal = np.cross(u, gz)
     if np.linalg.norm(normal) > PARALLEL_TOL:
@@ -107,7 +92,7 @@ def _chain_arrays(arm: Robot, direction, mount: np.ndarray) -> dict:
         x1 /= np.linalg.norm(x1)
     F1 = make_transform(np.column_stack([x1, np.cross(u, x1), u]), G[:3, 3])
     alpha2 = float(np.arctan2(np.cross(u, gz) @ x1, u @ gz))
-    R = F1[:3, :3] @ _rx(alpha2)
+    R = F1[:3, :3] @ rot_x(alpha2)
     theta2 = float(np.arctan2(np.cross(R[:, 0], G[:3, 0]) @ gz, R[:, 0] @ G[:3, 0]))
     links = {"alpha": np.r_[0.0, alpha2, arm.alpha[1:]], "a": np.r_[0.0, 0.0, arm.a[1:]],
              "beta": np.r_[0.0, 0.0, arm.beta[1:]], "theta": np.r_[0.0, theta2, arm.theta[1:]],
@@ -143,7 +128,6 @@ def cell_from_data(data: dict, path: Path | None = None) -> Robot:
                        description=_text(data.get("description", ""), "description", MAX_DESCRIPTION))
 
 
-
 def is_track_cell(robot: Robot) -> bool:
     """Whether ``robot`` is an arm on a track: a prismatic joint 1 carrying revolute joints 2..n."""
     return robot.n_joints >= 2 and bool(robot.prismatic[0]) and not robot.prismatic[1:].any()
@@ -162,7 +146,7 @@ def track_scale(robot: Robot) -> float:
 
 def _link_fixed(alpha: float, a: float, beta: float, theta: float) -> np.ndarray:
     """Rx(alpha) Tx(a) Ry(beta) Rz(theta): the constant part of a link before its joint."""
-    return make_transform(_rx(alpha) @ _ry(beta) @ _rz(theta), _rx(alpha) @ np.array([a, 0.0, 0.0]))
+    return make_transform(rot_x(alpha) @ rot_y(beta) @ rot_z(theta), rot_x(alpha) @ np.array([a, 0.0, 0.0]))
 
 
 def _arm_link1(robot: Robot) -> tuple[float, float, float, float]:

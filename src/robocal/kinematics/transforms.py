@@ -81,3 +81,21 @@ def is_rigid(T: np.ndarray, tol: float = ROTATION_TOL) -> np.ndarray:
     last = np.abs(T[..., 3, :] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=-1)
     with np.errstate(invalid="ignore"):  # NaN compares False below: not rigid
         return (ortho < tol) & (np.abs(det - 1.0) < tol) & (last < tol) & np.isfinite(T).all(axis=(-1, -2))
+
+
+def rot_x(t: float) -> np.ndarray:
+    """The rotation ``(3, 3)`` by ``t`` rad about x."""
+    c, s = np.cos(t), np.sin(t)
+    return np.array([[1.0, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def rot_y(t: float) -> np.ndarray:
+    """The rotation ``(3, 3)`` by ``t`` rad about y."""
+    c, s = np.cos(t), np.sin(t)
+    return np.array([[c, 0, s], [0, 1.0, 0], [-s, 0, c]])
+
+
+def rot_z(t: float) -> np.ndarray:
+    """The rotation ``(3, 3)`` by ``t`` rad about z."""
+    c, s = np.cos(t), np.sin(t)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])

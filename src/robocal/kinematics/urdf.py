@@ -30,7 +30,7 @@ import numpy as np
 from robocal.errors import ModelError
 from robocal.io import read_text, write_atomic
 from robocal.kinematics.model import Robot
-from robocal.kinematics.transforms import make_transform
+from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 
 _ZERO = 1e-12
 MAX_OFFSET_M = 100.0  # a joint origin farther than this from its parent is no robot's (URDF is in m)
@@ -38,26 +38,10 @@ MAX_ANGLE_RAD = 100.0  # origin angles and joint limits beyond (16 turns) are a 
 _MAX_AXIS = 1e6  # an axis vector is normalised; components beyond are refused
 
 
-# ----------------------------------------------------------------- small rotation helpers
-def _rx(t: float) -> np.ndarray:
-    c, s = np.cos(t), np.sin(t)
-    return np.array([[1.0, 0, 0], [0, c, -s], [0, s, c]])
-
-
-def _ry(t: float) -> np.ndarray:
-    c, s = np.cos(t), np.sin(t)
-    return np.array([[c, 0, s], [0, 1.0, 0], [-s, 0, c]])
-
-
-def _rz(t: float) -> np.ndarray:
-    c, s = np.cos(t), np.sin(t)
-    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
-
-
 def rpy_to_matrix(rpy) -> np.ndarray:
     """URDF roll-pitch-yaw (fixed axes X, Y, Z; rad) -> rotation ``Rz(y) Ry(p) Rx(r)``."""
     r, p, y = (float(v) for v in rpy)
-    return _rz(y) @ _ry(p) @ _rx(r)
+    return rot_z(y) @ rot_y(p) @ rot_x(r)
 
 
 def matrix_to_rpy(R: np.ndarray) -> np.ndarray:
@@ -153,8 +137,8 @@ def to_urdf(robot: Robot, name: str | None = None, frames: str = "model",
                   '  <link name="base_link"/>']
     parent = "link_0" if lines[-1] == '  <link name="link_0"/>' else "base_link"
     for i in range(robot.n_joints):
-        R = _rx(robot.alpha[i]) @ _ry(robot.beta[i]) @ _rz(robot.theta[i])
-        t = _rx(robot.alpha[i]) @ np.array([robot.a[i], 0.0, 0.0]) + R @ np.array([0, 0, robot.d[i]])
+        R = rot_x(robot.alpha[i]) @ rot_y(robot.beta[i]) @ rot_z(robot.theta[i])
+        t = rot_x(robot.alpha[i]) @ np.array([robot.a[i], 0.0, 0.0]) + R @ np.array([0, 0, robot.d[i]])
         lo, hi = robot.limits[i]
         child = f"link_{i + 1}"
         kind = "prismatic" if robot.prismatic[i] else "revolute"
@@ -383,7 +367,7 @@ def _lines_to_robot(P: np.ndarray, Z: np.ndarray, T_tip: np.ndarray, limits: np.
         beta[i] = np.arcsin(np.clip(zl[0], -1.0, 1.0))
         alpha[i] = np.arctan2(-zl[1], zl[2])
         a[i] = (feet[i] - op) @ Rp[:, 0]
-        R_int = Rp @ _rx(alpha[i]) @ _ry(beta[i])
+        R_int = Rp @ rot_x(alpha[i]) @ rot_y(beta[i])
         theta[i] = _angle_about(R_int[:, 0], xs[i], Z[i])
         d[i] = (origins[i] - feet[i]) @ Z[i]
     tool = np.linalg.solve(frames[-1], T_tip)

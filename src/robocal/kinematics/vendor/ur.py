@@ -35,7 +35,7 @@ from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.kinematics.catalog import catalog_entry
 from robocal.kinematics.convert import PARALLEL_TOL
 from robocal.kinematics.model import MAX_ANGLE_RAD, Robot
-from robocal.kinematics.transforms import make_transform
+from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 from robocal.kinematics.ur import nearest_ur_links
 from robocal.kinematics.urdf import matrix_to_rpy, rpy_to_matrix
 from robocal.yaml_load import load_yaml
@@ -56,21 +56,6 @@ SELF_CHECK_RAD = 1e-12
 SELF_CHECK_POSES = 64
 FLANGE_ON_AXIS_TOL = 1e-12  # m / rad: tool0 off joint 6's axis by more cannot be written for the xacro
 _DIST_TOL = 1e-12  # m: axes closer than this intersect
-
-
-def _rz(t: float) -> np.ndarray:
-    c, s = np.cos(t), np.sin(t)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def _rx(t: float) -> np.ndarray:
-    c, s = np.cos(t), np.sin(t)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def _ry(t: float) -> np.ndarray:
-    c, s = np.cos(t), np.sin(t)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 # ur_description: wrist_3_link -> flange rpy (0, -pi/2, -pi/2), flange -> tool0 rpy (pi/2, 0, pi/2)
@@ -179,9 +164,9 @@ def _dh_lines(table: DHTable) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def _dh_link(table: DHTable, i: int) -> np.ndarray:
     """The constant transform of DH row i at q = 0."""
-    return (make_transform(_rz(table.theta[i]), np.zeros(3))
+    return (make_transform(rot_z(table.theta[i]), np.zeros(3))
             @ make_transform(np.eye(3), (0.0, 0.0, table.d[i]))
-            @ make_transform(_rx(table.alpha[i]), (table.a[i], 0.0, 0.0)))
+            @ make_transform(rot_x(table.alpha[i]), (table.a[i], 0.0, 0.0)))
 
 
 def _origin_lines(origins: np.ndarray, tip: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -263,7 +248,7 @@ def mdh_beta_from_lines(u: np.ndarray, p: np.ndarray, flange: np.ndarray, hayati
         beta[i] = np.arcsin(np.clip(zl[0], -1.0, 1.0)) if hayati[i] else 0.0
         alpha[i] = np.arctan2(-zl[1], zl[2])
         a[i] = (feet[i] - o0) @ R0[:, 0]
-        inner = R0 @ _rx(alpha[i]) @ _ry(beta[i])
+        inner = R0 @ rot_x(alpha[i]) @ rot_y(beta[i])
         theta[i] = np.arctan2(np.cross(inner[:, 0], R1[:, 0]) @ R1[:, 2], inner[:, 0] @ R1[:, 0])
         d[i] = (o1 - feet[i]) @ R1[:, 2]
     tool = np.linalg.solve(frames[-1], flange)
@@ -554,8 +539,8 @@ def xacro_origins(robot: Robot, nominal: Robot) -> np.ndarray:
     if robot.n_joints != 6 or nearest_ur_links(*robot.links) is None:
         raise ModelError(f"{robot.name} is not a Universal Robots arm (six joints, axes 2-4 parallel, offset "
                          "wrist): a ur_calibration YAML describes one")
-    origins = [make_transform(_rx(robot.alpha[i]) @ _ry(robot.beta[i]) @ _rz(robot.theta[i]),
-                              _rx(robot.alpha[i]) @ np.array([robot.a[i], 0.0, 0.0]))
+    origins = [make_transform(rot_x(robot.alpha[i]) @ rot_y(robot.beta[i]) @ rot_z(robot.theta[i]),
+                              rot_x(robot.alpha[i]) @ np.array([robot.a[i], 0.0, 0.0]))
                @ make_transform(np.eye(3), (0.0, 0.0, robot.d[i])) for i in range(6)]
     origins[0] = nominal.base @ origins[0]
     # what follows joint 6 up to tool0, moved before Rz(q6): possible when it turns about z only
@@ -566,7 +551,7 @@ def xacro_origins(robot: Robot, nominal: Robot) -> np.ndarray:
                          "the xacro fixes tool0 on wrist_3_link, so a ur_calibration YAML cannot hold this "
                          "geometry")
     yaw = np.arctan2(rest[1, 0], rest[0, 0])
-    origins[5] = origins[5] @ make_transform(_rz(yaw), (0.0, 0.0, rest[2, 3]))
+    origins[5] = origins[5] @ make_transform(rot_z(yaw), (0.0, 0.0, rest[2, 3]))
     return np.array(origins)
 
 
