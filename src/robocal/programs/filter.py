@@ -501,7 +501,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,
                         program.ledger.records(corrected, program.not_corrected), calibrated,
-                        joints=np.where(good[:, None], q, np.nan))
+                        joints=np.where(good[:, None], q, np.nan),
+                        data_files=frozenset(s.path for s in sources[len(paths):]))  # the register file
 
 
 def _compensate(model: Robot, nominal: Robot, F: np.ndarray, seeds: np.ndarray) -> Compensation:

@@ -83,6 +83,7 @@ class FilterResult:
     motions: list[MotionRecord] = field(default_factory=list)  # every motion to a Cartesian pose
     calibrated: Robot | None = None  # the model that corrected the targets: its marker goes on the files
     joints: np.ndarray | None = None  # (targets, n) rad on the calibrated model, NaN where not corrected
+    data_files: frozenset[Path] = frozenset()  # outputs that are data, not programs: no marker
 
     def table_csv(self) -> str:
         """The per-target table as CSV text (one row per target, `rows`' columns)."""
@@ -181,8 +182,7 @@ class FilterResult:
         files: dict[Path, bytes] = {}
         for src, dst in outputs.items():  # marked with the calibrated model that corrected them
             data = self.outputs[Path(src)]
-            data_file = Path(src).suffix.lower() == ".csv"  # FANUC position registers: data, not a program
-            files[Path(dst)] = data if self.calibrated is None or data_file else \
+            files[Path(dst)] = data if self.calibrated is None or Path(src) in self.data_files else \
                 mark_program(self.dialect, data, self.calibrated)
         for t in table_paths(table) if table is not None else []:
             files[t] = (self.table_csv() if t.suffix.lower() == ".csv" else self.table_json()).encode()
