@@ -18,6 +18,7 @@ from functools import partial
 
 import numpy as np
 
+from robocal.campaign.information import Noise, posterior_analysis
 from robocal.damped_least_squares import Status
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
@@ -843,11 +844,16 @@ def _nongeometric_section(result: CalibrationResult, terms: list[str], estimated
 
 
 def analyze(robot, joints_or_data, kind: str = "point", params="auto",
-            rtol: float = DEFAULT_RTOL) -> Identifiability:
+            rtol: float = DEFAULT_RTOL, noise_mm: float = 0.02) -> Identifiability:
     """Identifiability of a pose set before measuring: only the joints matter.
 
     ``joints_or_data`` is a ``(N, n)`` array (rad) or Measurements; the observations are taken
-    as the model's own predictions, so no measurement is needed.
+    as the model's own predictions, so no measurement is needed. With the priors every fit
+    carries (`robocal.identify.priors`) and the measurement noise ``noise_mm``, the parameters
+    are judged as the calibration will treat them (`robocal.campaign.information.judge`):
+    ``kept`` the data determine, ``undetermined`` only their priors do (the fit holds them at
+    nominal within their prior; of these the rank test alone would call some unidentifiable),
+    ``dropped`` neither does (frames confounded with another, or without effect).
 
     Parameters
     ----------
@@ -861,12 +867,16 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
         The candidate free parameters, as in `calibrate`.
     rtol : float
         Relative singular-value threshold below which a parameter is not identifiable.
+    noise_mm : float, default 0.02
+        The measurement noise (1 sigma per coordinate), millimetres: how much the data weigh
+        against the priors.
 
     Returns
     -------
     Identifiability
-        ``kept`` and ``dropped`` parameters (with ``confounded_with``), ``rank``,
-        ``condition_number``, ``singular_values`` and ``observability``.
+        ``kept``, ``undetermined`` (with ``prior_ratio``) and ``dropped`` parameters (with
+        ``confounded_with``), ``rank``, ``condition_number``, ``singular_values`` and
+        ``observability``.
 
     Raises
     ------
@@ -882,7 +892,7 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     >>> ident = rc.analyze(robot, q)
     >>> ident.rank == len(ident.kept)
     True
-    >>> "d1" in ident.dropped  # the base frame's height absorbs d1
+    >>> "d1" in ident.undetermined  # the base frame's height absorbs d1: its prior holds it
     True
     """
     q = robot.check_joints(getattr(joints_or_data, "joints", joints_or_data))
@@ -890,10 +900,9 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     T = robot.fk(q, smr=None if smr is None or smr.max(initial=0) > len(robot.smr) else smr)
     extra = {"rotations": T[:, :3, :3]} if kind == "pose" else {}
     data = Measurements.from_arrays(kind, q, points=T[:, :3, 3], **extra)
-    problem = CalibrationProblem(robot, data)
-    space = problem.space(robot, params)
-    J = problem.jacobian(problem.start(robot), space)
-    return analyze_jacobian(J, space.names, data.n_poses, rtol)
+    if not (np.isfinite(noise_mm) and noise_mm > 0):
+        raise DataError(f"the measurement noise must be > 0 mm, got {noise_mm}")
+    return posterior_analysis(robot, data, Noise(sigma_m=float(noise_mm) * 1e-3), params, rtol)
 
 
 def _plain(options: dict) -> dict:

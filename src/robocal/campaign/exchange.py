@@ -2,7 +2,10 @@
 
 Candidate ``j`` contributes the information ``G_j^T G_j`` (``G_j`` its ``(r, p)`` block of
 noise-weighted identification-Jacobian rows: 3 rows for a tracker point, zero rows where an
-SMR is not seen); a design ``S`` has the information matrix ``M = sum_{j in S} G_j^T G_j``.
+SMR is not seen); a design ``S`` has the posterior information matrix
+``M = diag(prior) + sum_{j in S} G_j^T G_j``, with ``prior`` the parameters' prior precisions
+(``1 / sigma_prior^2`` in the scaled unknowns, 0 where a parameter has no prior), so that ``M^-1``
+is the MAP posterior covariance the calibration will have.
 Criteria, all minimised:
 
 - ``I``: ``trace(M^-1 A)``, the mean predicted variance of the TCP position over a region whose
@@ -63,10 +66,12 @@ class ExchangeResult:
     value: float
 
 
-def criterion_value(G: np.ndarray, A: np.ndarray | None, indices, criterion: str = "I") -> float:
-    """The criterion of a design computed from scratch (``inf`` when M is singular)."""
+def criterion_value(G: np.ndarray, A: np.ndarray | None, indices, criterion: str = "I",
+                    prior: np.ndarray | None = None) -> float:
+    """The criterion of a design computed from scratch (``inf`` when M is singular); ``prior``
+    ``(p,)`` the prior precisions (default none)."""
     H = G[np.asarray(indices, int)].reshape(-1, G.shape[-1])
-    M = H.T @ H
+    M = H.T @ H + np.diag(_prior(prior, G.shape[-1]))
     w, V = np.linalg.eigh(M)
     if w[0] <= w[-1] * 1e-13 or w[-1] <= 0:
         return float("inf")
@@ -124,6 +129,11 @@ def _logdet(S: np.ndarray) -> np.ndarray:
     return np.where(sign > 0, logdet, -np.inf)
 
 
+def _prior(prior: np.ndarray | None, p: int) -> np.ndarray:
+    """The prior precisions ``(p,)`` (zeros when there are none)."""
+    return np.zeros(p) if prior is None else np.asarray(prior, dtype=float)
+
+
 def _identity(r: int) -> np.ndarray:
     return np.eye(r)[:, :, None]
 
@@ -134,9 +144,10 @@ class _Design:
     stacks of tiny matrices are not)."""
 
     def __init__(self, G: np.ndarray, A: np.ndarray | None, criterion: str,
-                 conflicts: Callable[[int], np.ndarray]) -> None:
+                 conflicts: Callable[[int], np.ndarray], prior: np.ndarray | None = None) -> None:
         self.G = G
         self.C, self.r, self.p = G.shape
+        self.M0 = np.diag(_prior(prior, self.p)) + RIDGE * np.eye(self.p)  # before any candidate
         self.Gt = np.ascontiguousarray(G.transpose(1, 2, 0))  # (r, p, C)
         self.A = A
         self.criterion = criterion
@@ -161,7 +172,7 @@ class _Design:
     def refresh(self) -> None:
         """Recompute M, its inverse and the candidates' quadratic forms from scratch."""
         H = self.G[self.members].reshape(-1, self.p)
-        self.M = H.T @ H + RIDGE * np.eye(self.p)
+        self.M = H.T @ H + self.M0
         if self.criterion == "O4":
             self.value = self._o4(self.M[None])[0]
             return
@@ -360,10 +371,12 @@ def _fedorov(design: _Design, rng: np.random.Generator, max_sweeps: int) -> None
 
 def exchange(G: np.ndarray, A: np.ndarray | None, n: int, *, criterion: str = "I", starts: int = 4,
              seed: int = 0, conflicts: Callable[[int], np.ndarray] | None = None,
-             init: np.ndarray | None = None, progress: Progress | None = None) -> ExchangeResult:
+             init: np.ndarray | None = None, progress: Progress | None = None,
+             prior: np.ndarray | None = None) -> ExchangeResult:
     """The best ``n`` of the candidate blocks ``G (C, r, p)`` for ``criterion``.
 
-    ``A (p, p)``: the region matrix (criterion I). ``conflicts(j)`` -> ``(C,)`` 0/1 ints: the
+    ``A (p, p)``: the region matrix (criterion I). ``prior (p,)``: the unknowns' prior precisions
+    (the posterior's ``P^-1``; default none). ``conflicts(j)`` -> ``(C,)`` 0/1 ints: the
     candidates that may not be chosen together with ``j`` (default: ``j`` itself). ``init``: a
     design of at most ``n`` candidates to start from instead of the random starts (it is
     completed greedily, then improved). ``progress`` is advanced once per start.
@@ -375,19 +388,21 @@ def exchange(G: np.ndarray, A: np.ndarray | None, n: int, *, criterion: str = "I
         raise DataError(f"cannot choose {n} of {C} candidates")
     if criterion == "I" and (A is None or A.shape != (p, p)):
         raise DataError("the I criterion needs the region matrix A (p, p)")
+    if prior is not None and (np.shape(prior) != (p,) or not np.all(np.asarray(prior) >= 0)):
+        raise DataError(f"the prior precisions must be {p} values >= 0")
     if conflicts is None:
         def conflicts(j: int) -> np.ndarray:
             out = np.zeros(C, np.int64)
             out[j] = 1
             return out
     with threadpool_limits(1, user_api="blas") if threadpool_limits else nullcontext():
-        return _search(G, A, n, criterion, starts, seed, conflicts, init, progress)
+        return _search(G, A, n, criterion, starts, seed, conflicts, init, progress, prior)
 
 
-def _search(G, A, n, criterion, starts, seed, conflicts, init, progress) -> ExchangeResult:
+def _search(G, A, n, criterion, starts, seed, conflicts, init, progress, prior) -> ExchangeResult:
     C, r, p = G.shape
     rng = np.random.default_rng(seed)
-    design = _Design(G, A, criterion, conflicts)
+    design = _Design(G, A, criterion, conflicts, prior)
     n0 = min(n, int(np.ceil((p + 1) / r)))
     runs = []
     for s in range(1 if init is not None else max(1, int(starts))):
@@ -406,7 +421,7 @@ def _search(G, A, n, criterion, starts, seed, conflicts, init, progress) -> Exch
         design.reset(members)
         _fedorov(design, np.random.default_rng([seed, s]), MAX_SWEEPS)
         _detmax(design, max_steps=4 * n + 20)
-        exact = criterion_value(G, A, design.members, criterion)
+        exact = criterion_value(G, A, design.members, criterion, prior)
         if best is None or exact < best[0]:
             best = (exact, sorted(design.members))
     return ExchangeResult(indices=np.asarray(best[1], int), value=best[0])

@@ -13,9 +13,24 @@ that ``G^T G`` is the information in 1/unit^2:
   ``10 um + 0.5 um/m * r`` and transverse ``2.5 urad * r`` at distance ``r`` from the tracker;
 - pose orientations: ``rotation_sigma`` (rad) per axis; plane contacts and distances: ``sigma``.
 
-The region of interest enters through ``A = mean_region(J_r^T J_r)`` with ``J_r`` the TCP
-position rows (the first SMR) of the identified robot parameters, so ``trace(M^-1 A)`` is the mean
-predicted variance (m^2) of the TCP position over the region after calibration.
+The information matrix is the calibration's posterior one, ``M = P^-1 + sum G_j^T G_j``, with
+``P`` the priors every fit carries (:func:`robocal.identify.priors.prior_sigma`, joint-error terms
+included; frames and SMR offsets have none). The unknowns are those the rank test keeps on all
+candidates together and those it drops that have a prior and an effect (d1 beside the base
+height, a wrist twist beside the tool): the fit holds these at nominal, and their prior is what
+remains of their error, so the plan neither ignores them nor spends poses on what the priors
+already pin.
+
+The region of interest enters through ``A = mean_region(J_r^T J_r)``
+(:func:`robocal.trust.coverage.region_matrix`, the TCP Jacobian the predicted accuracy of a
+calibration uses), so ``trace(M^-1 A)`` is the mean predicted variance (m^2) of the TCP position
+over the region after calibration: the ``predicted_accuracy`` of ``calibrate`` before the
+unmodelled error.
+
+:func:`judge` says of a pose set which parameters the data determine and which only their
+priors (posterior sigma above :data:`robocal.identify.priors.NOT_DETERMINED_RATIO` of the
+prior's): the fit holds the latter at nominal within their prior; only a parameter with neither
+(a frame confounded with another, or one without effect) is ``dropped``.
 """
 
 from __future__ import annotations
@@ -32,9 +47,11 @@ from robocal.data.simulate import (
     TRACKER_RADIAL_UM_PER_M,
 )
 from robocal.errors import DataError
-from robocal.identify.identifiability import Identifiability, analyze
+from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, analyze, hold
+from robocal.identify.priors import posterior_covariance, prior_sigma, undetermined
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.space import State
+from robocal.trust.coverage import region_matrix
 
 GENERATED_KINDS = ("point", "pose")  # kinds whose candidates robocal can generate from joints
 IDENTIFIABILITY_ROWS = 12000         # residual rows (items spread over all candidates) analysed
@@ -75,15 +92,18 @@ class Noise:
 
 @dataclass
 class Information:
-    """Candidate blocks ``G (C, r, p)`` (columns scaled by ``scale``) of the identified unknowns
-    ``names`` (``robot_names`` without the nuisance), ``rows (C,)`` the residual rows each
-    candidate gives, the candidates' measurement data ``data`` (``group`` the candidate of each
-    data row, ``row_group`` of each residual row), and the unweighted Jacobian ``J_raw`` of all
-    rows over ``all_names`` (for the identifiability analysis of a chosen set, as ``robocal
-    analyze`` computes it)."""
+    """Candidate blocks ``G (C, r, p)`` (columns scaled by ``scale``) of the unknowns ``names``
+    (``robot_names`` without the nuisance) and their prior precisions ``prior (p,)`` in the
+    scaled unknowns (0: no prior), ``rows (C,)`` the residual rows each candidate gives, the
+    candidates' measurement data ``data`` (``group`` the candidate of each data row,
+    ``row_group`` of each residual row), the unweighted Jacobian ``J_raw`` of all rows over
+    ``all_names`` and its whitened rows ``J_white``, with the priors ``sigma`` (SI, inf: none)
+    of ``all_names`` (for :func:`judge` of a chosen set, as ``robocal analyze`` computes it);
+    ``identifiable`` how many of ``names`` the rank test keeps (the rest only their priors pin)."""
 
     G: np.ndarray
     scale: np.ndarray
+    prior: np.ndarray
     names: list[str]
     robot_names: list[str]
     rows: np.ndarray
@@ -91,22 +111,55 @@ class Information:
     group: np.ndarray
     row_group: np.ndarray
     J_raw: np.ndarray
+    J_white: np.ndarray
+    sigma: np.ndarray
     all_names: list[str]
+    identifiable: int
 
     def region_matrix(self, robot, q_region: np.ndarray) -> np.ndarray:
-        """``A (p, p)`` in the scaled unknowns: the mean ``J^T J`` of the TCP position over the
-        region joints ``q_region (R, n)``; zero on nuisance unknowns."""
-        J = robot.jacobian(q_region, self.robot_names, kind="point")
+        """``A (p, p)`` in the scaled unknowns: :func:`robocal.trust.coverage.region_matrix` of
+        the TCP position over the region joints ``q_region (R, n)``; zero on nuisance unknowns."""
         k = len(self.robot_names)
         A = np.zeros((len(self.names), len(self.names)))
-        A[:k, :k] = np.einsum("rik,ril->kl", J, J) / len(q_region)
+        A[:k, :k] = region_matrix(robot, self.robot_names, q_region)
         return A / np.outer(self.scale, self.scale)
 
     def analyze_subset(self, candidates: np.ndarray) -> Identifiability:
-        """The identifiability analysis (as ``robocal analyze`` does it) of the chosen candidates."""
+        """:func:`judge` of the chosen candidates (as ``robocal analyze`` does it)."""
         rows = np.isin(self.row_group, candidates)
         n_poses = int(np.unique(self.data.pose_id[np.isin(self.group, candidates)]).size)
-        return analyze(self.J_raw[rows], self.all_names, n_poses)
+        return judge(self.J_raw[rows], self.J_white[rows], self.all_names, self.sigma, n_poses)
+
+
+def judge(J: np.ndarray, J_white: np.ndarray, names: list[str], sigma: np.ndarray, n_poses: int,
+          rtol: float = DEFAULT_RTOL) -> Identifiability:
+    """What a pose set determines, with the priors: the rank test on ``J (M, k)`` (unit weights,
+    as :func:`robocal.identify.identifiability.analyze`), then, on the noise-whitened rows
+    ``J_white (M, k)`` and the priors ``sigma (k,)`` (SI, inf: none), the kept parameters the data
+    do not determine beyond their prior (:func:`robocal.identify.priors.undetermined`, as the
+    calibration holds them) and the rank-dropped ones that have a prior and an effect are
+    ``undetermined`` (held at nominal within their prior, with their posterior / prior sigma
+    ratio); ``dropped`` keeps those neither the data nor a prior determine."""
+    sigma = np.asarray(sigma, dtype=float)
+    ident = analyze(J, names, n_poses, rtol)
+    kept = [names.index(nm) for nm in ident.kept]
+    held, ratio = undetermined(J_white[:, kept], sigma[kept], 1.0)
+    ident = hold(ident, J, [ident.kept[j] for j in held],
+                 {ident.kept[j]: float(q) for j, q in enumerate(ratio) if np.isfinite(q)})
+    pinned = [nm for nm in ident.dropped if np.isfinite(sigma[names.index(nm)]) and ident.confounded_with[nm]]
+    if not pinned:
+        return ident
+    cols = [names.index(nm) for nm in ident.kept + pinned]
+    inv = np.where(np.isfinite(sigma[cols]), 1.0 / sigma[cols], 0.0)
+    post = np.sqrt(np.maximum(np.diag(posterior_covariance(J_white[:, cols], inv, 1.0)), 0.0))
+    pinned_ratio = {nm: float(post[len(ident.kept) + i] * inv[len(ident.kept) + i])
+                    for i, nm in enumerate(pinned)}
+    return Identifiability(names=ident.names, kept=ident.kept,
+                           dropped=[nm for nm in ident.dropped if nm not in pinned],
+                           confounded_with=ident.confounded_with, rank=ident.rank,
+                           condition_number=ident.condition_number, singular_values=ident.singular_values,
+                           n_poses=n_poses, undetermined=ident.undetermined + pinned,
+                           prior_ratio={**ident.prior_ratio, **pinned_ratio})
 
 
 def candidate_data(robot, kind: str, q: np.ndarray, visible: np.ndarray) -> Measurements:
@@ -155,7 +208,10 @@ def information(robot, data: Measurements, noise: Noise, params="auto") -> Infor
     sample = np.unique(np.linspace(0, obs.n_items - 1, count).astype(int))
     rows = (sample[:, None] * r + np.arange(r)).reshape(-1)
     ident = analyze(Jw[rows], all_names, data.n_poses)
-    keep = [all_names.index(nm) for nm in ident.kept]
+    sigma = np.r_[prior_sigma(robot, robot_names), np.full(len(all_names) - len(robot_names), np.inf)]
+    pinned = {nm for nm in ident.dropped  # no data on them, but a prior: what remains of their error
+              if np.isfinite(sigma[all_names.index(nm)]) and ident.confounded_with[nm]}
+    keep = [j for j, nm in enumerate(all_names) if nm in ident.kept or nm in pinned]
     item_of_rows = obs.item_of_rows()
     # a candidate is a pose (all its SMRs' rows), or one pair of a distance measurement
     item_group = np.arange(obs.n_items) if obs.kind == "distance" else data.pose_id
@@ -170,7 +226,23 @@ def information(robot, data: Measurements, noise: Noise, params="auto") -> Infor
         G[cand_of_item, slot * r + k] = items[:, k]
     scale = np.sqrt(np.sum(G**2, axis=(0, 1)) / labels.size)
     scale = np.where(scale > 0, scale, 1.0)
-    kept_robot = [nm for nm in ident.kept if nm in robot_names]
-    return Information(G=G / scale, scale=scale, names=list(ident.kept), robot_names=kept_robot,
+    names = [all_names[j] for j in keep]
+    prior = np.where(np.isfinite(sigma[keep]), 1.0 / (sigma[keep] * scale) ** 2, 0.0)
+    return Information(G=G / scale, scale=scale, prior=prior, names=names,
+                       robot_names=[nm for nm in names if nm in robot_names],
                        rows=per * r, data=data, group=cand_of_item[item_of_rows],
-                       row_group=np.repeat(cand_of_item, r), J_raw=J_raw, all_names=all_names)
+                       row_group=np.repeat(cand_of_item, r), J_raw=J_raw, J_white=Jw, sigma=sigma,
+                       all_names=all_names, identifiable=len(ident.kept))
+
+
+def posterior_analysis(robot, data: Measurements, noise: Noise, params="auto",
+                       rtol: float = DEFAULT_RTOL) -> Identifiability:
+    """:func:`judge` of the measurements ``data`` (their rows at the model's predictions) for the
+    unknowns ``params``, the data whitened by ``noise``."""
+    problem = CalibrationProblem(robot, data)
+    space = problem.space(robot, params)
+    state = problem.start(robot)
+    J = problem.jacobian(state, space)
+    sigma = np.r_[prior_sigma(robot, space.robot), np.full(len(space.nuisance), np.inf)]
+    return judge(J, _whitened_jacobian(robot, problem, state, J, noise), space.names, sigma,
+                 data.n_poses, rtol)

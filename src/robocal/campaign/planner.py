@@ -4,10 +4,14 @@ From the nominal model alone: candidate poses (generated inside the joint limits
 file) are filtered by the constraints (:mod:`robocal.campaign.constraints`), each candidate's
 information about the identifiable parameters is computed (:mod:`robocal.campaign.information`),
 an exchange search picks the best ``n`` (:mod:`robocal.campaign.exchange`), and the chosen poses
-are put in a short measuring order (:mod:`robocal.campaign.order`). The predicted accuracy is
-``sqrt(trace(M^-1 A))``: the expected RMS of the calibrated model's TCP position error over the
-region of interest due to the measurement noise (m; reported in mm). Parameters that stay
-unidentifiable are held at their values and their own errors are not part of that figure.
+are put in a short measuring order (:mod:`robocal.campaign.order`). ``M`` is the posterior
+information matrix, the data's plus the priors' the calibration carries (``J^T W J + P^-1``), so
+the predicted accuracy ``sqrt(trace(M^-1 A))`` is the expected RMS of the calibrated model's TCP
+position error over the region of interest (default: the workspace sample of
+:func:`robocal.trust.coverage.workspace_sample`) from the measurement noise and what the priors
+leave of the parameters the poses do not determine (m; reported in mm): the predicted accuracy
+``calibrate`` reports, before the unmodelled error. Frame parameters that stay unidentifiable
+(no prior) are held at their values and their own errors are not part of that figure.
 """
 
 from __future__ import annotations
@@ -30,10 +34,11 @@ from robocal.ik.path import default_weights, travel
 from robocal.kinematics.cell import is_track_cell
 from robocal.kinematics.transforms import make_transform
 from robocal.progress import Progress
+from robocal.trust.coverage import WORKSPACE_SAMPLES, WORKSPACE_SEED, workspace_sample
 from robocal.version import __version__
 
 DEFAULT_CANDIDATES = 5000
-DEFAULT_REGION_SIZE = 2000
+DEFAULT_REGION_SIZE = WORKSPACE_SAMPLES
 DEFAULT_STARTS = 4
 MAX_DRAWS = 50              # candidate batches drawn before constraints are declared too tight
 ROUND_DECIMALS_DEG = 4      # generated joints are rounded to 1e-4 deg (what the programs say)
@@ -188,14 +193,19 @@ class CampaignResult:
                  f"{self.n_candidates} candidates ({self.criterion}-optimal)",
                  f"predicted accuracy: {self.predicted_rms_mm:.4f} mm RMS of the TCP position over the "
                  f"region (noise {noise})",
-                 f"identifiable: {ident.rank} parameters; condition number {ident.condition_number:.3g} "
+                 f"determined by the data: {len(ident.kept)} parameters, by their priors only: "
+                 f"{len(ident.undetermined)}; condition number {ident.condition_number:.3g} "
                  f"({ident.condition_class}); " + " ".join(f"{k} {v:.3g}" for k, v in o.items()),
                  f"measuring order: weighted travel {self.travel:.4g} (in the search's order "
                  f"{self.travel_unordered:.4g})",
                  f"candidates: {self.funnel.text()}"]
+        for name in ident.undetermined:
+            conf = "/".join(ident.confounded_with[name]) or "nothing"
+            lines.append(f"  held by its prior (the poses do not determine it; posterior sigma "
+                         f"{ident.prior_ratio[name]:.0%} of the prior's): {name} (~{conf})")
         for name in ident.dropped:
             conf = "/".join(ident.confounded_with[name]) or "no effect"
-            lines.append(f"  not identifiable from these poses: {name} (~{conf})")
+            lines.append(f"  not identifiable from these poses and no prior: {name} (~{conf})")
         if self.curve:
             lines.append("poses  predicted RMS (mm)  random poses, median (mm)")
             lines += [f"{p.n:5d}  {p.predicted_rms_mm:18.4f}  {p.random_median_mm:25.4f}" for p in self.curve]
@@ -224,8 +234,11 @@ class CampaignResult:
             "identifiability": {key: v for key, v in ident.to_dict().items()
                                 if key not in ("kept", "dropped", "undetermined", "confounded_with")},
             "parameters": self.parameters,
-            "dropped": [{"name": nm, "reason": "not identifiable from these poses",
-                         "confounded_with": ident.confounded_with[nm]} for nm in ident.dropped],
+            "dropped": [{"name": nm, "reason": "not identifiable from these poses and no prior",
+                         "confounded_with": ident.confounded_with[nm]} for nm in ident.dropped]
+            + [{"name": nm, "reason": f"held by its prior: the poses do not determine it (posterior sigma "
+                                      f"{ident.prior_ratio[nm]:.0%} of the prior's)",
+                "confounded_with": ident.confounded_with[nm]} for nm in ident.undetermined],
             "curve": [{"n": p.n, "predicted_rms_mm": p.predicted_rms_mm,
                        "random_median_mm": p.random_median_mm} for p in self.curve],
             "candidates": self.funnel.to_dict(),
@@ -299,8 +312,11 @@ def _generate(robot, count, constraints, smr, normals, limits, rng, funnel):
 
 
 def _region(robot, region, size, constraints, limits, rng, smr, normals):
-    """Joints ``(R, n)`` of the region of interest: given joints, or random poses in the limits
-    (inside the TCP boxes; inside ``region`` when it is a box)."""
+    """Joints ``(R, n)`` of the region of interest: given joints, random poses in the limits inside
+    the TCP boxes (inside ``region`` when it is a box), or without boxes the workspace sample the
+    predicted accuracy of a calibration uses (``size`` of them)."""
+    if region is None and not constraints.boxes:
+        return workspace_sample(robot, size, WORKSPACE_SEED)
     if region is not None:
         arr = np.asarray(region, dtype=float)
         if arr.shape == (2, 3):
@@ -364,8 +380,9 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         I-optimal (average predicted TCP variance over the region, default), D-optimal or O4.
     region : array_like, shape (R, n), or tuple of array_like, shape (3,) each, optional
         Where the accuracy matters: joints in radians, or a box ``(lower, upper)`` in metres
-        (default ``region_size`` random poses in the limits and TCP boxes).
-    region_size : int, default 2000
+        (default: ``region_size`` random poses in the limits, seeded as the workspace sample of a
+        calibration's predicted accuracy; inside the TCP boxes when there are any).
+    region_size : int, default 1000
         Number of random region poses.
     starts : int, default 4
         Random starts of the exchange search.
@@ -456,7 +473,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                 funnel.record("distances missing an end", len(given) - len(whole))
             data, given = data.subset(whole), given[whole]
     info = information(plan_robot, data, noise, params)
-    C, _, p = info.G.shape
+    C, p = len(info.G), info.identifiable  # the data must determine those without a prior
     rows_min = int(info.rows.min())
     n_min = p // rows_min + 1
     if n < n_min:
@@ -474,7 +491,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     values = _curve_values(curve, n, n_min, C)
     with Progress(int(starts) + len(values), "poses", quiet=progress is not True) as bar:
         found = exchange(info.G, A, n, criterion=criterion, starts=int(starts), seed=seed,
-                         conflicts=conflicts, progress=bar)
+                         conflicts=conflicts, progress=bar, prior=info.prior)
         points = _curve(info, A, values, criterion, seed, conflicts, bar, (n, found.indices))
     weights = default_weights(robot)
     chosen = found.indices[measuring_order(robot, cand_q[found.indices], weights)]
@@ -497,7 +514,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                         "give the SMR's position on the flange (smr / --smr-mm) if it is off the axis")
     return CampaignResult(
         robot=plan_robot, kind=kind, joints=joints, candidate_index=index, visible=visible_out,
-        predicted_rms_mm=float(np.sqrt(criterion_value(info.G, A, chosen, "I")) * 1e3),
+        predicted_rms_mm=float(np.sqrt(criterion_value(info.G, A, chosen, "I", info.prior)) * 1e3),
         criterion=criterion, criterion_value=found.value, identifiability=info.analyze_subset(chosen),
         parameters=list(info.names),
         travel=travel(joints, weights), travel_unordered=travel(cand_q[found.indices], weights),
@@ -538,10 +555,10 @@ def _curve(info: Information, A, values, criterion, seed, conflicts, bar, main) 
         else:
             init = previous if previous is not None and len(previous) <= n else None
             idx = exchange(info.G, A, n, criterion=criterion, starts=DEFAULT_STARTS, seed=seed,
-                           conflicts=conflicts, init=init).indices
-        random = [criterion_value(info.G, A, rng.choice(len(info.G), n, replace=False), "I")
+                           conflicts=conflicts, init=init, prior=info.prior).indices
+        random = [criterion_value(info.G, A, rng.choice(len(info.G), n, replace=False), "I", info.prior)
                   for _ in range(CURVE_RANDOM_DESIGNS)]
-        points.append(CurvePoint(n, float(np.sqrt(criterion_value(info.G, A, idx, "I")) * 1e3),
+        points.append(CurvePoint(n, float(np.sqrt(criterion_value(info.G, A, idx, "I", info.prior)) * 1e3),
                                  float(np.sqrt(np.median(random)) * 1e3)))
         previous = idx
         bar.update(info=f"curve {n} poses")

@@ -14,7 +14,8 @@ EPILOG = """Examples:
 
 def add_parser(sub) -> None:
     p = sub.add_parser("analyze", help="identifiability and observability of a pose set",
-                       description="Which parameters a set of poses can identify, the condition "
+                       description="Which parameters a set of poses determines and which only their "
+                                   "priors hold (as the calibration will treat them), the condition "
                                    "number of the normal matrix and the observability indices O1-O4.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("data", help="CSV with joint columns q1_deg.. (or _rad); measurements optional")
@@ -22,6 +23,9 @@ def add_parser(sub) -> None:
     p.add_argument("--kind", choices=("point", "pose"), default="point",
                    help="what will be measured at each pose (default: point)")
     p.add_argument("--params", default="auto", help="auto, all, or names")
+    p.add_argument("--noise-mm", type=float, default=0.02,
+                   help="measurement noise, 1 sigma per coordinate in mm (default 0.02): how much the data "
+                        "weigh against the parameters' priors")
     p.add_argument("--tool-mm", metavar="X,Y,Z", type=numbers(3, "X,Y,Z in mm"),
                    help="the SMR/tool position on the flange in mm (default: the model's tool); "
                         "an SMR on the flange axis leaves the last joint's offset unobservable")
@@ -42,7 +46,9 @@ def run(args) -> int:
         tool[:3, 3] = np.array(args.tool_mm) * LENGTH_UNITS["mm"]
         robot = robot.with_frames(tool=tool)
     joints = read_joints(args.data, robot)
-    ident = analyze(robot, joints, kind=args.kind, params=args.params)
-    print(f"{len(joints)} poses of {robot.name}, {args.kind} measurements")
+    ident = analyze(robot, joints, kind=args.kind, params=args.params, noise_mm=args.noise_mm)
+    print(f"{len(joints)} poses of {robot.name}, {args.kind} measurements (noise {args.noise_mm:g} mm)")
+    print(f"determined by the data: {len(ident.kept)} parameters; by their priors only (held at nominal): "
+          f"{len(ident.undetermined)}; by neither: {len(ident.dropped)}")
     print(ident.summary())
     return 0

@@ -59,7 +59,7 @@ class Prediction:
         if missing:
             raise DataError(f"the prediction's parameters {missing[:4]} are not in model {robot.name}: "
                             "use the result JSON written with this calibrated model")
-        G = robot.jacobian(q, list(self.names), kind="point")  # (N, 3, k)
+        G = tcp_jacobian(robot, self.names, q)  # (N, 3, k)
         var = np.einsum("nik,kl,nil->n", G, self.covariance, G)
         return np.sqrt(np.maximum(var, 0.0) + (self.unmodelled_mm * 1e-3) ** 2) * 1e3
 
@@ -87,6 +87,22 @@ class Prediction:
         if not np.isfinite(cov).all() or out.unmodelled_mm < 0 or not out.validated_mm > 0:
             raise DataError("the result's predicted_accuracy.model has non-finite or negative figures")
         return out
+
+
+def tcp_jacobian(robot, names, q: np.ndarray) -> np.ndarray:
+    """``G(q) (N, 3, k)``: the TCP position's identification Jacobian (m per SI unit) over the
+    robot parameters ``names`` at joints ``q (N, n)`` (rad), through which a parameter
+    covariance becomes a predicted TCP error."""
+    return robot.jacobian(q, list(names), kind="point")
+
+
+def region_matrix(robot, names, q: np.ndarray) -> np.ndarray:
+    """``A (k, k)``: the mean of ``G(q)^T G(q)`` (:func:`tcp_jacobian`) over the joints
+    ``q (R, n)``, so that ``trace(C A)`` is the mean over ``q`` of the predicted TCP variance
+    (m^2, before the unmodelled error) of :meth:`Prediction.error_mm` for the covariance ``C``:
+    the I-optimality criterion the campaign planner minimises over the workspace sample."""
+    G = tcp_jacobian(robot, names, q)
+    return np.einsum("rik,ril->kl", G, G) / len(q)
 
 
 GRAM_RCOND = 1e-12  # eigenvalues of the scaled information below this (relative) carry no information
