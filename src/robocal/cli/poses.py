@@ -71,7 +71,9 @@ def add_parser(sub) -> None:
                                                    "in the limits and boxes)")
     g.add_argument("--region-box", type=float, nargs=6, help="region of interest: TCP box (mm)",
                    metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"))
-    g.add_argument("--region-size", type=int, default=2000, help="random poses of the default region")
+    g.add_argument("--region-size", type=int, default=1000,
+                   help="random poses of the default region (default 1000: the workspace sample of a "
+                        "calibration's predicted accuracy)")
     g.add_argument("--curve", type=_curve, metavar="START:STOP[:STEP]",
                    help="predicted accuracy against the number of poses, e.g. 8:60")
     g = p.add_argument_group("measurement")
