@@ -116,3 +116,18 @@ def test_plan_summary_says_what_only_the_priors_hold():
     reasons = {d["name"]: d["reason"] for d in plan.to_dict()["dropped"]}
     assert reasons["d1"].startswith("held by its prior")
     assert set(plan.identifiability.undetermined) <= set(plan.parameters)
+
+
+def test_a_model_with_joint_error_terms_is_planned_for_them_with_their_priors():
+    from robocal.campaign.information import Noise, candidate_data, information
+    from robocal.identify.priors import JOINT_ERROR_SIGMA
+    from robocal.kinematics.joint_errors import candidate_names
+
+    robot = rc.Robot.from_catalog("abb_irb2600").with_joint_errors(candidate_names(6, ["compliance"]))
+    plan = rc.plan_poses(robot, 30, smr=SMR, n_candidates=300, region_size=50, starts=1)
+    terms = [nm for nm in plan.parameters if nm.startswith("comp")]
+    assert terms and set(terms) <= set(robot.parameter_names)
+    q = np.random.default_rng(1).uniform(robot.limits[:, 0], robot.limits[:, 1], (200, 6))
+    info = information(plan.robot, candidate_data(plan.robot, "point", q, np.ones((200, 1), bool)), Noise())
+    j = info.names.index(terms[0])
+    assert info.prior[j] == pytest.approx(1.0 / (JOINT_ERROR_SIGMA["compliance"] * info.scale[j]) ** 2)

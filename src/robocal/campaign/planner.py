@@ -263,7 +263,7 @@ def _planning_robot(robot, smr, normals):
         raise DataError(f"give one non-zero facing direction per SMR ({len(smr)} SMRs)")
     normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
     placed = smr_in_link_frame(robot, smr)
-    plan = replace(robot, tool=make_transform(R, placed[0]), smr=placed[1:], nominal=None, joint_errors=None)
+    plan = replace(robot, tool=make_transform(R, placed[0]), smr=placed[1:], nominal=None)
     return plan, smr, normals
 
 
