@@ -1,0 +1,321 @@
+"""Each motion of a program corrected with the load active where it runs.
+
+Truth: a KR 210 R2700 whose payload compliance is known (the calibrated model *is* the truth, so
+the model's own error is zero), a program that switches between two loads, written in each
+vendor's syntax; the filtered program run by the nominal controller on the true robot at each
+motion's load reaches the intended positions within the written numbers' resolution. Each motion's
+correction is the one the same target gets filtered alone with ``--payload`` of its load.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from robocal import Robot
+from robocal.cli import main
+from robocal.data.simulate import perturbed
+from robocal.errors import DataError
+from robocal.ik.singularity import singularity_distance
+from robocal.kinematics.transforms import make_transform
+from robocal.programs import filter_program
+from robocal.programs.load_data import read_schedules
+from robocal.programs.motions import summary
+from robocal.programs.simulate import execute, write_program
+
+N = 8  # targets; the load changes before target N // 2
+HALF = N // 2
+RESOLUTION_MM = 0.002  # the written positions' resolution and the orientation's effect on the TCP
+TOOL = make_transform(Rotation.from_euler("z", 90, degrees=True).as_matrix(), np.array([0.05, 0.0, 0.25]))
+FRAME = make_transform(np.eye(3), np.array([1.2, -0.4, 0.3]))
+
+
+def _robots():
+    nominal = Robot.from_catalog("kuka_kr210_r2700")
+    terms = {"payload2": 3e-6, "payload3": 4e-6, "payload5": 6e-6}  # rad/(kg m): ~1 mm at 150 kg
+    cal = perturbed(nominal, 5).with_joint_errors(list(terms)).with_values(terms)
+    return nominal, cal
+
+
+def _joints(nominal, n, seed=0):
+    rng = np.random.default_rng(seed)
+    mid, half = nominal.limits.mean(axis=1), np.minimum(np.ptp(nominal.limits, axis=1), 2 * np.pi) * 0.3
+    q = rng.uniform(mid - half, mid + half, (6 * n, 6))
+    return q[singularity_distance(nominal, q).sigma_rel > 0.05][:n]
+
+
+def _tool0(mass_kg, cog_m, tool=None):
+    """A load (kg, cog m) in tool0; ``tool``: the cog is given in that tool's frame."""
+    c = np.asarray(cog_m, float)
+    return np.array([mass_kg, *(c if tool is None else tool[:3, :3] @ c + tool[:3, 3])])
+
+
+def _insert_before(text: str, marker: str, line: str) -> str:
+    at = text.index(marker)
+    at = text.rindex("\n", 0, at) + 1
+    return text[:at] + line + text[at:]
+
+
+def _set_loads(dialect: str, paths, tmp_path):
+    """Edit the written program to run targets 0..HALF-1 with load A and the rest with load B.
+    Returns (A, B) in tool0 (kg, m) and the filter's extra arguments."""
+    kwargs = {}
+    if dialect == "krl":
+        src = paths[0]
+        text = src.read_text()
+        text = text.replace(
+            "  $TOOL = TOOL_DATA[1]\n",
+            "  $TOOL = TOOL_DATA[1]\n  $LOAD = {M 150.0, CM {X 0.0, "
+            "Y 0.0, Z 300.0, A 0.0, B 0.0, C 0.0}, J {X 0.0, Y 0.0, Z 0.0}}\n",
+        )
+        text = _insert_before(text, f" XP{HALF}\n", "  $LOAD = LOAD_DATA[4]\n")
+        src.write_text(text)
+        config = tmp_path / "$config.dat"
+        config.write_text(
+            "DEFDAT  $CONFIG\nDECL LOAD LOAD_DATA[4]={M 20.0,CM {X 50.0,Y 0.0,Z 100.0,A 0.0,B 0.0,"
+            "C 0.0},J {X 0.0,Y 0.0,Z 0.0}}\nENDDAT\n"
+        )
+        kwargs["references"] = [config]
+        return _tool0(150, [0, 0, 0.3]), _tool0(20, [0.05, 0, 0.1]), kwargs
+    if dialect == "rapid":
+        src = paths[0]
+        text = src.read_bytes().decode()
+        text = text.replace(
+            "[1,[0,0,50],[1,0,0,0],0,0,0]];",
+            "[20,[0,0,100],[1,0,0,0],0,0,0]];\r\n"
+            "    PERS loaddata part:=[130,[0,0,200],[1,0,0,0],0.5,0.5,0.5];",
+        )
+        text = text.replace("    PROC main()\r\n", "    PROC main()\r\n        GripLoad part;\r\n")
+        text = _insert_before(text, f" p{HALF}, v500", "        GripLoad load0;\r\n")
+        src.write_bytes(text.encode())
+        tool_load = _tool0(20, [0, 0, 0.1])
+        part = _tool0(130, [0, 0, 0.2], TOOL)  # a payload's cog is in the tool frame
+        both = np.array([150.0, *((tool_load[0] * tool_load[1:] + part[0] * part[1:]) / 150.0)])
+        return both, tool_load, kwargs
+    if dialect == "fanuc":
+        src = paths[0]
+        text = src.read_bytes().decode()
+        text = text.replace("   0:  UTOOL_NUM=1 ;", "   0:  UTOOL_NUM=1 ;\r\n   0:  PAYLOAD[3] ;")
+        text = _insert_before(text, f" P[{HALF + 1}] ", "   0:  PAYLOAD[5:gripper empty] ;\r\n")
+        src.write_bytes(text.encode())
+        schedules = tmp_path / "payloads.csv"
+        schedules.write_text(
+            "schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm\n3,150,0,0,30\n5,20,5,0,10\n"
+        )
+        kwargs["payload_schedules"] = schedules
+        return _tool0(150, [0, 0, 0.3]), _tool0(20, [0.05, 0, 0.1]), kwargs
+    src = paths[0]  # URScript
+    text = src.read_text()
+    text = text.replace("def sim():\n", "def sim():\n  set_payload(150.0, [0.0, 0.0, 0.3])\n")
+    lines = text.split("\n")
+    moves = [k for k, line in enumerate(lines) if line.strip().startswith("movel(")]
+    lines.insert(moves[HALF], "  set_payload(20.0, [0.05, 0.0, 0.1])")
+    src.write_text("\n".join(lines))
+    return _tool0(150, [0, 0, 0.3]), _tool0(20, [0.05, 0, 0.1]), kwargs
+
+
+@pytest.mark.parametrize("dialect", ["krl", "rapid", "fanuc", "urscript"])
+def test_each_motion_runs_with_the_load_set_before_it_and_reaches_the_truth(dialect, tmp_path):
+    nominal, cal = _robots()
+    q = _joints(nominal, N)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    paths, tools, frames = write_program(dialect, folder, nominal, q, TOOL, FRAME)
+    a, b, kwargs = _set_loads(dialect, paths, tmp_path)
+    res = filter_program(paths, cal, nominal, tools=tools, frames=frames, **kwargs)
+    counts = summary(res.motions)
+    assert counts == {"total": N, "corrected": N, "named": 0}  # every motion corrected or named
+    assert len(res.loads) == 2 and all(f"{N // 2} motion(s)" in line for line in res.loads)
+    assert res.loads[0].startswith("150 kg") and res.loads[1].startswith("20 kg")
+    assert not [w for w in res.warnings if "assumed" in w]
+    out = []
+    for p in paths:
+        o = tmp_path / p.name
+        o.write_bytes(res.outputs[p])
+        out.append(o)
+    refs = kwargs.get("references", ())
+    truth = cal.with_frames(base=nominal.base, tool=nominal.tool)
+    for load, rows in ((a, slice(0, HALF)), (b, slice(HALF, N))):
+        reached, _ = execute(
+            out, truth.with_conditions(load), nominal, tools=tools, frames=frames, references=refs
+        )
+        unfiltered, wanted = execute(
+            paths, truth.with_conditions(load), nominal, tools=tools, frames=frames, references=refs
+        )
+        err = np.linalg.norm(reached[rows, :3, 3] - wanted[rows, :3, 3], axis=1) * 1e3
+        before = np.linalg.norm(unfiltered[rows, :3, 3] - wanted[rows, :3, 3], axis=1) * 1e3
+        assert err.max() < RESOLUTION_MM, (dialect, err)
+        assert before.min() > 50 * RESOLUTION_MM  # the errors were there to correct
+        # the same motions filtered alone with --payload of their load: the same corrections
+        alone = filter_program(
+            paths,
+            cal,
+            nominal,
+            tools=tools,
+            frames=frames,
+            payload=load,
+            **{k: v for k, v in kwargs.items() if k == "references"},
+        )
+        assert [r["correction_mm"] for r in alone.rows[rows]] == [r["correction_mm"] for r in res.rows[rows]]
+        assert alone.loads == [
+            f"{load[0]:g} kg, centre of mass [{', '.join(f'{c * 1e3:.4g}' for c in load[1:])}] "
+            "mm (--payload): every motion"
+        ]
+
+
+def _rapid_routine_program(tmp_path, nominal):
+    """A RAPID module whose routine Approach is called with the part gripped and after releasing it."""
+    paths, _, _ = write_program("rapid", tmp_path, nominal, _joints(nominal, 3), TOOL, FRAME)
+    text = (
+        paths[0]
+        .read_bytes()
+        .decode()
+        .replace(
+            "[1,[0,0,50],[1,0,0,0],0,0,0]];",
+            "[20,[0,0,100],[1,0,0,0],0,0,0]];\r\n    PERS loaddata part:=[130,[0,0,200],[1,0,0,0],0,0,0];",
+        )
+    )
+    head, _, _ = text.partition("    PROC main()")
+    body = [
+        "    PROC main()",
+        "        MoveJ p0, v1000, fine, tReal\\WObj:=wCell;",
+        "        GripLoad part;",
+        "        Approach;",
+        "        GripLoad load0;",
+        "        Approach;",
+        "        MoveL p2, v500, fine, tReal\\TLoad:=part\\WObj:=wCell;",
+        "    ENDPROC",
+        "    PROC Approach()",
+        "        MoveL p1, v500, z10, tReal\\WObj:=wCell;",
+        "    ENDPROC",
+        "ENDMODULE",
+        "",
+    ]
+    paths[0].write_bytes((head + "\r\n".join(body)).encode())
+    return paths[0]
+
+
+def test_a_target_run_with_two_loads_is_corrected_for_its_first_and_the_motion_named(tmp_path):
+    nominal, cal = _robots()
+    path = _rapid_routine_program(tmp_path, nominal)
+    res = filter_program([path], cal, nominal)
+    counts = summary(res.motions)
+    assert counts == {"total": 3, "corrected": 2, "named": 1}
+    named = next(m for m in res.motions if m.status == "named")
+    assert named.instruction == "MoveL" and "p1" in named.target
+    assert "corrected for the load of its first execution (150 kg" in named.reason
+    assert "runs with 20 kg" in named.reason and "declare a copy of the target for each load" in named.reason
+    assert any("not corrected: its target p1" in w for w in res.warnings)
+    by_load = {line.split(" kg")[0]: line for line in res.loads}
+    assert set(by_load) == {"20", "150", "130"}  # \TLoad:=part is p2's whole load, in tool0
+    assert "(\\TLoad:=part)" in by_load["130"] and "centre of mass [0, 0, 200] mm" in by_load["130"]
+    # p1 is corrected as with the part gripped (its first execution)
+    part_in_tool0 = _tool0(130, [0, 0, 0.2], TOOL)
+    grip = np.array([150.0, *((20 * np.array([0, 0, 0.1]) + 130 * part_in_tool0[1:]) / 150)])
+    alone = filter_program([path], cal, nominal, payload=grip)
+    assert [r["correction_mm"] for r in alone.rows if r["name"] == "p1"] == [
+        r["correction_mm"] for r in res.rows if r["name"] == "p1"
+    ]
+
+
+def test_unreadable_or_missing_load_data_is_a_clear_error(tmp_path):
+    nominal, cal = _robots()
+    paths, tools, frames = write_program("fanuc", tmp_path, nominal, _joints(nominal, 2), TOOL, FRAME)
+    text = (
+        paths[0]
+        .read_bytes()
+        .decode()
+        .replace("   0:  UTOOL_NUM=1 ;", "   0:  UTOOL_NUM=1 ;\r\n   0:  PAYLOAD[2] ;")
+    )
+    paths[0].write_bytes(text.encode())
+    with pytest.raises(
+        DataError,
+        match=r"sim.ls:7: PAYLOAD\[2\]: the payload schedules live in the controller: "
+        r"give them with --payload-schedules",
+    ):
+        filter_program(paths, cal, nominal, tools=tools, frames=frames)
+    with pytest.raises(
+        DataError, match=r"payload schedule 2 is not in the schedules given \(they hold \[1\]\)"
+    ):
+        filter_program(paths, cal, nominal, tools=tools, frames=frames, payload_schedules={1: (10, 0, 0, 0)})
+    given = filter_program(
+        paths, cal, nominal, tools=tools, frames=frames, payload=[10.0]
+    )  # --payload: every motion
+    assert given.loads == ["10 kg, centre of mass [0, 0, 0] mm (--payload): every motion"]
+    with pytest.raises(DataError, match="--payload-schedules is for FANUC programs"):
+        filter_program(
+            [_rapid_routine_program(tmp_path, nominal)], cal, nominal, payload_schedules={1: (1, 0, 0, 0)}
+        )
+    script = tmp_path / "cell.script"
+    script.write_text(
+        "def cell():\n  set_payload(m_part, [0, 0, 0.1])\n  movel(p[1.2, 0.2, 0.8, 3.14, 0, 0])\nend\n"
+    )
+    with pytest.raises(
+        DataError,
+        match=r"cell.script:2: set_payload\(m_part, \[0, 0, 0.1\]\): the payload is not "
+        "written as numbers; give the load with --payload",
+    ):
+        filter_program([script], cal, nominal)
+
+
+def test_fanuc_payload_schedules_from_sysvars_va_and_csv(tmp_path):
+    va = tmp_path / "SYSVARS.VA"
+    va.write_text(
+        "[*SYSTEM*]$PLST_GRP1  Storage: CMOS  Access: RW  : ARRAY[10] OF PLST_GRP_T\n"
+        "     Field: $PLST_GRP1[1].$COMMENT Access: RW: STRING[17] = 'GRIPPER'\n"
+        "     Field: $PLST_GRP1[1].$PAYLOAD Access: RW: REAL = 4.500000e+01\n"
+        "     Field: $PLST_GRP1[1].$PAYLOAD_X Access: RW: REAL = 0.000000e+00\n"
+        "     Field: $PLST_GRP1[1].$PAYLOAD_Y Access: RW: REAL = -2.500000e+00\n"
+        "     Field: $PLST_GRP1[1].$PAYLOAD_Z Access: RW: REAL = 1.500000e+01\n"
+        "     Field: $PLST_GRP1[1].$PAYLOAD_IX Access: RW: REAL = 1.200000e+00\n"
+        "     Field: $PLST_GRP1[2].$PAYLOAD Access: RW: REAL = -9999\n"
+        "     Field: $PLST_GRP1[2].$PAYLOAD_X Access: RW: REAL = 0\n"
+    )
+    got = read_schedules(va)
+    assert list(got) == [1]  # schedule 2 is the factory's placeholder: not set
+    np.testing.assert_allclose(got[1], [45.0, 0.0, -0.025, 0.15])  # cm -> m
+    csv_file = tmp_path / "p.csv"
+    csv_file.write_text("schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm\n1,45,0,-2.5,15\n")
+    assert read_schedules(csv_file) == got
+    csv_file.write_text("schedule,mass\n1,45\n")
+    with pytest.raises(DataError, match="not a SYSVARS.VA with \\$PLST_GRP1 nor a CSV with the header"):
+        read_schedules(csv_file)
+
+
+def test_filter_cli_reads_fanuc_payload_schedules_and_prints_the_loads(tmp_path, capsys):
+    nominal, cal = _robots()
+    cal.save(tmp_path / "cal.yaml")
+    paths, tools, frames = write_program("fanuc", tmp_path, nominal, _joints(nominal, 4), TOOL, FRAME)
+    text = (
+        paths[0]
+        .read_bytes()
+        .decode()
+        .replace("   0:  UTOOL_NUM=1 ;", "   0:  UTOOL_NUM=1 ;\r\n   0:  PAYLOAD[1] ;")
+    )
+    paths[0].write_bytes(text.encode())
+    (tmp_path / "pl.csv").write_text(
+        "schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm\n1,90,0,0,25\n"
+    )
+    args = [
+        "filter",
+        str(paths[0]),
+        "--calibrated",
+        str(tmp_path / "cal.yaml"),
+        "--nominal",
+        "kuka_kr210_r2700",
+        "-o",
+        str(tmp_path / "out.ls"),
+        "--tool",
+        f"1={tools['1']}",
+        "--frame",
+        f"1={frames['1']}",
+    ]
+    assert main(args) == 2
+    assert "--payload-schedules" in capsys.readouterr().err
+    assert main([*args, "--payload-schedules", str(tmp_path / "pl.csv")]) == 0
+    out = capsys.readouterr().out
+    assert (
+        "load: 90 kg, centre of mass [0, 0, 250] mm (sim.ls:7 (PAYLOAD[1])): 4 motion(s), sim.ls lines 8-11"
+        in out
+    )
