@@ -54,6 +54,7 @@ from robocal.programs.urscript import URScriptDialect
 MM, CM = 1e-3, 1e-2  # m
 NULL_TOOL = 0  # KRL tool 0 ($NULLFRAME) has no LOAD_DATA: selecting it sets no load here
 UNSET_KG = 0.0  # a FANUC schedule with a mass <= this (factory -9999 sentinel) is not set
+STATEMENT_CHARS = 60  # a load statement quoted in messages is shortened to this
 _NUM = r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
 _ADVICE = "give the load with --payload KG[,X,Y,Z] (every motion) instead"
 
@@ -76,7 +77,9 @@ class Setting:
 
 
 def _setting(src: ProgramText, at: int, text: str, mass, cog, grip: bool = False) -> Setting:
-    where = f"{src.path.name}:{src.line_of(at)} ({' '.join(text.split())[:60]})"
+    text = " ".join(text.split())
+    text = text if len(text) <= STATEMENT_CHARS else text[:STATEMENT_CHARS - 3] + "..."
+    where = f"{src.path.name}:{src.line_of(at)} ({text})"
     return Setting(src.path, at, where, None if mass is None else float(mass),
                    None if cog is None else tuple(float(c) for c in cog), grip)
 
