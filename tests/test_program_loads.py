@@ -9,6 +9,8 @@ correction is the one the same target gets filtered alone with ``--payload`` of 
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -319,3 +321,86 @@ def test_filter_cli_reads_fanuc_payload_schedules_and_prints_the_loads(tmp_path,
         "load: 90 kg, centre of mass [0, 0, 250] mm (sim.ls:7 (PAYLOAD[1])): 4 motion(s), sim.ls lines 8-11"
         in out
     )
+
+
+CORPUS = Path(__file__).parent / "data" / "programs" / "corpus"
+
+
+def _payload_model(name: str) -> tuple[Robot, Robot]:
+    nominal = Robot.from_catalog(name)
+    terms = {"payload2": 2e-5, "payload3": 3e-5}
+    return nominal, perturbed(nominal, 3).with_joint_errors(list(terms)).with_values(terms)
+
+
+def test_corpus_machine_tending_gripload_and_tload():
+    """A RAPID cell whose routines grip and release parts: each motion with its tool's load plus the
+    part it holds; a position reached empty-handed and loaded is named where it runs with the other."""
+    nominal, cal = _payload_model("abb_irb2600")
+    res = filter_program([CORPUS / "machine_tending.mod"], cal, nominal)
+    assert summary(res.motions) == {"total": 9, "corrected": 5, "named": 4}
+    assert res.loads == [
+        "18.5 kg, centre of mass [0, 12, 95] mm (tooldata tgripper): 4 motion(s), machine_tending.mod "
+        "lines 29-30, 44, 49",
+        "24.7 kg, centre of mass [0, 8.988, 132.7] mm (tooldata tgripper + machine_tending.mod:34 (GripLoad "
+        "ldBlank;)): 3 motion(s), machine_tending.mod lines 35, 39-40",
+        "23.4 kg, centre of mass [0, 9.487, 125.4] mm (tooldata tgripper + machine_tending.mod:52 (GripLoad "
+        "ldFinished;)): 1 motion(s), machine_tending.mod line 53",
+        "23.4 kg, centre of mass [0, 10, 124] mm (machine_tending.mod:23 (\\TLoad:=ldGripFinished)): "
+        "1 motion(s), machine_tending.mod line 23",
+    ]
+    named = {(m.line, m.target) for m in res.motions if m.status == "named"}
+    assert named == {(35, "pConveyorAbove"), (44, "pChuckAbove"), (49, "pChuck"), (53, "pChuckAbove")}
+    # 24.7 kg: the 18.5 kg gripper (cog [0, 12, 95]) and the 6.2 kg blank 60 mm along the tool's z
+    # (its TCP 185 mm out)
+    cog = (18.5 * np.array([0, 12, 95]) + 6.2 * np.array([0, 0, 185 + 60])) / 24.7
+    assert f"[0, {cog[1]:.4g}, {cog[2]:.4g}]" in res.loads[1]
+
+
+def test_corpus_fanuc_payload_schedules_from_the_controllers_sysvars():
+    nominal, cal = _payload_model("fanuc_r2000ic_165f")
+    res = filter_program(
+        [CORPUS / "pns0012.ls"],
+        cal,
+        nominal,
+        payload_schedules=CORPUS / "SYSVARS.VA",
+        tools={"1": "0,0,300,0,0,0"},
+        frames={"1": "1500,0,200,0,0,0"},
+    )
+    assert summary(res.motions) == {"total": 4, "corrected": 4, "named": 0}
+    assert res.loads == [
+        "32 kg, centre of mass [0, 0, 180] mm (pns0012.ls:25 (PAYLOAD[1])): 2 motion(s), pns0012.ls "
+        "lines 26-27",
+        "82 kg, centre of mass [0, 0, 340] mm (pns0012.ls:30 (PAYLOAD[2:Bag 50kg])): 2 motion(s), pns0012.ls "
+        "lines 31-32",
+    ]
+
+
+def test_corpus_kss8_with_sload_applies_to_its_motion_and_the_rest_run_with_the_default():
+    nominal, cal = _payload_model("kuka_kr16_2")
+    files = [CORPUS / "deburr_cell.src", CORPUS / "deburr_cell.dat"]
+    res = filter_program(files, cal, nominal, references=[CORPUS / "$config.dat"])
+    assert res.loads[0] == (
+        "4.5 kg, centre of mass [0, 0, 90] mm (deburr_cell.src:27 ($LOAD = "
+        "SLOAD(FP1.TOOL_NO))): 2 motion(s), deburr_cell.src lines 27, 31"
+    )
+    assert res.loads[1].startswith(
+        "no load (the program sets none before these motions; the model's default, no payload): 8 motion(s)"
+    )
+    assert any("assumed no payload (0 kg)" in w for w in res.warnings)
+
+
+@pytest.mark.parametrize("dialect", ["inform", "val3", "krl", "urscript"])
+def test_a_payload_and_thermal_model_without_load_data_warns_of_the_defaults_it_assumed(dialect, tmp_path):
+    nominal, cal = _robots()
+    warm = (
+        cal.with_joint_errors(["payload2", "payload3", "thermal"])
+        .with_values({"payload2": 3e-6, "payload3": 4e-6, "thermal": 11.5e-6})
+        .with_reference_temperature(24.0)
+    )
+    paths, tools, frames = write_program(dialect, tmp_path, nominal, _joints(nominal, 3), TOOL, FRAME)
+    res = filter_program(paths, warm, nominal, tools=tools, frames=frames)
+    assumed = [w for w in res.warnings if "assumed" in w]
+    assert len(assumed) == 2 and "assumed no payload (0 kg)" in assumed[0] and "24 deg C" in assumed[1]
+    assert res.loads and res.loads[0].startswith("no load (the program sets none before these motions")
+    hot = filter_program(paths, warm, nominal, tools=tools, frames=frames, payload=[50.0], temperature=30.0)
+    assert not [w for w in hot.warnings if "assumed" in w]

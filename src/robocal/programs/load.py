@@ -200,7 +200,9 @@ def _lines(motions: list[tuple[Account, Load | None, str]]) -> list[str]:
     for key, (where, files) in out.items():
         n = sum(len(v) for v in files.values())
         at = "; ".join(f"{name} {_ranges(sorted(set(v)))}" for name, v in files.items())
-        lines.append(f"{_text(key)} ({where}): {n} motion(s), {at}")
+        what = f"{_text(key)} ({where})" if key is not None else \
+            "no load (the program sets none before these motions; the model's default, no payload)"
+        lines.append(f"{what}: {n} motion(s), {at}")
     return lines
 
 

@@ -110,7 +110,7 @@ class LoadReader:
 # ----------------------------------------------------------------------------------------- RAPID
 _RAPID_MASK = [re.compile(r"![^\n]*")], [re.compile(r'"(?:[^"\n]|"")*"')]
 _RAPID_DECL = re.compile(r"\b(?:(?:LOCAL|TASK)\s+)?(?:CONST|PERS|VAR)\s+(tooldata|loaddata)\s+"
-                         r"([A-Za-z]\w*)\s*:=", re.IGNORECASE)
+                         r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*:=", re.IGNORECASE)
 _GRIPLOAD = re.compile(r"\bGripLoad\b\s*([^;]*);", re.IGNORECASE)
 _TLOAD = re.compile(r"\\\s*TLoad\s*:=\s*([^,;\\]+)", re.IGNORECASE)
 _RAPID_NONE = {"tool0": (0.0, (0.0, 0.0, 0.0)), "load0": (0.0, (0.0, 0.0, 0.0))}
@@ -132,8 +132,11 @@ class RapidLoads(LoadReader):
                 end = masked.find(";", m.end())
                 tree, _ = parse_aggregate(src, masked, m.end(), len(masked) if end < 0 else end,
                                           f"{m.group(1)} {m.group(2)}")
-                load = tree[2] if m.group(1).lower() == "tooldata" and len(tree) > 2 else tree
-                self.loads[m.group(2).lower()] = _loaddata(src, m.start(), load, m.group(2))
+                tool = m.group(1).lower() == "tooldata"
+                for suffix, node in _elements(tree, m.group(3) is not None, tool):
+                    load = node[2] if tool and len(node) > 2 else node
+                    name = m.group(2) + suffix
+                    self.loads[name.lower()] = _loaddata(src, m.start(), load, name)
             if src in references:
                 continue
             for m in _GRIPLOAD.finditer(masked):
@@ -173,6 +176,15 @@ class RapidLoads(LoadReader):
         c2 = frame[:3, :3] @ c2 + frame[:3, 3]  # the payload's cog: tool frame -> tool0
         cog = (m1 * np.asarray(c1) + m2 * c2) / (m1 + m2)
         return (m1 + m2, *cog.tolist()), where
+
+
+def _elements(tree, array: bool, tool: bool, index: tuple[int, ...] = ()) -> list[tuple[str, list]]:
+    """``(suffix, aggregate)`` of a declaration's value: itself, or each element of an array
+    (``{1}``, ``{2,1}`` ...): a tooldata begins with its robhold word, a loaddata with its mass."""
+    leaf = isinstance(tree, list) and tree and isinstance(tree[0], Word if tool else Number)
+    if not array or leaf or not isinstance(tree, list):
+        return [("{" + ",".join(map(str, index)) + "}" if index else "", tree)]
+    return [e for k, node in enumerate(tree, start=1) for e in _elements(node, array, tool, (*index, k))]
 
 
 def _loaddata(src: ProgramText, at: int, node, name: str) -> tuple[float, tuple]:
@@ -280,6 +292,8 @@ class KRLLoads(LoadReader):
                 s = _KRL_SLOAD.search(w.group(1))
                 if s is None or s.group(1).upper() not in self.fdat:
                     mass, cog = self._value(src, at, w.group(0), None, w.group(1))
+                elif self.fdat[s.group(1).upper()] == NULL_TOOL:
+                    return super().at_motion(state, target, instruction)
                 else:
                     mass, cog = self._data(src, at, w.group(0), self.fdat[s.group(1).upper()])
                 return (mass, *cog), f"{src.path.name}:{src.line_of(at)} ({' '.join(w.group(0).split())})"
