@@ -80,10 +80,13 @@ def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibr
     first: dict[int, tuple[Load | None, str]] = {}  # target index -> its first execution's load
     motions: dict[int, tuple[Account | None, Load | None, str]] = {}  # id(account) -> first load
     plan = LoadPlan([None] * len(targets))
+    keys: dict[tuple, Load] = {}  # a load as read -> its key (a few distinct loads, many motions)
     for state, path, offset, i in runs:
         acc = finder.find(path, offset)
         got = reader.at_motion(state, targets[i], (acc.source, acc.at) if acc else None)
-        key, where = (None, NO_LOAD) if got is None else (_key(got[0]), got[1])
+        if got is not None and got[0] not in keys:
+            keys[got[0]] = _key(got[0])
+        key, where = (None, NO_LOAD) if got is None else (keys[got[0]], got[1])
         motions.setdefault(id(acc), (acc, key, where))
         if i not in first:
             first[i] = (key, where)
@@ -163,12 +166,16 @@ class _AccountFinder:
             self.by_path.setdefault(acc.source.path, []).append((acc.at, acc))
         for v in self.by_path.values():
             v.sort(key=lambda e: e[0])
+        self.starts = {path: [a for a, _ in v] for path, v in self.by_path.items()}
+        self.last: tuple = (None, [], [])  # (path, its accounts, their starts): a Path hashes slowly
 
     def find(self, path, offset: int) -> Account | None:
-        accs = self.by_path.get(path, [])
+        if path is not self.last[0]:
+            self.last = (path, self.by_path.get(path, []), self.starts.get(path, []))
+        _, accs, starts = self.last
         if not accs:
             return None
-        k = bisect.bisect_right([a for a, _ in accs], offset) - 1
+        k = bisect.bisect_right(starts, offset) - 1
         src = accs[0][1].source
         line = src.line_of(offset)
         later_here = k + 1 < len(accs) and src.line_of(accs[k + 1][0]) == line
@@ -178,8 +185,8 @@ class _AccountFinder:
 
 
 def _key(load) -> Load:
-    v = np.round(np.asarray(load, float) / SAME_LOAD) * SAME_LOAD
-    return tuple(float(x) + 0.0 for x in v)
+    """The load as a hashable key, rounded to SAME_LOAD (plain floats: called once per motion)."""
+    return tuple(round(float(v) / SAME_LOAD) * SAME_LOAD + 0.0 for v in load)
 
 
 def _text(key: Load | None) -> str:

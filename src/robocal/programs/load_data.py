@@ -122,12 +122,13 @@ class RapidLoads(LoadReader):
     def __init__(self, tools: dict[str, np.ndarray]):
         self.tools = tools  # tool name (lower case) -> tframe 4x4 (m), as the filter reads them
         self.loads: dict[str, tuple[float, tuple]] = dict(_RAPID_NONE)  # tooldata tload / loaddata
-        self.masked: dict[Path, str] = {}
+        self.masked: dict[int, str] = {}  # id(ProgramText) -> its masked text (a Path hashes slowly)
+        self.combined: dict[tuple, tuple[Load, str]] = {}  # (tool, GripLoad) -> the motion's load
 
     def settings(self, sources, references):
         out = []
         for src in [*references, *sources]:
-            masked = self.masked[src.path] = mask(src.text, *_RAPID_MASK)
+            masked = self.masked[id(src)] = mask(src.text, *_RAPID_MASK)
             for m in _RAPID_DECL.finditer(masked):
                 end = masked.find(";", m.end())
                 tree, _ = parse_aggregate(src, masked, m.end(), len(masked) if end < 0 else end,
@@ -150,7 +151,7 @@ class RapidLoads(LoadReader):
 
     def at_motion(self, state, target, instruction):
         src, at = instruction if instruction else (target.source, target.offset)
-        masked = self.masked.get(src.path, "")
+        masked = self.masked.get(id(src), "")
         end = masked.find(";", at)
         own = _TLOAD.search(masked, at, len(masked) if end < 0 else end)
         if own:
@@ -161,12 +162,19 @@ class RapidLoads(LoadReader):
             mass, cog = self.loads[name]
             return (mass, *cog), f"{src.path.name}:{src.line_of(at)} (\\TLoad:={own.group(1).strip()})"
         tool = target.tool.lower()
+        grip = state.get("grip")
+        key = (tool, id(grip))  # the settings live as long as the reader's caller's list
+        if key not in self.combined:
+            self.combined[key] = self._combined(target, tool, grip)
+        return self.combined[key]
+
+    def _combined(self, target: Target, tool: str, grip: Setting | None) -> tuple[Load, str]:
+        """The load of a motion with ``tool`` after the GripLoad ``grip`` (None: none yet)."""
         if tool not in self.loads:
             raise _unread(target.source, target.offset, target.name, f"the load of tool {target.tool} is not "
                           "known (its tooldata is declared in no file given; give its module with "
                           "--references)")
         m1, c1 = self.loads[tool]
-        grip = state.get("grip")
         m2 = 0.0 if grip is None else grip.mass
         where = f"tooldata {target.tool}" + ("" if grip is None or not m2 else f" + {grip.where}")
         if m1 + m2 <= 0:
@@ -219,11 +227,11 @@ class KRLLoads(LoadReader):
     def __init__(self):
         self.data: dict[int, tuple[float, tuple] | str] = {}  # LOAD_DATA[n] -> (kg, cog m) or why not
         self.fdat: dict[str, int] = {}  # FDAT name -> TOOL_NO
-        self.masked: dict[Path, str] = {}
+        self.masked: dict[int, str] = {}  # id(ProgramText) -> its masked text (a Path hashes slowly)
 
     def settings(self, sources, references):
         for src in [*references, *sources]:
-            masked = self.masked[src.path] = mask(src.text, *_KRL_MASK)
+            masked = self.masked[id(src)] = mask(src.text, *_KRL_MASK)
             for m in _KRL_DATA.finditer(masked):
                 lit = _KRL_LITERAL.match(masked, m.end())
                 n = int(m.group(1))
@@ -238,7 +246,7 @@ class KRLLoads(LoadReader):
             self.fdat.update({m.group(1).upper(): int(m.group(2)) for m in _KRL_FDAT.finditer(masked)})
         out = []
         for src in sources:
-            masked = self.masked[src.path]
+            masked = self.masked[id(src)]
             inside = [(m.start(), m.end()) for m in _KRL_MOTION.finditer(masked)]
             for m in _KRL_SET.finditer(masked):
                 if any(a <= m.start() < b for a, b in inside):
@@ -285,7 +293,7 @@ class KRLLoads(LoadReader):
     def at_motion(self, state, target, instruction):
         if instruction is not None:
             src, at = instruction
-            masked = self.masked.get(src.path, "")
+            masked = self.masked.get(id(src), "")
             line = masked[at:masked.find("\n", at) if "\n" in masked[at:] else len(masked)]
             w = re.search(r"\$LOAD\s*=\s*([^,\n]*(?:\([^)\n]*\))?)", line, re.IGNORECASE)
             if w:
