@@ -13,15 +13,19 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from robocal import Robot
 from robocal.cli import main
+from robocal.compensate import compensate
 from robocal.data.simulate import perturbed
 from robocal.errors import DataError
 from robocal.ik.singularity import singularity_distance
 from robocal.kinematics.transforms import make_transform
 from robocal.programs import filter_program
+from robocal.programs.load import LoadPlan, compensate_by_load
 from robocal.programs.load_data import read_schedules
 from robocal.programs.motions import summary
 from robocal.programs.simulate import execute, write_program
@@ -404,3 +408,23 @@ def test_a_payload_and_thermal_model_without_load_data_warns_of_the_defaults_it_
     assert res.loads and res.loads[0].startswith("no load (the program sets none before these motions")
     hot = filter_program(paths, warm, nominal, tools=tools, frames=frames, payload=[50.0], temperature=30.0)
     assert not [w for w in hot.warnings if "assumed" in w]
+
+
+@settings(max_examples=12, deadline=None)
+@given(
+    st.lists(st.sampled_from([None, (150.0, 0.0, 0.0, 0.3), (20.0, 0.05, 0.0, 0.1)]), min_size=1, max_size=9)
+)
+def test_compensating_per_load_puts_each_target_back_in_its_place(keys):
+    """compensate_by_load against compensating every target alone at its own load."""
+    nominal, cal = _robots()
+    q = _joints(nominal, len(keys), seed=len(keys))
+    F = nominal.fk(q)
+    plan = LoadPlan(list(keys))
+    got = compensate_by_load(plan, cal, 30.0, lambda m, i: compensate(m, nominal, F[i], seeds=q[i]))
+    for i, key in enumerate(keys):
+        alone = compensate(cal.with_conditions(key, 30.0), nominal, F[i : i + 1], seeds=q[i : i + 1])
+        np.testing.assert_allclose(got.joints[i], alone.joints[0], atol=1e-12)
+        np.testing.assert_allclose(got.corrected_targets[i], alone.corrected_targets[0], atol=1e-12)
+        assert got.converged[i] == alone.converged[0]
+        assert got.singularity.sigma_rel[i] == pytest.approx(alone.singularity.sigma_rel[0])
+    assert any("assumed no payload" in a for a in got.assumed) == (None in keys)
