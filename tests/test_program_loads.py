@@ -428,3 +428,34 @@ def test_compensating_per_load_puts_each_target_back_in_its_place(keys):
         assert got.converged[i] == alone.converged[0]
         assert got.singularity.sigma_rel[i] == pytest.approx(alone.singularity.sigma_rel[0])
     assert any("assumed no payload" in a for a in got.assumed) == (None in keys)
+
+
+def test_load_data_not_written_as_numbers_stops_only_the_motions_that_use_it(tmp_path):
+    nominal, cal = _robots()
+    path = _rapid_routine_program(tmp_path, nominal)
+    text = path.read_bytes().decode()
+    spare = "    PERS tooldata tSpare:=[TRUE,[[0,0,100],[1,0,0,0]],[nMass,[0,0,50],[1,0,0,0],0,0,0]];\r\n"
+    path.write_bytes(text.replace("    PERS loaddata part", spare + "    PERS loaddata part").encode())
+    assert summary(filter_program([path], cal, nominal).motions)["total"] == 3  # tSpare unused: no matter
+    path.write_bytes(
+        path.read_bytes().replace(b"MoveJ p0, v1000, fine, tReal", b"MoveJ p0, v1000, fine, tSpare")
+    )
+    with pytest.raises(
+        DataError, match="tSpare: its load is not written as numbers; give the load with --payload"
+    ):
+        filter_program([path], cal, nominal)
+
+
+def test_fanuc_payload_of_group_one_written_with_its_group(tmp_path):
+    nominal, cal = _payload_model("fanuc_r2000ic_165f")
+    path = tmp_path / "pns0012.ls"
+    path.write_bytes((CORPUS / "pns0012.ls").read_bytes().replace(b"PAYLOAD[2:Bag 50kg]", b"PAYLOAD[GP1:2]"))
+    res = filter_program(
+        [path],
+        cal,
+        nominal,
+        payload_schedules=CORPUS / "SYSVARS.VA",
+        tools={"1": "0,0,300,0,0,0"},
+        frames={"1": "1500,0,200,0,0,0"},
+    )
+    assert res.loads[1].startswith("82 kg, centre of mass [0, 0, 340] mm (pns0012.ls:30 (PAYLOAD[GP1:2]))")

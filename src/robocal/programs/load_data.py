@@ -121,7 +121,7 @@ class RapidLoads(LoadReader):
 
     def __init__(self, tools: dict[str, np.ndarray]):
         self.tools = tools  # tool name (lower case) -> tframe 4x4 (m), as the filter reads them
-        self.loads: dict[str, tuple[float, tuple]] = dict(_RAPID_NONE)  # tooldata tload / loaddata
+        self.loads: dict[str, tuple[float, tuple] | DataError] = dict(_RAPID_NONE)  # tload / loaddata
         self.masked: dict[int, str] = {}  # id(ProgramText) -> its masked text (a Path hashes slowly)
         self.combined: dict[tuple, tuple[Load, str]] = {}  # (tool, GripLoad) -> the motion's load
 
@@ -137,7 +137,10 @@ class RapidLoads(LoadReader):
                 for suffix, node in _elements(tree, m.group(3) is not None, tool):
                     load = node[2] if tool and len(node) > 2 else node
                     name = m.group(2) + suffix
-                    self.loads[name.lower()] = _loaddata(src, m.start(), load, name)
+                    try:
+                        self.loads[name.lower()] = _loaddata(src, m.start(), load, name)
+                    except DataError as exc:  # an error only for the motions that use it
+                        self.loads[name.lower()] = exc
             if src in references:
                 continue
             for m in _GRIPLOAD.finditer(masked):
@@ -145,7 +148,7 @@ class RapidLoads(LoadReader):
                 if name not in self.loads:
                     raise _unread(src, m.start(), m.group(0), f"loaddata {m.group(1).strip()} is declared in "
                                   "no file given (give its module as a program file or with --references)")
-                mass, cog = self.loads[name]
+                mass, cog = self._load(name)
                 out.append(_setting(src, m.start(), m.group(0), mass, cog, grip=True))
         return out
 
@@ -159,7 +162,7 @@ class RapidLoads(LoadReader):
             if name not in self.loads:
                 raise _unread(src, at, own.group(0), f"loaddata {own.group(1).strip()} is declared in no "
                               "file given")
-            mass, cog = self.loads[name]
+            mass, cog = self._load(name)
             return (mass, *cog), f"{src.path.name}:{src.line_of(at)} (\\TLoad:={own.group(1).strip()})"
         tool = target.tool.lower()
         grip = state.get("grip")
@@ -168,13 +171,20 @@ class RapidLoads(LoadReader):
             self.combined[key] = self._combined(target, tool, grip)
         return self.combined[key]
 
+    def _load(self, name: str) -> tuple[float, tuple]:
+        """The load data ``name`` declares, or the error reading it (raised where it is used)."""
+        got = self.loads[name]
+        if isinstance(got, DataError):
+            raise got
+        return got
+
     def _combined(self, target: Target, tool: str, grip: Setting | None) -> tuple[Load, str]:
         """The load of a motion with ``tool`` after the GripLoad ``grip`` (None: none yet)."""
         if tool not in self.loads:
             raise _unread(target.source, target.offset, target.name, f"the load of tool {target.tool} is not "
                           "known (its tooldata is declared in no file given; give its module with "
                           "--references)")
-        m1, c1 = self.loads[tool]
+        m1, c1 = self._load(tool)
         m2 = 0.0 if grip is None else grip.mass
         where = f"tooldata {target.tool}" + ("" if grip is None or not m2 else f" + {grip.where}")
         if m1 + m2 <= 0:
@@ -310,7 +320,7 @@ class KRLLoads(LoadReader):
 
 # ----------------------------------------------------------------------------------------- FANUC
 _FANUC_MASK = [re.compile(r"^\s*\d+:\s*!.*$", re.MULTILINE), re.compile(r"//[^\n]*")], []
-_PAYLOAD = re.compile(r"\bPAYLOAD\s*\[\s*([^\]:]*)\s*(?::[^\]]*)?\]", re.IGNORECASE)
+_PAYLOAD = re.compile(r"\bPAYLOAD\s*\[\s*(?:GP1\s*:\s*)?([^\]:,]*)\s*(?:[:,][^\]]*)?\]", re.IGNORECASE)
 _VA_FIELD = re.compile(r"\$PLST_GRP1\s*\[\s*(\d+)\s*\]\s*\.\s*\$(PAYLOAD(?:_[XYZ])?)\b[^=\n]*=\s*" + _NUM,
                        re.IGNORECASE)
 SCHEDULE_COLUMNS = ("schedule", "payload_kg", "payload_x_cm", "payload_y_cm", "payload_z_cm")
