@@ -459,3 +459,28 @@ def test_fanuc_payload_of_group_one_written_with_its_group(tmp_path):
         frames={"1": "1500,0,200,0,0,0"},
     )
     assert res.loads[1].startswith("82 kg, centre of mass [0, 0, 340] mm (pns0012.ls:30 (PAYLOAD[GP1:2]))")
+
+
+def test_a_model_without_a_payload_term_reads_no_load_data(tmp_path):
+    nominal = Robot.from_catalog("fanuc_r2000ic_165f")
+    geometric = perturbed(nominal, 3)
+    res = filter_program(
+        [CORPUS / "pns0012.ls"],
+        geometric,
+        nominal,
+        payload_schedules=CORPUS / "SYSVARS.VA",
+        tools={"1": "0,0,300,0,0,0"},
+        frames={"1": "1500,0,200,0,0,0"},
+    )
+    assert res.loads == [] and "--payload-schedules is not used" in res.warnings[-1]
+    plain = filter_program(
+        [CORPUS / "pns0012.ls"],
+        geometric,
+        nominal,
+        payload=[50.0],
+        tools={"1": "0,0,300,0,0,0"},
+        frames={"1": "1500,0,200,0,0,0"},
+    )
+    assert (
+        plain.loads == [] and summary(plain.motions)["corrected"] == 4
+    )  # PAYLOAD[n] without schedules: fine

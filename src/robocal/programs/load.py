@@ -65,13 +65,15 @@ def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibr
     overriding the program's; ``schedules``: FANUC payload schedules
     (:func:`robocal.programs.load_data.read_schedules`). Motions named for running with another
     load than their target's are named in ``program``'s accounting (its ledger and uncorrected)."""
+    if "payload" not in condition_terms(calibrated):  # --payload given anyway: the CLI says it is not used
+        unused = [] if schedules is None else [f"--payload-schedules is not used: the model of "
+                                               f"{calibrated.name} has no payload term"]
+        return LoadPlan([None] * len(targets), warnings=unused)
     if payload is not None:
         given = np.zeros(4)
         given[:np.size(payload)] = np.asarray(payload, float).reshape(-1)
         key = _key(given)
         return LoadPlan([key] * len(targets), [f"{_text(key)} (--payload): every motion"])
-    if "payload" not in condition_terms(calibrated):
-        return LoadPlan([None] * len(targets))
     reader = reader_for(dialect, program.tools, schedules)
     settings = reader.settings(sources, references)
     index = {id(t): i for i, t in enumerate(targets)}
