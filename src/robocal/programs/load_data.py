@@ -17,7 +17,8 @@ mass. Per dialect:
   flange, has no LOAD_DATA and changes nothing here), and a KSS 8
   motion's ``WITH $LOAD = SLOAD(F.TOOL_NO)`` (that motion only). ``LOAD_DATA[n]={M.., CM {..}}``
   is read from the program files or a reference ($config.dat). ``M -1`` is the controller's
-  default load from its machine data: not known here.
+  default load from its machine data: not known here. A bare ``$TOOL = TOOL_DATA[n]`` leaves
+  ``$LOAD`` as it was (the controller keeps them apart).
 * FANUC TP: ``PAYLOAD[n]`` selects payload schedule n of motion group 1, whose values live in the
   controller (``$PLST_GRP1[n].$PAYLOAD`` kg, ``$PAYLOAD_X/_Y/_Z`` cm in the faceplate frame): they
   are read from the controller's SYSVARS.VA (:func:`read_schedules`) or a CSV
