@@ -9,6 +9,7 @@ correction is the one the same target gets filtered alone with ``--payload`` of 
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -325,6 +326,10 @@ def test_filter_cli_reads_fanuc_payload_schedules_and_prints_the_loads(tmp_path,
         "load: 90 kg, centre of mass [0, 0, 250] mm (sim.ls:7 (PAYLOAD[1])): 4 motion(s), sim.ls lines 8-11"
         in out
     )
+    table = json.loads((tmp_path / "out.ls.targets.json").read_text())
+    assert table["loads"] == [
+        "90 kg, centre of mass [0, 0, 250] mm (sim.ls:7 (PAYLOAD[1])): 4 motion(s), sim.ls lines 8-11"
+    ]
 
 
 CORPUS = Path(__file__).parent / "data" / "programs" / "corpus"
