@@ -489,3 +489,52 @@ def test_a_model_without_a_payload_term_reads_no_load_data(tmp_path):
     assert (
         plain.loads == [] and summary(plain.motions)["corrected"] == 4
     )  # PAYLOAD[n] without schedules: fine
+
+
+def test_krl_tool_changes_load_their_load_data_in_the_order_the_routines_run(tmp_path):
+    """The routines are written after the main one: in text order every motion would follow the
+    last BAS(#TOOL, 2); run in order, approach's motions carry LOAD_DATA[1] and place's LOAD_DATA[2]."""
+    nominal, cal = _robots()
+    paths, tools, frames = write_program("krl", tmp_path, nominal, _joints(nominal, 4), TOOL, FRAME)
+    main_src = [
+        "DEF sim( )",
+        "  BAS(#INITMOV, 0)",
+        "  BAS(#TOOL, 1)  ; the gripper, empty",
+        "  $BASE = BASE_DATA[1]",
+        "  approach()",
+        "  BAS(#TOOL, 2)  ; the same gripper holding the part: its own tool and load data",
+        "  place()",
+        "END",
+        "",
+        "DEF approach( )",
+        "  PTP XP0",
+        "  LIN XP1",
+        "END",
+        "",
+        "DEF place( )",
+        "  LIN XP2",
+        "  LIN XP3",
+        "END",
+        "",
+    ]
+    paths[0].write_text("\n".join(main_src))
+    config = tmp_path / "$config.dat"
+    config.write_text(
+        "DEFDAT  $CONFIG\n"
+        "LOAD_DATA[1]={M 35.0,CM {X 0.0,Y 0.0,Z 120.0,A 0.0,B 0.0,C 0.0},J {X 0.0,Y 0.0,Z 0.0}}\n"
+        "LOAD_DATA[2]={M 135.0,CM {X 0.0,Y 0.0,Z 310.0,A 0.0,B 0.0,C 0.0},J {X 0.0,Y 0.0,Z 0.0}}\n"
+        "ENDDAT\n"
+    )
+    tools = {"1": tools["1"], "2": tools["1"]}
+    res = filter_program(paths, cal, nominal, tools=tools, frames=frames, references=[config])
+    assert res.loads == [
+        "35 kg, centre of mass [0, 0, 120] mm (sim.src:3 (BAS(#TOOL, 1))): 2 motion(s), sim.src lines 11-12",
+        "135 kg, centre of mass [0, 0, 310] mm (sim.src:6 (BAS(#TOOL, 2))): 2 motion(s), sim.src lines 16-17",
+    ]
+    for load, names in (([35.0, 0, 0, 0.12], {"XP0", "XP1"}), ([135.0, 0, 0, 0.31], {"XP2", "XP3"})):
+        alone = filter_program(
+            paths, cal, nominal, tools=tools, frames=frames, references=[config], payload=load
+        )
+        assert [r["correction_mm"] for r in alone.rows if r["name"] in names] == [
+            r["correction_mm"] for r in res.rows if r["name"] in names
+        ]
