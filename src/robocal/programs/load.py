@@ -29,7 +29,7 @@ import numpy as np
 
 from robocal.compensate import Compensation
 from robocal.ik.singularity import SingularityDistance
-from robocal.kinematics.joint_errors import condition_terms
+from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
 from robocal.kinematics.model import Robot
 from robocal.programs.load_data import Load, LoadReader, Setting, reader_for
 from robocal.programs.model import Dialect, Program, Target
@@ -38,6 +38,7 @@ from robocal.programs.source import ProgramText
 
 SAME_LOAD = 1e-9  # kg and m: two loads closer than this in every number are the same load
 NO_LOAD = "no load set by the program before it"
+HINTS = ("load data in the program before these motions, or --payload KG[,X,Y,Z]", "--temperature C")
 
 
 @dataclass
@@ -229,9 +230,11 @@ def compensate_by_load(plan: LoadPlan, model: Robot, temperature: float | None,
                        run: Callable[[Robot, np.ndarray], Compensation]) -> Compensation:
     """``run(model at one load and ``temperature``, indices of its targets)`` for each load of
     ``plan``, the results put back in the targets' order (one load: its result as is)."""
-    parts = [(idx, run(model.with_conditions(load, temperature), idx)) for load, idx in plan.groups()]
+    models = [(idx, model.with_conditions(load, temperature)) for load, idx in plan.groups()]
+    parts = [(idx, run(m, idx)) for idx, m in models]
+    assumed = tuple(dict.fromkeys(a for _, m in models for a in assumed_conditions(m, HINTS)))
     if len(parts) == 1:
-        return parts[0][1]
+        return replace(parts[0][1], assumed=assumed)
     N = len(plan.keys)
 
     def scatter(values: list[np.ndarray]) -> np.ndarray:
@@ -243,7 +246,6 @@ def compensate_by_load(plan: LoadPlan, model: Robot, temperature: float | None,
     comps = [c for _, c in parts]
     sing = None if comps[0].singularity is None else SingularityDistance(
         *(scatter([getattr(c.singularity, f.name) for c in comps]) for f in fields(SingularityDistance)))
-    assumed = tuple(dict.fromkeys(a for c in comps for a in c.assumed))
     return replace(comps[0], joints=scatter([c.joints for c in comps]),
                    corrected_targets=scatter([c.corrected_targets for c in comps]),
                    converged=scatter([c.converged for c in comps]),
