@@ -305,7 +305,8 @@ class KRLLoads(LoadReader):
         if instruction is not None:
             src, at = instruction
             masked = self.masked.get(id(src), "")
-            line = masked[at:masked.find("\n", at) if "\n" in masked[at:] else len(masked)]
+            end = masked.find("\n", at)
+            line = masked[at:end if end >= 0 else len(masked)]
             w = re.search(r"\$LOAD\s*=\s*([^,\n]*(?:\([^)\n]*\))?)", line, re.IGNORECASE)
             if w:
                 s = _KRL_SLOAD.search(w.group(1))
@@ -355,10 +356,37 @@ class FanucLoads(LoadReader):
 
 
 def read_schedules(path: str | Path) -> dict[int, Load]:
-    """FANUC payload schedules of motion group 1 from the controller's SYSVARS.VA (``Field:
-    $PLST_GRP1[n].$PAYLOAD ... = kg``, ``$PAYLOAD_X/_Y/_Z`` cm) or a CSV with the header
-    ``schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm``: schedule -> (kg, x, y, z m).
-    A schedule with a mass <= 0 (the factory's -9999 placeholder) is not set and left out."""
+    """FANUC payload schedules of motion group 1, the values ``PAYLOAD[n]`` selects.
+
+    From the controller's SYSVARS.VA (``Field: $PLST_GRP1[n].$PAYLOAD ... = kg``,
+    ``$PAYLOAD_X/_Y/_Z`` in cm in the faceplate frame) or a CSV with the header
+    ``schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm``. A schedule with a mass <= 0
+    (the factory's -9999 placeholder) is not set and left out.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The SYSVARS.VA or the CSV.
+
+    Returns
+    -------
+    dict of int to tuple of 4 floats
+        Schedule number -> (kg, centre of mass x, y, z in metres in the flange frame tool0).
+
+    Raises
+    ------
+    DataError
+        An unreadable file, neither format, a schedule without a mass, or none set.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from robocal.programs import read_schedules
+    >>> _ = Path("payloads.csv").write_text("schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm\\n"
+    ...                                     "1,32,0,0,18\\n2,82,0,0,34\\n")
+    >>> read_schedules("payloads.csv")[2]  # 82 kg, 34 cm out along the faceplate's z
+    (82.0, 0.0, 0.0, 0.34)
+    """
     path = Path(path)
     try:
         text = path.read_bytes().decode("latin-1")
