@@ -42,7 +42,6 @@ from robocal.programs.fanuc_ls import FanucDialect
 from robocal.programs.inform import InformDialect, looks_like_inform
 from robocal.programs.krl import KRLDialect
 from robocal.programs.load import compensate_by_load, plan_loads
-from robocal.programs.load_data import read_schedules
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.motions import undeclared
 from robocal.programs.rapid import RapidDialect
@@ -459,12 +458,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
             warnings.append("no motion to a Cartesian pose in these files")
         return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings, program.uncorrected,
                             program.ledger.records(set(), program.not_corrected))
-    if payload_schedules is not None and not isinstance(d, FanucDialect):
-        raise DataError(f"--payload-schedules is for FANUC programs (PAYLOAD[n]), not {d.name}")
-    schedules = read_schedules(payload_schedules) if isinstance(payload_schedules, str | Path) else \
-        None if payload_schedules is None else {int(k): tuple(np.asarray(v, float).tolist())
-                                                for k, v in payload_schedules.items()}
-    loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, schedules)
+    loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, payload_schedules)
     warnings += loads.warnings
     values, P, W, tool = target_poses(d, program, targets)
     X = W @ P
@@ -485,9 +479,13 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     seeds = np.where(ok[:, None], q_nom, 0.0)
     real_model = controller_model(calibrated, nominal, robot_base)
     Xr = X @ invert_transform(real_tool)
-    comp = compensate_by_load(loads, real_model, temperature, lambda m, i: _compensate(
-        m, nominal, Xr[i], seeds[i]) if track is None else track.compensate(m, [targets[k] for k in i], Xr[i],
-                                                                            seeds[i]))
+
+    def run(model: Robot, i: np.ndarray) -> Compensation:  # the targets i at one load
+        if track is None:
+            return _compensate(model, nominal, Xr[i], seeds[i])
+        return track.compensate(model, [targets[k] for k in i], Xr[i], seeds[i])
+
+    comp = compensate_by_load(loads, real_model, temperature, run)
     q, sing = comp.joints, comp.singularity
     warnings += comp.assumed
     _check_joints(controller, comp, ok, problems)

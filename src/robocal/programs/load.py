@@ -24,14 +24,17 @@ from __future__ import annotations
 import bisect
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields, replace
+from pathlib import Path
 
 import numpy as np
 
 from robocal.compensate import Compensation
+from robocal.errors import DataError
 from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
 from robocal.kinematics.model import Robot
-from robocal.programs.load_data import Load, LoadReader, Setting, reader_for
+from robocal.programs.fanuc_ls import FanucDialect
+from robocal.programs.load_data import Load, LoadReader, Setting, read_schedules, reader_for
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.motions import Account
 from robocal.programs.source import ProgramText
@@ -61,11 +64,18 @@ class LoadPlan:
 
 def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibrated: Robot,
                sources: list[ProgramText], references: list[ProgramText], payload=None,
-               schedules: dict[int, Load] | None = None) -> LoadPlan:
+               schedules: str | Path | dict[int, Load] | None = None) -> LoadPlan:
     """The load of each of ``targets`` (module docstring). ``payload``: kg or (kg, x, y, z m),
     overriding the program's; ``schedules``: FANUC payload schedules
-    (:func:`robocal.programs.load_data.read_schedules`). Motions named for running with another
-    load than their target's are named in ``program``'s accounting (its ledger and uncorrected)."""
+    (:func:`robocal.programs.load_data.read_schedules`), a file or schedule -> (kg, x, y, z m).
+    Motions named for running with another load than their target's are named in ``program``'s
+    accounting (its ledger and uncorrected)."""
+    if schedules is not None and not isinstance(dialect, FanucDialect):
+        raise DataError(f"--payload-schedules is for FANUC programs (PAYLOAD[n]), not {dialect.name}")
+    if isinstance(schedules, str | Path):
+        schedules = read_schedules(schedules)
+    elif schedules is not None:
+        schedules = {int(k): tuple(np.asarray(v, float).tolist()) for k, v in schedules.items()}
     if "payload" not in condition_terms(calibrated):  # --payload given anyway: the CLI says it is not used
         unused = [] if schedules is None else [f"--payload-schedules is not used: the model of "
                                                f"{calibrated.name} has no payload term"]
