@@ -538,3 +538,11 @@ def test_krl_tool_changes_load_their_load_data_in_the_order_the_routines_run(tmp
         assert [r["correction_mm"] for r in alone.rows if r["name"] in names] == [
             r["correction_mm"] for r in res.rows if r["name"] in names
         ]
+
+
+def test_a_malformed_payload_is_a_clear_error(tmp_path):
+    nominal, cal = _robots()
+    path = _rapid_routine_program(tmp_path, nominal)
+    for bad in ([10.0, 0.1], [-5.0]):
+        with pytest.raises(DataError, match="a payload is a mass >= 0 kg"):
+            filter_program([path], cal, nominal, payload=bad)

@@ -81,9 +81,7 @@ def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibr
                                                f"{calibrated.name} has no payload term"]
         return LoadPlan([None] * len(targets), warnings=unused)
     if payload is not None:
-        given = np.zeros(4)
-        given[:np.size(payload)] = np.asarray(payload, float).reshape(-1)
-        key = _key(given)
+        key = _key(calibrated.with_conditions(payload).joint_errors.payload)  # checked: kg >= 0, 1 or 4
         return LoadPlan([key] * len(targets), [f"{_text(key)} (--payload): every motion"])
     reader = reader_for(dialect, program.tools, schedules)
     settings = reader.settings(sources, references)
