@@ -34,7 +34,7 @@ from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
 from robocal.kinematics.model import Robot
 from robocal.programs.fanuc_ls import FanucDialect
-from robocal.programs.load_data import Load, LoadReader, Setting, read_schedules, reader_for
+from robocal.programs.load_data import Load, Setting, read_schedules, reader_for
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.motions import Account
 from robocal.programs.source import ProgramText
@@ -262,4 +262,4 @@ def compensate_by_load(plan: LoadPlan, model: Robot, temperature: float | None,
                    controller=None, assumed=assumed)
 
 
-__all__ = ["LoadPlan", "LoadReader", "compensate_by_load", "plan_loads"]
+__all__ = ["LoadPlan", "compensate_by_load", "plan_loads"]

@@ -86,7 +86,8 @@ def _setting(src: ProgramText, at: int, text: str, mass, cog, grip: bool = False
 
 
 def _unread(src: ProgramText, at: int, text: str, why: str) -> DataError:
-    return DataError(f"{src.path.name}:{src.line_of(at)}: {' '.join(text.split())[:60]}: {why}; {_ADVICE}")
+    return DataError(f"{src.path.name}:{src.line_of(at)}: {' '.join(text.split())[:STATEMENT_CHARS]}: {why}; "
+                     f"{_ADVICE}")
 
 
 class LoadReader:
