@@ -546,3 +546,20 @@ def test_a_malformed_payload_is_a_clear_error(tmp_path):
     for bad in ([10.0, 0.1], [-5.0]):
         with pytest.raises(DataError, match="a payload is a mass >= 0 kg"):
             filter_program([path], cal, nominal, payload=bad)
+
+
+def test_urscript_partial_payload_setters_keep_the_other_half(tmp_path):
+    nominal, cal = _robots()
+    paths, tools, frames = write_program("urscript", tmp_path, nominal, _joints(nominal, 3), TOOL, FRAME)
+    lines = paths[0].read_text().split("\n")
+    moves = [k for k, line in enumerate(lines) if line.strip().startswith("movel(")]
+    lines.insert(moves[2], "  set_payload(5.0)  # the centre of gravity kept")
+    lines.insert(moves[1], "  set_payload_mass(3.0)")
+    lines.insert(moves[0], "  set_payload_cog([0.0, 0.0, 0.1])  # no mass yet: the default")
+    paths[0].write_text("\n".join(lines))
+    res = filter_program(paths, cal, nominal, tools=tools, frames=frames)
+    assert [line.split(" (")[0] for line in res.loads] == [
+        "no load",
+        "3 kg, centre of mass [0, 0, 100] mm",
+        "5 kg, centre of mass [0, 0, 100] mm",
+    ]
