@@ -129,7 +129,7 @@ def krl_program(seed: int = 1, n_targets: int = 100) -> dict:
         return float(np.sqrt(np.mean(np.sum((A[:, :3, 3] - X0[:, :3, 3]) ** 2, axis=1)))) * 1e3
 
     return {"filtered": rms(reached_f), "unfiltered": rms(reached_u), "model": rms(perfect),
-            "load_note": next((w for w in res.warnings if "load" in w), "")}
+            "load_note": (res.loads or [""])[0]}
 
 
 if __name__ == "__main__":

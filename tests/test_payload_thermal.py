@@ -193,13 +193,18 @@ def test_simulate_cli_writes_the_condition_columns_and_refuses_a_bad_range(tmp_p
     assert "LO:HI" in capsys.readouterr().err
 
 
-def _palletize(tmp_path):
+def _palletize(tmp_path, load2: str | None = None):
+    """The palletize program (its inline forms use tool 2) and a $config.dat; ``load2``: the
+    LOAD_DATA[2] aggregate the $config.dat declares (None: none)."""
     import shutil
     from pathlib import Path
 
     data = Path(__file__).parent / "data" / "programs"
     for f in ("palletize.src", "palletize.dat", "config.dat"):
         shutil.copy(data / f, tmp_path / f)
+    if load2 is not None:
+        config = tmp_path / "config.dat"
+        config.write_text(config.read_text().replace("ENDDAT", f"LOAD_DATA[2]={load2}\nENDDAT"))
     return [tmp_path / "palletize.src", tmp_path / "palletize.dat"], [tmp_path / "config.dat"]
 
 
@@ -214,9 +219,13 @@ def test_filter_and_compensate_use_the_given_conditions_and_warn_of_the_assumed_
     warm = true.with_joint_errors(["payload2", "payload3", "thermal"]).with_values(
         {"payload2": 2e-5, "payload3": 3e-5, "thermal": k}).with_reference_temperature(t_ref)
     files, refs = _palletize(tmp_path)
+    with pytest.raises(DataError, match=r"FDAT_ACT=FP1: LOAD_DATA\[2\] is declared in no file given"):
+        filter_program(files, warm, nominal, references=refs)  # the inline forms load LOAD_DATA[2]
+    files, refs = _palletize(tmp_path, "{M 0.0,CM {X 0,Y 0,Z 0,A 0,B 0,C 0},J {X 0,Y 0,Z 0}}")
     plain = filter_program(files, warm, nominal, references=refs)
     assumed = [w for w in plain.warnings if "assumed" in w]
-    assert len(assumed) == 2 and "0 kg" in assumed[0] and "24 deg C" in assumed[1]
+    assert len(assumed) == 1 and "24 deg C" in assumed[0]
+    assert plain.loads[0].startswith("0 kg, centre of mass [0, 0, 0] mm (palletize.src:27 (FDAT_ACT=FP1))")
     # the thermal term at t: the same as the true links scaled by 1 + k (t - t_ref), no thermal term
     s = 1 + k * (t - t_ref)
     scaled = replace(true, a=true.a * s, d=true.d * s).with_joint_errors(["payload2", "payload3"])
@@ -284,38 +293,36 @@ def test_evaluate_warns_when_the_data_lack_the_columns_the_model_uses(tmp_path, 
     assert "(the temperature_c column): assumed its reference temperature 25 deg C" in out
 
 
-def test_filter_reads_the_one_load_a_program_sets(tmp_path):
+def test_filter_reads_the_load_a_krl_program_sets(tmp_path):
     from robocal.data.simulate import perturbed
     from robocal.programs import filter_program
 
     nominal = Robot.from_catalog("kuka_kr16_2")
     warm = perturbed(nominal, 3).with_joint_errors(["payload2", "payload3"]).with_values(
         {"payload2": 2e-5, "payload3": 3e-5})
-    files, refs = _palletize(tmp_path)
+    load2 = "{M 12.0,CM {X 0,Y 0,Z 300,A 0,B 0,C 0},J {X 0,Y 0,Z 0}}"
+    files, refs = _palletize(tmp_path, load2)
     src = files[0].read_text()
     given = filter_program(files, warm, nominal, references=refs, payload=[12.0, 0.0, 0.0, 0.3])
-    files[0].write_text(src.replace("DEF palletize( )\n",
-                                    "DEF palletize( )\n$LOAD = {M 12.0, CM {X 0, Y 0, Z 300, A 0, B 0, C 0}, "
-                                    "J {X 0, Y 0, Z 0}}\n", 1))
-    own = filter_program(files, warm, nominal, references=refs)
-    assert any("the program's load 12 kg, centre of mass [0.0, 0.0, 300.0] mm (palletize.src:6)" in w
-               for w in own.warnings)
+    own = filter_program(files, warm, nominal, references=refs)  # FDAT_ACT=FP1 loads LOAD_DATA[2]
+    assert own.loads == ["12 kg, centre of mass [0, 0, 300] mm (palletize.src:27 (FDAT_ACT=FP1)): "
+                         "4 motion(s), palletize.src lines 29, 36, 45-46"]
     assert not any("assumed" in w for w in own.warnings)
-    def corrections(res):  # the inserted line moves the line numbers: compare what was corrected
+
+    def corrections(res):
         return [(r["name"].split("@")[0], r["correction_mm"], r["correction_deg"]) for r in res.rows]
 
     assert corrections(own) == corrections(given)
-    twice = src.replace("DEF palletize( )\n", "DEF palletize( )\n$LOAD = {M 12.0, CM {X 0, Y 0, Z 300}}\n"
-                        "$LOAD = {M 5.0, CM {X 0, Y 0, Z 100}}\n", 1)
-    files[0].write_text(twice)
-    mixed = filter_program(files, warm, nominal, references=refs)
-    assert any("2 different loads" in w for w in mixed.warnings)
-    assert any("assumed no payload (0 kg)" in w for w in mixed.warnings)
-    files[0].write_text(src.replace("DEF palletize( )\n", "DEF palletize( )\n$LOAD = LOAD_DATA[1]\n", 1))
-    unread = filter_program(files, warm, nominal, references=refs)
-    assert any("not read here ($LOAD =" in w for w in unread.warnings)
-    model_without = filter_program(files, perturbed(nominal, 3), nominal, references=refs)
-    assert not any("load" in w.lower() for w in model_without.warnings)
+    tool2 = "$TOOL = TOOL_DATA[2]\n"
+    files[0].write_text(src.replace(tool2, tool2 + "  $LOAD = LOAD_DATA[7]\n"))
+    with pytest.raises(DataError, match=r"palletize.src:44: \$LOAD = LOAD_DATA\[7\]: LOAD_DATA\[7\] is "
+                                        "declared in no file given .*--references.*--payload"):
+        filter_program(files, warm, nominal, references=refs)
+    files[0].write_text(src.replace("$TOOL = TOOL_DATA[2]\n", "$TOOL = TOOL_DATA[2]\n  $LOAD.M = 3.0\n"))
+    with pytest.raises(DataError, match="a component of"):
+        filter_program(files, warm, nominal, references=refs)
+    model_without = filter_program(files, perturbed(nominal, 3), nominal, references=refs)  # reads no load
+    assert model_without.loads == [] and not any("load" in w.lower() for w in model_without.warnings)
 
 
 def test_filter_reads_urscript_set_payload(tmp_path):
@@ -331,7 +338,7 @@ def test_filter_reads_urscript_set_payload(tmp_path):
     warm = perturbed(nominal, 2).with_joint_errors(["payload2", "payload3"]).with_values(
         {"payload2": 1e-4, "payload3": 1e-4})
     res = filter_program([path], warm, nominal)
-    assert any("the program's load 1.2 kg, centre of mass [0.0, 0.0, 80.0] mm (pick_place.script:4)" in w
-               for w in res.warnings)
+    assert res.loads[0].startswith("1.2 kg, centre of mass [0, 0, 80] mm (pick_place.script:4 "
+                                   "(set_payload(1.2, [0.0, 0.0, 0.08])))")
     given = filter_program([path], warm, nominal, payload=[1.2, 0.0, 0.0, 0.08])
     assert [r["correction_mm"] for r in res.rows] == [r["correction_mm"] for r in given.rows]

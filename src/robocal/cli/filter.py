@@ -106,7 +106,11 @@ def add_parser(sub) -> None:
                    help="files read for tool/frame declarations only ($config.dat, system modules)")
     p.add_argument("--payload", type=numbers(None, "KG or KG,X,Y,Z with X,Y,Z in mm"), metavar="KG[,X,Y,Z]",
                    help="the payload every target is run with: its mass (kg) and centre of mass in the "
-                        "flange frame tool0 (mm; default at the flange), for a model with a payload term")
+                        "flange frame tool0 (mm; default at the flange), for a model with a payload term "
+                        "(default: each motion with the load the program sets before it)")
+    p.add_argument("--payload-schedules", metavar="FILE",
+                   help="FANUC: the payload schedules PAYLOAD[n] selects, the controller's SYSVARS.VA "
+                        "($PLST_GRP1) or a CSV schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm")
     p.add_argument("--temperature", type=float, metavar="C",
                    help="the arm's temperature (deg C) the program runs at, for a model with a thermal term")
     p.add_argument("--format", choices=("rapid", "krl", "fanuc", "urscript", "inform", "val3"),
@@ -246,7 +250,8 @@ def run(args) -> int:
 
     targets, table, written = _output_paths(args.programs, args.output, args.table, args.position_registers)
     check_outputs(written, [*targets, args.calibrated, args.nominal, *args.references,
-                            *([args.position_registers] if args.position_registers else [])])
+                            *([args.position_registers] if args.position_registers else []),
+                            *([args.payload_schedules] if args.payload_schedules else [])])
     calibrated, nominal = load_calibrated_and_nominal(args.calibrated, args.nominal)
     prediction = load_prediction(args.result, calibrated, written)
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
@@ -260,7 +265,8 @@ def run(args) -> int:
                          frames=_named(args.frame, "--frame"), tcp=tcp, robot_base=base,
                          dialect=args.format, references=args.references, keep_unreached=args.keep_unreached,
                          force=args.force, strict=args.strict, position_registers=args.position_registers,
-                         payload=payload_si(args.payload), temperature=args.temperature)
+                         payload=payload_si(args.payload), temperature=args.temperature,
+                         payload_schedules=args.payload_schedules)
     res.warnings[:0] = conditions_unused(calibrated, args)
     if prediction is not None and res.joints is not None:
         from robocal.trust.coverage import target_warnings

@@ -34,7 +34,6 @@ from robocal.ik import solve_all
 from robocal.ik.closed_form import has_closed_form
 from robocal.ik.controller import JUMP_DEG, nearest_solutions
 from robocal.ik.singularity import SingularityDistance
-from robocal.kinematics.joint_errors import condition_terms
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
@@ -42,7 +41,7 @@ from robocal.programs.external import set_aside_external
 from robocal.programs.fanuc_ls import FanucDialect
 from robocal.programs.inform import InformDialect, looks_like_inform
 from robocal.programs.krl import KRLDialect
-from robocal.programs.load import program_load
+from robocal.programs.load import compensate_by_load, plan_loads
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.motions import undeclared
 from robocal.programs.rapid import RapidDialect
@@ -336,7 +335,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                    robot_base=None, dialect: str | None = None, references=(),
                    keep_unreached: bool = False, strict: bool = False, force: bool = False,
                    position_registers: str | Path | None = None, payload=None,
-                   temperature: float | None = None) -> FilterResult:
+                   temperature: float | None = None, payload_schedules=None) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -389,10 +388,13 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         A FANUC position register file: motions to those registers are corrected.
     payload : float or array_like, shape (4,), optional
         The payload every target is run with: kg, or kg and the centre of mass x, y, z in the
-        flange frame (m), for a model with a payload term (default: the program's own load data
-        where it sets one, else none, with a warning).
+        flange frame (m), for a model with a payload term (default: each motion with the load the
+        program sets before it, `robocal.programs.load`; none set: no payload, with a warning).
     temperature : float, optional
         The arm's temperature every target is run at, deg C, for a model with a thermal term.
+    payload_schedules : path-like or dict of int to array_like, shape (4,), optional
+        FANUC payload schedules for ``PAYLOAD[n]``: the controller's SYSVARS.VA or a CSV
+        (`robocal.programs.load_data.read_schedules`), or schedule -> (kg, x, y, z m).
 
     Returns
     -------
@@ -440,7 +442,6 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         if not isinstance(d, FanucDialect):
             raise DataError(f"--position-registers is for FANUC programs, not {d.name}")
         sources.append(ProgramText(position_registers))
-    calibrated, load_notes = _with_load(calibrated, d, sources, payload, temperature)
     refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
     missing = undeclared(program.ledger)
@@ -448,7 +449,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         raise _listed(f"{len(missing)} motion(s) move to names declared in none of the files given:", missing,
                       "give the files that declare them (or --references), or run without --strict to "
                       "name these motions and correct the rest")
-    warnings = list(program.warnings) + load_notes
+    warnings = list(program.warnings)
     if track is not None:
         track.take(program, warnings)
     targets = _filterable(d, program, warnings)
@@ -457,6 +458,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
             warnings.append("no motion to a Cartesian pose in these files")
         return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings, program.uncorrected,
                             program.ledger.records(set(), program.not_corrected))
+    loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, payload_schedules)
+    warnings += loads.warnings
     values, P, W, tool = target_poses(d, program, targets)
     X = W @ P
     real = {d.name_key(k): v for k, v in (tcp or {}).items()}
@@ -475,8 +478,14 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     warnings += _inexact_configurations(d, controller, targets, q_nom, ok)
     seeds = np.where(ok[:, None], q_nom, 0.0)
     real_model = controller_model(calibrated, nominal, robot_base)
-    comp = _compensate(real_model, nominal, X @ invert_transform(real_tool), seeds) if track is None \
-        else track.compensate(real_model, targets, X @ invert_transform(real_tool), seeds)
+    Xr = X @ invert_transform(real_tool)
+
+    def run(model: Robot, i: np.ndarray) -> Compensation:  # the targets i at one load
+        if track is None:
+            return _compensate(model, nominal, Xr[i], seeds[i])
+        return track.compensate(model, [targets[k] for k in i], Xr[i], seeds[i])
+
+    comp = compensate_by_load(loads, real_model, temperature, run)
     q, sing = comp.joints, comp.singularity
     warnings += comp.assumed
     _check_joints(controller, comp, ok, problems)
@@ -501,7 +510,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,
                         program.ledger.records(corrected, program.not_corrected), calibrated,
-                        joints=np.where(good[:, None], q, np.nan),
+                        joints=np.where(good[:, None], q, np.nan), loads=loads.lines,
                         data_files=frozenset(s.path for s in sources[len(paths):]))  # the register file
 
 
@@ -524,19 +533,6 @@ def _compensate(model: Robot, nominal: Robot, F: np.ndarray, seeds: np.ndarray) 
                    converged=joined([p.converged for p in parts]),
                    position_error=joined([p.position_error for p in parts]),
                    orientation_error=joined([p.orientation_error for p in parts]), singularity=sing)
-
-
-def _with_load(calibrated: Robot, dialect: Dialect, sources, payload, temperature) -> tuple[Robot, list[str]]:
-    """``calibrated`` at the given payload (else the one load the program sets, if the model has a
-    payload term) and temperature, and the warnings on the program's own load."""
-    if payload is not None or "payload" not in condition_terms(calibrated):
-        return calibrated.with_conditions(payload, temperature), []
-    load, why = program_load(dialect, sources)
-    if load is None:
-        return calibrated.with_conditions(None, temperature), [why] if why else []
-    notes = [f"the program's load {load[0]:g} kg, centre of mass {np.round(load[1:] * 1e3, 3).tolist()} mm "
-             f"({why}) applied to every motion"]
-    return calibrated.with_conditions(load, temperature), notes
 
 
 def _check_tcp(real: dict, tools: dict, warnings: list) -> None:

@@ -160,6 +160,7 @@ def order_by_execution(prog: Program, flow: Flow) -> None:
             why = f"the routine calls expand to more than {MAX_SEGMENTS} pieces"
         else:
             order = _executed(steps, segments)
+            prog.executed = [(path, a, b) for path, a, b, _ in segments]
     if why:
         prog.warnings.append(f"{why}: targets are chained in text order, which may differ from the order the "
                              "controller runs them in (the solution nearest the previous joints may differ)")

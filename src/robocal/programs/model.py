@@ -66,7 +66,9 @@ class Program:
     motions twice), with the call that entered its routine (``file:line``, '' at the entry).
     ``ledger``: one :class:`~robocal.programs.motions.Account` per motion instruction to a Cartesian
     pose (:meth:`motion`); ``not_corrected``: ``id(target)`` -> why, for targets a dialect leaves
-    alone although a motion reaches them (a FANUC position used only as an INC displacement)."""
+    alone although a motion reaches them (a FANUC position used only as an INC displacement).
+    ``executed``: the text pieces ``(file, start, end)`` in the order the controller runs them
+    (:mod:`robocal.programs.flow`; empty: not known, text order)."""
 
     targets: list[Target]
     frames: dict[str, np.ndarray] = field(default_factory=dict)
@@ -80,6 +82,7 @@ class Program:
     sequence: list[tuple[Target | np.ndarray, str]] = field(default_factory=list)
     ledger: Ledger = field(default_factory=Ledger)
     not_corrected: dict[int, str] = field(default_factory=dict)
+    executed: list[tuple[Path, int, int]] = field(default_factory=list)  # text pieces in execution order
 
     def motion(self, source: ProgramText, at: int, instruction: str) -> Account:
         """The account of the motion instruction at offset ``at`` of ``source`` (opened once)."""

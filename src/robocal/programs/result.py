@@ -55,6 +55,9 @@ class FilterResult:
     joints : numpy.ndarray, shape (T, n), optional
         Each target's joints on the calibrated model, radians, in the order of `rows`; NaN where
         a target was not corrected.
+    loads : list of str
+        For a model with a payload term, which motions ran with which load (one line per load:
+        kg, centre of mass in tool0 mm, where the program sets it, the motions' lines).
 
     Examples
     --------
@@ -84,6 +87,7 @@ class FilterResult:
     calibrated: Robot | None = None  # the model that corrected the targets: its marker goes on the files
     joints: np.ndarray | None = None  # (targets, n) rad on the calibrated model, NaN where not corrected
     data_files: frozenset[Path] = frozenset()  # outputs that are data, not programs: no marker
+    loads: list[str] = field(default_factory=list)  # which motions ran with which load (payload term)
 
     def table_csv(self) -> str:
         """The per-target table as CSV text (one row per target, `rows`' columns)."""
@@ -98,7 +102,7 @@ class FilterResult:
     def table_json(self) -> str:
         """The per-target table, the summary, the motions and the warnings as JSON text."""
         return json.dumps({"dialect": self.dialect, "files": [str(p) for p in self.outputs],
-                           "summary": self.summary_dict(), "warnings": self.warnings,
+                           "summary": self.summary_dict(), "loads": self.loads, "warnings": self.warnings,
                            "targets": self.rows, "motions": [m.as_dict() for m in self.motions]}, indent=1)
 
     def summary_dict(self) -> dict:
@@ -144,6 +148,7 @@ class FilterResult:
                       f"  nearest singularity: {s['nearest_singularity']['name']} "
                       f"({s['nearest_singularity']['kind']}, sigma_rel "
                       f"{s['nearest_singularity']['sigma_rel']:.4f})"]
+        lines += [f"  load: {line}" for line in self.loads]
         shown = collapse(self.warnings)
         for w in shown[:LISTED]:
             lines.append(f"  warning: {w}")
