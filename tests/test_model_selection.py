@@ -17,6 +17,7 @@ from robocal.damped_least_squares import Status
 from robocal.data.measurements import Measurements, approach_from_order, parse_csv, travel_from_order
 from robocal.data.simulate import simulate_tracker
 from robocal.errors import IdentificationError, ModelError
+from robocal.evaluate import model_errors
 from robocal.identify.frequency_search import FrequencyScan, trig_sums
 from robocal.identify.lsq import gauss_newton
 from robocal.identify.priors import prior_sigma
@@ -24,6 +25,7 @@ from robocal.identify.problem import CalibrationProblem
 from robocal.identify.space import ParameterSpace
 from robocal.kinematics.joint_errors import JointErrorModel, candidate_names, cyclic_names
 from robocal.model_selection import (
+    SELECTION_TOLERANCE,
     _candidates,
     _choose,
     _CrossValidation,
@@ -118,18 +120,44 @@ def test_frequency_search_finds_the_injected_frequencies_and_nothing_in_noise():
             assert f == pytest.approx(120.0 if i == 0 else 80.0, abs=0.1)  # peak width ~0.5
 
 
-def test_one_standard_error_rule_prefers_fewer_parameters_within_one_se():
-    rows = [{"terms": [], "n_params": 30, "cv_rms_mm": 0.50, "cv_se_mm": 0.01},
-            {"terms": ["gear"], "n_params": 54, "cv_rms_mm": 0.40, "cv_se_mm": 0.02},
-            {"terms": ["backlash"], "n_params": 36, "cv_rms_mm": 0.415, "cv_se_mm": 0.01},
-            {"terms": ["gear", "backlash"], "n_params": 60, "cv_rms_mm": 0.39, "cv_se_mm": 0.03}]
-    chosen, best, reason = _choose(rows)
-    assert best == 3 and chosen == 2 and "fewest parameters" in reason
-    rows[2]["cv_rms_mm"] = 0.43  # no longer within 0.39 + 0.03 of the best
-    chosen, best, _ = _choose(rows)
-    assert chosen == 1
-    rows[3]["cv_se_mm"] = 0.001
-    assert _choose(rows)[0] == 3
+def _rows_with_contributions(rms_mm, spread_mm, n_params, poses=100, seed=0):
+    """Candidate rows whose per-pose MSE shares (m^2) give exactly ``rms_mm``: a noise common to
+    every candidate (large) plus each candidate's own scatter ``spread_mm`` (small)."""
+    rng = np.random.default_rng(seed)
+    common = rng.uniform(0.5, 1.5, poses)
+    rows, contributions = [], []
+    for i, (rms, spread, k) in enumerate(zip(rms_mm, spread_mm, n_params, strict=True)):
+        share = common + spread * rng.standard_normal(poses)
+        share *= (rms * 1e-3) ** 2 / share.sum()
+        rows.append({"terms": [f"t{i}"] * bool(i), "n_params": k, "cv_rms_mm": rms, "cv_se_mm": 0.05})
+        contributions.append(share)
+    return rows, contributions
+
+
+def test_paired_one_standard_error_rule_prefers_fewer_parameters_within_one_paired_se():
+    # geometric 0.2% above the best, the pose-to-pose scatter of the difference large: within
+    rows, contrib = _rows_with_contributions([0.501, 0.500, 0.530], [0.5, 0.5, 0.5], [30, 60, 40])
+    chosen, best, reason = _choose(rows, contrib)
+    assert best == 1 and chosen == 0 and "fewest parameters" in reason
+    assert rows[best]["cv_paired_se_mm"] is None
+    # the same RMS, but the difference consistent over the poses (small paired SE): the best
+    rows, contrib = _rows_with_contributions([0.501, 0.500, 0.530], [0.001, 0.001, 0.001], [30, 60, 40])
+    assert _choose(rows, contrib)[0] == 1
+    # the paired SE against a brute-force computation: SE of the MSE difference, to RMS (delta)
+    d = contrib[2] - contrib[1]
+    se_mse = np.std(d, ddof=1) * np.sqrt(d.size)
+    assert rows[2]["cv_paired_se_mm"] == pytest.approx(se_mse / ((0.53 + 0.5) * 1e-3) * 1e3)
+
+
+def test_selection_never_accepts_more_than_its_tolerance_above_the_best():
+    # a huge pose-to-pose scatter makes the paired SE large; the cap still holds
+    over = 1 + 1.5 * SELECTION_TOLERANCE
+    rows, contrib = _rows_with_contributions([0.5 * over, 0.5], [50.0, 50.0], [30, 60])
+    chosen, _, _ = _choose(rows, contrib)
+    assert rows[0]["cv_paired_se_mm"] > 0.5 * (over - 1) and chosen == 1
+    within = 1 + 0.5 * SELECTION_TOLERANCE
+    rows, contrib = _rows_with_contributions([0.5 * within, 0.5], [50.0, 50.0], [30, 60])
+    assert _choose(rows, contrib)[0] == 0
 
 
 def test_folds_keep_whole_poses_and_the_measuring_order():
@@ -206,6 +234,25 @@ def test_linearised_fold_fits_match_nonlinear_fold_calibrations():
             errors = test.position_errors(test.start(fitted.state.robot))
             assert fitted.status == Status.CONVERGED
             assert np.sqrt(np.mean(errors**2)) * 1e3 == pytest.approx(linear[f], rel=1e-2)
+
+
+def test_a_warm_start_delivers_the_model_it_fitted():
+    """A joint-error parameter declared but not estimated (here: left out of ``params``) is held
+    at zero, not at the warm start's value: the delivered model (which keeps only the estimated
+    joint errors) must reproduce the fit's own RMS on its calibration data."""
+    robot = Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(_with_errors(robot, *COMPLIANCE_GEAR_BACKLASH), 80, noise_mm=0.02, seed=9)
+    superset = calibrate(robot, sim.data, nongeometric="compliance,gear,backlash")
+    left_out = "comp3_6"
+    assert abs(superset.robot.get(left_out)) > 1e-5  # the warm start carries a value for it
+    params = [nm for nm in superset.names if nm != left_out]
+    warm = calibrate(robot, sim.data, params=params, nongeometric="compliance,gear,backlash",
+                     warm_start=superset)
+    assert left_out not in warm.robot.joint_error_names
+    own = np.sqrt(np.mean(np.sum(model_errors(warm.robot, sim.data) ** 2, axis=1))) * 1e3
+    assert own == pytest.approx(warm.after["rms"], rel=1e-6)
+    cold = calibrate(robot, sim.data, params=params, nongeometric="compliance,gear,backlash")
+    assert warm.after["rms"] == pytest.approx(cold.after["rms"], rel=1e-6)
 
 
 def test_auto_works_for_a_seven_axis_arm():

@@ -770,7 +770,7 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
                    "the calibration data (nominal model, frames fitted)", force=force, warnings=warnings)
     space, ident, more = _estimated_space(problem, state0, params, rtol, problem.n_poses)
     warnings += more
-    first = state0 if warm_start is None else _warm_state(problem, warm_start, declared_start)
+    first = state0 if warm_start is None else _warm_state(problem, warm_start, declared_start, space)
     out = _run_solver(method, problem, first, space, seed, progress, options)
     cov = _covariance(problem, out, space)
     check_corrections(state0.robot, out.state.robot, space.robot,
@@ -820,14 +820,18 @@ def _check_consistency(result: CalibrationResult, sigma: dict | None, seed: int,
     result.warnings += result.consistency.warnings("the calibration")
 
 
-def _warm_state(problem: CalibrationProblem, warm: CalibrationResult, start) -> State:
+def _warm_state(problem: CalibrationProblem, warm: CalibrationResult, start, space: ParameterSpace) -> State:
     """The start of a warm-started solve: ``warm``'s final geometry and nuisance, its joint-error
-    values for the terms ``start`` (the start model) declares (0 for the others)."""
+    values for the parameters ``space`` estimates (0 for the others: the delivered model keeps only
+    the estimated joint errors, so one held at ``warm``'s value would be fitted with and then lost)."""
     if warm.robot.n_joints != start.n_joints or warm.problem.kind != problem.kind \
             or warm.problem.nuisance_names != problem.nuisance_names:
         raise IdentificationError("warm_start must be a calibration of the same robot with the same "
                                   "kind of data (and the same planes or SMRs)")
-    return State(warm.state.robot.with_joint_errors(start.joint_error_names), warm.state.nuisance)
+    robot = warm.state.robot.with_joint_errors(start.joint_error_names)
+    kept = set(space.robot) | set(warm.start.joint_error_names)  # the start model's own stay
+    held = {nm: 0.0 for nm in start.joint_error_names if nm not in kept}
+    return State(robot.with_values(held) if held else robot, warm.state.nuisance)
 
 
 def _nongeometric_section(result: CalibrationResult, terms: list[str], estimated: list[str]) -> dict:

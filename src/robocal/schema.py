@@ -219,7 +219,8 @@ _OBSERVATIONS = Obj({
                                  "joints_deg", "measured", "model_before", "model_after", "weight"))
 _TEXTS = Seq(Str(), null=True)
 _CANDIDATE = Obj({"terms": _TEXTS, "cv_rms_mm": Num(null=True), "cv_se_mm": Num(null=True),
-                  "fold_rms_mm": Arr(null=True), "calibration_rms_mm": Num(null=True),
+                  "cv_paired_se_mm": Num(null=True), "fold_rms_mm": Arr(null=True),
+                  "calibration_rms_mm": Num(null=True),
                   "n_params": Int(null=True, lo=0), "parameters": _TEXTS})
 
 RESULT_SCHEMA = Obj({
@@ -268,6 +269,7 @@ RESULT_SCHEMA = Obj({
     "model_selection": Obj({"method": Str(null=True), "folds": Int(null=True), "seed": Any(),
                             "n_poses": Int(null=True), "candidates": Seq(_CANDIDATE, null=True),
                             "chosen": Int(null=True), "best": Int(null=True), "reason": Str(null=True),
+                            "tolerance": Num(null=True),
                             "chosen_terms": _TEXTS,
                             "cyclic_frequencies": Seq(Obj({"joint": Int(null=True),
                                                            "cycles_per_rev": Num(null=True)}), null=True),
