@@ -101,11 +101,12 @@ class FrequencyScan:
         self.n_independent = max(sum(g.size for g in self.grids) / 2.0, 1.0)
         self.q_pose = q_pose
 
-    def columns(self, Jtheta: np.ndarray, rows: int, found) -> np.ndarray:
-        """``(M, 2k)`` columns ``Jtheta[:, i] * (sin f q_i, cos f q_i)`` of ``found`` [(i, f)]."""
+    def columns(self, Jtheta: np.ndarray, rows: int, found, items: slice = slice(None)) -> np.ndarray:
+        """``(M, 2k)`` columns ``Jtheta[:, i] * (sin f q_i, cos f q_i)`` of ``found`` [(i, f)];
+        ``Jtheta`` the rows of the measurement ``items`` (default all)."""
         cols = []
         for i, f in found:
-            qi = np.repeat(self.q_item[:, i], rows)
+            qi = np.repeat(self.q_item[items, i], rows)
             cols += [Jtheta[:, i] * np.sin(f * qi), Jtheta[:, i] * np.cos(f * qi)]
         return np.stack(cols, axis=1) if cols else np.zeros((Jtheta.shape[0], 0))
 
