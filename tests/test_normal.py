@@ -78,3 +78,26 @@ def _compare(monkeypatch, lin, fold, scan, per_fold, full, fixed):
         for key in ("cv_rms_mm", "cv_se_mm", "calibration_rms_mm"):
             assert b[key] == pytest.approx(a[key], rel=1e-9)
         np.testing.assert_allclose(b["fold_rms_mm"], a["fold_rms_mm"], rtol=1e-9)
+
+
+@pytest.mark.parametrize("chunk_rows", [7, 10**9])
+def test_orthonormal_basis_from_chunks_projects_like_the_svd(monkeypatch, chunk_rows):
+    """The frequency search's basis of a model's columns (from the chunked R factor) spans what the
+    SVD of the whole scaled matrix keeps, orthonormal to rounding, with ill-conditioned and
+    dependent columns."""
+    from robocal.identify import frequency_search
+
+    monkeypatch.setattr(normal, "CHUNK_ROWS", chunk_rows)
+    rng = np.random.default_rng(5)
+    A = rng.normal(size=(90, 8)) * np.logspace(-4, 3, 8)
+    A[:, 5] = A[:, 1] * 2e3 + A[:, 2] * 1e-9  # nearly dependent: kept only above the cut-off
+    A[:, 6] = A[:, 3] - A[:, 4] * 1e-2  # dependent combination, kept
+    A[:, 7] = 0.0
+    U = frequency_search._orthonormal(A)
+    norms = np.linalg.norm(A, axis=0)
+    Us, s, _ = np.linalg.svd(A / np.where(norms > 0, norms, 1.0), full_matrices=False)
+    ref = Us[:, s > 1e-10 * s[0]]
+    assert U.shape == ref.shape
+    np.testing.assert_allclose(U.T @ U, np.eye(U.shape[1]), atol=1e-12)
+    x = rng.normal(size=90)
+    np.testing.assert_allclose(U @ (U.T @ x), ref @ (ref.T @ x), atol=1e-9 * np.linalg.norm(x))

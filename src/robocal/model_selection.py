@@ -296,8 +296,11 @@ def _search(lin: _Linearised, cv_fold: np.ndarray | None, k: int):
     if lin.q_item is None:
         return None, [], [[] for _ in range(k)]
     scan = FrequencyScan(lin.q_item, lin.group)
-    w = np.sqrt(np.repeat(lin.weight, lin.rows))[:, None]
-    args = (lin.A * w, lin.r * w[:, 0], lin.Jtheta * w, lin.rows)
+    if np.all(lin.weight == 1.0):  # lsq: no weighted copy of the (M, k) columns
+        args = (lin.A, lin.r, lin.Jtheta, lin.rows)
+    else:
+        w = np.sqrt(np.repeat(lin.weight, lin.rows))[:, None]
+        args = (lin.A * w, lin.r * w[:, 0], lin.Jtheta * w, lin.rows)
     full = scan.search(*args)
     folds = [scan.search(*args, mask=cv_fold != f) for f in range(k)] if full else [[] for _ in range(k)]
     return scan, scan.polish(full, *args), folds
