@@ -100,12 +100,14 @@ def _linearise(result, ng_names: list[str]) -> _Linearised:
     n = robot.n_joints
     geometric = [nm for nm in result.names if block_of(nm) != "joint_errors"]
     thetas = [f"theta{i + 1}" for i in range(n)]
-    space = ParameterSpace((*geometric, *[t for t in thetas if t not in geometric], *ng_names),
+    space = ParameterSpace((*geometric, *ng_names, *[t for t in thetas if t not in geometric]),
                            tuple(problem.nuisance_names))
     state = State(robot, state.nuisance)
     J = problem.jacobian(state, space)  # one pass: robot columns (with the thetas), then nuisance
     column = {nm: j for j, nm in enumerate(space.names)}
-    A = J[:, [column[nm] for nm in (*geometric, *space.nuisance, *ng_names)]]
+    # without nuisance A is J's leading columns (a view: no second (M, k) array), else a copy
+    A = J[:, : len(geometric) + len(ng_names)] if not space.nuisance else \
+        J[:, [column[nm] for nm in (*geometric, *space.nuisance, *ng_names)]]
     Jtheta = J[:, [column[t] for t in thetas]]
     r = problem.residuals(state)
     data, rows = obs.data, obs.rows_per_item

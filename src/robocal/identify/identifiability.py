@@ -148,11 +148,11 @@ class Identifiability:
 
 
 def _pivoted_rank(A: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
-    """Column indices of ``A`` (unit-scale columns) kept by pivoted QR, and an orthonormal
-    basis of their span."""
+    """Column indices of ``A`` (unit-scale columns; overwritten) kept by pivoted QR, and an
+    orthonormal basis of their span."""
     if A.shape[1] == 0:
         return np.zeros(0, int), np.zeros((A.shape[0], 0))
-    Q, R, piv = scipy.linalg.qr(A, mode="economic", pivoting=True)
+    Q, R, piv = scipy.linalg.qr(A, mode="economic", pivoting=True, overwrite_a=True)
     rank = int(np.sum(np.abs(np.diag(R)) > rtol))
     return piv[:rank], Q[:, :rank]
 
