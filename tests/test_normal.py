@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from robocal import Robot, calibrate
 from robocal.data.simulate import simulate_tracker
 from robocal.identify import normal
-from robocal.identify.normal import normal_equations, r_factor, row_chunks
+from robocal.identify.normal import Normal, r_factor, row_chunks
 from robocal.kinematics.joint_errors import JointErrorModel, candidate_names, cyclic_names
 from robocal.model_selection import _candidates, _CrossValidation, _folds, _linearise, _search
 
@@ -26,7 +26,9 @@ def test_chunked_normal_equations_and_r_factor_match_the_whole_matrix(m, k, size
     J, r = rng.normal(size=(m, k)) * 10.0 ** rng.uniform(-3, 3, k), rng.normal(size=m)
     chunks = list(row_chunks(m, size))
     assert np.array_equal(np.concatenate([np.arange(m)[s] for s in chunks]), np.arange(m))
-    ne = normal_equations(lambda s: (J[s], r[s]), m, k, size)
+    ne = Normal.zeros(k)
+    for s in chunks:
+        ne.add(J[s], r[s])
     assert ne.rows == m
     np.testing.assert_allclose(ne.G, J.T @ J, rtol=1e-12, atol=1e-12 * np.abs(J.T @ J).max())
     np.testing.assert_allclose(ne.h, J.T @ r, rtol=1e-12, atol=1e-12 * np.abs(J).max() * np.abs(r).sum())

@@ -7,7 +7,7 @@ triangular factor of a QR decomposition, which carries the same column geometry 
 pivoted-QR rank decisions, singular values) as ``J`` itself because ``J = Q R`` with orthonormal
 ``Q``. Both are accumulated here over chunks of :data:`CHUNK_ROWS` rows, so no caller holds more
 than one chunk of a derived (weighted, column-selected) copy of the rows. This module is the one
-place that does it; the callers hand it a function giving the rows of a chunk.
+place that does it (the callers hand it the rows of each chunk).
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ import scipy.linalg
 
 CHUNK_ROWS = 3 * 4096  # residual rows per chunk (4,096 poses of 3 rows; a few MB per derived copy)
 
-Rows = Callable[[slice], tuple[np.ndarray, np.ndarray]]  # chunk -> (J rows (c, k), r rows (c,))
 
 
 def row_chunks(n_rows: int, size: int | None = None) -> Iterator[slice]:
@@ -52,14 +51,6 @@ class Normal:
         self.h += J.T @ r
         self.rr += float(r @ r)
         self.rows += J.shape[0]
-
-
-def normal_equations(rows: Rows, n_rows: int, k: int, size: int | None = None) -> Normal:
-    """:class:`Normal` of the ``n_rows`` rows that ``rows(chunk)`` gives chunk by chunk."""
-    out = Normal.zeros(k)
-    for chunk in row_chunks(n_rows, size):
-        out.add(*rows(chunk))
-    return out
 
 
 def r_factor(rows: Callable[[slice], np.ndarray], n_rows: int, k: int, size: int | None = None) -> np.ndarray:
