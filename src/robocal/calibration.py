@@ -604,9 +604,13 @@ def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data
     return result
 
 
-def _rows(robot, data, *args, **kwargs) -> int:
-    """The measurement rows of a calibration's ``data`` (one set or several)."""
-    return sum(len(d) for d in data) if isinstance(data, list | tuple) else len(data)
+def _rows(robot=None, data=None, *args, **kwargs) -> int:
+    """The measurement rows of a calibration's ``data`` (one set or several; 0 for what is not
+    measurements: the calibration itself then refuses it)."""
+    try:
+        return sum(len(d) for d in data) if isinstance(data, list | tuple) else len(data)
+    except TypeError:
+        return 0
 
 
 @memory_guard("the calibration")

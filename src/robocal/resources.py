@@ -31,8 +31,8 @@ GEOMETRIC_BYTES_PER_POSE = 8_000  # geometric model only (--nongeometric none)
 FIXED_BYTES = 300_000_000  # chunked temporaries, BLAS buffers and the result, whatever the poses
 # residual rows (10,000 tracker poses) below which a calibration runs its linear algebra on one BLAS
 # thread: its products and decompositions are of (k x k) or thin (rows x k) matrices, which gain
-# nothing from threads and lose much to them on a busy machine (100 poses, 2 cores under load:
-# the whole calibration 2.5x faster, its solve 6x; benchmarks/bench_calibrate.py)
+# nothing from threads and lose much to them on a busy machine (100 poses, 2 cores at load 10:
+# the whole calibration 2.5-4x faster, its damped solve 4-10x; bench_calibrate's speed case)
 SMALL_PROBLEM_ROWS = 30_000
 ADVICE = ("calibrate fewer poses (a subset, e.g. every second pose), use --nongeometric none (the "
           "geometric model needs about a third of the memory) or run on a machine with more memory")
