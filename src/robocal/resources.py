@@ -26,7 +26,7 @@ try:  # optional (extra 'threads'): small least-squares problems run best on one
 except ImportError:  # pragma: no cover - without it the BLAS library keeps its own thread count
     ThreadpoolController = None
 
-BYTES_PER_POSE = 24_000  # default error-model search: bounds the measured 9.9 kB (RSS) and the address space
+BYTES_PER_POSE = 24_000  # default error-model search: bounds the measured 9.4 kB (RSS) and the address space
 GEOMETRIC_BYTES_PER_POSE = 8_000  # geometric model only (--nongeometric none)
 FIXED_BYTES = 300_000_000  # chunked temporaries, BLAS buffers and the result, whatever the poses
 # residual rows (10,000 tracker poses) below which a calibration runs its linear algebra on one BLAS
