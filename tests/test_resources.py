@@ -66,3 +66,30 @@ def test_a_memory_error_outside_the_calibration_is_the_same_line(monkeypatch, ca
     assert main(["robots"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"robocal robots: error: {res.out_of_memory('the command')}"]
+
+
+def test_small_calibrations_run_on_one_blas_thread_and_large_ones_keep_theirs(monkeypatch):
+    threadpoolctl = pytest.importorskip("threadpoolctl")
+    import robocal.identify.lsq as lsq
+
+    seen = []
+    real = lsq.minimize
+
+    def spy(*args, **kwargs):  # the damped loop, inside calibrate and gauss_newton
+        seen.append(max(info["num_threads"] for info in threadpoolctl.threadpool_info()
+                        if info["user_api"] == "blas"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(lsq, "minimize", spy)
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    data = simulate_tracker(robot, 30, seed=1).data
+    with threadpoolctl.threadpool_limits(2, user_api="blas"):
+        calibrate(robot, data, nongeometric=None)
+        assert seen and set(seen) == {1}
+        monkeypatch.setattr(res, "SMALL_PROBLEM_ROWS", 10)  # now 30 poses are a large problem
+        seen.clear()
+        calibrate(robot, data, nongeometric=None)
+        assert set(seen) == {2}
+    # and the decorator returns what the function returns, either way
+    for rows in (1, 10**9):
+        assert res.few_threads(lambda n: n)(lambda n: n + 1)(rows) == rows + 1

@@ -43,7 +43,7 @@ from robocal.kinematics.thermal import reference_of as thermal_reference
 from robocal.model_selection import calibrate_cyclic, select_error_model, selection_table
 from robocal.progress import Progress
 from robocal.report.metrics import position_stats
-from robocal.resources import calibration_bytes, check_memory, memory_guard
+from robocal.resources import calibration_bytes, check_memory, few_threads, memory_guard
 from robocal.schema import RESULT_SCHEMA, validate
 from robocal.trust.consistency import Consistency, check_fit, check_not_worse
 from robocal.trust.coverage import accuracy_line, predict, prediction
@@ -605,7 +605,17 @@ def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data
     return result
 
 
+def _rows(robot=None, data=None, *args, **kwargs) -> int:
+    """The measurement rows of a calibration's ``data`` (one set or several; 0 for what is not
+    measurements: the calibration itself then refuses it)."""
+    try:
+        return sum(len(d) for d in data) if isinstance(data, list | tuple) else len(data)
+    except TypeError:
+        return 0
+
+
 @memory_guard("the calibration")
+@few_threads(_rows)
 def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
               register_frames: bool = True, rtol: float = DEFAULT_RTOL, seed: int = 0,
               progress=None, nongeometric="default", force: bool = False, sigma: dict | None = None,

@@ -63,8 +63,10 @@ import numpy as np
 import scipy.linalg
 
 from robocal.errors import IdentificationError
+from robocal.identify import normal
 from robocal.identify.frequency_search import FrequencyScan
 from robocal.identify.identifiability import independent_columns
+from robocal.identify.normal import Normal, r_factor, row_chunks
 from robocal.identify.priors import JOINT_ERROR_SIGMA, prior_sigma
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.kinematics.joint_errors import CONDITION_TERMS, TERMS, candidate_names, cyclic_names, term_of
@@ -110,12 +112,14 @@ def _linearise(result, ng_names: list[str]) -> _Linearised:
     n = robot.n_joints
     geometric = [nm for nm in result.names if block_of(nm) != "joint_errors"]
     thetas = [f"theta{i + 1}" for i in range(n)]
-    space = ParameterSpace((*geometric, *[t for t in thetas if t not in geometric], *ng_names),
+    space = ParameterSpace((*geometric, *ng_names, *[t for t in thetas if t not in geometric]),
                            tuple(problem.nuisance_names))
     state = State(robot, state.nuisance)
     J = problem.jacobian(state, space)  # one pass: robot columns (with the thetas), then nuisance
     column = {nm: j for j, nm in enumerate(space.names)}
-    A = J[:, [column[nm] for nm in (*geometric, *space.nuisance, *ng_names)]]
+    # without nuisance A is J's leading columns (a view: no second (M, k) array), else a copy
+    A = J[:, : len(geometric) + len(ng_names)] if not space.nuisance else \
+        J[:, [column[nm] for nm in (*geometric, *space.nuisance, *ng_names)]]
     Jtheta = J[:, [column[t] for t in thetas]]
     r = problem.residuals(state)
     data, rows = obs.data, obs.rows_per_item
@@ -180,37 +184,48 @@ def _solve(G: np.ndarray, h: np.ndarray) -> np.ndarray:
 
 
 class _CrossValidation:
-    """K-fold fits of candidate column sets from the linearised superset, by normal equations."""
+    """K-fold fits of candidate column sets from the linearised superset, by normal equations.
+
+    Nothing of size (rows x columns) is held beyond the linearised superset itself: each fold's
+    normal equations (training rows, and the full data's as fold K) are accumulated chunk by chunk
+    (:mod:`robocal.identify.normal`), and a candidate's test errors are computed chunk by chunk
+    from the unweighted columns (one product with the steps of every fold)."""
 
     def __init__(self, lin: _Linearised, fold: np.ndarray, k: int, scan: FrequencyScan | None,
                  fold_cyclic: list[list[tuple[int, float]]], full_cyclic: list[tuple[int, float]]):
-        self.lin, self.k = lin, k
+        self.lin, self.k, self.scan = lin, k, scan
         rows = lin.rows
         self.row_fold = np.repeat(fold, rows)
         self.row_weight = np.sqrt(np.repeat(lin.weight, rows))
         self.scored = lin.weight > 0
-        unweighted = bool(np.all(lin.weight == 1.0))  # lsq: no weighted copy of the (M, k) columns
-        A = lin.A if unweighted else lin.A * self.row_weight[:, None]
+        self.unweighted = bool(np.all(lin.weight == 1.0))  # lsq: no weighted copy of a chunk
         self.r = lin.r * self.row_weight
-        self.n_columns = A.shape[1]
-        self.extra_full = np.zeros((A.shape[0], 0)) if scan is None else \
-            scan.columns(lin.Jtheta, rows, full_cyclic) * self.row_weight[:, None]
-        self.extra_fold = [np.zeros((A.shape[0], 0)) if scan is None else
-                           scan.columns(lin.Jtheta, rows, found) * self.row_weight[:, None]
-                           for found in fold_cyclic]
-        self.gram, self.test = [], []  # per fold: normal equations of the training rows, test rows
-        for f in range(k):
-            train, test = self.row_fold != f, self.row_fold == f
-            B = np.hstack([A[train], self.extra_fold[f][train]])
-            self.gram.append((B.T @ B, B.T @ self.r[train]))
-            self.test.append((test, np.hstack([A[test], self.extra_fold[f][test]])))
-        B = np.hstack([A, self.extra_full])
-        self.gram_full = (B.T @ B, B.T @ self.r)
-        self.test_full = (np.ones(A.shape[0], bool), B)
+        self.n_columns = lin.A.shape[1]
+        self.cyclic = [*fold_cyclic, full_cyclic]  # per fold, then the full data's (fold k)
+        self.chunk = max(rows, normal.CHUNK_ROWS // rows * rows)  # whole items per chunk
+        self.gram = [Normal.zeros(self.n_columns + 2 * len(found)) for found in self.cyclic]
+        # the pose (group) index of each scored test item, in the order _errors returns them
+        labels, group_index = np.unique(lin.group, return_inverse=True)
+        self.n_groups = labels.size
+        self.test_group = np.concatenate([group_index[(fold == f) & self.scored] for f in range(k)])
+        for s in row_chunks(lin.r.size, self.chunk):
+            A = lin.A[s] if self.unweighted else lin.A[s] * self.row_weight[s, None]
+            for f, gram in enumerate(self.gram):
+                B = np.hstack([A, self._extra(s, f) * self.row_weight[s, None]])
+                train = self.row_fold[s] != f  # all rows for the full data (f == k)
+                gram.add(B[train], self.r[s][train])
 
-    def _fit(self, gram, cand: _Candidate, n_extra: int) -> np.ndarray:
+    def _extra(self, s: slice, f: int) -> np.ndarray:
+        """The unweighted cyclic columns of fold ``f``'s frequencies on the rows ``s``."""
+        if self.scan is None:
+            return np.zeros((s.stop - s.start, 0))
+        rows = self.lin.rows
+        return self.scan.columns(self.lin.Jtheta[s], rows, self.cyclic[f],
+                                 items=slice(s.start // rows, s.stop // rows))
+
+    def _fit(self, gram: Normal, cand: _Candidate, n_extra: int) -> tuple[np.ndarray, np.ndarray]:
         """Step ``x`` on the candidate's columns (then the cyclic ones) for one Gram set."""
-        G, h = gram  # G's first n_columns columns are those of A: the left-out terms' too
+        G, h = gram.G, gram.h  # G's first n_columns columns are those of A: the left-out terms' too
         k = self.n_columns
         cols = np.r_[cand.columns, np.arange(k, k + n_extra)] if cand.cyclic else cand.columns
         v = self.lin.ng_values[cand.zeroed - self.lin.k0]
@@ -220,44 +235,52 @@ class _CrossValidation:
         offset = np.r_[self.lin.prior_offset, np.zeros(n_extra)][cols]
         return cols, _solve(G[np.ix_(cols, cols)] + np.diag(w2), rhs - w2 * offset)
 
-    def _errors(self, test, cand: _Candidate, cols: np.ndarray, x: np.ndarray) -> np.ndarray:
-        """Position error (m) of the items of the ``test`` rows (mask, their columns) after the step."""
-        rows, B = test
-        v = self.lin.ng_values[cand.zeroed - self.lin.k0]
-        e = self.r[rows] + B[:, cand.zeroed] @ v - B[:, cols] @ x
-        e = e / np.where(self.row_weight[rows] > 0, self.row_weight[rows], 1.0) * self.lin.sigma[rows]
-        per_item = e.reshape(-1, self.lin.rows)[:, :3]
-        return np.linalg.norm(per_item, axis=1)
+    def _errors(self, cand: _Candidate, steps: list[tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
+        """Per fold (then the full data): the position error (m) of its scored test items (every
+        scored item for the full data) after its step ``(cols, x)`` with the left-out terms at zero."""
+        lin, k = self.lin, self.n_columns
+        Y = np.zeros((k, len(steps)))  # the change of the unweighted model along A's columns, per fold
+        Y[cand.zeroed] = lin.ng_values[cand.zeroed - lin.k0][:, None]
+        extra = []
+        for f, (cols, x) in enumerate(steps):
+            geo = cols < k
+            Y[cols[geo], f] -= x[geo]
+            extra.append(-x[~geo])
+        out: list[list[np.ndarray]] = [[] for _ in steps]
+        for s in row_chunks(lin.r.size, self.chunk):
+            base = lin.r[s][:, None] + lin.A[s] @ Y  # (rows, folds + 1): residuals after each step
+            for f in range(len(steps)):
+                rows = self.row_fold[s] == f if f < self.k else slice(None)
+                e = base[rows, f]
+                if extra[f].size:
+                    e = e + self._extra(s, f)[rows] @ extra[f]
+                items = np.linalg.norm((e * lin.sigma[s][rows]).reshape(-1, lin.rows)[:, :3], axis=1)
+                scored = self.scored[s.start // lin.rows: s.stop // lin.rows]
+                out[f].append(items[scored[rows[:: lin.rows]] if f < self.k else scored])
+        return [np.concatenate(parts) for parts in out]
 
     def evaluate(self, cand: _Candidate) -> dict:
         """Cross-validated RMS (mm), its standard error over the folds, and the full-data fit's RMS."""
-        squares, fold_rms, groups = [], [], []
-        for f in range(self.k):
-            cols, x = self._fit(self.gram[f], cand, self.extra_fold[f].shape[1])
-            err = self._errors(self.test[f], cand, cols, x)
-            items = self.test[f][0][:: self.lin.rows]
-            scored = self.scored[items]
-            squares.append(err[scored] ** 2)
-            groups.append(self.lin.group[items][scored])
-            fold_rms.append(np.sqrt(np.mean(err[scored] ** 2)))
-        labels, inverse = np.unique(np.concatenate(groups), return_inverse=True)
-        cols, x = self._fit(self.gram_full, cand, self.extra_full.shape[1])
-        fit = self._errors(self.test_full, cand, cols, x)[self.scored]
-        return {"cv_rms_mm": float(np.sqrt(np.mean(np.concatenate(squares))) * 1e3),
+        steps = [self._fit(gram, cand, 2 * len(found))
+                 for gram, found in zip(self.gram, self.cyclic, strict=True)]
+        *folds, fit = self._errors(cand, steps)
+        fold_rms = [np.sqrt(np.mean(err**2)) for err in folds]
+        squares = np.concatenate(folds) ** 2
+        return {"cv_rms_mm": float(np.sqrt(np.mean(squares)) * 1e3),
                 "cv_se_mm": float(np.std(fold_rms, ddof=1) / np.sqrt(self.k) * 1e3),
                 "fold_rms_mm": [float(v * 1e3) for v in fold_rms],
                 "calibration_rms_mm": float(np.sqrt(np.mean(fit ** 2)) * 1e3),
-                "n_params": int(cols.size),
+                "n_params": int(steps[-1][0].size),
                 # per pose (group, sorted): its share of the cross-validated mean squared error
                 # (m^2), for the paired comparison of candidates (popped by select_error_model)
-                "mse_contributions": np.bincount(inverse, weights=np.concatenate(squares),
-                                                 minlength=labels.size) / sum(q.size for q in squares)}
+                "mse_contributions": np.bincount(self.test_group, weights=squares,
+                                                 minlength=self.n_groups) / squares.size}
 
 
 def _candidates(lin: _Linearised, terms: list[str], has_cyclic: bool, rtol: float) -> list[_Candidate]:
     """Every combination of ``terms`` (cyclic last), its kept joint-error columns (third stage)."""
     geo = np.arange(lin.k0)
-    R = scipy.linalg.qr(lin.A, mode="r")[0][: lin.A.shape[1]]  # same column geometry as A, K x K
+    R = r_factor(lambda s: lin.A[s], *lin.A.shape)  # same column geometry as A, K x K
     present = [t for t in terms if t != "cyclic"] + (["cyclic"] if has_cyclic else [])
     out = []
     for size in range(len(present) + 1):
@@ -318,8 +341,11 @@ def _search(lin: _Linearised, cv_fold: np.ndarray | None, k: int):
     if lin.q_item is None:
         return None, [], [[] for _ in range(k)]
     scan = FrequencyScan(lin.q_item, lin.group)
-    w = np.sqrt(np.repeat(lin.weight, lin.rows))[:, None]
-    args = (lin.A * w, lin.r * w[:, 0], lin.Jtheta * w, lin.rows)
+    if np.all(lin.weight == 1.0):  # lsq: no weighted copy of the (M, k) columns
+        args = (lin.A, lin.r, lin.Jtheta, lin.rows)
+    else:
+        w = np.sqrt(np.repeat(lin.weight, lin.rows))[:, None]
+        args = (lin.A * w, lin.r * w[:, 0], lin.Jtheta * w, lin.rows)
     full = scan.search(*args)
     folds = [scan.search(*args, mask=cv_fold != f) for f in range(k)] if full else [[] for _ in range(k)]
     return scan, scan.polish(full, *args), folds

@@ -21,9 +21,19 @@ from pathlib import Path
 
 from robocal.errors import ResourceError
 
-BYTES_PER_POSE = 24_000  # default error-model search: bounds the measured 13.9 kB (RSS) and the address space
+try:  # optional (extra 'threads'): small least-squares problems run best on one BLAS thread
+    from threadpoolctl import ThreadpoolController
+except ImportError:  # pragma: no cover - without it the BLAS library keeps its own thread count
+    ThreadpoolController = None
+
+BYTES_PER_POSE = 24_000  # default error-model search: bounds the measured 9.4 kB (RSS) and the address space
 GEOMETRIC_BYTES_PER_POSE = 8_000  # geometric model only (--nongeometric none)
 FIXED_BYTES = 300_000_000  # chunked temporaries, BLAS buffers and the result, whatever the poses
+# residual rows (10,000 tracker poses) below which a calibration runs its linear algebra on one BLAS
+# thread: its products and decompositions are of (k x k) or thin (rows x k) matrices, which gain
+# nothing from threads and lose much to them on a busy machine (100 poses, 2 cores at load 10:
+# the whole calibration 2.5-4x faster, its damped solve 4-10x; bench_calibrate's speed case)
+SMALL_PROBLEM_ROWS = 30_000
 ADVICE = ("calibrate fewer poses (a subset, e.g. every second pose), use --nongeometric none (the "
           "geometric model needs about a third of the memory) or run on a machine with more memory")
 
@@ -105,3 +115,24 @@ def memory_guard(what: str):
 
 def _gb(n: int) -> str:
     return f"{n / 1e9:.2f} GB"
+
+
+@functools.cache
+def _controller():
+    return None if ThreadpoolController is None else ThreadpoolController()
+
+
+def few_threads(rows_of):
+    """Decorator: the function runs on one BLAS thread when ``rows_of(*args, **kwargs)`` (its
+    problem's residual rows) is below :data:`SMALL_PROBLEM_ROWS` and ``threadpoolctl`` is
+    installed; unchanged otherwise."""
+    def wrap(fn):
+        @functools.wraps(fn)
+        def limited(*args, **kwargs):
+            controller = _controller()
+            if controller is None or rows_of(*args, **kwargs) >= SMALL_PROBLEM_ROWS:
+                return fn(*args, **kwargs)
+            with controller.limit(limits=1, user_api="blas"):
+                return fn(*args, **kwargs)
+        return limited
+    return wrap

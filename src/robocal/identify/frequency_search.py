@@ -34,9 +34,11 @@ summed weights. The cross-validation folds search on their training poses only (
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg
 import scipy.sparse
 
 from robocal.identify.identifiability import NG_RTOL
+from robocal.identify.normal import r_factor, row_chunks
 from robocal.kinematics.joint_errors import CYCLIC_MIN_FREQUENCY
 
 MAX_FREQUENCY = 400.0        # cycles per revolution: twice the largest common reducer ratio
@@ -101,11 +103,12 @@ class FrequencyScan:
         self.n_independent = max(sum(g.size for g in self.grids) / 2.0, 1.0)
         self.q_pose = q_pose
 
-    def columns(self, Jtheta: np.ndarray, rows: int, found) -> np.ndarray:
-        """``(M, 2k)`` columns ``Jtheta[:, i] * (sin f q_i, cos f q_i)`` of ``found`` [(i, f)]."""
+    def columns(self, Jtheta: np.ndarray, rows: int, found, items: slice = slice(None)) -> np.ndarray:
+        """``(M, 2k)`` columns ``Jtheta[:, i] * (sin f q_i, cos f q_i)`` of ``found`` [(i, f)];
+        ``Jtheta`` the rows of the measurement ``items`` (default all)."""
         cols = []
         for i, f in found:
-            qi = np.repeat(self.q_item[:, i], rows)
+            qi = np.repeat(self.q_item[items, i], rows)
             cols += [Jtheta[:, i] * np.sin(f * qi), Jtheta[:, i] * np.cos(f * qi)]
         return np.stack(cols, axis=1) if cols else np.zeros((Jtheta.shape[0], 0))
 
@@ -115,10 +118,10 @@ class FrequencyScan:
         Jacobian ``J (M, p)`` and residuals ``r (M,)`` at its fit; ``Jtheta (M, n)`` are the
         weighted theta columns there, ``rows`` the residual rows per item, ``mask (N,)`` the items
         to use (default all)."""
-        n_items, n = self.q_item.shape
-        keep = np.ones(n_items, bool) if mask is None else np.asarray(mask, bool)
-        row_keep = np.repeat(keep, rows)[:, None]
-        J, r, Jtheta = J * row_keep, r * row_keep[:, 0], Jtheta * row_keep
+        n = self.q_item.shape[1]
+        if mask is not None:  # the left-out items' rows count as zero (copies of the arrays)
+            row_keep = np.repeat(np.asarray(mask, bool), rows)[:, None]
+            J, r, Jtheta = J * row_keep, r * row_keep[:, 0], Jtheta * row_keep
         pose_of_row = np.repeat(self.pose_of_item, rows)
         weight = np.zeros((self.n_poses, n))  # sum of squared theta columns per pose (refinement)
         np.add.at(weight, pose_of_row, Jtheta**2)
@@ -159,6 +162,8 @@ class FrequencyScan:
         the other frequencies (one backfitting pass; the search refines each peak before the later
         ones join the model, which biases overlapping ones by a few hundredths)."""
         out = list(found)
+        if not out:
+            return out
         U0 = _orthonormal(J)  # the model's span once; each frequency adds the others' columns to it
         for k, (i, f0) in enumerate(out):
             others = self.columns(Jtheta, rows, out[:k] + out[k + 1 :])
@@ -210,12 +215,25 @@ def _peak(grid: np.ndarray, gain: np.ndarray) -> float:
 
 
 def _orthonormal(A: np.ndarray) -> np.ndarray:
-    """Orthonormal basis of the column space of ``A`` (columns scaled first)."""
-    if A.shape[1] == 0:
-        return np.zeros((A.shape[0], 0))
+    """Orthonormal basis ``(M, rank)`` of the column space of ``A (M, p)`` (columns scaled first),
+    the only (M x p) array made: the singular values and right vectors from the R factor of the
+    scaled columns (:func:`robocal.identify.normal.r_factor`, chunk by chunk), the basis as the
+    scaled columns times V / s, made orthonormal to rounding by one more chunked QR pass."""
+    M, p = A.shape
+    if p == 0:
+        return np.zeros((M, 0))
     norms = np.linalg.norm(A, axis=0)
-    U, s, _ = np.linalg.svd(A / np.where(norms > 0, norms, 1.0), full_matrices=False)
-    return U[:, s > 1e-10 * max(s[0], 1e-300)]
+    scale = np.where(norms > 0, norms, 1.0)
+    _, s, Vt = np.linalg.svd(r_factor(lambda c: A[c] / scale, M, p))
+    keep = s > 1e-10 * max(s[0], 1e-300)
+    T = Vt[keep].T / s[keep] / scale[:, None]  # (p, rank): the scaled columns' left singular vectors
+    U = np.empty((M, int(keep.sum())))
+    for c in row_chunks(M):
+        U[c] = A[c] @ T
+    R = r_factor(lambda c: U[c], *U.shape)  # close to the identity: undo the rounding of A @ T
+    for c in row_chunks(M):
+        U[c] = scipy.linalg.solve_triangular(R, U[c].T, trans="T").T
+    return U
 
 
 def _wald_scan(y: np.ndarray, q: np.ndarray, f0: float, step: float, n_freq: int) -> np.ndarray:

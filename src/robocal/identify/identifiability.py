@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
+from robocal.identify.normal import r_factor
 from robocal.identify.space import block_of
 
 DEFAULT_RTOL = 1e-7
@@ -148,11 +149,11 @@ class Identifiability:
 
 
 def _pivoted_rank(A: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
-    """Column indices of ``A`` (unit-scale columns) kept by pivoted QR, and an orthonormal
-    basis of their span."""
+    """Column indices of ``A`` (unit-scale columns; overwritten) kept by pivoted QR, and an
+    orthonormal basis of their span."""
     if A.shape[1] == 0:
         return np.zeros(0, int), np.zeros((A.shape[0], 0))
-    Q, R, piv = scipy.linalg.qr(A, mode="economic", pivoting=True)
+    Q, R, piv = scipy.linalg.qr(A, mode="economic", pivoting=True, overwrite_a=True)
     rank = int(np.sum(np.abs(np.diag(R)) > rtol))
     return piv[:rank], Q[:, :rank]
 
@@ -171,11 +172,13 @@ def _select(Js: np.ndarray, groups: Sequence[tuple[np.ndarray, float]], rtol: fl
     column indices on what the kept columns of the earlier groups leave unexplained, with its
     own smallest relative pivot."""
     kept, basis = [], np.zeros((Js.shape[0], 0))
-    for group, floor in groups:
+    for stage, (group, floor) in enumerate(groups):
         cols = Js[:, group]
-        picked, Q = _pivoted_rank(cols - basis @ (basis.T @ cols), max(rtol, floor))
+        cols -= basis @ (basis.T @ cols)  # in place: one (M, group) array per stage
+        picked, Q = _pivoted_rank(cols, max(rtol, floor))
         kept.append(group[picked])
-        basis = np.hstack([basis, Q])
+        if stage < len(groups) - 1:  # the last stage's basis serves no later one
+            basis = np.hstack([basis, Q])
     return np.sort(np.concatenate(kept))
 
 
@@ -199,17 +202,20 @@ def analyze(J: np.ndarray, names: Sequence[str], n_poses: int,
                             for stage, floor in STAGES], rtol)
     rank = kept_idx.size
     drop_idx = sorted(set(range(len(names))) - set(kept_idx.tolist()))
-    s, cond = _spectrum(Js[:, kept_idx])
+    s, cond = _spectrum(Js, kept_idx)
     return Identifiability(names=names, kept=[names[j] for j in kept_idx],
                            dropped=[names[j] for j in drop_idx],
                            confounded_with=_confounders(Js, zero, names, kept_idx, drop_idx),
                            rank=rank, condition_number=cond, singular_values=s, n_poses=n_poses)
 
 
-def _spectrum(Js: np.ndarray) -> tuple[np.ndarray, float]:
-    """Singular values of unit columns ``Js`` and the condition number of their normal matrix."""
-    s = np.linalg.svd(Js, compute_uv=False) if Js.shape[1] else np.zeros(0)
-    return s, float((s[0] / s[-1]) ** 2) if s.size and s[-1] > 0 else float("inf")
+def _spectrum(Js: np.ndarray, kept_idx: np.ndarray) -> tuple[np.ndarray, float]:
+    """Singular values of the unit columns ``Js[:, kept_idx]`` (those of their R factor, made
+    chunk by chunk: no copy of the columns) and the condition number of their normal matrix."""
+    if not kept_idx.size:
+        return np.zeros(0), float("inf")
+    s = np.linalg.svd(r_factor(lambda c: Js[c][:, kept_idx], Js.shape[0], kept_idx.size), compute_uv=False)
+    return s, float((s[0] / s[-1]) ** 2) if s[-1] > 0 else float("inf")
 
 
 def _confounders(Js: np.ndarray, zero: np.ndarray, names: Sequence[str], kept_idx: np.ndarray,
@@ -218,7 +224,11 @@ def _confounders(Js: np.ndarray, zero: np.ndarray, names: Sequence[str], kept_id
     out: dict[str, list[str]] = {}
     if not len(targets):
         return out
-    coef, *_ = np.linalg.lstsq(Js[:, kept_idx], Js[:, list(targets)], rcond=None)
+    # least squares of the targets on the kept columns, from the R factor of [kept | targets]:
+    # [[R11 R12] [0 R22]] gives the same coefficients as the columns themselves (R11 x = R12)
+    cols, k = np.r_[kept_idx, list(targets)].astype(np.int64), len(kept_idx)
+    R = r_factor(lambda c: Js[c][:, cols], Js.shape[0], cols.size)
+    coef = np.linalg.lstsq(R[:k, :k], R[:k, k:], rcond=None)[0] if k else np.zeros((0, cols.size))
     for c, j in enumerate(targets):
         weights = np.abs(coef[:, c])
         if zero[j] or weights.max(initial=0) == 0:
@@ -240,7 +250,7 @@ def hold(ident: Identifiability, J: np.ndarray, undetermined: list[str],
     kept_idx = np.array([ident.names.index(nm) for nm in kept], dtype=np.int64)
     targets = [ident.names.index(nm) for nm in undetermined]
     confounded = {**ident.confounded_with, **_confounders(Js, zero, ident.names, kept_idx, targets)}
-    s, cond = _spectrum(Js[:, kept_idx])
+    s, cond = _spectrum(Js, kept_idx)
     return Identifiability(names=ident.names, kept=kept, dropped=ident.dropped, confounded_with=confounded,
                            rank=ident.rank, condition_number=cond, singular_values=s,
                            n_poses=ident.n_poses, undetermined=undetermined,

@@ -17,6 +17,7 @@ from robocal.damped_least_squares import Status, minimize
 from robocal.identify.linalg import ScaledSVD
 from robocal.identify.solvers import SolverResult, history_entry
 from robocal.identify.space import ParameterSpace, State
+from robocal.resources import few_threads
 
 STEP_TOL = 1e-13  # largest change of a unit-scaled column's contribution that still counts as a step
 FTOL = 1e-10  # converged when the linear model predicts a decrease below this fraction of the cost
@@ -111,6 +112,7 @@ class _Calibration:
             self.total = self.total + self.dx
 
 
+@few_threads(lambda problem, *args, **kwargs: problem.sigma.size)
 def gauss_newton(problem, state: State, space: ParameterSpace, *, row_weights=None,
                  max_iter: int = 50, ftol: float = FTOL, ridge: float = 0.0, prior=None,
                  progress=None, jacobian: np.ndarray | None = None,

@@ -180,6 +180,10 @@ class CalibrationProblem:
         k, m = len(space.robot), len(self.nuisance_names)
         if tuple(space.nuisance) != tuple(self.nuisance_names):
             raise IdentificationError("the parameter space must carry every nuisance parameter")
+        if len(self.observations) == 1:  # its block is J: no second (M, k) array
+            J = self.observations[0].jacobian(state.robot, space.robot, state.nuisance)
+            J /= self.sigma[:, None]
+            return J
         J = np.zeros((self.sigma.size, k + m))
         for obs, rows, nu in zip(self.observations, self._rows, self._nuisance, strict=True):
             block = obs.jacobian(state.robot, space.robot, state.nuisance[nu])
