@@ -162,6 +162,16 @@ def test_limits_are_vendor_values():
             assert (lim[:, 0] < 0).all() and (lim[:, 1] > 0).all(), name
 
 
+def test_each_catalog_file_is_named_after_its_robot():
+    """catalog_entry reads ``<name>.yaml`` alone: every file must carry the name it is filed under."""
+    from importlib import resources
+
+    folder = resources.files("robocal").joinpath("catalog")
+    files = [p.name for p in folder.iterdir() if p.name.endswith(".yaml")]
+    assert sorted(f.removesuffix(".yaml") for f in files) == catalog_names()
+    assert all(catalog_entry(n)["name"] == n for n in catalog_names())
+
+
 def test_unknown_name_lists_the_catalog():
     with pytest.raises(ModelError, match="unknown robot 'irb9999'.*abb_irb120.*ur10"):
         Robot.from_catalog("irb9999")
