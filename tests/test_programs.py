@@ -308,6 +308,21 @@ def test_unreachable_and_impossible_configuration(tmp_path):
         filter_program(bad, robot, robot)
 
 
+def test_table_json_holds_every_field_one_target_per_line(tmp_path):
+    """The table JSON (written row by row for speed) parses to the same content as a plain dump."""
+    from dataclasses import asdict
+
+    robot, files, *_ = _fixture("rapid", tmp_path)
+    res = filter_program(files[0], perturbed(robot, 7), robot)
+    text = res.table_json()
+    expected = {"dialect": res.dialect, "files": [str(p) for p in res.outputs], "summary": res.summary_dict(),
+                "loads": res.loads, "warnings": res.warnings, "targets": res.rows,
+                "motions": [asdict(m) for m in res.motions]}
+    assert json.loads(text) == json.loads(json.dumps(expected))
+    lines = {ln.strip().rstrip(",") for ln in text.splitlines()}
+    assert len(res.rows) == 5 and all(json.dumps(r) in lines for r in res.rows)
+
+
 def test_cli_filter_writes_all_or_nothing(tmp_path, capsys):
     robot, files, *_ = _fixture("rapid", tmp_path)
     cal = tmp_path / "cal.yaml"

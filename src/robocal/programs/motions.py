@@ -29,7 +29,7 @@ A target the dialect itself leaves alone although motions reach it goes in
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -71,7 +71,8 @@ class MotionRecord:
     needs: str = ""
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        """The record's fields by name (all scalars: no deep copy as in dataclasses.asdict)."""
+        return {name: getattr(self, name) for name in self.__slots__}
 
 
 @dataclass
