@@ -36,8 +36,8 @@ from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import Number, ProgramText, mask
 
-_COMMENT = re.compile(r";[^\n]*")
-_STRING = re.compile(r'"[^"\n]*"')
+COMMENT_RE = re.compile(r";[^\n]*")
+STRING_RE = re.compile(r'"[^"\n]*"')
 _AGG = re.compile(r"\{[^{}]*\}")
 _COMPONENT = re.compile(r"\b([A-Za-z]\w*)\s+([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|'[BbHh][^']*')")
 _DECL = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(E6POS|POS|FRAME)\s+([A-Za-z_$]\w*)"
@@ -49,7 +49,7 @@ _FDAT = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?FDAT\s+(\w+)\s*=\s*(?=\{)"
                    re.IGNORECASE | re.MULTILINE)
 _DATA = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:FRAME\s+)?(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]"
                    r"\s*=\s*(?=\{)", re.IGNORECASE | re.MULTILINE)
-_MOTION = re.compile(r"^[ \t]*(PTP|LIN|CIRC|SPTP|SLIN|SCIRC|SPL)(_REL)?\s+(.+)$",
+MOTION_RE = re.compile(r"^[ \t]*(PTP|LIN|CIRC|SPTP|SLIN|SCIRC|SPL)(_REL)?\s+(.+)$",
                      re.IGNORECASE | re.MULTILINE)
 _STATE = re.compile(r"(\$TOOL|\$BASE)\s*=\s*([^\n]+)|BAS\s*\(\s*#(TOOL|BASE)\s*,\s*(\d+)\s*\)|"
                     r"FDAT_ACT\s*=\s*(\w+)", re.IGNORECASE)
@@ -167,7 +167,7 @@ class KRLDialect(Dialect):
         prog.frames[NULL] = np.eye(4)
         prog.tools[NULL] = np.eye(4)
         for src in [*references, *sources]:
-            masked = st.masked[src.path] = mask(src.text, [_COMMENT], [_STRING])
+            masked = st.masked[src.path] = mask(src.text, [COMMENT_RE], [STRING_RE])
             for m in _DATA.finditer(masked):
                 found = self._aggregate(src, masked, m.end())
                 if found is None or any(k not in found[0] for k in _POSE_KEYS):
@@ -224,7 +224,7 @@ class KRLDialect(Dialect):
         data_list = src.path.suffix.lower() == ".dat"
         for m in _ASSIGN.finditer(masked):
             name = m.group(1).upper()
-            if name in _KEYWORDS or name.endswith("_ACT") or _MOTION.match(masked, m.start()) \
+            if name in _KEYWORDS or name.endswith("_ACT") or MOTION_RE.match(masked, m.start()) \
                     or data_list and m.group(4).lstrip().startswith("{"):  # a .dat's initial value
                 continue
             proc = _routine_at(routines, m.start())
@@ -253,7 +253,7 @@ class KRLDialect(Dialect):
                      "base": ("?", "the program does not set the base before this motion "
                                    "($BASE=BASE_DATA[n], BAS(#BASE,n), FDAT_ACT or WITH "
                                    "$BASE=SBASE(F.BASE_NO))")}
-            motions = list(_MOTION.finditer(masked))
+            motions = list(MOTION_RE.finditer(masked))
             starts = [m.start() for m in motions]
             states = [m for m in _STATE.finditer(masked) if not _inside(motions, starts, m.start())]
             events = sorted([(m.start(), "state", m) for m in states]

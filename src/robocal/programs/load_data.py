@@ -46,17 +46,17 @@ import numpy as np
 from robocal.errors import DataError
 from robocal.programs.aggregate import Word, parse_aggregate
 from robocal.programs.fanuc_ls import FanucDialect
-from robocal.programs.krl import KRLDialect
+from robocal.programs.krl import COMMENT_RE, MOTION_RE, STRING_RE, KRLDialect
 from robocal.programs.model import Dialect, Target
 from robocal.programs.rapid import RapidDialect
-from robocal.programs.source import Number, ProgramText, mask
+from robocal.programs.source import NUMBER_RE, Number, ProgramText, mask
 from robocal.programs.urscript import URScriptDialect
 
 MM, CM = 1e-3, 1e-2  # m
 NULL_TOOL = 0  # KRL tool 0 ($NULLFRAME) has no LOAD_DATA: selecting it sets no load here
 UNSET_KG = 0.0  # a FANUC schedule with a mass <= this (factory -9999 sentinel) is not set
 STATEMENT_CHARS = 60  # a load statement quoted in messages is shortened to this
-_NUM = r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
+_NUM = f"({NUMBER_RE.pattern})"
 _ADVICE = "give the load with --payload KG[,X,Y,Z] (every motion) instead"
 
 Load = tuple[float, float, float, float]  # kg, then the centre of mass x, y, z (m) in tool0
@@ -220,7 +220,6 @@ def _loaddata(src: ProgramText, at: int, node, name: str) -> tuple[float, tuple]
 
 
 # ------------------------------------------------------------------------------------------- KRL
-_KRL_MASK = [re.compile(r";[^\n]*")], [re.compile(r'"[^"\n]*"')]
 _KRL_LITERAL = re.compile(r"\{\s*M\s+" + _NUM + r"\s*,\s*CM\s*\{\s*X\s+" + _NUM + r"\s*,\s*Y\s+" + _NUM
                           + r"\s*,\s*Z\s+" + _NUM, re.IGNORECASE)
 _KRL_DATA = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:LOAD\s+)?LOAD_DATA\s*\[\s*(\d+)\s*\]\s*=\s*",
@@ -229,7 +228,6 @@ _KRL_SET = re.compile(r"\$LOAD\b\s*(\.\s*\w+\s*)?=\s*([^\n]*)|BAS\s*\(\s*#TOOL\s
                       r"\bFDAT_ACT\s*=\s*(\w+)", re.IGNORECASE)
 _KRL_FDAT = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?FDAT\s+(\w+)\s*=\s*\{[^}\n]*?\bTOOL_NO\s+(\d+)",
                        re.IGNORECASE | re.MULTILINE)
-_KRL_MOTION = re.compile(r"^[ \t]*(?:PTP|LIN|CIRC|SPTP|SLIN|SCIRC|SPL)\b[^\n]*", re.IGNORECASE | re.MULTILINE)
 _KRL_SLOAD = re.compile(r"SLOAD\s*\(\s*(\w+)\s*\.\s*TOOL_NO\s*\)", re.IGNORECASE)
 
 
@@ -243,7 +241,7 @@ class KRLLoads(LoadReader):
 
     def settings(self, sources, references):
         for src in [*references, *sources]:
-            masked = self.masked[id(src)] = mask(src.text, *_KRL_MASK)
+            masked = self.masked[id(src)] = mask(src.text, [COMMENT_RE], [STRING_RE])
             for m in _KRL_DATA.finditer(masked):
                 lit = _KRL_LITERAL.match(masked, m.end())
                 n = int(m.group(1))
@@ -259,9 +257,10 @@ class KRLLoads(LoadReader):
         out = []
         for src in sources:
             masked = self.masked[id(src)]
-            inside = [(m.start(), m.end()) for m in _KRL_MOTION.finditer(masked)]
+            spans = np.array([m.span() for m in MOTION_RE.finditer(masked)], dtype=np.int64).reshape(-1, 2)
             for m in _KRL_SET.finditer(masked):
-                if any(a <= m.start() < b for a, b in inside):
+                k = np.searchsorted(spans[:, 0], m.start(), side="right") - 1  # the motion line before it
+                if k >= 0 and m.start() < spans[k, 1]:
                     continue  # a motion's own WITH $LOAD: at_motion
                 text = m.group(0)
                 if m.group(4):  # FDAT_ACT = F: the inline form's BAS call loads LOAD_DATA[F.TOOL_NO]

@@ -28,10 +28,11 @@ from robocal.kinematics.cell import arm_model, carriage_frames, is_track_cell
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform
 from robocal.programs.model import Program, Target
+from robocal.programs.source import NUMBER_RE
 
 # The track's value in a target's external-axis summary (the dialects write "eax_a = 1500",
 # "E1 1500.0", "E1 = 1500.000"), in mm; any other axis named there is not the track's.
-_NUMBER = r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
+_NUMBER = f"({NUMBER_RE.pattern})"
 _TRACK_VALUE = re.compile(r"^\s*(?:eax_a|E1)\s*=?\s*" + _NUMBER + r"\s*$")
 # A zero track value is not in the summary (the dialects list only non-zero axes): a KRL E6POS
 # ``E1 0.0`` or a FANUC ``E1 = 0.000 mm`` in the target's own text, up to its closing brace.
