@@ -37,8 +37,8 @@ from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_quat, quat_to_matrix
 from robocal.programs.source import Number, mask
 
-_COMMENT = re.compile(r"![^\n]*")
-_STRING = re.compile(r'"(?:[^"\n]|"")*"')
+COMMENT_RE = re.compile(r"![^\n]*")
+STRING_RE = re.compile(r'"(?:[^"\n]|"")*"')
 _DECL = re.compile(r"\b(?:(?:LOCAL|TASK)\s+)?(CONST|PERS|VAR)\s+(robtarget|tooldata|wobjdata)\s+"
                    r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*(:=)?", re.IGNORECASE)
 # instruction -> (positions of the robtarget arguments, position of the tool argument), counting
@@ -141,7 +141,7 @@ class RapidDialect(Dialect):
         flow = Flow()
         lowered, spans = {}, {}
         for src in [*references, *sources]:  # every module's routines first: calls cross modules
-            masked = st.masked[src.path] = mask(src.text, [_COMMENT], [_STRING])
+            masked = st.masked[src.path] = mask(src.text, [COMMENT_RE], [STRING_RE])
             low = lowered[src.path] = masked.lower()  # case-insensitive searches, without the slow flag
             routines = spans[src.path] = []  # (start, end, name)
             for m in _ROUTINE.finditer(low):

@@ -31,8 +31,8 @@ from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import nearest_rotvec
 from robocal.programs.source import Number, mask
 
-_COMMENT = re.compile(r"#[^\n]*")
-_STRING = re.compile(r"\"[^\"\n]*\"|'[^'\n]*'")
+COMMENT_RE = re.compile(r"#[^\n]*")
+STRING_RE = re.compile(r"\"[^\"\n]*\"|'[^'\n]*'")
 _POSE = re.compile(r"(?<![\w.])p\s*(?=\[)")
 _ASSIGN = re.compile(r"(?:\b(?:global|local)\s+)?\b([A-Za-z_]\w*)\s*=\s*(?!=)")
 _CALL = re.compile(r"\b(movel|movep|movec|movej|set_tcp)\s*\(")
@@ -100,7 +100,7 @@ class URScriptDialect(Dialect):
             prog.tools[DEFAULT_TOOL] = user_default
         scripts = []
         for src in sources:
-            masked = mask(src.text, [_COMMENT], [_STRING])
+            masked = mask(src.text, [COMMENT_RE], [STRING_RE])
             sc = _Script(self, src, masked, prog)
             tool = DEFAULT_TOOL
             used = prog.used

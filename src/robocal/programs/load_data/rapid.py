@@ -17,9 +17,9 @@ from robocal.programs.load_data.base import (
     unread,
 )
 from robocal.programs.model import Target
+from robocal.programs.rapid import COMMENT_RE, STRING_RE
 from robocal.programs.source import Number, ProgramText, mask
 
-_RAPID_MASK = [re.compile(r"![^\n]*")], [re.compile(r'"(?:[^"\n]|"")*"')]
 _RAPID_DECL = re.compile(r"\b(?:(?:LOCAL|TASK)\s+)?(?:CONST|PERS|VAR)\s+(tooldata|loaddata)\s+"
                          r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*:=", re.IGNORECASE)
 _GRIPLOAD = re.compile(r"\bGripLoad\b\s*([^;]*);", re.IGNORECASE)
@@ -39,7 +39,7 @@ class RapidLoads(LoadReader):
     def settings(self, sources, references):
         out = []
         for src in [*references, *sources]:
-            masked = self.masked[id(src)] = mask(src.text, *_RAPID_MASK)
+            masked = self.masked[id(src)] = mask(src.text, [COMMENT_RE], [STRING_RE])
             for m in _RAPID_DECL.finditer(masked):
                 end = masked.find(";", m.end())
                 tree, _ = parse_aggregate(src, masked, m.end(), len(masked) if end < 0 else end,

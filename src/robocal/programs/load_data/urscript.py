@@ -11,8 +11,8 @@ from robocal.programs.load_data.base import (
     unread,
 )
 from robocal.programs.source import mask
+from robocal.programs.urscript import COMMENT_RE, STRING_RE
 
-_UR_MASK = [re.compile(r"#[^\n]*")], [re.compile(r"\"[^\"\n]*\"|'[^'\n]*'")]
 _UR_CALL = re.compile(r"\b(set_payload|set_target_payload|set_payload_mass|set_payload_cog)\s*\(([^()\n]*"
                       r"(?:\[[^\]\n]*\][^()\n]*)?)\)")
 _UR_ARGS = re.compile(r"\s*" + NUM + r"\s*(?:,\s*\[\s*" + NUM + r"\s*,\s*" + NUM + r"\s*,\s*" + NUM
@@ -26,7 +26,7 @@ class URScriptLoads(LoadReader):
     def settings(self, sources, references):
         out = []
         for src in sources:
-            masked = mask(src.text, *_UR_MASK)
+            masked = mask(src.text, [COMMENT_RE], [STRING_RE])
             for m in _UR_CALL.finditer(masked):
                 fn, args, text = m.group(1), m.group(2), m.group(0)
                 if fn == "set_payload_cog":
