@@ -45,7 +45,7 @@ from robocal.data.importer import import_tracker
 from robocal.data.simulate import simulate_tracker
 from robocal.evaluate import model_errors
 from robocal.kinematics.joint_errors import JointErrorModel
-from robocal.model_selection import SELECTION_TOLERANCE
+from robocal.model_selection import SELECTION_TOLERANCE, paired_se_mm
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from results import figure, table  # noqa: E402
@@ -116,14 +116,14 @@ def _sets():
 
 
 def _paired_se_mm(model, other, held) -> float:
-    """Standard error (mm) of ``model``'s held-out RMS minus ``other``'s: from the paired per-pose
-    differences of their shares of the mean squared error (what the held-out sample can resolve)."""
+    """Standard error (mm) of ``model``'s held-out RMS minus ``other``'s: the selection's own paired
+    rule (`robocal.model_selection.paired_se_mm`) on the held-out poses' shares of the mean squared
+    error (what the held-out sample can resolve)."""
     pose = np.unique(held.pose_id, return_inverse=True)[1]
     share = [np.bincount(pose, weights=np.sum(model_errors(m, held) ** 2, axis=1)) / held.pose_id.size
              for m in (model, other)]
-    d = share[0] - share[1]
-    total = np.sqrt(share[0].sum()) + np.sqrt(share[1].sum())
-    return float(np.sqrt(d.size) * np.std(d, ddof=1) / total * 1e3)
+    rms_mm = [np.sqrt(s.sum()) * 1e3 for s in share]
+    return paired_se_mm(share[0], share[1], rms_mm[0], rms_mm[1])
 
 
 def _spec(terms) -> str:

@@ -294,7 +294,7 @@ def _candidates(lin: _Linearised, terms: list[str], has_cyclic: bool, rtol: floa
     return out
 
 
-def _paired_se_mm(contrib: np.ndarray, contrib_best: np.ndarray, rms_mm: float, rms_best_mm: float) -> float:
+def paired_se_mm(contrib: np.ndarray, contrib_best: np.ndarray, rms_mm: float, rms_best_mm: float) -> float:
     """Standard error (mm) of a candidate's cross-validated RMS minus the best one's, from the
     paired per-pose differences of their contributions (m^2) to the mean squared error: the
     error common to both (the poses' noise, the folds' luck) cancels."""
@@ -316,7 +316,7 @@ def _choose(rows: list[dict], contributions: list[np.ndarray]) -> tuple[int, int
     cap = SELECTION_TOLERANCE * rms_b
     eligible = []
     for i, row in enumerate(rows):
-        se = None if i == best else _paired_se_mm(contributions[i], contributions[best],
+        se = None if i == best else paired_se_mm(contributions[i], contributions[best],
                                                   row["cv_rms_mm"], rms_b)
         row["cv_paired_se_mm"] = se
         if i == best or row["cv_rms_mm"] - rms_b <= min(se, cap):
