@@ -192,6 +192,36 @@ def _whitened_jacobian(robot, problem: CalibrationProblem, state: State, J: np.n
     return out.reshape(J.shape)
 
 
+def candidate_blocks(obs, data: Measurements, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Residual rows ``(M, k)`` of the observation ``obs`` of ``data`` grouped into candidate blocks
+    ``G (C, r_max, k)`` (zero rows where a candidate gives fewer), with the candidate of each item
+    ``(items,)`` and the items per candidate ``(C,)``. A candidate is a pose (all its SMRs' rows), or
+    one pair of a distance measurement."""
+    r = obs.rows_per_item
+    item_group = np.arange(obs.n_items) if obs.kind == "distance" else data.pose_id
+    labels, cand_of_item = np.unique(item_group, return_inverse=True)
+    per = np.bincount(cand_of_item, minlength=labels.size)
+    order = np.argsort(cand_of_item, kind="stable")
+    slot = np.empty(obs.n_items, int)
+    slot[order] = np.arange(obs.n_items) - np.repeat(np.cumsum(per) - per, per)
+    G = np.zeros((labels.size, per.max() * r, rows.shape[1]))
+    items = rows.reshape(obs.n_items, r, -1)
+    for k in range(r):  # a loop over the rows of one item only
+        G[cand_of_item, slot * r + k] = items[:, k]
+    return G, cand_of_item, per
+
+
+def whitened_rows(robot, data: Measurements, noise: Noise, names: list[str]) -> tuple[object, np.ndarray]:
+    """The observation of ``data`` and its identification-Jacobian rows ``(M, k)`` over the robot
+    parameters ``names`` at the model's start, whitened by ``noise``."""
+    problem = CalibrationProblem(robot, data)
+    space = problem.space(robot, names)
+    state = problem.start(robot)
+    J = problem.jacobian(state, space)
+    columns = [space.names.index(nm) for nm in names]
+    return problem.observation, _whitened_jacobian(robot, problem, state, J, noise)[:, columns]
+
+
 def information(robot, data: Measurements, noise: Noise, params="auto") -> Information:
     """The candidate blocks of ``data`` (rows grouped into candidates by ``pose_id``; distances by
     pair) for the unknowns ``params`` identifies (see the module docstring)."""
@@ -212,25 +242,14 @@ def information(robot, data: Measurements, noise: Noise, params="auto") -> Infor
     pinned = {nm for nm in ident.dropped  # no data on them, but a prior: what remains of their error
               if np.isfinite(sigma[all_names.index(nm)]) and ident.confounded_with[nm]}
     keep = [j for j, nm in enumerate(all_names) if nm in ident.kept or nm in pinned]
-    item_of_rows = obs.item_of_rows()
-    # a candidate is a pose (all its SMRs' rows), or one pair of a distance measurement
-    item_group = np.arange(obs.n_items) if obs.kind == "distance" else data.pose_id
-    labels, cand_of_item = np.unique(item_group, return_inverse=True)
-    per = np.bincount(cand_of_item, minlength=labels.size)
-    order = np.argsort(cand_of_item, kind="stable")
-    slot = np.empty(obs.n_items, int)
-    slot[order] = np.arange(obs.n_items) - np.repeat(np.cumsum(per) - per, per)
-    G = np.zeros((labels.size, per.max() * r, len(keep)))
-    items = Jw.reshape(obs.n_items, r, -1)[:, :, keep]
-    for k in range(r):  # a loop over the rows of one item only
-        G[cand_of_item, slot * r + k] = items[:, k]
-    scale = np.sqrt(np.sum(G**2, axis=(0, 1)) / labels.size)
+    G, cand_of_item, per = candidate_blocks(obs, data, Jw[:, keep])
+    scale = np.sqrt(np.sum(G**2, axis=(0, 1)) / len(G))
     scale = np.where(scale > 0, scale, 1.0)
     names = [all_names[j] for j in keep]
     prior = np.where(np.isfinite(sigma[keep]), 1.0 / (sigma[keep] * scale) ** 2, 0.0)
     return Information(G=G / scale, scale=scale, prior=prior, names=names,
                        robot_names=[nm for nm in names if nm in robot_names],
-                       rows=per * r, data=data, group=cand_of_item[item_of_rows],
+                       rows=per * r, data=data, group=cand_of_item[obs.item_of_rows()],
                        row_group=np.repeat(cand_of_item, r), J_raw=J_raw, J_white=Jw, sigma=sigma,
                        all_names=all_names, identifiable=len(ident.kept))
 

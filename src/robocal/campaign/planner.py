@@ -12,6 +12,10 @@ position error over the region of interest (default: the workspace sample of
 leave of the parameters the poses do not determine (m; reported in mm): the predicted accuracy
 ``calibrate`` reports, before the unmodelled error. Frame parameters that stay unidentifiable
 (no prior) are held at their values and their own errors are not part of that figure.
+
+Given the robot's unmodelled error (``unmodelled_mm``, e.g. what a previous calibration left),
+the design is then polished for the error the fit will absorb from it
+(:mod:`robocal.campaign.unmodelled`) and the predicted accuracy includes it.
 """
 
 from __future__ import annotations
@@ -21,11 +25,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from robocal.campaign import constraints as cons
-from robocal.campaign.exchange import CRITERIA, criterion_value, exchange
+from robocal.campaign.exchange import CRITERIA, ExchangeResult, criterion_value, exchange
 from robocal.campaign.files import CandidateFile, poses_csv
 from robocal.campaign.information import GENERATED_KINDS, Information, Noise, candidate_data, information
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
+from robocal.campaign.unmodelled import DEFAULT_TERMS, mean_square, search, unmodelled_error
 from robocal.data.measurements import KINDS, Measurements, robot_reach
 from robocal.data.simulate import smr_in_link_frame
 from robocal.errors import DataError
@@ -189,6 +194,9 @@ class CampaignResult:
         o = ident.observability
         noise = (f"isotropic {self.noise.sigma_m * 1e3:g} mm" if self.noise.model == "isotropic"
                  else "the tracker's anisotropic model")
+        unmodelled = self.settings.get("unmodelled_mm", 0.0)
+        noise += (f"; unmodelled error {unmodelled:g} mm as {', '.join(self.settings['unmodelled_terms'])}"
+                  if unmodelled else "; before the unmodelled error")
         lines = [f"{self.n} poses of {self.robot.name} ({self.kind} measurements) chosen from "
                  f"{self.n_candidates} candidates ({self.criterion}-optimal)",
                  f"predicted accuracy: {self.predicted_rms_mm:.4f} mm RMS of the TCP position over the "
@@ -344,7 +352,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                noise_mm: float = 0.02, noise_model: str = "isotropic", rotation_noise_deg: float = 0.001,
                criterion: str = "I", region=None, region_size: int = DEFAULT_REGION_SIZE,
                starts: int = DEFAULT_STARTS, curve=None, seed: int = 0, progress=None,
-               params="auto") -> CampaignResult:
+               params="auto", unmodelled_mm: float = 0.0, unmodelled_terms=DEFAULT_TERMS) -> CampaignResult:
     """Choose ``n`` calibration poses for ``robot`` (the nominal model).
 
     Candidates are filtered by the constraints, an exchange search picks the ``n`` that best
@@ -395,6 +403,13 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     params : 'auto' or list of str, default 'auto'
         The unknowns the campaign is to determine: the calibration's default set, or a list of
         names (e.g. the joint zeros with the frame and SMR, for a check campaign).
+    unmodelled_mm : float, default 0
+        The robot's error the calibrated model will not describe, 3-D RMS over the region, mm
+        (a previous calibration's ``unmodelled_mm``): the I-optimal design is polished for the
+        error the fit absorbs from it, and the predicted accuracy includes it. 0: noise only.
+    unmodelled_terms : sequence of str, default ('compliance', 'backlash', 'travel')
+        The joint-error terms that model that error (their priors' shape, scaled to
+        ``unmodelled_mm``); those the calibration fits are left out.
 
     Returns
     -------
@@ -426,6 +441,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         raise DataError(f"unknown measurement kind {kind!r}: use one of {', '.join(KINDS)}")
     if criterion not in CRITERIA:
         raise DataError(f"unknown criterion {criterion!r}: use one of {', '.join(CRITERIA)}")
+    if unmodelled_mm and criterion != "I":
+        raise DataError("an unmodelled error is planned for with the I criterion (the predicted accuracy)")
     if int(starts) < 1 or int(n_candidates) < 1 or int(region_size) < 1:
         raise DataError("starts, n_candidates and region_size must be >= 1")
     constraints = cons.Constraints() if constraints is None else constraints
@@ -489,10 +506,19 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     conflicts = (cons.conflict_rows(cand_q, constraints.min_joint_distance_deg)
                  if constraints.min_joint_distance_deg > 0 else None)
     values = _curve_values(curve, n, n_min, C)
+    um = unmodelled_error(plan_robot, data, noise, info, q_region, float(unmodelled_mm), unmodelled_terms)
+
+    def predicted(indices) -> float:  # m^2: the mean squared TCP error over the region
+        return criterion_value(info.G, A, indices, "I", info.prior) if um is None else \
+            mean_square(info.G, A, info.prior, um, indices)
+
     with Progress(int(starts) + len(values), "poses", quiet=progress is not True) as bar:
         found = exchange(info.G, A, n, criterion=criterion, starts=int(starts), seed=seed,
                          conflicts=conflicts, progress=bar, prior=info.prior)
-        points = _curve(info, A, values, criterion, seed, conflicts, bar, (n, found.indices))
+        if um is not None:
+            found = ExchangeResult(*search(info.G, A, info.prior, um, found.indices, conflicts,
+                                           np.random.default_rng([seed, 2]), int(starts)))
+        points = _curve(info, A, values, criterion, seed, conflicts, bar, (n, found.indices), predicted)
     weights = default_weights(robot)
     chosen = found.indices[measuring_order(robot, cand_q[found.indices], weights)]
     if file_data is None:  # one output row per pose, with the SMRs it shows
@@ -514,13 +540,15 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                         "give the SMR's position on the flange (smr / --smr-mm) if it is off the axis")
     return CampaignResult(
         robot=plan_robot, kind=kind, joints=joints, candidate_index=index, visible=visible_out,
-        predicted_rms_mm=float(np.sqrt(criterion_value(info.G, A, chosen, "I", info.prior)) * 1e3),
+        predicted_rms_mm=float(np.sqrt(predicted(chosen)) * 1e3),
         criterion=criterion, criterion_value=found.value, identifiability=info.analyze_subset(chosen),
         parameters=list(info.names),
         travel=travel(joints, weights), travel_unordered=travel(cand_q[found.indices], weights),
         weights=weights, curve=points, funnel=funnel, noise=noise,
         settings={"seed": int(seed), "starts": int(starts), "criterion": criterion,
                   "region_size": len(q_region), "margin_deg": constraints.margin_deg,
+                  "unmodelled_mm": 0.0 if um is None else um.rms_m * 1e3,
+                  "unmodelled_terms": [] if um is None else list(um.terms),
                   "min_joint_distance_deg": constraints.min_joint_distance_deg,
                   "smr_mm": (smr * 1e3).tolist(), "smr_normals": normals.tolist(),
                   "tracker_mm": None if tracker is None else (tracker.position * 1e3).tolist()},
@@ -544,8 +572,10 @@ def _positions(chosen: np.ndarray, values: np.ndarray) -> np.ndarray:
     return order[np.searchsorted(chosen, values, sorter=order)]
 
 
-def _curve(info: Information, A, values, criterion, seed, conflicts, bar, main) -> list[CurvePoint]:
-    """Predicted accuracy against the number of poses: each N warm-started from the previous."""
+def _curve(info: Information, A, values, criterion, seed, conflicts, bar, main,
+           predicted) -> list[CurvePoint]:
+    """Predicted accuracy (``predicted(indices)``, m^2) against the number of poses: each N
+    warm-started from the previous."""
     points = []
     rng = np.random.default_rng([seed, 1])
     previous = None
@@ -556,9 +586,8 @@ def _curve(info: Information, A, values, criterion, seed, conflicts, bar, main) 
             init = previous if previous is not None and len(previous) <= n else None
             idx = exchange(info.G, A, n, criterion=criterion, starts=DEFAULT_STARTS, seed=seed,
                            conflicts=conflicts, init=init, prior=info.prior).indices
-        random = [criterion_value(info.G, A, rng.choice(len(info.G), n, replace=False), "I", info.prior)
-                  for _ in range(CURVE_RANDOM_DESIGNS)]
-        points.append(CurvePoint(n, float(np.sqrt(criterion_value(info.G, A, idx, "I", info.prior)) * 1e3),
+        random = [predicted(rng.choice(len(info.G), n, replace=False)) for _ in range(CURVE_RANDOM_DESIGNS)]
+        points.append(CurvePoint(n, float(np.sqrt(predicted(idx)) * 1e3),
                                  float(np.sqrt(np.median(random)) * 1e3)))
         previous = idx
         bar.update(info=f"curve {n} poses")

@@ -81,6 +81,12 @@ def add_parser(sub) -> None:
     g.add_argument("--noise-model", choices=("isotropic", "tracker"), default="isotropic",
                    help="tracker: the instrument's anisotropic model (needs --tracker-mm)")
     g.add_argument("--rotation-noise-deg", type=float, default=0.001, help="orientation noise (pose data)")
+    g.add_argument("--unmodelled-mm", type=float, default=0.0, metavar="U",
+                   help="the robot's error the calibrated model will not describe (3-D RMS over the region, "
+                        "mm; e.g. the 'unmodelled' error of an earlier geometric calibration): plan for "
+                        "what the fit absorbs of it, and include it in the predicted accuracy (default 0)")
+    g.add_argument("--unmodelled-terms", default="compliance,backlash,travel", metavar="TERMS",
+                   help="joint-error terms that model that error (comma separated)")
     g.add_argument("--smr-mm", type=numbers(3, "X,Y,Z in mm"), action="append", metavar="X,Y,Z",
                    help="an SMR position on the flange (repeat for several; default the model's TCP)")
     g.add_argument("--smr-normal", type=numbers(3, "a direction X,Y,Z"), action="append", metavar="X,Y,Z",
@@ -243,7 +249,8 @@ def run(args) -> int:
         smr_normals=None if not args.smr_normal else np.array(args.smr_normal),
         noise_mm=args.noise_mm, noise_model=args.noise_model, rotation_noise_deg=args.rotation_noise_deg,
         criterion=args.criterion, region=region, region_size=args.region_size, starts=args.starts,
-        curve=args.curve, seed=args.seed, progress=not args.quiet, params=params)
+        curve=args.curve, seed=args.seed, progress=not args.quiet, params=params,
+        unmodelled_mm=args.unmodelled_mm, unmodelled_terms=args.unmodelled_terms)
     texts = _outputs(args, result, robot)
     created = args.val3 is not None and not Path(args.val3).is_dir()
     if created:
