@@ -8,7 +8,7 @@ import pytest
 
 import robocal as rc
 from robocal.campaign.information import Noise, information
-from robocal.campaign.unmodelled import Unmodelled, mean_square, search, unmodelled_error
+from robocal.campaign.unmodelled import Unmodelled, mean_square, scan, search, unmodelled_error
 from robocal.errors import RobocalError
 
 
@@ -23,7 +23,7 @@ def _toy(seed=0, C=10, r=3, p=4, m=2, R=40):
     rms = np.sqrt(np.sum(np.diag(np.einsum("rik,ril->kl", Jn, Jn) / R) * variance))
     prior = np.r_[rng.uniform(0.5, 2.0, p - 1), 0.0]  # the last unknown has no prior (a frame)
     um = Unmodelled(rms_m=float(rms), terms=("compliance",), names=[f"c{i}" for i in range(m)],
-                    X=np.einsum("crp,crm->cpm", G, N), variance=variance, A_cross=A_cross)
+                    N=N, variance=variance, A_cross=A_cross)
     return G, N, Jf, Jn, A, prior, um
 
 
@@ -41,6 +41,17 @@ def test_mean_square_is_the_monte_carlo_error_of_the_fitted_model():
     error = np.einsum("rik,dk->dri", Jf, estimate - theta) - np.einsum("rim,dm->dri", Jn, c)
     monte_carlo = float(np.mean(np.sum(error**2, axis=2)))
     assert mean_square(G, A, prior, um, design) == pytest.approx(monte_carlo, rel=0.02)
+
+
+def test_scan_is_the_direct_value_of_each_design():
+    G, _, _, _, A, prior, um = _toy(seed=2, C=12)
+    design = [1, 4, 6]
+    H = G[design].reshape(-1, G.shape[-1])
+    M = H.T @ H + np.diag(prior)
+    X = np.einsum("crp,crm->pm", G[design], um.N[design])
+    others = np.array([0, 2, 3, 5, 7, 8, 9, 10, 11])
+    direct = [mean_square(G, A, prior, um, [*design, c]) for c in others]
+    np.testing.assert_allclose(scan(G, A, um, M, X, others), direct, rtol=1e-9)
 
 
 def test_search_finds_the_brute_force_best_design():

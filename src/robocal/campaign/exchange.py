@@ -395,8 +395,14 @@ def exchange(G: np.ndarray, A: np.ndarray | None, n: int, *, criterion: str = "I
             out = np.zeros(C, np.int64)
             out[j] = 1
             return out
-    with threadpool_limits(1, user_api="blas") if threadpool_limits else nullcontext():
+    with one_blas_thread():
         return _search(G, A, n, criterion, starts, seed, conflicts, init, progress, prior)
+
+
+def one_blas_thread():
+    """A context in which BLAS runs on one thread (with the optional ``threadpoolctl``): a search's
+    many small products gain nothing from threads and lose much when the machine is busy."""
+    return threadpool_limits(1, user_api="blas") if threadpool_limits else nullcontext()
 
 
 def _search(G, A, n, criterion, starts, seed, conflicts, init, progress, prior) -> ExchangeResult:

@@ -21,9 +21,9 @@ pose by ``J_f (theta_hat - theta) - J_n c``, whose mean square over the region i
 (``A`` the region matrix of :func:`robocal.trust.coverage.region_matrix` over the fitted and the
 unmodelled unknowns; the first term is the I-criterion of :mod:`robocal.campaign.exchange`).
 :func:`search` improves the noise-optimal design and random ones for ``V`` by Fedorov sweeps over
-every candidate (batched: one ``(C, p, p)`` inverse per member tried), so the plan trades noise
-against what the fit absorbs, and ``sqrt(V)`` is an accuracy prediction that includes the
-unmodelled error.
+every candidate (:func:`scan`: one ``(p, p)`` inverse per member tried and a Woodbury update per
+candidate), so the plan trades noise against what the fit absorbs, and ``sqrt(V)`` is an accuracy
+prediction that includes the unmodelled error.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.campaign.exchange import IMPROVEMENT_RTOL, MAX_SWEEPS, RIDGE
+from robocal.campaign.exchange import IMPROVEMENT_RTOL, MAX_SWEEPS, RIDGE, one_blas_thread
 from robocal.campaign.information import Information, Noise, candidate_blocks, whitened_rows
 from robocal.data.measurements import Measurements
 from robocal.errors import DataError
@@ -47,14 +47,15 @@ DEFAULT_TERMS = ("compliance", "backlash", "travel")  # the non-geometric errors
 @dataclass(frozen=True)
 class Unmodelled:
     """The unmodelled error of a plan: its RMS ``rms_m`` (m) over the region, the joint-error
-    parameters ``names`` (m of them) that model it, the candidates' cross information
-    ``X (C, p, m)`` (``G_j^T N_j``: the planner's scaled unknowns by these parameters, SI), their
-    variances ``variance (m,)`` (SI^2), and the region's cross matrix ``A_cross (p, m)``."""
+    parameters ``names`` (m of them) that model it, the candidates' whitened rows of them
+    ``N (C, r, m)`` (the rows of the planner's blocks ``G``; SI), their variances ``variance (m,)``
+    (SI^2), and the region's cross matrix ``A_cross (p, m)`` (the planner's scaled unknowns by
+    these parameters)."""
 
     rms_m: float
     terms: tuple[str, ...]
     names: list[str]
-    X: np.ndarray
+    N: np.ndarray
     variance: np.ndarray
     A_cross: np.ndarray
 
@@ -88,10 +89,9 @@ def unmodelled_error(robot, data: Measurements, noise: Noise, info: Information,
     A_fitted, A_cross = np.zeros((p, p)), np.zeros((p, len(names)))
     A_fitted[:k, :k] = A[:k, :k] / np.outer(info.scale[:k], info.scale[:k])
     A_cross[:k] = A[:k, k:] / info.scale[:k, None]
-    X = np.einsum("crp,crm->cpm", info.G, N)  # the same rows: one observation of the same data
     sigma2 = prior_sigma(full, names) ** 2
     variance = sigma2 * (rms_mm * 1e-3) ** 2 / float(np.sum(np.diag(A)[k:] * sigma2))
-    return Unmodelled(rms_m=float(rms_mm) * 1e-3, terms=terms, names=names, X=X, variance=variance,
+    return Unmodelled(rms_m=float(rms_mm) * 1e-3, terms=terms, names=names, N=N, variance=variance,
                       A_cross=A_cross)
 
 
@@ -104,12 +104,49 @@ def _values(M: np.ndarray, X: np.ndarray, A: np.ndarray, um: Unmodelled) -> np.n
             - 2.0 * np.einsum("dia,ia,a->d", T, um.A_cross, um.variance) + um.rms_m**2)
 
 
+def _cross(G: np.ndarray, um: Unmodelled, indices) -> np.ndarray:
+    """``X = sum_j G_j^T N_j (p, m)`` over the candidates ``indices``."""
+    return np.einsum("crp,crm->pm", G[indices], um.N[indices])
+
+
 def mean_square(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, indices) -> float:
     """``V`` (m^2) of the design ``indices`` computed from scratch (no ridge)."""
     idx = np.asarray(indices, int)
     H = G[idx].reshape(-1, G.shape[-1])
     M = H.T @ H + np.diag(prior)
-    return float(_values(M[None], um.X[idx].sum(axis=0)[None], A, um)[0])
+    return float(_values(M[None], _cross(G, um, idx)[None], A, um)[0])
+
+
+def scan(G: np.ndarray, A: np.ndarray, um: Unmodelled, M: np.ndarray, X: np.ndarray,
+         candidates: np.ndarray) -> np.ndarray:
+    """``V`` (m^2) after adding each of ``candidates (K,)`` to a design of information ``M (p, p)``
+    and cross information ``X (p, m)``, by the Woodbury identity: with ``B = M^-1``, a block ``G_c``
+    and ``S = I + G_c B G_c^T``, ``(M + G_c^T G_c)^-1 X_c = T0 + B G_c^T K`` with ``T0 = B X`` and
+    ``K = S^-1 (N_c - G_c T0)``, so every term of ``V`` is ``V`` of the design plus ``(r, r)`` and
+    ``(r, m)`` products per candidate (no ``(p, p)`` inverse per candidate)."""
+    B = np.linalg.inv(M)
+    B = 0.5 * (B + B.T)
+    P, C = um.variance, um.A_cross
+    T0 = B @ X
+    Gc = G[candidates]
+    K_, r, p = Gc.shape
+    rows = Gc.reshape(-1, p)                                   # every candidate's rows: BLAS products
+
+    def per_candidate(Y: np.ndarray) -> np.ndarray:
+        return Y.reshape(K_, r, -1)
+
+    GB = per_candidate(rows @ B)                                # U^T = G_c B
+    GBA = per_candidate(GB.reshape(-1, p) @ A)
+    S_inv = np.linalg.inv(np.einsum("krp,ksp->krs", GB, Gc) + np.eye(r))  # (I + G_c B G_c^T)^-1
+    GDG = np.einsum("krp,ksp->krs", GBA, GB)                    # G_c B A B G_c^T
+    K = np.einsum("krs,ksa->kra", S_inv, um.N[candidates] - per_candidate(rows @ T0))
+    base = np.einsum("ij,ji->", B, A) + np.einsum("ia,ia,a->", T0, A @ T0, P) - 2.0 * np.einsum(
+        "ia,ia,a->", T0, C, P) + um.rms_m**2
+    KP = K * P
+    return (base - np.einsum("krs,ksr->k", S_inv, GDG)
+            + 2.0 * np.einsum("kra,kra->k", KP, per_candidate(GBA.reshape(-1, p) @ T0))
+            + np.einsum("kra,krs,ksa->k", KP, GDG, K, optimize=True)
+            - 2.0 * np.einsum("kra,kra->k", KP, per_candidate(GB.reshape(-1, p) @ C)))
 
 
 def search(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, init,
@@ -119,7 +156,6 @@ def search(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, init
     ``starts`` random ones (no two members conflicting): the noise-optimal design's extreme poses
     are often a local optimum of ``V``. Returns the sorted design and its ``V`` (m^2)."""
     C, n = len(G), len(init)
-    H = np.einsum("cri,crj->cij", G, G)
 
     def blocked_by(m: int) -> np.ndarray:
         if conflicts is not None:
@@ -129,12 +165,13 @@ def search(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, init
         return out
 
     best = None
-    for design in [list(init)] + [_packing(C, n, blocked_by, rng) for _ in range(starts)]:
-        if len(design) < n:
-            continue  # the conflicts left no room for a random packing of n
-        found = polish(G, H, A, prior, um, design, blocked_by, rng)
-        if best is None or found[1] < best[1]:
-            best = found
+    with one_blas_thread():
+        for design in [list(init)] + [_packing(C, n, blocked_by, rng) for _ in range(starts)]:
+            if len(design) < n:
+                continue  # the conflicts left no room for a random packing of n
+            found = polish(G, A, prior, um, design, blocked_by, rng)
+            if best is None or found[1] < best[1]:
+                best = found
     return best
 
 
@@ -151,31 +188,32 @@ def _packing(C: int, n: int, blocked_by, rng: np.random.Generator) -> list[int]:
     return members
 
 
-def polish(G: np.ndarray, H: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, members,
+def polish(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, members,
            blocked_by: Callable[[int], np.ndarray], rng: np.random.Generator,
            max_sweeps: int = MAX_SWEEPS) -> tuple[np.ndarray, float]:
-    """Fedorov sweeps from the design ``members`` for ``V`` (``H (C, p, p)`` each candidate's
-    ``G_j^T G_j``, ``blocked_by(j)`` the candidates that may not join ``j``): each member in turn
-    is exchanged for the candidate that lowers ``V`` most (every allowed candidate evaluated),
-    until a whole sweep changes nothing. Returns the sorted design and its ``V`` (m^2)."""
+    """Fedorov sweeps from the design ``members`` for ``V`` (``blocked_by(j)``: the candidates that
+    may not join ``j``): each member in turn is exchanged for the candidate that lowers ``V`` most
+    (every allowed candidate scored by :func:`scan`), until a whole sweep changes nothing. Returns
+    the sorted design and its ``V`` (m^2)."""
     members = [int(m) for m in members]
     blocked = np.sum([blocked_by(m) for m in members], axis=0)
-    M = np.diag(prior) + RIDGE * np.eye(G.shape[-1]) + H[members].sum(axis=0)
-    X = um.X[members].sum(axis=0)
+    M = np.diag(prior) + RIDGE * np.eye(G.shape[-1]) + np.einsum("cri,crj->ij", G[members], G[members])
+    X = _cross(G, um, members)
     current = float(_values(M[None], X[None], A, um)[0])
     for _ in range(max_sweeps):
         changed = False
-        for i in rng.permutation(members):  # each member in turn: one batched scan of the candidates
+        for i in rng.permutation(members):  # each member in turn: one scan of the candidates
             i = int(i)
+            M_i, X_i = M - G[i].T @ G[i], X - G[i].T @ um.N[i]
             allowed = np.flatnonzero(blocked - blocked_by(i) == 0)
-            tried = _values(M - H[i] + H[allowed], X - um.X[i] + um.X[allowed], A, um)
+            tried = scan(G, A, um, M_i, X_i, allowed)
             best = int(np.argmin(tried))
             j = int(allowed[best])
             if j == i or not tried[best] < current - IMPROVEMENT_RTOL * current:
                 continue
             members[members.index(i)] = j
             blocked += blocked_by(j) - blocked_by(i)
-            M, X, current = M - H[i] + H[j], X - um.X[i] + um.X[j], float(tried[best])
+            M, X, current = M_i + G[j].T @ G[j], X_i + G[j].T @ um.N[j], float(tried[best])
             changed = True
         if not changed:
             break
