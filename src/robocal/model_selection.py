@@ -2,7 +2,9 @@
 
 Candidates: the geometric model and every combination of the joint-error terms the data can
 carry (compliance, gear, backlash, travel, and cyclic when the frequency search finds any; payload
-and thermal when the data record payloads and temperatures that vary).
+and thermal when the data record payloads and temperatures that vary; thermal_groups, a k per link
+group, only with thermal and over a temperature span of at least
+:data:`robocal.kinematics.thermal.MIN_GROUP_SPAN_K`).
 Each is judged by K-fold cross-validation on the calibration data alone, folds by whole poses
 (every SMR of a pose in the same fold; distance data: by pair). The approach directions and
 moves each row carries come from the full measuring order (``Measurements.approach`` and
@@ -69,6 +71,7 @@ from robocal.identify.identifiability import independent_columns
 from robocal.identify.normal import Normal, r_factor, row_chunks
 from robocal.identify.priors import JOINT_ERROR_SIGMA, prior_sigma
 from robocal.identify.space import ParameterSpace, State, block_of
+from robocal.kinematics import thermal
 from robocal.kinematics.joint_errors import CONDITION_TERMS, TERMS, candidate_names, cyclic_names, term_of
 
 FOLDS = 5
@@ -285,6 +288,8 @@ def _candidates(lin: _Linearised, terms: list[str], has_cyclic: bool, rtol: floa
     out = []
     for size in range(len(present) + 1):
         for combo in itertools.combinations(present, size):
+            if thermal.GROUPS_TERM in combo and "thermal" not in combo:
+                continue  # the groups' ks are deviations from the shared k: never without it
             idx = np.array([lin.k0 + j for j, nm in enumerate(lin.ng_names) if term_of(nm) in combo],
                            dtype=np.int64)
             kept = idx[independent_columns(R[:, np.r_[geo, idx]], lin.k0, rtol)] if idx.size else idx
@@ -401,7 +406,8 @@ def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol
         "cyclic_frequencies": [{"joint": i + 1, "cycles_per_rev": f} for i, f in full_cyclic],
         "cyclic_frequencies_per_fold": [len(f) for f in fold_cyclic],
         # the order terms the data cannot carry (payload and thermal need recorded conditions: not listed)
-        "terms_without_data": [t for t in FIXED_TERMS if t not in fixed and t not in CONDITION_TERMS],
+        "terms_without_data": [t for t in FIXED_TERMS if t not in fixed and t not in CONDITION_TERMS
+                               and t != thermal.GROUPS_TERM],
         "time_s": {"superset_fit": t_superset, "selection": t_select - t_superset,
                    "final_fit": total - t_select, "total": total},
     }
@@ -416,6 +422,8 @@ def _term_has_data(term: str, data) -> bool:
         return data.payload is not None and np.unique(data.payload, axis=0).shape[0] > 1
     if term == "thermal":
         return data.temperature is not None and np.ptp(data.temperature) > 0
+    if term == thermal.GROUPS_TERM:  # a k per link group needs a span that can tell the groups apart
+        return data.temperature is not None and np.ptp(data.temperature) >= thermal.MIN_GROUP_SPAN_K
     if term == "backlash":
         return data.approach is not None and bool(np.any(data.approach))
     if term == "travel":
