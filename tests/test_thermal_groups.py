@@ -177,3 +177,18 @@ def test_auto_keeps_one_k_when_the_arm_has_one_and_tries_groups_only_over_a_wide
     narrow = replace(cal.data, temperature=20.0 + (cal.data.temperature - 20.0) / 5)  # a 3 K span
     assert _term_has_data("thermal", narrow) and not _term_has_data("thermal_groups", narrow)
     assert not _term_has_data("thermal_groups", replace(cal.data, temperature=None))
+
+
+def test_a_group_the_data_do_not_determine_falls_back_to_the_shared_k():
+    robot = Robot.from_catalog(KR210)  # a short, noisy campaign over 6 K: the wrist's 215 mm is not seen
+    cal = simulate_tracker(robot, 60, noise_mm=0.05, seed=4, temperatures=(20, 26),
+                           thermal_k=ALUMINIUM_FOREARM)
+    result = calibrate(robot, cal.data, nongeometric="thermal_groups")
+    out = result.to_dict()
+    rows = {r["group"]: r for r in out["thermal_groups"]}
+    assert rows["forearm"]["source"] == "own" and rows["wrist"]["source"] == "shared"
+    shared_k = result.robot.joint_errors.thermal_k()
+    assert all(r["k_per_K"] == shared_k for r in rows.values() if r["source"] == "shared")
+    dropped = {d["name"]: d["reason"] for d in out["dropped"]}
+    assert "thermal" not in dropped  # of the redundant set a deviation is set aside, not the shared k
+    assert dropped["thermal_wrist"].startswith("not determined by these data")

@@ -72,7 +72,14 @@ from robocal.identify.normal import Normal, r_factor, row_chunks
 from robocal.identify.priors import JOINT_ERROR_SIGMA, prior_sigma
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.kinematics import thermal
-from robocal.kinematics.joint_errors import CONDITION_TERMS, TERMS, candidate_names, cyclic_names, term_of
+from robocal.kinematics.joint_errors import (
+    CONDITION_TERMS,
+    TERMS,
+    candidate_names,
+    cyclic_names,
+    is_refinement,
+    term_of,
+)
 
 FOLDS = 5
 # cyclic: searched for; scale: declared by a model with a track, never tried by the selection
@@ -292,7 +299,8 @@ def _candidates(lin: _Linearised, terms: list[str], has_cyclic: bool, rtol: floa
                 continue  # the groups' ks are deviations from the shared k: never without it
             idx = np.array([lin.k0 + j for j, nm in enumerate(lin.ng_names) if term_of(nm) in combo],
                            dtype=np.int64)
-            kept = idx[independent_columns(R[:, np.r_[geo, idx]], lin.k0, rtol)] if idx.size else idx
+            later = np.array([is_refinement(lin.ng_names[j - lin.k0]) for j in idx], bool)
+            kept = idx[independent_columns(R[:, np.r_[geo, idx]], lin.k0, rtol, later)] if idx.size else idx
             zeroed = np.setdiff1d(np.arange(lin.k0, lin.A.shape[1]), kept)
             out.append(_Candidate(combo, np.r_[geo, kept], zeroed, "cyclic" in combo,
                                   [lin.ng_names[j - lin.k0] for j in kept]))

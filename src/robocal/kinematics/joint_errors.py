@@ -127,6 +127,13 @@ def term_of(name: str) -> str:
     raise ModelError(f"{name!r} is not a joint-error parameter name")
 
 
+def is_refinement(name: str) -> bool:
+    """Whether ``name`` refines another parameter's value for a part of the arm (a link group's
+    thermal deviation from the shared k): the identifiability analysis selects it after the
+    others, so of a redundant set the refinement is set aside."""
+    return bool(_THERMAL_GROUP.match(name))
+
+
 def is_parameter_name(name: str) -> bool:
     """Whether ``name`` has the form of a joint-error parameter (for some joint count)."""
     return any(rx.match(name) for rx in _PATTERNS.values())
