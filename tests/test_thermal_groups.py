@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 from robocal import Robot
 from robocal.calibration import calibrate
 from robocal.cli import main
+from robocal.data.measurements import Measurements
 from robocal.data.simulate import simulate_tracker
 from robocal.errors import DataError, ModelError
 from robocal.identify.problem import CalibrationProblem
@@ -177,6 +178,9 @@ def test_auto_keeps_one_k_when_the_arm_has_one_and_tries_groups_only_over_a_wide
     narrow = replace(cal.data, temperature=20.0 + (cal.data.temperature - 20.0) / 5)  # a 3 K span
     assert _term_has_data("thermal", narrow) and not _term_has_data("thermal_groups", narrow)
     assert not _term_has_data("thermal_groups", replace(cal.data, temperature=None))
+    four = Measurements.from_arrays("point", cal.data.joints[:, :4], points=cal.data.points,
+                                    temperature=cal.data.temperature)  # a 4-axis arm: no link groups
+    assert _term_has_data("thermal", four) and not _term_has_data("thermal_groups", four)
 
 
 def test_a_group_the_data_do_not_determine_falls_back_to_the_shared_k():

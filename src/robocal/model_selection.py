@@ -430,8 +430,10 @@ def _term_has_data(term: str, data) -> bool:
         return data.payload is not None and np.unique(data.payload, axis=0).shape[0] > 1
     if term == "thermal":
         return data.temperature is not None and np.ptp(data.temperature) > 0
-    if term == thermal.GROUPS_TERM:  # a k per link group needs a span that can tell the groups apart
-        return data.temperature is not None and np.ptp(data.temperature) >= thermal.MIN_GROUP_SPAN_K
+    if term == thermal.GROUPS_TERM:  # an arm with link groups, over a span that can tell them apart
+        kinds = np.zeros(data.n_joints, bool) if data.linear is None else np.asarray(data.linear, bool)
+        return (data.temperature is not None and np.ptp(data.temperature) >= thermal.MIN_GROUP_SPAN_K
+                and bool((thermal.link_groups(kinds) >= 0).any()))
     if term == "backlash":
         return data.approach is not None and bool(np.any(data.approach))
     if term == "travel":
