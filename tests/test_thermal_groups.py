@@ -129,6 +129,8 @@ def test_simulated_per_group_truth_is_reproduced_by_the_fitted_terms():
             simulate_tracker(robot, 5, temperatures=(20, 30), thermal_k=bad)
     with pytest.raises(DataError, match="needs temperatures"):
         simulate_tracker(robot, 5, thermal_k=1e-5)
+    with pytest.raises(DataError, match="carries its own thermal expansion"):
+        simulate_tracker(sim.truth, 5, as_is=True, temperatures=(20, 30), thermal_k=1e-5)
 
 
 def test_simulate_cli_thermal_k(tmp_path, capsys):

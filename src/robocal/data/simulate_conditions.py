@@ -111,6 +111,9 @@ def true_terms(robot, payloads: np.ndarray | None, temperatures, reach: float,
     own = {} if errors is None else {nm: float(v) for nm, v in zip(errors.names, errors.values, strict=True)
                                      if nm.startswith("thermal") or nm.startswith("payload")}
     if own:
+        if thermal_k is not None and any(nm.startswith("thermal") for nm in own):
+            raise DataError("the model measured as it is carries its own thermal expansion: a true "
+                            "thermal k cannot be given too")
         return own
     values = {}
     if payloads is not None and payloads.max() > 0:
