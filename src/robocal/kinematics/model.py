@@ -634,7 +634,7 @@ class Robot:
         return None if k is None else thermal_scale(k, temperature, errors.reference_temperature_c)
 
     def links_at(self, temperature: np.ndarray | None = None) -> LinkArrays:
-        """The link parameters, ``a, d`` ``(N, n)`` scaled by :meth:`link_scale` at ``temperature
+        """The link parameters, ``a, d`` ``(N, n)`` scaled by `link_scale` at ``temperature
         (N,)`` deg C; the plain ``(n,)`` links without a thermal term or a temperature."""
         return scaled_links(self.links, self.link_scale(temperature))
 
