@@ -198,3 +198,22 @@ def test_a_group_the_data_do_not_determine_falls_back_to_the_shared_k():
     dropped = {d["name"]: d["reason"] for d in out["dropped"]}
     assert "thermal" not in dropped  # of the redundant set a deviation is set aside, not the shared k
     assert dropped["thermal_wrist"].startswith("not determined by these data")
+
+
+def test_link_length_columns_at_a_temperature_are_exact(rng):
+    """With only thermal terms (no joint-error basis depending on the links) every column of the
+    link lengths at a recorded temperature matches finite differences to rounding."""
+    robot = Robot.from_catalog(KR210)
+    sim = simulate_tracker(robot, 12, noise_mm=0.0, seed=7)
+    data = replace(sim.data, temperature=rng.uniform(0.0, 60.0, len(sim.data)))
+    truth = sim.truth.with_joint_errors(GROUPS).with_values({"thermal": 23e-6, "thermal_forearm": 60e-6})
+    truth = truth.with_reference_temperature(20.0)
+    problem = CalibrationProblem(truth, data)
+    space = ParameterSpace(("a2", "a3", "d1", "d4", "d6"))
+    state = problem.start(truth)
+    J = problem.jacobian(state, space)
+    for c in range(space.size):
+        e = np.zeros(space.size)
+        e[c] = 1e-6
+        fd = -(problem.residuals(space.apply(state, e)) - problem.residuals(space.apply(state, -e))) / 2e-6
+        np.testing.assert_allclose(J[:, c], fd, rtol=1e-7, atol=1e-9)
