@@ -14,13 +14,23 @@ from the program) and run on the true robot at 120 kg and 30 deg C through the n
 its RMS error at the targets against the model's own error there (the true robot at the joints
 where the calibrated model reaches each target); goal: within 1.3x + 0.002 mm.
 
-Run: ``PYTHONPATH=src python benchmarks/bench_payload_thermal.py``.
+Then the link groups: two campaigns of 300 poses warming from 20 to 35 deg C (no payload), one of an
+arm whose forearm is aluminium (k 23e-6/K, the rest steel 11.5e-6/K) and one of an all-steel arm,
+calibrated without a thermal term, with one k (``thermal``), with a k per link group
+(``thermal_groups``) and ``auto``; held out: 100 other poses of the same arm at 28 deg C and 100 at
+35 deg C (the warm end, where the groups differ most), each against its noise floor. Three seeds;
+recorded as the table ``payload_thermal.groups``.
+
+Run: ``PYTHONPATH=src python benchmarks/bench_payload_thermal.py`` (or ``benchmarks/run.py
+payload_thermal`` to record it in results.json).
 """
 
 from __future__ import annotations
 
+import sys
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -34,10 +44,16 @@ from robocal.programs import filter_program
 from robocal.programs.simulate import execute, touch_poses, write_program
 from robocal.tcp import identify_tcp
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from results import figure, table  # noqa: E402
+
 SEEDS = (1, 2, 3)
 N_CAL, N_HELD = 300, 100
 NOISE_MM = 0.02
 GOALS = {"payload,thermal": 1.3, "auto": 1.5}
+GROUP_TRUTHS = {"aluminium forearm": {"forearm": 23e-6}, "all steel": None}
+GROUP_MODELS = ("none", "thermal", "thermal_groups", "auto")
+GROUP_HELD_C = (28.0, 35.0)
 
 
 def campaign(seed: int):
@@ -75,11 +91,57 @@ def main() -> None:
         verdict = "meets" if worst[model] <= goal else "MISSES"
         print(f"worst ratio {model}: {worst[model]:.2f} ({verdict} the {goal}x goal)")
     print(f"worst ratio geometric only: {worst['none']:.2f}")
+    link_groups()
     k = krl_program()
     goal = 1.3 * k["model"] + 0.002
     print(f"KRL program at 120 kg (read from $LOAD), 30 deg C: filtered RMS {k['filtered']:.4f} mm, "
           f"unfiltered {k['unfiltered']:.4f} mm, the model's own error {k['model']:.4f} mm; "
           f"goal <= {goal:.4f} mm: {'meets' if k['filtered'] <= goal else 'MISSES'} ({k['load_note']})")
+
+
+def link_groups() -> None:
+    """The per-group section (module docstring): one row per true arm and model, the worst held-out
+    RMS / noise floor over the seeds at each held-out temperature, the forearm's k and what auto chose."""
+    robot = Robot.from_catalog("kuka_kr210_r2700")
+    rows = []
+    for truth_name, thermal_k in GROUP_TRUTHS.items():
+        worst = {m: [0.0] * len(GROUP_HELD_C) for m in GROUP_MODELS}
+        rms_mm = {m: [[] for _ in GROUP_HELD_C] for m in GROUP_MODELS}
+        forearm = {m: [] for m in GROUP_MODELS}
+        chosen: dict[str, int] = {}
+        for seed in SEEDS:
+            cal = simulate_tracker(robot, N_CAL, noise_mm=NOISE_MM, seed=seed, temperatures=(20, 35),
+                                   thermal_k=thermal_k)
+            held = [simulate_tracker(cal.truth, N_HELD, noise_mm=NOISE_MM, seed=seed + 100 + j, as_is=True,
+                                     temperatures=(t, t)) for j, t in enumerate(GROUP_HELD_C)]
+            for model in GROUP_MODELS:
+                res = calibrate(robot, cal.data, validation=[h.data for h in held], nongeometric=model)
+                per_file = [f for f in res.per_file() if f["role"] != "calibration"]
+                for j, (f, h) in enumerate(zip(per_file, held, strict=True)):
+                    rms_mm[model][j].append(f["after"]["rms"])
+                    worst[model][j] = max(worst[model][j], f["after"]["rms"] / h.noise_floor_mm)
+                errors = res.robot.joint_errors
+                groups = None if errors is None else errors.thermal_groups()
+                k = groups["forearm"] if groups else (errors.thermal_k() if errors is not None else None)
+                if k is not None:
+                    forearm[model].append(k)
+                if model == "auto":
+                    label = ", ".join(res.model_selection["chosen_terms"]) or "geometric"
+                    chosen[label] = chosen.get(label, 0) + 1
+        for model in GROUP_MODELS:
+            ks = forearm[model]
+            rows.append([truth_name, model,
+                         *(f"{np.mean(r):.4f}" for r in rms_mm[model]),
+                         *(f"{w:.2f}" for w in worst[model]),
+                         f"{np.mean(ks) * 1e6:.1f}" if ks else "-",
+                         "; ".join(f"{c} x{n}" for c, n in chosen.items()) if model == "auto" else ""])
+        figure(f"groups_{'alu' if thermal_k else 'steel'}_auto", "; ".join(
+            f"{c} ({n} of {len(SEEDS)})" for c, n in chosen.items()))
+    table(f"KR 210 R2700, {N_CAL} poses 20-35 deg C, {NOISE_MM} mm noise, seeds {SEEDS}: held-out RMS (mean, "
+          "mm) and worst RMS / noise floor at 28 and 35 deg C, the forearm's k (mean, 1e-6/K; truth 23 "
+          "or 11.5)",
+          ["true arm", "model", "RMS 28 C", "RMS 35 C", "worst/floor 28 C", "worst/floor 35 C",
+           "forearm k", "auto chose"], rows, key="groups")
 
 
 def krl_program(seed: int = 1, n_targets: int = 100) -> dict:

@@ -39,6 +39,8 @@ from robocal.identify.uncertainty import correlation, covariance, tcp_position_c
 from robocal.io import load_json, read_text, write_atomic
 from robocal.kinematics.cell import TRACK_IDENTIFIABILITY, is_track_cell
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
+from robocal.kinematics.thermal import group_summary as thermal_group_summary
+from robocal.kinematics.thermal import groups_of as thermal_groups_of
 from robocal.kinematics.thermal import reference_of as thermal_reference
 from robocal.model_selection import calibrate_cyclic, select_error_model, selection_table
 from robocal.progress import Progress
@@ -357,6 +359,8 @@ class CalibrationResult(_BeforeAfter):
             out["nongeometric"] = self.nongeometric
         if self.model_selection is not None:
             out["model_selection"] = self.model_selection
+        if (groups := thermal_groups_of(self.robot, self.unknowns)) is not None:
+            out["thermal_groups"] = groups
         if self.judged:
             out["validation_independence"] = [
                 {"file": j.data.label, "rows": len(j.data) + j.repeated, "repeated_rows": j.repeated,
@@ -456,6 +460,8 @@ class CalibrationResult(_BeforeAfter):
                          "geometry)")
         if self.model_selection is not None:
             lines.append(selection_table(self.model_selection))
+        if (groups := thermal_groups_of(self.robot, self.unknowns)) is not None:
+            lines.append(thermal_group_summary(groups))
         if len(self.rejected):
             lines.append(f"rejected observations: {len(self.rejected)}; without them the calibration "
                          f"set's RMS is {self.after_inliers['rms']:.4f} mm")

@@ -2,7 +2,9 @@
 
 Candidates: the geometric model and every combination of the joint-error terms the data can
 carry (compliance, gear, backlash, travel, and cyclic when the frequency search finds any; payload
-and thermal when the data record payloads and temperatures that vary).
+and thermal when the data record payloads and temperatures that vary; thermal_groups, a k per link
+group, only with thermal and over a temperature span of at least
+:data:`robocal.kinematics.thermal.MIN_GROUP_SPAN_K`).
 Each is judged by K-fold cross-validation on the calibration data alone, folds by whole poses
 (every SMR of a pose in the same fold; distance data: by pair). The approach directions and
 moves each row carries come from the full measuring order (``Measurements.approach`` and
@@ -69,7 +71,15 @@ from robocal.identify.identifiability import independent_columns
 from robocal.identify.normal import Normal, r_factor, row_chunks
 from robocal.identify.priors import JOINT_ERROR_SIGMA, prior_sigma
 from robocal.identify.space import ParameterSpace, State, block_of
-from robocal.kinematics.joint_errors import CONDITION_TERMS, TERMS, candidate_names, cyclic_names, term_of
+from robocal.kinematics import thermal
+from robocal.kinematics.joint_errors import (
+    CONDITION_TERMS,
+    TERMS,
+    candidate_names,
+    cyclic_names,
+    is_refinement,
+    term_of,
+)
 
 FOLDS = 5
 # cyclic: searched for; scale: declared by a model with a track, never tried by the selection
@@ -285,9 +295,12 @@ def _candidates(lin: _Linearised, terms: list[str], has_cyclic: bool, rtol: floa
     out = []
     for size in range(len(present) + 1):
         for combo in itertools.combinations(present, size):
+            if thermal.GROUPS_TERM in combo and "thermal" not in combo:
+                continue  # the groups' ks are deviations from the shared k: never without it
             idx = np.array([lin.k0 + j for j, nm in enumerate(lin.ng_names) if term_of(nm) in combo],
                            dtype=np.int64)
-            kept = idx[independent_columns(R[:, np.r_[geo, idx]], lin.k0, rtol)] if idx.size else idx
+            later = np.array([is_refinement(lin.ng_names[j - lin.k0]) for j in idx], bool)
+            kept = idx[independent_columns(R[:, np.r_[geo, idx]], lin.k0, rtol, later)] if idx.size else idx
             zeroed = np.setdiff1d(np.arange(lin.k0, lin.A.shape[1]), kept)
             out.append(_Candidate(combo, np.r_[geo, kept], zeroed, "cyclic" in combo,
                                   [lin.ng_names[j - lin.k0] for j in kept]))
@@ -401,7 +414,8 @@ def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol
         "cyclic_frequencies": [{"joint": i + 1, "cycles_per_rev": f} for i, f in full_cyclic],
         "cyclic_frequencies_per_fold": [len(f) for f in fold_cyclic],
         # the order terms the data cannot carry (payload and thermal need recorded conditions: not listed)
-        "terms_without_data": [t for t in FIXED_TERMS if t not in fixed and t not in CONDITION_TERMS],
+        "terms_without_data": [t for t in FIXED_TERMS if t not in fixed and t not in CONDITION_TERMS
+                               and t != thermal.GROUPS_TERM],
         "time_s": {"superset_fit": t_superset, "selection": t_select - t_superset,
                    "final_fit": total - t_select, "total": total},
     }
@@ -416,6 +430,10 @@ def _term_has_data(term: str, data) -> bool:
         return data.payload is not None and np.unique(data.payload, axis=0).shape[0] > 1
     if term == "thermal":
         return data.temperature is not None and np.ptp(data.temperature) > 0
+    if term == thermal.GROUPS_TERM:  # an arm with link groups, over a span that can tell them apart
+        kinds = np.zeros(data.n_joints, bool) if data.linear is None else np.asarray(data.linear, bool)
+        return (data.temperature is not None and np.ptp(data.temperature) >= thermal.MIN_GROUP_SPAN_K
+                and bool((thermal.link_groups(kinds) >= 0).any()))
     if term == "backlash":
         return data.approach is not None and bool(np.any(data.approach))
     if term == "travel":

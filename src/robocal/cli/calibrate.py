@@ -94,8 +94,9 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed of stochastic methods")
     p.add_argument("--nongeometric", metavar="TERMS", default="default",
                    help="non-geometric terms identified with the geometry (methods lsq, robust): "
-                        "compliance, gear, backlash, travel, cyclic, payload, thermal (comma separated; "
-                        "payload and thermal need the payload_kg and temperature_c columns); auto: the "
+                        "compliance, gear, backlash, travel, cyclic, payload, thermal, thermal_groups (comma "
+                        "separated; payload and thermal need the payload_kg and temperature_c columns; "
+                        "thermal_groups: a k per link group beside the shared one); auto: the "
                         "terms chosen by cross-validation on the calibration data (the candidate "
                         "table is printed); none: the geometric model only. Default: auto for "
                         "lsq/robust on one file of tracker data (points or poses) with at least 100 "

@@ -18,8 +18,10 @@ EPILOG = """Examples:
       -o data.csv --truth truth.yaml       # rehearse a campaign planned by `robocal poses`
   robocal simulate --robot truth.yaml --as-is --kind distance --poses 8 --noise-mm 0.005 \\
       -o scalebar.csv --truth truth_bar.yaml   # a 500 mm scale bar touched by the probe of truth.yaml
-  robocal simulate --robot kuka_kr210_r2700 --poses 300 --payloads 0,75,150 --temperatures 20:35 \
+  robocal simulate --robot kuka_kr210_r2700 --poses 300 --payloads 0,75,150 --temperatures 20:35 \\
       -o cell.csv --truth truth.yaml       # a campaign at three payloads while the arm warms up
+  robocal simulate --robot kuka_kr210_r2700 --poses 300 --temperatures 20:35 --thermal-k forearm=23e-6 \\
+      -o warm.csv --truth truth.yaml       # an aluminium forearm on a steel arm
 The truth YAML is the true robot (tracker frame as base, SMR 0 as tool); TRUTH.sim.json next to it
 holds the noise floor (3-D RMS of the added noise, mm), outlier rows and plane coefficients.
 """
@@ -66,6 +68,10 @@ def add_parser(sub) -> None:
     p.add_argument("--temperatures", type=_range, metavar="LO:HI",
                    help="the arm warms from LO to HI deg C within each payload block (or over the campaign): "
                         "the truth's links expand (writes the temperature_c column)")
+    p.add_argument("--thermal-k", type=_thermal_k, metavar="K|GROUP=K,..",
+                   help="the truth's thermal expansion per K with --temperatures: one k (default steel "
+                        "11.5e-6), or per link group, e.g. forearm=23e-6 (groups base, upper_arm, forearm, "
+                        "wrist; all=K for the others)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("-o", "--output", required=True, help="measurement CSV to write")
     p.add_argument("--truth", required=True, help="true robot model YAML to write")
@@ -80,6 +86,22 @@ def _range(text: str) -> tuple[float, float]:
         raise argparse.ArgumentTypeError(f"expected a range LO:HI in deg C, e.g. 20:35, got {text!r}") \
             from None
     return lo, hi
+
+
+def _thermal_k(text: str) -> float | dict[str, float]:
+    """``'11.5e-6'`` -> 11.5e-6; ``'forearm=23e-6,all=11.5e-6'`` -> {group: k} (checked by the
+    simulator)."""
+    items = [t.strip() for t in text.split(",") if t.strip()]
+    try:
+        if len(items) == 1 and "=" not in items[0]:
+            return float(items[0])
+        pairs = [t.split("=") for t in items]
+        if not pairs or any(len(p) != 2 for p in pairs):
+            raise ValueError
+        return {g.strip(): float(k) for g, k in pairs}
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected K or GROUP=K,.. (per K, e.g. forearm=23e-6), "
+                                         f"got {text!r}") from None
 
 
 def _planned(args, robot, smr, tracker):
@@ -143,7 +165,7 @@ def run(args) -> int:
                               smr_offsets=smr, tracker_position=tracker, bar_length_m=args.bar_mm * 1e-3,
                               as_is=args.as_is, payloads=args.payloads, temperatures=args.temperatures,
                               payload_com=None if args.payload_com_mm is None else
-                              np.array(args.payload_com_mm) * 1e-3)
+                              np.array(args.payload_com_mm) * 1e-3, thermal_k=args.thermal_k)
     sidecar = write_simulation(result, args.output, args.truth)
     if not args.quiet:
         print(f"simulated {len(result.data)} {args.kind} observations of {result.info['n_poses']} poses; "

@@ -315,7 +315,7 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
                      error_scale: float = 1.0, joints=None, visible=None, smr_offsets=None,
                      tracker_position=None, bar_length_m: float = SCALE_BAR_M,
                      as_is: bool = False, payloads=None, temperatures=None,
-                     payload_com=None) -> SimulationResult:
+                     payload_com=None, thermal_k=None) -> SimulationResult:
     """Simulate ``n_poses`` measured poses of a perturbed copy of ``robot`` (see module docstring).
 
     The true robot is ``robot`` plus random parameter errors, seen from a randomly placed
@@ -373,6 +373,9 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         ``(lo, hi)`` arm temperatures, deg C, drawn per pose.
     payload_com : array_like, shape (3,), optional
         The payload's centre of mass in the flange frame, metres.
+    thermal_k : float or dict, optional
+        The true thermal expansion, 1/K: one k for the arm, or ``{group: k}`` per link group
+        (base, upper_arm, forearm, wrist; ``"all"``: the others); default steel, 11.5e-6.
 
     Returns
     -------
@@ -412,6 +415,9 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, joint_noise_deg,
            rotation_noise_deg)
     payloads, temperatures = conditions.check(payloads, temperatures)
+    thermal_k = conditions.check_thermal_k(thermal_k)
+    if thermal_k is not None and temperatures is None:
+        raise DataError("a true thermal expansion coefficient needs temperatures to act at")
     if (payloads is not None or temperatures is not None) and kind not in ("point", "pose"):
         raise DataError("payloads and temperatures are simulated for point and pose data")
     if kind == "distance" and not 0 < bar_length_m < 10:
@@ -444,9 +450,9 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     else:  # the conditions' physics, independent of the fitting code; the truth then carries them
         payload, temperature = (None if x is None else x[pose_id] for x in (payload, temperature))
         coefficients = conditions.true_terms(true, payloads, temperatures, robot_reach(robot),
-                                             np.random.default_rng([seed, 35]))
+                                             np.random.default_rng([seed, 35]), thermal_k)
         t_ref = float(np.mean(temperature)) if temperature is not None else 20.0
-        if true.joint_errors is not None and "thermal" in true.joint_errors.names:  # as_is: its own T_ref
+        if true.joint_errors is not None and any(nm.startswith("thermal") for nm in true.joint_errors.names):
             t_ref = true.joint_errors.reference_temperature_c
         T = conditions.measured_poses(true, q_rows, smr, approach, travel, payload, temperature,
                                       coefficients, t_ref)

@@ -7,7 +7,11 @@ parameters whose columns explain it (the confounders). The selection runs in sta
 :data:`STAGES`): frame, SMR and nuisance parameters first, then the link parameters, then the
 joint-error terms, each stage on what the kept columns of the earlier stages leave unexplained,
 so that of a confounded pair the earlier stage's parameter is kept (d1 is dropped rather than
-base.z, gear1_c1 rather than theta1). A joint-error parameter must be more clearly independent:
+base.z, gear1_c1 rather than theta1). A joint-error parameter that refines another for a part of
+the arm (a link group's thermal deviation from the shared k:
+:func:`robocal.kinematics.joint_errors.is_refinement`) is selected after the other joint-error
+terms, so of the redundant set (the shared k and every group's deviation) a deviation is set
+aside, not the shared k. A joint-error parameter must be more clearly independent:
 at least 1/sqrt(NG_MAX_VIF) of its (unit) column beyond what the columns kept before it explain
 (the earlier stages' and the terms the greedy pivoting picked ahead of it), i.e. a variance
 inflation factor below NG_MAX_VIF against those columns — not against the final set, where
@@ -33,6 +37,7 @@ import scipy.linalg
 
 from robocal.identify.normal import r_factor
 from robocal.identify.space import block_of
+from robocal.kinematics.joint_errors import is_refinement
 
 DEFAULT_RTOL = 1e-7
 NG_MAX_VIF = 1000.0  # largest VIF of a kept joint-error term against the columns picked before it
@@ -182,12 +187,17 @@ def _select(Js: np.ndarray, groups: Sequence[tuple[np.ndarray, float]], rtol: fl
     return np.sort(np.concatenate(kept))
 
 
-def independent_columns(J: np.ndarray, k0: int, rtol: float = DEFAULT_RTOL) -> np.ndarray:
+def independent_columns(J: np.ndarray, k0: int, rtol: float = DEFAULT_RTOL,
+                        later: np.ndarray | None = None) -> np.ndarray:
     """Sorted indices (0-based among the columns ``k0:``) of the joint-error columns of ``J (M, k)``
-    that the joint-error stage keeps after the geometric columns ``J[:, :k0]`` (all kept)."""
+    that the joint-error stage keeps after the geometric columns ``J[:, :k0]`` (all kept);
+    ``later`` ``(k - k0,)`` bool: the refinements, selected after the others."""
     Js, zero = _unit_columns(J)
     geometric, terms = np.arange(k0), np.arange(k0, J.shape[1])
-    kept = _select(Js, [(geometric[~zero[:k0]], 0.0), (terms[~zero[k0:]], NG_RTOL)], rtol)
+    later = np.zeros(terms.size, bool) if later is None else np.asarray(later, bool)
+    stages = [(geometric[~zero[:k0]], 0.0), (terms[~zero[k0:] & ~later], NG_RTOL),
+              (terms[~zero[k0:] & later], NG_RTOL)]
+    kept = _select(Js, stages, rtol)
     return kept[kept >= k0] - k0
 
 
@@ -198,8 +208,11 @@ def analyze(J: np.ndarray, names: Sequence[str], n_poses: int,
     names = list(names)
     Js, zero = _unit_columns(J)
     blocks = np.array([block_of(nm) for nm in names])
-    kept_idx = _select(Js, [(np.flatnonzero(np.isin(blocks, stage) & ~zero), floor)
-                            for stage, floor in STAGES], rtol)
+    later = np.array([block == "joint_errors" and is_refinement(nm) for nm, block in zip(names, blocks,
+                                                                                          strict=True)], bool)
+    stages = [(np.flatnonzero(np.isin(blocks, stage) & ~zero & (later if refine else ~later)), floor)
+              for stage, floor in STAGES for refine in (False, True)]  # a stage's refinements after it
+    kept_idx = _select(Js, [s for s in stages if s[0].size], rtol)
     rank = kept_idx.size
     drop_idx = sorted(set(range(len(names))) - set(kept_idx.tolist()))
     s, cond = _spectrum(Js, kept_idx)

@@ -50,9 +50,10 @@ JOINT_ERROR_SIGMA = {"gear": np.deg2rad(0.2), "cyclic": np.deg2rad(0.2), "backla
                      "travel": 0.01, "compliance": 0.01,
                      "scale": 5e-4,
                      # payload: a 10 kg m payload moment turns a joint by up to ~1e-3 rad (small arms
-                     # are the softest per kg m); thermal: steel 11.5e-6/K, aluminium 23e-6/K
-                     "payload": 1e-4, "thermal": 30e-6}  # SI units of each term (rad, rad/rad, rad/m,
-                                                         # 1, rad/(kg m), 1/K)
+                     # are the softest per kg m); thermal: steel 11.5e-6/K, aluminium 23e-6/K; a link
+                     # group's deviation from the shared k: the steel-aluminium difference 11.5e-6/K
+                     "payload": 1e-4, "thermal": 30e-6,
+                     "thermal_groups": 12e-6}  # SI units: rad, rad/rad, rad/m, 1, rad/(kg m), 1/K
 NOT_DETERMINED_RATIO = 0.5  # posterior sigma / prior sigma above which the data do not determine it
 NOISE_RTOL = 0.05  # the noise estimate has settled when it changes by less than this fraction
 NOISE_MAX_PASSES = 10

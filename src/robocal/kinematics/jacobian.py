@@ -14,8 +14,8 @@ import numpy as np
 from robocal.errors import ModelError
 from robocal.kinematics.fk import CHUNK, LinkArrays, chain_frames
 from robocal.kinematics.joint_errors import conditions_of, joint_error_basis, scatter_offsets
-from robocal.kinematics.thermal import NAME as THERMAL
-from robocal.kinematics.thermal import translation_axis
+from robocal.kinematics.thermal import is_name as is_thermal
+from robocal.kinematics.thermal import link_mask, scaled_links, translation_axis
 
 
 def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray,
@@ -73,10 +73,10 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
     small dependence of the joint errors on the link parameters is second order and left out).
     A joint-error parameter p of joint i turns the TCP about axis i by B_p(q) per unit
     (:func:`joint_error_basis`): its axis is joint i's scaled by B_p, pose by pose; on a prismatic
-    joint it moves the TCP along axis i (the d_i column scaled by B_p). The thermal
-    parameter translates the TCP (`robocal.kinematics.thermal.translation_axis`); with it,
-    every axis is that of the links scaled at ``temperature (N,)`` (the link-length columns are
-    per unit of the scaled length: a relative difference of k (T - T_ref), ~1e-4, left out).
+    joint it moves the TCP along axis i (the d_i column scaled by B_p). A thermal parameter
+    (shared or a link group's) translates the TCP (`robocal.kinematics.thermal.translation_axis`); with it,
+    every axis is that of the links scaled at ``temperature (N,)``, and the link-length columns
+    are per unit of the unscaled length (the scaled one's times the link's scale).
     """
     tools = robot.tool if smr is None else robot.tools_for(smr)
     payload, temperature = conditions_of(robot, q.shape[0], payload, temperature)
@@ -86,7 +86,8 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
         B, joint = joint_error_basis(robot, q, robot.joint_errors.names, approach, travel,
                                      payload)  # (N, m), (m,)
         reached = q + scatter_offsets(B, joint, robot.joint_errors.values, robot.n_joints)
-    tcp, u, o, rotation = motion_axes(robot.links_at(temperature), robot.base, tools, reached,
+    scale = robot.link_scale(temperature)  # (N, n) or None
+    tcp, u, o, rotation = motion_axes(scaled_links(robot.links, scale), robot.base, tools, reached,
                                       robot.prismatic)
     k = len(robot.smr)
     if k:
@@ -103,14 +104,19 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
         slides = robot.prismatic[joint]
         column = 5 * joint + np.where(slides, 4, 3)  # d_i of a prismatic joint, else theta_i
         u_err, turn = u[:, column] * B.T, ~slides
-        if THERMAL in robot.joint_errors.names:
-            t = robot.joint_errors.names.index(THERMAL)
-            u_err[:, t] = translation_axis(u[:, : 5 * robot.n_joints], robot.links, temperature,
-                                           robot.joint_errors.reference_temperature_c)
-            turn[t] = False
+        for t, name in enumerate(robot.joint_errors.names):
+            if is_thermal(name):
+                u_err[:, t] = translation_axis(u[:, : 5 * robot.n_joints], robot.links, temperature,
+                                               robot.joint_errors.reference_temperature_c,
+                                               link_mask(name, robot.prismatic))
+                turn[t] = False
         u = np.concatenate([u, u_err], axis=1)
         o = np.concatenate([o, o[:, column]], axis=1)
         rotation = np.concatenate([rotation, turn])
+    if scale is not None:  # d(a_i s_i)/d(a_i) = s_i (after the joint-error and thermal axes used u)
+        L = 5 * robot.n_joints
+        u[:, 1:L:5] *= scale.T
+        u[:, 4:L:5] *= scale.T
     return tcp, u, o, rotation
 
 

@@ -46,8 +46,9 @@ the names.
 Two terms depend on the conditions recorded with each row (``Measurements.payload`` and
 ``.temperature``) and live in their own modules: ``payload`` (``payload{i}``, the joints' deflection
 under the payload's gravity moment: :mod:`robocal.kinematics.load`) and ``thermal`` (one parameter,
-the arm's link lengths scaled by ``1 + k (T - T_ref)``: :mod:`robocal.kinematics.thermal`; not a
-joint offset, so its column of the joint-offset basis is zero and the FK and Jacobian apply it).
+the arm's link lengths scaled by ``1 + k (T - T_ref)``) with ``thermal_groups`` (per link group, the
+group's deviation ``thermal_<group>`` from that k): :mod:`robocal.kinematics.thermal`; not joint
+offsets, so their columns of the joint-offset basis are zero and the FK and Jacobian apply them).
 """
 
 from __future__ import annotations
@@ -63,11 +64,12 @@ from robocal.io import as_number
 from robocal.kinematics import load, thermal
 from robocal.kinematics.fk import chain_frames
 
-TERMS = ("compliance", "gear", "backlash", "travel", "cyclic", "scale", "payload", "thermal")
+TERMS = ("compliance", "gear", "backlash", "travel", "cyclic", "scale", "payload", "thermal",
+         thermal.GROUPS_TERM)
 CONDITION_TERMS = ("payload", "thermal")  # the terms that use the rows' recorded conditions
 UNITS = {"compliance": "rad/m", "gear": "rad", "backlash": "rad", "travel": "rad/rad",
          "cyclic": "rad", "scale": "1", "payload": load.UNIT,
-         "thermal": thermal.UNIT}  # SI unit of each term's parameters
+         "thermal": thermal.UNIT, thermal.GROUPS_TERM: thermal.UNIT}  # SI unit of each term's parameters
 CYCLIC_MIN_FREQUENCY = 2.0  # cycles per joint revolution; 1 and 2 are the gear term's harmonics
 _COMP = re.compile(r"^comp(\d+)_(\d+)$")
 _GEAR = re.compile(r"^gear(\d+)_([sc][12])$")
@@ -76,8 +78,10 @@ _TRAVEL = re.compile(r"^travel(\d+)$")
 _CYCLIC = re.compile(r"^cyc(\d+)_(\d+(?:\.\d{1,2})?)_([sc])$")
 _SCALE = re.compile(r"^scale(\d+)$")
 _THERMAL = re.compile(f"^{thermal.NAME}$")
+_THERMAL_GROUP = re.compile(f"^({'|'.join(thermal.GROUP_NAMES)})$")
 _PATTERNS = {"compliance": _COMP, "gear": _GEAR, "backlash": _BACKLASH, "travel": _TRAVEL,
-             "cyclic": _CYCLIC, "scale": _SCALE, "payload": load.PATTERN, "thermal": _THERMAL}
+             "cyclic": _CYCLIC, "scale": _SCALE, "payload": load.PATTERN, "thermal": _THERMAL,
+             thermal.GROUPS_TERM: _THERMAL_GROUP}
 
 
 def term_names(n: int, term: str) -> list[str]:
@@ -99,6 +103,8 @@ def term_names(n: int, term: str) -> list[str]:
         return load.names(n)
     if term == "thermal":
         return [thermal.NAME]
+    if term == thermal.GROUPS_TERM:  # the groups' deviations from the shared k, which they need
+        return [thermal.NAME, *thermal.GROUP_NAMES]
     raise ModelError(f"unknown non-geometric term {term!r}; choose from {', '.join(TERMS)}")
 
 
@@ -119,6 +125,13 @@ def term_of(name: str) -> str:
         if pattern.match(name):
             return term
     raise ModelError(f"{name!r} is not a joint-error parameter name")
+
+
+def is_refinement(name: str) -> bool:
+    """Whether ``name`` refines another parameter's value for a part of the arm (a link group's
+    thermal deviation from the shared k): the identifiability analysis selects it after the
+    others, so of a redundant set the refinement is set aside."""
+    return bool(_THERMAL_GROUP.match(name))
 
 
 def is_parameter_name(name: str) -> bool:
@@ -168,12 +181,13 @@ def _parse(name: str, n: int) -> tuple[int, str, int | str | tuple | None]:
     joint = load.joint_of(name, n)
     if joint is not None:
         return joint, "payload", None
-    if name == thermal.NAME:
+    if thermal.is_name(name):
         return 0, "thermal", None
     raise ModelError(f"unknown joint-error parameter {name!r} for a {n}-joint robot: "
                      "use comp{i}_{j} (i < j <= n), gear{i}_s1|c1|s2|c2, backlash{i}, travel{i}, scale{i}, "
                      f"cyc{{i}}_{{f}}_s|c (f > {CYCLIC_MIN_FREQUENCY:g} cycles per revolution), "
-                     f"payload{{i}} ({load.FIRST_JOINT} <= i <= n) or {thermal.NAME}")
+                     f"payload{{i}} ({load.FIRST_JOINT} <= i <= n), {thermal.NAME} or "
+                     f"{', '.join(thermal.GROUP_NAMES)}")
 
 
 def joint_error_basis(robot, q: np.ndarray, names: Sequence[str], approach: np.ndarray | None = None,
@@ -185,8 +199,8 @@ def joint_error_basis(robot, q: np.ndarray, names: Sequence[str], approach: np.n
     frames at ``q`` (its link parameters and base; the robot's own joint-error model is not
     applied); backlash columns are the approach directions ``approach (N, n)``, travel columns the
     joint moves ``travel (N, n)`` rad and payload columns the moments of ``payload (N, 4)``
-    (:func:`robocal.kinematics.load.moment_basis`) (zeros when not given). The thermal column is
-    zero: it scales the links, not a joint."""
+    (:func:`robocal.kinematics.load.moment_basis`) (zeros when not given). The thermal columns
+    are zero: they scale the links, not a joint."""
     n = robot.n_joints
     parsed = [_parse(nm, n) for nm in names]
     B = np.empty((q.shape[0], len(parsed)))
@@ -275,9 +289,13 @@ def assumed_conditions(robot, hints: tuple[str, str] = CONDITION_OPTIONS) -> lis
 
 
 def condition_terms(robot) -> set[str]:
-    """The terms of :data:`CONDITION_TERMS` ``robot``'s error model declares."""
+    """The terms of :data:`CONDITION_TERMS` ``robot``'s error model declares (per-group thermal
+    deviations count as ``thermal``: they use the temperature)."""
     errors = getattr(robot, "joint_errors", None)
-    return set() if errors is None else set(errors.terms) & set(CONDITION_TERMS)
+    if errors is None:
+        return set()
+    terms = {"thermal" if t == thermal.GROUPS_TERM else t for t in errors.terms}
+    return terms & set(CONDITION_TERMS)
 
 
 @dataclass(frozen=True, eq=False)
@@ -322,8 +340,15 @@ class JointErrorModel:
         return scatter_offsets(B, joint, self.values, q.shape[-1])
 
     def thermal_k(self) -> float | None:
-        """The thermal expansion coefficient (1/K), or None without the thermal term."""
+        """The shared thermal expansion coefficient (1/K), or None without the thermal term."""
         return float(self.values[self.names.index(thermal.NAME)]) if thermal.NAME in self.names else None
+
+    def thermal_groups(self) -> dict[str, float] | None:
+        """Each link group's expansion coefficient (1/K) (:func:`robocal.kinematics.thermal.
+        group_coefficients`), or None without per-group deviations."""
+        if not any(nm in self.names for nm in thermal.GROUP_NAMES):
+            return None
+        return thermal.group_coefficients(dict(zip(self.names, self.values.tolist(), strict=True)))
 
     def to_dict(self) -> dict:
         """Plain data for the model YAML (SI units of :data:`UNITS`)."""
@@ -331,8 +356,11 @@ class JointErrorModel:
                         "travel: rad per rad of move; scale: per unit of joint value; payload: rad per kg m "
                         "of payload moment; thermal: 1/K)",
                "parameters": dict(zip(self.names, self.values.tolist(), strict=True))}
-        if thermal.NAME in self.names:
+        if any(thermal.is_name(nm) for nm in self.names):
             out["reference_temperature_c"] = float(self.reference_temperature_c)
+        groups = self.thermal_groups()
+        if groups is not None:  # derived, for the reader; checked against the parameters on loading
+            out[GROUP_K_KEY] = groups
         return out
 
     @classmethod
@@ -345,4 +373,27 @@ class JointErrorModel:
         values = [as_number(v, f"joint_errors.parameters.{name}", ModelError) for name, v in params.items()]
         t_ref = as_number(data.get("reference_temperature_c", thermal.DEFAULT_REFERENCE_C),
                           "joint_errors.reference_temperature_c", ModelError)
-        return cls(tuple(params), np.array(values), t_ref)
+        model = cls(tuple(params), np.array(values), t_ref)
+        _check_group_k(model, data.get(GROUP_K_KEY))
+        return model
+
+
+GROUP_K_KEY = "thermal_k_per_group"  # the model file's derived per-group ks (1/K)
+GROUP_K_RTOL = 1e-9  # relative agreement of a written per-group k with its parameters (YAML round trip)
+
+
+def _check_group_k(model: JointErrorModel, written) -> None:
+    """A model file's ``thermal_k_per_group`` must agree with its thermal parameters (it is derived
+    from them: an edit there alone would change nothing, silently)."""
+    if written is None:
+        return
+    derived = model.thermal_groups()
+    if not isinstance(written, dict) or derived is None or set(written) != set(derived):
+        raise ModelError(f"joint_errors.{GROUP_K_KEY} must list the groups {', '.join(thermal.GROUPS)} and "
+                         f"comes with the parameters {', '.join(thermal.GROUP_NAMES)}")
+    for g, k in derived.items():
+        v = as_number(written[g], f"joint_errors.{GROUP_K_KEY}.{g}", ModelError)
+        if abs(v - k) > GROUP_K_RTOL * max(abs(k), 1e-6):
+            raise ModelError(f"joint_errors.{GROUP_K_KEY}.{g} = {v:.6g} disagrees with the parameters "
+                             f"{thermal.NAME} + {thermal.NAME}_{g} = {k:.6g}: it is derived from them, "
+                             "edit the parameters")

@@ -38,6 +38,7 @@ from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.model_file import LINK_FIELDS, dump_model, is_cell, read_model_data, robot_kwargs
 from robocal.kinematics.opw import OPWParameters
+from robocal.kinematics.thermal import link_coefficients as thermal_coefficients
 from robocal.kinematics.thermal import scale as thermal_scale
 from robocal.kinematics.thermal import scaled_links
 from robocal.kinematics.transforms import ROTATION_TOL, make_transform, matrix_to_rotvec, rotvec_to_matrix
@@ -622,17 +623,20 @@ class Robot:
             errors = replace(errors, temperature_c=float(as_number(temperature, "temperature", DataError)))
         return replace(self, joint_errors=errors)
 
+    def link_scale(self, temperature: np.ndarray | None = None) -> np.ndarray | None:
+        """``(N, n)`` the thermal terms' scale of each link length at ``temperature (N,)`` deg C
+        (`robocal.kinematics.thermal`: each link by its group's k; ``(1, n)`` at the fixed
+        temperature of `with_conditions`); None without a thermal term or a temperature."""
+        errors = self.joint_errors
+        k = None if errors is None else thermal_coefficients(errors.names, errors.values, self.prismatic)
+        if k is not None and temperature is None and errors.temperature_c is not None:
+            temperature = np.array([errors.temperature_c])  # one for all rows
+        return None if k is None else thermal_scale(k, temperature, errors.reference_temperature_c)
+
     def links_at(self, temperature: np.ndarray | None = None) -> LinkArrays:
-        """The link parameters, ``a, d`` ``(N, n)`` scaled by the thermal term at ``temperature
-        (N,)`` deg C (`robocal.kinematics.thermal`); the plain ``(n,)`` links without a
-        thermal term or a temperature."""
-        k = None if self.joint_errors is None else self.joint_errors.thermal_k()
-        if k is not None and temperature is None and self.joint_errors.temperature_c is not None:
-            temperature = np.array([self.joint_errors.temperature_c])  # one for all rows
-        if k is None or temperature is None:
-            return self.links
-        t_ref = self.joint_errors.reference_temperature_c
-        return scaled_links(self.links, thermal_scale(k, temperature, t_ref))
+        """The link parameters, ``a, d`` ``(N, n)`` scaled by `link_scale` at ``temperature
+        (N,)`` deg C; the plain ``(n,)`` links without a thermal term or a temperature."""
+        return scaled_links(self.links, self.link_scale(temperature))
 
     def default_free(self, orientation: bool = False) -> list[str]:
         """Parameters a calibration frees by default: every link parameter (beta only on

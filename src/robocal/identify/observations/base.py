@@ -9,7 +9,7 @@ import numpy as np
 from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import joint_error_basis, scatter_offsets
-from robocal.kinematics.thermal import NAME as THERMAL
+from robocal.kinematics.thermal import link_coefficients as thermal_coefficients
 from robocal.kinematics.thermal import scale as thermal_scale
 from robocal.kinematics.thermal import scaled_links
 
@@ -132,8 +132,8 @@ class Observation:
                 self._basis = (robot, *joint_error_basis(robot, self.q, robot.joint_errors.names,
                                                          self.approach, self.travel, self.payload))
             q = q + scatter_offsets(*self._basis[1:], moved.joint_errors, n)
-            k_index = [i for i, nm in enumerate(robot.joint_errors.names) if nm == THERMAL]
-            if k_index and self.temperature is not None:  # (P, N) scale of each displaced robot
-                links = scaled_links(links, thermal_scale(moved.joint_errors[:, k_index[0]], self.temperature,
+            k = thermal_coefficients(robot.joint_errors.names, moved.joint_errors, robot.prismatic)  # (P, n)
+            if k is not None and self.temperature is not None:  # (P, N, n) scale of each displaced robot
+                links = scaled_links(links, thermal_scale(k, self.temperature,
                                                           robot.joint_errors.reference_temperature_c))
         return chain_frames(links, moved.base[:, None], tools, q, prismatic=robot.prismatic)
