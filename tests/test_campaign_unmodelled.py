@@ -124,6 +124,8 @@ def test_plan_with_an_unmodelled_error(irb2600_plan):
     ({"unmodelled_mm": 0.2, "criterion": "D"}, "I criterion"),
     ({"unmodelled_mm": 0.2, "unmodelled_terms": ["payload"]}, "no recorded conditions"),
     ({"unmodelled_mm": 0.2, "unmodelled_terms": ["wobble"]}, "unknown non-geometric term"),
+    ({"unmodelled_mm": 0.2, "unmodelled_terms": ["thermal_groups"]}, "no recorded conditions"),
+    ({"unmodelled_mm": 0.2, "unmodelled_terms": ["comp1_2"]}, "no effect here"),
 ])
 def test_invalid_unmodelled_error(kw, message):
     robot = rc.Robot.from_catalog("abb_irb2600")

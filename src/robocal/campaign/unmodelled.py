@@ -38,6 +38,7 @@ from robocal.campaign.information import Information, Noise, candidate_blocks, w
 from robocal.data.measurements import Measurements
 from robocal.errors import DataError
 from robocal.identify.priors import prior_sigma
+from robocal.kinematics import thermal
 from robocal.kinematics.joint_errors import CONDITION_TERMS, candidate_names, parse_terms
 from robocal.trust.coverage import region_matrix
 
@@ -64,26 +65,26 @@ def unmodelled_error(robot, data: Measurements, noise: Noise, info: Information,
                      rms_mm: float, terms=DEFAULT_TERMS) -> Unmodelled | None:
     """The unmodelled error of RMS ``rms_mm`` (mm over the region joints ``q_region (R, n)``) as
     the joint-error ``terms`` of ``robot`` that the fit (``info``) does not estimate; None when it
-    is zero or no such term is left."""
+    is zero (DataError when none of the terms is left with an effect)."""
     if not (np.isfinite(rms_mm) and rms_mm >= 0):
         raise DataError(f"the unmodelled error must be a finite RMS >= 0 mm, got {rms_mm}")
     terms = tuple(parse_terms(terms))
-    if set(terms) & set(CONDITION_TERMS):
+    conditions = set(terms) & {*CONDITION_TERMS, thermal.GROUPS_TERM}
+    if conditions:
         raise DataError("the unmodelled error is modelled by joint-error terms that need no recorded "
-                        f"conditions: not {', '.join(sorted(set(terms) & set(CONDITION_TERMS)))}")
+                        f"conditions: not {', '.join(sorted(conditions))}")
     if rms_mm == 0:
         return None
     fitted = set(info.robot_names) | set(robot.joint_error_names)
     names = [nm for nm in candidate_names(robot.n_joints, terms) if nm not in fitted]
-    if not names:
-        return None
     full = robot.with_joint_errors([*robot.joint_error_names, *names])
     obs, rows = whitened_rows(full, data, noise, names)
     N = candidate_blocks(obs, data, rows)[0]
     keep = np.sum(N**2, axis=(0, 1)) > 0  # terms no candidate moves (a vertical axis's compliance)
     names, N = [nm for nm, k in zip(names, keep, strict=True) if k], N[:, :, keep]
     if not names:
-        return None
+        raise DataError(f"the unmodelled terms {', '.join(terms)} have no effect here that the calibrated "
+                        "model does not already fit: name other terms (--unmodelled-terms)")
     k, p = len(info.robot_names), len(info.names)
     A = region_matrix(full, [*info.robot_names, *names], q_region)
     A_fitted, A_cross = np.zeros((p, p)), np.zeros((p, len(names)))
