@@ -466,6 +466,22 @@ def test_fanuc_payload_of_group_one_written_with_its_group(tmp_path):
     assert res.loads[1].startswith("82 kg, centre of mass [0, 0, 340] mm (pns0012.ls:30 (PAYLOAD[GP1:2]))")
 
 
+def test_fanuc_payload_of_another_motion_group_is_not_the_arms(tmp_path):
+    """A multi-group program (arm and positioner) sets each group's payload: the positioner's
+    PAYLOAD[GP2:n] neither stops the run nor becomes the arm's load."""
+    nominal, cal = _payload_model("fanuc_r2000ic_165f")
+    path = tmp_path / "pns0012.ls"
+    path.write_bytes((CORPUS / "pns0012.ls").read_bytes().replace(
+        b"PAYLOAD[2:Bag 50kg]", b"PAYLOAD[GP2:7] ;\r\n  30:  PAYLOAD[GP1:2]"))
+    kw = dict(payload_schedules=CORPUS / "SYSVARS.VA", tools={"1": "0,0,300,0,0,0"},
+              frames={"1": "1500,0,200,0,0,0"})
+    res = filter_program([path], cal, nominal, **kw)
+    assert len(res.loads) == 2 and "PAYLOAD[GP1:2]" in res.loads[1] and "GP2" not in " ".join(res.loads)
+    path.write_bytes(path.read_bytes().replace(b"PAYLOAD[GP2:7]", b"PAYLOAD[GP1:7]"))
+    with pytest.raises(DataError, match="payload schedule 7 is not in the schedules given"):
+        filter_program([path], cal, nominal, **kw)
+
+
 def test_a_model_without_a_payload_term_reads_no_load_data(tmp_path):
     nominal = Robot.from_catalog("fanuc_r2000ic_165f")
     geometric = perturbed(nominal, 3)

@@ -22,7 +22,8 @@ from robocal.programs.source import mask
 
 UNSET_KG = 0.0  # a schedule with a mass <= this (factory -9999 sentinel) is not set
 _FANUC_MASK = [re.compile(r"^\s*\d+:\s*!.*$", re.MULTILINE), re.compile(r"//[^\n]*")], []
-_PAYLOAD = re.compile(r"\bPAYLOAD\s*\[\s*(?:GP1\s*:\s*)?([^\]:,]*)\s*(?:[:,][^\]]*)?\]", re.IGNORECASE)
+_PAYLOAD = re.compile(r"\bPAYLOAD\s*\[\s*(?:GP(\d+)\s*:\s*)?([^\]:,]*)\s*(?:[:,][^\]]*)?\]", re.IGNORECASE)
+ARM_GROUP = 1  # the motion group whose positions robocal corrects (the arm); others' loads are not its
 _VA_FIELD = re.compile(r"\$PLST_GRP1\s*\[\s*(\d+)\s*\]\s*\.\s*\$(PAYLOAD(?:_[XYZ])?)\b[^=\n]*=\s*" + NUM,
                        re.IGNORECASE)
 SCHEDULE_COLUMNS = ("schedule", "payload_kg", "payload_x_cm", "payload_y_cm", "payload_z_cm")
@@ -40,9 +41,11 @@ class FanucLoads(LoadReader):
             masked = mask(src.text, *_FANUC_MASK)
             for m in _PAYLOAD.finditer(masked):
                 text = m.group(0)
-                if not m.group(1).strip().isdigit():
+                if m.group(1) is not None and int(m.group(1)) != ARM_GROUP:
+                    continue  # another motion group's payload (a positioner, a second arm)
+                if not m.group(2).strip().isdigit():
                     raise unread(src, m.start(), text, "the schedule number is a register or variable")
-                n = int(m.group(1))
+                n = int(m.group(2))
                 if self.schedules is None:
                     raise unread(src, m.start(), text, "the payload schedules live in the controller: give "
                                   "them with --payload-schedules (its SYSVARS.VA, or a CSV "
