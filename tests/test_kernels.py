@@ -4,6 +4,7 @@ singular poses (each is also checked against the independent truths of test_kine
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -84,6 +85,23 @@ def test_core_runs_without_numba():
     out = subprocess.run([sys.executable, "-c", "import sys, robocal; print('numba' in sys.modules)"],
                          capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+@requires_numba
+def test_auto_imports_numba_only_for_large_work():
+    """``auto`` leaves numba unimported for a small forward-kinematics call (its import costs more
+    than it saves there) and uses it once imported, or for a call of LOAD_MIN_ITEMS poses."""
+    code = ("import sys, numpy as np, robocal as rc\n"
+            "from robocal.kinematics import kernels as kn\n"
+            "r = rc.Robot.from_catalog('abb_irb2600')\n"
+            "r.fk(np.zeros((100, 6)))\n"
+            "print('numba' in sys.modules)\n"
+            "kn.LOAD_MIN_ITEMS = 50\n"
+            "r.fk(np.zeros((50, 6)))\n"
+            "print('numba' in sys.modules, kn.compiled('robocal.kinematics.fk_numba', 1) is not None)")
+    env = {**os.environ, kn.ENV: "auto"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+    assert out.stdout.split() == ["False", "True", "True"]
 
 
 @requires_numba

@@ -98,7 +98,7 @@ def chain_frames(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nd
     """
     links, q = prismatic_split(links, q, prismatic)
     if _fast_ok(links, base, tool, q):
-        kernel = None if frames else compiled("robocal.kinematics.fk_numba")
+        kernel = None if frames else compiled("robocal.kinematics.fk_numba", q.shape[0])
         if kernel is not None:
             return kernel.chain_fk(links, base, tool, q)
         return _fast_chain(links, base, tool, q, frames)
