@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 from results import table
 from scipy.optimize import least_squares
-from timing import best_time
+from timing import best_time, kernel_choices
 
 from robocal import RobocalError, Robot
 from robocal.calibration import calibrate
@@ -23,6 +23,7 @@ from robocal.data.simulate import simulate_tracker
 from robocal.identify.lsq import gauss_newton
 from robocal.identify.plausibility import spread
 from robocal.identify.problem import CalibrationProblem
+from robocal.kinematics.kernels import use_kernels
 from robocal.kinematics.catalog import catalog_names
 from robocal.report.metrics import position_stats
 
@@ -206,15 +207,20 @@ def speed_rows(nominal, n: int) -> list:
 
 
 def speed() -> None:
+    """Each pose count with the numpy kernels (what a calibration of this size runs by default: it
+    does not import numba) and with the numba kernels (the ``fast`` extra, once numba is imported):
+    the forward kinematics of both the residual and the Jacobian, for robocal and scipy alike."""
     nominal = Robot.from_catalog("abb_irb2600")
     out = []
-    for n in (100, 1000):
-        rows = speed_rows(nominal, n)
-        out += [[n, label, f"{t * 1e3:.1f}", f"{rms:.4f}", f"{t / rows[0][1]:.1f}x"]
-                for label, t, rms in rows]
+    for kernel in kernel_choices("robocal.kinematics.fk_numba"):
+        for n in (100, 1000):
+            with use_kernels(kernel):
+                rows = speed_rows(nominal, n)
+            out += [[n, kernel, label, f"{t * 1e3:.1f}", f"{rms:.4f}", f"{t / rows[0][1]:.1f}x"]
+                    for label, t, rms in rows]
     table("calibration speed: simulated abb_irb2600, noise 0.02 mm, 200 validation poses, best of 5 (the "
           "solve rows start from the same registered model with the same identifiable parameters)",
-          ["poses", "what", "time (ms)", "validation RMS (mm)", "vs robocal solve"], out, key="speed")
+          ["poses", "kernels", "what", "time (ms)", "validation RMS (mm)", "vs robocal solve"], out, key="speed")
 
 
 PARTS = {"accuracy": accuracy_goals, "plausibility": plausibility_checks, "speed": speed}

@@ -130,6 +130,26 @@ def test_fk_backends_agree_on_odd_input(rng):
     np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
 
 
+@requires_numba
+def test_frames_and_jacobian_backends_agree(rng):
+    """The compiled frames (``frames=True``) and identification Jacobian against the numpy ones:
+    every parameter of a robot with two extra SMRs, point and pose rows, a per-row tool."""
+    robot = random_robot(rng)
+    robot = rc.Robot(**{f: getattr(robot, f) for f in ("alpha", "a", "beta", "theta", "d")},
+                     base=robot.base, tool=robot.tool, smr=rng.uniform(-0.1, 0.1, (2, 3)))
+    q = rng.uniform(-4, 4, (700, 6))
+    smr = rng.integers(0, 3, 700)
+    names = robot.parameter_names
+    for kind in ("point", "pose"):
+        a, b = both(lambda kind=kind: robot.jacobian(q, names, kind=kind, smr=smr))
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+    a, b = both(lambda: robot.jacobian(q[:, ::-1], names[3::4], smr=smr))  # a subset; strided joints
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+    (ta, fa), (tb, fb) = both(lambda: robot.fk(q, frames=True, smr=smr))
+    np.testing.assert_allclose(ta, tb, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(fa, fb, rtol=0, atol=1e-13)
+
+
 def _singular_and_edge_poses(robot, rng, n=300):
     """World poses: random, wrist singular (paper theta5 = 0, pi), wrist centre on J1, arm
     stretched and folded."""

@@ -98,9 +98,9 @@ def chain_frames(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nd
     """
     links, q = prismatic_split(links, q, prismatic)
     if _fast_ok(links, base, tool, q):
-        kernel = None if frames else compiled("robocal.kinematics.fk_numba", q.shape[0])
+        kernel = compiled("robocal.kinematics.fk_numba", q.shape[0])
         if kernel is not None:
-            return kernel.chain_fk(links, base, tool, q)
+            return kernel.chain_fk(links, base, tool, q, frames)
         return _fast_chain(links, base, tool, q, frames)
     n = q.shape[-1]
     shape = np.broadcast_shapes(q.shape[:-1], links.alpha.shape[:-1], links.d.shape[:-1], base.shape[:-2],

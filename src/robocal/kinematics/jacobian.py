@@ -13,6 +13,7 @@ import numpy as np
 
 from robocal.errors import ModelError
 from robocal.kinematics.fk import CHUNK, LinkArrays, chain_frames
+from robocal.kinematics.kernels import compiled
 from robocal.kinematics.joint_errors import conditions_of, joint_error_basis, scatter_offsets
 from robocal.kinematics.thermal import NAME as THERMAL
 from robocal.kinematics.thermal import translation_axis
@@ -145,6 +146,11 @@ def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: s
 
 def _jacobian_rows(robot, q, idx: np.ndarray, kind: str, smr, approach, travel, payload,
                    temperature) -> np.ndarray:
+    if robot.joint_errors is None and not np.any(robot.prismatic):  # one chain: the compiled twin, if in use
+        kernel = compiled("robocal.kinematics.jacobian_numba", q.shape[0])
+        if kernel is not None:
+            tools = robot.tool if smr is None else robot.tools_for(smr)
+            return kernel.jacobian_rows(robot.links, robot.base, tools, q, idx, kind, smr, len(robot.smr))
     tcp, u, o, rotation = robot_motion_axes(robot, q, smr, approach, travel, payload, temperature)
     return jacobian_from_axes(tcp, u[:, idx], o[:, idx], rotation[idx], kind)
 
