@@ -23,8 +23,8 @@ from robocal.data.simulate import simulate_tracker
 from robocal.identify.lsq import gauss_newton
 from robocal.identify.plausibility import spread
 from robocal.identify.problem import CalibrationProblem
-from robocal.kinematics.kernels import use_kernels
 from robocal.kinematics.catalog import catalog_names
+from robocal.kinematics.kernels import use_kernels
 from robocal.report.metrics import position_stats
 
 PYBOTICS_MAX_POSES = 100  # pybotics loops over poses in Python: ~minutes per 100-pose fit
@@ -220,7 +220,8 @@ def speed() -> None:
                     for label, t, rms in rows]
     table("calibration speed: simulated abb_irb2600, noise 0.02 mm, 200 validation poses, best of 5 (the "
           "solve rows start from the same registered model with the same identifiable parameters)",
-          ["poses", "kernels", "what", "time (ms)", "validation RMS (mm)", "vs robocal solve"], out, key="speed")
+          ["poses", "kernels", "what", "time (ms)", "validation RMS (mm)", "vs robocal solve"], out,
+          key="speed")
 
 
 PARTS = {"accuracy": accuracy_goals, "plausibility": plausibility_checks, "speed": speed}

@@ -13,8 +13,8 @@ import numpy as np
 
 from robocal.errors import ModelError
 from robocal.kinematics.fk import CHUNK, LinkArrays, chain_frames
-from robocal.kinematics.kernels import compiled
 from robocal.kinematics.joint_errors import conditions_of, joint_error_basis, scatter_offsets
+from robocal.kinematics.kernels import compiled
 from robocal.kinematics.thermal import NAME as THERMAL
 from robocal.kinematics.thermal import translation_axis
 
