@@ -95,5 +95,6 @@ def jacobian_rows(links: LinkArrays, base: np.ndarray, tools: np.ndarray, q: np.
     out = np.empty((N, 3 if kind == "point" else 6, idx.size))
     rows_smr = np.zeros(N, np.int64) if smr is None else np.ascontiguousarray(smr, dtype=np.int64)
     a, columns = np.ascontiguousarray(links.a, dtype=float), np.ascontiguousarray(idx, dtype=np.int64)
-    _columns(frames, tcp, np.cos(links.alpha), np.sin(links.alpha), a, columns, rows_smr, n_smr, kind == "pose", out)
+    _columns(frames, tcp, np.cos(links.alpha), np.sin(links.alpha), a, columns, rows_smr, n_smr,
+             kind == "pose", out)
     return out
