@@ -149,7 +149,8 @@ def _jacobian_rows(robot, q, idx: np.ndarray, kind: str, smr, approach, travel, 
     if robot.joint_errors is None and not np.any(robot.prismatic):  # one chain: the compiled twin, if in use
         kernel = compiled("robocal.kinematics.jacobian_numba", q.shape[0])
         if kernel is not None:
-            tools = robot.tool if smr is None else robot.tools_for(smr)
+            one_tool = smr is None or not len(robot.smr) and not np.any(smr)  # every row SMR 0
+            tools = robot.tool if one_tool else robot.tools_for(smr)
             return kernel.jacobian_rows(robot.links, robot.base, tools, q, idx, kind, smr, len(robot.smr))
     tcp, u, o, rotation = robot_motion_axes(robot, q, smr, approach, travel, payload, temperature)
     return jacobian_from_axes(tcp, u[:, idx], o[:, idx], rotation[idx], kind)
