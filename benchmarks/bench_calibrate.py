@@ -7,12 +7,13 @@ Jacobian on the same residual (what pybotics does) vs pybotics itself, simulated
 
 from __future__ import annotations
 
+import os
 import sys
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from results import table
+from results import figure, table
 from scipy.optimize import least_squares
 from timing import best_time, kernel_choices
 
@@ -212,16 +213,18 @@ def speed() -> None:
     does not import numba) and with the numba kernels (the ``fast`` extra, once numba is imported):
     the forward kinematics of both the residual and the Jacobian, for robocal and scipy alike."""
     nominal = Robot.from_catalog("abb_irb2600")
-    out = []
+    out, load = [], os.getloadavg()[0]
     for kernel in kernel_choices("robocal.kinematics.fk_numba"):
         for n in (100, 1000):
             with use_kernels(kernel):
                 rows = speed_rows(nominal, n)
             out += [[n, kernel, label, f"{t * 1e3:.1f}", f"{rms:.4f}", f"{t / rows[0][1]:.1f}x"]
                     for label, t, rms in rows]
+            figure(f"speed_ratio_{n}_{kernel}", f"{rows[1][1] / rows[0][1]:.1f}x")
+            figure(f"solve_ms_{n}_{kernel}", f"{rows[0][1] * 1e3:.1f}")
     table("calibration speed: simulated abb_irb2600, noise 0.02 mm, 200 validation poses, best of 5 (robocal "
           "solve: of 30; the solve rows start from the same registered model with the same identifiable "
-          "parameters)",
+          f"parameters); load average {load:.1f} at its start, {os.getloadavg()[0]:.1f} at its end",
           ["poses", "kernels", "what", "time (ms)", "validation RMS (mm)", "vs robocal solve"], out,
           key="speed")
 
