@@ -28,7 +28,7 @@ from robocal.kinematics.catalog import catalog_names
 from robocal.kinematics.kernels import use_kernels
 from robocal.report.metrics import position_stats
 
-SPEED_ROUNDS = {100: 30, 1000: 8}  # poses -> timed rounds (the best of each call is kept)
+SPEED_ROUNDS = {100: 60, 1000: 8}  # poses -> timed rounds (the best of each call is kept)
 PYBOTICS_MAX_POSES = 100  # pybotics loops over poses in Python: ~minutes per 100-pose fit
 DATASETS = Path(__file__).resolve().parents[2] / "shared" / "datasets"
 
