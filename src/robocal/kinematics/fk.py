@@ -6,9 +6,9 @@ times faster in numpy than stacked 4x4 matrix products. One robot with a batch o
 common case) takes a faster path: cache-sized chunks, the frame kept as four (3, M) column blocks,
 the link's constant rotations Rx(alpha) Ry(beta) applied as scalar column mixes (skipped or turned
 into a column swap when alpha, beta are 0 or multiples of pi/2) and sin/cos of every joint from
-one vectorised polynomial evaluation per chunk. With the optional numba extra, the TCP poses of
-that path come from its compiled twin, :mod:`robocal.kinematics.fk_numba` (see
-:mod:`robocal.kinematics.kernels`).
+one vectorised polynomial evaluation per chunk. With the optional numba extra in use, the TCP
+poses (and frames) of that path come from its compiled twin, :mod:`robocal.kinematics.fk_numba`
+(see :mod:`robocal.kinematics.kernels`: a small call does not import numba by itself).
 """
 
 from __future__ import annotations
