@@ -7,14 +7,15 @@ Jacobian on the same residual (what pybotics does) vs pybotics itself, simulated
 
 from __future__ import annotations
 
+import os
 import sys
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from results import table
+from results import figure, table
 from scipy.optimize import least_squares
-from timing import best_time
+from timing import best_time, interleaved, kernel_choices
 
 from robocal import RobocalError, Robot
 from robocal.calibration import calibrate
@@ -24,8 +25,10 @@ from robocal.identify.lsq import gauss_newton
 from robocal.identify.plausibility import spread
 from robocal.identify.problem import CalibrationProblem
 from robocal.kinematics.catalog import catalog_names
+from robocal.kinematics.kernels import use_kernels
 from robocal.report.metrics import position_stats
 
+SPEED_ROUNDS = {100: 60, 1000: 8}  # poses -> timed rounds (the best of each call is kept)
 PYBOTICS_MAX_POSES = 100  # pybotics loops over poses in Python: ~minutes per 100-pose fit
 DATASETS = Path(__file__).resolve().parents[2] / "shared" / "datasets"
 
@@ -191,30 +194,47 @@ def plausibility_checks() -> None:
 
 
 def speed_rows(nominal, n: int) -> list:
-    """(label, seconds, validation RMS mm) for ``n`` calibration poses."""
+    """(label, wall s, CPU s, validation RMS mm) for ``n`` calibration poses: the three timed
+    calls alternate round by round (:func:`timing.interleaved`), so a busy machine slows them
+    alike; CPU time counts every thread (scipy's linear algebra runs on every core)."""
     sim = simulate_tracker(nominal, n + 200, seed=42)
     cal = sim.data.subset(np.flatnonzero(sim.data.pose_id < n))
     val = sim.data.subset(np.flatnonzero(sim.data.pose_id >= n))
-    t_full, res = best_time(lambda: calibrate(nominal, cal, nongeometric=None), 5)
+    res = calibrate(nominal, cal, nongeometric=None)
     problem, state0, space = solve_problem(nominal, cal, res.names)
-    t_rc, rc_robot = best_time(lambda: robocal_solve(problem, state0, space), 5)
-    t_fd, fd_robot = best_time(lambda: scipy_fd(problem, state0, space), 3)
-    rows = [("robocal solve (analytic J, LM)", t_rc, _validation_rms(rc_robot, val)),
-            ("scipy least_squares solve (FD J, trf)", t_fd, _validation_rms(fd_robot, val)),
-            ("robocal calibrate(): whole pipeline", t_full, _validation_rms(res.robot, val))]
-    return rows + _pybotics_rows(nominal, cal, val)
+    calls = {"solve": lambda: robocal_solve(problem, state0, space),
+             "fd": lambda: scipy_fd(problem, state0, space),
+             "full": lambda: calibrate(nominal, cal, nongeometric=None)}
+    best = interleaved(calls, SPEED_ROUNDS[n])
+    rows = [("robocal solve (analytic J, LM)", *best["solve"], _validation_rms(calls["solve"](), val)),
+            ("scipy least_squares solve (FD J, trf)", *best["fd"], _validation_rms(calls["fd"](), val)),
+            ("robocal calibrate(): whole pipeline", *best["full"], _validation_rms(res.robot, val))]
+    return rows + [(label, t, float("nan"), rms) for label, t, rms in _pybotics_rows(nominal, cal, val)]
 
 
 def speed() -> None:
+    """Each pose count with the numpy kernels (what a calibration of this size runs by default: it
+    does not import numba) and with the numba kernels (the ``fast`` extra, once numba is imported):
+    the forward kinematics of both the residual and the Jacobian, for robocal and scipy alike."""
     nominal = Robot.from_catalog("abb_irb2600")
-    out = []
-    for n in (100, 1000):
-        rows = speed_rows(nominal, n)
-        out += [[n, label, f"{t * 1e3:.1f}", f"{rms:.4f}", f"{t / rows[0][1]:.1f}x"]
-                for label, t, rms in rows]
-    table("calibration speed: simulated abb_irb2600, noise 0.02 mm, 200 validation poses, best of 5 (the "
-          "solve rows start from the same registered model with the same identifiable parameters)",
-          ["poses", "what", "time (ms)", "validation RMS (mm)", "vs robocal solve"], out, key="speed")
+    out, load = [], os.getloadavg()[0]
+    for kernel in kernel_choices("robocal.kinematics.fk_numba"):
+        for n in SPEED_ROUNDS:
+            with use_kernels(kernel):
+                rows = speed_rows(nominal, n)
+            _, wall0, cpu0, _ = rows[0]
+            out += [[n, kernel, label, f"{wall * 1e3:.1f}", "" if np.isnan(cpu) else f"{cpu * 1e3:.1f}",
+                     f"{rms:.4f}", f"{wall / wall0:.1f}x", "" if np.isnan(cpu) else f"{cpu / cpu0:.1f}x"]
+                    for label, wall, cpu, rms in rows]  # pybotics (timed alone): no CPU time
+            figure(f"speed_ratio_{n}_{kernel}", f"{rows[1][1] / wall0:.1f}x")
+            figure(f"speed_cpu_ratio_{n}_{kernel}", f"{rows[1][2] / cpu0:.1f}x")
+            figure(f"solve_ms_{n}_{kernel}", f"{wall0 * 1e3:.1f}")
+    table("calibration speed: simulated abb_irb2600, noise 0.02 mm, 200 validation poses, best of "
+          f"{SPEED_ROUNDS[100]} (1,000 poses: of {SPEED_ROUNDS[1000]}) rounds that alternate the three calls "
+          "(the solve rows start from the same registered model with the same identifiable parameters); "
+          f"load average {load:.1f} at its start, {os.getloadavg()[0]:.1f} at its end",
+          ["poses", "kernels", "what", "wall (ms)", "CPU (ms)", "validation RMS (mm)",
+           "vs robocal solve, wall", "CPU"], out, key="speed")
 
 
 PARTS = {"accuracy": accuracy_goals, "plausibility": plausibility_checks, "speed": speed}

@@ -4,6 +4,7 @@ singular poses (each is also checked against the independent truths of test_kine
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -87,6 +88,23 @@ def test_core_runs_without_numba():
 
 
 @requires_numba
+def test_auto_imports_numba_only_for_large_work():
+    """``auto`` leaves numba unimported for a small forward-kinematics call (its import costs more
+    than it saves there) and uses it once imported, or for a call of LOAD_MIN_ITEMS poses."""
+    code = ("import sys, numpy as np, robocal as rc\n"
+            "from robocal.kinematics import kernels as kn\n"
+            "r = rc.Robot.from_catalog('abb_irb2600')\n"
+            "r.fk(np.zeros((100, 6)))\n"
+            "print('numba' in sys.modules)\n"
+            "kn.LOAD_MIN_ITEMS = 50\n"
+            "r.fk(np.zeros((50, 6)))\n"
+            "print('numba' in sys.modules, kn.compiled('robocal.kinematics.fk_numba', 1) is not None)")
+    env = {**os.environ, kn.ENV: "auto"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+    assert out.stdout.split() == ["False", "True", "True"]
+
+
+@requires_numba
 def test_fk_backends_agree(rng):
     for n in (6, 6, 3, 7):
         robot = random_robot(rng, n)
@@ -110,6 +128,26 @@ def test_fk_backends_agree_on_odd_input(rng):
     # one tool per row (several SMRs)
     a, b = both(lambda: chain_frames(robot.links, robot.base, tools, q))
     np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+
+
+@requires_numba
+def test_frames_and_jacobian_backends_agree(rng):
+    """The compiled frames (``frames=True``) and identification Jacobian against the numpy ones:
+    every parameter of a robot with two extra SMRs, point and pose rows, a per-row tool."""
+    robot = random_robot(rng)
+    robot = rc.Robot(**{f: getattr(robot, f) for f in ("alpha", "a", "beta", "theta", "d")},
+                     base=robot.base, tool=robot.tool, smr=rng.uniform(-0.1, 0.1, (2, 3)))
+    q = rng.uniform(-4, 4, (700, 6))
+    smr = rng.integers(0, 3, 700)
+    names = robot.parameter_names
+    for kind in ("point", "pose"):
+        a, b = both(lambda kind=kind: robot.jacobian(q, names, kind=kind, smr=smr))
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+    a, b = both(lambda: robot.jacobian(q[:, ::-1], names[3::4], smr=smr))  # a subset; strided joints
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+    (ta, fa), (tb, fb) = both(lambda: robot.fk(q, frames=True, smr=smr))
+    np.testing.assert_allclose(ta, tb, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(fa, fb, rtol=0, atol=1e-13)
 
 
 def _singular_and_edge_poses(robot, rng, n=300):

@@ -97,7 +97,7 @@ def _fd_jacobian(robot: Robot, q, names, kind, h=1e-6):
 
 
 @pytest.mark.parametrize("kind", ["point", "pose"])
-def test_jacobian_matches_central_differences(rng, kind):
+def test_jacobian_matches_central_differences(rng, kind, kernels):
     worst = 0.0
     for _ in range(4):
         robot = random_robot(rng)

@@ -65,6 +65,10 @@ class DampedProblem(Protocol):
         """Move the members to their proposed points."""
 
 
+_CODES = np.array([Status.CONVERGED, Status.STALLED, Status.MAX_ITERATIONS], dtype=object)
+_RUNNING, _CONVERGED, _STALLED, _MAX_ITERATIONS = -1, 0, 1, 2  # a member's state in minimize
+
+
 @dataclass(frozen=True)
 class DampedResult:
     """``status`` ``(size,)`` of :class:`Status` and ``nit`` ``(size,)`` accepted steps."""
@@ -80,19 +84,19 @@ def minimize(problem: DampedProblem, max_iter: int,
     round of accepted steps (history, progress)."""
     size = problem.size
     damping = np.full(size, DAMPING_START)
-    status = np.full(size, None, dtype=object)
+    code = np.full(size, _RUNNING)  # index into _CODES once stopped (int codes: cheap to compare)
     nit = np.zeros(size, dtype=int)
     first = np.full(size, np.nan)  # predicted decrease at the first damping tried since linearising
     problem.linearize(np.arange(size))
     if max_iter < 1:
-        status[:] = Status.MAX_ITERATIONS
-    while (run := np.flatnonzero(status == None)).size:  # noqa: E711 (elementwise on objects)
+        code[:] = _MAX_ITERATIONS
+    while (run := np.flatnonzero(code == _RUNNING)).size:
         cost = problem.cost()[run]
         predicted = problem.propose(run, damping[run])
         fresh = np.isnan(first[run])
         first[run[fresh]] = predicted[fresh]
         done = problem.converged(run, predicted)
-        status[run[done]] = Status.CONVERGED
+        code[run[done]] = _CONVERGED
         run, cost = run[~done], cost[~done]
         if not run.size:
             break
@@ -108,9 +112,12 @@ def minimize(problem: DampedProblem, max_iter: int,
         gave_up = damping[rejected] > DAMPING_MAX
         stuck = rejected[gave_up]
         small = first[stuck] <= STALL_RTOL * cost[~better][gave_up]
-        status[stuck] = np.where(small, Status.CONVERGED, Status.STALLED)
-        status[accepted[nit[accepted] >= max_iter]] = Status.MAX_ITERATIONS
-        relinearize = accepted[status[accepted] == None]  # noqa: E711
+        code[stuck] = np.where(small, _CONVERGED, _STALLED)
+        code[accepted[nit[accepted] >= max_iter]] = _MAX_ITERATIONS
+        relinearize = accepted[code[accepted] == _RUNNING]
         if relinearize.size:
             problem.linearize(relinearize)
+    status = np.full(size, None, dtype=object)
+    stopped = code != _RUNNING
+    status[stopped] = _CODES[code[stopped]]
     return DampedResult(status=status, nit=nit)

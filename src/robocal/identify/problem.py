@@ -61,6 +61,7 @@ class CalibrationProblem:
         self.weighted = not lone or any(d.sigma is not None for d in self.datasets)
         self.sigma = np.concatenate([obs.residual_scale(s) for obs, s in
                                      zip(self.observations, self.set_sigma, strict=True)])
+        self._unit_sigma = bool(np.all(self.sigma == 1.0))  # dividing by it changes nothing: skipped
         self._nuisance = _consecutive([len(obs.nuisance_names) for obs in self.observations])
         self._rows = _consecutive([obs.n_items * obs.rows_per_item for obs in self.observations])
         self._items = _consecutive([obs.n_items for obs in self.observations])
@@ -182,7 +183,8 @@ class CalibrationProblem:
             raise IdentificationError("the parameter space must carry every nuisance parameter")
         if len(self.observations) == 1:  # its block is J: no second (M, k) array
             J = self.observations[0].jacobian(state.robot, space.robot, state.nuisance)
-            J /= self.sigma[:, None]
+            if not self._unit_sigma:
+                J /= self.sigma[:, None]
             return J
         J = np.zeros((self.sigma.size, k + m))
         for obs, rows, nu in zip(self.observations, self._rows, self._nuisance, strict=True):

@@ -33,4 +33,4 @@ def correlation(cov: np.ndarray) -> np.ndarray:
 def tcp_position_covariance(robot, q: np.ndarray, names, cov: np.ndarray) -> np.ndarray:
     """Covariance ``(N, 3, 3)`` (m^2) of the predicted TCP position at joints ``q (N, n)``."""
     J = robot.jacobian(q, names, kind="point")
-    return np.einsum("nik,kl,njl->nij", J, cov, J)
+    return (J @ cov) @ J.transpose(0, 2, 1)  # not einsum's unoptimised three-operand loop

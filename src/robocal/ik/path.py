@@ -20,8 +20,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from robocal.errors import DataError, ModelError, UnreachableError
 from robocal.ik.closed_form import branch_model, branch_slot, solve_branches, turn_copies
@@ -254,6 +252,9 @@ def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | No
         rows.append(node[s + mi, ki]), cols.append(node[s + mi + 1, li]), data.append(1.0 + cost[ok])
     kl = np.flatnonzero(valid[M - 1])
     rows.append(node[M - 1, kl]), cols.append(np.full(kl.size, t_node)), data.append(np.ones(kl.size))
+    from scipy.sparse import csr_matrix  # here: every command imports robocal.ik, few plan paths
+    from scipy.sparse.csgraph import dijkstra
+
     G = csr_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))),
                    shape=(t_node + 1, t_node + 1))
     _, pred = dijkstra(G, directed=True, indices=0, return_predecessors=True)

@@ -6,9 +6,9 @@ times faster in numpy than stacked 4x4 matrix products. One robot with a batch o
 common case) takes a faster path: cache-sized chunks, the frame kept as four (3, M) column blocks,
 the link's constant rotations Rx(alpha) Ry(beta) applied as scalar column mixes (skipped or turned
 into a column swap when alpha, beta are 0 or multiples of pi/2) and sin/cos of every joint from
-one vectorised polynomial evaluation per chunk. With the optional numba extra, the TCP poses of
-that path come from its compiled twin, :mod:`robocal.kinematics.fk_numba` (see
-:mod:`robocal.kinematics.kernels`).
+one vectorised polynomial evaluation per chunk. With the optional numba extra in use, the TCP
+poses (and frames) of that path come from its compiled twin, :mod:`robocal.kinematics.fk_numba`
+(see :mod:`robocal.kinematics.kernels`: a small call does not import numba by itself).
 """
 
 from __future__ import annotations
@@ -98,9 +98,9 @@ def chain_frames(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nd
     """
     links, q = prismatic_split(links, q, prismatic)
     if _fast_ok(links, base, tool, q):
-        kernel = None if frames else compiled("robocal.kinematics.fk_numba")
+        kernel = compiled("robocal.kinematics.fk_numba", q.shape[0])
         if kernel is not None:
-            return kernel.chain_fk(links, base, tool, q)
+            return kernel.chain_fk(links, base, tool, q, frames)
         return _fast_chain(links, base, tool, q, frames)
     n = q.shape[-1]
     shape = np.broadcast_shapes(q.shape[:-1], links.alpha.shape[:-1], links.d.shape[:-1], base.shape[:-2],

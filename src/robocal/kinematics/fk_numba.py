@@ -104,6 +104,49 @@ def _fk_kernel(q, theta, A, a, d, base, tool, out):
             o[3, 0], o[3, 1], o[3, 2], o[3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
+@numba.njit(**_JIT)
+def _frames_kernel(q, theta, A, a, d, base, tool, out, frames):
+    """``out`` ``(N, 4, 4)`` <- TCP poses and ``frames`` ``(N, n + 1, 4, 4)`` <- the world poses of
+    frames {0}..{n} of joints ``q`` ``(N, n)``; tool ``(1 | N, 4, 4)``. Pose by pose, the chain of
+    :func:`chain_block` (same formulas, same sin/cos) with every frame stored."""
+    N, n = q.shape
+    per_row = tool.shape[0] > 1
+    R = np.empty((3, 4))
+    for i in range(N):
+        for row in range(3):
+            for col in range(4):
+                R[row, col] = base[row, col]
+        F = frames[i]
+        for j in range(n + 1):
+            if j:
+                x = q[i, j - 1] + theta[j - 1]
+                if abs(x) <= _POLY_MAX:
+                    c, s = cos_sin(x)
+                else:
+                    c, s = np.cos(x), np.sin(x)
+                Aj, aj, dj = A[j - 1], a[j - 1], d[j - 1]
+                for row in range(3):
+                    r0, r1, r2 = R[row, 0], R[row, 1], R[row, 2]
+                    b0 = r0 * Aj[0, 0] + r1 * Aj[1, 0] + r2 * Aj[2, 0]
+                    b1 = r0 * Aj[0, 1] + r1 * Aj[1, 1] + r2 * Aj[2, 1]
+                    b2 = r0 * Aj[0, 2] + r1 * Aj[1, 2] + r2 * Aj[2, 2]
+                    R[row, 3] += aj * r0 + dj * b2
+                    R[row, 0] = c * b0 + s * b1
+                    R[row, 1] = c * b1 - s * b0
+                    R[row, 2] = b2
+            for row in range(3):
+                for col in range(4):
+                    F[j, row, col] = R[row, col]
+            F[j, 3, 0], F[j, 3, 1], F[j, 3, 2], F[j, 3, 3] = 0.0, 0.0, 0.0, 1.0
+        E = tool[i] if per_row else tool[0]
+        o = out[i]
+        for row in range(3):
+            for col in range(4):
+                o[row, col] = R[row, 0] * E[0, col] + R[row, 1] * E[1, col] + R[row, 2] * E[2, col]
+            o[row, 3] += R[row, 3]
+        o[3, 0], o[3, 1], o[3, 2], o[3, 3] = 0.0, 0.0, 0.0, 1.0
+
+
 def link_constants(links: LinkArrays) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``theta, A, a, d`` of one robot for :func:`chain_block` (A_j = Rx(alpha_j) Ry(beta_j), with
     the rounding residue at multiples of 90 deg removed as in the numpy path)."""
@@ -115,11 +158,18 @@ def link_constants(links: LinkArrays) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return theta, A, a, d
 
 
-def chain_fk(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray) -> np.ndarray:
+def chain_fk(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.ndarray, frames: bool = False):
     """TCP poses ``(N, 4, 4)`` of one robot (links ``(n,)``, base ``(4, 4)``) for joints ``(N, n)``,
-    tool ``(4, 4)`` or ``(N, 4, 4)``: the compiled :func:`robocal.kinematics.fk.chain_fk`."""
+    tool ``(4, 4)`` or ``(N, 4, 4)``: the compiled :func:`robocal.kinematics.fk.chain_fk`; with
+    ``frames=True`` also the world poses of frames {0}..{n} ``(N, n + 1, 4, 4)`` (as
+    :func:`robocal.kinematics.fk.chain_frames`)."""
     q = np.ascontiguousarray(q, dtype=float)
     out = np.empty((q.shape[0], 4, 4))
-    _fk_kernel(q, *link_constants(links), np.ascontiguousarray(base, dtype=float),
-               np.ascontiguousarray(tool, dtype=float).reshape(-1, 4, 4), out)
-    return out
+    args = (q, *link_constants(links), np.ascontiguousarray(base, dtype=float),
+            np.ascontiguousarray(tool, dtype=float).reshape(-1, 4, 4), out)
+    if not frames:
+        _fk_kernel(*args)
+        return out
+    saved = np.empty((q.shape[0], q.shape[1] + 1, 4, 4))
+    _frames_kernel(*args, saved)
+    return out, saved

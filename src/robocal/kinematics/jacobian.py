@@ -14,6 +14,7 @@ import numpy as np
 from robocal.errors import ModelError
 from robocal.kinematics.fk import CHUNK, LinkArrays, chain_frames
 from robocal.kinematics.joint_errors import conditions_of, joint_error_basis, scatter_offsets
+from robocal.kinematics.kernels import compiled
 from robocal.kinematics.thermal import is_name as is_thermal
 from robocal.kinematics.thermal import link_mask, scaled_links, translation_axis
 
@@ -151,17 +152,30 @@ def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: s
 
 def _jacobian_rows(robot, q, idx: np.ndarray, kind: str, smr, approach, travel, payload,
                    temperature) -> np.ndarray:
+    if robot.joint_errors is None and not np.any(robot.prismatic):  # one chain: the compiled twin, if in use
+        kernel = compiled("robocal.kinematics.jacobian_numba", q.shape[0])
+        if kernel is not None:
+            one_tool = smr is None or not len(robot.smr) and not np.any(smr)  # every row SMR 0
+            tools = robot.tool if one_tool else robot.tools_for(smr)
+            return kernel.jacobian_rows(robot.links, robot.base, tools, q, idx, kind, smr, len(robot.smr))
     tcp, u, o, rotation = robot_motion_axes(robot, q, smr, approach, travel, payload, temperature)
     return jacobian_from_axes(tcp, u[:, idx], o[:, idx], rotation[idx], kind)
 
 
 def jacobian_from_axes(tcp, u, o, rotation, kind: str = "point") -> np.ndarray:
-    """Assemble Jacobian rows ``(N, 3|6, k)`` from motion axes ``u, o (3, k, N)``."""
-    d = tcp[:, :3, 3].T[:, None] - o  # (3, k, N)
-    rot = rotation[:, None]
-    cross = np.stack([u[1] * d[2] - u[2] * d[1], u[2] * d[0] - u[0] * d[2], u[0] * d[1] - u[1] * d[0]])
-    dpos = np.where(rot, cross, u)
-    if kind == "point":
-        return dpos.transpose(2, 0, 1)
-    dori = np.where(rot, u, 0.0)
-    return np.concatenate([dpos, dori]).transpose(2, 0, 1)
+    """Assemble Jacobian rows ``(N, 3|6, k)`` from motion axes ``u, o (3, k, N)``: the cross
+    products for the rotation columns only, written straight into the rows' layout."""
+    k, N = u.shape[1], u.shape[2]
+    out = np.empty((N, 3 if kind == "point" else 6, k))
+    view = out.transpose(1, 2, 0)  # (rows, k, N)
+    rot, move = np.flatnonzero(rotation), np.flatnonzero(~rotation)
+    view[:3, move] = u[:, move]
+    ur = u[:, rot]
+    d = tcp[:, :3, 3].T[:, None] - o[:, rot]  # (3, r, N)
+    view[0, rot] = ur[1] * d[2] - ur[2] * d[1]
+    view[1, rot] = ur[2] * d[0] - ur[0] * d[2]
+    view[2, rot] = ur[0] * d[1] - ur[1] * d[0]
+    if kind == "pose":
+        view[3:, rot] = ur
+        view[3:, move] = 0.0
+    return out

@@ -478,7 +478,12 @@ class Robot:
         >>> rc.Robot.from_catalog("abb_irb2600").parameter_names[:5]
         ['alpha1', 'a1', 'beta1', 'theta1', 'd1']
         """
-        return self.geometry_names + self.joint_error_names
+        return list(self._names)
+
+    @functools.cached_property
+    def _names(self) -> tuple[str, ...]:
+        """`parameter_names`, built once (the model is immutable; a calibration asks ~100 times)."""
+        return tuple(self.geometry_names + self.joint_error_names)
 
     def parameter_units(self) -> list[str]:
         """'m' or 'rad' for each parameter, in vector order (joint-error terms: their own unit,

@@ -60,7 +60,7 @@ class Prediction:
             raise DataError(f"the prediction's parameters {missing[:4]} are not in model {robot.name}: "
                             "use the result JSON written with this calibrated model")
         G = tcp_jacobian(robot, self.names, q)  # (N, 3, k)
-        var = np.einsum("nik,kl,nil->n", G, self.covariance, G)
+        var = np.einsum("nik,nik->n", G @ self.covariance, G)  # G C G^T's trace, pose by pose
         return np.sqrt(np.maximum(var, 0.0) + (self.unmodelled_mm * 1e-3) ** 2) * 1e3
 
     def beyond(self, robot, q) -> np.ndarray:
