@@ -66,6 +66,34 @@ def parse_aggregate(src: ProgramText, masked: str, pos: int, end: int, what: str
             expect_item = False
 
 
+_SHAPED: dict[tuple[int, ...], re.Pattern] = {}
+_ITEM = r"\s*(" + NUMBER_RE.pattern + r")\s*"
+
+
+def _shaped(sizes: tuple[int, ...]) -> re.Pattern:
+    """The pattern of an aggregate of lists of ``sizes`` numbers, each number a group."""
+    pattern = _SHAPED.get(sizes)
+    if pattern is None:
+        groups = [r"\[" + ",".join([_ITEM] * k) + r"\]" for k in sizes]
+        pattern = _SHAPED[sizes] = re.compile(r"\s*\[\s*" + r"\s*,\s*".join(groups) + r"\s*\]")
+    return pattern
+
+
+def parse_numbers(src: ProgramText, masked: str, pos: int, end: int, sizes: tuple[int, ...]):
+    """The tree :func:`parse_aggregate` gives for an aggregate of lists of ``sizes`` numbers only
+    (a robtarget ``[[x,y,z],[q1..q4],[cf..],[eax..]]``), found by one compiled pattern instead
+    of a token at a time: ``(tree, stop)``, or None when the text at ``pos`` has another shape
+    (then :func:`parse_aggregate` reads it, and names what is malformed)."""
+    m = _shaped(sizes).match(masked, pos, end)
+    if m is None:
+        return None
+    text, spans, tree, k = src.text, m.regs, [], 1
+    for size in sizes:
+        tree.append([Number(a, b, text[a:b]) for a, b in spans[k:k + size]])
+        k += size
+    return tree, m.end()
+
+
 def numbers_of(node, sizes: tuple[int, ...], src: ProgramText, at: int, what: str) -> list[list[Number]]:
     """Check that ``node`` is a list of lists of numbers of the given sizes; return them."""
     ok = isinstance(node, list) and len(node) >= len(sizes)

@@ -28,7 +28,14 @@ import numpy as np
 
 from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
-from robocal.programs.aggregate import Word, close_bracket, numbers_of, parse_aggregate, split_top
+from robocal.programs.aggregate import (
+    Word,
+    close_bracket,
+    numbers_of,
+    parse_aggregate,
+    parse_numbers,
+    split_top,
+)
 from robocal.programs.config import ABBConfig
 from robocal.programs.expressions import constant_value
 from robocal.programs.flow import Flow, Routine, order_by_execution
@@ -86,6 +93,7 @@ _POSITION_MM = 1e-3  # mm: 1 um
 _QUATERNION = 1e-6  # about 2e-6 rad: 0.4 um at 200 mm from the flange
 BUILTIN_TOOLS = ("tool0",)
 BUILTIN_WOBJS = ("wobj0",)
+_SHAPE = (3, 4, 4, 6)  # a robtarget's numbers: position, quaternion, confdata, external axes
 _DEPTH = 12  # routine calls and assignments followed at most this deep
 
 
@@ -218,7 +226,8 @@ class RapidDialect(Dialect):
                 if kind == "robtarget":
                     st.declared.setdefault(name.lower(), [])  # VAR robtarget p; assigned at run time
                 return
-            tree, _ = parse_aggregate(src, masked, m.end(), e, f"{kind} {name}")
+            shaped = parse_numbers(src, masked, m.end(), e, _SHAPE) if kind == "robtarget" else None
+            tree, _ = shaped or parse_aggregate(src, masked, m.end(), e, f"{kind} {name}")
             where = f"{src.path.name}:{src.line_of(m.start())}"
             if kind == "robtarget":
                 targets = self._robtargets(src, tree, name, m.start(), m.group(4))
@@ -384,7 +393,8 @@ class RapidDialect(Dialect):
         if depth > _DEPTH:
             return [f"{text[:40]} is defined through more than {_DEPTH} assignments or calls"]
         if text.startswith("["):
-            tree, _ = parse_aggregate(src, masked, lead, b, "robtarget")
+            tree, _ = parse_numbers(src, masked, lead, b, _SHAPE) or parse_aggregate(src, masked, lead, b,
+                                                                                     "robtarget")
             if isinstance(tree, list) and tree and isinstance(tree[0], list) and tree[0] \
                     and isinstance(tree[0][0], Number):
                 key = (src.path, lead)
