@@ -16,6 +16,7 @@ lets the computation run; a ``MemoryError`` then still ends as the same one line
 from __future__ import annotations
 
 import functools
+import gc
 import resource
 from pathlib import Path
 
@@ -136,3 +137,22 @@ def few_threads(rows_of):
                 return fn(*args, **kwargs)
         return limited
     return wrap
+
+
+def gc_paused(fn):
+    """Decorator: Python's cycle collector is off while ``fn`` runs (and back as it was after).
+    A function that builds hundreds of thousands of small objects that all stay alive (a
+    100,000-target program's parsed numbers, targets and table rows) otherwise pays one full
+    collection, a walk over every live object, each time the survivors grow by a quarter: about a
+    third of reading a 100,000-target RAPID module. What it frees is freed by reference counting;
+    cycles wait for the next collection."""
+    @functools.wraps(fn)
+    def paused(*args, **kwargs):
+        was = gc.isenabled()
+        gc.disable()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            if was:
+                gc.enable()
+    return paused

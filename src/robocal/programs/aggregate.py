@@ -70,28 +70,17 @@ _SHAPED: dict[tuple[int, ...], re.Pattern] = {}
 _ITEM = r"\s*(" + NUMBER_RE.pattern + r")\s*"
 
 
-def _shaped(sizes: tuple[int, ...]) -> re.Pattern:
-    """The pattern of an aggregate of lists of ``sizes`` numbers, each number a group."""
+def shape_pattern(sizes: tuple[int, ...]) -> re.Pattern:
+    """The pattern of an aggregate of lists of ``sizes`` numbers only (a RAPID robtarget
+    ``[[x,y,z],[q1..q4],[cf..],[eax..]]`` is (3, 4, 4, 6)), each number a group in order: what
+    :func:`parse_aggregate` reads as that tree, found by one compiled match instead of a token
+    at a time. Text of another shape does not match (:func:`parse_aggregate` reads it, and names
+    what is malformed)."""
     pattern = _SHAPED.get(sizes)
     if pattern is None:
         groups = [r"\[" + ",".join([_ITEM] * k) + r"\]" for k in sizes]
         pattern = _SHAPED[sizes] = re.compile(r"\s*\[\s*" + r"\s*,\s*".join(groups) + r"\s*\]")
     return pattern
-
-
-def parse_numbers(src: ProgramText, masked: str, pos: int, end: int, sizes: tuple[int, ...]):
-    """The tree :func:`parse_aggregate` gives for an aggregate of lists of ``sizes`` numbers only
-    (a robtarget ``[[x,y,z],[q1..q4],[cf..],[eax..]]``), found by one compiled pattern instead
-    of a token at a time: ``(tree, stop)``, or None when the text at ``pos`` has another shape
-    (then :func:`parse_aggregate` reads it, and names what is malformed)."""
-    m = _shaped(sizes).match(masked, pos, end)
-    if m is None:
-        return None
-    text, spans, tree, k = src.text, m.regs, [], 1
-    for size in sizes:
-        tree.append([Number(a, b, text[a:b]) for a, b in spans[k:k + size]])
-        k += size
-    return tree, m.end()
 
 
 def numbers_of(node, sizes: tuple[int, ...], src: ProgramText, at: int, what: str) -> list[list[Number]]:
@@ -127,7 +116,14 @@ def close_bracket(text: str, open_at: int) -> int:
 
 
 def split_top(text: str, start: int, end: int, sep: str = ",") -> list[tuple[int, int]]:
-    """Spans of ``text[start:end]`` split at ``sep`` outside brackets, braces and parentheses."""
+    """Spans of ``text[start:end]`` split at ``sep`` (one character) outside brackets, braces and
+    parentheses."""
+    if _BRACKETS.search(text, start, end) is None:  # nothing nested: split in C
+        out, at = [], start
+        for piece in text[start:end].split(sep):
+            out.append((at, at + len(piece)))
+            at += len(piece) + 1
+        return out
     splitter = _SPLITTERS.get(sep)
     if splitter is None:
         splitter = _SPLITTERS[sep] = re.compile(r"[\[\](){}" + re.escape(sep) + "]")

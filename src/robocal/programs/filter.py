@@ -51,6 +51,7 @@ from robocal.programs.source import ProgramText
 from robocal.programs.track import track_program
 from robocal.programs.urscript import URScriptDialect
 from robocal.programs.val3 import Val3Dialect, application_files
+from robocal.resources import gc_paused
 from robocal.trust.output_marker import check_unmarked
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
@@ -331,6 +332,7 @@ def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
     return values, dialect.to_pose(values), W, tool
 
 
+@gc_paused
 def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
                    robot_base=None, dialect: str | None = None, references=(),
                    keep_unreached: bool = False, strict: bool = False, force: bool = False,
