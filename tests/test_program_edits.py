@@ -1,14 +1,18 @@
-"""The bulk number formatter of the filter's text edits writes, for every number, the text the
-one-number formatter writes (random values, old numbers of every form the readers accept, the
-dialects' resolutions and decimals, negative zero, large and small magnitudes)."""
+"""What the filter writes in bulk is what it wrote one item at a time: the number formatter of
+its text edits (random values, old numbers of every form the readers accept, the dialects'
+resolutions and decimals, negative zero, large and small magnitudes) and the rows of its JSON
+table (strings with braces, commas, quotes, control characters)."""
 
 from __future__ import annotations
+
+import json
 
 import numpy as np
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from robocal.programs.edits import format_numbers
+from robocal.programs.result import _one_per_line
 from robocal.programs.source import NUMBER_RE, Number, format_number
 
 # the resolutions the dialects write with (mm, deg, quaternion, rad, m) and arbitrary ones
@@ -43,3 +47,14 @@ def test_format_numbers_writes_what_format_number_writes(items):
 def test_format_numbers_of_nothing():
     """No number: no text."""
     assert format_numbers(np.zeros(0), [], np.zeros(0, int), np.zeros(0), np.zeros(0, int)) == []
+
+
+SCALARS = st.one_of(st.text(max_size=12), st.sampled_from(["}, {", '"}, {"', "},\x00{", "\x00", "{", "}"]),
+                    st.floats(), st.integers(), st.booleans(), st.none())
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.dictionaries(st.text(max_size=6), SCALARS, max_size=6), max_size=6))
+def test_json_rows_as_dumped_one_by_one(rows):
+    """The rows of the table JSON, encoded at once, read as each row's own json.dumps, one a line."""
+    assert _one_per_line(rows) == ",".join(f"\n  {json.dumps(row)}" for row in rows)

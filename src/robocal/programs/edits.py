@@ -83,9 +83,11 @@ def number_edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.nd
     texts = format_numbers(new[rows, cols], [n.text for n in nums], written, resolution[cols],
                            _file_decimals(d, targets, old.shape[1])[rows, cols])
     edits: dict[Path, dict] = {}
+    last = -1
     for i, num, text in zip(rows.tolist(), nums, texts, strict=True):
-        t = targets[i]
-        mine = edits.setdefault(t.source.path, {})
+        if i != last:  # the numbers of one target come together
+            t, last = targets[i], i
+            mine = edits.setdefault(t.source.path, {})
         if num.start == num.end:  # a number the file leaves out: inserted (several in their order)
             key = (num.start, num.end)
             mine[key] = mine.get(key, "") + d.number_edit(t, num, text)

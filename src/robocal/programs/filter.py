@@ -326,7 +326,7 @@ def controller_joints(dialect: Dialect, program: Program, targets: list[Target],
 def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
     """``(values, P, W, tool)``: the pose numbers as written ``(N, k)``; target poses in their
     frames, the frames and the tools, each ``(N, 4, 4)`` m."""
-    values = np.array([t.values() for t in targets])
+    values = np.array([[float(n.text) for n in t.numbers] for t in targets], dtype=float)
     W = np.array([program.frames[t.frame] for t in targets])
     tool = np.array([program.tools[t.tool] for t in targets])
     return values, dialect.to_pose(values), W, tool
@@ -615,26 +615,27 @@ def _check_joints(nominal: Robot, comp: Compensation, ok: np.ndarray, problems: 
 
 
 def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing) -> list[dict]:
-    """The per-target table (see docs/programs.md)."""
+    """The per-target table (see docs/programs.md), built from columns (one conversion per column,
+    not per value)."""
     dpos = np.linalg.norm(Xc[:, :3, 3] - X[:, :3, 3], axis=1) * 1e3
     drot = np.rad2deg(np.linalg.norm(matrix_to_rotvec(Xc[:, :3, :3] @ np.swapaxes(X[:, :3, :3], 1, 2)),
                                      axis=1))
     lim = np.rad2deg(np.minimum(q - nominal.limits[:, 0], nominal.limits[:, 1] - q))
-    columns = sing.columns()
+    joint = np.argmin(lim, axis=1)
+    columns = {name: values.tolist() for name, values in sing.columns().items()}
+    cols = zip(dpos.tolist(), drot.tolist(), lim[np.arange(len(lim)), joint].tolist(), (joint + 1).tolist(),
+               good.tolist(), ok.tolist(), converged.tolist(), changed.tolist(), strict=True)
     rows = []
-    for i, t in enumerate(targets):
-        j = int(np.argmin(lim[i]))
+    for i, (t, (mm, deg, margin, j, g, reached, conv, ch)) in enumerate(zip(targets, cols, strict=True)):
         rows.append({
             "file": t.source.path.name, "line": t.line, "name": t.name, "frame": t.frame, "tool": t.tool,
-            "filtered": bool(good[i]),
-            "correction_mm": float(dpos[i]), "correction_deg": float(drot[i]),
-            "configuration": "changed" if changed[i] else ("none" if t.config is None else
-                                                           "kept" if t.monitored else "not monitored"),
+            "filtered": g, "correction_mm": mm, "correction_deg": deg,
+            "configuration": "changed" if ch else ("none" if t.config is None else
+                                                   "kept" if t.monitored else "not monitored"),
             "config_before": (d.scheme.text(t.config) if cfg is not None and t.config is not None else
-                              d.scheme.text(cfg[0][i]) if cfg is not None and ok[i] else ""),
-            "config_after": d.scheme.text(cfg[1][i]) if cfg is not None and good[i] else "",
-            "reachable": bool(ok[i]), "converged": bool(converged[i]),
-            "limit_margin_deg": float(lim[i, j]), "limit_joint": j + 1,
-            **{name: values[i].item() for name, values in columns.items()},
+                              d.scheme.text(cfg[0][i]) if cfg is not None and reached else ""),
+            "config_after": d.scheme.text(cfg[1][i]) if cfg is not None and g else "",
+            "reachable": reached, "converged": conv, "limit_margin_deg": margin, "limit_joint": j,
+            **{name: values[i] for name, values in columns.items()},
         })
     return rows

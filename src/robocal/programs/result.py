@@ -107,8 +107,7 @@ class FilterResult:
                   "summary": self.summary_dict(), "loads": self.loads, "warnings": self.warnings}
         lists = {"targets": self.rows, "motions": [m.as_dict() for m in self.motions]}
         items = [f" {json.dumps(k)}: {json.dumps(v)}" for k, v in header.items()]
-        items += [f" {json.dumps(k)}: [" + ",".join(f"\n  {json.dumps(row)}" for row in rows) + "\n ]"
-                  for k, rows in lists.items()]
+        items += [f" {json.dumps(k)}: [" + _one_per_line(rows) + "\n ]" for k, rows in lists.items()]
         return "{\n" + ",\n".join(items) + "\n}\n"
 
     def summary_dict(self) -> dict:
@@ -200,6 +199,20 @@ class FilterResult:
         check_outputs(files, self.outputs)
         write_all(files)
         return list(files)
+
+
+_ITEMS = ",\x00"  # json's separator between items, marked: a raw NUL is never inside encoded JSON
+
+
+def _one_per_line(rows: list[dict]) -> str:
+    """``rows`` (flat dicts of scalars) as JSON, each on its own line after a newline and two
+    spaces, comma-separated: what ``json.dumps`` of each row gives, encoded by one call of json's
+    C encoder (the separator between rows is told from the one between a row's items by the
+    braces around it)."""
+    if not rows:
+        return ""
+    text = json.dumps(rows, separators=(_ITEMS, ": "))
+    return "\n  " + text[1:-1].replace("}" + _ITEMS + "{", "},\n  {").replace(_ITEMS, ", ")
 
 
 _WHERE = re.compile(r"^(\S+:\d+(?: \([^)]*\))?): (.*)$", re.DOTALL)
