@@ -507,8 +507,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         cfg = (d.scheme.encode(controller, seeds), d.scheme.encode(controller, q))
     edits, changed = number_edits(d, targets, values, good, Pc, cfg, warnings)
     warnings += comp.warnings([t.where for t in targets], good)  # the corrected ones near a singularity
+    outputs = {s.path: s.replaced(edits.pop(s.path, {})) for s in sources}  # edits freed once used
     rows = _rows(d, targets, X, W @ Pc, controller, q, ok, good, comp.converged & ok, changed, cfg, sing)
-    outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,
                         program.ledger.records(corrected, program.not_corrected), calibrated,

@@ -85,14 +85,15 @@ class ProgramText:
 
     def replaced(self, edits: dict[tuple[int, int], str]) -> bytes:
         """The file's bytes with the spans ``(start, end)`` replaced by new ASCII text."""
-        out, pos = [], 0
-        for (start, end), new in sorted(edits.items()):
+        out, pos, data = bytearray(), 0, memoryview(self.data)  # no copy of the pieces kept between
+        for start, end in sorted(edits):
             if start < pos:
                 raise AssertionError(f"overlapping edits at byte {start}")
-            out += [self.original[pos:start], new]
+            out += data[pos:start]
+            out += edits[start, end].encode("latin-1")
             pos = end
-        out.append(self.original[pos:])
-        return "".join(out).encode("latin-1")
+        out += data[pos:]
+        return bytes(out)
 
 
 _NOT_LINE_END = re.compile(r"[^\r\n]")
