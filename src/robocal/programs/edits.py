@@ -17,6 +17,7 @@ import numpy as np
 
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.programs.model import Dialect, Target
+from robocal.programs.source import ProgramText
 
 SWING_DEG = 1.0  # Euler angles moving more than this for a smaller turn: named (gimbal lock)
 _SEP = "\x00"  # joins the formats of one batch; never in a formatted number
@@ -56,14 +57,33 @@ def format_numbers(values: np.ndarray, texts: list[str], written: np.ndarray, re
     return out
 
 
+class FileEdits:
+    """One file's edits: the numbers rewritten in place (``starts``, ``ends``, ``texts``: three
+    lists, a 100,000-target program's 700,000 numbers without a dict entry and key each) and the
+    other span -> text edits (configuration data, FANUC numbers kept in their width, numbers a
+    file leaves out)."""
+
+    def __init__(self) -> None:
+        self.starts: list[int] = []
+        self.ends: list[int] = []
+        self.texts: list[str] = []
+        self.spans: dict[tuple[int, int], str] = {}
+
+    def apply(self, src: ProgramText) -> bytes:
+        """``src``'s bytes with these edits."""
+        return src.spliced(self.starts + [k[0] for k in self.spans], self.ends + [k[1] for k in self.spans],
+                           self.texts + list(self.spans.values()))
+
+
 def monitored(targets: list[Target]) -> np.ndarray:
     """Which targets' configuration data the controller follows (they have some, monitored)."""
     return np.array([t.config is not None and t.monitored for t in targets])
 
 
 def number_edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray, Pc: np.ndarray, cfg,
-                 warnings: list) -> tuple[dict[Path, dict], np.ndarray]:
-    """Span edits per file for the corrected poses ``Pc`` ``(N, 4, 4)`` of targets whose numbers
+                 warnings: list) -> tuple[dict[Path, FileEdits], np.ndarray]:
+    """The edits of each file (:class:`FileEdits`) for the corrected poses ``Pc`` ``(N, 4, 4)`` of
+    targets whose numbers
     were ``old`` ``(N, k)`` and, where the correction crossed a configuration boundary, the
     configuration data; and which targets' configuration changed. ``cfg``: (rows of the nominal
     joints, rows of the corrected joints) or None."""
@@ -82,22 +102,24 @@ def number_edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.nd
     written = np.array([n.decimals for n in nums], int)
     texts = format_numbers(new[rows, cols], [n.text for n in nums], written, resolution[cols],
                            _file_decimals(d, targets, old.shape[1])[rows, cols])
-    edits: dict[Path, dict] = {}
+    edits: dict[Path, FileEdits] = {}
     last = -1
     for i, num, text in zip(rows.tolist(), nums, texts, strict=True):
         if i != last:  # the numbers of one target come together
             t, last = targets[i], i
-            mine = edits.setdefault(t.source.path, {})
+            mine = edits.setdefault(t.source.path, FileEdits())
         if num.start == num.end:  # a number the file leaves out: inserted (several in their order)
             key = (num.start, num.end)
-            mine[key] = mine.get(key, "") + d.number_edit(t, num, text)
+            mine.spans[key] = mine.spans.get(key, "") + d.number_edit(t, num, text)
         elif d.keep_width:
-            mine.update(_aligned(t.source.text, num, text))
+            mine.spans.update(_aligned(t.source.text, num, text))
         else:
-            mine[num.start, num.end] = text
+            mine.starts.append(num.start)
+            mine.ends.append(num.end)
+            mine.texts.append(text)
     for i in np.flatnonzero(changed):
         t = targets[i]
-        edits.setdefault(t.source.path, {}).update(d.config_edits(t, cfg[1][i]))
+        edits.setdefault(t.source.path, FileEdits()).spans.update(d.config_edits(t, cfg[1][i]))
         warnings.append(f"{t.where}: configuration changed from {d.scheme.text(cfg[0][i])} to "
                         f"{d.scheme.text(cfg[1][i])}: the corrected joints cross a configuration "
                         "boundary; check the motion into and out of this target")

@@ -37,7 +37,7 @@ from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
-from robocal.programs.edits import monitored, number_edits
+from robocal.programs.edits import FileEdits, monitored, number_edits
 from robocal.programs.external import set_aside_external
 from robocal.programs.fanuc_ls import FanucDialect
 from robocal.programs.inform import InformDialect, looks_like_inform
@@ -507,7 +507,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         cfg = (d.scheme.encode(controller, seeds), d.scheme.encode(controller, q))
     edits, changed = number_edits(d, targets, values, good, Pc, cfg, warnings)
     warnings += comp.warnings([t.where for t in targets], good)  # the corrected ones near a singularity
-    outputs = {s.path: s.replaced(edits.pop(s.path, {})) for s in sources}  # edits freed once used
+    outputs = {s.path: edits.pop(s.path, FileEdits()).apply(s) for s in sources}  # edits freed once used
     rows = _rows(d, targets, X, W @ Pc, controller, q, ok, good, comp.converged & ok, changed, cfg, sing)
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,
