@@ -111,11 +111,11 @@ def number_edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.nd
         if num.start == num.end:  # a number the file leaves out: inserted (several in their order)
             key = (num.start, num.end)
             mine.spans[key] = mine.spans.get(key, "") + d.number_edit(t, num, text)
-        elif d.keep_width:
-            mine.spans.update(_aligned(t.source.text, num, text))
         else:
-            mine.starts.append(num.start)
-            mine.ends.append(num.end)
+            start, end, text = (_aligned(t.source.text, num, text) if d.keep_width else
+                                (num.start, num.end, text))
+            mine.starts.append(start)
+            mine.ends.append(end)
             mine.texts.append(text)
     for i in np.flatnonzero(changed):
         t = targets[i]
@@ -162,13 +162,16 @@ def _gimbal_swings(d: Dialect, targets: list[Target], old: np.ndarray, new: np.n
             for i in np.flatnonzero(good & (swing > SWING_DEG) & (turn < SWING_DEG))]
 
 
-def _aligned(text: str, num, new: str) -> dict[tuple[int, int], str]:
-    """The edit writing ``new`` over number ``num`` of ``text`` in the same width when the number is
-    right-aligned after spaces: padded with spaces, or taking spaces before it (one is kept)."""
+def _aligned(text: str, num, new: str) -> tuple[int, int, str]:
+    """The edit ``(start, end, text)`` writing ``new`` over number ``num`` of ``text`` in the same
+    width when the number is right-aligned after spaces: padded with spaces, or taking spaces
+    before it (one is kept)."""
     if text[num.start - 1:num.start] != " " or len(new) == len(num.text):
-        return {(num.start, num.end): new}
+        return num.start, num.end, new
     if len(new) < len(num.text):
-        return {(num.start, num.end): new.rjust(len(num.text))}
-    spaces = len(text[:num.start]) - len(text[:num.start].rstrip(" "))
-    take = min(len(new) - len(num.text), spaces - 1)
-    return {(num.start - take, num.end): new}
+        return num.start, num.end, new.rjust(len(num.text))
+    first = num.start  # the spaces right before the number (not a copy of the text before it)
+    while first > 0 and text[first - 1] == " ":
+        first -= 1
+    take = min(len(new) - len(num.text), num.start - first - 1)
+    return num.start - take, num.end, new
