@@ -83,6 +83,16 @@ def shape_pattern(sizes: tuple[int, ...]) -> re.Pattern:
     return pattern
 
 
+def list_pattern(size: int) -> re.Pattern:
+    """The pattern of one list of ``size`` numbers (a URScript ``p[x, y, z, rx, ry, rz]``'s
+    brackets), each number a group: what :func:`parse_aggregate` reads as a flat list of them."""
+    key = (-size,)  # beside the nested shapes of shape_pattern
+    pattern = _SHAPED.get(key)
+    if pattern is None:
+        pattern = _SHAPED[key] = re.compile(r"\s*\[" + ",".join([_ITEM] * size) + r"\]")
+    return pattern
+
+
 def numbers_of(node, sizes: tuple[int, ...], src: ProgramText, at: int, what: str) -> list[list[Number]]:
     """Check that ``node`` is a list of lists of numbers of the given sizes; return them."""
     ok = isinstance(node, list) and len(node) >= len(sizes)
