@@ -51,7 +51,7 @@ from robocal.programs.source import ProgramText
 from robocal.programs.track import track_program
 from robocal.programs.urscript import URScriptDialect
 from robocal.programs.val3 import Val3Dialect, application_files
-from robocal.resources import gc_paused
+from robocal.resources import gc_paused, heap_trimmed
 from robocal.trust.output_marker import check_unmarked
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
@@ -332,6 +332,7 @@ def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
     return values, dialect.to_pose(values), W, tool
 
 
+@heap_trimmed  # outermost: after the parse's objects are freed
 @gc_paused
 def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
                    robot_base=None, dialect: str | None = None, references=(),
