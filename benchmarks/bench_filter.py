@@ -1,5 +1,5 @@
 """Program filter benchmark: speed on 10,000-target programs in each format (goal < 5 s), one run
-on 100,000-target programs (goal < 60 s and < 1 GB; each program is written by one process and
+on 100,000-target programs (goal < 30 s and < 1 GB; each program is written by one process and
 filtered by another, so that the peak memory measured is the filter's), and the
 simulated-truth goal on 200-target programs (within 1.2x of a perfect filter, >= 10x better than
 the unfiltered program); the UR5 drilling cell of issue 21 (a URScript program near the stretched
@@ -163,6 +163,7 @@ def speed(n: int = 10_000) -> None:
 
 
 LARGE = 100_000  # targets of the large-program case
+LARGE_S = 30  # s: the goal for filtering and writing it
 
 
 def large_write(dialect: str, name: str, folder: str, n: int = LARGE) -> None:
@@ -210,14 +211,14 @@ def large() -> None:
         print(json.dumps(r), flush=True)
         m = r["motions"]
         rows.append([dialect, name, r["targets"], f"{r['mb_file']:.1f}", f"{r['s']:.1f}", f"{r['cpu_s']:.1f}",
-                     f"{r['peak_mb']:.0f}", "met" if r["s"] < 60 and r["peak_mb"] < 1024 else "NOT met",
+                     f"{r['peak_mb']:.0f}", "met" if r["s"] < LARGE_S and r["peak_mb"] < 1024 else "NOT met",
                      f"{m['corrected']} + {m['named']} = {m['total']}"])
     figure("large_targets", f"{LARGE:,}")
     figure("large_slowest_s", f"{max(float(r[4]) for r in rows):.1f}")
     figure("large_peak_mb", f"{max(float(r[6]) for r in rows):.0f}")
     table(f"filter, {LARGE:,}-target programs, one run each (filter and write)",
           ["format", "robot", "targets", "MB", "filter + write (s)", "CPU (s)", "peak memory (MB)",
-           "goal < 60 s, < 1 GB", "motions corrected + named = total"], rows, key="large")
+           f"goal < {LARGE_S} s, < 1 GB", "motions corrected + named = total"], rows, key="large")
 
 
 def _ratios(rows: list[dict]) -> tuple[list[float], list[float]]:

@@ -110,15 +110,22 @@ class Compensation:
         """One line per target that was not reached or sits close to a singularity, labelled by
         ``names`` (default ``target i``, i from 0); ``which`` ``(N,)`` bool: only those targets."""
         out = []
-        for i in np.flatnonzero(np.ones(len(self.converged), bool) if which is None else which):
+        n = len(self.converged)
+        close = np.zeros(n, bool) if self.singularity is None else self.singularity.close
+        jumps = np.zeros(n, bool)
+        if self.controller is not None:
+            jumps[self.controller.jumps] = True
+        asked = np.ones(n, bool) if which is None else np.asarray(which, bool)
+        named = (~self.converged | close | jumps) & asked
+        for i in np.flatnonzero(named):  # only the targets with something to say
             name = f"target {i}" if names is None else names[i]
             if not self.converged[i]:
                 out.append(f"{name}: {self.not_reached(i)}: its correction cannot be realised in this "
                            "configuration")
-            elif self.singularity is not None and self.singularity.close[i]:
+            elif close[i]:
                 out.append(f"{name}: close to a singularity, {self.singularity.describe(i)}: the controller "
                            "may not realise its correction")
-            if self.controller is not None and i in self.controller.jumps:
+            if jumps[i]:
                 out.append(f"{name}: the controller's solution nearest the previous joints moves a joint "
                            f"by {np.rad2deg(self.controller.move[i]):.0f} deg (no nearer solution exists): "
                            "it may take another solution than assumed here")

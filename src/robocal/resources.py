@@ -15,7 +15,9 @@ lets the computation run; a ``MemoryError`` then still ends as the same one line
 
 from __future__ import annotations
 
+import ctypes
 import functools
+import gc
 import resource
 from pathlib import Path
 
@@ -136,3 +138,47 @@ def few_threads(rows_of):
                 return fn(*args, **kwargs)
         return limited
     return wrap
+
+
+def gc_paused(fn):
+    """Decorator: Python's cycle collector is off while ``fn`` runs (and back as it was after).
+    A function that builds hundreds of thousands of small objects that all stay alive (a
+    100,000-target program's parsed numbers, targets and table rows) otherwise pays one full
+    collection, a walk over every live object, each time the survivors grow by a quarter: about a
+    third of reading a 100,000-target RAPID module. What it frees is freed by reference counting;
+    cycles wait for the next collection."""
+    @functools.wraps(fn)
+    def paused(*args, **kwargs):
+        was = gc.isenabled()
+        gc.disable()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            if was:
+                gc.enable()
+    return paused
+
+
+@functools.cache
+def _libc():
+    try:
+        return ctypes.CDLL("libc.so.6")  # glibc (Linux); elsewhere nothing to trim
+    except OSError:
+        return None
+
+
+def heap_trimmed(fn):
+    """Decorator: after ``fn`` returns, the memory its freed objects held goes back to the
+    operating system (glibc ``malloc_trim``; a no-op elsewhere). Reading a 100,000-target program
+    frees some 300 MB of small blocks when it is done that the C library would otherwise keep, and
+    the text written next (the target table, tens of MB) would add to them: the peak resident
+    memory of filtering it falls from about 1,050 to under 1,000 MB."""
+    @functools.wraps(fn)
+    def trimmed(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            libc = _libc()
+            if libc is not None and hasattr(libc, "malloc_trim"):
+                libc.malloc_trim(0)
+    return trimmed

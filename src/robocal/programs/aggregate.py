@@ -66,6 +66,33 @@ def parse_aggregate(src: ProgramText, masked: str, pos: int, end: int, what: str
             expect_item = False
 
 
+_SHAPED: dict[tuple[int, ...], re.Pattern] = {}
+_ITEM = r"\s*(" + NUMBER_RE.pattern + r")\s*"
+
+
+def shape_pattern(sizes: tuple[int, ...]) -> re.Pattern:
+    """The pattern of an aggregate of lists of ``sizes`` numbers only (a RAPID robtarget
+    ``[[x,y,z],[q1..q4],[cf..],[eax..]]`` is (3, 4, 4, 6)), each number a group in order: what
+    :func:`parse_aggregate` reads as that tree, found by one compiled match instead of a token
+    at a time. Text of another shape does not match (:func:`parse_aggregate` reads it, and names
+    what is malformed)."""
+    pattern = _SHAPED.get(sizes)
+    if pattern is None:
+        groups = [r"\[" + ",".join([_ITEM] * k) + r"\]" for k in sizes]
+        pattern = _SHAPED[sizes] = re.compile(r"\s*\[\s*" + r"\s*,\s*".join(groups) + r"\s*\]")
+    return pattern
+
+
+def list_pattern(size: int) -> re.Pattern:
+    """The pattern of one list of ``size`` numbers (a URScript ``p[x, y, z, rx, ry, rz]``'s
+    brackets), each number a group: what :func:`parse_aggregate` reads as a flat list of them."""
+    key = (-size,)  # beside the nested shapes of shape_pattern
+    pattern = _SHAPED.get(key)
+    if pattern is None:
+        pattern = _SHAPED[key] = re.compile(r"\s*\[" + ",".join([_ITEM] * size) + r"\]")
+    return pattern
+
+
 def numbers_of(node, sizes: tuple[int, ...], src: ProgramText, at: int, what: str) -> list[list[Number]]:
     """Check that ``node`` is a list of lists of numbers of the given sizes; return them."""
     ok = isinstance(node, list) and len(node) >= len(sizes)
@@ -99,7 +126,14 @@ def close_bracket(text: str, open_at: int) -> int:
 
 
 def split_top(text: str, start: int, end: int, sep: str = ",") -> list[tuple[int, int]]:
-    """Spans of ``text[start:end]`` split at ``sep`` outside brackets, braces and parentheses."""
+    """Spans of ``text[start:end]`` split at ``sep`` (one character) outside brackets, braces and
+    parentheses."""
+    if _BRACKETS.search(text, start, end) is None:  # nothing nested: split in C
+        out, at = [], start
+        for piece in text[start:end].split(sep):
+            out.append((at, at + len(piece)))
+            at += len(piece) + 1
+        return out
     splitter = _SPLITTERS.get(sep)
     if splitter is None:
         splitter = _SPLITTERS[sep] = re.compile(r"[\[\](){}" + re.escape(sep) + "]")

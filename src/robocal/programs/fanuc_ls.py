@@ -42,6 +42,10 @@ _CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d{
                      r"\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*'")
 _VALUE = r"\b{}\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*(?:mm|deg)"
 _KEYS = ("X", "Y", "Z", "W", "P", "R")
+_VALUES = tuple(re.compile(_VALUE.format(k)) for k in _KEYS)
+_JOINTS = re.compile(r"\bJ1\s*=")  # a position in joint representation
+_NEXT = re.compile(r"\bP\[")
+_NUMBER = re.compile(r"P\[(\d+)")
 _EXTENDED = re.compile(r"\b(E\d)\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))")
 _LINE = re.compile(r"^[ \t]*\d*[ \t]*:(.*)$", re.MULTILINE)
 _MOVE = re.compile(r"\s*([JLCA])\s+(.*)$")
@@ -116,12 +120,12 @@ class FanucDialect(Dialect):
                 a, b = body_start + groups[0].end(), body_start + g_end
                 gp = text[a:b]
                 where = f"{src.path.name}:{src.line_of(m.start())}"
-                if re.search(r"\bJ1\s*=", gp):
+                if _JOINTS.search(gp):
                     joint.add((src.path, int(m.group(1))))
                     continue  # joint representation
                 nums = []
-                for k in _KEYS:
-                    v = re.search(_VALUE.format(k), gp)
+                for k, value in zip(_KEYS, _VALUES, strict=True):
+                    v = value.search(gp)
                     if not v:
                         raise DataError(f"{where}: malformed position {name}: no {k} = ... "
                                         f"{'mm' if k in 'XYZ' else 'deg'}")
@@ -153,7 +157,7 @@ class FanucDialect(Dialect):
         motion uses it as a pose); position registers, missing positions and run-time offsets
         are named. ``registers``: PR number -> Target from --position-registers (None: not given):
         a motion to a register given there is corrected in the user and tool frame active there."""
-        numbers = {(t.source.path, int(re.match(r"P\[(\d+)", t.name).group(1))): t for t in prog.targets}
+        numbers = {(t.source.path, int(_NUMBER.match(t.name).group(1))): t for t in prog.targets}
         incremental: dict[tuple, list] = {}  # position -> accounts of the INC motions using it
         used_registers: dict[int, Target] = {}
         plain = set()  # positions some motion uses as a pose
@@ -278,5 +282,5 @@ def _check_body(src, at: int, name: str, body: str, groups: list) -> None:
     if not groups or body[:groups[0].start()].strip():
         raise DataError(f"{where}: position {name}: expected a group header GP1: (GPn:) first, got "
                         f"{' '.join(body.split())[:40]!r}")
-    if re.search(r"\bP\[", body):
+    if _NEXT.search(body):
         raise DataError(f"{where}: position {name} is not closed with }}; before the next position")

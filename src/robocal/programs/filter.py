@@ -37,6 +37,7 @@ from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
+from robocal.programs.edits import FileEdits, monitored, number_edits
 from robocal.programs.external import set_aside_external
 from robocal.programs.fanuc_ls import FanucDialect
 from robocal.programs.inform import InformDialect, looks_like_inform
@@ -46,15 +47,15 @@ from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.motions import undeclared
 from robocal.programs.rapid import RapidDialect
 from robocal.programs.result import LISTED, FilterResult, collapse
-from robocal.programs.source import ProgramText, format_number
+from robocal.programs.source import ProgramText
 from robocal.programs.track import track_program
 from robocal.programs.urscript import URScriptDialect
 from robocal.programs.val3 import Val3Dialect, application_files
+from robocal.resources import gc_paused, heap_trimmed
 from robocal.trust.output_marker import check_unmarked
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
-SWING_DEG = 1.0  # Euler angles moving more than this for a smaller turn: named (gimbal lock)
 CHUNK = 5_000  # targets whose IK candidates and numeric IK are computed at once (memory)
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
 # A real TCP (--tcp) turned more than this from the program's tool data is another tool or a wrong
@@ -325,12 +326,14 @@ def controller_joints(dialect: Dialect, program: Program, targets: list[Target],
 def target_poses(dialect: Dialect, program: Program, targets: list[Target]):
     """``(values, P, W, tool)``: the pose numbers as written ``(N, k)``; target poses in their
     frames, the frames and the tools, each ``(N, 4, 4)`` m."""
-    values = np.array([t.values() for t in targets])
+    values = np.array([[float(n.text) for n in t.numbers] for t in targets], dtype=float)
     W = np.array([program.frames[t.frame] for t in targets])
     tool = np.array([program.tools[t.tool] for t in targets])
     return values, dialect.to_pose(values), W, tool
 
 
+@heap_trimmed  # outermost: after the parse's objects are freed
+@gc_paused
 def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, frames=None, tcp=None,
                    robot_base=None, dialect: str | None = None, references=(),
                    keep_unreached: bool = False, strict: bool = False, force: bool = False,
@@ -503,10 +506,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     cfg = None
     if d.scheme is not None:
         cfg = (d.scheme.encode(controller, seeds), d.scheme.encode(controller, q))
-    edits, changed = _edits(d, targets, values, good, Pc, cfg, warnings)
+    edits, changed = number_edits(d, targets, values, good, Pc, cfg, warnings)
     warnings += comp.warnings([t.where for t in targets], good)  # the corrected ones near a singularity
+    outputs = {s.path: edits.pop(s.path, FileEdits()).apply(s) for s in sources}  # edits freed once used
     rows = _rows(d, targets, X, W @ Pc, controller, q, ok, good, comp.converged & ok, changed, cfg, sing)
-    outputs = {s.path: s.replaced(edits.get(s.path, {})) for s in sources}
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,
                         program.ledger.records(corrected, program.not_corrected), calibrated,
@@ -582,17 +585,12 @@ def _listed(headline: str, items: list[str], advice: str) -> DataError:
     return ListedError("\n".join([headline, *items[:LISTED], *more, advice]))
 
 
-def _monitored(targets: list[Target]) -> np.ndarray:
-    """Which targets' configuration data the controller follows (they have some, monitored)."""
-    return np.array([t.config is not None and t.monitored for t in targets])
-
-
 def _inexact_configurations(d: Dialect, nominal: Robot, targets: list[Target], q_nom, ok) -> list[str]:
     """Warnings for targets whose configuration data match no solution exactly (a quadrant or
     turn no joint vector inside the limits has): the nearest solution was taken."""
     if d.scheme is None:
         return []
-    has = _monitored(targets) & ok
+    has = monitored(targets) & ok
     if not has.any():
         return []
     rows = d.scheme.encode(nominal, q_nom[has])
@@ -617,102 +615,28 @@ def _check_joints(nominal: Robot, comp: Compensation, ok: np.ndarray, problems: 
                                  f"{-margin[j]:.3f} deg)"))
 
 
-def _edits(d: Dialect, targets: list[Target], old: np.ndarray, good: np.ndarray, Pc: np.ndarray, cfg,
-           warnings: list):
-    """Span edits per file for the corrected poses ``Pc`` of targets whose numbers were ``old``
-    and, where the correction crossed a configuration boundary, the configuration data; and which
-    targets' configuration changed. ``cfg``: (rows of the nominal joints, rows of the corrected
-    joints) or None."""
-    new = d.from_pose(Pc, old)
-    warnings += _gimbal_swings(d, targets, old, new, good)
-    resolution = d.resolutions()
-    moved = good[:, None] & (np.abs(new - old) > resolution / 2)  # numbers that must be rewritten
-    changed = np.zeros(len(targets), bool)
-    if cfg is not None:
-        has = _monitored(targets)
-        want = np.array([t.config if has[i] else cfg[0][i] for i, t in enumerate(targets)])
-        # rewritten only when the written data describe the corrected joints worse than the nominal ones
-        changed = good & has & (d.scheme.score(cfg[1], want) > d.scheme.score(cfg[0], want))
-    finest: dict[tuple[Path, int], int] = {}  # (file, column) -> the file's decimals for shared columns
-    for group in d.shared_decimals:
-        for t in targets:
-            most = max(t.numbers[j].decimals for j in group)
-            for j in group:
-                key = (t.source.path, j)
-                finest[key] = max(finest.get(key, 0), most)
-    edits: dict[Path, dict] = {}
-    for i in np.flatnonzero(moved.any(axis=1) | changed):
-        t = targets[i]
-        mine = edits.setdefault(t.source.path, {})
-        for j in np.flatnonzero(moved[i]):
-            num = t.numbers[j]
-            text = format_number(float(new[i, j]), num, float(resolution[j]),
-                                 finest.get((t.source.path, int(j)), 0))
-            if num.start == num.end:  # a number the file leaves out: inserted (several in their order)
-                key = (num.start, num.end)
-                mine[key] = mine.get(key, "") + d.number_edit(t, num, text)
-                continue
-            mine.update(_aligned(t.source.text, num, text) if d.keep_width else {(num.start, num.end): text})
-        if changed[i]:
-            mine.update(d.config_edits(t, cfg[1][i]))
-            warnings.append(f"{t.where}: configuration changed from {d.scheme.text(cfg[0][i])} to "
-                            f"{d.scheme.text(cfg[1][i])}: the corrected joints cross a configuration "
-                            "boundary; check the motion into and out of this target")
-    return edits, changed
-
-
-def _gimbal_swings(d: Dialect, targets: list[Target], old: np.ndarray, new: np.ndarray,
-                   good: np.ndarray) -> list[str]:
-    """Warnings for targets whose Euler angles change by more than ``SWING_DEG`` while the
-    orientation turns less: near gimbal lock (middle angle +-90 deg) the outer angles trade, and a
-    turn off the pole needs them to swing (same orientation, other numbers)."""
-    if not d.euler_columns:
-        return []
-    cols = list(d.euler_columns)
-    step = new[:, cols] - old[:, cols]
-    swing = np.abs(step - 360.0 * np.round(step / 360.0)).max(axis=1)
-    R0, R1 = d.to_pose(old)[:, :3, :3], d.to_pose(new)[:, :3, :3]
-    turn = np.rad2deg(np.linalg.norm(matrix_to_rotvec(R1 @ np.swapaxes(R0, 1, 2)), axis=1))
-    pole = np.abs(90.0 - np.abs(new[:, cols[1]]))
-    return [f"{targets[i].where}: its angles change by up to {swing[i]:.1f} deg for an orientation "
-            f"correction of {turn[i]:.3f} deg: it is {pole[i]:.3f} deg from gimbal lock (middle angle "
-            "+-90 deg), where the other two angles trade; the orientation is the corrected one"
-            for i in np.flatnonzero(good & (swing > SWING_DEG) & (turn < SWING_DEG))]
-
-
-def _aligned(text: str, num, new: str) -> dict[tuple[int, int], str]:
-    """The edit writing ``new`` over number ``num`` of ``text`` in the same width when the number is
-    right-aligned after spaces: padded with spaces, or taking spaces before it (one is kept)."""
-    if text[num.start - 1:num.start] != " " or len(new) == len(num.text):
-        return {(num.start, num.end): new}
-    if len(new) < len(num.text):
-        return {(num.start, num.end): new.rjust(len(num.text))}
-    spaces = len(text[:num.start]) - len(text[:num.start].rstrip(" "))
-    take = min(len(new) - len(num.text), spaces - 1)
-    return {(num.start - take, num.end): new}
-
-
 def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing) -> list[dict]:
-    """The per-target table (see docs/programs.md)."""
+    """The per-target table (see docs/programs.md), built from columns (one conversion per column,
+    not per value)."""
     dpos = np.linalg.norm(Xc[:, :3, 3] - X[:, :3, 3], axis=1) * 1e3
     drot = np.rad2deg(np.linalg.norm(matrix_to_rotvec(Xc[:, :3, :3] @ np.swapaxes(X[:, :3, :3], 1, 2)),
                                      axis=1))
     lim = np.rad2deg(np.minimum(q - nominal.limits[:, 0], nominal.limits[:, 1] - q))
-    columns = sing.columns()
+    joint = np.argmin(lim, axis=1)
+    columns = {name: values.tolist() for name, values in sing.columns().items()}
+    cols = zip(dpos.tolist(), drot.tolist(), lim[np.arange(len(lim)), joint].tolist(), (joint + 1).tolist(),
+               good.tolist(), ok.tolist(), converged.tolist(), changed.tolist(), strict=True)
     rows = []
-    for i, t in enumerate(targets):
-        j = int(np.argmin(lim[i]))
+    for i, (t, (mm, deg, margin, j, g, reached, conv, ch)) in enumerate(zip(targets, cols, strict=True)):
         rows.append({
             "file": t.source.path.name, "line": t.line, "name": t.name, "frame": t.frame, "tool": t.tool,
-            "filtered": bool(good[i]),
-            "correction_mm": float(dpos[i]), "correction_deg": float(drot[i]),
-            "configuration": "changed" if changed[i] else ("none" if t.config is None else
-                                                           "kept" if t.monitored else "not monitored"),
+            "filtered": g, "correction_mm": mm, "correction_deg": deg,
+            "configuration": "changed" if ch else ("none" if t.config is None else
+                                                   "kept" if t.monitored else "not monitored"),
             "config_before": (d.scheme.text(t.config) if cfg is not None and t.config is not None else
-                              d.scheme.text(cfg[0][i]) if cfg is not None and ok[i] else ""),
-            "config_after": d.scheme.text(cfg[1][i]) if cfg is not None and good[i] else "",
-            "reachable": bool(ok[i]), "converged": bool(converged[i]),
-            "limit_margin_deg": float(lim[i, j]), "limit_joint": j + 1,
-            **{name: values[i].item() for name, values in columns.items()},
+                              d.scheme.text(cfg[0][i]) if cfg is not None and reached else ""),
+            "config_after": d.scheme.text(cfg[1][i]) if cfg is not None and g else "",
+            "reachable": reached, "converged": conv, "limit_margin_deg": margin, "limit_joint": j,
+            **{name: values[i] for name, values in columns.items()},
         })
     return rows

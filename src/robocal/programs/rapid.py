@@ -28,7 +28,14 @@ import numpy as np
 
 from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
-from robocal.programs.aggregate import Word, close_bracket, numbers_of, parse_aggregate, split_top
+from robocal.programs.aggregate import (
+    Word,
+    close_bracket,
+    numbers_of,
+    parse_aggregate,
+    shape_pattern,
+    split_top,
+)
 from robocal.programs.config import ABBConfig
 from robocal.programs.expressions import constant_value
 from robocal.programs.flow import Flow, Routine, order_by_execution
@@ -81,11 +88,14 @@ _LEAD = re.compile(r"\s*(?:(?:LOCAL\s+)?(?:PROC|TRAP)\s+\w+\s*(?:\([^)]*\))?|(?:
                    r"CASE\s+[^:]+:|(?:ELSE)?IF\s+[\s\S]*?\bTHEN|FOR\s+[\s\S]*?\bDO|WHILE\s+[\s\S]*?\bDO|"
                    r"TEST\s+[^\n]+|MODULE\s+\w+(?:\s*\([^)]*\))?|ERROR(?:\s*\([^)]*\))?|UNDO|BACKWARD|"
                    r"[A-Za-z]\w*:(?!=))", re.IGNORECASE)
+_CONF_LIMIT = 2**31  # confdata are quadrants and turns: an integer beyond this is not one
 _UNUSED_AXIS = 8e9  # external-axis values at or above this are 9E9: the axis is not used
 _POSITION_MM = 1e-3  # mm: 1 um
 _QUATERNION = 1e-6  # about 2e-6 rad: 0.4 um at 200 mm from the flange
 BUILTIN_TOOLS = ("tool0",)
 BUILTIN_WOBJS = ("wobj0",)
+# a robtarget of numbers only (position, quaternion, confdata, six external axes): one match
+_ROBTARGET = shape_pattern((3, 4, 4, 6))
 _DEPTH = 12  # routine calls and assignments followed at most this deep
 
 
@@ -218,10 +228,12 @@ class RapidDialect(Dialect):
                 if kind == "robtarget":
                     st.declared.setdefault(name.lower(), [])  # VAR robtarget p; assigned at run time
                 return
-            tree, _ = parse_aggregate(src, masked, m.end(), e, f"{kind} {name}")
+            shaped = _ROBTARGET.match(masked, m.end(), e) if kind == "robtarget" and not m.group(4) else None
+            tree = None if shaped else parse_aggregate(src, masked, m.end(), e, f"{kind} {name}")[0]
             where = f"{src.path.name}:{src.line_of(m.start())}"
             if kind == "robtarget":
-                targets = self._robtargets(src, tree, name, m.start(), m.group(4))
+                targets = [self._shaped(src, shaped, name, m.start())] if shaped else \
+                    self._robtargets(src, tree, name, m.start(), m.group(4))
                 if only_frames:
                     for t in targets:
                         t.name += f" (in the reference {src.path.name})"
@@ -292,15 +304,27 @@ class RapidDialect(Dialect):
 
     def _robtarget(self, src, tree, name, at) -> Target:
         xyz, quat, conf = numbers_of(tree, (3, 4, 4), src, at, f"robtarget {name}")
-        config = np.array([float(n.text) for n in conf])
-        if not np.all(config == np.round(config)):
+        ext = tree[3] if len(tree) > 3 and isinstance(tree[3], list) else []
+        axes = [(k, x.text) for k, x in enumerate(ext) if isinstance(x, Number)]
+        return self._target(src, xyz + quat, conf, axes, name, at)
+
+    def _shaped(self, src, m: re.Match, name, at) -> Target:
+        """The target of a robtarget of numbers only, matched by ``_ROBTARGET``."""
+        text, spans = src.text, m.regs
+        numbers = [Number(a, b, text[a:b]) for a, b in spans[1:12]]
+        axes = list(enumerate(text[a:b] for a, b in spans[12:18]))
+        return self._target(src, numbers[:7], numbers[7:], axes, name, at)
+
+    def _target(self, src, pose: list[Number], conf: list[Number], ext: list[tuple[int, str]], name,
+                at) -> Target:
+        """A robtarget's Target from its pose numbers, confdata and external axes ``(index, text)``."""
+        config = [float(n.text) for n in conf]
+        if not all(c.is_integer() and abs(c) < _CONF_LIMIT for c in config):
             raise DataError(f"{src.path.name}:{src.line_of(at)}: robtarget {name}: confdata must be "
                             f"integers, got {[n.text for n in conf]}")
-        cf1, cf4, cf6, cfx = config.astype(int)
-        ext = tree[3] if len(tree) > 3 and isinstance(tree[3], list) else []
-        used = [f"eax_{'abcdef'[k]} = {x.text}" for k, x in enumerate(ext)
-                if isinstance(x, Number) and abs(x.value) < _UNUSED_AXIS]
-        return Target(src, at, name, xyz + quat, config=np.array([cfx, cf1, cf4, cf6]), config_spans=conf,
+        cf1, cf4, cf6, cfx = map(int, config)
+        used = [f"eax_{'abcdef'[k]} = {x}" for k, x in ext if abs(float(x)) < _UNUSED_AXIS]
+        return Target(src, at, name, pose, config=np.array([cfx, cf1, cf4, cf6]), config_spans=conf,
                       external=", ".join(used))
 
     def _robtargets(self, src, tree, name, at, array: str | None) -> list[Target]:
@@ -384,6 +408,12 @@ class RapidDialect(Dialect):
         if depth > _DEPTH:
             return [f"{text[:40]} is defined through more than {_DEPTH} assignments or calls"]
         if text.startswith("["):
+            key = (src.path, lead)
+            shaped = _ROBTARGET.match(masked, lead, b)
+            if shaped:
+                if key not in st.inline:
+                    st.inline[key] = self._shaped(src, shaped, f"inline@{src.line_of(lead)}", lead)
+                return [st.inline[key]]
             tree, _ = parse_aggregate(src, masked, lead, b, "robtarget")
             if isinstance(tree, list) and tree and isinstance(tree[0], list) and tree[0] \
                     and isinstance(tree[0][0], Number):
@@ -414,7 +444,7 @@ class RapidDialect(Dialect):
             if arg_src is None:
                 return [f"{r.group(1)} is a parameter of routine {proc} that no call in these files gives"]
             return self._follow(st, arg_src, x, y, caller, outer, depth + 1)
-        fields = re.sub(r"\s+", "", fields).lower()
+        fields = re.sub(r"\s+", "", fields).lower() if fields else ""
         if fields and name + fields not in st.declared:
             return [f"{' '.join(text.split())} is a field of a RECORD or robtarget: its value is not "
                     "followed"]
@@ -473,6 +503,7 @@ class _State:
         self.constants: dict[str, float] = {}  # CONST num name -> value
         self.records: dict[str, list[tuple[str, str]]] = {}  # RECORD type -> [(type, field)]
         self._scopes: dict[str, list] = {}
+        self._names: dict[tuple[str, str], tuple[str, str]] = {}  # (text, what) -> name_of outside parameters
 
     def scopes(self, proc: str, depth: int = 0) -> list[dict]:
         """Every binding of routine ``proc``'s parameters by the calls of these files: parameter
@@ -506,6 +537,14 @@ class _State:
         """The tool or work object an argument names (following routine parameters), or why not."""
         masked = self.masked[src.path]
         text = masked[span[0]:span[1]].strip() if isinstance(span, tuple) else span
+        if not scope:  # the same text names the same tool everywhere outside routine parameters
+            key = (text, what)
+            if key not in self._names:
+                self._names[key] = self._name_of(text, src, scope, what)
+            return self._names[key]
+        return self._name_of(text, src, scope, what)
+
+    def _name_of(self, text: str, src, scope, what: str) -> tuple[str, str]:
         r = _REF.fullmatch(text)
         if not r or r.group(3):
             return "", f"the {what} {' '.join(text.split())[:40]} is chosen at run time"
@@ -529,7 +568,7 @@ def _arguments(masked: str, start: int, end: int) -> tuple[list[tuple[int, int]]
     the switch's own span) of an instruction whose arguments run from ``start`` to ``end``."""
     positional, optional = [], {}
     for ps, pe in split_top(masked, start, end, ","):
-        parts = split_top(masked, ps, pe, "\\")
+        parts = split_top(masked, ps, pe, "\\") if "\\" in masked[ps:pe] else [(ps, pe)]
         if masked[parts[0][0]:parts[0][1]].strip():
             positional.append(parts[0])
         for os_, oe in parts[1:]:

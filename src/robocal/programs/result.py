@@ -25,6 +25,7 @@ from robocal.programs.motions import MotionRecord, summary, summary_line
 from robocal.trust.output_marker import mark_program
 
 LISTED = 20  # problems (warnings) listed in one message
+JSON_ROWS = 5_000  # table rows encoded by one call of json's encoder
 
 
 @dataclass
@@ -106,10 +107,14 @@ class FilterResult:
         header = {"dialect": self.dialect, "files": [str(p) for p in self.outputs],
                   "summary": self.summary_dict(), "loads": self.loads, "warnings": self.warnings}
         lists = {"targets": self.rows, "motions": [m.as_dict() for m in self.motions]}
-        items = [f" {json.dumps(k)}: {json.dumps(v)}" for k, v in header.items()]
-        items += [f" {json.dumps(k)}: [" + ",".join(f"\n  {json.dumps(row)}" for row in rows) + "\n ]"
-                  for k, rows in lists.items()]
-        return "{\n" + ",\n".join(items) + "\n}\n"
+        parts = ["{\n", ",\n".join(f" {json.dumps(k)}: {json.dumps(v)}" for k, v in header.items())]
+        for k, rows in lists.items():
+            parts.append(f",\n {json.dumps(k)}: [")
+            for s in range(0, len(rows), JSON_ROWS):  # a few MB of text at a time, joined once
+                parts.append(("," if s else "") + _one_per_line(rows[s:s + JSON_ROWS]))
+            parts.append("\n ]")
+        parts.append("\n}\n")
+        return "".join(parts)
 
     def summary_dict(self) -> dict:
         """Counts and extremes: targets filtered, motions corrected and named, configurations
@@ -200,6 +205,20 @@ class FilterResult:
         check_outputs(files, self.outputs)
         write_all(files)
         return list(files)
+
+
+_ITEMS = ",\x00"  # json's separator between items, marked: a raw NUL is never inside encoded JSON
+
+
+def _one_per_line(rows: list[dict]) -> str:
+    """``rows`` (flat dicts of scalars) as JSON, each on its own line after a newline and two
+    spaces, comma-separated: what ``json.dumps`` of each row gives, encoded by one call of json's
+    C encoder (the separator between rows is told from the one between a row's items by the
+    braces around it)."""
+    if not rows:
+        return ""
+    text = json.dumps(rows, separators=(_ITEMS, ": "))
+    return "\n  " + text[1:-1].replace("}" + _ITEMS + "{", "},\n  {").replace(_ITEMS, ", ")
 
 
 _WHERE = re.compile(r"^(\S+:\d+(?: \([^)]*\))?): (.*)$", re.DOTALL)

@@ -19,6 +19,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from robocal.errors import DataError
 
 _LONE_CR = re.compile(r"\r(?!\n)")
@@ -85,14 +87,20 @@ class ProgramText:
 
     def replaced(self, edits: dict[tuple[int, int], str]) -> bytes:
         """The file's bytes with the spans ``(start, end)`` replaced by new ASCII text."""
-        out, pos = [], 0
-        for (start, end), new in sorted(edits.items()):
-            if start < pos:
-                raise AssertionError(f"overlapping edits at byte {start}")
-            out += [self.original[pos:start], new]
-            pos = end
-        out.append(self.original[pos:])
-        return "".join(out).encode("latin-1")
+        return self.spliced([k[0] for k in edits], [k[1] for k in edits], list(edits.values()))
+
+    def spliced(self, starts: list[int], ends: list[int], texts: list[str]) -> bytes:
+        """The file's bytes with each span ``starts[k]:ends[k]`` replaced by ``texts[k]`` (ASCII),
+        in any order: built in one bytearray in span order (no list of pieces kept)."""
+        out, pos, data = bytearray(), 0, memoryview(self.data)
+        for k in np.lexsort((np.asarray(ends, np.int64), np.asarray(starts, np.int64))).tolist():
+            if starts[k] < pos:
+                raise AssertionError(f"overlapping edits at byte {starts[k]}")
+            out += data[pos:starts[k]]
+            out += texts[k].encode("latin-1")
+            pos = ends[k]
+        out += data[pos:]
+        return bytes(out)
 
 
 _NOT_LINE_END = re.compile(r"[^\r\n]")

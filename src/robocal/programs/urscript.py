@@ -24,7 +24,7 @@ import numpy as np
 
 from robocal.errors import DataError
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
-from robocal.programs.aggregate import close_bracket, numbers_of, parse_aggregate, split_top
+from robocal.programs.aggregate import close_bracket, list_pattern, numbers_of, parse_aggregate, split_top
 from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import IDENTITY, Dialect, Program, Target
 from robocal.programs.motions import Undeclared
@@ -34,6 +34,8 @@ from robocal.programs.source import Number, mask
 COMMENT_RE = re.compile(r"#[^\n]*")
 STRING_RE = re.compile(r"\"[^\"\n]*\"|'[^'\n]*'")
 _POSE = re.compile(r"(?<![\w.])p\s*(?=\[)")
+_SIX = list_pattern(6)  # a pose literal's six numbers
+_ASSIGNED = re.compile(r"\b([A-Za-z_]\w*)\s*=\s*$")  # ``name =`` right before a literal
 _ASSIGN = re.compile(r"(?:\b(?:global|local)\s+)?\b([A-Za-z_]\w*)\s*=\s*(?!=)")
 _CALL = re.compile(r"\b(movel|movep|movec|movej|set_tcp)\s*\(")
 _IDENT = re.compile(r"\s*([A-Za-z_]\w*)\s*$")
@@ -329,9 +331,11 @@ class _Script:
         if lead in self.poses:
             return ("target", self.poses[lead], IDENTITY, None)
         close = close_bracket(masked, pm.end())
+        six = _SIX.match(masked, pm.end(), close + 1)  # six numbers: one match
         try:
-            tree, _ = parse_aggregate(self.src, masked, pm.end(), close + 1, "pose")
-            nums = numbers_of([tree], (6,), self.src, lead, "pose")[0]
+            nums = [Number(a, b, self.src.text[a:b]) for a, b in six.regs[1:]] if six else numbers_of(
+                [parse_aggregate(self.src, masked, pm.end(), close + 1, "pose")[0]], (6,), self.src, lead,
+                "pose")[0]
         except DataError:  # not six literal numbers: expressions, perhaps constant ones
             nums = None
         if nums is not None:
@@ -367,7 +371,7 @@ class _Script:
     def _name_at(self, lead: int) -> str:
         """The variable a literal pose is assigned to (``name = p[...]``), else ``p@line``."""
         before = self.masked[max(0, lead - 80):lead]
-        m = re.search(r"\b([A-Za-z_]\w*)\s*=\s*$", before)
+        m = _ASSIGNED.search(before)
         return m.group(1) if m else f"p@{self.src.line_of(lead)}"
 
     def _compose(self, fn: str, first: list, second: list, first_text: str) -> list:
