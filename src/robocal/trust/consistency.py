@@ -62,7 +62,12 @@ MIN_SEGMENT_ROWS = 3  # ... and at least this many rows
 MIN_CHANGE_ROWS = 12  # files with fewer point/pose rows are not searched for change points
 ORIENTATION_FIT_DEG = 1.0  # a pose file's orientation convention fits when it leaves at most this RMS
 WORSE_TOLERANCE = 1.001  # a fit whose RMS exceeds the nominal's by this factor is worse than nominal
-_PERMUTATION_BATCH = 20  # shuffles evaluated together (bounds the memory to 20 x rows x 6 floats)
+_PERMUTATION_BATCH = 20  # shuffles evaluated together at most ...
+# ... and fewer on long files: a batch's shuffled copies (2 frames x shuffles x rows x 3 floats, and
+# the CUSUM's temporaries of that size) stay within this many bytes (one shuffle at a time beyond
+# ~40,000 rows), so the test's memory grows with the rows by a few hundred bytes per row
+_PERMUTATION_BYTES = 64 * 2**20
+_CUSUM_BYTES_PER_VALUE = 5 * 8  # the shuffled copy, its centred copy, its cumulative sum, S_k, S_k^2
 
 
 @dataclass(frozen=True)
@@ -194,6 +199,14 @@ def _cusum(X: np.ndarray, splits: np.ndarray) -> np.ndarray:
     return np.sum(S**2, axis=-1) / (splits * (N - splits) / N)
 
 
+def _permutation_batch(n_rows: int) -> int:
+    """Shuffles of ``n_rows`` rows evaluated together: :data:`_PERMUTATION_BATCH`, fewer (at least
+    one) where their temporaries would exceed :data:`_PERMUTATION_BYTES`. The batch changes
+    neither the random draws (one stream, row after row) nor any shuffle's statistic."""
+    per_shuffle = 2 * n_rows * 3 * _CUSUM_BYTES_PER_VALUE
+    return int(min(_PERMUTATION_BATCH, max(1, _PERMUTATION_BYTES // per_shuffle)))
+
+
 def change_point(errors: np.ndarray, rotations: np.ndarray, noise: float, seed: int = 0):
     """The most significant mean shift of residuals ``errors (N, 3)`` (m) along the row order, in
     the tracker frame and in the flange frame (``rotations (N, 3, 3)``: flange orientation per
@@ -210,8 +223,9 @@ def change_point(errors: np.ndarray, rotations: np.ndarray, noise: float, seed: 
     best = observed[f, j]
     rng = np.random.default_rng(seed)
     exceed = 0
-    for start in range(0, PERMUTATIONS, _PERMUTATION_BATCH):
-        P = min(_PERMUTATION_BATCH, PERMUTATIONS - start)
+    batch = _permutation_batch(N)
+    for start in range(0, PERMUTATIONS, batch):
+        P = min(batch, PERMUTATIONS - start)
         order = np.argsort(rng.random((P, N)), axis=1)
         exceed += int(np.count_nonzero(_cusum(X[:, order], splits).max(axis=(0, 2)) >= best))
     p = (1 + exceed) / (PERMUTATIONS + 1)
