@@ -29,9 +29,10 @@ MAX_INT = 2**53  # an integer column's values beyond this are not exact in a flo
 DECIMAL_COMMA = re.compile(r"[-+]?\d+,\d+")  # a number written with a decimal comma (12,5)
 
 
-def text_lines(text: str, window: int = WINDOW_CHARS) -> Iterator[str]:
+def text_lines(text: str, window: int | None = None) -> Iterator[str]:
     """The lines of ``text``, exactly those of ``text.splitlines()``, produced one window of about
-    ``window`` characters at a time (never a list of every line)."""
+    ``window`` characters at a time (default :data:`WINDOW_CHARS`; never a list of every line)."""
+    window = window or WINDOW_CHARS
     pos, n = 0, len(text)
     size = window
     while pos < n:
@@ -135,13 +136,15 @@ def _fast_block(lines: list[str], header: list[str], first_line: int):
     return values, first_line + np.array(kept, dtype=np.int64)
 
 
-def read_table(lines: Iterable[str], header: list[str], name: str, header_line: int):
-    """The numeric body ``(R, C)`` of the CSV lines below the header and each row's line number
-    ``(R,)`` (blank and ``#`` rows skipped), read :data:`BLOCK_LINES` lines at a time."""
+def read_table(lines: Iterable[str], header: list[str], name: str, header_line: int,
+               block_lines: int | None = None):
+    """The numeric body ``(R, C)`` of the CSV lines below the header (line ``header_line``) and
+    each row's line number ``(R,)`` (blank and ``#`` rows skipped), read ``block_lines`` lines at a
+    time (default :data:`BLOCK_LINES`)."""
     blocks, numbers = [], []
     first = header_line + 1
     it = iter(lines)
-    while block := list(itertools.islice(it, BLOCK_LINES)):
+    while block := list(itertools.islice(it, block_lines or BLOCK_LINES)):
         fast = _fast_block(block, header, first)
         values, line_no = fast if fast is not None else _slow_block(block, header, name, first)
         blocks.append(values)
