@@ -147,3 +147,16 @@ def test_an_evaluation_that_cannot_fit_is_refused_before_it_starts(monkeypatch, 
     assert written["errors_mm"] == stats["errors_mm"].tolist()
     assert written["evaluation"]["rms"] == stats["rms"]
     assert res.evaluation_bytes(1000) - res.evaluation_bytes(0) == 1000 * res.EVALUATION_BYTES_PER_ROW
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(12, 400), st.integers(1, 4), st.integers(0, 2**32 - 1))
+def test_the_cusum_is_bit_identical_to_its_formula(n, shuffles, seed):
+    rng = np.random.default_rng(seed)
+    X = rng.normal(size=(2, n, 3)) * 1e-5 + rng.normal(size=3) * 1e-4
+    shuffled = np.take(X, np.argsort(rng.random((shuffles, n)), axis=1), axis=1)
+    m = max(tc.MIN_SEGMENT_ROWS, int(tc.MIN_SEGMENT_FRACTION * n))
+    splits = np.arange(m, n - m + 1)
+    for Y in (X, shuffled):
+        S = np.cumsum(Y - Y.mean(axis=-2, keepdims=True), axis=-2)[..., splits - 1, :]
+        assert np.array_equal(tc._cusum(Y, splits), np.sum(S**2, axis=-1) / (splits * (n - splits) / n))

@@ -67,7 +67,7 @@ _PERMUTATION_BATCH = 20  # shuffles evaluated together at most ...
 # the CUSUM's temporaries of that size) stay within this many bytes (one shuffle at a time beyond
 # ~40,000 rows), so the test's memory grows with the rows by a few hundred bytes per row
 _PERMUTATION_BYTES = 64 * 2**20
-_CUSUM_BYTES_PER_VALUE = 5 * 8  # the shuffled copy, its centred copy, its cumulative sum, S_k, S_k^2
+_CUSUM_BYTES_PER_VALUE = 3 * 8  # the shuffled copy, its centred cumulative sum, the sum of squares
 
 
 @dataclass(frozen=True)
@@ -195,8 +195,13 @@ def _cusum(X: np.ndarray, splits: np.ndarray) -> np.ndarray:
     """CUSUM statistic ``(..., K)`` of residuals ``X (..., N, 3)`` at the splits (first rows of the
     second segment)."""
     N = X.shape[-2]
-    S = np.cumsum(X - X.mean(axis=-2, keepdims=True), axis=-2)[..., splits - 1, :]
-    return np.sum(S**2, axis=-1) / (splits * (N - splits) / N)
+    S = X - X.mean(axis=-2, keepdims=True)
+    np.cumsum(S, axis=-2, out=S)  # in place: one (..., N, 3) temporary
+    S = S[..., splits[0] - 1:splits[-1], :]  # the splits are consecutive rows: a view
+    S *= S
+    sq = S[..., 0] + S[..., 1]  # the sum over x, y, z in np.sum's order: bit-identical
+    sq += S[..., 2]
+    return sq / (splits * (N - splits) / N)
 
 
 def _permutation_batch(n_rows: int) -> int:
@@ -227,7 +232,7 @@ def change_point(errors: np.ndarray, rotations: np.ndarray, noise: float, seed: 
     for start in range(0, PERMUTATIONS, batch):
         P = min(batch, PERMUTATIONS - start)
         order = np.argsort(rng.random((P, N)), axis=1)
-        exceed += int(np.count_nonzero(_cusum(X[:, order], splits).max(axis=(0, 2)) >= best))
+        exceed += int(np.count_nonzero(_cusum(np.take(X, order, axis=1), splits).max(axis=(0, 2)) >= best))
     p = (1 + exceed) / (PERMUTATIONS + 1)
     k = int(splits[j])
     Y = X[f]
