@@ -63,11 +63,12 @@ MIN_CHANGE_ROWS = 12  # files with fewer point/pose rows are not searched for ch
 ORIENTATION_FIT_DEG = 1.0  # a pose file's orientation convention fits when it leaves at most this RMS
 WORSE_TOLERANCE = 1.001  # a fit whose RMS exceeds the nominal's by this factor is worse than nominal
 _PERMUTATION_BATCH = 20  # shuffles evaluated together at most ...
-# ... and fewer on long files: a batch's shuffled copies (2 frames x shuffles x rows x 3 floats, and
-# the CUSUM's temporaries of that size) stay within this many bytes (one shuffle at a time beyond
-# ~40,000 rows), so the test's memory grows with the rows by a few hundred bytes per row
+# ... and fewer on long files: a batch's temporaries (per shuffle and row: the random draws and
+# their order, the shuffled and the centred-and-summed copies of 2 frames x 3 floats, the sums of
+# squares and their ratio; 144 bytes) stay within this many bytes, so one shuffle at a time
+# beyond ~470,000 rows and the test's memory grows with the rows by ~150 bytes a row
 _PERMUTATION_BYTES = 64 * 2**20
-_CUSUM_BYTES_PER_VALUE = 3 * 8  # the shuffled copy, its centred cumulative sum, the sum of squares
+_CUSUM_BYTES_PER_VALUE = 24  # the temporaries above per row and per value of a shuffled row (2 x 3)
 
 
 @dataclass(frozen=True)
