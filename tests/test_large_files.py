@@ -160,3 +160,30 @@ def test_the_cusum_is_bit_identical_to_its_formula(n, shuffles, seed):
     for Y in (X, shuffled):
         S = np.cumsum(Y - Y.mean(axis=-2, keepdims=True), axis=-2)[..., splits - 1, :]
         assert np.array_equal(tc._cusum(Y, splits), np.sum(S**2, axis=-1) / (splits * (n - splits) / n))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.text(alphabet="ab,\r\n", max_size=60), st.integers(1, 5))
+def test_the_line_count_before_reading_covers_every_row(tmp_path_factory, text, block):
+    path = tmp_path_factory.mktemp("lines") / "f.csv"
+    path.write_bytes(text.encode())
+    lines = text.splitlines()
+    n = ct.count_lines(path, block)
+    assert len(lines) <= n <= text.count("\n") + text.count("\r") + 1
+
+
+def test_the_command_refuses_a_file_too_large_before_reading_it(monkeypatch, tmp_path, capsys):
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(robot, 30, noise_mm=0.02, seed=1)
+    sim.data.save(tmp_path / "d.csv")
+    sim.truth.save(tmp_path / "m.yaml")
+    monkeypatch.setattr(res, "available_bytes", lambda: 200_000_000)
+
+    def not_read(*args, **kwargs):
+        raise AssertionError("the file was read before the refusal")
+
+    monkeypatch.setattr("robocal.cli.args.load_measurements", not_read)
+    code = main(["--quiet", "evaluate", str(tmp_path / "m.yaml"), str(tmp_path / "d.csv")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1
+    assert "evaluating 32 measurement rows needs about 0.30 GB" in err[0] and "evaluate a subset" in err[0]

@@ -53,6 +53,11 @@ def run(args) -> int:
 
     check_history_options(args)
     robot = load_model(args.model)
+    from robocal.data.csv_table import count_lines
+    from robocal.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
+
+    rows = sum(count_lines(p) for p in (args.data, args.frame_from) if p is not None)  # before reading them
+    check_memory(evaluation_bytes(rows), f"evaluating {rows:,} measurement rows", EVALUATION_ADVICE)
     data = load_measurements(args.data, robot, args.quiet, args.fanuc_coupled)
     frame_from = None if args.frame_from is None else \
         load_measurements(args.frame_from, robot, args.quiet, args.fanuc_coupled)

@@ -50,6 +50,22 @@ def text_lines(text: str, window: int | None = None) -> Iterator[str]:
         size = window
 
 
+def count_lines(path, block: int = 1 << 20) -> int:
+    """The lines of the file at ``path`` by its line ends (LF, CR LF or CR; at least its rows), read
+    1 MB at a time: a file's size in rows before reading it; 0 when it cannot be read (the reader
+    then says why)."""
+    ends, last = 0, b"\n"
+    try:
+        with open(path, "rb") as f:
+            while chunk := f.read(block):  # LF, CR and CR LF (one end, also across two chunks)
+                ends += chunk.count(b"\n") + chunk.count(b"\r") - chunk.count(b"\r\n")
+                ends -= last == b"\r" and chunk[:1] == b"\n"
+                last = chunk[-1:]
+    except OSError:
+        return 0
+    return ends + (last not in (b"\n", b"\r"))
+
+
 def csv_rows(lines: Iterable[str], name: str) -> Iterator[list[str]]:
     """The CSV rows of ``lines``, read as they are consumed; a malformed file as one DataError."""
     reader = csv.reader(lines)
