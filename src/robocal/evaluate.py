@@ -102,7 +102,7 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
         real robot's travel).
     ResourceError
         The machine lacks the memory the evaluation needs (refused before it starts, naming how
-        much it needs: :func:`robocal.resources.evaluation_bytes`).
+        much it needs: `robocal.resources.evaluation_bytes`).
 
     Examples
     --------
