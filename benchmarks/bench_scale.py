@@ -1,12 +1,16 @@
 """Scale: time and peak memory (RSS) of ``robocal calibrate`` with the default (the error-model
 search) on 1,000 to 100,000 simulated poses, 100,000 poses under a 3 GiB address-space limit
-(``ulimit -v``), the geometric model alone, and ``robocal filter`` on 10,000 and 100,000-target
-RAPID programs; the growth of memory with the poses (kB per pose, and the exponent of a power law)
-above what a process holds with no data.
+(``ulimit -v``), the geometric model alone, ``robocal evaluate`` of a calibrated model on 1,000 to
+100,000-row measurement files, and ``robocal filter`` on 10,000 and 100,000-target RAPID programs;
+the growth of memory with the poses (kB per pose, and the exponent of a power law) above what a
+process holds with no data, and of evaluate's memory with the rows (kB per row).
 
 Each case runs the command line in a fresh interpreter (its own peak RSS: ``ru_maxrss``), one case
 at a time; the machine's load is recorded with the results (the timings depend on it, the memory
-does not). ``python benchmarks/bench_scale.py [quick]``: ``quick`` stops at 20,000 poses.
+does not). ``python benchmarks/bench_scale.py [quick]``: ``quick`` stops at 20,000 poses. With
+the environment variable ``BENCH_SCALE_LARGE=1`` (also through ``benchmarks/run.py``) evaluate also
+runs on 1,000,000 and 2,700,000 rows (a 500 MB file: the 100,000 simulated poses repeated, each copy
+with its own pose ids and line numbers), which takes tens of minutes.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ TARGETS = (10_000, 100_000)
 ADDRESS_LIMIT = 3 * 1024**3  # bytes: the 100,000-pose default case runs under this ulimit -v
 LIMITED_FROM = 100_000  # the largest pose count, from this many, runs (once) under ADDRESS_LIMIT
 GEOMETRIC_AT = 10_000  # poses of the geometric-model case (--nongeometric none)
+LARGE_ROWS = (1_000_000, 2_700_000)  # evaluate's large files (BENCH_SCALE_LARGE=1)
 SRC = Path(__file__).resolve().parents[1] / "src"
 # runs a robocal command line in this interpreter and prints its exit code and peak RSS (kB)
 _RUNNER = ("import json, resource, sys\nfrom robocal.cli import main\ncode = main(sys.argv[1:])\n"
@@ -97,6 +102,48 @@ def calibrate_scale(folder: Path, poses) -> tuple[list, dict]:
     return rows, rss
 
 
+def repeated_csv(source: Path, target: Path, rows: int) -> None:
+    """``target``: the measurement rows of ``source`` repeated up to ``rows`` rows, each copy with
+    its own pose ids and line numbers (a long campaign's file without simulating it)."""
+    lines = source.read_text().splitlines()
+    start = next(k for k, line in enumerate(lines) if not line.startswith("#"))
+    header = lines[start].split(",")
+    pid, src = header.index("pose_id"), header.index("source_row")
+    body = [line.split(",") for line in lines[start + 1:]]
+    with target.open("w") as f:
+        f.write("\n".join(lines[:start + 1]) + "\n")
+        for k in range(rows):
+            cells = list(body[k % len(body)])
+            cells[pid] = str(int(cells[pid]) + (k // len(body)) * len(body))
+            cells[src] = str(start + 2 + k)
+            f.write(",".join(cells) + "\n")
+
+
+def evaluate_scale(folder: Path, poses, large: tuple = ()) -> tuple[list, dict]:
+    """Rows of the evaluate table and its peak RSS (MB) by rows: the true model of each simulated
+    file (calibrate_scale's) judged on it, and the largest file repeated to ``large`` rows."""
+    rows, rss = [], {}
+    cases = [(n, folder / f"poses{n}.csv") for n in poses]
+    biggest = max(poses)
+    for n in large:
+        repeated_csv(folder / f"poses{biggest}.csv", folder / f"rows{n}.csv", n)
+        cases.append((n, folder / f"rows{n}.csv"))
+    for n, data in cases:
+        model = folder / f"truth{min(n, biggest)}.yaml"
+        load = _load()
+        out = run_cli(["evaluate", str(model), str(data), "--json", str(folder / "evaluation.json")])
+        if out["code"] == 0:
+            rss[n] = out["rss_mb"]
+        mb = data.stat().st_size / 1e6
+        rows.append([f"{n:,}", f"{mb:.0f}", out["code"], f"{out['s']:.1f}", f"{out['rss_mb']:.0f}", load,
+                     out["message"][:120] if out["code"] else ""])
+        print(f"    evaluate {n} rows ({mb:.0f} MB): exit {out['code']}, {out['s']:.1f} s, "
+              f"{out['rss_mb']:.0f} MB", flush=True)
+        if n in large:
+            data.unlink()
+    return rows, rss
+
+
 def filter_scale(folder: Path, targets) -> list:
     """Rows of the filter table: RAPID programs of ``targets`` targets (bench_filter's generator)."""
     from bench_filter import _joints
@@ -142,14 +189,23 @@ def main(parts: list[str] | None = None) -> None:
     poses = tuple(p for p in POSES if p <= 20_000) if quick else POSES
     targets = TARGETS[:1] if quick else TARGETS
     base = _baseline_mb()
+    large = LARGE_ROWS if os.environ.get("BENCH_SCALE_LARGE") == "1" else ()
     with tempfile.TemporaryDirectory() as tmp:
         rows, rss = calibrate_scale(Path(tmp), poses)
+        erows, erss = evaluate_scale(Path(tmp), poses, large)
         frows = filter_scale(Path(tmp), targets)
     slope, exponent = growth(rss, base)
+    eslope, _ = growth(erss, base)
     table(f"calibrate {ROBOT} (simulated, one SMR), default error-model search unless noted: wall time and "
           f"peak RSS of the whole command in a fresh interpreter (which holds {base:.0f} MB with no data)",
           ["poses", "case", "exit", "time (s)", "peak RSS (MB)", "load (1/5/15 min)", "message"], rows,
           key="calibrate")
+    repeated = "the largest two: the 100,000 poses repeated; " if large else ""
+    table(f"evaluate the true model on simulated {ROBOT} measurement files (one SMR, SI columns with 17 "
+          f"digits; {repeated}--json written): wall time and peak RSS of the whole command in a fresh "
+          "interpreter",
+          ["rows", "file (MB)", "exit", "time (s)", "peak RSS (MB)", "load (1/5/15 min)", "message"], erows,
+          key="evaluate")
     table(f"filter RAPID programs ({ROBOT}): wall time and peak RSS",
           ["targets", "exit", "time (s)", "peak RSS (MB)", "load (1/5/15 min)", "message"], frows,
           key="filter")
@@ -158,8 +214,12 @@ def main(parts: list[str] | None = None) -> None:
     figure("baseline_mb", f"{base:.0f}")
     for n, mb in rss.items():
         figure(f"rss_{n}_mb", f"{mb:.0f}")
+    figure("evaluate_kb_per_row", f"{eslope:.2f}")
+    for n, mb in erss.items():
+        figure(f"evaluate_rss_{n}_mb", f"{mb:.0f}")
     print(f"  memory: {slope:.1f} kB per pose (least squares over {', '.join(map(str, sorted(rss)))} poses), "
-          f"power-law exponent above the {base:.0f} MB baseline {exponent:.2f}")
+          f"power-law exponent above the {base:.0f} MB baseline {exponent:.2f}; evaluate {eslope:.2f} kB per "
+          f"row (least squares over {', '.join(map(str, sorted(erss)))} rows)")
 
 
 if __name__ == "__main__":

@@ -11,6 +11,7 @@ from robocal.identify.observations import observation_for
 from robocal.identify.plausibility import check_joint_limits, check_residual, check_spread
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.metrics import position_stats
+from robocal.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
 from robocal.trust.consistency import check_fit
 
 
@@ -99,6 +100,9 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     DataError
         Data that do not fit the model (joint count, SMR indices, joint readings beyond any
         real robot's travel).
+    ResourceError
+        The machine lacks the memory the evaluation needs (refused before it starts, naming how
+        much it needs: `robocal.resources.evaluation_bytes`).
 
     Examples
     --------
@@ -111,6 +115,8 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     >>> round(stats["rms"], 6) == round(sim.noise_floor_mm, 6), stats["error_vectors_mm"].shape
     (True, (30, 3))
     """
+    rows = len(data) + (0 if frame_from is None else len(frame_from))
+    check_memory(evaluation_bytes(rows), f"evaluating {rows:,} measurement rows", EVALUATION_ADVICE)
     out, warnings = {}, []
     for d in (data, frame_from):
         if d is not None:

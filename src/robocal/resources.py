@@ -36,6 +36,11 @@ FIXED_BYTES = 300_000_000  # chunked temporaries, BLAS buffers and the result, w
 # nothing from threads and lose much to them on a busy machine (100 poses, 2 cores at load 10:
 # the whole calibration 2.5-4x faster, its damped solve 4-10x; bench_calibrate's speed case)
 SMALL_PROBLEM_ROWS = 30_000
+# evaluating a model on a measurement file: bounds the measured ~1.2 kB per row of peak RSS (the
+# rows' arrays, the model's frames and the residual test's shuffles; bench_scale's evaluate case)
+EVALUATION_BYTES_PER_ROW = 3_000
+EVALUATION_ADVICE = ("evaluate a subset of the rows (split the file, e.g. by pose ranges) or run on a "
+                     "machine with more memory")
 ADVICE = ("calibrate fewer poses (a subset, e.g. every second pose), use --nongeometric none (the "
           "geometric model needs about a third of the memory) or run on a machine with more memory")
 
@@ -86,13 +91,19 @@ def calibration_bytes(n_poses: int, searched: bool) -> int:
     return FIXED_BYTES + n_poses * (BYTES_PER_POSE if searched else GEOMETRIC_BYTES_PER_POSE)
 
 
-def check_memory(needed: int, what: str) -> None:
+def evaluation_bytes(n_rows: int) -> int:
+    """Memory an evaluation of a model on ``n_rows`` measurement rows needs beyond what is held
+    already (bytes)."""
+    return FIXED_BYTES + n_rows * EVALUATION_BYTES_PER_ROW
+
+
+def check_memory(needed: int, what: str, advice: str = ADVICE) -> None:
     """ResourceError, before anything starts, when ``needed`` bytes cannot be had (see
-    :func:`available_bytes`); ``what`` names the computation."""
+    :func:`available_bytes`); ``what`` names the computation, ``advice`` what to do instead."""
     have = available_bytes()
     if have is not None and needed > have:
         raise ResourceError(f"{what} needs about {_gb(needed)} of memory, this machine offers "
-                            f"{_gb(have)}: {ADVICE}")
+                            f"{_gb(have)}: {advice}")
 
 
 def out_of_memory(what: str) -> str:

@@ -14,6 +14,9 @@ EPILOG = """Examples:
 """
 
 
+_ERRORS = "<errors_mm>"  # stands for the per-row error list in the JSON until it is written
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser("evaluate", help="position error statistics of a model on measurements",
                        description="Compare a model (which holds its base and tool) with measurements: "
@@ -50,6 +53,11 @@ def run(args) -> int:
 
     check_history_options(args)
     robot = load_model(args.model)
+    from robocal.data.csv_table import count_lines
+    from robocal.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
+
+    rows = sum(count_lines(p) for p in (args.data, args.frame_from) if p is not None)  # before reading them
+    check_memory(evaluation_bytes(rows), f"evaluating {rows:,} measurement rows", EVALUATION_ADVICE)
     data = load_measurements(args.data, robot, args.quiet, args.fanuc_coupled)
     frame_from = None if args.frame_from is None else \
         load_measurements(args.frame_from, robot, args.quiet, args.fanuc_coupled)
@@ -66,8 +74,9 @@ def run(args) -> int:
            "consistency": stats["consistency"], "warnings": stats["warnings"]}
     if "rotation_deg" in stats:
         out["rotation_deg"] = stats["rotation_deg"]
-    if args.json:
-        write_all({args.json: json.dumps(out, indent=2) + "\n"})
+    if args.json:  # the per-row errors on one line by json's C encoder (indent runs the pure-Python one)
+        text = json.dumps({**out, "errors_mm": _ERRORS}, indent=2)
+        write_all({args.json: text.replace(f'"{_ERRORS}"', json.dumps(out["errors_mm"]), 1) + "\n"})
     for warning in stats["warnings"]:
         print(f"WARNING: {warning}")
     if not args.quiet:

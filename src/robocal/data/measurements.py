@@ -47,18 +47,17 @@ from __future__ import annotations
 
 import csv
 import io
-import itertools
 import re
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from robocal.data.csv_table import csv_rows, read_table, text_lines
 from robocal.errors import DataError, UnitError
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
-from robocal.kinematics.fk import CHUNK
 from robocal.kinematics.transforms import ROTATION_TOL
 
 KINDS = ("point", "pose", "plane", "distance")
@@ -66,7 +65,6 @@ _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "r
                  "pair", "distance", "approach", "travel", "payload", "temperature")  # row-indexed
 _LENGTH_COLUMNS = ("x", "y", "z", "sigma", "distance")
 _PLAIN_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row", "qw", "qx", "qy", "qz")
-_INT_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row")
 # A laser tracker's range is below ~80 m; anything farther is a unit mistake whatever the robot.
 MAX_TRACKER_RANGE_M = 100.0
 MAX_PAYLOAD_KG = 5000.0  # no arm carries more; a larger value is a unit mistake (g, lb)
@@ -76,7 +74,6 @@ MAX_JOINT_RAD = 4 * np.pi  # no joint turns more than two turns either way
 # base) plus SPAN_MARGIN_M; a wider span is a length unit mistake or a bigger robot's data.
 MAX_SPAN_REACHES = 2.0
 SPAN_MARGIN_M = 0.5
-DECIMAL_COMMA = re.compile(r"[-+]?\d+,\d+")  # a number written with a decimal comma (12,5)
 # Consecutive rows whose joints all agree within this (rad) are readings of one pose (a tracker
 # export that repeats each reading, or the SMRs of one pose) when the file has no pose_id: a
 # robot standing still reads its encoders to well below it; two planned poses never differ less.
@@ -766,34 +763,18 @@ def _header_role(name: str):
     return None
 
 
-def _csv_rows(lines, name: str):
-    """The CSV rows of ``lines`` (an iterator), read as they are consumed."""
-    reader = csv.reader(lines)
-    while True:
-        try:
-            row = next(reader)
-        except StopIteration:
-            return
-        except csv.Error as exc:
-            raise DataError(f"{name}: not a valid CSV file ({exc})") from None
-        yield row
-
-
-def _split_csv(text: str, name: str) -> tuple[str, int, list[str], Iterator[list[str]]]:
-    """(provenance comment, header line number, the header row, the CSV rows below it, read as
-    they are consumed: no list of every row's cells)."""
-    lines = text.splitlines()
+def _split_csv(text: str, name: str) -> tuple[str, int, list[str], Iterator[str]]:
+    """(provenance comment, header line number, the header row, the lines below it, read as they
+    are consumed: no list of every line)."""
+    lines = text_lines(text)
     source = ""
-    start = 0
-    while start < len(lines) and (lines[start].lstrip().startswith("#") or not lines[start].strip()):
-        if not source and lines[start].lstrip().startswith("#"):
-            source = lines[start].lstrip()[1:].strip()
-        start += 1
-    if start >= len(lines):
-        raise DataError(f"{name}: the file is empty; a measurement CSV needs a header line "
-                        "(e.g. q1_deg,...,q6_deg,x_mm,y_mm,z_mm) and data rows")
-    rows = _csv_rows(itertools.islice(lines, start, None), name)
-    return source, start + 1, next(rows, []), rows
+    for start, line in enumerate(lines):
+        if not (line.lstrip().startswith("#") or not line.strip()):
+            return source, start + 1, next(csv_rows([line], name), []), lines
+        if not source and line.lstrip().startswith("#"):
+            source = line.lstrip()[1:].strip()
+    raise DataError(f"{name}: the file is empty; a measurement CSV needs a header line "
+                    "(e.g. q1_deg,...,q6_deg,x_mm,y_mm,z_mm) and data rows")
 
 
 def _column_roles(header: list[str], name: str, header_line: int) -> dict:
@@ -875,55 +856,6 @@ def _data_kind(roles: dict, name: str) -> str:
         return "point"
     raise DataError(f"{name}: no observation columns; add x_mm,y_mm,z_mm (points), "
                     "qw..qz (poses), plane (plane contacts) or pair,distance_mm")
-
-
-def _cell(cell: str, column: str, where: str) -> float:
-    """One numeric cell; errors name the line, the column and the value."""
-    text = cell.strip()[:40]
-    try:
-        v = float(cell)
-    except ValueError:
-        if DECIMAL_COMMA.fullmatch(text):
-            raise DataError(f"{where}, column {column}: {text!r} has a decimal comma: robocal reads numbers "
-                            "with a decimal point; save the file with '.' as the decimal separator") from None
-        raise DataError(f"{where}, column {column}: {text!r} is not a number; fix or remove that "
-                        "row") from None
-    if not np.isfinite(v):
-        raise DataError(f"{where}, column {column}: {text!r} (NaN or infinite); remove failed readings "
-                        "or re-import with `robocal import`, which drops them")
-    integer = column in _INT_COLUMNS or column.startswith("approach")
-    if integer and v != round(v):
-        raise DataError(f"{where}, column {column}: {text!r} must be an integer")
-    if column in _INT_COLUMNS and abs(v) > 2**53:
-        raise DataError(f"{where}, column {column}: {text!r} is out of range")
-    return v
-
-
-def _table(rows: Iterable[list[str]], header: list[str], name: str, header_line: int):
-    """The numeric body ``(R, C)`` and each row's line number ``(R,)``; blank and ``#`` rows
-    skipped. Filled in blocks of CHUNK rows (arrays, not a Python float per cell)."""
-    width = len(header)
-    blocks, numbers = [], []
-    block, block_no, used = np.empty((CHUNK, width)), np.empty(CHUNK, np.int64), 0
-    for k, row in enumerate(rows):
-        ln = header_line + 1 + k
-        if not row or all(not c.strip() for c in row) or row[0].lstrip().startswith("#"):
-            continue
-        if len(row) != width:
-            raise DataError(f"{name}, line {ln}: {len(row)} values but the header has {width} columns; "
-                            "fix or remove that row")
-        block[used] = [_cell(cell, h, f"{name}, line {ln}") for h, cell in zip(header, row, strict=True)]
-        block_no[used] = ln
-        used += 1
-        if used == CHUNK:
-            blocks.append(block)
-            numbers.append(block_no)
-            block, block_no, used = np.empty((CHUNK, width)), np.empty(CHUNK, np.int64), 0
-    blocks.append(block[:used])
-    numbers.append(block_no[:used])
-    if not sum(len(b) for b in blocks):
-        raise DataError(f"{name}: the file has a header but no data rows")
-    return np.concatenate(blocks), np.concatenate(numbers)
 
 
 def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) -> dict:
@@ -1022,7 +954,7 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     roles = _column_roles(header, name, header_line)
     joint_cols = _joint_columns(roles, name)
     kind = _data_kind(roles, name)
-    table, line_no = _table(rows, header, name, header_line)
+    table, line_no = read_table(rows, header, name, header_line)
     col = {h: table[:, i] for i, h in enumerate(header)}
     joints = np.stack([col[h] * roles[h][2] for h in joint_cols], axis=1)
     linear = np.array([_is_length(h) for h in joint_cols])

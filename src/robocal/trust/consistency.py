@@ -62,7 +62,13 @@ MIN_SEGMENT_ROWS = 3  # ... and at least this many rows
 MIN_CHANGE_ROWS = 12  # files with fewer point/pose rows are not searched for change points
 ORIENTATION_FIT_DEG = 1.0  # a pose file's orientation convention fits when it leaves at most this RMS
 WORSE_TOLERANCE = 1.001  # a fit whose RMS exceeds the nominal's by this factor is worse than nominal
-_PERMUTATION_BATCH = 20  # shuffles evaluated together (bounds the memory to 20 x rows x 6 floats)
+_PERMUTATION_BATCH = 20  # shuffles evaluated together at most ...
+# ... and fewer on long files: a batch's temporaries (per shuffle and row: the random draws and
+# their order, the shuffled and the centred-and-summed copies of 2 frames x 3 floats, the sums of
+# squares and their ratio; 144 bytes) stay within this many bytes, so one shuffle at a time
+# beyond ~470,000 rows and the test's memory grows with the rows by ~150 bytes a row
+_PERMUTATION_BYTES = 64 * 2**20
+_CUSUM_BYTES_PER_VALUE = 24  # the temporaries above per row and per value of a shuffled row (2 x 3)
 
 
 @dataclass(frozen=True)
@@ -190,8 +196,21 @@ def _cusum(X: np.ndarray, splits: np.ndarray) -> np.ndarray:
     """CUSUM statistic ``(..., K)`` of residuals ``X (..., N, 3)`` at the splits (first rows of the
     second segment)."""
     N = X.shape[-2]
-    S = np.cumsum(X - X.mean(axis=-2, keepdims=True), axis=-2)[..., splits - 1, :]
-    return np.sum(S**2, axis=-1) / (splits * (N - splits) / N)
+    S = X - X.mean(axis=-2, keepdims=True)
+    np.cumsum(S, axis=-2, out=S)  # in place: one (..., N, 3) temporary
+    S = S[..., splits[0] - 1:splits[-1], :]  # the splits are consecutive rows: a view
+    S *= S
+    sq = S[..., 0] + S[..., 1]  # the sum over x, y, z in np.sum's order: bit-identical
+    sq += S[..., 2]
+    return sq / (splits * (N - splits) / N)
+
+
+def _permutation_batch(n_rows: int) -> int:
+    """Shuffles of ``n_rows`` rows evaluated together: :data:`_PERMUTATION_BATCH`, fewer (at least
+    one) where their temporaries would exceed :data:`_PERMUTATION_BYTES`. The batch changes
+    neither the random draws (one stream, row after row) nor any shuffle's statistic."""
+    per_shuffle = 2 * n_rows * 3 * _CUSUM_BYTES_PER_VALUE
+    return int(min(_PERMUTATION_BATCH, max(1, _PERMUTATION_BYTES // per_shuffle)))
 
 
 def change_point(errors: np.ndarray, rotations: np.ndarray, noise: float, seed: int = 0):
@@ -210,10 +229,11 @@ def change_point(errors: np.ndarray, rotations: np.ndarray, noise: float, seed: 
     best = observed[f, j]
     rng = np.random.default_rng(seed)
     exceed = 0
-    for start in range(0, PERMUTATIONS, _PERMUTATION_BATCH):
-        P = min(_PERMUTATION_BATCH, PERMUTATIONS - start)
+    batch = _permutation_batch(N)
+    for start in range(0, PERMUTATIONS, batch):
+        P = min(batch, PERMUTATIONS - start)
         order = np.argsort(rng.random((P, N)), axis=1)
-        exceed += int(np.count_nonzero(_cusum(X[:, order], splits).max(axis=(0, 2)) >= best))
+        exceed += int(np.count_nonzero(_cusum(np.take(X, order, axis=1), splits).max(axis=(0, 2)) >= best))
     p = (1 + exceed) / (PERMUTATIONS + 1)
     k = int(splits[j])
     Y = X[f]
