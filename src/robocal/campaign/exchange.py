@@ -285,17 +285,32 @@ def _improves(new: float, old: float) -> bool:
     return new < old - IMPROVEMENT_RTOL * max(abs(old), 1e-300)
 
 
-def _packing(design: _Design, order: np.ndarray, limit: int) -> list[int]:
-    """Members taken in ``order``, each skipped when it conflicts with one already taken."""
+def packing(C: int, conflicts: Callable[[int], np.ndarray], order: np.ndarray, limit: int) -> list[int]:
+    """Up to ``limit`` of the ``C`` candidates taken in ``order``, each skipped when it conflicts
+    (``conflicts(j)``: the candidates that may not be chosen with ``j``) with one already taken."""
     members: list[int] = []
-    blocked = np.zeros(design.C, np.int64)
+    blocked = np.zeros(C, np.int64)
     for j in order:  # sequential by nature: each pick blocks its neighbours
         if len(members) >= limit:
             break
         if blocked[j] == 0:
             members.append(int(j))
-            blocked += design.conflicts(int(j))
+            blocked += conflicts(int(j))
     return members
+
+
+def packing_of(design: _Design, n: int, rng: np.random.Generator) -> list[int]:
+    """A random packing of ``n`` members for ``design`` (see :func:`packing`)."""
+    return packing(design.C, design.conflicts, rng.permutation(design.C), n)
+
+
+def itself_only(C: int) -> Callable[[int], np.ndarray]:
+    """The conflicts without a minimum distance: a candidate conflicts with itself only."""
+    def conflicts(j: int) -> np.ndarray:
+        out = np.zeros(C, np.int64)
+        out[j] = 1
+        return out
+    return conflicts
 
 
 def _complete(design: _Design, n: int, rng: np.random.Generator) -> None:
@@ -307,17 +322,17 @@ def _complete(design: _Design, n: int, rng: np.random.Generator) -> None:
         if np.isfinite(values[j]):
             design.add(j)
             continue
-        packing = _packing(design, rng.permutation(design.C), n)
-        if len(packing) < n:
+        members = packing_of(design, n, rng)
+        if len(members) < n:
             raise DataError(
-                f"only {len(packing)} poses could be chosen with no two closer than the minimum joint "
+                f"only {len(members)} poses could be chosen with no two closer than the minimum joint "
                 f"distance (asked for {n}): lower the minimum distance or allow more candidates")
-        design.reset(packing)
+        design.reset(members)
 
 
 def _start(design: _Design, n: int, n0: int, rng: np.random.Generator) -> None:
     """A random minimal design of ``n0`` non-conflicting members, completed greedily to ``n``."""
-    design.reset(_packing(design, rng.permutation(design.C), n0))
+    design.reset(packing_of(design, n0, rng))
     _complete(design, n, rng)
 
 
@@ -391,10 +406,7 @@ def exchange(G: np.ndarray, A: np.ndarray | None, n: int, *, criterion: str = "I
     if prior is not None and (np.shape(prior) != (p,) or not np.all(np.asarray(prior) >= 0)):
         raise DataError(f"the prior precisions must be {p} values >= 0")
     if conflicts is None:
-        def conflicts(j: int) -> np.ndarray:
-            out = np.zeros(C, np.int64)
-            out[j] = 1
-            return out
+        conflicts = itself_only(C)
     with one_blas_thread():
         return _search(G, A, n, criterion, starts, seed, conflicts, init, progress, prior)
 

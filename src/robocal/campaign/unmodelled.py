@@ -33,7 +33,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.campaign.exchange import IMPROVEMENT_RTOL, MAX_SWEEPS, RIDGE, one_blas_thread
+from robocal.campaign.exchange import (
+    IMPROVEMENT_RTOL,
+    MAX_SWEEPS,
+    RIDGE,
+    itself_only,
+    one_blas_thread,
+    packing,
+)
 from robocal.campaign.information import Information, Noise, candidate_blocks, whitened_rows
 from robocal.data.measurements import Measurements
 from robocal.errors import DataError
@@ -157,36 +164,16 @@ def search(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, init
     ``starts`` random ones (no two members conflicting): the noise-optimal design's extreme poses
     are often a local optimum of ``V``. Returns the sorted design and its ``V`` (m^2)."""
     C, n = len(G), len(init)
-
-    def blocked_by(m: int) -> np.ndarray:
-        if conflicts is not None:
-            return conflicts(m)
-        out = np.zeros(C, np.int64)
-        out[m] = 1
-        return out
-
+    blocked_by = itself_only(C) if conflicts is None else conflicts
     best = None
     with one_blas_thread():
-        for design in [list(init)] + [_packing(C, n, blocked_by, rng) for _ in range(starts)]:
+        for design in [list(init)] + [packing(C, blocked_by, rng.permutation(C), n) for _ in range(starts)]:
             if len(design) < n:
                 continue  # the conflicts left no room for a random packing of n
             found = polish(G, A, prior, um, design, blocked_by, rng)
             if best is None or found[1] < best[1]:
                 best = found
     return best
-
-
-def _packing(C: int, n: int, blocked_by, rng: np.random.Generator) -> list[int]:
-    """``n`` candidates in random order, each skipped when it conflicts with one already taken."""
-    members: list[int] = []
-    blocked = np.zeros(C, np.int64)
-    for j in rng.permutation(C):  # sequential by nature: each pick blocks its neighbours
-        if len(members) == n:
-            break
-        if blocked[j] == 0:
-            members.append(int(j))
-            blocked += blocked_by(int(j))
-    return members
 
 
 def polish(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, members,
