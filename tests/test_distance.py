@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from jacobian_check import central_difference
 
 from robocal import Robot, calibrate
 from robocal.data.measurements import Measurements
@@ -39,9 +40,7 @@ def test_jacobian_and_batch_match_the_residuals():
     J = problem.jacobian(state, space)
     h = 1e-7
     for k in range(space.size):
-        e = np.zeros(space.size)
-        e[k] = h
-        fd = -(problem.residuals(space.apply(state, e)) - problem.residuals(space.apply(state, -e))) / (2 * h)
+        fd = central_difference(problem, state, space, k, h)
         np.testing.assert_allclose(J[:, k], fd, atol=1e-7)
     X = np.random.default_rng(3).normal(0, 1e-4, (4, space.size))
     batch, _ = problem.profiled_residuals_batch(state.robot, space.robot, X)  # the population solvers' path
