@@ -58,6 +58,14 @@ def _tool0(mass_kg, cog_m, tool=None):
     return np.array([mass_kg, *(c if tool is None else tool[:3, :3] @ c + tool[:3, 3])])
 
 
+def _set_payload_after_tool(path, statement: str) -> None:
+    """A FANUC TP program of write_program with ``statement`` (a PAYLOAD[...]) right after its
+    UTOOL_NUM line."""
+    text = path.read_bytes().decode()
+    line = "   0:  UTOOL_NUM=1 ;"
+    path.write_bytes(text.replace(line, f"{line}\r\n   0:  {statement} ;").encode())
+
+
 def _insert_before(text: str, marker: str, line: str) -> str:
     at = text.index(marker)
     at = text.rindex("\n", 0, at) + 1
@@ -102,9 +110,9 @@ def _set_loads(dialect: str, paths, tmp_path):
         return both, tool_load, kwargs
     if dialect == "fanuc":
         src = paths[0]
-        text = src.read_bytes().decode()
-        text = text.replace("   0:  UTOOL_NUM=1 ;", "   0:  UTOOL_NUM=1 ;\r\n   0:  PAYLOAD[3] ;")
-        text = _insert_before(text, f" P[{HALF + 1}] ", "   0:  PAYLOAD[5:gripper empty] ;\r\n")
+        _set_payload_after_tool(src, "PAYLOAD[3]")
+        text = _insert_before(src.read_bytes().decode(), f" P[{HALF + 1}] ",
+                              "   0:  PAYLOAD[5:gripper empty] ;\r\n")
         src.write_bytes(text.encode())
         schedules = tmp_path / "payloads.csv"
         schedules.write_text(
@@ -229,13 +237,7 @@ def test_a_target_run_with_two_loads_is_corrected_for_its_first_and_the_motion_n
 def test_unreadable_or_missing_load_data_is_a_clear_error(tmp_path):
     nominal, cal = _robots()
     paths, tools, frames = write_program("fanuc", tmp_path, nominal, _joints(nominal, 2), TOOL, FRAME)
-    text = (
-        paths[0]
-        .read_bytes()
-        .decode()
-        .replace("   0:  UTOOL_NUM=1 ;", "   0:  UTOOL_NUM=1 ;\r\n   0:  PAYLOAD[2] ;")
-    )
-    paths[0].write_bytes(text.encode())
+    _set_payload_after_tool(paths[0], "PAYLOAD[2]")
     with pytest.raises(
         DataError,
         match=r"sim.ls:7: PAYLOAD\[2\]: the payload schedules live in the controller: "
@@ -294,13 +296,7 @@ def test_filter_cli_reads_fanuc_payload_schedules_and_prints_the_loads(tmp_path,
     nominal, cal = _robots()
     cal.save(tmp_path / "cal.yaml")
     paths, tools, frames = write_program("fanuc", tmp_path, nominal, _joints(nominal, 4), TOOL, FRAME)
-    text = (
-        paths[0]
-        .read_bytes()
-        .decode()
-        .replace("   0:  UTOOL_NUM=1 ;", "   0:  UTOOL_NUM=1 ;\r\n   0:  PAYLOAD[1] ;")
-    )
-    paths[0].write_bytes(text.encode())
+    _set_payload_after_tool(paths[0], "PAYLOAD[1]")
     (tmp_path / "pl.csv").write_text(
         "schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm\n1,90,0,0,25\n"
     )
