@@ -126,12 +126,21 @@ def test_the_batch_bounds_the_shuffles_memory():
         tc._PERMUTATION_BYTES, 2 * n * 3 * tc._CUSUM_BYTES_PER_VALUE)
 
 
-def test_an_evaluation_that_cannot_fit_is_refused_before_it_starts(monkeypatch, tmp_path, capsys):
+@pytest.fixture
+def short_of_memory(monkeypatch, tmp_path):
+    """A 30-pose simulated campaign saved as d.csv and its truth m.yaml in ``tmp_path``, on a
+    machine that offers 0.2 GB."""
     robot = rc.Robot.from_catalog("abb_irb2600")
     sim = simulate_tracker(robot, 30, noise_mm=0.02, seed=1)
     sim.data.save(tmp_path / "d.csv")
     sim.truth.save(tmp_path / "m.yaml")
     monkeypatch.setattr(res, "available_bytes", lambda: 200_000_000)
+    return sim
+
+
+def test_an_evaluation_that_cannot_fit_is_refused_before_it_starts(short_of_memory, monkeypatch, tmp_path,
+                                                                   capsys):
+    sim = short_of_memory
     with pytest.raises(ResourceError, match=r"evaluating 30 measurement rows needs about 0\.30 GB.*"
                                             r"offers 0\.20 GB.*evaluate a subset"):
         rc.evaluate(sim.truth, sim.data)
@@ -172,13 +181,8 @@ def test_the_line_count_before_reading_covers_every_row(tmp_path_factory, text, 
     assert len(lines) <= n <= text.count("\n") + text.count("\r") + 1
 
 
-def test_the_command_refuses_a_file_too_large_before_reading_it(monkeypatch, tmp_path, capsys):
-    robot = rc.Robot.from_catalog("abb_irb2600")
-    sim = simulate_tracker(robot, 30, noise_mm=0.02, seed=1)
-    sim.data.save(tmp_path / "d.csv")
-    sim.truth.save(tmp_path / "m.yaml")
-    monkeypatch.setattr(res, "available_bytes", lambda: 200_000_000)
-
+def test_the_command_refuses_a_file_too_large_before_reading_it(short_of_memory, monkeypatch, tmp_path,
+                                                                 capsys):
     def not_read(*args, **kwargs):
         raise AssertionError("the file was read before the refusal")
 
