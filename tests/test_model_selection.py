@@ -349,6 +349,20 @@ def test_explicit_cyclic_term_searches_the_data_and_the_model_round_trips(tmp_pa
     assert any("no significant cyclic error" in w for w in plain.warnings)
 
 
+def test_a_peak_at_the_bottom_of_the_band_stays_a_cyclic_frequency():
+    """A twice-per-revolution error (the gear term's) searched by ``cyclic`` alone peaks at the
+    band's lowest frequency; its refinement must not move it below 2 cycles per revolution (it did,
+    and the calibration stopped naming a frequency of 1.99)."""
+    robot = Robot.from_catalog("abb_irb2600")
+    true = _with_errors(robot, ["gear1_s2", "gear1_c2"], [3e-4, 2e-4])
+    for seed in (0, 1):
+        sim = simulate_tracker(true, 120, noise_mm=0.02, seed=seed)
+        result = calibrate(robot, sim.data, nongeometric="cyclic")
+        found = [float(nm.split("_")[1]) for nm in result.robot.joint_errors.names]
+        assert found and min(found) > 2.0
+        assert result.after["rms"] <= 1.1 * sim.noise_floor_mm
+
+
 def test_a_chosen_model_that_does_not_converge_is_not_chosen(monkeypatch):
     """auto's final fit must converge: a candidate whose final calibration stops at the limit is
     marked in the table (x, not_converged) and the one-standard-error rule picks among the rest."""

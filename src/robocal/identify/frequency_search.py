@@ -50,6 +50,7 @@ _REFINE_POINTS = 21          # least-squares refinement grid over +-1 grid step 
 _POLISH_POINTS = 9           # exact refinement grid over +-1/2 grid step (polish)
 TRIG_SUM_RTOL = 1e-13        # truncation of the gridded sums' Taylor series, relative to sum |w|
 _OVERSAMPLING = 4            # FFT length / number of modes: the Taylor remainder's step is pi / 4
+_LOWEST = CYCLIC_MIN_FREQUENCY + 0.01  # refinement never goes below this (names round to 0.01)
 
 
 def trig_sums(w: np.ndarray, x: np.ndarray, n_modes: int) -> np.ndarray:
@@ -169,7 +170,7 @@ class FrequencyScan:
             others = self.columns(Jtheta, rows, out[:k] + out[k + 1 :])
             U = np.hstack([U0, _orthonormal(others - U0 @ (U0.T @ others))])
             rp = r - U @ (U.T @ r)
-            grid = f0 + np.linspace(-0.5, 0.5, _POLISH_POINTS) * self.step[i]
+            grid = _in_band(f0 + np.linspace(-0.5, 0.5, _POLISH_POINTS) * self.step[i])
             qi = np.repeat(self.q_item[:, i], rows)[:, None] * grid[None]
             S, C = Jtheta[:, [i]] * np.sin(qi), Jtheta[:, [i]] * np.cos(qi)
             S, C = S - U @ (U.T @ S), C - U @ (U.T @ C)
@@ -183,7 +184,7 @@ class FrequencyScan:
         ``y (poses,)`` is the residual along joint i's motion per pose, ``weight (poses,)`` the
         squared norm of its column; the columns' small overlap with the model's is neglected
         here (the statistic of the refined frequency is then computed exactly)."""
-        grid = f0 + np.linspace(-1.0, 1.0, _REFINE_POINTS) * self.step[i]
+        grid = _in_band(f0 + np.linspace(-1.0, 1.0, _REFINE_POINTS) * self.step[i])
         phase = np.outer(self.q_pose[:, i], grid)
         s, c = np.sin(phase), np.cos(phase)
         gain = _quadratic_form(y @ s, y @ c, weight @ (s * s), weight @ (c * c), weight @ (s * c))
@@ -202,6 +203,13 @@ class FrequencyScan:
         if np.linalg.det(V) <= 0:
             return 0.0, None
         return float(b @ np.linalg.solve(V, b)), cp
+
+
+def _in_band(grid: np.ndarray) -> np.ndarray:
+    """The refinement ``grid``'s frequencies a cyclic error can have: above the gear term's
+    harmonics (a peak at the bottom of the searched band must not refine into them) and below
+    MAX_FREQUENCY."""
+    return grid[(grid >= _LOWEST) & (grid <= MAX_FREQUENCY)]
 
 
 def _peak(grid: np.ndarray, gain: np.ndarray) -> float:
