@@ -38,6 +38,7 @@ from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
 from robocal.io import load_json, read_text, write_atomic
 from robocal.kinematics.cell import TRACK_IDENTIFIABILITY, is_track_cell
+from robocal.kinematics.conditions import range_of as conditions_range
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
 from robocal.kinematics.thermal import group_summary as thermal_group_summary
 from robocal.kinematics.thermal import groups_of as thermal_groups_of
@@ -778,7 +779,8 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
         else warm_start.start
     declared = list(dict.fromkeys(start.joint_error_names + candidate_names(start.n_joints, terms)))
     declared_start = start.with_joint_errors(declared).with_reference_temperature(
-        thermal_reference([d.temperature for d in datasets]))  # T_ref: the calibration's mean
+        thermal_reference([d.temperature for d in datasets])).with_calibrated_conditions(  # T_ref: the mean
+        conditions_range([d.payload for d in datasets], [d.temperature for d in datasets]))
     problem = CalibrationProblem(declared_start, datasets, sigma=sigma)
     state0 = problem.start(declared_start)
     errors0 = problem.position_errors(state0)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from robocal.data.registration import apply_registration, register_frame
@@ -9,6 +11,7 @@ from robocal.diagnose import fit_rms_mm
 from robocal.errors import DataError
 from robocal.identify.observations import observation_for
 from robocal.identify.plausibility import check_joint_limits, check_residual, check_spread
+from robocal.kinematics.joint_errors import extrapolated_conditions
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.metrics import position_stats
 from robocal.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
@@ -121,6 +124,8 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     for d in (data, frame_from):
         if d is not None:
             check_joint_limits(robot, d, f"the data {d.label or ''}".strip(), force=force, warnings=warnings)
+    warnings += extrapolated_conditions(robot, data.payload, data.temperature,
+                                        f"rows of {Path(data.file).name if data.file else 'the data'}")
     if fit_frame or frame_from is not None:
         fitted_on = data if frame_from is None else frame_from
         reg = register_frame(robot, fitted_on)

@@ -62,6 +62,8 @@ import numpy as np
 from robocal.errors import IdentificationError, ModelError
 from robocal.io import as_number
 from robocal.kinematics import load, thermal
+from robocal.kinematics.conditions import KEY as CONDITIONS_KEY
+from robocal.kinematics.conditions import CalibratedRange, beyond
 from robocal.kinematics.fk import chain_frames
 
 TERMS = ("compliance", "gear", "backlash", "travel", "cyclic", "scale", "payload", "thermal",
@@ -288,6 +290,21 @@ def assumed_conditions(robot, hints: tuple[str, str] = CONDITION_OPTIONS) -> lis
     return out
 
 
+def extrapolated_conditions(robot, payload: np.ndarray | None = None, temperature: np.ndarray | None = None,
+                            rows: str = "") -> list[str]:
+    """Warnings where the conditions ``robot``'s error model is used at lie beyond the ones its
+    calibration covered (:mod:`robocal.kinematics.conditions`): the rows' ``payload (N, 4)`` and
+    ``temperature (N,)`` where given (``rows`` names them), else its fixed ones
+    (:meth:`~robocal.kinematics.model.Robot.with_conditions`)."""
+    errors, terms = robot.joint_errors, condition_terms(robot)
+    if errors is None or errors.calibrated is None:
+        return []
+    named = rows if payload is not None or temperature is not None else ""
+    payload, temperature = conditions_of(robot, 1, payload, temperature)
+    mass = payload[:, 0] if "payload" in terms and payload is not None else None
+    return beyond(errors.calibrated, mass, temperature if "thermal" in terms else None, named)
+
+
 def condition_terms(robot) -> set[str]:
     """The terms of :data:`CONDITION_TERMS` ``robot``'s error model declares (per-group thermal
     deviations count as ``thermal``: they use the temperature)."""
@@ -303,13 +320,15 @@ class JointErrorModel:
     """Named joint-error parameters and their values (SI units of :data:`UNITS`);
     ``reference_temperature_c``: the thermal term's T_ref (deg C); ``payload`` (kg, then the
     centre of mass x, y, z in m in the flange frame) and ``temperature_c``: the fixed conditions the
-    model is used at where the rows give none (None: no payload, the arm at T_ref; not saved)."""
+    model is used at where the rows give none (None: no payload, the arm at T_ref; not saved);
+    ``calibrated``: the payloads and temperatures the calibration covered (None: not known)."""
 
     names: tuple[str, ...]
     values: np.ndarray
     reference_temperature_c: float = thermal.DEFAULT_REFERENCE_C
     payload: tuple[float, float, float, float] | None = None
     temperature_c: float | None = None
+    calibrated: CalibratedRange | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "names", tuple(str(n) for n in self.names))
@@ -361,6 +380,9 @@ class JointErrorModel:
         groups = self.thermal_groups()
         if groups is not None:  # derived, for the reader; checked against the parameters on loading
             out[GROUP_K_KEY] = groups
+        if self.calibrated is not None and self.calibrated.to_dict() and \
+                set(self.terms) & {*CONDITION_TERMS, thermal.GROUPS_TERM}:
+            out[CONDITIONS_KEY] = self.calibrated.to_dict()
         return out
 
     @classmethod
@@ -373,7 +395,9 @@ class JointErrorModel:
         values = [as_number(v, f"joint_errors.parameters.{name}", ModelError) for name, v in params.items()]
         t_ref = as_number(data.get("reference_temperature_c", thermal.DEFAULT_REFERENCE_C),
                           "joint_errors.reference_temperature_c", ModelError)
-        model = cls(tuple(params), np.array(values), t_ref)
+        calibrated = data.get(CONDITIONS_KEY)
+        calibrated = None if calibrated is None else CalibratedRange.from_dict(calibrated)
+        model = cls(tuple(params), np.array(values), t_ref, calibrated=calibrated)
         _check_group_k(model, data.get(GROUP_K_KEY))
         return model
 

@@ -599,7 +599,8 @@ class Robot:
         old = {} if self.joint_errors is None else \
             dict(zip(self.joint_errors.names, self.joint_errors.values.tolist(), strict=True))
         t_ref = {} if self.joint_errors is None else \
-            {"reference_temperature_c": self.joint_errors.reference_temperature_c}
+            {"reference_temperature_c": self.joint_errors.reference_temperature_c,
+             "calibrated": self.joint_errors.calibrated}
         errors = JointErrorModel(tuple(names), np.array([old.get(nm, 0.0) for nm in names]), **t_ref)
         return replace(self, joint_errors=errors)
 
@@ -608,6 +609,13 @@ class Robot:
         if self.joint_errors is None:
             return self
         return replace(self, joint_errors=replace(self.joint_errors, reference_temperature_c=float(celsius)))
+
+    def with_calibrated_conditions(self, calibrated) -> Robot:
+        """A copy whose error model records the payloads and temperatures its calibration covered
+        (a :class:`robocal.kinematics.conditions.CalibratedRange`); self without joint errors."""
+        if self.joint_errors is None:
+            return self
+        return replace(self, joint_errors=replace(self.joint_errors, calibrated=calibrated))
 
     def with_conditions(self, payload=None, temperature: float | None = None) -> Robot:
         """A copy used at a fixed payload ``(kg, x, y, z)`` (kg, m: the centre of mass in the flange

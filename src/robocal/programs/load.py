@@ -31,7 +31,7 @@ import numpy as np
 from robocal.compensate import Compensation
 from robocal.errors import DataError
 from robocal.ik.singularity import SingularityDistance
-from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
+from robocal.kinematics.joint_errors import assumed_conditions, condition_terms, extrapolated_conditions
 from robocal.kinematics.model import Robot
 from robocal.programs.fanuc_ls import FanucDialect
 from robocal.programs.load_data import Load, Setting, read_schedules, reader_for
@@ -240,7 +240,8 @@ def compensate_by_load(plan: LoadPlan, model: Robot, temperature: float | None,
     ``plan``, the results put back in the targets' order (one load: its result as is)."""
     models = [(idx, model.with_conditions(load, temperature)) for load, idx in plan.groups()]
     parts = [(idx, run(m, idx)) for idx, m in models]
-    assumed = tuple(dict.fromkeys(a for _, m in models for a in assumed_conditions(m, HINTS)))
+    assumed = tuple(dict.fromkeys(a for _, m in models
+                                  for a in (*assumed_conditions(m, HINTS), *extrapolated_conditions(m))))
     if len(parts) == 1:
         return replace(parts[0][1], assumed=assumed)
     N = len(plan.keys)

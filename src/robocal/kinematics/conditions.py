@@ -1,0 +1,106 @@
+"""The conditions a model's payload and thermal terms were calibrated over, and a warning wherever
+the model is used beyond them.
+
+The payload term is linear in the payload's gravity moment and the thermal term in the temperature
+difference: both were fitted on the payloads and temperatures the calibration recorded. A payload
+twice the heaviest one measured, or a cell 15 K warmer than any measurement, is corrected by a
+straight-line extrapolation nothing has checked (a real gearbox stiffens or softens with load; a
+warm-up is not uniform). The model file keeps the ranges (``joint_errors.calibrated_conditions``),
+and compensate, filter and evaluate say when a payload or temperature they correct for lies
+beyond them by more than the margins below. Models saved without the ranges are not checked.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from robocal.errors import ModelError
+from robocal.io import as_number
+
+TEMPERATURE_MARGIN_K = 2.0  # a temperature this far beyond the calibrated range is an extrapolation
+PAYLOAD_MARGIN_FRACTION = 0.1  # a payload beyond the calibrated masses by this share of the heaviest ...
+PAYLOAD_MARGIN_KG = 0.5  # ... or by this, whichever is larger
+KEY = "calibrated_conditions"  # the model file's key (under joint_errors)
+
+
+@dataclass(frozen=True)
+class CalibratedRange:
+    """The payload masses (kg) and temperatures (deg C) the calibration data covered, each as
+    ``(lowest, highest)``, or None where the data recorded none."""
+
+    payload_kg: tuple[float, float] | None = None
+    temperature_c: tuple[float, float] | None = None
+
+    def to_dict(self) -> dict:
+        """Plain data for the model YAML."""
+        return {name: [float(v) for v in span] for name, span in
+                (("payload_kg", self.payload_kg), ("temperature_c", self.temperature_c)) if span is not None}
+
+    @classmethod
+    def from_dict(cls, data) -> CalibratedRange:
+        """The range of a model file's ``calibrated_conditions`` mapping (checked)."""
+        if not isinstance(data, dict) or not set(data) <= {"payload_kg", "temperature_c"}:
+            raise ModelError(f"joint_errors.{KEY} must be a mapping with payload_kg and/or temperature_c: "
+                             "[lowest, highest]")
+        spans = {}
+        for name, span in data.items():
+            if not isinstance(span, list | tuple) or len(span) != 2:
+                raise ModelError(f"joint_errors.{KEY}.{name} must be [lowest, highest]")
+            lo, hi = (as_number(v, f"joint_errors.{KEY}.{name}", ModelError) for v in span)
+            if lo > hi:
+                raise ModelError(f"joint_errors.{KEY}.{name}: the lowest value {lo:g} is above the "
+                                 f"highest {hi:g}")
+            spans[name] = (lo, hi)
+        return cls(**spans)
+
+
+def range_of(payloads: Sequence[np.ndarray | None],
+             temperatures: Sequence[np.ndarray | None]) -> CalibratedRange:
+    """The range the data sets recorded: ``payloads`` their ``(N, 4)`` payloads (kg, m; None: not
+    recorded), ``temperatures`` their ``(N,)`` temperatures (deg C)."""
+    masses = [np.asarray(p, float)[:, 0] for p in payloads if p is not None]
+    temps = [np.asarray(t, float) for t in temperatures if t is not None]
+
+    def span(parts):
+        if not parts:
+            return None
+        values = np.concatenate(parts)
+        return float(values.min()), float(values.max())
+
+    return CalibratedRange(span(masses), span(temps))
+
+
+def beyond(calibrated: CalibratedRange | None, payload_kg=None, temperature_c=None,
+           rows: str = "") -> list[str]:
+    """Warnings for payload masses (kg) and temperatures (deg C), scalars or per-row arrays (None:
+    not used), beyond ``calibrated`` by more than the margins; ``rows`` names the rows the arrays
+    belong to (e.g. "rows of val.csv"). None, or a condition the calibration did not record:
+    nothing to say."""
+    if calibrated is None:
+        return []
+    out = []
+    checks = (("payload", "payload", payload_kg, calibrated.payload_kg, "kg"),
+              ("temperature", "thermal", temperature_c, calibrated.temperature_c, "deg C"))
+    for name, term, used, span, unit in checks:
+        if used is None or span is None:
+            continue
+        values = np.atleast_1d(np.asarray(used, float))
+        lo, hi = span
+        margin = TEMPERATURE_MARGIN_K if name == "temperature" else \
+            max(PAYLOAD_MARGIN_KG, PAYLOAD_MARGIN_FRACTION * hi)
+        outside = values[(values < lo - margin) | (values > hi + margin)]
+        if not outside.size:
+            continue
+        if rows:
+            low, high = outside.min(), outside.max()
+            shown = f"{low:.4g}" if low == high else f"{low:.4g} to {high:.4g}"
+            subject = f"the {name} of {outside.size} {rows} ({shown} {unit})"
+        else:
+            subject = f"the {name} {outside[0]:.4g} {unit}"
+        out.append(f"{subject} is beyond the {lo:.4g} to {hi:.4g} {unit} the model's {term} term was "
+                   f"calibrated over: its correction there is extrapolated (measure at this {name} to "
+                   "check it)")
+    return out
