@@ -612,7 +612,7 @@ class Robot:
 
     def with_calibrated_conditions(self, calibrated) -> Robot:
         """A copy whose error model records the payloads and temperatures its calibration covered
-        (a :class:`robocal.kinematics.conditions.CalibratedRange`); self without joint errors."""
+        (a `robocal.kinematics.conditions.CalibratedRange`); self without joint errors."""
         if self.joint_errors is None:
             return self
         return replace(self, joint_errors=replace(self.joint_errors, calibrated=calibrated))
