@@ -28,8 +28,9 @@ the correction must change is written as a ``///RCONF`` line before the position
 restored after it). ROBOT positions are in the robot's base frame; BASE positions too (a job
 without base axes: the base and robot coordinates coincide); USER positions in the user frame
 ``///USER n``. Tool and user-frame values live in the controller: ``--tool n=X,Y,Z,Rx,Ry,Rz``,
-``--frame n=...`` (mm, deg), or the user frames of the controller's UFRAME.CND given as a
-reference (:func:`user_frames`); tool 0 without data is the flange (a warning). A job may save the
+``--frame n=...`` (mm, deg), or the user frames of the controller's UFRAME.CND and the tools of its
+TOOL.CND given as references (:func:`user_frames`, :mod:`robocal.programs.inform_tools`; ``--tool``
+and ``--frame`` take precedence); tool 0 without data is the flange (a warning). A job may save the
 P variables it uses in its ``//POS`` (``P00100=...``): those are read before VAR.DAT's, and
 another job's saved P variables after VAR.DAT's.
 
@@ -49,6 +50,7 @@ from scipy.spatial.transform import Rotation
 from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.config import ConfigScheme, branch_bits
+from robocal.programs.inform_tools import is_tool_file, read_tool_file
 from robocal.programs.model import IDENTITY, Dialect, Program, Target
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import Number, ProgramText
@@ -177,7 +179,12 @@ class InformDialect(Dialect):
     def parse(self, sources, frames, tools, references=()):
         prog = Program([], frames={IDENTITY: np.eye(4)}, tools={})
         for ref in references:
-            prog.frames.update(user_frames(ref))
+            if is_tool_file(ref):  # TOOL.CND: its tool frames (its loads: load_data.inform)
+                entries = read_tool_file(ref)
+                poses = self.to_pose(np.array([e.frame for e in entries.values()]))
+                prog.tools.update(zip(entries, poses, strict=True))
+            else:
+                prog.frames.update(user_frames(ref))
         prog.frames.update(frames)
         prog.tools.update(tools)
         positions: dict[tuple, Position] = {}  # (path or 'global', kind, index) -> position
@@ -205,7 +212,7 @@ class InformDialect(Dialect):
             if id(t) not in used:
                 prog.warnings.append(f"{t.where}: no motion of these jobs reaches it: left as it is")
                 continue
-            tool0 |= t.tool == "0" and "0" not in tools
+            tool0 |= t.tool == "0" and "0" not in prog.tools
             t.order = len(prog.targets)
             prog.targets.append(t)
         if tool0:
@@ -468,7 +475,7 @@ def user_frames(src: ProgramText) -> dict[str, np.ndarray]:
             current = None
     if not out:
         raise DataError(f"{src.path.name}: no //UFRAME n with ////BUSER X,Y,Z,Rx,Ry,Rz: not a UFRAME.CND "
-                        "(tools: --tool n=X,Y,Z,Rx,Ry,Rz; VAR.DAT: give it as a program file)")
+                        "nor a TOOL.CND (//TOOL n) (VAR.DAT: give it as a program file)")
     return out
 
 

@@ -35,6 +35,7 @@ from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
 from robocal.kinematics.model import Robot
 from robocal.programs.fanuc_ls import FanucDialect
 from robocal.programs.load_data import Load, Setting, read_schedules, reader_for
+from robocal.programs.load_data.base import ranges
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.motions import Account
 from robocal.programs.source import ProgramText
@@ -226,12 +227,7 @@ def _lines(motions: list[tuple[Account, Load | None, str]]) -> list[str]:
 
 def _ranges(lines: list[int]) -> str:
     """``line 3`` / ``lines 3-5, 9``."""
-    parts, start = [], lines[0]
-    for a, b in zip(lines, [*lines[1:], None], strict=True):
-        if b != a + 1:
-            parts.append(f"{start}" if start == a else f"{start}-{a}")
-            start = b
-    return ("line " if len(lines) == 1 else "lines ") + ", ".join(parts)
+    return ("line " if len(lines) == 1 else "lines ") + ranges(lines)
 
 
 def compensate_by_load(plan: LoadPlan, model: Robot, temperature: float | None,

@@ -65,3 +65,13 @@ class LoadReader:
         if last is None or last.mass is None:
             return None
         return (last.mass, *(last.cog or (0.0, 0.0, 0.0))), last.where
+
+
+def ranges(values: list[int]) -> str:
+    """``3-5, 9``: sorted distinct integers as runs."""
+    parts, start = [], values[0]
+    for a, b in zip(values, [*values[1:], None], strict=True):
+        if b != a + 1:
+            parts.append(f"{start}" if start == a else f"{start}-{a}")
+            start = b
+    return ", ".join(parts)
