@@ -174,3 +174,18 @@ def test_filter_cli_reads_the_tool_file_and_prints_the_loads(tmp_path, capsys):
     assert table["loads"][0].startswith("38 kg")
     assert main([*args[:-1], str(CORPUS / "VAR.DAT")]) == 2  # neither a TOOL.CND nor a UFRAME.CND
     assert "not a UFRAME.CND nor a TOOL.CND" in capsys.readouterr().err
+
+
+def test_a_tool_the_job_rewrites_at_run_time_is_named(tmp_path):
+    """SETTOOL TL#(n) P.. writes tool n's data from a position variable when the job runs (offline
+    generators emit it before a motion): the frame and load given for tool n are not what runs."""
+    nominal, cal = _robots()
+    path = tmp_path / JOB.name
+    path.write_bytes(JOB.read_bytes().replace(b"NOP\r\n", b"NOP\r\nSETTOOL TL#(2) P010\r\n"))
+    res = filter_program([path], cal, nominal, references=[TOOLS])
+    assert summary(res.motions) == {"total": 8, "corrected": 5, "named": 3}
+    named = [m for m in res.motions if m.status == "named"]
+    assert [m.target for m in named] == ["C00003", "C00004", "C00005"]
+    assert "taught with tool 2, whose data the job writes at run time by SETTOOL at PALLETIZE.JBI:23" in \
+        named[0].reason
+    assert [line.split(" (")[0] for line in res.loads] == ["38 kg, centre of mass [0, 0, 160] mm"]

@@ -75,6 +75,8 @@ _REF = re.compile(r"\b(C|BC|EC|P|BP|EX|LP|LBP|LEX)(?:(\d+)|\[([^\]]*)\])")
 _SHIFT_ON = re.compile(r"^\s*SFTON\b(.*)$")
 _SHIFT_OFF = re.compile(r"^\s*SFTOF\b")
 _MFRAME = re.compile(r"^\s*MFRAME\s+UF#\(\s*(\d+)\s*\)")
+_SETTOOL = re.compile(r"^\s*SETTOOL\s+TL#\(\s*([^)]*?)\s*\)")  # writes tool n's data at run time
+ANY_TOOL = "*"  # a SETTOOL whose tool number is not written as a number
 # instructions that write a position variable at run time (its first operand)
 _WRITES = re.compile(r"^\s*(SET|SETE|GETS|GETE|GETPOS|ADD|SUB|MUL|DIV|CNVRT|CLEAR|SETFILE|GETFILE|MSHIFT|"
                      r"READ|PXEREAD)\s+(LP|P|LBP|BP|LEX|EX)(\d+)\b")
@@ -324,15 +326,20 @@ def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _He
 def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named: set) -> None:
     """Account for every motion of the job's ``//INST`` in text order: a Cartesian C or P position
     is a corrected target; joint (PULSE) positions need nothing; incremental, shifted, conveyor-
-    or station-synchronised motions, base axes, stations and positions written at run time are
-    named."""
+    or station-synchronised motions, base axes, stations, positions written at run time and
+    positions whose tool the job rewrites (``SETTOOL TL#(n) P..``: the tool file's data of tool n
+    from a position variable) are named."""
     shift = ""  # the SFTON in effect
     runtime: dict[str, str] = {}  # variable -> where the job writes it at run time (anywhere: loops)
     mframe: dict[str, str] = {}  # user frame -> the MFRAME that sets it
+    settool: dict[str, str] = {}  # tool -> the SETTOOL that writes it (anywhere: loops)
     on_track = bool(re.search(r"^///GROUP\d+\s+[^\r\n]*\bBS\d", src.text, re.MULTILINE))  # robot on base axes
     inst = [(start, _LABELED.sub("", line, count=1) if "*" in line else line)
             for start, line, _ in _instructions(src)]
     for start, body in inst:
+        st = _SETTOOL.match(body)
+        if st:
+            settool.setdefault(str(int(st.group(1))) if st.group(1).isdigit() else ANY_TOOL, src.where(start))
         w = _WRITES.match(body)
         if w:
             runtime.setdefault(f"{w.group(2)}{int(w.group(3))}", f"{w.group(1)} ({src.where(start)})")
@@ -401,6 +408,12 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
             prog.skip(src.where(start), instr, f"{label} is a BASE position of a robot on base axes "
                                                "(///GROUP ... BS): where it is for the robot depends on "
                                                "the axes' position", acc, label)
+            continue
+        written = settool.get(t.tool, settool.get(ANY_TOOL))
+        if written:
+            named.add(id(t))
+            prog.skip(src.where(start), instr, f"{label} is taught with tool {t.tool}, whose data the job "
+                                               f"writes at run time by SETTOOL at {written}", acc, label)
             continue
         if t.frame in mframe:
             named.add(id(t))
