@@ -429,7 +429,12 @@ def test_a_payload_and_thermal_model_without_load_data_warns_of_the_defaults_it_
     res = filter_program(paths, warm, nominal, tools=tools, frames=frames)
     assumed = [w for w in res.warnings if "assumed" in w]
     assert len(assumed) == 2 and "assumed no payload (0 kg)" in assumed[0] and "24 deg C" in assumed[1]
-    assert res.loads and res.loads[0].startswith("no load (the program sets none before these motions")
+    why, where = {"inform": ("no tool file TOOL.CND given", "--references TOOL.CND, or --payload"),
+                  "val3": ("a VAL3 program holds no load data", "(--payload"),
+                  }.get(dialect, ("the program sets none before these motions", "in the program before these "
+                                  "motions, or --payload"))
+    assert res.loads and res.loads[0].startswith(f"no load ({why}; the model's default")
+    assert where in assumed[0]
     hot = filter_program(paths, warm, nominal, tools=tools, frames=frames, payload=[50.0], temperature=30.0)
     assert not [w for w in hot.warnings if "assumed" in w]
 

@@ -61,8 +61,8 @@ __all__ = ["Load", "LoadReader", "Setting", "read_schedules", "reader_for"]
 
 def reader_for(dialect: Dialect, tools: dict[str, np.ndarray], schedules: dict[int, Load] | None) \
         -> LoadReader:
-    """The load reader of ``dialect`` (one that reads nothing for VAL3, which has no load
-    data); ``tools``: the program's tool frames (RAPID payloads are given in
+    """The load reader of ``dialect`` (:class:`NoLoads` for VAL3, which has no load data);
+    ``tools``: the program's tool frames (RAPID payloads are given in
     the tool frame); ``schedules``: FANUC payload schedules (:func:`read_schedules`)."""
     if isinstance(dialect, RapidDialect):
         return RapidLoads(tools)
@@ -74,4 +74,11 @@ def reader_for(dialect: Dialect, tools: dict[str, np.ndarray], schedules: dict[i
         return URScriptLoads()
     if isinstance(dialect, InformDialect):
         return InformLoads()
-    return LoadReader()
+    return NoLoads()
+
+
+class NoLoads(LoadReader):
+    """Staubli VAL3 (module docstring): no statement or data type holds a load."""
+
+    none = "a VAL3 program holds no load data"
+    hint = ""

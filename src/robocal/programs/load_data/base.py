@@ -50,7 +50,12 @@ def unread(src: ProgramText, at: int, text: str, why: str) -> DataError:
 
 class LoadReader:
     """One dialect's load statements: :meth:`settings` in the program files, :meth:`at_motion` the
-    load a motion runs with given the last settings executed before it."""
+    load a motion runs with given the last settings executed before it. ``none``: why a motion
+    runs with the model's default load (for the summary); ``hint``: where the user gives the load
+    instead of ``--payload`` ('' for a dialect with no load data)."""
+
+    none = "the program sets none before these motions"
+    hint = "load data in the program before these motions"
 
     def settings(self, sources: list[ProgramText], references: list[ProgramText]) -> list[Setting]:
         """Every statement of ``sources`` that sets the load, in text order per file."""

@@ -18,6 +18,9 @@ UNSET_KG = 0.0  # a tool whose W is <= this has no load registered in the tool f
 class InformLoads(LoadReader):
     """Yaskawa INFORM (module docstring): each motion with the load of its position's tool."""
 
+    none = "no tool file TOOL.CND given"
+    hint = "the controller's tool file with --references TOOL.CND"
+
     def __init__(self):
         self.tools: dict[str, ToolEntry] = {}
         self.file = ""  # the tool file's name ('' when none is given)
