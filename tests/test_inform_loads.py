@@ -126,6 +126,7 @@ def test_a_job_without_its_tool_file_runs_with_the_default_and_says_so():
      r"TOOL.CND:11: malformed line '0.000,160.000' of tool 1: expected Xg,Yg,Zg \(the centre of gravity\)"),
     (b"38.000\r\n", b"38 kg\r\n", r"TOOL.CND:12: malformed line '38 kg' of tool 1: expected W \(the mass\)"),
     (b"//TOOL 2\r\n", b"//TOOL 1\r\n", r"TOOL.CND:15: tool 1 is given twice"),
+    (b"//TOOL 2\r\n", b"//TOOL " + b"2" * 5000 + b"\r\n", r"TOOL.CND:15: malformed //TOOL line"),
     (b"0.000,0.000,310.000\r\n98.000\r\n2.500,2.500,1.100\r\n0.000,0,1\r\n", b"",
      r"TOOL.CND:15: tool 2 has 1 line\(s\) of numbers"),
 ])
@@ -189,3 +190,29 @@ def test_a_tool_the_job_rewrites_at_run_time_is_named(tmp_path):
     assert "taught with tool 2, whose data the job writes at run time by SETTOOL at PALLETIZE.JBI:23" in \
         named[0].reason
     assert [line.split(" (")[0] for line in res.loads] == ["38 kg, centre of mass [0, 0, 160] mm"]
+
+
+def test_the_tool_file_given_as_a_job_is_a_clear_error():
+    nominal, cal = _robots()
+    with pytest.raises(DataError, match="TOOL.CND is a controller file of tools or user frames .*: give it "
+                                        "with --references"):
+        filter_program([JOB, TOOLS], cal, nominal)
+    with pytest.raises(DataError, match="or the controller's TOOL.CND / UFRAME.CND with --references"):
+        filter_program([JOB], cal, nominal)  # the tools' data given nowhere
+
+
+def test_a_number_thousands_of_digits_long_is_no_index(tmp_path):
+    """A mangled file (a number of 5000 digits where a tool or position number stands) is a one-line
+    error or a named motion, never Python's integer-conversion limit."""
+    nominal, cal = _robots()
+    long = b"7" * 5000
+    for old, new in ((b"///TOOL 2", b"///TOOL " + long), (b"C00003=", b"C" + long + b"="),
+                     (b"MOVL C00003", b"MOVL C" + long)):
+        path = tmp_path / JOB.name
+        path.write_bytes(JOB.read_bytes().replace(old, new, 1))
+        try:
+            res = filter_program([path], cal, nominal, references=[TOOLS])
+        except DataError as exc:
+            assert "\n" not in str(exc)
+        else:
+            assert summary(res.motions)["named"] >= 1

@@ -66,21 +66,23 @@ TURN_TOLERANCE = 1e-12  # relative: an angle printed as exactly 180 deg keeps it
 _LINE = re.compile(r"([^\r\n]*)(\r\n|\n|\r|$)")  # CRLF, LF or a lone CR ends a line
 _SECTION = re.compile(r"^//(?!/)\s*(\w+)")
 _HEADER = re.compile(r"^///\s*(\w+)\s*(.*?)\s*$")
-_ENTRY = re.compile(r"^\s*([A-Z]{1,4})(\d+)\s*=\s*(.*?)\s*$")  # C, BC, EC, P, BP, EX, ... (others kept)
+_INDEX = r"(\d{1,9})"  # a position, variable, tool or frame number (a longer one is none)
+# C, BC, EC, P, BP, EX, ... (others kept)
+_ENTRY = re.compile(r"^\s*([A-Z]{1,4})" + _INDEX + r"\s*=\s*(.*?)\s*$")
 _MOTION = re.compile(r"^\s*(MOVJ|MOVL|MOVC|MOVS|IMOV|SMOVJ|SMOVL|SMOVC|SMOV|SYMOVJ|SYMOVL|SYMOVC|EIMOVL|"
                      r"EIMOVC|EIMOVJ|EMOVJ|EMOVL)\b(.*)$")
 _NUM = r"([-+]?(?:\d+\.?\d*|\.\d+))"
-_SIX = re.compile(r"(C|P)(\d+)=" + ",".join([_NUM] * POSE_VALUES) + r"[ \t]*$")  # the usual entry, fast
-_REF = re.compile(r"\b(C|BC|EC|P|BP|EX|LP|LBP|LEX)(?:(\d+)|\[([^\]]*)\])")
+_SIX = re.compile(r"(C|P)" + _INDEX + "=" + ",".join([_NUM] * POSE_VALUES) + r"[ \t]*$")  # the usual, fast
+_REF = re.compile(r"\b(C|BC|EC|P|BP|EX|LP|LBP|LEX)(?:" + _INDEX + r"|\[([^\]]*)\])")
 _SHIFT_ON = re.compile(r"^\s*SFTON\b(.*)$")
 _SHIFT_OFF = re.compile(r"^\s*SFTOF\b")
-_MFRAME = re.compile(r"^\s*MFRAME\s+UF#\(\s*(\d+)\s*\)")
+_MFRAME = re.compile(r"^\s*MFRAME\s+UF#\(\s*" + _INDEX + r"\s*\)")
 _SETTOOL = re.compile(r"^\s*SETTOOL\s+TL#\(\s*([^)]*?)\s*\)")  # writes tool n's data at run time
 ANY_TOOL = "*"  # a SETTOOL whose tool number is not written as a number
 # instructions that write a position variable at run time (its first operand)
 _WRITES = re.compile(r"^\s*(SET|SETE|GETS|GETE|GETPOS|ADD|SUB|MUL|DIV|CNVRT|CLEAR|SETFILE|GETFILE|MSHIFT|"
-                     r"READ|PXEREAD)\s+(LP|P|LBP|BP|LEX|EX)(\d+)\b")
-_REFP = re.compile(r"^\s*REFP\s+\d+\s+(C|P)(\d+)\b")
+                     r"READ|PXEREAD)\s+(LP|P|LBP|BP|LEX|EX)" + _INDEX + r"\b")
+_REFP = re.compile(r"^\s*REFP\s+\d+\s+(C|P)" + _INDEX + r"\b")
 _LABELED = re.compile(r"^\s*(?:\*\w+\s+)?")
 _RUNTIME_INDEX = "the position number is computed at run time"
 
@@ -151,7 +153,8 @@ class InformDialect(Dialect):
     name = "Yaskawa INFORM"
     suffixes = (".jbi",)
     scheme = YaskawaConfig()
-    frame_help = "X,Y,Z in mm and Rx,Ry,Rz in deg, as on the pendant's tool and user frame screens"
+    frame_help = ("X,Y,Z in mm and Rx,Ry,Rz in deg, as on the pendant's tool and user frame screens; or the "
+                  "controller's TOOL.CND / UFRAME.CND with --references")
 
     def to_pose(self, values):
         values = np.asarray(values, float)
@@ -192,6 +195,9 @@ class InformDialect(Dialect):
         positions: dict[tuple, Position] = {}  # (path or 'global', kind, index) -> position
         jobs = []
         for src in sources:
+            if is_tool_file(src) or _UFRAME_LINE.search(src.text):
+                raise DataError(f"{src.path.name} is a controller file of tools or user frames (TOOL.CND, "
+                                "UFRAME.CND), not a job: give it with --references")
             found = _read_positions(src, prog)
             scope = "global" if _is_variable_file(src) else src.path
             for p in found:
@@ -304,14 +310,14 @@ def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _He
     """Apply a ``///KEY value`` line of a position section to ``head`` (malformed: DataError)."""
     key, value = h.group(1).upper(), h.group(2)
     if key == "NPOS":
-        if not re.fullmatch(r"\d+(?:\s*,\s*\d+)*", value):
+        if not re.fullmatch(r"\d{1,9}(?:\s*,\s*\d{1,9})*", value):
             raise DataError(f"{src.where(start)}: malformed ///NPOS {value!r}: expected 6 integers")
     elif key == "POSTYPE":
         head.postype = value.upper()
     elif key in ("RECTAN", "PULSE"):
         head.rectan = key == "RECTAN"
     elif key in ("USER", "TOOL"):
-        if not value.isdigit():
+        if not re.fullmatch(_INDEX, value):
             raise DataError(f"{src.where(start)}: malformed ///{key} {value!r}: expected a number")
         setattr(head, key.lower(), str(int(value)))
     elif key == "RCONF":
@@ -339,7 +345,8 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
     for start, body in inst:
         st = _SETTOOL.match(body)
         if st:
-            settool.setdefault(str(int(st.group(1))) if st.group(1).isdigit() else ANY_TOOL, src.where(start))
+            number = re.fullmatch(_INDEX, st.group(1))
+            settool.setdefault(str(int(number.group(1))) if number else ANY_TOOL, src.where(start))
         w = _WRITES.match(body)
         if w:
             runtime.setdefault(f"{w.group(2)}{int(w.group(3))}", f"{w.group(1)} ({src.where(start)})")
@@ -464,7 +471,8 @@ def _named_reason(instr: str, ref, refs, plus: str, other: str, shift: str, runt
     return ""
 
 
-_UFRAME = re.compile(r"^//UFRAME\s+(\d+)\s*$")
+_UFRAME = re.compile(r"^//UFRAME\s+" + _INDEX + r"\s*$")
+_UFRAME_LINE = re.compile(r"^//UFRAME\s+\d+\s*$", re.MULTILINE)
 _BUSER = re.compile(r"^////BUSER\s+(.*?)\s*$")
 
 

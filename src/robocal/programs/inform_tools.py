@@ -40,6 +40,7 @@ from robocal.programs.source import ProgramText
 
 MM = 1e-3  # m
 _BLOCK = re.compile(r"^//TOOL\s+(\d+)\s*$")
+MAX_DIGITS = 6  # a tool number longer than this is no tool number (a controller has up to 64 or 128)
 _COUNTS = (6, 3, 1)  # numbers on the first three lines of a block: frame, centre of gravity, W
 _WHAT = ("X,Y,Z,Rx,Ry,Rz (the tool frame)", "Xg,Yg,Zg (the centre of gravity)", "W (the mass)")
 
@@ -91,6 +92,9 @@ def read_tool_file(src: ProgramText) -> dict[str, ToolEntry]:
         head = _BLOCK.match(line)
         if head:
             close()
+            if len(head.group(1)) > MAX_DIGITS:
+                raise DataError(f"{src.path.name}:{k}: malformed //TOOL line: a tool number of more than "
+                                f"{MAX_DIGITS} digits")
             block = (str(int(head.group(1))), "", k, [])
             continue
         if block is None or not line:
