@@ -5,7 +5,8 @@ A simulated KR 210 R2700 campaign at 0, 75 and 150 kg and 20-35 deg C is calibra
 runs its first half at 120 kg (centre of mass 300 mm along the flange's z) and its second half at
 40 kg (150 mm), set in the program as each controller writes it (KRL ``$LOAD = {M .., CM {..}}``
 then ``$LOAD = LOAD_DATA[4]`` from a $config.dat; RAPID tooldata tload and ``GripLoad`` of a
-loaddata; FANUC ``PAYLOAD[n]`` with a schedule CSV; URScript ``set_payload``), filtered at
+loaddata; FANUC ``PAYLOAD[n]`` with a schedule CSV; URScript ``set_payload``; Yaskawa INFORM the
+second half's positions taught with tool 2, the two tools' loads in a TOOL.CND), filtered at
 ``--temperature 30`` and run by the nominal controller on the true arm at each motion's load and
 30 deg C. Reported: RMS position error at the targets of the filtered program, of the unfiltered
 one, and the model's own error there (the calibrated model's joints for the targets, run on the
@@ -83,6 +84,16 @@ def _set_loads(dialect: str, paths: list[Path], folder: Path) -> dict:
             "schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm\n1,120,0,0,30\n2,40,0,0,15\n"
         )
         return {"payload_schedules": schedules}
+    if dialect == "inform":  # the same TCP as tools 1 and 2 of the controller's tool file, each with its load
+        src.write_bytes(text.replace(f"\r\nC{half:05d}=", f"\r\n///TOOL 2\r\nC{half:05d}=").encode())
+        block = ("0.000,0.000,200.000,0.0000,0.0000,0.0000\r\n{cog}\r\n{kg}\r\n"
+                 "0.000,0.000,0.000\r\n0.000,0,1\r\n")
+        tool_file = folder / "TOOL.CND"
+        tool_file.write_bytes(("//TOOL 1\r\n///NAME GRIPPER+PART\r\n"
+                               + block.format(cog="0.000,0.000,300.000", kg="120.000")
+                               + "//TOOL 2\r\n///NAME GRIPPER\r\n"
+                               + block.format(cog="0.000,0.000,150.000", kg="40.000")).encode())
+        return {"references": [tool_file]}
     k = lines.index("def sim():")
     lines.insert(k + 1, "  set_payload(120.0, [0.0, 0.0, 0.3])")
     moves = [i for i, line in enumerate(lines) if line.strip().startswith("movel(")]
@@ -91,7 +102,7 @@ def _set_loads(dialect: str, paths: list[Path], folder: Path) -> dict:
     return {}
 
 
-def run(dialects=("krl", "rapid", "fanuc", "urscript")) -> dict:
+def run(dialects=("krl", "rapid", "fanuc", "urscript", "inform")) -> dict:
     nominal = Robot.from_catalog("kuka_kr210_r2700")
     sim = simulate_tracker(
         nominal, N_CAL, n_smr=3, noise_mm=NOISE_MM, seed=SEED, payloads=[0, 75, 150], temperatures=(20, 35)
@@ -121,7 +132,7 @@ def run(dialects=("krl", "rapid", "fanuc", "urscript")) -> dict:
             names = filter_program(
                 paths, cal, nominal, tools=tools, frames=frames, temperature=TEMPERATURE, **extra
             ).rows
-            tcp = {names[0]["tool"]: real}  # the tool's name as the program's dialect keys it
+            tcp = {r["tool"]: real for r in names}  # the tools' names as the program's dialect keys them
             res = filter_program(
                 paths, cal, nominal, tools=tools, frames=frames, temperature=TEMPERATURE, tcp=tcp, **extra
             )

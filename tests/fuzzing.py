@@ -293,6 +293,20 @@ def build_readers(folder: Path) -> dict[str, Reader]:
             [out] if len(programs) == 1 else ["outdir"],
             extra={"outdir": len(programs) > 1},
         )
+    # a Yaskawa job with the controller's tool file, filtered with a payload model (the loads read)
+    corpus = PROGRAMS / "corpus"
+    files = ["PALLETIZE.JBI", "TOOL.CND"]
+    terms = {"payload2": 4e-6, "payload3": 5e-6}
+    path = folder / "cal_yaskawa_gp180.yaml"
+    gp180 = perturbed(Robot.from_catalog("yaskawa_gp180"), 7)
+    gp180.with_joint_errors(list(terms)).with_values(terms).save(path)
+
+    def inform_argv(d):
+        return ["filter", str(d / files[0]), "--references", str(d / files[1]), "--calibrated",
+                str(d / "cal.yaml"), "--nominal", "yaskawa_gp180", "-o", str(d / "out.JBI")]
+
+    readers["inform"] = Reader("inform", {**{f: (corpus / f).read_bytes() for f in files},
+                                          "cal.yaml": path.read_bytes()}, files, inform_argv, ["out.JBI"])
     return readers
 
 

@@ -1,9 +1,9 @@
 """Fuzzing every reader of the command line (bounded to about a minute): mutated measurement CSVs
 of the four kinds, both import layouts, model YAML (three catalog forms and a saved model),
-result JSON, URDF and the four robot-program formats must end with exit 0 and every output
-written, or exit 2 and one line; never an internal error (exit 3), a traceback, a stray warning
-line or a modified input. The mutations and the contract are in tests/fuzzing.py; the long run
-(10,000 mutants per reader) is scripts/fuzz_readers.py."""
+result JSON, URDF and five robot-program formats (INFORM with its TOOL.CND) must end with exit 0
+and every output written, or exit 2 and one line; never an internal error (exit 3), a traceback,
+a stray warning line or a modified input. The mutations and the contract are in tests/fuzzing.py;
+the long run (10,000 mutants per reader) is scripts/fuzz_readers.py."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ from hypothesis import strategies as st
 
 READERS = ["csv_point", "csv_pose", "csv_plane", "csv_distance", "import_rows", "import_files",
            "model_abb_irb2600", "model_ur5", "model_puma560", "model_saved", "urdf", "result_json",
-           "rapid", "krl", "fanuc", "urscript"]
-EXAMPLES = {"result_json": 15, "urscript": 20, "fanuc": 20}  # the slower readers (default 30)
+           "rapid", "krl", "fanuc", "urscript", "inform"]
+EXAMPLES = {"result_json": 15, "urscript": 20, "fanuc": 20, "inform": 20}  # the slower readers (default 30)
 
 
 @pytest.fixture(scope="module")

@@ -29,7 +29,7 @@ from robocal.programs import filter_program
 from robocal.programs.load import LoadPlan, compensate_by_load
 from robocal.programs.load_data import read_schedules
 from robocal.programs.motions import summary
-from robocal.programs.simulate import execute, write_program
+from robocal.programs.simulate import execute, fanuc_frame_text, write_program
 
 N = 8  # targets; the load changes before target N // 2
 HALF = N // 2
@@ -70,6 +70,20 @@ def _insert_before(text: str, marker: str, line: str) -> str:
     at = text.index(marker)
     at = text.rindex("\n", 0, at) + 1
     return text[:at] + line + text[at:]
+
+
+def _tool_file(path, tools: dict[int, tuple[str, str, float, tuple]]) -> Path:
+    """A Yaskawa TOOL.CND as the controller saves it (64 blocks, CR LF) with ``tools``:
+    number -> (name, frame text X,Y,Z,Rx,Ry,Rz (mm, deg), W kg, (Xg, Yg, Zg) mm); the rest empty."""
+    lines = []
+    for n in range(64):
+        name, frame, kg, cog = tools.get(n, ("", "0,0,0,0,0,0", 0.0, (0, 0, 0)))
+        f = [float(v) for v in frame.split(",")]
+        lines += [f"//TOOL {n}", f"///NAME {name}".rstrip(),
+                  ",".join([f"{v:.3f}" for v in f[:3]] + [f"{v:.4f}" for v in f[3:]]),
+                  ",".join(f"{v:.3f}" for v in cog), f"{kg:.3f}", "0.000,0.000,0.000", "0.000,0,1"]
+    path.write_bytes(("\r\n".join(lines) + "\r\n").encode())
+    return path
 
 
 def _set_loads(dialect: str, paths, tmp_path):
@@ -120,6 +134,15 @@ def _set_loads(dialect: str, paths, tmp_path):
         )
         kwargs["payload_schedules"] = schedules
         return _tool0(150, [0, 0, 0.3]), _tool0(20, [0.05, 0, 0.1]), kwargs
+    if dialect == "inform":  # the positions of the second half taught with tool 2: the same gripper
+        # holding less, its load in the controller's tool file
+        src = paths[0]
+        text = src.read_bytes().decode()
+        src.write_bytes(text.replace(f"\r\nC{HALF:05d}=", f"\r\n///TOOL 2\r\nC{HALF:05d}=").encode())
+        tool = fanuc_frame_text(TOOL)  # X,Y,Z,Rx,Ry,Rz as the pendant's tool screen
+        loads = {1: ("GRIPPER+PART", tool, 150.0, (0, 0, 300)), 2: ("GRIPPER", tool, 20.0, (50, 0, 100))}
+        kwargs["references"] = [_tool_file(tmp_path / "TOOL.CND", loads)]
+        return _tool0(150, [0, 0, 0.3]), _tool0(20, [0.05, 0, 0.1]), kwargs
     src = paths[0]  # URScript
     text = src.read_text()
     text = text.replace("def sim():\n", "def sim():\n  set_payload(150.0, [0.0, 0.0, 0.3])\n")
@@ -130,7 +153,7 @@ def _set_loads(dialect: str, paths, tmp_path):
     return _tool0(150, [0, 0, 0.3]), _tool0(20, [0.05, 0, 0.1]), kwargs
 
 
-@pytest.mark.parametrize("dialect", ["krl", "rapid", "fanuc", "urscript"])
+@pytest.mark.parametrize("dialect", ["krl", "rapid", "fanuc", "urscript", "inform"])
 def test_each_motion_runs_with_the_load_set_before_it_and_reaches_the_truth(dialect, tmp_path):
     nominal, cal = _robots()
     q = _joints(nominal, N)
@@ -406,7 +429,12 @@ def test_a_payload_and_thermal_model_without_load_data_warns_of_the_defaults_it_
     res = filter_program(paths, warm, nominal, tools=tools, frames=frames)
     assumed = [w for w in res.warnings if "assumed" in w]
     assert len(assumed) == 2 and "assumed no payload (0 kg)" in assumed[0] and "24 deg C" in assumed[1]
-    assert res.loads and res.loads[0].startswith("no load (the program sets none before these motions")
+    why, where = {"inform": ("no tool file TOOL.CND given", "--references TOOL.CND, or --payload"),
+                  "val3": ("a VAL3 program holds no load data", "(--payload"),
+                  }.get(dialect, ("the program sets none before these motions", "in the program before these "
+                                  "motions, or --payload"))
+    assert res.loads and res.loads[0].startswith(f"no load ({why}; the model's default")
+    assert where in assumed[0]
     hot = filter_program(paths, warm, nominal, tools=tools, frames=frames, payload=[50.0], temperature=30.0)
     assert not [w for w in hot.warnings if "assumed" in w]
 

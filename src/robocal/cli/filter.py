@@ -103,7 +103,8 @@ def add_parser(sub) -> None:
     p.add_argument("--robot-base", metavar="x,y,z,rx,ry,rz",
                    help="the controller's base in the calibrated model's world frame (mm, deg)")
     p.add_argument("--references", nargs="+", default=[], metavar="FILE",
-                   help="files read for tool/frame declarations only ($config.dat, system modules)")
+                   help="files read for tool/frame/load declarations only ($config.dat, system modules, "
+                        "a Yaskawa TOOL.CND / UFRAME.CND)")
     p.add_argument("--payload", type=numbers(None, "KG or KG,X,Y,Z with X,Y,Z in mm"), metavar="KG[,X,Y,Z]",
                    help="the payload every target is run with: its mass (kg) and centre of mass in the "
                         "flange frame tool0 (mm; default at the flange), for a model with a payload term "

@@ -380,7 +380,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     dialect : {'rapid', 'krl', 'fanuc', 'urscript', 'inform', 'val3'}, optional
         The program language (default: from the files' suffixes, see `dialect_for`).
     references : sequence of path-like
-        Files read only for their tool / frame declarations, never written.
+        Files read only for their tool / frame / load declarations (a KUKA $config.dat, RAPID
+        system modules, a Yaskawa TOOL.CND or UFRAME.CND), never written.
     keep_unreached : bool, default False
         Leave the targets that cannot be corrected unchanged, with a warning, instead of failing.
     strict : bool, default False

@@ -28,8 +28,9 @@ the correction must change is written as a ``///RCONF`` line before the position
 restored after it). ROBOT positions are in the robot's base frame; BASE positions too (a job
 without base axes: the base and robot coordinates coincide); USER positions in the user frame
 ``///USER n``. Tool and user-frame values live in the controller: ``--tool n=X,Y,Z,Rx,Ry,Rz``,
-``--frame n=...`` (mm, deg), or the user frames of the controller's UFRAME.CND given as a
-reference (:func:`user_frames`); tool 0 without data is the flange (a warning). A job may save the
+``--frame n=...`` (mm, deg), or the user frames of the controller's UFRAME.CND and the tools of its
+TOOL.CND given as references (:func:`user_frames`, :mod:`robocal.programs.inform_tools`; ``--tool``
+and ``--frame`` take precedence); tool 0 without data is the flange (a warning). A job may save the
 P variables it uses in its ``//POS`` (``P00100=...``): those are read before VAR.DAT's, and
 another job's saved P variables after VAR.DAT's.
 
@@ -49,6 +50,7 @@ from scipy.spatial.transform import Rotation
 from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.config import ConfigScheme, branch_bits
+from robocal.programs.inform_tools import is_tool_file, read_tool_file
 from robocal.programs.model import IDENTITY, Dialect, Program, Target
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import Number, ProgramText
@@ -64,19 +66,23 @@ TURN_TOLERANCE = 1e-12  # relative: an angle printed as exactly 180 deg keeps it
 _LINE = re.compile(r"([^\r\n]*)(\r\n|\n|\r|$)")  # CRLF, LF or a lone CR ends a line
 _SECTION = re.compile(r"^//(?!/)\s*(\w+)")
 _HEADER = re.compile(r"^///\s*(\w+)\s*(.*?)\s*$")
-_ENTRY = re.compile(r"^\s*([A-Z]{1,4})(\d+)\s*=\s*(.*?)\s*$")  # C, BC, EC, P, BP, EX, ... (others kept)
+_INDEX = r"(\d{1,9})"  # a position, variable, tool or frame number (a longer one is none)
+# C, BC, EC, P, BP, EX, ... (others kept)
+_ENTRY = re.compile(r"^\s*([A-Z]{1,4})" + _INDEX + r"\s*=\s*(.*?)\s*$")
 _MOTION = re.compile(r"^\s*(MOVJ|MOVL|MOVC|MOVS|IMOV|SMOVJ|SMOVL|SMOVC|SMOV|SYMOVJ|SYMOVL|SYMOVC|EIMOVL|"
                      r"EIMOVC|EIMOVJ|EMOVJ|EMOVL)\b(.*)$")
 _NUM = r"([-+]?(?:\d+\.?\d*|\.\d+))"
-_SIX = re.compile(r"(C|P)(\d+)=" + ",".join([_NUM] * POSE_VALUES) + r"[ \t]*$")  # the usual entry, fast
-_REF = re.compile(r"\b(C|BC|EC|P|BP|EX|LP|LBP|LEX)(?:(\d+)|\[([^\]]*)\])")
+_SIX = re.compile(r"(C|P)" + _INDEX + "=" + ",".join([_NUM] * POSE_VALUES) + r"[ \t]*$")  # the usual, fast
+_REF = re.compile(r"\b(C|BC|EC|P|BP|EX|LP|LBP|LEX)(?:" + _INDEX + r"|\[([^\]]*)\])")
 _SHIFT_ON = re.compile(r"^\s*SFTON\b(.*)$")
 _SHIFT_OFF = re.compile(r"^\s*SFTOF\b")
-_MFRAME = re.compile(r"^\s*MFRAME\s+UF#\(\s*(\d+)\s*\)")
+_MFRAME = re.compile(r"^\s*MFRAME\s+UF#\(\s*" + _INDEX + r"\s*\)")
+_SETTOOL = re.compile(r"^\s*SETTOOL\s+TL#\(\s*([^)]*?)\s*\)")  # writes tool n's data at run time
+ANY_TOOL = "*"  # a SETTOOL whose tool number is not written as a number
 # instructions that write a position variable at run time (its first operand)
 _WRITES = re.compile(r"^\s*(SET|SETE|GETS|GETE|GETPOS|ADD|SUB|MUL|DIV|CNVRT|CLEAR|SETFILE|GETFILE|MSHIFT|"
-                     r"READ|PXEREAD)\s+(LP|P|LBP|BP|LEX|EX)(\d+)\b")
-_REFP = re.compile(r"^\s*REFP\s+\d+\s+(C|P)(\d+)\b")
+                     r"READ|PXEREAD)\s+(LP|P|LBP|BP|LEX|EX)" + _INDEX + r"\b")
+_REFP = re.compile(r"^\s*REFP\s+\d+\s+(C|P)" + _INDEX + r"\b")
 _LABELED = re.compile(r"^\s*(?:\*\w+\s+)?")
 _RUNTIME_INDEX = "the position number is computed at run time"
 
@@ -147,7 +153,8 @@ class InformDialect(Dialect):
     name = "Yaskawa INFORM"
     suffixes = (".jbi",)
     scheme = YaskawaConfig()
-    frame_help = "X,Y,Z in mm and Rx,Ry,Rz in deg, as on the pendant's tool and user frame screens"
+    frame_help = ("X,Y,Z in mm and Rx,Ry,Rz in deg, as on the pendant's tool and user frame screens; or the "
+                  "controller's TOOL.CND / UFRAME.CND with --references")
 
     def to_pose(self, values):
         values = np.asarray(values, float)
@@ -177,12 +184,20 @@ class InformDialect(Dialect):
     def parse(self, sources, frames, tools, references=()):
         prog = Program([], frames={IDENTITY: np.eye(4)}, tools={})
         for ref in references:
-            prog.frames.update(user_frames(ref))
+            if is_tool_file(ref):  # TOOL.CND: its tool frames (its loads: load_data.inform)
+                entries = read_tool_file(ref)
+                poses = self.to_pose(np.array([e.frame for e in entries.values()]))
+                prog.tools.update(zip(entries, poses, strict=True))
+            else:
+                prog.frames.update(user_frames(ref))
         prog.frames.update(frames)
         prog.tools.update(tools)
         positions: dict[tuple, Position] = {}  # (path or 'global', kind, index) -> position
         jobs = []
         for src in sources:
+            if is_tool_file(src) or _UFRAME_LINE.search(src.text):
+                raise DataError(f"{src.path.name} is a controller file of tools or user frames (TOOL.CND, "
+                                "UFRAME.CND), not a job: give it with --references")
             found = _read_positions(src, prog)
             scope = "global" if _is_variable_file(src) else src.path
             for p in found:
@@ -205,7 +220,7 @@ class InformDialect(Dialect):
             if id(t) not in used:
                 prog.warnings.append(f"{t.where}: no motion of these jobs reaches it: left as it is")
                 continue
-            tool0 |= t.tool == "0" and "0" not in tools
+            tool0 |= t.tool == "0" and "0" not in prog.tools
             t.order = len(prog.targets)
             prog.targets.append(t)
         if tool0:
@@ -295,14 +310,14 @@ def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _He
     """Apply a ``///KEY value`` line of a position section to ``head`` (malformed: DataError)."""
     key, value = h.group(1).upper(), h.group(2)
     if key == "NPOS":
-        if not re.fullmatch(r"\d+(?:\s*,\s*\d+)*", value):
+        if not re.fullmatch(r"\d{1,9}(?:\s*,\s*\d{1,9})*", value):
             raise DataError(f"{src.where(start)}: malformed ///NPOS {value!r}: expected 6 integers")
     elif key == "POSTYPE":
         head.postype = value.upper()
     elif key in ("RECTAN", "PULSE"):
         head.rectan = key == "RECTAN"
     elif key in ("USER", "TOOL"):
-        if not value.isdigit():
+        if not re.fullmatch(_INDEX, value):
             raise DataError(f"{src.where(start)}: malformed ///{key} {value!r}: expected a number")
         setattr(head, key.lower(), str(int(value)))
     elif key == "RCONF":
@@ -317,15 +332,21 @@ def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _He
 def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named: set) -> None:
     """Account for every motion of the job's ``//INST`` in text order: a Cartesian C or P position
     is a corrected target; joint (PULSE) positions need nothing; incremental, shifted, conveyor-
-    or station-synchronised motions, base axes, stations and positions written at run time are
-    named."""
+    or station-synchronised motions, base axes, stations, positions written at run time and
+    positions whose tool the job rewrites (``SETTOOL TL#(n) P..``: the tool file's data of tool n
+    from a position variable) are named."""
     shift = ""  # the SFTON in effect
     runtime: dict[str, str] = {}  # variable -> where the job writes it at run time (anywhere: loops)
     mframe: dict[str, str] = {}  # user frame -> the MFRAME that sets it
+    settool: dict[str, str] = {}  # tool -> the SETTOOL that writes it (anywhere: loops)
     on_track = bool(re.search(r"^///GROUP\d+\s+[^\r\n]*\bBS\d", src.text, re.MULTILINE))  # robot on base axes
     inst = [(start, _LABELED.sub("", line, count=1) if "*" in line else line)
             for start, line, _ in _instructions(src)]
     for start, body in inst:
+        st = _SETTOOL.match(body)
+        if st:
+            number = re.fullmatch(_INDEX, st.group(1))
+            settool.setdefault(str(int(number.group(1))) if number else ANY_TOOL, src.where(start))
         w = _WRITES.match(body)
         if w:
             runtime.setdefault(f"{w.group(2)}{int(w.group(3))}", f"{w.group(1)} ({src.where(start)})")
@@ -395,6 +416,12 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
                                                "(///GROUP ... BS): where it is for the robot depends on "
                                                "the axes' position", acc, label)
             continue
+        written = settool.get(t.tool, settool.get(ANY_TOOL))
+        if written:
+            named.add(id(t))
+            prog.skip(src.where(start), instr, f"{label} is taught with tool {t.tool}, whose data the job "
+                                               f"writes at run time by SETTOOL at {written}", acc, label)
+            continue
         if t.frame in mframe:
             named.add(id(t))
             prog.skip(src.where(start), instr, f"{label} is in user frame {t.frame}, set at run time by "
@@ -444,7 +471,8 @@ def _named_reason(instr: str, ref, refs, plus: str, other: str, shift: str, runt
     return ""
 
 
-_UFRAME = re.compile(r"^//UFRAME\s+(\d+)\s*$")
+_UFRAME = re.compile(r"^//UFRAME\s+" + _INDEX + r"\s*$")
+_UFRAME_LINE = re.compile(r"^//UFRAME\s+\d+\s*$", re.MULTILINE)
 _BUSER = re.compile(r"^////BUSER\s+(.*?)\s*$")
 
 
@@ -468,7 +496,7 @@ def user_frames(src: ProgramText) -> dict[str, np.ndarray]:
             current = None
     if not out:
         raise DataError(f"{src.path.name}: no //UFRAME n with ////BUSER X,Y,Z,Rx,Ry,Rz: not a UFRAME.CND "
-                        "(tools: --tool n=X,Y,Z,Rx,Ry,Rz; VAR.DAT: give it as a program file)")
+                        "nor a TOOL.CND (//TOOL n) (VAR.DAT: give it as a program file)")
     return out
 
 

@@ -34,25 +34,29 @@ from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.joint_errors import assumed_conditions, condition_terms, extrapolated_conditions
 from robocal.kinematics.model import Robot
 from robocal.programs.fanuc_ls import FanucDialect
-from robocal.programs.load_data import Load, Setting, read_schedules, reader_for
+from robocal.programs.load_data import Load, LoadReader, Setting, read_schedules, reader_for
+from robocal.programs.load_data.base import ranges
 from robocal.programs.model import Dialect, Program, Target
 from robocal.programs.motions import Account
 from robocal.programs.source import ProgramText
 
 SAME_LOAD = 1e-9  # kg and m: two loads closer than this in every number are the same load
 NO_LOAD = "no load set by the program before it"
-HINTS = ("load data in the program before these motions, or --payload KG[,X,Y,Z]", "--temperature C")
+PAYLOAD_OPTION, TEMPERATURE_OPTION = "--payload KG[,X,Y,Z]", "--temperature C"
 
 
 @dataclass
 class LoadPlan:
     """``keys``: per target (the filter's order) the load it is corrected with (kg, x, y, z m in
     tool0), None for the model's default; ``lines``: which motions run with which load, for the
-    summary; ``warnings``: the motions named because their target is corrected for another load."""
+    summary; ``warnings``: the motions named because their target is corrected for another load;
+    ``hint``: where the dialect's programs give their load (besides ``--payload``), for the
+    warning about a default load."""
 
     keys: list[Load | None]
     lines: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    hint: str = LoadReader.hint
 
     def groups(self) -> list[tuple[Load | None, np.ndarray]]:
         """``(load, indices of its targets)`` per distinct load, in the order first used."""
@@ -90,7 +94,7 @@ def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibr
     finder = _AccountFinder(program)
     first: dict[int, tuple[Load | None, str]] = {}  # target index -> its first execution's load
     motions: dict[int, tuple[Account | None, Load | None, str]] = {}  # id(account) -> first load
-    plan = LoadPlan([None] * len(targets))
+    plan = LoadPlan([None] * len(targets), hint=reader.hint)
     keys: dict[tuple, Load] = {}  # a load as read -> its key (a few distinct loads, many motions)
     for state, path, offset, i in runs:
         acc = finder.find(path, offset)
@@ -112,7 +116,7 @@ def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibr
                 text = f"{acc.where}: {acc.instruction}: not corrected: {why}"
                 program.uncorrected.append(text)
                 plan.warnings.append(text)
-    plan.lines = _lines([m for m in motions.values() if m[0] is not None])
+    plan.lines = _lines([m for m in motions.values() if m[0] is not None], reader.none)
     return plan
 
 
@@ -208,8 +212,9 @@ def _text(key: Load | None) -> str:
     return f"{key[0]:g} kg, centre of mass [{cog}] mm"
 
 
-def _lines(motions: list[tuple[Account, Load | None, str]]) -> list[str]:
-    """One line per distinct load: the load, where it is set and the motions (file: lines)."""
+def _lines(motions: list[tuple[Account, Load | None, str]], none: str) -> list[str]:
+    """One line per distinct load: the load, where it is set and the motions (file: lines);
+    ``none``: why motions run with the model's default."""
     out: dict[Load | None, tuple[str, dict[str, list[int]]]] = {}
     for acc, key, where in motions:
         entry = out.setdefault(key, (where, {}))
@@ -219,19 +224,14 @@ def _lines(motions: list[tuple[Account, Load | None, str]]) -> list[str]:
         n = sum(len(v) for v in files.values())
         at = "; ".join(f"{name} {_ranges(sorted(set(v)))}" for name, v in files.items())
         what = f"{_text(key)} ({where})" if key is not None else \
-            "no load (the program sets none before these motions; the model's default, no payload)"
+            f"no load ({none}; the model's default, no payload)"
         lines.append(f"{what}: {n} motion(s), {at}")
     return lines
 
 
 def _ranges(lines: list[int]) -> str:
     """``line 3`` / ``lines 3-5, 9``."""
-    parts, start = [], lines[0]
-    for a, b in zip(lines, [*lines[1:], None], strict=True):
-        if b != a + 1:
-            parts.append(f"{start}" if start == a else f"{start}-{a}")
-            start = b
-    return ("line " if len(lines) == 1 else "lines ") + ", ".join(parts)
+    return ("line " if len(lines) == 1 else "lines ") + ranges(lines)
 
 
 def compensate_by_load(plan: LoadPlan, model: Robot, temperature: float | None,
@@ -240,8 +240,9 @@ def compensate_by_load(plan: LoadPlan, model: Robot, temperature: float | None,
     ``plan``, the results put back in the targets' order (one load: its result as is)."""
     models = [(idx, model.with_conditions(load, temperature)) for load, idx in plan.groups()]
     parts = [(idx, run(m, idx)) for idx, m in models]
+    hints = (f"{plan.hint}, or {PAYLOAD_OPTION}" if plan.hint else PAYLOAD_OPTION, TEMPERATURE_OPTION)
     assumed = tuple(dict.fromkeys(a for _, m in models
-                                  for a in (*assumed_conditions(m, HINTS), *extrapolated_conditions(m))))
+                                  for a in (*assumed_conditions(m, hints), *extrapolated_conditions(m))))
     if len(parts) == 1:
         return replace(parts[0][1], assumed=assumed)
     N = len(plan.keys)

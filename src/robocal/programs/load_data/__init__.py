@@ -23,6 +23,12 @@ mass. Per dialect:
   controller (``$PLST_GRP1[n].$PAYLOAD`` kg, ``$PAYLOAD_X/_Y/_Z`` cm in the faceplate frame): they
   are read from the controller's SYSVARS.VA (:func:`read_schedules`) or a CSV
   ``schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm`` the user gives.
+* Yaskawa INFORM: a job sets no load; each motion runs with the load of its position's tool
+  (``///TOOL n``) registered in the controller's tool file TOOL.CND (W kg, Xg, Yg, Zg mm in the
+  flange coordinates), given as a reference (:mod:`robocal.programs.inform_tools`). A tool the file
+  lacks, or whose W is 0 (no load registered), stops the motions that use it.
+* Staubli VAL3: no statement or data type of the language holds a load (a ``tool`` is a frame and
+  its gripper output, an ``mdesc`` speeds, accelerations and blending): ``--payload``.
 * URScript: ``set_payload(m, [x, y, z])`` / ``set_target_payload(m, [x, y, z], ...)`` (kg, m from
   the tool flange, in its frame), ``set_payload(m)`` (the centre of gravity kept),
   ``set_payload_mass(m)``, ``set_payload_cog([x, y, z])``.
@@ -38,9 +44,11 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.programs.fanuc_ls import FanucDialect
+from robocal.programs.inform import InformDialect
 from robocal.programs.krl import KRLDialect
 from robocal.programs.load_data.base import Load, LoadReader, Setting
 from robocal.programs.load_data.fanuc import FanucLoads, read_schedules
+from robocal.programs.load_data.inform import InformLoads
 from robocal.programs.load_data.krl import KRLLoads
 from robocal.programs.load_data.rapid import RapidLoads
 from robocal.programs.load_data.urscript import URScriptLoads
@@ -53,8 +61,8 @@ __all__ = ["Load", "LoadReader", "Setting", "read_schedules", "reader_for"]
 
 def reader_for(dialect: Dialect, tools: dict[str, np.ndarray], schedules: dict[int, Load] | None) \
         -> LoadReader:
-    """The load reader of ``dialect`` (one that reads nothing for a dialect without load
-    statements: INFORM, VAL3); ``tools``: the program's tool frames (RAPID payloads are given in
+    """The load reader of ``dialect`` (:class:`NoLoads` for VAL3, which has no load data);
+    ``tools``: the program's tool frames (RAPID payloads are given in
     the tool frame); ``schedules``: FANUC payload schedules (:func:`read_schedules`)."""
     if isinstance(dialect, RapidDialect):
         return RapidLoads(tools)
@@ -64,4 +72,13 @@ def reader_for(dialect: Dialect, tools: dict[str, np.ndarray], schedules: dict[i
         return FanucLoads(schedules)
     if isinstance(dialect, URScriptDialect):
         return URScriptLoads()
-    return LoadReader()
+    if isinstance(dialect, InformDialect):
+        return InformLoads()
+    return NoLoads()
+
+
+class NoLoads(LoadReader):
+    """Staubli VAL3 (module docstring): no statement or data type holds a load."""
+
+    none = "a VAL3 program holds no load data"
+    hint = ""

@@ -50,7 +50,12 @@ def unread(src: ProgramText, at: int, text: str, why: str) -> DataError:
 
 class LoadReader:
     """One dialect's load statements: :meth:`settings` in the program files, :meth:`at_motion` the
-    load a motion runs with given the last settings executed before it."""
+    load a motion runs with given the last settings executed before it. ``none``: why a motion
+    runs with the model's default load (for the summary); ``hint``: where the user gives the load
+    instead of ``--payload`` ('' for a dialect with no load data)."""
+
+    none = "the program sets none before these motions"
+    hint = "load data in the program before these motions"
 
     def settings(self, sources: list[ProgramText], references: list[ProgramText]) -> list[Setting]:
         """Every statement of ``sources`` that sets the load, in text order per file."""
@@ -65,3 +70,13 @@ class LoadReader:
         if last is None or last.mass is None:
             return None
         return (last.mass, *(last.cog or (0.0, 0.0, 0.0))), last.where
+
+
+def ranges(values: list[int]) -> str:
+    """``3-5, 9``: sorted distinct integers as runs."""
+    parts, start = [], values[0]
+    for a, b in zip(values, [*values[1:], None], strict=True):
+        if b != a + 1:
+            parts.append(f"{start}" if start == a else f"{start}-{a}")
+            start = b
+    return ", ".join(parts)
