@@ -14,9 +14,11 @@ EPILOG = """Examples:
 
 def add_parser(sub) -> None:
     p = sub.add_parser("analyze", help="identifiability and observability of a pose set",
-                       description="Which parameters a set of poses determines and which only their "
-                                   "priors hold (as the calibration will treat them), the condition "
-                                   "number of the normal matrix and the observability indices O1-O4.",
+                       description="Which parameters a set of poses determines, in the words the "
+                                   "calibration will use: estimated, not determined by these data (held "
+                                   "near nominal by their priors) or not identifiable (exactly confounded "
+                                   "or without effect); the condition number of the normal matrix and the "
+                                   "observability indices O1-O4.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("data", help="CSV with joint columns q1_deg.. (or _rad); measurements optional")
     p.add_argument("--robot", required=True, help="nominal model: catalog name or model YAML")
@@ -37,6 +39,7 @@ def run(args) -> int:
 
     from robocal.calibration import analyze
     from robocal.data.measurements import read_joints
+    from robocal.identify import vocabulary
     from robocal.io import LENGTH_UNITS
     from robocal.kinematics.model import load_model
 
@@ -48,7 +51,6 @@ def run(args) -> int:
     joints = read_joints(args.data, robot)
     ident = analyze(robot, joints, kind=args.kind, params=args.params, noise_mm=args.noise_mm)
     print(f"{len(joints)} poses of {robot.name}, {args.kind} measurements (noise {args.noise_mm:g} mm)")
-    print(f"determined by the data: {len(ident.kept)} parameters; by their priors only (held at nominal): "
-          f"{len(ident.undetermined)}; by neither: {len(ident.dropped)}")
+    print(vocabulary.counts(ident))
     print(ident.summary())
     return 0
