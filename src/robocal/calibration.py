@@ -918,9 +918,11 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     """
     q = robot.check_joints(getattr(joints_or_data, "joints", joints_or_data))
     smr = getattr(joints_or_data, "smr", None)
-    T = robot.fk(q, smr=None if smr is None or smr.max(initial=0) > len(robot.smr) else smr)
+    smr = None if smr is None or smr.max(initial=0) > len(robot.smr) else smr
+    T = robot.fk(q, smr=smr)
     extra = {"rotations": T[:, :3, :3]} if kind == "pose" else {}
-    data = Measurements.from_arrays(kind, q, points=T[:, :3, 3], **extra)
+    data = Measurements.from_arrays(kind, q, points=T[:, :3, 3], smr=smr,  # every SMR's rows, as measured
+                                    pose_id=getattr(joints_or_data, "pose_id", None), **extra)
     if not (np.isfinite(noise_mm) and noise_mm > 0):
         raise DataError(f"the measurement noise must be > 0 mm, got {noise_mm}")
     return posterior_analysis(robot, data, Noise(sigma_m=float(noise_mm) * 1e-3), params, rtol)
