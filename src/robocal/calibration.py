@@ -871,10 +871,11 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     ``joints_or_data`` is a ``(N, n)`` array (rad) or Measurements; the observations are taken
     as the model's own predictions, so no measurement is needed. With the priors every fit
     carries (`robocal.identify.priors`) and the measurement noise ``noise_mm``, the parameters
-    are judged as the calibration will treat them (`robocal.campaign.information.judge`):
-    ``kept`` the data determine, ``undetermined`` only their priors do (the fit holds them at
-    nominal within their prior; of these the rank test alone would call some unidentifiable),
-    ``dropped`` neither does (frames confounded with another, or without effect).
+    are judged as the calibration will judge them, in the words of `robocal.identify.vocabulary`
+    (`robocal.campaign.information.judge`): ``kept`` the data determine (estimated),
+    ``undetermined`` only their priors do (not determined by these data: held near nominal by
+    their prior), ``dropped`` no poses can (not identifiable: exactly confounded with other
+    parameters or a frame, or without effect). Of Measurements, each row keeps its SMR.
 
     Parameters
     ----------
@@ -913,8 +914,8 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     >>> ident = rc.analyze(robot, q)
     >>> ident.rank == len(ident.kept)
     True
-    >>> "d1" in ident.undetermined  # the base frame's height absorbs d1: its prior holds it
-    True
+    >>> "d1" in ident.dropped, ident.confounded_with["d1"]  # not identifiable: base.z absorbs it
+    (True, ['base.z'])
     """
     q = robot.check_joints(getattr(joints_or_data, "joints", joints_or_data))
     smr = getattr(joints_or_data, "smr", None)
