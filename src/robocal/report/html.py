@@ -466,14 +466,16 @@ def _nongeometric(ng: dict | None, params: list[dict], dropped: dict) -> str:
     """The joint-error terms' parameters (their display units), shown here and only here."""
     if not ng or not params:
         return ""
-    n_out = sum(p.get("name") in dropped for p in params)
+    n_unused = sum(_status(p) == "not used" for p in params)
+    n_out = sum(p.get("name") in dropped for p in params) - n_unused
     return (f"<h3>Joint errors: {esc(', '.join(ng.get('terms', [])))}</h3>"
             "<p>Errors the model adds to the commanded joints: compliance (per metre of unit-weight "
             "moment arm), gear harmonics, backlash (half lost motion, by approach direction), travel "
             "(error per degree of the joint's last move) and cyclic errors "
             "(named cyc, the joint, then the cycles per revolution: <code>cyc3_2</code> is joint 3, twice "
             "per turn). "
-            f"{n_out} term(s) the data cannot separate from the geometry were left out (highlighted).</p>"
+            f"{n_out} term(s) the data cannot separate from the geometry were left out (highlighted)"
+            + (f"; {n_unused} not used: the data do not vary their condition" if n_unused else "") + ".</p>"
             + _parameter_table(params, dropped, JOINT_ERROR_COLUMNS))
 
 
