@@ -220,3 +220,27 @@ def test_of_two_parameters_with_one_effect_the_earlier_is_kept_whatever_the_roun
         J[:, 3] = J[:, 1] * (1.0 + eps)  # d3 has d2's effect; rounding may favour either
         ident = analyze_jacobian(J.copy(), names, 30)
         assert ident.dropped == ["d3"] and ident.confounded_with["d3"] == ["d2"]
+
+
+def test_a_parameter_confounded_only_on_these_poses_is_not_determined_by_them():
+    """q2 and q3 never move: on these poses the upper arm's parameters act like the base frame's,
+    but other poses separate them (not determined by these data); d1 beside the base height stays
+    not identifiable (no poses separate it)."""
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    q = np.random.default_rng(0).uniform(robot.limits[:, 0], robot.limits[:, 1], (40, 6))
+    q[:, 1], q[:, 2] = 0.3, -0.2
+    sim = simulate_tracker(robot, joints=q, noise_mm=0.02, seed=1, n_smr=2)
+    res = calibrate(robot, sim.data, nongeometric=None, force=True)  # it holds only near its poses
+    ident = res.identifiability
+    assert {"theta2", "a3", "d4"} <= set(ident.undetermined)
+    assert all(ident.prior_ratio[nm] == 1.0 for nm in ("theta2", "a3", "d4"))
+    assert {"d1", "d3", "theta6", "d6"} <= set(ident.dropped) and "theta2" not in ident.dropped
+    assert _words(rc.analyze(res.start, sim.data, noise_mm=res.space.noise * 1e3)) == _words(ident)
+    rows = {r["name"]: r for r in res.to_dict()["parameters"]}
+    assert rows["theta2"]["identification"] == "not determined by these data"
+    assert rows["theta2"]["status"] == "not determined" and rows["theta2"]["correction"] == 0.0
+    # on poses spread over the limits, the same parameters: only the structural ones are dropped
+    spread = calibrate(robot, simulate_tracker(robot, 40, noise_mm=0.02, seed=1, n_smr=2).data,
+                       nongeometric=None)
+    assert set(spread.identifiability.dropped) == {"alpha1", "a1", "theta1", "d1", "d3", "theta6", "d6"}
+    assert "theta2" in spread.identifiability.kept

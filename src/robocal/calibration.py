@@ -37,6 +37,7 @@ from robocal.identify.priors import linear_analysis, prior_sigma, undetermined
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
 from robocal.identify.space import ParameterSpace, State, block_of
+from robocal.identify.structural import separate, unidentifiable
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
 from robocal.io import load_json, read_text, write_atomic
 from robocal.kinematics.cell import TRACK_IDENTIFIABILITY, is_track_cell
@@ -525,6 +526,8 @@ def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: f
     held, ratio = undetermined(J0[:, columns], sigma, lin.noise)
     ident = hold(ident, J0, [kept.names[j] for j in held],
                  {n: float(q) for n, q in zip(kept.names, ratio, strict=True) if np.isfinite(q)})
+    n_smr = min(max(d.n_smr for d in problem.datasets), len(robot.smr) + 1)
+    ident = separate(ident, unidentifiable(robot, problem.kind, list(candidates.robot), n_smr, rtol))
     return kept.with_prior(sigma, mean, lin.noise).restricted(ident.kept), ident, warnings
 
 
@@ -926,7 +929,9 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
                                     pose_id=getattr(joints_or_data, "pose_id", None), **extra)
     if not (np.isfinite(noise_mm) and noise_mm > 0):
         raise DataError(f"the measurement noise must be > 0 mm, got {noise_mm}")
-    return posterior_analysis(robot, data, Noise(sigma_m=float(noise_mm) * 1e-3), params, rtol)
+    ident = posterior_analysis(robot, data, Noise(sigma_m=float(noise_mm) * 1e-3), params, rtol)
+    n_smr = 1 if smr is None else int(smr.max(initial=0)) + 1
+    return separate(ident, unidentifiable(robot, kind, ident.names, n_smr, rtol))
 
 
 def _plain(options: dict) -> dict:

@@ -36,6 +36,7 @@ from robocal.data.simulate import smr_in_link_frame
 from robocal.errors import DataError
 from robocal.identify import vocabulary
 from robocal.identify.identifiability import Identifiability
+from robocal.identify.structural import separate, unidentifiable
 from robocal.ik.path import default_weights, travel
 from robocal.kinematics.cell import is_track_cell
 from robocal.kinematics.transforms import make_transform
@@ -531,7 +532,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     return CampaignResult(
         robot=plan_robot, kind=kind, joints=joints, candidate_index=index, visible=visible_out,
         predicted_rms_mm=float(np.sqrt(predicted(chosen)) * 1e3),
-        criterion=criterion, criterion_value=found.value, identifiability=info.analyze_subset(chosen),
+        criterion=criterion, criterion_value=found.value, identifiability=separate(
+            info.analyze_subset(chosen), unidentifiable(plan_robot, kind, info.all_names, max(len(smr), 1))),
         parameters=list(info.names),
         travel=travel(joints, weights), travel_unordered=travel(cand_q[found.indices], weights),
         weights=weights, curve=points, funnel=funnel, noise=noise,

@@ -2,14 +2,15 @@
 
 ``calibrate``, ``analyze`` and ``poses`` (the planner) say the same words of the same parameter:
 
-- **not identifiable** (:data:`NOT_IDENTIFIABLE`): the rank test drops it: on these poses its effect is
-  exactly that of other parameters or of a frame (its confounders: d1 beside the base height, d3
-  beside d2 of two parallel axes, theta6 beside the tool), or it has no effect at all. It is held at
-  nominal and its confounders absorb its error: no data separate it, so it costs nothing.
-- **not determined by these data** (:data:`NOT_DETERMINED`): it passes the rank test but the data
-  carry less information on it than its prior (posterior sigma above
-  :data:`robocal.identify.priors.NOT_DETERMINED_RATIO` of the prior's): held near nominal by its
-  prior. More poses, or poses that move it apart from its confounders, would determine it.
+- **not identifiable** (:data:`NOT_IDENTIFIABLE`): the rank test drops it, on these poses and on poses
+  spread over the joint limits (:mod:`robocal.identify.structural`): its effect is exactly that of
+  other parameters or of a frame (its confounders: d1 beside the base height, d3 beside d2 of two
+  parallel axes, theta6 beside the tool), or it has no effect at all. It is held at nominal and its
+  confounders absorb its error: no data separate it, so it costs nothing.
+- **not determined by these data** (:data:`NOT_DETERMINED`): the data carry less information on it
+  than its prior (posterior sigma above :data:`robocal.identify.priors.NOT_DETERMINED_RATIO` of the
+  prior's), or the rank test drops it on these poses only: held near nominal by its prior. More
+  poses, or poses that move it apart from its confounders, would determine it.
 - **not used** (:data:`NOT_USED`): a payload or thermal term the calibration data cannot show (no
   ``payload_kg`` / ``temperature_c`` column, or one value in every row).
 
