@@ -244,3 +244,31 @@ def test_a_parameter_confounded_only_on_these_poses_is_not_determined_by_them():
                        nongeometric=None)
     assert set(spread.identifiability.dropped) == {"alpha1", "a1", "theta1", "d1", "d3", "theta6", "d6"}
     assert "theta2" in spread.identifiability.kept
+
+
+def test_the_words_of_one_identifiability():
+    from robocal.identify.identifiability import Identifiability
+
+    conf = {"d1": ["base.z"], "d3": ["d2"], "gear2_c1": ["theta2"], "comp4_5": [], "d5": ["alpha6"]}
+    ident = Identifiability(names=["d1", "d3", "gear2_c1", "comp4_5", "d5", "a2"], kept=["a2"],
+                            dropped=["d1", "d3", "gear2_c1", "comp4_5"], confounded_with=conf, rank=1,
+                            condition_number=1.0, singular_values=np.ones(1), undetermined=["d5"],
+                            prior_ratio={"d5": 0.83, "a2": 0.1})
+    unused = {"comp4_5": "the calibration data have no payload_kg column"}
+    rows = {r["name"]: r for r in vocabulary.entries(ident.dropped + ident.undetermined, ident, unused)}
+    assert rows["d1"] == {"name": "d1", "status": "not identifiable", "confounded_with": ["base.z"],
+                          "reason": "not identifiable: confounded with base.z; held at nominal, its "
+                                    "confounders absorb it"}
+    assert rows["gear2_c1"]["reason"].startswith("not identifiable: not separable from the geometry on "
+                                                 "these data")
+    assert rows["comp4_5"]["status"] == "not used"
+    assert rows["d5"] == {"name": "d5", "status": "not determined by these data", "prior_ratio": 0.83,
+                          "confounded_with": ["alpha6"],
+                          "reason": "not determined by these data: posterior sigma 83% of its prior; "
+                                    "confounded with alpha6; held near nominal by its prior"}
+    assert vocabulary.status("a2", ident) == "estimated"
+    assert vocabulary.counts(ident) == ("estimated: 1; not determined by these data (held near nominal by "
+                                        "their priors): 1; not identifiable (held at nominal): 4")
+    lines = vocabulary.lines(ident)
+    assert lines[0].endswith("d1 (~base.z), d3 (~d2), gear2_c1 (~theta2), comp4_5 (no effect)")
+    assert lines[1].endswith("d5 (83% of prior; ~alpha6)")

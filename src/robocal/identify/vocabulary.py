@@ -14,6 +14,12 @@
 - **not used** (:data:`NOT_USED`): a payload or thermal term the calibration data cannot show (no
   ``payload_kg`` / ``temperature_c`` column, or one value in every row).
 
+A joint-error term (:mod:`robocal.kinematics.joint_errors`) must be more clearly independent than a
+geometric parameter to be estimated (a variance inflation below
+:data:`robocal.identify.identifiability.NG_MAX_VIF` against the columns kept before it): one set aside
+by that rule is not identifiable from these data although not exactly confounded, and its reason
+says so (:data:`NOT_SEPARABLE`).
+
 Every estimated parameter is :data:`ESTIMATED`. The functions take an
 :class:`robocal.identify.identifiability.Identifiability` (``dropped``, ``undetermined``,
 ``confounded_with``, ``prior_ratio``).
@@ -21,10 +27,13 @@ Every estimated parameter is :data:`ESTIMATED`. The functions take an
 
 from __future__ import annotations
 
+from robocal.identify.space import block_of
+
 ESTIMATED = "estimated"
 NOT_IDENTIFIABLE = "not identifiable"
 NOT_DETERMINED = "not determined by these data"
 NOT_USED = "not used"
+NOT_SEPARABLE = "not separable from the geometry on these data (exactly or nearly confounded)"
 # what each word means, said once (summaries and reports)
 MEANING = {
     NOT_IDENTIFIABLE: "exactly confounded or without effect: held at nominal, the confounders absorb it",
@@ -57,7 +66,9 @@ def detail(name: str, ident, not_used: dict[str, str] | None = None, sep: str = 
         parts = [f"posterior sigma {ratio:.0%} of its prior"] if ratio is not None else []
         return "; ".join(parts + ([f"confounded with {conf}"] if conf else []))
     if name in ident.dropped:
-        return f"confounded with {conf}" if conf else "no effect on these data"
+        what = f"{NOT_SEPARABLE}: confounded with {conf}" if block_of(name) == "joint_errors" \
+            else f"confounded with {conf}"
+        return what if conf else "no effect on these data"
     return ""
 
 

@@ -525,7 +525,8 @@ def _identifiability(result: dict) -> str:
         return out
     return _grid(out, "<h3>Parameters not estimated</h3>"
                  "<p><b>not identifiable</b>: exactly confounded with the parameters or frame named (or "
-                 "without effect): held at nominal, they absorb it. <b>not determined by these data</b>: "
+                 "without effect; a joint-error term also when nearly so): held at nominal, they absorb "
+                 "it. <b>not determined by these data</b>: "
                  "held near nominal by its prior (posterior &sigma; over half the prior's): more or other "
                  "poses would determine it. <b>not used</b>: the data do not vary the condition it needs.</p>"
                  + _table(["parameter", "status", "reason", "confounded with"],
