@@ -92,29 +92,35 @@ def test_predicted_accuracy_is_the_calibration_prediction_of_the_posterior():
     assert "d1" in names and np.sqrt(np.mean(data_only**2)) > plan.predicted_rms_mm
 
 
-def test_the_judgement_separates_data_priors_and_neither():
+def test_the_judgement_separates_estimated_not_determined_and_not_identifiable():
     robot = rc.Robot.from_catalog("abb_irb2600")
     q = np.random.default_rng(0).uniform(robot.limits[:, 0], robot.limits[:, 1], (40, 6))
     ident = rc.analyze(robot, q)  # the SMR on the flange axis: theta6 has no effect at all
     assert sorted(ident.kept + ident.undetermined + ident.dropped) == sorted(ident.names)
-    assert "d1" in ident.undetermined and ident.prior_ratio["d1"] == pytest.approx(1.0, abs=1e-3)
-    assert ident.dropped == ["theta6"]
-    assert all(0 < ident.prior_ratio[nm] <= 1.0 + 1e-9 for nm in ident.undetermined)
-    # the noise weighs the data against the priors: very noisy data determine less
+    # the first joint's beside the base frame, d3 beside d2 (parallel axes 2, 3), with the SMR on the
+    # flange axis the wrist's alpha6, a6 beside d5, theta5 and d6 beside the tool: exactly confounded,
+    # not identifiable whatever their prior; theta6 without effect
+    assert ident.dropped == ["alpha1", "a1", "theta1", "d1", "d3", "alpha6", "a6", "theta6", "d6"]
+    assert ident.confounded_with["d1"] == ["base.z"] and ident.confounded_with["d3"] == ["d2"]
+    assert ident.confounded_with["theta6"] == []
     noisy = rc.analyze(robot, q, noise_mm=50.0)
+    assert noisy.undetermined and all(0.5 < noisy.prior_ratio[nm] <= 1.0 + 1e-9 for nm in noisy.undetermined)
+    # the noise weighs the data against the priors: very noisy data determine less
     assert len(noisy.undetermined) > len(ident.undetermined)
     assert set(noisy.kept) < set(ident.kept)
     with pytest.raises(DataError, match="noise"):
         rc.analyze(robot, q, noise_mm=0.0)
 
 
-def test_plan_summary_says_what_only_the_priors_hold():
+def test_plan_summary_says_what_is_not_identifiable_and_what_only_the_priors_hold():
     robot = rc.Robot.from_catalog("abb_irb2600")
     plan = rc.plan_poses(robot, 15, smr=SMR, n_candidates=200, region_size=50, starts=1)
     text = plan.summary()
-    assert "held by its prior" in text and "d1" in text and "not identifiable" not in text
-    reasons = {d["name"]: d["reason"] for d in plan.to_dict()["dropped"]}
-    assert reasons["d1"].startswith("held by its prior")
+    assert "not identifiable (exactly confounded" in text and "d1 (~base.z)" in text
+    dropped = {d["name"]: d for d in plan.to_dict()["dropped"]}
+    assert dropped["d1"]["status"] == "not identifiable"
+    assert dropped["d1"]["reason"].startswith("not identifiable: confounded with base.z; held at nominal")
+    assert dropped["d1"]["confounded_with"] == ["base.z"]
     assert set(plan.identifiability.undetermined) <= set(plan.parameters)
 
 

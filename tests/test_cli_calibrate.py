@@ -67,9 +67,9 @@ def test_analyze_a_planned_pose_set(tmp_path, capsys):
                     + "\n".join(",".join(map(str, r)) for r in q) + "\n")
     assert main(["analyze", str(path), "--robot", "abb_irb2600", "--tool-mm", "30,20,80"]) == 0
     out = capsys.readouterr().out
-    assert "rank 27 of 34" in out and "not determined by these data (held at nominal): d1" in out
-    assert "determined by the data: 27 parameters; by their priors only (held at nominal): 7; by neither: 0" \
-        in out
+    assert "rank 27 of 34" in out and "  not identifiable: d1  (confounded with base.z)" in out
+    assert "estimated: 27; not determined by these data (held near nominal by their priors): 0; not " \
+        "identifiable (held at nominal): 7" in out
     np.testing.assert_allclose(read_joints(path), np.deg2rad(q))
 
 

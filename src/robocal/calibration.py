@@ -18,11 +18,13 @@ from functools import partial
 
 import numpy as np
 
+from robocal import calibration_conditions as conditions
 from robocal.campaign.information import Noise, posterior_analysis
 from robocal.damped_least_squares import Status
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
 from robocal.errors import DataError, IdentificationError
+from robocal.identify import vocabulary
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, hold
 from robocal.identify.identifiability import analyze as analyze_jacobian
 from robocal.identify.plausibility import (
@@ -35,12 +37,12 @@ from robocal.identify.priors import linear_analysis, prior_sigma, undetermined
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
 from robocal.identify.space import ParameterSpace, State, block_of
+from robocal.identify.structural import separate, unidentifiable
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
 from robocal.io import load_json, read_text, write_atomic
 from robocal.kinematics.cell import TRACK_IDENTIFIABILITY, is_track_cell
 from robocal.kinematics.conditions import range_of as conditions_range
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
-from robocal.kinematics.thermal import group_summary as thermal_group_summary
 from robocal.kinematics.thermal import groups_of as thermal_groups_of
 from robocal.kinematics.thermal import reference_of as thermal_reference
 from robocal.model_selection import calibrate_cyclic, select_error_model, selection_table
@@ -267,6 +269,7 @@ class CalibrationResult(_BeforeAfter):
         estimate = dict(zip(self.robot.parameter_names, self.robot.values, strict=True))
         nuisance = self.problem.nuisance_names
         dropped, held = set(self.identifiability.dropped), set(self.identifiability.undetermined)
+        unused = self.not_used
         rows = []
         for name in self.identifiability.names:
             if name in nuisance:  # e.g. plane coefficients: reported in their own unit
@@ -280,8 +283,15 @@ class CalibrationResult(_BeforeAfter):
             rows.append({"name": name, "unit": unit, "nominal": float(nom), "estimate": float(est),
                          "correction": float(est - nom), "sigma": None if s is None else float(s * f),
                          "status": "dropped" if name in dropped else
-                         "not determined" if name in held else "estimated"})
+                         "not determined" if name in held else "estimated",
+                         "identification": vocabulary.status(name, self.identifiability, unused)})
         return rows
+
+    @property
+    def not_used(self) -> dict[str, str]:
+        """The payload / thermal parameters the calibration data cannot show (no column or one
+        value), each with why (`robocal.calibration_conditions.not_used`)."""
+        return conditions.not_used(self.problem.datasets, self.identifiability.dropped)
 
     @staticmethod
     def _observations(obs, states: tuple[State, State], weights: np.ndarray | None) -> dict:
@@ -333,11 +343,7 @@ class CalibrationResult(_BeforeAfter):
             "after": self.after,
             **({"after_inliers": inliers} if (inliers := self.after_inliers) else {}),
             "parameters": self.parameter_table(),
-            "dropped": [{"name": n, "reason": "not identifiable from these data",
-                         "confounded_with": ident.confounded_with[n]} for n in ident.dropped] + [
-                {"name": n, "reason": f"not determined by these data: posterior sigma "
-                                      f"{ident.prior_ratio[n]:.0%} of its prior; held at nominal",
-                 "confounded_with": ident.confounded_with[n]} for n in ident.undetermined],
+            "dropped": vocabulary.entries(ident.dropped + ident.undetermined, ident, self.not_used),
             "priors": self._priors(),
             "identifiability": {key: v for key, v in ident.to_dict().items()
                                 if key not in ("kept", "dropped", "undetermined", "confounded_with")},
@@ -362,6 +368,8 @@ class CalibrationResult(_BeforeAfter):
             out["model_selection"] = self.model_selection
         if (groups := thermal_groups_of(self.robot, self.unknowns)) is not None:
             out["thermal_groups"] = groups
+        if (section := conditions.section(self)) is not None:
+            out["conditions"] = section
         if self.judged:
             out["validation_independence"] = [
                 {"file": j.data.label, "rows": len(j.data) + j.repeated, "repeated_rows": j.repeated,
@@ -443,26 +451,20 @@ class CalibrationResult(_BeforeAfter):
             if top:
                 lines.append(f"largest corrections ({unit}): " + ", ".join(
                     f"{r['name']} {r['correction']:+.4f} ± {r['sigma']:.4f}" for r in top))
-        confounded = self.identifiability.confounded_with
-        for label, fixed in (
-                ("not identifiable (fixed)",
-                 [n for n in self.identifiability.dropped if block_of(n) != "joint_errors"]),
-                ("not determined by these data (held at nominal; measure poses that move them "
-                 "apart from their confounders)", self.identifiability.undetermined)):
-            if fixed:
-                lines.append(f"{label}: " + ", ".join(
-                    f"{n} (~{'/'.join(confounded[n]) or 'no effect'})" for n in fixed))
+        ident, unused = self.identifiability, self.not_used
+        lines += vocabulary.lines(ident, [n for n in ident.dropped if block_of(n) != "joint_errors"]
+                                  + ident.undetermined)
         if is_track_cell(self.robot):
             lines.append(TRACK_IDENTIFIABILITY)
         if self.nongeometric is not None:
             ng = self.nongeometric
+            out = [n for n in ng["dropped"] if n not in unused]
             lines.append(f"non-geometric terms {', '.join(ng['terms'])}: {len(ng['kept'])} parameters "
-                         f"estimated, {len(ng['dropped'])} left out (no effect or not separable from the "
-                         "geometry)")
+                         f"estimated, {len(out)} left out (no effect or not separable from the geometry)")
         if self.model_selection is not None:
             lines.append(selection_table(self.model_selection))
-        if (groups := thermal_groups_of(self.robot, self.unknowns)) is not None:
-            lines.append(thermal_group_summary(groups))
+        if (section := conditions.section(self)) is not None:
+            lines += conditions.summary_lines(section)
         if len(self.rejected):
             lines.append(f"rejected observations: {len(self.rejected)}; without them the calibration "
                          f"set's RMS is {self.after_inliers['rms']:.4f} mm")
@@ -525,6 +527,8 @@ def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: f
     held, ratio = undetermined(J0[:, columns], sigma, lin.noise)
     ident = hold(ident, J0, [kept.names[j] for j in held],
                  {n: float(q) for n, q in zip(kept.names, ratio, strict=True) if np.isfinite(q)})
+    n_smr = min(max(d.n_smr for d in problem.datasets), len(robot.smr) + 1)
+    ident = separate(ident, unidentifiable(robot, problem.kind, list(candidates.robot), n_smr, rtol))
     return kept.with_prior(sigma, mean, lin.noise).restricted(ident.kept), ident, warnings
 
 
@@ -872,10 +876,11 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     ``joints_or_data`` is a ``(N, n)`` array (rad) or Measurements; the observations are taken
     as the model's own predictions, so no measurement is needed. With the priors every fit
     carries (`robocal.identify.priors`) and the measurement noise ``noise_mm``, the parameters
-    are judged as the calibration will treat them (`robocal.campaign.information.judge`):
-    ``kept`` the data determine, ``undetermined`` only their priors do (the fit holds them at
-    nominal within their prior; of these the rank test alone would call some unidentifiable),
-    ``dropped`` neither does (frames confounded with another, or without effect).
+    are judged as the calibration will judge them, in the words of `robocal.identify.vocabulary`
+    (`robocal.campaign.information.judge`): ``kept`` the data determine (estimated),
+    ``undetermined`` only their priors do (not determined by these data: held near nominal by
+    their prior), ``dropped`` no poses can (not identifiable: exactly confounded with other
+    parameters or a frame, or without effect). Of Measurements, each row keeps its SMR.
 
     Parameters
     ----------
@@ -914,17 +919,21 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     >>> ident = rc.analyze(robot, q)
     >>> ident.rank == len(ident.kept)
     True
-    >>> "d1" in ident.undetermined  # the base frame's height absorbs d1: its prior holds it
-    True
+    >>> "d1" in ident.dropped, ident.confounded_with["d1"]  # not identifiable: base.z absorbs it
+    (True, ['base.z'])
     """
     q = robot.check_joints(getattr(joints_or_data, "joints", joints_or_data))
     smr = getattr(joints_or_data, "smr", None)
-    T = robot.fk(q, smr=None if smr is None or smr.max(initial=0) > len(robot.smr) else smr)
+    smr = None if smr is None or smr.max(initial=0) > len(robot.smr) else smr
+    T = robot.fk(q, smr=smr)
     extra = {"rotations": T[:, :3, :3]} if kind == "pose" else {}
-    data = Measurements.from_arrays(kind, q, points=T[:, :3, 3], **extra)
+    data = Measurements.from_arrays(kind, q, points=T[:, :3, 3], smr=smr,  # every SMR's rows, as measured
+                                    pose_id=getattr(joints_or_data, "pose_id", None), **extra)
     if not (np.isfinite(noise_mm) and noise_mm > 0):
         raise DataError(f"the measurement noise must be > 0 mm, got {noise_mm}")
-    return posterior_analysis(robot, data, Noise(sigma_m=float(noise_mm) * 1e-3), params, rtol)
+    ident = posterior_analysis(robot, data, Noise(sigma_m=float(noise_mm) * 1e-3), params, rtol)
+    n_smr = 1 if smr is None else int(smr.max(initial=0)) + 1
+    return separate(ident, unidentifiable(robot, kind, ident.names, n_smr, rtol))
 
 
 def _plain(options: dict) -> dict:

@@ -223,6 +223,23 @@ _CANDIDATE = Obj({"terms": _TEXTS, "cv_rms_mm": Num(null=True), "cv_se_mm": Num(
                   "calibration_rms_mm": Num(null=True),
                   "n_params": Int(null=True, lo=0), "parameters": _TEXTS})
 
+_ESTIMATE = {"status": Str(null=True, max_len=100), "detail": Str(null=True)}
+_CONDITIONS = Obj({  # robocal.calibration_conditions
+    "terms": _TEXTS, "reference_temperature_c": Num(null=True),
+    "data": Obj({"payload": Obj({"min_kg": Num(), "max_kg": Num(), "masses_kg": Arr(null=True),
+                                 "centre_of_mass_mm": Obj({"min": Arr(), "max": Arr()}, null=True)},
+                                null=True),
+                 "temperature": Obj({"min_c": Num(), "max_c": Num()}, null=True)}, null=True),
+    "thermal": Obj({"k_per_K": Num(), "sigma_per_K": Num(null=True), **_ESTIMATE}, null=True),
+    "thermal_groups": Seq(Obj({"group": Str(max_len=100), "label": Str(null=True, max_len=100),
+                               "k_per_K": Num(), "sigma_per_K": Num(), "source": Str(max_len=100)}),
+                          null=True),
+    "payload": Seq(Obj({"name": Str(max_len=100), "joint": Int(lo=1, hi=64), "estimate": Num(),
+                        "unit": Str(null=True, max_len=40), "sigma": Num(null=True), **_ESTIMATE}),
+                   null=True),
+    "assumed": Map(Num(), null=True),
+    "not_used": Seq(Obj({"term": Str(max_len=100), "reason": Str(null=True)}), null=True)}, null=True)
+
 RESULT_SCHEMA = Obj({
     "format": Str(), "robocal_version": Str(null=True, max_len=100),
     "robot": Obj({"name": Str(null=True, max_len=1000), "description": Str(null=True),
@@ -242,10 +259,13 @@ RESULT_SCHEMA = Obj({
     "parameters": Seq(Obj({"name": Str(max_len=200), "unit": Str(null=True, max_len=40),
                            "nominal": Num(null=True), "estimate": Num(null=True),
                            "correction": Num(null=True),
-                           "sigma": Num(null=True), "status": Str(null=True, max_len=40)},
+                           "sigma": Num(null=True), "status": Str(null=True, max_len=40),
+                           "identification": Str(null=True, max_len=100)},
                           required=("name",)), null=True),
     "dropped": Seq(Obj({"name": Str(max_len=200), "reason": Str(null=True),
+                        "status": Str(null=True, max_len=100), "prior_ratio": Num(null=True),
                         "confounded_with": _TEXTS}, required=("name",)), null=True),
+    "conditions": _CONDITIONS,
     "identifiability": Obj({"n_params": Int(null=True, lo=0), "rank": Int(null=True, lo=0),
                             "condition_number": Num(null=True, max_abs=math.inf),
                             "condition_class": Str(null=True, max_len=40), "O1": Num(null=True),

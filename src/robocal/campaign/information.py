@@ -27,10 +27,10 @@ calibration uses), so ``trace(M^-1 A)`` is the mean predicted variance (m^2) of 
 over the region after calibration: the ``predicted_accuracy`` of ``calibrate`` before the
 unmodelled error.
 
-:func:`judge` says of a pose set which parameters the data determine and which only their
-priors (posterior sigma above :data:`robocal.identify.priors.NOT_DETERMINED_RATIO` of the
-prior's): the fit holds the latter at nominal within their prior; only a parameter with neither
-(a frame confounded with another, or one without effect) is ``dropped``.
+:func:`judge` says of a pose set what the calibration will say of each parameter, in the words of
+:mod:`robocal.identify.vocabulary`: estimated, not determined by these data (posterior sigma above
+:data:`robocal.identify.priors.NOT_DETERMINED_RATIO` of the prior's: held near nominal by its
+prior) or not identifiable (``dropped`` by the rank test: exactly confounded or without effect).
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ from robocal.data.simulate import (
 )
 from robocal.errors import DataError
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, analyze, hold
-from robocal.identify.priors import posterior_covariance, prior_sigma, undetermined
+from robocal.identify.priors import prior_sigma, undetermined
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.space import State
 from robocal.trust.coverage import region_matrix
@@ -133,33 +133,19 @@ class Information:
 
 def judge(J: np.ndarray, J_white: np.ndarray, names: list[str], sigma: np.ndarray, n_poses: int,
           rtol: float = DEFAULT_RTOL) -> Identifiability:
-    """What a pose set determines, with the priors: the rank test on ``J (M, k)`` (unit weights,
-    as :func:`robocal.identify.identifiability.analyze`), then, on the noise-whitened rows
+    """What a pose set determines, with the priors, as the calibration judges it
+    (:mod:`robocal.identify.vocabulary`): the rank test on ``J (M, k)`` (unit weights, as
+    :func:`robocal.identify.identifiability.analyze`) gives ``dropped`` (not identifiable: exactly
+    confounded or without effect, whatever their prior); then, on the noise-whitened rows
     ``J_white (M, k)`` and the priors ``sigma (k,)`` (SI, inf: none), the kept parameters the data
-    do not determine beyond their prior (:func:`robocal.identify.priors.undetermined`, as the
-    calibration holds them) and the rank-dropped ones that have a prior and an effect are
-    ``undetermined`` (held at nominal within their prior, with their posterior / prior sigma
-    ratio); ``dropped`` keeps those neither the data nor a prior determine."""
+    do not determine beyond their prior (:func:`robocal.identify.priors.undetermined`) are
+    ``undetermined`` (not determined by these data, with their posterior / prior sigma ratio)."""
     sigma = np.asarray(sigma, dtype=float)
     ident = analyze(J, names, n_poses, rtol)
     kept = [names.index(nm) for nm in ident.kept]
     held, ratio = undetermined(J_white[:, kept], sigma[kept], 1.0)
-    ident = hold(ident, J, [ident.kept[j] for j in held],
-                 {ident.kept[j]: float(q) for j, q in enumerate(ratio) if np.isfinite(q)})
-    pinned = [nm for nm in ident.dropped if np.isfinite(sigma[names.index(nm)]) and ident.confounded_with[nm]]
-    if not pinned:
-        return ident
-    cols = [names.index(nm) for nm in ident.kept + pinned]
-    inv = np.where(np.isfinite(sigma[cols]), 1.0 / sigma[cols], 0.0)
-    post = np.sqrt(np.maximum(np.diag(posterior_covariance(J_white[:, cols], inv, 1.0)), 0.0))
-    pinned_ratio = {nm: float(post[len(ident.kept) + i] * inv[len(ident.kept) + i])
-                    for i, nm in enumerate(pinned)}
-    return Identifiability(names=ident.names, kept=ident.kept,
-                           dropped=[nm for nm in ident.dropped if nm not in pinned],
-                           confounded_with=ident.confounded_with, rank=ident.rank,
-                           condition_number=ident.condition_number, singular_values=ident.singular_values,
-                           n_poses=n_poses, undetermined=ident.undetermined + pinned,
-                           prior_ratio={**ident.prior_ratio, **pinned_ratio})
+    return hold(ident, J, [ident.kept[j] for j in held],
+                {ident.kept[j]: float(q) for j, q in enumerate(ratio) if np.isfinite(q)})
 
 
 def candidate_data(robot, kind: str, q: np.ndarray, visible: np.ndarray) -> Measurements:

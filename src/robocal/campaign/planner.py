@@ -34,7 +34,9 @@ from robocal.campaign.unmodelled import DEFAULT_TERMS, mean_square, search, unmo
 from robocal.data.measurements import KINDS, Measurements, robot_reach
 from robocal.data.simulate import smr_in_link_frame
 from robocal.errors import DataError
+from robocal.identify import vocabulary
 from robocal.identify.identifiability import Identifiability
+from robocal.identify.structural import separate, unidentifiable
 from robocal.ik.path import default_weights, travel
 from robocal.kinematics.cell import is_track_cell
 from robocal.kinematics.transforms import make_transform
@@ -201,19 +203,12 @@ class CampaignResult:
                  f"{self.n_candidates} candidates ({self.criterion}-optimal)",
                  f"predicted accuracy: {self.predicted_rms_mm:.4f} mm RMS of the TCP position over the "
                  f"region (noise {noise})",
-                 f"determined by the data: {len(ident.kept)} parameters, by their priors only: "
-                 f"{len(ident.undetermined)}; condition number {ident.condition_number:.3g} "
+                 f"{vocabulary.counts(ident)}; condition number {ident.condition_number:.3g} "
                  f"({ident.condition_class}); " + " ".join(f"{k} {v:.3g}" for k, v in o.items()),
                  f"measuring order: weighted travel {self.travel:.4g} (in the search's order "
                  f"{self.travel_unordered:.4g})",
                  f"candidates: {self.funnel.text()}"]
-        for name in ident.undetermined:
-            conf = "/".join(ident.confounded_with[name]) or "nothing"
-            lines.append(f"  held by its prior (the poses do not determine it; posterior sigma "
-                         f"{ident.prior_ratio[name]:.0%} of the prior's): {name} (~{conf})")
-        for name in ident.dropped:
-            conf = "/".join(ident.confounded_with[name]) or "no effect"
-            lines.append(f"  not identifiable from these poses and no prior: {name} (~{conf})")
+        lines += vocabulary.lines(ident, indent="  ")
         if self.curve:
             lines.append("poses  predicted RMS (mm)  random poses, median (mm)")
             lines += [f"{p.n:5d}  {p.predicted_rms_mm:18.4f}  {p.random_median_mm:25.4f}" for p in self.curve]
@@ -242,11 +237,7 @@ class CampaignResult:
             "identifiability": {key: v for key, v in ident.to_dict().items()
                                 if key not in ("kept", "dropped", "undetermined", "confounded_with")},
             "parameters": self.parameters,
-            "dropped": [{"name": nm, "reason": "not identifiable from these poses and no prior",
-                         "confounded_with": ident.confounded_with[nm]} for nm in ident.dropped]
-            + [{"name": nm, "reason": f"held by its prior: the poses do not determine it (posterior sigma "
-                                      f"{ident.prior_ratio[nm]:.0%} of the prior's)",
-                "confounded_with": ident.confounded_with[nm]} for nm in ident.undetermined],
+            "dropped": vocabulary.entries(ident.dropped + ident.undetermined, ident),
             "curve": [{"n": p.n, "predicted_rms_mm": p.predicted_rms_mm,
                        "random_median_mm": p.random_median_mm} for p in self.curve],
             "candidates": self.funnel.to_dict(),
@@ -541,7 +532,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     return CampaignResult(
         robot=plan_robot, kind=kind, joints=joints, candidate_index=index, visible=visible_out,
         predicted_rms_mm=float(np.sqrt(predicted(chosen)) * 1e3),
-        criterion=criterion, criterion_value=found.value, identifiability=info.analyze_subset(chosen),
+        criterion=criterion, criterion_value=found.value, identifiability=separate(
+            info.analyze_subset(chosen), unidentifiable(plan_robot, kind, info.all_names, max(len(smr), 1))),
         parameters=list(info.names),
         travel=travel(joints, weights), travel_unordered=travel(cand_q[found.indices], weights),
         weights=weights, curve=points, funnel=funnel, noise=noise,

@@ -14,11 +14,15 @@ EPILOG = """Examples:
 
 def add_parser(sub) -> None:
     p = sub.add_parser("analyze", help="identifiability and observability of a pose set",
-                       description="Which parameters a set of poses determines and which only their "
-                                   "priors hold (as the calibration will treat them), the condition "
-                                   "number of the normal matrix and the observability indices O1-O4.",
+                       description="Which parameters a set of poses determines, in the words the "
+                                   "calibration will use: estimated, not determined by these data (held "
+                                   "near nominal by their priors) or not identifiable (exactly confounded "
+                                   "or without effect); the condition number of the normal matrix and the "
+                                   "observability indices O1-O4.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("data", help="CSV with joint columns q1_deg.. (or _rad); measurements optional")
+    p.add_argument("data", help="CSV with joint columns q1_deg.. (or _rad); with measured points (x_mm.. "
+                                "or x_m..), the tracker frame and SMR offsets are fitted to them first, as "
+                                "calibrate does (unless --tool-mm is given)")
     p.add_argument("--robot", required=True, help="nominal model: catalog name or model YAML")
     p.add_argument("--kind", choices=("point", "pose"), default="point",
                    help="what will be measured at each pose (default: point)")
@@ -36,7 +40,9 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.calibration import analyze
-    from robocal.data.measurements import read_joints
+    from robocal.data.measurements import Measurements, read_joint_table
+    from robocal.data.registration import register
+    from robocal.identify import vocabulary
     from robocal.io import LENGTH_UNITS
     from robocal.kinematics.model import load_model
 
@@ -45,10 +51,16 @@ def run(args) -> int:
         tool = robot.tool.copy()
         tool[:3, 3] = np.array(args.tool_mm) * LENGTH_UNITS["mm"]
         robot = robot.with_frames(tool=tool)
-    joints = read_joints(args.data, robot)
-    ident = analyze(robot, joints, kind=args.kind, params=args.params, noise_mm=args.noise_mm)
-    print(f"{len(joints)} poses of {robot.name}, {args.kind} measurements (noise {args.noise_mm:g} mm)")
-    print(f"determined by the data: {len(ident.kept)} parameters; by their priors only (held at nominal): "
-          f"{len(ident.undetermined)}; by neither: {len(ident.dropped)}")
+    table = read_joint_table(args.data)
+    measured = {"x_mm", "x_m"} & set(table.header) and not args.tool_mm
+    # a measurement file: the tracker frame and the SMR offsets fitted to it first, each pose with the
+    # SMRs it measured: the parameters are judged on the model calibrate starts from
+    data = Measurements.load(args.data) if measured else robot.check_joints(table.joints)
+    if measured:
+        robot = register(robot, data)
+    ident = analyze(robot, data, kind=args.kind, params=args.params, noise_mm=args.noise_mm)
+    n_poses = data.n_poses if isinstance(data, Measurements) else len(data)
+    print(f"{n_poses} poses of {robot.name}, {args.kind} measurements (noise {args.noise_mm:g} mm)")
+    print(vocabulary.counts(ident))
     print(ident.summary())
     return 0

@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
+from robocal.identify import vocabulary
 from robocal.identify.normal import r_factor
 from robocal.identify.space import block_of
 from robocal.kinematics.joint_errors import is_refinement
@@ -45,6 +46,7 @@ NG_RTOL = float(1.0 / np.sqrt(NG_MAX_VIF))  # the smallest relative pivot a join
 # the order in which blocks are selected (robocal.identify.space.BLOCKS), each with the smallest
 # relative pivot it keeps whatever the rtol asked for
 STAGES = ((("base", "tool", "smr", "nuisance"), 0.0), (("links",), 0.0), (("joint_errors",), NG_RTOL))
+TWIN_COS = 1.0 - 1e-9  # |cos| between two unit Jacobian columns beyond which they are one effect
 NO_EFFECT = 1e-9  # column norm, relative to the largest, below which a parameter has no effect
 
 
@@ -138,18 +140,14 @@ class Identifiability:
                 "confounded_with": self.confounded_with}
 
     def summary(self) -> str:
-        """A short human summary: rank, condition number, observability, the dropped parameters."""
+        """A short human summary: rank, condition number, observability, then each parameter not
+        estimated in the words of :mod:`robocal.identify.vocabulary`."""
         o = self.observability
         lines = [f"rank {self.rank} of {len(self.names)} parameters; condition number of the "
                  f"scaled normal matrix {self.condition_number:.3g} ({self.condition_class})",
                  "observability O1 {O1:.3g}  O2 {O2:.3g}  O3 {O3:.3g}  O4 {O4:.3g}".format(**o)]
-        for name in self.dropped:
-            conf = ", ".join(self.confounded_with[name]) or "nothing (no effect on these data)"
-            lines.append(f"  not identifiable: {name}  (confounded with {conf})")
-        for name in self.undetermined:
-            conf = ", ".join(self.confounded_with[name]) or "nothing"
-            lines.append(f"  not determined by these data (held at nominal): {name}  (posterior sigma "
-                         f"{self.prior_ratio[name]:.0%} of its prior; confounded with {conf})")
+        for name in self.dropped + self.undetermined:  # the words of robocal.identify.vocabulary
+            lines.append(f"  {vocabulary.status(name, self)}: {name}  ({vocabulary.detail(name, self)})")
         return "\n".join(lines)
 
 
@@ -212,7 +210,7 @@ def analyze(J: np.ndarray, names: Sequence[str], n_poses: int,
                                                                                           strict=True)], bool)
     stages = [(np.flatnonzero(np.isin(blocks, stage) & ~zero & (later if refine else ~later)), floor)
               for stage, floor in STAGES for refine in (False, True)]  # a stage's refinements after it
-    kept_idx = _select(Js, [s for s in stages if s[0].size], rtol)
+    kept_idx = _earlier_twins(Js, blocks, zero, _select(Js, [s for s in stages if s[0].size], rtol))
     rank = kept_idx.size
     drop_idx = sorted(set(range(len(names))) - set(kept_idx.tolist()))
     s, cond = _spectrum(Js, kept_idx)
@@ -220,6 +218,23 @@ def analyze(J: np.ndarray, names: Sequence[str], n_poses: int,
                            dropped=[names[j] for j in drop_idx],
                            confounded_with=_confounders(Js, zero, names, kept_idx, drop_idx),
                            rank=rank, condition_number=cond, singular_values=s, n_poses=n_poses)
+
+
+def _earlier_twins(Js: np.ndarray, blocks: np.ndarray, zero: np.ndarray, kept_idx: np.ndarray) -> np.ndarray:
+    """``kept_idx`` with, of two link parameters that have one effect (unit columns parallel beyond
+    :data:`TWIN_COS`: d2 and d3 of two parallel axes), the earlier in the chain kept: which of them
+    the pivoting keeps depends on rounding, and every analysis of the same poses must name the same."""
+    kept = set(kept_idx.tolist())
+    links = [j for j in range(Js.shape[1]) if blocks[j] == "links" and not zero[j]]
+    for j in links:
+        later = [k for k in links if k > j and k in kept]
+        if j in kept or not later:
+            continue
+        twins = np.flatnonzero(np.abs(Js[:, j] @ Js[:, later]) > TWIN_COS)
+        if twins.size:
+            kept.discard(later[twins[0]])
+            kept.add(j)
+    return np.array(sorted(kept), dtype=kept_idx.dtype)
 
 
 def _spectrum(Js: np.ndarray, kept_idx: np.ndarray) -> tuple[np.ndarray, float]:

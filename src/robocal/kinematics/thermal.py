@@ -163,10 +163,3 @@ def group_sources(values: dict[str, float], estimated: set[str], prismatic: np.n
         source = "own" if nm in estimated else "shared" if NAME in estimated else "prior"
         out.append({"group": g, "k_per_K": k[g], "source": source})
     return out
-
-
-def group_summary(rows: list[dict]) -> str:
-    """One line for :func:`group_sources`'s rows."""
-    what = {"own": "own", "shared": "the shared k", "prior": "held at the prior"}
-    return "thermal expansion per link group (1/K): " + ", ".join(
-        f"{GROUP_LABELS[r['group']]} {r['k_per_K']:.3g} ({what[r['source']]})" for r in rows)

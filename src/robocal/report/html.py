@@ -394,7 +394,15 @@ def _unit_digits(unit) -> int:
 # here is shown as it is, without highlighting; a new status needs one entry.
 PARAMETER_STATUS = {"estimated": ("", "estimated"), "fixed": ("", "fixed"),
                     "dropped": ("dropped", "not identifiable"),
-                    "not determined": ("dropped", "not determined by these data")}
+                    "not determined": ("dropped", "not determined by these data"),
+                    "not identifiable": ("dropped", "not identifiable"),
+                    "not determined by these data": ("dropped", "not determined by these data"),
+                    "not used": ("dropped", "not used")}
+
+
+def _status(p: dict):
+    """A parameter row's status: its ``identification`` word when the result has it, else ``status``."""
+    return p.get("identification") or p.get("status")
 
 
 def _note(p: dict, dropped: dict) -> str:
@@ -409,8 +417,7 @@ def _note(p: dict, dropped: dict) -> str:
 # column -> (header, alignment, cell of a parameter dict given the dropped table; pre-escaped)
 PARAMETER_COLUMNS = {
     "name": ("name", "l", lambda p, d: esc(p.get("name"))),
-    "status": ("status", "l", lambda p, d: esc(PARAMETER_STATUS.get(p.get("status"),
-                                                                    ("", p.get("status")))[1])),
+    "status": ("status", "l", lambda p, d: esc(PARAMETER_STATUS.get(_status(p), ("", _status(p)))[1])),
     "unit": ("unit", "l", lambda p, d: esc(p.get("unit"))),
     "nominal": ("nominal", "r", lambda p, d: _num(p.get("nominal"), _unit_digits(p.get("unit")))),
     "estimate": ("estimate", "r", lambda p, d: _num(p.get("estimate"), _unit_digits(p.get("unit")))),
@@ -427,7 +434,7 @@ def _parameter_table(params: list[dict], dropped: dict, columns: tuple[str, ...]
     statuses :data:`PARAMETER_STATUS` highlights marked."""
     spec = [PARAMETER_COLUMNS[c] for c in columns]
     rows = [[cell(p, dropped) for _, _, cell in spec] for p in params]
-    classes = [PARAMETER_STATUS.get(p.get("status"), ("", ""))[0] for p in params]
+    classes = [PARAMETER_STATUS.get(_status(p), ("", ""))[0] for p in params]
     return _table([h for h, _, _ in spec], rows, row_class=classes, align="".join(a for _, a, _ in spec))
 
 
@@ -459,14 +466,16 @@ def _nongeometric(ng: dict | None, params: list[dict], dropped: dict) -> str:
     """The joint-error terms' parameters (their display units), shown here and only here."""
     if not ng or not params:
         return ""
-    n_out = sum(p.get("name") in dropped for p in params)
+    n_unused = sum(_status(p) == "not used" for p in params)
+    n_out = sum(p.get("name") in dropped for p in params) - n_unused
     return (f"<h3>Joint errors: {esc(', '.join(ng.get('terms', [])))}</h3>"
             "<p>Errors the model adds to the commanded joints: compliance (per metre of unit-weight "
             "moment arm), gear harmonics, backlash (half lost motion, by approach direction), travel "
             "(error per degree of the joint's last move) and cyclic errors "
             "(named cyc, the joint, then the cycles per revolution: <code>cyc3_2</code> is joint 3, twice "
             "per turn). "
-            f"{n_out} term(s) the data cannot separate from the geometry were left out (highlighted).</p>"
+            f"{n_out} term(s) the data cannot separate from the geometry were left out (highlighted)"
+            + (f"; {n_unused} not used: the data do not vary their condition" if n_unused else "") + ".</p>"
             + _parameter_table(params, dropped, JOINT_ERROR_COLUMNS))
 
 
@@ -514,10 +523,17 @@ def _identifiability(result: dict) -> str:
     dropped = result.get("dropped") or []
     if not dropped:
         return out
-    return _grid(out, "<h3>Parameters not identifiable or not determined by these data</h3>" + _table(
-        ["parameter", "reason", "confounded with"],
-        [[esc(d.get("name")), esc(d.get("reason")), esc(", ".join(d.get("confounded_with") or []))
-          or "no effect on the measurements"] for d in dropped], align="llw"))
+    return _grid(out, "<h3>Parameters not estimated</h3>"
+                 "<p><b>not identifiable</b>: exactly confounded with the parameters or frame named (or "
+                 "without effect; a joint-error term also when nearly so): held at nominal, they absorb "
+                 "it. <b>not determined by these data</b>: "
+                 "held near nominal by its prior (posterior &sigma; over half the prior's): more or other "
+                 "poses would determine it. <b>not used</b>: the data do not vary the condition it needs.</p>"
+                 + _table(["parameter", "status", "reason", "confounded with"],
+                          [[esc(d.get("name")), esc(d.get("status") or "held at nominal"),
+                            esc(d.get("reason")), esc(", ".join(d.get("confounded_with") or [])) or "&ndash;"]
+                           for d in dropped],
+                          align="llww"))
 
 
 def _correlation(result: dict) -> str:
@@ -673,6 +689,11 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     if accuracy:
         sections.append(("predicted-accuracy", "Predicted accuracy over the workspace", accuracy))
     sections.append(("parameters", "Parameters", _parameters(result)))
+    from robocal.report.conditions import section as conditions_section
+
+    working = conditions_section(result)
+    if working:
+        sections.append(("conditions", "Payload and temperature", working))
     selection = _model_selection(result.get("model_selection"))
     if selection:
         sections.append(("model-selection", "Error model selection", selection))

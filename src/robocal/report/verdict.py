@@ -4,7 +4,8 @@ to do next. It reads the result JSON (docs/result-json.md) and judges:
 - the held-out accuracy against the noise floor (``consistency.noise_mm``, the instrument's noise per
   coordinate: a perfect model's point errors have an RMS of sqrt(3) times it on point data);
 - the predicted accuracy over the workspace (``predicted_accuracy``);
-- the warnings, counting the parameters held at nominal (``dropped``: not determined by the data);
+- the warnings, counting the parameters held at nominal (``dropped``), by the words of
+  :mod:`robocal.identify.vocabulary` (not identifiable; not determined by these data; not used);
 - the next step, one sentence chosen by the first rule that applies (see `next_step`).
 """
 
@@ -27,6 +28,25 @@ def noise_floor_mm(result: dict) -> float | None:
 def held_parameters(result: dict) -> list[str]:
     """The parameters held at nominal because the data do not determine them."""
     return [str(d.get("name")) for d in result.get("dropped") or []]
+
+
+# how the box says each word of robocal.identify.vocabulary (an older result's entry without a
+# status: the word its reason starts with, else held at nominal)
+HELD_WORDS = {"not identifiable": "not identifiable (held at nominal, the confounders absorb it)",
+              "not determined by these data": "not determined by these data (held near nominal by "
+                                              "their priors: more or other poses would determine them)",
+              "not used": "not used (the data do not vary their condition)"}
+HELD_DEFAULT = "held at nominal"
+
+
+def held_by_word(result: dict) -> dict[str, list[str]]:
+    """The held parameters (`held_parameters`) grouped by how the box says why."""
+    out: dict[str, list[str]] = {}
+    for d in result.get("dropped") or []:
+        reason = str(d.get("reason") or "")
+        word = d.get("status") or next((w for w in HELD_WORDS if reason.startswith(w)), None)
+        out.setdefault(HELD_WORDS.get(word, HELD_DEFAULT), []).append(str(d.get("name")))
+    return out
 
 
 def next_step(result: dict) -> tuple[str, str]:
@@ -81,13 +101,13 @@ def verdict_box(result: dict) -> str:
     if ws.get("rms") is not None:
         lines.append(f"Predicted over the whole workspace: <b>{num(ws['rms'])} mm RMS</b> "
                      f"(p95 {num(ws.get('p95'))} mm).")
-    warnings, held = result.get("warnings") or [], held_parameters(result)
+    warnings, held = result.get("warnings") or [], held_by_word(result)
     parts = []
     if warnings:
         parts.append(f"{len(warnings)} warning(s) below")
-    if held:
-        shown = ", ".join(esc(n) for n in held[:8]) + (" ..." if len(held) > 8 else "")
-        parts.append(f"{len(held)} parameter(s) held at nominal, not determined by these data ({shown})")
+    for word, names in held.items():
+        shown = ", ".join(esc(n) for n in names[:8]) + (" ..." if len(names) > 8 else "")
+        parts.append(f"{len(names)} parameter(s) {esc(word)}: {shown}")
     lines.append(("<b class='bad'>Read first:</b> " + "; ".join(parts) + ".") if parts
                  else "No warnings, and every parameter was determined by the data.")
     lines.append(f"<b>Next:</b> {esc(step)}")

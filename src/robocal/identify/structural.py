@@ -1,0 +1,67 @@
+"""Which parameters no pose set can identify: the rank test on poses spread over the joint limits.
+
+The rank test of a calibration or an analysis drops the parameters whose effect on *these* poses is
+exactly that of others. Some are confounded on every pose set (d1 beside the base height, d3 beside
+d2 of two parallel axes, theta6 beside the tool: the model has more parameters than effects); others
+only on these poses (a joint that never moved, poses that all share one arm posture), and other
+poses would determine them. :func:`unidentifiable` repeats the rank test on
+:data:`GENERIC_POSES` poses drawn uniformly within the joint limits (seeded), the same SMRs and the
+same kind of measurement, and :func:`separate` moves a robot parameter dropped on the data but
+identifiable there from ``dropped`` to ``undetermined`` (not determined by these data,
+:mod:`robocal.identify.vocabulary`). Joint-error terms are not judged here (their effect needs the
+rows' conditions and approach directions), nor plane, distance or other kinds (the fixture decides
+what a pose can see): their rank-dropped parameters stay not identifiable.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robocal.data.measurements import Measurements
+from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, analyze
+from robocal.identify.problem import CalibrationProblem
+from robocal.identify.space import block_of
+
+GENERIC_POSES = 60  # poses spread over the joint limits: beyond the parameters of any arm robocal models
+GENERIC_SEED = 0
+JUDGED_KINDS = ("point", "pose")
+JUDGED_BLOCKS = ("links", "base", "tool", "smr")
+
+
+def unidentifiable(robot, kind: str, names: list[str], n_smr: int = 1,
+                   rtol: float = DEFAULT_RTOL) -> set[str]:
+    """Of the parameters ``names``: those the rank test drops on generic poses (module docstring)
+    of ``robot`` measured as ``kind`` with SMRs 0..``n_smr``-1, plus every one this test does not
+    judge (another kind, a joint-error term or a nuisance parameter)."""
+    judged = [nm for nm in names if block_of(nm) in JUDGED_BLOCKS]
+    unjudged = set(names) - set(judged)
+    if kind not in JUDGED_KINDS or not judged:
+        return set(names)
+    lo, hi = robot.limits[:, 0], robot.limits[:, 1]
+    q = np.random.default_rng(GENERIC_SEED).uniform(lo, hi, (GENERIC_POSES, robot.n_joints))
+    smr = np.repeat(np.arange(n_smr), GENERIC_POSES)
+    q = np.tile(q, (n_smr, 1))
+    T = robot.fk(q, smr=smr)
+    extra = {"rotations": T[:, :3, :3]} if kind == "pose" else {}
+    data = Measurements.from_arrays(kind, q, points=T[:, :3, 3], smr=smr,
+                                    pose_id=np.tile(np.arange(GENERIC_POSES), n_smr), **extra)
+    problem = CalibrationProblem(robot, data)
+    space = problem.space(robot, judged)
+    J = problem.jacobian(problem.start(robot), space)
+    dropped = set(analyze(J, space.names, GENERIC_POSES, rtol).dropped)
+    return unjudged | (dropped & set(judged))
+
+
+def separate(ident: Identifiability, structural: set[str]) -> Identifiability:
+    """``ident`` with each dropped parameter not in ``structural`` (identifiable on other poses)
+    moved to ``undetermined`` with a posterior / prior sigma ratio of 1 (the data say nothing of it
+    beyond what its confounders take: it keeps its prior)."""
+    moved = [nm for nm in ident.dropped if nm not in structural]
+    if not moved:
+        return ident
+    return Identifiability(names=ident.names, kept=ident.kept,
+                           dropped=[nm for nm in ident.dropped if nm in structural],
+                           confounded_with=ident.confounded_with, rank=ident.rank,
+                           condition_number=ident.condition_number, singular_values=ident.singular_values,
+                           n_poses=ident.n_poses, undetermined=ident.undetermined + moved,
+                           prior_ratio={**ident.prior_ratio, **dict.fromkeys(moved, 1.0)})
