@@ -36,7 +36,9 @@ import numpy as np
 from robocal.campaign.exchange import (
     IMPROVEMENT_RTOL,
     MAX_SWEEPS,
+    REFRESH_EVERY,
     RIDGE,
+    SINGULAR,
     itself_only,
     one_blas_thread,
     packing,
@@ -128,33 +130,107 @@ def mean_square(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled,
 def scan(G: np.ndarray, A: np.ndarray, um: Unmodelled, M: np.ndarray, X: np.ndarray,
          candidates: np.ndarray) -> np.ndarray:
     """``V`` (m^2) after adding each of ``candidates (K,)`` to a design of information ``M (p, p)``
-    and cross information ``X (p, m)``, by the Woodbury identity: with ``B = M^-1``, a block ``G_c``
-    and ``S = I + G_c B G_c^T``, ``(M + G_c^T G_c)^-1 X_c = T0 + B G_c^T K`` with ``T0 = B X`` and
-    ``K = S^-1 (N_c - G_c T0)``, so every term of ``V`` is ``V`` of the design plus ``(r, r)`` and
-    ``(r, m)`` products per candidate (no ``(p, p)`` inverse per candidate)."""
-    B = np.linalg.inv(M)
-    B = 0.5 * (B + B.T)
-    P, C = um.variance, um.A_cross
-    T0 = B @ X
-    Gc = G[candidates]
-    K_, r, p = Gc.shape
-    rows = Gc.reshape(-1, p)                                   # every candidate's rows: BLAS products
+    and cross information ``X (p, m)`` (see :class:`Scans`)."""
+    return Scans(G, A, um, M, X).values()[np.asarray(candidates, int)]
 
-    def per_candidate(Y: np.ndarray) -> np.ndarray:
-        return Y.reshape(K_, r, -1)
 
-    GB = per_candidate(rows @ B)                                # U^T = G_c B
-    GBA = per_candidate(GB.reshape(-1, p) @ A)
-    S_inv = np.linalg.inv(np.einsum("krp,ksp->krs", GB, Gc) + np.eye(r))  # (I + G_c B G_c^T)^-1
-    GDG = np.einsum("krp,ksp->krs", GBA, GB)                    # G_c B A B G_c^T
-    K = np.einsum("krs,ksa->kra", S_inv, um.N[candidates] - per_candidate(rows @ T0))
-    base = np.einsum("ij,ji->", B, A) + np.einsum("ia,ia,a->", T0, A @ T0, P) - 2.0 * np.einsum(
-        "ia,ia,a->", T0, C, P) + um.rms_m**2
-    KP = K * P
-    return (base - np.einsum("krs,ksr->k", S_inv, GDG)
-            + 2.0 * np.einsum("kra,kra->k", KP, per_candidate(GBA.reshape(-1, p) @ T0))
-            + np.einsum("kra,krs,ksa->k", KP, GDG, K, optimize=True)
-            - 2.0 * np.einsum("kra,kra->k", KP, per_candidate(GB.reshape(-1, p) @ C)))
+class Scans:
+    """A design (information ``M (p, p)``, cross information ``X (p, m)``) and, for every
+    candidate ``c`` of ``G (C, r, p)``, the products that give ``V`` after adding it.
+
+    With ``B = M^-1``, ``D = B A B``, ``T0 = B X``, a block ``G_c`` and ``S_c = I + G_c B G_c^T``,
+    the Woodbury identity gives ``(M + G_c^T G_c)^-1 (X + G_c^T N_c) = T0 + B G_c^T K_c`` with
+    ``K_c = S_c^-1 (N_c - G_c T0)``, so that
+
+        V_c = V - trace(S_c^-1 QD_c) + sum_a P_a (K_c^T (2 GDX_c + QD_c K_c - 2 GBC_c))_aa
+
+    from the ``(r, r)`` forms ``QB_c = G_c B G_c^T``, ``QD_c = G_c D G_c^T`` and the ``(r, m)``
+    products ``GBX_c = G_c T0``, ``GDX_c = G_c D X``, ``GBC_c = G_c B A_cross`` (``P`` the
+    unmodelled variances). A design change (adding or removing one block ``H``) changes ``B`` and
+    ``D`` by rank ``r`` (:meth:`updated`), and every candidate's forms and products by the same
+    rank: one ``(C r, p) x (p, 2r)`` product updates them all, where computing them afresh
+    (:class:`Scans` of ``M, X``) costs ``(C r, p) x (p, 2p + 3m)``. ``values`` costs
+    ``O(C r^2 (r + m))``: no ``(p, p)`` work per candidate.
+    """
+
+    def __init__(self, G: np.ndarray, A: np.ndarray, um: Unmodelled, M: np.ndarray, X: np.ndarray,
+                 state: tuple | None = None) -> None:
+        self.G, self.A, self.um, self.M, self.X = G, A, um, M, X
+        C, r, p = G.shape
+        self.rows = G.reshape(C * r, p)
+        if state is None:
+            B = np.linalg.inv(M)
+            B = 0.5 * (B + B.T)
+            D = B @ A @ B
+            D = 0.5 * (D + D.T)
+            GB, GD = (self.rows @ B).reshape(C, r, p), (self.rows @ D).reshape(C, r, p)
+            Gt = G.transpose(0, 2, 1)
+            QB, QD = GB @ Gt, GD @ Gt
+            Y = (self.rows @ np.hstack([B @ X, D @ X, B @ um.A_cross])).reshape(C, r, -1)
+            state = (B, D, QB, QD, Y)
+        self.B, self.D, self.QB, self.QD, self.Y = state
+        T0 = self.B @ X
+        P = um.variance
+        self.value = float(np.einsum("ij,ji->", self.B, A) + np.einsum("ia,ia,a->", T0, A @ T0, P)
+                           - 2.0 * np.einsum("ia,ia,a->", T0, um.A_cross, P) + um.rms_m**2)
+
+    def values(self) -> np.ndarray:
+        """``V`` (m^2) after adding each candidate ``(C,)``."""
+        m = len(self.um.variance)
+        GBX, GDX, GBC = self.Y[..., :m], self.Y[..., m: 2 * m], self.Y[..., 2 * m:]
+        S_inv = _spd_inverse(self.QB + np.eye(self.QB.shape[-1]))
+        K = S_inv @ (self.um.N - GBX)
+        return (self.value - np.einsum("crs,csr->c", S_inv, self.QD)
+                + np.einsum("cra,cra->c", K * self.um.variance, 2.0 * (GDX - GBC) + self.QD @ K))
+
+    def updated(self, index: int, sign: float) -> Scans:
+        """The design with candidate ``index`` added (``sign`` +1) or removed (-1); computed afresh
+        when removing it leaves ``M`` (numerically) singular."""
+        H, N_i = self.G[index], self.um.N[index]
+        r = H.shape[0]
+        M, X = self.M + sign * (H.T @ H), self.X + sign * (H.T @ N_i)
+        Pm = H @ self.B                                           # (r, p)
+        S = np.eye(r) + sign * (Pm @ H.T)
+        if sign < 0 and np.linalg.det(S) <= SINGULAR:
+            return Scans(self.G, self.A, self.um, M, X)
+        E = sign * np.linalg.inv(S)
+        E = 0.5 * (E + E.T)
+        R = self.D @ H.T                                          # (p, r)
+        F = E @ (Pm @ self.A @ Pm.T) @ E
+        B = self.B - Pm.T @ E @ Pm
+        D = self.D - Pm.T @ E @ R.T - R @ E @ Pm + Pm.T @ F @ Pm
+        GPR = (self.rows @ np.hstack([Pm.T, R])).reshape(len(self.G), r, 2 * r)
+        GP, GR = GPR[..., :r], GPR[..., r:]                       # G_c B H^T, G_c D H^T
+        GPE = GP @ E
+        GPt = GP.transpose(0, 2, 1)
+        cross = GPE @ GR.transpose(0, 2, 1)
+        QB = self.QB - GPE @ GPt
+        QD = self.QD - cross - cross.transpose(0, 2, 1) + (GP @ F) @ GPt
+        PX, RX = Pm @ X, R.T @ X                                  # H B X', H D X'
+        W = sign * N_i - E @ PX
+        zero = np.zeros_like(W)
+        step = np.block([[W, F @ PX - E @ RX, -E @ (Pm @ self.um.A_cross)], [zero, W, zero]])
+        Y = self.Y + (GPR.reshape(-1, 2 * r) @ step).reshape(self.Y.shape)
+        return Scans(self.G, self.A, self.um, M, X,
+                     (0.5 * (B + B.T), 0.5 * (D + D.T), QB, QD, Y))
+
+
+def _spd_inverse(S: np.ndarray) -> np.ndarray:
+    """The inverses ``(C, r, r)`` of symmetric positive definite ``S (C, r, r)``: by the Cholesky
+    factor ``L`` (``S^-1 = L^-T L^-1``, ``L^-1`` by forward substitution, a loop over the ``r``
+    rows of one block vectorised over the candidates: numpy's batched inverse solves each small
+    matrix in its own LAPACK call, several times slower); by ``numpy.linalg.inv`` when some
+    ``S_c`` is not numerically positive definite."""
+    try:
+        L = np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        return np.linalg.inv(S)
+    Li = np.zeros_like(S)
+    for k in range(S.shape[-1]):  # row k of L^-1 from the rows above it
+        Li[:, k, k] = 1.0
+        Li[:, k, :k] = -np.einsum("cj,cjb->cb", L[:, k, :k], Li[:, :k, :k])
+        Li[:, k, : k + 1] /= L[:, k, k, None]
+    return Li.transpose(0, 2, 1) @ Li
 
 
 def search(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, init,
@@ -187,21 +263,23 @@ def polish(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, memb
     blocked = np.sum([blocked_by(m) for m in members], axis=0)
     M = np.diag(prior) + RIDGE * np.eye(G.shape[-1]) + np.einsum("cri,crj->ij", G[members], G[members])
     X = _cross(G, um, members)
+    design = Scans(G, A, um, M, X)
     current = float(_values(M[None], X[None], A, um)[0])
+    changes = 0
     for _ in range(max_sweeps):
         changed = False
         for i in rng.permutation(members):  # each member in turn: one scan of the candidates
             i = int(i)
-            M_i, X_i = M - G[i].T @ G[i], X - G[i].T @ um.N[i]
-            allowed = np.flatnonzero(blocked - blocked_by(i) == 0)
-            tried = scan(G, A, um, M_i, X_i, allowed)
-            best = int(np.argmin(tried))
-            j = int(allowed[best])
-            if j == i or not tried[best] < current - IMPROVEMENT_RTOL * current:
+            without = design.updated(i, -1.0)
+            tried = np.where(blocked - blocked_by(i) == 0, without.values(), np.inf)
+            j = int(np.argmin(tried))
+            if j == i or not tried[j] < current - IMPROVEMENT_RTOL * current:
                 continue
             members[members.index(i)] = j
             blocked += blocked_by(j) - blocked_by(i)
-            M, X, current = M_i + G[j].T @ G[j], X_i + G[j].T @ um.N[j], float(tried[best])
+            design, current, changes = without.updated(j, 1.0), float(tried[j]), changes + 2
+            if changes >= REFRESH_EVERY:  # from scratch: the updates' rounding does not accumulate
+                design, changes = Scans(G, A, um, design.M, design.X), 0
             changed = True
         if not changed:
             break
