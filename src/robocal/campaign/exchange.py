@@ -83,9 +83,16 @@ def criterion_value(G: np.ndarray, A: np.ndarray | None, indices, criterion: str
 
 
 def _abt(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
-    """``X_c Y_c^T`` for per-candidate matrices stored component-wise ``(r, r, C)``."""
-    return np.einsum("akc,bkc->abc", X, Y) if X.shape[0] > 3 else \
-        (X[:, None, :, :] * Y[None, :, :, :]).sum(axis=2)
+    """``X_c Y_c^T`` ``(a, b, C)`` for per-candidate matrices stored component-wise ``X (a, k, C)``,
+    ``Y (b, k, C)``: for ``k <= 3`` a sum of ``k`` elementwise products (in the order of numpy's
+    sum over k, without its ``(a, b, k, C)`` temporary)."""
+    k = X.shape[1]
+    if k > 3:
+        return np.einsum("akc,bkc->abc", X, Y)
+    out = X[:, None, 0, :] * Y[None, :, 0, :]
+    for j in range(1, k):  # a loop over the rows of one block only
+        out += X[:, None, j, :] * Y[None, :, j, :]
+    return out
 
 
 def _det_adj3(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

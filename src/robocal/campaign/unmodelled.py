@@ -39,6 +39,8 @@ from robocal.campaign.exchange import (
     REFRESH_EVERY,
     RIDGE,
     SINGULAR,
+    _abt,
+    _det_adj3,
     itself_only,
     one_blas_thread,
     packing,
@@ -131,88 +133,141 @@ def scan(G: np.ndarray, A: np.ndarray, um: Unmodelled, M: np.ndarray, X: np.ndar
          candidates: np.ndarray) -> np.ndarray:
     """``V`` (m^2) after adding each of ``candidates (K,)`` to a design of information ``M (p, p)``
     and cross information ``X (p, m)`` (see :class:`Scans`)."""
-    return Scans(G, A, um, M, X).values()[np.asarray(candidates, int)]
+    return Scans(Candidates.of(G, A, um), M, X).values()[np.asarray(candidates, int)]
+
+
+@dataclass(frozen=True)
+class Candidates:
+    """What a search's scans share: the blocks ``G (C, r, p)``, the region matrices ``A (p, p)``
+    and ``A_cross`` scaled by the unmodelled terms' standard deviations (``(p, m)``: the terms
+    then have unit variance), and each candidate's fitted and scaled unmodelled rows side by side,
+    component-wise ``rows (r, p + m, C)`` (the products over all candidates are then ``r`` BLAS
+    products and their ``(r, r)`` results long vectors)."""
+
+    G: np.ndarray
+    A: np.ndarray
+    um: Unmodelled
+    cross: np.ndarray
+    rows: np.ndarray
+
+    @classmethod
+    def of(cls, G: np.ndarray, A: np.ndarray, um: Unmodelled) -> Candidates:
+        sd = np.sqrt(um.variance)
+        rows = np.concatenate([G, um.N * sd], axis=2).transpose(1, 2, 0)
+        return cls(G=G, A=A, um=um, cross=um.A_cross * sd, rows=np.ascontiguousarray(rows))
 
 
 class Scans:
     """A design (information ``M (p, p)``, cross information ``X (p, m)``) and, for every
-    candidate ``c`` of ``G (C, r, p)``, the products that give ``V`` after adding it.
+    candidate ``c``, four ``(r, r)`` forms that give ``V`` after adding it.
 
-    With ``B = M^-1``, ``D = B A B``, ``T0 = B X``, a block ``G_c`` and ``S_c = I + G_c B G_c^T``,
-    the Woodbury identity gives ``(M + G_c^T G_c)^-1 (X + G_c^T N_c) = T0 + B G_c^T K_c`` with
-    ``K_c = S_c^-1 (N_c - G_c T0)``, so that
+    With ``B = M^-1``, ``D = B A B`` and the unmodelled terms scaled to unit variance (``N``,
+    ``X``, ``A_cross`` times their standard deviations), ``T = B X`` and ``Z = D X - B A_cross``,
+    a block ``G_c`` and ``S_c = I + G_c B G_c^T``, the Woodbury identity gives
+    ``(M + G_c^T G_c)^-1 (X + G_c^T N_c) = T + B G_c^T S_c^-1 W_c`` with ``W_c = N_c - G_c T``, so
 
-        V_c = V - trace(S_c^-1 QD_c) + sum_a P_a (K_c^T (2 GDX_c + QD_c K_c - 2 GBC_c))_aa
+        V_c = V - trace(S_c^-1 QD_c) + 2 trace(S_c^-1 WZ_c) + trace(S_c^-1 QD_c S_c^-1 WW_c)
 
-    from the ``(r, r)`` forms ``QB_c = G_c B G_c^T``, ``QD_c = G_c D G_c^T`` and the ``(r, m)``
-    products ``GBX_c = G_c T0``, ``GDX_c = G_c D X``, ``GBC_c = G_c B A_cross`` (``P`` the
-    unmodelled variances). A design change (adding or removing one block ``H``) changes ``B`` and
-    ``D`` by rank ``r`` (:meth:`updated`), and every candidate's forms and products by the same
-    rank: one ``(C r, p) x (p, 2r)`` product updates them all, where computing them afresh
-    (:class:`Scans` of ``M, X``) costs ``(C r, p) x (p, 2p + 3m)``. ``values`` costs
-    ``O(C r^2 (r + m))``: no ``(p, p)`` work per candidate.
+    with ``QB_c = G_c B G_c^T`` (in ``S_c``), ``QD_c = G_c D G_c^T``, ``WW_c = W_c W_c^T`` and
+    ``WZ_c = W_c (G_c Z)^T``: ``(r, r)`` each, whatever the number of terms. Adding or removing a
+    block ``H`` changes ``B``, ``D``, ``T`` and ``Z`` by rank ``r`` (:meth:`updated`): every
+    candidate's forms change by products of five ``(r, r)`` blocks (``G_c B H^T``, ``G_c D H^T``
+    and three of ``W_c``, ``G_c Z`` by the change), one ``(C r, p + m) x (p + m, 5 r)`` product for
+    all, where computing them afresh costs ``(C r, p) x (p, 2 p + 2 m)``.
     """
 
-    def __init__(self, G: np.ndarray, A: np.ndarray, um: Unmodelled, M: np.ndarray, X: np.ndarray,
-                 state: tuple | None = None) -> None:
-        self.G, self.A, self.um, self.M, self.X = G, A, um, M, X
-        C, r, p = G.shape
-        self.rows = G.reshape(C * r, p)
+    def __init__(self, cands: Candidates, M: np.ndarray, X: np.ndarray, state: tuple | None = None) -> None:
+        self.cands, self.M, self.X = cands, M, X
+        A, cross = cands.A, cands.cross
         if state is None:
             B = np.linalg.inv(M)
             B = 0.5 * (B + B.T)
             D = B @ A @ B
-            D = 0.5 * (D + D.T)
-            GB, GD = (self.rows @ B).reshape(C, r, p), (self.rows @ D).reshape(C, r, p)
-            Gt = G.transpose(0, 2, 1)
-            QB, QD = GB @ Gt, GD @ Gt
-            Y = (self.rows @ np.hstack([B @ X, D @ X, B @ um.A_cross])).reshape(C, r, -1)
-            state = (B, D, QB, QD, Y)
-        self.B, self.D, self.QB, self.QD, self.Y = state
-        T0 = self.B @ X
-        P = um.variance
-        self.value = float(np.einsum("ij,ji->", self.B, A) + np.einsum("ia,ia,a->", T0, A @ T0, P)
-                           - 2.0 * np.einsum("ia,ia,a->", T0, um.A_cross, P) + um.rms_m**2)
+            state = (B, 0.5 * (D + D.T)) + self._forms(B, 0.5 * (D + D.T))
+        self.B, self.D, self.QB, self.QD, self.WW, self.WZ = state
+        self.T = self.B @ self.scaled_X
+        self.Z = self.D @ self.scaled_X - self.B @ cross
+        self.value = float(np.einsum("ij,ji->", self.B, A) + np.einsum("ia,ia->", self.T, A @ self.T)
+                           - 2.0 * np.einsum("ia,ia->", self.T, cross) + self.cands.um.rms_m**2)
+
+    @property
+    def scaled_X(self) -> np.ndarray:
+        return self.X * np.sqrt(self.cands.um.variance)
+
+    def _forms(self, B: np.ndarray, D: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``QB, QD, WW, WZ (r, r, C)`` from scratch."""
+        rows = self.cands.rows
+        p = len(B)
+        X = self.scaled_X
+        T, Z = B @ X, D @ X - B @ self.cands.cross
+        G, N = rows[:, :p], rows[:, p:]
+        GB, GD = B @ G, D @ G                                      # (r, p, C)
+        W = N - T.T @ G                                            # (r, m, C)
+        return _abt(GB, G), _abt(GD, G), _abt(W, W), _abt(W, Z.T @ G)
 
     def values(self) -> np.ndarray:
         """``V`` (m^2) after adding each candidate ``(C,)``."""
-        m = len(self.um.variance)
-        GBX, GDX, GBC = self.Y[..., :m], self.Y[..., m: 2 * m], self.Y[..., 2 * m:]
-        S_inv = _spd_inverse(self.QB + np.eye(self.QB.shape[-1]))
-        K = S_inv @ (self.um.N - GBX)
-        return (self.value - np.einsum("crs,csr->c", S_inv, self.QD)
-                + np.einsum("cra,cra->c", K * self.um.variance, 2.0 * (GDX - GBC) + self.QD @ K))
+        S_inv = _inverse(self.QB + np.eye(len(self.QB))[:, :, None])
+        Y = _abt(_abt(S_inv, self.QD), S_inv)                     # S^-1 QD S^-1 (all symmetric)
+        return self.value + np.einsum("abc,bac->c", S_inv, 2.0 * self.WZ - self.QD) + np.einsum(
+            "abc,abc->c", Y, self.WW)
 
     def updated(self, index: int, sign: float) -> Scans:
         """The design with candidate ``index`` added (``sign`` +1) or removed (-1); computed afresh
         when removing it leaves ``M`` (numerically) singular."""
-        H, N_i = self.G[index], self.um.N[index]
-        r = H.shape[0]
-        M, X = self.M + sign * (H.T @ H), self.X + sign * (H.T @ N_i)
-        Pm = H @ self.B                                           # (r, p)
+        cands = self.cands
+        H = cands.G[index]
+        r, p = H.shape
+        N_i = cands.rows[:, p:, index]                             # (r, m) scaled
+        M, X = self.M + sign * (H.T @ H), self.X + sign * (H.T @ cands.um.N[index])
+        Pm = H @ self.B                                            # (r, p)
         S = np.eye(r) + sign * (Pm @ H.T)
         if sign < 0 and np.linalg.det(S) <= SINGULAR:
-            return Scans(self.G, self.A, self.um, M, X)
+            return Scans(cands, M, X)
         E = sign * np.linalg.inv(S)
         E = 0.5 * (E + E.T)
-        R = self.D @ H.T                                          # (p, r)
-        F = E @ (Pm @ self.A @ Pm.T) @ E
+        R = self.D @ H.T                                           # (p, r)
+        F = E @ (Pm @ cands.A @ Pm.T) @ E
         B = self.B - Pm.T @ E @ Pm
         D = self.D - Pm.T @ E @ R.T - R @ E @ Pm + Pm.T @ F @ Pm
-        GPR = (self.rows @ np.hstack([Pm.T, R])).reshape(len(self.G), r, 2 * r)
-        GP, GR = GPR[..., :r], GPR[..., r:]                       # G_c B H^T, G_c D H^T
-        GPE = GP @ E
-        GPt = GP.transpose(0, 2, 1)
-        cross = GPE @ GR.transpose(0, 2, 1)
-        QB = self.QB - GPE @ GPt
-        QD = self.QD - cross - cross.transpose(0, 2, 1) + (GP @ F) @ GPt
-        PX, RX = Pm @ X, R.T @ X                                  # H B X', H D X'
-        W = sign * N_i - E @ PX
-        zero = np.zeros_like(W)
-        step = np.block([[W, F @ PX - E @ RX, -E @ (Pm @ self.um.A_cross)], [zero, W, zero]])
-        Y = self.Y + (GPR.reshape(-1, 2 * r) @ step).reshape(self.Y.shape)
-        return Scans(self.G, self.A, self.um, M, X,
-                     (0.5 * (B + B.T), 0.5 * (D + D.T), QB, QD, Y))
+        Xs = X * np.sqrt(cands.um.variance)
+        PX = Pm @ Xs
+        O1 = sign * N_i - E @ PX                                   # W_c' = W_c - GP_c O1
+        O2 = F @ PX - E @ (R.T @ Xs) + E @ (Pm @ cands.cross)      # G_c Z' = G_c Z + GP_c O2 + GR_c O1
+        m = N_i.shape[1]
+        step = np.zeros((p + m, 5 * r))                            # on [G_c, N_c]: the five blocks
+        step[:p, :r], step[:p, r: 2 * r] = Pm.T, R
+        step[:p, 2 * r: 3 * r], step[p:, 2 * r: 3 * r] = -self.T @ O1.T, O1.T
+        step[:p, 3 * r: 4 * r], step[p:, 3 * r: 4 * r] = -self.T @ O2.T, O2.T
+        step[:p, 4 * r:] = self.Z @ O1.T
+        # GP = G_c B H^T, GR = G_c D H^T, a = W_c O1^T, b = W_c O2^T, c = G_c Z O1^T: (r, r, C) each
+        GP, GR, a, b, c = np.split(step.T @ cands.rows, 5, axis=1)
+        # the forms' changes, products X_c Y_c^T of (r, r) blocks; those with the same Y stacked
+        GPE, GPF, GPO11, GPO12 = np.split(_times(GP, np.hstack([E, F, O1 @ O1.T, O1 @ O2.T])), 4, axis=1)
+        EP, FP, aP, OP, bP, O2P = np.split(_abt(np.concatenate([GPE, GPF, a, GPO11, b, GPO12]), GP), 6)
+        ER, aR, OR = np.split(_abt(np.concatenate([GPE, a, GPO11]), GR), 3)
+        QB = self.QB - EP
+        QD = self.QD - ER - ER.transpose(1, 0, 2) + FP
+        WW = self.WW - aP - aP.transpose(1, 0, 2) + OP
+        WZ = self.WZ + bP + aR - _abt(GP, c) - O2P - OR
+        return Scans(cands, M, X, (0.5 * (B + B.T), 0.5 * (D + D.T), QB, QD, WW, WZ))
+
+
+def _times(X: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """``X_c K`` for per-candidate ``X (r, k, C)`` (component-wise) and one ``K (k, l)``."""
+    return K.T @ X
+
+
+def _inverse(S: np.ndarray) -> np.ndarray:
+    """The inverses ``(r, r, C)`` of symmetric positive definite ``S (r, r, C)`` (component-wise):
+    by the adjugate for ``r <= 3`` (elementwise over the candidates), else :func:`_spd_inverse`."""
+    r = len(S)
+    if r == 1:
+        return 1.0 / S
+    if r == 3:
+        det, adj = _det_adj3(S)
+        return adj / det
+    return _spd_inverse(S.transpose(2, 0, 1)).transpose(1, 2, 0)
 
 
 def _spd_inverse(S: np.ndarray) -> np.ndarray:
@@ -263,7 +318,8 @@ def polish(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, memb
     blocked = np.sum([blocked_by(m) for m in members], axis=0)
     M = np.diag(prior) + RIDGE * np.eye(G.shape[-1]) + np.einsum("cri,crj->ij", G[members], G[members])
     X = _cross(G, um, members)
-    design = Scans(G, A, um, M, X)
+    cands = Candidates.of(G, A, um)
+    design = Scans(cands, M, X)
     current = float(_values(M[None], X[None], A, um)[0])
     changes = 0
     for _ in range(max_sweeps):
@@ -279,7 +335,7 @@ def polish(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, memb
             blocked += blocked_by(j) - blocked_by(i)
             design, current, changes = without.updated(j, 1.0), float(tried[j]), changes + 2
             if changes >= REFRESH_EVERY:  # from scratch: the updates' rounding does not accumulate
-                design, changes = Scans(G, A, um, design.M, design.X), 0
+                design, changes = Scans(cands, design.M, design.X), 0
             changed = True
         if not changed:
             break
