@@ -38,7 +38,6 @@ from robocal.campaign.exchange import (
     MAX_SWEEPS,
     REFRESH_EVERY,
     RIDGE,
-    SINGULAR,
     _abt,
     _det_adj3,
     itself_only,
@@ -54,6 +53,8 @@ from robocal.kinematics.joint_errors import CONDITION_TERMS, candidate_names, pa
 from robocal.trust.coverage import region_matrix
 
 DEFAULT_TERMS = ("compliance", "backlash", "travel")  # the non-geometric errors of common arms
+DOWNDATE_MIN_DET = 1e-4  # removing a block with det(I - H B H^T) below this: forms afresh (a rank-r
+                         # downdate would amplify the rounding by about its inverse)
 
 
 @dataclass(frozen=True)
@@ -214,7 +215,7 @@ class Scans:
 
     def updated(self, index: int, sign: float) -> Scans:
         """The design with candidate ``index`` added (``sign`` +1) or removed (-1); computed afresh
-        when removing it leaves ``M`` (numerically) singular."""
+        when removing it leaves ``M`` nearly singular (:data:`DOWNDATE_MIN_DET`)."""
         cands = self.cands
         H = cands.G[index]
         r, p = H.shape
@@ -222,7 +223,7 @@ class Scans:
         M, X = self.M + sign * (H.T @ H), self.X + sign * (H.T @ cands.um.N[index])
         Pm = H @ self.B                                            # (r, p)
         S = np.eye(r) + sign * (Pm @ H.T)
-        if sign < 0 and np.linalg.det(S) <= SINGULAR:
+        if sign < 0 and np.linalg.det(S) < DOWNDATE_MIN_DET:
             return Scans(cands, M, X)
         E = sign * np.linalg.inv(S)
         E = 0.5 * (E + E.T)
