@@ -243,14 +243,14 @@ class Scans:
         step[:p, 4 * r:] = self.Z @ O1.T
         # GP = G_c B H^T, GR = G_c D H^T, a = W_c O1^T, b = W_c O2^T, c = G_c Z O1^T: (r, r, C) each
         GP, GR, a, b, c = np.split(step.T @ cands.rows, 5, axis=1)
-        # the forms' changes, products X_c Y_c^T of (r, r) blocks; those with the same Y stacked
+        # the forms' changes as few products X_c Y_c^T of (r, r) blocks as their symmetry allows
         GPE, GPF, GPO11, GPO12 = np.split(_times(GP, np.hstack([E, F, O1 @ O1.T, O1 @ O2.T])), 4, axis=1)
-        EP, FP, aP, OP, bP, O2P = np.split(_abt(np.concatenate([GPE, GPF, a, GPO11, b, GPO12]), GP), 6)
-        ER, aR, OR = np.split(_abt(np.concatenate([GPE, a, GPO11]), GR), 3)
-        QB = self.QB - EP
-        QD = self.QD - ER - ER.transpose(1, 0, 2) + FP
-        WW = self.WW - aP - aP.transpose(1, 0, 2) + OP
-        WZ = self.WZ + bP + aR - _abt(GP, c) - O2P - OR
+        QB = self.QB - _abt(GPE, GP)
+        dQD = _abt(0.5 * GPF, GP) - _abt(GPE, GR)                 # QD' = QD + dQD + dQD^T
+        dWW = _abt(0.5 * GPO11 - a, GP)                           # WW' = WW + dWW + dWW^T
+        QD = self.QD + dQD + dQD.transpose(1, 0, 2)
+        WW = self.WW + dWW + dWW.transpose(1, 0, 2)
+        WZ = self.WZ + _abt(b - GPO12, GP) + _abt(a - GPO11, GR) - _abt(GP, c)
         return Scans(cands, M, X, (0.5 * (B + B.T), 0.5 * (D + D.T), QB, QD, WW, WZ))
 
 
