@@ -12,8 +12,8 @@
    previous search (kept here as the reference: a ``(p, p)`` inverse and ``(C r, p) x (p, p)``
    products per member tried), alternating, best of ``SEARCH_ROUNDS``; both must choose the same
    design with the same value (1e-9). Cases: the 5,000 generated IRB 120 candidates above, and
-   the real IRB 120 calibration poses (500 candidates, 3 SMRs: 9 rows per pose) when the data
-   sets are present.
+   the real IRB 120 calibration poses (500 candidates, as bench_campaign plans them) when the
+   data sets are present.
 
 The machine's load average is printed with every table: the machine may be shared.
 """
@@ -73,7 +73,7 @@ def cli_seconds(src: Path, args: list[str]) -> tuple[float, float]:
 def command_line() -> None:
     trees = {"this version": SRC}
     if os.environ.get("BENCH_PLAN_SPEED_BASELINE"):
-        trees["baseline"] = Path(os.environ["BENCH_PLAN_SPEED_BASELINE"])
+        trees["previous version"] = Path(os.environ["BENCH_PLAN_SPEED_BASELINE"])
     with tempfile.TemporaryDirectory() as tmp:
         base = ["--quiet", "poses", "--robot", "abb_irb120", "-n", "20", "-o", str(Path(tmp) / "poses.csv")]
         runs = {(tree, label): args for tree in trees
@@ -96,8 +96,8 @@ def command_line() -> None:
     results.figure("cli_unmodelled_s", f"{best['this version', unmodelled][0]:.1f}")
     results.figure("cli_noise_only_s", f"{best['this version', 'noise only'][0]:.1f}")
     results.figure("cli_load", start.split("/")[0])
-    if "baseline" in trees:
-        results.figure("cli_baseline_unmodelled_s", f"{best['baseline', unmodelled][0]:.1f}")
+    if "previous version" in trees:
+        results.figure("cli_previous_unmodelled_s", f"{best['previous version', unmodelled][0]:.1f}")
 
 
 # ----------------------------------------------------------------------------- the previous search
@@ -192,7 +192,7 @@ def searches() -> None:
         from robocal.data.datasets import irb120
 
         cal = irb120(DATASETS)[0]
-        cases["IRB 120 real poses, 500, 3 SMRs"] = search_problem(robot, 20, candidates=cal,
+        cases["IRB 120, its 500 real calibration poses"] = search_problem(robot, 20, candidates=cal,
                                                                   unmodelled_mm=IRB120_REAL_UNMODELLED_MM)
     else:
         print(f"IRB 120 data set not found at {DATASETS}: the real-pose case is skipped")
