@@ -21,9 +21,10 @@ pose by ``J_f (theta_hat - theta) - J_n c``, whose mean square over the region i
 (``A`` the region matrix of :func:`robocal.trust.coverage.region_matrix` over the fitted and the
 unmodelled unknowns; the first term is the I-criterion of :mod:`robocal.campaign.exchange`).
 :func:`search` improves the noise-optimal design and random ones for ``V`` by Fedorov sweeps over
-every candidate (:func:`scan`: one ``(p, p)`` inverse per member tried and a Woodbury update per
-candidate), so the plan trades noise against what the fit absorbs, and ``sqrt(V)`` is an accuracy
-prediction that includes the unmodelled error.
+every candidate (:class:`Scans`: four ``(r, r)`` forms per candidate, updated by rank ``r`` after
+each change of the design, give every candidate's ``V`` by the Woodbury identity), so the plan
+trades noise against what the fit absorbs, and ``sqrt(V)`` is an accuracy prediction that includes
+the unmodelled error.
 """
 
 from __future__ import annotations
@@ -313,8 +314,9 @@ def polish(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, memb
            max_sweeps: int = MAX_SWEEPS) -> tuple[np.ndarray, float]:
     """Fedorov sweeps from the design ``members`` for ``V`` (``blocked_by(j)``: the candidates that
     may not join ``j``): each member in turn is exchanged for the candidate that lowers ``V`` most
-    (every allowed candidate scored by :func:`scan`), until a whole sweep changes nothing. Returns
-    the sorted design and its ``V`` (m^2)."""
+    (every allowed candidate scored by :class:`Scans` of the design without it), until a whole sweep
+    changes nothing; the forms are computed afresh every ``REFRESH_EVERY`` changes. Returns the
+    sorted design and its ``V`` (m^2)."""
     members = [int(m) for m in members]
     blocked = np.sum([blocked_by(m) for m in members], axis=0)
     M = np.diag(prior) + RIDGE * np.eye(G.shape[-1]) + np.einsum("cri,crj->ij", G[members], G[members])
