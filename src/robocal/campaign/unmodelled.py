@@ -131,13 +131,6 @@ def mean_square(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled,
     return float(_values(M[None], _cross(G, um, idx)[None], A, um)[0])
 
 
-def scan(G: np.ndarray, A: np.ndarray, um: Unmodelled, M: np.ndarray, X: np.ndarray,
-         candidates: np.ndarray) -> np.ndarray:
-    """``V`` (m^2) after adding each of ``candidates (K,)`` to a design of information ``M (p, p)``
-    and cross information ``X (p, m)`` (see :class:`Scans`)."""
-    return Scans(Candidates.of(G, A, um), M, X).values()[np.asarray(candidates, int)]
-
-
 @dataclass(frozen=True)
 class Candidates:
     """What a search's scans share: the blocks ``G (C, r, p)``, the region matrices ``A (p, p)``
