@@ -8,14 +8,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from robocal.campaign.exchange import IMPROVEMENT_RTOL, _abt, itself_only
+from robocal.campaign.exchange import IMPROVEMENT_RTOL, _abt, cholesky_inverse, itself_only
 from robocal.campaign.unmodelled import (
     Candidates,
     Scans,
     Unmodelled,
     _cross,
     _inverse,
-    _spd_inverse,
     mean_square,
     polish,
 )
@@ -98,12 +97,17 @@ def test_small_inverses_are_numpys(seed, r):
     rng = np.random.default_rng(seed)
     L = rng.normal(size=(40, r, r))
     S = L @ L.transpose(0, 2, 1) + np.eye(r)
-    np.testing.assert_allclose(_spd_inverse(S), np.linalg.inv(S), rtol=1e-9, atol=1e-12)
+    S_inv, logdet = cholesky_inverse(S)
+    np.testing.assert_allclose(S_inv, np.linalg.inv(S), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(logdet, np.linalg.slogdet(S)[1], rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(_inverse(S.transpose(1, 2, 0)).transpose(2, 0, 1), np.linalg.inv(S),
                                rtol=1e-9, atol=1e-12)
-    if r > 1:  # not positive definite: numpy's inverse
+    if r > 1:  # not positive definite: refused, and numpy's inverse in the scans
         S[3] = np.diag(np.r_[-1.0, np.ones(r - 1)])
-        np.testing.assert_allclose(_spd_inverse(S), np.linalg.inv(S), rtol=1e-9, atol=1e-12)
+        with pytest.raises(np.linalg.LinAlgError):
+            cholesky_inverse(S)
+        np.testing.assert_allclose(_inverse(S.transpose(1, 2, 0)).transpose(2, 0, 1), np.linalg.inv(S),
+                                   rtol=1e-9, atol=1e-12)
 
 
 @settings(max_examples=30, deadline=None)

@@ -41,6 +41,7 @@ from robocal.campaign.exchange import (
     RIDGE,
     _abt,
     _det_adj3,
+    cholesky_inverse,
     itself_only,
     one_blas_thread,
     packing,
@@ -255,32 +256,21 @@ def _times(X: np.ndarray, K: np.ndarray) -> np.ndarray:
 
 def _inverse(S: np.ndarray) -> np.ndarray:
     """The inverses ``(r, r, C)`` of symmetric positive definite ``S (r, r, C)`` (component-wise):
-    by the adjugate for ``r <= 3`` (elementwise over the candidates), else :func:`_spd_inverse`."""
+    by the adjugate for ``r`` 1 and 3 (elementwise over the candidates), else by the Cholesky factors
+    (:func:`robocal.campaign.exchange.cholesky_inverse`; numpy's inverse when one is not
+    numerically positive definite)."""
     r = len(S)
     if r == 1:
         return 1.0 / S
     if r == 3:
         det, adj = _det_adj3(S)
         return adj / det
-    return _spd_inverse(S.transpose(2, 0, 1)).transpose(1, 2, 0)
-
-
-def _spd_inverse(S: np.ndarray) -> np.ndarray:
-    """The inverses ``(C, r, r)`` of symmetric positive definite ``S (C, r, r)``: by the Cholesky
-    factor ``L`` (``S^-1 = L^-T L^-1``, ``L^-1`` by forward substitution, a loop over the ``r``
-    rows of one block vectorised over the candidates: numpy's batched inverse solves each small
-    matrix in its own LAPACK call, several times slower); by ``numpy.linalg.inv`` when some
-    ``S_c`` is not numerically positive definite."""
+    Sc = S.transpose(2, 0, 1)
     try:
-        L = np.linalg.cholesky(S)
-    except np.linalg.LinAlgError:
-        return np.linalg.inv(S)
-    Li = np.zeros_like(S)
-    for k in range(S.shape[-1]):  # row k of L^-1 from the rows above it
-        Li[:, k, k] = 1.0
-        Li[:, k, :k] = -np.einsum("cj,cjb->cb", L[:, k, :k], Li[:, :k, :k])
-        Li[:, k, : k + 1] /= L[:, k, k, None]
-    return Li.transpose(0, 2, 1) @ Li
+        S_inv = cholesky_inverse(Sc)[0]
+    except np.linalg.LinAlgError:  # not numerically positive definite: numpy's inverse
+        S_inv = np.linalg.inv(Sc)
+    return S_inv.transpose(1, 2, 0)
 
 
 def search(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, init,
