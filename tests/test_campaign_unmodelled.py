@@ -8,7 +8,7 @@ import pytest
 
 import robocal as rc
 from robocal.campaign.information import Noise, information
-from robocal.campaign.unmodelled import Unmodelled, mean_square, scan, search, unmodelled_error
+from robocal.campaign.unmodelled import Candidates, Scans, Unmodelled, mean_square, search, unmodelled_error
 from robocal.errors import RobocalError
 
 
@@ -51,7 +51,7 @@ def test_scan_is_the_direct_value_of_each_design():
     X = np.einsum("crp,crm->pm", G[design], um.N[design])
     others = np.array([0, 2, 3, 5, 7, 8, 9, 10, 11])
     direct = [mean_square(G, A, prior, um, [*design, c]) for c in others]
-    np.testing.assert_allclose(scan(G, A, um, M, X, others), direct, rtol=1e-9)
+    np.testing.assert_allclose(Scans(Candidates.of(G, A, um), M, X).values()[others], direct, rtol=1e-9)
 
 
 def test_search_finds_the_brute_force_best_design():

@@ -83,9 +83,16 @@ def criterion_value(G: np.ndarray, A: np.ndarray | None, indices, criterion: str
 
 
 def _abt(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
-    """``X_c Y_c^T`` for per-candidate matrices stored component-wise ``(r, r, C)``."""
-    return np.einsum("akc,bkc->abc", X, Y) if X.shape[0] > 3 else \
-        (X[:, None, :, :] * Y[None, :, :, :]).sum(axis=2)
+    """``X_c Y_c^T`` ``(a, b, C)`` for per-candidate matrices stored component-wise ``X (a, k, C)``,
+    ``Y (b, k, C)``: for ``k <= 3`` a sum of ``k`` elementwise products (in the order of numpy's
+    sum over k, without its ``(a, b, k, C)`` temporary)."""
+    k = X.shape[1]
+    if k > 3:
+        return np.einsum("akc,bkc->abc", X, Y)
+    out = X[:, None, 0, :] * Y[None, :, 0, :]
+    for j in range(1, k):  # a loop over the rows of one block only
+        out += X[:, None, j, :] * Y[None, :, j, :]
+    return out
 
 
 def _det_adj3(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -113,10 +120,30 @@ def _inverse_trace(S: np.ndarray, Q: np.ndarray) -> np.ndarray:
         ok = det > SINGULAR
         return np.where(ok, np.einsum("ijc,jic->c", adj, Q) / np.where(ok, det, 1.0), np.inf)
     Sc, Qc = S.transpose(2, 0, 1), Q.transpose(2, 0, 1)
+    try:  # all positive definite (adding a block): by the Cholesky factors
+        S_inv, logdet = cholesky_inverse(Sc)
+        return np.where(logdet > np.log(SINGULAR), np.einsum("cij,cji->c", S_inv, Qc), np.inf)
+    except np.linalg.LinAlgError:
+        pass
     sign, logdet = np.linalg.slogdet(Sc)
     ok = (sign > 0) & (logdet > np.log(SINGULAR))
     X = np.linalg.solve(np.where(ok[:, None, None], Sc, np.eye(r)), Qc)
     return np.where(ok, np.trace(X, axis1=1, axis2=2), np.inf)
+
+
+def cholesky_inverse(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The inverses ``(C, r, r)`` and log-determinants ``(C,)`` of symmetric positive definite
+    ``S (C, r, r)`` by their Cholesky factors ``L`` (``S^-1 = L^-T L^-1``, ``L^-1`` by forward
+    substitution: a loop over the ``r`` rows of one block, vectorised over the candidates; numpy's
+    batched inverse and solve run one LAPACK call per small matrix, several times slower).
+    ``numpy.linalg.LinAlgError`` when some ``S_c`` is not positive definite."""
+    L = np.linalg.cholesky(S)
+    Li = np.zeros_like(S)
+    for k in range(S.shape[-1]):  # row k of L^-1 from the rows above it
+        Li[:, k, k] = 1.0
+        Li[:, k, :k] = -np.einsum("cj,cjb->cb", L[:, k, :k], Li[:, :k, :k])
+        Li[:, k, : k + 1] /= L[:, k, k, None]
+    return Li.transpose(0, 2, 1) @ Li, 2.0 * np.sum(np.log(np.diagonal(L, axis1=1, axis2=2)), axis=1)
 
 
 def _logdet(S: np.ndarray) -> np.ndarray:

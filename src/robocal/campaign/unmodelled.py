@@ -21,9 +21,10 @@ pose by ``J_f (theta_hat - theta) - J_n c``, whose mean square over the region i
 (``A`` the region matrix of :func:`robocal.trust.coverage.region_matrix` over the fitted and the
 unmodelled unknowns; the first term is the I-criterion of :mod:`robocal.campaign.exchange`).
 :func:`search` improves the noise-optimal design and random ones for ``V`` by Fedorov sweeps over
-every candidate (:func:`scan`: one ``(p, p)`` inverse per member tried and a Woodbury update per
-candidate), so the plan trades noise against what the fit absorbs, and ``sqrt(V)`` is an accuracy
-prediction that includes the unmodelled error.
+every candidate (:class:`Scans`: four ``(r, r)`` forms per candidate, updated by rank ``r`` after
+each change of the design, give every candidate's ``V`` by the Woodbury identity), so the plan
+trades noise against what the fit absorbs, and ``sqrt(V)`` is an accuracy prediction that includes
+the unmodelled error.
 """
 
 from __future__ import annotations
@@ -36,7 +37,11 @@ import numpy as np
 from robocal.campaign.exchange import (
     IMPROVEMENT_RTOL,
     MAX_SWEEPS,
+    REFRESH_EVERY,
     RIDGE,
+    _abt,
+    _det_adj3,
+    cholesky_inverse,
     itself_only,
     one_blas_thread,
     packing,
@@ -50,6 +55,8 @@ from robocal.kinematics.joint_errors import CONDITION_TERMS, candidate_names, pa
 from robocal.trust.coverage import region_matrix
 
 DEFAULT_TERMS = ("compliance", "backlash", "travel")  # the non-geometric errors of common arms
+DOWNDATE_MIN_DET = 1e-4  # removing a block with det(I - H B H^T) below this: forms afresh (a rank-r
+                         # downdate would amplify the rounding by about its inverse)
 
 
 @dataclass(frozen=True)
@@ -125,36 +132,145 @@ def mean_square(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled,
     return float(_values(M[None], _cross(G, um, idx)[None], A, um)[0])
 
 
-def scan(G: np.ndarray, A: np.ndarray, um: Unmodelled, M: np.ndarray, X: np.ndarray,
-         candidates: np.ndarray) -> np.ndarray:
-    """``V`` (m^2) after adding each of ``candidates (K,)`` to a design of information ``M (p, p)``
-    and cross information ``X (p, m)``, by the Woodbury identity: with ``B = M^-1``, a block ``G_c``
-    and ``S = I + G_c B G_c^T``, ``(M + G_c^T G_c)^-1 X_c = T0 + B G_c^T K`` with ``T0 = B X`` and
-    ``K = S^-1 (N_c - G_c T0)``, so every term of ``V`` is ``V`` of the design plus ``(r, r)`` and
-    ``(r, m)`` products per candidate (no ``(p, p)`` inverse per candidate)."""
-    B = np.linalg.inv(M)
-    B = 0.5 * (B + B.T)
-    P, C = um.variance, um.A_cross
-    T0 = B @ X
-    Gc = G[candidates]
-    K_, r, p = Gc.shape
-    rows = Gc.reshape(-1, p)                                   # every candidate's rows: BLAS products
+@dataclass(frozen=True)
+class Candidates:
+    """What a search's scans share: the blocks ``G (C, r, p)``, the region matrices ``A (p, p)``
+    and ``A_cross`` scaled by the unmodelled terms' standard deviations (``(p, m)``: the terms
+    then have unit variance), and each candidate's fitted and scaled unmodelled rows side by side,
+    component-wise ``rows (r, p + m, C)`` (the products over all candidates are then ``r`` BLAS
+    products and their ``(r, r)`` results long vectors)."""
 
-    def per_candidate(Y: np.ndarray) -> np.ndarray:
-        return Y.reshape(K_, r, -1)
+    G: np.ndarray
+    A: np.ndarray
+    um: Unmodelled
+    cross: np.ndarray
+    rows: np.ndarray
 
-    GB = per_candidate(rows @ B)                                # U^T = G_c B
-    GBA = per_candidate(GB.reshape(-1, p) @ A)
-    S_inv = np.linalg.inv(np.einsum("krp,ksp->krs", GB, Gc) + np.eye(r))  # (I + G_c B G_c^T)^-1
-    GDG = np.einsum("krp,ksp->krs", GBA, GB)                    # G_c B A B G_c^T
-    K = np.einsum("krs,ksa->kra", S_inv, um.N[candidates] - per_candidate(rows @ T0))
-    base = np.einsum("ij,ji->", B, A) + np.einsum("ia,ia,a->", T0, A @ T0, P) - 2.0 * np.einsum(
-        "ia,ia,a->", T0, C, P) + um.rms_m**2
-    KP = K * P
-    return (base - np.einsum("krs,ksr->k", S_inv, GDG)
-            + 2.0 * np.einsum("kra,kra->k", KP, per_candidate(GBA.reshape(-1, p) @ T0))
-            + np.einsum("kra,krs,ksa->k", KP, GDG, K, optimize=True)
-            - 2.0 * np.einsum("kra,kra->k", KP, per_candidate(GB.reshape(-1, p) @ C)))
+    @classmethod
+    def of(cls, G: np.ndarray, A: np.ndarray, um: Unmodelled) -> Candidates:
+        sd = np.sqrt(um.variance)
+        rows = np.concatenate([G, um.N * sd], axis=2).transpose(1, 2, 0)
+        return cls(G=G, A=A, um=um, cross=um.A_cross * sd, rows=np.ascontiguousarray(rows))
+
+
+class Scans:
+    """A design (information ``M (p, p)``, cross information ``X (p, m)``) and, for every
+    candidate ``c``, four ``(r, r)`` forms that give ``V`` after adding it.
+
+    With ``B = M^-1``, ``D = B A B`` and the unmodelled terms scaled to unit variance (``N``,
+    ``X``, ``A_cross`` times their standard deviations), ``T = B X`` and ``Z = D X - B A_cross``,
+    a block ``G_c`` and ``S_c = I + G_c B G_c^T``, the Woodbury identity gives
+    ``(M + G_c^T G_c)^-1 (X + G_c^T N_c) = T + B G_c^T S_c^-1 W_c`` with ``W_c = N_c - G_c T``, so
+
+        V_c = V - trace(S_c^-1 QD_c) + 2 trace(S_c^-1 WZ_c) + trace(S_c^-1 QD_c S_c^-1 WW_c)
+
+    with ``QB_c = G_c B G_c^T`` (in ``S_c``), ``QD_c = G_c D G_c^T``, ``WW_c = W_c W_c^T`` and
+    ``WZ_c = W_c (G_c Z)^T``: ``(r, r)`` each, whatever the number of terms. Adding or removing a
+    block ``H`` changes ``B``, ``D``, ``T`` and ``Z`` by rank ``r`` (:meth:`updated`): every
+    candidate's forms change by products of five ``(r, r)`` blocks (``G_c B H^T``, ``G_c D H^T``
+    and three of ``W_c``, ``G_c Z`` by the change), one ``(C r, p + m) x (p + m, 5 r)`` product for
+    all, where computing them afresh costs ``(C r, p) x (p, 2 p + 2 m)``.
+    """
+
+    def __init__(self, cands: Candidates, M: np.ndarray, X: np.ndarray, state: tuple | None = None) -> None:
+        self.cands, self.M, self.X = cands, M, X
+        A, cross = cands.A, cands.cross
+        if state is None:
+            B = np.linalg.inv(M)
+            B = 0.5 * (B + B.T)
+            D = B @ A @ B
+            state = (B, 0.5 * (D + D.T)) + self._forms(B, 0.5 * (D + D.T))
+        self.B, self.D, self.QB, self.QD, self.WW, self.WZ = state
+        self.T = self.B @ self.scaled_X
+        self.Z = self.D @ self.scaled_X - self.B @ cross
+        self.value = float(np.einsum("ij,ji->", self.B, A) + np.einsum("ia,ia->", self.T, A @ self.T)
+                           - 2.0 * np.einsum("ia,ia->", self.T, cross) + self.cands.um.rms_m**2)
+
+    @property
+    def scaled_X(self) -> np.ndarray:
+        return self.X * np.sqrt(self.cands.um.variance)
+
+    def _forms(self, B: np.ndarray, D: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``QB, QD, WW, WZ (r, r, C)`` from scratch."""
+        rows = self.cands.rows
+        p = len(B)
+        X = self.scaled_X
+        T, Z = B @ X, D @ X - B @ self.cands.cross
+        G, N = rows[:, :p], rows[:, p:]
+        GB, GD = B @ G, D @ G                                      # (r, p, C)
+        W = N - T.T @ G                                            # (r, m, C)
+        return _abt(GB, G), _abt(GD, G), _abt(W, W), _abt(W, Z.T @ G)
+
+    def values(self) -> np.ndarray:
+        """``V`` (m^2) after adding each candidate ``(C,)``."""
+        S_inv = _inverse(self.QB + np.eye(len(self.QB))[:, :, None])
+        Y = _abt(_abt(S_inv, self.QD), S_inv)                     # S^-1 QD S^-1 (all symmetric)
+        return self.value + np.einsum("abc,bac->c", S_inv, 2.0 * self.WZ - self.QD) + np.einsum(
+            "abc,abc->c", Y, self.WW)
+
+    def updated(self, index: int, sign: float) -> Scans:
+        """The design with candidate ``index`` added (``sign`` +1) or removed (-1); computed afresh
+        when removing it leaves ``M`` nearly singular (:data:`DOWNDATE_MIN_DET`)."""
+        cands = self.cands
+        H = cands.G[index]
+        r, p = H.shape
+        N_i = cands.rows[:, p:, index]                             # (r, m) scaled
+        M, X = self.M + sign * (H.T @ H), self.X + sign * (H.T @ cands.um.N[index])
+        Pm = H @ self.B                                            # (r, p)
+        S = np.eye(r) + sign * (Pm @ H.T)
+        if sign < 0 and np.linalg.det(S) < DOWNDATE_MIN_DET:
+            return Scans(cands, M, X)
+        E = sign * np.linalg.inv(S)
+        E = 0.5 * (E + E.T)
+        R = self.D @ H.T                                           # (p, r)
+        F = E @ (Pm @ cands.A @ Pm.T) @ E
+        B = self.B - Pm.T @ E @ Pm
+        D = self.D - Pm.T @ E @ R.T - R @ E @ Pm + Pm.T @ F @ Pm
+        Xs = X * np.sqrt(cands.um.variance)
+        PX = Pm @ Xs
+        O1 = sign * N_i - E @ PX                                   # W_c' = W_c - GP_c O1
+        O2 = F @ PX - E @ (R.T @ Xs) + E @ (Pm @ cands.cross)      # G_c Z' = G_c Z + GP_c O2 + GR_c O1
+        m = N_i.shape[1]
+        step = np.zeros((p + m, 5 * r))                            # on [G_c, N_c]: the five blocks
+        step[:p, :r], step[:p, r: 2 * r] = Pm.T, R
+        step[:p, 2 * r: 3 * r], step[p:, 2 * r: 3 * r] = -self.T @ O1.T, O1.T
+        step[:p, 3 * r: 4 * r], step[p:, 3 * r: 4 * r] = -self.T @ O2.T, O2.T
+        step[:p, 4 * r:] = self.Z @ O1.T
+        # GP = G_c B H^T, GR = G_c D H^T, a = W_c O1^T, b = W_c O2^T, c = G_c Z O1^T: (r, r, C) each
+        GP, GR, a, b, c = np.split(step.T @ cands.rows, 5, axis=1)
+        # the forms' changes as few products X_c Y_c^T of (r, r) blocks as their symmetry allows
+        GPE, GPF, GPO11, GPO12 = np.split(_times(GP, np.hstack([E, F, O1 @ O1.T, O1 @ O2.T])), 4, axis=1)
+        QB = self.QB - _abt(GPE, GP)
+        dQD = _abt(0.5 * GPF, GP) - _abt(GPE, GR)                 # QD' = QD + dQD + dQD^T
+        dWW = _abt(0.5 * GPO11 - a, GP)                           # WW' = WW + dWW + dWW^T
+        QD = self.QD + dQD + dQD.transpose(1, 0, 2)
+        WW = self.WW + dWW + dWW.transpose(1, 0, 2)
+        WZ = self.WZ + _abt(b - GPO12, GP) + _abt(a - GPO11, GR) - _abt(GP, c)
+        return Scans(cands, M, X, (0.5 * (B + B.T), 0.5 * (D + D.T), QB, QD, WW, WZ))
+
+
+def _times(X: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """``X_c K`` for per-candidate ``X (r, k, C)`` (component-wise) and one ``K (k, l)``."""
+    return K.T @ X
+
+
+def _inverse(S: np.ndarray) -> np.ndarray:
+    """The inverses ``(r, r, C)`` of symmetric positive definite ``S (r, r, C)`` (component-wise):
+    by the adjugate for ``r`` 1 and 3 (elementwise over the candidates), else by the Cholesky factors
+    (:func:`robocal.campaign.exchange.cholesky_inverse`; numpy's inverse when one is not
+    numerically positive definite)."""
+    r = len(S)
+    if r == 1:
+        return 1.0 / S
+    if r == 3:
+        det, adj = _det_adj3(S)
+        return adj / det
+    Sc = S.transpose(2, 0, 1)
+    try:
+        S_inv = cholesky_inverse(Sc)[0]
+    except np.linalg.LinAlgError:  # not numerically positive definite: numpy's inverse
+        S_inv = np.linalg.inv(Sc)
+    return S_inv.transpose(1, 2, 0)
 
 
 def search(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, init,
@@ -181,27 +297,31 @@ def polish(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, memb
            max_sweeps: int = MAX_SWEEPS) -> tuple[np.ndarray, float]:
     """Fedorov sweeps from the design ``members`` for ``V`` (``blocked_by(j)``: the candidates that
     may not join ``j``): each member in turn is exchanged for the candidate that lowers ``V`` most
-    (every allowed candidate scored by :func:`scan`), until a whole sweep changes nothing. Returns
-    the sorted design and its ``V`` (m^2)."""
+    (every allowed candidate scored by :class:`Scans` of the design without it), until a whole sweep
+    changes nothing; the forms are computed afresh every ``REFRESH_EVERY`` changes. Returns the
+    sorted design and its ``V`` (m^2)."""
     members = [int(m) for m in members]
     blocked = np.sum([blocked_by(m) for m in members], axis=0)
     M = np.diag(prior) + RIDGE * np.eye(G.shape[-1]) + np.einsum("cri,crj->ij", G[members], G[members])
     X = _cross(G, um, members)
+    cands = Candidates.of(G, A, um)
+    design = Scans(cands, M, X)
     current = float(_values(M[None], X[None], A, um)[0])
+    changes = 0
     for _ in range(max_sweeps):
         changed = False
         for i in rng.permutation(members):  # each member in turn: one scan of the candidates
             i = int(i)
-            M_i, X_i = M - G[i].T @ G[i], X - G[i].T @ um.N[i]
-            allowed = np.flatnonzero(blocked - blocked_by(i) == 0)
-            tried = scan(G, A, um, M_i, X_i, allowed)
-            best = int(np.argmin(tried))
-            j = int(allowed[best])
-            if j == i or not tried[best] < current - IMPROVEMENT_RTOL * current:
+            without = design.updated(i, -1.0)
+            tried = np.where(blocked - blocked_by(i) == 0, without.values(), np.inf)
+            j = int(np.argmin(tried))
+            if j == i or not tried[j] < current - IMPROVEMENT_RTOL * current:
                 continue
             members[members.index(i)] = j
             blocked += blocked_by(j) - blocked_by(i)
-            M, X, current = M_i + G[j].T @ G[j], X_i + G[j].T @ um.N[j], float(tried[best])
+            design, current, changes = without.updated(j, 1.0), float(tried[j]), changes + 2
+            if changes >= REFRESH_EVERY:  # from scratch: the updates' rounding does not accumulate
+                design, changes = Scans(cands, design.M, design.X), 0
             changed = True
         if not changed:
             break
