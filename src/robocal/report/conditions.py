@@ -9,11 +9,12 @@ temperature, and the terms not used. Every string from the result is escaped.
 
 from __future__ import annotations
 
-from robocal.report.format import esc
+from robocal.report.format import esc, table
 from robocal.report.format import num as _num
 
 SOURCES = {"own": "own (its deviation estimated)", "shared": "the shared k",
            "prior": "held at the prior mean"}  # where a link group's k comes from
+TEXT_ENDS = "lrrl"  # the tables' alignment: a name, two numbers, a word
 
 
 def _micro(value):
@@ -86,18 +87,18 @@ def section(result: dict) -> str:
         out.append("<h3>Thermal expansion</h3>" + _rows([["shared k (every link)", value]]))
     groups = c.get("thermal_groups")
     if groups and "thermal" not in unused:
-        out.append(_table(["link group", "k (10<sup>&minus;6</sup>/K)", "1&sigma;", "source"], [
+        out.append(table(["link group", "k (10<sup>&minus;6</sup>/K)", "1&sigma;", "source"], [
             [esc(g.get("label") or g.get("group")), _num(_micro(g.get("k_per_K")), 3),
              _num(_micro(g.get("sigma_per_K")), 3), esc(SOURCES.get(g.get("source"), g.get("source")))]
-            for g in groups]))
+            for g in groups], align=TEXT_ENDS))
     loads = c.get("payload")
     if loads and "payload" not in unused:
         unit = esc(loads[0].get("unit"))
         out.append("<h3>Payload compliance</h3><p>Joint turn per kg m of the payload's gravity moment "
-                   "about the joint (joint 1 is vertical: none).</p>" + _table(
+                   "about the joint (joint 1 is vertical: none).</p>" + table(
                        ["joint", f"compliance ({unit})", "1&sigma;", "status"],
                        [[esc(r.get("joint")), _num(r.get("estimate"), 4), _num(r.get("sigma"), 4), _status(r)]
-                        for r in loads]))
+                        for r in loads], align=TEXT_ENDS))
     return "".join(out)
 
 
@@ -105,14 +106,3 @@ def _rows(rows: list[list[str]]) -> str:
     """A two-column key / value table (cells pre-escaped)."""
     body = "".join(f"<tr><th class='l'>{a}</th><td class='l wrap'>{b}</td></tr>" for a, b in rows)
     return f"<div class='scroll'><table><tbody>{body}</tbody></table></div>"
-
-
-def _table(header: list[str], rows: list[list[str]]) -> str:
-    """A table whose first and last columns are text (left-aligned), numbers between (cells pre-escaped)."""
-    def cells(tag: str, row: list[str]) -> str:
-        return "".join(f"<{tag}{' class=l' if i in (0, len(row) - 1) else ''}>{c}</{tag}>"
-                       for i, c in enumerate(row))
-
-    body = "".join(f"<tr>{cells('td', r)}</tr>" for r in rows)
-    return (f"<div class='scroll'><table><thead><tr>{cells('th', header)}</tr></thead>"
-            f"<tbody>{body}</tbody></table></div>")

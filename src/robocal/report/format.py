@@ -24,3 +24,22 @@ def num(value, digits: int = 4) -> str:
     if value != 0 and (abs(value) >= 1e6 or abs(value) < 10 ** (-digits)):
         return f"{value:.{min(digits, 4)}g}" if abs(value) >= 1e6 else f"{value:.3e}"
     return f"{value:.{digits}f}"
+
+
+def table(header: list[str], rows: list[list[str]], left: int = 1, row_class=None,
+          align: str | None = None) -> str:
+    """Rows of pre-escaped cells; the first ``left`` columns are left-aligned, or ``align`` gives
+    each column's alignment (``"l"`` left, ``"r"`` right, ``"w"`` left and wrapping)."""
+    align = align or "l" * left + "r" * max(len(header) - left, 0)
+    css = {"l": ' class="l"', "w": ' class="l wrap"', "r": ""}
+
+    def cls(k: int) -> str:
+        return css[align[k]] if k < len(align) else ""
+
+    head = "".join(f"<th{cls(k)}>{h}</th>" for k, h in enumerate(header))
+    body = []
+    for i, r in enumerate(rows):
+        rc = f' class="{row_class[i]}"' if row_class and row_class[i] else ""
+        body.append(f"<tr{rc}>" + "".join(f"<td{cls(k)}>{c}</td>" for k, c in enumerate(r)) + "</tr>")
+    markup = f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
+    return f"<div class='scroll'>{markup}</div>"

@@ -17,6 +17,7 @@ from robocal.errors import DataError
 from robocal.io import write_atomic
 from robocal.report.format import esc
 from robocal.report.format import num as _num
+from robocal.report.format import table as _table
 from robocal.report.iso9283 import pose_accuracy_repeatability
 from robocal.report.verdict import held_parameters, verdict_box
 
@@ -59,25 +60,6 @@ figcaption{color:#555;font-size:12px}figcaption b{color:#222}
  table{font-size:9px;max-width:100%}th,td{padding:1px 3px;white-space:normal}
  .grid{grid-template-columns:1fr}}
 """
-
-
-def _table(header: list[str], rows: list[list[str]], left: int = 1, row_class=None,
-           align: str | None = None) -> str:
-    """Rows of pre-escaped cells; the first ``left`` columns are left-aligned, or ``align`` gives
-    each column's alignment (``"l"`` left, ``"r"`` right, ``"w"`` left and wrapping)."""
-    align = align or "l" * left + "r" * max(len(header) - left, 0)
-    css = {"l": ' class="l"', "w": ' class="l wrap"', "r": ""}
-
-    def cls(k: int) -> str:
-        return css[align[k]] if k < len(align) else ""
-
-    head = "".join(f"<th{cls(k)}>{h}</th>" for k, h in enumerate(header))
-    body = []
-    for i, r in enumerate(rows):
-        rc = f' class="{row_class[i]}"' if row_class and row_class[i] else ""
-        body.append(f"<tr{rc}>" + "".join(f"<td{cls(k)}>{c}</td>" for k, c in enumerate(r)) + "</tr>")
-    table = f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
-    return f"<div class='scroll'>{table}</div>"
 
 
 def _figure(svg: str, caption: str, look: str | None = None) -> str:
