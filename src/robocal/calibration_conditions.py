@@ -28,6 +28,7 @@ from robocal.identify import vocabulary
 from robocal.identify.priors import prior_sigma
 from robocal.identify.space import block_of
 from robocal.kinematics import load, thermal
+from robocal.kinematics.conditions import range_of
 from robocal.kinematics.joint_errors import CONDITION_TERMS, condition_terms, term_of
 
 PAYLOAD_UNIT = "urad/(kg m)"  # the payload compliance's display unit: joint turn per kg m of payload moment
@@ -103,18 +104,20 @@ def section(result) -> dict | None:
 
 
 def _coverage(datasets) -> dict:
-    """The payloads and temperatures the calibration rows recorded."""
-    payload, temperature = _column(datasets, "payload"), _column(datasets, "temperature")
+    """The payloads and temperatures the calibration rows recorded (the range the model keeps,
+    :func:`robocal.kinematics.conditions.range_of`, with the distinct masses and centres of mass)."""
+    covered = range_of([d.payload for d in datasets], [d.temperature for d in datasets])
     out: dict = {"payload": None, "temperature": None}
-    if payload is not None:
+    if covered.payload_kg is not None:
+        payload = _column(datasets, "payload")
         masses = np.unique(payload[:, 0])
         loaded = payload[payload[:, 0] > 0, 1:] * 1e3
-        out["payload"] = {"min_kg": float(masses[0]), "max_kg": float(masses[-1]),
+        out["payload"] = {"min_kg": covered.payload_kg[0], "max_kg": covered.payload_kg[1],
                           "masses_kg": masses.tolist() if masses.size <= MAX_LISTED_PAYLOADS else None,
                           "centre_of_mass_mm": None if not len(loaded) else
                           {"min": loaded.min(axis=0).tolist(), "max": loaded.max(axis=0).tolist()}}
-    if temperature is not None:
-        out["temperature"] = {"min_c": float(temperature.min()), "max_c": float(temperature.max())}
+    if covered.temperature_c is not None:
+        out["temperature"] = {"min_c": covered.temperature_c[0], "max_c": covered.temperature_c[1]}
     return out
 
 

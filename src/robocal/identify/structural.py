@@ -15,6 +15,8 @@ what a pose can see): their rank-dropped parameters stay not identifiable.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from robocal.data.measurements import Measurements
@@ -59,9 +61,6 @@ def separate(ident: Identifiability, structural: set[str]) -> Identifiability:
     moved = [nm for nm in ident.dropped if nm not in structural]
     if not moved:
         return ident
-    return Identifiability(names=ident.names, kept=ident.kept,
-                           dropped=[nm for nm in ident.dropped if nm in structural],
-                           confounded_with=ident.confounded_with, rank=ident.rank,
-                           condition_number=ident.condition_number, singular_values=ident.singular_values,
-                           n_poses=ident.n_poses, undetermined=ident.undetermined + moved,
-                           prior_ratio={**ident.prior_ratio, **dict.fromkeys(moved, 1.0)})
+    return replace(ident, dropped=[nm for nm in ident.dropped if nm in structural],
+                   undetermined=ident.undetermined + moved,
+                   prior_ratio={**ident.prior_ratio, **dict.fromkeys(moved, 1.0)})
