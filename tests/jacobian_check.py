@@ -2,6 +2,9 @@
 
 import numpy as np
 
+from robocal.identify.problem import CalibrationProblem
+from robocal.identify.space import ParameterSpace
+
 
 def central_difference(problem, state, space, column: int, h: float) -> np.ndarray:
     """``d residuals / d unknown[column]`` ``(M,)`` of ``problem`` at ``state`` by a central
@@ -10,3 +13,16 @@ def central_difference(problem, state, space, column: int, h: float) -> np.ndarr
     e = np.zeros(space.size)
     e[column] = h
     return -(problem.residuals(space.apply(state, e)) - problem.residuals(space.apply(state, -e))) / (2 * h)
+
+
+def joint_error_jacobian(robot, data, names, values, geometric, reference_c: float | None = None):
+    """``(problem, state, space, J)``: ``data`` seen by ``robot`` with the joint-error parameters
+    ``names`` set to ``values`` (the thermal term's T_ref ``reference_c`` deg C where given), the
+    space ``geometric`` then ``names`` and its Jacobian there."""
+    truth = robot.with_joint_errors(names).with_values(dict(zip(names, values, strict=True)))
+    if reference_c is not None:
+        truth = truth.with_reference_temperature(reference_c)
+    problem = CalibrationProblem(truth, data)
+    space = ParameterSpace((*geometric, *names))
+    state = problem.start(truth)
+    return problem, state, space, problem.jacobian(state, space)

@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_program_loads import payload_model
 
 from robocal import Robot
 from robocal.cli import main
-from robocal.data.simulate import perturbed
 from robocal.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs import filter_program
@@ -40,9 +40,8 @@ BAG = np.array([98.0, 0.0, 0.0, 0.31])  # tool 2: the gripper holding a bag
 
 
 def _robots() -> tuple[Robot, Robot]:
-    nominal = Robot.from_catalog("yaskawa_gp180")
-    terms = {"payload2": 4e-6, "payload3": 5e-6, "payload5": 8e-6}  # rad/(kg m): ~0.5 mm at 98 kg
-    return nominal, perturbed(nominal, 11).with_joint_errors(list(terms)).with_values(terms)
+    # rad/(kg m): ~0.5 mm at 98 kg
+    return payload_model("yaskawa_gp180", {"payload2": 4e-6, "payload3": 5e-6, "payload5": 8e-6}, 11)
 
 
 def test_the_tool_file_gives_each_tool_its_frame_and_load():

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from jacobian_check import central_difference
+from jacobian_check import central_difference, joint_error_jacobian
 
 from robocal import Robot
 from robocal.calibration import calibrate
@@ -79,11 +79,7 @@ def test_travel_and_cyclic_columns_match_finite_differences(kind):
     names = ["travel1", "travel3", *cyclic_names(2, 101.5), *cyclic_names(5, 7)]
     # pose rows differentiate the rotation-vector error exactly only at zero error
     nu = np.array([1e-3, -2e-3, 2e-4, -1e-4, 3e-4, 1e-4]) * (1.0 if kind == "point" else 1e-5)
-    truth = sim.truth.with_joint_errors(names).with_values(dict(zip(names, nu, strict=True)))
-    problem = CalibrationProblem(truth, sim.data)
-    space = ParameterSpace(("a2", "d4", *names))
-    state = problem.start(truth)
-    J = problem.jacobian(state, space)
+    problem, state, space, J = joint_error_jacobian(sim.truth, sim.data, names, nu, ("a2", "d4"))
     h = 1e-7 if kind == "point" else 1e-6
     for c in range(2, space.size):
         fd = central_difference(problem, state, space, c, h)

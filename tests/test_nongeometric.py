@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from conftest import require_datasets
-from jacobian_check import central_difference
+from jacobian_check import central_difference, joint_error_jacobian
 
 from robocal import Robot
 from robocal.calibration import calibrate
@@ -63,11 +63,8 @@ def test_jacobian_columns_match_finite_differences(kind):
     sim = simulate_tracker(robot, 15, kind=kind, noise_mm=0.0, seed=3)
     # pose rows differentiate the rotation-vector error exactly only at zero error
     values = 0.5 * VALUES if kind == "point" else 1e-6 * VALUES
-    truth = sim.truth.with_joint_errors(NAMES).with_values(dict(zip(NAMES, values, strict=True)))
-    problem = CalibrationProblem(truth, sim.data)
-    space = ParameterSpace(("a2", "theta3", "d4", *NAMES))
-    state = problem.start(truth)
-    J = problem.jacobian(state, space)
+    geometric = ("a2", "theta3", "d4")
+    problem, state, space, J = joint_error_jacobian(sim.truth, sim.data, NAMES, values, geometric)
     h = 1e-7
     for c in range(3, space.size):
         fd = central_difference(problem, state, space, c, h)

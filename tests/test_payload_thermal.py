@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from jacobian_check import central_difference
+from jacobian_check import central_difference, joint_error_jacobian
 
 from robocal import Robot
 from robocal.calibration import calibrate
@@ -16,8 +16,6 @@ from robocal.cli import main
 from robocal.data.measurements import Measurements, parse_csv
 from robocal.data.simulate import simulate_tracker
 from robocal.errors import DataError, UnitError
-from robocal.identify.problem import CalibrationProblem
-from robocal.identify.space import ParameterSpace
 from robocal.kinematics.joint_errors import parse_terms, term_names
 
 HEADER = "q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,x_mm,y_mm,z_mm"
@@ -121,12 +119,7 @@ def test_payload_and_thermal_columns_match_finite_differences(kind, rng):
     data = replace(sim.data, payload=payload, temperature=temperature)
     names = [*term_names(6, "payload"), "thermal", "comp2_3"]
     values = (np.array([3e-7, 2e-7, 1e-6, 5e-7, 1e-6, 11.5e-6, 4e-4]) * (1 if kind == "point" else 1e-3))
-    truth = sim.truth.with_joint_errors(names).with_values(dict(zip(names, values, strict=True)))
-    truth = truth.with_reference_temperature(26.0)
-    problem = CalibrationProblem(truth, data)
-    space = ParameterSpace(("a2", "d1", *names))
-    state = problem.start(truth)
-    J = problem.jacobian(state, space)
+    problem, state, space, J = joint_error_jacobian(sim.truth, data, names, values, ("a2", "d1"), 26.0)
     assert np.abs(J[:, 2:]).max(axis=0).min() > 1e-3  # every column moves the TCP
     for c in range(space.size):
         h = 1e-9 if c >= 2 else 1e-7

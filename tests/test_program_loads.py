@@ -38,11 +38,16 @@ TOOL = make_transform(Rotation.from_euler("z", 90, degrees=True).as_matrix(), np
 FRAME = make_transform(np.eye(3), np.array([1.2, -0.4, 0.3]))
 
 
+def payload_model(name: str, terms: dict[str, float], seed: int) -> tuple[Robot, Robot]:
+    """``(nominal, calibrated)``: the catalog robot ``name`` and a perturbed copy (``seed``) with the
+    payload compliance ``terms`` (rad/(kg m)), the truth a filtered program is judged against."""
+    nominal = Robot.from_catalog(name)
+    return nominal, perturbed(nominal, seed).with_joint_errors(list(terms)).with_values(terms)
+
+
 def _robots():
-    nominal = Robot.from_catalog("kuka_kr210_r2700")
-    terms = {"payload2": 3e-6, "payload3": 4e-6, "payload5": 6e-6}  # rad/(kg m): ~1 mm at 150 kg
-    cal = perturbed(nominal, 5).with_joint_errors(list(terms)).with_values(terms)
-    return nominal, cal
+    # rad/(kg m): ~1 mm at 150 kg
+    return payload_model("kuka_kr210_r2700", {"payload2": 3e-6, "payload3": 4e-6, "payload5": 6e-6}, 5)
 
 
 def _joints(nominal, n, seed=0):
@@ -355,9 +360,7 @@ CORPUS = Path(__file__).parent / "data" / "programs" / "corpus"
 
 
 def _payload_model(name: str) -> tuple[Robot, Robot]:
-    nominal = Robot.from_catalog(name)
-    terms = {"payload2": 2e-5, "payload3": 3e-5}
-    return nominal, perturbed(nominal, 3).with_joint_errors(list(terms)).with_values(terms)
+    return payload_model(name, {"payload2": 2e-5, "payload3": 3e-5}, 3)
 
 
 def test_corpus_machine_tending_gripload_and_tload():

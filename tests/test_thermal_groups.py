@@ -12,7 +12,7 @@ import pytest
 import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from jacobian_check import central_difference
+from jacobian_check import central_difference, joint_error_jacobian
 
 from robocal import Robot
 from robocal.calibration import calibrate
@@ -62,12 +62,7 @@ def test_group_columns_match_finite_differences(kind, rng):
     data = replace(sim.data, temperature=rng.uniform(20.0, 35.0, len(sim.data)))
     names = [*GROUPS, "comp2_3"]
     values = np.array([11.5e-6, 1e-6, -2e-6, 11.5e-6, 3e-6, 4e-4])
-    truth = sim.truth.with_joint_errors(names).with_values(dict(zip(names, values, strict=True)))
-    truth = truth.with_reference_temperature(26.0)
-    problem = CalibrationProblem(truth, data)
-    space = ParameterSpace(("a2", "d1", *names))
-    state = problem.start(truth)
-    J = problem.jacobian(state, space)
+    problem, state, space, J = joint_error_jacobian(sim.truth, data, names, values, ("a2", "d1"), 26.0)
     assert np.abs(J[:, 2:]).max(axis=0).min() > 1e-3  # every column moves the TCP
     for c in range(space.size):
         h = 1e-9 if c >= 2 else 1e-7
