@@ -33,15 +33,8 @@ import numpy as np
 import results
 
 import robocal as rc
-from robocal.campaign import planner
-from robocal.campaign.exchange import (
-    IMPROVEMENT_RTOL,
-    MAX_SWEEPS,
-    RIDGE,
-    itself_only,
-    one_blas_thread,
-    packing,
-)
+from robocal.campaign import planner, unmodelled
+from robocal.campaign.exchange import IMPROVEMENT_RTOL, MAX_SWEEPS, RIDGE
 from robocal.campaign.unmodelled import _cross, _values, mean_square, search
 
 CLI_ROUNDS = 3
@@ -155,18 +148,13 @@ def previous_polish(G, A, prior, um, members, blocked_by, rng):
     return np.asarray(sorted(members), int), mean_square(G, A, prior, um, members)
 
 
-def previous_search(G, A, prior, um, init, conflicts, rng, starts):
-    C, n = len(G), len(init)
-    blocked_by = itself_only(C) if conflicts is None else conflicts
-    best = None
-    with one_blas_thread():
-        for design in [list(init)] + [packing(C, blocked_by, rng.permutation(C), n) for _ in range(starts)]:
-            if len(design) < n:
-                continue
-            found = previous_polish(G, A, prior, um, design, blocked_by, rng)
-            if best is None or found[1] < best[1]:
-                best = found
-    return best
+def previous_search(*args):
+    """``search`` (the same starts and their order) polishing with :func:`previous_polish`."""
+    saved, unmodelled.polish = unmodelled.polish, previous_polish
+    try:
+        return unmodelled.search(*args)
+    finally:
+        unmodelled.polish = saved
 
 
 def search_problem(robot, n: int, **kw) -> tuple:
