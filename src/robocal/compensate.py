@@ -44,7 +44,7 @@ from robocal.ik.singularity import SingularityDistance, singularity_distance
 from robocal.ik.track import solve as track_solve
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.kinematics.cell import is_track_cell
-from robocal.kinematics.joint_errors import assumed_conditions, extrapolated_conditions
+from robocal.kinematics.joint_errors import condition_warnings
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import ROTATION_TOL, invert_transform, make_transform, pose_error
 from robocal.magnitudes import check_degree_set, check_radians, check_targets
@@ -280,7 +280,7 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     if targets_frame == "robot":
         calibrated = calibrated.with_frames(base=nominal.base)
     calibrated = calibrated.with_conditions(payload, temperature)
-    assumed = (*assumed_conditions(calibrated), *extrapolated_conditions(calibrated))
+    assumed = tuple(condition_warnings(calibrated))
     parameters = parameter_table(calibrated, nominal)
     model, controller = calibrated, nominal
     if tool is not None:  # robot_base identity: the targets' frame (calibrated, re-expressed for 'robot')

@@ -305,6 +305,13 @@ def extrapolated_conditions(robot, payload: np.ndarray | None = None, temperatur
     return beyond(errors.calibrated, mass, temperature if "thermal" in terms else None, named)
 
 
+def condition_warnings(robot, hints: tuple[str, str] = CONDITION_OPTIONS) -> list[str]:
+    """What to say of the fixed conditions ``robot``'s error model is used at: the defaults it
+    assumes (:func:`assumed_conditions`) and those beyond its calibration
+    (:func:`extrapolated_conditions`)."""
+    return [*assumed_conditions(robot, hints), *extrapolated_conditions(robot)]
+
+
 def condition_terms(robot) -> set[str]:
     """The terms of :data:`CONDITION_TERMS` ``robot``'s error model declares (per-group thermal
     deviations count as ``thermal``: they use the temperature)."""

@@ -31,7 +31,7 @@ import numpy as np
 from robocal.compensate import Compensation
 from robocal.errors import DataError
 from robocal.ik.singularity import SingularityDistance
-from robocal.kinematics.joint_errors import assumed_conditions, condition_terms, extrapolated_conditions
+from robocal.kinematics.joint_errors import condition_terms, condition_warnings
 from robocal.kinematics.model import Robot
 from robocal.programs.fanuc_ls import FanucDialect
 from robocal.programs.load_data import Load, LoadReader, Setting, read_schedules, reader_for
@@ -241,8 +241,7 @@ def compensate_by_load(plan: LoadPlan, model: Robot, temperature: float | None,
     models = [(idx, model.with_conditions(load, temperature)) for load, idx in plan.groups()]
     parts = [(idx, run(m, idx)) for idx, m in models]
     hints = (f"{plan.hint}, or {PAYLOAD_OPTION}" if plan.hint else PAYLOAD_OPTION, TEMPERATURE_OPTION)
-    assumed = tuple(dict.fromkeys(a for _, m in models
-                                  for a in (*assumed_conditions(m, hints), *extrapolated_conditions(m))))
+    assumed = tuple(dict.fromkeys(a for _, m in models for a in condition_warnings(m, hints)))
     if len(parts) == 1:
         return replace(parts[0][1], assumed=assumed)
     N = len(plan.keys)
