@@ -8,13 +8,18 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from robocal.campaign.exchange import IMPROVEMENT_RTOL, _abt, cholesky_inverse, itself_only
+from robocal.campaign.exchange import (
+    IMPROVEMENT_RTOL,
+    block_abt,
+    block_inverses,
+    cholesky_inverse,
+    itself_only,
+)
 from robocal.campaign.unmodelled import (
     Candidates,
     Scans,
     Unmodelled,
     _cross,
-    _inverse,
     mean_square,
     polish,
 )
@@ -100,13 +105,13 @@ def test_small_inverses_are_numpys(seed, r):
     S_inv, logdet = cholesky_inverse(S)
     np.testing.assert_allclose(S_inv, np.linalg.inv(S), rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(logdet, np.linalg.slogdet(S)[1], rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(_inverse(S.transpose(1, 2, 0)).transpose(2, 0, 1), np.linalg.inv(S),
+    np.testing.assert_allclose(block_inverses(S.transpose(1, 2, 0)).transpose(2, 0, 1), np.linalg.inv(S),
                                rtol=1e-9, atol=1e-12)
     if r > 1:  # not positive definite: refused, and numpy's inverse in the scans
         S[3] = np.diag(np.r_[-1.0, np.ones(r - 1)])
         with pytest.raises(np.linalg.LinAlgError):
             cholesky_inverse(S)
-        np.testing.assert_allclose(_inverse(S.transpose(1, 2, 0)).transpose(2, 0, 1), np.linalg.inv(S),
+        np.testing.assert_allclose(block_inverses(S.transpose(1, 2, 0)).transpose(2, 0, 1), np.linalg.inv(S),
                                    rtol=1e-9, atol=1e-12)
 
 
@@ -115,7 +120,7 @@ def test_small_inverses_are_numpys(seed, r):
 def test_block_products_are_einsums(seed, a, k, b):
     rng = np.random.default_rng(seed)
     X, Y = rng.normal(size=(a, k, 50)), rng.normal(size=(b, k, 50))
-    np.testing.assert_allclose(_abt(X, Y), np.einsum("akc,bkc->abc", X, Y), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(block_abt(X, Y), np.einsum("akc,bkc->abc", X, Y), rtol=1e-12, atol=1e-12)
 
 
 def _direct_polish(G, A, prior, um, members, blocked_by, rng):

@@ -82,7 +82,7 @@ def criterion_value(G: np.ndarray, A: np.ndarray | None, indices, criterion: str
     return float(-w[0] / np.sqrt(w[-1]))
 
 
-def _abt(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
+def block_abt(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
     """``X_c Y_c^T`` ``(a, b, C)`` for per-candidate matrices stored component-wise ``X (a, k, C)``,
     ``Y (b, k, C)``: for ``k <= 3`` a sum of ``k`` elementwise products (in the order of numpy's
     sum over k, without its ``(a, b, k, C)`` temporary)."""
@@ -95,7 +95,7 @@ def _abt(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
     return out
 
 
-def _det_adj3(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def det_adj3(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Determinant ``(C,)`` and adjugate ``(3, 3, C)`` of symmetric 3x3 matrices ``(3, 3, C)``."""
     a, b, c = S[0, 0], S[0, 1], S[0, 2]
     d, e, f = S[1, 1], S[1, 2], S[2, 2]
@@ -116,7 +116,7 @@ def _inverse_trace(S: np.ndarray, Q: np.ndarray) -> np.ndarray:
         ok = S[0, 0] > SINGULAR
         return np.where(ok, Q[0, 0] / np.where(ok, S[0, 0], 1.0), np.inf)
     if r == 3:
-        det, adj = _det_adj3(S)
+        det, adj = det_adj3(S)
         ok = det > SINGULAR
         return np.where(ok, np.einsum("ijc,jic->c", adj, Q) / np.where(ok, det, 1.0), np.inf)
     Sc, Qc = S.transpose(2, 0, 1), Q.transpose(2, 0, 1)
@@ -146,11 +146,30 @@ def cholesky_inverse(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return Li.transpose(0, 2, 1) @ Li, 2.0 * np.sum(np.log(np.diagonal(L, axis1=1, axis2=2)), axis=1)
 
 
+def block_inverses(S: np.ndarray) -> np.ndarray:
+    """The inverses ``(r, r, C)`` of symmetric positive definite ``S (r, r, C)`` (component-wise):
+    by the adjugate for ``r`` 1 and 3 (elementwise over the candidates), else by the Cholesky factors
+    (:func:`cholesky_inverse`; numpy's inverse when one is not
+    numerically positive definite)."""
+    r = len(S)
+    if r == 1:
+        return 1.0 / S
+    if r == 3:
+        det, adj = det_adj3(S)
+        return adj / det
+    Sc = S.transpose(2, 0, 1)
+    try:
+        S_inv = cholesky_inverse(Sc)[0]
+    except np.linalg.LinAlgError:  # not numerically positive definite: numpy's inverse
+        S_inv = np.linalg.inv(Sc)
+    return S_inv.transpose(1, 2, 0)
+
+
 def _logdet(S: np.ndarray) -> np.ndarray:
     """``log det S_c`` for symmetric ``S (r, r, C)`` (-inf where S_c is singular)."""
     r = S.shape[0]
     if r in (1, 3):
-        det = S[0, 0] if r == 1 else _det_adj3(S)[0]
+        det = S[0, 0] if r == 1 else det_adj3(S)[0]
         return np.where(det > SINGULAR, np.log(np.maximum(det, SINGULAR)), -np.inf)
     sign, logdet = np.linalg.slogdet(S.transpose(2, 0, 1))
     return np.where(sign > 0, logdet, -np.inf)
@@ -232,13 +251,13 @@ class _Design:
             D = self.D - P.T @ E @ R.T - R @ E @ P + P.T @ F @ P
             X = np.hstack([P.T, R]).T @ self.Gt               # (r, 2r, C): G B H^T, G D H^T
             GP, GR = X[:, : self.r], X[:, self.r :]
-            QB = self.QB - _abt(E.T @ GP, GP)                # E.T @ GP: per row a, (G B H^T E)
+            QB = self.QB - block_abt(E.T @ GP, GP)                # E.T @ GP: per row a, (G B H^T E)
             W = E.T @ GR - 0.5 * (F.T @ GP)
-            WG = _abt(W, GP)
+            WG = block_abt(W, GP)
             QD = self.QD - WG - WG.transpose(1, 0, 2)
             return 0.5 * (B + B.T), 0.5 * (D + D.T), QB, QD
         GP = P @ self.Gt                                      # (r, r, C)
-        return 0.5 * (B + B.T), None, self.QB - _abt(E.T @ GP, GP), None
+        return 0.5 * (B + B.T), None, self.QB - block_abt(E.T @ GP, GP), None
 
     def _commit(self, index: int, sign: float, updated=None, value: float | None = None) -> None:
         H = self.G[index]

@@ -39,9 +39,8 @@ from robocal.campaign.exchange import (
     MAX_SWEEPS,
     REFRESH_EVERY,
     RIDGE,
-    _abt,
-    _det_adj3,
-    cholesky_inverse,
+    block_abt,
+    block_inverses,
     itself_only,
     one_blas_thread,
     packing,
@@ -199,12 +198,12 @@ class Scans:
         G, N = rows[:, :p], rows[:, p:]
         GB, GD = B @ G, D @ G                                      # (r, p, C)
         W = N - T.T @ G                                            # (r, m, C)
-        return _abt(GB, G), _abt(GD, G), _abt(W, W), _abt(W, Z.T @ G)
+        return block_abt(GB, G), block_abt(GD, G), block_abt(W, W), block_abt(W, Z.T @ G)
 
     def values(self) -> np.ndarray:
         """``V`` (m^2) after adding each candidate ``(C,)``."""
-        S_inv = _inverse(self.QB + np.eye(len(self.QB))[:, :, None])
-        Y = _abt(_abt(S_inv, self.QD), S_inv)                     # S^-1 QD S^-1 (all symmetric)
+        S_inv = block_inverses(self.QB + np.eye(len(self.QB))[:, :, None])
+        Y = block_abt(block_abt(S_inv, self.QD), S_inv)                     # S^-1 QD S^-1 (all symmetric)
         return self.value + np.einsum("abc,bac->c", S_inv, 2.0 * self.WZ - self.QD) + np.einsum(
             "abc,abc->c", Y, self.WW)
 
@@ -240,37 +239,18 @@ class Scans:
         GP, GR, a, b, c = np.split(step.T @ cands.rows, 5, axis=1)
         # the forms' changes as few products X_c Y_c^T of (r, r) blocks as their symmetry allows
         GPE, GPF, GPO11, GPO12 = np.split(_times(GP, np.hstack([E, F, O1 @ O1.T, O1 @ O2.T])), 4, axis=1)
-        QB = self.QB - _abt(GPE, GP)
-        dQD = _abt(0.5 * GPF, GP) - _abt(GPE, GR)                 # QD' = QD + dQD + dQD^T
-        dWW = _abt(0.5 * GPO11 - a, GP)                           # WW' = WW + dWW + dWW^T
+        QB = self.QB - block_abt(GPE, GP)
+        dQD = block_abt(0.5 * GPF, GP) - block_abt(GPE, GR)                 # QD' = QD + dQD + dQD^T
+        dWW = block_abt(0.5 * GPO11 - a, GP)                           # WW' = WW + dWW + dWW^T
         QD = self.QD + dQD + dQD.transpose(1, 0, 2)
         WW = self.WW + dWW + dWW.transpose(1, 0, 2)
-        WZ = self.WZ + _abt(b - GPO12, GP) + _abt(a - GPO11, GR) - _abt(GP, c)
+        WZ = self.WZ + block_abt(b - GPO12, GP) + block_abt(a - GPO11, GR) - block_abt(GP, c)
         return Scans(cands, M, X, (0.5 * (B + B.T), 0.5 * (D + D.T), QB, QD, WW, WZ))
 
 
 def _times(X: np.ndarray, K: np.ndarray) -> np.ndarray:
     """``X_c K`` for per-candidate ``X (r, k, C)`` (component-wise) and one ``K (k, l)``."""
     return K.T @ X
-
-
-def _inverse(S: np.ndarray) -> np.ndarray:
-    """The inverses ``(r, r, C)`` of symmetric positive definite ``S (r, r, C)`` (component-wise):
-    by the adjugate for ``r`` 1 and 3 (elementwise over the candidates), else by the Cholesky factors
-    (:func:`robocal.campaign.exchange.cholesky_inverse`; numpy's inverse when one is not
-    numerically positive definite)."""
-    r = len(S)
-    if r == 1:
-        return 1.0 / S
-    if r == 3:
-        det, adj = _det_adj3(S)
-        return adj / det
-    Sc = S.transpose(2, 0, 1)
-    try:
-        S_inv = cholesky_inverse(Sc)[0]
-    except np.linalg.LinAlgError:  # not numerically positive definite: numpy's inverse
-        S_inv = np.linalg.inv(Sc)
-    return S_inv.transpose(1, 2, 0)
 
 
 def search(G: np.ndarray, A: np.ndarray, prior: np.ndarray, um: Unmodelled, init,
