@@ -39,7 +39,7 @@ from robocal.errors import DataError
 from robocal.programs.source import ProgramText
 
 MM = 1e-3  # m
-_BLOCK = re.compile(r"^//TOOL\s+(\d+)\s*$")
+_BLOCK = re.compile(r"^//TOOL\s+(\d+)\s*$", re.MULTILINE)
 MAX_DIGITS = 6  # a tool number longer than this is no tool number (a controller has up to 64 or 128)
 _COUNTS = (6, 3, 1)  # numbers on the first three lines of a block: frame, centre of gravity, W
 _WHAT = ("X,Y,Z,Rx,Ry,Rz (the tool frame)", "Xg,Yg,Zg (the centre of gravity)", "W (the mass)")
@@ -60,7 +60,7 @@ class ToolEntry:
 
 def is_tool_file(src: ProgramText) -> bool:
     """A TOOL.CND: a ``//TOOL n`` line."""
-    return re.search(r"^//TOOL\s+\d+\s*$", src.text, re.MULTILINE) is not None
+    return _BLOCK.search(src.text) is not None
 
 
 def read_tool_file(src: ProgramText) -> dict[str, ToolEntry]:
