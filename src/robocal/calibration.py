@@ -52,6 +52,7 @@ from robocal.resources import calibration_bytes, check_memory, few_threads, memo
 from robocal.schema import RESULT_SCHEMA, validate
 from robocal.trust.consistency import Consistency, check_fit, check_not_worse
 from robocal.trust.coverage import accuracy_line, predict, prediction
+from robocal.trust.file_shifts import FileShifts, file_shifts, pose_means
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, independent
 from robocal.version import __version__
 
@@ -124,6 +125,9 @@ class CalibrationResult(_BeforeAfter):
         The start state (registered model, nuisance fitted to it).
     judged : list of Judged
         Each validation set judged with the start and the calibrated model.
+    validation_shifts : FileShifts or None
+        The held-out error split into a shift per validation file and the error within the files
+        (`robocal.trust.file_shifts`), with two validation files or more.
     warnings : list of str
         What the user should know (held parameters, implausible corrections with ``force``...).
     settings : dict
@@ -170,6 +174,7 @@ class CalibrationResult(_BeforeAfter):
     provenance: dict = field(default_factory=dict)
     consistency: Consistency | None = None
     predicted_accuracy: dict | None = None
+    validation_shifts: FileShifts | None = None
 
     @property
     def state(self) -> State:
@@ -377,6 +382,8 @@ class CalibrationResult(_BeforeAfter):
             out["data"]["validation_file"] = ", ".join(j.data.source for j in self.judged)
             out["validation_before"] = self.validation_before
             out["validation"] = self.validation
+            if self.validation_shifts is not None:
+                out["validation_shifts"] = self.validation_shifts.to_dict()
             j = self.judged[0]
             out["validation_observations"] = self._observations(j.problem.observations[0], j.states, None)
         return out
@@ -439,6 +446,10 @@ class CalibrationResult(_BeforeAfter):
             vb, va = self.validation_before, self.validation
             lines.append(f"validation set  ({va['n']} obs): RMS {vb['rms']:.4f} -> {va['rms']:.4f} mm, "
                          f"max {vb['max']:.4f} -> {va['max']:.4f} mm")
+            if (shifts := self.validation_shifts) is not None:
+                lines.append(f"  of it, a shift per validation file {shifts.shift_rms_mm:.4f} mm RMS "
+                             f"(F test p = {shifts.p_value:.2g}); within the files "
+                             f"{shifts.within_rms_mm:.4f} mm")
         if len(self.problem.datasets) + len(self.judged) > 1:
             for row in self.per_file():
                 b, a = row["before"], row["after"]
@@ -821,9 +832,19 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     _check_consistency(result, sigma, seed, force)
     states = (state0, State(final_robot, out.state.nuisance))
     result.judged = [_judge(problem, start, states, v, force, warnings) for v in validations]
+    result.validation_shifts = _validation_shifts(result.judged)
+    if result.validation_shifts is not None and result.validation_shifts.significant:
+        warnings.append(result.validation_shifts.sentence())
     if terms:
         result.nongeometric = _nongeometric_section(result, terms, estimated_terms)
     return result
+
+
+def _validation_shifts(judged: list[Judged]) -> FileShifts | None:
+    """The shift per validation file (:mod:`robocal.trust.file_shifts`) of the point and pose files."""
+    files = [j for j in judged if j.data.kind in ("point", "pose")]
+    errors = [pose_means(j.problem.item_error_vectors(j.states[1])[0], j.data.pose_id) for j in files]
+    return file_shifts([j.data.label for j in files], errors)
 
 
 def _check_consistency(result: CalibrationResult, sigma: dict | None, seed: int, force: bool) -> None:

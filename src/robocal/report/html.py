@@ -264,8 +264,26 @@ def _per_file(result: dict) -> str:
              for k, v in (result.get("per_kind") or {}).items()]
     return ("<h3>Per file</h3><p>Each file judged in its own kind of error (all in mm).</p>"
             + _table(["", "kind", "error", "file", "RMS before", "RMS after", "max after", "n"], rows,
-                     align="lllwrrrr")
+                     align="lllwrrrr") + _validation_shifts(result.get("validation_shifts") or {})
             + "<h3>Per kind, after calibration</h3>" + _table(["", "RMS (mm)", "max (mm)", "n"], kinds))
+
+
+def _validation_shifts(shifts: dict) -> str:
+    """The held-out error split into a shift per validation file and the error within the files."""
+    if shifts.get("rms_mm") is None:
+        return ""
+    p = shifts.get("p_value")
+    verdict = ("<b class='bad'>the files are shifted from each other</b>: the tracker or the base set up "
+               "again between sessions, the arm at another temperature, or an error of the model constant "
+               "over a file's poses" if shifts.get("significant") else "no shift per file beyond the scatter")
+    rows = [[esc(f.get("file")), esc(f.get("poses")), *(_num(v) for v in f.get("shift_mm") or [])]
+            for f in shifts.get("files") or []]
+    p_text = esc(f"{p:.2g}" if isinstance(p, float) else p)
+    return (f"<p>Of the held-out {_num(shifts['rms_mm'])} mm RMS (per pose), a shift common to each "
+            f"validation file carries {_num(shifts.get('shift_rms_mm'))} mm and the error within the files "
+            f"is {_num(shifts.get('within_rms_mm'))} mm (F test p = {p_text}): {verdict}.</p>"
+            + _table(["validation file", "poses", "shift x (mm)", "shift y (mm)", "shift z (mm)"], rows,
+                     align="wrrrr"))
 
 
 def _provenance(prov: dict) -> list[tuple[str, str]]:
