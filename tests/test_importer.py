@@ -47,6 +47,24 @@ def test_combined_files_average_repeats_and_drop_failed(tmp_path, rng):
     assert keep.pose_id.tolist() == [0, 0, 0, 1, 1, 2, 2, 2, 3, 3]
 
 
+@pytest.mark.parametrize("average", [True, False])
+def test_each_combined_file_is_a_run_of_its_own(tmp_path, rng, average):
+    """A file's first pose follows no row of another file: its approach and move are 0 (unknown),
+    the other rows' are those of their own file's order (backlash and travel terms use them)."""
+    q = rng.uniform(-90, 90, (7, 6))
+    rows = np.hstack([np.repeat(q, 2, 0), rng.uniform(-1, 1, (14, 3)), np.zeros((14, 3))])
+    files = [_write(tmp_path / "run1.csv", rows[:8]), _write(tmp_path / "run2.csv", rows[8:])]
+    together = import_tracker(files, joints="cols=0-5:deg", points="cols=6-8:m", average=average).data
+    alone = [import_tracker([f], joints="cols=0-5:deg", points="cols=6-8:m", average=average).data
+             for f in files]
+    np.testing.assert_array_equal(together.approach, np.vstack([d.approach for d in alone]))
+    np.testing.assert_allclose(together.travel, np.vstack([d.travel for d in alone]), rtol=0, atol=1e-15)
+    first_of_run2 = len(alone[0])
+    assert not together.approach[first_of_run2].any() and not together.travel[first_of_run2].any()
+    moved = np.sign(q[5] - q[4])  # the second pose of run 2 came from its first one
+    np.testing.assert_array_equal(together.approach[first_of_run2 + (1 if average else 2)], moved)
+
+
 def test_separate_smr_files_in_mm(tmp_path, rng):
     q = rng.uniform(-3, 3, (5, 6))
     pts = rng.uniform(-2000, 2000, (3, 5, 3))

@@ -4,7 +4,9 @@ Column roles and units come from specs ``[FILE:]cols=A-B:UNIT`` (0-based columns
 inclusive or ``a,b,c``; UNIT deg|rad for joints, mm|m for points). Two layouts:
 
 - combined: every raw file holds joints and points on each row (``raw`` files, specs without
-  FILE). Several files are concatenated in the given order (Meca500 data);
+  FILE). Several files are concatenated in the given order (Meca500 data), each a measuring run
+  of its own: the approach directions and joint moves (backlash, travel) of a file's first pose are
+  0, not the move from another file's last pose;
 - separate: one joints file plus one points file per SMR, row i of each file belonging to pose i
   (specs with FILE; the k-th points spec is SMR k-1). IRB 120 data: 1000 poses x 3 SMRs.
 
@@ -26,7 +28,13 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.data.measurements import MAX_JOINT_RAD, MAX_TRACKER_RANGE_M, Measurements
+from robocal.data.measurements import (
+    MAX_JOINT_RAD,
+    MAX_TRACKER_RANGE_M,
+    Measurements,
+    approach_from_order,
+    travel_from_order,
+)
 from robocal.errors import DataError, UnitError
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 
@@ -284,7 +292,8 @@ def import_tracker(raw=(), *, joints: str | ColumnSpec, points, base=(), average
     raw, jspec, pspecs = _parse_specs(raw, joints, points)
     separate = jspec.file is not None
     dropped, files = [], []
-    out = {k: [] for k in ("q", "p", "smr", "pose", "row", "spread_max", "spread_rms", "readings")}
+    out = {k: [] for k in ("q", "p", "smr", "pose", "row", "approach", "travel", "spread_max", "spread_rms",
+                           "readings")}
     next_pose = 0
     for b, (q, p, s, lines, plines, pfile, jfile) in enumerate(_read_blocks(raw, jspec, pspecs, skip_rows)):
         bad, why = _failed(p, q)
@@ -313,17 +322,24 @@ def import_tracker(raw=(), *, joints: str | ColumnSpec, points, base=(), average
         out["smr"].append(np.full(len(qk[take]), s))
         out["pose"].append(ids)
         out["row"].append(lk[take])
+        # each raw file is a measuring run of its own: its first pose follows no row of another file
+        out["approach"].append(approach_from_order(qk[take], ids))
+        out["travel"].append(travel_from_order(qk[take], ids))
     if not out["q"]:
         raise DataError("no valid readings left after dropping failed rows")
     q, p, smr, pose_id, rows = (np.concatenate(out[k]) for k in ("q", "p", "smr", "pose", "row"))
     order = np.arange(len(q))
+    approach = travel = None  # separate: one joints file, the row order's
     if separate:  # order by pose, then SMR; renumber poses 0..P-1
         order = np.lexsort((smr, pose_id))
         pose_id = np.unique(pose_id, return_inverse=True)[1]
+    else:
+        approach, travel = np.concatenate(out["approach"]), np.concatenate(out["travel"])
     names = [f for f, _ in files] + ([p.file for p in pspecs] if separate else [])
     files_text = ", ".join(Path(f).name for f in names)
     data = Measurements.from_arrays("point", q[order], points=p[order], smr=smr[order],
                                     pose_id=pose_id[order], source_row=rows[order],
+                                    approach=approach, travel=travel,
                                     source=f"imported by robocal from {files_text}")
     drift = [_drift(ColumnSpec.parse(b, "points") if isinstance(b, str) else b, skip_rows) for b in base]
     return ImportResult(data=data, dropped=dropped, spread_max=np.concatenate(out["spread_max"]),
