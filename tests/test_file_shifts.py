@@ -39,14 +39,14 @@ def test_the_split_is_unbiased_and_adds_up(rng):
     for _ in range(1500):
         errors, shifts = _draw(rng, 7, 10, sigma, shift_rms)
         s = file_shifts([f"v{k}" for k in range(7)], errors)
-        assert s.shift_rms_mm**2 + s.within_rms_mm**2 == pytest.approx(s.rms_mm**2, rel=1e-9) \
-            or s.shift_rms_mm == 0.0
+        assert s.shift_rms_mm**2 + s.within_rms_mm**2 == pytest.approx(s.rms_mm**2, rel=1e-9)
         est.append((s.shift_rms_mm * 1e-3) ** 2)
         true_ms.append(np.mean(np.sum(shifts**2, axis=1)))
         within.append((s.within_rms_mm * 1e-3) ** 2)
-    # the estimate is clipped at 0 (a small upward bias) and otherwise unbiased
+    # the estimate is clipped at 0 (a small upward bias, the within-file share as much lower) and
+    # otherwise unbiased
     assert np.mean(est) == pytest.approx(np.mean(true_ms), rel=0.1)
-    assert np.mean(within) == pytest.approx(3 * sigma**2, rel=0.02)
+    assert np.mean(within) == pytest.approx(3 * sigma**2, rel=0.03)
 
 
 def test_too_few_files_or_poses_give_no_test(rng):
@@ -89,9 +89,10 @@ def test_calibration_reports_shifted_validation_files(campaign):
     shifted = rc.calibrate(ROBOT, cal, validation=moved, nongeometric=None)
     s = shifted.validation_shifts
     assert s.significant and any("validation files are shifted" in w for w in shifted.warnings)
-    # the shifts come back on top of what the clean files already had, the within-file error stays
+    # the shifts come back on top of what the clean files already had; within the files, the error
+    # of the clean files (whose own shifts are below the scatter) is left
     np.testing.assert_allclose(s.shifts_mm - clean.validation_shifts.shifts_mm, offsets * 1e3, atol=1e-9)
-    assert s.within_rms_mm == pytest.approx(clean.validation_shifts.within_rms_mm, rel=1e-9)
+    assert s.within_rms_mm == pytest.approx(clean.validation_shifts.rms_mm, rel=0.05)
     true_rms = np.sqrt(np.mean(np.sum(offsets**2, axis=1))) * 1e3
     assert s.shift_rms_mm == pytest.approx(true_rms, rel=0.25)
     out = shifted.to_dict()
