@@ -26,6 +26,11 @@ def num(value, digits: int = 4) -> str:
     return f"{value:.{digits}f}"
 
 
+def p_value(value) -> str:
+    """A test's p-value with two significant digits (escaped as it is when not a number)."""
+    return f"{value:.2g}" if isinstance(value, float) else esc(value)
+
+
 def table(header: list[str], rows: list[list[str]], left: int = 1, row_class=None,
           align: str | None = None) -> str:
     """Rows of pre-escaped cells; the first ``left`` columns are left-aligned, or ``align`` gives

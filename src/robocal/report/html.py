@@ -15,7 +15,7 @@ import numpy as np
 
 from robocal.errors import DataError
 from robocal.io import write_atomic
-from robocal.report.format import esc
+from robocal.report.format import esc, p_value
 from robocal.report.format import num as _num
 from robocal.report.format import table as _table
 from robocal.report.iso9283 import pose_accuracy_repeatability
@@ -278,10 +278,9 @@ def _validation_shifts(shifts: dict) -> str:
                "over a file's poses" if shifts.get("significant") else "no shift per file beyond the scatter")
     rows = [[esc(f.get("file")), esc(f.get("poses")), *(_num(v) for v in f.get("shift_mm") or [])]
             for f in shifts.get("files") or []]
-    p_text = esc(f"{p:.2g}" if isinstance(p, float) else p)
     return (f"<p>Of the held-out {_num(shifts['rms_mm'])} mm RMS (per pose), a shift common to each "
             f"validation file carries {_num(shifts.get('shift_rms_mm'))} mm and the error within the files "
-            f"is {_num(shifts.get('within_rms_mm'))} mm (F test p = {p_text}): {verdict}.</p>"
+            f"is {_num(shifts.get('within_rms_mm'))} mm (F test p = {p_value(p)}): {verdict}.</p>"
             + _table(["validation file", "poses", "shift x (mm)", "shift y (mm)", "shift z (mm)"], rows,
                      align="wrrrr"))
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.report.format import esc, num
+from robocal.report.format import esc, num, p_value
 
 
 def headline(result: dict) -> list[str]:
@@ -14,11 +14,10 @@ def headline(result: dict) -> list[str]:
     lines = []
     c = result.get("consistency") or {}
     if c.get("verdict") == "inconsistent":
-        p = c.get("p_value")
         lines.append(f"<b class='bad'>The model misses its data by more than the instrument and the error "
                      f"model explain</b> ({num(c.get('rms_mm'))} mm RMS against "
                      f"{num(c.get('expected_rms_mm'))} mm expected; chi-square p = "
-                     f"{esc(f'{p:.2g}' if isinstance(p, float) else p)})")
+                     f"{p_value(c.get('p_value'))})")
     elif c.get("verdict") == "step":
         lines.append("<b class='bad'>The residuals change along the measuring order</b> (see the warnings)")
     pa = result.get("predicted_accuracy") or {}
