@@ -15,6 +15,16 @@ def central_difference(problem, state, space, column: int, h: float) -> np.ndarr
     return -(problem.residuals(space.apply(state, e)) - problem.residuals(space.apply(state, -e))) / (2 * h)
 
 
+def assert_columns_match(problem, state, space, J: np.ndarray, n_geometric: int) -> None:
+    """Every column of ``J`` against its central difference: steps 1e-7 for the first
+    ``n_geometric`` unknowns (m, rad) and 1e-9 for the joint-error terms after them; rtol 1e-4,
+    atol 1e-6 of the difference's largest value."""
+    for c in range(space.size):
+        h = 1e-9 if c >= n_geometric else 1e-7
+        fd = central_difference(problem, state, space, c, h)
+        np.testing.assert_allclose(J[:, c], fd, rtol=1e-4, atol=1e-6 * np.abs(fd).max())
+
+
 def joint_error_jacobian(robot, data, names, values, geometric, reference_c: float | None = None):
     """``(problem, state, space, J)``: ``data`` seen by ``robot`` with the joint-error parameters
     ``names`` set to ``values`` (the thermal term's T_ref ``reference_c`` deg C where given), the
