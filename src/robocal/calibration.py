@@ -125,9 +125,6 @@ class CalibrationResult(_BeforeAfter):
         The start state (registered model, nuisance fitted to it).
     judged : list of Judged
         Each validation set judged with the start and the calibrated model.
-    validation_shifts : FileShifts or None
-        The held-out error split into a shift per validation file and the error within the files
-        (`robocal.trust.file_shifts`), with two validation files or more.
     warnings : list of str
         What the user should know (held parameters, implausible corrections with ``force``...).
     settings : dict
@@ -174,7 +171,6 @@ class CalibrationResult(_BeforeAfter):
     provenance: dict = field(default_factory=dict)
     consistency: Consistency | None = None
     predicted_accuracy: dict | None = None
-    validation_shifts: FileShifts | None = None
 
     @property
     def state(self) -> State:
@@ -200,6 +196,14 @@ class CalibrationResult(_BeforeAfter):
     def validation(self) -> dict | None:
         """Statistics (mm) of every validation item with the calibrated model (all files)."""
         return _combined([j.errors[1] for j in self.judged])
+
+    @property
+    def validation_shifts(self) -> FileShifts | None:
+        """The held-out error split into a shift per validation file and the error within the files
+        (`robocal.trust.file_shifts`; point and pose files), with two validation files or more."""
+        files = [j for j in self.judged if j.data.kind in ("point", "pose")]
+        errors = [pose_means(j.problem.item_error_vectors(j.states[1])[0], j.data.pose_id) for j in files]
+        return file_shifts([j.data.label for j in files], errors)
 
     def _files(self) -> list[tuple[str, Measurements, np.ndarray, np.ndarray]]:
         """(role, data, errors before, errors after) of every file, calibration then validation."""
@@ -382,8 +386,8 @@ class CalibrationResult(_BeforeAfter):
             out["data"]["validation_file"] = ", ".join(j.data.source for j in self.judged)
             out["validation_before"] = self.validation_before
             out["validation"] = self.validation
-            if self.validation_shifts is not None:
-                out["validation_shifts"] = self.validation_shifts.to_dict()
+            if (shifts := self.validation_shifts) is not None:
+                out["validation_shifts"] = shifts.to_dict()
             j = self.judged[0]
             out["validation_observations"] = self._observations(j.problem.observations[0], j.states, None)
         return out
@@ -832,19 +836,11 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     _check_consistency(result, sigma, seed, force)
     states = (state0, State(final_robot, out.state.nuisance))
     result.judged = [_judge(problem, start, states, v, force, warnings) for v in validations]
-    result.validation_shifts = _validation_shifts(result.judged)
-    if result.validation_shifts is not None and result.validation_shifts.significant:
-        warnings.append(result.validation_shifts.sentence())
+    if (shifts := result.validation_shifts) is not None and shifts.significant:
+        warnings.append(shifts.sentence())
     if terms:
         result.nongeometric = _nongeometric_section(result, terms, estimated_terms)
     return result
-
-
-def _validation_shifts(judged: list[Judged]) -> FileShifts | None:
-    """The shift per validation file (:mod:`robocal.trust.file_shifts`) of the point and pose files."""
-    files = [j for j in judged if j.data.kind in ("point", "pose")]
-    errors = [pose_means(j.problem.item_error_vectors(j.states[1])[0], j.data.pose_id) for j in files]
-    return file_shifts([j.data.label for j in files], errors)
 
 
 def _check_consistency(result: CalibrationResult, sigma: dict | None, seed: int, force: bool) -> None:
