@@ -1,4 +1,4 @@
-"""Workflow mistakes of a third round (arms from users' DH files, outputs fed back in, magnitudes
+"""Workflow mistakes (arms from users' DH files, outputs fed back in, magnitudes
 typed in the wrong unit, messages that must name the cause): each is refused with one line naming
 the cause (exit 2, no traceback), warned naming the problem, or handled right."""
 
