@@ -127,7 +127,7 @@ def _demo_report(tmp_path_factory):
 
 
 def _meca500_report(tmp_path_factory):
-    from conftest import require_datasets
+    from robots import require_datasets
 
     from robocal import Robot, calibrate
     from robocal.data.datasets import meca500

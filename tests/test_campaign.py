@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import require_datasets
+from robots import require_datasets
 
 import robocal as rc
 from robocal import DataError, Robot

@@ -8,7 +8,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import require_datasets
+from robots import require_datasets
 
 import robocal as rc
 from robocal.calibration import calibrate, load_result

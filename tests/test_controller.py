@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import wrapped
+from robots import wrapped
 
 import robocal as rc
 from robocal.cli import main

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import random_robot, require_datasets
+from robots import random_robot, require_datasets
 from test_measurements import MECA
 
 from robocal import DataError, PlausibilityError, Robot

@@ -221,7 +221,7 @@ def test_analyze_on_its_own_zero_column():
 
 def test_real_meca500_and_irb120():
     """The real data sets: lsq beats the datasets README's plain baselines' nominal figures."""
-    from conftest import require_datasets
+    from robots import require_datasets
 
     from robocal.data.datasets import irb120, meca500
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import KERNELS, random_robot, wrapped
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from robots import KERNELS, random_robot, wrapped
 
 import robocal as rc
 from robocal.data.simulate import perturbed

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import require_datasets
+from robots import require_datasets
 
 from robocal import DataError, UnitError
 from robocal.cli import main

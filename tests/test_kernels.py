@@ -10,9 +10,9 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import random_frame, random_robot, requires_numba, wrapped
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from robots import random_frame, random_robot, requires_numba, wrapped
 
 import robocal as rc
 from robocal.errors import RobocalError

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import SHARED, random_robot
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from robots import SHARED, random_robot
 
 from robocal import DataError, ModelError, Robot
 from robocal.kinematics.transforms import invert_transform, rotvec_to_matrix
@@ -227,7 +227,7 @@ def test_bad_joints_and_parameters(rng):
 
 
 def test_invert_transform(rng):
-    from conftest import random_frame
+    from robots import random_frame
 
     T = random_frame(rng)
     np.testing.assert_allclose(T @ invert_transform(T), np.eye(4), atol=1e-12)

@@ -7,8 +7,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from conftest import require_datasets
 from jacobian_check import central_difference, joint_error_jacobian
+from robots import require_datasets
 
 from robocal import Robot
 from robocal.calibration import calibrate

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import random_frame
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from robots import random_frame
 from test_measurements import MECA
 
 from robocal import DataError

@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import KERNELS, random_frame, wrapped
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from robots import KERNELS, random_frame, wrapped
 from test_ik import fk_errors, recovered
 
 import robocal as rc

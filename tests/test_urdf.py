@@ -6,7 +6,7 @@ import io
 
 import numpy as np
 import pytest
-from conftest import random_frame, random_robot
+from robots import random_frame, random_robot
 
 from robocal import ModelError, Robot
 from robocal.kinematics.transforms import make_transform
