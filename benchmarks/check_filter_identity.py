@@ -5,7 +5,8 @@ tree in its own interpreter, and the filtered files and the target table (CSV an
 byte for byte. Exit 0 when every output is the same; one line per case either way.
 
 ``python benchmarks/check_filter_identity.py REFERENCE_SRC [N]`` (REFERENCE_SRC: the ``src``
-folder of the other tree, e.g. a worktree of main).
+folder of the other tree, e.g. a worktree of main). benchmarks/check_output_identity.py runs this
+check after comparing the outputs of every other command.
 """
 
 from __future__ import annotations
