@@ -5,10 +5,10 @@ text and every exit code are compared. Exit 0 when everything is the same; one l
 
 ``python benchmarks/check_output_identity.py REFERENCE_SRC`` (REFERENCE_SRC: the ``src`` folder of
 the other tree, e.g. /work/ref/src), from the tree to check (its ``src`` is this file's
-``../src``). Options: ``--only commands|filter`` (default both), ``--targets N`` (the size of the
-generated programs of the filter part, default 2000), ``--keep DIR`` (keep both trees' outputs
-and logs there to look at a difference). The commands part takes about 2 minutes, the filter
-part about 1 minute with 2000 targets (on an idle machine).
+``../src``; ``--tree OTHER_SRC`` checks another one). Options: ``--only commands|filter``
+(default both), ``--targets N`` (the size of the generated programs of the filter part, default
+2000), ``--keep DIR`` (keep both trees' outputs and logs there to look at a difference). The
+commands part takes about 2 minutes, the filter part about 1 minute with 2000 targets (idle).
 
 What runs (the README's and the tutorial's command lines, on the data shipped in the package and
 in tests/data): ``robots``; ``poses`` with its CSV, JSON and HTML and the program of every language
@@ -328,15 +328,16 @@ def written_by(step: int, steps: list[tuple[str, str]], rel: str) -> bool:
     return any(w and (rel == w or rel.startswith(w.rstrip("/") + "/")) for w in words)
 
 
-def check_commands(reference: Path, keep: Path | None) -> int:
-    """Run every step with both trees and print one line per step; the number of steps that differ."""
+def check_commands(reference: Path, tree: Path, keep: Path | None) -> int:
+    """Run every step with both trees (their ``src`` folders) and print one line per step; the
+    number of steps that differ."""
     steps = STEPS
-    fixed = sorted({str(reference), str(SRC), str(SRC.resolve())}, key=len, reverse=True)
+    fixed = sorted({str(reference), str(tree)}, key=len, reverse=True)
     base = Path(tempfile.mkdtemp(prefix="robocal-identity-"))
     try:
         work = base / "work"
         trees = {}
-        for name, src in (("reference", reference), ("this tree", SRC)):
+        for name, src in (("reference", reference), ("this tree", tree)):
             work.mkdir()
             times = run_steps(src, work, base / f"log {name}", steps)
             trees[name] = times
@@ -384,19 +385,22 @@ def check_commands(reference: Path, keep: Path | None) -> int:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("reference", type=Path, help="the src folder of the reference tree")
+    parser.add_argument("--tree", type=Path, default=SRC,
+                        help="the src folder of the tree to check (default: this script's ../src)")
     parser.add_argument("--only", choices=["commands", "filter"], help="run one part (default both)")
     parser.add_argument("--targets", type=int, default=2000, help="targets of the filter part's programs")
     parser.add_argument("--keep", type=Path, help="copy both trees' outputs and logs here")
     args = parser.parse_args(argv)
-    reference = args.reference.resolve()
+    reference, tree = args.reference.resolve(), args.tree.resolve()
     failed = 0
     if args.only in (None, "commands"):
-        failed += check_commands(reference, args.keep)
+        failed += check_commands(reference, tree, args.keep)
     if args.only in (None, "filter"):
         sys.path.insert(0, str(HERE))
-        from check_filter_identity import main as check_filter
+        import check_filter_identity
 
-        failed += check_filter(reference, args.targets)
+        check_filter_identity.SRC = tree
+        failed += check_filter_identity.main(reference, args.targets)
     verdict = "all the same" if not failed else "DIFFERENCES (see above)"
     print(f"{time.strftime('%H:%M')} output identity: {verdict}")
     return 1 if failed else 0
