@@ -123,6 +123,10 @@ def test_four_writers_started_together_are_all_recorded(backend, tmp_path, reque
     start.set()
     for p in procs:
         p.join(60)
+    stuck = [p for p in procs if p.is_alive()]
+    for p in stuck:
+        p.kill()
+    assert not stuck, f"{len(stuck)} writer(s) still running after 60 s: killed"
     assert [p.exitcode for p in procs] == [0, 0, 0, 0]
     with History(location) as h:
         got = h.entries("shared")

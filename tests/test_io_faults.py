@@ -14,6 +14,7 @@ import tempfile
 import textwrap
 from pathlib import Path
 
+import children
 import pytest
 
 import robocal.io as rio
@@ -266,18 +267,18 @@ def test_real_signals_at_random_moments_leave_a_consistent_set(tmp_path, sig):
         if child is None or child.poll() is not None:
             child = subprocess.Popen([sys.executable, "-c", _SIGNAL_CHILD, str(tmp_path)],
                                      stdout=subprocess.PIPE, text=True)
-            assert child.stdout.readline() == "ready\n"
+            assert children.read_line(child, "say it is ready") == "ready\n"
         time.sleep(rng.uniform(0.0, 0.05))
         child.send_signal(sig)
         if sig == signal.SIGTERM:
-            assert child.wait(10) == -signal.SIGTERM
+            assert children.wait(child, "end on SIGTERM", 10) == -signal.SIGTERM
         else:
-            assert child.stdout.readline() == "interrupted\n"
+            assert children.read_line(child, f"answer SIGINT {run + 1}") == "interrupted\n"
         if run and (sig == signal.SIGTERM):
             assert _consistent(tmp_path, names)
             assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)
     child.send_signal(signal.SIGTERM)
-    child.wait(10)
+    children.wait(child, "end on SIGTERM", 10)
     assert _consistent(tmp_path, names)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)
 
@@ -289,10 +290,10 @@ def test_kill_9_leaves_whole_files_and_the_next_run_cleans_up(tmp_path):
     for run in range(3):
         child = subprocess.Popen([sys.executable, "-c", _SIGNAL_CHILD, str(tmp_path)],
                                  stdout=subprocess.PIPE, text=True)
-        assert child.stdout.readline() == "ready\n"
+        assert children.read_line(child, "say it is ready") == "ready\n"
         time.sleep(0.02 * run)
         child.kill()
-        child.wait(10)
+        children.wait(child, "end on SIGKILL", 10)
         for n in names:  # each file whole (a set may mix generations: the documented limit)
             if (tmp_path / n).exists():
                 text = (tmp_path / n).read_text()
@@ -318,10 +319,10 @@ print(bad)
 
 def test_two_processes_racing_for_the_same_outputs_never_mix_them(tmp_path):
     rounds = 25
-    children = [subprocess.Popen([sys.executable, "-c", _RACE_CHILD, str(tmp_path), tag, str(rounds)],
-                                 stdout=subprocess.PIPE, text=True) for tag in "AB"]
-    outs = [c.communicate(timeout=60)[0] for c in children]
-    assert [c.returncode for c in children] == [0, 0]
+    racers = [subprocess.Popen([sys.executable, "-c", _RACE_CHILD, str(tmp_path), tag, str(rounds)],
+                               stdout=subprocess.PIPE, text=True) for tag in "AB"]
+    outs = [children.communicate(c, f"finish {rounds} rounds")[0] for c in racers]
+    assert [c.returncode for c in racers] == [0, 0]
     assert [int(o) for o in outs] == [0, 0]  # 2 x 25 writes, every one checked under the lock
     names = ["cal.yaml", "result.json", "report.html"]
     final = {(tmp_path / n).read_text().split(" ", 1)[0] for n in names}
@@ -339,12 +340,12 @@ def test_a_writer_waits_for_another_and_then_refuses_with_one_line(tmp_path, mon
             import fcntl, os, sys, time
             fd = os.open({str(tmp_path)!r}, os.O_RDONLY); fcntl.flock(fd, fcntl.LOCK_EX)
             print("locked", flush=True); time.sleep(30)""")], stdout=subprocess.PIPE, text=True)
-        assert holder.stdout.readline() == "locked\n"
+        assert children.read_line(holder, "say it holds the lock") == "locked\n"
         with pytest.raises(DataError, match="another robocal process") as err:
             write_all({tmp_path / "a": "x"})
         assert "\n" not in str(err.value) and not (tmp_path / "a").exists()
         holder.kill()
-        holder.wait()
+        children.wait(holder, "end on SIGKILL", 10)
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # released with its process
     finally:
         os.close(fd)

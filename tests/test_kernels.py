@@ -80,10 +80,11 @@ def test_core_runs_without_numba():
             "T = r.fk(np.zeros((3, 6)))\n"
             "assert np.isfinite(rc.ik.solve_all(r, T)).all(axis=2).any(axis=1).all()\n"
             "print(active())")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         timeout=300)
     assert out.stdout.strip() == "numpy"
     out = subprocess.run([sys.executable, "-c", "import sys, robocal; print('numba' in sys.modules)"],
-                         capture_output=True, text=True, check=True)
+                         capture_output=True, text=True, check=True, timeout=300)
     assert out.stdout.strip() == "False"
 
 
@@ -100,7 +101,8 @@ def test_auto_imports_numba_only_for_large_work():
             "r.fk(np.zeros((50, 6)))\n"
             "print('numba' in sys.modules, kn.compiled('robocal.kinematics.fk_numba', 1) is not None)")
     env = {**os.environ, kn.ENV: "auto"}
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env,
+                         timeout=600)
     assert out.stdout.split() == ["False", "True", "True"]
 
 

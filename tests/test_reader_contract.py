@@ -14,6 +14,7 @@ import sys
 import time
 from pathlib import Path
 
+import children
 import numpy as np
 import pytest
 
@@ -288,7 +289,7 @@ def test_ctrl_c_at_any_moment_of_a_real_run(tmp_path):
                                  stderr=subprocess.PIPE, text=True)
         time.sleep(delay)
         child.send_signal(signal.SIGINT)
-        err = child.communicate(timeout=60)[1]
+        err = children.communicate(child, f"end {delay} s after SIGINT", 120)[1]
         if "init_import_site" in err or child.returncode == -signal.SIGINT:
             continue  # the interpreter was still starting
         assert child.returncode in (0, 130), err

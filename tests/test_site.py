@@ -29,7 +29,7 @@ def site(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("site")
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
     proc = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-q", "-d", str(out)],
-                          cwd=ROOT, capture_output=True, text=True, env=env, check=False)
+                          cwd=ROOT, capture_output=True, text=True, env=env, check=False, timeout=900)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return out
 

@@ -70,7 +70,8 @@ def test_tutorial_runs_as_written(tmp_path):
     outputs = []
     for lang, body in found:
         cmd = ["bash", "-e", "-o", "pipefail", "-c", body] if lang == "bash" else [sys.executable, "-c", body]
-        proc = subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True, check=False)
+        proc = subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True, check=False,
+                              timeout=900)
         assert proc.returncode == 0, f"{body}\n{proc.stderr[-2000:]}"
         outputs.append(proc.stdout + proc.stderr)
     for name in ("poses.csv", "campaign.html", "Campaign.mod", "calibrated.yaml", "result.json",
