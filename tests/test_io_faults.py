@@ -273,7 +273,10 @@ def test_real_signals_at_random_moments_leave_a_consistent_set(tmp_path, sig):
         if sig == signal.SIGTERM:
             assert children.wait(child, "end on SIGTERM", 10) == -signal.SIGTERM
         else:
-            assert children.read_line(child, f"answer SIGINT {run + 1}") == "interrupted\n"
+            answer = children.read_line(child, f"answer SIGINT {run + 1}")
+            if answer == "" and children.wait(child) == -signal.SIGINT:
+                continue  # it came between two writes (outside the child's try), not inside write_all
+            assert answer == "interrupted\n"
         if run and (sig == signal.SIGTERM):
             assert _consistent(tmp_path, names)
             assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)
