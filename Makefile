@@ -1,11 +1,12 @@
-# Two commands on a fresh clone: `make demo` and `make test` (ruff, the docs site, the tests).
-# Each builds .venv itself. `make docs` builds the site alone, `make bench` runs the benchmarks.
+# Two commands on a fresh clone: `make demo` and `make test` (ruff, the docs site, the tests but the
+# slow ones). Each builds .venv itself. `make test-slow` runs the slow tests (the browser ones and
+# the long cases; CI runs both), `make docs` builds the site alone, `make bench` runs the benchmarks.
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test docs bench lint clean
+.PHONY: demo test test-slow docs bench lint clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 11), "robocal needs Python >= 3.11"'
@@ -17,15 +18,21 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(VENV)/bin/robocal demo
 
+# pytest's addopts leave out the tests marked slow (pyproject.toml): under 10 minutes on a busy
+# 2-core machine
 test: $(STAMP)
-	@# headless Chromium for tests/test_browser.py; where it cannot be installed that test skips
-	@command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || \
-	  { command -v apt-get >/dev/null 2>&1 && \
-	    (apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium) >/dev/null 2>&1; } || \
-	  echo "chromium not installed (no apt-get or no permission): the browser test will be skipped"
 	$(PY) -m ruff check .
 	$(MAKE) --no-print-directory docs
 	$(PY) -m pytest -q
+
+# only the tests marked slow: the browser tests (headless Chromium; where it cannot be installed they
+# skip) and the long cases
+test-slow: $(STAMP)
+	@command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || \
+	  { command -v apt-get >/dev/null 2>&1 && \
+	    (apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium) >/dev/null 2>&1; } || \
+	  echo "chromium not installed (no apt-get or no permission): the browser tests will be skipped"
+	$(PY) -m pytest -q -m slow
 
 # the documentation site in build/site; --strict: any warning (a broken link, a missing page) fails
 docs: $(STAMP)

@@ -17,6 +17,8 @@ from test_report import section_ids, svg_count, synthetic_result  # noqa: E402
 
 from robocal.report.html import write_report  # noqa: E402
 
+pytestmark = pytest.mark.slow  # a browser start per test: `make test-slow`
+
 BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
          "--disable-background-networking", "--disable-component-update", "--disable-sync",
