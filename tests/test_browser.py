@@ -32,7 +32,7 @@ def browser() -> str:
         path = shutil.which(name)
         if path:
             return path
-    pytest.skip("no Chromium found (Debian: apt-get install chromium; `make test` installs it where "
+    pytest.skip("no Chromium found (Debian: apt-get install chromium; `make test-slow` installs it where "
                 "apt-get is available)")
 
 

@@ -67,10 +67,11 @@ def test_formula_conversion_and_refusal():
         docs_math.formulas_to_mathml('<span class="arithmatex">x^2</span>')
 
 
+@pytest.mark.slow  # a browser
 def test_search_finds_pages_from_disk(site, tmp_path):
     browser = next((p for p in map(shutil.which, BROWSERS) if p), None)
     if browser is None:
-        pytest.skip("no Chromium found (Debian: apt-get install chromium; `make test` installs it)")
+        pytest.skip("no Chromium found (Debian: apt-get install chromium; `make test-slow` installs it)")
     url = (site / "index.html").as_uri() + "?q=tracker"
     proc = subprocess.run([browser, *FLAGS, f"--user-data-dir={tmp_path / 'profile'}",
                            "--virtual-time-budget=10000", "--dump-dom", url],
