@@ -27,6 +27,7 @@ def _model_error(calibrated, truth, q) -> float:
     return float(np.sqrt(np.mean(np.sum(e**2, axis=1))))
 
 
+@pytest.mark.slow
 def test_plan_is_deterministic_in_the_limits_and_better_than_random():
     a = plan_poses(IRB, 14, smr=SMR, n_candidates=1500, seed=3, curve=(11, 20))
     b = plan_poses(IRB, 14, smr=SMR, n_candidates=1500, seed=3)
@@ -43,6 +44,7 @@ def test_plan_is_deterministic_in_the_limits_and_better_than_random():
     assert point.predicted_rms_mm == pytest.approx(a.predicted_rms_mm)
 
 
+@pytest.mark.slow
 def test_predicted_accuracy_matches_real_calibrations():
     """Plan, simulate the planned poses on perturbed robots, calibrate with lsq: the RMS of the
     true model error over the region agrees with the prediction (mean square over repeats)."""
@@ -58,6 +60,7 @@ def test_predicted_accuracy_matches_real_calibrations():
     assert achieved == pytest.approx(result.predicted_rms_mm, rel=0.25)
 
 
+@pytest.mark.slow
 def test_tracker_line_of_sight_and_boxes_hold_for_every_chosen_pose():
     tracker = Tracker(position=[2.4, 0.6, 0.4], acceptance_deg=30.0, range_m=(0.5, 10.0))
     box = ((0.4, -1.2, 0.0), (1.8, 1.2, 1.9))
@@ -200,6 +203,7 @@ def test_tracker_noise_whitener_matches_the_simulated_tracker():
     np.testing.assert_allclose(np.linalg.inv(W.T @ W), cov, rtol=0.05, atol=0.03 * np.abs(cov).max())
 
 
+@pytest.mark.slow
 def test_pose_and_tracker_noise_plans_and_plane_candidates():
     pose = plan_poses(MECA, 12, kind="pose", smr=[0.01, 0.0, 0.03], n_candidates=600, starts=2)
     assert pose.identifiability.rank > 27 and pose.kind == "pose"

@@ -210,6 +210,7 @@ def test_cli_robots_shows_one_robot(capsys):
     assert "abb_irb120" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_cli_demo_runs_the_pipeline(tmp_path, capsys):
     assert main(["--quiet", "demo", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out

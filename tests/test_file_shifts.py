@@ -107,6 +107,7 @@ def test_one_validation_file_has_no_split(campaign):
     assert result.validation_shifts is None and "validation_shifts" not in result.to_dict()
 
 
+@pytest.mark.slow
 def test_cli_prints_and_reports_the_split(campaign, tmp_path, capsys):
     from robocal.cli import main
 

@@ -25,6 +25,7 @@ def readers(tmp_path_factory):
     return build_readers(tmp_path_factory.mktemp("fuzz_seeds"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", READERS)
 def test_reader_keeps_the_contract_on_mutants(readers, tmp_path_factory, name):
     reader = readers[name]

@@ -122,6 +122,7 @@ def test_several_smrs_and_pose_data():
     assert "tool.rz" in res.names + res.identifiability.dropped
 
 
+@pytest.mark.slow
 def test_predicted_sigma_matches_monte_carlo_spread():
     """Repeat calibrate on fresh noise: the predicted 1-sigma match the observed spread.
 
@@ -219,6 +220,7 @@ def test_analyze_on_its_own_zero_column():
     assert ident.dropped == ["a3"] and ident.confounded_with["a3"] == []
 
 
+@pytest.mark.slow
 def test_real_meca500_and_irb120():
     """The real data sets: lsq beats the datasets README's plain baselines' nominal figures."""
     from robots import require_datasets

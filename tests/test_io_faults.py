@@ -104,6 +104,7 @@ def _clean_steps(tmp_path: Path, monkeypatch, scenario) -> int:
     return injector.count
 
 
+@pytest.mark.slow
 def test_a_fault_at_every_step_leaves_all_old_or_all_new(tmp_path, monkeypatch):
     class TerminatedError(Exception):
         pass

@@ -278,6 +278,7 @@ def test_warm_start_reaches_the_cold_solution_and_checks_its_input():
         calibrate(robot, sim.data, nongeometric="cyclic", warm_start=geometric)
 
 
+@pytest.mark.slow
 def test_auto_result_json_report_and_command_line(tmp_path, capsys):
     from robocal.cli import main
 

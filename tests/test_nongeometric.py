@@ -106,6 +106,7 @@ def test_simulated_truth_reaches_noise_floor_only_with_the_terms():
         parse_terms("compliance,friction")
 
 
+@pytest.mark.slow
 def test_residual_model_learns_a_smooth_field_and_refuses_noise(tmp_path, rng):
     q = rng.uniform(-2, 2, (160, 6))
     smr = np.zeros(160, int)

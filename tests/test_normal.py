@@ -46,6 +46,7 @@ def test_a_chunk_holds_at_least_one_row():
         list(row_chunks(10, 0))
 
 
+@pytest.mark.slow
 def test_cross_validation_with_chunks_of_a_few_rows_matches_one_chunk(monkeypatch):
     """Every candidate's cross-validated and fit errors, and the kept columns, from chunks of sixteen
     poses equal those from one chunk to 1e-9 (cyclic columns found per fold included), with and

@@ -70,6 +70,7 @@ def test_seven_axis_arm_with_unmodelled_errors_calibrates_with_defaults():
     assert {"alpha7", "alpha6"} <= set(result.identifiability.undetermined)
 
 
+@pytest.mark.slow
 def test_robust_converges_on_planned_kr16_campaigns():
     robot = rc.Robot.from_catalog("kuka_kr16_2")
     for seed in (2, 4):  # the two of six seeds whose IGG3 weights cycled or crept to max_outer

@@ -276,6 +276,7 @@ def test_ctrl_c_while_the_command_line_starts_is_one_line_and_130(monkeypatch, c
     assert capsys.readouterr().err == "robocal: interrupted\n"
 
 
+@pytest.mark.slow
 def test_ctrl_c_at_any_moment_of_a_real_run(tmp_path):
     """SIGINT at increasing delays into `robocal calibrate` (start-up imports, reading, solving,
     writing): one line and exit 130, or the run had finished. Python's own start-up (site

@@ -38,6 +38,7 @@ def pages(site: Path) -> list[Path]:
     return sorted(p for p in site.rglob("*.html") if "assets" not in p.parts)
 
 
+@pytest.mark.slow
 def test_nav_links_open_files_from_disk(site):
     index = (site / "index.html").read_text(encoding="utf-8")
     links = [h for h in re.findall(r'class="md-nav__link[^"]*"[^>]*href="([^"#]+)"', index)
@@ -48,6 +49,7 @@ def test_nav_links_open_files_from_disk(site):
         assert target.is_file() and target.suffix == ".html", f"nav link {href} is not a page file"
 
 
+@pytest.mark.slow
 def test_no_page_shows_raw_latex(site):
     formulas = 0
     for page in pages(site):
@@ -83,6 +85,7 @@ def test_search_finds_pages_from_disk(site, tmp_path):
     assert not [m for m in console_messages(proc.stderr) if "iframe" in m or "Worker" in m]
 
 
+@pytest.mark.slow
 def test_changelog_glossary_licence_and_citation(site):
     import yaml
 

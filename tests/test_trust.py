@@ -202,6 +202,7 @@ def test_prediction_round_trips_and_matches_the_propagation(sim):
         Prediction.from_dict({"names": ["a2"], "covariance_si": [[1.0, 2.0]]})
 
 
+@pytest.mark.slow
 def test_cli_clustered_calibration_warns_and_compensate_warns_per_target(tmp_path, capsys):
     from robocal.cli import main
     from robocal.compensate import format_csv, pose_columns

@@ -60,6 +60,7 @@ def test_output_comparison():
         docs_tutorial.with_outputs("x", ["one"])
 
 
+@pytest.mark.slow
 def test_tutorial_runs_as_written(tmp_path):
     pytest.importorskip("matplotlib", reason="the tutorial writes the HTML report (report extra)")
     env = {**os.environ, "PATH": os.pathsep.join([str(Path(sys.executable).parent), os.environ["PATH"]])}

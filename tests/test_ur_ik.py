@@ -34,6 +34,7 @@ def test_every_catalog_ur_has_the_form():
         assert not (robot.has_ur_form and robot.has_opw_form), name
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", UR_ROBOTS)
 def test_against_ur_analytic_ik(name):
     peer = pytest.importorskip("ur_analytic_ik", reason="ur-analytic-ik (test extra) not installed")
