@@ -232,6 +232,10 @@ def test_the_written_file_is_fsynced_before_it_replaces_the_target(tmp_path, mon
 _SIGNAL_CHILD = _CHILD_PRELUDE + """
 import os, signal
 from pathlib import Path
+# a child inherits an ignored SIGINT (pytest run in the background: `make test &`, nohup, CI) and
+# Python then leaves it ignored: between two writes every SIGINT would be dropped and the test wait
+# for an answer forever (it hung 9 minutes). The child is an interactive program: Ctrl-C raises.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 folder = Path(sys.argv[1])
 names = ["cal.yaml", "result.json", "report.html"]
 gen = 0
