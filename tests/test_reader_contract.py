@@ -283,7 +283,13 @@ def test_ctrl_c_at_any_moment_of_a_real_run(tmp_path):
     import, before robocal's code runs) is outside robocal and not judged."""
     data = tmp_path / "cal.csv"
     shutil.copy(DEMO / "calibration.csv", data)
-    exe = [sys.executable, "-c", "import sys; from robocal.cli import main; sys.exit(main())"]
+    # SIGINT back to Python's default: a child of a background pytest inherits it ignored (and the
+    # command line rightly leaves an ignored SIGINT ignored: nothing would be tested)
+    code = ("import signal, sys\n"
+            "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+            "from robocal.cli import main\n"
+            "sys.exit(main())")
+    exe = [sys.executable, "-c", code]
     for delay in (0.2, 0.4, 0.7, 1.0, 1.5):
         child = subprocess.Popen([*exe, "calibrate", str(data), "--robot", "abb_irb2600", "--nongeometric",
                                   "none", "-o", str(tmp_path / "c.yaml")], stdout=subprocess.DEVNULL,
