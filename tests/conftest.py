@@ -1,5 +1,8 @@
 """Shared fixtures: each test once per kernel implementation, a seeded random generator.
-Helpers the tests import by name (random robots, frames, the data sets folder) are in robots.py."""
+Helpers the tests import by name (random robots, frames, the data sets folder) are in robots.py;
+waits on child processes go through children.py (each with a deadline). A test that opens a
+browser or takes more than a few seconds is marked ``@pytest.mark.slow``: `make test` leaves it
+to `make test-slow` (CI runs both)."""
 
 from __future__ import annotations
 
