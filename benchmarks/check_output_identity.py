@@ -16,7 +16,8 @@ in tests/data): ``robots``; ``poses`` with its CSV, JSON and HTML and the progra
 ``calibrate`` (model YAML, result JSON, HTML report, with and without a history, robust and
 --hold-out, a refusal); ``report``; ``evaluate``; ``check``; ``history``; ``analyze``; ``plan``;
 ``compensate``; ``export`` (URDF both frames, YAML, ur_calibration, URDF back to YAML);
-``import-calibration``; ``filter`` on the command line on every program of tests/data/programs
+``import`` (a headerless file made from the shipped demo campaign); ``import-calibration``;
+``filter`` on the command line on every program of tests/data/programs
 (its warnings included) and on the campaign programs; ``demo`` (what ``make demo`` writes). The
 filter part (``--only filter``) is benchmarks/check_filter_identity.py: the API's filtered programs
 and target tables of tests/data/programs and of an N-target program of each format.
@@ -40,6 +41,7 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import math
 import os
 import re
 import shlex
@@ -134,6 +136,10 @@ STEPS: list[tuple[str, str]] = [
      "result_kuka.json"),
     ("calibrate refused",
      "calibrate missing.csv --robot abb_irb2600 -o never.yaml"),
+    ("import",
+     "import raw.txt --joints cols=0-5:deg --points cols=6-8:mm -o imported.csv"),
+    ("evaluate imported",
+     "evaluate abb_irb2600 imported.csv --fit-frame"),
     ("report",
      "report result.json -o report_again.html --title 'IRB 2600, cell 4'"),
     ("evaluate",
@@ -256,14 +262,26 @@ def masked(text: str, fixed: list[str], name: str = "") -> str:
     return text
 
 
-def run_steps(src: Path, work: Path, log: Path, steps: list[tuple[str, str]]) -> dict[str, float]:
-    """Run the steps with the tree ``src`` in ``work``; stdout, stderr and exit code of step k in
-    ``log/k.out``, ``k.err``, ``k.rc``. Returns each step's wall time (s)."""
+def raw_tracker_file(src: Path, rows: int = 40) -> str:
+    """A headerless tracker/controller file for ``robocal import``: the first ``rows`` rows of the
+    demo campaign shipped with the package in the tree ``src`` (joints in deg, then the point in
+    mm, space-separated)."""
+    demo = src / "robocal" / "demo_data" / "calibration.csv"
+    lines = [line.split(",") for line in demo.read_text().splitlines()[2:2 + rows]]
+    return "".join(" ".join([*(f"{float(v) * 180 / math.pi:.6f}" for v in cells[2:8]),
+                             *(f"{float(v) * 1000:.4f}" for v in cells[8:11])]) + "\n" for cells in lines)
+
+
+def run_steps(src: Path, work: Path, log: Path, steps: list[tuple[str, str]], raw: str) -> dict[str, float]:
+    """Run the steps with the tree ``src`` in ``work`` (``raw``: the text of raw.txt); stdout,
+    stderr and exit code of step k in ``log/k.out``, ``k.err``, ``k.rc``. Returns each step's wall
+    time (s)."""
     shutil.copytree(PROGRAMS, work / "programs")
     shutil.copytree(TEST_DATA, work / "data", ignore=shutil.ignore_patterns("programs"))
     (work / "targets.csv").write_text(TARGETS_CSV)
     (work / "waypoints.csv").write_text(WAYPOINTS_CSV)
     (work / "targets_m.csv").write_text(TARGETS_M_CSV)
+    (work / "raw.txt").write_text(raw)
     for name in FOLDERS:
         (work / name).mkdir()
     log.mkdir()
@@ -339,7 +357,7 @@ def check_commands(reference: Path, tree: Path, keep: Path | None) -> int:
         trees = {}
         for name, src in (("reference", reference), ("this tree", tree)):
             work.mkdir()
-            times = run_steps(src, work, base / f"log {name}", steps)
+            times = run_steps(src, work, base / f"log {name}", steps, raw_tracker_file(reference))
             trees[name] = times
             work.rename(base / name)
         ref_dir, new_dir = base / "reference", base / "this tree"
