@@ -1,0 +1,27 @@
+"""The test suite's own conventions (issue 43): helpers are imported from plain modules, never from
+conftest; test files are named by what they test, not by the round that added them."""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+TESTS = Path(__file__).resolve().parent
+
+
+def test_no_test_imports_conftest():
+    """conftest holds fixtures and hooks only; shared helpers live in robots.py, children.py, ..."""
+    offenders = []
+    for path in sorted(TESTS.glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = ([node.module or ""] if isinstance(node, ast.ImportFrom)
+                     else [a.name for a in node.names] if isinstance(node, ast.Import) else [])
+            offenders += [f"{path.name}:{node.lineno}" for name in names if name.split(".")[-1] == "conftest"]
+    assert not offenders, offenders
+
+
+def test_test_files_are_not_named_by_a_round():
+    """test_workflow_mistakes_3.py said when it was written, not what it tests."""
+    numbered = [p.name for p in TESTS.glob("test_*.py") if re.search(r"_(\d+|round\w*)\.py$", p.name)]
+    assert not numbered, numbered
