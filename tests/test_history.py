@@ -106,7 +106,7 @@ def test_an_older_schema_is_migrated_and_a_newer_one_refused(tmp_path):
 
 
 def _writer(location: str, start, index: int, count: int) -> None:
-    start.wait()
+    start.wait(60)  # the parent sets it at once; the parent joins each writer for 60 s
     with History(location) as h:
         for k in range(count):
             h.record(_entry("shared", summary={"writer": index, "k": k}))

@@ -25,3 +25,26 @@ def test_test_files_are_not_named_by_a_round():
     """test_workflow_mistakes_3.py said when it was written, not what it tests."""
     numbered = [p.name for p in TESTS.glob("test_*.py") if re.search(r"_(\d+|round\w*)\.py$", p.name)]
     assert not numbered, numbered
+
+
+def _calls(path: Path):
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute):
+            yield node
+
+
+def test_every_wait_on_a_child_process_has_a_deadline():
+    """subprocess.run(..., timeout=...); a Popen child's output and exit are awaited through
+    children.py (read_line, wait, communicate: each kills a child that stops answering)."""
+    offenders = []
+    for path in sorted(TESTS.glob("*.py")):
+        if path.name == "children.py":
+            continue
+        for call in _calls(path):
+            keywords = {k.arg for k in call.keywords}
+            name, owner = call.func.attr, ast.unparse(call.func.value)
+            if (name == "run" and owner == "subprocess" and "timeout" not in keywords
+                    or name in ("wait", "communicate") and not call.args and "timeout" not in keywords
+                    or name == "readline" and owner.endswith(".stdout")):
+                offenders.append(f"{path.name}:{call.lineno}: {ast.unparse(call)[:60]}")
+    assert not offenders, offenders
