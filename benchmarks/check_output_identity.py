@@ -14,7 +14,8 @@ What runs (the README's and the tutorial's command lines, on the data shipped in
 in tests/data): ``robots``; ``poses`` with its CSV, JSON and HTML and the program of every language
 (--rapid --krl --fanuc --urscript --inform --val3, each on a robot of that maker); ``simulate``;
 ``calibrate`` (model YAML, result JSON, HTML report, with and without a history, robust and
---hold-out, a refusal); ``report``; ``evaluate``; ``check``; ``history``; ``analyze``; ``plan``;
+--hold-out, genetic, swarm, neural, payload and thermal terms, a robot on a linear track, a
+refusal); ``report``; ``evaluate``; ``check``; ``history``; ``analyze``; ``plan``;
 ``compensate``; ``export`` (URDF both frames, YAML, ur_calibration, URDF back to YAML);
 ``import`` (a headerless file made from the shipped demo campaign); ``import-calibration``;
 ``filter`` on the command line on every program of tests/data/programs
@@ -70,6 +71,13 @@ TARGETS_CSV = """x_mm,y_mm,z_mm,rx_deg,ry_deg,rz_deg
 1000,100,900,170,0,180
 """
 WAYPOINTS_CSV = TARGETS_CSV
+# a KUKA KR 210 on a 6 m linear track (a prismatic first joint: e1 columns in mm)
+TRACK_YAML = """units: {length: mm, angle: deg}
+name: kr210 on a 6 m track
+robot: kuka_kr210_r2700
+track: {direction: [1, 0, 0], limits: [0, 6000]}
+mount: {xyz: [0, 0, 0], rpy: [0, 0, 0]}
+"""
 TARGETS_M_CSV = "x_mm,y_mm,z_mm,rx_deg,ry_deg,rz_deg\n0.9,0,1.2,180,0,180\n0.95,0.15,1.1,175,5,170\n"
 
 CAMPAIGN = "--smr-mm 20,-30,80 --tracker-mm 2500,500,300"
@@ -140,6 +148,39 @@ STEPS: list[tuple[str, str]] = [
      "import raw.txt --joints cols=0-5:deg --points cols=6-8:mm -o imported.csv"),
     ("evaluate imported",
      "evaluate abb_irb2600 imported.csv --fit-frame"),
+    ("calibrate genetic",
+     "calibrate measured.csv --robot abb_irb2600 --method genetic --seed 1 --force "
+     "-o calibrated_genetic.yaml --json result_genetic.json"),
+    ("calibrate swarm",
+     "calibrate measured.csv --robot abb_irb2600 --method swarm --seed 1 -o calibrated_swarm.yaml "
+     "--json result_swarm.json"),
+    ("calibrate neural",
+     "calibrate measured.csv --robot abb_irb2600 --method neural --seed 1 -o calibrated_neural.yaml "
+     "--json result_neural.json"),
+    ("simulate payloads and temperatures",
+     "simulate --robot abb_irb2600 --poses 80 --payloads 0,6,12 --payload-com-mm 0,0,80 --temperatures 20:35 "
+     "--seed 11 -o loaded.csv --truth truth_loaded.yaml"),
+    ("calibrate payload thermal",
+     "calibrate loaded.csv --robot abb_irb2600 --nongeometric payload,thermal -o calibrated_loaded.yaml "
+     "--json result_loaded.json --report report_loaded.html"),
+    ("compensate with payload and temperature",
+     "compensate calibrated_loaded.yaml targets.csv --nominal abb_irb2600 --payload 8,0,0,80 "
+     "--temperature 30 -o commands_loaded.csv"),
+    ("filter with payload and temperature",
+     "filter {programs}/weld_cell.mod --calibrated calibrated_loaded.yaml --nominal abb_irb2600 "
+     "--payload 8,0,0,80 --temperature 30 -o weld_loaded.mod"),
+    ("poses along a track",
+     "poses --robot track.yaml -n 20 -o track_poses.csv --json track_poses.json --candidates 800 --starts 1 "
+     "--region-size 300"),
+    ("simulate track",
+     "simulate --robot track.yaml --poses 120 --seed 5 -o track_all.csv --truth track_truth.yaml"),
+    ("calibrate track",
+     "calibrate track_all.csv --robot track.yaml --nongeometric none --hold-out 30 -o track_cal.yaml "
+     "--json track_result.json"),
+    ("evaluate track",
+     "evaluate track_cal.yaml track_all.csv --json track_evaluate.json"),
+    ("export track urdf",
+     "export track_cal.yaml --urdf track.urdf"),
     ("report",
      "report result.json -o report_again.html --title 'IRB 2600, cell 4'"),
     ("evaluate",
@@ -282,6 +323,7 @@ def run_steps(src: Path, work: Path, log: Path, steps: list[tuple[str, str]], ra
     (work / "waypoints.csv").write_text(WAYPOINTS_CSV)
     (work / "targets_m.csv").write_text(TARGETS_M_CSV)
     (work / "raw.txt").write_text(raw)
+    (work / "track.yaml").write_text(TRACK_YAML)
     for name in FOLDERS:
         (work / name).mkdir()
     log.mkdir()
