@@ -18,7 +18,8 @@ in tests/data): ``robots``; ``poses`` with its CSV, JSON and HTML and the progra
 refusal); ``report``; ``evaluate``; ``check``; ``history``; ``analyze``; ``plan``;
 ``compensate``; ``export`` (URDF both frames, YAML, ur_calibration, URDF back to YAML);
 ``import`` (a headerless file made from the shipped demo campaign); ``import-calibration``;
-``filter`` on the command line on every program of tests/data/programs
+``filter`` on the command line on every program of tests/data/programs (and the track programs of
+its corpus on a FANUC cell with a track)
 (its warnings included) and on the campaign programs; ``demo`` (what ``make demo`` writes). The
 filter part (``--only filter``) is benchmarks/check_filter_identity.py: the API's filtered programs
 and target tables of tests/data/programs and of an N-target program of each format.
@@ -77,6 +78,13 @@ name: kr210 on a 6 m track
 robot: kuka_kr210_r2700
 track: {direction: [1, 0, 0], limits: [0, 6000]}
 mount: {xyz: [0, 0, 0], rpy: [0, 0, 0]}
+"""
+# an LR Mate on a 3 m track, its base near the targets of tests/data/programs/corpus/track_pick.ls
+FANUC_TRACK_YAML = """units: {length: mm, angle: deg}
+name: lrmate on a 3 m track
+robot: fanuc_lrmate200id
+track: {direction: [1, 0, 0], limits: [0, 3000]}
+mount: {xyz: [-1650, 0, 0], rpy: [0, 0, 0]}
 """
 TARGETS_M_CSV = "x_mm,y_mm,z_mm,rx_deg,ry_deg,rz_deg\n0.9,0,1.2,180,0,180\n0.95,0.15,1.1,175,5,170\n"
 
@@ -181,6 +189,19 @@ STEPS: list[tuple[str, str]] = [
      "evaluate track_cal.yaml track_all.csv --json track_evaluate.json"),
     ("export track urdf",
      "export track_cal.yaml --urdf track.urdf"),
+    ("simulate fanuc track",
+     "simulate --robot fanuc_track.yaml --poses 30 --seed 2 -o fanuc_track.csv "
+     "--truth fanuc_track_truth.yaml"),
+    ("filter fanuc track",
+     "filter {programs}/corpus/track_pick.ls --frame 1=450,-150,100,0,0,-10 --tool 2=0,0,120,0,0,0 "
+     "--calibrated fanuc_track_truth.yaml --nominal fanuc_track.yaml -o track_pick_cal.ls --keep-unreached"),
+    ("filter rapid track targets named",
+     "filter {programs}/corpus/track_mill.mod --calibrated calibrated.yaml --nominal abb_irb2600 "
+     "-o track_mill_cal.mod"),
+    ("filter inform track",
+     "filter {programs}/corpus/TRACK_WELD.JBI --tool 1=0,-35,410,0,-30,0 --tool 3=0,0,180,0,0,0 "
+     "--frame 2=1250,-300,450,0,0,15 --calibrated truth_gp25.yaml --nominal yaskawa_gp25 "
+     "-o TRACK_WELD_CAL.JBI --keep-unreached"),
     ("report",
      "report result.json -o report_again.html --title 'IRB 2600, cell 4'"),
     ("evaluate",
@@ -324,6 +345,7 @@ def run_steps(src: Path, work: Path, log: Path, steps: list[tuple[str, str]], ra
     (work / "targets_m.csv").write_text(TARGETS_M_CSV)
     (work / "raw.txt").write_text(raw)
     (work / "track.yaml").write_text(TRACK_YAML)
+    (work / "fanuc_track.yaml").write_text(FANUC_TRACK_YAML)
     for name in FOLDERS:
         (work / name).mkdir()
     log.mkdir()
