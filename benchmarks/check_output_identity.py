@@ -18,9 +18,8 @@ in tests/data): ``robots``; ``poses`` with its CSV, JSON and HTML and the progra
 refusal); ``report``; ``evaluate``; ``check``; ``history``; ``analyze``; ``plan``;
 ``compensate``; ``export`` (URDF both frames, YAML, ur_calibration, URDF back to YAML);
 ``import`` (a headerless file made from the shipped demo campaign); ``import-calibration``;
-``filter`` on the command line on every program of tests/data/programs (and the track programs of
-its corpus on a FANUC cell with a track)
-(its warnings included) and on the campaign programs; ``demo`` (what ``make demo`` writes). The
+``filter`` on the command line on every program of tests/data/programs (its warnings included;
+the corpus's track programs too) and on the campaign programs; ``demo`` (what ``make demo`` writes). The
 filter part (``--only filter``) is benchmarks/check_filter_identity.py: the API's filtered programs
 and target tables of tests/data/programs and of an N-target program of each format.
 
