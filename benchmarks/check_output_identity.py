@@ -8,7 +8,7 @@ the other tree, e.g. /work/ref/src), from the tree to check (its ``src`` is this
 ``../src``; ``--tree OTHER_SRC`` checks another one). Options: ``--only commands|filter``
 (default both), ``--targets N`` (the size of the generated programs of the filter part, default
 2000), ``--keep DIR`` (keep both trees' outputs and logs there to look at a difference). The
-commands part takes about 2 minutes, the filter part about 1 minute with 2000 targets (idle).
+commands part takes about 2.5 minutes, the filter part about 1 minute with 2000 targets.
 
 What runs (the README's and the tutorial's command lines, on the data shipped in the package and
 in tests/data): ``robots``; ``poses`` with its CSV, JSON and HTML and the program of every language
