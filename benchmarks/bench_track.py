@@ -17,9 +17,9 @@ import numpy as np
 from results import figure, table
 from scipy.spatial.transform import Rotation
 
-from robocal.calibration import calibrate
+from robocal.calibration.evaluation import evaluate
+from robocal.calibration.pipeline import calibrate
 from robocal.data.simulate import simulate_tracker
-from robocal.evaluate import evaluate
 from robocal.ik import track
 from robocal.kinematics.cell import TRACK_SCALE, arm_model, cell_from_data
 from robocal.programs.config import ABBConfig

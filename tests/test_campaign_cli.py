@@ -13,8 +13,8 @@ import pytest
 from robocal import DataError, Robot
 from robocal.campaign import programs, read_planned
 from robocal.cli import main
+from robocal.core.io import write_all
 from robocal.data.measurements import Measurements, read_joint_table, read_joints
-from robocal.io import write_all
 from robocal.report.campaign import render_campaign
 
 

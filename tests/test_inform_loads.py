@@ -23,7 +23,7 @@ from test_program_loads import payload_model
 
 from robocal import Robot
 from robocal.cli import main
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs import filter_program
 from robocal.programs.inform import InformDialect

@@ -13,8 +13,8 @@ import pytest
 
 import robocal as rc
 from robocal.cli import main
+from robocal.core.errors import DataError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError
 from robocal.programs import filter_program
 from robocal.programs.source import NUMBER_RE
 

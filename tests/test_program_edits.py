@@ -12,7 +12,7 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.programs.aggregate import parse_aggregate, shape_pattern
 from robocal.programs.edits import format_numbers
 from robocal.programs.result import _one_per_line

@@ -20,9 +20,9 @@ from scipy.spatial.transform import Rotation
 
 from robocal import Robot
 from robocal.cli import main
-from robocal.compensate import compensate
+from robocal.core.errors import DataError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError
+from robocal.deploy.compensation import compensate
 from robocal.ik.singularity import singularity_distance
 from robocal.kinematics.transforms import make_transform
 from robocal.programs import filter_program

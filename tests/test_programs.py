@@ -19,8 +19,8 @@ from scipy.spatial.transform import Rotation
 
 import robocal as rc
 from robocal.cli import main
+from robocal.core.errors import DataError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError
 from robocal.ik.opw_ik import branch_slot
 from robocal.kinematics.catalog import catalog_names
 from robocal.kinematics.transforms import rotvec_to_matrix

@@ -16,8 +16,8 @@ from scipy.spatial.transform import Rotation
 
 import robocal as rc
 from robocal.cli import main
+from robocal.core.errors import DataError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.programs import filter_program
 from robocal.programs.filter import dialect_for

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
+from robocal.core.errors import DataError
 from robocal.data.measurements import JointTable, Measurements, read_joint_table
-from robocal.errors import DataError
 
 VISIBLE_PREFIX = "visible_smr"
 _XYZ = ("x", "y", "z")

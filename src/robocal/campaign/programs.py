@@ -47,8 +47,8 @@ import textwrap
 
 import numpy as np
 
+from robocal.core.errors import DataError
 from robocal.data.joint_conventions import J23_FACTOR  # FANUC J3 (TP) = J3 (catalog) + J23_FACTOR * J2
-from robocal.errors import DataError
 from robocal.trust.output_marker import TP_REMARK_WIDTH  # characters of one TP remark line (! ...)
 
 PROGRAM_JOINTS = 6                 # every language here drives a six-axis arm (A1..A6, robax_a..f)

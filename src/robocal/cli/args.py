@@ -47,7 +47,7 @@ def load_measurements(path: str, robot, quiet: bool = False, fanuc_coupled: bool
 
 def payload_si(values: list[float] | None) -> list[float] | None:
     """``--payload KG[,X,Y,Z]`` (kg, mm) -> [kg, x, y, z] (kg, m); None when not given."""
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
 
     if values is None:
         return None
@@ -76,7 +76,7 @@ def check_distinct_inputs(paths, what: str = "input files", why: str = TWICE) ->
     import hashlib
     from pathlib import Path
 
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
 
     seen: dict = {}
     for path in (p for p in paths if p is not None):
@@ -102,7 +102,7 @@ def check_format(path, kind: str, option: str, hint: str = "") -> None:
     (``-o result.json`` for a model YAML); unknown or no suffixes are allowed."""
     from pathlib import Path
 
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
 
     if path is None:
         return
@@ -116,7 +116,7 @@ def check_format(path, kind: str, option: str, hint: str = "") -> None:
 def controller_for(robot, nominal: str | None):
     """The controller's model of ``robot`` (its base and flange, tool0): ``nominal`` (catalog name
     or YAML), else the catalog robot of the model's name, else None."""
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
     from robocal.kinematics.catalog import catalog_names
     from robocal.kinematics.model import load_model
 
@@ -131,19 +131,19 @@ def controller_for(robot, nominal: str | None):
 
 def check_tool_mm(xyz, option: str) -> None:
     """Refuse a tool translation (mm) whose magnitude says another unit (metres, or not a length
-    a tool has): :func:`robocal.magnitudes.check_tool`."""
+    a tool has): :func:`robocal.core.magnitudes.check_tool`."""
     import numpy as np
 
-    from robocal.magnitudes import check_tool
+    from robocal.core.magnitudes import check_tool
 
     check_tool(np.asarray(xyz, dtype=float) * 1e-3, "mm", option)
 
 
 def tool_frame(text: str, option: str):
     """A tool frame ``x,y,z,rx,ry,rz`` (mm, deg) -> 4x4 (m), refused when its magnitudes say
-    another unit (:func:`check_tool_mm`, :func:`robocal.magnitudes.check_degrees`)."""
-    from robocal.compensate import frame_from_text
-    from robocal.magnitudes import check_degrees
+    another unit (:func:`check_tool_mm`, :func:`robocal.core.magnitudes.check_degrees`)."""
+    from robocal.core.magnitudes import check_degrees
+    from robocal.deploy.compensation import frame_from_text
 
     T = frame_from_text(text, option)
     values = [float(v) for v in text.replace(" ", "").split(",") if v]
@@ -153,10 +153,10 @@ def tool_frame(text: str, option: str):
 
 
 def diagnosed(error, robot, datasets, frame_fitted: bool = True):
-    """``error`` (a PlausibilityError) with the data's own diagnosis (:func:`robocal.diagnose.diagnose`)
-    put first when they tell more (a swapped or sign-flipped joint column, a mirrored frame, the odd
-    file, a frame that needs --fit-frame)."""
-    from robocal.diagnose import diagnose
+    """``error`` (a PlausibilityError) with the data's own diagnosis
+    (:func:`robocal.trust.diagnosis.diagnose`) put first when they tell more (a swapped or
+    sign-flipped joint column, a mirrored frame, the odd file, a frame that needs --fit-frame)."""
+    from robocal.trust.diagnosis import diagnose
 
     why = diagnose(robot, datasets, frame_fitted=frame_fitted)
     return error if why is None else type(error)(f"{why} (the check: {error})")
@@ -181,7 +181,7 @@ def load_calibrated_and_nominal(calibrated: str, nominal: str, option: str = "--
 
     import numpy as np
 
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
     from robocal.kinematics.catalog import catalog_names
     from robocal.kinematics.model import Robot, load_model
 
@@ -217,9 +217,9 @@ def load_prediction(path, calibrated, outputs: list):
     (none of them is the JSON)."""
     if path is None:
         return None
-    from robocal.calibration import load_result
-    from robocal.errors import DataError
-    from robocal.io import check_outputs
+    from robocal.calibration.pipeline import load_result
+    from robocal.core.errors import DataError
+    from robocal.core.io import check_outputs
     from robocal.trust.coverage import Prediction
 
     check_outputs(outputs, [path])

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from robocal.cli.args import numbers
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 
 EPILOG = """Examples:
   robocal filter weld.mod --calibrated cal.yaml --nominal abb_irb2600 -o weld_cal.mod
@@ -165,10 +165,10 @@ def _output_paths(programs: list[str], output: str, table: str | None,
 def _check_magnitudes(args, reach_m: float) -> None:
     """Refuse --tool / --frame values whose magnitudes say another unit than the program's notation
     (lengths mm, URScript m; KRL and FANUC angles deg, URScript rad) for a robot of ``reach_m``
-    (:mod:`robocal.magnitudes`)."""
+    (:mod:`robocal.core.magnitudes`)."""
     import numpy as np
 
-    from robocal.magnitudes import LENGTH_SCALES_M, check_degrees, check_frame, check_radians, check_tool
+    from robocal.core.magnitudes import LENGTH_SCALES_M, check_degrees, check_frame, check_radians, check_tool
 
     suffix = Path(args.programs[0]).suffix.lower()
     language = args.format or next((k for k, s in SUFFIXES.items() if suffix in s), None)
@@ -201,7 +201,7 @@ def _tool_disagreements(args) -> list[str]:
     (naming both); none when the files cannot be read without the overrides."""
     import numpy as np
 
-    from robocal.errors import RobocalError
+    from robocal.core.errors import RobocalError
     from robocal.kinematics.transforms import pose_error
     from robocal.programs.filter import as_frames, dialect_for
     from robocal.programs.source import ProgramText
@@ -243,10 +243,10 @@ def run(args) -> int:
         payload_si,
         tool_frame,
     )
-    from robocal.compensate import frame_from_text
+    from robocal.core.io import check_outputs
+    from robocal.core.magnitudes import check_degrees, check_frame
     from robocal.data.measurements import robot_reach
-    from robocal.io import check_outputs
-    from robocal.magnitudes import check_degrees, check_frame
+    from robocal.deploy.compensation import frame_from_text
     from robocal.programs import filter_program
 
     targets, table, written = _output_paths(args.programs, args.output, args.table, args.position_registers)

@@ -171,7 +171,7 @@ def _params(args, robot):
     tracker frame and the SMR offsets."""
     if not args.check:
         return "auto"
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
     from robocal.history.offsets import offsets_params
 
     if args.kind not in ("point", "pose"):
@@ -183,7 +183,7 @@ def _val3_files(args) -> list[str]:
     """The files --val3 FOLDER will write (names checked before planning); the folder is created
     when absent (its parent must exist)."""
     from robocal.campaign import programs
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
 
     if args.val3 is None:
         return []
@@ -200,9 +200,9 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.campaign import Constraints, Tracker, plan_poses, read_candidates
+    from robocal.core.errors import DataError
+    from robocal.core.io import check_outputs, write_all
     from robocal.data.measurements import read_joints
-    from robocal.errors import DataError
-    from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
 
     if args.krl and Path(args.krl).suffix.lower() != ".src":

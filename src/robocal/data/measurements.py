@@ -55,9 +55,9 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from robocal.core.errors import DataError, UnitError
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
 from robocal.data.csv_table import csv_rows, read_table, text_lines
-from robocal.errors import DataError, UnitError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
 from robocal.kinematics.transforms import ROTATION_TOL
 
 KINDS = ("point", "pose", "plane", "distance")
@@ -268,7 +268,7 @@ class Measurements:
         >>> rc.Measurements.from_arrays("point", q)
         Traceback (most recent call last):
         ...
-        robocal.errors.DataError: ...
+        robocal.core.errors.DataError: ...
         """
         if kind not in KINDS:
             raise DataError(f"unknown measurement kind {kind!r}: use one of {', '.join(KINDS)}")

@@ -48,10 +48,10 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from robocal.core.errors import DataError, UnreachableError
+from robocal.core.io import write_all
 from robocal.data import simulate_conditions as conditions
 from robocal.data.measurements import Measurements, approach_from_order, robot_reach, travel_from_order
-from robocal.errors import DataError, UnreachableError
-from robocal.io import write_all
 from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, is_track_cell, track_chain
 from robocal.kinematics.model import Robot
 from robocal.kinematics.model_file import dump_model

@@ -31,7 +31,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.kinematics.fk import LinkArrays, chain_fk
 
 PAYLOAD_COM_M = (0.0, 0.0, 0.25)  # default centre of mass in the flange frame, m

@@ -33,8 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.damped_least_squares import Status
-from robocal.errors import IdentificationError
+from robocal.core.damped_least_squares import Status
+from robocal.core.errors import IdentificationError
 from robocal.identify.plain_io import encode_plain, load_plain, save_plain
 from robocal.identify.population import Stagnation
 from robocal.identify.solvers import SolverResult, history_entry

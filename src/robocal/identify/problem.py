@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from robocal.errors import IdentificationError
+from robocal.core.errors import IdentificationError
 from robocal.identify.observations import observation_for
 from robocal.identify.space import ParameterSpace, State, resolve_names
 

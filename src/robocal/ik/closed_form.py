@@ -17,7 +17,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from robocal.errors import ModelError
+from robocal.core.errors import ModelError
 from robocal.ik import opw_ik, ur_ik
 from robocal.ik.opw_ik import SEED_MARGIN, TOL, check_poses
 from robocal.kinematics.model import Robot

@@ -38,8 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import ModelError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, short_repr
+from robocal.core.errors import ModelError
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, short_repr
 from robocal.kinematics.convert import PARALLEL_TOL, default_parallel
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.model import Robot, load_model

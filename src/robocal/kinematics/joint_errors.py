@@ -59,8 +59,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.errors import IdentificationError, ModelError
-from robocal.io import as_number
+from robocal.core.errors import IdentificationError, ModelError
+from robocal.core.io import as_number
 from robocal.kinematics import load, thermal
 from robocal.kinematics.conditions import KEY as CONDITIONS_KEY
 from robocal.kinematics.conditions import CalibratedRange, beyond

@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import ModelError
-from robocal.io import read_text, write_atomic
+from robocal.core.errors import ModelError
+from robocal.core.io import read_text, write_atomic
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 

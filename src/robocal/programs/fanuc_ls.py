@@ -25,8 +25,8 @@ import re
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.errors import DataError
-from robocal.io import short_repr
+from robocal.core.errors import DataError
+from robocal.core.io import short_repr
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.config import FANUCConfig
 from robocal.programs.fanuc_registers import ActiveFrames, read_registers

@@ -19,7 +19,7 @@ import re
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.programs.model import Target
 from robocal.programs.source import Number, ProgramText
 

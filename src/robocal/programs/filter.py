@@ -27,8 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.compensate import Compensation, compensate, controller_model
-from robocal.errors import DataError, ListedError, ModelError
+from robocal.core.errors import DataError, ListedError, ModelError
+from robocal.core.resources import gc_paused, heap_trimmed
+from robocal.deploy.compensation import Compensation, compensate, controller_model
 from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
 from robocal.ik.closed_form import has_closed_form
@@ -51,7 +52,6 @@ from robocal.programs.source import ProgramText
 from robocal.programs.track import track_program
 from robocal.programs.urscript import URScriptDialect
 from robocal.programs.val3 import Val3Dialect, application_files
-from robocal.resources import gc_paused, heap_trimmed
 from robocal.trust.output_marker import check_unmarked
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
@@ -103,7 +103,7 @@ def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
     >>> dialect_for([Path("a.txt")])
     Traceback (most recent call last):
     ...
-    robocal.errors.DataError: cannot tell the program format of ['a.txt'] from the file suffixes ...
+    robocal.core.errors.DataError: cannot tell the program format of ['a.txt'] from the file suffixes ...
     """
     dialects = DIALECTS
     if name is not None:
@@ -519,7 +519,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
 
 
 def _compensate(model: Robot, nominal: Robot, F: np.ndarray, seeds: np.ndarray) -> Compensation:
-    """:func:`robocal.compensate` of flange poses ``F`` ``(N, 4, 4)`` from ``seeds`` ``(N, n)``,
+    """:func:`robocal.deploy.compensation` of flange poses ``F`` ``(N, 4, 4)`` from ``seeds`` ``(N, n)``,
     ``CHUNK`` targets at a time (the numeric IK's arrays for 100,000 poses at once take
     gigabytes); each target's result depends on its own seed only."""
     parts = [compensate(model, nominal, F[s:s + CHUNK], seeds=seeds[s:s + CHUNK])

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.config import ConfigScheme, branch_bits
 from robocal.programs.inform_tools import is_tool_file, read_tool_file

@@ -35,7 +35,7 @@ import math
 import re
 from dataclasses import dataclass
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.programs.source import ProgramText
 
 MM = 1e-3  # m

@@ -26,7 +26,7 @@ import re
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.aggregate import split_top
 from robocal.programs.config import KUKAConfig

@@ -28,8 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.compensate import Compensation
-from robocal.errors import DataError
+from robocal.core.errors import DataError
+from robocal.deploy.compensation import Compensation
 from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.joint_errors import condition_terms, condition_warnings
 from robocal.kinematics.model import Robot

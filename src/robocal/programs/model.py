@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.programs.config import ConfigScheme
 from robocal.programs.motions import Account, Ledger
 from robocal.programs.source import Number, ProgramText

@@ -26,7 +26,7 @@ import re
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.aggregate import (
     Word,

@@ -4,7 +4,7 @@ accounting (:mod:`robocal.programs.motions`) and the warnings; how they are summ
 ``FilterResult.table_json()`` holds ``summary`` (targets, corrections and ``motions``:
 ``{"total", "corrected", "named"}``), ``warnings``, ``targets`` (one row per target) and
 ``motions`` (one record per motion instruction to a Cartesian pose). Writing goes through
-:func:`robocal.io.write_all`: the programs and the table together, or nothing.
+:func:`robocal.core.io.write_all`: the programs and the table together, or nothing.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import DataError
-from robocal.io import check_outputs, write_all
+from robocal.core.errors import DataError
+from robocal.core.io import check_outputs, write_all
 from robocal.kinematics.model import Robot
 from robocal.programs.motions import MotionRecord, summary, summary_line
 from robocal.trust.output_marker import mark_program

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 
 _LONE_CR = re.compile(r"\r(?!\n)")
 NUMBER_RE = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")

@@ -22,7 +22,7 @@ from bisect import bisect_left
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
 from robocal.programs.aggregate import close_bracket, list_pattern, numbers_of, parse_aggregate, split_top
 from robocal.programs.flow import Flow, Routine, order_by_execution

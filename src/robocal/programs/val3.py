@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.config import ConfigScheme, branch_bits
 from robocal.programs.model import Dialect, Program, Target

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.identify.priors import prior_sigma
 
 WORKSPACE_SAMPLES = 1000  # joint vectors of the workspace sample
@@ -136,10 +136,11 @@ def posterior(problem, state, names: list[str], s0: float) -> np.ndarray:
 
 
 def prediction(result) -> Prediction:
-    """The :class:`Prediction` of a calibration result (``robocal.calibration.CalibrationResult``): the
-    posterior of its candidate robot parameters the calibrated model carries (extra SMR offsets
-    marginalised), ``u`` from its cross-validation or its dof-corrected residual, the validated
-    error from its validation data when there are any."""
+    """The :class:`Prediction` of a calibration result
+    (``robocal.calibration.pipeline.CalibrationResult``): the posterior of its candidate robot
+    parameters the calibrated model carries (extra SMR offsets marginalised), ``u`` from its
+    cross-validation or its dof-corrected residual, the validated error from its validation data
+    when there are any."""
     problem, state, robot = result.problem, result.state, result.robot
     nuisance = set(problem.nuisance_names)
     names = [n for n in result.identifiability.names if n not in nuisance and n in robot.parameter_names]

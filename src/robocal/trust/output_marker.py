@@ -34,9 +34,9 @@ import hashlib
 import re
 from dataclasses import dataclass
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
+from robocal.core.version import __version__
 from robocal.kinematics.model import Robot
-from robocal.version import __version__
 
 FINGERPRINT_HEX = 12  # hex digits of the SHA-256 kept: 48 bits, a collision 1 in 2.8e14
 TP_REMARK_WIDTH = 30  # characters of one FANUC TP remark line (! ...)
@@ -153,7 +153,7 @@ def check_unmarked(text: str, where: str, action: str, force: bool = False) -> M
     >>> check_unmarked(marked, "targets.csv", "compensated")
     Traceback (most recent call last):
     ...
-    robocal.errors.DataError: targets.csv was already compensated by robocal 0.1.0 with the ...
+    robocal.core.errors.DataError: targets.csv was already compensated by robocal 0.1.0 with the ...
     >>> check_unmarked(marked, "targets.csv", "compensated", force=True).model
     'ebba57c5590e'
     """

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import importlib
 
-from robocal.errors import IdentificationError
+from robocal.core.errors import IdentificationError
 
 # Measurements.kind -> "module:Class"
 OBSERVATIONS = {

@@ -34,7 +34,7 @@ mass. Per dialect:
   ``set_payload_mass(m)``, ``set_payload_cog([x, y, z])``.
 
 A statement this cannot read (a variable, a computed value, ``$LOAD.M = ..``, ``PAYLOAD[R[1]]``,
-a ``LOAD_DATA[n]`` or schedule nobody gave) raises :class:`~robocal.errors.DataError` naming it
+a ``LOAD_DATA[n]`` or schedule nobody gave) raises :class:`~robocal.core.errors.DataError` naming it
 and how to give the load instead: a motion corrected with a load it does not carry would look
 right and be wrong.
 """

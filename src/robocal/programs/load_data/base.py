@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.programs.model import Target
 from robocal.programs.source import NUMBER_RE, ProgramText
 

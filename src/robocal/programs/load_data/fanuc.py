@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.programs.load_data.base import (
     CM,
     NUM,

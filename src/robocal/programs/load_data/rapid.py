@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.programs.aggregate import Word, parse_aggregate
 from robocal.programs.load_data.base import (
     MM,

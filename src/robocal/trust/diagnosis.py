@@ -23,9 +23,9 @@ from itertools import combinations
 
 import numpy as np
 
+from robocal.core.errors import RobocalError
 from robocal.data.joint_conventions import COUPLED_OPTION, fanuc_decoupled
 from robocal.data.registration import register_frame
-from robocal.errors import RobocalError
 from robocal.identify.plausibility import error_limit_mm
 
 GAIN = 5.0  # a hypothesis must fit this many times better than the data as given

@@ -7,7 +7,7 @@ the result and campaign JSON files record it (``robocal_version``), and
 Examples
 --------
 >>> import robocal as rc
->>> from robocal.version import __version__
+>>> from robocal.core.version import __version__
 >>> rc.__version__ == __version__
 True
 >>> major, minor, patch = (int(part) for part in rc.__version__.split(".")[:3])

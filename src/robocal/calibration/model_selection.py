@@ -30,7 +30,7 @@ the nominal model): for lsq from the superset's estimate (``calibrate(..., warm_
 iterations to the same minimum), for robust from nominal (its IGG3 weights depend on the path, so
 the result is the robust calibration of that model named explicitly).
 
-The calibrations themselves are the caller's (:func:`robocal.calibration.calibrate` passes its
+The calibrations themselves are the caller's (:func:`robocal.calibration.pipeline.calibrate` passes its
 ``fit(terms, validations, warm_start)``), so this module sits below the API layer.
 
 Choice (the paired one-standard-error rule, capped): the candidate with the lowest
@@ -64,7 +64,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from robocal.errors import IdentificationError
+from robocal.core.errors import IdentificationError
 from robocal.identify import normal
 from robocal.identify.frequency_search import FrequencyScan
 from robocal.identify.identifiability import independent_columns

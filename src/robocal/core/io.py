@@ -17,7 +17,7 @@ import time
 from collections.abc import Mapping
 from pathlib import Path
 
-from robocal.errors import DataError, RobocalError
+from robocal.core.errors import DataError, RobocalError
 
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3}  # unit name -> metres per unit
 ANGLE_UNITS = {"rad": 1.0, "deg": math.pi / 180.0}  # unit name -> radians per unit
@@ -76,7 +76,7 @@ def _refuse_constant(name: str):
 def load_json(path, what: str, error: type[RobocalError] = DataError):
     """The data of a user's JSON file (:func:`read_text`); ``error`` with one line naming the file
     for invalid JSON, NaN/Infinity, an integer of thousands of digits or nesting deeper than the
-    parser can follow. Validate the structure at the caller (:mod:`robocal.schema`)."""
+    parser can follow. Validate the structure at the caller (:mod:`robocal.core.schema`)."""
     text = read_text(path, what, error)
     try:
         return json.loads(text, parse_constant=_refuse_constant)

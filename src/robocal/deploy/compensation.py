@@ -30,8 +30,10 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from robocal.core.errors import DataError
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text
+from robocal.core.magnitudes import check_degree_set, check_radians, check_targets
 from robocal.data.measurements import robot_reach
-from robocal.errors import DataError
 from robocal.identify.plausibility import (
     MAX_ANGLE_CORRECTION_DEG,
     MAX_LENGTH_CORRECTION_FRACTION,
@@ -42,12 +44,10 @@ from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
 from robocal.ik.singularity import SingularityDistance, singularity_distance
 from robocal.ik.track import solve as track_solve
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.kinematics.cell import is_track_cell
 from robocal.kinematics.joint_errors import condition_warnings
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import ROTATION_TOL, invert_transform, make_transform, pose_error
-from robocal.magnitudes import check_degree_set, check_radians, check_targets
 
 
 @dataclass(frozen=True)
@@ -59,7 +59,7 @@ class Compensation:
     ``singularity``: each target's distance from the singularities at its joints (6-axis arms);
     ``controller``: the nominal controller's own choice of solutions, when seeded from it.
 
-    Returned by `robocal.compensate`.
+    Returned by `robocal.deploy.compensation`.
 
     Attributes
     ----------
@@ -409,7 +409,7 @@ def check_target_units(T: np.ndarray, layout: dict, reach_m: float, what: str,
                        origin_m=(0.0, 0.0, 0.0)) -> None:
     """Refuse targets ``(N, 4, 4)`` (m) read in ``layout`` (:func:`read_poses_csv`) whose magnitudes
     say another unit than their headers, for a robot of ``reach_m`` whose base is at ``origin_m``:
-    positions (:func:`robocal.magnitudes.check_targets`) and Euler angles in degrees that are
+    positions (:func:`robocal.core.magnitudes.check_targets`) and Euler angles in degrees that are
     radians or in radians beyond a turn."""
     check_targets(T[:, :3, 3], layout["length"], reach_m, what, origin_m)
     if layout["orientation"] in ANGLE_UNITS:

@@ -31,7 +31,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from robocal.errors import UnitError
+from robocal.core.errors import UnitError
 
 # metres per unit of the lengths a user may type; the order is the order of likelihood
 LENGTH_SCALES_M = {"mm": 1e-3, "m": 1.0, "inch": 0.0254}
@@ -88,12 +88,12 @@ def check_length(size_m: float, declared: str, low_m: float, high_m: float, what
 
     Examples
     --------
-    >>> from robocal.magnitudes import TOOL_MAX_M, TOOL_MIN_M, check_length
+    >>> from robocal.core.magnitudes import TOOL_MAX_M, TOOL_MIN_M, check_length
     >>> check_length(0.25, "m", TOOL_MIN_M, TOOL_MAX_M, "tool.yaml", "a tool's TCP offset")  # passes
     >>> check_length(250.0, "m", TOOL_MIN_M, TOOL_MAX_M, "tool.yaml", "a tool's TCP offset")
     Traceback (most recent call last):
     ...
-    robocal.errors.UnitError: tool.yaml: 250 m is too large ...; the values look like millimetres ...
+    robocal.core.errors.UnitError: tool.yaml: 250 m is too large ...; the values look like millimetres ...
     """
     if (zero_ok and size_m == 0.0) or low_m <= size_m <= high_m:
         return
@@ -121,12 +121,12 @@ def check_tool(xyz_m: Sequence[float], declared: str, what: str) -> None:
 
     Examples
     --------
-    >>> from robocal.magnitudes import check_tool
+    >>> from robocal.core.magnitudes import check_tool
     >>> check_tool([0.0, 0.0, 0.25], "m", "tool.yaml")  # a 250 mm tool: passes
     >>> check_tool([0.0, 0.0, 250.0], "m", "tool.yaml")  # millimetres declared as metres
     Traceback (most recent call last):
     ...
-    robocal.errors.UnitError: tool.yaml: 250 m is too large for a tool's TCP offset ...: give metres
+    robocal.core.errors.UnitError: tool.yaml: 250 m is too large for a tool's TCP offset ...: give metres
     """
     xyz = np.abs(np.asarray(xyz_m, dtype=float))
     check_length(float(xyz.max()), declared, TOOL_MIN_M, TOOL_MAX_M, what, "a tool's TCP offset")
@@ -140,12 +140,12 @@ def check_frame(xyz_m: Sequence[float], declared: str, reach_m: float, what: str
 
     Examples
     --------
-    >>> from robocal.magnitudes import check_frame
+    >>> from robocal.core.magnitudes import check_frame
     >>> check_frame([1.2, 0.3, 0.0], "m", 1.6, "wobj1")  # 1.2 m from a 1.6 m robot's base
     >>> check_frame([1200.0, 300.0, 0.0], "m", 1.6, "wobj1")
     Traceback (most recent call last):
     ...
-    robocal.errors.UnitError: wobj1: 1200 m is too large for a frame of this robot ...: give metres
+    robocal.core.errors.UnitError: wobj1: 1200 m is too large for a frame of this robot ...: give metres
     """
     xyz = np.abs(np.asarray(xyz_m, dtype=float))
     check_length(float(xyz.max()), declared, FRAME_MIN_M, FRAME_MAX_REACHES * reach_m, what,
@@ -175,12 +175,12 @@ def check_targets(points_m: np.ndarray, declared: str, reach_m: float, what: str
     Examples
     --------
     >>> import numpy as np
-    >>> from robocal.magnitudes import check_targets
+    >>> from robocal.core.magnitudes import check_targets
     >>> check_targets(np.array([[1.0, 0.0, 0.5]]), "m", 1.6, "targets.csv")  # within reach
     >>> check_targets(np.array([[1000.0, 0.0, 500.0]]), "m", 1.6, "targets.csv")
     Traceback (most recent call last):
     ...
-    robocal.errors.UnitError: targets.csv: the farthest target ...; the values look like millimetres ...
+    robocal.core.errors.UnitError: targets.csv: the farthest target ...; the values look like millimetres ...
     """
     far = float(np.linalg.norm(np.asarray(points_m, float) - np.asarray(origin_m, float), axis=1).max())
     check_length(far, declared, TARGETS_MIN_REACHES * reach_m, TARGETS_MAX_REACHES * reach_m,
@@ -194,12 +194,12 @@ def check_model_reach(reach_m: float, declared: str, what: str) -> None:
 
     Examples
     --------
-    >>> from robocal.magnitudes import check_model_reach
+    >>> from robocal.core.magnitudes import check_model_reach
     >>> check_model_reach(3.1, "m", "irb2600.yaml")  # m: passes
     >>> check_model_reach(3100.0, "m", "irb2600.yaml")
     Traceback (most recent call last):
     ...
-    robocal.errors.UnitError: irb2600.yaml: 3100 m is too large for a robot's reach ...
+    robocal.core.errors.UnitError: irb2600.yaml: 3100 m is too large for a robot's reach ...
     """
     check_length(reach_m, declared, MODEL_MIN_REACH_M, MODEL_MAX_REACH_M, what, "a robot's reach",
                  advice="make it length: {unit} (or convert them)", strict=False)
@@ -221,7 +221,7 @@ def radian_like(angles_deg: Sequence[float]) -> np.ndarray:
 
     Examples
     --------
-    >>> from robocal.magnitudes import radian_like
+    >>> from robocal.core.magnitudes import radian_like
     >>> radian_like([90.0, 1.5708, 0.7854, 45.0]).tolist()  # pi/2 and pi/4 typed as degrees
     [False, True, True, False]
     """
@@ -241,12 +241,12 @@ def check_degrees(angles_deg: Sequence[float], what: str) -> None:
 
     Examples
     --------
-    >>> from robocal.magnitudes import check_degrees
+    >>> from robocal.core.magnitudes import check_degrees
     >>> check_degrees([90.0, -45.0], "tool rx, ry")  # passes
     >>> check_degrees([90.0, 1.5708], "tool rx, ry")
     Traceback (most recent call last):
     ...
-    robocal.errors.UnitError: tool rx, ry: 1.5708 look like radians (1.5708 rad = 90.0002 deg); the angles ...
+    robocal.core.errors.UnitError: tool rx, ry: 1.5708 look like radians (1.5708 rad = 90.0002 deg); ...
     """
     a = np.asarray(angles_deg, dtype=float)
     bad = radian_like(a)
@@ -263,12 +263,12 @@ def check_degree_set(angles_deg: Sequence[float], what: str) -> None:
 
     Examples
     --------
-    >>> from robocal.magnitudes import check_degree_set
+    >>> from robocal.core.magnitudes import check_degree_set
     >>> check_degree_set([90.0, -45.0, 0.0], "targets.csv rx ry rz")  # passes
     >>> check_degree_set([0.5, -1.2, 3.1], "targets.csv rx ry rz")
     Traceback (most recent call last):
     ...
-    robocal.errors.UnitError: targets.csv rx ry rz: every angle lies within +-3.1 deg, as radians do ...
+    robocal.core.errors.UnitError: targets.csv rx ry rz: every angle lies within +-3.1 deg, as radians do ...
     """
     a = np.abs(np.asarray(angles_deg, dtype=float))
     if RADIAN_SET_MIN_DEG < a.max(initial=0.0) <= math.pi + 1e-6:
@@ -281,12 +281,12 @@ def check_radians(angles_rad: Sequence[float], what: str) -> None:
 
     Examples
     --------
-    >>> from robocal.magnitudes import check_radians
+    >>> from robocal.core.magnitudes import check_radians
     >>> check_radians([1.5708, -0.1], "tool rx, ry")  # passes
     >>> check_radians([90.0, -0.1], "tool rx, ry")
     Traceback (most recent call last):
     ...
-    robocal.errors.UnitError: tool rx, ry: 90 rad is more than a turn: ...
+    robocal.core.errors.UnitError: tool rx, ry: 90 rad is more than a turn: ...
     """
     a = np.asarray(angles_rad, dtype=float)
     bad = np.abs(a) > MAX_RADIANS
@@ -318,13 +318,13 @@ def check_model_units(lengths_m, angles_rad, limits_rad, length_unit: str, angle
     Examples
     --------
     >>> import numpy as np
-    >>> from robocal.magnitudes import check_model_units
+    >>> from robocal.core.magnitudes import check_model_units
     >>> lengths = [0.445, 0.15, 0.7, 0.115, 0.795, 0.085]  # m
     >>> check_model_units(lengths, np.deg2rad([90.0, 0.0, -90.0]), [], "m", "deg")  # passes
     >>> check_model_units(lengths, np.deg2rad([1.5708, 0.0, -1.5708]), [], "m", "deg")
     Traceback (most recent call last):
     ...
-    robocal.errors.UnitError: the model file's units look wrong ...; the angles look like radians: ...
+    robocal.core.errors.UnitError: the model file's units look wrong ...; the angles look like radians: ...
     """
     scale = math.pi / 180.0 if angle_unit == "deg" else 1.0
     head = f"the model file's units look wrong (units: {{length: {length_unit}, angle: {angle_unit}}})"

@@ -30,15 +30,15 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import ModelError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
+from robocal.core.errors import ModelError
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text
+from robocal.core.yaml_load import load_yaml
 from robocal.kinematics.catalog import catalog_entry
 from robocal.kinematics.convert import PARALLEL_TOL
 from robocal.kinematics.model import MAX_ANGLE_RAD, Robot
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 from robocal.kinematics.ur import nearest_ur_links
 from robocal.kinematics.urdf import matrix_to_rpy, rpy_to_matrix
-from robocal.yaml_load import load_yaml
 
 LINK_NAMES = ("shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3")
 ORIGIN_KEYS = ("x", "y", "z", "roll", "pitch", "yaw")
@@ -103,7 +103,7 @@ class ImportedCalibration:
     >>> import os, tempfile
     >>> import numpy as np
     >>> import robocal as rc
-    >>> from robocal.kinematics.vendor.ur import import_calibration, to_ur_calibration
+    >>> from robocal.kinematics.manufacturer.ur import import_calibration, to_ur_calibration
     >>> nominal = rc.Robot.from_catalog("ur5e")
     >>> real = nominal.with_values({"a2": nominal.get("a2") - 0.0005})  # upper arm 0.5 mm longer
     >>> path = os.path.join(tempfile.mkdtemp(), "ur5e_calibration.yaml")
@@ -505,7 +505,7 @@ def import_calibration(path, nominal_name: str, name: str | None = None) -> Impo
     >>> import os, tempfile
     >>> import numpy as np
     >>> import robocal as rc
-    >>> from robocal.kinematics.vendor.ur import import_calibration, to_ur_calibration
+    >>> from robocal.kinematics.manufacturer.ur import import_calibration, to_ur_calibration
     >>> nominal = rc.Robot.from_catalog("ur5e")
     >>> real = nominal.with_values({"a2": nominal.get("a2") - 0.0005})  # upper arm 0.5 mm longer
     >>> path = os.path.join(tempfile.mkdtemp(), "ur5e_calibration.yaml")
@@ -577,7 +577,7 @@ def not_representable(robot: Robot) -> str | None:
     Examples
     --------
     >>> import robocal as rc
-    >>> from robocal.kinematics.vendor.ur import not_representable
+    >>> from robocal.kinematics.manufacturer.ur import not_representable
     >>> nominal = rc.Robot.from_catalog("ur5e")
     >>> not_representable(nominal) is None  # rigid links, exact joints: all of it fits
     True
@@ -617,7 +617,7 @@ def to_ur_calibration(robot: Robot, nominal: Robot) -> str:
     Examples
     --------
     >>> import robocal as rc
-    >>> from robocal.kinematics.vendor.ur import to_ur_calibration
+    >>> from robocal.kinematics.manufacturer.ur import to_ur_calibration
     >>> nominal = rc.Robot.from_catalog("ur5e")
     >>> text = to_ur_calibration(nominal, nominal)  # the nominal arm, exported
     >>> [line.strip() for line in text.splitlines() if line.startswith("  ") and not

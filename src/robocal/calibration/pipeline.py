@@ -4,7 +4,7 @@ The pipeline: fit the tracker frame and SMR offsets to the nominal model (regist
 the joint-error terms asked for, pick the identifiable parameters (QR with pivoting: the
 `ParameterSpace` that is estimated), run the chosen method, then compute the covariance of
 the estimate and the before/after position statistics. Which joint-error terms: named by the
-user, or chosen by cross-validation (`robocal.model_selection`, ``nongeometric='auto'``,
+user, or chosen by cross-validation (`robocal.calibration.model_selection`, ``nongeometric='auto'``,
 the default on tracker data of enough poses), with cyclic frequencies searched in the data
 (`robocal.identify.frequency_search`).
 """
@@ -18,12 +18,17 @@ from functools import partial
 
 import numpy as np
 
-from robocal import calibration_conditions as conditions
-from robocal.campaign.information import Noise, posterior_analysis
-from robocal.damped_least_squares import Status
+from robocal.calibration import conditions
+from robocal.calibration.model_selection import calibrate_cyclic, select_error_model, selection_table
+from robocal.core.damped_least_squares import Status
+from robocal.core.errors import DataError, IdentificationError
+from robocal.core.io import load_json, read_text, write_atomic
+from robocal.core.progress import Progress
+from robocal.core.resources import calibration_bytes, check_memory, few_threads, memory_guard
+from robocal.core.schema import RESULT_SCHEMA, validate
+from robocal.core.version import __version__
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
-from robocal.errors import DataError, IdentificationError
 from robocal.identify import vocabulary
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, hold
 from robocal.identify.identifiability import analyze as analyze_jacobian
@@ -39,22 +44,17 @@ from robocal.identify.solvers import SolverResult, check_options, get_solver, it
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.identify.structural import separate, unidentifiable
 from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
-from robocal.io import load_json, read_text, write_atomic
 from robocal.kinematics.cell import TRACK_IDENTIFIABILITY, is_track_cell
 from robocal.kinematics.conditions import range_of as conditions_range
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
 from robocal.kinematics.thermal import groups_of as thermal_groups_of
 from robocal.kinematics.thermal import reference_of as thermal_reference
-from robocal.model_selection import calibrate_cyclic, select_error_model, selection_table
-from robocal.progress import Progress
 from robocal.report.metrics import position_stats
-from robocal.resources import calibration_bytes, check_memory, few_threads, memory_guard
-from robocal.schema import RESULT_SCHEMA, validate
 from robocal.trust.consistency import Consistency, check_fit, check_not_worse
 from robocal.trust.coverage import accuracy_line, predict, prediction
 from robocal.trust.file_shifts import FileShifts, file_shifts, pose_means
+from robocal.trust.posterior import Noise, posterior_analysis
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, independent
-from robocal.version import __version__
 
 RESULT_FORMAT = "robocal-result/1"
 NONGEOMETRIC_METHODS = ("lsq", "robust")  # the methods that estimate the joint-error terms
@@ -299,7 +299,7 @@ class CalibrationResult(_BeforeAfter):
     @property
     def not_used(self) -> dict[str, str]:
         """The payload / thermal parameters the calibration data cannot show (no column or one
-        value), each with why (`robocal.calibration_conditions.not_used`)."""
+        value), each with why (`robocal.calibration.conditions.not_used`)."""
         return conditions.not_used(self.problem.datasets, self.identifiability.dropped)
 
     @staticmethod
@@ -680,7 +680,7 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         `robocal.kinematics.joint_errors`): term names and explicit parameter names, e.g.
         ``'compliance,backlash,travel'`` or ``'gear2_c1,cyc4_50_s,cyc4_50_c'``; ``'cyclic'``
         searches the frequencies of cyclic errors in the data first; ``'auto'`` chooses the terms
-        by cross-validation on ``data`` (`robocal.model_selection`; the result's
+        by cross-validation on ``data`` (`robocal.calibration.model_selection`; the result's
         ``model_selection`` holds the table); ``'default'`` is ``'auto'`` for lsq and robust on one
         tracker data set (points or poses) of at least `AUTO_DEFAULT_MIN_POSES` poses, else none;
         None or ``'none'``: the geometric model only. The calibrated robot carries the terms and
@@ -894,7 +894,7 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     as the model's own predictions, so no measurement is needed. With the priors every fit
     carries (`robocal.identify.priors`) and the measurement noise ``noise_mm``, the parameters
     are judged as the calibration will judge them, in the words of `robocal.identify.vocabulary`
-    (`robocal.campaign.information.judge`): ``kept`` the data determine (estimated),
+    (`robocal.trust.posterior.judge`): ``kept`` the data determine (estimated),
     ``undetermined`` only their priors do (not determined by these data: held near nominal by
     their prior), ``dropped`` no poses can (not identifiable: exactly confounded with other
     parameters or a frame, or without effect). Of Measurements, each row keeps its SMR.
@@ -959,7 +959,7 @@ def _plain(options: dict) -> dict:
 
 def load_result(path) -> dict:
     """Read a result JSON written by `CalibrationResult.save_json`, validated field by
-    field (`robocal.schema.RESULT_SCHEMA`); DataError names the file and the field."""
+    field (`robocal.core.schema.RESULT_SCHEMA`); DataError names the file and the field."""
     hint = "; give the JSON `robocal calibrate --json` wrote"
     if read_text(path, "result JSON file").lstrip().startswith("format: robocal-model"):
         raise DataError(f"{path} is a robot model YAML, not a result JSON{hint}")

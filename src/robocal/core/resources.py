@@ -21,7 +21,7 @@ import gc
 import resource
 from pathlib import Path
 
-from robocal.errors import ResourceError
+from robocal.core.errors import ResourceError
 
 try:  # optional (extra 'threads'): small least-squares problems run best on one BLAS thread
     from threadpoolctl import ThreadpoolController

@@ -6,16 +6,16 @@ from pathlib import Path
 
 import numpy as np
 
+from robocal.core.errors import DataError
+from robocal.core.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
 from robocal.data.registration import apply_registration, register_frame
-from robocal.diagnose import fit_rms_mm
-from robocal.errors import DataError
 from robocal.identify.observations import observation_for
 from robocal.identify.plausibility import check_joint_limits, check_residual, check_spread
 from robocal.kinematics.joint_errors import extrapolated_conditions
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.metrics import position_stats
-from robocal.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
 from robocal.trust.consistency import check_fit
+from robocal.trust.diagnosis import fit_rms_mm
 
 
 def model_errors(robot, data) -> np.ndarray:
@@ -105,7 +105,7 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
         real robot's travel).
     ResourceError
         The machine lacks the memory the evaluation needs (refused before it starts, naming how
-        much it needs: `robocal.resources.evaluation_bytes`).
+        much it needs: `robocal.core.resources.evaluation_bytes`).
 
     Examples
     --------

@@ -20,7 +20,7 @@ import yaml
 from yaml.events import AliasEvent
 from yaml.nodes import MappingNode, ScalarNode, SequenceNode
 
-from robocal.errors import DataError, RobocalError
+from robocal.core.errors import DataError, RobocalError
 
 MAX_BYTES = 4_000_000  # a model or settings file is a few kB
 MAX_DEPTH = 32  # nesting of collections

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 
 MAX_ABS = 1e15  # no number in a robocal file is larger (mm, deg, counts)
 MAX_INT = 2**53  # integers beyond are not exact as JSON numbers
@@ -224,7 +224,7 @@ _CANDIDATE = Obj({"terms": _TEXTS, "cv_rms_mm": Num(null=True), "cv_se_mm": Num(
                   "n_params": Int(null=True, lo=0), "parameters": _TEXTS})
 
 _ESTIMATE = {"status": Str(null=True, max_len=100), "detail": Str(null=True)}
-_CONDITIONS = Obj({  # robocal.calibration_conditions
+_CONDITIONS = Obj({  # robocal.calibration.conditions
     "terms": _TEXTS, "reference_temperature_c": Num(null=True),
     "data": Obj({"payload": Obj({"min_kg": Num(), "max_kg": Num(), "masses_kg": Arr(null=True),
                                  "centre_of_mass_mm": Obj({"min": Arr(), "max": Arr()}, null=True)},

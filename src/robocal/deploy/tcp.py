@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.compensate import controller_model
-from robocal.errors import DataError
+from robocal.core.errors import DataError
+from robocal.deploy.compensation import controller_model
 from robocal.kinematics.model import Robot
 
 MIN_POSES = 4
@@ -42,7 +42,7 @@ class ToolCalibration:
     Examples
     --------
     >>> import numpy as np
-    >>> from robocal.tcp import ToolCalibration
+    >>> from robocal.deploy.tcp import ToolCalibration
     >>> result = ToolCalibration(tcp=np.array([0.0, 0.0, 0.2]), point=np.array([1.0, 0.0, 0.5]),
     ...                          residuals=np.array([1e-5, 2e-5, 1e-5, 2e-5]), spread_deg=35.0)
     >>> round(result.rms_mm, 4)
