@@ -20,7 +20,7 @@ import robocal.core.io as rio
 from robocal.core.errors import DataError
 from robocal.core.io import write_all
 
-SRC = Path(rio.__file__).resolve().parent  # src/robocal: children import robocal.core.io alone (fast)
+SRC = Path(rio.__file__).resolve().parents[1]  # src/robocal: children import robocal.core.io alone (fast)
 _CHILD_PRELUDE = f"""
 import sys, types
 pkg = types.ModuleType("robocal"); pkg.__path__ = [{str(SRC)!r}]; sys.modules["robocal"] = pkg
