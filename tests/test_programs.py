@@ -25,8 +25,10 @@ from robocal.ik.opw_ik import branch_slot
 from robocal.kinematics.catalog import catalog_names
 from robocal.kinematics.transforms import rotvec_to_matrix
 from robocal.programs import FilterResult, filter_program
-from robocal.programs.config import ABBConfig, FANUCConfig, KUKAConfig
-from robocal.programs.inform import YaskawaConfig
+from robocal.programs.dialects.fanuc.configuration import FANUCConfig
+from robocal.programs.dialects.inform.configuration import YaskawaConfig
+from robocal.programs.dialects.krl.configuration import KUKAConfig
+from robocal.programs.dialects.rapid.configuration import ABBConfig
 from robocal.programs.rotations import matrix_to_quat, matrix_to_zyx, nearest_rotvec, quat_to_matrix
 from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE, Number, format_number
@@ -237,8 +239,8 @@ def test_rapid_details(tmp_path):
 def test_urscript_variable_is_its_latest_assignment():
     """A motion through a variable takes the variable's last assignment before it in text order,
     whatever other names share its prefix; a use before any assignment is not a target."""
+    from robocal.programs.dialects.urscript.reader import URScriptDialect
     from robocal.programs.source import ProgramText
-    from robocal.programs.urscript import URScriptDialect
 
     text = b"""def prog():
   movel(Waypoint_1_p, a=1.2, v=0.25)
@@ -468,8 +470,8 @@ def test_krl_needs_the_tool_and_base_in_effect(tmp_path):
 
 
 def test_krl_and_fanuc_configuration_edits():
-    from robocal.programs.fanuc_ls import FanucDialect
-    from robocal.programs.krl import KRLDialect
+    from robocal.programs.dialects.fanuc.reader import FanucDialect
+    from robocal.programs.dialects.krl.reader import KRLDialect
     from robocal.programs.model import Target
     from robocal.programs.source import ProgramText
 

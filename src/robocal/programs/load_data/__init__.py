@@ -25,7 +25,7 @@ mass. Per dialect:
   ``schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm`` the user gives.
 * Yaskawa INFORM: a job sets no load; each motion runs with the load of its position's tool
   (``///TOOL n``) registered in the controller's tool file TOOL.CND (W kg, Xg, Yg, Zg mm in the
-  flange coordinates), given as a reference (:mod:`robocal.programs.inform_tools`). A tool the file
+  flange coordinates), given as a reference (:mod:`robocal.programs.dialects.inform.tool_file`). A tool the file
   lacks, or whose W is 0 (no load registered), stops the motions that use it.
 * Staubli VAL3: no statement or data type of the language holds a load (a ``tool`` is a frame and
   its gripper output, an ``mdesc`` speeds, accelerations and blending): ``--payload``.
@@ -41,44 +41,6 @@ right and be wrong.
 
 from __future__ import annotations
 
-import numpy as np
-
-from robocal.programs.fanuc_ls import FanucDialect
-from robocal.programs.inform import InformDialect
-from robocal.programs.krl import KRLDialect
 from robocal.programs.load_data.base import Load, LoadReader, Setting
-from robocal.programs.load_data.fanuc import FanucLoads, read_schedules
-from robocal.programs.load_data.inform import InformLoads
-from robocal.programs.load_data.krl import KRLLoads
-from robocal.programs.load_data.rapid import RapidLoads
-from robocal.programs.load_data.urscript import URScriptLoads
-from robocal.programs.model import Dialect
-from robocal.programs.rapid import RapidDialect
-from robocal.programs.urscript import URScriptDialect
 
-__all__ = ["Load", "LoadReader", "Setting", "read_schedules", "reader_for"]
-
-
-def reader_for(dialect: Dialect, tools: dict[str, np.ndarray], schedules: dict[int, Load] | None) \
-        -> LoadReader:
-    """The load reader of ``dialect`` (:class:`NoLoads` for VAL3, which has no load data);
-    ``tools``: the program's tool frames (RAPID payloads are given in
-    the tool frame); ``schedules``: FANUC payload schedules (:func:`read_schedules`)."""
-    if isinstance(dialect, RapidDialect):
-        return RapidLoads(tools)
-    if isinstance(dialect, KRLDialect):
-        return KRLLoads()
-    if isinstance(dialect, FanucDialect):
-        return FanucLoads(schedules)
-    if isinstance(dialect, URScriptDialect):
-        return URScriptLoads()
-    if isinstance(dialect, InformDialect):
-        return InformLoads()
-    return NoLoads()
-
-
-class NoLoads(LoadReader):
-    """Staubli VAL3 (module docstring): no statement or data type holds a load."""
-
-    none = "a VAL3 program holds no load data"
-    hint = ""
+__all__ = ["Load", "LoadReader", "Setting"]

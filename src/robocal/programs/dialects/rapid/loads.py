@@ -8,6 +8,7 @@ import numpy as np
 
 from robocal.errors import DataError
 from robocal.programs.aggregate import Word, parse_aggregate
+from robocal.programs.dialects.rapid.syntax import COMMENT_RE, STRING_RE
 from robocal.programs.load_data.base import (
     MM,
     Load,
@@ -16,9 +17,8 @@ from robocal.programs.load_data.base import (
     setting,
     unread,
 )
-from robocal.programs.model import Target
-from robocal.programs.rapid import COMMENT_RE, STRING_RE
-from robocal.programs.source import Number, ProgramText, mask
+from robocal.programs.source import Number, ProgramText
+from robocal.programs.target import Target
 
 _RAPID_DECL = re.compile(r"\b(?:(?:LOCAL|TASK)\s+)?(?:CONST|PERS|VAR)\s+(tooldata|loaddata)\s+"
                          r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*:=", re.IGNORECASE)
@@ -39,7 +39,7 @@ class RapidLoads(LoadReader):
     def settings(self, sources, references):
         out = []
         for src in [*references, *sources]:
-            masked = self.masked[id(src)] = mask(src.text, [COMMENT_RE], [STRING_RE])
+            masked = self.masked[id(src)] = src.masked([COMMENT_RE], [STRING_RE])
             for m in _RAPID_DECL.finditer(masked):
                 end = masked.find(";", m.end())
                 tree, _ = parse_aggregate(src, masked, m.end(), len(masked) if end < 0 else end,

@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 
-from robocal.programs.krl import COMMENT_RE, MOTION_RE, STRING_RE
+from robocal.programs.dialects.krl.syntax import COMMENT_RE, MOTION_RE, STRING_RE
 from robocal.programs.load_data.base import (
     MM,
     NUM,
@@ -14,7 +14,6 @@ from robocal.programs.load_data.base import (
     setting,
     unread,
 )
-from robocal.programs.source import mask
 
 NULL_TOOL = 0  # KRL tool 0 ($NULLFRAME) has no LOAD_DATA: selecting it sets no load here
 _KRL_LITERAL = re.compile(r"\{\s*M\s+" + NUM + r"\s*,\s*CM\s*\{\s*X\s+" + NUM + r"\s*,\s*Y\s+" + NUM
@@ -38,7 +37,7 @@ class KRLLoads(LoadReader):
 
     def settings(self, sources, references):
         for src in [*references, *sources]:
-            masked = self.masked[id(src)] = mask(src.text, [COMMENT_RE], [STRING_RE])
+            masked = self.masked[id(src)] = src.masked([COMMENT_RE], [STRING_RE])
             for m in _KRL_DATA.finditer(masked):
                 lit = _KRL_LITERAL.match(masked, m.end())
                 n = int(m.group(1))

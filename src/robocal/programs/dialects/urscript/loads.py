@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import re
 
+from robocal.programs.dialects.urscript.syntax import COMMENT_RE, STRING_RE
 from robocal.programs.load_data.base import (
     NUM,
     LoadReader,
     setting,
     unread,
 )
-from robocal.programs.source import mask
-from robocal.programs.urscript import COMMENT_RE, STRING_RE
 
 _UR_CALL = re.compile(r"\b(set_payload|set_target_payload|set_payload_mass|set_payload_cog)\s*\(([^()\n]*"
                       r"(?:\[[^\]\n]*\][^()\n]*)?)\)")
@@ -26,7 +25,7 @@ class URScriptLoads(LoadReader):
     def settings(self, sources, references):
         out = []
         for src in sources:
-            masked = mask(src.text, [COMMENT_RE], [STRING_RE])
+            masked = src.masked([COMMENT_RE], [STRING_RE])
             for m in _UR_CALL.finditer(masked):
                 fn, args, text = m.group(1), m.group(2), m.group(0)
                 if fn == "set_payload_cog":
