@@ -82,7 +82,7 @@ def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibr
     Motions named for running with another load than their target's are named in ``program``'s
     accounting (its ledger and uncorrected)."""
     if schedules is not None and not dialect.payload_schedules:
-        raise DataError(f"--payload-schedules is for {_capable('payload_schedules')} programs "
+        raise DataError(f"--payload-schedules is for {_capable('vendor')} programs "
                         f"({_capable('schedule_statement')}), not {dialect.name}")
     if isinstance(schedules, str | Path):
         schedules = dialect.read_schedules(schedules)
