@@ -60,8 +60,8 @@ from robocal.programs.dialects.writing import (
 )
 from robocal.programs.registry import dialect_named, dialects
 
-__all__ = ["DEGREE_DECIMALS", "campaign_outputs", "campaign_programs", "fixed_point", "program_options", "refuse_tracks",
-           "write_campaign"]
+__all__ = ["DEGREE_DECIMALS", "campaign_outputs", "campaign_programs", "fixed_point", "program_options",
+           "refuse_tracks", "write_campaign"]
 
 
 def program_options() -> list:

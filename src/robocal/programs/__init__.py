@@ -8,7 +8,8 @@ from __future__ import annotations
 import importlib
 
 _HOMES = {"FilterResult": "robocal.programs.result", "dialect_for": "robocal.programs.registry",
-          "filter_program": "robocal.programs.filter", "read_schedules": "robocal.programs.dialects.fanuc.loads"}
+          "filter_program": "robocal.programs.filter",
+          "read_schedules": "robocal.programs.dialects.fanuc.loads"}
 __all__ = ["FilterResult", "dialect_for", "filter_program", "read_schedules"]
 
 

@@ -281,9 +281,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     declare: the tools as the controller knows them. ``tcp``: tool name -> 4x4 (m), the real TCP
     identified on the calibrated model (``robocal tool``), used with the calibrated flange
     instead of the controller's tool data. ``robot_base``: the controller's base frame (4x4, m,
-    or text x,y,z,rx,ry,rz in mm and deg, its magnitudes checked) in the calibrated model's world frame (default: the calibrated frame {0} is the controller's
-    base). Targets that cannot be corrected (out of reach, out of the joint limits, a
-    configuration they cannot have, not converged) raise DataError naming each one; with
+    or text x,y,z,rx,ry,rz in mm and deg, its magnitudes checked) in the calibrated model's world
+    frame (default: the calibrated frame {0} is the controller's base). Targets that cannot be
+    corrected (out of reach, out of the joint limits, a configuration they cannot have, not
+    converged) raise DataError naming each one; with
     ``keep_unreached`` they are left unchanged with a warning. A motion to a name declared in none
     of the files given is named (its record says the declaration it needs); with ``strict`` the
     run is refused instead. ``position_registers``: a FANUC position register file
@@ -373,7 +374,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     check_magnitudes(given, dialect, tools, frames, robot_reach(nominal))
     robot_base = robot_base_frame(robot_base, robot_reach(nominal))
     res = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect, references,
-                    keep_unreached, strict, force, position_registers, payload, temperature, payload_schedules)
+                    keep_unreached, strict, force, position_registers, payload, temperature,
+                    payload_schedules)
     res.warnings[:0] = unused_conditions(calibrated, payload, temperature)
     if prediction is not None and res.joints is not None:
         res.warnings += target_warnings(prediction, calibrated, res.joints)

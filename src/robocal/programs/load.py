@@ -78,7 +78,8 @@ def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibr
                schedules: str | Path | dict[int, Load] | None = None) -> LoadPlan:
     """The load of each of ``targets`` (module docstring). ``payload``: kg or (kg, x, y, z m),
     overriding the program's; ``schedules``: payload schedules (of a language that
-    has them, :meth:`~robocal.programs.dialects.base.Dialect.read_schedules`), a file or schedule -> (kg, x, y, z m).
+    has them, :meth:`~robocal.programs.dialects.base.Dialect.read_schedules`), a file or
+    schedule -> (kg, x, y, z m).
     Motions named for running with another load than their target's are named in ``program``'s
     accounting (its ledger and uncorrected)."""
     if schedules is not None and not dialect.payload_schedules:

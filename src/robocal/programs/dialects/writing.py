@@ -64,7 +64,8 @@ def ascii_comment(text: str) -> str:
     return "".join(ch if 32 <= ord(ch) < 127 and ch not in "\"'" else " " for ch in text)
 
 
-def program_poses(d, nominal, q: np.ndarray, tool: np.ndarray, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+def program_poses(d, nominal, q: np.ndarray, tool: np.ndarray,
+                  frame: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """A test program's target poses ``(N, 4, 4)`` (m, in ``frame``) at joints ``q`` ``(N, 6)``
     (rad) of ``nominal`` with TCP ``tool``, and the configuration rows of dialect ``d`` there
     (None: it has no configuration data)."""

@@ -25,8 +25,8 @@ mass. Per dialect:
   ``schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm`` the user gives.
 * Yaskawa INFORM: a job sets no load; each motion runs with the load of its position's tool
   (``///TOOL n``) registered in the controller's tool file TOOL.CND (W kg, Xg, Yg, Zg mm in the
-  flange coordinates), given as a reference (:mod:`robocal.programs.dialects.inform.tool_file`). A tool the file
-  lacks, or whose W is 0 (no load registered), stops the motions that use it.
+  flange coordinates), given as a reference (:mod:`robocal.programs.dialects.inform.tool_file`).
+  A tool the file lacks, or whose W is 0 (no load registered), stops the motions that use it.
 * Staubli VAL3: no statement or data type of the language holds a load (a ``tool`` is a frame and
   its gripper output, an ``mdesc`` speeds, accelerations and blending): ``--payload``.
 * URScript: ``set_payload(m, [x, y, z])`` / ``set_target_payload(m, [x, y, z], ...)`` (kg, m from

@@ -44,7 +44,8 @@ def fanuc_ls_program(joints_deg, name: str = "ROBOCAL_CAMPAIGN", *,
                  f"  WAIT {settle_s:6.2f}(sec) ;", f"  CALL {procedure}({k}) ;"]
     remarks = [f"  !{line} ;" for note in notes
                for line in textwrap.wrap(ascii_comment(note.replace(";", ",")), TP_REMARK_WIDTH)]
-    lines = [f"/PROG  {name}", "/ATTR", "OWNER\t\t= MNEDITOR;", f'COMMENT\t\t= "{ascii_comment(comment)[:16]}";',
+    lines = [f"/PROG  {name}", "/ATTR", "OWNER\t\t= MNEDITOR;",
+             f'COMMENT\t\t= "{ascii_comment(comment)[:16]}";',
              "PROG_SIZE\t= 0;", "CREATE\t\t= DATE 00-01-01  TIME 00:00:00;",
              "MODIFIED\t= DATE 00-01-01  TIME 00:00:00;", "FILE_NAME\t= ;", "VERSION\t\t= 0;",
              f"LINE_COUNT\t= {len(remarks) + len(body)};", "MEMORY_SIZE\t= 0;", "PROTECT\t\t= READ_WRITE;",

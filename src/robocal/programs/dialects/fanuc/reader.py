@@ -11,8 +11,8 @@ Positions in the ``/POS`` section::
 
 W, P, R are fixed-axis XYZ angles: R = Rz(R) Ry(P) Rx(W) (deg). CONFIG: flip (F/N), elbow
 (U/D), front/back (T/B) and the turn numbers of J1, J4, J6 (see
-:class:`robocal.programs.dialects.fanuc.configuration.FANUCConfig`). Each position carries its user frame UF and tool
-frame UT; their values live in the controller, so they are given on the command line
+:class:`robocal.programs.dialects.fanuc.configuration.FANUCConfig`). Each position carries its
+user frame UF and tool frame UT; their values live in the controller, so they are given on the command line
 (``--frame u=X,Y,Z,W,P,R``, ``--tool t=...``, mm and deg); UF 0 is the world (= robot base)
 frame, UT 0 the faceplate. Joint representations (J1 = ...), other motion groups (GP2 ...) and
 extended axes are left alone.

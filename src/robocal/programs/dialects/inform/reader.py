@@ -29,8 +29,9 @@ restored after it). ROBOT positions are in the robot's base frame; BASE position
 without base axes: the base and robot coordinates coincide); USER positions in the user frame
 ``///USER n``. Tool and user-frame values live in the controller: ``--tool n=X,Y,Z,Rx,Ry,Rz``,
 ``--frame n=...`` (mm, deg), or the user frames of the controller's UFRAME.CND and the tools of its
-TOOL.CND given as references (:func:`user_frames`, :mod:`robocal.programs.dialects.inform.tool_file`; ``--tool``
-and ``--frame`` take precedence); tool 0 without data is the flange (a warning). A job may save the
+TOOL.CND given as references (:func:`user_frames`,
+:mod:`robocal.programs.dialects.inform.tool_file`; ``--tool`` and ``--frame`` take precedence); tool 0
+without data is the flange (a warning). A job may save the
 P variables it uses in its ``//POS`` (``P00100=...``): those are read before VAR.DAT's, and
 another job's saved P variables after VAR.DAT's.
 

@@ -1,7 +1,8 @@
 """KUKA KRL programs (.src with its .dat, .sub, $config.dat as a reference).
 
 * Positions ``{X x, Y y, Z z, A a, B b, C c, S s, T t, E1 ...}`` (mm; A, B, C = ZYX Euler in
-  deg, R = Rz(A) Ry(B) Rx(C); S status and T turn, see :class:`robocal.programs.dialects.krl.configuration.KUKAConfig`;
+  deg, R = Rz(A) Ry(B) Rx(C); S status and T turn, see
+  :class:`robocal.programs.dialects.krl.configuration.KUKAConfig`;
   external axes E1..E6 left alone) declared as ``DECL E6POS|POS|FRAME name=...`` (``DECL``
   and ``GLOBAL`` optional; array elements ``name[i]=...``) or written inline in a motion.
   A position without X, Y, Z, A, B, C (a partial aggregate) is left alone with a warning; one

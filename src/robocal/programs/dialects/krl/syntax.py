@@ -1,4 +1,5 @@
-"""The lexical pieces of KUKA KRL text its reader and its load reader share: comments, strings, motion statements."""
+"""The lexical pieces of KUKA KRL text its reader and its load reader share: comments, strings,
+motion statements."""
 
 from __future__ import annotations
 

@@ -1,8 +1,9 @@
 """ABB RAPID modules (.mod, .modx, .prg, .sys).
 
 * ``robtarget`` = ``[[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[eax_a,...,eax_f]]``: mm, unit
-  quaternion w-first, configuration (see :class:`robocal.programs.dialects.rapid.configuration.ABBConfig`), external
-  axes (left alone). Declared ``CONST``/``PERS``/``VAR`` (also ``LOCAL``/``TASK``, arrays
+  quaternion w-first, configuration (see
+  :class:`robocal.programs.dialects.rapid.configuration.ABBConfig`), external axes (left alone).
+  Declared ``CONST``/``PERS``/``VAR`` (also ``LOCAL``/``TASK``, arrays
   ``name{n}`` / ``name{n,m}``) or written inline in a motion instruction.
 * ``tooldata`` = ``[robhold,[[x,y,z],[q1..q4]],[load...]]``: TCP = flange * tframe.
 * ``wobjdata`` = ``[robhold,ufprog,ufmec,[[uframe]],[[oframe]]]``: target pose in the world

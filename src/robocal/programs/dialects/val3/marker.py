@@ -1,5 +1,6 @@
 """The provenance marker of Staubli VAL3: an XML comment ``<!-- ... -->`` on the line after the
-XML declaration of each file written (a file without a declaration carries none) (:mod:`robocal.trust.output_marker`)."""
+XML declaration of each file written (a file without a declaration carries none)
+(:mod:`robocal.trust.output_marker`)."""
 
 from __future__ import annotations
 
