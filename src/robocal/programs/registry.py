@@ -92,7 +92,7 @@ def language_of(path: Path) -> Dialect | None:
 
 
 def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
-    """The program dialect from ``name`` (a key of :data:`DIALECTS`) or the suffixes; a language
+    """The program dialect from ``name`` (a key of `DIALECTS`) or the suffixes; a language
     that recognises its files by their contents (a Yaskawa job or VAR.DAT, told by its first
     line: ``/JOB``, ``//`` sections) wins over a suffix it shares with another.
 

@@ -181,8 +181,16 @@ def shortened(body: str, width: int) -> str:
 
 
 class ProgramMarker(Protocol):
-    """What marks a program: a language's comment syntax (its
-    :meth:`~robocal.programs.dialects.base.Dialect.mark`)."""
+    """What marks a program: a language's comment syntax (the ``mark`` of its
+    `robocal.programs.dialects.base.Dialect`).
+
+    Examples
+    --------
+    >>> from robocal.programs.registry import dialect_named
+    >>> body = "robocal 0.1.0 model ebba57c5590e"
+    >>> dialect_named("urscript").mark("movej([0, 0, 0, 0, 0, 0])\\n", body, body + ": filtered")
+    '# robocal 0.1.0 model ebba57c5590e: filtered\\nmovej([0, 0, 0, 0, 0, 0])\\n'
+    """
 
     def mark(self, text: str, body: str, note: str) -> str:
         """``text`` with the marker ``body`` (and ``note``, the same with what was done) added."""
