@@ -148,17 +148,11 @@ def _params(args, robot):
     return offsets_params(robot, max(1, len(args.smr_mm or [])))
 
 
-def run(args) -> int:
-    import numpy as np
-
-    from robocal.campaign import Constraints, Tracker, plan_poses, read_candidates
-    from robocal.campaign.programs import campaign_outputs, program_options, refuse_tracks, write_campaign
-    from robocal.data.measurements import read_joints
-    from robocal.errors import DataError
+def _check_outputs(args, programs: dict[str, str]) -> None:
+    """Refuse outputs named for another format, or that would overwrite an input, before planning."""
+    from robocal.campaign.programs import campaign_outputs, program_options
     from robocal.io import check_outputs
-    from robocal.kinematics.model import load_model
 
-    programs = _programs(args)
     written = campaign_outputs(programs, args.procedure)
     for path, kind, option in ((args.output, "CSV", "-o"), (args.json, "JSON", "--json"),
                                (args.html, "HTML", "--html"), *((programs.get(d.key), d.campaign_format,
@@ -166,6 +160,38 @@ def run(args) -> int:
                                                                 if d.campaign_format)):
         check_format(path, kind, option)
     check_outputs([args.output, args.json, args.html, *written], [args.robot, args.candidates, args.region])
+
+
+def _constraints(args):
+    """The constraints on the chosen poses: joint margins, TCP boxes, distances, the tracker's
+    line of sight (lengths from mm to m)."""
+    import numpy as np
+
+    from robocal.campaign import Constraints, Tracker
+
+    tracker = None
+    if args.tracker_mm is not None:
+        tracker = Tracker(position=np.array(args.tracker_mm) * 1e-3, acceptance_deg=args.acceptance_deg,
+                          range_m=tuple(args.tracker_range_m), clearance_m=args.clearance_mm * 1e-3,
+                          arm_radius_m=None if args.arm_radius_mm is None else args.arm_radius_mm * 1e-3)
+    boxes = tuple(np.array(b).reshape(2, 3) * 1e-3 for b in (args.box or []))
+    return Constraints(margin_deg=args.margin_deg, boxes=boxes,
+                       min_joint_distance_deg=args.min_joint_distance_deg,
+                       min_wrist_deg=args.min_wrist_deg, min_elbow_deg=args.min_elbow_deg,
+                       min_shoulder_m=args.min_shoulder_mm * 1e-3, tracker=tracker)
+
+
+def run(args) -> int:
+    import numpy as np
+
+    from robocal.campaign import plan_poses, read_candidates
+    from robocal.campaign.programs import refuse_tracks, write_campaign
+    from robocal.data.measurements import read_joints
+    from robocal.errors import DataError
+    from robocal.kinematics.model import load_model
+
+    programs = _programs(args)
+    _check_outputs(args, programs)
     for smr in args.smr_mm or []:
         check_tool_mm(smr, f"--smr-mm {','.join(f'{v:g}' for v in smr)}")
     robot = load_model(args.robot)
@@ -175,16 +201,7 @@ def run(args) -> int:
         raise DataError("give one --smr-normal per --smr-mm")
     if args.region and args.region_box:
         raise DataError("give either --region or --region-box, not both")
-    tracker = None
-    if args.tracker_mm is not None:
-        tracker = Tracker(position=np.array(args.tracker_mm) * 1e-3, acceptance_deg=args.acceptance_deg,
-                          range_m=tuple(args.tracker_range_m), clearance_m=args.clearance_mm * 1e-3,
-                          arm_radius_m=None if args.arm_radius_mm is None else args.arm_radius_mm * 1e-3)
-    boxes = tuple(np.array(b).reshape(2, 3) * 1e-3 for b in (args.box or []))
-    constraints = Constraints(margin_deg=args.margin_deg, boxes=boxes,
-                              min_joint_distance_deg=args.min_joint_distance_deg,
-                              min_wrist_deg=args.min_wrist_deg, min_elbow_deg=args.min_elbow_deg,
-                              min_shoulder_m=args.min_shoulder_mm * 1e-3, tracker=tracker)
+    constraints = _constraints(args)
     candidates = read_candidates(args.candidates, robot, args.kind) if args.candidates else None
     region = (read_joints(args.region, robot) if args.region else
               np.array(args.region_box).reshape(2, 3) * 1e-3 if args.region_box else None)
