@@ -593,3 +593,21 @@ def test_no_entry_keeps_text_order_with_a_warning(tmp_path):
     robot = rc.Robot.from_catalog("ur5")
     assert any("no entry routine found" in w for w in _controller([two], robot)[3])
     assert not any("no entry routine found" in w for w in _controller([flat], robot)[3])
+
+
+def test_filter_program_returns_the_warnings_about_what_was_given():
+    """The API says what the command line says: a --tool that differs from the program's own tool
+    data, a payload / temperature the model has no term for; magnitudes in another unit refused."""
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    calibrated = perturbed(nominal, 0)
+    res = filter_program(DATA / "weld_cell.mod", calibrated, nominal, payload=5.0, temperature=30.0,
+                         tools={"tGun": "52,0,200,0.96592583,0,0.25881905,0"})
+    assert res.warnings[0].startswith("--tool tGun=52,0,200,0.96592583,0,0.25881905,0 replaces the program's "
+                                      "own tool data tGun (TCP at 50, 0, 200 mm on the flange) and differs "
+                                      "from it by 2 mm")
+    assert res.warnings[1:3] == ["--payload is not used: the model of abb_irb2600 has no payload term",
+                                 "--temperature is not used: the model of abb_irb2600 has no thermal term"]
+    with pytest.raises(DataError, match="the values look like metres"):
+        filter_program(DATA / "weld_cell.mod", calibrated, nominal, robot_base="0.1,0,0,0,0,0.05")
+    with pytest.raises(DataError, match="look like metres"):
+        filter_program(DATA / "sealing.ls", calibrated, nominal, tools={"2": "0,0,0.12,0,0,0"})
