@@ -1,4 +1,4 @@
-"""The loads of Yaskawa INFORM jobs (what they mean: :mod:`robocal.programs.load_data`).
+"""The loads of Yaskawa INFORM jobs (the reader interface: :mod:`robocal.programs.load_data`).
 
 A job sets no load: each position carries its tool number (``///TOOL n`` of its ``//POS``
 section) and the controller runs the motion with that tool's load from its tool file

@@ -1,4 +1,13 @@
-"""The load statements of KUKA KRL programs (what they mean: :mod:`robocal.programs.load_data`)."""
+"""The load statements of KUKA KRL programs (the reader interface: :mod:`robocal.programs.load_data`).
+
+``$LOAD = {M m, CM {X x, Y y, Z z, A.., B.., C..}, J {..}}`` (kg, mm in the flange frame), ``$LOAD =
+LOAD_DATA[n]``, ``BAS(#TOOL, n)`` and an inline form's ``FDAT_ACT = F`` (tool ``F.TOOL_NO``: the
+controller loads ``LOAD_DATA[TOOL_NO]`` with the tool; tool 0, the flange, has no LOAD_DATA and
+changes nothing here), and a KSS 8 motion's ``WITH $LOAD = SLOAD(F.TOOL_NO)`` (that motion only).
+``LOAD_DATA[n]={M.., CM {..}}`` is read from the program files or a reference ($config.dat). ``M
+-1`` is the controller's default load from its machine data: not known here. A bare ``$TOOL =
+TOOL_DATA[n]`` leaves ``$LOAD`` as it was (the controller keeps them apart).
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,12 @@
-"""The load statements of ABB RAPID programs (what they mean: :mod:`robocal.programs.load_data`)."""
+"""The load statements of ABB RAPID programs (the reader interface: :mod:`robocal.programs.load_data`).
+
+A motion runs with its tool's ``tload`` (tooldata ``[robhold, tframe, [mass, [x, y, z], aom, ix, iy,
+iz]]``: kg, mm in the wrist frame tool0) plus the payload the last ``GripLoad name`` connected
+(loaddata ``[mass, [x, y, z], aom, ix, iy, iz]``: its centre of gravity in mm in the *tool* frame,
+turned into tool0 through the tool's tframe; ``GripLoad load0`` disconnects it); a motion's optional
+``\\TLoad:=name`` is its total load (the tool's and the payload's together, centre of gravity in
+tool0) and replaces both. ``tool0`` and ``load0`` carry nothing.
+"""
 
 from __future__ import annotations
 

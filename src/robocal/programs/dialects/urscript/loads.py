@@ -1,4 +1,9 @@
-"""The load statements of URScript programs (what they mean: :mod:`robocal.programs.load_data`)."""
+"""The load statements of URScript programs (the reader interface: :mod:`robocal.programs.load_data`).
+
+``set_payload(m, [x, y, z])`` / ``set_target_payload(m, [x, y, z], ...)`` (kg, m from the tool
+flange, in its frame), ``set_payload(m)`` (the centre of gravity kept), ``set_payload_mass(m)``,
+``set_payload_cog([x, y, z])``.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""The load statements of Staubli VAL3 programs: none (:mod:`robocal.programs.load_data`)."""
+"""The load statements of Staubli VAL3 programs: none (:mod:`robocal.programs.load_data`).
+
+No statement or data type of the language holds a load (a ``tool`` is a frame and its gripper
+output, an ``mdesc`` speeds, accelerations and blending): ``--payload``.
+"""
 
 from __future__ import annotations
 
