@@ -11,17 +11,18 @@ the same model loaded from any of its files gives the same fingerprint). Reading
 back in (filtering a filtered program, compensating compensated targets: the corrections applied
 twice) is refused, naming the earlier run, unless the caller forces it.
 
-Where the marker goes (one added line; the rest of the file is byte for byte the same):
+Where the marker goes (one added line; the rest of the file is byte for byte the same), in each
+language's comment syntax (its ``programs/dialects/<language>/marker.py``):
 
 * ABB RAPID: ``! ...`` on the line after the first ``MODULE`` line (the file's first line
   without one);
 * KUKA KRL: ``; ...`` on the line after the first ``DEF`` / ``DEFDAT`` / ``DEFFCT`` line;
 * FANUC TP (.ls): a remark ``!...`` as the last line of ``/MN``, numbered after the last line,
-  with ``LINE_COUNT`` raised by one; a remark line holds `TP_REMARK_WIDTH` characters, so
+  with ``LINE_COUNT`` raised by one; a remark line holds 30 characters, so
   the fingerprint is cut to fit (10 hex digits with a five-character version);
 * URScript: ``# ...`` as the first line;
-* Yaskawa INFORM: a comment instruction ``'...`` after the job's ``NOP`` (a comment holds
-  `INFORM_COMMENT_WIDTH` characters: the fingerprint is cut to fit); a VAR.DAT, which holds
+* Yaskawa INFORM: a comment instruction ``'...`` after the job's ``NOP`` (a comment holds 32
+  characters: the fingerprint is cut to fit); a VAR.DAT, which holds
   no instructions, carries none;
 * Staubli VAL3: an XML comment ``<!-- ... -->`` on the line after the XML declaration of each
   file written (a file without a declaration carries none);
