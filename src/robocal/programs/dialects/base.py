@@ -42,8 +42,6 @@ class Dialect:
     shared_suffixes: tuple[str, ...] = ()  # suffixes another language has too (told by `recognises`)
     campaign_format = ""  # a campaign program's kind in output-name checks ('RAPID'; '': a folder)
     campaign_suffix = ""  # ... and its file suffix
-    campaign_metavar = ""  # poses --LANG's metavar
-    campaign_help = ""  # poses --LANG's help
     campaign_rank = 0  # the order poses writes the languages' programs in
     campaign_refuses_tracks = False  # its campaign programs are refused for an arm on a track
     scheme: ConfigScheme | None = None

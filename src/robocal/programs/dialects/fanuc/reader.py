@@ -75,7 +75,6 @@ class FanucDialect(Dialect):
     vendor = "FANUC"
     schedule_statement = "PAYLOAD[n]"
     campaign_format, campaign_suffix = "TP", ".ls"
-    campaign_metavar, campaign_help = "F.ls", "FANUC TP program (ASCII .ls; J3 in FANUC's convention)"
     suffixes = (".ls",)
     scheme = FANUCConfig()
     keep_width = True

@@ -138,7 +138,6 @@ class InformDialect(Dialect):
     shared_suffixes = (".dat",)  # the controller's VAR.DAT
     signature = r"^/JOB\b|^//(?:NAME|POS|INST)\b"
     campaign_format, campaign_suffix = "JBI", ".jbi"
-    campaign_metavar, campaign_help = "F.JBI", "Yaskawa INFORM job (RECTAN positions with their RCONF)"
     suffixes = (".jbi",)
     scheme = YaskawaConfig()
     frame_help = ("X,Y,Z in mm and Rx,Ry,Rz in deg, as on the pendant's tool and user frame screens; or the "

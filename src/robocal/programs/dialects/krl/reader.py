@@ -96,7 +96,6 @@ class KRLDialect(Dialect):
     signature = r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)"
     angle_unit = "deg"
     campaign_format, campaign_suffix = "KRL", ".src"
-    campaign_metavar, campaign_help = "F.src", "KUKA KRL program (.src, and .dat next to it)"
     suffixes = (".src", ".dat", ".sub")
     scheme = KUKAConfig()
     frame_help = "X,Y,Z in mm and A,B,C in deg (ZYX Euler), as in TOOL_DATA/BASE_DATA"

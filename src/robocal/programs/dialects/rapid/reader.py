@@ -123,7 +123,6 @@ class RapidDialect(Dialect):
     vendor = "ABB"
     signature = r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)"
     campaign_format, campaign_suffix = "RAPID", ".mod"
-    campaign_metavar, campaign_help = "F.mod", "ABB RAPID module"
     suffixes = (".mod", ".modx", ".prg", ".sys")
     scheme = ABBConfig()
     n_values = 7

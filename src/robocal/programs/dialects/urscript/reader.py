@@ -88,7 +88,6 @@ class URScriptDialect(Dialect):
     length_unit = "m"
     angle_unit = "rad"
     campaign_format, campaign_suffix = "URScript", ".script"
-    campaign_metavar, campaign_help = "F.script", "URScript program"
     suffixes = (".script", ".urscript")
     scheme = None
     frame_help = "x,y,z in m and the rotation vector rx,ry,rz in rad, as in p[...]"

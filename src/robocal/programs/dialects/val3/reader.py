@@ -184,8 +184,6 @@ class Val3Dialect(Dialect):
     campaign_rank = 5
     vendor = "Staubli"
     signature = r"staubli\.com/robotics/VAL3"
-    campaign_metavar = "FOLDER"
-    campaign_help = "Staubli VAL3 application (a folder named like the application, created if absent)"
     suffixes = (".pgx", ".dtx", ".pjx")
     scheme = StaubliConfig()
     frame_help = "x,y,z in mm and rx,ry,rz in deg (R = Rx Ry Rz), as in the .dtx"
