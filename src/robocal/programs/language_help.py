@@ -68,8 +68,10 @@ FILTER_OPTIONS = {
                           "config): motions to PR[n] are corrected and the corrected registers written to "
                           "OUTPUT.registers.csv",
 }
-PROGRAM_OPTION = ("a campaign program in language LANG ({languages}) written as PATH (a KRL .src gets its "
-                  ".dat next to it; a VAL3 application is a folder named like the application, created if "
+PROGRAM_OPTION = ("a campaign program in language LANG ({languages}) written as PATH: an ABB RAPID module, "
+                  "a KUKA KRL .src (its .dat is written next to it), a URScript program, a FANUC TP program "
+                  "(ASCII .ls; J3 in FANUC's convention), a Yaskawa INFORM job (RECTAN positions with their "
+                  "RCONF), a Staubli VAL3 application (a folder named like the application, created if "
                   "absent); repeat for several")
 # where the flow of a program without configuration data starts (robocal.programs.flow)
 ENTRY_ROUTINES = ("URScript: top-level code or one def nothing calls; RAPID: PROC main; KRL: the DEF named "
