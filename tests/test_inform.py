@@ -19,7 +19,8 @@ from robocal.data.simulate import perturbed
 from robocal.errors import DataError
 from robocal.programs import filter_program
 from robocal.programs.dialects.inform.reader import InformDialect
-from robocal.programs.filter import controller_joints, dialect_for, target_poses
+from robocal.programs.filter import controller_joints, target_poses
+from robocal.programs.registry import dialect_for
 from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE, ProgramText
 

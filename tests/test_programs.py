@@ -497,7 +497,8 @@ def test_a_robot_that_is_not_six_axis_is_refused():
 def _controller(paths, robot, tools=None, frames=None):
     """Target names in the filter's order, their flange poses and the filter's controller joints."""
     from robocal.kinematics.transforms import invert_transform
-    from robocal.programs.filter import as_frames, controller_joints, dialect_for, target_poses
+    from robocal.programs.filter import as_frames, controller_joints, target_poses
+    from robocal.programs.registry import dialect_for
     from robocal.programs.source import ProgramText
 
     d = dialect_for(paths)

@@ -21,7 +21,7 @@ from robocal.errors import DataError
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.programs import filter_program
 from robocal.programs.dialects.val3.reader import Val3Dialect, _read_data, application_files
-from robocal.programs.filter import dialect_for
+from robocal.programs.registry import dialect_for
 from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE, ProgramText
 

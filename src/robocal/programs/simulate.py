@@ -17,8 +17,8 @@ from scipy.spatial.transform import Rotation
 from robocal.ik import solve
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform
-from robocal.programs.filter import as_frames, controller_joints, dialect_for, target_poses
-from robocal.programs.registry import dialect_named
+from robocal.programs.filter import as_frames, controller_joints, target_poses
+from robocal.programs.registry import dialect_for, dialect_named
 from robocal.programs.source import ProgramText
 
 
