@@ -371,8 +371,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     """
     given = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     references = [references] if isinstance(references, str | Path) else list(references)
-    check_magnitudes(given, dialect, tools, frames, robot_reach(nominal))
-    robot_base = robot_base_frame(robot_base, robot_reach(nominal))
+    reach = robot_reach(nominal)
+    check_magnitudes(given, dialect, tools, frames, reach)
+    robot_base = robot_base_frame(robot_base, reach)
     res = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect, references,
                     keep_unreached, strict, force, position_registers, payload, temperature,
                     payload_schedules)
