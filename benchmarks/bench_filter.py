@@ -32,7 +32,8 @@ from robocal.ik.controller import nearest_solutions
 from robocal.ik.singularity import singularity_distance
 from robocal.kinematics.transforms import invert_transform, make_transform
 from robocal.programs import filter_program
-from robocal.programs.filter import _nearest_joints, as_frames, controller_joints, dialect_for, target_poses
+from robocal.programs.filter import _nearest_joints, as_frames, controller_joints, target_poses
+from robocal.programs.registry import dialect_for
 from robocal.programs.simulate import execute, touch_poses, write_program
 from robocal.programs.source import ProgramText
 

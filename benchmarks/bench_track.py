@@ -22,7 +22,7 @@ from robocal.calibration.pipeline import calibrate
 from robocal.data.simulate import simulate_tracker
 from robocal.ik import track
 from robocal.kinematics.cell import TRACK_SCALE, arm_model, cell_from_data
-from robocal.programs.config import ABBConfig
+from robocal.programs.dialects.rapid.configuration import ABBConfig
 from robocal.programs.filter import filter_program
 
 CELL = {"units": {"length": "mm", "angle": "deg"}, "name": "kr210 on a 6 m track",

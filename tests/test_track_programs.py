@@ -14,7 +14,7 @@ from robocal.data.simulate import simulate_tracker
 from robocal.deploy.compensation import controller_model
 from robocal.ik import track
 from robocal.kinematics.cell import arm_model, cell_from_data
-from robocal.programs.config import ABBConfig
+from robocal.programs.dialects.rapid.configuration import ABBConfig
 from robocal.programs.filter import filter_program
 
 CELL = {"units": {"length": "mm", "angle": "deg"}, "name": "irb2600 on a 6 m track",

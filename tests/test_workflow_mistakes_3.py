@@ -346,8 +346,8 @@ def test_a_fanuc_joint_log_with_j3_coupled_to_j2_names_the_option(fanuc, tmp_pat
 
 
 def test_the_fanuc_conventions_are_inverse(rng):
-    from robocal.campaign.programs import J23_FACTOR as CAMPAIGN_FACTOR
     from robocal.data.joint_conventions import J23_FACTOR, fanuc_coupled, fanuc_decoupled
+    from robocal.programs.dialects.fanuc.campaign import J23_FACTOR as CAMPAIGN_FACTOR
 
     q = rng.uniform(-3, 3, (20, 6))
     assert np.allclose(fanuc_decoupled(fanuc_coupled(q)), q)

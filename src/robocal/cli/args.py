@@ -92,9 +92,17 @@ def check_distinct_inputs(paths, what: str = "input files", why: str = TWICE) ->
 
 
 # output suffix -> the format written there; an output named for another format is refused
+# (and each robot language's campaign program suffix, :func:`_program_formats`)
 FORMATS = {".json": "JSON", ".yaml": "YAML", ".yml": "YAML", ".csv": "CSV", ".html": "HTML", ".htm": "HTML",
-           ".urdf": "URDF", ".npz": "npz", ".mod": "RAPID", ".src": "KRL", ".script": "URScript", ".ls": "TP",
-           ".jbi": "JBI"}
+           ".urdf": "URDF", ".npz": "npz"}
+
+
+def _program_formats() -> dict[str, str]:
+    """Campaign program suffix -> its kind, from the languages' registry (imported only for an
+    output whose suffix FORMATS does not know)."""
+    from robocal.programs.registry import dialects
+
+    return {d.campaign_suffix: d.campaign_format for d in dialects() if d.campaign_format}
 
 
 def check_format(path, kind: str, option: str, hint: str = "") -> None:
@@ -106,9 +114,12 @@ def check_format(path, kind: str, option: str, hint: str = "") -> None:
 
     if path is None:
         return
-    named = FORMATS.get(Path(path).suffix.lower())
+    formats = FORMATS
+    if Path(path).suffix.lower() not in FORMATS or kind not in FORMATS.values():
+        formats = FORMATS | _program_formats()
+    named = formats.get(Path(path).suffix.lower())
     if named is not None and named != kind:
-        suffix = next(s for s, k in FORMATS.items() if k == kind)
+        suffix = next(s for s, k in formats.items() if k == kind)
         raise DataError(f"{option} {path}: {option} writes {kind}, but the name says {named}; name it "
                         f"{Path(path).with_suffix(suffix).name}{hint}")
 

@@ -1,4 +1,13 @@
-"""The load statements of KUKA KRL programs (what they mean: :mod:`robocal.programs.load_data`)."""
+"""The load statements of KUKA KRL programs (the reader interface: :mod:`robocal.programs.load_data`).
+
+``$LOAD = {M m, CM {X x, Y y, Z z, A.., B.., C..}, J {..}}`` (kg, mm in the flange frame), ``$LOAD =
+LOAD_DATA[n]``, ``BAS(#TOOL, n)`` and an inline form's ``FDAT_ACT = F`` (tool ``F.TOOL_NO``: the
+controller loads ``LOAD_DATA[TOOL_NO]`` with the tool; tool 0, the flange, has no LOAD_DATA and
+changes nothing here), and a KSS 8 motion's ``WITH $LOAD = SLOAD(F.TOOL_NO)`` (that motion only).
+``LOAD_DATA[n]={M.., CM {..}}`` is read from the program files or a reference ($config.dat). ``M
+-1`` is the controller's default load from its machine data: not known here. A bare ``$TOOL =
+TOOL_DATA[n]`` leaves ``$LOAD`` as it was (the controller keeps them apart).
+"""
 
 from __future__ import annotations
 
@@ -6,7 +15,7 @@ import re
 
 import numpy as np
 
-from robocal.programs.krl import COMMENT_RE, MOTION_RE, STRING_RE
+from robocal.programs.dialects.krl.syntax import COMMENT_RE, MOTION_RE, STRING_RE
 from robocal.programs.load_data.base import (
     MM,
     NUM,
@@ -14,7 +23,6 @@ from robocal.programs.load_data.base import (
     setting,
     unread,
 )
-from robocal.programs.source import mask
 
 NULL_TOOL = 0  # KRL tool 0 ($NULLFRAME) has no LOAD_DATA: selecting it sets no load here
 _KRL_LITERAL = re.compile(r"\{\s*M\s+" + NUM + r"\s*,\s*CM\s*\{\s*X\s+" + NUM + r"\s*,\s*Y\s+" + NUM
@@ -38,7 +46,7 @@ class KRLLoads(LoadReader):
 
     def settings(self, sources, references):
         for src in [*references, *sources]:
-            masked = self.masked[id(src)] = mask(src.text, [COMMENT_RE], [STRING_RE])
+            masked = self.masked[id(src)] = src.masked([COMMENT_RE], [STRING_RE])
             for m in _KRL_DATA.finditer(masked):
                 lit = _KRL_LITERAL.match(masked, m.end())
                 n = int(m.group(1))

@@ -1,4 +1,10 @@
-"""The load statements of FANUC TP programs (what they mean: :mod:`robocal.programs.load_data`)."""
+"""The load statements of FANUC TP programs (the reader interface: :mod:`robocal.programs.load_data`).
+
+``PAYLOAD[n]`` selects payload schedule n of motion group 1, whose values live in the controller
+(``$PLST_GRP1[n].$PAYLOAD`` kg, ``$PAYLOAD_X/_Y/_Z`` cm in the faceplate frame): they are read from
+the controller's SYSVARS.VA (:func:`read_schedules`) or a CSV
+``schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm`` the user gives.
+"""
 
 from __future__ import annotations
 

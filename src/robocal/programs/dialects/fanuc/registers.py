@@ -20,8 +20,8 @@ import re
 import numpy as np
 
 from robocal.core.errors import DataError
-from robocal.programs.model import Target
 from robocal.programs.source import Number, ProgramText
+from robocal.programs.target import Target
 
 HEADER = "register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,config"
 _NUM = r"\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*"

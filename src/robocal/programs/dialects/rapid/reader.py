@@ -1,8 +1,9 @@
 """ABB RAPID modules (.mod, .modx, .prg, .sys).
 
 * ``robtarget`` = ``[[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[eax_a,...,eax_f]]``: mm, unit
-  quaternion w-first, configuration (see :class:`robocal.programs.config.ABBConfig`), external
-  axes (left alone). Declared ``CONST``/``PERS``/``VAR`` (also ``LOCAL``/``TASK``, arrays
+  quaternion w-first, configuration (see
+  :class:`robocal.programs.dialects.rapid.configuration.ABBConfig`), external axes (left alone).
+  Declared ``CONST``/``PERS``/``VAR`` (also ``LOCAL``/``TASK``, arrays
   ``name{n}`` / ``name{n,m}``) or written inline in a motion instruction.
 * ``tooldata`` = ``[robhold,[[x,y,z],[q1..q4]],[load...]]``: TCP = flange * tframe.
 * ``wobjdata`` = ``[robhold,ufprog,ufmec,[[uframe]],[[oframe]]]``: target pose in the world
@@ -36,16 +37,19 @@ from robocal.programs.aggregate import (
     shape_pattern,
     split_top,
 )
-from robocal.programs.config import ABBConfig
+from robocal.programs.dialects.base import Dialect
+from robocal.programs.dialects.rapid import marker, simulated
+from robocal.programs.dialects.rapid.campaign import rapid_module
+from robocal.programs.dialects.rapid.configuration import ABBConfig
+from robocal.programs.dialects.rapid.loads import RapidLoads
+from robocal.programs.dialects.rapid.syntax import COMMENT_RE, STRING_RE
 from robocal.programs.expressions import constant_value
 from robocal.programs.flow import Flow, Routine, order_by_execution
-from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_quat, quat_to_matrix
-from robocal.programs.source import Number, mask
+from robocal.programs.source import Number
 
-COMMENT_RE = re.compile(r"![^\n]*")
-STRING_RE = re.compile(r'"(?:[^"\n]|"")*"')
 _DECL = re.compile(r"\b(?:(?:LOCAL|TASK)\s+)?(CONST|PERS|VAR)\s+(robtarget|tooldata|wobjdata)\s+"
                    r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*(:=)?", re.IGNORECASE)
 # instruction -> (positions of the robtarget arguments, position of the tool argument), counting
@@ -113,11 +117,29 @@ def _pose_numbers(node, src, at, what) -> list[Number]:
 
 class RapidDialect(Dialect):
     name = "ABB RAPID"
+    key = "rapid"
+    campaign_rank = 0
+    campaign_refuses_tracks = True
+    vendor = "ABB"
+    signature = r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)"
+    campaign_format, campaign_suffix = "RAPID", ".mod"
     suffixes = (".mod", ".modx", ".prg", ".sys")
     scheme = ABBConfig()
     n_values = 7
     shared_decimals = ((3, 4, 5, 6),)  # a quaternion is written at the file's precision
     frame_help = "x,y,z in mm and the quaternion q1,q2,q3,q4 (w first), as in tooldata/wobjdata"
+
+    def load_reader(self, tools, schedules):
+        return RapidLoads(tools)
+
+    def campaign_files(self, joints, robot, path, **options):
+        return {str(path): rapid_module(np.rad2deg(joints), path.stem, **options)}
+
+    def mark(self, text, body, note):
+        return marker.mark(text, body, note)
+
+    def test_program(self, folder, nominal, q, tool, frame, name, variables=False):
+        return simulated.write_test_program(self, folder, nominal, q, tool, frame, name, variables)
 
     def name_key(self, name):
         return name.lower()
@@ -151,7 +173,7 @@ class RapidDialect(Dialect):
         flow = Flow()
         lowered, spans = {}, {}
         for src in [*references, *sources]:  # every module's routines first: calls cross modules
-            masked = st.masked[src.path] = mask(src.text, [COMMENT_RE], [STRING_RE])
+            masked = st.masked[src.path] = src.masked([COMMENT_RE], [STRING_RE])
             low = lowered[src.path] = masked.lower()  # case-insensitive searches, without the slow flag
             routines = spans[src.path] = []  # (start, end, name)
             for m in _ROUTINE.finditer(low):

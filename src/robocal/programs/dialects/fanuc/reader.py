@@ -11,8 +11,8 @@ Positions in the ``/POS`` section::
 
 W, P, R are fixed-axis XYZ angles: R = Rz(R) Ry(P) Rx(W) (deg). CONFIG: flip (F/N), elbow
 (U/D), front/back (T/B) and the turn numbers of J1, J4, J6 (see
-:class:`robocal.programs.config.FANUCConfig`). Each position carries its user frame UF and tool
-frame UT; their values live in the controller, so they are given on the command line
+:class:`robocal.programs.dialects.fanuc.configuration.FANUCConfig`). Each position carries its
+user frame UF and tool frame UT; their values live in the controller, so they are given on the command line
 (``--frame u=X,Y,Z,W,P,R``, ``--tool t=...``, mm and deg); UF 0 is the world (= robot base)
 frame, UT 0 the faceplate. Joint representations (J1 = ...), other motion groups (GP2 ...) and
 extended axes are left alone.
@@ -28,9 +28,13 @@ from scipy.spatial.transform import Rotation
 from robocal.core.errors import DataError
 from robocal.core.io import short_repr
 from robocal.kinematics.transforms import make_transform
-from robocal.programs.config import FANUCConfig
-from robocal.programs.fanuc_registers import ActiveFrames, read_registers
-from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.dialects.base import Dialect
+from robocal.programs.dialects.fanuc import marker, simulated
+from robocal.programs.dialects.fanuc.campaign import fanuc_ls_program
+from robocal.programs.dialects.fanuc.configuration import FANUCConfig
+from robocal.programs.dialects.fanuc.loads import FanucLoads, read_schedules
+from robocal.programs.dialects.fanuc.registers import ActiveFrames, read_registers
+from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import Number
@@ -60,11 +64,37 @@ _ANGLE_DEG = 1e-3  # the controller writes 3 decimals: 1e-3 deg is 2 um at 120 m
 
 class FanucDialect(Dialect):
     name = "FANUC TP"
+    key = "fanuc"
+    campaign_rank = 3
+    campaign_refuses_tracks = True
+    title = "FANUC TP (.ls)"
+    signature = r"^/(?:PROG|MN|POS)\b"
+    angle_unit = "deg"
+    position_registers = True
+    payload_schedules = True
+    vendor = "FANUC"
+    schedule_statement = "PAYLOAD[n]"
+    campaign_format, campaign_suffix = "TP", ".ls"
     suffixes = (".ls",)
     scheme = FANUCConfig()
     keep_width = True
     euler_columns = (3, 4, 5)  # W, P, R
     frame_help = "X,Y,Z in mm and W,P,R in deg, as on the teach pendant's frame screen"
+
+    def load_reader(self, tools, schedules):
+        return FanucLoads(schedules)
+
+    def read_schedules(self, path):
+        return read_schedules(path)
+
+    def campaign_files(self, joints, robot, path, **options):
+        return {str(path): fanuc_ls_program(np.rad2deg(joints), path.stem, **options)}
+
+    def mark(self, text, body, note):
+        return marker.mark(text, body, note)
+
+    def test_program(self, folder, nominal, q, tool, frame, name, variables=False):
+        return simulated.write_test_program(self, folder, nominal, q, tool, frame, name, variables)
 
     def to_pose(self, values):
         values = np.asarray(values, float)

@@ -1,17 +1,21 @@
-"""The load statements of URScript programs (what they mean: :mod:`robocal.programs.load_data`)."""
+"""The load statements of URScript programs (the reader interface: :mod:`robocal.programs.load_data`).
+
+``set_payload(m, [x, y, z])`` / ``set_target_payload(m, [x, y, z], ...)`` (kg, m from the tool
+flange, in its frame), ``set_payload(m)`` (the centre of gravity kept), ``set_payload_mass(m)``,
+``set_payload_cog([x, y, z])``.
+"""
 
 from __future__ import annotations
 
 import re
 
+from robocal.programs.dialects.urscript.syntax import COMMENT_RE, STRING_RE
 from robocal.programs.load_data.base import (
     NUM,
     LoadReader,
     setting,
     unread,
 )
-from robocal.programs.source import mask
-from robocal.programs.urscript import COMMENT_RE, STRING_RE
 
 _UR_CALL = re.compile(r"\b(set_payload|set_target_payload|set_payload_mass|set_payload_cog)\s*\(([^()\n]*"
                       r"(?:\[[^\]\n]*\][^()\n]*)?)\)")
@@ -26,7 +30,7 @@ class URScriptLoads(LoadReader):
     def settings(self, sources, references):
         out = []
         for src in sources:
-            masked = mask(src.text, [COMMENT_RE], [STRING_RE])
+            masked = src.masked([COMMENT_RE], [STRING_RE])
             for m in _UR_CALL.finditer(masked):
                 fn, args, text = m.group(1), m.group(2), m.group(0)
                 if fn == "set_payload_cog":

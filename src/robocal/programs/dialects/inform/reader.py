@@ -29,8 +29,9 @@ restored after it). ROBOT positions are in the robot's base frame; BASE position
 without base axes: the base and robot coordinates coincide); USER positions in the user frame
 ``///USER n``. Tool and user-frame values live in the controller: ``--tool n=X,Y,Z,Rx,Ry,Rz``,
 ``--frame n=...`` (mm, deg), or the user frames of the controller's UFRAME.CND and the tools of its
-TOOL.CND given as references (:func:`user_frames`, :mod:`robocal.programs.inform_tools`; ``--tool``
-and ``--frame`` take precedence); tool 0 without data is the flange (a warning). A job may save the
+TOOL.CND given as references (:func:`user_frames`,
+:mod:`robocal.programs.dialects.inform.tool_file`; ``--tool`` and ``--frame`` take precedence); tool 0
+without data is the flange (a warning). A job may save the
 P variables it uses in its ``//POS`` (``P00100=...``): those are read before VAR.DAT's, and
 another job's saved P variables after VAR.DAT's.
 
@@ -49,9 +50,13 @@ from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
-from robocal.programs.config import ConfigScheme, branch_bits
-from robocal.programs.inform_tools import is_tool_file, read_tool_file
-from robocal.programs.model import IDENTITY, Dialect, Program, Target
+from robocal.programs.dialects.base import Dialect
+from robocal.programs.dialects.inform import marker, simulated
+from robocal.programs.dialects.inform.campaign import inform_job
+from robocal.programs.dialects.inform.configuration import YaskawaConfig
+from robocal.programs.dialects.inform.loads import InformLoads
+from robocal.programs.dialects.inform.tool_file import is_tool_file, read_tool_file
+from robocal.programs.model import IDENTITY, Program, Target
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import Number, ProgramText
 
@@ -61,7 +66,6 @@ POSE_VALUES = 6
 BRANCH_FIELDS = 3  # RCONF's flip, arm and front/back: the least a form must give
 CONFIG_FIELDS = 6  # RCONF fields the form of a 6-axis arm uses (the rest, 2 or 18, are kept)
 NPOS_KINDS = ("C", "BC", "EC", "P", "BP", "EX")  # the order of ///NPOS
-TURN_TOLERANCE = 1e-12  # relative: an angle printed as exactly 180 deg keeps its R, T, S flag
 
 _LINE = re.compile(r"([^\r\n]*)(\r\n|\n|\r|$)")  # CRLF, LF or a lone CR ends a line
 _SECTION = re.compile(r"^//(?!/)\s*(\w+)")
@@ -85,30 +89,6 @@ _WRITES = re.compile(r"^\s*(SET|SETE|GETS|GETE|GETPOS|ADD|SUB|MUL|DIV|CNVRT|CLEA
 _REFP = re.compile(r"^\s*REFP\s+\d+\s+(C|P)" + _INDEX + r"\b")
 _LABELED = re.compile(r"^\s*(?:\*\w+\s+)?")
 _RUNTIME_INDEX = "the position number is computed at run time"
-
-
-class YaskawaConfig(ConfigScheme):
-    """Yaskawa's form (RCONF) ``l, m, n, o, p, q, ...``: l = 1 no flip (B < 0), 0 flip; m = 1 lower
-    arm (the elbow bent the other way than in the zero pose), 0 upper arm; n = 1 back (the wrist
-    centre behind the S axis), 0 front; o, p, q = 1 when R, T, S stand at 180 deg or more
-    (outside -180 < angle <= 180), else 0. Rows carry 2 for an angle beyond +-360 deg (written as
-    1), so that a flag 1 selects the copy within +-360 deg before one beyond it (a T axis of
-    +-455 deg has two copies with the flag set)."""
-
-    name = "Yaskawa RCONF"  # rows [no_flip, lower, back, R, T, S]: 0 | 1 | 2 (beyond a turn)
-    branch_fields = 3
-
-    def encode(self, robot, q):
-        q = np.asarray(q, float)
-        shoulder, elbow, _ = branch_bits(robot, q)
-        a = q[..., [3, 5, 0]]
-        half, turn = np.pi * (1 + TURN_TOLERANCE), 2 * np.pi * (1 + TURN_TOLERANCE)
-        over = (~((a > -half) & (a <= half))).astype(int) + (~((a > -turn) & (a <= turn))).astype(int)
-        bits = np.stack([q[..., 4] < 0, elbow, shoulder], axis=-1).astype(int)
-        return np.concatenate([bits, over], axis=-1)
-
-    def text(self, row):
-        return ",".join(str(min(int(v), 1)) for v in row)
 
 
 @dataclass
@@ -151,10 +131,32 @@ def _lines(text: str):
 
 class InformDialect(Dialect):
     name = "Yaskawa INFORM"
+    key = "inform"
+    campaign_rank = 4
+    vendor = "Yaskawa"
+    title = "Yaskawa INFORM (.JBI)"
+    shared_suffixes = (".dat",)  # the controller's VAR.DAT
+    signature = r"^/JOB\b|^//(?:NAME|POS|INST)\b"
+    campaign_format, campaign_suffix = "JBI", ".jbi"
     suffixes = (".jbi",)
     scheme = YaskawaConfig()
     frame_help = ("X,Y,Z in mm and Rx,Ry,Rz in deg, as on the pendant's tool and user frame screens; or the "
                   "controller's TOOL.CND / UFRAME.CND with --references")
+
+    def recognises(self, head):
+        return looks_like_inform(head)
+
+    def load_reader(self, tools, schedules):
+        return InformLoads()
+
+    def campaign_files(self, joints, robot, path, **options):
+        return {str(path): inform_job(np.rad2deg(joints), robot, path.stem, dialect=self, **options)}
+
+    def mark(self, text, body, note):
+        return marker.mark(text, body, note)
+
+    def test_program(self, folder, nominal, q, tool, frame, name, variables=False):
+        return simulated.write_test_program(self, folder, nominal, q, tool, frame, name, variables)
 
     def to_pose(self, values):
         values = np.asarray(values, float)

@@ -25,14 +25,17 @@ import numpy as np
 from robocal.core.errors import DataError
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
 from robocal.programs.aggregate import close_bracket, list_pattern, numbers_of, parse_aggregate, split_top
+from robocal.programs.dialects.base import Dialect
+from robocal.programs.dialects.urscript import marker, simulated
+from robocal.programs.dialects.urscript.campaign import urscript_program
+from robocal.programs.dialects.urscript.loads import URScriptLoads
+from robocal.programs.dialects.urscript.syntax import COMMENT_RE, STRING_RE
 from robocal.programs.flow import Flow, Routine, order_by_execution
-from robocal.programs.model import IDENTITY, Dialect, Program, Target
+from robocal.programs.model import IDENTITY, Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import nearest_rotvec
-from robocal.programs.source import Number, mask
+from robocal.programs.source import Number
 
-COMMENT_RE = re.compile(r"#[^\n]*")
-STRING_RE = re.compile(r"\"[^\"\n]*\"|'[^'\n]*'")
 _POSE = re.compile(r"(?<![\w.])p\s*(?=\[)")
 _SIX = list_pattern(6)  # a pose literal's six numbers
 _ASSIGNED = re.compile(r"\b([A-Za-z_]\w*)\s*=\s*$")  # ``name =`` right before a literal
@@ -77,9 +80,29 @@ class _Assignments:
 
 class URScriptDialect(Dialect):
     name = "URScript"
+    key = "urscript"
+    campaign_rank = 2
+    campaign_refuses_tracks = True
+    vendor = "Universal Robots"
+    signature = r"^\s*def\s+\w+\s*\(.*\)\s*:|\bmove[ljpc]\s*\("
+    length_unit = "m"
+    angle_unit = "rad"
+    campaign_format, campaign_suffix = "URScript", ".script"
     suffixes = (".script", ".urscript")
     scheme = None
     frame_help = "x,y,z in m and the rotation vector rx,ry,rz in rad, as in p[...]"
+
+    def load_reader(self, tools, schedules):
+        return URScriptLoads()
+
+    def campaign_files(self, joints, robot, path, **options):
+        return {str(path): urscript_program(joints, path.stem, **options)}
+
+    def mark(self, text, body, note):
+        return marker.mark(text, body, note)
+
+    def test_program(self, folder, nominal, q, tool, frame, name, variables=False):
+        return simulated.write_test_program(self, folder, nominal, q, tool, frame, name, variables)
 
     def to_pose(self, values):
         values = np.asarray(values, float)
@@ -102,7 +125,7 @@ class URScriptDialect(Dialect):
             prog.tools[DEFAULT_TOOL] = user_default
         scripts = []
         for src in sources:
-            masked = mask(src.text, [COMMENT_RE], [STRING_RE])
+            masked = src.masked([COMMENT_RE], [STRING_RE])
             sc = _Script(self, src, masked, prog)
             tool = DEFAULT_TOOL
             used = prog.used

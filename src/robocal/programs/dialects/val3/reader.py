@@ -41,8 +41,18 @@ from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
-from robocal.programs.config import ConfigScheme, branch_bits
-from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.dialects.base import Dialect
+from robocal.programs.dialects.val3 import marker, simulated
+from robocal.programs.dialects.val3.campaign import val3_application
+from robocal.programs.dialects.val3.configuration import (
+    CONFIG_WORDS,
+    ELBOW,
+    SHOULDER,
+    WRIST,
+    StaubliConfig,
+)
+from robocal.programs.dialects.val3.loads import NoLoads
+from robocal.programs.model import Program, Target
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import NUMBER_RE, Number, ProgramText, mask
 
@@ -70,39 +80,8 @@ _CALL = re.compile(r"\bcall\s+([A-Za-z_]\w*)\s*\(")
 _ITEM = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\[\s*([^\]]*?)\s*\])?\s*$")
 _LITERAL6 = re.compile(r"^\s*\{\s*" + r"\s*,\s*".join([f"({NUMBER_RE.pattern})"] * 6) + r"\s*\}\s*$")
 _WRAPPER = re.compile(r"^\s*(appro|compose)\s*\((.*)\)\s*$", re.DOTALL)
-SHOULDER = {"lefty": 0, "righty": 1}
-ELBOW = {"epositive": 0, "enegative": 1}
-WRIST = {"wpositive": 0, "wnegative": 1}
-CONFIG_WORDS = (("shoulder", SHOULDER), ("elbow", ELBOW), ("wrist", WRIST))
 OLD_TYPES = {"point": "pointRx", "joint": "jointRx"}  # the type names of older VAL3 versions
 KNOWN_TYPES = ("pointRx", "frame", "tool", "trsf", "jointRx")  # the data read from a .dtx
-
-
-class StaubliConfig(ConfigScheme):
-    """VAL3 ``config``: shoulder righty (the wrist centre behind axis 1), elbow enegative (the
-    elbow bent the other way than the stretched arm), wrist wnegative (joint 5 negative); -1 in
-    a wanted row (``ssame``, ``sfree``, absent) accepts either."""
-
-    name = "VAL3 config"  # rows [righty, enegative, wnegative]
-    branch_fields = 3
-
-    def encode(self, robot, q):
-        q = np.asarray(q, float)
-        shoulder, elbow, _ = branch_bits(robot, q)
-        return np.stack([shoulder, elbow, q[..., 4] < 0], axis=-1).astype(int)
-
-    def score(self, have, want):
-        return 1000 * ((have != want) & (want >= 0)).sum(axis=-1)
-
-    def text(self, row):
-        return " ".join(words_of(row))
-
-
-def words_of(row) -> list[str]:
-    out = []
-    for (kind, words), v in zip(CONFIG_WORDS, row, strict=True):
-        out.append(next((w for w, k in words.items() if k == int(v)), kind[0] + "free"))
-    return out
 
 
 @dataclass
@@ -201,9 +180,40 @@ def _chain(data: dict[str, Datum], start: str, root: str, what: str, where: str,
 
 class Val3Dialect(Dialect):
     name = "Staubli VAL3"
+    key = "val3"
+    campaign_rank = 5
+    vendor = "Staubli"
+    signature = r"staubli\.com/robotics/VAL3"
     suffixes = (".pgx", ".dtx", ".pjx")
     scheme = StaubliConfig()
     frame_help = "x,y,z in mm and rx,ry,rz in deg (R = Rx Ry Rz), as in the .dtx"
+
+    def folder_files(self, folder):
+        return application_files(folder)
+
+    def load_reader(self, tools, schedules):
+        return NoLoads()
+
+    def campaign_files(self, joints, robot, path, **options):
+        files = val3_application(np.rad2deg(joints), path.name, **options)
+        return {str(path / file): text for file, text in files.items()}
+
+    def campaign_paths(self, path, procedure):
+        if path.exists() and not path.is_dir():
+            raise DataError(f"--val3 {path}: not a folder (a VAL3 application is a folder)")
+        if not path.exists() and not path.resolve().parent.is_dir():
+            raise DataError(f"--val3 {path}: its parent folder does not exist")
+        names = val3_application([[0.0] * 6], path.name, procedure=procedure)
+        return [str(path / name) for name in names] if path.is_dir() else []
+
+    def campaign_folder(self, path):
+        return path
+
+    def mark(self, text, body, note):
+        return marker.mark(text, body, note)
+
+    def test_program(self, folder, nominal, q, tool, frame, name, variables=False):
+        return simulated.write_test_program(self, folder, nominal, q, tool, frame, name, variables)
 
     @staticmethod
     def pose_of(d: Datum) -> np.ndarray:

@@ -1,7 +1,8 @@
 """KUKA KRL programs (.src with its .dat, .sub, $config.dat as a reference).
 
 * Positions ``{X x, Y y, Z z, A a, B b, C c, S s, T t, E1 ...}`` (mm; A, B, C = ZYX Euler in
-  deg, R = Rz(A) Ry(B) Rx(C); S status and T turn, see :class:`robocal.programs.config.KUKAConfig`;
+  deg, R = Rz(A) Ry(B) Rx(C); S status and T turn, see
+  :class:`robocal.programs.dialects.krl.configuration.KUKAConfig`;
   external axes E1..E6 left alone) declared as ``DECL E6POS|POS|FRAME name=...`` (``DECL``
   and ``GLOBAL`` optional; array elements ``name[i]=...``) or written inline in a motion.
   A position without X, Y, Z, A, B, C (a partial aggregate) is left alone with a warning; one
@@ -29,15 +30,18 @@ from scipy.spatial.transform import Rotation
 from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.aggregate import split_top
-from robocal.programs.config import KUKAConfig
+from robocal.programs.dialects.base import Dialect
+from robocal.programs.dialects.krl import marker, simulated
+from robocal.programs.dialects.krl.campaign import krl_program
+from robocal.programs.dialects.krl.configuration import KUKAConfig
+from robocal.programs.dialects.krl.loads import KRLLoads
+from robocal.programs.dialects.krl.syntax import COMMENT_RE, MOTION_RE, STRING_RE
 from robocal.programs.flow import Flow, Routine, order_by_execution
-from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
-from robocal.programs.source import Number, ProgramText, mask
+from robocal.programs.source import Number, ProgramText
 
-COMMENT_RE = re.compile(r";[^\n]*")
-STRING_RE = re.compile(r'"[^"\n]*"')
 _AGG = re.compile(r"\{[^{}]*\}")
 _COMPONENT = re.compile(r"\b([A-Za-z]\w*)\s+([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|'[BbHh][^']*')")
 _DECL = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(E6POS|POS|FRAME)\s+([A-Za-z_$]\w*)"
@@ -49,8 +53,6 @@ _FDAT = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?FDAT\s+(\w+)\s*=\s*(?=\{)"
                    re.IGNORECASE | re.MULTILINE)
 _DATA = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:FRAME\s+)?(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]"
                    r"\s*=\s*(?=\{)", re.IGNORECASE | re.MULTILINE)
-MOTION_RE = re.compile(r"^[ \t]*(PTP|LIN|CIRC|SPTP|SLIN|SCIRC|SPL)(_REL)?\s+(.+)$",
-                     re.IGNORECASE | re.MULTILINE)
 _STATE = re.compile(r"(\$TOOL|\$BASE)\s*=\s*([^\n]+)|BAS\s*\(\s*#(TOOL|BASE)\s*,\s*(\d+)\s*\)|"
                     r"FDAT_ACT\s*=\s*(\w+)", re.IGNORECASE)
 _ROUTINE = re.compile(r"^[ \t]*(?:GLOBAL\s+)?DEF\s+([A-Za-z_]\w*)\s*\(([^)]*)\)",
@@ -87,9 +89,34 @@ def _canonical(key: str, kind: str) -> str:
 class KRLDialect(Dialect):
     euler_columns = (3, 4, 5)  # A, B, C
     name = "KUKA KRL"
+    key = "krl"
+    campaign_rank = 1
+    campaign_refuses_tracks = True
+    vendor = "KUKA"
+    signature = r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)"
+    angle_unit = "deg"
+    campaign_format, campaign_suffix = "KRL", ".src"
     suffixes = (".src", ".dat", ".sub")
     scheme = KUKAConfig()
     frame_help = "X,Y,Z in mm and A,B,C in deg (ZYX Euler), as in TOOL_DATA/BASE_DATA"
+
+    def load_reader(self, tools, schedules):
+        return KRLLoads()
+
+    def campaign_files(self, joints, robot, path, **options):
+        src, dat = krl_program(np.rad2deg(joints), path.stem, **options)
+        return {str(path): src, str(path.with_suffix(".dat")): dat}
+
+    def campaign_paths(self, path, procedure):
+        if path.suffix.lower() != ".src":
+            raise DataError(f"--krl names the .src file (its .dat is written next to it), got {path}")
+        return [str(path), str(path.with_suffix(".dat"))]
+
+    def mark(self, text, body, note):
+        return marker.mark(text, body, note)
+
+    def test_program(self, folder, nominal, q, tool, frame, name, variables=False):
+        return simulated.write_test_program(self, folder, nominal, q, tool, frame, name, variables)
 
     def name_key(self, name):
         return _canonical(_canonical(name, "TOOL"), "BASE")
@@ -167,7 +194,7 @@ class KRLDialect(Dialect):
         prog.frames[NULL] = np.eye(4)
         prog.tools[NULL] = np.eye(4)
         for src in [*references, *sources]:
-            masked = st.masked[src.path] = mask(src.text, [COMMENT_RE], [STRING_RE])
+            masked = st.masked[src.path] = src.masked([COMMENT_RE], [STRING_RE])
             for m in _DATA.finditer(masked):
                 found = self._aggregate(src, masked, m.end())
                 if found is None or any(k not in found[0] for k in _POSE_KEYS):

@@ -1,16 +1,16 @@
-"""The loads of Yaskawa INFORM jobs (what they mean: :mod:`robocal.programs.load_data`).
+"""The loads of Yaskawa INFORM jobs (the reader interface: :mod:`robocal.programs.load_data`).
 
 A job sets no load: each position carries its tool number (``///TOOL n`` of its ``//POS``
 section) and the controller runs the motion with that tool's load from its tool file
-(:mod:`robocal.programs.inform_tools`), given as a reference (TOOL.CND). Without one the motions
+(:mod:`robocal.programs.dialects.inform.tool_file`), given as a reference (TOOL.CND). Without one the motions
 run with the model's default load (the filter's warning names it).
 """
 
 from __future__ import annotations
 
-from robocal.programs.inform_tools import ToolEntry, is_tool_file, read_tool_file
+from robocal.programs.dialects.inform.tool_file import ToolEntry, is_tool_file, read_tool_file
 from robocal.programs.load_data.base import Load, LoadReader, ranges, unread
-from robocal.programs.model import Target
+from robocal.programs.target import Target
 
 UNSET_KG = 0.0  # a tool whose W is <= this has no load registered in the tool file
 

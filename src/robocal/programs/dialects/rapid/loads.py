@@ -1,4 +1,12 @@
-"""The load statements of ABB RAPID programs (what they mean: :mod:`robocal.programs.load_data`)."""
+"""The load statements of ABB RAPID programs (the reader interface: :mod:`robocal.programs.load_data`).
+
+A motion runs with its tool's ``tload`` (tooldata ``[robhold, tframe, [mass, [x, y, z], aom, ix, iy,
+iz]]``: kg, mm in the wrist frame tool0) plus the payload the last ``GripLoad name`` connected
+(loaddata ``[mass, [x, y, z], aom, ix, iy, iz]``: its centre of gravity in mm in the *tool* frame,
+turned into tool0 through the tool's tframe; ``GripLoad load0`` disconnects it); a motion's optional
+``\\TLoad:=name`` is its total load (the tool's and the payload's together, centre of gravity in
+tool0) and replaces both. ``tool0`` and ``load0`` carry nothing.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +16,7 @@ import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.programs.aggregate import Word, parse_aggregate
+from robocal.programs.dialects.rapid.syntax import COMMENT_RE, STRING_RE
 from robocal.programs.load_data.base import (
     MM,
     Load,
@@ -16,9 +25,8 @@ from robocal.programs.load_data.base import (
     setting,
     unread,
 )
-from robocal.programs.model import Target
-from robocal.programs.rapid import COMMENT_RE, STRING_RE
-from robocal.programs.source import Number, ProgramText, mask
+from robocal.programs.source import Number, ProgramText
+from robocal.programs.target import Target
 
 _RAPID_DECL = re.compile(r"\b(?:(?:LOCAL|TASK)\s+)?(?:CONST|PERS|VAR)\s+(tooldata|loaddata)\s+"
                          r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*:=", re.IGNORECASE)
@@ -39,7 +47,7 @@ class RapidLoads(LoadReader):
     def settings(self, sources, references):
         out = []
         for src in [*references, *sources]:
-            masked = self.masked[id(src)] = mask(src.text, [COMMENT_RE], [STRING_RE])
+            masked = self.masked[id(src)] = src.masked([COMMENT_RE], [STRING_RE])
             for m in _RAPID_DECL.finditer(masked):
                 end = masked.find(";", m.end())
                 tree, _ = parse_aggregate(src, masked, m.end(), len(masked) if end < 0 else end,
