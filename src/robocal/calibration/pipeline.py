@@ -19,7 +19,7 @@ from functools import partial
 import numpy as np
 
 from robocal.calibration.model_selection import calibrate_cyclic, select_error_model, selection_table
-from robocal.calibration.pipeline import conditions
+from robocal.calibration import conditions
 from robocal.core.damped_least_squares import Status
 from robocal.core.errors import DataError, IdentificationError
 from robocal.core.io import load_json, read_text, write_atomic
