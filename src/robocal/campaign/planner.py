@@ -24,7 +24,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from robocal.campaign import constraints as cons
+import robocal.campaign.constraints as cons
 from robocal.campaign.exchange import CRITERIA, ExchangeResult, criterion_value, exchange
 from robocal.campaign.files import CandidateFile, poses_csv
 from robocal.campaign.information import GENERATED_KINDS, Information, Noise, candidate_data, information

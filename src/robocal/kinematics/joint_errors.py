@@ -59,9 +59,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import robocal.kinematics.load as load
+import robocal.kinematics.thermal as thermal
 from robocal.errors import IdentificationError, ModelError
 from robocal.io import as_number
-from robocal.kinematics import load, thermal
 from robocal.kinematics.conditions import KEY as CONDITIONS_KEY
 from robocal.kinematics.conditions import CalibratedRange, beyond
 from robocal.kinematics.fk import chain_frames
