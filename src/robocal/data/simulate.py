@@ -52,8 +52,8 @@ from robocal.data import simulate_conditions as conditions
 from robocal.data.measurements import Measurements, approach_from_order, robot_reach, travel_from_order
 from robocal.errors import DataError, UnreachableError
 from robocal.io import write_all
-from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, is_track_cell, track_chain
-from robocal.kinematics.model import Robot
+from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, is_track_cell
+from robocal.kinematics.model import Robot, track_chain
 from robocal.kinematics.model_file import dump_model
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
 
@@ -277,7 +277,7 @@ def _true_cell(robot: Robot, rng: np.random.Generator, error_scale: float) -> Ro
     """A true arm on a track: the arm perturbed as :func:`perturbed` does, the track direction tilted
     by TRACK_TILT_DEG about a random normal, the mount off by MOUNT_ERROR_MM / MOUNT_ERROR_DEG
     (random directions), the encoder scale off by TRACK_SCALE_ERROR (random sign), all times
-    ``error_scale``; rebuilt exactly as a cell file's chain (:func:`robocal.kinematics.cell.track_chain`)."""
+    ``error_scale``; rebuilt exactly as a cell file's chain (:func:`robocal.kinematics.model.track_chain`)."""
     arm = arm_model(robot).with_frames(base=carriage_frames(robot, 0.0)[0])
     true_arm = perturbed(arm, rng, scale=error_scale)
     u = robot.fk(np.zeros((1, robot.n_joints)), frames=True)[1][0, 1, :3, 2]  # the track's direction

@@ -32,17 +32,27 @@ import numpy as np
 from robocal.errors import DataError, ModelError, UnitError
 from robocal.io import as_number, write_atomic
 from robocal.kinematics.catalog import catalog_kwargs
+from robocal.kinematics.cell_file import TRACK_SCALE, chain_arrays, read_cell
 from robocal.kinematics.convert import dh_kwargs, mdh_kwargs, opw_chain, opw_kwargs, opw_parameters
 from robocal.kinematics.fk import LinkArrays, chain_fk, chain_frames
 from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import JointErrorModel
-from robocal.kinematics.model_file import LINK_FIELDS, dump_model, is_cell, read_model_data, robot_kwargs
+from robocal.kinematics.model_file import (
+    LINK_FIELDS,
+    MAX_NAME,
+    _text,
+    dump_model,
+    is_cell,
+    read_model_data,
+    robot_kwargs,
+)
 from robocal.kinematics.opw import OPWParameters
 from robocal.kinematics.thermal import link_coefficients as thermal_coefficients
 from robocal.kinematics.thermal import scale as thermal_scale
 from robocal.kinematics.thermal import scaled_links
 from robocal.kinematics.transforms import ROTATION_TOL, make_transform, matrix_to_rotvec, rotvec_to_matrix
 from robocal.kinematics.ur import URForm, ur_form
+from robocal.kinematics.urdf_read import urdf_kwargs
 
 FRAME_FIELDS = ("x", "y", "z", "rx", "ry", "rz")
 _LINK_IS_LENGTH = {"alpha": False, "a": True, "beta": False, "theta": False, "d": True}
@@ -905,7 +915,7 @@ class Robot:
     @classmethod
     def load(cls, path) -> Robot:
         """Read a model YAML (docs/model-yaml.md: the catalog's format, hand-written or saved, or a
-        cell file: a robot on a track, `robocal.kinematics.cell`).
+        cell file: a robot on a track, `robocal.kinematics.cell_file`).
 
         Parameters
         ----------
@@ -931,8 +941,6 @@ class Robot:
         data = read_model_data(path)
         try:
             if is_cell(data):
-                from robocal.kinematics.cell import cell_from_data  # the cell builds on this module
-
                 return cell_from_data(data, Path(path))
             return cls(**robot_kwargs(data))
         except (ModelError, UnitError) as exc:  # the model file's fault, whatever the check
@@ -944,15 +952,13 @@ class Robot:
 
 def load_model(spec: str) -> Robot:
     """A robot from a model YAML path (or a cell file: a robot on a track), a URDF (a serial chain:
-    `robocal.kinematics.urdf.from_urdf`) or a catalog name (what every ``--robot`` takes)."""
+    `robocal.kinematics.urdf_read`) or a catalog name (what every ``--robot`` takes)."""
     path = Path(spec)
     if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (path.is_file() and _looks_like_xml(path)):
-        from robocal.kinematics.urdf import from_urdf  # urdf builds on this module
-
         if path.suffix.lower() == ".xacro":
             raise ModelError(f"{spec} is a xacro macro file: expand it first (xacro {path.name} > "
                              "robot.urdf) and give the URDF")
-        return from_urdf(path)
+        return Robot(**urdf_kwargs(path))
     if path.suffix.lower() in (".yaml", ".yml") or path.exists():
         return Robot.load(path)
     return Robot.from_catalog(spec)
@@ -962,3 +968,32 @@ def _looks_like_xml(path: Path) -> bool:
     """The file starts like XML (a URDF given without its suffix)."""
     with open(path, "rb") as fh:
         return fh.read(64).lstrip().startswith(b"<")
+
+
+def track_chain(arm: Robot, direction, mount: np.ndarray, limits, name: str | None = None,
+                description: str = "") -> Robot:
+    """The cell chain (`robocal.kinematics.cell_file`'s docstring) of ``arm`` (6 revolute joints, no
+    joint-error terms) on a track along unit ``direction`` (world frame) with ``mount`` ``(4, 4)``
+    (carriage at e1 = 0 -> robot base, m) and e1 ``limits`` (lower, upper) in m."""
+    if arm.has_prismatic or arm.joint_errors is not None:
+        raise ModelError(f"{arm.name}: a robot on a track must be a revolute arm without joint-error "
+                         "terms (give its geometry; the cell declares the track's own terms)")
+    chain = chain_arrays(arm.links, arm.base, arm.tool, arm.parallel, arm.smr, direction, mount)
+    nom = arm.nominal_robot()
+    nominal = chain_arrays(nom.links, nom.base, nom.tool, nom.parallel, nom.smr, direction, mount)
+    kinds = np.r_[True, np.zeros(arm.n_joints, bool)]  # the track, then the arm's revolute joints
+    nominal_robot = Robot(**nominal, prismatic=kinds)
+    limits = np.vstack([np.asarray(limits, float).reshape(1, 2), arm.limits])
+    return Robot(**chain, limits=limits, prismatic=kinds,
+                 nominal=nominal_robot.nominal, opw=arm.opw,
+                 name=arm.name if name is None else name, description=description,
+                 joint_errors=JointErrorModel((TRACK_SCALE,), np.zeros(1)))
+
+
+def cell_from_data(data: dict, path: Path | None = None) -> Robot:
+    """The chain of a cell mapping (`robocal.kinematics.cell_file.read_cell`; its arm, a catalog name or
+    a model file relative to ``path``'s folder, loaded by :func:`load_model`)."""
+    cell = read_cell(data, path)
+    arm = load_model(cell.robot)
+    name = _text(f"{arm.name} on a track", "name", MAX_NAME) if cell.name is None else cell.name
+    return track_chain(arm, cell.direction, cell.mount, cell.limits, name=name, description=cell.description)

@@ -37,7 +37,7 @@ from robocal.kinematics.convert import PARALLEL_TOL
 from robocal.kinematics.model import MAX_ANGLE_RAD, Robot
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 from robocal.kinematics.ur import nearest_ur_links
-from robocal.kinematics.urdf import matrix_to_rpy, rpy_to_matrix
+from robocal.kinematics.urdf_read import matrix_to_rpy, rpy_to_matrix
 from robocal.yaml_load import load_yaml
 
 LINK_NAMES = ("shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3")
