@@ -58,6 +58,7 @@ from scipy.spatial.transform import Rotation
 from robocal.data.csv_table import csv_rows, read_table, text_lines
 from robocal.errors import DataError, UnitError
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
+from robocal.kinematics.conditions import NONE, Conditions
 from robocal.kinematics.transforms import ROTATION_TOL
 
 KINDS = ("point", "pose", "plane", "distance")
@@ -184,6 +185,11 @@ class Measurements:
     external: int = 0  # the first ``external`` joints are external axes (e1..): a track carrying the arm
 
     @property
+    def conditions(self) -> Conditions:
+        """The rows' approach directions, moves, payloads and temperatures as one `Conditions`."""
+        return Conditions(self.approach, self.travel, self.payload, self.temperature)
+
+    @property
     def label(self) -> str:
         """How messages and reports name the set: its file, else its provenance text."""
         return self.file or self.source
@@ -202,8 +208,8 @@ class Measurements:
     @classmethod
     def from_arrays(cls, kind: str, joints, *, points=None, rotations=None, plane=None, pair=None,
                     distance=None, smr=None, sigma=None, pose_id=None, source_row=None,
-                    source: str = "", approach=None, travel=None, linear=None,
-                    external: int = 0, payload=None, temperature=None) -> Measurements:
+                    source: str = "", conditions: Conditions = NONE, linear=None,
+                    external: int = 0) -> Measurements:
         """Validated measurements from arrays in SI units (rad, m).
 
         Parameters
@@ -232,20 +238,16 @@ class Measurements:
             The rows' line numbers in their source file (default ``1..N``).
         source : str
             Provenance text, kept in the CSV's first comment line.
-        approach : array_like of int, shape (N, n), optional
-            Joint approach directions (default: from the row order, `approach_from_order`).
-        travel : array_like, shape (N, n), optional
-            Joint moves from the previous pose, radians (default: from the row order,
-            `travel_from_order`).
+        conditions : Conditions, optional
+            The rows' conditions (`robocal.kinematics.conditions.Conditions`): joint approach
+            directions (default: from the row order, `approach_from_order`), joint moves from the
+            previous pose, radians (default: from the row order, `travel_from_order`), payloads
+            (mass kg and centre of mass in the flange frame m; None: not recorded) and arm
+            temperatures (deg C; None: not recorded).
         linear : array_like of bool, shape (n,), optional
             Joints in metres (prismatic, e.g. a track).
         external : int, optional
             How many leading joints are external axes (written as e1.. columns).
-        payload : array_like, shape (N, 4), optional
-            Each row's payload: mass (kg) and centre of mass in the flange frame (m); None: not
-            recorded.
-        temperature : array_like, shape (N,), optional
-            Each row's arm temperature, deg C; None: not recorded.
 
         Returns
         -------
@@ -319,6 +321,7 @@ class Measurements:
             sigma = _float_array(sigma, "sigma", (N,))
             if (sigma <= 0).any():
                 raise DataError("sigma must be positive (m)")
+        approach, travel = conditions.approach, conditions.travel
         if approach is None:
             approach = approach_from_order(joints, pose_id)
         else:
@@ -335,7 +338,7 @@ class Measurements:
             raise DataError(f"linear (prismatic joint flags) must have {n} values")
         if not 0 <= int(external) <= n:
             raise DataError(f"external axes must be 0..{n}, got {external}")
-        kw.update(_conditions(payload, temperature, N))
+        kw.update(_conditions(conditions.payload, conditions.temperature, N))
         return cls(kind=kind, joints=joints, pose_id=pose_id, smr=smr, source_row=source_row,
                    sigma=sigma, source=str(source).replace("\n", " "), approach=approach,
                    travel=travel, linear=linear, external=int(external), **kw)
@@ -975,10 +978,10 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
         ints["pose_id"], notes = _repeats(joints, np.array(line_no), name)
     try:
         data = Measurements.from_arrays(kind, joints, smr=ints["smr"], pose_id=ints["pose_id"],
-                                        source_row=source_row, source=source, approach=approach,
-                                        travel=travel, linear=linear,
-                                        external=sum(roles[h][0] == "e" for h in joint_cols),
-                                        payload=payload, temperature=temperature, **kw)
+                                        source_row=source_row, source=source,
+                                        conditions=Conditions(approach, travel, payload, temperature),
+                                        linear=linear, external=sum(roles[h][0] == "e" for h in joint_cols),
+                                        **kw)
     except DataError as exc:
         raise DataError(f"{name}: {exc}") from None
     return replace(data, notes=notes)

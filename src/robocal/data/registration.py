@@ -74,8 +74,7 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
     # the joints the robot really reached (a model with backlash or travel terms needs the
     # directions and moves of the measuring order, as calibration and evaluation judge it)
     flange = replace(robot, base=np.eye(4), tool=np.eye(4), smr=np.zeros((0, 3)), nominal=None).fk(
-        data.joints, approach=data.approach, travel=data.travel, payload=data.payload,
-        temperature=data.temperature)
+        data.joints, conditions=data.conditions)
     Rf, of = flange[:, :3, :3], flange[:, :3, 3]
     p = data.points
     start = np.vstack([robot.tool[:3, 3], robot.smr])

@@ -48,11 +48,12 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.data import simulate_conditions as conditions
+import robocal.data.simulated_physics as physics
 from robocal.data.measurements import Measurements, approach_from_order, robot_reach, travel_from_order
 from robocal.errors import DataError, UnreachableError
 from robocal.io import write_all
 from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, is_track_cell
+from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.model import Robot, track_chain
 from robocal.kinematics.model_file import dump_model
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
@@ -368,7 +369,7 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         Measure ``robot`` exactly as it is: no errors drawn, its own base and tool.
     payloads : sequence of float, optional
         Payload masses, kg, one block of poses each (working conditions: point and pose data,
-        `robocal.data.simulate_conditions`).
+        `robocal.data.simulated_physics`).
     temperatures : tuple of float, optional
         ``(lo, hi)`` arm temperatures, deg C, drawn per pose.
     payload_com : array_like, shape (3,), optional
@@ -414,8 +415,8 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         tracker_position = check_tracker_position(tracker_position)
     _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, joint_noise_deg,
            rotation_noise_deg)
-    payloads, temperatures = conditions.check(payloads, temperatures)
-    thermal_k = conditions.check_thermal_k(thermal_k)
+    payloads, temperatures = physics.check(payloads, temperatures)
+    thermal_k = physics.check_thermal_k(thermal_k)
     if thermal_k is not None and temperatures is None:
         raise DataError("a true thermal expansion coefficient needs temperatures to act at")
     if (payloads is not None or temperatures is not None) and kind not in ("point", "pose"):
@@ -444,18 +445,18 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     N = len(q_rows)
     approach = approach_from_order(q_rows, pose_id)  # the poses are measured in this order
     travel = travel_from_order(q_rows, pose_id)
-    payload, temperature = conditions.schedule(n_poses, payloads, temperatures, payload_com)
+    payload, temperature = physics.schedule(n_poses, payloads, temperatures, payload_com)
     if payload is None and temperature is None:
-        T = true.fk(q_rows, smr=smr, approach=approach, travel=travel)
+        T = true.fk(q_rows, smr=smr, conditions=Conditions(approach, travel))
     else:  # the conditions' physics, independent of the fitting code; the truth then carries them
         payload, temperature = (None if x is None else x[pose_id] for x in (payload, temperature))
-        coefficients = conditions.true_terms(true, payloads, temperatures, robot_reach(robot),
+        coefficients = physics.true_terms(true, payloads, temperatures, robot_reach(robot),
                                              np.random.default_rng([seed, 35]), thermal_k)
         t_ref = float(np.mean(temperature)) if temperature is not None else 20.0
         if true.joint_errors is not None and any(nm.startswith("thermal") for nm in true.joint_errors.names):
             t_ref = true.joint_errors.reference_temperature_c
-        T = conditions.measured_poses(true, q_rows, smr, approach, travel, payload, temperature,
-                                      coefficients, t_ref)
+        T = physics.measured_poses(true, q_rows, smr, Conditions(approach, travel, payload, temperature),
+                                   coefficients, t_ref)
         true = true.with_joint_errors([*true.joint_error_names, *coefficients]).with_values(
             coefficients).with_reference_temperature(t_ref)
     if kind in ("point", "pose"):
@@ -481,8 +482,8 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
             "rotation_noise_deg": float(rotation_noise_deg), "error_scale": float(error_scale),
             "noise_floor_mm": floor}
     source = f"simulated by robocal: robot {robot.name}, seed {seed}, {kind}, noise floor {floor:.6g} mm"
-    data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id, approach=approach,
-                                    travel=travel, payload=payload, temperature=temperature,
+    data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id,
+                                    conditions=Conditions(approach, travel, payload, temperature),
                                     source_row=np.arange(2, N + 2), source=source,
                                     linear=robot.prismatic, external=int(is_track_cell(robot)), **kw)
     truth = replace(true, name=f"{robot.name}_true",

@@ -33,6 +33,7 @@ from robocal.errors import DataError, ModelError, UnitError
 from robocal.io import as_number, write_atomic
 from robocal.kinematics.catalog import catalog_kwargs
 from robocal.kinematics.cell_file import TRACK_SCALE, chain_arrays, read_cell
+from robocal.kinematics.conditions import NONE, Conditions
 from robocal.kinematics.convert import dh_kwargs, mdh_kwargs, opw_chain, opw_kwargs, opw_parameters
 from robocal.kinematics.fk import LinkArrays, chain_fk, chain_frames
 from robocal.kinematics.jacobian import identification_jacobian
@@ -772,22 +773,20 @@ class Robot:
             raise DataError(f"joints contain NaN or infinite values in row(s) {bad[:10].tolist()}")
         return q
 
-    def reached_joints(self, q: np.ndarray, approach: np.ndarray | None = None,
-                       travel: np.ndarray | None = None, payload: np.ndarray | None = None) -> np.ndarray:
+    def reached_joints(self, q: np.ndarray, conditions: Conditions = NONE) -> np.ndarray:
         """The joints ``(N, n)`` the robot really turns to for commanded ``q`` (rad): ``q + dq(q)``
-        with the declared joint-error terms (``approach`` ``(N, n)``: each joint's approach
-        direction, for backlash; ``travel`` ``(N, n)`` rad: each joint's last move, for travel;
-        ``payload`` ``(N, 4)`` kg and m: the payload carried, for payload)."""
+        with the declared joint-error terms at the rows' ``conditions`` (approach directions for
+        backlash, last moves for travel, the payload carried for payload)."""
         if self.joint_errors is None:
             return q
-        return q + self.joint_errors.offsets(self, q, approach, travel, payload)
+        return q + self.joint_errors.offsets(self, q, conditions)
 
-    def fk(self, q, frames: bool = False, smr=None, approach=None, travel=None, payload=None,
-           temperature=None):
+    def fk(self, q, frames: bool = False, smr=None, conditions: Conditions = NONE):
         """TCP poses ``(N, 4, 4)`` (world frame, m) for joints ``(N, n)`` in rad.
 
         Joint-error terms turn the commanded joints into the joints the robot really reaches
-        first (`reached_joints`); a thermal term scales the links at ``temperature`` (`links_at`).
+        first (`reached_joints`); a thermal term scales the links at the rows' temperature
+        (`links_at`).
 
         Parameters
         ----------
@@ -797,14 +796,10 @@ class Robot:
             Also return the world poses of the frames {0}..{n}.
         smr : array_like of int, shape (N,), optional
             Each row's SMR index (default: the tool, SMR 0).
-        approach : array_like, shape (N, n), optional
-            Each joint's approach direction (+1 or -1), for a backlash term.
-        travel : array_like, shape (N, n), optional
-            Each joint's last move, radians, for a travel term.
-        payload : array_like, shape (N, 4), optional
-            Each row's payload (kg, centre of mass in the flange frame in m), for a payload term.
-        temperature : array_like, shape (N,), optional
-            Each row's arm temperature, deg C, for a thermal term.
+        conditions : Conditions, optional
+            Each row's approach directions, last moves, payload and temperature
+            (`robocal.kinematics.conditions.Conditions`; e.g. ``data.conditions`` of measurements),
+            for the backlash, travel, payload and thermal terms.
 
         Returns
         -------
@@ -831,15 +826,15 @@ class Robot:
         >>> frames.shape
         (2, 7, 4, 4)
         """
-        q = self.reached_joints(self.check_joints(q), approach, travel, payload)
+        q = self.reached_joints(self.check_joints(q), conditions)
         tool = self.tool if smr is None else self.tools_for(smr)
-        links = self.links_at(temperature)
+        links = self.links_at(conditions.temperature)
         if frames:
             return chain_frames(links, self.base, tool, q, frames=True, prismatic=self.prismatic)
         return chain_fk(links, self.base, tool, q, prismatic=self.prismatic)
 
     def jacobian(self, q, params: Sequence[str] | None = None, kind: str = "point", smr=None,
-                 approach=None, travel=None, payload=None, temperature=None):
+                 conditions: Conditions = NONE):
         """Identification Jacobian ``(N, 3|6, k)``; see
         `robocal.kinematics.jacobian.identification_jacobian`.
 
@@ -854,10 +849,8 @@ class Robot:
             Position rows only, or position then orientation rows.
         smr : array_like of int, shape (N,), optional
             Each row's SMR index (default: the tool).
-        approach : array_like, shape (N, n), optional
-            Each joint's approach direction (+1 or -1), for a backlash term.
-        travel : array_like, shape (N, n), optional
-            Each joint's last move, radians, for a travel term.
+        conditions : Conditions, optional
+            Each row's approach directions, last moves, payload and temperature, as for `fk`.
 
         Returns
         -------
@@ -885,8 +878,7 @@ class Robot:
         array([0., 0., 1.])
         """
         names = self.default_free(kind == "pose") if params is None else list(params)
-        return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach, travel,
-                                       payload, temperature)
+        return identification_jacobian(self, self.check_joints(q), names, kind, smr, conditions)
 
     def within_limits(self, q) -> np.ndarray:
         """``(N,)`` bool: every joint inside its limits."""

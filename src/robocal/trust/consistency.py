@@ -50,6 +50,7 @@ from robocal.diagnose import GAIN, fit_rms_mm, joint_mixup, length_unit
 from robocal.errors import PlausibilityError, RobocalError
 from robocal.identify.plausibility import FORCE_HINT
 from robocal.identify.problem import KIND_SIGMA
+from robocal.kinematics.conditions import Conditions
 
 ALPHA = 1e-3  # the residual test's false-alarm probability per fit (model and noise right)
 UNMODELLED_MM_PER_M = 0.5  # unmodelled-error budget: mm (1 sigma, per coordinate) per metre of reach
@@ -257,7 +258,7 @@ def find_change_points(robot, observations, errors: list[np.ndarray], noise: lis
         if obs.kind not in ("point", "pose"):
             continue
         data = obs.data
-        R = robot.fk(data.joints, smr=data.smr, approach=data.approach, travel=data.travel)[:, :3, :3]
+        R = robot.fk(data.joints, smr=data.smr, conditions=Conditions(data.approach, data.travel))[:, :3, :3]
         found = change_point(e, R, float(np.sqrt(np.mean(s**2))), seed)
         if found is not None:
             k, frame, step, p, shape = found
@@ -291,7 +292,7 @@ def orientation_convention(robot, data) -> str | None:
     except (RobocalError, np.linalg.LinAlgError):
         return None
     links = replace(robot, base=np.eye(4), tool=np.eye(4), smr=np.zeros((0, 3)))
-    A = reg.base[:3, :3] @ links.fk(data.joints, approach=data.approach, travel=data.travel)[:, :3, :3]
+    A = reg.base[:3, :3] @ links.fk(data.joints, conditions=Conditions(data.approach, data.travel))[:, :3, :3]
     R = data.rotations
     q = Rotation.from_matrix(R).as_quat()  # x, y, z, w: the file's qx, qy, qz, qw as read
     last = Rotation.from_quat(q[:, [3, 0, 1, 2]]).as_matrix()  # the file's columns held x, y, z, w
