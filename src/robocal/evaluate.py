@@ -141,7 +141,7 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     stats = position_stats(err)
     check_residual(stats["rms"], obs.modelled_points(robot, nuisance), "the evaluated data", force=force,
                    warnings=warnings)
-    if not (fit_frame or frame_from is not None) and data.kind in ("point", "pose"):
+    if not (fit_frame or frame_from is not None) and data.spec.sees_position:
         _check_frame_moved(robot, data, stats["rms"], warnings)
     unknowns = 6 + 3 * data.n_smr if fit_frame and frame_from is None else 0
     consistency = check_fit(robot, robot, [obs], [err], unknowns)
@@ -154,7 +154,7 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
         stats["error_vectors_mm"] = err * 1e3
     else:
         stats["errors_mm"] = err * 1e3
-    if data.kind == "pose":
+    if data.spec.sees_orientation:
         R = robot.fk(data.joints, smr=data.smr, conditions=data.conditions)[:, :3, :3]
         ang = np.linalg.norm(matrix_to_rotvec(data.rotations @ np.swapaxes(R, 1, 2)), axis=1)
         deg = np.rad2deg(ang)

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
+from robocal.data.kinds import OBSERVED
 from robocal.data.measurements import JointTable, Measurements, read_joint_table
 from robocal.errors import DataError
 
@@ -83,11 +84,12 @@ def read_candidates(path, robot, kind: str = "point") -> CandidateFile:
     """
     table = read_joint_table(path)
     q = robot.check_joints(table.joints)
-    if kind in ("plane", "distance"):
+    spec = OBSERVED.get(kind)
+    if spec is not None and not spec.sees_position:  # a fixture's contacts or pairs: from the file
         data = Measurements.load(path, robot=robot)
         if data.kind != kind or len(data) != len(q):
             raise DataError(f"{path}: {kind} candidates need a {kind} measurement CSV (joints with "
-                            f"{'a plane' if kind == 'plane' else 'pair and distance_mm'} column), got "
+                            f"{spec.columns} column), got "
                             f"{data.kind} data")
         return CandidateFile(joints=q, rows=np.arange(len(q)), table=table, data=data, path=str(path))
     ids = table.column("pose_id")

@@ -56,12 +56,12 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from robocal.data.csv_table import csv_rows, read_table, text_lines
+from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
 from robocal.errors import DataError, UnitError
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
 from robocal.kinematics.conditions import NONE, Conditions
 from robocal.kinematics.transforms import ROTATION_TOL
 
-KINDS = ("point", "pose", "plane", "distance")
 _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
                  "pair", "distance", "approach", "travel", "payload", "temperature")  # row-indexed
 _LENGTH_COLUMNS = ("x", "y", "z", "sigma", "distance")
@@ -185,6 +185,11 @@ class Measurements:
     external: int = 0  # the first ``external`` joints are external axes (e1..): a track carrying the arm
 
     @property
+    def spec(self) -> KindSpec:
+        """What the rows' kind observes (`robocal.data.kinds`)."""
+        return OBSERVED[self.kind]
+
+    @property
     def conditions(self) -> Conditions:
         """The rows' approach directions, moves, payloads and temperatures as one `Conditions`."""
         return Conditions(self.approach, self.travel, self.payload, self.temperature)
@@ -272,15 +277,13 @@ class Measurements:
         ...
         robocal.errors.DataError: ...
         """
-        if kind not in KINDS:
-            raise DataError(f"unknown measurement kind {kind!r}: use one of {', '.join(KINDS)}")
+        spec = kind_spec(kind)
         joints = np.asarray(joints, dtype=float) if not isinstance(joints, np.ndarray) else joints
         if joints.ndim != 2 or joints.shape[0] < 1 or joints.shape[1] < 1:
             raise DataError(f"joints must have shape (N, n) with N, n >= 1, got {joints.shape}")
         N, n = joints.shape
         joints = _float_array(joints, "joints", (N, n))
-        need = {"point": {"points"}, "pose": {"points", "rotations"}, "plane": {"plane"},
-                "distance": {"pair", "distance"}}[kind]
+        need = set(spec.arrays)
         given = {k for k, v in (("points", points), ("rotations", rotations), ("plane", plane),
                                 ("pair", pair), ("distance", distance)) if v is not None}
         if need - given:
@@ -430,7 +433,7 @@ class Measurements:
         if index.min() < -len(self) or index.max() >= len(self):
             raise DataError(f"row index out of range for {len(self)} rows")
         take = {f: (None if getattr(self, f) is None else getattr(self, f)[index]) for f in _ARRAY_FIELDS}
-        if self.kind == "distance":
+        if self.spec.group == "pair":
             ids, counts = np.unique(take["pair"], return_counts=True)
             if (counts != 2).any():
                 raise DataError("a distance subset must keep both rows of every pair")
@@ -438,7 +441,7 @@ class Measurements:
 
     def _groups(self) -> np.ndarray:
         """Group label of each row: rows that must stay together when splitting."""
-        return self.pair if self.kind == "distance" else self.pose_id
+        return getattr(self, self.spec.group)
 
     def split_poses(self, fraction: float | int = 0.5, seed: int = 0) -> tuple[Measurements, Measurements]:
         """Random split by pose (distance data: by pair) into (first, rest).
@@ -867,8 +870,8 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
         h = next(h for h in col if roles[h][0] == c)
         return col[h] * roles[h][2]
 
-    kw = {}
-    if kind in ("point", "pose"):
+    kw, spec = {}, OBSERVED[kind]
+    if spec.sees_position:
         kw["points"] = np.stack([length(c) for c in "xyz"], axis=1)
         far = np.abs(kw["points"]).max(axis=1) > MAX_TRACKER_RANGE_M
         if far.any():
@@ -876,7 +879,7 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
             raise UnitError(f"{name}, line {ln}: a point {np.abs(kw['points'][far][0]).max():.4g} m from the "
                             f"tracker is beyond any tracker's range: the length unit is probably wrong "
                             f"(values in mm must be in columns x_mm, y_mm, z_mm)")
-    if kind == "pose":
+    if spec.sees_orientation:
         qv = np.stack([col["qx"], col["qy"], col["qz"], col["qw"]], axis=1)
         norm = np.linalg.norm(qv, axis=1)
         bad = np.flatnonzero(np.abs(norm - 1.0) > ROTATION_TOL)
@@ -884,9 +887,9 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
             raise DataError(f"{name}, line {line_no[bad[0]]}: quaternion norm {norm[bad[0]]:.6g} is not 1; "
                             "give a unit quaternion qw,qx,qy,qz")
         kw["rotations"] = Rotation.from_quat(qv).as_matrix()
-    if kind == "plane":
+    if "plane" in spec.arrays:
         kw["plane"] = col["plane"].astype(np.int64)
-    if kind == "distance":
+    if "pair" in spec.arrays:
         kw["pair"] = col["pair"].astype(np.int64)
         kw["distance"] = length("distance")
     if "sigma" in {r[0] for r in roles.values()}:
@@ -974,7 +977,7 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     ints = {c: (col[c].astype(np.int64) if c in col else None) for c in ("smr", "pose_id")}
     source_row = col["source_row"].astype(np.int64) if "source_row" in col else np.array(line_no)
     notes = ()
-    if ints["pose_id"] is None and kind != "distance":
+    if ints["pose_id"] is None and OBSERVED[kind].group == "pose_id":
         ints["pose_id"], notes = _repeats(joints, np.array(line_no), name)
     try:
         data = Measurements.from_arrays(kind, joints, smr=ints["smr"], pose_id=ints["pose_id"],

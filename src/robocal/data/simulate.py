@@ -49,6 +49,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import robocal.data.simulated_physics as physics
+from robocal.data.kinds import KINDS, OBSERVED
 from robocal.data.measurements import Measurements, approach_from_order, robot_reach, travel_from_order
 from robocal.errors import DataError, UnreachableError
 from robocal.io import write_all
@@ -64,7 +65,6 @@ TRACKER_ANGULAR_URAD = 2.5       # angle-encoder noise (1 sigma, each transverse
 NOISE_MODELS = ("isotropic", "tracker")
 TRACKER_DISTANCE_M = (2.0, 4.0)  # a random tracker stands this far from the robot's base origin, m
 OUTLIER_MM = (1.0, 5.0)          # size of a gross error (uniform), mm
-SIM_KINDS = ("point", "pose", "plane", "distance")
 SCALE_BAR_M = 0.5  # default certified length of a simulated scale bar (distance kind), m
 MIN_BAR_ANGLE_DEG = 20.0  # the two poses of a bar placement differ by at least this much (joint 1 or 2)
 # A true arm on a track (error_scale 1): the track's direction tilted, the encoder's scale and the
@@ -233,15 +233,15 @@ def _move_tips(robot, q: np.ndarray, target: np.ndarray, normal: np.ndarray | No
 
 def _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, joint_noise_deg,
            rotation_noise_deg) -> None:
-    if kind not in SIM_KINDS:
-        raise DataError(f"unknown simulation kind {kind!r}: use one of {', '.join(SIM_KINDS)}")
+    if kind not in KINDS:
+        raise DataError(f"unknown simulation kind {kind!r}: use one of {', '.join(KINDS)}")
     if noise_model not in NOISE_MODELS:
         raise DataError(f"unknown noise model {noise_model!r}: use 'isotropic' or 'tracker'")
     if int(n_poses) < 1 or int(n_smr) < 1 or int(n_planes) < 1:
         raise DataError("n_poses, n_smr and n_planes must be >= 1")
     if not 0.0 <= outliers < 1.0 or noise_mm < 0 or joint_noise_deg < 0 or rotation_noise_deg < 0:
         raise DataError("outliers must be in [0, 1) and noise levels >= 0")
-    if kind != "point" and n_smr != 1:
+    if not OBSERVED[kind].several_smrs and n_smr != 1:
         raise DataError(f"{kind} simulation uses one tool point: set n_smr = 1")
 
 
@@ -259,9 +259,9 @@ def _true_robot(robot: Robot, rng: np.random.Generator, kind: str, n_smr: int, e
     if smr_offsets is not None:
         placed = smr_in_link_frame(robot, smr_offsets)
         tool0, extra = placed[0], placed[1:]
-    tool_R = _random_rotation(rng) if kind == "pose" else robot.tool[:3, :3]
+    tool_R = _random_rotation(rng) if OBSERVED[kind].sees_orientation else robot.tool[:3, :3]
     # the tracker frame: random position 2-4 m from the base origin, random orientation
-    if kind in ("plane", "distance"):
+    if not OBSERVED[kind].sees_position:
         base = robot.base.copy()
     else:
         c = _unit(rng, 1)[0] * rng.uniform(*TRACKER_DISTANCE_M)
@@ -303,7 +303,7 @@ def _tracker_readings(kind: str, T: np.ndarray, rng: np.random.Generator, noise_
     gross = np.zeros((N, 3))
     gross[outlier_rows] = _unit(rng, n_out) * rng.uniform(*OUTLIER_MM, (n_out, 1)) * 1e-3
     kw = {"points": p + noise + gross}
-    if kind == "pose":
+    if OBSERVED[kind].sees_orientation:
         dR = rotvec_to_matrix(rng.standard_normal((N, 3)) * np.deg2rad(rotation_noise_deg))
         kw["rotations"] = dR @ T[:, :3, :3]
     return kw, noise, outlier_rows
@@ -419,7 +419,8 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     thermal_k = physics.check_thermal_k(thermal_k)
     if thermal_k is not None and temperatures is None:
         raise DataError("a true thermal expansion coefficient needs temperatures to act at")
-    if (payloads is not None or temperatures is not None) and kind not in ("point", "pose"):
+    spec = OBSERVED[kind]
+    if (payloads is not None or temperatures is not None) and not spec.sees_position:
         raise DataError("payloads and temperatures are simulated for point and pose data")
     if kind == "distance" and not 0 < bar_length_m < 10:
         raise DataError(f"the scale bar's length must be between 0 and 10 m, got {bar_length_m} m")
@@ -435,9 +436,9 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         q = joints
     else:
         q = sample_joints(true, n_poses, rng, workspace_box, tool=true.tool)
-    per_pose = n_smr if kind == "point" else 2 if kind == "distance" else 1
-    smr = np.tile(np.arange(n_smr), n_poses) if kind == "point" else np.zeros(n_poses * per_pose, np.int64)
-    pose_id = np.repeat(np.arange(n_poses), n_smr) if kind == "point" else np.arange(n_poses * per_pose)
+    per_pose = n_smr if spec.several_smrs else spec.rows_per_placement
+    smr = np.tile(np.arange(n_smr), n_poses) if spec.several_smrs else np.zeros(n_poses * per_pose, np.int64)
+    pose_id = np.repeat(np.arange(n_poses), n_smr) if spec.several_smrs else np.arange(n_poses * per_pose)
     if visible is not None:
         seen = visible.reshape(-1)
         smr, pose_id = smr[seen], pose_id[seen]
@@ -459,7 +460,7 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
                                    coefficients, t_ref)
         true = true.with_joint_errors([*true.joint_error_names, *coefficients]).with_values(
             coefficients).with_reference_temperature(t_ref)
-    if kind in ("point", "pose"):
+    if spec.sees_position:
         kw, noise, outlier_rows = _tracker_readings(kind, T, rng, noise_mm, noise_model, outliers,
                                                     rotation_noise_deg)
     elif kind == "distance":  # the two nests of a placement: the bar's certified length on both rows
@@ -495,8 +496,9 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
 
 def _check_given(robot, n_poses, n_smr, kind, joints, visible, smr_offsets):
     """Validate the planned-campaign options; returns them as arrays with ``n_poses``, ``n_smr``."""
+    spec = OBSERVED.get(kind)  # None: an unknown kind, refused by _check
     if joints is not None:
-        if kind not in ("point", "pose"):
+        if spec is None or not spec.sees_position:
             raise DataError(f"{kind} measurements place their own poses; given joints work for point "
                             "and pose measurements")
         joints = robot.check_joints(joints)
@@ -516,7 +518,7 @@ def _check_given(robot, n_poses, n_smr, kind, joints, visible, smr_offsets):
         visible = np.asarray(visible, dtype=bool)
         if visible.ndim == 2 and n_smr == 1:  # the SMR count from the visibility columns
             n_smr = visible.shape[1]
-        if kind != "point" or joints is None or visible.shape != (len(joints), n_smr):
+        if spec is None or not spec.several_smrs or joints is None or visible.shape != (len(joints), n_smr):
             raise DataError(f"visible must be ({n_poses}, {n_smr}) booleans for given joints of "
                             "point measurements (one per pose and SMR)")
         blind = np.flatnonzero(~visible.any(axis=1))

@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.damped_least_squares import Status
+from robocal.data.kinds import OBSERVED
 from robocal.errors import IdentificationError
 from robocal.identify.network import FIELDS, BPNetwork
 from robocal.identify.population import Stagnation
@@ -43,11 +44,12 @@ def pose_error_inputs(problem, state) -> np.ndarray:
     """Network inputs ``(N, 3|6)``: each target's measured-minus-modelled error, mm / mrad."""
     obs = problem.observation
     r = obs.residuals(state.robot, state.nuisance).reshape(obs.n_items, obs.rows_per_item)
-    if problem.kind == "pose":  # orientation rows are scaled by the length scale
+    spec = OBSERVED.get(problem.kind)  # None: several kinds ("mixed")
+    if spec is None or not spec.sees_position:
+        raise IdentificationError("method 'neural' needs point or pose data (its input is a pose error)")
+    if spec.sees_orientation:  # orientation rows are scaled by the length scale
         r = r.copy()
         r[:, 3:6] /= obs.scale[3]
-    elif problem.kind != "point":
-        raise IdentificationError("method 'neural' needs point or pose data (its input is a pose error)")
     return r[:, :6] * 1e3
 
 

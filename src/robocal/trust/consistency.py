@@ -255,7 +255,7 @@ def find_change_points(robot, observations, errors: list[np.ndarray], noise: lis
     observation models (``.data``, ``.kind``), ``errors`` their item errors (m) with ``robot``."""
     out = []
     for obs, e, s in zip(observations, errors, noise, strict=True):
-        if obs.kind not in ("point", "pose"):
+        if not obs.data.spec.sees_position:
             continue
         data = obs.data
         R = robot.fk(data.joints, smr=data.smr, conditions=Conditions(data.approach, data.travel))[:, :3, :3]
@@ -285,7 +285,7 @@ def orientation_convention(robot, data) -> str | None:
     ``qw,qx,qy,qz`` headers, the inverse rotation, both) under which the model's orientations fit
     (within :data:`ORIENTATION_FIT_DEG` and :data:`robocal.diagnose.GAIN` times better than as
     given), as a sentence; None otherwise."""
-    if data.kind != "pose" or data.rotations is None:
+    if not data.spec.sees_orientation or data.rotations is None:
         return None
     try:
         reg = register_frame(robot, data)
@@ -314,7 +314,7 @@ def diagnose_misfit(robot, datasets) -> list[str]:
     file). Empty when the data do not tell."""
     out = []
     for d in datasets:
-        if d.kind not in ("point", "pose") or len(d) < 6:
+        if not d.spec.sees_position or len(d) < 6:
             continue
         given = fit_rms_mm(robot, d)
         reason = orientation_convention(robot, d)
