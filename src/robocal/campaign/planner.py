@@ -189,7 +189,7 @@ class CampaignResult:
         """The text of ``poses.csv`` (see `robocal.campaign.files`)."""
         return poses_csv(self.joints, self.visible, self.source, self.source_rows,
                          smr_mm=self.settings["smr_mm"], tracker_mm=self.settings["tracker_mm"],
-                         track=bool(self._track))
+                         spec=self.robot.joints)
 
     def summary(self) -> str:
         """A short human summary: poses, predicted accuracy, identifiability, route, candidates."""

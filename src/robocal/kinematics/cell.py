@@ -21,7 +21,7 @@ TRACK_IDENTIFIABILITY = (
 
 def is_track_cell(robot: Robot) -> bool:
     """Whether ``robot`` is an arm on a track: a prismatic joint 1 carrying revolute joints 2..n."""
-    return robot.n_joints >= 2 and bool(robot.prismatic[0]) and not robot.prismatic[1:].any()
+    return robot.external_axes == 1
 
 
 def _check_cell(robot: Robot) -> None:

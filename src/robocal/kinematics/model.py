@@ -56,6 +56,7 @@ from robocal.kinematics.ur import URForm, ur_form
 from robocal.kinematics.urdf_read import urdf_kwargs
 
 FRAME_FIELDS = ("x", "y", "z", "rx", "ry", "rz")
+REVOLUTE, PRISMATIC = "revolute", "prismatic"  # the joint types (JointSpec.kind)
 _LINK_IS_LENGTH = {"alpha": False, "a": True, "beta": False, "theta": False, "d": True}
 OPW_MATCH_TOL = 1e-12  # m / rad: links this close to their OPW form's chain still have that form
 
@@ -101,6 +102,43 @@ def _as_frame(T, what: str) -> np.ndarray:
         raise ModelError(f"{what} rotation is not orthonormal with det +1")
     return T
 
+
+
+class JointSpec(NamedTuple):
+    """One joint as messages, range checks and joints files name it (`Robot.joints`).
+
+    Values are SI inside robocal (rad for a revolute joint, m for a prismatic one); files and
+    messages show them in the joint's `unit` (deg or mm) under its `column` (``q3_deg``,
+    ``q3_mm``, a track's ``e1_mm``).
+    """
+
+    name: str  # "q3", or "e1" for an external axis (a track's carriage)
+    kind: str  # REVOLUTE or PRISMATIC
+    limits: tuple[float, float]  # (lower, upper), rad or m
+
+    @property
+    def prismatic(self) -> bool:
+        return self.kind == PRISMATIC
+
+    @property
+    def unit(self) -> str:
+        """What the joint is shown in: 'mm' (prismatic) or 'deg' (revolute)."""
+        return "mm" if self.prismatic else "deg"
+
+    @property
+    def column(self) -> str:
+        """The joint's CSV column, e.g. ``q3_deg``, ``q3_mm``, ``e1_mm``."""
+        return f"{self.name}_{self.unit}"
+
+    def shown(self, value):
+        """``value`` (SI: rad or m; a number or an array) in the joint's `unit` (deg or mm)."""
+        return np.multiply(value, 1e3) if self.prismatic else np.rad2deg(value)
+
+    def describe(self, value: float) -> str:
+        """``value`` (SI) with the joint's name, unit and limits, e.g. ``q2 = 95.2 deg (limits -95 ..
+        155)``, ``e1 = 6343 mm (limits 0 .. 6000)``."""
+        lo, hi = self.shown(np.array(self.limits))
+        return f"{self.name} = {self.shown(value):.6g} {self.unit} (limits {lo:.6g} .. {hi:.6g})"
 
 class DisplacedArrays(NamedTuple):
     """What `Robot.displaced_arrays` returns for displacements ``(..., k)``: link arrays
@@ -282,6 +320,30 @@ class Robot:
     def joint_units(self) -> list[str]:
         """'m' (prismatic) or 'rad' (revolute) for each joint."""
         return ["m" if p else "rad" for p in self.prismatic]
+
+    @property
+    def external_axes(self) -> int:
+        """How many leading joints are external axes (written ``e1..``): 1 for an arm on a track (a
+        prismatic joint 1 carrying revolute joints, `robocal.kinematics.cell_file`), else 0."""
+        return int(self.n_joints >= 2 and bool(self.prismatic[0]) and not self.prismatic[1:].any())
+
+    @property
+    def joints(self) -> tuple[JointSpec, ...]:
+        """Each joint's name, type, unit, CSV column and limits (`JointSpec`): what every message,
+        range check and joints file says of a joint. External axes are ``e1..``, the arm's joints
+        ``q1..`` counted after them; revolute joints are shown in deg, prismatic ones in mm.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> [j.column for j in rc.Robot.from_catalog("abb_irb2600").joints][:2]
+        ['q1_deg', 'q2_deg']
+        """
+        k = self.external_axes
+        return tuple(JointSpec(f"e{i + 1}" if i < k else f"q{i - k + 1}",
+                               PRISMATIC if slides else REVOLUTE,
+                               (float(lo), float(hi)))
+                     for i, (slides, (lo, hi)) in enumerate(zip(self.prismatic, self.limits, strict=True)))
 
     @property
     def has_ur_form(self) -> bool:
