@@ -9,7 +9,7 @@ import pytest
 
 from robocal.campaign.files import poses_csv
 from robocal.data.measurements import Measurements
-from robocal.errors import DataError, PlausibilityError
+from robocal.errors import DataError, PlausibilityError, UnitError
 from robocal.identify.plausibility import check_joint_limits
 from robocal.kinematics.model import PRISMATIC, REVOLUTE, Robot, cell_from_data
 
@@ -82,15 +82,25 @@ def test_a_revolute_reading_keeps_its_message():
         check_joint_limits(robot, _data(robot, q), "the data")
 
 
-def test_a_joint_limited_beyond_two_turns_reads_inside_its_limits():
+def _wide_wrist() -> Robot:
+    """An IRB 2600 whose wrist turns +-2700 deg (several turns either way)."""
     base = Robot.from_catalog("abb_irb2600")
     wide = np.array(base.limits)
-    wide[5] = np.deg2rad([-2700.0, 2700.0])  # an endless wrist (several turns either way)
-    robot = Robot(alpha=base.alpha, a=base.a, beta=base.beta, theta=base.theta, d=base.d, base=base.base,
-                  tool=base.tool, limits=wide, name="wide")
+    wide[5] = np.deg2rad([-2700.0, 2700.0])
+    return Robot(alpha=base.alpha, a=base.a, beta=base.beta, theta=base.theta, d=base.d, base=base.base,
+                 tool=base.tool, limits=wide, name="wide")
+
+
+def test_a_joint_limited_beyond_two_turns_reads_inside_its_limits(tmp_path):
+    robot = _wide_wrist()
     q = np.zeros((1, 6))
     q[0, 5] = np.deg2rad(1500.0)  # 4 turns: inside its own limits
     check_joint_limits(robot, _data(robot, q), "the data")
     q[0, 4] = np.deg2rad(1500.0)  # but on a joint limited to less than 2 turns: not a real reading
     with pytest.raises(DataError, match="beyond 2 turns"):
         check_joint_limits(robot, _data(robot, q), "the data")
+    q[0, 4] = 0.0
+    _data(robot, q).save(tmp_path / "wide.csv")  # SI columns: q6_rad = 26.2
+    assert Measurements.load(tmp_path / "wide.csv", robot=robot).joints[0, 5] == q[0, 5]
+    with pytest.raises(UnitError, match="> 2 turns"):  # without the robot: degrees under _rad?
+        Measurements.load(tmp_path / "wide.csv")

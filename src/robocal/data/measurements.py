@@ -525,7 +525,8 @@ class Measurements:
         ('points.csv', (2, 3))
         """
         path = Path(path)
-        data = replace(parse_csv(read_text(path, "measurement file"), str(path)), file=str(path))
+        text = read_text(path, "measurement file")
+        data = replace(parse_csv(text, str(path), joint_range_rad(robot)), file=str(path))
         if robot is not None:
             data.check_against(robot, reach, str(path))
         elif reach is not None:
@@ -603,6 +604,16 @@ class Measurements:
         True
         """
         write_atomic(path, self.to_csv())
+
+
+def joint_range_rad(robot=None) -> float:
+    """The largest revolute joint value (rad) a reading of ``robot`` can have: two turns, or its
+    widest finite revolute limit when that is wider (`robocal.kinematics.model.Robot.joints`)."""
+    if robot is None:
+        return MAX_JOINT_RAD
+    limits = np.array([j.limits for j in robot.joints if not j.prismatic]).reshape(-1, 2)
+    finite = np.abs(limits[np.isfinite(limits).all(axis=1)])
+    return max(MAX_JOINT_RAD, float(finite.max(initial=0.0)))
 
 
 def robot_reach(robot) -> float:
@@ -946,8 +957,10 @@ def _repeats(joints: np.ndarray, line_no: np.ndarray, name: str) -> tuple[np.nda
     return pose_id, notes
 
 
-def parse_csv(text: str, name: str = "<text>") -> Measurements:
-    """Parse canonical CSV text; ``name`` is used in error messages."""
+def parse_csv(text: str, name: str = "<text>", max_joint_rad: float = MAX_JOINT_RAD) -> Measurements:
+    """Parse canonical CSV text; ``name`` is used in error messages. Radian joint values beyond
+    ``max_joint_rad`` (default two turns; wider for a robot whose joints turn further,
+    `joint_range_rad`) are read as degrees under the wrong header and refused."""
     source, header_line, header_row, rows = _split_csv(text, name)
     header = [h.strip().lower() for h in header_row]
     if header[0].startswith("format: robocal-"):
@@ -965,9 +978,10 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     joints = np.stack([col[h] * roles[h][2] for h in joint_cols], axis=1)
     linear = np.array([_is_length(h) for h in joint_cols])
     angles = np.abs(np.where(linear, 0.0, joints))
-    if angles.max() > MAX_JOINT_RAD and any(roles[h][2] == 1.0 for h in joint_cols if not _is_length(h)):
+    if angles.max() > max_joint_rad and any(roles[h][2] == 1.0 for h in joint_cols if not _is_length(h)):
         ln = line_no[int(np.argmax(angles.max(axis=1)))]
-        raise UnitError(f"{name}, line {ln}: joint values up to {np.abs(joints).max():.4g} rad (> 2 turns): "
+        turns = f"> {max_joint_rad / (2 * np.pi):g} turns"
+        raise UnitError(f"{name}, line {ln}: joint values up to {np.abs(joints).max():.4g} rad ({turns}): "
                         "these look like degrees; name the columns q1_deg..")
     kw = _observed(kind, col, roles, line_no, name)
     approach = _per_joint(col, roles, "approach", len(joint_cols), name)
