@@ -800,7 +800,7 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     declared = list(dict.fromkeys(start.joint_error_names + candidate_names(start.n_joints, terms)))
     declared_start = start.with_joint_errors(declared).with_reference_temperature(
         thermal_reference([d.temperature for d in datasets])).with_calibrated_conditions(  # T_ref: the mean
-        conditions_range([d.payload for d in datasets], [d.temperature for d in datasets]))
+        conditions_range([d.conditions for d in datasets]))
     problem = CalibrationProblem(declared_start, datasets, sigma=sigma)
     state0 = problem.start(declared_start)
     errors0 = problem.position_errors(state0)

@@ -95,12 +95,11 @@ class CalibratedRange:
         return cls(**spans)
 
 
-def range_of(payloads: Sequence[np.ndarray | None],
-             temperatures: Sequence[np.ndarray | None]) -> CalibratedRange:
-    """The range the data sets recorded: ``payloads`` their ``(N, 4)`` payloads (kg, m; None: not
-    recorded), ``temperatures`` their ``(N,)`` temperatures (deg C)."""
-    masses = [np.asarray(p, float)[:, 0] for p in payloads if p is not None]
-    temps = [np.asarray(t, float) for t in temperatures if t is not None]
+def range_of(recorded: Sequence[Conditions]) -> CalibratedRange:
+    """The range of payload masses and temperatures the data sets' conditions ``recorded`` (their
+    payloads ``(N, 4)`` kg, m and temperatures ``(N,)`` deg C; None: not recorded)."""
+    masses = [np.asarray(c.payload, float)[:, 0] for c in recorded if c.payload is not None]
+    temps = [np.asarray(c.temperature, float) for c in recorded if c.temperature is not None]
 
     def span(parts):
         if not parts:
