@@ -60,6 +60,7 @@ from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
 from robocal.errors import DataError, UnitError
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
 from robocal.kinematics.conditions import NONE, Conditions
+from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
 from robocal.kinematics.transforms import ROTATION_TOL
 
 _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
@@ -350,8 +351,6 @@ class Measurements:
     def missing_conditions(self, robot) -> list[str]:
         """Warnings for ``robot``'s payload / thermal terms these data have no column for, naming
         the default the model assumes (no payload; its reference temperature)."""
-        from robocal.kinematics.joint_errors import assumed_conditions
-
         errors = robot.joint_errors
         if errors is None:
             return []
@@ -364,8 +363,6 @@ class Measurements:
     def unused_conditions(self, robot) -> str | None:
         """A note naming the recorded conditions (payload, temperature) ``robot``'s error model
         has no term for, or None when it uses every one recorded."""
-        from robocal.kinematics.joint_errors import condition_terms
-
         used = condition_terms(robot)
         unused = [c for c, term in (("payload", "payload"), ("temperature", "thermal"))
                   if getattr(self, c) is not None and term not in used]

@@ -32,7 +32,7 @@ import numpy as np
 
 from robocal.errors import ModelError
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
-from robocal.kinematics.catalog import catalog_entry
+from robocal.kinematics.catalog import catalog_entry, catalog_names
 from robocal.kinematics.convert import PARALLEL_TOL
 from robocal.kinematics.model import MAX_ANGLE_RAD, Robot
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
@@ -321,8 +321,6 @@ def _check_nominal(robot: Robot, nominal: Robot, source: str, fits) -> None:
 
 def _ur_names() -> list[str]:
     """The catalog's Universal Robots arms (those with a nominal DH table)."""
-    from robocal.kinematics.catalog import catalog_names
-
     return [n for n in catalog_names() if n.startswith("ur") and "dh" in catalog_entry(n)]
 
 
