@@ -1,10 +1,10 @@
 """The kinds of measurement rows and what each observes: the one registry every module asks.
 
 A measurement set (:class:`robocal.data.measurements.Measurements`) holds one kind of row; its
-observation model (residuals and Jacobian rows) is the class of the same name in
+observation model (residuals and Jacobian rows) is the class `KindSpec.observation` names in
 `robocal.identify.observations`. A module that treats kinds differently asks the kind's
-`KindSpec` a capability (``OBSERVED[data.kind].sees_position``) instead of naming kinds; a new
-kind is one entry here and one observation module.
+`KindSpec` a capability (``data.spec.sees_position``) instead of naming kinds; a new kind is one
+entry here and one observation module.
 """
 
 from __future__ import annotations
@@ -24,6 +24,8 @@ class KindSpec:
     ----------
     name : str
         The kind's name (``Measurements.kind``, the CSV's observation columns).
+    observation : str
+        Its observation model, ``"module:Class"`` in `robocal.identify.observations`.
     arrays : tuple of str
         The observation arrays of `Measurements` it requires (and the only ones it takes).
     sees_position : bool
@@ -44,6 +46,7 @@ class KindSpec:
     """
 
     name: str
+    observation: str
     arrays: tuple[str, ...]
     sees_position: bool = False
     sees_orientation: bool = False
@@ -62,12 +65,13 @@ class KindSpec:
 
 
 OBSERVED = {spec.name: spec for spec in (
-    KindSpec("point", ("points",), sees_position=True, several_smrs=True, columns="x_mm,y_mm,z_mm"),
-    KindSpec("pose", ("points", "rotations"), sees_position=True, sees_orientation=True,
-             columns="x_mm,y_mm,z_mm and qw..qz"),
-    KindSpec("plane", ("plane",), columns="a plane"),
-    KindSpec("distance", ("pair", "distance"), group="pair", rows_per_placement=2,
-             columns="pair and distance_mm"),
+    KindSpec("point", "point:PointObservation", ("points",), sees_position=True, several_smrs=True,
+             columns="x_mm,y_mm,z_mm"),
+    KindSpec("pose", "pose:PoseObservation", ("points", "rotations"), sees_position=True,
+             sees_orientation=True, columns="x_mm,y_mm,z_mm and qw..qz"),
+    KindSpec("plane", "plane:PlaneObservation", ("plane",), columns="a plane"),
+    KindSpec("distance", "distance:DistanceObservation", ("pair", "distance"), group="pair",
+             rows_per_placement=2, columns="pair and distance_mm"),
 )}
 KINDS = tuple(OBSERVED)  # every kind's name, in the order messages list them
 
