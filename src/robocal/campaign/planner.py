@@ -39,7 +39,6 @@ from robocal.identify import vocabulary
 from robocal.identify.identifiability import Identifiability
 from robocal.identify.structural import separate, unidentifiable
 from robocal.ik.path import default_weights, travel
-from robocal.kinematics.cell import is_track_cell
 from robocal.kinematics.transforms import make_transform
 from robocal.progress import Progress
 from robocal.trust.coverage import WORKSPACE_SAMPLES, WORKSPACE_SEED, workspace_sample
@@ -180,11 +179,6 @@ class CampaignResult:
         """The candidates the search chose from (what the funnel left)."""
         return self.funnel.left
 
-    @property
-    def _track(self) -> int:
-        """1 when joint 1 is a track's carriage (m, written apart as e1_mm), else 0."""
-        return int(is_track_cell(self.robot))
-
     def poses_csv(self) -> str:
         """The text of ``poses.csv`` (see `robocal.campaign.files`)."""
         return poses_csv(self.joints, self.visible, self.source, self.source_rows,
@@ -227,9 +221,9 @@ class CampaignResult:
             "predicted_rms_mm": self.predicted_rms_mm,
             "noise": {"model": self.noise.model, "sigma_mm": self.noise.sigma_m * 1e3},
             "joints_deg": [[float(fixed_point(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv
-                           for row in np.rad2deg(self.joints[:, self._track:])],
+                           for row in np.rad2deg(self.joints[:, self.robot.external_axes:])],
             **({"e1_mm": [float(fixed_point(v, DEGREE_DECIMALS)) for v in self.joints[:, 0] * 1e3]}
-               if self._track else {}),
+               if self.robot.external_axes else {}),
             "candidate_index": self.candidate_index.tolist(),
             "visible": self.visible.astype(int).tolist(),
             "tcp_mm": (self.robot.fk(self.joints)[:, :3, 3] * 1e3).tolist(),

@@ -486,7 +486,7 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id,
                                     conditions=Conditions(approach, travel, payload, temperature),
                                     source_row=np.arange(2, N + 2), source=source,
-                                    linear=robot.prismatic, external=int(is_track_cell(robot)), **kw)
+                                    linear=robot.prismatic, external=robot.external_axes, **kw)
     truth = replace(true, name=f"{robot.name}_true",
                     description=f"true robot of a robocal simulation (seed {seed}); noise floor "
                                 f"{floor:.6g} mm (3-D RMS of the added noise)")
