@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from robocal.campaign.constraints import limits_with_margin
 from robocal.campaign.files import poses_csv
 from robocal.data.measurements import Measurements
 from robocal.errors import DataError, PlausibilityError, UnitError
@@ -104,3 +105,8 @@ def test_a_joint_limited_beyond_two_turns_reads_inside_its_limits(tmp_path):
     assert Measurements.load(tmp_path / "wide.csv", robot=robot).joints[0, 5] == q[0, 5]
     with pytest.raises(UnitError, match="> 2 turns"):  # without the robot: degrees under _rad?
         Measurements.load(tmp_path / "wide.csv")
+
+
+def test_a_margin_that_leaves_no_room_names_the_quill_in_mm():
+    with pytest.raises(DataError, match=r"no room on joint 3 \(limits -200 to 0 mm\)"):
+        limits_with_margin(_scara(), 10.0)
