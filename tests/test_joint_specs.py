@@ -110,3 +110,16 @@ def test_a_joint_limited_beyond_two_turns_reads_inside_its_limits(tmp_path):
 def test_a_margin_that_leaves_no_room_names_the_quill_in_mm():
     with pytest.raises(DataError, match=r"no room on joint 3 \(limits -200 to 0 mm\)"):
         limits_with_margin(_scara(), 10.0)
+
+
+def test_a_gantry_is_no_track_and_a_track_counts_its_arm_joints():
+    gantry = Robot(alpha=np.array([0.0, -np.pi / 2, -np.pi / 2, 0.0]), a=np.zeros(4), beta=np.zeros(4),
+                   theta=np.array([0.0, np.pi / 2, 0.0, 0.0]), d=np.zeros(4),
+                   prismatic=[True, True, True, False], name="gantry",
+                   limits=np.array([[0.0, 2.0], [0.0, 1.0], [-0.5, 0.0], [-3.0, 3.0]]))
+    assert gantry.external_axes == 0 and [j.column for j in gantry.joints][:3] == ["q1_mm", "q2_mm", "q3_mm"]
+    three = Measurements.from_arrays("point", np.zeros((2, 3)), points=np.ones((2, 3)))
+    with pytest.raises(DataError, match=r"has 4 joints: use"):
+        three.check_against(gantry)
+    with pytest.raises(DataError, match=r"has 7 joints \(e1 for its track, then q1\.\.q6\)"):
+        three.check_against(cell_from_data(CELL))

@@ -464,7 +464,8 @@ class Measurements:
         """Check joint count, SMR indices and unit plausibility against a robot; returns self."""
         where = f"{path}: " if path else (f"{self.source}: " if self.source else "")
         if self.n_joints != robot.n_joints:
-            track = " (e1 for its track, then q1..q6)" if robot.prismatic[0] else ""
+            k = robot.external_axes
+            track = f" (e1 for its track, then q1..q{robot.n_joints - k})" if k else ""
             raise DataError(f"{where}the data have {self.n_joints} joint columns but {robot.name} has "
                             f"{robot.n_joints} joints{track}: use a file with {robot.n_joints} joint "
                             "columns or the matching robot model")
@@ -475,7 +476,7 @@ class Measurements:
             kind = "prismatic (give it in mm or m)" if robot.prismatic[k] else "revolute (deg or rad)"
             raise UnitError(f"{where}joint column {k + 1} ({self.joint_column(k, '')}) is in "
                             f"{'length' if linear[k] else 'angle'} units but {robot.name}'s joint {k + 1} is "
-                            f"{kind}" + (": a track's column is e1_mm" if robot.prismatic[0] else ""))
+                            f"{kind}" + (": a track's column is e1_mm" if robot.external_axes else ""))
         if reach is None:
             reach = robot_reach(robot)
         _check_plausible(self, reach, where)
