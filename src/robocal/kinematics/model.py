@@ -103,7 +103,6 @@ def _as_frame(T, what: str) -> np.ndarray:
     return T
 
 
-
 class JointSpec(NamedTuple):
     """One joint as messages, range checks and joints files name it (`Robot.joints`).
 
@@ -118,6 +117,7 @@ class JointSpec(NamedTuple):
 
     @property
     def prismatic(self) -> bool:
+        """Whether the joint slides (its value in m adds to its d) rather than turns."""
         return self.kind == PRISMATIC
 
     @property
@@ -130,7 +130,7 @@ class JointSpec(NamedTuple):
         """The joint's CSV column, e.g. ``q3_deg``, ``q3_mm``, ``e1_mm``."""
         return f"{self.name}_{self.unit}"
 
-    def shown(self, value):
+    def shown(self, value: float | np.ndarray) -> float | np.ndarray:
         """``value`` (SI: rad or m; a number or an array) in the joint's `unit` (deg or mm)."""
         return np.multiply(value, 1e3) if self.prismatic else np.rad2deg(value)
 
@@ -139,6 +139,7 @@ class JointSpec(NamedTuple):
         155)``, ``e1 = 6343 mm (limits 0 .. 6000)``."""
         lo, hi = self.shown(np.array(self.limits))
         return f"{self.name} = {self.shown(value):.6g} {self.unit} (limits {lo:.6g} .. {hi:.6g})"
+
 
 class DisplacedArrays(NamedTuple):
     """What `Robot.displaced_arrays` returns for displacements ``(..., k)``: link arrays
