@@ -43,6 +43,8 @@ def test_a_scara_quill_is_prismatic_in_mm():
     header, row = text.splitlines()[:2]
     assert header.startswith("q1_deg,q2_deg,q3_mm,q4_deg")
     assert row.split(",")[2] == "-50"  # the quill in mm, not 2.9 "deg"
+    np.testing.assert_array_equal(robot.joints_shown([[0.1, -0.2, -0.05, 1.0]]),
+                                  [[np.rad2deg(0.1), np.rad2deg(-0.2), -50.0, np.rad2deg(1.0)]])
 
 
 def test_a_track_is_e1_in_mm_and_the_arm_q1_to_q6():

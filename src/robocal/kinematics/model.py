@@ -346,6 +346,12 @@ class Robot:
                                (float(lo), float(hi)))
                      for i, (slides, (lo, hi)) in enumerate(zip(self.prismatic, self.limits, strict=True)))
 
+    def joints_shown(self, q) -> np.ndarray:
+        """Joints ``q`` ``(N, n)`` (rad; m for a prismatic joint) in each joint's unit (deg; mm):
+        what joints files and messages show (`joints`)."""
+        q = np.asarray(q, float)
+        return np.where(self.prismatic, q * 1e3, np.rad2deg(q))
+
     @property
     def has_ur_form(self) -> bool:
         """Whether closed-form UR inverse kinematics applies to this robot's chain (see `ur_form`)."""
