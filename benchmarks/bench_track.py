@@ -21,7 +21,8 @@ from robocal.calibration import calibrate
 from robocal.data.simulate import simulate_tracker
 from robocal.evaluate import evaluate
 from robocal.ik import track
-from robocal.kinematics.cell import TRACK_SCALE, arm_model, cell_from_data
+from robocal.kinematics.cell import TRACK_SCALE, arm_model
+from robocal.kinematics.model import cell_from_data
 from robocal.programs.config import ABBConfig
 from robocal.programs.filter import filter_program
 
