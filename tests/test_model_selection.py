@@ -24,6 +24,7 @@ from robocal.identify.lsq import gauss_newton
 from robocal.identify.priors import prior_sigma
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.space import ParameterSpace
+from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.joint_errors import JointErrorModel, candidate_names, cyclic_names
 from robocal.model_selection import (
     SELECTION_TOLERANCE,
@@ -87,7 +88,7 @@ def test_travel_and_cyclic_columns_match_finite_differences(kind):
     # the model the calibration returns applies the same offsets in fk
     model = JointErrorModel(tuple(names), nu)
     d = sim.data
-    dq = model.offsets(sim.truth, d.joints, d.conditions)
+    dq = model.offsets(sim.truth, d.joints, Conditions(d.approach, d.travel))
     assert np.allclose(dq[:, 0], nu[0] * d.travel[:, 0])
     q2 = d.joints[:, 1]
     assert np.allclose(dq[:, 1], nu[2] * np.sin(101.5 * q2) + nu[3] * np.cos(101.5 * q2))
