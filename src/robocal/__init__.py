@@ -30,7 +30,7 @@ _LAZY = {
     "register": "robocal.data.registration",
     "simulate_tracker": "robocal.data.simulate",
     "evaluate": "robocal.evaluate",
-    "Robot": "robocal.kinematics.model",
+    "Robot": "robocal.kinematics.model", "Conditions": "robocal.kinematics.conditions",
     "FilterResult": "robocal.programs", "filter_program": "robocal.programs",
     "ToolCalibration": "robocal.tcp", "identify_tcp": "robocal.tcp",
 }

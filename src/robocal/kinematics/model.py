@@ -867,8 +867,8 @@ class Robot:
             Each row's SMR index (default: the tool, SMR 0).
         conditions : Conditions, optional
             Each row's approach directions, last moves, payload and temperature
-            (`robocal.kinematics.conditions.Conditions`; e.g. ``data.conditions`` of measurements),
-            for the backlash, travel, payload and thermal terms.
+            (`robocal.Conditions`, e.g. ``rc.Conditions(temperature=t)``; ``data.conditions`` of
+            measurements), for the backlash, travel, payload and thermal terms.
 
         Returns
         -------
