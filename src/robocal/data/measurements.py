@@ -59,7 +59,7 @@ from robocal.data.csv_table import csv_rows, read_table, text_lines
 from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
 from robocal.errors import DataError, UnitError
 from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
-from robocal.kinematics.conditions import NONE, Conditions
+from robocal.kinematics.conditions import UNKNOWN, Conditions
 from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
 from robocal.kinematics.transforms import ROTATION_TOL
 
@@ -214,7 +214,7 @@ class Measurements:
     @classmethod
     def from_arrays(cls, kind: str, joints, *, points=None, rotations=None, plane=None, pair=None,
                     distance=None, smr=None, sigma=None, pose_id=None, source_row=None,
-                    source: str = "", conditions: Conditions = NONE, linear=None,
+                    source: str = "", conditions: Conditions = UNKNOWN, linear=None,
                     external: int = 0) -> Measurements:
         """Validated measurements from arrays in SI units (rad, m).
 

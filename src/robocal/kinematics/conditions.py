@@ -61,7 +61,7 @@ class Conditions:
                              np.asarray(getattr(self, f.name))[index] for f in fields(self)})
 
 
-NONE = Conditions()  # nothing known
+UNKNOWN = Conditions()  # no row condition known (the default of every function taking conditions)
 
 
 @dataclass(frozen=True)

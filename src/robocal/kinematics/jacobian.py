@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from robocal.errors import ModelError
-from robocal.kinematics.conditions import NONE, Conditions
+from robocal.kinematics.conditions import UNKNOWN, Conditions
 from robocal.kinematics.fk import CHUNK, LinkArrays, chain_frames
 from robocal.kinematics.joint_errors import conditions_of, joint_error_basis, scatter_offsets
 from robocal.kinematics.kernels import compiled
@@ -63,7 +63,7 @@ def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nda
     return tcp, u, o, rotation
 
 
-def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None, conditions: Conditions = NONE):
+def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None, conditions: Conditions = UNKNOWN):
     """:func:`motion_axes` for a robot, with the columns of its extra SMRs and of its joint-error
     terms appended (the order of :attr:`Robot.parameter_names`).
 
@@ -121,7 +121,7 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None, condi
 
 
 def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: str = "point",
-                            smr: np.ndarray | None = None, conditions: Conditions = NONE):
+                            smr: np.ndarray | None = None, conditions: Conditions = UNKNOWN):
     """d(TCP)/d(params) for joints ``q`` ``(N, n)`` (``smr`` ``(N,)``: each row's SMR index;
     ``conditions``: the rows' approach directions, moves, payloads and temperatures, for the
     backlash, travel, payload and thermal terms).

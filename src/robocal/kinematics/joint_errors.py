@@ -64,7 +64,7 @@ import robocal.kinematics.thermal as thermal
 from robocal.errors import IdentificationError, ModelError
 from robocal.io import as_number
 from robocal.kinematics.conditions import KEY as CONDITIONS_KEY
-from robocal.kinematics.conditions import NONE, CalibratedRange, Conditions, beyond
+from robocal.kinematics.conditions import UNKNOWN, CalibratedRange, Conditions, beyond
 from robocal.kinematics.fk import chain_frames
 
 TERMS = ("compliance", "gear", "backlash", "travel", "cyclic", "scale", "payload", "thermal",
@@ -194,7 +194,7 @@ def _parse(name: str, n: int) -> tuple[int, str, int | str | tuple | None]:
 
 
 def joint_error_basis(robot, q: np.ndarray, names: Sequence[str],
-                      conditions: Conditions = NONE) -> tuple[np.ndarray, np.ndarray]:
+                      conditions: Conditions = UNKNOWN) -> tuple[np.ndarray, np.ndarray]:
     """``(B (N, k), joint (k,))``: d(dq_joint[p])/d(param p) at joints ``q (N, n)`` (rad).
 
     ``dq[:, joint[p]] += B[:, p] * value[p]``. Compliance and payload columns use the robot's
@@ -258,7 +258,7 @@ def scatter_offsets(B: np.ndarray, joint: np.ndarray, values: np.ndarray, n: int
     return dq
 
 
-def conditions_of(robot, N: int, conditions: Conditions = NONE) -> Conditions:
+def conditions_of(robot, N: int, conditions: Conditions = UNKNOWN) -> Conditions:
     """The N rows' ``conditions`` with their payload ``(N, 4)`` and temperature ``(N,)`` as given,
     else the fixed ones the robot's error model is used at
     (:meth:`robocal.kinematics.model.Robot.with_conditions`), else None."""
@@ -291,7 +291,7 @@ def assumed_conditions(robot, hints: tuple[str, str] = CONDITION_OPTIONS) -> lis
     return out
 
 
-def extrapolated_conditions(robot, conditions: Conditions = NONE, rows: str = "") -> list[str]:
+def extrapolated_conditions(robot, conditions: Conditions = UNKNOWN, rows: str = "") -> list[str]:
     """Warnings where the conditions ``robot``'s error model is used at lie beyond the ones its
     calibration covered (:mod:`robocal.kinematics.conditions`): the rows' payload ``(N, 4)`` and
     temperature ``(N,)`` where ``conditions`` give them (``rows`` names them), else its fixed ones
@@ -358,7 +358,7 @@ class JointErrorModel:
         """SI unit of each parameter (:data:`UNITS` of its term)."""
         return [UNITS[term_of(nm)] for nm in self.names]
 
-    def offsets(self, robot, q: np.ndarray, conditions: Conditions = NONE) -> np.ndarray:
+    def offsets(self, robot, q: np.ndarray, conditions: Conditions = UNKNOWN) -> np.ndarray:
         """Joint offsets ``dq (N, n)`` (rad) at commanded joints ``q (N, n)`` reached at
         ``conditions``: from their approach directions (backlash; None: unknown, mid-band) by
         their moves (None: no move) carrying their payload (None: none)."""

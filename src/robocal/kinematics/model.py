@@ -33,7 +33,7 @@ from robocal.errors import DataError, ModelError, UnitError
 from robocal.io import as_number, write_atomic
 from robocal.kinematics.catalog import catalog_kwargs
 from robocal.kinematics.cell_file import TRACK_SCALE, chain_arrays, read_cell
-from robocal.kinematics.conditions import NONE, Conditions
+from robocal.kinematics.conditions import UNKNOWN, Conditions
 from robocal.kinematics.convert import dh_kwargs, mdh_kwargs, opw_chain, opw_kwargs, opw_parameters
 from robocal.kinematics.fk import LinkArrays, chain_fk, chain_frames
 from robocal.kinematics.jacobian import identification_jacobian
@@ -842,7 +842,7 @@ class Robot:
             raise DataError(f"joints contain NaN or infinite values in row(s) {bad[:10].tolist()}")
         return q
 
-    def reached_joints(self, q: np.ndarray, conditions: Conditions = NONE) -> np.ndarray:
+    def reached_joints(self, q: np.ndarray, conditions: Conditions = UNKNOWN) -> np.ndarray:
         """The joints ``(N, n)`` the robot really turns to for commanded ``q`` (rad): ``q + dq(q)``
         with the declared joint-error terms at the rows' ``conditions`` (approach directions for
         backlash, last moves for travel, the payload carried for payload)."""
@@ -850,7 +850,7 @@ class Robot:
             return q
         return q + self.joint_errors.offsets(self, q, conditions)
 
-    def fk(self, q, frames: bool = False, smr=None, conditions: Conditions = NONE):
+    def fk(self, q, frames: bool = False, smr=None, conditions: Conditions = UNKNOWN):
         """TCP poses ``(N, 4, 4)`` (world frame, m) for joints ``(N, n)`` in rad.
 
         Joint-error terms turn the commanded joints into the joints the robot really reaches
@@ -903,7 +903,7 @@ class Robot:
         return chain_fk(links, self.base, tool, q, prismatic=self.prismatic)
 
     def jacobian(self, q, params: Sequence[str] | None = None, kind: str = "point", smr=None,
-                 conditions: Conditions = NONE):
+                 conditions: Conditions = UNKNOWN):
         """Identification Jacobian ``(N, 3|6, k)``; see
         `robocal.kinematics.jacobian.identification_jacobian`.
 
