@@ -10,14 +10,8 @@ Rz(theta_i) Tz(d_i) (Rz(q) and Tz(d) commute) and its axis is z, so URDF forward
 exactly the model's; a prismatic joint is a URDF ``prismatic`` joint along z (Tz(q) after Tz(d)),
 its limits in m. Floats are written with ``repr`` (shortest exact round trip).
 
-Import (:func:`from_urdf`): the joints' lines at the zero configuration (point and direction in
-the root frame) are converted to MDH + beta: consecutive axes that are not (nearly) parallel get
-the common normal (alpha, a, beta = 0); nearly parallel ones get Hayati's construction (x along
-the perpendicular to the next axis in the plane normal to the current one; beta non-zero). The
-root-to-frame-{0} transform becomes the base frame and the flange-to-tip transform the tool.
-A prismatic joint (a mobile manipulator's torso lift, a gantry's axes, a linear track) slides along
-its axis: where its line lies is free (a translation moves every point alike), so the same
-construction places it, and the joint is flagged prismatic (its value, m, adds to its d).
+Import (:func:`from_urdf`): the joints' lines at the zero configuration converted to MDH + beta,
+by `robocal.kinematics.urdf_read` (which the model's loader uses too: `load_model` reads a URDF).
 """
 
 from __future__ import annotations
