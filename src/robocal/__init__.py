@@ -28,9 +28,10 @@ _LAZY = {
     "compensate": "robocal.compensate",
     "Measurements": "robocal.data.measurements",
     "register": "robocal.data.registration",
+    "Conditions": "robocal.kinematics.conditions",  # the rows' conditions for Robot.fk / jacobian
     "simulate_tracker": "robocal.data.simulate",
     "evaluate": "robocal.evaluate",
-    "Robot": "robocal.kinematics.model", "Conditions": "robocal.kinematics.conditions",
+    "Robot": "robocal.kinematics.model",
     "FilterResult": "robocal.programs", "filter_program": "robocal.programs",
     "ToolCalibration": "robocal.tcp", "identify_tcp": "robocal.tcp",
 }
