@@ -12,8 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import robocal as rc
+from robocal.core.schema import RESULT_SCHEMA, validate
 from robocal.data.simulate import simulate_tracker
-from robocal.schema import RESULT_SCHEMA, validate
 from robocal.trust.file_shifts import MIN_FILE_POSES, SHIFT_ALPHA, file_shifts, pose_means
 from tests.conftest import require_datasets
 

@@ -9,8 +9,8 @@ import pytest
 
 from robocal.campaign.constraints import limits_with_margin
 from robocal.campaign.files import poses_csv
+from robocal.core.errors import DataError, PlausibilityError, UnitError
 from robocal.data.measurements import Measurements
-from robocal.errors import DataError, PlausibilityError, UnitError
 from robocal.identify.plausibility import check_joint_limits
 from robocal.kinematics.model import PRISMATIC, REVOLUTE, Robot, cell_from_data
 

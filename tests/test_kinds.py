@@ -8,9 +8,9 @@ import importlib
 import numpy as np
 import pytest
 
+from robocal.core.errors import DataError
 from robocal.data.kinds import KINDS, OBSERVED, kind_spec
 from robocal.data.measurements import Measurements
-from robocal.errors import DataError
 from robocal.kinematics.model import Robot
 
 

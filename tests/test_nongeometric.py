@@ -11,9 +11,9 @@ from conftest import require_datasets
 from jacobian_check import central_difference, joint_error_jacobian
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
+from robocal.core.errors import IdentificationError, ModelError
 from robocal.data.simulate import simulate_tracker
-from robocal.errors import IdentificationError, ModelError
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.residual import ResidualModel
 from robocal.identify.space import ParameterSpace, State

@@ -11,11 +11,11 @@ import pytest
 from jacobian_check import assert_columns_match, joint_error_jacobian
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
 from robocal.cli import main
+from robocal.core.errors import DataError, UnitError
 from robocal.data.measurements import Measurements, parse_csv
 from robocal.data.simulate import simulate_tracker
-from robocal.errors import DataError, UnitError
 from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.joint_errors import parse_terms, term_names
 
@@ -200,8 +200,8 @@ def _palletize(tmp_path, load2: str | None = None):
 
 
 def test_filter_and_compensate_use_the_given_conditions_and_warn_of_the_assumed_ones(tmp_path):
-    from robocal.compensate import compensate
     from robocal.data.simulate import perturbed
+    from robocal.deploy.compensation import compensate
     from robocal.programs import filter_program
 
     nominal = Robot.from_catalog("kuka_kr16_2")
@@ -260,7 +260,7 @@ def test_compensate_cli_takes_payload_and_temperature(tmp_path, capsys):
 
 
 def test_auto_considers_payload_and_thermal_only_when_the_data_vary_them():
-    from robocal.model_selection import _term_has_data
+    from robocal.calibration.model_selection import _term_has_data
 
     robot = Robot.from_catalog("kuka_kr210_r2700")
     cal = simulate_tracker(robot, 80, noise_mm=0.02, seed=4, payloads=[0, 75, 150], temperatures=(20, 35))

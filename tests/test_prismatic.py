@@ -9,12 +9,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from robocal.errors import ModelError
+from robocal.core.errors import ModelError
+from robocal.core.yaml_load import load_yaml
 from robocal.ik import numeric
 from robocal.kinematics.model import Robot
 from robocal.kinematics.model_file import robot_kwargs
 from robocal.kinematics.urdf import from_urdf, to_urdf
-from robocal.yaml_load import load_yaml
 
 
 def _rot(axis: int, t: float) -> np.ndarray:

@@ -15,17 +15,17 @@ from hypothesis import strategies as st
 from jacobian_check import assert_columns_match, joint_error_jacobian
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.model_selection import _term_has_data
+from robocal.calibration.pipeline import calibrate
 from robocal.cli import main
+from robocal.core.errors import DataError, ModelError
 from robocal.data.measurements import Measurements
 from robocal.data.simulate import simulate_tracker
-from robocal.errors import DataError, ModelError
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.space import ParameterSpace
 from robocal.kinematics import thermal
 from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.joint_errors import parse_terms, term_names
-from robocal.model_selection import _term_has_data
 
 KR210 = "kuka_kr210_r2700"
 GROUPS = ["thermal", *thermal.GROUP_NAMES]

@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from robocal.core.errors import DataError
 from robocal.data.simulate import check_tracker_position
-from robocal.errors import DataError
 from robocal.ik.singularity import MEASURE_JOINTS, classic_distances
 
 DEFAULT_ACCEPTANCE_DEG = 30.0
@@ -76,7 +76,7 @@ class Tracker:
     >>> rc.Tracker(position=[3.0, 0.0, 0.5], range_m=(5, 1))
     Traceback (most recent call last):
     ...
-    robocal.errors.DataError: the tracker range must be 0 <= min < max (m), got (5, 1)
+    robocal.core.errors.DataError: the tracker range must be 0 <= min < max (m), got (5, 1)
     """
 
     position: np.ndarray

@@ -22,9 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
+from robocal.core.errors import DataError
 from robocal.data.kinds import OBSERVED
 from robocal.data.measurements import JointTable, Measurements, read_joint_table
-from robocal.errors import DataError
 from robocal.kinematics.model import JointSpec
 
 VISIBLE_PREFIX = "visible_smr"

@@ -27,22 +27,23 @@ import numpy as np
 import robocal.campaign.constraints as cons
 from robocal.campaign.exchange import CRITERIA, ExchangeResult, criterion_value, exchange
 from robocal.campaign.files import CandidateFile, poses_csv
-from robocal.campaign.information import Information, Noise, candidate_data, information
+from robocal.campaign.information import Information, candidate_data, information
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
 from robocal.campaign.unmodelled import DEFAULT_TERMS, mean_square, search, unmodelled_error
+from robocal.core.errors import DataError
+from robocal.core.progress import Progress
+from robocal.core.version import __version__
 from robocal.data.kinds import OBSERVED, kind_spec
 from robocal.data.measurements import Measurements, robot_reach
 from robocal.data.simulate import smr_in_link_frame
-from robocal.errors import DataError
 from robocal.identify import vocabulary
 from robocal.identify.identifiability import Identifiability
 from robocal.identify.structural import separate, unidentifiable
 from robocal.ik.path import default_weights, travel
 from robocal.kinematics.transforms import make_transform
-from robocal.progress import Progress
 from robocal.trust.coverage import WORKSPACE_SAMPLES, WORKSPACE_SEED, workspace_sample
-from robocal.version import __version__
+from robocal.trust.posterior import Noise
 
 DEFAULT_CANDIDATES = 5000
 DEFAULT_REGION_SIZE = WORKSPACE_SAMPLES

@@ -92,9 +92,15 @@ def run(args) -> int:
         payload_si,
         tool_frame,
     )
-    from robocal.compensate import check_target_units, compensate, format_csv, pose_columns, read_poses_csv
+    from robocal.core.io import check_outputs, read_text, write_all
     from robocal.data.measurements import robot_reach
-    from robocal.io import check_outputs, read_text, write_all
+    from robocal.deploy.compensation import (
+        check_target_units,
+        compensate,
+        format_csv,
+        pose_columns,
+        read_poses_csv,
+    )
     from robocal.trust.output_marker import check_unmarked, mark_csv
 
     check_format(args.output, "CSV", "-o")

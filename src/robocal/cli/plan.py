@@ -44,12 +44,12 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.cli.args import controller_for, tool_frame
-    from robocal.compensate import check_target_units, controller_model, format_csv, read_poses_csv
+    from robocal.core.errors import DataError
+    from robocal.core.io import check_outputs, write_atomic
     from robocal.data.measurements import robot_reach
-    from robocal.errors import DataError
+    from robocal.deploy.compensation import check_target_units, controller_model, format_csv, read_poses_csv
     from robocal.ik import track
     from robocal.ik.path import plan_path
-    from robocal.io import check_outputs, write_atomic
     from robocal.kinematics.cell import is_track_cell
     from robocal.kinematics.model import load_model
 

@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from robocal.core.errors import DataError, UnitError
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.data.measurements import (
     MAX_JOINT_RAD,
     MAX_TRACKER_RANGE_M,
@@ -35,8 +37,6 @@ from robocal.data.measurements import (
     approach_from_order,
     travel_from_order,
 )
-from robocal.errors import DataError, UnitError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.kinematics.conditions import Conditions
 
 _SPLIT = re.compile(r"[,;\s]+")

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 
 
 @dataclass(frozen=True)

@@ -55,10 +55,10 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from robocal.core.errors import DataError, UnitError
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
 from robocal.data.csv_table import csv_rows, read_table, text_lines
 from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
-from robocal.errors import DataError, UnitError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
 from robocal.kinematics.conditions import UNKNOWN, Conditions
 from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
 from robocal.kinematics.transforms import ROTATION_TOL
@@ -276,7 +276,7 @@ class Measurements:
         >>> rc.Measurements.from_arrays("point", q)
         Traceback (most recent call last):
         ...
-        robocal.errors.DataError: ...
+        robocal.core.errors.DataError: ...
         """
         spec = kind_spec(kind)
         joints = np.asarray(joints, dtype=float) if not isinstance(joints, np.ndarray) else joints

@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from robocal.errors import DataError, IdentificationError
+from robocal.core.errors import DataError, IdentificationError
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix, skew
 
 # Smallest singular value (relative to the largest) of the column-normalised registration Jacobian

@@ -49,10 +49,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import robocal.data.simulated_physics as physics
+from robocal.core.errors import DataError, UnreachableError
+from robocal.core.io import write_all
 from robocal.data.kinds import KINDS, OBSERVED
 from robocal.data.measurements import Measurements, approach_from_order, robot_reach, travel_from_order
-from robocal.errors import DataError, UnreachableError
-from robocal.io import write_all
 from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, is_track_cell
 from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.model import Robot, track_chain

@@ -32,7 +32,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.fk import LinkArrays, chain_fk
 

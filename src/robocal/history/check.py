@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg, stats
 
+from robocal.core.errors import DataError
 from robocal.data.registration import register
-from robocal.errors import DataError
 from robocal.identify.plausibility import check_residual
 from robocal.identify.space import block_of
 from robocal.kinematics.conditions import Conditions

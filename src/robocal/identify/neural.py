@@ -31,9 +31,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.damped_least_squares import Status
+from robocal.core.damped_least_squares import Status
+from robocal.core.errors import IdentificationError
 from robocal.data.kinds import OBSERVED
-from robocal.errors import IdentificationError
 from robocal.identify.network import FIELDS, BPNetwork
 from robocal.identify.population import Stagnation
 from robocal.identify.solvers import SolverResult, history_entry

@@ -34,7 +34,7 @@ What real robots' errors can be, and the limits derived from it (named once here
   in mm (``JOINT_LIMIT_TOL_MM``, ``JOINT_LIMIT_MARGIN_MM``). Beyond ``MAX_JOINT_TURNS`` turns (or a
   revolute joint's own limits, when wider) no reading is real and ``force`` does not pass it.
 
-Each check raises :class:`robocal.errors.PlausibilityError` naming what is probably wrong;
+Each check raises :class:`robocal.core.errors.PlausibilityError` naming what is probably wrong;
 ``force=True`` (``--force``) turns it into a warning for users who know better.
 """
 
@@ -42,9 +42,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from robocal.core.errors import DataError, PlausibilityError
 from robocal.data.joint_conventions import COUPLED_OPTION, fanuc_decoupled
 from robocal.data.measurements import robot_reach
-from robocal.errors import DataError, PlausibilityError
 from robocal.identify.space import block_of
 
 MAX_NOMINAL_ERROR_MM = 10.0

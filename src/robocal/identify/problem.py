@@ -16,8 +16,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from robocal.core.errors import IdentificationError
 from robocal.data.kinds import OBSERVED
-from robocal.errors import IdentificationError
 from robocal.identify.observations import observation_for
 from robocal.identify.space import ParameterSpace, State, resolve_names
 

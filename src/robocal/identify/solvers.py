@@ -16,8 +16,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from robocal.damped_least_squares import SUCCESS, Status
-from robocal.errors import IdentificationError
+from robocal.core.damped_least_squares import SUCCESS, Status
+from robocal.core.errors import IdentificationError
 from robocal.identify.network import BPNetwork
 from robocal.identify.space import State
 

@@ -19,7 +19,7 @@ import numpy as np
 
 import robocal.ik.opw_ik as opw_ik
 import robocal.ik.ur_ik as ur_ik
-from robocal.errors import ModelError
+from robocal.core.errors import ModelError
 from robocal.ik.opw_ik import SEED_MARGIN, TOL, check_poses
 from robocal.kinematics.model import Robot
 from robocal.kinematics.model_file import LINK_FIELDS

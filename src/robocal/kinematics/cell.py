@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.errors import ModelError
+from robocal.core.errors import ModelError
 from robocal.kinematics.cell_file import TRACK_SCALE
 from robocal.kinematics.convert import opw_chain
 from robocal.kinematics.model import Robot

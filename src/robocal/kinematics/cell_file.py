@@ -40,8 +40,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from robocal.errors import ModelError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, short_repr
+from robocal.core.errors import ModelError
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, short_repr
 from robocal.kinematics.convert import PARALLEL_TOL, default_parallel
 from robocal.kinematics.fk import LinkArrays
 from robocal.kinematics.model_file import MAX_DESCRIPTION, MAX_NAME, _frame, _mapping, _numbers, _text, _units

@@ -22,8 +22,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from robocal.errors import ModelError
-from robocal.io import as_number
+from robocal.core.errors import ModelError
+from robocal.core.io import as_number
 
 TEMPERATURE_MARGIN_K = 2.0  # a temperature this far beyond the calibrated range is an extrapolation
 PAYLOAD_MARGIN_FRACTION = 0.1  # a payload beyond the calibrated masses by this share of the heaviest ...

@@ -11,7 +11,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from robocal.errors import ModelError
+from robocal.core.errors import ModelError
 from robocal.kinematics.conditions import UNKNOWN, Conditions
 from robocal.kinematics.fk import CHUNK, LinkArrays, chain_frames
 from robocal.kinematics.joint_errors import conditions_of, joint_error_basis, scatter_offsets

@@ -61,8 +61,8 @@ import numpy as np
 
 import robocal.kinematics.load as load
 import robocal.kinematics.thermal as thermal
-from robocal.errors import IdentificationError, ModelError
-from robocal.io import as_number
+from robocal.core.errors import IdentificationError, ModelError
+from robocal.core.io import as_number
 from robocal.kinematics.conditions import KEY as CONDITIONS_KEY
 from robocal.kinematics.conditions import UNKNOWN, CalibratedRange, Conditions, beyond
 from robocal.kinematics.fk import chain_frames

@@ -29,8 +29,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from robocal.errors import DataError, ModelError, UnitError
-from robocal.io import as_number, write_atomic
+from robocal.core.errors import DataError, ModelError, UnitError
+from robocal.core.io import as_number, write_atomic
 from robocal.kinematics.catalog import catalog_kwargs
 from robocal.kinematics.cell_file import TRACK_SCALE, chain_arrays, read_cell
 from robocal.kinematics.conditions import UNKNOWN, Conditions

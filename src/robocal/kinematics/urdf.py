@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.errors import ModelError
-from robocal.io import write_atomic
+from robocal.core.errors import ModelError
+from robocal.core.io import write_atomic
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 from robocal.kinematics.urdf_read import matrix_to_rpy, urdf_kwargs

@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import ModelError
-from robocal.io import read_text
+from robocal.core.errors import ModelError
+from robocal.core.io import read_text
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 
 MAX_OFFSET_M = 100.0  # a joint origin farther than this from its parent is no robot's (URDF is in m)

@@ -26,8 +26,8 @@ the residual better than the step is called a drift.
 
 **Diagnosis** of an inconsistent fit, in order: the change point; the orientation convention of a
 6-DOF pose file (quaternions scalar-last under ``qw,qx,qy,qz`` headers, or the inverse rotation:
-each tried, the one that fits named); the length unit (:func:`robocal.diagnose.length_unit`); a
-joint column exchange or sign flip (:func:`robocal.diagnose.joint_mixup`).
+each tried, the one that fits named); the length unit (:func:`robocal.trust.diagnosis.length_unit`); a
+joint column exchange or sign flip (:func:`robocal.trust.diagnosis.joint_mixup`).
 
 **Worse than nominal.** A fitted model that misses its own data by more than the nominal model
 with the frames fitted (beyond :data:`WORSE_TOLERANCE`) is not written
@@ -44,13 +44,13 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 from scipy.special import chdtrc  # chi2.sf without importing scipy.stats (a third of start-up)
 
+from robocal.core.errors import PlausibilityError, RobocalError
 from robocal.data.measurements import robot_reach
 from robocal.data.registration import register_frame
-from robocal.diagnose import GAIN, fit_rms_mm, joint_mixup, length_unit
-from robocal.errors import PlausibilityError, RobocalError
 from robocal.identify.plausibility import FORCE_HINT
 from robocal.identify.problem import KIND_SIGMA
 from robocal.kinematics.conditions import Conditions
+from robocal.trust.diagnosis import GAIN, fit_rms_mm, joint_mixup, length_unit
 
 ALPHA = 1e-3  # the residual test's false-alarm probability per fit (model and noise right)
 UNMODELLED_MM_PER_M = 0.5  # unmodelled-error budget: mm (1 sigma, per coordinate) per metre of reach
@@ -283,7 +283,7 @@ def _angle_rms_deg(A: np.ndarray, R: np.ndarray) -> float:
 def orientation_convention(robot, data) -> str | None:
     """For a 6-DOF pose file: another reading of its quaternions (scalar-last under
     ``qw,qx,qy,qz`` headers, the inverse rotation, both) under which the model's orientations fit
-    (within :data:`ORIENTATION_FIT_DEG` and :data:`robocal.diagnose.GAIN` times better than as
+    (within :data:`ORIENTATION_FIT_DEG` and :data:`robocal.trust.diagnosis.GAIN` times better than as
     given), as a sentence; None otherwise."""
     if not data.spec.sees_orientation or data.rotations is None:
         return None

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import importlib
 
+from robocal.core.errors import IdentificationError
 from robocal.data.kinds import OBSERVED
-from robocal.errors import IdentificationError
 
 
 def observation_for(data, robot, **options):
