@@ -2,7 +2,7 @@
 
 Campaign: 300 poses (tracker points, 0.02 mm isotropic noise) in three blocks at 0, 75 and
 150 kg (centre of mass 250 mm along the flange's z axis), the arm warming from 20 to 35 deg C
-within each block (:mod:`robocal.data.simulate_conditions`). Held out: 100 other poses of the same
+within each block (:mod:`robocal.data.simulated_physics`). Held out: 100 other poses of the same
 true robot at 110 kg and 28 deg C (``as_is``). Calibrated with the geometric model,
 ``nongeometric="payload,thermal"`` and ``"auto"``; the held-out RMS is compared with the noise
 floor of the held-out set (goals: 1.3x for the named terms, 1.5x for auto). Three seeds.

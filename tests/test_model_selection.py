@@ -33,6 +33,7 @@ from robocal.identify.lsq import gauss_newton
 from robocal.identify.priors import prior_sigma
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.space import ParameterSpace
+from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.joint_errors import JointErrorModel, candidate_names, cyclic_names
 
 COMPLIANCE_GEAR_BACKLASH = (["comp2_3", "comp2_6", "comp3_6", "gear1_s1", "gear2_c1", "gear3_s2", "backlash1",
@@ -87,7 +88,7 @@ def test_travel_and_cyclic_columns_match_finite_differences(kind):
     # the model the calibration returns applies the same offsets in fk
     model = JointErrorModel(tuple(names), nu)
     d = sim.data
-    dq = model.offsets(sim.truth, d.joints, d.approach, d.travel)
+    dq = model.offsets(sim.truth, d.joints, Conditions(d.approach, d.travel))
     assert np.allclose(dq[:, 0], nu[0] * d.travel[:, 0])
     q2 = d.joints[:, 1]
     assert np.allclose(dq[:, 1], nu[2] * np.sin(101.5 * q2) + nu[3] * np.cos(101.5 * q2))
@@ -337,8 +338,8 @@ def test_explicit_cyclic_term_searches_the_data_and_the_model_round_trips(tmp_pa
     back = Robot.load(tmp_path / "m.yaml")
     d = sim.data
     assert back.joint_errors.names == result.robot.joint_errors.names
-    assert np.array_equal(back.fk(d.joints, approach=d.approach, travel=d.travel),
-                          result.robot.fk(d.joints, approach=d.approach, travel=d.travel))
+    assert np.array_equal(back.fk(d.joints, conditions=d.conditions),
+                          result.robot.fk(d.joints, conditions=d.conditions))
     clean = simulate_tracker(robot, 60, noise_mm=0.02, seed=2).data
     plain = calibrate(robot, clean, nongeometric="cyclic")
     assert plain.robot.joint_errors is None

@@ -10,7 +10,8 @@ from robocal import Robot
 from robocal.calibration.pipeline import calibrate
 from robocal.core.errors import DataError, IdentificationError
 from robocal.data.simulate import simulate_tracker
-from robocal.identify.neural import BPNetwork, compensate, default_outputs, train
+from robocal.identify.network import BPNetwork
+from robocal.identify.neural import compensate, default_outputs, train
 from robocal.identify.problem import CalibrationProblem
 
 

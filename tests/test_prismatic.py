@@ -210,7 +210,7 @@ def _urdf_fk(text: str, q: np.ndarray) -> np.ndarray:
     """The URDF's own forward kinematics along its single chain (the independent truth)."""
     import xml.etree.ElementTree as ET
 
-    from robocal.kinematics.urdf import rpy_to_matrix
+    from robocal.kinematics.urdf_read import rpy_to_matrix
 
     T, k = np.eye(4), 0
     for j in ET.fromstring(text).findall("joint"):

@@ -10,8 +10,8 @@ import robocal as rc
 from robocal.core.errors import DataError, UnitError
 from robocal.data.measurements import Measurements, parse_csv
 from robocal.data.simulate import TRACK_SCALE_ERROR, simulate_tracker
-from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, cell_from_data
-from robocal.kinematics.model import Robot
+from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames
+from robocal.kinematics.model import Robot, cell_from_data
 
 CELL = {"units": {"length": "mm", "angle": "deg"}, "name": "kr210 on a 6 m track",
         "robot": "kuka_kr210_r2700", "track": {"direction": [1, 0, 0], "limits": [0, 6000]},

@@ -13,7 +13,8 @@ from scipy.spatial.transform import Rotation
 from robocal.data.simulate import simulate_tracker
 from robocal.deploy.compensation import controller_model
 from robocal.ik import track
-from robocal.kinematics.cell import arm_model, cell_from_data
+from robocal.kinematics.cell import arm_model
+from robocal.kinematics.model import cell_from_data
 from robocal.programs.dialects.rapid.configuration import ABBConfig
 from robocal.programs.filter import filter_program
 

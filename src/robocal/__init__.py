@@ -26,6 +26,7 @@ _LAZY = {
     "compensate": "robocal.deploy.compensation",
     "Measurements": "robocal.data.measurements",
     "register": "robocal.data.registration",
+    "Conditions": "robocal.kinematics.conditions",  # the rows' conditions for Robot.fk / jacobian
     "simulate_tracker": "robocal.data.simulate",
     "evaluate": "robocal.calibration.evaluation",
     "Robot": "robocal.kinematics.model",

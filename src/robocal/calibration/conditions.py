@@ -106,7 +106,7 @@ def section(result) -> dict | None:
 def _coverage(datasets) -> dict:
     """The payloads and temperatures the calibration rows recorded (the range the model keeps,
     :func:`robocal.kinematics.conditions.range_of`, with the distinct masses and centres of mass)."""
-    covered = range_of([d.payload for d in datasets], [d.temperature for d in datasets])
+    covered = range_of([d.conditions for d in datasets])
     out: dict = {"payload": None, "temperature": None}
     if covered.payload_kg is not None:
         payload = _column(datasets, "payload")

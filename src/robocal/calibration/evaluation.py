@@ -124,15 +124,13 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     for d in (data, frame_from):
         if d is not None:
             check_joint_limits(robot, d, f"the data {d.label or ''}".strip(), force=force, warnings=warnings)
-    warnings += extrapolated_conditions(robot, data.payload, data.temperature,
+    warnings += extrapolated_conditions(robot, data.conditions,
                                         f"rows of {Path(data.file).name if data.file else 'the data'}")
     if fit_frame or frame_from is not None:
         fitted_on = data if frame_from is None else frame_from
         reg = register_frame(robot, fitted_on)
         robot = apply_registration(robot, reg)
-        modelled = robot.fk(fitted_on.joints, smr=fitted_on.smr, approach=fitted_on.approach,
-                            travel=fitted_on.travel, payload=fitted_on.payload,
-                            temperature=fitted_on.temperature)[:, :3, 3]
+        modelled = robot.fk(fitted_on.joints, smr=fitted_on.smr, conditions=fitted_on.conditions)[:, :3, 3]
         check_spread(fitted_on.points, modelled, "the data the frame is fitted on", force=force,
                      warnings=warnings)
         out["robot"] = robot
@@ -143,7 +141,7 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     stats = position_stats(err)
     check_residual(stats["rms"], obs.modelled_points(robot, nuisance), "the evaluated data", force=force,
                    warnings=warnings)
-    if not (fit_frame or frame_from is not None) and data.kind in ("point", "pose"):
+    if not (fit_frame or frame_from is not None) and data.spec.sees_position:
         _check_frame_moved(robot, data, stats["rms"], warnings)
     unknowns = 6 + 3 * data.n_smr if fit_frame and frame_from is None else 0
     consistency = check_fit(robot, robot, [obs], [err], unknowns)
@@ -156,9 +154,8 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
         stats["error_vectors_mm"] = err * 1e3
     else:
         stats["errors_mm"] = err * 1e3
-    if data.kind == "pose":
-        R = robot.fk(data.joints, smr=data.smr, approach=data.approach, travel=data.travel,
-                     payload=data.payload, temperature=data.temperature)[:, :3, :3]
+    if data.spec.sees_orientation:
+        R = robot.fk(data.joints, smr=data.smr, conditions=data.conditions)[:, :3, :3]
         ang = np.linalg.norm(matrix_to_rotvec(data.rotations @ np.swapaxes(R, 1, 2)), axis=1)
         deg = np.rad2deg(ang)
         stats["rotation_deg"] = {"rms": float(np.sqrt(np.mean(deg**2))), "mean": float(deg.mean()),

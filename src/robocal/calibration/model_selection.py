@@ -371,7 +371,7 @@ def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol
     choice and the cost. ``warm_final``: the final fit starts from the superset's estimate (else
     from nominal, as the calibration of the chosen model named explicitly)."""
     t0 = time.perf_counter()
-    n_groups = np.unique(data.pair if data.kind == "distance" else data.pose_id).size
+    n_groups = np.unique(getattr(data, data.spec.group)).size
     if n_groups < FOLDS * MIN_POSES_PER_FOLD:
         raise IdentificationError(
             f"choosing the error model by {FOLDS}-fold cross-validation needs at least "

@@ -18,8 +18,8 @@ from functools import partial
 
 import numpy as np
 
-from robocal.calibration.model_selection import calibrate_cyclic, select_error_model, selection_table
 from robocal.calibration import conditions
+from robocal.calibration.model_selection import calibrate_cyclic, select_error_model, selection_table
 from robocal.core.damped_least_squares import Status
 from robocal.core.errors import DataError, IdentificationError
 from robocal.core.io import load_json, read_text, write_atomic
@@ -27,6 +27,7 @@ from robocal.core.progress import Progress
 from robocal.core.resources import calibration_bytes, check_memory, few_threads, memory_guard
 from robocal.core.schema import RESULT_SCHEMA, validate
 from robocal.core.version import __version__
+from robocal.data.kinds import kind_spec
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
 from robocal.identify import vocabulary
@@ -201,7 +202,7 @@ class CalibrationResult(_BeforeAfter):
     def validation_shifts(self) -> FileShifts | None:
         """The held-out error split into a shift per validation file and the error within the files
         (`robocal.trust.file_shifts`; point and pose files), with two validation files or more."""
-        files = [j for j in self.judged if j.data.kind in ("point", "pose")]
+        files = [j for j in self.judged if j.data.spec.sees_position]
         errors = [pose_means(j.problem.item_error_vectors(j.states[1])[0], j.data.pose_id) for j in files]
         return file_shifts([j.data.label for j in files], errors)
 
@@ -497,7 +498,7 @@ def json_text(content: dict) -> str:
 def _start_model(robot, datasets: list, register_frames: bool, force: bool, warnings: list[str]):
     """The nominal model with the tracker frame and SMR offsets fitted to the first point or pose
     set; the measured points must spread like the fitted model's (a unit or robot mix-up else)."""
-    data = next((d for d in datasets if d.kind in ("point", "pose")), None)
+    data = next((d for d in datasets if d.spec.sees_position), None)
     if data is None or not register_frames:
         return robot
     start = register(robot, data)
@@ -799,7 +800,7 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     declared = list(dict.fromkeys(start.joint_error_names + candidate_names(start.n_joints, terms)))
     declared_start = start.with_joint_errors(declared).with_reference_temperature(
         thermal_reference([d.temperature for d in datasets])).with_calibrated_conditions(  # T_ref: the mean
-        conditions_range([d.payload for d in datasets], [d.temperature for d in datasets]))
+        conditions_range([d.conditions for d in datasets]))
     problem = CalibrationProblem(declared_start, datasets, sigma=sigma)
     state0 = problem.start(declared_start)
     errors0 = problem.position_errors(state0)
@@ -943,9 +944,9 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     smr = getattr(joints_or_data, "smr", None)
     smr = None if smr is None or smr.max(initial=0) > len(robot.smr) else smr
     T = robot.fk(q, smr=smr)
-    extra = {"rotations": T[:, :3, :3]} if kind == "pose" else {}
-    data = Measurements.from_arrays(kind, q, points=T[:, :3, 3], smr=smr,  # every SMR's rows, as measured
-                                    pose_id=getattr(joints_or_data, "pose_id", None), **extra)
+    readings = kind_spec(kind).readings(T)
+    data = Measurements.from_arrays(kind, q, smr=smr,  # every SMR's rows, as measured
+                                    pose_id=getattr(joints_or_data, "pose_id", None), **readings)
     if not (np.isfinite(noise_mm) and noise_mm > 0):
         raise DataError(f"the measurement noise must be > 0 mm, got {noise_mm}")
     ident = posterior_analysis(robot, data, Noise(sigma_m=float(noise_mm) * 1e-3), params, rtol)

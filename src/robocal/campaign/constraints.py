@@ -206,9 +206,10 @@ def limits_with_margin(robot, margin_deg: float) -> np.ndarray:
     tight = np.flatnonzero(lim[:, 0] > lim[:, 1])
     if tight.size:
         i = int(tight[0])
-        lo, hi = np.rad2deg(robot.limits[i])
+        joint = robot.joints[i]
+        lo, hi = joint.shown(np.array(joint.limits))
         raise DataError(f"a joint-limit margin of {margin_deg:g} deg leaves no room on joint {i + 1} "
-                        f"(limits {lo:.4g} to {hi:.4g} deg): lower the margin")
+                        f"(limits {lo:.4g} to {hi:.4g} {joint.unit}): lower the margin")
     return lim
 
 

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robocal.core.errors import DataError
+from robocal.data.kinds import OBSERVED
 from robocal.data.measurements import Measurements
 from robocal.identify.identifiability import Identifiability, analyze
 from robocal.identify.priors import prior_sigma
@@ -40,7 +41,6 @@ from robocal.identify.problem import CalibrationProblem
 from robocal.trust.coverage import region_matrix
 from robocal.trust.posterior import Noise, judge, whitened_jacobian
 
-GENERATED_KINDS = ("point", "pose")  # kinds whose candidates robocal can generate from joints
 IDENTIFIABILITY_ROWS = 12000         # residual rows (items spread over all candidates) analysed
 
 
@@ -89,13 +89,13 @@ def candidate_data(robot, kind: str, q: np.ndarray, visible: np.ndarray) -> Meas
     """Measurements a campaign at joints ``q (C, n)`` would give, with the model's own
     predictions as the measured values: one row per candidate and SMR it sees (points), one per
     candidate (poses)."""
-    if kind not in GENERATED_KINDS:
+    spec = OBSERVED.get(kind)
+    if spec is None or not spec.sees_position:  # only a tracker's candidates follow from the joints
         raise DataError(f"{kind} candidates come from a file of contacts or pairs (--from): robocal "
                         "cannot place them without the fixture")
-    cand, smr = np.nonzero(visible) if kind == "point" else (np.arange(len(q)), np.zeros(len(q), int))
+    cand, smr = np.nonzero(visible) if spec.several_smrs else (np.arange(len(q)), np.zeros(len(q), int))
     T = robot.fk(q[cand], smr=smr)
-    extra = {"rotations": T[:, :3, :3]} if kind == "pose" else {}
-    return Measurements.from_arrays(kind, q[cand], points=T[:, :3, 3], smr=smr, pose_id=cand, **extra)
+    return Measurements.from_arrays(kind, q[cand], smr=smr, pose_id=cand, **spec.readings(T))
 
 
 def candidate_blocks(obs, data: Measurements, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -104,7 +104,7 @@ def candidate_blocks(obs, data: Measurements, rows: np.ndarray) -> tuple[np.ndar
     ``(items,)`` and the items per candidate ``(C,)``. A candidate is a pose (all its SMRs' rows), or
     one pair of a distance measurement."""
     r = obs.rows_per_item
-    item_group = np.arange(obs.n_items) if obs.kind == "distance" else data.pose_id
+    item_group = data.pose_id if data.spec.group == "pose_id" else np.arange(obs.n_items)  # a pair: one item
     labels, cand_of_item = np.unique(item_group, return_inverse=True)
     per = np.bincount(cand_of_item, minlength=labels.size)
     order = np.argsort(cand_of_item, kind="stable")

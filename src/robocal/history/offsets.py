@@ -78,7 +78,7 @@ def recalibrate_offsets(nominal, start, data, validation=None, **options):
     """
     check_same_robot(nominal, start)
     sets = data if isinstance(data, list | tuple) else [data]
-    if any(d.kind not in ("point", "pose") for d in sets):
+    if any(not d.spec.sees_position for d in sets):
         raise DataError("an offsets-only recalibration needs tracker data (points or poses)")
     for key in ("params", "nongeometric"):
         if key in options:

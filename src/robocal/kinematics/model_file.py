@@ -296,7 +296,7 @@ def dump_model(robot) -> str:
 
 def is_cell(data) -> bool:
     """Whether a loaded model mapping is a cell file, a robot on a track (it names a ``robot`` and
-    a ``track``: :mod:`robocal.kinematics.cell`)."""
+    a ``track``: :mod:`robocal.kinematics.cell_file`)."""
     return isinstance(data, dict) and "track" in data and "robot" in data
 
 

@@ -117,7 +117,7 @@ def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
     as one sentence, or None when the data do not tell. ``datasets``: Measurements (only point
     and pose sets are examined); ``frame_fitted=False``: the model was judged in its own frame
     (no registration), so a frame that fits is itself the diagnosis."""
-    sets = [d for d in datasets if d.kind in ("point", "pose") and len(d) >= 6]
+    sets = [d for d in datasets if d.spec.sees_position and len(d) >= 6]
     if not sets:
         return None
     alone = [fit_rms_mm(robot, d) for d in sets]

@@ -89,7 +89,7 @@ def whitened_jacobian(robot, problem: CalibrationProblem, state: State, J: np.nd
     (whitened)."""
     obs = problem.observation
     r = obs.rows_per_item
-    if obs.kind in ("plane", "distance"):
+    if not obs.data.spec.sees_position:
         return J / noise.sigma_m
     blocks = J.reshape(obs.n_items, r, -1)
     W = noise.whitener(obs.modelled_points(robot, state.nuisance))

@@ -33,12 +33,12 @@ import numpy as np
 from robocal.core.errors import ModelError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.core.yaml_load import load_yaml
-from robocal.kinematics.catalog import catalog_entry
+from robocal.kinematics.catalog import catalog_entry, catalog_names
 from robocal.kinematics.convert import PARALLEL_TOL
 from robocal.kinematics.model import MAX_ANGLE_RAD, Robot
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 from robocal.kinematics.ur import nearest_ur_links
-from robocal.kinematics.urdf import matrix_to_rpy, rpy_to_matrix
+from robocal.kinematics.urdf_read import matrix_to_rpy, rpy_to_matrix
 
 LINK_NAMES = ("shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3")
 ORIGIN_KEYS = ("x", "y", "z", "roll", "pitch", "yaw")
@@ -321,8 +321,6 @@ def _check_nominal(robot: Robot, nominal: Robot, source: str, fits) -> None:
 
 def _ur_names() -> list[str]:
     """The catalog's Universal Robots arms (those with a nominal DH table)."""
-    from robocal.kinematics.catalog import catalog_names
-
     return [n for n in catalog_names() if n.startswith("ur") and "dh" in catalog_entry(n)]
 
 

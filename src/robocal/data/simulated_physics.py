@@ -1,4 +1,5 @@
-"""Working conditions of a simulated campaign: payloads and the arm's temperature.
+"""The physics of a simulated campaign's conditions: the payloads' deflection and the arm's
+thermal expansion.
 
 The truth of :func:`robocal.data.simulate.simulate_tracker` with ``payloads`` and
 ``temperatures``: the poses are measured in equal consecutive blocks, one per payload (in the
@@ -32,6 +33,7 @@ from dataclasses import replace
 import numpy as np
 
 from robocal.core.errors import DataError
+from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.fk import LinkArrays, chain_fk
 
 PAYLOAD_COM_M = (0.0, 0.0, 0.25)  # default centre of mass in the flange frame, m
@@ -168,13 +170,15 @@ def _com_height(links: LinkArrays, q: np.ndarray, com: np.ndarray) -> np.ndarray
     return chain_fk(links, np.eye(4), tool, q)[:, 2, 3]
 
 
-def measured_poses(true, q: np.ndarray, smr: np.ndarray, approach, travel, payload, temperature,
+def measured_poses(true, q: np.ndarray, smr: np.ndarray, conditions: Conditions,
                    coefficients: dict[str, float], reference: float) -> np.ndarray:
     """TCP poses ``(N, 4, 4)`` of the true robot ``true`` (its own joint errors, without the
-    condition terms) at commanded ``q (N, n)`` carrying ``payload (N, 4)`` at ``temperature (N,)``
-    (either None), with the true ``coefficients`` (:func:`true_terms`)."""
+    condition terms) at commanded ``q (N, n)`` reached at ``conditions`` (approach directions and
+    moves) carrying their payload ``(N, 4)`` at their temperature ``(N,)`` (either None), with the
+    true ``coefficients`` (:func:`true_terms`)."""
     n = q.shape[1]
-    reached = true.reached_joints(q, approach, travel)
+    payload, temperature = conditions.payload, conditions.temperature
+    reached = true.reached_joints(q, Conditions(conditions.approach, conditions.travel))
     if payload is not None and payload[:, 0].any():
         plain = replace(true, joint_errors=None)
         c = np.array([coefficients.get(f"payload{i + 1}", 0.0) for i in range(n)])
