@@ -5,7 +5,7 @@ thermal campaign).
 For every data set and split: ``auto`` (chosen by cross-validation on the calibration part only)
 and every candidate it considered, each calibrated by hand with its terms named (the held-out part
 only judges). Recorded per set: auto's choice and held-out RMS, the best candidate's, their ratio,
-and whether auto stays within the selection's tolerance (``robocal.model_selection.
+and whether auto stays within the selection's tolerance (``robocal.calibration.model_selection.
 SELECTION_TOLERANCE``: the most the rule lets the chosen model's cross-validated error exceed the
 lowest one) of the best candidate held out. The held-out sets are finite samples: the held-out SE
 column is the standard error of auto's held-out RMS minus the best candidate's (paired over the
@@ -39,13 +39,13 @@ from pathlib import Path
 import numpy as np
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.evaluation import model_errors
+from robocal.calibration.model_selection import SELECTION_TOLERANCE, paired_se_mm
+from robocal.calibration.pipeline import calibrate
 from robocal.data.datasets import irb120, meca500
 from robocal.data.importer import import_tracker
 from robocal.data.simulate import simulate_tracker
-from robocal.evaluate import model_errors
 from robocal.kinematics.joint_errors import JointErrorModel
-from robocal.model_selection import SELECTION_TOLERANCE, paired_se_mm
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from results import figure, table  # noqa: E402
@@ -117,8 +117,8 @@ def _sets():
 
 def _paired_se_mm(model, other, held) -> float:
     """Standard error (mm) of ``model``'s held-out RMS minus ``other``'s: the selection's own paired
-    rule (`robocal.model_selection.paired_se_mm`) on the held-out poses' shares of the mean squared
-    error (what the held-out sample can resolve)."""
+    rule (`robocal.calibration.model_selection.paired_se_mm`) on the held-out poses' shares of the
+    mean squared error (what the held-out sample can resolve)."""
     pose = np.unique(held.pose_id, return_inverse=True)[1]
     share = [np.bincount(pose, weights=np.sum(model_errors(m, held) ** 2, axis=1)) / held.pose_id.size
              for m in (model, other)]

@@ -18,7 +18,7 @@ from scipy.optimize import least_squares
 from timing import best_time, interleaved, kernel_choices
 
 from robocal import RobocalError, Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
 from robocal.data.registration import register
 from robocal.data.simulate import simulate_tracker
 from robocal.identify.lsq import gauss_newton

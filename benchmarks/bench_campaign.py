@@ -42,8 +42,9 @@ from timing import best_time
 import robocal as rc
 from robocal.campaign import exchange
 from robocal.campaign.exchange import _Design, criterion_value
-from robocal.campaign.information import Noise, candidate_data, information
+from robocal.campaign.information import candidate_data, information
 from robocal.data.simulate import simulate_tracker
+from robocal.trust.posterior import Noise
 
 SEEDS = 40
 PLANNER_SEEDS = 6  # Meca500: the planner's seed picks among near-equal designs; their median

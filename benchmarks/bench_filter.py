@@ -24,17 +24,18 @@ from scipy.spatial.transform import Rotation
 from timing import best_time
 
 import robocal as rc
-from robocal.compensate import controller_model
 from robocal.data.simulate import perturbed, simulate_tracker
+from robocal.deploy.compensation import controller_model
+from robocal.deploy.tcp import identify_tcp
 from robocal.ik.closed_form import branch_slot
 from robocal.ik.controller import nearest_solutions
 from robocal.ik.singularity import singularity_distance
 from robocal.kinematics.transforms import invert_transform, make_transform
 from robocal.programs import filter_program
-from robocal.programs.filter import _nearest_joints, as_frames, controller_joints, dialect_for, target_poses
+from robocal.programs.filter import _nearest_joints, as_frames, controller_joints, target_poses
+from robocal.programs.registry import dialect_for
 from robocal.programs.simulate import execute, touch_poses, write_program
 from robocal.programs.source import ProgramText
-from robocal.tcp import identify_tcp
 
 CASES = [("rapid", "abb_irb2600"), ("krl", "kuka_kr16_2"), ("fanuc", "fanuc_lrmate200id"),
          ("urscript", "ur5"), ("inform", "yaskawa_gp25"), ("val3", "staubli_tx2_140")]

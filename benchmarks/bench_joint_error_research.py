@@ -16,13 +16,14 @@ from pathlib import Path
 import numpy as np
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.model_selection import _folds
+from robocal.calibration.pipeline import calibrate
 from robocal.data.datasets import irb120, meca500
 from robocal.identify.linalg import ScaledSVD
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.space import ParameterSpace
+from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.fk import chain_frames
-from robocal.model_selection import _folds
 
 DS = Path(__file__).resolve().parents[2] / "shared" / "datasets"
 FOLDS = 5
@@ -39,7 +40,7 @@ class _Linear:
         self.A = problem.jacobian(state, result.space)
         self.r = problem.residuals(state)
         self.Jtheta = problem.jacobian(state, ParameterSpace([f"theta{i + 1}" for i in range(n)]))
-        self.q_reached = state.robot.reached_joints(data.joints, data.approach, data.travel)
+        self.q_reached = state.robot.reached_joints(data.joints, Conditions(data.approach, data.travel))
         self.robot = state.robot
 
     def joint_columns(self, f: np.ndarray) -> np.ndarray:

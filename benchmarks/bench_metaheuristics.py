@@ -23,7 +23,7 @@ from results import table
 from scipy.optimize import differential_evolution
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
 from robocal.data.simulate import sample_joints, simulate_tracker
 from robocal.identify.observations.plane import PlaneObservation
 from robocal.identify.population import PopulationCost

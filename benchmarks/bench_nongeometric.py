@@ -28,10 +28,10 @@ from pathlib import Path
 import numpy as np
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.evaluation import model_errors
+from robocal.calibration.pipeline import calibrate
 from robocal.data.datasets import irb120, meca500
 from robocal.data.simulate import simulate_tracker
-from robocal.evaluate import model_errors
 from robocal.identify import identifiability
 from robocal.identify.residual import ResidualModel
 from robocal.kinematics.joint_errors import TERMS, JointErrorModel, cyclic_names

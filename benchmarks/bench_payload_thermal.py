@@ -2,7 +2,7 @@
 
 Campaign: 300 poses (tracker points, 0.02 mm isotropic noise) in three blocks at 0, 75 and
 150 kg (centre of mass 250 mm along the flange's z axis), the arm warming from 20 to 35 deg C
-within each block (:mod:`robocal.data.simulate_conditions`). Held out: 100 other poses of the same
+within each block (:mod:`robocal.data.simulated_physics`). Held out: 100 other poses of the same
 true robot at 110 kg and 28 deg C (``as_is``). Calibrated with the geometric model,
 ``nongeometric="payload,thermal"`` and ``"auto"``; the held-out RMS is compared with the noise
 floor of the held-out set (goals: 1.3x for the named terms, 1.5x for auto). Three seeds.
@@ -35,14 +35,14 @@ from pathlib import Path
 import numpy as np
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
 from robocal.data.simulate import simulate_tracker
+from robocal.deploy.tcp import identify_tcp
 from robocal.ik import solve as ik_solve
 from robocal.ik.singularity import singularity_distance
 from robocal.kinematics.transforms import invert_transform, make_transform
 from robocal.programs import filter_program
 from robocal.programs.simulate import execute, touch_poses, write_program
-from robocal.tcp import identify_tcp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from results import figure, table  # noqa: E402

@@ -25,14 +25,14 @@ from pathlib import Path
 import numpy as np
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
 from robocal.data.simulate import simulate_tracker
+from robocal.deploy.tcp import identify_tcp
 from robocal.ik import solve as ik_solve
 from robocal.ik.singularity import singularity_distance
 from robocal.kinematics.transforms import invert_transform, make_transform
 from robocal.programs import filter_program
 from robocal.programs.simulate import execute, touch_poses, write_program
-from robocal.tcp import identify_tcp
 
 N_CAL, N_TARGETS, NOISE_MM, SEED = 300, 100, 0.02, 1
 TEMPERATURE = 30.0

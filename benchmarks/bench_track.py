@@ -17,12 +17,13 @@ import numpy as np
 from results import figure, table
 from scipy.spatial.transform import Rotation
 
-from robocal.calibration import calibrate
+from robocal.calibration.evaluation import evaluate
+from robocal.calibration.pipeline import calibrate
 from robocal.data.simulate import simulate_tracker
-from robocal.evaluate import evaluate
 from robocal.ik import track
-from robocal.kinematics.cell import TRACK_SCALE, arm_model, cell_from_data
-from robocal.programs.config import ABBConfig
+from robocal.kinematics.cell import TRACK_SCALE, arm_model
+from robocal.kinematics.model import cell_from_data
+from robocal.programs.dialects.rapid.configuration import ABBConfig
 from robocal.programs.filter import filter_program
 
 CELL = {"units": {"length": "mm", "angle": "deg"}, "name": "kr210 on a 6 m track",

@@ -22,8 +22,8 @@ import numpy as np
 from results import figure, table
 
 import robocal as rc
+from robocal.core.errors import PlausibilityError
 from robocal.data.simulate import simulate_tracker
-from robocal.errors import PlausibilityError
 
 ROBOTS = ("abb_irb2600", "kuka_kr16_2", "fanuc_m20ia", "yaskawa_gp25", "ur10", "staubli_tx2_140")
 SEEDS = range(5)

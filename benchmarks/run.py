@@ -27,8 +27,8 @@ sys.path.insert(0, str(HERE))  # the benchmarks share benchmarks/timing.py and r
 
 import results  # noqa: E402
 
-from robocal.io import write_atomic  # noqa: E402
-from robocal.version import __version__  # noqa: E402
+from robocal.core.io import write_atomic  # noqa: E402
+from robocal.core.version import __version__  # noqa: E402
 
 RESULTS = HERE / "results.json"
 

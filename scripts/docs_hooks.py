@@ -4,6 +4,8 @@ cannot drift from what they describe.
 A page holds a marker comment that the hook replaces when the site is built:
 
 - ``<!-- generated: cli -->``: every ``robocal`` command, from the argparse parser itself;
+- ``<!-- generated: program-formats -->``: the robot languages of ``robocal filter --format`` and
+  ``robocal poses --program``, from their registry (``robocal.programs.registry``);
 - ``<!-- generated: benchmarks -->``: the tables and output of ``benchmarks/results.json``, which
   ``benchmarks/run.py`` (``make bench``) writes;
 - ``<!-- bench: NAME.KEY -->``: the table recorded under ``KEY`` by ``benchmarks/bench_NAME.py``,
@@ -26,6 +28,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 BENCH_RESULTS = ROOT / "benchmarks" / "results.json"
 CLI_MARK = "<!-- generated: cli -->"
+FORMATS_MARK = "<!-- generated: program-formats -->"
 BENCH_MARK = "<!-- generated: benchmarks -->"
 BENCH_REF = re.compile(r"<!--\s*bench:\s*([a-z0-9_]+)(?:\.([A-Za-z0-9_]+))?\s*-->")
 BENCH_FIGURE = re.compile(r"\{\{\s*bench\.([a-z0-9_]+)\.([A-Za-z0-9_]+)\s*\}\}")
@@ -39,6 +42,10 @@ class BenchReferenceError(ValueError):
 def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001 - MkDocs' signature
     if CLI_MARK in markdown:
         markdown = markdown.replace(CLI_MARK, cli_markdown())
+    if FORMATS_MARK in markdown:
+        from robocal.programs.registry import format_table
+
+        markdown = markdown.replace(FORMATS_MARK, format_table())
     if BENCH_MARK in markdown:
         markdown = markdown.replace(BENCH_MARK, benchmarks_markdown(BENCH_RESULTS))
     if BENCH_ANY.search(markdown):

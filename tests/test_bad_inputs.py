@@ -13,8 +13,8 @@ import pytest
 
 import robocal as rc
 from robocal.cli import main
-from robocal.compensate import format_csv, pose_columns
 from robocal.data.measurements import read_joints
+from robocal.deploy.compensation import format_csv, pose_columns
 from robocal.kinematics.transforms import make_transform
 from robocal.kinematics.urdf import from_urdf, to_urdf
 

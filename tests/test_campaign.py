@@ -11,10 +11,10 @@ import robocal as rc
 from robocal import DataError, Robot
 from robocal.campaign import Constraints, Tracker, plan_poses
 from robocal.campaign.constraints import _segment_point_distance, _segment_segment_distance, smr_geometry
-from robocal.campaign.information import Noise
 from robocal.data.measurements import Measurements
 from robocal.data.simulate import _tracker_noise, simulate_tracker
 from robocal.ik.singularity import classic_distances, singularity_distance
+from robocal.trust.posterior import Noise
 
 IRB = Robot.from_catalog("abb_irb2600")
 MECA = Robot.from_catalog("meca500")

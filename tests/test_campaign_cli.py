@@ -11,10 +11,13 @@ import numpy as np
 import pytest
 
 from robocal import DataError, Robot
-from robocal.campaign import programs, read_planned
+from robocal.campaign import read_planned
 from robocal.cli import main
+from robocal.core.io import write_all
 from robocal.data.measurements import Measurements, read_joint_table, read_joints
-from robocal.io import write_all
+from robocal.programs.dialects.krl.campaign import krl_program
+from robocal.programs.dialects.rapid.campaign import rapid_module
+from robocal.programs.dialects.urscript.campaign import urscript_program
 from robocal.report.campaign import render_campaign
 
 
@@ -193,10 +196,10 @@ def test_write_all_rolls_back_when_a_later_file_fails(tmp_path, monkeypatch):
 def test_program_writers_check_their_input():
     q = np.zeros((3, 5))
     with pytest.raises(DataError, match="6-axis"):
-        programs.rapid_module(q)
+        rapid_module(q)
     with pytest.raises(DataError, match="percentage"):
-        programs.urscript_program(np.zeros((2, 6)), speed_percent=0)
+        urscript_program(np.zeros((2, 6)), speed_percent=0)
     with pytest.raises(DataError, match="identifier"):
-        programs.krl_program(np.zeros((2, 6)), "a" * 30)
-    src, dat = programs.krl_program(np.array([[-0.0, 1e-11, 123.456789, -45, 0, 360]]))
+        krl_program(np.zeros((2, 6)), "a" * 30)
+    src, dat = krl_program(np.array([[-0.0, 1e-11, 123.456789, -45, 0, 360]]))
     assert "DECL AXIS XP1={A1 0,A2 0,A3 123.456789,A4 -45,A5 0,A6 360}" in dat and "PTP XP1" in src

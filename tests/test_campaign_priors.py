@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 import robocal as rc
 from robocal.campaign.exchange import RIDGE, _Design, criterion_value, exchange
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.identify.priors import prior_sigma
 from robocal.trust.coverage import Prediction, information_covariance
 
@@ -125,9 +125,10 @@ def test_plan_summary_says_what_is_not_identifiable_and_what_only_the_priors_hol
 
 
 def test_a_model_with_joint_error_terms_is_planned_for_them_with_their_priors():
-    from robocal.campaign.information import Noise, candidate_data, information
+    from robocal.campaign.information import candidate_data, information
     from robocal.identify.priors import JOINT_ERROR_SIGMA
     from robocal.kinematics.joint_errors import candidate_names
+    from robocal.trust.posterior import Noise
 
     robot = rc.Robot.from_catalog("abb_irb2600").with_joint_errors(candidate_names(6, ["compliance"]))
     plan = rc.plan_poses(robot, 30, smr=SMR, n_candidates=300, region_size=50, starts=1)

@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 
 import robocal as rc
-from robocal.campaign.information import Noise, information
+from robocal.campaign.information import information
 from robocal.campaign.unmodelled import Candidates, Scans, Unmodelled, mean_square, search, unmodelled_error
-from robocal.errors import RobocalError
+from robocal.core.errors import RobocalError
+from robocal.trust.posterior import Noise
 
 
 def _toy(seed=0, C=10, r=3, p=4, m=2, R=40):

@@ -14,8 +14,8 @@ from scipy import stats
 
 import robocal as rc
 from robocal.cli import main
+from robocal.core.errors import DataError
 from robocal.data.simulate import sample_joints, simulate_tracker
-from robocal.errors import DataError
 from robocal.history.check import ALPHA, Uncertainty, _p_value, _Whitened, check
 from robocal.history.record import calibration_uncertainty
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix

@@ -12,8 +12,8 @@ from test_plane import tracker_rms_mm
 
 import robocal as rc
 from robocal.cli import main
+from robocal.core.errors import IdentificationError
 from robocal.data.simulate import sample_joints, simulate_tracker
-from robocal.errors import IdentificationError
 from robocal.identify.problem import KIND_SIGMA, CalibrationProblem
 
 ROBOT = rc.Robot.from_catalog("abb_irb2600")

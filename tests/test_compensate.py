@@ -7,15 +7,15 @@ import pytest
 
 import robocal as rc
 from robocal.cli import main
-from robocal.compensate import (
+from robocal.core.errors import DataError
+from robocal.data.simulate import perturbed
+from robocal.deploy.compensation import (
     format_csv,
     parameter_table,
     pose_columns,
     read_poses_csv,
     residual_mm,
 )
-from robocal.data.simulate import perturbed
-from robocal.errors import DataError
 from robocal.ik.numeric import nominal_seeds
 
 

@@ -9,12 +9,12 @@ import yaml
 from test_payload_thermal import _palletize
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.evaluation import evaluate
+from robocal.calibration.pipeline import calibrate
 from robocal.cli import main
-from robocal.compensate import compensate
+from robocal.core.errors import ModelError
 from robocal.data.simulate import perturbed, simulate_tracker
-from robocal.errors import ModelError
-from robocal.evaluate import evaluate
+from robocal.deploy.compensation import compensate
 from robocal.kinematics.conditions import PAYLOAD_MARGIN_FRACTION, TEMPERATURE_MARGIN_K, CalibratedRange
 
 BEYOND = "calibrated over: its correction there is extrapolated"

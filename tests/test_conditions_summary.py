@@ -11,7 +11,7 @@ import pytest
 from robots import require_datasets
 
 import robocal as rc
-from robocal.calibration import calibrate, load_result
+from robocal.calibration.pipeline import calibrate, load_result
 from robocal.cli import main
 from robocal.data.simulate import simulate_tracker
 from robocal.identify import vocabulary

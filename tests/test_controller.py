@@ -9,9 +9,9 @@ from robots import wrapped
 
 import robocal as rc
 from robocal.cli import main
-from robocal.compensate import compensate
+from robocal.core.errors import DataError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError
+from robocal.deploy.compensation import compensate
 from robocal.ik import solve_all
 from robocal.ik.closed_form import branch_slot
 from robocal.ik.controller import nearest_solutions

@@ -10,10 +10,10 @@ from robots import random_robot, require_datasets
 from test_measurements import MECA
 
 from robocal import DataError, PlausibilityError, Robot
+from robocal.calibration.evaluation import evaluate
 from robocal.cli import main
 from robocal.data import Measurements, simulate_tracker
 from robocal.data.importer import import_tracker
-from robocal.evaluate import evaluate
 from robocal.report import position_stats
 
 

@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 from robots import require_datasets
 
 import robocal as rc
+from robocal.core.schema import RESULT_SCHEMA, validate
 from robocal.data.simulate import simulate_tracker
-from robocal.schema import RESULT_SCHEMA, validate
 from robocal.trust.file_shifts import MIN_FILE_POSES, SHIFT_ALPHA, file_shifts, pose_means
 
 ROBOT = rc.Robot.from_catalog("ur10e")  # developed on the Meca500: judged on another family

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from robocal import IdentificationError, Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
 from robocal.data.simulate import simulate_tracker
 from robocal.identify import genetic
 from robocal.identify.problem import CalibrationProblem

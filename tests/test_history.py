@@ -10,7 +10,7 @@ import uuid
 
 import pytest
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.history.store import SCHEMA_VERSION, History, Record, file_sha256, now_utc
 
 POSTGRES_ENV = "ROBOCAL_TEST_POSTGRES_URL"

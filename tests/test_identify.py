@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from robocal import DataError, IdentificationError, PlausibilityError, Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
 from robocal.data.simulate import simulate_tracker

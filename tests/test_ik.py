@@ -10,8 +10,8 @@ from hypothesis import strategies as st
 from robots import KERNELS, random_robot, wrapped
 
 import robocal as rc
+from robocal.core.errors import DataError, ModelError, UnreachableError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError, ModelError, UnreachableError
 from robocal.ik import solve_all
 from robocal.kinematics.kernels import use_kernels
 from robocal.kinematics.transforms import make_transform, pose_error, rotvec_to_matrix

@@ -15,11 +15,12 @@ import pytest
 
 import robocal as rc
 from robocal.cli import main
+from robocal.core.errors import DataError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError
 from robocal.programs import filter_program
-from robocal.programs.filter import controller_joints, dialect_for, target_poses
-from robocal.programs.inform import InformDialect
+from robocal.programs.dialects.inform.reader import InformDialect
+from robocal.programs.filter import controller_joints, target_poses
+from robocal.programs.registry import dialect_for
 from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE, ProgramText
 

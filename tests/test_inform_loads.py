@@ -23,11 +23,11 @@ from test_program_loads import payload_model
 
 from robocal import Robot
 from robocal.cli import main
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs import filter_program
-from robocal.programs.inform import InformDialect
-from robocal.programs.inform_tools import read_tool_file
+from robocal.programs.dialects.inform.reader import InformDialect
+from robocal.programs.dialects.inform.tool_file import read_tool_file
 from robocal.programs.motions import summary
 from robocal.programs.simulate import execute
 from robocal.programs.source import ProgramText

@@ -17,20 +17,20 @@ from pathlib import Path
 import children
 import pytest
 
-import robocal.io as rio
-from robocal.errors import DataError
-from robocal.io import write_all
+import robocal.core.io as rio
+from robocal.core.errors import DataError
+from robocal.core.io import write_all
 
-SRC = Path(rio.__file__).resolve().parent  # src/robocal: children import robocal.io alone (fast)
+SRC = Path(rio.__file__).resolve().parents[1]  # src/robocal: children import robocal.core.io alone (fast)
 _CHILD_PRELUDE = f"""
 import sys, types
 pkg = types.ModuleType("robocal"); pkg.__path__ = [{str(SRC)!r}]; sys.modules["robocal"] = pkg
-from robocal.io import write_all, _FolderLocks
+from robocal.core.io import write_all, _FolderLocks
 """
 
 
 class _Injector:
-    """Counts the steps of a write (file-system calls robocal.io makes) and acts at step ``n``:
+    """Counts the steps of a write (file-system calls robocal.core.io makes) and acts at step ``n``:
     ``kind`` is 'eio' / 'enospc' (that call raises OSError) or 'sigint' / 'sigterm' (a real signal
     is sent to this process just before the call, which then runs)."""
 

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from robots import random_frame, random_robot, requires_numba, wrapped
 
 import robocal as rc
-from robocal.errors import RobocalError
+from robocal.core.errors import RobocalError
 from robocal.ik import solve_all
 from robocal.ik.opw_ik import opw_form
 from robocal.kinematics import kernels as kn

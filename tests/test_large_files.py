@@ -12,13 +12,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import robocal as rc
+import robocal.core.resources as res
 import robocal.data.csv_table as ct
-import robocal.resources as res
 import robocal.trust.consistency as tc
 from robocal.cli import main
+from robocal.core.errors import DataError, ResourceError
 from robocal.data.measurements import parse_csv
 from robocal.data.simulate import simulate_tracker
-from robocal.errors import DataError, ResourceError
 
 HEADER = ["pose_id", "q1_deg", "q2_deg", "x_mm", "smr"]
 

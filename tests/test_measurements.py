@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from robocal import DataError, RobocalError, Robot, UnitError
 from robocal.data import Measurements
 from robocal.data.measurements import parse_csv
+from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.transforms import rotvec_to_matrix
 
 MECA = Robot.from_catalog("meca500")
@@ -245,7 +246,8 @@ def test_approach_directions_follow_the_measurement_order_and_survive_subsets(tm
     part.save(tmp_path / "part.csv")
     assert Measurements.load(tmp_path / "part.csv").approach.tolist() == [[-1, 1], [0, 0]]
     with pytest.raises(DataError, match="approach"):
-        Measurements.from_arrays("point", q, points=np.zeros((4, 3)), approach=np.full((4, 2), 2))
+        Measurements.from_arrays("point", q, points=np.zeros((4, 3)),
+                                 conditions=Conditions(approach=np.full((4, 2), 2)))
 
 
 def test_a_file_longer_than_a_chunk_reads_every_row_with_its_line_number():

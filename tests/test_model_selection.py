@@ -13,19 +13,8 @@ from hypothesis import strategies as st
 from jacobian_check import central_difference, joint_error_jacobian
 
 from robocal import Robot
-from robocal.calibration import calibrate
-from robocal.damped_least_squares import Status
-from robocal.data.measurements import Measurements, approach_from_order, parse_csv, travel_from_order
-from robocal.data.simulate import simulate_tracker
-from robocal.errors import IdentificationError, ModelError
-from robocal.evaluate import model_errors
-from robocal.identify.frequency_search import FrequencyScan, trig_sums
-from robocal.identify.lsq import gauss_newton
-from robocal.identify.priors import prior_sigma
-from robocal.identify.problem import CalibrationProblem
-from robocal.identify.space import ParameterSpace
-from robocal.kinematics.joint_errors import JointErrorModel, candidate_names, cyclic_names
-from robocal.model_selection import (
+from robocal.calibration.evaluation import model_errors
+from robocal.calibration.model_selection import (
     SELECTION_TOLERANCE,
     _candidates,
     _choose,
@@ -34,6 +23,18 @@ from robocal.model_selection import (
     _linearise,
     selection_table,
 )
+from robocal.calibration.pipeline import calibrate
+from robocal.core.damped_least_squares import Status
+from robocal.core.errors import IdentificationError, ModelError
+from robocal.data.measurements import Measurements, approach_from_order, parse_csv, travel_from_order
+from robocal.data.simulate import simulate_tracker
+from robocal.identify.frequency_search import FrequencyScan, trig_sums
+from robocal.identify.lsq import gauss_newton
+from robocal.identify.priors import prior_sigma
+from robocal.identify.problem import CalibrationProblem
+from robocal.identify.space import ParameterSpace
+from robocal.kinematics.conditions import Conditions
+from robocal.kinematics.joint_errors import JointErrorModel, candidate_names, cyclic_names
 
 COMPLIANCE_GEAR_BACKLASH = (["comp2_3", "comp2_6", "comp3_6", "gear1_s1", "gear2_c1", "gear3_s2", "backlash1",
                              "backlash2", "backlash4"],
@@ -87,7 +88,7 @@ def test_travel_and_cyclic_columns_match_finite_differences(kind):
     # the model the calibration returns applies the same offsets in fk
     model = JointErrorModel(tuple(names), nu)
     d = sim.data
-    dq = model.offsets(sim.truth, d.joints, d.approach, d.travel)
+    dq = model.offsets(sim.truth, d.joints, Conditions(d.approach, d.travel))
     assert np.allclose(dq[:, 0], nu[0] * d.travel[:, 0])
     q2 = d.joints[:, 1]
     assert np.allclose(dq[:, 1], nu[2] * np.sin(101.5 * q2) + nu[3] * np.cos(101.5 * q2))
@@ -308,7 +309,7 @@ def test_auto_result_json_report_and_command_line(tmp_path, capsys):
 
 
 def test_auto_is_the_default_for_lsq_and_robust_on_tracker_data_with_enough_poses():
-    from robocal.calibration import AUTO_DEFAULT_MIN_POSES, resolve_nongeometric
+    from robocal.calibration.pipeline import AUTO_DEFAULT_MIN_POSES, resolve_nongeometric
 
     robot = Robot.from_catalog("abb_irb2600")
     many = simulate_tracker(robot, AUTO_DEFAULT_MIN_POSES, noise_mm=0.02, seed=1).data
@@ -338,8 +339,8 @@ def test_explicit_cyclic_term_searches_the_data_and_the_model_round_trips(tmp_pa
     back = Robot.load(tmp_path / "m.yaml")
     d = sim.data
     assert back.joint_errors.names == result.robot.joint_errors.names
-    assert np.array_equal(back.fk(d.joints, approach=d.approach, travel=d.travel),
-                          result.robot.fk(d.joints, approach=d.approach, travel=d.travel))
+    assert np.array_equal(back.fk(d.joints, conditions=d.conditions),
+                          result.robot.fk(d.joints, conditions=d.conditions))
     clean = simulate_tracker(robot, 60, noise_mm=0.02, seed=2).data
     plain = calibrate(robot, clean, nongeometric="cyclic")
     assert plain.robot.joint_errors is None
@@ -363,7 +364,7 @@ def test_a_peak_at_the_bottom_of_the_band_stays_a_cyclic_frequency():
 def test_a_chosen_model_that_does_not_converge_is_not_chosen(monkeypatch):
     """auto's final fit must converge: a candidate whose final calibration stops at the limit is
     marked in the table (x, not_converged) and the one-standard-error rule picks among the rest."""
-    import robocal.calibration as calibration
+    import robocal.calibration.pipeline as calibration
 
     robot = Robot.from_catalog("abb_irb2600")
     sim = simulate_tracker(_with_errors(robot, ["backlash2", "backlash3"], [2e-4, -2e-4]), 130,

@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
+from robocal.core.errors import DataError, IdentificationError
 from robocal.data.simulate import simulate_tracker
-from robocal.errors import DataError, IdentificationError
-from robocal.identify.neural import BPNetwork, compensate, default_outputs, train
+from robocal.identify.network import BPNetwork
+from robocal.identify.neural import compensate, default_outputs, train
 from robocal.identify.problem import CalibrationProblem
 
 

@@ -11,12 +11,13 @@ from jacobian_check import central_difference, joint_error_jacobian
 from robots import require_datasets
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
+from robocal.core.errors import IdentificationError, ModelError
 from robocal.data.simulate import simulate_tracker
-from robocal.errors import IdentificationError, ModelError
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.residual import ResidualModel
 from robocal.identify.space import ParameterSpace, State
+from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.joint_errors import JointErrorModel, parse_terms, term_names
 
 NAMES = ["comp2_3", "comp2_6", "comp3_6", "comp5_6", "gear1_s1", "gear2_c1", "gear3_s2", "gear5_c2",
@@ -38,8 +39,9 @@ def test_fk_applies_joint_offsets_and_yaml_round_trips(tmp_path, rng):
     # gear terms by hand; backlash only acts with approach directions
     assert np.allclose(dq[:, 0], 2e-4 * np.sin(q[:, 0]))
     s = np.sign(rng.normal(size=q.shape)).astype(int)
-    assert np.allclose(robot.joint_errors.offsets(robot, q, s)[:, 0] - dq[:, 0], 2e-4 * s[:, 0])
-    assert np.allclose(robot.fk(q, approach=s), plain.fk(q + robot.joint_errors.offsets(robot, q, s)))
+    assert np.allclose(robot.joint_errors.offsets(robot, q, Conditions(s))[:, 0] - dq[:, 0], 2e-4 * s[:, 0])
+    assert np.allclose(robot.fk(q, conditions=Conditions(s)),
+                       plain.fk(q + robot.joint_errors.offsets(robot, q, Conditions(s))))
     robot.save(tmp_path / "m.yaml")
     back = Robot.load(tmp_path / "m.yaml")
     assert back.joint_errors.names == robot.joint_errors.names
@@ -157,11 +159,11 @@ def test_jacobian_of_a_robot_with_joint_errors_matches_finite_differences(rng):
     q = rng.uniform(-1.5, 1.5, (8, 6))
     s = np.sign(rng.normal(size=q.shape)).astype(int)
     names = ["a2", "theta3", "d4", "alpha5", "tool.x"]
-    J = robot.jacobian(q, names, approach=s)
+    J = robot.jacobian(q, names, conditions=Conditions(s))
     h = 1e-7
     for k in range(len(names)):
         e = np.zeros(len(names))
         e[k] = h
-        fd = (robot.displaced(names, e).fk(q, approach=s)[:, :3, 3]
-              - robot.displaced(names, -e).fk(q, approach=s)[:, :3, 3]) / (2 * h)
+        fd = (robot.displaced(names, e).fk(q, conditions=Conditions(s))[:, :3, 3]
+              - robot.displaced(names, -e).fk(q, conditions=Conditions(s))[:, :3, 3]) / (2 * h)
         np.testing.assert_allclose(J[:, :, k], fd, atol=1e-8)

@@ -12,11 +12,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from robocal import Robot, calibrate
+from robocal.calibration.model_selection import _candidates, _CrossValidation, _folds, _linearise, _search
 from robocal.data.simulate import simulate_tracker
 from robocal.identify import normal
 from robocal.identify.normal import Normal, r_factor, row_chunks
 from robocal.kinematics.joint_errors import JointErrorModel, candidate_names, cyclic_names
-from robocal.model_selection import _candidates, _CrossValidation, _folds, _linearise, _search
 
 
 @settings(max_examples=25, deadline=None)

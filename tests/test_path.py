@@ -9,7 +9,7 @@ import pytest
 
 import robocal as rc
 from robocal.cli import main
-from robocal.errors import DataError, UnreachableError
+from robocal.core.errors import DataError, UnreachableError
 from robocal.ik import solve_all
 from robocal.ik.path import default_weights, travel
 
@@ -98,7 +98,7 @@ def test_bad_input():
 def test_cli_plan(tmp_path, capsys):
     robot = rc.Robot.from_catalog("abb_irb2600")
     T = trajectory(robot, 20)
-    from robocal.compensate import format_csv, pose_columns
+    from robocal.deploy.compensation import format_csv, pose_columns
 
     cols, vals = pose_columns(T, {"length": "mm", "orientation": "deg"})
     (tmp_path / "poses.csv").write_text(format_csv(cols, vals))

@@ -11,11 +11,12 @@ import pytest
 from jacobian_check import assert_columns_match, joint_error_jacobian
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
 from robocal.cli import main
+from robocal.core.errors import DataError, UnitError
 from robocal.data.measurements import Measurements, parse_csv
 from robocal.data.simulate import simulate_tracker
-from robocal.errors import DataError, UnitError
+from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.joint_errors import parse_terms, term_names
 
 HEADER = "q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,x_mm,y_mm,z_mm"
@@ -30,7 +31,7 @@ def _conditions(rng, n):
 def test_condition_columns_round_trip_and_units(rng):
     payload, temperature = _conditions(rng, 6)
     data = Measurements.from_arrays("point", rng.uniform(-1, 1, (6, 6)), points=rng.uniform(0, 2, (6, 3)),
-                                    payload=payload, temperature=temperature)
+                                    conditions=Conditions(payload=payload, temperature=temperature))
     back = parse_csv(data.to_csv())
     np.testing.assert_array_equal(back.payload, payload)
     np.testing.assert_array_equal(back.temperature, temperature)
@@ -62,7 +63,8 @@ def test_condition_column_errors_are_one_line(extra, values, error, match):
 def test_a_model_without_the_terms_says_it_did_not_use_the_columns(rng):
     payload, temperature = _conditions(rng, 3)
     data = Measurements.from_arrays("point", rng.uniform(-1, 1, (3, 6)), points=rng.uniform(0, 2, (3, 3)),
-                                    payload=payload, temperature=temperature, source="cell")
+                                    conditions=Conditions(payload=payload, temperature=temperature),
+                                    source="cell")
     robot = Robot.from_catalog("kuka_kr210_r2700")
     note = data.unused_conditions(robot)
     assert "payload and temperature" in note and "no payload or thermal term" in note
@@ -81,7 +83,7 @@ def test_payload_moment_is_the_derivative_of_the_payloads_potential_energy(rng):
     q = rng.uniform(-1.0, 1.0, (8, 6))
     payload, _ = _conditions(rng, 8)
     from robocal.kinematics.joint_errors import joint_error_basis
-    B, joint = joint_error_basis(model, q, names, payload=payload)
+    B, joint = joint_error_basis(model, q, names, Conditions(payload=payload))
     com = replace(robot, tool=np.eye(4))
     h = 1e-6
     for p, i in enumerate(joint):
@@ -107,7 +109,8 @@ def test_thermal_term_scales_the_arms_link_lengths_base_height_included(rng):
     for t in (12.0, 22.0, 37.0):
         s = 1 + k * (t - t_ref)
         scaled = replace(robot, a=robot.a * s, d=robot.d * s)  # d1 is the base height
-        np.testing.assert_allclose(warm.fk(q, temperature=np.full(5, t)), scaled.fk(q), atol=1e-13)
+        hot = Conditions(temperature=np.full(5, t))
+        np.testing.assert_allclose(warm.fk(q, conditions=hot), scaled.fk(q), atol=1e-13)
     np.testing.assert_allclose(warm.fk(q), robot.fk(q), atol=1e-15)  # no temperature: the arm at T_ref
 
 
@@ -145,8 +148,7 @@ def test_simulated_conditions_physics_agrees_with_the_fitted_terms():
     d = sim.data
     assert sorted(set(d.payload[:, 0])) == [0.0, 75.0, 150.0] and d.temperature.min() == 20.0
     assert sim.truth.joint_errors.reference_temperature_c == pytest.approx(d.temperature.mean())
-    p = sim.truth.fk(d.joints, smr=d.smr, approach=d.approach, travel=d.travel, payload=d.payload,
-                     temperature=d.temperature)[:, :3, 3]
+    p = sim.truth.fk(d.joints, smr=d.smr, conditions=d.conditions)[:, :3, 3]
     np.testing.assert_allclose(p, d.points, rtol=0, atol=1e-9)
     plain = sim.truth.with_joint_errors([]).fk(d.joints, smr=d.smr)[:, :3, 3]
     assert np.linalg.norm(plain - d.points, axis=1).max() > 1e-4  # the conditions move the TCP
@@ -198,8 +200,8 @@ def _palletize(tmp_path, load2: str | None = None):
 
 
 def test_filter_and_compensate_use_the_given_conditions_and_warn_of_the_assumed_ones(tmp_path):
-    from robocal.compensate import compensate
     from robocal.data.simulate import perturbed
+    from robocal.deploy.compensation import compensate
     from robocal.programs import filter_program
 
     nominal = Robot.from_catalog("kuka_kr16_2")
@@ -227,8 +229,8 @@ def test_filter_and_compensate_use_the_given_conditions_and_warn_of_the_assumed_
     q = np.deg2rad([[10, -80, 90, 5, 40, 0], [-20, -60, 70, 0, 60, 30]])
     targets = nominal.fk(q)
     res = compensate(warm, nominal, targets, payload=[12.0, 0, 0, 0.1], temperature=t, targets_frame="robot")
-    reached = warm.with_frames(base=nominal.base).fk(res.joints, payload=np.tile([12.0, 0, 0, 0.1], (2, 1)),
-                                                       temperature=np.full(2, t))
+    reached = warm.with_frames(base=nominal.base).fk(res.joints, conditions=Conditions(
+        payload=np.tile([12.0, 0, 0, 0.1], (2, 1)), temperature=np.full(2, t)))
     np.testing.assert_allclose(reached[:, :3, 3], targets[:, :3, 3], atol=1e-9)
     assert res.assumed == () and len(compensate(warm, nominal, targets, targets_frame="robot").assumed) == 2
 
@@ -258,7 +260,7 @@ def test_compensate_cli_takes_payload_and_temperature(tmp_path, capsys):
 
 
 def test_auto_considers_payload_and_thermal_only_when_the_data_vary_them():
-    from robocal.model_selection import _term_has_data
+    from robocal.calibration.model_selection import _term_has_data
 
     robot = Robot.from_catalog("kuka_kr210_r2700")
     cal = simulate_tracker(robot, 80, noise_mm=0.02, seed=4, payloads=[0, 75, 150], temperatures=(20, 35))

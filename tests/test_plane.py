@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from robocal import IdentificationError, Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
 from robocal.data.measurements import Measurements
 from robocal.data.registration import umeyama
 from robocal.data.simulate import sample_joints, simulate_tracker

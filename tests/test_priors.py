@@ -9,8 +9,8 @@ from simulated_campaigns import seven_axis_campaign, ur5_campaign
 
 import robocal as rc
 from robocal.campaign.planner import plan_poses
+from robocal.core.errors import PlausibilityError
 from robocal.data.simulate import simulate_tracker
-from robocal.errors import PlausibilityError
 from robocal.identify.plausibility import check_corrections
 from robocal.identify.priors import linear_analysis, posterior_covariance, prior_sigma, undetermined
 

@@ -9,12 +9,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from robocal.errors import ModelError
+from robocal.core.errors import ModelError
+from robocal.core.yaml_load import load_yaml
 from robocal.ik import numeric
 from robocal.kinematics.model import Robot
 from robocal.kinematics.model_file import robot_kwargs
 from robocal.kinematics.urdf import from_urdf, to_urdf
-from robocal.yaml_load import load_yaml
 
 
 def _rot(axis: int, t: float) -> np.ndarray:
@@ -210,7 +210,7 @@ def _urdf_fk(text: str, q: np.ndarray) -> np.ndarray:
     """The URDF's own forward kinematics along its single chain (the independent truth)."""
     import xml.etree.ElementTree as ET
 
-    from robocal.kinematics.urdf import rpy_to_matrix
+    from robocal.kinematics.urdf_read import rpy_to_matrix
 
     T, k = np.eye(4), 0
     for j in ET.fromstring(text).findall("joint"):

@@ -13,8 +13,8 @@ import pytest
 
 import robocal as rc
 from robocal.cli import main
+from robocal.core.errors import DataError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError
 from robocal.programs import filter_program
 from robocal.programs.source import NUMBER_RE
 
@@ -555,8 +555,8 @@ def test_krl_literal_index_is_that_element(tmp_path):
 
 def test_urscript_qnear_variable_is_read():
     """get_inverse_kin(pose, qnear=q_home): the joints the controller starts from."""
+    from robocal.programs.dialects.urscript.reader import URScriptDialect
     from robocal.programs.source import ProgramText
-    from robocal.programs.urscript import URScriptDialect
 
     text = (b"def f():\n  q_home = [0.1, -1.5, 1.5, -1.5, -1.5, 0.2]\n  P1 = p[0.4, -0.2, 0.3, 0, 3.1, 0]\n"
             b"  movej(get_inverse_kin(P1, qnear=q_home))\nend\n")
@@ -582,7 +582,7 @@ def test_rapid_routine_without_a_call_in_these_files(tmp_path):
 def test_rapid_seam_finding_and_routines_of_other_modules():
     """SeamFind's ToPoint is a target; a robtarget passed to a routine no file given defines is
     named; a robtarget whose field is changed at run time is named, not corrected."""
-    from robocal.programs.rapid import RapidDialect
+    from robocal.programs.dialects.rapid.reader import RapidDialect
     from robocal.programs.source import ProgramText
 
     rt = "[[500,-200,400],[0,0,1,0],[-1,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
@@ -603,9 +603,9 @@ def test_rapid_seam_finding_and_routines_of_other_modules():
 def test_positions_passed_to_routines_not_given_are_named():
     """KRL UserMove(XP9) with UserMove in another file; URScript rq_move_to(Drop_p) of a URCap: the
     positions are named, not reported as unused."""
-    from robocal.programs.krl import KRLDialect
+    from robocal.programs.dialects.krl.reader import KRLDialect
+    from robocal.programs.dialects.urscript.reader import URScriptDialect
     from robocal.programs.source import ProgramText
-    from robocal.programs.urscript import URScriptDialect
 
     src = b"DEF cell( )\r\n  $TOOL = TOOL_DATA[1]\r\n  $BASE = BASE_DATA[1]\r\n  UserMove(XP9)\r\nEND\r\n"
     dat = b"DEFDAT cell\r\nDECL E6POS XP9={X 500,Y 0,Z 600,A 0,B 90,C 0,S 2,T 2}\r\nENDDAT\r\n"
@@ -634,7 +634,7 @@ def test_cli_lists_refused_motions_one_a_line(tmp_path, capsys):
 
 
 def test_rapid_error_handler_motions_are_read():
-    from robocal.programs.rapid import RapidDialect
+    from robocal.programs.dialects.rapid.reader import RapidDialect
     from robocal.programs.source import ProgramText
 
     rt = "[[500,-200,400],[0,0,1,0],[-1,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"

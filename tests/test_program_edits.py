@@ -12,7 +12,7 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.programs.aggregate import parse_aggregate, shape_pattern
 from robocal.programs.edits import format_numbers
 from robocal.programs.result import _one_per_line
@@ -113,7 +113,7 @@ def test_shape_pattern_reads_what_the_token_reader_reads(text):
 
 def test_confdata_must_be_integers_of_a_sensible_size(tmp_path):
     """A robtarget's confdata out of any quadrant's range is refused, naming the target."""
-    from robocal.programs.filter import dialect_for
+    from robocal.programs.registry import dialect_for
 
     path = tmp_path / "m.mod"
     path.write_text("MODULE m\n  CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,1e999,0],"

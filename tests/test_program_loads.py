@@ -20,16 +20,17 @@ from scipy.spatial.transform import Rotation
 
 from robocal import Robot
 from robocal.cli import main
-from robocal.compensate import compensate
+from robocal.core.errors import DataError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError
+from robocal.deploy.compensation import compensate
 from robocal.ik.singularity import singularity_distance
 from robocal.kinematics.transforms import make_transform
 from robocal.programs import filter_program
+from robocal.programs.dialects.fanuc.loads import read_schedules
+from robocal.programs.dialects.writing import wpr_text as fanuc_frame_text
 from robocal.programs.load import LoadPlan, compensate_by_load
-from robocal.programs.load_data import read_schedules
 from robocal.programs.motions import summary
-from robocal.programs.simulate import execute, fanuc_frame_text, write_program
+from robocal.programs.simulate import execute, write_program
 
 N = 8  # targets; the load changes before target N // 2
 HALF = N // 2

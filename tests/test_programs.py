@@ -19,14 +19,16 @@ from scipy.spatial.transform import Rotation
 
 import robocal as rc
 from robocal.cli import main
+from robocal.core.errors import DataError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError
 from robocal.ik.opw_ik import branch_slot
 from robocal.kinematics.catalog import catalog_names
 from robocal.kinematics.transforms import rotvec_to_matrix
 from robocal.programs import FilterResult, filter_program
-from robocal.programs.config import ABBConfig, FANUCConfig, KUKAConfig
-from robocal.programs.inform import YaskawaConfig
+from robocal.programs.dialects.fanuc.configuration import FANUCConfig
+from robocal.programs.dialects.inform.configuration import YaskawaConfig
+from robocal.programs.dialects.krl.configuration import KUKAConfig
+from robocal.programs.dialects.rapid.configuration import ABBConfig
 from robocal.programs.rotations import matrix_to_quat, matrix_to_zyx, nearest_rotvec, quat_to_matrix
 from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE, Number, format_number
@@ -237,8 +239,8 @@ def test_rapid_details(tmp_path):
 def test_urscript_variable_is_its_latest_assignment():
     """A motion through a variable takes the variable's last assignment before it in text order,
     whatever other names share its prefix; a use before any assignment is not a target."""
+    from robocal.programs.dialects.urscript.reader import URScriptDialect
     from robocal.programs.source import ProgramText
-    from robocal.programs.urscript import URScriptDialect
 
     text = b"""def prog():
   movel(Waypoint_1_p, a=1.2, v=0.25)
@@ -468,8 +470,8 @@ def test_krl_needs_the_tool_and_base_in_effect(tmp_path):
 
 
 def test_krl_and_fanuc_configuration_edits():
-    from robocal.programs.fanuc_ls import FanucDialect
-    from robocal.programs.krl import KRLDialect
+    from robocal.programs.dialects.fanuc.reader import FanucDialect
+    from robocal.programs.dialects.krl.reader import KRLDialect
     from robocal.programs.model import Target
     from robocal.programs.source import ProgramText
 
@@ -495,7 +497,8 @@ def test_a_robot_that_is_not_six_axis_is_refused():
 def _controller(paths, robot, tools=None, frames=None):
     """Target names in the filter's order, their flange poses and the filter's controller joints."""
     from robocal.kinematics.transforms import invert_transform
-    from robocal.programs.filter import as_frames, controller_joints, dialect_for, target_poses
+    from robocal.programs.filter import as_frames, controller_joints, target_poses
+    from robocal.programs.registry import dialect_for
     from robocal.programs.source import ProgramText
 
     d = dialect_for(paths)
@@ -591,3 +594,21 @@ def test_no_entry_keeps_text_order_with_a_warning(tmp_path):
     robot = rc.Robot.from_catalog("ur5")
     assert any("no entry routine found" in w for w in _controller([two], robot)[3])
     assert not any("no entry routine found" in w for w in _controller([flat], robot)[3])
+
+
+def test_filter_program_returns_the_warnings_about_what_was_given():
+    """The API says what the command line says: a --tool that differs from the program's own tool
+    data, a payload / temperature the model has no term for; magnitudes in another unit refused."""
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    calibrated = perturbed(nominal, 0)
+    res = filter_program(DATA / "weld_cell.mod", calibrated, nominal, payload=5.0, temperature=30.0,
+                         tools={"tGun": "52,0,200,0.96592583,0,0.25881905,0"})
+    assert res.warnings[0].startswith("--tool tGun=52,0,200,0.96592583,0,0.25881905,0 replaces the program's "
+                                      "own tool data tGun (TCP at 50, 0, 200 mm on the flange) and differs "
+                                      "from it by 2 mm")
+    assert res.warnings[1:3] == ["--payload is not used: the model of abb_irb2600 has no payload term",
+                                 "--temperature is not used: the model of abb_irb2600 has no thermal term"]
+    with pytest.raises(DataError, match="the values look like metres"):
+        filter_program(DATA / "weld_cell.mod", calibrated, nominal, robot_base="0.1,0,0,0,0,0.05")
+    with pytest.raises(DataError, match="look like metres"):
+        filter_program(DATA / "sealing.ls", calibrated, nominal, tools={"2": "0,0,0.12,0,0,0"})

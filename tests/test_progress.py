@@ -6,8 +6,8 @@ import io
 
 import pytest
 
-from robocal import progress
-from robocal.progress import Progress, track
+from robocal.core import progress
+from robocal.core.progress import Progress, track
 
 
 class FakeTTY(io.StringIO):

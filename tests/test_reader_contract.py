@@ -20,8 +20,8 @@ import pytest
 
 import robocal as rc
 from robocal.cli import main
+from robocal.core.errors import DataError, ModelError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError, ModelError
 from robocal.kinematics.urdf import from_urdf, to_urdf
 from robocal.programs import filter_program
 

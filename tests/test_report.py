@@ -182,7 +182,7 @@ def test_plane_data_without_measured_points():
 
 
 def test_rejects_non_dict():
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
 
     with pytest.raises(DataError):
         render_report([1, 2])
@@ -209,7 +209,7 @@ def test_cli_report(tmp_path):
 
 def test_report_of_a_real_robust_calibration(tmp_path):
     """End to end: simulate a tracker data set with outliers, calibrate (robust), report."""
-    from robocal.calibration import calibrate, load_result
+    from robocal.calibration.pipeline import calibrate, load_result
     from robocal.data.simulate import simulate_tracker
 
     robot = Robot.from_catalog("abb_irb2600")

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 import robocal as rc
-import robocal.resources as res
-from robocal.calibration import calibrate
+import robocal.core.resources as res
+from robocal.calibration.pipeline import calibrate
 from robocal.cli import main
+from robocal.core.errors import ResourceError
 from robocal.data.simulate import simulate_tracker
-from robocal.errors import ResourceError
 
 
 def test_the_estimate_grows_linearly_and_the_default_search_costs_more():
@@ -39,7 +39,7 @@ def test_running_out_of_memory_is_one_clean_line(monkeypatch, tmp_path, capsys):
         np.empty(1)  # a real call site: any allocation inside the calibration
         raise MemoryError
 
-    monkeypatch.setattr("robocal.calibration._start_model", exhausted)
+    monkeypatch.setattr("robocal.calibration.pipeline._start_model", exhausted)
     with pytest.raises(ResourceError, match="the calibration ran out of memory: calibrate fewer poses"):
         calibrate(rc.Robot.from_catalog("abb_irb2600"), data, nongeometric=None)
     code = main(["--quiet", "calibrate", str(tmp_path / "d.csv"), "--robot", "abb_irb2600",

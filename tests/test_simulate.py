@@ -9,10 +9,10 @@ import pytest
 from test_measurements import MECA
 
 from robocal import DataError, Robot
+from robocal.calibration.evaluation import evaluate
 from robocal.cli import main
 from robocal.data import Measurements, simulate_tracker
 from robocal.data.simulate import TRACKER_ANGULAR_URAD, TRACKER_RADIAL_MM, TRACKER_RADIAL_UM_PER_M
-from robocal.evaluate import evaluate
 
 
 @pytest.mark.parametrize(("kind", "n_smr"), [("point", 1), ("point", 3), ("pose", 1), ("plane", 1)])

@@ -92,7 +92,7 @@ def test_changelog_glossary_licence_and_citation(site):
     assert "Unreleased" in (site / "changelog.html").read_text(encoding="utf-8")
     assert (site / "glossary.html").read_text(encoding="utf-8").count("<dt>") >= 15
     citation = yaml.safe_load((ROOT / "CITATION.cff").read_text(encoding="utf-8"))
-    from robocal.version import __version__
+    from robocal.core.version import __version__
 
     assert citation["cff-version"] and citation["version"] == __version__
     assert "MIT License" in (ROOT / "LICENSE").read_text(encoding="utf-8")

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 import robocal as rc
-from robocal.damped_least_squares import DAMPING_FACTOR, DAMPING_MAX, DAMPING_START, Status, minimize
+from robocal.core.damped_least_squares import DAMPING_FACTOR, DAMPING_MAX, DAMPING_START, Status, minimize
+from robocal.core.errors import DataError, IdentificationError, ModelError
+from robocal.core.io import write_all
 from robocal.data.simulate import perturbed, simulate_tracker
-from robocal.errors import DataError, IdentificationError, ModelError
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SOLVERS, SolverResult
 from robocal.identify.space import ParameterSpace, block_of
-from robocal.io import write_all
 
 
 def test_parameter_space_declares_every_block_and_moves_states():

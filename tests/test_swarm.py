@@ -7,7 +7,7 @@ import pytest
 from test_plane import heldout_rms_mm, plane_campaign, tracker_rms_mm
 
 from robocal import IdentificationError, Robot
-from robocal.calibration import calibrate
+from robocal.calibration.pipeline import calibrate
 from robocal.data.simulate import sample_joints, simulate_tracker
 from robocal.identify import swarm
 from robocal.identify.problem import CalibrationProblem

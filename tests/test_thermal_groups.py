@@ -15,16 +15,17 @@ from hypothesis import strategies as st
 from jacobian_check import assert_columns_match, joint_error_jacobian
 
 from robocal import Robot
-from robocal.calibration import calibrate
+from robocal.calibration.model_selection import _term_has_data
+from robocal.calibration.pipeline import calibrate
 from robocal.cli import main
+from robocal.core.errors import DataError, ModelError
 from robocal.data.measurements import Measurements
 from robocal.data.simulate import simulate_tracker
-from robocal.errors import DataError, ModelError
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.space import ParameterSpace
 from robocal.kinematics import thermal
+from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.joint_errors import parse_terms, term_names
-from robocal.model_selection import _term_has_data
 
 KR210 = "kuka_kr210_r2700"
 GROUPS = ["thermal", *thermal.GROUP_NAMES]
@@ -52,7 +53,8 @@ def test_each_link_group_scales_its_own_links(values, t):
     s = 1 + k * (t - t_ref)
     scaled = replace(robot, a=robot.a * s, d=robot.d * s)  # written out: link by link
     q = np.random.default_rng(1).uniform(-1.0, 1.0, (4, 6))
-    np.testing.assert_allclose(warm.fk(q, temperature=np.full(4, t)), scaled.fk(q), atol=1e-13)
+    hot = Conditions(temperature=np.full(4, t))
+    np.testing.assert_allclose(warm.fk(q, conditions=hot), scaled.fk(q), atol=1e-13)
 
 
 @pytest.mark.parametrize("kind", ["point", "pose"])
@@ -81,7 +83,8 @@ def test_model_file_saves_the_per_group_ks_and_a_one_k_file_means_the_same(tmp_p
     back = Robot.load(tmp_path / "g.yaml")
     assert back.joint_errors.thermal_groups() == per_group.joint_errors.thermal_groups()
     q, t = np.random.default_rng(2).uniform(-1, 1, (5, 6)), np.linspace(15, 40, 5)
-    np.testing.assert_array_equal(back.fk(q, temperature=t), per_group.fk(q, temperature=t))
+    np.testing.assert_array_equal(back.fk(q, conditions=Conditions(temperature=t)),
+                                  per_group.fk(q, conditions=Conditions(temperature=t)))
     # the derived per-group ks must agree with the parameters: an edit there alone is refused
     text["thermal_k_per_group"]["forearm"] = 30e-6
     model = yaml.safe_load((tmp_path / "g.yaml").read_text())
@@ -99,8 +102,8 @@ def test_model_file_saves_the_per_group_ks_and_a_one_k_file_means_the_same(tmp_p
     s = 1 + 11.5e-6 * (t - 22.0)[:, None]
     for i in range(5):
         scaled = replace(robot, a=robot.a * s[i], d=robot.d * s[i])
-        np.testing.assert_allclose(loaded.fk(q[i:i + 1], temperature=t[i:i + 1]), scaled.fk(q[i:i + 1]),
-                                   atol=1e-13)
+        row = Conditions(temperature=t[i:i + 1])
+        np.testing.assert_allclose(loaded.fk(q[i:i + 1], conditions=row), scaled.fk(q[i:i + 1]), atol=1e-13)
 
 
 def test_simulated_per_group_truth_is_reproduced_by_the_fitted_terms():
@@ -110,8 +113,7 @@ def test_simulated_per_group_truth_is_reproduced_by_the_fitted_terms():
     d = sim.data
     assert sim.truth.joint_errors.thermal_groups() == pytest.approx(
         {"base": 11.5e-6, "upper_arm": 11.5e-6, "forearm": 23e-6, "wrist": 11.5e-6})
-    p = sim.truth.fk(d.joints, smr=d.smr, approach=d.approach, travel=d.travel, payload=d.payload,
-                     temperature=d.temperature)[:, :3, 3]
+    p = sim.truth.fk(d.joints, smr=d.smr, conditions=d.conditions)[:, :3, 3]
     np.testing.assert_allclose(p, d.points, rtol=0, atol=1e-9)
     one = simulate_tracker(robot, 30, noise_mm=0.0, seed=5, temperatures=(20, 35), thermal_k=11.5e-6)
     assert one.truth.joint_errors.thermal_groups() is None and one.truth.joint_errors.thermal_k() == 11.5e-6
@@ -171,8 +173,9 @@ def test_auto_keeps_one_k_when_the_arm_has_one_and_tries_groups_only_over_a_wide
     narrow = replace(cal.data, temperature=20.0 + (cal.data.temperature - 20.0) / 5)  # a 3 K span
     assert _term_has_data("thermal", narrow) and not _term_has_data("thermal_groups", narrow)
     assert not _term_has_data("thermal_groups", replace(cal.data, temperature=None))
+    # a 4-axis arm: no link groups
     four = Measurements.from_arrays("point", cal.data.joints[:, :4], points=cal.data.points,
-                                    temperature=cal.data.temperature)  # a 4-axis arm: no link groups
+                                    conditions=Conditions(temperature=cal.data.temperature))
     assert _term_has_data("thermal", four) and not _term_has_data("thermal_groups", four)
 
 

@@ -11,13 +11,19 @@ from scipy.spatial.transform import Rotation
 
 import robocal as rc
 from robocal.cli import main
-from robocal.compensate import controller_model, format_csv, frame_from_text, frame_to_text, pose_columns
+from robocal.core.errors import DataError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError
+from robocal.deploy.compensation import (
+    controller_model,
+    format_csv,
+    frame_from_text,
+    frame_to_text,
+    pose_columns,
+)
+from robocal.deploy.tcp import identify_tcp
 from robocal.ik.singularity import SINGULAR_SIGMA, singularity_distance
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.simulate import touch_poses
-from robocal.tcp import identify_tcp
 
 TOOL = make_transform(Rotation.from_euler("xyz", [0, 30, 0], degrees=True).as_matrix(),
                       np.array([0.05, -0.01, 0.2]))

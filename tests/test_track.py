@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 import robocal as rc
+from robocal.core.errors import DataError, UnitError
 from robocal.data.measurements import Measurements, parse_csv
 from robocal.data.simulate import TRACK_SCALE_ERROR, simulate_tracker
-from robocal.errors import DataError, UnitError
-from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, cell_from_data
-from robocal.kinematics.model import Robot
+from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames
+from robocal.kinematics.model import Robot, cell_from_data
 
 CELL = {"units": {"length": "mm", "angle": "deg"}, "name": "kr210 on a 6 m track",
         "robot": "kuka_kr210_r2700", "track": {"direction": [1, 0, 0], "limits": [0, 6000]},
@@ -87,7 +87,7 @@ def test_measurements_from_arrays_validates_flags():
 
 
 def test_closed_form_on_the_track_and_compensation_keep_e1(cell):
-    from robocal.compensate import compensate
+    from robocal.deploy.compensation import compensate
     from robocal.ik import track
 
     rng = np.random.default_rng(7)
@@ -118,7 +118,7 @@ def test_cell_through_the_command_line(tmp_path, cell):
     from scipy.spatial.transform import Rotation
 
     from robocal.cli import main
-    from robocal.compensate import read_poses_csv
+    from robocal.deploy.compensation import read_poses_csv
 
     (tmp_path / "track.yaml").write_text(yaml.safe_dump(CELL))
     d = str(tmp_path)

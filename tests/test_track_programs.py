@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from robocal.compensate import controller_model
 from robocal.data.simulate import simulate_tracker
+from robocal.deploy.compensation import controller_model
 from robocal.ik import track
-from robocal.kinematics.cell import arm_model, cell_from_data
-from robocal.programs.config import ABBConfig
+from robocal.kinematics.cell import arm_model
+from robocal.kinematics.model import cell_from_data
+from robocal.programs.dialects.rapid.configuration import ABBConfig
 from robocal.programs.filter import filter_program
 
 CELL = {"units": {"length": "mm", "angle": "deg"}, "name": "irb2600 on a 6 m track",
@@ -113,7 +114,7 @@ def test_targets_without_a_track_value_are_named(tmp_path):
 
 def test_a_six_axis_nominal_still_names_track_targets(tmp_path):
     from robocal import Robot
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
 
     text, *_ = _module(cell_from_data(CELL), 2, seed=6)
     path = tmp_path / "m.mod"

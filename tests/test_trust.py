@@ -10,12 +10,12 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import robocal as rc
+from robocal.core.errors import DataError, PlausibilityError
 from robocal.data.simulate import simulate_tracker
-from robocal.diagnose import diagnose
-from robocal.errors import DataError, PlausibilityError
 from robocal.identify.space import block_of
 from robocal.trust.consistency import ALPHA, change_point, orientation_convention, residual_test
 from robocal.trust.coverage import Prediction, workspace_sample
+from robocal.trust.diagnosis import diagnose
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, repeated_rows
 
 ROBOT = rc.Robot.from_catalog("abb_irb2600")
@@ -205,7 +205,7 @@ def test_prediction_round_trips_and_matches_the_propagation(sim):
 @pytest.mark.slow
 def test_cli_clustered_calibration_warns_and_compensate_warns_per_target(tmp_path, capsys):
     from robocal.cli import main
-    from robocal.compensate import format_csv, pose_columns
+    from robocal.deploy.compensation import format_csv, pose_columns
 
     cal = _clustered(60, 5)
     cal.data.save(tmp_path / "cal.csv")
@@ -241,7 +241,7 @@ def test_cli_clustered_calibration_warns_and_compensate_warns_per_target(tmp_pat
 
 
 def test_evaluate_reports_the_residual_test(sim):
-    from robocal.evaluate import evaluate
+    from robocal.calibration.evaluation import evaluate
 
     stats = evaluate(ROBOT, sim.data, fit_frame=True)
     assert stats["consistency"]["dof"] == 3 * 60 - 9 and stats["consistency"]["verdict"] == "consistent"

@@ -13,8 +13,8 @@ from ur_tools import DATA, dh_fk, driver_yaml, lines_to_dh, true_arm_dh, xacro_f
 
 import robocal as rc
 from robocal.cli import main
-from robocal.errors import ModelError
-from robocal.kinematics.vendor import ur as vur
+from robocal.core.errors import ModelError
+from robocal.kinematics.manufacturer import ur as vur
 
 CONF = DATA / "ur5e_calibration.conf"
 YAML10 = DATA / "ur10e_calibration.yaml"
@@ -268,7 +268,7 @@ def test_factory_model_as_nominal_seeds_ik_compensate_and_plan(tmp_path):
     for robot, nominal in ((factory, None), (cal, None), (cal, factory)):  # ... it is seeded by the UR one
         res = rc.ik.solve(robot, robot.fk(q) if robot is factory else T, nominal=nominal)
         assert res.converged.all() and res.position_error.max() < 1e-9
-    from robocal.compensate import compensate, format_csv, pose_columns
+    from robocal.deploy.compensation import compensate, format_csv, pose_columns
 
     comp = compensate(cal, factory, T, start=q[0])
     assert comp.converged.all()

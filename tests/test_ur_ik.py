@@ -13,8 +13,8 @@ from robots import KERNELS, random_frame, wrapped
 from test_ik import fk_errors, recovered
 
 import robocal as rc
+from robocal.core.errors import ModelError
 from robocal.data.simulate import perturbed
-from robocal.errors import ModelError
 from robocal.ik import solve_all
 from robocal.ik.closed_form import branch_slot
 from robocal.ik.singularity import singularity_distance

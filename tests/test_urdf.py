@@ -10,7 +10,8 @@ from robots import random_frame, random_robot
 
 from robocal import ModelError, Robot
 from robocal.kinematics.transforms import make_transform
-from robocal.kinematics.urdf import from_urdf, matrix_to_rpy, rpy_to_matrix, to_urdf, write_urdf
+from robocal.kinematics.urdf import from_urdf, to_urdf, write_urdf
+from robocal.kinematics.urdf_read import matrix_to_rpy, rpy_to_matrix
 
 yourdfpy = pytest.importorskip("yourdfpy", reason="yourdfpy (test extra) is needed to parse URDF")
 

@@ -16,14 +16,14 @@ from scipy.spatial.transform import Rotation
 
 import robocal as rc
 from robocal.cli import main
+from robocal.core.errors import DataError
 from robocal.data.simulate import perturbed
-from robocal.errors import DataError
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.programs import filter_program
-from robocal.programs.filter import dialect_for
+from robocal.programs.dialects.val3.reader import Val3Dialect, _read_data, application_files
+from robocal.programs.registry import dialect_for
 from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE, ProgramText
-from robocal.programs.val3 import Val3Dialect, _read_data, application_files
 
 APP = Path(__file__).parent / "data" / "programs" / "val3" / "pick_place"
 NOMINAL = rc.Robot.from_catalog("staubli_tx2_140")

@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 
 import robocal as rc
 from robocal.cli import main
-from robocal.compensate import format_csv
+from robocal.deploy.compensation import format_csv
 
 # A user's DH file for a 7-axis arm: Franka Emika Panda, Craig's modified DH as Franka publishes it
 PANDA_YAML = """\
@@ -185,8 +185,8 @@ def test_the_fingerprint_names_the_parameters_not_the_file(tmp_path):
 
 
 def test_compensated_targets_are_marked_and_compensating_them_again_is_refused(tmp_path, capsys):
-    from robocal.compensate import pose_columns, read_poses_csv
     from robocal.data.simulate import perturbed
+    from robocal.deploy.compensation import pose_columns, read_poses_csv
     from robocal.trust.output_marker import model_fingerprint
 
     irb = rc.Robot.from_catalog("abb_irb2600")
@@ -214,8 +214,8 @@ def test_compensated_targets_are_marked_and_compensating_them_again_is_refused(t
 @pytest.fixture(scope="module")
 def cell(tmp_path_factory) -> Path:
     """A calibrated ABB model, flange targets in mm/deg and the same in the wrong units."""
-    from robocal.compensate import pose_columns
     from robocal.data.simulate import perturbed
+    from robocal.deploy.compensation import pose_columns
 
     d = tmp_path_factory.mktemp("cell")
     irb = rc.Robot.from_catalog("abb_irb2600")
@@ -283,7 +283,7 @@ def test_a_magnitude_in_another_unit_is_refused_naming_the_unit(case, argv, word
 
 
 def test_magnitudes_in_the_right_units_pass(cell, tmp_path, capsys):
-    from robocal.magnitudes import check_frame, check_length, check_targets, check_tool
+    from robocal.core.magnitudes import check_frame, check_length, check_targets, check_tool
 
     check_tool([0.0, 0.0, 0.12], "mm", "t")
     check_frame([0.0, 0.0, 0.0], "mm", 1.0, "f")  # the identity frame
@@ -346,8 +346,8 @@ def test_a_fanuc_joint_log_with_j3_coupled_to_j2_names_the_option(fanuc, tmp_pat
 
 
 def test_the_fanuc_conventions_are_inverse(rng):
-    from robocal.campaign.programs import J23_FACTOR as CAMPAIGN_FACTOR
     from robocal.data.joint_conventions import J23_FACTOR, fanuc_coupled, fanuc_decoupled
+    from robocal.programs.dialects.fanuc.campaign import J23_FACTOR as CAMPAIGN_FACTOR
 
     q = rng.uniform(-3, 3, (20, 6))
     assert np.allclose(fanuc_decoupled(fanuc_coupled(q)), q)

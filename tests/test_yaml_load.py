@@ -11,8 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from robocal import Robot
-from robocal.errors import DataError, ModelError
-from robocal.yaml_load import MAX_ALIASES, dump_yaml, load_yaml
+from robocal.core.errors import DataError, ModelError
+from robocal.core.yaml_load import MAX_ALIASES, dump_yaml, load_yaml
 
 
 @pytest.mark.parametrize("text, key", [

@@ -162,7 +162,7 @@ def true_arm_dh(name: str, seed: int):
 
 
 def write_files() -> None:
-    from robocal.kinematics.vendor.ur import nominal_dh
+    from robocal.kinematics.manufacturer.ur import nominal_dh
 
     nominal = nominal_dh("ur5e")
     theta, d, a, alpha = true_arm_dh("ur5e", 31)

@@ -3,10 +3,8 @@
 from __future__ import annotations
 
 import importlib
-import sys
-import types
 
-from robocal.errors import (
+from robocal.core.errors import (
     DataError,
     IdentificationError,
     ModelError,
@@ -15,24 +13,25 @@ from robocal.errors import (
     UnitError,
     UnreachableError,
 )
-from robocal.version import __version__
+from robocal.core.version import __version__
 
 # The API is imported on first use (PEP 562): `import robocal` and the command line start fast, and
 # Ctrl-C during the heavy imports reaches the command line's handler (one line, exit 130).
 _LAZY = {
     "ik": "robocal.ik",  # rc.ik.solve_all, rc.ik.solve, rc.ik.plan_path
-    "CalibrationResult": "robocal.calibration", "analyze": "robocal.calibration",
-    "calibrate": "robocal.calibration",
+    "CalibrationResult": "robocal.calibration.pipeline", "analyze": "robocal.calibration.pipeline",
+    "calibrate": "robocal.calibration.pipeline",
     "CampaignResult": "robocal.campaign", "Constraints": "robocal.campaign", "Tracker": "robocal.campaign",
     "plan_poses": "robocal.campaign",
-    "compensate": "robocal.compensate",
+    "compensate": "robocal.deploy.compensation",
     "Measurements": "robocal.data.measurements",
     "register": "robocal.data.registration",
+    "Conditions": "robocal.kinematics.conditions",  # the rows' conditions for Robot.fk / jacobian
     "simulate_tracker": "robocal.data.simulate",
-    "evaluate": "robocal.evaluate",
+    "evaluate": "robocal.calibration.evaluation",
     "Robot": "robocal.kinematics.model",
     "FilterResult": "robocal.programs", "filter_program": "robocal.programs",
-    "ToolCalibration": "robocal.tcp", "identify_tcp": "robocal.tcp",
+    "ToolCalibration": "robocal.deploy.tcp", "identify_tcp": "robocal.deploy.tcp",
 }
 
 
@@ -47,19 +46,6 @@ def __getattr__(name: str):
 
 def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_LAZY))
-
-
-class _Package(types.ModuleType):
-    """Keeps ``rc.evaluate`` and ``rc.compensate`` the functions: loading their modules
-    (robocal/evaluate.py, robocal/compensate.py) would otherwise bind the module to the name."""
-
-    def __setattr__(self, name: str, value) -> None:
-        if name in _LAZY and name != "ik" and isinstance(value, types.ModuleType):
-            return
-        super().__setattr__(name, value)
-
-
-sys.modules[__name__].__class__ = _Package
 
 
 __all__ = [

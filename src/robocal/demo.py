@@ -13,11 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.calibration import calibrate, json_text
-from robocal.compensate import compensate
+from robocal.calibration.pipeline import calibrate, json_text
+from robocal.core.io import write_all
 from robocal.data.measurements import Measurements
+from robocal.deploy.compensation import compensate
 from robocal.ik import plan_path
-from robocal.io import write_all
 from robocal.kinematics.model import Robot
 from robocal.kinematics.model_file import dump_model
 from robocal.report.html import render_report

@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from robocal.core.errors import DataError
 from robocal.data.simulate import check_tracker_position
-from robocal.errors import DataError
 from robocal.ik.singularity import MEASURE_JOINTS, classic_distances
 
 DEFAULT_ACCEPTANCE_DEG = 30.0
@@ -76,7 +76,7 @@ class Tracker:
     >>> rc.Tracker(position=[3.0, 0.0, 0.5], range_m=(5, 1))
     Traceback (most recent call last):
     ...
-    robocal.errors.DataError: the tracker range must be 0 <= min < max (m), got (5, 1)
+    robocal.core.errors.DataError: the tracker range must be 0 <= min < max (m), got (5, 1)
     """
 
     position: np.ndarray
@@ -206,9 +206,10 @@ def limits_with_margin(robot, margin_deg: float) -> np.ndarray:
     tight = np.flatnonzero(lim[:, 0] > lim[:, 1])
     if tight.size:
         i = int(tight[0])
-        lo, hi = np.rad2deg(robot.limits[i])
+        joint = robot.joints[i]
+        lo, hi = joint.shown(np.array(joint.limits))
         raise DataError(f"a joint-limit margin of {margin_deg:g} deg leaves no room on joint {i + 1} "
-                        f"(limits {lo:.4g} to {hi:.4g} deg): lower the margin")
+                        f"(limits {lo:.4g} to {hi:.4g} {joint.unit}): lower the margin")
     return lim
 
 

@@ -39,8 +39,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.errors import DataError
-from robocal.progress import Progress
+from robocal.core.errors import DataError
+from robocal.core.progress import Progress
 
 try:  # optional (extra 'threads'): the search's many small BLAS products run best on one thread
     from threadpoolctl import threadpool_limits

@@ -3,7 +3,8 @@ output of a run together (all files or none).
 
 ``poses.csv`` has the measurement CSV's joint columns, one row per pose in measuring order:
 ``q1_deg..qn_deg`` (degrees with up to 10 decimals; generated candidates are rounded to 1e-4
-deg, so the file holds them exactly); with
+deg, so the file holds them exactly; a prismatic joint in mm, ``q3_mm``, a track's carriage
+``e1_mm``: the robot's `robocal.kinematics.model.Robot.joints`); with
 candidates from a file, the file's own joint columns and the chosen rows' cells exactly as read,
 plus ``source_row`` (the row's line in that file). With several SMRs, ``visible_smr0..`` (1/0)
 say which SMRs the tracker sees at each pose; plane contacts and distances keep their ``plane``
@@ -15,13 +16,16 @@ rehearsal (``robocal simulate --joints``) measures the campaign that was planned
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
+from robocal.core.errors import DataError
+from robocal.data.kinds import OBSERVED
 from robocal.data.measurements import JointTable, Measurements, read_joint_table
-from robocal.errors import DataError
+from robocal.kinematics.model import JointSpec
 
 VISIBLE_PREFIX = "visible_smr"
 _XYZ = ("x", "y", "z")
@@ -83,11 +87,12 @@ def read_candidates(path, robot, kind: str = "point") -> CandidateFile:
     """
     table = read_joint_table(path)
     q = robot.check_joints(table.joints)
-    if kind in ("plane", "distance"):
+    spec = OBSERVED.get(kind)
+    if spec is not None and not spec.sees_position:  # a fixture's contacts or pairs: from the file
         data = Measurements.load(path, robot=robot)
         if data.kind != kind or len(data) != len(q):
             raise DataError(f"{path}: {kind} candidates need a {kind} measurement CSV (joints with "
-                            f"{'a plane' if kind == 'plane' else 'pair and distance_mm'} column), got "
+                            f"{spec.columns} column), got "
                             f"{data.kind} data")
         return CandidateFile(joints=q, rows=np.arange(len(q)), table=table, data=data, path=str(path))
     ids = table.column("pose_id")
@@ -108,15 +113,17 @@ def _cells(values: np.ndarray) -> list[str]:
 
 
 def poses_csv(joints: np.ndarray, visible: np.ndarray | None = None, source: CandidateFile | None = None,
-              rows: np.ndarray | None = None, smr_mm=None, tracker_mm=None, track: bool = False) -> str:
-    """The text of ``poses.csv`` (see the module docstring) for ``joints (N, n)`` rad in measuring
-    order; ``source`` and ``rows (N,)`` (table rows) when the candidates came from a file;
-    ``smr_mm (k, 3)`` and ``tracker_mm (3,)`` the planned SMRs and tracker position (mm); ``track``:
-    joint 1 is a track's carriage (m), written as ``e1_mm``."""
+              rows: np.ndarray | None = None, smr_mm=None, tracker_mm=None,
+              spec: Sequence[JointSpec] = ()) -> str:
+    """The text of ``poses.csv`` (see the module docstring) for ``joints (N, n)`` (rad; m for a
+    prismatic joint) in measuring order, each under its joint's column in its unit (``spec``:
+    the robot's `robocal.kinematics.model.Robot.joints`: ``q1_deg``, a quill's ``q3_mm``, a track's
+    ``e1_mm``); ``source`` and ``rows (N,)`` (table rows) when the candidates came from a file;
+    ``smr_mm (k, 3)`` and ``tracker_mm (3,)`` the planned SMRs and tracker position (mm)."""
     if source is None:
-        k = int(track)
-        header = ["e1_mm"] * k + [f"q{i + 1}_deg" for i in range(joints.shape[1] - k)]
-        body = [_cells(row) for row in np.c_[joints[:, :k] * 1e3, np.rad2deg(joints[:, k:])]]
+        header = [j.column for j in spec]
+        shown = np.column_stack([j.shown(joints[:, i]) for i, j in enumerate(spec)])
+        body = [_cells(row) for row in shown]
     else:
         t = source.table
         header = [t.header[c] for c in t.joint_columns] + ["source_row"]

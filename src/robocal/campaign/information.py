@@ -5,13 +5,8 @@ default free set without what the kind can never see, reduced by the identifiabi
 (pivoted QR) on the candidates together (at most ``IDENTIFIABILITY_ROWS`` residual rows from
 measurements spread over all of them: what is identifiable is structural). A candidate's block
 holds the identification-Jacobian rows of every measurement it gives (one per SMR the tracker
-sees for points, a 6-DOF pose, a plane contact, a distance), each whitened by its noise model so
-that ``G^T G`` is the information in 1/unit^2:
-
-- isotropic: ``sigma`` (m) on each coordinate;
-- tracker: the virtual tracker's model (:mod:`robocal.data.simulate`): radial
-  ``10 um + 0.5 um/m * r`` and transverse ``2.5 urad * r`` at distance ``r`` from the tracker;
-- pose orientations: ``rotation_sigma`` (rad) per axis; plane contacts and distances: ``sigma``.
+sees for points, a 6-DOF pose, a plane contact, a distance), each whitened by its noise model
+(:class:`robocal.trust.posterior.Noise`) so that ``G^T G`` is the information in 1/unit^2.
 
 The information matrix is the calibration's posterior one, ``M = P^-1 + sum G_j^T G_j``, with
 ``P`` the priors every fit carries (:func:`robocal.identify.priors.prior_sigma`, joint-error terms
@@ -27,10 +22,8 @@ calibration uses), so ``trace(M^-1 A)`` is the mean predicted variance (m^2) of 
 over the region after calibration: the ``predicted_accuracy`` of ``calibrate`` before the
 unmodelled error.
 
-:func:`judge` says of a pose set what the calibration will say of each parameter, in the words of
-:mod:`robocal.identify.vocabulary`: estimated, not determined by these data (posterior sigma above
-:data:`robocal.identify.priors.NOT_DETERMINED_RATIO` of the prior's: held near nominal by its
-prior) or not identifiable (``dropped`` by the rank test: exactly confounded or without effect).
+What a chosen set determines is judged as the calibration judges it
+(:func:`robocal.trust.posterior.judge`).
 """
 
 from __future__ import annotations
@@ -39,55 +32,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robocal.core.errors import DataError
+from robocal.data.kinds import OBSERVED
 from robocal.data.measurements import Measurements
-from robocal.data.simulate import (
-    NOISE_MODELS,
-    TRACKER_ANGULAR_URAD,
-    TRACKER_RADIAL_MM,
-    TRACKER_RADIAL_UM_PER_M,
-)
-from robocal.errors import DataError
-from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, analyze, hold
-from robocal.identify.priors import prior_sigma, undetermined
+from robocal.identify.identifiability import Identifiability, analyze
+from robocal.identify.priors import prior_sigma
 from robocal.identify.problem import CalibrationProblem
-from robocal.identify.space import State
 from robocal.trust.coverage import region_matrix
+from robocal.trust.posterior import Noise, judge, whitened_jacobian
 
-GENERATED_KINDS = ("point", "pose")  # kinds whose candidates robocal can generate from joints
 IDENTIFIABILITY_ROWS = 12000         # residual rows (items spread over all candidates) analysed
-
-
-@dataclass(frozen=True)
-class Noise:
-    """The measurement noise: ``sigma_m`` (isotropic, per coordinate; plane and distance data),
-    ``model`` ('isotropic' or 'tracker', which needs ``tracker_position``), and the orientation
-    noise ``rotation_sigma_rad`` of 6-DOF poses."""
-
-    sigma_m: float = 2e-5
-    model: str = "isotropic"
-    tracker_position: np.ndarray | None = None
-    rotation_sigma_rad: float = np.deg2rad(0.001)
-
-    def __post_init__(self) -> None:
-        if self.model not in NOISE_MODELS:
-            raise DataError(f"unknown noise model {self.model!r}: use 'isotropic' or 'tracker'")
-        if self.model == "tracker" and self.tracker_position is None:
-            raise DataError("the tracker noise model needs the tracker's position")
-        if not (self.sigma_m > 0 and self.rotation_sigma_rad > 0):
-            raise DataError("noise levels must be > 0 (a noise-free measurement has no optimal design)")
-
-    def whitener(self, points: np.ndarray) -> np.ndarray:
-        """``(N, 3, 3)`` matrices W with ``W^T W = Sigma^-1`` for points ``(N, 3)`` (m)."""
-        N = len(points)
-        if self.model == "isotropic":
-            return np.broadcast_to(np.eye(3) / self.sigma_m, (N, 3, 3))
-        d = points - self.tracker_position
-        r = np.linalg.norm(d, axis=1)
-        u = d / np.maximum(r, 1e-12)[:, None]
-        radial = TRACKER_RADIAL_MM * 1e-3 + TRACKER_RADIAL_UM_PER_M * 1e-6 * r
-        transverse = np.maximum(TRACKER_ANGULAR_URAD * 1e-6 * r, 1e-12)
-        uu = u[:, :, None] * u[:, None, :]
-        return uu / radial[:, None, None] + (np.eye(3) - uu) / transverse[:, None, None]
 
 
 @dataclass
@@ -131,51 +85,17 @@ class Information:
         return judge(self.J_raw[rows], self.J_white[rows], self.all_names, self.sigma, n_poses)
 
 
-def judge(J: np.ndarray, J_white: np.ndarray, names: list[str], sigma: np.ndarray, n_poses: int,
-          rtol: float = DEFAULT_RTOL) -> Identifiability:
-    """What a pose set determines, with the priors, as the calibration judges it
-    (:mod:`robocal.identify.vocabulary`): the rank test on ``J (M, k)`` (unit weights, as
-    :func:`robocal.identify.identifiability.analyze`) gives ``dropped`` (not identifiable: exactly
-    confounded or without effect, whatever their prior); then, on the noise-whitened rows
-    ``J_white (M, k)`` and the priors ``sigma (k,)`` (SI, inf: none), the kept parameters the data
-    do not determine beyond their prior (:func:`robocal.identify.priors.undetermined`) are
-    ``undetermined`` (not determined by these data, with their posterior / prior sigma ratio)."""
-    sigma = np.asarray(sigma, dtype=float)
-    ident = analyze(J, names, n_poses, rtol)
-    kept = [names.index(nm) for nm in ident.kept]
-    held, ratio = undetermined(J_white[:, kept], sigma[kept], 1.0)
-    return hold(ident, J, [ident.kept[j] for j in held],
-                {ident.kept[j]: float(q) for j, q in enumerate(ratio) if np.isfinite(q)})
-
-
 def candidate_data(robot, kind: str, q: np.ndarray, visible: np.ndarray) -> Measurements:
     """Measurements a campaign at joints ``q (C, n)`` would give, with the model's own
     predictions as the measured values: one row per candidate and SMR it sees (points), one per
     candidate (poses)."""
-    if kind not in GENERATED_KINDS:
+    spec = OBSERVED.get(kind)
+    if spec is None or not spec.sees_position:  # only a tracker's candidates follow from the joints
         raise DataError(f"{kind} candidates come from a file of contacts or pairs (--from): robocal "
                         "cannot place them without the fixture")
-    cand, smr = np.nonzero(visible) if kind == "point" else (np.arange(len(q)), np.zeros(len(q), int))
+    cand, smr = np.nonzero(visible) if spec.several_smrs else (np.arange(len(q)), np.zeros(len(q), int))
     T = robot.fk(q[cand], smr=smr)
-    extra = {"rotations": T[:, :3, :3]} if kind == "pose" else {}
-    return Measurements.from_arrays(kind, q[cand], points=T[:, :3, 3], smr=smr, pose_id=cand, **extra)
-
-
-def _whitened_jacobian(robot, problem: CalibrationProblem, state: State, J: np.ndarray,
-                       noise: Noise) -> np.ndarray:
-    """The rows ``J (M, k + m)`` of the observation Jacobian at ``state`` divided by their noise
-    (whitened)."""
-    obs = problem.observation
-    r = obs.rows_per_item
-    if obs.kind in ("plane", "distance"):
-        return J / noise.sigma_m
-    blocks = J.reshape(obs.n_items, r, -1)
-    W = noise.whitener(obs.modelled_points(robot, state.nuisance))
-    out = np.empty_like(blocks)
-    out[:, :3] = np.einsum("nij,njk->nik", W, blocks[:, :3])
-    if r == 6:
-        out[:, 3:] = blocks[:, 3:] / (noise.rotation_sigma_rad * obs.scale[3])
-    return out.reshape(J.shape)
+    return Measurements.from_arrays(kind, q[cand], smr=smr, pose_id=cand, **spec.readings(T))
 
 
 def candidate_blocks(obs, data: Measurements, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -184,7 +104,7 @@ def candidate_blocks(obs, data: Measurements, rows: np.ndarray) -> tuple[np.ndar
     ``(items,)`` and the items per candidate ``(C,)``. A candidate is a pose (all its SMRs' rows), or
     one pair of a distance measurement."""
     r = obs.rows_per_item
-    item_group = np.arange(obs.n_items) if obs.kind == "distance" else data.pose_id
+    item_group = data.pose_id if data.spec.group == "pose_id" else np.arange(obs.n_items)  # a pair: one item
     labels, cand_of_item = np.unique(item_group, return_inverse=True)
     per = np.bincount(cand_of_item, minlength=labels.size)
     order = np.argsort(cand_of_item, kind="stable")
@@ -197,17 +117,6 @@ def candidate_blocks(obs, data: Measurements, rows: np.ndarray) -> tuple[np.ndar
     return G, cand_of_item, per
 
 
-def whitened_rows(robot, data: Measurements, noise: Noise, names: list[str]) -> tuple[object, np.ndarray]:
-    """The observation of ``data`` and its identification-Jacobian rows ``(M, k)`` over the robot
-    parameters ``names`` at the model's start, whitened by ``noise``."""
-    problem = CalibrationProblem(robot, data)
-    space = problem.space(robot, names)
-    state = problem.start(robot)
-    J = problem.jacobian(state, space)
-    columns = [space.names.index(nm) for nm in names]
-    return problem.observation, _whitened_jacobian(robot, problem, state, J, noise)[:, columns]
-
-
 def information(robot, data: Measurements, noise: Noise, params="auto") -> Information:
     """The candidate blocks of ``data`` (rows grouped into candidates by ``pose_id``; distances by
     pair) for the unknowns ``params`` identifies (see the module docstring)."""
@@ -217,7 +126,7 @@ def information(robot, data: Measurements, noise: Noise, params="auto") -> Infor
     robot_names, all_names = list(space.robot), space.names
     state = problem.start(robot)
     J_raw = problem.jacobian(state, space)  # the data carry no sigma: unit weights
-    Jw = _whitened_jacobian(robot, problem, state, J_raw, noise)
+    Jw = whitened_jacobian(robot, problem, state, J_raw, noise)
     r = obs.rows_per_item
     # which parameters are identifiable is structural: items spread over all candidates suffice
     count = min(obs.n_items, IDENTIFIABILITY_ROWS // r)
@@ -240,14 +149,3 @@ def information(robot, data: Measurements, noise: Noise, params="auto") -> Infor
                        all_names=all_names, identifiable=len(ident.kept))
 
 
-def posterior_analysis(robot, data: Measurements, noise: Noise, params="auto",
-                       rtol: float = DEFAULT_RTOL) -> Identifiability:
-    """:func:`judge` of the measurements ``data`` (their rows at the model's predictions) for the
-    unknowns ``params``, the data whitened by ``noise``."""
-    problem = CalibrationProblem(robot, data)
-    space = problem.space(robot, params)
-    state = problem.start(robot)
-    J = problem.jacobian(state, space)
-    sigma = np.r_[prior_sigma(robot, space.robot), np.full(len(space.nuisance), np.inf)]
-    return judge(J, _whitened_jacobian(robot, problem, state, J, noise), space.names, sigma,
-                 data.n_poses, rtol)

@@ -24,25 +24,26 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from robocal.campaign import constraints as cons
+import robocal.campaign.constraints as cons
 from robocal.campaign.exchange import CRITERIA, ExchangeResult, criterion_value, exchange
 from robocal.campaign.files import CandidateFile, poses_csv
-from robocal.campaign.information import GENERATED_KINDS, Information, Noise, candidate_data, information
+from robocal.campaign.information import Information, candidate_data, information
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
 from robocal.campaign.unmodelled import DEFAULT_TERMS, mean_square, search, unmodelled_error
-from robocal.data.measurements import KINDS, Measurements, robot_reach
+from robocal.core.errors import DataError
+from robocal.core.progress import Progress
+from robocal.core.version import __version__
+from robocal.data.kinds import OBSERVED, kind_spec
+from robocal.data.measurements import Measurements, robot_reach
 from robocal.data.simulate import smr_in_link_frame
-from robocal.errors import DataError
 from robocal.identify import vocabulary
 from robocal.identify.identifiability import Identifiability
 from robocal.identify.structural import separate, unidentifiable
 from robocal.ik.path import default_weights, travel
-from robocal.kinematics.cell import is_track_cell
 from robocal.kinematics.transforms import make_transform
-from robocal.progress import Progress
 from robocal.trust.coverage import WORKSPACE_SAMPLES, WORKSPACE_SEED, workspace_sample
-from robocal.version import __version__
+from robocal.trust.posterior import Noise
 
 DEFAULT_CANDIDATES = 5000
 DEFAULT_REGION_SIZE = WORKSPACE_SAMPLES
@@ -179,16 +180,11 @@ class CampaignResult:
         """The candidates the search chose from (what the funnel left)."""
         return self.funnel.left
 
-    @property
-    def _track(self) -> int:
-        """1 when joint 1 is a track's carriage (m, written apart as e1_mm), else 0."""
-        return int(is_track_cell(self.robot))
-
     def poses_csv(self) -> str:
         """The text of ``poses.csv`` (see `robocal.campaign.files`)."""
         return poses_csv(self.joints, self.visible, self.source, self.source_rows,
                          smr_mm=self.settings["smr_mm"], tracker_mm=self.settings["tracker_mm"],
-                         track=bool(self._track))
+                         spec=self.robot.joints)
 
     def summary(self) -> str:
         """A short human summary: poses, predicted accuracy, identifiability, route, candidates."""
@@ -226,9 +222,9 @@ class CampaignResult:
             "predicted_rms_mm": self.predicted_rms_mm,
             "noise": {"model": self.noise.model, "sigma_mm": self.noise.sigma_m * 1e3},
             "joints_deg": [[float(fixed_point(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv
-                           for row in np.rad2deg(self.joints[:, self._track:])],
+                           for row in np.rad2deg(self.joints[:, self.robot.external_axes:])],
             **({"e1_mm": [float(fixed_point(v, DEGREE_DECIMALS)) for v in self.joints[:, 0] * 1e3]}
-               if self._track else {}),
+               if self.robot.external_axes else {}),
             "candidate_index": self.candidate_index.tolist(),
             "visible": self.visible.astype(int).tolist(),
             "tcp_mm": (self.robot.fk(self.joints)[:, :3, 3] * 1e3).tolist(),
@@ -428,8 +424,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     """
     if not isinstance(n, int | np.integer) or n < 1:
         raise DataError(f"the number of poses must be a positive integer, got {n!r}")
-    if kind not in KINDS:
-        raise DataError(f"unknown measurement kind {kind!r}: use one of {', '.join(KINDS)}")
+    kind_spec(kind)  # an unknown kind: DataError
     if criterion not in CRITERIA:
         raise DataError(f"unknown criterion {criterion!r}: use one of {', '.join(CRITERIA)}")
     if unmodelled_mm and criterion != "I":
@@ -454,7 +449,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     source = candidates if isinstance(candidates, CandidateFile) else None
     file_data = source.data if source is not None else \
         candidates if isinstance(candidates, Measurements) else None
-    if kind in GENERATED_KINDS:
+    if OBSERVED[kind].sees_position:  # candidates generated from joints
         file_data = None
     elif file_data is None or file_data.kind != kind:
         raise DataError(f"{kind} candidates come from a measurement file of {kind} data (contacts or pairs): "
@@ -474,7 +469,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         data = candidate_data(plan_robot, kind, q, visible)   # pose_id = row of q
     else:
         data = file_data.subset(given)
-        if kind == "distance":  # a pair needs both ends
+        if OBSERVED[kind].group == "pair":  # a pair needs both ends
             pair_of = np.unique(data.pair, return_inverse=True)[1]
             whole = np.flatnonzero(np.bincount(pair_of)[pair_of] == 2)
             if len(whole) < len(given):
@@ -526,7 +521,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     if candidates is None and int(n_candidates) > C:
         warnings.append(f"only {C} of the {int(n_candidates)} candidates asked for met the constraints in "
                         f"{funnel.start} random poses: the constraints leave a small part of the workspace")
-    if len(smr) == 1 and np.linalg.norm(smr[0, :2]) < 1e-6 and kind == "point":
+    if len(smr) == 1 and np.linalg.norm(smr[0, :2]) < 1e-6 and OBSERVED[kind].several_smrs:
         warnings.append("the SMR is on the flange axis: the last joint's zero offset cannot be identified; "
                         "give the SMR's position on the flange (smr / --smr-mm) if it is off the axis")
     return CampaignResult(

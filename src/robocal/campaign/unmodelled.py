@@ -45,13 +45,14 @@ from robocal.campaign.exchange import (
     one_blas_thread,
     packing,
 )
-from robocal.campaign.information import Information, Noise, candidate_blocks, whitened_rows
+from robocal.campaign.information import Information, candidate_blocks
+from robocal.core.errors import DataError
 from robocal.data.measurements import Measurements
-from robocal.errors import DataError
 from robocal.identify.priors import prior_sigma
 from robocal.kinematics import thermal
 from robocal.kinematics.joint_errors import CONDITION_TERMS, candidate_names, parse_terms
 from robocal.trust.coverage import region_matrix
+from robocal.trust.posterior import Noise, whitened_rows
 
 DEFAULT_TERMS = ("compliance", "backlash", "travel")  # the non-geometric errors of common arms
 DOWNDATE_MIN_DET = 1e-4  # removing a block with det(I - H B H^T) below this: forms afresh (a rank-r

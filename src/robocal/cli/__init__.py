@@ -15,9 +15,9 @@ import threading
 import traceback
 import warnings
 
-from robocal.errors import ListedError, RobocalError
-from robocal.resources import out_of_memory
-from robocal.version import __version__
+from robocal.core.errors import ListedError, RobocalError
+from robocal.core.resources import out_of_memory
+from robocal.core.version import __version__
 
 DEBUG_ENV = "ROBOCAL_DEBUG"  # set to 1 to see the traceback of an internal error
 
@@ -115,7 +115,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _run(args, argv: list[str], interrupts: _Interrupts) -> int:
     args.argv = argv  # the command line as given (the result's provenance)
-    from robocal.progress import set_quiet
+    from robocal.core.progress import set_quiet
 
     set_quiet(args.quiet)
     try:

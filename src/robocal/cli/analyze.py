@@ -39,11 +39,11 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from robocal.calibration import analyze
+    from robocal.calibration.pipeline import analyze
+    from robocal.core.io import LENGTH_UNITS
     from robocal.data.measurements import Measurements, read_joint_table
     from robocal.data.registration import register
     from robocal.identify import vocabulary
-    from robocal.io import LENGTH_UNITS
     from robocal.kinematics.model import load_model
 
     robot = load_model(args.robot)

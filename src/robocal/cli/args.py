@@ -47,7 +47,7 @@ def load_measurements(path: str, robot, quiet: bool = False, fanuc_coupled: bool
 
 def payload_si(values: list[float] | None) -> list[float] | None:
     """``--payload KG[,X,Y,Z]`` (kg, mm) -> [kg, x, y, z] (kg, m); None when not given."""
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
 
     if values is None:
         return None
@@ -76,7 +76,7 @@ def check_distinct_inputs(paths, what: str = "input files", why: str = TWICE) ->
     import hashlib
     from pathlib import Path
 
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
 
     seen: dict = {}
     for path in (p for p in paths if p is not None):
@@ -92,9 +92,17 @@ def check_distinct_inputs(paths, what: str = "input files", why: str = TWICE) ->
 
 
 # output suffix -> the format written there; an output named for another format is refused
+# (and each robot language's campaign program suffix, :func:`_program_formats`)
 FORMATS = {".json": "JSON", ".yaml": "YAML", ".yml": "YAML", ".csv": "CSV", ".html": "HTML", ".htm": "HTML",
-           ".urdf": "URDF", ".npz": "npz", ".mod": "RAPID", ".src": "KRL", ".script": "URScript", ".ls": "TP",
-           ".jbi": "JBI"}
+           ".urdf": "URDF", ".npz": "npz"}
+
+
+def _program_formats() -> dict[str, str]:
+    """Campaign program suffix -> its kind, from the languages' registry (imported only for an
+    output whose suffix FORMATS does not know)."""
+    from robocal.programs.registry import dialects
+
+    return {d.campaign_suffix: d.campaign_format for d in dialects() if d.campaign_format}
 
 
 def check_format(path, kind: str, option: str, hint: str = "") -> None:
@@ -102,13 +110,16 @@ def check_format(path, kind: str, option: str, hint: str = "") -> None:
     (``-o result.json`` for a model YAML); unknown or no suffixes are allowed."""
     from pathlib import Path
 
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
 
     if path is None:
         return
-    named = FORMATS.get(Path(path).suffix.lower())
+    formats = FORMATS
+    if Path(path).suffix.lower() not in FORMATS or kind not in FORMATS.values():
+        formats = FORMATS | _program_formats()
+    named = formats.get(Path(path).suffix.lower())
     if named is not None and named != kind:
-        suffix = next(s for s, k in FORMATS.items() if k == kind)
+        suffix = next(s for s, k in formats.items() if k == kind)
         raise DataError(f"{option} {path}: {option} writes {kind}, but the name says {named}; name it "
                         f"{Path(path).with_suffix(suffix).name}{hint}")
 
@@ -116,7 +127,7 @@ def check_format(path, kind: str, option: str, hint: str = "") -> None:
 def controller_for(robot, nominal: str | None):
     """The controller's model of ``robot`` (its base and flange, tool0): ``nominal`` (catalog name
     or YAML), else the catalog robot of the model's name, else None."""
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
     from robocal.kinematics.catalog import catalog_names
     from robocal.kinematics.model import load_model
 
@@ -131,19 +142,19 @@ def controller_for(robot, nominal: str | None):
 
 def check_tool_mm(xyz, option: str) -> None:
     """Refuse a tool translation (mm) whose magnitude says another unit (metres, or not a length
-    a tool has): :func:`robocal.magnitudes.check_tool`."""
+    a tool has): :func:`robocal.core.magnitudes.check_tool`."""
     import numpy as np
 
-    from robocal.magnitudes import check_tool
+    from robocal.core.magnitudes import check_tool
 
     check_tool(np.asarray(xyz, dtype=float) * 1e-3, "mm", option)
 
 
 def tool_frame(text: str, option: str):
     """A tool frame ``x,y,z,rx,ry,rz`` (mm, deg) -> 4x4 (m), refused when its magnitudes say
-    another unit (:func:`check_tool_mm`, :func:`robocal.magnitudes.check_degrees`)."""
-    from robocal.compensate import frame_from_text
-    from robocal.magnitudes import check_degrees
+    another unit (:func:`check_tool_mm`, :func:`robocal.core.magnitudes.check_degrees`)."""
+    from robocal.core.magnitudes import check_degrees
+    from robocal.deploy.compensation import frame_from_text
 
     T = frame_from_text(text, option)
     values = [float(v) for v in text.replace(" ", "").split(",") if v]
@@ -153,10 +164,10 @@ def tool_frame(text: str, option: str):
 
 
 def diagnosed(error, robot, datasets, frame_fitted: bool = True):
-    """``error`` (a PlausibilityError) with the data's own diagnosis (:func:`robocal.diagnose.diagnose`)
-    put first when they tell more (a swapped or sign-flipped joint column, a mirrored frame, the odd
-    file, a frame that needs --fit-frame)."""
-    from robocal.diagnose import diagnose
+    """``error`` (a PlausibilityError) with the data's own diagnosis
+    (:func:`robocal.trust.diagnosis.diagnose`) put first when they tell more (a swapped or
+    sign-flipped joint column, a mirrored frame, the odd file, a frame that needs --fit-frame)."""
+    from robocal.trust.diagnosis import diagnose
 
     why = diagnose(robot, datasets, frame_fitted=frame_fitted)
     return error if why is None else type(error)(f"{why} (the check: {error})")
@@ -181,7 +192,7 @@ def load_calibrated_and_nominal(calibrated: str, nominal: str, option: str = "--
 
     import numpy as np
 
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
     from robocal.kinematics.catalog import catalog_names
     from robocal.kinematics.model import Robot, load_model
 
@@ -217,9 +228,9 @@ def load_prediction(path, calibrated, outputs: list):
     (none of them is the JSON)."""
     if path is None:
         return None
-    from robocal.calibration import load_result
-    from robocal.errors import DataError
-    from robocal.io import check_outputs
+    from robocal.calibration.pipeline import load_result
+    from robocal.core.errors import DataError
+    from robocal.core.io import check_outputs
     from robocal.trust.coverage import Prediction
 
     check_outputs(outputs, [path])

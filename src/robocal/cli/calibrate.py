@@ -12,7 +12,7 @@ from robocal.cli.history_options import (
     record,
     start_record,
 )
-from robocal.io import LENGTH_UNITS
+from robocal.core.io import LENGTH_UNITS
 
 EPILOG = """Examples:
   robocal calibrate data.csv --robot abb_irb2600 --validate val.csv -o calibrated.yaml --json result.json
@@ -123,7 +123,7 @@ def add_parser(sub) -> None:
 def error_model_line(args, data: list) -> str | None:
     """Which error model the default gave and why, when it is not the cross-validated choice (whose
     table the summary prints): the geometric model for a method, several files or too few poses."""
-    from robocal.calibration import AUTO_DEFAULT_KINDS, AUTO_DEFAULT_MIN_POSES, NONGEOMETRIC_METHODS
+    from robocal.calibration.pipeline import AUTO_DEFAULT_KINDS, AUTO_DEFAULT_MIN_POSES, NONGEOMETRIC_METHODS
 
     if args.nongeometric.strip().lower() != "default":
         return None
@@ -145,11 +145,11 @@ def error_model_line(args, data: list) -> str | None:
 def run(args) -> int:
     import numpy as np
 
-    from robocal.calibration import calibrate, json_text
+    from robocal.calibration.pipeline import calibrate, json_text
     from robocal.cli.args import check_distinct_inputs, check_format, diagnosed, load_measurements
-    from robocal.errors import DataError, IdentificationError, PlausibilityError
+    from robocal.core.errors import DataError, IdentificationError, PlausibilityError
+    from robocal.core.io import check_outputs, write_all
     from robocal.history.offsets import zero_shifts
-    from robocal.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
     from robocal.kinematics.model_file import dump_model
 

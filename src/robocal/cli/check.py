@@ -46,11 +46,11 @@ def run(args) -> int:
 
     from robocal.cli.args import check_format, load_measurements
     from robocal.cli.history_options import check_history_options, record
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
+    from robocal.core.io import check_outputs, load_json, write_all
     from robocal.history.check import Uncertainty, check
     from robocal.history.record import fingerprints
     from robocal.history.store import History, Record
-    from robocal.io import check_outputs, load_json, write_all
     from robocal.kinematics.model import Robot
     from robocal.kinematics.model_file import dump_model
 

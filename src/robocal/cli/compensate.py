@@ -92,10 +92,15 @@ def run(args) -> int:
         payload_si,
         tool_frame,
     )
-    from robocal.compensate import check_target_units, compensate, format_csv, pose_columns, read_poses_csv
+    from robocal.core.io import check_outputs, read_text, write_all
     from robocal.data.measurements import robot_reach
-    from robocal.io import check_outputs, read_text, write_all
-    from robocal.kinematics.cell import is_track_cell
+    from robocal.deploy.compensation import (
+        check_target_units,
+        compensate,
+        format_csv,
+        pose_columns,
+        read_poses_csv,
+    )
     from robocal.trust.output_marker import check_unmarked, mark_csv
 
     check_format(args.output, "CSV", "-o")
@@ -115,12 +120,8 @@ def run(args) -> int:
                      targets_frame=args.targets_in, tool=tool, e1=layout.get("e1"),
                      payload=payload_si(args.payload), temperature=args.temperature)
     names, values = pose_columns(res.corrected_targets, layout)
-    track = int(is_track_cell(calibrated))  # an arm on a track: e1 (mm) first, kept as given
-    joints = ["e1_mm"] * track + [f"q{i + 1}_{'mm' if calibrated.prismatic[i + track] else 'deg'}"
-                                  for i in range(calibrated.n_joints - track)]
-    columns = joints + names + ["converged"]
-    shown = np.where(calibrated.prismatic, res.joints * 1e3, np.rad2deg(res.joints))
-    cells = [shown, values, res.converged[:, None].astype(int)]
+    columns = [j.column for j in calibrated.joints] + names + ["converged"]  # a track's e1 (mm) first
+    cells = [calibrated.joints_shown(res.joints), values, res.converged[:, None].astype(int)]
     if res.singularity is not None:  # how far each target is from a singularity
         sing = res.singularity.columns()
         columns += list(sing)

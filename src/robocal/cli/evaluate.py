@@ -41,10 +41,10 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import json
 
+    from robocal.calibration.evaluation import evaluate
     from robocal.cli.args import check_format, diagnosed, load_measurements
-    from robocal.errors import PlausibilityError
-    from robocal.evaluate import evaluate
-    from robocal.io import check_outputs, write_all
+    from robocal.core.errors import PlausibilityError
+    from robocal.core.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
 
     check_format(args.json, "JSON", "--json")
@@ -53,8 +53,8 @@ def run(args) -> int:
 
     check_history_options(args)
     robot = load_model(args.model)
+    from robocal.core.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
     from robocal.data.csv_table import count_lines
-    from robocal.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
 
     rows = sum(count_lines(p) for p in (args.data, args.frame_from) if p is not None)  # before reading them
     check_memory(evaluation_bytes(rows), f"evaluating {rows:,} measurement rows", EVALUATION_ADVICE)

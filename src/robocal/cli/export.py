@@ -42,8 +42,8 @@ def run(args) -> int:
     from pathlib import Path
 
     from robocal.cli.args import check_format, controller_for
-    from robocal.errors import DataError
-    from robocal.io import check_outputs, write_all
+    from robocal.core.errors import DataError
+    from robocal.core.io import check_outputs, write_all
     from robocal.kinematics.model import load_model
     from robocal.kinematics.model_file import dump_model
     from robocal.kinematics.urdf import from_urdf, not_carried, to_urdf
@@ -76,7 +76,7 @@ def run(args) -> int:
     if args.yaml:
         texts[args.yaml] = dump_model(robot)
     if args.ur_calibration:
-        from robocal.kinematics.vendor.ur import not_representable, to_ur_calibration
+        from robocal.kinematics.manufacturer.ur import not_representable, to_ur_calibration
 
         nominal = controller_for(robot, args.nominal)
         if nominal is None:

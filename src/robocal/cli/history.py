@@ -29,10 +29,10 @@ def run(args) -> int:
 
     from robocal.cli.args import check_format
     from robocal.cli.history_options import check_history_options
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
+    from robocal.core.io import check_outputs, write_all
+    from robocal.core.version import __version__
     from robocal.history.store import History, is_postgres
-    from robocal.io import check_outputs, write_all
-    from robocal.version import __version__
 
     check_format(args.json, "JSON", "--json")
     check_format(args.report, "HTML", "--report")

@@ -19,7 +19,7 @@ def check_history_options(args, existing: bool = False) -> None:
     what the command reads)."""
     from pathlib import Path
 
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
     from robocal.history.store import History, check_robot_id, is_postgres
 
     if bool(args.history) != bool(args.robot_id):
@@ -34,7 +34,7 @@ def check_history_options(args, existing: bool = False) -> None:
 def record_evaluation(args, robot, summary: dict, files: list[tuple[str, str]]) -> int:
     """Record an evaluation of ``robot`` (``summary``: its statistics, mm) as derived from the
     calibration of the same model when the history holds one."""
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
     from robocal.history.record import fingerprints
     from robocal.history.store import History, Record
     from robocal.kinematics.model_file import dump_model
@@ -52,7 +52,7 @@ def record_evaluation(args, robot, summary: dict, files: list[tuple[str, str]]) 
 def offsets_start(args):
     """The start model of ``--offsets-only --start`` (None without them); the options that cannot go
     with it refused."""
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
     from robocal.kinematics.model import load_model
 
     if bool(args.offsets_only) != bool(args.start):
@@ -67,7 +67,7 @@ def offsets_start(args):
 
 def start_record(args, start) -> int | None:
     """The history's record of the calibration ``start`` came from (None when it holds none)."""
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
     from robocal.history.store import History
     from robocal.kinematics.model_file import dump_model
 

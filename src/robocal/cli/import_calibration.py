@@ -34,9 +34,9 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from robocal.cli.args import check_format
-    from robocal.io import check_outputs, write_all
+    from robocal.core.io import check_outputs, write_all
+    from robocal.kinematics.manufacturer.ur import import_calibration
     from robocal.kinematics.model_file import dump_model
-    from robocal.kinematics.vendor.ur import import_calibration
 
     check_format(args.output, "YAML", "-o")
     check_outputs([args.output], [args.calibration])

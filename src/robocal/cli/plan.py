@@ -44,12 +44,12 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.cli.args import controller_for, tool_frame
-    from robocal.compensate import check_target_units, controller_model, format_csv, read_poses_csv
+    from robocal.core.errors import DataError
+    from robocal.core.io import check_outputs, write_atomic
     from robocal.data.measurements import robot_reach
-    from robocal.errors import DataError
+    from robocal.deploy.compensation import check_target_units, controller_model, format_csv, read_poses_csv
     from robocal.ik import track
     from robocal.ik.path import plan_path
-    from robocal.io import check_outputs, write_atomic
     from robocal.kinematics.cell import is_track_cell
     from robocal.kinematics.model import load_model
 
@@ -80,13 +80,9 @@ def run(args) -> int:
         if start is not None:
             start = np.r_[layout["e1"][0], start]
         res = track.plan(robot, poses, layout["e1"], weights=args.weights, start=start, nominal=nominal)
-        cols = ["e1_mm"] + [f"q{i + 1}_deg" for i in range(robot.n_joints - 1)]
-        shown = np.c_[res.joints[:, 0] * 1e3, np.rad2deg(res.joints[:, 1:])]
     else:
         res = plan_path(robot, poses, weights=args.weights, start=start, nominal=nominal)
-        cols = [f"q{i + 1}_deg" for i in range(robot.n_joints)]
-        shown = np.rad2deg(res.joints)
-    write_atomic(args.output, format_csv(cols, shown))
+    write_atomic(args.output, format_csv([j.column for j in robot.joints], robot.joints_shown(res.joints)))
     gain = 100.0 * (1.0 - res.cost / res.greedy_cost) if res.greedy_cost > 0 else 0.0
     print(f"poses: {frames}")
     print(f"weights {np.round(res.weights, 4).tolist()}")

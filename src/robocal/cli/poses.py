@@ -3,32 +3,10 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from robocal.cli.args import check_format, check_tool_mm, numbers
-
-EPILOG = """Examples:
-  robocal poses --robot abb_irb2600 -n 20 --smr-mm 20,-30,80 -o poses.csv --curve 10:60 --html campaign.html
-  robocal poses --robot abb_irb2600 -n 25 --smr-mm 20,-30,80 --tracker-mm 2500,500,300 \\
-      --box 500 -1000 0 1800 1000 1800 --min-joint-distance-deg 10 -o poses.csv \\
-      --rapid campaign.mod --krl campaign.src --urscript campaign.script
-  robocal poses --robot fanuc_lrmate200id -n 20 --smr-mm 20,-30,60 -o poses.csv --fanuc campaign.ls
-  robocal poses --robot yaskawa_gp25 -n 20 --smr-mm 20,-30,60 -o poses.csv --inform CAMPAIGN.JBI
-  robocal poses --robot staubli_tx2_140 -n 20 --smr-mm 20,-30,60 -o poses.csv --val3 campaign
-  robocal poses --robot meca500 -n 20 --from taught.csv --region taught.csv -o poses.csv
-  robocal poses --robot abb_irb2600 --check -n 20 --from poses.csv -o check_poses.csv --rapid check.mod
-  robocal simulate --robot abb_irb2600 --joints poses.csv --smr-mm 20,-30,80 -o data.csv --truth truth.yaml
-Lengths in mm in the robot's base frame (SMR positions and facing directions in the flange frame),
-angles in deg; write a value that starts with a minus as --smr-mm=-50,50,60.
-poses.csv: q1_deg..q6_deg in measuring order (with --from: the chosen rows' joint
-cells exactly as read, and their line numbers); visible_smr0.. with several SMRs. The programs
-move to each pose (MoveAbsJ / PTP / movej / J P[k]; INFORM: MOVJ to RECTAN positions in the robot
-frame, TOOL 0, with the planned joints' RCONF), wait --settle-s, and call --procedure: replace its
-body with your tracker trigger (FANUC: a TP program of that name, taking the pose number; INFORM: a
-job of that name, the pose number in I000; VAL3: movej(jPose[k], flange, ...) and call of a program
-of that name, the pose number its argument).
-Every output is written, or none.
-"""
+from robocal.programs.language_help import POSES_EPILOG, PROGRAM_OPTION
+from robocal.programs.registry import DIALECTS
 
 
 def _curve(text: str) -> tuple[int, ...]:
@@ -48,7 +26,7 @@ def add_parser(sub) -> None:
                                    "that meet the constraints and the tracker's line of sight), put them in "
                                    "a short measuring order, predict the accuracy, and write the pose list "
                                    "and robot programs.",
-                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       epilog=POSES_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--robot", required=True, help="nominal model: catalog name or model YAML")
     p.add_argument("-n", "--poses", type=int, required=True, help="number of poses to measure")
     p.add_argument("-o", "--output", required=True, metavar="poses.csv", help="planned poses CSV to write")
@@ -114,27 +92,35 @@ def add_parser(sub) -> None:
     g = p.add_argument_group("outputs")
     g.add_argument("--json", metavar="campaign.json", help="the plan as JSON")
     g.add_argument("--html", metavar="campaign.html", help="HTML page with the accuracy curve")
-    g.add_argument("--rapid", metavar="F.mod", help="ABB RAPID module")
-    g.add_argument("--krl", metavar="F.src", help="KUKA KRL program (.src, and .dat next to it)")
-    g.add_argument("--urscript", metavar="F.script", help="URScript program")
-    g.add_argument("--fanuc", metavar="F.ls", help="FANUC TP program (ASCII .ls; J3 in FANUC's convention)")
-    g.add_argument("--inform", metavar="F.JBI", help="Yaskawa INFORM job (RECTAN positions with their RCONF)")
-    g.add_argument("--val3", metavar="FOLDER", help="Staubli VAL3 application (a folder named like the "
-                                                    "application, created if absent)")
+    g.add_argument("--program", nargs=2, action="append", default=[], metavar=("LANG", "PATH"),
+                   help=PROGRAM_OPTION.format(languages=", ".join(DIALECTS)))
+    for key in DIALECTS:
+        g.add_argument(f"--{key}", metavar="PATH", help=f"the same as --program {key} PATH")
     g.add_argument("--speed-percent", type=float, default=20.0, help="programs' speed, %% of maximum")
     g.add_argument("--settle-s", type=float, default=1.0, help="wait at each pose before measuring, s")
     g.add_argument("--procedure", default="MeasurePose", help="procedure called at each pose")
     p.set_defaults(func=run)
 
 
-def _outputs(args, result, robot) -> dict:
+def _programs(args) -> dict[str, str]:
+    """Language key -> the path of its campaign program (--program LANG PATH, or --LANG PATH)."""
+    from robocal.core.errors import DataError
+
+    programs = {key: getattr(args, key) for key in DIALECTS if getattr(args, key) is not None}
+    for key, path in args.program:
+        if key not in DIALECTS or key in programs:
+            raise DataError(f"--program {key} {path}: " + (f"LANG is one of {', '.join(DIALECTS)}" if
+                                                            key not in DIALECTS else f"{key} is given twice"))
+        programs[key] = path
+    return programs
+
+
+def _outputs(args, result, robot, programs: dict[str, str]) -> dict:
     """Every output's text, computed before anything is written (``robot``: the model as loaded,
     its tool the flange, for programs with Cartesian positions)."""
     import json
 
-    import numpy as np
-
-    from robocal.campaign import programs
+    from robocal.campaign.programs import campaign_programs
 
     texts = {args.output: result.poses_csv()}
     if args.json:
@@ -143,27 +129,10 @@ def _outputs(args, result, robot) -> dict:
         from robocal.report.campaign import render_campaign
 
         texts[args.html] = render_campaign(result.to_dict())
-    deg = np.rad2deg(result.joints)
-    kw = {"speed_percent": args.speed_percent, "settle_s": args.settle_s, "procedure": args.procedure,
-          "comment": f"robocal campaign: {result.n} poses of {result.robot.name}, predicted accuracy "
-                     f"{result.predicted_rms_mm:.4f} mm"}
-    if args.rapid:
-        texts[args.rapid] = programs.rapid_module(deg, Path(args.rapid).stem, **kw)
-    if args.krl:
-        src, dat = programs.krl_program(deg, Path(args.krl).stem, **kw)
-        texts[args.krl] = src
-        texts[str(Path(args.krl).with_suffix(".dat"))] = dat
-    if args.urscript:
-        texts[args.urscript] = programs.urscript_program(result.joints, Path(args.urscript).stem, **kw)
-    if args.fanuc:
-        texts[args.fanuc] = programs.fanuc_ls_program(deg, Path(args.fanuc).stem, **kw)
-    if args.inform:
-        texts[args.inform] = programs.inform_job(deg, robot, Path(args.inform).stem, **kw)
-    if args.val3:
-        folder = Path(args.val3)
-        for file, text in programs.val3_application(deg, folder.name, **kw).items():
-            texts[str(folder / file)] = text
-    return texts
+    comment = (f"robocal campaign: {result.n} poses of {result.robot.name}, predicted accuracy "
+               f"{result.predicted_rms_mm:.4f} mm")
+    return texts | campaign_programs(result.joints, robot, programs, speed_percent=args.speed_percent,
+                                     settle_s=args.settle_s, procedure=args.procedure, comment=comment)
 
 
 def _params(args, robot):
@@ -171,7 +140,7 @@ def _params(args, robot):
     tracker frame and the SMR offsets."""
     if not args.check:
         return "auto"
-    from robocal.errors import DataError
+    from robocal.core.errors import DataError
     from robocal.history.offsets import offsets_params
 
     if args.kind not in ("point", "pose"):
@@ -179,67 +148,60 @@ def _params(args, robot):
     return offsets_params(robot, max(1, len(args.smr_mm or [])))
 
 
-def _val3_files(args) -> list[str]:
-    """The files --val3 FOLDER will write (names checked before planning); the folder is created
-    when absent (its parent must exist)."""
-    from robocal.campaign import programs
-    from robocal.errors import DataError
+def _check_outputs(args, programs: dict[str, str]) -> None:
+    """Refuse outputs named for another format, or that would overwrite an input, before planning."""
+    from robocal.campaign.programs import campaign_outputs, program_options
+    from robocal.core.io import check_outputs
 
-    if args.val3 is None:
-        return []
-    folder = Path(args.val3)
-    if folder.exists() and not folder.is_dir():
-        raise DataError(f"--val3 {folder}: not a folder (a VAL3 application is a folder)")
-    if not folder.exists() and not folder.resolve().parent.is_dir():
-        raise DataError(f"--val3 {folder}: its parent folder does not exist")
-    names = programs.val3_application([[0.0] * 6], folder.name, procedure=args.procedure)
-    return [str(folder / name) for name in names]
+    written = campaign_outputs(programs, args.procedure)
+    for path, kind, option in ((args.output, "CSV", "-o"), (args.json, "JSON", "--json"),
+                               (args.html, "HTML", "--html"), *((programs.get(d.key), d.campaign_format,
+                                                                 f"--{d.key}") for d in program_options()
+                                                                if d.campaign_format)):
+        check_format(path, kind, option)
+    check_outputs([args.output, args.json, args.html, *written], [args.robot, args.candidates, args.region])
 
 
-def run(args) -> int:
+def _constraints(args):
+    """The constraints on the chosen poses: joint margins, TCP boxes, distances, the tracker's
+    line of sight (lengths from mm to m)."""
     import numpy as np
 
-    from robocal.campaign import Constraints, Tracker, plan_poses, read_candidates
-    from robocal.data.measurements import read_joints
-    from robocal.errors import DataError
-    from robocal.io import check_outputs, write_all
-    from robocal.kinematics.model import load_model
+    from robocal.campaign import Constraints, Tracker
 
-    if args.krl and Path(args.krl).suffix.lower() != ".src":
-        raise DataError(f"--krl names the .src file (its .dat is written next to it), got {args.krl}")
-    dat = args.krl and Path(args.krl).with_suffix(".dat")
-    for path, kind, option in ((args.output, "CSV", "-o"), (args.json, "JSON", "--json"),
-                               (args.html, "HTML", "--html"), (args.rapid, "RAPID", "--rapid"),
-                               (args.urscript, "URScript", "--urscript"), (args.fanuc, "TP", "--fanuc"),
-                               (args.inform, "JBI", "--inform")):
-        check_format(path, kind, option)
-    val3 = _val3_files(args)
-    check_outputs([args.output, args.json, args.html, args.rapid, args.urscript, args.krl, dat, args.fanuc,
-                   args.inform, *(val3 if Path(args.val3 or ".").is_dir() else [])],
-                  [args.robot, args.candidates, args.region])
-    for smr in args.smr_mm or []:
-        check_tool_mm(smr, f"--smr-mm {','.join(f'{v:g}' for v in smr)}")
-    robot = load_model(args.robot)
-    params = _params(args, robot)
-    wanted = [f for f in (args.rapid, args.krl, args.urscript, args.fanuc) if f]
-    if wanted and robot.has_prismatic:
-        raise DataError(f"{robot.name} has a prismatic joint (a track): campaign programs with external "
-                        f"axes are not written ({', '.join(wanted)}); drive the poses of {args.output} "
-                        "(e1_mm and the arm's joints) with your own program")
-    if args.smr_normal and len(args.smr_normal) != len(args.smr_mm or []):
-        raise DataError("give one --smr-normal per --smr-mm")
-    if args.region and args.region_box:
-        raise DataError("give either --region or --region-box, not both")
     tracker = None
     if args.tracker_mm is not None:
         tracker = Tracker(position=np.array(args.tracker_mm) * 1e-3, acceptance_deg=args.acceptance_deg,
                           range_m=tuple(args.tracker_range_m), clearance_m=args.clearance_mm * 1e-3,
                           arm_radius_m=None if args.arm_radius_mm is None else args.arm_radius_mm * 1e-3)
     boxes = tuple(np.array(b).reshape(2, 3) * 1e-3 for b in (args.box or []))
-    constraints = Constraints(margin_deg=args.margin_deg, boxes=boxes,
-                              min_joint_distance_deg=args.min_joint_distance_deg,
-                              min_wrist_deg=args.min_wrist_deg, min_elbow_deg=args.min_elbow_deg,
-                              min_shoulder_m=args.min_shoulder_mm * 1e-3, tracker=tracker)
+    return Constraints(margin_deg=args.margin_deg, boxes=boxes,
+                       min_joint_distance_deg=args.min_joint_distance_deg,
+                       min_wrist_deg=args.min_wrist_deg, min_elbow_deg=args.min_elbow_deg,
+                       min_shoulder_m=args.min_shoulder_mm * 1e-3, tracker=tracker)
+
+
+def run(args) -> int:
+    import numpy as np
+
+    from robocal.campaign import plan_poses, read_candidates
+    from robocal.campaign.programs import refuse_tracks, write_campaign
+    from robocal.core.errors import DataError
+    from robocal.data.measurements import read_joints
+    from robocal.kinematics.model import load_model
+
+    programs = _programs(args)
+    _check_outputs(args, programs)
+    for smr in args.smr_mm or []:
+        check_tool_mm(smr, f"--smr-mm {','.join(f'{v:g}' for v in smr)}")
+    robot = load_model(args.robot)
+    params = _params(args, robot)
+    refuse_tracks(programs, robot, args.output)
+    if args.smr_normal and len(args.smr_normal) != len(args.smr_mm or []):
+        raise DataError("give one --smr-normal per --smr-mm")
+    if args.region and args.region_box:
+        raise DataError("give either --region or --region-box, not both")
+    constraints = _constraints(args)
     candidates = read_candidates(args.candidates, robot, args.kind) if args.candidates else None
     region = (read_joints(args.region, robot) if args.region else
               np.array(args.region_box).reshape(2, 3) * 1e-3 if args.region_box else None)
@@ -251,16 +213,8 @@ def run(args) -> int:
         criterion=args.criterion, region=region, region_size=args.region_size, starts=args.starts,
         curve=args.curve, seed=args.seed, progress=not args.quiet, params=params,
         unmodelled_mm=args.unmodelled_mm, unmodelled_terms=args.unmodelled_terms)
-    texts = _outputs(args, result, robot)
-    created = args.val3 is not None and not Path(args.val3).is_dir()
-    if created:
-        Path(args.val3).mkdir()
-    try:
-        write_all(texts)
-    except BaseException:
-        if created and not any(Path(args.val3).iterdir()):
-            Path(args.val3).rmdir()
-        raise
+    texts = _outputs(args, result, robot, programs)
+    write_campaign(texts, programs)
     print(result.summary())
     for path in texts:
         print(f"wrote {path}")

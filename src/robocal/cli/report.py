@@ -22,9 +22,9 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from robocal.calibration import load_result
+    from robocal.calibration.pipeline import load_result
     from robocal.cli.args import check_format
-    from robocal.io import check_outputs
+    from robocal.core.io import check_outputs
     from robocal.report.html import write_report
 
     check_format(args.output, "HTML", "-o")

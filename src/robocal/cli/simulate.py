@@ -133,9 +133,9 @@ def run(args) -> int:
 
     import numpy as np
 
+    from robocal.core.errors import DataError
+    from robocal.core.io import check_outputs
     from robocal.data.simulate import simulate_tracker, write_simulation
-    from robocal.errors import DataError
-    from robocal.io import check_outputs
     from robocal.kinematics.model import load_model
 
     check_format(args.output, "CSV", "-o")

@@ -35,13 +35,13 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import json
 
-    from robocal.compensate import frame_from_text, frame_to_text, rotation_from_text
+    from robocal.core.io import check_outputs, write_atomic
+    from robocal.core.magnitudes import check_degrees
     from robocal.data.measurements import read_joints
-    from robocal.io import check_outputs, write_atomic
+    from robocal.deploy.compensation import frame_from_text, frame_to_text, rotation_from_text
+    from robocal.deploy.tcp import identify_tcp
     from robocal.kinematics.model import Robot, load_model
     from robocal.kinematics.transforms import make_transform
-    from robocal.magnitudes import check_degrees
-    from robocal.tcp import identify_tcp
 
     rotation = rotation_from_text(args.rotation, "--rotation")
     angles = [float(v) for v in args.rotation.replace(" ", "").split(",") if v]

@@ -20,7 +20,7 @@ from collections.abc import Iterable, Iterator
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 
 BLOCK_LINES = 4096  # lines converted at once (their Python strings live only for one block)
 WINDOW_CHARS = 1 << 22  # characters of text split into lines at a time (4 MB)

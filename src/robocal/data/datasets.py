@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from robocal.core.errors import DataError
 from robocal.data.importer import import_tracker
-from robocal.errors import DataError
 
 
 def _folder(root, name: str) -> Path:

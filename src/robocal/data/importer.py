@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from robocal.core.errors import DataError, UnitError
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text
 from robocal.data.measurements import (
     MAX_JOINT_RAD,
     MAX_TRACKER_RANGE_M,
@@ -35,8 +37,7 @@ from robocal.data.measurements import (
     approach_from_order,
     travel_from_order,
 )
-from robocal.errors import DataError, UnitError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text
+from robocal.kinematics.conditions import Conditions
 
 _SPLIT = re.compile(r"[,;\s]+")
 # a digit, a comma, a digit, inside a value: a decimal comma when the line is split by ';' or
@@ -339,7 +340,7 @@ def import_tracker(raw=(), *, joints: str | ColumnSpec, points, base=(), average
     files_text = ", ".join(Path(f).name for f in names)
     data = Measurements.from_arrays("point", q[order], points=p[order], smr=smr[order],
                                     pose_id=pose_id[order], source_row=rows[order],
-                                    approach=approach, travel=travel,
+                                    conditions=Conditions(approach, travel),
                                     source=f"imported by robocal from {files_text}")
     drift = [_drift(ColumnSpec.parse(b, "points") if isinstance(b, str) else b, skip_rows) for b in base]
     return ImportResult(data=data, dropped=dropped, spread_max=np.concatenate(out["spread_max"]),

@@ -9,7 +9,11 @@ arms). A joint log from a FANUC controller is read with `fanuc_decoupled` (CLI
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
+
+from robocal.data.measurements import approach_from_order, travel_from_order
 
 J23_FACTOR = 1.0  # FANUC J3 (controller) = J3 (catalog, ROS-I) + J23_FACTOR * J2
 COUPLED_OPTION = "--fanuc-j2j3-coupled"  # the command-line option that reads a FANUC joint log
@@ -72,10 +76,6 @@ def fanuc_decoupled(q: np.ndarray) -> np.ndarray:
 def fanuc_decoupled_data(data):
     """Measurements whose joints are a FANUC controller's -> the same with the catalog's joints
     (the approach directions and travel re-derived from the row order)."""
-    from dataclasses import replace
-
-    from robocal.data.measurements import approach_from_order, travel_from_order
-
     q = fanuc_decoupled(data.joints)
     return replace(data, joints=q, approach=approach_from_order(q, data.pose_id),
                    travel=travel_from_order(q, data.pose_id))

@@ -55,12 +55,14 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from robocal.core.errors import DataError, UnitError
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
 from robocal.data.csv_table import csv_rows, read_table, text_lines
-from robocal.errors import DataError, UnitError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
+from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
+from robocal.kinematics.conditions import UNKNOWN, Conditions
+from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
 from robocal.kinematics.transforms import ROTATION_TOL
 
-KINDS = ("point", "pose", "plane", "distance")
 _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
                  "pair", "distance", "approach", "travel", "payload", "temperature")  # row-indexed
 _LENGTH_COLUMNS = ("x", "y", "z", "sigma", "distance")
@@ -184,6 +186,16 @@ class Measurements:
     external: int = 0  # the first ``external`` joints are external axes (e1..): a track carrying the arm
 
     @property
+    def spec(self) -> KindSpec:
+        """What the rows' kind observes (`robocal.data.kinds`)."""
+        return OBSERVED[self.kind]
+
+    @property
+    def conditions(self) -> Conditions:
+        """The rows' approach directions, moves, payloads and temperatures as one `Conditions`."""
+        return Conditions(self.approach, self.travel, self.payload, self.temperature)
+
+    @property
     def label(self) -> str:
         """How messages and reports name the set: its file, else its provenance text."""
         return self.file or self.source
@@ -202,8 +214,8 @@ class Measurements:
     @classmethod
     def from_arrays(cls, kind: str, joints, *, points=None, rotations=None, plane=None, pair=None,
                     distance=None, smr=None, sigma=None, pose_id=None, source_row=None,
-                    source: str = "", approach=None, travel=None, linear=None,
-                    external: int = 0, payload=None, temperature=None) -> Measurements:
+                    source: str = "", conditions: Conditions = UNKNOWN, linear=None,
+                    external: int = 0) -> Measurements:
         """Validated measurements from arrays in SI units (rad, m).
 
         Parameters
@@ -232,20 +244,16 @@ class Measurements:
             The rows' line numbers in their source file (default ``1..N``).
         source : str
             Provenance text, kept in the CSV's first comment line.
-        approach : array_like of int, shape (N, n), optional
-            Joint approach directions (default: from the row order, `approach_from_order`).
-        travel : array_like, shape (N, n), optional
-            Joint moves from the previous pose, radians (default: from the row order,
-            `travel_from_order`).
+        conditions : Conditions, optional
+            The rows' conditions (`robocal.kinematics.conditions.Conditions`): joint approach
+            directions (default: from the row order, `approach_from_order`), joint moves from the
+            previous pose, radians (default: from the row order, `travel_from_order`), payloads
+            (mass kg and centre of mass in the flange frame m; None: not recorded) and arm
+            temperatures (deg C; None: not recorded).
         linear : array_like of bool, shape (n,), optional
             Joints in metres (prismatic, e.g. a track).
         external : int, optional
             How many leading joints are external axes (written as e1.. columns).
-        payload : array_like, shape (N, 4), optional
-            Each row's payload: mass (kg) and centre of mass in the flange frame (m); None: not
-            recorded.
-        temperature : array_like, shape (N,), optional
-            Each row's arm temperature, deg C; None: not recorded.
 
         Returns
         -------
@@ -268,17 +276,15 @@ class Measurements:
         >>> rc.Measurements.from_arrays("point", q)
         Traceback (most recent call last):
         ...
-        robocal.errors.DataError: ...
+        robocal.core.errors.DataError: ...
         """
-        if kind not in KINDS:
-            raise DataError(f"unknown measurement kind {kind!r}: use one of {', '.join(KINDS)}")
+        spec = kind_spec(kind)
         joints = np.asarray(joints, dtype=float) if not isinstance(joints, np.ndarray) else joints
         if joints.ndim != 2 or joints.shape[0] < 1 or joints.shape[1] < 1:
             raise DataError(f"joints must have shape (N, n) with N, n >= 1, got {joints.shape}")
         N, n = joints.shape
         joints = _float_array(joints, "joints", (N, n))
-        need = {"point": {"points"}, "pose": {"points", "rotations"}, "plane": {"plane"},
-                "distance": {"pair", "distance"}}[kind]
+        need = set(spec.arrays)
         given = {k for k, v in (("points", points), ("rotations", rotations), ("plane", plane),
                                 ("pair", pair), ("distance", distance)) if v is not None}
         if need - given:
@@ -319,6 +325,7 @@ class Measurements:
             sigma = _float_array(sigma, "sigma", (N,))
             if (sigma <= 0).any():
                 raise DataError("sigma must be positive (m)")
+        approach, travel = conditions.approach, conditions.travel
         if approach is None:
             approach = approach_from_order(joints, pose_id)
         else:
@@ -335,7 +342,7 @@ class Measurements:
             raise DataError(f"linear (prismatic joint flags) must have {n} values")
         if not 0 <= int(external) <= n:
             raise DataError(f"external axes must be 0..{n}, got {external}")
-        kw.update(_conditions(payload, temperature, N))
+        kw.update(_conditions(conditions.payload, conditions.temperature, N))
         return cls(kind=kind, joints=joints, pose_id=pose_id, smr=smr, source_row=source_row,
                    sigma=sigma, source=str(source).replace("\n", " "), approach=approach,
                    travel=travel, linear=linear, external=int(external), **kw)
@@ -344,8 +351,6 @@ class Measurements:
     def missing_conditions(self, robot) -> list[str]:
         """Warnings for ``robot``'s payload / thermal terms these data have no column for, naming
         the default the model assumes (no payload; its reference temperature)."""
-        from robocal.kinematics.joint_errors import assumed_conditions
-
         errors = robot.joint_errors
         if errors is None:
             return []
@@ -358,8 +363,6 @@ class Measurements:
     def unused_conditions(self, robot) -> str | None:
         """A note naming the recorded conditions (payload, temperature) ``robot``'s error model
         has no term for, or None when it uses every one recorded."""
-        from robocal.kinematics.joint_errors import condition_terms
-
         used = condition_terms(robot)
         unused = [c for c, term in (("payload", "payload"), ("temperature", "thermal"))
                   if getattr(self, c) is not None and term not in used]
@@ -427,7 +430,7 @@ class Measurements:
         if index.min() < -len(self) or index.max() >= len(self):
             raise DataError(f"row index out of range for {len(self)} rows")
         take = {f: (None if getattr(self, f) is None else getattr(self, f)[index]) for f in _ARRAY_FIELDS}
-        if self.kind == "distance":
+        if self.spec.group == "pair":
             ids, counts = np.unique(take["pair"], return_counts=True)
             if (counts != 2).any():
                 raise DataError("a distance subset must keep both rows of every pair")
@@ -435,7 +438,7 @@ class Measurements:
 
     def _groups(self) -> np.ndarray:
         """Group label of each row: rows that must stay together when splitting."""
-        return self.pair if self.kind == "distance" else self.pose_id
+        return getattr(self, self.spec.group)
 
     def split_poses(self, fraction: float | int = 0.5, seed: int = 0) -> tuple[Measurements, Measurements]:
         """Random split by pose (distance data: by pair) into (first, rest).
@@ -461,7 +464,8 @@ class Measurements:
         """Check joint count, SMR indices and unit plausibility against a robot; returns self."""
         where = f"{path}: " if path else (f"{self.source}: " if self.source else "")
         if self.n_joints != robot.n_joints:
-            track = " (e1 for its track, then q1..q6)" if robot.prismatic[0] else ""
+            k = robot.external_axes
+            track = f" (e1 for its track, then q1..q{robot.n_joints - k})" if k else ""
             raise DataError(f"{where}the data have {self.n_joints} joint columns but {robot.name} has "
                             f"{robot.n_joints} joints{track}: use a file with {robot.n_joints} joint "
                             "columns or the matching robot model")
@@ -472,7 +476,7 @@ class Measurements:
             kind = "prismatic (give it in mm or m)" if robot.prismatic[k] else "revolute (deg or rad)"
             raise UnitError(f"{where}joint column {k + 1} ({self.joint_column(k, '')}) is in "
                             f"{'length' if linear[k] else 'angle'} units but {robot.name}'s joint {k + 1} is "
-                            f"{kind}" + (": a track's column is e1_mm" if robot.prismatic[0] else ""))
+                            f"{kind}" + (": a track's column is e1_mm" if robot.external_axes else ""))
         if reach is None:
             reach = robot_reach(robot)
         _check_plausible(self, reach, where)
@@ -519,7 +523,8 @@ class Measurements:
         ('points.csv', (2, 3))
         """
         path = Path(path)
-        data = replace(parse_csv(read_text(path, "measurement file"), str(path)), file=str(path))
+        text = read_text(path, "measurement file")
+        data = replace(parse_csv(text, str(path), joint_range_rad(robot)), file=str(path))
         if robot is not None:
             data.check_against(robot, reach, str(path))
         elif reach is not None:
@@ -597,6 +602,16 @@ class Measurements:
         True
         """
         write_atomic(path, self.to_csv())
+
+
+def joint_range_rad(robot=None) -> float:
+    """The largest revolute joint value (rad) a reading of ``robot`` can have: two turns, or its
+    widest finite revolute limit when that is wider (`robocal.kinematics.model.Robot.joints`)."""
+    if robot is None:
+        return MAX_JOINT_RAD
+    limits = np.array([j.limits for j in robot.joints if not j.prismatic]).reshape(-1, 2)
+    finite = np.abs(limits[np.isfinite(limits).all(axis=1)])
+    return max(MAX_JOINT_RAD, float(finite.max(initial=0.0)))
 
 
 def robot_reach(robot) -> float:
@@ -864,8 +879,8 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
         h = next(h for h in col if roles[h][0] == c)
         return col[h] * roles[h][2]
 
-    kw = {}
-    if kind in ("point", "pose"):
+    kw, spec = {}, OBSERVED[kind]
+    if spec.sees_position:
         kw["points"] = np.stack([length(c) for c in "xyz"], axis=1)
         far = np.abs(kw["points"]).max(axis=1) > MAX_TRACKER_RANGE_M
         if far.any():
@@ -873,7 +888,7 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
             raise UnitError(f"{name}, line {ln}: a point {np.abs(kw['points'][far][0]).max():.4g} m from the "
                             f"tracker is beyond any tracker's range: the length unit is probably wrong "
                             f"(values in mm must be in columns x_mm, y_mm, z_mm)")
-    if kind == "pose":
+    if spec.sees_orientation:
         qv = np.stack([col["qx"], col["qy"], col["qz"], col["qw"]], axis=1)
         norm = np.linalg.norm(qv, axis=1)
         bad = np.flatnonzero(np.abs(norm - 1.0) > ROTATION_TOL)
@@ -881,9 +896,9 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
             raise DataError(f"{name}, line {line_no[bad[0]]}: quaternion norm {norm[bad[0]]:.6g} is not 1; "
                             "give a unit quaternion qw,qx,qy,qz")
         kw["rotations"] = Rotation.from_quat(qv).as_matrix()
-    if kind == "plane":
+    if "plane" in spec.arrays:
         kw["plane"] = col["plane"].astype(np.int64)
-    if kind == "distance":
+    if "pair" in spec.arrays:
         kw["pair"] = col["pair"].astype(np.int64)
         kw["distance"] = length("distance")
     if "sigma" in {r[0] for r in roles.values()}:
@@ -940,8 +955,10 @@ def _repeats(joints: np.ndarray, line_no: np.ndarray, name: str) -> tuple[np.nda
     return pose_id, notes
 
 
-def parse_csv(text: str, name: str = "<text>") -> Measurements:
-    """Parse canonical CSV text; ``name`` is used in error messages."""
+def parse_csv(text: str, name: str = "<text>", max_joint_rad: float = MAX_JOINT_RAD) -> Measurements:
+    """Parse canonical CSV text; ``name`` is used in error messages. Radian joint values beyond
+    ``max_joint_rad`` (default two turns; wider for a robot whose joints turn further,
+    `joint_range_rad`) are read as degrees under the wrong header and refused."""
     source, header_line, header_row, rows = _split_csv(text, name)
     header = [h.strip().lower() for h in header_row]
     if header[0].startswith("format: robocal-"):
@@ -959,9 +976,10 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     joints = np.stack([col[h] * roles[h][2] for h in joint_cols], axis=1)
     linear = np.array([_is_length(h) for h in joint_cols])
     angles = np.abs(np.where(linear, 0.0, joints))
-    if angles.max() > MAX_JOINT_RAD and any(roles[h][2] == 1.0 for h in joint_cols if not _is_length(h)):
+    if angles.max() > max_joint_rad and any(roles[h][2] == 1.0 for h in joint_cols if not _is_length(h)):
         ln = line_no[int(np.argmax(angles.max(axis=1)))]
-        raise UnitError(f"{name}, line {ln}: joint values up to {np.abs(joints).max():.4g} rad (> 2 turns): "
+        turns = f"> {max_joint_rad / (2 * np.pi):g} turns"
+        raise UnitError(f"{name}, line {ln}: joint values up to {np.abs(joints).max():.4g} rad ({turns}): "
                         "these look like degrees; name the columns q1_deg..")
     kw = _observed(kind, col, roles, line_no, name)
     approach = _per_joint(col, roles, "approach", len(joint_cols), name)
@@ -971,14 +989,14 @@ def parse_csv(text: str, name: str = "<text>") -> Measurements:
     ints = {c: (col[c].astype(np.int64) if c in col else None) for c in ("smr", "pose_id")}
     source_row = col["source_row"].astype(np.int64) if "source_row" in col else np.array(line_no)
     notes = ()
-    if ints["pose_id"] is None and kind != "distance":
+    if ints["pose_id"] is None and OBSERVED[kind].group == "pose_id":
         ints["pose_id"], notes = _repeats(joints, np.array(line_no), name)
     try:
         data = Measurements.from_arrays(kind, joints, smr=ints["smr"], pose_id=ints["pose_id"],
-                                        source_row=source_row, source=source, approach=approach,
-                                        travel=travel, linear=linear,
-                                        external=sum(roles[h][0] == "e" for h in joint_cols),
-                                        payload=payload, temperature=temperature, **kw)
+                                        source_row=source_row, source=source,
+                                        conditions=Conditions(approach, travel, payload, temperature),
+                                        linear=linear, external=sum(roles[h][0] == "e" for h in joint_cols),
+                                        **kw)
     except DataError as exc:
         raise DataError(f"{name}: {exc}") from None
     return replace(data, notes=notes)

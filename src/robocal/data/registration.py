@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from robocal.errors import DataError, IdentificationError
+from robocal.core.errors import DataError, IdentificationError
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix, skew
 
 # Smallest singular value (relative to the largest) of the column-normalised registration Jacobian
@@ -62,7 +62,7 @@ def _offsets_lsq(Rf: np.ndarray, of: np.ndarray, local: np.ndarray, smr: np.ndar
 def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30) -> Registration:
     """Fit the base frame and the SMR offsets of ``robot`` (its links, nominal or not) to point or
     pose measurements ``data`` (tracker frame). See the module docstring."""
-    if data.kind not in ("point", "pose"):
+    if not data.spec.sees_position:
         raise DataError(f"registration needs point or pose measurements, not {data.kind!r}")
     if data.n_joints != robot.n_joints:
         data.check_against(robot)
@@ -74,8 +74,7 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
     # the joints the robot really reached (a model with backlash or travel terms needs the
     # directions and moves of the measuring order, as calibration and evaluation judge it)
     flange = replace(robot, base=np.eye(4), tool=np.eye(4), smr=np.zeros((0, 3)), nominal=None).fk(
-        data.joints, approach=data.approach, travel=data.travel, payload=data.payload,
-        temperature=data.temperature)
+        data.joints, conditions=data.conditions)
     Rf, of = flange[:, :3, :3], flange[:, :3, 3]
     p = data.points
     start = np.vstack([robot.tool[:3, 3], robot.smr])
@@ -121,7 +120,7 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
     local = np.einsum("nij,nj->ni", Rf, t[smr]) + of
     res = p - (local @ B[:3, :3].T + B[:3, 3])
     tool_R = None
-    if data.kind == "pose":
+    if data.spec.sees_orientation:
         # R_meas = R_B R_f R_tool  ->  R_tool = projection onto SO(3) of the mean of (R_B R_f)^T R_meas
         M = np.einsum("nji,njk->ik", B[:3, :3] @ Rf, data.rotations)
         U, _, Vt = np.linalg.svd(M)

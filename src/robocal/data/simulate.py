@@ -48,12 +48,14 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.data import simulate_conditions as conditions
+import robocal.data.simulated_physics as physics
+from robocal.core.errors import DataError, UnreachableError
+from robocal.core.io import write_all
+from robocal.data.kinds import KINDS, OBSERVED
 from robocal.data.measurements import Measurements, approach_from_order, robot_reach, travel_from_order
-from robocal.errors import DataError, UnreachableError
-from robocal.io import write_all
-from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, is_track_cell, track_chain
-from robocal.kinematics.model import Robot
+from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, is_track_cell
+from robocal.kinematics.conditions import Conditions
+from robocal.kinematics.model import Robot, track_chain
 from robocal.kinematics.model_file import dump_model
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
 
@@ -63,7 +65,6 @@ TRACKER_ANGULAR_URAD = 2.5       # angle-encoder noise (1 sigma, each transverse
 NOISE_MODELS = ("isotropic", "tracker")
 TRACKER_DISTANCE_M = (2.0, 4.0)  # a random tracker stands this far from the robot's base origin, m
 OUTLIER_MM = (1.0, 5.0)          # size of a gross error (uniform), mm
-SIM_KINDS = ("point", "pose", "plane", "distance")
 SCALE_BAR_M = 0.5  # default certified length of a simulated scale bar (distance kind), m
 MIN_BAR_ANGLE_DEG = 20.0  # the two poses of a bar placement differ by at least this much (joint 1 or 2)
 # A true arm on a track (error_scale 1): the track's direction tilted, the encoder's scale and the
@@ -232,15 +233,15 @@ def _move_tips(robot, q: np.ndarray, target: np.ndarray, normal: np.ndarray | No
 
 def _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, joint_noise_deg,
            rotation_noise_deg) -> None:
-    if kind not in SIM_KINDS:
-        raise DataError(f"unknown simulation kind {kind!r}: use one of {', '.join(SIM_KINDS)}")
+    if kind not in KINDS:
+        raise DataError(f"unknown simulation kind {kind!r}: use one of {', '.join(KINDS)}")
     if noise_model not in NOISE_MODELS:
         raise DataError(f"unknown noise model {noise_model!r}: use 'isotropic' or 'tracker'")
     if int(n_poses) < 1 or int(n_smr) < 1 or int(n_planes) < 1:
         raise DataError("n_poses, n_smr and n_planes must be >= 1")
     if not 0.0 <= outliers < 1.0 or noise_mm < 0 or joint_noise_deg < 0 or rotation_noise_deg < 0:
         raise DataError("outliers must be in [0, 1) and noise levels >= 0")
-    if kind != "point" and n_smr != 1:
+    if not OBSERVED[kind].several_smrs and n_smr != 1:
         raise DataError(f"{kind} simulation uses one tool point: set n_smr = 1")
 
 
@@ -258,9 +259,9 @@ def _true_robot(robot: Robot, rng: np.random.Generator, kind: str, n_smr: int, e
     if smr_offsets is not None:
         placed = smr_in_link_frame(robot, smr_offsets)
         tool0, extra = placed[0], placed[1:]
-    tool_R = _random_rotation(rng) if kind == "pose" else robot.tool[:3, :3]
+    tool_R = _random_rotation(rng) if OBSERVED[kind].sees_orientation else robot.tool[:3, :3]
     # the tracker frame: random position 2-4 m from the base origin, random orientation
-    if kind in ("plane", "distance"):
+    if not OBSERVED[kind].sees_position:
         base = robot.base.copy()
     else:
         c = _unit(rng, 1)[0] * rng.uniform(*TRACKER_DISTANCE_M)
@@ -277,7 +278,7 @@ def _true_cell(robot: Robot, rng: np.random.Generator, error_scale: float) -> Ro
     """A true arm on a track: the arm perturbed as :func:`perturbed` does, the track direction tilted
     by TRACK_TILT_DEG about a random normal, the mount off by MOUNT_ERROR_MM / MOUNT_ERROR_DEG
     (random directions), the encoder scale off by TRACK_SCALE_ERROR (random sign), all times
-    ``error_scale``; rebuilt exactly as a cell file's chain (:func:`robocal.kinematics.cell.track_chain`)."""
+    ``error_scale``; rebuilt exactly as a cell file's chain (:func:`robocal.kinematics.model.track_chain`)."""
     arm = arm_model(robot).with_frames(base=carriage_frames(robot, 0.0)[0])
     true_arm = perturbed(arm, rng, scale=error_scale)
     u = robot.fk(np.zeros((1, robot.n_joints)), frames=True)[1][0, 1, :3, 2]  # the track's direction
@@ -302,7 +303,7 @@ def _tracker_readings(kind: str, T: np.ndarray, rng: np.random.Generator, noise_
     gross = np.zeros((N, 3))
     gross[outlier_rows] = _unit(rng, n_out) * rng.uniform(*OUTLIER_MM, (n_out, 1)) * 1e-3
     kw = {"points": p + noise + gross}
-    if kind == "pose":
+    if OBSERVED[kind].sees_orientation:
         dR = rotvec_to_matrix(rng.standard_normal((N, 3)) * np.deg2rad(rotation_noise_deg))
         kw["rotations"] = dR @ T[:, :3, :3]
     return kw, noise, outlier_rows
@@ -368,7 +369,7 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         Measure ``robot`` exactly as it is: no errors drawn, its own base and tool.
     payloads : sequence of float, optional
         Payload masses, kg, one block of poses each (working conditions: point and pose data,
-        `robocal.data.simulate_conditions`).
+        `robocal.data.simulated_physics`).
     temperatures : tuple of float, optional
         ``(lo, hi)`` arm temperatures, deg C, drawn per pose.
     payload_com : array_like, shape (3,), optional
@@ -414,11 +415,12 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         tracker_position = check_tracker_position(tracker_position)
     _check(kind, noise_model, n_poses, n_smr, n_planes, outliers, noise_mm, joint_noise_deg,
            rotation_noise_deg)
-    payloads, temperatures = conditions.check(payloads, temperatures)
-    thermal_k = conditions.check_thermal_k(thermal_k)
+    payloads, temperatures = physics.check(payloads, temperatures)
+    thermal_k = physics.check_thermal_k(thermal_k)
     if thermal_k is not None and temperatures is None:
         raise DataError("a true thermal expansion coefficient needs temperatures to act at")
-    if (payloads is not None or temperatures is not None) and kind not in ("point", "pose"):
+    spec = OBSERVED[kind]
+    if (payloads is not None or temperatures is not None) and not spec.sees_position:
         raise DataError("payloads and temperatures are simulated for point and pose data")
     if kind == "distance" and not 0 < bar_length_m < 10:
         raise DataError(f"the scale bar's length must be between 0 and 10 m, got {bar_length_m} m")
@@ -434,9 +436,9 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         q = joints
     else:
         q = sample_joints(true, n_poses, rng, workspace_box, tool=true.tool)
-    per_pose = n_smr if kind == "point" else 2 if kind == "distance" else 1
-    smr = np.tile(np.arange(n_smr), n_poses) if kind == "point" else np.zeros(n_poses * per_pose, np.int64)
-    pose_id = np.repeat(np.arange(n_poses), n_smr) if kind == "point" else np.arange(n_poses * per_pose)
+    per_pose = n_smr if spec.several_smrs else spec.rows_per_placement
+    smr = np.tile(np.arange(n_smr), n_poses) if spec.several_smrs else np.zeros(n_poses * per_pose, np.int64)
+    pose_id = np.repeat(np.arange(n_poses), n_smr) if spec.several_smrs else np.arange(n_poses * per_pose)
     if visible is not None:
         seen = visible.reshape(-1)
         smr, pose_id = smr[seen], pose_id[seen]
@@ -444,21 +446,21 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     N = len(q_rows)
     approach = approach_from_order(q_rows, pose_id)  # the poses are measured in this order
     travel = travel_from_order(q_rows, pose_id)
-    payload, temperature = conditions.schedule(n_poses, payloads, temperatures, payload_com)
+    payload, temperature = physics.schedule(n_poses, payloads, temperatures, payload_com)
     if payload is None and temperature is None:
-        T = true.fk(q_rows, smr=smr, approach=approach, travel=travel)
+        T = true.fk(q_rows, smr=smr, conditions=Conditions(approach, travel))
     else:  # the conditions' physics, independent of the fitting code; the truth then carries them
         payload, temperature = (None if x is None else x[pose_id] for x in (payload, temperature))
-        coefficients = conditions.true_terms(true, payloads, temperatures, robot_reach(robot),
+        coefficients = physics.true_terms(true, payloads, temperatures, robot_reach(robot),
                                              np.random.default_rng([seed, 35]), thermal_k)
         t_ref = float(np.mean(temperature)) if temperature is not None else 20.0
         if true.joint_errors is not None and any(nm.startswith("thermal") for nm in true.joint_errors.names):
             t_ref = true.joint_errors.reference_temperature_c
-        T = conditions.measured_poses(true, q_rows, smr, approach, travel, payload, temperature,
-                                      coefficients, t_ref)
+        T = physics.measured_poses(true, q_rows, smr, Conditions(approach, travel, payload, temperature),
+                                   coefficients, t_ref)
         true = true.with_joint_errors([*true.joint_error_names, *coefficients]).with_values(
             coefficients).with_reference_temperature(t_ref)
-    if kind in ("point", "pose"):
+    if spec.sees_position:
         kw, noise, outlier_rows = _tracker_readings(kind, T, rng, noise_mm, noise_model, outliers,
                                                     rotation_noise_deg)
     elif kind == "distance":  # the two nests of a placement: the bar's certified length on both rows
@@ -481,10 +483,10 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
             "rotation_noise_deg": float(rotation_noise_deg), "error_scale": float(error_scale),
             "noise_floor_mm": floor}
     source = f"simulated by robocal: robot {robot.name}, seed {seed}, {kind}, noise floor {floor:.6g} mm"
-    data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id, approach=approach,
-                                    travel=travel, payload=payload, temperature=temperature,
+    data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id,
+                                    conditions=Conditions(approach, travel, payload, temperature),
                                     source_row=np.arange(2, N + 2), source=source,
-                                    linear=robot.prismatic, external=int(is_track_cell(robot)), **kw)
+                                    linear=robot.prismatic, external=robot.external_axes, **kw)
     truth = replace(true, name=f"{robot.name}_true",
                     description=f"true robot of a robocal simulation (seed {seed}); noise floor "
                                 f"{floor:.6g} mm (3-D RMS of the added noise)")
@@ -494,8 +496,9 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
 
 def _check_given(robot, n_poses, n_smr, kind, joints, visible, smr_offsets):
     """Validate the planned-campaign options; returns them as arrays with ``n_poses``, ``n_smr``."""
+    spec = OBSERVED.get(kind)  # None: an unknown kind, refused by _check
     if joints is not None:
-        if kind not in ("point", "pose"):
+        if spec is None or not spec.sees_position:
             raise DataError(f"{kind} measurements place their own poses; given joints work for point "
                             "and pose measurements")
         joints = robot.check_joints(joints)
@@ -515,7 +518,7 @@ def _check_given(robot, n_poses, n_smr, kind, joints, visible, smr_offsets):
         visible = np.asarray(visible, dtype=bool)
         if visible.ndim == 2 and n_smr == 1:  # the SMR count from the visibility columns
             n_smr = visible.shape[1]
-        if kind != "point" or joints is None or visible.shape != (len(joints), n_smr):
+        if spec is None or not spec.several_smrs or joints is None or visible.shape != (len(joints), n_smr):
             raise DataError(f"visible must be ({n_poses}, {n_smr}) booleans for given joints of "
                             "point measurements (one per pose and SMR)")
         blind = np.flatnonzero(~visible.any(axis=1))

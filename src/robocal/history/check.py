@@ -31,10 +31,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg, stats
 
+from robocal.core.errors import DataError
 from robocal.data.registration import register
-from robocal.errors import DataError
 from robocal.identify.plausibility import check_residual
 from robocal.identify.space import block_of
+from robocal.kinematics.conditions import Conditions
 
 ALPHA = 0.01  # the false-alarm rate the verdict is taken at: changed exactly when p_value < ALPHA
 MIN_CHECK_POSES = 8  # fewer poses leave too few degrees of freedom after the frame fit
@@ -276,7 +277,7 @@ def check(robot, data, uncertainty: Uncertainty, *, fit_frame: bool = True, nois
     if noise_mm is not None and not 0 < noise_mm < 10:
         raise DataError(f"--noise-mm must be between 0 and 10 mm, got {noise_mm}")
     start = register(robot, data) if fit_frame else robot
-    kw = {"smr": data.smr, "approach": data.approach, "travel": data.travel}
+    kw = {"smr": data.smr, "conditions": Conditions(data.approach, data.travel)}
     modelled = start.fk(data.joints, **kw)[:, :3, 3]
     r = (data.points - modelled).reshape(-1)
     rms_mm = float(np.sqrt(np.mean(np.sum((data.points - modelled) ** 2, axis=1)))) * 1e3

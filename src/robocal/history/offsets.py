@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.calibration import calibrate
-from robocal.errors import DataError
+from robocal.calibration.pipeline import calibrate
+from robocal.core.errors import DataError
 
 FRAME_PARAMS = ("base.x", "base.y", "base.z", "base.rx", "base.ry", "base.rz", "tool.x", "tool.y", "tool.z")
 SAME_NOMINAL_TOL = 1e-9  # m or rad: the calibrated model must carry the nominal robot's links
@@ -32,7 +32,7 @@ def check_same_robot(nominal, start) -> None:
 
 
 def recalibrate_offsets(nominal, start, data, validation=None, **options):
-    """A `robocal.calibration.CalibrationResult` whose robot is ``start`` (an earlier
+    """A `robocal.calibration.pipeline.CalibrationResult` whose robot is ``start`` (an earlier
     calibration of ``nominal``) with only its joint zeros re-identified on ``data`` (point or pose
     measurements; the tracker frame and SMR offsets fitted with them); ``validation`` and
     ``options`` as `robocal.calibrate` takes them (not ``params`` nor ``nongeometric``).
@@ -78,7 +78,7 @@ def recalibrate_offsets(nominal, start, data, validation=None, **options):
     """
     check_same_robot(nominal, start)
     sets = data if isinstance(data, list | tuple) else [data]
-    if any(d.kind not in ("point", "pose") for d in sets):
+    if any(not d.spec.sees_position for d in sets):
         raise DataError("an offsets-only recalibration needs tracker data (points or poses)")
     for key in ("params", "nongeometric"):
         if key in options:

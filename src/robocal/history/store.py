@@ -24,8 +24,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from robocal.errors import DataError
-from robocal.version import __version__
+from robocal.core.errors import DataError
+from robocal.core.version import __version__
 
 KINDS = ("calibration", "check", "evaluation")  # evaluation: a model judged on held-out data
 POSTGRES_SCHEMES = ("postgresql://", "postgres://")

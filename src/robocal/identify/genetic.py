@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.errors import IdentificationError
+from robocal.core.errors import IdentificationError
 from robocal.identify.lsq import gauss_newton
 from robocal.identify.population import PopulationCost, evolve, stop_message
 from robocal.identify.solvers import SolverResult

@@ -4,7 +4,7 @@ update — with Levenberg-Marquardt damping so it converges from the nominal mod
 Each iteration re-linearises at the current model (rotations of base and tool are composed
 multiplicatively), so the iteration is Gauss-Newton on the parameter manifold; the damping
 schedule and stopping rules are robocal's one damped least-squares loop
-(:mod:`robocal.damped_least_squares`).
+(:mod:`robocal.core.damped_least_squares`).
 """
 
 from __future__ import annotations
@@ -13,11 +13,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from robocal.damped_least_squares import Status, minimize
+from robocal.core.damped_least_squares import Status, minimize
+from robocal.core.resources import few_threads
 from robocal.identify.linalg import ScaledSVD
 from robocal.identify.solvers import SolverResult, history_entry
 from robocal.identify.space import ParameterSpace, State
-from robocal.resources import few_threads
 
 STEP_TOL = 1e-13  # largest change of a unit-scaled column's contribution that still counts as a step
 FTOL = 1e-10  # converged when the linear model predicts a decrease below this fraction of the cost

@@ -29,82 +29,27 @@ the network's outputs over the calibration targets. Networks save as ``.npz`` or
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from robocal.damped_least_squares import Status
-from robocal.errors import IdentificationError
-from robocal.identify.plain_io import encode_plain, load_plain, save_plain
+from robocal.core.damped_least_squares import Status
+from robocal.core.errors import IdentificationError
+from robocal.data.kinds import OBSERVED
+from robocal.identify.network import FIELDS, BPNetwork
 from robocal.identify.population import Stagnation
 from robocal.identify.solvers import SolverResult, history_entry
 from robocal.identify.space import ParameterSpace, State
-
-FORMAT = "robocal-bpnet/1"
-_FIELDS = ("W1", "b1", "W2", "b2")
-
-
-def _sigmoid(z: np.ndarray) -> np.ndarray:
-    return 0.5 * (1.0 + np.tanh(0.5 * z))
-
-
-@dataclass
-class BPNetwork:
-    """Weights ``W1 (h, i)``, thresholds ``b1 (h,)``, ``W2 (o, h)``, ``b2 (o,)``; output names."""
-
-    W1: np.ndarray
-    b1: np.ndarray
-    W2: np.ndarray
-    b2: np.ndarray
-    outputs: list[str]
-    inputs: int
-
-    @classmethod
-    def init(cls, n_in: int, n_hidden: int, outputs: list[str], rng: np.random.Generator) -> BPNetwork:
-        """a401: every weight and threshold uniform in (0, 1)."""
-        o = len(outputs)
-        return cls(rng.uniform(0, 1, (n_hidden, n_in)), rng.uniform(0, 1, n_hidden),
-                   rng.uniform(0, 1, (o, n_hidden)), rng.uniform(0, 1, o), list(outputs), n_in)
-
-    def forward(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Hidden ``(N, h)`` and output ``(N, o)`` for inputs ``x (N, i)`` (mm / mrad)."""
-        h = _sigmoid(x @ self.W1.T - self.b1)
-        return h, h @ self.W2.T - self.b2
-
-    def parameter_errors(self, x: np.ndarray) -> np.ndarray:
-        """Structural errors ``(N, o)`` in SI units (m, rad) for pose errors ``x`` (mm / mrad)."""
-        return self.forward(np.atleast_2d(np.asarray(x, float)))[1] * 1e-3
-
-    def to_dict(self) -> dict:
-        return {"format": FORMAT, "outputs": self.outputs, "inputs": self.inputs,
-                "units": "inputs mm (position) and mrad (orientation); outputs mm and mrad",
-                **{f: getattr(self, f).tolist() for f in _FIELDS}}
-
-    def file_content(self, path) -> str | bytes:
-        """What :meth:`save` writes to ``path`` (``.json`` text or ``.npz`` bytes, plain arrays)."""
-        return encode_plain(path, self.to_dict(), "BP network")
-
-    def save(self, path) -> None:
-        """Write ``.json`` or ``.npz`` (plain arrays) atomically."""
-        save_plain(path, self.to_dict(), "BP network")
-
-    @classmethod
-    def load(cls, path) -> BPNetwork:
-        """Read a network written by :meth:`save` (no pickle)."""
-        d = load_plain(path, "BP network", FORMAT)
-        outputs = [str(s) for s in np.atleast_1d(d["outputs"])]
-        return cls(*(np.asarray(d[f], float) for f in _FIELDS), outputs, int(d["inputs"]))
 
 
 def pose_error_inputs(problem, state) -> np.ndarray:
     """Network inputs ``(N, 3|6)``: each target's measured-minus-modelled error, mm / mrad."""
     obs = problem.observation
     r = obs.residuals(state.robot, state.nuisance).reshape(obs.n_items, obs.rows_per_item)
-    if problem.kind == "pose":  # orientation rows are scaled by the length scale
+    spec = OBSERVED.get(problem.kind)  # None: several kinds ("mixed")
+    if spec is None or not spec.sees_position:
+        raise IdentificationError("method 'neural' needs point or pose data (its input is a pose error)")
+    if spec.sees_orientation:  # orientation rows are scaled by the length scale
         r = r.copy()
         r[:, 3:6] /= obs.scale[3]
-    elif problem.kind != "point":
-        raise IdentificationError("method 'neural' needs point or pose data (its input is a pose error)")
     return r[:, :6] * 1e3
 
 
@@ -167,12 +112,12 @@ def train(problem, start: State, outputs: list[str], *, hidden: int = 9, index: 
         grads = {"W2": g_y.T @ h, "b2": -g_y.sum(axis=0)}
         g_z = (g_y @ net.W2) * h * (1.0 - h)
         grads["W1"], grads["b1"] = g_z.T @ x, -g_z.sum(axis=0)
-        old = {f: getattr(net, f).copy() for f in _FIELDS}
-        for f in _FIELDS:
+        old = {f: getattr(net, f).copy() for f in FIELDS}
+        for f in FIELDS:
             setattr(net, f, old[f] - lr * grads[f])
         trial = evaluate(net)
         if trial[0] > cost:  # undo the step, halve the rate
-            for f in _FIELDS:
+            for f in FIELDS:
                 setattr(net, f, old[f])
             lr *= 0.5
         else:

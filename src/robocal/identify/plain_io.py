@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import DataError
-from robocal.io import load_json, write_atomic
+from robocal.core.errors import DataError
+from robocal.core.io import load_json, write_atomic
 
 
 def encode_plain(path, data: dict, what: str) -> str | bytes:

@@ -30,10 +30,11 @@ What real robots' errors can be, and the limits derived from it (named once here
   limits set inside the hard stops, encoder rounding) passes, further is warned with the rows and
   joints named, and beyond ``JOINT_LIMIT_MARGIN_DEG`` past a limit is not this robot's reading
   (radians under _deg, a shifted column, another robot's file): a 12 rad reading on a joint
-  limited to +-180 deg degraded a fit 27x without a word. Beyond ``MAX_JOINT_TURNS`` turns no
-  reading is real and ``force`` does not pass it.
+  limited to +-180 deg degraded a fit 27x without a word. A prismatic joint has the same checks
+  in mm (``JOINT_LIMIT_TOL_MM``, ``JOINT_LIMIT_MARGIN_MM``). Beyond ``MAX_JOINT_TURNS`` turns (or a
+  revolute joint's own limits, when wider) no reading is real and ``force`` does not pass it.
 
-Each check raises :class:`robocal.errors.PlausibilityError` naming what is probably wrong;
+Each check raises :class:`robocal.core.errors.PlausibilityError` naming what is probably wrong;
 ``force=True`` (``--force``) turns it into a warning for users who know better.
 """
 
@@ -41,9 +42,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from robocal.core.errors import DataError, PlausibilityError
 from robocal.data.joint_conventions import COUPLED_OPTION, fanuc_decoupled
 from robocal.data.measurements import robot_reach
-from robocal.errors import DataError, PlausibilityError
 from robocal.identify.space import block_of
 
 MAX_NOMINAL_ERROR_MM = 10.0
@@ -58,6 +59,8 @@ MAX_ANGLE_CORRECTION_DEG = 5.0
 DETERMINED_SIGMAS = 3.0  # a correction beyond this many sigma is what the data say
 JOINT_LIMIT_TOL_DEG = 1.0
 JOINT_LIMIT_MARGIN_DEG = 90.0
+JOINT_LIMIT_TOL_MM = 1.0  # the same for a prismatic joint (a track's carriage, a SCARA's quill)
+JOINT_LIMIT_MARGIN_MM = 100.0
 MAX_JOINT_TURNS = 2.0
 _LISTED = 5  # rows named in a joint-limit message
 FORCE_HINT = "if you are sure the data and the model are right, rerun with --force (force=True)"
@@ -159,14 +162,12 @@ def check_corrections(start, final, names, *, sigma: dict[str, float] | None = N
 
 
 def _readings(data, robot, mask: np.ndarray) -> str:
-    """The first readings where ``mask (N, n)`` holds: row, joint, value and the limit (deg)."""
+    """The first readings where ``mask (N, n)`` holds: row, joint, value and the limits (deg, or mm
+    for a prismatic joint)."""
     rows, joints = np.nonzero(mask)
-    lo, hi = np.rad2deg(robot.limits.T)
-    items = []
-    for r, j in zip(rows[:_LISTED], joints[:_LISTED], strict=True):
-        value = np.rad2deg(data.joints[r, j])
-        items.append(f"row {int(data.source_row[r])} q{j + 1} = {value:.6g} deg (limits {lo[j]:.6g} .. "
-                     f"{hi[j]:.6g})")
+    spec = robot.joints
+    items = [f"row {int(data.source_row[r])} {spec[j].describe(data.joints[r, j])}"
+             for r, j in zip(rows[:_LISTED], joints[:_LISTED], strict=True)]
     more = len(rows) - len(items)
     n_rows = len(np.unique(rows))
     return f"{n_rows} row(s): " + "; ".join(items) + (f"; and {more} more" if more > 0 else "")
@@ -178,12 +179,14 @@ def check_joint_limits(robot, data, what: str, *, force: bool = False,
     DataError beyond ``MAX_JOINT_TURNS`` turns, PlausibilityError beyond the margin, a warning
     appended to ``warnings`` beyond the tolerance."""
     q = data.joints
-    turns = np.abs(q) > MAX_JOINT_TURNS * 2 * np.pi
+    revolute = ~robot.prismatic
+    widest = np.where(np.isfinite(robot.limits), np.abs(robot.limits), 0.0).max(axis=1)  # (n,) rad or m
+    turns = revolute & (np.abs(q) > np.maximum(MAX_JOINT_TURNS * 2 * np.pi, widest))  # within its range: real
     if turns.any():
         raise DataError(f"{what}: joint readings beyond {MAX_JOINT_TURNS:g} turns cannot be real (radians "
                         f"under _deg headers? a shifted column?): {_readings(data, robot, turns)}")
     past = np.maximum(robot.limits[:, 0] - q, q - robot.limits[:, 1])  # (N, n) rad past a limit
-    far = past > np.deg2rad(JOINT_LIMIT_MARGIN_DEG)
+    far = past > np.where(revolute, np.deg2rad(JOINT_LIMIT_MARGIN_DEG), JOINT_LIMIT_MARGIN_MM * 1e-3)
     if far.any():
         cause = "another robot's data, radians under _deg headers, a shifted column?"
         if q.shape[1] >= 3:
@@ -193,9 +196,11 @@ def check_joint_limits(robot, data, what: str, *, force: bool = False,
                 cause = ("J3 looks coupled to J2: with J3 - J2 every reading is inside the limits (a FANUC "
                          "controller's joint log counts J3 from the horizontal): read it with "
                          f"{COUPLED_OPTION}")
-        _fail(f"{what}: joint readings more than {JOINT_LIMIT_MARGIN_DEG:g} deg outside {robot.name}'s "
+        margin = f"{JOINT_LIMIT_MARGIN_DEG:g} deg" + (f" ({JOINT_LIMIT_MARGIN_MM:g} mm on a prismatic joint)"
+                                                       if robot.has_prismatic else "")
+        _fail(f"{what}: joint readings more than {margin} outside {robot.name}'s "
               f"joint limits ({cause}): {_readings(data, robot, far)}", force, warnings)
-    near = (past > np.deg2rad(JOINT_LIMIT_TOL_DEG)) & ~far
+    near = (past > np.where(revolute, np.deg2rad(JOINT_LIMIT_TOL_DEG), JOINT_LIMIT_TOL_MM * 1e-3)) & ~far
     if near.any() and warnings is not None:
         warnings.append(f"{what}: joint readings outside {robot.name}'s joint limits (check the model's "
                         f"limits and the joint columns): {_readings(data, robot, near)}")

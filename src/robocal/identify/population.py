@@ -8,10 +8,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from robocal.damped_least_squares import Status
+from robocal.core.damped_least_squares import Status
+from robocal.core.progress import Progress
 from robocal.identify.solvers import history_entry
 from robocal.identify.space import ParameterSpace, State
-from robocal.progress import Progress
 
 
 class PopulationCost:

@@ -16,7 +16,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from robocal.errors import IdentificationError
+from robocal.core.errors import IdentificationError
+from robocal.data.kinds import OBSERVED
 from robocal.identify.observations import observation_for
 from robocal.identify.space import ParameterSpace, State, resolve_names
 
@@ -149,7 +150,7 @@ class CalibrationProblem:
         :func:`robocal.identify.space.resolve_names`) plus every nuisance parameter. 'auto' and
         'all' leave out what no observation can see (the base frame for planes alone)."""
         blind = set.intersection(*(set(obs.not_observable(robot)) for obs in self.observations))
-        orientation = any(obs.kind == "pose" for obs in self.observations)
+        orientation = any(OBSERVED[obs.kind].sees_orientation for obs in self.observations)
         names = resolve_names(robot, params, sorted(blind), orientation)
         return ParameterSpace(tuple(names), tuple(self.nuisance_names))
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.identify.plain_io import load_plain, save_plain
 
 FORMAT = "robocal-residual/1"

@@ -30,8 +30,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.damped_least_squares import Status
-from robocal.errors import IdentificationError
+from robocal.core.damped_least_squares import Status
+from robocal.core.errors import IdentificationError
 from robocal.identify.linalg import ScaledSVD
 from robocal.identify.lsq import gauss_newton
 from robocal.identify.solvers import SolverResult, history_entry

@@ -12,16 +12,14 @@ from __future__ import annotations
 import importlib
 import inspect
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
-from robocal.damped_least_squares import SUCCESS, Status
-from robocal.errors import IdentificationError
+from robocal.core.damped_least_squares import SUCCESS, Status
+from robocal.core.errors import IdentificationError
+from robocal.identify.network import BPNetwork
 from robocal.identify.space import State
-
-if TYPE_CHECKING:
-    from robocal.identify.neural import BPNetwork
 
 
 class SolverSpec(NamedTuple):

@@ -21,7 +21,7 @@ from itertools import compress
 
 import numpy as np
 
-from robocal.errors import IdentificationError
+from robocal.core.errors import IdentificationError
 from robocal.kinematics.joint_errors import is_parameter_name
 from robocal.kinematics.model import Robot
 

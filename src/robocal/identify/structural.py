@@ -19,6 +19,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from robocal.data.kinds import OBSERVED
 from robocal.data.measurements import Measurements
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, analyze
 from robocal.identify.problem import CalibrationProblem
@@ -26,7 +27,6 @@ from robocal.identify.space import block_of
 
 GENERIC_POSES = 60  # poses spread over the joint limits: beyond the parameters of any arm robocal models
 GENERIC_SEED = 0
-JUDGED_KINDS = ("point", "pose")
 JUDGED_BLOCKS = ("links", "base", "tool", "smr")
 
 
@@ -37,16 +37,16 @@ def unidentifiable(robot, kind: str, names: list[str], n_smr: int = 1,
     judge (another kind, a joint-error term or a nuisance parameter)."""
     judged = [nm for nm in names if block_of(nm) in JUDGED_BLOCKS]
     unjudged = set(names) - set(judged)
-    if kind not in JUDGED_KINDS or not judged:
+    spec = OBSERVED.get(kind)  # None: several kinds ("mixed")
+    if spec is None or not spec.sees_position or not judged:
         return set(names)
     lo, hi = robot.limits[:, 0], robot.limits[:, 1]
     q = np.random.default_rng(GENERIC_SEED).uniform(lo, hi, (GENERIC_POSES, robot.n_joints))
     smr = np.repeat(np.arange(n_smr), GENERIC_POSES)
     q = np.tile(q, (n_smr, 1))
     T = robot.fk(q, smr=smr)
-    extra = {"rotations": T[:, :3, :3]} if kind == "pose" else {}
-    data = Measurements.from_arrays(kind, q, points=T[:, :3, 3], smr=smr,
-                                    pose_id=np.tile(np.arange(GENERIC_POSES), n_smr), **extra)
+    data = Measurements.from_arrays(kind, q, smr=smr, pose_id=np.tile(np.arange(GENERIC_POSES), n_smr),
+                                    **spec.readings(T))
     problem = CalibrationProblem(robot, data)
     space = problem.space(robot, judged)
     J = problem.jacobian(problem.start(robot), space)

@@ -32,8 +32,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.damped_least_squares import Status
-from robocal.errors import IdentificationError
+from robocal.core.damped_least_squares import Status
+from robocal.core.errors import IdentificationError
 from robocal.identify.lsq import gauss_newton
 from robocal.identify.population import PopulationCost, evolve, stop_message
 from robocal.identify.solvers import SolverResult

@@ -17,8 +17,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from robocal.errors import ModelError
-from robocal.ik import opw_ik, ur_ik
+import robocal.ik.opw_ik as opw_ik
+import robocal.ik.ur_ik as ur_ik
+from robocal.core.errors import ModelError
 from robocal.ik.opw_ik import SEED_MARGIN, TOL, check_poses
 from robocal.kinematics.model import Robot
 from robocal.kinematics.model_file import LINK_FIELDS

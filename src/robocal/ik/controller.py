@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.ik.closed_form import branch_slot, seed_model
 from robocal.ik.numeric import seeded_branches
 from robocal.ik.opw_ik import check_poses

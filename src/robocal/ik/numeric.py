@@ -4,7 +4,7 @@ Batched Levenberg-Marquardt on the 6 pose residuals (position m, rotation vector
 frame) with the joint Jacobian, which is the identification Jacobian w.r.t. theta1..thetan
 (d TCP / d theta_i = d TCP / d q_i; d_i for a prismatic joint, whose value adds to d_i);
 every target is one member of robocal's damped
-least-squares loop (:mod:`robocal.damped_least_squares`, the one calibration uses), with
+least-squares loop (:mod:`robocal.core.damped_least_squares`, the one calibration uses), with
 Marquardt's diagonal scaling. Seeds default to the closed-form solution of the robot's nominal
 model (its OPW or UR form, :mod:`robocal.ik.closed_form`) in the requested branch, with this
 robot's base and tool.
@@ -17,8 +17,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from robocal.damped_least_squares import Status, minimize
-from robocal.errors import DataError, UnreachableError
+from robocal.core.damped_least_squares import Status, minimize
+from robocal.core.errors import DataError, UnreachableError
 from robocal.ik.closed_form import branch_model, branch_slot, seed_branches, seed_model, solve_branches
 from robocal.ik.opw_ik import check_poses
 from robocal.kinematics.model import Robot

@@ -39,7 +39,7 @@ from functools import partial
 
 import numpy as np
 
-from robocal.errors import DataError, ModelError
+from robocal.core.errors import DataError, ModelError
 from robocal.kinematics.fk import chain_fk, chain_frames
 from robocal.kinematics.kernels import compiled
 from robocal.kinematics.model import Robot

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.errors import DataError, ModelError, UnreachableError
+from robocal.core.errors import DataError, ModelError, UnreachableError
 from robocal.ik.closed_form import branch_model, branch_slot, solve_branches, turn_copies
 from robocal.ik.numeric import nominal_branches
 from robocal.ik.numeric import solve as ik_solve

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.kinematics.model import Robot
 
 SINGULAR_SIGMA = 0.01  # sigma_rel below which a configuration is reported as close to a singularity

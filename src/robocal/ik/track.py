@@ -17,7 +17,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.ik import closed_form
 from robocal.ik.numeric import IKResult, nominal_seeds
 from robocal.ik.numeric import solve as numeric_solve

@@ -39,7 +39,7 @@ from functools import partial
 
 import numpy as np
 
-from robocal.errors import ModelError
+from robocal.core.errors import ModelError
 from robocal.ik.opw_ik import _CHUNK, _CLAMP, _SINGULAR, TOL, _clamp, _wrap, keep_verified
 from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.kernels import compiled

@@ -11,9 +11,9 @@ from __future__ import annotations
 from functools import cache
 from importlib import resources
 
-from robocal.errors import ModelError
+from robocal.core.errors import ModelError
+from robocal.core.yaml_load import load_yaml
 from robocal.kinematics.model_file import robot_kwargs
-from robocal.yaml_load import load_yaml
 
 
 @cache

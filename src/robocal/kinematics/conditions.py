@@ -1,5 +1,10 @@
-"""The conditions a model's payload and thermal terms were calibrated over, and a warning wherever
-the model is used beyond them.
+"""The conditions a robot works at besides its joints: each measured or commanded row's
+(`Conditions`: what the joint-error and thermal terms depend on), the ones a model's payload and
+thermal terms were calibrated over (`CalibratedRange`), and a warning wherever the model is used
+beyond them.
+
+`Conditions` is the one representation of a row's conditions from the data to the kinematics:
+``Measurements.conditions``, ``Robot.fk(q, conditions=...)``, the identification Jacobian.
 
 The payload term is linear in the payload's gravity moment and the thermal term in the temperature
 difference: both were fitted on the payloads and temperatures the calibration recorded. A payload
@@ -13,17 +18,50 @@ beyond them by more than the margins below. Models saved without the ranges are 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
-from robocal.errors import ModelError
-from robocal.io import as_number
+from robocal.core.errors import ModelError
+from robocal.core.io import as_number
 
 TEMPERATURE_MARGIN_K = 2.0  # a temperature this far beyond the calibrated range is an extrapolation
 PAYLOAD_MARGIN_FRACTION = 0.1  # a payload beyond the calibrated masses by this share of the heaviest ...
 PAYLOAD_MARGIN_KG = 0.5  # ... or by this, whichever is larger
 KEY = "calibrated_conditions"  # the model file's key (under joint_errors)
+
+
+@dataclass(frozen=True)
+class Conditions:
+    """What each of N rows was reached at besides its commanded joints ``(N, n)``; every field
+    optional (None: not known, the terms that need it contribute nothing or use the model's fixed
+    conditions, `robocal.kinematics.model.Robot.with_conditions`).
+
+    Attributes
+    ----------
+    approach : numpy.ndarray of int, shape (N, n), optional
+        Each joint's approach direction (-1, 0, +1), for a backlash term.
+    travel : numpy.ndarray, shape (N, n), optional
+        Each joint's signed move from the previous pose (rad; m for a prismatic joint), for a
+        travel term.
+    payload : numpy.ndarray, shape (N, 4), optional
+        The payload carried: mass (kg), then its centre of mass x, y, z in the flange frame (m).
+    temperature : numpy.ndarray, shape (N,), optional
+        The arm's temperature, deg C.
+    """
+
+    approach: np.ndarray | None = None
+    travel: np.ndarray | None = None
+    payload: np.ndarray | None = None
+    temperature: np.ndarray | None = None
+
+    def rows(self, index) -> Conditions:
+        """The conditions of the rows ``index`` (a slice, indices or a mask) of every field given."""
+        return Conditions(**{f.name: None if getattr(self, f.name) is None else
+                             np.asarray(getattr(self, f.name))[index] for f in fields(self)})
+
+
+UNKNOWN = Conditions()  # no row condition known (the default of every function taking conditions)
 
 
 @dataclass(frozen=True)
@@ -57,12 +95,11 @@ class CalibratedRange:
         return cls(**spans)
 
 
-def range_of(payloads: Sequence[np.ndarray | None],
-             temperatures: Sequence[np.ndarray | None]) -> CalibratedRange:
-    """The range the data sets recorded: ``payloads`` their ``(N, 4)`` payloads (kg, m; None: not
-    recorded), ``temperatures`` their ``(N,)`` temperatures (deg C)."""
-    masses = [np.asarray(p, float)[:, 0] for p in payloads if p is not None]
-    temps = [np.asarray(t, float) for t in temperatures if t is not None]
+def range_of(recorded: Sequence[Conditions]) -> CalibratedRange:
+    """The range of payload masses and temperatures the data sets' conditions ``recorded`` (their
+    payloads ``(N, 4)`` kg, m and temperatures ``(N,)`` deg C; None: not recorded)."""
+    masses = [np.asarray(c.payload, float)[:, 0] for c in recorded if c.payload is not None]
+    temps = [np.asarray(c.temperature, float) for c in recorded if c.temperature is not None]
 
     def span(parts):
         if not parts:

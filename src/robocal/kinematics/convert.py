@@ -16,8 +16,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from robocal.errors import ModelError
-from robocal.io import ANGLE_UNITS, length_scale
+from robocal.core.errors import ModelError
+from robocal.core.io import ANGLE_UNITS, length_scale
 from robocal.kinematics.opw import OPWParameters
 
 PARALLEL_TOL = 1e-9  # |sin| of the angle between two axes below which they count as parallel

@@ -11,7 +11,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from robocal.errors import ModelError
+from robocal.core.errors import ModelError
+from robocal.kinematics.conditions import UNKNOWN, Conditions
 from robocal.kinematics.fk import CHUNK, LinkArrays, chain_frames
 from robocal.kinematics.joint_errors import conditions_of, joint_error_basis, scatter_offsets
 from robocal.kinematics.kernels import compiled
@@ -62,9 +63,7 @@ def motion_axes(links: LinkArrays, base: np.ndarray, tool: np.ndarray, q: np.nda
     return tcp, u, o, rotation
 
 
-def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
-                      approach: np.ndarray | None = None, travel: np.ndarray | None = None,
-                      payload: np.ndarray | None = None, temperature: np.ndarray | None = None):
+def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None, conditions: Conditions = UNKNOWN):
     """:func:`motion_axes` for a robot, with the columns of its extra SMRs and of its joint-error
     terms appended (the order of :attr:`Robot.parameter_names`).
 
@@ -75,17 +74,17 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
     A joint-error parameter p of joint i turns the TCP about axis i by B_p(q) per unit
     (:func:`joint_error_basis`): its axis is joint i's scaled by B_p, pose by pose; on a prismatic
     joint it moves the TCP along axis i (the d_i column scaled by B_p). A thermal parameter
-    (shared or a link group's) translates the TCP (`robocal.kinematics.thermal.translation_axis`); with it,
-    every axis is that of the links scaled at ``temperature (N,)``, and the link-length columns
-    are per unit of the unscaled length (the scaled one's times the link's scale).
+    (shared or a link group's) translates the TCP (`robocal.kinematics.thermal.translation_axis`); with
+    it, every axis is that of the links scaled at the ``conditions``' temperature ``(N,)``, and the
+    link-length columns are per unit of the unscaled length (the scaled one's times the link's scale).
     """
     tools = robot.tool if smr is None else robot.tools_for(smr)
-    payload, temperature = conditions_of(robot, q.shape[0], payload, temperature)
+    conditions = conditions_of(robot, q.shape[0], conditions)
+    temperature = conditions.temperature
     if robot.joint_errors is None:
         reached = q
     else:  # the basis once: for the reached joints (as robot.reached_joints) and the axes
-        B, joint = joint_error_basis(robot, q, robot.joint_errors.names, approach, travel,
-                                     payload)  # (N, m), (m,)
+        B, joint = joint_error_basis(robot, q, robot.joint_errors.names, conditions)  # (N, m), (m,)
         reached = q + scatter_offsets(B, joint, robot.joint_errors.values, robot.n_joints)
     scale = robot.link_scale(temperature)  # (N, n) or None
     tcp, u, o, rotation = motion_axes(scaled_links(robot.links, scale), robot.base, tools, reached,
@@ -122,13 +121,10 @@ def robot_motion_axes(robot, q: np.ndarray, smr: np.ndarray | None = None,
 
 
 def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: str = "point",
-                            smr: np.ndarray | None = None, approach: np.ndarray | None = None,
-                            travel: np.ndarray | None = None, payload: np.ndarray | None = None,
-                            temperature: np.ndarray | None = None):
+                            smr: np.ndarray | None = None, conditions: Conditions = UNKNOWN):
     """d(TCP)/d(params) for joints ``q`` ``(N, n)`` (``smr`` ``(N,)``: each row's SMR index;
-    ``approach`` ``(N, n)``: joint approach directions for a backlash model; ``travel`` ``(N, n)``
-    rad: joint moves for a travel model; ``payload`` ``(N, 4)`` kg, m and ``temperature`` ``(N,)``
-    deg C: the rows' conditions for the payload and thermal terms).
+    ``conditions``: the rows' approach directions, moves, payloads and temperatures, for the
+    backlash, travel, payload and thermal terms).
 
     kind 'point': ``(N, 3, k)`` position rows (m per m or m per rad);
     kind 'pose': ``(N, 6, k)`` position rows then orientation rows (rad per unit).
@@ -140,25 +136,23 @@ def identification_jacobian(robot, q: np.ndarray, params: Sequence[str], kind: s
     idx = robot.indices(params)
     N = q.shape[0]
     if N <= CHUNK:
-        return _jacobian_rows(robot, q, idx, kind, smr, approach, travel, payload, temperature)
+        return _jacobian_rows(robot, q, idx, kind, smr, conditions)
     out = np.empty((N, 3 if kind == "point" else 6, idx.size))
     for start in range(0, N, CHUNK):
         part = slice(start, start + CHUNK)
-        out[part] = _jacobian_rows(robot, q[part], idx, kind, *(None if v is None else np.asarray(v)[part]
-                                                                  for v in (smr, approach, travel, payload,
-                                                                            temperature)))
+        out[part] = _jacobian_rows(robot, q[part], idx, kind, None if smr is None else np.asarray(smr)[part],
+                                   conditions.rows(part))
     return out
 
 
-def _jacobian_rows(robot, q, idx: np.ndarray, kind: str, smr, approach, travel, payload,
-                   temperature) -> np.ndarray:
+def _jacobian_rows(robot, q, idx: np.ndarray, kind: str, smr, conditions: Conditions) -> np.ndarray:
     if robot.joint_errors is None and not np.any(robot.prismatic):  # one chain: the compiled twin, if in use
         kernel = compiled("robocal.kinematics.jacobian_numba", q.shape[0])
         if kernel is not None:
             one_tool = smr is None or not len(robot.smr) and not np.any(smr)  # every row SMR 0
             tools = robot.tool if one_tool else robot.tools_for(smr)
             return kernel.jacobian_rows(robot.links, robot.base, tools, q, idx, kind, smr, len(robot.smr))
-    tcp, u, o, rotation = robot_motion_axes(robot, q, smr, approach, travel, payload, temperature)
+    tcp, u, o, rotation = robot_motion_axes(robot, q, smr, conditions)
     return jacobian_from_axes(tcp, u[:, idx], o[:, idx], rotation[idx], kind)
 
 

@@ -55,15 +55,16 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from robocal.errors import IdentificationError, ModelError
-from robocal.io import as_number
-from robocal.kinematics import load, thermal
+import robocal.kinematics.load as load
+import robocal.kinematics.thermal as thermal
+from robocal.core.errors import IdentificationError, ModelError
+from robocal.core.io import as_number
 from robocal.kinematics.conditions import KEY as CONDITIONS_KEY
-from robocal.kinematics.conditions import CalibratedRange, beyond
+from robocal.kinematics.conditions import UNKNOWN, CalibratedRange, Conditions, beyond
 from robocal.kinematics.fk import chain_frames
 
 TERMS = ("compliance", "gear", "backlash", "travel", "cyclic", "scale", "payload", "thermal",
@@ -192,23 +193,23 @@ def _parse(name: str, n: int) -> tuple[int, str, int | str | tuple | None]:
                      f"{', '.join(thermal.GROUP_NAMES)}")
 
 
-def joint_error_basis(robot, q: np.ndarray, names: Sequence[str], approach: np.ndarray | None = None,
-                      travel: np.ndarray | None = None,
-                      payload: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def joint_error_basis(robot, q: np.ndarray, names: Sequence[str],
+                      conditions: Conditions = UNKNOWN) -> tuple[np.ndarray, np.ndarray]:
     """``(B (N, k), joint (k,))``: d(dq_joint[p])/d(param p) at joints ``q (N, n)`` (rad).
 
     ``dq[:, joint[p]] += B[:, p] * value[p]``. Compliance and payload columns use the robot's
     frames at ``q`` (its link parameters and base; the robot's own joint-error model is not
-    applied); backlash columns are the approach directions ``approach (N, n)``, travel columns the
-    joint moves ``travel (N, n)`` rad and payload columns the moments of ``payload (N, 4)``
-    (:func:`robocal.kinematics.load.moment_basis`) (zeros when not given). The thermal columns
+    applied); backlash columns are the ``conditions``' approach directions ``(N, n)``, travel
+    columns their joint moves ``(N, n)`` rad and payload columns the moments of their payload
+    ``(N, 4)`` (:func:`robocal.kinematics.load.moment_basis`) (zeros when not given). The thermal columns
     are zero: they scale the links, not a joint."""
     n = robot.n_joints
     parsed = [_parse(nm, n) for nm in names]
     B = np.empty((q.shape[0], len(parsed)))
     frames = None
     loaded = [p for p, t in enumerate(parsed) if t[1] == "payload"]
-    payload = conditions_of(robot, q.shape[0], payload)[0]
+    approach, travel = conditions.approach, conditions.travel
+    payload = conditions_of(robot, q.shape[0], conditions).payload
     if loaded and payload is not None:
         _, frames = chain_frames(robot.links, robot.base, robot.tool, q, frames=True,
                                  prismatic=robot.prismatic)
@@ -257,18 +258,18 @@ def scatter_offsets(B: np.ndarray, joint: np.ndarray, values: np.ndarray, n: int
     return dq
 
 
-def conditions_of(robot, N: int, payload: np.ndarray | None = None,
-                  temperature: np.ndarray | None = None) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """The rows' ``payload (N, 4)`` and ``temperature (N,)``: as given, else the fixed conditions
-    the robot's error model is used at (:meth:`robocal.kinematics.model.Robot.with_conditions`),
-    else None."""
+def conditions_of(robot, N: int, conditions: Conditions = UNKNOWN) -> Conditions:
+    """The N rows' ``conditions`` with their payload ``(N, 4)`` and temperature ``(N,)`` as given,
+    else the fixed ones the robot's error model is used at
+    (:meth:`robocal.kinematics.model.Robot.with_conditions`), else None."""
+    payload, temperature = conditions.payload, conditions.temperature
     errors = getattr(robot, "joint_errors", None)
     if errors is not None:
         if payload is None and errors.payload is not None:
             payload = np.broadcast_to(np.asarray(errors.payload, float), (N, 4))
         if temperature is None and errors.temperature_c is not None:
             temperature = np.full(N, float(errors.temperature_c))
-    return payload, temperature
+    return replace(conditions, payload=payload, temperature=temperature)
 
 
 CONDITION_OPTIONS = ("--payload KG[,X,Y,Z]", "--temperature C")  # how a command is given them
@@ -290,17 +291,17 @@ def assumed_conditions(robot, hints: tuple[str, str] = CONDITION_OPTIONS) -> lis
     return out
 
 
-def extrapolated_conditions(robot, payload: np.ndarray | None = None, temperature: np.ndarray | None = None,
-                            rows: str = "") -> list[str]:
+def extrapolated_conditions(robot, conditions: Conditions = UNKNOWN, rows: str = "") -> list[str]:
     """Warnings where the conditions ``robot``'s error model is used at lie beyond the ones its
-    calibration covered (:mod:`robocal.kinematics.conditions`): the rows' ``payload (N, 4)`` and
-    ``temperature (N,)`` where given (``rows`` names them), else its fixed ones
+    calibration covered (:mod:`robocal.kinematics.conditions`): the rows' payload ``(N, 4)`` and
+    temperature ``(N,)`` where ``conditions`` give them (``rows`` names them), else its fixed ones
     (:meth:`~robocal.kinematics.model.Robot.with_conditions`)."""
     errors, terms = robot.joint_errors, condition_terms(robot)
     if errors is None or errors.calibrated is None:
         return []
-    named = rows if payload is not None or temperature is not None else ""
-    payload, temperature = conditions_of(robot, 1, payload, temperature)
+    named = rows if conditions.payload is not None or conditions.temperature is not None else ""
+    filled = conditions_of(robot, 1, conditions)
+    payload, temperature = filled.payload, filled.temperature
     mass = payload[:, 0] if "payload" in terms and payload is not None else None
     return beyond(errors.calibrated, mass, temperature if "thermal" in terms else None, named)
 
@@ -357,12 +358,11 @@ class JointErrorModel:
         """SI unit of each parameter (:data:`UNITS` of its term)."""
         return [UNITS[term_of(nm)] for nm in self.names]
 
-    def offsets(self, robot, q: np.ndarray, approach: np.ndarray | None = None,
-                travel: np.ndarray | None = None, payload: np.ndarray | None = None) -> np.ndarray:
-        """Joint offsets ``dq (N, n)`` (rad) at commanded joints ``q (N, n)`` reached from the
-        directions ``approach (N, n)`` (backlash; None: unknown, mid-band) by the moves
-        ``travel (N, n)`` rad (None: no move) carrying ``payload (N, 4)`` (kg, m; None: none)."""
-        B, joint = joint_error_basis(robot, q, self.names, approach, travel, payload)
+    def offsets(self, robot, q: np.ndarray, conditions: Conditions = UNKNOWN) -> np.ndarray:
+        """Joint offsets ``dq (N, n)`` (rad) at commanded joints ``q (N, n)`` reached at
+        ``conditions``: from their approach directions (backlash; None: unknown, mid-band) by
+        their moves (None: no move) carrying their payload (None: none)."""
+        B, joint = joint_error_basis(robot, q, self.names, conditions)
         return scatter_offsets(B, joint, self.values, q.shape[-1])
 
     def thermal_k(self) -> float | None:

@@ -23,7 +23,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from types import ModuleType
 
-from robocal.errors import RobocalError
+from robocal.core.errors import RobocalError
 
 ENV = "ROBOCAL_KERNELS"
 CHOICES = ("auto", "numpy", "numba")

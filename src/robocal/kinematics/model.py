@@ -29,22 +29,34 @@ from typing import NamedTuple
 
 import numpy as np
 
-from robocal.errors import DataError, ModelError, UnitError
-from robocal.io import as_number, write_atomic
+from robocal.core.errors import DataError, ModelError, UnitError
+from robocal.core.io import as_number, write_atomic
 from robocal.kinematics.catalog import catalog_kwargs
+from robocal.kinematics.cell_file import TRACK_SCALE, chain_arrays, read_cell
+from robocal.kinematics.conditions import UNKNOWN, Conditions
 from robocal.kinematics.convert import dh_kwargs, mdh_kwargs, opw_chain, opw_kwargs, opw_parameters
 from robocal.kinematics.fk import LinkArrays, chain_fk, chain_frames
 from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import JointErrorModel
-from robocal.kinematics.model_file import LINK_FIELDS, dump_model, is_cell, read_model_data, robot_kwargs
+from robocal.kinematics.model_file import (
+    LINK_FIELDS,
+    MAX_NAME,
+    _text,
+    dump_model,
+    is_cell,
+    read_model_data,
+    robot_kwargs,
+)
 from robocal.kinematics.opw import OPWParameters
 from robocal.kinematics.thermal import link_coefficients as thermal_coefficients
 from robocal.kinematics.thermal import scale as thermal_scale
 from robocal.kinematics.thermal import scaled_links
 from robocal.kinematics.transforms import ROTATION_TOL, make_transform, matrix_to_rotvec, rotvec_to_matrix
 from robocal.kinematics.ur import URForm, ur_form
+from robocal.kinematics.urdf_read import urdf_kwargs
 
 FRAME_FIELDS = ("x", "y", "z", "rx", "ry", "rz")
+REVOLUTE, PRISMATIC = "revolute", "prismatic"  # the joint types (JointSpec.kind)
 _LINK_IS_LENGTH = {"alpha": False, "a": True, "beta": False, "theta": False, "d": True}
 OPW_MATCH_TOL = 1e-12  # m / rad: links this close to their OPW form's chain still have that form
 
@@ -89,6 +101,44 @@ def _as_frame(T, what: str) -> np.ndarray:
     if np.abs(R @ R.T - np.eye(3)).max() > ROTATION_TOL or abs(np.linalg.det(R) - 1) > ROTATION_TOL:
         raise ModelError(f"{what} rotation is not orthonormal with det +1")
     return T
+
+
+class JointSpec(NamedTuple):
+    """One joint as messages, range checks and joints files name it (`Robot.joints`).
+
+    Values are SI inside robocal (rad for a revolute joint, m for a prismatic one); files and
+    messages show them in the joint's `unit` (deg or mm) under its `column` (``q3_deg``,
+    ``q3_mm``, a track's ``e1_mm``).
+    """
+
+    name: str  # "q3", or "e1" for an external axis (a track's carriage)
+    kind: str  # REVOLUTE or PRISMATIC
+    limits: tuple[float, float]  # (lower, upper), rad or m
+
+    @property
+    def prismatic(self) -> bool:
+        """Whether the joint slides (its value in m adds to its d) rather than turns."""
+        return self.kind == PRISMATIC
+
+    @property
+    def unit(self) -> str:
+        """What the joint is shown in: 'mm' (prismatic) or 'deg' (revolute)."""
+        return "mm" if self.prismatic else "deg"
+
+    @property
+    def column(self) -> str:
+        """The joint's CSV column, e.g. ``q3_deg``, ``q3_mm``, ``e1_mm``."""
+        return f"{self.name}_{self.unit}"
+
+    def shown(self, value: float | np.ndarray) -> float | np.ndarray:
+        """``value`` (SI: rad or m; a number or an array) in the joint's `unit` (deg or mm)."""
+        return np.multiply(value, 1e3) if self.prismatic else np.rad2deg(value)
+
+    def describe(self, value: float) -> str:
+        """``value`` (SI) with the joint's name, unit and limits, e.g. ``q2 = 95.2 deg (limits -95 ..
+        155)``, ``e1 = 6343 mm (limits 0 .. 6000)``."""
+        lo, hi = self.shown(np.array(self.limits))
+        return f"{self.name} = {self.shown(value):.6g} {self.unit} (limits {lo:.6g} .. {hi:.6g})"
 
 
 class DisplacedArrays(NamedTuple):
@@ -271,6 +321,36 @@ class Robot:
     def joint_units(self) -> list[str]:
         """'m' (prismatic) or 'rad' (revolute) for each joint."""
         return ["m" if p else "rad" for p in self.prismatic]
+
+    @property
+    def external_axes(self) -> int:
+        """How many leading joints are external axes (written ``e1..``): 1 for an arm on a track (a
+        prismatic joint 1 carrying revolute joints, `robocal.kinematics.cell_file`), else 0."""
+        return int(self.n_joints >= 2 and bool(self.prismatic[0]) and not self.prismatic[1:].any())
+
+    @property
+    def joints(self) -> tuple[JointSpec, ...]:
+        """Each joint's name, type, unit, CSV column and limits (`JointSpec`): what every message,
+        range check and joints file says of a joint. External axes are ``e1..``, the arm's joints
+        ``q1..`` counted after them; revolute joints are shown in deg, prismatic ones in mm.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> [j.column for j in rc.Robot.from_catalog("abb_irb2600").joints][:2]
+        ['q1_deg', 'q2_deg']
+        """
+        k = self.external_axes
+        return tuple(JointSpec(f"e{i + 1}" if i < k else f"q{i - k + 1}",
+                               PRISMATIC if slides else REVOLUTE,
+                               (float(lo), float(hi)))
+                     for i, (slides, (lo, hi)) in enumerate(zip(self.prismatic, self.limits, strict=True)))
+
+    def joints_shown(self, q) -> np.ndarray:
+        """Joints ``q`` ``(N, n)`` (rad; m for a prismatic joint) in each joint's unit (deg; mm):
+        what joints files and messages show (`joints`)."""
+        q = np.asarray(q, float)
+        return np.where(self.prismatic, q * 1e3, np.rad2deg(q))
 
     @property
     def has_ur_form(self) -> bool:
@@ -762,22 +842,20 @@ class Robot:
             raise DataError(f"joints contain NaN or infinite values in row(s) {bad[:10].tolist()}")
         return q
 
-    def reached_joints(self, q: np.ndarray, approach: np.ndarray | None = None,
-                       travel: np.ndarray | None = None, payload: np.ndarray | None = None) -> np.ndarray:
+    def reached_joints(self, q: np.ndarray, conditions: Conditions = UNKNOWN) -> np.ndarray:
         """The joints ``(N, n)`` the robot really turns to for commanded ``q`` (rad): ``q + dq(q)``
-        with the declared joint-error terms (``approach`` ``(N, n)``: each joint's approach
-        direction, for backlash; ``travel`` ``(N, n)`` rad: each joint's last move, for travel;
-        ``payload`` ``(N, 4)`` kg and m: the payload carried, for payload)."""
+        with the declared joint-error terms at the rows' ``conditions`` (approach directions for
+        backlash, last moves for travel, the payload carried for payload)."""
         if self.joint_errors is None:
             return q
-        return q + self.joint_errors.offsets(self, q, approach, travel, payload)
+        return q + self.joint_errors.offsets(self, q, conditions)
 
-    def fk(self, q, frames: bool = False, smr=None, approach=None, travel=None, payload=None,
-           temperature=None):
+    def fk(self, q, frames: bool = False, smr=None, conditions: Conditions = UNKNOWN):
         """TCP poses ``(N, 4, 4)`` (world frame, m) for joints ``(N, n)`` in rad.
 
         Joint-error terms turn the commanded joints into the joints the robot really reaches
-        first (`reached_joints`); a thermal term scales the links at ``temperature`` (`links_at`).
+        first (`reached_joints`); a thermal term scales the links at the rows' temperature
+        (`links_at`).
 
         Parameters
         ----------
@@ -787,14 +865,10 @@ class Robot:
             Also return the world poses of the frames {0}..{n}.
         smr : array_like of int, shape (N,), optional
             Each row's SMR index (default: the tool, SMR 0).
-        approach : array_like, shape (N, n), optional
-            Each joint's approach direction (+1 or -1), for a backlash term.
-        travel : array_like, shape (N, n), optional
-            Each joint's last move, radians, for a travel term.
-        payload : array_like, shape (N, 4), optional
-            Each row's payload (kg, centre of mass in the flange frame in m), for a payload term.
-        temperature : array_like, shape (N,), optional
-            Each row's arm temperature, deg C, for a thermal term.
+        conditions : Conditions, optional
+            Each row's approach directions, last moves, payload and temperature
+            (`robocal.Conditions`, e.g. ``rc.Conditions(temperature=t)``; ``data.conditions`` of
+            measurements), for the backlash, travel, payload and thermal terms.
 
         Returns
         -------
@@ -821,15 +895,15 @@ class Robot:
         >>> frames.shape
         (2, 7, 4, 4)
         """
-        q = self.reached_joints(self.check_joints(q), approach, travel, payload)
+        q = self.reached_joints(self.check_joints(q), conditions)
         tool = self.tool if smr is None else self.tools_for(smr)
-        links = self.links_at(temperature)
+        links = self.links_at(conditions.temperature)
         if frames:
             return chain_frames(links, self.base, tool, q, frames=True, prismatic=self.prismatic)
         return chain_fk(links, self.base, tool, q, prismatic=self.prismatic)
 
     def jacobian(self, q, params: Sequence[str] | None = None, kind: str = "point", smr=None,
-                 approach=None, travel=None, payload=None, temperature=None):
+                 conditions: Conditions = UNKNOWN):
         """Identification Jacobian ``(N, 3|6, k)``; see
         `robocal.kinematics.jacobian.identification_jacobian`.
 
@@ -844,10 +918,8 @@ class Robot:
             Position rows only, or position then orientation rows.
         smr : array_like of int, shape (N,), optional
             Each row's SMR index (default: the tool).
-        approach : array_like, shape (N, n), optional
-            Each joint's approach direction (+1 or -1), for a backlash term.
-        travel : array_like, shape (N, n), optional
-            Each joint's last move, radians, for a travel term.
+        conditions : Conditions, optional
+            Each row's approach directions, last moves, payload and temperature, as for `fk`.
 
         Returns
         -------
@@ -875,8 +947,7 @@ class Robot:
         array([0., 0., 1.])
         """
         names = self.default_free(kind == "pose") if params is None else list(params)
-        return identification_jacobian(self, self.check_joints(q), names, kind, smr, approach, travel,
-                                       payload, temperature)
+        return identification_jacobian(self, self.check_joints(q), names, kind, smr, conditions)
 
     def within_limits(self, q) -> np.ndarray:
         """``(N,)`` bool: every joint inside its limits."""
@@ -905,7 +976,7 @@ class Robot:
     @classmethod
     def load(cls, path) -> Robot:
         """Read a model YAML (docs/model-yaml.md: the catalog's format, hand-written or saved, or a
-        cell file: a robot on a track, `robocal.kinematics.cell`).
+        cell file: a robot on a track, `robocal.kinematics.cell_file`).
 
         Parameters
         ----------
@@ -931,8 +1002,6 @@ class Robot:
         data = read_model_data(path)
         try:
             if is_cell(data):
-                from robocal.kinematics.cell import cell_from_data  # the cell builds on this module
-
                 return cell_from_data(data, Path(path))
             return cls(**robot_kwargs(data))
         except (ModelError, UnitError) as exc:  # the model file's fault, whatever the check
@@ -944,15 +1013,13 @@ class Robot:
 
 def load_model(spec: str) -> Robot:
     """A robot from a model YAML path (or a cell file: a robot on a track), a URDF (a serial chain:
-    `robocal.kinematics.urdf.from_urdf`) or a catalog name (what every ``--robot`` takes)."""
+    `robocal.kinematics.urdf_read`) or a catalog name (what every ``--robot`` takes)."""
     path = Path(spec)
     if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (path.is_file() and _looks_like_xml(path)):
-        from robocal.kinematics.urdf import from_urdf  # urdf builds on this module
-
         if path.suffix.lower() == ".xacro":
             raise ModelError(f"{spec} is a xacro macro file: expand it first (xacro {path.name} > "
                              "robot.urdf) and give the URDF")
-        return from_urdf(path)
+        return Robot(**urdf_kwargs(path))
     if path.suffix.lower() in (".yaml", ".yml") or path.exists():
         return Robot.load(path)
     return Robot.from_catalog(spec)
@@ -962,3 +1029,32 @@ def _looks_like_xml(path: Path) -> bool:
     """The file starts like XML (a URDF given without its suffix)."""
     with open(path, "rb") as fh:
         return fh.read(64).lstrip().startswith(b"<")
+
+
+def track_chain(arm: Robot, direction, mount: np.ndarray, limits, name: str | None = None,
+                description: str = "") -> Robot:
+    """The cell chain (`robocal.kinematics.cell_file`'s docstring) of ``arm`` (6 revolute joints, no
+    joint-error terms) on a track along unit ``direction`` (world frame) with ``mount`` ``(4, 4)``
+    (carriage at e1 = 0 -> robot base, m) and e1 ``limits`` (lower, upper) in m."""
+    if arm.has_prismatic or arm.joint_errors is not None:
+        raise ModelError(f"{arm.name}: a robot on a track must be a revolute arm without joint-error "
+                         "terms (give its geometry; the cell declares the track's own terms)")
+    chain = chain_arrays(arm.links, arm.base, arm.tool, arm.parallel, arm.smr, direction, mount)
+    nom = arm.nominal_robot()
+    nominal = chain_arrays(nom.links, nom.base, nom.tool, nom.parallel, nom.smr, direction, mount)
+    kinds = np.r_[True, np.zeros(arm.n_joints, bool)]  # the track, then the arm's revolute joints
+    nominal_robot = Robot(**nominal, prismatic=kinds)
+    limits = np.vstack([np.asarray(limits, float).reshape(1, 2), arm.limits])
+    return Robot(**chain, limits=limits, prismatic=kinds,
+                 nominal=nominal_robot.nominal, opw=arm.opw,
+                 name=arm.name if name is None else name, description=description,
+                 joint_errors=JointErrorModel((TRACK_SCALE,), np.zeros(1)))
+
+
+def cell_from_data(data: dict, path: Path | None = None) -> Robot:
+    """The chain of a cell mapping (`robocal.kinematics.cell_file.read_cell`; its arm, a catalog name or
+    a model file relative to ``path``'s folder, loaded by :func:`load_model`)."""
+    cell = read_cell(data, path)
+    arm = load_model(cell.robot)
+    name = _text(f"{arm.name} on a track", "name", MAX_NAME) if cell.name is None else cell.name
+    return track_chain(arm, cell.direction, cell.mount, cell.limits, name=name, description=cell.description)

@@ -1,4 +1,4 @@
-"""The robot model file (YAML, read by :func:`robocal.yaml_load.load_yaml`): one format for the
+"""The robot model file (YAML, read by :func:`robocal.core.yaml_load.load_yaml`): one format for the
 catalog, for the user's own robot and for :meth:`Robot.save`. docs/model-yaml.md documents it; in short::
 
     name: my_robot                      # optional: description, format
@@ -35,14 +35,14 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.errors import ModelError
-from robocal.io import ANGLE_UNITS, LENGTH_UNITS, as_number, read_text, short_repr
+from robocal.core.errors import ModelError
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, as_number, read_text, short_repr
+from robocal.core.magnitudes import check_model_units
+from robocal.core.yaml_load import dump_yaml, load_yaml
 from robocal.kinematics.convert import default_parallel, dh_kwargs, mdh_kwargs, opw_kwargs, opw_parameters
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.opw import GEOMETRY, OPWParameters
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
-from robocal.magnitudes import check_model_units
-from robocal.yaml_load import dump_yaml, load_yaml
 
 FORMAT = "robocal-model/1"
 LINK_FIELDS = ("alpha", "a", "beta", "theta", "d")
@@ -296,12 +296,12 @@ def dump_model(robot) -> str:
 
 def is_cell(data) -> bool:
     """Whether a loaded model mapping is a cell file, a robot on a track (it names a ``robot`` and
-    a ``track``: :mod:`robocal.kinematics.cell`)."""
+    a ``track``: :mod:`robocal.kinematics.cell_file`)."""
     return isinstance(data, dict) and "track" in data and "robot" in data
 
 
 def read_model_data(path):
-    """The parsed mapping of a model YAML file (:func:`robocal.yaml_load.load_yaml`: safe, YAML 1.2
+    """The parsed mapping of a model YAML file (:func:`robocal.core.yaml_load.load_yaml`: safe, YAML 1.2
     numbers, no duplicate keys, bounded)."""
     path = Path(path)
     return load_yaml(read_text(path, "robot model YAML file", ModelError), str(path), ModelError,

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.errors import ModelError
+from robocal.core.errors import ModelError
 
 GEOMETRY = ("a1", "a2", "b", "c1", "c2", "c3", "c4")
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.programs.source import NUMBER_RE, Number, ProgramText
 
 

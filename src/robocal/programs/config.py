@@ -1,4 +1,5 @@
-"""Vendor configuration data <-> the closed-form branch slot and the +-2 pi turn of each joint.
+"""Configuration data <-> the closed-form branch slot and the +-2 pi turn of each joint: what
+every language's configuration scheme (``dialects/<language>/configuration.py``) shares.
 
 The branch slot of :func:`robocal.ik.solve_all` is ``s = 4 * wrist_flip + 2 * shoulder + elbow``
 (see :mod:`robocal.ik.opw_ik`). :func:`branch_bits` computes the three bits of any joint vector
@@ -35,12 +36,12 @@ def branch_bits(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
     return opw_branch_bits(robot.opw if robot.opw is not None else opw_form(robot), q)
 
 
-def _set_bits(x: np.ndarray, n: int) -> np.ndarray:
+def set_bits(x: np.ndarray, n: int) -> np.ndarray:
     """How many of the lowest ``n`` bits of integers ``x`` are set."""
     return sum((x >> i) & 1 for i in range(n))
 
 
-def _floor_div(q: np.ndarray, step: float, shift: float = 0.0) -> np.ndarray:
+def floor_div(q: np.ndarray, step: float, shift: float = 0.0) -> np.ndarray:
     # a hair of tolerance so that values printed as exactly 90.000 deg stay in their quadrant
     return np.floor((q + shift) / step + 1e-12).astype(int)
 
@@ -63,68 +64,3 @@ class ConfigScheme:
 
     def text(self, row) -> str:
         return "[" + ",".join(str(int(v)) for v in row) + "]"
-
-
-class ABBConfig(ConfigScheme):
-    """ABB confdata [cf1, cf4, cf6, cfx]: quadrants floor(q / 90 deg) of axes 1, 4, 6 and
-    cfx = 4 * behind axis 1 + 2 * behind the lower arm + (axis 5 negative)."""
-
-    name = "ABB confdata"  # rows [cfx, cf1, cf4, cf6]
-    branch_fields = 1
-
-    def encode(self, robot, q):
-        q = np.asarray(q, float)
-        shoulder, elbow, _ = branch_bits(robot, q)
-        cfx = 4 * shoulder.astype(int) + 2 * elbow.astype(int) + (q[..., 4] < 0).astype(int)
-        quad = _floor_div(q[..., [0, 3, 5]], np.pi / 2)
-        return np.concatenate([cfx[..., None], quad], axis=-1)
-
-    def score(self, have, want):
-        # cfx compared bit by bit
-        bits = _set_bits(np.bitwise_xor(have[..., 0], want[..., 0]), 3)
-        return BRANCH_MISMATCH * bits + np.abs(have[..., 1:] - want[..., 1:]).sum(axis=-1)
-
-    def text(self, row):
-        return f"[{int(row[1])},{int(row[2])},{int(row[3])},{int(row[0])}]"
-
-
-class KUKAConfig(ConfigScheme):
-    """KUKA Status and Turn: S bit 0 overhead area, bit 1 A3 >= phi (elbow as in the zero
-    pose), bit 2 A5 <= 0; T bit i set when axis i+1 is negative."""
-
-    name = "KUKA S/T"  # rows [S, T]
-
-    def encode(self, robot, q):
-        q = np.asarray(q, float)
-        shoulder, elbow, _ = branch_bits(robot, q)
-        S = shoulder.astype(int) + 2 * (~elbow).astype(int) + 4 * (q[..., 4] <= 0).astype(int)
-        T = ((q < 0).astype(int) << np.arange(q.shape[-1])).sum(axis=-1)
-        return np.stack([S, T], axis=-1)
-
-    def score(self, have, want):
-        # T = -1: the target gives no turn, any turn will do
-        ds = np.bitwise_xor(have[..., 0], want[..., 0] & 7)
-        dt = np.where(want[..., 1] < 0, 0, np.bitwise_xor(have[..., 1], want[..., 1] & 63))
-        return BRANCH_MISMATCH * _set_bits(ds, 3) + _set_bits(dt, 6)
-
-    def text(self, row):
-        return f"S {int(row[0])} T {int(row[1])}"
-
-
-class FANUCConfig(ConfigScheme):
-    """FANUC CONFIG 'F|N U|D T|B, t1, t4, t6': flip (J5 > 0), elbow down, back (wrist centre
-    behind J1), and the turn numbers of J1, J4, J6 (0 for -180..180 deg, 1 for 180..540 ...)."""
-
-    name = "FANUC CONFIG"  # rows [flip, down, back, turn1, turn4, turn6]
-    branch_fields = 3
-
-    def encode(self, robot, q):
-        q = np.asarray(q, float)
-        shoulder, elbow, _ = branch_bits(robot, q)
-        turns = _floor_div(q[..., [0, 3, 5]], 2 * np.pi, np.pi)
-        bits = np.stack([q[..., 4] > 0, elbow, shoulder], axis=-1).astype(int)
-        return np.concatenate([bits, turns], axis=-1)
-
-    def text(self, row):
-        f, d, b, t1, t4, t6 = (int(v) for v in row)
-        return f"{'F' if f else 'N'} {'D' if d else 'U'} {'B' if b else 'T'}, {t1}, {t4}, {t6}"

@@ -16,8 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from robocal.kinematics.transforms import matrix_to_rotvec
-from robocal.programs.model import Dialect, Target
+from robocal.programs.dialects.base import Dialect
 from robocal.programs.source import ProgramText
+from robocal.programs.target import Target
 
 SWING_DEG = 1.0  # Euler angles moving more than this for a smaller turn: named (gimbal lock)
 _SEP = "\x00"  # joins the formats of one batch; never in a formatted number

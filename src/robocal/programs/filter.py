@@ -27,8 +27,10 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.compensate import Compensation, compensate, controller_model
-from robocal.errors import DataError, ListedError, ModelError
+from robocal.core.errors import DataError, ListedError, ModelError
+from robocal.core.resources import gc_paused, heap_trimmed
+from robocal.data.measurements import robot_reach
+from robocal.deploy.compensation import Compensation, compensate, controller_model
 from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
 from robocal.ik.closed_form import has_closed_form
@@ -37,21 +39,25 @@ from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
+from robocal.programs.dialects.base import Dialect
 from robocal.programs.edits import FileEdits, monitored, number_edits
 from robocal.programs.external import set_aside_external
-from robocal.programs.fanuc_ls import FanucDialect
-from robocal.programs.inform import InformDialect, looks_like_inform
-from robocal.programs.krl import KRLDialect
+from robocal.programs.given_data import (
+    as_frames,
+    check_language,
+    check_magnitudes,
+    robot_base_frame,
+    tool_disagreements,
+    unused_conditions,
+)
 from robocal.programs.load import compensate_by_load, plan_loads
-from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.model import Program, Target
 from robocal.programs.motions import undeclared
-from robocal.programs.rapid import RapidDialect
+from robocal.programs.registry import capable, dialect_for, program_files
 from robocal.programs.result import LISTED, FilterResult, collapse
 from robocal.programs.source import ProgramText
 from robocal.programs.track import track_program
-from robocal.programs.urscript import URScriptDialect
-from robocal.programs.val3 import Val3Dialect, application_files
-from robocal.resources import gc_paused, heap_trimmed
+from robocal.trust.coverage import Prediction, target_warnings
 from robocal.trust.output_marker import check_unmarked
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
@@ -62,80 +68,6 @@ SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs w
 # --rotation (the 4-point method finds the position only): refused. Moved more: a warning.
 TCP_TURN_MAX_DEG = 5.0
 TCP_SHIFT_WARN_MM = 10.0
-
-
-DIALECTS = {"rapid": RapidDialect, "krl": KRLDialect, "fanuc": FanucDialect, "urscript": URScriptDialect,
-            "inform": InformDialect, "val3": Val3Dialect}
-
-
-def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
-    """The program dialect from ``name`` ('rapid', 'krl', 'fanuc', 'urscript', 'inform', 'val3') or the
-    suffixes; a Yaskawa job or VAR.DAT is also told by its first line (``/JOB``, ``//`` sections).
-
-    Parameters
-    ----------
-    paths : list of Path
-        The program files (a KRL ``.src`` with its ``.dat``, a VAL3 project's files ...); a
-        ``.dat`` is read to tell a Yaskawa VAR.DAT from a KRL data list.
-    name : str, optional
-        The dialect's name, which overrides the suffixes.
-
-    Returns
-    -------
-    Dialect
-        The reader and writer of that program format (``name``, ``suffixes``).
-
-    Raises
-    ------
-    DataError
-        An unknown ``name``, or files whose suffixes name no dialect or more than one.
-
-    Examples
-    --------
-    >>> from pathlib import Path
-    >>> from robocal.programs import dialect_for
-    >>> dialect_for([Path("weld.mod")]).name
-    'ABB RAPID'
-    >>> ".src" in dialect_for([Path("weld.src"), Path("weld.dat")]).suffixes  # KUKA KRL
-    True
-    >>> dialect_for([Path("a.txt")], "val3").suffixes[0]  # named: the suffix does not matter
-    '.pgx'
-    >>> dialect_for([Path("a.txt")])
-    Traceback (most recent call last):
-    ...
-    robocal.errors.DataError: cannot tell the program format of ['a.txt'] from the file suffixes ...
-    """
-    dialects = DIALECTS
-    if name is not None:
-        if name not in dialects:
-            raise DataError(f"unknown program format {name!r}: use one of {', '.join(dialects)}")
-        return dialects[name]()
-    found = {key for p in paths for key, d in dialects.items() if p.suffix.lower() in d.suffixes}
-    if found <= {"krl", "inform"} and paths and all(p.suffix.lower() == ".jbi" or _sniff_inform(p)
-                                                    for p in paths):
-        found = {"inform"}  # jobs and VAR.DAT (a .dat that is not KRL), or a job under another name
-    if len(found) != 1:
-        known = ", ".join(f"{k}: {' '.join(d.suffixes)}" for k, d in dialects.items())
-        raise DataError(f"cannot tell the program format of {[p.name for p in paths]} from the file "
-                        f"suffixes ({known}); name it with --format")
-    return dialects[found.pop()]()
-
-
-def _sniff_inform(path: Path) -> bool:
-    """The file reads as a Yaskawa job or variable file (unreadable: False, reported later)."""
-    try:
-        with open(path, "rb") as f:
-            return looks_like_inform(f.read(4096).decode("latin-1"))
-    except OSError:
-        return False
-
-
-def as_frames(dialect: Dialect, given) -> dict[str, np.ndarray]:
-    """name -> 4x4 (m) from name -> 4x4 or text in the dialect's pose notation."""
-    out = {}
-    for key, val in (given or {}).items():
-        out[str(key)] = dialect.frame_from_text(val) if isinstance(val, str) else np.asarray(val, float)
-    return out
 
 
 def _configured_joints(dialect, nominal, F, targets, problems):
@@ -338,7 +270,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                    robot_base=None, dialect: str | None = None, references=(),
                    keep_unreached: bool = False, strict: bool = False, force: bool = False,
                    position_registers: str | Path | None = None, payload=None,
-                   temperature: float | None = None, payload_schedules=None) -> FilterResult:
+                   temperature: float | None = None, payload_schedules=None,
+                   prediction: Prediction | None = None) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -347,14 +280,15 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     program's pose notation (``dialect.frame_help``), completing or overriding what the files
     declare: the tools as the controller knows them. ``tcp``: tool name -> 4x4 (m), the real TCP
     identified on the calibrated model (``robocal tool``), used with the calibrated flange
-    instead of the controller's tool data. ``robot_base``: the controller's base frame (4x4, m)
-    in the calibrated model's world frame (default: the calibrated frame {0} is the controller's
-    base). Targets that cannot be corrected (out of reach, out of the joint limits, a
-    configuration they cannot have, not converged) raise DataError naming each one; with
+    instead of the controller's tool data. ``robot_base``: the controller's base frame (4x4, m,
+    or text x,y,z,rx,ry,rz in mm and deg, its magnitudes checked) in the calibrated model's world
+    frame (default: the calibrated frame {0} is the controller's base). Targets that cannot be
+    corrected (out of reach, out of the joint limits, a configuration they cannot have, not
+    converged) raise DataError naming each one; with
     ``keep_unreached`` they are left unchanged with a warning. A motion to a name declared in none
     of the files given is named (its record says the declaration it needs); with ``strict`` the
     run is refused instead. ``position_registers``: a FANUC position register file
-    (`robocal.programs.fanuc_registers`): motions to those registers are corrected and the file's
+    (`robocal.programs.dialects.fanuc.registers`): motions to those registers are corrected and the file's
     corrected copy is one of the outputs. Nothing is written here: see `FilterResult.write`, which
     marks the files with the calibrated model's fingerprint (`robocal.trust.output_marker`); a
     marked input (already filtered) raises DataError naming the earlier run unless ``force``.
@@ -398,18 +332,25 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         The arm's temperature every target is run at, deg C, for a model with a thermal term.
     payload_schedules : path-like or dict of int to array_like, shape (4,), optional
         FANUC payload schedules for ``PAYLOAD[n]``: the controller's SYSVARS.VA or a CSV
-        (`robocal.programs.load_data.read_schedules`), or schedule -> (kg, x, y, z m).
+        (`robocal.programs.read_schedules`), or schedule -> (kg, x, y, z m).
+    prediction : robocal.trust.coverage.Prediction, optional
+        The calibration's predicted accuracy: a warning names the targets whose predicted error
+        exceeds 3 x the validated one (outside the calibrated region).
 
     Returns
     -------
     FilterResult
         The filtered files' bytes and the per-target table; `FilterResult.write` writes them.
+        Its warnings begin with the ``tools`` that differ from the program's own tool data of
+        the same name and a ``payload`` / ``temperature`` the model has no term for.
 
     Raises
     ------
     DataError
         No file, an unknown dialect, a nominal model without 6 joints, an unknown tool or
-        frame, or targets that cannot be corrected (each named).
+        frame, ``tools`` / ``frames`` / ``robot_base`` text whose magnitudes say another unit,
+        targets that cannot be corrected (each named), or files without a Cartesian target
+        that read as another language than their suffix says.
 
     Examples
     --------
@@ -428,8 +369,29 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     >>> "[[1139.328,200.893,722.77]" in Path("cell_cal.mod").read_text()  # 0.5 mm less reach
     True
     """
-    paths = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
-    paths = [f for p in paths for f in (application_files(p) if p.is_dir() else [p])]  # a VAL3 application
+    given = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
+    references = [references] if isinstance(references, str | Path) else list(references)
+    reach = robot_reach(nominal)
+    check_magnitudes(given, dialect, tools, frames, reach)
+    robot_base = robot_base_frame(robot_base, reach)
+    res = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect, references,
+                    keep_unreached, strict, force, position_registers, payload, temperature,
+                    payload_schedules)
+    res.warnings[:0] = unused_conditions(calibrated, payload, temperature)
+    if prediction is not None and res.joints is not None:
+        res.warnings += target_warnings(prediction, calibrated, res.joints)
+    if not res.rows:
+        check_language(programs, references, dialect)
+    res.warnings[:0] = tool_disagreements(given, dialect, tools, frames, references)
+    return res
+
+
+def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frames, tcp, robot_base,
+              dialect: str | None, references: list, keep_unreached: bool, strict: bool, force: bool,
+              position_registers, payload, temperature, payload_schedules) -> FilterResult:
+    """:func:`filter_program` of the files ``given`` (an application folder among them), without
+    the warnings and checks of what the user gave."""
+    paths = program_files(given)  # an application folder: its files
     if not paths:
         raise DataError("no program file given")
     track = track_program(nominal)  # an arm on a track: programs/track.py
@@ -443,10 +405,11 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     for s in sources:
         check_unmarked(s.text, str(s.path), "filtered", force)
     if position_registers is not None:
-        if not isinstance(d, FanucDialect):
-            raise DataError(f"--position-registers is for FANUC programs, not {d.name}")
+        if not d.position_registers:
+            vendors = " / ".join(c.vendor for c in capable("position_registers"))
+            raise DataError(f"--position-registers is for {vendors} programs, not {d.name}")
         sources.append(ProgramText(position_registers))
-    refs = [ProgramText(p) for p in ([references] if isinstance(references, str | Path) else references)]
+    refs = [ProgramText(p) for p in references]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
     missing = undeclared(program.ledger)
     if strict and missing:
@@ -461,7 +424,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
         return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings, program.uncorrected,
-                            program.ledger.records(set(), program.not_corrected))
+                            program.ledger.records(set(), program.not_corrected), language=d)
     loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, payload_schedules)
     warnings += loads.warnings
     values, P, W, tool = target_poses(d, program, targets)
@@ -515,11 +478,12 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,
                         program.ledger.records(corrected, program.not_corrected), calibrated,
                         joints=np.where(good[:, None], q, np.nan), loads=loads.lines,
-                        data_files=frozenset(s.path for s in sources[len(paths):]))  # the register file
+                        data_files=frozenset(s.path for s in sources[len(paths):]),  # the register file
+                        language=d)
 
 
 def _compensate(model: Robot, nominal: Robot, F: np.ndarray, seeds: np.ndarray) -> Compensation:
-    """:func:`robocal.compensate` of flange poses ``F`` ``(N, 4, 4)`` from ``seeds`` ``(N, n)``,
+    """:func:`robocal.deploy.compensation` of flange poses ``F`` ``(N, 4, 4)`` from ``seeds`` ``(N, n)``,
     ``CHUNK`` targets at a time (the numeric IK's arrays for 100,000 poses at once take
     gigabytes); each target's result depends on its own seed only."""
     parts = [compensate(model, nominal, F[s:s + CHUNK], seeds=seeds[s:s + CHUNK])

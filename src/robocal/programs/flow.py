@@ -19,6 +19,7 @@ import bisect
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from robocal.programs.language_help import ENTRY_ROUTINES
 from robocal.programs.model import Program, Target
 from robocal.programs.source import ProgramText
 
@@ -150,8 +151,7 @@ def order_by_execution(prog: Program, flow: Flow) -> None:
     order: list[tuple[int, str]] = []  # (index into steps, via) in execution order
     why = ""
     if flow.entry is None:
-        why = "no entry routine found (URScript: top-level code or one def nothing calls; RAPID: PROC " \
-              "main; KRL: the DEF named like the .src file)" if flow.routines else ""
+        why = f"no entry routine found ({ENTRY_ROUTINES})" if flow.routines else ""
     else:
         cycles: list[str] = []
         segments = _segments(flow, cycles)

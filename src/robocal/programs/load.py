@@ -28,16 +28,17 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.compensate import Compensation
-from robocal.errors import DataError
+from robocal.core.errors import DataError
+from robocal.deploy.compensation import Compensation
 from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.joint_errors import condition_terms, condition_warnings
 from robocal.kinematics.model import Robot
-from robocal.programs.fanuc_ls import FanucDialect
-from robocal.programs.load_data import Load, LoadReader, Setting, read_schedules, reader_for
+from robocal.programs.dialects.base import Dialect
+from robocal.programs.load_data import Load, LoadReader, Setting
 from robocal.programs.load_data.base import ranges
-from robocal.programs.model import Dialect, Program, Target
+from robocal.programs.model import Program, Target
 from robocal.programs.motions import Account
+from robocal.programs.registry import capable
 from robocal.programs.source import ProgramText
 
 SAME_LOAD = 1e-9  # kg and m: two loads closer than this in every number are the same load
@@ -66,18 +67,26 @@ class LoadPlan:
         return [(k, np.array(v, dtype=int)) for k, v in order.items()]
 
 
+def _capable(attribute: str) -> str:
+    """``attribute`` (vendor, schedule_statement) of the languages whose loads come from payload
+    schedules."""
+    return " / ".join(getattr(d, attribute) for d in capable("payload_schedules"))
+
+
 def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibrated: Robot,
                sources: list[ProgramText], references: list[ProgramText], payload=None,
                schedules: str | Path | dict[int, Load] | None = None) -> LoadPlan:
     """The load of each of ``targets`` (module docstring). ``payload``: kg or (kg, x, y, z m),
-    overriding the program's; ``schedules``: FANUC payload schedules
-    (:func:`robocal.programs.load_data.read_schedules`), a file or schedule -> (kg, x, y, z m).
+    overriding the program's; ``schedules``: payload schedules (of a language that
+    has them, :meth:`~robocal.programs.dialects.base.Dialect.read_schedules`), a file or
+    schedule -> (kg, x, y, z m).
     Motions named for running with another load than their target's are named in ``program``'s
     accounting (its ledger and uncorrected)."""
-    if schedules is not None and not isinstance(dialect, FanucDialect):
-        raise DataError(f"--payload-schedules is for FANUC programs (PAYLOAD[n]), not {dialect.name}")
+    if schedules is not None and not dialect.payload_schedules:
+        raise DataError(f"--payload-schedules is for {_capable('vendor')} programs "
+                        f"({_capable('schedule_statement')}), not {dialect.name}")
     if isinstance(schedules, str | Path):
-        schedules = read_schedules(schedules)
+        schedules = dialect.read_schedules(schedules)
     elif schedules is not None:
         schedules = {int(k): tuple(np.asarray(v, float).tolist()) for k, v in schedules.items()}
     if "payload" not in condition_terms(calibrated):  # --payload given anyway: the CLI says it is not used
@@ -87,7 +96,7 @@ def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibr
     if payload is not None:
         key = _key(calibrated.with_conditions(payload).joint_errors.payload)  # checked: kg >= 0, 1 or 4
         return LoadPlan([key] * len(targets), [f"{_text(key)} (--payload): every motion"])
-    reader = reader_for(dialect, program.tools, schedules)
+    reader = dialect.load_reader(program.tools, schedules)
     settings = reader.settings(sources, references)
     index = {id(t): i for i, t in enumerate(targets)}
     runs = _executions(program, settings, index)

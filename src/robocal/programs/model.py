@@ -1,10 +1,11 @@
-"""What every program format gives the filter: Cartesian targets with the spans to rewrite.
+"""What every program format gives the filter: a :class:`Program`, its Cartesian targets with the
+spans to rewrite.
 
-A :class:`Target` is one Cartesian position of a program (a declaration or a literal written
-in a motion instruction): the numbers of its pose in the file's units, the frame (work object,
-base, user frame, feature) and the tool it is used with, and its configuration data. A
-:class:`Dialect` knows one vendor's notation: pose numbers <-> 4x4 transforms, resolutions to
-write them with, its configuration scheme, and how to rewrite a target's configuration.
+A :class:`~robocal.programs.target.Target` is one Cartesian position of a program (a declaration
+or a literal written in a motion instruction): the numbers of its pose in the file's units, the
+frame (work object, base, user frame, feature) and the tool it is used with, and its
+configuration data. A :class:`~robocal.programs.dialects.base.Dialect` knows one language's
+notation and reads its files into a :class:`Program`.
 """
 
 from __future__ import annotations
@@ -14,45 +15,12 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import DataError
-from robocal.programs.config import ConfigScheme
+from robocal.core.errors import DataError
 from robocal.programs.motions import Account, Ledger
-from robocal.programs.source import Number, ProgramText
+from robocal.programs.source import ProgramText
+from robocal.programs.target import IDENTITY, Target
 
-IDENTITY = "identity"  # name of the identity frame / tool (world, wobj0, tool0, $NULLFRAME ...)
-
-
-@dataclass
-class Target:
-    """One Cartesian target. ``numbers``: the pose numbers as written (vendor order and units);
-    ``frame`` / ``tool``: keys into :attr:`Program.frames` / :attr:`Program.tools`;
-    ``config``: the vendor's configuration row (None: the target has none); ``config_spans``:
-    whatever the dialect needs to rewrite it; ``qnear``: joints (rad) a controller would start
-    its search from (URScript ``qnear=``), else None."""
-
-    source: ProgramText
-    offset: int
-    name: str
-    numbers: list[Number]
-    frame: str = IDENTITY
-    tool: str = IDENTITY
-    config: np.ndarray | None = None
-    config_spans: object = None
-    qnear: np.ndarray | None = None
-    order: int = 0  # position in execution order (first execution, :mod:`robocal.programs.flow`)
-    monitored: bool = True  # False: the motion runs with configuration monitoring off (RAPID ConfL Off)
-    external: str = ""  # external-axis values the target carries (a track, gantry or positioner)
-
-    @property
-    def line(self) -> int:
-        return self.source.line_of(self.offset)
-
-    @property
-    def where(self) -> str:
-        return f"{self.source.path.name}:{self.line} ({self.name})"
-
-    def values(self) -> np.ndarray:
-        return np.array([n.value for n in self.numbers], dtype=float)
+__all__ = ["IDENTITY", "Program", "Target"]
 
 
 @dataclass
@@ -123,61 +91,3 @@ class Program:
         if text not in self.uncorrected:
             self.uncorrected.append(text)
             self.warnings.append(text)
-
-
-class Dialect:
-    """One vendor's program format (subclasses: rapid, krl, fanuc_ls, urscript)."""
-
-    name = ""
-    suffixes: tuple[str, ...] = ()
-    scheme: ConfigScheme | None = None
-    n_values = 6  # pose numbers per target
-    shared_decimals: tuple[tuple[int, ...], ...] = ()  # pose columns written at the file's finest decimals
-    keep_width = False  # numbers right-aligned after spaces keep their width (FANUC)
-    euler_columns: tuple[int, ...] = ()  # pose columns that are Euler angles in deg (gimbal lock possible)
-    frame_help = ""  # how --tool/--frame values are written for this dialect
-
-    def parse(self, sources: list[ProgramText], frames: dict[str, np.ndarray],
-              tools: dict[str, np.ndarray], references: list[ProgramText] = ()) -> Program:
-        """Targets, frames and tools of the files; ``references`` are read for their tool and
-        frame declarations only (KUKA $config.dat, ABB system modules); ``frames``/``tools``
-        from the command line (already in SI) complete or override those in the files."""
-        raise NotImplementedError
-
-    def to_pose(self, values: np.ndarray) -> np.ndarray:
-        """Pose numbers ``(N, k)`` in the file's notation -> ``(N, 4, 4)`` (m)."""
-        raise NotImplementedError
-
-    def from_pose(self, T: np.ndarray, old: np.ndarray) -> np.ndarray:
-        """``(N, 4, 4)`` (m) -> pose numbers ``(N, k)``, of all equivalent notations the one
-        nearest the old numbers (quaternion sign, Euler branch, rotation-vector turn)."""
-        raise NotImplementedError
-
-    def resolutions(self) -> np.ndarray:
-        """``(k,)`` finest step worth writing for each pose number, in its unit."""
-        raise NotImplementedError
-
-    def config_edits(self, target: Target, new: np.ndarray) -> dict[tuple[int, int], str]:
-        """Span -> text edits writing configuration row ``new`` into ``target``."""
-        raise NotImplementedError
-
-    def number_edit(self, target: Target, num: Number, text: str) -> str:
-        """The text that replaces ``num`` (its span) when it is rewritten as ``text``: the number
-        itself, or, for a number the file leaves out (a zero-length span), whatever writes it
-        (VAL3: the attribute)."""
-        return text
-
-    def name_key(self, name: str) -> str:
-        """The key a tool or frame name has in :class:`Program` (RAPID names ignore case)."""
-        return name
-
-    def frame_from_text(self, text: str) -> np.ndarray:
-        """A ``--tool``/``--frame`` value (comma-separated numbers in this dialect's pose
-        notation) -> 4x4 (m)."""
-        try:
-            vals = np.array([float(v) for v in text.replace(" ", "").split(",") if v], dtype=float)
-        except ValueError:
-            raise DataError(f"frame {text!r}: expected comma-separated numbers ({self.frame_help})") from None
-        if vals.size != self.n_values or not np.isfinite(vals).all():
-            raise DataError(f"frame {text!r}: expected {self.n_values} numbers ({self.frame_help})")
-        return self.to_pose(vals[None])[0]

@@ -31,11 +31,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    from robocal.programs.model import Target
-    from robocal.programs.source import ProgramText
+from robocal.programs.source import ProgramText
+from robocal.programs.target import Target
 
 CORRECTED = "corrected"
 NAMED = "named"

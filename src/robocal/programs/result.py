@@ -4,7 +4,7 @@ accounting (:mod:`robocal.programs.motions`) and the warnings; how they are summ
 ``FilterResult.table_json()`` holds ``summary`` (targets, corrections and ``motions``:
 ``{"total", "corrected", "named"}``), ``warnings``, ``targets`` (one row per target) and
 ``motions`` (one record per motion instruction to a Cartesian pose). Writing goes through
-:func:`robocal.io.write_all`: the programs and the table together, or nothing.
+:func:`robocal.core.io.write_all`: the programs and the table together, or nothing.
 """
 
 from __future__ import annotations
@@ -18,11 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import DataError
-from robocal.io import check_outputs, write_all
+from robocal.core.errors import DataError
+from robocal.core.io import check_outputs, write_all
 from robocal.kinematics.model import Robot
 from robocal.programs.motions import MotionRecord, summary, summary_line
-from robocal.trust.output_marker import mark_program
+from robocal.programs.registry import dialect_with_name
+from robocal.trust.output_marker import ProgramMarker, mark_program
 
 LISTED = 20  # problems (warnings) listed in one message
 JSON_ROWS = 5_000  # table rows encoded by one call of json's encoder
@@ -59,6 +60,9 @@ class FilterResult:
     loads : list of str
         For a model with a payload term, which motions ran with which load (one line per load:
         kg, centre of mass in tool0 mm, where the program sets it, the motions' lines).
+    language : Dialect, optional
+        The language's dialect, which marks the written files (default: the registered one
+        named `dialect`).
 
     Examples
     --------
@@ -89,6 +93,7 @@ class FilterResult:
     joints: np.ndarray | None = None  # (targets, n) rad on the calibrated model, NaN where not corrected
     data_files: frozenset[Path] = frozenset()  # outputs that are data, not programs: no marker
     loads: list[str] = field(default_factory=list)  # which motions ran with which load (payload term)
+    language: ProgramMarker | None = field(default=None, repr=False, compare=False)  # marks the files
 
     def table_csv(self) -> str:
         """The per-target table as CSV text (one row per target, `rows`' columns)."""
@@ -199,7 +204,7 @@ class FilterResult:
         for src, dst in outputs.items():  # marked with the calibrated model that corrected them
             data = self.outputs[Path(src)]
             files[Path(dst)] = data if self.calibrated is None or Path(src) in self.data_files else \
-                mark_program(self.dialect, data, self.calibrated)
+                mark_program(self.language or dialect_with_name(self.dialect), data, self.calibrated)
         for t in table_paths(table) if table is not None else []:
             files[t] = (self.table_csv() if t.suffix.lower() == ".csv" else self.table_json()).encode()
         check_outputs(files, self.outputs)

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 
 _LONE_CR = re.compile(r"\r(?!\n)")
 NUMBER_RE = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
@@ -65,6 +65,15 @@ class ProgramText:
         # dialects read has it as LF, same length, so offsets and line numbers hold for both
         self.text = _LONE_CR.sub("\n", self.original) if "\r" in self.original else self.original
         self._lines = [0] + [m.end() for m in re.finditer("\n", self.text)]
+        self._masked: dict[tuple, str] = {}  # (blank, quoted) patterns -> the masked text
+
+    def masked(self, blank: list[re.Pattern], quoted: list[re.Pattern] = ()) -> str:
+        """:func:`mask` of the text with these patterns, computed once (the reader and the load
+        reader of a language share it)."""
+        key = (tuple(blank), tuple(quoted))
+        if key not in self._masked:
+            self._masked[key] = mask(self.text, blank, quoted)
+        return self._masked[key]
 
     def line_of(self, offset: int) -> int:
         """1-based line number of a byte offset."""

@@ -7,7 +7,7 @@ FANUC world frame) is the cell's world with the carriage at e1 = 0 and the nomin
 nominal controller puts the arm's base where the nominal cell has it at the program's e1
 (:func:`robocal.kinematics.cell.carriage_frames`: ideal track, nominal mount) and solves the arm's
 joints there; the calibrated cell is then driven to the intended pose with the track held at that
-e1 (:func:`robocal.compensate.compensate` with ``e1``), and the corrected target is the nominal
+e1 (:func:`robocal.deploy.compensation.compensate` with ``e1``), and the corrected target is the nominal
 cell's pose of those joints. e1, the configuration data (unless the correction crosses a
 configuration boundary, as for any target) and every byte outside the pose numbers stay as they
 are. Targets with other external axes (a second track axis, a positioner, a FANUC GP2) stay set
@@ -22,7 +22,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from robocal.compensate import Compensation, compensate
+from robocal.deploy.compensation import Compensation, compensate
 from robocal.ik.singularity import singularity_distance
 from robocal.kinematics.cell import arm_model, carriage_frames, is_track_cell
 from robocal.kinematics.model import Robot
@@ -86,7 +86,7 @@ class TrackProgram:
     def compensate(self, calibrated: Robot, targets: list[Target], flanges: np.ndarray,
                    seeds: np.ndarray) -> Compensation:
         """The compensation of world flange poses ``flanges`` ``(N, 4, 4)`` on the ``calibrated`` cell
-        (already the controller's view: :func:`robocal.compensate.controller_model`) with the track
+        (already the controller's view: :func:`robocal.deploy.compensation.controller_model`) with the track
         at each target's e1, seeded by the controller's arm joints ``seeds`` ``(N, 6)``; returned
         in the arm's view (joints ``(N, 6)`` and their singularity distances), the corrected
         targets in the world (the nominal cell's poses)."""

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 from robocal.report.html import _figure, _grid, _identifiability, _num, _table, esc, page
 
 

@@ -1,7 +1,7 @@
 """The report's section on the working conditions of a calibration with payload or thermal terms.
 
 Rendered from the result's ``conditions`` section (docs/result-json.md; built by
-:mod:`robocal.calibration_conditions`): the payloads and temperatures the calibration data covered
+:mod:`robocal.calibration.conditions`): the payloads and temperatures the calibration data covered
 and T_ref, the thermal expansion coefficients (shared and per link group, with where each comes
 from), the payload compliance per joint, the defaults the model assumes without a payload or a
 temperature, and the terms not used. Every string from the result is escaped.

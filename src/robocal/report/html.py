@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.errors import DataError
-from robocal.io import write_atomic
+from robocal.core.errors import DataError
+from robocal.core.io import write_atomic
 from robocal.report.format import esc, p_value
 from robocal.report.format import num as _num
 from robocal.report.format import table as _table
@@ -101,7 +101,7 @@ class _ObsErrors:
         self.after_pts = _array(obs, "model_after", 3)
         self.measured = _array(obs, "measured", 3)
         n = next((len(obs[k]) for k in ("error_after", "model_after", "error_before", "measured")
-                  if obs.get(k) is not None), 0)  # rows (one length: robocal.schema checks it)
+                  if obs.get(k) is not None), 0)  # rows (one length: robocal.core.schema checks it)
         self.joints = _array(obs, "joints_deg")
         self.pose_id = np.asarray(_or(obs.get("pose_id"), np.arange(n)))
         self.source_row = np.asarray(_or(obs.get("source_row"), np.arange(n)))

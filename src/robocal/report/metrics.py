@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 
 
 def position_stats(errors) -> dict:

@@ -17,7 +17,7 @@ try:
     from matplotlib.figure import Figure
     from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 except ImportError as exc:  # pragma: no cover - exercised only without the extra
-    from robocal.errors import RobocalError
+    from robocal.core.errors import RobocalError
 
     raise RobocalError("the HTML report needs matplotlib: pip install 'robocal[report]'") from exc
 

@@ -26,8 +26,8 @@ the residual better than the step is called a drift.
 
 **Diagnosis** of an inconsistent fit, in order: the change point; the orientation convention of a
 6-DOF pose file (quaternions scalar-last under ``qw,qx,qy,qz`` headers, or the inverse rotation:
-each tried, the one that fits named); the length unit (:func:`robocal.diagnose.length_unit`); a
-joint column exchange or sign flip (:func:`robocal.diagnose.joint_mixup`).
+each tried, the one that fits named); the length unit (:func:`robocal.trust.diagnosis.length_unit`); a
+joint column exchange or sign flip (:func:`robocal.trust.diagnosis.joint_mixup`).
 
 **Worse than nominal.** A fitted model that misses its own data by more than the nominal model
 with the frames fitted (beyond :data:`WORSE_TOLERANCE`) is not written
@@ -44,12 +44,13 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 from scipy.special import chdtrc  # chi2.sf without importing scipy.stats (a third of start-up)
 
+from robocal.core.errors import PlausibilityError, RobocalError
 from robocal.data.measurements import robot_reach
 from robocal.data.registration import register_frame
-from robocal.diagnose import GAIN, fit_rms_mm, joint_mixup, length_unit
-from robocal.errors import PlausibilityError, RobocalError
 from robocal.identify.plausibility import FORCE_HINT
 from robocal.identify.problem import KIND_SIGMA
+from robocal.kinematics.conditions import Conditions
+from robocal.trust.diagnosis import GAIN, fit_rms_mm, joint_mixup, length_unit
 
 ALPHA = 1e-3  # the residual test's false-alarm probability per fit (model and noise right)
 UNMODELLED_MM_PER_M = 0.5  # unmodelled-error budget: mm (1 sigma, per coordinate) per metre of reach
@@ -254,10 +255,10 @@ def find_change_points(robot, observations, errors: list[np.ndarray], noise: lis
     observation models (``.data``, ``.kind``), ``errors`` their item errors (m) with ``robot``."""
     out = []
     for obs, e, s in zip(observations, errors, noise, strict=True):
-        if obs.kind not in ("point", "pose"):
+        if not obs.data.spec.sees_position:
             continue
         data = obs.data
-        R = robot.fk(data.joints, smr=data.smr, approach=data.approach, travel=data.travel)[:, :3, :3]
+        R = robot.fk(data.joints, smr=data.smr, conditions=Conditions(data.approach, data.travel))[:, :3, :3]
         found = change_point(e, R, float(np.sqrt(np.mean(s**2))), seed)
         if found is not None:
             k, frame, step, p, shape = found
@@ -282,16 +283,16 @@ def _angle_rms_deg(A: np.ndarray, R: np.ndarray) -> float:
 def orientation_convention(robot, data) -> str | None:
     """For a 6-DOF pose file: another reading of its quaternions (scalar-last under
     ``qw,qx,qy,qz`` headers, the inverse rotation, both) under which the model's orientations fit
-    (within :data:`ORIENTATION_FIT_DEG` and :data:`robocal.diagnose.GAIN` times better than as
+    (within :data:`ORIENTATION_FIT_DEG` and :data:`robocal.trust.diagnosis.GAIN` times better than as
     given), as a sentence; None otherwise."""
-    if data.kind != "pose" or data.rotations is None:
+    if not data.spec.sees_orientation or data.rotations is None:
         return None
     try:
         reg = register_frame(robot, data)
     except (RobocalError, np.linalg.LinAlgError):
         return None
     links = replace(robot, base=np.eye(4), tool=np.eye(4), smr=np.zeros((0, 3)))
-    A = reg.base[:3, :3] @ links.fk(data.joints, approach=data.approach, travel=data.travel)[:, :3, :3]
+    A = reg.base[:3, :3] @ links.fk(data.joints, conditions=Conditions(data.approach, data.travel))[:, :3, :3]
     R = data.rotations
     q = Rotation.from_matrix(R).as_quat()  # x, y, z, w: the file's qx, qy, qz, qw as read
     last = Rotation.from_quat(q[:, [3, 0, 1, 2]]).as_matrix()  # the file's columns held x, y, z, w
@@ -313,7 +314,7 @@ def diagnose_misfit(robot, datasets) -> list[str]:
     file). Empty when the data do not tell."""
     out = []
     for d in datasets:
-        if d.kind not in ("point", "pose") or len(d) < 6:
+        if not d.spec.sees_position or len(d) < 6:
             continue
         given = fit_rms_mm(robot, d)
         reason = orientation_convention(robot, d)

@@ -26,11 +26,17 @@ their range. :meth:`Prediction.error_mm` is the per-target API (``compensate --r
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
+from robocal.identify.identifiability import Identifiability
 from robocal.identify.priors import prior_sigma
+from robocal.identify.problem import CalibrationProblem
+from robocal.identify.solvers import SolverResult
+from robocal.identify.space import ParameterSpace, State
+from robocal.kinematics.model import Robot
 
 WORKSPACE_SAMPLES = 1000  # joint vectors of the workspace sample
 WORKSPACE_SEED = 0  # its seed: the same model gives the same figures
@@ -135,11 +141,27 @@ def posterior(problem, state, names: list[str], s0: float) -> np.ndarray:
     return cov[:k, :k]
 
 
-def prediction(result) -> Prediction:
-    """The :class:`Prediction` of a calibration result (``robocal.calibration.CalibrationResult``): the
-    posterior of its candidate robot parameters the calibrated model carries (extra SMR offsets
-    marginalised), ``u`` from its cross-validation or its dof-corrected residual, the validated
-    error from its validation data when there are any."""
+class Fit(Protocol):
+    """What :func:`prediction` reads of a fit: a calibration result
+    (:class:`robocal.calibration.pipeline.CalibrationResult`) has it all. Named here so that the
+    trust layer states what it needs without importing the calibration above it."""
+
+    problem: CalibrationProblem
+    state: State
+    robot: Robot
+    space: ParameterSpace
+    identifiability: Identifiability
+    solver: SolverResult
+    model_selection: dict | None
+    validation: dict | None
+    judged: list
+
+
+def prediction(result: Fit) -> Prediction:
+    """The :class:`Prediction` of a fit (a calibration result): the posterior of its candidate robot
+    parameters the calibrated model carries (extra SMR offsets marginalised), ``u`` from its
+    cross-validation or its dof-corrected residual, the validated error from its validation data
+    when there are any."""
     problem, state, robot = result.problem, result.state, result.robot
     nuisance = set(problem.nuisance_names)
     names = [n for n in result.identifiability.names if n not in nuisance and n in robot.parameter_names]

@@ -11,17 +11,18 @@ the same model loaded from any of its files gives the same fingerprint). Reading
 back in (filtering a filtered program, compensating compensated targets: the corrections applied
 twice) is refused, naming the earlier run, unless the caller forces it.
 
-Where the marker goes (one added line; the rest of the file is byte for byte the same):
+Where the marker goes (one added line; the rest of the file is byte for byte the same), in each
+language's comment syntax (its ``programs/dialects/<language>/marker.py``):
 
 * ABB RAPID: ``! ...`` on the line after the first ``MODULE`` line (the file's first line
   without one);
 * KUKA KRL: ``; ...`` on the line after the first ``DEF`` / ``DEFDAT`` / ``DEFFCT`` line;
 * FANUC TP (.ls): a remark ``!...`` as the last line of ``/MN``, numbered after the last line,
-  with ``LINE_COUNT`` raised by one; a remark line holds `TP_REMARK_WIDTH` characters, so
+  with ``LINE_COUNT`` raised by one; a remark line holds 30 characters, so
   the fingerprint is cut to fit (10 hex digits with a five-character version);
 * URScript: ``# ...`` as the first line;
-* Yaskawa INFORM: a comment instruction ``'...`` after the job's ``NOP`` (a comment holds
-  `INFORM_COMMENT_WIDTH` characters: the fingerprint is cut to fit); a VAR.DAT, which holds
+* Yaskawa INFORM: a comment instruction ``'...`` after the job's ``NOP`` (a comment holds 32
+  characters: the fingerprint is cut to fit); a VAR.DAT, which holds
   no instructions, carries none;
 * Staubli VAL3: an XML comment ``<!-- ... -->`` on the line after the XML declaration of each
   file written (a file without a declaration carries none);
@@ -33,27 +34,19 @@ from __future__ import annotations
 import hashlib
 import re
 from dataclasses import dataclass
+from typing import Protocol
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
+from robocal.core.version import __version__
 from robocal.kinematics.model import Robot
-from robocal.version import __version__
 
 FINGERPRINT_HEX = 12  # hex digits of the SHA-256 kept: 48 bits, a collision 1 in 2.8e14
-TP_REMARK_WIDTH = 30  # characters of one FANUC TP remark line (! ...)
-_SHORTEST_HEX = 8  # a FANUC remark keeps at least this many hex digits of the fingerprint
+_SHORTEST_HEX = 8  # a marker cut to fit a short comment keeps at least this many hex digits
 _SIGNIFICANT = 12  # significant digits of each parameter in the canonical text
 MARKER_RE = re.compile(rf"robocal (?P<version>\d[\w.+-]*) "
                        rf"model (?P<model>[0-9a-f]{{{_SHORTEST_HEX},{FINGERPRINT_HEX}}})\b")
 _NOTE = {"filtered": "targets filtered, do not filter again",
          "compensated": "targets compensated, do not compensate again"}
-_RAPID_ANCHOR = re.compile(r"^[ \t]*MODULE\b[^\r\n]*(\r?\n)", re.M | re.I)
-_KRL_ANCHOR = re.compile(r"^[ \t]*(?:GLOBAL[ \t]+)?(?:DEF|DEFDAT|DEFFCT)\b[^\r\n]*(\r?\n)", re.M | re.I)
-_INFORM_NOP = re.compile(r"^NOP[ \t]*(\r?\n|\r)", re.M)
-_XML_ANCHOR = re.compile(r"^(?:\xef\xbb\xbf)?<\?xml[^>]*\?>[ \t]*(\r?\n)")
-MARKED_FORMATS = ("rapid", "krl", "fanuc", "urscript", "inform", "val3")  # in the dialects' names
-INFORM_COMMENT_WIDTH = 32  # characters of an INFORM comment instruction ('...)
-_FANUC_LINE = re.compile(r"^[ \t]*(\d+):", re.M)
-_FANUC_COUNT = re.compile(r"^(LINE_COUNT\s*=\s*)(\d+)", re.M)
 
 
 @dataclass(frozen=True)
@@ -153,7 +146,7 @@ def check_unmarked(text: str, where: str, action: str, force: bool = False) -> M
     >>> check_unmarked(marked, "targets.csv", "compensated")
     Traceback (most recent call last):
     ...
-    robocal.errors.DataError: targets.csv was already compensated by robocal 0.1.0 with the ...
+    robocal.core.errors.DataError: targets.csv was already compensated by robocal 0.1.0 with the ...
     >>> check_unmarked(marked, "targets.csv", "compensated", force=True).model
     'ebba57c5590e'
     """
@@ -166,53 +159,47 @@ def check_unmarked(text: str, where: str, action: str, force: bool = False) -> M
     return found
 
 
-def _newline(text: str) -> str:
+def newline(text: str) -> str:
+    """The line end ``text`` uses."""
     return "\r\n" if "\r\n" in text else "\n"
 
 
-def _insert_after(text: str, anchor: re.Pattern, line: str) -> str:
+def insert_after(text: str, anchor: re.Pattern, line: str) -> str:
+    """``line`` inserted after the first match of ``anchor`` (whose group 1 is its line end), with
+    the next line's indent; no match: as the first line."""
     m = anchor.search(text)
-    nl = m.group(1) if m else _newline(text)
+    nl = m.group(1) if m else newline(text)
     at = m.end() if m else 0
     rest = text[at:]
     indent = re.match(r"[ \t]*", rest).group() if m and rest.strip() else ""
     return text[:at] + indent + line + nl + rest
 
 
-def _short(body: str, width: int) -> str:
+def shortened(body: str, width: int) -> str:
     """``body`` with its fingerprint cut (to no fewer than _SHORTEST_HEX digits) to fit ``width``."""
     cut = max(_SHORTEST_HEX, FINGERPRINT_HEX - max(0, len(body) - width))
     return body[:len(body) - FINGERPRINT_HEX + cut]
 
 
-def _mark_inform(text: str, body: str) -> str:
-    """A comment instruction after the job's NOP (the first instruction); a file without one (the
-    controller's VAR.DAT, which holds no instructions) is left as it is."""
-    m = _INFORM_NOP.search(text)
-    if m is None:
-        return text
-    return text[:m.end()] + f"'{_short(body, INFORM_COMMENT_WIDTH)}{m.group(1)}" + text[m.end():]
+class ProgramMarker(Protocol):
+    """What marks a program: a language's comment syntax (the ``mark`` of its
+    `robocal.programs.dialects.base.Dialect`).
+
+    Examples
+    --------
+    >>> from robocal.programs.registry import dialect_named
+    >>> body = "robocal 0.1.0 model ebba57c5590e"
+    >>> dialect_named("urscript").mark("movej([0, 0, 0, 0, 0, 0])\\n", body, body + ": filtered")
+    '# robocal 0.1.0 model ebba57c5590e: filtered\\nmovej([0, 0, 0, 0, 0, 0])\\n'
+    """
+
+    def mark(self, text: str, body: str, note: str) -> str:
+        """``text`` with the marker ``body`` (and ``note``, the same with what was done) added."""
 
 
-def _mark_fanuc(text: str, body: str) -> str:
-    start, stop = text.find("/MN"), text.find("/POS")
-    if start < 0:
-        raise DataError("a FANUC .ls program without /MN cannot carry a provenance marker")
-    stop = len(text) if stop < start else stop
-    numbers = [int(n) for n in _FANUC_LINE.findall(text, start, stop)]
-    nl = _newline(text)
-    body = _short(body, TP_REMARK_WIDTH)
-    remark = f"{max(numbers, default=0) + 1:>4}:  !{body} ;{nl}"
-    if stop < len(text) and not text[:stop].endswith("\n"):
-        remark = nl + remark
-    out = text[:stop] + remark + text[stop:]
-    return _FANUC_COUNT.sub(lambda m: f"{m.group(1)}{int(m.group(2)) + 1}", out, count=1)
-
-
-def mark_program(dialect: str, data: bytes, robot: Robot) -> bytes:
+def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot) -> bytes:
     """A filtered program's bytes with the marker of ``robot`` (the calibrated model) added in
-    ``dialect``'s comment syntax (a name holding one of MARKED_FORMATS, as the dialects' own names
-    do; see the module docstring).
+    ``dialect``'s comment syntax (see the module docstring).
 
     Raises
     ------
@@ -222,31 +209,15 @@ def mark_program(dialect: str, data: bytes, robot: Robot) -> bytes:
     Examples
     --------
     >>> import robocal as rc
+    >>> from robocal.programs.registry import dialect_named
     >>> from robocal.trust.output_marker import mark_program, marker_text
     >>> robot = rc.Robot.from_catalog("abb_irb2600")
-    >>> out = mark_program("ABB RAPID", b"MODULE weld\\nENDMODULE\\n", robot)
+    >>> out = mark_program(dialect_named("rapid"), b"MODULE weld\\nENDMODULE\\n", robot)
     >>> out.decode().splitlines()[1] == f"! {marker_text(robot)}: targets filtered, do not filter again"
     True
     """
-    text = data.decode("latin-1")
-    dialect = next((k for k in MARKED_FORMATS if k in dialect.lower()), dialect)
     body = marker_text(robot)
-    note = f"{body}: {_NOTE['filtered']}"
-    if dialect == "rapid":
-        out = _insert_after(text, _RAPID_ANCHOR, f"! {note}")
-    elif dialect == "krl":
-        out = _insert_after(text, _KRL_ANCHOR, f"; {note}")
-    elif dialect == "fanuc":
-        out = _mark_fanuc(text, body)
-    elif dialect == "urscript":
-        out = f"# {note}{_newline(text)}{text}"
-    elif dialect == "inform":
-        out = _mark_inform(text, body)
-    elif dialect == "val3":
-        out = _insert_after(text, _XML_ANCHOR, f"<!-- {note} -->") if _XML_ANCHOR.search(text) else text
-    else:
-        raise DataError(f"no provenance marker for program format {dialect!r}")
-    return out.encode("latin-1")
+    return dialect.mark(data.decode("latin-1"), body, f"{body}: {_NOTE['filtered']}").encode("latin-1")
 
 
 def mark_csv(text: str, robot: Robot) -> str:

@@ -13,7 +13,7 @@ import hashlib
 import numpy as np
 from scipy.spatial import cKDTree
 
-from robocal.errors import DataError
+from robocal.core.errors import DataError
 
 JOINT_REPEAT_TOL_DEG = 0.01  # every joint within this: the same pose (joint reading noise)
 _FINGERPRINT_DECIMALS = 4  # joints (deg) are rounded to this many decimals before hashing

@@ -32,10 +32,7 @@ class Observation:
         self.data = data
         self.q = robot.check_joints(data.joints)
         self.smr = np.asarray(data.smr, dtype=int)
-        self.approach = data.approach  # joint approach directions (backlash)
-        self.travel = data.travel  # joint moves from the previous pose (travel)
-        self.payload = data.payload  # (N, 4) kg, m or None (payload)
-        self.temperature = data.temperature  # (N,) deg C or None (thermal)
+        self.conditions = data.conditions  # approach, travel, payload, temperature of each row
         self.item_sigma = None if data.sigma is None else np.asarray(data.sigma, dtype=float)
         self._basis = None  # (robot, B, joint): the joint-error basis batch_tcp last used
 
@@ -108,14 +105,12 @@ class Observation:
     def _fk(self, robot) -> np.ndarray:
         """TCP poses ``(N, 4, 4)`` of the data rows: each with its SMR, joint-error terms from
         the rows' approach directions and moves."""
-        return robot.fk(self.q, smr=self.smr, approach=self.approach, travel=self.travel,
-                        payload=self.payload, temperature=self.temperature)
+        return robot.fk(self.q, smr=self.smr, conditions=self.conditions)
 
     def _tcp_jacobian(self, robot, names: Sequence[str], kind: str = "point") -> np.ndarray:
         """d(TCP of each row)/d(``names``) ``(N, 3|6, k)`` (:func:`identification_jacobian`,
         ``kind`` 'point' or 'pose'), with the rows' SMRs, approach directions and moves."""
-        return identification_jacobian(robot, self.q, names, kind, self.smr, self.approach, self.travel,
-                                       self.payload, self.temperature)
+        return identification_jacobian(robot, self.q, names, kind, self.smr, self.conditions)
 
     def batch_tcp(self, robot, names, X) -> np.ndarray:
         """TCP poses ``(P, N, 4, 4)`` of the displaced robots (each row with its SMR, joint-error
@@ -130,10 +125,11 @@ class Observation:
         if moved.joint_errors is not None:
             if self._basis is None or self._basis[0] is not robot:  # once per robot, not per call
                 self._basis = (robot, *joint_error_basis(robot, self.q, robot.joint_errors.names,
-                                                         self.approach, self.travel, self.payload))
+                                                         self.conditions))
             q = q + scatter_offsets(*self._basis[1:], moved.joint_errors, n)
             k = thermal_coefficients(robot.joint_errors.names, moved.joint_errors, robot.prismatic)  # (P, n)
-            if k is not None and self.temperature is not None:  # (P, N, n) scale of each displaced robot
-                links = scaled_links(links, thermal_scale(k, self.temperature,
+            temperature = self.conditions.temperature
+            if k is not None and temperature is not None:  # (P, N, n) scale of each displaced robot
+                links = scaled_links(links, thermal_scale(k, temperature,
                                                           robot.joint_errors.reference_temperature_c))
         return chain_frames(links, moved.base[:, None], tools, q, prismatic=robot.prismatic)

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.errors import IdentificationError
+from robocal.core.errors import IdentificationError
 from robocal.identify.observations.base import Observation
 
 MIN_CONTACTS_PER_PLANE = 3

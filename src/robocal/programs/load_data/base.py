@@ -6,9 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from robocal.errors import DataError
-from robocal.programs.model import Target
+from robocal.core.errors import DataError
 from robocal.programs.source import NUMBER_RE, ProgramText
+from robocal.programs.target import Target
 
 MM, CM = 1e-3, 1e-2  # m
 STATEMENT_CHARS = 60  # a load statement quoted in messages is shortened to this

@@ -1,0 +1,165 @@
+"""How accurate is a model on measurements: position error statistics in mm."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from robocal.core.errors import DataError
+from robocal.core.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
+from robocal.data.registration import apply_registration, register_frame
+from robocal.identify.observations import observation_for
+from robocal.identify.plausibility import check_joint_limits, check_residual, check_spread
+from robocal.kinematics.joint_errors import extrapolated_conditions
+from robocal.kinematics.transforms import matrix_to_rotvec
+from robocal.report.metrics import position_stats
+from robocal.trust.consistency import check_fit
+from robocal.trust.diagnosis import fit_rms_mm
+
+
+def model_errors(robot, data) -> np.ndarray:
+    """Per-row errors of ``robot`` on ``data`` (m), from the data kind's observation model:
+    point/pose ``(N, 3)`` measured - modelled position; plane ``(N,)`` signed distance of the
+    modelled tip to the least-squares plane (of the model's tips) of its plane index; distance
+    ``(N,)`` modelled - measured distance (both rows of a pair carry it)."""
+    obs = _observation(robot, data)
+    return _row_errors(obs, robot, obs.nuisance_start(robot))
+
+
+def _observation(robot, data):
+    """The observation of ``data`` for ``robot`` (checked: joints, SMRs)."""
+    data.check_against(robot)
+    if data.n_smr > len(robot.smr) + 1:
+        raise DataError(f"the data use {data.n_smr} SMRs but the model has {len(robot.smr) + 1}: "
+                        "register the frame first (--fit-frame) or use a model with these SMRs")
+    return observation_for(data, robot)
+
+
+def _row_errors(obs, robot, nuisance: np.ndarray) -> np.ndarray:
+    """`model_errors` of an observation with its nuisance."""
+    r = obs.residuals(robot, nuisance).reshape(obs.n_items, obs.rows_per_item)
+    if obs.rows_per_item > 1:
+        return r[:, :3]
+    return -r[obs.item_of_rows(), 0]
+
+
+# The model's own frame and SMR miss the data by more than this (mm RMS) and this many times what a
+# refitted frame and SMR leave: the tracker or the SMR moved since the model was made.
+FRAME_MOVED_MM = 0.1
+FRAME_MOVED_GAIN = 5.0
+
+
+def _check_frame_moved(robot, data, rms_mm: float, warnings: list[str]) -> None:
+    """Warn when refitting only the tracker frame and SMR offsets explains most of the error."""
+    refit = fit_rms_mm(robot, data)
+    if rms_mm > FRAME_MOVED_MM and rms_mm > FRAME_MOVED_GAIN * refit:
+        warnings.append(f"with the tracker frame and SMR offsets refitted the model misses these data by "
+                        f"{refit:.3g} mm RMS instead of {rms_mm:.3g} mm: the tracker or the SMR moved since "
+                        "the model was made (--fit-frame judges the links alone)")
+
+
+def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bool = False) -> dict:
+    """Position error statistics (mm) of ``robot`` against ``data``.
+
+    ``fit_frame`` first registers the base frame and SMR offsets on ``data`` (for a nominal
+    model); ``frame_from`` (Measurements) registers them on another data set and judges ``data``
+    with them (registered on a calibration set, judged on a validation set). Returns
+    ``{"n", "rms", "mean", "max", "p95"}`` plus ``"errors_mm"`` (N,) per-row error magnitudes
+    (plane/distance: signed), ``"error_vectors_mm"`` (N, 3) for point/pose data, ``"kind"``,
+    ``"n_poses"`` and, with a fitted frame, ``"robot"`` (the registered model) and
+    ``"registration_rms_mm"``, and ``"consistency"``: the residual test against the instrument's noise
+    (`robocal.trust.consistency`; its warnings join ``"warnings"``). PlausibilityError when the
+    model misses the data by more than a robot's errors can explain (``force=True``: a warning in
+    ``"warnings"``).
+
+    Parameters
+    ----------
+    robot : Robot
+        The model judged (calibrated, or nominal with ``fit_frame``).
+    data : Measurements
+        The measurements it is judged on (any kind; points in the model's world frame unless a
+        frame is fitted).
+    fit_frame : bool, default False
+        First register the base frame and SMR offsets on ``data`` (for a nominal model).
+    frame_from : Measurements, optional
+        Register the frame on this set instead and judge ``data`` with it.
+    force : bool, default False
+        Turn the plausibility errors into warnings.
+
+    Returns
+    -------
+    dict
+        ``n``, ``rms``, ``mean``, ``max``, ``p95`` (mm); ``errors_mm`` ``(N,)`` (plane/distance:
+        signed); ``error_vectors_mm`` ``(N, 3)`` (point/pose); ``rotation_deg`` (pose);
+        ``kind``; ``n_poses``; ``warnings`` (list of str); ``consistency`` (the residual test);
+        with a fitted frame ``robot`` and ``registration_rms_mm``.
+
+    Raises
+    ------
+    PlausibilityError
+        The model misses the data by more than a robot's errors can explain (wrong robot, wrong
+        units, a moved tracker).
+    DataError
+        Data that do not fit the model (joint count, SMR indices, joint readings beyond any
+        real robot's travel).
+    ResourceError
+        The machine lacks the memory the evaluation needs (refused before it starts, naming how
+        much it needs: `robocal.core.resources.evaluation_bytes`).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> sim = rc.simulate_tracker(nominal, 30, noise_mm=0.01, seed=3)
+    >>> rc.evaluate(nominal, sim.data, fit_frame=True)["rms"] > 0.5  # mm: the nominal model's error
+    True
+    >>> stats = rc.evaluate(sim.truth, sim.data)  # the true robot: only the noise is left
+    >>> round(stats["rms"], 6) == round(sim.noise_floor_mm, 6), stats["error_vectors_mm"].shape
+    (True, (30, 3))
+    """
+    rows = len(data) + (0 if frame_from is None else len(frame_from))
+    check_memory(evaluation_bytes(rows), f"evaluating {rows:,} measurement rows", EVALUATION_ADVICE)
+    out, warnings = {}, []
+    for d in (data, frame_from):
+        if d is not None:
+            check_joint_limits(robot, d, f"the data {d.label or ''}".strip(), force=force, warnings=warnings)
+    warnings += extrapolated_conditions(robot, data.conditions,
+                                        f"rows of {Path(data.file).name if data.file else 'the data'}")
+    if fit_frame or frame_from is not None:
+        fitted_on = data if frame_from is None else frame_from
+        reg = register_frame(robot, fitted_on)
+        robot = apply_registration(robot, reg)
+        modelled = robot.fk(fitted_on.joints, smr=fitted_on.smr, conditions=fitted_on.conditions)[:, :3, 3]
+        check_spread(fitted_on.points, modelled, "the data the frame is fitted on", force=force,
+                     warnings=warnings)
+        out["robot"] = robot
+        out["registration_rms_mm"] = reg.rms * 1e3
+    obs = _observation(robot, data)
+    nuisance = obs.nuisance_start(robot)
+    err = _row_errors(obs, robot, nuisance)
+    stats = position_stats(err)
+    check_residual(stats["rms"], obs.modelled_points(robot, nuisance), "the evaluated data", force=force,
+                   warnings=warnings)
+    if not (fit_frame or frame_from is not None) and data.spec.sees_position:
+        _check_frame_moved(robot, data, stats["rms"], warnings)
+    unknowns = 6 + 3 * data.n_smr if fit_frame and frame_from is None else 0
+    consistency = check_fit(robot, robot, [obs], [err], unknowns)
+    warnings += consistency.warnings("the model")
+    stats["consistency"] = consistency.to_dict()
+    stats["kind"] = data.kind
+    stats["n_poses"] = data.n_poses
+    if err.ndim == 2:
+        stats["errors_mm"] = np.linalg.norm(err, axis=1) * 1e3
+        stats["error_vectors_mm"] = err * 1e3
+    else:
+        stats["errors_mm"] = err * 1e3
+    if data.spec.sees_orientation:
+        R = robot.fk(data.joints, smr=data.smr, conditions=data.conditions)[:, :3, :3]
+        ang = np.linalg.norm(matrix_to_rotvec(data.rotations @ np.swapaxes(R, 1, 2)), axis=1)
+        deg = np.rad2deg(ang)
+        stats["rotation_deg"] = {"rms": float(np.sqrt(np.mean(deg**2))), "mean": float(deg.mean()),
+                                 "max": float(deg.max()), "p95": float(np.percentile(deg, 95))}
+    stats.update(out)
+    stats["warnings"] = warnings
+    return stats

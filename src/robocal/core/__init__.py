@@ -1,0 +1,1 @@
+"""The ground floor: errors, files, units and the numerics every layer shares."""

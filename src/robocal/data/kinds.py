@@ -1,0 +1,83 @@
+"""The kinds of measurement rows and what each observes: the one registry every module asks.
+
+A measurement set (:class:`robocal.data.measurements.Measurements`) holds one kind of row; its
+observation model (residuals and Jacobian rows) is the class `KindSpec.observation` names in
+`robocal.identify.observations`. A module that treats kinds differently asks the kind's
+`KindSpec` a capability (``data.spec.sees_position``) instead of naming kinds; a new kind is one
+entry here and one observation module.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robocal.core.errors import DataError
+
+
+@dataclass(frozen=True)
+class KindSpec:
+    """What one kind of measurement row observes and how its rows belong together.
+
+    Attributes
+    ----------
+    name : str
+        The kind's name (``Measurements.kind``, the CSV's observation columns).
+    observation : str
+        Its observation model, ``"module:Class"`` in `robocal.identify.observations`.
+    arrays : tuple of str
+        The observation arrays of `Measurements` it requires (and the only ones it takes).
+    sees_position : bool
+        Each row is a measured position of the TCP (an SMR or probe) in the tracker frame: a
+        tracker's data, registration and frame fits apply, candidates are generated from joints
+        alone, and a simulation measures it from a tracker at a random place.
+    sees_orientation : bool
+        Each row also measures the TCP's orientation (a 6-DOF probe).
+    several_smrs : bool
+        One pose may give several rows, one per SMR the tracker sees.
+    group : str
+        The `Measurements` array whose equal values mark rows that stay together (a pose, or the
+        two ends of a distance pair).
+    rows_per_placement : int
+        Rows one placement of the robot gives with one SMR (a distance pair: its two ends).
+    columns : str
+        How its CSV columns are named in messages.
+    """
+
+    name: str
+    observation: str
+    arrays: tuple[str, ...]
+    sees_position: bool = False
+    sees_orientation: bool = False
+    several_smrs: bool = False
+    group: str = "pose_id"
+    rows_per_placement: int = 1
+    columns: str = ""
+
+    def readings(self, T: np.ndarray) -> dict[str, np.ndarray]:
+        """The observation arrays a perfect reading of TCP poses ``T (N, 4, 4)`` (tracker frame, m)
+        gives: positions, and orientations for a kind that sees them (kinds that see a position)."""
+        out = {"points": T[:, :3, 3]}
+        if self.sees_orientation:
+            out["rotations"] = T[:, :3, :3]
+        return out
+
+
+OBSERVED = {spec.name: spec for spec in (
+    KindSpec("point", "point:PointObservation", ("points",), sees_position=True, several_smrs=True,
+             columns="x_mm,y_mm,z_mm"),
+    KindSpec("pose", "pose:PoseObservation", ("points", "rotations"), sees_position=True,
+             sees_orientation=True, columns="x_mm,y_mm,z_mm and qw..qz"),
+    KindSpec("plane", "plane:PlaneObservation", ("plane",), columns="a plane"),
+    KindSpec("distance", "distance:DistanceObservation", ("pair", "distance"), group="pair",
+             rows_per_placement=2, columns="pair and distance_mm"),
+)}
+KINDS = tuple(OBSERVED)  # every kind's name, in the order messages list them
+
+
+def kind_spec(kind: str) -> KindSpec:
+    """The spec of ``kind``; DataError for an unknown kind (naming the known ones)."""
+    if kind not in OBSERVED:
+        raise DataError(f"unknown measurement kind {kind!r}: use one of {', '.join(KINDS)}")
+    return OBSERVED[kind]

@@ -1,0 +1,121 @@
+"""A robot on a linear track (a 7th axis): the cell file and the chain it stands for.
+
+The cell file is a model file next to a robot (docs/model-yaml.md)::
+
+    units: {length: mm, angle: deg}
+    name: kr210 on a 6 m track
+    robot: kuka_kr210_r2700            # a catalog name or a model file (relative to this file)
+    track: {direction: [1, 0, 0], limits: [0, 6000]}   # unit vector in the world frame; e1 range
+    mount: {xyz: [0, 0, 0], rpy: [0, 0, 0]}            # carriage at e1 = 0 -> robot base
+
+Its forward kinematics is ``world_T_tcp = [I, direction * e1] @ mount @ robot_fk(q)`` (robot_fk
+with the robot's own base and tool frames). The cell is a chain like any other
+(:class:`robocal.kinematics.model.Robot`, built by
+:func:`robocal.kinematics.model.track_chain`, joints ``(e1, q1..q6)``): joint 1 is prismatic along
+the track, so forward kinematics, the identification Jacobian, calibration and the files come
+for free. The chain is built exactly:
+
+- frame {0} (the model's base frame) has z along the track and its origin where the track line
+  through the arm's first joint frame meets it (where a translation's line lies is free);
+- link 1 is the prismatic joint with every constant zero (its d is the track's zero);
+- link 2 is the arm's first joint re-expressed from frame {1}: alpha the angle from the track to
+  the joint-1 axis about their common normal, theta the turn that puts the arm's frame {1} back,
+  d the arm's own d1; links 3..7 are the arm's links 2..6 unchanged, and the tool is the arm's;
+- a ``scale1`` joint-error term (the track encoder's scale, nominally 0) is declared.
+
+Identifiability: the cell file's ``direction`` and ``mount`` rotation describe overlapping freedom
+(turning the track direction and counter-turning the mount leaves the arm where it was), so a
+calibration identifies the chain's parameters instead: the base frame (the track's direction and
+position in the tracker frame), the track scale ``scale1``, and the mount as the arm's first
+axis seen from the carriage (``alpha2``, ``theta2``); ``theta1``, ``d1``, ``a2`` and ``d2`` (where the
+carriage frame sits on the track) are confounded with the base frame and dropped, which the result
+reports. The calibrated cell is written as that chain (a model file
+with ``type: prismatic`` on joint 1), which every command reads.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from robocal.core.errors import ModelError
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, short_repr
+from robocal.kinematics.convert import PARALLEL_TOL, default_parallel
+from robocal.kinematics.fk import LinkArrays
+from robocal.kinematics.model_file import MAX_DESCRIPTION, MAX_NAME, _frame, _mapping, _numbers, _text, _units
+from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
+
+CELL_KEYS = {"format", "name", "description", "units", "robot", "track", "mount"}
+DIRECTION_TOL = 1e-6  # |norm - 1| of the track direction: a unit vector written to 6 digits
+TRACK_SCALE = "scale1"  # the track encoder's scale error (a joint-error term of joint 1)
+
+
+class CellFile(NamedTuple):
+    """What a cell file says (module docstring), in SI units."""
+
+    robot: str  # the arm: a catalog name, or a model file's path (resolved from the cell file's folder)
+    direction: np.ndarray  # (3,) unit vector, world frame
+    mount: np.ndarray  # (4, 4) carriage at e1 = 0 -> robot base, m
+    limits: np.ndarray  # (2,) e1 range, m
+    name: str | None  # None: "<arm's name> on a track"
+    description: str
+
+
+def read_cell(data: dict, path: Path | None = None) -> CellFile:
+    """The contents of a cell mapping (the module docstring's file); ``robot:`` is a catalog name or
+    a model file relative to ``path``'s folder. ModelError names the key."""
+    _mapping(data, "the cell", CELL_KEYS, {"units", "robot", "track"})
+    length_unit, angle_unit = _units(data)
+    length = LENGTH_UNITS[length_unit]
+    angle = ANGLE_UNITS[angle_unit]
+    spec = data["robot"]
+    if not isinstance(spec, str) or not spec.strip():
+        raise ModelError(f"robot: expected a catalog name or a model file, got {short_repr(spec)}")
+    local = (path.parent if path is not None else Path(".")) / spec
+    track = _mapping(data["track"], "track", {"direction", "limits"}, {"direction", "limits"})
+    direction = _numbers(track["direction"], "track.direction", 3)
+    if abs(np.linalg.norm(direction) - 1.0) > DIRECTION_TOL:
+        raise ModelError(f"track.direction {direction.tolist()} is not a unit vector (norm "
+                         f"{np.linalg.norm(direction):.6g}): give the track's direction in the world frame "
+                         "with norm 1")
+    limits = _numbers(track["limits"], "track.limits", 2) * length
+    if not limits[0] < limits[1]:
+        raise ModelError(f"track.limits: lower {limits[0]:g} m is not below upper {limits[1]:g} m")
+    mount = _frame(data.get("mount", {}), length, angle, "mount")
+    name = data.get("name")
+    return CellFile(str(local) if local.suffix or local.exists() else spec,
+                    direction / np.linalg.norm(direction), mount, limits,
+                    None if name is None else _text(name, "name", MAX_NAME),
+                    _text(data.get("description", ""), "description", MAX_DESCRIPTION))
+
+
+def chain_arrays(links: LinkArrays, base: np.ndarray, tool: np.ndarray, parallel: np.ndarray,
+                 smr: np.ndarray, direction, mount: np.ndarray) -> dict:
+    """Links, base, tool, parallel flags and SMR offsets (`robocal.kinematics.model.Robot`'s
+    arguments) of the cell chain (module docstring) of an arm with ``links`` ``(n,)`` each,
+    ``base`` and ``tool`` ``(4, 4)``, ``parallel`` ``(n,)`` and SMR offsets ``smr`` on a track
+    along unit ``direction`` (world frame) with ``mount`` ``(4, 4)`` (carriage at e1 = 0 -> robot
+    base, m)."""
+    u = np.asarray(direction, float)
+    P = np.asarray(mount, float) @ base
+    G = P.copy()  # the arm's joint-1 frame before its joint: Rx(alpha1) Tx(a1) Ry(beta1) Rz(theta1)
+    G[:3, 3] += links.a[0] * P[:3, 0]
+    G[:3, :3] = P[:3, :3] @ rot_x(links.alpha[0]) @ rot_y(links.beta[0]) @ rot_z(links.theta[0])
+    gz = G[:3, 2]
+    normal = np.cross(u, gz)
+    if np.linalg.norm(normal) > PARALLEL_TOL:
+        x1 = normal / np.linalg.norm(normal)
+    else:  # the track is parallel to joint 1 (a lift): any normal; the arm's x keeps theta small
+        x1 = G[:3, 0] - (G[:3, 0] @ u) * u
+        x1 /= np.linalg.norm(x1)
+    F1 = make_transform(np.column_stack([x1, np.cross(u, x1), u]), G[:3, 3])
+    alpha2 = float(np.arctan2(np.cross(u, gz) @ x1, u @ gz))
+    R = F1[:3, :3] @ rot_x(alpha2)
+    theta2 = float(np.arctan2(np.cross(R[:, 0], G[:3, 0]) @ gz, R[:, 0] @ G[:3, 0]))
+    chain = {"alpha": np.r_[0.0, alpha2, links.alpha[1:]], "a": np.r_[0.0, 0.0, links.a[1:]],
+             "beta": np.r_[0.0, 0.0, links.beta[1:]], "theta": np.r_[0.0, theta2, links.theta[1:]],
+             "d": np.r_[0.0, links.d[0], links.d[1:]]}
+    chain_parallel = np.r_[False, default_parallel([0.0, alpha2])[1], parallel[1:]]
+    return {**chain, "base": F1, "tool": tool, "parallel": chain_parallel, "smr": smr}

@@ -1,0 +1,142 @@
+"""The protocol every robot language implements (:class:`Dialect`): pose numbers <-> 4x4
+transforms, resolutions to write them with, its configuration scheme and how to rewrite a
+target's configuration, how its files are recognised, its load statements, its provenance
+marker and the programs robocal writes in it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from robocal.core.errors import DataError
+from robocal.kinematics.model import Robot
+from robocal.programs.config import ConfigScheme
+from robocal.programs.load_data.base import Load, LoadReader
+from robocal.programs.model import Program
+from robocal.programs.source import Number, ProgramText
+from robocal.programs.target import Target
+
+
+class Dialect:
+    """One robot language: how its files are recognised, read and rewritten (the reader), the
+    load statements it holds, the provenance marker in its comment syntax, and the campaign and
+    test programs robocal writes in it. A subclass sets the attributes and overrides the methods
+    its language has; the registry (:mod:`robocal.programs.registry`) maps its ``key`` to it.
+
+    Capabilities the filter asks instead of the language's name: ``position_registers`` (a file
+    of position registers the motions use, ``filter_program(position_registers=...)``),
+    ``payload_schedules`` (load schedules the motions select, ``payload_schedules=...``)."""
+
+    key = ""  # registry key: --format, poses --program
+    name = ""  # the language as messages and results name it
+    title = ""  # the language in a recognition message (default: ``name``)
+    vendor = ""  # the robot maker whose controllers run it (messages about capabilities)
+    suffixes: tuple[str, ...] = ()  # of its files, lower case
+    signature = ""  # a regular expression (multi-line, any case) a file in this language matches
+    length_unit = "mm"  # unit of the positions of --tool / --frame values
+    angle_unit: str | None = None  # unit their angles are checked in ('deg', 'rad'; None: not checked)
+    position_registers = False  # capability: motions to position registers kept in a file of their own
+    payload_schedules = False  # capability: loads selected by number from the controller's schedules
+    schedule_statement = ""  # ... by this statement
+    shared_suffixes: tuple[str, ...] = ()  # suffixes another language has too (told by `recognises`)
+    campaign_format = ""  # a campaign program's kind in output-name checks ('RAPID'; '': a folder)
+    campaign_suffix = ""  # ... and its file suffix
+    campaign_rank = 0  # the order poses writes the languages' programs in
+    campaign_refuses_tracks = False  # its campaign programs are refused for an arm on a track
+    scheme: ConfigScheme | None = None
+    n_values = 6  # pose numbers per target
+    shared_decimals: tuple[tuple[int, ...], ...] = ()  # pose columns written at the file's finest decimals
+    keep_width = False  # numbers right-aligned after spaces keep their width (FANUC)
+    euler_columns: tuple[int, ...] = ()  # pose columns that are Euler angles in deg (gimbal lock possible)
+    frame_help = ""  # how --tool/--frame values are written for this dialect
+
+    def parse(self, sources: list[ProgramText], frames: dict[str, np.ndarray],
+              tools: dict[str, np.ndarray], references: list[ProgramText] = ()) -> Program:
+        """Targets, frames and tools of the files; ``references`` are read for their tool and
+        frame declarations only (KUKA $config.dat, ABB system modules); ``frames``/``tools``
+        from the command line (already in SI) complete or override those in the files."""
+        raise NotImplementedError
+
+    def to_pose(self, values: np.ndarray) -> np.ndarray:
+        """Pose numbers ``(N, k)`` in the file's notation -> ``(N, 4, 4)`` (m)."""
+        raise NotImplementedError
+
+    def from_pose(self, T: np.ndarray, old: np.ndarray) -> np.ndarray:
+        """``(N, 4, 4)`` (m) -> pose numbers ``(N, k)``, of all equivalent notations the one
+        nearest the old numbers (quaternion sign, Euler branch, rotation-vector turn)."""
+        raise NotImplementedError
+
+    def resolutions(self) -> np.ndarray:
+        """``(k,)`` finest step worth writing for each pose number, in its unit."""
+        raise NotImplementedError
+
+    def config_edits(self, target: Target, new: np.ndarray) -> dict[tuple[int, int], str]:
+        """Span -> text edits writing configuration row ``new`` into ``target``."""
+        raise NotImplementedError
+
+    def number_edit(self, target: Target, num: Number, text: str) -> str:
+        """The text that replaces ``num`` (its span) when it is rewritten as ``text``: the number
+        itself, or, for a number the file leaves out (a zero-length span), whatever writes it
+        (VAL3: the attribute)."""
+        return text
+
+    def name_key(self, name: str) -> str:
+        """The key a tool or frame name has in :class:`Program` (RAPID names ignore case)."""
+        return name
+
+    def frame_from_text(self, text: str) -> np.ndarray:
+        """A ``--tool``/``--frame`` value (comma-separated numbers in this dialect's pose
+        notation) -> 4x4 (m)."""
+        try:
+            vals = np.array([float(v) for v in text.replace(" ", "").split(",") if v], dtype=float)
+        except ValueError:
+            raise DataError(f"frame {text!r}: expected comma-separated numbers ({self.frame_help})") from None
+        if vals.size != self.n_values or not np.isfinite(vals).all():
+            raise DataError(f"frame {text!r}: expected {self.n_values} numbers ({self.frame_help})")
+        return self.to_pose(vals[None])[0]
+
+    def recognises(self, head: str) -> bool:
+        """``head`` (a file's first 4 kB) is in this language whatever its suffix (a Yaskawa job
+        or VAR.DAT): it wins over a suffix it shares with another language."""
+        return False
+
+    def folder_files(self, folder: Path) -> list[Path] | None:
+        """The program files of an application ``folder`` (a VAL3 application), None: this
+        language's programs are files."""
+        return None
+
+    def load_reader(self, tools: dict[str, np.ndarray], schedules: dict[int, Load] | None) -> LoadReader:
+        """The reader of this language's load statements (:mod:`robocal.programs.load_data`);
+        ``tools``: the program's tool frames (4x4, m); ``schedules``: payload schedules
+        (``payload_schedules`` languages)."""
+        return LoadReader()
+
+    def read_schedules(self, path: str | Path) -> dict[int, Load]:
+        """The payload schedules of file ``path`` (``payload_schedules`` languages)."""
+        raise DataError(f"{self.name} programs select no payload schedules")
+
+    def mark(self, text: str, body: str, note: str) -> str:
+        """``text`` (a filtered file) with the provenance marker added in a comment
+        (:mod:`robocal.trust.output_marker`): ``body`` is ``robocal <version> model
+        <fingerprint>``, ``note`` the same with what was done to the file."""
+        raise DataError(f"no provenance marker for program format {self.name!r}")
+
+    def campaign_files(self, joints: np.ndarray, robot: Robot, path: Path, **options) -> dict[str, str]:
+        """A campaign program visiting ``joints`` ``(N, 6)`` (rad) of ``robot`` in order, written
+        as ``path``: file path -> text (:mod:`robocal.campaign.programs`, ``options``: its
+        speed_percent, settle_s, procedure, comment)."""
+        raise DataError(f"robocal writes no {self.name} campaign programs")
+
+    def campaign_paths(self, path: Path, procedure: str) -> list[str]:
+        """The files ``campaign_files`` writes or overwrites as ``path`` (checked before planning)."""
+        return [str(path)]
+
+    def campaign_folder(self, path: Path) -> Path | None:
+        """The folder a campaign program written as ``path`` is (created if absent), None: a file."""
+        return None
+
+    def test_program(self, folder: Path, nominal: Robot, q: np.ndarray, tool: np.ndarray,
+                     frame: np.ndarray, name: str, variables: bool = False) -> tuple[list[Path], dict, dict]:
+        """A simulated program (:func:`robocal.programs.simulate.write_program`)."""
+        raise NotImplementedError

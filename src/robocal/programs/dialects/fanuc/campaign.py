@@ -1,0 +1,62 @@
+"""FANUC TP campaign programs (:mod:`robocal.campaign.programs`): an ASCII ``.ls`` program (``/PROG``,
+``/ATTR``, ``/MN``, ``/POS``, ``/END``) with ``UFRAME_NUM=0``, ``UTOOL_NUM=0``, per pose ``J P[k] speed%
+FINE``, ``WAIT``, ``CALL procedure(k)`` (a TP program of the cell that triggers the tracker), and joint
+positions ``J1= .. deg`` in ``/POS``. FANUC controllers count J3 from the horizontal, not from the upper
+arm as the catalog (ROS-Industrial's joint_3) does: the TP value is J3 + J23_FACTOR * J2
+(ROS-Industrial fanuc_driver's J3_out = J3_in + J23_factor * J2_in, J23_factor 1 for its arms)."""
+
+from __future__ import annotations
+
+import textwrap
+
+from robocal.data.joint_conventions import J23_FACTOR  # FANUC J3 (TP) = J3 (catalog) + J23_FACTOR * J2
+from robocal.programs.dialects.writing import (
+    DEFAULT_PROCEDURE,
+    DEFAULT_SETTLE_S,
+    DEFAULT_SPEED_PERCENT,
+    ascii_comment,
+    checked_joints,
+    comment_lines,
+    fixed_point,
+    identifier,
+)
+
+TP_REMARK_WIDTH = 30  # characters of one FANUC TP remark line (! ...)
+
+TP_NAME_MAX = 36                   # R-30iB program names
+TP_DECIMALS = 4                    # TP stores single-precision joint values
+
+
+def fanuc_ls_program(joints_deg, name: str = "ROBOCAL_CAMPAIGN", *,
+                     speed_percent: float = DEFAULT_SPEED_PERCENT, settle_s: float = DEFAULT_SETTLE_S,
+                     procedure: str = DEFAULT_PROCEDURE, comment: str = "") -> str:
+    """FANUC TP ``.ls`` text visiting ``joints_deg (N, 6)`` (catalog convention) in order."""
+    q = checked_joints(joints_deg, speed_percent, settle_s, "FANUC TP").copy()
+    name = identifier(name, "the TP program name (the file name)", TP_NAME_MAX).upper()
+    procedure = identifier(procedure, "the procedure (TP program) name", TP_NAME_MAX).upper()
+    q[:, 2] += J23_FACTOR * q[:, 1]
+    notes = [*comment_lines(comment, len(q)),
+             f"J3 is FANUC's (from the horizontal): catalog J3 + J2; {procedure} is a TP program of yours "
+             "that triggers the tracker (its argument: the pose number)"]
+    body = ["  UFRAME_NUM=0 ;", "  UTOOL_NUM=0 ;"]
+    for k in range(1, len(q) + 1):
+        body += [f"J P[{k}] {max(1, round(speed_percent))}% FINE    ;",
+                 f"  WAIT {settle_s:6.2f}(sec) ;", f"  CALL {procedure}({k}) ;"]
+    remarks = [f"  !{line} ;" for note in notes
+               for line in textwrap.wrap(ascii_comment(note.replace(";", ",")), TP_REMARK_WIDTH)]
+    lines = [f"/PROG  {name}", "/ATTR", "OWNER\t\t= MNEDITOR;",
+             f'COMMENT\t\t= "{ascii_comment(comment)[:16]}";',
+             "PROG_SIZE\t= 0;", "CREATE\t\t= DATE 00-01-01  TIME 00:00:00;",
+             "MODIFIED\t= DATE 00-01-01  TIME 00:00:00;", "FILE_NAME\t= ;", "VERSION\t\t= 0;",
+             f"LINE_COUNT\t= {len(remarks) + len(body)};", "MEMORY_SIZE\t= 0;", "PROTECT\t\t= READ_WRITE;",
+             "TCD:  STACK_SIZE\t= 0,", "      TASK_PRIORITY\t= 50,", "      TIME_SLICE\t= 0,",
+             "      BUSY_LAMP_OFF\t= 0,", "      ABORT_REQUEST\t= 0,", "      PAUSE_REQUEST\t= 0;",
+             "DEFAULT_GROUP\t= 1,*,*,*,*;", "CONTROL_CODE\t= 00000000 00000000;", "/MN"]
+    lines += [f"{i:4d}:{text}" for i, text in enumerate([*remarks, *body], start=1)]
+    lines.append("/POS")
+    for k, row in enumerate(q, start=1):
+        v = [fixed_point(x, TP_DECIMALS) for x in row]
+        lines += [f"P[{k}]{{", "   GP1:", "\tUF : 0, UT : 0,",
+                  f"\tJ1= {v[0]} deg,\tJ2= {v[1]} deg,\tJ3= {v[2]} deg,",
+                  f"\tJ4= {v[3]} deg,\tJ5= {v[4]} deg,\tJ6= {v[5]} deg", "};"]
+    return "\n".join([*lines, "/END", ""])

@@ -1,0 +1,31 @@
+"""The provenance marker of FANUC TP (.ls): a remark ``!...`` as the last line of ``/MN``,
+numbered after the last line, with ``LINE_COUNT`` raised by one; a remark line holds
+`TP_REMARK_WIDTH` characters, so the fingerprint is cut to fit (10 hex digits with a
+five-character version) (:mod:`robocal.trust.output_marker`)."""
+
+from __future__ import annotations
+
+import re
+
+from robocal.core.errors import DataError
+from robocal.programs.dialects.fanuc.campaign import TP_REMARK_WIDTH
+from robocal.trust.output_marker import newline, shortened
+
+_LINE = re.compile(r"^[ \t]*(\d+):", re.M)
+_COUNT = re.compile(r"^(LINE_COUNT\s*=\s*)(\d+)", re.M)
+
+
+def mark(text: str, body: str, note: str) -> str:
+    """``text`` with the remark ``!body`` (cut to fit) as the last line of /MN."""
+    start, stop = text.find("/MN"), text.find("/POS")
+    if start < 0:
+        raise DataError("a FANUC .ls program without /MN cannot carry a provenance marker")
+    stop = len(text) if stop < start else stop
+    numbers = [int(n) for n in _LINE.findall(text, start, stop)]
+    nl = newline(text)
+    body = shortened(body, TP_REMARK_WIDTH)
+    remark = f"{max(numbers, default=0) + 1:>4}:  !{body} ;{nl}"
+    if stop < len(text) and not text[:stop].endswith("\n"):
+        remark = nl + remark
+    out = text[:stop] + remark + text[stop:]
+    return _COUNT.sub(lambda m: f"{m.group(1)}{int(m.group(2)) + 1}", out, count=1)

@@ -1,0 +1,316 @@
+"""FANUC TP source programs (.ls).
+
+Positions in the ``/POS`` section::
+
+    P[n] or P[n:"comment"]{
+       GP1:
+        UF : u, UT : t,     CONFIG : 'N U T, 0, 0, 0',
+        X = x mm, Y = y mm, Z = z mm,
+        W = w deg, P = p deg, R = r deg
+    };
+
+W, P, R are fixed-axis XYZ angles: R = Rz(R) Ry(P) Rx(W) (deg). CONFIG: flip (F/N), elbow
+(U/D), front/back (T/B) and the turn numbers of J1, J4, J6 (see
+:class:`robocal.programs.dialects.fanuc.configuration.FANUCConfig`). Each position carries its
+user frame UF and tool frame UT; their values live in the controller, so they are given on the command line
+(``--frame u=X,Y,Z,W,P,R``, ``--tool t=...``, mm and deg); UF 0 is the world (= robot base)
+frame, UT 0 the faceplate. Joint representations (J1 = ...), other motion groups (GP2 ...) and
+extended axes are left alone.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from robocal.core.errors import DataError
+from robocal.core.io import short_repr
+from robocal.kinematics.transforms import make_transform
+from robocal.programs.dialects.base import Dialect
+from robocal.programs.dialects.fanuc import marker, simulated
+from robocal.programs.dialects.fanuc.campaign import fanuc_ls_program
+from robocal.programs.dialects.fanuc.configuration import FANUCConfig
+from robocal.programs.dialects.fanuc.loads import FanucLoads, read_schedules
+from robocal.programs.dialects.fanuc.registers import ActiveFrames, read_registers
+from robocal.programs.model import Program, Target
+from robocal.programs.motions import Undeclared
+from robocal.programs.rotations import matrix_to_zyx
+from robocal.programs.source import Number
+
+_POS = re.compile(r"\bP\[\s*(\d+)\s*(?::\s*\"([^\"]*)\")?\s*\]\s*\{(.*?)\}\s*;", re.DOTALL)
+_GROUP = re.compile(r"\bGP(\d+)\s*:")
+_FRAME_NO = re.compile(r"\b(UF|UT)\s*:\s*(\w+)")
+_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d{1,3})\s*,"
+                     r"\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*'")
+_VALUE = r"\b{}\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*(?:mm|deg)"
+_KEYS = ("X", "Y", "Z", "W", "P", "R")
+_VALUES = tuple(re.compile(_VALUE.format(k)) for k in _KEYS)
+_JOINTS = re.compile(r"\bJ1\s*=")  # a position in joint representation
+_NEXT = re.compile(r"\bP\[")
+_NUMBER = re.compile(r"P\[(\d+)")
+_EXTENDED = re.compile(r"\b(E\d)\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))")
+_LINE = re.compile(r"^[ \t]*\d*[ \t]*:(.*)$", re.MULTILINE)
+_MOVE = re.compile(r"\s*([JLCA])\s+(.*)$")
+_ARC_END = re.compile(r"\s*(P|PR)\[")
+_POSITION = re.compile(r"\b(PR|P)\[\s*((?:[A-Z]+\[\s*\d+\s*\])|\d+)\s*(?::[^\]]*)?\]")
+_OFFSET = re.compile(r"\b(Tool_Offset|Offset|VOFFSET)\b(?:\s*,\s*(\w+\[[^\]]*\]))?", re.IGNORECASE)
+_INCREMENTAL = re.compile(r"\bINC\b")
+_POSITION_MM = 1e-3
+_POSITION_DIGITS = 5  # position numbers P[n] (the controller's are far below 100,000)
+_ANGLE_DEG = 1e-3  # the controller writes 3 decimals: 1e-3 deg is 2 um at 120 mm from the flange
+
+
+class FanucDialect(Dialect):
+    name = "FANUC TP"
+    key = "fanuc"
+    campaign_rank = 3
+    campaign_refuses_tracks = True
+    title = "FANUC TP (.ls)"
+    signature = r"^/(?:PROG|MN|POS)\b"
+    angle_unit = "deg"
+    position_registers = True
+    payload_schedules = True
+    vendor = "FANUC"
+    schedule_statement = "PAYLOAD[n]"
+    campaign_format, campaign_suffix = "TP", ".ls"
+    suffixes = (".ls",)
+    scheme = FANUCConfig()
+    keep_width = True
+    euler_columns = (3, 4, 5)  # W, P, R
+    frame_help = "X,Y,Z in mm and W,P,R in deg, as on the teach pendant's frame screen"
+
+    def load_reader(self, tools, schedules):
+        return FanucLoads(schedules)
+
+    def read_schedules(self, path):
+        return read_schedules(path)
+
+    def campaign_files(self, joints, robot, path, **options):
+        return {str(path): fanuc_ls_program(np.rad2deg(joints), path.stem, **options)}
+
+    def mark(self, text, body, note):
+        return marker.mark(text, body, note)
+
+    def test_program(self, folder, nominal, q, tool, frame, name, variables=False):
+        return simulated.write_test_program(self, folder, nominal, q, tool, frame, name, variables)
+
+    def to_pose(self, values):
+        values = np.asarray(values, float)
+        R = Rotation.from_euler("ZYX", values[:, [5, 4, 3]], degrees=True).as_matrix()  # Rz(R) Ry(P) Rx(W)
+        return make_transform(R, values[:, :3] * 1e-3)
+
+    def from_pose(self, T, old):
+        rpw = matrix_to_zyx(T[:, :3, :3], old[:, [5, 4, 3]], _ANGLE_DEG / 2)
+        return np.hstack([T[:, :3, 3] * 1e3, rpw[:, [2, 1, 0]]])
+
+    def resolutions(self):
+        return np.array([_POSITION_MM] * 3 + [_ANGLE_DEG] * 3)
+
+    def config_edits(self, target, new):
+        spans = target.config_spans  # (flip, up, front, t1, t4, t6) as (start, end, text)
+        letters = ("NF"[int(new[0])], "UD"[int(new[1])], "TB"[int(new[2])])
+        texts = [*letters, *(str(int(v)) for v in new[3:])]
+        return {(a, b): t for (a, b, old), t in zip(spans, texts, strict=True) if old != t}
+
+    def parse(self, sources, frames, tools, references=()):
+        prog = Program([], frames={"0": np.eye(4)}, tools={"0": np.eye(4)})
+        prog.frames.update(frames)
+        prog.tools.update(tools)
+        order = 0
+        joint: set = set()
+        registers = None  # the --position-registers file, given among the sources as a .csv
+        for src in [s for s in sources if s.path.suffix.lower() == ".csv"]:
+            registers = read_registers(src)
+        sources = [s for s in sources if s.path.suffix.lower() != ".csv"]
+        for src in sources:
+            text = src.text
+            start = text.find("/POS")
+            if start < 0:
+                prog.warnings.append(f"{src.path.name}: no /POS section: no positions")
+                continue
+            end = text.find("/END", start)
+            end = len(text) if end < 0 else end
+            after = start + len("/POS")  # the /POS section holds position blocks and nothing else
+            for m in _POS.finditer(text, after, end):
+                _nothing_between(src, text, after, m.start())
+                after = m.end()
+                if len(m.group(1)) > _POSITION_DIGITS:
+                    raise DataError(f"{src.path.name}:{src.line_of(m.start())}: position number "
+                                    f"{short_repr(m.group(1))} has more than {_POSITION_DIGITS} digits")
+                name = f"P[{m.group(1)}{':' + m.group(2) if m.group(2) else ''}]"
+                body_start = m.start(3)
+                body = m.group(3)
+                groups = list(_GROUP.finditer(body))
+                _check_body(src, m.start(), name, body, groups)
+                if groups[0].group(1) != "1":
+                    continue
+                g_end = groups[1].start() if len(groups) > 1 else len(body)
+                a, b = body_start + groups[0].end(), body_start + g_end
+                gp = text[a:b]
+                where = f"{src.path.name}:{src.line_of(m.start())}"
+                if _JOINTS.search(gp):
+                    joint.add((src.path, int(m.group(1))))
+                    continue  # joint representation
+                nums = []
+                for k, value in zip(_KEYS, _VALUES, strict=True):
+                    v = value.search(gp)
+                    if not v:
+                        raise DataError(f"{where}: malformed position {name}: no {k} = ... "
+                                        f"{'mm' if k in 'XYZ' else 'deg'}")
+                    nums.append(Number(a + v.start(1), a + v.end(1), v.group(1)))
+                fr = dict(_FRAME_NO.findall(gp))
+                if "UF" not in fr or "UT" not in fr \
+                        or not all(fr[k].isdigit() and len(fr[k]) <= 3 for k in ("UF", "UT")):
+                    raise DataError(f"{where}: position {name} needs numeric UF and UT, got {short_repr(fr)}")
+                c = _CONFIG.search(gp)
+                if not c:
+                    raise DataError(f"{where}: position {name}: CONFIG must read 'N|F U|D T|B, t1, t4, t6'")
+                row = np.array(["NF".index(c.group(1)), "UD".index(c.group(2)), "TB".index(c.group(3)),
+                                int(c.group(4)), int(c.group(5)), int(c.group(6))])
+                spans = [(a + c.start(k), a + c.end(k), c.group(k)) for k in range(1, 7)]
+                external = [f"{e} = {v}" for e, v in _EXTENDED.findall(gp) if float(v) != 0.0]
+                external += [f"motion group GP{g.group(1)}" for g in groups[1:]]
+                prog.targets.append(Target(src, m.start(), name, nums, frame=str(int(fr["UF"])),
+                                           tool=str(int(fr["UT"])), config=row, config_spans=spans,
+                                           order=order, external=", ".join(external)))
+                order += 1
+            _nothing_between(src, text, after, end)
+        self._motions(sources, prog, joint, registers)
+        return prog
+
+    def _motions(self, sources, prog, joint, registers):
+        """Account for every motion of the /MN sections: positions every motion reaches are the
+        /POS targets (each carries its own UF and UT, so all are corrected); an incremental
+        motion's position is a displacement (named; the position is left alone unless another
+        motion uses it as a pose); position registers, missing positions and run-time offsets
+        are named. ``registers``: PR number -> Target from --position-registers (None: not given):
+        a motion to a register given there is corrected in the user and tool frame active there."""
+        numbers = {(t.source.path, int(_NUMBER.match(t.name).group(1))): t for t in prog.targets}
+        incremental: dict[tuple, list] = {}  # position -> accounts of the INC motions using it
+        used_registers: dict[int, Target] = {}
+        plain = set()  # positions some motion uses as a pose
+        for src in sources:
+            text = src.text
+            start, stop = text.find("/MN"), text.find("/POS")
+            if start < 0:
+                continue
+            lines = list(_LINE.finditer(text, start, stop if stop > 0 else len(text)))
+            active = ActiveFrames(src, start, stop if stop > 0 else len(text))
+            for k, line in enumerate(lines):
+                body = line.group(1)
+                mv = _MOVE.match(body)
+                if not mv or body.lstrip().startswith(("//", "!")):
+                    continue
+                here = f"{src.path.name}:{src.line_of(line.start())}"
+                refs = [_POSITION.search(mv.group(2))]
+                options = mv.group(2)
+                if mv.group(1) == "C" and k + 1 < len(lines) and _ARC_END.match(lines[k + 1].group(1)):
+                    refs.append(_POSITION.search(lines[k + 1].group(1)))  # the end point on the next line
+                    options += " " + lines[k + 1].group(1)
+                instr = mv.group(1)
+                off = _OFFSET.search(options) if "OFFSET" in options.upper() else None
+                for ref in refs:
+                    if ref is None:  # a vision register, an expression ...: the pose is not one of these
+                        prog.skip(here, instr, "its position is not a P[n] or PR[n] this filter reads",
+                                  prog.motion(src, line.start(1), instr), mv.group(2).split()[0] if
+                                  mv.group(2).split() else "")
+                        continue
+                    label = ref.group(0)
+                    number = ref.group(2).isdigit() and len(ref.group(2)) <= _POSITION_DIGITS
+                    acc = None if ref.group(1) == "P" and number and (src.path, int(ref.group(2))) in joint \
+                        else prog.motion(src, line.start(1), instr)
+                    if acc is None:
+                        continue  # a joint representation: nothing to correct
+                    if ref.group(1) == "PR":
+                        why = _register(ref, registers, active, line.start())
+                        if isinstance(why, str):
+                            prog.skip(here, instr, why, acc, label)
+                        elif off or "INC" in options and _INCREMENTAL.search(options):
+                            how = off.group(0) if off else "INC"
+                            prog.skip(here, instr, f"{label} is shifted at run time ({how})", acc, label)
+                        else:
+                            t, uf, ut = why
+                            prog.use(t, ut, uf, here, label, "user frame", (src.path, line.start()), acc)
+                            used_registers.setdefault(id(t), t)
+                        continue
+                    if not ref.group(2).isdigit():
+                        prog.warnings.append(f"{here}: {instr} {label}: the position number is known at run "
+                                             "time only; every position of /POS is corrected")
+                        for (path, _), t in numbers.items():
+                            if path == src.path:
+                                acc.reach(t, label)
+                        continue
+                    if len(ref.group(2)) > _POSITION_DIGITS:
+                        prog.skip(here, instr, f"P[{short_repr(ref.group(2))}] is not a position number "
+                                               f"(more than {_POSITION_DIGITS} digits)", acc, label)
+                        continue
+                    key = (src.path, int(ref.group(2)))
+                    if key not in numbers:
+                        prog.skip(here, instr, Undeclared(f"P[{ref.group(2)}] is not a Cartesian position of "
+                                                          "group 1 in /POS (missing or malformed)",
+                                                          f"P[{ref.group(2)}] in /POS"), acc, label)
+                        continue
+                    acc.reach(numbers[key], label)
+                    if "INC" in options and _INCREMENTAL.search(options):
+                        incremental.setdefault(key, []).append((here, instr, label, acc))
+                        continue
+                    plain.add(key)
+                    if off:
+                        prog.skip(here, instr, f"{label} is shifted at run time by {off.group(0)}: {label} "
+                                               "is corrected for its own pose, the shifted pose is not", acc)
+        for key, uses in incremental.items():
+            for here, instr, label, acc in uses:
+                why = (f"{label} is an incremental move (INC): a displacement, not a pose" if key not in plain
+                       else f"{label} is an incremental move (INC) here and a pose in other motions, which "
+                            "correct it: this displacement changes by that correction")
+                prog.skip(here, instr, why, acc)
+            if key not in plain:
+                prog.not_corrected[id(numbers[key])] = "used only as an incremental (INC) displacement"
+        prog.targets = [t for key, t in numbers.items() if key in plain or key not in incremental]
+        prog.targets += used_registers.values()
+
+
+def _register(ref, registers, active, at: int):
+    """``(Target, user frame, tool frame)`` of the motion to position register ``ref`` at ``at``,
+    or why it cannot be corrected."""
+    label, n = ref.group(0), ref.group(2)
+    if registers is None:
+        return (f"{label} is a position register: its value lives in the controller (give the registers' "
+                "values with --position-registers to correct it)")
+    if not n.isdigit():
+        return f"{label}: the register number is known at run time only"
+    if len(n) > _POSITION_DIGITS:
+        return f"PR[{short_repr(n)}] is not a register number (more than {_POSITION_DIGITS} digits)"
+    if int(n) in active.assigned:
+        return f"{label} is assigned in this program: its value is computed at run time"
+    if int(n) not in registers:
+        return Undeclared(f"{label} is not in the --position-registers file",
+                          f"PR[{int(n)}] in --position-registers")
+    uf, ut = active.at(at)
+    if uf is None or ut is None:
+        return f"{label}: UFRAME_NUM and UTOOL_NUM are not both set before this motion (the frames it is in)"
+    return registers[int(n)], str(int(uf)), str(int(ut))
+
+
+def _nothing_between(src, text: str, a: int, b: int) -> None:
+    """Only blanks may stand between position blocks: a block whose head does not read
+    ``P[n]{`` or ``P[n:"comment"]{`` would otherwise be skipped without a word."""
+    gap = text[a:b]
+    if gap.strip():
+        k = a + len(gap) - len(gap.lstrip())
+        first = gap.strip().splitlines()[0][:60]
+        raise DataError(f"{src.path.name}:{src.line_of(k)}: malformed position block {first!r}: expected "
+                        "P[n]{ or P[n:\"comment\"]{, the group GPn:, the values and }; (nothing else in "
+                        "/POS)")
+
+
+def _check_body(src, at: int, name: str, body: str, groups: list) -> None:
+    """A position block starts with its first group header and holds one position."""
+    where = f"{src.path.name}:{src.line_of(at)}"
+    if not groups or body[:groups[0].start()].strip():
+        raise DataError(f"{where}: position {name}: expected a group header GP1: (GPn:) first, got "
+                        f"{' '.join(body.split())[:40]!r}")
+    if _NEXT.search(body):
+        raise DataError(f"{where}: position {name} is not closed with }}; before the next position")

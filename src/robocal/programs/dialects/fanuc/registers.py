@@ -1,0 +1,85 @@
+"""FANUC position registers ``PR[n]`` given as a file (``--position-registers``), so that motions
+to them can be corrected: their values live in the controller, not in the .ls program.
+
+File format (CSV, one register a row, ``#`` comments and blank lines ignored), the values as the
+controller's DATA > Position Reg screen shows a Cartesian register::
+
+    register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,config
+    5,812.500,-120.000,430.000,180.000,0.000,90.000,"N U T, 0, 0, 0"
+
+A register's value is read in the user frame and tool frame active at the motion that uses it
+(``UFRAME_NUM=n`` / ``UTOOL_NUM=n`` in /MN, in text order). The filter writes the corrected values
+to a copy of this file (same rows, only the numbers and configuration changed). A register that a
+program assigns (``PR[5]=LPOS``, ``PR[5,3]=...``) is computed at run time: its motions are named.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from robocal.core.errors import DataError
+from robocal.programs.source import Number, ProgramText
+from robocal.programs.target import Target
+
+HEADER = "register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,config"
+_NUM = r"\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*"
+_ROW = re.compile(r"^\s*(\d{1,4})\s*," + ",".join([_NUM] * 6) + r",\s*\"?\s*([NF])\s*([UD])\s*([TB])\s*,\s*"
+                  r"([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*\"?\s*$", re.MULTILINE)
+_ACTIVE = re.compile(r"\b(UFRAME_NUM|UTOOL_NUM)\s*=\s*(\d+)\s*;")
+_ASSIGNED = re.compile(r"\bPR\[\s*(\d+)\s*(?:,\s*\d+\s*)?(?::[^\]]*)?\]\s*=")
+
+
+def read_registers(src: ProgramText) -> dict[int, Target]:
+    """Register number -> a :class:`Target` whose numbers are in ``src`` (frame and tool unset)."""
+    text = src.text
+    lines = [(m.start(), m.group()) for m in re.finditer(r"[^\n]*", text) if m.group().strip()]
+    out: dict[int, Target] = {}
+    seen_header = False
+    for at, line in lines:
+        body = line.strip()
+        if body.startswith("#"):
+            continue
+        if not seen_header:
+            if body.replace(" ", "").lower() != HEADER:
+                raise DataError(f"{src.where(at)}: a position register file starts with the header {HEADER}")
+            seen_header = True
+            continue
+        m = _ROW.match(text, at, at + len(line))
+        if m is None:
+            raise DataError(f"{src.where(at)}: expected register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,\"N U T, "
+                            f"t1, t4, t6\", got {body[:60]!r}")
+        n = int(m.group(1))
+        if n in out:
+            raise DataError(f"{src.where(at)}: PR[{n}] is given twice")
+        nums = [Number(m.start(k), m.end(k), m.group(k)) for k in range(2, 8)]
+        row = np.array(["NF".index(m.group(8)), "UD".index(m.group(9)), "TB".index(m.group(10)),
+                        int(m.group(11)), int(m.group(12)), int(m.group(13))])
+        spans = [(m.start(k), m.end(k), m.group(k)) for k in range(8, 14)]
+        out[n] = Target(src, at, f"PR[{n}]", nums, config=row, config_spans=spans)
+    if not seen_header:
+        raise DataError(f"{src.path}: empty position register file (header {HEADER})")
+    return out
+
+
+class ActiveFrames:
+    """The UFRAME_NUM / UTOOL_NUM in effect at each offset of one .ls file's /MN section."""
+
+    def __init__(self, src: ProgramText, start: int, stop: int):
+        self._at: list[int] = []
+        self._state: list[tuple[str | None, str | None]] = []
+        uf = ut = None
+        for m in _ACTIVE.finditer(src.text, start, stop):
+            if m.group(1) == "UFRAME_NUM":
+                uf = m.group(2)
+            else:
+                ut = m.group(2)
+            self._at.append(m.start())
+            self._state.append((uf, ut))
+        self.assigned = {int(m.group(1)) for m in _ASSIGNED.finditer(src.text, start, stop)}
+
+    def at(self, offset: int) -> tuple[str | None, str | None]:
+        """``(user frame, tool frame)`` numbers in effect at ``offset`` (None: not set yet)."""
+        k = np.searchsorted(self._at, offset) - 1
+        return self._state[k] if k >= 0 else (None, None)

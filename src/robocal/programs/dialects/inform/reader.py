@@ -1,0 +1,510 @@
+"""Yaskawa INFORM jobs (.JBI, as the teach pendant saves them) and the global position variables of
+the controller's ``VAR.DAT``.
+
+A job::
+
+    /JOB
+    //NAME WELD_A
+    //POS
+    ///NPOS 3,0,0,0,0,0          C, BC, EC, P, BP, EX positions in //POS
+    ///USER 2
+    ///TOOL 1
+    ///POSTYPE USER             PULSE (joints, encoder pulses), BASE, ROBOT or USER
+    ///RECTAN                   Cartesian: X, Y, Z (mm), Rx, Ry, Rz (deg)
+    ///RCONF 1,0,0,0,0,0,0,0    the configuration ("form") of the positions that follow
+    C00000=1012.500,-155.000,320.000,180.0000,0.0000,0.0000
+    //INST
+    ///DATE 2024/03/01 10:12
+    ///ATTR SC,RW
+    ///GROUP1 RB1
+    NOP
+    MOVL C00000 V=120.0 PL=0
+    END
+
+The ``///`` header lines are a state: each position takes the TOOL, USER, POSTYPE and RCONF last
+set above it. Rx, Ry, Rz are fixed-axis XYZ angles, ``R = Rz(Rz) Ry(Ry) Rx(Rx)``. RCONF (see
+:class:`YaskawaConfig`): flip, arm, front/back and the ``< 180`` flags of R, T and S; a form that
+the correction must change is written as a ``///RCONF`` line before the position (and the old one
+restored after it). ROBOT positions are in the robot's base frame; BASE positions too (a job
+without base axes: the base and robot coordinates coincide); USER positions in the user frame
+``///USER n``. Tool and user-frame values live in the controller: ``--tool n=X,Y,Z,Rx,Ry,Rz``,
+``--frame n=...`` (mm, deg), or the user frames of the controller's UFRAME.CND and the tools of its
+TOOL.CND given as references (:func:`user_frames`,
+:mod:`robocal.programs.dialects.inform.tool_file`; ``--tool`` and ``--frame`` take precedence); tool 0
+without data is the flange (a warning). A job may save the
+P variables it uses in its ``//POS`` (``P00100=...``): those are read before VAR.DAT's, and
+another job's saved P variables after VAR.DAT's.
+
+``VAR.DAT`` holds the global variables; its position section ``//P`` has the same header lines
+and ``P0001=...`` entries. Given as a program file, its Cartesian positions that the jobs' motions
+reach are corrected too; otherwise a motion to ``P001`` is named.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from robocal.core.errors import DataError
+from robocal.kinematics.transforms import make_transform
+from robocal.programs.dialects.base import Dialect
+from robocal.programs.dialects.inform import marker, simulated
+from robocal.programs.dialects.inform.campaign import inform_job
+from robocal.programs.dialects.inform.configuration import YaskawaConfig
+from robocal.programs.dialects.inform.loads import InformLoads
+from robocal.programs.dialects.inform.tool_file import is_tool_file, read_tool_file
+from robocal.programs.model import IDENTITY, Program, Target
+from robocal.programs.rotations import matrix_to_zyx
+from robocal.programs.source import Number, ProgramText
+
+_POSITION_MM = 1e-3  # the pendant writes 3 decimals for mm
+_ANGLE_DEG = 1e-4  # ... and 4 for degrees
+POSE_VALUES = 6
+BRANCH_FIELDS = 3  # RCONF's flip, arm and front/back: the least a form must give
+CONFIG_FIELDS = 6  # RCONF fields the form of a 6-axis arm uses (the rest, 2 or 18, are kept)
+NPOS_KINDS = ("C", "BC", "EC", "P", "BP", "EX")  # the order of ///NPOS
+
+_LINE = re.compile(r"([^\r\n]*)(\r\n|\n|\r|$)")  # CRLF, LF or a lone CR ends a line
+_SECTION = re.compile(r"^//(?!/)\s*(\w+)")
+_HEADER = re.compile(r"^///\s*(\w+)\s*(.*?)\s*$")
+_INDEX = r"(\d{1,9})"  # a position, variable, tool or frame number (a longer one is none)
+# C, BC, EC, P, BP, EX, ... (others kept)
+_ENTRY = re.compile(r"^\s*([A-Z]{1,4})" + _INDEX + r"\s*=\s*(.*?)\s*$")
+_MOTION = re.compile(r"^\s*(MOVJ|MOVL|MOVC|MOVS|IMOV|SMOVJ|SMOVL|SMOVC|SMOV|SYMOVJ|SYMOVL|SYMOVC|EIMOVL|"
+                     r"EIMOVC|EIMOVJ|EMOVJ|EMOVL)\b(.*)$")
+_NUM = r"([-+]?(?:\d+\.?\d*|\.\d+))"
+_SIX = re.compile(r"(C|P)" + _INDEX + "=" + ",".join([_NUM] * POSE_VALUES) + r"[ \t]*$")  # the usual, fast
+_REF = re.compile(r"\b(C|BC|EC|P|BP|EX|LP|LBP|LEX)(?:" + _INDEX + r"|\[([^\]]*)\])")
+_SHIFT_ON = re.compile(r"^\s*SFTON\b(.*)$")
+_SHIFT_OFF = re.compile(r"^\s*SFTOF\b")
+_MFRAME = re.compile(r"^\s*MFRAME\s+UF#\(\s*" + _INDEX + r"\s*\)")
+_SETTOOL = re.compile(r"^\s*SETTOOL\s+TL#\(\s*([^)]*?)\s*\)")  # writes tool n's data at run time
+ANY_TOOL = "*"  # a SETTOOL whose tool number is not written as a number
+# instructions that write a position variable at run time (its first operand)
+_WRITES = re.compile(r"^\s*(SET|SETE|GETS|GETE|GETPOS|ADD|SUB|MUL|DIV|CNVRT|CLEAR|SETFILE|GETFILE|MSHIFT|"
+                     r"READ|PXEREAD)\s+(LP|P|LBP|BP|LEX|EX)" + _INDEX + r"\b")
+_REFP = re.compile(r"^\s*REFP\s+\d+\s+(C|P)" + _INDEX + r"\b")
+_LABELED = re.compile(r"^\s*(?:\*\w+\s+)?")
+_RUNTIME_INDEX = "the position number is computed at run time"
+
+
+@dataclass
+class _Header:
+    """The ``///`` state a position takes."""
+
+    postype: str = ""
+    rectan: bool = False
+    user: str = ""
+    tool: str = "0"
+    rconf: list[str] | None = None  # the RCONF fields as written
+    rconf_line: str = ""  # the RCONF line's text (restored after a position whose form is rewritten)
+
+
+@dataclass
+class Position:
+    """One position entry (``C00003=...``): its kind and number, the header state, the numbers and
+    the span of its line (with its line end)."""
+
+    kind: str
+    index: int
+    numbers: list[Number]
+    header: _Header
+    line_start: int
+    line_end: int
+    newline: str
+    target: Target | None = None  # the Cartesian target, when it is one
+
+
+def _lines(text: str):
+    """``(start, line without its end, line end)`` of every line."""
+    pos = 0
+    while pos < len(text):
+        m = _LINE.match(text, pos)
+        yield pos, m.group(1), m.group(2)
+        if not m.group(2):
+            break
+        pos = m.end()
+
+
+class InformDialect(Dialect):
+    name = "Yaskawa INFORM"
+    key = "inform"
+    campaign_rank = 4
+    vendor = "Yaskawa"
+    title = "Yaskawa INFORM (.JBI)"
+    shared_suffixes = (".dat",)  # the controller's VAR.DAT
+    signature = r"^/JOB\b|^//(?:NAME|POS|INST)\b"
+    campaign_format, campaign_suffix = "JBI", ".jbi"
+    suffixes = (".jbi",)
+    scheme = YaskawaConfig()
+    frame_help = ("X,Y,Z in mm and Rx,Ry,Rz in deg, as on the pendant's tool and user frame screens; or the "
+                  "controller's TOOL.CND / UFRAME.CND with --references")
+
+    def recognises(self, head):
+        return looks_like_inform(head)
+
+    def load_reader(self, tools, schedules):
+        return InformLoads()
+
+    def campaign_files(self, joints, robot, path, **options):
+        return {str(path): inform_job(np.rad2deg(joints), robot, path.stem, dialect=self, **options)}
+
+    def mark(self, text, body, note):
+        return marker.mark(text, body, note)
+
+    def test_program(self, folder, nominal, q, tool, frame, name, variables=False):
+        return simulated.write_test_program(self, folder, nominal, q, tool, frame, name, variables)
+
+    def to_pose(self, values):
+        values = np.asarray(values, float)
+        R = Rotation.from_euler("ZYX", values[:, [5, 4, 3]], degrees=True).as_matrix()  # Rz Ry Rx
+        return make_transform(R, values[:, :3] * 1e-3)
+
+    def from_pose(self, T, old):
+        zyx = matrix_to_zyx(T[:, :3, :3], np.asarray(old, float)[:, [5, 4, 3]])
+        return np.hstack([T[:, :3, 3] * 1e3, zyx[:, [2, 1, 0]]])
+
+    def resolutions(self):
+        return np.array([_POSITION_MM] * 3 + [_ANGLE_DEG] * 3)
+
+    def config_edits(self, target, new):
+        pos: Position = target.config_spans
+        old = pos.header.rconf or []
+        fields = [str(min(int(v), 1)) for v in new] + old[CONFIG_FIELDS:]
+        text = target.source.text
+        newline = pos.newline or ("\r\n" if "\r\n" in text else "\n")
+        edits = {(pos.line_start, pos.line_start): f"///RCONF {','.join(fields)}{newline}"}
+        following = _LINE.match(text, pos.line_end).group(1)
+        if pos.header.rconf_line and _ENTRY.match(following):
+            # the positions after it keep their form (a rewritten one right after replaces this line)
+            edits[(pos.line_end, pos.line_end)] = pos.header.rconf_line + newline
+        return edits
+
+    def parse(self, sources, frames, tools, references=()):
+        prog = Program([], frames={IDENTITY: np.eye(4)}, tools={})
+        for ref in references:
+            if is_tool_file(ref):  # TOOL.CND: its tool frames (its loads: load_data.inform)
+                entries = read_tool_file(ref)
+                poses = self.to_pose(np.array([e.frame for e in entries.values()]))
+                prog.tools.update(zip(entries, poses, strict=True))
+            else:
+                prog.frames.update(user_frames(ref))
+        prog.frames.update(frames)
+        prog.tools.update(tools)
+        positions: dict[tuple, Position] = {}  # (path or 'global', kind, index) -> position
+        jobs = []
+        for src in sources:
+            if is_tool_file(src) or _UFRAME_LINE.search(src.text):
+                raise DataError(f"{src.path.name} is a controller file of tools or user frames (TOOL.CND, "
+                                "UFRAME.CND), not a job: give it with --references")
+            found = _read_positions(src, prog)
+            scope = "global" if _is_variable_file(src) else src.path
+            for p in found:
+                positions[(scope, p.kind, p.index)] = p
+                if scope != "global" and p.kind == "P":  # a P variable another job saves in its //POS
+                    positions.setdefault(("jobs", "P", p.index), p)
+            if scope != "global":
+                jobs.append(src)
+        used: set[int] = set()  # targets a corrected motion reaches
+        named: set[int] = set()  # ... a named motion reaches
+        for src in jobs:
+            _motions(src, positions, prog, used, named)
+        tool0 = False
+        for p in {id(p): p for p in positions.values()}.values():  # a job's P variable is under two keys
+            t = p.target
+            if t is None:
+                continue
+            if id(t) in named and id(t) not in used:
+                continue
+            if id(t) not in used:
+                prog.warnings.append(f"{t.where}: no motion of these jobs reaches it: left as it is")
+                continue
+            tool0 |= t.tool == "0" and "0" not in prog.tools
+            t.order = len(prog.targets)
+            prog.targets.append(t)
+        if tool0:
+            prog.tools["0"] = np.eye(4)
+            prog.warnings.append("TOOL 0 has no data given: taken as the flange (give "
+                                 "--tool 0=X,Y,Z,Rx,Ry,Rz if tool file 0 holds a tool)")
+        prog.targets.sort(key=lambda t: (str(t.source.path), t.offset))
+        for k, t in enumerate(prog.targets):
+            t.order = k
+        return prog
+
+
+def _is_variable_file(src: ProgramText) -> bool:
+    """A controller variable file (VAR.DAT): no ``/JOB`` line, position sections ``//P``."""
+    return not re.search(r"^\s*/JOB\b", src.text, re.MULTILINE)
+
+
+def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
+    """The position entries of a job's ``//POS`` (or a VAR.DAT's ``//P``, ``//BP``, ``//EX``)
+    with their header state; Cartesian robot positions become targets. ``///NPOS`` is checked."""
+    out: list[Position] = []
+    section = ""
+    head = _Header()
+    state: tuple[_Header, np.ndarray | None] | None = None  # a copy of head for the entries, until it changes
+    npos: tuple[int, list[int]] | None = None
+    for start, line, end in _lines(src.text):
+        sec = _SECTION.match(line)
+        if sec:
+            section = sec.group(1).upper()
+            head, state = _Header(), None
+            continue
+        if section not in ("POS", "P", "BP", "EX"):
+            continue
+        h = _HEADER.match(line)
+        if h:
+            _header_line(src, start, line, h, head)
+            state = None
+            if h.group(1).upper() == "NPOS":
+                npos = (start, [int(v) for v in h.group(2).split(",")])
+            elif h.group(1).upper() == "POSTYPE":  # a new coordinate system: RECTAN / PULSE follows
+                head.rectan = False
+            continue
+        if not line.strip() or line.lstrip().startswith("'"):
+            continue
+        fast = _SIX.match(line)
+        if fast:
+            kind, index = fast.group(1), fast.group(2)
+            nums = [Number(start + fast.start(k), start + fast.end(k), fast.group(k)) for k in range(3, 9)]
+        else:
+            e = _ENTRY.match(line)
+            if not e:
+                raise DataError(f"{src.where(start)}: malformed position line {line.strip()[:60]!r}: "
+                                "expected ///HEADER or NAME=values")
+            kind, index = e.group(1), e.group(2)
+            nums = src.numbers_in(start + e.start(3), start + e.end(3))
+            if len(nums) != len(e.group(3).split(",")):
+                raise DataError(f"{src.where(start)}: malformed position {kind}{index}: values must be "
+                                "numbers separated by commas")
+        if state is None:
+            flags = head.rconf[:CONFIG_FIELDS] if head.rconf is not None else None
+            # an older form without the R, T, S flags: within -180 < angle <= 180
+            config = None if flags is None else \
+                np.array([int(f) for f in flags] + [0] * (CONFIG_FIELDS - len(flags)))
+            state = (_Header(**vars(head)), config)
+        header, config = state
+        pos = Position(kind, int(index), nums, header, start, start + len(line) + len(end), end)
+        out.append(pos)
+        if kind in ("C", "P", "LP") and header.rectan and header.postype in ("BASE", "ROBOT", "USER"):
+            name = f"{kind}{index}"
+            if len(nums) != POSE_VALUES:
+                prog.warnings.append(f"{src.where(start)}: {name} has {len(nums)} values (a 7-axis arm's "
+                                     "form): left as it is")
+                continue
+            if header.postype == "USER" and not header.user:
+                raise DataError(f"{src.where(start)}: {name} is a USER position but no ///USER n precedes it")
+            pos.target = Target(src, start, name, nums, frame=header.user if header.postype == "USER" else
+                                IDENTITY, tool=header.tool, config=config, config_spans=pos)
+    if npos is not None:
+        counts = [sum(p.kind == k for p in out) for k in NPOS_KINDS]
+        if npos[1] != counts[:len(npos[1])]:
+            prog.warnings.append(f"{src.where(npos[0])}: ///NPOS {','.join(map(str, npos[1]))} but the "
+                                 f"section holds {','.join(map(str, counts))} (C, BC, EC, P, BP, EX)")
+    return out
+
+
+def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _Header) -> None:
+    """Apply a ``///KEY value`` line of a position section to ``head`` (malformed: DataError)."""
+    key, value = h.group(1).upper(), h.group(2)
+    if key == "NPOS":
+        if not re.fullmatch(r"\d{1,9}(?:\s*,\s*\d{1,9})*", value):
+            raise DataError(f"{src.where(start)}: malformed ///NPOS {value!r}: expected 6 integers")
+    elif key == "POSTYPE":
+        head.postype = value.upper()
+    elif key in ("RECTAN", "PULSE"):
+        head.rectan = key == "RECTAN"
+    elif key in ("USER", "TOOL"):
+        if not re.fullmatch(_INDEX, value):
+            raise DataError(f"{src.where(start)}: malformed ///{key} {value!r}: expected a number")
+        setattr(head, key.lower(), str(int(value)))
+    elif key == "RCONF":
+        fields = [f.strip() for f in value.split(",")] if value else []
+        if len(fields) < BRANCH_FIELDS or any(f not in ("0", "1") for f in fields[:CONFIG_FIELDS]) \
+                or not all(f.isdigit() for f in fields):
+            raise DataError(f"{src.where(start)}: malformed ///RCONF {value!r}: expected flags 0 or 1 "
+                            "(flip, arm, front/back, R, T, S, ...)")
+        head.rconf, head.rconf_line = fields, line
+
+
+def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named: set) -> None:
+    """Account for every motion of the job's ``//INST`` in text order: a Cartesian C or P position
+    is a corrected target; joint (PULSE) positions need nothing; incremental, shifted, conveyor-
+    or station-synchronised motions, base axes, stations, positions written at run time and
+    positions whose tool the job rewrites (``SETTOOL TL#(n) P..``: the tool file's data of tool n
+    from a position variable) are named."""
+    shift = ""  # the SFTON in effect
+    runtime: dict[str, str] = {}  # variable -> where the job writes it at run time (anywhere: loops)
+    mframe: dict[str, str] = {}  # user frame -> the MFRAME that sets it
+    settool: dict[str, str] = {}  # tool -> the SETTOOL that writes it (anywhere: loops)
+    on_track = bool(re.search(r"^///GROUP\d+\s+[^\r\n]*\bBS\d", src.text, re.MULTILINE))  # robot on base axes
+    inst = [(start, _LABELED.sub("", line, count=1) if "*" in line else line)
+            for start, line, _ in _instructions(src)]
+    for start, body in inst:
+        st = _SETTOOL.match(body)
+        if st:
+            number = re.fullmatch(_INDEX, st.group(1))
+            settool.setdefault(str(int(number.group(1))) if number else ANY_TOOL, src.where(start))
+        w = _WRITES.match(body)
+        if w:
+            runtime.setdefault(f"{w.group(2)}{int(w.group(3))}", f"{w.group(1)} ({src.where(start)})")
+    for start, body in inst:
+        if _SHIFT_OFF.match(body):
+            shift = ""
+            continue
+        on = _SHIFT_ON.match(body)
+        if on:
+            shift = f"SFTON{on.group(1).split(chr(39))[0].rstrip()} ({src.where(start)})"
+            continue
+        mf = _MFRAME.match(body)
+        if mf:
+            mframe[str(int(mf.group(1)))] = src.where(start)
+            continue
+        ref_point = _REFP.match(body)
+        if ref_point:  # a weaving reference point: a taught position like the motions' (not a motion)
+            kind, index = ref_point.group(1), int(ref_point.group(2))
+            pos = positions.get((src.path, kind, index)) or positions.get(("global", kind, index)) \
+                or positions.get(("jobs", kind, index))
+            if pos is not None and pos.target is not None:
+                used.add(id(pos.target))
+            continue
+        mv = _MOTION.match(body)
+        if not mv:
+            continue
+        instr, rest = mv.group(1), mv.group(2).split("'")[0]
+        robot_part, plus, other = rest.partition("+")
+        refs = list(_REF.finditer(robot_part))
+        robot_refs = [r for r in refs if r.group(1) in ("C", "P", "LP")]
+        ref = robot_refs[0] if robot_refs else None
+        pos = None
+        if ref is not None and ref.group(2) is not None:
+            kind, index = ref.group(1), int(ref.group(2))
+            pos = positions.get((src.path, kind, index))  # the job's own //POS (P too), else VAR.DAT
+            if pos is None and kind == "P":  # a global variable: VAR.DAT, else another job that saves it
+                pos = positions.get(("global", "P", index)) or positions.get(("jobs", "P", index))
+        if pos is not None and pos.target is None and instr != "IMOV" and (
+                pos.header.postype == "PULSE" or not pos.header.rectan):
+            prog.motions.append((src.path, start, np.full(6, np.nan)))  # a joint position: no correction
+            continue
+        acc = prog.motion(src, start, instr)
+        if ref is None:
+            prog.skip(src.where(start), instr, "no robot position (C, P or LP) in the instruction", acc)
+            continue
+        label = ref.group(0)
+        why = _named_reason(instr, ref, refs, plus, other, shift, runtime)
+        if why:
+            if pos is not None and pos.target is not None:
+                named.add(id(pos.target))
+            prog.skip(src.where(start), instr, why, acc, label)
+            continue
+        if pos is None:
+            prog.skip(src.where(start), instr, f"{label} is not in the files given" + (
+                " (a global position variable: give VAR.DAT as a program file)" if kind == "P" else ""),
+                acc, label)
+            continue
+        if pos.target is None:
+            why = f"{label} is in an unsupported coordinate system (///POSTYPE {pos.header.postype or '?'})" \
+                if len(pos.numbers) == POSE_VALUES else f"{label} is not a 6-value Cartesian position"
+            prog.skip(src.where(start), instr, why, acc, label)
+            continue
+        t = pos.target
+        if on_track and pos.header.postype == "BASE":
+            named.add(id(t))
+            prog.skip(src.where(start), instr, f"{label} is a BASE position of a robot on base axes "
+                                               "(///GROUP ... BS): where it is for the robot depends on "
+                                               "the axes' position", acc, label)
+            continue
+        written = settool.get(t.tool, settool.get(ANY_TOOL))
+        if written:
+            named.add(id(t))
+            prog.skip(src.where(start), instr, f"{label} is taught with tool {t.tool}, whose data the job "
+                                               f"writes at run time by SETTOOL at {written}", acc, label)
+            continue
+        if t.frame in mframe:
+            named.add(id(t))
+            prog.skip(src.where(start), instr, f"{label} is in user frame {t.frame}, set at run time by "
+                                               f"MFRAME at {mframe[t.frame]}", acc, label)
+            continue
+        used.add(id(t))
+        acc.reach(t, label)
+        prog.motions.append((src.path, start, t))
+
+
+def _instructions(src: ProgramText):
+    """The lines of the job's ``//INST`` section that are instructions (not headers or comments)."""
+    section = ""
+    for start, line, end in _lines(src.text):
+        sec = _SECTION.match(line)
+        if sec:
+            section = sec.group(1).upper()
+        elif section == "INST" and not line.startswith("///") and not line.lstrip().startswith("'"):
+            yield start, line, end
+
+
+def _named_reason(instr: str, ref, refs, plus: str, other: str, shift: str, runtime: dict) -> str:
+    """Why a motion cannot be corrected ('' when it can)."""
+    label = ref.group(0)
+    if ref.group(2) is None:
+        return f"{label}: {_RUNTIME_INDEX}"
+    if instr == "IMOV":
+        return f"{label} is an increment (IMOV): a displacement, not a pose"
+    if instr.startswith("SMOV"):
+        return f"{label} follows a conveyor (SMOV): the pose moves at run time"
+    if instr.startswith("SYMOV"):
+        return f"{label} is synchronised with a station (SYMOV): the pose moves with the station"
+    if instr.startswith(("EIMOV", "EMOV")):
+        return f"{label}: a motion of an external axis group"
+    axes = [r.group(0) for r in refs if r.group(1) in ("BC", "BP", "LBP", "EC", "EX", "LEX")]
+    if axes or plus:
+        what = ", ".join(axes) if axes else "another control group (+" + other.strip().split(" ")[0] + ")"
+        return f"{label} moves with {what}: base axes and stations are not modelled (a fixed base and work " \
+               "are assumed)"
+    name = f"{ref.group(1)}{int(ref.group(2))}"
+    if name in runtime:
+        return f"{label} is written at run time by {runtime[name]}"
+    if ref.group(1) == "LP":
+        return f"{label} is a local position variable: its value is set at run time"
+    if shift:
+        return f"{label} is shifted at run time by {shift}"
+    return ""
+
+
+_UFRAME = re.compile(r"^//UFRAME\s+" + _INDEX + r"\s*$")
+_UFRAME_LINE = re.compile(r"^//UFRAME\s+\d+\s*$", re.MULTILINE)
+_BUSER = re.compile(r"^////BUSER\s+(.*?)\s*$")
+
+
+def user_frames(src: ProgramText) -> dict[str, np.ndarray]:
+    """The user frames of a controller's UFRAME.CND (``//UFRAME n`` blocks, each with its frame in
+    the base coordinates ``////BUSER X,Y,Z,Rx,Ry,Rz``, mm and deg): 'n' -> 4x4 (m)."""
+    out: dict[str, np.ndarray] = {}
+    current = None
+    for start, line, _ in _lines(src.text):
+        head = _UFRAME.match(line)
+        if head:
+            current = str(int(head.group(1)))
+            continue
+        b = _BUSER.match(line)
+        if b and current is not None:
+            nums = src.numbers_in(start + b.start(1), start + b.end(1))
+            if len(nums) != POSE_VALUES or len(b.group(1).split(",")) != POSE_VALUES:
+                raise DataError(f"{src.where(start)}: malformed ////BUSER of user frame {current}: expected "
+                                "X,Y,Z,Rx,Ry,Rz")
+            out[current] = InformDialect().to_pose(np.array([[n.value for n in nums]]))[0]
+            current = None
+    if not out:
+        raise DataError(f"{src.path.name}: no //UFRAME n with ////BUSER X,Y,Z,Rx,Ry,Rz: not a UFRAME.CND "
+                        "nor a TOOL.CND (//TOOL n) (VAR.DAT: give it as a program file)")
+    return out
+
+
+def looks_like_inform(text: str) -> bool:
+    """A job (``/JOB`` first) or a VAR.DAT (``//`` sections with ``P0000=`` entries)."""
+    head = text.lstrip("\ufeff \t\r\n")[:4000]
+    if re.search(r"^/JOB\b", head, re.MULTILINE) and re.search(r"^//(?:NAME|POS|INST)\b", head, re.MULTILINE):
+        return True  # a job (an offline generator may put a ' comment line before /JOB)
+    return bool(re.match(r"//\w", head) and re.search(r"^P\d+=", head, re.M))

@@ -1,0 +1,10 @@
+"""The provenance marker of URScript: ``# ...`` as the first line (:mod:`robocal.trust.output_marker`)."""
+
+from __future__ import annotations
+
+from robocal.trust.output_marker import newline
+
+
+def mark(text: str, body: str, note: str) -> str:
+    """``text`` with the comment ``# note`` as its first line."""
+    return f"# {note}{newline(text)}{text}"

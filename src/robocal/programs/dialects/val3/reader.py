@@ -1,0 +1,534 @@
+"""Staubli VAL3 applications: a folder with the project (``.pjx``), programs (``.pgx``: XML whose
+``<Code>`` holds the VAL3 code in CDATA) and data (``.dtx``).
+
+Data (``.dtx``)::
+
+    <Data name="pPick" access="public" xsi:type="array" type="pointRx" size="2">
+      <Value key="0" x="412.5" y="-120" z="35.25" rx="180" rz="90" shoulder="lefty"
+             elbow="epositive" wrist="wpositive" fatherId="fPallet[0]" />
+      ...
+    <Data name="fPallet" ... type="frame" size="1">
+      <Value key="0" x="600" y="-200" z="50" rz="15" fatherId="world[0]" />
+    <Data name="tGripper" ... type="tool" size="1">
+      <Value key="0" z="180" fatherId="flange[0]" ioLink="valve1" />
+
+x, y, z in mm, rx, ry, rz in deg: ``R = Rx(rx) Ry(ry) Rz(rz)`` (about the moving axes). An absent
+coordinate is 0 (the controller's editor leaves zeros out); when a correction makes it non-zero,
+the attribute is inserted after the coordinate before it. The coordinates may also stand on an
+element inside the ``<Value>`` (the older CS8 layout); both are read the same way. A point's
+``fatherId`` chain of frames ends at ``world[0]`` (the robot's base); a tool's at ``flange[0]``.
+Configuration (``shoulder`` lefty / righty, ``elbow`` epositive / enegative, ``wrist`` wpositive /
+wnegative; ``ssame``, ``sfree``, ... or absent: any) selects the branch; VAL3 carries no turn data.
+
+The motions ``movej``, ``movel`` and ``movec`` of the programs are read from the code: points
+(``pPick``, ``pPick[1]``; ``pPick[i]`` with a run-time index reaches every element),
+``appro(p, trsf)`` and ``compose(p, frame, trsf)`` with a trsf of the ``.dtx`` or a literal
+``{x, y, z, rx, ry, rz}`` (a use of ``p``), program parameters (followed to every call's argument),
+the tool (second argument; third of movec). Joint motions (a ``jointRx``) need nothing.
+``here()``, points written by the code (an assignment, a field, ``sioGet``), locals, parameters no
+call gives, and ``appro`` / ``compose`` with a run-time trsf are named. Only the numbers inside
+the attribute values change (or an absent coordinate is added): the XML is never re-serialised.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from robocal.core.errors import DataError
+from robocal.kinematics.transforms import make_transform
+from robocal.programs.dialects.base import Dialect
+from robocal.programs.dialects.val3 import marker, simulated
+from robocal.programs.dialects.val3.campaign import val3_application
+from robocal.programs.dialects.val3.configuration import (
+    CONFIG_WORDS,
+    ELBOW,
+    SHOULDER,
+    WRIST,
+    StaubliConfig,
+)
+from robocal.programs.dialects.val3.loads import NoLoads
+from robocal.programs.model import Program, Target
+from robocal.programs.rotations import matrix_to_zyx
+from robocal.programs.source import NUMBER_RE, Number, ProgramText, mask
+
+COORDS = ("x", "y", "z", "rx", "ry", "rz")
+_POSITION_MM = 1e-3
+_ANGLE_DEG = 1e-4
+WORLD, FLANGE = "world[0]", "flange[0]"
+MAX_CHAIN = 32  # frames in a fatherId chain (a longer one is a loop)
+MAX_CALLS = 16  # calls a point parameter is followed through (deeper: named)
+
+_COMMENT = re.compile(r"<!--.*?-->", re.DOTALL)
+_DATA = re.compile(r"<Data\b([^>]*?)(/?)>")
+_DATA_END = re.compile(r"</Data\s*>")
+_VALUE = re.compile(r"<Value\b([^>]*?)(/?)>")
+_VALUE_END = re.compile(r"</Value\s*>")
+_INNER = re.compile(r"<\w+\b([^>]*?)/?>")
+_ATTR = re.compile(r"([\w:]+)\s*=\s*\"([^\"]*)\"")
+_PROGRAM = re.compile(r"<Program\b([^>]*?)>")
+_CODE = re.compile(r"<Code>\s*<!\[CDATA\[(.*?)\]\]>\s*</Code>", re.DOTALL)
+_LOCAL = re.compile(r"<(?:Local|Parameter)\b([^>]*?)/?>")
+_LINE_COMMENT = re.compile(r"//[^\r\n]*")
+_STRING = re.compile(r"\"[^\"\r\n]*\"")
+_MOTION = re.compile(r"\b(movej|movel|movec)\s*\(")
+_CALL = re.compile(r"\bcall\s+([A-Za-z_]\w*)\s*\(")
+_ITEM = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\[\s*([^\]]*?)\s*\])?\s*$")
+_LITERAL6 = re.compile(r"^\s*\{\s*" + r"\s*,\s*".join([f"({NUMBER_RE.pattern})"] * 6) + r"\s*\}\s*$")
+_WRAPPER = re.compile(r"^\s*(appro|compose)\s*\((.*)\)\s*$", re.DOTALL)
+OLD_TYPES = {"point": "pointRx", "joint": "jointRx"}  # the type names of older VAL3 versions
+KNOWN_TYPES = ("pointRx", "frame", "tool", "trsf", "jointRx")  # the data read from a .dtx
+
+
+@dataclass
+class Datum:
+    """One ``<Value>`` of a ``<Data>``: its type, the coordinates (Number, or a zero-length
+    Number where the attribute is absent), config words and spans, fatherId."""
+
+    name: str
+    type: str
+    source: ProgramText
+    offset: int
+    numbers: list[Number]
+    inserts: dict[int, str] = field(default_factory=dict)  # offset of an absent coordinate -> its name
+    config: list[tuple[str, int, int] | None] = field(default_factory=list)  # (word, start, end)
+    father: str = ""
+    joints: np.ndarray | None = None
+
+
+def _attrs(text: str, start: int, end: int) -> dict[str, tuple[str, int, int]]:
+    """name -> (value, start, end of the value) of the attributes in ``text[start:end]``."""
+    return {m.group(1): (m.group(2), m.start(2), m.end(2)) for m in _ATTR.finditer(text, start, end)}
+
+
+def _read_data(src: ProgramText) -> dict[str, Datum]:
+    """Every element of every ``<Data>`` of a .dtx: 'name[k]' -> Datum."""
+    text = mask(src.text, [_COMMENT])
+    out: dict[str, Datum] = {}
+    for d in _DATA.finditer(text):
+        head = _attrs(text, d.start(1), d.end(1))
+        if "name" not in head or "type" not in head:
+            raise DataError(f"{src.where(d.start())}: a <Data> without name or type")
+        name, kind = head["name"][0], head["type"][0]
+        if d.group(2) == "/" or OLD_TYPES.get(kind, kind) not in KNOWN_TYPES:
+            continue  # no values (every element at its defaults), or a type with no pose (num, user types)
+        stop = _DATA_END.search(text, d.end())
+        if stop is None:
+            raise DataError(f"{src.where(d.start())}: <Data name=\"{name}\"> is not closed")
+        for v in _VALUE.finditer(text, d.end(), stop.start()):
+            attrs = _attrs(text, v.start(1), v.end(1))
+            if "key" not in attrs:
+                raise DataError(f"{src.where(v.start())}: a <Value> of {name} without key")
+            body_end = v.end()
+            if v.group(2) != "/":
+                close = _VALUE_END.search(text, v.end(), stop.start())
+                if close is None:
+                    raise DataError(f"{src.where(v.start())}: <Value> of {name} is not closed")
+                body_end = close.start()
+                for inner in _INNER.finditer(text, v.end(), body_end):
+                    for k, val in _attrs(text, inner.start(1), inner.end(1)).items():
+                        attrs.setdefault(k, val)  # the older layout: coordinates on an inner element
+            key = f"{name}[{attrs['key'][0]}]"
+            out[key] = _datum(src, key, kind, v, attrs)
+    return out
+
+
+def _datum(src: ProgramText, key: str, kind: str, v: re.Match, attrs: dict) -> Datum:
+    kind = OLD_TYPES.get(kind, kind)
+    datum = Datum(key, kind, src, v.start(), [], father=attrs.get("fatherId", ("",))[0])
+    if kind in ("pointRx", "frame", "tool", "trsf"):
+        after = attrs["key"][2] + 1  # an absent coordinate goes right after the one before it
+        for c in COORDS:
+            if c in attrs:
+                val, a, b = attrs[c]
+                if not NUMBER_RE.fullmatch(val):
+                    raise DataError(f"{src.where(a)}: {key}: {c}=\"{val}\" is not a number")
+                datum.numbers.append(Number(a, b, val))
+                after = b + 1
+            else:
+                datum.numbers.append(Number(after, after, "0"))
+                datum.inserts[after] = c
+    if kind == "pointRx":
+        for word, values in CONFIG_WORDS:
+            got = attrs.get(word)
+            datum.config.append(None if got is None or got[0] not in values else got)
+    if kind == "jointRx":
+        datum.joints = np.deg2rad([float(attrs.get(f"j{i}", ("0",))[0]) for i in range(1, 7)])
+    return datum
+
+
+def _chain(data: dict[str, Datum], start: str, root: str, what: str, where: str,
+           supplied: dict) -> np.ndarray:
+    """The pose of ``start`` in ``root`` through the fatherId chain (a frame or tool given on the
+    command line overrides the file's)."""
+    T, name, seen = np.eye(4), start, 0
+    while name != root:
+        if name in supplied:
+            return supplied[name] @ T
+        d = data.get(name)
+        if d is None or d.type != what or seen > MAX_CHAIN:
+            raise DataError(f"{where}: {what} {name} is not declared in the .dtx files given (its chain must "
+                            f"end at {root})")
+        T = Val3Dialect.pose_of(d) @ T
+        name, seen = d.father, seen + 1
+    return T
+
+
+class Val3Dialect(Dialect):
+    name = "Staubli VAL3"
+    key = "val3"
+    campaign_rank = 5
+    vendor = "Staubli"
+    signature = r"staubli\.com/robotics/VAL3"
+    suffixes = (".pgx", ".dtx", ".pjx")
+    scheme = StaubliConfig()
+    frame_help = "x,y,z in mm and rx,ry,rz in deg (R = Rx Ry Rz), as in the .dtx"
+
+    def folder_files(self, folder):
+        return application_files(folder)
+
+    def load_reader(self, tools, schedules):
+        return NoLoads()
+
+    def campaign_files(self, joints, robot, path, **options):
+        files = val3_application(np.rad2deg(joints), path.name, **options)
+        return {str(path / file): text for file, text in files.items()}
+
+    def campaign_paths(self, path, procedure):
+        if path.exists() and not path.is_dir():
+            raise DataError(f"--val3 {path}: not a folder (a VAL3 application is a folder)")
+        if not path.exists() and not path.resolve().parent.is_dir():
+            raise DataError(f"--val3 {path}: its parent folder does not exist")
+        names = val3_application([[0.0] * 6], path.name, procedure=procedure)
+        return [str(path / name) for name in names] if path.is_dir() else []
+
+    def campaign_folder(self, path):
+        return path
+
+    def mark(self, text, body, note):
+        return marker.mark(text, body, note)
+
+    def test_program(self, folder, nominal, q, tool, frame, name, variables=False):
+        return simulated.write_test_program(self, folder, nominal, q, tool, frame, name, variables)
+
+    @staticmethod
+    def pose_of(d: Datum) -> np.ndarray:
+        return Val3Dialect().to_pose(np.array([[n.value for n in d.numbers]]))[0]
+
+    def to_pose(self, values):
+        values = np.asarray(values, float)
+        R = Rotation.from_euler("XYZ", values[:, 3:6], degrees=True).as_matrix()
+        return make_transform(R, values[:, :3] * 1e-3)
+
+    def from_pose(self, T, old):
+        old = np.asarray(old, float)
+        # R = Rx(a) Ry(b) Rz(c) is the transpose of Rz(-c) Ry(-b) Rx(-a): the ZYX reader nearest -old
+        zyx = matrix_to_zyx(np.swapaxes(T[:, :3, :3], 1, 2), -old[:, [5, 4, 3]])
+        return np.hstack([T[:, :3, 3] * 1e3, -zyx[:, [2, 1, 0]]])
+
+    def resolutions(self):
+        return np.array([_POSITION_MM] * 3 + [_ANGLE_DEG] * 3)
+
+    def number_edit(self, target: Target, num: Number, text: str) -> str:
+        name = target.config_spans[1].get(num.start) if target.config_spans else None
+        return text if name is None or num.end != num.start else f" {name}=\"{text}\""
+
+    def config_edits(self, target, new):
+        spans = target.config_spans[0]
+        out = {}
+        for (_, values), got, v in zip(CONFIG_WORDS, spans, new, strict=True):
+            text = next(w for w, k in values.items() if k == int(v))
+            if got is not None and got[0] != text:
+                out[(got[1], got[2])] = text
+        return out
+
+    def parse(self, sources, frames, tools, references=()):
+        prog = Program([], frames={WORLD: np.eye(4), **frames}, tools={FLANGE: np.eye(4), **tools})
+        data: dict[str, Datum] = {}
+        for src in [*sources, *references]:
+            if src.path.suffix.lower() == ".dtx":
+                data.update(_read_data(src))
+        programs = [s for s in sources if s.path.suffix.lower() == ".pgx"]
+        if not programs:
+            prog.warnings.append("no .pgx program given: give the application's folder or its .pgx files")
+        targets: dict[str, Target] = {}
+        ctx = _Context(data, [r for src in programs for r in _routines(src)])
+        for r in ctx.routines.values():
+            _program_motions(r, ctx, prog, targets, frames)
+        return prog
+
+
+def _target(d: Datum, frame: str, tool: str) -> Target:
+    config = np.array([-1 if c is None else {**SHOULDER, **ELBOW, **WRIST}[c[0]] for c in d.config])
+    if (config < 0).all():  # ssame / sfree / absent throughout: the solution nearest the joints before
+        config = None
+    return Target(d.source, d.offset, d.name, d.numbers, frame=frame, tool=tool, config=config,
+                  config_spans=(d.config, d.inserts))
+
+
+def _split_args(text: str) -> list[str]:
+    """Top-level comma-separated arguments of ``text``."""
+    out, depth, cur = [], 0, []
+    for ch in text:
+        if ch in "([{":
+            depth += 1
+        elif ch in ")]}":
+            depth -= 1
+        if ch == "," and depth == 0:
+            out.append("".join(cur))
+            cur = []
+        else:
+            cur.append(ch)
+    out.append("".join(cur))
+    return out
+
+
+def _call_args(code: str, open_at: int) -> tuple[list[str], int] | None:
+    """Arguments of the call whose '(' is at ``open_at``, and the offset after ')'."""
+    depth = 0
+    for i in range(open_at, len(code)):
+        if code[i] == "(":
+            depth += 1
+        elif code[i] == ")":
+            depth -= 1
+            if depth == 0:
+                return _split_args(code[open_at + 1:i]), i + 1
+    return None
+
+
+@dataclass
+class _Routine:
+    """One ``<Program>``: its name, parameters in order, locals and parameters -> type, its code."""
+
+    name: str
+    params: list[str]
+    kinds: dict[str, str]
+    src: ProgramText
+    code_m: re.Match
+
+
+@dataclass
+class _Context:
+    """The application: its data, programs by name, what the code writes at run time (a point any
+    program writes is a run-time point in all of them) and the calls of each program ``(caller,
+    arguments, offset)``."""
+
+    data: dict
+    routines: dict[str, _Routine] = field(default_factory=dict)
+    written: dict[str, str] = field(default_factory=dict)
+    calls: dict[str, list[tuple[_Routine, list[str], int]]] = field(default_factory=dict)
+
+    def __init__(self, data: dict, routines: list[_Routine]):
+        self.data, self.routines, self.written, self.calls = data, {r.name: r for r in routines}, {}, {}
+        for r in routines:
+            code = _code(r.code_m)
+            for name, how in _written(code).items():
+                self.written.setdefault(name, how)
+            for m in _CALL.finditer(code):
+                args = _call_args(code, m.end() - 1)
+                if args is not None:
+                    self.calls.setdefault(m.group(1), []).append((r, args[0], r.code_m.start(1) + m.start()))
+
+
+def _routines(src: ProgramText) -> list[_Routine]:
+    """The ``<Program>`` blocks of a .pgx (a file may hold several)."""
+    text, out, last = src.text, [], 0
+    for code_m in _CODE.finditer(text):
+        header = text[last:code_m.start()]
+        last = code_m.end()
+        heads = list(_PROGRAM.finditer(header))
+        name = _attrs(header, heads[-1].start(1), heads[-1].end(1)).get("name", ("",))[0] if heads else ""
+        decl = [_attrs(header, m.start(1), m.end(1)) for m in _LOCAL.finditer(header)]
+        params = [a["name"][0] for m, a in zip(_LOCAL.finditer(header), decl, strict=True)
+                  if "name" in a and m.group(0).startswith("<Parameter")]
+        kinds = {a["name"][0]: a.get("type", ("",))[0] for a in decl if "name" in a}
+        out.append(_Routine(name or src.path.stem, params, kinds, src, code_m))
+    return out
+
+
+def _code(code_m: re.Match) -> str:
+    """A program's code with comments blanked and strings masked (offsets kept)."""
+    return mask(code_m.group(1), [_LINE_COMMENT], [_STRING])
+
+
+def _program_motions(r: _Routine, ctx: _Context, prog: Program, targets: dict, frames: dict) -> None:
+    """The motions of one program's code: its points (and the tool) as targets, or named."""
+    src, data, kinds, written = r.src, ctx.data, r.kinds, ctx.written
+    base = r.code_m.start(1)
+    code = _code(r.code_m)
+    for m in _MOTION.finditer(code):
+        call = _call_args(code, m.end() - 1)
+        at = base + m.start()
+        instr = m.group(1)
+        if call is None:
+            raise DataError(f"{src.where(at)}: {instr}( is not closed")
+        args = call[0]
+        points = args[:2] if instr == "movec" else args[:1]
+        tool_arg = args[2] if instr == "movec" and len(args) > 2 else args[1] if len(args) > 1 else ""
+        if all(_is_joint(p, data) for p in points):
+            continue  # a joint motion: no correction
+        acc = prog.motion(src, at, instr)
+        tool, why = _tool(tool_arg, data, kinds, written, prog.tools, src.where(at))
+        for p in points:
+            label = " ".join(p.split())
+            found, reason = _points(p, r, ctx)
+            if reason or why:
+                prog.skip(src.where(at), instr, reason or why, acc, label)
+                continue
+            for d in found:
+                frame = d.father or WORLD
+                key = d.name
+                if frame not in prog.frames:
+                    try:
+                        prog.frames[frame] = _chain(data, frame, WORLD, "frame", src.where(at), frames)
+                    except DataError as exc:
+                        prog.skip(src.where(at), instr, str(exc).split(": ", 1)[1], acc, label)
+                        break
+                fw = _frame_written(frame, data, written)
+                if fw:
+                    prog.skip(src.where(at), instr, fw, acc, label)
+                    break
+                t = targets.get(key)
+                if t is None:
+                    t = targets[key] = _target(d, frame, tool)
+                prog.use(t, tool, frame, src.where(at), key, "frame", (src.path, at), acc)
+
+
+def _is_joint(expr: str, data: dict) -> bool:
+    m = _ITEM.match(expr)
+    if not m:
+        return False
+    d = data.get(f"{m.group(1)}[{m.group(2) or 0}]") or data.get(f"{m.group(1)}[0]")
+    return d is not None and d.type == "jointRx"
+
+
+def _written(code: str) -> dict[str, str]:
+    """Names the code writes at run time (assignment, a field, sioGet) -> how."""
+    out = {}
+    for m in re.finditer(r"(?<![\w.])([A-Za-z_]\w*)\s*(?:\[[^\]]*\])?\s*((?:\.\w+)*)\s*=(?!=)", code):
+        out.setdefault(m.group(1), f"{m.group(1)}{m.group(2)} is assigned in the program at run time")
+    for m in re.finditer(r"\bsioGet\s*\(\s*[^,]+,\s*([A-Za-z_]\w*)", code):
+        out.setdefault(m.group(1), f"{m.group(1)} is received at run time (sioGet)")
+    return out
+
+
+def _points(expr: str, r: _Routine, ctx: _Context, depth: int = 0) -> tuple[list[Datum], str]:
+    """The pointRx data an argument of program ``r`` reaches, or why it cannot be followed; a
+    parameter is followed to the arguments of every call of ``r`` (``depth``: calls followed)."""
+    data, kinds, written = ctx.data, r.kinds, ctx.written
+    w = _WRAPPER.match(expr)
+    if w:
+        args = _split_args(w.group(2))
+        func = w.group(1)
+        if func == "appro" and len(args) == 2 or func == "compose" and len(args) == 3:
+            for extra in args[1:]:
+                why = _constant(extra, data, kinds, written, "frame" if func == "compose" and extra is args[1]
+                                else "trsf")
+                if why:
+                    return [], f"{func}(...) with {why}"
+            return _points(args[0], r, ctx, depth)
+        return [], f"{func}(...) with {len(args)} arguments"
+    m = _ITEM.match(expr)
+    if not m:
+        call = re.match(r"\s*([A-Za-z_]\w*)\s*\(", expr)
+        if call:
+            return [], f"computed at run time by {call.group(1)}()"
+        return [], "an expression this filter does not follow"
+    name, index = m.group(1), m.group(2)
+    if name in r.params and index is None and name not in written:
+        return _through_calls(name, r, ctx, depth)
+    if name in kinds:
+        what = "parameter" if name in r.params else "local"
+        return [], f"{name} is a {what} of {r.name} ({kinds[name] or 'no type'}): set at run time"
+    if name in written:
+        return [], written[name]
+    if index is None or re.fullmatch(r"\d+", index):
+        d = data.get(f"{name}[{int(index or 0)}]")
+        if d is None:
+            return [], f"{name}[{int(index or 0)}] is not declared in the .dtx files given"
+        if d.type != "pointRx":
+            return [], f"{name} is a {d.type}, not a pointRx"
+        return [d], ""
+    elements = [d for k, d in data.items() if k.startswith(name + "[") and d.type == "pointRx"]
+    if not elements:
+        return [], f"{name}[{index}]: no pointRx {name} in the .dtx files given"
+    return elements, ""  # a run-time index: every element
+
+
+def _through_calls(name: str, r: _Routine, ctx: _Context, depth: int) -> tuple[list[Datum], str]:
+    """The points parameter ``name`` of ``r`` receives from every call of ``r``."""
+    calls = ctx.calls.get(r.name, [])
+    if not calls:
+        return [], f"{name} is a parameter of {r.name} that no call in these files gives"
+    if depth >= MAX_CALLS:
+        return [], f"{name} is passed through more than {MAX_CALLS} calls"
+    k = r.params.index(name)
+    found: list[Datum] = []
+    for caller, args, at in calls:
+        where = caller.src.where(at)
+        if k >= len(args):
+            return [], f"{name}: the call of {r.name} at {where} does not give it"
+        got, why = _points(args[k], caller, ctx, depth + 1)
+        if why:
+            return [], f"{name} is a parameter: the call at {where} passes {' '.join(args[k].split())}: {why}"
+        found += [d for d in got if all(d is not e for e in found)]
+    return found, ""
+
+
+def _constant(expr: str, data: dict, kinds: dict, written: dict, what: str) -> str:
+    """'' when ``expr`` is a constant trsf / frame, else why not."""
+    if _LITERAL6.match(expr):
+        return ""
+    m = _ITEM.match(expr)
+    if not m or m.group(1) in kinds or m.group(1) in written:
+        return f"a run-time {what} ({' '.join(expr.split())})"
+    if m.group(2) is not None and not re.fullmatch(r"\d+", m.group(2)):
+        return f"a {what} chosen at run time ({' '.join(expr.split())})"
+    d = data.get(f"{m.group(1)}[{int(m.group(2) or 0)}]")
+    return "" if d is not None and d.type == what else f"an unknown {what} {m.group(1)}"
+
+
+def _tool(expr: str, data: dict, kinds: dict, written: dict, tools: dict, where: str) -> tuple[str, str]:
+    """(tool key, '') or ('', why)."""
+    m = _ITEM.match(expr)
+    if not m:
+        return "", f"the tool {' '.join(expr.split()) or '(none)'} is computed at run time"
+    name = m.group(1)
+    if name in kinds or name in written:
+        return "", f"the tool {name} is set at run time"
+    if m.group(2) is not None and not re.fullmatch(r"\d+", m.group(2)):
+        return "", f"the tool {name}[{m.group(2)}] is chosen at run time"
+    key = f"{name}[{int(m.group(2) or 0)}]"
+    if key == FLANGE or name == "flange":
+        return FLANGE, ""
+    if key in tools:
+        return key, ""
+    try:
+        tools[key] = _chain(data, key, FLANGE, "tool", where, tools)
+    except DataError as exc:
+        return "", str(exc).split(": ", 1)[1]
+    return key, ""
+
+
+def _frame_written(frame: str, data: dict, written: dict) -> str:
+    name = frame
+    for _ in range(MAX_CHAIN):
+        if name == WORLD or name not in data:
+            return ""
+        base = name.split("[")[0]
+        if base in written:
+            return f"its frame {base} is changed at run time"
+        name = data[name].father
+    return ""
+
+
+def application_files(folder: Path) -> list[Path]:
+    """The .pjx, .pgx and .dtx files of an application folder."""
+    files = sorted(p for p in Path(folder).iterdir() if p.suffix.lower() in Val3Dialect.suffixes)
+    if not files:
+        raise DataError(f"{folder}: no .pjx, .pgx or .dtx file: not a VAL3 application folder")
+    return files

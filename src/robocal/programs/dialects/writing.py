@@ -1,0 +1,101 @@
+"""What every language's campaign program writer shares (``dialects/<language>/campaign.py``;
+what the programs do: :mod:`robocal.campaign.programs`): fixed-point numbers, identifiers, the
+checks of joints, speed and settle time, and the header comment."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from robocal.core.errors import DataError
+from robocal.kinematics.transforms import invert_transform
+
+PROGRAM_JOINTS = 6                 # every language here drives a six-axis arm
+DEGREE_DECIMALS = 10               # written precision of joint values in degrees
+RADIAN_DECIMALS = 12               # ... in radians
+DEFAULT_SPEED_PERCENT = 20.0
+DEFAULT_SETTLE_S = 1.0
+DEFAULT_PROCEDURE = "MeasurePose"
+
+
+def fixed_point(value: float, decimals: int) -> str:
+    """Fixed-point text without exponent or trailing zeros (every controller parses it)."""
+    text = f"{value:.{decimals}f}".rstrip("0").rstrip(".")
+    return "0" if text in ("-0", "") else text
+
+
+def identifier(name: str, what: str, limit: int) -> str:
+    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", name or "") or len(name) > limit:
+        raise DataError(f"{what} {name!r} is not a valid identifier: a letter, then letters, digits or "
+                        f"underscores, at most {limit} characters")
+    return name
+
+
+def checked_joints(joints_deg: np.ndarray, speed_percent: float, settle_s: float,
+                   language: str) -> np.ndarray:
+    """``joints_deg`` as an ``(N, 6)`` float array, refused (DataError) when not finite or the
+    speed or settle time is out of range; ``language`` names the program in the message."""
+    q = np.asarray(joints_deg, dtype=float)
+    if q.ndim != 2 or q.shape[1] != PROGRAM_JOINTS:
+        raise DataError(f"a {language} campaign program drives a {PROGRAM_JOINTS}-axis robot; this robot has "
+                        f"{q.shape[-1]} joints")
+    if not np.isfinite(q).all():
+        raise DataError("joint values must be finite")
+    if not 0 < speed_percent <= 100:
+        raise DataError(f"the speed must be a percentage in (0, 100], got {speed_percent}")
+    if not 0 <= settle_s < 3600:
+        raise DataError(f"the settle time must be in [0, 3600) s, got {settle_s}")
+    return q
+
+
+def comment_lines(comment: str, n: int) -> list[str]:
+    """Comment text for a program header: printable ASCII only (controllers' comment charset)."""
+    text = comment or f"robocal measurement campaign: {n} poses"
+    clean = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in text)
+    return [clean[i : i + 100] for i in range(0, len(clean), 100)] + [
+        "joint values in the controller's joint convention; replace the measure procedure's body "
+        "with your tracker trigger"]
+
+
+def ascii_comment(text: str) -> str:
+    """Printable ASCII without quotes (a TP comment)."""
+    return "".join(ch if 32 <= ord(ch) < 127 and ch not in "\"'" else " " for ch in text)
+
+
+def program_poses(d, nominal, q: np.ndarray, tool: np.ndarray,
+                  frame: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """A test program's target poses ``(N, 4, 4)`` (m, in ``frame``) at joints ``q`` ``(N, 6)``
+    (rad) of ``nominal`` with TCP ``tool``, and the configuration rows of dialect ``d`` there
+    (None: it has no configuration data)."""
+    P = invert_transform(frame) @ nominal.fk(q) @ tool
+    return P, (d.scheme.encode(nominal, q) if d.scheme is not None else None)
+
+
+def quaternions(R: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``(N, 4)`` w first, w >= 0, of rotation matrices ``(N, 3, 3)``."""
+    q = Rotation.from_matrix(R).as_quat(scalar_first=True)
+    return np.where(q[:, :1] < 0, -q, q)
+
+
+def zyx_angles(R: np.ndarray) -> np.ndarray:
+    """``(N, 3)`` angles (a, b, c) deg of rotation matrices ``(N, 3, 3)``: R = Rz(a) Ry(b) Rx(c)."""
+    return Rotation.from_matrix(R).as_euler("ZYX", degrees=True)
+
+
+def frame_text(T: np.ndarray, kind: str) -> str:
+    """A 4x4 frame as text: ``rotvec`` x,y,z (m),rx,ry,rz (rad); ``zyx`` X,Y,Z (mm),A,B,C (deg,
+    R = Rz(A) Ry(B) Rx(C))."""
+    if kind == "rotvec":
+        return ", ".join(f"{v:.6f}" for v in (*T[:3, 3], *Rotation.from_matrix(T[:3, :3]).as_rotvec()))
+    if kind == "zyx":
+        a, b, c = zyx_angles(T[None, :3, :3])[0]
+        return ",".join(f"{v:.6f}" for v in (*(T[:3, 3] * 1e3), a, b, c))
+    raise ValueError(kind)
+
+
+def wpr_text(T: np.ndarray) -> str:
+    """X,Y,Z,W,P,R (mm, deg: turns about the fixed x, y, z axes) of a 4x4 frame."""
+    a, b, c = zyx_angles(T[None, :3, :3])[0]
+    return ",".join(f"{v:.6f}" for v in (*(T[:3, 3] * 1e3), c, b, a))

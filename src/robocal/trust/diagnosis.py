@@ -1,0 +1,147 @@
+"""Why does a model miss the measurements? The next step after a plausibility refusal.
+
+When the nominal model misses tracker data by far more than a robot's errors can explain
+(:mod:`robocal.identify.plausibility`), the data often tell which mistake it is. Each hypothesis
+is tested by fitting the tracker frame and SMR offsets (:func:`robocal.data.registration.register_frame`)
+to the data as the hypothesis would correct them; one that fits within the plausible error
+(:func:`robocal.identify.plausibility.error_limit_mm`) and at least ``GAIN`` times better than the
+data as given is named:
+
+- two joint columns exchanged (every pair) or one joint's sign flipped (every joint);
+- a mirrored tracker frame (a left-handed frame: one axis's sign flipped in the export);
+- several files: the odd one (the others fit, it does not), or every file fitting alone but not
+  together (a second tracker station, or the tracker moved between files);
+- a model judged in another frame than the data's (a nominal model without ``--fit-frame``);
+- a length unit: the points read as millimetres but written in metres or inches (or the other way);
+- FANUC's J2/J3 coupling: a controller's joint log counts J3 from the horizontal (J3 + J2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from itertools import combinations
+
+import numpy as np
+
+from robocal.core.errors import RobocalError
+from robocal.data.joint_conventions import COUPLED_OPTION, fanuc_decoupled
+from robocal.data.registration import register_frame
+from robocal.identify.plausibility import error_limit_mm
+
+GAIN = 5.0  # a hypothesis must fit this many times better than the data as given
+
+
+def fit_rms_mm(robot, data) -> float:
+    """RMS (mm) left after fitting the tracker frame and SMR offsets of ``robot`` to ``data``
+    (point or pose Measurements); inf when the fit fails."""
+    try:
+        return register_frame(robot, data).rms * 1e3
+    except (RobocalError, np.linalg.LinAlgError, FloatingPointError):
+        return float("inf")
+
+
+def _columns(data, joints) -> object:
+    """``data`` with other joint values (approach and travel re-derived from the row order)."""
+    from robocal.data.measurements import approach_from_order, travel_from_order
+
+    return replace(data, joints=joints, approach=approach_from_order(joints, data.pose_id),
+                   travel=travel_from_order(joints, data.pose_id))
+
+
+def joint_mixup(robot, data, given_mm: float) -> str | None:
+    """A joint column exchange or sign flip under which the model fits, as a sentence, or None."""
+    limit = error_limit_mm(data.points)
+    n = data.n_joints
+    trials = []
+    for i, j in combinations(range(n), 2):
+        q = data.joints.copy()
+        q[:, [i, j]] = q[:, [j, i]]
+        trials.append((f"joint columns q{i + 1} and q{j + 1} look exchanged", q))
+    for i in range(n):
+        q = data.joints.copy()
+        q[:, i] = -q[:, i]
+        trials.append((f"joint q{i + 1}'s sign looks flipped (the controller counts it the other way)", q))
+    best = min(((fit_rms_mm(robot, _columns(data, q)), what) for what, q in trials), key=lambda t: t[0])
+    if best[0] <= limit and best[0] * GAIN < given_mm:
+        return (f"{best[1]}: corrected so, the nominal model fits to {best[0]:.3g} mm RMS ({given_mm:.3g} "
+                "mm as given); fix the file's joint columns")
+    return None
+
+
+def mirrored(robot, data, given_mm: float) -> str | None:
+    """The sentence naming a mirrored tracker frame when the model fits the mirrored points."""
+    flipped = data.points * np.array([1.0, 1.0, -1.0])
+    rms = fit_rms_mm(robot, replace(data, points=flipped, rotations=None, kind="point"))
+    if rms <= error_limit_mm(data.points) and rms * GAIN < given_mm:
+        return (f"the tracker frame looks mirrored (left-handed: one axis's sign flipped in the export): "
+                f"with one axis flipped the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as "
+                "given); export the points in a right-handed frame")
+    return None
+
+
+# factor the points as read must be multiplied by to be right, and the mistake it undoes
+UNIT_SCALES = ((1e3, "the points look like metres under _mm headers (or the file's unit is m)"),
+               (1e-3, "the points look like millimetres under _m headers"),
+               (25.4, "the points look like inches under _mm headers (the tracker exported inches)"),
+               (25.4e-3, "the points look like inches under _m headers (the tracker exported inches)"))
+
+
+def length_unit(robot, data, given_mm: float) -> str | None:
+    """A length unit under which the model fits ``data``'s points (:data:`UNIT_SCALES`), as a
+    sentence, or None."""
+    best = min(((fit_rms_mm(robot, replace(data, points=data.points * f)), f, what)
+                for f, what in UNIT_SCALES), key=lambda t: t[0])
+    rms, f, what = best
+    if rms <= error_limit_mm(data.points * f) and rms * GAIN < given_mm:
+        return (f"{what}: scaled by {f:g} the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as "
+                "given); fix the unit of the file's x, y, z columns (their header's _mm or _m)")
+    return None
+
+
+def fanuc_coupled(robot, data, given_mm: float) -> str | None:
+    """The sentence naming FANUC's J2/J3 coupling (J3 counted from the horizontal, as a FANUC
+    controller logs it) when the model fits with J3 decoupled, or None."""
+    if data.n_joints < 3:
+        return None
+    rms = fit_rms_mm(robot, _columns(data, fanuc_decoupled(data.joints)))
+    if rms <= error_limit_mm(data.points) and rms * GAIN < given_mm:
+        return (f"J3 looks coupled to J2 (FANUC's convention: J3 counted from the horizontal, as a FANUC "
+                f"controller logs it and robocal's --fanuc programs take it): with J3 - J2 the nominal model "
+                f"fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as given); read the file with "
+                f"{COUPLED_OPTION}")
+    return None
+
+
+def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
+    """The most likely mistake behind data that ``robot`` (nominal or calibrated links) misses,
+    as one sentence, or None when the data do not tell. ``datasets``: Measurements (only point
+    and pose sets are examined); ``frame_fitted=False``: the model was judged in its own frame
+    (no registration), so a frame that fits is itself the diagnosis."""
+    sets = [d for d in datasets if d.spec.sees_position and len(d) >= 6]
+    if not sets:
+        return None
+    alone = [fit_rms_mm(robot, d) for d in sets]
+    limits = [error_limit_mm(d.points) for d in sets]
+    fits = [a <= lim for a, lim in zip(alone, limits, strict=True)]
+    if not frame_fitted and all(fits):
+        return (f"with the base frame and SMR offsets fitted the model fits to {max(alone):.3g} mm RMS: the "
+                "model's frame is not the measurements' (a nominal model): judge it with --fit-frame or "
+                "--frame-from")
+    if len(sets) > 1 and all(fits):
+        return ("each file fits the model with its own tracker frame (" + ", ".join(
+            f"{d.label or k}: {a:.3g} mm" for k, (d, a) in enumerate(zip(sets, alone, strict=True)))
+            + ") but not together: they were measured from different tracker positions (a second station, or "
+            "the tracker moved); bring them into one frame, or calibrate with one station's files")
+    if len(sets) > 1 and any(fits):
+        odd = [d.label or str(k) for k, (d, ok) in enumerate(zip(sets, fits, strict=True)) if not ok]
+        worst = max(a for a, ok in zip(alone, fits, strict=True) if not ok)
+        reason = next((r for d, ok in zip(sets, fits, strict=True) if not ok
+                       for r in [joint_mixup(robot, d, worst) or mirrored(robot, d, worst)] if r), None)
+        return (f"{', '.join(odd)} is the odd file: the others fit the model, it misses by {worst:.4g} mm RMS"
+                + (f"; {reason}" if reason else " (another robot's data, another file, or a unit)"))
+    for d, a in zip(sets, alone, strict=True):
+        reason = (joint_mixup(robot, d, a) or mirrored(robot, d, a) or length_unit(robot, d, a)
+                  or fanuc_coupled(robot, d, a))
+        if reason:
+            return (f"{d.label}: " if len(sets) > 1 and d.label else "") + reason
+    return None

@@ -1,0 +1,127 @@
+"""Joint kinds from the model (Robot.joints): names, types, units, CSV columns and limits of a
+revolute arm, a SCARA with a prismatic quill and an arm on a track, and the messages, range checks
+and joints files that use them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from robocal.campaign.constraints import limits_with_margin
+from robocal.campaign.files import poses_csv
+from robocal.core.errors import DataError, PlausibilityError, UnitError
+from robocal.data.measurements import Measurements
+from robocal.identify.plausibility import check_joint_limits
+from robocal.kinematics.model import PRISMATIC, REVOLUTE, Robot, cell_from_data
+
+CELL = {"units": {"length": "mm", "angle": "deg"}, "robot": "kuka_kr210_r2700",
+        "track": {"direction": [1, 0, 0], "limits": [0, 6000]}}
+
+
+def _scara() -> Robot:
+    """Four joints: shoulder and elbow (revolute), the quill (prismatic, m), the wrist (revolute)."""
+    return Robot(alpha=np.zeros(4), a=np.array([0.0, 0.4, 0.3, 0.0]), beta=np.zeros(4), theta=np.zeros(4),
+                 d=np.array([0.2, 0.0, 0.0, 0.0]), prismatic=[False, False, True, False],
+                 limits=np.array([[-2.5, 2.5], [-2.5, 2.5], [-0.2, 0.0], [-6.0, 6.0]]), name="scara")
+
+
+def test_a_revolute_arm_has_joints_in_degrees():
+    robot = Robot.from_catalog("abb_irb2600")
+    joints = robot.joints
+    assert [j.column for j in joints] == [f"q{i}_deg" for i in range(1, 7)]
+    assert {j.kind for j in joints} == {REVOLUTE} and robot.external_axes == 0
+    np.testing.assert_array_equal([j.limits for j in joints], robot.limits)
+    assert joints[1].shown(np.pi / 2) == 90.0
+
+
+def test_a_scara_quill_is_prismatic_in_mm():
+    robot = _scara()
+    assert [j.column for j in robot.joints] == ["q1_deg", "q2_deg", "q3_mm", "q4_deg"]
+    assert robot.joints[2].kind == PRISMATIC and robot.joints[2].unit == "mm"
+    assert robot.joints[2].describe(-0.25) == "q3 = -250 mm (limits -200 .. 0)"
+    text = poses_csv(np.array([[0.1, -0.2, -0.05, 1.0]]), spec=robot.joints)
+    header, row = text.splitlines()[:2]
+    assert header.startswith("q1_deg,q2_deg,q3_mm,q4_deg")
+    assert row.split(",")[2] == "-50"  # the quill in mm, not 2.9 "deg"
+    np.testing.assert_array_equal(robot.joints_shown([[0.1, -0.2, -0.05, 1.0]]),
+                                  [[np.rad2deg(0.1), np.rad2deg(-0.2), -50.0, np.rad2deg(1.0)]])
+
+
+def test_a_track_is_e1_in_mm_and_the_arm_q1_to_q6():
+    cell = cell_from_data(CELL)
+    assert cell.external_axes == 1
+    assert [j.column for j in cell.joints] == ["e1_mm"] + [f"q{i}_deg" for i in range(1, 7)]
+    assert cell.joints[0].limits == (0.0, 6.0)
+
+
+def _data(robot: Robot, q: np.ndarray) -> Measurements:
+    return Measurements.from_arrays("point", q, points=robot.fk(q)[:, :3, 3], linear=robot.prismatic,
+                                    external=robot.external_axes)
+
+
+def test_a_track_reading_past_its_end_is_named_in_mm():
+    cell = cell_from_data(CELL)
+    q = np.zeros((2, 7))
+    q[:, 2] = -np.pi / 2
+    q[1, 0] = 6.3434  # 343.4 mm past the track's end: not 363 "deg" past 343.8
+    with pytest.raises(PlausibilityError, match=r"more than 90 deg \(100 mm on a prismatic joint\)") as err:
+        check_joint_limits(cell, _data(cell, q), "the data")
+    assert "row 2 e1 = 6343.4 mm (limits 0 .. 6000)" in str(err.value)
+    warnings: list[str] = []
+    q[1, 0] = 6.0005  # 0.5 mm: within the tolerance
+    check_joint_limits(cell, _data(cell, q), "the data", warnings=warnings)
+    assert not warnings
+    q[1, 0] = 6.05  # 50 mm: warned, not refused (a revolute joint's 1 deg / 90 deg are not mm)
+    check_joint_limits(cell, _data(cell, q), "the data", warnings=warnings)
+    assert len(warnings) == 1 and "e1 = 6050 mm (limits 0 .. 6000)" in warnings[0]
+
+
+def test_a_revolute_reading_keeps_its_message():
+    robot = Robot.from_catalog("abb_irb2600")
+    q = np.zeros((1, 6))
+    q[0, 1] = np.deg2rad(300.0)
+    expected = r"more than 90 deg outside .*: 1 row\(s\): row 1 q2 = 300 deg \(limits -95 \.\. 155\)"
+    with pytest.raises(PlausibilityError, match=expected):
+        check_joint_limits(robot, _data(robot, q), "the data")
+
+
+def _wide_wrist() -> Robot:
+    """An IRB 2600 whose wrist turns +-2700 deg (several turns either way)."""
+    base = Robot.from_catalog("abb_irb2600")
+    wide = np.array(base.limits)
+    wide[5] = np.deg2rad([-2700.0, 2700.0])
+    return Robot(alpha=base.alpha, a=base.a, beta=base.beta, theta=base.theta, d=base.d, base=base.base,
+                 tool=base.tool, limits=wide, name="wide")
+
+
+def test_a_joint_limited_beyond_two_turns_reads_inside_its_limits(tmp_path):
+    robot = _wide_wrist()
+    q = np.zeros((1, 6))
+    q[0, 5] = np.deg2rad(1500.0)  # 4 turns: inside its own limits
+    check_joint_limits(robot, _data(robot, q), "the data")
+    q[0, 4] = np.deg2rad(1500.0)  # but on a joint limited to less than 2 turns: not a real reading
+    with pytest.raises(DataError, match="beyond 2 turns"):
+        check_joint_limits(robot, _data(robot, q), "the data")
+    q[0, 4] = 0.0
+    _data(robot, q).save(tmp_path / "wide.csv")  # SI columns: q6_rad = 26.2
+    assert Measurements.load(tmp_path / "wide.csv", robot=robot).joints[0, 5] == q[0, 5]
+    with pytest.raises(UnitError, match="> 2 turns"):  # without the robot: degrees under _rad?
+        Measurements.load(tmp_path / "wide.csv")
+
+
+def test_a_margin_that_leaves_no_room_names_the_quill_in_mm():
+    with pytest.raises(DataError, match=r"no room on joint 3 \(limits -200 to 0 mm\)"):
+        limits_with_margin(_scara(), 10.0)
+
+
+def test_a_gantry_is_no_track_and_a_track_counts_its_arm_joints():
+    gantry = Robot(alpha=np.array([0.0, -np.pi / 2, -np.pi / 2, 0.0]), a=np.zeros(4), beta=np.zeros(4),
+                   theta=np.array([0.0, np.pi / 2, 0.0, 0.0]), d=np.zeros(4),
+                   prismatic=[True, True, True, False], name="gantry",
+                   limits=np.array([[0.0, 2.0], [0.0, 1.0], [-0.5, 0.0], [-3.0, 3.0]]))
+    assert gantry.external_axes == 0 and [j.column for j in gantry.joints][:3] == ["q1_mm", "q2_mm", "q3_mm"]
+    three = Measurements.from_arrays("point", np.zeros((2, 3)), points=np.ones((2, 3)))
+    with pytest.raises(DataError, match=r"has 4 joints: use"):
+        three.check_against(gantry)
+    with pytest.raises(DataError, match=r"has 7 joints \(e1 for its track, then q1\.\.q6\)"):
+        three.check_against(cell_from_data(CELL))

@@ -1,0 +1,66 @@
+"""The package's layers (docs/explanation/architecture.md): each sub-package imports only from the
+layers below it, function-level imports included, and the package root holds at most three loose
+modules."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import robocal
+
+PACKAGE = Path(robocal.__file__).parent
+
+# bottom to top; a package may import from the layers before its own, never from its own layer's
+# other packages or from above
+LAYERS = [
+    ["core"],
+    ["kinematics"],
+    ["data", "ik"],
+    ["identify"],
+    ["trust", "report"],
+    ["calibration", "deploy"],
+    ["programs"],
+    ["campaign", "history"],
+    ["demo"],
+    ["cli"],
+]
+LEVEL = {name: k for k, layer in enumerate(LAYERS) for name in layer}
+
+
+def _imported_packages(path: Path) -> set[str]:
+    """The robocal sub-packages (first name under robocal) a module imports, at any level."""
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            names = [node.module]
+        elif isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        else:
+            continue
+        out.update(n.split(".")[1] for n in names if n.startswith("robocal.") and n.count(".") >= 1)
+    return out
+
+
+def test_every_sub_package_has_a_layer():
+    packages = {p.name for p in PACKAGE.iterdir() if p.is_dir() and any(p.glob("*.py"))}
+    modules = {p.stem for p in PACKAGE.glob("*.py") if p.stem != "__init__"}
+    assert packages | modules == set(LEVEL), "add the new package to LAYERS (and to architecture.md)"
+
+
+def test_imports_go_only_downward():
+    upward = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        rel = path.relative_to(PACKAGE)
+        if rel.name == "__init__.py" and len(rel.parts) == 1:
+            continue  # the package root re-exports the API lazily, from every layer
+        own = rel.parts[0].removesuffix(".py")
+        for other in _imported_packages(path) - {own}:
+            if LEVEL[other] >= LEVEL[own]:
+                upward.append(f"{rel} imports robocal.{other} (layer {LEVEL[other]} >= {LEVEL[own]})")
+    assert not upward, "\n".join(upward)
+
+
+def test_the_root_shows_the_layers():
+    loose = sorted(p.name for p in PACKAGE.glob("*.py"))
+    assert len(loose) <= 3, loose
