@@ -217,7 +217,7 @@ def load_prediction(path, calibrated, outputs: list):
     (none of them is the JSON)."""
     if path is None:
         return None
-    from robocal.calibration.pipeline import load_result
+    from robocal.calibration.result import load_result
     from robocal.core.errors import DataError
     from robocal.core.io import check_outputs
     from robocal.trust.coverage import Prediction

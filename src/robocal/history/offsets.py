@@ -32,7 +32,7 @@ def check_same_robot(nominal, start) -> None:
 
 
 def recalibrate_offsets(nominal, start, data, validation=None, **options):
-    """A `robocal.calibration.pipeline.CalibrationResult` whose robot is ``start`` (an earlier
+    """A `robocal.calibration.result.CalibrationResult` whose robot is ``start`` (an earlier
     calibration of ``nominal``) with only its joint zeros re-identified on ``data`` (point or pose
     measurements; the tracker frame and SMR offsets fitted with them); ``validation`` and
     ``options`` as `robocal.calibrate` takes them (not ``params`` nor ``nongeometric``).

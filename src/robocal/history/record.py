@@ -33,7 +33,7 @@ def calibration_uncertainty(result) -> dict:
 
 def calibration_record(result, robot_id: str, files: list[tuple[str, str]], parent: int | None = None,
                        **summary) -> Record:
-    """The history record of a `robocal.calibration.pipeline.CalibrationResult`; ``files``:
+    """The history record of a `robocal.calibration.result.CalibrationResult`; ``files``:
     ``(path, role)`` of its inputs; ``summary``: extra figures to keep (e.g. ``offsets_only``)."""
     validation = result.validation
     figures = {"method": result.method, "n_poses": int(result.problem.n_poses), "before": result.before,

@@ -137,7 +137,7 @@ def posterior(problem, state, names: list[str], s0: float) -> np.ndarray:
 
 def prediction(result) -> Prediction:
     """The :class:`Prediction` of a calibration result
-    (``robocal.calibration.pipeline.CalibrationResult``): the posterior of its candidate robot
+    (``robocal.calibration.result.CalibrationResult``): the posterior of its candidate robot
     parameters the calibrated model carries (extra SMR offsets marginalised), ``u`` from its
     cross-validation or its dof-corrected residual, the validated error from its validation data
     when there are any."""
