@@ -20,7 +20,7 @@ import numpy as np
 from robocal.calibration.model_selection import calibrate_cyclic, select_error_model
 from robocal.calibration.result import CalibrationResult, Judged
 from robocal.core.damped_least_squares import Status
-from robocal.core.errors import DataError, IdentificationError
+from robocal.core.errors import DataError, IdentificationError, PlausibilityError
 from robocal.core.progress import Progress
 from robocal.core.resources import calibration_bytes, check_memory, few_threads, memory_guard
 from robocal.core.version import __version__
@@ -46,6 +46,7 @@ from robocal.kinematics.thermal import reference_of as thermal_reference
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import check_fit, check_not_worse
 from robocal.trust.coverage import predict, prediction
+from robocal.trust.diagnosis import diagnosed
 from robocal.trust.posterior import Noise, posterior_analysis
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, independent
 
@@ -200,7 +201,8 @@ def _rows(robot=None, data=None, *args, **kwargs) -> int:
 def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
               register_frames: bool = True, rtol: float = DEFAULT_RTOL, seed: int = 0,
               progress=None, nongeometric="default", force: bool = False, sigma: dict | None = None,
-              warm_start: CalibrationResult | None = None, **options) -> CalibrationResult:
+              warm_start: CalibrationResult | None = None, hold_out: int | None = None,
+              **options) -> CalibrationResult:
     """Calibrate ``robot`` (nominal model) against ``data``: Measurements, or a list of them of
     any kinds (points, poses, planes, distances) identified together in one problem, each set
     weighted by its noise (its sigma column, else ``sigma`` {kind: m}, else
@@ -248,6 +250,9 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     warm_start : CalibrationResult, optional
         A result of the same robot and data whose start model (no new registration) and final
         estimate start this one; the parameter selection is the one without it.
+    hold_out : int, optional
+        Judge on the last ``hold_out`` poses of the one calibration set (file order) and
+        calibrate on the rest (no ``validation`` then).
     **options
         Solver options (e.g. ``k0``, ``k1``, ``ridge`` for ``'robust'``; checked against its
         signature).
@@ -256,7 +261,8 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     -------
     CalibrationResult
         The calibrated model (``result.robot``), the statistics before and after (mm), the
-        parameters with their uncertainty, identifiability and warnings.
+        parameters with their uncertainty, identifiability and warnings; ``error_model_choice``
+        says why the default error model is the geometric one.
 
     Raises
     ------
@@ -265,9 +271,10 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         solver option, or a method that cannot take the requested terms.
     PlausibilityError
         Data and model disagree beyond what real robots do (`robocal.identify.plausibility`;
-        ``force=True`` turns those into warnings).
+        ``force=True`` turns those into warnings); the data's own diagnosis first when it names
+        the cause (`robocal.trust.diagnosis.diagnosed`).
     DataError
-        Invalid data (shapes, joint count, units).
+        Invalid data (shapes, joint count, units), or a ``hold_out`` the data cannot give.
 
     Examples
     --------
@@ -283,8 +290,41 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     >>> "d1" in result.identifiability.dropped  # the base frame absorbs d1
     True
     """
-    check_options(method, options)
     datasets, validations = _as_sets(data, "calibration"), _as_sets(validation, "validation")
+    if hold_out is not None:
+        datasets, validations = split_hold_out(datasets, validations, hold_out)
+    try:
+        return _calibrate_sets(robot, datasets, validations, method, params, register_frames, rtol, seed,
+                               progress, nongeometric, force, sigma, warm_start, options)
+    except PlausibilityError as exc:  # the data's own diagnosis first when it tells more
+        raise diagnosed(exc, robot, [*datasets, *validations]) from None
+
+
+def split_hold_out(datasets: list, validations: list, n: int) -> tuple[list, list]:
+    """([the one calibration set without its last ``n`` poses (file order)], [those poses]): the
+    held-out validation of ``calibrate(..., hold_out=n)``.
+
+    Raises
+    ------
+    DataError
+        Several calibration sets, validation sets given as well, or ``n`` not between 1 and the
+        number of poses - 1.
+    """
+    if validations or len(datasets) > 1:
+        raise DataError("--hold-out splits one calibration file: give one file and no --validate")
+    data = datasets[0]
+    if not 0 < n < data.n_poses:
+        raise DataError(f"--hold-out must be between 1 and {data.n_poses - 1} (the data have "
+                        f"{data.n_poses} poses)")
+    calibration = data.first_poses(data.n_poses - n)
+    return [calibration], [data.subset(~np.isin(data.pose_id, calibration.pose_id))]
+
+
+def _calibrate_sets(robot, datasets: list, validations: list, method: str, params, register_frames: bool,
+                    rtol: float, seed: int, progress, nongeometric, force: bool, sigma: dict | None,
+                    warm_start: CalibrationResult | None, options: dict) -> CalibrationResult:
+    """:func:`calibrate` of the data sets as lists."""
+    check_options(method, options)
     spec = resolve_nongeometric(nongeometric, method, datasets)
     rows = sum(len(d) for d in datasets)
     check_memory(calibration_bytes(rows, spec == "auto"), f"calibrating {rows} measurement rows"
@@ -316,7 +356,29 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     result.predicted_accuracy, more = predict(result.robot, prediction(result),
                                               np.vstack([d.joints for d in result.problem.datasets]))
     result.warnings += more
+    result.error_model_choice = _default_geometric(nongeometric, method, datasets)
     return result
+
+
+def _default_geometric(spec, method: str, datasets: list) -> str | None:
+    """Why the default error model is the geometric one (``'geometric (why)'``), when
+    ``spec`` is 'default' and the default does not choose by cross-validation (which prints its
+    table): the method, several files, the data's kind or too few poses."""
+    if not isinstance(spec, str) or spec.strip().lower() != "default":
+        return None
+    if method not in NONGEOMETRIC_METHODS:
+        why = f"method {method} estimates the geometric parameters only"
+    elif len(datasets) != 1:
+        why = (f"{len(datasets)} calibration files: the default chooses non-geometric terms on one tracker "
+               "data set; name them with --nongeometric to identify them")
+    elif (data := datasets[0]).kind not in AUTO_DEFAULT_KINDS:
+        why = f"{data.kind} data: the default chooses non-geometric terms on tracker data (points, poses)"
+    elif data.n_poses < AUTO_DEFAULT_MIN_POSES:
+        why = (f"{data.n_poses} poses: the default chooses non-geometric terms by cross-validation from "
+               f"{AUTO_DEFAULT_MIN_POSES} poses on; name them with --nongeometric to identify them anyway")
+    else:
+        return None
+    return f"geometric ({why})"
 
 
 def resolve_nongeometric(spec, method: str, datasets: list) -> str | list | None:

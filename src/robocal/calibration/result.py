@@ -10,8 +10,8 @@ import numpy as np
 
 from robocal.calibration import conditions
 from robocal.calibration.model_selection import selection_table
-from robocal.core.errors import DataError
-from robocal.core.io import load_json, read_text, write_atomic
+from robocal.core.errors import DataError, IdentificationError
+from robocal.core.io import load_json, read_text, write_all, write_atomic
 from robocal.core.schema import RESULT_SCHEMA, validate
 from robocal.core.version import __version__
 from robocal.data.measurements import Measurements
@@ -23,6 +23,7 @@ from robocal.identify.solvers import SolverResult
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.identify.uncertainty import correlation, tcp_position_covariance
 from robocal.kinematics.cell import TRACK_IDENTIFIABILITY, is_track_cell
+from robocal.kinematics.model_file import dump_model
 from robocal.kinematics.thermal import groups_of as thermal_groups_of
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import Consistency
@@ -147,6 +148,7 @@ class CalibrationResult(_BeforeAfter):
     provenance: dict = field(default_factory=dict)
     consistency: Consistency | None = None
     predicted_accuracy: dict | None = None
+    error_model_choice: str | None = None  # why the default error model is geometric, when it is
 
     @property
     def state(self) -> State:
@@ -162,6 +164,12 @@ class CalibrationResult(_BeforeAfter):
     def unknowns(self) -> list[str]:
         """Every estimated unknown (robot parameters, then nuisance)."""
         return self.space.names
+
+    @property
+    def notes(self) -> list[str]:
+        """What the calibration data record that the calibrated model has no term for (one line
+        per data set that does)."""
+        return [note for note in (d.unused_conditions(self.robot) for d in self.problem.datasets) if note]
 
     @property
     def validation_before(self) -> dict | None:
@@ -415,6 +423,52 @@ class CalibrationResult(_BeforeAfter):
             The JSON file to write.
         """
         write_atomic(path, self.to_json())
+
+    def write(self, output=None, json=None, report=None, network=None, force: bool = False) -> list[str]:
+        """Write the calibrated model YAML (``output``), the result JSON (``json``), the HTML report
+        (``report``) and the trained network of the neural method (``network``, .npz or .json):
+        all computed first, then written together (all or none, `robocal.core.io.write_all`).
+
+        Parameters
+        ----------
+        output, json, report, network : str or path-like, optional
+            The files to write; None skips one.
+        force : bool
+            Write the results of a solve that did not converge.
+
+        Returns
+        -------
+        list of str
+            The paths written, in the order above.
+
+        Raises
+        ------
+        IdentificationError
+            The solver did not converge and ``force`` is False: nothing is written.
+
+        Examples
+        --------
+        >>> result.write(output="calibrated.yaml", json="result.json")  # doctest: +SKIP
+        ['calibrated.yaml', 'result.json']
+        """
+        if not self.solver.success and not force:
+            raise IdentificationError(f"the solver did not converge ({self.solver.status.value}): nothing "
+                                      "written; adjust the method's options, or rerun with --force to write "
+                                      "the results anyway")
+        texts = {}
+        if output:
+            texts[output] = dump_model(self.robot)
+        content = self.to_dict() if json or report else None
+        if json:
+            texts[json] = json_text(content)
+        if report:
+            from robocal.report.html import render_report
+
+            texts[report] = render_report(content)
+        if network:
+            texts[network] = self.solver.network.file_content(network)
+        write_all(texts)
+        return [str(path) for path in texts]
 
     def summary(self) -> str:
         """A short human summary: before -> after, largest corrections, dropped parameters."""

@@ -41,9 +41,10 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from pathlib import Path
 
-    from robocal.cli.args import check_format, controller_for
+    from robocal.cli.args import check_format
     from robocal.core.errors import DataError
     from robocal.core.io import check_outputs, write_all
+    from robocal.deploy.models import controller_for
     from robocal.kinematics.model import load_model
     from robocal.kinematics.model_file import dump_model
     from robocal.kinematics.urdf import from_urdf, not_carried, to_urdf

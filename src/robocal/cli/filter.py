@@ -236,24 +236,24 @@ def _tool_disagreements(args) -> list[str]:
 def run(args) -> int:
     import sys
 
-    from robocal.cli.args import (
-        conditions_unused,
-        load_calibrated_and_nominal,
-        load_prediction,
-        payload_si,
-        tool_frame,
-    )
     from robocal.core.io import check_outputs
     from robocal.core.magnitudes import check_degrees, check_frame
     from robocal.data.measurements import robot_reach
     from robocal.deploy.compensation import frame_from_text
+    from robocal.deploy.models import (
+        load_model_pair,
+        load_prediction,
+        payload_si,
+        tool_frame,
+        unused_conditions,
+    )
     from robocal.programs import filter_program
 
     targets, table, written = _output_paths(args.programs, args.output, args.table, args.position_registers)
     check_outputs(written, [*targets, args.calibrated, args.nominal, *args.references,
                             *([args.position_registers] if args.position_registers else []),
                             *([args.payload_schedules] if args.payload_schedules else [])])
-    calibrated, nominal = load_calibrated_and_nominal(args.calibrated, args.nominal)
+    calibrated, nominal = load_model_pair(args.calibrated, args.nominal)
     prediction = load_prediction(args.result, calibrated, written)
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
     _check_magnitudes(args, robot_reach(nominal))
@@ -268,7 +268,7 @@ def run(args) -> int:
                          force=args.force, strict=args.strict, position_registers=args.position_registers,
                          payload=payload_si(args.payload), temperature=args.temperature,
                          payload_schedules=args.payload_schedules)
-    res.warnings[:0] = conditions_unused(calibrated, args)
+    res.warnings[:0] = unused_conditions(calibrated, args.payload, args.temperature)
     if prediction is not None and res.joints is not None:
         from robocal.trust.coverage import target_warnings
 

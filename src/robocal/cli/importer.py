@@ -37,9 +37,10 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from robocal.cli.args import check_distinct_inputs, check_format, print_warnings
+    from robocal.cli.args import check_format, print_warnings
     from robocal.core.io import check_outputs
     from robocal.data.importer import import_tracker
+    from robocal.data.inputs import check_distinct_inputs
 
     specs = [spec.split(":cols=")[0] for spec in [args.joints, *args.points, *args.base] if ":" in spec]
     check_format(args.output, "CSV", "-o")

@@ -43,11 +43,11 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from robocal.cli.args import controller_for, tool_frame
     from robocal.core.errors import DataError
     from robocal.core.io import check_outputs, write_atomic
     from robocal.data.measurements import robot_reach
     from robocal.deploy.compensation import check_target_units, controller_model, format_csv, read_poses_csv
+    from robocal.deploy.models import controller_for, tool_frame
     from robocal.ik import track
     from robocal.ik.path import plan_path
     from robocal.kinematics.cell import is_track_cell

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from robocal.cli.args import check_format, check_tool_mm, numbers
+from robocal.cli.args import check_format, numbers
+from robocal.deploy.models import check_tool_mm
 
 EPILOG = """Examples:
   robocal poses --robot abb_irb2600 -n 20 --smr-mm 20,-30,80 -o poses.csv --curve 10:60 --html campaign.html

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import check_format, check_tool_mm, numbers
+from robocal.cli.args import check_format, numbers
 
 TRACKER_MIN_DISTANCE_M = 0.3  # a tracker closer to the robot's base is inside the robot (a unit slip)
 
@@ -136,6 +136,7 @@ def run(args) -> int:
     from robocal.core.errors import DataError
     from robocal.core.io import check_outputs
     from robocal.data.simulate import simulate_tracker, write_simulation
+    from robocal.deploy.models import check_tool_mm
     from robocal.kinematics.model import load_model
 
     check_format(args.output, "CSV", "-o")

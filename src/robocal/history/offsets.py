@@ -8,6 +8,7 @@ import numpy as np
 
 from robocal.calibration.pipeline import calibrate
 from robocal.core.errors import DataError
+from robocal.kinematics.model import load_model
 
 FRAME_PARAMS = ("base.x", "base.y", "base.z", "base.rx", "base.ry", "base.rz", "tool.x", "tool.y", "tool.z")
 SAME_NOMINAL_TOL = 1e-9  # m or rad: the calibrated model must carry the nominal robot's links
@@ -90,6 +91,20 @@ def recalibrate_offsets(nominal, start, data, validation=None, **options):
     return result
 
 
+def offsets_start(start: str | None, offsets_only: bool, params: str = "auto",
+                  nongeometric: str = "default"):
+    """The start model of an offsets-only recalibration (``--offsets-only --start START``; None
+    without them), the options that cannot go with it refused (DataError)."""
+    if bool(offsets_only) != bool(start):
+        raise DataError("--offsets-only and --start go together: the joint zeros of the calibrated model "
+                        "--start are re-identified")
+    if not offsets_only:
+        return None
+    if params != "auto" or nongeometric.strip().lower() != "default":
+        raise DataError("--offsets-only chooses its own parameters: drop --params and --nongeometric")
+    return load_model(start)
+
+
 def zero_shifts(result, start) -> list[dict]:
     """The re-identified joint zeros' change from ``start`` (the earlier calibration):
     ``[{name, shift, sigma, unit}]`` in deg, largest first."""
@@ -97,3 +112,9 @@ def zero_shifts(result, start) -> list[dict]:
     rows = [{"name": n, "unit": "deg", "shift": float(np.rad2deg(result.robot.get(n) - start.get(n))),
              "sigma": float(np.rad2deg(sigma[n]))} for n in result.names if n.startswith("theta")]
     return sorted(rows, key=lambda r: -abs(r["shift"]))
+
+
+def shifts_line(shifts: list[dict]) -> str:
+    """One line of :func:`zero_shifts`: each joint zero's change with its sigma (deg)."""
+    return "joint zeros changed from the start: " + \
+        ", ".join(f"{r['name']} {r['shift']:+.4f} ± {r['sigma']:.4f} deg" for r in shifts)
