@@ -48,10 +48,10 @@ def run(args) -> int:
     check_distinct_inputs(args.raw, "raw files")
     result = import_tracker(args.raw, joints=args.joints, points=args.points, base=args.base,
                             average=not args.keep_repeats, skip_rows=args.skip_rows)
-    result.data.save(args.output)
+    written = result.write(args.output)
     if args.quiet:
-        print_warnings("import", result.warnings())
+        print_warnings("import", result.warnings)
     else:
         print(result.summary())
-        print(f"wrote {args.output}")
+        print(f"wrote {', '.join(written)}")
     return 0

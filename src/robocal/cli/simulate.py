@@ -104,38 +104,15 @@ def _thermal_k(text: str) -> float | dict[str, float]:
                                          f"got {text!r}") from None
 
 
-def _planned(args, robot, smr, tracker):
-    """Joints, visibility, SMRs and tracker of the planned campaign ``--joints``: the plan's SMRs
-    and tracker unless given here (a WARNING when they differ from the plan's)."""
-    import numpy as np
-
-    from robocal.campaign.files import read_planned
-
-    plan = read_planned(args.joints, robot)
-    for what, mine, theirs, option in (("SMR positions", smr, plan.smr, "--smr-mm"),
-                                       ("tracker position", tracker, plan.tracker, "--tracker-mm")):
-        if theirs is None:
-            if mine is None:
-                print(f"note: {args.joints} does not carry a planned {what}: a random one is simulated")
-        elif mine is None:
-            print(f"using the plan's {what} (mm): {np.round(theirs * 1e3, 4).tolist()} from {args.joints}")
-        elif np.shape(mine) != np.shape(theirs) or not np.allclose(mine, theirs, atol=1e-6):
-            print(f"WARNING: {option} {np.round(np.asarray(mine) * 1e3, 4).tolist()} differs from the "
-                  f"{what} the campaign {args.joints} was planned with ({np.round(theirs * 1e3, 4).tolist()} "
-                  "mm): the rehearsal measures another campaign")
-    smr = plan.smr if smr is None else smr
-    tracker = plan.tracker if tracker is None else tracker
-    return plan.joints, plan.visible, smr, tracker
-
-
 def run(args) -> int:
     from pathlib import Path
 
     import numpy as np
 
+    from robocal.campaign.files import read_planned
     from robocal.core.errors import DataError
     from robocal.core.io import check_outputs
-    from robocal.data.simulate import simulate_tracker, write_simulation
+    from robocal.data.simulate import simulate_tracker
     from robocal.deploy.models import check_tool_mm
     from robocal.kinematics.model import load_model
 
@@ -158,7 +135,11 @@ def run(args) -> int:
                         "the values look like metres: give mm (e.g. 2500,500,300)")
     joints = visible = None
     if args.joints:
-        joints, visible, smr, tracker = _planned(args, robot, smr, tracker)
+        plan = read_planned(args.joints, robot)
+        joints, visible = plan.joints, plan.visible
+        smr, tracker, lines = plan.measured_with(smr, tracker, args.joints)
+        for line in lines:
+            print(line)
     result = simulate_tracker(robot, args.poses, noise_mm=args.noise_mm, noise_model=args.noise_model,
                               outliers=args.outliers, n_smr=args.smr, workspace_box=box, seed=args.seed,
                               kind=args.kind, n_planes=args.planes, joint_noise_deg=args.joint_noise_deg,
@@ -167,9 +148,8 @@ def run(args) -> int:
                               as_is=args.as_is, payloads=args.payloads, temperatures=args.temperatures,
                               payload_com=None if args.payload_com_mm is None else
                               np.array(args.payload_com_mm) * 1e-3, thermal_k=args.thermal_k)
-    sidecar = write_simulation(result, args.output, args.truth)
+    written = result.write(args.output, args.truth)
     if not args.quiet:
-        print(f"simulated {len(result.data)} {args.kind} observations of {result.info['n_poses']} poses; "
-              f"noise floor {result.noise_floor_mm:.4f} mm; {len(result.outlier_rows)} outlier(s)")
-        print(f"wrote {args.output}, {args.truth}, {sidecar}")
+        print(result.summary())
+        print(f"wrote {', '.join(written)}")
     return 0

@@ -42,7 +42,7 @@ the recorded joints of every kind.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -122,6 +122,26 @@ class SimulationResult:
     true_joints: np.ndarray
     planes: np.ndarray | None
     info: dict
+    warnings: list[str] = field(default_factory=list)  # a simulation measures what it is told: none
+
+    def summary(self) -> str:
+        """Observations, poses, the noise floor (mm) and the outliers."""
+        info = self.info
+        return (f"simulated {len(self.data)} {info['kind']} observations of {info['n_poses']} poses; "
+                f"noise floor {self.noise_floor_mm:.4f} mm; {len(self.outlier_rows)} outlier(s)")
+
+    def to_dict(self) -> dict:
+        """The settings and seed, the outliers' file lines and the planes (the sidecar JSON)."""
+        side = dict(self.info)
+        side["outlier_rows"] = (self.outlier_rows + 2).tolist()  # file line numbers
+        side["planes"] = None if self.planes is None else [
+            {"normal": row[:3].tolist(), "offset_m": float(row[3])} for row in self.planes]
+        return side
+
+    def write(self, data_path, truth_path) -> list[str]:
+        """Write the data CSV, the truth model YAML and the sidecar JSON ``TRUTH.sim.json`` (all
+        three or none); the paths written."""
+        return [str(data_path), str(truth_path), str(write_simulation(self, data_path, truth_path))]
 
 
 def _random_rotation(rng: np.random.Generator) -> np.ndarray:
@@ -587,10 +607,7 @@ def write_simulation(result: SimulationResult, data_path, truth_path) -> Path:
     or none."""
     truth_path = Path(truth_path)
     sidecar = truth_path.with_suffix(".sim.json")
-    side = dict(result.info)
-    side["outlier_rows"] = (result.outlier_rows + 2).tolist()  # file line numbers
-    side["planes"] = None if result.planes is None else [
-        {"normal": row[:3].tolist(), "offset_m": float(row[3])} for row in result.planes]
+    side = result.to_dict()
     side["data"] = str(data_path)
     side["truth"] = str(truth_path)
     write_all({data_path: result.data.to_csv(), truth_path: dump_model(result.truth),

@@ -12,7 +12,7 @@ import numpy as np
 from robocal.core.errors import DataError
 from robocal.core.io import check_outputs
 from robocal.core.magnitudes import check_degrees, check_tool
-from robocal.deploy.compensation import frame_from_text
+from robocal.deploy.compensation import controller_model, frame_from_text, rotation_from_text
 from robocal.kinematics.catalog import catalog_names
 from robocal.kinematics.joint_errors import condition_terms
 from robocal.kinematics.model import Robot, load_model
@@ -152,3 +152,32 @@ def tool_frame(text: str, option: str) -> np.ndarray:
     check_tool_mm(values[:3], f"{option} {text}")
     check_degrees(values[3:], f"{option} {text}")
     return T
+
+
+def tool_rotation(text: str, option: str) -> np.ndarray:
+    """A tool's orientation ``rx,ry,rz`` (deg, fixed-axis XYZ) -> 3x3, refused when the angles
+    look like radians (:func:`robocal.core.magnitudes.check_degrees`)."""
+    rotation = rotation_from_text(text, option)
+    check_degrees([float(v) for v in text.replace(" ", "").split(",") if v], f"{option} {text}")
+    return rotation
+
+
+def planning_model(robot: Robot, nominal: Robot | None, tool: str = "flange") -> tuple[Robot, str]:
+    """The model a path is planned on, and the frames its poses are in (said in words).
+
+    ``nominal`` (the controller's model, :func:`controller_for`; None for a robot outside the
+    catalog): the calibrated model in the robot's base frame, its flange carrying ``tool``
+    (``"flange"``, ``"measured"``: the model's own tool, or ``x,y,z,rx,ry,rz`` in mm, deg on the
+    flange); without it, the model's world frame and its own tool (carrying ``tool``).
+    """
+    frame = None if tool in ("flange", "measured") else tool_frame(tool, "--tool")
+    if nominal is not None and tool != "measured":
+        frames = "the robot's base frame, " + ("the flange (tool0)" if frame is None else f"the tool {tool}")
+        return controller_model(robot, nominal, tool=frame), frames
+    if nominal is not None:
+        return robot.with_frames(base=nominal.base), \
+            "the robot's base frame, the model's own tool (e.g. the measured SMR)"
+    carried = "its own tool" if frame is None else f"its tool carrying {tool}"
+    return (robot if frame is None else robot.with_frames(tool=robot.tool @ frame),
+            f"the model's world frame and {carried} ({robot.name} is not a catalog robot: give --nominal "
+            "for the robot's base and flange)")
