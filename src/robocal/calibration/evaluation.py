@@ -66,7 +66,7 @@ STATISTICS = ("n", "rms", "mean", "max", "p95")  # the statistics an evaluation 
 
 
 class EvaluationResult(dict):
-    """What :func:`evaluate` returns: the dict of statistics it always returned (``n``, ``rms``,
+    """What `evaluate` returns: the dict of statistics it always returned (``n``, ``rms``,
     ``mean``, ``max``, ``p95`` in mm, ``errors_mm``, ``kind``, ``n_poses``, ``consistency``,
     ``warnings`` ...) with the result protocol: ``summary()``, ``warnings``, ``to_dict()``,
     ``write()``. ``names`` labels the model, the data and the frame's data in the summary and the
@@ -117,7 +117,7 @@ class EvaluationResult(dict):
         return out
 
     def write(self, json_path=None) -> list[str]:
-        """Write :meth:`to_dict` as JSON to ``json_path`` (atomically); the paths written."""
+        """Write `to_dict` as JSON to ``json_path`` (atomically); the paths written."""
         if json_path is None:
             return []
         out = self.to_dict()  # the per-row errors on one line by json's C encoder (indent: pure Python)
@@ -199,7 +199,7 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
 
 
 def _statistics(robot, data, fit_frame: bool, frame_from, force: bool) -> dict:
-    """:func:`evaluate`'s statistics as a plain dict."""
+    """`evaluate`'s statistics as a plain dict."""
     rows = len(data) + (0 if frame_from is None else len(frame_from))
     check_memory(evaluation_bytes(rows), f"evaluating {rows:,} measurement rows", EVALUATION_ADVICE)
     out, warnings = {}, []

@@ -323,7 +323,7 @@ def split_hold_out(datasets: list, validations: list, n: int) -> tuple[list, lis
 def _calibrate_sets(robot, datasets: list, validations: list, method: str, params, register_frames: bool,
                     rtol: float, seed: int, progress, nongeometric, force: bool, sigma: dict | None,
                     warm_start: CalibrationResult | None, options: dict) -> CalibrationResult:
-    """:func:`calibrate` of the data sets as lists."""
+    """`calibrate` of the data sets as lists."""
     check_options(method, options)
     spec = resolve_nongeometric(nongeometric, method, datasets)
     rows = sum(len(d) for d in datasets)

@@ -33,11 +33,15 @@ def check_distinct_inputs(paths, what: str = "input files", why: str = TWICE) ->
 
     Examples
     --------
+    >>> from pathlib import Path
     >>> from robocal.data.inputs import check_distinct_inputs
-    >>> check_distinct_inputs(["cal.csv", "cal.csv"], "calibration files")  # doctest: +SKIP
+    >>> for name in ("cal.csv", "copy.csv"):
+    ...     _ = Path(name).write_text("pose_id,q1_deg\\n0,1.0\\n")
+    >>> check_distinct_inputs(["cal.csv", "val.csv"])  # a missing file: the reader names it
+    >>> check_distinct_inputs(["cal.csv", "copy.csv"], "calibration files")
     Traceback (most recent call last):
     ...
-    robocal.core.errors.DataError: cal.csv is given twice among the calibration files: ...
+    robocal.core.errors.DataError: copy.csv has the same contents as cal.csv among the calibration files: ...
     """
     seen: dict = {}
     for path in (p for p in paths if p is not None):
@@ -54,7 +58,7 @@ def check_distinct_inputs(paths, what: str = "input files", why: str = TWICE) ->
 
 def read_measurements(path, robot, fanuc_coupled: bool = False,
                       model_used: bool = True) -> tuple[Measurements, list[str]]:
-    """:meth:`Measurements.load` of ``path`` checked against ``robot``, with the reader's notes.
+    """`Measurements.load` of ``path`` checked against ``robot``, with the reader's notes.
 
     Parameters
     ----------

@@ -49,8 +49,14 @@ def load_model_pair(calibrated: str, nominal: str, option: str = "--calibrated")
 
     Examples
     --------
+    >>> import robocal as rc
     >>> from robocal.deploy.models import load_model_pair
-    >>> load_model_pair("abb_irb2600", "calibrated.yaml")  # doctest: +SKIP
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> nominal.with_values({"a2": nominal.get("a2") + 1e-4}).save("calibrated.yaml")
+    >>> calibrated, controller = load_model_pair("calibrated.yaml", "abb_irb2600")
+    >>> controller.name, round((calibrated.get("a2") - controller.get("a2")) * 1e3, 3)  # mm
+    ('abb_irb2600', 0.1)
+    >>> load_model_pair("abb_irb2600", "calibrated.yaml")  # the two swapped
     Traceback (most recent call last):
     ...
     robocal.core.errors.DataError: --calibrated abb_irb2600 and --nominal calibrated.yaml look swapped: ...
@@ -140,13 +146,13 @@ def unused_conditions(robot: Robot, payload=None, temperature: float | None = No
 
 def check_tool_mm(xyz, option: str) -> None:
     """Refuse a tool translation (mm) whose magnitude says another unit (metres, or not a length
-    a tool has): :func:`robocal.core.magnitudes.check_tool`."""
+    a tool has): `robocal.core.magnitudes.check_tool`."""
     check_tool(np.asarray(xyz, dtype=float) * 1e-3, "mm", option)
 
 
 def tool_frame(text: str, option: str) -> np.ndarray:
     """A tool frame ``x,y,z,rx,ry,rz`` (mm, deg) -> 4x4 (m), refused when its magnitudes say
-    another unit (:func:`check_tool_mm`, :func:`robocal.core.magnitudes.check_degrees`)."""
+    another unit (`check_tool_mm`, `robocal.core.magnitudes.check_degrees`)."""
     T = frame_from_text(text, option)
     values = [float(v) for v in text.replace(" ", "").split(",") if v]
     check_tool_mm(values[:3], f"{option} {text}")
@@ -156,7 +162,7 @@ def tool_frame(text: str, option: str) -> np.ndarray:
 
 def tool_rotation(text: str, option: str) -> np.ndarray:
     """A tool's orientation ``rx,ry,rz`` (deg, fixed-axis XYZ) -> 3x3, refused when the angles
-    look like radians (:func:`robocal.core.magnitudes.check_degrees`)."""
+    look like radians (`robocal.core.magnitudes.check_degrees`)."""
     rotation = rotation_from_text(text, option)
     check_degrees([float(v) for v in text.replace(" ", "").split(",") if v], f"{option} {text}")
     return rotation
@@ -165,7 +171,7 @@ def tool_rotation(text: str, option: str) -> np.ndarray:
 def planning_model(robot: Robot, nominal: Robot | None, tool: str = "flange") -> tuple[Robot, str]:
     """The model a path is planned on, and the frames its poses are in (said in words).
 
-    ``nominal`` (the controller's model, :func:`controller_for`; None for a robot outside the
+    ``nominal`` (the controller's model, `controller_for`; None for a robot outside the
     catalog): the calibrated model in the robot's base frame, its flange carrying ``tool``
     (``"flange"``, ``"measured"``: the model's own tool, or ``x,y,z,rx,ry,rz`` in mm, deg on the
     flange); without it, the model's world frame and its own tool (carrying ``tool``).

@@ -81,13 +81,13 @@ class ToolCalibration:
 
     def to_dict(self, name: str = "TOOL", rotation: np.ndarray | None = None) -> dict:
         """The TCP and the touched point (mm), each pose's residual (mm), their RMS, the spread
-        (deg) and the :meth:`option`."""
+        (deg) and the `option`."""
         return {"tcp_mm": (self.tcp * 1e3).tolist(), "point_mm": (self.point * 1e3).tolist(),
                 "residuals_mm": (self.residuals * 1e3).tolist(), "rms_mm": self.rms_mm,
                 "spread_deg": self.spread_deg, "tcp_option": self.option(name, rotation)}
 
     def write(self, json_path=None, name: str = "TOOL", rotation: np.ndarray | None = None) -> list[str]:
-        """Write :meth:`to_dict` as JSON to ``json_path`` (atomically); the paths written."""
+        """Write `to_dict` as JSON to ``json_path`` (atomically); the paths written."""
         if json_path is None:
             return []
         write_atomic(json_path, json.dumps(self.to_dict(name, rotation), indent=1) + "\n")

@@ -177,7 +177,7 @@ class CheckResult:
     warnings: list[str] = field(default_factory=list)  # the verdict says what matters: none today
 
     def write(self, json_path=None, **header) -> list[str]:
-        """Write ``header`` (e.g. the model and data files) and :meth:`to_dict` as JSON to
+        """Write ``header`` (e.g. the model and data files) and `to_dict` as JSON to
         ``json_path`` (atomically); the paths written."""
         if json_path is None:
             return []
