@@ -138,8 +138,10 @@ def run(args) -> int:
     robot_id = open_history(args.history, args.robot_id)
     start = offsets_start(args.start, args.offsets_only, args.params, args.nongeometric)
     robot = load_model(args.robot)
-    data, validation = ([load_measurements(f, robot, args.quiet, args.fanuc_coupled, model_used=False)
-                         for f in files] for files in (args.data, validate))
+    def read(files: list[str]) -> list:  # conditions without a term in the model: result.notes
+        return [load_measurements(f, robot, args.quiet, args.fanuc_coupled, model_used=False) for f in files]
+
+    data, validation = read(args.data), read(validate)
     common = dict(validation=validation or None, method=args.method, seed=args.seed, progress=not args.quiet,
                   force=args.force, sigma=dict(args.sigma), hold_out=args.hold_out, **dict(args.options))
     if start is None:
@@ -153,10 +155,10 @@ def run(args) -> int:
     for note in result.notes:
         print(f"note: {note}")
     derived = {} if start is None else {"offsets_only": True, "zero_shifts": zero_shifts(result, start)}
-    line = shifts_line(derived["zero_shifts"]) if start is not None else \
-        result.error_model_choice and f"error model: {result.error_model_choice}"
-    if line:
-        print(line)
+    if start is not None:
+        print(shifts_line(derived["zero_shifts"]))
+    elif result.error_model_choice:
+        print(f"error model: {result.error_model_choice}")
     for path in result.write(args.output, args.json, args.report, args.network_out, args.force):
         print(f"wrote {path}")
     if args.history:  # after the files: the history is never the only copy

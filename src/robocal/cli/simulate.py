@@ -6,8 +6,6 @@ import argparse
 
 from robocal.cli.args import check_format, numbers
 
-TRACKER_MIN_DISTANCE_M = 0.3  # a tracker closer to the robot's base is inside the robot (a unit slip)
-
 EPILOG = """Examples:
   robocal simulate --robot abb_irb2600 --poses 200 --noise-mm 0.02 --seed 1 -o data.csv --truth truth.yaml
   robocal simulate --robot model.yaml --poses 100 --smr 3 --noise-model tracker --outliers 0.02 \\
@@ -110,10 +108,8 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.campaign.files import read_planned
-    from robocal.core.errors import DataError
     from robocal.core.io import check_outputs
-    from robocal.data.simulate import simulate_tracker
-    from robocal.deploy.models import check_tool_mm
+    from robocal.data.simulate import probe_and_tracker, simulate_tracker
     from robocal.kinematics.model import load_model
 
     check_format(args.output, "CSV", "-o")
@@ -122,17 +118,7 @@ def run(args) -> int:
                   [args.robot, args.joints])
     robot = load_model(args.robot)
     box = None if args.box is None else np.array(args.box).reshape(2, 3) * 1e-3
-    if args.tool_mm is not None and args.smr_mm:
-        raise DataError("give the probe either as --tool-mm or as --smr-mm, not both")
-    given = args.smr_mm or ([args.tool_mm] if args.tool_mm is not None else None)
-    for smr in given or []:
-        check_tool_mm(smr, f"--smr-mm/--tool-mm {','.join(f'{v:g}' for v in smr)}")
-    smr = None if given is None else np.array(given) * 1e-3
-    tracker = None if args.tracker_mm is None else np.array(args.tracker_mm) * 1e-3
-    if tracker is not None and np.linalg.norm(tracker) < TRACKER_MIN_DISTANCE_M:
-        raise DataError(f"--tracker-mm {','.join(f'{v:g}' for v in args.tracker_mm)}: a tracker "
-                        f"{np.linalg.norm(tracker) * 1e3:.3g} mm from the robot's base is inside the robot; "
-                        "the values look like metres: give mm (e.g. 2500,500,300)")
+    smr, tracker = probe_and_tracker(args.smr_mm, args.tool_mm, args.tracker_mm)
     joints = visible = None
     if args.joints:
         plan = read_planned(args.joints, robot)

@@ -50,6 +50,7 @@ from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError, UnreachableError
 from robocal.core.io import write_all
+from robocal.core.magnitudes import check_tool
 from robocal.data import simulate_conditions as conditions
 from robocal.data.measurements import Measurements, approach_from_order, robot_reach, travel_from_order
 from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, is_track_cell, track_chain
@@ -600,6 +601,35 @@ def _plane_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, wo
         raise UnreachableError(f"could place only {int(filled.sum())} of {n_poses} plane contacts: "
                                "use fewer poses or a larger workspace")
     return chosen, plane_idx, np.column_stack([normals, offsets])
+
+
+TRACKER_MIN_DISTANCE_M = 0.3  # a tracker closer to the robot's base is inside the robot (a unit slip)
+
+
+def probe_and_tracker(smr_mm=None, tool_mm=None,
+                      tracker_mm=None) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The SMRs ``(k, 3)`` (or the probe tip, SMR 0) and the tracker ``(3,)`` in m of a simulation,
+    given in mm (None: random), refused when their magnitudes say metres.
+
+    Raises
+    ------
+    DataError
+        Both SMRs and a probe tip, or a tracker inside the robot.
+    UnitError
+        An SMR or tip no tool has (e.g. given in metres).
+    """
+    if tool_mm is not None and smr_mm:
+        raise DataError("give the probe either as --tool-mm or as --smr-mm, not both")
+    given = smr_mm or ([tool_mm] if tool_mm is not None else None)
+    for smr in given or []:
+        shown = ",".join(f"{v:g}" for v in smr)
+        check_tool(np.asarray(smr, dtype=float) * 1e-3, "mm", f"--smr-mm/--tool-mm {shown}")
+    tracker = None if tracker_mm is None else np.array(tracker_mm) * 1e-3
+    if tracker is not None and np.linalg.norm(tracker) < TRACKER_MIN_DISTANCE_M:
+        raise DataError(f"--tracker-mm {','.join(f'{v:g}' for v in tracker_mm)}: a tracker "
+                        f"{np.linalg.norm(tracker) * 1e3:.3g} mm from the robot's base is inside the robot; "
+                        "the values look like metres: give mm (e.g. 2500,500,300)")
+    return (None if given is None else np.array(given) * 1e-3), tracker
 
 
 def write_simulation(result: SimulationResult, data_path, truth_path) -> Path:
