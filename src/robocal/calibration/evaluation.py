@@ -10,6 +10,7 @@ import numpy as np
 from robocal.core.errors import DataError, PlausibilityError
 from robocal.core.io import write_all
 from robocal.core.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
+from robocal.data.csv_table import count_lines
 from robocal.data.registration import apply_registration, register_frame
 from robocal.identify.observations import observation_for
 from robocal.identify.plausibility import check_joint_limits, check_residual, check_spread
@@ -124,6 +125,13 @@ class EvaluationResult(dict):
         text = json.dumps({**out, "errors_mm": _ERRORS}, indent=2)
         write_all({json_path: text.replace(f'"{_ERRORS}"', json.dumps(out["errors_mm"]), 1) + "\n"})
         return [str(json_path)]
+
+
+def check_files_memory(paths) -> None:
+    """Refuse, before reading them, measurement files (None entries skipped) with more rows than an
+    evaluation can hold in this machine's memory (ResourceError naming what it needs)."""
+    rows = sum(count_lines(p) for p in paths if p is not None)
+    check_memory(evaluation_bytes(rows), f"evaluating {rows:,} measurement rows", EVALUATION_ADVICE)
 
 
 def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bool = False,

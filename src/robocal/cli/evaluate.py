@@ -36,11 +36,9 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from robocal.calibration.evaluation import evaluate
+    from robocal.calibration.evaluation import check_files_memory, evaluate
     from robocal.cli.args import check_format, load_measurements
     from robocal.core.io import check_outputs
-    from robocal.core.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
-    from robocal.data.csv_table import count_lines
     from robocal.history.record import evaluation_record, open_history, record
     from robocal.kinematics.model import load_model
 
@@ -48,8 +46,7 @@ def run(args) -> int:
     check_outputs([args.json], [args.model, args.data, args.frame_from])
     robot_id = open_history(args.history, args.robot_id)
     robot = load_model(args.model)
-    rows = sum(count_lines(p) for p in (args.data, args.frame_from) if p is not None)  # before reading them
-    check_memory(evaluation_bytes(rows), f"evaluating {rows:,} measurement rows", EVALUATION_ADVICE)
+    check_files_memory([args.data, args.frame_from])  # before reading them
     data = load_measurements(args.data, robot, args.quiet, args.fanuc_coupled)
     frame_from = None if args.frame_from is None else \
         load_measurements(args.frame_from, robot, args.quiet, args.fanuc_coupled)
@@ -64,9 +61,7 @@ def run(args) -> int:
             print(f"wrote {path}")
     if args.history:  # after the files: the history is never the only copy
         files = [(args.data, "evaluation")] + ([(args.frame_from, "frame")] if args.frame_from else [])
-        figures = {**stats.statistics, "n_poses": stats["n_poses"], "kind": stats["kind"],
-                   "fit_frame": bool(args.fit_frame)}
-        said = record(args.history, evaluation_record(args.history, robot_id, robot, figures, files))
+        said = record(args.history, evaluation_record(args.history, robot_id, robot, stats, files))
         if not args.quiet:
             print(said)
     return 0

@@ -82,10 +82,12 @@ def parent_calibration(location: str, robot_id: str, robot) -> int | None:
             return None
 
 
-def evaluation_record(location: str, robot_id: str, robot, summary: dict,
-                      files: list[tuple[str, str]]) -> Record:
-    """The record of an evaluation of ``robot`` (``summary``: its statistics, mm), derived from the
-    calibration of the same model when the history holds one."""
+def evaluation_record(location: str, robot_id: str, robot, result, files: list[tuple[str, str]]) -> Record:
+    """The record of an evaluation of ``robot`` (`robocal.calibration.evaluation.EvaluationResult`:
+    its statistics in mm, poses, kind, whether the frame was fitted), derived from the calibration
+    of the same model when the history holds one."""
+    summary = {**result.statistics, "n_poses": result["n_poses"], "kind": result["kind"],
+               "fit_frame": bool(result.fit_frame)}
     return Record(robot_id=robot_id, kind="evaluation", model_yaml=dump_model(robot), summary=summary,
                   data=fingerprints(files), parent=parent_calibration(location, robot_id, robot))
 
