@@ -85,8 +85,10 @@ class EvaluationResult(dict):
     True
     """
 
-    names: dict
-    fit_frame: bool
+    def __init__(self, stats: dict, names: dict | None = None, fit_frame: bool = False) -> None:
+        super().__init__(stats)
+        self.names = dict(names or {})
+        self.fit_frame = bool(fit_frame)
 
     @property
     def warnings(self) -> list[str]:
@@ -198,12 +200,10 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     (True, (30, 3))
     """
     try:
-        result = EvaluationResult(_statistics(robot, data, fit_frame, frame_from, force))
+        return EvaluationResult(_statistics(robot, data, fit_frame, frame_from, force), names, fit_frame)
     except PlausibilityError as exc:  # the data's own diagnosis first when it tells more
         fitted = fit_frame or frame_from is not None
         raise diagnosed(exc, robot, [d for d in (frame_from, data) if d is not None], fitted) from None
-    result.names, result.fit_frame = dict(names or {}), bool(fit_frame)
-    return result
 
 
 def _statistics(robot, data, fit_frame: bool, frame_from, force: bool) -> dict:
