@@ -424,14 +424,14 @@ class CalibrationResult(_BeforeAfter):
         """
         write_atomic(path, self.to_json())
 
-    def write(self, output=None, json=None, report=None, network=None, force: bool = False) -> list[str]:
-        """Write the calibrated model YAML (``output``), the result JSON (``json``), the HTML report
+    def write(self, output=None, json_path=None, report=None, network=None, force: bool = False) -> list[str]:
+        """Write the calibrated model YAML (``output``), the result JSON (``json_path``), the HTML report
         (``report``) and the trained network of the neural method (``network``, .npz or .json):
         all computed first, then written together (all or none, `robocal.core.io.write_all`).
 
         Parameters
         ----------
-        output, json, report, network : str or path-like, optional
+        output, json_path, report, network : str or path-like, optional
             The files to write; None skips one.
         force : bool
             Write the results of a solve that did not converge.
@@ -448,7 +448,7 @@ class CalibrationResult(_BeforeAfter):
 
         Examples
         --------
-        >>> result.write(output="calibrated.yaml", json="result.json")  # doctest: +SKIP
+        >>> result.write(output="calibrated.yaml", json_path="result.json")  # doctest: +SKIP
         ['calibrated.yaml', 'result.json']
         """
         if not self.solver.success and not force:
@@ -458,9 +458,9 @@ class CalibrationResult(_BeforeAfter):
         texts = {}
         if output:
             texts[output] = dump_model(self.robot)
-        content = self.to_dict() if json or report else None
-        if json:
-            texts[json] = json_text(content)
+        content = self.to_dict() if json_path or report else None
+        if json_path:
+            texts[json_path] = json_text(content)
         if report:
             from robocal.report.html import render_report
 
