@@ -55,12 +55,12 @@ class ModelExport:
 
     def summary(self) -> str:
         """The notes, warnings and frame descriptions, then the files."""
-        return "\n".join([*self.lines(), f"{self.robot.name} ({self.robot.n_joints} joints): wrote "
-                          f"{', '.join(self.texts)}"])
+        files = ", ".join(str(path) for path in self.texts)
+        return "\n".join([*self.lines(), f"{self.robot.name} ({self.robot.n_joints} joints): {files}"])
 
     def to_dict(self) -> dict:
         """The files' contents by path, and the warnings."""
-        return {"files": dict(self.texts), "warnings": self.warnings}
+        return {"files": {str(path): text for path, text in self.texts.items()}, "warnings": self.warnings}
 
     def write(self) -> list[str]:
         """Write every file (all or none); the paths written."""
