@@ -8,7 +8,7 @@ import numpy as np
 
 from robocal.calibration.pipeline import calibrate
 from robocal.core.errors import DataError
-from robocal.kinematics.model import load_model
+from robocal.kinematics.model import Robot, load_model
 
 FRAME_PARAMS = ("base.x", "base.y", "base.z", "base.rx", "base.ry", "base.rz", "tool.x", "tool.y", "tool.z")
 SAME_NOMINAL_TOL = 1e-9  # m or rad: the calibrated model must carry the nominal robot's links
@@ -92,7 +92,7 @@ def recalibrate_offsets(nominal, start, data, validation=None, **options):
 
 
 def offsets_start(start: str | None, offsets_only: bool, params: str = "auto",
-                  nongeometric: str = "default"):
+                  nongeometric: str = "default") -> Robot | None:
     """The start model of an offsets-only recalibration (``--offsets-only --start START``; None
     without them), the options that cannot go with it refused (DataError)."""
     if bool(offsets_only) != bool(start):
@@ -115,6 +115,6 @@ def zero_shifts(result, start) -> list[dict]:
 
 
 def shifts_line(shifts: list[dict]) -> str:
-    """One line of :func:`zero_shifts`: each joint zero's change with its sigma (deg)."""
+    """One line of `zero_shifts`: each joint zero's change with its sigma (deg)."""
     return "joint zeros changed from the start: " + \
         ", ".join(f"{r['name']} {r['shift']:+.4f} ± {r['sigma']:.4f} deg" for r in shifts)
