@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from robocal.core.errors import DataError
+from robocal.core.errors import DataError, RobocalError
 from robocal.core.io import write_all
 from robocal.deploy.models import controller_for
 from robocal.kinematics.manufacturer.ur import not_representable, to_ur_calibration
@@ -27,7 +27,8 @@ UR_CALIBRATION = ("ur_calibration YAML: the geometry from the controller's base 
 class ModelExport:
     """The files of `export_model`: ``texts`` {path: content}, and what to tell the user, in
     order: ``said`` (line, shown even when quiet) pairs; ``warnings`` the lines a model's content
-    could not carry.
+    could not carry; ``refused``: why a file asked for cannot be made (raised by `write`, after
+    what was said of the files before it).
 
     Examples
     --------
@@ -43,6 +44,7 @@ class ModelExport:
     robot: Robot
     texts: dict = field(default_factory=dict)
     said: list[tuple[str, bool]] = field(default_factory=list)
+    refused: RobocalError | None = None
 
     @property
     def warnings(self) -> list[str]:
@@ -63,7 +65,15 @@ class ModelExport:
         return {"files": {str(path): text for path, text in self.texts.items()}, "warnings": self.warnings}
 
     def write(self) -> list[str]:
-        """Write every file (all or none); the paths written."""
+        """Write every file (all or none); the paths written.
+
+        Raises
+        ------
+        RobocalError
+            ``refused``: a file asked for cannot be made; nothing is written.
+        """
+        if self.refused is not None:
+            raise self.refused
         write_all(self.texts)
         return [str(path) for path in self.texts]
 
@@ -74,13 +84,21 @@ def export_model(robot: Robot, urdf=None, yaml=None, ur_calibration=None, frames
     of the controller's model ``nominal``, a catalog name or model file, default the catalog robot
     of the model's name; 'model': its world frame and tool), as robocal's model YAML, and as a
     ur_calibration YAML (the geometry from the controller's base to its flange); None skips one.
-
-    Raises
-    ------
-    DataError
-        A ur_calibration YAML of a robot outside the catalog without ``nominal``.
+    A file that cannot be made (e.g. a ur_calibration YAML of a robot outside the catalog without
+    ``nominal``) is ``refused``: `ModelExport.write` raises it, after what was said of the files
+    before it.
     """
     out = ModelExport(robot)
+    try:
+        _make(out, urdf, yaml, ur_calibration, frames, nominal)
+    except RobocalError as exc:
+        out.refused = exc
+    return out
+
+
+def _make(out: ModelExport, urdf, yaml, ur_calibration, frames: str, nominal: str | None) -> None:
+    """The texts of `export_model`, in order, and what to say of them."""
+    robot = out.robot
     if urdf:
         controller = controller_for(robot, nominal) if frames == "robot" else None
         if frames == "robot" and controller is None:
@@ -102,4 +120,3 @@ def export_model(robot: Robot, urdf=None, yaml=None, ur_calibration=None, frames
         if not_representable(robot):
             out.said.append((f"WARNING: {not_representable(robot)}", True))
         out.said.append((UR_CALIBRATION, False))
-    return out
