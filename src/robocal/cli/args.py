@@ -7,7 +7,8 @@ import argparse
 import sys
 from collections.abc import Callable
 
-from robocal.core import io
+from robocal.core.io import FORMATS as DATA_FORMATS
+from robocal.core.io import check_format as check_data_format
 
 
 def numbers(count: int | None, unit_hint: str) -> Callable[[str], list[float]]:
@@ -40,12 +41,12 @@ def load_measurements(path: str, robot, quiet: bool = False, fanuc_coupled: bool
 
 
 # output suffix -> the format written there; an output named for another format is refused
-FORMATS = {**io.FORMATS, ".mod": "RAPID", ".src": "KRL", ".script": "URScript", ".ls": "TP", ".jbi": "JBI"}
+FORMATS = {**DATA_FORMATS, ".mod": "RAPID", ".src": "KRL", ".script": "URScript", ".ls": "TP", ".jbi": "JBI"}
 
 
 def check_format(path, kind: str, option: str, hint: str = "") -> None:
     """:func:`robocal.core.io.check_format` with the robot programs' suffixes too."""
-    io.check_format(path, kind, option, hint, FORMATS)
+    check_data_format(path, kind, option, hint, FORMATS)
 
 
 def print_warnings(command: str, warnings) -> None:
