@@ -239,14 +239,8 @@ def run(args) -> int:
     from robocal.core.io import check_outputs
     from robocal.core.magnitudes import check_degrees, check_frame
     from robocal.data.measurements import robot_reach
-    from robocal.deploy.compensation import frame_from_text
-    from robocal.deploy.models import (
-        load_model_pair,
-        load_prediction,
-        payload_si,
-        tool_frame,
-        unused_conditions,
-    )
+    from robocal.deploy.compensation import frame_from_text, unused_conditions
+    from robocal.deploy.models import load_model_pair, load_prediction, payload_si, tool_frame
     from robocal.programs import filter_program
 
     targets, table, written = _output_paths(args.programs, args.output, args.table, args.position_registers)

@@ -1,7 +1,7 @@
 """The models a robot's programs and targets are corrected with, loaded and checked: the calibrated
 model and the controller's nominal one (refused when they look swapped), the controller's model of
 a calibrated robot, the calibration's accuracy prediction, and the options that go with them (a
-tool frame, a payload, conditions the model has no term for)."""
+tool frame, a payload)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,6 @@ from robocal.core.io import check_outputs
 from robocal.core.magnitudes import check_degrees, check_tool
 from robocal.deploy.compensation import controller_model, frame_from_text, rotation_from_text
 from robocal.kinematics.catalog import catalog_names
-from robocal.kinematics.joint_errors import condition_terms
 from robocal.kinematics.model import Robot, load_model
 from robocal.trust.coverage import Prediction
 
@@ -133,15 +132,6 @@ def payload_si(values: list[float] | None) -> list[float] | None:
     if len(values) not in (1, 4):
         raise DataError(f"--payload takes KG or KG,X,Y,Z (centre of mass in mm), got {len(values)} numbers")
     return [values[0], *(v * 1e-3 for v in values[1:])]
-
-
-def unused_conditions(robot: Robot, payload=None, temperature: float | None = None) -> list[str]:
-    """Warnings for a payload / temperature given to a model without the term that uses it."""
-    terms = condition_terms(robot)
-    return [f"{option} is not used: the model of {robot.name} has no {term} term"
-            for option, term, value in (("--payload", "payload", payload),
-                                        ("--temperature", "thermal", temperature))
-            if value is not None and term not in terms]
 
 
 def check_tool_mm(xyz, option: str) -> None:
