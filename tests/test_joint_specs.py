@@ -110,8 +110,9 @@ def test_a_joint_limited_beyond_two_turns_reads_inside_its_limits(tmp_path):
 
 
 def test_a_margin_that_leaves_no_room_names_the_quill_in_mm():
-    with pytest.raises(DataError, match=r"no room on joint 3 \(limits -200 to 0 mm\)"):
-        limits_with_margin(_scara(), 10.0)
+    limits_with_margin(_scara(), 10.0)  # 10 mm off either end of a 200 mm quill (not 10 deg = 175 mm)
+    with pytest.raises(DataError, match=r"margin of 101 mm leaves no room on joint 3 \(limits -200 to 0 mm"):
+        limits_with_margin(_scara(), 101.0)
 
 
 def test_a_gantry_is_no_track_and_a_track_counts_its_arm_joints():
@@ -125,3 +126,85 @@ def test_a_gantry_is_no_track_and_a_track_counts_its_arm_joints():
         three.check_against(gantry)
     with pytest.raises(DataError, match=r"has 7 joints \(e1 for its track, then q1\.\.q6\)"):
         three.check_against(cell_from_data(CELL))
+
+
+def test_a_margin_and_a_joint_distance_count_a_prismatic_joint_in_mm():
+    from robocal.campaign.constraints import conflict_rows, margin_unit
+
+    robot = _scara()
+    lim = limits_with_margin(robot, 1.0)
+    np.testing.assert_allclose(lim[2], [-0.199, -0.001])  # 1 mm off the quill's ends, not 17.5 mm
+    np.testing.assert_allclose(lim[0], [-2.5 + np.deg2rad(1.0), 2.5 - np.deg2rad(1.0)])
+    assert margin_unit(robot) == "deg, mm on q3" and margin_unit(Robot.from_catalog("abb_irb2600")) == "deg"
+    q = np.zeros((3, 4))
+    q[1, 2], q[2, 0] = -0.005, np.deg2rad(5.0)  # 5 mm down the quill, 5 deg on the shoulder
+    conflicts = conflict_rows(robot, q, 4.0)
+    np.testing.assert_array_equal(conflicts(0), [1, 0, 0])
+    np.testing.assert_array_equal(conflict_rows(robot, q, 6.0)(0), [1, 1, 1])
+
+
+def _scara_plan():
+    import robocal as rc
+
+    return rc.plan_poses(_scara(), 12, n_candidates=200, region_size=80, starts=1, seed=1)
+
+
+def test_a_scara_campaign_writes_its_quill_in_mm_and_its_page_says_so():
+    from robocal.report.campaign import render_campaign
+
+    plan = _scara_plan()
+    out = plan.to_dict()
+    assert out["robot"]["joints"] == ["q1_deg", "q2_deg", "q3_mm", "q4_deg"]
+    quill = np.array(out["joints_deg"])[:, 2]
+    np.testing.assert_allclose(quill, plan.joints[:, 2] * 1e3, atol=1e-4)
+    assert (quill <= -1.0).all() and (quill >= -199.0).all()  # mm, within the 1 mm margin
+    np.testing.assert_array_equal(np.round(plan.joints[:, 2] * 1e3, 4), plan.joints[:, 2] * 1e3)
+    page = render_campaign(out)
+    assert "<th>q3 (mm)</th>" in page and "q3 (deg)" not in page
+
+
+def test_an_ordinary_arm_keeps_its_robot_section_and_labels():
+    from robocal.report.format import joint_columns
+
+    robot = Robot.from_catalog("abb_irb2600")
+    assert robot.section() == {"name": "abb_irb2600", "description": robot.description, "n_joints": 6}
+    assert joint_columns({"robot": robot.section()}, 6)[1] == ("q2", "deg")
+    cell = cell_from_data(CELL)
+    assert cell.section()["joints"][:2] == ["e1_mm", "q1_deg"]
+    assert joint_columns({"robot": cell.section()}, 7)[:2] == [("e1", "mm"), ("q1", "deg")]
+
+
+def test_coverage_gives_a_prismatic_joint_in_mm():
+    from robocal.trust.coverage import coverage, covered_text
+
+    robot = _scara()
+    q = np.array([[0.1, -0.2, -0.05, 1.0], [0.3, 0.2, -0.01, 2.0]])
+    rows = coverage(robot, q)
+    assert set(rows[0]) == {"joint", "limits_deg", "covered_deg", "fraction"}
+    assert set(rows[2]) == {"joint", "limits_mm", "covered_mm", "fraction"}
+    np.testing.assert_allclose(rows[2]["limits_mm"], [-200.0, 0.0])
+    np.testing.assert_allclose(rows[2]["covered_mm"], [-50.0, -10.0])
+    assert rows[2]["fraction"] == pytest.approx(0.2)
+    assert covered_text(robot, rows[2]) == "q3 (covered -50..-10 of -200..0 mm)"
+    assert covered_text(robot, rows[1]) == "q2 (covered -11..11 of -143..143 deg)"
+    cell = cell_from_data(CELL)
+    track = coverage(cell, np.zeros((2, 7)))[0]
+    assert covered_text(cell, track) == "e1 (covered 0..0 of 0..6000 mm)"
+
+
+def test_a_scara_calibration_reports_its_quill_in_mm():
+    import robocal as rc
+    from robocal.report.html import render_report
+
+    robot = _scara()
+    q = np.random.default_rng(3).uniform(robot.limits[:, 0], robot.limits[:, 1], (40, 4))
+    data = Measurements.from_arrays("point", q, points=robot.fk(q)[:, :3, 3] + 1e-5, linear=robot.prismatic)
+    result = rc.calibrate(robot, data, nongeometric="none", register_frames=False, force=True)
+    out = result.to_dict()
+    assert out["robot"]["joints"] == ["q1_deg", "q2_deg", "q3_mm", "q4_deg"]
+    np.testing.assert_allclose(np.array(out["observations"]["joints_deg"])[:, 2], q[:, 2] * 1e3)
+    cov = out["predicted_accuracy"]["coverage"][2]
+    assert "limits_mm" in cov and "limits_deg" not in cov
+    page = render_report(out)
+    assert "q3 (mm)" in page and "q3 (deg)" not in page
+    assert "mm on q3" in page  # the joint distance's unit
