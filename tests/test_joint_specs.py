@@ -208,3 +208,22 @@ def test_a_scara_calibration_reports_its_quill_in_mm():
     page = render_report(out)
     assert "q3 (mm)" in page and "q3 (deg)" not in page
     assert "mm on q3" in page  # the joint distance's unit
+
+
+def test_measurements_read_against_a_model_take_its_joint_names(tmp_path):
+    cell = cell_from_data(CELL)
+    q = np.zeros((2, 7))
+    q[:, 0], q[:, 3] = [1.0, 2.0], -np.pi / 2
+    points = cell.fk(q)[:, :3, 3]
+    plain = Measurements.from_arrays("point", q, points=points, linear=cell.prismatic)  # q1_m: no track named
+    plain.save(tmp_path / "q1.csv")
+    assert (tmp_path / "q1.csv").read_text().count("q1_m,") == 1
+    data = Measurements.load(tmp_path / "q1.csv", robot=cell)
+    assert data.external == 1 and data.to_csv().count("e1_m,") == 1  # the model's e1, saved as such
+    np.testing.assert_array_equal(data.joints, q)
+    scara = _scara()
+    q4 = np.array([[0.1, -0.2, -0.05, 1.0]])
+    angles = Measurements.from_arrays("point", q4, points=scara.fk(q4)[:, :3, 3])
+    expected = r"joint 3 \(q3\) is prismatic \(give it in mm or m\): its column is q3_mm"
+    with pytest.raises(UnitError, match=expected):
+        angles.check_against(scara)
