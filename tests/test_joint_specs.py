@@ -227,3 +227,14 @@ def test_measurements_read_against_a_model_take_its_joint_names(tmp_path):
     expected = r"joint 3 \(q3\) is prismatic \(give it in mm or m\): its column is q3_mm"
     with pytest.raises(UnitError, match=expected):
         angles.check_against(scara)
+
+
+def test_a_repeated_pose_on_a_track_is_within_its_tolerance_in_mm():
+    from robocal.trust.provenance import repeated_rows
+
+    ref = np.zeros((1, 7))
+    q = np.zeros((3, 7))
+    q[1, 0], q[2, 0] = 5e-6, 1e-4  # 0.005 mm and 0.1 mm along the track (0.1 mm < 0.01 "deg" = 0.17 mm)
+    slides = np.r_[True, np.zeros(6, bool)]
+    np.testing.assert_array_equal(repeated_rows(ref, q, prismatic=slides), [True, True, False])
+    np.testing.assert_array_equal(repeated_rows(ref, q), [True, True, True])  # without the kinds: rad

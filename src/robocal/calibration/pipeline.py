@@ -55,7 +55,7 @@ from robocal.trust.consistency import Consistency, check_fit, check_not_worse
 from robocal.trust.coverage import accuracy_line, predict, prediction
 from robocal.trust.file_shifts import FileShifts, file_shifts, pose_means
 from robocal.trust.posterior import Noise, posterior_analysis
-from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, independent
+from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, independent, tolerance_unit
 
 RESULT_FORMAT = "robocal-result/1"
 NONGEOMETRIC_METHODS = ("lsq", "robust")  # the methods that estimate the joint-error terms
@@ -619,8 +619,8 @@ def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data
     rows, repeated = independent(data, problem.datasets, what)
     if repeated:
         warnings.append(f"{what}: {repeated} of its {len(data)} rows repeat calibration poses (joints within "
-                        f"{JOINT_REPEAT_TOL_DEG:g} deg): the held-out figures are computed on the other "
-                        f"{len(rows)} rows only")
+                        f"{JOINT_REPEAT_TOL_DEG:g} {tolerance_unit(data)}): the held-out figures are "
+                        f"computed on the other {len(rows)} rows only")
         result = replace(judged(rows), repeated=repeated)
     if result.after["rms"] > result.before["rms"]:
         warnings.append(f"the calibrated model is worse than the nominal on the validation data "
