@@ -238,3 +238,18 @@ def test_a_repeated_pose_on_a_track_is_within_its_tolerance_in_mm():
     slides = np.r_[True, np.zeros(6, bool)]
     np.testing.assert_array_equal(repeated_rows(ref, q, prismatic=slides), [True, True, False])
     np.testing.assert_array_equal(repeated_rows(ref, q), [True, True, True])  # without the kinds: rad
+
+
+def test_a_joint_column_exchange_on_a_track_names_the_arm_joints():
+    from dataclasses import replace
+
+    from robocal.data.simulate import simulate_tracker
+    from robocal.trust.diagnosis import fit_rms_mm, joint_mixup
+
+    cell = cell_from_data(CELL)
+    data = simulate_tracker(cell, 30, noise_mm=0.0, seed=2).data
+    q = data.joints.copy()
+    q[:, [2, 3]] = q[:, [3, 2]]  # the arm's q2 and q3 (columns 3 and 4 after e1)
+    swapped = replace(data, joints=q)
+    given = fit_rms_mm(cell, swapped)
+    assert joint_mixup(cell, swapped, given).startswith("joint columns q2 and q3 look exchanged")
