@@ -253,3 +253,14 @@ def test_a_joint_column_exchange_on_a_track_names_the_arm_joints():
     swapped = replace(data, joints=q)
     given = fit_rms_mm(cell, swapped)
     assert joint_mixup(cell, swapped, given).startswith("joint columns q2 and q3 look exchanged")
+
+
+def test_a_track_campaign_page_shows_the_carriage_in_mm():
+    from robocal.report.campaign import render_campaign
+
+    page = {"robot": {"name": "cell", "n_joints": 7}, "joints_deg": [[0.0, -90.0, 90.0, 0.0, 10.0, 0.0]],
+            "e1_mm": [1500.0], "tcp_mm": [[1.0, 2.0, 3.0]]}
+    for campaign in (page, {**page, "robot": cell_from_data(CELL).section()}):  # older file, this one
+        html = render_campaign(campaign)
+        assert "<th>e1 (mm)</th><th>q1 (deg)</th>" in html and "q7" not in html
+        assert "1500.0000" in html
