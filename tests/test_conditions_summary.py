@@ -11,7 +11,8 @@ import pytest
 from conftest import require_datasets
 
 import robocal as rc
-from robocal.calibration.pipeline import calibrate, load_result
+from robocal.calibration.pipeline import calibrate
+from robocal.calibration.result import load_result
 from robocal.cli import main
 from robocal.data.simulate import simulate_tracker
 from robocal.identify import vocabulary

@@ -209,7 +209,8 @@ def test_cli_report(tmp_path):
 
 def test_report_of_a_real_robust_calibration(tmp_path):
     """End to end: simulate a tracker data set with outliers, calibrate (robust), report."""
-    from robocal.calibration.pipeline import calibrate, load_result
+    from robocal.calibration.pipeline import calibrate
+    from robocal.calibration.result import load_result
     from robocal.data.simulate import simulate_tracker
 
     robot = Robot.from_catalog("abb_irb2600")

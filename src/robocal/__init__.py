@@ -19,7 +19,7 @@ from robocal.core.version import __version__
 # Ctrl-C during the heavy imports reaches the command line's handler (one line, exit 130).
 _LAZY = {
     "ik": "robocal.ik",  # rc.ik.solve_all, rc.ik.solve, rc.ik.plan_path
-    "CalibrationResult": "robocal.calibration.pipeline", "analyze": "robocal.calibration.pipeline",
+    "CalibrationResult": "robocal.calibration.result", "analyze": "robocal.calibration.pipeline",
     "calibrate": "robocal.calibration.pipeline",
     "CampaignResult": "robocal.campaign", "Constraints": "robocal.campaign", "Tracker": "robocal.campaign",
     "plan_poses": "robocal.campaign",

@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.calibration.pipeline import calibrate, json_text
+from robocal.calibration.pipeline import calibrate
+from robocal.calibration.result import json_text
 from robocal.core.io import write_all
 from robocal.data.measurements import Measurements
 from robocal.deploy.compensation import compensate

@@ -65,7 +65,7 @@ def not_used(datasets, names) -> dict[str, str]:
 
 
 def section(result) -> dict | None:
-    """The ``conditions`` section (module docstring) of a `robocal.calibration.pipeline.CalibrationResult`,
+    """The ``conditions`` section (module docstring) of a `robocal.calibration.result.CalibrationResult`,
     or None when its candidate parameters have no payload or thermal term."""
     ident = result.identifiability
     declared = [nm for nm in ident.names if _is_condition(nm)]

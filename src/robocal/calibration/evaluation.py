@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 
-from robocal.core.errors import DataError
+from robocal.core.errors import DataError, PlausibilityError
+from robocal.core.io import write_all
 from robocal.core.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
+from robocal.data.csv_table import count_lines
 from robocal.data.registration import apply_registration, register_frame
 from robocal.identify.observations import observation_for
 from robocal.identify.plausibility import check_joint_limits, check_residual, check_spread
@@ -15,7 +18,7 @@ from robocal.kinematics.joint_errors import extrapolated_conditions
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import check_fit
-from robocal.trust.diagnosis import fit_rms_mm
+from robocal.trust.diagnosis import diagnosed, fit_rms_mm
 
 
 def model_errors(robot, data) -> np.ndarray:
@@ -59,7 +62,82 @@ def _check_frame_moved(robot, data, rms_mm: float, warnings: list[str]) -> None:
                         "the model was made (--fit-frame judges the links alone)")
 
 
-def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bool = False) -> dict:
+_ERRORS = "<errors_mm>"  # stands for the per-row error list in the JSON until it is written
+STATISTICS = ("n", "rms", "mean", "max", "p95")  # the statistics an evaluation reports (mm; n a count)
+
+
+class EvaluationResult(dict):
+    """What `evaluate` returns: the dict of statistics it always returned (``n``, ``rms``,
+    ``mean``, ``max``, ``p95`` in mm, ``errors_mm``, ``kind``, ``n_poses``, ``consistency``,
+    ``warnings`` ...) with the result protocol: ``summary()``, ``warnings``, ``to_dict()``,
+    ``write()``. ``names`` labels the model, the data and the frame's data in the summary and the
+    JSON (file names or catalog names; None: unnamed).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> robot = rc.Robot.from_catalog("abb_irb2600")
+    >>> sim = rc.simulate_tracker(robot, 30, noise_mm=0.01, seed=1, as_is=True)
+    >>> stats = rc.evaluate(robot, sim.data)
+    >>> stats["rms"] < 0.05, stats.warnings == stats["warnings"]  # mm
+    (True, True)
+    >>> stats.summary().startswith("point errors of the model on the data (30 poses): n 30, rms")
+    True
+    """
+
+    def __init__(self, stats: dict, names: dict | None = None, fit_frame: bool = False) -> None:
+        super().__init__(stats)
+        self.names = dict(names or {})
+        self.fit_frame = bool(fit_frame)
+
+    @property
+    def warnings(self) -> list[str]:
+        """What the evaluation warns of (one line each)."""
+        return self["warnings"]
+
+    @property
+    def statistics(self) -> dict:
+        """``{n, rms, mean, max, p95}`` (mm)."""
+        return {k: self[k] for k in STATISTICS}
+
+    def summary(self) -> str:
+        """One line: the kind of errors, of which model on which data, the statistics (mm)."""
+        stats = self.statistics
+        return (f"{self['kind']} errors of {self.names.get('model') or 'the model'} on "
+                f"{self.names.get('data') or 'the data'} ({self['n_poses']} poses): "
+                + ", ".join(f"{k} {stats[k]:.4f} mm" if k != "n" else f"n {stats[k]}" for k in STATISTICS))
+
+    def to_dict(self) -> dict:
+        """The evaluation JSON: the names, the statistics, each row's error (mm), the consistency
+        and the warnings."""
+        out = {"model": self.names.get("model"), "data": self.names.get("data"), "kind": self["kind"],
+               "n_poses": self["n_poses"], "fit_frame": bool(self.fit_frame),
+               "frame_from": self.names.get("frame_from"), "units": "mm", "evaluation": self.statistics,
+               "errors_mm": self["errors_mm"].tolist(), "consistency": self["consistency"],
+               "warnings": self["warnings"]}
+        if "rotation_deg" in self:
+            out["rotation_deg"] = self["rotation_deg"]
+        return out
+
+    def write(self, json_path=None) -> list[str]:
+        """Write `to_dict` as JSON to ``json_path`` (atomically); the paths written."""
+        if json_path is None:
+            return []
+        out = self.to_dict()  # the per-row errors on one line by json's C encoder (indent: pure Python)
+        text = json.dumps({**out, "errors_mm": _ERRORS}, indent=2)
+        write_all({json_path: text.replace(f'"{_ERRORS}"', json.dumps(out["errors_mm"]), 1) + "\n"})
+        return [str(json_path)]
+
+
+def check_files_memory(paths) -> None:
+    """Refuse, before reading them, measurement files (None entries skipped) with more rows than an
+    evaluation can hold in this machine's memory (ResourceError naming what it needs)."""
+    rows = sum(count_lines(p) for p in paths if p is not None)
+    check_memory(evaluation_bytes(rows), f"evaluating {rows:,} measurement rows", EVALUATION_ADVICE)
+
+
+def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bool = False,
+             names: dict | None = None) -> EvaluationResult:
     """Position error statistics (mm) of ``robot`` against ``data``.
 
     ``fit_frame`` first registers the base frame and SMR offsets on ``data`` (for a nominal
@@ -86,10 +164,13 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
         Register the frame on this set instead and judge ``data`` with it.
     force : bool, default False
         Turn the plausibility errors into warnings.
+    names : dict, optional
+        ``{"model": ..., "data": ..., "frame_from": ...}``: how the summary and the JSON name them.
 
     Returns
     -------
-    dict
+    EvaluationResult
+        A dict (as before) with ``summary()``, ``warnings``, ``to_dict()``, ``write()``:
         ``n``, ``rms``, ``mean``, ``max``, ``p95`` (mm); ``errors_mm`` ``(N,)`` (plane/distance:
         signed); ``error_vectors_mm`` ``(N, 3)`` (point/pose); ``rotation_deg`` (pose);
         ``kind``; ``n_poses``; ``warnings`` (list of str); ``consistency`` (the residual test);
@@ -118,6 +199,15 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     >>> round(stats["rms"], 6) == round(sim.noise_floor_mm, 6), stats["error_vectors_mm"].shape
     (True, (30, 3))
     """
+    try:
+        return EvaluationResult(_statistics(robot, data, fit_frame, frame_from, force), names, fit_frame)
+    except PlausibilityError as exc:  # the data's own diagnosis first when it tells more
+        fitted = fit_frame or frame_from is not None
+        raise diagnosed(exc, robot, [d for d in (frame_from, data) if d is not None], fitted) from None
+
+
+def _statistics(robot, data, fit_frame: bool, frame_from, force: bool) -> dict:
+    """`evaluate`'s statistics as a plain dict."""
     rows = len(data) + (0 if frame_from is None else len(frame_from))
     check_memory(evaluation_bytes(rows), f"evaluating {rows:,} measurement rows", EVALUATION_ADVICE)
     out, warnings = {}, []

@@ -12,25 +12,21 @@ the default on tracker data of enough poses), with cyclic frequencies searched i
 from __future__ import annotations
 
 import datetime
-import json
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from functools import partial
 
 import numpy as np
 
-from robocal.calibration import conditions
-from robocal.calibration.model_selection import calibrate_cyclic, select_error_model, selection_table
+from robocal.calibration.model_selection import calibrate_cyclic, select_error_model
+from robocal.calibration.result import CalibrationResult, Judged
 from robocal.core.damped_least_squares import Status
-from robocal.core.errors import DataError, IdentificationError
-from robocal.core.io import load_json, read_text, write_atomic
+from robocal.core.errors import DataError, IdentificationError, PlausibilityError
 from robocal.core.progress import Progress
 from robocal.core.resources import calibration_bytes, check_memory, few_threads, memory_guard
-from robocal.core.schema import RESULT_SCHEMA, validate
 from robocal.core.version import __version__
 from robocal.data.kinds import kind_spec
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
-from robocal.identify import vocabulary
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, hold
 from robocal.identify.identifiability import analyze as analyze_jacobian
 from robocal.identify.plausibility import (
@@ -44,453 +40,20 @@ from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.identify.structural import separate, unidentifiable
-from robocal.identify.uncertainty import correlation, covariance, tcp_position_covariance
-from robocal.kinematics.cell import TRACK_IDENTIFIABILITY, is_track_cell
+from robocal.identify.uncertainty import correlation, covariance
 from robocal.kinematics.conditions import range_of as conditions_range
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
-from robocal.kinematics.thermal import groups_of as thermal_groups_of
 from robocal.kinematics.thermal import reference_of as thermal_reference
 from robocal.report.metrics import position_stats
-from robocal.trust.consistency import Consistency, check_fit, check_not_worse
-from robocal.trust.coverage import accuracy_line, predict, prediction
-from robocal.trust.file_shifts import FileShifts, file_shifts, pose_means
+from robocal.trust.consistency import check_fit, check_not_worse
+from robocal.trust.coverage import predict, prediction
+from robocal.trust.diagnosis import diagnosed
 from robocal.trust.posterior import Noise, posterior_analysis
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, independent, tolerance_unit
 
-RESULT_FORMAT = "robocal-result/1"
 NONGEOMETRIC_METHODS = ("lsq", "robust")  # the methods that estimate the joint-error terms
 AUTO_DEFAULT_KINDS = ("point", "pose")  # tracker data: where nongeometric="auto" is the default ...
 AUTO_DEFAULT_MIN_POSES = 100  # ... from this many poses on (20 held out per cross-validation fold)
-_DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 180.0 / np.pi),
-            "rad/rad": ("mdeg/deg", 1e3), "1": ("ppm", 1e6),  # "1": a scale (dimensionless)
-            "rad/(kg m)": ("deg/(kg m)", 180.0 / np.pi), "1/K": ("1e-6/K", 1e6)}
-
-
-class _BeforeAfter:
-    """Statistics (mm) of ``errors`` (each item's error with the start and the calibrated model, m)."""
-
-    errors: tuple[np.ndarray, np.ndarray]
-
-    @property
-    def before(self) -> dict:
-        """Statistics (mm) with the start model."""
-        return position_stats(self.errors[0])
-
-    @property
-    def after(self) -> dict:
-        """Statistics (mm) with the calibrated model."""
-        return position_stats(self.errors[1])
-
-
-@dataclass
-class Judged(_BeforeAfter):
-    """A measurement set judged with the start and the calibrated model: its problem, the two
-    states (nuisance carried over from the calibration) and each item's error with them (m)."""
-
-    data: Measurements
-    problem: CalibrationProblem
-    states: tuple[State, State]
-    errors: tuple[np.ndarray, np.ndarray]
-    repeated: int = 0  # rows left out: they repeat calibration poses (robocal.trust.provenance)
-
-
-@dataclass
-class CalibrationResult(_BeforeAfter):
-    """Everything a calibration found; ``to_dict()`` is the JSON of docs/result-json.md.
-
-    Returned by `robocal.calibrate`; `summary` prints it, `save_json` writes it,
-    ``result.robot.save(path)`` writes the calibrated model.
-
-    Attributes
-    ----------
-    robot : Robot
-        The calibrated model (with the declared joint-error terms, which its ``fk`` applies).
-    start : Robot
-        The registered start model (nominal geometry in the measurement's frame).
-    method : str
-        The solver used (``'lsq'``, ``'robust'``...).
-    identifiability : Identifiability
-        Which parameters the data determine: kept, dropped (not identifiable, with what they are
-        confounded with) and undetermined (held at nominal), the condition number.
-    space : ParameterSpace
-        What was estimated: robot parameters, then nuisance (tracker frame, SMRs, planes...).
-    covariance : numpy.ndarray, shape (k, k)
-        Covariance of the estimated unknowns, SI units (m, rad).
-    solver : SolverResult
-        The solver's outcome: final state, convergence, iteration history, robust weights.
-    errors : tuple of numpy.ndarray, shape (M,) each
-        Each calibration item's error in the start and in the final state, metres.
-    problem : CalibrationProblem
-        The measurement model of the calibration data.
-    initial : State
-        The start state (registered model, nuisance fitted to it).
-    judged : list of Judged
-        Each validation set judged with the start and the calibrated model.
-    warnings : list of str
-        What the user should know (held parameters, implausible corrections with ``force``...).
-    settings : dict
-        The settings of the run (method, params, rtol, seed, solver options).
-    nongeometric : dict or None
-        The joint-error terms identified, when any.
-    model_selection : dict or None
-        The cross-validation table when the terms were chosen automatically.
-    provenance : dict
-        Versions, date and input files.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> import robocal as rc
-    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
-    >>> sim = rc.simulate_tracker(nominal, 40, noise_mm=0.01, seed=2)
-    >>> result = rc.calibrate(nominal, sim.data, nongeometric=None)
-    >>> result.after["rms"] < 0.05 < 0.5 < result.before["rms"]  # mm: from the errors to the noise
-    True
-    >>> q = sim.data.joints
-    >>> error = result.robot.fk(q)[:, :3, 3] - sim.truth.fk(q)[:, :3, 3]  # against the truth, m
-    >>> bool(np.abs(error).max() < 5e-5)
-    True
-    >>> result.predict_position_sigma(q[:2]).shape  # 1-sigma of the predicted TCP, m
-    (2, 3)
-    """
-
-    robot: object
-    start: object
-    method: str
-    identifiability: Identifiability
-    space: ParameterSpace
-    covariance: np.ndarray
-    solver: SolverResult
-    errors: tuple[np.ndarray, np.ndarray] = field(repr=False)
-    problem: CalibrationProblem = field(repr=False)
-    initial: State = field(repr=False)
-    judged: list[Judged] = field(default_factory=list, repr=False)
-    warnings: list[str] = field(default_factory=list)
-    settings: dict = field(default_factory=dict)
-    nongeometric: dict | None = None
-    model_selection: dict | None = None
-    provenance: dict = field(default_factory=dict)
-    consistency: Consistency | None = None
-    predicted_accuracy: dict | None = None
-
-    @property
-    def state(self) -> State:
-        """The final state of the solver (calibrated model and nuisance)."""
-        return self.solver.state
-
-    @property
-    def names(self) -> list[str]:
-        """The estimated robot parameters."""
-        return list(self.space.robot)
-
-    @property
-    def unknowns(self) -> list[str]:
-        """Every estimated unknown (robot parameters, then nuisance)."""
-        return self.space.names
-
-    @property
-    def validation_before(self) -> dict | None:
-        """Statistics (mm) of every validation item with the start model (all files together)."""
-        return _combined([j.errors[0] for j in self.judged])
-
-    @property
-    def validation(self) -> dict | None:
-        """Statistics (mm) of every validation item with the calibrated model (all files)."""
-        return _combined([j.errors[1] for j in self.judged])
-
-    @property
-    def validation_shifts(self) -> FileShifts | None:
-        """The held-out error split into a shift per validation file and the error within the files
-        (`robocal.trust.file_shifts`; point and pose files), with two validation files or more."""
-        files = [j for j in self.judged if j.data.spec.sees_position]
-        errors = [pose_means(j.problem.item_error_vectors(j.states[1])[0], j.data.pose_id) for j in files]
-        return file_shifts([j.data.label for j in files], errors)
-
-    def _files(self) -> list[tuple[str, Measurements, np.ndarray, np.ndarray]]:
-        """(role, data, errors before, errors after) of every file, calibration then validation."""
-        before, after = self.errors
-        return [("calibration", data, before[items], after[items])
-                for data, items in zip(self.problem.datasets, self.problem.item_blocks(), strict=True)] + \
-            [("validation", j.data, *j.errors) for j in self.judged]
-
-    def per_file(self) -> list[dict]:
-        """Per measurement file (calibration, then validation): its kind and its statistics (mm)
-        before and after; the errors of each kind are in mm (position, plane deviation, distance)."""
-        return [{"role": role, "file": data.label, "kind": data.kind, "before": position_stats(before),
-                 "after": position_stats(after)} for role, data, before, after in self._files()]
-
-    def per_kind(self) -> dict[str, dict]:
-        """Per role and kind (e.g. ``calibration plane``): statistics (mm) after calibration."""
-        out: dict[str, list] = {}
-        for role, data, _, after in self._files():
-            out.setdefault(f"{role} {data.kind}", []).append(after)
-        return {key: _combined(parts) for key, parts in out.items()}
-
-    @property
-    def sigma(self) -> np.ndarray:
-        """1-sigma of every unknown (robot parameters then nuisance), SI units."""
-        return np.sqrt(np.maximum(np.diag(self.covariance), 0.0))
-
-    @property
-    def after_inliers(self) -> dict | None:
-        """Statistics after calibration without the rejected observations (robust), else None."""
-        w = self.solver.item_weights
-        if w is None or not (w == 0).any():
-            return None
-        return position_stats(self.errors[1][w != 0])
-
-    @property
-    def correlation(self) -> np.ndarray:
-        """Correlation matrix ``(k, k)`` of the estimated unknowns (order of `unknowns`)."""
-        return correlation(self.covariance)
-
-    @property
-    def rejected(self) -> np.ndarray:
-        """Indices of the measurement items a robust method rejected (weight 0)."""
-        w = self.solver.item_weights
-        return np.zeros(0, int) if w is None else np.flatnonzero(w == 0)
-
-    def predict_position_sigma(self, q) -> np.ndarray:
-        """1-sigma ``(N, 3)`` (m) of the calibrated model's TCP position at joints ``q``.
-
-        Parameters
-        ----------
-        q : array_like, shape (N, n)
-            Joints, radians.
-
-        Returns
-        -------
-        numpy.ndarray, shape (N, 3)
-            Standard deviation of the predicted TCP's x, y, z in the world frame, metres, from
-            the covariance of the estimated parameters.
-        """
-        k = len(self.space.robot)
-        cov = tcp_position_covariance(self.robot, self.robot.check_joints(q), self.names,
-                                      self.covariance[:k, :k])
-        return np.sqrt(np.maximum(np.diagonal(cov, axis1=1, axis2=2), 0.0))
-
-    def parameter_table(self) -> list[dict]:
-        """Every candidate parameter (and nuisance) with nominal, estimate, correction, sigma
-        (display units: mm, deg; nuisance in its own)."""
-        start = self.initial.robot
-        sigma = dict(zip(self.unknowns, self.sigma, strict=True))
-        units = dict(zip(start.parameter_names, start.parameter_units(), strict=True))
-        nominal = dict(zip(start.parameter_names, start.nominal_values, strict=True))
-        estimate = dict(zip(self.robot.parameter_names, self.robot.values, strict=True))
-        nuisance = self.problem.nuisance_names
-        dropped, held = set(self.identifiability.dropped), set(self.identifiability.undetermined)
-        unused = self.not_used
-        rows = []
-        for name in self.identifiability.names:
-            if name in nuisance:  # e.g. plane coefficients: reported in their own unit
-                j = nuisance.index(name)
-                unit, f = "", 1.0
-                nom, est = float(self.initial.nuisance[j]), float(self.state.nuisance[j])
-            else:  # a joint-error term left unidentified is not carried: its estimate is nominal
-                unit, f = _DISPLAY[units[name]]
-                nom, est = nominal[name] * f, estimate.get(name, nominal[name]) * f
-            s = sigma.get(name)
-            rows.append({"name": name, "unit": unit, "nominal": float(nom), "estimate": float(est),
-                         "correction": float(est - nom), "sigma": None if s is None else float(s * f),
-                         "status": "dropped" if name in dropped else
-                         "not determined" if name in held else "estimated",
-                         "identification": vocabulary.status(name, self.identifiability, unused)})
-        return rows
-
-    @property
-    def not_used(self) -> dict[str, str]:
-        """The payload / thermal parameters the calibration data cannot show (no column or one
-        value), each with why (`robocal.calibration.conditions.not_used`)."""
-        return conditions.not_used(self.problem.datasets, self.identifiability.dropped)
-
-    @staticmethod
-    def _observations(obs, states: tuple[State, State], weights: np.ndarray | None) -> dict:
-        """The per-row section of one file (observation ``obs``): joints, measured and modelled."""
-        data = obs.data
-        nu = [s.nuisance[: len(obs.nuisance_names)] for s in states]  # the first file's nuisance
-        measured = getattr(obs, "measured", None)
-        measured = None if measured is None or measured.ndim != 2 else measured * 1e3
-        if weights is not None:
-            weights = weights[obs.item_of_rows()]  # one per data row
-        pairs = list(zip(states, nu, strict=True))
-        before, after = (obs.modelled_points(s.robot, n) * 1e3 for s, n in pairs)
-        errors = [obs.position_errors(s.robot, n)[obs.item_of_rows()] * 1e3 for s, n in pairs]
-        return {
-            "kind": obs.kind, "error_before": errors[0].tolist(), "error_after": errors[1].tolist(),
-            "pose_id": data.pose_id.tolist(), "source_row": data.source_row.tolist(),
-            "smr": data.smr.tolist(),  # each joint in its unit (a quill's, a track's e1 in mm):
-            "joints_deg": states[0].robot.joints_shown(data.joints).tolist(),
-            "measured": None if measured is None else measured.tolist(),
-            "model_before": before.tolist(), "model_after": after.tolist(),
-            "weight": None if weights is None else weights.tolist(),
-            "plane": None if data.plane is None else data.plane.tolist(),
-        }
-
-    def to_dict(self) -> dict:
-        """The result as plain data (mm, deg), per docs/result-json.md."""
-        ident, problem = self.identifiability, self.problem
-        k = len(self.unknowns)
-        data, first = problem.datasets[0], problem.observations[0]  # the per-row sections: the first file
-        out = {
-            "format": RESULT_FORMAT,
-            "robocal_version": __version__,
-            "provenance": self.provenance,
-            "robot": self.robot.section(),
-            "data": {"file": data.source, "kind": problem.kind, "n_poses": int(problem.n_poses),
-                     "n_observations": int(sum(len(d) for d in problem.datasets)),
-                     "files": [{"file": d.label, "kind": d.kind, "n_poses": int(d.n_poses),
-                                "n_observations": len(d),
-                                "sigma_mm": None if d.sigma is not None or not problem.weighted else s * 1e3}
-                               for d, s in zip(problem.datasets, problem.set_sigma, strict=True)]},
-            "method": self.method,
-            "settings": self.settings,
-            "converged": self.solver.success,
-            "status": self.solver.status.value,
-            "message": self.solver.message,
-            "before": self.before,
-            "after": self.after,
-            **({"after_inliers": inliers} if (inliers := self.after_inliers) else {}),
-            "parameters": self.parameter_table(),
-            "dropped": vocabulary.entries(ident.dropped + ident.undetermined, ident, self.not_used),
-            "priors": self._priors(),
-            "identifiability": {key: v for key, v in ident.to_dict().items()
-                                if key not in ("kept", "dropped", "undetermined", "confounded_with")},
-            "correlation": {"names": self.unknowns,
-                            "matrix": np.round(self.correlation, 6).reshape(k, k).tolist()},
-            "per_file": self.per_file(),
-            "per_kind": self.per_kind(),
-            "rejected": self._rejected(),
-            "observations": self._observations(first, (self.initial, self.state), self._first_weights()),
-            "history": self.solver.history,
-            "history_units": ({"cost": "1", "rms": "1 (residuals divided by sigma)"} if problem.weighted
-                              else {"cost": "m^2", "rms": "m"}),
-            "warnings": self.warnings,
-        }
-        if self.consistency is not None:
-            out["consistency"] = self.consistency.to_dict()
-        if self.predicted_accuracy is not None:
-            out["predicted_accuracy"] = self.predicted_accuracy
-        if self.nongeometric is not None:
-            out["nongeometric"] = self.nongeometric
-        if self.model_selection is not None:
-            out["model_selection"] = self.model_selection
-        if (groups := thermal_groups_of(self.robot, self.unknowns)) is not None:
-            out["thermal_groups"] = groups
-        if (section := conditions.section(self)) is not None:
-            out["conditions"] = section
-        if self.judged:
-            out["validation_independence"] = [
-                {"file": j.data.label, "rows": len(j.data) + j.repeated, "repeated_rows": j.repeated,
-                 "rows_judged": len(j.data), "tolerance_deg": JOINT_REPEAT_TOL_DEG} for j in self.judged]
-            out["data"]["validation_file"] = ", ".join(j.data.source for j in self.judged)
-            out["validation_before"] = self.validation_before
-            out["validation"] = self.validation
-            if (shifts := self.validation_shifts) is not None:
-                out["validation_shifts"] = shifts.to_dict()
-            j = self.judged[0]
-            out["validation_observations"] = self._observations(j.problem.observations[0], j.states, None)
-        return out
-
-    def _priors(self) -> dict:
-        """The priors of the estimate (docs/priors.md): the noise scale they were weighed with and
-        each parameter's 1-sigma prior in display units (mm, deg; null without a prior)."""
-        space, robot = self.space, self.initial.robot
-        units = dict(zip(robot.parameter_names, robot.parameter_units(), strict=True))
-        names = [*space.robot, *self.identifiability.undetermined]
-        sigma = dict(zip(space.names, space.prior_sigma or [np.inf] * space.size, strict=True))
-        sigma.update(zip(self.identifiability.undetermined,
-                         prior_sigma(robot, self.identifiability.undetermined), strict=True))
-        return {"source": "robocal.identify.priors (docs/priors.md)",
-                "noise": space.noise, "noise_unit": "1 (residuals divided by sigma)"
-                if self.problem.weighted else "m",
-                "sigma": {n: float(sigma[n] * _DISPLAY[units[n]][1]) if np.isfinite(sigma[n]) else None
-                          for n in names}}
-
-    def _first_weights(self) -> np.ndarray | None:
-        """The robust weights of the first file's items."""
-        w = self.solver.item_weights
-        return None if w is None else w[self.problem.item_blocks()[0]]
-
-    def _rejected(self) -> list[dict]:
-        """Every row of an item a robust method rejected: its file, row, residual (mm)."""
-        w = self.solver.item_weights
-        if w is None:
-            return []
-        out = []
-        for obs, items in zip(self.problem.observations, self.problem.item_blocks(), strict=True):
-            item = items[obs.item_of_rows()]  # each data row's item
-            for row in np.flatnonzero(w[item] == 0):
-                out.append({"file": obs.data.label, "source_row": int(obs.data.source_row[row]),
-                            "pose_id": int(obs.data.pose_id[row]),
-                            "residual": float(self.errors[1][item[row]] * 1e3), "weight": 0.0})
-        return out
-
-    def to_json(self) -> str:
-        """The result JSON text (docs/result-json.md)."""
-        return json_text(self.to_dict())
-
-    def save_json(self, path) -> None:
-        """Write the result JSON (docs/result-json.md) atomically.
-
-        Parameters
-        ----------
-        path : str or path-like
-            The JSON file to write.
-        """
-        write_atomic(path, self.to_json())
-
-    def summary(self) -> str:
-        """A short human summary: before -> after, largest corrections, dropped parameters."""
-        b, a = self.before, self.after
-        lines = [f"{self.method}: {self.solver.message}",
-                 f"calibration set ({b['n']} obs): RMS {b['rms']:.4f} -> {a['rms']:.4f} mm, "
-                 f"max {b['max']:.4f} -> {a['max']:.4f} mm"]
-        if self.judged:
-            vb, va = self.validation_before, self.validation
-            lines.append(f"validation set  ({va['n']} obs): RMS {vb['rms']:.4f} -> {va['rms']:.4f} mm, "
-                         f"max {vb['max']:.4f} -> {va['max']:.4f} mm")
-            if (shifts := self.validation_shifts) is not None:
-                lines.append(f"  of it, a shift per validation file {shifts.shift_rms_mm:.4f} mm RMS "
-                             f"(F test p = {shifts.p_value:.2g}); within the files "
-                             f"{shifts.within_rms_mm:.4f} mm")
-        if len(self.problem.datasets) + len(self.judged) > 1:
-            for row in self.per_file():
-                b, a = row["before"], row["after"]
-                lines.append(f"  {row['role']} {row['kind']} {row['file'][-50:]!r} ({a['n']} obs): RMS "
-                             f"{b['rms']:.4f} -> {a['rms']:.4f} mm")
-        links = [r for r in self.parameter_table()
-                 if r["status"] == "estimated" and block_of(r["name"]) == "links"]
-        for unit in ("mm", "deg"):
-            top = sorted((r for r in links if r["unit"] == unit), key=lambda r: -abs(r["correction"]))[:3]
-            if top:
-                lines.append(f"largest corrections ({unit}): " + ", ".join(
-                    f"{r['name']} {r['correction']:+.4f} ± {r['sigma']:.4f}" for r in top))
-        ident, unused = self.identifiability, self.not_used
-        lines += vocabulary.lines(ident, [n for n in ident.dropped if block_of(n) != "joint_errors"]
-                                  + ident.undetermined)
-        if is_track_cell(self.robot):
-            lines.append(TRACK_IDENTIFIABILITY)
-        if self.nongeometric is not None:
-            ng = self.nongeometric
-            out = [n for n in ng["dropped"] if n not in unused]
-            lines.append(f"non-geometric terms {', '.join(ng['terms'])}: {len(ng['kept'])} parameters "
-                         f"estimated, {len(out)} left out (no effect or not separable from the geometry)")
-        if self.model_selection is not None:
-            lines.append(selection_table(self.model_selection))
-        if (section := conditions.section(self)) is not None:
-            lines += conditions.summary_lines(section)
-        if len(self.rejected):
-            lines.append(f"rejected observations: {len(self.rejected)}; without them the calibration "
-                         f"set's RMS is {self.after_inliers['rms']:.4f} mm")
-        if self.predicted_accuracy is not None:
-            lines.append(accuracy_line(self.predicted_accuracy))
-        lines += [f"WARNING: {w}" for w in self.warnings]
-        return "\n".join(lines)
-
-
-def json_text(content: dict) -> str:
-    """The text of a result JSON from `CalibrationResult.to_dict` (NaN refused)."""
-    return json.dumps(content, indent=1, allow_nan=False)
 
 
 def _start_model(robot, datasets: list, register_frames: bool, force: bool, warnings: list[str]):
@@ -583,11 +146,6 @@ def _partners(cov: np.ndarray, names: list[str]) -> dict[str, list[str]]:
             for i, n in enumerate(names)}
 
 
-def _combined(errors: list[np.ndarray]) -> dict | None:
-    """Statistics (mm) of several files' item errors (m) together; None for no file."""
-    return position_stats(np.concatenate(errors)) if errors else None
-
-
 def _as_sets(data, what: str) -> list:
     """One Measurements or a list of them -> a non-empty list."""
     sets = [] if data is None else list(data) if isinstance(data, list | tuple) else [data]
@@ -644,7 +202,8 @@ def _rows(robot=None, data=None, *args, **kwargs) -> int:
 def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
               register_frames: bool = True, rtol: float = DEFAULT_RTOL, seed: int = 0,
               progress=None, nongeometric="default", force: bool = False, sigma: dict | None = None,
-              warm_start: CalibrationResult | None = None, **options) -> CalibrationResult:
+              warm_start: CalibrationResult | None = None, hold_out: int | None = None,
+              **options) -> CalibrationResult:
     """Calibrate ``robot`` (nominal model) against ``data``: Measurements, or a list of them of
     any kinds (points, poses, planes, distances) identified together in one problem, each set
     weighted by its noise (its sigma column, else ``sigma`` {kind: m}, else
@@ -692,6 +251,9 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     warm_start : CalibrationResult, optional
         A result of the same robot and data whose start model (no new registration) and final
         estimate start this one; the parameter selection is the one without it.
+    hold_out : int, optional
+        Judge on the last ``hold_out`` poses of the one calibration set (file order) and
+        calibrate on the rest (no ``validation`` then).
     **options
         Solver options (e.g. ``k0``, ``k1``, ``ridge`` for ``'robust'``; checked against its
         signature).
@@ -700,7 +262,8 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     -------
     CalibrationResult
         The calibrated model (``result.robot``), the statistics before and after (mm), the
-        parameters with their uncertainty, identifiability and warnings.
+        parameters with their uncertainty, identifiability and warnings; ``error_model_choice``
+        says why the default error model is the geometric one.
 
     Raises
     ------
@@ -709,9 +272,10 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         solver option, or a method that cannot take the requested terms.
     PlausibilityError
         Data and model disagree beyond what real robots do (`robocal.identify.plausibility`;
-        ``force=True`` turns those into warnings).
+        ``force=True`` turns those into warnings); the data's own diagnosis first when it names
+        the cause (`robocal.trust.diagnosis.diagnosed`).
     DataError
-        Invalid data (shapes, joint count, units).
+        Invalid data (shapes, joint count, units), or a ``hold_out`` the data cannot give.
 
     Examples
     --------
@@ -727,8 +291,41 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     >>> "d1" in result.identifiability.dropped  # the base frame absorbs d1
     True
     """
-    check_options(method, options)
     datasets, validations = _as_sets(data, "calibration"), _as_sets(validation, "validation")
+    if hold_out is not None:
+        datasets, validations = split_hold_out(datasets, validations, hold_out)
+    try:
+        return _calibrate_sets(robot, datasets, validations, method, params, register_frames, rtol, seed,
+                               progress, nongeometric, force, sigma, warm_start, options)
+    except PlausibilityError as exc:  # the data's own diagnosis first when it tells more
+        raise diagnosed(exc, robot, [*datasets, *validations]) from None
+
+
+def split_hold_out(datasets: list, validations: list, n: int) -> tuple[list, list]:
+    """([the one calibration set without its last ``n`` poses (file order)], [those poses]): the
+    held-out validation of ``calibrate(..., hold_out=n)``.
+
+    Raises
+    ------
+    DataError
+        Several calibration sets, validation sets given as well, or ``n`` not between 1 and the
+        number of poses - 1.
+    """
+    if validations or len(datasets) > 1:
+        raise DataError("--hold-out splits one calibration file: give one file and no --validate")
+    data = datasets[0]
+    if not 0 < n < data.n_poses:
+        raise DataError(f"--hold-out must be between 1 and {data.n_poses - 1} (the data have "
+                        f"{data.n_poses} poses)")
+    calibration = data.first_poses(data.n_poses - n)
+    return [calibration], [data.subset(~np.isin(data.pose_id, calibration.pose_id))]
+
+
+def _calibrate_sets(robot, datasets: list, validations: list, method: str, params, register_frames: bool,
+                    rtol: float, seed: int, progress, nongeometric, force: bool, sigma: dict | None,
+                    warm_start: CalibrationResult | None, options: dict) -> CalibrationResult:
+    """`calibrate` of the data sets as lists."""
+    check_options(method, options)
     spec = resolve_nongeometric(nongeometric, method, datasets)
     rows = sum(len(d) for d in datasets)
     check_memory(calibration_bytes(rows, spec == "auto"), f"calibrating {rows} measurement rows"
@@ -760,7 +357,29 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     result.predicted_accuracy, more = predict(result.robot, prediction(result),
                                               np.vstack([d.joints for d in result.problem.datasets]))
     result.warnings += more
+    result.error_model_choice = _default_geometric(nongeometric, method, datasets)
     return result
+
+
+def _default_geometric(spec, method: str, datasets: list) -> str | None:
+    """Why the default error model is the geometric one (``'geometric (why)'``), when
+    ``spec`` is 'default' and the default does not choose by cross-validation (which prints its
+    table): the method, several files, the data's kind or too few poses."""
+    if not isinstance(spec, str) or spec.strip().lower() != "default":
+        return None
+    if method not in NONGEOMETRIC_METHODS:
+        why = f"method {method} estimates the geometric parameters only"
+    elif len(datasets) != 1:
+        why = (f"{len(datasets)} calibration files: the default chooses non-geometric terms on one tracker "
+               "data set; name them with --nongeometric to identify them")
+    elif (data := datasets[0]).kind not in AUTO_DEFAULT_KINDS:
+        why = f"{data.kind} data: the default chooses non-geometric terms on tracker data (points, poses)"
+    elif data.n_poses < AUTO_DEFAULT_MIN_POSES:
+        why = (f"{data.n_poses} poses: the default chooses non-geometric terms by cross-validation from "
+               f"{AUTO_DEFAULT_MIN_POSES} poses on; name them with --nongeometric to identify them anyway")
+    else:
+        return None
+    return f"geometric ({why})"
 
 
 def resolve_nongeometric(spec, method: str, datasets: list) -> str | list | None:
@@ -954,18 +573,3 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
 
 def _plain(options: dict) -> dict:
     return {k: v for k, v in options.items() if isinstance(v, str | int | float | bool)}
-
-
-def load_result(path) -> dict:
-    """Read a result JSON written by `CalibrationResult.save_json`, validated field by
-    field (`robocal.core.schema.RESULT_SCHEMA`); DataError names the file and the field."""
-    hint = "; give the JSON `robocal calibrate --json` wrote"
-    if read_text(path, "result JSON file").lstrip().startswith("format: robocal-model"):
-        raise DataError(f"{path} is a robot model YAML, not a result JSON{hint}")
-    data = load_json(path, "result JSON file")
-    if not isinstance(data, dict) or data.get("format") != RESULT_FORMAT:
-        raise DataError(f"{path} is not a robocal result JSON (format {RESULT_FORMAT}){hint}")
-    try:
-        return validate(data, RESULT_SCHEMA)
-    except DataError as exc:
-        raise DataError(f"{path}: {exc}") from None

@@ -158,6 +158,26 @@ class Planned:
     smr: np.ndarray | None
     tracker: np.ndarray | None
 
+    def measured_with(self, smr: np.ndarray | None, tracker: np.ndarray | None,
+                      path) -> tuple[np.ndarray | None, np.ndarray | None, list[str]]:
+        """(SMRs, tracker) to rehearse the campaign ``path`` with: the plan's unless given
+        (``smr`` ``(k, 3)`` m, ``tracker`` ``(3,)`` m), and what to tell the user of them (a
+        ``WARNING`` line when the given ones differ from the plan's)."""
+        lines = []
+        for what, mine, theirs, option in (("SMR positions", smr, self.smr, "--smr-mm"),
+                                           ("tracker position", tracker, self.tracker, "--tracker-mm")):
+            planned = None if theirs is None else np.round(theirs * 1e3, 4).tolist()  # mm
+            if theirs is None:
+                if mine is None:
+                    lines.append(f"note: {path} does not carry a planned {what}: a random one is simulated")
+            elif mine is None:
+                lines.append(f"using the plan's {what} (mm): {planned} from {path}")
+            elif np.shape(mine) != np.shape(theirs) or not np.allclose(mine, theirs, atol=1e-6):
+                lines.append(f"WARNING: {option} {np.round(np.asarray(mine) * 1e3, 4).tolist()} differs from "
+                             f"the {what} the campaign {path} was planned with ({planned} mm): the rehearsal "
+                             "measures another campaign")
+        return (self.smr if smr is None else smr), (self.tracker if tracker is None else tracker), lines
+
 
 def _fixed_columns(table: JointTable, names: list[str], path) -> np.ndarray | None:
     """The one value per column ``names`` that every row repeats (m, from mm), or None when absent."""

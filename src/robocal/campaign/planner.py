@@ -20,6 +20,7 @@ the design is then polished for the error the fit will absorb from it
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -32,6 +33,7 @@ from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
 from robocal.campaign.unmodelled import DEFAULT_TERMS, mean_square, search, unmodelled_error
 from robocal.core.errors import DataError
+from robocal.core.io import write_all
 from robocal.core.progress import Progress
 from robocal.core.version import __version__
 from robocal.data.kinds import OBSERVED, kind_spec
@@ -185,6 +187,27 @@ class CampaignResult:
         return poses_csv(self.joints, self.visible, self.source, self.source_rows,
                          smr_mm=self.settings["smr_mm"], tracker_mm=self.settings["tracker_mm"],
                          spec=self.robot.joints)
+
+    def write(self, csv, json_path=None, html=None, programs: dict | None = None) -> list[str]:
+        """Write ``poses.csv`` (``csv``), the JSON of `to_dict` (``json_path``), the HTML page
+        (``html``) and the robot programs ``programs`` {path: text} (all or none); the paths
+        written.
+
+        Examples
+        --------
+        >>> result.write("poses.csv", json_path="campaign.json")  # doctest: +SKIP
+        ['poses.csv', 'campaign.json']
+        """
+        texts = {csv: self.poses_csv()}
+        if json_path:
+            texts[json_path] = json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n"
+        if html:
+            from robocal.report.campaign import render_campaign
+
+            texts[html] = render_campaign(self.to_dict())
+        texts.update(programs or {})
+        write_all(texts)
+        return [str(path) for path in texts]
 
     def summary(self) -> str:
         """A short human summary: poses, predicted accuracy, identifiability, route, candidates."""

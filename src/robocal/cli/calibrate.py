@@ -5,13 +5,7 @@ from __future__ import annotations
 import argparse
 
 from robocal.cli.args import add_fanuc_coupled
-from robocal.cli.history_options import (
-    add_history_options,
-    check_history_options,
-    offsets_start,
-    record,
-    start_record,
-)
+from robocal.cli.history_options import add_history_options
 from robocal.core.io import LENGTH_UNITS
 
 EPILOG = """Examples:
@@ -120,42 +114,19 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
-def error_model_line(args, data: list) -> str | None:
-    """Which error model the default gave and why, when it is not the cross-validated choice (whose
-    table the summary prints): the geometric model for a method, several files or too few poses."""
-    from robocal.calibration.pipeline import AUTO_DEFAULT_KINDS, AUTO_DEFAULT_MIN_POSES, NONGEOMETRIC_METHODS
-
-    if args.nongeometric.strip().lower() != "default":
-        return None
-    if args.method not in NONGEOMETRIC_METHODS:
-        why = f"method {args.method} estimates the geometric parameters only"
-    elif len(data) != 1:
-        why = (f"{len(data)} calibration files: the default chooses non-geometric terms on one tracker data "
-               "set; name them with --nongeometric to identify them")
-    elif data[0].kind not in AUTO_DEFAULT_KINDS:
-        why = f"{data[0].kind} data: the default chooses non-geometric terms on tracker data (points, poses)"
-    elif data[0].n_poses < AUTO_DEFAULT_MIN_POSES:
-        why = (f"{data[0].n_poses} poses: the default chooses non-geometric terms by cross-validation from "
-               f"{AUTO_DEFAULT_MIN_POSES} poses on; name them with --nongeometric to identify them anyway")
-    else:
-        return None
-    return f"error model: geometric ({why})"
-
-
 def run(args) -> int:
-    import numpy as np
-
-    from robocal.calibration.pipeline import calibrate, json_text
-    from robocal.cli.args import check_distinct_inputs, check_format, diagnosed, load_measurements
-    from robocal.core.errors import DataError, IdentificationError, PlausibilityError
-    from robocal.core.io import check_outputs, write_all
-    from robocal.history.offsets import zero_shifts
+    from robocal.calibration.pipeline import calibrate
+    from robocal.cli.args import check_format, load_measurements
+    from robocal.core.errors import IdentificationError
+    from robocal.core.io import check_outputs
+    from robocal.data.inputs import check_distinct_inputs
+    from robocal.history.offsets import offsets_start, recalibrate_offsets, shifts_line, zero_shifts
+    from robocal.history.record import calibration_record, open_history, parent_calibration, record
     from robocal.kinematics.model import load_model
-    from robocal.kinematics.model_file import dump_model
 
-    outputs = (args.output, args.json, args.report, args.network_out)
     validate = args.validate or []
-    check_outputs(outputs, (*args.data, *validate, args.robot, args.start))  # fail before the work
+    check_outputs((args.output, args.json, args.report, args.network_out),
+                  (*args.data, *validate, args.robot, args.start))  # fail before the work
     check_format(args.output, "YAML", "-o", " (or use --json for the result)")
     check_format(args.json, "JSON", "--json")
     check_format(args.report, "HTML", "--report")
@@ -164,71 +135,36 @@ def run(args) -> int:
                           "a validation on the calibration data says nothing of the accuracy elsewhere")
     if args.network_out and (args.method != "neural" or not args.network_out.endswith((".npz", ".json"))):
         raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
-    check_history_options(args)
-    start = offsets_start(args)
-    sigma = dict(args.sigma)
+    robot_id = open_history(args.history, args.robot_id)
+    start = offsets_start(args.start, args.offsets_only, args.params, args.nongeometric)
     robot = load_model(args.robot)
-    data = [load_measurements(f, robot, args.quiet, args.fanuc_coupled, model_used=False) for f in args.data]
-    validation = [load_measurements(f, robot, args.quiet, args.fanuc_coupled, model_used=False)
-                  for f in validate]
-    if args.hold_out is not None:
-        if validation or len(data) > 1:
-            raise DataError("--hold-out splits one calibration file: give one file and no --validate")
-        if not 0 < args.hold_out < data[0].n_poses:
-            raise DataError(f"--hold-out must be between 1 and {data[0].n_poses - 1} (the data have "
-                            f"{data[0].n_poses} poses)")
-        calibration = data[0].first_poses(data[0].n_poses - args.hold_out)
-        validation = [data[0].subset(~np.isin(data[0].pose_id, calibration.pose_id))]
-        data = [calibration]
-    try:
-        if start is None:
-            result = calibrate(robot, data, method=args.method, params=args.params,
-                               validation=validation or None, seed=args.seed, progress=not args.quiet,
-                               nongeometric=args.nongeometric, force=args.force, sigma=sigma,
-                               **dict(args.options))
-        else:
-            from robocal.history.offsets import recalibrate_offsets
+    def read(files: list[str]) -> list:  # conditions without a term in the model: result.notes
+        return [load_measurements(f, robot, args.quiet, args.fanuc_coupled, model_used=False) for f in files]
 
-            result = recalibrate_offsets(robot, start, data, validation=validation or None,
-                                         method=args.method, seed=args.seed, progress=not args.quiet,
-                                         force=args.force, sigma=sigma, **dict(args.options))
-    except PlausibilityError as exc:
-        raise diagnosed(exc, robot, [*data, *validation]) from None
+    data, validation = read(args.data), read(validate)
+    common = dict(validation=validation or None, method=args.method, seed=args.seed, progress=not args.quiet,
+                  force=args.force, sigma=dict(args.sigma), hold_out=args.hold_out, **dict(args.options))
+    if start is None:
+        result = calibrate(robot, data, params=args.params, nongeometric=args.nongeometric, **common)
+    else:
+        result = recalibrate_offsets(robot, start, data, **common)
     result.provenance.update(command="robocal " + " ".join(args.argv), robot_spec=args.robot,
                              data_file=", ".join(args.data), validation_file=", ".join(validate) or None,
                              hold_out=args.hold_out)
     print(result.summary())
-    for note in filter(None, (d.unused_conditions(result.robot) for d in data)):
+    for note in result.notes:
         print(f"note: {note}")
     derived = {} if start is None else {"offsets_only": True, "zero_shifts": zero_shifts(result, start)}
-    line = error_model_line(args, data) if start is None else "joint zeros changed from the start: " + \
-        ", ".join(f"{r['name']} {r['shift']:+.4f} ± {r['sigma']:.4f} deg" for r in derived["zero_shifts"])
-    if line:
-        print(line)
-    if not result.solver.success and not args.force:
-        raise IdentificationError(f"the solver did not converge ({result.solver.status.value}): nothing "
-                                  "written; adjust the method's options, or rerun with --force to write "
-                                  "the results anyway")
-    # every output is computed before the first is written: all are written, or none
-    texts = {}
-    if args.output:
-        texts[args.output] = dump_model(result.robot)
-    content = result.to_dict() if args.json or args.report else None
-    if args.json:
-        texts[args.json] = json_text(content)
-    if args.report:
-        from robocal.report.html import render_report
-
-        texts[args.report] = render_report(content)
-    if args.network_out:
-        texts[args.network_out] = result.solver.network.file_content(args.network_out)
-    write_all(texts)
-    for path in texts:
+    if start is not None:
+        print(shifts_line(derived["zero_shifts"]))
+    elif result.error_model_choice:
+        print(f"error model: {result.error_model_choice}")
+    for path in result.write(args.output, args.json, args.report, args.network_out, args.force):
         print(f"wrote {path}")
     if args.history:  # after the files: the history is never the only copy
-        from robocal.history.record import calibration_record
-
         files = [(f, "calibration") for f in args.data] + [(f, "validation") for f in validate]
-        parent = None if start is None else start_record(args, start)
-        record(args, calibration_record(result, args.robot_id, files, parent, **derived))
+        parent = None if start is None else parent_calibration(args.history, robot_id, start)
+        said = record(args.history, calibration_record(result, robot_id, files, parent, **derived))
+        if not args.quiet:
+            print(said)
     return 0

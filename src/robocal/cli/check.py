@@ -42,50 +42,26 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    import json
-
     from robocal.cli.args import check_format, load_measurements
-    from robocal.cli.history_options import check_history_options, record
-    from robocal.core.errors import DataError
-    from robocal.core.io import check_outputs, load_json, write_all
-    from robocal.history.check import Uncertainty, check
-    from robocal.history.record import fingerprints
-    from robocal.history.store import History, Record
-    from robocal.kinematics.model import Robot
-    from robocal.kinematics.model_file import dump_model
+    from robocal.core.io import check_outputs
+    from robocal.history.check import check, load_calibration
+    from robocal.history.record import check_record, open_history, record
 
     check_format(args.json, "JSON", "--json")
     check_outputs([args.json], [args.model, args.data, args.result])
-    check_history_options(args, existing=True)
-    if not args.history and not args.result:
-        raise DataError("the check needs the calibration's uncertainty: give --history and --robot-id (where "
-                        "calibrate recorded it) or --result RESULT.json (calibrate --json)")
-    robot = Robot.load(args.model)
-    model_yaml = dump_model(robot)
-    parent = None
-    if args.result:
-        uncertainty = Uncertainty.from_result(load_json(args.result, "a calibration result JSON"))
-    if args.history:
-        with History(args.history) as history:
-            calibration = history.calibration(args.robot_id, model_yaml)
-        parent = calibration.id
-        if not args.result:
-            uncertainty = Uncertainty.from_dict(calibration.uncertainty)
+    robot_id = open_history(args.history, args.robot_id, existing=True)
+    robot, uncertainty, parent = load_calibration(args.model, args.result, args.history, robot_id)
     data = load_measurements(args.data, robot, args.quiet)
     result = check(robot, data, uncertainty, fit_frame=args.fit_frame, noise_mm=args.noise_mm,
                    force=args.force)
-    content = {"model": args.model, "data": args.data, "fit_frame": bool(args.fit_frame),
-               "calibration_record": parent, **result.to_dict()}
-    if args.json:
-        write_all({args.json: json.dumps(content, indent=2, allow_nan=False) + "\n"})
-        print(f"wrote {args.json}")
+    for path in result.write(args.json, model=args.model, data=args.data, fit_frame=bool(args.fit_frame),
+                             calibration_record=parent):
+        print(f"wrote {path}")
     print(result.summary())
     for note in result.notes:
         print(f"note: {note}")
     if args.history:
-        keys = ("verdict", "p_value", "n_poses", "rms_mm", "predicted_rms_mm")
-        summary = {key: content[key] for key in keys}
-        summary["changed_parameters"] = result.changed_parameters
-        record(args, Record(robot_id=args.robot_id, kind="check", model_yaml=model_yaml, summary=summary,
-                            data=fingerprints([(args.data, "check")]), parent=parent))
+        said = record(args.history, check_record(result, robot_id, robot, args.data, parent))
+        if not args.quiet:
+            print(said)
     return 0

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from robocal.cli.args import numbers
 
@@ -63,94 +62,41 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _statistics(res, targets, calibrated, nominal, args) -> str:
-    """``: corrections largest .. mm, median .. mm (.. deg)``: how far each corrected target is from
-    the target the controller would be given without compensation (empty for --tool measured, whose
-    corrected targets are for another TCP)."""
-    import numpy as np
-
-    from robocal.kinematics.transforms import invert_transform, pose_error
-
-    if args.tool == "measured":
-        return ""
-    to_robot = nominal.base @ invert_transform(calibrated.base)
-    plain = targets if args.targets_in == "robot" else to_robot @ targets
-    err = pose_error(res.corrected_targets, plain)
-    mm, deg = np.linalg.norm(err[:, :3], axis=1) * 1e3, np.rad2deg(np.linalg.norm(err[:, 3:], axis=1))
-    return (f": corrections largest {mm.max():.4g} mm, median {np.median(mm):.4g} mm; orientation largest "
-            f"{deg.max():.4g} deg, median {np.median(deg):.4g} deg")
+# what the targets are, as the options say (printed before the summary)
+FRAMES = {"robot": "the robot's base frame (the calibrated frame {0})",
+          "model": "the calibrated model's world frame (where it was measured)"}
+TOOLS = {"flange": "the flange (tool0)",
+         "measured": "the calibrated model's own tool (the measured SMR or probe)"}
 
 
 def run(args) -> int:
     import numpy as np
 
-    from robocal.cli.args import (
-        check_format,
-        conditions_unused,
-        load_calibrated_and_nominal,
-        load_prediction,
-        payload_si,
-        tool_frame,
-    )
-    from robocal.core.io import check_outputs, read_text, write_all
-    from robocal.data.measurements import robot_reach
-    from robocal.deploy.compensation import (
-        check_target_units,
-        compensate,
-        format_csv,
-        pose_columns,
-        read_poses_csv,
-    )
-    from robocal.trust.output_marker import check_unmarked, mark_csv
+    from robocal.cli.args import check_format
+    from robocal.core.io import check_outputs
+    from robocal.deploy.compensation import compensate, read_targets
+    from robocal.deploy.models import load_model_pair, load_prediction, payload_si, tool_frame
 
     check_format(args.output, "CSV", "-o")
     check_format(args.parameters, "CSV", "--parameters")
     check_outputs([args.output, args.parameters], [args.calibrated, args.targets, args.nominal])
-    calibrated, nominal = load_calibrated_and_nominal(args.calibrated, args.nominal, "calibrated model")
-    check_unmarked(read_text(Path(args.targets), "pose CSV file"), args.targets, "compensated", args.force)
-    targets, layout = read_poses_csv(args.targets)
+    calibrated, nominal = load_model_pair(args.calibrated, args.nominal, "calibrated model")
     origin = calibrated.base[:3, 3] if args.targets_in == "model" else np.zeros(3)
-    check_target_units(targets, layout, robot_reach(nominal), args.targets, origin)
+    targets, layout = read_targets(args.targets, nominal, origin, args.force)
     tool = {"measured": None, "flange": np.eye(4)}.get(args.tool)
-    if args.tool not in ("measured", "flange"):
+    if args.tool not in TOOLS:
         tool = tool_frame(args.tool, "--tool")
-    start = None if args.start is None else np.deg2rad(args.start)
     prediction = load_prediction(args.result, calibrated, [args.output, args.parameters])
-    res = compensate(calibrated, nominal, targets, branch=args.branch, start=start,
+    res = compensate(calibrated, nominal, targets, branch=args.branch,
+                     start=None if args.start is None else np.deg2rad(args.start),
                      targets_frame=args.targets_in, tool=tool, e1=layout.get("e1"),
-                     payload=payload_si(args.payload), temperature=args.temperature)
-    names, values = pose_columns(res.corrected_targets, layout)
-    columns = [j.column for j in calibrated.joints] + names + ["converged"]  # a track's e1 (mm) first
-    cells = [calibrated.joints_shown(res.joints), values, res.converged[:, None].astype(int)]
-    if res.singularity is not None:  # how far each target is from a singularity
-        sing = res.singularity.columns()
-        columns += list(sing)
-        cells += [np.column_stack(list(sing.values()))]
-    text = format_csv(columns, np.concatenate([np.asarray(c, dtype=object) for c in cells], axis=1))
-    texts = {args.output: mark_csv(text, calibrated)}
-    if args.parameters:
-        rows = []
-        for r in res.parameters:
-            k = 1e3 if r["unit"] == "m" else 180.0 / np.pi
-            rows.append([r["name"], "mm" if r["unit"] == "m" else "deg",
-                         r["nominal"] * k, r["calibrated"] * k, r["delta"] * k])
-        lines = ["name,unit,nominal,calibrated,delta"]
-        lines += [",".join([a, u] + [repr(float(v)) for v in vals]) for a, u, *vals in rows]
-        texts[args.parameters] = "\n".join(lines) + "\n"
-    write_all(texts)
+                     payload=payload_si(args.payload), temperature=args.temperature, layout=layout,
+                     prediction=prediction)
+    res.write(args.output, args.parameters)
     if not args.quiet:
-        where = {"robot": "the robot's base frame (the calibrated frame {0})",
-                 "model": "the calibrated model's world frame (where it was measured)"}[args.targets_in]
-        what = {"flange": "the flange (tool0)", "measured": "the calibrated model's own tool (the measured "
-                "SMR or probe)"}.get(args.tool, f"the tool {args.tool} (mm, deg) on the flange")
-        print(f"targets: {what} in {where}")
-        print(f"compensated {len(targets)} target(s){_statistics(res, targets, calibrated, nominal, args)}; "
-              f"largest model residual {res.position_error.max() * 1e3:.3g} mm -> {args.output}")
-    warnings = [*conditions_unused(calibrated, args), *res.assumed, *res.warnings()[:20]]
-    if prediction is not None:
-        from robocal.trust.coverage import target_warnings
-
-        warnings += target_warnings(prediction, calibrated, res.joints)
-    for warning in warnings:
+        what = TOOLS.get(args.tool, f"the tool {args.tool} (mm, deg) on the flange")
+        print(f"targets: {what} in {FRAMES[args.targets_in]}")
+        print(f"{res.summary()} -> {args.output}")
+    for warning in res.warnings:
         print(f"warning: {warning}")
     return 0 if res.converged.all() else 1

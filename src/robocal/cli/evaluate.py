@@ -14,9 +14,6 @@ EPILOG = """Examples:
 """
 
 
-_ERRORS = "<errors_mm>"  # stands for the per-row error list in the JSON until it is written
-
-
 def add_parser(sub) -> None:
     p = sub.add_parser("evaluate", help="position error statistics of a model on measurements",
                        description="Compare a model (which holds its base and tool) with measurements: "
@@ -39,55 +36,32 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    import json
-
-    from robocal.calibration.evaluation import evaluate
-    from robocal.cli.args import check_format, diagnosed, load_measurements
-    from robocal.core.errors import PlausibilityError
-    from robocal.core.io import check_outputs, write_all
+    from robocal.calibration.evaluation import check_files_memory, evaluate
+    from robocal.cli.args import check_format, load_measurements
+    from robocal.core.io import check_outputs
+    from robocal.history.record import evaluation_record, open_history, record
     from robocal.kinematics.model import load_model
 
     check_format(args.json, "JSON", "--json")
     check_outputs([args.json], [args.model, args.data, args.frame_from])
-    from robocal.cli.history_options import check_history_options
-
-    check_history_options(args)
+    robot_id = open_history(args.history, args.robot_id)
     robot = load_model(args.model)
-    from robocal.core.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
-    from robocal.data.csv_table import count_lines
-
-    rows = sum(count_lines(p) for p in (args.data, args.frame_from) if p is not None)  # before reading them
-    check_memory(evaluation_bytes(rows), f"evaluating {rows:,} measurement rows", EVALUATION_ADVICE)
+    check_files_memory([args.data, args.frame_from])  # before reading them
     data = load_measurements(args.data, robot, args.quiet, args.fanuc_coupled)
     frame_from = None if args.frame_from is None else \
         load_measurements(args.frame_from, robot, args.quiet, args.fanuc_coupled)
-    try:
-        stats = evaluate(robot, data, fit_frame=args.fit_frame, frame_from=frame_from, force=args.force)
-    except PlausibilityError as exc:
-        fitted = args.fit_frame or frame_from is not None
-        raise diagnosed(exc, robot, [d for d in (frame_from, data) if d is not None], fitted) from None
-    keys = ("n", "rms", "mean", "max", "p95")
-    summary = {k: stats[k] for k in keys}
-    out = {"model": args.model, "data": args.data, "kind": stats["kind"], "n_poses": stats["n_poses"],
-           "fit_frame": bool(args.fit_frame), "frame_from": args.frame_from, "units": "mm",
-           "evaluation": summary, "errors_mm": stats["errors_mm"].tolist(),
-           "consistency": stats["consistency"], "warnings": stats["warnings"]}
-    if "rotation_deg" in stats:
-        out["rotation_deg"] = stats["rotation_deg"]
-    if args.json:  # the per-row errors on one line by json's C encoder (indent runs the pure-Python one)
-        text = json.dumps({**out, "errors_mm": _ERRORS}, indent=2)
-        write_all({args.json: text.replace(f'"{_ERRORS}"', json.dumps(out["errors_mm"]), 1) + "\n"})
-    for warning in stats["warnings"]:
+    stats = evaluate(robot, data, fit_frame=args.fit_frame, frame_from=frame_from, force=args.force,
+                     names={"model": args.model, "data": args.data, "frame_from": args.frame_from})
+    written = stats.write(args.json)
+    for warning in stats.warnings:
         print(f"WARNING: {warning}")
     if not args.quiet:
-        print(f"{stats['kind']} errors of {args.model} on {args.data} ({stats['n_poses']} poses): "
-              + ", ".join(f"{k} {summary[k]:.4f} mm" if k != "n" else f"n {summary[k]}" for k in keys))
-        if args.json:
-            print(f"wrote {args.json}")
+        print(stats.summary())
+        for path in written:
+            print(f"wrote {path}")
     if args.history:  # after the files: the history is never the only copy
-        from robocal.cli.history_options import record_evaluation
-
         files = [(args.data, "evaluation")] + ([(args.frame_from, "frame")] if args.frame_from else [])
-        record_evaluation(args, robot, {**summary, "n_poses": stats["n_poses"], "kind": stats["kind"],
-                                        "fit_frame": bool(args.fit_frame)}, files)
+        said = record(args.history, evaluation_record(args.history, robot_id, robot, stats, files))
+        if not args.quiet:
+            print(said)
     return 0

@@ -41,12 +41,12 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from pathlib import Path
 
-    from robocal.cli.args import check_format, controller_for
+    from robocal.cli.args import check_format
     from robocal.core.errors import DataError
-    from robocal.core.io import check_outputs, write_all
+    from robocal.core.io import check_outputs
+    from robocal.deploy.formats import export_model
     from robocal.kinematics.model import load_model
-    from robocal.kinematics.model_file import dump_model
-    from robocal.kinematics.urdf import from_urdf, not_carried, to_urdf
+    from robocal.kinematics.urdf import from_urdf
 
     if not args.urdf and not args.yaml and not args.ur_calibration:
         raise DataError("nothing to write: give --urdf OUT, --yaml OUT and/or --ur-calibration OUT")
@@ -58,38 +58,10 @@ def run(args) -> int:
         robot = from_urdf(Path(args.model), tip=args.tip)
     else:
         robot = load_model(args.model)
-    texts = {}
-    if args.urdf:
-        nominal = controller_for(robot, args.nominal) if args.frames == "robot" else None
-        if args.frames == "robot" and nominal is None:
-            print(f"note: {robot.name} is not a catalog robot and no --nominal is given: base_link is the "
-                  "model's frame {0}, tool0 the flange centre with the model's tool rotation")
-        texts[args.urdf] = to_urdf(robot, frames=args.frames, nominal=nominal)
-        if not_carried(robot):
-            print(f"WARNING: {not_carried(robot)}")
-        if not args.quiet:
-            print("URDF frames: " + (
-                "base_link = the robot's base (frame {0}), tool0 = the flange; the model's world frame "
-                "and tool are in a comment (--frames model to use them)" if args.frames == "robot" else
-                "world = the model's world frame (e.g. the tracker), tool0 = the model's tool (e.g. the "
-                "measured SMR)"))
-    if args.yaml:
-        texts[args.yaml] = dump_model(robot)
-    if args.ur_calibration:
-        from robocal.kinematics.manufacturer.ur import not_representable, to_ur_calibration
-
-        nominal = controller_for(robot, args.nominal)
-        if nominal is None:
-            raise DataError(f"--ur-calibration: {robot.name} is not a catalog robot: give --nominal, the "
-                            "controller's model (e.g. ur5e, or factory.yaml from robocal import-calibration)")
-        texts[args.ur_calibration] = to_ur_calibration(robot, nominal)
-        if not_representable(robot):
-            print(f"WARNING: {not_representable(robot)}")
-        if not args.quiet:
-            print("ur_calibration YAML: the geometry from the controller's base to the flange (tool0); the "
-                  "model's world frame and tool are not part of it; its hash is robocal's, so the ROS driver "
-                  "reports that it differs from the robot's own calibration")
-    write_all(texts)
+    result = export_model(robot, args.urdf, args.yaml, args.ur_calibration, args.frames, args.nominal)
+    for line in result.lines(args.quiet):
+        print(line)
+    written = result.write()
     if not args.quiet:
-        print(f"{robot.name} ({robot.n_joints} joints): wrote {', '.join(texts)}")
+        print(f"{robot.name} ({robot.n_joints} joints): wrote {', '.join(written)}")
     return 0

@@ -98,15 +98,15 @@ def _output_paths(programs: list[str], output: str, table: str | None,
 def run(args) -> int:
     import sys
 
-    from robocal.cli.args import load_calibrated_and_nominal, load_prediction, payload_si, tool_frame
     from robocal.core.io import check_outputs
+    from robocal.deploy.models import load_model_pair, load_prediction, payload_si, tool_frame
     from robocal.programs import filter_program
 
     targets, table, written = _output_paths(args.programs, args.output, args.table, args.position_registers)
     check_outputs(written, [*targets, args.calibrated, args.nominal, *args.references,
                             *([args.position_registers] if args.position_registers else []),
                             *([args.payload_schedules] if args.payload_schedules else [])])
-    calibrated, nominal = load_calibrated_and_nominal(args.calibrated, args.nominal)
+    calibrated, nominal = load_model_pair(args.calibrated, args.nominal)
     prediction = load_prediction(args.result, calibrated, written)
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),

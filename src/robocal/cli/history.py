@@ -25,39 +25,18 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    import json
-
     from robocal.cli.args import check_format
-    from robocal.cli.history_options import check_history_options
-    from robocal.core.errors import DataError
-    from robocal.core.io import check_outputs, write_all
-    from robocal.core.version import __version__
-    from robocal.history.store import History, is_postgres
+    from robocal.core.io import check_outputs
+    from robocal.history.record import open_history
+    from robocal.history.store import is_postgres
+    from robocal.history.timeline import timeline
 
     check_format(args.json, "JSON", "--json")
     check_format(args.report, "HTML", "--report")
     check_outputs([args.json, args.report], [] if is_postgres(args.history) else [args.history])
-    check_history_options(args, existing=True)
-    robot_id = args.robot_id
-    with History(args.history) as history:
-        records = history.entries(robot_id)
-    if not records:
-        raise DataError(f"the history has no record of robot id {robot_id!r}")
-    timeline = {"robot_id": robot_id, "entries": [r.timeline_entry() for r in records]}
-    texts = {}
-    if args.json:
-        texts[args.json] = json.dumps(timeline, indent=2, allow_nan=False) + "\n"
-    if args.report:
-        from robocal.report.timeline import render_history
-
-        texts[args.report] = render_history(timeline, __version__)
-    write_all(texts)
-    for e in timeline["entries"]:
-        held, rms = ("-" if v is None else f"{v:.4f}" for v in (e["held_out_rms"], e["rms"]))
-        line = f"#{e['id']:<4} {e['date']}  {e['kind']:<11} held-out {held} mm  RMS {rms} mm"
-        if e["kind"] == "check":
-            line += f"  {e['verdict']} (p = {e['p_value']:.3g})"
-        print(line)
-    for path in texts:
+    result = timeline(args.history, open_history(args.history, args.robot_id, existing=True))
+    written = result.write(args.json, args.report)
+    print(result.summary())
+    for path in written:
         print(f"wrote {path}")
     return 0

@@ -34,14 +34,13 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from robocal.cli.args import check_format
-    from robocal.core.io import check_outputs, write_all
+    from robocal.core.io import check_outputs
     from robocal.kinematics.manufacturer.ur import import_calibration
-    from robocal.kinematics.model_file import dump_model
 
     check_format(args.output, "YAML", "-o")
     check_outputs([args.output], [args.calibration])
     result = import_calibration(args.calibration, args.robot, args.name)
-    write_all({args.output: dump_model(result.robot)})
+    result.write(args.output)
     for note in result.notes:
         print(f"note: {note}")
     if not args.quiet:

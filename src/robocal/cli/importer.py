@@ -37,9 +37,10 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from robocal.cli.args import check_distinct_inputs, check_format, print_warnings
+    from robocal.cli.args import check_format, print_warnings
     from robocal.core.io import check_outputs
     from robocal.data.importer import import_tracker
+    from robocal.data.inputs import check_distinct_inputs
 
     specs = [spec.split(":cols=")[0] for spec in [args.joints, *args.points, *args.base] if ":" in spec]
     check_format(args.output, "CSV", "-o")
@@ -47,10 +48,10 @@ def run(args) -> int:
     check_distinct_inputs(args.raw, "raw files")
     result = import_tracker(args.raw, joints=args.joints, points=args.points, base=args.base,
                             average=not args.keep_repeats, skip_rows=args.skip_rows)
-    result.data.save(args.output)
+    written = result.write(args.output)
     if args.quiet:
-        print_warnings("import", result.warnings())
+        print_warnings("import", result.warnings)
     else:
         print(result.summary())
-        print(f"wrote {args.output}")
+        print(f"wrote {', '.join(written)}")
     return 0

@@ -43,11 +43,11 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from robocal.cli.args import controller_for, tool_frame
     from robocal.core.errors import DataError
-    from robocal.core.io import check_outputs, write_atomic
+    from robocal.core.io import check_outputs
     from robocal.data.measurements import robot_reach
-    from robocal.deploy.compensation import check_target_units, controller_model, format_csv, read_poses_csv
+    from robocal.deploy.compensation import check_target_units, read_poses_csv
+    from robocal.deploy.models import controller_for, planning_model
     from robocal.ik import track
     from robocal.ik.path import plan_path
     from robocal.kinematics.cell import is_track_cell
@@ -57,19 +57,7 @@ def run(args) -> int:
     check_outputs([args.output], [args.poses, args.robot])
     robot = load_model(args.robot)
     nominal = controller_for(robot, args.nominal)
-    tool = None if args.tool in ("flange", "measured") else tool_frame(args.tool, "--tool")
-    if nominal is not None and args.tool != "measured":
-        robot = controller_model(robot, nominal, tool=tool)
-        frames = "the robot's base frame, " + ("the flange (tool0)" if tool is None else
-                                               f"the tool {args.tool}")
-    elif nominal is not None:
-        robot = robot.with_frames(base=nominal.base)
-        frames = "the robot's base frame, the model's own tool (e.g. the measured SMR)"
-    else:
-        robot = robot if tool is None else robot.with_frames(tool=robot.tool @ tool)
-        carried = "its own tool" if tool is None else f"its tool carrying {args.tool}"
-        frames = (f"the model's world frame and {carried} ({robot.name} is not a catalog robot: give "
-                  "--nominal for the robot's base and flange)")
+    robot, frames = planning_model(robot, nominal, args.tool)
     poses, layout = read_poses_csv(args.poses)
     check_target_units(poses, layout, robot_reach(robot), args.poses, robot.base[:3, 3])
     start = None if args.start is None else np.deg2rad(args.start)
@@ -77,15 +65,11 @@ def run(args) -> int:
         if "e1" not in layout:
             raise DataError(f"{robot.name} is an arm on a track: give each pose's carriage position in an "
                             "e1_mm column")
-        if start is not None:
-            start = np.r_[layout["e1"][0], start]
+        start = None if start is None else np.r_[layout["e1"][0], start]
         res = track.plan(robot, poses, layout["e1"], weights=args.weights, start=start, nominal=nominal)
     else:
         res = plan_path(robot, poses, weights=args.weights, start=start, nominal=nominal)
-    write_atomic(args.output, format_csv([j.column for j in robot.joints], robot.joints_shown(res.joints)))
-    gain = 100.0 * (1.0 - res.cost / res.greedy_cost) if res.greedy_cost > 0 else 0.0
+    res.write(args.output)
     print(f"poses: {frames}")
-    print(f"weights {np.round(res.weights, 4).tolist()}")
-    print(f"optimal total weighted travel {res.cost:.6g}")
-    print(f"greedy  total weighted travel {res.greedy_cost:.6g} (optimal saves {gain:.1f}%)")
+    print(res.summary())
     return 0

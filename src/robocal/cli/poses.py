@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import check_format, check_tool_mm, numbers
+from robocal.cli.args import check_format, numbers
+from robocal.deploy.models import check_tool_mm
 from robocal.programs.language_help import POSES_EPILOG, PROGRAM_OPTION
 from robocal.programs.registry import DIALECTS
 

@@ -22,7 +22,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from robocal.calibration.pipeline import load_result
+    from robocal.calibration.result import load_result
     from robocal.cli.args import check_format
     from robocal.core.io import check_outputs
     from robocal.report.html import write_report

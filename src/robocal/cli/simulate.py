@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import check_format, check_tool_mm, numbers
-
-TRACKER_MIN_DISTANCE_M = 0.3  # a tracker closer to the robot's base is inside the robot (a unit slip)
+from robocal.cli.args import check_format, numbers
 
 EPILOG = """Examples:
   robocal simulate --robot abb_irb2600 --poses 200 --noise-mm 0.02 --seed 1 -o data.csv --truth truth.yaml
@@ -104,38 +102,14 @@ def _thermal_k(text: str) -> float | dict[str, float]:
                                          f"got {text!r}") from None
 
 
-def _planned(args, robot, smr, tracker):
-    """Joints, visibility, SMRs and tracker of the planned campaign ``--joints``: the plan's SMRs
-    and tracker unless given here (a WARNING when they differ from the plan's)."""
-    import numpy as np
-
-    from robocal.campaign.files import read_planned
-
-    plan = read_planned(args.joints, robot)
-    for what, mine, theirs, option in (("SMR positions", smr, plan.smr, "--smr-mm"),
-                                       ("tracker position", tracker, plan.tracker, "--tracker-mm")):
-        if theirs is None:
-            if mine is None:
-                print(f"note: {args.joints} does not carry a planned {what}: a random one is simulated")
-        elif mine is None:
-            print(f"using the plan's {what} (mm): {np.round(theirs * 1e3, 4).tolist()} from {args.joints}")
-        elif np.shape(mine) != np.shape(theirs) or not np.allclose(mine, theirs, atol=1e-6):
-            print(f"WARNING: {option} {np.round(np.asarray(mine) * 1e3, 4).tolist()} differs from the "
-                  f"{what} the campaign {args.joints} was planned with ({np.round(theirs * 1e3, 4).tolist()} "
-                  "mm): the rehearsal measures another campaign")
-    smr = plan.smr if smr is None else smr
-    tracker = plan.tracker if tracker is None else tracker
-    return plan.joints, plan.visible, smr, tracker
-
-
 def run(args) -> int:
     from pathlib import Path
 
     import numpy as np
 
-    from robocal.core.errors import DataError
+    from robocal.campaign.files import read_planned
     from robocal.core.io import check_outputs
-    from robocal.data.simulate import simulate_tracker, write_simulation
+    from robocal.data.simulate import probe_and_tracker, simulate_tracker
     from robocal.kinematics.model import load_model
 
     check_format(args.output, "CSV", "-o")
@@ -144,20 +118,14 @@ def run(args) -> int:
                   [args.robot, args.joints])
     robot = load_model(args.robot)
     box = None if args.box is None else np.array(args.box).reshape(2, 3) * 1e-3
-    if args.tool_mm is not None and args.smr_mm:
-        raise DataError("give the probe either as --tool-mm or as --smr-mm, not both")
-    given = args.smr_mm or ([args.tool_mm] if args.tool_mm is not None else None)
-    for smr in given or []:
-        check_tool_mm(smr, f"--smr-mm/--tool-mm {','.join(f'{v:g}' for v in smr)}")
-    smr = None if given is None else np.array(given) * 1e-3
-    tracker = None if args.tracker_mm is None else np.array(args.tracker_mm) * 1e-3
-    if tracker is not None and np.linalg.norm(tracker) < TRACKER_MIN_DISTANCE_M:
-        raise DataError(f"--tracker-mm {','.join(f'{v:g}' for v in args.tracker_mm)}: a tracker "
-                        f"{np.linalg.norm(tracker) * 1e3:.3g} mm from the robot's base is inside the robot; "
-                        "the values look like metres: give mm (e.g. 2500,500,300)")
+    smr, tracker = probe_and_tracker(args.smr_mm, args.tool_mm, args.tracker_mm)
     joints = visible = None
     if args.joints:
-        joints, visible, smr, tracker = _planned(args, robot, smr, tracker)
+        plan = read_planned(args.joints, robot)
+        joints, visible = plan.joints, plan.visible
+        smr, tracker, lines = plan.measured_with(smr, tracker, args.joints)
+        for line in lines:
+            print(line)
     result = simulate_tracker(robot, args.poses, noise_mm=args.noise_mm, noise_model=args.noise_model,
                               outliers=args.outliers, n_smr=args.smr, workspace_box=box, seed=args.seed,
                               kind=args.kind, n_planes=args.planes, joint_noise_deg=args.joint_noise_deg,
@@ -166,9 +134,8 @@ def run(args) -> int:
                               as_is=args.as_is, payloads=args.payloads, temperatures=args.temperatures,
                               payload_com=None if args.payload_com_mm is None else
                               np.array(args.payload_com_mm) * 1e-3, thermal_k=args.thermal_k)
-    sidecar = write_simulation(result, args.output, args.truth)
+    written = result.write(args.output, args.truth)
     if not args.quiet:
-        print(f"simulated {len(result.data)} {args.kind} observations of {result.info['n_poses']} poses; "
-              f"noise floor {result.noise_floor_mm:.4f} mm; {len(result.outlier_rows)} outlier(s)")
-        print(f"wrote {args.output}, {args.truth}, {sidecar}")
+        print(result.summary())
+        print(f"wrote {', '.join(written)}")
     return 0

@@ -33,31 +33,20 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    import json
-
-    from robocal.core.io import check_outputs, write_atomic
-    from robocal.core.magnitudes import check_degrees
+    from robocal.core.io import check_outputs
     from robocal.data.measurements import read_joints
-    from robocal.deploy.compensation import frame_from_text, frame_to_text, rotation_from_text
+    from robocal.deploy.compensation import frame_from_text
+    from robocal.deploy.models import tool_rotation
     from robocal.deploy.tcp import identify_tcp
     from robocal.kinematics.model import Robot, load_model
-    from robocal.kinematics.transforms import make_transform
 
-    rotation = rotation_from_text(args.rotation, "--rotation")
-    angles = [float(v) for v in args.rotation.replace(" ", "").split(",") if v]
-    check_degrees(angles, f"--rotation {args.rotation}")
+    rotation = tool_rotation(args.rotation, "--rotation")
     check_outputs([args.json], [args.calibrated, args.joints, args.nominal])
-    calibrated = Robot.load(args.calibrated)
-    nominal = load_model(args.nominal)
+    calibrated, nominal = Robot.load(args.calibrated), load_model(args.nominal)
     q = read_joints(args.joints, nominal)
     base = None if args.robot_base is None else frame_from_text(args.robot_base, "--robot-base")
     res = identify_tcp(calibrated, nominal, q, base)
-    T = make_transform(rotation, res.tcp)
-    if args.json:
-        write_atomic(args.json, json.dumps({
-            "tcp_mm": (res.tcp * 1e3).tolist(), "point_mm": (res.point * 1e3).tolist(),
-            "residuals_mm": (res.residuals * 1e3).tolist(), "rms_mm": res.rms_mm,
-            "spread_deg": res.spread_deg, "tcp_option": f"{args.name}={frame_to_text(T)}"}, indent=1) + "\n")
+    res.write(args.json, args.name, rotation)
     print(res.summary())
-    print(f"use: --tcp {args.name}={frame_to_text(T)}")
+    print(f"use: --tcp {res.option(args.name, rotation)}")
     return 0

@@ -129,6 +129,25 @@ def check_outputs(outputs, inputs=()) -> None:
     check_writable(outs)
 
 
+# output suffix -> the data format written there (robot programs add their own suffixes: ``formats``)
+FORMATS = {".json": "JSON", ".yaml": "YAML", ".yml": "YAML", ".csv": "CSV", ".html": "HTML", ".htm": "HTML",
+           ".urdf": "URDF", ".npz": "npz"}
+
+
+def check_format(path, kind: str, option: str, hint: str = "", formats: Mapping | None = None) -> None:
+    """Refuse writing ``kind`` (a ``formats`` value, default :data:`FORMATS`) into ``path`` named
+    for another known format (``-o result.json`` for a model YAML); unknown or no suffixes are
+    allowed. ``option`` names the output (``--json``) and ``hint`` completes the message."""
+    if path is None:
+        return
+    formats = FORMATS if formats is None else formats
+    named = formats.get(Path(path).suffix.lower())
+    if named is not None and named != kind:
+        suffix = next(s for s, k in formats.items() if k == kind)
+        raise DataError(f"{option} {path}: {option} writes {kind}, but the name says {named}; name it "
+                        f"{Path(path).with_suffix(suffix).name}{hint}")
+
+
 TEMP_SUFFIX = ".robocal.tmp"  # a new content not yet renamed over its target: ".<name>.<random>.robocal.tmp"
 BACKUP_SUFFIX = ".robocal.bak"  # a hard link to a target's old content while a set is committed
 LOCK_TIMEOUT_S = 60.0  # how long a writer waits for another robocal process writing in the same folder

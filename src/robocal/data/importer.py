@@ -173,6 +173,7 @@ class ImportResult:
     drift: list = field(default_factory=list)
     files: list = field(default_factory=list)
 
+    @property
     def warnings(self) -> list[str]:
         """What the user must know even with ``--quiet``: dropped readings, stray base readings."""
         out = []
@@ -213,6 +214,21 @@ class ImportResult:
                          f"{dr['dropped']} failed reading(s) and {len(dr['stray_lines'])} stray reading(s) "
                          f"> {STRAY_MM:g} mm off (lines {dr['stray_lines'][:10]})")
         return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """The import's figures: observations, poses, SMRs, joints, poses per file, dropped readings
+        ``[file, line, reason]``, the base SMR drift and the warnings."""
+        d = self.data
+        return {"observations": len(d), "poses": d.n_poses, "smr": d.n_smr, "joints": d.n_joints,
+                "files": [[str(f), int(n)] for f, n in self.files],
+                "dropped": [[str(f), int(ln), why] for f, ln, why in self.dropped],
+                "drift": self.drift, "warnings": self.warnings}
+
+    def write(self, output) -> list[str]:
+        """Write the measurements as the canonical measurement CSV (`Measurements.save`); the
+        paths written."""
+        self.data.save(output)
+        return [str(output)]
 
 
 def _failed(points: np.ndarray, joints: np.ndarray) -> tuple[np.ndarray, list[str]]:

@@ -42,7 +42,7 @@ the recorded joints of every kind.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +51,7 @@ from scipy.spatial.transform import Rotation
 import robocal.data.simulated_physics as physics
 from robocal.core.errors import DataError, UnreachableError
 from robocal.core.io import write_all
+from robocal.core.magnitudes import check_tool
 from robocal.data.kinds import KINDS, OBSERVED
 from robocal.data.measurements import Measurements, approach_from_order, robot_reach, travel_from_order
 from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, is_track_cell
@@ -123,6 +124,26 @@ class SimulationResult:
     true_joints: np.ndarray
     planes: np.ndarray | None
     info: dict
+    warnings: list[str] = field(default_factory=list)  # a simulation measures what it is told: none
+
+    def summary(self) -> str:
+        """Observations, poses, the noise floor (mm) and the outliers."""
+        info = self.info
+        return (f"simulated {len(self.data)} {info['kind']} observations of {info['n_poses']} poses; "
+                f"noise floor {self.noise_floor_mm:.4f} mm; {len(self.outlier_rows)} outlier(s)")
+
+    def to_dict(self) -> dict:
+        """The settings and seed, the outliers' file lines and the planes (the sidecar JSON)."""
+        side = dict(self.info)
+        side["outlier_rows"] = (self.outlier_rows + 2).tolist()  # file line numbers
+        side["planes"] = None if self.planes is None else [
+            {"normal": row[:3].tolist(), "offset_m": float(row[3])} for row in self.planes]
+        return side
+
+    def write(self, data_path, truth_path) -> list[str]:
+        """Write the data CSV, the truth model YAML and the sidecar JSON ``TRUTH.sim.json`` (all
+        three or none); the paths written."""
+        return [str(data_path), str(truth_path), str(write_simulation(self, data_path, truth_path))]
 
 
 def _random_rotation(rng: np.random.Generator) -> np.ndarray:
@@ -585,15 +606,41 @@ def _plane_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, wo
     return chosen, plane_idx, np.column_stack([normals, offsets])
 
 
+TRACKER_MIN_DISTANCE_M = 0.3  # a tracker closer to the robot's base is inside the robot (a unit slip)
+
+
+def probe_and_tracker(smr_mm=None, tool_mm=None,
+                      tracker_mm=None) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The SMRs ``(k, 3)`` (or the probe tip, SMR 0) and the tracker ``(3,)`` in m of a simulation,
+    given in mm (None: random), refused when their magnitudes say metres.
+
+    Raises
+    ------
+    DataError
+        Both SMRs and a probe tip, or a tracker inside the robot.
+    UnitError
+        An SMR or tip no tool has (e.g. given in metres).
+    """
+    if tool_mm is not None and smr_mm:
+        raise DataError("give the probe either as --tool-mm or as --smr-mm, not both")
+    given = smr_mm or ([tool_mm] if tool_mm is not None else None)
+    for smr in given or []:
+        shown = ",".join(f"{v:g}" for v in smr)
+        check_tool(np.asarray(smr, dtype=float) * 1e-3, "mm", f"--smr-mm/--tool-mm {shown}")
+    tracker = None if tracker_mm is None else np.array(tracker_mm) * 1e-3
+    if tracker is not None and np.linalg.norm(tracker) < TRACKER_MIN_DISTANCE_M:
+        raise DataError(f"--tracker-mm {','.join(f'{v:g}' for v in tracker_mm)}: a tracker "
+                        f"{np.linalg.norm(tracker) * 1e3:.3g} mm from the robot's base is inside the robot; "
+                        "the values look like metres: give mm (e.g. 2500,500,300)")
+    return (None if given is None else np.array(given) * 1e-3), tracker
+
+
 def write_simulation(result: SimulationResult, data_path, truth_path) -> Path:
     """Write the data CSV, the truth model YAML and the sidecar JSON (returned path): all three
     or none."""
     truth_path = Path(truth_path)
     sidecar = truth_path.with_suffix(".sim.json")
-    side = dict(result.info)
-    side["outlier_rows"] = (result.outlier_rows + 2).tolist()  # file line numbers
-    side["planes"] = None if result.planes is None else [
-        {"normal": row[:3].tolist(), "offset_m": float(row[3])} for row in result.planes]
+    side = result.to_dict()
     side["data"] = str(data_path)
     side["truth"] = str(truth_path)
     write_all({data_path: result.data.to_csv(), truth_path: dump_model(result.truth),

@@ -24,14 +24,14 @@ from __future__ import annotations
 import csv
 import io
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
-from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_all
 from robocal.core.magnitudes import check_degree_set, check_radians, check_targets
 from robocal.data.measurements import robot_reach
 from robocal.identify.plausibility import (
@@ -45,9 +45,13 @@ from robocal.ik.opw_ik import check_poses
 from robocal.ik.singularity import SingularityDistance, singularity_distance
 from robocal.ik.track import solve as track_solve
 from robocal.kinematics.cell import is_track_cell
-from robocal.kinematics.joint_errors import condition_warnings
+from robocal.kinematics.joint_errors import condition_terms, condition_warnings
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import ROTATION_TOL, invert_transform, make_transform, pose_error
+from robocal.trust.coverage import Prediction, target_warnings
+from robocal.trust.output_marker import check_unmarked, mark_csv
+
+MAX_TARGET_WARNINGS = 20  # targets not reached or near a singularity named in ``warnings``
 
 
 @dataclass(frozen=True)
@@ -79,6 +83,14 @@ class Compensation:
         Each target's distance from the singularities at its joints (6-axis arms).
     controller : ControllerChoice or None
         The nominal controller's own choice of solutions, when seeded from ``start``.
+    warnings : list of str
+        Conditions the model has no term for or assumed, the first `MAX_TARGET_WARNINGS`
+        targets not reached or near a singularity, targets outside the calibrated region.
+    layout : dict or None
+        The targets file's columns (`read_poses_csv`), which `write` keeps (default mm, deg).
+    target_shift : numpy.ndarray, shape (N, 6), or None
+        How far each corrected target is from the given one (m, rad; `pose_error`), None for
+        the calibrated model's own tool (its corrected targets are for another TCP).
 
     Examples
     --------
@@ -91,7 +103,7 @@ class Compensation:
     >>> shift = (comp.corrected_targets - wanted)[0, :3, 3]  # m
     >>> bool(np.allclose(shift, [0.0, 0.0, -0.001], atol=1e-9))  # program the target 1 mm lower
     True
-    >>> comp.warnings()  # reached, far from singularities
+    >>> comp.warnings  # reached, far from singularities
     []
     """
 
@@ -105,8 +117,61 @@ class Compensation:
     singularity: SingularityDistance | None = None
     controller: ControllerChoice | None = None
     assumed: tuple[str, ...] = ()  # payload / temperature: defaults assumed, or beyond the calibrated ones
+    warnings: list[str] = field(default_factory=list)
+    layout: dict | None = None
+    target_shift: np.ndarray | None = None
+    source_model: Robot | None = None  # the calibrated model as given: its fingerprint marks the file
 
-    def warnings(self, names: Sequence[str] | None = None, which: np.ndarray | None = None) -> list[str]:
+    def summary(self) -> str:
+        """How many targets, how far their corrections move them (mm, deg) and the largest residual
+        left on the calibrated model (mm)."""
+        shift = ""
+        if self.target_shift is not None:
+            mm = np.linalg.norm(self.target_shift[:, :3], axis=1) * 1e3
+            deg = np.rad2deg(np.linalg.norm(self.target_shift[:, 3:], axis=1))
+            shift = (f": corrections largest {mm.max():.4g} mm, median {np.median(mm):.4g} mm; orientation "
+                     f"largest {deg.max():.4g} deg, median {np.median(deg):.4g} deg")
+        return (f"compensated {len(self.joints)} target(s){shift}; largest model residual "
+                f"{self.position_error.max() * 1e3:.3g} mm")
+
+    def to_dict(self) -> dict:
+        """The commands (joints in deg or mm, corrected targets in the targets' units, converged,
+        distances from the singularities) as ``{column: list}``, and the warnings."""
+        columns, values = self._table()
+        return {"columns": {c: values[:, i].tolist() for i, c in enumerate(columns)},
+                "warnings": self.warnings}
+
+    def _table(self) -> tuple[list[str], np.ndarray]:
+        """The commands CSV's columns and values ``(N, k)`` (objects)."""
+        model = self.corrected_model
+        layout = self.layout or {"length": "mm", "orientation": "deg"}
+        names, values = pose_columns(self.corrected_targets, layout)
+        columns = [j.column for j in model.joints] + names + ["converged"]  # a track's e1 (mm) first
+        cells = [model.joints_shown(self.joints), values,
+                 self.converged[:, None].astype(int)]
+        if self.singularity is not None:  # how far each target is from a singularity
+            sing = self.singularity.columns()
+            columns += list(sing)
+            cells += [np.column_stack(list(sing.values()))]
+        return columns, np.concatenate([np.asarray(c, dtype=object) for c in cells], axis=1)
+
+    def write(self, output, parameters=None) -> list[str]:
+        """Write the commands CSV (``output``, marked with the calibrated model's fingerprint) and
+        the corrected-parameter table (``parameters``: name, unit (mm/deg), nominal, calibrated,
+        delta), all or none; the paths written."""
+        texts = {output: mark_csv(format_csv(*self._table()), self.source_model or self.corrected_model)}
+        if parameters:
+            lines = ["name,unit,nominal,calibrated,delta"]
+            for r in self.parameters:
+                k, unit = (1e3, "mm") if r["unit"] == "m" else (180.0 / np.pi, "deg")
+                lines.append(",".join([r["name"], unit] + [repr(float(r[key] * k))
+                                                          for key in ("nominal", "calibrated", "delta")]))
+            texts[parameters] = "\n".join(lines) + "\n"
+        write_all(texts)
+        return [str(path) for path in texts]
+
+    def target_warnings(self, names: Sequence[str] | None = None,
+                        which: np.ndarray | None = None) -> list[str]:
         """One line per target that was not reached or sits close to a singularity, labelled by
         ``names`` (default ``target i``, i from 0); ``which`` ``(N,)`` bool: only those targets."""
         out = []
@@ -135,6 +200,15 @@ class Compensation:
         """Why target ``i`` has no correction (how far the IK stopped, the nearest singularity)."""
         where = "" if self.singularity is None else f"; {self.singularity.describe(i)}"
         return f"not reached on the calibrated model (best {self.position_error[i] * 1e3:.3g} mm off){where}"
+
+
+def unused_conditions(robot: Robot, payload=None, temperature: float | None = None) -> list[str]:
+    """Warnings for a payload / temperature given to a model without the term that uses it."""
+    terms = condition_terms(robot)
+    return [f"{option} is not used: the model of {robot.name} has no {term} term"
+            for option, term, value in (("--payload", "payload", payload),
+                                        ("--temperature", "thermal", temperature))
+            if value is not None and term not in terms]
 
 
 def _check_same_robot(calibrated: Robot, nominal: Robot) -> None:
@@ -187,7 +261,8 @@ def controller_model(calibrated: Robot, nominal: Robot, robot_base=None, tool=No
 
 def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None = None,
                seeds=None, start=None, targets_frame: str = "model", tool=None, e1=None, payload=None,
-               temperature: float | None = None) -> Compensation:
+               temperature: float | None = None, layout: dict | None = None,
+               prediction: Prediction | None = None) -> Compensation:
     """Corrected joints and Cartesian targets for target poses ``(N, 4, 4)`` (m) of the
     calibrated model's TCP.
 
@@ -242,6 +317,11 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
         The user's real tool on the flange, metres.
     e1 : array_like, shape (N,), optional
         An arm on a track: each target's carriage position, metres (kept as given).
+    layout : dict, optional
+        The columns of the targets file (`read_targets`), which `Compensation.write` keeps.
+    prediction : Prediction, optional
+        The calibration's accuracy prediction (`robocal.deploy.models.load_prediction`): warn of
+        the targets where its predicted error exceeds 3 x the validated one.
 
     Returns
     -------
@@ -249,7 +329,8 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
         ``joints`` ``(N, n)`` rad to send to the controller; ``corrected_targets``
         ``(N, 4, 4)`` m, the poses to program on the nominal controller; ``converged`` ``(N,)``;
         ``position_error`` ``(N,)`` m and ``orientation_error`` ``(N,)`` rad left on the
-        calibrated model; ``parameters``; ``singularity``; ``controller``; ``warnings()``.
+        calibrated model; ``parameters``; ``singularity``; ``controller``; ``warnings``;
+        ``summary()``; ``write()``.
 
     Raises
     ------
@@ -277,6 +358,7 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     """
     if targets_frame not in ("model", "robot"):
         raise DataError(f"targets_frame must be 'model' or 'robot', got {targets_frame!r}")
+    given = calibrated
     if targets_frame == "robot":
         calibrated = calibrated.with_frames(base=nominal.base)
     calibrated = calibrated.with_conditions(payload, temperature)
@@ -303,11 +385,30 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     else:
         res = ik_solve(model, T, seeds, branch=branch, nominal=controller)
     sing = singularity_distance(model, res.joints) if model.n_joints == 6 else None
-    return Compensation(joints=res.joints, corrected_targets=controller.fk(res.joints),
-                        converged=res.converged, position_error=res.position_error,
-                        orientation_error=res.orientation_error,
+    corrected = controller.fk(res.joints)
+    plain = T if targets_frame == "robot" else nominal.base @ invert_transform(given.base) @ T
+    comp = Compensation(joints=res.joints, corrected_targets=corrected, converged=res.converged,
+                        position_error=res.position_error, orientation_error=res.orientation_error,
                         parameters=parameters, corrected_model=calibrated, singularity=sing,
-                        controller=choice, assumed=assumed)
+                        controller=choice, assumed=assumed, layout=layout, source_model=given,
+                        target_shift=None if tool is None else pose_error(corrected, plain))
+    comp.warnings[:] = [*unused_conditions(given, payload, temperature), *assumed,
+                        *comp.target_warnings()[:MAX_TARGET_WARNINGS]]
+    if prediction is not None:
+        comp.warnings.extend(target_warnings(prediction, given, res.joints))
+    return comp
+
+
+def read_targets(path, nominal: Robot, origin=(0.0, 0.0, 0.0),
+                 force: bool = False) -> tuple[np.ndarray, dict]:
+    """Target poses ``(N, 4, 4)`` (m) and the file's layout (`read_poses_csv`) of a targets CSV
+    for the controller's model ``nominal`` (its base at ``origin``, m), refused when robocal
+    already compensated it (its marker line; ``force`` lets it through) or when its magnitudes
+    say another unit than its headers (`check_target_units`)."""
+    check_unmarked(read_text(Path(path), "pose CSV file"), path, "compensated", force)
+    targets, layout = read_poses_csv(path)
+    check_target_units(targets, layout, robot_reach(nominal), path, origin)
+    return targets, layout
 
 
 def _numbers(text: str, count: int, what: str, form: str) -> np.ndarray:

@@ -11,13 +11,16 @@ of each pose says how well it touched the point (and how good the model is there
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import json
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from robocal.core.errors import DataError
-from robocal.deploy.compensation import controller_model
+from robocal.core.io import write_atomic
+from robocal.deploy.compensation import controller_model, frame_to_text
 from robocal.kinematics.model import Robot
+from robocal.kinematics.transforms import make_transform
 
 MIN_POSES = 4
 MIN_SPREAD_DEG = 5.0  # smallest orientation spread about the weakest axis for a determined TCP
@@ -38,6 +41,8 @@ class ToolCalibration:
         Distance of each pose's tip from the common point, metres.
     spread_deg : float
         The orientations' spread about their weakest axis, degrees.
+    warnings : list of str
+        None today: poses that do not determine the TCP are refused.
 
     Examples
     --------
@@ -53,6 +58,7 @@ class ToolCalibration:
     point: np.ndarray
     residuals: np.ndarray
     spread_deg: float
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def rms_mm(self) -> float:
@@ -66,6 +72,26 @@ class ToolCalibration:
                  f"{self.residuals.max() * 1e3:.3f} mm; orientation spread {self.spread_deg:.1f} deg"]
         lines += [f"  pose {i + 1}: {r * 1e3:.3f} mm" for i, r in enumerate(self.residuals)]
         return "\n".join(lines)
+
+    def option(self, name: str = "TOOL", rotation: np.ndarray | None = None) -> str:
+        """The ``--tcp`` value ``NAME=x,y,z,rx,ry,rz`` (mm, deg) of this TCP with the tool's
+        orientation ``rotation`` (3x3; default none): the 4-point method finds the position only."""
+        T = make_transform(np.eye(3) if rotation is None else rotation, self.tcp)
+        return f"{name}={frame_to_text(T)}"
+
+    def to_dict(self, name: str = "TOOL", rotation: np.ndarray | None = None) -> dict:
+        """The TCP and the touched point (mm), each pose's residual (mm), their RMS, the spread
+        (deg) and the `option`."""
+        return {"tcp_mm": (self.tcp * 1e3).tolist(), "point_mm": (self.point * 1e3).tolist(),
+                "residuals_mm": (self.residuals * 1e3).tolist(), "rms_mm": self.rms_mm,
+                "spread_deg": self.spread_deg, "tcp_option": self.option(name, rotation)}
+
+    def write(self, json_path=None, name: str = "TOOL", rotation: np.ndarray | None = None) -> list[str]:
+        """Write `to_dict` as JSON to ``json_path`` (atomically); the paths written."""
+        if json_path is None:
+            return []
+        write_atomic(json_path, json.dumps(self.to_dict(name, rotation), indent=1) + "\n")
+        return [str(json_path)]
 
 
 def identify_tcp(calibrated: Robot, nominal: Robot, q, robot_base=None) -> ToolCalibration:

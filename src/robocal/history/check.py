@@ -26,16 +26,21 @@ theta6 turns the SMR about the flange axis, which the refitted SMR offset absorb
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import linalg, stats
 
 from robocal.core.errors import DataError
+from robocal.core.io import load_json, write_all
 from robocal.data.registration import register
+from robocal.history.store import History
 from robocal.identify.plausibility import check_residual
 from robocal.identify.space import block_of
 from robocal.kinematics.conditions import Conditions
+from robocal.kinematics.model import Robot
+from robocal.kinematics.model_file import dump_model
 
 ALPHA = 0.01  # the false-alarm rate the verdict is taken at: changed exactly when p_value < ALPHA
 MIN_CHECK_POSES = 8  # fewer poses leave too few degrees of freedom after the frame fit
@@ -89,6 +94,31 @@ class Uncertainty:
         dof = max(3 * n_points - len(corr_names), 1)
         kind = str(result.get("data", {}).get("kind"))
         return cls(tuple(names), cov, float(np.sqrt(n_points * (rms_mm * 1e-3) ** 2 / dof)), dof, kind)
+
+
+def load_calibration(model: str, result: str | None, history: str | None, robot_id: str | None):
+    """(the calibrated model of ``model``, its `Uncertainty`, the id of its history record or
+    None): the uncertainty from the calibration's result JSON ``result`` or else from the history
+    (``history``, ``robot_id``: the calibration recorded with this model).
+
+    Raises
+    ------
+    DataError
+        Neither a result JSON nor a history, or no calibration of this model in the history.
+    """
+    if not history and not result:
+        raise DataError("the check needs the calibration's uncertainty: give --history and --robot-id (where "
+                        "calibrate recorded it) or --result RESULT.json (calibrate --json)")
+    robot = Robot.load(model)
+    parent = uncertainty = None
+    if result:
+        uncertainty = Uncertainty.from_result(load_json(result, "a calibration result JSON"))
+    if history:
+        with History(history) as store:
+            calibration = store.calibration(robot_id, dump_model(robot))
+        parent = calibration.id
+        uncertainty = uncertainty or Uncertainty.from_dict(calibration.uncertainty)
+    return robot, uncertainty, parent
 
 
 @dataclass
@@ -145,6 +175,15 @@ class CheckResult:
     changed_parameters: list[dict] = field(default_factory=list)
     explained_p_value: float | None = None
     notes: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)  # the verdict says what matters: none today
+
+    def write(self, json_path=None, **header) -> list[str]:
+        """Write ``header`` (e.g. the model and data files) and `to_dict` as JSON to
+        ``json_path`` (atomically); the paths written."""
+        if json_path is None:
+            return []
+        write_all({json_path: json.dumps({**header, **self.to_dict()}, indent=2, allow_nan=False) + "\n"})
+        return [str(json_path)]
 
     def to_dict(self) -> dict:
         out = {"verdict": self.verdict, "p_value": self.p_value, "alpha": ALPHA,

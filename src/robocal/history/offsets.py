@@ -6,8 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.calibration.pipeline import calibrate
+from robocal.calibration.pipeline import calibrate, split_hold_out
 from robocal.core.errors import DataError
+from robocal.kinematics.model import Robot, load_model
 
 FRAME_PARAMS = ("base.x", "base.y", "base.z", "base.rx", "base.ry", "base.rz", "tool.x", "tool.y", "tool.z")
 SAME_NOMINAL_TOL = 1e-9  # m or rad: the calibrated model must carry the nominal robot's links
@@ -32,7 +33,7 @@ def check_same_robot(nominal, start) -> None:
 
 
 def recalibrate_offsets(nominal, start, data, validation=None, **options):
-    """A `robocal.calibration.pipeline.CalibrationResult` whose robot is ``start`` (an earlier
+    """A `robocal.calibration.result.CalibrationResult` whose robot is ``start`` (an earlier
     calibration of ``nominal``) with only its joint zeros re-identified on ``data`` (point or pose
     measurements; the tracker frame and SMR offsets fitted with them); ``validation`` and
     ``options`` as `robocal.calibrate` takes them (not ``params`` nor ``nongeometric``).
@@ -48,7 +49,7 @@ def recalibrate_offsets(nominal, start, data, validation=None, **options):
     validation : Measurements, optional
         Held-out data to report the recalibrated model's accuracy on.
     **options
-        Further `robocal.calibrate` options (method, loss ...).
+        Further `robocal.calibrate` options (method, loss, ``hold_out`` ...).
 
     Returns
     -------
@@ -76,18 +77,36 @@ def recalibrate_offsets(nominal, start, data, validation=None, **options):
     >>> result.robot.get("a2") == start.get("a2"), result.after["rms"] < 0.05  # links kept; mm
     (True, True)
     """
+    sets = list(data) if isinstance(data, list | tuple) else [data]
+    if options.get("hold_out") is not None:  # the held-out poses become the validation
+        given = [] if validation is None else \
+            list(validation) if isinstance(validation, list | tuple) else [validation]
+        sets, validation = split_hold_out(sets, given, options.pop("hold_out"))
     check_same_robot(nominal, start)
-    sets = data if isinstance(data, list | tuple) else [data]
     if any(not d.spec.sees_position for d in sets):
         raise DataError("an offsets-only recalibration needs tracker data (points or poses)")
     for key in ("params", "nongeometric"):
         if key in options:
             raise DataError(f"an offsets-only recalibration chooses its own {key}")
     n_smr = max(d.n_smr for d in sets)
-    result = calibrate(start, data, params=offsets_params(start, n_smr), validation=validation,
+    result = calibrate(start, sets, params=offsets_params(start, n_smr), validation=validation,
                        nongeometric="none", **options)
     result.settings["offsets_only"] = True
     return result
+
+
+def offsets_start(start: str | None, offsets_only: bool, params: str = "auto",
+                  nongeometric: str = "default") -> Robot | None:
+    """The start model of an offsets-only recalibration (``--offsets-only --start START``; None
+    without them), the options that cannot go with it refused (DataError)."""
+    if bool(offsets_only) != bool(start):
+        raise DataError("--offsets-only and --start go together: the joint zeros of the calibrated model "
+                        "--start are re-identified")
+    if not offsets_only:
+        return None
+    if params != "auto" or nongeometric.strip().lower() != "default":
+        raise DataError("--offsets-only chooses its own parameters: drop --params and --nongeometric")
+    return load_model(start)
 
 
 def zero_shifts(result, start) -> list[dict]:
@@ -97,3 +116,9 @@ def zero_shifts(result, start) -> list[dict]:
     rows = [{"name": n, "unit": "deg", "shift": float(np.rad2deg(result.robot.get(n) - start.get(n))),
              "sigma": float(np.rad2deg(sigma[n]))} for n in result.names if n.startswith("theta")]
     return sorted(rows, key=lambda r: -abs(r["shift"]))
+
+
+def shifts_line(shifts: list[dict]) -> str:
+    """One line of `zero_shifts`: each joint zero's change with its sigma (deg)."""
+    return "joint zeros changed from the start: " + \
+        ", ".join(f"{r['name']} {r['shift']:+.4f} ± {r['sigma']:.4f} deg" for r in shifts)

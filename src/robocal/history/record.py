@@ -1,11 +1,15 @@
 """History records built from results: a calibration (its model, figures, parameters with sigma,
-the covariance a later check needs) and the fingerprints of the files it came from."""
+the covariance a later check needs), an evaluation, and the fingerprints of the files they came
+from; opening a command's history and recording in it."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
-from robocal.history.store import Record, file_sha256
+from robocal.core.errors import DataError
+from robocal.history.store import History, Record, check_robot_id, file_sha256, is_postgres, shown
 from robocal.identify.space import block_of
 from robocal.kinematics.model_file import dump_model
 
@@ -33,7 +37,7 @@ def calibration_uncertainty(result) -> dict:
 
 def calibration_record(result, robot_id: str, files: list[tuple[str, str]], parent: int | None = None,
                        **summary) -> Record:
-    """The history record of a `robocal.calibration.pipeline.CalibrationResult`; ``files``:
+    """The history record of a `robocal.calibration.result.CalibrationResult`; ``files``:
     ``(path, role)`` of its inputs; ``summary``: extra figures to keep (e.g. ``offsets_only``)."""
     validation = result.validation
     figures = {"method": result.method, "n_poses": int(result.problem.n_poses), "before": result.before,
@@ -44,3 +48,62 @@ def calibration_record(result, robot_id: str, files: list[tuple[str, str]], pare
     return Record(robot_id=robot_id, kind="calibration", model_yaml=dump_model(result.robot), summary=figures,
                   parameters=parameters, uncertainty=calibration_uncertainty(result),
                   data=fingerprints(files), parent=parent)
+
+
+def open_history(location: str | None, robot_id: str | None, existing: bool = False) -> str | None:
+    """Check a command's ``--history`` and ``--robot-id`` before any work: both or neither, the
+    robot id's form, the history opens (its schema created or migrated); ``existing``: a SQLite
+    history must exist already (it holds what the command reads). The checked robot id (None
+    without a history).
+
+    Raises
+    ------
+    DataError
+        One option without the other, a missing history, a bad robot id.
+    """
+    if bool(location) != bool(robot_id):
+        raise DataError("--history and --robot-id go together: give both to record in a robot's history")
+    if location and existing and not is_postgres(location) and not Path(location).is_file():
+        raise DataError(f"the history {location} does not exist")
+    if not location:
+        return robot_id
+    robot_id = check_robot_id(robot_id)
+    History(location).close()
+    return robot_id
+
+
+def parent_calibration(location: str, robot_id: str, robot) -> int | None:
+    """The id of the history's calibration record of ``robot`` (the same model), None when it
+    holds none (a model calibrated elsewhere, or a nominal one)."""
+    with History(location) as history:
+        try:
+            return history.calibration(robot_id, dump_model(robot)).id
+        except DataError:
+            return None
+
+
+def evaluation_record(location: str, robot_id: str, robot, result, files: list[tuple[str, str]]) -> Record:
+    """The record of an evaluation of ``robot`` (`robocal.calibration.evaluation.EvaluationResult`:
+    its statistics in mm, poses, kind, whether the frame was fitted), derived from the calibration
+    of the same model when the history holds one."""
+    summary = {**result.statistics, "n_poses": result["n_poses"], "kind": result["kind"],
+               "fit_frame": bool(result.fit_frame)}
+    return Record(robot_id=robot_id, kind="evaluation", model_yaml=dump_model(robot), summary=summary,
+                  data=fingerprints(files), parent=parent_calibration(location, robot_id, robot))
+
+
+def record(location: str, entry: Record) -> str:
+    """Store ``entry`` in the history at ``location``; the line saying so."""
+    with History(location) as history:
+        ident = history.record(entry)
+    return f"recorded {entry.kind} #{ident} of robot {entry.robot_id!r} in {shown(location)}"
+
+
+def check_record(result, robot_id: str, robot, data_file: str, parent: int | None) -> Record:
+    """The record of a check (`robocal.history.check.CheckResult`) of ``robot`` on ``data_file``,
+    derived from the calibration record ``parent``."""
+    figures = result.to_dict()
+    summary = {key: figures[key] for key in ("verdict", "p_value", "n_poses", "rms_mm", "predicted_rms_mm")}
+    summary["changed_parameters"] = result.changed_parameters
+    return Record(robot_id=robot_id, kind="check", model_yaml=dump_model(robot), summary=summary,
+                  data=fingerprints([(data_file, "check")]), parent=parent)

@@ -29,12 +29,14 @@ observability indices then describe the set that is estimated.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
 
+from robocal.core.io import write_atomic
 from robocal.identify import vocabulary
 from robocal.identify.normal import r_factor
 from robocal.identify.space import block_of
@@ -112,6 +114,7 @@ class Identifiability:
     n_poses: int = 0
     undetermined: list[str] = field(default_factory=list)
     prior_ratio: dict[str, float] = field(default_factory=dict)  # posterior / prior sigma
+    warnings: list[str] = field(default_factory=list)  # the summary names what is not estimated: none
 
     @property
     def condition_class(self) -> str:
@@ -138,6 +141,13 @@ class Identifiability:
                 "condition_class": self.condition_class, **self.observability,
                 "kept": self.kept, "dropped": self.dropped, "undetermined": self.undetermined,
                 "confounded_with": self.confounded_with}
+
+    def write(self, json_path=None) -> list[str]:
+        """Write `to_dict` as JSON to ``json_path`` (atomically); the paths written."""
+        if json_path is None:
+            return []
+        write_atomic(json_path, json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n")
+        return [str(json_path)]
 
     def summary(self) -> str:
         """A short human summary: rank, condition number, observability, then each parameter not

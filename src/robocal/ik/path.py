@@ -17,11 +17,12 @@ the small joints, spare the big ones").
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from robocal.core.errors import DataError, ModelError, UnreachableError
+from robocal.core.io import write_atomic
 from robocal.ik.closed_form import branch_model, branch_slot, solve_branches, turn_copies
 from robocal.ik.numeric import nominal_branches
 from robocal.ik.numeric import solve as ik_solve
@@ -53,6 +54,10 @@ class PathResult:
         The closed-form branch slot of each chosen joint vector.
     candidates : numpy.ndarray of int, shape (M,)
         How many candidates each waypoint had.
+    track : bool
+        The first joint is a track's carriage (metres), kept where the poses put it.
+    warnings : list of str
+        None today: a waypoint without a solution is refused.
 
     Examples
     --------
@@ -72,6 +77,34 @@ class PathResult:
     weights: np.ndarray
     slots: np.ndarray
     candidates: np.ndarray
+    track: bool = False
+    joint_specs: tuple = ()  # the robot's joints (Robot.joints): each one's column and unit
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def saving(self) -> float:
+        """How much less the optimal path travels than the greedy one, percent."""
+        return 100.0 * (1.0 - self.cost / self.greedy_cost) if self.greedy_cost > 0 else 0.0
+
+    def summary(self) -> str:
+        """The weights and the optimal and greedy weighted travel."""
+        return (f"weights {np.round(self.weights, 4).tolist()}\n"
+                f"optimal total weighted travel {self.cost:.6g}\n"
+                f"greedy  total weighted travel {self.greedy_cost:.6g} (optimal saves {self.saving:.1f}%)")
+
+    def to_dict(self) -> dict:
+        """The joints (rad; a track's carriage m), the costs, the weights and the branch slots."""
+        return {"joints": self.joints.tolist(), "cost": self.cost, "greedy_cost": self.greedy_cost,
+                "weights": self.weights.tolist(), "slots": self.slots.tolist()}
+
+    def write(self, path) -> list[str]:
+        """Write the joints CSV (each joint under its column in its unit: ``q1_deg..``, a track's
+        ``e1_mm`` first, a quill's ``q3_mm``) atomically; the paths written."""
+        columns = [j.column for j in self.joint_specs]
+        shown = np.column_stack([j.shown(self.joints[:, k]) for k, j in enumerate(self.joint_specs)])
+        lines = [",".join(columns)] + [",".join(repr(float(v)) for v in row) for row in shown.tolist()]
+        write_atomic(path, "\n".join(lines) + "\n")
+        return [str(path)]
 
 
 def default_weights(robot: Robot, wrist=(1.0, 1.0, 1.0)) -> np.ndarray:
@@ -272,4 +305,4 @@ def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | No
     greedy = _greedy(cand, valid, w, first)
     return PathResult(joints=joints, cost=travel(joints, w, start), greedy_joints=greedy,
                       greedy_cost=travel(greedy, w, start), weights=w,
-                      slots=src[np.arange(M), chosen], candidates=valid.sum(axis=1))
+                      slots=src[np.arange(M), chosen], candidates=valid.sum(axis=1), joint_specs=robot.joints)

@@ -471,7 +471,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     if d.scheme is not None:
         cfg = (d.scheme.encode(controller, seeds), d.scheme.encode(controller, q))
     edits, changed = number_edits(d, targets, values, good, Pc, cfg, warnings)
-    warnings += comp.warnings([t.where for t in targets], good)  # the corrected ones near a singularity
+    warnings += comp.target_warnings([t.where for t in targets], good)  # corrected ones near a singularity
     outputs = {s.path: edits.pop(s.path, FileEdits()).apply(s) for s in sources}  # edits freed once used
     rows = _rows(d, targets, X, W @ Pc, controller, q, ok, good, comp.converged & ok, changed, cfg, sing)
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}

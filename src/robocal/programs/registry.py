@@ -76,6 +76,12 @@ def capable(capability: str) -> list[Dialect]:
     return [d for d in dialects() if getattr(d, capability)]
 
 
+def program_formats() -> dict[str, str]:
+    """Campaign program suffix -> the format written there (``.mod`` -> its language's name), of
+    every language that writes campaign programs: the output-name check's program half."""
+    return {d.campaign_suffix: d.campaign_format for d in dialects() if d.campaign_format}
+
+
 def program_files(paths: list[Path]) -> list[Path]:
     """``paths`` with each application folder (VAL3) replaced by its program files."""
     out = []

@@ -143,7 +143,7 @@ def posterior(problem, state, names: list[str], s0: float) -> np.ndarray:
 
 class Fit(Protocol):
     """What :func:`prediction` reads of a fit: a calibration result
-    (:class:`robocal.calibration.pipeline.CalibrationResult`) has it all. Named here so that the
+    (:class:`robocal.calibration.result.CalibrationResult`) has it all. Named here so that the
     trust layer states what it needs without importing the calibration above it."""
 
     problem: CalibrationProblem

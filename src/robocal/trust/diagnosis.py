@@ -149,3 +149,11 @@ def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
         if reason:
             return (f"{d.label}: " if len(sets) > 1 and d.label else "") + reason
     return None
+
+
+def diagnosed(error: Exception, robot, datasets, frame_fitted: bool = True) -> Exception:
+    """``error`` (a PlausibilityError) with the data's own diagnosis (:func:`diagnose`) put first
+    when it tells more (a swapped or sign-flipped joint column, a mirrored frame, the odd file, a
+    frame that needs fitting); ``error`` itself otherwise."""
+    why = diagnose(robot, datasets, frame_fitted=frame_fitted)
+    return error if why is None else type(error)(f"{why} (the check: {error})")

@@ -31,11 +31,12 @@ from pathlib import Path
 import numpy as np
 
 from robocal.core.errors import ModelError
-from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_all
 from robocal.core.yaml_load import load_yaml
 from robocal.kinematics.catalog import catalog_entry, catalog_names
 from robocal.kinematics.convert import PARALLEL_TOL
 from robocal.kinematics.model import MAX_ANGLE_RAD, Robot
+from robocal.kinematics.model_file import dump_model
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 from robocal.kinematics.ur import nearest_ur_links
 from robocal.kinematics.urdf_read import matrix_to_rpy, rpy_to_matrix
@@ -119,6 +120,21 @@ class ImportedCalibration:
     robot: Robot
     kind: str  # "calibration.conf" or "ur_calibration YAML"
     notes: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)  # what matters is said in ``notes``: none
+
+    def summary(self) -> str:
+        """The format read and the notes, one line each."""
+        return "\n".join([f"{self.robot.name}: {self.kind} read (exact to its own composition)",
+                          *(f"note: {note}" for note in self.notes)])
+
+    def to_dict(self) -> dict:
+        """The format read, the notes and the model YAML."""
+        return {"kind": self.kind, "notes": list(self.notes), "model_yaml": dump_model(self.robot)}
+
+    def write(self, output) -> list[str]:
+        """Write the model YAML (atomically); the paths written."""
+        write_all({output: dump_model(self.robot)})
+        return [str(output)]
 
 
 # ----------------------------------------------------------------- chains and lines

@@ -1,0 +1,537 @@
+"""The result of a calibration (`CalibrationResult`, each judged data set a `Judged`), its JSON
+(docs/result-json.md) and the reading of a result JSON back (`load_result`)."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from robocal.calibration import conditions
+from robocal.calibration.model_selection import selection_table
+from robocal.core.errors import DataError, IdentificationError
+from robocal.core.io import load_json, read_text, write_all, write_atomic
+from robocal.core.schema import RESULT_SCHEMA, validate
+from robocal.core.version import __version__
+from robocal.data.measurements import Measurements
+from robocal.identify import vocabulary
+from robocal.identify.identifiability import Identifiability
+from robocal.identify.priors import prior_sigma
+from robocal.identify.problem import CalibrationProblem
+from robocal.identify.solvers import SolverResult
+from robocal.identify.space import ParameterSpace, State, block_of
+from robocal.identify.uncertainty import correlation, tcp_position_covariance
+from robocal.kinematics.cell import TRACK_IDENTIFIABILITY, is_track_cell
+from robocal.kinematics.model_file import dump_model
+from robocal.kinematics.thermal import groups_of as thermal_groups_of
+from robocal.report.metrics import position_stats
+from robocal.trust.consistency import Consistency
+from robocal.trust.coverage import accuracy_line
+from robocal.trust.file_shifts import FileShifts, file_shifts, pose_means
+from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG
+
+RESULT_FORMAT = "robocal-result/1"
+_DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 180.0 / np.pi),
+            "rad/rad": ("mdeg/deg", 1e3), "1": ("ppm", 1e6),  # "1": a scale (dimensionless)
+            "rad/(kg m)": ("deg/(kg m)", 180.0 / np.pi), "1/K": ("1e-6/K", 1e6)}
+
+
+def _combined(errors: list[np.ndarray]) -> dict | None:
+    """Statistics (mm) of several files' item errors (m) together; None for no file."""
+    return position_stats(np.concatenate(errors)) if errors else None
+
+
+class _BeforeAfter:
+    """Statistics (mm) of ``errors`` (each item's error with the start and the calibrated model, m)."""
+
+    errors: tuple[np.ndarray, np.ndarray]
+
+    @property
+    def before(self) -> dict:
+        """Statistics (mm) with the start model."""
+        return position_stats(self.errors[0])
+
+    @property
+    def after(self) -> dict:
+        """Statistics (mm) with the calibrated model."""
+        return position_stats(self.errors[1])
+
+
+@dataclass
+class Judged(_BeforeAfter):
+    """A measurement set judged with the start and the calibrated model: its problem, the two
+    states (nuisance carried over from the calibration) and each item's error with them (m)."""
+
+    data: Measurements
+    problem: CalibrationProblem
+    states: tuple[State, State]
+    errors: tuple[np.ndarray, np.ndarray]
+    repeated: int = 0  # rows left out: they repeat calibration poses (robocal.trust.provenance)
+
+
+@dataclass
+class CalibrationResult(_BeforeAfter):
+    """Everything a calibration found; ``to_dict()`` is the JSON of docs/result-json.md.
+
+    Returned by `robocal.calibrate`; `summary` prints it, `save_json` writes it,
+    ``result.robot.save(path)`` writes the calibrated model.
+
+    Attributes
+    ----------
+    robot : Robot
+        The calibrated model (with the declared joint-error terms, which its ``fk`` applies).
+    start : Robot
+        The registered start model (nominal geometry in the measurement's frame).
+    method : str
+        The solver used (``'lsq'``, ``'robust'``...).
+    identifiability : Identifiability
+        Which parameters the data determine: kept, dropped (not identifiable, with what they are
+        confounded with) and undetermined (held at nominal), the condition number.
+    space : ParameterSpace
+        What was estimated: robot parameters, then nuisance (tracker frame, SMRs, planes...).
+    covariance : numpy.ndarray, shape (k, k)
+        Covariance of the estimated unknowns, SI units (m, rad).
+    solver : SolverResult
+        The solver's outcome: final state, convergence, iteration history, robust weights.
+    errors : tuple of numpy.ndarray, shape (M,) each
+        Each calibration item's error in the start and in the final state, metres.
+    problem : CalibrationProblem
+        The measurement model of the calibration data.
+    initial : State
+        The start state (registered model, nuisance fitted to it).
+    judged : list of Judged
+        Each validation set judged with the start and the calibrated model.
+    warnings : list of str
+        What the user should know (held parameters, implausible corrections with ``force``...).
+    settings : dict
+        The settings of the run (method, params, rtol, seed, solver options).
+    nongeometric : dict or None
+        The joint-error terms identified, when any.
+    model_selection : dict or None
+        The cross-validation table when the terms were chosen automatically.
+    provenance : dict
+        Versions, date and input files.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> nominal = rc.Robot.from_catalog("abb_irb2600")
+    >>> sim = rc.simulate_tracker(nominal, 40, noise_mm=0.01, seed=2)
+    >>> result = rc.calibrate(nominal, sim.data, nongeometric=None)
+    >>> result.after["rms"] < 0.05 < 0.5 < result.before["rms"]  # mm: from the errors to the noise
+    True
+    >>> q = sim.data.joints
+    >>> error = result.robot.fk(q)[:, :3, 3] - sim.truth.fk(q)[:, :3, 3]  # against the truth, m
+    >>> bool(np.abs(error).max() < 5e-5)
+    True
+    >>> result.predict_position_sigma(q[:2]).shape  # 1-sigma of the predicted TCP, m
+    (2, 3)
+    """
+
+    robot: object
+    start: object
+    method: str
+    identifiability: Identifiability
+    space: ParameterSpace
+    covariance: np.ndarray
+    solver: SolverResult
+    errors: tuple[np.ndarray, np.ndarray] = field(repr=False)
+    problem: CalibrationProblem = field(repr=False)
+    initial: State = field(repr=False)
+    judged: list[Judged] = field(default_factory=list, repr=False)
+    warnings: list[str] = field(default_factory=list)
+    settings: dict = field(default_factory=dict)
+    nongeometric: dict | None = None
+    model_selection: dict | None = None
+    provenance: dict = field(default_factory=dict)
+    consistency: Consistency | None = None
+    predicted_accuracy: dict | None = None
+    error_model_choice: str | None = None  # why the default error model is geometric, when it is
+
+    @property
+    def state(self) -> State:
+        """The final state of the solver (calibrated model and nuisance)."""
+        return self.solver.state
+
+    @property
+    def names(self) -> list[str]:
+        """The estimated robot parameters."""
+        return list(self.space.robot)
+
+    @property
+    def unknowns(self) -> list[str]:
+        """Every estimated unknown (robot parameters, then nuisance)."""
+        return self.space.names
+
+    @property
+    def notes(self) -> list[str]:
+        """What the calibration data record that the calibrated model has no term for (one line
+        per data set that does)."""
+        return [note for note in (d.unused_conditions(self.robot) for d in self.problem.datasets) if note]
+
+    @property
+    def validation_before(self) -> dict | None:
+        """Statistics (mm) of every validation item with the start model (all files together)."""
+        return _combined([j.errors[0] for j in self.judged])
+
+    @property
+    def validation(self) -> dict | None:
+        """Statistics (mm) of every validation item with the calibrated model (all files)."""
+        return _combined([j.errors[1] for j in self.judged])
+
+    @property
+    def validation_shifts(self) -> FileShifts | None:
+        """The held-out error split into a shift per validation file and the error within the files
+        (`robocal.trust.file_shifts`; point and pose files), with two validation files or more."""
+        files = [j for j in self.judged if j.data.spec.sees_position]
+        errors = [pose_means(j.problem.item_error_vectors(j.states[1])[0], j.data.pose_id) for j in files]
+        return file_shifts([j.data.label for j in files], errors)
+
+    def _files(self) -> list[tuple[str, Measurements, np.ndarray, np.ndarray]]:
+        """(role, data, errors before, errors after) of every file, calibration then validation."""
+        before, after = self.errors
+        return [("calibration", data, before[items], after[items])
+                for data, items in zip(self.problem.datasets, self.problem.item_blocks(), strict=True)] + \
+            [("validation", j.data, *j.errors) for j in self.judged]
+
+    def per_file(self) -> list[dict]:
+        """Per measurement file (calibration, then validation): its kind and its statistics (mm)
+        before and after; the errors of each kind are in mm (position, plane deviation, distance)."""
+        return [{"role": role, "file": data.label, "kind": data.kind, "before": position_stats(before),
+                 "after": position_stats(after)} for role, data, before, after in self._files()]
+
+    def per_kind(self) -> dict[str, dict]:
+        """Per role and kind (e.g. ``calibration plane``): statistics (mm) after calibration."""
+        out: dict[str, list] = {}
+        for role, data, _, after in self._files():
+            out.setdefault(f"{role} {data.kind}", []).append(after)
+        return {key: _combined(parts) for key, parts in out.items()}
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """1-sigma of every unknown (robot parameters then nuisance), SI units."""
+        return np.sqrt(np.maximum(np.diag(self.covariance), 0.0))
+
+    @property
+    def after_inliers(self) -> dict | None:
+        """Statistics after calibration without the rejected observations (robust), else None."""
+        w = self.solver.item_weights
+        if w is None or not (w == 0).any():
+            return None
+        return position_stats(self.errors[1][w != 0])
+
+    @property
+    def correlation(self) -> np.ndarray:
+        """Correlation matrix ``(k, k)`` of the estimated unknowns (order of `unknowns`)."""
+        return correlation(self.covariance)
+
+    @property
+    def rejected(self) -> np.ndarray:
+        """Indices of the measurement items a robust method rejected (weight 0)."""
+        w = self.solver.item_weights
+        return np.zeros(0, int) if w is None else np.flatnonzero(w == 0)
+
+    def predict_position_sigma(self, q) -> np.ndarray:
+        """1-sigma ``(N, 3)`` (m) of the calibrated model's TCP position at joints ``q``.
+
+        Parameters
+        ----------
+        q : array_like, shape (N, n)
+            Joints, radians.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3)
+            Standard deviation of the predicted TCP's x, y, z in the world frame, metres, from
+            the covariance of the estimated parameters.
+        """
+        k = len(self.space.robot)
+        cov = tcp_position_covariance(self.robot, self.robot.check_joints(q), self.names,
+                                      self.covariance[:k, :k])
+        return np.sqrt(np.maximum(np.diagonal(cov, axis1=1, axis2=2), 0.0))
+
+    def parameter_table(self) -> list[dict]:
+        """Every candidate parameter (and nuisance) with nominal, estimate, correction, sigma
+        (display units: mm, deg; nuisance in its own)."""
+        start = self.initial.robot
+        sigma = dict(zip(self.unknowns, self.sigma, strict=True))
+        units = dict(zip(start.parameter_names, start.parameter_units(), strict=True))
+        nominal = dict(zip(start.parameter_names, start.nominal_values, strict=True))
+        estimate = dict(zip(self.robot.parameter_names, self.robot.values, strict=True))
+        nuisance = self.problem.nuisance_names
+        dropped, held = set(self.identifiability.dropped), set(self.identifiability.undetermined)
+        unused = self.not_used
+        rows = []
+        for name in self.identifiability.names:
+            if name in nuisance:  # e.g. plane coefficients: reported in their own unit
+                j = nuisance.index(name)
+                unit, f = "", 1.0
+                nom, est = float(self.initial.nuisance[j]), float(self.state.nuisance[j])
+            else:  # a joint-error term left unidentified is not carried: its estimate is nominal
+                unit, f = _DISPLAY[units[name]]
+                nom, est = nominal[name] * f, estimate.get(name, nominal[name]) * f
+            s = sigma.get(name)
+            rows.append({"name": name, "unit": unit, "nominal": float(nom), "estimate": float(est),
+                         "correction": float(est - nom), "sigma": None if s is None else float(s * f),
+                         "status": "dropped" if name in dropped else
+                         "not determined" if name in held else "estimated",
+                         "identification": vocabulary.status(name, self.identifiability, unused)})
+        return rows
+
+    @property
+    def not_used(self) -> dict[str, str]:
+        """The payload / thermal parameters the calibration data cannot show (no column or one
+        value), each with why (`robocal.calibration.conditions.not_used`)."""
+        return conditions.not_used(self.problem.datasets, self.identifiability.dropped)
+
+    @staticmethod
+    def _observations(obs, states: tuple[State, State], weights: np.ndarray | None) -> dict:
+        """The per-row section of one file (observation ``obs``): joints, measured and modelled."""
+        data = obs.data
+        nu = [s.nuisance[: len(obs.nuisance_names)] for s in states]  # the first file's nuisance
+        measured = getattr(obs, "measured", None)
+        measured = None if measured is None or measured.ndim != 2 else measured * 1e3
+        if weights is not None:
+            weights = weights[obs.item_of_rows()]  # one per data row
+        pairs = list(zip(states, nu, strict=True))
+        before, after = (obs.modelled_points(s.robot, n) * 1e3 for s, n in pairs)
+        errors = [obs.position_errors(s.robot, n)[obs.item_of_rows()] * 1e3 for s, n in pairs]
+        return {
+            "kind": obs.kind, "error_before": errors[0].tolist(), "error_after": errors[1].tolist(),
+            "pose_id": data.pose_id.tolist(), "source_row": data.source_row.tolist(),
+            "smr": data.smr.tolist(),  # each joint in its unit (a quill's, a track's e1 in mm):
+            "joints_deg": states[0].robot.joints_shown(data.joints).tolist(),
+            "measured": None if measured is None else measured.tolist(),
+            "model_before": before.tolist(), "model_after": after.tolist(),
+            "weight": None if weights is None else weights.tolist(),
+            "plane": None if data.plane is None else data.plane.tolist(),
+        }
+
+    def to_dict(self) -> dict:
+        """The result as plain data (mm, deg), per docs/result-json.md."""
+        ident, problem = self.identifiability, self.problem
+        k = len(self.unknowns)
+        data, first = problem.datasets[0], problem.observations[0]  # the per-row sections: the first file
+        out = {
+            "format": RESULT_FORMAT,
+            "robocal_version": __version__,
+            "provenance": self.provenance,
+            "robot": self.robot.section(),
+            "data": {"file": data.source, "kind": problem.kind, "n_poses": int(problem.n_poses),
+                     "n_observations": int(sum(len(d) for d in problem.datasets)),
+                     "files": [{"file": d.label, "kind": d.kind, "n_poses": int(d.n_poses),
+                                "n_observations": len(d),
+                                "sigma_mm": None if d.sigma is not None or not problem.weighted else s * 1e3}
+                               for d, s in zip(problem.datasets, problem.set_sigma, strict=True)]},
+            "method": self.method,
+            "settings": self.settings,
+            "converged": self.solver.success,
+            "status": self.solver.status.value,
+            "message": self.solver.message,
+            "before": self.before,
+            "after": self.after,
+            **({"after_inliers": inliers} if (inliers := self.after_inliers) else {}),
+            "parameters": self.parameter_table(),
+            "dropped": vocabulary.entries(ident.dropped + ident.undetermined, ident, self.not_used),
+            "priors": self._priors(),
+            "identifiability": {key: v for key, v in ident.to_dict().items()
+                                if key not in ("kept", "dropped", "undetermined", "confounded_with")},
+            "correlation": {"names": self.unknowns,
+                            "matrix": np.round(self.correlation, 6).reshape(k, k).tolist()},
+            "per_file": self.per_file(),
+            "per_kind": self.per_kind(),
+            "rejected": self._rejected(),
+            "observations": self._observations(first, (self.initial, self.state), self._first_weights()),
+            "history": self.solver.history,
+            "history_units": ({"cost": "1", "rms": "1 (residuals divided by sigma)"} if problem.weighted
+                              else {"cost": "m^2", "rms": "m"}),
+            "warnings": self.warnings,
+        }
+        if self.consistency is not None:
+            out["consistency"] = self.consistency.to_dict()
+        if self.predicted_accuracy is not None:
+            out["predicted_accuracy"] = self.predicted_accuracy
+        if self.nongeometric is not None:
+            out["nongeometric"] = self.nongeometric
+        if self.model_selection is not None:
+            out["model_selection"] = self.model_selection
+        if (groups := thermal_groups_of(self.robot, self.unknowns)) is not None:
+            out["thermal_groups"] = groups
+        if (section := conditions.section(self)) is not None:
+            out["conditions"] = section
+        if self.judged:
+            out["validation_independence"] = [
+                {"file": j.data.label, "rows": len(j.data) + j.repeated, "repeated_rows": j.repeated,
+                 "rows_judged": len(j.data), "tolerance_deg": JOINT_REPEAT_TOL_DEG} for j in self.judged]
+            out["data"]["validation_file"] = ", ".join(j.data.source for j in self.judged)
+            out["validation_before"] = self.validation_before
+            out["validation"] = self.validation
+            if (shifts := self.validation_shifts) is not None:
+                out["validation_shifts"] = shifts.to_dict()
+            j = self.judged[0]
+            out["validation_observations"] = self._observations(j.problem.observations[0], j.states, None)
+        return out
+
+    def _priors(self) -> dict:
+        """The priors of the estimate (docs/priors.md): the noise scale they were weighed with and
+        each parameter's 1-sigma prior in display units (mm, deg; null without a prior)."""
+        space, robot = self.space, self.initial.robot
+        units = dict(zip(robot.parameter_names, robot.parameter_units(), strict=True))
+        names = [*space.robot, *self.identifiability.undetermined]
+        sigma = dict(zip(space.names, space.prior_sigma or [np.inf] * space.size, strict=True))
+        sigma.update(zip(self.identifiability.undetermined,
+                         prior_sigma(robot, self.identifiability.undetermined), strict=True))
+        return {"source": "robocal.identify.priors (docs/priors.md)",
+                "noise": space.noise, "noise_unit": "1 (residuals divided by sigma)"
+                if self.problem.weighted else "m",
+                "sigma": {n: float(sigma[n] * _DISPLAY[units[n]][1]) if np.isfinite(sigma[n]) else None
+                          for n in names}}
+
+    def _first_weights(self) -> np.ndarray | None:
+        """The robust weights of the first file's items."""
+        w = self.solver.item_weights
+        return None if w is None else w[self.problem.item_blocks()[0]]
+
+    def _rejected(self) -> list[dict]:
+        """Every row of an item a robust method rejected: its file, row, residual (mm)."""
+        w = self.solver.item_weights
+        if w is None:
+            return []
+        out = []
+        for obs, items in zip(self.problem.observations, self.problem.item_blocks(), strict=True):
+            item = items[obs.item_of_rows()]  # each data row's item
+            for row in np.flatnonzero(w[item] == 0):
+                out.append({"file": obs.data.label, "source_row": int(obs.data.source_row[row]),
+                            "pose_id": int(obs.data.pose_id[row]),
+                            "residual": float(self.errors[1][item[row]] * 1e3), "weight": 0.0})
+        return out
+
+    def to_json(self) -> str:
+        """The result JSON text (docs/result-json.md)."""
+        return json_text(self.to_dict())
+
+    def save_json(self, path) -> None:
+        """Write the result JSON (docs/result-json.md) atomically.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The JSON file to write.
+        """
+        write_atomic(path, self.to_json())
+
+    def write(self, output=None, json_path=None, report=None, network=None, force: bool = False) -> list[str]:
+        """Write the calibrated model YAML (``output``), the result JSON (``json_path``), the HTML report
+        (``report``) and the trained network of the neural method (``network``, .npz or .json):
+        all computed first, then written together (all or none, `robocal.core.io.write_all`).
+
+        Parameters
+        ----------
+        output, json_path, report, network : str or path-like, optional
+            The files to write; None skips one.
+        force : bool
+            Write the results of a solve that did not converge.
+
+        Returns
+        -------
+        list of str
+            The paths written, in the order above.
+
+        Raises
+        ------
+        IdentificationError
+            The solver did not converge and ``force`` is False: nothing is written.
+
+        Examples
+        --------
+        >>> result.write(output="calibrated.yaml", json_path="result.json")  # doctest: +SKIP
+        ['calibrated.yaml', 'result.json']
+        """
+        if not self.solver.success and not force:
+            raise IdentificationError(f"the solver did not converge ({self.solver.status.value}): nothing "
+                                      "written; adjust the method's options, or rerun with --force to write "
+                                      "the results anyway")
+        texts = {}
+        if output:
+            texts[output] = dump_model(self.robot)
+        content = self.to_dict() if json_path or report else None
+        if json_path:
+            texts[json_path] = json_text(content)
+        if report:
+            from robocal.report.html import render_report
+
+            texts[report] = render_report(content)
+        if network:
+            texts[network] = self.solver.network.file_content(network)
+        write_all(texts)
+        return [str(path) for path in texts]
+
+    def summary(self) -> str:
+        """A short human summary: before -> after, largest corrections, dropped parameters."""
+        b, a = self.before, self.after
+        lines = [f"{self.method}: {self.solver.message}",
+                 f"calibration set ({b['n']} obs): RMS {b['rms']:.4f} -> {a['rms']:.4f} mm, "
+                 f"max {b['max']:.4f} -> {a['max']:.4f} mm"]
+        if self.judged:
+            vb, va = self.validation_before, self.validation
+            lines.append(f"validation set  ({va['n']} obs): RMS {vb['rms']:.4f} -> {va['rms']:.4f} mm, "
+                         f"max {vb['max']:.4f} -> {va['max']:.4f} mm")
+            if (shifts := self.validation_shifts) is not None:
+                lines.append(f"  of it, a shift per validation file {shifts.shift_rms_mm:.4f} mm RMS "
+                             f"(F test p = {shifts.p_value:.2g}); within the files "
+                             f"{shifts.within_rms_mm:.4f} mm")
+        if len(self.problem.datasets) + len(self.judged) > 1:
+            for row in self.per_file():
+                b, a = row["before"], row["after"]
+                lines.append(f"  {row['role']} {row['kind']} {row['file'][-50:]!r} ({a['n']} obs): RMS "
+                             f"{b['rms']:.4f} -> {a['rms']:.4f} mm")
+        links = [r for r in self.parameter_table()
+                 if r["status"] == "estimated" and block_of(r["name"]) == "links"]
+        for unit in ("mm", "deg"):
+            top = sorted((r for r in links if r["unit"] == unit), key=lambda r: -abs(r["correction"]))[:3]
+            if top:
+                lines.append(f"largest corrections ({unit}): " + ", ".join(
+                    f"{r['name']} {r['correction']:+.4f} ± {r['sigma']:.4f}" for r in top))
+        ident, unused = self.identifiability, self.not_used
+        lines += vocabulary.lines(ident, [n for n in ident.dropped if block_of(n) != "joint_errors"]
+                                  + ident.undetermined)
+        if is_track_cell(self.robot):
+            lines.append(TRACK_IDENTIFIABILITY)
+        if self.nongeometric is not None:
+            ng = self.nongeometric
+            out = [n for n in ng["dropped"] if n not in unused]
+            lines.append(f"non-geometric terms {', '.join(ng['terms'])}: {len(ng['kept'])} parameters "
+                         f"estimated, {len(out)} left out (no effect or not separable from the geometry)")
+        if self.model_selection is not None:
+            lines.append(selection_table(self.model_selection))
+        if (section := conditions.section(self)) is not None:
+            lines += conditions.summary_lines(section)
+        if len(self.rejected):
+            lines.append(f"rejected observations: {len(self.rejected)}; without them the calibration "
+                         f"set's RMS is {self.after_inliers['rms']:.4f} mm")
+        if self.predicted_accuracy is not None:
+            lines.append(accuracy_line(self.predicted_accuracy))
+        lines += [f"WARNING: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+
+def json_text(content: dict) -> str:
+    """The text of a result JSON from `CalibrationResult.to_dict` (NaN refused)."""
+    return json.dumps(content, indent=1, allow_nan=False)
+
+
+def load_result(path) -> dict:
+    """Read a result JSON written by `CalibrationResult.save_json`, validated field by
+    field (`robocal.core.schema.RESULT_SCHEMA`); DataError names the file and the field."""
+    hint = "; give the JSON `robocal calibrate --json` wrote"
+    if read_text(path, "result JSON file").lstrip().startswith("format: robocal-model"):
+        raise DataError(f"{path} is a robot model YAML, not a result JSON{hint}")
+    data = load_json(path, "result JSON file")
+    if not isinstance(data, dict) or data.get("format") != RESULT_FORMAT:
+        raise DataError(f"{path} is not a robocal result JSON (format {RESULT_FORMAT}){hint}")
+    try:
+        return validate(data, RESULT_SCHEMA)
+    except DataError as exc:
+        raise DataError(f"{path}: {exc}") from None

@@ -1,0 +1,90 @@
+"""The robot catalog and one robot model as text (what ``robocal robots`` prints): each catalog
+robot's reach, payload and class; a model's MDH + beta table (mm, deg), frames, limits and the
+flange pose at a few joint sets."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from robocal.kinematics.catalog import catalog_descriptions, catalog_specs
+from robocal.kinematics.model import Robot
+
+SHOW_JOINTS_DEG = np.array([[0, 0, 0, 0, 0, 0], [30, -20, 15, 45, -60, 90], [-90, 40, -30, -120, 30, 0]],
+                           dtype=float)
+PAYLOAD_CLASSES = ((3.0, "light"), (20.0, "small"), (80.0, "medium"), (300.0, "heavy"))
+
+
+def payload_class(kg: float | None) -> str:
+    """The payload class of a vendor payload (kg): light <= 3, small <= 20, medium <= 80, heavy
+    <= 300, else very heavy; '-' when unknown."""
+    if kg is None:
+        return "-"
+    return next((label for top, label in PAYLOAD_CLASSES if kg <= top), "very heavy")
+
+
+def _figure(value, unit: str, width: int) -> str:
+    return f"{'-' if value is None else f'{value:g}{unit}':>{width}s}"
+
+
+def catalog_listing() -> str:
+    """One line per catalog robot: name, reach (mm), payload (kg), payload class, description.
+
+    Examples
+    --------
+    >>> from robocal.report.robots import catalog_listing
+    >>> catalog_listing().splitlines()[0].split()
+    ['name', 'reach', 'mm', 'payload', 'class', 'description']
+    """
+    specs = catalog_specs()
+    lines = [f"{'name':20s} {'reach mm':>8s} {'payload':>9s}  {'class':12s} description"]
+    for name, text in catalog_descriptions().items():
+        reach, payload = specs[name]
+        lines.append(f"{name:20s} {_figure(reach, '', 8)} {_figure(payload, ' kg', 9)}  "
+                     f"{payload_class(payload):12s} {text}")
+    return "\n".join(lines)
+
+
+def model_table(robot: Robot) -> str:
+    """``robot``'s parameter table (mm, deg), base and tool frames, and the flange pose at a few
+    joint sets (prismatic joints at 0).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> from robocal.report.robots import model_table
+    >>> model_table(rc.Robot.from_catalog("kuka_kr16_2")).splitlines()[0].startswith("kuka_kr16_2: ")
+    True
+    """
+    lines = [f"{robot.name}: {robot.description}",
+             "\nmodified DH + beta (T_i = Rx(alpha) Tx(a) Ry(beta) Rz(theta + q) Tz(d))",
+             f"{'joint':>5} {'alpha deg':>10} {'a mm':>10} {'beta deg':>9} {'theta deg':>10} {'d mm':>10}"
+             f"  {'limits deg (mm)':>17}  parallel"]
+    for i in range(robot.n_joints):
+        slide = robot.prismatic[i]  # a prismatic joint: limits in mm, its value adds to d
+        lo, hi = robot.limits[i] * 1e3 if slide else np.rad2deg(robot.limits[i])
+        lines.append(f"{i + 1:5d} {np.rad2deg(robot.alpha[i]):10.3f} {robot.a[i] * 1e3:10.3f} "
+                     f"{np.rad2deg(robot.beta[i]):9.3f} {np.rad2deg(robot.theta[i]):10.3f} "
+                     f"{robot.d[i] * 1e3:10.3f}  {lo:8.1f} {hi:8.1f}  {'yes' if robot.parallel[i] else ''}"
+                     + ("  prismatic (mm)" if slide else ""))
+    for label, T in (("base", robot.base), ("tool", robot.tool)):
+        rpy = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)
+        xyz = np.round(T[:3, 3] * 1e3, 3).tolist()
+        lines.append(f"{label}: xyz {xyz} mm, rpy {np.round(rpy, 3).tolist()} deg")
+    q = np.zeros((len(SHOW_JOINTS_DEG), robot.n_joints))
+    turning = np.flatnonzero(~robot.prismatic)  # the sample angles go to the revolute joints
+    k = min(turning.size, SHOW_JOINTS_DEG.shape[1])
+    q[:, turning[:k]] = SHOW_JOINTS_DEG[:, :k]
+    T = robot.fk(np.deg2rad(q))  # prismatic joints at 0
+    with warnings.catch_warnings():  # gimbal lock at pitch +-90 deg: scipy then sets yaw to 0
+        warnings.simplefilter("ignore", UserWarning)
+        rpy = Rotation.from_matrix(T[:, :3, :3]).as_euler("xyz", degrees=True)
+    lines.append("\ntool pose (x y z mm, fixed-axis roll pitch yaw deg)"
+                 + ("; prismatic joints at 0" if robot.has_prismatic else ""))
+    for j in range(len(q)):
+        lines.append(f"q = {np.array2string(q[j], precision=1, separator=', ')} deg  ->  "
+                     f"xyz {np.array2string(T[j, :3, 3] * 1e3, precision=3, separator=', ')}  "
+                     f"rpy {np.array2string(rpy[j], precision=3, separator=', ')}")
+    return "\n".join(lines)

@@ -1,0 +1,100 @@
+"""One protocol for every result the API returns (issue 43): ``summary()`` (text), ``warnings`` (a
+list attribute, never a method), ``to_dict()`` (plain data) and ``write(...)`` (the paths it wrote);
+and the pieces of the command line that moved into the API (hold-out split, the default error
+model's reason, the swapped-model check)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import robocal as rc
+from robocal.calibration.evaluation import EvaluationResult
+from robocal.core.errors import DataError
+from robocal.data.importer import ImportResult
+from robocal.deploy.formats import export_model
+from robocal.deploy.models import load_model_pair
+from robocal.deploy.tcp import ToolCalibration
+from robocal.history.check import Uncertainty, check
+from robocal.history.timeline import Timeline
+from robocal.kinematics.manufacturer.ur import ImportedCalibration
+
+
+@pytest.fixture(scope="module")
+def sim():
+    return rc.simulate_tracker(rc.Robot.from_catalog("abb_irb2600"), 40, noise_mm=0.01, seed=2)
+
+
+def results(sim, tmp_path) -> dict:
+    """name -> (result, its write() call writing into tmp_path)."""
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    cal = rc.calibrate(nominal, sim.data, nongeometric=None)
+    real = nominal.with_values({"a2": nominal.get("a2") + 5e-4})
+    comp = rc.compensate(real, nominal, nominal.fk(np.array([[0.1, 0.2, 0.1, 0.3, 0.4, 0.5]])))
+    unc = Uncertainty(names=("a2",), covariance=np.array([[1e-10]]), noise_m=1e-5, dof=200)
+    ur5e = rc.Robot.from_catalog("ur5e")
+    q = np.linspace([0.0, -1.2, 1.3, -0.4, 1.2, 0.0], [0.6, -1.0, 1.5, -0.2, 1.4, 0.5], 4)
+    tool = ToolCalibration(tcp=np.array([0.0, 0.0, 0.2]), point=np.array([1.0, 0.0, 0.5]),
+                           residuals=np.array([1e-5, 2e-5, 1e-5, 2e-5]), spread_deg=35.0)
+    entry = {"id": 1, "date": "2026-12-06 03:00:00", "kind": "calibration", "held_out_rms": 0.03, "rms": 0.02}
+    p = tmp_path
+    return {
+        "calibration": (cal, lambda r: r.write(p / "c.yaml", p / "c.json")),
+        "compensation": (comp, lambda r: r.write(p / "commands.csv", p / "parameters.csv")),
+        "evaluation": (rc.evaluate(sim.truth, sim.data), lambda r: r.write(p / "e.json")),
+        "check": (check(sim.truth, sim.data, unc), lambda r: r.write(p / "check.json", model="m.yaml")),
+        "tool": (tool, lambda r: r.write(p / "tool.json")),
+        "path": (rc.ik.plan_path(ur5e, ur5e.fk(q)), lambda r: r.write(p / "joints.csv")),
+        "simulation": (sim, lambda r: r.write(p / "d.csv", p / "truth.yaml")),
+        "import": (ImportResult(data=sim.data), lambda r: r.write(p / "imported.csv")),
+        "identifiability": (rc.analyze(nominal, sim.data.joints), lambda r: r.write(p / "ident.json")),
+        "timeline": (Timeline("R1", [entry]), lambda r: r.write(p / "timeline.json")),
+        "model export": (export_model(nominal, urdf=p / "r.urdf"), lambda r: r.write()),
+        "imported calibration": (ImportedCalibration(ur5e, "calibration.conf", ["a note"]),
+                                 lambda r: r.write(p / "factory.yaml")),
+    }
+
+
+def test_every_result_has_the_protocol(sim, tmp_path):
+    for name, (result, write) in results(sim, tmp_path).items():
+        assert isinstance(result.summary(), str) and result.summary(), name
+        assert isinstance(result.warnings, list), f"{name}: warnings is {type(result.warnings).__name__}"
+        json.dumps(result.to_dict(), default=str)  # plain data
+        written = write(result)
+        assert written and all(Path(path).is_file() for path in written), name
+
+
+def test_evaluate_still_returns_the_dict(sim):
+    stats = rc.evaluate(sim.truth, sim.data, names={"model": "truth.yaml", "data": "d.csv"})
+    assert isinstance(stats, dict) and isinstance(stats, EvaluationResult)
+    assert stats["warnings"] is stats.warnings and stats["rms"] < 0.05
+    assert stats.summary().startswith("point errors of truth.yaml on d.csv (40 poses): n 40, rms ")
+
+
+def test_hold_out_judges_the_last_poses(sim):
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    held = rc.calibrate(nominal, sim.data, nongeometric="none", hold_out=10)
+    assert held.problem.n_poses == 30 and held.validation["n"] == 10
+    assert held.error_model_choice is None  # named: no default to explain
+    with pytest.raises(DataError, match="between 1 and 39"):
+        rc.calibrate(nominal, sim.data, hold_out=40)
+    with pytest.raises(DataError, match="splits one calibration file"):
+        rc.calibrate(nominal, sim.data, validation=sim.data, hold_out=5)
+
+
+def test_the_result_says_why_the_default_error_model_is_geometric(sim):
+    result = rc.calibrate(rc.Robot.from_catalog("abb_irb2600"), sim.data)
+    assert result.error_model_choice.startswith("geometric (40 poses: the default chooses non-geometric")
+
+
+def test_swapped_models_are_refused(tmp_path):
+    nominal = rc.Robot.from_catalog("abb_irb2600")
+    path = tmp_path / "calibrated.yaml"
+    nominal.with_values({"a2": nominal.get("a2") + 1e-4}).save(path)
+    calibrated, controller = load_model_pair(str(path), "abb_irb2600")
+    assert controller.name == "abb_irb2600" and calibrated.get("a2") != controller.get("a2")
+    with pytest.raises(DataError, match="look swapped"):
+        load_model_pair("abb_irb2600", str(path))
