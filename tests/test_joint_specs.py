@@ -138,9 +138,9 @@ def test_a_margin_and_a_joint_distance_count_a_prismatic_joint_in_mm():
     assert margin_unit(robot) == "deg, mm on q3" and margin_unit(Robot.from_catalog("abb_irb2600")) == "deg"
     q = np.zeros((3, 4))
     q[1, 2], q[2, 0] = -0.005, np.deg2rad(5.0)  # 5 mm down the quill, 5 deg on the shoulder
-    conflicts = conflict_rows(robot, q, 4.0)
+    conflicts = conflict_rows(q, 4.0, robot.prismatic)
     np.testing.assert_array_equal(conflicts(0), [1, 0, 0])
-    np.testing.assert_array_equal(conflict_rows(robot, q, 6.0)(0), [1, 1, 1])
+    np.testing.assert_array_equal(conflict_rows(q, 6.0, robot.prismatic)(0), [1, 1, 1])
 
 
 def _scara_plan():

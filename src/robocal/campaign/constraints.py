@@ -356,12 +356,12 @@ def apply(robot, q: np.ndarray, constraints: Constraints, smr: np.ndarray, norma
     return keep, visible & keep[:, None]
 
 
-def conflict_rows(robot, q: np.ndarray, min_distance_deg: float):
-    """``conflicts(j) -> (C,)`` 0/1: candidates ``q (C, n)`` (rad; m on a prismatic joint) of
-    ``robot`` closer than ``min_distance_deg`` to candidate ``j``, ``j`` included: the Euclidean
-    joint-space distance over the joints in their units (deg; mm on a prismatic joint, 1 mm
-    counting as 1 deg)."""
-    qd = robot.joints_shown(q)
+def conflict_rows(q: np.ndarray, min_distance_deg: float, prismatic: np.ndarray | None = None):
+    """``conflicts(j) -> (C,)`` 0/1: candidates ``q (C, n)`` (rad; m on a joint flagged in
+    ``prismatic (n,)``, e.g. ``robot.prismatic``) closer than ``min_distance_deg`` to candidate
+    ``j``, ``j`` included: the Euclidean joint-space distance over the joints in their units (deg;
+    mm on a prismatic joint, 1 mm counting as 1 deg)."""
+    qd = np.rad2deg(q) if prismatic is None else np.where(prismatic, q * 1e3, np.rad2deg(q))
     limit = float(min_distance_deg) ** 2
 
     def conflicts(j: int) -> np.ndarray:

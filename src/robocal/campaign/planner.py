@@ -513,7 +513,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     A = info.region_matrix(plan_robot, q_region)
     first_row = np.unique(info.group, return_index=True)[1]
     cand_q = data.joints[first_row]                           # one joint vector per candidate
-    conflicts = (cons.conflict_rows(robot, cand_q, constraints.min_joint_distance_deg)
+    conflicts = (cons.conflict_rows(cand_q, constraints.min_joint_distance_deg, robot.prismatic)
                  if constraints.min_joint_distance_deg > 0 else None)
     values = _curve_values(curve, n, n_min, C)
     um = unmodelled_error(plan_robot, data, noise, info, q_region, float(unmodelled_mm), unmodelled_terms)
