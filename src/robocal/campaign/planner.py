@@ -306,8 +306,7 @@ def _curve_values(curve, n: int, n_min: int, n_max: int) -> list[int]:
 
 def _draw(robot, count: int, limits: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     q = rng.uniform(limits[:, 0], limits[:, 1], (count, robot.n_joints))
-    slides = robot.prismatic
-    return np.where(slides, np.round(q * 1e3, ROUND_DECIMALS_DEG) / 1e3,
+    return np.where(robot.prismatic, np.round(q * 1e3, ROUND_DECIMALS_DEG) / 1e3,
                     np.deg2rad(np.round(np.rad2deg(q), ROUND_DECIMALS_DEG)))
 
 

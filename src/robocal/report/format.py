@@ -59,4 +59,3 @@ def joint_columns(result: dict, n: int, external: int = 0) -> list[tuple[str, st
     if not isinstance(columns, list) or len(columns) != n:
         return [(f"e{i + 1}", "mm") if i < external else (f"q{i - external + 1}", "deg") for i in range(n)]
     return [tuple(str(c).rpartition("_")[::2]) for c in columns]
-
