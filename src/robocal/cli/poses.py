@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 
 from robocal.cli.args import check_format, numbers
-from robocal.deploy.models import check_tool_mm
 from robocal.programs.language_help import POSES_EPILOG, PROGRAM_OPTION
 from robocal.programs.registry import DIALECTS
 
@@ -191,6 +190,7 @@ def run(args) -> int:
     from robocal.campaign.programs import refuse_tracks, write_campaign
     from robocal.core.errors import DataError
     from robocal.data.measurements import read_joints
+    from robocal.deploy.models import check_tool_mm
     from robocal.kinematics.model import load_model
 
     programs = _programs(args)
