@@ -110,8 +110,9 @@ def test_a_joint_limited_beyond_two_turns_reads_inside_its_limits(tmp_path):
 
 
 def test_a_margin_that_leaves_no_room_names_the_quill_in_mm():
-    with pytest.raises(DataError, match=r"no room on joint 3 \(limits -200 to 0 mm\)"):
-        limits_with_margin(_scara(), 10.0)
+    limits_with_margin(_scara(), 10.0)  # 10 mm off either end of a 200 mm quill (not 10 deg = 175 mm)
+    with pytest.raises(DataError, match=r"margin of 101 mm leaves no room on joint 3 \(limits -200 to 0 mm"):
+        limits_with_margin(_scara(), 101.0)
 
 
 def test_a_gantry_is_no_track_and_a_track_counts_its_arm_joints():
@@ -125,3 +126,141 @@ def test_a_gantry_is_no_track_and_a_track_counts_its_arm_joints():
         three.check_against(gantry)
     with pytest.raises(DataError, match=r"has 7 joints \(e1 for its track, then q1\.\.q6\)"):
         three.check_against(cell_from_data(CELL))
+
+
+def test_a_margin_and_a_joint_distance_count_a_prismatic_joint_in_mm():
+    from robocal.campaign.constraints import conflict_rows, margin_unit
+
+    robot = _scara()
+    lim = limits_with_margin(robot, 1.0)
+    np.testing.assert_allclose(lim[2], [-0.199, -0.001])  # 1 mm off the quill's ends, not 17.5 mm
+    np.testing.assert_allclose(lim[0], [-2.5 + np.deg2rad(1.0), 2.5 - np.deg2rad(1.0)])
+    assert margin_unit(robot) == "deg, mm on q3" and margin_unit(Robot.from_catalog("abb_irb2600")) == "deg"
+    q = np.zeros((3, 4))
+    q[1, 2], q[2, 0] = -0.005, np.deg2rad(5.0)  # 5 mm down the quill, 5 deg on the shoulder
+    conflicts = conflict_rows(q, 4.0, robot.prismatic)
+    np.testing.assert_array_equal(conflicts(0), [1, 0, 0])
+    np.testing.assert_array_equal(conflict_rows(q, 6.0, robot.prismatic)(0), [1, 1, 1])
+
+
+def _scara_plan():
+    import robocal as rc
+
+    return rc.plan_poses(_scara(), 12, n_candidates=200, region_size=80, starts=1, seed=1)
+
+
+def test_a_scara_campaign_writes_its_quill_in_mm_and_its_page_says_so():
+    from robocal.report.campaign import render_campaign
+
+    plan = _scara_plan()
+    out = plan.to_dict()
+    assert out["robot"]["joints"] == ["q1_deg", "q2_deg", "q3_mm", "q4_deg"]
+    quill = np.array(out["joints_deg"])[:, 2]
+    np.testing.assert_allclose(quill, plan.joints[:, 2] * 1e3, atol=1e-4)
+    assert (quill <= -1.0).all() and (quill >= -199.0).all()  # mm, within the 1 mm margin
+    np.testing.assert_array_equal(np.round(plan.joints[:, 2] * 1e3, 4), plan.joints[:, 2] * 1e3)
+    page = render_campaign(out)
+    assert "<th>q3 (mm)</th>" in page and "q3 (deg)" not in page
+
+
+def test_an_ordinary_arm_keeps_its_robot_section_and_labels():
+    from robocal.report.format import joint_columns
+
+    robot = Robot.from_catalog("abb_irb2600")
+    assert robot.section() == {"name": "abb_irb2600", "description": robot.description, "n_joints": 6}
+    assert joint_columns({"robot": robot.section()}, 6)[1] == ("q2", "deg")
+    cell = cell_from_data(CELL)
+    assert cell.section()["joints"][:2] == ["e1_mm", "q1_deg"]
+    assert joint_columns({"robot": cell.section()}, 7)[:2] == [("e1", "mm"), ("q1", "deg")]
+
+
+def test_coverage_gives_a_prismatic_joint_in_mm():
+    from robocal.trust.coverage import coverage, covered_text
+
+    robot = _scara()
+    q = np.array([[0.1, -0.2, -0.05, 1.0], [0.3, 0.2, -0.01, 2.0]])
+    rows = coverage(robot, q)
+    assert set(rows[0]) == {"joint", "limits_deg", "covered_deg", "fraction"}
+    assert set(rows[2]) == {"joint", "limits_mm", "covered_mm", "fraction"}
+    np.testing.assert_allclose(rows[2]["limits_mm"], [-200.0, 0.0])
+    np.testing.assert_allclose(rows[2]["covered_mm"], [-50.0, -10.0])
+    assert rows[2]["fraction"] == pytest.approx(0.2)
+    assert covered_text(robot, rows[2]) == "q3 (covered -50..-10 of -200..0 mm)"
+    assert covered_text(robot, rows[1]) == "q2 (covered -11..11 of -143..143 deg)"
+    cell = cell_from_data(CELL)
+    track = coverage(cell, np.zeros((2, 7)))[0]
+    assert covered_text(cell, track) == "e1 (covered 0..0 of 0..6000 mm)"
+
+
+def test_a_scara_calibration_reports_its_quill_in_mm():
+    import robocal as rc
+    from robocal.report.html import render_report
+
+    robot = _scara()
+    q = np.random.default_rng(3).uniform(robot.limits[:, 0], robot.limits[:, 1], (40, 4))
+    data = Measurements.from_arrays("point", q, points=robot.fk(q)[:, :3, 3] + 1e-5, linear=robot.prismatic)
+    result = rc.calibrate(robot, data, nongeometric="none", register_frames=False, force=True)
+    out = result.to_dict()
+    assert out["robot"]["joints"] == ["q1_deg", "q2_deg", "q3_mm", "q4_deg"]
+    np.testing.assert_allclose(np.array(out["observations"]["joints_deg"])[:, 2], q[:, 2] * 1e3)
+    cov = out["predicted_accuracy"]["coverage"][2]
+    assert "limits_mm" in cov and "limits_deg" not in cov
+    page = render_report(out)
+    assert "q3 (mm)" in page and "q3 (deg)" not in page
+    assert "mm on q3" in page  # the joint distance's unit
+
+
+def test_measurements_read_against_a_model_take_its_joint_names(tmp_path):
+    cell = cell_from_data(CELL)
+    q = np.zeros((2, 7))
+    q[:, 0], q[:, 3] = [1.0, 2.0], -np.pi / 2
+    points = cell.fk(q)[:, :3, 3]
+    plain = Measurements.from_arrays("point", q, points=points, linear=cell.prismatic)  # q1_m: no track named
+    plain.save(tmp_path / "q1.csv")
+    assert (tmp_path / "q1.csv").read_text().count("q1_m,") == 1
+    data = Measurements.load(tmp_path / "q1.csv", robot=cell)
+    assert data.external == 1 and data.to_csv().count("e1_m,") == 1  # the model's e1, saved as such
+    np.testing.assert_array_equal(data.joints, q)
+    scara = _scara()
+    q4 = np.array([[0.1, -0.2, -0.05, 1.0]])
+    angles = Measurements.from_arrays("point", q4, points=scara.fk(q4)[:, :3, 3])
+    expected = r"joint 3 \(q3\) is prismatic \(give it in mm or m\): its column is q3_mm"
+    with pytest.raises(UnitError, match=expected):
+        angles.check_against(scara)
+
+
+def test_a_repeated_pose_on_a_track_is_within_its_tolerance_in_mm():
+    from robocal.trust.provenance import repeated_rows
+
+    ref = np.zeros((1, 7))
+    q = np.zeros((3, 7))
+    q[1, 0], q[2, 0] = 5e-6, 1e-4  # 0.005 mm and 0.1 mm along the track (0.1 mm < 0.01 "deg" = 0.17 mm)
+    slides = np.r_[True, np.zeros(6, bool)]
+    np.testing.assert_array_equal(repeated_rows(ref, q, prismatic=slides), [True, True, False])
+    np.testing.assert_array_equal(repeated_rows(ref, q), [True, True, True])  # without the kinds: rad
+
+
+def test_a_joint_column_exchange_on_a_track_names_the_arm_joints():
+    from dataclasses import replace
+
+    from robocal.data.simulate import simulate_tracker
+    from robocal.trust.diagnosis import fit_rms_mm, joint_mixup
+
+    cell = cell_from_data(CELL)
+    data = simulate_tracker(cell, 30, noise_mm=0.0, seed=2).data
+    q = data.joints.copy()
+    q[:, [2, 3]] = q[:, [3, 2]]  # the arm's q2 and q3 (columns 3 and 4 after e1)
+    swapped = replace(data, joints=q)
+    given = fit_rms_mm(cell, swapped)
+    assert joint_mixup(cell, swapped, given).startswith("joint columns q2 and q3 look exchanged")
+
+
+def test_a_track_campaign_page_shows_the_carriage_in_mm():
+    from robocal.report.campaign import render_campaign
+
+    page = {"robot": {"name": "cell", "n_joints": 7}, "joints_deg": [[0.0, -90.0, 90.0, 0.0, 10.0, 0.0]],
+            "e1_mm": [1500.0], "tcp_mm": [[1.0, 2.0, 3.0]]}
+    for campaign in (page, {**page, "robot": cell_from_data(CELL).section()}):  # older file, this one
+        html = render_campaign(campaign)
+        assert "<th>e1 (mm)</th><th>q1 (deg)</th>" in html and "q7" not in html
+        assert "1500.0000" in html

@@ -49,7 +49,7 @@ from robocal.trust.consistency import check_fit, check_not_worse
 from robocal.trust.coverage import predict, prediction
 from robocal.trust.diagnosis import diagnosed
 from robocal.trust.posterior import Noise, posterior_analysis
-from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, independent
+from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, independent, tolerance_unit
 
 NONGEOMETRIC_METHODS = ("lsq", "robust")  # the methods that estimate the joint-error terms
 AUTO_DEFAULT_KINDS = ("point", "pose")  # tracker data: where nongeometric="auto" is the default ...
@@ -177,8 +177,8 @@ def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data
     rows, repeated = independent(data, problem.datasets, what)
     if repeated:
         warnings.append(f"{what}: {repeated} of its {len(data)} rows repeat calibration poses (joints within "
-                        f"{JOINT_REPEAT_TOL_DEG:g} deg): the held-out figures are computed on the other "
-                        f"{len(rows)} rows only")
+                        f"{JOINT_REPEAT_TOL_DEG:g} {tolerance_unit(data)}): the held-out figures are "
+                        f"computed on the other {len(rows)} rows only")
         result = replace(judged(rows), repeated=repeated)
     if result.after["rms"] > result.before["rms"]:
         warnings.append(f"the calibrated model is worse than the nominal on the validation data "

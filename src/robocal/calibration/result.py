@@ -301,9 +301,8 @@ class CalibrationResult(_BeforeAfter):
         return {
             "kind": obs.kind, "error_before": errors[0].tolist(), "error_after": errors[1].tolist(),
             "pose_id": data.pose_id.tolist(), "source_row": data.source_row.tolist(),
-            "smr": data.smr.tolist(),  # a prismatic joint (a track's e1) in mm, not deg:
-            "joints_deg": np.where(False if data.linear is None else data.linear, data.joints * 1e3,
-                                   np.rad2deg(data.joints)).tolist(),
+            "smr": data.smr.tolist(),  # each joint in its unit (a quill's, a track's e1 in mm):
+            "joints_deg": states[0].robot.joints_shown(data.joints).tolist(),
             "measured": None if measured is None else measured.tolist(),
             "model_before": before.tolist(), "model_after": after.tolist(),
             "weight": None if weights is None else weights.tolist(),
@@ -319,8 +318,7 @@ class CalibrationResult(_BeforeAfter):
             "format": RESULT_FORMAT,
             "robocal_version": __version__,
             "provenance": self.provenance,
-            "robot": {"name": self.robot.name, "description": self.robot.description,
-                      "n_joints": self.robot.n_joints},
+            "robot": self.robot.section(),
             "data": {"file": data.source, "kind": problem.kind, "n_poses": int(problem.n_poses),
                      "n_observations": int(sum(len(d) for d in problem.datasets)),
                      "files": [{"file": d.label, "kind": d.kind, "n_poses": int(d.n_poses),

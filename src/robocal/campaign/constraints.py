@@ -5,7 +5,7 @@ Every constraint is optional; each removes candidate poses and the planner repor
 candidates. Positions are in the model's world frame, which for a catalog robot is the robot's
 base frame; SMR positions and facing directions are in the flange frame (``tool0``).
 
-- joint limits with a margin (deg) on both ends;
+- joint limits with a margin (deg; mm on a prismatic joint) on both ends;
 - Cartesian boxes: the TCP (the first SMR) must lie inside at least one box;
 - singularity distances (`robocal.ik.singularity.classic_distances`), each a minimum: the
   wrist's (angle between the axes of joints 4 and 6, deg), the elbow's (arm stretched or folded,
@@ -110,12 +110,14 @@ class Constraints:
     Attributes
     ----------
     margin_deg : float, optional
-        Distance kept from both joint limits, degrees.
+        Distance kept from both joint limits, degrees (millimetres on a prismatic joint: a
+        quill, a track).
     boxes : sequence of array_like, shape (2, 3) each
         Cartesian boxes ``((xmin, ymin, zmin), (xmax, ymax, zmax))`` in the world frame, metres:
         the TCP (the first SMR) must lie inside at least one.
     min_joint_distance_deg : float, default 0
-        Smallest joint-space distance between two chosen poses, degrees.
+        Smallest joint-space distance between two chosen poses, degrees (Euclidean over the
+        joints; a prismatic joint counts in millimetres).
     min_wrist_deg : float, default 0
         Smallest angle between the axes of joints 4 and 6, degrees (less than 90).
     min_elbow_deg : float, default 0
@@ -199,17 +201,34 @@ class Funnel:
                 "left": self.left}
 
 
+def in_joint_units(robot, value: float) -> np.ndarray:
+    """``(n,)``: ``value`` taken in each joint's unit (deg on a revolute joint, mm on a prismatic
+    one: `robocal.kinematics.model.JointSpec.unit`), in SI (rad, m)."""
+    return np.where(robot.prismatic, value * 1e-3, np.deg2rad(value))
+
+
+def margin_unit(robot) -> str:
+    """The unit a joint margin or distance is in on ``robot``: ``deg``, ``mm`` (all joints
+    prismatic) or e.g. ``deg, mm on q3`` (`in_joint_units`)."""
+    sliding = [j.name for j in robot.joints if j.prismatic]
+    if not sliding or len(sliding) == robot.n_joints:
+        return "mm" if sliding else "deg"
+    return f"deg, mm on {', '.join(sliding)}"
+
+
 def limits_with_margin(robot, margin_deg: float) -> np.ndarray:
-    """``(n, 2)`` joint limits (rad) shrunk by the margin; DataError when a joint has no room."""
-    m = np.deg2rad(margin_deg)
-    lim = robot.limits + np.array([m, -m])
+    """``(n, 2)`` joint limits (rad; m on a prismatic joint) shrunk by the margin, in each joint's
+    unit (deg; mm on a prismatic joint: a quill's or a track's 1 mm, not 1 deg = 17 mm); DataError
+    when a joint has no room."""
+    m = in_joint_units(robot, margin_deg)
+    lim = robot.limits + np.stack([m, -m], axis=1)
     tight = np.flatnonzero(lim[:, 0] > lim[:, 1])
     if tight.size:
         i = int(tight[0])
         joint = robot.joints[i]
         lo, hi = joint.shown(np.array(joint.limits))
-        raise DataError(f"a joint-limit margin of {margin_deg:g} deg leaves no room on joint {i + 1} "
-                        f"(limits {lo:.4g} to {hi:.4g} {joint.unit}): lower the margin")
+        raise DataError(f"a joint-limit margin of {margin_deg:g} {joint.unit} leaves no room on joint "
+                        f"{i + 1} (limits {lo:.4g} to {hi:.4g} {joint.unit}): lower the margin")
     return lim
 
 
@@ -280,7 +299,7 @@ def apply(robot, q: np.ndarray, constraints: Constraints, smr: np.ndarray, norma
     tracker is given), and records the removals in ``funnel``.
     """
     keep = ((q >= limits[:, 0]) & (q <= limits[:, 1])).all(axis=1)
-    margin = f" (margin {constraints.margin_deg:g} deg)" if constraints.margin_deg else ""
+    margin = f" (margin {constraints.margin_deg:g} {margin_unit(robot)})" if constraints.margin_deg else ""
     funnel.record(f"the joint limits{margin}", int(np.sum(~keep)))
     pos, nrm, frames = smr_geometry(robot, q, smr, normals)
 
@@ -337,10 +356,12 @@ def apply(robot, q: np.ndarray, constraints: Constraints, smr: np.ndarray, norma
     return keep, visible & keep[:, None]
 
 
-def conflict_rows(q: np.ndarray, min_distance_deg: float):
-    """``conflicts(j) -> (C,)`` 0/1: candidates closer than ``min_distance_deg`` (Euclidean
-    joint-space distance in deg) to candidate ``j``, ``j`` included."""
-    qd = np.rad2deg(q)
+def conflict_rows(q: np.ndarray, min_distance_deg: float, prismatic: np.ndarray | None = None):
+    """``conflicts(j) -> (C,)`` 0/1: candidates ``q (C, n)`` (rad; m on a joint flagged in
+    ``prismatic (n,)``, e.g. ``robot.prismatic``) closer than ``min_distance_deg`` to candidate
+    ``j``, ``j`` included: the Euclidean joint-space distance over the joints in their units (deg;
+    mm on a prismatic joint, 1 mm counting as 1 deg)."""
+    qd = np.rad2deg(q) if prismatic is None else np.where(prismatic, q * 1e3, np.rad2deg(q))
     limit = float(min_distance_deg) ** 2
 
     def conflicts(j: int) -> np.ndarray:

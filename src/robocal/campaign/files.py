@@ -2,9 +2,9 @@
 output of a run together (all files or none).
 
 ``poses.csv`` has the measurement CSV's joint columns, one row per pose in measuring order:
-``q1_deg..qn_deg`` (degrees with up to 10 decimals; generated candidates are rounded to 1e-4
-deg, so the file holds them exactly; a prismatic joint in mm, ``q3_mm``, a track's carriage
-``e1_mm``: the robot's `robocal.kinematics.model.Robot.joints`); with
+``q1_deg..qn_deg`` (degrees with up to 10 decimals; a prismatic joint in mm, ``q3_mm``, a track's
+carriage ``e1_mm``: the robot's `robocal.kinematics.model.Robot.joints`; generated candidates
+are rounded to 1e-4 deg or 1e-4 mm, so the file holds them exactly); with
 candidates from a file, the file's own joint columns and the chosen rows' cells exactly as read,
 plus ``source_row`` (the row's line in that file). With several SMRs, ``visible_smr0..`` (1/0)
 say which SMRs the tracker sees at each pose; plane contacts and distances keep their ``plane``

@@ -1,7 +1,9 @@
 """The order in which to measure the chosen poses: short robot travel.
 
 Travel between two poses is the weighted joint distance ``sum_i w_i |dq_i|`` of the seed-001
-path planner (:func:`robocal.ik.path.default_weights`: the big joints cost more). The route is
+path planner (:func:`robocal.ik.path.default_weights`: the big joints cost more; ``dq`` in rad, a
+prismatic joint's in m at weight 1 per metre, so that a metre along a track costs as much as a
+radian of a wrist joint). The route is
 an open path starting at the pose nearest the home position (zero joints, clipped into the
 limits): nearest neighbour, then 2-opt (reverse any stretch of the route that shortens it)
 until no reversal helps.
@@ -56,7 +58,8 @@ def _two_opt(route: np.ndarray, D: np.ndarray) -> np.ndarray:
 
 
 def measuring_order(robot, q: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """Permutation ``(N,)`` of joints ``q (N, n)`` rad giving a short measuring route."""
+    """Permutation ``(N,)`` of joints ``q (N, n)`` (rad; m on a prismatic joint) giving a short
+    measuring route."""
     if len(q) < 2:
         return np.arange(len(q))
     D = _distances(q, weights)

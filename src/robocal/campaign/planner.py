@@ -51,7 +51,7 @@ DEFAULT_CANDIDATES = 5000
 DEFAULT_REGION_SIZE = WORKSPACE_SAMPLES
 DEFAULT_STARTS = 4
 MAX_DRAWS = 50              # candidate batches drawn before constraints are declared too tight
-ROUND_DECIMALS_DEG = 4      # generated joints are rounded to 1e-4 deg (what the programs say)
+ROUND_DECIMALS_DEG = 4      # generated joints are rounded to 1e-4 deg (1e-4 mm): what poses.csv says
 CURVE_POINTS = 12           # N values of an accuracy curve given as start:stop
 CURVE_RANDOM_DESIGNS = 9    # random designs per N for the curve's random baseline
 FORMAT = "robocal-campaign/1"
@@ -237,17 +237,16 @@ class CampaignResult:
     def to_dict(self) -> dict:
         """Plain data (mm, deg) for JSON and the HTML page."""
         ident = self.identifiability
+        shown, k = self.robot.joints_shown(self.joints), self.robot.external_axes
         return {
             "format": FORMAT, "robocal_version": __version__,
-            "robot": {"name": self.robot.name, "description": self.robot.description,
-                      "n_joints": self.robot.n_joints},
+            "robot": self.robot.section(),
             "kind": self.kind, "criterion": self.criterion, "n_poses": self.n,
             "predicted_rms_mm": self.predicted_rms_mm,
             "noise": {"model": self.noise.model, "sigma_mm": self.noise.sigma_m * 1e3},
-            "joints_deg": [[float(fixed_point(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv
-                           for row in np.rad2deg(self.joints[:, self.robot.external_axes:])],
-            **({"e1_mm": [float(fixed_point(v, DEGREE_DECIMALS)) for v in self.joints[:, 0] * 1e3]}
-               if self.robot.external_axes else {}),
+            "joints_deg": [[float(fixed_point(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv (mm on
+                           for row in shown[:, k:]],                           # a prismatic joint)
+            **({"e1_mm": [float(fixed_point(v, DEGREE_DECIMALS)) for v in shown[:, 0]]} if k else {}),
             "candidate_index": self.candidate_index.tolist(),
             "visible": self.visible.astype(int).tolist(),
             "tcp_mm": (self.robot.fk(self.joints)[:, :3, 3] * 1e3).tolist(),
@@ -307,7 +306,8 @@ def _curve_values(curve, n: int, n_min: int, n_max: int) -> list[int]:
 
 def _draw(robot, count: int, limits: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     q = rng.uniform(limits[:, 0], limits[:, 1], (count, robot.n_joints))
-    return np.deg2rad(np.round(np.rad2deg(q), ROUND_DECIMALS_DEG))
+    return np.where(robot.prismatic, np.round(q * 1e3, ROUND_DECIMALS_DEG) / 1e3,
+                    np.deg2rad(np.round(np.rad2deg(q), ROUND_DECIMALS_DEG)))
 
 
 def _generate(robot, count, constraints, smr, normals, limits, rng, funnel):
@@ -512,7 +512,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     A = info.region_matrix(plan_robot, q_region)
     first_row = np.unique(info.group, return_index=True)[1]
     cand_q = data.joints[first_row]                           # one joint vector per candidate
-    conflicts = (cons.conflict_rows(cand_q, constraints.min_joint_distance_deg)
+    conflicts = (cons.conflict_rows(cand_q, constraints.min_joint_distance_deg, robot.prismatic)
                  if constraints.min_joint_distance_deg > 0 else None)
     values = _curve_values(curve, n, n_min, C)
     um = unmodelled_error(plan_robot, data, noise, info, q_region, float(unmodelled_mm), unmodelled_terms)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 
 from robocal.cli.args import check_format, numbers
-from robocal.deploy.models import check_tool_mm
 from robocal.programs.language_help import POSES_EPILOG, PROGRAM_OPTION
 from robocal.programs.registry import DIALECTS
 
@@ -72,12 +71,14 @@ def add_parser(sub) -> None:
                    help="its facing direction on the flange (one per --smr-mm; default flange z)")
     g = p.add_argument_group("constraints")
     g.add_argument("--margin-deg", type=float,
-                   help="stay this far inside the joint limits (default 1 deg; 0 for --from poses)")
+                   help="stay this far inside the joint limits (default 1 deg, mm on a prismatic joint; "
+                        "0 for --from poses)")
     g.add_argument("--box", type=float, nargs=6, action="append",
                    metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
                    help="the TCP must be inside this box (mm; repeat for several boxes)")
     g.add_argument("--min-joint-distance-deg", type=float, default=0.0,
-                   help="minimum joint-space distance between chosen poses (Euclidean, deg)")
+                   help="minimum joint-space distance between chosen poses (Euclidean, deg; mm on a "
+                        "prismatic joint)")
     g.add_argument("--min-wrist-deg", type=float, default=0.0, help="angle between axes 4 and 6, deg")
     g.add_argument("--min-elbow-deg", type=float, default=0.0,
                    help="distance from the stretched/folded arm, deg")
@@ -189,6 +190,7 @@ def run(args) -> int:
     from robocal.campaign.programs import refuse_tracks, write_campaign
     from robocal.core.errors import DataError
     from robocal.data.measurements import read_joints
+    from robocal.deploy.models import check_tool_mm
     from robocal.kinematics.model import load_model
 
     programs = _programs(args)

@@ -243,7 +243,8 @@ _CONDITIONS = Obj({  # robocal.calibration.conditions
 RESULT_SCHEMA = Obj({
     "format": Str(), "robocal_version": Str(null=True, max_len=100),
     "robot": Obj({"name": Str(null=True, max_len=1000), "description": Str(null=True),
-                  "n_joints": Int(null=True, lo=1, hi=64)}, null=True),
+                  "n_joints": Int(null=True, lo=1, hi=64),
+                  "joints": Seq(Str(max_len=40), null=True)}, null=True),
     "provenance": Obj({"created": Str(null=True), "command": Str(null=True), "robot_spec": Str(null=True),
                        "data_file": Str(null=True), "validation_file": Str(null=True), "hold_out": Any()},
                       null=True),

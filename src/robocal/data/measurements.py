@@ -473,10 +473,11 @@ class Measurements:
         wrong = np.flatnonzero(linear != robot.prismatic)
         if wrong.size:
             k = int(wrong[0])
-            kind = "prismatic (give it in mm or m)" if robot.prismatic[k] else "revolute (deg or rad)"
+            joint = robot.joints[k]
+            kind = "prismatic (give it in mm or m)" if joint.prismatic else "revolute (deg or rad)"
             raise UnitError(f"{where}joint column {k + 1} ({self.joint_column(k, '')}) is in "
-                            f"{'length' if linear[k] else 'angle'} units but {robot.name}'s joint {k + 1} is "
-                            f"{kind}" + (": a track's column is e1_mm" if robot.external_axes else ""))
+                            f"{'length' if linear[k] else 'angle'} units but {robot.name}'s joint {k + 1} "
+                            f"({joint.name}) is {kind}: its column is {joint.column}")
         if reach is None:
             reach = robot_reach(robot)
         _check_plausible(self, reach, where)
@@ -493,8 +494,10 @@ class Measurements:
         path : str or path-like
             The CSV file (format: the measurement CSV reference page; units in the column names).
         robot : Robot, optional
-            Check the joint count and SMR indices against this model, and that the points span
-            no more than it can reach.
+            Check the joint count, the joints' kinds (angle or length columns) and SMR indices
+            against this model, and that the points span no more than it can reach; the joints
+            are then named as the model names them (`Robot.joints`: a track's carriage ``e1``,
+            a gantry's first axis ``q1``), which `save` writes.
         reach : float, optional
             The reach used for the length plausibility check without a robot, metres.
 
@@ -527,6 +530,8 @@ class Measurements:
         data = replace(parse_csv(text, str(path), joint_range_rad(robot)), file=str(path))
         if robot is not None:
             data.check_against(robot, reach, str(path))
+            if data.external != robot.external_axes:  # the model's names: e1.. (a track), then q1..
+                data = replace(data, external=robot.external_axes)
         elif reach is not None:
             _check_plausible(data, reach, f"{path}: ")
         return data

@@ -352,6 +352,14 @@ class Robot:
         q = np.asarray(q, float)
         return np.where(self.prismatic, q * 1e3, np.rad2deg(q))
 
+    def section(self) -> dict:
+        """The ``robot`` section of the result and campaign JSON: ``name``, ``description``,
+        ``n_joints`` and, when a joint is prismatic, ``joints``: each joint's CSV column (``['e1_mm',
+        'q1_deg', ...]``, ``['q1_deg', 'q2_deg', 'q3_mm', 'q4_deg']``), which says the unit of its
+        values in the JSON (absent: every joint revolute, in deg)."""
+        out = {"name": self.name, "description": self.description, "n_joints": self.n_joints}
+        return {**out, "joints": [j.column for j in self.joints]} if self.has_prismatic else out
+
     @property
     def has_ur_form(self) -> bool:
         """Whether closed-form UR inverse kinematics applies to this robot's chain (see `ur_form`)."""

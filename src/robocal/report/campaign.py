@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.core.errors import DataError
+from robocal.report.format import joint_columns
 from robocal.report.html import _figure, _grid, _identifiability, _num, _table, esc, page
 
 
@@ -69,16 +70,21 @@ def _curve(c: dict) -> str:
 def _poses(c: dict) -> str:
     from robocal.report import plots
 
-    q = np.asarray(c.get("joints_deg") or [], float)
+    q = np.asarray(c.get("joints_deg") or [], float)  # deg; mm on a prismatic joint
     tcp = np.asarray(c.get("tcp_mm") or [], float)
     if q.ndim != 2 or tcp.shape != (len(q), 3):
         raise DataError("a campaign page needs joints_deg (N, n) and tcp_mm (N, 3)")
+    track = np.asarray(c.get("e1_mm") or [], float)  # an arm on a track: its carriage, written apart
+    external = int(track.shape == (len(q),) and len(q) > 0)
+    if external:
+        q = np.column_stack([track, q])
     visible = np.asarray(c.get("visible") or np.ones((len(q), 1)), int)
     fig = _figure(plots.points_3d(tcp, np.arange(1, len(q) + 1, dtype=float), "measuring order"),
                   "TCP (first SMR) positions of the planned poses, coloured by measuring order.",
                   "poses spread over the whole region the robot will work in; a region without poses is "
                   "a region the calibration does not vouch for.")
-    header = ["#"] + [f"q{i + 1} (deg)" for i in range(q.shape[1])] + ["x (mm)", "y (mm)", "z (mm)"]
+    header = (["#"] + [f"{esc(name)} ({esc(unit)})" for name, unit in joint_columns(c, q.shape[1], external)]
+              + ["x (mm)", "y (mm)", "z (mm)"])
     multi = visible.shape[1] > 1
     if multi:
         header.append("SMRs seen")

@@ -48,3 +48,14 @@ def table(header: list[str], rows: list[list[str]], left: int = 1, row_class=Non
         body.append(f"<tr{rc}>" + "".join(f"<td{cls(k)}>{c}</td>" for k, c in enumerate(r)) + "</tr>")
     markup = f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
     return f"<div class='scroll'>{markup}</div>"
+
+
+def joint_columns(result: dict, n: int, external: int = 0) -> list[tuple[str, str]]:
+    """Each of ``n`` joints' ``(name, unit)`` of a result or campaign dict: from its ``robot.joints``
+    columns (``q3_mm``, a track's ``e1_mm``: written when a joint is prismatic, see
+    `robocal.kinematics.model.Robot.section`), else (an older file) ``external`` track carriages
+    ``e1..`` in mm, then revolute joints ``q1..`` in deg."""
+    columns = (result.get("robot") or {}).get("joints")
+    if not isinstance(columns, list) or len(columns) != n:
+        return [(f"e{i + 1}", "mm") if i < external else (f"q{i - external + 1}", "deg") for i in range(n)]
+    return [tuple(str(c).rpartition("_")[::2]) for c in columns]

@@ -15,7 +15,7 @@ import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.core.io import write_atomic
-from robocal.report.format import esc, p_value
+from robocal.report.format import esc, joint_columns, p_value
 from robocal.report.format import num as _num
 from robocal.report.format import table as _table
 from robocal.report.iso9283 import pose_accuracy_repeatability
@@ -96,13 +96,15 @@ ERROR_LABELS = {"point": "position error (mm)", "pose": "position error (mm)",
 class _ObsErrors:
     """Per-observation errors (mm) of one observation block, before and after."""
 
-    def __init__(self, obs: dict) -> None:
+    def __init__(self, obs: dict, result: dict) -> None:
         self.before_pts = _array(obs, "model_before", 3)
         self.after_pts = _array(obs, "model_after", 3)
         self.measured = _array(obs, "measured", 3)
         n = next((len(obs[k]) for k in ("error_after", "model_after", "error_before", "measured")
                   if obs.get(k) is not None), 0)  # rows (one length: robocal.core.schema checks it)
-        self.joints = _array(obs, "joints_deg")
+        self.joints = _array(obs, "joints_deg")  # deg; mm on a prismatic joint
+        self.joint_names = None if self.joints is None or self.joints.ndim != 2 else \
+            joint_columns(result, self.joints.shape[1])  # (name, unit) of each
         self.pose_id = np.asarray(_or(obs.get("pose_id"), np.arange(n)))
         self.source_row = np.asarray(_or(obs.get("source_row"), np.arange(n)))
         self.smr = np.asarray(_or(obs.get("smr"), np.zeros(n, int)))
@@ -332,7 +334,8 @@ def _errors_section(cal: _ObsErrors, val: _ObsErrors | None) -> str:
     figs = [sorted_fig, dist_fig]
     if cal.joints is not None and cal.joints.ndim == 2 and len(cal.joints) == len(cal.after):
         figs.append(_figure(
-            plots.error_vs_joints(cal.joints, cal.after, cal.label, rejected=cal.rejected),
+            plots.error_vs_joints(cal.joints, cal.after, cal.label, rejected=cal.rejected,
+                                  joints=cal.joint_names),
             "Error after calibration against each joint angle (linear scale); the line is the mean of "
             f"{plots.JOINT_BINS} groups of equally many observations, in the order of the joint's angle.",
             "a trend, wave or step of the line: an effect of that joint the model lacks (compliance, "
@@ -676,9 +679,9 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     robot = (result.get("robot") or {}).get("name", "robot")
     title = title or f"Calibration report: {robot}"
     obs = result.get("observations") or {}
-    cal = _ObsErrors(obs)
+    cal = _ObsErrors(obs, result)
     vobs = result.get("validation_observations")
-    val = _ObsErrors(vobs) if vobs else None
+    val = _ObsErrors(vobs, result) if vobs else None
     sections = [("summary", "Summary", _summary(result))]
     if cal.ok:
         sections.append(("errors", "Errors before and after", _errors_section(cal, val)))

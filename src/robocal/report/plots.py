@@ -173,13 +173,16 @@ def _binned_mean(x: np.ndarray, y: np.ndarray, bins: int) -> tuple[np.ndarray, n
 
 @_styled
 def error_vs_joints(joints_deg: np.ndarray, after: np.ndarray, label: str = "error (mm)",
-                    rejected: np.ndarray | None = None) -> Figure:
-    """Error after calibration ``(N,)`` against each joint angle of ``joints_deg`` ``(N, n)``, on a
-    linear scale, with the mean per bin of equally many poses; ``rejected`` observations are left
-    out (their errors would set the scale)."""
+                    rejected: np.ndarray | None = None,
+                    joints: list[tuple[str, str]] | None = None) -> Figure:
+    """Error after calibration ``(N,)`` against each joint of ``joints_deg`` ``(N, n)`` (deg; mm on
+    a prismatic joint), on a linear scale, with the mean per bin of equally many poses; ``joints``
+    names each ``(name, unit)`` (default ``q1..qn`` in deg); ``rejected`` observations are left out
+    (their errors would set the scale)."""
     keep = np.ones(after.size, bool) if rejected is None else ~np.asarray(rejected, bool)
     q, e = joints_deg[keep], after[keep]
     n = joints_deg.shape[1]
+    joints = joints or [(f"q{j + 1}", "deg") for j in range(n)]
     cols = 3
     rows = -(-n // cols)
     fig = _figure(6.4, 1.75 * rows + 0.35, top=0.3, hspace=0.65, wspace=0.08, left=0.75)
@@ -193,7 +196,7 @@ def error_vs_joints(joints_deg: np.ndarray, after: np.ndarray, label: str = "err
         if e.size:
             xc, mean = _binned_mean(q[:, j], e, JOINT_BINS)
             ax.plot(xc, mean, color="#0b4f3c", lw=1.6, label="mean per bin")
-        ax.set_xlabel(f"q{j + 1} (deg)")
+        ax.set_xlabel(f"{joints[j][0]} ({joints[j][1]})")
         if j % cols == 0:
             ax.set_ylabel(label)
     if e.size:
@@ -317,16 +320,18 @@ def accuracy_curve(n: np.ndarray, planned: np.ndarray, random: np.ndarray,
 
 
 @_styled
-def error_vs_distance(distance: np.ndarray, predicted: np.ndarray, validated: float, factor: float) -> Figure:
-    """Predicted RMS error (mm) of the workspace sample against its joint distance (deg) to the
-    nearest calibration pose, with the validated error and ``factor`` times it as lines."""
+def error_vs_distance(distance: np.ndarray, predicted: np.ndarray, validated: float, factor: float,
+                      unit: str = "deg") -> Figure:
+    """Predicted RMS error (mm) of the workspace sample against its joint distance (``unit``: deg,
+    or e.g. ``deg; mm on q3`` with a prismatic joint) to the nearest calibration pose, with the
+    validated error and ``factor`` times it as lines."""
     fig = _figure(6.4, 2.8, top=0.35)
     ax = fig.add_subplot()
     ax.plot(distance, predicted, "o-", color=BEFORE, ms=3, label="predicted over the workspace")
     ax.axhline(validated, color=AFTER, lw=1.2, label="validated")
     ax.axhline(factor * validated, color="grey", lw=0.8, ls="--", label=f"{factor:g} x validated")
     _log_if_wide(ax, np.append(predicted, validated), "y")
-    ax.set_xlabel("joint distance to the nearest calibration pose (deg)")
+    ax.set_xlabel(f"joint distance to the nearest calibration pose ({unit})")
     ax.set_ylabel("predicted RMS error (mm)")
     _legend_above(ax)
     return fig

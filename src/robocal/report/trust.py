@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.report.format import esc, num, p_value
+from robocal.report.format import esc, joint_columns, num, p_value
 
 
 def headline(result: dict) -> list[str]:
@@ -40,18 +40,27 @@ def section(result: dict) -> str | None:
     curve = pa.get("by_distance") or {}
     if not curve.get("distance_deg"):
         return None
+    joints = pa.get("coverage") or []
+    names = joint_columns(result, len(joints))
+    sliding = [name for name, unit in names if unit == "mm"]
     svg = plots.error_vs_distance(np.asarray(curve["distance_deg"], float),
                                   np.asarray(curve["rms_mm"], float), float(pa["validated_mm"]),
-                                  float(pa["factor"]))
-    rows = "".join(f"<tr><td>q{esc(j['joint'])}</td><td>{num(j['covered_deg'][0], 1)} .. "
-                   f"{num(j['covered_deg'][1], 1)}</td><td>{num(j['limits_deg'][0], 1)} .. "
-                   f"{num(j['limits_deg'][1], 1)}</td><td>{num(100 * j['fraction'], 0)}%</td></tr>"
-                   for j in pa.get("coverage") or [])
+                                  float(pa["factor"]),
+                                  unit="deg" + (f"; mm on {', '.join(sliding)}" if sliding else ""))
+    units = {unit for _, unit in names}
+    shown = f" ({units.pop()})" if len(units) == 1 else ""  # else each row says its unit
+    rows = []
+    for j in joints:
+        name, unit = names[j["joint"] - 1] if 1 <= j["joint"] <= len(names) else (f"q{j['joint']}", "deg")
+        (a, b), (lo, hi) = j.get(f"covered_{unit}") or [None, None], j.get(f"limits_{unit}") or [None, None]
+        each = "" if shown else f" {esc(unit)}"
+        rows.append(f"<tr><td>{esc(name)}</td><td>{num(a, 1)} .. {num(b, 1)}{each}</td><td>{num(lo, 1)} .. "
+                    f"{num(hi, 1)}{each}</td><td>{num(100 * j['fraction'], 0)}%</td></tr>")
     ws = pa.get("workspace") or {}
     return (f"<figure>{svg}<figcaption><b>Look for:</b> the predicted error far from the calibration poses "
             f"against the validated {num(pa['validated_mm'])} mm ({esc(pa.get('validated_from'))}). "
             f"Predicted from the parameters' posterior covariance and the unmodelled error "
             f"({num(pa.get('unmodelled_mm'))} mm) at {esc(ws.get('samples'))} joint vectors uniform in "
             "the limits (seeded).</figcaption></figure>"
-            "<table><tr><th>joint</th><th>calibration poses (deg)</th><th>limits (deg)</th><th>covered</th>"
-            f"</tr>{rows}</table>")
+            f"<table><tr><th>joint</th><th>calibration poses{shown}</th><th>limits{shown}</th>"
+            f"<th>covered</th></tr>{''.join(rows)}</table>")

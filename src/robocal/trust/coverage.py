@@ -211,22 +211,34 @@ def _stats(e: np.ndarray) -> dict:
 
 
 def coverage(robot, q_cal: np.ndarray) -> list[dict]:
-    """Per joint: its limits and the range the calibration poses ``q_cal (N, n)`` span (deg), and
-    the fraction of the limits that is."""
-    lo, hi = np.rad2deg(robot.limits.T)
-    a, b = np.rad2deg(q_cal.min(axis=0)), np.rad2deg(q_cal.max(axis=0))
-    return [{"joint": j + 1, "limits_deg": [float(lo[j]), float(hi[j])],
-             "covered_deg": [float(a[j]), float(b[j])],
+    """Per joint (``joint``: its 1-based number in the joint vector, `Robot.joints` names it): its
+    limits and the range the calibration poses ``q_cal (N, n)`` (rad; m) span, in the joint's unit
+    (``limits_deg``, ``covered_deg``; a prismatic joint's ``limits_mm``, ``covered_mm``), and the
+    fraction of the limits that is."""
+    lo, hi = robot.joints_shown(robot.limits.T)
+    a, b = robot.joints_shown(q_cal.min(axis=0)), robot.joints_shown(q_cal.max(axis=0))
+    return [{"joint": j + 1, f"limits_{spec.unit}": [float(lo[j]), float(hi[j])],
+             f"covered_{spec.unit}": [float(a[j]), float(b[j])],
              "fraction": float(min(1.0, (b[j] - a[j]) / max(hi[j] - lo[j], 1e-12)))}
-            for j in range(robot.n_joints)]
+            for j, spec in enumerate(robot.joints)]
 
 
-def _by_distance(q_ws: np.ndarray, q_cal: np.ndarray, err: np.ndarray) -> dict:
-    """The workspace sample's predicted error binned by its joint-space distance (deg, Euclidean
-    over the joints) to the nearest calibration pose: bin centres and the RMS per bin."""
+def covered_text(robot, entry: dict) -> str:
+    """One joint of `coverage` in words: ``q2 (covered -40..60 of -95..155 deg)``, a quill's ``q3
+    (covered -50..0 of -200..0 mm)``."""
+    spec = robot.joints[entry["joint"] - 1]
+    (a, b), (lo, hi) = entry[f"covered_{spec.unit}"], entry[f"limits_{spec.unit}"]
+    return f"{spec.name} (covered {a:.0f}..{b:.0f} of {lo:.0f}..{hi:.0f} {spec.unit})"
+
+
+def _by_distance(robot, q_ws: np.ndarray, q_cal: np.ndarray, err: np.ndarray) -> dict:
+    """The workspace sample's predicted error binned by its joint-space distance (Euclidean over
+    the joints in their units: deg, a prismatic joint's mm counting as deg) to the nearest
+    calibration pose: bin centres and the RMS per bin."""
     from scipy.spatial import cKDTree
 
-    dist = np.rad2deg(cKDTree(q_cal).query(q_ws)[0])
+    dist = (cKDTree(robot.joints_shown(q_cal)).query(robot.joints_shown(q_ws))[0] if robot.has_prismatic
+            else np.rad2deg(cKDTree(q_cal).query(q_ws)[0]))
     edges = np.quantile(dist, np.linspace(0, 1, DISTANCE_BINS + 1))
     idx = np.clip(np.searchsorted(edges, dist, side="right") - 1, 0, DISTANCE_BINS - 1)
     centres, rms = [], []
@@ -251,13 +263,12 @@ def predict(robot, prediction: Prediction, q_cal: np.ndarray) -> tuple[dict, lis
            "validated_mm": prediction.validated_mm, "validated_from": prediction.validated_from,
            "unmodelled_mm": prediction.unmodelled_mm, "ratio": ratio, "factor": EXTRAPOLATION_FACTOR,
            "holds_only_near_poses": ratio > EXTRAPOLATION_FACTOR, "coverage": joints,
-           "by_distance": _by_distance(q_ws, q_cal, ws), "model": prediction.to_dict()}
+           "by_distance": _by_distance(robot, q_ws, q_cal, ws), "model": prediction.to_dict()}
     warnings = []
     if out["holds_only_near_poses"]:
         narrow = [j for j in joints if j["fraction"] < COVERAGE_MIN_FRACTION]
         where = ("; measure poses over the rest of " + ", ".join(
-            f"q{j['joint']} (covered {j['covered_deg'][0]:.0f}..{j['covered_deg'][1]:.0f} of "
-            f"{j['limits_deg'][0]:.0f}..{j['limits_deg'][1]:.0f} deg)" for j in narrow)) if narrow else \
+            covered_text(robot, j) for j in narrow)) if narrow else \
             "; measure poses spread over the workspace"
         ws_rms, ws_p95 = out["workspace"]["rms"], out["workspace"]["p95"]
         warnings.append(f"the calibration holds only near its poses: predicted {ws_rms:.3g} mm RMS (p95 "

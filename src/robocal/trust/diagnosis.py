@@ -49,18 +49,22 @@ def _columns(data, joints) -> object:
 
 
 def joint_mixup(robot, data, given_mm: float) -> str | None:
-    """A joint column exchange or sign flip under which the model fits, as a sentence, or None."""
+    """A joint column exchange (of two joints of one kind: two angles, two lengths) or sign flip
+    under which the model fits, as a sentence naming the joints as ``robot`` does, or None."""
     limit = error_limit_mm(data.points)
-    n = data.n_joints
+    spec = robot.joints
     trials = []
-    for i, j in combinations(range(n), 2):
+    for i, j in combinations(range(len(spec)), 2):
+        if spec[i].kind != spec[j].kind:
+            continue
         q = data.joints.copy()
         q[:, [i, j]] = q[:, [j, i]]
-        trials.append((f"joint columns q{i + 1} and q{j + 1} look exchanged", q))
-    for i in range(n):
+        trials.append((f"joint columns {spec[i].name} and {spec[j].name} look exchanged", q))
+    for i, joint in enumerate(spec):
         q = data.joints.copy()
         q[:, i] = -q[:, i]
-        trials.append((f"joint q{i + 1}'s sign looks flipped (the controller counts it the other way)", q))
+        trials.append((f"joint {joint.name}'s sign looks flipped (the controller counts it the other way)",
+                       q))
     best = min(((fit_rms_mm(robot, _columns(data, q)), what) for what, q in trials), key=lambda t: t[0])
     if best[0] <= limit and best[0] * GAIN < given_mm:
         return (f"{best[1]}: corrected so, the nominal model fits to {best[0]:.3g} mm RMS ({given_mm:.3g} "

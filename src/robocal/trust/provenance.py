@@ -28,15 +28,28 @@ def fingerprint(joints: np.ndarray) -> str:
     return h.hexdigest()[:16]
 
 
-def repeated_rows(reference: np.ndarray, joints: np.ndarray,
-                  tol_deg: float = JOINT_REPEAT_TOL_DEG) -> np.ndarray:
-    """``(N,)`` bool: which rows of ``joints (N, n)`` (rad) repeat a pose of ``reference (M, n)``
-    (rad): every joint within ``tol_deg``."""
+def repeated_rows(reference: np.ndarray, joints: np.ndarray, tol_deg: float = JOINT_REPEAT_TOL_DEG,
+                  prismatic: np.ndarray | None = None) -> np.ndarray:
+    """``(N,)`` bool: which rows of ``joints (N, n)`` (rad; m on a joint flagged in ``prismatic
+    (n,)``) repeat a pose of ``reference (M, n)``: every joint within ``tol_deg`` (a prismatic
+    joint within ``tol_deg`` mm)."""
     reference, joints = np.asarray(reference, float), np.asarray(joints, float)
     if len(reference) == 0 or len(joints) == 0:
         return np.zeros(len(joints), bool)
-    dist, _ = cKDTree(reference).query(joints, p=np.inf, distance_upper_bound=np.deg2rad(tol_deg))
+    if prismatic is not None and np.any(prismatic):  # each joint in its unit: deg, mm
+        def shown(q: np.ndarray) -> np.ndarray:
+            return np.where(prismatic, q * 1e3, np.rad2deg(q))
+
+        dist, _ = cKDTree(shown(reference)).query(shown(joints), p=np.inf, distance_upper_bound=tol_deg)
+    else:
+        dist, _ = cKDTree(reference).query(joints, p=np.inf, distance_upper_bound=np.deg2rad(tol_deg))
     return np.isfinite(dist)
+
+
+def tolerance_unit(data) -> str:
+    """The unit `repeated_rows`' tolerance is in for ``data``: ``deg``, or ``deg (mm on a
+    prismatic joint)``."""
+    return "deg" if data.linear is None else "deg (mm on a prismatic joint)"
 
 
 def independent(data, reference: list, what: str):
@@ -44,12 +57,13 @@ def independent(data, reference: list, what: str):
     (:func:`repeated_rows`; a distance pair goes whole), and how many rows were dropped.
     DataError naming ``what`` when every row repeats one."""
     ref = [d.joints for d in reference if d.n_joints == data.n_joints]
-    mask = repeated_rows(np.vstack(ref), data.joints) if ref else np.zeros(len(data), bool)
+    mask = repeated_rows(np.vstack(ref), data.joints, prismatic=data.linear) if ref else \
+        np.zeros(len(data), bool)
     if data.pair is not None:
         mask = np.isin(data.pair, data.pair[mask])
     if mask.all():
         raise DataError(f"{what}: every one of its {len(data)} rows repeats a calibration pose (joints "
-                        f"within {JOINT_REPEAT_TOL_DEG:g} deg): judged on the calibration's own poses it "
-                        "says nothing of the accuracy elsewhere; validate on poses measured apart from the "
-                        "calibration")
+                        f"within {JOINT_REPEAT_TOL_DEG:g} {tolerance_unit(data)}): judged on the "
+                        "calibration's own poses it says nothing of the accuracy elsewhere; validate on "
+                        "poses measured apart from the calibration")
     return (data.subset(np.flatnonzero(~mask)) if mask.any() else data), int(mask.sum())
