@@ -229,6 +229,24 @@ def test_the_written_file_is_fsynced_before_it_replaces_the_target(tmp_path, mon
     assert events[4:] == ["fsync"]  # the folder, after the renames
 
 
+def test_an_ignored_sigint_stays_ignored_during_a_write(tmp_path, monkeypatch):
+    """A background job ignores SIGINT: a write neither catches it nor abandons the set for it."""
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    real_replace = os.replace
+
+    def replace_after_a_sigint(src, dst):
+        signal.raise_signal(signal.SIGINT)  # ignored: the write goes on
+        real_replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", replace_after_a_sigint)
+    try:
+        write_all({tmp_path / "a": "new a", tmp_path / "b": "new b"})
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert (tmp_path / "a").read_text() == "new a" and (tmp_path / "b").read_text() == "new b"
+
+
 _SIGNAL_CHILD = _CHILD_PRELUDE + """
 import os, signal
 from pathlib import Path

@@ -269,7 +269,8 @@ class _DeferSignals:
     def __enter__(self):
         if threading.current_thread() is threading.main_thread():
             for sig in self.SIGNALS:
-                self.previous[sig] = signal.signal(sig, self._note)
+                if signal.getsignal(sig) is not signal.SIG_IGN:  # ignored (a background job): stays so
+                    self.previous[sig] = signal.signal(sig, self._note)
         return self
 
     def check(self) -> None:
