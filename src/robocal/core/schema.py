@@ -240,6 +240,27 @@ _CONDITIONS = Obj({  # robocal.calibration.conditions
     "assumed": Map(Num(), null=True),
     "not_used": Seq(Obj({"term": Str(max_len=100), "reason": Str(null=True)}), null=True)}, null=True)
 
+def _pairs(value: dict, where: str) -> None:
+    """The ranges of a coverage entry are (lower, upper) pairs."""
+    for key in ("limits_deg", "covered_deg", "limits_mm", "covered_mm"):
+        if value.get(key) is not None and len(value[key]) != 2:
+            _fail(f"{where}.{key}", f"expected [lower, upper], got {len(value[key])} numbers")
+
+
+_PREDICTED_ACCURACY = Obj({  # robocal.trust.coverage: what the report reads of it
+    "workspace": Obj({"n": Int(null=True, lo=0), "rms": Num(null=True), "p95": Num(null=True),
+                      "max": Num(null=True), "samples": Int(null=True, lo=0)}, null=True),
+    "calibration_region": Obj({"n": Int(null=True, lo=0), "rms": Num(null=True), "p95": Num(null=True),
+                               "max": Num(null=True)}, null=True),
+    "validated_mm": Num(), "validated_from": Str(null=True), "unmodelled_mm": Num(null=True),
+    "ratio": Num(null=True, max_abs=math.inf), "factor": Num(), "holds_only_near_poses": Bool(null=True),
+    "coverage": Seq(Obj({"joint": Int(lo=1, hi=64), "fraction": Num(),
+                         "limits_deg": Arr(null=True), "covered_deg": Arr(null=True),
+                         "limits_mm": Arr(null=True), "covered_mm": Arr(null=True)},
+                        required=("joint", "fraction"), post=_pairs), null=True),
+    "by_distance": Obj({"distance_deg": Arr(null=True), "rms_mm": Arr(null=True)}, null=True),
+}, required=("validated_mm", "factor"), null=True)
+
 RESULT_SCHEMA = Obj({
     "format": Str(), "robocal_version": Str(null=True, max_len=100),
     "robot": Obj({"name": Str(null=True, max_len=1000), "description": Str(null=True),
@@ -267,6 +288,7 @@ RESULT_SCHEMA = Obj({
                         "status": Str(null=True, max_len=100), "prior_ratio": Num(null=True),
                         "confounded_with": _TEXTS}, required=("name",)), null=True),
     "conditions": _CONDITIONS,
+    "predicted_accuracy": _PREDICTED_ACCURACY,
     "validation_shifts": Obj({  # robocal.trust.file_shifts
         "test": Str(null=True, max_len=100), "statistic": Num(null=True, max_abs=math.inf),
         "dof": Arr(integer=True, null=True), "p_value": Num(null=True), "alpha": Num(null=True),
