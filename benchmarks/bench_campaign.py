@@ -42,7 +42,7 @@ from timing import best_time
 import robocal as rc
 from robocal.campaign import exchange
 from robocal.campaign.exchange import _Design, criterion_value
-from robocal.campaign.information import candidate_data, information
+from robocal.campaign.information import candidate_data, candidate_information
 from robocal.data.simulate import simulate_tracker
 from robocal.trust.posterior import Noise
 
@@ -122,8 +122,8 @@ def simulated() -> None:
     # the limit any design on such candidates can reach (drawn like the plan's, not the same ones)
     plan_robot = plans["I-optimal, 20"].robot
     q = np.random.default_rng(0).uniform(lo + 0.0175, hi - 0.0175, (5000, 6))
-    info = information(plan_robot, candidate_data(plan_robot, "point", q, np.ones((5000, 1), bool)),
-                       Noise(sigma_m=NOISE_MM * 1e-3))
+    info = candidate_information(plan_robot, candidate_data(plan_robot, "point", q, np.ones((5000, 1), bool)),
+                                 Noise(sigma_m=NOISE_MM * 1e-3))
     A = info.region_matrix(plan_robot, np.random.default_rng(1).uniform(lo, hi, (2000, 6)))
     random_pred = {n: np.sqrt(np.median([criterion_value(info.G, A, np.random.default_rng([n, k]).choice(
         5000, n, replace=False), "I", info.prior) for k in range(200)])) * 1e3 for n in (20, 30)}
@@ -261,8 +261,8 @@ def speed() -> None:
     lo, hi = robot.limits.T
     q = np.random.default_rng(0).uniform(lo, hi, (5000, 6))
     plan_robot = r20.robot
-    info = information(plan_robot, candidate_data(plan_robot, "point", q, np.ones((5000, 1), bool)),
-                       Noise(sigma_m=2e-5))
+    info = candidate_information(plan_robot, candidate_data(plan_robot, "point", q, np.ones((5000, 1), bool)),
+                                 Noise(sigma_m=2e-5))
     A = info.region_matrix(plan_robot, q[:2000])
     design = _Design(info.G, A, "I", lambda j: np.eye(1, 5000, j, dtype=np.int64)[0])
     design.reset(list(range(20)))
@@ -284,7 +284,7 @@ def speed() -> None:
 
 @contextmanager
 def blas_threads():
-    """``plan_poses`` / ``exchange`` without their one-BLAS-thread limit."""
+    """``plan_poses`` / ``exchange_search`` without their one-BLAS-thread limit."""
     saved = exchange.threadpool_limits
     exchange.threadpool_limits = None
     try:
@@ -304,8 +304,8 @@ def several_smrs(robot, q: np.ndarray) -> None:
         t_many, many = best_time(plan, repeat=1)
     assert np.array_equal(one.joints, many.joints)
     plan_robot = one.robot
-    info = information(plan_robot, candidate_data(plan_robot, "point", q, np.ones((len(q), 3), bool)),
-                       Noise(sigma_m=2e-5))
+    data = candidate_data(plan_robot, "point", q, np.ones((len(q), 3), bool))
+    info = candidate_information(plan_robot, data, Noise(sigma_m=2e-5))
     A = info.region_matrix(plan_robot, q[:2000])
     design = _Design(info.G, A, "I", lambda j: np.eye(1, len(q), j, dtype=np.int64)[0])
     design.reset(list(range(30)))

@@ -30,7 +30,7 @@ from results import figure, table
 import robocal as rc
 from robocal.campaign.planner import plan_poses
 from robocal.data.simulate import sample_joints, simulate_tracker
-from robocal.history.check import Uncertainty, check
+from robocal.history.check import Uncertainty, check_calibration
 from robocal.history.offsets import offsets_params, recalibrate_offsets
 from robocal.history.record import calibration_uncertainty
 from robocal.history.store import History
@@ -73,9 +73,11 @@ def main() -> None:
     rng = np.random.default_rng(2026)
     changed = truth.with_values({"theta2": truth.get("theta2") + np.deg2rad(SHIFT_DEG)})
     t0 = time.perf_counter()
-    same = [check(result.robot, campaign(truth, rng), unc, fit_frame=True) for _ in range(CAMPAIGNS)]
+    same = [check_calibration(result.robot, campaign(truth, rng), unc, fit_frame=True)
+            for _ in range(CAMPAIGNS)]
     seconds = (time.perf_counter() - t0) / CAMPAIGNS
-    moved = [check(result.robot, campaign(changed, rng), unc, fit_frame=True) for _ in range(CAMPAIGNS)]
+    moved = [check_calibration(result.robot, campaign(changed, rng), unc, fit_frame=True)
+             for _ in range(CAMPAIGNS)]
     holds = sum(r.verdict == "holds" for r in same)
     flagged = sum(r.verdict == "changed" for r in moved)
     first = [r.changed_parameters[0] for r in moved if r.changed_parameters]
@@ -155,7 +157,7 @@ def planned_vs_random(truth, result, unc: Uncertainty, rng: np.random.Generator)
                 q = planned if label == "planned" else pool[rng.choice(len(pool), CHECK_POSES, replace=False)]
                 data = simulate_tracker(tracker_moved(changed, rng), joints=q, as_is=True,
                                         seed=int(rng.integers(2**31))).data
-                hits += check(result.robot, data, unc).verdict == "changed"
+                hits += check_calibration(result.robot, data, unc).verdict == "changed"
             row.append(f"{hits} of {CAMPAIGNS}")
         rows.append(row)
     table("Changed found by 20 poses planned for the joint zeros (poses --check) and by 20 random poses",
@@ -172,8 +174,8 @@ def false_alarms(rng: np.random.Generator) -> None:
         local = {"calibration": 0, "stated": 0}
         for _ in range(40):
             data = campaign(truth, rng)
-            local["calibration"] += check(result.robot, data, unc).verdict == "changed"
-            local["stated"] += check(result.robot, data, unc, noise_mm=0.02).verdict == "changed"
+            local["calibration"] += check_calibration(result.robot, data, unc).verdict == "changed"
+            local["stated"] += check_calibration(result.robot, data, unc, noise_mm=0.02).verdict == "changed"
         total += 40
         rows.append([100 + seed, f"{local['calibration']} of 40", f"{local['stated']} of 40"])
         for k in alarms:

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from robocal import Robot
 from robocal.campaign.constraints import conflict_rows
-from robocal.campaign.exchange import _Design, criterion_value, exchange
+from robocal.campaign.exchange import _Design, criterion_value, exchange_search
 from robocal.campaign.order import _distances, _nearest_neighbour, measuring_order
 from robocal.ik.path import default_weights, travel
 
@@ -39,7 +39,7 @@ def test_exchange_finds_the_brute_force_optimum(criterion, seed):
     G, A = _problem(seed, r=1 + seed % 3, p=4 + seed % 2)
     n = 5
     best_value, best_combo = _brute(G, A, n, criterion)
-    found = exchange(G, A, n, criterion=criterion, starts=4, seed=seed)
+    found = exchange_search(G, A, n, criterion=criterion, starts=4, seed=seed)
     assert found.value == pytest.approx(best_value, rel=1e-8)
     assert found.value == pytest.approx(criterion_value(G, A, found.indices, criterion), rel=1e-12)
     assert sorted(found.indices.tolist()) == sorted(best_combo) or found.value <= best_value * (1 + 1e-8)
@@ -57,7 +57,7 @@ def test_exchange_with_a_minimum_distance_finds_the_feasible_optimum(seed):
         return all(np.linalg.norm(qd[a] - qd[b]) >= d_min for a, b in itertools.combinations(combo, 2))
 
     best_value, _ = _brute(G, A, 4, "I", feasible)
-    found = exchange(G, A, 4, criterion="I", starts=6, seed=seed, conflicts=conflicts)
+    found = exchange_search(G, A, 4, criterion="I", starts=6, seed=seed, conflicts=conflicts)
     assert feasible(found.indices)
     assert found.value == pytest.approx(best_value, rel=1e-8)
 
@@ -98,10 +98,10 @@ def test_woodbury_scans_equal_direct_computation(seed, r, p, criterion):
 
 def test_exchange_is_deterministic_and_starts_from_a_given_design():
     G, A = _problem(3, C=40, p=8)
-    a = exchange(G, A, 6, seed=7)
-    b = exchange(G, A, 6, seed=7)
+    a = exchange_search(G, A, 6, seed=7)
+    b = exchange_search(G, A, 6, seed=7)
     np.testing.assert_array_equal(a.indices, b.indices)
-    warm = exchange(G, A, 9, init=a.indices)
+    warm = exchange_search(G, A, 9, init=a.indices)
     assert set(a.indices) <= set(range(40)) and len(warm.indices) == 9
     assert warm.value <= a.value  # more poses never predict worse
 

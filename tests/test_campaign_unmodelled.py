@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import robocal as rc
-from robocal.campaign.information import information
+from robocal.campaign.information import candidate_information
 from robocal.campaign.unmodelled import Candidates, Scans, Unmodelled, mean_square, search, unmodelled_error
 from robocal.core.errors import RobocalError
 from robocal.trust.posterior import Noise
@@ -96,7 +96,7 @@ def test_the_terms_error_over_the_region_is_the_stated_one():
     plan_robot = _planning_robot(robot, [[0.03, 0.0, 0.1]], None)[0]
     data = candidate_data(plan_robot, "point", q, np.ones((len(q), 1), bool))
     noise = Noise()
-    info = information(plan_robot, data, noise)
+    info = candidate_information(plan_robot, data, noise)
     q_region = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (60, 6))
     um = unmodelled_error(plan_robot, data, noise, info, q_region, 0.25)
     full = plan_robot.with_joint_errors(um.names)

@@ -16,7 +16,7 @@ import robocal as rc
 from robocal.cli import main
 from robocal.core.errors import DataError
 from robocal.data.simulate import sample_joints, simulate_tracker
-from robocal.history.check import ALPHA, Uncertainty, _p_value, _Whitened, check
+from robocal.history.check import ALPHA, Uncertainty, _p_value, _Whitened, check_calibration
 from robocal.history.record import calibration_uncertainty
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
 
@@ -57,22 +57,22 @@ def test_the_statistic_is_the_generalised_least_squares_residual(seed, M, k):
 def test_unchanged_robot_holds_and_a_moved_joint_zero_is_named(calibrated):
     truth, result = calibrated
     unc = Uncertainty.from_dict(calibration_uncertainty(result))
-    same = check(result.robot, _campaign(truth, 1), unc)
+    same = check_calibration(result.robot, _campaign(truth, 1), unc)
     assert same.verdict == "holds" and same.p_value >= ALPHA and not same.to_dict().get("changed_parameters")
     assert any("theta1, theta6" in n for n in same.notes)
-    moved = check(result.robot, _campaign(truth, 2, theta3=0.01), unc)
+    moved = check_calibration(result.robot, _campaign(truth, 2, theta3=0.01), unc)
     assert moved.verdict == "changed" and moved.p_value < ALPHA
     first = moved.changed_parameters[0]
     assert first["name"] == "theta3" and first["unit"] == "deg"
     assert abs(first["shift"] - 0.01) < 3 * first["sigma"]
     assert moved.to_dict()["changed_parameters"] == moved.changed_parameters
     # theta1 turns the robot about its base axis: the refitted frame absorbs it, without a frame fit not
-    hidden = check(result.robot, _campaign(truth, 3, theta1=0.02), unc)
+    hidden = check_calibration(result.robot, _campaign(truth, 3, theta1=0.02), unc)
     assert hidden.verdict == "holds"
     in_place = _campaign(truth, 4, theta1=0.02)
     in_place = simulate_tracker(truth.with_values({"theta1": truth.get("theta1") + np.deg2rad(0.02)}),
                                 joints=in_place.joints, as_is=True, seed=4).data
-    seen = check(result.robot, in_place, unc, fit_frame=False)
+    seen = check_calibration(result.robot, in_place, unc, fit_frame=False)
     assert seen.verdict == "changed" and seen.changed_parameters[0]["name"] == "theta1"
 
 
@@ -96,9 +96,10 @@ def test_a_calibration_with_several_smrs_and_joint_error_terms_is_checked():
     assert any(n.startswith("comp") for n in unc.names)
     q = sample_joints(nominal, 20, np.random.default_rng(1))
     same = simulate_tracker(sim.truth, joints=q, as_is=True, seed=3, n_smr=2).data
-    assert check(result.robot, same, unc).verdict == "holds"
+    assert check_calibration(result.robot, same, unc).verdict == "holds"
     moved = sim.truth.with_values({"theta4": sim.truth.get("theta4") + np.deg2rad(0.05)})
-    out = check(result.robot, simulate_tracker(moved, joints=q, as_is=True, seed=3, n_smr=2).data, unc)
+    moved_data = simulate_tracker(moved, joints=q, as_is=True, seed=3, n_smr=2).data
+    out = check_calibration(result.robot, moved_data, unc)
     assert out.verdict == "changed" and out.changed_parameters[0]["name"] == "theta4"
 
 
@@ -106,19 +107,19 @@ def test_stated_noise_gives_a_chi_square_test_and_bad_input_is_refused(calibrate
     truth, result = calibrated
     unc = Uncertainty.from_dict(calibration_uncertainty(result))
     data = _campaign(truth, 5)
-    out = check(result.robot, data, unc, noise_mm=0.02).to_dict()
+    out = check_calibration(result.robot, data, unc, noise_mm=0.02).to_dict()
     assert out["test"]["kind"] == "chi2" and out["test"]["noise_dof"] is None and out["verdict"] == "holds"
     # a far noisier instrument stated than the data show: the residuals are smaller than expected
-    assert check(result.robot, data, unc, noise_mm=0.2).p_value > 0.999
+    assert check_calibration(result.robot, data, unc, noise_mm=0.2).p_value > 0.999
     with pytest.raises(DataError, match="at least 8 poses"):
-        check(result.robot, _campaign(truth, 6, n=5), unc)
+        check_calibration(result.robot, _campaign(truth, 6, n=5), unc)
     with pytest.raises(DataError, match="noise-mm"):
-        check(result.robot, data, unc, noise_mm=-1)
+        check_calibration(result.robot, data, unc, noise_mm=-1)
     with pytest.raises(DataError, match="does not have"):
-        check(result.robot, data, replace(unc, names=("gear2_s1", *unc.names[1:])))
+        check_calibration(result.robot, data, replace(unc, names=("gear2_s1", *unc.names[1:])))
     with pytest.raises(DataError, match="plane data, whose noise is not the tracker's"):
-        check(result.robot, data, replace(unc, kind="plane"))
-    assert check(result.robot, data, replace(unc, kind="plane"), noise_mm=0.02).verdict == "holds"
+        check_calibration(result.robot, data, replace(unc, kind="plane"))
+    assert check_calibration(result.robot, data, replace(unc, kind="plane"), noise_mm=0.02).verdict == "holds"
 
 
 def test_check_command_with_a_history(calibrated, tmp_path, capsys):

@@ -15,7 +15,7 @@ from robots import require_datasets
 import robocal as rc
 from robocal.core.schema import RESULT_SCHEMA, validate
 from robocal.data.simulate import simulate_tracker
-from robocal.trust.file_shifts import MIN_FILE_POSES, SHIFT_ALPHA, file_shifts, pose_means
+from robocal.trust.file_shifts import MIN_FILE_POSES, SHIFT_ALPHA, pose_means, split_by_file
 
 ROBOT = rc.Robot.from_catalog("ur10e")  # developed on the Meca500: judged on another family
 
@@ -28,7 +28,7 @@ def _draw(rng, n_files: int, poses: int, sigma: float, shift_rms: float = 0.0):
 
 
 def test_no_shift_false_alarms_follow_the_f_distribution(rng):
-    p = np.array([file_shifts(["f"] * 5, _draw(rng, 5, 10, 1e-5)[0]).p_value for _ in range(2000)])
+    p = np.array([split_by_file(["f"] * 5, _draw(rng, 5, 10, 1e-5)[0]).p_value for _ in range(2000)])
     for alpha in (0.05, 0.2, 0.5):  # uniform p-values: each rate within 4 binomial sigmas
         assert abs(np.mean(p < alpha) - alpha) < 4 * np.sqrt(alpha * (1 - alpha) / len(p))
 
@@ -38,7 +38,7 @@ def test_the_split_is_unbiased_and_adds_up(rng):
     est, true_ms, within = [], [], []
     for _ in range(1500):
         errors, shifts = _draw(rng, 7, 10, sigma, shift_rms)
-        s = file_shifts([f"v{k}" for k in range(7)], errors)
+        s = split_by_file([f"v{k}" for k in range(7)], errors)
         assert s.shift_rms_mm**2 + s.within_rms_mm**2 == pytest.approx(s.rms_mm**2, rel=1e-9)
         est.append((s.shift_rms_mm * 1e-3) ** 2)
         true_ms.append(np.mean(np.sum(shifts**2, axis=1)))
@@ -51,10 +51,10 @@ def test_the_split_is_unbiased_and_adds_up(rng):
 
 def test_too_few_files_or_poses_give_no_test(rng):
     e = _draw(rng, 3, 10, 1e-5)[0]
-    assert file_shifts(["a"], e[:1]) is None
+    assert split_by_file(["a"], e[:1]) is None
     short = [e[0], e[1][:MIN_FILE_POSES - 1]]
-    assert file_shifts(["a", "b"], short) is None
-    s = file_shifts(["a", "b", "c"], [e[0], e[1][:MIN_FILE_POSES - 1], e[2]])
+    assert split_by_file(["a", "b"], short) is None
+    s = split_by_file(["a", "b", "c"], [e[0], e[1][:MIN_FILE_POSES - 1], e[2]])
     assert s.files == ("a", "c") and s.poses == (10, 10) and s.dof == (6, 54)
 
 

@@ -175,11 +175,11 @@ def test_an_ordinary_arm_keeps_its_robot_section_and_labels():
 
 
 def test_coverage_gives_a_prismatic_joint_in_mm():
-    from robocal.trust.coverage import coverage, covered_text
+    from robocal.trust.coverage import covered_text, joint_coverage
 
     robot = _scara()
     q = np.array([[0.1, -0.2, -0.05, 1.0], [0.3, 0.2, -0.01, 2.0]])
-    rows = coverage(robot, q)
+    rows = joint_coverage(robot, q)
     assert set(rows[0]) == {"joint", "limits_deg", "covered_deg", "fraction"}
     assert set(rows[2]) == {"joint", "limits_mm", "covered_mm", "fraction"}
     np.testing.assert_allclose(rows[2]["limits_mm"], [-200.0, 0.0])
@@ -188,7 +188,7 @@ def test_coverage_gives_a_prismatic_joint_in_mm():
     assert covered_text(robot, rows[2]) == "q3 (covered -50..-10 of -200..0 mm)"
     assert covered_text(robot, rows[1]) == "q2 (covered -11..11 of -143..143 deg)"
     cell = cell_from_data(CELL)
-    track = coverage(cell, np.zeros((2, 7)))[0]
+    track = joint_coverage(cell, np.zeros((2, 7)))[0]
     assert covered_text(cell, track) == "e1 (covered 0..0 of 0..6000 mm)"
 
 

@@ -1,6 +1,6 @@
 """The package's layers (docs/explanation/architecture.md): each sub-package imports only from the
-layers below it, function-level imports included, and the package root holds at most three loose
-modules."""
+layers below it, function-level imports included, the package root holds at most three loose
+modules, and no module is named like its own function."""
 
 from __future__ import annotations
 
@@ -65,3 +65,16 @@ def test_imports_go_only_downward():
 def test_the_root_shows_the_layers():
     loose = sorted(p.name for p in PACKAGE.glob("*.py"))
     assert len(loose) <= 3, loose
+
+
+def test_no_module_is_named_like_its_own_function():
+    # `from robocal.x.y import y` would be ambiguous, and such a name once forced a module-object hack
+    # in the package root
+    named_alike = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        tops = ast.parse(path.read_text()).body
+        defined = {node.name for node in tops
+                   if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))}
+        if path.stem in defined:
+            named_alike.append(str(path.relative_to(PACKAGE)))
+    assert not named_alike, f"rename the function or the module: {named_alike}"

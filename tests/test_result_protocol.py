@@ -18,7 +18,7 @@ from robocal.data.importer import ImportResult
 from robocal.deploy.formats import export_model
 from robocal.deploy.models import load_model_pair
 from robocal.deploy.tcp import ToolCalibration
-from robocal.history.check import Uncertainty, check
+from robocal.history.check import Uncertainty, check_calibration
 from robocal.history.timeline import Timeline
 from robocal.kinematics.manufacturer.ur import ImportedCalibration
 
@@ -45,7 +45,8 @@ def results(sim, tmp_path) -> dict:
         "calibration": (cal, lambda r: r.write(p / "c.yaml", p / "c.json")),
         "compensation": (comp, lambda r: r.write(p / "commands.csv", p / "parameters.csv")),
         "evaluation": (rc.evaluate(sim.truth, sim.data), lambda r: r.write(p / "e.json")),
-        "check": (check(sim.truth, sim.data, unc), lambda r: r.write(p / "check.json", model="m.yaml")),
+        "check": (check_calibration(sim.truth, sim.data, unc),
+                  lambda r: r.write(p / "check.json", model="m.yaml")),
         "tool": (tool, lambda r: r.write(p / "tool.json")),
         "path": (rc.ik.plan_path(ur5e, ur5e.fk(q)), lambda r: r.write(p / "joints.csv")),
         "simulation": (sim, lambda r: r.write(p / "d.csv", p / "truth.yaml")),

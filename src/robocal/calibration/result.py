@@ -28,7 +28,7 @@ from robocal.kinematics.thermal import groups_of as thermal_groups_of
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import Consistency
 from robocal.trust.coverage import accuracy_line
-from robocal.trust.file_shifts import FileShifts, file_shifts, pose_means
+from robocal.trust.file_shifts import FileShifts, pose_means, split_by_file
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG
 
 RESULT_FORMAT = "robocal-result/1"
@@ -187,7 +187,7 @@ class CalibrationResult(_BeforeAfter):
         (`robocal.trust.file_shifts`; point and pose files), with two validation files or more."""
         files = [j for j in self.judged if j.data.spec.sees_position]
         errors = [pose_means(j.problem.item_error_vectors(j.states[1])[0], j.data.pose_id) for j in files]
-        return file_shifts([j.data.label for j in files], errors)
+        return split_by_file([j.data.label for j in files], errors)
 
     def _files(self) -> list[tuple[str, Measurements, np.ndarray, np.ndarray]]:
         """(role, data, errors before, errors after) of every file, calibration then validation."""

@@ -430,10 +430,10 @@ def _fedorov(design: _Design, rng: np.random.Generator, max_sweeps: int) -> None
             break
 
 
-def exchange(G: np.ndarray, A: np.ndarray | None, n: int, *, criterion: str = "I", starts: int = 4,
-             seed: int = 0, conflicts: Callable[[int], np.ndarray] | None = None,
-             init: np.ndarray | None = None, progress: Progress | None = None,
-             prior: np.ndarray | None = None) -> ExchangeResult:
+def exchange_search(G: np.ndarray, A: np.ndarray | None, n: int, *, criterion: str = "I", starts: int = 4,
+                    seed: int = 0, conflicts: Callable[[int], np.ndarray] | None = None,
+                    init: np.ndarray | None = None, progress: Progress | None = None,
+                    prior: np.ndarray | None = None) -> ExchangeResult:
     """The best ``n`` of the candidate blocks ``G (C, r, p)`` for ``criterion``.
 
     ``A (p, p)``: the region matrix (criterion I). ``prior (p,)``: the unknowns' prior precisions

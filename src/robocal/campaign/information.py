@@ -117,7 +117,7 @@ def candidate_blocks(obs, data: Measurements, rows: np.ndarray) -> tuple[np.ndar
     return G, cand_of_item, per
 
 
-def information(robot, data: Measurements, noise: Noise, params="auto") -> Information:
+def candidate_information(robot, data: Measurements, noise: Noise, params="auto") -> Information:
     """The candidate blocks of ``data`` (rows grouped into candidates by ``pose_id``; distances by
     pair) for the unknowns ``params`` identifies (see the module docstring)."""
     problem = CalibrationProblem(robot, data)

@@ -26,9 +26,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 import robocal.campaign.constraints as cons
-from robocal.campaign.exchange import CRITERIA, ExchangeResult, criterion_value, exchange
+from robocal.campaign.exchange import CRITERIA, ExchangeResult, criterion_value, exchange_search
 from robocal.campaign.files import CandidateFile, poses_csv
-from robocal.campaign.information import Information, candidate_data, information
+from robocal.campaign.information import Information, candidate_data, candidate_information
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
 from robocal.campaign.unmodelled import DEFAULT_TERMS, mean_square, search, unmodelled_error
@@ -498,7 +498,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
             if len(whole) < len(given):
                 funnel.record("distances missing an end", len(given) - len(whole))
             data, given = data.subset(whole), given[whole]
-    info = information(plan_robot, data, noise, params)
+    info = candidate_information(plan_robot, data, noise, params)
     C, p = len(info.G), info.identifiable  # the data must determine those without a prior
     rows_min = int(info.rows.min())
     n_min = p // rows_min + 1
@@ -522,8 +522,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
             mean_square(info.G, A, info.prior, um, indices)
 
     with Progress(int(starts) + len(values), "poses", quiet=progress is not True) as bar:
-        found = exchange(info.G, A, n, criterion=criterion, starts=int(starts), seed=seed,
-                         conflicts=conflicts, progress=bar, prior=info.prior)
+        found = exchange_search(info.G, A, n, criterion=criterion, starts=int(starts), seed=seed,
+                                conflicts=conflicts, progress=bar, prior=info.prior)
         if um is not None:
             found = ExchangeResult(*search(info.G, A, info.prior, um, found.indices, conflicts,
                                            np.random.default_rng([seed, 2]), int(starts)))
@@ -594,8 +594,8 @@ def _curve(info: Information, A, values, criterion, seed, conflicts, bar, main,
             idx = main[1]
         else:
             init = previous if previous is not None and len(previous) <= n else None
-            idx = exchange(info.G, A, n, criterion=criterion, starts=DEFAULT_STARTS, seed=seed,
-                           conflicts=conflicts, init=init, prior=info.prior).indices
+            idx = exchange_search(info.G, A, n, criterion=criterion, starts=DEFAULT_STARTS, seed=seed,
+                                  conflicts=conflicts, init=init, prior=info.prior).indices
         random = [predicted(rng.choice(len(info.G), n, replace=False)) for _ in range(CURVE_RANDOM_DESIGNS)]
         points.append(CurvePoint(n, float(np.sqrt(predicted(idx)) * 1e3),
                                  float(np.sqrt(np.median(random)) * 1e3)))

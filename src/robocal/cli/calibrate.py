@@ -121,7 +121,7 @@ def run(args) -> int:
     from robocal.core.io import check_outputs
     from robocal.data.inputs import check_distinct_inputs
     from robocal.history.offsets import offsets_start, recalibrate_offsets, shifts_line, zero_shifts
-    from robocal.history.record import calibration_record, open_history, parent_calibration, record
+    from robocal.history.record import calibration_record, open_history, parent_calibration, record_entry
     from robocal.kinematics.model import load_model
 
     validate = args.validate or []
@@ -164,7 +164,7 @@ def run(args) -> int:
     if args.history:  # after the files: the history is never the only copy
         files = [(f, "calibration") for f in args.data] + [(f, "validation") for f in validate]
         parent = None if start is None else parent_calibration(args.history, robot_id, start)
-        said = record(args.history, calibration_record(result, robot_id, files, parent, **derived))
+        said = record_entry(args.history, calibration_record(result, robot_id, files, parent, **derived))
         if not args.quiet:
             print(said)
     return 0

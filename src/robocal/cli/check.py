@@ -44,16 +44,16 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from robocal.cli.args import check_format, load_measurements
     from robocal.core.io import check_outputs
-    from robocal.history.check import check, load_calibration
-    from robocal.history.record import check_record, open_history, record
+    from robocal.history.check import check_calibration, load_calibration
+    from robocal.history.record import check_record, open_history, record_entry
 
     check_format(args.json, "JSON", "--json")
     check_outputs([args.json], [args.model, args.data, args.result])
     robot_id = open_history(args.history, args.robot_id, existing=True)
     robot, uncertainty, parent = load_calibration(args.model, args.result, args.history, robot_id)
     data = load_measurements(args.data, robot, args.quiet)
-    result = check(robot, data, uncertainty, fit_frame=args.fit_frame, noise_mm=args.noise_mm,
-                   force=args.force)
+    result = check_calibration(robot, data, uncertainty, fit_frame=args.fit_frame, noise_mm=args.noise_mm,
+                               force=args.force)
     for path in result.write(args.json, model=args.model, data=args.data, fit_frame=bool(args.fit_frame),
                              calibration_record=parent):
         print(f"wrote {path}")
@@ -61,7 +61,7 @@ def run(args) -> int:
     for note in result.notes:
         print(f"note: {note}")
     if args.history:
-        said = record(args.history, check_record(result, robot_id, robot, args.data, parent))
+        said = record_entry(args.history, check_record(result, robot_id, robot, args.data, parent))
         if not args.quiet:
             print(said)
     return 0

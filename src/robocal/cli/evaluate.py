@@ -39,7 +39,7 @@ def run(args) -> int:
     from robocal.calibration.evaluation import check_files_memory, evaluate
     from robocal.cli.args import check_format, load_measurements
     from robocal.core.io import check_outputs
-    from robocal.history.record import evaluation_record, open_history, record
+    from robocal.history.record import evaluation_record, open_history, record_entry
     from robocal.kinematics.model import load_model
 
     check_format(args.json, "JSON", "--json")
@@ -61,7 +61,7 @@ def run(args) -> int:
             print(f"wrote {path}")
     if args.history:  # after the files: the history is never the only copy
         files = [(args.data, "evaluation")] + ([(args.frame_from, "frame")] if args.frame_from else [])
-        said = record(args.history, evaluation_record(args.history, robot_id, robot, stats, files))
+        said = record_entry(args.history, evaluation_record(args.history, robot_id, robot, stats, files))
         if not args.quiet:
             print(said)
     return 0

@@ -29,12 +29,12 @@ def run(args) -> int:
     from robocal.core.io import check_outputs
     from robocal.history.record import open_history
     from robocal.history.store import is_postgres
-    from robocal.history.timeline import timeline
+    from robocal.history.timeline import read_timeline
 
     check_format(args.json, "JSON", "--json")
     check_format(args.report, "HTML", "--report")
     check_outputs([args.json, args.report], [] if is_postgres(args.history) else [args.history])
-    result = timeline(args.history, open_history(args.history, args.robot_id, existing=True))
+    result = read_timeline(args.history, open_history(args.history, args.robot_id, existing=True))
     written = result.write(args.json, args.report)
     print(result.summary())
     for path in written:

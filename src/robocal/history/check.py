@@ -152,11 +152,11 @@ class CheckResult:
     --------
     >>> import numpy as np
     >>> import robocal as rc
-    >>> from robocal.history.check import Uncertainty, check
+    >>> from robocal.history.check import Uncertainty, check_calibration
     >>> nominal = rc.Robot.from_catalog("abb_irb2600")
     >>> sim = rc.simulate_tracker(nominal, 20, noise_mm=0.01, seed=3)
     >>> unc = Uncertainty(names=("a2",), covariance=np.array([[1e-10]]), noise_m=1e-5, dof=200)
-    >>> result = check(sim.truth, sim.data, unc)
+    >>> result = check_calibration(sim.truth, sim.data, unc)
     >>> d = result.to_dict()
     >>> d["verdict"], d["test"]["kind"], d["n_poses"], result.rms_mm < 0.05  # mm
     ('holds', 'F', 20, True)
@@ -252,8 +252,8 @@ def candidates(robot, fit_frame: bool) -> tuple[list[str], list[str]]:
     return zeros, others
 
 
-def check(robot, data, uncertainty: Uncertainty, *, fit_frame: bool = True, noise_mm: float | None = None,
-          force: bool = False) -> CheckResult:
+def check_calibration(robot, data, uncertainty: Uncertainty, *, fit_frame: bool = True,
+                      noise_mm: float | None = None, force: bool = False) -> CheckResult:
     """Judge the calibrated ``robot`` on the check campaign ``data`` (point measurements) with the
     calibration's ``uncertainty``; ``fit_frame``: refit the tracker frame and SMR offsets first (the
     tracker moved since); ``noise_mm``: the instrument's 1-sigma per coordinate (mm), else the
@@ -293,14 +293,14 @@ def check(robot, data, uncertainty: Uncertainty, *, fit_frame: bool = True, nois
     --------
     >>> import numpy as np
     >>> import robocal as rc
-    >>> from robocal.history.check import Uncertainty, check
+    >>> from robocal.history.check import Uncertainty, check_calibration
     >>> nominal = rc.Robot.from_catalog("abb_irb2600")
     >>> sim = rc.simulate_tracker(nominal, 20, noise_mm=0.01, seed=3)
     >>> unc = Uncertainty(names=("a2",), covariance=np.array([[1e-10]]), noise_m=1e-5, dof=200)
-    >>> check(sim.truth, sim.data, unc).verdict  # the true model: nothing moved
+    >>> check_calibration(sim.truth, sim.data, unc).verdict  # the true model: nothing moved
     'holds'
     >>> moved = sim.truth.with_values({"a2": sim.truth.get("a2") + 0.001})  # a model 1 mm off
-    >>> result = check(moved, sim.data, unc)
+    >>> result = check_calibration(moved, sim.data, unc)
     >>> result.verdict, result.changed_parameters[0]["name"], round(result.changed_parameters[0]["shift"])
     ('changed', 'a2', -1)
     """

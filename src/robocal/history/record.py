@@ -92,7 +92,7 @@ def evaluation_record(location: str, robot_id: str, robot, result, files: list[t
                   data=fingerprints(files), parent=parent_calibration(location, robot_id, robot))
 
 
-def record(location: str, entry: Record) -> str:
+def record_entry(location: str, entry: Record) -> str:
     """Store ``entry`` in the history at ``location``; the line saying so."""
     with History(location) as history:
         ident = history.record(entry)

@@ -18,8 +18,8 @@ class Timeline:
 
     Examples
     --------
-    >>> from robocal.history.timeline import timeline
-    >>> print(timeline("robots.sqlite", "IRB-17").summary())  # doctest: +SKIP
+    >>> from robocal.history.timeline import read_timeline
+    >>> print(read_timeline("robots.sqlite", "IRB-17").summary())  # doctest: +SKIP
     #1    2026-12-06 03:12:36  calibration held-out 0.0359 mm  RMS 0.0309 mm
     """
 
@@ -56,7 +56,7 @@ class Timeline:
         return [str(path) for path in texts]
 
 
-def timeline(location: str, robot_id: str) -> Timeline:
+def read_timeline(location: str, robot_id: str) -> Timeline:
     """The `Timeline` of ``robot_id`` in the history at ``location`` (DataError when it holds no
     record of it)."""
     with History(location) as history:

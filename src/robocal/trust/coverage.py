@@ -210,7 +210,7 @@ def _stats(e: np.ndarray) -> dict:
             "max": float(e.max())}
 
 
-def coverage(robot, q_cal: np.ndarray) -> list[dict]:
+def joint_coverage(robot, q_cal: np.ndarray) -> list[dict]:
     """Per joint (``joint``: its 1-based number in the joint vector, `Robot.joints` names it): its
     limits and the range the calibration poses ``q_cal (N, n)`` (rad; m) span, in the joint's unit
     (``limits_deg``, ``covered_deg``; a prismatic joint's ``limits_mm``, ``covered_mm``), and the
@@ -224,7 +224,7 @@ def coverage(robot, q_cal: np.ndarray) -> list[dict]:
 
 
 def covered_text(robot, entry: dict) -> str:
-    """One joint of `coverage` in words: ``q2 (covered -40..60 of -95..155 deg)``, a quill's ``q3
+    """One joint of `joint_coverage` in words: ``q2 (covered -40..60 of -95..155 deg)``, a quill's ``q3
     (covered -50..0 of -200..0 mm)``."""
     spec = robot.joints[entry["joint"] - 1]
     (a, b), (lo, hi) = entry[f"covered_{spec.unit}"], entry[f"limits_{spec.unit}"]
@@ -255,7 +255,7 @@ def predict(robot, prediction: Prediction, q_cal: np.ndarray) -> tuple[dict, lis
     ``prediction`` and calibration joints ``q_cal (N, n)`` (rad), and its warnings."""
     q_ws = workspace_sample(robot)
     ws, cal = prediction.error_mm(robot, q_ws), prediction.error_mm(robot, q_cal)
-    joints = coverage(robot, q_cal)
+    joints = joint_coverage(robot, q_cal)
     ratio = float(np.sqrt(np.mean(ws**2))) / prediction.validated_mm
     out = {"workspace": {**_stats(ws), "samples": WORKSPACE_SAMPLES, "seed": WORKSPACE_SEED,
                          "sampling": "uniform within the joint limits, the model's tool"},

@@ -89,7 +89,7 @@ def pose_means(errors: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
     return sums / counts[:, None]
 
 
-def file_shifts(labels: list[str], errors: list[np.ndarray]) -> FileShifts | None:
+def split_by_file(labels: list[str], errors: list[np.ndarray]) -> FileShifts | None:
     """The test of the module docstring on validation files named ``labels`` with their per-pose
     errors ``errors`` (each ``(n_f, 3)``, m); None with fewer than two files of at least
     :data:`MIN_FILE_POSES` poses."""
