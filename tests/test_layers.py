@@ -78,3 +78,16 @@ def test_no_module_is_named_like_its_own_function():
         if path.stem in defined:
             named_alike.append(str(path.relative_to(PACKAGE)))
     assert not named_alike, f"rename the function or the module: {named_alike}"
+
+
+def test_the_architecture_picture_shows_these_layers():
+    """docs/explanation/architecture.svg is drawn from the same layers (scripts/docs_architecture_svg.py)."""
+    import importlib.util
+
+    script = Path(__file__).resolve().parents[1] / "scripts" / "docs_architecture_svg.py"
+    spec = importlib.util.spec_from_file_location("docs_architecture_svg", script)
+    drawing = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(drawing)
+    assert [packages for packages, _ in drawing.LAYERS] == LAYERS
+    svg = script.parents[1] / "docs" / "explanation" / "architecture.svg"
+    assert svg.read_text() == drawing.drawing(), "run scripts/docs_architecture_svg.py"
