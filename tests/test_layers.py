@@ -62,6 +62,12 @@ def test_imports_go_only_downward():
     assert not upward, "\n".join(upward)
 
 
+def test_the_report_renders_the_result_json_alone():
+    """The report reads only the documented result JSON: it imports nothing of robocal but core."""
+    imported = set().union(*(_imported_packages(p) for p in (PACKAGE / "report").rglob("*.py")))
+    assert imported <= {"core", "report"}, sorted(imported)
+
+
 def test_the_root_shows_the_layers():
     loose = sorted(p.name for p in PACKAGE.glob("*.py"))
     assert len(loose) <= 3, loose

@@ -17,8 +17,8 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    from robocal.kinematics.listing import catalog_listing, model_table
     from robocal.kinematics.model import load_model
-    from robocal.report.robots import catalog_listing, model_table
 
     print(catalog_listing() if args.name is None else model_table(load_model(args.name)))
     return 0

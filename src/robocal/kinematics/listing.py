@@ -34,7 +34,7 @@ def catalog_listing() -> str:
 
     Examples
     --------
-    >>> from robocal.report.robots import catalog_listing
+    >>> from robocal.kinematics.listing import catalog_listing
     >>> catalog_listing().splitlines()[0].split()
     ['name', 'reach', 'mm', 'payload', 'class', 'description']
     """
@@ -54,7 +54,7 @@ def model_table(robot: Robot) -> str:
     Examples
     --------
     >>> import robocal as rc
-    >>> from robocal.report.robots import model_table
+    >>> from robocal.kinematics.listing import model_table
     >>> model_table(rc.Robot.from_catalog("kuka_kr16_2")).splitlines()[0].startswith("kuka_kr16_2: ")
     True
     """
