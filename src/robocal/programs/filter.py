@@ -382,7 +382,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         res.warnings += target_warnings(prediction, calibrated, res.joints)
     if not res.rows:
         check_language(programs, references, dialect)
-    # as before this check read the files once: an application folder given (VAL3) is not compared
+    # unchanged: a VAL3 application given as its folder was never compared (the check read it as a file)
     if not any(p.is_dir() for p in given):
         res.warnings[:0] = tool_disagreements(res.language, declared_tools, tools)
     return res
@@ -390,8 +390,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
 
 def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frames, tcp, robot_base,
               dialect: str | None, references: list, keep_unreached: bool, strict: bool, force: bool,
-              position_registers, payload, temperature, payload_schedules,
-              ) -> tuple[FilterResult, dict[str, np.ndarray]]:
+              position_registers, payload, temperature,
+              payload_schedules) -> tuple[FilterResult, dict[str, np.ndarray]]:
     """:func:`filter_program` of the files ``given`` (an application folder among them), without
     the warnings and checks of what the user gave, and the tool data the files hold without
     ``tools`` (`Program.declared_tools`, which the ``tools`` are checked against)."""

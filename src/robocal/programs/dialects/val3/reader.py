@@ -374,7 +374,7 @@ def _program_motions(r: _Routine, ctx: _Context, prog: Program, targets: dict, f
             continue  # a joint motion: no correction
         acc = prog.motion(src, at, instr)
         tool, why = _tool(tool_arg, data, kinds, written, prog.tools, src.where(at))
-        _tool(tool_arg, data, kinds, written, prog.declared_tools, src.where(at))  # registered without --tool
+        _tool(tool_arg, data, kinds, written, prog.declared_tools, src.where(at))  # from the .dtx alone
         for p in points:
             label = " ".join(p.split())
             found, reason = _points(p, r, ctx)
