@@ -24,11 +24,12 @@ from robocal.data.simulate import perturbed
 from robocal.ik.opw_ik import branch_slot
 from robocal.kinematics.catalog import catalog_names
 from robocal.kinematics.transforms import rotvec_to_matrix
-from robocal.programs import FilterResult, filter_program
+from robocal.programs import FilterResult, filter_program, source
 from robocal.programs.dialects.fanuc.configuration import FANUCConfig
 from robocal.programs.dialects.inform.configuration import YaskawaConfig
 from robocal.programs.dialects.krl.configuration import KUKAConfig
 from robocal.programs.dialects.rapid.configuration import ABBConfig
+from robocal.programs.registry import dialect_named
 from robocal.programs.rotations import matrix_to_quat, matrix_to_zyx, nearest_rotvec, quat_to_matrix
 from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE, Number, format_number
@@ -612,3 +613,35 @@ def test_filter_program_returns_the_warnings_about_what_was_given():
         filter_program(DATA / "weld_cell.mod", calibrated, nominal, robot_base="0.1,0,0,0,0,0.05")
     with pytest.raises(DataError, match="look like metres"):
         filter_program(DATA / "sealing.ls", calibrated, nominal, tools={"2": "0,0,0.12,0,0,0"})
+
+
+@pytest.mark.parametrize(("key", "files", "references", "robot", "tool", "own"), [
+    ("rapid", ["weld_cell.mod"], [], "abb_irb2600", {"tGun": "60,0,200,0.96592583,0,0.25881905,0"},
+     "tGun (TCP at 50, 0, 200 mm"),
+    ("krl", ["palletize.src", "palletize.dat"], ["config.dat"], "kuka_kr16_2", {"1": "0,0,150,0,0,0"},
+     "1 (TCP at 0, 0, 250 mm")])
+def test_a_tool_given_reads_each_file_once(key, files, references, robot, tool, own, monkeypatch):
+    """With --tool, each file is masked and parsed once: that parse records the tool data the files
+    hold (`Program.declared_tools`), which the --tool is checked against (a second parse without
+    the overrides, masking every file again, did that before)."""
+    dialect = type(dialect_named(key))
+    parses, masks = [], []
+    parse, mask = dialect.parse, source.mask
+
+    def counted_parse(self, sources, *args):
+        parses.append([s.path.name for s in sources])
+        return parse(self, sources, *args)
+
+    def counted_mask(text, *args):
+        masks.append(text)
+        return mask(text, *args)
+
+    monkeypatch.setattr(dialect, "parse", counted_parse)
+    monkeypatch.setattr(source, "mask", counted_mask)
+    nominal = rc.Robot.from_catalog(robot)
+    res = filter_program([DATA / f for f in files], perturbed(nominal, 0), nominal, tools=tool,
+                         references=[DATA / r for r in references], keep_unreached=True)
+    assert parses == [files]
+    assert len(masks) == len(files) + len(references)  # the load reader shares the reader's masking
+    name, text = next(iter(tool.items()))
+    assert res.warnings[0].startswith(f"--tool {name}={text} replaces the program's own tool data {own}")

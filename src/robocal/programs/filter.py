@@ -374,23 +374,27 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     reach = robot_reach(nominal)
     check_magnitudes(given, dialect, tools, frames, reach)
     robot_base = robot_base_frame(robot_base, reach)
-    res = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect, references,
-                    keep_unreached, strict, force, position_registers, payload, temperature,
-                    payload_schedules)
+    res, declared_tools = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,
+                                    references, keep_unreached, strict, force, position_registers, payload,
+                                    temperature, payload_schedules)
     res.warnings[:0] = unused_conditions(calibrated, payload, temperature)
     if prediction is not None and res.joints is not None:
         res.warnings += target_warnings(prediction, calibrated, res.joints)
     if not res.rows:
         check_language(programs, references, dialect)
-    res.warnings[:0] = tool_disagreements(given, dialect, tools, frames, references)
+    # unchanged: a VAL3 application given as its folder was never compared (the check read it as a file)
+    if not any(p.is_dir() for p in given):
+        res.warnings[:0] = tool_disagreements(res.language, declared_tools, tools)
     return res
 
 
 def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frames, tcp, robot_base,
               dialect: str | None, references: list, keep_unreached: bool, strict: bool, force: bool,
-              position_registers, payload, temperature, payload_schedules) -> FilterResult:
+              position_registers, payload, temperature,
+              payload_schedules) -> tuple[FilterResult, dict[str, np.ndarray]]:
     """:func:`filter_program` of the files ``given`` (an application folder among them), without
-    the warnings and checks of what the user gave."""
+    the warnings and checks of what the user gave, and the tool data the files hold without
+    ``tools`` (`Program.declared_tools`, which the ``tools`` are checked against)."""
     paths = program_files(given)  # an application folder: its files
     if not paths:
         raise DataError("no program file given")
@@ -424,7 +428,8 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
         return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings, program.uncorrected,
-                            program.ledger.records(set(), program.not_corrected), language=d)
+                            program.ledger.records(set(), program.not_corrected), language=d), \
+            program.declared_tools
     loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, payload_schedules)
     warnings += loads.warnings
     values, P, W, tool = target_poses(d, program, targets)
@@ -479,7 +484,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
                         program.ledger.records(corrected, program.not_corrected), calibrated,
                         joints=np.where(good[:, None], q, np.nan), loads=loads.lines,
                         data_files=frozenset(s.path for s in sources[len(paths):]),  # the register file
-                        language=d)
+                        language=d), program.declared_tools
 
 
 def _compensate(model: Robot, nominal: Robot, F: np.ndarray, seeds: np.ndarray) -> Compensation:

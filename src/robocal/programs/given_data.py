@@ -10,15 +10,14 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.core.errors import DataError, RobocalError
+from robocal.core.errors import DataError
 from robocal.core.magnitudes import LENGTH_SCALES_M, check_degrees, check_frame, check_radians, check_tool
 from robocal.deploy.compensation import frame_from_text
 from robocal.kinematics.joint_errors import condition_terms
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import pose_error
 from robocal.programs.dialects.base import Dialect
-from robocal.programs.registry import DIALECTS, dialect_for, dialect_named, dialects, language_of
-from robocal.programs.source import ProgramText
+from robocal.programs.registry import DIALECTS, dialect_named, dialects, language_of
 
 # a --tool this far from the program's own tool data of the same name is another tool: a warning
 TOOL_DISAGREE_MM = 0.5
@@ -80,21 +79,15 @@ def unused_conditions(calibrated: Robot, payload, temperature) -> list[str]:
             if value is not None and term not in terms]
 
 
-def tool_disagreements(given: list[Path], dialect: str | None, tools, frames, references) -> list[str]:
-    """One warning per ``tools`` entry that overrides tool data the program files declare
-    differently (naming both); none when the files cannot be read without the overrides."""
+def tool_disagreements(d: Dialect, declared: dict[str, np.ndarray], tools) -> list[str]:
+    """One warning per ``tools`` entry (name -> 4x4 m, or text in ``d``'s pose notation) that
+    replaces tool data the program holds differently, naming both. ``declared``: the tool data
+    the program files hold without ``tools`` (`Program.declared_tools` of the filter's parse)."""
     if not tools:
         return []
-    try:
-        d = dialect_for(given, dialect)
-        frames = as_frames(d, frames)
-        program = d.parse([ProgramText(p) for p in given], frames, {}, [ProgramText(p) for p in references])
-        overrides = {d.name_key(k): v for k, v in as_frames(d, tools).items()}
-    except RobocalError:
-        return []
     out = []
-    for key, T in overrides.items():
-        own = program.tools.get(key)
+    for key, T in {d.name_key(k): v for k, v in as_frames(d, tools).items()}.items():
+        own = declared.get(key)
         if own is None:
             continue
         err = pose_error(np.asarray(own)[None], np.asarray(T)[None])[0]

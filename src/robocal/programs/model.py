@@ -36,7 +36,9 @@ class Program:
     pose (:meth:`motion`); ``not_corrected``: ``id(target)`` -> why, for targets a dialect leaves
     alone although a motion reaches them (a FANUC position used only as an INC displacement).
     ``executed``: the text pieces ``(file, start, end)`` in the order the controller runs them
-    (:mod:`robocal.programs.flow`; empty: not known, text order)."""
+    (:mod:`robocal.programs.flow`; empty: not known, text order). ``declared_tools``: the tool data
+    the program holds without the user's ``tools`` (what the files declare and the controller's
+    own, e.g. tool0 or the flange), name -> 4x4 (m): what a ``--tool`` of the same name replaces."""
 
     targets: list[Target]
     frames: dict[str, np.ndarray] = field(default_factory=dict)
@@ -51,6 +53,7 @@ class Program:
     ledger: Ledger = field(default_factory=Ledger)
     not_corrected: dict[int, str] = field(default_factory=dict)
     executed: list[tuple[Path, int, int]] = field(default_factory=list)  # text pieces in execution order
+    declared_tools: dict[str, np.ndarray] = field(default_factory=dict)
 
     def motion(self, source: ProgramText, at: int, instruction: str) -> Account:
         """The account of the motion instruction at offset ``at`` of ``source`` (opened once)."""

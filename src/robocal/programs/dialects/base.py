@@ -55,7 +55,9 @@ class Dialect:
               tools: dict[str, np.ndarray], references: list[ProgramText] = ()) -> Program:
         """Targets, frames and tools of the files; ``references`` are read for their tool and
         frame declarations only (KUKA $config.dat, ABB system modules); ``frames``/``tools``
-        from the command line (already in SI) complete or override those in the files."""
+        from the command line (already in SI) complete or override those in the files; the
+        tool data the program holds without them is its ``declared_tools`` (the files are read
+        once: a ``--tool`` that differs is named from this parse)."""
         raise NotImplementedError
 
     def to_pose(self, values: np.ndarray) -> np.ndarray:

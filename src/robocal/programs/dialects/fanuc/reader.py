@@ -116,6 +116,7 @@ class FanucDialect(Dialect):
 
     def parse(self, sources, frames, tools, references=()):
         prog = Program([], frames={"0": np.eye(4)}, tools={"0": np.eye(4)})
+        prog.declared_tools = dict(prog.tools)  # UTOOL 0, the flange: TP files declare no tool data
         prog.frames.update(frames)
         prog.tools.update(tools)
         order = 0

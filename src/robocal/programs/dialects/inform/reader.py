@@ -193,6 +193,7 @@ class InformDialect(Dialect):
             else:
                 prog.frames.update(user_frames(ref))
         prog.frames.update(frames)
+        prog.declared_tools = dict(prog.tools)
         prog.tools.update(tools)
         positions: dict[tuple, Position] = {}  # (path or 'global', kind, index) -> position
         jobs = []
@@ -212,7 +213,8 @@ class InformDialect(Dialect):
         named: set[int] = set()  # ... a named motion reaches
         for src in jobs:
             _motions(src, positions, prog, used, named)
-        tool0 = False
+        # a reached target uses TOOL 0, without data for it: anywhere (tool0) / in TOOL.CND (own_tool0)
+        tool0 = own_tool0 = False
         for p in {id(p): p for p in positions.values()}.values():  # a job's P variable is under two keys
             t = p.target
             if t is None:
@@ -223,8 +225,11 @@ class InformDialect(Dialect):
                 prog.warnings.append(f"{t.where}: no motion of these jobs reaches it: left as it is")
                 continue
             tool0 |= t.tool == "0" and "0" not in prog.tools
+            own_tool0 |= t.tool == "0" and "0" not in prog.declared_tools
             t.order = len(prog.targets)
             prog.targets.append(t)
+        if own_tool0:  # the controller's flange, which a --tool 0 replaces
+            prog.declared_tools["0"] = np.eye(4)
         if tool0:
             prog.tools["0"] = np.eye(4)
             prog.warnings.append("TOOL 0 has no data given: taken as the flange (give "

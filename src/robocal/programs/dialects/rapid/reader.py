@@ -233,6 +233,7 @@ class RapidDialect(Dialect):
             prog.tools.setdefault(name, np.eye(4))
         for name in BUILTIN_WOBJS:
             prog.frames.setdefault(name, np.eye(4))
+        prog.declared_tools = dict(prog.tools)
         prog.tools.update({self.name_key(k): v for k, v in tools.items()})
         prog.frames.update({self.name_key(k): v for k, v in frames.items()})
         self._assign(prog, st)

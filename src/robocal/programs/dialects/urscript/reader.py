@@ -119,6 +119,7 @@ class URScriptDialect(Dialect):
 
     def parse(self, sources, frames, tools, references=()):
         prog = Program([], frames={IDENTITY: np.eye(4), **frames}, tools={IDENTITY: np.eye(4)})
+        prog.declared_tools = dict(prog.tools)  # and each set_tcp's pose (_set_tcp)
         user_default = tools.get(DEFAULT_TOOL, tools.get("", None))
         prog.tools.update(tools)
         if user_default is not None:
@@ -175,7 +176,10 @@ class URScriptDialect(Dialect):
             if t.tool.startswith("?"):
                 prog.unsupported[f"tool:{t.tool}"] = (f"set_tcp({t.tool[1:]}) is not a pose this filter can "
                                                       "read")
-        if any(t.tool == DEFAULT_TOOL for t in prog.targets) and DEFAULT_TOOL not in prog.tools:
+        default_used = any(t.tool == DEFAULT_TOOL for t in prog.targets)
+        if default_used:  # the installation's TCP, which the script does not hold: taken as the flange
+            prog.declared_tools[DEFAULT_TOOL] = np.eye(4)
+        if default_used and DEFAULT_TOOL not in prog.tools:
             prog.tools[DEFAULT_TOOL] = np.eye(4)
             prog.warnings.append("no set_tcp before the first motion and no --tool: the installation's "
                                  "TCP is taken as the flange (give it with --tool x,y,z,rx,ry,rz in m, rad)")
@@ -189,7 +193,7 @@ class URScriptDialect(Dialect):
         if len(found) == 1 and found[0][0] in ("target", "pose") and found[0][2] == IDENTITY:
             pose = found[0][1] if found[0][0] == "pose" else self.to_pose(found[0][1].values()[None])[0]
             name = f"set_tcp@{sc.src.line_of(at)}"
-            sc.prog.tools[name] = pose
+            sc.prog.tools[name] = sc.prog.declared_tools[name] = pose
             if found[0][0] == "target":
                 sc.as_frame.add(id(found[0][1]))
             return name

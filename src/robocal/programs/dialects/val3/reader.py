@@ -247,7 +247,8 @@ class Val3Dialect(Dialect):
         return out
 
     def parse(self, sources, frames, tools, references=()):
-        prog = Program([], frames={WORLD: np.eye(4), **frames}, tools={FLANGE: np.eye(4), **tools})
+        prog = Program([], frames={WORLD: np.eye(4), **frames}, tools={FLANGE: np.eye(4), **tools},
+                       declared_tools={FLANGE: np.eye(4)})  # and each motion's tool from the .dtx alone
         data: dict[str, Datum] = {}
         for src in [*sources, *references]:
             if src.path.suffix.lower() == ".dtx":
@@ -373,6 +374,7 @@ def _program_motions(r: _Routine, ctx: _Context, prog: Program, targets: dict, f
             continue  # a joint motion: no correction
         acc = prog.motion(src, at, instr)
         tool, why = _tool(tool_arg, data, kinds, written, prog.tools, src.where(at))
+        _tool(tool_arg, data, kinds, written, prog.declared_tools, src.where(at))  # from the .dtx alone
         for p in points:
             label = " ".join(p.split())
             found, reason = _points(p, r, ctx)
