@@ -21,7 +21,8 @@ from robocal.calibration.evaluation import evaluate
 from robocal.calibration.pipeline import calibrate
 from robocal.data.simulate import simulate_tracker
 from robocal.ik import track
-from robocal.kinematics.cell import TRACK_SCALE, arm_model
+from robocal.kinematics.cell import arm_model
+from robocal.kinematics.cell_file import TRACK_SCALE
 from robocal.kinematics.model import cell_from_data
 from robocal.programs.dialects.rapid.configuration import ABBConfig
 from robocal.programs.filter import filter_program

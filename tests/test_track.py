@@ -10,7 +10,8 @@ import robocal as rc
 from robocal.core.errors import DataError, UnitError
 from robocal.data.measurements import Measurements, parse_csv
 from robocal.data.simulate import TRACK_SCALE_ERROR, simulate_tracker
-from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames
+from robocal.kinematics.cell import arm_model, carriage_frames
+from robocal.kinematics.cell_file import TRACK_SCALE
 from robocal.kinematics.model import Robot, cell_from_data
 
 CELL = {"units": {"length": "mm", "angle": "deg"}, "name": "kr210 on a 6 m track",

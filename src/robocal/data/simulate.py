@@ -54,7 +54,8 @@ from robocal.core.io import write_all
 from robocal.core.magnitudes import check_tool
 from robocal.data.kinds import KINDS, OBSERVED
 from robocal.data.measurements import Measurements, approach_from_order, robot_reach, travel_from_order
-from robocal.kinematics.cell import TRACK_SCALE, arm_model, carriage_frames, is_track_cell
+from robocal.kinematics.cell import arm_model, carriage_frames, is_track_cell
+from robocal.kinematics.cell_file import TRACK_SCALE
 from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.model import Robot, track_chain
 from robocal.kinematics.model_file import dump_model

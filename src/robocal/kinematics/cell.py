@@ -6,7 +6,6 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.core.errors import ModelError
-from robocal.kinematics.cell_file import TRACK_SCALE
 from robocal.kinematics.convert import opw_chain
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
@@ -27,12 +26,6 @@ def is_track_cell(robot: Robot) -> bool:
 def _check_cell(robot: Robot) -> None:
     if not is_track_cell(robot):
         raise ModelError(f"{robot.name} is not an arm on a track (joint 1 prismatic, the others revolute)")
-
-
-def track_scale(robot: Robot) -> float:
-    """The track encoder's scale error ``scale1`` of a cell (0 when not declared)."""
-    names = robot.joint_error_names
-    return float(robot.joint_errors.values[names.index(TRACK_SCALE)]) if TRACK_SCALE in names else 0.0
 
 
 def _link_fixed(alpha: float, a: float, beta: float, theta: float) -> np.ndarray:

@@ -318,10 +318,6 @@ class Robot:
         """Whether a joint of the chain is prismatic (its value, in m, adds to its d)."""
         return bool(self.prismatic.any())
 
-    def joint_units(self) -> list[str]:
-        """'m' (prismatic) or 'rad' (revolute) for each joint."""
-        return ["m" if p else "rad" for p in self.prismatic]
-
     @property
     def external_axes(self) -> int:
         """How many leading joints are external axes (written ``e1..``): 1 for an arm on a track (a
