@@ -54,8 +54,9 @@ class PathResult:
         The closed-form branch slot of each chosen joint vector.
     candidates : numpy.ndarray of int, shape (M,)
         How many candidates each waypoint had.
-    track : bool
-        The first joint is a track's carriage (metres), kept where the poses put it.
+    joint_specs : tuple of JointSpec
+        The robot's joints (`Robot.joints`): each one's column and unit in the joints file (a
+        track's carriage ``e1_mm`` first, kept where the poses put it).
     warnings : list of str
         None today: a waypoint without a solution is refused.
 
@@ -77,8 +78,7 @@ class PathResult:
     weights: np.ndarray
     slots: np.ndarray
     candidates: np.ndarray
-    track: bool = False
-    joint_specs: tuple = ()  # the robot's joints (Robot.joints): each one's column and unit
+    joint_specs: tuple = ()
     warnings: list[str] = field(default_factory=list)
 
     @property

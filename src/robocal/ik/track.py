@@ -105,4 +105,4 @@ def plan(robot: Robot, poses, e1, *, weights=None, start=None, nominal: Robot | 
         arm_start = arm_start[1:]
     res = plan_path(arm, local, weights=weights, start=arm_start, nominal=arm_nominal)
     return replace(res, joints=with_track(e1, res.joints), greedy_joints=with_track(e1, res.greedy_joints),
-                   track=True, joint_specs=robot.joints)
+                   joint_specs=robot.joints)
