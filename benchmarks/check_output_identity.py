@@ -480,8 +480,7 @@ def main(argv: list[str] | None = None) -> int:
         sys.path.insert(0, str(HERE))
         import check_filter_identity
 
-        check_filter_identity.SRC = tree
-        failed += check_filter_identity.main(reference, args.targets)
+        failed += check_filter_identity.main(reference, args.targets, tree)
     verdict = "all the same" if not failed else "DIFFERENCES (see above)"
     print(f"{time.strftime('%H:%M')} output identity: {verdict}")
     return 1 if failed else 0
