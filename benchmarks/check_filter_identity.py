@@ -110,14 +110,16 @@ def cases(folder: Path, n: int) -> list[tuple[str, dict]]:
     return out
 
 
-def main(reference: Path, n: int = 10_000) -> int:
+def main(reference: Path, n: int = 10_000, tree: Path = SRC) -> int:
+    """Filter every case with the trees ``reference`` and ``tree`` (``src`` folders) and print one
+    line per case; 1 when any output differs."""
     failed = 0
     with tempfile.TemporaryDirectory() as tmp:
         for k, (label, case) in enumerate(cases(Path(tmp), n)):
             spec = Path(tmp) / f"case{k}.json"
             spec.write_text(json.dumps(case))
             t_ref = run(reference, spec, Path(tmp) / f"ref{k}")
-            t_new = run(SRC, spec, Path(tmp) / f"new{k}")
+            t_new = run(tree, spec, Path(tmp) / f"new{k}")
             differ = compare(Path(tmp) / f"ref{k}", Path(tmp) / f"new{k}")
             failed += bool(differ)
             files = len(list((Path(tmp) / f"new{k}").iterdir()))

@@ -16,6 +16,7 @@ import importlib.util
 from pathlib import Path
 
 import pytest
+from import_graph import imports
 
 CLI = Path(__file__).resolve().parents[1] / "src" / "robocal" / "cli"
 MAX_RUN_LINES = 60
@@ -25,20 +26,11 @@ def _private(name: str) -> bool:
     return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
 
 
-def _imports(tree: ast.AST) -> list[tuple[str, list[str], int]]:
-    """(module, names imported from it, line) of every robocal import in ``tree``."""
-    out = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.ImportFrom) and node.module and node.module.split(".")[0] == "robocal":
-            out.append((node.module, [a.name for a in node.names], node.lineno))
-        elif isinstance(node, ast.Import):
-            out += [(a.name, [], node.lineno) for a in node.names if a.name.split(".")[0] == "robocal"]
-    return out
-
-
 @pytest.mark.parametrize("path", [pytest.param(p, id=p.name) for p in sorted(CLI.glob("*.py"))])
 def test_the_command_line_imports_only_public_api(path):
-    for module, names, line in _imports(ast.parse(path.read_text())):
+    for module, names, line in imports(path, CLI.parents[1]):
+        if module.split(".")[0] != "robocal":
+            continue
         where = f"{path.name}:{line}"
         assert not any(_private(part) for part in module.split(".")), f"{where}: private module {module}"
         assert not [n for n in names if _private(n)], f"{where}: private name from {module}: {names}"

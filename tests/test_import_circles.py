@@ -4,33 +4,22 @@ form no strongly connected component of more than one module (Tarjan)."""
 
 from __future__ import annotations
 
-import ast
 from pathlib import Path
+
+from import_graph import imports, module_name
 
 ROOT = Path(__file__).resolve().parent.parent / "src" / "robocal"
 
 
 def _module_names() -> dict[str, Path]:
-    names = {}
-    for path in ROOT.rglob("*.py"):
-        parts = path.relative_to(ROOT.parent).with_suffix("").parts
-        names[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
-    return names
+    return {module_name(path, ROOT.parent): path for path in ROOT.rglob("*.py")}
 
 
 def _imports(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
     """The modules of ``modules`` that ``name`` (at ``path``) imports, anywhere in its code."""
-    package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
     out = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-        if isinstance(node, ast.ImportFrom):
-            base = package[:len(package) - node.level + 1] if node.level else []
-            target = ".".join(base + ([node.module] if node.module else []))
-            candidates = [target] + [f"{target}.{alias.name}" for alias in node.names]
-        elif isinstance(node, ast.Import):
-            candidates = [alias.name for alias in node.names]
-        else:
-            continue
+    for module, names, _ in imports(path, ROOT.parent):
+        candidates = [module] + [f"{module}.{n}" for n in names]
         out.update(c for c in candidates if c in modules and c != name)
     return out
 

@@ -7,6 +7,8 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
+from import_graph import imports
+
 import robocal
 
 PACKAGE = Path(robocal.__file__).parent
@@ -31,16 +33,8 @@ LEVEL = {name: k for k, layer in enumerate(LAYERS) for name in layer}
 
 def _imported_packages(path: Path) -> set[str]:
     """The robocal sub-packages (first name under robocal) a module imports, at any level."""
-    out = set()
-    for node in ast.walk(ast.parse(path.read_text())):
-        if isinstance(node, ast.ImportFrom) and node.module and not node.level:
-            names = [node.module]
-        elif isinstance(node, ast.Import):
-            names = [a.name for a in node.names]
-        else:
-            continue
-        out.update(n.split(".")[1] for n in names if n.startswith("robocal.") and n.count(".") >= 1)
-    return out
+    modules = [module for module, _, _ in imports(path, PACKAGE.parent)]
+    return {module.split(".")[1] for module in modules if module.startswith("robocal.")}
 
 
 def test_every_sub_package_has_a_layer():

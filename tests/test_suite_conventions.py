@@ -7,6 +7,8 @@ import ast
 import re
 from pathlib import Path
 
+from import_graph import imports
+
 TESTS = Path(__file__).resolve().parent
 
 
@@ -14,10 +16,8 @@ def test_no_test_imports_conftest():
     """conftest holds fixtures and hooks only; shared helpers live in robots.py, children.py, ..."""
     offenders = []
     for path in sorted(TESTS.glob("*.py")):
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            names = ([node.module or ""] if isinstance(node, ast.ImportFrom)
-                     else [a.name for a in node.names] if isinstance(node, ast.Import) else [])
-            offenders += [f"{path.name}:{node.lineno}" for name in names if name.split(".")[-1] == "conftest"]
+        offenders += [f"{path.name}:{line}" for module, _, line in imports(path, TESTS)
+                      if module.split(".")[-1] == "conftest"]
     assert not offenders, offenders
 
 
