@@ -58,7 +58,7 @@ from robocal.programs.dialects.writing import (
     DEGREE_DECIMALS,
     fixed_point,
 )
-from robocal.programs.registry import dialect_named, dialects
+from robocal.programs.registry import dialects
 
 __all__ = ["DEGREE_DECIMALS", "campaign_outputs", "campaign_programs", "fixed_point", "program_options",
            "refuse_tracks", "write_campaign"]
@@ -111,10 +111,10 @@ def campaign_programs(joints: np.ndarray, robot: Robot, programs: dict[str, str 
     """The campaign programs visiting ``joints`` ``(N, 6)`` (rad) of ``robot`` (its nominal model,
     the flange its tool) in order: ``programs`` maps a language key to the path to write
     (module docstring); returns file path -> text, in :func:`program_options` order."""
+    q = np.asarray(joints, float)
     texts: dict[str, str] = {}
     for d in program_options():
         if programs.get(d.key) is not None:
-            texts.update(dialect_named(d.key).campaign_files(
-                np.asarray(joints, float), robot, Path(programs[d.key]), speed_percent=speed_percent,
-                settle_s=settle_s, procedure=procedure, comment=comment))
+            texts.update(d.campaign_files(q, robot, Path(programs[d.key]), speed_percent=speed_percent,
+                                          settle_s=settle_s, procedure=procedure, comment=comment))
     return texts
