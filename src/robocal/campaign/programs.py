@@ -8,38 +8,9 @@ seconds for the robot to come to rest, and calls a named procedure at each pose 
 triggers the tracker (the generated procedure only shows a message: replace its body with the
 cell's trigger, a digital output or a socket message). Joint values are written in the robot's
 own joint convention: the catalog's joint zeros and signs are the controller's, so the planned
-values go out unchanged (degrees for RAPID and KRL, radians for URScript).
-
-- RAPID: one module with ``CONST jointtarget`` data, ``PROC main()`` (``VelSet`` to the speed
-  percentage, then ``MoveAbsJ ... fine, tool0``, ``WaitTime``, the procedure call per pose) and the
-  procedure ``PROC name(num pose)``; external axes are 9E9 (none).
-- KRL: a ``.src`` (``BAS(#INITMOV,0)``, ``BAS(#VEL_PTP, speed)``, then per pose ``PTP XPk``,
-  ``WAIT SEC``, the procedure call) and its ``.dat`` declaring ``DECL AXIS XPk={A1 ..,A6 ..}``
-  (AXIS, not E6AXIS, so that no external axis moves).
-- FANUC TP: an ASCII ``.ls`` program (``/PROG``, ``/ATTR``, ``/MN``, ``/POS``, ``/END``) with
-  ``UFRAME_NUM=0``, ``UTOOL_NUM=0``, per pose ``J P[k] speed% FINE``, ``WAIT``, ``CALL
-  procedure(k)`` (a TP program of the cell that triggers the tracker), and joint positions
-  ``J1= .. deg`` in ``/POS``. FANUC controllers count J3 from the horizontal, not from the upper
-  arm as the catalog (ROS-Industrial's joint_3) does: the TP value is J3 + J23_FACTOR * J2
-  (ROS-Industrial fanuc_driver's J3_out = J3_in + J23_factor * J2_in, J23_factor 1 for its arms).
-- URScript: a program ``def name(): ... end`` with ``movej([q1, .., q6], a=.., v=..)``, where
-  ``v`` is the speed percentage of pi rad/s (Universal Robots' joint speed limit) and ``a`` 1.4
-  rad/s^2, ``sleep`` and the procedure, defined inside the program.
-- INFORM: a job (``/JOB``, ``//POS``, ``//INST``) with one Cartesian position per pose,
-  ``///POSTYPE ROBOT``, ``///RECTAN``, ``///TOOL 0`` (the flange), and the form ``///RCONF`` of the
-  planned joints (written again whenever it changes): the controller's own IK in that form gives
-  back the planned joints. Joint positions (``///PULSE``) would need each axis's encoder pulses per
-  degree, which live in the controller's parameters (ALL.PRM), not in the model. Per pose
-  ``MOVJ Cnnnnn VJ=speed``, ``TIMER T=settle``, ``SET I000 k`` and ``CALL JOB:procedure`` (a job of
-  the cell that triggers the tracker and reads the pose number from I000). X, Y, Z in mm with 3
-  decimals, Rx, Ry, Rz in deg with 4, as the pendant writes them; CRLF line ends. The form tells a
-  joint's copies apart within +-360 deg only: a planned T beyond a turn (the GP arms' T has
-  +-455 deg) is reached as its copy within a turn, the same flange pose.
-- VAL3: an application folder NAME/ with ``NAME.pjx``, ``start.pgx`` (per pose ``movej(jPose[k],
-  flange, mCampaign)``, ``waitEndMove()``, ``delay(settle)``, ``call procedure(k)``), ``stop.pgx``,
-  the procedure's ``.pgx`` (a ``num`` parameter; its body only writes a message) and ``NAME.dtx``
-  declaring ``jPose`` (jointRx, deg) and ``mCampaign`` (mdesc, ``vel`` = the speed percentage,
-  blend off). XML as the Staubli editor writes it (UTF-8, CRLF).
+values go out unchanged, in each language's unit, except where a language's writer says otherwise
+(FANUC's J3 counted from the horizontal, INFORM's Cartesian positions). What each language's
+program looks like is in the docstring of its writer.
 """
 
 from __future__ import annotations
@@ -58,7 +29,7 @@ from robocal.programs.dialects.writing import (
     DEGREE_DECIMALS,
     fixed_point,
 )
-from robocal.programs.registry import dialect_named, dialects
+from robocal.programs.registry import dialects
 
 __all__ = ["DEGREE_DECIMALS", "campaign_outputs", "campaign_programs", "fixed_point", "program_options",
            "refuse_tracks", "write_campaign"]
@@ -111,10 +82,10 @@ def campaign_programs(joints: np.ndarray, robot: Robot, programs: dict[str, str 
     """The campaign programs visiting ``joints`` ``(N, 6)`` (rad) of ``robot`` (its nominal model,
     the flange its tool) in order: ``programs`` maps a language key to the path to write
     (module docstring); returns file path -> text, in :func:`program_options` order."""
+    q = np.asarray(joints, float)
     texts: dict[str, str] = {}
     for d in program_options():
         if programs.get(d.key) is not None:
-            texts.update(dialect_named(d.key).campaign_files(
-                np.asarray(joints, float), robot, Path(programs[d.key]), speed_percent=speed_percent,
-                settle_s=settle_s, procedure=procedure, comment=comment))
+            texts.update(d.campaign_files(q, robot, Path(programs[d.key]), speed_percent=speed_percent,
+                                          settle_s=settle_s, procedure=procedure, comment=comment))
     return texts

@@ -79,13 +79,6 @@ class ProgramText:
         """1-based line number of a byte offset."""
         return bisect.bisect_right(self._lines, offset)
 
-    def number_at(self, start: int, end: int) -> Number:
-        """The number occupying exactly ``start:end``, else DataError naming the line."""
-        text = self.text[start:end]
-        if not NUMBER_RE.fullmatch(text):
-            raise DataError(f"{self.path}:{self.line_of(start)}: expected a number, found {text!r}")
-        return Number(start, end, text)
-
     def numbers_in(self, start: int, end: int) -> list[Number]:
         """Every number inside ``start:end`` in order."""
         return [Number(m.start(), m.end(), m.group()) for m in NUMBER_RE.finditer(self.text, start, end)]

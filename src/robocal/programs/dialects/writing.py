@@ -10,7 +10,9 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
+from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform
+from robocal.programs.dialects.base import Dialect
 
 PROGRAM_JOINTS = 6                 # every language here drives a six-axis arm
 DEGREE_DECIMALS = 10               # written precision of joint values in degrees
@@ -27,6 +29,8 @@ def fixed_point(value: float, decimals: int) -> str:
 
 
 def identifier(name: str, what: str, limit: int) -> str:
+    """``name`` as given when it is an identifier every controller accepts (a letter, then letters,
+    digits or underscores, at most ``limit`` characters), else DataError naming ``what`` it is."""
     if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", name or "") or len(name) > limit:
         raise DataError(f"{what} {name!r} is not a valid identifier: a letter, then letters, digits or "
                         f"underscores, at most {limit} characters")
@@ -64,7 +68,7 @@ def ascii_comment(text: str) -> str:
     return "".join(ch if 32 <= ord(ch) < 127 and ch not in "\"'" else " " for ch in text)
 
 
-def program_poses(d, nominal, q: np.ndarray, tool: np.ndarray,
+def program_poses(d: Dialect, nominal: Robot, q: np.ndarray, tool: np.ndarray,
                   frame: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """A test program's target poses ``(N, 4, 4)`` (m, in ``frame``) at joints ``q`` ``(N, 6)``
     (rad) of ``nominal`` with TCP ``tool``, and the configuration rows of dialect ``d`` there

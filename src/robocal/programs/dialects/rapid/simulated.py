@@ -15,7 +15,7 @@ from robocal.programs.dialects.writing import program_poses, quaternions
 def write_test_program(d: Dialect, folder: Path, nominal: Robot, q: np.ndarray, tool: np.ndarray,
                        frame: np.ndarray, name: str,
                        variables: bool = False) -> tuple[list[Path], dict, dict]:
-    """A ABB RAPID program visiting joints ``q`` ``(N, 6)`` (rad) of ``nominal`` with TCP ``tool``
+    """An ABB RAPID program visiting joints ``q`` ``(N, 6)`` (rad) of ``nominal`` with TCP ``tool``
     in ``frame`` (4x4, m): :func:`robocal.programs.simulate.write_program`."""
     P, cfg = program_poses(d, nominal, q, tool, frame)
     p_mm = P[:, :3, 3] * 1e3
