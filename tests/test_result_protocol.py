@@ -41,7 +41,13 @@ def results(sim, tmp_path) -> dict:
                            residuals=np.array([1e-5, 2e-5, 1e-5, 2e-5]), spread_deg=35.0)
     entry = {"id": 1, "date": "2026-12-06 03:00:00", "kind": "calibration", "held_out_rms": 0.03, "rms": 0.02}
     p = tmp_path
+    target = ("[[1139.82,200.98,722.77],[0.1300295,-0.08641011,0.98767211,0.01137611],[0,0,-1,0],"
+              "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")
+    (p / "cell.mod").write_text(f"MODULE Cell\n  CONST robtarget pPick:={target};\n  PROC main()\n"
+                                "    MoveJ pPick, v1000, fine, tool0;\n  ENDPROC\nENDMODULE\n")
     return {
+        "filter": (rc.filter_program(p / "cell.mod", real, nominal),
+                   lambda r: r.write(p / "cell_cal.mod", p / "cell_targets")),
         "calibration": (cal, lambda r: r.write(p / "c.yaml", p / "c.json")),
         "compensation": (comp, lambda r: r.write(p / "commands.csv", p / "parameters.csv")),
         "evaluation": (rc.evaluate(sim.truth, sim.data), lambda r: r.write(p / "e.json")),
@@ -66,6 +72,12 @@ def test_every_result_has_the_protocol(sim, tmp_path):
         json.dumps(result.to_dict(), default=str)  # plain data
         written = write(result)
         assert written and all(Path(path).is_file() for path in written), name
+
+
+def test_a_filters_table_json_is_its_dict(sim, tmp_path):
+    result, _ = results(sim, tmp_path)["filter"]
+    assert json.loads(result.table_json()) == json.loads(json.dumps(result.to_dict()))
+    assert result.to_dict()["summary"]["targets"] == 1
 
 
 def test_evaluate_still_returns_the_dict(sim):

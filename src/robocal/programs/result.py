@@ -105,14 +105,21 @@ class FilterResult:
             writer.writerow([f"{r[c]:.6g}" if isinstance(r[c], float) else r[c] for c in cols])
         return out.getvalue()
 
+    def to_dict(self) -> dict:
+        """The result as plain data: the dialect, the filtered files, the summary
+        (`summary_dict`), the loads, the warnings, the per-target table and the motions (what
+        `table_json` writes)."""
+        return {"dialect": self.dialect, "files": [str(p) for p in self.outputs],
+                "summary": self.summary_dict(), "loads": self.loads, "warnings": self.warnings,
+                "targets": self.rows, "motions": [m.as_dict() for m in self.motions]}
+
     def table_json(self) -> str:
         """The per-target table, the summary, the motions and the warnings as JSON text: one key
         per line, one target or motion per line (each encoded by json's C encoder: an indented dump
         runs the pure-Python encoder, seconds for a 100,000-target program)."""
-        header = {"dialect": self.dialect, "files": [str(p) for p in self.outputs],
-                  "summary": self.summary_dict(), "loads": self.loads, "warnings": self.warnings}
-        lists = {"targets": self.rows, "motions": [m.as_dict() for m in self.motions]}
-        parts = ["{\n", ",\n".join(f" {json.dumps(k)}: {json.dumps(v)}" for k, v in header.items())]
+        content = self.to_dict()
+        lists = {key: content.pop(key) for key in ("targets", "motions")}
+        parts = ["{\n", ",\n".join(f" {json.dumps(k)}: {json.dumps(v)}" for k, v in content.items())]
         for k, rows in lists.items():
             parts.append(f",\n {json.dumps(k)}: [")
             for s in range(0, len(rows), JSON_ROWS):  # a few MB of text at a time, joined once
