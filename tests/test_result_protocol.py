@@ -79,6 +79,7 @@ def test_hold_out_judges_the_last_poses(sim):
     nominal = rc.Robot.from_catalog("abb_irb2600")
     held = rc.calibrate(nominal, sim.data, nongeometric="none", hold_out=10)
     assert held.problem.n_poses == 30 and held.validation["n"] == 10
+    assert held.provenance["hold_out"] == 10  # the report's 'hold-out split' row, without the CLI
     assert held.error_model_choice is None  # named: no default to explain
     with pytest.raises(DataError, match="between 1 and 39"):
         rc.calibrate(nominal, sim.data, hold_out=40)

@@ -150,7 +150,7 @@ def run(args) -> int:
         result = recalibrate_offsets(robot, start, data, **common)
     result.provenance.update(command="robocal " + " ".join(args.argv), robot_spec=args.robot,
                              data_file=", ".join(args.data), validation_file=", ".join(validate) or None,
-                             hold_out=args.hold_out)
+                             hold_out=result.provenance.pop("hold_out", None))  # the calibration's, last
     print(result.summary())
     for note in result.notes:
         print(f"note: {note}")
