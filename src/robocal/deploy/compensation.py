@@ -422,17 +422,26 @@ def _numbers(text: str, count: int, what: str, form: str) -> np.ndarray:
     return vals
 
 
-def rotation_from_text(text: str, what: str = "rotation") -> np.ndarray:
-    """A rotation written ``rx,ry,rz`` (deg, fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx)) -> 3x3."""
-    return Rotation.from_euler("xyz", _numbers(text, 3, what, "rx,ry,rz (deg, fixed-axis XYZ)"),
-                               degrees=True).as_matrix()
+def rotation_values(text: str, what: str = "rotation") -> np.ndarray:
+    """The three angles ``(3,)`` (deg; fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx)) of a rotation written
+    ``rx,ry,rz``, else DataError."""
+    return _numbers(text, 3, what, "rx,ry,rz (deg, fixed-axis XYZ)")
+
+
+def frame_values(text: str, what: str = "frame") -> np.ndarray:
+    """The six numbers ``(6,)`` (mm, deg) of a frame written ``x,y,z,rx,ry,rz``, else DataError."""
+    return _numbers(text, 6, what, "x,y,z,rx,ry,rz (mm, deg; fixed-axis XYZ)")
+
+
+def frame_from_values(vals: np.ndarray) -> np.ndarray:
+    """``x,y,z,rx,ry,rz`` ``(6,)`` (mm, deg; fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx), as the
+    targets' ``rx_deg..`` columns) -> 4x4 (m)."""
+    return make_transform(Rotation.from_euler("xyz", vals[3:], degrees=True).as_matrix(), vals[:3] * 1e-3)
 
 
 def frame_from_text(text: str, what: str = "frame") -> np.ndarray:
-    """A frame written ``x,y,z,rx,ry,rz`` (mm, deg; fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx), as the
-    targets' ``rx_deg..`` columns) -> 4x4 (m)."""
-    vals = _numbers(text, 6, what, "x,y,z,rx,ry,rz (mm, deg; fixed-axis XYZ)")
-    return make_transform(Rotation.from_euler("xyz", vals[3:], degrees=True).as_matrix(), vals[:3] * 1e-3)
+    """A frame written ``x,y,z,rx,ry,rz`` (mm, deg; `frame_from_values`) -> 4x4 (m)."""
+    return frame_from_values(frame_values(text, what))
 
 
 def frame_to_text(T: np.ndarray) -> str:
