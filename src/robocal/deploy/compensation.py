@@ -24,7 +24,7 @@ from __future__ import annotations
 import csv
 import io
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -392,11 +392,11 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
                         parameters=parameters, corrected_model=calibrated, singularity=sing,
                         controller=choice, assumed=assumed, layout=layout, source_model=given,
                         target_shift=None if tool is None else pose_error(corrected, plain))
-    comp.warnings[:] = [*unused_conditions(given, payload, temperature), *assumed,
-                        *comp.target_warnings()[:MAX_TARGET_WARNINGS]]
+    warnings = [*unused_conditions(given, payload, temperature), *assumed,
+                *comp.target_warnings()[:MAX_TARGET_WARNINGS]]
     if prediction is not None:
-        comp.warnings.extend(target_warnings(prediction, given, res.joints))
-    return comp
+        warnings += target_warnings(prediction, given, res.joints)
+    return replace(comp, warnings=warnings)  # frozen: the warnings read the targets' verdicts above
 
 
 def read_targets(path, nominal: Robot, origin=(0.0, 0.0, 0.0),
