@@ -90,6 +90,7 @@ def test_hold_out_judges_the_last_poses(sim):
 def test_the_result_says_why_the_default_error_model_is_geometric(sim):
     result = rc.calibrate(rc.Robot.from_catalog("abb_irb2600"), sim.data)
     assert result.error_model_choice.startswith("geometric (40 poses: the default chooses non-geometric")
+    assert result.summary().endswith(f"error model: {result.error_model_choice}")  # said without the CLI
 
 
 def test_swapped_models_are_refused(tmp_path):
