@@ -253,7 +253,7 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         estimate start this one; the parameter selection is the one without it.
     hold_out : int, optional
         Judge on the last ``hold_out`` poses of the one calibration set (file order) and
-        calibrate on the rest (no ``validation`` then).
+        calibrate on the rest (no ``validation`` then); recorded in ``provenance["hold_out"]``.
     **options
         Solver options (e.g. ``k0``, ``k1``, ``ridge`` for ``'robust'``; checked against its
         signature).
