@@ -203,6 +203,8 @@ def test_offsets_only_recalibration_moves_only_the_joint_zeros(calibrated):
     kept = out.robot.values[out.robot.indices(links)]
     assert np.array_equal(kept, result.robot.values[result.robot.indices(links)])
     assert out.validation["rms"] < 1.3 * 0.04  # the instrument's noise level: the change is undone
+    held = recalibrate_offsets(nominal, result.robot, data, hold_out=40, progress=False)  # calibrate's split
+    assert held.validation == out.validation and held.provenance["hold_out"] == 40
     with pytest.raises(DataError, match="not a calibration of"):
         recalibrate_offsets(rc.Robot.from_catalog("abb_irb4600"), result.robot, short)
     with pytest.raises(DataError, match="chooses its own params"):

@@ -91,6 +91,7 @@ def test_hold_out_judges_the_last_poses(sim):
     nominal = rc.Robot.from_catalog("abb_irb2600")
     held = rc.calibrate(nominal, sim.data, nongeometric="none", hold_out=10)
     assert held.problem.n_poses == 30 and held.validation["n"] == 10
+    assert held.provenance["hold_out"] == 10  # the report's 'hold-out split' row, without the CLI
     assert held.error_model_choice is None  # named: no default to explain
     with pytest.raises(DataError, match="between 1 and 39"):
         rc.calibrate(nominal, sim.data, hold_out=40)
@@ -101,6 +102,7 @@ def test_hold_out_judges_the_last_poses(sim):
 def test_the_result_says_why_the_default_error_model_is_geometric(sim):
     result = rc.calibrate(rc.Robot.from_catalog("abb_irb2600"), sim.data)
     assert result.error_model_choice.startswith("geometric (40 poses: the default chooses non-geometric")
+    assert result.summary().endswith(f"error model: {result.error_model_choice}")  # said without the CLI
 
 
 def test_swapped_models_are_refused(tmp_path):

@@ -253,7 +253,7 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         estimate start this one; the parameter selection is the one without it.
     hold_out : int, optional
         Judge on the last ``hold_out`` poses of the one calibration set (file order) and
-        calibrate on the rest (no ``validation`` then).
+        calibrate on the rest (no ``validation`` then); recorded in ``provenance["hold_out"]``.
     **options
         Solver options (e.g. ``k0``, ``k1``, ``ridge`` for ``'robust'``; checked against its
         signature).
@@ -295,10 +295,13 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     if hold_out is not None:
         datasets, validations = split_hold_out(datasets, validations, hold_out)
     try:
-        return _calibrate_sets(robot, datasets, validations, method, params, register_frames, rtol, seed,
-                               progress, nongeometric, force, sigma, warm_start, options)
+        result = _calibrate_sets(robot, datasets, validations, method, params, register_frames, rtol, seed,
+                                 progress, nongeometric, force, sigma, warm_start, options)
     except PlausibilityError as exc:  # the data's own diagnosis first when it tells more
         raise diagnosed(exc, robot, [*datasets, *validations]) from None
+    if hold_out is not None:  # the JSON and the report name the split (docs/result-json.md)
+        result.provenance["hold_out"] = hold_out
+    return result
 
 
 def split_hold_out(datasets: list, validations: list, n: int) -> tuple[list, list]:

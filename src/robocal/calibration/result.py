@@ -469,7 +469,8 @@ class CalibrationResult(_BeforeAfter):
         return [str(path) for path in texts]
 
     def summary(self) -> str:
-        """A short human summary: before -> after, largest corrections, dropped parameters."""
+        """A short human summary: before -> after, largest corrections, dropped parameters, the
+        warnings, the `notes` and why the default error model is the geometric one."""
         b, a = self.before, self.after
         lines = [f"{self.method}: {self.solver.message}",
                  f"calibration set ({b['n']} obs): RMS {b['rms']:.4f} -> {a['rms']:.4f} mm, "
@@ -514,6 +515,9 @@ class CalibrationResult(_BeforeAfter):
         if self.predicted_accuracy is not None:
             lines.append(accuracy_line(self.predicted_accuracy))
         lines += [f"WARNING: {w}" for w in self.warnings]
+        lines += [f"note: {note}" for note in self.notes]
+        if self.error_model_choice:
+            lines.append(f"error model: {self.error_model_choice}")
         return "\n".join(lines)
 
 

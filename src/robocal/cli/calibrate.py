@@ -150,15 +150,11 @@ def run(args) -> int:
         result = recalibrate_offsets(robot, start, data, **common)
     result.provenance.update(command="robocal " + " ".join(args.argv), robot_spec=args.robot,
                              data_file=", ".join(args.data), validation_file=", ".join(validate) or None,
-                             hold_out=args.hold_out)
+                             hold_out=result.provenance.pop("hold_out", None))  # the calibration's, last
     print(result.summary())
-    for note in result.notes:
-        print(f"note: {note}")
     derived = {} if start is None else {"offsets_only": True, "zero_shifts": zero_shifts(result, start)}
     if start is not None:
         print(shifts_line(derived["zero_shifts"]))
-    elif result.error_model_choice:
-        print(f"error model: {result.error_model_choice}")
     for path in result.write(args.output, args.json, args.report, args.network_out, args.force):
         print(f"wrote {path}")
     if args.history:  # after the files: the history is never the only copy

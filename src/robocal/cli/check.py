@@ -58,8 +58,6 @@ def run(args) -> int:
                              calibration_record=parent):
         print(f"wrote {path}")
     print(result.summary())
-    for note in result.notes:
-        print(f"note: {note}")
     if args.history:
         said = record_entry(args.history, check_record(result, robot_id, robot, args.data, parent))
         if not args.quiet:

@@ -24,7 +24,7 @@ from __future__ import annotations
 import csv
 import io
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -392,11 +392,11 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
                         parameters=parameters, corrected_model=calibrated, singularity=sing,
                         controller=choice, assumed=assumed, layout=layout, source_model=given,
                         target_shift=None if tool is None else pose_error(corrected, plain))
-    comp.warnings[:] = [*unused_conditions(given, payload, temperature), *assumed,
-                        *comp.target_warnings()[:MAX_TARGET_WARNINGS]]
+    warnings = [*unused_conditions(given, payload, temperature), *assumed,
+                *comp.target_warnings()[:MAX_TARGET_WARNINGS]]
     if prediction is not None:
-        comp.warnings.extend(target_warnings(prediction, given, res.joints))
-    return comp
+        warnings += target_warnings(prediction, given, res.joints)
+    return replace(comp, warnings=warnings)  # frozen: the warnings read the targets' verdicts above
 
 
 def read_targets(path, nominal: Robot, origin=(0.0, 0.0, 0.0),
@@ -422,17 +422,26 @@ def _numbers(text: str, count: int, what: str, form: str) -> np.ndarray:
     return vals
 
 
-def rotation_from_text(text: str, what: str = "rotation") -> np.ndarray:
-    """A rotation written ``rx,ry,rz`` (deg, fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx)) -> 3x3."""
-    return Rotation.from_euler("xyz", _numbers(text, 3, what, "rx,ry,rz (deg, fixed-axis XYZ)"),
-                               degrees=True).as_matrix()
+def rotation_values(text: str, what: str = "rotation") -> np.ndarray:
+    """The three angles ``(3,)`` (deg; fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx)) of a rotation written
+    ``rx,ry,rz``, else DataError."""
+    return _numbers(text, 3, what, "rx,ry,rz (deg, fixed-axis XYZ)")
+
+
+def frame_values(text: str, what: str = "frame") -> np.ndarray:
+    """The six numbers ``(6,)`` (mm, deg) of a frame written ``x,y,z,rx,ry,rz``, else DataError."""
+    return _numbers(text, 6, what, "x,y,z,rx,ry,rz (mm, deg; fixed-axis XYZ)")
+
+
+def frame_from_values(vals: np.ndarray) -> np.ndarray:
+    """``x,y,z,rx,ry,rz`` ``(6,)`` (mm, deg; fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx), as the
+    targets' ``rx_deg..`` columns) -> 4x4 (m)."""
+    return make_transform(Rotation.from_euler("xyz", vals[3:], degrees=True).as_matrix(), vals[:3] * 1e-3)
 
 
 def frame_from_text(text: str, what: str = "frame") -> np.ndarray:
-    """A frame written ``x,y,z,rx,ry,rz`` (mm, deg; fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx), as the
-    targets' ``rx_deg..`` columns) -> 4x4 (m)."""
-    vals = _numbers(text, 6, what, "x,y,z,rx,ry,rz (mm, deg; fixed-axis XYZ)")
-    return make_transform(Rotation.from_euler("xyz", vals[3:], degrees=True).as_matrix(), vals[:3] * 1e-3)
+    """A frame written ``x,y,z,rx,ry,rz`` (mm, deg; `frame_from_values`) -> 4x4 (m)."""
+    return frame_from_values(frame_values(text, what))
 
 
 def frame_to_text(T: np.ndarray) -> str:

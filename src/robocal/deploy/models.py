@@ -8,11 +8,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
 from robocal.core.io import check_outputs
 from robocal.core.magnitudes import check_degrees, check_tool
-from robocal.deploy.compensation import controller_model, frame_from_text, rotation_from_text
+from robocal.deploy.compensation import controller_model, frame_from_values, frame_values, rotation_values
 from robocal.kinematics.catalog import catalog_names
 from robocal.kinematics.model import Robot, load_model
 from robocal.trust.coverage import Prediction
@@ -143,19 +144,18 @@ def check_tool_mm(xyz, option: str) -> None:
 def tool_frame(text: str, option: str) -> np.ndarray:
     """A tool frame ``x,y,z,rx,ry,rz`` (mm, deg) -> 4x4 (m), refused when its magnitudes say
     another unit (`check_tool_mm`, `robocal.core.magnitudes.check_degrees`)."""
-    T = frame_from_text(text, option)
-    values = [float(v) for v in text.replace(" ", "").split(",") if v]
+    values = frame_values(text, option)
     check_tool_mm(values[:3], f"{option} {text}")
     check_degrees(values[3:], f"{option} {text}")
-    return T
+    return frame_from_values(values)
 
 
 def tool_rotation(text: str, option: str) -> np.ndarray:
     """A tool's orientation ``rx,ry,rz`` (deg, fixed-axis XYZ) -> 3x3, refused when the angles
     look like radians (`robocal.core.magnitudes.check_degrees`)."""
-    rotation = rotation_from_text(text, option)
-    check_degrees([float(v) for v in text.replace(" ", "").split(",") if v], f"{option} {text}")
-    return rotation
+    angles = rotation_values(text, option)
+    check_degrees(angles, f"{option} {text}")
+    return Rotation.from_euler("xyz", angles, degrees=True).as_matrix()
 
 
 def planning_model(robot: Robot, nominal: Robot | None, tool: str = "flange") -> tuple[Robot, str]:

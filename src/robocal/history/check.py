@@ -198,11 +198,14 @@ class CheckResult:
         return out
 
     def summary(self) -> str:
-        line = (f"check of {self.n_poses} poses: {self.verdict} (p = {self.p_value:.3g}; "
-                f"RMS {self.rms_mm:.4f} mm, expected {self.predicted_rms_mm:.4f} mm if unchanged)")
+        """The verdict with its p-value and RMS (mm), the parameters most likely moved, the notes."""
+        lines = [f"check of {self.n_poses} poses: {self.verdict} (p = {self.p_value:.3g}; "
+                 f"RMS {self.rms_mm:.4f} mm, expected {self.predicted_rms_mm:.4f} mm if unchanged)"]
         moved = [f"{c['name']} {c['shift']:+.4f} ± {c['sigma']:.4f} {c['unit']}"
                  for c in self.changed_parameters]
-        return line + ("\nmost likely moved: " + ", ".join(moved) if moved else "")
+        if moved:
+            lines.append("most likely moved: " + ", ".join(moved))
+        return "\n".join(lines + [f"note: {note}" for note in self.notes])
 
 
 class _Whitened:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.calibration.pipeline import calibrate, split_hold_out
+from robocal.calibration.pipeline import calibrate
 from robocal.core.errors import DataError
 from robocal.kinematics.model import Robot, load_model
 
@@ -78,17 +78,13 @@ def recalibrate_offsets(nominal, start, data, validation=None, **options):
     (True, True)
     """
     sets = list(data) if isinstance(data, list | tuple) else [data]
-    if options.get("hold_out") is not None:  # the held-out poses become the validation
-        given = [] if validation is None else \
-            list(validation) if isinstance(validation, list | tuple) else [validation]
-        sets, validation = split_hold_out(sets, given, options.pop("hold_out"))
     check_same_robot(nominal, start)
     if any(not d.spec.sees_position for d in sets):
         raise DataError("an offsets-only recalibration needs tracker data (points or poses)")
     for key in ("params", "nongeometric"):
         if key in options:
             raise DataError(f"an offsets-only recalibration chooses its own {key}")
-    n_smr = max(d.n_smr for d in sets)
+    n_smr = max(d.n_smr for d in sets)  # held-out poses of an SMR the others lack: calibrate refuses them
     result = calibrate(start, sets, params=offsets_params(start, n_smr), validation=validation,
                        nongeometric="none", **options)
     result.settings["offsets_only"] = True

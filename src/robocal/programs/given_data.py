@@ -12,7 +12,7 @@ import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.core.magnitudes import LENGTH_SCALES_M, check_degrees, check_frame, check_radians, check_tool
-from robocal.deploy.compensation import frame_from_text
+from robocal.deploy.compensation import frame_from_values, frame_values
 from robocal.kinematics.joint_errors import condition_terms
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import pose_error
@@ -63,10 +63,11 @@ def robot_base_frame(base, reach_m: float) -> np.ndarray | None:
     (mm, deg) read and its magnitudes checked for a robot of ``reach_m``."""
     if not isinstance(base, str):
         return base
-    frame = frame_from_text(base, "--robot-base")
+    values = frame_values(base, "--robot-base")
+    frame = frame_from_values(values)
     what = f"--robot-base {base}"
     check_frame(frame[:3, 3], "mm", reach_m, what)
-    check_degrees([float(v) for v in base.replace(" ", "").split(",")][3:], what)
+    check_degrees(values[3:], what)
     return frame
 
 
