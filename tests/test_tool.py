@@ -73,6 +73,10 @@ def test_cli_tool(tmp_path, capsys):
     assert main(["tool", str(tmp_path / "touch.csv"), "--calibrated", str(tmp_path / "cal.yaml"), "--nominal",
                  "abb_irb2600", "--rotation", "0,30"]) == 2
     assert "--rotation '0,30': expected rx,ry,rz (deg" in capsys.readouterr().err
+    # --robot-base in metres is refused as filter refuses it (the same magnitude check)
+    assert main(["tool", str(tmp_path / "touch.csv"), "--calibrated", str(tmp_path / "cal.yaml"), "--nominal",
+                 "abb_irb2600", "--robot-base", "0.5,0.2,0,0,0,0"]) == 2
+    assert "--robot-base 0.5,0.2,0,0,0,0" in capsys.readouterr().err
 
 
 def test_frame_text_round_trip():

@@ -34,9 +34,8 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from robocal.core.io import check_outputs
-    from robocal.data.measurements import read_joints
-    from robocal.deploy.compensation import frame_from_text
-    from robocal.deploy.models import tool_rotation
+    from robocal.data.measurements import read_joints, robot_reach
+    from robocal.deploy.models import robot_base_frame, tool_rotation
     from robocal.deploy.tcp import identify_tcp
     from robocal.kinematics.model import Robot, load_model
 
@@ -44,7 +43,7 @@ def run(args) -> int:
     check_outputs([args.json], [args.calibrated, args.joints, args.nominal])
     calibrated, nominal = Robot.load(args.calibrated), load_model(args.nominal)
     q = read_joints(args.joints, nominal)
-    base = None if args.robot_base is None else frame_from_text(args.robot_base, "--robot-base")
+    base = robot_base_frame(args.robot_base, robot_reach(nominal))  # magnitudes checked, as filter's
     res = identify_tcp(calibrated, nominal, q, base)
     res.write(args.json, args.name, rotation)
     print(res.summary())

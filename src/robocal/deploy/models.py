@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
 from robocal.core.io import check_outputs
-from robocal.core.magnitudes import check_degrees, check_tool
+from robocal.core.magnitudes import check_degrees, check_frame, check_tool
 from robocal.deploy.compensation import controller_model, frame_from_values, frame_values, rotation_values
 from robocal.kinematics.catalog import catalog_names
 from robocal.kinematics.model import Robot, load_model
@@ -177,3 +177,16 @@ def planning_model(robot: Robot, nominal: Robot | None, tool: str = "flange") ->
     return (robot if frame is None else robot.with_frames(tool=robot.tool @ frame),
             f"the model's world frame and {carried} ({robot.name} is not a catalog robot: give --nominal "
             "for the robot's base and flange)")
+
+
+def robot_base_frame(base, reach_m: float) -> np.ndarray | None:
+    """The controller's base frame 4x4 (m): ``base`` as given, or its text ``x,y,z,rx,ry,rz``
+    (mm, deg) read and its magnitudes checked for a robot of ``reach_m``."""
+    if not isinstance(base, str):
+        return base
+    values = frame_values(base, "--robot-base")
+    frame = frame_from_values(values)
+    what = f"--robot-base {base}"
+    check_frame(frame[:3, 3], "mm", reach_m, what)
+    check_degrees(values[3:], what)
+    return frame

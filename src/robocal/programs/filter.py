@@ -31,6 +31,7 @@ from robocal.core.errors import DataError, ListedError, ModelError
 from robocal.core.resources import gc_paused, heap_trimmed
 from robocal.data.measurements import robot_reach
 from robocal.deploy.compensation import Compensation, compensate, controller_model
+from robocal.deploy.models import robot_base_frame
 from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
 from robocal.ik.closed_form import has_closed_form
@@ -46,7 +47,6 @@ from robocal.programs.given_data import (
     as_frames,
     check_language,
     check_magnitudes,
-    robot_base_frame,
     tool_disagreements,
     unused_conditions,
 )

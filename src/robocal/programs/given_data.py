@@ -12,7 +12,6 @@ import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.core.magnitudes import LENGTH_SCALES_M, check_degrees, check_frame, check_radians, check_tool
-from robocal.deploy.compensation import frame_from_values, frame_values
 from robocal.kinematics.joint_errors import condition_terms
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import pose_error
@@ -56,19 +55,6 @@ def check_magnitudes(given: list[Path], dialect: str | None, tools, frames, reac
                 check_degrees(values[3:6], what)
             elif angles == "rad":
                 check_radians(values[3:6], what)
-
-
-def robot_base_frame(base, reach_m: float) -> np.ndarray | None:
-    """The controller's base frame 4x4 (m): ``base`` as given, or its text ``x,y,z,rx,ry,rz``
-    (mm, deg) read and its magnitudes checked for a robot of ``reach_m``."""
-    if not isinstance(base, str):
-        return base
-    values = frame_values(base, "--robot-base")
-    frame = frame_from_values(values)
-    what = f"--robot-base {base}"
-    check_frame(frame[:3, 3], "mm", reach_m, what)
-    check_degrees(values[3:], what)
-    return frame
 
 
 def unused_conditions(calibrated: Robot, payload, temperature) -> list[str]:
