@@ -103,6 +103,13 @@ def _as_frame(T, what: str) -> np.ndarray:
     return T
 
 
+def joints_in_units(q, prismatic) -> np.ndarray:
+    """Joints ``q (..., n)`` (rad; m on a joint flagged in ``prismatic (n,)``) in each joint's unit
+    (deg; mm on a prismatic joint): what joints files and messages show (`JointSpec.shown`)."""
+    q = np.asarray(q, float)
+    return np.where(prismatic, q * 1e3, np.rad2deg(q))
+
+
 class JointSpec(NamedTuple):
     """One joint as messages, range checks and joints files name it (`Robot.joints`).
 
@@ -345,8 +352,7 @@ class Robot:
     def joints_shown(self, q) -> np.ndarray:
         """Joints ``q`` ``(N, n)`` (rad; m for a prismatic joint) in each joint's unit (deg; mm):
         what joints files and messages show (`joints`)."""
-        q = np.asarray(q, float)
-        return np.where(self.prismatic, q * 1e3, np.rad2deg(q))
+        return joints_in_units(q, self.prismatic)
 
     def section(self) -> dict:
         """The ``robot`` section of the result and campaign JSON: ``name``, ``description``,
