@@ -264,3 +264,16 @@ def test_a_track_campaign_page_shows_the_carriage_in_mm():
         html = render_campaign(campaign)
         assert "<th>e1 (mm)</th><th>q1 (deg)</th>" in html and "q7" not in html
         assert "1500.0000" in html
+
+
+def test_joint_params_name_the_quills_d():
+    assert _scara().joint_params == ["theta1", "theta2", "d3", "theta4"]
+
+
+@pytest.mark.parametrize("kind", ["distance", "plane"])
+def test_a_scara_bar_or_plane_simulation_moves_its_quill_as_a_slide(kind):
+    from robocal.data.simulate import simulate_tracker
+
+    sim = simulate_tracker(_scara(), 20, kind=kind, seed=4, noise_mm=0.0)  # was LinAlgError (a theta3 column)
+    q = sim.data.joints
+    assert np.isfinite(q).all() and len(q) >= 20

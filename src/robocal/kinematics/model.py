@@ -326,6 +326,12 @@ class Robot:
         return bool(self.prismatic.any())
 
     @property
+    def joint_params(self) -> list[str]:
+        """The parameter each joint's value adds to, in joint order: ``theta<i>`` for a revolute
+        joint, ``d<i>`` for a prismatic one; their `jacobian` columns are the joint Jacobian."""
+        return [f"{'d' if slides else 'theta'}{i + 1}" for i, slides in enumerate(self.prismatic)]
+
+    @property
     def external_axes(self) -> int:
         """How many leading joints are external axes (written ``e1..``): 1 for an arm on a track (a
         prismatic joint 1 carrying revolute joints, `robocal.kinematics.cell_file`), else 0."""
