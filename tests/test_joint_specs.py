@@ -277,3 +277,18 @@ def test_a_scara_bar_or_plane_simulation_moves_its_quill_as_a_slide(kind):
     sim = simulate_tracker(_scara(), 20, kind=kind, seed=4, noise_mm=0.0)  # was LinAlgError (a theta3 column)
     q = sim.data.joints
     assert np.isfinite(q).all() and len(q) >= 20
+
+
+def test_a_joints_file_with_a_quill_in_degrees_is_refused(tmp_path):
+    from robocal.campaign.files import read_planned
+    from robocal.data.measurements import read_joints
+
+    path = tmp_path / "poses.csv"
+    path.write_text("q1_deg,q2_deg,q3_deg,q4_deg\n10,20,-50,30\n")  # was: -50 deg read as a -0.87 m quill
+    expected = r"joint column 3 \(q3\) is in angle units but scara's joint 3 \(q3\) is prismatic"
+    with pytest.raises(UnitError, match=expected):
+        read_planned(path, _scara())
+    with pytest.raises(UnitError, match=expected):
+        read_joints(path, _scara())
+    path.write_text("q1_deg,q2_deg,q3_mm,q4_deg\n10,20,-50,30\n")
+    np.testing.assert_allclose(read_planned(path, _scara()).joints[0, 2], -0.05)
