@@ -253,3 +253,14 @@ def test_gram_route_equals_the_direct_svd():
     np.testing.assert_allclose(gram.solve(r, damping=0.3, prior=prior), ridge, rtol=1e-8)
     J[:, 1] = J[:, 0] / J[:, 0].std() * J[:, 1].std() + 1e-7 * rng.normal(size=600)  # near-collinear
     assert ScaledSVD.of(J).U is not None  # ill conditioned: the direct SVD
+
+
+def test_an_infinite_condition_number_is_written_as_null():
+    import json
+
+    from robocal.identify.identifiability import Identifiability
+
+    ident = Identifiability(names=["a2"], kept=[], dropped=[], confounded_with={}, rank=0,
+                            condition_number=float("inf"), singular_values=np.zeros(0),
+                            undetermined=["a2"])  # all held by their priors (was: ValueError in json)
+    assert json.loads(json.dumps(ident.to_dict(), allow_nan=False))["condition_number"] is None

@@ -264,3 +264,41 @@ def test_a_track_campaign_page_shows_the_carriage_in_mm():
         html = render_campaign(campaign)
         assert "<th>e1 (mm)</th><th>q1 (deg)</th>" in html and "q7" not in html
         assert "1500.0000" in html
+
+
+def test_joint_params_name_the_quills_d():
+    assert _scara().joint_params == ["theta1", "theta2", "d3", "theta4"]
+
+
+@pytest.mark.parametrize("kind", ["distance", "plane"])
+def test_a_scara_bar_or_plane_simulation_moves_its_quill_as_a_slide(kind):
+    from robocal.data.simulate import simulate_tracker
+
+    sim = simulate_tracker(_scara(), 20, kind=kind, seed=4, noise_mm=0.0)  # was LinAlgError (a theta3 column)
+    q = sim.data.joints
+    assert np.isfinite(q).all() and len(q) >= 20
+
+
+def test_a_joints_file_with_a_quill_in_degrees_is_refused(tmp_path):
+    from robocal.campaign.files import read_planned
+    from robocal.data.measurements import read_joints
+
+    path = tmp_path / "poses.csv"
+    path.write_text("q1_deg,q2_deg,q3_deg,q4_deg\n10,20,-50,30\n")  # was: -50 deg read as a -0.87 m quill
+    expected = r"joint column 3 \(q3\) is in angle units but scara's joint 3 \(q3\) is prismatic"
+    with pytest.raises(UnitError, match=expected):
+        read_planned(path, _scara())
+    with pytest.raises(UnitError, match=expected):
+        read_joints(path, _scara())
+    path.write_text("q1_deg,q2_deg,q3_mm,q4_deg\n10,20,-50,30\n")
+    np.testing.assert_allclose(read_planned(path, _scara()).joints[0, 2], -0.05)
+
+
+def test_a_scara_registers_from_points():
+    from robocal.data.registration import register_frame, turns_about_one_axis
+    from robocal.data.simulate import simulate_tracker
+
+    robot = _scara()
+    assert turns_about_one_axis(robot) and not turns_about_one_axis(Robot.from_catalog("abb_irb2600"))
+    sim = simulate_tracker(robot, 30, seed=2, noise_mm=0.0)  # was: "the pose set is degenerate"
+    assert register_frame(robot, sim.data).rms < 2e-3  # m: the nominal model, the truth's errors left

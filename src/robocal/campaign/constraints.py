@@ -30,6 +30,7 @@ import numpy as np
 from robocal.core.errors import DataError
 from robocal.data.simulate import check_tracker_position
 from robocal.ik.singularity import MEASURE_JOINTS, classic_distances
+from robocal.kinematics.model import joints_in_units
 
 DEFAULT_ACCEPTANCE_DEG = 30.0
 DEFAULT_RANGE_M = (0.5, 40.0)      # a typical tracker's measuring range; set your instrument's
@@ -361,7 +362,7 @@ def conflict_rows(q: np.ndarray, min_distance_deg: float, prismatic: np.ndarray 
     ``prismatic (n,)``, e.g. ``robot.prismatic``) closer than ``min_distance_deg`` to candidate
     ``j``, ``j`` included: the Euclidean joint-space distance over the joints in their units (deg;
     mm on a prismatic joint, 1 mm counting as 1 deg)."""
-    qd = np.rad2deg(q) if prismatic is None else np.where(prismatic, q * 1e3, np.rad2deg(q))
+    qd = joints_in_units(q, False if prismatic is None else prismatic)
     limit = float(min_distance_deg) ** 2
 
     def conflicts(j: int) -> np.ndarray:

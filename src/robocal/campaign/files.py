@@ -86,7 +86,7 @@ def read_candidates(path, robot, kind: str = "point") -> CandidateFile:
     True
     """
     table = read_joint_table(path)
-    q = robot.check_joints(table.joints)
+    q = table.joints_of(robot, path)
     spec = OBSERVED.get(kind)
     if spec is not None and not spec.sees_position:  # a fixture's contacts or pairs: from the file
         data = Measurements.load(path, robot=robot)
@@ -233,7 +233,7 @@ def read_planned(path, robot) -> Planned:
     (True, array([[0., 0., 0.]]))
     """
     table = read_joint_table(path)
-    q = robot.check_joints(table.joints)
+    q = table.joints_of(robot, path)
     smr = []
     while table.column(f"smr{len(smr)}_x_mm") is not None:
         smr.append(_fixed_columns(table, [f"smr{len(smr)}_{c}_mm" for c in _XYZ], path))

@@ -28,6 +28,10 @@ class KindSpec:
         Its observation model, ``"module:Class"`` in `robocal.identify.observations`.
     arrays : tuple of str
         The observation arrays of `Measurements` it requires (and the only ones it takes).
+    sigma_m : float
+        The 1-sigma noise (m) of a row when a set of several kinds has no sigma column and none is
+        given: a laser tracker 2-4 m away (points, a 6-DOF pose's position), a touch probe, a scale
+        bar or ball bar.
     sees_position : bool
         Each row is a measured position of the TCP (an SMR or probe) in the tracker frame: a
         tracker's data, registration and frame fits apply, candidates are generated from joints
@@ -48,6 +52,7 @@ class KindSpec:
     name: str
     observation: str
     arrays: tuple[str, ...]
+    sigma_m: float
     sees_position: bool = False
     sees_orientation: bool = False
     several_smrs: bool = False
@@ -65,12 +70,12 @@ class KindSpec:
 
 
 OBSERVED = {spec.name: spec for spec in (
-    KindSpec("point", "point:PointObservation", ("points",), sees_position=True, several_smrs=True,
-             columns="x_mm,y_mm,z_mm"),
-    KindSpec("pose", "pose:PoseObservation", ("points", "rotations"), sees_position=True,
+    KindSpec("point", "point:PointObservation", ("points",), sigma_m=20e-6, sees_position=True,
+             several_smrs=True, columns="x_mm,y_mm,z_mm"),
+    KindSpec("pose", "pose:PoseObservation", ("points", "rotations"), sigma_m=20e-6, sees_position=True,
              sees_orientation=True, columns="x_mm,y_mm,z_mm and qw..qz"),
-    KindSpec("plane", "plane:PlaneObservation", ("plane",), columns="a plane"),
-    KindSpec("distance", "distance:DistanceObservation", ("pair", "distance"), group="pair",
+    KindSpec("plane", "plane:PlaneObservation", ("plane",), sigma_m=10e-6, columns="a plane"),
+    KindSpec("distance", "distance:DistanceObservation", ("pair", "distance"), sigma_m=5e-6, group="pair",
              rows_per_placement=2, columns="pair and distance_mm"),
 )}
 KINDS = tuple(OBSERVED)  # every kind's name, in the order messages list them

@@ -48,7 +48,7 @@ from __future__ import annotations
 import csv
 import io
 import re
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -470,14 +470,7 @@ class Measurements:
                             f"{robot.n_joints} joints{track}: use a file with {robot.n_joints} joint "
                             "columns or the matching robot model")
         linear = np.zeros(self.n_joints, bool) if self.linear is None else self.linear
-        wrong = np.flatnonzero(linear != robot.prismatic)
-        if wrong.size:
-            k = int(wrong[0])
-            joint = robot.joints[k]
-            kind = "prismatic (give it in mm or m)" if joint.prismatic else "revolute (deg or rad)"
-            raise UnitError(f"{where}joint column {k + 1} ({self.joint_column(k, '')}) is in "
-                            f"{'length' if linear[k] else 'angle'} units but {robot.name}'s joint {k + 1} "
-                            f"({joint.name}) is {kind}: its column is {joint.column}")
+        check_joint_kinds(linear, robot, [self.joint_column(k, "") for k in range(self.n_joints)], where)
         if reach is None:
             reach = robot_reach(robot)
         _check_plausible(self, reach, where)
@@ -689,6 +682,20 @@ def approach_from_order(joints: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
     return np.sign(travel_from_order(joints, pose_id)).astype(np.int64)
 
 
+def check_joint_kinds(linear: np.ndarray, robot, columns: Sequence[str], where: str = "") -> None:
+    """UnitError naming the first joint column (``columns``: each joint's column name) whose unit
+    is a length where ``robot``'s joint is revolute, or an angle where it is prismatic (``linear``
+    ``(n,)`` bool: the column in length units); ``where`` prefixes the message."""
+    wrong = np.flatnonzero(np.asarray(linear, bool) != robot.prismatic)
+    if wrong.size:
+        k = int(wrong[0])
+        joint = robot.joints[k]
+        kind = "prismatic (give it in mm or m)" if joint.prismatic else "revolute (deg or rad)"
+        raise UnitError(f"{where}joint column {k + 1} ({columns[k]}) is in "
+                        f"{'length' if linear[k] else 'angle'} units but {robot.name}'s joint {k + 1} "
+                        f"({joint.name}) is {kind}: its column is {joint.column}")
+
+
 @dataclass(frozen=True)
 class JointTable:
     """The joint columns of a CSV as read: ``joints (N, n)`` rad, ``header`` (lower-case names),
@@ -700,6 +707,15 @@ class JointTable:
     joint_columns: list[int]
     cells: list[list[str]]
     lines: np.ndarray
+
+    def joints_of(self, robot, path) -> np.ndarray:
+        """``joints`` checked against ``robot`` (their count, and each column's unit a length
+        exactly where the joint is prismatic; ``path`` names the file in the UnitError)."""
+        q = robot.check_joints(self.joints)
+        names = [self.header[c] for c in self.joint_columns]
+        check_joint_kinds([_is_length(h) for h in names], robot, [h.rpartition("_")[0] for h in names],
+                          f"{path}: ")
+        return q
 
     def column(self, name: str) -> list[str] | None:
         """The text cells of column ``name`` (None when absent)."""
@@ -742,8 +758,8 @@ def read_joint_table(path) -> JointTable:
 def read_joints(path, robot=None) -> np.ndarray:
     """Only the joint columns (q1_deg.. or _rad) of a CSV, ``(N, n)`` rad — for planning a pose
     set before anything is measured. Other columns are ignored."""
-    q = read_joint_table(path).joints
-    return q if robot is None else robot.check_joints(q)
+    table = read_joint_table(path)
+    return table.joints if robot is None else table.joints_of(robot, path)
 
 
 def _header_role(name: str):

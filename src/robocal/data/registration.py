@@ -9,6 +9,10 @@ works:
    fit of every ``t_s`` (starting from the model's offsets, or zero);
 2. finish with Gauss-Newton on (B translation, B rotation as a multiplicative rotation vector,
    all t_s) until the step is below 1e-13 m.
+
+A robot whose joints all leave one flange axis pointing the same way (a SCARA) cannot show the
+SMR offsets along that axis apart from the base frame's translation: that one freedom stays where
+it started (`turns_about_one_axis`), as the calibration then reports for tool.z.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from robocal.kinematics.transforms import make_transform, rotvec_to_matrix, skew
 # Smallest singular value (relative to the largest) of the column-normalised registration Jacobian
 # for which the poses still fix the frame and the SMR offsets (identical or collinear poses do not).
 REGISTRATION_RCOND = 1e-6
+FIXED_AXIS_TOL = 1e-12  # spread of a flange axis's world direction (relative) below which it never turns
 
 
 @dataclass(frozen=True)
@@ -48,6 +53,19 @@ def umeyama(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0])
     R = Vt.T @ D @ U.T
     return make_transform(R, cd - R @ cs)
+
+
+def turns_about_one_axis(robot) -> bool:
+    """Whether every joint of ``robot`` leaves one flange axis pointing the same way (a SCARA: all
+    its revolute axes parallel): point data then cannot tell the SMR offsets along that axis from
+    the base frame's translation (one freedom the registration leaves where it started)."""
+    lo, hi = robot.limits[:, 0], robot.limits[:, 1]
+    phase = (np.arange(8)[:, None] * 0.618 + np.arange(robot.n_joints) * 0.382) % 1.0  # spread joints
+    R = replace(robot, base=np.eye(4), tool=np.eye(4), smr=np.zeros((0, 3)), nominal=None,
+                joint_errors=None).fk(lo + (hi - lo) * phase)[:, :3, :3]
+    D = R - R[0]
+    spread = np.linalg.eigvalsh(np.einsum("nji,njk->ik", D, D))
+    return bool(spread[0] <= FIXED_AXIS_TOL * max(spread[-1], 1e-300))
 
 
 def _offsets_lsq(Rf: np.ndarray, of: np.ndarray, local: np.ndarray, smr: np.ndarray, k: int) -> np.ndarray:
@@ -112,7 +130,8 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
             break
     Jn = J.reshape(-1, 6 + 3 * k)
     sv = np.linalg.svd(Jn / np.maximum(np.linalg.norm(Jn, axis=0), 1e-300), compute_uv=False)
-    if sv[-1] < REGISTRATION_RCOND * sv[0]:
+    free = 1 if turns_about_one_axis(robot) else 0  # the structural freedom (turns_about_one_axis)
+    if sv[-1 - free] < REGISTRATION_RCOND * sv[0]:
         raise IdentificationError(
             f"the pose set is degenerate: its {data.n_poses} poses cannot fix the tracker frame and the SMR "
             "offsets (they barely change the flange's orientation or position): measure poses spread "

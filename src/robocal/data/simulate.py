@@ -232,10 +232,10 @@ def _move_tips(robot, q: np.ndarray, target: np.ndarray, normal: np.ndarray | No
                iterations: int = 30, damping: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
     """Joints near ``q (N, n)`` whose tips are at ``target (N, 3)`` (m), or with ``normal (N, 3)``
     (unit) on the planes ``normal . p = target`` (``target (N,)``, m): damped minimum-norm
-    Gauss-Newton on the joints (the joint Jacobian is the theta_i columns of the identification
-    Jacobian, projected on the normal for planes). Returns the joints and the distance ``(N,)``
-    left to the target."""
-    names = [f"theta{i + 1}" for i in range(robot.n_joints)]
+    Gauss-Newton on the joints (the joint Jacobian is the identification Jacobian's columns of
+    `Robot.joint_params`: theta_i, a prismatic joint's d_i; projected on the normal for planes).
+    Returns the joints and the distance ``(N,)`` left to the target."""
+    names = robot.joint_params
 
     def residual(q):  # (N, 3) from the points, (N, 1) from the planes
         p = robot.fk(q)[:, :3, 3]

@@ -178,7 +178,7 @@ def measured_poses(true, q: np.ndarray, smr: np.ndarray, conditions: Conditions,
     true ``coefficients`` (:func:`true_terms`)."""
     n = q.shape[1]
     payload, temperature = conditions.payload, conditions.temperature
-    reached = true.reached_joints(q, Conditions(conditions.approach, conditions.travel))
+    reached = true.reached_joints(q, conditions.motion)
     if payload is not None and payload[:, 0].any():
         plain = replace(true, joint_errors=None)
         c = np.array([coefficients.get(f"payload{i + 1}", 0.0) for i in range(n)])

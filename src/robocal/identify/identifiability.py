@@ -135,9 +135,10 @@ class Identifiability:
         }
 
     def to_dict(self) -> dict:
-        """Plain data for the result JSON."""
+        """Plain data for the result JSON (condition number None where infinite: no parameter kept,
+        or their columns dependent)."""
         return {"n_params": len(self.names), "rank": self.rank,
-                "condition_number": self.condition_number,
+                "condition_number": self.condition_number if np.isfinite(self.condition_number) else None,
                 "condition_class": self.condition_class, **self.observability,
                 "kept": self.kept, "dropped": self.dropped, "undetermined": self.undetermined,
                 "confounded_with": self.confounded_with}

@@ -22,9 +22,8 @@ from robocal.identify.observations import observation_for
 from robocal.identify.space import ParameterSpace, State, resolve_names
 
 DEFAULT_SIGMA = 1.0  # residual scale of a lone set without sigma (unweighted: residuals in SI units)
-# 1-sigma noise (m) of each kind when a set of several has no sigma column and none is given: a
-# laser tracker 2-4 m away (points, 6-DOF pose positions), a touch probe, a scale bar or ball bar
-KIND_SIGMA = {"point": 20e-6, "pose": 20e-6, "plane": 10e-6, "distance": 5e-6}
+# 1-sigma noise (m) of each kind when a set of several has no sigma column and none is given
+KIND_SIGMA = {name: spec.sigma_m for name, spec in OBSERVED.items()}  # (robocal.data.kinds)
 
 
 def _consecutive(sizes: Sequence[int]) -> list[np.ndarray]:

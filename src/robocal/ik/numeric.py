@@ -80,7 +80,7 @@ class _Targets:
                  free: np.ndarray):
         self.robot, self.T, self.tol = robot, T, (pos_tol, rot_tol)
         self.free = free
-        self.names = [f"{'d' if robot.prismatic[i] else 'theta'}{i + 1}" for i in free]
+        self.names = [robot.joint_params[i] for i in free]
         self.size = T.shape[0]
         self.q = q0.copy()
         self.err = pose_error(T, robot.fk(self.q))

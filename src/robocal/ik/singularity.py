@@ -112,7 +112,7 @@ def singularity_distance(robot: Robot, q) -> SingularityDistance:
     if robot.n_joints < WRIST_AXES[1]:
         raise DataError(f"singularity distances need an arm with a wrist (at least {WRIST_AXES[1]} joints); "
                         f"{robot.name} has {robot.n_joints}")
-    names = [f"theta{i + 1}" for i in range(robot.n_joints)]
+    names = robot.joint_params
     s = np.linalg.svd(robot.jacobian(q, names, kind="pose"), compute_uv=False)
     sigma_rel = s[:, -1] / np.maximum(s[:, 0], 1e-300)
     c = classic_distances(robot.fk(q, frames=True)[1])

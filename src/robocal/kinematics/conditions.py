@@ -55,6 +55,12 @@ class Conditions:
     payload: np.ndarray | None = None
     temperature: np.ndarray | None = None
 
+    @property
+    def motion(self) -> Conditions:
+        """Only the approach directions and moves: how the joints were reached, without the payload
+        carried or the temperature."""
+        return Conditions(self.approach, self.travel)
+
     def rows(self, index) -> Conditions:
         """The conditions of the rows ``index`` (a slice, indices or a mask) of every field given."""
         return Conditions(**{f.name: None if getattr(self, f.name) is None else

@@ -89,6 +89,18 @@ def _snap(values: np.ndarray, grid: float, tol: float) -> np.ndarray:
     return np.where(np.abs(values - k * grid) < tol, k * grid, values) + 0.0  # + 0.0: no -0.0
 
 
+def first_frame(axis: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """The MDH frame {0} ``(4, 4)`` of a chain whose first joint turns about the unit ``axis (3,)``
+    through ``point (3,)`` (world, m): the world frame when that line is the world z axis, else a
+    frame on the line (its x the world x, or y, made normal to it)."""
+    ez = np.array([0.0, 0.0, 1.0])
+    if np.linalg.norm(np.cross(axis, ez)) < PARALLEL_TOL and np.linalg.norm(point[:2]) < _DIST_TOL:
+        return np.eye(4)
+    x0 = _perp(np.array([1.0, 0, 0]), axis)
+    x0 = _unit(x0 if np.linalg.norm(x0) > 1e-6 else _perp(np.array([0, 1.0, 0]), axis))
+    return _frame(x0, axis, point - (point @ axis) * axis)
+
+
 def mdh_from_axes(joint_frames: np.ndarray, flange: np.ndarray) -> dict:
     """MDH + beta parameters of the chain whose joint i turns about the z axis of
     ``joint_frames[i]`` (world, zero joints), with flange pose ``flange`` at zero joints.
@@ -99,14 +111,7 @@ def mdh_from_axes(joint_frames: np.ndarray, flange: np.ndarray) -> dict:
     u = joint_frames[:, :3, 2]
     p = joint_frames[:, :3, 3]
     n = len(u)
-    ez = np.array([0.0, 0.0, 1.0])
-    # frame {0}: the world frame when axis 1 is the world z line, else a frame on axis 1
-    if np.linalg.norm(np.cross(u[0], ez)) < PARALLEL_TOL and np.linalg.norm(p[0, :2]) < _DIST_TOL:
-        F = [np.eye(4)]
-    else:
-        x0 = _perp(np.array([1.0, 0, 0]), u[0])
-        x0 = _unit(x0 if np.linalg.norm(x0) > 1e-6 else _perp(np.array([0, 1.0, 0]), u[0]))
-        F = [_frame(x0, u[0], p[0] - (p[0] @ u[0]) * u[0])]
+    F = [first_frame(u[0], p[0])]
     for i in range(n):
         prev = F[-1]
         x_prev, o_prev = prev[:3, 0], prev[:3, 3]

@@ -103,6 +103,13 @@ def _as_frame(T, what: str) -> np.ndarray:
     return T
 
 
+def joints_in_units(q, prismatic) -> np.ndarray:
+    """Joints ``q (..., n)`` (rad; m on a joint flagged in ``prismatic (n,)``) in each joint's unit
+    (deg; mm on a prismatic joint): what joints files and messages show (`JointSpec.shown`)."""
+    q = np.asarray(q, float)
+    return np.where(prismatic, q * 1e3, np.rad2deg(q))
+
+
 class JointSpec(NamedTuple):
     """One joint as messages, range checks and joints files name it (`Robot.joints`).
 
@@ -319,6 +326,12 @@ class Robot:
         return bool(self.prismatic.any())
 
     @property
+    def joint_params(self) -> list[str]:
+        """The parameter each joint's value adds to, in joint order: ``theta<i>`` for a revolute
+        joint, ``d<i>`` for a prismatic one; their `jacobian` columns are the joint Jacobian."""
+        return [f"{'d' if slides else 'theta'}{i + 1}" for i, slides in enumerate(self.prismatic)]
+
+    @property
     def external_axes(self) -> int:
         """How many leading joints are external axes (written ``e1..``): 1 for an arm on a track (a
         prismatic joint 1 carrying revolute joints, `robocal.kinematics.cell_file`), else 0."""
@@ -345,8 +358,7 @@ class Robot:
     def joints_shown(self, q) -> np.ndarray:
         """Joints ``q`` ``(N, n)`` (rad; m for a prismatic joint) in each joint's unit (deg; mm):
         what joints files and messages show (`joints`)."""
-        q = np.asarray(q, float)
-        return np.where(self.prismatic, q * 1e3, np.rad2deg(q))
+        return joints_in_units(q, self.prismatic)
 
     def section(self) -> dict:
         """The ``robot`` section of the result and campaign JSON: ``name``, ``description``,

@@ -49,7 +49,6 @@ from robocal.data.measurements import robot_reach
 from robocal.data.registration import register_frame
 from robocal.identify.plausibility import FORCE_HINT
 from robocal.identify.problem import KIND_SIGMA
-from robocal.kinematics.conditions import Conditions
 from robocal.trust.diagnosis import GAIN, fit_rms_mm, joint_mixup, length_unit
 
 ALPHA = 1e-3  # the residual test's false-alarm probability per fit (model and noise right)
@@ -258,7 +257,7 @@ def find_change_points(robot, observations, errors: list[np.ndarray], noise: lis
         if not obs.data.spec.sees_position:
             continue
         data = obs.data
-        R = robot.fk(data.joints, smr=data.smr, conditions=Conditions(data.approach, data.travel))[:, :3, :3]
+        R = robot.fk(data.joints, smr=data.smr, conditions=data.conditions.motion)[:, :3, :3]
         found = change_point(e, R, float(np.sqrt(np.mean(s**2))), seed)
         if found is not None:
             k, frame, step, p, shape = found
@@ -292,7 +291,7 @@ def orientation_convention(robot, data) -> str | None:
     except (RobocalError, np.linalg.LinAlgError):
         return None
     links = replace(robot, base=np.eye(4), tool=np.eye(4), smr=np.zeros((0, 3)))
-    A = reg.base[:3, :3] @ links.fk(data.joints, conditions=Conditions(data.approach, data.travel))[:, :3, :3]
+    A = reg.base[:3, :3] @ links.fk(data.joints, conditions=data.conditions.motion)[:, :3, :3]
     R = data.rotations
     q = Rotation.from_matrix(R).as_quat()  # x, y, z, w: the file's qx, qy, qz, qw as read
     last = Rotation.from_quat(q[:, [3, 0, 1, 2]]).as_matrix()  # the file's columns held x, y, z, w

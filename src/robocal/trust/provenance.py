@@ -14,6 +14,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from robocal.core.errors import DataError
+from robocal.kinematics.model import joints_in_units
 
 JOINT_REPEAT_TOL_DEG = 0.01  # every joint within this: the same pose (joint reading noise)
 _FINGERPRINT_DECIMALS = 4  # joints (deg) are rounded to this many decimals before hashing
@@ -37,10 +38,8 @@ def repeated_rows(reference: np.ndarray, joints: np.ndarray, tol_deg: float = JO
     if len(reference) == 0 or len(joints) == 0:
         return np.zeros(len(joints), bool)
     if prismatic is not None and np.any(prismatic):  # each joint in its unit: deg, mm
-        def shown(q: np.ndarray) -> np.ndarray:
-            return np.where(prismatic, q * 1e3, np.rad2deg(q))
-
-        dist, _ = cKDTree(shown(reference)).query(shown(joints), p=np.inf, distance_upper_bound=tol_deg)
+        dist, _ = cKDTree(joints_in_units(reference, prismatic)).query(
+            joints_in_units(joints, prismatic), p=np.inf, distance_upper_bound=tol_deg)
     else:
         dist, _ = cKDTree(reference).query(joints, p=np.inf, distance_upper_bound=np.deg2rad(tol_deg))
     return np.isfinite(dist)

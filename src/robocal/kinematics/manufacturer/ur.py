@@ -34,7 +34,7 @@ from robocal.core.errors import ModelError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_all
 from robocal.core.yaml_load import load_yaml
 from robocal.kinematics.catalog import catalog_entry, catalog_names
-from robocal.kinematics.convert import PARALLEL_TOL
+from robocal.kinematics.convert import PARALLEL_TOL, first_frame
 from robocal.kinematics.model import MAX_ANGLE_RAD, Robot
 from robocal.kinematics.model_file import dump_model
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
@@ -223,13 +223,7 @@ def mdh_beta_from_lines(u: np.ndarray, p: np.ndarray, flange: np.ndarray, hayati
     """
     n = len(u)
     hayati = np.asarray(hayati, bool)
-    ez = np.array([0.0, 0.0, 1.0])
-    if np.linalg.norm(np.cross(u[0], ez)) < PARALLEL_TOL and np.linalg.norm(p[0, :2]) < _DIST_TOL:
-        frames = [np.eye(4)]
-    else:
-        x0 = _perp(np.array([1.0, 0, 0]), u[0])
-        x0 = _unit(x0 if np.linalg.norm(x0) > 1e-6 else _perp(np.array([0, 1.0, 0]), u[0]))
-        frames = [_frame(x0, u[0], p[0] - (p[0] @ u[0]) * u[0])]
+    frames = [first_frame(u[0], p[0])]
     feet = [frames[0][:3, 3] + ((p[0] - frames[0][:3, 3]) @ frames[0][:3, 0]) * frames[0][:3, 0]]
     for i in range(n):
         x_prev, z = frames[-1][:3, 0], u[i]
