@@ -294,6 +294,16 @@ def test_a_joints_file_with_a_quill_in_degrees_is_refused(tmp_path):
     np.testing.assert_allclose(read_planned(path, _scara()).joints[0, 2], -0.05)
 
 
+def test_analyze_checks_a_joints_files_kinds(tmp_path, capsys):
+    from robocal.cli import main
+
+    _scara().save(tmp_path / "scara.yaml")
+    path = tmp_path / "poses.csv"
+    path.write_text("q1_deg,q2_deg,q3_deg,q4_deg\n10,20,-50,30\n20,-30,-60,40\n")
+    assert main(["analyze", str(path), "--robot", str(tmp_path / "scara.yaml")]) == 2
+    assert "joint 3 (q3) is prismatic" in capsys.readouterr().err
+
+
 def test_a_scara_registers_from_points():
     from robocal.data.registration import register_frame, turns_about_one_axis
     from robocal.data.simulate import simulate_tracker

@@ -55,7 +55,7 @@ def run(args) -> int:
     measured = {"x_mm", "x_m"} & set(table.header) and not args.tool_mm
     # a measurement file: the tracker frame and the SMR offsets fitted to it first, each pose with the
     # SMRs it measured: the parameters are judged on the model calibrate starts from
-    data = Measurements.load(args.data) if measured else robot.check_joints(table.joints)
+    data = Measurements.load(args.data) if measured else table.joints_of(robot, args.data)
     if measured:
         robot = register(robot, data)
     ident = analyze(robot, data, kind=args.kind, params=args.params, noise_mm=args.noise_mm)
