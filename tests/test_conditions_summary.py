@@ -152,7 +152,7 @@ def test_a_term_without_its_column_is_not_used_and_says_why(tmp_path, capsys):
         {"term": "thermal", "reason": "the calibration data have no temperature_c column"}]
     assert result["conditions"]["assumed"] == {}  # the delivered model carries neither term
     page = render_report(result)
-    assert "0 term(s) the data cannot separate from the geometry were left out (highlighted); 6 not " \
+    assert "0 term(s) the data cannot separate from the geometry were left out (highlighted); 12 not " \
            "used" in page
     assert "<b>payload term not used:</b> the calibration data have no payload_kg column" in page
 

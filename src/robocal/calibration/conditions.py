@@ -87,7 +87,7 @@ def section(result) -> dict | None:
                           "detail": vocabulary.detail(thermal.NAME, ident, unused)}
     if any(nm in thermal.GROUP_NAMES for nm in declared):
         out["thermal_groups"] = _groups(result, values, sigma, start, declared)
-    payload = [nm for nm in declared if term_of(nm) == "payload"]
+    payload = [nm for nm in declared if term_of(nm) == "payload" and not load.is_lever(nm)]  # compliances
     if payload:
         out["payload"] = [{"name": nm, "joint": load.joint_of(nm, start.n_joints) + 1,
                            "estimate": float(values.get(nm, 0.0) * PAYLOAD_SCALE), "unit": PAYLOAD_UNIT,

@@ -34,7 +34,8 @@ from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG
 RESULT_FORMAT = "robocal-result/1"
 _DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 180.0 / np.pi),
             "rad/rad": ("mdeg/deg", 1e3), "1": ("ppm", 1e6),  # "1": a scale (dimensionless)
-            "rad/(kg m)": ("deg/(kg m)", 180.0 / np.pi), "1/K": ("1e-6/K", 1e6)}
+            "rad/(kg m)": ("deg/(kg m)", 180.0 / np.pi), "rad/kg": ("deg/kg", 180.0 / np.pi),
+            "1/K": ("1e-6/K", 1e6)}
 
 
 def _combined(errors: list[np.ndarray]) -> dict | None:

@@ -131,10 +131,11 @@ def term_of(name: str) -> str:
 
 
 def is_refinement(name: str) -> bool:
-    """Whether ``name`` refines another parameter's value for a part of the arm (a link group's
-    thermal deviation from the shared k): the identifiability analysis selects it after the
-    others, so of a redundant set the refinement is set aside."""
-    return bool(_THERMAL_GROUP.match(name))
+    """Whether ``name`` refines another parameter's value (a link group's thermal deviation from
+    the shared k; a payload lever correction, which on a wrist joint whose axis passes through a
+    point fixed to the flange is redundant with the joint's compliance): the identifiability
+    analysis selects it after the others, so of a redundant set the refinement is set aside."""
+    return bool(_THERMAL_GROUP.match(name)) or load.is_lever(name)
 
 
 def is_parameter_name(name: str) -> bool:
@@ -183,13 +184,14 @@ def _parse(name: str, n: int) -> tuple[int, str, int | str | tuple | None]:
         return int(m[1]) - 1, "scale", None
     joint = load.joint_of(name, n)
     if joint is not None:
-        return joint, "payload", None
+        return joint, "payload", load.axis_of(name)
     if thermal.is_name(name):
         return 0, "thermal", None
     raise ModelError(f"unknown joint-error parameter {name!r} for a {n}-joint robot: "
                      "use comp{i}_{j} (i < j <= n), gear{i}_s1|c1|s2|c2, backlash{i}, travel{i}, scale{i}, "
                      f"cyc{{i}}_{{f}}_s|c (f > {CYCLIC_MIN_FREQUENCY:g} cycles per revolution), "
-                     f"payload{{i}} ({load.FIRST_JOINT} <= i <= n), {thermal.NAME} or "
+                     f"payload{{i}}, payload{{i}}_x|y|z ({load.FIRST_JOINT} <= i <= n; no payload{{n}}_z), "
+                     f"{thermal.NAME} or "
                      f"{', '.join(thermal.GROUP_NAMES)}")
 
 
@@ -207,13 +209,16 @@ def joint_error_basis(robot, q: np.ndarray, names: Sequence[str],
     parsed = [_parse(nm, n) for nm in names]
     B = np.empty((q.shape[0], len(parsed)))
     frames = None
-    loaded = [p for p, t in enumerate(parsed) if t[1] == "payload"]
+    loaded = [p for p, t in enumerate(parsed) if t[1] == "payload" and t[2] is None]
+    levers = [p for p, t in enumerate(parsed) if t[1] == "payload" and t[2] is not None]
     approach, travel = conditions.approach, conditions.travel
     payload = conditions_of(robot, q.shape[0], conditions).payload
-    if loaded and payload is not None:
+    if (loaded or levers) and payload is not None:
         _, frames = chain_frames(robot.links, robot.base, robot.tool, q, frames=True,
                                  prismatic=robot.prismatic)
-        B[:, loaded] = load.moment_basis(frames, payload, np.array([parsed[p][0] for p in loaded]))
+        B[:, loaded] = load.moment_basis(frames, payload, np.array([parsed[p][0] for p in loaded], dtype=int))
+        B[:, levers] = load.lever_basis(frames, payload, np.array([parsed[p][0] for p in levers], dtype=int),
+                                        np.array([parsed[p][2] for p in levers], dtype=int))
     for p, (i, kind, detail) in enumerate(parsed):
         if kind == "payload":
             if payload is None:
@@ -355,8 +360,9 @@ class JointErrorModel:
         return [t for t in TERMS if t in kinds]
 
     def units(self) -> list[str]:
-        """SI unit of each parameter (:data:`UNITS` of its term)."""
-        return [UNITS[term_of(nm)] for nm in self.names]
+        """SI unit of each parameter (:data:`UNITS` of its term; a payload lever correction's
+        :data:`robocal.kinematics.load.LEVER_UNIT`)."""
+        return [load.unit_of(nm) if term_of(nm) == "payload" else UNITS[term_of(nm)] for nm in self.names]
 
     def offsets(self, robot, q: np.ndarray, conditions: Conditions = UNKNOWN) -> np.ndarray:
         """Joint offsets ``dq (N, n)`` (rad) at commanded joints ``q (N, n)`` reached at
@@ -380,7 +386,8 @@ class JointErrorModel:
         """Plain data for the model YAML (SI units of :data:`UNITS`)."""
         out = {"units": "SI (comp: rad per m of unit-weight moment arm; gear, backlash, cyc: rad; "
                         "travel: rad per rad of move; scale: per unit of joint value; payload: rad per kg m "
-                        "of payload moment; thermal: 1/K)",
+                        "of payload moment, payload{i}_x..z: rad per kg of payload times m of centre-of-mass "
+                        "error; thermal: 1/K)",
                "parameters": dict(zip(self.names, self.values.tolist(), strict=True))}
         if any(thermal.is_name(nm) for nm in self.names):
             out["reference_temperature_c"] = float(self.reference_temperature_c)
