@@ -219,8 +219,8 @@ _OBSERVATIONS = Obj({
                                  "joints_deg", "measured", "model_before", "model_after", "weight"))
 _TEXTS = Seq(Str(), null=True)
 _CANDIDATE = Obj({"terms": _TEXTS, "cv_rms_mm": Num(null=True), "cv_se_mm": Num(null=True),
-                  "cv_paired_se_mm": Num(null=True), "fold_rms_mm": Arr(null=True),
-                  "calibration_rms_mm": Num(null=True),
+                  "cv_robust_rms_mm": Num(null=True), "cv_paired_se_mm": Num(null=True),
+                  "fold_rms_mm": Arr(null=True), "calibration_rms_mm": Num(null=True),
                   "n_params": Int(null=True, lo=0), "parameters": _TEXTS})
 
 _ESTIMATE = {"status": Str(null=True, max_len=100), "detail": Str(null=True)}

@@ -490,10 +490,12 @@ def _model_selection(ms: dict | None) -> str:
     rows, classes = [], []
     for i in order:
         c = cands[i]
-        mark = "chosen" if i == ms.get("chosen") else ("lowest CV error" if i == ms.get("best") else "")
+        best = "lowest winsorized CV error" if i == ms.get("best") else ""
+        mark = "chosen" if i == ms.get("chosen") else best
         rows.append([esc(", ".join(c.get("terms") or []) or "geometric"), esc(mark), _num(c.get("n_params")),
                      _num(c.get("cv_rms_mm"), 4), _num(c.get("cv_se_mm"), 4),
-                     _num(c.get("cv_paired_se_mm"), 4), _num(c.get("calibration_rms_mm"), 4)])
+                     _num(c.get("cv_robust_rms_mm"), 4), _num(c.get("cv_paired_se_mm"), 4),
+                     _num(c.get("calibration_rms_mm"), 4)])
         classes.append("chosen" if i == ms.get("chosen") else "")
     text = (f"<p>{esc(ms.get('method'))}, {_num(ms.get('n_poses'))} poses. Chosen: "
             f"<b>{esc(', '.join(ms.get('chosen_terms') or []) or 'geometric')}</b> &mdash; "
@@ -503,7 +505,8 @@ def _model_selection(ms: dict | None) -> str:
         text += ("<p>Cyclic errors found (joint: cycles per revolution): " + esc(", ".join(
             f"J{c.get('joint')}: {c.get('cycles_per_rev')}" for c in freqs)) + ".</p>")
     return text + _table(["model", "", "parameters", "CV RMS (mm)", "&plusmn; SE (mm)",
-                          "paired SE (mm)", "fit RMS (mm)"], rows, left=2, row_class=classes)
+                          "winsorized CV RMS (mm)", "paired SE (mm)", "fit RMS (mm)"], rows, left=2,
+                         row_class=classes)
 
 
 _IDENT_LABELS = {"n_params": "candidate parameters", "rank": "rank (identifiable)",
