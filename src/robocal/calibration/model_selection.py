@@ -53,8 +53,8 @@ backlash, cyclic at 0.0184 mm held out while the gear term's set reached 0.0174;
 chooses that set, 0.0173). The table keeps the plain cross-validated RMS (``cv_rms_mm``) next to
 the winsorized one (``cv_robust_rms_mm``). The paired standard error is that of the difference
 between the two candidates' errors over the same held-out poses (each pose's share of the mean
-squared error, candidate minus best, summed over the poses): what the two share (a pose's noise, a fold's luck, an error neither
-models) cancels, so it measures whether the data tell them apart. The earlier rule took the
+squared error, candidate minus best, summed over the poses): what the two share (a pose's noise,
+a fold's luck, an error neither models) cancels, so it measures whether the data tell them apart. The earlier rule took the
 standard error of the best candidate's own error over the 5 folds, which on an arm with a large
 error no candidate models (a 7-axis, cable-driven arm: millimetres) is many times larger than
 the differences between candidates and so chose the geometric model while a joint-error model was
