@@ -41,32 +41,31 @@ the result is the robust calibration of that model named explicitly).
 The calibrations themselves are the caller's (:func:`robocal.calibration.pipeline.calibrate` passes its
 ``fit(terms, validations, warm_start)``), so this module sits below the API layer.
 
-Choice (the paired one-standard-error rule, capped, on winsorized errors): each pose's share of
-a candidate's cross-validated squared error is capped at the WINSOR_QUANTILE (95 %) quantile of
-all the candidates' shares; the candidate with the lowest such (winsorized) RMS is the best,
-unless a simpler one — fewer identified parameters — is within one *paired* standard error of it
-(on the capped shares) and within SELECTION_TOLERANCE (2%) of it; then the simplest such one. On
-real tracker sets a few poses carry much of the cross-validated error (5 % of the poses 40 % of it
-on the Meca500 and IRB 120): plain, those poses decide the RMS differences and the paired SE,
-which hid a term every other pose gains from (Meca500 README split: auto chose compliance,
-backlash, cyclic at 0.0184 mm held out while the gear term's set reached 0.0174; winsorized it
-chooses that set, 0.0173). The table keeps the plain cross-validated RMS (``cv_rms_mm``) next to
-the winsorized one (``cv_robust_rms_mm``). The paired standard error is that of the difference
-between the two candidates' errors over the same held-out poses (each pose's share of the mean
-squared error, candidate minus best, summed over the poses): what the two share (a pose's noise,
-a fold's luck, an error neither models) cancels, so it measures whether the data tell them apart. The earlier rule took the
-standard error of the best candidate's own error over the 5 folds, which on an arm with a large
-error no candidate models (a 7-axis, cable-driven arm: millimetres) is many times larger than
-the differences between candidates and so chose the geometric model while a joint-error model was
-7% better held out. The cap bounds what the rule gives away for simplicity: the chosen model's
-cross-validated error is never more than SELECTION_TOLERANCE above the lowest one
-(``benchmarks/bench_auto_selection.py`` measures the held-out side on the real and simulated sets).
-The chosen model's final calibration must converge: one that does not is marked in the table
-(``not_converged``, ``x``) and the rule is applied to the others. Every fit (superset, folds,
-final) carries the same parameter priors (:mod:`robocal.identify.priors`): the fold fits add the
-prior rows to their normal equations.
-Robust calibrations: the fold fits use the superset's IGG3 weights and the error is scored on
-the observations it kept.
+Choice (the paired one-standard-error rule, capped, on winsorized errors): each pose's share of a
+candidate's cross-validated squared error is capped at the WINSOR_QUANTILE (95 %) quantile of all
+the candidates' shares; the candidate with the lowest such (winsorized) RMS is the best, unless a
+simpler one — fewer identified parameters — is within one *paired* standard error of it (on the
+capped shares) and within SELECTION_TOLERANCE (2%) of it; then the simplest such one. On real
+tracker sets a few poses carry much of the cross-validated error (5 % of the poses 40 % of it on
+the Meca500 and IRB 120): plain, those poses decide the RMS differences and the paired SE, which
+hid a term every other pose gains from (Meca500 README split: auto chose compliance, backlash,
+cyclic at 0.0184 mm held out while the gear term's set reached 0.0174; winsorized it chooses that
+set, 0.0173). The table keeps the plain cross-validated RMS (``cv_rms_mm``) next to the winsorized
+one (``cv_robust_rms_mm``). The paired standard error is that of the difference between the two
+candidates' errors over the same held-out poses (each pose's share of the mean squared error,
+candidate minus best, summed over the poses): what the two share (a pose's noise, a fold's luck,
+an error neither models) cancels, so it measures whether the data tell them apart. The earlier
+rule took the standard error of the best candidate's own error over the 5 folds, which on an arm
+with a large error no candidate models (a 7-axis, cable-driven arm: millimetres) is many times
+larger than the differences between candidates and so chose the geometric model while a
+joint-error model was 7% better held out. The cap bounds what the rule gives away for simplicity:
+the chosen model's cross-validated error is never more than SELECTION_TOLERANCE above the lowest
+one (``benchmarks/bench_auto_selection.py`` measures the held-out side on the real and simulated
+sets). The chosen model's final calibration must converge: one that does not is marked in the
+table (``not_converged``, ``x``) and the rule is applied to the others. Every fit (superset,
+folds, final) carries the same parameter priors (:mod:`robocal.identify.priors`): the fold fits
+add the prior rows to their normal equations. Robust calibrations: the fold fits use the
+superset's IGG3 weights and the error is scored on the observations it kept.
 """
 
 from __future__ import annotations
