@@ -143,3 +143,29 @@ def test_cli_plans_for_the_unmodelled_error(tmp_path, capsys):
                  "--unmodelled-mm", "0.2", "--unmodelled-terms", "compliance,gear"])
     assert code == 0 and out.exists()
     assert "unmodelled error 0.2 mm as compliance, gear" in capsys.readouterr().out
+
+
+def test_measured_candidates_plan_for_the_error_their_measurements_show():
+    """Candidates measured in an earlier campaign (a truth with known compliance): by default the
+    region is the candidates and the unmodelled error is what their calibration with the
+    unmodelled terms shows; its RMS over the candidates agrees with the true terms' own TCP error
+    there (FK of the truth with and without them); named 0, the plan is for the noise alone."""
+    from robocal.data.simulate import simulate_tracker
+
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    names, values = ["comp2_3", "comp2_6", "comp3_6"], {"comp2_3": 4e-4, "comp2_6": -3e-4, "comp3_6": 5e-4}
+    truth = robot.with_joint_errors(names).with_values(values)
+    sim = simulate_tracker(truth, 120, noise_mm=0.02, seed=3)
+    kw = dict(candidates=sim.data, region_size=500, starts=1)
+    plan = rc.plan_poses(robot, 20, **kw)
+    assert plan.settings["region"] == "the candidates"
+    assert plan.settings["unmodelled_from"] == "the candidates' measurements"
+    assert "the candidates' measurements show it" in plan.summary()
+    q = sim.data.joints[np.unique(sim.data.pose_id, return_index=True)[1]]
+    plain = sim.truth.with_joint_errors([])
+    effect = sim.truth.fk(q)[:, :3, 3] - plain.fk(q)[:, :3, 3]
+    true_mm = np.sqrt(np.mean(np.sum(effect**2, axis=1))) * 1e3
+    assert plan.settings["unmodelled_mm"] == pytest.approx(true_mm, rel=0.2)
+    noise_only = rc.plan_poses(robot, 20, unmodelled_mm=0.0, **kw)
+    assert noise_only.settings["unmodelled_mm"] == 0.0 and noise_only.settings["unmodelled_from"] == \
+        "none (noise only)"

@@ -31,7 +31,7 @@ from robocal.campaign.files import CandidateFile, poses_csv
 from robocal.campaign.information import Information, candidate_data, candidate_information
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
-from robocal.campaign.unmodelled import DEFAULT_TERMS, mean_square, search, unmodelled_error
+from robocal.campaign.unmodelled import DEFAULT_TERMS, mean_square, measured_values, search, unmodelled_error
 from robocal.core.errors import DataError
 from robocal.core.io import write_all
 from robocal.core.progress import Progress
@@ -216,8 +216,10 @@ class CampaignResult:
         noise = (f"isotropic {self.noise.sigma_m * 1e3:g} mm" if self.noise.model == "isotropic"
                  else "the tracker's anisotropic model")
         unmodelled = self.settings.get("unmodelled_mm", 0.0)
-        noise += (f"; unmodelled error {unmodelled:g} mm as {', '.join(self.settings['unmodelled_terms'])}"
-                  if unmodelled else "; before the unmodelled error")
+        source = " (the candidates' measurements show it)" \
+            if self.settings.get("unmodelled_from") == "the candidates' measurements" else ""
+        noise += (f"; unmodelled error {unmodelled:.4g} mm as {', '.join(self.settings['unmodelled_terms'])}"
+                  f"{source}" if unmodelled else "; before the unmodelled error")
         lines = [f"{self.n} poses of {self.robot.name} ({self.kind} measurements) chosen from "
                  f"{self.n_candidates} candidates ({self.criterion}-optimal)",
                  f"predicted accuracy: {self.predicted_rms_mm:.4f} mm RMS of the TCP position over the "
@@ -362,7 +364,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                noise_mm: float = 0.02, noise_model: str = "isotropic", rotation_noise_deg: float = 0.001,
                criterion: str = "I", region=None, region_size: int = DEFAULT_REGION_SIZE,
                starts: int = DEFAULT_STARTS, curve=None, seed: int = 0, progress=None,
-               params="auto", unmodelled_mm: float = 0.0, unmodelled_terms=DEFAULT_TERMS) -> CampaignResult:
+               params="auto", unmodelled_mm: float | None = None,
+               unmodelled_terms=DEFAULT_TERMS) -> CampaignResult:
     """Choose ``n`` calibration poses for ``robot`` (the nominal model).
 
     Candidates are filtered by the constraints, an exchange search picks the ``n`` that best
@@ -398,8 +401,10 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         I-optimal (average predicted TCP variance over the region, default), D-optimal or O4.
     region : array_like, shape (R, n), or tuple of array_like, shape (3,) each, optional
         Where the accuracy matters: joints in radians, or a box ``(lower, upper)`` in metres
-        (default: ``region_size`` random poses in the limits, seeded as the workspace sample of a
-        calibration's predicted accuracy; inside the TCP boxes when there are any).
+        (default: given candidates, the poses of the cell they are (``region_size`` of them at
+        random when there are more); else ``region_size`` random poses in the limits, seeded as
+        the workspace sample of a calibration's predicted accuracy; inside the TCP boxes when
+        there are any).
     region_size : int, default 1000
         Number of random region poses.
     starts : int, default 4
@@ -413,10 +418,13 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     params : 'auto' or list of str, default 'auto'
         The unknowns the campaign is to determine: the calibration's default set, or a list of
         names (e.g. the joint zeros with the frame and SMR, for a check campaign).
-    unmodelled_mm : float, default 0
+    unmodelled_mm : float, optional
         The robot's error the calibrated model will not describe, 3-D RMS over the region, mm
         (a previous calibration's ``unmodelled_mm``): the I-optimal design is polished for the
         error the fit absorbs from it, and the predicted accuracy includes it. 0: noise only.
+        Default: with candidates that carry their measurements (Measurements of points or poses,
+        e.g. an earlier campaign) and the I criterion, the error they show (each unmodelled
+        term's variance its value in their calibration with ``unmodelled_terms``); else 0.
     unmodelled_terms : sequence of str, default ('compliance', 'backlash', 'travel')
         The joint-error terms that model that error (their priors' shape, scaled to
         ``unmodelled_mm``); those the calibration fits are left out.
@@ -452,6 +460,9 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         raise DataError(f"unknown criterion {criterion!r}: use one of {', '.join(CRITERIA)}")
     if unmodelled_mm and criterion != "I":
         raise DataError("an unmodelled error is planned for with the I criterion (the predicted accuracy)")
+    measured = candidates if (unmodelled_mm is None and criterion == "I" and OBSERVED[kind].sees_position
+                              and isinstance(candidates, Measurements) and candidates.points is not None) \
+        else None
     if int(starts) < 1 or int(n_candidates) < 1 or int(region_size) < 1:
         raise DataError("starts, n_candidates and region_size must be >= 1")
     constraints = cons.Constraints() if constraints is None else constraints
@@ -508,6 +519,10 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                         f"plan at least {n_min} poses")
     if n > C:
         _fail_empty(funnel, f"only {C} candidates meet the constraints, fewer than the {n} poses asked for")
+    region_from = "given" if region is not None else "the TCP boxes" if constraints.boxes else \
+        "the candidates" if candidates is not None else "workspace sample"
+    if region_from == "the candidates":  # the cell's own poses
+        region = q if len(q) <= int(region_size) else q[np.sort(rng.choice(len(q), int(region_size), False))]
     q_region = _region(geometry, region, int(region_size), constraints, limits, rng, smr, normals)
     A = info.region_matrix(plan_robot, q_region)
     first_row = np.unique(info.group, return_index=True)[1]
@@ -515,7 +530,9 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     conflicts = (cons.conflict_rows(cand_q, constraints.min_joint_distance_deg, robot.prismatic)
                  if constraints.min_joint_distance_deg > 0 else None)
     values = _curve_values(curve, n, n_min, C)
-    um = unmodelled_error(plan_robot, data, noise, info, q_region, float(unmodelled_mm), unmodelled_terms)
+    shown = None if measured is None else measured_values(robot, measured, unmodelled_terms)
+    um = unmodelled_error(plan_robot, data, noise, info, q_region, float(unmodelled_mm or 0.0),
+                          unmodelled_terms, shown)
 
     def predicted(indices) -> float:  # m^2: the mean squared TCP error over the region
         return criterion_value(info.G, A, indices, "I", info.prior) if um is None else \
@@ -559,6 +576,9 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                   "region_size": len(q_region), "margin_deg": constraints.margin_deg,
                   "unmodelled_mm": 0.0 if um is None else um.rms_m * 1e3,
                   "unmodelled_terms": [] if um is None else list(um.terms),
+                  "unmodelled_from": "the candidates' measurements" if measured is not None else
+                                     "given" if unmodelled_mm else "none (noise only)",
+                  "region": region_from,
                   "min_joint_distance_deg": constraints.min_joint_distance_deg,
                   "smr_mm": (smr * 1e3).tolist(), "smr_normals": normals.tolist(),
                   "tracker_mm": None if tracker is None else (tracker.position * 1e3).tolist()},

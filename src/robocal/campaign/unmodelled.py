@@ -75,19 +75,40 @@ class Unmodelled:
     A_cross: np.ndarray
 
 
-def unmodelled_error(robot, data: Measurements, noise: Noise, info: Information, q_region: np.ndarray,
-                     rms_mm: float, terms=DEFAULT_TERMS) -> Unmodelled | None:
-    """The unmodelled error of RMS ``rms_mm`` (mm over the region joints ``q_region (R, n)``) as
-    the joint-error ``terms`` of ``robot`` that the fit (``info``) does not estimate; None when it
-    is zero (DataError when none of the terms is left with an effect)."""
-    if not (np.isfinite(rms_mm) and rms_mm >= 0):
-        raise DataError(f"the unmodelled error must be a finite RMS >= 0 mm, got {rms_mm}")
+def check_terms(terms) -> tuple[str, ...]:
+    """Validated unmodelled ``terms``: joint-error terms that need no recorded conditions."""
     terms = tuple(parse_terms(terms))
     conditions = set(terms) & {*CONDITION_TERMS, thermal.GROUPS_TERM}
     if conditions:
         raise DataError("the unmodelled error is modelled by joint-error terms that need no recorded "
                         f"conditions: not {', '.join(sorted(conditions))}")
-    if rms_mm == 0:
+    return terms
+
+
+def measured_values(robot, measured: Measurements, terms=DEFAULT_TERMS) -> dict[str, float]:
+    """The joint-error ``terms``' values (SI) the measurements ``measured`` of ``robot`` (the
+    nominal model; e.g. candidates measured in an earlier campaign) show: their calibration with
+    those terms (the default calibration's method and priors)."""
+    from robocal.calibration.pipeline import calibrate
+
+    errors = calibrate(robot, measured, nongeometric=",".join(check_terms(terms))).robot.joint_errors
+    return {} if errors is None else dict(zip(errors.names, errors.values.tolist(), strict=True))
+
+
+def unmodelled_error(robot, data: Measurements, noise: Noise, info: Information, q_region: np.ndarray,
+                     rms_mm: float, terms=DEFAULT_TERMS, values: dict[str, float] | None = None
+                     ) -> Unmodelled | None:
+    """The unmodelled error as the joint-error ``terms`` of ``robot`` that the fit (``info``) does
+    not estimate: of RMS ``rms_mm`` (mm over the region joints ``q_region (R, n)``) in the shape
+    of their priors, or, with ``values`` (:func:`measured_values`), in the shape of their measured
+    magnitudes (independent: a design is not tuned to one noisy estimate of the combination) and
+    of the RMS the measured values make together over the region (their fitted values compensate
+    each other where the terms are correlated; ``rms_mm`` unused); None when it is zero
+    (DataError when none of the terms is left with an effect)."""
+    if not (np.isfinite(rms_mm) and rms_mm >= 0):
+        raise DataError(f"the unmodelled error must be a finite RMS >= 0 mm, got {rms_mm}")
+    terms = check_terms(terms)
+    if rms_mm == 0 and values is None:
         return None
     fitted = set(info.robot_names) | set(robot.joint_error_names)
     names = [nm for nm in candidate_names(robot.n_joints, terms) if nm not in fitted]
@@ -95,8 +116,12 @@ def unmodelled_error(robot, data: Measurements, noise: Noise, info: Information,
     obs, rows = whitened_rows(full, data, noise, names)
     N = candidate_blocks(obs, data, rows)[0]
     keep = np.sum(N**2, axis=(0, 1)) > 0  # terms no candidate moves (a vertical axis's compliance)
+    if values is not None:  # and terms the measurements show none of
+        keep &= np.array([values.get(nm, 0.0) != 0.0 for nm in names], bool)
     names, N = [nm for nm, k in zip(names, keep, strict=True) if k], N[:, :, keep]
     if not names:
+        if values is not None:
+            return None
         raise DataError(f"the unmodelled terms {', '.join(terms)} have no effect here that the calibrated "
                         "model does not already fit: name other terms (--unmodelled-terms)")
     k, p = len(info.robot_names), len(info.names)
@@ -104,10 +129,15 @@ def unmodelled_error(robot, data: Measurements, noise: Noise, info: Information,
     A_fitted, A_cross = np.zeros((p, p)), np.zeros((p, len(names)))
     A_fitted[:k, :k] = A[:k, :k] / np.outer(info.scale[:k], info.scale[:k])
     A_cross[:k] = A[:k, k:] / info.scale[:k, None]
-    sigma2 = prior_sigma(full, names) ** 2
-    variance = sigma2 * (rms_mm * 1e-3) ** 2 / float(np.sum(np.diag(A)[k:] * sigma2))
-    return Unmodelled(rms_m=float(rms_mm) * 1e-3, terms=terms, names=names, N=N, variance=variance,
-                      A_cross=A_cross)
+    if values is None:
+        sigma2 = prior_sigma(full, names) ** 2
+        rms_m = float(rms_mm) * 1e-3
+    else:  # each term's measured magnitude, scaled to the error the measured values make together
+        v = np.array([values[nm] for nm in names])
+        sigma2 = v**2
+        rms_m = float(np.sqrt(v @ A[k:, k:] @ v))
+    variance = sigma2 * rms_m**2 / float(np.sum(np.diag(A)[k:] * sigma2))
+    return Unmodelled(rms_m=rms_m, terms=terms, names=names, N=N, variance=variance, A_cross=A_cross)
 
 
 def _values(M: np.ndarray, X: np.ndarray, A: np.ndarray, um: Unmodelled) -> np.ndarray:
