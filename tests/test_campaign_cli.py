@@ -103,7 +103,9 @@ def test_analyze_and_simulate_read_the_planned_file(planned, capsys):
     np.testing.assert_array_equal(seen[data.pose_id, data.smr], True)
 
 
-def test_candidates_from_a_file_are_copied_exactly(tmp_path):
+def test_candidates_from_a_file_are_copied_exactly(tmp_path, capsys):
+    """A taught file's cells are copied exactly; its placeholder points (1, 2, 3 mm at every pose)
+    cannot be calibrated: the plan is for the noise alone, with a warning."""
     rng = np.random.default_rng(1)
     robot = Robot.from_catalog("meca500")
     q = np.rad2deg(rng.uniform(robot.limits[:, 0] * 0.8, robot.limits[:, 1] * 0.8, (80, 6)))
@@ -118,6 +120,7 @@ def test_candidates_from_a_file_are_copied_exactly(tmp_path):
     assert main(["--quiet", "poses", "--robot", "meca500", "-n", "15", "--from", str(src), "--starts", "2",
                  "-o", str(out)]) == 0
     assert src.read_bytes() == before
+    assert "the candidates' measurements do not show their unmodelled error" in capsys.readouterr().out
     chosen = read_joint_table(out)
     assert chosen.header[:7] == [f"q{i}_deg" for i in range(1, 7)] + ["source_row"]
     assert chosen.header[7:] == ["smr0_x_mm", "smr0_y_mm", "smr0_z_mm"]  # the planned SMR

@@ -169,3 +169,23 @@ def test_measured_candidates_plan_for_the_error_their_measurements_show():
     noise_only = rc.plan_poses(robot, 20, unmodelled_mm=0.0, **kw)
     assert noise_only.settings["unmodelled_mm"] == 0.0 and noise_only.settings["unmodelled_from"] == \
         "none (noise only)"
+
+
+def test_a_measurement_file_of_candidates_carries_its_measurements(tmp_path):
+    """A candidate CSV with measured points (an earlier campaign) keeps them for the planner; a
+    joints-only CSV has none."""
+    from robocal.campaign import read_candidates
+    from robocal.data.simulate import simulate_tracker
+
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    sim = simulate_tracker(robot.with_joint_errors(["comp2_3"]).with_values({"comp2_3": 4e-4}), 60,
+                           noise_mm=0.02, seed=2)
+    sim.data.save(tmp_path / "earlier.csv")
+    earlier = read_candidates(tmp_path / "earlier.csv", robot)
+    np.testing.assert_allclose(earlier.measured.points, sim.data.points, atol=1e-9)
+    plan = rc.plan_poses(robot, 15, candidates=earlier, region_size=100, starts=1)
+    assert plan.settings["unmodelled_from"] == "the candidates' measurements"
+    header = ",".join(f"q{i}_deg" for i in range(1, 7))
+    (tmp_path / "joints.csv").write_text(header + "\n" + "\n".join(
+        ",".join(f"{v:.4f}" for v in row) for row in np.rad2deg(sim.data.joints)) + "\n")
+    assert read_candidates(tmp_path / "joints.csv", robot).measured is None

@@ -16,6 +16,7 @@ rehearsal (``robocal simulate --joints``) measures the campaign that was planned
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -28,6 +29,7 @@ from robocal.data.measurements import JointTable, Measurements, read_joint_table
 from robocal.kinematics.model import JointSpec
 
 VISIBLE_PREFIX = "visible_smr"
+_POINT_COLUMN = re.compile(r"^x_[a-z]+$")  # a measured point's first column (x_mm, x_m, ...)
 _XYZ = ("x", "y", "z")
 
 
@@ -35,13 +37,16 @@ _XYZ = ("x", "y", "z")
 class CandidateFile:
     """Candidates read from a CSV: ``joints (C, n)`` rad (one per distinct pose, or the rows of
     contacts / distance ends for ``data``), ``rows (C,)`` the table row of each, ``table`` the
-    file's joint table, ``data`` the Measurements (plane contacts and distances only)."""
+    file's joint table, ``data`` the Measurements (plane contacts and distances only),
+    ``measured`` the file's measured points or poses when it has them (an earlier campaign: the
+    planner reads the unmodelled error they show)."""
 
     joints: np.ndarray
     rows: np.ndarray
     table: JointTable
     data: Measurements | None = None
     path: str = ""
+    measured: Measurements | None = None
 
 
 def read_candidates(path, robot, kind: str = "point") -> CandidateFile:
@@ -105,7 +110,10 @@ def read_candidates(path, robot, kind: str = "point") -> CandidateFile:
     else:
         new = np.r_[True, (q[1:] != q[:-1]).any(axis=1)]
     first = np.flatnonzero(new)
-    return CandidateFile(joints=q[first], rows=first, table=table, path=str(path))
+    measured = Measurements.load(path, robot=robot) if any(_POINT_COLUMN.match(h) for h in table.header) \
+        else None
+    return CandidateFile(joints=q[first], rows=first, table=table, path=str(path),
+                         measured=measured if measured is not None and measured.points is not None else None)
 
 
 def _cells(values: np.ndarray) -> list[str]:

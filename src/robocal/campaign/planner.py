@@ -32,7 +32,7 @@ from robocal.campaign.information import Information, candidate_data, candidate_
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
 from robocal.campaign.unmodelled import DEFAULT_TERMS, mean_square, measured_values, search, unmodelled_error
-from robocal.core.errors import DataError
+from robocal.core.errors import DataError, RobocalError
 from robocal.core.io import write_all
 from robocal.core.progress import Progress
 from robocal.core.version import __version__
@@ -423,8 +423,10 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         (a previous calibration's ``unmodelled_mm``): the I-optimal design is polished for the
         error the fit absorbs from it, and the predicted accuracy includes it. 0: noise only.
         Default: with candidates that carry their measurements (Measurements of points or poses,
-        e.g. an earlier campaign) and the I criterion, the error they show (each unmodelled
-        term's variance its value in their calibration with ``unmodelled_terms``); else 0.
+        or a candidate file with measured columns: an earlier campaign) and the I criterion, the
+        error they show (the unmodelled terms' values in their calibration with
+        ``unmodelled_terms``: each term's variance in the shape of its magnitude, scaled to the
+        error they make together); else 0.
     unmodelled_terms : sequence of str, default ('compliance', 'backlash', 'travel')
         The joint-error terms that model that error (their priors' shape, scaled to
         ``unmodelled_mm``); those the calibration fits are left out.
@@ -460,9 +462,10 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         raise DataError(f"unknown criterion {criterion!r}: use one of {', '.join(CRITERIA)}")
     if unmodelled_mm and criterion != "I":
         raise DataError("an unmodelled error is planned for with the I criterion (the predicted accuracy)")
-    measured = candidates if (unmodelled_mm is None and criterion == "I" and OBSERVED[kind].sees_position
-                              and isinstance(candidates, Measurements) and candidates.points is not None) \
-        else None
+    measured = candidates.measured if isinstance(candidates, CandidateFile) else candidates \
+        if isinstance(candidates, Measurements) and candidates.points is not None else None
+    if unmodelled_mm is not None or criterion != "I" or not OBSERVED[kind].sees_position:
+        measured = None
     if int(starts) < 1 or int(n_candidates) < 1 or int(region_size) < 1:
         raise DataError("starts, n_candidates and region_size must be >= 1")
     constraints = cons.Constraints() if constraints is None else constraints
@@ -530,7 +533,15 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     conflicts = (cons.conflict_rows(cand_q, constraints.min_joint_distance_deg, robot.prismatic)
                  if constraints.min_joint_distance_deg > 0 else None)
     values = _curve_values(curve, n, n_min, C)
-    shown = None if measured is None else measured_values(robot, measured, unmodelled_terms)
+    shown, warnings = None, []
+    if measured is not None:
+        try:
+            shown = measured_values(robot, measured, unmodelled_terms)
+        except RobocalError as e:  # placeholder points, too few poses: plan for the noise alone
+            warnings.append(f"the candidates' measurements do not show their unmodelled error ({e}): "
+                            "planned for the measurement noise alone; give unmodelled_mm (--unmodelled-mm) "
+                            "to plan for one")
+            measured = None
     um = unmodelled_error(plan_robot, data, noise, info, q_region, float(unmodelled_mm or 0.0),
                           unmodelled_terms, shown)
 
@@ -557,7 +568,6 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         visible_out = np.ones((len(rows), 1), bool)
     index = given[data.pose_id[rows]] if file_data is None else given[rows]
     joints = data.joints[rows]
-    warnings = []
     if candidates is None and int(n_candidates) > C:
         warnings.append(f"only {C} of the {int(n_candidates)} candidates asked for met the constraints in "
                         f"{funnel.start} random poses: the constraints leave a small part of the workspace")

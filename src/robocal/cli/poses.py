@@ -59,10 +59,11 @@ def add_parser(sub) -> None:
     g.add_argument("--noise-model", choices=("isotropic", "tracker"), default="isotropic",
                    help="tracker: the instrument's anisotropic model (needs --tracker-mm)")
     g.add_argument("--rotation-noise-deg", type=float, default=0.001, help="orientation noise (pose data)")
-    g.add_argument("--unmodelled-mm", type=float, default=0.0, metavar="U",
+    g.add_argument("--unmodelled-mm", type=float, default=None, metavar="U",
                    help="the robot's error the calibrated model will not describe (3-D RMS over the region, "
                         "mm; e.g. the 'unmodelled' error of an earlier geometric calibration): plan for "
-                        "what the fit absorbs of it, and include it in the predicted accuracy (default 0)")
+                        "what the fit absorbs of it, and include it in the predicted accuracy (default: "
+                        "what the --from file's measurements show when it has them, else 0)")
     g.add_argument("--unmodelled-terms", default="compliance,backlash,travel", metavar="TERMS",
                    help="joint-error terms that model that error (comma separated)")
     g.add_argument("--smr-mm", type=numbers(3, "X,Y,Z in mm"), action="append", metavar="X,Y,Z",
