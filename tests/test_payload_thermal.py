@@ -146,6 +146,9 @@ def test_payload_term_recovers_known_compliances_and_the_loads_centre_of_mass():
     delta = lever_correction(values, (2, 3))
     true_delta = truth["com"] - np.asarray(payload_truth.RECORDED_COM_M)
     np.testing.assert_allclose(delta, true_delta, atol=0.015)
+    said = result.to_dict()["conditions"]["payload_com_correction_mm"]  # what the summary says too
+    assert said["joints"] == [2, 3] and np.allclose(said["xyz"], delta * 1e3)
+    assert "the load's centre of mass, as the payload term sees it (joints 2, 3)" in result.summary()
     assert result.robot.joint_errors.thermal_k() == pytest.approx(payload_truth.THERMAL_K, rel=0.05)
 
 

@@ -94,6 +94,12 @@ def section(result) -> dict | None:
                            "sigma": None if nm not in sigma else float(sigma[nm] * PAYLOAD_SCALE),
                            "status": vocabulary.status(nm, ident, unused),
                            "detail": vocabulary.detail(nm, ident, unused)} for nm in payload]
+    levers = sorted({load.joint_of(nm, start.n_joints) + 1 for nm in declared if load.is_lever(nm)})
+    if levers and not any(term_of(nm) == "payload" for nm in unused):  # the load's centre of mass
+        delta = load.lever_correction({nm: values.get(nm, 0.0) for nm in declared}, levers)
+        if delta is not None:
+            out["payload_com_correction_mm"] = {"joints": levers,
+                                                "xyz": (np.nan_to_num(delta) * 1e3).tolist()}
     used = condition_terms(result.robot)
     out["assumed"] = {**({"payload_kg": 0.0} if "payload" in used else {}),
                       **({"temperature_c": t_ref} if "thermal" in used else {})}
@@ -167,6 +173,11 @@ def summary_lines(conditions: dict) -> list[str]:
     if conditions.get("payload") and "payload" not in unused:
         lines.append(f"payload compliance ({PAYLOAD_UNIT}): " + ", ".join(
             f"J{r['joint']} " + _value(r["estimate"], r["sigma"], 1.0, "", r) for r in conditions["payload"]))
+    if (com := conditions.get("payload_com_correction_mm")) is not None:
+        lines.append("the load's centre of mass, as the payload term sees it (joints "
+                     f"{', '.join(map(str, com['joints']))}): " + ", ".join(
+                         f"{a} {v:+.0f}" for a, v in zip("xyz", com["xyz"], strict=True))
+                     + " mm from the one recorded (flange frame)")
     assumed = conditions["assumed"]
     if assumed:
         said = (["no payload (0 kg) when none is given"] if "payload_kg" in assumed else []) + (

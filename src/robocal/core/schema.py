@@ -237,6 +237,7 @@ _CONDITIONS = Obj({  # robocal.calibration.conditions
     "payload": Seq(Obj({"name": Str(max_len=100), "joint": Int(lo=1, hi=64), "estimate": Num(),
                         "unit": Str(null=True, max_len=40), "sigma": Num(null=True), **_ESTIMATE}),
                    null=True),
+    "payload_com_correction_mm": Obj({"joints": Arr(), "xyz": Arr()}, null=True),
     "assumed": Map(Num(), null=True),
     "not_used": Seq(Obj({"term": Str(max_len=100), "reason": Str(null=True)}), null=True)}, null=True)
 
