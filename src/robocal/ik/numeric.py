@@ -382,8 +382,8 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
     T = check_poses(poses)
     N, n = T.shape[0], robot.n_joints
     tol = (pos_tol, rot_tol)
-    if seeds is None and locked is None and is_scara_arm(robot):
-        return _finish(_scara(robot, T, branch, nominal), N, pos_tol, rot_tol, strict)
+    if locked is None and is_scara_arm(robot):  # 4 tasks: a SCARA cannot tilt (robocal.ik.scara)
+        return _finish(_scara(robot, T, branch, seeds), N, pos_tol, rot_tol, strict)
     if seeds is None and (locked is not None or robot.has_prismatic):
         raise DataError(f"{robot.name}: IK of a chain with prismatic or locked joints needs seeds (for an "
                         "arm on a track: robocal.ik.track.solve)")
@@ -418,13 +418,16 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
                    pos_tol, rot_tol, strict)
 
 
-def _scara(robot: Robot, T: np.ndarray, branch: int | None, nominal: Robot | None) -> IKResult:
+def _scara(robot: Robot, T: np.ndarray, branch: int | None, given: np.ndarray | None) -> IKResult:
     """A SCARA (or a calibrated model of one): each target from the planar closed form of the
     robot's own chain in ``branch`` (default: the first branch that converges inside the limits),
     refined on its 4 tasks (:mod:`robocal.ik.scara`: position and the turn about its axis; a SCARA
-    cannot tilt, so the orientation error reported is the turn's). ``nominal``'s slots name the
-    branches (a SCARA's are the elbow's sign on both)."""
+    cannot tilt, so the orientation error reported is the turn's); ``given`` seeds ``(N, 4)`` or
+    ``(4,)`` replace the closed form's."""
     seeds = scara_ik.seed_branches(robot, T)
+    if given is not None:
+        seeds = np.broadcast_to(np.asarray(given, float), (T.shape[0], 4))[:, None, :]
+        branch = 0
     order = range(scara_ik.BRANCHES) if branch is None else [int(branch)]
     N = T.shape[0]
     q, err = seeds[:, order[0]].copy(), np.full((N, 4), np.inf)
