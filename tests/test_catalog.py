@@ -21,6 +21,7 @@ REQUIRED = ["abb_irb120", "abb_irb1600", "abb_irb2400", "abb_irb2600", "abb_irb4
             "fanuc_m20ia", "fanuc_m710ic50", "fanuc_r2000ic_165f", "abb_irb6700", "yaskawa_gp25"]
 OPW_ROBOTS = [n for n in catalog_names() if "opw" in catalog_entry(n)]
 CHAINS = yaml.safe_load((Path(__file__).parent / "data" / "ros_industrial_chains.yaml").read_text())
+SCARAS = yaml.safe_load((Path(__file__).parent / "data" / "scara_sources.yaml").read_text())
 
 
 def random_joints(robot: Robot, rng, n: int = 200) -> np.ndarray:
@@ -67,7 +68,8 @@ def test_entry_equals_its_ros_industrial_urdf(name, rng):
 def test_every_entry_is_checked_against_a_source():
     """Each catalog robot meets an independent source in some test: py-opw-kinematics on its OPW
     set, a ROS-I URDF chain, Universal Robots' DH (ur-analytic-ik, test_ur_ik), or a dedicated test."""
-    dedicated = {"puma560", "abb_irb120", "meca500", "ur5", "ur10"}
+    dedicated = {"puma560", "abb_irb120", "meca500", "ur5", "ur10",
+                 *SCARAS}  # the SCARAs: robotkinematicscatalogue's chains, tests/test_scara.py
     ur = {n for n in catalog_names() if Robot.from_catalog(n).has_ur_form}
     assert set(catalog_names()) <= set(OPW_ROBOTS) | set(CHAINS) | ur | dedicated
 
