@@ -158,10 +158,12 @@ def test_limits_are_vendor_values():
     # the KR 210 R2700 extra's A2 works in [-140, -5] deg (its URDF): zero is outside its range
     assert np.allclose(np.rad2deg(Robot.from_catalog("kuka_kr210_r2700").limits[1]), [-140, -5])
     for name in catalog_names():
-        lim = Robot.from_catalog(name).limits
-        assert lim.shape == (6, 2) and (lim[:, 0] < lim[:, 1]).all(), name
+        robot = Robot.from_catalog(name)
+        lim = robot.limits
+        assert lim.shape == (4 if name in SCARAS else 6, 2) and (lim[:, 0] < lim[:, 1]).all(), name
+        turning = lim[~robot.prismatic]  # a SCARA's quill is 0 at one end of its stroke
         if name != "kuka_kr210_r2700":
-            assert (lim[:, 0] < 0).all() and (lim[:, 1] > 0).all(), name
+            assert (turning[:, 0] < 0).all() and (turning[:, 1] > 0).all(), name
 
 
 def test_each_catalog_file_is_named_after_its_robot():

@@ -170,3 +170,17 @@ def test_a_scale_bar_scara_predicts_millimetres_not_metres():
     result = rc.calibrate(robot, sim.data, nongeometric="none")
     assert "tool.z" in result.identifiability.dropped
     assert result.to_dict()["predicted_accuracy"]["workspace"]["rms"] < 20.0  # mm: priors a bar cannot see
+
+
+def test_a_scara_campaign_program_is_fanuc_tp_with_the_quill_in_mm(tmp_path):
+    from robocal.campaign.programs import campaign_programs, refuse_tracks
+    from robocal.core.errors import DataError
+
+    robot = rc.Robot.from_catalog("fanuc_sr6ia")
+    q = np.array([[0.1, -0.2, -0.05, 1.0], [0.3, 0.4, -0.15, -2.0]])
+    text = campaign_programs(q, robot, {"fanuc": tmp_path / "c.ls"})[str(tmp_path / "c.ls")]
+    assert "J3= -50 mm" in text and "J3= -150 mm" in text and "J5" not in text
+    assert "J2= 22.9183 deg" in text  # 0.4 rad as it is: no J2/J3 coupling on a SCARA
+    refuse_tracks({"fanuc": "c.ls"}, robot, "poses.csv")  # FANUC TP drives a SCARA
+    with pytest.raises(DataError, match="is a SCARA: campaign programs are written for it in FANUC"):
+        refuse_tracks({"rapid": "c.mod"}, robot, "poses.csv")

@@ -27,6 +27,7 @@ from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
 from robocal.core.io import short_repr
+from robocal.ik.scara import is_scara
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.dialects.base import Dialect
 from robocal.programs.dialects.fanuc import marker, simulated
@@ -69,6 +70,7 @@ class FanucDialect(Dialect):
     key = "fanuc"
     campaign_rank = 3
     campaign_refuses_tracks = True
+    campaign_scara = True  # an SR-series arm: J1, J2, J4 in deg, the quill J3 in mm
     title = "FANUC TP (.ls)"
     signature = r"^/(?:PROG|MN|POS)\b"
     angle_unit = "deg"
@@ -90,6 +92,8 @@ class FanucDialect(Dialect):
         return read_schedules(path)
 
     def campaign_files(self, joints, robot, path, **options):
+        if is_scara(robot):  # joints in their units (deg; mm on the quill), no J2/J3 coupling
+            return {str(path): fanuc_ls_program(robot.joints_shown(joints), path.stem, scara=True, **options)}
         return {str(path): fanuc_ls_program(np.rad2deg(joints), path.stem, **options)}
 
     def mark(self, text, body, note):
