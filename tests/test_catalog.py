@@ -240,12 +240,13 @@ def test_fk_polynomial_sin_cos_and_large_angle_fallback(rng):
 
 @pytest.mark.parametrize("name", [n for n in catalog_names() if n not in ("meca500",)])
 def test_closed_form_ik_round_trip_on_every_arm(name, rng):
-    """Every catalog arm but the Meca500 (no closed form: its OPW set is not carried) has the OPW or
-    UR form; its closed-form IK recovers random joints, each solution FK-exact."""
+    """Every catalog arm but the Meca500 (no closed form: its OPW set is not carried) has the OPW, UR
+    or SCARA form; its closed-form IK recovers random joints, each solution FK-exact."""
     from robocal.ik import solve_all
+    from robocal.ik.closed_form import has_closed_form
 
     robot = Robot.from_catalog(name)
-    assert robot.has_opw_form or robot.has_ur_form
+    assert has_closed_form(robot) and (robot.has_opw_form or robot.has_ur_form or name in SCARAS)
     q = random_joints(robot, rng, 300)
     T = robot.fk(q)
     sols = solve_all(robot, T)

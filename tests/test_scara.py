@@ -184,3 +184,15 @@ def test_a_scara_campaign_program_is_fanuc_tp_with_the_quill_in_mm(tmp_path):
     refuse_tracks({"fanuc": "c.ls"}, robot, "poses.csv")  # FANUC TP drives a SCARA
     with pytest.raises(DataError, match="is a SCARA: campaign programs are written for it in FANUC"):
         refuse_tracks({"rapid": "c.mod"}, robot, "poses.csv")
+
+
+def test_plan_path_on_a_scara_chooses_among_its_hands():
+    robot = rc.Robot.from_catalog("epson_g6_651s")
+    q = np.deg2rad([[30.0, 40.0, 0.0, 10.0], [-50.0, -60.0, 0.0, 80.0], [10.0, 100.0, 0.0, -30.0]])
+    q[:, 2] = [-0.05, -0.1, -0.02]
+    path = rc.ik.plan_path(robot, robot.fk(q))
+    assert path.joints.shape == (3, 4) and path.cost <= path.greedy_cost
+    np.testing.assert_allclose(robot.fk(path.joints), robot.fk(q), atol=1e-9)
+    calibrated = simulate_tracker(robot, 10, seed=3, noise_mm=0.0).truth
+    path = rc.ik.plan_path(calibrated, calibrated.fk(q), nominal=robot)
+    np.testing.assert_allclose(calibrated.fk(path.joints)[:, :3, 3], calibrated.fk(q)[:, :3, 3], atol=1e-9)
