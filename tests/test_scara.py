@@ -73,6 +73,9 @@ def test_scara_calibration_recovers_truth_and_names_its_freedoms():
     sim = simulate_tracker(robot, 60, seed=1, noise_mm=0.0)
     result = rc.calibrate(robot, sim.data, nongeometric="none")
     assert result.to_dict()["after"]["rms"] < 1e-4  # mm: noise-free data are fitted exactly
+    q = np.random.default_rng(9).uniform(robot.limits[:, 0], robot.limits[:, 1], (200, 4))
+    held_out = result.robot.fk(q)[:, :3, 3] - sim.truth.fk(q)[:, :3, 3]
+    assert np.abs(held_out).max() < 1e-7  # m: the truth's TCP everywhere, whatever the freedoms held
     freedoms = {f["freedom"]: f for f in result.identifiability.freedoms}
     assert {"height", "turn", "tilt", "axis1", "quill", "forearm"} <= set(freedoms)
     assert "d3" in freedoms["height"]["held"] and "quill zero (d3)" in freedoms["height"]["words"]

@@ -428,6 +428,9 @@ def _scara(robot: Robot, T: np.ndarray, branch: int | None, given: np.ndarray | 
     if given is not None:
         seeds = np.broadcast_to(np.asarray(given, float), (T.shape[0], 4))[:, None, :]
         branch = 0
+    if branch is not None and int(branch) not in range(scara_ik.BRANCHES):
+        raise DataError(f"{robot.name} is a SCARA: its branches are 0 (elbow positive) and 1 (negative), "
+                        f"not {branch}")
     order = range(scara_ik.BRANCHES) if branch is None else [int(branch)]
     N = T.shape[0]
     q, err = seeds[:, order[0]].copy(), np.full((N, 4), np.inf)

@@ -16,7 +16,8 @@ class FANUCConfig(ConfigScheme):
 
     A SCARA's (FANUC SR-series) CONFIG is 'L|R, t1, t2, t4': the arm's hand and three turn numbers,
     here those of J1, J2 and J4 (the joints that turn; an assumption: FANUC's manuals were not at
-    hand, and on SR arms J1 and J2 stay within +-180 deg, so only J4's turn can differ from 0).
+    hand; on SR arms J1 and J2 stay within +-180 deg, so only J4's turn can differ from 0, and a
+    public SR-6iA register file shows 'R, 0, 0, -1': the last field is the one that turns).
     Its row is ``[right, SCARA, SCARA, t1, t2, t4]``; right-handed ('R') is the elbow bent to the
     left looking down the arm from the shoulder (the elbow's turn positive about the base frame's
     z axis, up), so the elbow lies to the right of the line from J1 to the quill."""
