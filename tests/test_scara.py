@@ -80,6 +80,9 @@ def test_scara_calibration_recovers_truth_and_names_its_freedoms():
     assert {"height", "turn", "tilt", "axis1", "quill", "forearm"} <= set(freedoms)
     assert "d3" in freedoms["height"]["held"] and "quill zero (d3)" in freedoms["height"]["words"]
     assert "structural freedoms of a SCARA" in result.summary()
+    from robocal.report.html import render_report
+
+    assert "Structural freedoms of a SCARA" in render_report(result.to_dict())
 
 
 def _sr_program(robot, q, hands) -> str:
