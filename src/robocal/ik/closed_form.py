@@ -147,19 +147,21 @@ def turn_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = False,
               tol: float = TOL, threads: int | None = None) -> np.ndarray:
-    """All closed-form inverse-kinematics solutions of world TCP poses (OPW or UR form).
+    """All closed-form inverse-kinematics solutions of world TCP poses (OPW, UR or SCARA form).
 
     Base and tool of the model are removed first; each solution is verified by ``robot.fk``.
 
     Parameters
     ----------
     robot : Robot
-        A model with an OPW form (ortho-parallel arm with a spherical wrist) or a UR form
-        (Universal Robots geometry); its base and tool frames are taken into account.
+        A model with an OPW form (ortho-parallel arm with a spherical wrist), a UR form
+        (Universal Robots geometry) or a SCARA form (`robocal.ik.scara`); its base and tool
+        frames are taken into account.
     poses : array_like, shape (N, 4, 4) or (4, 4)
         World poses of the TCP, metres.
     limits : bool, default False
-        Set the solutions outside the joint limits to NaN (the shape stays ``(N, 8, 6)``).
+        Set the solutions outside the joint limits to NaN (the shape stays ``(N, 8, 6)``; a
+        SCARA's ``(N, 2, 4)``).
     extra_turns : bool, default False
         Every candidate inside the limits, including the +-2 pi copies of joints with more than
         a full turn of travel; implies ``limits``.
@@ -172,13 +174,14 @@ def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = 
     -------
     numpy.ndarray, shape (N, 8, 6) or (N, K, 6)
         Joints, radians, wrapped to [-pi, pi); NaN where a branch does not exist. The 8 slots are
-        the branches in a fixed order (shoulder, elbow, wrist). With ``extra_turns``, K is the
-        largest candidate count over the poses, valid rows first, NaN padding.
+        the branches in a fixed order (shoulder, elbow, wrist); a SCARA's 2 are its hands (the
+        elbow's sign), its quill in m, not wrapped. With ``extra_turns``, K is the largest
+        candidate count over the poses, valid rows first, NaN padding.
 
     Raises
     ------
     ModelError
-        The model has neither an OPW nor a UR form.
+        The model has no OPW, UR or SCARA form.
     DataError
         ``poses`` are not rigid transforms.
 

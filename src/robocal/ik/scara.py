@@ -7,9 +7,9 @@ from the upper arm to the forearm about the robot's axis direction) positive, sl
 - :func:`seed_branches`: the planar two-link closed form (``L1`` = the distance between axes 1 and
   2, ``L2`` = between axes 2 and 4, the joint zeros' offsets taken from the model at q = 0), for
   any SCARA chain, unverified: seeds.
-- :func:`refine`: damped Newton on the 4 task residuals (position, turn about the axis) of the
-  model itself, a calibrated one included (its axes a little tilted: the tilt of the flange is then
-  what the calibrated robot has at that position, not a task).
+- :func:`refine`: Newton (steps clipped to :data:`_MAX_STEP`) on the 4 task residuals (position,
+  turn about the axis) of the model itself, a calibrated one included (its axes a little tilted:
+  the tilt of the flange is then what the calibrated robot has at that position, not a task).
 - :func:`chunk_solver`: the verified closed form of a nominal SCARA (the form
   :mod:`robocal.ik.closed_form` registers): each branch refined and kept where the model's pose
   equals the target within ``tol`` (a target tilted off the axis has no solution).
