@@ -202,3 +202,15 @@ def test_plan_path_on_a_scara_chooses_among_its_hands():
     calibrated = simulate_tracker(robot, 10, seed=3, noise_mm=0.0).truth
     path = rc.ik.plan_path(calibrated, calibrated.fk(q), nominal=robot)
     np.testing.assert_allclose(calibrated.fk(path.joints)[:, :3, 3], calibrated.fk(q)[:, :3, 3], atol=1e-9)
+
+
+def test_a_six_axis_config_on_a_scara_is_named_not_called_impossible(tmp_path):
+    from robocal.core.errors import DataError
+
+    robot = rc.Robot.from_catalog("fanuc_sr6ia")
+    q = np.deg2rad([[30.0, 40.0, 0.0, 10.0]])
+    q[:, 2] = -0.05
+    (tmp_path / "t.ls").write_text(_sr_program(robot, q, ["N U T"]))
+    with pytest.raises(DataError, match="CONFIG 'N U T, 0, 0, 0' is a 6-axis arm's, but the nominal model "
+                                        "fanuc_sr6ia is a SCARA"):
+        rc.filter_program(tmp_path / "t.ls", robot, robot)

@@ -105,8 +105,9 @@ def _configured_joints(dialect, nominal, F, targets, problems):
     for i in np.flatnonzero(~reach):
         problems.append((int(i), "no solution of the nominal model inside the joint limits (out of reach)"))
     for i in np.flatnonzero(has & reach & ~possible):
-        problems.append((int(i), f"configuration {scheme.text(targets[i].config)} is not possible for this "
-                                 "pose inside the joint limits"))
+        problems.append((int(i), scheme.mismatch(nominal, targets[i].config) or f"configuration "
+                         f"{scheme.text(targets[i].config)} is not possible for this pose inside the joint "
+                         "limits"))
     configured = np.flatnonzero(has & reach & possible)
     # no configuration data: in program order, the candidate nearest the previous target's joints
     last = -1  # the last target without configuration data given joints

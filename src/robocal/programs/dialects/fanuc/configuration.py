@@ -37,6 +37,14 @@ class FANUCConfig(ConfigScheme):
         bits = np.stack([q[..., 4] > 0, elbow, shoulder], axis=-1).astype(int)
         return np.concatenate([bits, turns], axis=-1)
 
+    def mismatch(self, robot, row):
+        scara_row, scara_robot = int(row[1]) == SCARA, is_scara(robot)
+        if scara_row == scara_robot:
+            return ""
+        return (f"CONFIG '{self.text(row)}' is a {'SCARA' if scara_row else '6-axis arm'}'s, but the "
+                f"nominal model {robot.name} is {'not a SCARA' if scara_row else 'a SCARA'}: give the "
+                "program's robot")
+
     def text(self, row):
         f, d, b, t1, t4, t6 = (int(v) for v in row)
         if d == SCARA:
