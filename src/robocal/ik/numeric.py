@@ -17,9 +17,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+import robocal.ik.scara as scara_ik
 from robocal.core.damped_least_squares import Status, minimize
 from robocal.core.errors import DataError, UnreachableError
-from robocal.ik import scara as scara_ik
 from robocal.ik.closed_form import branch_model, branch_slot, seed_branches, seed_model, solve_branches
 from robocal.ik.opw_ik import check_poses
 from robocal.ik.scara import is_scara_arm

@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import robocal.ik.scara as scara_ik
 from robocal.core.errors import DataError, ModelError, UnreachableError
 from robocal.core.io import write_atomic
-from robocal.ik import scara as scara_ik
 from robocal.ik.closed_form import branch_model, branch_slot, solve_branches, turn_copies
 from robocal.ik.numeric import nominal_branches
 from robocal.ik.numeric import solve as ik_solve
