@@ -11,8 +11,10 @@ The data folder holds the three repositories side by side (``figaroh-examples/``
 folder given, else ``$ROBOCAL_FIGAROH_DATA``, else a cache the benchmark downloads into; when none
 holds the data, :class:`DataUnavailableError` says why.
 
-Splits are fixed (no randomness): within one session, every ``HOLD_EVERY``-th pose of the file
-(0-based pose index ``i % HOLD_EVERY == HOLD_EVERY - 1``) is held out and the others calibrate;
+Splits are fixed (no randomness): within one session, every ``HOLD_EVERY``-th usable pose of the
+file (0-based index ``i % HOLD_EVERY == HOLD_EVERY - 1`` among the poses :func:`usable` keeps:
+mislabelled motion-capture markers and corrupted joint readings are dropped first) is held out
+and the others calibrate;
 "next day" calibrates on one session and judges on another, the measurement frame being fitted
 again (a rigid motion, nothing else) on the judging session, since a mobile robot and its motion
 capture are not where they were (`REFIT_FRAME`).
@@ -28,9 +30,12 @@ Sets (``SETS``; robocal's data model: a chain of joints from the URDF root to a 
   within one session: ``figaroh-examples/examples/tiago/data/calibration/mocap/
   qualysis_base_hand_calibration.csv`` (34 poses; columns x4..z4 repeat x3..z3, so 3 distinct
   markers: the repeated one is dropped).
-- ``tiago_next_day``: the same robot, calibrated on ``figaroh/data/tiago/exp_data_nov_64_2611.csv``
-  (41 poses, 4 markers, 26 Nov) and judged on ``exp_data_nov_64_3011.csv`` (37 poses, 30 Nov: the
-  session the qualysis file above was cut from), frame fitted again on 30 Nov.
+- ``tiago_next_day``: the same robot, calibrated on 26 Nov, ``figaroh/data/tiago/exp_data_nov_64
+  _2611.csv`` (the space is in the name: the corrected copy of ``exp_data_nov_64_2611.csv``, whose
+  typed joints carry typos such as arm3 signs flipped, -0.36 for -0.036 and one 9551), 40 poses, 4
+  markers; judged on 30 Nov, the qualysis file above (the corrected cut of
+  ``exp_data_nov_64_3011.csv``: 34 of its 37 poses; its x3..z3 is the 26 Nov file's marker 4, found
+  from the marker-to-marker distances), with the frame fitted again on 30 Nov.
 - ``ur10_pose``: UR10 (``ur10_robot.urdf``, root to ``wrist_3_link``) with a camera and a
   checkerboard, ``figaroh-examples/examples/ur10/data/calibration.csv`` (23 poses): 6-D poses,
   x, y, z (m) and phix, phiy, phiz (rad) in FIGAROH's convention, roll-pitch-yaw
@@ -67,6 +72,8 @@ CACHE = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "roboca
 REPOS = ("figaroh-examples", "figaroh-plus", "figaroh")
 HOLD_EVERY = 3  # within a session: every third pose is held out
 REPEAT_TOL_M = 1e-9  # a marker column equal to an earlier one within this is a repeated column
+LIMIT_SLACK = 0.05  # rad or m: a reading further past a URDF limit is corrupted (one at its stop reads on it)
+RIGID_TOL_M = 5e-3  # m: marker-to-marker distances further from the median: mislabelled markers
 
 
 class DataUnavailableError(RuntimeError):
@@ -93,10 +100,11 @@ class Session:
     rotations: np.ndarray | None
     rows: np.ndarray
     file: Path
+    ids: tuple[int, ...]  # each marker's identity (its SMR index), the same physical marker in every file
 
     def take(self, index: np.ndarray) -> Session:
         rot = None if self.rotations is None else self.rotations[index]
-        return Session(self.joints[index], self.markers[index], rot, self.rows[index], self.file)
+        return Session(self.joints[index], self.markers[index], rot, self.rows[index], self.file, self.ids)
 
 
 @dataclass(frozen=True)
@@ -111,9 +119,11 @@ class Spec:
     joints_deg: bool = False
     example: str = ""  # FIGAROH's example folder (its config, for the peer's run)
     config: str = ""
+    marker_ids: tuple[tuple[int, ...] | None, ...] = ()  # per file: the marker behind x1, x2..; () 0, 1..
 
 
 TIAGO_JOINTS = ("torso_lift_joint", *(f"arm_{k}_joint" for k in range(1, 8)))
+OLD_NAMES = {"torso": "torso_lift_joint", **{f"arm{k}": f"arm_{k}_joint" for k in range(1, 8)}}
 SPECS: dict[str, Spec] = {
     "talos": Spec("figaroh-examples/examples/talos/urdf/talos_full_v2.urdf", "gripper_left_base_link",
                   ("torso_1_joint", "torso_2_joint", *(f"arm_left_{k}_joint" for k in range(1, 8))),
@@ -124,9 +134,11 @@ SPECS: dict[str, Spec] = {
                   ("figaroh-examples/examples/tiago/data/calibration/mocap/qualysis_base_hand_calibration.csv",),
                   example="figaroh-examples/examples/tiago", config="config/tiago_config_mocap.yaml"),
     "tiago_next_day": Spec("figaroh-examples/examples/tiago/urdf/tiago_48_schunk.urdf", "wrist_ft_tool_link",
-                           ("torso", *(f"arm{k}" for k in range(1, 8))),
-                           ("figaroh/data/tiago/exp_data_nov_64_2611.csv",
-                            "figaroh/data/tiago/exp_data_nov_64_3011.csv"),
+                           TIAGO_JOINTS,
+                           ("figaroh/data/tiago/exp_data_nov_64 _2611.csv",
+                            "figaroh-examples/examples/tiago/data/calibration/mocap/"
+                            "qualysis_base_hand_calibration.csv"),
+                           marker_ids=(None, (0, 1, 3, 3)),
                            example="figaroh-examples/examples/tiago",
                            config="config/tiago_config_mocap.yaml"),
     "ur10_pose": Spec("figaroh-examples/examples/ur10/urdf/ur10_robot.urdf", "wrist_3_link",
@@ -170,11 +182,14 @@ def _read_csv(path: Path) -> tuple[list[str], list[list[str]]]:
     return [h.strip() for h in rows[0]], rows[1:]
 
 
-def read_session(path: Path, spec: Spec) -> Session:
+def read_session(path: Path, spec: Spec, ids: tuple[int, ...] | None = None) -> Session:
     """One FIGAROH CSV as a :class:`Session`: marker columns ``x1, y1, z1, ...`` (and
     ``phix1..phiz1`` for a 6-D set), the joint columns of ``spec``; a marker whose columns repeat
-    an earlier marker's is dropped; poses with a missing value are left out."""
+    an earlier marker's is dropped; poses with a missing value are left out. ``ids``: the marker
+    behind each column group (default 0, 1, ..). Joint columns are found by the spec's names or,
+    in FIGAROH's older TIAGo files, as ``torso, arm1..arm7``."""
     header, cells = _read_csv(path)
+    header = [OLD_NAMES.get(h, h) for h in header]
     index = {h: i for i, h in enumerate(header)}
     n_markers = sum(1 for k in range(1, 100) if f"x{k}" in index)
     names = [f"{c}{k}" for k in range(1, n_markers + 1) for c in "xyz"] + list(spec.joint_columns)
@@ -198,7 +213,33 @@ def read_session(path: Path, spec: Spec) -> Session:
     if spec.pose_6d:
         phi = values[:, -3:]
         rotations = Rotation.from_euler("ZYX", phi[:, ::-1]).as_matrix()  # Rz(phiz) Ry(phiy) Rx(phix)
-    return Session(joints, markers[:, keep], rotations, lines, path)
+    ids = tuple(range(n_markers)) if ids is None else ids
+    return Session(joints, markers[:, keep], rotations, lines, path, tuple(ids[m] for m in keep))
+
+
+def usable(s: Session, robot: rc.Robot) -> tuple[Session, list[str]]:
+    """The poses of ``s`` an instrument check and the robot's joint limits accept, and a note per
+    rule that dropped some: markers on one rigid body keep their distances, so a pose whose
+    marker-to-marker distances differ from the file's median by more than `RIGID_TOL_M` has a
+    mislabelled or ghost marker (motion capture); a joint reading `LIMIT_SLACK` beyond the URDF's limits is a
+    corrupted value (e.g. 9551 rad in one row of the 26 Nov TIAGo file). Neither looks at a model's
+    fit: both tools get the same poses."""
+    notes, keep = [], np.ones(len(s.joints), bool)
+    M = s.markers.shape[1]
+    if M > 1:
+        i, j = np.triu_indices(M, 1)
+        d = np.linalg.norm(s.markers[:, i] - s.markers[:, j], axis=2)
+        bad = np.abs(d - np.median(d, axis=0)).max(axis=1) > RIGID_TOL_M
+        if bad.any():
+            notes.append(f"{s.file.name}: CSV lines {', '.join(map(str, s.rows[bad]))} dropped (marker "
+                         f"distances off by more than {RIGID_TOL_M * 1e3:g} mm: mislabelled markers)")
+        keep &= ~bad
+    lim = np.asarray(robot.limits)
+    out = ((s.joints < lim[:, 0] - LIMIT_SLACK) | (s.joints > lim[:, 1] + LIMIT_SLACK)).any(axis=1) & keep
+    if out.any():
+        notes.append(f"{s.file.name}: CSV lines {', '.join(map(str, s.rows[out]))} dropped (joints beyond "
+                     "the URDF's limits)")
+    return s.take(np.flatnonzero(keep & ~out)), notes
 
 
 def held_out_mask(n: int) -> np.ndarray:
@@ -206,14 +247,17 @@ def held_out_mask(n: int) -> np.ndarray:
     return np.arange(n) % HOLD_EVERY == HOLD_EVERY - 1
 
 
-def sessions(name: str, root: Path) -> tuple[Session, Session]:
-    """The calibration and held-out sessions (poses) of set ``name`` under ``root``."""
+def sessions(name: str, root: Path, robot: rc.Robot) -> tuple[Session, Session, list[str]]:
+    """The calibration and held-out poses of set ``name`` under ``root`` (the :func:`usable`
+    ones), and the notes of what was dropped."""
     spec = SPECS[name]
-    first = read_session(root / spec.files[0], spec)
+    ids = spec.marker_ids or (None,) * len(spec.files)
+    first, notes = usable(read_session(root / spec.files[0], spec, ids[0]), robot)
     if len(spec.files) == 2:
-        return first, read_session(root / spec.files[1], spec)
+        second, more = usable(read_session(root / spec.files[1], spec, ids[1]), robot)
+        return first, second, notes + more
     held = held_out_mask(len(first.joints))
-    return first.take(np.flatnonzero(~held)), first.take(np.flatnonzero(held))
+    return first.take(np.flatnonzero(~held)), first.take(np.flatnonzero(held)), notes
 
 
 def measurements(s: Session, robot: rc.Robot, pose_6d: bool) -> rc.Measurements:
@@ -221,7 +265,7 @@ def measurements(s: Session, robot: rc.Robot, pose_6d: bool) -> rc.Measurements:
     ``pose`` rows for a 6-D set (one marker), ``point`` rows otherwise."""
     N, M = s.markers.shape[:2]
     linear = np.asarray(robot.prismatic, bool)
-    common = dict(pose_id=np.repeat(np.arange(N), M), smr=np.tile(np.arange(M), N),
+    common = dict(pose_id=np.repeat(np.arange(N), M), smr=np.tile(np.array(s.ids), N),
                   source_row=np.repeat(s.rows, M), source=f"FIGAROH example data {s.file.name}",
                   linear=linear if linear.any() else None)
     joints = np.repeat(s.joints, M, axis=0)
@@ -244,14 +288,14 @@ def load(name: str, folder: str | os.PathLike | None = None) -> PeerSet:
     root = data_root(folder)
     spec = SPECS[name]
     robot = nominal(name, root)
-    cal, held = sessions(name, root)
+    cal, held, notes = sessions(name, root, robot)
     how = (f"calibrate on {Path(spec.files[0]).name} ({len(cal.joints)} poses), judge on "
            f"{Path(spec.files[1]).name} ({len(held.joints)} poses) with the frame fitted again"
            if len(spec.files) == 2 else
            f"{Path(spec.files[0]).name}: every {HOLD_EVERY}rd pose held out ({len(cal.joints)} calibrate, "
            f"{len(held.joints)} judge)")
     what = "6-D poses" if spec.pose_6d else f"{cal.markers.shape[1]} marker position(s) per pose"
-    description = f"{name}: {robot.n_joints} joints to {spec.tip}, {what}; {how}"
+    description = "; ".join([f"{name}: {robot.n_joints} joints to {spec.tip}, {what}", how, *notes])
     return PeerSet(robot, measurements(cal, robot, spec.pose_6d), measurements(held, robot, spec.pose_6d),
                    description)
 
