@@ -11,8 +11,8 @@ FIGAROH rows are skipped with the reason.
 robocal runs what ``robocal calibrate CAL.csv --robot MODEL.urdf --validate HELD.csv`` runs:
 ``rc.calibrate(robot, cal, validation=held)`` with every default. FIGAROH runs its example's
 calibration class (``TALOSCalibration``, ``TiagoCalibration``, ``UR10Calibration``; the generic
-``BaseCalibration`` for the MATE, whose example class predates FIGAROH 1.0) with the example
-folder's configuration (its legacy file converted by FIGAROH's own
+``BaseCalibration`` where the example's class does not import with FIGAROH 1.0: MATE, UR10) with
+the example folder's configuration (its legacy file converted by FIGAROH's own
 ``figaroh.utils.config_migration``, the data file pointed at the split's calibration poses, one
 marker entry per marker of the set) and the example's ``solve`` arguments. Both are judged alike:
 the held-out markers predicted by each calibrated model in its fitted measurement frame, against
@@ -51,11 +51,12 @@ DOWNLOADS = {  # FIGAROH's public repositories (Apache-2.0), as GitHub archives 
 DOWNLOAD_TIMEOUT_S = 30
 # FIGAROH's example per set: the module and class under figaroh-examples/examples (None: the
 # generic BaseCalibration), the legacy config, and the example script's solve() arguments.
+TIAGO_RUN = ("examples.tiago.utils.tiago_tools", "TiagoCalibration", "config/tiago_config.yaml", {})
 FIGAROH_RUNS = {
     "talos": ("examples.talos.utils.talos_tools", "TALOSCalibration", "config/talos_config.yaml",
               dict(method="lm", max_iterations=3, outlier_threshold=3.0)),
-    "tiago": ("examples.tiago.utils.tiago_tools", "TiagoCalibration", "config/tiago_config.yaml", {}),
-    "tiago_next_day": ("examples.tiago.utils.tiago_tools", "TiagoCalibration", "config/tiago_config.yaml", {}),
+    "tiago": TIAGO_RUN,
+    "tiago_next_day": TIAGO_RUN,
     "ur10_pose": ("examples.ur10.utils.ur10_tools", "UR10Calibration", "config/ur10_config_new.yaml", {}),
     "ur10_point": ("examples.ur10.utils.ur10_tools", "UR10Calibration", "config/ur10_config_new.yaml", {}),
     "mate": (None, None, "config/mate.yaml", {}),
@@ -156,11 +157,13 @@ def run_figaroh(name: str, root: Path, workdir: Path) -> dict:
     os.chdir(example)
     try:
         robot = _figaroh_robot(root / spec.urdf, root / spec.example.split("/")[0] / "models")
-        if module is None:
-            klass = BaseCalibration
-        else:
+        klass, how = BaseCalibration, "BaseCalibration"
+        if module is not None:
             sys.path.insert(0, str(root / "figaroh-examples"))
-            klass = getattr(importlib.import_module(module), cls)
+            try:
+                klass, how = getattr(importlib.import_module(module), cls), cls
+            except ImportError as exc:  # the example's tools use an API FIGAROH 1.0 removed
+                how = f"BaseCalibration ({cls}: {type(exc).__name__})"
         calibration = klass(robot, str(cfg))
         calibration.calib_config["known_baseframe"] = False
         calibration.calib_config["known_tipframe"] = False
@@ -178,7 +181,7 @@ def run_figaroh(name: str, root: Path, workdir: Path) -> dict:
     pee = pee.reshape(len(ids), n_dofs, -1)[:, :3, :]  # (markers, xyz, poses)
     pred = np.concatenate([pee[ids.index(i)].T[:, None] for i in held.ids], axis=1).reshape(-1, 3)
     out = judged(pred, held.markers.reshape(-1, 3), name in ps.REFIT_FRAME)
-    out.update(note=f"{len(result.x)} parameters, {calibration.STATUS.lower()}, {seconds:.1f} s",
+    out.update(note=f"{how}, {len(result.x)} parameters, {calibration.STATUS.lower()}, {seconds:.1f} s",
                params=dict(zip(calibration.calib_config["param_name"], result.x, strict=True)))
     return out
 
