@@ -164,12 +164,12 @@ def run_figaroh(name: str, root: Path, workdir: Path) -> dict:
                 klass, how = getattr(importlib.import_module(module), cls), cls
             except ImportError as exc:  # the example's tools use an API FIGAROH 1.0 removed
                 how = f"BaseCalibration ({cls}: {type(exc).__name__})"
-        calibration = klass(robot, str(cfg))
-        calibration.calib_config["known_baseframe"] = False
-        calibration.calib_config["known_tipframe"] = False
-        calibration.calib_config["validation_data_file"] = str(held_csv)
         t0 = time.perf_counter()
         with contextlib.redirect_stdout(io.StringIO()):
+            calibration = klass(robot, str(cfg))
+            calibration.calib_config["known_baseframe"] = False
+            calibration.calib_config["known_tipframe"] = False
+            calibration.calib_config["validation_data_file"] = str(held_csv)
             calibration.initialize()
             result = calibration.solve(plotting=False, enable_logging=False, **solve_kw)
         seconds = time.perf_counter() - t0
