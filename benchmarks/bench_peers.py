@@ -60,6 +60,7 @@ FIGAROH_RUNS = {
     "ur10_pose": ("examples.ur10.utils.ur10_tools", "UR10Calibration", "config/ur10_config_new.yaml", {}),
     "ur10_point": ("examples.ur10.utils.ur10_tools", "UR10Calibration", "config/ur10_config_new.yaml", {}),
     "mate": (None, None, "config/mate.yaml", {}),
+    "mate_q1_flipped": (None, None, "config/mate.yaml", {}),
 }
 
 

@@ -46,6 +46,8 @@ Sets (``SETS``; robocal's data model: a chain of joints from the URDF root to a 
 - ``ur10_point``: the same poses, positions only.
 - ``mate``: the MATE 3-joint arm (``figaroh-plus/examples/mate``, root ``Base`` to
   ``end_effector``), ``data/transformed_poses.csv`` (10 poses, joints in degrees, positions m).
+  robocal's default refuses it: joint q1's sign looks flipped (the file counts it the other way).
+- ``mate_q1_flipped``: the same file with q1's sign turned over, as that check says.
 
 Markers on several bodies, a camera on the flange observing a fixed board (hand-eye) and a
 contact measuring a tilt are not robocal kinds yet: where FIGAROH's example measures more than a
@@ -120,6 +122,7 @@ class Spec:
     example: str = ""  # FIGAROH's example folder (its config, for the peer's run)
     config: str = ""
     marker_ids: tuple[tuple[int, ...] | None, ...] = ()  # per file: the marker behind x1, x2..; () 0, 1..
+    flip: tuple[int, ...] = ()  # joints (0-based) whose file sign is turned over
 
 
 TIAGO_JOINTS = ("torso_lift_joint", *(f"arm_{k}_joint" for k in range(1, 8)))
@@ -154,6 +157,10 @@ SPECS: dict[str, Spec] = {
     "mate": Spec("figaroh-plus/examples/mate/urdf/mate.urdf", "end_effector", ("q_1", "q_2", "q_3"),
                  ("figaroh-plus/examples/mate/data/transformed_poses.csv",), joints_deg=True,
                  example="figaroh-plus/examples/mate", config="config/mate.yaml"),
+    "mate_q1_flipped": Spec("figaroh-plus/examples/mate/urdf/mate.urdf", "end_effector",
+                            ("q_1", "q_2", "q_3"),
+                            ("figaroh-plus/examples/mate/data/transformed_poses.csv",), joints_deg=True,
+                            example="figaroh-plus/examples/mate", config="config/mate.yaml", flip=(0,)),
 }
 REFIT_FRAME = frozenset({"tiago_next_day"})  # judged in another session's measurement frame
 
@@ -209,6 +216,7 @@ def read_session(path: Path, spec: Spec, ids: tuple[int, ...] | None = None) -> 
     joints = values[:, 3 * n_markers:3 * n_markers + len(spec.joint_columns)]
     if spec.joints_deg:
         joints = np.deg2rad(joints)
+    joints[:, list(spec.flip)] *= -1
     rotations = None
     if spec.pose_6d:
         phi = values[:, -3:]
