@@ -2,7 +2,7 @@
 data (TALOS, TIAGo within a session and the next day, UR10 with a camera, MATE), both on the same
 fixed split (``benchmarks/peer_sets.py``), held-out position error in mm, measured in one run.
 
-``python benchmarks/bench_peers.py [--data DIR] [--only NAME] [--robocal-only]``. The data folder
+``python benchmarks/bench_peers.py [--data DIR] [--only NAME] [--robocal-only] [--liao DIR]``. The data folder
 holds FIGAROH's repositories (``--data``, else ``$ROBOCAL_FIGAROH_DATA``, else the download cache
 ``~/.cache/robocal/figaroh``, filled when online); without it the benchmark says why and skips.
 FIGAROH itself is the optional ``peers`` extra (``pip install robocal[peers]``); without it the
@@ -18,6 +18,10 @@ marker entry per marker of the set) and the example's ``solve`` arguments. Both 
 the held-out markers predicted by each calibrated model in its fitted measurement frame, against
 the measured ones (3-D distance per marker and pose: RMS, mean, max); for the next-day set the
 frame is fitted again (rigid motion only) on the judging session for both.
+
+Without ``--only`` it also measures robocal's default on the IRB 120 campaign published with
+Wu et al. 2015 (``benchmarks/liao_irb120.py``: ``--liao DIR`` or ``$ROBOCAL_LIAO_DATA``) on the
+paper's 40 test points, beside the paper's own published figures.
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
+import liao_irb120  # noqa: E402
 import peer_sets as ps  # noqa: E402
 from results import table  # noqa: E402
 
@@ -230,6 +235,29 @@ def figaroh_missing() -> str:
     return ""
 
 
+PAPER_IRB120_MM = {"mean": 0.266, "max": 0.525}  # Wu et al. 2015's own method on its 40 test points
+
+
+def irb120_paper(folder: str | None) -> None:
+    """robocal's default on the IRB 120 campaign of Wu et al. 2015, judged on its 40 test points
+    (the paper's own figures beside it); skipped with the reason when the data are absent."""
+    try:
+        campaign = liao_irb120.load(folder)
+    except liao_irb120.LiaoUnavailableError as exc:
+        print(f"(IRB 120 paper comparison skipped: {exc})")
+        return
+    print(f"  {campaign.description}", flush=True)
+    rows = []
+    for label, model in (("nominal, frame registered", rc.register(campaign.robot, campaign.calibration)),
+                         ("robocal default", rc.calibrate(campaign.robot, campaign.calibration).robot)):
+        e = liao_irb120.test_errors_mm(model, campaign)
+        rows.append([label, f"{np.sqrt(np.mean(e**2)):.3f}", f"{e.mean():.3f}", f"{e.max():.3f}"])
+    rows.append(["the paper's method (published)", "", f"{PAPER_IRB120_MM['mean']:.3f}",
+                 f"{PAPER_IRB120_MM['max']:.3f}"])
+    table("IRB 120 (Wu et al. 2015, 36 poses x 3 SMRs): error on the 40 test points, mm",
+          ["model", "RMS", "mean", "max"], rows, key="irb120_paper")
+
+
 def _row(name: str, tool: str, r: dict) -> list:
     return [name, tool, f"{r['rms']:.3f}", f"{r['mean']:.3f}", f"{r['max']:.3f}", r["n"], r["note"]]
 
@@ -239,7 +267,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--data", help=f"folder with FIGAROH's repositories (default ${ps.DATA_ENV})")
     parser.add_argument("--only", choices=sorted(ps.SETS), help="one set")
     parser.add_argument("--robocal-only", action="store_true", help="skip FIGAROH")
+    parser.add_argument("--liao", help="the IRB 120 campaign of Wu et al. 2015 (default "
+                                       f"${liao_irb120.DATA_ENV}); absent: that table is skipped")
     args = parser.parse_args([] if argv is None and __name__ != "__main__" else argv)
+    if not args.only:
+        irb120_paper(args.liao)
     root, why = find_data(args.data)
     if root is None:
         print(f"(peer benchmark skipped: {why})")
