@@ -63,11 +63,14 @@ def _fake_data(root: Path) -> np.ndarray:
 
 def test_absent_data_skip_with_the_places_looked_at(tmp_path, monkeypatch, capsys):
     monkeypatch.delenv(peer_sets.DATA_ENV, raising=False)
+    monkeypatch.delenv("ROBOCAL_LIAO_DATA", raising=False)
     monkeypatch.setattr(peer_sets, "CACHE", tmp_path / "cache")
     with pytest.raises(peer_sets.DataUnavailableError, match="looked at: --data .*nowhere"):
         peer_sets.load("talos", tmp_path / "nowhere")
     assert bench_peers.main(["--data", str(tmp_path / "nowhere"), "--robocal-only"]) == 0
-    assert "peer benchmark skipped: FIGAROH's example data not found" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "peer benchmark skipped: FIGAROH's example data not found" in out
+    assert "IRB 120 paper comparison skipped" in out
 
 
 def test_loader_reads_figaroh_layout_and_splits_every_third_pose(tmp_path):
@@ -106,3 +109,47 @@ def test_refitting_the_frame_removes_a_rigid_motion_only():
     meas = pred @ T[:3, :3].T + T[:3, 3]
     assert bench_peers.judged(pred, meas, refit=True)["max"] < 1e-9
     assert bench_peers.judged(pred, meas, refit=False)["rms"] > 100
+
+
+def _fake_liao(folder: Path, robot) -> None:
+    """The Wu et al. 2015 layout (.mat files in mm/deg, Experiment.m with the test points at q = 0)
+    measured exactly by ``robot`` (its base frame = the tracker's), SMRs and test points known."""
+    from scipy.io import savemat
+
+    folder.mkdir()
+    rng = np.random.default_rng(5)
+    smrs = np.array([[0.0, 0.0, 0.02], [0.03, 0.0, 0.02], [0.0, 0.03, 0.02]])
+    tips = np.array([[0.01, 0.01, 0.03], [0.012, 0.008, 0.031]])
+
+    def point(q, offset):
+        _, frames = robot.fk(q, frames=True)
+        return frames[:, -1, :3, :3] @ offset + frames[:, -1, :3, 3]
+
+    q = rng.uniform(-1, 1, (36, 6))
+    cal = np.stack([point(q, s) for s in smrs], axis=1).reshape(-1, 3)
+    savemat(folder / "CaliJointAngles.mat", {"CaliJointAngles": np.rad2deg(q)})
+    savemat(folder / "CaliPosition.mat", {"CaliPosition": cal * 1e3})
+    lines = []
+    for suffix, n, tip in (("", 10, tips[0]), ("2", 30, tips[1])):
+        qt = rng.uniform(-1, 1, (n, 6))
+        savemat(folder / f"TestJointAngles{suffix}.mat", {f"TestJointAngles{suffix}": np.rad2deg(qt)})
+        savemat(folder / f"TestPosition{suffix}.mat", {f"TestPosition{suffix}": point(qt, tip) * 1e3})
+        at_zero = point(np.zeros((1, 6)), tip)[0] * 1e3
+        xyz = "\t".join(f"{v:.9f}" for v in at_zero)
+        lines.append(f"TestPoint_Meas{suffix}=[{xyz}]*s;%Test Point")
+    (folder / "Experiment.m").write_text("s=0.001;\n" + "\n".join(lines) + "\n")
+
+
+def test_liao_campaign_places_the_test_point_from_its_reading_at_zero(tmp_path, monkeypatch):
+    import liao_irb120
+
+    monkeypatch.delenv(liao_irb120.DATA_ENV, raising=False)
+    with pytest.raises(liao_irb120.LiaoUnavailableError, match="looked at: nothing"):
+        liao_irb120.load(None)
+    truth = rc.Robot.from_catalog("abb_irb120")
+    _fake_liao(tmp_path / liao_irb120.FOLDER, truth)
+    campaign = liao_irb120.load(tmp_path)  # the repository folder holding it
+    assert len(campaign.calibration) == 108 and campaign.calibration.n_smr == 3
+    assert len(campaign.test_joints) == 40
+    assert liao_irb120.test_errors_mm(truth, campaign).max() < 1e-6  # the true model: exact
+    assert liao_irb120.test_errors_mm(rc.calibrate(truth, campaign.calibration).robot, campaign).max() < 1e-3
