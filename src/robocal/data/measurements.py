@@ -877,11 +877,14 @@ def _data_kind(roles: dict, name: str) -> str:
         raise DataError(f"{name}: a pose needs all of qw, qx, qy, qz; missing "
                         f"{sorted({'qw', 'qx', 'qy', 'qz'} - quat)}")
     marked = [spec.name for spec in OBSERVED.values() if spec.column and spec.column in present]
+    if len(marked) > 1:
+        raise DataError(f"{name}: the columns {', '.join(OBSERVED[k].column for k in marked)} mark different "
+                        f"kinds ({', '.join(marked)}): one file holds one kind of contact")
     if marked:
         column = OBSERVED[marked[0]].column
-        if xyz or quat or "pair" in present or len(marked) > 1:
+        if xyz or quat or "pair" in present:
             raise DataError(f"{name}: {marked[0]} contacts have only joints and '{column}'; remove x/y/z, "
-                            "quaternion, pair and other plane columns")
+                            "quaternion and pair columns")
         return marked[0]
     if "pair" in present or "distance" in present:
         if not {"pair", "distance"} <= present:

@@ -34,11 +34,12 @@ What flush contacts cannot see (``params='auto'`` leaves it out, :func:`not_obse
   moves no contact off its plane, and moving it along its normal shifts every contact of a plane
   by the same height, which the plane's offset takes;
 - the last link's ``d_n`` (a translation fixed in the flange frame, like the tool's);
-- the rotation of the face about its own normal (``tool.rz`` when the normal is the flange's z;
-  for a face normal along another flange axis its rotation; otherwise the identifiability
-  analysis holds that combination); with the normal along the flange's z, which is the last
-  joint's axis, also that joint's zero ``theta_n`` (a rotation about the normal) and ``a_n`` (a
-  translation along ``x_{n-1}``, perpendicular to the last axis: always within the face's plane).
+- the rotation of the face about its own normal: ``tool.rz`` when the normal is the flange's z
+  (within ``FACE_AXIS_TOL_RAD``, 1 deg), that axis's rotation for a normal along another flange
+  axis, else the identifiability analysis holds that combination. With the normal along the
+  flange's z, the last joint's axis, also that joint's zero ``theta_n`` (a rotation about the
+  normal) and ``a_n`` (a translation along ``x_{n-1}``, perpendicular to the last axis: always
+  within the face's plane).
 """
 
 from __future__ import annotations
@@ -49,17 +50,19 @@ from robocal.core.errors import IdentificationError
 from robocal.data.kinds import FLUSH_TILT_LENGTH_M as TILT_LENGTH_M
 from robocal.identify.observations.plane import PlaneObservation, scale_reference
 
-# |face normal component| (flange frame) along a flange axis above which the face's own rotation
-# is that axis's tool rotation (named as not observable)
-AXIS_ALIGNED = 1.0 - 1e-9
+# A face normal within this angle (rad) of a flange axis (a face mounted square, with its mounting
+# error): its spin is that axis's tool rotation, named as not observable with the last joint's
+# zero and a_n when the axis is the flange's z (the data see them only through the small tilt)
+FACE_AXIS_TOL_RAD = np.deg2rad(1.0)
 PLANE_FIT_ITERATIONS = 3  # Gauss-Newton steps of a plane fit from its closed-form start (3 reach 1e-15)
 
 
 def face_normal_axis(robot) -> int | None:
-    """The flange axis (0, 1, 2) the tool face's normal (the tool's z) lies along, or None."""
+    """The flange axis (0, 1, 2) the tool face's normal (the tool's z) lies along (within
+    `FACE_AXIS_TOL_RAD`), or None."""
     normal = np.abs(robot.tool[:3, 2])
     axis = int(np.argmax(normal))
-    return axis if normal[axis] >= AXIS_ALIGNED else None
+    return axis if normal[axis] >= np.cos(FACE_AXIS_TOL_RAD) else None
 
 
 def not_observable(robot) -> list[str]:
