@@ -114,7 +114,7 @@ class CalibrationProblem:
 
     @property
     def kind(self) -> str:
-        """The observation kind ('point', 'pose', 'plane', 'distance'; 'mixed' for several kinds)."""
+        """The observation kind ('point', 'pose', 'plane', 'flush', 'distance'; 'mixed' for several kinds)."""
         kinds = {obs.kind for obs in self.observations}
         return kinds.pop() if len(kinds) == 1 else "mixed"
 
