@@ -53,9 +53,9 @@ def test_jacobian_matches_finite_differences():
     flush (so every term of the residuals' derivatives is exercised)."""
     rng = np.random.default_rng(0)
     tool = make_transform(rotvec_to_matrix(np.array([0.3, -0.2, 0.1])), np.array([0.02, -0.01, 0.09]))
-    robot = IRB.with_frames(tool=tool)
-    data = Measurements.from_arrays("flush", sample_joints(robot, 24, rng), plane=np.arange(24) % 3)
-    problem = CalibrationProblem(robot, data)
+    sim = simulate_tracker(IRB.with_frames(tool=tool), 24, kind="flush", n_planes=3, seed=0, noise_mm=0.05)
+    robot = IRB.with_frames(tool=sim.truth.tool)
+    problem = CalibrationProblem(robot, sim.data)
     state = problem.start(robot)
     state = replace(state, nuisance=state.nuisance + rng.normal(0, 0.02, state.nuisance.size))
     names = ("alpha2", "a2", "theta3", "d4", "beta3", "a6", "theta6", "tool.x", "tool.rx", "tool.ry",
@@ -167,6 +167,13 @@ def test_bad_flush_data_give_clear_errors():
         CalibrationProblem(nominal, on_smr)
     with pytest.raises(DataError, match="flush measurements need"):
         Measurements.from_arrays("flush", data.joints)
+    swapped = data.plane.copy()
+    swapped[[4, 7]] = (swapped[[4, 7]] + 1) % 3  # two contacts numbered with the next plane
+    with pytest.raises(IdentificationError, match=r"tilted by up to .* on plane\(s\) \[2\] \(rows \[9, 6, "):
+        CalibrationProblem(nominal, replace(data, plane=swapped))
+    sideways = nominal.with_frames(tool=make_transform(rotvec_to_matrix([0, np.pi / 2, 0]), np.zeros(3)))
+    with pytest.raises(IdentificationError, match="face normal is the tool's z axis"):
+        CalibrationProblem(sideways, data)  # the face normal given along the flange's x
     plane = Measurements.from_arrays("plane", data.joints[:9], plane=data.plane[:9])
     with pytest.raises(IdentificationError, match="plane0 is in two measurement sets"):
         CalibrationProblem(nominal, [data, plane])

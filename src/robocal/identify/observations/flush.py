@@ -54,6 +54,11 @@ from robocal.identify.observations.plane import PlaneObservation, scale_referenc
 # error): its spin is that axis's tool rotation, named as not observable with the last joint's
 # zero and a_n when the axis is the flange's z (the data see them only through the small tilt)
 FACE_AXIS_TOL_RAD = np.deg2rad(1.0)
+# At the model a calibration starts from, a face beyond these from flush on the plane fitted to its
+# plane's contacts is not a robot error (nominal models tilt a face by well below 1 deg and miss by
+# a few mm): a contact on another plane, not flush, or the face normal given wrong
+MAX_START_TILT_RAD = np.deg2rad(5.0)
+MAX_START_HEIGHT_M = 0.02
 PLANE_FIT_ITERATIONS = 3  # Gauss-Newton steps of a plane fit from its closed-form start (3 reach 1e-15)
 
 
@@ -101,6 +106,27 @@ class FlushObservation(PlaneObservation):
         d = self.dependent_axis
         self.perm = np.stack([(d + 1) % 3, (d + 2) % 3, d], axis=1)
         self.nuisance_names = [f"plane{pid}.{c}" for pid in self.plane_ids for c in "abc"]
+        self._check_flush(robot)
+
+    def _check_flush(self, robot) -> None:
+        """IdentificationError when ``robot``'s faces at the contacts of a plane are farther from
+        flush on the plane fitted to them than any robot's errors explain (`MAX_START_TILT_RAD`,
+        `MAX_START_HEIGHT_M`): a contact numbered with another plane, a face not pressed flush,
+        or a face normal that is not the tool's z."""
+        m = self.modelled(self._fk(robot), self.nuisance_start(robot))
+        tilt, height = np.linalg.norm(m[:, 1:], axis=1) / TILT_LENGTH_M, np.abs(m[:, 0])
+        for what, value, limit, unit, scale in (("tilted by", tilt, MAX_START_TILT_RAD, "deg", 180 / np.pi),
+                                                ("off the plane by", height, MAX_START_HEIGHT_M, "mm", 1e3)):
+            bad = np.flatnonzero(value > limit)
+            if bad.size:
+                worst = bad[np.argsort(-value[bad])][:5]
+                planes = np.unique(self.plane_ids[self.plane_of[bad]]).tolist()
+                raise IdentificationError(
+                    f"{self.data.label or 'flush contacts'}: with {robot.name} the face is {what} up to "
+                    f"{value.max() * scale:.3g} {unit} on plane(s) {planes} (rows "
+                    f"{self.data.source_row[worst].tolist()}), beyond {limit * scale:.3g} {unit}: check "
+                    "those rows' flush_plane ids and that the face normal is the tool's z axis (--tool's "
+                    "rotation)")
 
     def not_observable(self, robot) -> list[str]:
         return not_observable(robot)
