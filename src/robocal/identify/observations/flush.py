@@ -5,9 +5,10 @@ its height along the plane's normal and two angles (the face normal parallel to 
 normal). FIGAROH's TALOS table-contact calibration measures the same ``[z, roll, pitch]``.
 
 The face is the model's tool: its centre is the TCP (``tool.x/y/z``) and its normal the tool
-frame's z axis (``--tool`` with rx, ry, rz; either sense of the normal). The world frame is the
-robot base frame, in which the planes are expressed. Three residuals per contact, measured minus
-modelled (what is measured is a perfect contact: zero height, zero tilt):
+frame's z axis (the model file's ``tool: {xyz, rpy}``; either sense of the normal). The world
+frame is the robot model's (its base frame), in which the planes are expressed. Three residuals
+per contact, measured minus modelled (what is measured is a perfect contact: zero height, zero
+tilt):
 
 - ``-h``: the signed orthogonal distance ``h`` of the TCP to its plane (m), as for ``plane``;
 - ``-L t_u`` and ``-L t_v``: the face normal's tilt from the plane's normal in the plane's two
@@ -125,8 +126,8 @@ class FlushObservation(PlaneObservation):
                     f"{self.data.label or 'flush contacts'}: with {robot.name} the face is {what} up to "
                     f"{value.max() * scale:.3g} {unit} on plane(s) {planes} (rows "
                     f"{self.data.source_row[worst].tolist()}), beyond {limit * scale:.3g} {unit}: check "
-                    "those rows' flush_plane ids and that the face normal is the tool's z axis (--tool's "
-                    "rotation)")
+                    "those rows' flush_plane ids and that the face normal is the tool's z axis (the model's "
+                    "tool rotation)")
 
     def not_observable(self, robot) -> list[str]:
         return not_observable(robot)
