@@ -237,7 +237,3 @@ class FlushObservation(PlaneObservation):
         """``(N,)`` each contact's error, m: the norm of the face centre's height off its plane and
         the two rim lifts (tilts times ``TILT_LENGTH_M``), what ``evaluate`` reports too."""
         return np.linalg.norm(self.modelled(self._fk(robot), nuisance), axis=1)
-
-    def tilt_errors(self, robot, nuisance) -> np.ndarray:
-        """``(N,)`` tilt of each modelled face from its plane, rad (the two angles' norm)."""
-        return np.linalg.norm(self.modelled(self._fk(robot), nuisance)[:, 1:], axis=1) / TILT_LENGTH_M
