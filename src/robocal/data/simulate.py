@@ -87,7 +87,7 @@ class SimulationResult:
     extra SMRs in ``truth.smr``); ``noise`` (N, 3) m the noise added to each point (zeros for
     plane data); ``noise_floor_mm`` (see module docstring); ``outlier_rows`` row indices with a
     gross error; ``true_joints`` (N, n) rad before joint reading noise; ``planes`` (P, 4) unit
-    normal and offset (n.p = c, m) of plane data (world = robot base), else None; ``info`` the
+    normal and offset (n.p = c, m) of plane and flush data (world = robot base), else None; ``info`` the
     settings and seed.
 
     Returned by `robocal.simulate_tracker`.
@@ -99,7 +99,8 @@ class SimulationResult:
     truth : Robot
         The true robot (tracker frame as base, SMR 0 as tool, extra SMRs in ``truth.smr``).
     noise : numpy.ndarray, shape (N, 3)
-        The noise added to each point, metres (zeros for plane data).
+        The noise added to each point, metres (flush data: the face centre's height along the
+        plane's normal plus its two tilts times the 50 mm rim length, along the plane's axes).
     noise_floor_mm : float
         RMS of the noise added (outliers excluded), mm: what a perfect calibration reaches.
     outlier_rows : numpy.ndarray of int
@@ -107,7 +108,8 @@ class SimulationResult:
     true_joints : numpy.ndarray, shape (N, n)
         The joints before the reading noise, radians.
     planes : numpy.ndarray, shape (P, 4), optional
-        Unit normal and offset (n.p = c, m) of each plane (plane data; world = robot base).
+        Unit normal and offset (n.p = c, m) of each plane (plane and flush data; world = robot
+        base; for flush data the normal is along the tool's z at the contacts).
     info : dict
         The settings and the seed.
 
