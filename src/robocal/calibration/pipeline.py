@@ -498,7 +498,7 @@ def _check_consistency(result: CalibrationResult, sigma: dict | None, seed: int,
     problem = result.problem
     result.consistency = check_fit(result.state.robot, result.start, problem.observations,
                                    problem.item_error_vectors(result.state),
-                                   result.space.size, sigma=sigma, seed=seed)
+                                   result.space.size, sigma=sigma, seed=seed, priors=result.prior_scales)
     kept = slice(None) if result.solver.item_weights is None else result.solver.item_weights != 0
     before, after_rms = (position_stats(e[kept])["rms"] for e in result.errors)
     # a solve stopped by a limit or the user's threshold may end anywhere: that is said elsewhere;

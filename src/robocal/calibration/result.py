@@ -513,8 +513,8 @@ class CalibrationResult(_BeforeAfter):
         if self.prior_scales is not None:
             lines.append(self.prior_scales.sentence())
         if leaning := self.leaning_on_prior():
-            lines.append("estimated but leaning on their prior (its share of their information): " + ", ".join(
-                f"{n} {v:.0%}" for n, v in list(leaning.items())[:8]))
+            shares = ", ".join(f"{n} {v:.0%}" for n, v in list(leaning.items())[:8])
+            lines.append(f"estimated but leaning on their prior (its share of their information): {shares}")
         ident, unused = self.identifiability, self.not_used
         lines += vocabulary.lines(ident, [n for n in ident.dropped if block_of(n) != "joint_errors"]
                                   + ident.undetermined)

@@ -164,8 +164,8 @@ def run(args) -> int:
     common = dict(validation=validation or None, method=args.method, seed=args.seed, progress=not args.quiet,
                   force=args.force, sigma=dict(args.sigma), hold_out=args.hold_out, **dict(args.options))
     if start is None:
-        result = calibrate(robot, data, params=args.params, nongeometric=args.nongeometric, priors=args.priors,
-                           **common)
+        result = calibrate(robot, data, params=args.params, nongeometric=args.nongeometric,
+                           priors=args.priors, **common)
     else:
         result = recalibrate_offsets(robot, start, data, **common)
     result.provenance.update(command="robocal " + " ".join(args.argv), robot_spec=args.robot,

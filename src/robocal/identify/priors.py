@@ -8,7 +8,8 @@ scale of one measurement row, estimated from the data by :func:`linear_analysis`
 data determine moves freely; one they cannot determine stays near nominal instead of wandering
 along a null direction. This is seed 003's ridge step with a physical, per-parameter ridge.
 
-The industrial class's scales (1 sigma, :data:`robocal.kinematics.prior_spec.CLASSES`) are deliberately generous: they are the
+The industrial class's scales (1 sigma, :data:`robocal.kinematics.prior_spec.CLASSES`) are deliberately
+generous: they are the
 size of the corrections published calibrations of industrial arms identify, not the machining
 tolerances of the parts. Sources: Mooring, Roth & Driels, *Fundamentals of Manipulator
 Calibration* (Wiley 1991), ch. 1 and 5 (link length errors of tenths of a millimetre to a few
@@ -239,7 +240,7 @@ class PriorScales:
     def option(self) -> str:
         """The ``--priors`` text that sets the scales the data ask for."""
         wider = self.tighter_than_asked
-        return ",".join(f"{g}={v * _DISPLAY[g][1]:.3g}{_DISPLAY[g][0]}" for g, v in wider.items())
+        return ",".join(f"{g}={wider[g] * _DISPLAY[g][1]:.3g}{_DISPLAY[g][0]}" for g in GROUPS if g in wider)
 
     def to_dict(self) -> dict:
         """Plain data (display units: deg, mm, x) for the result JSON and the report."""

@@ -135,7 +135,8 @@ class PriorSpec:
         if isinstance(items, str):
             return cls.parse(items)
         if not isinstance(items, dict):
-            raise ModelError(f"priors: expected a mapping like {{class: service, zeros: 3deg}}, got {items!r:.60}")
+            raise ModelError(f"priors: expected a mapping like {{class: service, zeros: 3deg}}, got "
+                             f"{items!r:.60}")
         known = {"class", "estimate", *GROUPS}
         unknown = sorted(str(k) for k in items if str(k) not in known)
         if unknown:
