@@ -55,8 +55,8 @@ def test_group_scales_maximise_the_evidence_against_a_brute_force_grid():
     assert fit.factors["a"] > 2.0  # the data ask for the wider group
     assert fit.factors["a"] == pytest.approx(fa[i], rel=0.1)
     assert fit.noise == pytest.approx(s[j], rel=0.1)
-    best = log_evidence(stats, precision / np.array([fit.factors["a"]] * 3 + [fit.factors["b"]] * 2 + [1]) ** 2,
-                        fit.noise)
+    factors = np.array([fit.factors["a"]] * 3 + [fit.factors["b"]] * 2 + [1.0])
+    best = log_evidence(stats, precision / factors**2, fit.noise)
     assert best >= grid.max() - 1e-6
     assert fit.gain > 3.0
 
@@ -73,7 +73,8 @@ def _truth(nominal, rng, zero_deg: float, len_mm: float, twist_deg: float = 0.5)
     ``len_mm`` (1 sigma)."""
     up = {}
     for i in range(1, nominal.n_joints + 1):
-        up[f"theta{i}"] = nominal.get(f"theta{i}") + np.deg2rad(zero_deg) * rng.choice([-1, 1]) * rng.uniform(0.8, 1.2)
+        zero = np.deg2rad(zero_deg) * rng.choice([-1, 1]) * rng.uniform(0.8, 1.2)
+        up[f"theta{i}"] = nominal.get(f"theta{i}") + zero
         up[f"alpha{i}"] = nominal.get(f"alpha{i}") + np.deg2rad(twist_deg) * rng.normal()
         for p in ("a", "d"):
             up[f"{p}{i}"] = nominal.get(f"{p}{i}") + len_mm * 1e-3 * rng.normal()
@@ -94,7 +95,8 @@ def test_a_robot_far_from_its_drawing_gets_wider_priors_and_the_held_out_error_r
     assert res.validation["rms"] < 1.5 * noise_3d
     tight = rc.calibrate(nominal, fit, validation=check, nongeometric=None, force=True, priors="estimate=no")
     assert tight.validation["rms"] > 2 * res.validation["rms"]  # measured: 3.19 vs 1.10 mm
-    assert "estimated" in res.summary() and res.to_dict()["priors"]["groups"]["zeros"]["source"] == "estimated"
+    assert "estimated" in res.summary()
+    assert res.to_dict()["priors"]["groups"]["zeros"]["source"] == "estimated"
 
 
 def test_an_industrial_simulation_keeps_the_class_defaults():
@@ -112,7 +114,8 @@ def test_priors_grammar_and_errors():
     assert PriorSpec.parse("twists=17.4533mrad").scales["twists"] == pytest.approx(np.deg2rad(1), rel=1e-5)
     for bad, words in (("zeros=3", "unit"), ("zeros=3mm", "unit"), ("class=robot", "unknown robot class"),
                        ("size=3mm", "unknown key"), ("zeros", "key=value"), ("zeros=-1deg", "unit"),
-                       ("lengths=0mm", "above 0"), ("zeros=1deg,zeros=2deg", "twice"), ("estimate=maybe", "yes or no")):
+                       ("lengths=0mm", "above 0"), ("zeros=1deg,zeros=2deg", "twice"),
+                       ("estimate=maybe", "yes or no")):
         with pytest.raises(ModelError, match=words):
             PriorSpec.parse(bad)
     with pytest.raises(argparse.ArgumentTypeError, match="unit"):
@@ -124,7 +127,8 @@ def test_model_file_priors_block_round_trip(tmp_path):
     path = tmp_path / "m.yaml"
     robot.save(path)
     back = rc.Robot.load(path)
-    assert back.priors.robot_class == "service" and back.priors.scales["zeros"] == pytest.approx(np.deg2rad(3))
+    assert back.priors.robot_class == "service"
+    assert back.priors.scales["zeros"] == pytest.approx(np.deg2rad(3))
     assert class_of(back) == ("service", "named")
     text = path.read_text().replace("zeros: 3deg", "zeros: 3")
     path.write_text(text)
