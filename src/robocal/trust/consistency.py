@@ -27,8 +27,8 @@ the residual better than the step is called a drift.
 **Diagnosis** of an inconsistent fit, in order: the change point; the orientation convention of a
 6-DOF pose file (quaternions scalar-last under ``qw,qx,qy,qz`` headers, or the inverse rotation:
 each tried, the one that fits named); the length unit (:func:`robocal.trust.diagnosis.length_unit`); a
-joint column exchange or sign flip (:func:`robocal.trust.diagnosis.joint_mixup`); before them,
-priors too tight for the robot (:func:`robocal.trust.diagnosis.priors_too_tight`).
+joint column exchange or sign flip (:func:`robocal.trust.diagnosis.joint_mixup`); when none of
+them, priors too tight for the robot (:func:`robocal.trust.diagnosis.priors_too_tight`).
 
 **Worse than nominal.** A fitted model that misses its own data by more than the nominal model
 with the frames fitted (beyond :data:`WORSE_TOLERANCE`) is not written
@@ -339,9 +339,9 @@ def check_fit(robot, start, observations, errors: list[np.ndarray], n_unknowns: 
     result.change_points = find_change_points(robot, observations, errors, noise, seed)
     result.diagnosis = [c.sentence() for c in result.change_points]
     if result.misfit and not result.change_points:
-        tight = priors_too_tight(priors)
-        result.diagnosis += [tight] if tight else []
         result.diagnosis += diagnose_misfit(start, [obs.data for obs in observations])
+        tight = None if result.diagnosis else priors_too_tight(priors)  # a mistake in the data first
+        result.diagnosis += [tight] if tight else []
     return result
 
 

@@ -29,8 +29,11 @@ from robocal.core.errors import RobocalError
 from robocal.data.joint_conventions import COUPLED_OPTION, fanuc_decoupled
 from robocal.data.registration import register_frame
 from robocal.identify.plausibility import error_limit_mm
+from robocal.kinematics.prior_spec import MAX_SCALE
 
 GAIN = 5.0  # a hypothesis must fit this many times better than the data as given
+# wider priors explain the data when the linearised fit's residual RMS falls by at least this fraction
+PRIORS_MIN_RMS_DROP = 0.1
 
 
 def fit_rms_mm(robot, data) -> float:
@@ -165,10 +168,15 @@ def priors_too_tight(scales) -> str | None:
     """The sentence naming prior groups too tight for the robot, with the ``--priors`` option that
     widens them, when widening them explains the data (``scales``: the fit's
     :class:`robocal.identify.priors.PriorScales`; its ``asked`` scales raise the evidence by at
-    least :data:`robocal.identify.evidence.EVIDENCE_GAIN_NATS`); None otherwise."""
+    least :data:`robocal.identify.evidence.EVIDENCE_GAIN_NATS`, the linearised fit's residual RMS
+    falls by :data:`PRIORS_MIN_RMS_DROP` and every scale is one a robot can have,
+    :data:`robocal.kinematics.prior_spec.MAX_SCALE`: else the data hold another mistake); None
+    otherwise."""
     if scales is None or not (option := scales.option()):
         return None
     drop = 1.0 - scales.rms_asked / scales.rms_used if scales.rms_used > 0 else 0.0
+    if drop < PRIORS_MIN_RMS_DROP or any(v > MAX_SCALE[g] for g, v in scales.tighter_than_asked.items()):
+        return None
     other = "" if scales.robot_class == "service" else \
         " (or --priors class=service for a humanoid, a mobile manipulator or a low-cost arm)"
     return (f"priors too tight for this robot ({scales.robot_class} class): widening them to "
