@@ -94,7 +94,7 @@ def test_a_robot_far_from_its_drawing_gets_wider_priors_and_the_held_out_error_r
     noise_3d = 0.5 * np.sqrt(3)
     assert res.validation["rms"] < 1.5 * noise_3d
     tight = rc.calibrate(nominal, fit, validation=check, nongeometric=None, force=True, priors="estimate=no")
-    assert tight.validation["rms"] > 2 * res.validation["rms"]  # measured: 3.19 vs 1.10 mm
+    assert tight.validation["rms"] > 10 * res.validation["rms"]  # measured: 35.3 vs 1.18 mm
     assert "estimated" in res.summary()
     assert res.to_dict()["priors"]["groups"]["zeros"]["source"] == "estimated"
 
