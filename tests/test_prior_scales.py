@@ -154,3 +154,20 @@ def test_priors_too_tight_is_the_diagnosis_of_a_misfit():
     assert priors_too_tight(None) is None
     wide = rc.calibrate(nominal, sim.data, nongeometric=None, force=True)  # estimated: nothing to say
     assert not any("priors too tight" in d for d in wide.consistency.diagnosis)
+
+
+def test_cli_priors_reach_the_calibration_and_its_json(tmp_path, capsys):
+    from robocal.calibration.result import load_result
+    from robocal.cli import main
+
+    sim = rc.simulate_tracker(rc.Robot.from_catalog("abb_irb2600"), 40, noise_mm=0.02, seed=2)
+    sim.data.save(tmp_path / "cal.csv")
+    model = tmp_path / "robot.yaml"
+    rc.Robot.from_catalog("abb_irb2600").with_priors(PriorSpec.parse("class=service,twists=0.5deg")).save(model)
+    assert main(["calibrate", str(tmp_path / "cal.csv"), "--robot", str(model), "--nongeometric", "none",
+                 "--priors", "zeros=2deg,estimate=no", "--json", str(tmp_path / "r.json")]) == 0
+    out = capsys.readouterr().out
+    assert "priors of the service class (named): zeros 2 deg (user), twists 0.5 deg (user)" in out
+    groups = load_result(tmp_path / "r.json")["priors"]["groups"]  # the JSON schema holds it
+    assert groups["zeros"]["source"] == "user" and groups["lengths"]["source"] == "fixed"
+    assert groups["lengths"]["scale"] == pytest.approx(groups["lengths"]["default"])
