@@ -4,6 +4,7 @@ the --priors grammar and the model file's priors: block, and the "priors too tig
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -138,6 +139,8 @@ def test_model_file_priors_block_round_trip(tmp_path):
 
 def test_class_from_the_model():
     assert class_of(rc.Robot.from_catalog("ur5"))[0] == "collaborative"
+    assert class_of(rc.Robot.from_catalog("ur10e"))[0] == "collaborative"
+    assert class_of(replace(rc.Robot.from_catalog("ur5"), name="urdf_arm"))[0] == "industrial"
     assert class_of(rc.Robot.from_catalog("abb_irb120"))[0] == "industrial"
     eight = rc.Robot.from_mdh(*np.zeros((4, 8)))
     assert class_of(eight)[0] == "service"

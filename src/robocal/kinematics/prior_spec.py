@@ -62,8 +62,9 @@ CLASSES = {
 }
 CLASS_ALIASES = {"humanoid": "service", "mobile": "service", "mobile-manipulator": "service",
                  "low-cost": "service", "lowcost": "service", "cobot": "collaborative"}
-# the catalog's makers (robocal.catalog file names) by class; other models go by their joints
-MAKER_CLASS = {"ur": "collaborative", "abb_": "industrial", "fanuc_": "industrial", "kuka_": "industrial",
+# the catalog's makers (robocal.catalog file names, matched at the start of a model's name) by
+# class; other models go by their joints
+MAKER_CLASS = {r"ur\d": "collaborative", "abb_": "industrial", "fanuc_": "industrial", "kuka_": "industrial",
                "yaskawa_": "industrial", "staubli_": "industrial", "meca500": "industrial",
                "puma": "industrial", "epson_": "industrial"}
 SERVICE_MIN_JOINTS = 8  # a chain this long is a torso before an arm: a humanoid or mobile manipulator
@@ -177,7 +178,7 @@ def class_of(robot) -> tuple[str, str]:
         return spec.robot_class, "named"
     name = str(robot.name).lower()
     for prefix, cls in MAKER_CLASS.items():
-        if name.startswith(prefix):
+        if re.match(prefix, name):
             return cls, f"model {robot.name}"
     if robot.n_joints >= SERVICE_MIN_JOINTS:
         return "service", f"{robot.n_joints} joints (a torso before an arm)"
