@@ -174,3 +174,26 @@ def test_cli_priors_reach_the_calibration_and_its_json(tmp_path, capsys):
     groups = load_result(tmp_path / "r.json")["priors"]["groups"]  # the JSON schema holds it
     assert groups["zeros"]["source"] == "user" and groups["lengths"]["source"] == "fixed"
     assert groups["lengths"]["scale"] == pytest.approx(groups["lengths"]["default"])
+
+
+def test_the_stated_priors_widen_the_plausible_corrections():
+    from robocal.core.errors import PlausibilityError
+    from robocal.identify.plausibility import check_corrections
+    from robocal.identify.priors import stated_sigma
+
+    nominal = rc.Robot.from_catalog("ur5")
+    names = ["a2", "theta3"]
+    moved = nominal.with_values({"a2": nominal.get("a2") + 0.02,
+                                 "theta3": nominal.get("theta3") + np.deg2rad(7)})
+    small = {"a2": 1e-4, "theta3": 1e-4}  # determined by the data
+
+    def check(start):
+        prior = dict(zip(names, stated_sigma(start, names), strict=True))
+        check_corrections(start, moved, names, sigma=small, prior=prior)
+
+    with pytest.raises(PlausibilityError, match="a2 by \\+20 mm, theta3 by \\+7 deg"):
+        check(nominal)  # an industrial class's limits: 5 mm (1 % of the reach), 5 deg
+    check(nominal.with_priors(PriorSpec.parse("class=service")))  # 3 x 10 mm per metre, 3 x 3 deg
+    estimated = nominal.with_priors(PriorSpec().with_estimated({"lengths": 0.01, "zeros": np.deg2rad(3)}))
+    with pytest.raises(PlausibilityError):  # the scales estimated from the data do not count
+        check(estimated)

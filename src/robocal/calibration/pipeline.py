@@ -35,7 +35,14 @@ from robocal.identify.plausibility import (
     check_residual,
     check_spread,
 )
-from robocal.identify.priors import PriorScales, fit_priors, linear_analysis, prior_sigma, undetermined
+from robocal.identify.priors import (
+    PriorScales,
+    fit_priors,
+    linear_analysis,
+    prior_sigma,
+    stated_sigma,
+    undetermined,
+)
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
 from robocal.identify.space import ParameterSpace, State, block_of
@@ -462,7 +469,8 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     check_corrections(state0.robot, out.state.robot, space.robot,
                       sigma=dict(zip(space.names, np.sqrt(np.maximum(np.diag(cov), 0.0)), strict=True)),
                       confounded={**_partners(cov, space.names), **ident.confounded_with}, force=force,
-                      warnings=warnings)
+                      warnings=warnings,
+                      prior=dict(zip(space.robot, stated_sigma(state0.robot, space.robot), strict=True)))
     if not out.success:
         warnings.append(out.message)
     estimated_terms = [n for n in space.robot if block_of(n) == "joint_errors"]

@@ -86,6 +86,13 @@ def group_scales(robot) -> dict[str, float]:
     return defaults if spec is None else {**defaults, **spec.estimated, **spec.scales}
 
 
+def stated_sigma(robot, names) -> np.ndarray:
+    """:func:`prior_sigma` with the scales the class and the user state, not those a calibration
+    estimated from the data (the plausibility limits' measure: a mistake in the data widens those)."""
+    spec = robot.priors
+    return prior_sigma(robot if spec is None else robot.with_priors(spec.with_estimated({})), names)
+
+
 def group_of(robot, name: str) -> str | None:
     """The prior group of a parameter (:data:`robocal.kinematics.prior_spec.GROUPS`), None for
     frames, SMR offsets and nuisance (no prior)."""
