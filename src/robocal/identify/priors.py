@@ -269,7 +269,8 @@ class PriorScales:
         """One line: the class and each group's scale and source."""
         parts = [f"{g} {self.display({g: v})[g]:.3g} {_DISPLAY[g][0]} ({self.source[g]})"
                  for g, v in self.scales.items()]
-        return f"priors of the {self.robot_class} class ({self.why}): " + ", ".join(parts)
+        return f"priors of the {self.robot_class} class ({self.why}): " + (
+            ", ".join(parts) or "no estimated parameter has a prior (frames only)")
 
 
 def fit_priors(robot, J: np.ndarray, r: np.ndarray, names, noise: float) -> tuple[object, PriorScales]:
