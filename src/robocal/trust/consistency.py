@@ -340,8 +340,10 @@ def check_fit(robot, start, observations, errors: list[np.ndarray], n_unknowns: 
     result.diagnosis = [c.sentence() for c in result.change_points]
     if result.misfit and not result.change_points:
         result.diagnosis += diagnose_misfit(start, [obs.data for obs in observations])
-        tight = None if result.diagnosis else priors_too_tight(priors)  # a mistake in the data first
-        result.diagnosis += [tight] if tight else []
+    mistakes = [d for d in result.diagnosis if d not in {c.sentence() for c in result.change_points}]
+    # a mistake in the data first; a change point may itself be a kinematic error the priors held
+    tight = priors_too_tight(priors) if result.misfit and not mistakes else None
+    result.diagnosis += [tight] if tight else []
     return result
 
 
