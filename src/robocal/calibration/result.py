@@ -397,7 +397,7 @@ class CalibrationResult(_BeforeAfter):
                           for n in names}}
 
     def leaning_on_prior(self) -> dict[str, float]:
-        """The estimated parameters whose prior carries at least :data:`PRIOR_SHARE_SHOWN` of their
+        """The estimated parameters whose prior carries at least `PRIOR_SHARE_SHOWN` of their
         information (posterior / prior variance: how much the prior holds them), largest first;
         the parameters held near nominal are listed with the not determined ones."""
         ratio = self.identifiability.prior_ratio
