@@ -5,6 +5,8 @@ One `Measurements` holds one observation kind for all its rows:
 - ``point``: ``points (N, 3)`` m, an SMR position in the tracker frame;
 - ``pose``: ``points (N, 3)`` m and ``rotations (N, 3, 3)``, a 6-DOF probe pose in the tracker frame;
 - ``plane``: ``plane (N,)`` int, the index of the plane the probe tip touched (no coordinates);
+- ``flush``: ``plane (N,)`` int, the index of the plane the tool face lay flush on (CSV column
+  ``flush_plane``; no coordinates: the contact fixes the face's height and two angles);
 - ``distance``: ``pair (N,)`` int and ``distance (N,)`` m. The two rows that share a ``pair`` id are
   the two ends (two joint vectors / SMRs) of one measured distance, and both carry the same
   measured distance (ball bar length, or distance between two tracker readings).
@@ -34,7 +36,8 @@ units: ``q1_deg..qn_deg`` or ``q1_rad..qn_rad`` (a prismatic joint's ``q{i}_mm``
 axes ``e1_mm`` / ``e1_m`` (a linear track) or ``e1_deg`` / ``e1_rad``, which come first in ``joints``
 (a track carries the arm: joints ``(e1, q1..q6)``); ``x_mm y_mm z_mm`` or ``x_m y_m z_m``; optional
 ``smr``, ``sigma_mm``/``sigma_m``, ``qw qx qy qz`` (pose), ``plane`` (plane contacts, then no
-x/y/z), ``pair`` and ``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``,
+x/y/z), ``flush_plane`` (flush contacts of the tool face, then no x/y/z), ``pair`` and
+``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``,
 ``approach1..approachn`` and ``travel1_rad..traveln_rad`` (or ``_deg``) (each written only where
 it differs from what the row order implies), ``payload_kg`` with optional ``payload_x_mm,
 payload_y_mm, payload_z_mm`` (or ``_m``; all three or none, default 0: at the flange) and
@@ -66,7 +69,7 @@ from robocal.kinematics.transforms import ROTATION_TOL
 _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
                  "pair", "distance", "approach", "travel", "payload", "temperature")  # row-indexed
 _LENGTH_COLUMNS = ("x", "y", "z", "sigma", "distance")
-_PLAIN_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row", "qw", "qx", "qy", "qz")
+_PLAIN_COLUMNS = ("smr", "plane", "flush_plane", "pair", "pose_id", "source_row", "qw", "qx", "qy", "qz")
 # A laser tracker's range is below ~80 m; anything farther is a unit mistake whatever the robot.
 MAX_TRACKER_RANGE_M = 100.0
 MAX_PAYLOAD_KG = 5000.0  # no arm carries more; a larger value is a unit mistake (g, lb)
@@ -119,7 +122,7 @@ class Measurements:
 
     Attributes
     ----------
-    kind : {'point', 'pose', 'plane', 'distance'}
+    kind : {'point', 'pose', 'plane', 'flush', 'distance'}
         What each row observed.
     joints : numpy.ndarray, shape (N, n)
         Commanded joints, radians.
@@ -220,7 +223,7 @@ class Measurements:
 
         Parameters
         ----------
-        kind : {'point', 'pose', 'plane', 'distance'}
+        kind : {'point', 'pose', 'plane', 'flush', 'distance'}
             What each row observed; it says which of the arrays below are required.
         joints : array_like, shape (N, n)
             Commanded joints, radians, in measurement order.
@@ -229,7 +232,7 @@ class Measurements:
         rotations : array_like, shape (N, 3, 3), optional
             Measured orientations, rotation matrices (``pose``).
         plane : array_like of int, shape (N,), optional
-            Index of the touched plane (``plane``).
+            Index of the touched plane (``plane``, ``flush``).
         pair : array_like of int, shape (N,), optional
             Pair id, two rows each (``distance``).
         distance : array_like, shape (N,), optional
@@ -550,7 +553,7 @@ class Measurements:
             for k, c in enumerate(("qw", "qx", "qy", "qz")):
                 cols[c] = quat[:, (3, 0, 1, 2)[k]]
         if self.plane is not None:
-            cols["plane"] = self.plane
+            cols[self.spec.column] = self.plane
         if self.pair is not None:
             cols["pair"] = self.pair
             cols["distance_m"] = self.distance
@@ -832,7 +835,7 @@ def _column_roles(header: list[str], name: str, header_line: int) -> dict:
                             "q1_deg..qn_deg (or _rad), e1_mm (a track), x_mm,y_mm,z_mm (or _m), smr, "
                             "sigma_mm, "
                             "qw,qx,qy,qz, "
-                            "plane, pair, distance_mm, pose_id, source_row, approach1..n, "
+                            "plane, flush_plane, pair, distance_mm, pose_id, source_row, approach1..n, "
                             "travel1_deg..n, payload_kg, payload_x_mm..payload_z_mm, temperature_c. "
                             "For another layout use `robocal import`")
         roles[h] = role
@@ -873,11 +876,16 @@ def _data_kind(roles: dict, name: str) -> str:
     if quat and len(quat) != 4:
         raise DataError(f"{name}: a pose needs all of qw, qx, qy, qz; missing "
                         f"{sorted({'qw', 'qx', 'qy', 'qz'} - quat)}")
-    if "plane" in present:
+    marked = [spec.name for spec in OBSERVED.values() if spec.column and spec.column in present]
+    if len(marked) > 1:
+        raise DataError(f"{name}: the columns {', '.join(OBSERVED[k].column for k in marked)} mark different "
+                        f"kinds ({', '.join(marked)}): one file holds one kind of contact")
+    if marked:
+        column = OBSERVED[marked[0]].column
         if xyz or quat or "pair" in present:
-            raise DataError(f"{name}: plane contacts have only joints and 'plane'; remove x/y/z, "
+            raise DataError(f"{name}: {marked[0]} contacts have only joints and '{column}'; remove x/y/z, "
                             "quaternion and pair columns")
-        return "plane"
+        return marked[0]
     if "pair" in present or "distance" in present:
         if not {"pair", "distance"} <= present:
             raise DataError(f"{name}: distance data need both 'pair' and 'distance_mm' columns")
@@ -918,7 +926,7 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
                             "give a unit quaternion qw,qx,qy,qz")
         kw["rotations"] = Rotation.from_quat(qv).as_matrix()
     if "plane" in spec.arrays:
-        kw["plane"] = col["plane"].astype(np.int64)
+        kw["plane"] = col[spec.column].astype(np.int64)
     if "pair" in spec.arrays:
         kw["pair"] = col["pair"].astype(np.int64)
         kw["distance"] = length("distance")

@@ -90,7 +90,9 @@ def _or(value, default):
 
 # what one observation's error is, by kind (the result's per-row error_before / error_after, mm)
 ERROR_LABELS = {"point": "position error (mm)", "pose": "position error (mm)",
-                "plane": "distance to fitted plane (mm)", "distance": "error of the pair's distance (mm)"}
+                "plane": "distance to fitted plane (mm)",
+                "flush": "flush contact error: height and rim lifts (mm)",
+                "distance": "error of the pair's distance (mm)"}
 
 
 class _ObsErrors:
@@ -247,7 +249,7 @@ def _summary(result: dict) -> str:
 
 
 _KIND_ERROR = {"point": "position", "pose": "position", "plane": "distance to the plane",
-               "distance": "distance error"}
+               "flush": "flush contact error", "distance": "distance error"}
 
 
 def _per_file(result: dict) -> str:
@@ -699,6 +701,10 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     if accuracy:
         sections.append(("predicted-accuracy", "Predicted accuracy over the workspace", accuracy))
     sections.append(("parameters", "Parameters", _parameters(result)))
+    from robocal.report.priors import section as priors_section
+
+    if priors := priors_section(result):
+        sections.append(("priors", "Parameter priors", priors))
     from robocal.report.conditions import section as conditions_section
 
     working = conditions_section(result)
@@ -722,7 +728,7 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     data = result.get("data") or {}
     subtitle = (f"{esc(data.get('file'))} &middot; error model {error_model(result)[0]} &middot; "
                 f"method {esc(result.get('method'))}")
-    narrow = {"model-selection", "identifiability", "rejected", "iso9283", "history"}
+    narrow = {"model-selection", "identifiability", "rejected", "iso9283", "history", "priors"}
     if not _joint_error_names(result):  # the parameter table alone: half the width is enough
         narrow.add("parameters")
     return page(title, subtitle, sections, result.get("robocal_version"), frozenset(narrow))
