@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
+from importlib import resources
 
 import numpy as np
 
@@ -62,11 +63,9 @@ CLASSES = {
 }
 CLASS_ALIASES = {"humanoid": "service", "mobile": "service", "mobile-manipulator": "service",
                  "low-cost": "service", "lowcost": "service", "cobot": "collaborative"}
-# the catalog's makers (robocal.catalog file names, matched at the start of a model's name) by
-# class; other models go by their joints
-MAKER_CLASS = {r"ur\d": "collaborative", "abb_": "industrial", "fanuc_": "industrial", "kuka_": "industrial",
-               "yaskawa_": "industrial", "staubli_": "industrial", "meca500": "industrial",
-               "puma": "industrial", "epson_": "industrial"}
+# catalog models whose class is not industrial (a pattern matched at the start of the catalog name);
+# every other catalog model is an industrial arm, and models outside the catalog go by their joints
+CATALOG_CLASS = {r"ur\d": "collaborative"}
 SERVICE_MIN_JOINTS = 8  # a chain this long is a torso before an arm: a humanoid or mobile manipulator
 _BOOL = {"yes": True, "true": True, "no": False, "false": False}
 _VALUE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-z]+)\s*$")
@@ -177,9 +176,9 @@ def class_of(robot) -> tuple[str, str]:
     if spec is not None and spec.robot_class is not None:
         return spec.robot_class, "named"
     name = str(robot.name).lower()
-    for prefix, cls in MAKER_CLASS.items():
-        if re.match(prefix, name):
-            return cls, f"model {robot.name}"
+    if resources.files("robocal").joinpath("catalog", f"{name}.yaml").is_file():  # a catalog model
+        cls = next((c for prefix, c in CATALOG_CLASS.items() if re.match(prefix, name)), "industrial")
+        return cls, f"model {robot.name}"
     if robot.n_joints >= SERVICE_MIN_JOINTS:
         return "service", f"{robot.n_joints} joints (a torso before an arm)"
     return "industrial", "default for a serial arm"
