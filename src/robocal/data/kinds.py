@@ -77,6 +77,15 @@ OBSERVED = {spec.name: spec for spec in (
     KindSpec("plane", "plane:PlaneObservation", ("plane",), sigma_m=10e-6, columns="a plane"),
     KindSpec("distance", "distance:DistanceObservation", ("pair", "distance"), sigma_m=5e-6, group="pair",
              rows_per_placement=2, columns="pair and distance_mm"),
+    # motion capture: markers on any link, their offsets and the capture frame estimated with the robot
+    KindSpec("marker", "marker:MarkerObservation", ("points", "link"), sigma_m=0.3e-3, several_smrs=True,
+             columns="x_mm,y_mm,z_mm and link"),
+    # a camera's board poses (board in the camera frame): camera in the cell, board on the flange ...
+    KindSpec("eye_to_hand", "camera:EyeToHandObservation", ("points", "rotations"), sigma_m=1e-3,
+             columns="x_mm,y_mm,z_mm and qw..qz"),
+    # ... or camera on the flange, board in the cell (hand-eye)
+    KindSpec("eye_in_hand", "camera:EyeInHandObservation", ("points", "rotations"), sigma_m=1e-3,
+             columns="x_mm,y_mm,z_mm and qw..qz"),
 )}
 KINDS = tuple(OBSERVED)  # every kind's name, in the order messages list them
 
