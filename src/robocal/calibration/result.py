@@ -110,6 +110,9 @@ class CalibrationResult(_BeforeAfter):
         The joint-error terms identified, when any.
     model_selection : dict or None
         The cross-validation table when the terms were chosen automatically.
+    variance_components : list of Components
+        Per 6-D set whose weights were estimated: its position and rotation noise
+        (`robocal.identify.variance_components`).
     provenance : dict
         Versions, date and input files.
 
@@ -148,6 +151,7 @@ class CalibrationResult(_BeforeAfter):
     provenance: dict = field(default_factory=dict)
     consistency: Consistency | None = None
     predicted_accuracy: dict | None = None
+    variance_components: list = field(default_factory=list)  # per 6-D set (identify.variance_components)
     error_model_choice: str | None = None  # why the default error model is geometric, when it is
 
     @property
@@ -357,6 +361,8 @@ class CalibrationResult(_BeforeAfter):
             out["nongeometric"] = self.nongeometric
         if self.model_selection is not None:
             out["model_selection"] = self.model_selection
+        if self.variance_components:
+            out["variance_components"] = [c.to_dict() for c in self.variance_components]
         if (groups := thermal_groups_of(self.robot, self.unknowns)) is not None:
             out["thermal_groups"] = groups
         if (section := conditions.section(self)) is not None:
@@ -507,6 +513,7 @@ class CalibrationResult(_BeforeAfter):
                          f"estimated, {len(out)} left out (no effect or not separable from the geometry)")
         if self.model_selection is not None:
             lines.append(selection_table(self.model_selection))
+        lines += [c.line() for c in self.variance_components]
         if (section := conditions.section(self)) is not None:
             lines += conditions.summary_lines(section)
         if len(self.rejected):

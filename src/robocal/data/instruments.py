@@ -17,7 +17,7 @@ An empty instrument name means "not declared": the kind's own default noise appl
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from robocal.core.errors import DataError
 
@@ -98,3 +98,29 @@ def check_instrument(name: str, kind: str) -> str:
         raise DataError(f"a {name} does not measure {kind} rows (it measures {', '.join(inst.kinds)}): "
                         "declare the instrument that took the data")
     return name
+
+
+def declared(sets: list, name: str | None) -> list:
+    """Measurement sets with the instrument ``name`` declared on those that declare none
+    (``name`` None or "": as they are); DataError for a set that declares another one."""
+    if not name:
+        return list(sets)
+    out = []
+    for d in sets:
+        if d.instrument and d.instrument != name:
+            raise DataError(f"{d.label or 'a data set'} declares the instrument {d.instrument!r}, not "
+                            f"{name!r}: remove its '# instrument:' line or the instrument option")
+        out.append(replace(d, instrument=check_instrument(name, d.kind)))
+    return out
+
+
+def default_method(sets: list) -> str:
+    """The calibration method for ``sets`` when none is named: ``robust`` when an instrument with
+    heavy-tailed errors took one of them, else ``lsq``."""
+    heavy = any(d.instrument and INSTRUMENTS[d.instrument].heavy_tailed for d in sets)
+    return "robust" if heavy else "lsq"
+
+
+def noise_of(data) -> float:
+    """1-sigma noise (m) of a set's rows without a sigma column: its instrument's, else its kind's."""
+    return INSTRUMENTS[data.instrument].sigma_m if data.instrument else data.spec.sigma_m

@@ -18,6 +18,7 @@ DEFAULT_LENGTH_SCALE = 0.1
 class PoseObservation(Observation):
     kind = "pose"
     rows_per_item = 6
+    variance_groups = ("position", "rotation")  # rows per item: 3 of each (variance components)
 
     def __init__(self, data, robot, length_scale: float = DEFAULT_LENGTH_SCALE) -> None:
         super().__init__(data, robot)
@@ -25,6 +26,12 @@ class PoseObservation(Observation):
         self.measured[:, :3, :3] = data.rotations
         self.measured[:, :3, 3] = data.points
         self.measured[:, 3, 3] = 1.0
+        self.set_length_scale(length_scale)
+
+    def set_length_scale(self, length_scale: float) -> None:
+        """Weigh a rad of orientation residual like ``length_scale`` m of position residual
+        (:mod:`robocal.identify.variance_components` estimates it)."""
+        self.length_scale = float(length_scale)
         self.scale = np.array([1.0, 1.0, 1.0, length_scale, length_scale, length_scale])
 
     def residuals(self, robot, nuisance=None) -> np.ndarray:
