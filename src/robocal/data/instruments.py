@@ -82,6 +82,16 @@ INSTRUMENTS = {i.name: i for i in (
 )}
 
 
+# the instrument a kind implies when the data declare none (only it measures such rows)
+IMPLIED = {"marker": "mocap", "eye_to_hand": "camera", "eye_in_hand": "camera"}
+
+
+def instrument_of(data) -> str:
+    """The instrument of a measurement set: the one it declares, else the one its kind implies
+    (`IMPLIED`), else "" (undeclared)."""
+    return data.instrument or IMPLIED.get(data.kind, "")
+
+
 def instrument_spec(name: str) -> Instrument:
     """The instrument called ``name``; DataError for an unknown one (naming the known ones)."""
     if name not in INSTRUMENTS:
@@ -117,10 +127,10 @@ def declared(sets: list, name: str | None) -> list:
 def default_method(sets: list) -> str:
     """The calibration method for ``sets`` when none is named: ``robust`` when an instrument with
     heavy-tailed errors took one of them, else ``lsq``."""
-    heavy = any(d.instrument and INSTRUMENTS[d.instrument].heavy_tailed for d in sets)
+    heavy = any(instrument_of(d) and INSTRUMENTS[instrument_of(d)].heavy_tailed for d in sets)
     return "robust" if heavy else "lsq"
 
 
 def noise_of(data) -> float:
     """1-sigma noise (m) of a set's rows without a sigma column: its instrument's, else its kind's."""
-    return INSTRUMENTS[data.instrument].sigma_m if data.instrument else data.spec.sigma_m
+    return INSTRUMENTS[instrument_of(data)].sigma_m if instrument_of(data) else data.spec.sigma_m

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robocal.data.instruments import instrument_of
 from robocal.identify.robust import leverage
 from robocal.identify.solvers import SolverResult
 from robocal.identify.space import ParameterSpace, State
@@ -74,8 +75,8 @@ def chosen(problem, wanted: bool | None = None) -> list[int]:
     none when False; by default (None) the camera's and every 6-D set declared taken with an
     instrument other than a laser tracker (a tracker's 6-DOF probe keeps its fixed scale)."""
     def default(obs) -> bool:
-        instrument = obs.data.instrument
-        return instrument != "tracker" and (bool(instrument) or obs.kind != "pose")
+        instrument = instrument_of(obs.data)
+        return bool(instrument) and instrument != "tracker"
 
     return [k for k, obs in enumerate(problem.observations)
             if takes_part(obs) and (wanted or (wanted is None and default(obs)))]
