@@ -11,6 +11,7 @@ from robocal.core.errors import DataError, PlausibilityError
 from robocal.core.io import write_all
 from robocal.core.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
 from robocal.data.csv_table import count_lines
+from robocal.data.instruments import declared
 from robocal.data.registration import apply_registration, register_frame
 from robocal.identify.observations import observation_for
 from robocal.identify.plausibility import check_joint_limits, check_residual, check_spread
@@ -137,7 +138,7 @@ def check_files_memory(paths) -> None:
 
 
 def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bool = False,
-             names: dict | None = None) -> EvaluationResult:
+             names: dict | None = None, instrument: str | None = None) -> EvaluationResult:
     """Position error statistics (mm) of ``robot`` against ``data``.
 
     ``fit_frame`` first registers the base frame and SMR offsets on ``data`` (for a nominal
@@ -166,6 +167,10 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
         Turn the plausibility errors into warnings.
     names : dict, optional
         ``{"model": ..., "data": ..., "frame_from": ...}``: how the summary and the JSON name them.
+    instrument : str, optional
+        The instrument that took ``data`` if it declares none (`robocal.data.instruments`): its
+        documented noise is the consistency test's. Marker and camera data fit their own frames
+        (capture frame and marker offsets; camera and board) on ``data`` itself.
 
     Returns
     -------
@@ -199,6 +204,7 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     >>> round(stats["rms"], 6) == round(sim.noise_floor_mm, 6), stats["error_vectors_mm"].shape
     (True, (30, 3))
     """
+    data = declared([data], instrument)[0]
     try:
         return EvaluationResult(_statistics(robot, data, fit_frame, frame_from, force), names, fit_frame)
     except PlausibilityError as exc:  # the data's own diagnosis first when it tells more

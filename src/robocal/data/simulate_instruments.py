@@ -75,8 +75,10 @@ def simulate_markers(robot, n_poses: int = 40, *, links=None, noise_mm: float = 
         ``info["frames"]``: ``capture`` (the robot's world in the capture frame) and
         ``markers`` (offsets ``(K, 3)`` m in their link frames).
     """
-    links = np.array([robot.n_joints] * 3 if links is None else links, int)
-    if links.ndim != 1 or links.size == 0 or links.min() < 0 or links.max() > robot.n_joints:
+    given = np.array([robot.n_joints] * 3 if links is None else links, float)
+    links = given.astype(int)
+    if given.ndim != 1 or links.size == 0 or (links != given).any() or links.min() < 0 \
+            or links.max() > robot.n_joints:
         raise DataError(f"marker links must be frames 0..{robot.n_joints}, got {links.tolist()}")
     if not (noise_mm >= 0 and n_poses >= 1):
         raise DataError("the noise must be >= 0 mm and n_poses >= 1")
@@ -166,3 +168,23 @@ def simulate_camera(robot, n_poses: int = 40, *, mount: str = "cell", noise_mm: 
             "frames": {k: v.tolist() for k, v in frames.items()}}
     return SimulationResult(data=data, truth=replace(true, name=f"{robot.name}_true"), noise=noise + gross,
                             noise_floor_mm=floor, outlier_rows=rows, true_joints=q, planes=None, info=info)
+
+
+KINDS = ("marker", "eye_to_hand", "eye_in_hand")  # the kinds simulated here (robocal simulate --kind)
+
+
+def simulate_kind(robot, kind: str, n_poses: int, *, noise_mm: float, rotation_noise_deg: float,
+                  outliers: float = 0.0, links=None, seed: int = 0) -> SimulationResult:
+    """:func:`simulate_markers` (``kind='marker'``) or :func:`simulate_camera` (the camera kinds)
+    with the command line's options; DataError for another kind."""
+    if n_poses is None:
+        raise DataError(f"simulated {kind} data need a number of poses (--poses), not planned joints")
+    if kind == "marker":
+        return simulate_markers(robot, n_poses, links=links, noise_mm=noise_mm, outliers=outliers, seed=seed)
+    mount = {v: k for k, v in MOUNTS.items()}.get(kind)
+    if mount is None:
+        raise DataError(f"kind {kind!r} is not an instrument kind: {', '.join(KINDS)}")
+    if links is not None:
+        raise DataError("--links places markers (kind marker), not a camera's board")
+    return simulate_camera(robot, n_poses, mount=mount, noise_mm=noise_mm, noise_deg=rotation_noise_deg,
+                           outliers=outliers, seed=seed)

@@ -157,6 +157,18 @@ class Fit(Protocol):
     judged: list
 
 
+def _absorbed(result: Fit) -> set[str]:
+    """Robot parameters held at nominal because an instrument's own frame (a camera's, a capture
+    system's: observations with ``frames_replace_base``) moves the TCP exactly as they do: their
+    error is a rigid motion of the robot's world that frame takes, as the base frame takes it for a
+    tracker, so they predict no error in the instrument's frame."""
+    frames = {n for obs in result.problem.observations if getattr(obs, "frames_replace_base", False)
+              for n in obs.nuisance_names}
+    ident = result.identifiability
+    return {n for n in ident.dropped if ident.confounded_with.get(n)
+            and set(ident.confounded_with[n]) <= frames}
+
+
 def prediction(result: Fit) -> Prediction:
     """The :class:`Prediction` of a fit (a calibration result): the posterior of its candidate robot
     parameters the calibrated model carries (extra SMR offsets marginalised), ``u`` from its
@@ -164,7 +176,8 @@ def prediction(result: Fit) -> Prediction:
     when there are any."""
     problem, state, robot = result.problem, result.state, result.robot
     nuisance = set(problem.nuisance_names)
-    names = [n for n in result.identifiability.names if n not in nuisance and n in robot.parameter_names]
+    names = [n for n in result.identifiability.names if n not in nuisance and n in robot.parameter_names
+             and n not in _absorbed(result)]
     r = problem.residuals(state)
     s0 = float(np.sqrt(r @ r / max(r.size - result.space.size, 1)))
     errors = problem.item_error_vectors(state)

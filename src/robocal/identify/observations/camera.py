@@ -48,6 +48,7 @@ class CameraObservation(Observation):
     """Board poses seen by a camera (see the module); subclasses fix the mounting."""
 
     kind = "camera"
+    frames_replace_base = True  # its frames take the robot base's place (trust.coverage)
     rows_per_item = 6
     inverted = False  # eye-in-hand: the chain is F(q)^-1
     blind_spot = "a camera's own frames replace the robot's base and tool frames"

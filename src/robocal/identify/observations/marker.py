@@ -41,6 +41,7 @@ def not_observable(robot) -> list[str]:
 
 class MarkerObservation(Observation):
     kind = "marker"
+    frames_replace_base = True  # its frames take the robot base's place (trust.coverage)
     rows_per_item = 3
     blind_spot = "the capture frame and the markers' offsets replace the robot's base and tool frames"
 
