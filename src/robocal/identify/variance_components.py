@@ -14,7 +14,8 @@ with ``v`` the residuals in the group's own unit (m or rad), ``w`` the rows' rob
 least squares) and ``h_ii`` the leverage of row i in the weighted fit with its prior rows (so
 ``sum (1 - h_ii)`` is the group's share of the redundancy). The length scale becomes the ratio of
 the two sigmas, the fit is redone with it, and so on until the ratio settles
-(:data:`RATIO_TOL`, at most :data:`MAX_ROUNDS` fits). With known sigmas this recovers them
+(:data:`RATIO_TOL`, at most :data:`MAX_ROUNDS` fits; a step that reverses the previous one, as a
+robust fit's weights can make it, is halved). With known sigmas this recovers them
 (tests/test_instruments.py simulates it).
 
 An observation takes part when it has ``variance_groups`` (position, rotation: three rows each)
@@ -34,7 +35,7 @@ from robocal.identify.solvers import SolverResult
 from robocal.identify.space import ParameterSpace, State
 
 RATIO_TOL = 0.01  # the length scale has settled when a round changes it by less than 1 %
-MAX_ROUNDS = 8  # fits at most (the ratio settles in 3-5 on real and simulated data)
+MAX_ROUNDS = 15  # fits at most (lsq settles in 2-4; robust weights can slow it to ~10)
 MIN_REDUNDANCY = 1.0  # a group with less redundancy than this has no variance of its own to give
 
 
@@ -120,6 +121,7 @@ def fit(solve: Callable[[State], SolverResult], problem, start: State, space: Pa
     if not parts:
         return out, []
     rounds, settled, last = 1, False, {}
+    previous = dict.fromkeys(parts, 0.0)  # each set's last log step of its length scale
     while rounds < MAX_ROUNDS:
         last = estimate(problem, out.state, space, out.item_weights)
         changes = []
@@ -129,9 +131,12 @@ def fit(solve: Callable[[State], SolverResult], problem, start: State, space: Pa
             obs = problem.observations[k]
             if min(red_m, red_rad) < MIN_REDUNDANCY or not (s_m > 0 and s_rad > 0):
                 continue
-            ratio = s_m / s_rad
-            changes.append(abs(np.log(ratio / obs.length_scale)))
-            obs.set_length_scale(ratio)
+            step = float(np.log(s_m / s_rad / obs.length_scale))
+            if step * previous[k] < 0:  # a reversal (robust weights moving with the scale): halve it
+                step /= 2
+            previous[k] = step
+            changes.append(abs(step))
+            obs.set_length_scale(obs.length_scale * np.exp(step))
         if not changes or max(changes) < RATIO_TOL:
             settled = True
             break
