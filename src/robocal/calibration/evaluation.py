@@ -16,7 +16,6 @@ from robocal.data.registration import apply_registration, register_frame
 from robocal.identify.observations import observation_for
 from robocal.identify.plausibility import check_joint_limits, check_residual, check_spread
 from robocal.kinematics.joint_errors import extrapolated_conditions
-from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import check_fit
 from robocal.trust.diagnosis import diagnosed, fit_rms_mm
@@ -177,7 +176,7 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     EvaluationResult
         A dict (as before) with ``summary()``, ``warnings``, ``to_dict()``, ``write()``:
         ``n``, ``rms``, ``mean``, ``max``, ``p95`` (mm); ``errors_mm`` ``(N,)`` (plane/distance:
-        signed); ``error_vectors_mm`` ``(N, 3)`` (point/pose); ``rotation_deg`` (pose);
+        signed); ``error_vectors_mm`` ``(N, 3)`` (point/pose); ``rotation_deg`` (6-D rows: pose, camera);
         ``kind``; ``n_poses``; ``warnings`` (list of str); ``consistency`` (the residual test);
         with a fitted frame ``robot`` and ``registration_rms_mm``.
 
@@ -250,10 +249,9 @@ def _statistics(robot, data, fit_frame: bool, frame_from, force: bool) -> dict:
         stats["error_vectors_mm"] = err * 1e3
     else:
         stats["errors_mm"] = err * 1e3
-    if data.spec.sees_orientation:
-        R = robot.fk(data.joints, smr=data.smr, conditions=data.conditions)[:, :3, :3]
-        ang = np.linalg.norm(matrix_to_rotvec(data.rotations @ np.swapaxes(R, 1, 2)), axis=1)
-        deg = np.rad2deg(ang)
+    if data.rotations is not None:  # 6-D rows (a probe, a camera): the rotation part of each residual
+        r = obs.residuals(robot, nuisance).reshape(obs.n_items, 6)
+        deg = np.rad2deg(np.linalg.norm(r[:, 3:] / obs.scale[3:], axis=1))
         stats["rotation_deg"] = {"rms": float(np.sqrt(np.mean(deg**2))), "mean": float(deg.mean()),
                                  "max": float(deg.max()), "p95": float(np.percentile(deg, 95))}
     stats.update(out)
