@@ -24,7 +24,7 @@ from robocal.core.errors import DataError, IdentificationError, PlausibilityErro
 from robocal.core.progress import Progress
 from robocal.core.resources import calibration_bytes, check_memory, few_threads, memory_guard
 from robocal.core.version import __version__
-from robocal.data.instruments import declared, default_method
+from robocal.data.instruments import declared, default_method, instrument_of
 from robocal.data.kinds import kind_spec
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
@@ -475,7 +475,8 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
                     "data": [d.source for d in datasets], "validation": [v.source for v in validations],
                     "fingerprints": {"data": [fingerprint(d.joints) for d in datasets],
                                      "validation": [fingerprint(v.joints) for v in validations]},
-                    "sigma_mm": {k: v * 1e3 for k, v in (sigma or {}).items()}})
+                    "sigma_mm": {k: v * 1e3 for k, v in (sigma or {}).items()},
+                    "instruments": [instrument_of(d) or None for d in datasets]})
     result.variance_components = found
     _check_consistency(result, sigma, seed, force)
     states = (state0, State(final_robot, out.state.nuisance))
