@@ -238,3 +238,15 @@ def test_cli_simulates_calibrates_and_evaluates_a_camera(tmp_path, capsys):
     capsys.readouterr()
     assert main(["calibrate", str(data), "--robot", "ur10", "--instrument", "mocap"]) != 0
     assert "declares the instrument 'camera', not 'mocap'" in capsys.readouterr().err
+
+
+def test_subsets_and_files_keep_links_and_instrument(tmp_path):
+    data = rc.simulate_markers(ROBOT, 6, links=[6, 2], seed=3).data
+    first, rest = data.split_poses(3, seed=0)
+    assert first.instrument == rest.instrument == "mocap"
+    assert first.link.tolist() == [6, 2] * 3 and len(rest) == 6
+    path = tmp_path / "m.csv"
+    first.save(path)
+    back = rc.Measurements.load(path)
+    assert back.link.tolist() == first.link.tolist() and back.instrument == "mocap"
+    assert data.first_poses(2).link.tolist() == [6, 2, 6, 2]
