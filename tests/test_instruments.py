@@ -250,3 +250,15 @@ def test_subsets_and_files_keep_links_and_instrument(tmp_path):
     back = rc.Measurements.load(path)
     assert back.link.tolist() == first.link.tolist() and back.instrument == "mocap"
     assert data.first_poses(2).link.tolist() == [6, 2, 6, 2]
+
+
+def test_markers_default_to_the_flange():
+    text = ("# kind: marker\nq1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,x_mm,y_mm,z_mm,smr\n"
+            "0,0,0,0,0,0,1,2,3,0\n10,0,0,0,0,0,1,2,3,1\n")
+    data = parse_csv(text)
+    assert data.kind == "marker" and data.link is None
+    assert parse_csv(data.to_csv()).kind == "marker"
+    sim = rc.simulate_markers(ROBOT, 20, noise_mm=0.0, seed=4).data  # three markers on the flange
+    plain = replace(sim, link=None)
+    a, b = (CalibrationProblem(ROBOT, d) for d in (sim, plain))
+    np.testing.assert_allclose(a.residuals(a.start(ROBOT)), b.residuals(b.start(ROBOT)), atol=1e-12)

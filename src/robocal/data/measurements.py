@@ -261,7 +261,8 @@ class Measurements:
             How many leading joints are external axes (written as e1.. columns).
         link : array_like of int, shape (N,), optional
             The frame carrying each row's marker (``marker``): 0 the robot's base frame {0}, i the
-            frame after joint i, n the flange (see `robocal.identify.observations.marker`).
+            frame after joint i, n the flange (the default; see
+            `robocal.identify.observations.marker`).
         instrument : str, optional
             The instrument that took the rows (`robocal.data.instruments`: tracker, mocap, camera).
 
@@ -299,8 +300,8 @@ class Measurements:
                                 ("pair", pair), ("distance", distance), ("link", link)) if v is not None}
         if need - given:
             raise DataError(f"{kind} measurements need {sorted(need - given)}")
-        if given - need:
-            raise DataError(f"{kind} measurements do not take {sorted(given - need)}")
+        if given - need - set(spec.optional):
+            raise DataError(f"{kind} measurements do not take {sorted(given - need - set(spec.optional))}")
         kw = {}
         if points is not None:
             kw["points"] = _float_array(points, "points", (N, 3))
@@ -975,7 +976,7 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
         kw["rotations"] = Rotation.from_quat(qv).as_matrix()
     if "plane" in spec.arrays:
         kw["plane"] = col["plane"].astype(np.int64)
-    if "link" in spec.arrays:
+    if "link" in spec.optional and "link" in col:
         kw["link"] = col["link"].astype(np.int64)
     if "pair" in spec.arrays:
         kw["pair"] = col["pair"].astype(np.int64)

@@ -2,8 +2,9 @@
 
 Each row is one marker's position in the capture system's frame. The marker sits on the link
 whose frame the row's ``link`` names (0 the robot's base frame {0}, i the frame after joint i, n the
-flange; the CSV's ``link`` column, default the flange) at an offset ``o_s`` in that frame, one per
-marker (the ``smr`` column numbers the markers, as it numbers a tracker's SMRs). The model is
+flange; the CSV's ``link`` column; without it, every marker is on the flange) at an offset ``o_s``
+in that frame, one per marker (the ``smr`` column numbers the markers, as it numbers a tracker's
+SMRs). The model is
 
     p = W F_j(q) o_s
 
@@ -48,7 +49,7 @@ class MarkerObservation(Observation):
     def __init__(self, data, robot) -> None:
         super().__init__(data, robot)
         n = robot.n_joints
-        self.link = np.asarray(data.link, int)
+        self.link = np.full(len(data), n) if data.link is None else np.asarray(data.link, int)
         if self.link.max() > n:
             raise IdentificationError(f"link {int(self.link.max())} does not exist: {robot.name} has frames "
                                       f"0 (its base) to {n} (its flange)")
