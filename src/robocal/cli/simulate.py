@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from robocal.cli.args import check_format, numbers
+from robocal.data.kinds import KINDS
 
 EPILOG = """Examples:
   robocal simulate --robot abb_irb2600 --poses 200 --noise-mm 0.02 --seed 1 -o data.csv --truth truth.yaml
@@ -12,6 +13,8 @@ EPILOG = """Examples:
       -o data.csv --truth truth.yaml
   robocal simulate --robot model.yaml --poses 300 --kind plane --planes 3 --joint-noise-deg 0.001 \\
       -o contacts.csv --truth truth.yaml
+  robocal simulate --robot abb_irb2600 --poses 90 --kind flush --planes 3 --noise-mm 0.005 \
+      -o flush.csv --truth truth.yaml      # a flat tool face pressed onto three tables
   robocal simulate --robot abb_irb2600 --joints poses.csv --smr-mm 20,-30,80 --tracker-mm 2500,500,300 \\
       -o data.csv --truth truth.yaml       # rehearse a campaign planned by `robocal poses`
   robocal simulate --robot truth.yaml --as-is --kind distance --poses 8 --noise-mm 0.005 \\
@@ -40,12 +43,12 @@ def add_parser(sub) -> None:
     which.add_argument("--joints", metavar="CSV",
                        help="measure these poses (q1_deg.., e.g. the poses.csv of `robocal poses`; "
                             "visible_smr* columns are honoured)")
-    p.add_argument("--kind", choices=("point", "pose", "plane", "distance", "marker", "eye_to_hand",
-                                      "eye_in_hand"), default="point",
-                   help="tracker points, 6-DOF poses, plane contacts, scale-bar placements (distance), "
-                        "motion-capture markers (marker, see --links), or a camera's board poses with the "
-                        "camera in the cell (eye_to_hand) or on the flange (eye_in_hand; --noise-mm and "
-                        "--rotation-noise-deg are its noise, the frames go to TRUTH.sim.json)")
+    p.add_argument("--kind", choices=KINDS, default="point",
+                   help="tracker points, 6-DOF poses, plane contacts (a probe tip), flush contacts (a "
+                        "flat tool face on a plane: its height and two angles), scale-bar placements "
+                        "(distance), motion-capture markers (marker, see --links), or a camera's board "
+                        "poses with the camera in the cell (eye_to_hand) or on the flange (eye_in_hand; "
+                        "--noise-mm and --rotation-noise-deg are its noise, the frames go to TRUTH.sim.json)")
     p.add_argument("--links", type=numbers(None, "link frame numbers"), metavar="J,J,..",
                    help="kind marker: the link frame of each marker (0 base .. n flange; default 3 on the "
                         "flange)")
@@ -53,9 +56,11 @@ def add_parser(sub) -> None:
     p.add_argument("--noise-model", choices=("isotropic", "tracker"), default="isotropic")
     p.add_argument("--outliers", type=float, default=0.0, help="fraction of rows with a 1-5 mm gross error")
     p.add_argument("--smr", type=int, default=1, help="SMRs on the tool (point data)")
-    p.add_argument("--planes", type=int, default=1, help="planes touched (plane data)")
+    p.add_argument("--planes", type=int, default=1, help="planes touched (plane and flush data)")
     p.add_argument("--joint-noise-deg", type=float, default=0.0, help="joint reading noise sigma, deg")
-    p.add_argument("--rotation-noise-deg", type=float, default=0.0, help="orientation noise (pose data), deg")
+    p.add_argument("--rotation-noise-deg", type=float, default=0.0,
+                   help="orientation noise (pose data), the face's tilt (flush data; default noise-mm "
+                        "over a 50 mm rim), deg")
     p.add_argument("--box", type=float, nargs=6, metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
                    help="keep poses whose tool point is in this box (robot base frame, mm)")
     p.add_argument("--smr-mm", type=numbers(3, "X,Y,Z in mm"), action="append", metavar="X,Y,Z",
@@ -121,7 +126,7 @@ def run(args) -> int:
     from robocal.campaign.files import read_planned
     from robocal.core.io import check_outputs
     from robocal.data.simulate import probe_and_tracker, simulate_tracker
-    from robocal.data.simulate_instruments import KINDS, simulate_kind
+    from robocal.data.simulate_instruments import INSTRUMENT_KINDS, simulate_kind
     from robocal.kinematics.model import load_model
 
     check_format(args.output, "CSV", "-o")
@@ -129,7 +134,7 @@ def run(args) -> int:
     check_outputs([args.output, args.truth, Path(args.truth).with_suffix(".sim.json")],
                   [args.robot, args.joints])
     robot = load_model(args.robot)
-    if args.kind in KINDS:
+    if args.kind in INSTRUMENT_KINDS:
         return _written(simulate_kind(robot, args.kind, args.poses, noise_mm=args.noise_mm, seed=args.seed,
                                       rotation_noise_deg=args.rotation_noise_deg, outliers=args.outliers,
                                       links=args.links),

@@ -5,6 +5,8 @@ One `Measurements` holds one observation kind for all its rows:
 - ``point``: ``points (N, 3)`` m, an SMR position in the tracker frame;
 - ``pose``: ``points (N, 3)`` m and ``rotations (N, 3, 3)``, a 6-DOF probe pose in the tracker frame;
 - ``plane``: ``plane (N,)`` int, the index of the plane the probe tip touched (no coordinates);
+- ``flush``: ``plane (N,)`` int, the index of the plane the tool face lay flush on (CSV column
+  ``flush_plane``; no coordinates: the contact fixes the face's height and two angles);
 - ``distance``: ``pair (N,)`` int and ``distance (N,)`` m. The two rows that share a ``pair`` id are
   the two ends (two joint vectors / SMRs) of one measured distance, and both carry the same
   measured distance (ball bar length, or distance between two tracker readings).
@@ -34,7 +36,8 @@ units: ``q1_deg..qn_deg`` or ``q1_rad..qn_rad`` (a prismatic joint's ``q{i}_mm``
 axes ``e1_mm`` / ``e1_m`` (a linear track) or ``e1_deg`` / ``e1_rad``, which come first in ``joints``
 (a track carries the arm: joints ``(e1, q1..q6)``); ``x_mm y_mm z_mm`` or ``x_m y_m z_m``; optional
 ``smr``, ``sigma_mm``/``sigma_m``, ``qw qx qy qz`` (pose), ``plane`` (plane contacts, then no
-x/y/z), ``pair`` and ``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``,
+x/y/z), ``flush_plane`` (flush contacts of the tool face, then no x/y/z), ``pair`` and
+``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``,
 ``approach1..approachn`` and ``travel1_rad..traveln_rad`` (or ``_deg``) (each written only where
 it differs from what the row order implies), ``payload_kg`` with optional ``payload_x_mm,
 payload_y_mm, payload_z_mm`` (or ``_m``; all three or none, default 0: at the flange) and
@@ -67,7 +70,8 @@ from robocal.kinematics.transforms import ROTATION_TOL
 _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
                  "pair", "distance", "approach", "travel", "payload", "temperature", "link")  # row-indexed
 _LENGTH_COLUMNS = ("x", "y", "z", "sigma", "distance")
-_PLAIN_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row", "qw", "qx", "qy", "qz", "link")
+_PLAIN_COLUMNS = ("smr", "plane", "flush_plane", "pair", "pose_id", "source_row", "qw", "qx", "qy", "qz",
+                  "link")
 # comment lines ``# NAME: value`` that declare what the columns cannot say (read and written back)
 _DIRECTIVES = ("instrument", "kind")
 # A laser tracker's range is below ~80 m; anything farther is a unit mistake whatever the robot.
@@ -122,7 +126,7 @@ class Measurements:
 
     Attributes
     ----------
-    kind : {'point', 'pose', 'plane', 'distance'}
+    kind : {'point', 'pose', 'plane', 'flush', 'distance'}
         What each row observed.
     joints : numpy.ndarray, shape (N, n)
         Commanded joints, radians.
@@ -225,7 +229,7 @@ class Measurements:
 
         Parameters
         ----------
-        kind : {'point', 'pose', 'plane', 'distance'}
+        kind : {'point', 'pose', 'plane', 'flush', 'distance'}
             What each row observed; it says which of the arrays below are required.
         joints : array_like, shape (N, n)
             Commanded joints, radians, in measurement order.
@@ -234,7 +238,7 @@ class Measurements:
         rotations : array_like, shape (N, 3, 3), optional
             Measured orientations, rotation matrices (``pose``).
         plane : array_like of int, shape (N,), optional
-            Index of the touched plane (``plane``).
+            Index of the touched plane (``plane``, ``flush``).
         pair : array_like of int, shape (N,), optional
             Pair id, two rows each (``distance``).
         distance : array_like, shape (N,), optional
@@ -566,7 +570,7 @@ class Measurements:
             for k, c in enumerate(("qw", "qx", "qy", "qz")):
                 cols[c] = quat[:, (3, 0, 1, 2)[k]]
         if self.plane is not None:
-            cols["plane"] = self.plane
+            cols[self.spec.column] = self.plane
         if self.link is not None:
             cols["link"] = self.link
         if self.pair is not None:
@@ -829,10 +833,11 @@ def _directive(line: str) -> tuple[str, str] | None:
 
 def _columns_kind(columns: set[str]) -> str:
     """The kind a canonical file's columns imply (what `_data_kind` reads without a ``# kind:``)."""
-    for column, kind in (("plane", "plane"), ("pair", "distance"), ("qw", "pose"), ("link", "marker")):
+    marked = [spec.name for spec in OBSERVED.values() if spec.column and spec.column in columns]
+    for column, kind in (("pair", "distance"), ("qw", "pose"), ("link", "marker")):
         if column in columns:
-            return kind
-    return "point"
+            marked.append(kind)
+    return (marked or ["point"])[0]
 
 
 def _split_csv(text: str, name: str) -> tuple[str, dict, int, list[str], Iterator[str]]:
@@ -870,7 +875,7 @@ def _column_roles(header: list[str], name: str, header_line: int) -> dict:
                             "q1_deg..qn_deg (or _rad), e1_mm (a track), x_mm,y_mm,z_mm (or _m), smr, "
                             "sigma_mm, "
                             "qw,qx,qy,qz, "
-                            "plane, pair, distance_mm, pose_id, source_row, approach1..n, "
+                            "plane, flush_plane, pair, distance_mm, pose_id, source_row, approach1..n, "
                             "travel1_deg..n, payload_kg, payload_x_mm..payload_z_mm, temperature_c. "
                             "For another layout use `robocal import`")
         roles[h] = role
@@ -913,11 +918,16 @@ def _data_kind(roles: dict, name: str) -> str:
                         f"{sorted({'qw', 'qx', 'qy', 'qz'} - quat)}")
     if "link" in present and not xyz:
         raise DataError(f"{name}: a 'link' column names the link carrying each marker: add x_mm,y_mm,z_mm")
-    if "plane" in present:
+    marked = [spec.name for spec in OBSERVED.values() if spec.column and spec.column in present]
+    if len(marked) > 1:
+        raise DataError(f"{name}: the columns {', '.join(OBSERVED[k].column for k in marked)} mark different "
+                        f"kinds ({', '.join(marked)}): one file holds one kind of contact")
+    if marked:
+        column = OBSERVED[marked[0]].column
         if xyz or quat or "pair" in present:
-            raise DataError(f"{name}: plane contacts have only joints and 'plane'; remove x/y/z, "
+            raise DataError(f"{name}: {marked[0]} contacts have only joints and '{column}'; remove x/y/z, "
                             "quaternion and pair columns")
-        return "plane"
+        return marked[0]
     if "pair" in present or "distance" in present:
         if not {"pair", "distance"} <= present:
             raise DataError(f"{name}: distance data need both 'pair' and 'distance_mm' columns")
@@ -945,7 +955,7 @@ def _declared_kind(columns_kind: str, declared: str | None, name: str) -> str:
         spec = kind_spec(declared)
     except DataError as exc:
         raise DataError(f"{name}: '# kind: {declared}': {exc}") from None
-    if spec.arrays != OBSERVED[columns_kind].arrays:
+    if spec.arrays != OBSERVED[columns_kind].arrays or spec.column != OBSERVED[columns_kind].column:
         raise DataError(f"{name}: '# kind: {declared}' needs the columns {spec.columns}, but the file has "
                         f"those of {columns_kind} rows ({OBSERVED[columns_kind].columns})")
     return declared
@@ -975,7 +985,7 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
                             "give a unit quaternion qw,qx,qy,qz")
         kw["rotations"] = Rotation.from_quat(qv).as_matrix()
     if "plane" in spec.arrays:
-        kw["plane"] = col["plane"].astype(np.int64)
+        kw["plane"] = col[spec.column].astype(np.int64)
     if "link" in spec.optional and "link" in col:
         kw["link"] = col["link"].astype(np.int64)
     if "pair" in spec.arrays:

@@ -170,7 +170,7 @@ def simulate_camera(robot, n_poses: int = 40, *, mount: str = "cell", noise_mm: 
                             noise_floor_mm=floor, outlier_rows=rows, true_joints=q, planes=None, info=info)
 
 
-KINDS = ("marker", "eye_to_hand", "eye_in_hand")  # the kinds simulated here (robocal simulate --kind)
+INSTRUMENT_KINDS = ("marker", "eye_to_hand", "eye_in_hand")  # the kinds simulated here (simulate --kind)
 
 
 def simulate_kind(robot, kind: str, n_poses: int, *, noise_mm: float, rotation_noise_deg: float,
@@ -183,7 +183,7 @@ def simulate_kind(robot, kind: str, n_poses: int, *, noise_mm: float, rotation_n
         return simulate_markers(robot, n_poses, links=links, noise_mm=noise_mm, outliers=outliers, seed=seed)
     mount = {v: k for k, v in MOUNTS.items()}.get(kind)
     if mount is None:
-        raise DataError(f"kind {kind!r} is not an instrument kind: {', '.join(KINDS)}")
+        raise DataError(f"kind {kind!r} is not an instrument kind: {', '.join(INSTRUMENT_KINDS)}")
     if links is not None:
         raise DataError("--links places markers (kind marker), not a camera's board")
     return simulate_camera(robot, n_poses, mount=mount, noise_mm=noise_mm, noise_deg=rotation_noise_deg,

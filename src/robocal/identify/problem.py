@@ -116,7 +116,7 @@ class CalibrationProblem:
 
     @property
     def kind(self) -> str:
-        """The observation kind ('point', 'pose', 'plane', 'distance'; 'mixed' for several kinds)."""
+        """The observation kind ('point', 'pose', 'plane', 'flush', 'distance'; 'mixed' for several kinds)."""
         kinds = {obs.kind for obs in self.observations}
         return kinds.pop() if len(kinds) == 1 else "mixed"
 
@@ -151,7 +151,8 @@ class CalibrationProblem:
         :func:`robocal.identify.space.resolve_names`) plus every nuisance parameter. 'auto' and
         'all' leave out what no observation can see (the base frame for planes alone)."""
         blind = set.intersection(*(set(obs.not_observable(robot)) for obs in self.observations))
-        orientation = any(OBSERVED[obs.kind].sees_orientation for obs in self.observations)
+        orientation = any(OBSERVED[obs.kind].sees_orientation or OBSERVED[obs.kind].sees_tilt
+                          for obs in self.observations)
         names = resolve_names(robot, params, sorted(blind), orientation)
         return ParameterSpace(tuple(names), tuple(self.nuisance_names))
 

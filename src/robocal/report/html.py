@@ -90,7 +90,9 @@ def _or(value, default):
 
 # what one observation's error is, by kind (the result's per-row error_before / error_after, mm)
 ERROR_LABELS = {"point": "position error (mm)", "pose": "position error (mm)",
-                "plane": "distance to fitted plane (mm)", "distance": "error of the pair's distance (mm)"}
+                "plane": "distance to fitted plane (mm)",
+                "flush": "flush contact error: height and rim lifts (mm)",
+                "distance": "error of the pair's distance (mm)"}
 
 
 class _ObsErrors:
@@ -247,7 +249,7 @@ def _summary(result: dict) -> str:
 
 
 _KIND_ERROR = {"point": "position", "pose": "position", "plane": "distance to the plane",
-               "distance": "distance error"}
+               "flush": "flush contact error", "distance": "distance error"}
 
 
 def _per_file(result: dict) -> str:
