@@ -222,7 +222,9 @@ def test_cli_simulates_calibrates_and_evaluates_a_camera(tmp_path, capsys):
     assert main(["simulate", "--robot", "ur10", "--poses", "30", "--kind", "eye_to_hand", "--noise-mm",
                  "0.5", "--rotation-noise-deg", "0.2", "-o", str(data), "--truth", str(truth)]) == 0
     out = tmp_path / "cal.yaml"
-    assert main(["calibrate", str(data), "--robot", "ur10", "-o", str(out)]) == 0
+    report = tmp_path / "r.html"
+    assert main(["calibrate", str(data), "--robot", "ur10", "-o", str(out), "--report", str(report)]) == 0
+    assert "6-D noise (variance components)" in report.read_text() and "camera" in report.read_text()
     assert main(["calibrate", str(data), "--robot", "ur10", "--method", "lsq"]) == 0
     text = capsys.readouterr().out
     assert "lsq: " in text and "variance components of" in text
