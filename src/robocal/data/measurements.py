@@ -9,7 +9,14 @@ One `Measurements` holds one observation kind for all its rows:
   ``flush_plane``; no coordinates: the contact fixes the face's height and two angles);
 - ``distance``: ``pair (N,)`` int and ``distance (N,)`` m. The two rows that share a ``pair`` id are
   the two ends (two joint vectors / SMRs) of one measured distance, and both carry the same
-  measured distance (ball bar length, or distance between two tracker readings).
+  measured distance (ball bar length, or distance between two tracker readings);
+- ``marker``: ``points (N, 3)`` m, a motion-capture marker in the capture frame, and ``link (N,)``
+  int, the frame of the model carrying it (CSV column ``link``; without it, the flange);
+- ``eye_to_hand`` / ``eye_in_hand``: ``points (N, 3)`` m and ``rotations (N, 3, 3)``, a board's pose
+  in a camera's frame, the camera fixed in the cell or on the flange (CSV line ``# kind: NAME``).
+
+A set may name the ``instrument`` that took it (CSV line ``# instrument: NAME``;
+`robocal.data.instruments`).
 
 Every row also has ``approach (N, n)`` in {-1, 0, +1}: the direction each joint moved to reach
 the row's pose from the previous pose (the rows are in measurement order; 0 for the first pose
@@ -157,6 +164,11 @@ class Measurements:
         The file it was read from ("" when built from arrays).
     notes : tuple of str
         How the reader interpreted the file (e.g. repeated readings).
+    link : numpy.ndarray of int, shape (N,), optional
+        The frame of the model carrying each row's marker (``marker``; None: the flange).
+    instrument : str
+        The instrument that took the rows (``tracker``, ``mocap``, ``camera``;
+        `robocal.data.instruments`); "" when the data do not say.
 
     Examples
     --------
