@@ -36,7 +36,7 @@ from robocal.identify.space import ParameterSpace, State
 
 RATIO_TOL = 0.01  # the length scale has settled when a round changes it by less than 1 %
 MAX_ROUNDS = 15  # fits at most (lsq settles in 2-4; robust weights can slow it to ~10)
-MIN_REDUNDANCY = 1.0  # a group with less redundancy than this has no variance of its own to give
+MIN_GROUP_REDUNDANCY = 1.0  # a group with less redundancy than this has no variance of its own to give
 
 
 @dataclass(frozen=True)
@@ -129,7 +129,7 @@ def fit(solve: Callable[[State], SolverResult], problem, start: State, space: Pa
             if k not in parts:
                 continue
             obs = problem.observations[k]
-            if min(red_m, red_rad) < MIN_REDUNDANCY or not (s_m > 0 and s_rad > 0):
+            if min(red_m, red_rad) < MIN_GROUP_REDUNDANCY or not (s_m > 0 and s_rad > 0):
                 continue
             step = float(np.log(s_m / s_rad / obs.length_scale))
             if step * previous[k] < 0:  # a reversal (robust weights moving with the scale): halve it
