@@ -113,6 +113,15 @@ def test_camera_calibration_reaches_the_noise_on_held_out_poses():
     assert result.validation_before["rms"] > 2 * floor and result.validation["rms"] < 1.3 * floor
 
 
+def test_two_held_out_camera_poses_are_judged_with_the_calibration_frames():
+    sim = rc.simulate_camera(ROBOT, 32, mount="flange", noise_mm=0.3, noise_deg=0.05, seed=12)
+    fit, check = sim.data.split_poses(30, seed=0)
+    result = rc.calibrate(ROBOT, fit, validation=check, method="lsq")
+    assert result.validation["n"] == 2 and result.validation["rms"] < 2.0
+    with pytest.raises(IdentificationError, match="2 poses cannot fix a camera's and a board's frames"):
+        rc.calibrate(ROBOT, check)
+
+
 def test_marker_offsets_and_capture_frame_recovered():
     sim = rc.simulate_markers(ROBOT, 40, links=[6, 6, 4, 3], noise_mm=0.05, error_scale=0.0, seed=9)
     result = rc.calibrate(ROBOT, sim.data, params=[], method="lsq")

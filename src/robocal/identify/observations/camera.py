@@ -62,7 +62,10 @@ class CameraObservation(Observation):
         self.measured = make_transform(data.rotations, data.points)
         default = INSTRUMENTS["camera"].length_scale
         self.set_length_scale(default if length_scale is None else length_scale)
-        self.L0, self.R0 = hand_eye(self._chain(robot), self.measured)
+        try:
+            self.L0, self.R0 = hand_eye(self._chain(robot), self.measured)
+        except IdentificationError:  # too few poses for frames of their own: they can still be judged
+            self.L0 = self.R0 = np.eye(4)  # with another set's frames (import_nuisance); a fit refuses
         self.nuisance_names = [f"camera.{f}" for f in FRAME_FIELDS] + [f"board.{f}" for f in FRAME_FIELDS]
 
     def set_length_scale(self, length_scale: float) -> None:
@@ -116,12 +119,13 @@ class CameraObservation(Observation):
         return {f"{self.kind}.camera": L.reshape(-1), f"{self.kind}.board": R.reshape(-1)}
 
     def import_nuisance(self, robot, entities) -> np.ndarray:
-        """The shared camera and board frames where ``entities`` has them, the rest fitted to ``robot``."""
-        start = self.nuisance_start(robot)
-        for part, key in ((slice(0, 6), "camera"), (slice(6, 12), "board")):
-            T = entities.get(f"{self.kind}.{key}")
+        """The shared camera and board frames where ``entities`` has them, the rest fitted to ``robot``
+        (a set of fewer than 3 poses can only be judged with both frames shared)."""
+        shared = [entities.get(f"{self.kind}.{key}") for key in ("camera", "board")]
+        start = np.zeros(12) if all(T is not None for T in shared) else self.nuisance_start(robot)
+        for part, T0, T in zip((slice(0, 6), slice(6, 12)), (self.L0, self.R0), shared, strict=True):
             if T is not None:
-                start[part] = nuisance_of(self.L0 if key == "camera" else self.R0, np.reshape(T, (4, 4)))
+                start[part] = nuisance_of(T0, np.reshape(T, (4, 4)))
         return start
 
     # ---------------------------------------------------------------- Observation API
