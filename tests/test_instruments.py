@@ -162,6 +162,14 @@ def test_variance_components_recover_the_noise(noise_mm, noise_deg):
     assert section["sigma_position_mm"] == pytest.approx(found.sigma_m * 1e3)
 
 
+def test_noise_beyond_the_camera_s_documented_is_said():
+    quiet = rc.simulate_camera(ROBOT, 60, noise_mm=1.0, noise_deg=0.3, seed=5).data
+    assert not [w for w in rc.calibrate(ROBOT, quiet, method="lsq").warnings if "scatter about the fit" in w]
+    loud = rc.simulate_camera(ROBOT, 60, noise_mm=5.0, noise_deg=0.3, seed=5).data
+    said = [w for w in rc.calibrate(ROBOT, loud, method="lsq").warnings if "scatter about the fit" in w]
+    assert len(said) == 1 and "position" in said[0] and "rotation" not in said[0]
+
+
 def test_variance_components_on_demand_for_tracker_poses_and_off():
     sim = rc.simulate_tracker(ROBOT, 60, kind="pose", noise_mm=0.05, rotation_noise_deg=0.01, seed=2)
     assert rc.calibrate(ROBOT, sim.data, nongeometric=None).variance_components == []

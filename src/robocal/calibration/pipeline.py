@@ -478,6 +478,7 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
                     "sigma_mm": {k: v * 1e3 for k, v in (sigma or {}).items()},
                     "instruments": [instrument_of(d) or None for d in datasets]})
     result.variance_components = found
+    warnings += [c.warning for c in found if c.warning]
     _check_consistency(result, sigma, seed, force)
     states = (state0, State(final_robot, out.state.nuisance))
     result.judged = [_judge(problem, start, states, v, force, warnings) for v in validations]

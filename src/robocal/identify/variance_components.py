@@ -29,11 +29,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robocal.data.instruments import instrument_of
+from robocal.data.instruments import INSTRUMENTS, instrument_of
 from robocal.identify.robust import leverage
 from robocal.identify.solvers import SolverResult
 from robocal.identify.space import ParameterSpace, State
 
+EXCESS = 3.0  # estimated noise beyond this many times the instrument's documented noise: said
 RATIO_TOL = 0.01  # the length scale has settled when a round changes it by less than 1 %
 MAX_ROUNDS = 15  # fits at most (lsq settles in 2-4; robust weights can slow it to ~10)
 MIN_GROUP_REDUNDANCY = 1.0  # a group with less redundancy than this has no variance of its own to give
@@ -43,7 +44,8 @@ MIN_GROUP_REDUNDANCY = 1.0  # a group with less redundancy than this has no vari
 class Components:
     """One 6-D set's estimated noise: ``sigma_m`` (position, m, each axis), ``sigma_rad`` (rotation,
     rad, each axis), the ``length_scale`` (m per rad) they give, the redundancy of each group and
-    the fits (``rounds``) it took; ``settled`` False when :data:`MAX_ROUNDS` were not enough."""
+    the fits (``rounds``) it took; ``settled`` False when :data:`MAX_ROUNDS` were not enough;
+    ``documented`` the instrument's (sigma_m, sigma_rad), when it documents both."""
 
     label: str
     sigma_m: float
@@ -52,12 +54,29 @@ class Components:
     redundancy: tuple[float, float]
     rounds: int
     settled: bool
+    documented: tuple[float, float] | None = None
 
     def to_dict(self) -> dict:
         return {"data": self.label, "sigma_position_mm": self.sigma_m * 1e3,
                 "sigma_rotation_deg": float(np.rad2deg(self.sigma_rad)),
                 "length_scale_m_per_rad": self.length_scale,
                 "redundancy": list(self.redundancy), "rounds": self.rounds, "settled": self.settled}
+
+    @property
+    def warning(self) -> str | None:
+        """A warning when the estimated noise exceeds :data:`EXCESS` times the instrument's
+        documented noise, else None."""
+        if self.documented is None:
+            return None
+        sigma_m, sigma_rad = self.documented
+        over = [f"{what} {got:.3g} {unit} against {doc:.3g} documented" for what, got, doc, unit in (
+            ("position", self.sigma_m * 1e3, sigma_m * 1e3, "mm"),
+            ("rotation", np.rad2deg(self.sigma_rad), np.rad2deg(sigma_rad), "deg")) if got > EXCESS * doc]
+        if not over:
+            return None
+        return (f"{self.label or 'the 6-D data'}: the poses scatter about the fit beyond what the instrument "
+                f"explains ({'; '.join(over)}, per axis): a gross error the robust weights kept, a board "
+                "detected badly (calibrate the camera, check the board's size), or errors the model lacks")
 
     def line(self) -> str:
         return (f"variance components of {self.label or 'the 6-D data'}: position "
@@ -148,6 +167,8 @@ def fit(solve: Callable[[State], SolverResult], problem, start: State, space: Pa
     for k in parts:
         obs = problem.observations[k]
         s_m, s_rad, red_m, red_rad = last.get(k, (np.nan, np.nan, 0.0, 0.0))
+        inst = INSTRUMENTS.get(instrument_of(obs.data))
+        documented = (inst.sigma_m, inst.sigma_rad) if inst is not None and inst.length_scale > 0 else None
         found.append(Components(obs.data.label, float(s_m), float(s_rad), obs.length_scale,
-                                (round(red_m, 3), round(red_rad, 3)), rounds, settled))
+                                (round(red_m, 3), round(red_rad, 3)), rounds, settled, documented))
     return out, found
