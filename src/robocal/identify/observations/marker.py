@@ -69,9 +69,7 @@ class MarkerObservation(Observation):
             raise IdentificationError("every marker is on the robot's base (link 0): markers on moving links "
                                       "are needed to see the robot")
         self.measured = np.asarray(data.points, float)
-        self.W0 = np.eye(4)
-        self.W0, offsets = self._alternate(robot)
-        self.offsets0 = offsets
+        self.W0 = self._alternate(robot)[0]  # the capture frame's reference (nuisance 0 at this robot)
         self.nuisance_names = [f"capture.{f}" for f in FRAME_FIELDS] + [
             f"marker{s}.{c}" for s in self.markers for c in "xyz"]
 
