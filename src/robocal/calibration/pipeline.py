@@ -36,7 +36,14 @@ from robocal.identify.plausibility import (
     check_residual,
     check_spread,
 )
-from robocal.identify.priors import linear_analysis, prior_sigma, undetermined
+from robocal.identify.priors import (
+    PriorScales,
+    fit_priors,
+    linear_analysis,
+    prior_sigma,
+    stated_sigma,
+    undetermined,
+)
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
 from robocal.identify.space import ParameterSpace, State, block_of
@@ -46,6 +53,7 @@ from robocal.identify.variance_components import chosen as chosen_components
 from robocal.identify.variance_components import fit as fit_components
 from robocal.kinematics.conditions import range_of as conditions_range
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
+from robocal.kinematics.prior_spec import PriorSpec
 from robocal.kinematics.thermal import reference_of as thermal_reference
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import check_fit, check_not_worse
@@ -72,9 +80,11 @@ def _start_model(robot, datasets: list, register_frames: bool, force: bool, warn
 
 
 def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: float,
-                     n_poses: int) -> tuple[ParameterSpace, Identifiability, list[str]]:
-    """The identifiable unknowns of ``params`` (plus every nuisance parameter), their analysis, and
-    warnings; IdentificationError when the data cannot support a calibration."""
+                     n_poses: int) -> tuple[ParameterSpace, Identifiability, list[str], object, PriorScales]:
+    """The identifiable unknowns of ``params`` (plus every nuisance parameter), their analysis,
+    warnings, the start robot with the prior group scales the data ask for and their record
+    (:func:`robocal.identify.priors.fit_priors`); IdentificationError when the data cannot support
+    a calibration."""
     candidates = problem.space(state0.robot, params)
     J0 = problem.jacobian(state0, candidates)
     ident = analyze_jacobian(J0, candidates.names, n_poses, rtol)
@@ -98,18 +108,23 @@ def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: f
         raise IdentificationError(f"the nuisance parameters {lost} are not identifiable: "
                                   "each plane needs contacts spread over its surface")
     kept = candidates.restricted(ident.kept)
-    robot = state0.robot
-    sigma = np.r_[prior_sigma(robot, kept.robot), np.full(len(kept.nuisance), np.inf)]
-    mean = np.r_[robot.values[robot.indices(kept.robot)], state0.nuisance]
     columns = [candidates.names.index(n) for n in kept.names]
-    lin = linear_analysis(J0[:, columns], problem.residuals(state0), sigma, problem.noise_guess,
-                          [rows for rows, _ in problem.row_blocks()])
+    r0, blocks = problem.residuals(state0), [rows for rows, _ in problem.row_blocks()]
+    flat = np.full(len(kept.nuisance), np.inf)
+    sigma = np.r_[prior_sigma(state0.robot, kept.robot), flat]
+    lin = linear_analysis(J0[:, columns], r0, sigma, problem.noise_guess, blocks)
+    robot, scales = fit_priors(state0.robot, J0[:, columns], r0, kept.names, lin.noise)
+    if "estimated" in scales.source.values():  # widened: the noise weighed against the new priors
+        sigma = np.r_[prior_sigma(robot, kept.robot), flat]
+        lin = linear_analysis(J0[:, columns], r0, sigma, lin.noise, blocks)
+    mean = np.r_[robot.values[robot.indices(kept.robot)], state0.nuisance]
     held, ratio = undetermined(J0[:, columns], sigma, lin.noise)
     ident = hold(ident, J0, [kept.names[j] for j in held],
                  {n: float(q) for n, q in zip(kept.names, ratio, strict=True) if np.isfinite(q)})
     n_smr = min(max(d.n_smr for d in problem.datasets), len(robot.smr) + 1)
     ident = separate(ident, unidentifiable(robot, problem.kind, list(candidates.robot), n_smr, rtol))
-    return kept.with_prior(sigma, mean, lin.noise).restricted(ident.kept), ident, warnings
+    warnings += scales.warnings()
+    return kept.with_prior(sigma, mean, lin.noise).restricted(ident.kept), ident, warnings, robot, scales
 
 
 def _run_solver(method: str, problem, state0: State, space: ParameterSpace, seed: int, progress,
@@ -207,7 +222,7 @@ def calibrate(robot, data, method: str | None = None, params="auto", validation=
               progress=None, nongeometric="default", force: bool = False, sigma: dict | None = None,
               warm_start: CalibrationResult | None = None, hold_out: int | None = None,
               instrument: str | None = None, variance_components: bool | None = None,
-              **options) -> CalibrationResult:
+              priors: str | dict | PriorSpec | None = None, **options) -> CalibrationResult:
     """Calibrate ``robot`` (nominal model) against ``data``: Measurements, or a list of them of
     any kinds (points, poses, planes, distances) identified together in one problem, each set
     weighted by its noise (its sigma column, else ``sigma`` {kind: m}, else
@@ -267,6 +282,13 @@ def calibrate(robot, data, method: str | None = None, params="auto", validation=
         Estimate the position and rotation noise of 6-D sets from the data (iterated variance
         components, `robocal.identify.variance_components`; ``result.variance_components``);
         default: for camera sets and 6-D sets of a declared instrument other than a tracker.
+    priors : str, dict or PriorSpec, optional
+        The parameter priors' class and group scales, on top of the model file's ``priors:``
+        block: ``'class=service,zeros=3deg,lengths=10mm'``, the same as a mapping, or a
+        `robocal.kinematics.prior_spec.PriorSpec` (docs/priors.md). Groups not given start from
+        the class default and are widened where the data ask for it (empirical Bayes,
+        `robocal.identify.evidence`); ``estimate=no`` keeps them fixed. The result's
+        ``prior_scales`` says what was used.
     **options
         Solver options (e.g. ``k0``, ``k1``, ``ridge`` for ``'robust'``; checked against its
         signature).
@@ -307,6 +329,7 @@ def calibrate(robot, data, method: str | None = None, params="auto", validation=
     datasets, validations = (declared(_as_sets(d, role), instrument)
                              for d, role in ((data, "calibration"), (validation, "validation")))
     method = default_method(datasets) if method is None else method
+    robot = with_priors(robot, priors)
     if hold_out is not None:
         datasets, validations = split_hold_out(datasets, validations, hold_out)
     try:
@@ -317,7 +340,18 @@ def calibrate(robot, data, method: str | None = None, params="auto", validation=
         raise diagnosed(exc, robot, [*datasets, *validations]) from None
     if hold_out is not None:  # the JSON and the report name the split (docs/result-json.md)
         result.provenance["hold_out"] = hold_out
+    if robot.priors is not None:
+        result.settings["priors"] = robot.priors.to_dict()
     return result
+
+
+def with_priors(robot, priors: str | dict | PriorSpec | None):
+    """``robot`` with ``priors`` (text, mapping or PriorSpec) on top of its own (the model file's);
+    ModelError naming the bad item."""
+    if priors is None:
+        return robot
+    spec = priors if isinstance(priors, PriorSpec) else PriorSpec.from_mapping(priors)
+    return robot.with_priors((robot.priors or PriorSpec()).merged(spec))
 
 
 def split_hold_out(datasets: list, validations: list, n: int) -> tuple[list, list]:
@@ -445,7 +479,8 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     errors0 = problem.position_errors(state0)
     check_residual(position_stats(errors0)["rms"], problem.modelled_points(state0),
                    "the calibration data (nominal model, frames fitted)", force=force, warnings=warnings)
-    space, ident, more = _estimated_space(problem, state0, params, rtol, problem.n_poses)
+    space, ident, more, prior_robot, scales = _estimated_space(problem, state0, params, rtol, problem.n_poses)
+    state0 = State(prior_robot, state0.nuisance)  # carries the group scales used (every later prior)
     warnings += more
     first = state0 if warm_start is None else _warm_state(problem, warm_start, declared_start, space)
     def solve(state: State) -> SolverResult:
@@ -456,7 +491,8 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     check_corrections(state0.robot, out.state.robot, space.robot,
                       sigma=dict(zip(space.names, np.sqrt(np.maximum(np.diag(cov), 0.0)), strict=True)),
                       confounded={**_partners(cov, space.names), **ident.confounded_with}, force=force,
-                      warnings=warnings)
+                      warnings=warnings,
+                      prior=dict(zip(space.robot, stated_sigma(state0.robot, space.robot), strict=True)))
     if not out.success:
         warnings.append(out.message)
     estimated_terms = [n for n in space.robot if block_of(n) == "joint_errors"]
@@ -464,7 +500,7 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
         n for n in estimated_terms if n not in start.joint_error_names])
     result = CalibrationResult(
         robot=final_robot, start=start, method=method, identifiability=ident, space=space,
-        covariance=cov, solver=out,
+        covariance=cov, solver=out, prior_scales=scales,
         errors=(errors0, problem.position_errors(out.state)), problem=problem, initial=state0,
         warnings=warnings, settings={"params": params if isinstance(params, str) else list(params),
                                      "seed": seed, "rtol": rtol, "nongeometric": ",".join(terms) or "none",
@@ -495,7 +531,7 @@ def _check_consistency(result: CalibrationResult, sigma: dict | None, seed: int,
     problem = result.problem
     result.consistency = check_fit(result.state.robot, result.start, problem.observations,
                                    problem.item_error_vectors(result.state),
-                                   result.space.size, sigma=sigma, seed=seed)
+                                   result.space.size, sigma=sigma, seed=seed, priors=result.prior_scales)
     kept = slice(None) if result.solver.item_weights is None else result.solver.item_weights != 0
     before, after_rms = (position_stats(e[kept])["rms"] for e in result.errors)
     # a solve stopped by a limit or the user's threshold may end anywhere: that is said elsewhere;

@@ -17,7 +17,7 @@ from robocal.core.version import __version__
 from robocal.data.measurements import Measurements
 from robocal.identify import vocabulary
 from robocal.identify.identifiability import Identifiability
-from robocal.identify.priors import prior_sigma
+from robocal.identify.priors import PriorScales, prior_sigma
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult
 from robocal.identify.space import ParameterSpace, State, block_of
@@ -32,6 +32,7 @@ from robocal.trust.file_shifts import FileShifts, pose_means, split_by_file
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG
 
 RESULT_FORMAT = "robocal-result/1"
+PRIOR_SHARE_SHOWN = 0.1  # an estimate whose prior carries this share of its information is listed
 _DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 180.0 / np.pi),
             "rad/rad": ("mdeg/deg", 1e3), "1": ("ppm", 1e6),  # "1": a scale (dimensionless)
             "rad/(kg m)": ("deg/(kg m)", 180.0 / np.pi), "1/K": ("1e-6/K", 1e6)}
@@ -115,6 +116,9 @@ class CalibrationResult(_BeforeAfter):
         (`robocal.identify.variance_components`).
     provenance : dict
         Versions, date and input files.
+    prior_scales : PriorScales or None
+        The prior scale of each parameter group the fit used (class default, estimated from the
+        data, or given) and what the data ask for (`robocal.identify.priors.fit_priors`).
 
     Examples
     --------
@@ -153,6 +157,7 @@ class CalibrationResult(_BeforeAfter):
     predicted_accuracy: dict | None = None
     variance_components: list = field(default_factory=list)  # per 6-D set (identify.variance_components)
     error_model_choice: str | None = None  # why the default error model is geometric, when it is
+    prior_scales: PriorScales | None = None  # the prior group scales used and where they came from
 
     @property
     def state(self) -> State:
@@ -389,11 +394,21 @@ class CalibrationResult(_BeforeAfter):
         sigma = dict(zip(space.names, space.prior_sigma or [np.inf] * space.size, strict=True))
         sigma.update(zip(self.identifiability.undetermined,
                          prior_sigma(robot, self.identifiability.undetermined), strict=True))
-        return {"source": "robocal.identify.priors (docs/priors.md)",
+        scales = {} if self.prior_scales is None else self.prior_scales.to_dict()
+        return {"source": "robocal.identify.priors (docs/priors.md)", **scales,
+                "leaning": self.leaning_on_prior(),
                 "noise": space.noise, "noise_unit": "1 (residuals divided by sigma)"
                 if self.problem.weighted else "m",
                 "sigma": {n: float(sigma[n] * _DISPLAY[units[n]][1]) if np.isfinite(sigma[n]) else None
                           for n in names}}
+
+    def leaning_on_prior(self) -> dict[str, float]:
+        """The estimated parameters whose prior carries at least `PRIOR_SHARE_SHOWN` of their
+        information (posterior / prior variance: how much the prior holds them), largest first;
+        the parameters held near nominal are listed with the not determined ones."""
+        ratio = self.identifiability.prior_ratio
+        share = {n: float(ratio[n] ** 2) for n in self.space.robot if n in ratio and np.isfinite(ratio[n])}
+        return dict(sorted(((n, v) for n, v in share.items() if v >= PRIOR_SHARE_SHOWN), key=lambda t: -t[1]))
 
     def _first_weights(self) -> np.ndarray | None:
         """The robust weights of the first file's items."""
@@ -501,6 +516,11 @@ class CalibrationResult(_BeforeAfter):
             if top:
                 lines.append(f"largest corrections ({unit}): " + ", ".join(
                     f"{r['name']} {r['correction']:+.4f} ± {r['sigma']:.4f}" for r in top))
+        if self.prior_scales is not None:
+            lines.append(self.prior_scales.sentence())
+        if leaning := self.leaning_on_prior():
+            shares = ", ".join(f"{n} {v:.0%}" for n, v in list(leaning.items())[:8])
+            lines.append(f"estimated but leaning on their prior (its share of their information): {shares}")
         ident, unused = self.identifiability, self.not_used
         lines += vocabulary.lines(ident, [n for n in ident.dropped if block_of(n) != "joint_errors"]
                                   + ident.undetermined)

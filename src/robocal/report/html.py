@@ -711,6 +711,10 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     if accuracy:
         sections.append(("predicted-accuracy", "Predicted accuracy over the workspace", accuracy))
     sections.append(("parameters", "Parameters", _parameters(result)))
+    from robocal.report.priors import section as priors_section
+
+    if priors := priors_section(result):
+        sections.append(("priors", "Parameter priors", priors))
     from robocal.report.conditions import section as conditions_section
 
     working = conditions_section(result)
@@ -734,7 +738,7 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     data = result.get("data") or {}
     subtitle = (f"{esc(data.get('file'))} &middot; error model {error_model(result)[0]} &middot; "
                 f"method {esc(result.get('method'))}")
-    narrow = {"model-selection", "identifiability", "rejected", "iso9283", "history"}
+    narrow = {"model-selection", "identifiability", "rejected", "iso9283", "history", "priors"}
     if not _joint_error_names(result):  # the parameter table alone: half the width is enough
         narrow.add("parameters")
     return page(title, subtitle, sections, result.get("robocal_version"), frozenset(narrow))
