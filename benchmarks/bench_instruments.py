@@ -10,16 +10,19 @@ the mocap default, against lsq).
 
 Real (when `peer_sets` -- benchmarks/peer_sets.py, FIGAROH's example data with fixed splits -- and
 the data are present: ``ROBOCAL_FIGAROH_DATA`` names their folder; else said): FIGAROH's UR10
-camera set read as a fixed camera watching a board on the flange (kind ``eye_to_hand``) beside
-robocal's default on the 6-DOF reading (kind ``pose``), and the TIAGo motion-capture set read as
-markers on the hand (kind ``marker``) beside the default on points. Held-out RMS (mm) of the
-board's / markers' positions, the split of `peer_sets`.
+robocal's default on each set as bench_peers runs it, without and with the set's instrument
+declared (mocap for TALOS and TIAGo, camera for the UR10: the one line ``# instrument: NAME`` of
+a file), judged as bench_peers judges it; and the UR10 camera set read as a fixed camera watching
+a board on the flange (``eye_to_hand``; ``eye_in_hand``, the wrong mounting, for contrast), the
+TIAGo motion-capture set as markers on the hand (``marker``). Held-out RMS (mm) of the board's /
+markers' positions, the split of `peer_sets`.
 """
 
 from __future__ import annotations
 
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -79,25 +82,49 @@ def simulated() -> None:
           ["method", "RMS mm (rigidly aligned)"], rows, key="outliers")
 
 
+# the instrument that took each of FIGAROH's sets (its example configs: sensor_type mocap; a camera
+# and a checkerboard for the UR10)
+FIGAROH_INSTRUMENTS = {"talos": "mocap", "tiago": "mocap", "tiago_next_day": "mocap", "ur10_pose": "camera",
+                       "ur10_point": "camera"}
+
+
+def _declared(s, instrument: str):
+    """A `peer_sets.PeerSet` whose measurements declare ``instrument`` (the file's one line)."""
+    return s._replace(calibration=replace(s.calibration, instrument=instrument),
+                      held_out=replace(s.held_out, instrument=instrument))
+
+
 def real() -> None:
     folder = os.environ.get("ROBOCAL_FIGAROH_DATA")
     if not folder:
         print("  FIGAROH's sets skipped: set ROBOCAL_FIGAROH_DATA to the folder holding figaroh-examples")
         return
     try:
+        import bench_peers as bp
         import peer_sets as ps
-        ur10, tiago = ps.load("ur10_pose", folder), ps.load("tiago", folder)
+        sets = {name: ps.load(name, folder) for name in FIGAROH_INSTRUMENTS}
     except Exception as exc:  # noqa: BLE001 - the loader or the data are absent: say so, run the rest
         print(f"  FIGAROH's sets skipped: {type(exc).__name__}: {str(exc)[:160]}")
         return
+    rows = []
+    for name, instrument in FIGAROH_INSTRUMENTS.items():  # judged as bench_peers judges robocal's default
+        refit = name in ps.REFIT_FRAME
+        plain = bp.run_robocal(sets[name], refit)
+        said = bp.run_robocal(_declared(sets[name], instrument), refit)
+        rows.append([name, f"{plain['rms']:.3f}", plain["result"].method, instrument, f"{said['rms']:.3f}",
+                     said["result"].method, "forced" if plain["note"] or said["note"] else ""])
+    table("FIGAROH's sets (peer_sets splits, judged as bench_peers): held-out RMS (mm), robocal's default "
+          "without and with the instrument declared",
+          ["set", "undeclared", "method", "instrument", "declared", "method", "note"], rows,
+          key="figaroh_declared")
 
     def camera(d, kind):
         return rc.Measurements.from_arrays(kind, d.joints, points=d.points, rotations=d.rotations,
                                            pose_id=d.pose_id, source=d.source)
 
-    def markers(d, n):
-        return rc.Measurements.from_arrays("marker", d.joints, points=d.points, link=np.full(len(d), n),
-                                           smr=d.smr, pose_id=d.pose_id, source=d.source, linear=d.linear)
+    def markers(d):  # no link column: every marker on the flange
+        return rc.Measurements.from_arrays("marker", d.joints, points=d.points, smr=d.smr, pose_id=d.pose_id,
+                                           source=d.source, linear=d.linear)
 
     def held(robot, cal, val, **kw):
         try:
@@ -105,20 +132,20 @@ def real() -> None:
         except rc.RobocalError as exc:
             return f"refused ({type(exc).__name__})"
 
-    n = tiago.robot.n_joints
-    rows = [["ur10 6-D", "pose (default)", held(ur10.robot, ur10.calibration, ur10.held_out)],
-            ["ur10 6-D", "eye_to_hand (default: robust)",
+    ur10, tiago = sets["ur10_pose"], sets["tiago"]
+    rows = [["ur10 6-D", "eye_to_hand (default: robust)",
              held(ur10.robot, camera(ur10.calibration, "eye_to_hand"), camera(ur10.held_out, "eye_to_hand"))],
             ["ur10 6-D", "eye_to_hand, lsq",
              held(ur10.robot, camera(ur10.calibration, "eye_to_hand"), camera(ur10.held_out, "eye_to_hand"),
                   method="lsq")],
-            ["tiago", "point (default)", held(tiago.robot, tiago.calibration, tiago.held_out)],
-            ["tiago", "marker (default: robust)",
-             held(tiago.robot, markers(tiago.calibration, n), markers(tiago.held_out, n))],
+            ["ur10 6-D", "eye_in_hand (the wrong mounting)",
+             held(ur10.robot, camera(ur10.calibration, "eye_in_hand"), camera(ur10.held_out, "eye_in_hand"))],
+            ["tiago", "marker on the flange (default: robust)",
+             held(tiago.robot, markers(tiago.calibration), markers(tiago.held_out))],
             ["tiago", "marker, lsq",
-             held(tiago.robot, markers(tiago.calibration, n), markers(tiago.held_out, n), method="lsq")]]
-    table("FIGAROH's real sets (peer_sets splits): held-out RMS, mm", ["set", "read as", "held-out RMS mm"],
-          rows, key="figaroh")
+             held(tiago.robot, markers(tiago.calibration), markers(tiago.held_out), method="lsq")]]
+    table("FIGAROH's sets read as the instrument kinds: held-out RMS, mm",
+          ["set", "read as", "held-out RMS mm"], rows, key="figaroh_kinds")
 
 
 def main() -> None:
