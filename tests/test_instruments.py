@@ -102,6 +102,13 @@ def test_camera_and_board_frames_recovered(mount):
         assert np.abs(got[:3, 3] - want[:3, 3]).max() < 0.5e-3  # m: 40 poses of 0.2 mm noise
         turn = np.arccos(np.clip((np.trace(got[:3, :3] @ want[:3, :3].T) - 1) / 2, -1.0, 1.0))
         assert np.rad2deg(turn) < 0.05
+    (section,) = result.to_dict()["instrument_frames"]  # the same frames, in mm and a quaternion
+    name = "camera_on_flange" if mount == "flange" else "camera_in_world"
+    np.testing.assert_allclose(section["frames"][name]["xyz_mm"], camera[:3, 3] * 1e3, atol=1e-9)
+    q = section["frames"][name]["quaternion_wxyz"]
+    turn = np.array(q[1:]) / np.linalg.norm(q[1:]) * 2 * np.arccos(q[0])
+    np.testing.assert_allclose(rotvec_to_matrix(turn), camera[:3, :3], atol=1e-9)
+    assert name + ": x, y, z" in result.summary()
 
 
 def test_camera_calibration_reaches_the_noise_on_held_out_poses():

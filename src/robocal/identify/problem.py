@@ -159,6 +159,13 @@ class CalibrationProblem:
     def start(self, robot) -> State:
         return State(robot, np.concatenate([obs.nuisance_start(robot) for obs in self.observations]))
 
+    def instrument_frames(self, state: State) -> list[tuple[str, dict[str, np.ndarray]]]:
+        """Per measurement set whose instrument carries frames of its own (a camera and its board,
+        a capture frame and marker offsets): its label and those frames at ``state`` (4 x 4
+        transforms or ``(3,)`` offsets, m; the observation's ``frames``)."""
+        return [(obs.data.label, obs.frames(nuisance))
+                for obs, nuisance in self._with_nuisance(state.nuisance) if hasattr(obs, "frames")]
+
     def export_nuisance(self, state: State) -> dict[str, np.ndarray]:
         """The state's nuisance as physical entities (planes as normal + offset), to judge other
         measurement sets with them (:meth:`carried_state`)."""

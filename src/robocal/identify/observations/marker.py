@@ -109,6 +109,14 @@ class MarkerObservation(Observation):
         p = np.einsum("nij,nj->ni", F[:, :3, :3], offsets[self.marker_of]) + F[:, :3, 3]
         return p @ W[:3, :3].T + W[:3, 3]
 
+    def frames(self, nuisance) -> dict[str, np.ndarray]:
+        """The estimated capture frame (the robot's world in it, 4 x 4, m) and each marker's offset
+        on its link (``(3,)``, m, in the link's frame)."""
+        W, offsets = self._split(nuisance)
+        links = {k: int(self.link[self.marker_of == k][0]) for k in range(self.markers.size)}
+        return {"robot_world_in_capture": W,
+                **{f"marker{s}_on_link{links[k]}": offsets[k] for k, s in enumerate(self.markers)}}
+
     # ---------------------------------------------------------------- nuisance
     def nuisance_start(self, robot) -> np.ndarray:
         W, offsets = self._alternate(robot)
