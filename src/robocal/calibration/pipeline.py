@@ -96,10 +96,14 @@ def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: f
         reason = "; ".join(dict.fromkeys(obs.blind_spot for obs in problem.observations if obs.blind_spot))
         warnings.append(f"{reason}: {', '.join(sorted(blind, key=state0.robot.parameter_names.index))} "
                         "are held at their nominal values")
-    if ident.rank < max(1, candidates.size // 2):
+    n_smr = min(max(d.n_smr for d in problem.datasets), len(state0.robot.smr) + 1)
+    structural = unidentifiable(state0.robot, problem.kind, list(candidates.robot), n_smr, rtol)
+    possible = candidates.size - (len(structural) if structural != set(candidates.robot) else 0)
+    if ident.rank < max(1, possible // 2):  # of what any pose set could identify (a SCARA's freedoms aside)
         raise IdentificationError(
-            f"the pose set is degenerate: only {ident.rank} of {candidates.size} parameters "
-            f"are identifiable from {n_poses} poses; measure poses spread over the workspace")
+            f"the pose set is degenerate: only {ident.rank} of the {possible} parameters poses spread over "
+            f"the joint limits identify are identifiable from {n_poses} poses; measure poses spread over "
+            "the workspace")
     if J0.shape[0] <= ident.rank:
         raise IdentificationError(f"{J0.shape[0]} residuals cannot determine {ident.rank} identifiable "
                                   "parameters: measure more poses")
@@ -121,8 +125,7 @@ def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: f
     held, ratio = undetermined(J0[:, columns], sigma, lin.noise)
     ident = hold(ident, J0, [kept.names[j] for j in held],
                  {n: float(q) for n, q in zip(kept.names, ratio, strict=True) if np.isfinite(q)})
-    n_smr = min(max(d.n_smr for d in problem.datasets), len(robot.smr) + 1)
-    ident = separate(ident, unidentifiable(robot, problem.kind, list(candidates.robot), n_smr, rtol))
+    ident = separate(ident, structural, robot)
     warnings += scales.warnings()
     return kept.with_prior(sigma, mean, lin.noise).restricted(ident.kept), ident, warnings, robot, scales
 
@@ -632,7 +635,7 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
         raise DataError(f"the measurement noise must be > 0 mm, got {noise_mm}")
     ident = posterior_analysis(robot, data, Noise(sigma_m=float(noise_mm) * 1e-3), params, rtol)
     n_smr = 1 if smr is None else int(smr.max(initial=0)) + 1
-    return separate(ident, unidentifiable(robot, kind, ident.names, n_smr, rtol))
+    return separate(ident, unidentifiable(robot, kind, ident.names, n_smr, rtol), robot)
 
 
 def _plain(options: dict) -> dict:

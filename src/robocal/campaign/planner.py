@@ -551,7 +551,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         robot=plan_robot, kind=kind, joints=joints, candidate_index=index, visible=visible_out,
         predicted_rms_mm=float(np.sqrt(predicted(chosen)) * 1e3),
         criterion=criterion, criterion_value=found.value, identifiability=separate(
-            info.analyze_subset(chosen), unidentifiable(plan_robot, kind, info.all_names, max(len(smr), 1))),
+            info.analyze_subset(chosen), unidentifiable(plan_robot, kind, info.all_names, max(len(smr), 1)),
+            plan_robot),
         parameters=list(info.names),
         travel=travel(joints, weights), travel_unordered=travel(cand_q[found.indices], weights),
         weights=weights, curve=points, funnel=funnel, noise=noise,

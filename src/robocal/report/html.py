@@ -543,6 +543,14 @@ def _identifiability(result: dict) -> str:
              else (f"{ident[k]:.4g}")] for k in keys if not isinstance(ident[k], list | dict)]
     out = _table(["", ""], rows, left=1) if rows else "<p>No identifiability analysis in this result.</p>"
     dropped = result.get("dropped") or []
+    freedoms = ident.get("structural_freedoms") or []  # a SCARA's (robocal.identify.freedoms)
+    if freedoms:
+        out += ("<h3>Structural freedoms of a SCARA</h3><p>The robot's structure, not the poses: no "
+                "campaign separates these; each is estimated once and the rest held at nominal.</p>"
+                + _table(["freedom", "held at nominal", "carried by"],
+                         [[esc(f.get("words")), esc(", ".join(f.get("held") or [])),
+                           esc(", ".join(f.get("carried_by") or [])) or "&ndash;"] for f in freedoms],
+                         align="www"))
     if not dropped:
         return out
     return _grid(out, "<h3>Parameters not estimated</h3>"

@@ -35,7 +35,7 @@ from robocal.identify.identifiability import Identifiability
 from robocal.identify.priors import prior_sigma
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult
-from robocal.identify.space import ParameterSpace, State
+from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.kinematics.model import Robot
 
 WORKSPACE_SAMPLES = 1000  # joint vectors of the workspace sample
@@ -176,8 +176,12 @@ def prediction(result: Fit) -> Prediction:
     when there are any."""
     problem, state, robot = result.problem, result.state, result.robot
     nuisance = set(problem.nuisance_names)
-    names = [n for n in result.identifiability.names if n not in nuisance and n in robot.parameter_names
-             and n not in _absorbed(result)]
+    # a frame parameter the data cannot identify has no prior either: held at nominal, it carries no
+    # variance (its column may be round-off only: a scale bar's SMR height on a SCARA, 1e-12 of the
+    # others, which the scaled information would read as information on a 1 m scale)
+    held = {n for n in result.identifiability.dropped if block_of(n) != "links"} | _absorbed(result)
+    names = [n for n in result.identifiability.names
+             if n not in nuisance and n in robot.parameter_names and n not in held]
     r = problem.residuals(state)
     s0 = float(np.sqrt(r @ r / max(r.size - result.space.size, 1)))
     errors = problem.item_error_vectors(state)
