@@ -24,6 +24,7 @@ from robocal.core.errors import DataError, IdentificationError, PlausibilityErro
 from robocal.core.progress import Progress
 from robocal.core.resources import calibration_bytes, check_memory, few_threads, memory_guard
 from robocal.core.version import __version__
+from robocal.data.instruments import declared, default_method, instrument_of
 from robocal.data.kinds import kind_spec
 from robocal.data.measurements import Measurements
 from robocal.data.registration import register
@@ -48,6 +49,8 @@ from robocal.identify.solvers import SolverResult, check_options, get_solver, it
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.identify.structural import separate, unidentifiable
 from robocal.identify.uncertainty import correlation, covariance
+from robocal.identify.variance_components import chosen as chosen_components
+from robocal.identify.variance_components import fit as fit_components
 from robocal.kinematics.conditions import range_of as conditions_range
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
 from robocal.kinematics.prior_spec import PriorSpec
@@ -217,10 +220,11 @@ def _rows(robot=None, data=None, *args, **kwargs) -> int:
 
 @memory_guard("the calibration")
 @few_threads(_rows)
-def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, *,
+def calibrate(robot, data, method: str | None = None, params="auto", validation=None, *,
               register_frames: bool = True, rtol: float = DEFAULT_RTOL, seed: int = 0,
               progress=None, nongeometric="default", force: bool = False, sigma: dict | None = None,
               warm_start: CalibrationResult | None = None, hold_out: int | None = None,
+              instrument: str | None = None, variance_components: bool | None = None,
               priors: str | dict | PriorSpec | None = None, **options) -> CalibrationResult:
     """Calibrate ``robot`` (nominal model) against ``data``: Measurements, or a list of them of
     any kinds (points, poses, planes, distances) identified together in one problem, each set
@@ -236,8 +240,10 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
         The nominal model.
     data : Measurements or list of Measurements
         The calibration data; several sets (of any kinds) are identified together.
-    method : str, default 'lsq'
-        ``'lsq'``, ``'robust'`` (outlier rejection), or another registered solver.
+    method : str, optional
+        ``'lsq'``, ``'robust'`` (outlier rejection), or another registered solver; default
+        ``'robust'`` when an instrument with heavy-tailed errors (motion capture, a camera) took
+        the data, else ``'lsq'`` (`robocal.data.instruments.default_method`).
     params : 'auto', 'all' or list of str
         The free parameters: ``'auto'`` the default free set with the unidentifiable ones
         dropped, ``'all'``, or names (see ``Robot.parameter_names``).
@@ -272,6 +278,13 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     hold_out : int, optional
         Judge on the last ``hold_out`` poses of the one calibration set (file order) and
         calibrate on the rest (no ``validation`` then); recorded in ``provenance["hold_out"]``.
+    instrument : str, optional
+        The instrument that took the sets declaring none (``tracker``, ``mocap``, ``camera``;
+        `robocal.data.instruments`): its documented noise weighs them, its tails choose the method.
+    variance_components : bool, optional
+        Estimate the position and rotation noise of 6-D sets from the data (iterated variance
+        components, `robocal.identify.variance_components`; ``result.variance_components``);
+        default: for camera sets and 6-D sets of a declared instrument other than a tracker.
     priors : str, dict or PriorSpec, optional
         The parameter priors' class and group scales, on top of the model file's ``priors:``
         block: ``'class=service,zeros=3deg,lengths=10mm'``, the same as a mapping, or a
@@ -316,13 +329,16 @@ def calibrate(robot, data, method: str = "lsq", params="auto", validation=None, 
     >>> "d1" in result.identifiability.dropped  # the base frame absorbs d1
     True
     """
-    datasets, validations = _as_sets(data, "calibration"), _as_sets(validation, "validation")
+    datasets, validations = (declared(_as_sets(d, role), instrument)
+                             for d, role in ((data, "calibration"), (validation, "validation")))
+    method = default_method(datasets) if method is None else method
     robot = with_priors(robot, priors)
     if hold_out is not None:
         datasets, validations = split_hold_out(datasets, validations, hold_out)
     try:
         result = _calibrate_sets(robot, datasets, validations, method, params, register_frames, rtol, seed,
-                                 progress, nongeometric, force, sigma, warm_start, options)
+                                 progress, nongeometric, force, sigma, warm_start, options,
+                                 components=variance_components)
     except PlausibilityError as exc:  # the data's own diagnosis first when it tells more
         raise diagnosed(exc, robot, [*datasets, *validations]) from None
     if hold_out is not None:  # the JSON and the report name the split (docs/result-json.md)
@@ -363,7 +379,8 @@ def split_hold_out(datasets: list, validations: list, n: int) -> tuple[list, lis
 
 def _calibrate_sets(robot, datasets: list, validations: list, method: str, params, register_frames: bool,
                     rtol: float, seed: int, progress, nongeometric, force: bool, sigma: dict | None,
-                    warm_start: CalibrationResult | None, options: dict) -> CalibrationResult:
+                    warm_start: CalibrationResult | None, options: dict, components: bool | None = None
+                    ) -> CalibrationResult:
     """`calibrate` of the data sets as lists."""
     check_options(method, options)
     spec = resolve_nongeometric(nongeometric, method, datasets)
@@ -376,7 +393,8 @@ def _calibrate_sets(robot, datasets: list, validations: list, method: str, param
             f"{method!r} searches the geometric parameters only (calibrate with lsq first, or "
             "drop --nongeometric)")
     fit = partial(_calibrate, robot, datasets, method, params, register_frames=register_frames,
-                  rtol=rtol, seed=seed, progress=progress, force=force, sigma=sigma, options=options)
+                  rtol=rtol, seed=seed, progress=progress, force=force, sigma=sigma, options=options,
+                  components=components)
     terms = [] if not spec or spec == "auto" else parse_terms(spec)
     if warm_start is not None and (spec == "auto" or "cyclic" in terms):
         raise IdentificationError("a warm start goes with named joint-error terms; nongeometric='auto' "
@@ -437,9 +455,10 @@ def resolve_nongeometric(spec, method: str, datasets: list) -> str | list | None
 
 def _calibrate(robot, datasets: list, method: str, params, terms: list[str], validations: list,
                warm_start: CalibrationResult | None = None, *, register_frames: bool, rtol: float,
-               seed: int, progress, force: bool, sigma: dict | None, options: dict) -> CalibrationResult:
+               seed: int, progress, force: bool, sigma: dict | None, options: dict,
+               components: bool | None = None) -> CalibrationResult:
     """One calibration with the joint-error terms (and explicit parameter names) ``terms``; the
-    arguments of `calibrate`."""
+    arguments of `calibrate` (``components``: its ``variance_components``)."""
     for d in datasets + validations:
         d.check_against(robot)
     n_smr = max(d.n_smr for d in datasets)
@@ -467,7 +486,10 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
     state0 = State(prior_robot, state0.nuisance)  # carries the group scales used (every later prior)
     warnings += more
     first = state0 if warm_start is None else _warm_state(problem, warm_start, declared_start, space)
-    out = _run_solver(method, problem, first, space, seed, progress, options)
+    def solve(state: State) -> SolverResult:
+        return _run_solver(method, problem, state, space, seed, progress, options)
+
+    out, found = fit_components(solve, problem, first, space, chosen_components(problem, components))
     cov = _covariance(problem, out, space)
     check_corrections(state0.robot, out.state.robot, space.robot,
                       sigma=dict(zip(space.names, np.sqrt(np.maximum(np.diag(cov), 0.0)), strict=True)),
@@ -492,7 +514,10 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
                     "data": [d.source for d in datasets], "validation": [v.source for v in validations],
                     "fingerprints": {"data": [fingerprint(d.joints) for d in datasets],
                                      "validation": [fingerprint(v.joints) for v in validations]},
-                    "sigma_mm": {k: v * 1e3 for k, v in (sigma or {}).items()}})
+                    "sigma_mm": {k: v * 1e3 for k, v in (sigma or {}).items()},
+                    "instruments": [instrument_of(d) or None for d in datasets]})
+    result.variance_components = found
+    warnings += [c.warning for c in found if c.warning]
     _check_consistency(result, sigma, seed, force)
     states = (state0, State(final_robot, out.state.nuisance))
     result.judged = [_judge(problem, start, states, v, force, warnings) for v in validations]

@@ -23,6 +23,10 @@ EPILOG = """Examples:
       -o cell.csv --truth truth.yaml       # a campaign at three payloads while the arm warms up
   robocal simulate --robot kuka_kr210_r2700 --poses 300 --temperatures 20:35 --thermal-k forearm=23e-6 \\
       -o warm.csv --truth truth.yaml       # an aluminium forearm on a steel arm
+  robocal simulate --robot ur10 --poses 40 --kind marker --links 6,6,6,4 --noise-mm 0.3 \\
+      -o mocap.csv --truth truth.yaml       # motion capture: 3 markers on the hand, one on link 4
+  robocal simulate --robot ur10 --poses 40 --kind eye_in_hand --noise-mm 1 --rotation-noise-deg 0.3 \\
+      -o camera.csv --truth truth.yaml      # a camera on the flange watching a fixed board
 The truth YAML is the true robot (tracker frame as base, SMR 0 as tool); TRUTH.sim.json next to it
 holds the noise floor (3-D RMS of the added noise, mm), outlier rows and plane coefficients.
 """
@@ -41,8 +45,13 @@ def add_parser(sub) -> None:
                             "visible_smr* columns are honoured)")
     p.add_argument("--kind", choices=KINDS, default="point",
                    help="tracker points, 6-DOF poses, plane contacts (a probe tip), flush contacts (a "
-                        "flat tool face on a plane: its height and two angles), or scale-bar placements "
-                        "(distance)")
+                        "flat tool face on a plane: its height and two angles), scale-bar placements "
+                        "(distance), motion-capture markers (marker, see --links), or a camera's board "
+                        "poses with the camera in the cell (eye_to_hand) or on the flange (eye_in_hand; "
+                        "--noise-mm and --rotation-noise-deg are its noise, the frames go to TRUTH.sim.json)")
+    p.add_argument("--links", type=numbers(None, "link frame numbers"), metavar="J,J,..",
+                   help="kind marker: the link frame of each marker (0 base .. n flange; default 3 on the "
+                        "flange)")
     p.add_argument("--noise-mm", type=float, default=0.02, help="isotropic noise sigma per axis, mm")
     p.add_argument("--noise-model", choices=("isotropic", "tracker"), default="isotropic")
     p.add_argument("--outliers", type=float, default=0.0, help="fraction of rows with a 1-5 mm gross error")
@@ -117,6 +126,7 @@ def run(args) -> int:
     from robocal.campaign.files import read_planned
     from robocal.core.io import check_outputs
     from robocal.data.simulate import probe_and_tracker, simulate_tracker
+    from robocal.data.simulate_instruments import INSTRUMENT_KINDS, simulate_kind
     from robocal.kinematics.model import load_model
 
     check_format(args.output, "CSV", "-o")
@@ -124,6 +134,11 @@ def run(args) -> int:
     check_outputs([args.output, args.truth, Path(args.truth).with_suffix(".sim.json")],
                   [args.robot, args.joints])
     robot = load_model(args.robot)
+    if args.kind in INSTRUMENT_KINDS:
+        return _written(simulate_kind(robot, args.kind, args.poses, noise_mm=args.noise_mm, seed=args.seed,
+                                      rotation_noise_deg=args.rotation_noise_deg, outliers=args.outliers,
+                                      links=args.links),
+                        args)
     box = None if args.box is None else np.array(args.box).reshape(2, 3) * 1e-3
     smr, tracker = probe_and_tracker(args.smr_mm, args.tool_mm, args.tracker_mm)
     joints = visible = None
@@ -141,6 +156,11 @@ def run(args) -> int:
                               as_is=args.as_is, payloads=args.payloads, temperatures=args.temperatures,
                               payload_com=None if args.payload_com_mm is None else
                               np.array(args.payload_com_mm) * 1e-3, thermal_k=args.thermal_k)
+    return _written(result, args)
+
+
+def _written(result, args) -> int:
+    """Write a simulation's files and say so."""
     written = result.write(args.output, args.truth)
     if not args.quiet:
         print(result.summary())

@@ -27,7 +27,9 @@ class KindSpec:
     observation : str
         Its observation model, ``"module:Class"`` in `robocal.identify.observations`.
     arrays : tuple of str
-        The observation arrays of `Measurements` it requires (and the only ones it takes).
+        The observation arrays of `Measurements` it requires.
+    optional : tuple of str
+        The observation arrays it takes besides (and no others).
     sigma_m : float
         The 1-sigma noise (m) of a row when a set of several kinds has no sigma column and none is
         given: a laser tracker 2-4 m away (points, a 6-DOF pose's position), a touch probe, a scale
@@ -59,6 +61,7 @@ class KindSpec:
     observation: str
     arrays: tuple[str, ...]
     sigma_m: float
+    optional: tuple[str, ...] = ()
     sees_position: bool = False
     sees_orientation: bool = False
     sees_tilt: bool = False
@@ -91,6 +94,15 @@ OBSERVED = {spec.name: spec for spec in (
              columns="flush_plane (the tool face flush on a plane)", column="flush_plane"),
     KindSpec("distance", "distance:DistanceObservation", ("pair", "distance"), sigma_m=5e-6, group="pair",
              rows_per_placement=2, columns="pair and distance_mm"),
+    # motion capture: markers on any link, their offsets and the capture frame estimated with the robot
+    KindSpec("marker", "marker:MarkerObservation", ("points",), optional=("link",), sigma_m=0.3e-3,
+             several_smrs=True, columns="x_mm,y_mm,z_mm and link"),
+    # a camera's board poses (board in the camera frame): camera in the cell, board on the flange ...
+    KindSpec("eye_to_hand", "camera:EyeToHandObservation", ("points", "rotations"), sigma_m=1e-3,
+             columns="x_mm,y_mm,z_mm and qw..qz"),
+    # ... or camera on the flange, board in the cell (hand-eye)
+    KindSpec("eye_in_hand", "camera:EyeInHandObservation", ("points", "rotations"), sigma_m=1e-3,
+             columns="x_mm,y_mm,z_mm and qw..qz"),
 )}
 KINDS = tuple(OBSERVED)  # every kind's name, in the order messages list them
 

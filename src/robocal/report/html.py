@@ -229,6 +229,7 @@ def _summary(result: dict) -> str:
              ("observations used / rejected", f"{esc(used)} / {esc(n_rej)}"),
              ("validation set", esc(data.get("validation_file")) if data.get("validation_file") else "none"),
              ("method", esc(result.get("method"))),
+             *_instruments(prov, result.get("variance_components") or []),
              *_provenance(prov),
              ("settings", ", ".join(f"{esc(k)}={esc(v)}" for k, v in settings.items()) or "&ndash;")]
     if "converged" in result or "message" in result:
@@ -249,7 +250,24 @@ def _summary(result: dict) -> str:
 
 
 _KIND_ERROR = {"point": "position", "pose": "position", "plane": "distance to the plane",
-               "flush": "flush contact error", "distance": "distance error"}
+               "flush": "flush contact error", "distance": "distance error", "marker": "marker position",
+               "eye_to_hand": "board position", "eye_in_hand": "board position"}
+
+
+def _instruments(prov: dict, components: list[dict]) -> list[tuple[str, str]]:
+    """The instruments of the calibration files and the 6-D noise estimated from them (pre-escaped
+    rows; none when no file declares an instrument)."""
+    rows = []
+    named = [i for i in prov.get("instruments") or [] if i]
+    if named:
+        rows.append(("instrument", esc(", ".join(dict.fromkeys(named)))))
+    for c in components:
+        rows.append(("6-D noise (variance components)",
+                     f"{_num(c.get('sigma_position_mm'))} mm, {_num(c.get('sigma_rotation_deg'))} deg "
+                     "per axis "
+                     f"<span class='note'>{esc(c.get('data'))}; {esc(c.get('rounds'))} fits"
+                     f"{'' if c.get('settled') else ', not settled'}</span>"))
+    return rows
 
 
 def _per_file(result: dict) -> str:

@@ -46,10 +46,10 @@ from scipy.spatial.transform import Rotation
 from scipy.special import chdtrc  # chi2.sf without importing scipy.stats (a third of start-up)
 
 from robocal.core.errors import PlausibilityError, RobocalError
+from robocal.data.instruments import noise_of
 from robocal.data.measurements import robot_reach
 from robocal.data.registration import register_frame
 from robocal.identify.plausibility import FORCE_HINT
-from robocal.identify.problem import KIND_SIGMA
 from robocal.trust.diagnosis import GAIN, fit_rms_mm, joint_mixup, length_unit, priors_too_tight
 
 ALPHA = 1e-3  # the residual test's false-alarm probability per fit (model and noise right)
@@ -162,8 +162,9 @@ def budget_m(robot) -> float:
 def item_noise(data, kind: str, n_items: int, item_of_rows: np.ndarray,
                sigma: dict | None = None) -> np.ndarray:
     """1-sigma (m) of each of ``n_items`` residual items of ``data``: its sigma column (per row,
-    ``item_of_rows`` maps rows to items), else ``sigma[kind]``, else :data:`KIND_SIGMA`."""
-    default = (sigma or {}).get(kind, KIND_SIGMA[kind])
+    ``item_of_rows`` maps rows to items), else ``sigma[kind]``, else its instrument's documented
+    noise (`robocal.data.instruments.noise_of`: else the kind's)."""
+    default = (sigma or {}).get(kind, noise_of(data))
     out = np.full(n_items, float(default))
     if data.sigma is not None:
         out[item_of_rows] = data.sigma
