@@ -52,6 +52,7 @@ from robocal.identify.space import block_of
 
 MAX_NOMINAL_ERROR_MM = 10.0
 MAX_NOMINAL_ERROR_FRACTION = 0.05
+GROSS_FRACTION = 0.1  # the share of the largest errors the misfit check leaves out (gross errors)
 SPREAD_RATIO = 3.0
 UNIT_RATIO = 300.0  # a spread ratio beyond this (either way) is a length unit (x1000)
 INCH_MM = 25.4
@@ -73,6 +74,17 @@ FORCE_HINT = "if you are sure the data and the model are right, rerun with --for
 def spread(points: np.ndarray) -> float:
     """RMS distance of points ``(N, 3)`` from their centroid (m)."""
     return float(np.sqrt(np.mean(np.sum((points - points.mean(axis=0)) ** 2, axis=1))))
+
+
+def bulk_rms_mm(errors: np.ndarray) -> float:
+    """RMS (mm) of the bulk of position errors ``errors`` (m; ``(N, 3)`` vectors or ``(N,)`` norms):
+    the largest :data:`GROSS_FRACTION` of the items left out, so that a few gross errors (a
+    mislabelled marker, a mistyped row) do not make a right model look like another robot's, while
+    data that do belong to another robot or unit, wrong in every row, still do."""
+    e = np.asarray(errors, dtype=float)
+    e = np.linalg.norm(e, axis=1) if e.ndim == 2 else np.abs(e)
+    kept = np.sort(e)[:max(1, int(np.ceil(len(e) * (1 - GROSS_FRACTION))))]
+    return float(np.sqrt(np.mean(kept**2)) * 1e3)
 
 
 def error_limit_mm(points: np.ndarray) -> float:
@@ -114,7 +126,8 @@ def check_spread(measured: np.ndarray, modelled: np.ndarray, what: str, *, force
 def check_residual(rms_mm: float, points: np.ndarray, what: str, *, force: bool = False,
                    warnings: list[str] | None = None) -> None:
     """An RMS residual ``rms_mm`` of the nominal (or calibrated) model on data whose points are
-    ``points (N, 3)`` must be within what geometric errors can leave (:func:`error_limit_mm`)."""
+    ``points (N, 3)`` must be within what geometric errors can leave (:func:`error_limit_mm`);
+    ``rms_mm`` is best the bulk's (:func:`bulk_rms_mm`)."""
     limit = error_limit_mm(points)
     if rms_mm <= limit:
         return
