@@ -21,6 +21,7 @@ REQUIRED = ["abb_irb120", "abb_irb1600", "abb_irb2400", "abb_irb2600", "abb_irb4
             "fanuc_m20ia", "fanuc_m710ic50", "fanuc_r2000ic_165f", "abb_irb6700", "yaskawa_gp25"]
 OPW_ROBOTS = [n for n in catalog_names() if "opw" in catalog_entry(n)]
 CHAINS = yaml.safe_load((Path(__file__).parent / "data" / "ros_industrial_chains.yaml").read_text())
+SCARAS = yaml.safe_load((Path(__file__).parent / "data" / "scara_sources.yaml").read_text())
 
 
 def random_joints(robot: Robot, rng, n: int = 200) -> np.ndarray:
@@ -67,7 +68,8 @@ def test_entry_equals_its_ros_industrial_urdf(name, rng):
 def test_every_entry_is_checked_against_a_source():
     """Each catalog robot meets an independent source in some test: py-opw-kinematics on its OPW
     set, a ROS-I URDF chain, Universal Robots' DH (ur-analytic-ik, test_ur_ik), or a dedicated test."""
-    dedicated = {"puma560", "abb_irb120", "meca500", "ur5", "ur10"}
+    dedicated = {"puma560", "abb_irb120", "meca500", "ur5", "ur10",
+                 *SCARAS}  # the SCARAs: robotkinematicscatalogue's chains, tests/test_scara.py
     ur = {n for n in catalog_names() if Robot.from_catalog(n).has_ur_form}
     assert set(catalog_names()) <= set(OPW_ROBOTS) | set(CHAINS) | ur | dedicated
 
@@ -156,10 +158,12 @@ def test_limits_are_vendor_values():
     # the KR 210 R2700 extra's A2 works in [-140, -5] deg (its URDF): zero is outside its range
     assert np.allclose(np.rad2deg(Robot.from_catalog("kuka_kr210_r2700").limits[1]), [-140, -5])
     for name in catalog_names():
-        lim = Robot.from_catalog(name).limits
-        assert lim.shape == (6, 2) and (lim[:, 0] < lim[:, 1]).all(), name
+        robot = Robot.from_catalog(name)
+        lim = robot.limits
+        assert lim.shape == (4 if name in SCARAS else 6, 2) and (lim[:, 0] < lim[:, 1]).all(), name
+        turning = lim[~robot.prismatic]  # a SCARA's quill is 0 at one end of its stroke
         if name != "kuka_kr210_r2700":
-            assert (lim[:, 0] < 0).all() and (lim[:, 1] > 0).all(), name
+            assert (turning[:, 0] < 0).all() and (turning[:, 1] > 0).all(), name
 
 
 def test_each_catalog_file_is_named_after_its_robot():
@@ -236,12 +240,13 @@ def test_fk_polynomial_sin_cos_and_large_angle_fallback(rng):
 
 @pytest.mark.parametrize("name", [n for n in catalog_names() if n not in ("meca500",)])
 def test_closed_form_ik_round_trip_on_every_arm(name, rng):
-    """Every catalog arm but the Meca500 (no closed form: its OPW set is not carried) has the OPW or
-    UR form; its closed-form IK recovers random joints, each solution FK-exact."""
+    """Every catalog arm but the Meca500 (no closed form: its OPW set is not carried) has the OPW, UR
+    or SCARA form; its closed-form IK recovers random joints, each solution FK-exact."""
     from robocal.ik import solve_all
+    from robocal.ik.closed_form import has_closed_form
 
     robot = Robot.from_catalog(name)
-    assert robot.has_opw_form or robot.has_ur_form
+    assert has_closed_form(robot) and (robot.has_opw_form or robot.has_ur_form or name in SCARAS)
     q = random_joints(robot, rng, 300)
     T = robot.fk(q)
     sols = solve_all(robot, T)

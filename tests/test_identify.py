@@ -18,6 +18,7 @@ from robocal.identify.identifiability import analyze, condition_class
 from robocal.identify.plausibility import check_corrections
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.robust import igg3_weights
+from robocal.identify.solvers import get_solver
 
 PI = np.pi
 
@@ -70,12 +71,34 @@ def test_identifiability_finds_the_textbook_redundancies():
 def test_robust_rejects_gross_outliers():
     sim, cal, val, floor = campaign(seed=5, outliers=0.05)
     robust = calibrate(irb2600(), cal, method="robust", validation=val)
-    lsq = calibrate(irb2600(), cal, validation=val)
     assert robust.validation["rms"] < 1.2 * floor
-    assert lsq.validation["rms"] > robust.validation["rms"]
     outlier_items = set(np.flatnonzero(np.isin(cal.source_row, sim.data.source_row[sim.outlier_rows])))
     assert outlier_items <= set(robust.rejected.tolist())
     assert len(robust.rejected) <= len(outlier_items) + 3
+
+
+def test_least_squares_refits_without_its_gross_errors_and_says_so():
+    sim, cal, val, floor = campaign(seed=5, outliers=0.05)
+    lsq = calibrate(irb2600(), cal, validation=val)
+    outlier_items = set(np.flatnonzero(np.isin(cal.source_row, sim.data.source_row[sim.outlier_rows])))
+    assert outlier_items <= set(lsq.rejected.tolist())  # every simulated gross error, and ...
+    assert len(lsq.rejected) <= len(outlier_items)  # ... only them
+    assert lsq.validation["rms"] < 1.2 * floor
+    assert any("rejected as gross errors" in w for w in lsq.warnings)
+    # the same fit without the screen (plain Gauss-Newton) is pulled off by the outliers
+    problem, space = lsq.problem, lsq.space
+    plain = get_solver("lsq")(problem, lsq.initial, space)
+    inliers = np.setdiff1d(np.arange(problem.n_items), sorted(outlier_items))
+    def inlier_rms(state):  # noqa: E306
+        return np.sqrt(np.mean(problem.position_errors(state)[inliers] ** 2))
+    assert inlier_rms(plain.state) > 1.5 * inlier_rms(lsq.solver.state)
+
+
+def test_least_squares_on_clean_data_is_plain_least_squares():
+    _, cal, val, _ = campaign(seed=5)
+    lsq = calibrate(irb2600(), cal, validation=val)
+    assert lsq.solver.item_weights is None and not lsq.rejected.size
+    assert not any("gross errors" in w for w in lsq.warnings)
 
 
 def test_robust_builds_the_jacobian_once_per_state(monkeypatch):
@@ -264,3 +287,15 @@ def test_an_infinite_condition_number_is_written_as_null():
                             condition_number=float("inf"), singular_values=np.zeros(0),
                             undetermined=["a2"])  # all held by their priors (was: ValueError in json)
     assert json.loads(json.dumps(ident.to_dict(), allow_nan=False))["condition_number"] is None
+
+
+def test_the_misfit_check_judges_the_bulk_not_a_few_gross_errors():
+    from robocal.identify.plausibility import bulk_rms_mm, check_residual
+    rng = np.random.default_rng(0)
+    points = rng.uniform(-0.5, 0.5, (100, 3))
+    errors = rng.normal(0, 1e-3, (100, 3))  # 1.7 mm RMS: a robot's geometric errors
+    errors[:5] += 0.2  # five gross errors of 350 mm
+    assert np.sqrt(np.mean(np.sum(errors**2, axis=1))) * 1e3 > 50  # the plain RMS: another robot
+    check_residual(bulk_rms_mm(errors), points, "data with five gross errors")  # the bulk: a robot
+    with pytest.raises(PlausibilityError, match="misses the measurements"):  # wrong in every row
+        check_residual(bulk_rms_mm(errors + 0.05), points, "another robot's data")

@@ -32,6 +32,7 @@ def test_capabilities_and_readings():
         data = Measurements.from_arrays(kind, q, **kind_spec(kind).readings(T))
         assert data.spec is OBSERVED[kind] and set(OBSERVED[kind].arrays) <= {
             f for f in ("points", "rotations") if getattr(data, f) is not None}
+    assert [k for k in KINDS if OBSERVED[k].sees_tilt] == ["flush"]
     with pytest.raises(DataError, match="unknown measurement kind 'laser': use one of point, pose, plane, "
-                                        "distance"):
+                                        "flush, distance"):
         kind_spec("laser")

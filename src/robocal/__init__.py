@@ -28,6 +28,8 @@ _LAZY = {
     "register": "robocal.data.registration",
     "Conditions": "robocal.kinematics.conditions",  # the rows' conditions for Robot.fk / jacobian
     "simulate_tracker": "robocal.data.simulate",
+    "simulate_markers": "robocal.data.simulate_instruments",
+    "simulate_camera": "robocal.data.simulate_instruments",
     "evaluate": "robocal.calibration.evaluation",
     "Robot": "robocal.kinematics.model",
     "FilterResult": "robocal.programs", "filter_program": "robocal.programs",
@@ -62,6 +64,8 @@ __all__ = [
     "plan_poses",
     "register",
     "simulate_tracker",
+    "simulate_markers",
+    "simulate_camera",
     "DataError",
     "IdentificationError",
     "ModelError",

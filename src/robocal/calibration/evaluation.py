@@ -11,11 +11,11 @@ from robocal.core.errors import DataError, PlausibilityError
 from robocal.core.io import write_all
 from robocal.core.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
 from robocal.data.csv_table import count_lines
+from robocal.data.instruments import declared
 from robocal.data.registration import apply_registration, register_frame
 from robocal.identify.observations import observation_for
 from robocal.identify.plausibility import check_joint_limits, check_residual, check_spread
 from robocal.kinematics.joint_errors import extrapolated_conditions
-from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import check_fit
 from robocal.trust.diagnosis import diagnosed, fit_rms_mm
@@ -137,7 +137,7 @@ def check_files_memory(paths) -> None:
 
 
 def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bool = False,
-             names: dict | None = None) -> EvaluationResult:
+             names: dict | None = None, instrument: str | None = None) -> EvaluationResult:
     """Position error statistics (mm) of ``robot`` against ``data``.
 
     ``fit_frame`` first registers the base frame and SMR offsets on ``data`` (for a nominal
@@ -166,13 +166,17 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
         Turn the plausibility errors into warnings.
     names : dict, optional
         ``{"model": ..., "data": ..., "frame_from": ...}``: how the summary and the JSON name them.
+    instrument : str, optional
+        The instrument that took ``data`` if it declares none (`robocal.data.instruments`): its
+        documented noise is the consistency test's. Marker and camera data fit their own frames
+        (capture frame and marker offsets; camera and board) on ``data`` itself.
 
     Returns
     -------
     EvaluationResult
         A dict (as before) with ``summary()``, ``warnings``, ``to_dict()``, ``write()``:
         ``n``, ``rms``, ``mean``, ``max``, ``p95`` (mm); ``errors_mm`` ``(N,)`` (plane/distance:
-        signed); ``error_vectors_mm`` ``(N, 3)`` (point/pose); ``rotation_deg`` (pose);
+        signed); ``error_vectors_mm`` ``(N, 3)`` (point/pose); ``rotation_deg`` (6-D rows: pose, camera);
         ``kind``; ``n_poses``; ``warnings`` (list of str); ``consistency`` (the residual test);
         with a fitted frame ``robot`` and ``registration_rms_mm``.
 
@@ -199,6 +203,7 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     >>> round(stats["rms"], 6) == round(sim.noise_floor_mm, 6), stats["error_vectors_mm"].shape
     (True, (30, 3))
     """
+    data = declared([data], instrument)[0]
     try:
         return EvaluationResult(_statistics(robot, data, fit_frame, frame_from, force), names, fit_frame)
     except PlausibilityError as exc:  # the data's own diagnosis first when it tells more
@@ -244,10 +249,9 @@ def _statistics(robot, data, fit_frame: bool, frame_from, force: bool) -> dict:
         stats["error_vectors_mm"] = err * 1e3
     else:
         stats["errors_mm"] = err * 1e3
-    if data.spec.sees_orientation:
-        R = robot.fk(data.joints, smr=data.smr, conditions=data.conditions)[:, :3, :3]
-        ang = np.linalg.norm(matrix_to_rotvec(data.rotations @ np.swapaxes(R, 1, 2)), axis=1)
-        deg = np.rad2deg(ang)
+    if data.rotations is not None:  # 6-D rows (a probe, a camera): the rotation part of each residual
+        r = obs.residuals(robot, nuisance).reshape(obs.n_items, 6)
+        deg = np.rad2deg(np.linalg.norm(r[:, 3:] / obs.scale[3:], axis=1))
         stats["rotation_deg"] = {"rms": float(np.sqrt(np.mean(deg**2))), "mean": float(deg.mean()),
                                  "max": float(deg.max()), "p95": float(np.percentile(deg, 95))}
     stats.update(out)

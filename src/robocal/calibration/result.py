@@ -7,6 +7,7 @@ import json
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from robocal.calibration import conditions
 from robocal.calibration.model_selection import selection_table
@@ -17,7 +18,7 @@ from robocal.core.version import __version__
 from robocal.data.measurements import Measurements
 from robocal.identify import vocabulary
 from robocal.identify.identifiability import Identifiability
-from robocal.identify.priors import prior_sigma
+from robocal.identify.priors import PriorScales, prior_sigma
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult
 from robocal.identify.space import ParameterSpace, State, block_of
@@ -25,6 +26,7 @@ from robocal.identify.uncertainty import correlation, tcp_position_covariance
 from robocal.kinematics.cell import TRACK_IDENTIFIABILITY, is_track_cell
 from robocal.kinematics.model_file import dump_model
 from robocal.kinematics.thermal import groups_of as thermal_groups_of
+from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import Consistency
 from robocal.trust.coverage import accuracy_line
@@ -32,6 +34,8 @@ from robocal.trust.file_shifts import FileShifts, pose_means, split_by_file
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG
 
 RESULT_FORMAT = "robocal-result/1"
+FRAME_LINES = 8  # an instrument's estimated frames and marker offsets shown in the summary, at most
+PRIOR_SHARE_SHOWN = 0.1  # an estimate whose prior carries this share of its information is listed
 _DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 180.0 / np.pi),
             "rad/rad": ("mdeg/deg", 1e3), "1": ("ppm", 1e6),  # "1": a scale (dimensionless)
             "rad/(kg m)": ("deg/(kg m)", 180.0 / np.pi), "rad/kg": ("deg/kg", 180.0 / np.pi),
@@ -111,8 +115,14 @@ class CalibrationResult(_BeforeAfter):
         The joint-error terms identified, when any.
     model_selection : dict or None
         The cross-validation table when the terms were chosen automatically.
+    variance_components : list of Components
+        Per 6-D set whose weights were estimated: its position and rotation noise
+        (`robocal.identify.variance_components`).
     provenance : dict
         Versions, date and input files.
+    prior_scales : PriorScales or None
+        The prior scale of each parameter group the fit used (class default, estimated from the
+        data, or given) and what the data ask for (`robocal.identify.priors.fit_priors`).
 
     Examples
     --------
@@ -149,12 +159,22 @@ class CalibrationResult(_BeforeAfter):
     provenance: dict = field(default_factory=dict)
     consistency: Consistency | None = None
     predicted_accuracy: dict | None = None
+    variance_components: list = field(default_factory=list)  # per 6-D set (identify.variance_components)
     error_model_choice: str | None = None  # why the default error model is geometric, when it is
+    prior_scales: PriorScales | None = None  # the prior group scales used and where they came from
 
     @property
     def state(self) -> State:
         """The final state of the solver (calibrated model and nuisance)."""
         return self.solver.state
+
+    @property
+    def instrument_frames(self) -> list[dict]:
+        """Per measurement set with frames of its own (a camera and its board; a capture frame and
+        marker offsets): ``{"data": label, "frames": {name: {"xyz_mm", "quaternion_wxyz",
+        "rotation_deg", "axis"}}}`` (an offset: ``xyz_mm`` only), the estimates of this calibration."""
+        return [{"data": label, "frames": {name: _frame_dict(T) for name, T in frames.items()}}
+                for label, frames in self.problem.instrument_frames(self.state)]
 
     @property
     def names(self) -> list[str]:
@@ -358,6 +378,10 @@ class CalibrationResult(_BeforeAfter):
             out["nongeometric"] = self.nongeometric
         if self.model_selection is not None:
             out["model_selection"] = self.model_selection
+        if self.variance_components:
+            out["variance_components"] = [c.to_dict() for c in self.variance_components]
+        if frames := self.instrument_frames:
+            out["instrument_frames"] = frames
         if (groups := thermal_groups_of(self.robot, self.unknowns)) is not None:
             out["thermal_groups"] = groups
         if (section := conditions.section(self)) is not None:
@@ -384,11 +408,21 @@ class CalibrationResult(_BeforeAfter):
         sigma = dict(zip(space.names, space.prior_sigma or [np.inf] * space.size, strict=True))
         sigma.update(zip(self.identifiability.undetermined,
                          prior_sigma(robot, self.identifiability.undetermined), strict=True))
-        return {"source": "robocal.identify.priors (docs/priors.md)",
+        scales = {} if self.prior_scales is None else self.prior_scales.to_dict()
+        return {"source": "robocal.identify.priors (docs/priors.md)", **scales,
+                "leaning": self.leaning_on_prior(),
                 "noise": space.noise, "noise_unit": "1 (residuals divided by sigma)"
                 if self.problem.weighted else "m",
                 "sigma": {n: float(sigma[n] * _DISPLAY[units[n]][1]) if np.isfinite(sigma[n]) else None
                           for n in names}}
+
+    def leaning_on_prior(self) -> dict[str, float]:
+        """The estimated parameters whose prior carries at least `PRIOR_SHARE_SHOWN` of their
+        information (posterior / prior variance: how much the prior holds them), largest first;
+        the parameters held near nominal are listed with the not determined ones."""
+        ratio = self.identifiability.prior_ratio
+        share = {n: float(ratio[n] ** 2) for n in self.space.robot if n in ratio and np.isfinite(ratio[n])}
+        return dict(sorted(((n, v) for n, v in share.items() if v >= PRIOR_SHARE_SHOWN), key=lambda t: -t[1]))
 
     def _first_weights(self) -> np.ndarray | None:
         """The robust weights of the first file's items."""
@@ -496,6 +530,11 @@ class CalibrationResult(_BeforeAfter):
             if top:
                 lines.append(f"largest corrections ({unit}): " + ", ".join(
                     f"{r['name']} {r['correction']:+.4f} ± {r['sigma']:.4f}" for r in top))
+        if self.prior_scales is not None:
+            lines.append(self.prior_scales.sentence())
+        if leaning := self.leaning_on_prior():
+            shares = ", ".join(f"{n} {v:.0%}" for n, v in list(leaning.items())[:8])
+            lines.append(f"estimated but leaning on their prior (its share of their information): {shares}")
         ident, unused = self.identifiability, self.not_used
         lines += vocabulary.lines(ident, [n for n in ident.dropped if block_of(n) != "joint_errors"]
                                   + ident.undetermined)
@@ -508,6 +547,9 @@ class CalibrationResult(_BeforeAfter):
                          f"estimated, {len(out)} left out (no effect or not separable from the geometry)")
         if self.model_selection is not None:
             lines.append(selection_table(self.model_selection))
+        lines += [c.line() for c in self.variance_components]
+        lines += [_frame_line(name, frame) for f in self.instrument_frames
+                  for name, frame in f["frames"].items()][:FRAME_LINES]
         if (section := conditions.section(self)) is not None:
             lines += conditions.summary_lines(section)
         if len(self.rejected):
@@ -540,3 +582,27 @@ def load_result(path) -> dict:
         return validate(data, RESULT_SCHEMA)
     except DataError as exc:
         raise DataError(f"{path}: {exc}") from None
+
+
+def _frame_dict(T: np.ndarray) -> dict:
+    """A 4 x 4 frame (m) as translation (mm), unit quaternion (w, x, y, z), rotation angle (deg) and
+    axis; a ``(3,)`` offset (m) as its translation only."""
+    T = np.asarray(T, float)
+    if T.shape == (3,):
+        return {"xyz_mm": (T * 1e3).tolist()}
+    rv = matrix_to_rotvec(T[:3, :3])
+    angle = float(np.linalg.norm(rv))
+    quat = Rotation.from_matrix(T[:3, :3]).as_quat()  # x, y, z, w
+    axis = rv / angle if angle > 0 else np.eye(3)[2]
+    return {"xyz_mm": (T[:3, 3] * 1e3).tolist(), "quaternion_wxyz": [float(quat[3]), *map(float, quat[:3])],
+            "rotation_deg": float(np.rad2deg(angle)), "axis": axis.tolist()}
+
+
+def _frame_line(name: str, frame: dict) -> str:
+    """One summary line of an instrument's estimated frame or offset (`_frame_dict`)."""
+    xyz = ", ".join(f"{v:.3f}" for v in frame["xyz_mm"])
+    turn = ""
+    if "axis" in frame:
+        axis = ", ".join(f"{v:.4f}" for v in frame["axis"])
+        turn = f"; rotation {frame['rotation_deg']:.4f} deg about ({axis})"
+    return f"{name}: x, y, z {xyz} mm{turn}"

@@ -61,7 +61,7 @@ def read_candidates(path, robot, kind: str = "point") -> CandidateFile:
         A measurement CSV or a CSV with joint columns only (``q1_deg..`` or ``q1_rad..``).
     robot : Robot
         The model (checks the joint count).
-    kind : {'point', 'pose', 'plane', 'distance'}
+    kind : {'point', 'pose', 'plane', 'flush', 'distance'}
         What will be measured.
 
     Returns
@@ -136,7 +136,7 @@ def poses_csv(joints: np.ndarray, visible: np.ndarray | None = None, source: Can
         t = source.table
         header = [t.header[c] for c in t.joint_columns] + ["source_row"]
         body = [[t.cells[r][c] for c in t.joint_columns] + [str(int(t.lines[r]))] for r in rows]
-        for extra in ("plane", "pair"):
+        for extra in [spec.column for spec in OBSERVED.values() if spec.column] + ["pair"]:
             cells = t.column(extra)
             if source.data is not None and cells is not None:
                 header.append(extra)

@@ -97,7 +97,7 @@ class CampaignResult:
     robot : Robot
         The nominal model planned for.
     kind : str
-        What is measured (``'point'``, ``'pose'``, ``'plane'``, ``'distance'``).
+        What is measured (``'point'``, ``'pose'``, ``'plane'``, ``'flush'``, ``'distance'``).
     joints : numpy.ndarray, shape (N, n)
         The chosen poses, radians, in measuring order (one row per pose; per contact or distance
         end for plane and distance data).
@@ -378,8 +378,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         The nominal model.
     n : int
         Number of poses to choose.
-    kind : {'point', 'pose', 'plane', 'distance'}
-        What is measured; ``'plane'`` and ``'distance'`` need ``candidates``.
+    kind : {'point', 'pose', 'plane', 'flush', 'distance'}
+        What is measured; ``'plane'``, ``'flush'`` and ``'distance'`` need ``candidates``.
     candidates : array_like, shape (C, n), CandidateFile or Measurements, optional
         Joints in radians, a candidate file (`robocal.campaign.read_candidates`) or
         Measurements (contacts / distances); default: generate ``n_candidates`` inside the
@@ -578,7 +578,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         robot=plan_robot, kind=kind, joints=joints, candidate_index=index, visible=visible_out,
         predicted_rms_mm=float(np.sqrt(predicted(chosen)) * 1e3),
         criterion=criterion, criterion_value=found.value, identifiability=separate(
-            info.analyze_subset(chosen), unidentifiable(plan_robot, kind, info.all_names, max(len(smr), 1))),
+            info.analyze_subset(chosen), unidentifiable(plan_robot, kind, info.all_names, max(len(smr), 1)),
+            plan_robot),
         parameters=list(info.names),
         travel=travel(joints, weights), travel_unordered=travel(cand_q[found.indices], weights),
         weights=weights, curve=points, funnel=funnel, noise=noise,

@@ -21,6 +21,7 @@ import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.core.io import write_all
+from robocal.ik.scara import is_scara
 from robocal.kinematics.model import Robot
 from robocal.programs.dialects.writing import (
     DEFAULT_PROCEDURE,
@@ -48,8 +49,18 @@ def campaign_outputs(programs: dict[str, str | Path], procedure: str = DEFAULT_P
 
 
 def refuse_tracks(programs: dict[str, str | Path], robot: Robot, poses: str) -> None:
-    """Refuse programs of languages that cannot drive ``robot``'s prismatic joint (a track);
+    """Refuse programs of languages that cannot drive ``robot``'s prismatic joint (a track; a SCARA's
+    quill: the languages whose writers drive a SCARA, ``campaign_scara``, write it);
     ``poses``: the planned poses' file, named as what to drive instead."""
+    if is_scara(robot):  # a SCARA's quill is its own joint 3, not an external axis
+        wanted = [str(programs[d.key]) for d in program_options()
+                  if programs.get(d.key) is not None and not d.campaign_scara]
+        if wanted:
+            raise DataError(f"{robot.name} is a SCARA: campaign programs are written for it in "
+                            f"{', '.join(d.title for d in program_options() if d.campaign_scara)} only, not "
+                            f"{', '.join(wanted)}; drive the poses of {poses} (the quill q3 in mm) with your "
+                            "own program")
+        return
     wanted = [str(programs[d.key]) for d in program_options()
               if programs.get(d.key) is not None and d.campaign_refuses_tracks]
     if wanted and robot.has_prismatic:

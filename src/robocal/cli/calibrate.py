@@ -18,6 +18,8 @@ EPILOG = """Examples:
   robocal calibrate data.csv --robot abb_irb2600 --method neural --set hidden=10 --network-out net.npz
   robocal calibrate contacts.csv scalebar.csv --robot abb_irb2600 --sigma plane=0.01 --sigma distance=0.005
   robocal calibrate check.csv --robot abb_irb2600 --offsets-only --start calibrated.yaml -o recalibrated.yaml
+  robocal calibrate board.csv --robot ur10 --instrument camera --validate held.csv   # a camera's board poses
+  robocal calibrate mocap.csv --robot tiago.yaml --priors class=service,zeros=3deg,lengths=10mm
 
 Method options (--set KEY=VALUE, SI units): lsq: max_iter (50); robust: k0, k1, ridge
 (double-h|gcv|lcurve|none), max_outer (30); genetic: population, generations (100), crossover,
@@ -34,7 +36,9 @@ the parameter priors (docs/priors.md); parameters the data do not determine are 
 
 
 RESERVED = ("seed", "method", "params", "validation", "progress", "nongeometric", "register_frames",
-            "rtol", "robot", "data", "force", "warm_start", "sigma")
+            "rtol", "robot", "data", "force", "warm_start", "sigma", "priors", "instrument",
+            "variance_components")
+INSTRUMENT_NAMES = ("tracker", "mocap", "camera")  # robocal.data.instruments.INSTRUMENTS (a test checks)
 
 
 def _option(text: str):
@@ -64,6 +68,17 @@ def _sigma(text: str) -> tuple[str, float]:
     return kind.strip(), mm * LENGTH_UNITS["mm"]
 
 
+def _priors(text: str):
+    """``--priors`` text -> PriorSpec (robocal.kinematics.prior_spec): an argparse type."""
+    from robocal.core.errors import ModelError
+    from robocal.kinematics.prior_spec import PriorSpec
+
+    try:
+        return PriorSpec.parse(text)
+    except ModelError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser("calibrate", help="identify the parameters from measurements",
                        description="Register the tracker frame, select the identifiable parameters, "
@@ -72,7 +87,13 @@ def add_parser(sub) -> None:
     p.add_argument("data", nargs="+", help="canonical measurement CSV(s) (robocal import / simulate); "
                                            "several files of any kinds are identified together")
     p.add_argument("--robot", required=True, help="nominal model: catalog name or model YAML")
-    p.add_argument("--method", default="lsq", help="lsq (default), robust, genetic, swarm, neural")
+    p.add_argument("--method", help="lsq, robust, genetic, swarm, neural (default: robust for data of an "
+                                    "instrument with heavy-tailed errors, mocap or camera; else lsq)")
+    p.add_argument("--instrument", choices=INSTRUMENT_NAMES,
+                   help="the instrument that took the files declaring none (a '# instrument: NAME' line "
+                        "declares it in a file): its documented noise weighs them, a mocap's or camera's "
+                        "heavy-tailed errors make robust the default method and a camera's 6-D poses get "
+                        "their position and rotation noise estimated (variance components)")
     p.add_argument("--params", default="auto",
                    help="auto (identifiable default set), all, or names separated by spaces/commas")
     p.add_argument("--validate", metavar="VAL.csv", nargs="+",
@@ -95,6 +116,13 @@ def add_parser(sub) -> None:
                         "table is printed); none: the geometric model only. Default: auto for "
                         "lsq/robust on one file of tracker data (points or poses) with at least 100 "
                         "poses, else none")
+    p.add_argument("--priors", type=_priors, metavar="GROUP=SCALE,...",
+                   help="the parameter priors (docs/priors.md): class=industrial|collaborative|service "
+                        "(service: humanoids, mobile manipulators, low-cost arms; default: chosen from the "
+                        "model), group scales with their unit: zeros=3deg, twists=1deg, lengths=10mm, "
+                        "errors=2x (a factor on the joint-error terms' scales), estimate=no (keep the "
+                        "class defaults instead of widening them where the data ask for it); on top of "
+                        "the model file's priors: block")
     p.add_argument("--network-out", metavar="net.npz",
                    help="method neural: save the trained network (.npz or .json, plain arrays)")
     p.add_argument("--set", dest="options", type=_option, action="append", default=[],
@@ -143,9 +171,11 @@ def run(args) -> int:
 
     data, validation = read(args.data), read(validate)
     common = dict(validation=validation or None, method=args.method, seed=args.seed, progress=not args.quiet,
-                  force=args.force, sigma=dict(args.sigma), hold_out=args.hold_out, **dict(args.options))
+                  force=args.force, sigma=dict(args.sigma), hold_out=args.hold_out,
+                  instrument=args.instrument, **dict(args.options))
     if start is None:
-        result = calibrate(robot, data, params=args.params, nongeometric=args.nongeometric, **common)
+        result = calibrate(robot, data, params=args.params, nongeometric=args.nongeometric,
+                           priors=args.priors, **common)
     else:
         result = recalibrate_offsets(robot, start, data, **common)
     result.provenance.update(command="robocal " + " ".join(args.argv), robot_spec=args.robot,

@@ -33,7 +33,8 @@ def add_parser(sub) -> None:
     p.add_argument("targets", help="targets CSV (position + orientation, units in the column names)")
     p.add_argument("--nominal", required=True, help="catalog name or model YAML of the controller's model")
     p.add_argument("--branch", type=int, default=None,
-                   help="IK branch slot 0..7 (4*wrist_flip + 2*shoulder + elbow); default: per target "
+                   help="IK branch slot 0..7 (4*wrist_flip + 2*shoulder + elbow; a SCARA's 0..1, the elbow "
+                        "positive or negative); default: per target "
                         "the lowest slot inside the joint limits")
     p.add_argument("--start", type=numbers(None, "q1,...,qn in deg"),
                    help="joints before the first target (deg): each target takes the nominal solution "

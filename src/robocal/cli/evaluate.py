@@ -27,6 +27,9 @@ def add_parser(sub) -> None:
     frame.add_argument("--frame-from", metavar="FIT.csv",
                        help="fit the base frame and SMR offsets on FIT.csv and judge DATA with them")
     p.add_argument("--json", metavar="OUT", help="write the statistics as JSON")
+    p.add_argument("--instrument", choices=("tracker", "mocap", "camera"),
+                   help="the instrument that took DATA if it declares none: its documented noise is the "
+                        "consistency test's")
     p.add_argument("--force", action="store_true",
                    help="report statistics the plausibility checks refuse (errors beyond any robot's)")
     add_history_options(p, "record the evaluation (its RMS as the model's held-out error) in this history: a "
@@ -51,7 +54,8 @@ def run(args) -> int:
     frame_from = None if args.frame_from is None else \
         load_measurements(args.frame_from, robot, args.quiet, args.fanuc_coupled)
     stats = evaluate(robot, data, fit_frame=args.fit_frame, frame_from=frame_from, force=args.force,
-                     names={"model": args.model, "data": args.data, "frame_from": args.frame_from})
+                     names={"model": args.model, "data": args.data, "frame_from": args.frame_from},
+                     instrument=args.instrument)
     written = stats.write(args.json)
     for warning in stats.warnings:
         print(f"WARNING: {warning}")

@@ -26,11 +26,12 @@ def add_parser(sub) -> None:
                                    "travel over the whole path. Prints the optimal and greedy costs.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("poses", help="waypoints CSV")
-    p.add_argument("--robot", required=True, help="catalog name or model YAML with an OPW form")
+    p.add_argument("--robot", required=True,
+                   help="catalog name or model YAML with a closed form (OPW, UR, SCARA)")
     p.add_argument("--weights", type=numbers(None, "w1,...,wn"),
-                   help="w1,...,w6 (cost per rad of each joint)")
+                   help="w1,...,wn (cost per rad of each joint; per m on a SCARA's quill)")
     p.add_argument("--start", type=numbers(None, "q1,...,qn in deg"),
-                   help="fixed start configuration q1..q6 in deg")
+                   help="fixed start configuration q1..qn in deg (mm on a SCARA's quill)")
     p.add_argument("--nominal",
                    help="the controller's model (catalog name or YAML) when --robot is calibrated")
     p.add_argument("--tool", metavar="x,y,z,rx,ry,rz", default="flange",
@@ -60,7 +61,9 @@ def run(args) -> int:
     robot, frames = planning_model(robot, nominal, args.tool)
     poses, layout = read_poses_csv(args.poses)
     check_target_units(poses, layout, robot_reach(robot), args.poses, robot.base[:3, 3])
-    start = None if args.start is None else np.deg2rad(args.start)
+    start = None if args.start is None or len(args.start) != robot.n_joints else \
+        np.where(robot.prismatic, np.asarray(args.start) * 1e-3, np.deg2rad(args.start))  # mm on a quill
+    start = np.deg2rad(args.start) if args.start is not None and start is None else start  # an arm on a track
     if is_track_cell(robot):  # the arm's path with the carriage where the poses put it
         if "e1" not in layout:
             raise DataError(f"{robot.name} is an arm on a track: give each pose's carriage position in an "

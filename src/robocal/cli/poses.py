@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from robocal.cli.args import check_format, numbers
+from robocal.data.kinds import KINDS
 from robocal.programs.language_help import POSES_EPILOG, PROGRAM_OPTION
 from robocal.programs.registry import DIALECTS
 
@@ -31,8 +32,8 @@ def add_parser(sub) -> None:
     p.add_argument("-n", "--poses", type=int, required=True, help="number of poses to measure")
     p.add_argument("-o", "--output", required=True, metavar="poses.csv", help="planned poses CSV to write")
     g = p.add_argument_group("candidates and search")
-    g.add_argument("--kind", choices=("point", "pose", "plane", "distance"), default="point",
-                   help="what is measured at each pose (plane, distance: --from a file of that kind)")
+    g.add_argument("--kind", choices=KINDS, default="point",
+                   help="what is measured at each pose (plane, flush, distance: --from a file of that kind)")
     g.add_argument("--from", dest="candidates", metavar="CSV",
                    help="choose among these poses (any measurement CSV or a joints-only CSV)")
     g.add_argument("--candidates", dest="n_candidates", type=int, default=5000,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from robocal.cli.args import check_format, numbers
+from robocal.data.kinds import KINDS
 
 EPILOG = """Examples:
   robocal simulate --robot abb_irb2600 --poses 200 --noise-mm 0.02 --seed 1 -o data.csv --truth truth.yaml
@@ -12,6 +13,8 @@ EPILOG = """Examples:
       -o data.csv --truth truth.yaml
   robocal simulate --robot model.yaml --poses 300 --kind plane --planes 3 --joint-noise-deg 0.001 \\
       -o contacts.csv --truth truth.yaml
+  robocal simulate --robot abb_irb2600 --poses 90 --kind flush --planes 3 --noise-mm 0.005 \
+      -o flush.csv --truth truth.yaml      # a flat tool face pressed onto three tables
   robocal simulate --robot abb_irb2600 --joints poses.csv --smr-mm 20,-30,80 --tracker-mm 2500,500,300 \\
       -o data.csv --truth truth.yaml       # rehearse a campaign planned by `robocal poses`
   robocal simulate --robot truth.yaml --as-is --kind distance --poses 8 --noise-mm 0.005 \\
@@ -20,6 +23,10 @@ EPILOG = """Examples:
       -o cell.csv --truth truth.yaml       # a campaign at three payloads while the arm warms up
   robocal simulate --robot kuka_kr210_r2700 --poses 300 --temperatures 20:35 --thermal-k forearm=23e-6 \\
       -o warm.csv --truth truth.yaml       # an aluminium forearm on a steel arm
+  robocal simulate --robot ur10 --poses 40 --kind marker --links 6,6,6,4 --noise-mm 0.3 \\
+      -o mocap.csv --truth truth.yaml       # motion capture: 3 markers on the hand, one on link 4
+  robocal simulate --robot ur10 --poses 40 --kind eye_in_hand --noise-mm 1 --rotation-noise-deg 0.3 \\
+      -o camera.csv --truth truth.yaml      # a camera on the flange watching a fixed board
 The truth YAML is the true robot (tracker frame as base, SMR 0 as tool); TRUTH.sim.json next to it
 holds the noise floor (3-D RMS of the added noise, mm), outlier rows and plane coefficients.
 """
@@ -36,15 +43,24 @@ def add_parser(sub) -> None:
     which.add_argument("--joints", metavar="CSV",
                        help="measure these poses (q1_deg.., e.g. the poses.csv of `robocal poses`; "
                             "visible_smr* columns are honoured)")
-    p.add_argument("--kind", choices=("point", "pose", "plane", "distance"), default="point",
-                   help="tracker points, 6-DOF poses, plane contacts, or scale-bar placements (distance)")
+    p.add_argument("--kind", choices=KINDS, default="point",
+                   help="tracker points, 6-DOF poses, plane contacts (a probe tip), flush contacts (a "
+                        "flat tool face on a plane: its height and two angles), scale-bar placements "
+                        "(distance), motion-capture markers (marker, see --links), or a camera's board "
+                        "poses with the camera in the cell (eye_to_hand) or on the flange (eye_in_hand; "
+                        "--noise-mm and --rotation-noise-deg are its noise, the frames go to TRUTH.sim.json)")
+    p.add_argument("--links", type=numbers(None, "link frame numbers"), metavar="J,J,..",
+                   help="kind marker: the link frame of each marker (0 base .. n flange; default 3 on the "
+                        "flange)")
     p.add_argument("--noise-mm", type=float, default=0.02, help="isotropic noise sigma per axis, mm")
     p.add_argument("--noise-model", choices=("isotropic", "tracker"), default="isotropic")
     p.add_argument("--outliers", type=float, default=0.0, help="fraction of rows with a 1-5 mm gross error")
     p.add_argument("--smr", type=int, default=1, help="SMRs on the tool (point data)")
-    p.add_argument("--planes", type=int, default=1, help="planes touched (plane data)")
+    p.add_argument("--planes", type=int, default=1, help="planes touched (plane and flush data)")
     p.add_argument("--joint-noise-deg", type=float, default=0.0, help="joint reading noise sigma, deg")
-    p.add_argument("--rotation-noise-deg", type=float, default=0.0, help="orientation noise (pose data), deg")
+    p.add_argument("--rotation-noise-deg", type=float, default=0.0,
+                   help="orientation noise (pose data), the face's tilt (flush data; default noise-mm "
+                        "over a 50 mm rim), deg")
     p.add_argument("--box", type=float, nargs=6, metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
                    help="keep poses whose tool point is in this box (robot base frame, mm)")
     p.add_argument("--smr-mm", type=numbers(3, "X,Y,Z in mm"), action="append", metavar="X,Y,Z",
@@ -110,6 +126,7 @@ def run(args) -> int:
     from robocal.campaign.files import read_planned
     from robocal.core.io import check_outputs
     from robocal.data.simulate import probe_and_tracker, simulate_tracker
+    from robocal.data.simulate_instruments import INSTRUMENT_KINDS, simulate_kind
     from robocal.kinematics.model import load_model
 
     check_format(args.output, "CSV", "-o")
@@ -117,6 +134,11 @@ def run(args) -> int:
     check_outputs([args.output, args.truth, Path(args.truth).with_suffix(".sim.json")],
                   [args.robot, args.joints])
     robot = load_model(args.robot)
+    if args.kind in INSTRUMENT_KINDS:
+        return _written(simulate_kind(robot, args.kind, args.poses, noise_mm=args.noise_mm, seed=args.seed,
+                                      rotation_noise_deg=args.rotation_noise_deg, outliers=args.outliers,
+                                      links=args.links),
+                        args)
     box = None if args.box is None else np.array(args.box).reshape(2, 3) * 1e-3
     smr, tracker = probe_and_tracker(args.smr_mm, args.tool_mm, args.tracker_mm)
     joints = visible = None
@@ -134,6 +156,11 @@ def run(args) -> int:
                               as_is=args.as_is, payloads=args.payloads, temperatures=args.temperatures,
                               payload_com=None if args.payload_com_mm is None else
                               np.array(args.payload_com_mm) * 1e-3, thermal_k=args.thermal_k)
+    return _written(result, args)
+
+
+def _written(result, args) -> int:
+    """Write a simulation's files and say so."""
     written = result.write(args.output, args.truth)
     if not args.quiet:
         print(result.summary())

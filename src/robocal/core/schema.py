@@ -301,7 +301,10 @@ RESULT_SCHEMA = Obj({
     "identifiability": Obj({"n_params": Int(null=True, lo=0), "rank": Int(null=True, lo=0),
                             "condition_number": Num(null=True, max_abs=math.inf),
                             "condition_class": Str(null=True, max_len=40), "O1": Num(null=True),
-                            "O2": Num(null=True), "O3": Num(null=True), "O4": Num(null=True)}, null=True),
+                            "O2": Num(null=True), "O3": Num(null=True), "O4": Num(null=True),
+                            "structural_freedoms": Seq(Obj({  # robocal.identify.freedoms (a SCARA)
+                                "freedom": Str(max_len=40), "words": Str(), "held": _TEXTS,
+                                "carried_by": _TEXTS}), null=True)}, null=True),
     "correlation": Obj({"names": Seq(Str(max_len=200)), "matrix": Arr(2, null=True, max_abs=1.0 + 1e-6)},
                        null=True, post=_square),
     "rejected": Seq(Obj({"source_row": Int(null=True), "pose_id": Int(null=True), "residual": Num(null=True),

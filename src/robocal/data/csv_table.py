@@ -24,7 +24,8 @@ from robocal.core.errors import DataError
 
 BLOCK_LINES = 4096  # lines converted at once (their Python strings live only for one block)
 WINDOW_CHARS = 1 << 22  # characters of text split into lines at a time (4 MB)
-INT_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row")  # integers, at most MAX_INT in size
+# integers, at most MAX_INT in size
+INT_COLUMNS = ("smr", "plane", "flush_plane", "pair", "pose_id", "source_row")
 MAX_INT = 2**53  # an integer column's values beyond this are not exact in a float
 DECIMAL_COMMA = re.compile(r"[-+]?\d+,\d+")  # a number written with a decimal comma (12,5)
 

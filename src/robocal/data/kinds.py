@@ -27,7 +27,9 @@ class KindSpec:
     observation : str
         Its observation model, ``"module:Class"`` in `robocal.identify.observations`.
     arrays : tuple of str
-        The observation arrays of `Measurements` it requires (and the only ones it takes).
+        The observation arrays of `Measurements` it requires.
+    optional : tuple of str
+        The observation arrays it takes besides (and no others).
     sigma_m : float
         The 1-sigma noise (m) of a row when a set of several kinds has no sigma column and none is
         given: a laser tracker 2-4 m away (points, a 6-DOF pose's position), a touch probe, a scale
@@ -38,6 +40,9 @@ class KindSpec:
         alone, and a simulation measures it from a tracker at a random place.
     sees_orientation : bool
         Each row also measures the TCP's orientation (a 6-DOF probe).
+    sees_tilt : bool
+        Each row constrains two angles of the TCP's orientation (a flush face): the tool's
+        rotation is estimated by default, as for a 6-DOF probe.
     several_smrs : bool
         One pose may give several rows, one per SMR the tracker sees.
     group : str
@@ -47,18 +52,24 @@ class KindSpec:
         Rows one placement of the robot gives with one SMR (a distance pair: its two ends).
     columns : str
         How its CSV columns are named in messages.
+    column : str
+        The CSV column that marks a file of this kind and holds its integer array (``plane``,
+        ``flush_plane``); "" for kinds recognised by their measured columns.
     """
 
     name: str
     observation: str
     arrays: tuple[str, ...]
     sigma_m: float
+    optional: tuple[str, ...] = ()
     sees_position: bool = False
     sees_orientation: bool = False
+    sees_tilt: bool = False
     several_smrs: bool = False
     group: str = "pose_id"
     rows_per_placement: int = 1
     columns: str = ""
+    column: str = ""
 
     def readings(self, T: np.ndarray) -> dict[str, np.ndarray]:
         """The observation arrays a perfect reading of TCP poses ``T (N, 4, 4)`` (tracker frame, m)
@@ -69,14 +80,29 @@ class KindSpec:
         return out
 
 
+# A flush contact's two angle rows are its tilts (rad) times this length (m): the lift of the rim of a
+# face of this radius, so its three rows are lengths with one noise (`sigma_m`)
+FLUSH_TILT_LENGTH_M = 0.05
+
 OBSERVED = {spec.name: spec for spec in (
     KindSpec("point", "point:PointObservation", ("points",), sigma_m=20e-6, sees_position=True,
              several_smrs=True, columns="x_mm,y_mm,z_mm"),
     KindSpec("pose", "pose:PoseObservation", ("points", "rotations"), sigma_m=20e-6, sees_position=True,
              sees_orientation=True, columns="x_mm,y_mm,z_mm and qw..qz"),
-    KindSpec("plane", "plane:PlaneObservation", ("plane",), sigma_m=10e-6, columns="a plane"),
+    KindSpec("plane", "plane:PlaneObservation", ("plane",), sigma_m=10e-6, columns="a plane", column="plane"),
+    KindSpec("flush", "flush:FlushObservation", ("plane",), sigma_m=10e-6, sees_tilt=True,
+             columns="flush_plane (the tool face flush on a plane)", column="flush_plane"),
     KindSpec("distance", "distance:DistanceObservation", ("pair", "distance"), sigma_m=5e-6, group="pair",
              rows_per_placement=2, columns="pair and distance_mm"),
+    # motion capture: markers on any link, their offsets and the capture frame estimated with the robot
+    KindSpec("marker", "marker:MarkerObservation", ("points",), optional=("link",), sigma_m=0.3e-3,
+             several_smrs=True, columns="x_mm,y_mm,z_mm and link"),
+    # a camera's board poses (board in the camera frame): camera in the cell, board on the flange ...
+    KindSpec("eye_to_hand", "camera:EyeToHandObservation", ("points", "rotations"), sigma_m=1e-3,
+             columns="x_mm,y_mm,z_mm and qw..qz"),
+    # ... or camera on the flange, board in the cell (hand-eye)
+    KindSpec("eye_in_hand", "camera:EyeInHandObservation", ("points", "rotations"), sigma_m=1e-3,
+             columns="x_mm,y_mm,z_mm and qw..qz"),
 )}
 KINDS = tuple(OBSERVED)  # every kind's name, in the order messages list them
 

@@ -5,9 +5,18 @@ One `Measurements` holds one observation kind for all its rows:
 - ``point``: ``points (N, 3)`` m, an SMR position in the tracker frame;
 - ``pose``: ``points (N, 3)`` m and ``rotations (N, 3, 3)``, a 6-DOF probe pose in the tracker frame;
 - ``plane``: ``plane (N,)`` int, the index of the plane the probe tip touched (no coordinates);
+- ``flush``: ``plane (N,)`` int, the index of the plane the tool face lay flush on (CSV column
+  ``flush_plane``; no coordinates: the contact fixes the face's height and two angles);
 - ``distance``: ``pair (N,)`` int and ``distance (N,)`` m. The two rows that share a ``pair`` id are
   the two ends (two joint vectors / SMRs) of one measured distance, and both carry the same
-  measured distance (ball bar length, or distance between two tracker readings).
+  measured distance (ball bar length, or distance between two tracker readings);
+- ``marker``: ``points (N, 3)`` m, a motion-capture marker in the capture frame, and ``link (N,)``
+  int, the frame of the model carrying it (CSV column ``link``; without it, the flange);
+- ``eye_to_hand`` / ``eye_in_hand``: ``points (N, 3)`` m and ``rotations (N, 3, 3)``, a board's pose
+  in a camera's frame, the camera fixed in the cell or on the flange (CSV line ``# kind: NAME``).
+
+A set may name the ``instrument`` that took it (CSV line ``# instrument: NAME``;
+`robocal.data.instruments`).
 
 Every row also has ``approach (N, n)`` in {-1, 0, +1}: the direction each joint moved to reach
 the row's pose from the previous pose (the rows are in measurement order; 0 for the first pose
@@ -34,7 +43,8 @@ units: ``q1_deg..qn_deg`` or ``q1_rad..qn_rad`` (a prismatic joint's ``q{i}_mm``
 axes ``e1_mm`` / ``e1_m`` (a linear track) or ``e1_deg`` / ``e1_rad``, which come first in ``joints``
 (a track carries the arm: joints ``(e1, q1..q6)``); ``x_mm y_mm z_mm`` or ``x_m y_m z_m``; optional
 ``smr``, ``sigma_mm``/``sigma_m``, ``qw qx qy qz`` (pose), ``plane`` (plane contacts, then no
-x/y/z), ``pair`` and ``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``,
+x/y/z), ``flush_plane`` (flush contacts of the tool face, then no x/y/z), ``pair`` and
+``distance_mm``/``distance_m`` (distance), ``pose_id``, ``source_row``,
 ``approach1..approachn`` and ``travel1_rad..traveln_rad`` (or ``_deg``) (each written only where
 it differs from what the row order implies), ``payload_kg`` with optional ``payload_x_mm,
 payload_y_mm, payload_z_mm`` (or ``_m``; all three or none, default 0: at the flange) and
@@ -58,15 +68,19 @@ from scipy.spatial.transform import Rotation
 from robocal.core.errors import DataError, UnitError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
 from robocal.data.csv_table import csv_rows, read_table, text_lines
+from robocal.data.instruments import check_instrument
 from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
 from robocal.kinematics.conditions import UNKNOWN, Conditions
 from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
 from robocal.kinematics.transforms import ROTATION_TOL
 
 _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
-                 "pair", "distance", "approach", "travel", "payload", "temperature")  # row-indexed
+                 "pair", "distance", "approach", "travel", "payload", "temperature", "link")  # row-indexed
 _LENGTH_COLUMNS = ("x", "y", "z", "sigma", "distance")
-_PLAIN_COLUMNS = ("smr", "plane", "pair", "pose_id", "source_row", "qw", "qx", "qy", "qz")
+_PLAIN_COLUMNS = ("smr", "plane", "flush_plane", "pair", "pose_id", "source_row", "qw", "qx", "qy", "qz",
+                  "link")
+# comment lines ``# NAME: value`` that declare what the columns cannot say (read and written back)
+_DIRECTIVES = ("instrument", "kind")
 # A laser tracker's range is below ~80 m; anything farther is a unit mistake whatever the robot.
 MAX_TRACKER_RANGE_M = 100.0
 MAX_PAYLOAD_KG = 5000.0  # no arm carries more; a larger value is a unit mistake (g, lb)
@@ -119,7 +133,7 @@ class Measurements:
 
     Attributes
     ----------
-    kind : {'point', 'pose', 'plane', 'distance'}
+    kind : {'point', 'pose', 'plane', 'flush', 'distance'}
         What each row observed.
     joints : numpy.ndarray, shape (N, n)
         Commanded joints, radians.
@@ -150,6 +164,11 @@ class Measurements:
         The file it was read from ("" when built from arrays).
     notes : tuple of str
         How the reader interpreted the file (e.g. repeated readings).
+    link : numpy.ndarray of int, shape (N,), optional
+        The frame of the model carrying each row's marker (``marker``; None: the flange).
+    instrument : str
+        The instrument that took the rows (``tracker``, ``mocap``, ``camera``;
+        `robocal.data.instruments`); "" when the data do not say.
 
     Examples
     --------
@@ -184,6 +203,8 @@ class Measurements:
     notes: tuple[str, ...] = ()  # how the reader interpreted the file (e.g. repeated readings)
     linear: np.ndarray | None = None  # (n,) bool: joints in length units (m: prismatic); None: all angles
     external: int = 0  # the first ``external`` joints are external axes (e1..): a track carrying the arm
+    link: np.ndarray | None = None  # (N,) int: the frame {0..n} carrying each marker (``marker``)
+    instrument: str = ""  # the instrument that took the rows (`robocal.data.instruments`); "" undeclared
 
     @property
     def spec(self) -> KindSpec:
@@ -215,12 +236,12 @@ class Measurements:
     def from_arrays(cls, kind: str, joints, *, points=None, rotations=None, plane=None, pair=None,
                     distance=None, smr=None, sigma=None, pose_id=None, source_row=None,
                     source: str = "", conditions: Conditions = UNKNOWN, linear=None,
-                    external: int = 0) -> Measurements:
+                    external: int = 0, link=None, instrument: str = "") -> Measurements:
         """Validated measurements from arrays in SI units (rad, m).
 
         Parameters
         ----------
-        kind : {'point', 'pose', 'plane', 'distance'}
+        kind : {'point', 'pose', 'plane', 'flush', 'distance'}
             What each row observed; it says which of the arrays below are required.
         joints : array_like, shape (N, n)
             Commanded joints, radians, in measurement order.
@@ -229,7 +250,7 @@ class Measurements:
         rotations : array_like, shape (N, 3, 3), optional
             Measured orientations, rotation matrices (``pose``).
         plane : array_like of int, shape (N,), optional
-            Index of the touched plane (``plane``).
+            Index of the touched plane (``plane``, ``flush``).
         pair : array_like of int, shape (N,), optional
             Pair id, two rows each (``distance``).
         distance : array_like, shape (N,), optional
@@ -254,6 +275,12 @@ class Measurements:
             Joints in metres (prismatic, e.g. a track).
         external : int, optional
             How many leading joints are external axes (written as e1.. columns).
+        link : array_like of int, shape (N,), optional
+            The frame carrying each row's marker (``marker``): 0 the robot's base frame {0}, i the
+            frame after joint i, n the flange (the default; see
+            `robocal.identify.observations.marker`).
+        instrument : str, optional
+            The instrument that took the rows (`robocal.data.instruments`: tracker, mocap, camera).
 
         Returns
         -------
@@ -286,11 +313,11 @@ class Measurements:
         joints = _float_array(joints, "joints", (N, n))
         need = set(spec.arrays)
         given = {k for k, v in (("points", points), ("rotations", rotations), ("plane", plane),
-                                ("pair", pair), ("distance", distance)) if v is not None}
+                                ("pair", pair), ("distance", distance), ("link", link)) if v is not None}
         if need - given:
             raise DataError(f"{kind} measurements need {sorted(need - given)}")
-        if given - need:
-            raise DataError(f"{kind} measurements do not take {sorted(given - need)}")
+        if given - need - set(spec.optional):
+            raise DataError(f"{kind} measurements do not take {sorted(given - need - set(spec.optional))}")
         kw = {}
         if points is not None:
             kw["points"] = _float_array(points, "points", (N, 3))
@@ -316,6 +343,10 @@ class Measurements:
             d2 = kw["distance"][order].reshape(-1, 2)
             if (d2[:, 0] != d2[:, 1]).any() or (d2 <= 0).any():
                 raise DataError("both rows of a distance pair must carry the same positive distance")
+        if link is not None:
+            kw["link"] = _int_array(link, "link", N)
+            if kw["link"].min() < 0:
+                raise DataError("link indices must be >= 0 (0 is the robot's base frame, n its flange)")
         smr = np.zeros(N, np.int64) if smr is None else _int_array(smr, "smr", N)
         if smr.min() < 0:
             raise DataError("smr indices must be >= 0 (0 is the tool)")
@@ -345,7 +376,8 @@ class Measurements:
         kw.update(_conditions(conditions.payload, conditions.temperature, N))
         return cls(kind=kind, joints=joints, pose_id=pose_id, smr=smr, source_row=source_row,
                    sigma=sigma, source=str(source).replace("\n", " "), approach=approach,
-                   travel=travel, linear=linear, external=int(external), **kw)
+                   travel=travel, linear=linear, external=int(external),
+                   instrument=check_instrument(str(instrument), kind), **kw)
 
     # ----------------------------------------------------------------- views
     def missing_conditions(self, robot) -> list[str]:
@@ -550,7 +582,9 @@ class Measurements:
             for k, c in enumerate(("qw", "qx", "qy", "qz")):
                 cols[c] = quat[:, (3, 0, 1, 2)[k]]
         if self.plane is not None:
-            cols["plane"] = self.plane
+            cols[self.spec.column] = self.plane
+        if self.link is not None:
+            cols["link"] = self.link
         if self.pair is not None:
             cols["pair"] = self.pair
             cols["distance_m"] = self.distance
@@ -571,6 +605,10 @@ class Measurements:
         out = io.StringIO()
         if self.source:
             out.write(f"# {self.source}\n")
+        if self.instrument:
+            out.write(f"# instrument: {self.instrument}\n")
+        if self.kind != _columns_kind(set(cols)):
+            out.write(f"# kind: {self.kind}\n")
         out.write(",".join(cols) + "\n")
         fmt = [(lambda v: str(int(v))) if np.asarray(c).dtype.kind in "iu" else (lambda v: repr(float(v)))
                for c in cols.values()]
@@ -799,15 +837,32 @@ def _header_role(name: str):
     return None
 
 
-def _split_csv(text: str, name: str) -> tuple[str, int, list[str], Iterator[str]]:
-    """(provenance comment, header line number, the header row, the lines below it, read as they
-    are consumed: no list of every line)."""
+def _directive(line: str) -> tuple[str, str] | None:
+    """``(name, value)`` of a comment line ``# NAME: value`` with NAME in `_DIRECTIVES`, else None."""
+    m = re.fullmatch(r"#\s*([a-z_]+)\s*:\s*(\S*)\s*", line.strip().lower())
+    return (m.group(1), m.group(2)) if m and m.group(1) in _DIRECTIVES else None
+
+
+def _columns_kind(columns: set[str]) -> str:
+    """The kind a canonical file's columns imply (what `_data_kind` reads without a ``# kind:``)."""
+    marked = [spec.name for spec in OBSERVED.values() if spec.column and spec.column in columns]
+    for column, kind in (("pair", "distance"), ("qw", "pose"), ("link", "marker")):
+        if column in columns:
+            marked.append(kind)
+    return (marked or ["point"])[0]
+
+
+def _split_csv(text: str, name: str) -> tuple[str, dict, int, list[str], Iterator[str]]:
+    """(provenance comment, the ``# NAME: value`` directives, header line number, the header row,
+    the lines below it, read as they are consumed: no list of every line)."""
     lines = text_lines(text)
-    source = ""
+    source, directives = "", {}
     for start, line in enumerate(lines):
         if not (line.lstrip().startswith("#") or not line.strip()):
-            return source, start + 1, next(csv_rows([line], name), []), lines
-        if not source and line.lstrip().startswith("#"):
+            return source, directives, start + 1, next(csv_rows([line], name), []), lines
+        if (d := _directive(line)) is not None:
+            directives[d[0]] = d[1]
+        elif not source and line.lstrip().startswith("#"):
             source = line.lstrip()[1:].strip()
     raise DataError(f"{name}: the file is empty; a measurement CSV needs a header line "
                     "(e.g. q1_deg,...,q6_deg,x_mm,y_mm,z_mm) and data rows")
@@ -832,7 +887,7 @@ def _column_roles(header: list[str], name: str, header_line: int) -> dict:
                             "q1_deg..qn_deg (or _rad), e1_mm (a track), x_mm,y_mm,z_mm (or _m), smr, "
                             "sigma_mm, "
                             "qw,qx,qy,qz, "
-                            "plane, pair, distance_mm, pose_id, source_row, approach1..n, "
+                            "plane, flush_plane, pair, distance_mm, pose_id, source_row, approach1..n, "
                             "travel1_deg..n, payload_kg, payload_x_mm..payload_z_mm, temperature_c. "
                             "For another layout use `robocal import`")
         roles[h] = role
@@ -873,11 +928,18 @@ def _data_kind(roles: dict, name: str) -> str:
     if quat and len(quat) != 4:
         raise DataError(f"{name}: a pose needs all of qw, qx, qy, qz; missing "
                         f"{sorted({'qw', 'qx', 'qy', 'qz'} - quat)}")
-    if "plane" in present:
+    if "link" in present and not xyz:
+        raise DataError(f"{name}: a 'link' column names the link carrying each marker: add x_mm,y_mm,z_mm")
+    marked = [spec.name for spec in OBSERVED.values() if spec.column and spec.column in present]
+    if len(marked) > 1:
+        raise DataError(f"{name}: the columns {', '.join(OBSERVED[k].column for k in marked)} mark different "
+                        f"kinds ({', '.join(marked)}): one file holds one kind of contact")
+    if marked:
+        column = OBSERVED[marked[0]].column
         if xyz or quat or "pair" in present:
-            raise DataError(f"{name}: plane contacts have only joints and 'plane'; remove x/y/z, "
+            raise DataError(f"{name}: {marked[0]} contacts have only joints and '{column}'; remove x/y/z, "
                             "quaternion and pair columns")
-        return "plane"
+        return marked[0]
     if "pair" in present or "distance" in present:
         if not {"pair", "distance"} <= present:
             raise DataError(f"{name}: distance data need both 'pair' and 'distance_mm' columns")
@@ -887,11 +949,28 @@ def _data_kind(roles: dict, name: str) -> str:
     if quat:
         if not xyz:
             raise DataError(f"{name}: pose data need x, y, z columns with the quaternion")
+        if "link" in present:
+            raise DataError(f"{name}: a 'link' column marks marker positions: remove the quaternion")
         return "pose"
     if xyz:
-        return "point"
+        return "marker" if "link" in present else "point"
     raise DataError(f"{name}: no observation columns; add x_mm,y_mm,z_mm (points), "
                     "qw..qz (poses), plane (plane contacts) or pair,distance_mm")
+
+
+def _declared_kind(columns_kind: str, declared: str | None, name: str) -> str:
+    """The kind a ``# kind: NAME`` line declares (it must take the arrays the columns give, e.g.
+    ``eye_in_hand`` for x, y, z and a quaternion), else the columns' kind."""
+    if declared is None:
+        return columns_kind
+    try:
+        spec = kind_spec(declared)
+    except DataError as exc:
+        raise DataError(f"{name}: '# kind: {declared}': {exc}") from None
+    if spec.arrays != OBSERVED[columns_kind].arrays or spec.column != OBSERVED[columns_kind].column:
+        raise DataError(f"{name}: '# kind: {declared}' needs the columns {spec.columns}, but the file has "
+                        f"those of {columns_kind} rows ({OBSERVED[columns_kind].columns})")
+    return declared
 
 
 def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) -> dict:
@@ -901,7 +980,7 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
         return col[h] * roles[h][2]
 
     kw, spec = {}, OBSERVED[kind]
-    if spec.sees_position:
+    if "points" in spec.arrays:
         kw["points"] = np.stack([length(c) for c in "xyz"], axis=1)
         far = np.abs(kw["points"]).max(axis=1) > MAX_TRACKER_RANGE_M
         if far.any():
@@ -909,7 +988,7 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
             raise UnitError(f"{name}, line {ln}: a point {np.abs(kw['points'][far][0]).max():.4g} m from the "
                             f"tracker is beyond any tracker's range: the length unit is probably wrong "
                             f"(values in mm must be in columns x_mm, y_mm, z_mm)")
-    if spec.sees_orientation:
+    if "rotations" in spec.arrays:
         qv = np.stack([col["qx"], col["qy"], col["qz"], col["qw"]], axis=1)
         norm = np.linalg.norm(qv, axis=1)
         bad = np.flatnonzero(np.abs(norm - 1.0) > ROTATION_TOL)
@@ -918,7 +997,9 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
                             "give a unit quaternion qw,qx,qy,qz")
         kw["rotations"] = Rotation.from_quat(qv).as_matrix()
     if "plane" in spec.arrays:
-        kw["plane"] = col["plane"].astype(np.int64)
+        kw["plane"] = col[spec.column].astype(np.int64)
+    if "link" in spec.optional and "link" in col:
+        kw["link"] = col["link"].astype(np.int64)
     if "pair" in spec.arrays:
         kw["pair"] = col["pair"].astype(np.int64)
         kw["distance"] = length("distance")
@@ -980,7 +1061,7 @@ def parse_csv(text: str, name: str = "<text>", max_joint_rad: float = MAX_JOINT_
     """Parse canonical CSV text; ``name`` is used in error messages. Radian joint values beyond
     ``max_joint_rad`` (default two turns; wider for a robot whose joints turn further,
     `joint_range_rad`) are read as degrees under the wrong header and refused."""
-    source, header_line, header_row, rows = _split_csv(text, name)
+    source, directives, header_line, header_row, rows = _split_csv(text, name)
     header = [h.strip().lower() for h in header_row]
     if header[0].startswith("format: robocal-"):
         kind = header[0].split("-", 1)[1].split("/")[0]
@@ -991,7 +1072,7 @@ def parse_csv(text: str, name: str = "<text>", max_joint_rad: float = MAX_JOINT_
                         "export): save the file comma-separated with '.' as the decimal separator")
     roles = _column_roles(header, name, header_line)
     joint_cols = _joint_columns(roles, name)
-    kind = _data_kind(roles, name)
+    kind = _declared_kind(_data_kind(roles, name), directives.get("kind"), name)
     table, line_no = read_table(rows, header, name, header_line)
     col = {h: table[:, i] for i, h in enumerate(header)}
     joints = np.stack([col[h] * roles[h][2] for h in joint_cols], axis=1)
@@ -1017,7 +1098,7 @@ def parse_csv(text: str, name: str = "<text>", max_joint_rad: float = MAX_JOINT_
                                         source_row=source_row, source=source,
                                         conditions=Conditions(approach, travel, payload, temperature),
                                         linear=linear, external=sum(roles[h][0] == "e" for h in joint_cols),
-                                        **kw)
+                                        instrument=directives.get("instrument", ""), **kw)
     except DataError as exc:
         raise DataError(f"{name}: {exc}") from None
     return replace(data, notes=notes)

@@ -81,7 +81,8 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
     """Fit the base frame and the SMR offsets of ``robot`` (its links, nominal or not) to point or
     pose measurements ``data`` (tracker frame). See the module docstring."""
     if not data.spec.sees_position:
-        raise DataError(f"registration needs point or pose measurements, not {data.kind!r}")
+        raise DataError(f"registration needs point or pose measurements, not {data.kind!r} (marker and "
+                        "camera data fit their own frames whenever they are judged: no frame to register)")
     if data.n_joints != robot.n_joints:
         data.check_against(robot)
     smr = data.smr

@@ -28,7 +28,11 @@ Kinds: ``point`` (n_smr SMRs per pose), ``pose`` (6-DOF probe; ``rotation_noise_
 ``plane`` (a probe tip touching ``n_planes`` planes with random normals; the world frame is the
 robot base, only joints are recorded, with ``joint_noise_deg`` reading noise; probe noise: each
 true tip lies ``noise_mm`` (1-sigma, along the normal) off its plane, so the noise floor is that
-distance's RMS; plane coefficients go to the sidecar), ``distance`` (``n_poses`` placements of
+distance's RMS; plane coefficients go to the sidecar), ``flush`` (the tool face pressed flush
+on ``n_planes`` planes with random normals, world = robot base, joints only: each true face
+centre lies ``noise_mm`` (1 sigma) off its plane along the normal, and its normal is tilted by
+``rotation_noise_deg`` per axis, by default ``noise_mm`` over the 50 mm rim length; the noise floor
+is the RMS of the contacts' error: height and rim lifts), ``distance`` (``n_poses`` placements of
 a scale bar of certified length ``bar_length_m`` touched by the probe tip at its two nests: the
 two rows of a pair record the certified length, the true tips are that length plus noise_mm
 (1-sigma) apart; no tracker, the world frame is the robot base).
@@ -52,7 +56,7 @@ import robocal.data.simulated_physics as physics
 from robocal.core.errors import DataError, UnreachableError
 from robocal.core.io import write_all
 from robocal.core.magnitudes import check_tool
-from robocal.data.kinds import KINDS, OBSERVED
+from robocal.data.kinds import FLUSH_TILT_LENGTH_M, KINDS, OBSERVED
 from robocal.data.measurements import Measurements, approach_from_order, robot_reach, travel_from_order
 from robocal.kinematics.cell import arm_model, carriage_frames, is_track_cell
 from robocal.kinematics.cell_file import TRACK_SCALE
@@ -83,7 +87,7 @@ class SimulationResult:
     extra SMRs in ``truth.smr``); ``noise`` (N, 3) m the noise added to each point (zeros for
     plane data); ``noise_floor_mm`` (see module docstring); ``outlier_rows`` row indices with a
     gross error; ``true_joints`` (N, n) rad before joint reading noise; ``planes`` (P, 4) unit
-    normal and offset (n.p = c, m) of plane data (world = robot base), else None; ``info`` the
+    normal and offset (n.p = c, m) of plane and flush data (world = robot base), else None; ``info`` the
     settings and seed.
 
     Returned by `robocal.simulate_tracker`.
@@ -95,7 +99,8 @@ class SimulationResult:
     truth : Robot
         The true robot (tracker frame as base, SMR 0 as tool, extra SMRs in ``truth.smr``).
     noise : numpy.ndarray, shape (N, 3)
-        The noise added to each point, metres (zeros for plane data).
+        The noise added to each point, metres (flush data: the face centre's height along the
+        plane's normal plus its two tilts times the 50 mm rim length, along the plane's axes).
     noise_floor_mm : float
         RMS of the noise added (outliers excluded), mm: what a perfect calibration reaches.
     outlier_rows : numpy.ndarray of int
@@ -103,7 +108,8 @@ class SimulationResult:
     true_joints : numpy.ndarray, shape (N, n)
         The joints before the reading noise, radians.
     planes : numpy.ndarray, shape (P, 4), optional
-        Unit normal and offset (n.p = c, m) of each plane (plane data; world = robot base).
+        Unit normal and offset (n.p = c, m) of each plane (plane and flush data; world = robot
+        base; for flush data the normal is along the tool's z at the contacts).
     info : dict
         The settings and the seed.
 
@@ -365,14 +371,16 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         inside it.
     seed : int, default 0
         The random seed.
-    kind : {'point', 'pose', 'plane', 'distance'}
+    kind : {'point', 'pose', 'plane', 'flush', 'distance'}
         What is measured (see the module docstring).
     n_planes : int, default 1
-        Planes touched by the probe (``plane``).
+        Planes touched by the probe (``plane``) or the tool face (``flush``).
     joint_noise_deg : float, default 0
         Reading noise on the recorded joints, degrees (1 sigma).
     rotation_noise_deg : float, default 0
-        Orientation noise of ``pose`` data, degrees per axis (1 sigma).
+        Orientation noise of ``pose`` data, degrees per axis (1 sigma); for ``flush`` the tilt
+        of each contact's face (default: ``noise_mm`` over the 50 mm rim length
+        `robocal.data.kinds.FLUSH_TILT_LENGTH_M`).
     error_scale : float, default 1
         Multiplies the drawn robot errors.
     joints : array_like, shape (N, n), optional
@@ -452,6 +460,11 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
     planes = None
     if kind == "plane":
         q, plane_idx, planes = _plane_poses(true, n_poses, int(n_planes), rng, workspace_box)
+    elif kind == "flush":
+        tilt_sigma = (np.deg2rad(rotation_noise_deg) if rotation_noise_deg
+                      else noise_mm * 1e-3 / FLUSH_TILT_LENGTH_M)
+        q, plane_idx, planes, contact_noise = _flush_poses(true, n_poses, int(n_planes), rng, workspace_box,
+                                                           noise_mm * 1e-3, tilt_sigma)
     elif kind == "distance":
         q, bar_noise = _bar_placements(true, n_poses, bar_length_m, noise_mm, rng, workspace_box)
     elif joints is not None:
@@ -489,6 +502,9 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         kw = {"pair": np.repeat(np.arange(n_poses), 2), "distance": np.full(N, float(bar_length_m))}
         outlier_rows, noise = np.zeros(0, np.int64), np.zeros((N, 3))
         noise[:, 0] = np.repeat(bar_noise, 2)  # both rows: the true tips' distance minus the certified
+    elif kind == "flush":  # the true faces placed with the contact's noise (height, tilt): _flush_poses
+        kw, outlier_rows = {"plane": plane_idx}, np.zeros(0, np.int64)
+        noise = contact_noise
     else:  # probe noise: each true tip ends up noise_mm (1-sigma) off its plane, along the normal
         kw, outlier_rows = {"plane": plane_idx}, np.zeros(0, np.int64)
         normal, offset = planes[plane_idx, :3], planes[plane_idx, 3]
@@ -605,6 +621,86 @@ def _plane_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, wo
         raise UnreachableError(f"could place only {int(filled.sum())} of {n_poses} plane contacts: "
                                "use fewer poses or a larger workspace")
     return chosen, plane_idx, np.column_stack([normals, offsets])
+
+
+FLUSH_START_COS = 0.3  # a random pose whose face normal is within ~73 deg of a plane's starts a contact
+FLUSH_START_HEIGHT_M = 0.2  # ... and whose face centre is this close to the plane
+
+
+def _move_faces(robot, q: np.ndarray, normal: np.ndarray, height: np.ndarray, direction: np.ndarray,
+                iterations: int = 50, damping: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
+    """Joints near ``q (N, n)`` whose TCP lies on the planes ``normal . p = height`` (``normal``
+    ``(N, 3)`` unit, ``height (N,)`` m) with its z axis along ``direction (N, 3)`` (unit): damped
+    Gauss-Newton on the joints as :func:`_move_tips`. Returns the joints and the residual norm ``(N,)``."""
+    names = robot.joint_params
+
+    def residual(q):  # (N, 4): height, then the face normal's difference
+        T = robot.fk(q)
+        return np.concatenate([(np.einsum("ni,ni->n", normal, T[:, :3, 3]) - height)[:, None],
+                               T[:, :3, 2] - direction], axis=1), T[:, :3, 2]
+
+    for _ in range(iterations):
+        r, z = residual(q)
+        if np.abs(r).max() < 1e-13:
+            break
+        J6 = robot.jacobian(q, names, kind="pose")  # (N, 6, n): dp, world rotations w
+        J = np.concatenate([np.einsum("ni,nij->nj", normal, J6[:, :3])[:, None],
+                            np.cross(J6[:, 3:], z[:, :, None], axis=1)], axis=1)  # dz = w x z
+        A = np.einsum("nik,njk->nij", J, J) + damping * np.eye(4)
+        q = q - np.einsum("nik,ni->nk", J, np.linalg.solve(A, r[:, :, None])[:, :, 0])
+    return q, np.linalg.norm(residual(q)[0], axis=1)
+
+
+def _flush_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, workspace_box,
+                 height_sigma: float, tilt_sigma: float):
+    """Joints putting the true tool face flush on one of ``n_planes`` random planes through the
+    workspace, each contact off by its noise: the face centre ``height_sigma`` (m, 1 sigma) along
+    the normal, the face normal tilted by ``tilt_sigma`` (rad, 1 sigma, each of two axes).
+    Returns the joints ``(n_poses, n)``, the plane of each, the planes ``(P, 4)`` (unit normal
+    along the tool's z at contact, offset n.p = c, m) and each contact's noise ``(n_poses, 3)`` m:
+    the height along the normal plus the two tilts times the rim length FLUSH_TILT_LENGTH_M
+    along the plane's axes (its norm is the contact's error at the truth)."""
+    normals = _unit(rng, n_planes)
+    q0 = sample_joints(true, 2048, rng, workspace_box, tool=true.tool)
+    centre = np.median(true.fk(q0)[:, :3, 3], axis=0)
+    offsets = normals @ centre + rng.uniform(-0.1, 0.1, n_planes)
+    plane_idx = np.arange(n_poses) % n_planes
+    e1 = np.cross(normals, np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    e2 = np.cross(normals, e1)
+    chosen, noise = np.zeros((n_poses, true.n_joints)), np.zeros((n_poses, 3))
+    filled = np.zeros(n_poses, bool)
+    for _ in range(100):
+        todo = np.flatnonzero(~filled)
+        if todo.size == 0:
+            break
+        q = sample_joints(true, 16 * todo.size, rng, workspace_box, tool=true.tool)
+        k = plane_idx[np.resize(todo, len(q))]
+        T = true.fk(q)
+        height = np.einsum("ni,ni->n", normals[k], T[:, :3, 3]) - offsets[k]
+        near = (np.einsum("ni,ni->n", normals[k], T[:, :3, 2]) > FLUSH_START_COS) & \
+            (np.abs(height) < FLUSH_START_HEIGHT_M)
+        q, k = q[near], k[near]
+        if not len(q):
+            continue
+        dh = rng.standard_normal(len(q)) * height_sigma
+        tilt = rng.standard_normal((len(q), 2)) * tilt_sigma
+        direction = normals[k] + tilt[:, :1] * e1[k] + tilt[:, 1:] * e2[k]
+        direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+        q, res = _move_faces(true, q, normals[k], offsets[k] + dh, direction)
+        ok = (res < 1e-12) & true.within_limits(q)
+        for plane in range(n_planes):  # fill each plane's open slots (a loop over planes only)
+            slots = todo[plane_idx[todo] == plane]
+            take = np.flatnonzero(ok & (k == plane))[: slots.size]
+            chosen[slots[: take.size]] = q[take]
+            noise[slots[: take.size]] = (dh[take, None] * normals[k[take]] + FLUSH_TILT_LENGTH_M
+                                         * (tilt[take, :1] * e1[k[take]] + tilt[take, 1:] * e2[k[take]]))
+            filled[slots[: take.size]] = True
+            todo = todo[~np.isin(todo, slots[: take.size])]
+    if not filled.all():
+        raise UnreachableError(f"could place only {int(filled.sum())} of {n_poses} flush contacts: "
+                               "use fewer poses or a larger workspace")
+    return chosen, plane_idx, np.column_stack([normals, offsets]), noise
 
 
 TRACKER_MIN_DISTANCE_M = 0.3  # a tracker closer to the robot's base is inside the robot (a unit slip)

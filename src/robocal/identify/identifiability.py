@@ -38,6 +38,7 @@ import scipy.linalg
 
 from robocal.core.io import write_atomic
 from robocal.identify import vocabulary
+from robocal.identify.freedoms import freedom_lines
 from robocal.identify.normal import r_factor
 from robocal.identify.space import block_of
 from robocal.kinematics.joint_errors import is_refinement
@@ -115,6 +116,7 @@ class Identifiability:
     undetermined: list[str] = field(default_factory=list)
     prior_ratio: dict[str, float] = field(default_factory=dict)  # posterior / prior sigma
     warnings: list[str] = field(default_factory=list)  # the summary names what is not estimated: none
+    freedoms: list[dict] = field(default_factory=list)  # a SCARA's structural freedoms (identify.freedoms)
 
     @property
     def condition_class(self) -> str:
@@ -141,7 +143,7 @@ class Identifiability:
                 "condition_number": self.condition_number if np.isfinite(self.condition_number) else None,
                 "condition_class": self.condition_class, **self.observability,
                 "kept": self.kept, "dropped": self.dropped, "undetermined": self.undetermined,
-                "confounded_with": self.confounded_with}
+                "confounded_with": self.confounded_with, "structural_freedoms": self.freedoms}
 
     def write(self, json_path=None) -> list[str]:
         """Write `to_dict` as JSON to ``json_path`` (atomically); the paths written."""
@@ -159,7 +161,7 @@ class Identifiability:
                  "observability O1 {O1:.3g}  O2 {O2:.3g}  O3 {O3:.3g}  O4 {O4:.3g}".format(**o)]
         for name in self.dropped + self.undetermined:  # the words of robocal.identify.vocabulary
             lines.append(f"  {vocabulary.status(name, self)}: {name}  ({vocabulary.detail(name, self)})")
-        return "\n".join(lines)
+        return "\n".join(lines + freedom_lines(self.freedoms, "  "))
 
 
 def _pivoted_rank(A: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:

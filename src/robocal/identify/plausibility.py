@@ -24,7 +24,10 @@ What real robots' errors can be, and the limits derived from it (named once here
   ``MAX_ANGLE_CORRECTION_DEG``, that the data determine (beyond ``DETERMINED_SIGMAS`` of its
   1-sigma) is the solver absorbing a mistake (a unit, the wrong robot). One the data do not
   determine (within that many sigma of zero) is weak identifiability: the message names what to
-  measure instead of blaming the input.
+  measure instead of blaming the input. A robot whose prior class (or the user) states wider
+  priors (:mod:`robocal.kinematics.prior_spec`: a humanoid's zeros 3 deg, lengths 10 mm per metre)
+  has correspondingly wider limits: ``PRIOR_SIGMAS`` times the stated prior where that is larger
+  (the scales a calibration estimated from the data do not count: a mistake widens them too).
 
 - A joint reading lies inside the robot's limits; a little beyond (``JOINT_LIMIT_TOL_DEG``: soft
   limits set inside the hard stops, encoder rounding) passes, further is warned with the rows and
@@ -49,6 +52,7 @@ from robocal.identify.space import block_of
 
 MAX_NOMINAL_ERROR_MM = 10.0
 MAX_NOMINAL_ERROR_FRACTION = 0.05
+GROSS_FRACTION = 0.1  # the share of the largest errors the misfit check leaves out (gross errors)
 SPREAD_RATIO = 3.0
 UNIT_RATIO = 300.0  # a spread ratio beyond this (either way) is a length unit (x1000)
 INCH_MM = 25.4
@@ -57,6 +61,7 @@ MAX_LENGTH_CORRECTION_MM = 5.0
 MAX_LENGTH_CORRECTION_FRACTION = 0.01
 MAX_ANGLE_CORRECTION_DEG = 5.0
 DETERMINED_SIGMAS = 3.0  # a correction beyond this many sigma is what the data say
+PRIOR_SIGMAS = 3.0  # a correction within this many stated prior sigmas is plausible whatever the limit
 JOINT_LIMIT_TOL_DEG = 1.0
 JOINT_LIMIT_MARGIN_DEG = 90.0
 JOINT_LIMIT_TOL_MM = 1.0  # the same for a prismatic joint (a track's carriage, a SCARA's quill)
@@ -69,6 +74,17 @@ FORCE_HINT = "if you are sure the data and the model are right, rerun with --for
 def spread(points: np.ndarray) -> float:
     """RMS distance of points ``(N, 3)`` from their centroid (m)."""
     return float(np.sqrt(np.mean(np.sum((points - points.mean(axis=0)) ** 2, axis=1))))
+
+
+def bulk_rms_mm(errors: np.ndarray) -> float:
+    """RMS (mm) of the bulk of position errors ``errors`` (m; ``(N, 3)`` vectors or ``(N,)`` norms):
+    the largest :data:`GROSS_FRACTION` of the items left out, so that a few gross errors (a
+    mislabelled marker, a mistyped row) do not make a right model look like another robot's, while
+    data that do belong to another robot or unit, wrong in every row, still do."""
+    e = np.asarray(errors, dtype=float)
+    e = np.linalg.norm(e, axis=1) if e.ndim == 2 else np.abs(e)
+    kept = np.sort(e)[:max(1, int(np.ceil(len(e) * (1 - GROSS_FRACTION))))]
+    return float(np.sqrt(np.mean(kept**2)) * 1e3)
 
 
 def error_limit_mm(points: np.ndarray) -> float:
@@ -110,7 +126,8 @@ def check_spread(measured: np.ndarray, modelled: np.ndarray, what: str, *, force
 def check_residual(rms_mm: float, points: np.ndarray, what: str, *, force: bool = False,
                    warnings: list[str] | None = None) -> None:
     """An RMS residual ``rms_mm`` of the nominal (or calibrated) model on data whose points are
-    ``points (N, 3)`` must be within what geometric errors can leave (:func:`error_limit_mm`)."""
+    ``points (N, 3)`` must be within what geometric errors can leave (:func:`error_limit_mm`);
+    ``rms_mm`` is best the bulk's (:func:`bulk_rms_mm`)."""
     limit = error_limit_mm(points)
     if rms_mm <= limit:
         return
@@ -122,23 +139,25 @@ def check_residual(rms_mm: float, points: np.ndarray, what: str, *, force: bool 
 
 def check_corrections(start, final, names, *, sigma: dict[str, float] | None = None,
                       confounded: dict[str, list[str]] | None = None, force: bool = False,
-                      warnings: list[str] | None = None) -> None:
+                      warnings: list[str] | None = None, prior: dict[str, float] | None = None) -> None:
     """Corrections of the estimated link parameters ``names`` from ``start`` to ``final`` (robots)
     must be of the size real robots' errors have (module docstring). ``sigma`` (SI, by name): the
     corrections' 1-sigma, to tell a determined correction from one the data cannot pin down;
-    ``confounded``: what each parameter is confounded with (for the message)."""
+    ``confounded``: what each parameter is confounded with (for the message); ``prior`` (SI, by
+    name): the stated prior sigma, which widens a limit to ``PRIOR_SIGMAS`` of it."""
     length_limit = max(MAX_LENGTH_CORRECTION_MM * 1e-3, MAX_LENGTH_CORRECTION_FRACTION * robot_reach(start))
     angle_limit = np.deg2rad(MAX_ANGLE_CORRECTION_DEG)
     units = dict(zip(start.parameter_names, start.parameter_units(), strict=True))
-    sigma, confounded = sigma or {}, confounded or {}
+    sigma, confounded, prior = sigma or {}, confounded or {}, prior or {}
     determined, loose = [], []
     links = [name for name in names if block_of(name) == "links"]
     deltas = final.values_of(links) - start.values_of(links)
     for name, delta in zip(links, deltas.tolist(), strict=True):
-        if units[name] == "m" and abs(delta) > length_limit:
+        widened = PRIOR_SIGMAS * prior.get(name, 0.0)
+        if units[name] == "m" and abs(delta) > max(length_limit, widened):
             text = f"{name} by {delta * 1e3:+.4g} mm"
             s = sigma.get(name, 0.0) * 1e3
-        elif units[name] == "rad" and abs(delta) > angle_limit:
+        elif units[name] == "rad" and abs(delta) > max(angle_limit, widened):
             text = f"{name} by {np.rad2deg(delta):+.4g} deg"
             s = np.rad2deg(sigma.get(name, 0.0))
         else:
@@ -148,7 +167,8 @@ def check_corrections(start, final, names, *, sigma: dict[str, float] | None = N
         else:
             partners = "/".join(confounded.get(name, [])) or "the other parameters"
             loose.append(f"{text} (+- {s:.3g}, confounded with {partners})")
-    limits = f"link lengths {length_limit * 1e3:.3g} mm, angles {MAX_ANGLE_CORRECTION_DEG:g} deg"
+    limits = f"link lengths {length_limit * 1e3:.3g} mm, angles {MAX_ANGLE_CORRECTION_DEG:g} deg" + (
+        f", or {PRIOR_SIGMAS:g} times the priors of the robot's class" if prior else "")
     if determined:
         _fail(f"the calibration corrected {', '.join(determined)}: more than real robots' errors can be "
               f"({limits}) and determined by the data; the solver is absorbing a mistake: a unit (length "

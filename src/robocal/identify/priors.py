@@ -8,7 +8,8 @@ scale of one measurement row, estimated from the data by :func:`linear_analysis`
 data determine moves freely; one they cannot determine stays near nominal instead of wandering
 along a null direction. This is seed 003's ridge step with a physical, per-parameter ridge.
 
-The scales (1 sigma, :data:`LINK_LENGTH_MM_PER_M` etc.) are deliberately generous: they are the
+The industrial class's scales (1 sigma, :data:`robocal.kinematics.prior_spec.CLASSES`) are deliberately
+generous: they are the
 size of the corrections published calibrations of industrial arms identify, not the machining
 tolerances of the parts. Sources: Mooring, Roth & Driels, *Fundamentals of Manipulator
 Calibration* (Wiley 1991), ch. 1 and 5 (link length errors of tenths of a millimetre to a few
@@ -29,19 +30,25 @@ it): it is held at nominal and reported with the parameters it is confounded wit
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from robocal.identify.evidence import (
+    DIAGNOSIS_WIDENING,
+    EVIDENCE_GAIN_NATS,
+    MAX_WIDENING,
+    NormalStats,
+    fit_group_scales,
+)
 from robocal.identify.linalg import ScaledSVD
 from robocal.identify.robust import MAD_TO_SIGMA
 from robocal.identify.space import block_of
 from robocal.kinematics.joint_errors import term_of
+from robocal.kinematics.prior_spec import CLASSES, GROUPS, PriorSpec, class_of
 
-LINK_LENGTH_MIN_MM = 0.5  # a, d: at least this (1 sigma) ...
-LINK_LENGTH_MM_PER_M = 1.0  # ... and this per metre of the arm's summed link lengths (size class)
-LINK_ANGLE_DEG = 0.2  # alpha, beta: axis misalignments
-JOINT_ZERO_DEG = 0.5  # theta: joint zero offsets (mastering)
+# the group scales of each robot class (zeros, twists, lengths per metre of the arm's summed link
+# lengths, a factor on the joint-error scales below): robocal.kinematics.prior_spec.CLASSES
 # Scale (a joint's encoder / transmission ratio, mostly a linear track's): 1 sigma 5e-4 m/m. A
 # track's rack pitch and encoder scale are within ~1e-4 (ISO 230-2 positioning accuracy of long
 # machine axes: 0.1-0.3 mm per metre before compensation) and steel grows 1.2e-5 per kelvin (1e-4
@@ -59,21 +66,59 @@ NOISE_RTOL = 0.05  # the noise estimate has settled when it changes by less than
 NOISE_MAX_PASSES = 10
 
 
+def class_defaults(robot) -> tuple[str, str, dict[str, float]]:
+    """The robot's prior class (:func:`robocal.kinematics.prior_spec.class_of`), why it was
+    chosen, and the class's default scale of each group (SI: rad, m; ``errors`` a factor on
+    :data:`JOINT_ERROR_SIGMA`); lengths grow with the arm's summed link lengths."""
+    name, why = class_of(robot)
+    c = CLASSES[name]
+    size_m = float(np.abs(robot.a).sum() + np.abs(robot.d).sum())
+    return name, why, {"zeros": np.deg2rad(c.zeros_deg), "twists": np.deg2rad(c.twists_deg),
+                       "lengths": max(c.lengths_min_mm, c.lengths_mm_per_m * size_m) * 1e-3,
+                       "errors": c.errors}
+
+
+def group_scales(robot) -> dict[str, float]:
+    """The scale of each group (SI) a fit of ``robot`` uses: its class's defaults, overridden by
+    the scales a calibration estimated and those the user gave (``robot.priors``)."""
+    spec = robot.priors
+    defaults = class_defaults(robot)[2]
+    return defaults if spec is None else {**defaults, **spec.estimated, **spec.scales}
+
+
+def stated_sigma(robot, names) -> np.ndarray:
+    """:func:`prior_sigma` with the scales the class and the user state, not those a calibration
+    estimated from the data (the plausibility limits' measure: a mistake in the data widens those)."""
+    spec = robot.priors
+    return prior_sigma(robot if spec is None else robot.with_priors(spec.with_estimated({})), names)
+
+
+def group_of(robot, name: str) -> str | None:
+    """The prior group of a parameter (:data:`robocal.kinematics.prior_spec.GROUPS`), None for
+    frames, SMR offsets and nuisance (no prior)."""
+    block = block_of(name)
+    if block == "joint_errors":
+        return "errors"
+    if block != "links":
+        return None
+    kind = name.rstrip("0123456789")
+    return {"a": "lengths", "d": "lengths", "theta": "zeros"}.get(kind, "twists")
+
+
 def prior_sigma(robot, names) -> np.ndarray:
-    """1-sigma prior scale ``(k,)`` (SI) of each named robot parameter; ``inf`` for frames and SMR
-    offsets (no prior)."""
-    link_mm = max(LINK_LENGTH_MIN_MM, LINK_LENGTH_MM_PER_M * (np.abs(robot.a).sum() + np.abs(robot.d).sum()))
+    """1-sigma prior scale ``(k,)`` (SI) of each named robot parameter (:func:`group_scales` of
+    its group; a joint-error term's :data:`JOINT_ERROR_SIGMA` times the ``errors`` factor);
+    ``inf`` for frames and SMR offsets (no prior)."""
+    scales = group_scales(robot)
     out = []
     for name in names:
-        block = block_of(name)
-        if block == "links":
-            kind = name.rstrip("0123456789")
-            out.append(link_mm * 1e-3 if kind in ("a", "d") else
-                       np.deg2rad(JOINT_ZERO_DEG if kind == "theta" else LINK_ANGLE_DEG))
-        elif block == "joint_errors":
-            out.append(JOINT_ERROR_SIGMA[term_of(name)])
-        else:
+        group = group_of(robot, name)
+        if group is None:
             out.append(np.inf)
+        elif group == "errors":
+            out.append(JOINT_ERROR_SIGMA[term_of(name)] * scales["errors"])
+        else:
+            out.append(scales[group])
     return np.array(out, dtype=float)
 
 
@@ -161,3 +206,95 @@ def undetermined(J: np.ndarray, sigma: np.ndarray, noise: float) -> tuple[list[i
         held.append(int(free[worst]))
         free = np.delete(free, worst)
     return held, ratio
+
+
+_DISPLAY = {"zeros": ("deg", np.rad2deg(1.0)), "twists": ("deg", np.rad2deg(1.0)), "lengths": ("mm", 1e3),
+            "errors": ("x", 1.0)}
+
+
+@dataclass(frozen=True)
+class PriorScales:
+    """The group scales a fit used and where each came from (``source``: 'fixed' the class default
+    kept, 'estimated' widened by the evidence, 'user' given), with the class, why it was chosen,
+    the evidence gain (nats) over the defaults, the groups the data pushed to the bound and
+    ``asked``: the scales the data ask for when every group may widen up to
+    :data:`robocal.identify.evidence.DIAGNOSIS_WIDENING` times what was used (the diagnosis of a
+    fit whose priors are too tight), with the linear MAP residual RMS (residual unit) with the
+    scales used and with those asked for."""
+
+    robot_class: str
+    why: str
+    scales: dict
+    defaults: dict
+    source: dict
+    gain: float = 0.0
+    at_bound: tuple = ()
+    asked: dict = field(default_factory=dict)
+    asked_gain: float = 0.0
+    rms_used: float = float("nan")
+    rms_asked: float = float("nan")
+
+    def display(self, scales: dict) -> dict:
+        """``{group: value}`` in the display units (deg, mm, x)."""
+        return {g: float(v * _DISPLAY[g][1]) for g, v in scales.items()}
+
+    @property
+    def tighter_than_asked(self) -> dict:
+        """The groups the data ask to widen (beyond the scale used, by the evidence gain), in SI."""
+        return {g: v for g, v in self.asked.items() if v > self.scales[g] * (1 + 1e-6)} \
+            if self.asked_gain >= EVIDENCE_GAIN_NATS else {}
+
+    def option(self) -> str:
+        """The ``--priors`` text that sets the scales the data ask for."""
+        wider = self.tighter_than_asked
+        return ",".join(f"{g}={wider[g] * _DISPLAY[g][1]:.3g}{_DISPLAY[g][0]}" for g in GROUPS if g in wider)
+
+    def to_dict(self) -> dict:
+        """Plain data (display units: deg, mm, x) for the result JSON and the report."""
+        return {"class": self.robot_class, "class_chosen_by": self.why,
+                "groups": {g: {"scale": self.display({g: v})[g], "unit": _DISPLAY[g][0],
+                               "default": self.display({g: self.defaults[g]})[g], "source": self.source[g]}
+                           for g, v in self.scales.items()},
+                "evidence_gain_nats": self.gain, "at_bound": list(self.at_bound),
+                "asked": self.display(self.tighter_than_asked), "asked_gain_nats": self.asked_gain}
+
+    def warnings(self) -> list[str]:
+        """A warning per group the data pushed to the widening bound."""
+        return [f"the data ask for a {g} prior wider than {MAX_WIDENING:g} times the {self.robot_class} "
+                f"class default ({self.display({g: self.scales[g]})[g]:.3g} {_DISPLAY[g][0]}): another "
+                "robot's model, a wrong joint convention or a mistake in the data, or a robot of another "
+                "class (name it with --priors class=...)" for g in self.at_bound]
+
+    def sentence(self) -> str:
+        """One line: the class and each group's scale and source."""
+        parts = [f"{g} {self.display({g: v})[g]:.3g} {_DISPLAY[g][0]} ({self.source[g]})"
+                 for g, v in self.scales.items()]
+        return f"priors of the {self.robot_class} class ({self.why}): " + (
+            ", ".join(parts) or "no estimated parameter has a prior (frames only)")
+
+
+def fit_priors(robot, J: np.ndarray, r: np.ndarray, names, noise: float) -> tuple[object, PriorScales]:
+    """``robot`` with the group scales the data ask for (empirical Bayes,
+    :func:`robocal.identify.evidence.fit_group_scales`) recorded in its priors, and the record:
+    ``J (M, k)`` the weighted Jacobian of the unknowns ``names`` at the registered nominal model,
+    ``r (M,)`` its residuals, ``noise`` the robust residual scale. Groups the user fixed
+    (``robot.priors``) and every group with ``estimate: no`` keep their scale."""
+    spec = robot.priors or PriorSpec()
+    robot_class, why, defaults = class_defaults(robot)
+    used = group_scales(robot.with_priors(spec.with_estimated({})))
+    groups = [group_of(robot, n) for n in names]
+    present = [g for g in GROUPS if g in groups]
+    estimated = [g for g in present if g not in spec.scales] if spec.estimate else []
+    sigma = prior_sigma(robot.with_priors(spec.with_estimated({})), names)
+    stats = NormalStats.of(J, r)
+    fit = fit_group_scales(J, r, sigma, groups, estimated, noise, stats=stats)
+    widened = {g: used[g] * f for g, f in fit.factors.items() if f > 1.0}
+    scales = {g: widened.get(g, used[g]) for g in present}
+    source = {g: "user" if g in spec.scales else "estimated" if g in widened else "fixed" for g in present}
+    fitted = robot.with_priors(spec.with_estimated(widened))
+    asked = fit_group_scales(J, r, prior_sigma(fitted, names), groups, present, noise,
+                             max_widening=DIAGNOSIS_WIDENING, stats=stats)
+    record = PriorScales(robot_class, why, scales, {g: defaults[g] for g in present}, source, fit.gain,
+                         fit.at_bound, {g: scales[g] * f for g, f in asked.factors.items()}, asked.gain,
+                         asked.rms_default, asked.rms_fitted)
+    return fitted, record

@@ -4,7 +4,8 @@ Each measurement set (a :class:`robocal.Measurements`, one kind) becomes an obse
 (:mod:`robocal.identify.observations`); the problem stacks their residual rows. Residuals are
 divided by the measurement uncertainty, so sets of different kinds (positions, plane deviations,
 distances, rotations) combine in one least-squares norm: the data's ``sigma`` column, else the
-``sigma`` given per kind, else :data:`KIND_SIGMA`. A single set without either is left unweighted
+``sigma`` given per kind, else the set's instrument's documented noise
+(`robocal.data.instruments`), else :data:`KIND_SIGMA`. A single set without either is left unweighted
 (residuals in SI units, what the solvers' thresholds and histories then show). The unknowns are a
 :class:`ParameterSpace`: robot parameters (moved by :meth:`ParameterSpace.apply`) and the
 observations' nuisance parameters (plane coefficients: plane ids name plates across all sets).
@@ -17,6 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from robocal.core.errors import IdentificationError
+from robocal.data.instruments import noise_of
 from robocal.data.kinds import OBSERVED
 from robocal.identify.observations import observation_for
 from robocal.identify.space import ParameterSpace, State, resolve_names
@@ -56,7 +58,7 @@ class CalibrationProblem:
         self.observations = [observation_for(d, robot, **observation_options) for d in self.datasets]
         self._check_planes()
         lone = len(self.datasets) == 1 and not given
-        self.set_sigma = [DEFAULT_SIGMA if lone else given.get(d.kind, KIND_SIGMA[d.kind])
+        self.set_sigma = [DEFAULT_SIGMA if lone else given.get(d.kind, noise_of(d))
                           for d in self.datasets]  # for sets without a sigma column
         self.weighted = not lone or any(d.sigma is not None for d in self.datasets)
         self.sigma = np.concatenate([obs.residual_scale(s) for obs, s in
@@ -69,8 +71,8 @@ class CalibrationProblem:
     @property
     def noise_guess(self) -> float:
         """The residual scale of one row expected before any fit (residual unit): 1 for weighted
-        residuals, else the kind's :data:`KIND_SIGMA` (m); the priors' start value."""
-        return 1.0 if self.weighted else KIND_SIGMA[self.observations[0].kind]
+        residuals, else the set's instrument's or kind's noise (m); the priors' start value."""
+        return 1.0 if self.weighted else noise_of(self.datasets[0])
 
     def _check_planes(self) -> None:
         """A plane id names one plate in every set of a calibration: the sets' ids must not repeat."""
@@ -114,7 +116,7 @@ class CalibrationProblem:
 
     @property
     def kind(self) -> str:
-        """The observation kind ('point', 'pose', 'plane', 'distance'; 'mixed' for several kinds)."""
+        """The observation kind ('point', 'pose', 'plane', 'flush', 'distance'; 'mixed' for several kinds)."""
         kinds = {obs.kind for obs in self.observations}
         return kinds.pop() if len(kinds) == 1 else "mixed"
 
@@ -149,12 +151,20 @@ class CalibrationProblem:
         :func:`robocal.identify.space.resolve_names`) plus every nuisance parameter. 'auto' and
         'all' leave out what no observation can see (the base frame for planes alone)."""
         blind = set.intersection(*(set(obs.not_observable(robot)) for obs in self.observations))
-        orientation = any(OBSERVED[obs.kind].sees_orientation for obs in self.observations)
+        orientation = any(OBSERVED[obs.kind].sees_orientation or OBSERVED[obs.kind].sees_tilt
+                          for obs in self.observations)
         names = resolve_names(robot, params, sorted(blind), orientation)
         return ParameterSpace(tuple(names), tuple(self.nuisance_names))
 
     def start(self, robot) -> State:
         return State(robot, np.concatenate([obs.nuisance_start(robot) for obs in self.observations]))
+
+    def instrument_frames(self, state: State) -> list[tuple[str, dict[str, np.ndarray]]]:
+        """Per measurement set whose instrument carries frames of its own (a camera and its board,
+        a capture frame and marker offsets): its label and those frames at ``state`` (4 x 4
+        transforms or ``(3,)`` offsets, m; the observation's ``frames``)."""
+        return [(obs.data.label, obs.frames(nuisance))
+                for obs, nuisance in self._with_nuisance(state.nuisance) if hasattr(obs, "frames")]
 
     def export_nuisance(self, state: State) -> dict[str, np.ndarray]:
         """The state's nuisance as physical entities (planes as normal + offset), to judge other

@@ -180,3 +180,26 @@ def solve(problem, start: State, space: ParameterSpace, *, k0: float = 1.5, k1: 
                else f"IGG3 weights still changing after {max_outer} iterations")
     return SolverResult(state=state, status=status, message=message, nit=nit, history=history,
                         item_weights=item_w)
+
+
+# Gross errors in a least-squares fit (a mislabelled motion-capture marker, a mistyped joint, a
+# reading of the wrong target): an item beyond GROSS_K1 robust sigmas of its set cannot be noise
+# (a normal residual passes 8 sigma once in 10^15), so least squares refits without it; between
+# GROSS_K0 and GROSS_K1 it is down-weighted as IGG3 does. Data without such items are fitted by plain
+# least squares, unchanged; heavy-tailed noise is the method `robust` (k0, k1 = 1.5, 3).
+GROSS_K0 = 5.0
+GROSS_K1 = 8.0
+
+
+def without_gross_errors(problem, fitted: SolverResult, space: ParameterSpace,
+                         progress=None) -> SolverResult:
+    """A least-squares result ``fitted`` refitted with its gross errors rejected (items beyond
+    :data:`GROSS_K1` robust sigmas of their set: IGG3 weights with k0 = :data:`GROSS_K0`, no ridge,
+    from ``fitted``'s state); ``fitted`` itself when it has none."""
+    v, _ = standardized_items(problem, problem.residuals(fitted.state))
+    if not np.any(np.abs(v) > GROSS_K1):
+        return fitted
+    out = solve(problem, fitted.state, space, k0=GROSS_K0, k1=GROSS_K1, ridge="none", progress=progress)
+    return SolverResult(state=out.state, status=out.status, nit=fitted.nit + out.nit,
+                        history=fitted.history + out.history[1:], item_weights=out.item_weights,
+                        message=f"{fitted.message}; gross errors rejected ({out.message})")

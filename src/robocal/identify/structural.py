@@ -9,8 +9,9 @@ poses would determine them. :func:`unidentifiable` repeats the rank test on
 same kind of measurement, and :func:`separate` moves a robot parameter dropped on the data but
 identifiable there from ``dropped`` to ``undetermined`` (not determined by these data,
 :mod:`robocal.identify.vocabulary`). Joint-error terms are not judged here (their effect needs the
-rows' conditions and approach directions), nor plane, distance or other kinds (the fixture decides
-what a pose can see): their rank-dropped parameters stay not identifiable.
+rows' conditions and approach directions), nor plane or other kinds (the fixture decides what a
+pose can see): their rank-dropped parameters stay not identifiable. Distances are judged on
+consecutive generic poses taken as pairs (a bar can be put anywhere).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import numpy as np
 
 from robocal.data.kinds import OBSERVED
 from robocal.data.measurements import Measurements
+from robocal.identify.freedoms import structural_freedoms
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, analyze
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.space import block_of
@@ -38,15 +40,22 @@ def unidentifiable(robot, kind: str, names: list[str], n_smr: int = 1,
     judged = [nm for nm in names if block_of(nm) in JUDGED_BLOCKS]
     unjudged = set(names) - set(judged)
     spec = OBSERVED.get(kind)  # None: several kinds ("mixed")
-    if spec is None or not spec.sees_position or not judged:
+    pairs = spec is not None and spec.group == "pair"  # distances: consecutive generic poses pair up
+    if spec is None or not (spec.sees_position or pairs) or not judged:
         return set(names)
     lo, hi = robot.limits[:, 0], robot.limits[:, 1]
     q = np.random.default_rng(GENERIC_SEED).uniform(lo, hi, (GENERIC_POSES, robot.n_joints))
     smr = np.repeat(np.arange(n_smr), GENERIC_POSES)
     q = np.tile(q, (n_smr, 1))
     T = robot.fk(q, smr=smr)
+    if pairs:
+        p = T[:, :3, 3].reshape(-1, 2, 3)
+        readings = {"pair": np.arange(len(q)) // 2,
+                    "distance": np.repeat(np.linalg.norm(p[:, 0] - p[:, 1], axis=1), 2)}
+    else:
+        readings = spec.readings(T)
     data = Measurements.from_arrays(kind, q, smr=smr, pose_id=np.tile(np.arange(GENERIC_POSES), n_smr),
-                                    **spec.readings(T))
+                                    **readings)
     problem = CalibrationProblem(robot, data)
     space = problem.space(robot, judged)
     J = problem.jacobian(problem.start(robot), space)
@@ -54,13 +63,15 @@ def unidentifiable(robot, kind: str, names: list[str], n_smr: int = 1,
     return unjudged | (dropped & set(judged))
 
 
-def separate(ident: Identifiability, structural: set[str]) -> Identifiability:
+def separate(ident: Identifiability, structural: set[str], robot=None) -> Identifiability:
     """``ident`` with each dropped parameter not in ``structural`` (identifiable on other poses)
     moved to ``undetermined`` with a posterior / prior sigma ratio of 1 (the data say nothing of it
-    beyond what its confounders take: it keeps its prior)."""
+    beyond what its confounders take: it keeps its prior). With ``robot``, a SCARA's held
+    parameters are named by their structural freedom (:mod:`robocal.identify.freedoms`)."""
     moved = [nm for nm in ident.dropped if nm not in structural]
+    dropped = [nm for nm in ident.dropped if nm in structural]
+    freedoms = [] if robot is None else structural_freedoms(robot, dropped, ident.kept)
     if not moved:
-        return ident
-    return replace(ident, dropped=[nm for nm in ident.dropped if nm in structural],
-                   undetermined=ident.undetermined + moved,
+        return replace(ident, freedoms=freedoms)
+    return replace(ident, dropped=dropped, undetermined=ident.undetermined + moved, freedoms=freedoms,
                    prior_ratio={**ident.prior_ratio, **dict.fromkeys(moved, 1.0)})

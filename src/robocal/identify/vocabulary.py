@@ -27,6 +27,7 @@ Every estimated parameter is :data:`ESTIMATED`. The functions take an
 
 from __future__ import annotations
 
+from robocal.identify.freedoms import freedom_lines
 from robocal.identify.space import block_of
 
 ESTIMATED = "estimated"
@@ -113,7 +114,7 @@ def lines(ident, names=None, indent: str = "", not_used: dict[str, str] | None =
         if these:
             out.append(f"{indent}{word} ({MEANING[word]}): " + ", ".join(
                 _short(nm, word, ident, not_used) for nm in these))
-    return out
+    return out + freedom_lines(getattr(ident, "freedoms", []), indent)
 
 
 def _short(name: str, word: str, ident, not_used: dict[str, str] | None) -> str:

@@ -18,6 +18,7 @@ from dataclasses import replace
 import numpy as np
 
 import robocal.ik.opw_ik as opw_ik
+import robocal.ik.scara as scara_ik
 import robocal.ik.ur_ik as ur_ik
 from robocal.core.errors import ModelError
 from robocal.ik.opw_ik import SEED_MARGIN, TOL, check_poses
@@ -27,8 +28,8 @@ from robocal.kinematics.ur import nearest_ur_links
 
 
 def has_closed_form(robot: Robot) -> bool:
-    """Whether closed-form IK applies to this robot's own chain (OPW or UR form)."""
-    return robot.has_opw_form or robot.has_ur_form
+    """Whether closed-form IK applies to this robot's own chain (OPW, UR or SCARA form)."""
+    return robot.has_opw_form or robot.has_ur_form or scara_ik.is_scara(robot)
 
 
 def seed_model(model: Robot) -> Robot:
@@ -50,6 +51,8 @@ def _module(robot: Robot):
         return opw_ik
     if robot.has_ur_form:
         return ur_ik
+    if scara_ik.is_scara(robot):
+        return scara_ik
     if robot.opw is not None:
         opw_ik.opw_form(robot)  # raises its message (a calibrated model of an OPW arm)
     raise ModelError(
@@ -60,13 +63,15 @@ def _module(robot: Robot):
 
 
 def solve_branches(robot: Robot, T: np.ndarray, tol: float = TOL, threads: int | None = None) -> np.ndarray:
-    """All 8 verified solutions ``(N, 8, 6)`` for checked world poses ``T`` (no limit handling).
+    """All verified solutions ``(N, B, n)`` for checked world poses ``T`` (no limit handling): B = 8
+    slots of a 6-axis arm, 2 of a SCARA (:mod:`robocal.ik.scara`).
 
     Raises ModelError when the robot's chain has no closed form (:func:`has_closed_form`)."""
-    solve, size = _module(robot).chunk_solver(robot, tol)
+    module = _module(robot)
+    solve, size = module.chunk_solver(robot, tol)
     N = T.shape[0]
     parts = [slice(s, min(s + size, N)) for s in range(0, N, size)]
-    out = np.empty((N, 8, 6))
+    out = np.empty((N, getattr(module, "BRANCHES", 8), robot.n_joints))
     workers = threads or min(os.cpu_count() or 1, 8)
 
     def run(part: slice) -> None:
@@ -88,6 +93,8 @@ def seed_branches(robot: Robot, T: np.ndarray) -> np.ndarray:
     module = _module(robot)
     if module is opw_ik:
         return opw_ik.seed_branches(robot, T)
+    if module is scara_ik:
+        return scara_ik.seed_branches(robot, T)
     return ur_ik.seed_branches(robot, T, SEED_MARGIN)
 
 
@@ -96,6 +103,8 @@ def branch_slot(nominal: Robot, q: np.ndarray) -> np.ndarray:
     set, else the UR form of its chain); a calibrated robot's slots are its nominal model's."""
     if nominal.opw is not None:
         return opw_ik.branch_slot(nominal.opw, q)
+    if scara_ik.is_scara(nominal):
+        return scara_ik.branch_slot(nominal, q)
     shoulder, elbow, flip = ur_ik.branch_bits(nominal, q)
     return 4 * flip.astype(int) + 2 * shoulder.astype(int) + elbow.astype(int)
 
@@ -115,15 +124,16 @@ def turn_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     q ``(N, B, 6)`` (NaN rows absent) -> ``(N, K, 6)`` candidates (NaN padded, valid first, in
     slot order then copy order) and ``(N, K)`` source slot index (-1 for padding)."""
     lo, hi = robot.limits[:, 0], robot.limits[:, 1]
-    # q in [-pi, pi): a copy q + 2 pi k can be inside [lo, hi] only for these k
-    kmin = np.floor((lo - np.pi) / (2 * np.pi)).astype(int) + 1
-    kmax = np.ceil((hi + np.pi) / (2 * np.pi)).astype(int) - 1
+    n = robot.n_joints
+    # q in [-pi, pi): a copy q + 2 pi k can be inside [lo, hi] only for these k (a prismatic joint: none)
+    kmin = np.where(robot.prismatic, 0, np.floor((lo - np.pi) / (2 * np.pi)).astype(int) + 1)
+    kmax = np.where(robot.prismatic, 0, np.ceil((hi + np.pi) / (2 * np.pi)).astype(int) - 1)
     grids = np.meshgrid(*[np.arange(a, b + 1) for a, b in zip(kmin, kmax, strict=True)], indexing="ij")
-    shifts = 2 * np.pi * np.stack([g.reshape(-1) for g in grids], axis=1)  # (C, 6)
+    shifts = 2 * np.pi * np.stack([g.reshape(-1) for g in grids], axis=1)  # (C, n)
     N, B, _ = q.shape
     cand = q[:, :, None, :] + shifts[None, None]  # (N, B, C, 6)
     ok = np.isfinite(cand).all(axis=3) & ((cand >= lo) & (cand <= hi)).all(axis=3)
-    cand = cand.reshape(N, -1, 6)
+    cand = cand.reshape(N, -1, n)
     ok = ok.reshape(N, -1)
     slot = np.broadcast_to(np.repeat(np.arange(B), shifts.shape[0]), ok.shape)
     K = max(int(ok.sum(axis=1).max(initial=0)), 1)
@@ -137,19 +147,21 @@ def turn_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = False,
               tol: float = TOL, threads: int | None = None) -> np.ndarray:
-    """All closed-form inverse-kinematics solutions of world TCP poses (OPW or UR form).
+    """All closed-form inverse-kinematics solutions of world TCP poses (OPW, UR or SCARA form).
 
     Base and tool of the model are removed first; each solution is verified by ``robot.fk``.
 
     Parameters
     ----------
     robot : Robot
-        A model with an OPW form (ortho-parallel arm with a spherical wrist) or a UR form
-        (Universal Robots geometry); its base and tool frames are taken into account.
+        A model with an OPW form (ortho-parallel arm with a spherical wrist), a UR form
+        (Universal Robots geometry) or a SCARA form (`robocal.ik.scara`); its base and tool
+        frames are taken into account.
     poses : array_like, shape (N, 4, 4) or (4, 4)
         World poses of the TCP, metres.
     limits : bool, default False
-        Set the solutions outside the joint limits to NaN (the shape stays ``(N, 8, 6)``).
+        Set the solutions outside the joint limits to NaN (the shape stays ``(N, 8, 6)``; a
+        SCARA's ``(N, 2, 4)``).
     extra_turns : bool, default False
         Every candidate inside the limits, including the +-2 pi copies of joints with more than
         a full turn of travel; implies ``limits``.
@@ -162,13 +174,14 @@ def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = 
     -------
     numpy.ndarray, shape (N, 8, 6) or (N, K, 6)
         Joints, radians, wrapped to [-pi, pi); NaN where a branch does not exist. The 8 slots are
-        the branches in a fixed order (shoulder, elbow, wrist). With ``extra_turns``, K is the
-        largest candidate count over the poses, valid rows first, NaN padding.
+        the branches in a fixed order (shoulder, elbow, wrist); a SCARA's 2 are its hands (the
+        elbow's sign), its quill in m, not wrapped. With ``extra_turns``, K is the largest
+        candidate count over the poses, valid rows first, NaN padding.
 
     Raises
     ------
     ModelError
-        The model has neither an OPW nor a UR form.
+        The model has no OPW, UR or SCARA form.
     DataError
         ``poses`` are not rigid transforms.
 

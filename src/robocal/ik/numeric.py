@@ -17,10 +17,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+import robocal.ik.scara as scara_ik
 from robocal.core.damped_least_squares import Status, minimize
 from robocal.core.errors import DataError, UnreachableError
 from robocal.ik.closed_form import branch_model, branch_slot, seed_branches, seed_model, solve_branches
 from robocal.ik.opw_ik import check_poses
+from robocal.ik.scara import is_scara_arm
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import pose_error
 
@@ -380,6 +382,8 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
     T = check_poses(poses)
     N, n = T.shape[0], robot.n_joints
     tol = (pos_tol, rot_tol)
+    if locked is None and is_scara_arm(robot):  # 4 tasks: a SCARA cannot tilt (robocal.ik.scara)
+        return _finish(_scara(robot, T, branch, seeds), N, pos_tol, rot_tol, strict)
     if seeds is None and (locked is not None or robot.has_prismatic):
         raise DataError(f"{robot.name}: IK of a chain with prismatic or locked joints needs seeds (for an "
                         "arm on a track: robocal.ik.track.solve)")
@@ -412,6 +416,36 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
             raise DataError(f"seeds must have shape ({N}, {n}), got {q0.shape}")
     return _finish(_solve_from(robot, T, q0, nominal, max_iter, tol, retry=True, locked=locked)[0], N,
                    pos_tol, rot_tol, strict)
+
+
+def _scara(robot: Robot, T: np.ndarray, branch: int | None, given: np.ndarray | None) -> IKResult:
+    """A SCARA (or a calibrated model of one): each target from the planar closed form of the
+    robot's own chain in ``branch`` (default: the first branch that converges inside the limits),
+    refined on its 4 tasks (:mod:`robocal.ik.scara`: position and the turn about its axis; a SCARA
+    cannot tilt, so the orientation error reported is the turn's); ``given`` seeds ``(N, 4)`` or
+    ``(4,)`` replace the closed form's."""
+    seeds = scara_ik.seed_branches(robot, T)
+    if given is not None:
+        seeds = np.broadcast_to(np.asarray(given, float), (T.shape[0], 4))[:, None, :]
+        branch = 0
+    if branch is not None and int(branch) not in range(scara_ik.BRANCHES):
+        raise DataError(f"{robot.name} is a SCARA: its branches are 0 (elbow positive) and 1 (negative), "
+                        f"not {branch}")
+    order = range(scara_ik.BRANCHES) if branch is None else [int(branch)]
+    N = T.shape[0]
+    q, err = seeds[:, order[0]].copy(), np.full((N, 4), np.inf)
+    done = np.zeros(N, bool)
+    for b in order:
+        rows = np.flatnonzero(~done)
+        qb, eb = scara_ik.refine(robot, T[rows], seeds[rows, b])
+        ok = scara_ik.converged(eb) & robot.within_limits(qb)
+        better = ok | (np.linalg.norm(eb[:, :3], axis=1) < np.linalg.norm(err[rows, :3], axis=1))
+        q[rows[better]], err[rows[better]] = qb[better], eb[better]
+        done[rows[ok]] = True
+    ok = scara_ik.converged(err)
+    return IKResult(joints=q, converged=ok, position_error=np.linalg.norm(err[:, :3], axis=1),
+                    orientation_error=np.abs(err[:, 3]), seeds=seeds[:, order[0]],
+                    iterations=0)
 
 
 def _finish(result: IKResult, N: int, pos_tol: float, rot_tol: float, strict: bool) -> IKResult:

@@ -21,16 +21,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import robocal.ik.scara as scara_ik
 from robocal.core.errors import DataError, ModelError, UnreachableError
 from robocal.core.io import write_atomic
 from robocal.ik.closed_form import branch_model, branch_slot, solve_branches, turn_copies
 from robocal.ik.numeric import nominal_branches
 from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
+from robocal.ik.scara import is_scara_arm
 from robocal.kinematics.model import Robot
 
 _TIE_BREAK = 1e-9  # weight of the first waypoint's distance from zero (rad): breaks exact ties only
-_BRANCH_JOINTS = 6  # the closed forms (OPW, UR) and so the branches exist for 6-joint arms only
+_BRANCH_JOINTS = 6  # the closed forms (OPW, UR) and so the branches exist for 6-joint arms (and a SCARA)
 _EDGE_CHUNK = 4_000_000  # pair evaluations per block when building edges (bounds memory)
 
 
@@ -182,6 +184,8 @@ def branch_candidates(robot: Robot, T: np.ndarray, nominal: Robot | None = None)
     try:
         return solve_branches(robot, T)
     except ModelError:
+        if is_scara_arm(robot):
+            return _scara_branches(robot, T, nominal)
         form = branch_model(robot, nominal)
         if form is None:
             raise
@@ -195,6 +199,20 @@ def branch_candidates(robot: Robot, T: np.ndarray, nominal: Robot | None = None)
         own = res.converged & (branch_slot(form, q) == ok % 8)  # a solution of another slot is that slot's
         out[ok[own]] = q[own]
     return out.reshape(seeds.shape)
+
+
+def _scara_branches(robot: Robot, T: np.ndarray, nominal: Robot | None) -> np.ndarray:
+    """A calibrated SCARA's 2 branches ``(M, 2, 4)``: the planar closed form of its own chain refined
+    on its 4 tasks (:mod:`robocal.ik.scara`), kept where it converges in its own slot (the elbow's
+    sign on ``nominal``, default the robot's nominal model)."""
+    form = robot.nominal_robot() if nominal is None else nominal
+    seeds = scara_ik.seed_branches(robot, T)
+    M, B, n = seeds.shape
+    q, err = scara_ik.refine(robot, np.repeat(T, B, axis=0), seeds.reshape(-1, n))
+    q[:, [0, 1, 3]] = np.remainder(q[:, [0, 1, 3]] + np.pi, 2 * np.pi) - np.pi
+    own = scara_ik.converged(err) & (scara_ik.branch_slot(form, q) == np.tile(np.arange(B), M))
+    q[~own] = np.nan
+    return q.reshape(M, B, n)
 
 
 def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | None = None) -> PathResult:
@@ -241,7 +259,7 @@ def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | No
     """
     T = check_poses(poses)
     n = robot.n_joints
-    if n != _BRANCH_JOINTS:
+    if n != _BRANCH_JOINTS and not is_scara_arm(robot):
         raise ModelError(
             f"plan chooses among the inverse-kinematics branches of a 6-joint arm; {robot.name} has {n} "
             "joints (" + ("redundant: infinitely many joint solutions per pose" if n > _BRANCH_JOINTS else

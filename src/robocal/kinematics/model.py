@@ -48,6 +48,7 @@ from robocal.kinematics.model_file import (
     robot_kwargs,
 )
 from robocal.kinematics.opw import OPWParameters
+from robocal.kinematics.prior_spec import PriorSpec
 from robocal.kinematics.thermal import link_coefficients as thermal_coefficients
 from robocal.kinematics.thermal import scale as thermal_scale
 from robocal.kinematics.thermal import scaled_links
@@ -197,6 +198,10 @@ class Robot:
         Extra SMR offsets on the flange, metres (SMR 0 is the tool).
     joint_errors : JointErrorModel or None
         The non-geometric terms that `fk` applies (compliance, backlash, cyclic errors...).
+    priors : PriorSpec or None
+        What the model file (or `with_priors`) says about the parameter priors: the robot's class
+        and group scales (`robocal.kinematics.prior_spec`, docs/priors.md); None: the class is
+        chosen from the model and every group scale estimated from the data.
     prismatic : numpy.ndarray of bool, shape (n,)
         ``prismatic[i]`` makes joint i prismatic: its value (m) adds to ``d_i`` (``theta_i`` stays
         a constant angle); ``d_i`` is its zero and a ``scale{i}`` joint-error term its encoder
@@ -238,6 +243,7 @@ class Robot:
     smr: np.ndarray | None = None
     joint_errors: JointErrorModel | None = None
     prismatic: np.ndarray | None = None
+    priors: PriorSpec | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.alpha).size
@@ -281,6 +287,8 @@ class Robot:
             raise ModelError("opw must be an OPWParameters (robocal.kinematics.opw)")
         if self.joint_errors is not None and not isinstance(self.joint_errors, JointErrorModel):
             raise ModelError("joint_errors must be a JointErrorModel (robocal.kinematics.joint_errors)")
+        if self.priors is not None and not isinstance(self.priors, PriorSpec):
+            raise ModelError("priors must be a PriorSpec (robocal.kinematics.prior_spec)")
         set_(self, "nominal", self._nominal_vector(self.nominal))
         for f in (*LINK_FIELDS, "base", "tool", "limits", "parallel", "smr", "nominal", "prismatic"):
             getattr(self, f).flags.writeable = False
@@ -699,6 +707,12 @@ class Robot:
              "calibrated": self.joint_errors.calibrated}
         errors = JointErrorModel(tuple(names), np.array([old.get(nm, 0.0) for nm in names]), **t_ref)
         return replace(self, joint_errors=errors)
+
+    def with_priors(self, priors: PriorSpec | None) -> Robot:
+        """A copy with the prior class and group scales ``priors`` (None: chosen and estimated)."""
+        if priors is not None and not isinstance(priors, PriorSpec):
+            raise ModelError("priors must be a PriorSpec (robocal.kinematics.prior_spec)")
+        return replace(self, priors=priors)
 
     def with_reference_temperature(self, celsius: float) -> Robot:
         """A copy whose thermal term's T_ref is ``celsius`` (deg C); self without joint errors."""

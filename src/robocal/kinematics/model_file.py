@@ -16,6 +16,7 @@ catalog, for the user's own robot and for :meth:`Robot.save`. docs/model-yaml.md
     smr: [[x, y, z], ...]               # optional extra SMR offsets on the flange
     nominal: {name: value, ...}         # optional: the nominal model (every parameter)
     joint_errors: {parameters: {name: value}}         # optional non-geometric terms (SI)
+    priors: {class: service, zeros: 3deg, lengths: 10mm}  # optional: robocal.kinematics.prior_spec
 
 With a table form, ``base`` and ``tool`` wrap the frames the conversion produces (world ->
 the table's base frame, the table's flange -> TCP); with ``joints`` rows they are the model's
@@ -42,6 +43,7 @@ from robocal.core.yaml_load import dump_yaml, load_yaml
 from robocal.kinematics.convert import default_parallel, dh_kwargs, mdh_kwargs, opw_kwargs, opw_parameters
 from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.opw import GEOMETRY, OPWParameters
+from robocal.kinematics.prior_spec import PriorSpec
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
 
 FORMAT = "robocal-model/1"
@@ -49,7 +51,7 @@ LINK_FIELDS = ("alpha", "a", "beta", "theta", "d")
 FORMS = ("opw", "dh", "mdh", "joints")
 INFO_KEYS = ("reach_mm", "payload_kg")  # the vendor's figures (catalog listing only; no effect on the model)
 _TOP_KEYS = {"format", "name", "description", "units", "limits", "base", "tool", "smr", "nominal",
-             "joint_errors", *INFO_KEYS, *FORMS}
+             "joint_errors", "priors", *INFO_KEYS, *FORMS}
 _JOINT_KEYS = {*LINK_FIELDS, "type", "limits", "parallel_to_previous"}
 JOINT_TYPES = ("revolute", "prismatic")
 MAX_NAME = 200  # characters of a model's name
@@ -245,6 +247,8 @@ def robot_kwargs(data) -> dict:
         kw["smr"] = np.array([_numbers(r, f"smr[{i}]", 3) for i, r in enumerate(smr)]).reshape(-1, 3) * length
     if data.get("joint_errors") is not None:
         kw["joint_errors"] = JointErrorModel.from_dict(data["joint_errors"], n)
+    if data.get("priors") is not None:
+        kw["priors"] = PriorSpec.from_mapping(data["priors"])
     kw["name"] = _text(data.get("name", "robot"), "name", MAX_NAME)
     kw["description"] = _text(data.get("description", ""), "description", MAX_DESCRIPTION)
     if data.get("nominal") is not None:  # a name -> value mapping (SI), resolved by the Robot
@@ -286,6 +290,8 @@ def robot_to_dict(robot) -> dict:
         out["opw"] = robot.opw.to_dict()
     if robot.joint_errors is not None:
         out["joint_errors"] = robot.joint_errors.to_dict()
+    if robot.priors is not None and (given := robot.priors.to_dict()):
+        out["priors"] = given
     return out
 
 

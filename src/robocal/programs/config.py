@@ -64,3 +64,8 @@ class ConfigScheme:
 
     def text(self, row) -> str:
         return "[" + ",".join(str(int(v)) for v in row) + "]"
+
+    def mismatch(self, robot: Robot, row) -> str:
+        """Why configuration data ``row`` cannot describe any joints of ``robot`` (another kind of
+        arm's), or '' when it can."""
+        return ""

@@ -36,6 +36,7 @@ from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
 from robocal.ik.closed_form import has_closed_form
 from robocal.ik.controller import JUMP_DEG, nearest_solutions
+from robocal.ik.scara import is_scara
 from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
@@ -61,6 +62,7 @@ from robocal.trust.coverage import Prediction, target_warnings
 from robocal.trust.output_marker import check_unmarked
 
 CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
+SCARA_DIALECTS = ("fanuc",)  # and these a SCARA too (FANUC SR-series: CONFIG 'L|R, t1, t2, t4')
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
 CHUNK = 5_000  # targets whose IK candidates and numeric IK are computed at once (memory)
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
@@ -103,8 +105,9 @@ def _configured_joints(dialect, nominal, F, targets, problems):
     for i in np.flatnonzero(~reach):
         problems.append((int(i), "no solution of the nominal model inside the joint limits (out of reach)"))
     for i in np.flatnonzero(has & reach & ~possible):
-        problems.append((int(i), f"configuration {scheme.text(targets[i].config)} is not possible for this "
-                                 "pose inside the joint limits"))
+        problems.append((int(i), scheme.mismatch(nominal, targets[i].config) or f"configuration "
+                         f"{scheme.text(targets[i].config)} is not possible for this pose inside the joint "
+                         "limits"))
     configured = np.flatnonzero(has & reach & possible)
     # no configuration data: in program order, the candidate nearest the previous target's joints
     last = -1  # the last target without configuration data given joints
@@ -399,12 +402,14 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     if not paths:
         raise DataError("no program file given")
     track = track_program(nominal)  # an arm on a track: programs/track.py
-    if nominal.n_joints != CONTROLLER_JOINTS and track is None:
+    d = dialect_for(paths, dialect)
+    scara = is_scara(nominal) and d.key in SCARA_DIALECTS
+    if nominal.n_joints != CONTROLLER_JOINTS and track is None and not scara:
         raise DataError(f"the programs of these controllers drive {CONTROLLER_JOINTS}-axis arms; the nominal "
                         f"model {nominal.name!r} has {nominal.n_joints} joints (an arm on a track: give "
-                        "its cell model)")
+                        "its cell model; a SCARA: its programs are read in "
+                        f"{', '.join(SCARA_DIALECTS)} only, Epson SPEL+ is not a language robocal reads)")
     controller = nominal if track is None else track.arm  # the arm the controller solves for
-    d = dialect_for(paths, dialect)
     sources = [ProgramText(p) for p in paths]
     for s in sources:
         check_unmarked(s.text, str(s.path), "filtered", force)
@@ -593,7 +598,7 @@ def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing
                                      axis=1))
     lim = np.rad2deg(np.minimum(q - nominal.limits[:, 0], nominal.limits[:, 1] - q))
     joint = np.argmin(lim, axis=1)
-    columns = {name: values.tolist() for name, values in sing.columns().items()}
+    columns = {} if sing is None else {name: values.tolist() for name, values in sing.columns().items()}
     cols = zip(dpos.tolist(), drot.tolist(), lim[np.arange(len(lim)), joint].tolist(), (joint + 1).tolist(),
                good.tolist(), ok.tolist(), converged.tolist(), changed.tolist(), strict=True)
     rows = []

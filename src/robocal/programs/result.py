@@ -135,7 +135,7 @@ class FilterResult:
         pos = np.array([r["correction_mm"] for r in rows]) if rows else np.zeros(0)
         rot = np.array([r["correction_deg"] for r in rows]) if rows else np.zeros(0)
         margin = [r["limit_margin_deg"] for r in rows]
-        sig = [r["sigma_rel"] for r in rows]
+        sig = [r["sigma_rel"] for r in rows if "sigma_rel" in r]  # none on a SCARA (no wrist singularity)
         out = {"targets": len(self.rows), "filtered": len(rows),
                "configuration_changed": sum(r["configuration"] == "changed" for r in rows),
                "correction_mm": {"median": float(np.median(pos)) if pos.size else 0.0,
@@ -145,9 +145,11 @@ class FilterResult:
                "motions": summary(self.motions),
                "uncorrected_motions": len(self.uncorrected), "warnings": len(self.warnings)}
         if rows:
-            i, j = int(np.argmin(margin)), int(np.argmin(sig))
+            i = int(np.argmin(margin))
             out["smallest_limit_margin"] = {"name": rows[i]["name"], "deg": margin[i],
                                             "joint": rows[i]["limit_joint"]}
+        if sig:
+            j = int(np.argmin(sig))
             out["nearest_singularity"] = {"name": rows[j]["name"], "kind": rows[j]["nearest_singularity"],
                                           "sigma_rel": sig[j]}
         return out
@@ -167,10 +169,11 @@ class FilterResult:
                       f"{s['correction_deg']['median']:.4f} deg, max {s['correction_deg']['max']:.4f} deg",
                       f"  configuration changed on {s['configuration_changed']} target(s)",
                       f"  smallest joint-limit margin {s['smallest_limit_margin']['deg']:.2f} deg "
-                      f"({s['smallest_limit_margin']['name']}, joint {s['smallest_limit_margin']['joint']})",
-                      f"  nearest singularity: {s['nearest_singularity']['name']} "
-                      f"({s['nearest_singularity']['kind']}, sigma_rel "
-                      f"{s['nearest_singularity']['sigma_rel']:.4f})"]
+                      f"({s['smallest_limit_margin']['name']}, joint {s['smallest_limit_margin']['joint']})"]
+            if "nearest_singularity" in s:
+                lines.append(f"  nearest singularity: {s['nearest_singularity']['name']} "
+                             f"({s['nearest_singularity']['kind']}, sigma_rel "
+                             f"{s['nearest_singularity']['sigma_rel']:.4f})")
         lines += [f"  load: {line}" for line in self.loads]
         shown = collapse(self.warnings)
         for w in shown[:LISTED]:

@@ -90,7 +90,9 @@ def _or(value, default):
 
 # what one observation's error is, by kind (the result's per-row error_before / error_after, mm)
 ERROR_LABELS = {"point": "position error (mm)", "pose": "position error (mm)",
-                "plane": "distance to fitted plane (mm)", "distance": "error of the pair's distance (mm)"}
+                "plane": "distance to fitted plane (mm)",
+                "flush": "flush contact error: height and rim lifts (mm)",
+                "distance": "error of the pair's distance (mm)"}
 
 
 class _ObsErrors:
@@ -227,6 +229,7 @@ def _summary(result: dict) -> str:
              ("observations used / rejected", f"{esc(used)} / {esc(n_rej)}"),
              ("validation set", esc(data.get("validation_file")) if data.get("validation_file") else "none"),
              ("method", esc(result.get("method"))),
+             *_instruments(prov, result.get("variance_components") or []),
              *_provenance(prov),
              ("settings", ", ".join(f"{esc(k)}={esc(v)}" for k, v in settings.items()) or "&ndash;")]
     if "converged" in result or "message" in result:
@@ -247,7 +250,24 @@ def _summary(result: dict) -> str:
 
 
 _KIND_ERROR = {"point": "position", "pose": "position", "plane": "distance to the plane",
-               "distance": "distance error"}
+               "flush": "flush contact error", "distance": "distance error", "marker": "marker position",
+               "eye_to_hand": "board position", "eye_in_hand": "board position"}
+
+
+def _instruments(prov: dict, components: list[dict]) -> list[tuple[str, str]]:
+    """The instruments of the calibration files and the 6-D noise estimated from them (pre-escaped
+    rows; none when no file declares an instrument)."""
+    rows = []
+    named = [i for i in prov.get("instruments") or [] if i]
+    if named:
+        rows.append(("instrument", esc(", ".join(dict.fromkeys(named)))))
+    for c in components:
+        rows.append(("6-D noise (variance components)",
+                     f"{_num(c.get('sigma_position_mm'))} mm, {_num(c.get('sigma_rotation_deg'))} deg "
+                     "per axis "
+                     f"<span class='note'>{esc(c.get('data'))}; {esc(c.get('rounds'))} fits"
+                     f"{'' if c.get('settled') else ', not settled'}</span>"))
+    return rows
 
 
 def _per_file(result: dict) -> str:
@@ -526,6 +546,14 @@ def _identifiability(result: dict) -> str:
              else (f"{ident[k]:.4g}")] for k in keys if not isinstance(ident[k], list | dict)]
     out = _table(["", ""], rows, left=1) if rows else "<p>No identifiability analysis in this result.</p>"
     dropped = result.get("dropped") or []
+    freedoms = ident.get("structural_freedoms") or []  # a SCARA's (robocal.identify.freedoms)
+    if freedoms:
+        out += ("<h3>Structural freedoms of a SCARA</h3><p>The robot's structure, not the poses: no "
+                "campaign separates these; each is estimated once and the rest held at nominal.</p>"
+                + _table(["freedom", "held at nominal", "carried by"],
+                         [[esc(f.get("words")), esc(", ".join(f.get("held") or [])),
+                           esc(", ".join(f.get("carried_by") or [])) or "&ndash;"] for f in freedoms],
+                         align="www"))
     if not dropped:
         return out
     return _grid(out, "<h3>Parameters not estimated</h3>"
@@ -694,6 +722,10 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     if accuracy:
         sections.append(("predicted-accuracy", "Predicted accuracy over the workspace", accuracy))
     sections.append(("parameters", "Parameters", _parameters(result)))
+    from robocal.report.priors import section as priors_section
+
+    if priors := priors_section(result):
+        sections.append(("priors", "Parameter priors", priors))
     from robocal.report.conditions import section as conditions_section
 
     working = conditions_section(result)
@@ -717,7 +749,7 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     data = result.get("data") or {}
     subtitle = (f"{esc(data.get('file'))} &middot; error model {error_model(result)[0]} &middot; "
                 f"method {esc(result.get('method'))}")
-    narrow = {"model-selection", "identifiability", "rejected", "iso9283", "history"}
+    narrow = {"model-selection", "identifiability", "rejected", "iso9283", "history", "priors"}
     if not _joint_error_names(result):  # the parameter table alone: half the width is enough
         narrow.add("parameters")
     return page(title, subtitle, sections, result.get("robocal_version"), frozenset(narrow))

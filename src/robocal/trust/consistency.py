@@ -27,7 +27,8 @@ the residual better than the step is called a drift.
 **Diagnosis** of an inconsistent fit, in order: the change point; the orientation convention of a
 6-DOF pose file (quaternions scalar-last under ``qw,qx,qy,qz`` headers, or the inverse rotation:
 each tried, the one that fits named); the length unit (:func:`robocal.trust.diagnosis.length_unit`); a
-joint column exchange or sign flip (:func:`robocal.trust.diagnosis.joint_mixup`).
+joint column exchange or sign flip (:func:`robocal.trust.diagnosis.joint_mixup`); when none of
+them, priors too tight for the robot (:func:`robocal.trust.diagnosis.priors_too_tight`).
 
 **Worse than nominal.** A fitted model that misses its own data by more than the nominal model
 with the frames fitted (beyond :data:`WORSE_TOLERANCE`) is not written
@@ -45,11 +46,11 @@ from scipy.spatial.transform import Rotation
 from scipy.special import chdtrc  # chi2.sf without importing scipy.stats (a third of start-up)
 
 from robocal.core.errors import PlausibilityError, RobocalError
+from robocal.data.instruments import noise_of
 from robocal.data.measurements import robot_reach
 from robocal.data.registration import register_frame
 from robocal.identify.plausibility import FORCE_HINT
-from robocal.identify.problem import KIND_SIGMA
-from robocal.trust.diagnosis import GAIN, fit_rms_mm, joint_mixup, length_unit
+from robocal.trust.diagnosis import GAIN, fit_rms_mm, joint_mixup, length_unit, priors_too_tight
 
 ALPHA = 1e-3  # the residual test's false-alarm probability per fit (model and noise right)
 UNMODELLED_MM_PER_M = 0.5  # unmodelled-error budget: mm (1 sigma, per coordinate) per metre of reach
@@ -161,8 +162,9 @@ def budget_m(robot) -> float:
 def item_noise(data, kind: str, n_items: int, item_of_rows: np.ndarray,
                sigma: dict | None = None) -> np.ndarray:
     """1-sigma (m) of each of ``n_items`` residual items of ``data``: its sigma column (per row,
-    ``item_of_rows`` maps rows to items), else ``sigma[kind]``, else :data:`KIND_SIGMA`."""
-    default = (sigma or {}).get(kind, KIND_SIGMA[kind])
+    ``item_of_rows`` maps rows to items), else ``sigma[kind]``, else its instrument's documented
+    noise (`robocal.data.instruments.noise_of`: else the kind's)."""
+    default = (sigma or {}).get(kind, noise_of(data))
     out = np.full(n_items, float(default))
     if data.sigma is not None:
         out[item_of_rows] = data.sigma
@@ -325,12 +327,13 @@ def diagnose_misfit(robot, datasets) -> list[str]:
 
 
 def check_fit(robot, start, observations, errors: list[np.ndarray], n_unknowns: int, *,
-              sigma: dict | None = None, seed: int = 0) -> Consistency:
+              sigma: dict | None = None, seed: int = 0, priors=None) -> Consistency:
     """The residual test, change points and (when the test fails or a change point is found) the
     diagnosis of a fit: ``robot`` the fitted model, ``start`` the nominal model (frames fitted) the
     diagnosis tries its hypotheses on, ``observations`` the files' observation models, ``errors``
     their item errors with ``robot`` (m), ``n_unknowns`` the unknowns estimated, ``sigma`` the noise
-    per kind (m) given for files without a sigma column."""
+    per kind (m) given for files without a sigma column, ``priors`` the fit's prior group scales
+    (:class:`robocal.identify.priors.PriorScales`: priors too tight for the robot are a diagnosis)."""
     noise = [item_noise(obs.data, obs.kind, len(e), obs.item_of_rows(), sigma)
              for obs, e in zip(observations, errors, strict=True)]
     result = residual_test(errors, noise, n_unknowns, budget_m(robot))
@@ -338,6 +341,10 @@ def check_fit(robot, start, observations, errors: list[np.ndarray], n_unknowns: 
     result.diagnosis = [c.sentence() for c in result.change_points]
     if result.misfit and not result.change_points:
         result.diagnosis += diagnose_misfit(start, [obs.data for obs in observations])
+    mistakes = [d for d in result.diagnosis if d not in {c.sentence() for c in result.change_points}]
+    # a mistake in the data first; a change point may itself be a kinematic error the priors held
+    tight = priors_too_tight(priors) if result.misfit and not mistakes else None
+    result.diagnosis += [tight] if tight else []
     return result
 
 

@@ -35,7 +35,7 @@ from robocal.identify.identifiability import Identifiability
 from robocal.identify.priors import prior_sigma
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult
-from robocal.identify.space import ParameterSpace, State
+from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.kinematics.model import Robot
 
 WORKSPACE_SAMPLES = 1000  # joint vectors of the workspace sample
@@ -157,6 +157,18 @@ class Fit(Protocol):
     judged: list
 
 
+def _absorbed(result: Fit) -> set[str]:
+    """Robot parameters held at nominal because an instrument's own frame (a camera's, a capture
+    system's: observations with ``frames_replace_base``) moves the TCP exactly as they do: their
+    error is a rigid motion of the robot's world that frame takes, as the base frame takes it for a
+    tracker, so they predict no error in the instrument's frame."""
+    frames = {n for obs in result.problem.observations if getattr(obs, "frames_replace_base", False)
+              for n in obs.nuisance_names}
+    ident = result.identifiability
+    return {n for n in ident.dropped if ident.confounded_with.get(n)
+            and set(ident.confounded_with[n]) <= frames}
+
+
 def prediction(result: Fit) -> Prediction:
     """The :class:`Prediction` of a fit (a calibration result): the posterior of its candidate robot
     parameters the calibrated model carries (extra SMR offsets marginalised), ``u`` from its
@@ -164,7 +176,12 @@ def prediction(result: Fit) -> Prediction:
     when there are any."""
     problem, state, robot = result.problem, result.state, result.robot
     nuisance = set(problem.nuisance_names)
-    names = [n for n in result.identifiability.names if n not in nuisance and n in robot.parameter_names]
+    # a frame parameter the data cannot identify has no prior either: held at nominal, it carries no
+    # variance (its column may be round-off only: a scale bar's SMR height on a SCARA, 1e-12 of the
+    # others, which the scaled information would read as information on a 1 m scale)
+    held = {n for n in result.identifiability.dropped if block_of(n) != "links"} | _absorbed(result)
+    names = [n for n in result.identifiability.names
+             if n not in nuisance and n in robot.parameter_names and n not in held]
     r = problem.residuals(state)
     s0 = float(np.sqrt(r @ r / max(r.size - result.space.size, 1)))
     errors = problem.item_error_vectors(state)

@@ -112,12 +112,15 @@ class Observation:
         ``kind`` 'point' or 'pose'), with the rows' SMRs, approach directions and moves."""
         return identification_jacobian(robot, self.q, names, kind, self.smr, self.conditions)
 
-    def batch_tcp(self, robot, names, X) -> np.ndarray:
+    def batch_tcp(self, robot, names, X, frames: bool = False):
         """TCP poses ``(P, N, 4, 4)`` of the displaced robots (each row with its SMR, joint-error
-        terms applied with their basis at the undisplaced robot: exact at X = 0)."""
+        terms applied with their basis at the undisplaced robot: exact at X = 0); with ``frames``
+        (kinds whose rows are not the robot's SMRs) the tool's for every row and the world poses
+        of frames {0}..{n} ``(P, N, n + 1, 4, 4)`` (as `Robot.fk`)."""
         moved = robot.displaced_arrays(names, X)
         P, (N, n) = X.shape[0], self.q.shape
-        offsets = np.concatenate([moved.tool[:, None, :3, 3], moved.smr], axis=1)[:, self.smr]  # (P, N, 3)
+        smr = np.zeros_like(self.smr) if frames else self.smr
+        offsets = np.concatenate([moved.tool[:, None, :3, 3], moved.smr], axis=1)[:, smr]  # (P, N, 3)
         tools = np.broadcast_to(moved.tool[:, None], (P, N, 4, 4)).copy()
         tools[..., :3, 3] = offsets
         links = type(moved.links)(*(v[:, None, :] for v in moved.links))
@@ -132,4 +135,4 @@ class Observation:
             if k is not None and temperature is not None:  # (P, N, n) scale of each displaced robot
                 links = scaled_links(links, thermal_scale(k, temperature,
                                                           robot.joint_errors.reference_temperature_c))
-        return chain_frames(links, moved.base[:, None], tools, q, prismatic=robot.prismatic)
+        return chain_frames(links, moved.base[:, None], tools, q, frames=frames, prismatic=robot.prismatic)

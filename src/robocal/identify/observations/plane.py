@@ -83,9 +83,19 @@ class PlaneObservation(Observation):
 
     def __init__(self, data, robot) -> None:
         super().__init__(data, robot)
+        self._index_planes(data, "plane contacts use the probe tip (the tool point)")
+        self.dependent_axis = self._choose_axes(self.modelled_points(robot))
+        d = self.dependent_axis
+        self.perm = np.stack([(d + 1) % 3, (d + 2) % 3, d], axis=1)  # (K, 3): u, v, d per plane
+        self.nuisance_names = [f"plane{pid}.{c}" for pid in self.plane_ids for c in "abc"]
+        self.nuisance_start(robot)  # raises when a plane's contacts are collinear
+
+    def _index_planes(self, data, tool_point: str) -> None:
+        """The planes of the rows (``plane_ids``, ``plane_of``, ``onehot (N, K)`` and the
+        least-squares ``fit_weights (N, K)``); IdentificationError for a row on an SMR (``tool_point``
+        says why) or a plane with fewer than `MIN_CONTACTS_PER_PLANE` contacts."""
         if self.smr.any():
-            raise IdentificationError("plane contacts use the probe tip (the tool point): the smr column "
-                                      "must be 0 on every row")
+            raise IdentificationError(f"{tool_point}: the smr column must be 0 on every row")
         self.plane_ids, self.plane_of = np.unique(np.asarray(data.plane, dtype=int), return_inverse=True)
         counts = np.bincount(self.plane_of, minlength=self.plane_ids.size)
         few = counts < MIN_CONTACTS_PER_PLANE
@@ -98,11 +108,6 @@ class PlaneObservation(Observation):
         self.onehot[np.arange(self.n_items), self.plane_of] = 1.0
         w = 1.0 if self.item_sigma is None else 1.0 / self.item_sigma**2
         self.fit_weights = self.onehot * np.broadcast_to(w, (self.n_items,))[:, None]  # (N, K)
-        self.dependent_axis = self._choose_axes(self.modelled_points(robot))
-        d = self.dependent_axis
-        self.perm = np.stack([(d + 1) % 3, (d + 2) % 3, d], axis=1)  # (K, 3): u, v, d per plane
-        self.nuisance_names = [f"plane{pid}.{c}" for pid in self.plane_ids for c in "abc"]
-        self.nuisance_start(robot)  # raises when a plane's contacts are collinear
 
     # ---------------------------------------------------------------- geometry
     def _choose_axes(self, points: np.ndarray) -> np.ndarray:

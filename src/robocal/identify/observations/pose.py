@@ -2,13 +2,15 @@
 
 The orientation residual is the rotation vector of R_measured R_model^T (rad), multiplied by
 ``length_scale`` (m) so both parts count in one norm: with the default 0.1 m, 1 mrad of
-orientation error weighs like 0.1 mm of position error.
+orientation error weighs like 0.1 mm of position error; rows declared taken with an instrument that
+documents both noises (a camera) start from their ratio (`robocal.data.instruments`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from robocal.data.instruments import INSTRUMENTS
 from robocal.identify.observations.base import Observation
 from robocal.kinematics.transforms import pose_error
 
@@ -18,13 +20,21 @@ DEFAULT_LENGTH_SCALE = 0.1
 class PoseObservation(Observation):
     kind = "pose"
     rows_per_item = 6
+    variance_groups = ("position", "rotation")  # rows per item: 3 of each (variance components)
 
-    def __init__(self, data, robot, length_scale: float = DEFAULT_LENGTH_SCALE) -> None:
+    def __init__(self, data, robot, length_scale: float | None = None) -> None:
         super().__init__(data, robot)
         self.measured = np.zeros((self.n_items, 4, 4))
         self.measured[:, :3, :3] = data.rotations
         self.measured[:, :3, 3] = data.points
         self.measured[:, 3, 3] = 1.0
+        declared = INSTRUMENTS[data.instrument].length_scale if data.instrument else 0.0
+        self.set_length_scale(length_scale or declared or DEFAULT_LENGTH_SCALE)
+
+    def set_length_scale(self, length_scale: float) -> None:
+        """Weigh a rad of orientation residual like ``length_scale`` m of position residual
+        (:mod:`robocal.identify.variance_components` estimates it)."""
+        self.length_scale = float(length_scale)
         self.scale = np.array([1.0, 1.0, 1.0, length_scale, length_scale, length_scale])
 
     def residuals(self, robot, nuisance=None) -> np.ndarray:

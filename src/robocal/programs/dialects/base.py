@@ -44,6 +44,7 @@ class Dialect:
     campaign_suffix = ""  # ... and its file suffix
     campaign_rank = 0  # the order poses writes the languages' programs in
     campaign_refuses_tracks = False  # its campaign programs are refused for an arm on a track
+    campaign_scara = False  # its campaign programs drive a SCARA (4 joints, the quill in mm)
     scheme: ConfigScheme | None = None
     n_values = 6  # pose numbers per target
     shared_decimals: tuple[tuple[int, ...], ...] = ()  # pose columns written at the file's finest decimals

@@ -38,12 +38,12 @@ def identifier(name: str, what: str, limit: int) -> str:
 
 
 def checked_joints(joints_deg: np.ndarray, speed_percent: float, settle_s: float,
-                   language: str) -> np.ndarray:
-    """``joints_deg`` as an ``(N, 6)`` float array, refused (DataError) when not finite or the
+                   language: str, joints: int = PROGRAM_JOINTS) -> np.ndarray:
+    """``joints_deg`` as an ``(N, joints)`` float array, refused (DataError) when not finite or the
     speed or settle time is out of range; ``language`` names the program in the message."""
     q = np.asarray(joints_deg, dtype=float)
-    if q.ndim != 2 or q.shape[1] != PROGRAM_JOINTS:
-        raise DataError(f"a {language} campaign program drives a {PROGRAM_JOINTS}-axis robot; this robot has "
+    if q.ndim != 2 or q.shape[1] != joints:
+        raise DataError(f"a {language} campaign program drives a {joints}-axis robot; this robot has "
                         f"{q.shape[-1]} joints")
     if not np.isfinite(q).all():
         raise DataError("joint values must be finite")

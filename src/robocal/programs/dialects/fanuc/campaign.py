@@ -14,6 +14,7 @@ from robocal.programs.dialects.writing import (
     DEFAULT_PROCEDURE,
     DEFAULT_SETTLE_S,
     DEFAULT_SPEED_PERCENT,
+    PROGRAM_JOINTS,
     ascii_comment,
     checked_joints,
     comment_lines,
@@ -25,19 +26,27 @@ TP_REMARK_WIDTH = 30  # characters of one FANUC TP remark line (! ...)
 
 TP_NAME_MAX = 36                   # R-30iB program names
 TP_DECIMALS = 4                    # TP stores single-precision joint values
+SCARA_JOINTS = 4                   # an SR-series arm: J1, J2, the quill J3, J4
 
 
 def fanuc_ls_program(joints_deg, name: str = "ROBOCAL_CAMPAIGN", *,
                      speed_percent: float = DEFAULT_SPEED_PERCENT, settle_s: float = DEFAULT_SETTLE_S,
-                     procedure: str = DEFAULT_PROCEDURE, comment: str = "") -> str:
-    """FANUC TP ``.ls`` text visiting ``joints_deg (N, 6)`` (catalog convention) in order."""
-    q = checked_joints(joints_deg, speed_percent, settle_s, "FANUC TP").copy()
+                     procedure: str = DEFAULT_PROCEDURE, comment: str = "", scara: bool = False) -> str:
+    """FANUC TP ``.ls`` text visiting ``joints_deg (N, 6)`` (catalog convention) in order; with
+    ``scara``, an SR-series arm's ``(N, 4)``: J1, J2, J4 in deg and the quill J3 in mm, as given
+    (no J2/J3 coupling on a SCARA)."""
+    q = checked_joints(joints_deg, speed_percent, settle_s, "FANUC TP", SCARA_JOINTS if scara
+                       else PROGRAM_JOINTS).copy()
     name = identifier(name, "the TP program name (the file name)", TP_NAME_MAX).upper()
     procedure = identifier(procedure, "the procedure (TP program) name", TP_NAME_MAX).upper()
-    q[:, 2] += J23_FACTOR * q[:, 1]
-    notes = [*comment_lines(comment, len(q)),
-             f"J3 is FANUC's (from the horizontal): catalog J3 + J2; {procedure} is a TP program of yours "
-             "that triggers the tracker (its argument: the pose number)"]
+    trigger = f"{procedure} is a TP program of yours that triggers the tracker (its argument: the pose " \
+        "number)"
+    if scara:
+        notes = [*comment_lines(comment, len(q)), f"J3 is the quill in mm; {trigger}"]
+    else:
+        q[:, 2] += J23_FACTOR * q[:, 1]
+        notes = [*comment_lines(comment, len(q)),
+                 f"J3 is FANUC's (from the horizontal): catalog J3 + J2; {trigger}"]
     body = ["  UFRAME_NUM=0 ;", "  UTOOL_NUM=0 ;"]
     for k in range(1, len(q) + 1):
         body += [f"J P[{k}] {max(1, round(speed_percent))}% FINE    ;",
@@ -56,6 +65,10 @@ def fanuc_ls_program(joints_deg, name: str = "ROBOCAL_CAMPAIGN", *,
     lines.append("/POS")
     for k, row in enumerate(q, start=1):
         v = [fixed_point(x, TP_DECIMALS) for x in row]
+        if scara:
+            lines += [f"P[{k}]{{", "   GP1:", "\tUF : 0, UT : 0,",
+                      f"\tJ1= {v[0]} deg,\tJ2= {v[1]} deg,\tJ3= {v[2]} mm,\tJ4= {v[3]} deg", "};"]
+            continue
         lines += [f"P[{k}]{{", "   GP1:", "\tUF : 0, UT : 0,",
                   f"\tJ1= {v[0]} deg,\tJ2= {v[1]} deg,\tJ3= {v[2]} deg,",
                   f"\tJ4= {v[3]} deg,\tJ5= {v[4]} deg,\tJ6= {v[5]} deg", "};"]

@@ -27,11 +27,12 @@ from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
 from robocal.core.io import short_repr
+from robocal.ik.scara import is_scara
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.dialects.base import Dialect
 from robocal.programs.dialects.fanuc import marker, simulated
 from robocal.programs.dialects.fanuc.campaign import fanuc_ls_program
-from robocal.programs.dialects.fanuc.configuration import FANUCConfig
+from robocal.programs.dialects.fanuc.configuration import SCARA, FANUCConfig
 from robocal.programs.dialects.fanuc.loads import FanucLoads, read_schedules
 from robocal.programs.dialects.fanuc.registers import ActiveFrames, read_registers
 from robocal.programs.model import Program, Target
@@ -44,6 +45,8 @@ _GROUP = re.compile(r"\bGP(\d+)\s*:")
 _FRAME_NO = re.compile(r"\b(UF|UT)\s*:\s*(\w+)")
 _CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d{1,3})\s*,"
                      r"\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*'")
+_SCARA_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([LR])\s*,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,"
+                           r"\s*([-+]?\d{1,3})\s*'")  # a SCARA's (SR-series): hand, three turns
 _VALUE = r"\b{}\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*(?:mm|deg)"
 _KEYS = ("X", "Y", "Z", "W", "P", "R")
 _VALUES = tuple(re.compile(_VALUE.format(k)) for k in _KEYS)
@@ -67,6 +70,7 @@ class FanucDialect(Dialect):
     key = "fanuc"
     campaign_rank = 3
     campaign_refuses_tracks = True
+    campaign_scara = True  # an SR-series arm: J1, J2, J4 in deg, the quill J3 in mm
     title = "FANUC TP (.ls)"
     signature = r"^/(?:PROG|MN|POS)\b"
     angle_unit = "deg"
@@ -88,6 +92,8 @@ class FanucDialect(Dialect):
         return read_schedules(path)
 
     def campaign_files(self, joints, robot, path, **options):
+        if is_scara(robot):  # joints in their units (deg; mm on the quill), no J2/J3 coupling
+            return {str(path): fanuc_ls_program(robot.joints_shown(joints), path.stem, scara=True, **options)}
         return {str(path): fanuc_ls_program(np.rad2deg(joints), path.stem, **options)}
 
     def mark(self, text, body, note):
@@ -110,8 +116,11 @@ class FanucDialect(Dialect):
 
     def config_edits(self, target, new):
         spans = target.config_spans  # (flip, up, front, t1, t4, t6) as (start, end, text)
-        letters = ("NF"[int(new[0])], "UD"[int(new[1])], "TB"[int(new[2])])
-        texts = [*letters, *(str(int(v)) for v in new[3:])]
+        if len(spans) == 4:  # a SCARA's (hand, t1, t2, t4)
+            texts = ["LR"[int(new[0])], *(str(int(v)) for v in new[3:])]
+        else:
+            letters = ("NF"[int(new[0])], "UD"[int(new[1])], "TB"[int(new[2])])
+            texts = [*letters, *(str(int(v)) for v in new[3:])]
         return {(a, b): t for (a, b, old), t in zip(spans, texts, strict=True) if old != t}
 
     def parse(self, sources, frames, tools, references=()):
@@ -166,11 +175,17 @@ class FanucDialect(Dialect):
                         or not all(fr[k].isdigit() and len(fr[k]) <= 3 for k in ("UF", "UT")):
                     raise DataError(f"{where}: position {name} needs numeric UF and UT, got {short_repr(fr)}")
                 c = _CONFIG.search(gp)
-                if not c:
-                    raise DataError(f"{where}: position {name}: CONFIG must read 'N|F U|D T|B, t1, t4, t6'")
-                row = np.array(["NF".index(c.group(1)), "UD".index(c.group(2)), "TB".index(c.group(3)),
-                                int(c.group(4)), int(c.group(5)), int(c.group(6))])
-                spans = [(a + c.start(k), a + c.end(k), c.group(k)) for k in range(1, 7)]
+                if c:
+                    row = np.array(["NF".index(c.group(1)), "UD".index(c.group(2)), "TB".index(c.group(3)),
+                                    int(c.group(4)), int(c.group(5)), int(c.group(6))])
+                    spans = [(a + c.start(k), a + c.end(k), c.group(k)) for k in range(1, 7)]
+                elif c := _SCARA_CONFIG.search(gp):
+                    row = np.array(["LR".index(c.group(1)), SCARA, SCARA,
+                                    *(int(c.group(k)) for k in (2, 3, 4))])
+                    spans = [(a + c.start(k), a + c.end(k), c.group(k)) for k in range(1, 5)]
+                else:
+                    raise DataError(f"{where}: position {name}: CONFIG must read 'N|F U|D T|B, t1, t4, t6' "
+                                    "(a SCARA's: 'L|R, t1, t2, t4')")
                 external = [f"{e} = {v}" for e, v in _EXTENDED.findall(gp) if float(v) != 0.0]
                 external += [f"motion group GP{g.group(1)}" for g in groups[1:]]
                 prog.targets.append(Target(src, m.start(), name, nums, frame=str(int(fr["UF"])),
