@@ -140,9 +140,9 @@ def _meca500_report(tmp_path_factory):
 
 
 @pytest.mark.parametrize("make, sections", [
-    (_demo_report, ["summary", "errors", "predicted-accuracy", "parameters", "model-selection",
+    (_demo_report, ["summary", "errors", "predicted-accuracy", "parameters", "priors", "model-selection",
                     "identifiability", "correlation", "rejected", "history"]),
-    (_meca500_report, ["summary", "errors", "predicted-accuracy", "parameters", "model-selection",
+    (_meca500_report, ["summary", "errors", "predicted-accuracy", "parameters", "priors", "model-selection",
                        "identifiability", "correlation", "history"]),
 ], ids=["demo", "real-meca500"])
 def test_real_reports_open_with_every_section(browser, tmp_path, tmp_path_factory, make, sections):

@@ -159,7 +159,7 @@ def test_predicted_sigma_matches_monte_carlo_spread():
     estimates, predicted = [], []
     for _ in range(100):
         noisy = Measurements.from_arrays("point", q, points=exact + rng.normal(0, 2e-5, exact.shape))
-        res = calibrate(irb2600(), noisy)
+        res = calibrate(irb2600(), noisy, nongeometric="none")  # the geometric model's posterior
         names = [n for n in res.names if not n.startswith("base.")]
         estimates.append(res.robot.values[res.robot.indices(names)])
         predicted.append(res.sigma[[res.unknowns.index(n) for n in names]])
