@@ -42,14 +42,15 @@ from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.kinematics.model import Robot
-from robocal.trust.gauge import gauge_free, gauge_of, scale_section, scale_text
+from robocal.trust.gauge import gauge_free, gauge_of, scale_section
 
 WORKSPACE_SAMPLES = 1000  # joint vectors of the workspace sample
 WORKSPACE_SEED = 0  # its seed: the same model gives the same figures
 EXTRAPOLATION_FACTOR = 3.0  # workspace RMS beyond this x the validated error: holds only near its poses
 COVERAGE_MIN_FRACTION = 0.5  # a joint whose calibration poses span less of its range is not covered
 DISTANCE_BINS = 8  # bins of the predicted error against the joint distance to the calibration poses
-SCALE_KEYS = ("reference", "nominal_mm", "prior_mm", "relative", "workspace_rms_mm")  # gauge.scale_section
+# the keys of robocal.trust.gauge.scale_section
+SCALE_KEYS = ("reference", "nominal_mm", "prior_mm", "relative", "workspace_rms_mm", "text")
 
 
 @dataclass(frozen=True)
@@ -234,7 +235,7 @@ def accuracy_line(section: dict) -> str:
     return (f"predicted accuracy{' ' + gauge if gauge else ''}: {ws['rms']:.4f} mm RMS (p95 "
             f"{ws['p95']:.4f}) over the workspace, {cal['rms']:.4f} mm RMS at the calibration poses; "
             f"validated {section['validated_mm']:.4f} mm ({section['validated_from']})"
-            + (f"; {scale_text(scale)}" if scale else ""))
+            + (f"; {scale['text']}" if scale else ""))
 
 
 def workspace_sample(robot, n: int = WORKSPACE_SAMPLES, seed: int = WORKSPACE_SEED) -> np.ndarray:

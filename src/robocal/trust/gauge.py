@@ -101,12 +101,9 @@ def scale_section(robot, gauge: Gauge, q: np.ndarray) -> dict | None:
     p = robot.fk(q)[:, :3, 3]
     spread = float(np.sqrt(np.mean(np.sum((p - p.mean(axis=0)) ** 2, axis=1))))
     relative = sigma / value if value > 0 and np.isfinite(sigma) else float("nan")
+    rms_mm = relative * spread * 1e3
+    text = (f"the scale rests on {gauge.scale}'s nominal {value * 1e3:.1f} mm: its prior "
+            f"{sigma * 1e3:.3g} mm ({relative * 100:.2g} %) is ±{rms_mm:.3g} mm RMS over the workspace, "
+            "not included")
     return {"reference": gauge.scale, "nominal_mm": value * 1e3, "prior_mm": sigma * 1e3,
-            "relative": relative, "workspace_rms_mm": relative * spread * 1e3}
-
-
-def scale_text(section: dict) -> str:
-    """The scale in words, for the predicted-accuracy line."""
-    return (f"the scale rests on {section['reference']}'s nominal {section['nominal_mm']:.1f} mm: its "
-            f"prior {section['prior_mm']:.3g} mm ({section['relative'] * 100:.2g} %) is "
-            f"±{section['workspace_rms_mm']:.3g} mm RMS over the workspace, not included")
+            "relative": relative, "workspace_rms_mm": rms_mm, "text": text}
