@@ -112,3 +112,19 @@ def test_contacts_clustered_in_one_corner_still_warn():
     truth = true_error_mm(result, sim.truth, scale=True)
     assert truth > 3 * pa["validated_mm"]  # the warning is true
     assert pa["workspace"]["rms"] > 1.3 * pa["calibration_region"]["rms"]
+
+
+def test_planes_with_a_scale_bar_are_up_to_a_rigid_motion_only():
+    """A scale bar gives contacts their length: the prediction is up to a rigid motion, not scale,
+    and the truth (rigid fit only) stays below it; tracker points give the world frame back."""
+    planes = simulate_tracker(ROBOT, 120, kind="plane", n_planes=3, seed=0, noise_mm=0.02,
+                              smr_offsets=np.zeros((1, 3)))
+    bar = simulate_tracker(planes.truth, 40, kind="distance", seed=1, noise_mm=0.02, as_is=True)
+    result = rc.calibrate(ROBOT, [planes.data, bar.data])
+    pa = result.predicted_accuracy
+    assert pa["gauge"] == "up to a rigid motion of the world (plane and distance data give no world frame)"
+    assert pa["scale"] is None and not pa["holds_only_near_poses"]
+    assert true_error_mm(result, planes.truth, scale=False) < pa["workspace"]["rms"]
+    points = simulate_tracker(planes.truth, 30, seed=2, as_is=True)
+    with_points = rc.calibrate(ROBOT, [planes.data, points.data])
+    assert "gauge" not in with_points.predicted_accuracy
