@@ -19,7 +19,7 @@ from robocal.data.kinds import FLUSH_TILT_LENGTH_M, OBSERVED
 from robocal.data.measurements import Measurements, parse_csv
 from robocal.data.registration import umeyama
 from robocal.data.simulate import sample_joints, simulate_tracker
-from robocal.identify.observations.flush import not_observable
+from robocal.identify.observations.flush import FlushObservation, not_observable
 from robocal.identify.problem import CalibrationProblem
 from robocal.identify.space import ParameterSpace
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
@@ -121,6 +121,21 @@ def test_blind_spots_are_named():
     n = IRB.n_joints
     blind = set(not_observable(IRB))  # the face normal along the flange's z: joint 6's axis
     assert {"tool.x", "tool.y", "tool.z", "tool.rz", f"d{n}", f"a{n}", f"theta{n}", "base.rz", "d4"} <= blind
+    # the spherical wrist's d5 moves the face within its plane: its column is round-off, its prior
+    # would predict mm over the workspace (the flush residual's Jacobian, the independent check)
+    assert f"d{n - 1}" in blind
+    sim = simulate_tracker(IRB, 40, kind="flush", n_planes=3, seed=2, noise_mm=0.01)
+    model = sim.truth
+    obs = FlushObservation(sim.data, model)
+    planes = obs.nuisance_start(model)
+
+    def column(name: str, h: float = 1e-6) -> np.ndarray:  # central differences of the residuals
+        return (obs.residuals(model.with_values({name: model.get(name) + h}), planes)
+                - obs.residuals(model.with_values({name: model.get(name) - h}), planes)) / (2 * h)
+
+    assert np.linalg.norm(column(f"d{n - 1}")) < 2e-3 * np.linalg.norm(column(f"a{n - 2}"))
+    skew = IRB.with_values({f"alpha{n}": IRB.get(f"alpha{n}") + 0.1})  # not square: d5 tilts the face
+    assert f"d{n - 1}" not in set(not_observable(skew))
     assert not {"tool.rx", "tool.ry", f"alpha{n}"} & blind
     along_x = IRB.with_frames(tool=make_transform(rotvec_to_matrix(np.array([0, np.pi / 2, 0])), np.zeros(3)))
     blind_x = set(not_observable(along_x))  # the face normal along the flange's x

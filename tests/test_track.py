@@ -178,3 +178,20 @@ def test_poses_plans_a_campaign_along_the_track(tmp_path):
     assert main(["--quiet", "poses", "--robot", f"{d}/track.yaml", "-n", "30", "-o", f"{d}/p2.csv",
                  "--rapid", f"{d}/p.mod"]) == 2
     assert not (tmp_path / "p2.csv").exists()
+
+
+def test_a_lift_is_not_called_a_track(cell):
+    """A prismatic joint 1 no cell file declares (a mobile manipulator's torso lift, a gantry axis):
+    the summary names its freedoms without the track's mount and encoder scale."""
+    from dataclasses import replace
+
+    from robocal.kinematics.cell import declares_track, first_joint_identifiability
+
+    lift = replace(cell, joint_errors=None, name="arm on a lift")
+    assert declares_track(cell) and not declares_track(lift)
+    assert first_joint_identifiability(Robot.from_catalog("kuka_kr210_r2700")) is None
+    sim = simulate_tracker(lift, 120, noise_mm=0.02, seed=5)
+    result = rc.calibrate(lift, sim.data, nongeometric="none")
+    summary = result.summary()
+    assert "prismatic joint 1 (a track, a lift, a gantry axis): its direction is the base frame" in summary
+    assert "track: its direction" not in summary and "scale1" not in summary

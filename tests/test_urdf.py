@@ -251,3 +251,16 @@ def test_cli_export_for_ros_puts_base_link_at_the_base_and_tool0_at_the_flange(t
                  "--frames", "model"]) == 0
     back = urdf_fk((tmp_path / "m.urdf").read_text(), q)
     np.testing.assert_allclose(back, measured.fk(q), atol=1e-9, rtol=0)
+
+
+def test_import_keeps_link_names_with_the_frame_each_rides_on():
+    """Each named link moves rigidly with the model frame it is mapped to: the URDF library's pose of
+    the link relative to the model's frame is the same at every configuration (independent truth)."""
+    robot = from_urdf(UR_LIKE)
+    assert robot.link_frames["base_link"] == 0 and robot.link_frames["wrist_3_link"] == 6
+    assert robot.link_frames["tool0"] == 6  # fixed after the last moving joint
+    q = np.random.default_rng(8).uniform(-np.pi, np.pi, (12, 6))
+    _, frames = robot.fk(q, frames=True)  # (N, 7, 4, 4): {0}..{6}
+    for link, j in robot.link_frames.items():
+        relative = np.linalg.inv(urdf_fk(UR_LIKE, q, tip=link, root="base_link")) @ frames[:, j]
+        np.testing.assert_allclose(relative, np.broadcast_to(relative[0], relative.shape), atol=1e-9)

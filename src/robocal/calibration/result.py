@@ -23,7 +23,7 @@ from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.identify.uncertainty import correlation, tcp_position_covariance
-from robocal.kinematics.cell import TRACK_IDENTIFIABILITY, is_track_cell
+from robocal.kinematics.cell import first_joint_identifiability
 from robocal.kinematics.model_file import dump_model
 from robocal.kinematics.thermal import groups_of as thermal_groups_of
 from robocal.kinematics.transforms import matrix_to_rotvec
@@ -538,8 +538,8 @@ class CalibrationResult(_BeforeAfter):
         ident, unused = self.identifiability, self.not_used
         lines += vocabulary.lines(ident, [n for n in ident.dropped if block_of(n) != "joint_errors"]
                                   + ident.undetermined)
-        if is_track_cell(self.robot):
-            lines.append(TRACK_IDENTIFIABILITY)
+        if first := first_joint_identifiability(self.start):
+            lines.append(first)
         if self.nongeometric is not None:
             ng = self.nongeometric
             out = [n for n in ng["dropped"] if n not in unused]

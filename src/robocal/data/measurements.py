@@ -58,7 +58,7 @@ from __future__ import annotations
 import csv
 import io
 import re
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -109,6 +109,29 @@ def _int_array(values, name: str, n: int) -> np.ndarray:
     elif arr.dtype.kind not in "iub":
         raise DataError(f"{name} must hold integers, got dtype {arr.dtype}")
     return arr.astype(np.int64)
+
+
+def _link_array(values, n: int) -> np.ndarray:
+    """A marker ``link`` column ``(n,)``: frame numbers (int >= 0), or, when a row names its link,
+    every row's text (str: a link name or a number; `Robot.link_numbers` resolves them)."""
+    arr = np.asarray(values)
+    if arr.dtype.kind in "UOS":
+        if arr.shape != (n,):
+            raise DataError(f"link must have shape ({n},), got {arr.shape}")
+        texts = np.array([str(v).strip() for v in arr], dtype=str)
+        if (texts == "").any():
+            raise DataError(f"row {int(np.argmax(texts == ''))}: a marker's link is empty: give its frame "
+                            "number or its link's name")
+        numeric = np.char.isdigit(np.char.lstrip(texts, "+-"))
+        if not numeric.all():
+            if (np.char.startswith(texts[numeric], "-")).any():
+                raise DataError("link indices must be >= 0 (0 is the robot's base frame, n its flange)")
+            return texts
+        arr = texts.astype(np.int64)
+    out = _int_array(arr, "link", n)
+    if out.min() < 0:
+        raise DataError("link indices must be >= 0 (0 is the robot's base frame, n its flange)")
+    return out
 
 
 def _float_array(values, name: str, shape: tuple) -> np.ndarray:
@@ -164,8 +187,10 @@ class Measurements:
         The file it was read from ("" when built from arrays).
     notes : tuple of str
         How the reader interpreted the file (e.g. repeated readings).
-    link : numpy.ndarray of int, shape (N,), optional
-        The frame of the model carrying each row's marker (``marker``; None: the flange).
+    link : numpy.ndarray of int or str, shape (N,), optional
+        The frame of the model carrying each row's marker (``marker``; None: the flange): frame
+        numbers (int), or when the rows name links, their texts (str: a model's link names, e.g. a
+        URDF's ``arm_left_4_link``, or numbers), which `Robot.link_numbers` resolves.
     instrument : str
         The instrument that took the rows (``tracker``, ``mocap``, ``camera``;
         `robocal.data.instruments`); "" when the data do not say.
@@ -203,7 +228,7 @@ class Measurements:
     notes: tuple[str, ...] = ()  # how the reader interpreted the file (e.g. repeated readings)
     linear: np.ndarray | None = None  # (n,) bool: joints in length units (m: prismatic); None: all angles
     external: int = 0  # the first ``external`` joints are external axes (e1..): a track carrying the arm
-    link: np.ndarray | None = None  # (N,) int: the frame {0..n} carrying each marker (``marker``)
+    link: np.ndarray | None = None  # (N,) int: the frame {0..n} carrying each marker (``marker``); str: names
     instrument: str = ""  # the instrument that took the rows (`robocal.data.instruments`); "" undeclared
 
     @property
@@ -275,10 +300,11 @@ class Measurements:
             Joints in metres (prismatic, e.g. a track).
         external : int, optional
             How many leading joints are external axes (written as e1.. columns).
-        link : array_like of int, shape (N,), optional
+        link : array_like of int or str, shape (N,), optional
             The frame carrying each row's marker (``marker``): 0 the robot's base frame {0}, i the
             frame after joint i, n the flange (the default; see
-            `robocal.identify.observations.marker`).
+            `robocal.identify.observations.marker`), or the name of its link in the model
+            (`robocal.kinematics.model.Robot.link_frames`, a URDF's link names).
         instrument : str, optional
             The instrument that took the rows (`robocal.data.instruments`: tracker, mocap, camera).
 
@@ -344,9 +370,7 @@ class Measurements:
             if (d2[:, 0] != d2[:, 1]).any() or (d2 <= 0).any():
                 raise DataError("both rows of a distance pair must carry the same positive distance")
         if link is not None:
-            kw["link"] = _int_array(link, "link", N)
-            if kw["link"].min() < 0:
-                raise DataError("link indices must be >= 0 (0 is the robot's base frame, n its flange)")
+            kw["link"] = _link_array(link, N)
         smr = np.zeros(N, np.int64) if smr is None else _int_array(smr, "smr", N)
         if smr.min() < 0:
             raise DataError("smr indices must be >= 0 (0 is the tool)")
@@ -610,8 +634,8 @@ class Measurements:
         if self.kind != _columns_kind(set(cols)):
             out.write(f"# kind: {self.kind}\n")
         out.write(",".join(cols) + "\n")
-        fmt = [(lambda v: str(int(v))) if np.asarray(c).dtype.kind in "iu" else (lambda v: repr(float(v)))
-               for c in cols.values()]
+        fmt = [(lambda v: str(int(v))) if np.asarray(c).dtype.kind in "iu" else str
+               if np.asarray(c).dtype.kind == "U" else (lambda v: repr(float(v))) for c in cols.values()]
         columns = list(cols.values())
         for r in range(len(self)):
             out.write(",".join(f(c[r]) for f, c in zip(fmt, columns, strict=True)) + "\n")
@@ -852,6 +876,20 @@ def _columns_kind(columns: set[str]) -> str:
     return (marked or ["point"])[0]
 
 
+def _coded_links(lines: Iterable[str], index: int, texts: dict[str, int]) -> Iterator[str]:
+    """The CSV ``lines`` with the ``link`` field (column ``index``) of each data row replaced by the
+    code of its text in ``texts`` (filled as the lines are read; a link name is no number for the
+    numeric reader), as a row's other fields are."""
+    for line in lines:
+        fields = line.split(",")
+        if len(fields) <= index or line.lstrip().startswith("#") or not line.replace(",", "").strip():
+            yield line
+            continue
+        text = fields[index].strip().strip('"').strip()
+        fields[index] = str(texts.setdefault(text, len(texts))) if text else ""
+        yield ",".join(fields)
+
+
 def _split_csv(text: str, name: str) -> tuple[str, dict, int, list[str], Iterator[str]]:
     """(provenance comment, the ``# NAME: value`` directives, header line number, the header row,
     the lines below it, read as they are consumed: no list of every line)."""
@@ -973,8 +1011,11 @@ def _declared_kind(columns_kind: str, declared: str | None, name: str) -> str:
     return declared
 
 
-def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) -> dict:
-    """The kind's observation arrays (SI) from the columns; unit errors name the line."""
+def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str,
+              link_texts: np.ndarray | None = None) -> dict:
+    """The kind's observation arrays (SI) from the columns (a ``link`` column of names: its
+    ``link_texts``, which the column's codes index: :func:`_coded_links`); unit errors name the
+    line."""
     def length(c: str) -> np.ndarray:
         h = next(h for h in col if roles[h][0] == c)
         return col[h] * roles[h][2]
@@ -999,7 +1040,7 @@ def _observed(kind: str, col: dict, roles: dict, line_no: list[int], name: str) 
     if "plane" in spec.arrays:
         kw["plane"] = col[spec.column].astype(np.int64)
     if "link" in spec.optional and "link" in col:
-        kw["link"] = col["link"].astype(np.int64)
+        kw["link"] = col["link"] if link_texts is None else link_texts[col["link"].astype(np.int64)]
     if "pair" in spec.arrays:
         kw["pair"] = col["pair"].astype(np.int64)
         kw["distance"] = length("distance")
@@ -1073,6 +1114,9 @@ def parse_csv(text: str, name: str = "<text>", max_joint_rad: float = MAX_JOINT_
     roles = _column_roles(header, name, header_line)
     joint_cols = _joint_columns(roles, name)
     kind = _declared_kind(_data_kind(roles, name), directives.get("kind"), name)
+    texts: dict[str, int] = {}
+    if "link" in header:  # markers' links may be named: the reader sees their codes
+        rows = _coded_links(rows, header.index("link"), texts)
     table, line_no = read_table(rows, header, name, header_line)
     col = {h: table[:, i] for i, h in enumerate(header)}
     joints = np.stack([col[h] * roles[h][2] for h in joint_cols], axis=1)
@@ -1083,7 +1127,7 @@ def parse_csv(text: str, name: str = "<text>", max_joint_rad: float = MAX_JOINT_
         turns = f"> {max_joint_rad / (2 * np.pi):g} turns"
         raise UnitError(f"{name}, line {ln}: joint values up to {np.abs(joints).max():.4g} rad ({turns}): "
                         "these look like degrees; name the columns q1_deg..")
-    kw = _observed(kind, col, roles, line_no, name)
+    kw = _observed(kind, col, roles, line_no, name, np.array(list(texts), dtype=str) if texts else None)
     approach = _per_joint(col, roles, "approach", len(joint_cols), name)
     approach = None if approach is None else approach.astype(np.int64)
     travel = _per_joint(col, roles, "travel", len(joint_cols), name)

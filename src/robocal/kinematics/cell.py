@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.core.errors import ModelError
+from robocal.kinematics.cell_file import TRACK_SCALE
 from robocal.kinematics.convert import opw_chain
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
@@ -16,6 +17,29 @@ TRACK_IDENTIFIABILITY = (
     "arm is identifiable): the track axis is the base frame's z (base.*), the arm's first axis seen "
     "from the carriage is alpha2/theta2, the encoder scale is scale1; where the carriage frame sits on "
     "the track (theta1, d1, a2, d2) is the base frame's own freedom")
+# The same freedoms for any other prismatic joint 1 (a lift, a gantry axis: no cell file declares a track)
+PRISMATIC_FIRST_IDENTIFIABILITY = (
+    "prismatic joint 1 (a track, a lift, a gantry axis): its direction is the base frame's z (base.*), "
+    "the next joint's axis seen from what it carries is alpha2/theta2{scale}; where that frame sits "
+    "along the axis (theta1, d1, a2, d2) is the base frame's own freedom")
+
+
+def declares_track(robot: Robot) -> bool:
+    """Whether ``robot`` is a track cell as a cell file builds it (:func:`is_track_cell` with the
+    track encoder's scale term ``scale1`` declared), not any chain whose joint 1 slides."""
+    return is_track_cell(robot) and TRACK_SCALE in robot.joint_error_names
+
+
+def first_joint_identifiability(robot: Robot) -> str | None:
+    """What a calibration of a robot whose joint 1 is prismatic (``robot``: the model it started
+    from) identifies of that axis, in words: the track's sentence for a declared track
+    (:func:`declares_track`), the general one for a lift or a gantry axis; None otherwise."""
+    if declares_track(robot):
+        return TRACK_IDENTIFIABILITY
+    if not robot.prismatic[0]:
+        return None
+    return PRISMATIC_FIRST_IDENTIFIABILITY.format(
+        scale=", its encoder scale scale1" if TRACK_SCALE in robot.joint_error_names else "")
 
 
 def is_track_cell(robot: Robot) -> bool:

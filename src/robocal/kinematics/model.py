@@ -38,6 +38,7 @@ from robocal.kinematics.convert import dh_kwargs, mdh_kwargs, opw_chain, opw_kwa
 from robocal.kinematics.fk import LinkArrays, chain_fk, chain_frames
 from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import JointErrorModel
+from robocal.kinematics.link_names import check_link_frames, link_numbers
 from robocal.kinematics.model_file import (
     LINK_FIELDS,
     MAX_NAME,
@@ -198,6 +199,9 @@ class Robot:
         Extra SMR offsets on the flange, metres (SMR 0 is the tool).
     joint_errors : JointErrorModel or None
         The non-geometric terms that `fk` applies (compliance, backlash, cyclic errors...).
+    link_frames : dict or None
+        The model's link names (a URDF's) and the frame {0..n} each moves with
+        (`robocal.kinematics.link_names`): markers may name their link; None: the model names none.
     priors : PriorSpec or None
         What the model file (or `with_priors`) says about the parameter priors: the robot's class
         and group scales (`robocal.kinematics.prior_spec`, docs/priors.md); None: the class is
@@ -244,6 +248,7 @@ class Robot:
     joint_errors: JointErrorModel | None = None
     prismatic: np.ndarray | None = None
     priors: PriorSpec | None = None
+    link_frames: dict[str, int] | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.alpha).size
@@ -289,6 +294,8 @@ class Robot:
             raise ModelError("joint_errors must be a JointErrorModel (robocal.kinematics.joint_errors)")
         if self.priors is not None and not isinstance(self.priors, PriorSpec):
             raise ModelError("priors must be a PriorSpec (robocal.kinematics.prior_spec)")
+        if self.link_frames is not None:
+            set_(self, "link_frames", check_link_frames(self.link_frames, n))
         set_(self, "nominal", self._nominal_vector(self.nominal))
         for f in (*LINK_FIELDS, "base", "tool", "limits", "parallel", "smr", "nominal", "prismatic"):
             getattr(self, f).flags.writeable = False
@@ -857,6 +864,12 @@ class Robot:
     def links(self) -> LinkArrays:
         """The link arrays (alpha, a, beta, theta, d), each ``(n,)``, as the kinematics kernels take them."""
         return LinkArrays(self.alpha, self.a, self.beta, self.theta, self.d)
+
+    def link_numbers(self, links) -> np.ndarray:
+        """The frame numbers ``(N,)`` (0 the base .. n the flange) of markers' links ``links (N,)``:
+        numbers, or the names of this model's links (`link_frames`); DataError for an unknown name,
+        listing the known ones (`robocal.kinematics.link_names.link_numbers`)."""
+        return link_numbers(links, self.link_frames, self.name)
 
     def check_joints(self, q) -> np.ndarray:
         """Joints as a ``(N, n)`` float array (rad; m for prismatic joints); raises DataError on

@@ -17,6 +17,7 @@ catalog, for the user's own robot and for :meth:`Robot.save`. docs/model-yaml.md
     nominal: {name: value, ...}         # optional: the nominal model (every parameter)
     joint_errors: {parameters: {name: value}}         # optional non-geometric terms (SI)
     priors: {class: service, zeros: 3deg, lengths: 10mm}  # optional: robocal.kinematics.prior_spec
+    link_frames: {arm_left_4_link: 4, ...}  # optional: link names (a URDF's) -> frame 0..n
 
 With a table form, ``base`` and ``tool`` wrap the frames the conversion produces (world ->
 the table's base frame, the table's flange -> TCP); with ``joints`` rows they are the model's
@@ -42,6 +43,7 @@ from robocal.core.magnitudes import check_model_units
 from robocal.core.yaml_load import dump_yaml, load_yaml
 from robocal.kinematics.convert import default_parallel, dh_kwargs, mdh_kwargs, opw_kwargs, opw_parameters
 from robocal.kinematics.joint_errors import JointErrorModel
+from robocal.kinematics.link_names import check_link_frames
 from robocal.kinematics.opw import GEOMETRY, OPWParameters
 from robocal.kinematics.prior_spec import PriorSpec
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
@@ -51,7 +53,7 @@ LINK_FIELDS = ("alpha", "a", "beta", "theta", "d")
 FORMS = ("opw", "dh", "mdh", "joints")
 INFO_KEYS = ("reach_mm", "payload_kg")  # the vendor's figures (catalog listing only; no effect on the model)
 _TOP_KEYS = {"format", "name", "description", "units", "limits", "base", "tool", "smr", "nominal",
-             "joint_errors", "priors", *INFO_KEYS, *FORMS}
+             "joint_errors", "priors", "link_frames", *INFO_KEYS, *FORMS}
 _JOINT_KEYS = {*LINK_FIELDS, "type", "limits", "parallel_to_previous"}
 JOINT_TYPES = ("revolute", "prismatic")
 MAX_NAME = 200  # characters of a model's name
@@ -249,6 +251,8 @@ def robot_kwargs(data) -> dict:
         kw["joint_errors"] = JointErrorModel.from_dict(data["joint_errors"], n)
     if data.get("priors") is not None:
         kw["priors"] = PriorSpec.from_mapping(data["priors"])
+    if data.get("link_frames") is not None:
+        kw["link_frames"] = check_link_frames(data["link_frames"], n)
     kw["name"] = _text(data.get("name", "robot"), "name", MAX_NAME)
     kw["description"] = _text(data.get("description", ""), "description", MAX_DESCRIPTION)
     if data.get("nominal") is not None:  # a name -> value mapping (SI), resolved by the Robot
@@ -292,6 +296,8 @@ def robot_to_dict(robot) -> dict:
         out["joint_errors"] = robot.joint_errors.to_dict()
     if robot.priors is not None and (given := robot.priors.to_dict()):
         out["priors"] = given
+    if robot.link_frames:
+        out["link_frames"] = dict(robot.link_frames)
     return out
 
 

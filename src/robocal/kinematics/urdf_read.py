@@ -151,7 +151,9 @@ def urdf_kwargs(source, tip: str | None = None, name: str | None = None,
     prismatic and fixed joints; text, or a path to a file).
 
     ``tip`` is the end link (default: the leaf link reached through the most moving joints,
-    e.g. ``tool0``); fixed joints along the chain are folded into the geometry. Consecutive
+    e.g. ``tool0``); fixed joints along the chain are folded into the geometry. The chain's link
+    names are kept with the frame each moves with (``link_frames``: the root's 0, a moving joint's
+    child its number, a link fixed after it the same). Consecutive
     axes closer than ``parallel_tol_deg`` to parallel are modelled with beta (flagged
     ``parallel``). The result's FK from the URDF root link to ``tip`` equals the URDF's.
     """
@@ -159,9 +161,11 @@ def urdf_kwargs(source, tip: str | None = None, name: str | None = None,
     chain = _chain(root, tip)
     T = np.eye(4)
     points, dirs, limits, prismatic = [], [], [], []
+    link_frames = {chain[0].find("parent").get("link"): 0} if chain else {}
     for j in chain:
         jname, jtype = j.get("name"), j.get("type")
         T = T @ _joint_origin(j, f"joint {jname!r}")
+        link_frames[j.find("child").get("link")] = len(dirs) + (jtype != "fixed")
         if jtype == "fixed":
             continue
         if jtype not in ("revolute", "continuous", "prismatic"):
@@ -193,9 +197,10 @@ def urdf_kwargs(source, tip: str | None = None, name: str | None = None,
             limits.append([-2 * np.pi, 2 * np.pi])
     if not dirs:
         raise ModelError("URDF chain has no moving joint")
-    return _lines_to_chain(np.array(points), np.array(dirs), T, np.array(limits),
-                           name or root.get("name") or "robot", np.sin(np.deg2rad(parallel_tol_deg)),
-                           np.array(prismatic))
+    kw = _lines_to_chain(np.array(points), np.array(dirs), T, np.array(limits),
+                         name or root.get("name") or "robot", np.sin(np.deg2rad(parallel_tol_deg)),
+                         np.array(prismatic))
+    return {**kw, "link_frames": link_frames}
 
 
 def _closest_on_line(p: np.ndarray, z: np.ndarray, x: np.ndarray) -> np.ndarray:

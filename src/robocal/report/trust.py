@@ -24,8 +24,10 @@ def headline(result: dict) -> list[str]:
     ws, cal = pa.get("workspace") or {}, pa.get("calibration_region") or {}
     if ws.get("rms") is not None:
         cls = "bad" if pa.get("holds_only_near_poses") else "good"
-        lines.append(f"Predicted accuracy over the workspace: <b class='{cls}'>{num(ws['rms'])} mm RMS</b> "
-                     f"(p95 {num(ws.get('p95'))} mm); at the calibration poses {num(cal.get('rms'))} mm"
+        gauge = f" {esc(pa['gauge'])}" if pa.get("gauge") else ""
+        lines.append(f"Predicted accuracy{gauge} over the workspace: <b class='{cls}'>{num(ws['rms'])} mm "
+                     f"RMS</b> (p95 {num(ws.get('p95'))} mm); at the calibration poses "
+                     f"{num(cal.get('rms'))} mm"
                      + (" &mdash; <b class='bad'>the calibration holds only near its poses</b>"
                         if pa.get("holds_only_near_poses") else ""))
     return lines
@@ -61,6 +63,9 @@ def section(result: dict) -> str | None:
             f"against the validated {num(pa['validated_mm'])} mm ({esc(pa.get('validated_from'))}). "
             f"Predicted from the parameters' posterior covariance and the unmodelled error "
             f"({num(pa.get('unmodelled_mm'))} mm) at {esc(ws.get('samples'))} joint vectors uniform in "
-            "the limits (seeded).</figcaption></figure>"
+            "the limits (seeded)"
+            + (f", {esc(pa['gauge'])}" if pa.get("gauge") else "")
+            + (f"; {esc(pa['scale'].get('text'))}" if pa.get("scale") else "")
+            + ".</figcaption></figure>"
             f"<table><tr><th>joint</th><th>calibration poses{shown}</th><th>limits{shown}</th>"
             f"<th>covered</th></tr>{''.join(rows)}</table>")

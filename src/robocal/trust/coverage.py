@@ -21,6 +21,11 @@ poses themselves. When the workspace RMS exceeds :data:`EXTRAPOLATION_FACTOR` ti
 validated error (the validation RMS, else ``u``), the calibration holds only near its poses: the
 warning names the joints whose calibration poses span less than :data:`COVERAGE_MIN_FRACTION` of
 their range. :meth:`Prediction.error_mm` is the per-target API (``compensate --result``).
+
+Data measured in no frame of the robot's world (plane and flush contacts, distances) promise
+accuracy only up to a rigid motion of the world, and without a length reference up to scale: their
+prediction is the error left after that motion (:mod:`robocal.trust.gauge`), the line says so, and
+the scale's prior is reported apart.
 """
 
 from __future__ import annotations
@@ -37,25 +42,32 @@ from robocal.identify.problem import CalibrationProblem
 from robocal.identify.solvers import SolverResult
 from robocal.identify.space import ParameterSpace, State, block_of
 from robocal.kinematics.model import Robot
+from robocal.trust.gauge import gauge_free, gauge_of, scale_section
 
 WORKSPACE_SAMPLES = 1000  # joint vectors of the workspace sample
 WORKSPACE_SEED = 0  # its seed: the same model gives the same figures
 EXTRAPOLATION_FACTOR = 3.0  # workspace RMS beyond this x the validated error: holds only near its poses
 COVERAGE_MIN_FRACTION = 0.5  # a joint whose calibration poses span less of its range is not covered
 DISTANCE_BINS = 8  # bins of the predicted error against the joint distance to the calibration poses
+# the keys of robocal.trust.gauge.scale_section
+SCALE_KEYS = ("reference", "nominal_mm", "prior_mm", "relative", "workspace_rms_mm", "text")
 
 
 @dataclass(frozen=True)
 class Prediction:
     """What predicts the TCP error anywhere: the robot parameters ``names`` and their posterior
     covariance ``(k, k)`` (SI), the unmodelled error ``unmodelled_mm`` (3-D RMS) and the validated
-    error ``validated_mm`` it is compared with (and where that figure comes from)."""
+    error ``validated_mm`` it is compared with (and where that figure comes from); for data without
+    a world frame the ``gauge`` the errors are up to (``'up to a rigid motion of the world and
+    scale (why)'``) and the ``scale`` its prior leaves (:func:`robocal.trust.gauge.scale_section`)."""
 
     names: tuple[str, ...]
     covariance: np.ndarray
     unmodelled_mm: float
     validated_mm: float
     validated_from: str
+    gauge: str = ""
+    scale: dict | None = None
 
     def error_mm(self, robot, q) -> np.ndarray:
         """Predicted RMS TCP position error ``(N,)`` (mm) of ``robot`` (the calibrated model) at
@@ -77,7 +89,7 @@ class Prediction:
     def to_dict(self) -> dict:
         return {"names": list(self.names), "covariance_si": self.covariance.tolist(),
                 "unmodelled_mm": self.unmodelled_mm, "validated_mm": self.validated_mm,
-                "validated_from": self.validated_from}
+                "validated_from": self.validated_from, "gauge": self.gauge, "scale": self.scale}
 
     @classmethod
     def from_dict(cls, d: dict) -> Prediction:
@@ -85,8 +97,10 @@ class Prediction:
         try:
             names = tuple(str(n) for n in d["names"])
             cov = np.asarray(d["covariance_si"], dtype=float).reshape(len(names), len(names))
+            scale = d.get("scale")
             out = cls(names, cov, float(d["unmodelled_mm"]), float(d["validated_mm"]),
-                      str(d["validated_from"]))
+                      str(d["validated_from"]), str(d.get("gauge") or ""),
+                      None if scale is None else {k: scale[k] for k in SCALE_KEYS})
         except (KeyError, TypeError, ValueError) as exc:
             raise DataError(f"the result's predicted_accuracy.model is malformed ({exc}): use a result "
                             "JSON written by robocal calibrate") from None
@@ -204,16 +218,24 @@ def prediction(result: Fit) -> Prediction:
         u, source = float(ms["candidates"][ms["chosen"]]["cv_rms_mm"]), "cross-validated"
     validated, vsource = (result.validation["rms"], "on the validation data") if result.judged \
         else (u, source)
-    return Prediction(tuple(names[i] for i in keep), cov[np.ix_(keep, keep)], u, max(validated, 1e-6),
-                      vsource)
+    names, cov = [names[i] for i in keep], cov[np.ix_(keep, keep)]
+    gauge = gauge_of(problem.observations, robot)
+    if gauge is None:
+        return Prediction(tuple(names), cov, u, max(validated, 1e-6), vsource)
+    q_ws = workspace_sample(robot)
+    names, cov = gauge_free(robot, names, cov, gauge, q_ws)
+    return Prediction(tuple(names), cov, u, max(validated, 1e-6), vsource,
+                      f"{gauge.text} ({gauge.why})", scale_section(robot, gauge, q_ws))
 
 
 def accuracy_line(section: dict) -> str:
     """The one-line summary of a ``predicted_accuracy`` section."""
     ws, cal = section["workspace"], section["calibration_region"]
-    return (f"predicted accuracy: {ws['rms']:.4f} mm RMS (p95 {ws['p95']:.4f}) over the workspace, "
-            f"{cal['rms']:.4f} mm RMS at the calibration poses; validated {section['validated_mm']:.4f} mm "
-            f"({section['validated_from']})")
+    gauge, scale = section.get("gauge"), section.get("scale")
+    return (f"predicted accuracy{' ' + gauge if gauge else ''}: {ws['rms']:.4f} mm RMS (p95 "
+            f"{ws['p95']:.4f}) over the workspace, {cal['rms']:.4f} mm RMS at the calibration poses; "
+            f"validated {section['validated_mm']:.4f} mm ({section['validated_from']})"
+            + (f"; {scale['text']}" if scale else ""))
 
 
 def workspace_sample(robot, n: int = WORKSPACE_SAMPLES, seed: int = WORKSPACE_SEED) -> np.ndarray:
@@ -281,6 +303,8 @@ def predict(robot, prediction: Prediction, q_cal: np.ndarray) -> tuple[dict, lis
            "unmodelled_mm": prediction.unmodelled_mm, "ratio": ratio, "factor": EXTRAPOLATION_FACTOR,
            "holds_only_near_poses": ratio > EXTRAPOLATION_FACTOR, "coverage": joints,
            "by_distance": _by_distance(robot, q_ws, q_cal, ws), "model": prediction.to_dict()}
+    if prediction.gauge:
+        out.update(gauge=prediction.gauge, scale=prediction.scale)
     warnings = []
     if out["holds_only_near_poses"]:
         narrow = [j for j in joints if j["fraction"] < COVERAGE_MIN_FRACTION]
@@ -288,8 +312,9 @@ def predict(robot, prediction: Prediction, q_cal: np.ndarray) -> tuple[dict, lis
             covered_text(robot, j) for j in narrow)) if narrow else \
             "; measure poses spread over the workspace"
         ws_rms, ws_p95 = out["workspace"]["rms"], out["workspace"]["p95"]
-        warnings.append(f"the calibration holds only near its poses: predicted {ws_rms:.3g} mm RMS (p95 "
-                        f"{ws_p95:.3g}) over the workspace against {prediction.validated_mm:.3g} mm "
+        up_to = f" {prediction.gauge}" if prediction.gauge else ""
+        warnings.append(f"the calibration holds only near its poses: predicted{up_to} {ws_rms:.3g} mm RMS "
+                        f"(p95 {ws_p95:.3g}) over the workspace against {prediction.validated_mm:.3g} mm "
                         f"{prediction.validated_from} ({ratio:.3g} x, beyond {EXTRAPOLATION_FACTOR:g} x)"
                         + where)
     return out, warnings

@@ -27,6 +27,9 @@ class Observation:
     rows_per_item = 1
     nuisance_names: list[str] = []
     blind_spot = ""  # why :meth:`not_observable` is not empty, for the result's warnings
+    # the data are measured in the robot's world (a tracker's, an instrument's frame): False for
+    # contacts and distances, whose calibration holds up to a rigid motion (robocal.trust.gauge)
+    world_frame = True
 
     def __init__(self, data, robot) -> None:
         self.data = data
@@ -43,6 +46,11 @@ class Observation:
     def not_observable(self, robot) -> list[str]:
         """Parameters this kind of data can never identify ('auto' leaves them out)."""
         return []
+
+    def scale_reference(self, robot) -> str | None:
+        """The length parameter held at nominal for the scale when the data carry no length
+        reference (plane, flush contacts), else None."""
+        return None
 
     def check_enough(self, n_unknowns: int) -> None:
         """Raise IdentificationError when the data are too few for ``n_unknowns`` (kinds with a

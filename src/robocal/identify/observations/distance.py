@@ -23,6 +23,7 @@ class DistanceObservation(Observation):
     kind = "distance"
     rows_per_item = 1
     blind_spot = "distances do not see the base frame"
+    world_frame = False
 
     def not_observable(self, robot) -> list[str]:
         return not_observable(robot)

@@ -40,7 +40,10 @@ What flush contacts cannot see (``params='auto'`` leaves it out, :func:`not_obse
   axis, else the identifiability analysis holds that combination. With the normal along the
   flange's z, the last joint's axis, also that joint's zero ``theta_n`` (a rotation about the
   normal) and ``a_n`` (a translation along ``x_{n-1}``, perpendicular to the last axis: always
-  within the face's plane).
+  within the face's plane); when the last twist is square as well (``z_{n-1}`` perpendicular to
+  ``z_n`` within ``FACE_AXIS_TOL_RAD``: a spherical wrist), ``d_{n-1}``, a translation along
+  ``z_{n-1}`` that is always within the face's plane too (its column is the round-off of the
+  faces' small tilts: held by its prior, it would predict its prior's error over the workspace).
 """
 
 from __future__ import annotations
@@ -76,7 +79,8 @@ def not_observable(robot) -> list[str]:
     translation and the last link's ``d_n`` (a translation fixed in the flange frame); when the face
     normal lies along a flange axis, the tool's rotation about it, and when that axis is the last
     joint's (flange z) also that joint's zero ``theta_n`` and ``a_n`` (a translation along
-    ``x_{n-1}``, always in the face's plane)."""
+    ``x_{n-1}``, always in the face's plane), and with a square last twist also ``d_{n-1}`` (along
+    ``z_{n-1}``, in the face's plane too)."""
     n = robot.n_joints
     names = [f"base.{f}" for f in ("x", "y", "z", "rx", "ry", "rz")] + [scale_reference(robot)]
     names += ["tool.x", "tool.y", "tool.z", f"d{n}"]
@@ -85,6 +89,8 @@ def not_observable(robot) -> list[str]:
         names.append(f"tool.r{'xyz'[axis]}")
     if axis == 2:
         names += [f"a{n}", f"theta{n}"]
+        if n > 1 and abs(np.cos(robot.get(f"alpha{n}"))) < np.sin(FACE_AXIS_TOL_RAD):
+            names.append(f"d{n - 1}")
     return list(dict.fromkeys(names))
 
 

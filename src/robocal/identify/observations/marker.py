@@ -49,7 +49,7 @@ class MarkerObservation(Observation):
     def __init__(self, data, robot) -> None:
         super().__init__(data, robot)
         n = robot.n_joints
-        self.link = np.full(len(data), n) if data.link is None else np.asarray(data.link, int)
+        self.link = np.full(len(data), n) if data.link is None else robot.link_numbers(data.link)
         if self.link.max() > n:
             raise IdentificationError(f"link {int(self.link.max())} does not exist: {robot.name} has frames "
                                       f"0 (its base) to {n} (its flange)")

@@ -74,9 +74,13 @@ class PlaneObservation(Observation):
     kind = "plane"
     rows_per_item = 1
     blind_spot = "plane contacts carry no length reference and do not see the base frame"
+    world_frame = False
 
     def not_observable(self, robot) -> list[str]:
         return not_observable(robot)
+
+    def scale_reference(self, robot) -> str:
+        return scale_reference(robot)
 
     def check_enough(self, n_unknowns: int) -> None:
         check_enough_contacts(self.n_items, n_unknowns)
