@@ -345,7 +345,7 @@ def main(argv: list[str] | None = None) -> int:
             for split in range(ps.n_splits(name, args.splits)):
                 runs.append(run_split(name, root, split, not peer_why, Path(tmp)))
                 print(f"  {runs[-1]['description']}" if split == 0 else f"    split {split}: "
-                      + runs[-1]["description"].split("; ")[1], flush=True)
+                      + "; ".join(runs[-1]["description"].split("; ")[1:]), flush=True)
             rows.append(_row(name, "robocal default", runs[0]["robocal"]))
             if "figaroh" in runs[0]:
                 fig = runs[0]["figaroh"]

@@ -199,3 +199,20 @@ def test_bench_summarises_several_splits(tmp_path, capsys):
     assert float(row[2]) < 5 * NOISE_M * 1e3 * np.sqrt(3)  # mean held-out RMS over the 3 splits
     with pytest.raises(SystemExit):
         bench_peers.main(["--data", str(tmp_path), "--splits", "0"])
+
+
+def test_a_judged_pose_with_a_typed_joint_typo_is_named_and_left_out(tmp_path):
+    """Another day's pose the nominal model misses by far more than any honest pose (a typo in a
+    typed joint) is not judged, and the note names its CSV line; the others are all kept."""
+    p = _fake_data(tmp_path)
+    robot = peer_sets.nominal("ur10_point", tmp_path)
+    spec = peer_sets.SPECS["ur10_point"]
+    day = peer_sets.read_session(tmp_path / spec.files[0], spec)
+    kept, notes = peer_sets.without_typos(day, robot, pose_6d=False)
+    assert len(kept.joints) == len(p) and notes == []
+    joints = day.joints.copy()
+    joints[7, 2] *= -1  # a sign typed wrong
+    typo = peer_sets.Session(joints, day.markers, None, day.rows, day.file, day.ids)
+    kept, notes = peer_sets.without_typos(typo, robot, pose_6d=False)
+    assert len(kept.joints) == len(p) - 1 and 9 not in kept.rows  # pose 7 is CSV line 9
+    assert "CSV lines 9 not judged" in notes[0]
