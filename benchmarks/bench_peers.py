@@ -311,8 +311,10 @@ def split_summary(name: str, runs: list[dict]) -> list:
     ours, peer, nominal = rms("robocal"), rms("figaroh"), rms("nominal")
     both = np.isfinite(peer)
     wins = f"{int(np.sum(np.asarray(ours)[both] <= np.asarray(peer)[both]))} of {int(both.sum())}"
-    notes = sorted({r["robocal"]["note"].split(";")[0] for r in runs if r["robocal"]["note"]}
-                   | {r["figaroh"]["failed"] for r in runs if "failed" in r.get("figaroh", {})})
+    refused = sum(1 for r in runs if r["robocal"]["note"])
+    failed = sum(1 for r in runs if "failed" in r.get("figaroh", {}))
+    notes = ([f"robocal refused by default on {refused} (figures with force=True)"] if refused else []) + \
+        ([f"FIGAROH failed on {failed}"] if failed else [])
     return [name, len(runs), _spread(ours), _spread(peer), _spread(nominal),
             wins if both.any() else "", "; ".join(notes)]
 
