@@ -2,9 +2,10 @@
 data (TALOS, TIAGo within a session and the next day, UR10 with a camera, MATE), both on the same
 fixed split (``benchmarks/peer_sets.py``), held-out position error in mm, measured in one run.
 
-``python benchmarks/bench_peers.py [--data DIR] [--only NAME] [--robocal-only] [--liao DIR]``. The data folder
-holds FIGAROH's repositories (``--data``, else ``$ROBOCAL_FIGAROH_DATA``, else the download cache
-``~/.cache/robocal/figaroh``, filled when online); without it the benchmark says why and skips.
+``python benchmarks/bench_peers.py [--data DIR] [--only NAME] [--robocal-only] [--liao DIR]
+[--splits K]``. The data folder holds FIGAROH's repositories (``--data``, else
+``$ROBOCAL_FIGAROH_DATA``, else the download cache ``~/.cache/robocal/figaroh``, filled when
+online); without it the benchmark says why and skips.
 FIGAROH itself is the optional ``peers`` extra (``pip install robocal[peers]``); without it the
 FIGAROH rows are skipped with the reason.
 
@@ -18,6 +19,14 @@ marker entry per marker of the set) and the example's ``solve`` arguments. Both 
 the held-out markers predicted by each calibrated model in its fitted measurement frame, against
 the measured ones (3-D distance per marker and pose: RMS, mean, max); for the next-day set the
 frame is fitted again (rigid motion only) on the judging session for both.
+
+With ``--splits K`` (default 1, or ``$ROBOCAL_PEER_SPLITS``: what ``benchmarks/run.py peers``
+records) each set is also run on its first K fixed splits (``peer_sets.py``: split 0 the default,
+then random thirds with fixed seeds; the next-day set has two, one per calibrating day), both tools
+on each, and a second table gives per set the mean and spread (sample standard deviation) over
+the splits of the held-out RMS of robocal's default, of FIGAROH and of the nominal model with
+its frame registered on the calibration poses, and the number of splits robocal wins (its RMS at
+or below FIGAROH's).
 
 Without ``--only`` it also measures robocal's default on the IRB 120 campaign published with
 Wu et al. 2015 (``benchmarks/liao_irb120.py``: ``--liao DIR`` or ``$ROBOCAL_LIAO_DATA``) on the
@@ -84,6 +93,13 @@ def judged(pred: np.ndarray, meas: np.ndarray, refit: bool) -> dict:
     return stats_mm(pred - meas)
 
 
+def run_nominal(s: ps.PeerSet, refit: bool) -> dict:
+    """The nominal model, its measurement frame (and SMRs) registered on the calibration poses,
+    judged like a calibrated one: the figure a calibration has to beat."""
+    model = rc.register(s.robot, s.calibration)
+    return judged(model.fk(s.held_out.joints, smr=s.held_out.smr)[:, :3, 3], s.held_out.points, refit)
+
+
 def run_robocal(s: ps.PeerSet, refit: bool) -> dict:
     """robocal's default calibration (what ``robocal calibrate`` runs) judged on the held-out poses."""
     held = s.held_out
@@ -128,8 +144,9 @@ def _figaroh_robot(urdf: Path, models: Path):
     return pin.RobotWrapper(pin.buildModelFromUrdf(str(urdf)))
 
 
-def run_figaroh(name: str, root: Path, workdir: Path) -> dict:
-    """FIGAROH's example calibration of set ``name`` on the same calibration poses, judged alike."""
+def run_figaroh(name: str, root: Path, workdir: Path, split: int = 0) -> dict:
+    """FIGAROH's example calibration of set ``name`` on the same calibration poses (split number
+    ``split``), judged alike."""
     import yaml
     from figaroh.calibration.base_calibration import BaseCalibration
     from figaroh.calibration.calibration_tools import calc_updated_fkm
@@ -137,7 +154,7 @@ def run_figaroh(name: str, root: Path, workdir: Path) -> dict:
 
     spec = ps.SPECS[name]
     robot_rc = ps.nominal(name, root)
-    cal, held, _ = ps.sessions(name, root, robot_rc)
+    cal, held, _ = ps.sessions(name, root, robot_rc, split)
     ids = sorted(set(cal.ids) | set(held.ids))
     module, cls, config, solve_kw = FIGAROH_RUNS[name]
     example = root / spec.example
@@ -235,6 +252,7 @@ def figaroh_missing() -> str:
     return ""
 
 
+SPLITS_ENV = "ROBOCAL_PEER_SPLITS"  # --splits' default: how many splits benchmarks/run.py records
 PAPER_IRB120_MM = {"mean": 0.266, "max": 0.525}  # Wu et al. 2015's own method on its 40 test points
 
 
@@ -262,14 +280,57 @@ def _row(name: str, tool: str, r: dict) -> list:
     return [name, tool, f"{r['rms']:.3f}", f"{r['mean']:.3f}", f"{r['max']:.3f}", r["n"], r["note"]]
 
 
+def run_split(name: str, root: Path, split: int, peer: bool, workdir: Path) -> dict:
+    """Both tools (FIGAROH when ``peer``) and the registered nominal model on split ``split`` of
+    set ``name``: {"robocal", "figaroh", "nominal"} -> statistics dict (FIGAROH's failure: a dict
+    with ``failed``), and the set's ``description``."""
+    s = ps.load(name, root, split)
+    refit = name in ps.REFIT_FRAME
+    out = {"description": s.description, "robocal": run_robocal(s, refit), "nominal": run_nominal(s, refit)}
+    if peer:
+        try:
+            out["figaroh"] = run_figaroh(name, root, workdir, split)
+        except Exception as exc:  # noqa: BLE001 - the peer's failure is a result to report
+            out["figaroh"] = {"failed": f"failed: {type(exc).__name__}: {str(exc)[:120]}"}
+    return out
+
+
+def _spread(values: list[float]) -> str:
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    if not len(v):
+        return ""
+    return f"{v.mean():.3f} ± {v.std(ddof=1):.3f}" if len(v) > 1 else f"{v[0]:.3f}"
+
+
+def split_summary(name: str, runs: list[dict]) -> list:
+    """One row of the multi-split table: the set, its splits, mean ± sd of the held-out RMS (mm) of
+    robocal's default, FIGAROH and the registered nominal model, and robocal's wins."""
+    def rms(tool):
+        return [r[tool]["rms"] if tool in r and "rms" in r[tool] else np.nan for r in runs]
+    ours, peer, nominal = rms("robocal"), rms("figaroh"), rms("nominal")
+    both = np.isfinite(peer)
+    wins = f"{int(np.sum(np.asarray(ours)[both] <= np.asarray(peer)[both]))} of {int(both.sum())}"
+    refused = sum(1 for r in runs if r["robocal"]["note"])
+    failed = sum(1 for r in runs if "failed" in r.get("figaroh", {}))
+    notes = ([f"robocal refused by default on {refused} (figures with force=True)"] if refused else []) + \
+        ([f"FIGAROH failed on {failed}"] if failed else [])
+    return [name, len(runs), _spread(ours), _spread(peer), _spread(nominal),
+            wins if both.any() else "", "; ".join(notes)]
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", help=f"folder with FIGAROH's repositories (default ${ps.DATA_ENV})")
     parser.add_argument("--only", choices=sorted(ps.SETS), help="one set")
     parser.add_argument("--robocal-only", action="store_true", help="skip FIGAROH")
+    parser.add_argument("--splits", type=int, default=int(os.environ.get(SPLITS_ENV, "1")),
+                        help=f"run the first K fixed splits of each set (default ${SPLITS_ENV} or 1)")
     parser.add_argument("--liao", help="the IRB 120 campaign of Wu et al. 2015 (default "
                                        f"${liao_irb120.DATA_ENV}); absent: that table is skipped")
     args = parser.parse_args([] if argv is None and __name__ != "__main__" else argv)
+    if args.splits < 1:
+        parser.error(f"--splits must be at least 1, got {args.splits}")
     if not args.only:
         irb120_paper(args.liao)
     root, why = find_data(args.data)
@@ -279,21 +340,27 @@ def main(argv: list[str] | None = None) -> int:
     peer_why = "--robocal-only" if args.robocal_only else figaroh_missing()
     if peer_why:
         print(f"(FIGAROH rows skipped: {peer_why})")
-    rows = []
+    rows, summary = [], []
     with tempfile.TemporaryDirectory() as tmp:
         for name in [args.only] if args.only else list(ps.SETS):
-            s = ps.load(name, root)
-            print(f"  {s.description}", flush=True)
-            refit = name in ps.REFIT_FRAME
-            rows.append(_row(name, "robocal default", run_robocal(s, refit)))
-            if not peer_why:
-                try:
-                    rows.append(_row(name, "FIGAROH example", run_figaroh(name, root, Path(tmp))))
-                except Exception as exc:  # noqa: BLE001 - the peer's failure is a result to report
-                    rows.append([name, "FIGAROH example", "", "", "", "", f"failed: {type(exc).__name__}: "
-                                 f"{str(exc)[:120]}"])
+            runs = []
+            for split in range(ps.n_splits(name, args.splits)):
+                runs.append(run_split(name, root, split, not peer_why, Path(tmp)))
+                print(f"  {runs[-1]['description']}" if split == 0 else f"    split {split}: "
+                      + "; ".join(runs[-1]["description"].split("; ")[1:]), flush=True)
+            rows.append(_row(name, "robocal default", runs[0]["robocal"]))
+            if "figaroh" in runs[0]:
+                fig = runs[0]["figaroh"]
+                rows.append([name, "FIGAROH example", "", "", "", "", fig["failed"]] if "failed" in fig
+                            else _row(name, "FIGAROH example", fig))
+            summary.append(split_summary(name, runs))
     table("FIGAROH's example data: held-out marker position error, mm (same split, same run)",
           ["set", "tool", "RMS", "mean", "max", "points", "note"], rows, key="peers")
+    if args.splits > 1:
+        table(f"FIGAROH's example data over {args.splits} fixed splits (next day: 2): held-out RMS, mm, "
+              "mean ± sd over the splits (same splits, same run)",
+              ["set", "splits", "robocal default", "FIGAROH example", "nominal, frame registered",
+               "robocal wins", "note"], summary, key="peers_splits")
     return 0
 
 

@@ -153,3 +153,66 @@ def test_liao_campaign_places_the_test_point_from_its_reading_at_zero(tmp_path, 
     assert len(campaign.test_joints) == 40
     assert liao_irb120.test_errors_mm(truth, campaign).max() < 1e-6  # the true model: exact
     assert liao_irb120.test_errors_mm(rc.calibrate(truth, campaign.calibration).robot, campaign).max() < 1e-3
+
+
+def test_splits_are_fixed_disjoint_and_cover_the_session(tmp_path):
+    """Split 0 is every third pose; splits 1.. hold out as many poses drawn with fixed seeds: the
+    same on every call, different between splits, calibration and held-out disjoint and complete."""
+    for n in (10, 34, 61):
+        np.testing.assert_array_equal(np.flatnonzero(peer_sets.held_out_mask(n, 0)), np.arange(2, n, 3))
+        masks = [peer_sets.held_out_mask(n, k) for k in range(1, 6)]
+        for k, m in enumerate(masks, start=1):
+            assert m.sum() == n // peer_sets.HOLD_EVERY
+            np.testing.assert_array_equal(m, peer_sets.held_out_mask(n, k))  # deterministic
+        assert len({m.tobytes() for m in masks}) == len(masks)  # distinct splits
+    with pytest.raises(ValueError, match="split must be >= 0"):
+        peer_sets.held_out_mask(10, -1)
+    p = _fake_data(tmp_path)
+    for k in range(4):
+        s = peer_sets.load("ur10_pose", tmp_path, split=k)
+        cal, held = s.calibration.points, s.held_out.points
+        assert len(cal) + len(held) == len(p) and len(held) == len(p) // 3
+        rows = {tuple(r) for r in np.round(np.vstack([cal, held]), 12)}
+        assert len(rows) == len(p)  # disjoint, and together every pose
+        again = peer_sets.load("ur10_pose", tmp_path, split=k)
+        np.testing.assert_array_equal(again.held_out.points, held)
+        assert (f"split {k}, a random third" in s.description) == (k > 0)
+
+
+def test_next_day_has_two_splits_and_judges_the_markers_calibrated():
+    assert peer_sets.n_splits("tiago_next_day", 10) == 2 and peer_sets.n_splits("tiago_next_day", 1) == 1
+    assert peer_sets.n_splits("tiago", 10) == 10
+    day = peer_sets.Session(np.zeros((2, 8)), np.arange(24.0).reshape(2, 4, 3), None, np.array([2, 3]),
+                            Path("a.csv"), (0, 1, 2, 3))
+    seen = day.with_markers((0, 1, 3))  # the other day saw markers 0, 1 and 3: renumbered 0, 1, 2
+    assert seen.ids == (0, 1, 2)
+    np.testing.assert_array_equal(seen.markers, day.markers[:, [0, 1, 3]])
+
+
+def test_bench_summarises_several_splits(tmp_path, capsys):
+    _fake_data(tmp_path)
+    assert bench_peers.main(["--data", str(tmp_path), "--only", "ur10_point", "--robocal-only",
+                             "--splits", "3"]) == 0
+    out = capsys.readouterr().out
+    assert "split 2: calibration.csv: split 2, a random third held out" in out
+    row = next(line for line in out.splitlines() if line.split()[:2] == ["ur10_point", "3"]).split()
+    assert float(row[2]) < 5 * NOISE_M * 1e3 * np.sqrt(3)  # mean held-out RMS over the 3 splits
+    with pytest.raises(SystemExit):
+        bench_peers.main(["--data", str(tmp_path), "--splits", "0"])
+
+
+def test_a_judged_pose_with_a_typed_joint_typo_is_named_and_left_out(tmp_path):
+    """Another day's pose the nominal model misses by far more than any honest pose (a typo in a
+    typed joint) is not judged, and the note names its CSV line; the others are all kept."""
+    p = _fake_data(tmp_path)
+    robot = peer_sets.nominal("ur10_point", tmp_path)
+    spec = peer_sets.SPECS["ur10_point"]
+    day = peer_sets.read_session(tmp_path / spec.files[0], spec)
+    kept, notes = peer_sets.without_typos(day, robot, pose_6d=False)
+    assert len(kept.joints) == len(p) and notes == []
+    joints = day.joints.copy()
+    joints[7, 2] *= -1  # a sign typed wrong
+    typo = peer_sets.Session(joints, day.markers, None, day.rows, day.file, day.ids)
+    kept, notes = peer_sets.without_typos(typo, robot, pose_6d=False)
+    assert len(kept.joints) == len(p) - 1 and 9 not in kept.rows  # pose 7 is CSV line 9
+    assert "CSV lines 9 not judged" in notes[0]
