@@ -124,7 +124,8 @@ def _chain(root: ET.Element, tip: str | None) -> list[ET.Element]:
     best = max(moving.values(), default=0)
     tips = [leaf for leaf in leaves if moving[leaf] == best]
     if best == 0 or len(tips) > 1:
-        raise ModelError(f"cannot choose the URDF chain's tip link among {tips or leaves}; pass tip=...")
+        raise ModelError(f"cannot choose the URDF chain's tip link among {tips or leaves}: name the "
+                         "chain's last link (--tip LINK on the command line, tip= in Python)")
     return path_to(tips[0])
 
 
