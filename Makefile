@@ -43,6 +43,8 @@ bench: $(STAMP)
 	$(PY) -m pip install --quiet -e '.[bench]'
 	@# pybotics (a peer in bench_calibrate) pins numpy < 2 but runs on numpy 2: install it alone
 	$(PY) -m pip install --quiet --no-deps pybotics || echo "pybotics not installed: its row is skipped"
+	@# FIGAROH (the peer of bench_peers) brings pinocchio and its own stack: optional, like its data
+	$(PY) -m pip install --quiet -e '.[peers]' || echo "figaroh not installed: bench_peers' FIGAROH rows are skipped"
 	$(PY) benchmarks/run.py
 
 lint: $(STAMP)
