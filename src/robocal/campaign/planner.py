@@ -26,9 +26,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 import robocal.campaign.constraints as cons
-from robocal.campaign.exchange import CRITERIA, ExchangeResult, criterion_value, exchange_search
+from robocal.campaign.exchange import CRITERIA, ExchangeResult, averaged_search
 from robocal.campaign.files import CandidateFile, poses_csv
-from robocal.campaign.information import Information, candidate_data, candidate_information
+from robocal.campaign.hypotheses import mean_criterion, smr_hypotheses
+from robocal.campaign.information import candidate_data, candidate_information
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
 from robocal.campaign.unmodelled import DEFAULT_TERMS, mean_square, measured_values, search, unmodelled_error
@@ -476,6 +477,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     noise = Noise(sigma_m=float(noise_mm) * 1e-3, model=noise_model,
                   tracker_position=None if tracker is None else tracker.position,
                   rotation_sigma_rad=np.deg2rad(float(rotation_noise_deg)))
+    smr_given = smr
     plan_robot, smr, normals = _planning_robot(robot, smr, smr_normals)
     geometry = replace(robot, smr=np.zeros((0, 3)), nominal=None, joint_errors=None)  # flange = tool
     rng = np.random.default_rng(seed)
@@ -544,18 +546,22 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
             measured = None
     um = unmodelled_error(plan_robot, data, noise, info, q_region, float(unmodelled_mm or 0.0),
                           unmodelled_terms, shown)
+    unknown_smr = (smr_given is None and len(smr) == 1 and file_data is None and um is None
+                   and criterion in ("I", "D"))
+    problems = [(info.G, A, info.prior)] if not unknown_smr else \
+        _smr_problems(robot, kind, q, visible, noise, params, q_region, smr[0], normals[:1])
 
     def predicted(indices) -> float:  # m^2: the mean squared TCP error over the region
-        return criterion_value(info.G, A, indices, "I", info.prior) if um is None else \
+        return mean_criterion(problems, indices) if um is None else \
             mean_square(info.G, A, info.prior, um, indices)
 
     with Progress(int(starts) + len(values), "poses", quiet=progress is not True) as bar:
-        found = exchange_search(info.G, A, n, criterion=criterion, starts=int(starts), seed=seed,
-                                conflicts=conflicts, progress=bar, prior=info.prior)
+        found = averaged_search(problems, n, criterion=criterion, starts=int(starts), seed=seed,
+                                conflicts=conflicts, progress=bar)
         if um is not None:
             found = ExchangeResult(*search(info.G, A, info.prior, um, found.indices, conflicts,
                                            np.random.default_rng([seed, 2]), int(starts)))
-        points = _curve(info, A, values, criterion, seed, conflicts, bar, (n, found.indices), predicted)
+        points = _curve(problems, values, criterion, seed, conflicts, bar, (n, found.indices), predicted)
     weights = default_weights(robot)
     chosen = found.indices[measuring_order(robot, cand_q[found.indices], weights)]
     if file_data is None:  # one output row per pose, with the SMRs it shows
@@ -596,6 +602,20 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         source=source, source_rows=None if source is None else source.rows[index], warnings=warnings)
 
 
+def _smr_problems(robot, kind: str, q: np.ndarray, visible: np.ndarray, noise: Noise, params,
+                  q_region: np.ndarray, smr: np.ndarray, normal: np.ndarray) -> list[tuple]:
+    """``(G, A, prior)`` of the candidates ``q (C, n)`` with the SMR at each point of
+    :func:`robocal.campaign.hypotheses.smr_hypotheses` around the nominal ``smr (3,)`` m (flange
+    frame): the hypotheses the criterion is averaged over when the SMR's place is not given."""
+    problems = []
+    for point in smr_hypotheses(smr):  # a loop over the four quadrature points
+        hyp_robot = _planning_robot(robot, point[None], normal)[0]
+        data = candidate_data(hyp_robot, kind, q, visible[:, :1])
+        hyp = candidate_information(hyp_robot, data, noise, params)
+        problems.append((hyp.G, hyp.region_matrix(hyp_robot, q_region), hyp.prior))
+    return problems
+
+
 def _given_joints(candidates, file_data) -> np.ndarray:
     """Candidate joints: every row of contact / distance data, else one row per distinct pose."""
     if isinstance(candidates, CandidateFile):
@@ -613,10 +633,11 @@ def _positions(chosen: np.ndarray, values: np.ndarray) -> np.ndarray:
     return order[np.searchsorted(chosen, values, sorter=order)]
 
 
-def _curve(info: Information, A, values, criterion, seed, conflicts, bar, main,
-           predicted) -> list[CurvePoint]:
-    """Predicted accuracy (``predicted(indices)``, m^2) against the number of poses: each N
-    warm-started from the previous."""
+def _curve(problems, values, criterion, seed, conflicts, bar, main, predicted) -> list[CurvePoint]:
+    """Predicted accuracy (``predicted(indices)``, m^2) against the number of poses, the designs
+    searched for the hypotheses ``problems`` (``(G, A, prior)`` each): each N warm-started from the
+    previous."""
+    C = len(problems[0][0])
     points = []
     rng = np.random.default_rng([seed, 1])
     previous = None
@@ -625,9 +646,9 @@ def _curve(info: Information, A, values, criterion, seed, conflicts, bar, main,
             idx = main[1]
         else:
             init = previous if previous is not None and len(previous) <= n else None
-            idx = exchange_search(info.G, A, n, criterion=criterion, starts=DEFAULT_STARTS, seed=seed,
-                                  conflicts=conflicts, init=init, prior=info.prior).indices
-        random = [predicted(rng.choice(len(info.G), n, replace=False)) for _ in range(CURVE_RANDOM_DESIGNS)]
+            idx = averaged_search(problems, n, criterion=criterion, starts=DEFAULT_STARTS, seed=seed,
+                                  conflicts=conflicts, init=init).indices
+        random = [predicted(rng.choice(C, n, replace=False)) for _ in range(CURVE_RANDOM_DESIGNS)]
         points.append(CurvePoint(n, float(np.sqrt(predicted(idx)) * 1e3),
                                  float(np.sqrt(np.median(random)) * 1e3)))
         previous = idx
