@@ -28,7 +28,7 @@ import numpy as np
 import robocal.campaign.constraints as cons
 from robocal.campaign.exchange import CRITERIA, ExchangeResult, averaged_search
 from robocal.campaign.files import CandidateFile, poses_csv
-from robocal.campaign.hypotheses import mean_criterion, smr_hypotheses
+from robocal.campaign.hypotheses import SMR_BOX_MM, mean_criterion, smr_hypotheses
 from robocal.campaign.information import candidate_data, candidate_information
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
@@ -110,6 +110,10 @@ class CampaignResult:
         Which SMRs the tracker sees at each pose.
     predicted_rms_mm : float
         Predicted RMS error of the calibrated model's TCP position over the region, mm.
+    predicted_heldout_mm : float
+        Predicted 3-D RMS of held-out check measurements over the region, mm: the model's error
+        and the measurement's own noise (the noise model's, or the residual of the measured
+        candidates' calibration: the noise the data show).
     criterion : str
         The design criterion (``'I'``, ``'D'`` or ``'O4'``) and ``criterion_value`` its value.
     identifiability : Identifiability
@@ -158,6 +162,7 @@ class CampaignResult:
     candidate_index: np.ndarray
     visible: np.ndarray
     predicted_rms_mm: float
+    predicted_heldout_mm: float
     criterion: str
     criterion_value: float
     identifiability: Identifiability
@@ -224,7 +229,9 @@ class CampaignResult:
         lines = [f"{self.n} poses of {self.robot.name} ({self.kind} measurements) chosen from "
                  f"{self.n_candidates} candidates ({self.criterion}-optimal)",
                  f"predicted accuracy: {self.predicted_rms_mm:.4f} mm RMS of the TCP position over the "
-                 f"region (noise {noise})",
+                 f"region (noise {noise}); held-out check measurements: {self.predicted_heldout_mm:.4f} mm "
+                 f"RMS (with their own noise, {self.settings['heldout_noise_mm']:.4g} mm 3-D RMS from "
+                 f"{self.settings['heldout_noise_from']})",
                  f"{vocabulary.counts(ident)}; condition number {ident.condition_number:.3g} "
                  f"({ident.condition_class}); " + " ".join(f"{k} {v:.3g}" for k, v in o.items()),
                  f"measuring order: weighted travel {self.travel:.4g} (in the search's order "
@@ -245,7 +252,7 @@ class CampaignResult:
             "format": FORMAT, "robocal_version": __version__,
             "robot": self.robot.section(),
             "kind": self.kind, "criterion": self.criterion, "n_poses": self.n,
-            "predicted_rms_mm": self.predicted_rms_mm,
+            "predicted_rms_mm": self.predicted_rms_mm, "predicted_heldout_mm": self.predicted_heldout_mm,
             "noise": {"model": self.noise.model, "sigma_mm": self.noise.sigma_m * 1e3},
             "joints_deg": [[float(fixed_point(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv (mm on
                            for row in shown[:, k:]],                           # a prismatic joint)
@@ -536,9 +543,13 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                  if constraints.min_joint_distance_deg > 0 else None)
     values = _curve_values(curve, n, n_min, C)
     shown, warnings = None, []
+    heldout_noise = _noise_rms(noise, plan_robot.fk(q_region)[:, :3, 3]) if OBSERVED[kind].sees_position \
+        else noise.sigma_m  # a contact's or a distance's one residual
+    heldout_from = "the noise model"
     if measured is not None:
         try:
-            shown = measured_values(robot, measured, unmodelled_terms)
+            shown, residual_mm = measured_values(robot, measured, unmodelled_terms)
+            heldout_noise, heldout_from = residual_mm * 1e-3, "the residual of the candidates' calibration"
         except RobocalError as e:  # placeholder points, too few poses: plan for the noise alone
             warnings.append(f"the candidates' measurements do not show their unmodelled error ({e}): "
                             "planned for the measurement noise alone; give unmodelled_mm (--unmodelled-mm) "
@@ -580,9 +591,11 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     if len(smr) == 1 and np.linalg.norm(smr[0, :2]) < 1e-6 and OBSERVED[kind].several_smrs:
         warnings.append("the SMR is on the flange axis: the last joint's zero offset cannot be identified; "
                         "give the SMR's position on the flange (smr / --smr-mm) if it is off the axis")
+    model_ms = predicted(chosen)
     return CampaignResult(
         robot=plan_robot, kind=kind, joints=joints, candidate_index=index, visible=visible_out,
-        predicted_rms_mm=float(np.sqrt(predicted(chosen)) * 1e3),
+        predicted_rms_mm=float(np.sqrt(model_ms) * 1e3),
+        predicted_heldout_mm=float(np.sqrt(model_ms + heldout_noise**2) * 1e3),
         criterion=criterion, criterion_value=found.value, identifiability=separate(
             info.analyze_subset(chosen), unidentifiable(plan_robot, kind, info.all_names, max(len(smr), 1)),
             plan_robot),
@@ -595,7 +608,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                   "unmodelled_terms": [] if um is None else list(um.terms),
                   "unmodelled_from": "the candidates' measurements" if measured is not None else
                                      "given" if unmodelled_mm else "none (noise only)",
-                  "region": region_from,
+                  "region": region_from, "smr_prior_box_mm": SMR_BOX_MM if unknown_smr else 0.0,
+                  "heldout_noise_mm": heldout_noise * 1e3, "heldout_noise_from": heldout_from,
                   "min_joint_distance_deg": constraints.min_joint_distance_deg,
                   "smr_mm": (smr * 1e3).tolist(), "smr_normals": normals.tolist(),
                   "tracker_mm": None if tracker is None else (tracker.position * 1e3).tolist()},
@@ -607,13 +621,21 @@ def _smr_problems(robot, kind: str, q: np.ndarray, visible: np.ndarray, noise: N
     """``(G, A, prior)`` of the candidates ``q (C, n)`` with the SMR at each point of
     :func:`robocal.campaign.hypotheses.smr_hypotheses` around the nominal ``smr (3,)`` m (flange
     frame): the hypotheses the criterion is averaged over when the SMR's place is not given."""
-    problems = []
+    problems, structure = [], None
     for point in smr_hypotheses(smr):  # a loop over the four quadrature points
         hyp_robot = _planning_robot(robot, point[None], normal)[0]
         data = candidate_data(hyp_robot, kind, q, visible[:, :1])
-        hyp = candidate_information(hyp_robot, data, noise, params)
+        hyp = candidate_information(hyp_robot, data, noise, params, structure)  # one structure off the axis
         problems.append((hyp.G, hyp.region_matrix(hyp_robot, q_region), hyp.prior))
+        structure = hyp.structure
     return problems
+
+
+def _noise_rms(noise: Noise, points: np.ndarray) -> float:
+    """The 3-D RMS (m) of the measurement noise at ``points (R, 3)`` m (robot base frame):
+    ``sqrt(mean trace(Sigma))`` of the noise model's covariances (``sqrt(3) sigma`` isotropic)."""
+    W = noise.whitener(points)
+    return float(np.sqrt(np.mean(np.trace(np.linalg.inv(np.swapaxes(W, 1, 2) @ W), axis1=1, axis2=2))))
 
 
 def _given_joints(candidates, file_data) -> np.ndarray:
