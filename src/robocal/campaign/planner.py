@@ -26,13 +26,20 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 import robocal.campaign.constraints as cons
-from robocal.campaign.exchange import CRITERIA, ExchangeResult, averaged_search
+from robocal.campaign.exchange import CRITERIA, ExchangeResult, averaged_search, criterion_value
 from robocal.campaign.files import CandidateFile, poses_csv
 from robocal.campaign.hypotheses import SMR_BOX_MM, mean_criterion, smr_hypotheses
-from robocal.campaign.information import candidate_data, candidate_information
+from robocal.campaign.information import Information, candidate_data, candidate_information
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
-from robocal.campaign.unmodelled import DEFAULT_TERMS, mean_square, measured_values, search, unmodelled_error
+from robocal.campaign.unmodelled import (
+    DEFAULT_TERMS,
+    Unmodelled,
+    mean_square,
+    measured_values,
+    search,
+    unmodelled_error,
+)
 from robocal.core.errors import DataError, RobocalError
 from robocal.core.io import write_all
 from robocal.core.progress import Progress
@@ -521,6 +528,15 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
             if len(whole) < len(given):
                 funnel.record("distances missing an end", len(given) - len(whole))
             data, given = data.subset(whole), given[whole]
+    shown, residual_mm, warnings = None, None, []
+    if measured is not None:
+        try:
+            shown, residual_mm = measured_values(robot, measured, unmodelled_terms)
+        except RobocalError as e:  # placeholder points, too few poses: plan for the noise alone
+            warnings.append(f"the candidates' measurements do not show their unmodelled error ({e}): "
+                            "planned for the measurement noise alone; give unmodelled_mm (--unmodelled-mm) "
+                            "to plan for one")
+            measured = None
     info = candidate_information(plan_robot, data, noise, params)
     C, p = len(info.G), info.identifiable  # the data must determine those without a prior
     rows_min = int(info.rows.min())
@@ -542,19 +558,10 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     conflicts = (cons.conflict_rows(cand_q, constraints.min_joint_distance_deg, robot.prismatic)
                  if constraints.min_joint_distance_deg > 0 else None)
     values = _curve_values(curve, n, n_min, C)
-    shown, warnings = None, []
-    heldout_noise = _noise_rms(noise, plan_robot.fk(q_region)[:, :3, 3]) if OBSERVED[kind].sees_position \
-        else noise.sigma_m  # a contact's or a distance's one residual
-    heldout_from = "the noise model"
-    if measured is not None:
-        try:
-            shown, residual_mm = measured_values(robot, measured, unmodelled_terms)
-            heldout_noise, heldout_from = residual_mm * 1e-3, "the residual of the candidates' calibration"
-        except RobocalError as e:  # placeholder points, too few poses: plan for the noise alone
-            warnings.append(f"the candidates' measurements do not show their unmodelled error ({e}): "
-                            "planned for the measurement noise alone; give unmodelled_mm (--unmodelled-mm) "
-                            "to plan for one")
-            measured = None
+    heldout_noise_model = _noise_rms(noise, plan_robot.fk(q_region)[:, :3, 3]) \
+        if OBSERVED[kind].sees_position else noise.sigma_m  # a contact's or a distance's one residual
+    heldout_from = "the noise model" if residual_mm is None else "the residual of the candidates' calibration"
+    heldout_noise = heldout_noise_model if residual_mm is None else residual_mm * 1e-3
     um = unmodelled_error(plan_robot, data, noise, info, q_region, float(unmodelled_mm or 0.0),
                           unmodelled_terms, shown)
     unknown_smr = (smr_given is None and len(smr) == 1 and file_data is None and um is None
@@ -592,6 +599,8 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         warnings.append("the SMR is on the flange axis: the last joint's zero offset cannot be identified; "
                         "give the SMR's position on the flange (smr / --smr-mm) if it is off the axis")
     model_ms = predicted(chosen)
+    if residual_mm is not None and OBSERVED[kind].sees_position:  # the noise the measurements show
+        model_ms = _shown_noise_ms(info, A, um, chosen, residual_mm * 1e-3 / float(heldout_noise_model))
     return CampaignResult(
         robot=plan_robot, kind=kind, joints=joints, candidate_index=index, visible=visible_out,
         predicted_rms_mm=float(np.sqrt(model_ms) * 1e3),
@@ -629,6 +638,18 @@ def _smr_problems(robot, kind: str, q: np.ndarray, visible: np.ndarray, noise: N
         problems.append((hyp.G, hyp.region_matrix(hyp_robot, q_region), hyp.prior))
         structure = hyp.structure
     return problems
+
+
+def _shown_noise_ms(info: Information, A: np.ndarray, um: Unmodelled | None, chosen: np.ndarray,
+                    ratio: float) -> float:
+    """The predicted mean square TCP error (m^2) of the design ``chosen`` when the measurements'
+    noise is ``ratio`` times the noise model's (the whitened rows, data and unmodelled, divided by
+    it; the priors unchanged): what the calibration's posterior will be with the noise the
+    candidates' measurements show."""
+    G = info.G / ratio
+    if um is None:
+        return criterion_value(G, A, chosen, "I", info.prior)
+    return mean_square(G, A, info.prior, replace(um, N=um.N / ratio), chosen)
 
 
 def _noise_rms(noise: Noise, points: np.ndarray) -> float:
