@@ -16,6 +16,12 @@ leave of the parameters the poses do not determine (m; reported in mm): the pred
 Given the robot's unmodelled error (``unmodelled_mm``, e.g. what a previous calibration left),
 the design is then polished for the error the fit will absorb from it
 (:mod:`robocal.campaign.unmodelled`) and the predicted accuracy includes it.
+
+When no SMR is given, its place on the flange is an unknown with a prior, and the criterion and
+the predicted accuracy are their expectation over it (:mod:`robocal.campaign.hypotheses`). The
+predicted RMS of held-out check measurements adds their own noise (the noise model's, or the
+residual of the measured candidates' calibration, whose noise then also enters the predicted
+accuracy).
 """
 
 from __future__ import annotations
@@ -405,7 +411,9 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         Limits margin, TCP boxes, joint distance, singularity distances, the `Tracker`.
     smr, smr_normals : array_like, shape (k, 3), optional
         SMR positions (m) and facing directions in the flange frame (default: one SMR at the
-        model's TCP facing along the flange z axis).
+        model's TCP facing along the flange z axis, its place unknown within a box of
+        ``SMR_BOX_MM`` about it: the I or D criterion averaged over that prior, see
+        :mod:`robocal.campaign.hypotheses`).
     noise_mm : float, default 0.02
         Measurement noise (1 sigma per axis), millimetres.
     noise_model : {'isotropic', 'tracker'}
