@@ -413,7 +413,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         SMR positions (m) and facing directions in the flange frame (default: one SMR at the
         model's TCP facing along the flange z axis, its place unknown within a box of
         ``SMR_BOX_MM`` about it: the I or D criterion averaged over that prior, see
-        :mod:`robocal.campaign.hypotheses`).
+        `robocal.campaign.hypotheses`).
     noise_mm : float, default 0.02
         Measurement noise (1 sigma per axis), millimetres.
     noise_model : {'isotropic', 'tracker'}
