@@ -239,8 +239,10 @@ class CampaignResult:
             if self.settings.get("unmodelled_from") == "the candidates' measurements" else ""
         noise += (f"; unmodelled error {unmodelled:.4g} mm as {', '.join(self.settings['unmodelled_terms'])}"
                   f"{source}" if unmodelled else "; before the unmodelled error")
+        box = self.settings.get("smr_prior_box_mm", 0.0)
+        unknown = f"; averaged over the SMR's place within +-{box:g} mm of the nominal" if box else ""
         lines = [f"{self.n} poses of {self.robot.name} ({self.kind} measurements) chosen from "
-                 f"{self.n_candidates} candidates ({self.criterion}-optimal)",
+                 f"{self.n_candidates} candidates ({self.criterion}-optimal{unknown})",
                  f"predicted accuracy: {self.predicted_rms_mm:.4f} mm RMS of the TCP position over the "
                  f"region (noise {noise}); held-out check measurements: {self.predicted_heldout_mm:.4f} mm "
                  f"RMS (with their own noise, {self.settings['heldout_noise_mm']:.4g} mm 3-D RMS from "
