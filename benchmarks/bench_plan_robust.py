@@ -31,7 +31,7 @@ from robocal.data.simulate import simulate_tracker
 
 ARMS = ("abb_irb2400", "abb_irb6700", "fanuc_m710ic50", "kuka_kr120_r2500", "yaskawa_gp88", "ur3e", "ur16e",
         "ur20", "kuka_kr210_r2700", "fanuc_r2000ic_165f")
-SEEDS = 8
+SEEDS = 16
 RANDOM_DRAWS = 4
 HELD_OUT = 100
 EVAL_POSES = 1000
