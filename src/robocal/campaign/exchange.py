@@ -193,7 +193,8 @@ class _Design:
                  conflicts: Callable[[int], np.ndarray], prior: np.ndarray | None = None) -> None:
         self.G = G
         self.C, self.r, self.p = G.shape
-        self.M0 = np.diag(_prior(prior, self.p)) + RIDGE * np.eye(self.p)  # before any candidate
+        self.prior = _prior(prior, self.p)
+        self.M0 = np.diag(self.prior) + RIDGE * np.eye(self.p)  # before any candidate
         self.Gt = np.ascontiguousarray(G.transpose(1, 2, 0))  # (r, p, C)
         self.A = A
         self.criterion = criterion
@@ -321,10 +322,76 @@ class _Design:
             return self.value + _inverse_trace(S, self.QD[:, :, m])
         return self.value - _logdet(S)
 
+    def exact(self, members) -> float:
+        """The criterion of ``members`` computed from scratch (no ridge)."""
+        return criterion_value(self.G, self.A, members, self.criterion, self.prior)
+
     def allowed(self, without: int | None = None) -> np.ndarray:
         """Candidates that may join (no conflict with a member, ``without`` left out)."""
         blocked = self.blocked if without is None else self.blocked - self.conflicts(without)
         return blocked == 0
+
+
+class _Average:
+    """Several designs of the same candidates, one per hypothesis about what the planner does not
+    know (e.g. the SMR's place on the flange): each ``_Design`` its own blocks ``G_k (C, r_k,
+    p_k)``, region matrix and priors; the criterion is their mean (the expected criterion over the
+    hypotheses, each weighed ``1 / K``). It offers what the search asks of a ``_Design`` (I and D:
+    the Woodbury scans of every hypothesis, summed)."""
+
+    def __init__(self, designs: list[_Design]) -> None:
+        self.designs = designs
+        self.weight = 1.0 / len(designs)
+        self.C, self.criterion, self.conflicts = designs[0].C, designs[0].criterion, designs[0].conflicts
+        self.r = min(d.r for d in designs)
+        self.p = max(d.p for d in designs)
+
+    @property
+    def members(self) -> list[int]:
+        return self.designs[0].members
+
+    @property
+    def value(self) -> float:
+        return self.weight * sum(d.value for d in self.designs)
+
+    def reset(self, members) -> None:
+        for d in self.designs:
+            d.reset(members)
+
+    def add(self, index: int) -> None:
+        for d in self.designs:
+            d.add(index)
+
+    def remove(self, index: int) -> None:
+        for d in self.designs:
+            d.remove(index)
+
+    def allowed(self, without: int | None = None) -> np.ndarray:
+        return self.designs[0].allowed(without)
+
+    def add_values(self, allowed: np.ndarray, QB=None, QD=None, value=None) -> np.ndarray:
+        """The mean criterion after adding each candidate ``(C,)`` (``QB``, ``QD``: each
+        hypothesis's forms, from :meth:`_updated`; ``value``: the mean they start from)."""
+        value = self.value if value is None else value
+        QB, QD = QB or [None] * len(self.designs), QD or [None] * len(self.designs)
+        gains = [d.add_values(allowed, QB=b, QD=q, value=0.0)
+                 for d, b, q in zip(self.designs, QB, QD, strict=True)]
+        return value + self.weight * np.sum(gains, axis=0)
+
+    def remove_values(self) -> np.ndarray:
+        return self.weight * np.sum([d.remove_values() for d in self.designs], axis=0)
+
+    def _updated(self, index: int, sign: float):
+        B, D, QB, QD = zip(*[d._updated(index, sign) for d in self.designs], strict=True)
+        return list(B), list(D), list(QB), list(QD)
+
+    def _commit(self, index: int, sign: float, updated=None, value: float | None = None) -> None:
+        for k, d in enumerate(self.designs):
+            d._commit(index, sign, None if updated is None else tuple(u[k] for u in updated))
+
+    def exact(self, members) -> float:
+        """The mean criterion of ``members`` computed from scratch."""
+        return self.weight * sum(d.exact(members) for d in self.designs)
 
 
 def _improves(new: float, old: float) -> bool:
@@ -454,7 +521,29 @@ def exchange_search(G: np.ndarray, A: np.ndarray | None, n: int, *, criterion: s
     if conflicts is None:
         conflicts = itself_only(C)
     with one_blas_thread():
-        return _search(G, A, n, criterion, starts, seed, conflicts, init, progress, prior)
+        return _search(_Design(G, A, criterion, conflicts, prior), n, starts, seed, init, progress)
+
+
+def averaged_search(problems: list[tuple[np.ndarray, np.ndarray | None, np.ndarray | None]], n: int, *,
+                    criterion: str = "I", starts: int = 4, seed: int = 0,
+                    conflicts: Callable[[int], np.ndarray] | None = None, init: np.ndarray | None = None,
+                    progress: Progress | None = None) -> ExchangeResult:
+    """The best ``n`` candidates for the mean of ``criterion`` (I or D) over hypotheses: one
+    ``(G, A, prior)`` per hypothesis (as :func:`exchange_search` takes them; the same ``C``
+    candidates in each, the unknowns may differ). One hypothesis: :func:`exchange_search`."""
+    if len(problems) == 1:
+        G, A, prior = problems[0]
+        return exchange_search(G, A, n, criterion=criterion, starts=starts, seed=seed, conflicts=conflicts,
+                               init=init, progress=progress, prior=prior)
+    if criterion not in ("I", "D"):
+        raise DataError(f"a criterion averaged over hypotheses is I or D, not {criterion!r}")
+    C = len(problems[0][0])
+    if any(len(G) != C for G, _, _ in problems) or not 0 < n <= C:
+        raise DataError(f"cannot choose {n} of {C} candidates in every hypothesis")
+    conflicts = itself_only(C) if conflicts is None else conflicts
+    with one_blas_thread():
+        return _search(_Average([_Design(G, A, criterion, conflicts, prior) for G, A, prior in problems]),
+                       n, starts, seed, init, progress)
 
 
 def one_blas_thread():
@@ -463,10 +552,9 @@ def one_blas_thread():
     return threadpool_limits(1, user_api="blas") if threadpool_limits else nullcontext()
 
 
-def _search(G, A, n, criterion, starts, seed, conflicts, init, progress, prior) -> ExchangeResult:
-    C, r, p = G.shape
+def _search(design: _Design | _Average, n, starts, seed, init, progress) -> ExchangeResult:
+    r, p = design.r, design.p
     rng = np.random.default_rng(seed)
-    design = _Design(G, A, criterion, conflicts, prior)
     n0 = min(n, int(np.ceil((p + 1) / r)))
     runs = []
     for s in range(1 if init is not None else max(1, int(starts))):
@@ -485,7 +573,7 @@ def _search(G, A, n, criterion, starts, seed, conflicts, init, progress, prior) 
         design.reset(members)
         _fedorov(design, np.random.default_rng([seed, s]), MAX_SWEEPS)
         _detmax(design, max_steps=4 * n + 20)
-        exact = criterion_value(G, A, design.members, criterion, prior)
+        exact = design.exact(design.members)
         if best is None or exact < best[0]:
             best = (exact, sorted(design.members))
     return ExchangeResult(indices=np.asarray(best[1], int), value=best[0])

@@ -53,7 +53,8 @@ class Information:
     ``row_group`` of each residual row), the unweighted Jacobian ``J_raw`` of all rows over
     ``all_names`` and its whitened rows ``J_white``, with the priors ``sigma`` (SI, inf: none)
     of ``all_names`` (for :func:`judge` of a chosen set, as ``robocal analyze`` computes it);
-    ``identifiable`` how many of ``names`` the rank test keeps (the rest only their priors pin)."""
+    ``identifiable`` how many of ``names`` the rank test keeps (the rest only their priors pin),
+    ``structure`` that test's result."""
 
     G: np.ndarray
     scale: np.ndarray
@@ -69,6 +70,7 @@ class Information:
     sigma: np.ndarray
     all_names: list[str]
     identifiable: int
+    structure: Identifiability
 
     def region_matrix(self, robot, q_region: np.ndarray) -> np.ndarray:
         """``A (p, p)`` in the scaled unknowns: :func:`robocal.trust.coverage.region_matrix` of
@@ -117,9 +119,12 @@ def candidate_blocks(obs, data: Measurements, rows: np.ndarray) -> tuple[np.ndar
     return G, cand_of_item, per
 
 
-def candidate_information(robot, data: Measurements, noise: Noise, params="auto") -> Information:
+def candidate_information(robot, data: Measurements, noise: Noise, params="auto",
+                          structure: Identifiability | None = None) -> Information:
     """The candidate blocks of ``data`` (rows grouped into candidates by ``pose_id``; distances by
-    pair) for the unknowns ``params`` identifies (see the module docstring)."""
+    pair) for the unknowns ``params`` identifies (see the module docstring); ``structure``: the
+    identifiability of the same unknowns on candidates of the same structure (e.g. another SMR off
+    the flange axis), reused instead of analysed again."""
     problem = CalibrationProblem(robot, data)
     obs = problem.observation
     space = problem.space(robot, params)
@@ -132,7 +137,7 @@ def candidate_information(robot, data: Measurements, noise: Noise, params="auto"
     count = min(obs.n_items, IDENTIFIABILITY_ROWS // r)
     sample = np.unique(np.linspace(0, obs.n_items - 1, count).astype(int))
     rows = (sample[:, None] * r + np.arange(r)).reshape(-1)
-    ident = analyze(Jw[rows], all_names, data.n_poses)
+    ident = analyze(Jw[rows], all_names, data.n_poses) if structure is None else structure
     sigma = np.r_[prior_sigma(robot, robot_names), np.full(len(all_names) - len(robot_names), np.inf)]
     pinned = {nm for nm in ident.dropped  # no data on them, but a prior: what remains of their error
               if np.isfinite(sigma[all_names.index(nm)]) and ident.confounded_with[nm]}
@@ -146,6 +151,6 @@ def candidate_information(robot, data: Measurements, noise: Noise, params="auto"
                        robot_names=[nm for nm in names if nm in robot_names],
                        rows=per * r, data=data, group=cand_of_item[obs.item_of_rows()],
                        row_group=np.repeat(cand_of_item, r), J_raw=J_raw, J_white=Jw, sigma=sigma,
-                       all_names=all_names, identifiable=len(ident.kept))
+                       all_names=all_names, identifiable=len(ident.kept), structure=ident)
 
 

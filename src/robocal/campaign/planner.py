@@ -16,6 +16,12 @@ leave of the parameters the poses do not determine (m; reported in mm): the pred
 Given the robot's unmodelled error (``unmodelled_mm``, e.g. what a previous calibration left),
 the design is then polished for the error the fit will absorb from it
 (:mod:`robocal.campaign.unmodelled`) and the predicted accuracy includes it.
+
+When no SMR is given, its place on the flange is an unknown with a prior, and the criterion and
+the predicted accuracy are their expectation over it (:mod:`robocal.campaign.hypotheses`). The
+predicted RMS of held-out check measurements adds their own noise (the noise model's, or the
+residual of the measured candidates' calibration, whose noise then also enters the predicted
+accuracy).
 """
 
 from __future__ import annotations
@@ -26,12 +32,20 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 import robocal.campaign.constraints as cons
-from robocal.campaign.exchange import CRITERIA, ExchangeResult, criterion_value, exchange_search
+from robocal.campaign.exchange import CRITERIA, ExchangeResult, averaged_search, criterion_value
 from robocal.campaign.files import CandidateFile, poses_csv
+from robocal.campaign.hypotheses import SMR_BOX_MM, mean_criterion, smr_hypotheses
 from robocal.campaign.information import Information, candidate_data, candidate_information
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
-from robocal.campaign.unmodelled import DEFAULT_TERMS, mean_square, measured_values, search, unmodelled_error
+from robocal.campaign.unmodelled import (
+    DEFAULT_TERMS,
+    Unmodelled,
+    mean_square,
+    measured_values,
+    search,
+    unmodelled_error,
+)
 from robocal.core.errors import DataError, RobocalError
 from robocal.core.io import write_all
 from robocal.core.progress import Progress
@@ -109,6 +123,10 @@ class CampaignResult:
         Which SMRs the tracker sees at each pose.
     predicted_rms_mm : float
         Predicted RMS error of the calibrated model's TCP position over the region, mm.
+    predicted_heldout_mm : float
+        Predicted 3-D RMS of held-out check measurements over the region, mm: the model's error
+        and the measurement's own noise (the noise model's, or the residual of the measured
+        candidates' calibration: the noise the data show).
     criterion : str
         The design criterion (``'I'``, ``'D'`` or ``'O4'``) and ``criterion_value`` its value.
     identifiability : Identifiability
@@ -157,6 +175,7 @@ class CampaignResult:
     candidate_index: np.ndarray
     visible: np.ndarray
     predicted_rms_mm: float
+    predicted_heldout_mm: float
     criterion: str
     criterion_value: float
     identifiability: Identifiability
@@ -220,10 +239,14 @@ class CampaignResult:
             if self.settings.get("unmodelled_from") == "the candidates' measurements" else ""
         noise += (f"; unmodelled error {unmodelled:.4g} mm as {', '.join(self.settings['unmodelled_terms'])}"
                   f"{source}" if unmodelled else "; before the unmodelled error")
+        box = self.settings.get("smr_prior_box_mm", 0.0)
+        unknown = f"; averaged over the SMR's place within +-{box:g} mm of the nominal" if box else ""
         lines = [f"{self.n} poses of {self.robot.name} ({self.kind} measurements) chosen from "
-                 f"{self.n_candidates} candidates ({self.criterion}-optimal)",
+                 f"{self.n_candidates} candidates ({self.criterion}-optimal{unknown})",
                  f"predicted accuracy: {self.predicted_rms_mm:.4f} mm RMS of the TCP position over the "
-                 f"region (noise {noise})",
+                 f"region (noise {noise}); held-out check measurements: {self.predicted_heldout_mm:.4f} mm "
+                 f"RMS (with their own noise, {self.settings['heldout_noise_mm']:.4g} mm 3-D RMS from "
+                 f"{self.settings['heldout_noise_from']})",
                  f"{vocabulary.counts(ident)}; condition number {ident.condition_number:.3g} "
                  f"({ident.condition_class}); " + " ".join(f"{k} {v:.3g}" for k, v in o.items()),
                  f"measuring order: weighted travel {self.travel:.4g} (in the search's order "
@@ -244,7 +267,7 @@ class CampaignResult:
             "format": FORMAT, "robocal_version": __version__,
             "robot": self.robot.section(),
             "kind": self.kind, "criterion": self.criterion, "n_poses": self.n,
-            "predicted_rms_mm": self.predicted_rms_mm,
+            "predicted_rms_mm": self.predicted_rms_mm, "predicted_heldout_mm": self.predicted_heldout_mm,
             "noise": {"model": self.noise.model, "sigma_mm": self.noise.sigma_m * 1e3},
             "joints_deg": [[float(fixed_point(v, DEGREE_DECIMALS)) for v in row]  # as in poses.csv (mm on
                            for row in shown[:, k:]],                           # a prismatic joint)
@@ -390,7 +413,9 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
         Limits margin, TCP boxes, joint distance, singularity distances, the `Tracker`.
     smr, smr_normals : array_like, shape (k, 3), optional
         SMR positions (m) and facing directions in the flange frame (default: one SMR at the
-        model's TCP facing along the flange z axis).
+        model's TCP facing along the flange z axis, its place unknown within a box of
+        ``SMR_BOX_MM`` about it: the I or D criterion averaged over that prior, see
+        `robocal.campaign.hypotheses`).
     noise_mm : float, default 0.02
         Measurement noise (1 sigma per axis), millimetres.
     noise_model : {'isotropic', 'tracker'}
@@ -476,6 +501,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     noise = Noise(sigma_m=float(noise_mm) * 1e-3, model=noise_model,
                   tracker_position=None if tracker is None else tracker.position,
                   rotation_sigma_rad=np.deg2rad(float(rotation_noise_deg)))
+    smr_given = smr
     plan_robot, smr, normals = _planning_robot(robot, smr, smr_normals)
     geometry = replace(robot, smr=np.zeros((0, 3)), nominal=None, joint_errors=None)  # flange = tool
     rng = np.random.default_rng(seed)
@@ -512,6 +538,15 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
             if len(whole) < len(given):
                 funnel.record("distances missing an end", len(given) - len(whole))
             data, given = data.subset(whole), given[whole]
+    shown, residual_mm, warnings = None, None, []
+    if measured is not None:
+        try:
+            shown, residual_mm = measured_values(robot, measured, unmodelled_terms)
+        except RobocalError as e:  # placeholder points, too few poses: plan for the noise alone
+            warnings.append(f"the candidates' measurements do not show their unmodelled error ({e}): "
+                            "planned for the measurement noise alone; give unmodelled_mm (--unmodelled-mm) "
+                            "to plan for one")
+            measured = None
     info = candidate_information(plan_robot, data, noise, params)
     C, p = len(info.G), info.identifiable  # the data must determine those without a prior
     rows_min = int(info.rows.min())
@@ -533,29 +568,28 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     conflicts = (cons.conflict_rows(cand_q, constraints.min_joint_distance_deg, robot.prismatic)
                  if constraints.min_joint_distance_deg > 0 else None)
     values = _curve_values(curve, n, n_min, C)
-    shown, warnings = None, []
-    if measured is not None:
-        try:
-            shown = measured_values(robot, measured, unmodelled_terms)
-        except RobocalError as e:  # placeholder points, too few poses: plan for the noise alone
-            warnings.append(f"the candidates' measurements do not show their unmodelled error ({e}): "
-                            "planned for the measurement noise alone; give unmodelled_mm (--unmodelled-mm) "
-                            "to plan for one")
-            measured = None
+    heldout_noise_model = _noise_rms(noise, plan_robot.fk(q_region)[:, :3, 3]) \
+        if OBSERVED[kind].sees_position else noise.sigma_m  # a contact's or a distance's one residual
+    heldout_from = "the noise model" if residual_mm is None else "the residual of the candidates' calibration"
+    heldout_noise = heldout_noise_model if residual_mm is None else residual_mm * 1e-3
     um = unmodelled_error(plan_robot, data, noise, info, q_region, float(unmodelled_mm or 0.0),
                           unmodelled_terms, shown)
+    unknown_smr = (smr_given is None and len(smr) == 1 and file_data is None and um is None
+                   and criterion in ("I", "D"))
+    problems = [(info.G, A, info.prior)] if not unknown_smr else \
+        _smr_problems(robot, kind, q, visible, noise, params, q_region, smr[0], normals[:1])
 
     def predicted(indices) -> float:  # m^2: the mean squared TCP error over the region
-        return criterion_value(info.G, A, indices, "I", info.prior) if um is None else \
+        return mean_criterion(problems, indices) if um is None else \
             mean_square(info.G, A, info.prior, um, indices)
 
     with Progress(int(starts) + len(values), "poses", quiet=progress is not True) as bar:
-        found = exchange_search(info.G, A, n, criterion=criterion, starts=int(starts), seed=seed,
-                                conflicts=conflicts, progress=bar, prior=info.prior)
+        found = averaged_search(problems, n, criterion=criterion, starts=int(starts), seed=seed,
+                                conflicts=conflicts, progress=bar)
         if um is not None:
             found = ExchangeResult(*search(info.G, A, info.prior, um, found.indices, conflicts,
                                            np.random.default_rng([seed, 2]), int(starts)))
-        points = _curve(info, A, values, criterion, seed, conflicts, bar, (n, found.indices), predicted)
+        points = _curve(problems, values, criterion, seed, conflicts, bar, (n, found.indices), predicted)
     weights = default_weights(robot)
     chosen = found.indices[measuring_order(robot, cand_q[found.indices], weights)]
     if file_data is None:  # one output row per pose, with the SMRs it shows
@@ -574,9 +608,13 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     if len(smr) == 1 and np.linalg.norm(smr[0, :2]) < 1e-6 and OBSERVED[kind].several_smrs:
         warnings.append("the SMR is on the flange axis: the last joint's zero offset cannot be identified; "
                         "give the SMR's position on the flange (smr / --smr-mm) if it is off the axis")
+    model_ms = predicted(chosen)
+    if residual_mm is not None and OBSERVED[kind].sees_position:  # the noise the measurements show
+        model_ms = _shown_noise_ms(info, A, um, chosen, residual_mm * 1e-3 / float(heldout_noise_model))
     return CampaignResult(
         robot=plan_robot, kind=kind, joints=joints, candidate_index=index, visible=visible_out,
-        predicted_rms_mm=float(np.sqrt(predicted(chosen)) * 1e3),
+        predicted_rms_mm=float(np.sqrt(model_ms) * 1e3),
+        predicted_heldout_mm=float(np.sqrt(model_ms + heldout_noise**2) * 1e3),
         criterion=criterion, criterion_value=found.value, identifiability=separate(
             info.analyze_subset(chosen), unidentifiable(plan_robot, kind, info.all_names, max(len(smr), 1)),
             plan_robot),
@@ -589,11 +627,46 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                   "unmodelled_terms": [] if um is None else list(um.terms),
                   "unmodelled_from": "the candidates' measurements" if measured is not None else
                                      "given" if unmodelled_mm else "none (noise only)",
-                  "region": region_from,
+                  "region": region_from, "smr_prior_box_mm": SMR_BOX_MM if unknown_smr else 0.0,
+                  "heldout_noise_mm": heldout_noise * 1e3, "heldout_noise_from": heldout_from,
                   "min_joint_distance_deg": constraints.min_joint_distance_deg,
                   "smr_mm": (smr * 1e3).tolist(), "smr_normals": normals.tolist(),
                   "tracker_mm": None if tracker is None else (tracker.position * 1e3).tolist()},
         source=source, source_rows=None if source is None else source.rows[index], warnings=warnings)
+
+
+def _smr_problems(robot, kind: str, q: np.ndarray, visible: np.ndarray, noise: Noise, params,
+                  q_region: np.ndarray, smr: np.ndarray, normal: np.ndarray) -> list[tuple]:
+    """``(G, A, prior)`` of the candidates ``q (C, n)`` with the SMR at each point of
+    :func:`robocal.campaign.hypotheses.smr_hypotheses` around the nominal ``smr (3,)`` m (flange
+    frame): the hypotheses the criterion is averaged over when the SMR's place is not given."""
+    problems, structure = [], None
+    for point in smr_hypotheses(smr):  # a loop over the four quadrature points
+        hyp_robot = _planning_robot(robot, point[None], normal)[0]
+        data = candidate_data(hyp_robot, kind, q, visible[:, :1])
+        hyp = candidate_information(hyp_robot, data, noise, params, structure)  # one structure off the axis
+        problems.append((hyp.G, hyp.region_matrix(hyp_robot, q_region), hyp.prior))
+        structure = hyp.structure
+    return problems
+
+
+def _shown_noise_ms(info: Information, A: np.ndarray, um: Unmodelled | None, chosen: np.ndarray,
+                    ratio: float) -> float:
+    """The predicted mean square TCP error (m^2) of the design ``chosen`` when the measurements'
+    noise is ``ratio`` times the noise model's (the whitened rows, data and unmodelled, divided by
+    it; the priors unchanged): what the calibration's posterior will be with the noise the
+    candidates' measurements show."""
+    G = info.G / ratio
+    if um is None:
+        return criterion_value(G, A, chosen, "I", info.prior)
+    return mean_square(G, A, info.prior, replace(um, N=um.N / ratio), chosen)
+
+
+def _noise_rms(noise: Noise, points: np.ndarray) -> float:
+    """The 3-D RMS (m) of the measurement noise at ``points (R, 3)`` m (robot base frame):
+    ``sqrt(mean trace(Sigma))`` of the noise model's covariances (``sqrt(3) sigma`` isotropic)."""
+    W = noise.whitener(points)
+    return float(np.sqrt(np.mean(np.trace(np.linalg.inv(np.swapaxes(W, 1, 2) @ W), axis1=1, axis2=2))))
 
 
 def _given_joints(candidates, file_data) -> np.ndarray:
@@ -613,10 +686,11 @@ def _positions(chosen: np.ndarray, values: np.ndarray) -> np.ndarray:
     return order[np.searchsorted(chosen, values, sorter=order)]
 
 
-def _curve(info: Information, A, values, criterion, seed, conflicts, bar, main,
-           predicted) -> list[CurvePoint]:
-    """Predicted accuracy (``predicted(indices)``, m^2) against the number of poses: each N
-    warm-started from the previous."""
+def _curve(problems, values, criterion, seed, conflicts, bar, main, predicted) -> list[CurvePoint]:
+    """Predicted accuracy (``predicted(indices)``, m^2) against the number of poses, the designs
+    searched for the hypotheses ``problems`` (``(G, A, prior)`` each): each N warm-started from the
+    previous."""
+    C = len(problems[0][0])
     points = []
     rng = np.random.default_rng([seed, 1])
     previous = None
@@ -625,9 +699,9 @@ def _curve(info: Information, A, values, criterion, seed, conflicts, bar, main,
             idx = main[1]
         else:
             init = previous if previous is not None and len(previous) <= n else None
-            idx = exchange_search(info.G, A, n, criterion=criterion, starts=DEFAULT_STARTS, seed=seed,
-                                  conflicts=conflicts, init=init, prior=info.prior).indices
-        random = [predicted(rng.choice(len(info.G), n, replace=False)) for _ in range(CURVE_RANDOM_DESIGNS)]
+            idx = averaged_search(problems, n, criterion=criterion, starts=DEFAULT_STARTS, seed=seed,
+                                  conflicts=conflicts, init=init).indices
+        random = [predicted(rng.choice(C, n, replace=False)) for _ in range(CURVE_RANDOM_DESIGNS)]
         points.append(CurvePoint(n, float(np.sqrt(predicted(idx)) * 1e3),
                                  float(np.sqrt(np.median(random)) * 1e3)))
         previous = idx

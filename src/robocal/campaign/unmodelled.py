@@ -85,14 +85,18 @@ def check_terms(terms) -> tuple[str, ...]:
     return terms
 
 
-def measured_values(robot, measured: Measurements, terms=DEFAULT_TERMS) -> dict[str, float]:
+def measured_values(robot, measured: Measurements, terms=DEFAULT_TERMS) -> tuple[dict[str, float], float]:
     """The joint-error ``terms``' values (SI) the measurements ``measured`` of ``robot`` (the
     nominal model; e.g. candidates measured in an earlier campaign) show: their calibration with
-    those terms (the default calibration's method and priors)."""
+    those terms (the default calibration's method and priors); and that calibration's residual
+    (3-D RMS, degrees of freedom corrected, mm): the instrument's noise and what the terms leave,
+    what a held-out measurement adds to the calibrated model's error."""
     from robocal.calibration.pipeline import calibrate
 
-    errors = calibrate(robot, measured, nongeometric=",".join(check_terms(terms))).robot.joint_errors
-    return {} if errors is None else dict(zip(errors.names, errors.values.tolist(), strict=True))
+    result = calibrate(robot, measured, nongeometric=",".join(check_terms(terms)))
+    errors = result.robot.joint_errors
+    values = {} if errors is None else dict(zip(errors.names, errors.values.tolist(), strict=True))
+    return values, float(result.predicted_accuracy["validated_mm"])
 
 
 def unmodelled_error(robot, data: Measurements, noise: Noise, info: Information, q_region: np.ndarray,
