@@ -206,3 +206,25 @@ def test_program_writers_check_their_input():
         krl_program(np.zeros((2, 6)), "a" * 30)
     src, dat = krl_program(np.array([[-0.0, 1e-11, 123.456789, -45, 0, 360]]))
     assert "DECL AXIS XP1={A1 0,A2 0,A3 123.456789,A4 -45,A5 0,A6 360}" in dat and "PTP XP1" in src
+
+
+def test_plan_from_noise_free_candidates_predicts_with_the_instruments_noise(tmp_path):
+    """Candidates whose points fit exactly (simulated without noise) show no noise; the held-out
+    prediction still carries the noise model's (a check measurement has it): finite, not zero."""
+    import json
+
+    import numpy as np
+
+    import robocal as rc
+    from robocal.cli import main
+    from robocal.data.simulate import sample_joints
+
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    q = sample_joints(robot, 40, np.random.default_rng(3))
+    rc.Measurements.from_arrays("point", q, points=robot.fk(q)[:, :3, 3]).save(tmp_path / "poses.csv")
+    plan = tmp_path / "plan.json"
+    assert main(["--quiet", "poses", "--robot", "abb_irb2600", "-n", "12",
+                 "--from", str(tmp_path / "poses.csv"), "--smr-mm", "20,-30,80", "-o", str(tmp_path / "out.csv"), "--json", str(plan),
+                 "--starts", "1"]) == 0
+    campaign = json.loads(plan.read_text())
+    assert 0 < campaign["predicted_rms_mm"] < campaign["predicted_heldout_mm"] < 1

@@ -571,7 +571,10 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     heldout_noise_model = _noise_rms(noise, plan_robot.fk(q_region)[:, :3, 3]) \
         if OBSERVED[kind].sees_position else noise.sigma_m  # a contact's or a distance's one residual
     heldout_from = "the noise model" if residual_mm is None else "the residual of the candidates' calibration"
-    heldout_noise = heldout_noise_model if residual_mm is None else residual_mm * 1e-3
+    # the noise the candidates' calibration shows, never below the noise model's (clean or simulated
+    # candidates fit to nothing: a check measurement still carries the instrument's noise)
+    heldout_noise = heldout_noise_model if residual_mm is None else \
+        max(residual_mm * 1e-3, heldout_noise_model)
     um = unmodelled_error(plan_robot, data, noise, info, q_region, float(unmodelled_mm or 0.0),
                           unmodelled_terms, shown)
     unknown_smr = (smr_given is None and len(smr) == 1 and file_data is None and um is None
@@ -610,7 +613,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
                         "give the SMR's position on the flange (smr / --smr-mm) if it is off the axis")
     model_ms = predicted(chosen)
     if residual_mm is not None and OBSERVED[kind].sees_position:  # the noise the measurements show
-        model_ms = _shown_noise_ms(info, A, um, chosen, residual_mm * 1e-3 / float(heldout_noise_model))
+        model_ms = _shown_noise_ms(info, A, um, chosen, heldout_noise / float(heldout_noise_model))
     return CampaignResult(
         robot=plan_robot, kind=kind, joints=joints, candidate_index=index, visible=visible_out,
         predicted_rms_mm=float(np.sqrt(model_ms) * 1e3),
