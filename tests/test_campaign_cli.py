@@ -224,7 +224,7 @@ def test_plan_from_noise_free_candidates_predicts_with_the_instruments_noise(tmp
     rc.Measurements.from_arrays("point", q, points=robot.fk(q)[:, :3, 3]).save(tmp_path / "poses.csv")
     plan = tmp_path / "plan.json"
     assert main(["--quiet", "poses", "--robot", "abb_irb2600", "-n", "12",
-                 "--from", str(tmp_path / "poses.csv"), "--smr-mm", "20,-30,80", "-o", str(tmp_path / "out.csv"), "--json", str(plan),
-                 "--starts", "1"]) == 0
+                 "--from", str(tmp_path / "poses.csv"), "--smr-mm", "20,-30,80",
+                 "-o", str(tmp_path / "out.csv"), "--json", str(plan), "--starts", "1"]) == 0
     campaign = json.loads(plan.read_text())
     assert 0 < campaign["predicted_rms_mm"] < campaign["predicted_heldout_mm"] < 1
