@@ -133,8 +133,9 @@ def check_residual(rms_mm: float, points: np.ndarray, what: str, *, force: bool 
         return
     _fail(f"{what}: the model misses the measurements by {rms_mm:.4g} mm RMS, far beyond what a "
           f"robot's geometric errors can explain (at most ~{limit:.3g} mm here): the data probably "
-          "belong to another robot or another file, or a unit (length or joint angle) is wrong",
-          force, warnings)
+          "belong to another robot or another file, a unit (length or joint angle) is wrong, or the "
+          "model's tool is not the one measured (a probe's or a contact face's offset from the flange: "
+          "give it as the model's tool)", force, warnings)
 
 
 def check_corrections(start, final, names, *, sigma: dict[str, float] | None = None,
