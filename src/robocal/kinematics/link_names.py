@@ -41,6 +41,14 @@ def _is_number(text: str) -> bool:
     return text.strip().lstrip("+-").isdigit()
 
 
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def link_numbers(links, link_frames: dict[str, int] | None, robot_name: str) -> np.ndarray:
     """The frame numbers ``(N,)`` of a ``link`` column ``links (N,)``: integers as they are, and
     strings either integers or names of ``link_frames`` (a model's, :func:`check_link_frames`).
@@ -54,15 +62,18 @@ def link_numbers(links, link_frames: dict[str, int] | None, robot_name: str) -> 
         text = value.strip()
         if _is_number(text):
             frames[k] = int(text)
+        elif link_frames and text in link_frames:
+            frames[k] = link_frames[text]
+        elif _is_float(text):
+            raise DataError(f"the markers' link {text!r} is not a frame number: give an integer, 0 the base "
+                            "to n the flange, or the link's name")
         elif not link_frames:
             raise DataError(f"the markers' link {text!r} is a name, but model {robot_name} names no links "
                             "(a model read from a URDF does): give frame numbers, 0 the base to n the flange")
-        elif text not in link_frames:
+        else:
             known = sorted(link_frames, key=link_frames.__getitem__)  # root to tip (a stable sort)
             more = f" and {len(known) - LISTED} more" if len(known) > LISTED else ""
             shown = ", ".join(known[:LISTED]) + more
             raise DataError(f"the markers' link {text!r} is not a link of model {robot_name}: its links "
                             f"are {shown} (or give frame numbers, 0 the base to n the flange)")
-        else:
-            frames[k] = link_frames[text]
     return frames[inverse.reshape(-1)]
