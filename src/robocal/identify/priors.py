@@ -38,6 +38,7 @@ from robocal.identify.evidence import (
     DIAGNOSIS_WIDENING,
     EVIDENCE_GAIN_NATS,
     MAX_WIDENING,
+    WIDENING_RTOL,
     NormalStats,
     fit_group_scales,
 )
@@ -241,7 +242,7 @@ class PriorScales:
     @property
     def tighter_than_asked(self) -> dict:
         """The groups the data ask to widen (beyond the scale used, by the evidence gain), in SI."""
-        return {g: v for g, v in self.asked.items() if v > self.scales[g] * (1 + 1e-6)} \
+        return {g: v for g, v in self.asked.items() if v > self.scales[g] * (1 + WIDENING_RTOL)} \
             if self.asked_gain >= EVIDENCE_GAIN_NATS else {}
 
     def option(self) -> str:

@@ -91,7 +91,7 @@ def parse_value(group: str, value) -> float:
                          f"{', '.join(units)} (e.g. {group}=2{GROUP_UNITS[group]})")
     si = float(match.group(1)) * units[match.group(2)]
     if not 0 < si <= MAX_SCALE[group]:
-        top = MAX_SCALE[group] / units[GROUP_UNITS[group]] if group != "errors" else MAX_SCALE[group]
+        top = MAX_SCALE[group] / units[GROUP_UNITS[group]]
         raise ModelError(f"priors: {group}={value!r} must be above 0 and at most {top:g} "
                          f"{GROUP_UNITS[group]}")
     return si
