@@ -288,3 +288,13 @@ def test_markers_default_to_the_flange():
     plain = replace(sim, link=None)
     a, b = (CalibrationProblem(ROBOT, d) for d in (sim, plain))
     np.testing.assert_allclose(a.residuals(a.start(ROBOT)), b.residuals(b.start(ROBOT)), atol=1e-12)
+
+
+def test_a_fit_that_rejects_every_measurement_says_so():
+    """Camera poses without orientation noise: the estimated rotation noise goes to 0 and the robust
+    weights reject every pose; the calibration says so (it said 'the data set is empty')."""
+    robot = rc.Robot.from_catalog("kuka_kr6_r700")
+    sim = rc.simulate_camera(robot, 30, mount="flange", noise_mm=0.02, noise_deg=0.0, seed=0)
+    with pytest.raises(IdentificationError, match="rejected every measurement.*lsq method without variance"):
+        rc.calibrate(robot, sim.data)
+    assert rc.calibrate(robot, sim.data, method="lsq", variance_components=False).after["rms"] < 0.1  # mm
