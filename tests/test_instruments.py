@@ -217,6 +217,10 @@ def test_csv_declares_instrument_kind_and_links():
     assert parse_csv("# instrument: mocap\n" + text).instrument == "mocap"
     with pytest.raises(DataError, match="unknown instrument 'laser'"):
         parse_csv("# instrument: laser\n" + text, "f.csv")
+    with pytest.raises(DataError, match="unknown instrument 'laser tracker'"):  # not ignored for its space
+        parse_csv("# Instrument: Laser Tracker\n" + text, "f.csv")
+    with pytest.raises(DataError, match="'# kind: eye in hand': unknown"):
+        parse_csv("# kind: eye in hand\n" + text, "f.csv")
     with pytest.raises(DataError, match="'# kind: eye_in_hand' needs the columns x_mm,y_mm,z_mm and qw..qz"):
         parse_csv("# kind: eye_in_hand\n" + text, "f.csv")
     with pytest.raises(DataError, match="a 'link' column names the link carrying each marker"):

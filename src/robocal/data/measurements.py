@@ -863,7 +863,7 @@ def _header_role(name: str):
 
 def _directive(line: str) -> tuple[str, str] | None:
     """``(name, value)`` of a comment line ``# NAME: value`` with NAME in `_DIRECTIVES`, else None."""
-    m = re.fullmatch(r"#\s*([a-z_]+)\s*:\s*(\S*)\s*", line.strip().lower())
+    m = re.fullmatch(r"#\s*([a-z_]+)\s*:\s*(.*?)\s*", line.strip().lower())  # a wrong value: named
     return (m.group(1), m.group(2)) if m and m.group(1) in _DIRECTIVES else None
 
 
