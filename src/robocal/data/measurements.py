@@ -355,9 +355,10 @@ class Measurements:
                 raise DataError(f"rotations of row index(es) {bad[:10].tolist()} are not proper rotations")
             kw["rotations"] = R
         if plane is not None:
-            kw["plane"] = _int_array(plane, "plane", N)
+            kw["plane"] = _int_array(plane, spec.column or "plane", N)
             if kw["plane"].min() < 0:
-                raise DataError("plane indices must be >= 0")
+                raise DataError(f"{spec.column or 'plane'} indices must be >= 0 (the plane each contact "
+                                "touched)")
         if pair is not None:
             kw["pair"] = _int_array(pair, "pair", N)
             kw["distance"] = _float_array(distance, "distance", (N,))
