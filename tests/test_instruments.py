@@ -302,3 +302,17 @@ def test_a_fit_that_rejects_every_measurement_says_so():
     with pytest.raises(IdentificationError, match="rejected every measurement.*lsq method without variance"):
         rc.calibrate(robot, sim.data)
     assert rc.calibrate(robot, sim.data, method="lsq", variance_components=False).after["rms"] < 0.1  # mm
+
+
+def test_six_d_kinds_share_one_length_scale_rule():
+    """Tracker 6-DOF poses and camera poses weigh rotation rows alike and refuse a scale <= 0."""
+    from robocal.identify.observations.camera import EyeToHandObservation
+    from robocal.identify.observations.pose import PoseObservation
+
+    pose = rc.simulate_tracker(ROBOT, 6, kind="pose", noise_mm=0.0, seed=1).data
+    cam = rc.simulate_camera(ROBOT, 6, noise_mm=0.0, noise_deg=0.0, seed=1).data
+    for obs in (PoseObservation(pose, ROBOT), EyeToHandObservation(cam, ROBOT)):
+        obs.set_length_scale(0.25)
+        assert obs.scale.tolist() == [1.0, 1.0, 1.0, 0.25, 0.25, 0.25]
+        with pytest.raises(IdentificationError, match=f"length scale of {obs.kind} rows must be positive"):
+            obs.set_length_scale(-1.0)
