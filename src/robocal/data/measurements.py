@@ -72,6 +72,7 @@ from robocal.data.instruments import check_instrument
 from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
 from robocal.kinematics.conditions import UNKNOWN, Conditions
 from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
+from robocal.kinematics.link_names import is_frame_number
 from robocal.kinematics.transforms import ROTATION_TOL
 
 _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
@@ -122,7 +123,7 @@ def _link_array(values, n: int) -> np.ndarray:
         if (texts == "").any():
             raise DataError(f"row {int(np.argmax(texts == ''))}: a marker's link is empty: give its frame "
                             "number or its link's name")
-        numeric = np.char.isdigit(np.char.lstrip(texts, "+-"))
+        numeric = is_frame_number(texts)
         if not numeric.all():
             if (np.char.startswith(texts[numeric], "-")).any():
                 raise DataError("link indices must be >= 0 (0 is the robot's base frame, n its flange)")

@@ -37,8 +37,14 @@ def check_link_frames(mapping, n: int) -> dict[str, int]:
     return out
 
 
+def is_frame_number(texts) -> np.ndarray:
+    """Per text of ``texts`` (a str or an array of them) whether it is a frame number (an integer,
+    signed or not: its range is checked where the model is known), not a link name."""
+    return np.char.isdigit(np.char.lstrip(np.char.strip(np.asarray(texts, dtype=str)), "+-"))
+
+
 def _is_number(text: str) -> bool:
-    return text.strip().lstrip("+-").isdigit()
+    return bool(is_frame_number(text))
 
 
 def _is_float(text: str) -> bool:
