@@ -182,6 +182,8 @@ def test_bad_flush_data_give_clear_errors():
         CalibrationProblem(nominal, on_smr)
     with pytest.raises(DataError, match="flush measurements need"):
         Measurements.from_arrays("flush", data.joints)
+    with pytest.raises(DataError, match=r"flush_plane indices must be >= 0"):  # the CSV column's name
+        Measurements.from_arrays("flush", data.joints, plane=-np.ones(len(data), int))
     swapped = data.plane.copy()
     swapped[[4, 7]] = (swapped[[4, 7]] + 1) % 3  # two contacts numbered with the next plane
     with pytest.raises(IdentificationError, match=r"tilted by up to .* on plane\(s\) \[2\] \(rows \[9, 6, "):

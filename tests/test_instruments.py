@@ -217,6 +217,10 @@ def test_csv_declares_instrument_kind_and_links():
     assert parse_csv("# instrument: mocap\n" + text).instrument == "mocap"
     with pytest.raises(DataError, match="unknown instrument 'laser'"):
         parse_csv("# instrument: laser\n" + text, "f.csv")
+    with pytest.raises(DataError, match="unknown instrument 'laser tracker'"):  # not ignored for its space
+        parse_csv("# Instrument: Laser Tracker\n" + text, "f.csv")
+    with pytest.raises(DataError, match="'# kind: eye in hand': unknown"):
+        parse_csv("# kind: eye in hand\n" + text, "f.csv")
     with pytest.raises(DataError, match="'# kind: eye_in_hand' needs the columns x_mm,y_mm,z_mm and qw..qz"):
         parse_csv("# kind: eye_in_hand\n" + text, "f.csv")
     with pytest.raises(DataError, match="a 'link' column names the link carrying each marker"):
@@ -288,3 +292,27 @@ def test_markers_default_to_the_flange():
     plain = replace(sim, link=None)
     a, b = (CalibrationProblem(ROBOT, d) for d in (sim, plain))
     np.testing.assert_allclose(a.residuals(a.start(ROBOT)), b.residuals(b.start(ROBOT)), atol=1e-12)
+
+
+def test_a_fit_that_rejects_every_measurement_says_so():
+    """Camera poses without orientation noise: the estimated rotation noise goes to 0 and the robust
+    weights reject every pose; the calibration says so (it said 'the data set is empty')."""
+    robot = rc.Robot.from_catalog("kuka_kr6_r700")
+    sim = rc.simulate_camera(robot, 30, mount="flange", noise_mm=0.02, noise_deg=0.0, seed=0)
+    with pytest.raises(IdentificationError, match="rejected every measurement.*lsq method without variance"):
+        rc.calibrate(robot, sim.data)
+    assert rc.calibrate(robot, sim.data, method="lsq", variance_components=False).after["rms"] < 0.1  # mm
+
+
+def test_six_d_kinds_share_one_length_scale_rule():
+    """Tracker 6-DOF poses and camera poses weigh rotation rows alike and refuse a scale <= 0."""
+    from robocal.identify.observations.camera import EyeToHandObservation
+    from robocal.identify.observations.pose import PoseObservation
+
+    pose = rc.simulate_tracker(ROBOT, 6, kind="pose", noise_mm=0.0, seed=1).data
+    cam = rc.simulate_camera(ROBOT, 6, noise_mm=0.0, noise_deg=0.0, seed=1).data
+    for obs in (PoseObservation(pose, ROBOT), EyeToHandObservation(cam, ROBOT)):
+        obs.set_length_scale(0.25)
+        assert obs.scale.tolist() == [1.0, 1.0, 1.0, 0.25, 0.25, 0.25]
+        with pytest.raises(IdentificationError, match=f"length scale of {obs.kind} rows must be positive"):
+            obs.set_length_scale(-1.0)

@@ -65,6 +65,10 @@ def test_unknown_link_names_are_refused_naming_the_known_ones():
         rc.Measurements.from_arrays("marker", np.zeros((2, 6)), points=np.zeros((2, 3)), link=["-1", "a"])
     with pytest.raises(DataError, match="link is empty"):
         rc.Measurements.from_arrays("marker", np.zeros((2, 6)), points=np.zeros((2, 3)), link=["", "a"])
+    fraction = replace(data, link=np.where(data.link == "link_2", "2.5", data.link))
+    for model in (ROBOT, catalog):  # a number that is no frame number is not taken for a name
+        with pytest.raises(DataError, match=r"link '2.5' is not a frame number: give an integer"):
+            rc.calibrate(model, fraction)
 
 
 def test_model_file_keeps_link_names(tmp_path):

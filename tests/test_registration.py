@@ -90,3 +90,20 @@ def test_rejects_plane_data_and_missing_smr(rng):
         register(
             MECA, Measurements.from_arrays("point", q, points=rng.normal(size=(5, 3)), smr=[0, 2, 0, 2, 0])
         )
+
+
+def test_nearest_rotation_is_the_frobenius_projection():
+    """The one rotation projection the frame fits share: a rotation maps to itself, a perturbed one
+    to a proper rotation no farther than the rotations around it (brute force), a reflection's
+    determinant is fixed."""
+    from robocal.kinematics.transforms import nearest_rotation, rotvec_to_matrix
+
+    rng = np.random.default_rng(4)
+    R = rotvec_to_matrix(rng.normal(size=3))
+    assert np.allclose(nearest_rotation(R), R, atol=1e-14)
+    M = R + 0.05 * rng.normal(size=(3, 3))
+    P = nearest_rotation(M)
+    assert np.allclose(P @ P.T, np.eye(3), atol=1e-12) and np.isclose(np.linalg.det(P), 1.0)
+    others = P @ rotvec_to_matrix(0.02 * rng.normal(size=(500, 3)))
+    assert np.linalg.norm(P - M) <= np.linalg.norm(others - M, axis=(1, 2)).min()
+    assert np.isclose(np.linalg.det(nearest_rotation(np.diag([1.0, 1.0, -1.0]))), 1.0)

@@ -345,3 +345,12 @@ def test_distance_data_report_the_pairs_length_errors(tmp_path):
     assert np.sqrt(np.mean(after**2)) == pytest.approx(result["after"]["rms"], rel=1e-9)
     text = render_report(result)
     assert "the pair&#x27;s distance (mm)" in text and "distance to fitted plane" not in text
+
+
+def test_priors_section_gives_the_asked_scales_their_units():
+    from robocal.report.priors import section
+
+    zeros = {"scale": 0.5, "default": 0.5, "unit": "deg", "source": "fixed"}
+    result = {"priors": {"class": "industrial", "class_chosen_by": "model ur5", "groups": {"zeros": zeros},
+                         "asked": {"zeros": 3.2}, "asked_gain_nats": 12.0}}
+    assert "wider priors than were used: zeros 3.200 deg (evidence +12" in section(result)

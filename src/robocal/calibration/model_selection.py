@@ -399,10 +399,12 @@ def _label(terms) -> str:
     return ", ".join(terms) if terms else "geometric"
 
 
-def _search(lin: _Linearised, cv_fold: np.ndarray | None, k: int):
-    """The cyclic frequencies of the full data and of each fold's training items."""
+def _full_search(lin: _Linearised) -> tuple:
+    """``(scan, arrays, found, polished)``: the frequency scan of the full data, the (weighted)
+    arrays it searches, the cyclic frequencies found and those polished; ``(None, (), [], [])``
+    without joint readings. The same for every partition into folds: computed once."""
     if lin.q_item is None:
-        return None, [], [[] for _ in range(k)]
+        return None, (), [], []
     scan = FrequencyScan(lin.q_item, lin.group)
     if np.all(lin.weight == 1.0):  # lsq: no weighted copy of the (M, k) columns
         args = (lin.A, lin.r, lin.Jtheta, lin.rows)
@@ -410,8 +412,20 @@ def _search(lin: _Linearised, cv_fold: np.ndarray | None, k: int):
         w = np.sqrt(np.repeat(lin.weight, lin.rows))[:, None]
         args = (lin.A * w, lin.r * w[:, 0], lin.Jtheta * w, lin.rows)
     full = scan.search(*args)
-    folds = [scan.search(*args, mask=cv_fold != f) for f in range(k)] if full else [[] for _ in range(k)]
-    return scan, scan.polish(full, *args), folds
+    return scan, args, full, scan.polish(full, *args)
+
+
+def _fold_searches(searched: tuple, cv_fold: np.ndarray | None, k: int) -> list:
+    """The cyclic frequencies of each fold's training items (``searched``: :func:`_full_search`;
+    none when the full data have none)."""
+    scan, args, full, _ = searched
+    return [scan.search(*args, mask=cv_fold != f) for f in range(k)] if full else [[] for _ in range(k)]
+
+
+def _search(lin: _Linearised, cv_fold: np.ndarray | None, k: int):
+    """The cyclic frequencies of the full data and of each fold's training items."""
+    searched = _full_search(lin)
+    return searched[0], searched[3], _fold_searches(searched, cv_fold, k)
 
 
 def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol: float,
@@ -431,10 +445,12 @@ def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol
     superset = fit(fixed, [], None)
     t_superset = time.perf_counter() - t0
     lin = _linearise(superset, candidate_names(superset.robot.n_joints, fixed))
-    scan, full_cyclic, fold_cyclic, repeats = None, [], [], []
+    searched = _full_search(lin)
+    scan, full_cyclic = searched[0], searched[3]
+    fold_cyclic, repeats = [], []
     for r in range(REPEATS):  # the same candidates judged over REPEATS partitions into folds
         fold = _folds(lin.group, FOLDS, seed + r)
-        scan, full_cyclic, found = _search(lin, fold, FOLDS)
+        found = _fold_searches(searched, fold, FOLDS)
         fold_cyclic += found
         cv = _CrossValidation(lin, fold, FOLDS, scan, found, full_cyclic, rtol)
         if not repeats:
@@ -445,7 +461,7 @@ def select_error_model(fit: Fit, data, validations: list, *, seed: int = 0, rtol
              "parameters": c.ng_names + (cyclic_params if c.cyclic else [])} for j, c in enumerate(cands)]
     contributions = [row.pop("mse_contributions") for row in rows]
     chosen, best, reason = _choose(rows, contributions)
-    del lin, cv, scan  # the linearised superset's (M, k) arrays are not needed by the final fit
+    del lin, cv, scan, searched  # the linearised superset's (M, k) arrays are not needed by the final fit
     t_select = time.perf_counter() - t0
     while True:  # the chosen model must converge: one that does not is marked and the rule rerun
         final = fit(rows[chosen]["parameters"], validations, superset if warm_final else None)

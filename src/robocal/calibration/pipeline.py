@@ -552,12 +552,20 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
 
 def _check_consistency(result: CalibrationResult, sigma: dict | None, seed: int, force: bool) -> None:
     """The residual test of the fit (:mod:`robocal.trust.consistency`) into the result and its
-    warnings; PlausibilityError (``force``: a warning) when the fit is worse than nominal."""
+    warnings; PlausibilityError (``force``: a warning) when the fit is worse than nominal;
+    IdentificationError when its robust weights rejected every measurement."""
     problem = result.problem
+    weights = result.solver.item_weights
+    if weights is not None and not np.any(weights):  # nothing left to judge the fit on
+        raise IdentificationError(
+            "the fit's robust weights rejected every measurement (each beyond its robust sigmas): the "
+            "data do not fit the model, or one group of residuals is noise-free (simulated 6-D data "
+            "without orientation noise, whose estimated rotation noise goes to 0); check the data, or "
+            "use the lsq method without variance components")
     result.consistency = check_fit(result.state.robot, result.start, problem.observations,
                                    problem.item_error_vectors(result.state),
                                    result.space.size, sigma=sigma, seed=seed, priors=result.prior_scales)
-    kept = slice(None) if result.solver.item_weights is None else result.solver.item_weights != 0
+    kept = slice(None) if weights is None else weights != 0
     before, after_rms = (position_stats(e[kept])["rms"] for e in result.errors)
     # a solve stopped by a limit or the user's threshold may end anywhere: that is said elsewhere;
     # a converged fit worse than nominal absorbed a mistake in the data

@@ -35,6 +35,7 @@ from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG
 
 RESULT_FORMAT = "robocal-result/1"
 FRAME_LINES = 8  # an instrument's estimated frames and marker offsets shown in the summary, at most
+LEANING_SHOWN = 8  # parameters leaning on their prior named in the summary, at most
 PRIOR_SHARE_SHOWN = 0.1  # an estimate whose prior carries this share of its information is listed
 _DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 180.0 / np.pi),
             "rad/rad": ("mdeg/deg", 1e3), "1": ("ppm", 1e6),  # "1": a scale (dimensionless)
@@ -533,7 +534,7 @@ class CalibrationResult(_BeforeAfter):
         if self.prior_scales is not None:
             lines.append(self.prior_scales.sentence())
         if leaning := self.leaning_on_prior():
-            shares = ", ".join(f"{n} {v:.0%}" for n, v in list(leaning.items())[:8])
+            shares = ", ".join(f"{n} {v:.0%}" for n, v in list(leaning.items())[:LEANING_SHOWN])
             lines.append(f"estimated but leaning on their prior (its share of their information): {shares}")
         ident, unused = self.identifiability, self.not_used
         lines += vocabulary.lines(ident, [n for n in ident.dropped if block_of(n) != "joint_errors"]

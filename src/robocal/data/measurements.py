@@ -72,6 +72,7 @@ from robocal.data.instruments import check_instrument
 from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
 from robocal.kinematics.conditions import UNKNOWN, Conditions
 from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
+from robocal.kinematics.link_names import is_frame_number
 from robocal.kinematics.transforms import ROTATION_TOL
 
 _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
@@ -122,7 +123,7 @@ def _link_array(values, n: int) -> np.ndarray:
         if (texts == "").any():
             raise DataError(f"row {int(np.argmax(texts == ''))}: a marker's link is empty: give its frame "
                             "number or its link's name")
-        numeric = np.char.isdigit(np.char.lstrip(texts, "+-"))
+        numeric = is_frame_number(texts)
         if not numeric.all():
             if (np.char.startswith(texts[numeric], "-")).any():
                 raise DataError("link indices must be >= 0 (0 is the robot's base frame, n its flange)")
@@ -355,9 +356,10 @@ class Measurements:
                 raise DataError(f"rotations of row index(es) {bad[:10].tolist()} are not proper rotations")
             kw["rotations"] = R
         if plane is not None:
-            kw["plane"] = _int_array(plane, "plane", N)
+            kw["plane"] = _int_array(plane, spec.column or "plane", N)
             if kw["plane"].min() < 0:
-                raise DataError("plane indices must be >= 0")
+                raise DataError(f"{spec.column or 'plane'} indices must be >= 0 (the plane each contact "
+                                "touched)")
         if pair is not None:
             kw["pair"] = _int_array(pair, "pair", N)
             kw["distance"] = _float_array(distance, "distance", (N,))
@@ -863,7 +865,7 @@ def _header_role(name: str):
 
 def _directive(line: str) -> tuple[str, str] | None:
     """``(name, value)`` of a comment line ``# NAME: value`` with NAME in `_DIRECTIVES`, else None."""
-    m = re.fullmatch(r"#\s*([a-z_]+)\s*:\s*(\S*)\s*", line.strip().lower())
+    m = re.fullmatch(r"#\s*([a-z_]+)\s*:\s*(.*?)\s*", line.strip().lower())  # a wrong value: named
     return (m.group(1), m.group(2)) if m and m.group(1) in _DIRECTIVES else None
 
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from robocal.core.errors import DataError, IdentificationError
-from robocal.kinematics.transforms import make_transform, rotvec_to_matrix, skew
+from robocal.kinematics.transforms import make_transform, nearest_rotation, rotvec_to_matrix, skew
 
 # Smallest singular value (relative to the largest) of the column-normalised registration Jacobian
 # for which the poses still fix the frame and the SMR offsets (identical or collinear poses do not).
@@ -49,9 +49,7 @@ def umeyama(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     w = np.full(len(src), 1.0 / len(src))
     cs, cd = w @ src, w @ dst
     H = (src - cs).T @ ((dst - cd) * w[:, None])
-    U, _, Vt = np.linalg.svd(H)
-    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0])
-    R = Vt.T @ D @ U.T
+    R = nearest_rotation(H).T
     return make_transform(R, cd - R @ cs)
 
 

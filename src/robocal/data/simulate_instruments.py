@@ -35,6 +35,11 @@ def _random_frame(rng: np.random.Generator, spread_m: float) -> np.ndarray:
                           rng.uniform(-spread_m, spread_m, 3))
 
 
+def _floor_mm(noise: np.ndarray) -> float:
+    """The noise floor (mm): the 3-D RMS of the position noise ``(N, 3)`` m (gross errors aside)."""
+    return float(np.sqrt(np.mean(np.sum(noise**2, axis=1)))) * 1e3
+
+
 def _outliers(rng: np.random.Generator, N: int, share: float, size_mm: float
               ) -> tuple[np.ndarray, np.ndarray]:
     """Rows given a gross error and the errors ``(N, 3)`` m (zeros elsewhere)."""
@@ -96,7 +101,7 @@ def simulate_markers(robot, n_poses: int = 40, *, links=None, noise_mm: float = 
     p = p @ W[:3, :3].T + W[:3, 3]
     noise = rng.standard_normal(p.shape) * noise_mm * 1e-3
     rows, gross = _outliers(rng, len(p), outliers, outlier_mm)
-    floor = float(np.sqrt(np.mean(np.sum(noise**2, axis=1)))) * 1e3
+    floor = _floor_mm(noise)
     data = Measurements.from_arrays("marker", q[pose_id], points=p + noise + gross, link=link, smr=smr,
                                     pose_id=pose_id, instrument=instrument,
                                     source=f"simulated by robocal: robot {robot.name}, seed {seed}, "
@@ -157,7 +162,7 @@ def simulate_camera(robot, n_poses: int = 40, *, mount: str = "cell", noise_mm: 
     noise = rng.standard_normal((n_poses, 3)) * noise_mm * 1e-3
     turn = rotvec_to_matrix(rng.standard_normal((n_poses, 3)) * np.deg2rad(noise_deg))
     rows, gross = _outliers(rng, n_poses, outliers, outlier_mm)
-    floor = float(np.sqrt(np.mean(np.sum(noise**2, axis=1)))) * 1e3
+    floor = _floor_mm(noise)
     kind = MOUNTS[mount]
     data = Measurements.from_arrays(kind, q, points=C[:, :3, 3] + noise + gross,
                                     rotations=turn @ C[:, :3, :3], instrument="camera",

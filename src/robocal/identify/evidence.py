@@ -33,6 +33,7 @@ EVIDENCE_GAIN_NATS = 3.0  # log Bayes factor a widened group must earn (Kass & R
 MAX_WIDENING = 20.0  # largest factor on a class default scale (service class: 60 deg zeros, 200 mm/m)
 DIAGNOSIS_WIDENING = 100.0  # the bound of the "what do the data ask for" fit behind the diagnosis
 NOISE_SPAN = 8.0  # log-space bound of the noise around its robust start estimate (e^8 either way)
+WIDENING_RTOL = 1e-6  # a factor within this relative distance of a bound (or scale) counts as at it
 _TINY = 1e-300
 
 
@@ -139,6 +140,6 @@ def fit_group_scales(J: np.ndarray, r: np.ndarray, sigma: np.ndarray, groups, es
     noise = float(np.exp(z[-1]))
     return ScaleFit(factors={g: float(np.exp(v)) for g, v in zip(free, log_f, strict=True)},
                     gain=float(cost(z_default) - cost(z)), noise=noise,
-                    at_bound=tuple(g for g, v in zip(free, log_f, strict=True) if v >= top - 1e-6),
+                    at_bound=tuple(g for g, v in zip(free, log_f, strict=True) if v >= top - WIDENING_RTOL),
                     rms_default=map_residual_rms(stats, precision(zeros), noise),
                     rms_fitted=map_residual_rms(stats, precision(log_f), noise))

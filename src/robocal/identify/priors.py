@@ -38,6 +38,7 @@ from robocal.identify.evidence import (
     DIAGNOSIS_WIDENING,
     EVIDENCE_GAIN_NATS,
     MAX_WIDENING,
+    WIDENING_RTOL,
     NormalStats,
     fit_group_scales,
 )
@@ -45,7 +46,7 @@ from robocal.identify.linalg import ScaledSVD
 from robocal.identify.robust import MAD_TO_SIGMA
 from robocal.identify.space import block_of
 from robocal.kinematics.joint_errors import term_of
-from robocal.kinematics.prior_spec import CLASSES, GROUPS, PriorSpec, class_of
+from robocal.kinematics.prior_spec import CLASSES, DISPLAY_FACTOR, GROUP_UNITS, GROUPS, PriorSpec, class_of
 
 # the group scales of each robot class (zeros, twists, lengths per metre of the arm's summed link
 # lengths, a factor on the joint-error scales below): robocal.kinematics.prior_spec.CLASSES
@@ -208,8 +209,7 @@ def undetermined(J: np.ndarray, sigma: np.ndarray, noise: float) -> tuple[list[i
     return held, ratio
 
 
-_DISPLAY = {"zeros": ("deg", np.rad2deg(1.0)), "twists": ("deg", np.rad2deg(1.0)), "lengths": ("mm", 1e3),
-            "errors": ("x", 1.0)}
+_DISPLAY = {g: (GROUP_UNITS[g], DISPLAY_FACTOR[g]) for g in GROUPS}  # (unit, factor from SI)
 
 
 @dataclass(frozen=True)
@@ -241,7 +241,7 @@ class PriorScales:
     @property
     def tighter_than_asked(self) -> dict:
         """The groups the data ask to widen (beyond the scale used, by the evidence gain), in SI."""
-        return {g: v for g, v in self.asked.items() if v > self.scales[g] * (1 + 1e-6)} \
+        return {g: v for g, v in self.asked.items() if v > self.scales[g] * (1 + WIDENING_RTOL)} \
             if self.asked_gain >= EVIDENCE_GAIN_NATS else {}
 
     def option(self) -> str:

@@ -58,10 +58,16 @@ def is_scara_arm(robot: Robot) -> bool:
     return robot.n_joints == 4 and is_scara(robot.nominal_robot())
 
 
-def _geometry(robot: Robot):
-    """``(origin, axis, L1, L2, phi1, phi2)``: axis 1's point and direction (world), the lengths
-    axis 1 -> axis 2 and axis 2 -> axis 4 (m), and the angles at q = 0 of the upper arm (about the
-    axis, from the world frame's direction ``e`` = the upper arm at q = 0) and of the elbow."""
+def first_axis(robot: Robot) -> np.ndarray:
+    """Joint 1's axis direction ``(3,)`` (world, unit) of a 4-joint ``robot`` at q = 0."""
+    return _frames(robot, np.zeros((1, 4)))[0][1, :3, 2]
+
+
+def _geometry(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float, float, np.ndarray]:
+    """``(origin, axis, e, L1, L2, elbow0, F)``: axis 1's point and direction (world), the unit
+    direction ``e`` of the upper arm at q = 0 (across the axis), the lengths axis 1 -> axis 2 and
+    axis 2 -> axis 4 (m), the elbow's angle at q = 0 (rad, about the axis, from the upper arm to the
+    forearm) and the world frames ``(5, 4, 4)`` at q = 0."""
     F = _frames(robot, np.zeros((1, 4)))[0]
     axis = F[1, :3, 2]
     o1, o2, o4 = F[1, :3, 3], F[2, :3, 3], F[4, :3, 3]

@@ -37,8 +37,22 @@ def check_link_frames(mapping, n: int) -> dict[str, int]:
     return out
 
 
+def is_frame_number(texts) -> np.ndarray:
+    """Per text of ``texts`` (a str or an array of them) whether it is a frame number (an integer,
+    signed or not: its range is checked where the model is known), not a link name."""
+    return np.char.isdigit(np.char.lstrip(np.char.strip(np.asarray(texts, dtype=str)), "+-"))
+
+
 def _is_number(text: str) -> bool:
-    return text.strip().lstrip("+-").isdigit()
+    return bool(is_frame_number(text))
+
+
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def link_numbers(links, link_frames: dict[str, int] | None, robot_name: str) -> np.ndarray:
@@ -54,15 +68,18 @@ def link_numbers(links, link_frames: dict[str, int] | None, robot_name: str) -> 
         text = value.strip()
         if _is_number(text):
             frames[k] = int(text)
+        elif link_frames and text in link_frames:
+            frames[k] = link_frames[text]
+        elif _is_float(text):
+            raise DataError(f"the markers' link {text!r} is not a frame number: give an integer, 0 the base "
+                            "to n the flange, or the link's name")
         elif not link_frames:
             raise DataError(f"the markers' link {text!r} is a name, but model {robot_name} names no links "
                             "(a model read from a URDF does): give frame numbers, 0 the base to n the flange")
-        elif text not in link_frames:
+        else:
             known = sorted(link_frames, key=link_frames.__getitem__)  # root to tip (a stable sort)
             more = f" and {len(known) - LISTED} more" if len(known) > LISTED else ""
             shown = ", ".join(known[:LISTED]) + more
             raise DataError(f"the markers' link {text!r} is not a link of model {robot_name}: its links "
                             f"are {shown} (or give frame numbers, 0 the base to n the flange)")
-        else:
-            frames[k] = link_frames[text]
     return frames[inverse.reshape(-1)]

@@ -33,6 +33,8 @@ GROUP_UNITS = {"zeros": "deg", "twists": "deg", "lengths": "mm", "errors": "x"} 
 _ANGLE = {"deg": np.pi / 180.0, "mrad": 1e-3, "rad": 1.0}
 _LENGTH = {"mm": 1e-3, "um": 1e-6, "m": 1.0}
 _UNITS = {"zeros": _ANGLE, "twists": _ANGLE, "lengths": _LENGTH, "errors": {"x": 1.0}}
+# a group scale in SI times this is in its display unit (GROUP_UNITS)
+DISPLAY_FACTOR = {g: 1.0 / units[GROUP_UNITS[g]] for g, units in _UNITS.items()}
 MAX_SCALE = {"zeros": np.deg2rad(30.0), "twists": np.deg2rad(30.0), "lengths": 0.2, "errors": 1000.0}
 
 
@@ -91,7 +93,7 @@ def parse_value(group: str, value) -> float:
                          f"{', '.join(units)} (e.g. {group}=2{GROUP_UNITS[group]})")
     si = float(match.group(1)) * units[match.group(2)]
     if not 0 < si <= MAX_SCALE[group]:
-        top = MAX_SCALE[group] / units[GROUP_UNITS[group]] if group != "errors" else MAX_SCALE[group]
+        top = MAX_SCALE[group] / units[GROUP_UNITS[group]]
         raise ModelError(f"priors: {group}={value!r} must be above 0 and at most {top:g} "
                          f"{GROUP_UNITS[group]}")
     return si

@@ -39,6 +39,15 @@ def matrix_to_rotvec(R: np.ndarray) -> np.ndarray:
     return Rotation.from_matrix(flat).as_rotvec().reshape(R.shape[:-2] + (3,))
 
 
+def nearest_rotation(M: np.ndarray) -> np.ndarray:
+    """The rotation ``(3, 3)`` nearest a matrix ``M (3, 3)`` in the Frobenius norm (its SVD with the
+    last singular direction flipped when ``det(U Vt) < 0``): the projection every frame fit here uses
+    (a mean of rotations, Kabsch/Umeyama ``nearest_rotation(H).T`` for a cross-covariance ``H``)."""
+    U, _, Vt = np.linalg.svd(M)
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt)) or 1.0])
+    return U @ D @ Vt
+
+
 def make_transform(R: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Homogeneous transforms ``(..., 4, 4)`` from rotations ``(..., 3, 3)`` and translations."""
     R = np.asarray(R, dtype=float)

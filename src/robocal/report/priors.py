@@ -30,7 +30,8 @@ def section(result: dict) -> str | None:
     asked = priors.get("asked") or {}
     if asked:
         out += ("<p class='bad'>The data ask for wider priors than were used: "
-                + ", ".join(f"{esc(g)} {num(v, 3)}" for g, v in asked.items())
+                + ", ".join(f"{esc(g)} {num(v, 3)} {esc((groups.get(g) or {}).get('unit', ''))}".rstrip()
+                            for g, v in asked.items())
                 + f" (evidence +{num(priors.get('asked_gain_nats'), 1)} nats): see the warnings.</p>")
     for g in priors.get("at_bound") or []:
         out += f"<p class='bad'>The {esc(g)} scale reached the widening bound.</p>"

@@ -6,12 +6,31 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from robocal.core.errors import IdentificationError
 from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.joint_errors import joint_error_basis, scatter_offsets
 from robocal.kinematics.thermal import link_coefficients as thermal_coefficients
 from robocal.kinematics.thermal import scale as thermal_scale
 from robocal.kinematics.thermal import scaled_links
+
+
+class SixDWeights:
+    """A 6-D observation's rows weighed in one norm: per item 3 position rows (m) and 3 rotation
+    rows (rad) times ``length_scale`` (m per rad; estimated by
+    :mod:`robocal.identify.variance_components`, which reads ``variance_groups``)."""
+
+    variance_groups = ("position", "rotation")  # rows per item: 3 of each (variance components)
+    kind: str
+
+    def set_length_scale(self, length_scale: float) -> None:
+        """Weigh a rad of orientation residual like ``length_scale`` m of position residual
+        (> 0; IdentificationError otherwise)."""
+        if not length_scale > 0:
+            raise IdentificationError(f"the length scale of {self.kind} rows must be positive (m per rad), "
+                                      f"got {length_scale}")
+        self.length_scale = float(length_scale)
+        self.scale = np.r_[np.ones(3), np.full(3, self.length_scale)]
 
 
 class Observation:

@@ -30,7 +30,7 @@ import numpy as np
 
 from robocal.core.errors import IdentificationError
 from robocal.data.instruments import INSTRUMENTS
-from robocal.identify.observations.base import Observation
+from robocal.identify.observations.base import Observation, SixDWeights
 from robocal.identify.observations.rigid import FRAME_FIELDS, frame_of, hand_eye, left_jacobian, nuisance_of
 from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.transforms import invert_transform, make_transform, pose_error, skew
@@ -44,7 +44,7 @@ def not_observable(robot) -> list[str]:
     return [n for n in robot.parameter_names if n.startswith(FRAME_PREFIXES)]
 
 
-class CameraObservation(Observation):
+class CameraObservation(SixDWeights, Observation):
     """Board poses seen by a camera (see the module); subclasses fix the mounting."""
 
     kind = "camera"
@@ -52,7 +52,6 @@ class CameraObservation(Observation):
     rows_per_item = 6
     inverted = False  # eye-in-hand: the chain is F(q)^-1
     blind_spot = "a camera's own frames replace the robot's base and tool frames"
-    variance_groups = ("position", "rotation")  # rows per item: 3 of each (variance components)
 
     def __init__(self, data, robot, length_scale: float | None = None) -> None:
         super().__init__(data, robot)
@@ -67,14 +66,6 @@ class CameraObservation(Observation):
         except IdentificationError:  # too few poses for frames of their own: they can still be judged
             self.L0 = self.R0 = np.eye(4)  # with another set's frames (import_nuisance); a fit refuses
         self.nuisance_names = [f"camera.{f}" for f in FRAME_FIELDS] + [f"board.{f}" for f in FRAME_FIELDS]
-
-    def set_length_scale(self, length_scale: float) -> None:
-        """Weigh a rad of orientation residual like ``length_scale`` m of position residual."""
-        if not length_scale > 0:
-            raise IdentificationError(f"the length scale of {self.kind} rows must be positive (m per rad), "
-                                      f"got {length_scale}")
-        self.length_scale = float(length_scale)
-        self.scale = np.r_[np.ones(3), np.full(3, self.length_scale)]
 
     def not_observable(self, robot) -> list[str]:
         return not_observable(robot)

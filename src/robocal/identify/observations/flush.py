@@ -139,11 +139,13 @@ class FlushObservation(PlaneObservation):
         return not_observable(robot)
 
     def check_enough(self, n_unknowns: int) -> None:
-        if 3 * self.n_items <= n_unknowns:
+        rows = self.rows_per_item
+        if rows * self.n_items <= n_unknowns:
             raise IdentificationError(
-                f"{self.n_items} flush contacts (3 residuals each) cannot determine {n_unknowns} unknowns "
-                f"(robot parameters plus 3 per plane): record more than {n_unknowns // 3} contacts (3 times "
-                "as many is better), over each plane and the robot's orientations about its normal")
+                f"{self.n_items} flush contacts ({rows} residuals each) cannot determine {n_unknowns} "
+                f"unknowns (robot parameters plus 3 per plane): record more than {n_unknowns // rows} "
+                "contacts (3 times as many is better), over each plane and the robot's orientations about "
+                "its normal")
 
     # ---------------------------------------------------------------- geometry
     def _slopes(self, z: np.ndarray) -> np.ndarray:

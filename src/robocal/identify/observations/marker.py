@@ -65,6 +65,7 @@ class MarkerObservation(Observation):
             on = sorted(set(self.link[self.smr == s].tolist()))
             raise IdentificationError(f"marker {s} is on two links ({on}): a marker stays on one link; "
                                       "number markers on other links apart")
+        self.marker_link = links  # (K,) the link frame of each marker
         if (links == 0).all():
             raise IdentificationError("every marker is on the robot's base (link 0): markers on moving links "
                                       "are needed to see the robot")
@@ -93,7 +94,7 @@ class MarkerObservation(Observation):
         offsets = np.zeros((self.markers.size, 3))
         count = np.bincount(self.marker_of, minlength=self.markers.size)[:, None]
         for _ in range(START_ALTERNATIONS):
-            p = np.einsum("nij,nj->ni", F[:, :3, :3], offsets[self.marker_of]) + F[:, :3, 3]
+            p = self._on_links(F, offsets)
             W = umeyama(p, self.measured)
             local = np.einsum("nji,nj->ni", F[:, :3, :3],
                               (self.measured - W[:3, 3]) @ W[:3, :3] - F[:, :3, 3])
@@ -102,20 +103,24 @@ class MarkerObservation(Observation):
             offsets /= count
         return W, offsets
 
+    def _on_links(self, F: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+        """``(..., N, 3)`` each row's marker in the robot's world, from its link frame ``F (..., N, 4,
+        4)`` and the markers' offsets ``(K, 3)`` (m, in their links' frames)."""
+        return np.einsum("...nij,nj->...ni", F[..., :3, :3], offsets[self.marker_of]) + F[..., :3, 3]
+
     def modelled_points(self, robot, nuisance=None) -> np.ndarray:
         nuisance = self.nuisance_start(robot) if nuisance is None else nuisance
         W, offsets = self._split(nuisance)
-        F = self._link_frames(robot)
-        p = np.einsum("nij,nj->ni", F[:, :3, :3], offsets[self.marker_of]) + F[:, :3, 3]
+        p = self._on_links(self._link_frames(robot), offsets)
         return p @ W[:3, :3].T + W[:3, 3]
 
     def frames(self, nuisance) -> dict[str, np.ndarray]:
         """The estimated capture frame (the robot's world in it, 4 x 4, m) and each marker's offset
         on its link (``(3,)``, m, in the link's frame)."""
         W, offsets = self._split(nuisance)
-        links = {k: int(self.link[self.marker_of == k][0]) for k in range(self.markers.size)}
         return {"robot_world_in_capture": W,
-                **{f"marker{s}_on_link{links[k]}": offsets[k] for k, s in enumerate(self.markers)}}
+                **{f"marker{s}_on_link{int(self.marker_link[k])}": offsets[k]
+                   for k, s in enumerate(self.markers)}}
 
     # ---------------------------------------------------------------- nuisance
     def nuisance_start(self, robot) -> np.ndarray:
@@ -125,7 +130,7 @@ class MarkerObservation(Observation):
     def export_nuisance(self, nuisance) -> dict[str, np.ndarray]:
         W, offsets = self._split(nuisance)
         out = {"capture": W.reshape(-1)}
-        out.update({f"marker{s}": np.r_[offsets[k], self.link[self.marker_of == k][0]]
+        out.update({f"marker{s}": np.r_[offsets[k], self.marker_link[k]]
                     for k, s in enumerate(self.markers)})
         return out
 
@@ -137,7 +142,7 @@ class MarkerObservation(Observation):
             start[:6] = nuisance_of(self.W0, np.reshape(entities["capture"], (4, 4)))
         for k, s in enumerate(self.markers):
             known = entities.get(f"marker{s}")
-            if known is not None and int(known[3]) == self.link[self.marker_of == k][0]:
+            if known is not None and int(known[3]) == self.marker_link[k]:
                 start[6 + 3 * k: 9 + 3 * k] = known[:3]
         return start
 
@@ -164,8 +169,7 @@ class MarkerObservation(Observation):
         W, offsets = self._split(nuisance)
         idx = robot.indices(names)
         F = self._link_frames(robot)
-        local = offsets[self.marker_of]
-        p = np.einsum("nij,nj->ni", F[:, :3, :3], local) + F[:, :3, 3]  # robot world
+        p = self._on_links(F, offsets)  # robot world
         _, u, o, rotation = robot_motion_axes(robot, self.q, None, self.conditions)
         at = np.zeros((self.n_items, 4, 4))
         at[:, :3, 3] = p
@@ -185,7 +189,7 @@ class MarkerObservation(Observation):
         _, frames = self.batch_tcp(robot, names, X, frames=True)
         F = frames[:, np.arange(self.n_items), self.link]  # (P, N, 4, 4)
         W, offsets = self._split(np.asarray(nuisance, float))
-        p = np.einsum("pnij,nj->pni", F[..., :3, :3], offsets[self.marker_of]) + F[..., :3, 3]
+        p = self._on_links(F, offsets)
         return (self.measured[None] - (p @ W[:3, :3].T + W[:3, 3])).reshape(X.shape[0], -1)
 
     def profiled_residuals_batch(self, robot, names, X):

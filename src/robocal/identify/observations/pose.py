@@ -11,16 +11,15 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.data.instruments import INSTRUMENTS
-from robocal.identify.observations.base import Observation
+from robocal.identify.observations.base import Observation, SixDWeights
 from robocal.kinematics.transforms import pose_error
 
 DEFAULT_LENGTH_SCALE = 0.1
 
 
-class PoseObservation(Observation):
+class PoseObservation(SixDWeights, Observation):
     kind = "pose"
     rows_per_item = 6
-    variance_groups = ("position", "rotation")  # rows per item: 3 of each (variance components)
 
     def __init__(self, data, robot, length_scale: float | None = None) -> None:
         super().__init__(data, robot)
@@ -30,12 +29,6 @@ class PoseObservation(Observation):
         self.measured[:, 3, 3] = 1.0
         declared = INSTRUMENTS[data.instrument].length_scale if data.instrument else 0.0
         self.set_length_scale(length_scale or declared or DEFAULT_LENGTH_SCALE)
-
-    def set_length_scale(self, length_scale: float) -> None:
-        """Weigh a rad of orientation residual like ``length_scale`` m of position residual
-        (:mod:`robocal.identify.variance_components` estimates it)."""
-        self.length_scale = float(length_scale)
-        self.scale = np.array([1.0, 1.0, 1.0, length_scale, length_scale, length_scale])
 
     def residuals(self, robot, nuisance=None) -> np.ndarray:
         return (pose_error(self.measured, self._fk(robot)) * self.scale).reshape(-1)

@@ -23,6 +23,7 @@ from robocal.kinematics.transforms import (
     invert_transform,
     make_transform,
     matrix_to_rotvec,
+    nearest_rotation,
     rotvec_to_matrix,
     skew,
 )
@@ -58,9 +59,7 @@ def nuisance_of(T0: np.ndarray, T: np.ndarray) -> np.ndarray:
 def chordal_mean(T: np.ndarray) -> np.ndarray:
     """The rigid transform ``(4, 4)`` closest to frames ``T (N, 4, 4)``: mean translation, and the
     rotation nearest the mean rotation matrix (SVD projection)."""
-    U, _, Vt = np.linalg.svd(T[:, :3, :3].mean(axis=0))
-    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt)) or 1.0])
-    return make_transform(U @ D @ Vt, T[:, :3, 3].mean(axis=0))
+    return make_transform(nearest_rotation(T[:, :3, :3].mean(axis=0)), T[:, :3, 3].mean(axis=0))
 
 
 def _pairs(N: int) -> tuple[np.ndarray, np.ndarray]:
@@ -94,9 +93,7 @@ def hand_eye(A: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         raise IdentificationError("the poses turn the flange about one axis only: the camera's (or board's) "
                                   "rotation on the flange cannot be found; measure poses that turn the wrist "
                                   "about different axes")
-    U, _, Vt = np.linalg.svd(H)
-    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0])
-    Rx = Vt.T @ D @ U.T  # alpha = Rx beta
+    Rx = nearest_rotation(H).T  # alpha = Rx beta
     M = (RA[:, :3, :3] - np.eye(3)).reshape(-1, 3)
     rhs = (np.einsum("ij,nj->ni", Rx, RB[:, :3, 3]) - RA[:, :3, 3]).reshape(-1)
     tx = np.linalg.lstsq(M, rhs, rcond=None)[0]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.ik.scara import branch_slot, is_scara
+from robocal.ik.scara import branch_slot, first_axis, is_scara
 from robocal.programs.config import ConfigScheme, branch_bits, floor_div
 
 SCARA = -1  # the middle fields of a SCARA's row: its CONFIG has one letter, 'L|R, t1, t2, t4'
@@ -54,8 +54,4 @@ class FANUCConfig(ConfigScheme):
 
 def _axis_up(robot) -> float:
     """Cosine between a SCARA's joint-1 axis and its base frame's z axis (up)."""
-    from robocal.kinematics.fk import chain_frames
-
-    F = chain_frames(robot.links, robot.base, robot.tool, np.zeros((1, robot.n_joints)), frames=True,
-                     prismatic=robot.prismatic)[1][0]
-    return float(F[1, :3, 2] @ robot.base[:3, 2])
+    return float(first_axis(robot) @ robot.base[:3, 2])
