@@ -43,7 +43,10 @@ def test_scans_with_a_prior_match_direct_posterior_inversion(seed, r, n):
             ridged = M + RIDGE * np.eye(len(M))  # the search's ridge before the data determine M
             direct = (np.trace(np.linalg.solve(ridged, A)) if criterion == "I"
                       else -np.linalg.slogdet(ridged)[1])
-            assert fast[j] == pytest.approx(direct, rel=1e-6, abs=1e-9)
+            # the rank-one updates lose digits as the ridged matrix's condition number grows (a design
+            # the ridge alone holds: values ~1/RIDGE): the tolerance scales with it
+            rel = max(1e-6, 1e-14 * np.linalg.cond(ridged))
+            assert fast[j] == pytest.approx(direct, rel=rel, abs=1e-9)
             if np.linalg.eigvalsh(M)[0] > 1e-6:  # the exact value (no ridge) where M is regular
                 exact = np.trace(np.linalg.solve(M, A)) if criterion == "I" else -np.linalg.slogdet(M)[1]
                 assert criterion_value(G, A, list(range(n)) + [j], criterion, prior) == \

@@ -107,3 +107,11 @@ def test_nearest_rotation_is_the_frobenius_projection():
     others = P @ rotvec_to_matrix(0.02 * rng.normal(size=(500, 3)))
     assert np.linalg.norm(P - M) <= np.linalg.norm(others - M, axis=(1, 2)).min()
     assert np.isclose(np.linalg.det(nearest_rotation(np.diag([1.0, 1.0, -1.0]))), 1.0)
+
+
+def test_kabsch_rotation_is_the_transposed_projection_of_the_cross_covariance():
+    from robocal.kinematics.transforms import kabsch_rotation, nearest_rotation
+
+    rng = np.random.default_rng(8)
+    for H in rng.normal(size=(50, 3, 3)):
+        assert np.allclose(kabsch_rotation(H), nearest_rotation(H).T, atol=1e-12)

@@ -22,7 +22,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from robocal.core.errors import DataError, IdentificationError
-from robocal.kinematics.transforms import make_transform, nearest_rotation, rotvec_to_matrix, skew
+from robocal.kinematics.transforms import kabsch_rotation, make_transform, rotvec_to_matrix, skew
 
 # Smallest singular value (relative to the largest) of the column-normalised registration Jacobian
 # for which the poses still fix the frame and the SMR offsets (identical or collinear poses do not).
@@ -49,7 +49,7 @@ def umeyama(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     w = np.full(len(src), 1.0 / len(src))
     cs, cd = w @ src, w @ dst
     H = (src - cs).T @ ((dst - cd) * w[:, None])
-    R = nearest_rotation(H).T
+    R = kabsch_rotation(H)
     return make_transform(R, cd - R @ cs)
 
 

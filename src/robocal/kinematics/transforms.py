@@ -48,6 +48,17 @@ def nearest_rotation(M: np.ndarray) -> np.ndarray:
     return U @ D @ Vt
 
 
+def kabsch_rotation(H: np.ndarray) -> np.ndarray:
+    """The rotation ``R (3, 3)`` that best turns the source points onto the destination points of a
+    cross-covariance ``H = sum (src - cs)(dst - cd)^T`` (Kabsch / Umeyama: ``V D U^T`` from the SVD
+    ``H = U S V^T``, ``D`` flipping the last direction of a reflection). The same rotation as
+    ``nearest_rotation(H).T``, computed in the order the frame fits were written in (their
+    results, bit for bit)."""
+    U, _, Vt = np.linalg.svd(H)
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0])
+    return Vt.T @ D @ U.T
+
+
 def make_transform(R: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Homogeneous transforms ``(..., 4, 4)`` from rotations ``(..., 3, 3)`` and translations."""
     R = np.asarray(R, dtype=float)

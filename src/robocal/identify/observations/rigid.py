@@ -21,6 +21,7 @@ import numpy as np
 from robocal.core.errors import IdentificationError
 from robocal.kinematics.transforms import (
     invert_transform,
+    kabsch_rotation,
     make_transform,
     matrix_to_rotvec,
     nearest_rotation,
@@ -93,7 +94,7 @@ def hand_eye(A: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         raise IdentificationError("the poses turn the flange about one axis only: the camera's (or board's) "
                                   "rotation on the flange cannot be found; measure poses that turn the wrist "
                                   "about different axes")
-    Rx = nearest_rotation(H).T  # alpha = Rx beta
+    Rx = kabsch_rotation(H)  # alpha = Rx beta
     M = (RA[:, :3, :3] - np.eye(3)).reshape(-1, 3)
     rhs = (np.einsum("ij,nj->ni", Rx, RB[:, :3, 3]) - RA[:, :3, 3]).reshape(-1)
     tx = np.linalg.lstsq(M, rhs, rcond=None)[0]
