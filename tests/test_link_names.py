@@ -81,3 +81,15 @@ def test_model_file_keeps_link_names(tmp_path):
         replace(ROBOT, link_frames={"link_9": 9})
     with pytest.raises(ModelError, match="'3' is not a link name"):
         replace(ROBOT, link_frames={"3": 3})
+
+
+def test_calibrated_model_judged_on_held_out_markers_of_several_links():
+    # a Panda-style campaign: three markers (one on a forearm link, two on the flange), named links,
+    # the calibrated model judged on held-out poses: its one tool SMR does not refuse the 3 markers
+    sim = rc.simulate_markers(ROBOT, 60, links=[4, 6, 6], noise_mm=0.1, seed=4)
+    named = _named(sim.data, ROBOT)
+    fit, held = named.subset(named.pose_id < 40), named.subset(named.pose_id >= 40)
+    result = rc.calibrate(ROBOT, fit, nongeometric="none")
+    stats = rc.evaluate(result.robot, held)
+    assert stats["kind"] == "marker" and stats["n"] == len(held)
+    assert stats["rms"] < 1.2 * sim.noise_floor_mm < rc.evaluate(ROBOT, held)["rms"]

@@ -31,9 +31,10 @@ def model_errors(robot, data) -> np.ndarray:
 
 
 def _observation(robot, data):
-    """The observation of ``data`` for ``robot`` (checked: joints, SMRs)."""
+    """The observation of ``data`` for ``robot`` (checked: joints, and the SMRs of a tracker's data:
+    markers' offsets are the observation's own unknowns, fitted on the data)."""
     data.check_against(robot)
-    if data.n_smr > len(robot.smr) + 1:
+    if data.spec.sees_position and data.n_smr > len(robot.smr) + 1:
         raise DataError(f"the data use {data.n_smr} SMRs but the model has {len(robot.smr) + 1}: "
                         "register the frame first (--fit-frame) or use a model with these SMRs")
     return observation_for(data, robot)
