@@ -93,3 +93,22 @@ def test_calibrated_model_judged_on_held_out_markers_of_several_links():
     stats = rc.evaluate(result.robot, held)
     assert stats["kind"] == "marker" and stats["n"] == len(held)
     assert stats["rms"] < 1.2 * sim.noise_floor_mm < rc.evaluate(ROBOT, held)["rms"]
+
+
+def test_simulated_markers_name_their_links_as_the_csv_does(tmp_path, capsys):
+    # `simulate --links panda_link4,panda_link8,7`: names of a URDF's links, as the CSV's link column
+    # takes them, give the simulation of their frame numbers; an unknown name lists the known ones
+    from robocal.cli import main
+
+    by_name = rc.simulate_markers(ROBOT, 5, links=["link_4", "tool0", "6"], seed=3)
+    by_number = rc.simulate_markers(ROBOT, 5, links=[4, 6, 6], seed=3)
+    np.testing.assert_array_equal(by_name.data.points, by_number.data.points)
+    urdf, out, truth = tmp_path / "arm.urdf", tmp_path / "m.csv", tmp_path / "t.yaml"
+    urdf.write_text(to_urdf(rc.Robot.from_catalog("ur10")))
+    args = ["simulate", "--robot", str(urdf), "--kind", "marker", "--poses", "5", "-o", str(out),
+            "--truth", str(truth), "--links"]
+    assert main(args + ["link_4,tool0"]) == 0
+    assert rc.Measurements.load(out).link.tolist() == [4, 6] * 5
+    capsys.readouterr()
+    assert main(args + ["arm_left_4_link"]) != 0
+    assert "'arm_left_4_link' is not a link of model" in capsys.readouterr().err

@@ -49,9 +49,9 @@ def add_parser(sub) -> None:
                         "(distance), motion-capture markers (marker, see --links), or a camera's board "
                         "poses with the camera in the cell (eye_to_hand) or on the flange (eye_in_hand; "
                         "--noise-mm and --rotation-noise-deg are its noise, the frames go to TRUTH.sim.json)")
-    p.add_argument("--links", type=numbers(None, "link frame numbers"), metavar="J,J,..",
-                   help="kind marker: the link frame of each marker (0 base .. n flange; default 3 on the "
-                        "flange)")
+    p.add_argument("--links", type=_names, metavar="J,J,..",
+                   help="kind marker: the link of each marker, a frame number (0 base .. n flange) or a "
+                        "link's name in a model read from a URDF (default 3 on the flange)")
     p.add_argument("--noise-mm", type=float, default=0.02, help="isotropic noise sigma per axis, mm")
     p.add_argument("--noise-model", choices=("isotropic", "tracker"), default="isotropic")
     p.add_argument("--outliers", type=float, default=0.0, help="fraction of rows with a 1-5 mm gross error")
@@ -116,6 +116,16 @@ def _thermal_k(text: str) -> float | dict[str, float]:
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected K or GROUP=K,.. (per K, e.g. forearm=23e-6), "
                                          f"got {text!r}") from None
+
+
+def _names(text: str) -> list[str]:
+    """An argparse ``type``: comma-separated texts (link names or frame numbers, resolved against
+    the model by the simulation)."""
+    values = [v.strip() for v in text.split(",") if v.strip()]
+    if not values:
+        raise argparse.ArgumentTypeError(f"expected comma-separated link names or frame numbers, "
+                                         f"got {text!r}")
+    return values
 
 
 def run(args) -> int:

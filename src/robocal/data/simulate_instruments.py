@@ -63,8 +63,9 @@ def simulate_markers(robot, n_poses: int = 40, *, links=None, noise_mm: float = 
         The nominal model; the truth is a perturbed copy (`robocal.data.simulate.perturbed`).
     n_poses : int
         Poses; every marker is seen at every pose.
-    links : sequence of int, optional
-        The link frame of each marker (0 base .. n flange); default three markers on the flange.
+    links : sequence of int or str, optional
+        The link frame of each marker (0 base .. n flange), or its link's name where the model names
+        its links (a URDF's, `Robot.link_frames`); default three markers on the flange.
     noise_mm : float
         1-sigma noise of each coordinate, mm.
     outliers : float
@@ -80,6 +81,8 @@ def simulate_markers(robot, n_poses: int = 40, *, links=None, noise_mm: float = 
         ``info["frames"]``: ``capture`` (the robot's world in the capture frame) and
         ``markers`` (offsets ``(K, 3)`` m in their link frames).
     """
+    if links is not None and np.asarray(links).dtype.kind in "US":  # texts: link names or frame numbers
+        links = robot.link_numbers(np.asarray(links))
     given = np.array([robot.n_joints] * 3 if links is None else links, float)
     links = given.astype(int)
     if given.ndim != 1 or links.size == 0 or (links != given).any() or links.min() < 0 \
