@@ -214,3 +214,62 @@ def test_a_six_axis_config_on_a_scara_is_named_not_called_impossible(tmp_path):
     with pytest.raises(DataError, match="CONFIG 'N U T, 0, 0, 0' is a 6-axis arm's, but the nominal model "
                                         "fanuc_sr6ia is a SCARA"):
         rc.filter_program(tmp_path / "t.ls", robot, robot)
+
+
+# A FANUC SR pick-and-place program as its pendant writes it (the style of a real SR-6iA program):
+# named positions in user frame 1 and tool 1, six decimals, W = -180 (flange down), CONFIG 'L, 0, 0, 0',
+# and motions to position registers (whose values live in the controller)
+_PICK_PLACE = """/PROG  PICK_PLACE
+/ATTR
+OWNER\t\t= MNEDITOR;
+COMMENT\t\t= "";
+LINE_COUNT\t= 5;
+PROTECT\t\t= READ_WRITE;
+DEFAULT_GROUP\t= 1,*,*,*,*;
+/APPL
+/MN
+   1:J P[1:HOME_PICK] 100% FINE    ;
+   2:L P[2:PLACE_A] 100mm/sec FINE    ;
+   3:  PR[2:TMP]=PR[5:TRAY]    ;
+   4:L PR[2:TMP] 100mm/sec FINE    ;
+   5:J P[3:CAM] 100% FINE    ;
+/POS
+{positions}/END
+"""
+_SR_TARGETS = [("HOME_PICK", 412.5, 176.25, 0.0, 0.0), ("PLACE_A", 355.125, -160.5, 0.0, 12.5),
+               ("CAM", 215.75, 330.0, 80.125, -35.0)]  # name, X Y Z mm in UF 1, R deg
+
+
+def test_a_pendant_written_sr_program_in_a_user_frame_is_filtered_onto_the_truth(tmp_path, capsys):
+    from scipy.spatial.transform import Rotation
+
+    from robocal.cli import main
+
+    nominal = rc.Robot.from_catalog("fanuc_sr6ia")
+    truth = replace(simulate_tracker(nominal, 10, seed=5, noise_mm=0.0).truth, tool=nominal.tool,
+                    smr=np.zeros((0, 3)))
+    truth.save(tmp_path / "cal.yaml")
+    blocks = "".join(f'P[{k}:"{name}"]{{\n   GP1:\n\tUF : 1, UT : 1,\t\tCONFIG : \'L, 0, 0, 0\',\n'
+                     f"\tX = {x:12.6f}  mm,\tY = {y:12.6f}  mm,\tZ = {z:12.6f}  mm,\n"
+                     f"\tW =  -180.000000 deg,\tP =     0.000000 deg,\tR = {r:12.6f} deg\n}};\n"
+                     for k, (name, x, y, z, r) in enumerate(_SR_TARGETS, start=1))
+    program = tmp_path / "PICK_PLACE.ls"
+    program.write_text(_PICK_PLACE.replace("{positions}", blocks))
+    out = tmp_path / "out.ls"
+    cal = str(tmp_path / "cal.yaml")
+    assert main(["filter", str(program), "--calibrated", cal, "--nominal", "fanuc_sr6ia",
+                 "--frame", "1=0,0,50,0,0,0", "--tool", "1=0,0,0,0,0,0", "-o", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "3 of 3 Cartesian target(s) filtered" in said and "PR[2:TMP] is a position register" in said
+    text = out.read_text()
+    assert text.count("CONFIG : 'L, 0, 0, 0'") == 3 and 'P[2:"PLACE_A"]' in text
+    values = np.array([[float(v) for v in re.findall(r"[XYZWPR] = +([-\d.]+)", block)]
+                       for block in text.split("/POS")[1].split("P[")[1:]])
+    meant = np.array([t[1:4] for t in _SR_TARGETS])
+    assert 0.01 < np.abs(values[:, :3] - meant).max() < 5.0  # corrected, by a calibration's size
+    F = np.broadcast_to(np.eye(4), (3, 4, 4)).copy()  # the corrected targets in the base frame (UF 1: z + 50)
+    F[:, :3, :3] = Rotation.from_euler("ZYX", values[:, [5, 4, 3]], degrees=True).as_matrix()
+    F[:, :3, 3] = (values[:, :3] + [0.0, 0.0, 50.0]) * 1e-3
+    sol = rc.ik.solve_all(nominal, F)[:, 1]  # 'L': slot 1
+    reached = np.linalg.inv(truth.base) @ truth.fk(sol)
+    np.testing.assert_allclose(reached[:, :3, 3], (meant + [0.0, 0.0, 50.0]) * 1e-3, atol=2e-6)
