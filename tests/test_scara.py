@@ -261,6 +261,14 @@ def test_a_pendant_written_sr_program_in_a_user_frame_is_filtered_onto_the_truth
                  "--frame", "1=0,0,50,0,0,0", "--tool", "1=0,0,0,0,0,0", "-o", str(out)]) == 0
     said = capsys.readouterr().out
     assert "3 of 3 Cartesian target(s) filtered" in said and "PR[2:TMP] is a position register" in said
+    # the quill's margin to its limits is in mm (it was its metres shown as radians in deg: 2.86 'deg')
+    import csv
+
+    with open(tmp_path / "out.ls.targets.csv", newline="") as f:
+        table = list(csv.DictReader(f))
+    assert all(r["limit_unit"] == ("mm" if r["limit_joint"] == "3" else "deg") for r in table)
+    quill = [r for r in table if r["limit_joint"] == "3"]
+    assert quill and all(float(r["limit_margin_deg"]) > 10.0 for r in quill)  # mm, not 0.05
     text = out.read_text()
     assert text.count("CONFIG : 'L, 0, 0, 0'") == 3 and 'P[2:"PLACE_A"]' in text
     values = np.array([[float(v) for v in re.findall(r"[XYZWPR] = +([-\d.]+)", block)]

@@ -584,10 +584,10 @@ def _check_joints(nominal: Robot, comp: Compensation, ok: np.ndarray, problems: 
         problems.append((int(i), comp.not_reached(i)))
     inside = nominal.within_limits(q)
     for i in np.flatnonzero(converged & ~inside):
-        margin = np.rad2deg(np.minimum(q[i] - nominal.limits[:, 0], nominal.limits[:, 1] - q[i]))
+        margin = nominal.joints_shown(np.minimum(q[i] - nominal.limits[:, 0], nominal.limits[:, 1] - q[i]))
         j = int(np.argmin(margin))
         problems.append((int(i), f"the corrected joints leave the limits (joint {j + 1} by "
-                                 f"{-margin[j]:.3f} deg)"))
+                                 f"{-margin[j]:.3f} {nominal.joints[j].unit})"))
 
 
 def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing) -> list[dict]:
@@ -596,8 +596,9 @@ def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing
     dpos = np.linalg.norm(Xc[:, :3, 3] - X[:, :3, 3], axis=1) * 1e3
     drot = np.rad2deg(np.linalg.norm(matrix_to_rotvec(Xc[:, :3, :3] @ np.swapaxes(X[:, :3, :3], 1, 2)),
                                      axis=1))
-    lim = np.rad2deg(np.minimum(q - nominal.limits[:, 0], nominal.limits[:, 1] - q))
+    lim = nominal.joints_shown(np.minimum(q - nominal.limits[:, 0], nominal.limits[:, 1] - q))  # deg; mm
     joint = np.argmin(lim, axis=1)
+    units = [spec.unit for spec in nominal.joints]
     columns = {} if sing is None else {name: values.tolist() for name, values in sing.columns().items()}
     cols = zip(dpos.tolist(), drot.tolist(), lim[np.arange(len(lim)), joint].tolist(), (joint + 1).tolist(),
                good.tolist(), ok.tolist(), converged.tolist(), changed.tolist(), strict=True)
@@ -612,6 +613,7 @@ def _rows(d, targets, X, Xc, nominal, q, ok, good, converged, changed, cfg, sing
                               d.scheme.text(cfg[0][i]) if cfg is not None and reached else ""),
             "config_after": d.scheme.text(cfg[1][i]) if cfg is not None and g else "",
             "reachable": reached, "converged": conv, "limit_margin_deg": margin, "limit_joint": j,
+            "limit_unit": units[j - 1],
             **{name: values[i] for name, values in columns.items()},
         })
     return rows

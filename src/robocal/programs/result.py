@@ -147,7 +147,7 @@ class FilterResult:
         if rows:
             i = int(np.argmin(margin))
             out["smallest_limit_margin"] = {"name": rows[i]["name"], "deg": margin[i],
-                                            "joint": rows[i]["limit_joint"]}
+                                            "joint": rows[i]["limit_joint"], "unit": rows[i]["limit_unit"]}
         if sig:
             j = int(np.argmin(sig))
             out["nearest_singularity"] = {"name": rows[j]["name"], "kind": rows[j]["nearest_singularity"],
@@ -168,7 +168,8 @@ class FilterResult:
                       f"{s['correction_mm']['max']:.3f} mm; orientation median "
                       f"{s['correction_deg']['median']:.4f} deg, max {s['correction_deg']['max']:.4f} deg",
                       f"  configuration changed on {s['configuration_changed']} target(s)",
-                      f"  smallest joint-limit margin {s['smallest_limit_margin']['deg']:.2f} deg "
+                      f"  smallest joint-limit margin {s['smallest_limit_margin']['deg']:.2f} "
+                      f"{s['smallest_limit_margin']['unit']} "
                       f"({s['smallest_limit_margin']['name']}, joint {s['smallest_limit_margin']['joint']})"]
             if "nearest_singularity" in s:
                 lines.append(f"  nearest singularity: {s['nearest_singularity']['name']} "
