@@ -166,9 +166,9 @@ def chunk_solver(robot: Robot, tol: float) -> tuple[Callable[[np.ndarray], np.nd
     def solve(T: np.ndarray) -> np.ndarray:
         seeds = seed_branches(robot, T)
         N = T.shape[0]
-        q, _ = refine(robot, np.repeat(T, BRANCHES, axis=0), seeds.reshape(-1, 4))
-        have = robot.fk(q)
         want = np.repeat(T, BRANCHES, axis=0)
+        q, _ = refine(robot, want, seeds.reshape(-1, 4))
+        have = robot.fk(q)
         ok = (np.abs(have - want).max(axis=(1, 2)) <= tol) & np.isfinite(q).all(axis=1)
         q[~ok] = np.nan
         q[:, [0, 1, 3]] = (q[:, [0, 1, 3]] + np.pi) % (2 * np.pi) - np.pi
