@@ -305,13 +305,13 @@ class _CrossValidation:
         out: list[list[np.ndarray]] = [[] for _ in steps]
         for s in row_chunks(lin.r.size, self.chunk):
             base = lin.r[s][:, None] + lin.A[s] @ Y  # (rows, folds + 1): residuals after each step
+            scored = self.scored[s.start // lin.rows: s.stop // lin.rows]
             for f in range(len(steps)):
                 rows = self.row_fold[s] == f if f < self.k else slice(None)
                 e = base[rows, f]
                 if extra[f].size:
                     e = e + self._extra(s, f)[rows] @ extra[f]
                 items = np.linalg.norm((e * lin.sigma[s][rows]).reshape(-1, lin.rows)[:, :3], axis=1)
-                scored = self.scored[s.start // lin.rows: s.stop // lin.rows]
                 out[f].append(items[scored[rows[:: lin.rows]] if f < self.k else scored])
         return [np.concatenate(parts) for parts in out]
 

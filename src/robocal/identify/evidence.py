@@ -107,7 +107,8 @@ def fit_group_scales(J: np.ndarray, r: np.ndarray, sigma: np.ndarray, groups, es
     stats = NormalStats.of(J, r) if stats is None else stats
     sigma = np.asarray(sigma, float)
     groups = np.array([g if g is not None else "" for g in groups], dtype=object)
-    free = [g for g in dict.fromkeys(groups) if g and g in set(estimated)]
+    wanted = set(estimated)
+    free = [g for g in dict.fromkeys(groups) if g and g in wanted]
     base = np.where(np.isfinite(sigma), 1.0 / np.where(np.isfinite(sigma), sigma, 1.0) ** 2, 0.0)
     member = np.array([groups == g for g in free], dtype=float).reshape(len(free), groups.size)
     top = np.log(max_widening)
@@ -128,18 +129,20 @@ def fit_group_scales(J: np.ndarray, r: np.ndarray, sigma: np.ndarray, groups, es
     zeros = np.zeros(len(free))
     z_default = best(zeros, zeros, np.r_[zeros, log_s0])
     z = best(zeros, np.full(len(free), top), z_default)
+    cost_z = cost(z)  # kept with z: each evidence once, not again per test and for the gain
     for i in np.argsort(z[:-1]):  # the least widened first: does each group earn its widening?
         hi = np.where(z[:-1] > 0.0, top, 0.0)  # the groups kept at their default so far stay there
         if hi[i] == 0.0:
             continue
         hi[i] = 0.0
         without = best(zeros, hi, z)
-        if cost(without) - cost(z) < EVIDENCE_GAIN_NATS:
-            z = without
+        cost_without = cost(without)
+        if cost_without - cost_z < EVIDENCE_GAIN_NATS:
+            z, cost_z = without, cost_without
     log_f = np.clip(z[:-1], 0.0, top)
     noise = float(np.exp(z[-1]))
     return ScaleFit(factors={g: float(np.exp(v)) for g, v in zip(free, log_f, strict=True)},
-                    gain=float(cost(z_default) - cost(z)), noise=noise,
+                    gain=float(cost(z_default) - cost_z), noise=noise,
                     at_bound=tuple(g for g, v in zip(free, log_f, strict=True) if v >= top - WIDENING_RTOL),
                     rms_default=map_residual_rms(stats, precision(zeros), noise),
                     rms_fitted=map_residual_rms(stats, precision(log_f), noise))

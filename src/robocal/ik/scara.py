@@ -124,11 +124,17 @@ def task_error(robot: Robot, T: np.ndarray, q: np.ndarray) -> np.ndarray:
     """``(N, 4)`` task residuals of joints ``q`` ``(N, 4)`` against world TCP poses ``T``: the
     position error (m, world) and the turn (rad) about the robot's axis from the model's TCP x axis
     to the target's."""
+    return _task_error(robot, T, q)[0]
+
+
+def _task_error(robot: Robot, T: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`task_error` and joint 1's axis ``(N, 3)`` (world) at ``q`` it turns about (for the
+    Newton step, which needs the same axis)."""
     have = robot.fk(q)
     axis = _frame_axes(robot, q)[:, 0]
     xh, xw = have[:, :3, 0], T[:, :3, 0]
     turn = np.arctan2(np.einsum("ni,ni->n", np.cross(xh, xw), axis), np.einsum("ni,ni->n", xh, xw))
-    return np.hstack([T[:, :3, 3] - have[:, :3, 3], turn[:, None]])
+    return np.hstack([T[:, :3, 3] - have[:, :3, 3], turn[:, None]]), axis
 
 
 def refine(robot: Robot, T: np.ndarray, q0: np.ndarray, iterations: int = _ITERATIONS
@@ -138,12 +144,11 @@ def refine(robot: Robot, T: np.ndarray, q0: np.ndarray, iterations: int = _ITERA
     (position rows, and the rotation rows projected on the robot's axis)."""
     q = np.asarray(q0, float).copy()
     for _ in range(iterations):
-        r = task_error(robot, T, q)
+        r, axis = _task_error(robot, T, q)  # the axis at q once: the residual's and the step's
         if not np.isfinite(r).all() or (np.linalg.norm(r[:, :3], axis=1) <= TASK_TOL[0] / 10).all() \
                 and (np.abs(r[:, 3]) <= TASK_TOL[1] / 10).all():
             break
         J = robot.jacobian(q, robot.joint_params, kind="pose")  # (N, 6, 4): position, rotation
-        axis = _frame_axes(robot, q)[:, 0]
         A = np.concatenate([J[:, :3], np.einsum("ni,nij->nj", axis, J[:, 3:])[:, None]], axis=1)
         step = np.linalg.solve(A + _SINGULAR_FLOOR * np.eye(4), r[:, :, None])[..., 0]
         q = q + step * np.minimum(1.0, _MAX_STEP / np.maximum(np.abs(step).max(axis=1), 1e-300))[:, None]
@@ -161,9 +166,9 @@ def chunk_solver(robot: Robot, tol: float) -> tuple[Callable[[np.ndarray], np.nd
     def solve(T: np.ndarray) -> np.ndarray:
         seeds = seed_branches(robot, T)
         N = T.shape[0]
-        q, _ = refine(robot, np.repeat(T, BRANCHES, axis=0), seeds.reshape(-1, 4))
-        have = robot.fk(q)
         want = np.repeat(T, BRANCHES, axis=0)
+        q, _ = refine(robot, want, seeds.reshape(-1, 4))
+        have = robot.fk(q)
         ok = (np.abs(have - want).max(axis=(1, 2)) <= tol) & np.isfinite(q).all(axis=1)
         q[~ok] = np.nan
         q[:, [0, 1, 3]] = (q[:, [0, 1, 3]] + np.pi) % (2 * np.pi) - np.pi

@@ -73,14 +73,13 @@ def gauge_free(robot, names: list[str], covariance: np.ndarray, gauge: Gauge,
     """``(names', C')``: the covariance ``(k, k)`` (SI) of the robot parameters ``names`` with the
     gauge motion that best fits each error's TCP displacement over the joints ``q (R, n)`` (rad)
     removed (module docstring); ``names'`` adds the base frame and, for the scale, the lengths."""
-    extra = list(RIGID) + (_lengths(robot) if gauge.scale else [])
-    full = list(names) + [n for n in dict.fromkeys(extra) if n not in names]
+    lengths = _lengths(robot) if gauge.scale else []
+    full = list(names) + [n for n in dict.fromkeys([*RIGID, *lengths]) if n not in names]
     index = {n: i for i, n in enumerate(full)}
     k, K = len(names), len(full)
     directions = np.zeros((K, len(RIGID) + (1 if gauge.scale else 0)))
     directions[[index[n] for n in RIGID], np.arange(len(RIGID))] = 1.0
     if gauge.scale:
-        lengths = _lengths(robot)
         directions[[index[n] for n in lengths], -1] = robot.values_of(lengths)
     G = robot.jacobian(q, full, kind="point")  # (R, 3, K)
     A = np.einsum("rik,ril->kl", G, G) / len(q)

@@ -30,7 +30,7 @@ from robocal.data.simulate import (
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, analyze, hold
 from robocal.identify.priors import prior_sigma, undetermined
 from robocal.identify.problem import CalibrationProblem
-from robocal.identify.space import State
+from robocal.identify.space import ParameterSpace, State
 
 
 @dataclass(frozen=True)
@@ -100,13 +100,20 @@ def whitened_jacobian(robot, problem: CalibrationProblem, state: State, J: np.nd
     return out.reshape(J.shape)
 
 
+def _at_start(robot, data: Measurements, params) -> tuple[CalibrationProblem, ParameterSpace, State,
+                                                           np.ndarray]:
+    """The problem of ``data``, the space of the unknowns ``params``, the model's start state and
+    the Jacobian ``(M, k + m)`` there."""
+    problem = CalibrationProblem(robot, data)
+    space = problem.space(robot, params)
+    state = problem.start(robot)
+    return problem, space, state, problem.jacobian(state, space)
+
+
 def whitened_rows(robot, data: Measurements, noise: Noise, names: list[str]) -> tuple[object, np.ndarray]:
     """The observation of ``data`` and its identification-Jacobian rows ``(M, k)`` over the robot
     parameters ``names`` at the model's start, whitened by ``noise``."""
-    problem = CalibrationProblem(robot, data)
-    space = problem.space(robot, names)
-    state = problem.start(robot)
-    J = problem.jacobian(state, space)
+    problem, space, state, J = _at_start(robot, data, names)
     columns = [space.names.index(nm) for nm in names]
     return problem.observation, whitened_jacobian(robot, problem, state, J, noise)[:, columns]
 
@@ -115,10 +122,7 @@ def posterior_analysis(robot, data: Measurements, noise: Noise, params="auto",
                        rtol: float = DEFAULT_RTOL) -> Identifiability:
     """:func:`judge` of the measurements ``data`` (their rows at the model's predictions) for the
     unknowns ``params``, the data whitened by ``noise``."""
-    problem = CalibrationProblem(robot, data)
-    space = problem.space(robot, params)
-    state = problem.start(robot)
-    J = problem.jacobian(state, space)
+    problem, space, state, J = _at_start(robot, data, params)
     sigma = np.r_[prior_sigma(robot, space.robot), np.full(len(space.nuisance), np.inf)]
     return judge(J, whitened_jacobian(robot, problem, state, J, noise), space.names, sigma,
                  data.n_poses, rtol)

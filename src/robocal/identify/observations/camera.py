@@ -31,17 +31,16 @@ import numpy as np
 from robocal.core.errors import IdentificationError
 from robocal.data.instruments import INSTRUMENTS
 from robocal.identify.observations.base import Observation, SixDWeights
-from robocal.identify.observations.rigid import FRAME_FIELDS, frame_of, hand_eye, left_jacobian, nuisance_of
+from robocal.identify.observations.rigid import (
+    FRAME_FIELDS,
+    frame_of,
+    hand_eye,
+    left_jacobian,
+    nuisance_of,
+    replaced_frames,
+)
 from robocal.kinematics.jacobian import identification_jacobian
 from robocal.kinematics.transforms import invert_transform, make_transform, pose_error, skew
-
-FRAME_PREFIXES = ("base.", "tool.", "smr")  # robot frames the camera's frames replace
-
-
-def not_observable(robot) -> list[str]:
-    """Robot parameters a camera's board poses never identify apart from its two frames: the base
-    and tool frames and SMR offsets."""
-    return [n for n in robot.parameter_names if n.startswith(FRAME_PREFIXES)]
 
 
 class CameraObservation(SixDWeights, Observation):
@@ -68,7 +67,7 @@ class CameraObservation(SixDWeights, Observation):
         self.nuisance_names = [f"camera.{f}" for f in FRAME_FIELDS] + [f"board.{f}" for f in FRAME_FIELDS]
 
     def not_observable(self, robot) -> list[str]:
-        return not_observable(robot)
+        return replaced_frames(robot)
 
     # ---------------------------------------------------------------- model
     def _flange(self, robot) -> np.ndarray:

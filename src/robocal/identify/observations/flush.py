@@ -105,7 +105,8 @@ class FlushObservation(PlaneObservation):
     def __init__(self, data, robot) -> None:
         super(PlaneObservation, self).__init__(data, robot)
         self._index_planes(data, "flush contacts use the tool face (the TCP and the tool's z axis)")
-        z = self._fk(robot)[:, :3, 2]
+        T = self._fk(robot)  # once: the face normals, then the check's planes and residuals
+        z = T[:, :3, 2]
         first = np.argmax(self.onehot, axis=0)  # (K,): each plane's first contact
         sense = np.sign(np.einsum("ni,ni->n", z, z[first[self.plane_of]]))  # either sense of the face
         mean = self.onehot.T @ (z * sense[:, None])  # (K, 3)
@@ -113,14 +114,14 @@ class FlushObservation(PlaneObservation):
         d = self.dependent_axis
         self.perm = np.stack([(d + 1) % 3, (d + 2) % 3, d], axis=1)
         self.nuisance_names = [f"plane{pid}.{c}" for pid in self.plane_ids for c in "abc"]
-        self._check_flush(robot)
+        self._check_flush(robot, T)
 
-    def _check_flush(self, robot) -> None:
-        """IdentificationError when ``robot``'s faces at the contacts of a plane are farther from
-        flush on the plane fitted to them than any robot's errors explain (`MAX_START_TILT_RAD`,
-        `MAX_START_HEIGHT_M`): a contact numbered with another plane, a face not pressed flush,
-        or a face normal that is not the tool's z."""
-        m = self.modelled(self._fk(robot), self.nuisance_start(robot))
+    def _check_flush(self, robot, T: np.ndarray) -> None:
+        """IdentificationError when ``robot``'s faces at the contacts of a plane (its TCP frames
+        ``T (N, 4, 4)``) are farther from flush on the plane fitted to them than any robot's errors
+        explain (`MAX_START_TILT_RAD`, `MAX_START_HEIGHT_M`): a contact numbered with another plane,
+        a face not pressed flush, or a face normal that is not the tool's z."""
+        m = self.modelled(T, self.fit_flush(T))  # on the planes nuisance_start fits
         tilt, height = np.linalg.norm(m[:, 1:], axis=1) / TILT_LENGTH_M, np.abs(m[:, 0])
         for what, value, limit, unit, scale in (("tilted by", tilt, MAX_START_TILT_RAD, "deg", 180 / np.pi),
                                                 ("off the plane by", height, MAX_START_HEIGHT_M, "mm", 1e3)):

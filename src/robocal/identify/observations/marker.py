@@ -25,19 +25,19 @@ import numpy as np
 from robocal.core.errors import IdentificationError
 from robocal.data.registration import umeyama
 from robocal.identify.observations.base import Observation
-from robocal.identify.observations.rigid import FRAME_FIELDS, frame_of, left_jacobian, nuisance_of
+from robocal.identify.observations.rigid import (
+    FRAME_FIELDS,
+    frame_of,
+    left_jacobian,
+    nuisance_of,
+    replaced_frames,
+)
 from robocal.kinematics.jacobian import jacobian_from_axes, robot_motion_axes
 from robocal.kinematics.joint_errors import joint_error_basis
 from robocal.kinematics.thermal import is_name as is_thermal
 from robocal.kinematics.transforms import skew
 
 START_ALTERNATIONS = 50  # rigid fit of W / offsets' least squares: the start of the joint estimate
-FRAME_PREFIXES = ("base.", "tool.", "smr")  # robot frames the capture frame and marker offsets replace
-
-
-def not_observable(robot) -> list[str]:
-    """Robot parameters markers never identify apart from their own frame and offsets."""
-    return [n for n in robot.parameter_names if n.startswith(FRAME_PREFIXES)]
 
 
 class MarkerObservation(Observation):
@@ -75,7 +75,7 @@ class MarkerObservation(Observation):
             f"marker{s}.{c}" for s in self.markers for c in "xyz"]
 
     def not_observable(self, robot) -> list[str]:
-        return not_observable(robot)
+        return replaced_frames(robot)
 
     # ---------------------------------------------------------------- model
     def _link_frames(self, robot) -> np.ndarray:

@@ -33,6 +33,14 @@ SMALL_ANGLE = 1e-8  # rad: below it the left Jacobian's series is used
 # relative rotations smaller than this (rad) carry no direction for the hand-eye rotation
 MIN_RELATIVE_TURN = 1e-3
 FRAME_FIELDS = ("x", "y", "z", "rx", "ry", "rz")
+FRAME_PREFIXES = ("base.", "tool.", "smr")  # robot frames an instrument's own frames replace
+
+
+def replaced_frames(robot) -> list[str]:
+    """Robot parameters an instrument with its own frames (a capture frame and marker offsets, a
+    camera's and a board's frames) never identifies apart from them: the base and tool frames and
+    the SMR offsets."""
+    return [n for n in robot.parameter_names if n.startswith(FRAME_PREFIXES)]
 
 
 def left_jacobian(phi: np.ndarray) -> np.ndarray:
