@@ -214,3 +214,16 @@ def test_a_six_axis_config_on_a_scara_is_named_not_called_impossible(tmp_path):
     with pytest.raises(DataError, match="CONFIG 'N U T, 0, 0, 0' is a 6-axis arm's, but the nominal model "
                                         "fanuc_sr6ia is a SCARA"):
         rc.filter_program(tmp_path / "t.ls", robot, robot)
+
+
+def test_a_scara_program_in_a_language_without_scaras_is_refused_naming_those_with(tmp_path):
+    """The languages whose programs drive a SCARA are the dialects that declare it
+    (``scara_programs``): a URScript program on a SCARA is refused naming them."""
+    from robocal.core.errors import DataError
+    from robocal.programs.registry import capable
+
+    assert [d.key for d in capable("scara_programs")] == ["fanuc"]
+    robot = rc.Robot.from_catalog("fanuc_sr6ia")
+    (tmp_path / "t.script").write_text("def t():\n  movel(p[0.3, 0.1, 0.1, 3.14159, 0, 0])\nend\n")
+    with pytest.raises(DataError, match="a SCARA: its programs are read in FANUC TP only"):
+        rc.filter_program(tmp_path / "t.script", robot, robot)
