@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import add_fanuc_coupled
+from robocal.cli.args import INSTRUMENT_NAMES, add_fanuc_coupled
 from robocal.cli.history_options import add_history_options
 from robocal.core.io import LENGTH_UNITS
 
@@ -38,7 +38,6 @@ the parameter priors (docs/priors.md); parameters the data do not determine are 
 RESERVED = ("seed", "method", "params", "validation", "progress", "nongeometric", "register_frames",
             "rtol", "robot", "data", "force", "warm_start", "sigma", "priors", "instrument",
             "variance_components")
-INSTRUMENT_NAMES = ("tracker", "mocap", "camera")  # robocal.data.instruments.INSTRUMENTS (a test checks)
 
 
 def _option(text: str):
