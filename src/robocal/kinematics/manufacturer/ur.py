@@ -101,20 +101,7 @@ class ImportedCalibration:
 
     Examples
     --------
-    >>> import os, tempfile
-    >>> import numpy as np
-    >>> import robocal as rc
-    >>> from robocal.kinematics.manufacturer.ur import import_calibration, to_ur_calibration
-    >>> nominal = rc.Robot.from_catalog("ur5e")
-    >>> real = nominal.with_values({"a2": nominal.get("a2") - 0.0005})  # upper arm 0.5 mm longer
-    >>> path = os.path.join(tempfile.mkdtemp(), "ur5e_calibration.yaml")
-    >>> with open(path, "w") as f:
-    ...     _ = f.write(to_ur_calibration(real, nominal))
-    >>> imported = import_calibration(path, "ur5e")
-    >>> imported.kind, len(imported.notes) > 0
-    ('ur_calibration YAML', True)
-    >>> abs(imported.robot.get("a2") - real.get("a2")) < 1e-9  # m: the longer arm read back
-    True
+    :func:`import_calibration` returns one (its example writes a file and reads it back).
     """
 
     robot: Robot
@@ -520,6 +507,10 @@ def import_calibration(path, nominal_name: str, name: str | None = None) -> Impo
     >>> with open(path, "w") as f:
     ...     _ = f.write(to_ur_calibration(real, nominal))
     >>> imported = import_calibration(path, "ur5e")
+    >>> imported.kind, len(imported.notes) > 0
+    ('ur_calibration YAML', True)
+    >>> abs(imported.robot.get("a2") - real.get("a2")) < 1e-9  # m: the longer arm read back
+    True
     >>> q = np.array([[0.1, -1.2, 1.0, -0.5, 0.3, 0.2]])  # rad
     >>> bool(np.allclose(imported.robot.fk(q), real.fk(q), atol=1e-12))  # the same arm, m
     True
