@@ -282,3 +282,11 @@ def test_given_tracker_and_smrs_reach_the_simulation():
     tracker_in_base = np.linalg.inv(sim.truth.base)[:3, 3]
     np.testing.assert_allclose(tracker_in_base, [1.5, -0.5, 0.3], atol=1e-12)
     np.testing.assert_array_equal(data.joints[data.smr == 0], q)
+
+
+def test_an_smr_in_millimetres_given_as_metres_is_refused_by_the_api():
+    """``plan_poses(smr=...)`` checks the SMR offsets' magnitude (m) as ``poses --smr-mm`` does its mm."""
+    from robocal.core.errors import UnitError
+
+    with pytest.raises(UnitError, match=r"smr\[0\]: 30 m is too large"):
+        plan_poses(MECA, 12, smr=[10.0, 0.0, 30.0], n_candidates=300, starts=1)

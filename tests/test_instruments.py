@@ -201,7 +201,7 @@ def test_instrument_registry_and_validation():
     assert default_method(declared([data], "mocap")) == "robust"
     with pytest.raises(DataError, match="declares the instrument 'mocap', not 'camera'"):
         declared(declared([data], "mocap"), "camera")
-    from robocal.cli.calibrate import INSTRUMENT_NAMES
+    from robocal.cli.args import INSTRUMENT_NAMES
     assert tuple(INSTRUMENTS) == INSTRUMENT_NAMES
 
 

@@ -113,3 +113,14 @@ def test_swapped_models_are_refused(tmp_path):
     assert controller.name == "abb_irb2600" and calibrated.get("a2") != controller.get("a2")
     with pytest.raises(DataError, match="look swapped"):
         load_model_pair("abb_irb2600", str(path))
+
+
+def test_a_network_file_for_a_method_without_one_is_refused_by_the_api(sim, tmp_path):
+    """``write(network=...)`` of a method that trains no network is refused by the API (as by
+    ``calibrate --network-out``), nothing written, not an AttributeError."""
+    from robocal.core.errors import IdentificationError
+
+    cal = rc.calibrate(rc.Robot.from_catalog("abb_irb2600"), sim.data, nongeometric="none")
+    with pytest.raises(IdentificationError, match="needs the neural method"):
+        cal.write(output=tmp_path / "cal.yaml", network=tmp_path / "net.npz")
+    assert not (tmp_path / "cal.yaml").exists()

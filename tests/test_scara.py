@@ -281,3 +281,14 @@ def test_a_pendant_written_sr_program_in_a_user_frame_is_filtered_onto_the_truth
     sol = rc.ik.solve_all(nominal, F)[:, 1]  # 'L': slot 1
     reached = np.linalg.inv(truth.base) @ truth.fk(sol)
     np.testing.assert_allclose(reached[:, :3, 3], (meant + [0.0, 0.0, 50.0]) * 1e-3, atol=2e-6)
+def test_a_scara_program_in_a_language_without_scaras_is_refused_naming_those_with(tmp_path):
+    """The languages whose programs drive a SCARA are the dialects that declare it
+    (``scara_programs``): a URScript program on a SCARA is refused naming them."""
+    from robocal.core.errors import DataError
+    from robocal.programs.registry import capable
+
+    assert [d.key for d in capable("scara_programs")] == ["fanuc"]
+    robot = rc.Robot.from_catalog("fanuc_sr6ia")
+    (tmp_path / "t.script").write_text("def t():\n  movel(p[0.3, 0.1, 0.1, 3.14159, 0, 0])\nend\n")
+    with pytest.raises(DataError, match="a SCARA: its programs are read in FANUC TP only"):
+        rc.filter_program(tmp_path / "t.script", robot, robot)

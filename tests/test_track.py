@@ -195,3 +195,14 @@ def test_a_lift_is_not_called_a_track(cell):
     summary = result.summary()
     assert "prismatic joint 1 (a track, a lift, a gantry axis): its direction is the base frame" in summary
     assert "track: its direction" not in summary and "scale1" not in summary
+
+
+def test_plan_path_on_a_track_cell_asks_for_the_carriage_positions(cell):
+    """The API (not only ``robocal plan`` without an e1_mm column) says that an arm on a track is
+    planned with its carriage positions, not that it has no branches."""
+    from robocal.core.errors import DataError
+    from robocal.ik.path import plan_path
+
+    robot = cell
+    with pytest.raises(DataError, match="is an arm on a track: plan its path with each pose's carriage"):
+        plan_path(robot, robot.fk(np.zeros((2, robot.n_joints))))

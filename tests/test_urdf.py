@@ -264,3 +264,16 @@ def test_import_keeps_link_names_with_the_frame_each_rides_on():
     for link, j in robot.link_frames.items():
         relative = np.linalg.inv(urdf_fk(UR_LIKE, q, tip=link, root="base_link")) @ frames[:, j]
         np.testing.assert_allclose(relative, np.broadcast_to(relative[0], relative.shape), atol=1e-9)
+
+
+def test_load_model_takes_the_urdf_tip_and_refuses_it_elsewhere(tmp_path):
+    """``load_model(spec, tip=...)`` (what ``export --tip`` calls): the chain ends at ``tip`` in a
+    URDF; a tip for a catalog name or a model YAML is refused, not silently ignored."""
+    from robocal.kinematics.model import load_model
+
+    path = tmp_path / "ur.urdf"
+    path.write_text(UR_LIKE)
+    assert load_model(str(path), tip="wrist_2_link").n_joints == 5
+    assert load_model(str(path)).n_joints == 6
+    with pytest.raises(ModelError, match="'tool0' is a URDF link, but abb_irb2600 is not a URDF"):
+        load_model("abb_irb2600", tip="tool0")

@@ -34,6 +34,7 @@ from robocal.trust.file_shifts import FileShifts, pose_means, split_by_file
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG
 
 RESULT_FORMAT = "robocal-result/1"
+NETWORK_SUFFIXES = (".npz", ".json")  # the files a trained network is written in
 FRAME_LINES = 8  # an instrument's estimated frames and marker offsets shown in the summary, at most
 LEANING_SHOWN = 8  # parameters leaning on their prior named in the summary, at most
 PRIOR_SHARE_SHOWN = 0.1  # an estimate whose prior carries this share of its information is listed
@@ -46,6 +47,21 @@ _DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180.0 / np.pi), "rad/m": ("deg/m", 
 def _combined(errors: list[np.ndarray]) -> dict | None:
     """Statistics (mm) of several files' item errors (m) together; None for no file."""
     return position_stats(np.concatenate(errors)) if errors else None
+
+
+def check_network_output(network, method: str) -> None:
+    """Refuse a file for the trained network (``network``, a path or None) unless ``method`` is
+    the neural one, which trains it, and the name ends in .npz or .json; the CLI asks before the
+    work, :meth:`CalibrationResult.write` again.
+
+    Raises
+    ------
+    IdentificationError
+        ``network`` is given with another method or file suffix.
+    """
+    if network and (method != "neural" or not str(network).lower().endswith(NETWORK_SUFFIXES)):
+        raise IdentificationError("a network file (--network-out) needs the neural method (--method neural) "
+                                  "and a .npz or .json file name")
 
 
 class _BeforeAfter:
@@ -62,6 +78,7 @@ class _BeforeAfter:
     def after(self) -> dict:
         """Statistics (mm) with the calibrated model."""
         return position_stats(self.errors[1])
+
 
 
 @dataclass
@@ -478,7 +495,8 @@ class CalibrationResult(_BeforeAfter):
         Raises
         ------
         IdentificationError
-            The solver did not converge and ``force`` is False: nothing is written.
+            The solver did not converge and ``force`` is False, or ``network`` is given for a
+            method that trains none (`check_network_output`): nothing is written.
 
         Examples
         --------
@@ -489,6 +507,7 @@ class CalibrationResult(_BeforeAfter):
             raise IdentificationError(f"the solver did not converge ({self.solver.status.value}): nothing "
                                       "written; adjust the method's options, or rerun with --force to write "
                                       "the results anyway")
+        check_network_output(network, self.method)
         texts = {}
         if output:
             texts[output] = dump_model(self.robot)

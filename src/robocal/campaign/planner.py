@@ -48,6 +48,7 @@ from robocal.campaign.unmodelled import (
 )
 from robocal.core.errors import DataError, RobocalError
 from robocal.core.io import write_all
+from robocal.core.magnitudes import check_tool
 from robocal.core.progress import Progress
 from robocal.core.version import __version__
 from robocal.data.kinds import OBSERVED, kind_spec
@@ -293,11 +294,14 @@ def _planning_robot(robot, smr, normals):
     """The robot with its TCP on the first SMR and the others as extra SMRs; SMR positions and
     facing directions ``(k, 3)`` in the flange (tool) frame."""
     R, t = robot.tool[:3, :3], robot.tool[:3, 3]
+    given = smr is not None
     if smr is None:
         smr = np.vstack([np.zeros(3), (robot.smr - t) @ R])
     smr = np.asarray(smr, dtype=float).reshape(-1, 3)
     if not len(smr) or not np.isfinite(smr).all():
         raise DataError("SMR positions must be finite (k, 3) coordinates in m (flange frame)")
+    for i, xyz in enumerate(smr if given else ()):  # another unit than m (the CLI asks in its mm first)
+        check_tool(xyz, "m", f"smr[{i}]")
     normals = np.tile([0.0, 0.0, 1.0], (len(smr), 1)) if normals is None else \
         np.asarray(normals, dtype=float).reshape(-1, 3)
     if normals.shape != smr.shape or not np.isfinite(normals).all() or \

@@ -12,6 +12,10 @@ from robocal.core.io import FORMATS as DATA_FORMATS
 from robocal.core.io import check_format as check_data_format
 from robocal.programs.registry import program_formats
 
+# robocal.data.instruments.INSTRUMENTS (a test checks), named here for --instrument's choices
+# without importing the data layer (0.4 s) to build the parser
+INSTRUMENT_NAMES = ("tracker", "mocap", "camera")
+
 
 def numbers(count: int | None, unit_hint: str) -> Callable[[str], list[float]]:
     """An argparse ``type``: ``count`` comma-separated numbers (e.g. ``X,Y,Z``; None: one or more,

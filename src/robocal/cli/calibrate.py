@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import add_fanuc_coupled
+from robocal.cli.args import INSTRUMENT_NAMES, add_fanuc_coupled
 from robocal.cli.history_options import add_history_options
 from robocal.core.io import LENGTH_UNITS
 
@@ -38,7 +38,6 @@ the parameter priors (docs/priors.md); parameters the data do not determine are 
 RESERVED = ("seed", "method", "params", "validation", "progress", "nongeometric", "register_frames",
             "rtol", "robot", "data", "force", "warm_start", "sigma", "priors", "instrument",
             "variance_components")
-INSTRUMENT_NAMES = ("tracker", "mocap", "camera")  # robocal.data.instruments.INSTRUMENTS (a test checks)
 
 
 def _option(text: str):
@@ -144,8 +143,8 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from robocal.calibration.pipeline import calibrate
+    from robocal.calibration.result import check_network_output
     from robocal.cli.args import check_format, load_measurements
-    from robocal.core.errors import IdentificationError
     from robocal.core.io import check_outputs
     from robocal.data.inputs import check_distinct_inputs
     from robocal.history.offsets import offsets_start, recalibrate_offsets, shifts_line, zero_shifts
@@ -161,8 +160,7 @@ def run(args) -> int:
     check_distinct_inputs(args.data, "calibration files")
     check_distinct_inputs([*args.data, *validate], "calibration and validation files",
                           "a validation on the calibration data says nothing of the accuracy elsewhere")
-    if args.network_out and (args.method != "neural" or not args.network_out.endswith((".npz", ".json"))):
-        raise IdentificationError("--network-out needs --method neural and a .npz or .json file name")
+    check_network_output(args.network_out, args.method)  # fail before the work
     robot_id = open_history(args.history, args.robot_id)
     start = offsets_start(args.start, args.offsets_only, args.params, args.nongeometric)
     robot = load_model(args.robot)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import add_fanuc_coupled
+from robocal.cli.args import INSTRUMENT_NAMES, add_fanuc_coupled
 from robocal.cli.history_options import add_history_options
 
 EPILOG = """Examples:
@@ -27,7 +27,7 @@ def add_parser(sub) -> None:
     frame.add_argument("--frame-from", metavar="FIT.csv",
                        help="fit the base frame and SMR offsets on FIT.csv and judge DATA with them")
     p.add_argument("--json", metavar="OUT", help="write the statistics as JSON")
-    p.add_argument("--instrument", choices=("tracker", "mocap", "camera"),
+    p.add_argument("--instrument", choices=INSTRUMENT_NAMES,
                    help="the instrument that took DATA if it declares none: its documented noise is the "
                         "consistency test's")
     p.add_argument("--force", action="store_true",

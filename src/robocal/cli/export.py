@@ -39,14 +39,12 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from pathlib import Path
 
     from robocal.cli.args import check_format
     from robocal.core.errors import DataError
     from robocal.core.io import check_outputs
     from robocal.deploy.formats import export_model
     from robocal.kinematics.model import load_model
-    from robocal.kinematics.urdf import from_urdf
 
     if not args.urdf and not args.yaml and not args.ur_calibration:
         raise DataError("nothing to write: give --urdf OUT, --yaml OUT and/or --ur-calibration OUT")
@@ -54,10 +52,7 @@ def run(args) -> int:
     check_format(args.yaml, "YAML", "--yaml")
     check_format(args.ur_calibration, "YAML", "--ur-calibration")
     check_outputs([args.urdf, args.yaml, args.ur_calibration], [args.model])
-    if Path(args.model).suffix.lower() == ".urdf":
-        robot = from_urdf(Path(args.model), tip=args.tip)
-    else:
-        robot = load_model(args.model)
+    robot = load_model(args.model, tip=args.tip)
     result = export_model(robot, args.urdf, args.yaml, args.ur_calibration, args.frames, args.nominal)
     for line in result.lines(args.quiet):
         print(line)

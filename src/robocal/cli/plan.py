@@ -44,7 +44,6 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from robocal.core.errors import DataError
     from robocal.core.io import check_outputs
     from robocal.data.measurements import robot_reach
     from robocal.deploy.compensation import check_target_units, read_poses_csv
@@ -64,10 +63,8 @@ def run(args) -> int:
     start = None if args.start is None or len(args.start) != robot.n_joints else \
         np.where(robot.prismatic, np.asarray(args.start) * 1e-3, np.deg2rad(args.start))  # mm on a quill
     start = np.deg2rad(args.start) if args.start is not None and start is None else start  # an arm on a track
-    if is_track_cell(robot):  # the arm's path with the carriage where the poses put it
-        if "e1" not in layout:
-            raise DataError(f"{robot.name} is an arm on a track: give each pose's carriage position in an "
-                            "e1_mm column")
+    # an arm on a track: the carriage where the poses put it (without e1 values plan_path refuses)
+    if is_track_cell(robot) and "e1" in layout:
         start = None if start is None else np.r_[layout["e1"][0], start]
         res = track.plan(robot, poses, layout["e1"], weights=args.weights, start=start, nominal=nominal)
     else:

@@ -589,13 +589,35 @@ def _bar_placements(true, n: int, length: float, noise_mm: float, rng: np.random
                            "the workspace: use a shorter bar, fewer placements or a larger workspace box")
 
 
-def _plane_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, workspace_box):
-    """Joints putting the true tip on one of ``n_planes`` random planes through the workspace."""
+def _random_planes(true, n_poses: int, n_planes: int, rng: np.random.Generator,
+                   workspace_box) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``n_planes`` random planes through the middle of the true tip's workspace: unit normals
+    ``(P, 3)``, offsets ``(P,)`` (n.p = c, m, within 0.1 m of the median tip), and the plane of
+    each of ``n_poses`` contacts ``(n_poses,)`` (in turn)."""
     normals = _unit(rng, n_planes)
     q0 = sample_joints(true, 2048, rng, workspace_box, tool=true.tool)
     centre = np.median(true.fk(q0)[:, :3, 3], axis=0)
     offsets = normals @ centre + rng.uniform(-0.1, 0.1, n_planes)
-    plane_idx = np.arange(n_poses) % n_planes
+    return normals, offsets, np.arange(n_poses) % n_planes
+
+
+def _fill_slots(todo: np.ndarray, plane_idx: np.ndarray, ok: np.ndarray, k: np.ndarray,
+                n_planes: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each plane's open contact slots (``todo``, of plane ``plane_idx``) filled in order by the
+    usable candidates (``ok``) drawn for that plane (``k``): the slots filled ``(m,)`` and the
+    candidates filling them ``(m,)`` (indices; a loop over planes only)."""
+    slots, take = [], []
+    for plane in range(n_planes):
+        open_slots = todo[plane_idx[todo] == plane]
+        usable = np.flatnonzero(ok & (k == plane))[: open_slots.size]
+        slots.append(open_slots[: usable.size])
+        take.append(usable)
+    return np.concatenate(slots), np.concatenate(take)
+
+
+def _plane_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, workspace_box):
+    """Joints putting the true tip on one of ``n_planes`` random planes through the workspace."""
+    normals, offsets, plane_idx = _random_planes(true, n_poses, n_planes, rng, workspace_box)
     chosen = np.zeros((n_poses, true.n_joints))
     filled = np.zeros(n_poses, bool)
     for _ in range(100):
@@ -611,12 +633,8 @@ def _plane_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, wo
             continue
         q, res = _move_tips(true, q, offsets[k], normals[k])
         ok = (res < 1e-12) & true.within_limits(q)
-        for plane in range(n_planes):  # fill each plane's open slots (a loop over planes only)
-            slots = todo[plane_idx[todo] == plane]
-            cand = q[ok & (k == plane)][: slots.size]
-            chosen[slots[: len(cand)]] = cand
-            filled[slots[: len(cand)]] = True
-            todo = todo[~np.isin(todo, slots[: len(cand)])]
+        slots, take = _fill_slots(todo, plane_idx, ok, k, n_planes)
+        chosen[slots], filled[slots] = q[take], True
     if not filled.all():
         raise UnreachableError(f"could place only {int(filled.sum())} of {n_poses} plane contacts: "
                                "use fewer poses or a larger workspace")
@@ -660,11 +678,7 @@ def _flush_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, wo
     along the tool's z at contact, offset n.p = c, m) and each contact's noise ``(n_poses, 3)`` m:
     the height along the normal plus the two tilts times the rim length FLUSH_TILT_LENGTH_M
     along the plane's axes (its norm is the contact's error at the truth)."""
-    normals = _unit(rng, n_planes)
-    q0 = sample_joints(true, 2048, rng, workspace_box, tool=true.tool)
-    centre = np.median(true.fk(q0)[:, :3, 3], axis=0)
-    offsets = normals @ centre + rng.uniform(-0.1, 0.1, n_planes)
-    plane_idx = np.arange(n_poses) % n_planes
+    normals, offsets, plane_idx = _random_planes(true, n_poses, n_planes, rng, workspace_box)
     e1 = np.cross(normals, np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
     e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
     e2 = np.cross(normals, e1)
@@ -689,14 +703,10 @@ def _flush_poses(true, n_poses: int, n_planes: int, rng: np.random.Generator, wo
         direction /= np.linalg.norm(direction, axis=1, keepdims=True)
         q, res = _move_faces(true, q, normals[k], offsets[k] + dh, direction)
         ok = (res < 1e-12) & true.within_limits(q)
-        for plane in range(n_planes):  # fill each plane's open slots (a loop over planes only)
-            slots = todo[plane_idx[todo] == plane]
-            take = np.flatnonzero(ok & (k == plane))[: slots.size]
-            chosen[slots[: take.size]] = q[take]
-            noise[slots[: take.size]] = (dh[take, None] * normals[k[take]] + FLUSH_TILT_LENGTH_M
-                                         * (tilt[take, :1] * e1[k[take]] + tilt[take, 1:] * e2[k[take]]))
-            filled[slots[: take.size]] = True
-            todo = todo[~np.isin(todo, slots[: take.size])]
+        slots, take = _fill_slots(todo, plane_idx, ok, k, n_planes)
+        chosen[slots], filled[slots] = q[take], True
+        noise[slots] = (dh[take, None] * normals[k[take]] + FLUSH_TILT_LENGTH_M
+                        * (tilt[take, :1] * e1[k[take]] + tilt[take, 1:] * e2[k[take]]))
     if not filled.all():
         raise UnreachableError(f"could place only {int(filled.sum())} of {n_poses} flush contacts: "
                                "use fewer poses or a larger workspace")

@@ -29,6 +29,7 @@ from robocal.ik.numeric import nominal_branches
 from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
 from robocal.ik.scara import is_scara_arm
+from robocal.kinematics.cell import is_track_cell
 from robocal.kinematics.model import Robot
 
 _TIE_BREAK = 1e-9  # weight of the first waypoint's distance from zero (rad): breaks exact ties only
@@ -246,6 +247,9 @@ def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | No
     ------
     UnreachableError
         Waypoints without any candidate inside the limits, listed by index.
+    DataError
+        ``robot`` is an arm on a track (its path needs each pose's carriage position:
+        :func:`robocal.ik.track.plan`).
 
     Examples
     --------
@@ -259,6 +263,9 @@ def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | No
     """
     T = check_poses(poses)
     n = robot.n_joints
+    if is_track_cell(robot):
+        raise DataError(f"{robot.name} is an arm on a track: plan its path with each pose's carriage "
+                        "position (robocal.ik.track.plan; in a poses CSV, an e1_mm column)")
     if n != _BRANCH_JOINTS and not is_scara_arm(robot):
         raise ModelError(
             f"plan chooses among the inverse-kinematics branches of a 6-joint arm; {robot.name} has {n} "

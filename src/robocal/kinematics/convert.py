@@ -83,6 +83,24 @@ def default_parallel(alpha) -> np.ndarray:
     return parallel
 
 
+def _normal_feet(p0: np.ndarray, z: np.ndarray, p1: np.ndarray, u1: np.ndarray,
+                 w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The feet ``(3,), (3,)`` of the common normal of the line through ``p0`` along unit ``z`` and
+    the one through ``p1`` along unit ``u1`` (m), ``w = z x u1`` (not near zero: not parallel)."""
+    r = p1 - p0
+    ww = w @ w
+    return p0 + (np.cross(r, u1) @ w) / ww * z, p1 + (np.cross(r, z) @ w) / ww * u1
+
+
+def _last_frame(p: np.ndarray, z: np.ndarray, flange: np.ndarray, x_prev: np.ndarray) -> np.ndarray:
+    """The last joint's MDH frame ``(4, 4)`` on the line through ``p`` along unit ``z``: its origin
+    level with the flange, its x the flange's x (else y, else ``x_prev``) made normal to ``z``."""
+    o = p + ((flange[:3, 3] - p) @ z) * z
+    x = next(_unit(_perp(v, z)) for v in (flange[:3, 0], flange[:3, 1], x_prev)
+             if np.linalg.norm(_perp(v, z)) > 1e-6)
+    return _frame(x, z, o)
+
+
 def _snap(values: np.ndarray, grid: float, tol: float) -> np.ndarray:
     """Round values within ``tol`` of a multiple of ``grid`` onto it (cleans 1e-17 residue)."""
     k = np.round(values / grid)
@@ -112,32 +130,24 @@ def mdh_from_axes(joint_frames: np.ndarray, flange: np.ndarray) -> dict:
     p = joint_frames[:, :3, 3]
     n = len(u)
     F = [first_frame(u[0], p[0])]
-    for i in range(n):
-        prev = F[-1]
-        x_prev, o_prev = prev[:3, 0], prev[:3, 3]
+    for i in range(n - 1):
+        x_prev, o_prev = F[-1][:3, 0], F[-1][:3, 3]
         # where the previous x axis meets axis i (the MDH intermediate origin, d_i = 0 there)
         hit = o_prev + ((p[i] - o_prev) @ x_prev) * x_prev
         z = u[i]
-        if i == n - 1:
-            o = p[i] + ((flange[:3, 3] - p[i]) @ z) * z
-            x = next(_unit(_perp(v, z)) for v in (flange[:3, 0], flange[:3, 1], x_prev)
-                      if np.linalg.norm(_perp(v, z)) > 1e-6)
+        w = np.cross(z, u[i + 1])
+        if np.linalg.norm(w) < PARALLEL_TOL:  # parallel: normal from the hit point
+            o = hit
+            v = _perp(p[i + 1] - o, z)
+            x = _unit(v) if np.linalg.norm(v) > _DIST_TOL else _unit(_perp(x_prev, z))
         else:
-            w = np.cross(z, u[i + 1])
-            if np.linalg.norm(w) < PARALLEL_TOL:  # parallel: normal from the hit point
-                o = hit
-                v = _perp(p[i + 1] - o, z)
-                x = _unit(v) if np.linalg.norm(v) > _DIST_TOL else _unit(_perp(x_prev, z))
-            else:
-                r = p[i + 1] - p[i]
-                ww = w @ w
-                o = p[i] + (np.cross(r, u[i + 1]) @ w) / ww * z
-                foot = p[i + 1] + (np.cross(r, z) @ w) / ww * u[i + 1]
-                v = foot - o
-                x = _unit(v) if np.linalg.norm(v) > _DIST_TOL else _unit(w)
-            if x @ x_prev < -1e-9:  # prefer theta near 0: a may then be negative
-                x = -x
+            o, foot = _normal_feet(p[i], z, p[i + 1], u[i + 1], w)
+            v = foot - o
+            x = _unit(v) if np.linalg.norm(v) > _DIST_TOL else _unit(w)
+        if x @ x_prev < -1e-9:  # prefer theta near 0: a may then be negative
+            x = -x
         F.append(_frame(x, z, o))
+    F.append(_last_frame(p[-1], u[-1], flange, F[-1][:3, 0]))
     alpha, a, theta, d = (np.zeros(n) for _ in range(4))
     for i in range(n):
         x0, z0, o0 = F[i][:3, 0], F[i][:3, 2], F[i][:3, 3]

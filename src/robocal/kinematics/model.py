@@ -1054,15 +1054,19 @@ class Robot:
         return f"Robot({self.name!r}, {self.n_joints} joints)"
 
 
-def load_model(spec: str) -> Robot:
+def load_model(spec: str, tip: str | None = None) -> Robot:
     """A robot from a model YAML path (or a cell file: a robot on a track), a URDF (a serial chain:
-    `robocal.kinematics.urdf_read`) or a catalog name (what every ``--robot`` takes)."""
+    `robocal.kinematics.urdf_read`, ending at link ``tip``, default the deepest leaf) or a catalog
+    name (what every ``--robot`` takes). A ``tip`` for anything but a URDF is refused (ModelError)."""
     path = Path(spec)
     if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (path.is_file() and _looks_like_xml(path)):
         if path.suffix.lower() == ".xacro":
             raise ModelError(f"{spec} is a xacro macro file: expand it first (xacro {path.name} > "
                              "robot.urdf) and give the URDF")
-        return Robot(**urdf_kwargs(path))
+        return Robot(**urdf_kwargs(path, tip))
+    if tip is not None:
+        raise ModelError(f"tip {tip!r} is a URDF link, but {spec} is not a URDF (its chain ends where its "
+                         "model says)")
     if path.suffix.lower() in (".yaml", ".yml") or path.exists():
         return Robot.load(path)
     return Robot.from_catalog(spec)

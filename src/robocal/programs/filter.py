@@ -61,8 +61,7 @@ from robocal.programs.track import track_program
 from robocal.trust.coverage import Prediction, target_warnings
 from robocal.trust.output_marker import check_unmarked
 
-CONTROLLER_JOINTS = 6  # RAPID, KRL, FANUC TP and URScript programs here drive 6-axis arms
-SCARA_DIALECTS = ("fanuc",)  # and these a SCARA too (FANUC SR-series: CONFIG 'L|R, t1, t2, t4')
+CONTROLLER_JOINTS = 6  # the programs the dialects read drive 6-axis arms (a few a SCARA too)
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
 CHUNK = 5_000  # targets whose IK candidates and numeric IK are computed at once (memory)
 SWEEPS = 4  # batched passes of the nearest-to-previous joint search (programs without configuration)
@@ -403,12 +402,13 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
         raise DataError("no program file given")
     track = track_program(nominal)  # an arm on a track: programs/track.py
     d = dialect_for(paths, dialect)
-    scara = is_scara(nominal) and d.key in SCARA_DIALECTS
+    scara = is_scara(nominal) and d.scara_programs  # a language whose programs drive a SCARA
     if nominal.n_joints != CONTROLLER_JOINTS and track is None and not scara:
+        scara_languages = ", ".join(c.name for c in capable("scara_programs"))
         raise DataError(f"the programs of these controllers drive {CONTROLLER_JOINTS}-axis arms; the nominal "
                         f"model {nominal.name!r} has {nominal.n_joints} joints (an arm on a track: give "
                         "its cell model; a SCARA: its programs are read in "
-                        f"{', '.join(SCARA_DIALECTS)} only, Epson SPEL+ is not a language robocal reads)")
+                        f"{scara_languages} only, Epson SPEL+ is not a language robocal reads)")
     controller = nominal if track is None else track.arm  # the arm the controller solves for
     sources = [ProgramText(p) for p in paths]
     for s in sources:

@@ -34,7 +34,16 @@ from robocal.core.errors import ModelError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_all
 from robocal.core.yaml_load import load_yaml
 from robocal.kinematics.catalog import catalog_entry, catalog_names
-from robocal.kinematics.convert import PARALLEL_TOL, first_frame
+from robocal.kinematics.convert import (
+    _DIST_TOL,
+    PARALLEL_TOL,
+    _frame,
+    _last_frame,
+    _normal_feet,
+    _perp,
+    _unit,
+    first_frame,
+)
 from robocal.kinematics.model import MAX_ANGLE_RAD, Robot
 from robocal.kinematics.model_file import dump_model
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
@@ -56,7 +65,6 @@ SELF_CHECK_M = 1e-11
 SELF_CHECK_RAD = 1e-12
 SELF_CHECK_POSES = 64
 FLANGE_ON_AXIS_TOL = 1e-12  # m / rad: tool0 off joint 6's axis by more cannot be written for the xacro
-_DIST_TOL = 1e-12  # m: axes closer than this intersect
 
 
 # ur_description: wrist_3_link -> flange rpy (0, -pi/2, -pi/2), flange -> tool0 rpy (pi/2, 0, pi/2)
@@ -101,20 +109,7 @@ class ImportedCalibration:
 
     Examples
     --------
-    >>> import os, tempfile
-    >>> import numpy as np
-    >>> import robocal as rc
-    >>> from robocal.kinematics.manufacturer.ur import import_calibration, to_ur_calibration
-    >>> nominal = rc.Robot.from_catalog("ur5e")
-    >>> real = nominal.with_values({"a2": nominal.get("a2") - 0.0005})  # upper arm 0.5 mm longer
-    >>> path = os.path.join(tempfile.mkdtemp(), "ur5e_calibration.yaml")
-    >>> with open(path, "w") as f:
-    ...     _ = f.write(to_ur_calibration(real, nominal))
-    >>> imported = import_calibration(path, "ur5e")
-    >>> imported.kind, len(imported.notes) > 0
-    ('ur_calibration YAML', True)
-    >>> abs(imported.robot.get("a2") - real.get("a2")) < 1e-9  # m: the longer arm read back
-    True
+    :func:`import_calibration` returns one (its example writes a file and reads it back).
     """
 
     robot: Robot
@@ -196,18 +191,6 @@ def _origin_lines(origins: np.ndarray, tip: np.ndarray) -> tuple[np.ndarray, np.
     return np.array(u), np.array(p), T @ tip
 
 
-def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.linalg.norm(v)
-
-
-def _perp(v: np.ndarray, z: np.ndarray) -> np.ndarray:
-    return v - (v @ z) * z
-
-
-def _frame(x: np.ndarray, z: np.ndarray, o: np.ndarray) -> np.ndarray:
-    return make_transform(np.column_stack([x, np.cross(z, x), z]), o)
-
-
 def mdh_beta_from_lines(u: np.ndarray, p: np.ndarray, flange: np.ndarray, hayati) -> dict:
     """MDH + beta (alpha, a, beta, theta, d ``(n,)``, base, tool 4x4) of the chain whose joint i
     turns right-handedly about the line through ``p[i]`` along unit ``u[i]`` (world, m), with
@@ -225,32 +208,25 @@ def mdh_beta_from_lines(u: np.ndarray, p: np.ndarray, flange: np.ndarray, hayati
     hayati = np.asarray(hayati, bool)
     frames = [first_frame(u[0], p[0])]
     feet = [frames[0][:3, 3] + ((p[0] - frames[0][:3, 3]) @ frames[0][:3, 0]) * frames[0][:3, 0]]
-    for i in range(n):
+    for i in range(n - 1):
         x_prev, z = frames[-1][:3, 0], u[i]
-        if i == n - 1:
-            o = p[i] + ((flange[:3, 3] - p[i]) @ z) * z
-            x = next(_unit(_perp(v, z)) for v in (flange[:3, 0], flange[:3, 1], x_prev)
-                     if np.linalg.norm(_perp(v, z)) > 1e-6)
+        w = np.cross(z, u[i + 1])
+        if hayati[i + 1] or np.linalg.norm(w) < PARALLEL_TOL:
+            o = feet[i]  # d_i = 0; the next axis crosses the plane normal to z through o at foot
+            foot = p[i + 1] + ((o - p[i + 1]) @ z) / (u[i + 1] @ z) * u[i + 1]
         else:
-            w = np.cross(z, u[i + 1])
-            if hayati[i + 1] or np.linalg.norm(w) < PARALLEL_TOL:
-                o = feet[i]  # d_i = 0; the next axis crosses the plane normal to z through o at foot
-                foot = p[i + 1] + ((o - p[i + 1]) @ z) / (u[i + 1] @ z) * u[i + 1]
-            else:
-                r = p[i + 1] - p[i]
-                ww = w @ w
-                o = p[i] + (np.cross(r, u[i + 1]) @ w) / ww * z
-                foot = p[i + 1] + (np.cross(r, z) @ w) / ww * u[i + 1]
-            gap = foot - o
-            if not (hayati[i + 1] or np.linalg.norm(w) < PARALLEL_TOL):
-                # the common normal's direction from the axes (exact however short the normal)
-                x = _unit(w) * (1.0 if gap @ w >= 0 else -1.0)
-            else:
-                x = _unit(gap) if np.linalg.norm(gap) > _DIST_TOL else _unit(_perp(x_prev, z))
-            if x @ x_prev < -1e-9:  # prefer theta near 0: a may then be negative
-                x = -x
-            feet.append(o + (gap @ x) * x)
+            o, foot = _normal_feet(p[i], z, p[i + 1], u[i + 1], w)
+        gap = foot - o
+        if not (hayati[i + 1] or np.linalg.norm(w) < PARALLEL_TOL):
+            # the common normal's direction from the axes (exact however short the normal)
+            x = _unit(w) * (1.0 if gap @ w >= 0 else -1.0)
+        else:
+            x = _unit(gap) if np.linalg.norm(gap) > _DIST_TOL else _unit(_perp(x_prev, z))
+        if x @ x_prev < -1e-9:  # prefer theta near 0: a may then be negative
+            x = -x
+        feet.append(o + (gap @ x) * x)
         frames.append(_frame(x, z, o))
+    frames.append(_last_frame(p[-1], u[-1], flange, frames[-1][:3, 0]))
     alpha, a, beta, theta, d = (np.zeros(n) for _ in range(5))
     for i in range(n):
         R0, o0, R1, o1 = frames[i][:3, :3], frames[i][:3, 3], frames[i + 1][:3, :3], frames[i + 1][:3, 3]
@@ -520,6 +496,10 @@ def import_calibration(path, nominal_name: str, name: str | None = None) -> Impo
     >>> with open(path, "w") as f:
     ...     _ = f.write(to_ur_calibration(real, nominal))
     >>> imported = import_calibration(path, "ur5e")
+    >>> imported.kind, len(imported.notes) > 0
+    ('ur_calibration YAML', True)
+    >>> abs(imported.robot.get("a2") - real.get("a2")) < 1e-9  # m: the longer arm read back
+    True
     >>> q = np.array([[0.1, -1.2, 1.0, -0.5, 0.3, 0.2]])  # rad
     >>> bool(np.allclose(imported.robot.fk(q), real.fk(q), atol=1e-12))  # the same arm, m
     True

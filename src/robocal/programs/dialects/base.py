@@ -26,7 +26,8 @@ class Dialect:
 
     Capabilities the filter asks instead of the language's name: ``position_registers`` (a file
     of position registers the motions use, ``filter_program(position_registers=...)``),
-    ``payload_schedules`` (load schedules the motions select, ``payload_schedules=...``)."""
+    ``payload_schedules`` (load schedules the motions select, ``payload_schedules=...``),
+    ``scara_programs`` (its programs drive a SCARA: the filter reads them for a 4-joint SCARA)."""
 
     key = ""  # registry key: --format, poses --program
     name = ""  # the language as messages and results name it
@@ -45,6 +46,7 @@ class Dialect:
     campaign_rank = 0  # the order poses writes the languages' programs in
     campaign_refuses_tracks = False  # its campaign programs are refused for an arm on a track
     campaign_scara = False  # its campaign programs drive a SCARA (4 joints, the quill in mm)
+    scara_programs = False  # capability: its programs drive a SCARA (its configuration data say so)
     scheme: ConfigScheme | None = None
     n_values = 6  # pose numbers per target
     shared_decimals: tuple[tuple[int, ...], ...] = ()  # pose columns written at the file's finest decimals

@@ -71,6 +71,7 @@ class FanucDialect(Dialect):
     campaign_rank = 3
     campaign_refuses_tracks = True
     campaign_scara = True  # an SR-series arm: J1, J2, J4 in deg, the quill J3 in mm
+    scara_programs = True  # SR-series programs: CONFIG 'L|R, t1, t2, t4'
     title = "FANUC TP (.ls)"
     signature = r"^/(?:PROG|MN|POS)\b"
     angle_unit = "deg"
