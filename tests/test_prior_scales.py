@@ -4,7 +4,9 @@ the --priors grammar and the model file's priors: block, and the "priors too tig
 from __future__ import annotations
 
 import argparse
+import sys
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +18,9 @@ from robocal.core.errors import ModelError
 from robocal.identify.evidence import NormalStats, fit_group_scales, log_evidence
 from robocal.kinematics.prior_spec import PriorSpec, class_of
 from robocal.trust.diagnosis import priors_too_tight
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from bench_prior_scales import far_from_drawing  # noqa: E402  (the benchmark's arms far from their drawing)
 
 
 def _linear_problem(seed: int = 0, widen: float = 4.0):
@@ -69,22 +74,9 @@ def test_a_group_the_data_do_not_ask_for_stays_at_its_default():
     assert fit.gain < 3.0 + 1e-9
 
 
-def _truth(nominal, rng, zero_deg: float, len_mm: float, twist_deg: float = 0.5):
-    """``nominal`` with joint zeros off by about ``zero_deg``, twists by ``twist_deg`` and lengths by
-    ``len_mm`` (1 sigma)."""
-    up = {}
-    for i in range(1, nominal.n_joints + 1):
-        zero = np.deg2rad(zero_deg) * rng.choice([-1, 1]) * rng.uniform(0.8, 1.2)
-        up[f"theta{i}"] = nominal.get(f"theta{i}") + zero
-        up[f"alpha{i}"] = nominal.get(f"alpha{i}") + np.deg2rad(twist_deg) * rng.normal()
-        for p in ("a", "d"):
-            up[f"{p}{i}"] = nominal.get(f"{p}{i}") + len_mm * 1e-3 * rng.normal()
-    return nominal.with_values(up)
-
-
 def test_a_robot_far_from_its_drawing_gets_wider_priors_and_the_held_out_error_reaches_the_noise():
     nominal = rc.Robot.from_catalog("abb_irb120")
-    true = _truth(nominal, np.random.default_rng(1), 2.5, 10.0)
+    true = far_from_drawing(nominal, np.random.default_rng(1), zero_deg=2.5, length_mm=10.0)
     sim = rc.simulate_tracker(true, 30, noise_mm=0.5, seed=3, as_is=True)
     fit, check = sim.data.split_poses(0.6, seed=0)
     res = rc.calibrate(nominal, fit, validation=check, nongeometric=None, force=True)
@@ -148,7 +140,7 @@ def test_class_from_the_model():
 
 def test_priors_too_tight_is_the_diagnosis_of_a_misfit():
     nominal = rc.Robot.from_catalog("ur5")
-    true = _truth(nominal, np.random.default_rng(1), 4.0, 15.0)
+    true = far_from_drawing(nominal, np.random.default_rng(1), zero_deg=4.0, length_mm=15.0)
     sim = rc.simulate_tracker(true, 15, noise_mm=0.02, seed=3, as_is=True)
     res = rc.calibrate(nominal, sim.data, nongeometric=None, priors="estimate=no", force=True)
     assert res.consistency.misfit
