@@ -249,7 +249,7 @@ def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | No
         Waypoints without any candidate inside the limits, listed by index.
     DataError
         ``robot`` is an arm on a track (its path needs each pose's carriage position:
-        :func:`robocal.ik.track.plan`).
+        `robocal.ik.track.plan`).
 
     Examples
     --------

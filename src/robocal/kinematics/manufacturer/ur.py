@@ -109,7 +109,12 @@ class ImportedCalibration:
 
     Examples
     --------
-    :func:`import_calibration` returns one (its example writes a file and reads it back).
+    `import_calibration` returns one (its example writes a file and reads it back); by hand:
+
+    >>> import robocal as rc
+    >>> from robocal.kinematics.manufacturer.ur import ImportedCalibration
+    >>> ImportedCalibration(rc.Robot.from_catalog("ur5e"), "ur_calibration YAML", []).kind
+    'ur_calibration YAML'
     """
 
     robot: Robot
