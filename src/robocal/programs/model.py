@@ -38,7 +38,11 @@ class Program:
     ``executed``: the text pieces ``(file, start, end)`` in the order the controller runs them
     (:mod:`robocal.programs.flow`; empty: not known, text order). ``declared_tools``: the tool data
     the program holds without the user's ``tools`` (what the files declare and the controller's
-    own, e.g. tool0 or the flange), name -> 4x4 (m): what a ``--tool`` of the same name replaces."""
+    own, e.g. tool0 or the flange), name -> 4x4 (m): what a ``--tool`` of the same name replaces.
+    ``carried``: frames that a mechanical unit moves (a work object on a positioner's plate: RAPID
+    ufmec, KRL external kinematics, an INFORM station frame, FANUC coordinated motion), frame name ->
+    the unit's name as the program and the cell file call it (``STN1``); such a frame is in that
+    unit's plate frame, not the robot's world (:mod:`robocal.programs.positioner`)."""
 
     targets: list[Target]
     frames: dict[str, np.ndarray] = field(default_factory=dict)
@@ -54,6 +58,7 @@ class Program:
     not_corrected: dict[int, str] = field(default_factory=dict)
     executed: list[tuple[Path, int, int]] = field(default_factory=list)  # text pieces in execution order
     declared_tools: dict[str, np.ndarray] = field(default_factory=dict)
+    carried: dict[str, str] = field(default_factory=dict)  # frame name -> mechanical unit moving it
 
     def motion(self, source: ProgramText, at: int, instruction: str) -> Account:
         """The account of the motion instruction at offset ``at`` of ``source`` (opened once)."""

@@ -4,7 +4,7 @@ them into a :class:`~robocal.programs.model.Program`)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -32,7 +32,10 @@ class Target:
     qnear: np.ndarray | None = None
     order: int = 0  # position in execution order (first execution, :mod:`robocal.programs.flow`)
     monitored: bool = True  # False: the motion runs with configuration monitoring off (RAPID ConfL Off)
-    external: str = ""  # external-axis values the target carries (a track, gantry or positioner)
+    external: str = ""  # external-axis values the target carries (a track, gantry or positioner), as text
+    # the same values as data: the program's axis name (eax_b, E2, E1 of GP2 ...) -> value as written
+    # (mm or deg); empty: none or not read by the dialect
+    axes: dict[str, float] = field(default_factory=dict)
 
     @property
     def line(self) -> int:
