@@ -26,7 +26,7 @@ The calibrated cell is put in the controller's world by `robocal.kinematics.work
 from __future__ import annotations
 
 import datetime
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -40,8 +40,7 @@ from robocal.data.cell_measurements import CellMeasurements
 from robocal.data.measurements import Measurements
 from robocal.data.registration import umeyama
 from robocal.kinematics.prior_spec import CLASSES, PriorSpec
-from robocal.kinematics.transforms import invert_transform, make_transform, matrix_to_rotvec
-from robocal.report.metrics import position_stats
+from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 
 CELL_RESULT_FORMAT = "robocal-cell-calibration/1"
 POSITIONER_CLASS = "positioner"  # the prior class of a positioner's chain (when the classes have it)
@@ -290,20 +289,21 @@ def _plate(cell, name: str, body: _Body, result) -> PlateSolution:
     held = [p for p in (f"theta{n}", f"d{n}") if p in ident.dropped or p in ident.undetermined]
     if body.smr_numbers is None:
         fixed = f"; {', '.join(held)} held (confounded with the plate's rotation)" if held else ""
-        return PlateSolution(name, "nests", f"plate of {name}: {len(body.robot.smr)} nests at known places fix "
-                             "the plate frame and the turn axis' zero together (the plate at every table "
+        return PlateSolution(name, "nests", f"plate of {name}: {len(body.robot.smr)} nests at known places "
+                             "fix the plate frame and the turn axis' zero together (the plate at every table "
                              f"angle is identified){fixed}")
     tool = result.robot.tool
     offsets = np.vstack([tool[:3, 3], result.robot.smr])  # SMR offsets on the last axis' frame
     on_plate = (offsets - chain.tool[:3, 3]) @ chain.tool[:3, :3]
     smr_mm = {int(s): (on_plate[k] * 1e3).round(4).tolist() for k, s in enumerate(body.smr_numbers)}
+    confounded = f"{' and '.join(held)} (the last axis' zero, its offset along the axis) are confounded " \
+        "with them and held at nominal, and " if held else ""
     return PlateSolution(
         name, "estimated SMRs",
         f"plate of {name}: no nests declared: the places of its {len(body.smr_numbers)} SMR(s) on the plate "
-        f"were estimated; the last axis' zero (theta{n}) and offset (d{n}) are confounded with them and held "
-        "at nominal, and the plate frame is the nominal one on the calibrated last axis: a work object on the "
-        "plate is only as good as that axis' mastering (declare nests: in the cell file to identify it)",
-        smr_mm)
+        f"were estimated; {confounded}the plate frame is the nominal one on the calibrated last axis: a work "
+        "object on the plate is only as good as that axis' mastering (declare nests: in the cell file to "
+        "identify the plate frame)", smr_mm)
 
 
 def _base_jacobian(anchor, body, which: int) -> np.ndarray:
@@ -399,8 +399,8 @@ def calibrate_cell(cell, data, calibrate_body: Callable, *, params="auto", valid
             plates.append(_plate(cell, name, body, result))
     missing = [b for b in cell.bodies if b not in data.bodies]
     if missing:
-        warnings.append(f"no rows on {', '.join(missing)}: kept nominal in the calibrated cell (its place in the "
-                        "world is the cell file's, not measured)")
+        warnings.append(f"no rows on {', '.join(missing)}: kept nominal in the calibrated cell (its place in "
+                        "the world is the cell file's, not measured)")
     relations = [_relation(cell.anchor, n, models, results) for n in models if n != cell.anchor]
     return CellCalibration(
         cell=cell, results=results, calibrated=cell.in_world(models), in_tracker=models, relations=relations,
@@ -408,17 +408,3 @@ def calibrate_cell(cell, data, calibrate_body: Callable, *, params="auto", valid
         provenance={"created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
                     "robocal_version": __version__, "cell": cell.name, "data": data.label,
                     "validation": None if validation is None else validation.label})
-
-
-def held_out_errors(calibration: CellCalibration) -> dict[str, np.ndarray]:
-    """Per body: the held-out position errors (m) of the calibrated model (empty without)."""
-    return {n: np.concatenate([j.errors[1] for j in r.judged]) if r.judged else np.zeros(0)
-            for n, r in calibration.results.items()}
-
-
-def pooled_stats(errors: Mapping[str, np.ndarray]) -> dict:
-    """`robocal.report.metrics.position_stats` (mm) of every body's errors (m) together."""
-    return position_stats(np.concatenate([e for e in errors.values()]))
-
-
-__all__ = ["CellCalibration", "Relation", "PlateSolution", "calibrate_cell", "make_transform"]

@@ -36,7 +36,14 @@ from robocal.core.io import write_all
 from robocal.core.yaml_load import dump_yaml
 from robocal.data.cell_measurements import CellMeasurements
 from robocal.data.measurements import Measurements
-from robocal.data.simulate import TRACKER_DISTANCE_M, _random_rotation, _true_cell, _unit, perturbed, sample_joints
+from robocal.data.simulate import (
+    TRACKER_DISTANCE_M,
+    _random_rotation,
+    _true_cell,
+    _unit,
+    perturbed,
+    sample_joints,
+)
 from robocal.kinematics.cell import is_track_cell
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
 
@@ -85,12 +92,14 @@ def true_cell(cell, seed: int | np.random.Generator | None = 0, *, error_scale: 
     if int(n_smr) < 1:
         raise DataError("n_smr must be >= 1 (the SMRs on each arm's flange)")
     plate_smr = PLATE_SMR_M if plate_smr is None else np.asarray(plate_smr, float)
-    if plate_smr.ndim != 2 or plate_smr.shape[1] != 3 or not len(plate_smr) or not np.isfinite(plate_smr).all():
-        raise DataError(f"plate SMRs must be a finite (K, 3) array of plate positions (m), got {plate_smr.shape}")
+    if plate_smr.ndim != 2 or plate_smr.shape[1] != 3 or not len(plate_smr) \
+            or not np.isfinite(plate_smr).all():
+        raise DataError(f"plate SMRs must be a finite (K, 3) array of plate positions (m), got shape "
+                        f"{plate_smr.shape}")
     arms = {n: _true_arm(a, rng, error_scale, n == cell.anchor, int(n_smr)) for n, a in cell.arms.items()}
     positioners = {n: _true_positioner(p, rng, error_scale, plate_smr) for n, p in cell.positioners.items()}
     return replace(cell, arms=arms, positioners=positioners, name=f"{cell.name} (true)",
-                   description=f"true cell of a robocal simulation (seed {seed if isinstance(seed, int) else ''})")
+                   description="true cell of a robocal simulation")
 
 
 @dataclass(frozen=True, eq=False)
@@ -216,4 +225,5 @@ def simulate_cell(cell, n_poses: int = 40, table_poses: int = 30, *, truth=None,
     data = CellMeasurements.from_bodies(cell, bodies, source=source)
     info = {"seed": int(seed), "n_poses": int(n_poses), "table_poses": int(table_poses), "n_smr": int(n_smr),
             "noise_mm": float(noise_mm), "error_scale": float(error_scale), "noise_floor_mm": floor}
-    return CellSimulation(data=data, truth=truth, tracker=tracker, noise=noise, noise_floor_mm=floor, info=info)
+    return CellSimulation(data=data, truth=truth, tracker=tracker, noise=noise, noise_floor_mm=floor,
+                          info=info)
