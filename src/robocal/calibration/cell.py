@@ -150,7 +150,8 @@ class CellCalibration:
         return _pooled([r.after for r in self.results.values()])
 
     def summary(self) -> str:
-        """Per body: before -> after (and held out), the relations, how each plate was identified."""
+        """Per body: before -> after (and held out), the relations, how each plate was identified,
+        the warnings."""
         lines = [f"cell {self.cell.name}: {len(self.results)} bod{'y' if len(self.results) == 1 else 'ies'} "
                  "calibrated in one tracker frame (one calibration per body: the rows of each SMR see only "
                  "its body)"]
@@ -164,6 +165,7 @@ class CellCalibration:
             lines.append(f"  held out, all bodies: RMS {v['rms']:.4f} mm ({v['n']} obs)")
         lines += [f"  {rel.sentence()}" for rel in self.relations]
         lines += [f"  {plate.sentence}" for plate in self.plates]
+        lines += [f"WARNING: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
