@@ -127,3 +127,16 @@ def test_refusals(tmp_path):
         "point", plate.joints, points=plate.points, smr=np.zeros(len(plate), int))), origin.columns)
     with pytest.raises(rc.DataError, match="SMR 0 on STN1's plate is not a declared nest"):
         rc.calibrate(cell, bad)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("nests", [True, False], ids=["nests", "no nests"])
+def test_the_first_goal(nests):
+    """Issue 45's first goal as benchmarks/bench_cell.py runs it: 100 arm + 40 table poses, as many
+    held out, 0.02 mm noise: held-out RMS <= 1.3 x the held-out noise floor, three seeds."""
+    cell = two_axis_cell(nests=nests)
+    for seed in range(3):
+        sim = rc.simulate_cell(cell, 100, 40, noise_mm=0.02, seed=seed)
+        held = rc.simulate_cell(cell, 100, 40, truth=sim.truth, tracker=sim.tracker, seed=seed + 1000)
+        cal = rc.calibrate(cell, sim.data, validation=held.data)
+        assert cal.validation["rms"] <= HELD_OUT_RATIO * held.noise_floor_mm, seed
