@@ -11,7 +11,7 @@ import pytest
 from cells import two_axis_cell
 
 import robocal as rc
-from robocal.kinematics.transforms import invert_transform
+from robocal.kinematics.transforms import invert_transform, make_transform
 
 HELD_OUT_RATIO = 1.3  # held-out RMS / noise floor the issue asks for
 
@@ -140,3 +140,38 @@ def test_the_first_goal(nests):
         held = rc.simulate_cell(cell, 100, 40, truth=sim.truth, tracker=sim.tracker, seed=seed + 1000)
         cal = rc.calibrate(cell, sim.data, validation=held.data)
         assert cal.validation["rms"] <= HELD_OUT_RATIO * held.noise_floor_mm, seed
+
+
+def test_evaluate_fits_one_frame_for_every_body(campaign):
+    cell, sim, held, cal = campaign
+    truth = rc.evaluate(sim.truth, held.data)  # only the noise is left (a frame and SMR places fitted)
+    assert truth.stats["rms"] == pytest.approx(held.noise_floor_mm, rel=0.1)
+    calibrated = rc.evaluate(cal.calibrated, held.data)
+    assert calibrated.stats["rms"] <= HELD_OUT_RATIO * held.noise_floor_mm
+    nominal = rc.evaluate(cell, held.data)
+    assert nominal.stats["rms"] > 10 * held.noise_floor_mm
+    # a positioner misplaced by 0.5 mm in the world cannot hide in a frame of its own
+    table = cal.calibrated.positioners["STN1"]
+    moved = table.chain.with_frames(base=table.chain.base @ make_transform(np.eye(3), [0.0005, 0.0, 0.0]))
+    shifted = rc.Cell(cal.calibrated.arms, {"STN1": rc.Positioner(moved, unit="STN1", nests=table.nests)})
+    assert rc.evaluate(shifted, held.data).stats["rms"] > 3 * held.noise_floor_mm
+
+
+def test_the_command_line(tmp_path, capsys):
+    from robocal.cli import main
+
+    cell = two_axis_cell(nests=True)
+    cell.save(tmp_path / "cell.yaml")
+    d = str(tmp_path)
+    assert main(["--quiet", "simulate", "--model", f"{d}/cell.yaml", "--poses", "60", "--table-poses", "30",
+                 "--seed", "2", "-o", f"{d}/cell.csv", "--truth", f"{d}/true_cell.yaml"]) == 0
+    assert main(["calibrate", f"{d}/cell.csv", "--model", f"{d}/cell.yaml", "--hold-out", "10",
+                 "--nongeometric", "none", "-o", f"{d}/calibrated.yaml", "--json", f"{d}/cell.json"]) == 0
+    out = capsys.readouterr().out
+    assert "held out, all bodies" in out and "nests at known places" in out
+    result = json.loads((tmp_path / "cell.json").read_text())
+    assert result["validation"]["rms"] < 0.05 and set(result["bodies"]) == {"arm", "STN1"}
+    assert main(["evaluate", f"{d}/calibrated.yaml", f"{d}/cell.csv", "--json", f"{d}/check.json"]) == 0
+    assert "one tracker frame for every body" in capsys.readouterr().out
+    assert main(["calibrate", f"{d}/cell.csv", "--model", f"{d}/cell.yaml", "--report", f"{d}/r.html"]) != 0
+    assert "not --report" in capsys.readouterr().err and not (tmp_path / "r.html").exists()
