@@ -458,11 +458,30 @@ def _definition(data: dict, where: str, name: str) -> Robot:
                                               MAX_DESCRIPTION))
 
 
+def catalog_positioner(name: str) -> tuple[Robot, float | None]:
+    """The chain (mount at the identity, plate frame as the catalog gives it) and the payload (kg,
+    None when the entry gives none) of catalog positioner ``name``; ModelError listing the catalog
+    for an unknown name.
+
+    Examples
+    --------
+    >>> from robocal.kinematics.workcell import catalog_positioner
+    >>> chain, payload = catalog_positioner("abb_irbp_a250")
+    >>> chain.n_joints, payload
+    (2, 250)
+    """
+    entry = positioner_entry(name)
+    if entry is None:
+        raise ModelError(f"unknown positioner {name!r}; the catalog has: {', '.join(positioner_names())} "
+                         "(run `robocal robots`)")
+    return _definition(entry, f"catalog positioner {name!r}", name), entry.get("payload_kg")
+
+
 def _model_chain(model, path: Path | None, where: str, name: str) -> Robot:
     """The chain a positioner's ``model:`` names: a catalog positioner, a file (a positioner
     definition or a model file), or an inline mapping (either)."""
     if isinstance(model, str) and positioner_entry(model) is not None:
-        return _definition(positioner_entry(model), f"catalog positioner {model!r}", model)
+        return catalog_positioner(model)[0]
     if isinstance(model, str):
         spec = _resolve(model, path, f"{where}.model")
         if not Path(spec).suffix and not Path(spec).exists():
