@@ -46,7 +46,16 @@ from robocal.kinematics.cell_file import (
     is_workcell,
     read_arms,
 )
-from robocal.kinematics.model import Robot, _looks_like_xml, arm_from_entry, load_model, placed
+from robocal.kinematics.model import (
+    PRISMATIC,
+    REVOLUTE,
+    JointSpec,
+    Robot,
+    _looks_like_xml,
+    arm_from_entry,
+    load_model,
+    placed,
+)
 from robocal.kinematics.model_file import (
     MAX_DESCRIPTION,
     MAX_NAME,
@@ -63,7 +72,7 @@ GEOMETRY_FORMS = ("model", "axes", "dh", "mdh", "joints")
 SECTION_KEYS = {*GEOMETRY_FORMS, "limits", "unit", "mount", "plate", "nests", "columns", "program_axes",
                 "name", "description"}
 DEFINITION_KEYS = {"format", "name", "description", "units", "axes", "plate", "payload_kg"}
-COLUMN = re.compile(r"^e(\d+)$")  # a positioner joint's column (its measurement column is e<k>_deg|_mm)
+COLUMN = re.compile(r"^e([1-9]\d*)$")  # a positioner joint's column (its measurement column is e<k>_deg|_mm)
 SINGLE_POSITIONER = "positioner"  # the body name of a ``positioner:`` without name or unit
 ANCHOR_ALIAS = "flange"  # a body label: the anchor arm
 PLATE_ALIAS = "plate"  # a body label: the only positioner
@@ -160,6 +169,14 @@ class Positioner:
     def n_axes(self) -> int:
         """The number of axes (joints of the chain)."""
         return self.chain.n_joints
+
+    @property
+    def joints(self) -> tuple[JointSpec, ...]:
+        """Each axis as messages, range checks and joints files name it: its column (``e1``), its
+        kind and limits (rad or m); ``.column`` is its CSV column (``e1_deg``, ``e2_mm``)."""
+        return tuple(JointSpec(c, PRISMATIC if slides else REVOLUTE, (float(lo), float(hi)))
+                     for c, slides, (lo, hi) in zip(self.columns, self.chain.prismatic, self.chain.limits,
+                                                    strict=True))
 
     def plate(self, e) -> np.ndarray:
         """World poses ``(N, 4, 4)`` (m) of the plate frame at axis values ``e`` ``(N, n)`` (rad; m
@@ -329,6 +346,20 @@ class Cell:
         name = self.resolve(name)
         return self.arms[name] if name in self.arms else self.positioners[name].chain
 
+    def joints(self, name: str) -> tuple[JointSpec, ...]:
+        """The joints of a body (by any label `resolve` takes) as measurement files name them: an
+        arm's ``q1..`` (a track's ``e1``), a positioner's `Positioner.columns`.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> cell = rc.load_cell("abb_irb2600")
+        >>> [j.column for j in cell.joints("flange")][:2]
+        ['q1_deg', 'q2_deg']
+        """
+        name = self.resolve(name)
+        return self.arms[name].joints if name in self.arms else self.positioners[name].joints
+
     def unit_of(self, name: str) -> str:
         """The program unit of a body (by any label `resolve` takes)."""
         name = self.resolve(name)
@@ -497,8 +528,9 @@ def _model_chain(model, path: Path | None, where: str, name: str) -> Robot:
     return Robot(**robot_kwargs({"name": name, **model}))
 
 
-def _positioner(spec, name: str, data: dict, path: Path | None) -> tuple[Positioner, bool]:
-    """A positioner section of a cell file (module docstring) and whether it gave its columns."""
+def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> Positioner:
+    """A positioner section of a cell file (module docstring); its columns default to
+    ``e<first>..``."""
     where = "positioner" if "positioner" in data else f"positioners.{name}"
     spec = _mapping(spec, where, SECTION_KEYS if where == "positioner" else SECTION_KEYS - {"name"})
     length_unit, angle_unit = _units(data)
@@ -530,10 +562,11 @@ def _positioner(spec, name: str, data: dict, path: Path | None) -> tuple[Positio
             raise ModelError(f"{where}.nests: expected a list of [x, y, z] plate positions")
         nests = np.array([_numbers(v, f"{where}.nests[{i}]", 3)
                           for i, v in enumerate(spec["nests"], 1)]) * length
-    columns = _names(spec.get("columns"), f"{where}.columns")
+    columns = _names(spec.get("columns"), f"{where}.columns") or \
+        tuple(f"e{first + i}" for i in range(chain.n_joints))
     program_axes = _names(spec.get("program_axes"), f"{where}.program_axes")
     unit = _text(spec.get("unit", name), f"{where}.unit", MAX_NAME)
-    return Positioner(chain, unit, columns, nests, program_axes), "columns" in spec
+    return Positioner(chain, unit, columns, nests, program_axes)
 
 
 def _names(values, where: str) -> tuple[str, ...]:
@@ -542,13 +575,6 @@ def _names(values, where: str) -> tuple[str, ...]:
     if not isinstance(values, list) or not all(isinstance(v, str) for v in values):
         raise ModelError(f"{where}: expected a list of names, got {short_repr(values)}")
     return tuple(values)
-
-
-def _default_columns(positioner: Positioner, first: int) -> Positioner:
-    """``positioner`` with columns ``e<first>..``, its program axes following them when defaulted."""
-    columns = tuple(f"e{first + i}" for i in range(positioner.n_axes))
-    defaulted = positioner.program_axes == tuple(c.upper() for c in positioner.columns)
-    return replace(positioner, columns=columns, program_axes=() if defaulted else positioner.program_axes)
 
 
 def cell_from_data(data: dict, path: Path | None = None) -> Cell:
@@ -564,15 +590,15 @@ def cell_from_data(data: dict, path: Path | None = None) -> Cell:
         label = spec.get("name", spec.get("unit", SINGLE_POSITIONER)) if isinstance(spec, dict) else ""
         sections = {_text(label, "positioner.name", MAX_NAME): spec}
     else:
-        raw = data.get("positioners") or {}
-        sections = {str(k): v for k, v in _mapping(raw, "positioners", set(map(str, raw))).items()} \
+        raw = data.get("positioners")
+        sections = {str(k): v for k, v in _mapping(raw, "positioners", set(map(str, raw or {}))).items()} \
             if "positioners" in data else {}
+        if "positioners" in data and not sections:
+            raise ModelError("positioners: expected at least one positioner {name: {axes or model, ...}}")
     positioners: dict[str, Positioner] = {}
     following = 1 + any(arm.external_axes for arm in arms.values())  # after a track's e1
     for name, spec in sections.items():
-        positioner, given = _positioner(spec, name, data, path)
-        if not given:
-            positioner = _default_columns(positioner, following)
+        positioner = _positioner(spec, name, data, path, following)
         positioners[name] = positioner
         following = max(int(COLUMN.match(c)[1]) for c in positioner.columns) + 1
     default_name = next(iter(arms.values())).name if len(arms) == 1 and not positioners else "cell"
