@@ -125,6 +125,18 @@ def test_several_arms_each_at_its_base(tmp_path):
         cell.resolve("plate")  # two positioners: no alias
 
 
+def test_joint_columns_of_every_body(tmp_path):
+    data = _with(TWO_ARMS, ("positioners", "STN1", "axes"),
+                 [{"type": "prismatic", "axis": [0, 0, 1], "origin": [0, 0, 300], "limits": [0, 500]},
+                  {"type": "revolute", "axis": [0, 0, 1], "origin": [100, 0, 0]}])
+    cell = load_cell(write(tmp_path, data))
+    assert [j.column for j in cell.joints("STN1")] == ["e1_mm", "e2_deg"]
+    assert [j.column for j in cell.joints("STN2")] == ["e3_deg", "e4_deg"]
+    assert [j.column for j in cell.joints("ROB_2")] == [f"q{i}_deg" for i in range(1, 7)]
+    assert cell.joints("STN1")[0].limits == (0.0, 0.5)
+    assert cell.positioners["STN2"].program_axes == ("E3", "E4")
+
+
 def test_track_arm_and_positioner_columns_follow_e1(tmp_path):
     data = {"units": {"length": "mm", "angle": "deg"}, "robot": "kuka_kr210_r2700",
             "track": {"direction": [1, 0, 0], "limits": [0, 6000]},
@@ -345,6 +357,8 @@ AX = ("positioner", "axes")
     (_with(TWO_ARMS, ("positioners", "STN2", "columns"), ["e1", "e4"]),
      r"positioner 'STN2': column e1 is already positioner 'STN1''s"),
     (_with(TWO_ARMS, ("robots",), {}), r"robots: expected at least one arm"),
+    (_with(TWO_ARMS, ("positioners",), {}), r"positioners: expected at least one positioner"),
+    (_with(CELL, P + ("columns",), ["e0", "e1"]), r"expected 2 distinct names e1, e2"),
     ({"units": {"length": "mm", "angle": "deg"}, "track": {"direction": [1, 0, 0], "limits": [0, 1]},
       "positioner": CELL["positioner"]}, r"a track and its mount belong to an arm"),
     (_with(CELL, ("units",), DELETE), r"the cell: missing key\(s\) \['units'\]"),
