@@ -380,9 +380,64 @@ def test_python_construction_is_validated():
         Cell({"a": arm}, {"p": chain})
     with pytest.raises(ModelError, match="unit is empty"):
         Positioner(chain, " ")
+    with pytest.raises(ModelError, match="robots.a.unit is empty"):
+        Cell({"a": arm}, arm_units={"a": ""})
     with pytest.raises(ModelError, match="2 nests but its chain has 3 SMR offsets"):
         Positioner(chain, "S", nests=np.zeros((2, 3)))  # the chain carries the cell's 3 nests
     with pytest.raises(ModelError, match=r"nests must be a finite \(K, 3\) array"):
         Positioner(Robot.from_mdh([0], [0], [0], [0]), "S", nests=np.zeros((2, 2)))
     with pytest.raises(ModelError, match="1 to 3 axes, got 6"):
         Positioner(arm, "S")
+
+
+def test_an_arm_on_a_track_among_several(tmp_path):
+    from robocal.kinematics.model import track_chain
+
+    data = _with(TWO_ARMS, ("robots", "right", "track"), {"direction": [0, 1, 0], "limits": [-1000, 5000]})
+    data["positioners"]["STN1"]["columns"] = ["e2"]
+    data["positioners"]["STN2"]["columns"] = ["e3", "e4"]
+    cell = load_cell(write(tmp_path, data))
+    arm = Robot.from_catalog("abb_irb2600")
+    truth = track_chain(arm, [0, 1, 0], pose([3000, 0, 0], [0, 0, 180]), [-1.0, 5.0])
+    np.testing.assert_array_equal(cell.arms["right"].values, truth.values)
+    assert [j.column for j in cell.joints("right")][:2] == ["e1_mm", "q1_deg"]
+    with pytest.raises(ModelError, match="column e1 is already the track of arm 'right''s"):
+        load_cell(write(tmp_path, _with(data, ("positioners", "STN1", "columns"), ["e1"])))
+
+
+def test_a_positioner_given_as_a_urdf(tmp_path):
+    (tmp_path / "table.urdf").write_text("""<robot name="table">
+      <link name="base"/><link name="tilt"/><link name="turn"/>
+      <joint name="a1" type="revolute"><parent link="base"/><child link="tilt"/>
+        <origin xyz="0 0 0.9"/><axis xyz="1 0 0"/><limit lower="-1.5" upper="1.5"/></joint>
+      <joint name="a2" type="revolute"><parent link="tilt"/><child link="turn"/>
+        <origin xyz="0 0 0.25"/><axis xyz="0 0 1"/><limit lower="-6" upper="6"/></joint>
+    </robot>""")
+    data = _with(_with(CELL, P + ("axes",), DELETE), P + ("model",), "table.urdf")
+    urdf = load_cell(write(tmp_path, data)).positioners["STN1"]
+    np.testing.assert_allclose(urdf.plate(np.deg2rad(E_DEG)), tilt_turn_truth(E_DEG), rtol=0, atol=TOL)
+
+
+def test_in_world_keeps_estimated_smrs_nominal_and_the_cells_geometry():
+    data = _with(CELL, P + ("nests",), DELETE)
+    cell = cell_from_data(data)
+    chain = cell.positioners["STN1"].chain
+    # a calibration without nests estimates the SMRs' plate positions: two more SMRs on the chain
+    estimated = Robot(**{f: getattr(chain, f) for f in ("alpha", "a", "beta", "theta", "d", "base", "tool",
+                                                        "limits", "parallel")},
+                      smr=[[0.1, 0, 0], [0, 0.1, 0]]).with_values({"d2": chain.get("d2") + 1e-4})
+    world = cell.in_world({"arm": cell.arms["arm"], "STN1": estimated})
+    moved = world.positioners["STN1"].chain
+    assert len(moved.smr) == 2 and moved.get("d2") == pytest.approx(chain.get("d2") + 1e-4)
+    nominal = dict(zip(moved.geometry_names, moved.nominal, strict=True))
+    assert nominal["d2"] == chain.get("d2") and nominal["smr1.x"] == 0.1
+
+
+def test_robots_command_shows_a_cell(tmp_path, capsys):
+    from robocal.cli import main
+
+    assert main(["robots", str(write(tmp_path, TWO_ARMS))]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("two robots (anchor: left)")
+    assert "== positioner STN2 (unit STN2; columns e2_deg, e3_deg)" in out
+    assert "== arm right (unit ROB_2; columns q1_deg" in out

@@ -5,13 +5,16 @@ flange pose at a few joint sets."""
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from robocal.kinematics.catalog import catalog_descriptions, catalog_specs, positioner_names
+from robocal.kinematics.cell_file import is_workcell
 from robocal.kinematics.model import Robot, load_model
-from robocal.kinematics.workcell import catalog_positioner
+from robocal.kinematics.model_file import read_model_data
+from robocal.kinematics.workcell import Cell, catalog_positioner, load_cell
 
 SHOW_JOINTS_DEG = np.array([[0, 0, 0, 0, 0, 0], [30, -20, 15, 45, -60, 90], [-90, 40, -30, -120, 30, 0]],
                            dtype=float)
@@ -58,9 +61,27 @@ def catalog_listing() -> str:
 
 
 def describe(spec: str) -> str:
-    """What ``robocal robots NAME`` prints: the `model_table` of a catalog positioner, or of any model
-    `load_model` reads (a catalog robot, a model file, a track cell file, a URDF)."""
-    return model_table(catalog_positioner(spec)[0] if spec in positioner_names() else load_model(spec))
+    """What ``robocal robots NAME`` prints: the `model_table` of a catalog positioner, `cell_table` of
+    a work cell file, or the `model_table` of any model `load_model` reads (a catalog robot, a model
+    file, a track cell file, a URDF)."""
+    if spec in positioner_names():
+        return model_table(catalog_positioner(spec)[0])
+    path = Path(spec)
+    if path.suffix.lower() in (".yaml", ".yml") and path.is_file() and is_workcell(read_model_data(path)):
+        return cell_table(load_cell(path))
+    return model_table(load_model(spec))
+
+
+def cell_table(cell: Cell) -> str:
+    """Each body of ``cell``: its name, kind, program unit and joint columns, then its `model_table`
+    (its base in the cell's world)."""
+    parts = [f"{cell.name}: {cell.description}".rstrip(": ") + f" (anchor: {cell.anchor})"]
+    for name in cell.bodies:
+        kind = "arm" if name in cell.arms else "positioner"
+        columns = ", ".join(j.column for j in cell.joints(name))
+        parts.append(f"\n== {kind} {name} (unit {cell.unit_of(name)}; columns {columns})\n"
+                     + model_table(cell.body(name)))
+    return "\n".join(parts)
 
 
 def model_table(robot: Robot) -> str:

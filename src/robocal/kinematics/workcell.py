@@ -72,6 +72,7 @@ GEOMETRY_FORMS = ("model", "axes", "dh", "mdh", "joints")
 SECTION_KEYS = {*GEOMETRY_FORMS, "limits", "unit", "mount", "plate", "nests", "columns", "program_axes",
                 "name", "description"}
 DEFINITION_KEYS = {"format", "name", "description", "units", "axes", "plate", "payload_kg"}
+URDF_SUFFIXES = (".urdf", ".xml")  # a positioner's model given as a URDF (load_model reads it)
 COLUMN = re.compile(r"^e([1-9]\d*)$")  # a positioner joint's column (its measurement column is e<k>_deg|_mm)
 SINGLE_POSITIONER = "positioner"  # the body name of a ``positioner:`` without name or unit
 ANCHOR_ALIAS = "flange"  # a body label: the anchor arm
@@ -271,6 +272,9 @@ class Cell:
             raise ModelError(f"arm_units names no arm: {unknown}; arms: {sorted(self.arms)}")
         set_(self, "arm_units", {n: _text(self.arm_units.get(n, n), f"robots.{n}.unit", MAX_NAME)
                                  for n in self.arms})
+        empty = [n for n, u in self.arm_units.items() if not u.strip()]
+        if empty:
+            raise ModelError(f"robots.{empty[0]}.unit is empty: name its mechanical unit (ROB_1...)")
         self._check_units()
         self._check_columns()
 
@@ -372,8 +376,9 @@ class Cell:
         The anchor's identified frame {0} is where the controller believes its base is:
         ``world_T_tracker = nominal_anchor.base @ inv(calibrated_anchor.base)``, and each other
         calibrated body's base in the world is ``world_T_tracker @ calibrated.base``. A body not in
-        ``calibrated`` stays nominal. Each moved body's nominal model is this cell's (when its
-        parameters are the same), so ``nominal_robot()`` is the controller's model.
+        ``calibrated`` stays nominal. Each moved body's nominal model is this cell's (a parameter the
+        cell's body lacks, such as an SMR the calibration estimated, keeps the calibration's nominal),
+        so ``nominal_robot()`` is the controller's model.
 
         Parameters
         ----------
@@ -414,8 +419,7 @@ class Cell:
                 raise ModelError(f"calibrated {name!r}: its joints differ from the cell's {nominal.name} "
                                  f"({nominal.n_joints} joints)")
             base = nominal.base if name == self.anchor else world_T_tracker @ model.base
-            moved = replace(model, base=base, nominal=nominal.nominal
-                            if nominal.geometry_names == model.geometry_names else None)
+            moved = replace(model, base=base, nominal=_controllers_nominal(model, nominal))
             if name in arms:
                 arms[name] = moved
             else:
@@ -453,6 +457,17 @@ class Cell:
 
     def __repr__(self) -> str:
         return f"Cell({self.name!r}, arms {list(self.arms)}, positioners {list(self.positioners)})"
+
+
+def _controllers_nominal(model: Robot, body: Robot) -> np.ndarray:
+    """The nominal geometry vector of calibrated ``model`` in the world: the cell's ``body``'s
+    nominal value of every parameter both have, ``model``'s own nominal for the others."""
+    nominal = model.nominal.copy()
+    names = model.geometry_names
+    known = dict(zip(body.geometry_names, body.nominal, strict=True))
+    shared = [i for i, name in enumerate(names) if name in known]
+    nominal[shared] = [known[names[i]] for i in shared]
+    return nominal
 
 
 def _axes_si(values, length: float, angle: float, where: str) -> list[dict]:
@@ -518,6 +533,9 @@ def _model_chain(model, path: Path | None, where: str, name: str) -> Robot:
         if not Path(spec).suffix and not Path(spec).exists():
             raise ModelError(f"{where}.model: unknown positioner {model!r}; the catalog has: "
                              f"{', '.join(positioner_names())} (run `robocal robots`), or give a file")
+        file = Path(spec)
+        if file.suffix.lower() in URDF_SUFFIXES or (file.is_file() and _looks_like_xml(file)):
+            return load_model(spec)  # a URDF of the positioner's chain (its root link the mount)
         model = read_model_data(spec)
         where = f"{where}.model ({spec})"
     if not isinstance(model, dict):
