@@ -441,3 +441,11 @@ def test_robots_command_shows_a_cell(tmp_path, capsys):
     assert out.startswith("two robots (anchor: left)")
     assert "== positioner STN2 (unit STN2; columns e2_deg, e3_deg)" in out
     assert "== arm right (unit ROB_2; columns q1_deg" in out
+
+
+def test_identifiability_says_which_case():
+    with_nests = cell_from_data(CELL).positioners["STN1"]
+    without = cell_from_data(_with(CELL, P + ("nests",), DELETE)).positioners["STN1"]
+    assert "last axis' zero (theta2) are identified" in with_nests.identifiability
+    assert "(theta2) and the plate frame's turn about that axis are one freedom" in without.identifiability
+    assert repr(without) == "Positioner('STN1', unit 'STN1', columns ['e1', 'e2'])"

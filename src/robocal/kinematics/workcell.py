@@ -75,6 +75,12 @@ DEFINITION_KEYS = {"format", "name", "description", "units", "axes", "plate", "p
 URDF_SUFFIXES = (".urdf", ".xml")  # a positioner's model given as a URDF (load_model reads it)
 COLUMN = re.compile(r"^e([1-9]\d*)$")  # a positioner joint's column (its measurement column is e<k>_deg|_mm)
 SINGLE_POSITIONER = "positioner"  # the body name of a ``positioner:`` without name or unit
+# What a calibration of a positioner identifies (docs/model-yaml.md, "Work cells"): Positioner.identifiability
+WITH_NESTS = ("positioner {name}: SMR nests at known plate positions fix the plate frame: its axes, the "
+              "plate frame and the last axis' zero ({zero}) are identified")
+WITHOUT_NESTS = ("positioner {name}: no SMR nests at known plate positions: the SMRs' plate positions are "
+                 "estimated, and the last axis' zero ({zero}) and the plate frame's turn about that axis "
+                 "are one freedom: the zero is held at its nominal value")
 ANCHOR_ALIAS = "flange"  # a body label: the anchor arm
 PLATE_ALIAS = "plate"  # a body label: the only positioner
 
@@ -179,6 +185,14 @@ class Positioner:
                      for c, slides, (lo, hi) in zip(self.columns, self.chain.prismatic, self.chain.limits,
                                                     strict=True))
 
+    @property
+    def identifiability(self) -> str:
+        """What a calibration identifies of this positioner, in words: with nests, the axes, the
+        plate frame and the last axis' zero; without, the zero is confounded with the plate's turn
+        about the last axis and held at its nominal value (the parameter named)."""
+        template = WITH_NESTS if self.nests is not None else WITHOUT_NESTS
+        return template.format(name=self.chain.name, zero=self.chain.joint_params[-1])
+
     def plate(self, e) -> np.ndarray:
         """World poses ``(N, 4, 4)`` (m) of the plate frame at axis values ``e`` ``(N, n)`` (rad; m
         for a prismatic axis).
@@ -193,6 +207,9 @@ class Positioner:
         (2, 4, 4)
         """
         return self.chain.fk(e)
+
+    def __repr__(self) -> str:
+        return f"Positioner({self.chain.name!r}, unit {self.unit!r}, columns {list(self.columns)})"
 
     def to_dict(self) -> dict:
         """The positioner's entry of a saved cell file (SI: its chain as an inline model)."""
