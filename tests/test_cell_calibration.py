@@ -175,3 +175,37 @@ def test_the_command_line(tmp_path, capsys):
     assert "one tracker frame for every body" in capsys.readouterr().out
     assert main(["calibrate", f"{d}/cell.csv", "--model", f"{d}/cell.yaml", "--report", f"{d}/r.html"]) != 0
     assert "not --report" in capsys.readouterr().err and not (tmp_path / "r.html").exists()
+
+
+def test_targets_on_the_plate_land_on_the_true_cell(campaign):
+    """Targets in the plate frame at given table angles, compensated on the calibrated cell: with
+    nests, the TRUE arm at those joints puts the TCP (the calibrated SMR, a point the data identify)
+    where it was meant to be on the TRUE plate, where the nominal controller's own joints miss by
+    the cell's errors; without nests the plate frame's error stays (and the result says so). The
+    corrected targets, run through the nominal cell, give those joints back."""
+    cell, sim, _, cal = campaign
+    rng = np.random.default_rng(7)
+    table = cell.positioners["STN1"].chain
+    e = rng.uniform(table.limits[:, 0] / 3, table.limits[:, 1] / 3, (12, 2))
+    tool = cal.results["arm"].robot.tool  # the SMR the campaign measured, as the calibration placed it
+    targets = make_transform(np.diag([1.0, -1.0, -1.0]), [0.0, 0.0, 0.2])[None].repeat(12, 0)
+    targets[:, :3, 3] += rng.uniform(-0.1, 0.1, (12, 3))  # 100-300 mm above the plate, TCP pointing down
+    comp = rc.compensate(cal.calibrated, cell, targets, positioner_values=e, tool=tool)
+    assert comp.arm_compensation.converged.all()
+
+    def on_true_plate(q):  # the true TCP in the true plate frame (m)
+        tcp = sim.truth.arms["arm"].fk(q)[:, :3, 3]
+        plate = sim.truth.positioners["STN1"].plate(e)
+        return np.einsum("nji,nj->ni", plate[:, :3, :3], tcp - plate[:, :3, 3])
+
+    error = np.linalg.norm(on_true_plate(comp.joints) - targets[:, :3, 3], axis=1)
+    nominal = rc.compensate(cell.arms["arm"], cell.arms["arm"], cell.positioners["STN1"].plate(e) @ targets,
+                            tool=tool)  # the nominal controller's joints of the nominal intended poses
+    missed = np.linalg.norm(on_true_plate(nominal.joints) - targets[:, :3, 3], axis=1)
+    if cell.positioners["STN1"].nests is not None:
+        assert error.max() < 0.1e-3 and missed.min() > 10 * error.max()
+    else:  # the plate frame is not observed (its turn zero, its place on the last axis): said, not hidden
+        assert error.min() > 0.05e-3 and "only as good as that axis' mastering" in cal.plates[0].sentence
+    again = cell.arms["arm"].with_frames(tool=tool).fk(comp.joints)  # what the corrected targets ask for
+    np.testing.assert_allclose(cell.positioners["STN1"].plate(e) @ comp.corrected_targets, again, atol=1e-9)
+    assert isinstance(comp.summary(), str) and json.dumps(comp.to_dict())
