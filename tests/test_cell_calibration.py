@@ -209,3 +209,23 @@ def test_targets_on_the_plate_land_on_the_true_cell(campaign):
     again = cell.arms["arm"].with_frames(tool=tool).fk(comp.joints)  # what the corrected targets ask for
     np.testing.assert_allclose(cell.positioners["STN1"].plate(e) @ comp.corrected_targets, again, atol=1e-9)
     assert isinstance(comp.summary(), str) and json.dumps(comp.to_dict())
+
+
+def test_compensate_command_line(tmp_path):
+    from robocal.cli import main
+
+    cell = two_axis_cell(nests=True)
+    cell.save(tmp_path / "cell.yaml")
+    d = str(tmp_path)
+    assert main(["--quiet", "simulate", "--model", f"{d}/cell.yaml", "--poses", "60", "--table-poses", "30",
+                 "--seed", "2", "-o", f"{d}/cell.csv", "--truth", f"{d}/true.yaml"]) == 0
+    assert main(["--quiet", "calibrate", f"{d}/cell.csv", "--model", f"{d}/cell.yaml", "--nongeometric",
+                 "none", "-o", f"{d}/calibrated.yaml"]) == 0
+    (tmp_path / "targets.csv").write_text("x_mm,y_mm,z_mm,rx_deg,ry_deg,rz_deg,e1_deg,e2_deg\n"
+                                          "10,20,200,180,0,30,-12.5,40\n-50,0,250,180,0,-20,20,-9.2\n")
+    assert main(["--quiet", "compensate", f"{d}/calibrated.yaml", f"{d}/targets.csv", "--nominal",
+                 f"{d}/cell.yaml", "--tool", "0,0,150,0,0,0", "-o", f"{d}/commands.csv"]) == 0
+    lines = (tmp_path / "commands.csv").read_text().splitlines()
+    assert lines[0].startswith("# robocal") and lines[1].startswith("q1_deg,") and "e1_deg,e2_deg" in lines[1]
+    assert [row.split(",")[6:8] for row in lines[2:]] == [["-12.5", "40"], ["20", "-9.2"]]  # as given
+    assert all(row.endswith(",1") for row in lines[2:])
