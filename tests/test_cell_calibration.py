@@ -5,10 +5,11 @@ against the truth, the relation's uncertainty, the refusals and the result proto
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
-from cells import two_axis_cell
+from cells import NESTS, two_axis_cell
 
 import robocal as rc
 from robocal.kinematics.transforms import invert_transform, make_transform
@@ -229,3 +230,20 @@ def test_compensate_command_line(tmp_path):
     assert lines[0].startswith("# robocal") and lines[1].startswith("q1_deg,") and "e1_deg,e2_deg" in lines[1]
     assert [row.split(",")[6:8] for row in lines[2:]] == [["-12.5", "40"], ["20", "-9.2"]]  # as given
     assert all(row.endswith(",1") for row in lines[2:])
+
+
+def test_wrong_nests_are_named():
+    """Nests declared 1 mm off where the SMRs really sat: the fit says so and names the nest
+    check; SMRs numbered against the nests: refused naming the body and what to check."""
+    cell = two_axis_cell(nests=True)
+    sim = rc.simulate_cell(cell, 40, 30, seed=1)
+    chain = replace(cell.positioners["STN1"].chain, smr=np.zeros((0, 3)), nominal=None)
+    wrong = rc.Cell(cell.arms, {"STN1": rc.Positioner(chain, unit="STN1",
+                                                       nests=NESTS + [[0.001, 0, 0], [0, 0, 0], [0, 0, 0]])})
+    cal = rc.calibrate(wrong, sim.data, nongeometric=None)
+    assert any("the nests' measured places on the plate differ" in w for w in cal.warnings)
+    assert not any("nests' measured" in w for w in rc.calibrate(cell, sim.data, nongeometric=None).warnings)
+    plate = sim.data["STN1"]
+    swapped = replace(plate, smr=np.array([{1: 2, 2: 1, 3: 3}[s] for s in plate.smr]))
+    with pytest.raises(rc.PlausibilityError, match=r"^STN1 \(its nests: is SMR k in nest k"):
+        rc.calibrate(cell, rc.CellMeasurements(dict(sim.data.bodies, STN1=swapped), sim.data.columns))
