@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from cells import NESTS, two_axis_cell
+from scipy.spatial.transform import Rotation
 
 import robocal as rc
 from robocal.kinematics.transforms import invert_transform, make_transform
@@ -247,3 +248,22 @@ def test_wrong_nests_are_named():
     swapped = replace(plate, smr=np.array([{1: 2, 2: 1, 3: 3}[s] for s in plate.smr]))
     with pytest.raises(rc.PlausibilityError, match=r"^STN1 \(its nests: is SMR k in nest k"):
         rc.calibrate(cell, rc.CellMeasurements(dict(sim.data.bodies, STN1=swapped), sim.data.columns))
+
+
+@pytest.mark.slow
+def test_the_relations_sigma_is_its_spread():
+    """The relation's 1-sigma (from both bases' covariances) against its spread over 30 campaigns of
+    the same true cell (fresh poses and noise each): the same within sampling error."""
+    cell = two_axis_cell(nests=True)
+    first = rc.simulate_cell(cell, 60, 30, seed=0)
+    deltas, sigmas, reference = [], [], None
+    for seed in range(30):
+        sim = rc.simulate_cell(cell, 60, 30, truth=first.truth, tracker=first.tracker, seed=100 + seed)
+        (relation,) = rc.calibrate(cell, sim.data, nongeometric=None).relations
+        T = relation.transform
+        reference = T if reference is None else reference
+        turn = Rotation.from_matrix(T[:3, :3] @ reference[:3, :3].T).as_rotvec()  # about the anchor's axes
+        deltas.append(np.r_[T[:3, 3] * 1e3, np.rad2deg(turn)])
+        sigmas.append(relation.sigma)
+    ratio = np.std(deltas, axis=0, ddof=1) / np.mean(sigmas, axis=0)
+    assert np.all((ratio > 0.6) & (ratio < 1.6)), ratio
