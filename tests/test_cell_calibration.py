@@ -267,3 +267,22 @@ def test_the_relations_sigma_is_its_spread():
         sigmas.append(relation.sigma)
     ratio = np.std(deltas, axis=0, ddof=1) / np.mean(sigmas, axis=0)
     assert np.all((ratio > 0.6) & (ratio < 1.6)), ratio
+
+
+def test_two_arms_and_a_table(tmp_path):
+    """Two arms facing each other over a table: each row's q columns are its own arm's joints (body
+    column), each arm calibrated on its rows, the second arm and the table related to the first."""
+    chain = two_axis_cell().positioners["STN1"].chain
+    left = rc.Robot.from_catalog("abb_irb2600")
+    right = left.with_frames(base=make_transform(np.diag([-1.0, -1.0, 1.0]), [2.2, 0.0, 0.0]))
+    cell = rc.Cell({"left": left, "right": right}, {"STN1": rc.Positioner(chain, unit="STN1")},
+                   name="two arms")
+    sim = rc.simulate_cell(cell, 50, 30, seed=2)
+    held = rc.simulate_cell(cell, 30, 20, truth=sim.truth, tracker=sim.tracker, seed=3)
+    sim.data.save(tmp_path / "cell.csv")
+    back = rc.CellMeasurements.load(tmp_path / "cell.csv", cell)
+    assert all(np.array_equal(back[b].joints, sim.data[b].joints) for b in ("left", "right", "STN1"))
+    cal = rc.calibrate(cell, back, validation=held.data, nongeometric=None)
+    assert [r.body for r in cal.relations] == ["right", "STN1"]
+    assert cal.validation["rms"] <= HELD_OUT_RATIO * held.noise_floor_mm
+    assert rc.evaluate(cal.calibrated, held.data).stats["rms"] <= HELD_OUT_RATIO * held.noise_floor_mm
