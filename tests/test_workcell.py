@@ -449,3 +449,17 @@ def test_identifiability_says_which_case():
     assert "last axis' zero (theta2) are identified" in with_nests.identifiability
     assert "(theta2) and the plate frame's turn about that axis are one freedom" in without.identifiability
     assert repr(without) == "Positioner('STN1', unit 'STN1', columns ['e1', 'e2'])"
+
+
+def test_a_positioner_with_nests_has_the_identification_jacobian():
+    """The body is an ordinary robot to the identification: its Jacobian at the nests (SMR k) is the
+    central difference of its forward kinematics."""
+    chain = cell_from_data(CELL).positioners["STN1"].chain
+    e = np.deg2rad([[10, 20], [-30, 100], [45, -200]])
+    smr = np.array([1, 2, 3])
+    names = chain.default_free(orientation=True)
+    J = chain.jacobian(e, names, smr=smr)
+    h = 1e-7
+    for k, name in enumerate(names):
+        step = (chain.displaced([name], [h]).fk(e, smr=smr) - chain.displaced([name], [-h]).fk(e, smr=smr))
+        np.testing.assert_allclose(J[:, :, k], step[:, :3, 3] / (2 * h), rtol=0, atol=1e-8, err_msg=name)
