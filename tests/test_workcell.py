@@ -463,3 +463,14 @@ def test_a_positioner_with_nests_has_the_identification_jacobian():
     for k, name in enumerate(names):
         step = (chain.displaced([name], [h]).fk(e, smr=smr) - chain.displaced([name], [-h]).fk(e, smr=smr))
         np.testing.assert_allclose(J[:, :, k], step[:, :3, 3] / (2 * h), rtol=0, atol=1e-8, err_msg=name)
+
+
+def test_program_axis_names_per_language():
+    stn = cell_from_data(_with(CELL, P + ("program_axes",), ["eax_b", "eax_c"])).positioners["STN1"]
+    assert stn.axes_in("rapid") == ("eax_b", "eax_c") and stn.axes_in("krl") == ("E2", "E3")
+    default = cell_from_data(CELL).positioners["STN1"]
+    assert default.axes_in("rapid") == ("eax_a", "eax_b") and default.axes_in("krl") == ("E1", "E2")
+    odd = cell_from_data(_with(CELL, P + ("program_axes",), ["B1", "B2"])).positioners["STN1"]
+    assert odd.axes_in("rapid") == ("B1", "B2")
+    with pytest.raises(ModelError, match="language must be rapid or krl"):
+        default.axes_in("inform")

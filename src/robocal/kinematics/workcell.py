@@ -73,6 +73,9 @@ SECTION_KEYS = {*GEOMETRY_FORMS, "limits", "unit", "mount", "plate", "nests", "c
                 "name", "description"}
 DEFINITION_KEYS = {"format", "name", "description", "units", "axes", "plate", "payload_kg"}
 URDF_SUFFIXES = (".urdf", ".xml")  # a positioner's model given as a URDF (load_model reads it)
+GENERIC_AXIS = re.compile(r"^E([1-6])$")  # a program axis given as the k-th external axis
+RAPID_AXIS = re.compile(r"^eax_([a-f])$")  # a robtarget's extax letter
+RAPID_LETTERS = "abcdef"
 COLUMN = re.compile(r"^e([1-9]\d*)$")  # a positioner joint's column (its measurement column is e<k>_deg|_mm)
 SINGLE_POSITIONER = "positioner"  # the body name of a ``positioner:`` without name or unit
 # What a calibration of a positioner identifies (docs/model-yaml.md, "Work cells"): Positioner.identifiability
@@ -207,6 +210,33 @@ class Positioner:
         (2, 4, 4)
         """
         return self.chain.fk(e)
+
+    def axes_in(self, language: str) -> tuple[str, ...]:
+        """The program's names of the axes in ``language``: ``"rapid"`` (a robtarget's extax
+        ``eax_a..eax_f``: ``E<k>`` is ``eax_<k-th letter>``) or ``"krl"`` (E6POS ``E1..E6``:
+        ``eax_<letter>`` is ``E<its number>``); a name of neither form is kept as written.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> from robocal.kinematics.positioner import positioner_chain
+        >>> chain = positioner_chain([{"type": "revolute", "axis": [1, 0, 0]},
+        ...                           {"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.2]}])
+        >>> table = rc.Positioner(chain, "STN1", columns=("e2", "e3"))
+        >>> table.axes_in("rapid"), table.axes_in("krl")
+        (('eax_b', 'eax_c'), ('E2', 'E3'))
+        """
+        if language not in ("rapid", "krl"):
+            raise ModelError(f"axes_in: language must be rapid or krl, got {language!r}")
+        out = []
+        for name in self.program_axes:
+            generic, rapid = GENERIC_AXIS.match(name), RAPID_AXIS.match(name)
+            if language == "rapid" and generic:
+                name = f"eax_{RAPID_LETTERS[int(generic[1]) - 1]}"
+            elif language == "krl" and rapid:
+                name = f"E{RAPID_LETTERS.index(rapid[1]) + 1}"
+            out.append(name)
+        return tuple(out)
 
     def __repr__(self) -> str:
         return f"Positioner({self.chain.name!r}, unit {self.unit!r}, columns {list(self.columns)})"
