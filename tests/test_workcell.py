@@ -474,3 +474,16 @@ def test_program_axis_names_per_language():
     assert odd.axes_in("rapid") == ("B1", "B2")
     with pytest.raises(ModelError, match="language must be rapid or krl"):
         default.axes_in("inform")
+
+
+def test_positioner_from_catalog_in_python():
+    mount = pose([1500, 0, 0], [0, 0, 90])
+    table = Positioner.from_catalog("abb_irbp_a250", "STN1", mount, nests=np.eye(3) * 0.2)
+    file = cell_from_data({"units": {"length": "mm", "angle": "deg"},
+                           "positioner": {"model": "abb_irbp_a250", "unit": "STN1",
+                                          "mount": {"xyz": [1500, 0, 0], "rpy": [0, 0, 90]},
+                                          "nests": [[200, 0, 0], [0, 200, 0], [0, 0, 200]]}})
+    e = np.deg2rad(E_DEG)
+    for k in range(4):
+        np.testing.assert_allclose(table.chain.fk(e, smr=np.full(len(e), k)),
+                                   file.positioners["STN1"].chain.fk(e, smr=np.full(len(e), k)), atol=TOL)

@@ -175,6 +175,25 @@ class Positioner:
                 raise ModelError(f"{self.chain.name}: {len(nests)} nests but its chain has "
                                  f"{len(self.chain.smr)} SMR offsets")
 
+    @classmethod
+    def from_catalog(cls, name: str, unit: str, mount: np.ndarray | None = None,
+                     plate: np.ndarray | None = None, **kwargs) -> Positioner:
+        """A catalog positioner (``robocal robots`` lists them) at ``mount`` ``(4, 4)`` (world -> its
+        base, m) with an extra ``plate`` ``(4, 4)`` after the catalog's plate frame; ``kwargs``:
+        ``columns``, ``nests`` (K, 3) m, ``program_axes``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> mount = np.eye(4)
+        >>> mount[0, 3] = 1.5
+        >>> table = rc.Positioner.from_catalog("abb_irbp_a250", "STN1", mount)
+        >>> table.plate(np.zeros((1, 2)))[0, :3, 3].round(3)  # 1.5 m out, plate 1.15 m up
+        array([1.5 , 0.  , 1.15])
+        """
+        return cls(placed(catalog_positioner(name)[0], mount, plate), unit, **kwargs)
+
     @property
     def n_axes(self) -> int:
         """The number of axes (joints of the chain)."""
