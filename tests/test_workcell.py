@@ -357,6 +357,8 @@ AX = ("positioner", "axes")
     (_with(TWO_ARMS, ("positioners", "STN2", "columns"), ["e1", "e4"]),
      r"positioner 'STN2': column e1 is already positioner 'STN1''s"),
     (_with(TWO_ARMS, ("robots",), {}), r"robots: expected at least one arm"),
+    (_with(TWO_ARMS, ("robots",), 3), r"robots: expected a mapping \{name: \{...\}\}, got 3"),
+    (_with(TWO_ARMS, ("positioners",), True), r"positioners: expected a mapping \{name: \{...\}\}"),
     (_with(TWO_ARMS, ("positioners",), {}), r"positioners: expected at least one positioner"),
     (_with(CELL, P + ("columns",), ["e0", "e1"]), r"expected 2 distinct names e1, e2"),
     ({"units": {"length": "mm", "angle": "deg"}, "track": {"direction": [1, 0, 0], "limits": [0, 1]},

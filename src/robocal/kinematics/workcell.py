@@ -44,6 +44,7 @@ from robocal.kinematics.cell_file import (
     _text,
     _units,
     is_workcell,
+    named,
     read_arms,
 )
 from robocal.kinematics.model import (
@@ -674,9 +675,7 @@ def cell_from_data(data: dict, path: Path | None = None) -> Cell:
         label = spec.get("name", spec.get("unit", SINGLE_POSITIONER)) if isinstance(spec, dict) else ""
         sections = {_text(label, "positioner.name", MAX_NAME): spec}
     else:
-        raw = data.get("positioners")
-        sections = {str(k): v for k, v in _mapping(raw, "positioners", set(map(str, raw or {}))).items()} \
-            if "positioners" in data else {}
+        sections = named(data["positioners"], "positioners") if "positioners" in data else {}
         if "positioners" in data and not sections:
             raise ModelError("positioners: expected at least one positioner {name: {axes or model, ...}}")
     positioners: dict[str, Positioner] = {}
