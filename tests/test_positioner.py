@@ -237,3 +237,12 @@ def test_robots_command_lists_and_shows_positioners(capsys):
     assert main(["robots", "kuka_dkp400"]) == 0
     shown = capsys.readouterr().out
     assert shown.startswith("kuka_dkp400: KUKA DKP-400") and "    2 " in shown
+
+
+def test_catalog_page_lists_every_positioner():
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "reference" / "catalog.md").read_text()
+    section = page[page.index("## Positioners"):]
+    for name in positioner_names():
+        assert f"| `{name}` |" in section, name

@@ -357,6 +357,8 @@ AX = ("positioner", "axes")
     (_with(TWO_ARMS, ("positioners", "STN2", "columns"), ["e1", "e4"]),
      r"positioner 'STN2': column e1 is already positioner 'STN1''s"),
     (_with(TWO_ARMS, ("robots",), {}), r"robots: expected at least one arm"),
+    (_with(TWO_ARMS, ("robots",), 3), r"robots: expected a mapping \{name: \{...\}\}, got 3"),
+    (_with(TWO_ARMS, ("positioners",), True), r"positioners: expected a mapping \{name: \{...\}\}"),
     (_with(TWO_ARMS, ("positioners",), {}), r"positioners: expected at least one positioner"),
     (_with(CELL, P + ("columns",), ["e0", "e1"]), r"expected 2 distinct names e1, e2"),
     ({"units": {"length": "mm", "angle": "deg"}, "track": {"direction": [1, 0, 0], "limits": [0, 1]},
@@ -449,3 +451,41 @@ def test_identifiability_says_which_case():
     assert "last axis' zero (theta2) are identified" in with_nests.identifiability
     assert "(theta2) and the plate frame's turn about that axis are one freedom" in without.identifiability
     assert repr(without) == "Positioner('STN1', unit 'STN1', columns ['e1', 'e2'])"
+
+
+def test_a_positioner_with_nests_has_the_identification_jacobian():
+    """The body is an ordinary robot to the identification: its Jacobian at the nests (SMR k) is the
+    central difference of its forward kinematics."""
+    chain = cell_from_data(CELL).positioners["STN1"].chain
+    e = np.deg2rad([[10, 20], [-30, 100], [45, -200]])
+    smr = np.array([1, 2, 3])
+    names = chain.default_free(orientation=True)
+    J = chain.jacobian(e, names, smr=smr)
+    h = 1e-7
+    for k, name in enumerate(names):
+        step = (chain.displaced([name], [h]).fk(e, smr=smr) - chain.displaced([name], [-h]).fk(e, smr=smr))
+        np.testing.assert_allclose(J[:, :, k], step[:, :3, 3] / (2 * h), rtol=0, atol=1e-8, err_msg=name)
+
+
+def test_program_axis_names_per_language():
+    stn = cell_from_data(_with(CELL, P + ("program_axes",), ["eax_b", "eax_c"])).positioners["STN1"]
+    assert stn.axes_in("rapid") == ("eax_b", "eax_c") and stn.axes_in("krl") == ("E2", "E3")
+    default = cell_from_data(CELL).positioners["STN1"]
+    assert default.axes_in("rapid") == ("eax_a", "eax_b") and default.axes_in("krl") == ("E1", "E2")
+    odd = cell_from_data(_with(CELL, P + ("program_axes",), ["B1", "B2"])).positioners["STN1"]
+    assert odd.axes_in("rapid") == ("B1", "B2")
+    with pytest.raises(ModelError, match="language must be rapid or krl"):
+        default.axes_in("inform")
+
+
+def test_positioner_from_catalog_in_python():
+    mount = pose([1500, 0, 0], [0, 0, 90])
+    table = Positioner.from_catalog("abb_irbp_a250", "STN1", mount, nests=np.eye(3) * 0.2)
+    file = cell_from_data({"units": {"length": "mm", "angle": "deg"},
+                           "positioner": {"model": "abb_irbp_a250", "unit": "STN1",
+                                          "mount": {"xyz": [1500, 0, 0], "rpy": [0, 0, 90]},
+                                          "nests": [[200, 0, 0], [0, 200, 0], [0, 0, 200]]}})
+    e = np.deg2rad(E_DEG)
+    for k in range(4):
+        np.testing.assert_allclose(table.chain.fk(e, smr=np.full(len(e), k)),
+                                   file.positioners["STN1"].chain.fk(e, smr=np.full(len(e), k)), atol=TOL)

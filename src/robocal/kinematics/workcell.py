@@ -44,6 +44,7 @@ from robocal.kinematics.cell_file import (
     _text,
     _units,
     is_workcell,
+    named,
     read_arms,
 )
 from robocal.kinematics.model import (
@@ -73,6 +74,9 @@ SECTION_KEYS = {*GEOMETRY_FORMS, "limits", "unit", "mount", "plate", "nests", "c
                 "name", "description"}
 DEFINITION_KEYS = {"format", "name", "description", "units", "axes", "plate", "payload_kg"}
 URDF_SUFFIXES = (".urdf", ".xml")  # a positioner's model given as a URDF (load_model reads it)
+GENERIC_AXIS = re.compile(r"^E([1-6])$")  # a program axis given as the k-th external axis
+RAPID_AXIS = re.compile(r"^eax_([a-f])$")  # a robtarget's extax letter
+RAPID_LETTERS = "abcdef"
 COLUMN = re.compile(r"^e([1-9]\d*)$")  # a positioner joint's column (its measurement column is e<k>_deg|_mm)
 SINGLE_POSITIONER = "positioner"  # the body name of a ``positioner:`` without name or unit
 # What a calibration of a positioner identifies (docs/model-yaml.md, "Work cells"): Positioner.identifiability
@@ -172,6 +176,25 @@ class Positioner:
                 raise ModelError(f"{self.chain.name}: {len(nests)} nests but its chain has "
                                  f"{len(self.chain.smr)} SMR offsets")
 
+    @classmethod
+    def from_catalog(cls, name: str, unit: str, mount: np.ndarray | None = None,
+                     plate: np.ndarray | None = None, **kwargs) -> Positioner:
+        """A catalog positioner (``robocal robots`` lists them) at ``mount`` ``(4, 4)`` (world -> its
+        base, m) with an extra ``plate`` ``(4, 4)`` after the catalog's plate frame; ``kwargs``:
+        ``columns``, ``nests`` (K, 3) m, ``program_axes``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> mount = np.eye(4)
+        >>> mount[0, 3] = 1.5
+        >>> table = rc.Positioner.from_catalog("abb_irbp_a250", "STN1", mount)
+        >>> table.plate(np.zeros((1, 2)))[0, :3, 3].round(3)  # 1.5 m out, plate 1.15 m up
+        array([1.5 , 0.  , 1.15])
+        """
+        return cls(placed(catalog_positioner(name)[0], mount, plate), unit, **kwargs)
+
     @property
     def n_axes(self) -> int:
         """The number of axes (joints of the chain)."""
@@ -207,6 +230,33 @@ class Positioner:
         (2, 4, 4)
         """
         return self.chain.fk(e)
+
+    def axes_in(self, language: str) -> tuple[str, ...]:
+        """The program's names of the axes in ``language``: ``"rapid"`` (a robtarget's extax
+        ``eax_a..eax_f``: ``E<k>`` is ``eax_<k-th letter>``) or ``"krl"`` (E6POS ``E1..E6``:
+        ``eax_<letter>`` is ``E<its number>``); a name of neither form is kept as written.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> from robocal.kinematics.positioner import positioner_chain
+        >>> chain = positioner_chain([{"type": "revolute", "axis": [1, 0, 0]},
+        ...                           {"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.2]}])
+        >>> table = rc.Positioner(chain, "STN1", columns=("e2", "e3"))
+        >>> table.axes_in("rapid"), table.axes_in("krl")
+        (('eax_b', 'eax_c'), ('E2', 'E3'))
+        """
+        if language not in ("rapid", "krl"):
+            raise ModelError(f"axes_in: language must be rapid or krl, got {language!r}")
+        out = []
+        for name in self.program_axes:
+            generic, rapid = GENERIC_AXIS.match(name), RAPID_AXIS.match(name)
+            if language == "rapid" and generic:
+                name = f"eax_{RAPID_LETTERS[int(generic[1]) - 1]}"
+            elif language == "krl" and rapid:
+                name = f"E{RAPID_LETTERS.index(rapid[1]) + 1}"
+            out.append(name)
+        return tuple(out)
 
     def __repr__(self) -> str:
         return f"Positioner({self.chain.name!r}, unit {self.unit!r}, columns {list(self.columns)})"
@@ -625,9 +675,7 @@ def cell_from_data(data: dict, path: Path | None = None) -> Cell:
         label = spec.get("name", spec.get("unit", SINGLE_POSITIONER)) if isinstance(spec, dict) else ""
         sections = {_text(label, "positioner.name", MAX_NAME): spec}
     else:
-        raw = data.get("positioners")
-        sections = {str(k): v for k, v in _mapping(raw, "positioners", set(map(str, raw or {}))).items()} \
-            if "positioners" in data else {}
+        sections = named(data["positioners"], "positioners") if "positioners" in data else {}
         if "positioners" in data and not sections:
             raise ModelError("positioners: expected at least one positioner {name: {axes or model, ...}}")
     positioners: dict[str, Positioner] = {}
