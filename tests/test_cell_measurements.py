@@ -72,3 +72,12 @@ def test_from_bodies_checks_limits():
     plate = rc.Measurements.from_arrays("point", q, points=[[1.4, 0.0, 1.1]], smr=[1])
     with pytest.raises(rc.DataError, match="outside its limits"):
         CellMeasurements.from_bodies(cell, {"plate": plate})
+
+
+def test_split_poses_per_body():
+    cell = two_axis_cell()
+    sim = rc.simulate_cell(cell, 10, 8, seed=0)
+    first, rest = sim.data.split_poses(0.5, seed=1)
+    for body in ("arm", "STN1"):
+        assert first[body].n_poses + rest[body].n_poses == sim.data[body].n_poses
+        assert not set(first[body].pose_id) & set(rest[body].pose_id)
