@@ -35,14 +35,12 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.core.errors import DataError
+from robocal.core.errors import DataError, ModelError
 from robocal.core.io import read_text, write_atomic
 from robocal.data.csv_table import text_lines
 from robocal.data.measurements import Measurements, joint_range_rad, parse_csv
 
 BODY_COLUMN = "body"
-ANCHOR_ALIAS = "flange"  # the anchor arm
-PLATE_ALIAS = "plate"  # the cell's only positioner
 # columns of the arm's joints and of its working conditions: a positioner row does not use them
 _ARM_ONLY = re.compile(r"([qe]\d+_[a-z]+|approach\d+|travel\d+_[a-z]+|payload_.*|temperature_c)")
 
@@ -59,19 +57,14 @@ def _chain(cell, name: str):
     return cell.positioners[name].chain if name in cell.positioners else cell.arms[name]
 
 
-def body_names(cell) -> dict[str, str]:
-    """Every text a ``body`` cell may hold (lower case) -> the body's name: arms' and positioners'
-    names, positioners' units, ``flange`` (the anchor arm) and ``plate`` (the only positioner)."""
-    names = {n.lower(): n for n in cell.arms}
-    for n, p in cell.positioners.items():
-        names.setdefault(n.lower(), n)
-        if getattr(p, "unit", ""):
-            names.setdefault(str(p.unit).lower(), n)
-    if cell.arms:
-        names.setdefault(ANCHOR_ALIAS, cell.anchor)
-    if len(cell.positioners) == 1:
-        names.setdefault(PLATE_ALIAS, next(iter(cell.positioners)))
-    return names
+def _resolved(cell, label: str, where: str) -> str:
+    """The body a ``body`` cell names (`robocal.kinematics.workcell.Cell.resolve`: a body's name or
+    unit, ``flange``, ``plate``); DataError naming ``where`` and the cell's bodies otherwise."""
+    try:
+        return cell.resolve(label)
+    except ModelError:
+        raise DataError(f"{where}: body {label!r} is not in the cell (its bodies: {', '.join(cell.bodies)}; "
+                        "flange: the first arm, plate: the only positioner)") from None
 
 
 def _row_cells(line: str, name: str, ln: int) -> list[str]:
@@ -115,15 +108,12 @@ class _Table:
     def _bodies(self, cell) -> list[str]:
         if BODY_COLUMN not in self.header:
             return [cell.anchor] * len(self.rows)
-        names, k, out = body_names(cell), self.header.index(BODY_COLUMN), []
+        k, seen, out = self.header.index(BODY_COLUMN), {}, []
         for ln, cells in self.rows:
             text = cells[k].strip()
-            if text.lower() not in names:
-                known = ", ".join(dict.fromkeys([*cell.arms, *cell.positioners])) or "none"
-                alias = " (or flange / plate)" if cell.arms or len(cell.positioners) == 1 else ""
-                raise DataError(f"{self.name}, line {ln}: body {text!r} is not in the cell (its bodies: "
-                                f"{known}{alias})")
-            out.append(names[text.lower()])
+            if text not in seen:
+                seen[text] = _resolved(cell, text, f"{self.name}, line {ln}")
+            out.append(seen[text])
         return out
 
     def columns_of(self, unit_names: tuple[str, ...]) -> dict[str, str]:
@@ -259,13 +249,9 @@ class CellMeasurements:
     def from_bodies(cls, cell, bodies: Mapping[str, Measurements], source: str = "") -> CellMeasurements:
         """Measurements of ``cell`` from per-body measurements (joints of each body's chain, SI);
         each body checked against its chain, a positioner's values against its limits."""
-        names = body_names(cell)
         out = {}
         for name, data in bodies.items():
-            if str(name).lower() not in names:
-                raise DataError(f"body {name!r} is not in the cell (its bodies: "
-                                f"{', '.join([*cell.arms, *cell.positioners])})")
-            body = names[str(name).lower()]
+            body = _resolved(cell, str(name), "the data")
             chain = _chain(cell, body)
             data.check_against(chain)
             if body in cell.positioners:
