@@ -46,15 +46,9 @@ _ARM_ONLY = re.compile(r"([qe]\d+_[a-z]+|approach\d+|travel\d+_[a-z]+|payload_.*
 
 
 def _joint_names(cell, name: str) -> tuple[str, ...]:
-    """The joint column names (no unit) of body ``name`` in a cell file: an arm's as its chain names
-    them (``q1``.., a track's ``e1``), a positioner's as it declares them (``e1``, ``e2``)."""
-    if name in cell.positioners:
-        return tuple(cell.positioners[name].columns)
-    return tuple(j.name for j in cell.arms[name].joints)
-
-
-def _chain(cell, name: str):
-    return cell.positioners[name].chain if name in cell.positioners else cell.arms[name]
+    """The joint column names (no unit) of body ``name`` in a cell file (`Cell.joints`): an arm's
+    ``q1``.. (a track's ``e1``), a positioner's columns (``e1``, ``e2``)."""
+    return tuple(j.name for j in cell.joints(name))
 
 
 def _resolved(cell, label: str, where: str) -> str:
@@ -252,7 +246,7 @@ class CellMeasurements:
         out = {}
         for name, data in bodies.items():
             body = _resolved(cell, str(name), "the data")
-            chain = _chain(cell, body)
+            chain = cell.body(body)
             data.check_against(chain)
             if body in cell.positioners:
                 _check_limits(data, chain, body, _joint_names(cell, body), data.label or "the data")
@@ -273,7 +267,7 @@ class CellMeasurements:
                 _check_positioner_rows(table, cell, body, positioner_cols[body])
         bodies = {}
         for body in present:
-            chain = _chain(cell, body)
+            chain = cell.body(body)
             keep, names = _body_columns(table, cell, body, positioner_cols)
             data = parse_csv(_body_text(table, body, keep, names), name, joint_range_rad(chain))
             data.check_against(chain, path=name)
