@@ -44,7 +44,7 @@ def _rows(cell, name: str, data) -> tuple[_Rows, int]:
     """The fit's view of body ``name``'s rows, and how many unknown SMR offsets it has."""
     if data.kind != "point":
         raise DataError(f"{data.label}: a cell is judged on SMR points, not {data.kind} rows")
-    chain = cell.arms[name] if name in cell.arms else cell.positioners[name].chain
+    chain = cell.body(name)
     flange = replace(chain, tool=np.eye(4), smr=np.zeros((0, 3)), nominal=None).fk(data.joints)
     R, o = flange[:, :3, :3], flange[:, :3, 3]
     known = np.zeros((len(data), 3))
