@@ -116,9 +116,10 @@ def add_parser(sub) -> None:
                         "lsq/robust on one file of tracker data (points or poses) with at least 100 "
                         "poses, else none")
     p.add_argument("--priors", type=_priors, metavar="GROUP=SCALE,...",
-                   help="the parameter priors (docs/priors.md): class=industrial|collaborative|service "
-                        "(service: humanoids, mobile manipulators, low-cost arms; default: chosen from the "
-                        "model), group scales with their unit: zeros=3deg, twists=1deg, lengths=10mm, "
+                   help="the parameter priors (docs/priors.md): class=industrial|collaborative|service|"
+                        "positioner (service: humanoids, mobile manipulators, low-cost arms; positioner: "
+                        "tables and turntables; default: chosen from the model), group scales with their "
+                        "unit: zeros=3deg, twists=1deg, lengths=10mm, "
                         "errors=2x (a factor on the joint-error terms' scales), estimate=no (keep the "
                         "class defaults instead of widening them where the data ask for it); on top of "
                         "the model file's priors: block")
