@@ -101,21 +101,18 @@ def _row(name: str, cal_err, held_err, seconds: float | None) -> list:
             "" if seconds is None else f"{seconds:.2f}"]
 
 
-def run_cli(cal: rc.Measurements, held: rc.Measurements, robot: rc.Robot) -> rc.Robot:
-    """``robocal calibrate CAL.csv --robot MODEL.yaml --validate HELD.csv -o OUT`` on the split;
-    the calibrated model it wrote."""
+def run_cli(cal: rc.Measurements, held: rc.Measurements, robot: rc.Robot, *options: str) -> rc.Robot:
+    """``robocal calibrate CAL.csv --robot MODEL.yaml --validate HELD.csv -o OUT [options]`` on
+    the split (the files :func:`rosi_positioner.write_inputs` writes); the calibrated model."""
     with tempfile.TemporaryDirectory() as tmp:
-        tmp = Path(tmp)
-        cal.save(tmp / "cal.csv")
-        held.save(tmp / "held.csv")
-        robot.save(tmp / "positioner.yaml")
+        cal_csv, held_csv, model = rp.write_inputs(tmp, robot, cal, held)
+        out = Path(tmp) / "calibrated.yaml"
         with contextlib.redirect_stdout(io.StringIO()):
-            code = cli_main(["--quiet", "calibrate", str(tmp / "cal.csv"), "--robot",
-                             str(tmp / "positioner.yaml"), "--validate", str(tmp / "held.csv"),
-                             "-o", str(tmp / "calibrated.yaml")])
+            code = cli_main(["--quiet", "calibrate", str(cal_csv), "--robot", str(model),
+                             "--validate", str(held_csv), "-o", str(out), *options])
         if code != 0:
             raise RuntimeError(f"robocal calibrate exited with {code}")
-        return rc.Robot.load(tmp / "calibrated.yaml")
+        return rc.Robot.load(out)
 
 
 FITS = (  # robocal's rows: name, calibrate's keyword arguments
@@ -164,11 +161,13 @@ def main(argv: list[str] | None = None) -> None:
     figure("rosi_positioner.reference_held_deg", f"{ref_held[1].mean():.4f}")
     print(f"  goal: held-out mean <= {GOAL_MM} mm and <= {GOAL_DEG} deg")
 
-    default = results["robocal default"]
-    cli_p, cli_r = pose_errors(run_cli(cal, held, robot).fk(held.joints), held)
-    same = abs(pose_errors(default.robot.fk(held.joints), held)[0].mean() - cli_p.mean()) < CLI_MATCH_MM
-    print(f"  robocal calibrate (command line): held-out mean {cli_p.mean():.4f} mm, {cli_r.mean():.5f} deg "
-          f"({'the same as' if same else 'DIFFERENT from'} the API's default)")
+    for name, options in (("robocal default", ()), ("robocal default, noise ratio estimated",
+                                                     ("--variance-components",))):
+        cli_p, cli_r = pose_errors(run_cli(cal, held, robot, *options).fk(held.joints), held)
+        api_p = pose_errors(results[name].robot.fk(held.joints), held)[0]
+        same = "the same as" if abs(api_p.mean() - cli_p.mean()) < CLI_MATCH_MM else "DIFFERENT from"
+        print(f"  robocal calibrate {' '.join(options) or '(defaults)'}: held-out mean {cli_p.mean():.4f} "
+              f"mm, {cli_r.mean():.5f} deg ({same} the API's {name!r})")
     for name, _ in FITS:
         res = results[name]
         terms = ", ".join(res.nongeometric["terms"]) if res.nongeometric else "geometric"

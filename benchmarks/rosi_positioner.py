@@ -28,6 +28,7 @@ out when ``i % HOLD_EVERY == HOLD_EVERY - 1``: 41 held out, 164 calibrate.
 
 from __future__ import annotations
 
+import argparse
 import os
 from pathlib import Path
 
@@ -143,3 +144,32 @@ def load(folder: str | Path | None = None) -> tuple[rc.Robot, rc.Measurements, r
     data = read_measurements(data_file(folder))
     held = hold_out_mask(len(data))
     return nominal_positioner(), data.subset(np.flatnonzero(~held)), data.subset(np.flatnonzero(held))
+
+
+def write_inputs(folder: str | Path, robot: rc.Robot, cal: rc.Measurements,
+                 held: rc.Measurements) -> tuple[Path, Path, Path]:
+    """``robocal calibrate``'s inputs in ``folder``: the calibration and held-out CSVs and the
+    nominal model YAML (``rosi_cal.csv``, ``rosi_held.csv``, ``rosi_positioner.yaml``)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = folder / "rosi_cal.csv", folder / "rosi_held.csv", folder / "rosi_positioner.yaml"
+    cal.save(paths[0])
+    held.save(paths[1])
+    robot.save(paths[2])
+    return paths
+
+
+def main(argv: list[str] | None = None) -> None:
+    """``python benchmarks/rosi_positioner.py OUT_DIR [--data DIR]``: write the split and the
+    nominal model for ``robocal calibrate OUT_DIR/rosi_cal.csv --robot OUT_DIR/rosi_positioner.yaml
+    --validate OUT_DIR/rosi_held.csv``."""
+    parser = argparse.ArgumentParser(description=main.__doc__.split("\n")[0])
+    parser.add_argument("out_dir")
+    parser.add_argument("--data", help="folder holding the measurements file (default: the kept copy)")
+    args = parser.parse_args(argv)
+    for path in write_inputs(args.out_dir, *load(args.data)):
+        print(f"wrote {path}")
+
+
+if __name__ == "__main__":
+    main()
