@@ -26,6 +26,7 @@ from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 MAX_OFFSET_M = 100.0  # a joint origin farther than this from its parent is no robot's (URDF is in m)
 MAX_ANGLE_RAD = 100.0  # origin angles and joint limits beyond (16 turns) are a unit or typing error
 _MAX_AXIS = 1e6  # an axis vector is normalised; components beyond are refused
+HAYATI_DEG = 5.0  # consecutive axes closer than this to parallel are modelled with beta (Hayati)
 
 
 def rpy_to_matrix(rpy) -> np.ndarray:
@@ -134,11 +135,13 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 
 def _perpendicular(z: np.ndarray, hint: np.ndarray) -> np.ndarray:
-    """Unit vector normal to ``z``, as close as possible to ``hint`` (else to world x or y)."""
+    """Unit vector normal to ``z``, as close as possible to ``hint`` (else to world x or y); projected
+    twice, so that it is normal to ``z`` to rounding even when ``hint`` is nearly along ``z``."""
     for h in (hint, np.array([1.0, 0, 0]), np.array([0, 1.0, 0])):
         v = h - (h @ z) * z
         if np.linalg.norm(v) > 1e-6:
-            return _unit(v)
+            v = _unit(v)
+            return _unit(v - (v @ z) * z)
     raise AssertionError("unreachable: x and y cannot both be parallel to a unit z")
 
 
@@ -147,7 +150,7 @@ def _angle_about(u: np.ndarray, v: np.ndarray, axis: np.ndarray) -> float:
 
 
 def urdf_kwargs(source, tip: str | None = None, name: str | None = None,
-                parallel_tol_deg: float = 5.0) -> dict:
+                parallel_tol_deg: float = HAYATI_DEG) -> dict:
     """The `robocal.kinematics.model.Robot` arguments of a serial URDF (revolute, continuous,
     prismatic and fixed joints; text, or a path to a file).
 
@@ -198,7 +201,7 @@ def urdf_kwargs(source, tip: str | None = None, name: str | None = None,
             limits.append([-2 * np.pi, 2 * np.pi])
     if not dirs:
         raise ModelError("URDF chain has no moving joint")
-    kw = _lines_to_chain(np.array(points), np.array(dirs), T, np.array(limits),
+    kw = lines_to_chain(np.array(points), np.array(dirs), T, np.array(limits),
                          name or root.get("name") or "robot", np.sin(np.deg2rad(parallel_tol_deg)),
                          np.array(prismatic))
     return {**kw, "link_frames": link_frames}
@@ -208,7 +211,7 @@ def _closest_on_line(p: np.ndarray, z: np.ndarray, x: np.ndarray) -> np.ndarray:
     return p + ((x - p) @ z) * z
 
 
-def _lines_to_chain(P: np.ndarray, Z: np.ndarray, T_tip: np.ndarray, limits: np.ndarray, name: str,
+def lines_to_chain(P: np.ndarray, Z: np.ndarray, T_tip: np.ndarray, limits: np.ndarray, name: str,
                     sin_tol: float, prismatic: np.ndarray) -> dict:
     """MDH + beta from joint lines (points ``P`` (n, 3), unit directions ``Z`` (n, 3)) and the
     tip pose ``T_tip`` at q = 0, all in the root frame; ``prismatic`` ``(n,)`` flags slides."""
@@ -227,7 +230,7 @@ def _lines_to_chain(P: np.ndarray, Z: np.ndarray, T_tip: np.ndarray, limits: np.
                 s, t = np.linalg.solve(A, [-(w @ z), -(w @ z2)])
                 o, foot2 = P[i] + s * z, p2 + t * z2
                 gap = foot2 - o
-                x = _unit(gap) if np.linalg.norm(gap) > 1e-9 else _unit(c)
+                x = _unit(c) * (-1.0 if gap @ c < 0 else 1.0)  # the common normal's direction, exactly
                 foot2 = o + (gap @ x) * x
             else:
                 hayati[i + 1] = True
@@ -237,6 +240,7 @@ def _lines_to_chain(P: np.ndarray, Z: np.ndarray, T_tip: np.ndarray, limits: np.
                 # axis i+1 meets the plane through o normal to z here
                 foot2 = p2 + ((o - p2) @ z) / (z2 @ z) * z2
                 gap = foot2 - o
+                gap -= (gap @ z) * z  # in the plane normal to z, to rounding
                 hint = xs[i - 1] if i > 0 else np.array([1.0, 0, 0])
                 x = _unit(gap) if np.linalg.norm(gap) > 1e-9 else _perpendicular(z, hint)
             feet[i + 1] = foot2
