@@ -13,14 +13,15 @@ chain carries what); its only public instance is this data set, and robocal's ca
 carries 6-D poses with external-axis columns. So the one-off format is read here and written as that
 CSV (``e1_deg, e2_deg, x_mm.., qw..qz``), which ``robocal calibrate`` reads like any other.
 
-The nominal chain is the repository's ``createTwoAxisPositioner()`` (standard DH rows
+The nominal chain (``CELL``, ``benchmarks/data/rosi_positioner/cell.yaml``: a positioner-only
+robocal cell file) is the repository's ``createTwoAxisPositioner()`` (standard DH rows
 ``(d, theta, r, alpha)``: axis 1 ``(0, 0, 0, -pi/2)``, axis 2 ``(-0.475 m, -pi/2, 0, 0)``, base
 ``T(2.2, 0, 1.6) Rx(pi/2)`` in the world) with the example's initial guesses
 (``kinematic_calibration_example.launch``: the sensor at ``T(2.2, 0.7, 1.075)`` in the world, the
 target at ``(0.17, -0.65, 0.5)``, quaternion ``(0.547419, 0.447585, -0.547419, -0.447585)`` on the
-last DH frame). robocal's model of it (:func:`nominal_positioner`): a 2-joint `robocal.Robot` whose
-``base`` is the positioner's DH base in the SENSOR frame (the measurement frame) and whose ``tool``
-is the target on the turn axis' frame.
+last DH frame). robocal's model of it (:func:`nominal_positioner`): the cell's positioner chain, a
+2-joint `robocal.Robot` whose ``base`` is the positioner's DH base seen from the SENSOR (the
+measurement frame) and whose ``tool`` is the target (the plate) on the turn axis' frame.
 
 Split (``hold_out_mask``): pose ``i`` (0-based, in the file's order, which is time order) is held
 out when ``i % HOLD_EVERY == HOLD_EVERY - 1``: 41 held out, 164 calibrate.
@@ -42,15 +43,16 @@ from robocal.core.errors import DataError
 SOURCE = ("github.com/Jmeyer1292/robot_cal_tools @2089a06d11b13323cf6c358a89524231801e5b06 "
           "rct_examples/data/positioner_kinematic_measurements.yaml (Apache-2.0)")
 FIXTURE = Path(__file__).resolve().parent / "data" / "rosi_positioner"
+CELL = FIXTURE / "cell.yaml"  # the nominal positioner as a positioner-only cell file
+POSITIONER = "rosi_positioner"  # its body name there
 FILE_NAMES = ("measurements.yaml", "positioner_kinematic_measurements.yaml")  # industrial_calibration, rct
 DATA_ENV = "ROBOCAL_ROSI_DATA"
 HOLD_EVERY = 5  # every 5th pose is held out
 QUATERNION_TOL = 1e-6  # |q| - 1 beyond this is not a rotation written to double precision: refused
 REPOSITORY_MEAN_MM, REPOSITORY_MEAN_DEG = 2.0, 0.2  # what the repository's test asserts, in-sample
 
-# the repository's nominal chain and initial guesses, SI (m, rad)
+# the repository's nominal chain and initial guesses, SI (m, rad): CELL transcribes them (tested)
 DH_D, DH_THETA, DH_R, DH_ALPHA = (0.0, -0.475), (0.0, -np.pi / 2), (0.0, 0.0), (-np.pi / 2, 0.0)
-DH_LIMITS = ((-np.pi, np.pi), (-2 * np.pi, 2 * np.pi))
 WORLD_T_POSITIONER = ((2.2, 0.0, 1.6), (np.pi / 2, 0.0, 0.0))  # translation, rotation vector
 WORLD_T_SENSOR = ((2.2, 0.7, 1.075), (0.0, 0.0, 0.0))
 MOUNT_T_TARGET = ((0.17, -0.65, 0.5), (0.447585, -0.547419, -0.447585, 0.547419))  # xyz, quaternion x,y,z,w
@@ -121,17 +123,17 @@ def read_measurements(path: str | Path) -> rc.Measurements:
         external=2, source=f"{SOURCE}: target on a 2-axis positioner in a fixed sensor's frame")
 
 
+def nominal_cell() -> rc.Cell:
+    """The positioner-only cell file ``CELL`` (the repository's chain and guesses in its world)."""
+    return rc.load_cell(CELL)
+
+
 def nominal_positioner() -> rc.Robot:
-    """The repository's nominal positioner as a 2-joint robocal Robot (standard DH converted
-    exactly): base = its DH base in the sensor frame, tool = the target on the last DH frame."""
-    world_positioner = _frame(WORLD_T_POSITIONER[0], Rotation.from_rotvec(WORLD_T_POSITIONER[1]))
+    """The cell's positioner as a 2-joint robocal Robot in the measurement frame: base = its DH
+    base in the sensor frame (the cell's mount seen from the sensor), tool = the target (plate)."""
+    chain = nominal_cell().positioners[POSITIONER].chain
     world_sensor = _frame(WORLD_T_SENSOR[0], Rotation.from_rotvec(WORLD_T_SENSOR[1]))
-    target = _frame(MOUNT_T_TARGET[0], Rotation.from_quat(MOUNT_T_TARGET[1]))
-    base = np.linalg.inv(world_sensor) @ world_positioner
-    return rc.Robot.from_dh(DH_THETA, DH_D, DH_R, DH_ALPHA, base=base, tool=target,
-                            limits=np.array(DH_LIMITS), name="rosi_positioner",
-                            description="ROS-Industrial robot_cal_tools 2-axis positioner (nominal), "
-                                        "in its fixed sensor's frame")
+    return chain.with_frames(base=np.linalg.inv(world_sensor) @ chain.base)
 
 
 def hold_out_mask(n: int) -> np.ndarray:

@@ -63,6 +63,20 @@ def test_nominal_chain_is_the_repositorys_chain(split):
     assert robot.n_joints == 2 and np.allclose(robot.limits[1], [-2 * np.pi, 2 * np.pi])
 
 
+def test_cell_file_is_the_chain_in_the_world_and_calibrates_from_there(split, fits):
+    robot, cal, held = split
+    cell = rp.nominal_cell()
+    assert cell.anchor == rp.POSITIONER and not cell.arms
+    positioner = cell.positioners[rp.POSITIONER]
+    assert positioner.columns == ("e1", "e2") and positioner.unit == "STN1"
+    world_sensor = np.eye(4)
+    world_sensor[:3, 3] = rp.WORLD_T_SENSOR[0]
+    assert np.allclose(world_sensor @ robot.fk(cal.joints), positioner.plate(cal.joints), atol=1e-12)
+    # the chain as the cell places it (2.3 m from the sensor): the frame registration finds the sensor
+    from_world = rc.calibrate(positioner.chain, cal, validation=held, variance_components=True)
+    assert _held_means(from_world, held) == pytest.approx(_held_means(fits["noise ratio"], held), abs=1e-6)
+
+
 @pytest.mark.parametrize("change, match", [
     (lambda e: e.update(camera_joints=[0.1]), "sensor moves"),
     (lambda e: e.update(target_joints=[0.1, 0.2, 0.3]), "3 target joints"),
