@@ -46,6 +46,12 @@ REFERENCE_LENGTH_M = 0.3  # the reference fit weighs 1 rad of orientation like 0
 CLI_MATCH_MM = 1e-6  # the command's calibrated model gives the API's held-out figures to this
 
 
+def model_poses(robot: rc.Robot, data: rc.Measurements) -> np.ndarray:
+    """``(N, 4, 4)`` the target poses ``robot`` predicts for ``data``'s rows, at the rows' own
+    conditions (a travel or backlash term needs each row's move from the one measured before)."""
+    return robot.fk(data.joints, smr=data.smr, conditions=data.conditions.motion)
+
+
 def pose_errors(T: np.ndarray, data: rc.Measurements) -> tuple[np.ndarray, np.ndarray]:
     """Per pose: position error (mm, 3-D distance) and orientation error (deg, angle of the
     relative rotation) of model poses ``T (N, 4, 4)`` against the measured ones."""
@@ -135,14 +141,14 @@ def main(argv: list[str] | None = None) -> None:
     every = rp.read_measurements(rp.data_file(args.data))
     print(f"data: {rp.data_file(args.data)}: {len(every)} poses, {len(cal)} calibrate, {len(held)} held out "
           f"(every {rp.HOLD_EVERY}th)")
-    rows = [_row("nominal chain (the example's guesses)", pose_errors(robot.fk(cal.joints), cal),
-                 pose_errors(robot.fk(held.joints), held), None)]
+    rows = [_row("nominal chain (the example's guesses)", pose_errors(model_poses(robot, cal), cal),
+                 pose_errors(model_poses(robot, held), held), None)]
     results = {}
     for name, kw in FITS:
         start = time.perf_counter()
         results[name] = res = rc.calibrate(robot, cal, validation=held, **kw)
-        rows.append(_row(name, pose_errors(res.robot.fk(cal.joints), cal),
-                         pose_errors(res.robot.fk(held.joints), held), time.perf_counter() - start))
+        rows.append(_row(name, pose_errors(model_poses(res.robot, cal), cal),
+                         pose_errors(model_poses(res.robot, held), held), time.perf_counter() - start))
     start = time.perf_counter()
     x = reference_fit(cal)
     seconds = time.perf_counter() - start
@@ -154,7 +160,7 @@ def main(argv: list[str] | None = None) -> None:
           rows, key="rosi_positioner.split")
     for name, _ in FITS:
         key = name.removeprefix("robocal ").replace(", noise ratio estimated", "_vc").replace(" ", "_")
-        held_p, held_r = pose_errors(results[name].robot.fk(held.joints), held)
+        held_p, held_r = pose_errors(model_poses(results[name].robot, held), held)
         figure(f"rosi_positioner.{key}_held_mm", f"{held_p.mean():.3f}")
         figure(f"rosi_positioner.{key}_held_deg", f"{held_r.mean():.4f}")
     figure("rosi_positioner.reference_held_mm", f"{ref_held[0].mean():.3f}")
@@ -163,8 +169,8 @@ def main(argv: list[str] | None = None) -> None:
 
     for name, options in (("robocal default", ()), ("robocal default, noise ratio estimated",
                                                      ("--variance-components",))):
-        cli_p, cli_r = pose_errors(run_cli(cal, held, robot, *options).fk(held.joints), held)
-        api_p = pose_errors(results[name].robot.fk(held.joints), held)[0]
+        cli_p, cli_r = pose_errors(model_poses(run_cli(cal, held, robot, *options), held), held)
+        api_p = pose_errors(model_poses(results[name].robot, held), held)[0]
         same = "the same as" if abs(api_p.mean() - cli_p.mean()) < CLI_MATCH_MM else "DIFFERENT from"
         print(f"  robocal calibrate {' '.join(options) or '(defaults)'}: held-out mean {cli_p.mean():.4f} "
               f"mm, {cli_r.mean():.5f} deg ({same} the API's {name!r})")
@@ -182,7 +188,7 @@ def main(argv: list[str] | None = None) -> None:
     start = time.perf_counter()
     whole = rc.calibrate(robot, every)
     seconds = time.perf_counter() - start
-    wp, wr = pose_errors(whole.robot.fk(every.joints), every)
+    wp, wr = pose_errors(model_poses(whole.robot, every), every)
     rp_, rr_ = pose_errors(reference_fk(reference_fit(every), every.joints), every)
     claim = ["repository's assertion", f"< {rp.REPOSITORY_MEAN_MM:g}", f"< {rp.REPOSITORY_MEAN_DEG:g}", "",
              ""]

@@ -97,7 +97,7 @@ def test_reader_refuses_what_it_cannot_read(tmp_path, change, match):
 def _held_means(result, held) -> tuple[float, float]:
     """Held-out mean position (mm) and orientation (deg) error of a result or a calibrated robot."""
     robot = getattr(result, "robot", result)
-    p, r = bench.pose_errors(robot.fk(held.joints), held)
+    p, r = bench.pose_errors(bench.model_poses(robot, held), held)
     return float(p.mean()), float(r.mean())
 
 
@@ -137,3 +137,13 @@ def test_command_line_on_the_written_split(tmp_path, split, fits, capsys):
     held = split[2]
     assert _held_means(rc.Robot.load(out), held) == pytest.approx(_held_means(fits["noise ratio"], held),
                                                                   abs=1e-6)
+
+
+def test_evaluate_reports_the_held_out_position_and_rotation_errors(split, fits):
+    held = split[2]
+    calibrated = fits["noise ratio"].robot
+    stats = rc.evaluate(calibrated, held)
+    position, rotation = bench.pose_errors(bench.model_poses(calibrated, held), held)  # its own way
+    assert stats["mean"] == pytest.approx(position.mean(), rel=1e-9)
+    assert stats["rotation_deg"]["mean"] == pytest.approx(rotation.mean(), rel=1e-9)
+    assert f"rotation rms {np.sqrt(np.mean(rotation ** 2)):.4f} deg" in stats.summary()
