@@ -132,7 +132,7 @@ FITS = (  # robocal's rows: name, calibrate's keyword arguments
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", help="folder holding the measurements file (default: the kept copy)")
-    args = parser.parse_args(argv)
+    args = parser.parse_args([] if argv is None and __name__ != "__main__" else argv)  # run.py: defaults
     try:
         robot, cal, held = rp.load(args.data)
     except rp.DataUnavailableError as exc:
@@ -157,14 +157,14 @@ def main(argv: list[str] | None = None) -> None:
     rows.append(_row("plain least squares (scipy, 14 parameters)", ref_cal, ref_held, seconds))
     table("ROS-Industrial 2-axis positioner, held out every 5th pose (mean errors; mm, deg)",
           ["model", "cal mm", "cal deg", "held mm", "held deg", "held RMS mm", "held max mm", "fit s"],
-          rows, key="rosi_positioner.split")
+          rows, key="split")
     for name, _ in FITS:
         key = name.removeprefix("robocal ").replace(", noise ratio estimated", "_vc").replace(" ", "_")
         held_p, held_r = pose_errors(model_poses(results[name].robot, held), held)
-        figure(f"rosi_positioner.{key}_held_mm", f"{held_p.mean():.3f}")
-        figure(f"rosi_positioner.{key}_held_deg", f"{held_r.mean():.4f}")
-    figure("rosi_positioner.reference_held_mm", f"{ref_held[0].mean():.3f}")
-    figure("rosi_positioner.reference_held_deg", f"{ref_held[1].mean():.4f}")
+        figure(f"{key}_held_mm", f"{held_p.mean():.3f}")
+        figure(f"{key}_held_deg", f"{held_r.mean():.4f}")
+    figure("reference_held_mm", f"{ref_held[0].mean():.3f}")
+    figure("reference_held_deg", f"{ref_held[1].mean():.4f}")
     print(f"  goal: held-out mean <= {GOAL_MM} mm and <= {GOAL_DEG} deg")
 
     for name, options in (("robocal default", ()), ("robocal default, noise ratio estimated",
@@ -196,7 +196,7 @@ def main(argv: list[str] | None = None) -> None:
           ["model", "mean mm", "mean deg", "max mm", "fit s"],
           [["robocal default", f"{wp.mean():.3f}", f"{wr.mean():.4f}", f"{wp.max():.3f}", f"{seconds:.2f}"],
            ["plain least squares (scipy)", f"{rp_.mean():.3f}", f"{rr_.mean():.4f}", f"{rp_.max():.3f}", ""],
-           claim], key="rosi_positioner.in_sample")
+           claim], key="in_sample")
 
 
 if __name__ == "__main__":
