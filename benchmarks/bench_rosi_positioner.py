@@ -121,6 +121,21 @@ def run_cli(cal: rc.Measurements, held: rc.Measurements, robot: rc.Robot, *optio
         return rc.Robot.load(out)
 
 
+def first_block(robot: rc.Robot, every: rc.Measurements) -> None:
+    """The step the consistency test finds where the tilt leaves its first value: the first tilt
+    block (the session's first poses) against a geometric fit of all the others."""
+    tilt = every.joints[:, 0]
+    first = np.abs(tilt - tilt[0]) <= np.deg2rad(0.05)
+    others = rc.calibrate(robot, every.subset(np.flatnonzero(~first)), nongeometric=None).robot
+    error = (model_poses(others, every)[:, :3, 3] - every.points) * 1e3
+    block_means = [np.linalg.norm(error[np.abs(tilt - t) <= np.deg2rad(0.05)].mean(axis=0))
+                   for t in np.unique(np.round(tilt[~first], 3))]
+    offset = np.linalg.norm(error[first].mean(axis=0))
+    print(f"  the first tilt block ({np.rad2deg(tilt[0]):.2f} deg, the session's first {first.sum()} poses) "
+          f"sits {figure('first_block_offset_mm', f'{offset:.3f}')} mm off a geometric fit of the other "
+          f"{(~first).sum()} poses; those blocks' own mean offsets: at most {max(block_means):.3f} mm")
+
+
 FITS = (  # robocal's rows: name, calibrate's keyword arguments
     ("robocal default", {}),
     ("robocal default, noise ratio estimated", {"variance_components": True}),
@@ -184,6 +199,8 @@ def main(argv: list[str] | None = None) -> None:
         for found in res.variance_components:
             print(f"    noise estimated: position {found.sigma_m * 1e3:.3f} mm, rotation "
                   f"{np.rad2deg(found.sigma_rad):.4f} deg per axis")
+
+    first_block(robot, every)
 
     start = time.perf_counter()
     whole = rc.calibrate(robot, every)
