@@ -147,3 +147,15 @@ def test_evaluate_reports_the_held_out_position_and_rotation_errors(split, fits)
     assert stats["mean"] == pytest.approx(position.mean(), rel=1e-9)
     assert stats["rotation_deg"]["mean"] == pytest.approx(rotation.mean(), rel=1e-9)
     assert f"rotation rms {np.sqrt(np.mean(rotation ** 2)):.4f} deg" in stats.summary()
+
+
+def test_benchmark_records_its_tables_and_figures(capsys):
+    import results
+
+    results.TABLES.clear()
+    results.FIGURES.clear()
+    bench.main([])
+    assert [t["key"] for t in results.TABLES] == ["split", "in_sample"]
+    assert float(results.FIGURES["default_vc_held_mm"]) <= GOAL_MM
+    assert float(results.FIGURES["default_vc_held_deg"]) <= GOAL_DEG
+    assert "the same as the API" in capsys.readouterr().out
