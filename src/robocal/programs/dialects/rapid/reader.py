@@ -224,9 +224,12 @@ class RapidDialect(Dialect):
                 else:
                     self._statement(src, masked, s, e, prog, st, src not in sources, proc, conf)
         for kind, decl, known in (("tool", st.tools, prog.tools), ("frame", st.wobjs, prog.frames)):
-            for name, (pose, ok, why) in decl.items():
+            for name, (pose, ok, why, *moved) in decl.items():
                 if ok:
                     known[name] = pose
+                    if moved and moved[0]:  # a work object a mechanical unit moves (ufmec)
+                        prog.carried[name] = moved[0]
+                        prog.warnings += [moved[1]] if moved[1] else []
                 else:
                     prog.unsupported[f"{kind}:{name}"] = why
         for name in BUILTIN_TOOLS:
@@ -346,9 +349,9 @@ class RapidDialect(Dialect):
             raise DataError(f"{src.path.name}:{src.line_of(at)}: robtarget {name}: confdata must be "
                             f"integers, got {[n.text for n in conf]}")
         cf1, cf4, cf6, cfx = map(int, config)
-        used = [f"eax_{'abcdef'[k]} = {x}" for k, x in ext if abs(float(x)) < _UNUSED_AXIS]
+        used = [(f"eax_{'abcdef'[k]}", x) for k, x in ext if abs(float(x)) < _UNUSED_AXIS]
         return Target(src, at, name, pose, config=np.array([cfx, cf1, cf4, cf6]), config_spans=conf,
-                      external=", ".join(used))
+                      external=", ".join(f"{k} = {x}" for k, x in used), axes={k: float(x) for k, x in used})
 
     def _robtargets(self, src, tree, name, at, array: str | None) -> list[Target]:
         return [self._robtarget(src, node, name + suffix, _first_offset(node, at) if array else at)
@@ -368,9 +371,16 @@ class RapidDialect(Dialect):
                             "[robhold,ufprog,ufmec,[uframe],[oframe]]")
         uf = self.to_pose(np.array([[n.value for n in _pose_numbers(tree[3], src, at, f"wobjdata {name}")]]))
         of = self.to_pose(np.array([[n.value for n in _pose_numbers(tree[4], src, at, f"wobjdata {name}")]]))
-        fixed = tree[0].text.upper() == "FALSE" and tree[1].text.upper() == "TRUE"
-        return (uf[0] @ of[0], fixed,
-                f"{where}: wobjdata {name} is held by the robot or moved by a mechanical unit")
+        robhold, ufprog = (tree[0].text.upper() == "TRUE",
+                           isinstance(tree[1], Word) and tree[1].text.upper() == "TRUE")
+        unit = "" if robhold or ufprog or not isinstance(tree[2], Word) else \
+            src.text[tree[2].start:tree[2].start + len(tree[2].text)].strip('"').strip()
+        note = f"{where}: wobjdata {name} moves with {unit} and has a uframe that is not the identity: " \
+            "taken as a frame on the unit's plate (oframe in uframe); check that the controller's uframe " \
+            "of this moving work object is that" if unit and not np.allclose(uf[0], np.eye(4)) else ""
+        why = f"{where}: wobjdata {name} is held by the robot (robhold TRUE)" if robhold else \
+            f"{where}: wobjdata {name} moves with a unit it does not name (ufprog FALSE, ufmec '')"
+        return uf[0] @ of[0], not robhold and (ufprog or bool(unit)), why, unit, note
 
     # ------------------------------------------------------------------ data flow
     def _assign(self, prog, st):
