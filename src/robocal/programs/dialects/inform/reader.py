@@ -532,6 +532,7 @@ def _external(prog: Program, t: Target, instr: str, moved: Moved, groups: Groups
         if t.frame in prog.frames:
             prog.frames.setdefault(key, prog.frames[t.frame])
         prog.carried[key] = unit
+        prog.in_world.add(key)  # the robot's position as taught with the station at its values
         t.frame = key
     return ""
 
