@@ -510,11 +510,12 @@ def _external(prog: Program, t: Target, instr: str, moved: Moved, groups: Groups
                     f"{how or 'PULSE'}): pulses per degree are controller parameters, not the cell file's")
         values = {f"E{k + 1}": v for k, v in enumerate(nums)}  # the station's axes 1.. in degrees
     else:
-        for u, label, kind, nums, how in moved.values:
-            if nums is not None:
-                as_read = how == "ANGLE" or kind in BASE_KINDS and how == "RECTAN"
-                what = "" if as_read else f" {how or 'PULSE'}"
-                values.update({f"{u}{what} {label.lstrip('+')}[{k + 1}]": v for k, v in enumerate(nums)})
+        for u, label, kind, nums, how in moved.values:  # each unit's axes (NaN: not in the files given)
+            if nums is None:
+                values[f"{u} {label.lstrip('+')}"] = float("nan")
+                continue
+            pulses = "" if how == "ANGLE" or kind in BASE_KINDS and how == "RECTAN" else " (pulses)"
+            values.update({f"{u} axis {k + 1}{pulses}": v for k, v in enumerate(nums)})
     first = uses.get(id(t))
     if first is not None:
         if first[0] != unit or unit is not None and first[1] != values:
