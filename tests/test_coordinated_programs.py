@@ -280,3 +280,29 @@ def test_fanuc_position_used_coordinated_and_not_is_named(tmp_path):
     res = filter_program([path], perturbed(FANUC_ARM, 7), FANUC_ARM, **FANUC_FRAMES)
     assert [m.status for m in res.motions] == ["named", "named", "corrected"]
     assert "cannot serve both" in res.motions[1].reason
+
+
+def test_fanuc_rail_and_servo_gun_group_with_a_track_cell(tmp_path):
+    """An integrated rail (E1 of group 1) and a second group moving on its own (a servo gun's GP2 J1,
+    as spot-welding cells write them): named without a track cell (the rail carries the arm),
+    corrected with one, E1 and GP2's values kept."""
+    from test_program_corpus import CORPUS
+    from test_track_programs import CELL
+
+    from robocal.data.simulate import simulate_tracker
+    from robocal.kinematics.model import cell_from_data
+
+    text = (CORPUS / "track_pick.ls").read_text().replace("= 1,*,*,*,*;", "= 1,1,*,*,*;")
+    path = tmp_path / "track_pick.ls"
+    path.write_text(text.replace("\n};", "\n   GP2:\n\tUF : 1, UT : 2,\n\tJ1=   100.000  mm\n};"))
+    res = filter_program([path], perturbed(FANUC_ARM, 7), FANUC_ARM, **FANUC_FRAMES)
+    assert res.summary_dict()["motions"]["corrected"] == 0
+    assert all("external axes E1 = " in m.reason for m in res.motions)
+    cell = cell_from_data({**CELL, "robot": "fanuc_lrmate200id",
+                           "track": {"direction": [1, 0, 0], "limits": [0, 3000]},
+                           "mount": {"xyz": [-1650, 0, 0], "rpy": [0, 0, 0]}})
+    truth = simulate_tracker(cell, 5, seed=2).truth
+    res = filter_program([path], truth, cell, keep_unreached=True, **FANUC_FRAMES)
+    assert res.summary_dict()["motions"]["corrected"] == 2
+    kept = re.compile(rb"(?:E1\s*=|J1=)\s*[-+.\d]+")
+    assert kept.findall(res.outputs[path]) == kept.findall(path.read_bytes())

@@ -191,11 +191,14 @@ class FanucDialect(Dialect):
                                     "(a SCARA's: 'L|R, t1, t2, t4')")
                 extended = [f"{e} = {v}" for e, v in _EXTENDED.findall(gp) if float(v) != 0.0]
                 values = group_values(body, groups)
-                external = extended + [f"motion group GP{g} ({values_text(axes)})"
-                                       for g, axes in values.items()]
+                # an extended axis of the arm's group (an integrated rail) carries the arm: its values
+                # alone, as text (a track cell takes them, robocal.programs.track); else the other
+                # groups' values, which do not move the arm's position unless coordinated, as data
+                external = extended or [f"motion group GP{g} ({values_text(axes)})"
+                                        for g, axes in values.items()]
                 t = Target(src, m.start(), name, nums, frame=str(int(fr["UF"])), tool=str(int(fr["UT"])),
                            config=row, config_spans=spans, order=order, external=", ".join(external))
-                if values and not extended:  # other groups only: as data (an integrated axis stays text)
+                if not extended:
                     t.axes = {f"GP{g} {k}": v for g, axes in values.items() for k, v in axes.items()}
                 others[id(t)] = (values, ", ".join(extended))
                 prog.targets.append(t)
