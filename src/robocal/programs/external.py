@@ -51,7 +51,7 @@ def sort_external(program: Program, warnings: list[str], taken: frozenset[int] =
         elif t.axes:  # values as data: read by the dialect, in a frame no unit carries
             kept.append(t)
             loose += 1
-            letters |= {k for k, v in t.axes.items() if v != 0.0}
+            letters |= {k for k, v in t.axes.items() if v != 0.0} or set(t.axes)
             continue
         else:
             why = (f"external axes {t.external}: the target moves with axes outside the arm (a track, gantry "
