@@ -12,13 +12,14 @@ where the tool lands on the true plate.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 import robocal as rc
 from robocal.data.simulate import perturbed
+from robocal.kinematics.positioner import positioner_chain as chain_of
 from robocal.kinematics.transforms import invert_transform, make_transform, rot_x, rot_y, rot_z
 from robocal.programs.dialects.writing import quaternions, zyx_angles
 from robocal.programs.filter import controller_joints, target_poses
@@ -32,35 +33,12 @@ TOOL = make_transform(rot_y(np.deg2rad(20.0)), [0.0, 0.0, 0.25])  # a torch 250 
 OFRAME = make_transform(rot_z(np.deg2rad(30.0)), [0.05, -0.04, 0.12])  # the workpiece on the plate
 
 
-@dataclass(frozen=True)
-class Positioner:
-    """What a cell's positioner is for the filter (the contract of kinematics.workcell)."""
-
-    chain: rc.Robot
-    unit: str
-    program_axes: tuple[str, ...]
-
-
-@dataclass(frozen=True)
-class Cell:
-    """An arm and its positioners (the contract of kinematics.workcell.Cell)."""
-
-    arms: dict
-    positioners: dict
-    name: str = "cell"
-    description: str = ""
-    extra: dict = field(default_factory=dict)
-
-
 def positioner_chain(mount: np.ndarray) -> rc.Robot:
     """A tilt-and-turn positioner: tilt about the world x 0.45 m above its mount, turn about the
     plate's normal 0.2 m above the tilt axis; the plate frame parallel to the world at zero."""
-    base = mount @ make_transform(rot_y(np.pi / 2), [0.0, 0.0, 0.45])  # joint 1's z = the world x
-    chain = rc.Robot(alpha=[0.0, 0.0], a=[0.0, 0.0], beta=[0.0, -np.pi / 2], theta=[0.0, 0.0],
-                     d=[0.0, 0.2], base=base, limits=np.deg2rad([[-90.0, 90.0], [-360.0, 360.0]]),
-                     name="positioner")
-    at_zero = chain.fk(np.zeros((1, 2)))[0]
-    return chain.with_frames(tool=invert_transform(at_zero) @ make_transform(np.eye(3), at_zero[:3, 3]))
+    tilt = {"type": "revolute", "axis": [1, 0, 0], "origin": [0, 0, 0.45], "limits": np.deg2rad([-90, 90])}
+    turn = {"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.2], "limits": np.deg2rad([-360, 360])}
+    return chain_of([tilt, turn], mount=mount)
 
 
 def _moved(T: np.ndarray, rng, mm: float, deg: float) -> np.ndarray:
@@ -77,7 +55,7 @@ def _chain_error(chain: rc.Robot, rng, mm: float, deg: float) -> rc.Robot:
 
 
 def cells(seed: int = 0, arm: str = ARM, unit: str = "STN1", axes=("eax_b", "eax_c"),
-          estimate_mm: float = 0.01, estimate_deg: float = 0.001) -> tuple[Cell, Cell, Cell]:
+          estimate_mm: float = 0.01, estimate_deg: float = 0.001) -> tuple[rc.Cell, rc.Cell, rc.Cell]:
     """``(nominal, true, calibrated)`` cells: the true one has the arm's link errors (0.05-0.5 mm,
     0.005-0.05 deg) and the positioner's (0.5 mm, 0.05 deg on its links and plate, 2 mm and 0.1 deg
     on its mount); the calibrated one is the truth plus ``estimate_mm`` / ``estimate_deg``."""
@@ -91,12 +69,15 @@ def cells(seed: int = 0, arm: str = ARM, unit: str = "STN1", axes=("eax_b", "eax
     cal_pos = _chain_error(true_pos, rng, estimate_mm, estimate_deg)
 
     def cell(a, p):
-        return Cell({"arm": a}, {"turntable": Positioner(p, unit, tuple(axes))})
+        return rc.Cell({"arm": a}, {"turntable": rc.Positioner(p, unit, program_axes=tuple(axes))})
 
-    return cell(nominal_arm, nominal_pos), cell(true_arm, true_pos), cell(cal_arm, cal_pos)
+    tracker = _moved(make_transform(rot_z(2.0), [2.5, -1.0, 0.3]), rng, 1.0, 1.0)  # the calibration's frame
+    calibrated = cell(cal_arm.with_frames(base=tracker @ cal_arm.base),
+                      cal_pos.with_frames(base=tracker @ cal_pos.base))
+    return cell(nominal_arm, nominal_pos), cell(true_arm, true_pos), calibrated
 
 
-def poses(nominal: Cell, n: int, seed: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def poses(nominal: rc.Cell, n: int, seed: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(q, e_deg, T)``: ``n`` arm joints (rad) whose torch points at the plate, positioner values
     (deg) and the targets T ``(n, 4, 4)`` (m, in OFRAME on the plate) the nominal cell gives them."""
     rng = np.random.default_rng(seed)
@@ -121,7 +102,7 @@ def poses(nominal: Cell, n: int, seed: int = 1) -> tuple[np.ndarray, np.ndarray,
     return q, e_deg[keep], T
 
 
-def rapid_program(folder: Path, nominal: Cell, q, e_deg, T, name: str = "stn_weld") -> Path:
+def rapid_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "stn_weld") -> Path:
     """A RAPID module in the style of ABB's coordinated-motion examples: a wobjdata moved by STN1
     (uframe identity, the workpiece in oframe), ``ActUnit STN1``, robtargets with the positioner
     in eax_b / eax_c, motions ``\\WObj:=wobjSTN1``; plus one uncoordinated target (wobj0) whose
@@ -156,7 +137,7 @@ def rapid_program(folder: Path, nominal: Cell, q, e_deg, T, name: str = "stn_wel
     return path
 
 
-def krl_program(folder: Path, nominal: Cell, q, e_deg, T, name: str = "dkp_weld",
+def krl_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "dkp_weld",
                 form: str = "ek") -> tuple[list[Path], Path]:
     """A KRL .src/.dat and its $config.dat: machine 2 a DKP-400 (#EASYS) named ``DKP400``, base 3
     (OFRAME) on its flange; ``form`` 'ek': ``$BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,
@@ -203,7 +184,7 @@ def krl_program(folder: Path, nominal: Cell, q, e_deg, T, name: str = "dkp_weld"
     return paths, folder / "$config.dat"
 
 
-def landing(paths, references, nominal: Cell, true: Cell, intended=None) -> dict:
+def landing(paths, references, nominal: rc.Cell, true: rc.Cell, intended=None) -> dict:
     """Run program files as the nominal controller would on the true cell. Returns, for the
     targets on the plate, the tool's landing error on the true plate (m, ``(N,)``) against the
     pose written in ``intended`` (files of the program before filtering; default ``paths``), the
@@ -227,10 +208,13 @@ def landing(paths, references, nominal: Cell, true: Cell, intended=None) -> dict
     return {"error": np.linalg.norm(on_plate[:, :3, 3] - P[:, :3, 3], axis=1), "q": q, "e": e}
 
 
-def model_error(q, e, calibrated: Cell, true: Cell, tool=TOOL) -> np.ndarray:
+def model_error(q, e, calibrated: rc.Cell, true: rc.Cell, tool=TOOL) -> np.ndarray:
     """The calibrated cell's own error (m, ``(N,)``) at arm joints q and positioner values e: where
-    it says the tool is on its plate, against where the true cell has it on the true plate."""
+    it says the tool is on its plate (its bodies put in the controller's world, which the true
+    cell's arm base is), against where the true cell has it on the true plate."""
     def on_plate(cell):
         arm, chain = cell.arms["arm"], cell.positioners["turntable"].chain
-        return invert_transform(chain.fk(e)) @ arm.with_frames(base=np.eye(4)).fk(q) @ tool
-    return np.linalg.norm(on_plate(calibrated)[:, :3, 3] - on_plate(true)[:, :3, 3], axis=1)
+        return invert_transform(chain.fk(e)) @ arm.fk(q) @ tool
+
+    in_world = true.in_world({name: calibrated.body(name) for name in calibrated.bodies})
+    return np.linalg.norm(on_plate(in_world)[:, :3, 3] - on_plate(true)[:, :3, 3], axis=1)

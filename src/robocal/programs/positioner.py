@@ -34,9 +34,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from robocal.core.errors import DataError
+from robocal.core.errors import DataError, ModelError
 from robocal.kinematics.model import Robot
-from robocal.kinematics.transforms import invert_transform
+from robocal.kinematics.workcell import Cell
 from robocal.programs.external import coordinated_unit
 from robocal.programs.model import Program, Target
 
@@ -158,21 +158,23 @@ class CoordinatedProgram:
         return nominal, real
 
 
-def cell_models(calibrated, nominal) -> tuple[Robot, Robot, CoordinatedProgram | None]:
+def cell_models(calibrated: Robot | Cell, nominal: Robot | Cell
+                ) -> tuple[Robot, Robot, CoordinatedProgram | None]:
     """``(calibrated arm, nominal arm, the cell's positioners)`` of the models a program is
     filtered with. Arms alone: as given, no positioner (None). Cells (the nominal cell file and
-    the calibrated cell the cell calibration wrote): the cell's one arm, and each positioner's
-    nominal chain and calibrated chain in the controller's world, which the calibrated arm's
-    identified frame {0} anchors: ``world_T_tracker = nominal_arm.base @ inv(calibrated_arm.base)``
-    (:func:`robocal.deploy.compensation.controller_model` puts the calibrated arm there).
+    the calibrated cell its calibration wrote, bodies in the tracker frame): the cell's one arm,
+    and each positioner's nominal chain and calibrated chain in the controller's world, which the
+    calibrated arm's identified frame {0} anchors (:meth:`Cell.in_world`:
+    ``world_T_tracker = nominal_arm.base @ inv(calibrated_arm.base)``;
+    :func:`robocal.deploy.compensation.controller_model` puts the calibrated arm there too).
 
     Raises
     ------
     DataError
-        One model a cell and the other not, a cell with several arms, a calibrated cell without
-        the nominal cell's arm or positioners.
+        One model a cell and the other not, a cell with several arms or none, a calibrated cell
+        without the nominal cell's bodies.
     """
-    cells = [hasattr(m, "positioners") for m in (calibrated, nominal)]
+    cells = [isinstance(m, Cell) for m in (calibrated, nominal)]
     if not any(cells):
         return calibrated, nominal, None
     if not all(cells):
@@ -182,20 +184,16 @@ def cell_models(calibrated, nominal) -> tuple[Robot, Robot, CoordinatedProgram |
     if len(nominal.arms) != 1:
         raise DataError(f"the cell {nominal.name!r} has {len(nominal.arms)} arms: filter each arm's program "
                         "with a cell of that arm and the positioners it works with")
-    (arm, nominal_arm), = nominal.arms.items()
-    calibrated_arm = _part(calibrated.arms, arm, "arm")
-    world = nominal_arm.base @ invert_transform(calibrated_arm.base)
-    stations = {}
-    for name, p in nominal.positioners.items():
-        chain = _part(calibrated.positioners, name, "positioner").chain
-        stations[p.unit] = Station(p.unit, p.chain, chain.with_frames(base=world @ chain.base),
-                                   tuple(p.program_axes))
-    return calibrated_arm, nominal_arm, CoordinatedProgram(stations)
-
-
-def _part(parts: dict, name: str, kind: str):
-    if name not in parts:
-        known = ", ".join(sorted(parts)) or "none"
-        raise DataError(f"the calibrated cell has no {kind} {name!r} (it has {known}): give the calibration "
-                        "of this cell")
-    return parts[name]
+    missing = sorted(set(nominal.bodies) - set(calibrated.bodies))
+    if missing:
+        raise DataError(f"the calibrated cell {calibrated.name!r} has no body {missing[0]!r} of the cell "
+                        f"{nominal.name!r} (it has {', '.join(calibrated.bodies)}): give this cell's "
+                        "calibration")
+    try:
+        world = nominal.in_world({name: calibrated.body(name) for name in nominal.bodies})
+    except ModelError as exc:
+        raise DataError(f"the calibrated cell does not fit the cell {nominal.name!r}: {exc}") from None
+    arm = nominal.anchor
+    stations = {p.unit: Station(p.unit, p.chain, world.positioners[name].chain, p.program_axes)
+                for name, p in nominal.positioners.items()}
+    return world.arms[arm], nominal.arms[arm], CoordinatedProgram(stations)
