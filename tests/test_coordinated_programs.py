@@ -224,3 +224,29 @@ def test_a_coordinated_target_without_its_positioner_values_is_named(tmp_path):
     named = [m for m in res.motions if m.status == "named"]
     assert [m.target for m in named] == ["pW1"] and "gives no value for its axis eax_b" in named[0].reason
     assert res.summary_dict()["motions"] == {"total": 5, "corrected": 4, "named": 1}
+
+
+def test_the_filter_command_takes_the_cell_files(tmp_path, capsys):
+    """robocal filter PROGRAM --model CELL.yaml --calibrated CALIBRATED_CELL.yaml: the cell files as
+    Cell.save writes them; the output is what the API gives; a program's unknown unit is one line
+    and nothing is written."""
+    from robocal.cli import main
+
+    nominal, _, calibrated = cp.cells(0)
+    q, e, T = cp.poses(nominal, 5)
+    path = cp.rapid_program(tmp_path, nominal, q, e, T)
+    nominal.save(tmp_path / "cell.yaml")
+    calibrated.save(tmp_path / "calibrated_cell.yaml")
+    out = tmp_path / "out.mod"
+    args = ["filter", str(path), "--model", str(tmp_path / "cell.yaml"), "--calibrated",
+            str(tmp_path / "calibrated_cell.yaml"), "-o", str(out)]
+    assert main(args) == 0
+    api = tmp_path / "api.mod"
+    filter_program(path, calibrated, nominal).write(api)
+    assert out.read_bytes() == api.read_bytes()
+    assert "7 motions: 7 corrected" in capsys.readouterr().out
+    path.write_bytes(path.read_bytes().replace(b'"STN1"', b'"STN7"'))
+    out.unlink()
+    assert main(args) != 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "mechanical unit STN7, which is not in the cell" in err[0] and not out.exists()
