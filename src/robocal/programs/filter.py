@@ -430,7 +430,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     warnings = list(program.warnings)
     if track is not None:
         track.take(program, warnings)
-    targets = _filterable(d, program, warnings, coordinated)
+    targets = _filterable(d, program, warnings, coordinated, fixed_arm=track is None)
     if not targets:
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
@@ -534,13 +534,13 @@ def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
 
 
 def _filterable(d: Dialect, program: Program, warnings: list,
-                coordinated: CoordinatedProgram | None = None) -> list[Target]:
+                coordinated: CoordinatedProgram | None = None, fixed_arm: bool = True) -> list[Target]:
     """The targets to filter: those with a supported tool and frame, all of them known, and
     corrected as arm targets or on a positioner's plate (``coordinated``:
     :mod:`robocal.programs.positioner`) whatever their external-axis values say
     (:func:`robocal.programs.external.sort_external`)."""
     taken = coordinated.take(program, warnings) if coordinated is not None else frozenset()
-    sort_external(program, warnings, taken)
+    sort_external(program, warnings, taken, fixed_arm)
     targets: list[Target] = []
     for t in program.targets:
         why = program.unsupported.get(f"tool:{t.tool}") or program.unsupported.get(f"frame:{t.frame}")
