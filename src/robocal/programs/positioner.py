@@ -36,6 +36,7 @@ import numpy as np
 
 from robocal.core.errors import DataError, ModelError
 from robocal.kinematics.model import Robot
+from robocal.kinematics.transforms import invert_transform
 from robocal.kinematics.workcell import Cell
 from robocal.programs.external import coordinated_unit
 from robocal.programs.model import Program, Target
@@ -109,6 +110,7 @@ class CoordinatedProgram:
     stations: dict[str, Station]
     e: dict[int, np.ndarray] = field(default_factory=dict)  # id(target) -> positioner values, SI
     unit: dict[int, str] = field(default_factory=dict)  # id(target) -> its station's unit
+    in_world: set[int] = field(default_factory=set)  # id(target): taught in the world (Program.in_world)
 
     def take(self, program: Program, warnings: list[str]) -> frozenset[int]:
         """Record the values of every target in a frame a unit carries; refuse a unit the cell
@@ -130,6 +132,8 @@ class CoordinatedProgram:
                 continue
             station.check_limits(t, e)
             self.e[id(t)], self.unit[id(t)] = e, station.unit
+            if t.frame in program.in_world:
+                self.in_world.add(id(t))
             kept.append(t)
         program.targets = kept
         return frozenset(self.e)
@@ -146,15 +150,20 @@ class CoordinatedProgram:
     def frames(self, targets: list[Target], W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The frames of ``targets`` in the world ``(N, 4, 4)`` (m) from their frames ``W``
         ``(N, 4, 4)``: ``(as the nominal controller puts them, where the calibrated cell has
-        them)``; a frame on a plate is ``plate(e) @ W``, any other is ``W`` in both."""
+        them)``; a frame on a plate is ``plate(e) @ W``, any other is ``W`` in both. A target
+        taught in the world at e (:attr:`Program.in_world`) is on the plate at
+        ``inv(nominal_plate(e)) @ W``: the controller has it at ``W``, the calibrated cell at
+        ``calibrated_plate(e) @ inv(nominal_plate(e)) @ W``."""
         nominal, real = W.copy(), W.copy()
         for unit, station in self.stations.items():
             rows = np.array([i for i, t in enumerate(targets) if self.unit.get(id(t)) == unit], dtype=int)
             if rows.size:
                 e = np.array([self.e[id(targets[i])] for i in rows])
                 plate_nominal, plate_real = station.plates(e)
-                nominal[rows] = plate_nominal @ W[rows]
-                real[rows] = plate_real @ W[rows]
+                world = np.array([id(targets[i]) in self.in_world for i in rows])
+                on_plate = np.where(world[:, None, None], invert_transform(plate_nominal) @ W[rows], W[rows])
+                nominal[rows] = plate_nominal @ on_plate
+                real[rows] = plate_real @ on_plate
         return nominal, real
 
 
