@@ -49,15 +49,17 @@ ENDMODULE
 
 def test_rapid_reads_axes_and_the_units_moving_work_objects(tmp_path):
     """eax values as data (9E9 and 9E9 written 9E9: unused), ufmec of robhold FALSE / ufprog
-    FALSE work objects as carried frames; a uframe that is not the identity is said; robhold
-    TRUE and ufprog FALSE without a unit stay unsupported, each with its own reason."""
+    FALSE work objects as carried frames in oframe (the controller defines a moving work object's
+    uframe: a stored one that is not the identity is said and not used, as in RobotStudio's
+    exports, which store the plate's world pose there); robhold TRUE and ufprog FALSE without a
+    unit stay unsupported, each with its own reason."""
     _, prog = _rapid(tmp_path, RAPID)
     p1, p2 = prog.targets
     assert p1.axes == {"eax_b": 30.5, "eax_c": -120.0} and p2.axes == {"eax_b": 0.0, "eax_c": 0.0}
     assert prog.carried == {"wobjstn1": "STN1", "wobjmoved": "STN2"}
     assert np.allclose(prog.frames["wobjstn1"][:3, 3], [0, 0, 0.25])
-    said = "wobjMoved moves with STN2 and has a uframe that is not the identity"
-    assert any(said in w for w in prog.warnings)
+    said = "wobjMoved moves with STN2: its uframe (100.0, 0.0, 0.0 mm ...) is not used"
+    assert any(said in w for w in prog.warnings) and np.allclose(prog.frames["wobjmoved"], np.eye(4))
     assert "robhold TRUE" in prog.unsupported["frame:wobjheld"]
     assert "ufmec ''" in prog.unsupported["frame:wobjnounit"]
 

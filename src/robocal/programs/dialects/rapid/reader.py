@@ -7,7 +7,12 @@
   ``name{n}`` / ``name{n,m}``) or written inline in a motion instruction.
 * ``tooldata`` = ``[robhold,[[x,y,z],[q1..q4]],[load...]]``: TCP = flange * tframe.
 * ``wobjdata`` = ``[robhold,ufprog,ufmec,[[uframe]],[[oframe]]]``: target pose in the world
-  (= robot base) frame = uframe * oframe * robtarget.
+  (= robot base) frame = uframe * oframe * robtarget. A work object a mechanical unit moves
+  (robhold FALSE, ufprog FALSE, ufmec ``"STN1"``) is a frame on that unit's plate
+  (:attr:`Program.carried`): the controller defines its user frame by the unit, so the targets are
+  in oframe on the plate and a stored uframe is not used (said when it is not the identity);
+  robhold TRUE (the robot holds the work: MultiMove, a stationary tool) is not filtered. The
+  robtarget's external axes that are not 9E9 are its :attr:`Target.axes` (``eax_b`` -> value).
 * Motion instructions and the positions of their arguments (optional ``\\Arg`` removed):
   MoveL/MoveJ and their DO/AO/GO/Sync forms: ToPoint, Speed, Zone, Tool; MoveC: CirPoint,
   ToPoint, Speed, Zone, Tool; TriggL/TriggJ: ToPoint, Speed, Trigg, Zone, Tool; TriggC: CirPoint,
@@ -375,12 +380,15 @@ class RapidDialect(Dialect):
                            isinstance(tree[1], Word) and tree[1].text.upper() == "TRUE")
         unit = "" if robhold or ufprog or not isinstance(tree[2], Word) else \
             src.text[tree[2].start:tree[2].start + len(tree[2].text)].strip('"').strip()
-        note = f"{where}: wobjdata {name} moves with {unit} and has a uframe that is not the identity: " \
-            "taken as a frame on the unit's plate (oframe in uframe); check that the controller's uframe " \
-            "of this moving work object is that" if unit and not np.allclose(uf[0], np.eye(4)) else ""
+        # a moving work object (ufprog FALSE): the controller defines its user frame by the unit (its
+        # plate), continuously, and may store it in the PERS value: the targets are in oframe on the plate
+        stored = ", ".join(f"{v:.1f}" for v in uf[0][:3, 3] * 1e3)
+        note = f"{where}: wobjdata {name} moves with {unit}: its uframe ({stored} mm ...) is not used (the " \
+            "controller defines a moving work object's user frame by the unit): its targets are taken in " \
+            "oframe on the unit's plate" if unit and not np.allclose(uf[0], np.eye(4)) else ""
         why = f"{where}: wobjdata {name} is held by the robot (robhold TRUE)" if robhold else \
             f"{where}: wobjdata {name} moves with a unit it does not name (ufprog FALSE, ufmec '')"
-        return uf[0] @ of[0], not robhold and (ufprog or bool(unit)), why, unit, note
+        return of[0] if unit else uf[0] @ of[0], not robhold and (ufprog or bool(unit)), why, unit, note
 
     # ------------------------------------------------------------------ data flow
     def _assign(self, prog, st):
