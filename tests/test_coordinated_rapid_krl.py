@@ -62,6 +62,11 @@ def test_rapid_reads_axes_and_the_units_moving_work_objects(tmp_path):
     assert any(said in w for w in prog.warnings) and np.allclose(prog.frames["wobjmoved"], np.eye(4))
     assert "robhold TRUE" in prog.unsupported["frame:wobjheld"]
     assert "ufmec ''" in prog.unsupported["frame:wobjnounit"]
+    assert not any("ActUnit" in w for w in prog.warnings)  # STN1 is activated; STN2 moves no used target
+    _, prog = _rapid(tmp_path, RAPID.replace("ActUnit STN1;", ""))
+    assert [w for w in prog.warnings if "ActUnit" in w] == [
+        "no ActUnit STN1 in these files: the work objects STN1 moves follow it only while it is active "
+        "(activated at start-up or by another module?)"]
 
 
 def test_without_a_cell_coordinated_targets_are_named_and_the_others_corrected(tmp_path):

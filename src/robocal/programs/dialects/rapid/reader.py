@@ -91,6 +91,7 @@ _SUBSCRIPT = re.compile(r"([A-Za-z]\w*)\s*\{\s*(\d+(?:\s*,\s*\d+)*)\s*\}")  # na
 _RECORD = re.compile(r"\brecord\s+([a-z]\w*)([\s\S]*?)\bendrecord\b")
 _COMPONENT = re.compile(r"([A-Za-z]\w*)\s+([A-Za-z]\w*)\s*;")
 _CONF = re.compile(r"\bconf([lj])\s*\\\s*(on|off)\b")
+_ACTUNIT = re.compile(r"\bactunit\s+([a-z]\w*)")  # searched in the lower-cased text
 # block keywords a statement may begin with before its instruction
 _LEAD = re.compile(r"\s*(?:(?:LOCAL\s+)?(?:PROC|TRAP)\s+\w+\s*(?:\([^)]*\))?|(?:LOCAL\s+)?FUNC\s+\w+\s+\w+\s*"
                    r"\([^)]*\)|ENDPROC|ENDFUNC|ENDTRAP|ENDIF|ELSE|ENDFOR|ENDWHILE|ENDTEST|DEFAULT\s*:|"
@@ -245,6 +246,7 @@ class RapidDialect(Dialect):
         prog.tools.update({self.name_key(k): v for k, v in tools.items()})
         prog.frames.update({self.name_key(k): v for k, v in frames.items()})
         self._assign(prog, st)
+        _inactive_units(prog, lowered)
         flow.calls = [(src, at, name) for name, calls in st.calls.items() for src, at, *_ in calls]
         flow.entry = flow.routines.get("main")
         order_by_execution(prog, flow)
@@ -661,6 +663,16 @@ def _constant(text: str, constants: dict[str, float]) -> float | None:
     """The value of a RAPID num expression of numbers, CONST nums and their constant array
     elements (``nBead{1, 2} * ((-1) * K)``), else None."""
     return constant_value(_constant_key(text), constants)
+
+
+def _inactive_units(prog: Program, lowered: dict) -> None:
+    """Warn of each unit moving a work object the motions use that no ``ActUnit`` of these files
+    activates (the controller moves such a work object only while its unit is active)."""
+    active = {m.group(1) for low in lowered.values() for m in _ACTUNIT.finditer(low)}
+    used = {prog.carried[t.frame] for t in prog.targets if t.frame in prog.carried}
+    for unit in sorted(u for u in used if u.lower() not in active):
+        prog.warnings.append(f"no ActUnit {unit} in these files: the work objects {unit} moves follow it "
+                             "only while it is active (activated at start-up or by another module?)")
 
 
 def _after_lead(masked: str, start: int, end: int) -> int:
