@@ -257,3 +257,22 @@ def test_the_filter_command_takes_the_cell_files(tmp_path, capsys):
     assert main(args) != 0
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "mechanical unit STN7, which is not in the cell" in err[0] and not out.exists()
+
+
+def test_a_calibrated_plate_far_from_the_nominal_one_is_said(tmp_path):
+    """A calibrated positioner mounted 40 mm from the nominal cell's (another cell's calibration, or a
+    mount drawn far off): corrected, and one warning gives how far the plate moved."""
+    import robocal as rc
+    from robocal.kinematics.transforms import make_transform
+
+    nominal, _, calibrated = cp.cells(0)
+    q, e, T = cp.poses(nominal, 4)
+    path = cp.rapid_program(tmp_path, nominal, q, e, T)
+    assert not any("plate is up to" in w for w in filter_program(path, calibrated, nominal).warnings)
+    p = calibrated.positioners["turntable"]
+    far = rc.Positioner(p.chain.with_frames(base=p.chain.base @ make_transform(np.eye(3), [0.04, 0, 0])),
+                        p.unit, program_axes=p.program_axes)
+    moved = rc.Cell(calibrated.arms, {"turntable": far})
+    res = filter_program(path, moved, nominal, keep_unreached=True)
+    said = [w for w in res.warnings if "plate is up to" in w]
+    assert len(said) == 1 and re.match(r"the calibrated STN1's plate is up to (3[89]|4[01])\.\d mm", said[0])

@@ -36,7 +36,7 @@ import numpy as np
 
 from robocal.core.errors import DataError, ModelError
 from robocal.kinematics.model import Robot
-from robocal.kinematics.transforms import invert_transform
+from robocal.kinematics.transforms import invert_transform, pose_error
 from robocal.kinematics.workcell import Cell
 from robocal.programs.external import coordinated_unit
 from robocal.programs.model import Program, Target
@@ -45,6 +45,9 @@ from robocal.programs.model import Program, Target
 # cell files' columns e1..; other names (FANUC "E1 of GP2" ...) are matched as written.
 _LOGICAL = (re.compile(r"^eax_([a-f])$", re.IGNORECASE), re.compile(r"^e(\d)$", re.IGNORECASE))
 MM = 1e-3  # prismatic positioner values in programs are millimetres
+# A calibrated plate further than this from the nominal one is more than a cell file's placement
+# error (a layout drawing's mount, a plate frame by eye): said, the targets moving that much.
+PLATE_MOVED_MM, PLATE_MOVED_DEG = 25.0, 2.0
 
 
 def logical_axis(name: str) -> str:
@@ -136,7 +139,25 @@ class CoordinatedProgram:
                 self.in_world.add(id(t))
             kept.append(t)
         program.targets = kept
+        warnings += self._far_plates()
         return frozenset(self.e)
+
+    def _far_plates(self) -> list[str]:
+        """A warning for each positioner whose calibrated plate is, at this program's values, further
+        from the nominal plate than a placement error of the cell file explains."""
+        out = []
+        for unit, station in self.stations.items():
+            e = np.array([v for k, v in self.e.items() if self.unit[k] == unit])
+            if not e.size:
+                continue
+            moved = pose_error(*station.plates(e)[::-1])
+            mm, deg = np.linalg.norm(moved[:, :3], axis=1).max() * 1e3, np.rad2deg(
+                np.linalg.norm(moved[:, 3:], axis=1).max())
+            if mm > PLATE_MOVED_MM or deg > PLATE_MOVED_DEG:
+                out.append(f"the calibrated {unit}'s plate is up to {mm:.1f} mm / {deg:.2f} deg from the "
+                           "nominal cell's at this program's values: its targets move that much; check that "
+                           "the calibrated cell is this cell's calibration")
+        return out
 
     def _station(self, unit: str, t: Target) -> Station:
         found = self.stations.get(unit) or next((s for k, s in self.stations.items()
