@@ -116,6 +116,11 @@ def test_krl_reads_bases_on_an_external_kinematic(tmp_path, base):
     assert prog.carried == {"3@DKP400": "DKP400"} and t.frame == "3@DKP400"
     assert np.allclose(prog.frames["3@DKP400"], prog.frames["3"])
     assert t.axes == {"E1": 12.5, "E2": -40.0, "E3": 0.0, "E4": 0.0, "E5": 0.0, "E6": 0.0}
+    nominal = cp.cells(0, arm=cp.KUKA_ARM)[0].arms["arm"]
+    paths, refs, _ = _krl(tmp_path, src, KRL_DAT, KRL_CONFIG)
+    res = filter_program(paths, nominal, nominal, references=refs)  # a plain arm: named
+    assert [m.reason for m in res.motions] == ["XP1: coordinated with DKP400: give a cell file (--model "
+                                               "CELL.yaml) whose positioner has unit DKP400"]
 
 
 def test_krl_external_kinematic_without_its_declaration_is_named(tmp_path):

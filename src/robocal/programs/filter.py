@@ -302,10 +302,13 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         The program file(s): ABB RAPID (.mod, .prg), KUKA KRL (a .src with its .dat), FANUC TP
         (.ls), URScript (.script), Yaskawa INFORM (.JBI, VAR.DAT) or a Staubli VAL3 application
         folder.
-    calibrated : Robot
-        The calibrated model.
-    nominal : Robot
-        The controller's nominal model (6 joints, or an arm on a track).
+    calibrated : Robot or Cell
+        The calibrated model; with a nominal cell, the calibrated cell (its bodies in the tracker
+        frame of its calibration).
+    nominal : Robot or Cell
+        The controller's nominal model (6 joints, or an arm on a track), or a cell of one arm and
+        its positioners: targets in a work object a positioner moves (coordinated motion) are then
+        corrected on its plate (`robocal.programs.positioner`).
     tools, frames : dict of str to array_like, shape (4, 4), or str, optional
         Name -> transform (metres) or text in the program's pose notation, completing or
         overriding the tools / frames the files declare (the tools as the controller knows them).
@@ -350,7 +353,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     Raises
     ------
     DataError
-        No file, an unknown dialect, a nominal model without 6 joints, an unknown tool or
+        No file, an unknown dialect, a nominal model without 6 joints, a program moving with a
+        mechanical unit the cell does not have or positioner values outside its limits, an
+        unknown tool or
         frame, ``tools`` / ``frames`` / ``robot_base`` text whose magnitudes say another unit,
         targets that cannot be corrected (each named), or files without a Cartesian target
         that read as another language than their suffix says.
