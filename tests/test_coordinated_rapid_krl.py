@@ -225,6 +225,14 @@ def test_refusals_name_the_cause_in_one_line(tmp_path):
         filter_program(path, calibrated, nominal)
 
 
+def test_a_cell_refuses_a_robot_base(tmp_path):
+    nominal, _, calibrated = cp.cells(0)
+    q, e, T = cp.poses(nominal, 2)
+    path = cp.rapid_program(tmp_path, nominal, q, e, T)
+    with pytest.raises(DataError, match=r"^robot_base \(--robot-base\) is for an arm alone"):
+        filter_program(path, calibrated, nominal, robot_base=np.eye(4))
+
+
 def test_a_coordinated_target_without_its_positioner_values_is_named(tmp_path):
     nominal, _, calibrated = cp.cells(0)
     q, e, T = cp.poses(nominal, 3)

@@ -380,6 +380,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     given = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     references = [references] if isinstance(references, str | Path) else list(references)
     calibrated, nominal, coordinated = cell_models(calibrated, nominal)
+    if coordinated is not None and robot_base is not None:
+        raise DataError("robot_base (--robot-base) is for an arm alone: a cell's world is its arm's "
+                        "identified frame {0} (Cell.in_world), where the controller has the arm's base")
     reach = robot_reach(nominal)
     check_magnitudes(given, dialect, tools, frames, reach)
     robot_base = robot_base_frame(robot_base, reach)
