@@ -289,3 +289,21 @@ def test_a_calibrated_plate_far_from_the_nominal_one_is_said(tmp_path):
     res = filter_program(path, moved, nominal, keep_unreached=True)
     said = [w for w in res.warnings if "plate is up to" in w]
     assert len(said) == 1 and re.match(r"the calibrated STN1's plate is up to (3[89]|4[01])\.\d mm", said[0])
+
+
+def test_station_values_of_a_prismatic_axis_are_millimetres(tmp_path):
+    """A lift (prismatic, mm in programs) and a turn (deg): values read by logical axis, SI out;
+    the limits refused in the axis' unit."""
+    from robocal.kinematics.positioner import positioner_chain
+    from robocal.programs.positioner import Station
+    from robocal.programs.target import Target
+
+    chain = positioner_chain([{"type": "prismatic", "axis": [0, 0, 1], "limits": [0.0, 0.5]},
+                              {"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.3]}])
+    station = Station("LIFT", chain, chain, ("E1", "E2"))
+    (tmp_path / "p.mod").write_text("MODULE m\nENDMODULE\n")
+    t = Target(ProgramText(tmp_path / "p.mod"), 0, "p", [], axes={"eax_a": 250.0, "eax_b": 90.0})
+    assert np.allclose(station.values(t), [0.25, np.pi / 2])
+    t.axes["eax_a"] = 600.0
+    with pytest.raises(DataError, match=r"^p.mod:1 \(p\): LIFT axis E1 = 600 mm \(limits 0 \.\. 500\)"):
+        station.check_limits(t, station.values(t))

@@ -214,6 +214,9 @@ def cell_models(calibrated: Robot | Cell, nominal: Robot | Cell
     if len(nominal.arms) != 1:
         raise DataError(f"the cell {nominal.name!r} has {len(nominal.arms)} arms: filter each arm's program "
                         "with a cell of that arm and the positioners it works with")
+    if next(iter(nominal.arms.values())).external_axes and nominal.positioners:
+        raise DataError(f"the cell {nominal.name!r} has an arm on a track and a positioner: programs of such "
+                        "a cell are not filtered yet (an arm on a track alone, or an arm with positioners)")
     missing = sorted(set(nominal.bodies) - set(calibrated.bodies))
     if missing:
         raise DataError(f"the calibrated cell {calibrated.name!r} has no body {missing[0]!r} of the cell "
