@@ -163,3 +163,17 @@ def test_fanuc_and_krl_track_positions_are_corrected(tmp_path, robot, files, mou
     new = b"".join(res.outputs[p] for p in paths)
     e1 = re.compile(rb"E1\s*=?\s*[-+.\d]+")
     assert e1.findall(old) == e1.findall(new)  # the track values as written
+
+
+def test_a_track_cell_names_targets_with_another_external_value(tmp_path):
+    """A track cell: a target with eax_a and an eax_b value is not the track's alone (the arm's place
+    may depend on it): named, not taken as an arm target."""
+    from robocal.data.simulate import perturbed
+
+    cell = cell_from_data(CELL)
+    text, *_ = _module(cell, 2, seed=6)
+    path = tmp_path / "m.mod"
+    path.write_text(text.replace(",9E+09,9E+09,9E+09,9E+09,9E+09]]", ",12.5,9E+09,9E+09,9E+09,9E+09]]", 1))
+    res = filter_program(path, perturbed(cell, 3), cell)
+    assert res.summary_dict()["motions"] == {"total": 2, "corrected": 1, "named": 1}
+    assert "external axes eax_a = " in next(m for m in res.motions if m.status == "named").reason

@@ -34,12 +34,15 @@ def needs_cell(unit: str) -> str:
     return f"coordinated with {unit}: give a cell file (--model CELL.yaml) whose positioner has unit {unit}"
 
 
-def sort_external(program: Program, warnings: list[str], taken: frozenset[int] = frozenset()) -> None:
+def sort_external(program: Program, warnings: list[str], taken: frozenset[int] = frozenset(),
+                  fixed_arm: bool = True) -> None:
     """Keep in ``program.targets`` the targets that can be corrected as arm targets (and those in
     ``taken``: ids a cell model already took, :mod:`robocal.programs.positioner`); name every
     other target with external values (a warning and its reason in ``program.not_corrected``,
     so each motion reaching it is named). Appends one warning counting the targets whose
-    external values no work object follows."""
+    external values no work object follows. ``fixed_arm`` False (an arm on a track, whose
+    targets the track took first): a target with other external values is named, the arm's
+    place depending on them."""
     kept, loose, letters = [], 0, set()
     for t in program.targets:
         unit = None if id(t) in taken else coordinated_unit(program, t)
@@ -48,10 +51,10 @@ def sort_external(program: Program, warnings: list[str], taken: frozenset[int] =
         elif id(t) in taken or not t.external:
             kept.append(t)
             continue
-        elif t.axes:  # values as data: read by the dialect, in a frame no unit carries
+        elif t.axes and fixed_arm:  # values as data: read by the dialect, in a frame no unit carries
             kept.append(t)
             loose += 1
-            letters |= {k for k, v in t.axes.items() if v != 0.0}
+            letters |= {k for k, v in t.axes.items() if v != 0.0} or set(t.axes)
             continue
         else:
             why = (f"external axes {t.external}: the target moves with axes outside the arm (a track, gantry "

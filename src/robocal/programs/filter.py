@@ -302,10 +302,13 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         The program file(s): ABB RAPID (.mod, .prg), KUKA KRL (a .src with its .dat), FANUC TP
         (.ls), URScript (.script), Yaskawa INFORM (.JBI, VAR.DAT) or a Staubli VAL3 application
         folder.
-    calibrated : Robot
-        The calibrated model.
-    nominal : Robot
-        The controller's nominal model (6 joints, or an arm on a track).
+    calibrated : Robot or Cell
+        The calibrated model; with a nominal cell, the calibrated cell (its bodies in the tracker
+        frame of its calibration).
+    nominal : Robot or Cell
+        The controller's nominal model (6 joints, or an arm on a track), or a cell of one arm and
+        its positioners: targets in a work object a positioner moves (coordinated motion) are then
+        corrected on its plate (`robocal.programs.positioner`).
     tools, frames : dict of str to array_like, shape (4, 4), or str, optional
         Name -> transform (metres) or text in the program's pose notation, completing or
         overriding the tools / frames the files declare (the tools as the controller knows them).
@@ -350,7 +353,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     Raises
     ------
     DataError
-        No file, an unknown dialect, a nominal model without 6 joints, an unknown tool or
+        No file, an unknown dialect, a nominal model without 6 joints, a program moving with a
+        mechanical unit the cell does not have or positioner values outside its limits, an
+        unknown tool or
         frame, ``tools`` / ``frames`` / ``robot_base`` text whose magnitudes say another unit,
         targets that cannot be corrected (each named), or files without a Cartesian target
         that read as another language than their suffix says.
@@ -375,6 +380,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     given = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     references = [references] if isinstance(references, str | Path) else list(references)
     calibrated, nominal, coordinated = cell_models(calibrated, nominal)
+    if coordinated is not None and robot_base is not None:
+        raise DataError("robot_base (--robot-base) is for an arm alone: a cell's world is its arm's "
+                        "identified frame {0} (Cell.in_world), where the controller has the arm's base")
     reach = robot_reach(nominal)
     check_magnitudes(given, dialect, tools, frames, reach)
     robot_base = robot_base_frame(robot_base, reach)
@@ -430,7 +438,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     warnings = list(program.warnings)
     if track is not None:
         track.take(program, warnings)
-    targets = _filterable(d, program, warnings, coordinated)
+    targets = _filterable(d, program, warnings, coordinated, fixed_arm=track is None)
     if not targets:
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
@@ -534,13 +542,13 @@ def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
 
 
 def _filterable(d: Dialect, program: Program, warnings: list,
-                coordinated: CoordinatedProgram | None = None) -> list[Target]:
+                coordinated: CoordinatedProgram | None = None, fixed_arm: bool = True) -> list[Target]:
     """The targets to filter: those with a supported tool and frame, all of them known, and
     corrected as arm targets or on a positioner's plate (``coordinated``:
     :mod:`robocal.programs.positioner`) whatever their external-axis values say
     (:func:`robocal.programs.external.sort_external`)."""
     taken = coordinated.take(program, warnings) if coordinated is not None else frozenset()
-    sort_external(program, warnings, taken)
+    sort_external(program, warnings, taken, fixed_arm)
     targets: list[Target] = []
     for t in program.targets:
         why = program.unsupported.get(f"tool:{t.tool}") or program.unsupported.get(f"frame:{t.frame}")

@@ -34,9 +34,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from robocal.core.errors import DataError
+from robocal.core.errors import DataError, ModelError
 from robocal.kinematics.model import Robot
-from robocal.kinematics.transforms import invert_transform
+from robocal.kinematics.transforms import invert_transform, pose_error
+from robocal.kinematics.workcell import Cell
 from robocal.programs.external import coordinated_unit
 from robocal.programs.model import Program, Target
 
@@ -44,6 +45,9 @@ from robocal.programs.model import Program, Target
 # cell files' columns e1..; other names (FANUC "E1 of GP2" ...) are matched as written.
 _LOGICAL = (re.compile(r"^eax_([a-f])$", re.IGNORECASE), re.compile(r"^e(\d)$", re.IGNORECASE))
 MM = 1e-3  # prismatic positioner values in programs are millimetres
+# A calibrated plate further than this from the nominal one is more than a cell file's placement
+# error (a layout drawing's mount, a plate frame by eye): said, the targets moving that much.
+PLATE_MOVED_MM, PLATE_MOVED_DEG = 25.0, 2.0
 
 
 def logical_axis(name: str) -> str:
@@ -135,7 +139,25 @@ class CoordinatedProgram:
                 self.in_world.add(id(t))
             kept.append(t)
         program.targets = kept
+        warnings += self._far_plates()
         return frozenset(self.e)
+
+    def _far_plates(self) -> list[str]:
+        """A warning for each positioner whose calibrated plate is, at this program's values, further
+        from the nominal plate than a placement error of the cell file explains."""
+        out = []
+        for unit, station in self.stations.items():
+            e = np.array([v for k, v in self.e.items() if self.unit[k] == unit])
+            if not e.size:
+                continue
+            moved = pose_error(*station.plates(e)[::-1])
+            mm, deg = np.linalg.norm(moved[:, :3], axis=1).max() * 1e3, np.rad2deg(
+                np.linalg.norm(moved[:, 3:], axis=1).max())
+            if mm > PLATE_MOVED_MM or deg > PLATE_MOVED_DEG:
+                out.append(f"the calibrated {unit}'s plate is up to {mm:.1f} mm / {deg:.2f} deg from the "
+                           "nominal cell's at this program's values: its targets move that much; check that "
+                           "the calibrated cell is this cell's calibration")
+        return out
 
     def _station(self, unit: str, t: Target) -> Station:
         found = self.stations.get(unit) or next((s for k, s in self.stations.items()
@@ -166,7 +188,45 @@ class CoordinatedProgram:
         return nominal, real
 
 
-def cell_models(calibrated: Robot, nominal: Robot) -> tuple[Robot, Robot, CoordinatedProgram | None]:
+def cell_models(calibrated: Robot | Cell, nominal: Robot | Cell
+                ) -> tuple[Robot, Robot, CoordinatedProgram | None]:
     """``(calibrated arm, nominal arm, the cell's positioners)`` of the models a program is
-    filtered with: arms alone have no positioner (None)."""
-    return calibrated, nominal, None
+    filtered with. Arms alone: as given, no positioner (None). Cells (the nominal cell file and
+    the calibrated cell its calibration wrote, bodies in the tracker frame): the cell's one arm,
+    and each positioner's nominal chain and calibrated chain in the controller's world, which the
+    calibrated arm's identified frame {0} anchors (:meth:`Cell.in_world`:
+    ``world_T_tracker = nominal_arm.base @ inv(calibrated_arm.base)``;
+    :func:`robocal.deploy.compensation.controller_model` puts the calibrated arm there too).
+
+    Raises
+    ------
+    DataError
+        One model a cell and the other not, a cell with several arms or none, a calibrated cell
+        without the nominal cell's bodies.
+    """
+    cells = [isinstance(m, Cell) for m in (calibrated, nominal)]
+    if not any(cells):
+        return calibrated, nominal, None
+    if not all(cells):
+        given, missing = ("calibrated", "nominal") if cells[0] else ("nominal", "calibrated")
+        raise DataError(f"the {given} model is a cell and the {missing} one is not: give both cell files "
+                        "(the nominal cell, and the calibrated cell its calibration wrote)")
+    if len(nominal.arms) != 1:
+        raise DataError(f"the cell {nominal.name!r} has {len(nominal.arms)} arms: filter each arm's program "
+                        "with a cell of that arm and the positioners it works with")
+    if next(iter(nominal.arms.values())).external_axes and nominal.positioners:
+        raise DataError(f"the cell {nominal.name!r} has an arm on a track and a positioner: programs of such "
+                        "a cell are not filtered yet (an arm on a track alone, or an arm with positioners)")
+    missing = sorted(set(nominal.bodies) - set(calibrated.bodies))
+    if missing:
+        raise DataError(f"the calibrated cell {calibrated.name!r} has no body {missing[0]!r} of the cell "
+                        f"{nominal.name!r} (it has {', '.join(calibrated.bodies)}): give this cell's "
+                        "calibration")
+    try:
+        world = nominal.in_world({name: calibrated.body(name) for name in nominal.bodies})
+    except ModelError as exc:
+        raise DataError(f"the calibrated cell does not fit the cell {nominal.name!r}: {exc}") from None
+    arm = nominal.anchor
+    stations = {p.unit: Station(p.unit, p.chain, world.positioners[name].chain, p.program_axes)
+                for name, p in nominal.positioners.items()}
+    return world.arms[arm], nominal.arms[arm], CoordinatedProgram(stations)
