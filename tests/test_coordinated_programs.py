@@ -409,3 +409,30 @@ def landing_goal(tmp_path: Path, dialect: str, seed: int) -> dict:
 
     return _goal({"error": error(before)}, {"error": error(after)},
                  cp.model_error(q_after, np.deg2rad(e), calibrated, true))
+
+
+def test_cli_filters_a_station_coordinated_job_with_cell_files(tmp_path, capsys):
+    """``robocal filter JOB --nominal CELL.yaml --calibrated CALIBRATED_CELL.yaml``: corrected; without
+    the cell files the same motions are named, asking for one."""
+    import cell_programs as cp
+
+    from robocal.cli import main
+
+    nominal, _, calibrated = cp.cells(5, arm="yaskawa_gp25", unit="ST1", axes=("E1", "E2"))
+    q, e, _ = cp.poses(nominal, 5)
+    job = _inform_cell_job(tmp_path, nominal.arms["arm"], q, e, cp.TOOL)
+    nominal.save(tmp_path / "cell.yaml")
+    calibrated.save(tmp_path / "calibrated_cell.yaml")
+    out = tmp_path / "STWELD_CAL.JBI"
+    assert main(["filter", str(job), "--calibrated", str(tmp_path / "calibrated_cell.yaml"), "--nominal",
+                 str(tmp_path / "cell.yaml"), "-o", str(out), "--tool", "1=0,0,250,0,20,0"]) == 0
+    assert "5 motions: 5 corrected, 0 not corrected" in capsys.readouterr().out
+    ec = re.compile(rb"^EC.*$", re.M)
+    assert ec.findall(out.read_bytes()) == ec.findall(job.read_bytes())  # the station's values as written
+    cal = tmp_path / "cal.yaml"
+    perturbed(INFORM_ARM, 7).save(cal)
+    assert main(["filter", str(job), "--calibrated", str(cal), "--nominal", "yaskawa_gp25", "-o",
+                 str(tmp_path / "ARM.JBI"), "--tool", "1=0,0,250,0,20,0"]) == 0
+    text = capsys.readouterr().out
+    assert "5 motions: 0 corrected, 5 not corrected" in text
+    assert "coordinated with ST1: give a cell file" in text
