@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 
 import robocal as rc
 import robocal.programs.filter as filter_module
@@ -25,42 +24,18 @@ from robocal.programs import filter_program
 from robocal.programs.dialects.fanuc.reader import FanucDialect
 from robocal.programs.dialects.inform.reader import InformDialect
 from robocal.programs.dialects.writing import program_poses
-from robocal.programs.positioner import CoordinatedProgram, Station
-from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE, ProgramText
 
 INFORM_ARM = rc.Robot.from_catalog("yaskawa_gp25")
 FANUC_ARM = rc.Robot.from_catalog("fanuc_lrmate200id")
 TOOL = make_transform(np.eye(3)[None], np.array([[0.0, 0.0, 0.18]]))[0]  # a 180 mm torch
-LANDS_MM = 0.003  # the file's resolution (3 decimals of mm, 4 of deg) seen at the TCP
-# a tilt-and-turn positioner 1.3 m in front of the arm: tilt about the world x axis, turn 250 mm above
-MOUNT = make_transform(Rotation.from_euler("y", 90, degrees=True).as_matrix()[None],
-                       np.array([[1.3, 0, 0.5]]))[0]
-POSITIONER = rc.Robot.from_mdh(alpha=[0, -90], a=[0, 0], theta=[0, 0], d=[0, 250], degrees=True,
-                               length_unit="mm", base=MOUNT, limits=[[-90, 90], [-360, 360]])
-E = np.array([[10.0, -30.0], [20.0, -30.0], [30.0, 15.0], [-45.0, 120.0]])  # deg
+E = np.array([[10.0, -30.0], [20.0, -30.0], [30.0, 15.0], [-45.0, 120.0]])  # a station's values, deg
 Q = np.deg2rad([[0, 10, -20, 0, -70, 0], [5, 15, -15, 10, -60, 5], [-5, 20, -10, -10, -65, -5],
                 [10, 5, -25, 5, -75, 10]])
 
 
-def _cell(monkeypatch, arm: rc.Robot, unit: str, axes=("E1", "E2"), calibrated_positioner=None) -> None:
-    """Filter with a cell of ``arm`` and the positioner as ``unit`` (perturbed: the calibrated one)."""
-    station = Station(unit, POSITIONER, calibrated_positioner or perturbed(POSITIONER, 3), tuple(axes))
-    cell = CoordinatedProgram({unit: station})
-    monkeypatch.setattr(filter_module, "cell_models", lambda c, n: (c, n, cell))
-
-
 def _outside_numbers(data: bytes) -> str:
     return re.sub(r" *" + NUMBER_RE.pattern, "#", data.decode("latin-1"))
-
-
-def _written(res, paths: list[Path], folder: Path) -> list[Path]:
-    folder.mkdir()
-    out = []
-    for p in paths:
-        (folder / p.name).write_bytes(res.outputs[p])
-        out.append(folder / p.name)
-    return out
 
 
 # ----------------------------------------------------------------------------- INFORM
@@ -134,46 +109,6 @@ def test_inform_coordinated_motions_without_a_cell_are_named(tmp_path):
     assert "encoder pulses" in res.motions[0].reason
 
 
-def test_inform_coordinated_targets_land_on_the_workpiece(tmp_path, monkeypatch):
-    """SMOVL ... +MOVJ EC with a cell whose positioner is ST1: the nominal controller (nominal arm IK of
-    the corrected position) drives the calibrated arm to the point the job meant on the plate,
-    ``calibrated_plate(e) @ inv(nominal_plate(e)) @ X``; the station's values, the forms and every
-    other byte stay."""
-    calibrated_positioner = perturbed(POSITIONER, 3)
-    _cell(monkeypatch, INFORM_ARM, "ST1", calibrated_positioner=calibrated_positioner)
-    moves = [f"SMOVL C{k:05d} V=100.0 +MOVJ EC{k:05d}" for k in range(len(Q))]
-    job = _inform_job(tmp_path, moves, groups=("RB1", "ST1"))
-    calibrated = perturbed(INFORM_ARM, 7)
-    res = filter_program([job], calibrated, INFORM_ARM, tools=INFORM_TOOLS)
-    assert res.summary_dict()["motions"] == {"total": 4, "corrected": 4, "named": 0}
-    assert _outside_numbers(res.outputs[job]) == _outside_numbers(job.read_bytes())
-    ec = re.findall(rb"^EC.*$", job.read_bytes(), re.M)
-    assert re.findall(rb"^EC.*$", res.outputs[job], re.M) == ec
-    out = _written(res, [job], tmp_path / "out")
-    reached, _ = execute(out, calibrated, INFORM_ARM, tools=INFORM_TOOLS)
-    before, X = execute([job], calibrated, INFORM_ARM, tools=INFORM_TOOLS)
-    e = np.deg2rad(E)
-    intended = calibrated_positioner.fk(e) @ invert_transform(POSITIONER.fk(e)) @ X
-    err = np.linalg.norm(reached[:, :3, 3] - intended[:, :3, 3], axis=1) * 1e3
-    err0 = np.linalg.norm(before[:, :3, 3] - intended[:, :3, 3], axis=1) * 1e3
-    assert err.max() < LANDS_MM and err0.min() > 10 * LANDS_MM, (err, err0)
-
-
-def test_inform_refusals(tmp_path, monkeypatch):
-    """A station the cell does not have, a station value outside its axis' limits: one line, nothing
-    written."""
-    job = _inform_job(tmp_path, ["SMOVL C00000 V=100.0 +MOVJ EC00000"], groups=("RB1", "ST2"))
-    _cell(monkeypatch, INFORM_ARM, "ST1")
-    with pytest.raises(DataError, match=r"mechanical unit ST2, which is not in the cell"):
-        filter_program([job], perturbed(INFORM_ARM, 7), INFORM_ARM, tools=INFORM_TOOLS)
-    far = tmp_path / "far"
-    far.mkdir()
-    job = _inform_job(far, ["SMOVL C00003 V=100.0 +MOVJ EC00003"])
-    job.write_bytes(job.read_bytes().replace(b"EC00003=-45.0000", b"EC00003=-95.0000"))
-    with pytest.raises(DataError, match=r"ST1 axis E1 = -95.*outside the positioner's limits"):
-        filter_program([job], perturbed(INFORM_ARM, 7), INFORM_ARM, tools=INFORM_TOOLS)
-
-
 def test_inform_target_used_coordinated_and_not_is_named(tmp_path):
     moves = ["SMOVL C00000 V=100.0 +MOVJ EC00000", "MOVL C00000 V=100.0", "MOVL C00001 V=100.0"]
     res = filter_program([_inform_job(tmp_path, moves)], perturbed(INFORM_ARM, 7), INFORM_ARM,
@@ -229,50 +164,16 @@ def test_fanuc_second_group_on_its_own_leaves_arm_targets(tmp_path):
     assert res.summary_dict()["motions"]["named"] == 1 and "E1 = 1500.000" in res.motions[0].reason
 
 
-def test_fanuc_coordinated_motion(tmp_path, monkeypatch):
-    """L ... COORD: named without a cell; with a cell whose positioner is GP2 the arm's position is
-    on the leader's plate (its coordinated frame): the nominal controller puts it at
-    ``nominal_plate(e) @ P`` and the corrected one drives the calibrated arm to
-    ``calibrated_plate(e) @ P``; GP2's values and every other byte stay."""
+def test_fanuc_coordinated_motion_without_a_cell_is_named(tmp_path):
+    """L ... COORD in positions with GP2 values: named, asking for a cell whose positioner is GP2
+    (with one: test_coordinated_targets_land_on_the_true_cell)."""
     moves = ["J P[1] 100% CNT50 COORD", "L P[2] 250mm/sec CNT100 COORD", "L P[3] 250mm/sec CNT100 COORD",
-             "L P[4] 250mm/sec FINE COORD"]
-    d = FanucDialect()
-    # the positions on the plate: the arm's poses at Q seen from the nominal plate at E
-    plate = POSITIONER.fk(np.deg2rad(E))
+             "L P[4] 250mm/sec FINE COORD[GP2]"]
     path = _fanuc_program(tmp_path, moves)
-    values = d.from_pose(invert_transform(plate) @ FANUC_ARM.fk(Q) @ TOOL, np.zeros((len(Q), 6)))
-    text = path.read_text()
-    for k in range(len(Q)):  # the arm's numbers of P[k+1] replaced by its pose on the plate
-        block = re.search(rf"P\[{k + 1}\]\{{.*?\}};", text, re.S).group(0)
-        new = block
-        for key, x in zip("XYZWPR", values[k], strict=True):
-            new = re.sub(rf"\b{key} = +[-\d.]+", f"{key} = {x:9.3f}", new, count=1)
-        text = text.replace(block, new)
-    path.write_bytes(text.encode())
-    calibrated = perturbed(FANUC_ARM, 7)
-    res = filter_program([path], calibrated, FANUC_ARM, **FANUC_FRAMES)
+    res = filter_program([path], perturbed(FANUC_ARM, 7), FANUC_ARM, **FANUC_FRAMES)
     assert res.summary_dict()["motions"] == {"total": 4, "corrected": 0, "named": 4}
     assert all("coordinated with GP2: give a cell file" in m.reason for m in res.motions)
-    calibrated_positioner = perturbed(POSITIONER, 3)
-    _cell(monkeypatch, FANUC_ARM, "GP2", calibrated_positioner=calibrated_positioner)
-    res = filter_program([path], calibrated, FANUC_ARM, **FANUC_FRAMES)
-    assert res.summary_dict()["motions"] == {"total": 4, "corrected": 4, "named": 0}
-    out = res.outputs[path]
-    assert _outside_numbers(out) == _outside_numbers(path.read_bytes())
-    assert re.findall(rb"J[12]=.*", out) == re.findall(rb"J[12]=.*", path.read_bytes())
-    # the controller: nominal IK (in the position's CONFIG) of nominal_plate(e) @ P'
-    (tmp_path / "out").mkdir()
-    (tmp_path / "out" / "cell.ls").write_bytes(out)
-    prog = d.parse([ProgramText(tmp_path / "out" / "cell.ls")], {}, {})
-    P = d.to_pose(np.array([t.values() for t in prog.targets]))
-    problems, warnings = [], []
-    F = plate @ P @ invert_transform(TOOL)
-    q = filter_module.controller_joints(d, prog, prog.targets, FANUC_ARM, F, problems, warnings)
-    assert not problems
-    reached = calibrated.fk(q) @ TOOL
-    intended = calibrated_positioner.fk(np.deg2rad(E)) @ d.to_pose(values)
-    err = np.linalg.norm(reached[:, :3, 3] - intended[:, :3, 3], axis=1) * 1e3
-    assert err.max() < LANDS_MM, err
+    assert res.outputs[path] == path.read_bytes()
 
 
 def test_fanuc_position_used_coordinated_and_not_is_named(tmp_path):
@@ -436,3 +337,32 @@ def test_cli_filters_a_station_coordinated_job_with_cell_files(tmp_path, capsys)
     text = capsys.readouterr().out
     assert "5 motions: 0 corrected, 5 not corrected" in text
     assert "coordinated with ST1: give a cell file" in text
+
+
+@pytest.mark.parametrize("dialect", ["inform", "fanuc"])
+def test_refusals_on_a_cell(tmp_path, dialect):
+    """A station / leader group the cell does not have, a value outside the positioner axis' limits:
+    one line naming the cause, nothing written."""
+    import cell_programs as cp
+
+    arm_name, unit = ("yaskawa_gp25", "ST1") if dialect == "inform" else ("fanuc_m20ia", "GP2")
+    nominal, _, calibrated = cp.cells(5, arm=arm_name, unit=unit, axes=("E1", "E2"))
+    q, e, T = cp.poses(nominal, 3)
+    arm = nominal.arms["arm"]
+    if dialect == "inform":
+        path, tools = _inform_cell_job(tmp_path, arm, q, e, cp.TOOL), {"tools": {"1": "0,0,250,0,20,0"}}
+        other = (b"///GROUP2 ST1", b"///GROUP2 ST2")
+        far = (f"EC00001={e[1, 0]:.4f}".encode(), b"EC00001=95.0000")
+    else:
+        path = _fanuc_cell_program(tmp_path, arm, q, e, cp.OFRAME @ T)
+        tools = {"tools": {"2": "0,0,250,0,20,0"}, "frames": {"1": "0,0,0,0,0,0"}}
+        other = (b"   GP2:", b"   GP3:")  # the positions' second group, the leader, is GP3
+        far = (f"J1=  {e[1, 0]:9.3f} deg".encode(), b"J1=     95.000 deg")
+    text = path.read_bytes()
+    for (old, new), cause in ((other, r"mechanical unit (ST2|GP3), which is not in the cell"),
+                              (far, r"axis E1 = 95.* outside the positioner's limits")):
+        assert old in text
+        path.write_bytes(text.replace(old, new))
+        with pytest.raises(DataError, match=cause) as err:
+            filter_program([path], calibrated, nominal, **tools)
+        assert "\n" not in str(err.value)
