@@ -39,7 +39,7 @@ def _outside_numbers(data: bytes) -> str:
 
 
 # ----------------------------------------------------------------------------- INFORM
-def _inform_job(folder: Path, moves: list[str], *, groups=("RB1", "ST1"), station="ANGLE", var=None) -> Path:
+def _inform_job(folder: Path, moves: list[str], *, groups=("RB1", "ST1"), station="ANGLE") -> Path:
     """A job with the arm's positions C0000k at joints Q[k] (ROBOT frame, tool 1) and the station's
     EC0000k at E[k] (``station``: ANGLE in deg, PULSE in pulses), ``moves`` as its instructions."""
     d = InformDialect()
@@ -366,3 +366,18 @@ def test_refusals_on_a_cell(tmp_path, dialect):
         with pytest.raises(DataError, match=cause) as err:
             filter_program([path], calibrated, nominal, **tools)
         assert "\n" not in str(err.value)
+
+
+def test_inform_station_in_the_robots_group_or_its_own():
+    """``///GROUP1 RB1,ST1`` with ``SMOVL C00001 EC00001`` and ``///GROUP2 ST1`` with ``SMOVL C00001
+    +MOVJ EC00001`` read the same: the target carried by ST1 at the station's values (E1, E2)."""
+    import tempfile
+
+    read = []
+    for groups, move in ((("RB1,ST1",), "SMOVL C00001 EC00001 V=80.0"),
+                         (("RB1", "ST1"), "SMOVL C00001 V=80.0 +MOVJ EC00001 VJ=50.00")):
+        with tempfile.TemporaryDirectory() as folder:
+            path = _inform_job(Path(folder), [move], groups=groups)
+            prog = InformDialect().parse([ProgramText(path)], {}, {})
+            read.append([(t.name, t.frame, prog.carried.get(t.frame), t.axes) for t in prog.targets])
+    assert read[0] == read[1] == [("C00001", "identity@ST1", "ST1", {"E1": 20.0, "E2": -30.0})]

@@ -14,8 +14,10 @@ W, P, R are fixed-axis XYZ angles: R = Rz(R) Ry(P) Rx(W) (deg). CONFIG: flip (F/
 :class:`robocal.programs.dialects.fanuc.configuration.FANUCConfig`). Each position carries its
 user frame UF and tool frame UT; their values live in the controller, so they are given on the command line
 (``--frame u=X,Y,Z,W,P,R``, ``--tool t=...``, mm and deg); UF 0 is the world (= robot base)
-frame, UT 0 the faceplate. Joint representations (J1 = ...), other motion groups (GP2 ...) and
-extended axes are left alone.
+frame, UT 0 the faceplate. Joint representations (J1 = ...) are left alone. Other motion groups
+(``GP2:`` ...) and a ``COORD`` motion's leader: :mod:`robocal.programs.dialects.fanuc.groups`;
+extended axes of group 1 (``E1 = ...``, an integrated rail): a track cell
+(:mod:`robocal.programs.track`), else named.
 """
 
 from __future__ import annotations

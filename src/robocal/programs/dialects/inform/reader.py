@@ -35,6 +35,10 @@ without data is the flange (a warning). A job may save the
 P variables it uses in its ``//POS`` (``P00100=...``): those are read before VAR.DAT's, and
 another job's saved P variables after VAR.DAT's.
 
+Base axes (``BC``), stations (``EC``, ``+MOVJ EC``) and station-coordinated ``SMOV`` motions:
+:mod:`robocal.programs.dialects.inform.groups` (the values as :attr:`Target.axes`; an ``SMOV``
+target carried by its station).
+
 ``VAR.DAT`` holds the global variables; its position section ``//P`` has the same header lines
 and ``P0001=...`` entries. Given as a program file, its Cartesian positions that the jobs' motions
 reach are corrected too; otherwise a motion to ``P001`` is named.
