@@ -508,7 +508,8 @@ def _external(prog: Program, t: Target, instr: str, moved: Moved, groups: Groups
         if unit == "a station":
             return f"coordinated with the station of {label}, but the ///GROUP lines name no one station"
         if nums is None:
-            return f"coordinated with {unit} (SMOV), but its position {label} is not in the files given"
+            where = _RUNTIME_INDEX if "[" in label else "not in the files given"
+            return f"coordinated with {unit} (SMOV), but its position {label}: {where}"
         if how != "ANGLE":
             return (f"coordinated with {unit} (SMOV), but its position {label} is in encoder pulses (///"
                     f"{how or 'PULSE'}): pulses per degree are controller parameters, not the cell file's")
