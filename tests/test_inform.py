@@ -47,11 +47,10 @@ CASES = {
          r":39: MOVL: .*LP000 is written at run time by SET",
          r":40: MOVL: .*P\[I000\]: the position number is computed at run time"], (9, 1)),
     "track and station": (
-        ["TRACK_WELD.JBI"], ["C00002"],
-        [r":28: MOVJ: .*C00000 moves with BC00000: base axes and stations are not modelled",
-         r":29: MOVL: .*C00001 moves with BC00001: base axes",
-         r":32: MOVL: .*C00003 is in user frame 5, set at run time by MFRAME at TRACK_WELD.JBI:31",
-         r":33: MOVL: .*C00004 is in user frame 5, set at run time by MFRAME"], (1, 0)),
+        # ROBOT positions with base-axis (BC) and station (+MOVJ EC) values: arm targets (issue 45)
+        ["TRACK_WELD.JBI"], ["C00000", "C00001", "C00002"],
+        [r":32: MOVL: .*C00003 is in user frame 5, set at run time by MFRAME at TRACK_WELD.JBI:31",
+         r":33: MOVL: .*C00004 is in user frame 5, set at run time by MFRAME"], (3, 0)),
 }
 NOMINAL = rc.Robot.from_catalog("yaskawa_gp25")
 CALIBRATED = perturbed(NOMINAL, 7)

@@ -219,17 +219,20 @@ def test_rapid_configuration_matching_no_solution_is_warned(tmp_path):
                         r"the nearest, \[0,-1,0,0\]", w) for w in res.warnings)
 
 
-def test_rapid_track_targets_are_named_per_motion(tmp_path):
-    """Robtargets with eax_a values (a robot on a track): left as they are, and each motion that
-    reaches one is named with the axis value (3 motions, counted by hand)."""
+def test_rapid_uncoordinated_external_values_are_arm_targets(tmp_path):
+    """Robtargets with eax_a values in wobj0 (no mechanical unit moves the work object) and a plain
+    arm model: the values do not move the targets relative to the arm, so the 3 motions (counted
+    by hand) are corrected as arm targets, the eax_a values untouched; one warning counts them
+    and says that a track carrying the arm needs its cell file."""
     robot = rc.Robot.from_catalog("abb_irb2600")
     path = _copy(["track_mill.mod"], tmp_path)[0]
     res = filter_program(path, perturbed(robot, 7), robot)
-    assert res.outputs[path] == path.read_bytes() and not res.rows
-    assert res.summary_dict()["motions"] == {"total": 3, "corrected": 0, "named": 3}
-    assert [(m.line, m.target) for m in res.motions] == [(9, "pMill10"), (10, "pMill20"), (11, "pMill30")]
-    assert all("external axes eax_a = " in m.reason for m in res.motions)
-    assert "external axes eax_a = 1450" in res.motions[1].reason
+    assert res.summary_dict()["motions"] == {"total": 3, "corrected": 3, "named": 0}
+    out = res.outputs[path].decode()
+    assert re.findall(r"\],\[(\d+),9E\+09", out) == ["800", "1450", "2100"]
+    said = [w for w in res.warnings if "external-axis values" in w]
+    assert len(said) == 1 and said[0].startswith("3 target(s)") and "(eax_a)" in said[0]
+    assert "cell file" in said[0]
 
 
 def test_rapid_quaternions_keep_the_files_precision(tmp_path):
@@ -316,15 +319,18 @@ def test_krl_tool_from_a_variable_is_named(tmp_path):
                                "TOOL_DATA[nT] (a variable index known at run time only)"]
 
 
-def test_krl_external_axis_values_are_named(tmp_path):
+def test_krl_uncoordinated_external_axis_values_are_arm_targets(tmp_path):
+    """An E6POS with E1 1250 used with a base no machine carries: corrected as an arm target (its
+    E1 kept), with the one summary warning."""
     files = _copy(["deburr_cell.src", "deburr_cell.dat"], tmp_path)
     dat = files[1].read_bytes()
     files[1].write_bytes(dat.replace(b"E1 0.0", b"E1 1250.0", 1))
     robot = rc.Robot.from_catalog("kuka_kr16_2")
     res = filter_program(files, perturbed(robot, 7), robot, references=_copy(["$config.dat"], tmp_path))
     sptp = next(m for m in res.motions if m.line == 27)
-    assert sptp.status == "named" and "external axes E1 1250.0" in sptp.reason
-    assert "XP1" not in [r["name"] for r in res.rows] and res.summary_dict()["motions"]["total"] == 15
+    assert sptp.status == "corrected" and "XP1" in [r["name"] for r in res.rows]
+    assert res.summary_dict()["motions"]["total"] == 15 and b"E1 1250.0" in res.outputs[files[1]]
+    assert sum("external-axis values (E1)" in w for w in res.warnings) == 1
 
 
 # ----------------------------------------------------------------------------- FANUC constructs

@@ -112,7 +112,10 @@ def test_targets_without_a_track_value_are_named(tmp_path):
     assert "no track position" in res.motions[0].reason
 
 
-def test_a_six_axis_nominal_still_names_track_targets(tmp_path):
+def test_a_six_axis_nominal_takes_track_targets_as_arm_targets_and_says_so(tmp_path):
+    """eax_a values in wobj0 with a plain arm: no work object follows them, so the targets are
+    corrected as arm targets (issue 45's rule), and one warning says that a track carrying the arm
+    needs its cell file."""
     from robocal import Robot
     from robocal.core.errors import DataError
 
@@ -120,8 +123,10 @@ def test_a_six_axis_nominal_still_names_track_targets(tmp_path):
     path = tmp_path / "m.mod"
     path.write_text(text)
     robot = Robot.from_catalog("abb_irb2600")
-    res = filter_program(path, robot, robot)
-    assert res.summary_dict()["motions"]["named"] == 2
+    res = filter_program(path, robot, robot, keep_unreached=True)  # one is out of the arm's reach alone
+    assert res.summary_dict()["motions"]["total"] == 2
+    assert not any("external axes" in m.reason for m in res.motions)
+    assert sum("if a track or gantry carries the arm, give its cell file" in w for w in res.warnings) == 1
     seven = Robot(alpha=[0.0] * 7, a=[0.0] * 7, beta=[0.0] * 7, theta=[0.0] * 7, d=[0.1] * 7)
     with pytest.raises(DataError, match="on a track: give its cell model"):
         filter_program(path, seven, seven)
@@ -158,3 +163,17 @@ def test_fanuc_and_krl_track_positions_are_corrected(tmp_path, robot, files, mou
     new = b"".join(res.outputs[p] for p in paths)
     e1 = re.compile(rb"E1\s*=?\s*[-+.\d]+")
     assert e1.findall(old) == e1.findall(new)  # the track values as written
+
+
+def test_a_track_cell_names_targets_with_another_external_value(tmp_path):
+    """A track cell: a target with eax_a and an eax_b value is not the track's alone (the arm's place
+    may depend on it): named, not taken as an arm target."""
+    from robocal.data.simulate import perturbed
+
+    cell = cell_from_data(CELL)
+    text, *_ = _module(cell, 2, seed=6)
+    path = tmp_path / "m.mod"
+    path.write_text(text.replace(",9E+09,9E+09,9E+09,9E+09,9E+09]]", ",12.5,9E+09,9E+09,9E+09,9E+09]]", 1))
+    res = filter_program(path, perturbed(cell, 3), cell)
+    assert res.summary_dict()["motions"] == {"total": 2, "corrected": 1, "named": 1}
+    assert "external axes eax_a = " in next(m for m in res.motions if m.status == "named").reason

@@ -29,8 +29,11 @@ def add_parser(sub) -> None:
                        epilog=FILTER_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("programs", nargs="+",
                    help=FILTER_OPTIONS["programs"])
-    p.add_argument("--calibrated", required=True, help="calibrated model YAML")
-    p.add_argument("--nominal", required=True, help="catalog name or model YAML of the controller's model")
+    p.add_argument("--calibrated", required=True,
+                   help="calibrated model YAML (a cell: the calibrated cell file its calibration wrote)")
+    p.add_argument("--nominal", "--model", dest="nominal", required=True,
+                   help="catalog name or model YAML of the controller's model; a cell file (arm and "
+                        "positioner) to correct the targets on the positioner's plate (coordinated motion)")
     p.add_argument("-o", "--output", required=True,
                    help="filtered program (one input) or an existing folder (several inputs)")
     p.add_argument("--tool", action="append", metavar="NAME=VALUES", help="controller tool data (repeatable)")
@@ -99,14 +102,14 @@ def run(args) -> int:
     import sys
 
     from robocal.core.io import check_outputs
-    from robocal.deploy.models import load_model_pair, load_prediction, payload_si, tool_frame
+    from robocal.deploy.models import load_models, load_prediction, payload_si, tool_frame
     from robocal.programs import filter_program
 
     targets, table, written = _output_paths(args.programs, args.output, args.table, args.position_registers)
     check_outputs(written, [*targets, args.calibrated, args.nominal, *args.references,
                             *([args.position_registers] if args.position_registers else []),
                             *([args.payload_schedules] if args.payload_schedules else [])])
-    calibrated, nominal = load_model_pair(args.calibrated, args.nominal)
+    calibrated, nominal = load_models(args.calibrated, args.nominal)
     prediction = load_prediction(args.result, calibrated, written)
     tcp = {k: tool_frame(v, f"--tcp {k}=") for k, v in _named(args.tcp, "--tcp").items()}
     res = filter_program(args.programs, calibrated, nominal, tools=_named(args.tool, "--tool"),

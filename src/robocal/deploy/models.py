@@ -10,12 +10,15 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.core.errors import DataError
+from robocal.core.errors import DataError, ModelError
 from robocal.core.io import check_outputs
 from robocal.core.magnitudes import check_degrees, check_frame, check_tool
 from robocal.deploy.compensation import controller_model, frame_from_values, frame_values, rotation_values
 from robocal.kinematics.catalog import catalog_names
+from robocal.kinematics.cell_file import is_workcell
 from robocal.kinematics.model import Robot, load_model
+from robocal.kinematics.model_file import read_model_data
+from robocal.kinematics.workcell import Cell, load_cell
 from robocal.trust.coverage import Prediction
 
 
@@ -78,6 +81,34 @@ def load_model_pair(calibrated: str, nominal: str, option: str = "--calibrated")
     return cal, nom
 
 
+def load_models(calibrated: str, nominal: str,
+                option: str = "--calibrated") -> tuple[Robot | Cell, Robot | Cell]:
+    """`load_model_pair`, or both as cells (`robocal.load_cell`) when either file is a work cell
+    with a positioner: a program's targets on the positioner's plate need the nominal cell and the
+    calibrated one (`robocal.programs.positioner`); a catalog name or robot file given with a cell
+    is a one-arm cell.
+
+    Raises
+    ------
+    DataError
+        What `load_model_pair` refuses; a cell file that does not load (its message).
+    """
+    if not any(_has_positioner(spec) for spec in (calibrated, nominal)):
+        return load_model_pair(calibrated, nominal, option)
+    try:
+        return load_cell(calibrated), load_cell(nominal)
+    except ModelError as exc:
+        raise DataError(str(exc)) from None
+
+
+def _has_positioner(spec: str) -> bool:
+    path = Path(spec)
+    if not path.is_file() or path.suffix.lower() not in (".yaml", ".yml"):
+        return False
+    data = read_model_data(path)
+    return is_workcell(data) and any(k in data for k in ("positioner", "positioners"))
+
+
 def controller_for(robot: Robot, nominal: str | None) -> Robot | None:
     """The controller's model of ``robot`` (its base and flange, tool0): ``nominal`` (catalog name
     or model YAML), else the catalog robot of the model's name, else None.
@@ -96,7 +127,7 @@ def controller_for(robot: Robot, nominal: str | None) -> Robot | None:
     return model
 
 
-def load_prediction(path: str | None, calibrated: Robot, outputs: list) -> Prediction | None:
+def load_prediction(path: str | None, calibrated: Robot | Cell, outputs: list) -> Prediction | None:
     """The accuracy prediction of a calibration's result JSON (None without ``path``), checked
     against the calibrated model (the same parameters) and the ``outputs`` (none of them is the
     JSON).
@@ -111,6 +142,8 @@ def load_prediction(path: str | None, calibrated: Robot, outputs: list) -> Predi
     from robocal.calibration.result import load_result
 
     check_outputs(outputs, [path])
+    if isinstance(calibrated, Cell):  # a cell calibration's prediction is its anchor arm's
+        calibrated = calibrated.body(calibrated.anchor)
     section = load_result(path).get("predicted_accuracy")
     if not isinstance(section, dict) or not isinstance(section.get("model"), dict):
         raise DataError(f"{path} has no predicted_accuracy section: calibrate again with --json to get one")

@@ -1,26 +1,71 @@
 """Targets with external-axis values (a track or gantry moving the robot, a positioner moving the
-work: RAPID ``extax`` not 9E9, KUKA E1..E6 not 0, FANUC E1.. values or a second motion group):
-where such a target is depends on axes the filter does not model (the base and the work are
-assumed fixed), so they are set aside before filtering and every motion that reaches one is named
-with the axis values. This check is kept apart from the filter so that a cell model (a track as a
-joint of the chain) can take these targets over in one place."""
+work: RAPID ``extax`` not 9E9, KUKA E1..E6 not 0, FANUC E1.. values or a second motion group),
+sorted before filtering by what the values do to the target:
+
+* a target in a frame a mechanical unit carries (:attr:`Program.carried`: a RAPID work object
+  with ``ufmec``, a KRL base on an external kinematic ...) moves with that unit: with a cell
+  model whose positioner has that unit it is corrected (:mod:`robocal.programs.positioner`, which
+  takes those targets first); otherwise every motion that reaches it is named with the unit and
+  the cell file to give;
+* a target whose dialect read its axis values (:attr:`Target.axes`) in a frame no unit carries:
+  the values do not move it relative to the arm (an uncoordinated positioner, a turntable the
+  program only indexes): it is corrected as an arm target, and one summary warning says how many
+  such targets there were and that a track or gantry carrying the arm needs its cell file;
+* a target whose values the dialect gives as text only (no :attr:`Target.axes`): where it is
+  depends on axes the filter does not model, so it is set aside and every motion that reaches
+  it is named with the values.
+
+A track cell takes its targets first (:mod:`robocal.programs.track`). This module is kept apart
+from the filter so that each cell model takes its targets in one place.
+"""
 
 from __future__ import annotations
 
-from robocal.programs.model import Program
+from robocal.programs.model import Program, Target
 
 
-def set_aside_external(program: Program, warnings: list[str]) -> None:
-    """Remove the targets that carry external-axis values from ``program.targets``; each gets a
-    warning and its reason in ``program.not_corrected`` (so each motion reaching it is named)."""
-    kept = []
+def coordinated_unit(program: Program, t: Target) -> str | None:
+    """The mechanical unit whose plate carries target ``t``'s frame (None: a frame of the world)."""
+    return program.carried.get(t.frame)
+
+
+def needs_cell(unit: str) -> str:
+    """Why a target coordinated with ``unit`` is not corrected without a cell model."""
+    return f"coordinated with {unit}: give a cell file (--model CELL.yaml) whose positioner has unit {unit}"
+
+
+def sort_external(program: Program, warnings: list[str], taken: frozenset[int] = frozenset(),
+                  fixed_arm: bool = True) -> None:
+    """Keep in ``program.targets`` the targets that can be corrected as arm targets (and those in
+    ``taken``: ids a cell model already took, :mod:`robocal.programs.positioner`); name every
+    other target with external values (a warning and its reason in ``program.not_corrected``,
+    so each motion reaching it is named). Appends one warning counting the targets whose
+    external values no work object follows. ``fixed_arm`` False (an arm on a track, whose
+    targets the track took first): a target with other external values is named, the arm's
+    place depending on them."""
+    kept, loose, letters = [], 0, set()
     for t in program.targets:
-        if not t.external:
+        unit = None if id(t) in taken else coordinated_unit(program, t)
+        if unit is not None:
+            why = needs_cell(unit)
+        elif id(t) in taken or not t.external:
             kept.append(t)
             continue
-        why = (f"external axes {t.external}: the target moves with axes outside the arm (a track, gantry "
-               "or positioner) and the filter assumes a fixed base and work")
+        elif t.axes and fixed_arm:  # values as data: read by the dialect, in a frame no unit carries
+            kept.append(t)
+            loose += 1
+            letters |= {k for k, v in t.axes.items() if v != 0.0} or set(t.axes)
+            continue
+        else:
+            why = (f"external axes {t.external}: the target moves with axes outside the arm (a track, gantry "
+                   "or positioner) and the filter assumes a fixed base and work")
         program.not_corrected[id(t)] = why
         warnings.append(f"{t.where}: not corrected: {why}")
         program.uncorrected.append(f"{t.where}: not corrected: {why}")
+    if loose:
+        axes = ", ".join(sorted(letters))
+        warnings.append(f"{loose} target(s) carry external-axis values ({axes}) in work objects no "
+                        "mechanical unit moves: corrected as arm targets (the values do not move them "
+                        "relative to the arm); if a track or gantry carries the arm, give its cell file "
+                        "(--model CELL.yaml)")
     program.targets = kept

@@ -43,7 +43,7 @@ from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
 from robocal.programs.dialects.base import Dialect
 from robocal.programs.edits import FileEdits, monitored, number_edits
-from robocal.programs.external import set_aside_external
+from robocal.programs.external import sort_external
 from robocal.programs.given_data import (
     as_frames,
     check_language,
@@ -54,6 +54,7 @@ from robocal.programs.given_data import (
 from robocal.programs.load import compensate_by_load, plan_loads
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import undeclared
+from robocal.programs.positioner import CoordinatedProgram, cell_models
 from robocal.programs.registry import capable, dialect_for, program_files
 from robocal.programs.result import LISTED, FilterResult, collapse
 from robocal.programs.source import ProgramText
@@ -301,10 +302,13 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         The program file(s): ABB RAPID (.mod, .prg), KUKA KRL (a .src with its .dat), FANUC TP
         (.ls), URScript (.script), Yaskawa INFORM (.JBI, VAR.DAT) or a Staubli VAL3 application
         folder.
-    calibrated : Robot
-        The calibrated model.
-    nominal : Robot
-        The controller's nominal model (6 joints, or an arm on a track).
+    calibrated : Robot or Cell
+        The calibrated model; with a nominal cell, the calibrated cell (its bodies in the tracker
+        frame of its calibration).
+    nominal : Robot or Cell
+        The controller's nominal model (6 joints, or an arm on a track), or a cell of one arm and
+        its positioners: targets in a work object a positioner moves (coordinated motion) are then
+        corrected on its plate (`robocal.programs.positioner`).
     tools, frames : dict of str to array_like, shape (4, 4), or str, optional
         Name -> transform (metres) or text in the program's pose notation, completing or
         overriding the tools / frames the files declare (the tools as the controller knows them).
@@ -349,7 +353,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     Raises
     ------
     DataError
-        No file, an unknown dialect, a nominal model without 6 joints, an unknown tool or
+        No file, an unknown dialect, a nominal model without 6 joints, a program moving with a
+        mechanical unit the cell does not have or positioner values outside its limits, an
+        unknown tool or
         frame, ``tools`` / ``frames`` / ``robot_base`` text whose magnitudes say another unit,
         targets that cannot be corrected (each named), or files without a Cartesian target
         that read as another language than their suffix says.
@@ -373,12 +379,16 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     """
     given = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     references = [references] if isinstance(references, str | Path) else list(references)
+    calibrated, nominal, coordinated = cell_models(calibrated, nominal)
+    if coordinated is not None and robot_base is not None:
+        raise DataError("robot_base (--robot-base) is for an arm alone: a cell's world is its arm's "
+                        "identified frame {0} (Cell.in_world), where the controller has the arm's base")
     reach = robot_reach(nominal)
     check_magnitudes(given, dialect, tools, frames, reach)
     robot_base = robot_base_frame(robot_base, reach)
     res, declared_tools = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,
                                     references, keep_unreached, strict, force, position_registers, payload,
-                                    temperature, payload_schedules)
+                                    temperature, payload_schedules, coordinated)
     res.warnings[:0] = unused_conditions(calibrated, payload, temperature)
     if prediction is not None and res.joints is not None:
         res.warnings += target_warnings(prediction, calibrated, res.joints)
@@ -392,8 +402,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
 
 def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frames, tcp, robot_base,
               dialect: str | None, references: list, keep_unreached: bool, strict: bool, force: bool,
-              position_registers, payload, temperature,
-              payload_schedules) -> tuple[FilterResult, dict[str, np.ndarray]]:
+              position_registers, payload, temperature, payload_schedules,
+              coordinated: CoordinatedProgram | None) -> tuple[FilterResult, dict[str, np.ndarray]]:
     """:func:`filter_program` of the files ``given`` (an application folder among them), without
     the warnings and checks of what the user gave, and the tool data the files hold without
     ``tools`` (`Program.declared_tools`, which the ``tools`` are checked against)."""
@@ -428,7 +438,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     warnings = list(program.warnings)
     if track is not None:
         track.take(program, warnings)
-    targets = _filterable(d, program, warnings)
+    targets = _filterable(d, program, warnings, coordinated, fixed_arm=track is None)
     if not targets:
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
@@ -438,6 +448,8 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, payload_schedules)
     warnings += loads.warnings
     values, P, W, tool = target_poses(d, program, targets)
+    if coordinated is not None:  # frames on a positioner's plate: in the world at each target's values
+        W, W_real = coordinated.frames(targets, W)
     X = W @ P
     real = {d.name_key(k): v for k, v in (tcp or {}).items()}
     unknown_tcp = sorted(set(real) - {t.tool for t in targets})
@@ -455,7 +467,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     warnings += _inexact_configurations(d, controller, targets, q_nom, ok)
     seeds = np.where(ok[:, None], q_nom, 0.0)
     real_model = controller_model(calibrated, nominal, robot_base)
-    Xr = X @ invert_transform(real_tool)
+    Xr = (X if coordinated is None else W_real @ P) @ invert_transform(real_tool)
 
     def run(model: Robot, i: np.ndarray) -> Compensation:  # the targets i at one load
         if track is None:
@@ -529,10 +541,14 @@ def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
                             "it is the same tool")
 
 
-def _filterable(d: Dialect, program: Program, warnings: list) -> list[Target]:
+def _filterable(d: Dialect, program: Program, warnings: list,
+                coordinated: CoordinatedProgram | None = None, fixed_arm: bool = True) -> list[Target]:
     """The targets to filter: those with a supported tool and frame, all of them known, and
-    without external axes (:func:`robocal.programs.external.set_aside_external`)."""
-    set_aside_external(program, warnings)
+    corrected as arm targets or on a positioner's plate (``coordinated``:
+    :mod:`robocal.programs.positioner`) whatever their external-axis values say
+    (:func:`robocal.programs.external.sort_external`)."""
+    taken = coordinated.take(program, warnings) if coordinated is not None else frozenset()
+    sort_external(program, warnings, taken, fixed_arm)
     targets: list[Target] = []
     for t in program.targets:
         why = program.unsupported.get(f"tool:{t.tool}") or program.unsupported.get(f"frame:{t.frame}")

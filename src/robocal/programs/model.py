@@ -42,7 +42,10 @@ class Program:
     ``carried``: frames that a mechanical unit moves (a work object on a positioner's plate: RAPID
     ufmec, KRL external kinematics, an INFORM station frame, FANUC coordinated motion), frame name ->
     the unit's name as the program and the cell file call it (``STN1``); such a frame is in that
-    unit's plate frame, not the robot's world (:mod:`robocal.programs.positioner`)."""
+    unit's plate frame, not the robot's world (:mod:`robocal.programs.positioner`). ``in_world``:
+    the carried frames whose targets are written in the robot's world as taught with the unit at
+    their values (an INFORM station-coordinated position): on the plate such a target is
+    ``inv(plate(e)) @ W @ T``."""
 
     targets: list[Target]
     frames: dict[str, np.ndarray] = field(default_factory=dict)
@@ -59,6 +62,7 @@ class Program:
     executed: list[tuple[Path, int, int]] = field(default_factory=list)  # text pieces in execution order
     declared_tools: dict[str, np.ndarray] = field(default_factory=dict)
     carried: dict[str, str] = field(default_factory=dict)  # frame name -> mechanical unit moving it
+    in_world: set[str] = field(default_factory=set)  # carried frames whose targets are taught in the world
 
     def motion(self, source: ProgramText, at: int, instruction: str) -> Account:
         """The account of the motion instruction at offset ``at`` of ``source`` (opened once)."""

@@ -14,8 +14,10 @@ W, P, R are fixed-axis XYZ angles: R = Rz(R) Ry(P) Rx(W) (deg). CONFIG: flip (F/
 :class:`robocal.programs.dialects.fanuc.configuration.FANUCConfig`). Each position carries its
 user frame UF and tool frame UT; their values live in the controller, so they are given on the command line
 (``--frame u=X,Y,Z,W,P,R``, ``--tool t=...``, mm and deg); UF 0 is the world (= robot base)
-frame, UT 0 the faceplate. Joint representations (J1 = ...), other motion groups (GP2 ...) and
-extended axes are left alone.
+frame, UT 0 the faceplate. Joint representations (J1 = ...) are left alone. Other motion groups
+(``GP2:`` ...) and a ``COORD`` motion's leader: :mod:`robocal.programs.dialects.fanuc.groups`;
+extended axes of group 1 (``E1 = ...``, an integrated rail): a track cell
+(:mod:`robocal.programs.track`), else named.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from robocal.programs.dialects.base import Dialect
 from robocal.programs.dialects.fanuc import marker, simulated
 from robocal.programs.dialects.fanuc.campaign import fanuc_ls_program
 from robocal.programs.dialects.fanuc.configuration import SCARA, FANUCConfig
+from robocal.programs.dialects.fanuc.groups import COORD, coordinate, group_values, values_text
 from robocal.programs.dialects.fanuc.loads import FanucLoads, read_schedules
 from robocal.programs.dialects.fanuc.registers import ActiveFrames, read_registers
 from robocal.programs.model import Program, Target
@@ -130,6 +133,7 @@ class FanucDialect(Dialect):
         prog.frames.update(frames)
         prog.tools.update(tools)
         order = 0
+        others: dict[int, tuple] = {}  # id(position) -> (its other groups' values, its extended axes)
         joint: set = set()
         registers = None  # the --position-registers file, given among the sources as a .csv
         for src in [s for s in sources if s.path.suffix.lower() == ".csv"]:
@@ -187,27 +191,39 @@ class FanucDialect(Dialect):
                 else:
                     raise DataError(f"{where}: position {name}: CONFIG must read 'N|F U|D T|B, t1, t4, t6' "
                                     "(a SCARA's: 'L|R, t1, t2, t4')")
-                external = [f"{e} = {v}" for e, v in _EXTENDED.findall(gp) if float(v) != 0.0]
-                external += [f"motion group GP{g.group(1)}" for g in groups[1:]]
-                prog.targets.append(Target(src, m.start(), name, nums, frame=str(int(fr["UF"])),
-                                           tool=str(int(fr["UT"])), config=row, config_spans=spans,
-                                           order=order, external=", ".join(external)))
+                extended = [f"{e} = {v}" for e, v in _EXTENDED.findall(gp) if float(v) != 0.0]
+                values = group_values(body, groups)
+                # an extended axis of the arm's group (an integrated rail) carries the arm: its values
+                # alone, as text (a track cell takes them, robocal.programs.track); else the other
+                # groups' values, which do not move the arm's position unless coordinated, as data
+                external = extended or [f"motion group GP{g} ({values_text(axes)})"
+                                        for g, axes in values.items()]
+                t = Target(src, m.start(), name, nums, frame=str(int(fr["UF"])), tool=str(int(fr["UT"])),
+                           config=row, config_spans=spans, order=order, external=", ".join(external))
+                if not extended:
+                    t.axes = {f"GP{g} {k}": v for g, axes in values.items() for k, v in axes.items()}
+                others[id(t)] = (values, ", ".join(extended))
+                prog.targets.append(t)
                 order += 1
             _nothing_between(src, text, after, end)
-        self._motions(sources, prog, joint, registers)
+        self._motions(sources, prog, joint, registers, others)
         return prog
 
-    def _motions(self, sources, prog, joint, registers):
+    def _motions(self, sources, prog, joint, registers, others):
         """Account for every motion of the /MN sections: positions every motion reaches are the
         /POS targets (each carries its own UF and UT, so all are corrected); an incremental
         motion's position is a displacement (named; the position is left alone unless another
         motion uses it as a pose); position registers, missing positions and run-time offsets
         are named. ``registers``: PR number -> Target from --position-registers (None: not given):
-        a motion to a register given there is corrected in the user and tool frame active there."""
+        a motion to a register given there is corrected in the user and tool frame active there.
+        ``others``: id(position) -> (its other groups' values, its extended axes as text): a
+        motion with ``COORD`` moves its position with the leader group
+        (:func:`robocal.programs.dialects.fanuc.groups.coordinate`)."""
         numbers = {(t.source.path, int(_NUMBER.match(t.name).group(1))): t for t in prog.targets}
         incremental: dict[tuple, list] = {}  # position -> accounts of the INC motions using it
         used_registers: dict[int, Target] = {}
         plain = set()  # positions some motion uses as a pose
+        first: dict[int, tuple] = {}  # id(position) -> how its first motion moves it (leader, values)
         for src in sources:
             text = src.text
             start, stop = text.find("/MN"), text.find("/POS")
@@ -274,6 +290,13 @@ class FanucDialect(Dialect):
                         incremental.setdefault(key, []).append((here, instr, label, acc))
                         continue
                     plain.add(key)
+                    t = numbers[key]
+                    if id(t) not in prog.not_corrected:
+                        why = coordinate(prog, t, COORD.search(options), *others[id(t)], first)
+                        if why:  # every motion reaching it is named
+                            prog.not_corrected[id(t)] = why
+                            prog.warnings.append(f"{t.where}: not corrected: {why}")
+                            prog.uncorrected.append(f"{t.where}: not corrected: {why}")
                     if off:
                         prog.skip(here, instr, f"{label} is shifted at run time by {off.group(0)}: {label} "
                                                "is corrected for its own pose, the shifted pose is not", acc)
@@ -285,7 +308,8 @@ class FanucDialect(Dialect):
                 prog.skip(here, instr, why, acc)
             if key not in plain:
                 prog.not_corrected[id(numbers[key])] = "used only as an incremental (INC) displacement"
-        prog.targets = [t for key, t in numbers.items() if key in plain or key not in incremental]
+        prog.targets = [t for key, t in numbers.items() if (key in plain or key not in incremental)
+                        and id(t) not in prog.not_corrected]
         prog.targets += used_registers.values()
 
 

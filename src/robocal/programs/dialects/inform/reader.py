@@ -35,6 +35,10 @@ without data is the flange (a warning). A job may save the
 P variables it uses in its ``//POS`` (``P00100=...``): those are read before VAR.DAT's, and
 another job's saved P variables after VAR.DAT's.
 
+Base axes (``BC``), stations (``EC``, ``+MOVJ EC``) and station-coordinated ``SMOV`` motions:
+:mod:`robocal.programs.dialects.inform.groups` (the values as :attr:`Target.axes`; an ``SMOV``
+target carried by its station).
+
 ``VAR.DAT`` holds the global variables; its position section ``//P`` has the same header lines
 and ``P0001=...`` entries. Given as a program file, its Cartesian positions that the jobs' motions
 reach are corrected too; otherwise a motion to ``P001`` is named.
@@ -54,6 +58,7 @@ from robocal.programs.dialects.base import Dialect
 from robocal.programs.dialects.inform import marker, simulated
 from robocal.programs.dialects.inform.campaign import inform_job
 from robocal.programs.dialects.inform.configuration import YaskawaConfig
+from robocal.programs.dialects.inform.groups import BASE_KINDS, STATION_KINDS, Groups, Moved, job_groups
 from robocal.programs.dialects.inform.loads import InformLoads
 from robocal.programs.dialects.inform.tool_file import is_tool_file, read_tool_file
 from robocal.programs.model import IDENTITY, Program, Target
@@ -89,6 +94,8 @@ _WRITES = re.compile(r"^\s*(SET|SETE|GETS|GETE|GETPOS|ADD|SUB|MUL|DIV|CNVRT|CLEA
 _REFP = re.compile(r"^\s*REFP\s+\d+\s+(C|P)" + _INDEX + r"\b")
 _LABELED = re.compile(r"^\s*(?:\*\w+\s+)?")
 _RUNTIME_INDEX = "the position number is computed at run time"
+_BOTH = "used by motions that move differently:"  # a target one correction cannot serve (every use named)
+_CONVEYOR = re.compile(r"\bCV#\(")  # a conveyor-synchronised SMOV (conveyor tracking)
 
 
 @dataclass
@@ -101,6 +108,7 @@ class _Header:
     tool: str = "0"
     rconf: list[str] | None = None  # the RCONF fields as written
     rconf_line: str = ""  # the RCONF line's text (restored after a position whose form is rewritten)
+    values: str = ""  # what the numbers are: RECTAN (mm, deg), PULSE (encoder pulses), ANGLE (deg) ...
 
 
 @dataclass
@@ -268,7 +276,7 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
             if h.group(1).upper() == "NPOS":
                 npos = (start, [int(v) for v in h.group(2).split(",")])
             elif h.group(1).upper() == "POSTYPE":  # a new coordinate system: RECTAN / PULSE follows
-                head.rectan = False
+                head.rectan, head.values = False, ""
             continue
         if not line.strip() or line.lstrip().startswith("'"):
             continue
@@ -321,8 +329,9 @@ def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _He
             raise DataError(f"{src.where(start)}: malformed ///NPOS {value!r}: expected 6 integers")
     elif key == "POSTYPE":
         head.postype = value.upper()
-    elif key in ("RECTAN", "PULSE"):
+    elif key in ("RECTAN", "PULSE", "ANGLE"):
         head.rectan = key == "RECTAN"
+        head.values = key
     elif key in ("USER", "TOOL"):
         if not re.fullmatch(_INDEX, value):
             raise DataError(f"{src.where(start)}: malformed ///{key} {value!r}: expected a number")
@@ -346,7 +355,8 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
     runtime: dict[str, str] = {}  # variable -> where the job writes it at run time (anywhere: loops)
     mframe: dict[str, str] = {}  # user frame -> the MFRAME that sets it
     settool: dict[str, str] = {}  # tool -> the SETTOOL that writes it (anywhere: loops)
-    on_track = bool(re.search(r"^///GROUP\d+\s+[^\r\n]*\bBS\d", src.text, re.MULTILINE))  # robot on base axes
+    groups = job_groups(src.text)
+    uses: dict[int, tuple[str | None, dict]] = {}  # id(target) -> (carrying unit, values) of its first use
     inst = [(start, _LABELED.sub("", line, count=1) if "*" in line else line)
             for start, line, _ in _instructions(src)]
     for start, body in inst:
@@ -381,8 +391,8 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         if not mv:
             continue
         instr, rest = mv.group(1), mv.group(2).split("'")[0]
-        robot_part, plus, other = rest.partition("+")
-        refs = list(_REF.finditer(robot_part))
+        parts = rest.split("+")  # the robot's group, then each other group's motion
+        refs = list(_REF.finditer(parts[0]))
         robot_refs = [r for r in refs if r.group(1) in ("C", "P", "LP")]
         ref = robot_refs[0] if robot_refs else None
         pos = None
@@ -400,7 +410,7 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
             prog.skip(src.where(start), instr, "no robot position (C, P or LP) in the instruction", acc)
             continue
         label = ref.group(0)
-        why = _named_reason(instr, ref, refs, plus, other, shift, runtime)
+        why = _named_reason(instr, ref, rest, shift, runtime)
         if why:
             if pos is not None and pos.target is not None:
                 named.add(id(pos.target))
@@ -417,7 +427,7 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
             prog.skip(src.where(start), instr, why, acc, label)
             continue
         t = pos.target
-        if on_track and pos.header.postype == "BASE":
+        if groups.on_track and pos.header.postype == "BASE":
             named.add(id(t))
             prog.skip(src.where(start), instr, f"{label} is a BASE position of a robot on base axes "
                                                "(///GROUP ... BS): where it is for the robot depends on "
@@ -434,9 +444,103 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
             prog.skip(src.where(start), instr, f"{label} is in user frame {t.frame}, set at run time by "
                                                f"MFRAME at {mframe[t.frame]}", acc, label)
             continue
+        if groups.on_track and pos.header.postype == "USER":
+            named.add(id(t))
+            prog.skip(src.where(start), instr, f"{label} is a USER position of a robot on base axes "
+                                               "(///GROUP ... BS): its user frame is in base coordinates, so "
+                                               "where it is for the robot depends on the axes' position",
+                      acc, label)
+            continue
+        if id(t) not in prog.not_corrected:
+            why = _external(prog, t, instr, _moved(src, parts, refs, groups, positions), groups, uses)
+            if why.startswith(_BOTH):  # every motion reaching it is named
+                prog.not_corrected[id(t)] = why
+                prog.warnings.append(f"{t.where}: not corrected: {why}")
+                prog.uncorrected.append(f"{t.where}: not corrected: {why}")
+                why = ""
+            if why:
+                named.add(id(t))
+                prog.skip(src.where(start), instr, why, acc, label)
+                continue
+        if id(t) in prog.not_corrected:
+            named.add(id(t))
+            used.discard(id(t))
+            acc.reach(t, label)
+            continue
         used.add(id(t))
         acc.reach(t, label)
         prog.motions.append((src.path, start, t))
+
+
+def _moved(src: ProgramText, parts: list[str], refs: list, groups: Groups, positions: dict) -> Moved:
+    """The base-axis and station positions a motion instruction moves with (``parts``: the
+    instruction split at its ``+``), each with its unit and its values when the files hold them."""
+    out = Moved()
+    for k, part in enumerate(parts):
+        for r in refs if k == 0 else _REF.finditer(part):
+            kind = r.group(1)
+            if kind not in STATION_KINDS + BASE_KINDS:
+                continue
+            unit = (groups.station_of(k) or "a station") if kind in STATION_KINDS else \
+                next((u for u in groups.robot if u.startswith("BS")), "base axes")
+            label = ("+" if k else "") + r.group(0)
+            pos = None
+            if r.group(2) is not None:
+                index = int(r.group(2))
+                pos = positions.get((src.path, kind, index)) or positions.get(("global", kind, index))
+            nums = [n.value for n in pos.numbers] if pos is not None else None
+            out.values.append((unit, label, kind, nums, pos.header.values if pos is not None else ""))
+    return out
+
+
+def _external(prog: Program, t: Target, instr: str, moved: Moved, groups: Groups, uses: dict) -> str:
+    """Record on target ``t`` what its motion moves with (:attr:`Target.external`,
+    :attr:`Target.axes`; a station-coordinated motion: ``t``'s frame becomes one the station carries,
+    :attr:`Program.carried`), or why the motion cannot be corrected ('')."""
+    unit, values = None, {}
+    if instr.startswith("SMOV"):  # station-coordinated: the target moves with the station's plate
+        stations = moved.station()
+        if not stations:
+            unit = groups.stations[0] if len(groups.stations) == 1 else ""
+            return (f"coordinated with {unit or 'a station'} (SMOV), but the instruction gives no station "
+                    "position (EC): where the station is depends on the motion before")
+        unit, label, nums, how = stations[0]
+        if unit == "a station":
+            return f"coordinated with the station of {label}, but the ///GROUP lines name no one station"
+        if nums is None:
+            where = _RUNTIME_INDEX if "[" in label else "not in the files given"
+            return f"coordinated with {unit} (SMOV), but its position {label}: {where}"
+        if how != "ANGLE":
+            return (f"coordinated with {unit} (SMOV), but its position {label} is in encoder pulses (///"
+                    f"{how or 'PULSE'}): pulses per degree are controller parameters, not the cell file's")
+        values = {f"E{k + 1}": v for k, v in enumerate(nums)}  # the station's axes 1.. in degrees
+    else:
+        for u, label, kind, nums, how in moved.values:  # each unit's axes (NaN: not in the files given)
+            if nums is None:
+                values[f"{u} {label.lstrip('+')}"] = float("nan")
+                continue
+            pulses = "" if how == "ANGLE" or kind in BASE_KINDS and how == "RECTAN" else " (pulses)"
+            values.update({f"{u} axis {k + 1}{pulses}": v for k, v in enumerate(nums)})
+    first = uses.get(id(t))
+    if first is not None:
+        if first[0] != unit or unit is not None and first[1] != values:
+            was, now = (f"coordinated with {u} at {', '.join(f'{k} = {x:g}' for k, x in v.items())}" if u
+                        else "not coordinated" for u, v in (first, (unit, values)))
+            return (f"{_BOTH} {now} here, {was} before: one corrected target cannot serve both; teach a copy "
+                    "for each use")
+        return ""
+    uses[id(t)] = (unit, values)
+    if not moved.values:
+        return ""
+    t.external, t.axes = moved.text(), values
+    if unit is not None:
+        key = f"{t.frame}@{unit}"
+        if t.frame in prog.frames:
+            prog.frames.setdefault(key, prog.frames[t.frame])
+        prog.carried[key] = unit
+        prog.in_world.add(key)  # the robot's position as taught with the station at its values
+        t.frame = key
+    return ""
 
 
 def _instructions(src: ProgramText):
@@ -450,24 +554,20 @@ def _instructions(src: ProgramText):
             yield start, line, end
 
 
-def _named_reason(instr: str, ref, refs, plus: str, other: str, shift: str, runtime: dict) -> str:
-    """Why a motion cannot be corrected ('' when it can)."""
+def _named_reason(instr: str, ref, rest: str, shift: str, runtime: dict) -> str:
+    """Why a motion cannot be corrected ('' when it can, perhaps with a station or base axes:
+    :func:`_external`)."""
     label = ref.group(0)
     if ref.group(2) is None:
         return f"{label}: {_RUNTIME_INDEX}"
     if instr == "IMOV":
         return f"{label} is an increment (IMOV): a displacement, not a pose"
-    if instr.startswith("SMOV"):
-        return f"{label} follows a conveyor (SMOV): the pose moves at run time"
+    if instr.startswith("SMOV") and _CONVEYOR.search(rest):
+        return f"{label} follows a conveyor (SMOV ... CV#): the pose moves at run time"
     if instr.startswith("SYMOV"):
         return f"{label} is synchronised with a station (SYMOV): the pose moves with the station"
     if instr.startswith(("EIMOV", "EMOV")):
         return f"{label}: a motion of an external axis group"
-    axes = [r.group(0) for r in refs if r.group(1) in ("BC", "BP", "LBP", "EC", "EX", "LEX")]
-    if axes or plus:
-        what = ", ".join(axes) if axes else "another control group (+" + other.strip().split(" ")[0] + ")"
-        return f"{label} moves with {what}: base axes and stations are not modelled (a fixed base and work " \
-               "are assumed)"
     name = f"{ref.group(1)}{int(ref.group(2))}"
     if name in runtime:
         return f"{label} is written at run time by {runtime[name]}"

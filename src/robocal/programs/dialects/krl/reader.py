@@ -35,6 +35,7 @@ from robocal.programs.dialects.krl import marker, simulated
 from robocal.programs.dialects.krl.campaign import krl_program
 from robocal.programs.dialects.krl.configuration import KUKAConfig
 from robocal.programs.dialects.krl.loads import KRLLoads
+from robocal.programs.dialects.krl.machines import Machines
 from robocal.programs.dialects.krl.syntax import COMMENT_RE, MOTION_RE, STRING_RE
 from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import Program, Target
@@ -184,9 +185,9 @@ class KRLDialect(Dialect):
             t = _int(comps["T"].text, src, at) if "T" in comps else -1
             config = np.array([s, t])
             spans = (comps["S"], comps.get("T"))
-        external = ", ".join(f"{k} {comps[k].text}" for k in _EXTERNAL if k in comps
-                             and not comps[k].text.startswith("'") and comps[k].value != 0.0)
-        return Target(src, at, name, nums, config=config, config_spans=spans, external=external)
+        axes = {k: comps[k].value for k in _EXTERNAL if k in comps and not comps[k].text.startswith("'")}
+        external = ", ".join(f"{k} {comps[k].text}" for k, v in axes.items() if v != 0.0)
+        return Target(src, at, name, nums, config=config, config_spans=spans, external=external, axes=axes)
 
     def parse(self, sources, frames, tools, references=()):
         prog = Program([])
@@ -210,6 +211,7 @@ class KRLDialect(Dialect):
                 st.fdat[m.group(1).upper()] = (comps.get("TOOL_NO"), comps.get("BASE_NO"),
                                                comps.get("IPO_FRAME", "#BASE").upper())
             st.axes |= {m.group(1).upper() for m in _AXES.finditer(masked)}
+            st.machines.read(src, masked)
             reference = src not in sources
             for m in _DECL.finditer(masked):
                 t = self._target(src, masked, m.end(), m.group(2), m.group(1).upper(), prog)
@@ -235,6 +237,7 @@ class KRLDialect(Dialect):
         for src in sources:
             self._flow(src, st, flow)
         self._motions(prog, sources, st)
+        self._carried(prog, st.machines)
         names = {src.path.stem.upper() for src in sources if src.path.suffix.lower() == ".src"}
         flow.entry = next((flow.routines[n] for n in names if n in flow.routines), None) \
             if len(names) == 1 else None
@@ -299,7 +302,7 @@ class KRLDialect(Dialect):
                         lhs, _, rhs = masked[a:b].partition("=")
                         if lhs.strip().upper() in ("$TOOL", "$BASE"):
                             which = lhs.strip().upper()[1:].lower()
-                            state[which] = _frame_value(rhs.strip(), which, st.fdat)
+                            state[which] = _frame_value(rhs.strip(), which, st.fdat, st.machines)
                     args_end = w.start()
                 acc = prog.motion(src, at, instr)
                 if m.group(2):
@@ -358,13 +361,24 @@ class KRLDialect(Dialect):
             if id(t) not in used and id(t) not in st.reference and id(t) not in passed | named:
                 prog.warnings.append(f"{t.where}: not used by a motion in these files: left as it is")
 
+    def _carried(self, prog, machines: Machines) -> None:
+        """The bases the motions put on a machine: their frames (BASE_DATA[n] or the literal
+        offset, in the machine's flange frame) and units (:attr:`Program.carried`)."""
+        for key, (unit, n) in machines.carried.items():
+            prog.carried[key] = unit
+            if n and n in prog.frames:
+                prog.frames[key] = prog.frames[n]
+            elif key in machines.literals and machines.literals[key].size == len(_POSE_KEYS):
+                prog.frames[key] = self.to_pose(machines.literals[key][None])[0]
+
     def _state(self, m, state, st):
         """Apply a tool/base assignment ($TOOL=, BAS(#TOOL,n), FDAT_ACT=) to ``state``."""
         if m.group(1):
             which = m.group(1).upper()[1:].lower()
-            state[which] = _frame_value(m.group(2).strip(), which, st.fdat)
+            state[which] = _frame_value(m.group(2).strip(), which, st.fdat, st.machines)
         elif m.group(3):
-            state[m.group(3).lower()] = (m.group(4), "")
+            state[m.group(3).lower()] = (m.group(4), "") if m.group(3).upper() == "TOOL" else \
+                st.machines.base(m.group(4))
         else:
             f = st.fdat.get(m.group(5).upper())
             if f is None:
@@ -374,7 +388,7 @@ class KRLDialect(Dialect):
                 state["tool"] = state["base"] = ("external TCP", "")
             else:
                 state["tool"] = (f[0], "") if f[0] else state["tool"]
-                state["base"] = (f[1], "") if f[1] else state["base"]
+                state["base"] = st.machines.base(f[1]) if f[1] else state["base"]
 
     def _follow(self, st, text, proc, scope, depth) -> list:
         """The positions (Target) a motion's argument ``text`` takes its value from, or strings
@@ -454,6 +468,7 @@ class _State:
         self.routines: dict = {}
         self.foreign: list = []  # (src, at, routine, argument spans): calls of routines not in these files
         self.homes: set[str] = set()  # XHOME names declared in no file given, taken as axis positions
+        self.machines = Machines()  # external kinematics: the bases a machine carries
 
     def declare(self, key: str, t: Target, reference: bool) -> None:
         self.declared[key] = [t]
@@ -476,11 +491,16 @@ def _inside(motions: list, starts: list[int], at: int) -> bool:
     return k >= 0 and at < motions[k].end()
 
 
-def _frame_value(value: str, which: str, fdat: dict) -> tuple[str, str]:
-    """(key, '') of the tool or base a $TOOL/$BASE value names, else ('?', why)."""
+def _frame_value(value: str, which: str, fdat: dict, machines: Machines) -> tuple[str, str]:
+    """(key, '') of the tool or base a $TOOL/$BASE value names, else ('?', why); a base on an
+    external kinematic (EK, or SBASE of a base MACHINE_FRAME_DAT puts on a machine) is the
+    machine's (:mod:`robocal.programs.dialects.krl.machines`)."""
     v = value.strip()
     if v.upper() == "$NULLFRAME":
         return NULL, ""
+    on_machine = machines.ek(v) if which == "base" else None
+    if on_machine is not None:
+        return on_machine
     d = re.fullmatch(r"(TOOL_DATA|BASE_DATA)\s*\[\s*(\w+)\s*\]", v, re.IGNORECASE)
     if d:
         if d.group(2).isdigit():
@@ -494,6 +514,8 @@ def _frame_value(value: str, which: str, fdat: dict) -> tuple[str, str]:
         if data[2] == "#TCP":
             return "external TCP", ""
         number = data[0] if which == "tool" else data[1]
+        if number is not None and which == "base":
+            return machines.base(number)
         return (number, "") if number is not None else ("?", f"FDAT {f.group(2)} has no "
                                                              f"{'TOOL_NO' if which == 'tool' else 'BASE_NO'}")
     return "?", f"${which.upper()} is set from {v} (a variable or function this filter cannot follow)"

@@ -7,7 +7,12 @@
   ``name{n}`` / ``name{n,m}``) or written inline in a motion instruction.
 * ``tooldata`` = ``[robhold,[[x,y,z],[q1..q4]],[load...]]``: TCP = flange * tframe.
 * ``wobjdata`` = ``[robhold,ufprog,ufmec,[[uframe]],[[oframe]]]``: target pose in the world
-  (= robot base) frame = uframe * oframe * robtarget.
+  (= robot base) frame = uframe * oframe * robtarget. A work object a mechanical unit moves
+  (robhold FALSE, ufprog FALSE, ufmec ``"STN1"``) is a frame on that unit's plate
+  (:attr:`Program.carried`): the controller defines its user frame by the unit, so the targets are
+  in oframe on the plate and a stored uframe is not used (said when it is not the identity);
+  robhold TRUE (the robot holds the work: MultiMove, a stationary tool) is not filtered. The
+  robtarget's external axes that are not 9E9 are its :attr:`Target.axes` (``eax_b`` -> value).
 * Motion instructions and the positions of their arguments (optional ``\\Arg`` removed):
   MoveL/MoveJ and their DO/AO/GO/Sync forms: ToPoint, Speed, Zone, Tool; MoveC: CirPoint,
   ToPoint, Speed, Zone, Tool; TriggL/TriggJ: ToPoint, Speed, Trigg, Zone, Tool; TriggC: CirPoint,
@@ -86,6 +91,7 @@ _SUBSCRIPT = re.compile(r"([A-Za-z]\w*)\s*\{\s*(\d+(?:\s*,\s*\d+)*)\s*\}")  # na
 _RECORD = re.compile(r"\brecord\s+([a-z]\w*)([\s\S]*?)\bendrecord\b")
 _COMPONENT = re.compile(r"([A-Za-z]\w*)\s+([A-Za-z]\w*)\s*;")
 _CONF = re.compile(r"\bconf([lj])\s*\\\s*(on|off)\b")
+_ACTUNIT = re.compile(r"\bactunit\s+([a-z]\w*)")  # searched in the lower-cased text
 # block keywords a statement may begin with before its instruction
 _LEAD = re.compile(r"\s*(?:(?:LOCAL\s+)?(?:PROC|TRAP)\s+\w+\s*(?:\([^)]*\))?|(?:LOCAL\s+)?FUNC\s+\w+\s+\w+\s*"
                    r"\([^)]*\)|ENDPROC|ENDFUNC|ENDTRAP|ENDIF|ELSE|ENDFOR|ENDWHILE|ENDTEST|DEFAULT\s*:|"
@@ -224,9 +230,12 @@ class RapidDialect(Dialect):
                 else:
                     self._statement(src, masked, s, e, prog, st, src not in sources, proc, conf)
         for kind, decl, known in (("tool", st.tools, prog.tools), ("frame", st.wobjs, prog.frames)):
-            for name, (pose, ok, why) in decl.items():
+            for name, (pose, ok, why, *moved) in decl.items():
                 if ok:
                     known[name] = pose
+                    if moved and moved[0]:  # a work object a mechanical unit moves (ufmec)
+                        prog.carried[name] = moved[0]
+                        prog.warnings += [moved[1]] if moved[1] else []
                 else:
                     prog.unsupported[f"{kind}:{name}"] = why
         for name in BUILTIN_TOOLS:
@@ -237,6 +246,7 @@ class RapidDialect(Dialect):
         prog.tools.update({self.name_key(k): v for k, v in tools.items()})
         prog.frames.update({self.name_key(k): v for k, v in frames.items()})
         self._assign(prog, st)
+        _inactive_units(prog, lowered)
         flow.calls = [(src, at, name) for name, calls in st.calls.items() for src, at, *_ in calls]
         flow.entry = flow.routines.get("main")
         order_by_execution(prog, flow)
@@ -346,9 +356,9 @@ class RapidDialect(Dialect):
             raise DataError(f"{src.path.name}:{src.line_of(at)}: robtarget {name}: confdata must be "
                             f"integers, got {[n.text for n in conf]}")
         cf1, cf4, cf6, cfx = map(int, config)
-        used = [f"eax_{'abcdef'[k]} = {x}" for k, x in ext if abs(float(x)) < _UNUSED_AXIS]
+        used = [(f"eax_{'abcdef'[k]}", x) for k, x in ext if abs(float(x)) < _UNUSED_AXIS]
         return Target(src, at, name, pose, config=np.array([cfx, cf1, cf4, cf6]), config_spans=conf,
-                      external=", ".join(used))
+                      external=", ".join(f"{k} = {x}" for k, x in used), axes={k: float(x) for k, x in used})
 
     def _robtargets(self, src, tree, name, at, array: str | None) -> list[Target]:
         return [self._robtarget(src, node, name + suffix, _first_offset(node, at) if array else at)
@@ -368,9 +378,19 @@ class RapidDialect(Dialect):
                             "[robhold,ufprog,ufmec,[uframe],[oframe]]")
         uf = self.to_pose(np.array([[n.value for n in _pose_numbers(tree[3], src, at, f"wobjdata {name}")]]))
         of = self.to_pose(np.array([[n.value for n in _pose_numbers(tree[4], src, at, f"wobjdata {name}")]]))
-        fixed = tree[0].text.upper() == "FALSE" and tree[1].text.upper() == "TRUE"
-        return (uf[0] @ of[0], fixed,
-                f"{where}: wobjdata {name} is held by the robot or moved by a mechanical unit")
+        robhold, ufprog = (tree[0].text.upper() == "TRUE",
+                           isinstance(tree[1], Word) and tree[1].text.upper() == "TRUE")
+        unit = "" if robhold or ufprog or not isinstance(tree[2], Word) else \
+            src.text[tree[2].start:tree[2].start + len(tree[2].text)].strip('"').strip()
+        # a moving work object (ufprog FALSE): the controller defines its user frame by the unit (its
+        # plate), continuously, and may store it in the PERS value: the targets are in oframe on the plate
+        stored = ", ".join(f"{v:.1f}" for v in uf[0][:3, 3] * 1e3)
+        note = f"{where}: wobjdata {name} moves with {unit}: its uframe ({stored} mm ...) is not used (the " \
+            "controller defines a moving work object's user frame by the unit): its targets are taken in " \
+            "oframe on the unit's plate" if unit and not np.allclose(uf[0], np.eye(4)) else ""
+        why = f"{where}: wobjdata {name} is held by the robot (robhold TRUE)" if robhold else \
+            f"{where}: wobjdata {name} moves with a unit it does not name (ufprog FALSE, ufmec '')"
+        return of[0] if unit else uf[0] @ of[0], not robhold and (ufprog or bool(unit)), why, unit, note
 
     # ------------------------------------------------------------------ data flow
     def _assign(self, prog, st):
@@ -643,6 +663,16 @@ def _constant(text: str, constants: dict[str, float]) -> float | None:
     """The value of a RAPID num expression of numbers, CONST nums and their constant array
     elements (``nBead{1, 2} * ((-1) * K)``), else None."""
     return constant_value(_constant_key(text), constants)
+
+
+def _inactive_units(prog: Program, lowered: dict) -> None:
+    """Warn of each unit moving a work object the motions use that no ``ActUnit`` of these files
+    activates (the controller moves such a work object only while its unit is active)."""
+    active = {m.group(1) for low in lowered.values() for m in _ACTUNIT.finditer(low)}
+    used = {prog.carried[t.frame] for t in prog.targets if t.frame in prog.carried}
+    for unit in sorted(u for u in used if u.lower() not in active):
+        prog.warnings.append(f"no ActUnit {unit} in these files: the work objects {unit} moves follow it "
+                             "only while it is active (activated at start-up or by another module?)")
 
 
 def _after_lead(masked: str, start: int, end: int) -> int:
