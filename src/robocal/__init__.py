@@ -31,7 +31,9 @@ _LAZY = {
     "simulate_markers": "robocal.data.simulate_instruments",
     "simulate_camera": "robocal.data.simulate_instruments",
     "evaluate": "robocal.calibration.evaluation",
-    "Robot": "robocal.kinematics.model",
+    "Robot": "robocal.kinematics.model", "load_model": "robocal.kinematics.model",
+    "Cell": "robocal.kinematics.workcell", "Positioner": "robocal.kinematics.workcell",
+    "load_cell": "robocal.kinematics.workcell",
     "FilterResult": "robocal.programs", "filter_program": "robocal.programs",
     "ToolCalibration": "robocal.deploy.tcp", "identify_tcp": "robocal.deploy.tcp",
 }
@@ -52,12 +54,14 @@ def __dir__() -> list[str]:
 
 __all__ = [
     "CalibrationResult",
+    "Cell",
     "FilterResult",
     "ToolCalibration",
     "CampaignResult",
     "Constraints",
     "Tracker",
     "Measurements",
+    "Positioner",
     "analyze",
     "calibrate",
     "evaluate",
@@ -79,4 +83,6 @@ __all__ = [
     "filter_program",
     "identify_tcp",
     "ik",
+    "load_cell",
+    "load_model",
 ]

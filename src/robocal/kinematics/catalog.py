@@ -19,7 +19,7 @@ from robocal.kinematics.model_file import robot_kwargs
 @cache
 def _file(file_name: str) -> dict:
     """The raw YAML mapping of one shipped catalog file."""
-    item = resources.files("robocal").joinpath("catalog", file_name)
+    item = resources.files("robocal").joinpath("catalog", *file_name.split("/"))
     return load_yaml(item.read_text(encoding="utf-8"), file_name, ModelError)
 
 
@@ -64,3 +64,29 @@ def catalog_kwargs(name: str) -> dict:
         return robot_kwargs(catalog_entry(name))
     except ModelError as exc:
         raise ModelError(f"catalog entry {name!r}: {exc}") from None
+
+
+POSITIONERS = "positioners"  # the catalog's folder of positioners (robocal.kinematics.workcell reads them)
+
+
+@cache
+def _positioner_entries() -> dict[str, dict]:
+    """name -> raw YAML mapping of every shipped positioner (``catalog/positioners/<name>.yaml``)."""
+    folder = resources.files("robocal").joinpath("catalog", POSITIONERS)
+    names = sorted(p.name for p in folder.iterdir() if p.name.endswith(".yaml")) if folder.is_dir() else []
+    return {data["name"]: data for data in (_file(f"{POSITIONERS}/{n}") for n in names)}
+
+
+def positioner_names() -> list[str]:
+    """Names of the catalog positioners, sorted."""
+    return sorted(_positioner_entries())
+
+
+def positioner_descriptions() -> dict[str, str]:
+    """name -> description (model, axes, where the numbers come from) of each catalog positioner."""
+    return {name: _positioner_entries()[name]["description"] for name in positioner_names()}
+
+
+def positioner_entry(name: str) -> dict | None:
+    """The raw mapping of catalog positioner ``name``, None when the catalog has none of that name."""
+    return _positioner_entries().get(name)

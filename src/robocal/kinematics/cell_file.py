@@ -48,6 +48,9 @@ from robocal.kinematics.model_file import MAX_DESCRIPTION, MAX_NAME, _frame, _ma
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 
 CELL_KEYS = {"format", "name", "description", "units", "robot", "track", "mount"}
+WORKCELL_KEYS = ("robots", "positioner", "positioners")  # any: a work cell (robocal.kinematics.workcell)
+ARM_KEYS = {"model", "base", "unit", "track"}
+SINGLE_ARM = "arm"  # the body name of the arm a work cell gives with ``robot:``
 DIRECTION_TOL = 1e-6  # |norm - 1| of the track direction: a unit vector written to 6 digits
 TRACK_SCALE = "scale1"  # the track encoder's scale error (a joint-error term of joint 1)
 
@@ -63,6 +66,28 @@ class CellFile(NamedTuple):
     description: str
 
 
+def _resolve(spec, path: Path | None, where: str) -> str:
+    """A catalog name, or a model file's path resolved from the cell file's folder."""
+    if not isinstance(spec, str) or not spec.strip():
+        raise ModelError(f"{where}: expected a catalog name or a model file, got {short_repr(spec)}")
+    local = (path.parent if path is not None else Path(".")) / spec
+    return str(local) if local.suffix or local.exists() else spec
+
+
+def _track(spec, length: float, where: str = "track") -> tuple[np.ndarray, np.ndarray]:
+    """(unit direction (3,), e1 limits (2,) m) of a ``track`` mapping."""
+    track = _mapping(spec, where, {"direction", "limits"}, {"direction", "limits"})
+    direction = _numbers(track["direction"], f"{where}.direction", 3)
+    if abs(np.linalg.norm(direction) - 1.0) > DIRECTION_TOL:
+        raise ModelError(f"{where}.direction {direction.tolist()} is not a unit vector (norm "
+                         f"{np.linalg.norm(direction):.6g}): give the track's direction in the world frame "
+                         "with norm 1")
+    limits = _numbers(track["limits"], f"{where}.limits", 2) * length
+    if not limits[0] < limits[1]:
+        raise ModelError(f"{where}.limits: lower {limits[0]:g} m is not below upper {limits[1]:g} m")
+    return direction / np.linalg.norm(direction), limits
+
+
 def read_cell(data: dict, path: Path | None = None) -> CellFile:
     """The contents of a cell mapping (the module docstring's file); ``robot:`` is a catalog name or
     a model file relative to ``path``'s folder. ModelError names the key."""
@@ -70,25 +95,73 @@ def read_cell(data: dict, path: Path | None = None) -> CellFile:
     length_unit, angle_unit = _units(data)
     length = LENGTH_UNITS[length_unit]
     angle = ANGLE_UNITS[angle_unit]
-    spec = data["robot"]
-    if not isinstance(spec, str) or not spec.strip():
-        raise ModelError(f"robot: expected a catalog name or a model file, got {short_repr(spec)}")
-    local = (path.parent if path is not None else Path(".")) / spec
-    track = _mapping(data["track"], "track", {"direction", "limits"}, {"direction", "limits"})
-    direction = _numbers(track["direction"], "track.direction", 3)
-    if abs(np.linalg.norm(direction) - 1.0) > DIRECTION_TOL:
-        raise ModelError(f"track.direction {direction.tolist()} is not a unit vector (norm "
-                         f"{np.linalg.norm(direction):.6g}): give the track's direction in the world frame "
-                         "with norm 1")
-    limits = _numbers(track["limits"], "track.limits", 2) * length
-    if not limits[0] < limits[1]:
-        raise ModelError(f"track.limits: lower {limits[0]:g} m is not below upper {limits[1]:g} m")
+    robot = _resolve(data["robot"], path, "robot")
+    direction, limits = _track(data["track"], length)
     mount = _frame(data.get("mount", {}), length, angle, "mount")
     name = data.get("name")
-    return CellFile(str(local) if local.suffix or local.exists() else spec,
-                    direction / np.linalg.norm(direction), mount, limits,
+    return CellFile(robot, direction, mount, limits,
                     None if name is None else _text(name, "name", MAX_NAME),
                     _text(data.get("description", ""), "description", MAX_DESCRIPTION))
+
+
+def is_workcell(data) -> bool:
+    """Whether a loaded model mapping is a work cell (several arms or a positioner:
+    `robocal.kinematics.workcell`), not one robot (nor a robot on a track alone)."""
+    return isinstance(data, dict) and any(k in data for k in WORKCELL_KEYS)
+
+
+class ArmEntry(NamedTuple):
+    """One arm of a work cell file, in SI units."""
+
+    model: str | dict  # a catalog name, a model file's path (resolved), or an inline model mapping
+    base: np.ndarray | None  # (4, 4) world -> the arm's base (with a track: carriage at e1 = 0 -> base)
+    unit: str  # its mechanical unit in programs (ROB_1...); default its body name
+    track: tuple[np.ndarray, np.ndarray] | None  # (unit direction (3,), e1 limits (2,) m) or None
+
+
+def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
+    """The arms of a work cell mapping, body name -> `ArmEntry`: ``robots: {name: {model, base,
+    unit, track}}``, or one ``robot:`` (with ``track:`` and ``mount:`` as a track cell file; its
+    body name ``arm``), or none (a positioner-only cell). ModelError names the key."""
+    _mapping(data, "the cell", CELL_KEYS | set(WORKCELL_KEYS), {"units"})
+    length_unit, angle_unit = _units(data)
+    length, angle = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit]
+    if "robots" in data:
+        clash = sorted({"robot", "track", "mount"} & set(data))
+        if clash:
+            raise ModelError(f"robots: give the arms either as robots: {{name: ...}} or as one robot:, "
+                             f"not both (found {clash})")
+        arms = _mapping(data["robots"], "robots", set(map(str, data["robots"] or {})))
+        if not arms:
+            raise ModelError("robots: expected at least one arm {name: {model, base, unit}}")
+        out = {}
+        for name, spec in arms.items():
+            where = f"robots.{name}"
+            spec = _mapping(spec, where, ARM_KEYS, {"model"})
+            model = spec["model"] if isinstance(spec["model"], dict) else \
+                _resolve(spec["model"], path, f"{where}.model")
+            track = None if spec.get("track") is None else _track(spec["track"], length, f"{where}.track")
+            out[str(name)] = ArmEntry(model, _frame(spec.get("base"), length, angle, f"{where}.base"),
+                                      _text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track)
+        return out
+    if "robot" not in data:
+        stray = sorted({"track", "mount"} & set(data))
+        if stray:
+            raise ModelError(f"{stray}: a track and its mount belong to an arm (robot:)")
+        return {}
+    track = None if data.get("track") is None else _track(data["track"], length)
+    return {SINGLE_ARM: ArmEntry(_resolve(data["robot"], path, "robot"),
+                                 _frame(data.get("mount"), length, angle, "mount"), SINGLE_ARM, track)}
+
+
+def count_positioners(data: dict) -> int:
+    """How many positioners a work cell mapping declares (``positioner:`` one, ``positioners:`` its
+    entries)."""
+    if "positioner" in data and "positioners" in data:
+        raise ModelError("give either positioner: (one) or positioners: {name: ...}, not both")
+    if "positioners" in data:
+        return len(_mapping(data["positioners"], "positioners", set(map(str, data["positioners"] or {}))))
+    return int("positioner" in data)
 
 
 def chain_arrays(links: LinkArrays, base: np.ndarray, tool: np.ndarray, parallel: np.ndarray,

@@ -32,7 +32,15 @@ import numpy as np
 from robocal.core.errors import DataError, ModelError, UnitError
 from robocal.core.io import as_number, write_atomic
 from robocal.kinematics.catalog import catalog_kwargs
-from robocal.kinematics.cell_file import TRACK_SCALE, chain_arrays, read_cell
+from robocal.kinematics.cell_file import (
+    TRACK_SCALE,
+    ArmEntry,
+    chain_arrays,
+    count_positioners,
+    is_workcell,
+    read_arms,
+    read_cell,
+)
 from robocal.kinematics.conditions import UNKNOWN, Conditions
 from robocal.kinematics.convert import dh_kwargs, mdh_kwargs, opw_chain, opw_kwargs, opw_parameters
 from robocal.kinematics.fk import LinkArrays, chain_fk, chain_frames
@@ -1044,6 +1052,8 @@ class Robot:
         """
         data = read_model_data(path)
         try:
+            if is_workcell(data):
+                return single_arm(data, Path(path))
             if is_cell(data):
                 return cell_from_data(data, Path(path))
             return cls(**robot_kwargs(data))
@@ -1055,7 +1065,8 @@ class Robot:
 
 
 def load_model(spec: str, tip: str | None = None) -> Robot:
-    """A robot from a model YAML path (or a cell file: a robot on a track), a URDF (a serial chain:
+    """A robot from a model YAML path (or a cell file: a robot on a track; a work cell file with one
+    arm and no positioner: that arm, placed in the world), a URDF (a serial chain:
     `robocal.kinematics.urdf_read`, ending at link ``tip``, default the deepest leaf) or a catalog
     name (what every ``--robot`` takes). A ``tip`` for anything but a URDF is refused (ModelError)."""
     path = Path(spec)
@@ -1105,3 +1116,41 @@ def cell_from_data(data: dict, path: Path | None = None) -> Robot:
     arm = load_model(cell.robot)
     name = _text(f"{arm.name} on a track", "name", MAX_NAME) if cell.name is None else cell.name
     return track_chain(arm, cell.direction, cell.mount, cell.limits, name=name, description=cell.description)
+
+
+def placed(robot: Robot, mount: np.ndarray | None = None, plate: np.ndarray | None = None) -> Robot:
+    """``robot`` with its base frame carried by ``mount`` ``(4, 4)`` (world -> where the model's own
+    world was: base ``mount @ base``) and its tool followed by ``plate`` ``(4, 4)`` (tool ``tool @
+    plate``), m; its nominal model moved alike (a calibrated model stays calibrated). Neither: the
+    robot itself."""
+    if mount is None and plate is None:
+        return robot
+
+    def move(r: Robot) -> Robot:
+        return replace(r, nominal=None, base=r.base if mount is None else np.asarray(mount, float) @ r.base,
+                       tool=r.tool if plate is None else r.tool @ np.asarray(plate, float))
+
+    return replace(move(robot), nominal=move(robot.nominal_robot()).nominal)
+
+
+def arm_from_entry(entry: ArmEntry) -> Robot:
+    """The arm of a work cell file's entry (`robocal.kinematics.cell_file.read_arms`): its model (a
+    catalog name, a file, or an inline model mapping) placed at the entry's base in the world, or
+    on the entry's track (the track cell chain, its mount the entry's base)."""
+    arm = Robot(**robot_kwargs(entry.model)) if isinstance(entry.model, dict) else load_model(entry.model)
+    if entry.track is not None:
+        mount = np.eye(4) if entry.base is None else entry.base
+        return track_chain(arm, entry.track[0], mount, entry.track[1], name=f"{arm.name} on a track")
+    return placed(arm, mount=entry.base)
+
+
+def single_arm(data: dict, path: Path | None = None) -> Robot:
+    """The arm of a work cell mapping that has exactly one arm and no positioner; otherwise
+    ModelError saying to load it as a cell (`robocal.load_cell`)."""
+    arms = read_arms(data, path)
+    positioners = count_positioners(data)
+    if len(arms) != 1 or positioners:
+        raise ModelError(f"a work cell ({len(arms)} arm(s), {positioners} positioner(s)), not one robot: "
+                         "load it with robocal.load_cell, or give it to a command that takes a cell "
+                         "(--model CELL.yaml)")
+    return arm_from_entry(next(iter(arms.values())))

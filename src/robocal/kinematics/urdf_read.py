@@ -26,6 +26,7 @@ from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 MAX_OFFSET_M = 100.0  # a joint origin farther than this from its parent is no robot's (URDF is in m)
 MAX_ANGLE_RAD = 100.0  # origin angles and joint limits beyond (16 turns) are a unit or typing error
 _MAX_AXIS = 1e6  # an axis vector is normalised; components beyond are refused
+HAYATI_DEG = 5.0  # consecutive axes closer than this to parallel are modelled with beta (Hayati)
 
 
 def rpy_to_matrix(rpy) -> np.ndarray:
@@ -147,7 +148,7 @@ def _angle_about(u: np.ndarray, v: np.ndarray, axis: np.ndarray) -> float:
 
 
 def urdf_kwargs(source, tip: str | None = None, name: str | None = None,
-                parallel_tol_deg: float = 5.0) -> dict:
+                parallel_tol_deg: float = HAYATI_DEG) -> dict:
     """The `robocal.kinematics.model.Robot` arguments of a serial URDF (revolute, continuous,
     prismatic and fixed joints; text, or a path to a file).
 
@@ -198,7 +199,7 @@ def urdf_kwargs(source, tip: str | None = None, name: str | None = None,
             limits.append([-2 * np.pi, 2 * np.pi])
     if not dirs:
         raise ModelError("URDF chain has no moving joint")
-    kw = _lines_to_chain(np.array(points), np.array(dirs), T, np.array(limits),
+    kw = lines_to_chain(np.array(points), np.array(dirs), T, np.array(limits),
                          name or root.get("name") or "robot", np.sin(np.deg2rad(parallel_tol_deg)),
                          np.array(prismatic))
     return {**kw, "link_frames": link_frames}
@@ -208,7 +209,7 @@ def _closest_on_line(p: np.ndarray, z: np.ndarray, x: np.ndarray) -> np.ndarray:
     return p + ((x - p) @ z) * z
 
 
-def _lines_to_chain(P: np.ndarray, Z: np.ndarray, T_tip: np.ndarray, limits: np.ndarray, name: str,
+def lines_to_chain(P: np.ndarray, Z: np.ndarray, T_tip: np.ndarray, limits: np.ndarray, name: str,
                     sin_tol: float, prismatic: np.ndarray) -> dict:
     """MDH + beta from joint lines (points ``P`` (n, 3), unit directions ``Z`` (n, 3)) and the
     tip pose ``T_tip`` at q = 0, all in the root frame; ``prismatic`` ``(n,)`` flags slides."""
