@@ -94,6 +94,10 @@ OBSERVED = {spec.name: spec for spec in (
              columns="flush_plane (the tool face flush on a plane)", column="flush_plane"),
     KindSpec("distance", "distance:DistanceObservation", ("pair", "distance"), sigma_m=5e-6, group="pair",
              rows_per_placement=2, columns="pair and distance_mm"),
+    # SMRs in nests at known places on a tool frame (a positioner's plate): the tool's six parameters
+    # seen through the nests, the nests held (the registration of flange SMRs does not apply)
+    KindSpec("nest", "nest:NestObservation", ("points",), sigma_m=20e-6, several_smrs=True,
+             columns="x_mm,y_mm,z_mm of SMRs in known nests"),
     # motion capture: markers on any link, their offsets and the capture frame estimated with the robot
     KindSpec("marker", "marker:MarkerObservation", ("points",), optional=("link",), sigma_m=0.3e-3,
              several_smrs=True, columns="x_mm,y_mm,z_mm and link"),
