@@ -142,3 +142,43 @@ def test_a_body_planned_as_the_wrong_kind_is_refused(cell_file):
         plan_cell(cell, {"STN1": 10}, {})
     with pytest.raises(DataError, match="is an arm"):
         plan_cell(cell, {}, {"arm": 10})
+
+
+def test_the_planned_file_measured_on_a_true_cell_calibrates_as_predicted(cell_file):
+    """The planned rows, read at a simulated true cell (the cell simulation's own truth draw; the
+    tracker frame the world's) and written as the cell's measurement file (each visible SMR's
+    reading appended), are read by the cell data layer to the planned joints and calibrated by
+    ``rc.calibrate``: the positioner's model error at held-out table angles is what the plan
+    predicted (ratio within sampling: one truth, 72 readings)."""
+    from robocal.data.cell_measurements import CellMeasurements
+    from robocal.data.cell_simulation import true_cell
+
+    cell = rc.load_cell(cell_file)
+    tracker = Tracker(position=[1.2, 2.8, 2.0], acceptance_deg=45)
+    plan = plan_cell(cell, {"arm": 30}, {"STN1": 24}, constraints=Constraints(tracker=tracker),
+                     smr={"arm": [[0.02, -0.03, 0.08]]}, n_candidates=1000, table_candidates=1000, starts=1)
+    truth = true_cell(cell, 7)
+    truth = truth.__class__(arms={"arm": truth.arms["arm"].with_frames(tool=plan.arms["arm"].robot.tool)},
+                            positioners=truth.positioners, name=truth.name)
+    rng = np.random.default_rng(8)
+    text = plan.poses_csv().splitlines()
+    header, rows = text[0].split(","), list(csv.reader(text[1:]))
+    lines = [",".join([*header[:9], "smr", "x_mm", "y_mm", "z_mm"])]
+    for r, (body, i) in zip(rows, plan.rows(), strict=True):
+        for k in np.flatnonzero(np.array(r[9:], int)):
+            q = (plan.arms if body == "arm" else plan.tables)[body].joints[i][None]
+            p = truth.body(body).fk(q, smr=[k if body == "STN1" else 0])[0, :3, 3] + rng.normal(0.0, 2e-5, 3)
+            lines.append(",".join([*r[:9], str(k), *(f"{v * 1e3:.6f}" for v in p)]))
+    data = CellMeasurements.parse("\n".join(lines) + "\n", cell, "measured.csv")
+    np.testing.assert_allclose(np.unique(data["STN1"].joints, axis=0),
+                               np.unique(np.round(plan.tables["STN1"].joints, 12), axis=0), atol=1e-9)
+    result = rc.calibrate(cell, data, nongeometric=None)
+    model, real = result.in_tracker["STN1"], truth.positioners["STN1"].chain
+    e = np.deg2rad(rng.uniform([-89, -179], [89, 179], (400, 2)))
+    nests = cell.positioners["STN1"].nests
+    smr = np.repeat(np.arange(1, len(nests) + 1), len(e))
+    e = np.tile(e, (len(nests), 1))
+    err = model.fk(e, smr=smr)[:, :3, 3] - real.fk(e, smr=smr)[:, :3, 3]
+    rms_mm = float(np.sqrt(np.mean(np.sum(err**2, axis=1)))) * 1e3
+    predicted = plan.tables["STN1"].predicted_rms_mm
+    assert 0.4 < rms_mm / predicted < 2.5, (rms_mm, predicted)
