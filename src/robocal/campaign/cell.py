@@ -58,9 +58,28 @@ class CellCampaignResult:
 
     Examples
     --------
-    >>> plan = rc.plan_cell(rc.load_cell("cell.yaml"), {"arm": 30}, {"STN1": 24},
-    ...                     constraints=rc.Constraints(tracker=rc.Tracker([3.0, 1.0, 2.0])))  # doctest: +SKIP
-    >>> plan.write("poses.csv", rapid="Campaign.mod")  # doctest: +SKIP
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> from robocal.campaign import plan_cell
+    >>> from robocal.kinematics.positioner import positioner_chain
+    >>> axes = [{"type": "revolute", "axis": [1, 0, 0], "origin": [0, 0, 0.9], "limits": [-1.57, 1.57]},
+    ...         {"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.25], "limits": [-3.14, 3.14]}]
+    >>> mount = np.eye(4); mount[0, 3] = 1.4  # m: the tilt-and-turn table 1.4 m in front of the arm
+    >>> table = rc.Positioner(positioner_chain(axes, mount), unit="STN1", program_axes=("eax_b", "eax_c"),
+    ...                       nests=[[0.2, 0, 0], [0, 0.2, 0], [-0.15, -0.15, 0]])  # m, on the plate
+    >>> cell = rc.Cell({"arm": rc.Robot.from_catalog("abb_irb2600")}, {"STN1": table})
+    >>> tracker = rc.Tracker([1.2, 2.8, 2.0], acceptance_deg=45)  # m, world frame
+    >>> plan = plan_cell(cell, {"arm": 15}, {"STN1": 12}, constraints=rc.Constraints(tracker=tracker),
+    ...                  smr={"arm": [[0.02, -0.03, 0.08]]}, n_candidates=300, table_candidates=300,
+    ...                  starts=1)
+    >>> plan.poses_csv().splitlines()[0]
+    'body,q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,e1_deg,e2_deg,visible_smr0,visible_smr1,visible_smr2,visible_smr3'
+    >>> len(plan.rows()), "theta2" in plan.tables["STN1"].identifiability.dropped  # the turn zero:
+    (27, True)
+    >>> "tool.rz" in plan.tables["STN1"].identifiability.kept  # ... the plate frame's, fixed by the nests
+    True
+    >>> plan.write("poses.csv", programs=plan.programs({"rapid": "Campaign.mod"}))
+    ['poses.csv', 'Campaign.mod']
     """
 
     cell: object
@@ -253,6 +272,21 @@ def plan_cell(cell, arm_poses: dict[str, int], table_poses: dict[str, int], *,
     DataError
         A body not in the cell, a positioner with neither declared nests nor ``nests``, or what
         `robocal.plan_poses` / `plan_table` refuse.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> from robocal.campaign import plan_cell
+    >>> from robocal.kinematics.positioner import positioner_chain
+    >>> turn = [{"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.8], "limits": [-3.14, 3.14]}]
+    >>> nests = [[0.2, 0, 0], [0, 0.2, 0], [-0.2, 0, 0]]  # m, plate frame
+    >>> table = rc.Positioner(positioner_chain(turn), unit="STN1", nests=nests)
+    >>> tracker = rc.Tracker([0.5, 0.0, 3.0])  # m: above the turntable, its nests face it
+    >>> plan = plan_cell(rc.Cell({}, {"STN1": table}), {}, {"STN1": 10},
+    ...                  constraints=rc.Constraints(tracker=tracker), table_candidates=300)
+    >>> plan.tables["STN1"].n, round(plan.tables["STN1"].predicted_rms_mm, 3) < 0.05  # mm at the nests
+    (10, True)
     """
     constraints = Constraints() if constraints is None else constraints
     tracker = constraints.tracker
