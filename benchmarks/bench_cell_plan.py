@@ -91,8 +91,8 @@ def main() -> None:
         rows.append([label, readings, f"{plan.predicted_rms_mm:.4f}", f"{rms['plan']:.4f}", grid_predicted,
                      grid_measured, f"{failed} of {len(SEEDS)}"])
         if label.startswith("overhead"):
-            figure("cell_plan.plan_rms_mm", f"{rms['plan']:.4f}")
-            figure("cell_plan.grid_rms_mm", f"{rms['grid']:.4f}")
+            figure("plan_rms_mm", f"{rms['plan']:.4f}")
+            figure("grid_rms_mm", f"{rms['grid']:.4f}")
     table(f"positioner: {N_TABLE} planned table angle sets vs a 3 x 8 grid, calibrated nests' model error "
           f"over {HELD_OUT} held-out angle sets (3-D RMS, mm; {len(SEEDS)} true cells, {NOISE_MM} mm noise)",
           ["tracker", "nest readings plan / grid", "plan predicted", "plan measured", "grid predicted",
