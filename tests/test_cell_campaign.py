@@ -66,7 +66,7 @@ def test_one_file_holds_the_arm_rows_then_the_table_rows(planned):
     values = np.array([[float(v) for v in r[1:9]] for r in rows])
     seen = np.array([[int(v) for v in r[9:]] for r in rows], bool)
     np.testing.assert_array_equal(values[:20, 6:], 0.0)  # the table at rest while the arm is measured
-    np.testing.assert_array_equal(values[20:, :6], 0.0)   # the arm parked while the table turns
+    np.testing.assert_array_equal(values[20:, :6], np.tile(values[19, :6], (18, 1)))  # the arm stays put
     assert seen[:20, 0].all() and not seen[:20, 1:].any()  # the arm's one SMR
     assert not seen[20:, 0].any() and seen[20:, 1:].any(axis=1).all()  # nests 1..3, never the plate origin
     campaign = json.loads((planned / "c.json").read_text())
@@ -182,3 +182,27 @@ def test_the_planned_file_measured_on_a_true_cell_calibrates_as_predicted(cell_f
     rms_mm = float(np.sqrt(np.mean(np.sum(err**2, axis=1)))) * 1e3
     predicted = plan.tables["STN1"].predicted_rms_mm
     assert 0.4 < rms_mm / predicted < 2.5, (rms_mm, predicted)
+
+
+def test_a_parked_arm_in_the_beam_hides_nests_from_the_table_plan(cell_file):
+    """With the tracker's arm radius, the table's angles are planned with the parked arm's axis lines
+    blocking the beam: every nest the plan counts as seen is clear of them, and some angles lose nests
+    the tracker would otherwise see."""
+    from robocal.campaign.cell import _axis_lines
+    from robocal.campaign.positioner import nest_visibility
+
+    cell = rc.load_cell(cell_file)
+    tracker = Tracker(position=[1.2, 2.8, 2.0], acceptance_deg=45, arm_radius_m=0.15)
+    park = np.deg2rad([35.0, 35.0, -40.0, 0.0, 0.0, 0.0])  # the forearm raised into the beam's way
+    plan = plan_cell(cell, {}, {"STN1": 12}, constraints=Constraints(tracker=tracker), park={"arm": park},
+                     table_candidates=500, starts=1)
+    table = plan.tables["STN1"]
+    nests, normals = cell.positioners["STN1"].nests, np.tile([0.0, 0.0, 1.0], (3, 1))
+    obstacles = _axis_lines(cell.arms["arm"], park)
+    blocked = nest_visibility(table.chain, table.joints, nests, normals, tracker, obstacles)
+    np.testing.assert_array_equal(table.visible, blocked)
+    assert "the beam clear of the parked arms" in table.funnel.text()
+    q = np.deg2rad(np.c_[np.linspace(-89, 89, 60), np.zeros(60)])
+    assert nest_visibility(table.chain, q, nests, normals, tracker, obstacles).sum() < \
+        nest_visibility(table.chain, q, nests, normals, tracker).sum()
+    np.testing.assert_array_equal(plan.park["arm"], park)

@@ -86,6 +86,22 @@ def test_a_nest_facing_away_or_below_the_plate_is_not_seen():
     assert not nest_visibility(chain, np.zeros((1, 2)), NESTS, np.tile([0.0, 0.0, 1.0], (3, 1)), low).any()
 
 
+def test_a_parked_arm_in_the_beam_hides_the_nests():
+    chain = tilt_turn()
+    q = np.deg2rad([[-40.0, 0.0]])
+    normals = np.tile([0.0, 0.0, 1.0], (3, 1))
+    free = Tracker(position=[1.6, 3.0, 2.2], acceptance_deg=45)
+    tracker = Tracker(position=[1.6, 3.0, 2.2], acceptance_deg=45, arm_radius_m=0.1)
+    plate = chain.fk(q)[0, :3, 3]
+    across = plate + 0.5 * (tracker.position - plate)            # halfway along the beam
+    wall = np.array([[across - [0.5, 0.0, 0.0], across + [0.5, 0.0, 0.0]]])  # a segment across it
+    assert nest_visibility(chain, q, NESTS, normals, tracker).all()
+    assert not nest_visibility(chain, q, NESTS, normals, tracker, wall).any()
+    assert nest_visibility(chain, q, NESTS, normals, free, wall).all()  # no arm radius: not checked
+    aside = wall + [0.0, 0.0, 1.0]                                 # 1 m above the beam
+    assert nest_visibility(chain, q, NESTS, normals, tracker, aside).all()
+
+
 def test_the_grid_covers_the_limits_without_repeating_a_turn():
     chain = tilt_turn()
     q = np.rad2deg(table_grid(chain, 24))

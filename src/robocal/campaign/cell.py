@@ -6,9 +6,12 @@ is planned per body. Each arm's poses as `robocal.plan_poses` plans them (the tr
 frame, the arm's base its place in the world), each positioner's table angles as
 `robocal.campaign.positioner.plan_table` plans them (the nests on its plate, the tracker's line of
 sight to them). The measuring order visits every arm's poses, then every positioner's angles; while
-one body is measured the others stand still: an arm at its park joints (default its zero joints,
-clipped to its limits; give ``park`` to keep it clear of the beam to the plate), a positioner at
-its rest values (default zero) while the arms are measured.
+one body is measured the others stand still: an arm at its park joints (default: where its last
+planned pose left it, so the program adds no motion of its own; an arm not measured at its zero
+joints clipped to its limits; give ``park`` to put it elsewhere), a positioner at its rest values
+(default zero) while the arms are measured. With the tracker's ``arm_radius_m``, a nest whose beam
+passes within that radius of a parked arm (its axis lines, frames {0}..{n} and the TCP) is not
+seen.
 
 The planned file (``CellCampaignResult.poses_csv``) is one measurement CSV of the cell without the
 readings (API45 "Measurements of a cell"): a ``body`` column, the arms' joint columns (each row the
@@ -226,14 +229,25 @@ class CellCampaignResult:
         return [str(p) for p in texts]
 
 
-def _rest(robot, given) -> np.ndarray:
-    """A body's joints while the others are measured: ``given`` (rad) or zero clipped to the limits."""
+def _rest(robot, given, plan: CampaignResult | None) -> np.ndarray:
+    """A body's joints while the others are measured: ``given`` (rad), else an arm's last planned pose,
+    else zero clipped to the limits."""
+    if given is None and plan is not None:
+        return plan.joints[-1]
     if given is None:
         return np.clip(np.zeros(robot.n_joints), robot.limits[:, 0], robot.limits[:, 1])
     q = robot.check_joints(given)[0]
     if not robot.within_limits(q[None])[0]:
         raise DataError(f"the park joints of {robot.name} are outside its limits")
     return q
+
+
+def _axis_lines(arm, q: np.ndarray) -> np.ndarray:
+    """The segments ``(n + 1, 2, 3)`` (m, world) joining the origins of frames {0}..{n} of ``arm`` at
+    joints ``q`` and the flange to its TCP: what of a parked arm can block the beam."""
+    tcp, frames = arm.fk(q[None], frames=True)
+    points = np.concatenate([frames[0, :, :3, 3], tcp[:, :3, 3]])
+    return np.stack([points[:-1], points[1:]], axis=1)
 
 
 def plan_cell(cell, arm_poses: dict[str, int], table_poses: dict[str, int], *,
@@ -259,7 +273,8 @@ def plan_cell(cell, arm_poses: dict[str, int], table_poses: dict[str, int], *,
         For a positioner without declared nests: its SMRs' approximate plate positions (K, 3) m
         (each one's position is then estimated). A positioner with declared nests uses them.
     park : dict of str to array_like, optional
-        A body's joints (rad) while the others are measured (default zero, clipped).
+        A body's joints (rad) while the others are measured (default: an arm's last planned pose, or
+        zero clipped to its limits).
     noise_mm, noise_model, criterion, seed, starts, n_candidates, table_candidates, progress
         As `robocal.plan_poses` (``table_candidates``: the positioners' candidate angle sets).
 
@@ -308,6 +323,10 @@ def plan_cell(cell, arm_poses: dict[str, int], table_poses: dict[str, int], *,
                                 noise_mm=noise_mm, noise_model=noise_model, criterion=criterion,
                                 seed=seed, starts=starts, n_candidates=n_candidates, progress=progress)
         warnings += [f"arm {name}: {w}" for w in arms[name].warnings]
+    park = {cell.resolve(k): v for k, v in (park or {}).items()}
+    rests = {name: _rest(cell.body(name), park.get(name), arms.get(name)) for name in cell.bodies}
+    obstacles = np.concatenate([_axis_lines(cell.arms[a], rests[a]) for a in cell.arms]) \
+        if cell.arms else None
     for name, n in resolved_tables.items():
         p = cell.positioners[name]
         known = p.nests is not None
@@ -317,9 +336,8 @@ def plan_cell(cell, arm_poses: dict[str, int], table_poses: dict[str, int], *,
         tables[name] = plan_table(p.chain, n, nests=p.nests if known else approximate[name],
                                   nests_known=known, tracker=tracker, noise_mm=noise_mm,
                                   noise_model=noise_model, criterion=criterion, seed=seed,
-                                  starts=starts, n_candidates=table_candidates, name=name)
+                                  starts=starts, n_candidates=table_candidates, name=name,
+                                  obstacles=obstacles)
         warnings += [f"positioner {name}: {w}" for w in tables[name].warnings]
-    park = {cell.resolve(k): v for k, v in (park or {}).items()}
-    rests = {name: _rest(cell.body(name), park.get(name)) for name in cell.bodies}
     return CellCampaignResult(cell=cell, arms=arms, tables=tables, park=rests, warnings=warnings)
 

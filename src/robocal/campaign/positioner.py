@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from robocal.campaign.constraints import Funnel, Tracker, limits_with_margin
+from robocal.campaign.constraints import Funnel, Tracker, _segment_segment_distance, limits_with_margin
 from robocal.campaign.exchange import CRITERIA, averaged_search, criterion_value
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
@@ -208,9 +208,11 @@ def nest_geometry(chain: Robot, q: np.ndarray, nests: np.ndarray,
 
 
 def nest_visibility(chain: Robot, q: np.ndarray, nests: np.ndarray, normals: np.ndarray,
-                    tracker: Tracker | None) -> np.ndarray:
+                    tracker: Tracker | None, obstacles: np.ndarray | None = None) -> np.ndarray:
     """``(N, K)`` bool: the tracker sees nest k at angles ``q[i]`` (its SMR faces the tracker within
-    the acceptance half-angle, inside the range); all True without a tracker."""
+    the acceptance half-angle, inside the range, and, with ``obstacles`` ``(S, 2, 3)`` (segments, m:
+    a parked arm's axis lines) and the tracker's arm radius, the beam clears them by that radius);
+    all True without a tracker."""
     if tracker is None:
         return np.ones((len(q), len(nests)), bool)
     pos, nrm = nest_geometry(chain, q, nests, normals)
@@ -218,7 +220,12 @@ def nest_visibility(chain: Robot, q: np.ndarray, nests: np.ndarray, normals: np.
     dist = np.linalg.norm(d, axis=2)
     cos = np.sum(d * nrm, axis=2) / np.maximum(dist, 1e-300)
     lo, hi = tracker.range_m
-    return (cos >= np.cos(np.deg2rad(tracker.acceptance_deg))) & (dist >= lo) & (dist <= hi)
+    seen = (cos >= np.cos(np.deg2rad(tracker.acceptance_deg))) & (dist >= lo) & (dist <= hi)
+    if obstacles is not None and len(obstacles) and tracker.arm_radius_m is not None:
+        gap = _segment_segment_distance(obstacles[:, 0], obstacles[:, 1], pos[..., None, :],
+                                        tracker.position)       # (N, K, S)
+        seen &= gap.min(axis=2) > tracker.arm_radius_m
+    return seen
 
 
 def table_unknowns(chain: Robot, n_nests: int, known: bool) -> list[str]:
@@ -331,7 +338,8 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
                tracker: Tracker | None = None, noise_mm: float = 0.02, noise_model: str = "isotropic",
                criterion: str = "I", n_candidates: int = DEFAULT_TABLE_CANDIDATES,
                region_size: int = DEFAULT_TABLE_REGION, margin_deg: float = DEFAULT_TABLE_MARGIN_DEG,
-               starts: int = 4, seed: int = 0, name: str | None = None) -> TablePlan:
+               starts: int = 4, seed: int = 0, name: str | None = None,
+               obstacles: np.ndarray | None = None) -> TablePlan:
     """Choose ``n`` table angle sets at which the tracker measures the plate's nests.
 
     Parameters
@@ -360,6 +368,9 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
         axis), region angle sets, random starts of the exchange search, the seed.
     name : str, optional
         The positioner's name (default the chain's).
+    obstacles : array_like, shape (S, 2, 3), optional
+        Segments (m, world) that block the beam within the tracker's ``arm_radius_m`` (an arm
+        parked while the table turns: `robocal.campaign.cell`).
 
     Returns
     -------
@@ -387,7 +398,9 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
     rng = np.random.default_rng(seed)
     limits = limits_with_margin(chain, margin_deg)
     funnel = Funnel()
-    q, visible = _candidates(chain, int(n_candidates), limits, nests, normals, tracker, rng, funnel)
+    obstacles = None if obstacles is None else np.asarray(obstacles, float).reshape(-1, 2, 3)
+    q, visible = _candidates(chain, int(n_candidates), limits, nests, normals, tracker, rng, funnel,
+                             obstacles)
     names = table_unknowns(chain, len(nests), nests_known)
     b, J, Jw = _blocks(chain, q, visible, nests, names, noise)
     p_data = len(b.structure.kept)
@@ -405,7 +418,7 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
     chosen = found.indices[measuring_order(chain, q[found.indices], weights)]
     # the naive grid of as many angle sets, with what the tracker sees there
     q_grid = table_grid(chain, n, margin_deg)
-    v_grid = nest_visibility(chain, q_grid, nests, normals, tracker)
+    v_grid = nest_visibility(chain, q_grid, nests, normals, tracker, obstacles)
     g, _, _ = _blocks(chain, q_grid, v_grid, nests, names, noise, b.structure)
     heldout_noise = _noise_ms(noise, nest_geometry(chain, q_region, nests, normals)[0].reshape(-1, 3))
     ms = criterion_value(b.G, A, chosen, "I", b.prior)
@@ -468,15 +481,17 @@ def _check_nests(nests, known: bool) -> np.ndarray:
     return arr
 
 
-def _candidates(chain, count, limits, nests, normals, tracker, rng, funnel):
+def _candidates(chain, count, limits, nests, normals, tracker, rng, funnel, obstacles):
     """Angle sets drawn in the limits until ``count`` show at least one nest to the tracker."""
     kept_q, kept_v, total = [], [], 0
     for _ in range(MAX_TABLE_DRAWS):
         q = _draw(chain, count, limits, rng)
         funnel.start += len(q)
-        visible = nest_visibility(chain, q, nests, normals, tracker)
+        visible = nest_visibility(chain, q, nests, normals, tracker, obstacles)
         seen = visible.any(axis=1)
-        funnel.record("the tracker line of sight and range (no nest seen)", int((~seen).sum()))
+        blocked = "" if obstacles is None or tracker is None or tracker.arm_radius_m is None else \
+            ", the beam clear of the parked arms"
+        funnel.record(f"the tracker line of sight and range{blocked} (no nest seen)", int((~seen).sum()))
         kept_q.append(q[seen])
         kept_v.append(visible[seen])
         total += int(seen.sum())
