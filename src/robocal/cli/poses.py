@@ -65,6 +65,8 @@ def add_parser(sub) -> None:
     g.add_argument("--nest-mm", type=numbers(3, "X,Y,Z in mm"), action="append", metavar="X,Y,Z",
                    help="a positioner without declared nests: an SMR's approximate plate position (repeat; "
                         "each one's position is then estimated, the turn axis' zero held at nominal)")
+    g.add_argument("--park-deg", type=numbers(None, "the arm's joints in deg"), metavar="J1,..,J6",
+                   help="the arms' joints while the table turns (default: where the last arm pose left it)")
     g.add_argument("--station-pulses-per-deg", type=numbers(None, "pulses per degree, one per axis"),
                    metavar="P1,P2", help="INFORM: the station axes' encoder pulses per degree (mm)")
     g = p.add_argument_group("measurement")
@@ -229,9 +231,10 @@ def _run_cell(args, programs: dict[str, str]) -> int:
     nests = {name: np.array(args.nest_mm) * 1e-3 for name, p in cell.positioners.items()
              if p.nests is None and args.nest_mm}
     smr = {name: np.array(args.smr_mm) * 1e-3 for name in cell.arms} if args.smr_mm else None
+    park = {name: np.deg2rad(args.park_deg) for name in cell.arms} if args.park_deg else None
     result = plan_cell(cell, {name: args.poses for name in cell.arms},
                        {name: n_table for name in cell.positioners}, constraints=_constraints(args), smr=smr,
-                       nests=nests, noise_mm=args.noise_mm, noise_model=args.noise_model,
+                       nests=nests, park=park, noise_mm=args.noise_mm, noise_model=args.noise_model,
                        criterion=args.criterion, seed=args.seed, starts=args.starts,
                        n_candidates=args.n_candidates, progress=not args.quiet)
     texts = _cell_outputs(args, result, programs)
