@@ -45,6 +45,10 @@ from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 CELL_RESULT_FORMAT = "robocal-cell-calibration/1"
 POSITIONER_CLASS = "positioner"  # the prior class of a positioner's chain (when the classes have it)
 BASE = tuple(f"base.{f}" for f in ("x", "y", "z", "rx", "ry", "rz"))
+# With nests, the plate's turn about the last axis and its offset along it (tool.rz, tool.z: flange
+# axes) are the last joint's zero and offset (theta_n, d_n) over again: those carry them (the turn
+# axis' zero is then the figure a user masters), the plate keeps its nominal turn and height.
+PLATE_HELD = ("tool.rz", "tool.z")
 RELATION_STEP = 1e-7  # m / rad: the central-difference step of the relation's derivative by the bases
 
 
@@ -150,7 +154,8 @@ class CellCalibration:
         return _pooled([r.after for r in self.results.values()])
 
     def summary(self) -> str:
-        """Per body: before -> after (and held out), the relations, how each plate was identified."""
+        """Per body: before -> after (and held out), the relations, how each plate was identified,
+        the warnings."""
         lines = [f"cell {self.cell.name}: {len(self.results)} bod{'y' if len(self.results) == 1 else 'ies'} "
                  "calibrated in one tracker frame (one calibration per body: the rows of each SMR see only "
                  "its body)"]
@@ -164,6 +169,7 @@ class CellCalibration:
             lines.append(f"  held out, all bodies: RMS {v['rms']:.4f} mm ({v['n']} obs)")
         lines += [f"  {rel.sentence()}" for rel in self.relations]
         lines += [f"  {plate.sentence}" for plate in self.plates]
+        lines += [f"WARNING: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
@@ -259,7 +265,8 @@ def _body(cell, name: str, data: Measurements, validation: Measurements | None, 
         rows = _nest_rows(data, len(chain.smr), name)
         held = None if validation is None else _nest_rows(validation, len(chain.smr), name)
         free = params if not isinstance(params, str) else [
-            n for n in chain.default_free(orientation=True) if not n.startswith("smr")]
+            n for n in chain.default_free(orientation=True)
+            if not n.startswith("smr") and n not in PLATE_HELD]
         return _Body(_registered_on_nests(chain, rows), rows, held, free, False)
     numbers = np.unique(data.smr)
     chain = replace(chain, smr=np.zeros((0, 3)), nominal=None)
@@ -283,27 +290,28 @@ def _in_tracker(cell, name: str, body: _Body, robot):
 
 def _plate(cell, name: str, body: _Body, result) -> PlateSolution:
     """How the plate of positioner ``name`` was identified, in words (module docstring)."""
-    chain = cell.positioners[name].chain
-    n = chain.n_joints
+    positioner = cell.positioners[name]
+    chain, said = positioner.chain, positioner.identifiability
+    zero = chain.joint_params[-1]
     ident = result.identifiability
-    held = [p for p in (f"theta{n}", f"d{n}") if p in ident.dropped or p in ident.undetermined]
+    held = [p for p in (zero, f"d{chain.n_joints}") if p in ident.dropped or p in ident.undetermined]
     if body.smr_numbers is None:
-        fixed = f"; {', '.join(held)} held (confounded with the plate's rotation)" if held else ""
-        return PlateSolution(name, "nests", f"plate of {name}: {len(body.robot.smr)} nests at known places "
-                             "fix the plate frame and the turn axis' zero together (the plate at every table "
-                             f"angle is identified){fixed}")
+        if zero in held:
+            return PlateSolution(name, "nests", f"{said}, but these data do not determine {zero}: it is held "
+                                 f"at nominal ({len(body.robot.smr)} nests; measure more table angles)")
+        sigma = dict(zip(result.unknowns, result.sigma, strict=True))[zero]
+        shown = chain.joints[-1].shown(np.array([result.robot.get(zero) - chain.get(zero), sigma]))
+        return PlateSolution(name, "nests", f"{said}: {zero} {shown[0]:+.4f} +- {shown[1]:.4f} "
+                             f"{chain.joints[-1].unit} from nominal ({len(body.robot.smr)} nests)")
     tool = result.robot.tool
     offsets = np.vstack([tool[:3, 3], result.robot.smr])  # SMR offsets on the last axis' frame
     on_plate = (offsets - chain.tool[:3, 3]) @ chain.tool[:3, :3]
     smr_mm = {int(s): (on_plate[k] * 1e3).round(4).tolist() for k, s in enumerate(body.smr_numbers)}
-    confounded = f"{' and '.join(held)} (the last axis' zero, its offset along the axis) are confounded " \
-        "with them and held at nominal, and " if held else ""
     return PlateSolution(
         name, "estimated SMRs",
-        f"plate of {name}: no nests declared: the places of its {len(body.smr_numbers)} SMR(s) on the plate "
-        f"were estimated; {confounded}the plate frame is the nominal one on the calibrated last axis: a work "
-        "object on the plate is only as good as that axis' mastering (declare nests: in the cell file to "
-        "identify the plate frame)", smr_mm)
+        f"{said} ({', '.join(held) or 'nothing'} held by these data); the plate frame is the nominal one on "
+        "the calibrated last axis: a work object on the plate is only as good as that axis' mastering; the "
+        f"places of its {len(body.smr_numbers)} SMR(s) on the plate are in the result", smr_mm)
 
 
 def _base_jacobian(anchor, body, which: int) -> np.ndarray:
