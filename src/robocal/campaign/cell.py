@@ -77,10 +77,8 @@ class CellCampaignResult:
     ...                  starts=1)
     >>> plan.poses_csv().splitlines()[0]
     'body,q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,e1_deg,e2_deg,visible_smr0,visible_smr1,visible_smr2,visible_smr3'
-    >>> len(plan.rows()), "theta2" in plan.tables["STN1"].identifiability.dropped  # the turn zero:
+    >>> len(plan.rows()), "theta2" in plan.tables["STN1"].identifiability.kept  # the turn axis' zero
     (27, True)
-    >>> "tool.rz" in plan.tables["STN1"].identifiability.kept  # ... the plate frame's, fixed by the nests
-    True
     >>> plan.write("poses.csv", programs=plan.programs({"rapid": "Campaign.mod"}))
     ['poses.csv', 'Campaign.mod']
     """

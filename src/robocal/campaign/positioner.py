@@ -13,8 +13,11 @@ follows from the chain's 6-row pose Jacobian of the plate frame (`Robot.jacobian
 (``[v]x`` the cross-product matrix), so:
 
 - **known nests** (declared in the cell file at known plate positions): the unknowns are the
-  axes (the chain's MDH rows), the mount (``base.*``) and the plate frame (``tool.*``, all six:
-  three or more nests not on a line fix its rotation, the turn axis' zero with it);
+  axes (the chain's MDH rows), the mount (``base.*``) and the plate frame (three or more nests not
+  on a line fix it, the turn axis' zero with it); as the cell's calibration does it
+  (`robocal.calibration.cell.PLATE_HELD`), the plate's turn about the last axis and its offset
+  along it are carried by that axis' zero and offset (``theta_n``, ``d_n``), ``tool.rz`` and
+  ``tool.z`` held;
 - **unknown nests**: each nest's plate position is estimated (``smr{k}.x/y/z``, dp_k/dn_k =
   R_F) and the plate frame is not: the last axis' zero is then confounded with the nests'
   rotation about it, and the rank test of the identifiability analysis says so.
@@ -40,6 +43,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from robocal.calibration.cell import PLATE_HELD, _with_positioner_priors
 from robocal.campaign.constraints import Funnel, Tracker, _segment_segment_distance, limits_with_margin
 from robocal.campaign.exchange import CRITERIA, averaged_search, criterion_value
 from robocal.campaign.order import measuring_order
@@ -88,7 +92,11 @@ class TablePlan:
         The same with a check measurement's own noise: the predicted RMS of held-out nest
         measurements, mm.
     grid_rms_mm, grid_heldout_mm : float
-        The same figures for a naive grid of as many angle pairs (`table_grid`).
+        The same figures for a naive grid of as many angle pairs (`table_grid`; inf: it does not
+        determine the positioner, even with the priors).
+    grid_not_determined : list of str
+        The parameters the plan estimates that the grid leaves to their priors (or cannot see): its
+        figures then rest on the priors' spread, not on the data.
     sigma : dict
         Each identified parameter's predicted 1-sigma (SI: m, rad) after the campaign.
     identifiability : Identifiability
@@ -123,6 +131,7 @@ class TablePlan:
     predicted_heldout_mm: float
     grid_rms_mm: float
     grid_heldout_mm: float
+    grid_not_determined: list[str]
     sigma: dict
     identifiability: Identifiability
     parameters: list[str]
@@ -148,15 +157,21 @@ class TablePlan:
                  f"{self.funnel.left} candidates ({self.criterion}-optimal)",
                  f"predicted accuracy at a nest over the table's range: {self.predicted_rms_mm:.4f} mm RMS "
                  f"(held-out nest measurements {self.predicted_heldout_mm:.4f} mm); a grid of "
-                 f"{self.n} angle pairs: " + (f"{self.grid_rms_mm:.4f} mm ({self.grid_heldout_mm:.4f} mm)"
-                                              if np.isfinite(self.grid_rms_mm) else
-                                              "does not determine the positioner"),
+                 f"{self.n} angle pairs: " + self._grid_text(),
                  f"{vocabulary.counts(ident)}; condition number {ident.condition_number:.3g} "
                  f"({ident.condition_class})",
                  "predicted 1-sigma after calibration: " + axis_sigma_text(self.sigma),
                  f"candidates: {self.funnel.text()}"]
         lines += vocabulary.lines(ident, indent="  ")
         return "\n".join(lines + [f"WARNING: {w}" for w in self.warnings])
+
+    def _grid_text(self) -> str:
+        if not np.isfinite(self.grid_rms_mm):
+            return "does not determine the positioner"
+        text = f"{self.grid_rms_mm:.4f} mm ({self.grid_heldout_mm:.4f} mm)"
+        if self.grid_not_determined:
+            text += f", leaving {', '.join(self.grid_not_determined)} to their priors"
+        return text
 
     def to_dict(self) -> dict:
         """Plain data (mm, deg) for JSON."""
@@ -169,6 +184,7 @@ class TablePlan:
             **{key: (value if np.isfinite(value) else None)  # None: the grid does not determine it
                for key, value in (("grid_rms_mm", self.grid_rms_mm),
                                   ("grid_heldout_mm", self.grid_heldout_mm))},
+            "grid_not_determined": self.grid_not_determined,
             "joints_deg": [[float(fixed_point(v, DEGREE_DECIMALS)) for v in row]
                            for row in self.chain.joints_shown(self.joints)],
             "visible": self.visible.astype(int).tolist(),
@@ -229,11 +245,13 @@ def nest_visibility(chain: Robot, q: np.ndarray, nests: np.ndarray, normals: np.
 
 
 def table_unknowns(chain: Robot, n_nests: int, known: bool) -> list[str]:
-    """The positioner's unknowns: the axes (the chain's link rows, beta on parallel axes), the
-    mount, and the plate frame (known nests) or each nest's plate position (unknown nests)."""
+    """The positioner's unknowns as its calibration frees them: the axes (the chain's link rows,
+    beta on parallel axes), the mount, and the plate frame but its turn and offset along the last
+    axis (known nests: `PLATE_HELD`) or each nest's plate position (unknown nests)."""
     names = [nm for nm in chain.default_free(orientation=True) if not nm.startswith(("tool.", "smr"))]
     if known:
-        return names + [f"tool.{c}" for c in ("x", "y", "z", "rx", "ry", "rz")]
+        plate = [f"tool.{c}" for c in ("x", "y", "z", "rx", "ry", "rz")]
+        return names + [nm for nm in plate if nm not in PLATE_HELD]
     return names + [f"smr{k + 1}.{c}" for k in range(n_nests) for c in "xyz"]
 
 
@@ -279,7 +297,7 @@ def _blocks(chain: Robot, q: np.ndarray, visible: np.ndarray, nests: np.ndarray,
     pos, _ = nest_geometry(chain, q, nests, np.zeros_like(nests))
     W = noise.whitener(pos.reshape(-1, 3)).reshape(len(q), len(nests), 3, 3)
     Jw = np.einsum("nkij,nkjp->nkip", W, J) * visible[:, :, None, None]
-    sigma = prior_sigma(chain, names)
+    sigma = prior_sigma(_with_positioner_priors(chain), names)  # the priors its calibration carries
     if structure is None:  # what is identifiable is structural: all candidates together
         rows = Jw[visible].reshape(-1, len(names))
         structure = analyze(rows, names, len(q))
@@ -419,7 +437,7 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
     # the naive grid of as many angle sets, with what the tracker sees there
     q_grid = table_grid(chain, n, margin_deg)
     v_grid = nest_visibility(chain, q_grid, nests, normals, tracker, obstacles)
-    g, _, _ = _blocks(chain, q_grid, v_grid, nests, names, noise, b.structure)
+    g, Jg, Jgw = _blocks(chain, q_grid, v_grid, nests, names, noise, b.structure)
     heldout_noise = _noise_ms(noise, nest_geometry(chain, q_region, nests, normals)[0].reshape(-1, 3))
     ms = criterion_value(b.G, A, chosen, "I", b.prior)
     ms_grid = criterion_value(g.G / b.scale * g.scale, A, np.arange(len(q_grid)), "I", b.prior)
@@ -427,20 +445,25 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
     rows = visible[chosen].reshape(-1)
     ident = judge(J[chosen].reshape(-1, len(names))[np.repeat(rows, 3)],
                   Jw[chosen].reshape(-1, len(names))[np.repeat(rows, 3)], names, b.sigma, n)
+    grid_rows = np.repeat(v_grid.reshape(-1), 3)
+    grid_ident = judge(Jg.reshape(-1, len(names))[grid_rows], Jgw.reshape(-1, len(names))[grid_rows], names,
+                       b.sigma, len(q_grid)) if v_grid.any() else None
+    grid_missing = [nm for nm in b.structure.kept if grid_ident is None or nm not in grid_ident.kept
+                    or nm in grid_ident.undetermined]
     warnings = []
     if not nests_known:
         warnings.append("the nests' plate positions are estimated: the last axis' zero is confounded with "
                         "their rotation about it and is held at nominal; declare the nests (their known "
                         "plate positions) to identify it with the plate frame")
-    if not np.isfinite(ms_grid):
+    if not np.isfinite(ms_grid) or grid_missing:
         warnings.append(f"a grid of {n} angle sets does not determine the positioner (the tracker sees too "
-                        "few nests there)")
+                        "few nests there): the plan's angles matter here")
     return TablePlan(
         chain=chain, name=name or chain.name, joints=q[chosen], visible=visible[chosen], nests=nests,
         nests_known=nests_known, predicted_rms_mm=float(np.sqrt(ms) * 1e3),
         predicted_heldout_mm=float(np.sqrt(ms + heldout_noise) * 1e3),
         grid_rms_mm=float(np.sqrt(ms_grid) * 1e3),
-        grid_heldout_mm=float(np.sqrt(ms_grid + heldout_noise) * 1e3),
+        grid_heldout_mm=float(np.sqrt(ms_grid + heldout_noise) * 1e3), grid_not_determined=grid_missing,
         sigma=sigma, identifiability=ident, parameters=list(b.names), criterion=criterion,
         criterion_value=found.value, funnel=funnel, noise=noise,
         settings={"seed": int(seed), "starts": int(starts), "criterion": criterion, "margin_deg": margin_deg,
