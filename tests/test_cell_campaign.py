@@ -206,3 +206,26 @@ def test_a_parked_arm_in_the_beam_hides_nests_from_the_table_plan(cell_file):
     assert nest_visibility(table.chain, q, nests, normals, tracker, obstacles).sum() < \
         nest_visibility(table.chain, q, nests, normals, tracker).sum()
     np.testing.assert_array_equal(plan.park["arm"], park)
+
+
+def test_each_language_names_the_table_axes_its_own_way(tmp_path):
+    """One cell file (program_axes eax_b, eax_c; unit GP2), three programs: RAPID's extax b and c,
+    KRL's E2 and E3 (`Positioner.axes_in`), FANUC's motion group GP2 with its own J1 and J2."""
+    path = tmp_path / "cell.yaml"
+    path.write_text((CELL % NESTS).replace("unit: STN1", "unit: GP2"))
+    cell = rc.load_cell(path)
+    plan = plan_cell(cell, {"arm": 12}, {"GP2": 10}, constraints=Constraints(tracker=Tracker(
+        position=[1.2, 2.8, 2.0], acceptance_deg=45)), smr={"arm": [[0.02, -0.03, 0.08]]},
+        n_candidates=400, table_candidates=400, starts=1)
+    files = {"rapid": tmp_path / "C.mod", "krl": tmp_path / "c.src", "fanuc": tmp_path / "c.ls"}
+    texts = plan.programs(files)
+    e = np.rad2deg(plan.tables["GP2"].joints[-1])
+    last_krl = re.findall(r"DECL E6AXIS XP22=\{([^}]*)\}", texts[str(tmp_path / "c.dat")])[0]
+    krl = dict(item.split() for item in last_krl.split(","))
+    np.testing.assert_allclose([float(krl["E2"]), float(krl["E3"])], e, atol=1e-9)
+    assert "E1" not in krl
+    rapid = re.findall(r"jt22 := \[\[[^\]]*\],\[([^\]]*)\]\]", texts[str(files["rapid"])])[0].split(",")
+    np.testing.assert_allclose([float(rapid[1]), float(rapid[2])], e, atol=1e-9)
+    fanuc = texts[str(files["fanuc"])].split("P[22]{")[1]
+    group = re.findall(r"GP2:\s*UF : 0, UT : 0,\s*J1= (\S+) deg,\s*J2= (\S+) deg", fanuc)[0]
+    np.testing.assert_allclose([float(v) for v in group], e, atol=1e-4)

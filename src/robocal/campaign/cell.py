@@ -25,14 +25,14 @@ from __future__ import annotations
 import csv
 import io
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from robocal.campaign.constraints import Constraints
 from robocal.campaign.planner import CampaignResult, plan_poses
 from robocal.campaign.positioner import TablePlan, plan_table
-from robocal.campaign.programs import DEGREE_DECIMALS, campaign_programs, fixed_point
+from robocal.campaign.programs import DEGREE_DECIMALS, campaign_programs, fixed_point, program_options
 from robocal.core.errors import DataError
 from robocal.core.io import write_all
 from robocal.core.version import __version__
@@ -40,6 +40,9 @@ from robocal.identify import vocabulary
 from robocal.programs.dialects.writing import ExternalAxes
 
 FORMAT = "robocal-cell-campaign/1"
+# languages whose programs name a positioner's axes among the robot's external axes (RAPID eax_a..,
+# KRL E1..: `Positioner.axes_in`); the others move it as its own group or station, axes 1..m
+ROBOT_AXIS_NAMES = ("rapid", "krl")
 
 
 @dataclass
@@ -182,15 +185,26 @@ class CellCampaignResult:
     def programs(self, programs: dict, *, arm: str | None = None, positioner: str | None = None,
                  pulses_per_unit=None, **options) -> dict[str, str]:
         """The campaign programs (`robocal.campaign.programs.campaign_programs`) driving ``arm``
-        and ``positioner`` through the plan (`program_joints`); ``pulses_per_unit``: the
-        positioner's encoder pulses per degree (mm) for INFORM; ``options``: speed_percent,
-        settle_s, procedure, comment."""
+        and ``positioner`` through the plan (`program_joints`), the positioner's axes named as each
+        language names them (`Positioner.axes_in`: RAPID ``eax_b``, KRL ``E2``; FANUC's group and
+        INFORM's station: their own axes 1..m);
+        ``pulses_per_unit``: the positioner's encoder pulses per degree (mm) for INFORM;
+        ``options``: speed_percent, settle_s, procedure, comment."""
         arm = arm or next(iter(self.cell.arms), None)
         q, external = self.program_joints(arm, positioner)
-        if external is not None and pulses_per_unit is not None:
-            external = ExternalAxes(external.values, external.unit, external.axes, external.prismatic,
-                                    tuple(float(v) for v in pulses_per_unit))
-        return campaign_programs(q, self.cell.arms[arm], programs, external=external, **options)
+        if external is None:
+            return campaign_programs(q, self.cell.arms[arm], programs, **options)
+        table = self.cell.positioners[positioner or next(iter(self.cell.positioners))]
+        ratio = None if pulses_per_unit is None else tuple(float(v) for v in pulses_per_unit)
+        texts: dict[str, str] = {}
+        for d in program_options():  # each language with the axis names it uses (Positioner.axes_in)
+            if programs.get(d.key) is not None:
+                axes = table.axes_in(d.key) if d.key in ROBOT_AXIS_NAMES else \
+                    tuple(f"E{i + 1}" for i in range(table.n_axes))  # a motion group's / station's own
+                texts.update(campaign_programs(q, self.cell.arms[arm], {d.key: programs[d.key]},
+                                               external=replace(external, axes=axes, pulses_per_unit=ratio),
+                                               **options))
+        return texts
 
     def summary(self) -> str:
         """Per body: what is measured, the predicted accuracy and how well its parameters are
