@@ -229,3 +229,17 @@ def test_each_language_names_the_table_axes_its_own_way(tmp_path):
     fanuc = texts[str(files["fanuc"])].split("P[22]{")[1]
     group = re.findall(r"GP2:\s*UF : 0, UT : 0,\s*J1= (\S+) deg,\s*J2= (\S+) deg", fanuc)[0]
     np.testing.assert_allclose([float(v) for v in group], e, atol=1e-4)
+
+
+def test_the_cell_plan_and_the_table_plan_keep_the_result_protocol(cell_file, tmp_path):
+    """summary(), warnings (a list), to_dict() (plain JSON) and write() as every result has them."""
+    from pathlib import Path
+
+    plan = plan_cell(rc.load_cell(cell_file), {}, {"STN1": 10}, constraints=Constraints(
+        tracker=Tracker(position=[1.2, 2.8, 2.0], acceptance_deg=45)), table_candidates=300, starts=1)
+    for result, write in ((plan, lambda r: r.write(tmp_path / "p.csv", tmp_path / "p.json")),
+                          (plan.tables["STN1"], lambda r: r.write(tmp_path / "t.json"))):
+        assert isinstance(result.summary(), str) and result.summary()
+        assert isinstance(result.warnings, list)
+        json.dumps(result.to_dict(), allow_nan=False)
+        assert all(Path(p).is_file() for p in write(result))
