@@ -180,9 +180,16 @@ def test_a_grid_the_tracker_barely_sees_is_said_to_rest_on_the_priors():
     json.dumps(blind.to_dict(), allow_nan=False)
 
 
+def test_known_nests_on_one_line_leave_the_turn_about_it_to_the_analysis():
+    line = [[0.1, 0, 0], [0.2, 0, 0], [0.3, 0, 0]]  # m, along the plate's x
+    plan = plan_table(tilt_turn(), 16, nests=line, n_candidates=400, starts=1,
+                      tracker=Tracker(position=[1.6, 3.0, 2.2], acceptance_deg=45))
+    assert "tool.rx" in plan.identifiability.dropped and "tool.ry" in plan.identifiability.kept
+    assert "tool.rx" in plan.summary()
+
+
 @pytest.mark.parametrize("kwargs, message", [
-    ({"nests": [[0.1, 0, 0], [0.2, 0, 0], [0.3, 0, 0]]}, "on one line"),
-    ({"nests": [[0.1, 0, 0]], "nests_known": True}, "on one line"),
+    ({"nests": [[0.1, 0]]}, "finite"),
     ({"nests": NESTS, "tracker": Tracker(position=[1.4, 0.0, -2.0])}, "sees no nest"),
     ({"nests": NESTS, "criterion": "O4"}, "criterion is I or D"),
 ])

@@ -64,7 +64,6 @@ DEFAULT_TABLE_MARGIN_DEG = 1.0      # generated angles stay this far inside the 
 NEST_NORMAL = (0.0, 0.0, 1.0)       # a nest's SMR faces along the plate z axis
 ROUND_DECIMALS_DEG = 4              # generated angles are rounded to 1e-4 deg (1e-4 mm)
 MAX_TABLE_DRAWS = 20                # candidate batches drawn before the tracker is declared blind
-COLLINEAR_M = 1e-3                  # nests closer than this to one line cannot fix the plate's rotation
 FORMAT = "robocal-table-campaign/1"
 
 
@@ -397,14 +396,14 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
     Raises
     ------
     DataError
-        Bad counts or nests (fewer than 3 not on a line for known nests), a criterion other than
-        I or D, or no angle at which the tracker sees a nest.
+        Bad counts or nests (not a finite (K, 3) array), a criterion other than I or D, or no angle
+        at which the tracker sees a nest.
     """
     if not isinstance(n, int | np.integer) or n < 1:
         raise DataError(f"the number of table angle sets must be a positive integer, got {n!r}")
     if criterion not in CRITERIA[:2]:
         raise DataError(f"the table's criterion is I or D, got {criterion!r}")
-    nests = _check_nests(nests, nests_known)
+    nests = _check_nests(nests)
     normals = np.tile(NEST_NORMAL, (len(nests), 1)) if normals is None else np.asarray(normals, float)
     if normals.shape != nests.shape or (np.linalg.norm(normals, axis=1) < 1e-9).any():
         raise DataError(f"give one non-zero facing direction per nest ({len(nests)} nests)")
@@ -489,18 +488,12 @@ def _noise_ms(noise: Noise, points: np.ndarray) -> float:
     return float(np.mean(np.trace(np.linalg.inv(np.swapaxes(W, 1, 2) @ W), axis1=1, axis2=2)))
 
 
-def _check_nests(nests, known: bool) -> np.ndarray:
-    """Nests as a finite ``(K, 3)`` array (m); known nests must be 3 or more, not on one line (their
-    positions fix the plate frame's rotation)."""
+def _check_nests(nests) -> np.ndarray:
+    """Nests as a finite ``(K, 3)`` array (m). Known nests on one line leave the plate's turn about
+    it undetermined: the identifiability analysis names it."""
     arr = np.asarray(nests, dtype=float)
     if arr.ndim != 2 or arr.shape[1] != 3 or not len(arr) or not np.isfinite(arr).all():
         raise DataError("nests must be finite (K, 3) plate positions in m")
-    if known:
-        centred = arr - arr.mean(axis=0)
-        s = np.linalg.svd(centred, compute_uv=False) if len(arr) >= 2 else np.zeros(1)
-        if len(arr) < 3 or (s[1] if len(s) > 1 else 0.0) < COLLINEAR_M:
-            raise DataError(f"{len(arr)} nest(s) on one line cannot fix the plate frame's rotation: declare "
-                            "at least 3 nests not on a line, or plan with nests_known=False")
     return arr
 
 
