@@ -219,7 +219,7 @@ def _run_cell(args, programs: dict[str, str]) -> int:
     import numpy as np
 
     from robocal.campaign import plan_cell
-    from robocal.campaign.programs import write_campaign
+    from robocal.campaign.programs import refuse_tracks, write_campaign
     from robocal.core.errors import DataError
     from robocal.kinematics.workcell import load_cell
 
@@ -227,6 +227,8 @@ def _run_cell(args, programs: dict[str, str]) -> int:
         raise DataError("--model plans a cell from generated candidates: --html, --from, --region, "
                         "--region-box, --curve and --check are for one arm (--robot)")
     cell = load_cell(args.model)
+    if cell.arms:
+        refuse_tracks(programs, next(iter(cell.arms.values())), args.output)
     n_table = args.poses if args.table_poses is None else args.table_poses
     nests = {name: np.array(args.nest_mm) * 1e-3 for name, p in cell.positioners.items()
              if p.nests is None and args.nest_mm}
