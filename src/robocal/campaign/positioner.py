@@ -26,7 +26,7 @@ A nest's SMR faces along the plate's z axis (``normals``): it is seen when the t
 the reflector's acceptance half-angle of that direction (a nest facing away from the tracker, or
 a tracker below the plate, sees nothing) and inside its range (`robocal.campaign.Tracker`).
 
-The design is chosen as the arm's (`robocal.campaign.exchange`): candidate angle pairs drawn in
+The design is chosen as the arm's (`robocal.campaign.exchange`): candidate angle sets drawn in
 the limits (each a block of whitened rows, zero rows for nests the tracker does not see), the
 posterior information ``M = P^-1 + sum G_j^T G_j`` (priors of `robocal.identify.priors`; frames
 and nests have none), and the I criterion ``trace(M^-1 A)`` with ``A`` the mean ``J^T J`` of the
@@ -58,8 +58,8 @@ from robocal.ik.path import default_weights, travel
 from robocal.kinematics.model import Robot
 from robocal.trust.posterior import Noise, judge
 
-DEFAULT_TABLE_CANDIDATES = 2000     # angle pairs drawn in the limits
-DEFAULT_TABLE_REGION = 400          # angle pairs of the region the predicted accuracy is over
+DEFAULT_TABLE_CANDIDATES = 2000     # angle sets drawn in the limits
+DEFAULT_TABLE_REGION = 400          # angle sets of the region the predicted accuracy is over
 DEFAULT_TABLE_MARGIN_DEG = 1.0      # generated angles stay this far inside the limits
 NEST_NORMAL = (0.0, 0.0, 1.0)       # a nest's SMR faces along the plate z axis
 ROUND_DECIMALS_DEG = 4              # generated angles are rounded to 1e-4 deg (1e-4 mm)
@@ -80,7 +80,7 @@ class TablePlan:
     joints : numpy.ndarray, shape (N, m)
         The chosen table angles, rad (m on a prismatic axis), in measuring order.
     visible : numpy.ndarray of bool, shape (N, K)
-        Which nests the tracker sees at each angle pair.
+        Which nests the tracker sees at each angle set.
     nests : numpy.ndarray, shape (K, 3)
         The nests' plate positions, m; ``nests_known``: declared (the plate frame is identified)
         or only approximate (each nest's position is estimated).
@@ -91,7 +91,7 @@ class TablePlan:
         The same with a check measurement's own noise: the predicted RMS of held-out nest
         measurements, mm.
     grid_rms_mm, grid_heldout_mm : float
-        The same figures for a naive grid of as many angle pairs (`table_grid`; inf: it does not
+        The same figures for a naive grid of as many angle sets (`table_grid`; inf: it does not
         determine the positioner, even with the priors).
     grid_not_determined : list of str
         The parameters the plan estimates that the grid leaves to their priors (or cannot see): its
@@ -143,7 +143,7 @@ class TablePlan:
 
     @property
     def n(self) -> int:
-        """The number of angle pairs."""
+        """The number of angle sets."""
         return len(self.joints)
 
     def summary(self) -> str:
@@ -151,12 +151,12 @@ class TablePlan:
         ident = self.identifiability
         nests = "known nests (plate frame identified)" if self.nests_known else \
             "nests at unknown plate positions (each estimated)"
-        lines = [f"{self.n} table angle pairs of {self.name} ({self.chain.n_joints} axes), "
+        lines = [f"{self.n} table angle sets of {self.name} ({self.chain.n_joints} axes), "
                  f"{int(self.visible.sum())} nest measurements, {len(self.nests)} {nests}, chosen from "
                  f"{self.funnel.left} candidates ({self.criterion}-optimal)",
                  f"predicted accuracy at a nest over the table's range: {self.predicted_rms_mm:.4f} mm RMS "
                  f"(held-out nest measurements {self.predicted_heldout_mm:.4f} mm); a grid of "
-                 f"{self.n} angle pairs: " + self._grid_text(),
+                 f"{self.n} angle sets: " + self._grid_text(),
                  f"{vocabulary.counts(ident)}; condition number {ident.condition_number:.3g} "
                  f"({ident.condition_class})",
                  "predicted 1-sigma after calibration: " + axis_sigma_text(self.sigma),
