@@ -115,16 +115,14 @@ class CellCampaignResult:
         groups: list[tuple[str, list[str]]] = []
         arm_cols: list[str] = []
         for name in self.cell.arms:
-            cols = [j.column for j in self.cell.arms[name].joints]
+            cols = [j.column for j in self.cell.joints(name)]
             if not arm_cols:
                 arm_cols = cols
                 groups.append(("arms", cols))
             elif cols != arm_cols:
                 raise DataError(f"arm {name!r}'s joint columns {cols} differ from {arm_cols}: one planned "
                                 "file holds one arm layout")
-        for name, p in self.cell.positioners.items():
-            groups.append((name, [j.column.replace(f"q{i + 1}", c) for i, (j, c) in
-                                  enumerate(zip(p.chain.joints, p.columns, strict=True))]))
+        groups += [(name, [j.column for j in self.cell.joints(name)]) for name in self.cell.positioners]
         return groups
 
     def poses_csv(self) -> str:
