@@ -5,10 +5,12 @@ against the truth, the relation's uncertainty, the refusals and the result proto
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
-from cells import two_axis_cell
+from cells import NESTS, two_axis_cell
+from scipy.spatial.transform import Rotation
 
 import robocal as rc
 from robocal.kinematics.transforms import invert_transform, make_transform
@@ -209,3 +211,78 @@ def test_targets_on_the_plate_land_on_the_true_cell(campaign):
     again = cell.arms["arm"].with_frames(tool=tool).fk(comp.joints)  # what the corrected targets ask for
     np.testing.assert_allclose(cell.positioners["STN1"].plate(e) @ comp.corrected_targets, again, atol=1e-9)
     assert isinstance(comp.summary(), str) and json.dumps(comp.to_dict())
+
+
+def test_compensate_command_line(tmp_path):
+    from robocal.cli import main
+
+    cell = two_axis_cell(nests=True)
+    cell.save(tmp_path / "cell.yaml")
+    d = str(tmp_path)
+    assert main(["--quiet", "simulate", "--model", f"{d}/cell.yaml", "--poses", "60", "--table-poses", "30",
+                 "--seed", "2", "-o", f"{d}/cell.csv", "--truth", f"{d}/true.yaml"]) == 0
+    assert main(["--quiet", "calibrate", f"{d}/cell.csv", "--model", f"{d}/cell.yaml", "--nongeometric",
+                 "none", "-o", f"{d}/calibrated.yaml"]) == 0
+    (tmp_path / "targets.csv").write_text("x_mm,y_mm,z_mm,rx_deg,ry_deg,rz_deg,e1_deg,e2_deg\n"
+                                          "10,20,200,180,0,30,-12.5,40\n-50,0,250,180,0,-20,20,-9.2\n")
+    assert main(["--quiet", "compensate", f"{d}/calibrated.yaml", f"{d}/targets.csv", "--nominal",
+                 f"{d}/cell.yaml", "--tool", "0,0,150,0,0,0", "-o", f"{d}/commands.csv"]) == 0
+    lines = (tmp_path / "commands.csv").read_text().splitlines()
+    assert lines[0].startswith("# robocal") and lines[1].startswith("q1_deg,") and "e1_deg,e2_deg" in lines[1]
+    assert [row.split(",")[6:8] for row in lines[2:]] == [["-12.5", "40"], ["20", "-9.2"]]  # as given
+    assert all(row.endswith(",1") for row in lines[2:])
+
+
+def test_wrong_nests_are_named():
+    """Nests declared 1 mm off where the SMRs really sat: the fit says so and names the nest
+    check; SMRs numbered against the nests: refused naming the body and what to check."""
+    cell = two_axis_cell(nests=True)
+    sim = rc.simulate_cell(cell, 40, 30, seed=1)
+    chain = replace(cell.positioners["STN1"].chain, smr=np.zeros((0, 3)), nominal=None)
+    wrong = rc.Cell(cell.arms, {"STN1": rc.Positioner(chain, unit="STN1",
+                                                       nests=NESTS + [[0.001, 0, 0], [0, 0, 0], [0, 0, 0]])})
+    cal = rc.calibrate(wrong, sim.data, nongeometric=None)
+    assert any("the nests' measured places on the plate differ" in w for w in cal.warnings)
+    assert not any("nests' measured" in w for w in rc.calibrate(cell, sim.data, nongeometric=None).warnings)
+    plate = sim.data["STN1"]
+    swapped = replace(plate, smr=np.array([{1: 2, 2: 1, 3: 3}[s] for s in plate.smr]))
+    with pytest.raises(rc.PlausibilityError, match=r"^STN1 \(its nests: is SMR k in nest k"):
+        rc.calibrate(cell, rc.CellMeasurements(dict(sim.data.bodies, STN1=swapped), sim.data.columns))
+
+
+@pytest.mark.slow
+def test_the_relations_sigma_is_its_spread():
+    """The relation's 1-sigma (from both bases' covariances) against its spread over 30 campaigns of
+    the same true cell (fresh poses and noise each): the same within sampling error."""
+    cell = two_axis_cell(nests=True)
+    first = rc.simulate_cell(cell, 60, 30, seed=0)
+    deltas, sigmas, reference = [], [], None
+    for seed in range(30):
+        sim = rc.simulate_cell(cell, 60, 30, truth=first.truth, tracker=first.tracker, seed=100 + seed)
+        (relation,) = rc.calibrate(cell, sim.data, nongeometric=None).relations
+        T = relation.transform
+        reference = T if reference is None else reference
+        turn = Rotation.from_matrix(T[:3, :3] @ reference[:3, :3].T).as_rotvec()  # about the anchor's axes
+        deltas.append(np.r_[T[:3, 3] * 1e3, np.rad2deg(turn)])
+        sigmas.append(relation.sigma)
+    ratio = np.std(deltas, axis=0, ddof=1) / np.mean(sigmas, axis=0)
+    assert np.all((ratio > 0.6) & (ratio < 1.6)), ratio
+
+
+def test_two_arms_and_a_table(tmp_path):
+    """Two arms facing each other over a table: each row's q columns are its own arm's joints (body
+    column), each arm calibrated on its rows, the second arm and the table related to the first."""
+    chain = two_axis_cell().positioners["STN1"].chain
+    left = rc.Robot.from_catalog("abb_irb2600")
+    right = left.with_frames(base=make_transform(np.diag([-1.0, -1.0, 1.0]), [2.2, 0.0, 0.0]))
+    cell = rc.Cell({"left": left, "right": right}, {"STN1": rc.Positioner(chain, unit="STN1")},
+                   name="two arms")
+    sim = rc.simulate_cell(cell, 50, 30, seed=2)
+    held = rc.simulate_cell(cell, 30, 20, truth=sim.truth, tracker=sim.tracker, seed=3)
+    sim.data.save(tmp_path / "cell.csv")
+    back = rc.CellMeasurements.load(tmp_path / "cell.csv", cell)
+    assert all(np.array_equal(back[b].joints, sim.data[b].joints) for b in ("left", "right", "STN1"))
+    cal = rc.calibrate(cell, back, validation=held.data, nongeometric=None)
+    assert [r.body for r in cal.relations] == ["right", "STN1"]
+    assert cal.validation["rms"] <= HELD_OUT_RATIO * held.noise_floor_mm
+    assert rc.evaluate(cal.calibrated, held.data).stats["rms"] <= HELD_OUT_RATIO * held.noise_floor_mm

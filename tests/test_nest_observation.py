@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pytest
 from cells import two_axis_cell
 from jacobian_check import assert_columns_match
 
@@ -63,3 +64,13 @@ def test_batch_residuals_match(rng):
     for p in range(4):
         np.testing.assert_allclose(batch[p], obs.residuals(robot.displaced(names, X[p])), atol=1e-12)
     assert set(obs.not_observable(robot)) == {f"smr{s}.{c}" for s in (1, 2, 3) for c in "xyz"}
+
+
+def test_a_derived_kind():
+    """Nest rows are made by the cell calibration of a plate's point rows: no file, simulation or
+    campaign kind of their own."""
+    from robocal.data.kinds import KINDS, OBSERVED
+
+    assert OBSERVED["nest"].derived and "nest" not in KINDS
+    with pytest.raises(rc.DataError, match="unknown simulation kind 'nest'"):
+        rc.simulate_tracker(rc.Robot.from_catalog("abb_irb2600"), 5, kind="nest")

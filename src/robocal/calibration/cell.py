@@ -32,7 +32,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.core.errors import DataError, IdentificationError
+from robocal.core.errors import DataError, IdentificationError, RobocalError
 from robocal.core.io import write_all
 from robocal.core.version import __version__
 from robocal.core.yaml_load import dump_yaml
@@ -49,6 +49,10 @@ BASE = tuple(f"base.{f}" for f in ("x", "y", "z", "rx", "ry", "rz"))
 # axes) are the last joint's zero and offset (theta_n, d_n) over again: those carry them (the turn
 # axis' zero is then the figure a user masters), the plate keeps its nominal turn and height.
 PLATE_HELD = ("tool.rz", "tool.z")
+# A nest whose mean residual (plate frame) exceeds this many standard errors and this size (mm) is
+# not where the cell file declares it (checked after the fit: the warning names it)
+NEST_MISMATCH_SIGMAS = 5.0
+NEST_MISMATCH_MM = 0.02
 RELATION_STEP = 1e-7  # m / rad: the central-difference step of the relation's derivative by the bases
 
 
@@ -314,6 +318,33 @@ def _plate(cell, name: str, body: _Body, result) -> PlateSolution:
         f"places of its {len(body.smr_numbers)} SMR(s) on the plate are in the result", smr_mm)
 
 
+def _nest_shape(name: str, body: _Body, result) -> list[str]:
+    """A warning when the nests' measured places on the plate differ from the declared ones: each
+    nest's mean residual in the plate frame beyond `NEST_MISMATCH_SIGMAS` standard errors and
+    `NEST_MISMATCH_MM` (a wrong ``nests:`` entry: the fit spreads it over the plate frame, the rest
+    stays at that nest)."""
+    fitted = result.problem.datasets[0]  # the rows fitted (a hold-out keeps the others apart)
+    r = result.problem.item_error_vectors(result.state)[0]  # (N, 3) measured - modelled, m
+    R = result.robot.fk(fitted.joints)[:, :3, :3]  # the plate's orientation at each row
+    local = np.einsum("nji,nj->ni", R, r)
+    nests = fitted.smr
+    counts = np.bincount(nests, minlength=len(body.robot.smr) + 1)[1:]
+    means = np.array([local[nests == k + 1].mean(axis=0) if counts[k] else np.zeros(3)
+                      for k in range(len(counts))])
+    noise = float(np.sqrt(np.mean(r**2)))
+    size = np.linalg.norm(means, axis=1)
+    bad = np.flatnonzero((size > NEST_MISMATCH_SIGMAS * noise / np.sqrt(np.maximum(counts, 1)))
+                         & (size > NEST_MISMATCH_MM * 1e-3) & (counts > 0))
+    if not bad.size:
+        return []
+    worst = int(bad[np.argmax(size[bad])])
+    beyond = ", ".join(str(k + 1) for k in bad)
+    return [f"{name}: the nests' measured places on the plate differ from the declared ones (nest "
+            f"{worst + 1} by {size[worst] * 1e3:.3f} mm on average; nests {beyond} beyond the noise): check "
+            "the cell file's nests: (and that SMR k sat in nest k); the plate frame fitted to them is off "
+            "accordingly"]
+
+
 def _base_jacobian(anchor, body, which: int) -> np.ndarray:
     """d(relation)/d(base.* of the anchor (``which`` 0) or of the body (1)) ``(6, 6)``: the
     relation's translation (m) and rotation vector (rad) by central differences."""
@@ -398,11 +429,18 @@ def calibrate_cell(cell, data, calibrate_body: Callable, *, params="auto", valid
     for name, rows in data.bodies.items():
         held = None if validation is None else validation.bodies.get(name)
         body = _body(cell, name, rows, held, params)
-        result = calibrate_body(body.robot, body.data, params=body.params, validation=body.validation,
-                                register_frames=body.register, **options)
+        try:
+            result = calibrate_body(body.robot, body.data, params=body.params, validation=body.validation,
+                                    register_frames=body.register, **options)
+        except RobocalError as exc:  # which body, and for nests what to check first
+            hint = " (its nests: is SMR k in nest k, and are the cell file's nests: where they are?)" \
+                if body.smr_numbers is None and name in cell.positioners else ""
+            raise type(exc)(f"{name}{hint}: {exc}") from None
         results[name] = result
         models[name] = _in_tracker(cell, name, body, result.robot)
         warnings += [f"{name}: {w}" for w in result.warnings]
+        if name in cell.positioners and body.smr_numbers is None:
+            warnings += _nest_shape(name, body, result)
         if name in cell.positioners:
             plates.append(_plate(cell, name, body, result))
     missing = [b for b in cell.bodies if b not in data.bodies]

@@ -93,7 +93,7 @@ def add_parser(sub) -> None:
     model.add_argument("--model", metavar="CELL.yaml",
                        help="a work cell file (arms, positioners): each body calibrated on its rows (the "
                             "data's body column) in one tracker frame; writes the calibrated cell (-o) and "
-                            "the result (--json)")
+                            "the result (--json); --hold-out N holds out the last N poses of each body")
     p.add_argument("--method", help="lsq, robust, genetic, swarm, neural (default: robust for data of an "
                                     "instrument with heavy-tailed errors, mocap or camera; else lsq)")
     p.add_argument("--instrument", choices=INSTRUMENT_NAMES,

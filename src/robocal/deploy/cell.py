@@ -12,14 +12,19 @@ the real cell to the intended point on the workpiece. The positioner's values st
 
 from __future__ import annotations
 
+import csv
+import io
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
-from robocal.core.io import write_all
+from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_all
 from robocal.kinematics.transforms import invert_transform, pose_error
+from robocal.trust.output_marker import mark_csv
 
 
 def _one(names, what: str, given: str | None, cell) -> str:
@@ -58,6 +63,7 @@ class CellCompensation:
     target_shift: np.ndarray
     arm_compensation: object
     warnings: list[str] = field(default_factory=list)
+    prismatic: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))  # its axes that slide
 
     def summary(self) -> str:
         mm = np.linalg.norm(self.target_shift[:, :3], axis=1) * 1e3
@@ -74,12 +80,26 @@ class CellCompensation:
                 "corrected_targets_m": self.corrected_targets.tolist(),
                 "converged": self.arm_compensation.converged.tolist(), "warnings": list(self.warnings)}
 
-    def write(self, json_path) -> list[str]:
-        """Write `to_dict` as JSON (atomically); returns the path."""
-        import json
+    def to_csv(self, joint_columns: list[str], positioner_columns: list[str]) -> str:
+        """The commands: the arm's joints (deg; mm for a prismatic joint), the positioner's values as
+        given, the corrected targets in the plate frame (mm, quaternion w, x, y, z), converged (1/0)."""
+        arm = self.arm_compensation.corrected_model
+        q = arm.joints_shown(self.joints)
+        e = np.where(self.prismatic, self.positioner_values * 1e3, np.rad2deg(self.positioner_values))
+        quat = Rotation.from_matrix(self.corrected_targets[:, :3, :3]).as_quat(scalar_first=True)
+        pose = np.column_stack([self.corrected_targets[:, :3, 3] * 1e3, quat])
+        columns = [*joint_columns, *positioner_columns, "x_mm", "y_mm", "z_mm", "qw", "qx", "qy", "qz",
+                   "converged"]
+        lines = [",".join(columns)] + [  # the positioner's values to 10 digits: as given, not deg->rad->deg
+            ",".join([*(repr(float(v)) for v in qk), *(f"{v:.10g}" for v in ek),
+                      *(repr(float(v)) for v in pk), str(int(ok))])
+            for qk, ek, pk, ok in zip(q, e, pose, self.arm_compensation.converged, strict=True)]
+        return mark_csv("\n".join(lines) + "\n", arm)
 
-        write_all({json_path: json.dumps(self.to_dict(), indent=1) + "\n"})
-        return [str(json_path)]
+    def write(self, output, joint_columns: list[str], positioner_columns: list[str]) -> list[str]:
+        """Write `to_csv` (atomically, marked with the calibrated arm's fingerprint); the path."""
+        write_all({output: self.to_csv(joint_columns, positioner_columns)})
+        return [str(output)]
 
 
 def compensate_cell(calibrated, nominal, targets, positioner_values, compensate_arm: Callable, *,
@@ -131,4 +151,35 @@ def compensate_cell(calibrated, nominal, targets, positioner_values, compensate_
                                            else nominal.arms[arm].tool @ np.asarray(tool, float))
     corrected = invert_transform(nominal.positioners[positioner].plate(e)) @ flange.fk(comp.joints)
     return CellCompensation(arm, positioner, comp.joints, e, corrected, pose_error(corrected, targets), comp,
-                            list(comp.warnings))
+                            list(comp.warnings), chain.prismatic.copy())
+
+
+def read_positioner_values(path, positioner) -> np.ndarray:
+    """The values ``(N, k)`` (rad; m for a prismatic axis) of ``positioner``'s axes in a targets
+    CSV: its columns (``e1_deg``, ``e2_rad``, ``e3_mm``...), one value per row (rows as the targets
+    reader counts them: leading ``#`` lines and blank lines skipped); DataError naming the column
+    or the line."""
+    path = Path(path)
+    lines = read_text(path, "targets CSV file").splitlines()
+    body = [(k + 1, ln) for k, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith("#")]
+    if not body:
+        raise DataError(f"{path} is empty")
+    header = [h.strip().lower() for h in next(csv.reader([body[0][1]]))]
+    index, scale = [], []
+    for spec in positioner.joints:
+        units = LENGTH_UNITS if spec.prismatic else ANGLE_UNITS
+        found = [(h, units[h.rsplit("_", 1)[1]]) for h in header
+                 if h.rsplit("_", 1)[0] == spec.name and "_" in h and h.rsplit("_", 1)[1] in units]
+        if len(found) != 1:
+            raise DataError(f"{path}: targets on the plate of {positioner.unit} need one column for its axis "
+                            f"{spec.name} ({spec.column}); header is {header}")
+        index.append(header.index(found[0][0]))
+        scale.append(found[0][1])
+    out = np.empty((len(body) - 1, len(index)))
+    for r, (ln, text) in enumerate(body[1:]):
+        cells = next(csv.reader(io.StringIO(text)))
+        try:
+            out[r] = [float(cells[i]) * s for i, s in zip(index, scale, strict=True)]
+        except (ValueError, IndexError):
+            raise DataError(f"{path}, line {ln}: the positioner's values must be numbers") from None
+    return out
