@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cells import two_axis_cell
 
 import robocal as rc
 from robocal.calibration.evaluation import EvaluationResult
@@ -62,7 +63,27 @@ def results(sim, tmp_path) -> dict:
         "model export": (export_model(nominal, urdf=p / "r.urdf"), lambda r: r.write()),
         "imported calibration": (ImportedCalibration(ur5e, "calibration.conf", ["a note"]),
                                  lambda r: r.write(p / "factory.yaml")),
+        **_cell_results(p),
     }
+
+
+def _cell_results(p: Path) -> dict:
+    """A work cell's results (issue 45): its simulation, calibration, evaluation and targets."""
+    cell = two_axis_cell(nests=True)
+    sim = rc.simulate_cell(cell, 30, 20, seed=1)
+    cal = rc.calibrate(cell, sim.data, nongeometric=None)
+    target = np.eye(4)
+    target[:3, :3], target[2, 3] = np.diag([1.0, -1.0, -1.0]), 0.2
+    comp = rc.compensate(cal.calibrated, cell, target, positioner_values=[0.1, 0.5])
+    return {"cell simulation": (sim, lambda r: r.write(p / "cell.csv", p / "true_cell.yaml")),
+            "cell calibration": (cal, lambda r: r.write(p / "cal_cell.yaml", p / "cal_cell.json")),
+            "cell evaluation": (rc.evaluate(cal.calibrated, sim.data),
+                                lambda r: r.write(p / "cell_eval.json")),
+            "cell compensation": (comp, lambda r: r.write(p / "cell_cmd.csv", ARM_COLUMNS, TABLE_COLUMNS))}
+
+
+ARM_COLUMNS = [f"q{i}_deg" for i in range(1, 7)]
+TABLE_COLUMNS = ["e1_deg", "e2_deg"]
 
 
 def test_every_result_has_the_protocol(sim, tmp_path):

@@ -34,6 +34,8 @@ _LAZY = {
     "Robot": "robocal.kinematics.model", "load_model": "robocal.kinematics.model",
     "Cell": "robocal.kinematics.workcell", "Positioner": "robocal.kinematics.workcell",
     "load_cell": "robocal.kinematics.workcell",
+    "CellMeasurements": "robocal.data.cell_measurements",  # a cell's rows, split per body
+    "simulate_cell": "robocal.data.cell_simulation", "CellCalibration": "robocal.calibration.cell",
     "FilterResult": "robocal.programs", "filter_program": "robocal.programs",
     "ToolCalibration": "robocal.deploy.tcp", "identify_tcp": "robocal.deploy.tcp",
 }
@@ -55,6 +57,8 @@ def __dir__() -> list[str]:
 __all__ = [
     "CalibrationResult",
     "Cell",
+    "CellCalibration",
+    "CellMeasurements",
     "FilterResult",
     "ToolCalibration",
     "CampaignResult",
@@ -84,5 +88,6 @@ __all__ = [
     "identify_tcp",
     "ik",
     "load_cell",
+    "simulate_cell",
     "load_model",
 ]

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robocal.calibration.cell_evaluation import evaluate_cell
 from robocal.core.errors import DataError, PlausibilityError
 from robocal.core.io import write_all
 from robocal.core.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
@@ -16,6 +17,7 @@ from robocal.data.registration import apply_registration, register_frame
 from robocal.identify.observations import observation_for
 from robocal.identify.plausibility import check_joint_limits, check_residual, check_spread
 from robocal.kinematics.joint_errors import extrapolated_conditions
+from robocal.kinematics.workcell import Cell
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import check_fit
 from robocal.trust.diagnosis import diagnosed, fit_rms_mm
@@ -159,11 +161,13 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
 
     Parameters
     ----------
-    robot : Robot
-        The model judged (calibrated, or nominal with ``fit_frame``).
-    data : Measurements
+    robot : Robot or Cell
+        The model judged (calibrated, or nominal with ``fit_frame``); a work cell
+        (`robocal.kinematics.workcell.Cell`) is judged on its bodies' SMR points with one tracker
+        frame fitted for all (`robocal.calibration.cell_evaluation`: returns a ``CellEvaluation``).
+    data : Measurements or CellMeasurements
         The measurements it is judged on (any kind; points in the model's world frame unless a
-        frame is fitted).
+        frame is fitted); of a cell, its rows split per body.
     fit_frame : bool, default False
         First register the base frame and SMR offsets on ``data`` (for a nominal model).
     frame_from : Measurements, optional
@@ -209,6 +213,8 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     >>> round(stats["rms"], 6) == round(sim.noise_floor_mm, 6), stats["error_vectors_mm"].shape
     (True, (30, 3))
     """
+    if isinstance(robot, Cell):  # every body in one tracker frame (robocal.calibration.cell_evaluation)
+        return evaluate_cell(robot, data)
     data = declared([data], instrument)[0]
     try:
         return EvaluationResult(_statistics(robot, data, fit_frame, frame_from, force), names, fit_frame)

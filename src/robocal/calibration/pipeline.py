@@ -17,6 +17,7 @@ from functools import partial
 
 import numpy as np
 
+from robocal.calibration.cell import calibrate_cell
 from robocal.calibration.model_selection import calibrate_cyclic, select_error_model
 from robocal.calibration.result import CalibrationResult, Judged
 from robocal.core.damped_least_squares import Status
@@ -58,6 +59,7 @@ from robocal.kinematics.conditions import range_of as conditions_range
 from robocal.kinematics.joint_errors import TERMS, candidate_names, parse_terms, term_of
 from robocal.kinematics.prior_spec import PriorSpec
 from robocal.kinematics.thermal import reference_of as thermal_reference
+from robocal.kinematics.workcell import Cell
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import check_fit, check_not_worse
 from robocal.trust.coverage import predict, prediction
@@ -271,10 +273,12 @@ def calibrate(robot, data, method: str | None = None, params="auto", validation=
 
     Parameters
     ----------
-    robot : Robot
-        The nominal model.
-    data : Measurements or list of Measurements
-        The calibration data; several sets (of any kinds) are identified together.
+    robot : Robot or Cell
+        The nominal model; a work cell (`robocal.kinematics.workcell.Cell`) is calibrated body by
+        body in one tracker frame (`robocal.calibration.cell`: returns a ``CellCalibration``).
+    data : Measurements or list of Measurements, or CellMeasurements
+        The calibration data; several sets (of any kinds) are identified together. Of a cell: its
+        rows split per body (`robocal.data.cell_measurements.CellMeasurements`).
     method : str, optional
         ``'lsq'``, ``'robust'`` (outlier rejection), or another registered solver; default
         ``'robust'`` when an instrument with heavy-tailed errors (motion capture, a camera) took
@@ -364,6 +368,11 @@ def calibrate(robot, data, method: str | None = None, params="auto", validation=
     >>> "d1" in result.identifiability.dropped  # the base frame absorbs d1
     True
     """
+    if isinstance(robot, Cell):  # one calibration per body, in one tracker frame (robocal.calibration.cell)
+        return calibrate_cell(robot, data, calibrate, params=params, validation=validation, method=method,
+                              rtol=rtol, seed=seed, progress=progress, nongeometric=nongeometric, force=force,
+                              sigma=sigma, hold_out=hold_out, instrument=instrument,
+                              variance_components=variance_components, priors=priors, **options)
     datasets, validations = (declared(_as_sets(d, role), instrument)
                              for d, role in ((data, "calibration"), (validation, "validation")))
     method = default_method(datasets) if method is None else method

@@ -20,6 +20,9 @@ EPILOG = """Examples:
   robocal calibrate check.csv --robot abb_irb2600 --offsets-only --start calibrated.yaml -o recalibrated.yaml
   robocal calibrate board.csv --robot ur10 --instrument camera --validate held.csv   # a camera's board poses
   robocal calibrate mocap.csv --robot tiago.yaml --priors class=service,zeros=3deg,lengths=10mm
+  robocal calibrate cell.csv --model cell.yaml --validate held.csv -o calibrated_cell.yaml --json cell.json
+      # a work cell (arm + positioner): one calibration per body in one tracker frame; the CSV's body
+      # column names each row's body, e1_deg.. hold the positioner's axes
 
 Method options (--set KEY=VALUE, SI units): lsq: max_iter (50); robust: k0, k1, ridge
 (double-h|gcv|lcurve|none), max_outer (30); genetic: population, generations (100), crossover,
@@ -85,7 +88,12 @@ def add_parser(sub) -> None:
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("data", nargs="+", help="canonical measurement CSV(s) (robocal import / simulate); "
                                            "several files of any kinds are identified together")
-    p.add_argument("--robot", required=True, help="nominal model: catalog name or model YAML")
+    model = p.add_mutually_exclusive_group(required=True)
+    model.add_argument("--robot", help="nominal model: catalog name or model YAML")
+    model.add_argument("--model", metavar="CELL.yaml",
+                       help="a work cell file (arms, positioners): each body calibrated on its rows (the "
+                            "data's body column) in one tracker frame; writes the calibrated cell (-o) and "
+                            "the result (--json); --hold-out N holds out the last N poses of each body")
     p.add_argument("--method", help="lsq, robust, genetic, swarm, neural (default: robust for data of an "
                                     "instrument with heavy-tailed errors, mocap or camera; else lsq)")
     p.add_argument("--instrument", choices=INSTRUMENT_NAMES,
@@ -159,7 +167,7 @@ def run(args) -> int:
 
     validate = args.validate or []
     check_outputs((args.output, args.json, args.report, args.network_out),
-                  (*args.data, *validate, args.robot, args.start))  # fail before the work
+                  (*args.data, *validate, args.robot, args.model, args.start))  # fail before the work
     check_format(args.output, "YAML", "-o", " (or use --json for the result)")
     check_format(args.json, "JSON", "--json")
     check_format(args.report, "HTML", "--report")
@@ -167,6 +175,8 @@ def run(args) -> int:
     check_distinct_inputs([*args.data, *validate], "calibration and validation files",
                           "a validation on the calibration data says nothing of the accuracy elsewhere")
     check_network_output(args.network_out, args.method)  # fail before the work
+    if args.model:  # a work cell: one calibration per body (robocal.calibration.cell)
+        return _calibrate_cell(args, validate)
     robot_id = open_history(args.history, args.robot_id)
     start = offsets_start(args.start, args.offsets_only, args.params, args.nongeometric)
     robot = load_model(args.robot)
@@ -197,4 +207,28 @@ def run(args) -> int:
         said = record_entry(args.history, calibration_record(result, robot_id, files, parent, **derived))
         if not args.quiet:
             print(said)
+    return 0
+
+
+def _calibrate_cell(args, validate: list[str]) -> int:
+    """``calibrate --model CELL.yaml``: the cell's data and held-out file, one call, its summary and files."""
+    import robocal as rc
+    from robocal.core.errors import DataError
+
+    unsupported = [o for o, v in (("--report", args.report), ("--offsets-only", args.offsets_only),
+                                  ("--network-out", args.network_out), ("--history", args.history)) if v]
+    if unsupported or len(args.data) > 1 or len(validate) > 1:
+        raise DataError(f"calibrate --model (a work cell) takes one data file and at most one --validate file"
+                        f"{', not ' + ', '.join(unsupported) if unsupported else ''}")
+    cell = rc.load_cell(args.model)
+    data = rc.CellMeasurements.load(args.data[0], cell)
+    validation = rc.CellMeasurements.load(validate[0], cell) if validate else None
+    result = rc.calibrate(cell, data, validation=validation, method=args.method, params=args.params,
+                          seed=args.seed, progress=not args.quiet, force=args.force, sigma=dict(args.sigma),
+                          instrument=args.instrument, nongeometric=args.nongeometric, priors=args.priors,
+                          hold_out=args.hold_out, **dict(args.options))
+    result.provenance.update(command="robocal " + " ".join(args.argv), model=args.model)
+    print(result.summary())
+    for path in result.write(args.output, args.json, args.force):
+        print(f"wrote {path}")
     return 0

@@ -20,7 +20,13 @@ units, and converged (1/0).
 --parameters writes name, unit (mm/deg), nominal, calibrated, delta = nominal - calibrated
 (a controller that loads its own parameters takes nominal - delta).
 commands.csv starts with a # line naming the calibrated model (fingerprint) and robocal's version;
-compensating such a file again is refused unless --force."""
+compensating such a file again is refused unless --force.
+A work cell (calibrated_cell.yaml of calibrate --model, --nominal CELL.yaml): targets.csv holds TCP
+poses in the positioner's plate frame and the positioner's values (e1_deg, e2_deg: its columns);
+commands.csv the arm's joints, the positioner's values as given, the corrected targets in the plate
+frame (mm, quaternion: what the nominal controller is given) and converged:
+  robocal compensate calibrated_cell.yaml plate_targets.csv --nominal cell.yaml --tool 0,0,200,0,0,0 \
+      -o commands.csv"""
 
 
 def add_parser(sub) -> None:
@@ -29,7 +35,8 @@ def add_parser(sub) -> None:
                                    "nominal closed-form solution; corrected Cartesian targets are the "
                                    "nominal forward kinematics of those joints.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("calibrated", help="calibrated model YAML")
+    p.add_argument("calibrated",
+                   help="calibrated model YAML, or a calibrated work cell (targets on its plate)")
     p.add_argument("targets", help="targets CSV (position + orientation, units in the column names)")
     p.add_argument("--nominal", required=True, help="catalog name or model YAML of the controller's model")
     p.add_argument("--branch", type=int, default=None,
@@ -81,6 +88,8 @@ def run(args) -> int:
     check_format(args.output, "CSV", "-o")
     check_format(args.parameters, "CSV", "--parameters")
     check_outputs([args.output, args.parameters], [args.calibrated, args.targets, args.nominal])
+    if (cell := _cell(args.calibrated)) is not None:  # targets on a positioner's plate
+        return _compensate_cell(args, cell)
     calibrated, nominal = load_model_pair(args.calibrated, args.nominal, "calibrated model")
     origin = calibrated.base[:3, 3] if args.targets_in == "model" else np.zeros(3)
     targets, layout = read_targets(args.targets, nominal, origin, args.force)
@@ -101,3 +110,49 @@ def run(args) -> int:
     for warning in res.warnings:
         print(f"warning: {warning}")
     return 0 if res.converged.all() else 1
+
+
+def _cell(spec: str):
+    """The work cell a model file describes (arms and positioners), else None."""
+    import robocal as rc
+
+    try:
+        cell = rc.load_cell(spec)
+    except rc.RobocalError:
+        return None  # not a cell: the model pair's loading says what is wrong
+    return cell if cell.positioners else None
+
+
+def _compensate_cell(args, calibrated) -> int:
+    """``compensate CELL.yaml TARGETS.csv --nominal CELL.yaml``: targets on the plate, one call."""
+    import numpy as np
+
+    import robocal as rc
+    from robocal.core.errors import DataError
+    from robocal.deploy.cell import read_positioner_values
+    from robocal.deploy.compensation import read_poses_csv
+    from robocal.deploy.models import tool_frame
+
+    unsupported = [o for o, v in (("--parameters", args.parameters), ("--result", args.result),
+                                  ("--targets-in", args.targets_in != "robot"), ("--payload", args.payload),
+                                  ("--temperature", args.temperature is not None),
+                                  ("--tool measured", args.tool == "measured")) if v]
+    if unsupported:
+        raise DataError(f"compensate with a work cell takes targets on the plate: not "
+                        f"{', '.join(unsupported)}")
+    if len(calibrated.positioners) != 1:
+        raise DataError("the cell has several positioners: compensate their targets with rc.compensate")
+    nominal = rc.load_cell(args.nominal)
+    targets, _ = read_poses_csv(args.targets)
+    positioner = next(iter(calibrated.positioners.values()))
+    e = read_positioner_values(args.targets, positioner)
+    tool = None if args.tool == "flange" else tool_frame(args.tool, "--tool")
+    res = rc.compensate(calibrated, nominal, targets, positioner_values=e, tool=tool, branch=args.branch,
+                        start=None if args.start is None else np.deg2rad(args.start))
+    arm = calibrated.arms[res.arm]
+    res.write(args.output, [j.column for j in arm.joints], [j.column for j in positioner.joints])
+    if not args.quiet:
+        print(f"{res.summary()} -> {args.output}")
+    for warning in res.warnings:
+        print(f"warning: {warning}")
+    return 0 if res.arm_compensation.converged.all() else 1

@@ -11,6 +11,8 @@ EPILOG = """Examples:
   robocal evaluate calibrated.yaml validation.csv --json val.json
   robocal evaluate meca500 meca_val.csv --fit-frame                   # nominal model: fit base and SMRs first
   robocal evaluate meca500 meca_val.csv --frame-from meca_cal.csv     # fit them on one file, judge another
+  robocal evaluate calibrated_cell.yaml cell_check.csv --json check.json   # a work cell: one tracker frame
+      # fitted for every body's SMRs (the rows' body column), the SMRs' places fitted except plate nests
 """
 
 
@@ -19,7 +21,7 @@ def add_parser(sub) -> None:
                        description="Compare a model (which holds its base and tool) with measurements: "
                                    "n, rms, mean, max, p95 of the position errors in mm.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("model", help="model YAML or catalog name")
+    p.add_argument("model", help="model YAML or catalog name, or a work cell file (arms, positioners)")
     p.add_argument("data", help="canonical measurement CSV")
     frame = p.add_mutually_exclusive_group()
     frame.add_argument("--fit-frame", action="store_true",
@@ -48,6 +50,8 @@ def run(args) -> int:
     check_format(args.json, "JSON", "--json")
     check_outputs([args.json], [args.model, args.data, args.frame_from])
     robot_id = open_history(args.history, args.robot_id)
+    if (cell := _cell(args.model)) is not None:  # every body in one tracker frame
+        return _evaluate_cell(args, cell)
     robot = load_model(args.model)
     check_files_memory([args.data, args.frame_from])  # before reading them
     data = load_measurements(args.data, robot, args.quiet, args.fanuc_coupled)
@@ -68,4 +72,36 @@ def run(args) -> int:
         said = record_entry(args.history, evaluation_record(args.history, robot_id, robot, stats, files))
         if not args.quiet:
             print(said)
+    return 0
+
+
+def _cell(spec: str):
+    """The work cell a model file describes (arms and positioners, or several arms), else None."""
+    import robocal as rc
+
+    try:
+        cell = rc.load_cell(spec)
+    except rc.RobocalError:
+        return None  # not a cell: load_model says what is wrong with it
+    return cell if cell.positioners or len(cell.arms) > 1 else None
+
+
+def _evaluate_cell(args, cell) -> int:
+    """``evaluate CELL.yaml DATA.csv``: one frame fitted for every body, the statistics per body."""
+    import robocal as rc
+    from robocal.core.errors import DataError
+
+    unsupported = [o for o, v in (("--fit-frame", args.fit_frame), ("--frame-from", args.frame_from),
+                                  ("--history", args.history)) if v]
+    if unsupported:
+        raise DataError(f"evaluate with a work cell fits one tracker frame for every body itself: not "
+                        f"{', '.join(unsupported)}")
+    result = rc.evaluate(cell, rc.CellMeasurements.load(args.data, cell))
+    written = result.write(args.json) if args.json else []
+    for warning in result.warnings:
+        print(f"WARNING: {warning}")
+    if not args.quiet:
+        print(result.summary())
+        for path in written:
+            print(f"wrote {path}")
     return 0

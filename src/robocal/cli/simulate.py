@@ -27,6 +27,8 @@ EPILOG = """Examples:
       -o mocap.csv --truth truth.yaml       # motion capture: 3 markers on the hand, one on link 4
   robocal simulate --robot ur10 --poses 40 --kind eye_in_hand --noise-mm 1 --rotation-noise-deg 0.3 \\
       -o camera.csv --truth truth.yaml      # a camera on the flange watching a fixed board
+  robocal simulate --model cell.yaml --poses 60 --table-poses 40 --noise-mm 0.02 --seed 1 \\
+      -o cell.csv --truth true_cell.yaml   # a work cell: SMRs on the arm's flange and on the plate
 The truth YAML is the true robot (tracker frame as base, SMR 0 as tool); TRUTH.sim.json next to it
 holds the noise floor (3-D RMS of the added noise, mm), outlier rows and plane coefficients.
 """
@@ -37,7 +39,15 @@ def add_parser(sub) -> None:
                        description="Simulate measurements of the given robot plus random parameter "
                                    "errors, seen from a tracker at a random pose 2-4 m away.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--robot", required=True, help="catalog name or model YAML (the nominal robot)")
+    model = p.add_mutually_exclusive_group(required=True)
+    model.add_argument("--robot", help="catalog name or model YAML (the nominal robot)")
+    model.add_argument("--model", metavar="CELL.yaml",
+                       help="a work cell file: each arm measured at --poses poses (its --smr SMRs on the "
+                            "flange), each positioner at --table-poses poses (the SMRs on its plate: its "
+                            "nests, else 3 SMRs 200 mm from the plate's origin), one tracker frame, "
+                            "isotropic noise; --truth writes the true cell (the SMRs' places as its arms' "
+                            "tools and its plates' nests)")
+    p.add_argument("--table-poses", type=int, default=30, help="with --model: poses of each positioner")
     which = p.add_mutually_exclusive_group(required=True)
     which.add_argument("--poses", type=int, help="number of random poses")
     which.add_argument("--joints", metavar="CSV",
@@ -142,7 +152,9 @@ def run(args) -> int:
     check_format(args.output, "CSV", "-o")
     check_format(args.truth, "YAML", "--truth")
     check_outputs([args.output, args.truth, Path(args.truth).with_suffix(".sim.json")],
-                  [args.robot, args.joints])
+                  [args.robot, args.model, args.joints])
+    if args.model:  # a work cell (robocal.data.cell_simulation)
+        return _written(_simulate_cell(args), args)
     robot = load_model(args.robot)
     if args.kind in INSTRUMENT_KINDS:
         return _written(simulate_kind(robot, args.kind, args.poses, noise_mm=args.noise_mm, seed=args.seed,
@@ -176,3 +188,20 @@ def _written(result, args) -> int:
         print(result.summary())
         print(f"wrote {', '.join(written)}")
     return 0
+
+
+def _simulate_cell(args):
+    """``simulate --model CELL.yaml``: the cell's campaign (``--as-is``: the cell is the truth)."""
+    import robocal as rc
+    from robocal.core.errors import DataError
+
+    unsupported = [o for o, v in (("--joints", args.joints), ("--kind", args.kind != "point"),
+                                  ("--noise-model", args.noise_model != "isotropic"),
+                                  ("--outliers", args.outliers), ("--box", args.box),
+                                  ("--tracker-mm", args.tracker_mm)) if v]
+    if unsupported:
+        raise DataError(f"simulate --model (a work cell) measures SMR points at random poses: not "
+                        f"{', '.join(unsupported)}")
+    cell = rc.load_cell(args.model)
+    return rc.simulate_cell(cell, args.poses, args.table_poses, truth=cell if args.as_is else None,
+                            noise_mm=args.noise_mm, n_smr=args.smr, seed=args.seed)

@@ -55,6 +55,10 @@ class KindSpec:
     column : str
         The CSV column that marks a file of this kind and holds its integer array (``plane``,
         ``flush_plane``); "" for kinds recognised by their measured columns.
+    derived : bool
+        Rows a model makes of another kind's (a work cell's plate SMRs in declared nests,
+        `robocal.calibration.cell`), not a kind of file, of simulation or of campaign of its own
+        (left out of `KINDS`).
     """
 
     name: str
@@ -70,6 +74,7 @@ class KindSpec:
     rows_per_placement: int = 1
     columns: str = ""
     column: str = ""
+    derived: bool = False
 
     def readings(self, T: np.ndarray) -> dict[str, np.ndarray]:
         """The observation arrays a perfect reading of TCP poses ``T (N, 4, 4)`` (tracker frame, m)
@@ -94,6 +99,10 @@ OBSERVED = {spec.name: spec for spec in (
              columns="flush_plane (the tool face flush on a plane)", column="flush_plane"),
     KindSpec("distance", "distance:DistanceObservation", ("pair", "distance"), sigma_m=5e-6, group="pair",
              rows_per_placement=2, columns="pair and distance_mm"),
+    # SMRs in nests at known places on a tool frame (a positioner's plate): the tool's six parameters
+    # seen through the nests, the nests held (the registration of flange SMRs does not apply)
+    KindSpec("nest", "nest:NestObservation", ("points",), sigma_m=20e-6, several_smrs=True,
+             columns="x_mm,y_mm,z_mm of SMRs in known nests", derived=True),
     # motion capture: markers on any link, their offsets and the capture frame estimated with the robot
     KindSpec("marker", "marker:MarkerObservation", ("points",), optional=("link",), sigma_m=0.3e-3,
              several_smrs=True, columns="x_mm,y_mm,z_mm and link"),
@@ -104,7 +113,7 @@ OBSERVED = {spec.name: spec for spec in (
     KindSpec("eye_in_hand", "camera:EyeInHandObservation", ("points", "rotations"), sigma_m=1e-3,
              columns="x_mm,y_mm,z_mm and qw..qz"),
 )}
-KINDS = tuple(OBSERVED)  # every kind's name, in the order messages list them
+KINDS = tuple(k for k, spec in OBSERVED.items() if not spec.derived)  # kinds of files, as messages list them
 
 
 def kind_spec(kind: str) -> KindSpec:

@@ -34,6 +34,7 @@ from robocal.core.errors import DataError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_all
 from robocal.core.magnitudes import check_degree_set, check_radians, check_targets
 from robocal.data.measurements import robot_reach
+from robocal.deploy.cell import compensate_cell
 from robocal.identify.plausibility import (
     MAX_ANGLE_CORRECTION_DEG,
     MAX_LENGTH_CORRECTION_FRACTION,
@@ -48,6 +49,7 @@ from robocal.kinematics.cell import is_track_cell
 from robocal.kinematics.joint_errors import condition_terms, condition_warnings
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import ROTATION_TOL, invert_transform, make_transform, pose_error
+from robocal.kinematics.workcell import Cell
 from robocal.trust.coverage import Prediction, target_warnings
 from robocal.trust.output_marker import check_unmarked, mark_csv
 
@@ -262,7 +264,7 @@ def controller_model(calibrated: Robot, nominal: Robot, robot_base=None, tool=No
 def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None = None,
                seeds=None, start=None, targets_frame: str = "model", tool=None, e1=None, payload=None,
                temperature: float | None = None, layout: dict | None = None,
-               prediction: Prediction | None = None) -> Compensation:
+               prediction: Prediction | None = None, positioner_values=None) -> Compensation:
     """Corrected joints and Cartesian targets for target poses ``(N, 4, 4)`` (m) of the
     calibrated model's TCP.
 
@@ -322,6 +324,11 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     prediction : Prediction, optional
         The calibration's accuracy prediction (`robocal.deploy.models.load_prediction`): warn of
         the targets where its predicted error exceeds 3 x the validated one.
+    positioner_values : array_like, shape (N, k), optional
+        With ``calibrated`` and ``nominal`` work cells (`robocal.kinematics.workcell.Cell`): the
+        targets are TCP poses in the plate frame of the cell's positioner standing at these axis
+        values (rad; m for a prismatic axis), reached by its arm (`robocal.deploy.cell`: returns a
+        ``CellCompensation``; a cell of several arms or positioners: ``compensate_cell`` names them).
 
     Returns
     -------
@@ -356,6 +363,10 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     >>> bool(np.allclose(nominal.fk(comp.joints), comp.corrected_targets))  # what to program
     True
     """
+    if isinstance(calibrated, Cell):  # targets on a positioner's plate (robocal.deploy.cell)
+        return compensate_cell(calibrated, nominal, targets, positioner_values, compensate, branch=branch,
+                               seeds=seeds, start=start, tool=tool, payload=payload, temperature=temperature,
+                               prediction=prediction)
     if targets_frame not in ("model", "robot"):
         raise DataError(f"targets_frame must be 'model' or 'robot', got {targets_frame!r}")
     given = calibrated

@@ -45,6 +45,8 @@ POSES_EPILOG = """Examples:
   robocal poses --robot staubli_tx2_140 -n 20 --smr-mm 20,-30,60 -o poses.csv --val3 campaign
   robocal poses --robot meca500 -n 20 --from taught.csv --region taught.csv -o poses.csv
   robocal poses --robot abb_irb2600 --check -n 20 --from poses.csv -o check_poses.csv --rapid check.mod
+  robocal poses --model cell.yaml -n 30 --table-poses 24 --smr-mm 20,-30,80 --tracker-mm 1200,2800,2000 \
+      --acceptance-deg 45 -o poses.csv --rapid campaign.mod   # an arm and its positioner's table angles
   robocal simulate --robot abb_irb2600 --joints poses.csv --smr-mm 20,-30,80 -o data.csv --truth truth.yaml
 Lengths in mm in the robot's base frame (SMR positions and facing directions in the flange frame),
 angles in deg; write a value that starts with a minus as --smr-mm=-50,50,60.

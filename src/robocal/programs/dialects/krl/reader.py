@@ -92,6 +92,7 @@ class KRLDialect(Dialect):
     name = "KUKA KRL"
     key = "krl"
     campaign_rank = 1
+    campaign_external = True  # a positioner's axes move in its campaign programs
     campaign_refuses_tracks = True
     vendor = "KUKA"
     signature = r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)"
