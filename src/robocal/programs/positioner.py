@@ -38,7 +38,7 @@ from robocal.core.errors import DataError, ModelError
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, pose_error
 from robocal.kinematics.workcell import Cell
-from robocal.programs.external import coordinated_unit
+from robocal.programs.external import UNNAMED, coordinated_unit
 from robocal.programs.model import Program, Target
 
 # The axis names programs write, as a logical axis number: RAPID eax_a..eax_f, KRL E1..E6,
@@ -126,7 +126,7 @@ class CoordinatedProgram:
             if unit is None:
                 kept.append(t)
                 continue
-            station = self._station(unit, t)
+            station = self._station(unit, t, warnings)
             e = station.values(t)
             if isinstance(e, str):
                 program.not_corrected[id(t)] = e
@@ -159,10 +159,18 @@ class CoordinatedProgram:
                            "the calibrated cell is this cell's calibration")
         return out
 
-    def _station(self, unit: str, t: Target) -> Station:
+    def _station(self, unit: str, t: Target, warnings: list[str]) -> Station:
+        if unit.startswith(UNNAMED) and len(self.stations) == 1:  # the program does not name it
+            (only,) = self.stations.values()
+            said = f"the program moves with a unit it does not name ({unit[1:]}): taken as the cell's only " \
+                   f"positioner, {only.unit}"
+            if said not in warnings:
+                warnings.append(said)
+            return only
         found = self.stations.get(unit) or next((s for k, s in self.stations.items()
                                                  if k.upper() == unit.upper()), None)
         if found is None:
+            unit = f"{unit[1:]}, which it does not name and" if unit.startswith(UNNAMED) else unit
             raise DataError(f"{t.where}: the program moves with mechanical unit {unit}, which is not in the "
                             f"cell (its positioners: {', '.join(sorted(self.stations)) or 'none'}); give the "
                             "cell file of this program's cell")

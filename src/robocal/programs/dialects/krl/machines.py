@@ -25,6 +25,7 @@ import re
 import numpy as np
 
 from robocal.programs.aggregate import split_top
+from robocal.programs.external import UNNAMED
 from robocal.programs.source import ProgramText
 
 _MACHINE_DEF = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:MACHINE_DEF_T\s+)?MACHINE_DEF\s*"
@@ -63,10 +64,10 @@ class Machines:
                 self.frames[m.group(1)] = str(int(index.group(1)))
 
     def _unit(self, m: str) -> tuple[str, str]:
-        """(machine m's name, '') or ('', why it is not known / carries nothing)."""
+        """(machine m's name, '') or ('', why it carries nothing); a machine no file declares is
+        unnamed (:data:`robocal.programs.external.UNNAMED`: a cell's only positioner takes it)."""
         if m not in self.names:
-            return "", (f"the base is on the external kinematic MACHINE_DEF[{m}], which no file given "
-                        "declares (give $config.dat with --references)")
+            return f"{UNNAMED}MACHINE_DEF[{m}], declared in no file given", ""
         name, kind = self.names[m]
         if kind not in CARRYING:
             return "", f"the base is on MACHINE_DEF[{m}] ({name}), a #{kind or '?'} machine (no base on it)"
@@ -81,11 +82,14 @@ class Machines:
         if m is None:
             return None
         args = [m.group(1)[a:b].strip() for a, b in split_top(m.group(1), 0, len(m.group(1)))]
-        root = _ROOT.fullmatch(args[0]) if args else None
-        if len(args) != 3 or root is None:
-            return "?", (f"$BASE is set from {value} (an external kinematic whose root is not "
-                         "MACHINE_DEF[m].ROOT)")
-        unit, why = self._unit(root.group(1))
+        if len(args) != 3:
+            return "?", f"$BASE is set from {value} (EK takes a root, a kind and an offset)"
+        root = _ROOT.fullmatch(args[0])
+        kind = args[1].lstrip("#").upper()
+        if root is None and kind in ("ROBOT", "NONE"):
+            return "?", f"$BASE is set from {value} (an external kinematic of kind #{kind}: no base on it)"
+        unnamed = f"{UNNAMED}EK root {' '.join(args[0].split())}"
+        unit, why = self._unit(root.group(1)) if root else (unnamed, "")
         if why:
             return "?", why
         data = _DATA.fullmatch(args[2])
