@@ -15,7 +15,9 @@ flange frame, the cell file's plate frame), or through ``BAS(#BASE, n)`` / an in
 ``BASE_NO n``, which KSS turns into that EK call when ``MACHINE_FRAME_DAT[n].MACH_DEF_INDEX`` is
 not 0. Such a base is a frame the machine carries (:attr:`Program.carried`), named
 ``n@MACHINE`` (``{X ..}@MACHINE`` for a literal offset) so that the same BASE_DATA[n] used as a
-fixed base stays another frame.
+fixed base stays another frame. A machine no file given declares (no $config.dat), or an EK whose
+root is a literal frame (``EK({X ..}, #EASYS, ...)``), is a unit the program does not name
+(:data:`robocal.programs.external.UNNAMED`): a cell's only positioner takes it.
 """
 
 from __future__ import annotations
