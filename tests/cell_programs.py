@@ -142,7 +142,8 @@ def krl_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "dkp_we
     """A KRL .src/.dat and its $config.dat: machine 2 a DKP-400 (#EASYS) named ``DKP400``, base 3
     (OFRAME) on its flange; ``form`` 'ek': ``$BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,
     BASE_DATA[3])`` as offline programming systems write it, 'bas': ``BAS(#BASE,3)`` with
-    MACHINE_FRAME_DAT[3] on machine 2, as the inline forms do."""
+    MACHINE_FRAME_DAT[3] on machine 2, as the inline forms do, 'spline': KSS 8's spline inline forms,
+    ``SLIN XW1 WITH $TOOL=STOOL2(FP1), $BASE=EK(K_ROOT(FP1.BASE_NO),K_TYPE(..),K_OFFS(..)) ...``."""
     d = dialect_named("krl")
     cfg = d.scheme.encode(nominal.arms["arm"], q)
     abc, p_mm = zyx_angles(T[:, :3, :3]), T[:, :3, 3] * 1e3
@@ -152,12 +153,18 @@ def krl_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "dkp_we
         values = [*(xyz * 1e3), *angles]
         return "{" + ",".join(f"{k} {v:.4f}" for k, v in zip("XYZABC", values, strict=True)) + "}"
 
-    base = "$BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,BASE_DATA[3])" if form == "ek" else \
-        "BAS(#BASE,3)"
+    base = {"ek": "$BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,BASE_DATA[3])",
+            "bas": "BAS(#BASE,3)", "spline": "$BASE=$NULLFRAME"}[form]
     src = [f"DEF {name}( )", ";FOLD INI", "  BAS(#INITMOV,0 )", ";ENDFOLD", "  $TOOL=TOOL_DATA[1]",
            f"  {base}",
            "  $ACT_EX_AX=2"]
-    src += [f"  {'PTP' if i == 0 else 'LIN'} XW{i}{'' if i == 0 else ' C_DIS'}" for i in range(len(q))]
+    if form == "spline":  # KSS 8 spline inline forms: the base of FDAT FP1 in each motion's WITH
+        src += [f"  {'SPTP' if i == 0 else 'SLIN'} XW{i} WITH $TOOL=STOOL2(FP1), "
+                "$BASE=EK(K_ROOT(FP1.BASE_NO),K_TYPE(FP1.BASE_NO),K_OFFS(FP1.BASE_NO)), "
+                "$IPO_MODE=SIPO_MODE(FP1.IPO_FRAME) C_SPL"
+                for i in range(len(q))]
+    else:
+        src += [f"  {'PTP' if i == 0 else 'LIN'} XW{i}{'' if i == 0 else ' C_DIS'}" for i in range(len(q))]
     src += ["  $BASE=$NULLFRAME", "  PTP XFREE", "END", ""]
     dat = [f"DEFDAT  {name}"] + [
         f"DECL E6POS XW{i}={{X {p_mm[i, 0]:.3f},Y {p_mm[i, 1]:.3f},Z {p_mm[i, 2]:.3f},A {abc[i, 0]:.4f},"
@@ -166,6 +173,7 @@ def krl_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "dkp_we
     qh = np.deg2rad([[20.0, -80.0, 100.0, 30.0, 40.0, 30.0]])  # away from the status/turn edges
     home, hc = nominal.arms["arm"].fk(qh), d.scheme.encode(nominal.arms["arm"], qh)[0]
     hx, ha = home[0, :3, 3] * 1e3, zyx_angles(home[:, :3, :3])[0]
+    dat += ['DECL FDAT FP1={TOOL_NO 1,BASE_NO 3,IPO_FRAME #BASE,POINT2[] " "}']
     dat += [f"DECL E6POS XFREE={{X {hx[0]:.2f},Y {hx[1]:.2f},Z {hx[2]:.2f},A {ha[0]:.3f},B {ha[1]:.3f},"
             f"C {ha[2]:.3f},S {hc[0]},T {hc[1]},E1 15.0,E2 -30.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}}", "ENDDAT", ""]
     config = ["DEFDAT  $CONFIG", ";FOLD EXTERNAL KINEMATICS",

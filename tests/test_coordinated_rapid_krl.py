@@ -196,7 +196,7 @@ def test_coordinated_rapid_targets_land_on_the_true_cell(tmp_path):
     _goal(before, after, cp.model_error(after["q"], after["e"], calibrated, true))
 
 
-@pytest.mark.parametrize("form", ["ek", "bas"])
+@pytest.mark.parametrize("form", ["ek", "bas", "spline"])
 def test_coordinated_krl_targets_land_on_the_true_cell(tmp_path, form):
     nominal, true, calibrated = cp.cells(3, arm=cp.KUKA_ARM, unit="DKP400", axes=("E1", "E2"))
     q, e, T = cp.poses(nominal, 30)
@@ -333,3 +333,16 @@ def test_krl_unnamed_machine_is_the_cells_only_positioner(tmp_path, root):
     named = filter_program(paths, calibrated, nominal, tools=tools, frames=frames, references=[config])
     if root.startswith("MACHINE_DEF"):  # $config.dat names it: the same corrections, nothing said
         assert named.outputs == res.outputs and not any("does not name" in w for w in named.warnings)
+
+
+def test_krl_spline_form_without_config_says_the_base_is_taken_as_fixed(tmp_path):
+    """EK(K_ROOT(FP1.BASE_NO), ...) without $config.dat: whether a machine carries base 3 is unknown;
+    it is taken as a fixed base (KSS's own rule without MACHINE_FRAME_DAT), said once."""
+    nominal, _, calibrated = cp.cells(3, arm=cp.KUKA_ARM, unit="DKP400", axes=("E1", "E2"))
+    q, e, T = cp.poses(nominal, 4)
+    paths, _ = cp.krl_program(tmp_path, nominal, q, e, T, form="spline")
+    prog = KRLDialect().parse([ProgramText(p) for p in paths], {}, {})
+    assert not prog.carried and {t.frame for t in prog.targets} == {"3", "0"}
+    said = [w for w in prog.warnings if "K_ROOT" in w]
+    assert said == ["$BASE=EK(K_ROOT(..)) of base 3: whether a machine carries it is in $config.dat's "
+                    "MACHINE_FRAME_DAT, not given (--references): taken as a fixed base"]
