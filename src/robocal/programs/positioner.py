@@ -48,6 +48,7 @@ MM = 1e-3  # prismatic positioner values in programs are millimetres
 # A calibrated plate further than this from the nominal one is more than a cell file's placement
 # error (a layout drawing's mount, a plate frame by eye): said, the targets moving that much.
 PLATE_MOVED_MM, PLATE_MOVED_DEG = 25.0, 2.0
+LIMIT_TOL = 1e-9  # rad or m: a value written at its limit converts to SI a rounding away from it
 
 
 def logical_axis(name: str) -> str:
@@ -94,7 +95,7 @@ class Station:
         """Refuse values ``e`` (SI) outside the positioner's axis limits (one line naming the target)."""
         for spec, value, name in zip(self.nominal.joints, e, self.axes, strict=True):
             lo, hi = spec.limits
-            if not lo <= value <= hi:
+            if not lo - LIMIT_TOL <= value <= hi + LIMIT_TOL:
                 shown = spec.describe(float(value)).split(" = ", 1)[1]
                 raise DataError(f"{t.where}: {self.unit} axis {name} = {shown}: outside the positioner's "
                                 "limits in the cell file (another positioner, or a wrong axis letter)")
