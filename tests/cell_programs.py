@@ -102,20 +102,25 @@ def poses(nominal: rc.Cell, n: int, seed: int = 1) -> tuple[np.ndarray, np.ndarr
     return q, e_deg[keep], T
 
 
-def rapid_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "stn_weld") -> Path:
+def rapid_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "stn_weld",
+                  robotstudio: bool = False) -> Path:
     """A RAPID module in the style of ABB's coordinated-motion examples: a wobjdata moved by STN1
     (uframe identity, the workpiece in oframe), ``ActUnit STN1``, robtargets with the positioner
     in eax_b / eax_c, motions ``\\WObj:=wobjSTN1``; plus one uncoordinated target (wobj0) whose
-    eax_b / eax_c do not move it."""
+    eax_b / eax_c do not move it. ``robotstudio``: as RobotStudio exports a path, the targets
+    written inline in the motions and the wobjdata's uframe the plate's world pose at zero (which
+    the controller does not use for a moving work object)."""
     d = dialect_named("rapid")
     cfg = d.scheme.encode(nominal.arms["arm"], q)
     quat, p_mm = quaternions(T[:, :3, :3]), T[:, :3, 3] * 1e3
     qo = quaternions(OFRAME[None, :3, :3])[0]
     qt = quaternions(TOOL[None, :3, :3])[0]
+    plate = nominal.positioners["turntable"].chain.fk(np.zeros((1, 2)))[0, :3, 3] * 1e3
+    uframe = ",".join(f"{v:.3f}" for v in plate) if robotstudio else "0,0,0"
     lines = ["MODULE StnWeld", "  ! arc welding on a two-axis positioner (STN1), coordinated motion",
              "  PERS tooldata tTorch:=[TRUE,[[" + ",".join(f"{v:.3f}" for v in TOOL[:3, 3] * 1e3) + "],["
              + ",".join(f"{v:.8f}" for v in qt) + "]],[4.5,[0,0,120],[1,0,0,0],0,0,0]];",
-             "  PERS wobjdata wobjSTN1:=[FALSE,FALSE,\"STN1\",[[0,0,0],[1,0,0,0]],[["
+             "  PERS wobjdata wobjSTN1:=[FALSE,FALSE,\"STN1\",[[" + uframe + "],[1,0,0,0]],[["
              + ",".join(f"{v:.3f}" for v in OFRAME[:3, 3] * 1e3) + "],[" + ",".join(f"{v:.8f}" for v in qo)
              + "]]];"]
     for i in range(len(q)):
@@ -130,6 +135,10 @@ def rapid_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "stn_
                  + ",".join(f"{v:.6f}" for v in quaternions(home[:, :3, :3])[0])
                  + f"],[{hc[1]},{hc[2]},{hc[3]},{hc[0]}],[9E+09,0,0,9E+09,9E+09,9E+09]];")
     moves = [f"    Move{'J' if i == 0 else 'L'} pW{i},v200,z1,tTorch\\WObj:=wobjSTN1;" for i in range(len(q))]
+    if robotstudio:  # each target inline, its declaration dropped
+        inline = {f"pW{i}": lines[4 + i].split(":=", 1)[1].rstrip(";") for i in range(len(q))}
+        lines[4:4 + len(q)] = []
+        moves = [m.replace(f" pW{i},", f" {inline[f'pW{i}']},") for i, m in enumerate(moves)]
     lines += ["  PROC main()", "    ActUnit STN1;", "    MoveJ pHome,v500,z50,tool0;", *moves,
               "    MoveJ pHome,v500,fine,tool0;", "    DeactUnit STN1;", "  ENDPROC", "ENDMODULE", ""]
     path = folder / f"{name}.mod"
@@ -196,12 +205,13 @@ def landing(paths, references, nominal: rc.Cell, true: rc.Cell, intended=None) -
     """Run program files as the nominal controller would on the true cell. Returns, for the
     targets on the plate, the tool's landing error on the true plate (m, ``(N,)``) against the
     pose written in ``intended`` (files of the program before filtering; default ``paths``), the
-    true model's own error at the joints reached (``model``: the calibrated model's when ``true``
-    is the calibrated cell) and the values read."""
+    joints reached and the positioner values read. The work object and tool are the generator's
+    own (OFRAME on the plate, TOOL), not what the reader makes of the files: the controller's
+    semantics, independent of the filter's."""
     d = dialect_named("rapid" if Path(paths[0]).suffix == ".mod" else "krl")
     prog = d.parse([ProgramText(Path(p)) for p in paths], {}, {}, [ProgramText(Path(p)) for p in references])
     targets = [t for t in prog.targets if t.frame in prog.carried]
-    _, P, W, tool = target_poses(d, prog, targets)
+    P, W, tool = target_poses(d, prog, targets)[1], OFRAME, TOOL
     p_axes = [logical_axis(a) for a in nominal.positioners["turntable"].program_axes]
     e = np.deg2rad([[{logical_axis(k): v for k, v in t.axes.items()}[a] for a in p_axes] for t in targets])
     arm, chain = nominal.arms["arm"], nominal.positioners["turntable"].chain

@@ -182,12 +182,16 @@ def _goal(before: dict, after: dict, model: np.ndarray) -> dict:
     return rms
 
 
-def test_coordinated_rapid_targets_land_on_the_true_cell(tmp_path):
+@pytest.mark.parametrize("robotstudio", [False, True])
+def test_coordinated_rapid_targets_land_on_the_true_cell(tmp_path, robotstudio):
+    """Declared robtargets in ABB's example style; or inline ones with the plate's world pose
+    stored as the uframe, as RobotStudio exports them (not used: the targets still land)."""
     nominal, true, calibrated = cp.cells(0)
     q, e, T = cp.poses(nominal, 30)
-    path = cp.rapid_program(tmp_path, nominal, q, e, T)
+    path = cp.rapid_program(tmp_path, nominal, q, e, T, robotstudio=robotstudio)
     res = filter_program(path, calibrated, nominal)
     assert res.summary_dict()["motions"] == {"total": 32, "corrected": 32, "named": 0}
+    assert sum("its uframe" in w for w in res.warnings) == robotstudio
     out = tmp_path / "out.mod"
     out.write_bytes(res.outputs[path])
     _identity_outside_numbers(RapidDialect(), [path], [out])
