@@ -183,3 +183,66 @@ def test_check_chain_on_tables():
     with pytest.raises(ModelError, match="1 to 3 axes, got 6"):
         check_chain(Robot.from_catalog("abb_irb2600"), "irb")
     check_chain(Robot.from_mdh([0, np.pi / 2], [0, 0], [0, 0], [0.5, 0.3]), "ok")
+
+
+# ----------------------------------------------------------------- the catalog's positioners
+from robocal.kinematics.catalog import positioner_names  # noqa: E402
+from robocal.kinematics.workcell import catalog_positioner, cell_from_data  # noqa: E402
+
+REQUIRED = {"abb_irbp_a250", "kuka_dkp400", "yaskawa_motopos_d250"}
+
+
+def test_catalog_has_the_common_positioners():
+    names = set(positioner_names())
+    assert names >= REQUIRED and names & {"abb_irbp_c500", "abb_irbp_l300"}
+
+
+@pytest.mark.parametrize("name", positioner_names())
+def test_catalog_positioner_is_sourced_and_loads(name):
+    chain, payload = catalog_positioner(name)
+    assert 1 <= chain.n_joints <= 3 and payload > 0
+    text = chain.description
+    assert "Source to check:" in text and "http" in text and "chosen:" in text, \
+        "say where the numbers come from and which were chosen"
+    e = np.zeros((1, chain.n_joints))
+    assert np.isfinite(chain.fk(e)).all()
+    assert (chain.limits[:, 0] < 0).all() and (chain.limits[:, 1] > 0).all()
+    # by name in a cell file, placed at its mount
+    cell = cell_from_data({"units": {"length": "mm", "angle": "deg"},
+                           "positioner": {"model": name, "unit": "STN1", "mount": {"xyz": [1500, 0, 0]}}})
+    placed = cell.positioners["STN1"].chain
+    np.testing.assert_allclose(placed.fk(e)[0, :3, 3], chain.fk(e)[0, :3, 3] + [1.5, 0, 0], atol=FK_TOL)
+
+
+def test_tilt_turn_entry_is_the_axes_it_declares():
+    chain, _ = catalog_positioner("abb_irbp_a250")
+    e = np.random.default_rng(4).uniform(-1.5, 1.5, (9, 2))
+    axes = [{"type": "revolute", "axis": [1, 0, 0], "origin": [0, 0, 0.9]},
+            {"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.25]}]
+    np.testing.assert_allclose(chain.fk(e), composed(axes, np.eye(4), np.eye(4), e), atol=FK_TOL)
+
+
+def test_unknown_catalog_positioner():
+    with pytest.raises(ModelError, match="unknown positioner 'abb_irbp_z9'; the catalog has: abb_irbp_a250"):
+        catalog_positioner("abb_irbp_z9")
+
+
+def test_robots_command_lists_and_shows_positioners(capsys):
+    from robocal.cli import main
+
+    assert main(["robots"]) == 0
+    out = capsys.readouterr().out
+    assert "positioners (a cell file's positioner: model: NAME)" in out
+    assert out.index("abb_irb2600") < out.index("positioners (") < out.index("abb_irbp_a250")
+    assert main(["robots", "kuka_dkp400"]) == 0
+    shown = capsys.readouterr().out
+    assert shown.startswith("kuka_dkp400: KUKA DKP-400") and "    2 " in shown
+
+
+def test_catalog_page_lists_every_positioner():
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "reference" / "catalog.md").read_text()
+    section = page[page.index("## Positioners"):]
+    for name in positioner_names():
+        assert f"| `{name}` |" in section, name

@@ -125,6 +125,18 @@ def test_several_arms_each_at_its_base(tmp_path):
         cell.resolve("plate")  # two positioners: no alias
 
 
+def test_joint_columns_of_every_body(tmp_path):
+    data = _with(TWO_ARMS, ("positioners", "STN1", "axes"),
+                 [{"type": "prismatic", "axis": [0, 0, 1], "origin": [0, 0, 300], "limits": [0, 500]},
+                  {"type": "revolute", "axis": [0, 0, 1], "origin": [100, 0, 0]}])
+    cell = load_cell(write(tmp_path, data))
+    assert [j.column for j in cell.joints("STN1")] == ["e1_mm", "e2_deg"]
+    assert [j.column for j in cell.joints("STN2")] == ["e3_deg", "e4_deg"]
+    assert [j.column for j in cell.joints("ROB_2")] == [f"q{i}_deg" for i in range(1, 7)]
+    assert cell.joints("STN1")[0].limits == (0.0, 0.5)
+    assert cell.positioners["STN2"].program_axes == ("E3", "E4")
+
+
 def test_track_arm_and_positioner_columns_follow_e1(tmp_path):
     data = {"units": {"length": "mm", "angle": "deg"}, "robot": "kuka_kr210_r2700",
             "track": {"direction": [1, 0, 0], "limits": [0, 6000]},
@@ -345,6 +357,10 @@ AX = ("positioner", "axes")
     (_with(TWO_ARMS, ("positioners", "STN2", "columns"), ["e1", "e4"]),
      r"positioner 'STN2': column e1 is already positioner 'STN1''s"),
     (_with(TWO_ARMS, ("robots",), {}), r"robots: expected at least one arm"),
+    (_with(TWO_ARMS, ("robots",), 3), r"robots: expected a mapping \{name: \{...\}\}, got 3"),
+    (_with(TWO_ARMS, ("positioners",), True), r"positioners: expected a mapping \{name: \{...\}\}"),
+    (_with(TWO_ARMS, ("positioners",), {}), r"positioners: expected at least one positioner"),
+    (_with(CELL, P + ("columns",), ["e0", "e1"]), r"expected 2 distinct names e1, e2"),
     ({"units": {"length": "mm", "angle": "deg"}, "track": {"direction": [1, 0, 0], "limits": [0, 1]},
       "positioner": CELL["positioner"]}, r"a track and its mount belong to an arm"),
     (_with(CELL, ("units",), DELETE), r"the cell: missing key\(s\) \['units'\]"),
@@ -366,9 +382,110 @@ def test_python_construction_is_validated():
         Cell({"a": arm}, {"p": chain})
     with pytest.raises(ModelError, match="unit is empty"):
         Positioner(chain, " ")
+    with pytest.raises(ModelError, match="robots.a.unit is empty"):
+        Cell({"a": arm}, arm_units={"a": ""})
     with pytest.raises(ModelError, match="2 nests but its chain has 3 SMR offsets"):
         Positioner(chain, "S", nests=np.zeros((2, 3)))  # the chain carries the cell's 3 nests
     with pytest.raises(ModelError, match=r"nests must be a finite \(K, 3\) array"):
         Positioner(Robot.from_mdh([0], [0], [0], [0]), "S", nests=np.zeros((2, 2)))
     with pytest.raises(ModelError, match="1 to 3 axes, got 6"):
         Positioner(arm, "S")
+
+
+def test_an_arm_on_a_track_among_several(tmp_path):
+    from robocal.kinematics.model import track_chain
+
+    data = _with(TWO_ARMS, ("robots", "right", "track"), {"direction": [0, 1, 0], "limits": [-1000, 5000]})
+    data["positioners"]["STN1"]["columns"] = ["e2"]
+    data["positioners"]["STN2"]["columns"] = ["e3", "e4"]
+    cell = load_cell(write(tmp_path, data))
+    arm = Robot.from_catalog("abb_irb2600")
+    truth = track_chain(arm, [0, 1, 0], pose([3000, 0, 0], [0, 0, 180]), [-1.0, 5.0])
+    np.testing.assert_array_equal(cell.arms["right"].values, truth.values)
+    assert [j.column for j in cell.joints("right")][:2] == ["e1_mm", "q1_deg"]
+    with pytest.raises(ModelError, match="column e1 is already the track of arm 'right''s"):
+        load_cell(write(tmp_path, _with(data, ("positioners", "STN1", "columns"), ["e1"])))
+
+
+def test_a_positioner_given_as_a_urdf(tmp_path):
+    (tmp_path / "table.urdf").write_text("""<robot name="table">
+      <link name="base"/><link name="tilt"/><link name="turn"/>
+      <joint name="a1" type="revolute"><parent link="base"/><child link="tilt"/>
+        <origin xyz="0 0 0.9"/><axis xyz="1 0 0"/><limit lower="-1.5" upper="1.5"/></joint>
+      <joint name="a2" type="revolute"><parent link="tilt"/><child link="turn"/>
+        <origin xyz="0 0 0.25"/><axis xyz="0 0 1"/><limit lower="-6" upper="6"/></joint>
+    </robot>""")
+    data = _with(_with(CELL, P + ("axes",), DELETE), P + ("model",), "table.urdf")
+    urdf = load_cell(write(tmp_path, data)).positioners["STN1"]
+    np.testing.assert_allclose(urdf.plate(np.deg2rad(E_DEG)), tilt_turn_truth(E_DEG), rtol=0, atol=TOL)
+
+
+def test_in_world_keeps_estimated_smrs_nominal_and_the_cells_geometry():
+    data = _with(CELL, P + ("nests",), DELETE)
+    cell = cell_from_data(data)
+    chain = cell.positioners["STN1"].chain
+    # a calibration without nests estimates the SMRs' plate positions: two more SMRs on the chain
+    estimated = Robot(**{f: getattr(chain, f) for f in ("alpha", "a", "beta", "theta", "d", "base", "tool",
+                                                        "limits", "parallel")},
+                      smr=[[0.1, 0, 0], [0, 0.1, 0]]).with_values({"d2": chain.get("d2") + 1e-4})
+    world = cell.in_world({"arm": cell.arms["arm"], "STN1": estimated})
+    moved = world.positioners["STN1"].chain
+    assert len(moved.smr) == 2 and moved.get("d2") == pytest.approx(chain.get("d2") + 1e-4)
+    nominal = dict(zip(moved.geometry_names, moved.nominal, strict=True))
+    assert nominal["d2"] == chain.get("d2") and nominal["smr1.x"] == 0.1
+
+
+def test_robots_command_shows_a_cell(tmp_path, capsys):
+    from robocal.cli import main
+
+    assert main(["robots", str(write(tmp_path, TWO_ARMS))]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("two robots (anchor: left)")
+    assert "== positioner STN2 (unit STN2; columns e2_deg, e3_deg)" in out
+    assert "== arm right (unit ROB_2; columns q1_deg" in out
+
+
+def test_identifiability_says_which_case():
+    with_nests = cell_from_data(CELL).positioners["STN1"]
+    without = cell_from_data(_with(CELL, P + ("nests",), DELETE)).positioners["STN1"]
+    assert "last axis' zero (theta2) are identified" in with_nests.identifiability
+    assert "(theta2) and the plate frame's turn about that axis are one freedom" in without.identifiability
+    assert repr(without) == "Positioner('STN1', unit 'STN1', columns ['e1', 'e2'])"
+
+
+def test_a_positioner_with_nests_has_the_identification_jacobian():
+    """The body is an ordinary robot to the identification: its Jacobian at the nests (SMR k) is the
+    central difference of its forward kinematics."""
+    chain = cell_from_data(CELL).positioners["STN1"].chain
+    e = np.deg2rad([[10, 20], [-30, 100], [45, -200]])
+    smr = np.array([1, 2, 3])
+    names = chain.default_free(orientation=True)
+    J = chain.jacobian(e, names, smr=smr)
+    h = 1e-7
+    for k, name in enumerate(names):
+        step = (chain.displaced([name], [h]).fk(e, smr=smr) - chain.displaced([name], [-h]).fk(e, smr=smr))
+        np.testing.assert_allclose(J[:, :, k], step[:, :3, 3] / (2 * h), rtol=0, atol=1e-8, err_msg=name)
+
+
+def test_program_axis_names_per_language():
+    stn = cell_from_data(_with(CELL, P + ("program_axes",), ["eax_b", "eax_c"])).positioners["STN1"]
+    assert stn.axes_in("rapid") == ("eax_b", "eax_c") and stn.axes_in("krl") == ("E2", "E3")
+    default = cell_from_data(CELL).positioners["STN1"]
+    assert default.axes_in("rapid") == ("eax_a", "eax_b") and default.axes_in("krl") == ("E1", "E2")
+    odd = cell_from_data(_with(CELL, P + ("program_axes",), ["B1", "B2"])).positioners["STN1"]
+    assert odd.axes_in("rapid") == ("B1", "B2")
+    with pytest.raises(ModelError, match="language must be rapid or krl"):
+        default.axes_in("inform")
+
+
+def test_positioner_from_catalog_in_python():
+    mount = pose([1500, 0, 0], [0, 0, 90])
+    table = Positioner.from_catalog("abb_irbp_a250", "STN1", mount, nests=np.eye(3) * 0.2)
+    file = cell_from_data({"units": {"length": "mm", "angle": "deg"},
+                           "positioner": {"model": "abb_irbp_a250", "unit": "STN1",
+                                          "mount": {"xyz": [1500, 0, 0], "rpy": [0, 0, 90]},
+                                          "nests": [[200, 0, 0], [0, 200, 0], [0, 0, 200]]}})
+    e = np.deg2rad(E_DEG)
+    for k in range(4):
+        np.testing.assert_allclose(table.chain.fk(e, smr=np.full(len(e), k)),
+                                   file.positioners["STN1"].chain.fk(e, smr=np.full(len(e), k)), atol=TOL)

@@ -104,6 +104,14 @@ def read_cell(data: dict, path: Path | None = None) -> CellFile:
                     _text(data.get("description", ""), "description", MAX_DESCRIPTION))
 
 
+def named(value, where: str) -> dict:
+    """A mapping of named entries (``robots:``, ``positioners:``), its names as text; ModelError for
+    anything else."""
+    if not isinstance(value, dict):
+        raise ModelError(f"{where}: expected a mapping {{name: {{...}}}}, got {short_repr(value)}")
+    return {str(k): v for k, v in value.items()}
+
+
 def is_workcell(data) -> bool:
     """Whether a loaded model mapping is a work cell (several arms or a positioner:
     `robocal.kinematics.workcell`), not one robot (nor a robot on a track alone)."""
@@ -131,7 +139,7 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
         if clash:
             raise ModelError(f"robots: give the arms either as robots: {{name: ...}} or as one robot:, "
                              f"not both (found {clash})")
-        arms = _mapping(data["robots"], "robots", set(map(str, data["robots"] or {})))
+        arms = named(data["robots"], "robots")
         if not arms:
             raise ModelError("robots: expected at least one arm {name: {model, base, unit}}")
         out = {}
@@ -141,7 +149,7 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
             model = spec["model"] if isinstance(spec["model"], dict) else \
                 _resolve(spec["model"], path, f"{where}.model")
             track = None if spec.get("track") is None else _track(spec["track"], length, f"{where}.track")
-            out[str(name)] = ArmEntry(model, _frame(spec.get("base"), length, angle, f"{where}.base"),
+            out[name] = ArmEntry(model, _frame(spec.get("base"), length, angle, f"{where}.base"),
                                       _text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track)
         return out
     if "robot" not in data:
@@ -160,7 +168,7 @@ def count_positioners(data: dict) -> int:
     if "positioner" in data and "positioners" in data:
         raise ModelError("give either positioner: (one) or positioners: {name: ...}, not both")
     if "positioners" in data:
-        return len(_mapping(data["positioners"], "positioners", set(map(str, data["positioners"] or {}))))
+        return len(named(data["positioners"], "positioners"))
     return int("positioner" in data)
 
 

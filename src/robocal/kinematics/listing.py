@@ -5,12 +5,16 @@ flange pose at a few joint sets."""
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.kinematics.catalog import catalog_descriptions, catalog_specs
-from robocal.kinematics.model import Robot
+from robocal.kinematics.catalog import catalog_descriptions, catalog_specs, positioner_names
+from robocal.kinematics.cell_file import is_workcell
+from robocal.kinematics.model import Robot, load_model
+from robocal.kinematics.model_file import read_model_data
+from robocal.kinematics.workcell import Cell, catalog_positioner, load_cell
 
 SHOW_JOINTS_DEG = np.array([[0, 0, 0, 0, 0, 0], [30, -20, 15, 45, -60, 90], [-90, 40, -30, -120, 30, 0]],
                            dtype=float)
@@ -30,7 +34,9 @@ def _figure(value, unit: str, width: int) -> str:
 
 
 def catalog_listing() -> str:
-    """One line per catalog robot: name, reach (mm), payload (kg), payload class, description.
+    """One line per catalog robot: name, reach (mm), payload (kg), payload class, description; then,
+    under their own heading, one line per catalog positioner: name, axes, payload, its description's
+    first sentence.
 
     Examples
     --------
@@ -44,7 +50,38 @@ def catalog_listing() -> str:
         reach, payload = specs[name]
         lines.append(f"{name:20s} {_figure(reach, '', 8)} {_figure(payload, ' kg', 9)}  "
                      f"{payload_class(payload):12s} {text}")
+    lines += ["", "positioners (a cell file's positioner: model: NAME)",
+              f"{'name':20s} {'axes':>8s} {'payload':>9s}  description"]
+    for name in positioner_names():
+        chain, payload = catalog_positioner(name)
+        kinds = "".join("P" if slides else "R" for slides in chain.prismatic)
+        summary = chain.description.split(". ")[0]
+        lines.append(f"{name:20s} {kinds:>8s} {_figure(payload, ' kg', 9)}  {summary}")
     return "\n".join(lines)
+
+
+def describe(spec: str) -> str:
+    """What ``robocal robots NAME`` prints: the `model_table` of a catalog positioner, `cell_table` of
+    a work cell file, or the `model_table` of any model `load_model` reads (a catalog robot, a model
+    file, a track cell file, a URDF)."""
+    if spec in positioner_names():
+        return model_table(catalog_positioner(spec)[0])
+    path = Path(spec)
+    if path.suffix.lower() in (".yaml", ".yml") and path.is_file() and is_workcell(read_model_data(path)):
+        return cell_table(load_cell(path))
+    return model_table(load_model(spec))
+
+
+def cell_table(cell: Cell) -> str:
+    """Each body of ``cell``: its name, kind, program unit and joint columns, then its `model_table`
+    (its base in the cell's world)."""
+    parts = [f"{cell.name}: {cell.description}".rstrip(": ") + f" (anchor: {cell.anchor})"]
+    for name in cell.bodies:
+        kind = "arm" if name in cell.arms else "positioner"
+        columns = ", ".join(j.column for j in cell.joints(name))
+        parts.append(f"\n== {kind} {name} (unit {cell.unit_of(name)}; columns {columns})\n"
+                     + model_table(cell.body(name)))
+    return "\n".join(parts)
 
 
 def model_table(robot: Robot) -> str:
@@ -70,7 +107,9 @@ def model_table(robot: Robot) -> str:
                      f"{robot.d[i] * 1e3:10.3f}  {lo:8.1f} {hi:8.1f}  {'yes' if robot.parallel[i] else ''}"
                      + ("  prismatic (mm)" if slide else ""))
     for label, T in (("base", robot.base), ("tool", robot.tool)):
-        rpy = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)
+        with warnings.catch_warnings():  # pitch +-90 deg (a positioner's horizontal axis): yaw set to 0
+            warnings.simplefilter("ignore", UserWarning)
+            rpy = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)
         xyz = np.round(T[:3, 3] * 1e3, 3).tolist()
         lines.append(f"{label}: xyz {xyz} mm, rpy {np.round(rpy, 3).tolist()} deg")
     q = np.zeros((len(SHOW_JOINTS_DEG), robot.n_joints))

@@ -9,14 +9,14 @@ or slides along in its own frame. Its forward kinematics is::
     world_T_plate(e) = mount @ O_1 @ J_1(e_1) @ O_2 @ J_2(e_2) ... @ plate
 
 with ``O_i`` the origin transform and ``J_i`` the joint motion (a rotation by ``e_i`` about the axis,
-or a translation by ``e_i`` along it). :func:`positioner_chain` converts it exactly to modified DH +
+or a translation by ``e_i`` along it). `positioner_chain` converts it exactly to modified DH +
 beta (`robocal.kinematics.urdf_read.lines_to_chain`, the URDF import's conversion: common normals,
 Hayati's beta on nearly parallel consecutive axes), so the positioner is a `Robot`: its base is the
 mount (world -> frame {0}), its tool the plate frame, its joints its axes. Forward kinematics, the
 identification Jacobian, priors and the model files come with it.
 
-Refused, with one line naming the cause: no axis or more than :data:`MAX_AXES`, a zero axis, an axis
-that is not a unit vector beyond :data:`robocal.kinematics.cell_file.DIRECTION_TOL` (within it the
+Refused, with one line naming the cause: no axis or more than `MAX_AXES`, a zero axis, an axis
+that is not a unit vector beyond `robocal.kinematics.cell_file.DIRECTION_TOL` (within it the
 axis is normalised), two consecutive revolute axes on one line (coaxial: the second adds no
 motion, hence no information), two consecutive prismatic axes along one direction, reversed limits,
 a prismatic axis without limits.
@@ -97,7 +97,7 @@ def _check_lines(P: np.ndarray, Z: np.ndarray, prismatic: np.ndarray, where: str
 
 
 def check_chain(robot: Robot, where: str) -> None:
-    """Refuse a chain that is no positioner: more than :data:`MAX_AXES` joints, consecutive
+    """Refuse a chain that is no positioner: more than `MAX_AXES` joints, consecutive
     revolute axes on one line, consecutive prismatic axes along one direction (its joint lines at
     zero, whatever form it was given in: axes, a DH or MDH table, joints rows)."""
     if robot.n_joints > MAX_AXES:

@@ -135,11 +135,13 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 
 def _perpendicular(z: np.ndarray, hint: np.ndarray) -> np.ndarray:
-    """Unit vector normal to ``z``, as close as possible to ``hint`` (else to world x or y)."""
+    """Unit vector normal to ``z``, as close as possible to ``hint`` (else to world x or y); projected
+    twice, so that it is normal to ``z`` to rounding even when ``hint`` is nearly along ``z``."""
     for h in (hint, np.array([1.0, 0, 0]), np.array([0, 1.0, 0])):
         v = h - (h @ z) * z
         if np.linalg.norm(v) > 1e-6:
-            return _unit(v)
+            v = _unit(v)
+            return _unit(v - (v @ z) * z)
     raise AssertionError("unreachable: x and y cannot both be parallel to a unit z")
 
 
@@ -228,7 +230,7 @@ def lines_to_chain(P: np.ndarray, Z: np.ndarray, T_tip: np.ndarray, limits: np.n
                 s, t = np.linalg.solve(A, [-(w @ z), -(w @ z2)])
                 o, foot2 = P[i] + s * z, p2 + t * z2
                 gap = foot2 - o
-                x = _unit(gap) if np.linalg.norm(gap) > 1e-9 else _unit(c)
+                x = _unit(c) * (-1.0 if gap @ c < 0 else 1.0)  # the common normal's direction, exactly
                 foot2 = o + (gap @ x) * x
             else:
                 hayati[i + 1] = True
@@ -238,6 +240,7 @@ def lines_to_chain(P: np.ndarray, Z: np.ndarray, T_tip: np.ndarray, limits: np.n
                 # axis i+1 meets the plane through o normal to z here
                 foot2 = p2 + ((o - p2) @ z) / (z2 @ z) * z2
                 gap = foot2 - o
+                gap -= (gap @ z) * z  # in the plane normal to z, to rounding
                 hint = xs[i - 1] if i > 0 else np.array([1.0, 0, 0])
                 x = _unit(gap) if np.linalg.norm(gap) > 1e-9 else _perpendicular(z, hint)
             feet[i + 1] = foot2

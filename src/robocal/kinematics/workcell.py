@@ -44,9 +44,19 @@ from robocal.kinematics.cell_file import (
     _text,
     _units,
     is_workcell,
+    named,
     read_arms,
 )
-from robocal.kinematics.model import Robot, _looks_like_xml, arm_from_entry, load_model, placed
+from robocal.kinematics.model import (
+    PRISMATIC,
+    REVOLUTE,
+    JointSpec,
+    Robot,
+    _looks_like_xml,
+    arm_from_entry,
+    load_model,
+    placed,
+)
 from robocal.kinematics.model_file import (
     MAX_DESCRIPTION,
     MAX_NAME,
@@ -63,8 +73,18 @@ GEOMETRY_FORMS = ("model", "axes", "dh", "mdh", "joints")
 SECTION_KEYS = {*GEOMETRY_FORMS, "limits", "unit", "mount", "plate", "nests", "columns", "program_axes",
                 "name", "description"}
 DEFINITION_KEYS = {"format", "name", "description", "units", "axes", "plate", "payload_kg"}
-COLUMN = re.compile(r"^e(\d+)$")  # a positioner joint's column (its measurement column is e<k>_deg|_mm)
+URDF_SUFFIXES = (".urdf", ".xml")  # a positioner's model given as a URDF (load_model reads it)
+GENERIC_AXIS = re.compile(r"^E([1-6])$")  # a program axis given as the k-th external axis
+RAPID_AXIS = re.compile(r"^eax_([a-f])$")  # a robtarget's extax letter
+RAPID_LETTERS = "abcdef"
+COLUMN = re.compile(r"^e([1-9]\d*)$")  # a positioner joint's column (its measurement column is e<k>_deg|_mm)
 SINGLE_POSITIONER = "positioner"  # the body name of a ``positioner:`` without name or unit
+# What a calibration of a positioner identifies (docs/model-yaml.md, "Work cells"): Positioner.identifiability
+WITH_NESTS = ("positioner {name}: SMR nests at known plate positions fix the plate frame: its axes, the "
+              "plate frame and the last axis' zero ({zero}) are identified")
+WITHOUT_NESTS = ("positioner {name}: no SMR nests at known plate positions: the SMRs' plate positions are "
+                 "estimated, and the last axis' zero ({zero}) and the plate frame's turn about that axis "
+                 "are one freedom: the zero is held at its nominal value")
 ANCHOR_ALIAS = "flange"  # a body label: the anchor arm
 PLATE_ALIAS = "plate"  # a body label: the only positioner
 
@@ -156,10 +176,45 @@ class Positioner:
                 raise ModelError(f"{self.chain.name}: {len(nests)} nests but its chain has "
                                  f"{len(self.chain.smr)} SMR offsets")
 
+    @classmethod
+    def from_catalog(cls, name: str, unit: str, mount: np.ndarray | None = None,
+                     plate: np.ndarray | None = None, **kwargs) -> Positioner:
+        """A catalog positioner (``robocal robots`` lists them) at ``mount`` ``(4, 4)`` (world -> its
+        base, m) with an extra ``plate`` ``(4, 4)`` after the catalog's plate frame; ``kwargs``:
+        ``columns``, ``nests`` (K, 3) m, ``program_axes``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> mount = np.eye(4)
+        >>> mount[0, 3] = 1.5
+        >>> table = rc.Positioner.from_catalog("abb_irbp_a250", "STN1", mount)
+        >>> table.plate(np.zeros((1, 2)))[0, :3, 3].round(3)  # 1.5 m out, plate 1.15 m up
+        array([1.5 , 0.  , 1.15])
+        """
+        return cls(placed(catalog_positioner(name)[0], mount, plate), unit, **kwargs)
+
     @property
     def n_axes(self) -> int:
         """The number of axes (joints of the chain)."""
         return self.chain.n_joints
+
+    @property
+    def joints(self) -> tuple[JointSpec, ...]:
+        """Each axis as messages, range checks and joints files name it: its column (``e1``), its
+        kind and limits (rad or m); ``.column`` is its CSV column (``e1_deg``, ``e2_mm``)."""
+        return tuple(JointSpec(c, PRISMATIC if slides else REVOLUTE, (float(lo), float(hi)))
+                     for c, slides, (lo, hi) in zip(self.columns, self.chain.prismatic, self.chain.limits,
+                                                    strict=True))
+
+    @property
+    def identifiability(self) -> str:
+        """What a calibration identifies of this positioner, in words: with nests, the axes, the
+        plate frame and the last axis' zero; without, the zero is confounded with the plate's turn
+        about the last axis and held at its nominal value (the parameter named)."""
+        template = WITH_NESTS if self.nests is not None else WITHOUT_NESTS
+        return template.format(name=self.chain.name, zero=self.chain.joint_params[-1])
 
     def plate(self, e) -> np.ndarray:
         """World poses ``(N, 4, 4)`` (m) of the plate frame at axis values ``e`` ``(N, n)`` (rad; m
@@ -175,6 +230,36 @@ class Positioner:
         (2, 4, 4)
         """
         return self.chain.fk(e)
+
+    def axes_in(self, language: str) -> tuple[str, ...]:
+        """The program's names of the axes in ``language``: ``"rapid"`` (a robtarget's extax
+        ``eax_a..eax_f``: ``E<k>`` is ``eax_<k-th letter>``) or ``"krl"`` (E6POS ``E1..E6``:
+        ``eax_<letter>`` is ``E<its number>``); a name of neither form is kept as written.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> from robocal.kinematics.positioner import positioner_chain
+        >>> chain = positioner_chain([{"type": "revolute", "axis": [1, 0, 0]},
+        ...                           {"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.2]}])
+        >>> table = rc.Positioner(chain, "STN1", columns=("e2", "e3"))
+        >>> table.axes_in("rapid"), table.axes_in("krl")
+        (('eax_b', 'eax_c'), ('E2', 'E3'))
+        """
+        if language not in ("rapid", "krl"):
+            raise ModelError(f"axes_in: language must be rapid or krl, got {language!r}")
+        out = []
+        for name in self.program_axes:
+            generic, rapid = GENERIC_AXIS.match(name), RAPID_AXIS.match(name)
+            if language == "rapid" and generic:
+                name = f"eax_{RAPID_LETTERS[int(generic[1]) - 1]}"
+            elif language == "krl" and rapid:
+                name = f"E{RAPID_LETTERS.index(rapid[1]) + 1}"
+            out.append(name)
+        return tuple(out)
+
+    def __repr__(self) -> str:
+        return f"Positioner({self.chain.name!r}, unit {self.unit!r}, columns {list(self.columns)})"
 
     def to_dict(self) -> dict:
         """The positioner's entry of a saved cell file (SI: its chain as an inline model)."""
@@ -254,6 +339,9 @@ class Cell:
             raise ModelError(f"arm_units names no arm: {unknown}; arms: {sorted(self.arms)}")
         set_(self, "arm_units", {n: _text(self.arm_units.get(n, n), f"robots.{n}.unit", MAX_NAME)
                                  for n in self.arms})
+        empty = [n for n, u in self.arm_units.items() if not u.strip()]
+        if empty:
+            raise ModelError(f"robots.{empty[0]}.unit is empty: name its mechanical unit (ROB_1...)")
         self._check_units()
         self._check_columns()
 
@@ -329,6 +417,20 @@ class Cell:
         name = self.resolve(name)
         return self.arms[name] if name in self.arms else self.positioners[name].chain
 
+    def joints(self, name: str) -> tuple[JointSpec, ...]:
+        """The joints of a body (by any label `resolve` takes) as measurement files name them: an
+        arm's ``q1..`` (a track's ``e1``), a positioner's `Positioner.columns`.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> cell = rc.load_cell("abb_irb2600")
+        >>> [j.column for j in cell.joints("flange")][:2]
+        ['q1_deg', 'q2_deg']
+        """
+        name = self.resolve(name)
+        return self.arms[name].joints if name in self.arms else self.positioners[name].joints
+
     def unit_of(self, name: str) -> str:
         """The program unit of a body (by any label `resolve` takes)."""
         name = self.resolve(name)
@@ -341,8 +443,9 @@ class Cell:
         The anchor's identified frame {0} is where the controller believes its base is:
         ``world_T_tracker = nominal_anchor.base @ inv(calibrated_anchor.base)``, and each other
         calibrated body's base in the world is ``world_T_tracker @ calibrated.base``. A body not in
-        ``calibrated`` stays nominal. Each moved body's nominal model is this cell's (when its
-        parameters are the same), so ``nominal_robot()`` is the controller's model.
+        ``calibrated`` stays nominal. Each moved body's nominal model is this cell's (a parameter the
+        cell's body lacks, such as an SMR the calibration estimated, keeps the calibration's nominal),
+        so ``nominal_robot()`` is the controller's model.
 
         Parameters
         ----------
@@ -383,8 +486,7 @@ class Cell:
                 raise ModelError(f"calibrated {name!r}: its joints differ from the cell's {nominal.name} "
                                  f"({nominal.n_joints} joints)")
             base = nominal.base if name == self.anchor else world_T_tracker @ model.base
-            moved = replace(model, base=base, nominal=nominal.nominal
-                            if nominal.geometry_names == model.geometry_names else None)
+            moved = replace(model, base=base, nominal=_controllers_nominal(model, nominal))
             if name in arms:
                 arms[name] = moved
             else:
@@ -424,6 +526,17 @@ class Cell:
         return f"Cell({self.name!r}, arms {list(self.arms)}, positioners {list(self.positioners)})"
 
 
+def _controllers_nominal(model: Robot, body: Robot) -> np.ndarray:
+    """The nominal geometry vector of calibrated ``model`` in the world: the cell's ``body``'s
+    nominal value of every parameter both have, ``model``'s own nominal for the others."""
+    nominal = model.nominal.copy()
+    names = model.geometry_names
+    known = dict(zip(body.geometry_names, body.nominal, strict=True))
+    shared = [i for i, name in enumerate(names) if name in known]
+    nominal[shared] = [known[names[i]] for i in shared]
+    return nominal
+
+
 def _axes_si(values, length: float, angle: float, where: str) -> list[dict]:
     """A file's ``axes`` list in SI (origins and prismatic limits in ``length``, rpy and revolute
     limits in ``angle``); the rest is checked by `positioner_chain`."""
@@ -458,16 +571,38 @@ def _definition(data: dict, where: str, name: str) -> Robot:
                                               MAX_DESCRIPTION))
 
 
+def catalog_positioner(name: str) -> tuple[Robot, float | None]:
+    """The chain (mount at the identity, plate frame as the catalog gives it) and the payload (kg,
+    None when the entry gives none) of catalog positioner ``name``; ModelError listing the catalog
+    for an unknown name.
+
+    Examples
+    --------
+    >>> from robocal.kinematics.workcell import catalog_positioner
+    >>> chain, payload = catalog_positioner("abb_irbp_a250")
+    >>> chain.n_joints, payload
+    (2, 250)
+    """
+    entry = positioner_entry(name)
+    if entry is None:
+        raise ModelError(f"unknown positioner {name!r}; the catalog has: {', '.join(positioner_names())} "
+                         "(run `robocal robots`)")
+    return _definition(entry, f"catalog positioner {name!r}", name), entry.get("payload_kg")
+
+
 def _model_chain(model, path: Path | None, where: str, name: str) -> Robot:
     """The chain a positioner's ``model:`` names: a catalog positioner, a file (a positioner
     definition or a model file), or an inline mapping (either)."""
     if isinstance(model, str) and positioner_entry(model) is not None:
-        return _definition(positioner_entry(model), f"catalog positioner {model!r}", model)
+        return catalog_positioner(model)[0]
     if isinstance(model, str):
         spec = _resolve(model, path, f"{where}.model")
         if not Path(spec).suffix and not Path(spec).exists():
             raise ModelError(f"{where}.model: unknown positioner {model!r}; the catalog has: "
                              f"{', '.join(positioner_names())} (run `robocal robots`), or give a file")
+        file = Path(spec)
+        if file.suffix.lower() in URDF_SUFFIXES or (file.is_file() and _looks_like_xml(file)):
+            return load_model(spec)  # a URDF of the positioner's chain (its root link the mount)
         model = read_model_data(spec)
         where = f"{where}.model ({spec})"
     if not isinstance(model, dict):
@@ -478,8 +613,9 @@ def _model_chain(model, path: Path | None, where: str, name: str) -> Robot:
     return Robot(**robot_kwargs({"name": name, **model}))
 
 
-def _positioner(spec, name: str, data: dict, path: Path | None) -> tuple[Positioner, bool]:
-    """A positioner section of a cell file (module docstring) and whether it gave its columns."""
+def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> Positioner:
+    """A positioner section of a cell file (module docstring); its columns default to
+    ``e<first>..``."""
     where = "positioner" if "positioner" in data else f"positioners.{name}"
     spec = _mapping(spec, where, SECTION_KEYS if where == "positioner" else SECTION_KEYS - {"name"})
     length_unit, angle_unit = _units(data)
@@ -511,10 +647,11 @@ def _positioner(spec, name: str, data: dict, path: Path | None) -> tuple[Positio
             raise ModelError(f"{where}.nests: expected a list of [x, y, z] plate positions")
         nests = np.array([_numbers(v, f"{where}.nests[{i}]", 3)
                           for i, v in enumerate(spec["nests"], 1)]) * length
-    columns = _names(spec.get("columns"), f"{where}.columns")
+    columns = _names(spec.get("columns"), f"{where}.columns") or \
+        tuple(f"e{first + i}" for i in range(chain.n_joints))
     program_axes = _names(spec.get("program_axes"), f"{where}.program_axes")
     unit = _text(spec.get("unit", name), f"{where}.unit", MAX_NAME)
-    return Positioner(chain, unit, columns, nests, program_axes), "columns" in spec
+    return Positioner(chain, unit, columns, nests, program_axes)
 
 
 def _names(values, where: str) -> tuple[str, ...]:
@@ -523,13 +660,6 @@ def _names(values, where: str) -> tuple[str, ...]:
     if not isinstance(values, list) or not all(isinstance(v, str) for v in values):
         raise ModelError(f"{where}: expected a list of names, got {short_repr(values)}")
     return tuple(values)
-
-
-def _default_columns(positioner: Positioner, first: int) -> Positioner:
-    """``positioner`` with columns ``e<first>..``, its program axes following them when defaulted."""
-    columns = tuple(f"e{first + i}" for i in range(positioner.n_axes))
-    defaulted = positioner.program_axes == tuple(c.upper() for c in positioner.columns)
-    return replace(positioner, columns=columns, program_axes=() if defaulted else positioner.program_axes)
 
 
 def cell_from_data(data: dict, path: Path | None = None) -> Cell:
@@ -545,15 +675,13 @@ def cell_from_data(data: dict, path: Path | None = None) -> Cell:
         label = spec.get("name", spec.get("unit", SINGLE_POSITIONER)) if isinstance(spec, dict) else ""
         sections = {_text(label, "positioner.name", MAX_NAME): spec}
     else:
-        raw = data.get("positioners") or {}
-        sections = {str(k): v for k, v in _mapping(raw, "positioners", set(map(str, raw))).items()} \
-            if "positioners" in data else {}
+        sections = named(data["positioners"], "positioners") if "positioners" in data else {}
+        if "positioners" in data and not sections:
+            raise ModelError("positioners: expected at least one positioner {name: {axes or model, ...}}")
     positioners: dict[str, Positioner] = {}
     following = 1 + any(arm.external_axes for arm in arms.values())  # after a track's e1
     for name, spec in sections.items():
-        positioner, given = _positioner(spec, name, data, path)
-        if not given:
-            positioner = _default_columns(positioner, following)
+        positioner = _positioner(spec, name, data, path, following)
         positioners[name] = positioner
         following = max(int(COLUMN.match(c)[1]) for c in positioner.columns) + 1
     default_name = next(iter(arms.values())).name if len(arms) == 1 and not positioners else "cell"
