@@ -55,10 +55,13 @@ def _chain_error(chain: rc.Robot, rng, mm: float, deg: float) -> rc.Robot:
 
 
 def cells(seed: int = 0, arm: str = ARM, unit: str = "STN1", axes=("eax_b", "eax_c"),
-          estimate_mm: float = 0.01, estimate_deg: float = 0.001) -> tuple[rc.Cell, rc.Cell, rc.Cell]:
+          estimate_mm: float = 0.01, estimate_deg: float = 0.001,
+          two_arms: bool = False) -> tuple[rc.Cell, rc.Cell, rc.Cell]:
     """``(nominal, true, calibrated)`` cells: the true one has the arm's link errors (0.05-0.5 mm,
     0.005-0.05 deg) and the positioner's (0.5 mm, 0.05 deg on its links and plate, 2 mm and 0.1 deg
-    on its mount); the calibrated one is the truth plus ``estimate_mm`` / ``estimate_deg``."""
+    on its mount); the calibrated one is the truth plus ``estimate_mm`` / ``estimate_deg``.
+    ``two_arms``: a first arm ``left`` (ROB_1, across the positioner) anchors the world, and the
+    programmed arm ``arm`` (ROB_2) really stands 1.5 mm / 0.05 deg from where the controller has it."""
     rng = np.random.default_rng(seed)
     nominal_arm = rc.Robot.from_catalog(arm)
     mount = make_transform(np.eye(3), [1.1, 0.45, 0.0])
@@ -68,13 +71,23 @@ def cells(seed: int = 0, arm: str = ARM, unit: str = "STN1", axes=("eax_b", "eax
     cal_arm = perturbed(true_arm, rng, length_mm=(0.0, estimate_mm), angle_deg=(0.0, estimate_deg))
     cal_pos = _chain_error(true_pos, rng, estimate_mm, estimate_deg)
 
-    def cell(a, p):
-        return rc.Cell({"arm": a}, {"turntable": rc.Positioner(p, unit, program_axes=tuple(axes))})
+    left = rc.Robot.from_catalog(ARM).with_frames(base=make_transform(rot_z(np.pi), [2.4, 0.9, 0.0]))
+    true_left = perturbed(left, rng)
+    cal_left = perturbed(true_left, rng, length_mm=(0.0, estimate_mm), angle_deg=(0.0, estimate_deg))
+    if two_arms:  # the programmed arm's real place in the world the left arm defines
+        true_arm = true_arm.with_frames(base=_moved(true_arm.base, rng, 1.5, 0.05))
+        cal_arm = cal_arm.with_frames(base=_moved(true_arm.base, rng, estimate_mm, estimate_deg))
+
+    def cell(a, p, first):
+        arms = {"left": first, "arm": a} if two_arms else {"arm": a}
+        return rc.Cell(arms, {"turntable": rc.Positioner(p, unit, program_axes=tuple(axes))},
+                       arm_units={"left": "ROB_1", "arm": "ROB_2"} if two_arms else {})
 
     tracker = _moved(make_transform(rot_z(2.0), [2.5, -1.0, 0.3]), rng, 1.0, 1.0)  # the calibration's frame
     calibrated = cell(cal_arm.with_frames(base=tracker @ cal_arm.base),
-                      cal_pos.with_frames(base=tracker @ cal_pos.base))
-    return cell(nominal_arm, nominal_pos), cell(true_arm, true_pos), calibrated
+                      cal_pos.with_frames(base=tracker @ cal_pos.base),
+                      cal_left.with_frames(base=tracker @ cal_left.base))
+    return cell(nominal_arm, nominal_pos, left), cell(true_arm, true_pos, true_left), calibrated
 
 
 def poses(nominal: rc.Cell, n: int, seed: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -221,7 +234,7 @@ def landing(paths, references, nominal: rc.Cell, true: rc.Cell, intended=None) -
         before = d.parse([ProgramText(Path(p)) for p in intended], {}, {},
                          [ProgramText(Path(p)) for p in references])
         P = target_poses(d, before, [t for t in before.targets if t.frame in before.carried])[1]
-    true_arm, true_chain = true.arms["arm"].with_frames(base=arm.base), true.positioners["turntable"].chain
+    true_arm, true_chain = true.arms["arm"], true.positioners["turntable"].chain
     on_plate = invert_transform(true_chain.fk(e) @ W) @ true_arm.fk(q) @ tool
     return {"error": np.linalg.norm(on_plate[:, :3, 3] - P[:, :3, 3], axis=1), "q": q, "e": e}
 

@@ -47,7 +47,7 @@ def _cell(monkeypatch, arm: rc.Robot, unit: str, axes=("E1", "E2"), calibrated_p
     """Filter with a cell of ``arm`` and the positioner as ``unit`` (perturbed: the calibrated one)."""
     station = Station(unit, POSITIONER, calibrated_positioner or perturbed(POSITIONER, 3), tuple(axes))
     cell = CoordinatedProgram({unit: station})
-    monkeypatch.setattr(filter_module, "cell_models", lambda c, n: (c, n, cell))
+    monkeypatch.setattr(filter_module, "cell_models", lambda c, n, arm=None: (c, n, cell))
 
 
 def _outside_numbers(data: bytes) -> str:

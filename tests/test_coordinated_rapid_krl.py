@@ -350,3 +350,24 @@ def test_krl_spline_form_without_config_says_the_base_is_taken_as_fixed(tmp_path
     said = [w for w in prog.warnings if "K_ROOT" in w]
     assert said == ["$BASE=EK(K_ROOT(..)) of base 3: whether a machine carries it is in $config.dat's "
                     "MACHINE_FRAME_DAT, not given (--references): taken as a fixed base"]
+
+
+def test_two_arms_each_program_with_its_own_arm_in_the_shared_world(tmp_path):
+    """A cell of two arms and a positioner: the first (ROB_1) anchors the world; ROB_2's program,
+    filtered with arm='ROB_2', lands on the true plate although ROB_2 really stands 1.5 mm / 0.05
+    deg from where the controller has it (its calibrated place in the shared world is used);
+    without arm the run is refused naming the arms."""
+    nominal, true, calibrated = cp.cells(0, two_arms=True)
+    q, e, T = cp.poses(nominal, 20)
+    path = cp.rapid_program(tmp_path, nominal, q, e, T)
+    with pytest.raises(DataError, match=r"has arms left \(ROB_1\), arm \(ROB_2\): name the arm"):
+        filter_program(path, calibrated, nominal)
+    with pytest.raises(DataError, match=r"--arm turntable: not an arm of the cell"):
+        filter_program(path, calibrated, nominal, arm="turntable")
+    res = filter_program(path, calibrated, nominal, arm="ROB_2")
+    out = tmp_path / "out.mod"
+    out.write_bytes(res.outputs[path])
+    before = cp.landing([path], [], nominal, true)
+    after = cp.landing([out], [], nominal, true, intended=[path])
+    rms = _goal(before, after, cp.model_error(after["q"], after["e"], calibrated, true))
+    assert rms["unfiltered"] > 1e-3  # the placement error is seen unfiltered
