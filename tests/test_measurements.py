@@ -82,6 +82,22 @@ def test_reads_mm_deg_columns_and_comment(tmp_path):
     assert d.pose_id.tolist() == [0, 1] and d.smr.tolist() == [0, 0]
 
 
+def test_external_axes_alone_are_a_positioner_file(tmp_path):
+    # a 2-axis positioner's file: its axes are the e columns, no arm joints
+    text = ("e1_deg,e2_deg,x_mm,y_mm,z_mm,qw,qx,qy,qz\n-30,0,100,200,300,1,0,0,0\n"
+            "-30,22.5,110,190,300,1,0,0,0\n")
+    data = parse_csv(text)
+    assert (data.n_joints, data.external, data.kind) == (2, 2, "pose")
+    assert np.allclose(data.joints, np.deg2rad([[-30, 0], [-30, 22.5]]))
+    path = tmp_path / "plate.csv"
+    data.save(path)
+    header = next(line for line in path.read_text().splitlines() if not line.startswith("#"))
+    assert header.split(",")[2:4] == ["e1_rad", "e2_rad"]
+    table = Robot.from_mdh([0, -90], [0, 0], [0, 0], [0, 400], degrees=True, length_unit="mm",
+                           limits=[[-90, 90], [-360, 360]])
+    assert Measurements.load(path, robot=table).n_joints == 2
+
+
 def test_subset_and_split_keep_poses_together(rng):
     data = _point_data(rng, N=40)
     a, b = data.split_poses(0.25, seed=3)

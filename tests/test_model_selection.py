@@ -29,7 +29,13 @@ from robocal.core.damped_least_squares import Status
 from robocal.core.errors import IdentificationError, ModelError
 from robocal.data.measurements import Measurements, approach_from_order, parse_csv, travel_from_order
 from robocal.data.simulate import simulate_tracker
-from robocal.identify.frequency_search import FrequencyScan, trig_sums
+from robocal.identify.frequency_search import (
+    ALIAS_CORRELATION,
+    MAX_FREQUENCY,
+    FrequencyScan,
+    resolved_frequency,
+    trig_sums,
+)
 from robocal.identify.lsq import gauss_newton
 from robocal.identify.priors import prior_sigma
 from robocal.identify.problem import CalibrationProblem
@@ -115,6 +121,36 @@ def test_frequency_search_finds_the_injected_frequencies_and_nothing_in_noise():
         assert {(i, round(f)) for i, f in found} == expected
         for i, f in found:
             assert f == pytest.approx(120.0 if i == 0 else 80.0, abs=0.1)  # peak width ~0.5
+
+
+def _brute_force_resolved(q: np.ndarray, step: float) -> float:
+    """resolved_frequency's definition evaluated directly: the spectral window at every offset."""
+    offsets = np.arange(int(np.ceil(2 * MAX_FREQUENCY / step)) + 1) * step
+    window = np.abs(np.exp(1j * offsets[:, None] * q[None]).mean(axis=1))
+    out = int(np.argmax(window < ALIAS_CORRELATION))
+    alias = np.flatnonzero(window[out:] >= ALIAS_CORRELATION)
+    return MAX_FREQUENCY if alias.size == 0 else min(offsets[out + alias[0]] / 2, MAX_FREQUENCY)
+
+
+def test_cyclic_search_stops_where_a_grid_of_angles_aliases():
+    rng = np.random.default_rng(3)
+    # a positioner's turn table in 22.5 deg steps read with 0.05 deg of jitter, 13 tilts of 5 deg
+    turn = np.tile(np.deg2rad(np.arange(16) * 22.5), 13) + np.deg2rad(0.05) * rng.standard_normal(208)
+    tilt = np.repeat(np.deg2rad(np.arange(-30, 31, 5)), 16)
+    q = np.column_stack([tilt, turn])
+    scan = FrequencyScan(q, np.arange(208))
+    for i, h in ((0, 5.0), (1, 22.5)):  # Nyquist of a grid of step h: pi / h = 180 / h cycles/rev
+        assert scan.top[i] == pytest.approx(180.0 / h, abs=scan.step[i])
+        assert scan.top[i] == pytest.approx(_brute_force_resolved(q[:, i], scan.step[i]), abs=1e-9)
+        assert scan.grids[i].max() < scan.top[i]
+        # above the limit a lower frequency gives the same column at these angles (an alias)
+        f = scan.top[i] + 1.0
+        alias = 360.0 / h - f
+        assert abs(np.corrcoef(np.sin(f * q[:, i]), -np.sin(alias * q[:, i]))[0, 1]) > 0.99
+    # an arm's joints spread at random: the whole band (no aliases)
+    arm = rng.uniform(-2.5, 2.5, (100, 6))
+    assert (FrequencyScan(arm, np.arange(100)).top == MAX_FREQUENCY).all()
+    assert resolved_frequency(arm[:, 0], 0.3) == _brute_force_resolved(arm[:, 0], 0.3) == MAX_FREQUENCY
 
 
 def _rows_with_contributions(rms_mm, spread_mm, n_params, poses=100, seed=0):

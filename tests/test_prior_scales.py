@@ -16,6 +16,7 @@ import robocal as rc
 from robocal.cli.calibrate import _priors
 from robocal.core.errors import ModelError
 from robocal.identify.evidence import NormalStats, fit_group_scales, log_evidence
+from robocal.identify.priors import class_defaults
 from robocal.kinematics.prior_spec import PriorSpec, class_of
 from robocal.trust.diagnosis import priors_too_tight
 
@@ -136,6 +137,15 @@ def test_class_from_the_model():
     assert class_of(rc.Robot.from_catalog("abb_irb120"))[0] == "industrial"
     eight = rc.Robot.from_mdh(*np.zeros((4, 8)))
     assert class_of(eight)[0] == "service"
+    # a tilt-and-turn table (2 joints) or a turntable (1): the positioner class and its scales
+    table = rc.Robot.from_mdh([0, -90], [0, 0], [0, 0], [0, 475], degrees=True, length_unit="mm")
+    assert class_of(table)[0] == "positioner"
+    assert class_of(rc.Robot.from_mdh([0], [0], [0], [0]))[0] == "positioner"
+    assert class_of(rc.Robot.from_mdh(*np.zeros((4, 3))))[0] == "industrial"
+    name, _, scales = class_defaults(table)
+    assert name == "positioner" and scales["zeros"] == pytest.approx(np.deg2rad(0.3))
+    assert scales["lengths"] == pytest.approx(5e-3)  # at least 5 mm (0.475 m x 10 mm/m is less)
+    assert class_of(table.with_priors(PriorSpec("industrial"))) == ("industrial", "named")
 
 
 def test_priors_too_tight_is_the_diagnosis_of_a_misfit():

@@ -102,11 +102,16 @@ class EvaluationResult(dict):
         return {k: self[k] for k in STATISTICS}
 
     def summary(self) -> str:
-        """One line: the kind of errors, of which model on which data, the statistics (mm)."""
+        """One line: the kind of errors, of which model on which data, the statistics (mm; and of
+        the rotation errors, deg, for 6-D rows)."""
         stats = self.statistics
+        rotation = self.get("rotation_deg")
+        turns = "" if rotation is None else "; rotation " + ", ".join(
+            f"{k} {rotation[k]:.4f} deg" for k in ("rms", "mean", "max", "p95"))
         return (f"{self['kind']} errors of {self.names.get('model') or 'the model'} on "
                 f"{self.names.get('data') or 'the data'} ({self['n_poses']} poses): "
-                + ", ".join(f"{k} {stats[k]:.4f} mm" if k != "n" else f"n {stats[k]}" for k in STATISTICS))
+                + ", ".join(f"{k} {stats[k]:.4f} mm" if k != "n" else f"n {stats[k]}" for k in STATISTICS)
+                + turns)
 
     def to_dict(self) -> dict:
         """The evaluation JSON: the names, the statistics, each row's error (mm), the consistency

@@ -174,6 +174,11 @@ def _covariance(problem: CalibrationProblem, out: SolverResult, space: Parameter
 
 
 PARTNER_CORRELATION = 0.9  # |correlation| above which two estimates are reported as confounded
+# The calibrated model is called worse than the nominal on validation data when its mean squared
+# item error exceeds the nominal's by more than this many standard errors of the paired difference
+# (one-sided 1 %): a calibration that changes nothing the data see (a positioner whose errors the
+# frames absorb) scatters a few % either way on the same poses, which is no finding
+WORSE_VALIDATION_Z = 2.33
 
 
 def _partners(cov: np.ndarray, names: list[str]) -> dict[str, list[str]]:
@@ -220,12 +225,23 @@ def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data
                         f"{JOINT_REPEAT_TOL_DEG:g} {tolerance_unit(data)}): the held-out figures are "
                         f"computed on the other {len(rows)} rows only")
         result = replace(judged(rows), repeated=repeated)
-    if result.after["rms"] > result.before["rms"]:
+    if significantly_worse(*result.errors):
         warnings.append(f"the calibrated model is worse than the nominal on the validation data "
                         f"{data.label} ({result.before['rms']:.4g} -> {result.after['rms']:.4g} mm RMS): the "
                         "calibration does not carry over (too few or clustered poses, or validation data "
                         "from another setup)")
     return result
+
+
+def significantly_worse(before: np.ndarray, after: np.ndarray) -> bool:
+    """Whether item errors ``after (N,)`` are worse than ``before (N,)`` on the same items beyond
+    sampling: their mean square larger by more than WORSE_VALIDATION_Z standard errors of the
+    paired squared differences (any increase with fewer than 3 items)."""
+    d = np.asarray(after, float) ** 2 - np.asarray(before, float) ** 2
+    if d.size < 3:
+        return bool(d.mean() > 0) if d.size else False
+    se = d.std(ddof=1) / np.sqrt(d.size)
+    return bool(d.mean() > WORSE_VALIDATION_Z * se)
 
 
 def _rows(robot=None, data=None, *args, **kwargs) -> int:

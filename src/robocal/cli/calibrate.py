@@ -93,6 +93,11 @@ def add_parser(sub) -> None:
                         "declares it in a file): its documented noise weighs them, a mocap's or camera's "
                         "heavy-tailed errors make robust the default method and a camera's 6-D poses get "
                         "their position and rotation noise estimated (variance components)")
+    p.add_argument("--variance-components", action=argparse.BooleanOptionalAction, default=None,
+                   help="estimate the position and rotation noise of 6-D pose files from the fit (iterated "
+                        "variance components) and weigh them with it; default: for a camera's files and "
+                        "6-D files of a declared instrument other than a laser tracker. Use it for a "
+                        "6-DOF sensor whose noise ratio is not documented")
     p.add_argument("--params", default="auto",
                    help="auto (identifiable default set), all, or names separated by spaces/commas")
     p.add_argument("--validate", metavar="VAL.csv", nargs="+",
@@ -116,9 +121,10 @@ def add_parser(sub) -> None:
                         "lsq/robust on one file of tracker data (points or poses) with at least 100 "
                         "poses, else none")
     p.add_argument("--priors", type=_priors, metavar="GROUP=SCALE,...",
-                   help="the parameter priors (docs/priors.md): class=industrial|collaborative|service "
-                        "(service: humanoids, mobile manipulators, low-cost arms; default: chosen from the "
-                        "model), group scales with their unit: zeros=3deg, twists=1deg, lengths=10mm, "
+                   help="the parameter priors (docs/priors.md): class=industrial|collaborative|service|"
+                        "positioner (service: humanoids, mobile manipulators, low-cost arms; positioner: "
+                        "tables and turntables; default: chosen from the model), group scales with their "
+                        "unit: zeros=3deg, twists=1deg, lengths=10mm, "
                         "errors=2x (a factor on the joint-error terms' scales), estimate=no (keep the "
                         "class defaults instead of widening them where the data ask for it); on top of "
                         "the model file's priors: block")
@@ -173,7 +179,7 @@ def run(args) -> int:
                   instrument=args.instrument, **dict(args.options))
     if start is None:
         result = calibrate(robot, data, params=args.params, nongeometric=args.nongeometric,
-                           priors=args.priors, **common)
+                           priors=args.priors, variance_components=args.variance_components, **common)
     else:
         result = recalibrate_offsets(robot, start, data, **common)
     result.provenance.update(command="robocal " + " ".join(args.argv), robot_spec=args.robot,

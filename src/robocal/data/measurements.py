@@ -949,8 +949,9 @@ def _joint_columns(roles: dict, name: str) -> list[str]:
             raise DataError(f"{name}: {'external axis' if role == 'e' else 'joint'} columns must be "
                             f"{role}1..{role}{len(cols)} without gaps, got {[h for _, h in cols]}")
         out += [h for _, h in cols]
-    if not any(roles[h][0] == "q" for h in out):
-        raise DataError(f"{name}: no joint columns; add q1_deg..qn_deg (or q1_rad..qn_rad)")
+    if not out:  # external axes alone are a chain of their own: a positioner's e1_deg, e2_deg
+        raise DataError(f"{name}: no joint columns; add q1_deg..qn_deg (or q1_rad..qn_rad), or e1_deg.. "
+                        "for a positioner's axes")
     if len({roles[h][2] for h in out if not _is_length(h)}) > 1:
         raise UnitError(f"{name}: joint columns mix _deg and _rad; use one unit for all joints")
     return out

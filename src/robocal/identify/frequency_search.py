@@ -5,7 +5,10 @@ joint's error holds a sinusoid in ``f q_i`` with ``f`` the reduction ratio (or a
 cycles per joint revolution: dq_i = s sin(f q_i) + c cos(f q_i). The search is greedy, on the
 linearised problem at a fitted model (a periodogram in the joint angle):
 
-1. For each joint and each frequency on a grid from CYCLIC_MIN_FREQUENCY to MAX_FREQUENCY
+1. For each joint and each frequency on a grid from CYCLIC_MIN_FREQUENCY to MAX_FREQUENCY, or to
+   the highest frequency the joint's angles resolve when lower (:func:`resolved_frequency`: angles
+   on a grid of step h alias every frequency above pi / h onto a lower one, as a positioner's
+   table turned in 22.5 deg steps does above 8 cycles per revolution)
    (step pi / (2 span_i), half the width of a peak over the joint's span in the data), the Wald
    statistic of adding the two columns ``d(TCP)/d(theta_i) * (sin f q_i, cos f q_i)`` to the
    fitted model, vectorised over frequencies. The variance is cluster-robust by pose (the
@@ -51,6 +54,12 @@ _POLISH_POINTS = 9           # exact refinement grid over +-1/2 grid step (polis
 TRIG_SUM_RTOL = 1e-13        # truncation of the gridded sums' Taylor series, relative to sum |w|
 _OVERSAMPLING = 4            # FFT length / number of modes: the Taylor remainder's step is pi / 4
 _LOWEST = CYCLIC_MIN_FREQUENCY + 0.01  # refinement never goes below this (names round to 0.01)
+# Two frequencies D apart whose columns correlate this much at the poses' angles (the sampling's
+# spectral window |mean exp(i D q)|) are not told apart: the higher one is an alias of the lower.
+# A grid's aliases reach ~1 (0.99 with 0.5 deg of jitter at 16 cycles/rev); P angles spread at
+# random exceed it at one of the ~3000 offsets scanned with probability ~3000 exp(-0.64 P): 1e-5
+# for 30 poses
+ALIAS_CORRELATION = 0.8
 
 
 def trig_sums(w: np.ndarray, x: np.ndarray, n_modes: int) -> np.ndarray:
@@ -86,6 +95,22 @@ def trig_sums(w: np.ndarray, x: np.ndarray, n_modes: int) -> np.ndarray:
     return total
 
 
+def resolved_frequency(q: np.ndarray, step: float) -> float:
+    """The highest frequency (cycles per revolution) whose cyclic error the joint angles ``q
+    (poses,)`` rad tell apart from a lower one: half the first offset D (on a grid of ``step``)
+    beyond the window's main lobe where the sampling's spectral window ``|mean exp(i D q)|``
+    reaches ALIAS_CORRELATION, since f and D - f then give the same columns. A regular grid of
+    step h has D = 2 pi / h: pi / h, its Nyquist frequency; angles spread irregularly (an arm's
+    poses) have no such D up to 2 MAX_FREQUENCY: MAX_FREQUENCY."""
+    n_modes = int(np.ceil(2.0 * MAX_FREQUENCY / step)) + 1
+    window = np.abs(trig_sums(np.full(q.size, 1.0 / max(q.size, 1)), step * np.asarray(q, float), n_modes))
+    below = np.flatnonzero(window < ALIAS_CORRELATION)
+    if below.size == 0:
+        return 0.0  # the angles never spread enough to leave the main lobe: nothing is resolved
+    alias = np.flatnonzero(window[below[0]:] >= ALIAS_CORRELATION)
+    return MAX_FREQUENCY if alias.size == 0 else min(0.5 * (below[0] + alias[0]) * step, MAX_FREQUENCY)
+
+
 class FrequencyScan:
     """The poses' joint angles and each joint's frequency grid (step 1 of the module docstring).
 
@@ -99,8 +124,11 @@ class FrequencyScan:
         self.n_poses = q_pose.shape[0]
         span = np.ptp(q_pose, axis=0)
         self.step = np.pi / (2.0 * np.maximum(span, 1e-12))
-        self.grids = [np.arange(CYCLIC_MIN_FREQUENCY + self.step[i], MAX_FREQUENCY, self.step[i])
-                      if span[i] >= MIN_SPAN else np.zeros(0) for i in range(q_pose.shape[1])]
+        # per joint, the top of its searched band (0: not searched): MAX_FREQUENCY or its aliasing limit
+        self.top = np.array([resolved_frequency(q_pose[:, i], self.step[i]) if span[i] >= MIN_SPAN else 0.0
+                             for i in range(q_pose.shape[1])])
+        self.grids = [np.arange(CYCLIC_MIN_FREQUENCY + self.step[i], self.top[i], self.step[i])
+                      for i in range(q_pose.shape[1])]
         self.n_independent = max(sum(g.size for g in self.grids) / 2.0, 1.0)
         self.q_pose = q_pose
 
@@ -170,7 +198,7 @@ class FrequencyScan:
             others = self.columns(Jtheta, rows, out[:k] + out[k + 1 :])
             U = np.hstack([U0, _orthonormal(others - U0 @ (U0.T @ others))])
             rp = r - U @ (U.T @ r)
-            grid = _in_band(f0 + np.linspace(-0.5, 0.5, _POLISH_POINTS) * self.step[i])
+            grid = _in_band(f0 + np.linspace(-0.5, 0.5, _POLISH_POINTS) * self.step[i], self.top[i])
             qi = np.repeat(self.q_item[:, i], rows)[:, None] * grid[None]
             S, C = Jtheta[:, [i]] * np.sin(qi), Jtheta[:, [i]] * np.cos(qi)
             S, C = S - U @ (U.T @ S), C - U @ (U.T @ C)
@@ -184,7 +212,7 @@ class FrequencyScan:
         ``y (poses,)`` is the residual along joint i's motion per pose, ``weight (poses,)`` the
         squared norm of its column; the columns' small overlap with the model's is neglected
         here (the statistic of the refined frequency is then computed exactly)."""
-        grid = _in_band(f0 + np.linspace(-1.0, 1.0, _REFINE_POINTS) * self.step[i])
+        grid = _in_band(f0 + np.linspace(-1.0, 1.0, _REFINE_POINTS) * self.step[i], self.top[i])
         phase = np.outer(self.q_pose[:, i], grid)
         s, c = np.sin(phase), np.cos(phase)
         gain = _quadratic_form(y @ s, y @ c, weight @ (s * s), weight @ (c * c), weight @ (s * c))
@@ -205,11 +233,11 @@ class FrequencyScan:
         return float(b @ np.linalg.solve(V, b)), cp
 
 
-def _in_band(grid: np.ndarray) -> np.ndarray:
+def _in_band(grid: np.ndarray, top: float) -> np.ndarray:
     """The refinement ``grid``'s frequencies a cyclic error can have: above the gear term's
-    harmonics (a peak at the bottom of the searched band must not refine into them) and below
-    MAX_FREQUENCY."""
-    return grid[(grid >= _LOWEST) & (grid <= MAX_FREQUENCY)]
+    harmonics (a peak at the bottom of the searched band must not refine into them) and up to
+    the joint's ``top`` (MAX_FREQUENCY, or lower where its angles alias)."""
+    return grid[(grid >= _LOWEST) & (grid <= top)]
 
 
 def _peak(grid: np.ndarray, gain: np.ndarray) -> float:

@@ -56,12 +56,19 @@ class PriorClass:
 # (the UR5/UR10 data robocal leads on were fitted with them), so they share the numbers and only the
 # name says what was chosen; the service class (humanoids, mobile manipulators, low-cost arms: plastic
 # or sheet-metal links, belt or cable drives, zeros set by eye) carries the corrections FIGAROH's
-# calibrations of TIAGo and TALOS identify (2-3 deg zeros, one 50 mrad; 11 mm lengths).
+# calibrations of TIAGo and TALOS identify (2-3 deg zeros, one 50 mrad; 11 mm lengths); the
+# positioner class (tilt-and-turn tables, turntables, headstocks: welded frames whose axes are set
+# at commissioning, not machined castings mastered at the factory) carries the prior of the
+# ROS-Industrial positioner calibration (robot_cal_tools' kinematic calibration example: 0.005 rad
+# and 0.005 m, 1 sigma, on every DH offset of its 2-axis positioner), which its real data agree
+# with (benchmarks/bench_rosi_positioner.py: corrections of 0.7 mm and 0.02 deg identified).
 CLASSES = {
     "industrial": PriorClass(0.5, 0.2, 1.0, 0.5, 1.0, "industrial arm (mastered zeros, machined castings)"),
     "collaborative": PriorClass(0.5, 0.2, 1.0, 0.5, 1.0, "collaborative arm (factory-calibrated)"),
     "service": PriorClass(3.0, 1.0, 10.0, 5.0, 3.0,
                           "humanoid, mobile manipulator or low-cost arm (zeros set by eye, light links)"),
+    "positioner": PriorClass(0.3, 0.3, 10.0, 5.0, 1.0,
+                             "positioner or turntable (welded frame, axes set at commissioning)"),
 }
 CLASS_ALIASES = {"humanoid": "service", "mobile": "service", "mobile-manipulator": "service",
                  "low-cost": "service", "lowcost": "service", "cobot": "collaborative"}
@@ -69,6 +76,7 @@ CLASS_ALIASES = {"humanoid": "service", "mobile": "service", "mobile-manipulator
 # every other catalog model is an industrial arm, and models outside the catalog go by their joints
 CATALOG_CLASS = {r"ur\d": "collaborative"}
 SERVICE_MIN_JOINTS = 8  # a chain this long is a torso before an arm: a humanoid or mobile manipulator
+POSITIONER_MAX_JOINTS = 2  # a chain this short carries a workpiece (no arm has fewer than 3 joints)
 _BOOL = {"yes": True, "true": True, "no": False, "false": False}
 _VALUE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-z]+)\s*$")
 
@@ -172,8 +180,9 @@ class PriorSpec:
 
 def class_of(robot) -> tuple[str, str]:
     """The robot's prior class and why: its own ``priors`` class, else its catalog maker, else
-    :data:`SERVICE_MIN_JOINTS` or more joints (a torso before an arm) the service class, else
-    industrial (the scales are then widened where the data ask)."""
+    :data:`SERVICE_MIN_JOINTS` or more joints (a torso before an arm) the service class, at most
+    :data:`POSITIONER_MAX_JOINTS` the positioner class, else industrial (the scales are then
+    widened where the data ask)."""
     spec = getattr(robot, "priors", None)
     if spec is not None and spec.robot_class is not None:
         return spec.robot_class, "named"
@@ -183,4 +192,6 @@ def class_of(robot) -> tuple[str, str]:
         return cls, f"model {robot.name}"
     if robot.n_joints >= SERVICE_MIN_JOINTS:
         return "service", f"{robot.n_joints} joints (a torso before an arm)"
+    if robot.n_joints <= POSITIONER_MAX_JOINTS:
+        return "positioner", f"{robot.n_joints} joint{'s' * (robot.n_joints > 1)}: no arm has fewer than 3"
     return "industrial", "default for a serial arm"

@@ -22,7 +22,11 @@ shuffles of the rows, both frames in each; exact when the rows are exchangeable,
 for a model that fits). A change point is reported when ``p <`` :data:`STEP_ALPHA` and the step
 is larger than :data:`STEP_MIN_SIGMAS` noise sigmas and :data:`STEP_MIN_RESIDUAL_RATIO` of the
 residual's 3-D RMS (a real, but negligible, drift is not a finding). A linear trend that explains
-the residual better than the step is called a drift.
+the residual better than the step is called a drift. A change point where a joint starts or stops
+standing still (within :data:`robocal.data.measurements.NEAR_REPEAT_RAD`) for at least a segment's
+rows (a blocked scan: a positioner's tilt held while its table turns) is an error of the model at
+that joint's value as much as a moved instrument: the rows are not exchangeable there, and the
+sentence names the joint and says the data cannot tell the two apart (`held_joint`).
 
 **Diagnosis** of an inconsistent fit, in order: the change point; the orientation convention of a
 6-DOF pose file (quaternions scalar-last under ``qw,qx,qy,qz`` headers, or the inverse rotation:
@@ -47,7 +51,7 @@ from scipy.special import chdtrc  # chi2.sf without importing scipy.stats (a thi
 
 from robocal.core.errors import PlausibilityError, RobocalError
 from robocal.data.instruments import noise_of
-from robocal.data.measurements import robot_reach
+from robocal.data.measurements import NEAR_REPEAT_RAD, robot_reach
 from robocal.data.registration import register_frame
 from robocal.identify.plausibility import FORCE_HINT
 from robocal.trust.diagnosis import GAIN, fit_rms_mm, joint_mixup, length_unit, priors_too_tight
@@ -87,6 +91,20 @@ class ChangePoint:
     step_mm: float
     p_value: float
     shape: str
+    joint: str = ""  # a joint standing still on one side of it (`held_joint`): its name, ...
+    joint_deg: float = 0.0  # ... the value it stood at (deg; mm for a prismatic joint) ...
+    joint_rows: int = 0  # ... and for how many rows (> 0: the rows before it, < 0: the rows after)
+
+    def _confound(self) -> str:
+        """What else explains a change point where a joint stood still (module docstring)."""
+        if not self.joint:
+            return ""
+        moves = (f"leaves {self.joint_deg:.4g} there, where it stood for the {self.joint_rows} rows before"
+                 if self.joint_rows > 0 else
+                 f"comes to {self.joint_deg:.4g} there and stands for the {-self.joint_rows} rows after")
+        return (f"; but joint {self.joint} {moves}, so an error of the model at that {self.joint} looks the "
+                "same: these data cannot tell the two apart (interleave that joint's values in the measuring "
+                "order, or re-measure one block)")
 
     def sentence(self) -> str:
         name = self.file or "the data"
@@ -95,16 +113,20 @@ class ChangePoint:
             return (f"the residuals drift along the measuring order of {name} ({self.step_mm:.3g} mm "
                     f"between the halves split at row {self.row}, in the {self.frame} frame, permutation "
                     f"p = {self.p_value:.2g}): the tracker, the SMR or the robot drifted during the campaign "
-                    "(temperature, a loose nest); re-measure, or calibrate the stable part")
+                    "(temperature, a loose nest); re-measure, or calibrate the stable part"
+                    f"{self._confound()}")
         cause = ("the SMR was moved to another nest or re-seated on the tool" if self.frame == "flange"
                  else "the tracker or the robot base moved (bumped)")
         return (f"the residuals step by {self.step_mm:.3g} mm at {where}, constant in the {self.frame} frame "
                 f"(permutation p = {self.p_value:.2g}): {cause} there; calibrate the two parts as separate "
-                "files (another SMR index or another tracker station) or re-measure")
+                f"files (another SMR index or another tracker station) or re-measure{self._confound()}")
 
     def to_dict(self) -> dict:
+        held = ({"joint": self.joint, "joint_value": self.joint_deg, "joint_rows": abs(self.joint_rows),
+                 "joint_held": "before" if self.joint_rows > 0 else "after"} if self.joint else {})
         return {"file": self.file, "index": self.index, "row": self.row, "n_rows": self.n_rows,
-                "frame": self.frame, "step_mm": self.step_mm, "p_value": self.p_value, "shape": self.shape}
+                "frame": self.frame, "step_mm": self.step_mm, "p_value": self.p_value, "shape": self.shape,
+                **held}
 
 
 @dataclass
@@ -221,7 +243,7 @@ def change_point(errors: np.ndarray, rotations: np.ndarray, noise: float, seed: 
     row), as ``(index, frame, step_m, p_value, shape)``, or None when it is not reported (module
     docstring: p-value, step size against ``noise`` (m, 1 sigma) and the residual)."""
     N = len(errors)
-    m = max(MIN_SEGMENT_ROWS, int(MIN_SEGMENT_FRACTION * N))
+    m = segment_rows(N)
     if max(MIN_CHANGE_ROWS, 2 * m + 1) > N:
         return None
     X = np.stack([errors, np.einsum("nji,nj->ni", rotations, errors)])  # tracker, flange frame
@@ -250,6 +272,35 @@ def change_point(errors: np.ndarray, rotations: np.ndarray, noise: float, seed: 
     return k, ("tracker", "flange")[f], step, p, "drift" if sse_trend < sse_step else "step"
 
 
+def segment_rows(n_rows: int) -> int:
+    """The fewest rows a change point leaves on each side of it in a file of ``n_rows``."""
+    return max(MIN_SEGMENT_ROWS, int(MIN_SEGMENT_FRACTION * n_rows))
+
+
+def _still_rows(still: np.ndarray) -> np.ndarray:
+    """``still (R, n)`` bool -> per column, how many leading rows are True."""
+    return np.where(still.all(axis=0), still.shape[0], np.argmin(still, axis=0))
+
+
+def held_joint(q: np.ndarray, k: int, rows: int) -> tuple[int, float, int] | None:
+    """A joint that moves at row ``k`` of joints ``q (N, n)`` after standing still (within
+    NEAR_REPEAT_RAD) on at least ``rows`` rows before it, or before standing still on as many
+    from it on: ``(joint 0-based, the value it stood at, rows it stood)`` (rows > 0 before row k,
+    < 0 from it on), the longest standing one; None when none."""
+    if not 0 < k < len(q):
+        return None
+    before = _still_rows(np.abs(q[:k][::-1] - q[k - 1]) <= NEAR_REPEAT_RAD)
+    after = _still_rows(np.abs(q[k:] - q[k]) <= NEAR_REPEAT_RAD)
+    moved = np.abs(q[k] - q[k - 1]) > NEAR_REPEAT_RAD
+    stood = np.where(moved, np.maximum(before, after), 0)
+    i = int(np.argmax(stood))
+    if stood[i] < rows:
+        return None
+    if before[i] >= after[i]:
+        return i, float(q[k - 1, i]), int(stood[i])
+    return i, float(q[k, i]), -int(stood[i])
+
+
 def find_change_points(robot, observations, errors: list[np.ndarray], noise: list[np.ndarray],
                        seed: int = 0) -> list[ChangePoint]:
     """The change points (:func:`change_point`) of every point or pose file: ``observations`` their
@@ -263,8 +314,14 @@ def find_change_points(robot, observations, errors: list[np.ndarray], noise: lis
         found = change_point(e, R, float(np.sqrt(np.mean(s**2))), seed)
         if found is not None:
             k, frame, step, p, shape = found
-            out.append(ChangePoint(file=data.label, index=k, row=int(data.source_row[k]), n_rows=len(data),
-                                   frame=frame, step_mm=step * 1e3, p_value=p, shape=shape))
+            cp = ChangePoint(file=data.label, index=k, row=int(data.source_row[k]), n_rows=len(data),
+                             frame=frame, step_mm=step * 1e3, p_value=p, shape=shape)
+            held = held_joint(data.joints, k, segment_rows(len(data)))
+            if held is not None:
+                i, value, stood = held
+                spec = robot.joints[i]
+                cp = replace(cp, joint=spec.name, joint_deg=float(spec.shown(value)), joint_rows=stood)
+            out.append(cp)
     return out
 
 

@@ -99,11 +99,14 @@ UNIT_SCALES = ((1e3, "the points look like metres under _mm headers (or the file
 
 def length_unit(robot, data, given_mm: float) -> str | None:
     """A length unit under which the model fits ``data``'s points (:data:`UNIT_SCALES`), as a
-    sentence, or None."""
-    best = min(((fit_rms_mm(robot, replace(data, points=data.points * f)), f, what)
+    sentence, or None. Each scale's fit is judged in the file's own unit (its RMS over the
+    scale): a target the model cannot move (a positioner's target where its axes meet, with the
+    frame fitted) fits a scaled-down cloud as closely, relative to its size, as the given one."""
+    best = min(((fit_rms_mm(robot, replace(data, points=data.points * f)) / f, f, what)
                 for f, what in UNIT_SCALES), key=lambda t: t[0])
-    rms, f, what = best
-    if rms <= error_limit_mm(data.points * f) and rms * GAIN < given_mm:
+    relative, f, what = best
+    rms = relative * f
+    if rms <= error_limit_mm(data.points * f) and relative * GAIN < given_mm:
         return (f"{what}: scaled by {f:g} the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as "
                 "given); fix the unit of the file's x, y, z columns (their header's _mm or _m)")
     return None

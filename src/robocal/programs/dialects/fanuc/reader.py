@@ -14,8 +14,10 @@ W, P, R are fixed-axis XYZ angles: R = Rz(R) Ry(P) Rx(W) (deg). CONFIG: flip (F/
 :class:`robocal.programs.dialects.fanuc.configuration.FANUCConfig`). Each position carries its
 user frame UF and tool frame UT; their values live in the controller, so they are given on the command line
 (``--frame u=X,Y,Z,W,P,R``, ``--tool t=...``, mm and deg); UF 0 is the world (= robot base)
-frame, UT 0 the faceplate. Joint representations (J1 = ...), other motion groups (GP2 ...) and
-extended axes are left alone.
+frame, UT 0 the faceplate. Joint representations (J1 = ...) are left alone. Other motion groups
+(``GP2:`` ...) and a ``COORD`` motion's leader: :mod:`robocal.programs.dialects.fanuc.groups`;
+extended axes of group 1 (``E1 = ...``, an integrated rail): a track cell
+(:mod:`robocal.programs.track`), else named.
 """
 
 from __future__ import annotations
@@ -191,11 +193,14 @@ class FanucDialect(Dialect):
                                     "(a SCARA's: 'L|R, t1, t2, t4')")
                 extended = [f"{e} = {v}" for e, v in _EXTENDED.findall(gp) if float(v) != 0.0]
                 values = group_values(body, groups)
-                external = extended + [f"motion group GP{g} ({values_text(axes)})"
-                                       for g, axes in values.items()]
+                # an extended axis of the arm's group (an integrated rail) carries the arm: its values
+                # alone, as text (a track cell takes them, robocal.programs.track); else the other
+                # groups' values, which do not move the arm's position unless coordinated, as data
+                external = extended or [f"motion group GP{g} ({values_text(axes)})"
+                                        for g, axes in values.items()]
                 t = Target(src, m.start(), name, nums, frame=str(int(fr["UF"])), tool=str(int(fr["UT"])),
                            config=row, config_spans=spans, order=order, external=", ".join(external))
-                if values and not extended:  # other groups only: as data (an integrated axis stays text)
+                if not extended:
                     t.axes = {f"GP{g} {k}": v for g, axes in values.items() for k, v in axes.items()}
                 others[id(t)] = (values, ", ".join(extended))
                 prog.targets.append(t)

@@ -35,6 +35,10 @@ without data is the flange (a warning). A job may save the
 P variables it uses in its ``//POS`` (``P00100=...``): those are read before VAR.DAT's, and
 another job's saved P variables after VAR.DAT's.
 
+Base axes (``BC``), stations (``EC``, ``+MOVJ EC``) and station-coordinated ``SMOV`` motions:
+:mod:`robocal.programs.dialects.inform.groups` (the values as :attr:`Target.axes`; an ``SMOV``
+target carried by its station).
+
 ``VAR.DAT`` holds the global variables; its position section ``//P`` has the same header lines
 and ``P0001=...`` entries. Given as a program file, its Cartesian positions that the jobs' motions
 reach are corrected too; otherwise a motion to ``P001`` is named.
@@ -504,7 +508,8 @@ def _external(prog: Program, t: Target, instr: str, moved: Moved, groups: Groups
         if unit == "a station":
             return f"coordinated with the station of {label}, but the ///GROUP lines name no one station"
         if nums is None:
-            return f"coordinated with {unit} (SMOV), but its position {label} is not in the files given"
+            where = _RUNTIME_INDEX if "[" in label else "not in the files given"
+            return f"coordinated with {unit} (SMOV), but its position {label}: {where}"
         if how != "ANGLE":
             return (f"coordinated with {unit} (SMOV), but its position {label} is in encoder pulses (///"
                     f"{how or 'PULSE'}): pulses per degree are controller parameters, not the cell file's")
