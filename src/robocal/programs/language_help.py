@@ -19,6 +19,8 @@ FILTER_EPILOG = """Examples:
   robocal filter pick.script --tool 0,0.02,0.15,0,0,0.5 --calibrated cal.yaml --nominal ur5 -o pick_cal.script
   robocal filter WELD.JBI VAR.DAT --frame 2=1250,-300,450,0,0,15 --tool 1=0,-35,410,0,-30,0 \\
       --calibrated cal.yaml --nominal yaskawa_gp25 -o filtered/
+  robocal filter stn_weld.mod --model cell.yaml --calibrated calibrated_cell.yaml -o stn_weld_cal.mod
+      (a cell with a positioner: targets in a work object it moves are corrected on its plate)
 Formats (from the suffix, or --format): rapid (.mod .modx .prg .sys), krl (.src .dat .sub), fanuc (.ls),
 urscript (.script .urscript), inform (.JBI, and the controller's VAR.DAT), val3 (an application's
 folder, or its .pgx and .dtx files). --tool / --frame give the controller's tool and frame data the
