@@ -55,10 +55,13 @@ def _chain_error(chain: rc.Robot, rng, mm: float, deg: float) -> rc.Robot:
 
 
 def cells(seed: int = 0, arm: str = ARM, unit: str = "STN1", axes=("eax_b", "eax_c"),
-          estimate_mm: float = 0.01, estimate_deg: float = 0.001) -> tuple[rc.Cell, rc.Cell, rc.Cell]:
+          estimate_mm: float = 0.01, estimate_deg: float = 0.001,
+          two_arms: bool = False) -> tuple[rc.Cell, rc.Cell, rc.Cell]:
     """``(nominal, true, calibrated)`` cells: the true one has the arm's link errors (0.05-0.5 mm,
     0.005-0.05 deg) and the positioner's (0.5 mm, 0.05 deg on its links and plate, 2 mm and 0.1 deg
-    on its mount); the calibrated one is the truth plus ``estimate_mm`` / ``estimate_deg``."""
+    on its mount); the calibrated one is the truth plus ``estimate_mm`` / ``estimate_deg``.
+    ``two_arms``: a first arm ``left`` (ROB_1, across the positioner) anchors the world, and the
+    programmed arm ``arm`` (ROB_2) really stands 1.5 mm / 0.05 deg from where the controller has it."""
     rng = np.random.default_rng(seed)
     nominal_arm = rc.Robot.from_catalog(arm)
     mount = make_transform(np.eye(3), [1.1, 0.45, 0.0])
@@ -68,13 +71,23 @@ def cells(seed: int = 0, arm: str = ARM, unit: str = "STN1", axes=("eax_b", "eax
     cal_arm = perturbed(true_arm, rng, length_mm=(0.0, estimate_mm), angle_deg=(0.0, estimate_deg))
     cal_pos = _chain_error(true_pos, rng, estimate_mm, estimate_deg)
 
-    def cell(a, p):
-        return rc.Cell({"arm": a}, {"turntable": rc.Positioner(p, unit, program_axes=tuple(axes))})
+    left = rc.Robot.from_catalog(ARM).with_frames(base=make_transform(rot_z(np.pi), [2.4, 0.9, 0.0]))
+    true_left = perturbed(left, rng)
+    cal_left = perturbed(true_left, rng, length_mm=(0.0, estimate_mm), angle_deg=(0.0, estimate_deg))
+    if two_arms:  # the programmed arm's real place in the world the left arm defines
+        true_arm = true_arm.with_frames(base=_moved(true_arm.base, rng, 1.5, 0.05))
+        cal_arm = cal_arm.with_frames(base=_moved(true_arm.base, rng, estimate_mm, estimate_deg))
+
+    def cell(a, p, first):
+        arms = {"left": first, "arm": a} if two_arms else {"arm": a}
+        return rc.Cell(arms, {"turntable": rc.Positioner(p, unit, program_axes=tuple(axes))},
+                       arm_units={"left": "ROB_1", "arm": "ROB_2"} if two_arms else {})
 
     tracker = _moved(make_transform(rot_z(2.0), [2.5, -1.0, 0.3]), rng, 1.0, 1.0)  # the calibration's frame
     calibrated = cell(cal_arm.with_frames(base=tracker @ cal_arm.base),
-                      cal_pos.with_frames(base=tracker @ cal_pos.base))
-    return cell(nominal_arm, nominal_pos), cell(true_arm, true_pos), calibrated
+                      cal_pos.with_frames(base=tracker @ cal_pos.base),
+                      cal_left.with_frames(base=tracker @ cal_left.base))
+    return cell(nominal_arm, nominal_pos, left), cell(true_arm, true_pos, true_left), calibrated
 
 
 def poses(nominal: rc.Cell, n: int, seed: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -102,20 +115,25 @@ def poses(nominal: rc.Cell, n: int, seed: int = 1) -> tuple[np.ndarray, np.ndarr
     return q, e_deg[keep], T
 
 
-def rapid_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "stn_weld") -> Path:
+def rapid_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "stn_weld",
+                  robotstudio: bool = False) -> Path:
     """A RAPID module in the style of ABB's coordinated-motion examples: a wobjdata moved by STN1
     (uframe identity, the workpiece in oframe), ``ActUnit STN1``, robtargets with the positioner
     in eax_b / eax_c, motions ``\\WObj:=wobjSTN1``; plus one uncoordinated target (wobj0) whose
-    eax_b / eax_c do not move it."""
+    eax_b / eax_c do not move it. ``robotstudio``: as RobotStudio exports a path, the targets
+    written inline in the motions and the wobjdata's uframe the plate's world pose at zero (which
+    the controller does not use for a moving work object)."""
     d = dialect_named("rapid")
     cfg = d.scheme.encode(nominal.arms["arm"], q)
     quat, p_mm = quaternions(T[:, :3, :3]), T[:, :3, 3] * 1e3
     qo = quaternions(OFRAME[None, :3, :3])[0]
     qt = quaternions(TOOL[None, :3, :3])[0]
+    plate = nominal.positioners["turntable"].chain.fk(np.zeros((1, 2)))[0, :3, 3] * 1e3
+    uframe = ",".join(f"{v:.3f}" for v in plate) if robotstudio else "0,0,0"
     lines = ["MODULE StnWeld", "  ! arc welding on a two-axis positioner (STN1), coordinated motion",
              "  PERS tooldata tTorch:=[TRUE,[[" + ",".join(f"{v:.3f}" for v in TOOL[:3, 3] * 1e3) + "],["
              + ",".join(f"{v:.8f}" for v in qt) + "]],[4.5,[0,0,120],[1,0,0,0],0,0,0]];",
-             "  PERS wobjdata wobjSTN1:=[FALSE,FALSE,\"STN1\",[[0,0,0],[1,0,0,0]],[["
+             "  PERS wobjdata wobjSTN1:=[FALSE,FALSE,\"STN1\",[[" + uframe + "],[1,0,0,0]],[["
              + ",".join(f"{v:.3f}" for v in OFRAME[:3, 3] * 1e3) + "],[" + ",".join(f"{v:.8f}" for v in qo)
              + "]]];"]
     for i in range(len(q)):
@@ -130,6 +148,10 @@ def rapid_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "stn_
                  + ",".join(f"{v:.6f}" for v in quaternions(home[:, :3, :3])[0])
                  + f"],[{hc[1]},{hc[2]},{hc[3]},{hc[0]}],[9E+09,0,0,9E+09,9E+09,9E+09]];")
     moves = [f"    Move{'J' if i == 0 else 'L'} pW{i},v200,z1,tTorch\\WObj:=wobjSTN1;" for i in range(len(q))]
+    if robotstudio:  # each target inline, its declaration dropped
+        inline = {f"pW{i}": lines[4 + i].split(":=", 1)[1].rstrip(";") for i in range(len(q))}
+        lines[4:4 + len(q)] = []
+        moves = [m.replace(f" pW{i},", f" {inline[f'pW{i}']},") for i, m in enumerate(moves)]
     lines += ["  PROC main()", "    ActUnit STN1;", "    MoveJ pHome,v500,z50,tool0;", *moves,
               "    MoveJ pHome,v500,fine,tool0;", "    DeactUnit STN1;", "  ENDPROC", "ENDMODULE", ""]
     path = folder / f"{name}.mod"
@@ -142,7 +164,8 @@ def krl_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "dkp_we
     """A KRL .src/.dat and its $config.dat: machine 2 a DKP-400 (#EASYS) named ``DKP400``, base 3
     (OFRAME) on its flange; ``form`` 'ek': ``$BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,
     BASE_DATA[3])`` as offline programming systems write it, 'bas': ``BAS(#BASE,3)`` with
-    MACHINE_FRAME_DAT[3] on machine 2, as the inline forms do."""
+    MACHINE_FRAME_DAT[3] on machine 2, as the inline forms do, 'spline': KSS 8's spline inline forms,
+    ``SLIN XW1 WITH $TOOL=STOOL2(FP1), $BASE=EK(K_ROOT(FP1.BASE_NO),K_TYPE(..),K_OFFS(..)) ...``."""
     d = dialect_named("krl")
     cfg = d.scheme.encode(nominal.arms["arm"], q)
     abc, p_mm = zyx_angles(T[:, :3, :3]), T[:, :3, 3] * 1e3
@@ -152,12 +175,18 @@ def krl_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "dkp_we
         values = [*(xyz * 1e3), *angles]
         return "{" + ",".join(f"{k} {v:.4f}" for k, v in zip("XYZABC", values, strict=True)) + "}"
 
-    base = "$BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,BASE_DATA[3])" if form == "ek" else \
-        "BAS(#BASE,3)"
+    base = {"ek": "$BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,BASE_DATA[3])",
+            "bas": "BAS(#BASE,3)", "spline": "$BASE=$NULLFRAME"}[form]
     src = [f"DEF {name}( )", ";FOLD INI", "  BAS(#INITMOV,0 )", ";ENDFOLD", "  $TOOL=TOOL_DATA[1]",
            f"  {base}",
            "  $ACT_EX_AX=2"]
-    src += [f"  {'PTP' if i == 0 else 'LIN'} XW{i}{'' if i == 0 else ' C_DIS'}" for i in range(len(q))]
+    if form == "spline":  # KSS 8 spline inline forms: the base of FDAT FP1 in each motion's WITH
+        src += [f"  {'SPTP' if i == 0 else 'SLIN'} XW{i} WITH $TOOL=STOOL2(FP1), "
+                "$BASE=EK(K_ROOT(FP1.BASE_NO),K_TYPE(FP1.BASE_NO),K_OFFS(FP1.BASE_NO)), "
+                "$IPO_MODE=SIPO_MODE(FP1.IPO_FRAME) C_SPL"
+                for i in range(len(q))]
+    else:
+        src += [f"  {'PTP' if i == 0 else 'LIN'} XW{i}{'' if i == 0 else ' C_DIS'}" for i in range(len(q))]
     src += ["  $BASE=$NULLFRAME", "  PTP XFREE", "END", ""]
     dat = [f"DEFDAT  {name}"] + [
         f"DECL E6POS XW{i}={{X {p_mm[i, 0]:.3f},Y {p_mm[i, 1]:.3f},Z {p_mm[i, 2]:.3f},A {abc[i, 0]:.4f},"
@@ -166,6 +195,7 @@ def krl_program(folder: Path, nominal: rc.Cell, q, e_deg, T, name: str = "dkp_we
     qh = np.deg2rad([[20.0, -80.0, 100.0, 30.0, 40.0, 30.0]])  # away from the status/turn edges
     home, hc = nominal.arms["arm"].fk(qh), d.scheme.encode(nominal.arms["arm"], qh)[0]
     hx, ha = home[0, :3, 3] * 1e3, zyx_angles(home[:, :3, :3])[0]
+    dat += ['DECL FDAT FP1={TOOL_NO 1,BASE_NO 3,IPO_FRAME #BASE,POINT2[] " "}']
     dat += [f"DECL E6POS XFREE={{X {hx[0]:.2f},Y {hx[1]:.2f},Z {hx[2]:.2f},A {ha[0]:.3f},B {ha[1]:.3f},"
             f"C {ha[2]:.3f},S {hc[0]},T {hc[1]},E1 15.0,E2 -30.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}}", "ENDDAT", ""]
     config = ["DEFDAT  $CONFIG", ";FOLD EXTERNAL KINEMATICS",
@@ -188,12 +218,13 @@ def landing(paths, references, nominal: rc.Cell, true: rc.Cell, intended=None) -
     """Run program files as the nominal controller would on the true cell. Returns, for the
     targets on the plate, the tool's landing error on the true plate (m, ``(N,)``) against the
     pose written in ``intended`` (files of the program before filtering; default ``paths``), the
-    true model's own error at the joints reached (``model``: the calibrated model's when ``true``
-    is the calibrated cell) and the values read."""
+    joints reached and the positioner values read. The work object and tool are the generator's
+    own (OFRAME on the plate, TOOL), not what the reader makes of the files: the controller's
+    semantics, independent of the filter's."""
     d = dialect_named("rapid" if Path(paths[0]).suffix == ".mod" else "krl")
     prog = d.parse([ProgramText(Path(p)) for p in paths], {}, {}, [ProgramText(Path(p)) for p in references])
     targets = [t for t in prog.targets if t.frame in prog.carried]
-    _, P, W, tool = target_poses(d, prog, targets)
+    P, W, tool = target_poses(d, prog, targets)[1], OFRAME, TOOL
     p_axes = [logical_axis(a) for a in nominal.positioners["turntable"].program_axes]
     e = np.deg2rad([[{logical_axis(k): v for k, v in t.axes.items()}[a] for a in p_axes] for t in targets])
     arm, chain = nominal.arms["arm"], nominal.positioners["turntable"].chain
@@ -203,7 +234,7 @@ def landing(paths, references, nominal: rc.Cell, true: rc.Cell, intended=None) -
         before = d.parse([ProgramText(Path(p)) for p in intended], {}, {},
                          [ProgramText(Path(p)) for p in references])
         P = target_poses(d, before, [t for t in before.targets if t.frame in before.carried])[1]
-    true_arm, true_chain = true.arms["arm"].with_frames(base=arm.base), true.positioners["turntable"].chain
+    true_arm, true_chain = true.arms["arm"], true.positioners["turntable"].chain
     on_plate = invert_transform(true_chain.fk(e) @ W) @ true_arm.fk(q) @ tool
     return {"error": np.linalg.norm(on_plate[:, :3, 3] - P[:, :3, 3], axis=1), "q": q, "e": e}
 

@@ -14,6 +14,7 @@ from robocal.core.errors import DataError
 from robocal.programs import filter_program
 from robocal.programs.dialects.krl.reader import KRLDialect
 from robocal.programs.dialects.rapid.reader import RapidDialect
+from robocal.programs.dialects.writing import frame_text
 from robocal.programs.positioner import logical_axis
 from robocal.programs.source import ProgramText
 
@@ -124,8 +125,9 @@ def test_krl_reads_bases_on_an_external_kinematic(tmp_path, base):
 
 
 def test_krl_external_kinematic_without_its_declaration_is_named(tmp_path):
-    """EK of a machine no file declares (no $config.dat): each motion named with what to give; a
-    plain BAS(#BASE, n) without MACHINE_FRAME_DAT stays a fixed base; an EK literal offset is read."""
+    """EK of a machine no file declares (no $config.dat): with a plain arm each motion is named with
+    what to give; a plain BAS(#BASE, n) without MACHINE_FRAME_DAT stays a fixed base; an EK literal
+    offset is read."""
     src = "DEF w( )\n  $TOOL=TOOL_DATA[1]\n" \
           "  $BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,BASE_DATA[3])\n" \
           "  LIN XP1\nEND\n"
@@ -133,8 +135,10 @@ def test_krl_external_kinematic_without_its_declaration_is_named(tmp_path):
     paths, _, prog = _krl(tmp_path, src, KRL_DAT, None)
     res = filter_program(paths, nominal, nominal, tools={"1": "0,0,250,0,0,0"})
     assert res.summary_dict()["motions"] == {"total": 1, "corrected": 0, "named": 1}
-    assert "MACHINE_DEF[2], which no file given declares (give $config.dat with --references)" in \
-        res.motions[0].reason
+    assert res.motions[0].reason == (
+        "XP1: coordinated with a unit the files do not name (MACHINE_DEF[2], declared in no file given): "
+        "give a cell file (--model CELL.yaml) with its positioner (and the file naming the unit, e.g. "
+        "$config.dat, with --references)")
     config = KRL_CONFIG.replace("{MACH_DEF_INDEX 2", "{MACH_DEF_INDEX 0")
     _, _, prog = _krl(tmp_path, src.replace(src.splitlines()[2], "  BAS(#BASE,3)"), KRL_DAT, config)
     assert prog.targets[0].frame == "3" and not prog.carried
@@ -178,12 +182,16 @@ def _goal(before: dict, after: dict, model: np.ndarray) -> dict:
     return rms
 
 
-def test_coordinated_rapid_targets_land_on_the_true_cell(tmp_path):
+@pytest.mark.parametrize("robotstudio", [False, True])
+def test_coordinated_rapid_targets_land_on_the_true_cell(tmp_path, robotstudio):
+    """Declared robtargets in ABB's example style; or inline ones with the plate's world pose
+    stored as the uframe, as RobotStudio exports them (not used: the targets still land)."""
     nominal, true, calibrated = cp.cells(0)
     q, e, T = cp.poses(nominal, 30)
-    path = cp.rapid_program(tmp_path, nominal, q, e, T)
+    path = cp.rapid_program(tmp_path, nominal, q, e, T, robotstudio=robotstudio)
     res = filter_program(path, calibrated, nominal)
     assert res.summary_dict()["motions"] == {"total": 32, "corrected": 32, "named": 0}
+    assert sum("its uframe" in w for w in res.warnings) == robotstudio
     out = tmp_path / "out.mod"
     out.write_bytes(res.outputs[path])
     _identity_outside_numbers(RapidDialect(), [path], [out])
@@ -192,7 +200,7 @@ def test_coordinated_rapid_targets_land_on_the_true_cell(tmp_path):
     _goal(before, after, cp.model_error(after["q"], after["e"], calibrated, true))
 
 
-@pytest.mark.parametrize("form", ["ek", "bas"])
+@pytest.mark.parametrize("form", ["ek", "bas", "spline"])
 def test_coordinated_krl_targets_land_on_the_true_cell(tmp_path, form):
     nominal, true, calibrated = cp.cells(3, arm=cp.KUKA_ARM, unit="DKP400", axes=("E1", "E2"))
     q, e, T = cp.poses(nominal, 30)
@@ -307,3 +315,59 @@ def test_station_values_of_a_prismatic_axis_are_millimetres(tmp_path):
     t.axes["eax_a"] = 600.0
     with pytest.raises(DataError, match=r"^p.mod:1 \(p\): LIFT axis E1 = 600 mm \(limits 0 \.\. 500\)"):
         station.check_limits(t, station.values(t))
+
+
+@pytest.mark.parametrize("root", ["MACHINE_DEF[2].ROOT", "{X 1100.0,Y 450.0,Z 0.0,A 0.0,B 0.0,C 0.0}"])
+def test_krl_unnamed_machine_is_the_cells_only_positioner(tmp_path, root):
+    """A KRL program whose EK machine no file names (no $config.dat; or a literal root, K_ROOT, with
+    #EASYS): with a cell of one positioner it is that one, said once; the targets land as with the
+    machine named."""
+    nominal, true, calibrated = cp.cells(3, arm=cp.KUKA_ARM, unit="DKP400", axes=("E1", "E2"))
+    q, e, T = cp.poses(nominal, 6)
+    paths, config = cp.krl_program(tmp_path, nominal, q, e, T)
+    src = paths[0].read_bytes().replace(b"EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,",
+                                        f"EK({root},#EASYS,".encode())
+    paths[0].write_bytes(src)
+    tools = {"1": frame_text(cp.TOOL, "zyx")}
+    frames = {"3": frame_text(cp.OFRAME, "zyx")}
+    res = filter_program(paths, calibrated, nominal, tools=tools, frames=frames)
+    said = [w for w in res.warnings if "a unit it does not name" in w]
+    assert len(said) == 1 and said[0].endswith("taken as the cell's only positioner, DKP400")
+    assert res.summary_dict()["motions"] == {"total": 7, "corrected": 7, "named": 0}
+    named = filter_program(paths, calibrated, nominal, tools=tools, frames=frames, references=[config])
+    if root.startswith("MACHINE_DEF"):  # $config.dat names it: the same corrections, nothing said
+        assert named.outputs == res.outputs and not any("does not name" in w for w in named.warnings)
+
+
+def test_krl_spline_form_without_config_says_the_base_is_taken_as_fixed(tmp_path):
+    """EK(K_ROOT(FP1.BASE_NO), ...) without $config.dat: whether a machine carries base 3 is unknown;
+    it is taken as a fixed base (KSS's own rule without MACHINE_FRAME_DAT), said once."""
+    nominal, _, calibrated = cp.cells(3, arm=cp.KUKA_ARM, unit="DKP400", axes=("E1", "E2"))
+    q, e, T = cp.poses(nominal, 4)
+    paths, _ = cp.krl_program(tmp_path, nominal, q, e, T, form="spline")
+    prog = KRLDialect().parse([ProgramText(p) for p in paths], {}, {})
+    assert not prog.carried and {t.frame for t in prog.targets} == {"3", "0"}
+    said = [w for w in prog.warnings if "K_ROOT" in w]
+    assert said == ["$BASE=EK(K_ROOT(..)) of base 3: whether a machine carries it is in $config.dat's "
+                    "MACHINE_FRAME_DAT, not given (--references): taken as a fixed base"]
+
+
+def test_two_arms_each_program_with_its_own_arm_in_the_shared_world(tmp_path):
+    """A cell of two arms and a positioner: the first (ROB_1) anchors the world; ROB_2's program,
+    filtered with arm='ROB_2', lands on the true plate although ROB_2 really stands 1.5 mm / 0.05
+    deg from where the controller has it (its calibrated place in the shared world is used);
+    without arm the run is refused naming the arms."""
+    nominal, true, calibrated = cp.cells(0, two_arms=True)
+    q, e, T = cp.poses(nominal, 20)
+    path = cp.rapid_program(tmp_path, nominal, q, e, T)
+    with pytest.raises(DataError, match=r"has arms left \(ROB_1\), arm \(ROB_2\): name the arm"):
+        filter_program(path, calibrated, nominal)
+    with pytest.raises(DataError, match=r"--arm turntable: not an arm of the cell"):
+        filter_program(path, calibrated, nominal, arm="turntable")
+    res = filter_program(path, calibrated, nominal, arm="ROB_2")
+    out = tmp_path / "out.mod"
+    out.write_bytes(res.outputs[path])
+    before = cp.landing([path], [], nominal, true)
+    after = cp.landing([out], [], nominal, true, intended=[path])
+    rms = _goal(before, after, cp.model_error(after["q"], after["e"], calibrated, true))
+    assert rms["unfiltered"] > 1e-3  # the placement error is seen unfiltered

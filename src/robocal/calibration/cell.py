@@ -39,11 +39,10 @@ from robocal.core.yaml_load import dump_yaml
 from robocal.data.cell_measurements import CellMeasurements
 from robocal.data.measurements import Measurements
 from robocal.data.registration import umeyama
-from robocal.kinematics.prior_spec import CLASSES, PriorSpec
+from robocal.kinematics.prior_spec import POSITIONER_CLASS, PriorSpec
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 
 CELL_RESULT_FORMAT = "robocal-cell-calibration/1"
-POSITIONER_CLASS = "positioner"  # the prior class of a positioner's chain (when the classes have it)
 BASE = tuple(f"base.{f}" for f in ("x", "y", "z", "rx", "ry", "rz"))
 # With nests, the plate's turn about the last axis and its offset along it (tool.rz, tool.z: flange
 # axes) are the last joint's zero and offset (theta_n, d_n) over again: those carry them (the turn
@@ -207,10 +206,10 @@ class CellCalibration:
 
 # ---------------------------------------------------------------------------------- the bodies
 def _with_positioner_priors(chain):
-    """A positioner's chain with the positioner prior class, where the classes have one and the
-    chain names none."""
+    """A positioner's chain with the positioner prior class where the chain names none (a 3-axis
+    positioner is no arm either)."""
     spec = chain.priors
-    if POSITIONER_CLASS not in CLASSES or (spec is not None and spec.robot_class is not None):
+    if spec is not None and spec.robot_class is not None:
         return chain
     return chain.with_priors(PriorSpec(POSITIONER_CLASS) if spec is None else
                              PriorSpec(POSITIONER_CLASS, spec.scales, spec.estimate))

@@ -28,6 +28,7 @@ from robocal.programs.dialects.writing import (
     DEFAULT_SETTLE_S,
     DEFAULT_SPEED_PERCENT,
     DEGREE_DECIMALS,
+    ExternalAxes,
     fixed_point,
 )
 from robocal.programs.registry import dialects
@@ -89,14 +90,25 @@ def write_campaign(texts: dict[str, str], programs: dict[str, str | Path]) -> No
 
 def campaign_programs(joints: np.ndarray, robot: Robot, programs: dict[str, str | Path], *,
                       speed_percent: float = DEFAULT_SPEED_PERCENT, settle_s: float = DEFAULT_SETTLE_S,
-                      procedure: str = DEFAULT_PROCEDURE, comment: str = "") -> dict[str, str]:
+                      procedure: str = DEFAULT_PROCEDURE, comment: str = "",
+                      external: ExternalAxes | None = None) -> dict[str, str]:
     """The campaign programs visiting ``joints`` ``(N, 6)`` (rad) of ``robot`` (its nominal model,
-    the flange its tool) in order: ``programs`` maps a language key to the path to write
-    (module docstring); returns file path -> text, in :func:`program_options` order."""
+    the flange its tool) in order, a positioner's values ``external`` (one row per pose, see
+    `robocal.programs.dialects.writing.ExternalAxes`) moving with them: ``programs`` maps a
+    language key to the path to write (module docstring); returns file path -> text, in
+    :func:`program_options` order. A language whose programs drive no positioner is refused when
+    ``external`` is given."""
     q = np.asarray(joints, float)
+    options = {} if external is None else {"external": external}
+    wanted = [d for d in program_options() if programs.get(d.key) is not None]
+    blind = [d.title or d.name for d in wanted if not d.campaign_external]
+    if external is not None and blind:
+        able = ", ".join(d.title or d.name for d in program_options() if d.campaign_external)
+        raise DataError(f"campaign programs in {', '.join(blind)} do not drive a positioner "
+                        f"({external.unit}): write them in {able}")
     texts: dict[str, str] = {}
     for d in program_options():
         if programs.get(d.key) is not None:
             texts.update(d.campaign_files(q, robot, Path(programs[d.key]), speed_percent=speed_percent,
-                                          settle_s=settle_s, procedure=procedure, comment=comment))
+                                          settle_s=settle_s, procedure=procedure, comment=comment, **options))
     return texts

@@ -36,6 +36,8 @@ def add_parser(sub) -> None:
                         "positioner) to correct the targets on the positioner's plate (coordinated motion)")
     p.add_argument("-o", "--output", required=True,
                    help="filtered program (one input) or an existing folder (several inputs)")
+    p.add_argument("--arm", metavar="NAME", help="with a cell of several arms: the arm (body name or unit, "
+                                                 "ROB_2) whose program this is")
     p.add_argument("--tool", action="append", metavar="NAME=VALUES", help="controller tool data (repeatable)")
     p.add_argument("--frame", action="append", metavar="NAME=VALUES",
                    help="work object / base / user frame / feature (repeatable)")
@@ -117,7 +119,7 @@ def run(args) -> int:
                          dialect=args.format, references=args.references, keep_unreached=args.keep_unreached,
                          force=args.force, strict=args.strict, position_registers=args.position_registers,
                          payload=payload_si(args.payload), temperature=args.temperature,
-                         payload_schedules=args.payload_schedules, prediction=prediction)
+                         payload_schedules=args.payload_schedules, prediction=prediction, arm=args.arm)
     written = res.write({p: targets[Path(p)] for p in res.outputs}, table)
     if args.quiet:  # the warnings still matter
         for w in res.warnings:

@@ -28,7 +28,11 @@ def add_parser(sub) -> None:
                                    "a short measuring order, predict the accuracy, and write the pose list "
                                    "and robot programs.",
                        epilog=POSES_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--robot", required=True, help="nominal model: catalog name or model YAML")
+    body = p.add_mutually_exclusive_group(required=True)
+    body.add_argument("--robot", help="nominal model: catalog name or model YAML")
+    body.add_argument("--model", metavar="CELL.yaml",
+                      help="a work cell (arms and positioners): -n poses of each arm, --table-poses table "
+                           "angle sets of each positioner (its nests on the plate seen by the tracker)")
     p.add_argument("-n", "--poses", type=int, required=True, help="number of poses to measure")
     p.add_argument("-o", "--output", required=True, metavar="poses.csv", help="planned poses CSV to write")
     g = p.add_argument_group("candidates and search")
@@ -55,6 +59,16 @@ def add_parser(sub) -> None:
                         "calibration's predicted accuracy)")
     g.add_argument("--curve", type=_curve, metavar="START:STOP[:STEP]",
                    help="predicted accuracy against the number of poses, e.g. 8:60")
+    g = p.add_argument_group("work cell (--model)")
+    g.add_argument("--table-poses", type=int, metavar="N",
+                   help="table angle sets of each positioner (default: -n)")
+    g.add_argument("--nest-mm", type=numbers(3, "X,Y,Z in mm"), action="append", metavar="X,Y,Z",
+                   help="a positioner without declared nests: an SMR's approximate plate position (repeat; "
+                        "each one's position is then estimated, the turn axis' zero held at nominal)")
+    g.add_argument("--park-deg", type=numbers(None, "the arm's joints in deg"), metavar="J1,..,J6",
+                   help="the arms' joints while the table turns (default: where the last arm pose left it)")
+    g.add_argument("--station-pulses-per-deg", type=numbers(None, "pulses per degree, one per axis"),
+                   metavar="P1,P2", help="INFORM: the station axes' encoder pulses per degree (mm)")
     g = p.add_argument_group("measurement")
     g.add_argument("--noise-mm", type=float, default=0.02, help="tracker noise sigma per axis, mm")
     g.add_argument("--noise-model", choices=("isotropic", "tracker"), default="isotropic",
@@ -163,7 +177,8 @@ def _check_outputs(args, programs: dict[str, str]) -> None:
                                                                  f"--{d.key}") for d in program_options()
                                                                 if d.campaign_format)):
         check_format(path, kind, option)
-    check_outputs([args.output, args.json, args.html, *written], [args.robot, args.candidates, args.region])
+    check_outputs([args.output, args.json, args.html, *written],
+                  [args.robot or args.model, args.candidates, args.region])
 
 
 def _constraints(args):
@@ -185,6 +200,53 @@ def _constraints(args):
                        min_shoulder_m=args.min_shoulder_mm * 1e-3, tracker=tracker)
 
 
+def _cell_outputs(args, result, programs: dict[str, str]) -> dict:
+    """A cell plan's outputs: the planned file, its JSON and the programs driving the anchor arm and
+    the positioner."""
+    import json
+
+    texts = {args.output: result.poses_csv()}
+    if args.json:
+        texts[args.json] = json.dumps(result.to_dict(), indent=1, allow_nan=False) + "\n"
+    comment = f"robocal campaign of cell {result.cell.name}: {len(result.rows())} rows"
+    return texts | (result.programs(programs, pulses_per_unit=args.station_pulses_per_deg,
+                                    speed_percent=args.speed_percent, settle_s=args.settle_s,
+                                    procedure=args.procedure, comment=comment) if programs else {})
+
+
+def _run_cell(args, programs: dict[str, str]) -> int:
+    """``poses --model CELL.yaml``: each arm's poses and each positioner's table angles."""
+    import numpy as np
+
+    from robocal.campaign import plan_cell
+    from robocal.campaign.programs import refuse_tracks, write_campaign
+    from robocal.core.errors import DataError
+    from robocal.kinematics.workcell import load_cell
+
+    if args.html or args.candidates or args.region or args.region_box or args.curve or args.check:
+        raise DataError("--model plans a cell from generated candidates: --html, --from, --region, "
+                        "--region-box, --curve and --check are for one arm (--robot)")
+    cell = load_cell(args.model)
+    if cell.arms:
+        refuse_tracks(programs, next(iter(cell.arms.values())), args.output)
+    n_table = args.poses if args.table_poses is None else args.table_poses
+    nests = {name: np.array(args.nest_mm) * 1e-3 for name, p in cell.positioners.items()
+             if p.nests is None and args.nest_mm}
+    smr = {name: np.array(args.smr_mm) * 1e-3 for name in cell.arms} if args.smr_mm else None
+    park = {name: np.deg2rad(args.park_deg) for name in cell.arms} if args.park_deg else None
+    result = plan_cell(cell, {name: args.poses for name in cell.arms},
+                       {name: n_table for name in cell.positioners}, constraints=_constraints(args), smr=smr,
+                       nests=nests, park=park, noise_mm=args.noise_mm, noise_model=args.noise_model,
+                       criterion=args.criterion, seed=args.seed, starts=args.starts,
+                       n_candidates=args.n_candidates, progress=not args.quiet)
+    texts = _cell_outputs(args, result, programs)
+    write_campaign(texts, programs)
+    print(result.summary())
+    for path in texts:
+        print(f"wrote {path}")
+    return 0
+
+
 def run(args) -> int:
     import numpy as np
 
@@ -199,6 +261,8 @@ def run(args) -> int:
     _check_outputs(args, programs)
     for smr in args.smr_mm or []:
         check_tool_mm(smr, f"--smr-mm {','.join(f'{v:g}' for v in smr)}")
+    if args.model:
+        return _run_cell(args, programs)
     robot = load_model(args.robot)
     params = _params(args, robot)
     refuse_tracks(programs, robot, args.output)

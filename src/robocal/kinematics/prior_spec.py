@@ -76,6 +76,7 @@ CLASS_ALIASES = {"humanoid": "service", "mobile": "service", "mobile-manipulator
 # every other catalog model is an industrial arm, and models outside the catalog go by their joints
 CATALOG_CLASS = {r"ur\d": "collaborative"}
 SERVICE_MIN_JOINTS = 8  # a chain this long is a torso before an arm: a humanoid or mobile manipulator
+POSITIONER_CLASS = "positioner"  # the class of a work cell's positioner and of 1-2 joint chains
 POSITIONER_MAX_JOINTS = 2  # a chain this short carries a workpiece (no arm has fewer than 3 joints)
 _BOOL = {"yes": True, "true": True, "no": False, "false": False}
 _VALUE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-z]+)\s*$")
@@ -193,5 +194,6 @@ def class_of(robot) -> tuple[str, str]:
     if robot.n_joints >= SERVICE_MIN_JOINTS:
         return "service", f"{robot.n_joints} joints (a torso before an arm)"
     if robot.n_joints <= POSITIONER_MAX_JOINTS:
-        return "positioner", f"{robot.n_joints} joint{'s' * (robot.n_joints > 1)}: no arm has fewer than 3"
+        joints = f"{robot.n_joints} joint{'s' * (robot.n_joints > 1)}"
+        return POSITIONER_CLASS, f"{joints}: no arm has fewer than 3"
     return "industrial", "default for a serial arm"

@@ -23,6 +23,8 @@ from __future__ import annotations
 
 from robocal.programs.model import Program, Target
 
+UNNAMED = "?"  # a carried frame's unit the program does not name: "?" + what moves it (KRL EK root)
+
 
 def coordinated_unit(program: Program, t: Target) -> str | None:
     """The mechanical unit whose plate carries target ``t``'s frame (None: a frame of the world)."""
@@ -31,6 +33,10 @@ def coordinated_unit(program: Program, t: Target) -> str | None:
 
 def needs_cell(unit: str) -> str:
     """Why a target coordinated with ``unit`` is not corrected without a cell model."""
+    if unit.startswith(UNNAMED):
+        return (f"coordinated with a unit the files do not name ({unit[1:]}): give a cell file (--model "
+                "CELL.yaml) with its positioner (and the file naming the unit, e.g. $config.dat, with "
+                "--references)")
     return f"coordinated with {unit}: give a cell file (--model CELL.yaml) whose positioner has unit {unit}"
 
 

@@ -274,7 +274,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                    keep_unreached: bool = False, strict: bool = False, force: bool = False,
                    position_registers: str | Path | None = None, payload=None,
                    temperature: float | None = None, payload_schedules=None,
-                   prediction: Prediction | None = None) -> FilterResult:
+                   prediction: Prediction | None = None, arm: str | None = None) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -342,6 +342,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     prediction : robocal.trust.coverage.Prediction, optional
         The calibration's predicted accuracy: a warning names the targets whose predicted error
         exceeds 3 x the validated one (outside the calibrated region).
+    arm : str, optional
+        With cells: the arm whose program this is (a body name or its unit, ``ROB_2``); default
+        the cell's only arm. Each arm's program is filtered with its own model, in the world the
+        cell's first arm anchors.
 
     Returns
     -------
@@ -379,13 +383,14 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     """
     given = [Path(p) for p in ([programs] if isinstance(programs, str | Path) else programs)]
     references = [references] if isinstance(references, str | Path) else list(references)
-    calibrated, nominal, coordinated = cell_models(calibrated, nominal)
+    calibrated, nominal, coordinated = cell_models(calibrated, nominal, arm)
     if coordinated is not None and robot_base is not None:
-        raise DataError("robot_base (--robot-base) is for an arm alone: a cell's world is its arm's "
-                        "identified frame {0} (Cell.in_world), where the controller has the arm's base")
+        raise DataError("robot_base (--robot-base) is for an arm alone: a cell's world is its anchor arm's "
+                        "identified frame {0} (Cell.in_world), where the controller has that arm's base")
     reach = robot_reach(nominal)
     check_magnitudes(given, dialect, tools, frames, reach)
-    robot_base = robot_base_frame(robot_base, reach)
+    # a cell's arm is in the controller's world already (Cell.in_world): its calibrated base is kept
+    robot_base = np.eye(4) if coordinated is not None else robot_base_frame(robot_base, reach)
     res, declared_tools = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,
                                     references, keep_unreached, strict, force, position_registers, payload,
                                     temperature, payload_schedules, coordinated)

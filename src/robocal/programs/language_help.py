@@ -19,6 +19,8 @@ FILTER_EPILOG = """Examples:
   robocal filter pick.script --tool 0,0.02,0.15,0,0,0.5 --calibrated cal.yaml --nominal ur5 -o pick_cal.script
   robocal filter WELD.JBI VAR.DAT --frame 2=1250,-300,450,0,0,15 --tool 1=0,-35,410,0,-30,0 \\
       --calibrated cal.yaml --nominal yaskawa_gp25 -o filtered/
+  robocal filter stn_weld.mod --model cell.yaml --calibrated calibrated_cell.yaml -o stn_weld_cal.mod
+      (a cell with a positioner: targets in a work object it moves are corrected on its plate)
 Formats (from the suffix, or --format): rapid (.mod .modx .prg .sys), krl (.src .dat .sub), fanuc (.ls),
 urscript (.script .urscript), inform (.JBI, and the controller's VAR.DAT), val3 (an application's
 folder, or its .pgx and .dtx files). --tool / --frame give the controller's tool and frame data the
@@ -45,6 +47,8 @@ POSES_EPILOG = """Examples:
   robocal poses --robot staubli_tx2_140 -n 20 --smr-mm 20,-30,60 -o poses.csv --val3 campaign
   robocal poses --robot meca500 -n 20 --from taught.csv --region taught.csv -o poses.csv
   robocal poses --robot abb_irb2600 --check -n 20 --from poses.csv -o check_poses.csv --rapid check.mod
+  robocal poses --model cell.yaml -n 30 --table-poses 24 --smr-mm 20,-30,80 --tracker-mm 1200,2800,2000 \
+      --acceptance-deg 45 -o poses.csv --rapid campaign.mod   # an arm and its positioner's table angles
   robocal simulate --robot abb_irb2600 --joints poses.csv --smr-mm 20,-30,80 -o data.csv --truth truth.yaml
 Lengths in mm in the robot's base frame (SMR positions and facing directions in the flange frame),
 angles in deg; write a value that starts with a minus as --smr-mm=-50,50,60.

@@ -38,7 +38,7 @@ from robocal.core.errors import DataError, ModelError
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, pose_error
 from robocal.kinematics.workcell import Cell
-from robocal.programs.external import coordinated_unit
+from robocal.programs.external import UNNAMED, coordinated_unit
 from robocal.programs.model import Program, Target
 
 # The axis names programs write, as a logical axis number: RAPID eax_a..eax_f, KRL E1..E6,
@@ -48,6 +48,7 @@ MM = 1e-3  # prismatic positioner values in programs are millimetres
 # A calibrated plate further than this from the nominal one is more than a cell file's placement
 # error (a layout drawing's mount, a plate frame by eye): said, the targets moving that much.
 PLATE_MOVED_MM, PLATE_MOVED_DEG = 25.0, 2.0
+LIMIT_TOL = 1e-9  # rad or m: a value written at its limit converts to SI a rounding away from it
 
 
 def logical_axis(name: str) -> str:
@@ -94,7 +95,7 @@ class Station:
         """Refuse values ``e`` (SI) outside the positioner's axis limits (one line naming the target)."""
         for spec, value, name in zip(self.nominal.joints, e, self.axes, strict=True):
             lo, hi = spec.limits
-            if not lo <= value <= hi:
+            if not lo - LIMIT_TOL <= value <= hi + LIMIT_TOL:
                 shown = spec.describe(float(value)).split(" = ", 1)[1]
                 raise DataError(f"{t.where}: {self.unit} axis {name} = {shown}: outside the positioner's "
                                 "limits in the cell file (another positioner, or a wrong axis letter)")
@@ -126,7 +127,7 @@ class CoordinatedProgram:
             if unit is None:
                 kept.append(t)
                 continue
-            station = self._station(unit, t)
+            station = self._station(unit, t, warnings)
             e = station.values(t)
             if isinstance(e, str):
                 program.not_corrected[id(t)] = e
@@ -159,10 +160,18 @@ class CoordinatedProgram:
                            "the calibrated cell is this cell's calibration")
         return out
 
-    def _station(self, unit: str, t: Target) -> Station:
+    def _station(self, unit: str, t: Target, warnings: list[str]) -> Station:
+        if unit.startswith(UNNAMED) and len(self.stations) == 1:  # the program does not name it
+            (only,) = self.stations.values()
+            said = f"the program moves with a unit it does not name ({unit[1:]}): taken as the cell's only " \
+                   f"positioner, {only.unit}"
+            if said not in warnings:
+                warnings.append(said)
+            return only
         found = self.stations.get(unit) or next((s for k, s in self.stations.items()
                                                  if k.upper() == unit.upper()), None)
         if found is None:
+            unit = f"{unit[1:]}, which it does not name and" if unit.startswith(UNNAMED) else unit
             raise DataError(f"{t.where}: the program moves with mechanical unit {unit}, which is not in the "
                             f"cell (its positioners: {', '.join(sorted(self.stations)) or 'none'}); give the "
                             "cell file of this program's cell")
@@ -188,21 +197,24 @@ class CoordinatedProgram:
         return nominal, real
 
 
-def cell_models(calibrated: Robot | Cell, nominal: Robot | Cell
+def cell_models(calibrated: Robot | Cell, nominal: Robot | Cell, arm: str | None = None
                 ) -> tuple[Robot, Robot, CoordinatedProgram | None]:
     """``(calibrated arm, nominal arm, the cell's positioners)`` of the models a program is
     filtered with. Arms alone: as given, no positioner (None). Cells (the nominal cell file and
-    the calibrated cell its calibration wrote, bodies in the tracker frame): the cell's one arm,
-    and each positioner's nominal chain and calibrated chain in the controller's world, which the
-    calibrated arm's identified frame {0} anchors (:meth:`Cell.in_world`:
-    ``world_T_tracker = nominal_arm.base @ inv(calibrated_arm.base)``;
-    :func:`robocal.deploy.compensation.controller_model` puts the calibrated arm there too).
+    the calibrated cell its calibration wrote, bodies in the tracker frame): the program's arm
+    (``arm``: a body name or unit; default the cell's only arm) and each positioner, nominal and
+    calibrated in the controller's world, which the anchor arm's identified frame {0} defines
+    (:meth:`Cell.in_world`: ``world_T_tracker = nominal_anchor.base @ inv(calibrated_anchor.base)``):
+    the anchor's calibrated base is its nominal one, another arm's is where the calibration found
+    it in that world (:func:`robocal.deploy.compensation.controller_model` with the identity as
+    the controller's base keeps it).
 
     Raises
     ------
     DataError
-        One model a cell and the other not, a cell with several arms or none, a calibrated cell
-        without the nominal cell's bodies.
+        One model a cell and the other not, a cell with several arms and no ``arm``, an ``arm``
+        that is not one, an arm on a track with a positioner, a calibrated cell without the
+        nominal cell's bodies.
     """
     cells = [isinstance(m, Cell) for m in (calibrated, nominal)]
     if not any(cells):
@@ -211,10 +223,8 @@ def cell_models(calibrated: Robot | Cell, nominal: Robot | Cell
         given, missing = ("calibrated", "nominal") if cells[0] else ("nominal", "calibrated")
         raise DataError(f"the {given} model is a cell and the {missing} one is not: give both cell files "
                         "(the nominal cell, and the calibrated cell its calibration wrote)")
-    if len(nominal.arms) != 1:
-        raise DataError(f"the cell {nominal.name!r} has {len(nominal.arms)} arms: filter each arm's program "
-                        "with a cell of that arm and the positioners it works with")
-    if next(iter(nominal.arms.values())).external_axes and nominal.positioners:
+    arm = _program_arm(nominal, arm)
+    if nominal.arms[arm].external_axes and nominal.positioners:
         raise DataError(f"the cell {nominal.name!r} has an arm on a track and a positioner: programs of such "
                         "a cell are not filtered yet (an arm on a track alone, or an arm with positioners)")
     missing = sorted(set(nominal.bodies) - set(calibrated.bodies))
@@ -226,7 +236,23 @@ def cell_models(calibrated: Robot | Cell, nominal: Robot | Cell
         world = nominal.in_world({name: calibrated.body(name) for name in nominal.bodies})
     except ModelError as exc:
         raise DataError(f"the calibrated cell does not fit the cell {nominal.name!r}: {exc}") from None
-    arm = nominal.anchor
     stations = {p.unit: Station(p.unit, p.chain, world.positioners[name].chain, p.program_axes)
                 for name, p in nominal.positioners.items()}
     return world.arms[arm], nominal.arms[arm], CoordinatedProgram(stations)
+
+
+def _program_arm(cell: Cell, arm: str | None) -> str:
+    """The body name of the arm a program drives: ``arm`` (a body name or unit), else the only one."""
+    arms = ", ".join(f"{n} ({cell.arm_units[n]})" for n in cell.arms) or "none"
+    if arm is None:
+        if len(cell.arms) != 1:
+            raise DataError(f"the cell {cell.name!r} has arms {arms}: name the arm whose program this is "
+                            "(--arm NAME or its unit)")
+        return next(iter(cell.arms))
+    try:
+        name = cell.resolve(arm)
+    except ModelError:
+        name = None
+    if name not in cell.arms:
+        raise DataError(f"--arm {arm}: not an arm of the cell {cell.name!r} (its arms: {arms})")
+    return name

@@ -46,6 +46,7 @@ class Dialect:
     campaign_rank = 0  # the order poses writes the languages' programs in
     campaign_refuses_tracks = False  # its campaign programs are refused for an arm on a track
     campaign_scara = False  # its campaign programs drive a SCARA (4 joints, the quill in mm)
+    campaign_external = False  # its campaign programs move a positioner with the arm (ExternalAxes)
     scara_programs = False  # capability: its programs drive a SCARA (its configuration data say so)
     scheme: ConfigScheme | None = None
     n_values = 6  # pose numbers per target

@@ -5,6 +5,7 @@ checks of joints, speed and settle time, and the header comment."""
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -52,6 +53,80 @@ def checked_joints(joints_deg: np.ndarray, speed_percent: float, settle_s: float
     if not 0 <= settle_s < 3600:
         raise DataError(f"the settle time must be in [0, 3600) s, got {settle_s}")
     return q
+
+
+@dataclass(frozen=True)
+class ExternalAxes:
+    """A positioner's values at each pose of a campaign program (issue 45): the controller moves its
+    mechanical unit with the arm, in the same motion instruction.
+
+    Attributes
+    ----------
+    values : numpy.ndarray, shape (N, m)
+        The positioner's axes at each pose, in the program's units: deg (mm on a prismatic axis).
+    unit : str
+        Its mechanical unit as the controller names it: RAPID ``STN1``, KRL the machine (its axes
+        are E1.. of the robot's E6AXIS), INFORM the station (``ST1``), FANUC the motion group
+        (``GP2``).
+    axes : tuple of str
+        The program's letter of each axis: RAPID ``eax_a``..``eax_f`` (the logical axes the unit
+        is configured on), KRL / INFORM / FANUC ``E1``.. (their order in the unit).
+    prismatic : tuple of bool
+        Which axes are prismatic (mm).
+    pulses_per_unit : tuple of float, optional
+        Encoder pulses per degree (per mm) of each axis: INFORM writes a station's positions in
+        pulses (the controller's parameters hold the ratio, not the cell file).
+    """
+
+    values: np.ndarray
+    unit: str
+    axes: tuple[str, ...]
+    prismatic: tuple[bool, ...] = ()
+    pulses_per_unit: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        v = np.asarray(self.values, dtype=float)
+        if v.ndim != 2 or not 1 <= v.shape[1] <= len(EXTERNAL_LETTERS) or not np.isfinite(v).all():
+            raise DataError("a positioner's program values must be a finite (N, m) array, 1 <= m <= 6")
+        object.__setattr__(self, "values", v)
+        object.__setattr__(self, "prismatic", tuple(self.prismatic) or (False,) * v.shape[1])
+        if len(self.axes) != v.shape[1] or len(self.prismatic) != v.shape[1]:
+            raise DataError(f"{self.unit}: {v.shape[1]} axes' values but {len(self.axes)} axis letters")
+        if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", self.unit or ""):
+            raise DataError(f"the mechanical unit {self.unit!r} is not a valid identifier")
+        ratios = self.pulses_per_unit
+        if ratios is not None and (len(ratios) != v.shape[1] or
+                                   not all(np.isfinite(r) and r > 0 for r in ratios)):
+            raise DataError(f"{self.unit}: give one positive pulses-per-degree (mm) ratio per axis")
+
+    def units(self) -> list[str]:
+        """Each axis' unit in a program: ``deg`` or ``mm``."""
+        return ["mm" if p else "deg" for p in self.prismatic]
+
+    def slots(self, letters: tuple[str, ...], language: str) -> list[int]:
+        """The slot (0-based) of each axis among a language's ``letters`` (RAPID ``eax_a``..): a
+        letter of another language, or one used twice, is refused."""
+        lower = [a.lower() for a in letters]
+        out = []
+        for axis in self.axes:
+            if axis.lower() not in lower:
+                raise DataError(f"{self.unit}: axis {axis!r} is not a {language} external axis "
+                                f"({', '.join(letters)})")
+            out.append(lower.index(axis.lower()))
+        if len(set(out)) < len(out):
+            raise DataError(f"{self.unit}: an external axis letter is given twice ({', '.join(self.axes)})")
+        return out
+
+
+EXTERNAL_LETTERS = ("E1", "E2", "E3", "E4", "E5", "E6")  # KRL E6AXIS, INFORM and FANUC axis order
+
+
+def checked_external(external: ExternalAxes | None, n: int, language: str) -> ExternalAxes | None:
+    """``external`` when it has one row per pose of ``n``; DataError naming ``language`` otherwise."""
+    if external is not None and len(external.values) != n:
+        raise DataError(f"a {language} campaign program of {n} poses got {len(external.values)} rows of "
+                        f"{external.unit}'s values")
+    return external
 
 
 def comment_lines(comment: str, n: int) -> list[str]:

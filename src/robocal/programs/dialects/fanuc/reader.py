@@ -72,6 +72,7 @@ class FanucDialect(Dialect):
     name = "FANUC TP"
     key = "fanuc"
     campaign_rank = 3
+    campaign_external = True  # a positioner's axes move in its campaign programs
     campaign_refuses_tracks = True
     campaign_scara = True  # an SR-series arm: J1, J2, J4 in deg, the quill J3 in mm
     scara_programs = True  # SR-series programs: CONFIG 'L|R, t1, t2, t4'

@@ -141,6 +141,7 @@ class InformDialect(Dialect):
     name = "Yaskawa INFORM"
     key = "inform"
     campaign_rank = 4
+    campaign_external = True  # a positioner's axes move in its campaign programs
     vendor = "Yaskawa"
     title = "Yaskawa INFORM (.JBI)"
     shared_suffixes = (".dat",)  # the controller's VAR.DAT

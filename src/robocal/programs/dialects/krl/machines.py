@@ -12,10 +12,13 @@ A KSS $config.dat declares the cell's machines and which machine each base is on
 A program puts its base on a machine with ``$BASE=EK(MACHINE_DEF[m].ROOT, MACHINE_DEF[m].MECH_TYPE,
 BASE_DATA[n])`` (the offset ``BASE_DATA[n]`` or a literal ``{X .., C ..}`` is in the machine's
 flange frame, the cell file's plate frame), or through ``BAS(#BASE, n)`` / an inline form's FDAT
-``BASE_NO n``, which KSS turns into that EK call when ``MACHINE_FRAME_DAT[n].MACH_DEF_INDEX`` is
-not 0. Such a base is a frame the machine carries (:attr:`Program.carried`), named
+``BASE_NO n`` / the spline inline forms' ``EK(K_ROOT(F.BASE_NO), K_TYPE(..), K_OFFS(..))``, which
+KSS turns into that EK call when ``MACHINE_FRAME_DAT[n].MACH_DEF_INDEX`` is not 0 (else base n is a
+fixed one). Such a base is a frame the machine carries (:attr:`Program.carried`), named
 ``n@MACHINE`` (``{X ..}@MACHINE`` for a literal offset) so that the same BASE_DATA[n] used as a
-fixed base stays another frame.
+fixed base stays another frame. A machine no file given declares (no $config.dat), or an EK whose
+root is a literal frame (``EK({X ..}, #EASYS, ...)``), is a unit the program does not name
+(:data:`robocal.programs.external.UNNAMED`): a cell's only positioner takes it.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ import re
 import numpy as np
 
 from robocal.programs.aggregate import split_top
+from robocal.programs.external import UNNAMED
 from robocal.programs.source import ProgramText
 
 _MACHINE_DEF = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:MACHINE_DEF_T\s+)?MACHINE_DEF\s*"
@@ -37,6 +41,7 @@ _INDEX = re.compile(r"\bMACH_DEF_INDEX\s+(\d+)", re.IGNORECASE)
 _EK = re.compile(r"EK\s*\(([\s\S]*)\)\s*$", re.IGNORECASE)
 _ROOT = re.compile(r"MACHINE_DEF\s*\[\s*(\d+)\s*\]\s*\.\s*ROOT", re.IGNORECASE)
 _DATA = re.compile(r"BASE_DATA\s*\[\s*(\d+)\s*\]", re.IGNORECASE)
+_NUMBERED = re.compile(r"K_ROOT\s*\(\s*(?:(\w+)\s*\.\s*BASE_NO|(\d+))\s*\)", re.IGNORECASE)  # KSS 8.x
 CARRYING = ("EASYS", "ERSYS")  # machine kinds whose flange carries a base (not #ROBOT, #NONE)
 
 
@@ -48,6 +53,7 @@ class Machines:
         self.frames: dict[str, str] = {}  # base n -> machine m (MACH_DEF_INDEX > 0)
         self.literals: dict[str, np.ndarray] = {}  # carried frame key -> literal offset values X..C
         self.carried: dict[str, tuple[str, str]] = {}  # frame key -> (machine name, base n or '')
+        self.notes: set[str] = set()  # what the program's warnings say of the bases read
 
     def read(self, src: ProgramText, masked: str) -> None:
         """The MACHINE_DEF and MACHINE_FRAME_DAT declarations of one file (strings read from its
@@ -63,10 +69,10 @@ class Machines:
                 self.frames[m.group(1)] = str(int(index.group(1)))
 
     def _unit(self, m: str) -> tuple[str, str]:
-        """(machine m's name, '') or ('', why it is not known / carries nothing)."""
+        """(machine m's name, '') or ('', why it carries nothing); a machine no file declares is
+        unnamed (:data:`robocal.programs.external.UNNAMED`: a cell's only positioner takes it)."""
         if m not in self.names:
-            return "", (f"the base is on the external kinematic MACHINE_DEF[{m}], which no file given "
-                        "declares (give $config.dat with --references)")
+            return f"{UNNAMED}MACHINE_DEF[{m}], declared in no file given", ""
         name, kind = self.names[m]
         if kind not in CARRYING:
             return "", f"the base is on MACHINE_DEF[{m}] ({name}), a #{kind or '?'} machine (no base on it)"
@@ -74,18 +80,33 @@ class Machines:
             return "", f"MACHINE_DEF[{m}] has no NAME: its cell positioner cannot be named"
         return name, ""
 
-    def ek(self, value: str) -> tuple[str, str] | None:
+    def ek(self, value: str, fdat: dict) -> tuple[str, str] | None:
         """The base key an ``EK(root, type, offset)`` value gives, ``(key, '')`` or ``('?', why)``;
-        None when ``value`` is not an EK call."""
+        None when ``value`` is not an EK call. ``fdat``: FDAT name -> (TOOL_NO, BASE_NO, ...), for
+        the spline inline forms' ``EK(K_ROOT(F.BASE_NO), K_TYPE(..), K_OFFS(..))``."""
         m = _EK.fullmatch(value.strip())
         if m is None:
             return None
         args = [m.group(1)[a:b].strip() for a, b in split_top(m.group(1), 0, len(m.group(1)))]
-        root = _ROOT.fullmatch(args[0]) if args else None
-        if len(args) != 3 or root is None:
-            return "?", (f"$BASE is set from {value} (an external kinematic whose root is not "
-                         "MACHINE_DEF[m].ROOT)")
-        unit, why = self._unit(root.group(1))
+        if len(args) != 3:
+            return "?", f"$BASE is set from {value} (EK takes a root, a kind and an offset)"
+        numbered = _NUMBERED.fullmatch(args[0])
+        if numbered:  # K_ROOT(n): base n on the machine MACHINE_FRAME_DAT[n] names, as BAS(#BASE, n)
+            n = numbered.group(2) or (fdat.get(numbered.group(1).upper()) or (None, None))[1]
+            if n is None:
+                return "?", (f"$BASE is set from {value}, but no FDAT {numbered.group(1)} with a BASE_NO is "
+                             "declared")
+            if not self.frames and not self.names:
+                self.notes.add(f"$BASE=EK(K_ROOT(..)) of base {n}: whether a machine carries it is in "
+                               "$config.dat's MACHINE_FRAME_DAT, not given (--references): taken as a fixed "
+                               "base")
+            return self.base(n)
+        root = _ROOT.fullmatch(args[0])
+        kind = args[1].lstrip("#").upper()
+        if root is None and kind in ("ROBOT", "NONE"):
+            return "?", f"$BASE is set from {value} (an external kinematic of kind #{kind}: no base on it)"
+        unnamed = f"{UNNAMED}EK root {' '.join(args[0].split())}"
+        unit, why = self._unit(root.group(1)) if root else (unnamed, "")
         if why:
             return "?", why
         data = _DATA.fullmatch(args[2])

@@ -92,6 +92,7 @@ class KRLDialect(Dialect):
     name = "KUKA KRL"
     key = "krl"
     campaign_rank = 1
+    campaign_external = True  # a positioner's axes move in its campaign programs
     campaign_refuses_tracks = True
     vendor = "KUKA"
     signature = r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)"
@@ -238,6 +239,7 @@ class KRLDialect(Dialect):
             self._flow(src, st, flow)
         self._motions(prog, sources, st)
         self._carried(prog, st.machines)
+        prog.warnings += sorted(st.machines.notes)
         names = {src.path.stem.upper() for src in sources if src.path.suffix.lower() == ".src"}
         flow.entry = next((flow.routines[n] for n in names if n in flow.routines), None) \
             if len(names) == 1 else None
@@ -498,7 +500,7 @@ def _frame_value(value: str, which: str, fdat: dict, machines: Machines) -> tupl
     v = value.strip()
     if v.upper() == "$NULLFRAME":
         return NULL, ""
-    on_machine = machines.ek(v) if which == "base" else None
+    on_machine = machines.ek(v, fdat) if which == "base" else None
     if on_machine is not None:
         return on_machine
     d = re.fullmatch(r"(TOOL_DATA|BASE_DATA)\s*\[\s*(\w+)\s*\]", v, re.IGNORECASE)

@@ -125,6 +125,7 @@ class RapidDialect(Dialect):
     name = "ABB RAPID"
     key = "rapid"
     campaign_rank = 0
+    campaign_external = True  # a positioner's axes move in its campaign programs
     campaign_refuses_tracks = True
     vendor = "ABB"
     signature = r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)"
