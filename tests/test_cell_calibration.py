@@ -175,8 +175,11 @@ def test_the_command_line(tmp_path, capsys):
     assert result["validation"]["rms"] < 0.05 and set(result["bodies"]) == {"arm", "STN1"}
     assert main(["evaluate", f"{d}/calibrated.yaml", f"{d}/cell.csv", "--json", f"{d}/check.json"]) == 0
     assert "one tracker frame for every body" in capsys.readouterr().out
-    assert main(["calibrate", f"{d}/cell.csv", "--model", f"{d}/cell.yaml", "--report", f"{d}/r.html"]) != 0
-    assert "not --report" in capsys.readouterr().err and not (tmp_path / "r.html").exists()
+    assert main(["--quiet", "calibrate", f"{d}/cell.csv", "--model", f"{d}/cell.yaml", "--nongeometric",
+                 "none", "--report", f"{d}/r.html"]) == 0
+    assert (tmp_path / "r_arm.html").is_file() and (tmp_path / "r_STN1.html").is_file()
+    assert main(["calibrate", f"{d}/cell.csv", "--model", f"{d}/cell.yaml", "--offsets-only"]) != 0
+    assert "not --offsets-only" in capsys.readouterr().err
 
 
 def test_targets_on_the_plate_land_on_the_true_cell(campaign):

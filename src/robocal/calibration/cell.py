@@ -28,6 +28,7 @@ from __future__ import annotations
 import datetime
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -185,11 +186,14 @@ class CellCalibration:
                 "plates": [p.to_dict() for p in self.plates],
                 "after": self.after, "validation": self.validation, "warnings": list(self.warnings)}
 
-    def write(self, output=None, json_path=None, force: bool = False) -> list[str]:
-        """Write the calibrated cell file (``output``, YAML: the cell in the controller's world) and
-        the result JSON (``json_path``), together or none (`robocal.core.io.write_all`). ``force``
-        writes the results of a body whose solve did not converge; returns the paths written."""
+    def write(self, output=None, json_path=None, report=None, force: bool = False) -> list[str]:
+        """Write the calibrated cell file (``output``, YAML: the cell in the controller's world), the
+        result JSON (``json_path``) and each body's HTML report (``report`` ``R.html``: ``R_<body>.html``
+        each), together or none (`robocal.core.io.write_all`). ``force`` writes the results of a body
+        whose solve did not converge; returns the paths written."""
         import json
+
+        from robocal.report.html import render_report
 
         stalled = [n for n, r in self.results.items() if not r.solver.success]
         if stalled and not force:
@@ -200,6 +204,10 @@ class CellCalibration:
             outputs[output] = dump_yaml(self.calibrated.to_dict())
         if json_path is not None:
             outputs[json_path] = json.dumps(self.to_dict(), indent=1, default=float) + "\n"
+        if report is not None:
+            report = Path(report)
+            outputs.update({report.with_name(f"{report.stem}_{name}{report.suffix}"):
+                            render_report(r.to_dict()) for name, r in self.results.items()})
         write_all(outputs)
         return [str(p) for p in outputs]
 

@@ -93,7 +93,8 @@ def add_parser(sub) -> None:
     model.add_argument("--model", metavar="CELL.yaml",
                        help="a work cell file (arms, positioners): each body calibrated on its rows (the "
                             "data's body column) in one tracker frame; writes the calibrated cell (-o) and "
-                            "the result (--json); --hold-out N holds out the last N poses of each body")
+                            "the result (--json) and each body's report (--report R.html: R_<body>.html); "
+                            "--hold-out N holds out the last N poses of each body")
     p.add_argument("--method", help="lsq, robust, genetic, swarm, neural (default: robust for data of an "
                                     "instrument with heavy-tailed errors, mocap or camera; else lsq)")
     p.add_argument("--instrument", choices=INSTRUMENT_NAMES,
@@ -215,7 +216,7 @@ def _calibrate_cell(args, validate: list[str]) -> int:
     import robocal as rc
     from robocal.core.errors import DataError
 
-    unsupported = [o for o, v in (("--report", args.report), ("--offsets-only", args.offsets_only),
+    unsupported = [o for o, v in (("--offsets-only", args.offsets_only),
                                   ("--network-out", args.network_out), ("--history", args.history)) if v]
     if unsupported or len(args.data) > 1 or len(validate) > 1:
         raise DataError(f"calibrate --model (a work cell) takes one data file and at most one --validate file"
@@ -229,6 +230,6 @@ def _calibrate_cell(args, validate: list[str]) -> int:
                           hold_out=args.hold_out, **dict(args.options))
     result.provenance.update(command="robocal " + " ".join(args.argv), model=args.model)
     print(result.summary())
-    for path in result.write(args.output, args.json, args.force):
+    for path in result.write(args.output, args.json, args.report, args.force):
         print(f"wrote {path}")
     return 0
