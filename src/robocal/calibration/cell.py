@@ -40,7 +40,7 @@ from robocal.core.yaml_load import dump_yaml
 from robocal.data.cell_measurements import CellMeasurements
 from robocal.data.measurements import Measurements
 from robocal.data.registration import umeyama
-from robocal.kinematics.prior_spec import POSITIONER_CLASS, PriorSpec
+from robocal.kinematics.positioner import with_positioner_priors
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 
 CELL_RESULT_FORMAT = "robocal-cell-calibration/1"
@@ -213,16 +213,6 @@ class CellCalibration:
 
 
 # ---------------------------------------------------------------------------------- the bodies
-def _with_positioner_priors(chain):
-    """A positioner's chain with the positioner prior class where the chain names none (a 3-axis
-    positioner is no arm either)."""
-    spec = chain.priors
-    if spec is not None and spec.robot_class is not None:
-        return chain
-    return chain.with_priors(PriorSpec(POSITIONER_CLASS) if spec is None else
-                             PriorSpec(POSITIONER_CLASS, spec.scales, spec.estimate))
-
-
 def _numbered(data: Measurements, smr_numbers: np.ndarray) -> Measurements:
     """``data`` with its SMRs renumbered to their index in ``smr_numbers`` (SMR 0 the first)."""
     missing = np.setdiff1d(data.smr, smr_numbers)
@@ -270,7 +260,7 @@ def _body(cell, name: str, data: Measurements, validation: Measurements | None, 
     if name in cell.arms:
         return _Body(cell.arms[name], data, validation, params, True)
     positioner = cell.positioners[name]
-    chain = _with_positioner_priors(positioner.chain)
+    chain = with_positioner_priors(positioner.chain)
     if positioner.nests is not None:
         chain = replace(chain, smr=np.asarray(positioner.nests, float), nominal=None)
         rows = _nest_rows(data, len(chain.smr), name)

@@ -43,8 +43,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from robocal.calibration.cell import PLATE_HELD, _with_positioner_priors
-from robocal.campaign.constraints import Funnel, Tracker, _segment_segment_distance, limits_with_margin
+from robocal.calibration.cell import PLATE_HELD
+from robocal.campaign.constraints import Funnel, Tracker, limits_with_margin, segment_segment_distance
 from robocal.campaign.exchange import CRITERIA, averaged_search, criterion_value
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
@@ -56,6 +56,7 @@ from robocal.identify.identifiability import Identifiability, analyze
 from robocal.identify.priors import prior_sigma
 from robocal.ik.path import default_weights, travel
 from robocal.kinematics.model import Robot
+from robocal.kinematics.positioner import with_positioner_priors
 from robocal.trust.posterior import Noise, judge
 
 DEFAULT_TABLE_CANDIDATES = 2000     # angle sets drawn in the limits
@@ -237,7 +238,7 @@ def nest_visibility(chain: Robot, q: np.ndarray, nests: np.ndarray, normals: np.
     lo, hi = tracker.range_m
     seen = (cos >= np.cos(np.deg2rad(tracker.acceptance_deg))) & (dist >= lo) & (dist <= hi)
     if obstacles is not None and len(obstacles) and tracker.arm_radius_m is not None:
-        gap = _segment_segment_distance(obstacles[:, 0], obstacles[:, 1], pos[..., None, :],
+        gap = segment_segment_distance(obstacles[:, 0], obstacles[:, 1], pos[..., None, :],
                                         tracker.position)       # (N, K, S)
         seen &= gap.min(axis=2) > tracker.arm_radius_m
     return seen
@@ -296,7 +297,7 @@ def _blocks(chain: Robot, q: np.ndarray, visible: np.ndarray, nests: np.ndarray,
     pos, _ = nest_geometry(chain, q, nests, np.zeros_like(nests))
     W = noise.whitener(pos.reshape(-1, 3)).reshape(len(q), len(nests), 3, 3)
     Jw = np.einsum("nkij,nkjp->nkip", W, J) * visible[:, :, None, None]
-    sigma = prior_sigma(_with_positioner_priors(chain), names)  # the priors its calibration carries
+    sigma = prior_sigma(with_positioner_priors(chain), names)  # the priors its calibration carries
     if structure is None:  # what is identifiable is structural: all candidates together
         rows = Jw[visible].reshape(-1, len(names))
         structure = analyze(rows, names, len(q))
