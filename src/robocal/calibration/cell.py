@@ -40,7 +40,7 @@ from robocal.core.yaml_load import dump_yaml
 from robocal.data.cell_measurements import CellMeasurements
 from robocal.data.measurements import Measurements
 from robocal.data.registration import umeyama
-from robocal.kinematics.positioner import with_positioner_priors
+from robocal.kinematics.positioner import nests_in_last_frame, with_positioner_priors
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 
 CELL_RESULT_FORMAT = "robocal-cell-calibration/1"
@@ -286,7 +286,7 @@ def _in_tracker(cell, name: str, body: _Body, robot):
     if positioner.nests is None:
         return replace(robot, tool=positioner.chain.tool, smr=positioner.chain.smr, nominal=None)
     nests = np.asarray(positioner.nests, float)
-    return replace(robot, smr=nests @ robot.tool[:3, :3].T + robot.tool[:3, 3], nominal=None)
+    return replace(robot, smr=nests_in_last_frame(robot, nests), nominal=None)
 
 
 def _plate(cell, name: str, body: _Body, result) -> PlateSolution:

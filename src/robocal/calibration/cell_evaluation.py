@@ -20,7 +20,7 @@ import numpy as np
 from robocal.core.errors import DataError, IdentificationError
 from robocal.core.io import write_all
 from robocal.data.cell_measurements import CellMeasurements
-from robocal.data.registration import umeyama
+from robocal.data.registration import smr_offsets_lsq, umeyama
 from robocal.report.metrics import position_stats
 
 FRAME_STEP_TOL = 1e-12  # m: the alternation stops when the frame's points move less than this
@@ -72,11 +72,7 @@ def _offsets(rows: _Rows, k: int, W: np.ndarray) -> np.ndarray:
     ``R_i^T (W^-1 p_i - o_i)`` over its rows (exact least squares: the R_i are rotations)."""
     if not k:
         return np.zeros((0, 3))
-    local = (rows.measured - W[:3, 3]) @ W[:3, :3]
-    v = np.einsum("nji,nj->ni", rows.R, local - rows.o)
-    sums = np.zeros((k, 3))
-    np.add.at(sums, rows.slot, v)
-    return sums / np.bincount(rows.slot, minlength=k)[:, None]
+    return smr_offsets_lsq(rows.R, rows.o, (rows.measured - W[:3, 3]) @ W[:3, :3], rows.slot, k)
 
 
 @dataclass(eq=False)

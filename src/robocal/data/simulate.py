@@ -63,7 +63,7 @@ from robocal.kinematics.cell_file import TRACK_SCALE
 from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.model import Robot, track_chain
 from robocal.kinematics.model_file import dump_model
-from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
+from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix, transform_points
 
 TRACKER_RADIAL_MM = 0.010        # ADM range noise at zero distance (1 sigma)
 TRACKER_RADIAL_UM_PER_M = 0.5    # growth of the range noise with distance
@@ -218,7 +218,7 @@ def check_tracker_position(position) -> np.ndarray:
 def smr_in_link_frame(robot: Robot, smr: np.ndarray) -> np.ndarray:
     """SMR positions ``(k, 3)`` m given in the flange frame (the robot's ``tool``), in the last
     link frame."""
-    return smr @ robot.tool[:3, :3].T + robot.tool[:3, 3]
+    return transform_points(robot.tool, smr)
 
 
 def _tracker_noise(p: np.ndarray, rng: np.random.Generator) -> np.ndarray:

@@ -65,7 +65,7 @@ from robocal.kinematics.model_file import (
     robot_kwargs,
     robot_to_dict,
 )
-from robocal.kinematics.positioner import check_chain, positioner_chain
+from robocal.kinematics.positioner import check_chain, nests_in_last_frame, positioner_chain
 from robocal.kinematics.transforms import invert_transform
 
 FORMAT = "robocal-cell/1"
@@ -93,7 +93,7 @@ def _nests_in_flange(chain: Robot, nests: np.ndarray) -> Robot:
     """``chain`` with its extra SMRs the ``nests`` ``(K, 3)`` (plate frame, m) seen from its last
     frame {n} (``tool @ nest``; its nominal alike): SMR k is nest k."""
     def move(r: Robot) -> Robot:
-        return replace(r, nominal=None, smr=nests @ r.tool[:3, :3].T + r.tool[:3, 3])
+        return replace(r, nominal=None, smr=nests_in_last_frame(r, nests))
 
     return replace(move(chain), nominal=move(chain.nominal_robot()).nominal)
 
