@@ -222,15 +222,21 @@ def _numbered(data: Measurements, smr_numbers: np.ndarray) -> Measurements:
     return replace(data, smr=np.searchsorted(smr_numbers, data.smr))
 
 
+def check_declared_nests(data: Measurements, n_nests: int, body: str) -> None:
+    """Refuse plate rows ``data`` of positioner ``body`` whose SMR is not one of its ``n_nests``
+    declared nests (SMR k sits in nest k, 1-based; SMR 0, the plate's origin, is no nest)."""
+    bad = data.smr[(data.smr < 1) | (data.smr > n_nests)]
+    if bad.size:
+        raise DataError(f"{data.label}: SMR {int(bad[0])} on {body}'s plate is not a declared nest (nests 1.."
+                        f"{n_nests}; SMR 0, the plate's origin, is no nest)")
+
+
 def _nest_rows(data: Measurements, n_nests: int, body: str) -> Measurements:
     """A plate's point rows as nest observations (SMR k in nest k, 1-based)."""
     if data.kind != "point":
         raise DataError(f"{data.label}: the plate of {body} declares nests: its rows must be SMR points "
                         f"(x, y, z), not {data.kind}")
-    bad = data.smr[(data.smr < 1) | (data.smr > n_nests)]
-    if bad.size:
-        raise DataError(f"{data.label}: SMR {int(bad[0])} on {body}'s plate is not a declared nest (nests 1.."
-                        f"{n_nests}; SMR 0, the plate's origin, is no nest)")
+    check_declared_nests(data, n_nests, body)
     return replace(data, kind="nest")
 
 

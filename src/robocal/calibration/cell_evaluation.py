@@ -17,6 +17,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from robocal.calibration.cell import check_declared_nests
 from robocal.core.errors import DataError, IdentificationError
 from robocal.core.io import write_all
 from robocal.data.cell_measurements import CellMeasurements
@@ -50,9 +51,7 @@ def _rows(cell, name: str, data) -> tuple[_Rows, int]:
     known = np.zeros((len(data), 3))
     nests = cell.positioners[name].nests if name in cell.positioners else None
     if nests is not None:
-        bad = data.smr[(data.smr < 1) | (data.smr > len(nests))]
-        if bad.size:
-            raise DataError(f"{data.label}: SMR {int(bad[0])} on {name}'s plate is not a declared nest")
+        check_declared_nests(data, len(nests), name)
         plate = chain.fk(data.joints)
         known = np.einsum("nij,nj->ni", plate[:, :3, :3], np.asarray(nests)[data.smr - 1]) + plate[:, :3, 3]
         return _Rows(R, o, np.full(len(data), -1), known, data.points), 0
