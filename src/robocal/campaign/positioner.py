@@ -1,5 +1,5 @@
 """The table angles of a positioner's calibration campaign: SMR nests on the plate measured at angle
-pairs chosen so that the axes are found (issue 45).
+sets chosen so that the axes are found (issue 45).
 
 A positioner is a `Robot` (its ``base`` the mount in the world, its ``tool`` the plate frame,
 its joints its axes: ``Positioner.chain``). The laser tracker measures SMRs sitting in nests on the
@@ -33,7 +33,7 @@ and nests have none), and the I criterion ``trace(M^-1 A)`` with ``A`` the mean 
 nests' positions over a region of table angles: its square root is the predicted RMS error of the
 calibrated positioner at a nest seen at any angle (m), before the noise of a check measurement
 (`TablePlan.predicted_heldout_mm` adds it). The same figures for a naive grid of as many angle
-pairs (`table_grid`) are the baseline the plan is compared with.
+sets (`table_grid`) are the baseline the plan is compared with.
 """
 
 from __future__ import annotations

@@ -48,7 +48,8 @@ from robocal.kinematics.model_file import MAX_DESCRIPTION, MAX_NAME, _frame, _ma
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 
 CELL_KEYS = {"format", "name", "description", "units", "robot", "track", "mount"}
-WORKCELL_KEYS = ("robots", "positioner", "positioners")  # any: a work cell (robocal.kinematics.workcell)
+POSITIONER_KEYS = ("positioner", "positioners")  # a work cell's positioner(s): one, or named ones
+WORKCELL_KEYS = ("robots", *POSITIONER_KEYS)  # any: a work cell (robocal.kinematics.workcell)
 ARM_KEYS = {"model", "base", "unit", "track"}
 SINGLE_ARM = "arm"  # the body name of the arm a work cell gives with ``robot:``
 DIRECTION_TOL = 1e-6  # |norm - 1| of the track direction: a unit vector written to 6 digits
