@@ -44,7 +44,15 @@ from robocal.core.errors import ModelError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, short_repr
 from robocal.kinematics.convert import PARALLEL_TOL, default_parallel
 from robocal.kinematics.fk import LinkArrays
-from robocal.kinematics.model_file import MAX_DESCRIPTION, MAX_NAME, _frame, _mapping, _numbers, _text, _units
+from robocal.kinematics.model_file import (
+    MAX_DESCRIPTION,
+    MAX_NAME,
+    checked_mapping,
+    checked_numbers,
+    checked_text,
+    read_frame,
+    read_units,
+)
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 
 CELL_KEYS = {"format", "name", "description", "units", "robot", "track", "mount"}
@@ -67,7 +75,7 @@ class CellFile(NamedTuple):
     description: str
 
 
-def _resolve(spec, path: Path | None, where: str) -> str:
+def resolve_file(spec, path: Path | None, where: str) -> str:
     """A catalog name, or a model file's path resolved from the cell file's folder."""
     if not isinstance(spec, str) or not spec.strip():
         raise ModelError(f"{where}: expected a catalog name or a model file, got {short_repr(spec)}")
@@ -77,13 +85,13 @@ def _resolve(spec, path: Path | None, where: str) -> str:
 
 def _track(spec, length: float, where: str = "track") -> tuple[np.ndarray, np.ndarray]:
     """(unit direction (3,), e1 limits (2,) m) of a ``track`` mapping."""
-    track = _mapping(spec, where, {"direction", "limits"}, {"direction", "limits"})
-    direction = _numbers(track["direction"], f"{where}.direction", 3)
+    track = checked_mapping(spec, where, {"direction", "limits"}, {"direction", "limits"})
+    direction = checked_numbers(track["direction"], f"{where}.direction", 3)
     if abs(np.linalg.norm(direction) - 1.0) > DIRECTION_TOL:
         raise ModelError(f"{where}.direction {direction.tolist()} is not a unit vector (norm "
                          f"{np.linalg.norm(direction):.6g}): give the track's direction in the world frame "
                          "with norm 1")
-    limits = _numbers(track["limits"], f"{where}.limits", 2) * length
+    limits = checked_numbers(track["limits"], f"{where}.limits", 2) * length
     if not limits[0] < limits[1]:
         raise ModelError(f"{where}.limits: lower {limits[0]:g} m is not below upper {limits[1]:g} m")
     return direction / np.linalg.norm(direction), limits
@@ -92,17 +100,17 @@ def _track(spec, length: float, where: str = "track") -> tuple[np.ndarray, np.nd
 def read_cell(data: dict, path: Path | None = None) -> CellFile:
     """The contents of a cell mapping (the module docstring's file); ``robot:`` is a catalog name or
     a model file relative to ``path``'s folder. ModelError names the key."""
-    _mapping(data, "the cell", CELL_KEYS, {"units", "robot", "track"})
-    length_unit, angle_unit = _units(data)
+    checked_mapping(data, "the cell", CELL_KEYS, {"units", "robot", "track"})
+    length_unit, angle_unit = read_units(data)
     length = LENGTH_UNITS[length_unit]
     angle = ANGLE_UNITS[angle_unit]
-    robot = _resolve(data["robot"], path, "robot")
+    robot = resolve_file(data["robot"], path, "robot")
     direction, limits = _track(data["track"], length)
-    mount = _frame(data.get("mount", {}), length, angle, "mount")
+    mount = read_frame(data.get("mount", {}), length, angle, "mount")
     name = data.get("name")
     return CellFile(robot, direction, mount, limits,
-                    None if name is None else _text(name, "name", MAX_NAME),
-                    _text(data.get("description", ""), "description", MAX_DESCRIPTION))
+                    None if name is None else checked_text(name, "name", MAX_NAME),
+                    checked_text(data.get("description", ""), "description", MAX_DESCRIPTION))
 
 
 def named(value, where: str) -> dict:
@@ -132,8 +140,8 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
     """The arms of a work cell mapping, body name -> `ArmEntry`: ``robots: {name: {model, base,
     unit, track}}``, or one ``robot:`` (with ``track:`` and ``mount:`` as a track cell file; its
     body name ``arm``), or none (a positioner-only cell). ModelError names the key."""
-    _mapping(data, "the cell", CELL_KEYS | set(WORKCELL_KEYS), {"units"})
-    length_unit, angle_unit = _units(data)
+    checked_mapping(data, "the cell", CELL_KEYS | set(WORKCELL_KEYS), {"units"})
+    length_unit, angle_unit = read_units(data)
     length, angle = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit]
     if "robots" in data:
         clash = sorted({"robot", "track", "mount"} & set(data))
@@ -146,12 +154,12 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
         out = {}
         for name, spec in arms.items():
             where = f"robots.{name}"
-            spec = _mapping(spec, where, ARM_KEYS, {"model"})
+            spec = checked_mapping(spec, where, ARM_KEYS, {"model"})
             model = spec["model"] if isinstance(spec["model"], dict) else \
-                _resolve(spec["model"], path, f"{where}.model")
+                resolve_file(spec["model"], path, f"{where}.model")
             track = None if spec.get("track") is None else _track(spec["track"], length, f"{where}.track")
-            out[name] = ArmEntry(model, _frame(spec.get("base"), length, angle, f"{where}.base"),
-                                      _text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track)
+            out[name] = ArmEntry(model, read_frame(spec.get("base"), length, angle, f"{where}.base"),
+                                 checked_text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track)
         return out
     if "robot" not in data:
         stray = sorted({"track", "mount"} & set(data))
@@ -159,8 +167,8 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
             raise ModelError(f"{stray}: a track and its mount belong to an arm (robot:)")
         return {}
     track = None if data.get("track") is None else _track(data["track"], length)
-    return {SINGLE_ARM: ArmEntry(_resolve(data["robot"], path, "robot"),
-                                 _frame(data.get("mount"), length, angle, "mount"), SINGLE_ARM, track)}
+    return {SINGLE_ARM: ArmEntry(resolve_file(data["robot"], path, "robot"),
+                                 read_frame(data.get("mount"), length, angle, "mount"), SINGLE_ARM, track)}
 
 
 def count_positioners(data: dict) -> int:
