@@ -56,7 +56,7 @@ from robocal.identify.identifiability import Identifiability, analyze
 from robocal.identify.priors import prior_sigma
 from robocal.ik.path import default_weights, travel
 from robocal.kinematics.model import Robot
-from robocal.kinematics.positioner import with_positioner_priors
+from robocal.kinematics.positioner import ZERO_AXIS, with_positioner_priors
 from robocal.trust.posterior import Noise, judge
 
 DEFAULT_TABLE_CANDIDATES = 2000     # angle sets drawn in the limits
@@ -65,6 +65,8 @@ DEFAULT_TABLE_MARGIN_DEG = 1.0      # generated angles stay this far inside the 
 NEST_NORMAL = (0.0, 0.0, 1.0)       # a nest's SMR faces along the plate z axis
 ROUND_DECIMALS_DEG = 4              # generated angles are rounded to 1e-4 deg (1e-4 mm)
 MAX_TABLE_DRAWS = 20                # candidate batches drawn before the tracker is declared blind
+FULL_TURN_TOL = 1e-9                # rad: a revolute range this close to 2 pi is a whole turn
+GRID_MIN_SPAN = 1e-9                # deg (mm): an axis' range counted no narrower in the grid's levels
 FORMAT = "robocal-table-campaign/1"
 
 
@@ -333,12 +335,13 @@ def table_grid(chain: Robot, n: int, margin_deg: float = DEFAULT_TABLE_MARGIN_DE
     lim = limits_with_margin(chain, margin_deg)
     span = np.where(chain.prismatic, (lim[:, 1] - lim[:, 0]) * 1e3,   # mm counts as deg, as elsewhere
                     np.rad2deg(np.minimum(lim[:, 1] - lim[:, 0], 2 * np.pi)))
+    log_span = np.log(np.maximum(span, GRID_MIN_SPAN))
     counts = min(_factorings(n, chain.n_joints),
-                 key=lambda c: float(np.ptp(np.log(np.array(c, float)) - np.log(np.maximum(span, 1e-9)))))
+                 key=lambda c: float(np.ptp(np.log(np.array(c, float)) - log_span)))
     axes = []
     for i, c in enumerate(counts):
         lo, hi = lim[i]
-        if not chain.prismatic[i] and hi - lo >= 2 * np.pi - 1e-9:
+        if not chain.prismatic[i] and hi - lo >= 2 * np.pi - FULL_TURN_TOL:
             hi = lo + 2 * np.pi * (1 - 1 / c)
         axes.append(np.linspace(lo, hi, c) if c > 1 else np.array([(lo + hi) / 2]))
     mesh = np.meshgrid(*axes, indexing="ij")
@@ -406,7 +409,7 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
         raise DataError(f"the table's criterion is I or D, got {criterion!r}")
     nests = _check_nests(nests)
     normals = np.tile(NEST_NORMAL, (len(nests), 1)) if normals is None else np.asarray(normals, float)
-    if normals.shape != nests.shape or (np.linalg.norm(normals, axis=1) < 1e-9).any():
+    if normals.shape != nests.shape or (np.linalg.norm(normals, axis=1) < ZERO_AXIS).any():
         raise DataError(f"give one non-zero facing direction per nest ({len(nests)} nests)")
     normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
     if int(n_candidates) < n or int(region_size) < 1 or int(starts) < 1:
