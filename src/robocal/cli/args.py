@@ -1,5 +1,6 @@
 """Argument types and helpers shared by the subcommands: numbers, measurements read with the
-reader's notes printed, output formats, the FANUC joint option, warnings of a quiet run."""
+reader's notes printed, output formats, the FANUC joint option, warnings of a quiet run, whether a
+model file is a work cell."""
 
 from __future__ import annotations
 
@@ -55,6 +56,20 @@ def check_format(path, kind: str, option: str, hint: str = "") -> None:
     if path is not None and not (data_suffix and kind in DATA_FORMATS.values()):
         formats = DATA_FORMATS | program_formats()
     check_data_format(path, kind, option, hint, formats)
+
+
+def work_cell(spec: str, *, positioner: bool = False):
+    """The `robocal.Cell` a model argument describes when the command treats it as a work cell,
+    else None: a cell with a positioner, or (unless ``positioner``: the command's targets are on a
+    plate) with several arms. A single robot, or a file `robocal.load_cell` refuses, is None: the
+    robot's loading then says what is wrong with it."""
+    import robocal as rc
+
+    try:
+        cell = rc.load_cell(spec)
+    except rc.RobocalError:
+        return None
+    return cell if cell.positioners or (not positioner and len(cell.arms) > 1) else None
 
 
 def print_warnings(command: str, warnings) -> None:

@@ -42,7 +42,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from robocal.calibration.evaluation import check_files_memory, evaluate
-    from robocal.cli.args import check_format, load_measurements
+    from robocal.cli.args import check_format, load_measurements, work_cell
     from robocal.core.io import check_outputs
     from robocal.history.record import evaluation_record, open_history, record_entry
     from robocal.kinematics.model import load_model
@@ -50,7 +50,7 @@ def run(args) -> int:
     check_format(args.json, "JSON", "--json")
     check_outputs([args.json], [args.model, args.data, args.frame_from])
     robot_id = open_history(args.history, args.robot_id)
-    if (cell := _cell(args.model)) is not None:  # every body in one tracker frame
+    if (cell := work_cell(args.model)) is not None:  # every body in one tracker frame
         return _evaluate_cell(args, cell)
     robot = load_model(args.model)
     check_files_memory([args.data, args.frame_from])  # before reading them
@@ -73,17 +73,6 @@ def run(args) -> int:
         if not args.quiet:
             print(said)
     return 0
-
-
-def _cell(spec: str):
-    """The work cell a model file describes (arms and positioners, or several arms), else None."""
-    import robocal as rc
-
-    try:
-        cell = rc.load_cell(spec)
-    except rc.RobocalError:
-        return None  # not a cell: load_model says what is wrong with it
-    return cell if cell.positioners or len(cell.arms) > 1 else None
 
 
 def _evaluate_cell(args, cell) -> int:
