@@ -403,17 +403,7 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
         Bad counts or nests (not a finite (K, 3) array), a criterion other than I or D, or no angle
         at which the tracker sees a nest.
     """
-    if not isinstance(n, int | np.integer) or n < 1:
-        raise DataError(f"the number of table angle sets must be a positive integer, got {n!r}")
-    if criterion not in CRITERIA[:2]:
-        raise DataError(f"the table's criterion is I or D, got {criterion!r}")
-    nests = _check_nests(nests)
-    normals = np.tile(NEST_NORMAL, (len(nests), 1)) if normals is None else np.asarray(normals, float)
-    if normals.shape != nests.shape or (np.linalg.norm(normals, axis=1) < ZERO_AXIS).any():
-        raise DataError(f"give one non-zero facing direction per nest ({len(nests)} nests)")
-    normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
-    if int(n_candidates) < n or int(region_size) < 1 or int(starts) < 1:
-        raise DataError("n_candidates must be >= the angle sets asked for; region_size and starts >= 1")
+    nests, normals = _table_settings(n, criterion, nests, normals, n_candidates, region_size, starts)
     noise = Noise(sigma_m=float(noise_mm) * 1e-3, model=noise_model,
                   tracker_position=None if tracker is None else tracker.position)
     rng = np.random.default_rng(seed)
@@ -437,30 +427,15 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
     found = averaged_search([(b.G, A, b.prior)], n, criterion=criterion, starts=int(starts), seed=seed)
     weights = default_weights(chain)
     chosen = found.indices[measuring_order(chain, q[found.indices], weights)]
-    # the naive grid of as many angle sets, with what the tracker sees there
-    q_grid = table_grid(chain, n, margin_deg)
-    v_grid = nest_visibility(chain, q_grid, nests, normals, tracker, obstacles)
-    g, Jg, Jgw = _blocks(chain, q_grid, v_grid, nests, names, noise, b.structure)
+    ms_grid, grid_missing = _grid_baseline(chain, n, margin_deg, nests, normals, tracker, obstacles, names,
+                                           noise, b, A)
     heldout_noise = _noise_ms(noise, nest_geometry(chain, q_region, nests, normals)[0].reshape(-1, 3))
     ms = criterion_value(b.G, A, chosen, "I", b.prior)
-    ms_grid = criterion_value(g.G / b.scale * g.scale, A, np.arange(len(q_grid)), "I", b.prior)
     sigma = _kept_sigma(b, chosen)
     rows = visible[chosen].reshape(-1)
     ident = judge(J[chosen].reshape(-1, len(names))[np.repeat(rows, 3)],
                   Jw[chosen].reshape(-1, len(names))[np.repeat(rows, 3)], names, b.sigma, n)
-    grid_rows = np.repeat(v_grid.reshape(-1), 3)
-    grid_ident = judge(Jg.reshape(-1, len(names))[grid_rows], Jgw.reshape(-1, len(names))[grid_rows], names,
-                       b.sigma, len(q_grid)) if v_grid.any() else None
-    grid_missing = [nm for nm in b.structure.kept if grid_ident is None or nm not in grid_ident.kept
-                    or nm in grid_ident.undetermined]
-    warnings = []
-    if not nests_known:
-        warnings.append("the nests' plate positions are estimated: the last axis' zero is confounded with "
-                        "their rotation about it and is held at nominal; declare the nests (their known "
-                        "plate positions) to identify it with the plate frame")
-    if not np.isfinite(ms_grid) or grid_missing:
-        warnings.append(f"a grid of {n} angle sets does not determine the positioner (the tracker sees too "
-                        "few nests there): the plan's angles matter here")
+    warnings = _table_warnings(n, nests_known, ms_grid, grid_missing)
     return TablePlan(
         chain=chain, name=name or chain.name, joints=q[chosen], visible=visible[chosen], nests=nests,
         nests_known=nests_known, predicted_rms_mm=float(np.sqrt(ms) * 1e3),
@@ -474,6 +449,57 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
                   "travel": travel(q[chosen], weights), "normals": normals.tolist(),
                   "tracker_mm": None if tracker is None else (tracker.position * 1e3).tolist()},
         warnings=warnings)
+
+
+def _table_settings(n: int, criterion: str, nests, normals, n_candidates: int, region_size: int,
+                    starts: int) -> tuple[np.ndarray, np.ndarray]:
+    """`plan_table`'s arguments checked: the nests ``(K, 3)`` (m, plate frame) and their unit facing
+    directions ``(K, 3)`` (default the plate's z axis); DataError naming the bad one."""
+    if not isinstance(n, int | np.integer) or n < 1:
+        raise DataError(f"the number of table angle sets must be a positive integer, got {n!r}")
+    if criterion not in CRITERIA[:2]:
+        raise DataError(f"the table's criterion is I or D, got {criterion!r}")
+    nests = _check_nests(nests)
+    normals = np.tile(NEST_NORMAL, (len(nests), 1)) if normals is None else np.asarray(normals, float)
+    if normals.shape != nests.shape or (np.linalg.norm(normals, axis=1) < ZERO_AXIS).any():
+        raise DataError(f"give one non-zero facing direction per nest ({len(nests)} nests)")
+    normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    if int(n_candidates) < n or int(region_size) < 1 or int(starts) < 1:
+        raise DataError("n_candidates must be >= the angle sets asked for; region_size and starts >= 1")
+    return nests, normals
+
+
+def _grid_baseline(chain: Robot, n: int, margin_deg: float, nests: np.ndarray, normals: np.ndarray,
+                   tracker: Tracker | None, obstacles: np.ndarray | None, names: list[str], noise: Noise,
+                   b: _Blocks, A: np.ndarray) -> tuple[float, list[str]]:
+    """The naive grid of as many angle sets (`table_grid`), with what the tracker sees there, judged
+    as the plan is: its mean squared error at the nests over the region (m^2, the I criterion in the
+    plan's scaling ``b`` and region matrix ``A``; inf when it does not determine the positioner) and
+    the parameters the plan estimates that it leaves to their priors (or cannot see)."""
+    q_grid = table_grid(chain, n, margin_deg)
+    v_grid = nest_visibility(chain, q_grid, nests, normals, tracker, obstacles)
+    g, Jg, Jgw = _blocks(chain, q_grid, v_grid, nests, names, noise, b.structure)
+    ms_grid = criterion_value(g.G / b.scale * g.scale, A, np.arange(len(q_grid)), "I", b.prior)
+    grid_rows = np.repeat(v_grid.reshape(-1), 3)
+    grid_ident = judge(Jg.reshape(-1, len(names))[grid_rows], Jgw.reshape(-1, len(names))[grid_rows], names,
+                       b.sigma, len(q_grid)) if v_grid.any() else None
+    missing = [nm for nm in b.structure.kept if grid_ident is None or nm not in grid_ident.kept
+               or nm in grid_ident.undetermined]
+    return ms_grid, missing
+
+
+def _table_warnings(n: int, nests_known: bool, ms_grid: float, grid_missing: list[str]) -> list[str]:
+    """What limits a table plan: estimated nests (the last axis' zero held), a grid that does not
+    determine the positioner."""
+    warnings = []
+    if not nests_known:
+        warnings.append("the nests' plate positions are estimated: the last axis' zero is confounded with "
+                        "their rotation about it and is held at nominal; declare the nests (their known "
+                        "plate positions) to identify it with the plate frame")
+    if not np.isfinite(ms_grid) or grid_missing:
+        warnings.append(f"a grid of {n} angle sets does not determine the positioner (the tracker sees too "
+                        "few nests there): the plan's angles matter here")
+    return warnings
 
 
 def _kept_sigma(b: _Blocks, chosen: np.ndarray) -> dict[str, float]:
