@@ -285,7 +285,7 @@ def landing_goal(tmp_path: Path, dialect: str, seed: int) -> dict:
 
     arm_name, unit, d = (("yaskawa_gp25", "ST1", InformDialect()) if dialect == "inform" else
                          ("fanuc_m20ia", "GP2", FanucDialect()))
-    nominal, true, calibrated = cp.cells(seed, arm=arm_name, unit=unit, axes=("E1", "E2"))
+    nominal, true, calibrated = cp.cells(seed, arm=arm_name, unit=unit, external_axes=(1, 2))
     q, e, T = cp.poses(nominal, 30)
     arm = nominal.arms["arm"]
     intended = cp.OFRAME @ T  # the tool's poses on the plate the program means
@@ -319,7 +319,7 @@ def test_cli_filters_a_station_coordinated_job_with_cell_files(tmp_path, capsys)
 
     from robocal.cli import main
 
-    nominal, _, calibrated = cp.cells(5, arm="yaskawa_gp25", unit="ST1", axes=("E1", "E2"))
+    nominal, _, calibrated = cp.cells(5, arm="yaskawa_gp25", unit="ST1", external_axes=(1, 2))
     q, e, _ = cp.poses(nominal, 5)
     job = _inform_cell_job(tmp_path, nominal.arms["arm"], q, e, cp.TOOL)
     nominal.save(tmp_path / "cell.yaml")
@@ -346,7 +346,7 @@ def test_refusals_on_a_cell(tmp_path, dialect):
     import cell_programs as cp
 
     arm_name, unit = ("yaskawa_gp25", "ST1") if dialect == "inform" else ("fanuc_m20ia", "GP2")
-    nominal, _, calibrated = cp.cells(5, arm=arm_name, unit=unit, axes=("E1", "E2"))
+    nominal, _, calibrated = cp.cells(5, arm=arm_name, unit=unit, external_axes=(1, 2))
     q, e, T = cp.poses(nominal, 3)
     arm = nominal.arms["arm"]
     if dialect == "inform":
