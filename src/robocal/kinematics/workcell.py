@@ -596,7 +596,8 @@ def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> P
     old = [k for k in RENAMED if isinstance(spec, dict) and k in spec]
     if old:
         raise ModelError(f"{where}.{old[0]}: now {RENAMED[old[0]]}, the controller's logical external-axis "
-                         "numbers ([2, 3] for the axes programs name eax_b, eax_c or E2, E3)")
+                         "numbers ([2, 3]: its second and third external axes; each program language names "
+                         "them)")
     spec = _mapping(spec, where, SECTION_KEYS if where == "positioner" else SECTION_KEYS - {"name"})
     length_unit, angle_unit = _units(data)
     length, angle = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit]
