@@ -27,7 +27,10 @@ class Dialect:
     Capabilities the filter asks instead of the language's name: ``position_registers`` (a file
     of position registers the motions use, ``filter_program(position_registers=...)``),
     ``payload_schedules`` (load schedules the motions select, ``payload_schedules=...``),
-    ``scara_programs`` (its programs drive a SCARA: the filter reads them for a 4-joint SCARA)."""
+    ``scara_programs`` (its programs drive a SCARA: the filter reads them for a 4-joint SCARA),
+    ``external_axis_names`` and ``positioner_group`` (how its programs name a positioner's axes,
+    the controller's logical external axes of a cell file: :meth:`positioner_axes`, which the
+    coordinated-motion filter and the campaign writers ask)."""
 
     key = ""  # registry key: --format, poses --program
     name = ""  # the language as messages and results name it

@@ -108,7 +108,7 @@ class ExternalAxes:
     def in_language(self, dialect: Dialect) -> ExternalAxes:
         """These values with the axes named as ``dialect``'s programs name them: the logical
         ``external_axes`` through :meth:`Dialect.positioner_axes
-        <robocal.programs.dialects.base.Dialect.positioner_axes>`; axes given by name are kept."""
+        <robocal.programs.dialects.base.Dialect.positioner_axes>`; without them, as given (``axes``)."""
         return replace(self, axes=dialect.positioner_axes(self.external_axes)) if self.external_axes else self
 
     def units(self) -> list[str]:
