@@ -60,13 +60,7 @@ def run(args) -> int:
     stats = evaluate(robot, data, fit_frame=args.fit_frame, frame_from=frame_from, force=args.force,
                      names={"model": args.model, "data": args.data, "frame_from": args.frame_from},
                      instrument=args.instrument)
-    written = stats.write(args.json)
-    for warning in stats.warnings:
-        print(f"WARNING: {warning}")
-    if not args.quiet:
-        print(stats.summary())
-        for path in written:
-            print(f"wrote {path}")
+    _said(stats, stats.write(args.json), args.quiet)
     if args.history:  # after the files: the history is never the only copy
         files = [(args.data, "evaluation")] + ([(args.frame_from, "frame")] if args.frame_from else [])
         said = record_entry(args.history, evaluation_record(args.history, robot_id, robot, stats, files))
@@ -86,11 +80,15 @@ def _evaluate_cell(args, cell) -> int:
         raise DataError(f"evaluate with a work cell fits one tracker frame for every body itself: not "
                         f"{', '.join(unsupported)}")
     result = rc.evaluate(cell, rc.CellMeasurements.load(args.data, cell))
-    written = result.write(args.json) if args.json else []
+    _said(result, result.write(args.json) if args.json else [], args.quiet)
+    return 0
+
+
+def _said(result, written: list[str], quiet: bool) -> None:
+    """An evaluation's warnings, then (unless ``quiet``) its summary and the files written."""
     for warning in result.warnings:
         print(f"WARNING: {warning}")
-    if not args.quiet:
+    if not quiet:
         print(result.summary())
         for path in written:
             print(f"wrote {path}")
-    return 0
