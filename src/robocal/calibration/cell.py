@@ -29,6 +29,7 @@ import datetime
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -42,6 +43,9 @@ from robocal.data.measurements import Measurements
 from robocal.data.registration import umeyama
 from robocal.kinematics.positioner import nests_in_last_frame, with_positioner_priors
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
+
+if TYPE_CHECKING:  # annotations only
+    from robocal.kinematics.workcell import Cell
 
 CELL_RESULT_FORMAT = "robocal-cell-calibration/1"
 BASE = tuple(f"base.{f}" for f in ("x", "y", "z", "rx", "ry", "rz"))
@@ -392,8 +396,8 @@ def _as_cell_data(cell, data, what: str) -> CellMeasurements | None:
                     f"cell)), got {type(data).__name__}")
 
 
-def calibrate_cell(cell, data, calibrate_body: Callable, *, params="auto", validation=None,
-                   **options) -> CellCalibration:
+def calibrate_cell(cell: Cell, data: CellMeasurements | Measurements, calibrate_body: Callable, *,
+                   params="auto", validation: CellMeasurements | None = None, **options) -> CellCalibration:
     """Calibrate a work cell: each body on its rows with ``calibrate_body`` (`rc.calibrate`), then
     the relations to the anchor and the calibrated cell in the controller's world.
 

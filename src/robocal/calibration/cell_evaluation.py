@@ -14,6 +14,7 @@ other) until the frame moves less than `FRAME_STEP_TOL`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,6 +24,9 @@ from robocal.core.io import write_all
 from robocal.data.cell_measurements import CellMeasurements
 from robocal.data.registration import smr_offsets_lsq, umeyama
 from robocal.report.metrics import position_stats
+
+if TYPE_CHECKING:  # annotations only
+    from robocal.kinematics.workcell import Cell
 
 FRAME_STEP_TOL = 1e-12  # m: the alternation stops when the frame's points move less than this
 MAX_ALTERNATIONS = 500
@@ -116,7 +120,7 @@ class CellEvaluation:
         return [str(json_path)]
 
 
-def evaluate_cell(cell, data: CellMeasurements) -> CellEvaluation:
+def evaluate_cell(cell: Cell, data: CellMeasurements) -> CellEvaluation:
     """Judge ``cell`` (a calibrated cell in its world, or a nominal one) on the SMR points ``data``
     of its bodies, in one tracker frame fitted once for all (module docstring).
 

@@ -8,10 +8,14 @@ import argparse
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from robocal.core.io import FORMATS as DATA_FORMATS
 from robocal.core.io import check_format as check_data_format
 from robocal.programs.registry import program_formats
+
+if TYPE_CHECKING:  # annotations only
+    from robocal.kinematics.workcell import Cell
 
 # robocal.data.instruments.INSTRUMENTS (a test checks), named here for --instrument's choices
 # without importing the data layer (0.4 s) to build the parser
@@ -58,7 +62,7 @@ def check_format(path, kind: str, option: str, hint: str = "") -> None:
     check_data_format(path, kind, option, hint, formats)
 
 
-def work_cell(spec: str, *, positioner: bool = False):
+def work_cell(spec: str, *, positioner: bool = False) -> Cell | None:
     """The `robocal.Cell` a model argument describes when the command treats it as a work cell,
     else None: a cell with a positioner, or (unless ``positioner``: the command's targets are on a
     plate) with several arms. A single robot, or a file `robocal.load_cell` refuses, is None: the

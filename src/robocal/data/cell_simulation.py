@@ -28,6 +28,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -46,6 +47,9 @@ from robocal.data.simulate import (
     true_arm,
 )
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
+
+if TYPE_CHECKING:  # annotations only
+    from robocal.kinematics.workcell import Cell
 
 POSITIONER_LENGTH_MM = (0.1, 0.2)  # a positioner's axis origins (a, d): machined, not mastered
 POSITIONER_ANGLE_DEG = (0.025, 0.05)  # its axis directions (alpha, beta) and zero offsets (theta)
@@ -82,8 +86,8 @@ def _true_positioner(positioner, rng: np.random.Generator, scale: float, plate_s
     return replace(positioner, chain=true, nests=np.array(nests, float))
 
 
-def true_cell(cell, seed: int | np.random.Generator | None = 0, *, error_scale: float = 1.0, n_smr: int = 1,
-              plate_smr=None):
+def true_cell(cell: Cell, seed: int | np.random.Generator | None = 0, *, error_scale: float = 1.0,
+              n_smr: int = 1, plate_smr=None) -> Cell:
     """A true cell around ``cell`` (module docstring): the errors drawn for ``seed``, the SMRs on
     each arm's flange (``n_smr`` of them: the arm's tool is SMR 0) and on each plate (its nests, or
     ``plate_smr`` ``(K, 3)`` m in the plate frame, default `PLATE_SMR_M`) as the positioner's nests."""
@@ -155,7 +159,7 @@ def _tracker_pose(cell, rng: np.random.Generator) -> np.ndarray:
     return make_transform(random_rotation(rng), centre)
 
 
-def simulate_cell(cell, n_poses: int = 40, table_poses: int = 30, *, truth=None, tracker=None,
+def simulate_cell(cell: Cell, n_poses: int = 40, table_poses: int = 30, *, truth=None, tracker=None,
                   noise_mm: float = 0.02, n_smr: int = 1, plate_smr=None, error_scale: float = 1.0,
                   seed: int = 0) -> CellSimulation:
     """Simulate a tracker campaign on a work cell (module docstring).
