@@ -372,11 +372,9 @@ def _base_covariance(result) -> np.ndarray:
     """The covariance ``(6, 6)`` of a calibration's base parameters (0 where one was not estimated)."""
     names = list(result.unknowns)
     cov = np.zeros((6, 6))
-    idx = [names.index(n) if n in names else -1 for n in BASE]
-    for i, a in enumerate(idx):
-        for j, b in enumerate(idx):
-            if a >= 0 and b >= 0:
-                cov[i, j] = result.covariance[a, b]
+    held = np.array([n in names for n in BASE])
+    idx = [names.index(n) for n in BASE if n in names]
+    cov[np.ix_(held, held)] = result.covariance[np.ix_(idx, idx)]
     return cov
 
 
