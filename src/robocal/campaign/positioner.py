@@ -39,7 +39,7 @@ sets (`table_grid`) are the baseline the plan is compared with.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -162,10 +162,15 @@ class TablePlan:
                  f"{self.n} angle sets: " + self._grid_text(),
                  f"{vocabulary.counts(ident)}; condition number {ident.condition_number:.3g} "
                  f"({ident.condition_class})",
-                 "predicted 1-sigma after calibration: " + axis_sigma_text(self.sigma),
+                 "predicted 1-sigma after calibration: " + axis_sigma_text(self.sigma, self._units()),
                  f"candidates: {self.funnel.text()}"]
         lines += vocabulary.lines(ident, indent="  ")
         return "\n".join(lines + [f"WARNING: {w}" for w in self.warnings])
+
+    def _units(self) -> dict[str, str]:
+        """Each parameter's SI unit (`Robot.parameter_units`; the nests as the chain's SMRs)."""
+        model = replace(self.chain, smr=self.nests, nominal=None)
+        return dict(zip(model.parameter_names, model.parameter_units(), strict=True))
 
     def _grid_text(self) -> str:
         if not np.isfinite(self.grid_rms_mm):
@@ -204,15 +209,11 @@ class TablePlan:
         return [str(json_path)]
 
 
-def axis_sigma_text(sigma: dict) -> str:
-    """The predicted 1-sigma of the parameters (m, rad) as 'name value unit' in mm and mdeg."""
-    return ", ".join(f"{k} {v * 1e3:.3g} mm" if _is_length(k) else f"{k} {np.rad2deg(v) * 1e3:.3g} mdeg"
+def axis_sigma_text(sigma: dict[str, float], units: dict[str, str]) -> str:
+    """The predicted 1-sigma of the parameters (SI: ``units`` their 'm' or 'rad', as
+    `Robot.parameter_units` gives them) as 'name value unit' in mm and mdeg."""
+    return ", ".join(f"{k} {v * 1e3:.3g} mm" if units[k] == "m" else f"{k} {np.rad2deg(v) * 1e3:.3g} mdeg"
                      for k, v in sigma.items())
-
-
-def _is_length(name: str) -> bool:
-    field_name = name.split(".")[-1] if "." in name else name.rstrip("0123456789")
-    return field_name in ("a", "d", "x", "y", "z")
 
 
 def nest_geometry(chain: Robot, q: np.ndarray, nests: np.ndarray,
