@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import numbers
+from robocal.cli.args import numbers, work_cell
 
 EPILOG = """Examples:
   robocal compensate calibrated.yaml targets.csv --nominal abb_irb2600 -o commands.csv
@@ -80,7 +80,7 @@ TOOLS = {"flange": "the flange (tool0)",
 def run(args) -> int:
     import numpy as np
 
-    from robocal.cli.args import check_format, work_cell
+    from robocal.cli.args import check_format
     from robocal.core.io import check_outputs
     from robocal.deploy.compensation import compensate, read_targets
     from robocal.deploy.models import load_model_pair, load_prediction, payload_si, tool_frame

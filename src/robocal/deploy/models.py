@@ -15,7 +15,7 @@ from robocal.core.io import check_outputs
 from robocal.core.magnitudes import check_degrees, check_frame, check_tool
 from robocal.deploy.compensation import controller_model, frame_from_values, frame_values, rotation_values
 from robocal.kinematics.catalog import catalog_names
-from robocal.kinematics.cell_file import POSITIONER_KEYS, is_workcell
+from robocal.kinematics.cell_file import is_workcell
 from robocal.kinematics.model import Robot, load_model
 from robocal.kinematics.model_file import read_model_data
 from robocal.kinematics.workcell import Cell, load_cell
@@ -106,7 +106,7 @@ def _has_positioner(spec: str) -> bool:
     if not path.is_file() or path.suffix.lower() not in (".yaml", ".yml"):
         return False
     data = read_model_data(path)
-    return is_workcell(data) and any(k in data for k in POSITIONER_KEYS)
+    return is_workcell(data) and any(k in data for k in ("positioner", "positioners"))
 
 
 def controller_for(robot: Robot, nominal: str | None) -> Robot | None:

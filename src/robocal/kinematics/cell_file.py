@@ -44,20 +44,11 @@ from robocal.core.errors import ModelError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, short_repr
 from robocal.kinematics.convert import PARALLEL_TOL, default_parallel
 from robocal.kinematics.fk import LinkArrays
-from robocal.kinematics.model_file import (
-    MAX_DESCRIPTION,
-    MAX_NAME,
-    checked_mapping,
-    checked_numbers,
-    checked_text,
-    read_frame,
-    read_units,
-)
+from robocal.kinematics.model_file import MAX_DESCRIPTION, MAX_NAME, _frame, _mapping, _numbers, _text, _units
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 
 CELL_KEYS = {"format", "name", "description", "units", "robot", "track", "mount"}
-POSITIONER_KEYS = ("positioner", "positioners")  # a work cell's positioner(s): one, or named ones
-WORKCELL_KEYS = ("robots", *POSITIONER_KEYS)  # any: a work cell (robocal.kinematics.workcell)
+WORKCELL_KEYS = ("robots", "positioner", "positioners")  # any: a work cell (robocal.kinematics.workcell)
 ARM_KEYS = {"model", "base", "unit", "track"}
 SINGLE_ARM = "arm"  # the body name of the arm a work cell gives with ``robot:``
 DIRECTION_TOL = 1e-6  # |norm - 1| of the track direction: a unit vector written to 6 digits
@@ -75,7 +66,7 @@ class CellFile(NamedTuple):
     description: str
 
 
-def resolve_file(spec, path: Path | None, where: str) -> str:
+def _resolve(spec, path: Path | None, where: str) -> str:
     """A catalog name, or a model file's path resolved from the cell file's folder."""
     if not isinstance(spec, str) or not spec.strip():
         raise ModelError(f"{where}: expected a catalog name or a model file, got {short_repr(spec)}")
@@ -85,13 +76,13 @@ def resolve_file(spec, path: Path | None, where: str) -> str:
 
 def _track(spec, length: float, where: str = "track") -> tuple[np.ndarray, np.ndarray]:
     """(unit direction (3,), e1 limits (2,) m) of a ``track`` mapping."""
-    track = checked_mapping(spec, where, {"direction", "limits"}, {"direction", "limits"})
-    direction = checked_numbers(track["direction"], f"{where}.direction", 3)
+    track = _mapping(spec, where, {"direction", "limits"}, {"direction", "limits"})
+    direction = _numbers(track["direction"], f"{where}.direction", 3)
     if abs(np.linalg.norm(direction) - 1.0) > DIRECTION_TOL:
         raise ModelError(f"{where}.direction {direction.tolist()} is not a unit vector (norm "
                          f"{np.linalg.norm(direction):.6g}): give the track's direction in the world frame "
                          "with norm 1")
-    limits = checked_numbers(track["limits"], f"{where}.limits", 2) * length
+    limits = _numbers(track["limits"], f"{where}.limits", 2) * length
     if not limits[0] < limits[1]:
         raise ModelError(f"{where}.limits: lower {limits[0]:g} m is not below upper {limits[1]:g} m")
     return direction / np.linalg.norm(direction), limits
@@ -100,17 +91,17 @@ def _track(spec, length: float, where: str = "track") -> tuple[np.ndarray, np.nd
 def read_cell(data: dict, path: Path | None = None) -> CellFile:
     """The contents of a cell mapping (the module docstring's file); ``robot:`` is a catalog name or
     a model file relative to ``path``'s folder. ModelError names the key."""
-    checked_mapping(data, "the cell", CELL_KEYS, {"units", "robot", "track"})
-    length_unit, angle_unit = read_units(data)
+    _mapping(data, "the cell", CELL_KEYS, {"units", "robot", "track"})
+    length_unit, angle_unit = _units(data)
     length = LENGTH_UNITS[length_unit]
     angle = ANGLE_UNITS[angle_unit]
-    robot = resolve_file(data["robot"], path, "robot")
+    robot = _resolve(data["robot"], path, "robot")
     direction, limits = _track(data["track"], length)
-    mount = read_frame(data.get("mount", {}), length, angle, "mount")
+    mount = _frame(data.get("mount", {}), length, angle, "mount")
     name = data.get("name")
     return CellFile(robot, direction, mount, limits,
-                    None if name is None else checked_text(name, "name", MAX_NAME),
-                    checked_text(data.get("description", ""), "description", MAX_DESCRIPTION))
+                    None if name is None else _text(name, "name", MAX_NAME),
+                    _text(data.get("description", ""), "description", MAX_DESCRIPTION))
 
 
 def named(value, where: str) -> dict:
@@ -140,8 +131,8 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
     """The arms of a work cell mapping, body name -> `ArmEntry`: ``robots: {name: {model, base,
     unit, track}}``, or one ``robot:`` (with ``track:`` and ``mount:`` as a track cell file; its
     body name ``arm``), or none (a positioner-only cell). ModelError names the key."""
-    checked_mapping(data, "the cell", CELL_KEYS | set(WORKCELL_KEYS), {"units"})
-    length_unit, angle_unit = read_units(data)
+    _mapping(data, "the cell", CELL_KEYS | set(WORKCELL_KEYS), {"units"})
+    length_unit, angle_unit = _units(data)
     length, angle = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit]
     if "robots" in data:
         clash = sorted({"robot", "track", "mount"} & set(data))
@@ -154,12 +145,12 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
         out = {}
         for name, spec in arms.items():
             where = f"robots.{name}"
-            spec = checked_mapping(spec, where, ARM_KEYS, {"model"})
+            spec = _mapping(spec, where, ARM_KEYS, {"model"})
             model = spec["model"] if isinstance(spec["model"], dict) else \
-                resolve_file(spec["model"], path, f"{where}.model")
+                _resolve(spec["model"], path, f"{where}.model")
             track = None if spec.get("track") is None else _track(spec["track"], length, f"{where}.track")
-            out[name] = ArmEntry(model, read_frame(spec.get("base"), length, angle, f"{where}.base"),
-                                 checked_text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track)
+            out[name] = ArmEntry(model, _frame(spec.get("base"), length, angle, f"{where}.base"),
+                                      _text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track)
         return out
     if "robot" not in data:
         stray = sorted({"track", "mount"} & set(data))
@@ -167,8 +158,8 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
             raise ModelError(f"{stray}: a track and its mount belong to an arm (robot:)")
         return {}
     track = None if data.get("track") is None else _track(data["track"], length)
-    return {SINGLE_ARM: ArmEntry(resolve_file(data["robot"], path, "robot"),
-                                 read_frame(data.get("mount"), length, angle, "mount"), SINGLE_ARM, track)}
+    return {SINGLE_ARM: ArmEntry(_resolve(data["robot"], path, "robot"),
+                                 _frame(data.get("mount"), length, angle, "mount"), SINGLE_ARM, track)}
 
 
 def count_positioners(data: dict) -> int:

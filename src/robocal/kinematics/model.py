@@ -50,7 +50,7 @@ from robocal.kinematics.link_names import check_link_frames, link_numbers
 from robocal.kinematics.model_file import (
     LINK_FIELDS,
     MAX_NAME,
-    checked_text,
+    _text,
     dump_model,
     is_cell,
     read_model_data,
@@ -1070,7 +1070,7 @@ def load_model(spec: str, tip: str | None = None) -> Robot:
     `robocal.kinematics.urdf_read`, ending at link ``tip``, default the deepest leaf) or a catalog
     name (what every ``--robot`` takes). A ``tip`` for anything but a URDF is refused (ModelError)."""
     path = Path(spec)
-    if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (path.is_file() and looks_like_xml(path)):
+    if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (path.is_file() and _looks_like_xml(path)):
         if path.suffix.lower() == ".xacro":
             raise ModelError(f"{spec} is a xacro macro file: expand it first (xacro {path.name} > "
                              "robot.urdf) and give the URDF")
@@ -1083,7 +1083,7 @@ def load_model(spec: str, tip: str | None = None) -> Robot:
     return Robot.from_catalog(spec)
 
 
-def looks_like_xml(path: Path) -> bool:
+def _looks_like_xml(path: Path) -> bool:
     """The file starts like XML (a URDF given without its suffix)."""
     with open(path, "rb") as fh:
         return fh.read(64).lstrip().startswith(b"<")
@@ -1114,7 +1114,7 @@ def cell_from_data(data: dict, path: Path | None = None) -> Robot:
     a model file relative to ``path``'s folder, loaded by :func:`load_model`)."""
     cell = read_cell(data, path)
     arm = load_model(cell.robot)
-    name = checked_text(f"{arm.name} on a track", "name", MAX_NAME) if cell.name is None else cell.name
+    name = _text(f"{arm.name} on a track", "name", MAX_NAME) if cell.name is None else cell.name
     return track_chain(arm, cell.direction, cell.mount, cell.limits, name=name, description=cell.description)
 
 

@@ -62,7 +62,7 @@ MAX_VALUES = 100_000  # YAML values in a model file once aliases are expanded (a
 _TABLE_KEYS = {"dh": ("theta", "d", "a", "alpha"), "mdh": ("alpha", "a", "theta", "d")}
 
 
-def checked_text(value, where: str, max_len: int) -> str:
+def _text(value, where: str, max_len: int) -> str:
     """A name or description: a text (a plain number is read as its text) of at most ``max_len``."""
     if isinstance(value, bool) or not isinstance(value, str | int | float):
         raise ModelError(f"{where}: expected a text, got a {type(value).__name__}")
@@ -72,7 +72,7 @@ def checked_text(value, where: str, max_len: int) -> str:
     return text
 
 
-def checked_numbers(values, where: str, count: int | None = None) -> np.ndarray:
+def _numbers(values, where: str, count: int | None = None) -> np.ndarray:
     """A file's list of finite numbers as an array ``(count,)`` (as written: no unit applied);
     ModelError naming ``where`` otherwise."""
     if not isinstance(values, list):
@@ -82,7 +82,7 @@ def checked_numbers(values, where: str, count: int | None = None) -> np.ndarray:
     return np.array([as_number(v, f"{where}[{i}]", ModelError) for i, v in enumerate(values)])
 
 
-def checked_mapping(value, where: str, allowed: set, required: set = frozenset()) -> dict:
+def _mapping(value, where: str, allowed: set, required: set = frozenset()) -> dict:
     """A file's mapping with only ``allowed`` keys and every ``required`` one; ModelError naming
     ``where`` and the keys otherwise."""
     if not isinstance(value, dict):
@@ -96,13 +96,13 @@ def checked_mapping(value, where: str, allowed: set, required: set = frozenset()
     return value
 
 
-def read_frame(spec, length: float, angle: float, where: str) -> np.ndarray | None:
+def _frame(spec, length: float, angle: float, where: str) -> np.ndarray | None:
     """A file's frame ``{xyz, rotation | rpy | rotvec}`` as a transform ``(4, 4)`` (m), its values
     scaled by ``length`` (to m) and ``angle`` (to rad); None when not given."""
     if spec is None:
         return None
-    spec = checked_mapping(spec, where, {"xyz", "rotation", "rpy", "rotvec"})
-    xyz = checked_numbers(spec.get("xyz", [0, 0, 0]), f"{where}.xyz", 3) * length
+    spec = _mapping(spec, where, {"xyz", "rotation", "rpy", "rotvec"})
+    xyz = _numbers(spec.get("xyz", [0, 0, 0]), f"{where}.xyz", 3) * length
     keys = [k for k in ("rotation", "rpy", "rotvec") if k in spec]
     if len(keys) > 1:
         raise ModelError(f"{where}: give only one of rotation, rpy, rotvec")
@@ -112,9 +112,9 @@ def read_frame(spec, length: float, angle: float, where: str) -> np.ndarray | No
         rows = spec["rotation"]
         if not isinstance(rows, list) or len(rows) != 3:
             raise ModelError(f"{where}.rotation must be 3 rows of 3 numbers")
-        R = np.array([checked_numbers(r, f"{where}.rotation[{i}]", 3) for i, r in enumerate(rows)])
+        R = np.array([_numbers(r, f"{where}.rotation[{i}]", 3) for i, r in enumerate(rows)])
     else:
-        v = checked_numbers(spec[keys[0]], f"{where}.{keys[0]}", 3) * angle
+        v = _numbers(spec[keys[0]], f"{where}.{keys[0]}", 3) * angle
         R = rotvec_to_matrix(v) if keys[0] == "rotvec" else Rotation.from_euler("xyz", v).as_matrix()
     return make_transform(R, xyz)
 
@@ -123,7 +123,7 @@ def _limits(values, n: int, where: str) -> np.ndarray:
     """``(n, 2)`` limits as written (in the file's angle unit)."""
     if not isinstance(values, list) or len(values) != n:
         raise ModelError(f"{where}: expected {n} [lower, upper] pairs (one per joint)")
-    return np.array([checked_numbers(v, f"{where}[{i}]", 2) for i, v in enumerate(values)])
+    return np.array([_numbers(v, f"{where}[{i}]", 2) for i, v in enumerate(values)])
 
 
 def _joint_type(value, where: str) -> bool:
@@ -141,9 +141,9 @@ def _types(values, n: int, where: str) -> np.ndarray:
     return np.array([_joint_type(v, f"{where}[{i}]") for i, v in enumerate(values)], bool)
 
 
-def read_units(data: dict) -> tuple[str, str]:
+def _units(data: dict) -> tuple[str, str]:
     """The file's (length, angle) unit names."""
-    units = checked_mapping(data.get("units"), "units", {"length", "angle"}, {"length", "angle"}) \
+    units = _mapping(data.get("units"), "units", {"length", "angle"}, {"length", "angle"}) \
         if "units" in data else None
     if units is None:
         raise ModelError("the model must declare its units: units: {length: m|mm, angle: rad|deg}")
@@ -154,10 +154,10 @@ def read_units(data: dict) -> tuple[str, str]:
 
 
 def _opw(spec, length_unit: str, degrees: bool) -> OPWParameters:
-    spec = checked_mapping(spec, "opw", {*GEOMETRY, "offsets", "signs"}, {*GEOMETRY, "offsets", "signs"})
+    spec = _mapping(spec, "opw", {*GEOMETRY, "offsets", "signs"}, {*GEOMETRY, "offsets", "signs"})
     values = [as_number(spec[k], f"opw.{k}", ModelError) for k in GEOMETRY]
-    return opw_parameters(*values, checked_numbers(spec["offsets"], "opw.offsets", 6),
-                          checked_numbers(spec["signs"], "opw.signs", 6), degrees=degrees,
+    return opw_parameters(*values, _numbers(spec["offsets"], "opw.offsets", 6),
+                          _numbers(spec["signs"], "opw.signs", 6), degrees=degrees,
                           length_unit=length_unit)
 
 
@@ -168,7 +168,7 @@ def _joint_rows(rows, length: float, angle: float) -> dict:
     limits, flags, prismatic = [], [], []
     for i, row in enumerate(rows, 1):
         where = f"joints[{i}] (joint {i})"
-        row = checked_mapping(row, where, _JOINT_KEYS, {"alpha", "a", "theta", "d"})
+        row = _mapping(row, where, _JOINT_KEYS, {"alpha", "a", "theta", "d"})
         for f in LINK_FIELDS:
             scale = length if f in ("a", "d") else angle
             cols[f].append(as_number(row.get(f, 0.0), f"{where}.{f}", ModelError) * scale)
@@ -176,7 +176,7 @@ def _joint_rows(rows, length: float, angle: float) -> dict:
         lim = row.get("limits")
         default = [-np.inf, np.inf] if prismatic[-1] else [-np.pi, np.pi]
         limits.append(default if lim is None else
-                      checked_numbers(lim, f"{where}.limits", 2) * (length if prismatic[-1] else angle))
+                      _numbers(lim, f"{where}.limits", 2) * (length if prismatic[-1] else angle))
         flag = row.get("parallel_to_previous")
         if flag is not None and not isinstance(flag, bool):
             raise ModelError(f"{where}.parallel_to_previous: expected true or false, got {short_repr(flag)}")
@@ -193,9 +193,9 @@ def _table(form: str, spec, length_unit: str, degrees: bool, n_limits, base, too
     file's ``limits`` and frames (see the module docstring)."""
     keys = _TABLE_KEYS[form]
     optional = {"beta", "type"} if form == "mdh" else {"type"}
-    spec = checked_mapping(spec, form, {*keys, *optional}, set(keys))
+    spec = _mapping(spec, form, {*keys, *optional}, set(keys))
     n = len(spec[keys[0]]) if isinstance(spec[keys[0]], list) else 0
-    cols = {k: checked_numbers(spec[k], f"{form}.{k}", n)
+    cols = {k: _numbers(spec[k], f"{form}.{k}", n)
             for k in (*keys, *optional) if k in spec and k != "type"}
     if n == 0:
         raise ModelError(f"{form}: the table needs at least one joint")
@@ -218,11 +218,11 @@ def robot_kwargs(data) -> dict:
     module docstring's format); ModelError naming the key for anything malformed."""
     if not isinstance(data, dict):
         raise ModelError("a robot model must be a YAML mapping (see docs/model-yaml.md)")
-    checked_mapping(data, "the model", _TOP_KEYS)
+    _mapping(data, "the model", _TOP_KEYS)
     for key in INFO_KEYS:
         if key in data and as_number(data[key], key, ModelError) <= 0:
             raise ModelError(f"{key} must be a positive number, got {data[key]!r}")
-    length_unit, angle_unit = read_units(data)
+    length_unit, angle_unit = _units(data)
     length, angle, degrees = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit], angle_unit == "deg"
     forms = [f for f in ("joints", "mdh", "dh") if f in data] or (["opw"] if "opw" in data else [])
     if len(forms) != 1:
@@ -230,8 +230,8 @@ def robot_kwargs(data) -> dict:
                          f"(found {[f for f in FORMS if f in data] or 'none'})")
     form = forms[0]
     opw = _opw(data["opw"], length_unit, degrees) if "opw" in data else None
-    base = read_frame(data.get("base"), length, angle, "base")
-    tool = read_frame(data.get("tool"), length, angle, "tool")
+    base = _frame(data.get("base"), length, angle, "base")
+    tool = _frame(data.get("tool"), length, angle, "tool")
     if form == "joints":
         if "limits" in data:
             raise ModelError("limits: with joints rows, give each joint's limits in its row")
@@ -253,7 +253,7 @@ def robot_kwargs(data) -> dict:
         smr = data["smr"]
         if not isinstance(smr, list):
             raise ModelError("smr: expected a list of [x, y, z] flange-frame offsets")
-        kw["smr"] = np.array([checked_numbers(r, f"smr[{i}]", 3)
+        kw["smr"] = np.array([_numbers(r, f"smr[{i}]", 3)
                               for i, r in enumerate(smr)]).reshape(-1, 3) * length
     if data.get("joint_errors") is not None:
         kw["joint_errors"] = JointErrorModel.from_dict(data["joint_errors"], n)
@@ -261,8 +261,8 @@ def robot_kwargs(data) -> dict:
         kw["priors"] = PriorSpec.from_mapping(data["priors"])
     if data.get("link_frames") is not None:
         kw["link_frames"] = check_link_frames(data["link_frames"], n)
-    kw["name"] = checked_text(data.get("name", "robot"), "name", MAX_NAME)
-    kw["description"] = checked_text(data.get("description", ""), "description", MAX_DESCRIPTION)
+    kw["name"] = _text(data.get("name", "robot"), "name", MAX_NAME)
+    kw["description"] = _text(data.get("description", ""), "description", MAX_DESCRIPTION)
     if data.get("nominal") is not None:  # a name -> value mapping (SI), resolved by the Robot
         nominal = data["nominal"]
         if not isinstance(nominal, dict):

@@ -40,29 +40,29 @@ from robocal.core.yaml_load import dump_yaml
 from robocal.kinematics.catalog import positioner_entry, positioner_names
 from robocal.kinematics.cell_file import (
     SINGLE_ARM,
-    checked_mapping,
-    checked_numbers,
-    checked_text,
+    _mapping,
+    _numbers,
+    _resolve,
+    _text,
+    _units,
     is_workcell,
     named,
     read_arms,
-    read_units,
-    resolve_file,
 )
 from robocal.kinematics.model import (
     PRISMATIC,
     REVOLUTE,
     JointSpec,
     Robot,
+    _looks_like_xml,
     arm_from_entry,
     load_model,
-    looks_like_xml,
     placed,
 )
 from robocal.kinematics.model_file import (
     MAX_DESCRIPTION,
     MAX_NAME,
-    read_frame,
+    _frame,
     read_model_data,
     robot_kwargs,
     robot_to_dict,
@@ -151,7 +151,7 @@ class Positioner:
             raise ModelError(f"a positioner's chain must be a Robot, got {type(self.chain).__name__}")
         check_chain(self.chain, self.chain.name)
         n = self.chain.n_joints
-        set_(self, "unit", checked_text(self.unit, f"{self.chain.name}: unit", MAX_NAME))
+        set_(self, "unit", _text(self.unit, f"{self.chain.name}: unit", MAX_NAME))
         if not self.unit.strip():
             raise ModelError(f"{self.chain.name}: unit is empty: name its mechanical unit (STN1...)")
         columns = tuple(self.columns) or tuple(f"e{i + 1}" for i in range(n))
@@ -296,8 +296,8 @@ class Cell:
         set_ = object.__setattr__
         set_(self, "arms", dict(self.arms))
         set_(self, "positioners", dict(self.positioners))
-        set_(self, "name", checked_text(self.name, "name", MAX_NAME))
-        set_(self, "description", checked_text(self.description, "description", MAX_DESCRIPTION))
+        set_(self, "name", _text(self.name, "name", MAX_NAME))
+        set_(self, "description", _text(self.description, "description", MAX_DESCRIPTION))
         for label, kind, group in (("arm", Robot, self.arms), ("positioner", Positioner, self.positioners)):
             for name, body in group.items():
                 if not isinstance(name, str) or not name.strip():
@@ -313,7 +313,7 @@ class Cell:
         unknown = sorted(set(self.arm_units) - set(self.arms))
         if unknown:
             raise ModelError(f"arm_units names no arm: {unknown}; arms: {sorted(self.arms)}")
-        set_(self, "arm_units", {n: checked_text(self.arm_units.get(n, n), f"robots.{n}.unit", MAX_NAME)
+        set_(self, "arm_units", {n: _text(self.arm_units.get(n, n), f"robots.{n}.unit", MAX_NAME)
                                  for n in self.arms})
         empty = [n for n, u in self.arm_units.items() if not u.strip()]
         if empty:
@@ -526,9 +526,9 @@ def _axes_si(values, length: float, angle: float, where: str) -> list[dict]:
         axis = dict(spec)
         for key, scale in (("origin", length), ("rpy", angle), ("axis", 1.0)):
             if key in axis:
-                axis[key] = checked_numbers(axis[key], f"{where}[{i}].{key}", 3) * scale
+                axis[key] = _numbers(axis[key], f"{where}[{i}].{key}", 3) * scale
         if axis.get("limits") is not None:
-            axis["limits"] = checked_numbers(axis["limits"], f"{where}[{i}].limits", 2) * \
+            axis["limits"] = _numbers(axis["limits"], f"{where}[{i}].limits", 2) * \
                 (length if axis.get("type") == "prismatic" else angle)
         out.append(axis)
     return out
@@ -537,13 +537,13 @@ def _axes_si(values, length: float, angle: float, where: str) -> list[dict]:
 def _definition(data: dict, where: str, name: str) -> Robot:
     """The chain of a positioner definition (a catalog positioner, its file, or an inline mapping
     with ``axes``: units, axes, plate)."""
-    data = checked_mapping(data, where, DEFINITION_KEYS, {"units", "axes"})
-    length_unit, angle_unit = read_units(data)
+    data = _mapping(data, where, DEFINITION_KEYS, {"units", "axes"})
+    length_unit, angle_unit = _units(data)
     length, angle = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit]
     return positioner_chain(_axes_si(data["axes"], length, angle, f"{where}.axes"),
-                            plate=read_frame(data.get("plate"), length, angle, f"{where}.plate"),
-                            name=checked_text(data.get("name", name), f"{where}.name", MAX_NAME),
-                            description=checked_text(data.get("description", ""), f"{where}.description",
+                            plate=_frame(data.get("plate"), length, angle, f"{where}.plate"),
+                            name=_text(data.get("name", name), f"{where}.name", MAX_NAME),
+                            description=_text(data.get("description", ""), f"{where}.description",
                                               MAX_DESCRIPTION))
 
 
@@ -572,12 +572,12 @@ def _model_chain(model, path: Path | None, where: str, name: str) -> Robot:
     if isinstance(model, str) and positioner_entry(model) is not None:
         return catalog_positioner(model)[0]
     if isinstance(model, str):
-        spec = resolve_file(model, path, f"{where}.model")
+        spec = _resolve(model, path, f"{where}.model")
         if not Path(spec).suffix and not Path(spec).exists():
             raise ModelError(f"{where}.model: unknown positioner {model!r}; the catalog has: "
                              f"{', '.join(positioner_names())} (run `robocal robots`), or give a file")
         file = Path(spec)
-        if file.suffix.lower() in URDF_SUFFIXES or (file.is_file() and looks_like_xml(file)):
+        if file.suffix.lower() in URDF_SUFFIXES or (file.is_file() and _looks_like_xml(file)):
             return load_model(spec)  # a URDF of the positioner's chain (its root link the mount)
         model = read_model_data(spec)
         where = f"{where}.model ({spec})"
@@ -598,8 +598,8 @@ def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> P
         raise ModelError(f"{where}.{old[0]}: now {RENAMED[old[0]]}, the controller's logical external-axis "
                          "numbers ([2, 3]: its second and third external axes; each program language names "
                          "them)")
-    spec = checked_mapping(spec, where, SECTION_KEYS if where == "positioner" else SECTION_KEYS - {"name"})
-    length_unit, angle_unit = read_units(data)
+    spec = _mapping(spec, where, SECTION_KEYS if where == "positioner" else SECTION_KEYS - {"name"})
+    length_unit, angle_unit = _units(data)
     length, angle = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit]
     forms = [k for k in GEOMETRY_FORMS if k in spec]
     if len(forms) != 1:
@@ -608,9 +608,9 @@ def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> P
     if "limits" in spec and forms[0] not in ("dh", "mdh"):
         raise ModelError(f"{where}.limits: only with a dh or mdh table (axes and joints rows carry "
                          "their own)")
-    mount = read_frame(spec.get("mount"), length, angle, f"{where}.mount")
-    plate = read_frame(spec.get("plate"), length, angle, f"{where}.plate")
-    description = checked_text(spec.get("description", ""), f"{where}.description", MAX_DESCRIPTION)
+    mount = _frame(spec.get("mount"), length, angle, f"{where}.mount")
+    plate = _frame(spec.get("plate"), length, angle, f"{where}.plate")
+    description = _text(spec.get("description", ""), f"{where}.description", MAX_DESCRIPTION)
     if forms[0] == "axes":
         chain = positioner_chain(_axes_si(spec["axes"], length, angle, f"{where}.axes"), mount, plate,
                                  name=name, description=description)
@@ -626,11 +626,11 @@ def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> P
     if spec.get("nests") is not None:
         if not isinstance(spec["nests"], list) or not spec["nests"]:
             raise ModelError(f"{where}.nests: expected a list of [x, y, z] plate positions")
-        nests = np.array([checked_numbers(v, f"{where}.nests[{i}]", 3)
+        nests = np.array([_numbers(v, f"{where}.nests[{i}]", 3)
                           for i, v in enumerate(spec["nests"], 1)]) * length
     columns = _names(spec.get("columns"), f"{where}.columns") or \
         tuple(f"e{first + i}" for i in range(chain.n_joints))
-    unit = checked_text(spec.get("unit", name), f"{where}.unit", MAX_NAME)
+    unit = _text(spec.get("unit", name), f"{where}.unit", MAX_NAME)
     return Positioner(chain, unit, columns, nests, _numbers_list(spec.get("external_axes"),
                                                                  f"{where}.external_axes"))
 
@@ -665,7 +665,7 @@ def cell_from_data(data: dict, path: Path | None = None) -> Cell:
     if "positioner" in data:
         spec = data["positioner"]
         label = spec.get("name", spec.get("unit", SINGLE_POSITIONER)) if isinstance(spec, dict) else ""
-        sections = {checked_text(label, "positioner.name", MAX_NAME): spec}
+        sections = {_text(label, "positioner.name", MAX_NAME): spec}
     else:
         sections = named(data["positioners"], "positioners") if "positioners" in data else {}
         if "positioners" in data and not sections:
@@ -677,8 +677,8 @@ def cell_from_data(data: dict, path: Path | None = None) -> Cell:
         positioners[name] = positioner
         following = max(int(COLUMN.match(c)[1]) for c in positioner.columns) + 1
     default_name = next(iter(arms.values())).name if len(arms) == 1 and not positioners else "cell"
-    return Cell(arms, positioners, checked_text(data.get("name", default_name), "name", MAX_NAME),
-                checked_text(data.get("description", ""), "description", MAX_DESCRIPTION), units)
+    return Cell(arms, positioners, _text(data.get("name", default_name), "name", MAX_NAME),
+                _text(data.get("description", ""), "description", MAX_DESCRIPTION), units)
 
 
 def load_cell(path) -> Cell:
@@ -728,7 +728,7 @@ def load_cell(path) -> Cell:
     [3.0, 0.0, 0.0]
     """
     spec = Path(path)
-    if spec.suffix.lower() in (".yaml", ".yml") or (spec.is_file() and not looks_like_xml(spec)):
+    if spec.suffix.lower() in (".yaml", ".yml") or (spec.is_file() and not _looks_like_xml(spec)):
         data = read_model_data(spec)
         if is_workcell(data):
             try:
