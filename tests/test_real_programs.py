@@ -16,18 +16,19 @@ ABB = rc.Robot.from_catalog("abb_irb4600")
 # a MultiMove task of an arm on a track (eax_a, mm): targets in a world work object, x + eax_a the
 # same along the path (the track carries the arm); the last target is reachable from the arm's
 # base at the track's zero, the others are not (written as an exported COMPAS RRC program is)
-TRACK_TASK = """MODULE Track_T_ROB1
-PERS tooldata HeatGun:=[TRUE,[[0.000,0.000,120.000],[1.0000,0.0000,0.0000,0.0000]],[2.5,[0.000,0.000,50.0],[1,0,0,0],0,0,0]];
-TASK PERS wobjdata DefaultFrame:=[FALSE,TRUE,"",[[0.000,0.000,0.000],[1.0000,0.0000,0.0000,0.0000]],[[0,0,0],[1,0,0,0]]];
-TASK PERS speeddata Speed000:=[100.00,180.00,5000.00,1080.00];
-PROC Main()
-ConfL \\Off;
-MoveJ [[3613.91,2326.15,1040.68],[0.5000,0.5000,0.5000,0.5000],[0,0,-2,0],[3079.80,9E9,9E9,9E9,9E9,9E9]]\\ID:=1,Speed000,fine,HeatGun \\WObj:=DefaultFrame;
-MoveJ [[3943.83,2265.39,1040.68],[0.5000,0.5000,0.5000,0.5000],[0,0,-2,0],[2749.92,9E9,9E9,9E9,9E9,9E9]]\\ID:=2,Speed000,fine,HeatGun \\WObj:=DefaultFrame;
-MoveL [[1200.00,300.00,900.00],[0,0.7071068,0.7071068,0],[0,0,0,0],[0.00,9E9,9E9,9E9,9E9,9E9]]\\ID:=3,Speed000,fine,HeatGun \\WObj:=DefaultFrame;
-ENDPROC
-ENDMODULE
-"""
+TOOL = "[TRUE,[[0,0,120],[1,0,0,0]],[2.5,[0,0,50],[1,0,0,0],0,0,0]]"
+WOBJ = '[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]'
+TAIL = "Speed000,fine,HeatGun \\WObj:=DefaultFrame;"
+TRACK_TASK = "\n".join([
+    "MODULE Track_T_ROB1", f"PERS tooldata HeatGun:={TOOL};", f"TASK PERS wobjdata DefaultFrame:={WOBJ};",
+    "TASK PERS speeddata Speed000:=[100.00,180.00,5000.00,1080.00];", "PROC Main()", "ConfL \\Off;",
+    "MoveJ [[3613.91,2326.15,1040.68],[0.5000,0.5000,0.5000,0.5000],[0,0,-2,0],"
+    f"[3079.80,9E9,9E9,9E9,9E9,9E9]]\\ID:=1,{TAIL}",
+    "MoveJ [[3943.83,2265.39,1040.68],[0.5000,0.5000,0.5000,0.5000],[0,0,-2,0],"
+    f"[2749.92,9E9,9E9,9E9,9E9,9E9]]\\ID:=2,{TAIL}",
+    "MoveL [[1200.00,300.00,900.00],[0,0.7071068,0.7071068,0],[0,0,0,0],"
+    f"[0.00,9E9,9E9,9E9,9E9,9E9]]\\ID:=3,{TAIL}",
+    "ENDPROC", "ENDMODULE", ""])
 
 
 def test_track_targets_out_of_the_fixed_arms_reach_name_their_axes(tmp_path):
