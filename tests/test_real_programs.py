@@ -34,8 +34,8 @@ TRACK_TASK = "\n".join([
 def test_track_targets_out_of_the_fixed_arms_reach_name_their_axes(tmp_path):
     """Targets with eax_a values in a work object no unit moves are corrected as arm targets; those
     the arm at a fixed base cannot reach were named 'no solution ... (out of reach)' alone, which
-    blames the target: their eax_a likely carries the arm (a track), and the reason says so, the
-    values and the cell file to give; the reachable one is corrected; every motion accounted."""
+    blames the target: their eax_a may carry the arm (here a track), and the reason says so with
+    the values and the cell file to give; the reachable one is corrected; every motion accounted."""
     path = tmp_path / "Track_T_ROB1.mod"
     path.write_text(TRACK_TASK)
     res = filter_program(path, perturbed(ABB, 7), ABB, keep_unreached=True)
@@ -44,8 +44,8 @@ def test_track_targets_out_of_the_fixed_arms_reach_name_their_axes(tmp_path):
     for line, value in ((7, "3079.80"), (8, "2749.92")):
         assert status[line][0] == "named"
         assert "out of reach" in status[line][1] and f"eax_a = {value}" in status[line][1]
-        assert "likely move the arm" in status[line][1] and "--model CELL.yaml" in status[line][1]
-    with pytest.raises(DataError, match=r"(?s)likely move the arm.*nothing was written"):
+        assert "if those axes move the arm" in status[line][1] and "--model CELL.yaml" in status[line][1]
+    with pytest.raises(DataError, match=r"(?s)if those axes move the arm.*nothing was written"):
         filter_program(path, perturbed(ABB, 7), ABB)
 
 

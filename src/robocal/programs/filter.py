@@ -483,7 +483,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     q, sing = comp.joints, comp.singularity
     warnings += comp.assumed
     _check_joints(controller, comp, ok, problems)
-    if coordinated is None:  # external-axis values that likely move the arm, said in the reason
+    if coordinated is None:  # external-axis values that may move the arm, said in the reason
         problems = [(i, unreached_reason(targets[i], why, track is None)) for i, why in problems]
     bad = {i for i, _ in problems}
     if problems and not keep_unreached:
