@@ -56,3 +56,121 @@ def test_unreached_target_without_external_values_keeps_its_reason(tmp_path):
     res = filter_program(path, perturbed(ABB, 7), ABB, keep_unreached=True)
     named = [m.reason for m in res.motions if m.status == "named"]
     assert len(named) == 2 and all("out of reach" in r and "track" not in r for r in named)
+
+
+# a touch-sensing (SmarTac) search written as the public program that showed it: one robtarget taught
+# once and run in the reference work object and in the one the search found
+SEARCH = """MODULE SearchCell
+  PERS tooldata toolWeldGun:=[TRUE,[[0,0,400],[1,0,0,0]],[3,[0,0,100],[1,0,0,0],0,0,0]];
+  PERS wobjdata obRef:=[FALSE,TRUE,"",[[1000,0,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
+  PERS wobjdata obNew:=[FALSE,TRUE,"",[[1000,0,300],[1,0,0,0]],[[1.2,-0.8,0.5],[1,0,0,0]]];
+  PERS robtarget pOframeHome:=[[0,0,150],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  PERS robtarget pSearch:=[[50,0,20],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  PROC main()
+    MoveJ pOframeHome, v200, fine, toolWeldGun\\WObj:=obRef;
+    MoveL pSearch, v200, fine, toolWeldGun\\WObj:=obRef;
+    MoveJ pOframeHome, v200, fine, toolWeldGun\\WObj:=obNew;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_target_used_in_two_work_objects_is_named_not_refused(tmp_path):
+    """A valid program whose robtarget is run in two work objects was refused whole (nothing
+    filtered); one correction cannot serve both, so that target is left as written and both of
+    its motions are named; the rest is corrected; the file's other bytes unchanged."""
+    path = tmp_path / "SearchCell.mod"
+    path.write_text(SEARCH)
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    res = filter_program(path, perturbed(robot, 7), robot)
+    by_line = {m.line: m for m in res.motions}
+    assert sorted(by_line) == [8, 9, 10] and by_line[9].status == "corrected"
+    for line in (8, 10):
+        assert by_line[line].status == "named" and "cannot serve both" in by_line[line].reason
+        assert "obref" in by_line[line].reason and "obnew" in by_line[line].reason
+    out = res.outputs[path].decode()
+    assert "pOframeHome:=[[0,0,150],[0,0,1,0]" in out and "pSearch:=[[50,0,20]" not in out
+
+
+# a sealing program on a pedestal nozzle (remote TCP), written as the public plant backups that showed
+# it: positions in RX .. RR, motions with RTCP, the servo gun / track groups GP2-GP3 in every position
+REMOTE_LS = """/PROG  UP022
+/ATTR
+DEFAULT_GROUP\t= 1,1,1,*,*;
+/MN
+   1:  UFRAME_NUM=1 ;
+   2:  UTOOL_NUM=2 ;
+   3:J P[1] 100% CNT0 ACC100    ;
+   4:L P[2] 200mm/sec CD5 ACC100 DB    0.0mm,P-SPS RTCP    ;
+   5:L P[3] 200mm/sec FINE    ;
+/POS
+P[1]{
+   GP1:
+\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',
+\tRX =   341.681  mm,\tRY =  -170.477  mm,\tRZ =  -671.251  mm,
+\tRW =    55.263 deg,\tRP =     4.579 deg,\tRR =  -173.433 deg
+   GP2:
+\tUF : 1, UT : 2,\t
+\tJ1=   100.000  mm
+   GP3:
+\tUF : 1, UT : 2,\t
+\tJ1=     0.000  mm
+};
+P[2]{
+   GP1:
+\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 1',
+\tRX =   810.218  mm,\tRY =  -319.330  mm,\tRZ =  -184.077  mm,
+\tRW =    60.000 deg,\tRP =     4.000 deg,\tRR =  -170.000 deg
+   GP2:
+\tUF : 1, UT : 2,\t
+\tJ1=   100.000  mm
+   GP3:
+\tUF : 1, UT : 2,\t
+\tJ1=     0.000  mm
+};
+P[3]{
+   GP1:
+\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',
+\tX =   300.000  mm,\tY =     0.000  mm,\tZ =   -50.000  mm,
+\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg
+   GP2:
+\tUF : 1, UT : 2,\t
+\tJ1=   300.000  mm
+   GP3:
+\tUF : 1, UT : 2,\t
+\tJ1=     0.000  mm
+};
+/END
+"""
+
+
+def test_fanuc_remote_tcp_positions_are_named_not_refused(tmp_path):
+    """Remote-TCP positions (RX .. RR) made the whole program refused as 'malformed position P[1]:
+    no X = ... mm'; they are read and every motion to them named (the fixed tool is not on the
+    arm's model); the other position (its GP2 servo-gun value in no coordinated frame) is
+    corrected as an arm target; every motion accounted; the RX numbers unchanged."""
+    path = tmp_path / "UP022.LS"
+    path.write_text(REMOTE_LS)
+    robot = rc.Robot.from_catalog("fanuc_r2000ic_165f")
+    res = filter_program(path, perturbed(robot, 7), robot, frames={"1": "1200,0,800,0,0,0"},
+                         tools={"2": "0,0,250,0,0,0"})
+    status = [(m.status, m.reason) for m in res.motions]
+    assert [s for s, _ in status] == ["named", "named", "corrected"]
+    assert all("remote-TCP position" in why for _, why in status[:2])
+    out = res.outputs[path].decode()
+    assert "RX =   341.681  mm" in out and "RX =   810.218  mm" in out and "X =   300.000  mm" not in out
+
+
+def test_inform_station_only_job_moves_no_arm(tmp_path):
+    """A job of the station group alone (///GROUP1 ST1, MOVJ EC00000: turn the positioner, as the
+    public welding cell's jobs do) was counted as a Cartesian motion and named 'no robot position';
+    the arm does not move: no motion to a Cartesian pose, nothing named, nothing refused."""
+    path = tmp_path / "TURN.JBI"
+    lines = ["/JOB", "//NAME TURN", "//POS", "///NPOS 0,0,1,0,0,0", "///TOOL 12", "///POSTYPE PULSE",
+             "///PULSE", "EC00000=-29914,0", "//INST", "///DATE 2023/11/10 10:40", "///ATTR SC,RW",
+             "///GROUP1 ST1", "NOP", "MOVJ EC00000 VJ=90.0", "END", ""]
+    path.write_bytes("\r\n".join(lines).encode())
+    robot = rc.Robot.from_catalog("yaskawa_gp25")
+    res = filter_program(path, perturbed(robot, 7), robot)
+    assert res.motions == [] and res.uncorrected == []
+    assert res.outputs[path] == path.read_bytes()
