@@ -554,7 +554,7 @@ def _filterable(d: Dialect, program: Program, warnings: list,
     corrected as arm targets or on a positioner's plate (``coordinated``:
     :mod:`robocal.programs.positioner`) whatever their external-axis values say
     (:func:`robocal.programs.external.sort_external`)."""
-    taken = coordinated.take(program, warnings) if coordinated is not None else frozenset()
+    taken = coordinated.take(program, warnings, d) if coordinated is not None else frozenset()
     sort_external(program, warnings, taken, fixed_arm)
     targets: list[Target] = []
     for t in program.targets:

@@ -38,6 +38,7 @@ from robocal.programs.dialects.fanuc.configuration import SCARA, FANUCConfig
 from robocal.programs.dialects.fanuc.groups import COORD, coordinate, group_values, values_text
 from robocal.programs.dialects.fanuc.loads import FanucLoads, read_schedules
 from robocal.programs.dialects.fanuc.registers import ActiveFrames, read_registers
+from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
@@ -76,6 +77,8 @@ class FanucDialect(Dialect):
     key = "fanuc"
     campaign_rank = 3
     campaign_external = True  # a positioner's axes move in its campaign programs
+    external_axis_names = EXTERNAL_LETTERS  # E1.. of a position: an arm group's extended axes, a group's
+    positioner_group = True  # a positioner is its own motion group (GP2): its axes E1..Em there
     campaign_refuses_tracks = True
     campaign_scara = True  # an SR-series arm: J1, J2, J4 in deg, the quill J3 in mm
     scara_programs = True  # SR-series programs: CONFIG 'L|R, t1, t2, t4'
