@@ -4,12 +4,14 @@ style of the program that showed it; the programs themselves are not copied: no 
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import robocal as rc
 from robocal.core.errors import DataError
 from robocal.data.simulate import perturbed
 from robocal.programs import filter_program
+from robocal.programs.source import ProgramText
 
 ABB = rc.Robot.from_catalog("abb_irb4600")
 
@@ -174,3 +176,19 @@ def test_inform_station_only_job_moves_no_arm(tmp_path):
     res = filter_program(path, perturbed(robot, 7), robot)
     assert res.motions == [] and res.uncorrected == []
     assert res.outputs[path] == path.read_bytes()
+
+
+def test_binary_module_is_said_binary_and_utf16_still_named(tmp_path):
+    """A module stored encrypted (random bytes, a NUL among them) was refused as 'looks UTF-16'
+    (the public repository's other modules were so); it is said binary; a UTF-16 module is still
+    said UTF-16, with or without its byte-order mark."""
+    rng = np.random.default_rng(3)
+    binary = tmp_path / "GeneralModule.mod"
+    binary.write_bytes(b"\xfc\xc8\xa4v\x00\x01" + rng.integers(0, 256, 3000, dtype=np.uint8).tobytes())
+    with pytest.raises(DataError, match="not a program text .binary data"):
+        ProgramText(binary)
+    for codec in ("utf-16", "utf-16-le", "utf-16-be"):
+        wide = tmp_path / f"{codec}.mod"
+        wide.write_bytes("MODULE A ! 注释\nENDMODULE\n".encode(codec))
+        with pytest.raises(DataError, match="looks UTF-16 encoded"):
+            ProgramText(wide)
