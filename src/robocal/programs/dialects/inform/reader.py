@@ -409,6 +409,8 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
                 pos.header.postype == "PULSE" or not pos.header.rectan):
             prog.motions.append((src.path, start, np.full(6, np.nan)))  # a joint position: no correction
             continue
+        if ref is None and refs and all(r.group(1) in STATION_KINDS for r in refs):
+            continue  # a station's motion alone (a job of ///GROUP1 ST1, MOVJ EC00000): the arm stays
         acc = prog.motion(src, start, instr)
         if ref is None:
             prog.skip(src.where(start), instr, "no robot position (C, P or LP) in the instruction", acc)
