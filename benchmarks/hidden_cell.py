@@ -153,17 +153,26 @@ def _small_transform(rng, mm: float, deg: float) -> np.ndarray:
 
 
 def perturbed(chain: Chain, rng, tilt_deg: float, shift_mm: float, zero_deg: float,
-              frame_mm: float, frame_deg: float, base_mm: float = 0.0, base_deg: float = 0.0) -> Chain:
+              frame_mm: float, frame_deg: float, base_mm: float = 0.0, base_deg: float = 0.0,
+              last_frame_on_axis: bool = False) -> Chain:
     """The chain with joint-axis errors: each line tilted by ~``tilt_deg`` and moved
     perpendicular to itself by ~``shift_mm``, each zero off by ~``zero_deg``, the last frame by
-    ~``frame_mm``/``frame_deg`` and the base by ~``base_mm``/``base_deg`` (random, 1 sigma)."""
+    ~``frame_mm``/``frame_deg`` and the base by ~``base_mm``/``base_deg`` (random, 1 sigma).
+    ``last_frame_on_axis``: the last frame moves with its axis' line (a flange machined on its
+    axis, mastered at its zero): the last axis' zero and the frame's own error are none."""
     n = len(chain.u)
-    u = np.array([_small_rotation(rng, tilt_deg) @ chain.u[i] for i in range(n)])
+    tilt = [_small_rotation(rng, tilt_deg) for _ in range(n)]
+    u = np.array([tilt[i] @ chain.u[i] for i in range(n)])
+    u /= np.linalg.norm(u, axis=1)[:, None]
     shift = rng.normal(size=(n, 3)) * shift_mm * 1e-3
     shift -= np.sum(shift * u, axis=1)[:, None] * u
-    return replace(chain, u=u / np.linalg.norm(u, axis=1)[:, None], p=chain.p + shift,
-                   zero=rng.normal(size=n) * np.deg2rad(zero_deg),
-                   M=chain.M @ _small_transform(rng, frame_mm, frame_deg),
+    zero = rng.normal(size=n) * np.deg2rad(zero_deg)
+    M = chain.M @ _small_transform(rng, frame_mm, frame_deg)
+    if last_frame_on_axis:  # the last line's tilt (about its point) and shift carry the frame along
+        p = chain.p[-1]
+        G = transform(tilt[-1], p + shift[-1] - tilt[-1] @ p)
+        M, zero[-1] = G @ chain.M, 0.0
+    return replace(chain, u=u, p=chain.p + shift, zero=zero, M=M,
                    base=chain.base @ _small_transform(rng, base_mm, base_deg))
 
 
@@ -229,11 +238,15 @@ FLANGE_SMR_MM = np.array([[0.0, 0, 40], [55.0, 0, 25], [-30.0, 50, 25]])  # SMR 
 
 
 def make_truth(seed: int, arm_name: str = "abb_irb2600", unit: str = "STN1",
-               program_axes=("eax_b", "eax_c")) -> Truth:
+               program_axes=("eax_b", "eax_c"), flange_on_axis: bool = False) -> Truth:
+    """The hidden cell of ``seed``. ``flange_on_axis``: the arm's flange carried by its axis 6
+    as drawn (no flange frame error, axis 6 mastered): what SMRs at unknown flange positions
+    cannot see is then not wrong either, so a tool given on the flange is where the model says."""
     rng = np.random.default_rng(seed)
     arm = nominal_arm(arm_name)
     pos = positioner_chain(MOUNT_XYZ, MOUNT_RPY, AXES, PLATE_XYZ)
-    true_arm = perturbed(arm, rng, tilt_deg=0.03, shift_mm=0.3, zero_deg=0.03, frame_mm=0.2, frame_deg=0.03)
+    true_arm = perturbed(arm, rng, tilt_deg=0.03, shift_mm=0.3, zero_deg=0.03, frame_mm=0.2, frame_deg=0.03,
+                         last_frame_on_axis=flange_on_axis)
     true_pos = perturbed(pos, rng, tilt_deg=0.05, shift_mm=0.3, zero_deg=0.05, frame_mm=0.3, frame_deg=0.05,
                          base_mm=1.5, base_deg=0.1)
     tracker = transform(Rotation.from_euler("zyx", [rng.uniform(-np.pi, np.pi), *rng.normal(size=2) * 0.02])
@@ -572,13 +585,19 @@ def on_true_plate(t: Truth, q: np.ndarray, e: np.ndarray) -> np.ndarray:
     return np.linalg.inv(t.true_pos.fk(e) @ WORKPIECE) @ t.true_arm.fk(q) @ TORCH
 
 
+def model_flange(arm, q: np.ndarray) -> np.ndarray:
+    """The calibrated arm's flange (N, 4, 4): its TCP is the nominal SMR 0 on the flange (the cell
+    file's tool), whatever internal frame its model composes it with."""
+    return arm.fk(q) @ np.linalg.inv(transform(np.eye(3), FLANGE_SMR_MM[0] * 1e-3))
+
+
 def on_model_plate(cal_path: Path, q: np.ndarray, e: np.ndarray) -> np.ndarray:
     """Where the calibrated cell (robocal's API, the model under test) says the torch is on its plate."""
     import robocal as rc
 
     cell = rc.load_cell(cal_path)
     arm, pos = next(iter(cell.arms.values())), next(iter(cell.positioners.values()))
-    return np.linalg.inv(pos.plate(e) @ WORKPIECE) @ arm.fk(q) @ np.linalg.inv(arm.tool) @ TORCH
+    return np.linalg.inv(pos.plate(e) @ WORKPIECE) @ model_flange(arm, q) @ TORCH
 
 
 def pose_errors(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -740,7 +759,7 @@ def uncoordinated(t: Truth, cal: Path, before: dict, after: dict, taught, cfg, i
     qs = arm_joints(rng, 300)
     pts = np.array([[0, 0, 0, 1], [0.2, 0, 0, 1], [0, 0.2, 0, 1]], float).T
     A = (t.true_arm.fk(qs) @ pts)[:, :3].transpose(0, 2, 1).reshape(-1, 3)
-    B = (arm.fk(qs) @ np.linalg.inv(arm.tool) @ pts)[:, :3].transpose(0, 2, 1).reshape(-1, 3)
+    B = (model_flange(arm, qs) @ pts)[:, :3].transpose(0, 2, 1).reshape(-1, 3)
     X = kabsch(A, B)  # truth world -> calibrated world
     names = [f"pF{k}" for k in range(len(taught))]
     res = {}
@@ -750,7 +769,7 @@ def uncoordinated(t: Truth, cal: Path, before: dict, after: dict, taught, cfg, i
         res[f"{label}_mm"] = rms(pose_errors(X @ t.true_arm.fk(q) @ TORCH, intended)[0])
         if label == "filtered":
             res["own_mm"] = rms(pose_errors(X @ t.true_arm.fk(q) @ TORCH,
-                                            arm.fk(q) @ np.linalg.inv(arm.tool) @ TORCH)[0])
+                                            model_flange(arm, q) @ TORCH)[0])
             res["config_mismatched"] = mismatched
     return res
 
@@ -790,21 +809,27 @@ def unknown_unit_check(folder: Path, t: Truth) -> dict:
             "written": written, "goal_met": bool(run.returncode == 2 and len(lines) == 1 and not written)}
 
 
-def run(seed: int = 0, sizes: Sizes = Sizes(), keep: Path | None = None) -> dict:
-    """Every check on one hidden truth (an ABB cell for RAPID, a KUKA cell for KRL)."""
+VARIANTS = {"flange on its axis": True, "flange off its axis": False}
+
+
+def run(seed: int = 0, sizes: Sizes = Sizes(), keep: Path | None = None, variants=tuple(VARIANTS)) -> dict:
+    """Every check on the hidden truths of ``seed`` (an ABB cell for RAPID, a KUKA cell for KRL),
+    for each variant of the arm's flange (``make_truth``'s ``flange_on_axis``)."""
     report: dict = {"seed": seed, "conventions_m": {n: check_conventions(n) for n in ARMS}}
     with tempfile.TemporaryDirectory() as tmp:
-        root = Path(keep) if keep else Path(tmp)
-        abb, kuka = root / "abb", root / "kuka"
-        abb.mkdir(parents=True, exist_ok=True)
-        kuka.mkdir(parents=True, exist_ok=True)
-        t = make_truth(seed)
-        report["abb_calibration"] = calibrate_cell(abb, t, sizes, seed)
-        report["rapid"] = {mode: rapid_checks(abb, t, sizes, seed, mode) for mode in ("nests", "free")}
-        report["unknown_unit"] = unknown_unit_check(abb, t)
-        tk = make_truth(seed + 1, "kuka_kr16_2", "DKP400", ("E1", "E2"))
-        report["kuka_calibration"] = calibrate_cell(kuka, tk, sizes, seed + 1)
-        report["krl"] = krl_checks(kuka, tk, sizes, seed + 1)
+        for variant in variants:
+            on_axis = VARIANTS[variant]
+            root = (Path(keep) if keep else Path(tmp)) / variant.replace(" ", "_")
+            abb, kuka = root / "abb", root / "kuka"
+            abb.mkdir(parents=True)
+            kuka.mkdir(parents=True)
+            t = make_truth(seed, flange_on_axis=on_axis)
+            r = report[variant] = {"abb_calibration": calibrate_cell(abb, t, sizes, seed)}
+            r["rapid"] = {mode: rapid_checks(abb, t, sizes, seed, mode) for mode in ("nests", "free")}
+            r["unknown_unit"] = unknown_unit_check(abb, t)
+            tk = make_truth(seed + 1, "kuka_kr16_2", "DKP400", ("E1", "E2"), flange_on_axis=on_axis)
+            r["kuka_calibration"] = calibrate_cell(kuka, tk, sizes, seed + 1)
+            r["krl"] = krl_checks(kuka, tk, sizes, seed + 1)
     return report
 
 
