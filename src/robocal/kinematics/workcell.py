@@ -725,7 +725,8 @@ def _flange(entry) -> np.ndarray | None:
     model = entry.model
     if isinstance(model, str) and Path(model).suffix.lower() in (".yaml", ".yml") and Path(model).is_file():
         model = read_model_data(Path(model))
-    if not isinstance(model, dict) or model.get("tool") is None or not any(k in model for k in TABLE_FORMS):
+    if not isinstance(model, dict) or model.get("tool") is None or "joints" in model \
+            or not any(k in model for k in TABLE_FORMS):
         return None
     return Robot(**robot_kwargs({k: v for k, v in model.items() if k not in ("tool", "smr")})).tool
 
