@@ -106,8 +106,17 @@ def opw_chain(a1, a2, b, c1, c2, c3, c4, offsets_deg, signs, flange: np.ndarray)
     axes 1, 4, 6 along z, 2, 3, 5 along y); ``flange`` the flange's orientation there."""
     z, y = np.array([0.0, 0, 1]), np.array([0.0, 1, 0])
     u = np.array([z, y, y, z, y, z])
-    p = np.array([[0, 0, 0], [a1, 0, c1], [a1, 0, c1 + c2], [a1 + a2, b, 0],
-                  [a1 + a2, b, c1 + c2 + c3], [a1 + a2, b, 0]], float)
+    p = np.array(
+        [
+            [0, 0, 0],
+            [a1, 0, c1],
+            [a1, 0, c1 + c2],
+            [a1 + a2, b, 0],
+            [a1 + a2, b, c1 + c2 + c3],
+            [a1 + a2, b, 0],
+        ],
+        float,
+    )
     M = transform(flange, [a1 + a2, b, c1 + c2 + c3 + c4])
     # the controller's value q maps to the OPW angle sign * q - offset (checked against the catalog)
     return Chain(u, p, np.asarray(signs, float), -np.deg2rad(offsets_deg), np.zeros(6), M, np.eye(4))
@@ -115,13 +124,17 @@ def opw_chain(a1, a2, b, c1, c2, c3, c4, offsets_deg, signs, flange: np.ndarray)
 
 # The catalog's OPW numbers (src/robocal/catalog/*.yaml, ../shared/robots/PARAMETERS.md), limits deg.
 ARMS = {
-    "abb_irb2600": dict(opw=(0.150, -0.115, 0.0, 0.445, 0.700, 0.795, 0.085, [0, 0, -90, 0, 0, 0],
-                             [1, 1, 1, 1, 1, 1]), flange=np.eye(3),
-                        limits=[(-180, 180), (-95, 155), (-180, 75), (-400, 400), (-120, 120), (-400, 400)]),
+    "abb_irb2600": dict(
+        opw=(0.150, -0.115, 0.0, 0.445, 0.700, 0.795, 0.085, [0, 0, -90, 0, 0, 0], [1, 1, 1, 1, 1, 1]),
+        flange=np.eye(3),
+        limits=[(-180, 180), (-95, 155), (-180, 75), (-400, 400), (-120, 120), (-400, 400)],
+    ),
     # KUKA's $FLANGE: z out of the flange, x down at the home pose (0, -90, 90, 0, 0, 0): B = 90 deg
-    "kuka_kr16_2": dict(opw=(0.260, 0.035, 0.0, 0.675, 0.680, 0.670, 0.158, [0, -90, 0, 0, 0, 0],
-                             [-1, 1, 1, -1, 1, -1]), flange=np.eye(3),
-                        limits=[(-185, 185), (-155, 35), (-130, 154), (-350, 350), (-130, 130), (-350, 350)]),
+    "kuka_kr16_2": dict(
+        opw=(0.260, 0.035, 0.0, 0.675, 0.680, 0.670, 0.158, [0, -90, 0, 0, 0, 0], [-1, 1, 1, -1, 1, -1]),
+        flange=np.eye(3),
+        limits=[(-185, 185), (-155, 35), (-130, 154), (-350, 350), (-130, 130), (-350, 350)],
+    ),
 }
 
 
@@ -140,8 +153,15 @@ def positioner_chain(mount_xyz_mm, mount_rpy_deg, axes, plate_xyz_mm) -> Chain:
     n = len(axes)
     base = transform(rpy(*np.deg2rad(mount_rpy_deg)), np.asarray(mount_xyz_mm, float) * 1e-3)
     M = transform(np.eye(3), at + np.asarray(plate_xyz_mm, float) * 1e-3)
-    return Chain(np.array([np.asarray(d, float) for d, _ in axes]), np.array(points), np.ones(n),
-                 np.zeros(n), np.zeros(n), M, base)
+    return Chain(
+        np.array([np.asarray(d, float) for d, _ in axes]),
+        np.array(points),
+        np.ones(n),
+        np.zeros(n),
+        np.zeros(n),
+        M,
+        base,
+    )
 
 
 def _small_rotation(rng, deg: float) -> np.ndarray:
@@ -152,9 +172,18 @@ def _small_transform(rng, mm: float, deg: float) -> np.ndarray:
     return transform(_small_rotation(rng, deg), rng.normal(size=3) / np.sqrt(3) * mm * 1e-3)
 
 
-def perturbed(chain: Chain, rng, tilt_deg: float, shift_mm: float, zero_deg: float,
-              frame_mm: float, frame_deg: float, base_mm: float = 0.0, base_deg: float = 0.0,
-              last_frame_on_axis: bool = False) -> Chain:
+def perturbed(
+    chain: Chain,
+    rng,
+    tilt_deg: float,
+    shift_mm: float,
+    zero_deg: float,
+    frame_mm: float,
+    frame_deg: float,
+    base_mm: float = 0.0,
+    base_deg: float = 0.0,
+    last_frame_on_axis: bool = False,
+) -> Chain:
     """The chain with joint-axis errors: each line tilted by ~``tilt_deg`` and moved
     perpendicular to itself by ~``shift_mm``, each zero off by ~``zero_deg``, the last frame by
     ~``frame_mm``/``frame_deg`` and the base by ~``base_mm``/``base_deg`` (random, 1 sigma).
@@ -172,8 +201,14 @@ def perturbed(chain: Chain, rng, tilt_deg: float, shift_mm: float, zero_deg: flo
         p = chain.p[-1]
         G = transform(tilt[-1], p + shift[-1] - tilt[-1] @ p)
         M, zero[-1] = G @ chain.M, 0.0
-    return replace(chain, u=u, p=chain.p + shift, zero=zero, M=M,
-                   base=chain.base @ _small_transform(rng, base_mm, base_deg))
+    return replace(
+        chain,
+        u=u,
+        p=chain.p + shift,
+        zero=zero,
+        M=M,
+        base=chain.base @ _small_transform(rng, base_mm, base_deg),
+    )
 
 
 def check_conventions(name: str) -> float:
@@ -202,8 +237,14 @@ def ik(chain: Chain, goals: np.ndarray, seeds: np.ndarray) -> tuple[np.ndarray, 
     also the position residuals (mm)."""
     out, res = np.empty_like(seeds), np.empty(len(seeds))
     for k, (G, q0) in enumerate(zip(goals, seeds, strict=True)):
-        sol = least_squares(lambda q, G=G: _pose_residual(chain.fk(q[None])[0], G), q0,
-                            xtol=1e-15, ftol=1e-15, gtol=1e-15, method="lm")
+        sol = least_squares(
+            lambda q, G=G: _pose_residual(chain.fk(q[None])[0], G),
+            q0,
+            xtol=1e-15,
+            ftol=1e-15,
+            gtol=1e-15,
+            method="lm",
+        )
         out[k], res[k] = sol.x, np.linalg.norm(sol.fun[:3])
     return out, res
 
@@ -237,22 +278,56 @@ NESTS_MM = np.array([[200.0, 0, 0], [-90.0, 170, 0], [-110.0, -160, 5]])
 FLANGE_SMR_MM = np.array([[0.0, 0, 40], [55.0, 0, 25], [-30.0, 50, 25]])  # SMR 0 = the model's tool
 
 
-def make_truth(seed: int, arm_name: str = "abb_irb2600", unit: str = "STN1",
-               program_axes=("eax_b", "eax_c"), flange_on_axis: bool = False) -> Truth:
+def make_truth(
+    seed: int,
+    arm_name: str = "abb_irb2600",
+    unit: str = "STN1",
+    program_axes=("eax_b", "eax_c"),
+    flange_on_axis: bool = False,
+) -> Truth:
     """The hidden cell of ``seed``. ``flange_on_axis``: the arm's flange carried by its axis 6
     as drawn (no flange frame error, axis 6 mastered): what SMRs at unknown flange positions
     cannot see is then not wrong either, so a tool given on the flange is where the model says."""
     rng = np.random.default_rng(seed)
     arm = nominal_arm(arm_name)
     pos = positioner_chain(MOUNT_XYZ, MOUNT_RPY, AXES, PLATE_XYZ)
-    true_arm = perturbed(arm, rng, tilt_deg=0.03, shift_mm=0.3, zero_deg=0.03, frame_mm=0.2, frame_deg=0.03,
-                         last_frame_on_axis=flange_on_axis)
-    true_pos = perturbed(pos, rng, tilt_deg=0.05, shift_mm=0.3, zero_deg=0.05, frame_mm=0.3, frame_deg=0.05,
-                         base_mm=1.5, base_deg=0.1)
-    tracker = transform(Rotation.from_euler("zyx", [rng.uniform(-np.pi, np.pi), *rng.normal(size=2) * 0.02])
-                        .as_matrix(), [rng.uniform(2.5, 3.5), rng.uniform(-2.0, 2.0), rng.uniform(0.2, 1.0)])
-    return Truth(arm_name, arm, true_arm, pos, true_pos, FLANGE_SMR_MM * 1e-3 + rng.normal(size=(3, 3)) * 5e-5,
-                 NESTS_MM * 1e-3, tracker, unit, tuple(program_axes))
+    true_arm = perturbed(
+        arm,
+        rng,
+        tilt_deg=0.03,
+        shift_mm=0.3,
+        zero_deg=0.03,
+        frame_mm=0.2,
+        frame_deg=0.03,
+        last_frame_on_axis=flange_on_axis,
+    )
+    true_pos = perturbed(
+        pos,
+        rng,
+        tilt_deg=0.05,
+        shift_mm=0.3,
+        zero_deg=0.05,
+        frame_mm=0.3,
+        frame_deg=0.05,
+        base_mm=1.5,
+        base_deg=0.1,
+    )
+    tracker = transform(
+        Rotation.from_euler("zyx", [rng.uniform(-np.pi, np.pi), *rng.normal(size=2) * 0.02]).as_matrix(),
+        [rng.uniform(2.5, 3.5), rng.uniform(-2.0, 2.0), rng.uniform(0.2, 1.0)],
+    )
+    return Truth(
+        arm_name,
+        arm,
+        true_arm,
+        pos,
+        true_pos,
+        FLANGE_SMR_MM * 1e-3 + rng.normal(size=(3, 3)) * 5e-5,
+        NESTS_MM * 1e-3,
+        tracker,
+        unit,
+        tuple(program_axes),
+    )
 
 
 def arm_joints(rng, n: int) -> np.ndarray:
@@ -287,7 +362,10 @@ def measure(t: Truth, q: np.ndarray, e: np.ndarray, rng) -> list[dict]:
 
 def write_csv(path: Path, rows: list[dict]) -> None:
     head = ["body"] + [f"q{i}_deg" for i in range(1, 7)] + ["e1_deg", "e2_deg", "x_mm", "y_mm", "z_mm", "smr"]
-    lines = ["# hidden cell truth (benchmarks/hidden_cell.py): its own kinematics and tracker", ",".join(head)]
+    lines = [
+        "# hidden cell truth (benchmarks/hidden_cell.py): its own kinematics and tracker",
+        ",".join(head),
+    ]
     for r in rows:
         q = [f"{v:.6f}" for v in np.rad2deg(r["q"])] if r["q"] is not None else [""] * 6
         e = [f"{v:.6f}" for v in np.rad2deg(r["e"])] if r["e"] is not None else ["", ""]
@@ -300,19 +378,25 @@ def write_cell(folder: Path, t: Truth, nests: bool, name: str = "cell.yaml") -> 
     flange SMRs' nominal offsets) and the positioner as drawn; ``nests`` declares the plate's nests."""
     a1, a2, b, c1, c2, c3, c4, offsets, signs = ARMS[t.arm_name]["opw"]
     lim = ARMS[t.arm_name]["limits"]
-    arm = (f"name: {t.arm_name}_smr\nunits: {{length: mm, angle: deg}}\n"
-           f"opw: {{a1: {a1 * 1e3:g}, a2: {a2 * 1e3:g}, b: {b * 1e3:g}, c1: {c1 * 1e3:g}, c2: {c2 * 1e3:g}, "
-           f"c3: {c3 * 1e3:g}, c4: {c4 * 1e3:g}, offsets: {offsets}, signs: {signs}}}\n"
-           f"limits: {[list(x) for x in lim]}\n"
-           f"tool: {{xyz: {FLANGE_SMR_MM[0].tolist()}}}\nsmr: {FLANGE_SMR_MM[1:].tolist()}\n")
+    arm = (
+        f"name: {t.arm_name}_smr\nunits: {{length: mm, angle: deg}}\n"
+        f"opw: {{a1: {a1 * 1e3:g}, a2: {a2 * 1e3:g}, b: {b * 1e3:g}, c1: {c1 * 1e3:g}, c2: {c2 * 1e3:g}, "
+        f"c3: {c3 * 1e3:g}, c4: {c4 * 1e3:g}, offsets: {offsets}, signs: {signs}}}\n"
+        f"limits: {[list(x) for x in lim]}\n"
+        f"tool: {{xyz: {FLANGE_SMR_MM[0].tolist()}}}\nsmr: {FLANGE_SMR_MM[1:].tolist()}\n"
+    )
     (folder / f"{t.arm_name}_smr.yaml").write_text(arm)
-    axes = ",\n         ".join(f"{{type: revolute, axis: {d}, origin: {o}, limits: {list(lim)}}}"
-                               for (d, o), lim in zip(AXES, AXIS_LIMITS, strict=True))
-    text = (f"units: {{length: mm, angle: deg}}\nname: hidden cell\nrobot: {t.arm_name}_smr.yaml\n"
-            f"positioner:\n  unit: {t.unit}\n  mount: {{xyz: {MOUNT_XYZ}, rpy: {MOUNT_RPY}}}\n"
-            f"  axes: [{axes}]\n  plate: {{xyz: {PLATE_XYZ}, rpy: [0, 0, 0]}}\n"
-            f"  columns: [e1, e2]\n  program_axes: [{', '.join(t.program_axes)}]\n"
-            + (f"  nests: {NESTS_MM.tolist()}\n" if nests else ""))
+    axes = ",\n         ".join(
+        f"{{type: revolute, axis: {d}, origin: {o}, limits: {list(lim)}}}"
+        for (d, o), lim in zip(AXES, AXIS_LIMITS, strict=True)
+    )
+    text = (
+        f"units: {{length: mm, angle: deg}}\nname: hidden cell\nrobot: {t.arm_name}_smr.yaml\n"
+        f"positioner:\n  unit: {t.unit}\n  mount: {{xyz: {MOUNT_XYZ}, rpy: {MOUNT_RPY}}}\n"
+        f"  axes: [{axes}]\n  plate: {{xyz: {PLATE_XYZ}, rpy: [0, 0, 0]}}\n"
+        f"  columns: [e1, e2]\n  program_axes: [{', '.join(t.program_axes)}]\n"
+        + (f"  nests: {NESTS_MM.tolist()}\n" if nests else "")
+    )
     path = folder / name
     path.write_text(text)
     return path
@@ -322,8 +406,12 @@ def robocal(*args: str, check: bool = True) -> subprocess.CompletedProcess:
     """robocal's command line, as a user runs it."""
     src = Path(__file__).resolve().parents[1] / "src"
     env = {**os.environ, "PYTHONPATH": f"{src}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
-    run = subprocess.run([sys.executable, "-c", "import sys; from robocal.cli import main; sys.exit(main())",
-                          *map(str, args)], capture_output=True, text=True, env=env)
+    run = subprocess.run(
+        [sys.executable, "-c", "import sys; from robocal.cli import main; sys.exit(main())", *map(str, args)],
+        capture_output=True,
+        text=True,
+        env=env,
+    )
     if check and run.returncode != 0:
         raise RuntimeError(f"robocal {' '.join(map(str, args))} failed ({run.returncode}):\n{run.stderr}")
     return run
@@ -392,7 +480,7 @@ def heldout_rms(world: np.ndarray, rows: list[dict]) -> float:
     meas = np.array([r["p"] for r in rows])
     T = kabsch(world, meas)
     res = meas - (world @ T[:3, :3].T + T[:3, 3])
-    return float(np.sqrt(np.mean(np.sum(res ** 2, axis=1))) * 1e3)
+    return float(np.sqrt(np.mean(np.sum(res**2, axis=1))) * 1e3)
 
 
 # --------------------------------------------------------------------------------- programs
@@ -429,8 +517,9 @@ def wrist_centre(t: Truth, q: np.ndarray) -> np.ndarray:
     c4 = ARMS[t.arm_name]["opw"][6]
     c = F[:, :3, 3] - c4 * F[:, :3, 2]
     a = t.arm.sign[0] * q[:, 0]
-    return np.column_stack([np.cos(a) * c[:, 0] + np.sin(a) * c[:, 1], -np.sin(a) * c[:, 0] + np.cos(a) * c[:, 1],
-                            c[:, 2]])
+    return np.column_stack(
+        [np.cos(a) * c[:, 0] + np.sin(a) * c[:, 1], -np.sin(a) * c[:, 0] + np.cos(a) * c[:, 1], c[:, 2]]
+    )
 
 
 def configuration(t: Truth, q: np.ndarray) -> np.ndarray | None:
@@ -447,7 +536,11 @@ def configuration(t: Truth, q: np.ndarray) -> np.ndarray | None:
         j2 = np.array([a1, c1])
         normal = np.array([np.cos(q[1]), -np.sin(q[1])])  # in front of the lower arm (x, z plane)
         quadrant = deg[[0, 3, 5]] / 90.0
-        if normal @ (c[[0, 2]] - j2) < 0.1 or deg[4] < 10 or np.min(np.abs(quadrant - np.round(quadrant))) < 0.03:
+        if (
+            normal @ (c[[0, 2]] - j2) < 0.1
+            or deg[4] < 10
+            or np.min(np.abs(quadrant - np.round(quadrant))) < 0.03
+        ):
             return None
         return np.r_[np.floor(quadrant), 0].astype(int)
     if deg[2] < 20 or abs(deg[4]) < 10 or np.min(np.abs(deg)) < 1.0:
@@ -464,13 +557,18 @@ def plan_targets(t: Truth, n: int, seed: int):
     es, qs, cfs, Ts = [], [], [], []
     while len(qs) < n:
         e = np.deg2rad([rng.uniform(-40, 40), rng.uniform(-180, 180)])
-        local = transform(rpy(np.pi + rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(-np.pi, np.pi)),
-                          [*rng.uniform(-0.15, 0.15, 2), rng.uniform(0.0, 0.05)])
+        local = transform(
+            rpy(np.pi + rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(-np.pi, np.pi)),
+            [*rng.uniform(-0.15, 0.15, 2), rng.uniform(0.0, 0.05)],
+        )
         goal = t.pos.fk(e[None])[0] @ WORKPIECE @ local @ np.linalg.inv(TORCH)
         a = np.arctan2(goal[1, 3], goal[0, 3]) * t.arm.sign[0]
         for q5 in (60.0, -60.0):
-            seed_q = np.deg2rad([np.rad2deg(a), 20, 0, 0, q5, 0] if t.arm_name.startswith("abb")
-                                else [np.rad2deg(a), -60, 100, 0, q5, 0])
+            seed_q = np.deg2rad(
+                [np.rad2deg(a), 20, 0, 0, q5, 0]
+                if t.arm_name.startswith("abb")
+                else [np.rad2deg(a), -60, 100, 0, q5, 0]
+            )
             q, res = ik(t.arm, goal[None], seed_q[None])
             q = q[0]
             if res[0] > IK_TOL_MM or np.any(q < lim[:, 0]) or np.any(q > lim[:, 1]):
@@ -486,30 +584,56 @@ def _f(values, fmt: str) -> str:
     return ",".join(format(v, fmt) for v in values)
 
 
-def rapid_module(folder: Path, e, cfg, T, unit: str, uframe: np.ndarray | None = None,
-                 extra_uncoordinated: tuple | None = None, name: str = "hidden") -> Path:
+def _robtarget(name: str, P: np.ndarray, cfg, e) -> str:
+    """A robtarget declaration: pose P (m), confdata, the positioner at eax_b / eax_c (rad)."""
+    return (
+        f"  CONST robtarget {name}:=[[{_f(P[:3, 3] * 1e3, '.3f')}],[{_f(quaternion(P[:3, :3]), '.6f')}],"
+        f"[{_f(cfg, 'd')}],[9E+09,{np.rad2deg(e[0]):.3f},{np.rad2deg(e[1]):.3f},9E+09,9E+09,9E+09]];"
+    )
+
+
+def rapid_module(
+    folder: Path,
+    e,
+    cfg,
+    T,
+    unit: str,
+    uframe: np.ndarray | None = None,
+    extra_uncoordinated: tuple | None = None,
+    name: str = "hidden",
+) -> Path:
     """A RAPID module of coordinated targets on ``unit``'s plate: wobjdata [FALSE, FALSE, "unit",
     uframe, oframe], robtargets in that work object with the positioner at eax_b / eax_c, ActUnit.
     ``uframe`` (default identity) as RobotStudio stores a moving work object's. ``extra_uncoordinated``
     (cfg, world poses, e): wobj0 targets with eax_b / eax_c values that do not move them."""
     uf = np.eye(4) if uframe is None else uframe
-    lines = ["MODULE HiddenCell", "  ! coordinated welding on a two-axis positioner",
-             f"  PERS tooldata tTorch:=[TRUE,[[{_f(TORCH[:3, 3] * 1e3, '.3f')}],[{_f(quaternion(TORCH[:3, :3]), '.8f')}]],"
-             "[3.2,[0,0,100],[1,0,0,0],0,0,0]];",
-             f"  PERS wobjdata wobjPlate:=[FALSE,FALSE,\"{unit}\",[[{_f(uf[:3, 3] * 1e3, '.3f')}],"
-             f"[{_f(quaternion(uf[:3, :3]), '.8f')}]],[[{_f(WORKPIECE[:3, 3] * 1e3, '.3f')}],"
-             f"[{_f(quaternion(WORKPIECE[:3, :3]), '.8f')}]]];"]
-    for k in range(len(T)):
-        lines.append(f"  CONST robtarget pW{k}:=[[{_f(T[k, :3, 3] * 1e3, '.3f')}],[{_f(quaternion(T[k, :3, :3]), '.6f')}],"
-                     f"[{_f(cfg[k], 'd')}],[9E+09,{np.rad2deg(e[k, 0]):.3f},{np.rad2deg(e[k, 1]):.3f},9E+09,9E+09,9E+09]];")
-    moves = [f"    Move{'J' if k == 0 else 'L'} pW{k},v100,z1,tTorch\\WObj:=wobjPlate;" for k in range(len(T))]
+    lines = [
+        "MODULE HiddenCell",
+        "  ! coordinated welding on a two-axis positioner",
+        f"  PERS tooldata tTorch:=[TRUE,[[{_f(TORCH[:3, 3] * 1e3, '.3f')}],"
+        f"[{_f(quaternion(TORCH[:3, :3]), '.8f')}]],"
+        "[3.2,[0,0,100],[1,0,0,0],0,0,0]];",
+        f'  PERS wobjdata wobjPlate:=[FALSE,FALSE,"{unit}",[[{_f(uf[:3, 3] * 1e3, ".3f")}],'
+        f"[{_f(quaternion(uf[:3, :3]), '.8f')}]],[[{_f(WORKPIECE[:3, 3] * 1e3, '.3f')}],"
+        f"[{_f(quaternion(WORKPIECE[:3, :3]), '.8f')}]]];",
+    ]
+    lines += [_robtarget(f"pW{k}", T[k], cfg[k], e[k]) for k in range(len(T))]
+    moves = [
+        f"    Move{'J' if k == 0 else 'L'} pW{k},v100,z1,tTorch\\WObj:=wobjPlate;" for k in range(len(T))
+    ]
     if extra_uncoordinated is not None:
         ucfg, U, ue = extra_uncoordinated
-        for k in range(len(U)):
-            lines.append(f"  CONST robtarget pF{k}:=[[{_f(U[k, :3, 3] * 1e3, '.3f')}],[{_f(quaternion(U[k, :3, :3]), '.6f')}],"
-                         f"[{_f(ucfg[k], 'd')}],[9E+09,{np.rad2deg(ue[k, 0]):.3f},{np.rad2deg(ue[k, 1]):.3f},9E+09,9E+09,9E+09]];")
+        lines += [_robtarget(f"pF{k}", U[k], ucfg[k], ue[k]) for k in range(len(U))]
         moves += [f"    MoveL pF{k},v100,fine,tTorch;" for k in range(len(U))]
-    lines += ["  PROC main()", f"    ActUnit {unit};", *moves, f"    DeactUnit {unit};", "  ENDPROC", "ENDMODULE", ""]
+    lines += [
+        "  PROC main()",
+        f"    ActUnit {unit};",
+        *moves,
+        f"    DeactUnit {unit};",
+        "  ENDPROC",
+        "ENDMODULE",
+        "",
+    ]
     path = folder / f"{name}.mod"
     path.write_bytes("\r\n".join(lines).encode())
     return path
@@ -518,26 +642,48 @@ def rapid_module(folder: Path, e, cfg, T, unit: str, uframe: np.ndarray | None =
 def krl_program(folder: Path, e, cfg, T, unit: str, mount: np.ndarray, name: str = "hidden") -> list[Path]:
     """A KRL .src/.dat and $config.dat: machine 2 an #EASYS named ``unit`` at ``mount`` in the world,
     base 3 the work object on its flange (MACHINE_FRAME_DAT[3]), ``$BASE=EK(...)``, E6POS with E1/E2."""
+
     def frame(T4):
-        return "{" + ",".join(f"{k} {v:.4f}" for k, v in zip("XYZABC", [*(T4[:3, 3] * 1e3), *zyx(T4[:3, :3])],
-                                                                  strict=True)) + "}"
-    src = [f"DEF {name}( )", "  BAS(#INITMOV,0 )", "  $TOOL=TOOL_DATA[1]",
-           "  $BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,BASE_DATA[3])", "  $ACT_EX_AX=2",
-           *[f"  {'PTP' if k == 0 else 'LIN'} XW{k}" for k in range(len(T))], "  $BASE=$NULLFRAME", "END", ""]
+        return (
+            "{"
+            + ",".join(
+                f"{k} {v:.4f}" for k, v in zip("XYZABC", [*(T4[:3, 3] * 1e3), *zyx(T4[:3, :3])], strict=True)
+            )
+            + "}"
+        )
+
+    src = [
+        f"DEF {name}( )",
+        "  BAS(#INITMOV,0 )",
+        "  $TOOL=TOOL_DATA[1]",
+        "  $BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,BASE_DATA[3])",
+        "  $ACT_EX_AX=2",
+        *[f"  {'PTP' if k == 0 else 'LIN'} XW{k}" for k in range(len(T))],
+        "  $BASE=$NULLFRAME",
+        "END",
+        "",
+    ]
     dat = [f"DEFDAT  {name}"]
     for k in range(len(T)):
         x, abc = T[k, :3, 3] * 1e3, zyx(T[k, :3, :3])
-        dat.append(f"DECL E6POS XW{k}={{X {x[0]:.3f},Y {x[1]:.3f},Z {x[2]:.3f},A {abc[0]:.4f},B {abc[1]:.4f},"
-                   f"C {abc[2]:.4f},S {cfg[k, 0]},T {cfg[k, 1]},E1 {np.rad2deg(e[k, 0]):.3f},"
-                   f"E2 {np.rad2deg(e[k, 1]):.3f},E3 0.0,E4 0.0,E5 0.0,E6 0.0}}")
+        dat.append(
+            f"DECL E6POS XW{k}={{X {x[0]:.3f},Y {x[1]:.3f},Z {x[2]:.3f},A {abc[0]:.4f},B {abc[1]:.4f},"
+            f"C {abc[2]:.4f},S {cfg[k, 0]},T {cfg[k, 1]},E1 {np.rad2deg(e[k, 0]):.3f},"
+            f"E2 {np.rad2deg(e[k, 1]):.3f},E3 0.0,E4 0.0,E5 0.0,E6 0.0}}"
+        )
     dat += ["ENDDAT", ""]
-    config = ["DEFDAT  $CONFIG",
-              'MACHINE_DEF[1]={NAME[] "KR16",COOP_KRC_INDEX 1,PARENT[] "WORLD",ROOT {X 0.0,Y 0.0,Z 0.0,'
-              'A 0.0,B 0.0,C 0.0},MECH_TYPE #ROBOT,GEOMETRY[] " "}',
-              f'MACHINE_DEF[2]={{NAME[] "{unit}",COOP_KRC_INDEX 1,PARENT[] "WORLD",ROOT {frame(mount)},'
-              'MECH_TYPE #EASYS,GEOMETRY[] " "}',
-              f'MACHINE_FRAME_DAT[3]={{MACH_DEF_INDEX 2,PARENT[] "{unit}",GEOMETRY[] " "}}',
-              f"TOOL_DATA[1]={frame(TORCH)}", f"BASE_DATA[3]={frame(WORKPIECE)}", "ENDDAT", ""]
+    config = [
+        "DEFDAT  $CONFIG",
+        'MACHINE_DEF[1]={NAME[] "KR16",COOP_KRC_INDEX 1,PARENT[] "WORLD",ROOT {X 0.0,Y 0.0,Z 0.0,'
+        'A 0.0,B 0.0,C 0.0},MECH_TYPE #ROBOT,GEOMETRY[] " "}',
+        f'MACHINE_DEF[2]={{NAME[] "{unit}",COOP_KRC_INDEX 1,PARENT[] "WORLD",ROOT {frame(mount)},'
+        'MECH_TYPE #EASYS,GEOMETRY[] " "}',
+        f'MACHINE_FRAME_DAT[3]={{MACH_DEF_INDEX 2,PARENT[] "{unit}",GEOMETRY[] " "}}',
+        f"TOOL_DATA[1]={frame(TORCH)}",
+        f"BASE_DATA[3]={frame(WORKPIECE)}",
+        "ENDDAT",
+        "",
+    ]
     paths = [folder / f"{name}.src", folder / f"{name}.dat", folder / "$config.dat"]
     for p, text in zip(paths, (src, dat, config), strict=True):
         p.write_bytes("\r\n".join(text).encode())
@@ -552,8 +698,11 @@ def read_rapid(path: Path) -> dict[str, dict]:
     out = {}
     for m in re.finditer(r"robtarget\s+(\w+)\s*:=\s*\[(.*?)\];", path.read_text()):
         v = [float(x) for x in re.findall(NUMBER, m.group(2))]
-        out[m.group(1)] = {"pose": transform(from_quaternion(v[3:7]), np.array(v[:3]) * 1e-3),
-                           "cfg": v[7:11], "eax": v[11:17]}
+        out[m.group(1)] = {
+            "pose": transform(from_quaternion(v[3:7]), np.array(v[:3]) * 1e-3),
+            "cfg": v[7:11],
+            "eax": v[11:17],
+        }
     return out
 
 
@@ -562,9 +711,13 @@ def read_krl(path: Path) -> dict[str, dict]:
     out = {}
     for m in re.finditer(r"DECL\s+E6POS\s+(\w+)\s*=\s*\{(.*?)\}", path.read_text()):
         kv = {k: float(v) for k, v in re.findall(r"(\w+)\s+(" + NUMBER + ")", m.group(2))}
-        out[m.group(1)] = {"pose": transform(from_zyx([kv["A"], kv["B"], kv["C"]]),
-                                             np.array([kv["X"], kv["Y"], kv["Z"]]) * 1e-3),
-                           "cfg": [kv["S"], kv["T"]], "eax": [kv[f"E{i}"] for i in range(1, 7)]}
+        out[m.group(1)] = {
+            "pose": transform(
+                from_zyx([kv["A"], kv["B"], kv["C"]]), np.array([kv["X"], kv["Y"], kv["Z"]]) * 1e-3
+            ),
+            "cfg": [kv["S"], kv["T"]],
+            "eax": [kv[f"E{i}"] for i in range(1, 7)],
+        }
     return out
 
 
@@ -576,7 +729,9 @@ def controller_joints(t: Truth, plate_goal: np.ndarray, taught: np.ndarray, cfg:
     numeric IK from the taught joints; also how many solutions do not match the program's
     configuration data and the largest IK residual (mm)."""
     q, res = ik(t.arm, plate_goal @ np.linalg.inv(TORCH), taught)
-    mismatched = sum(1 for k in range(len(q)) if not np.array_equal(configuration(t, q[k]), np.asarray(cfg[k])))
+    mismatched = sum(
+        1 for k in range(len(q)) if not np.array_equal(configuration(t, q[k]), np.asarray(cfg[k]))
+    )
     return q, mismatched, float(res.max())
 
 
@@ -603,8 +758,11 @@ def on_model_plate(cal_path: Path, q: np.ndarray, e: np.ndarray) -> np.ndarray:
 def pose_errors(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Position (mm) and rotation (deg) differences of pose stacks."""
     dp = np.linalg.norm(A[:, :3, 3] - B[:, :3, 3], axis=1) * 1e3
-    dr = np.rad2deg(np.linalg.norm(Rotation.from_matrix(np.swapaxes(A[:, :3, :3], 1, 2) @ B[:, :3, :3]).as_rotvec(),
-                                   axis=1))
+    dr = np.rad2deg(
+        np.linalg.norm(
+            Rotation.from_matrix(np.swapaxes(A[:, :3, :3], 1, 2) @ B[:, :3, :3]).as_rotvec(), axis=1
+        )
+    )
     return dp, dr
 
 
@@ -612,8 +770,15 @@ def rms(x) -> float:
     return float(np.sqrt(np.mean(np.square(x))))
 
 
-def land(t: Truth, poses: np.ndarray, e: np.ndarray, cfg, taught: np.ndarray, intended: np.ndarray,
-         work_object: np.ndarray = WORKPIECE) -> dict:
+def land(
+    t: Truth,
+    poses: np.ndarray,
+    e: np.ndarray,
+    cfg,
+    taught: np.ndarray,
+    intended: np.ndarray,
+    work_object: np.ndarray = WORKPIECE,
+) -> dict:
     """Run targets (poses in the work object, N) as my nominal controller does on the true cell:
     nominal plate at e, the work object on it, nominal IK; the torch's error on the true plate
     against the intended poses."""
@@ -640,8 +805,11 @@ def outside_numbers_changed(before: bytes, after: bytes, kind: str) -> list[str]
             head = sx.index(":=")
             px, py = re.split(f"({NUMBER})", sx[head:]), re.split(f"({NUMBER})", sy[head:])
             pose = set(range(1, 14, 2))  # the first 7 numbers (odd split positions)
-            same = sx[:head] == sy[:head] and len(px) == len(py) and all(
-                u == v for i, (u, v) in enumerate(zip(px, py, strict=True)) if i not in pose)
+            same = (
+                sx[:head] == sy[:head]
+                and len(px) == len(py)
+                and all(u == v for i, (u, v) in enumerate(zip(px, py, strict=True)) if i not in pose)
+            )
         elif kind == "krl" and "E6POS" in sx:
             key = r"((?:^|[{,])\s*[XYZABC]\s+)" + f"({NUMBER})"
             same = re.sub(key, r"\1#", sx) == re.sub(key, r"\1#", sy)
@@ -682,34 +850,60 @@ def calibrate_cell(folder: Path, t: Truth, sizes: Sizes, seed: int) -> dict:
         cal, res = folder / f"calibrated_{mode}.yaml", folder / f"calibrated_{mode}.json"
         run = robocal("calibrate", folder / "train.csv", "--model", cell, "-o", cal, "--json", res)
         evaluated = robocal("evaluate", cal, folder / "held.csv")
-        said = re.search(r"\(one tracker frame for every body\): n \d+, rms (" + NUMBER + ")", evaluated.stdout)
+        said = re.search(
+            r"\(one tracker frame for every body\): n \d+, rms (" + NUMBER + ")", evaluated.stdout
+        )
         held_rms = heldout_rms(predicted_by_model(cal, res, held), held)
-        out[mode] = {"heldout_mm": held_rms, "ratio": held_rms / floor,
-                     "robocal_evaluate_mm": float(said.group(1)) if said else None,
-                     "plate": [line.strip() for line in run.stdout.splitlines() if "positioner" in line]}
+        out[mode] = {
+            "heldout_mm": held_rms,
+            "ratio": held_rms / floor,
+            "robocal_evaluate_mm": float(said.group(1)) if said else None,
+            "plate": [line.strip() for line in run.stdout.splitlines() if "positioner" in line],
+        }
     return out
 
 
-def filter_cli(program: list[Path], cell: Path, calibrated: Path, out: Path, references=()) -> subprocess.CompletedProcess:
+def filter_cli(
+    program: list[Path], cell: Path, calibrated: Path, out: Path, references=()
+) -> subprocess.CompletedProcess:
     args = [*program, "--model", cell, "--calibrated", calibrated, "-o", out]
     if references:
         args += ["--references", *references]
     return robocal("filter", *args, check=False)
 
 
-def judge(t: Truth, cal: Path, before: dict, after: dict, names: list[str], e: np.ndarray, cfg, taught,
-          intended: np.ndarray) -> dict:
+def judge(
+    t: Truth,
+    cal: Path,
+    before: dict,
+    after: dict,
+    names: list[str],
+    e: np.ndarray,
+    cfg,
+    taught,
+    intended: np.ndarray,
+) -> dict:
     """Unfiltered and filtered landing on the true plate, the calibrated model's own error."""
     P0 = np.array([before[n]["pose"] for n in names])
     P1 = np.array([after[n]["pose"] for n in names])
     un, fi = land(t, P0, e, cfg, taught, intended), land(t, P1, e, cfg, taught, intended)
     own = pose_errors(on_model_plate(cal, fi["q"], e), on_true_plate(t, fi["q"], e))
-    r = {"unfiltered_mm": rms(un["mm"]), "filtered_mm": rms(fi["mm"]), "own_mm": rms(own[0]),
-         "filtered_deg": rms(fi["deg"]), "own_deg": rms(own[1]), "unfiltered_deg": rms(un["deg"]),
-         "within": int(np.sum(fi["mm"] <= LAND_FACTOR * own[0] + LAND_MARGIN_MM)), "n": len(names),
-         "config_mismatched": fi["config_mismatched"], "ik_residual_mm": fi["ik_residual_mm"]}
+    r = {
+        "unfiltered_mm": rms(un["mm"]),
+        "filtered_mm": rms(fi["mm"]),
+        "own_mm": rms(own[0]),
+        "filtered_deg": rms(fi["deg"]),
+        "own_deg": rms(own[1]),
+        "unfiltered_deg": rms(un["deg"]),
+        "within": int(np.sum(fi["mm"] <= LAND_FACTOR * own[0] + LAND_MARGIN_MM)),
+        "n": len(names),
+        "config_mismatched": fi["config_mismatched"],
+        "ik_residual_mm": fi["ik_residual_mm"],
+    }
     r["gain"] = r["unfiltered_mm"] / r["filtered_mm"]
-    r["goal_met"] = bool(r["filtered_mm"] <= LAND_FACTOR * r["own_mm"] + LAND_MARGIN_MM and r["gain"] >= LAND_GAIN)
+    r["goal_met"] = bool(
+        r["filtered_mm"] <= LAND_FACTOR * r["own_mm"] + LAND_MARGIN_MM and r["gain"] >= LAND_GAIN
+    )
     return r
 
 
@@ -739,8 +933,9 @@ def rapid_checks(folder: Path, t: Truth, sizes: Sizes, seed: int, mode: str) -> 
         names = [f"pW{k}" for k in range(len(T))]
         r = judge(t, cal, before, after, names, e, cfg, q, T)
         r["outside_numbers_changed"] = outside_numbers_changed(src.read_bytes(), dst.read_bytes(), "rapid")
-        r["eax_kept"] = all(before[n]["eax"] == after[n]["eax"] and before[n]["cfg"] == after[n]["cfg"]
-                            for n in before)
+        r["eax_kept"] = all(
+            before[n]["eax"] == after[n]["eax"] and before[n]["cfg"] == after[n]["cfg"] for n in before
+        )
         r["uncoordinated"] = uncoordinated(t, cal, before, after, uq, ucfg, U)
         r["warnings"] = [w for w in run.stderr.splitlines() if w.strip()][:6]
         out[style] = r
@@ -768,8 +963,7 @@ def uncoordinated(t: Truth, cal: Path, before: dict, after: dict, taught, cfg, i
         q, mismatched, _ = controller_joints(t, P, taught, cfg)
         res[f"{label}_mm"] = rms(pose_errors(X @ t.true_arm.fk(q) @ TORCH, intended)[0])
         if label == "filtered":
-            res["own_mm"] = rms(pose_errors(X @ t.true_arm.fk(q) @ TORCH,
-                                            model_flange(arm, q) @ TORCH)[0])
+            res["own_mm"] = rms(pose_errors(X @ t.true_arm.fk(q) @ TORCH, model_flange(arm, q) @ TORCH)[0])
             res["config_mismatched"] = mismatched
     return res
 
@@ -788,9 +982,12 @@ def krl_checks(folder: Path, t: Truth, sizes: Sizes, seed: int) -> dict:
     before, after = read_krl(dat), read_krl(outdir / dat.name)
     names = [f"XW{k}" for k in range(len(T))]
     r = judge(t, cal, before, after, names, e, cfg, q, T)
-    r["outside_numbers_changed"] = (outside_numbers_changed(dat.read_bytes(), (outdir / dat.name).read_bytes(), "krl")
-                                    + outside_numbers_changed(src.read_bytes(), (outdir / src.name).read_bytes(), "krl"))
-    r["eax_kept"] = all(before[n]["eax"] == after[n]["eax"] and before[n]["cfg"] == after[n]["cfg"] for n in before)
+    r["outside_numbers_changed"] = outside_numbers_changed(
+        dat.read_bytes(), (outdir / dat.name).read_bytes(), "krl"
+    ) + outside_numbers_changed(src.read_bytes(), (outdir / src.name).read_bytes(), "krl")
+    r["eax_kept"] = all(
+        before[n]["eax"] == after[n]["eax"] and before[n]["cfg"] == after[n]["cfg"] for n in before
+    )
     r["warnings"] = [w for w in run.stderr.splitlines() if w.strip()][:6]
     return r
 
@@ -805,8 +1002,13 @@ def unknown_unit_check(folder: Path, t: Truth) -> dict:
     run = filter_cli([src], folder / "cell_nests.yaml", folder / "calibrated_nests.yaml", dst)
     lines = [line for line in run.stderr.splitlines() if line.strip()]
     written = sorted(p.name for p in sub.iterdir() if p != src)
-    return {"exit": run.returncode, "stderr_lines": len(lines), "message": lines[0] if lines else "",
-            "written": written, "goal_met": bool(run.returncode == 2 and len(lines) == 1 and not written)}
+    return {
+        "exit": run.returncode,
+        "stderr_lines": len(lines),
+        "message": lines[0] if lines else "",
+        "written": written,
+        "goal_met": bool(run.returncode == 2 and len(lines) == 1 and not written),
+    }
 
 
 VARIANTS = {"flange on its axis": True, "flange off its axis": False}

@@ -36,8 +36,12 @@ def _cells(folder: Path, arm_name: str, unit: str, axes) -> tuple[rc.Cell, rc.Ce
 def _calibrated(cell: rc.Cell) -> rc.Cell:
     """The cell with the same link and axis errors (whatever its arm's tool)."""
     arm, (name, pos) = cell.arms["arm"], next(iter(cell.positioners.items()))
-    arm_err = {"a2": arm.get("a2") + 4e-4, "theta3": arm.get("theta3") + 3e-4, "d4": arm.get("d4") - 3e-4,
-               "alpha5": arm.get("alpha5") + 2e-4}
+    arm_err = {
+        "a2": arm.get("a2") + 4e-4,
+        "theta3": arm.get("theta3") + 3e-4,
+        "d4": arm.get("d4") - 3e-4,
+        "alpha5": arm.get("alpha5") + 2e-4,
+    }
     pos_err = {"theta2": pos.chain.get("theta2") + 5e-4, "a2": pos.chain.get("a2") + 3e-4}
     return cell.in_world({"arm": arm.with_values(arm_err), name: pos.chain.with_values(pos_err)})
 
@@ -46,8 +50,9 @@ def _calibrated(cell: rc.Cell) -> rc.Cell:
 def test_flange_of_a_model_with_a_tool_is_the_catalogs(tmp_path, arm_name):
     with_smr, plain, _ = _cells(tmp_path, arm_name, "STN1", ("eax_b", "eax_c"))
     np.testing.assert_allclose(with_smr.flange("arm"), rc.Robot.from_catalog(arm_name).tool, atol=1e-15)
-    np.testing.assert_allclose(with_smr.arms["arm"].tool[:3, 3] @ with_smr.flange("arm")[:3, :3], [0, 0, 0.04],
-                               atol=1e-15)  # the tool is SMR 0, 40 mm out on the flange's z
+    np.testing.assert_allclose(
+        with_smr.arms["arm"].tool[:3, 3] @ with_smr.flange("arm")[:3, :3], [0, 0, 0.04], atol=1e-15
+    )  # the tool is SMR 0, 40 mm out on the flange's z
     assert plain.flanges == {}
     with_smr.save(tmp_path / "saved.yaml")
     np.testing.assert_array_equal(rc.load_cell(tmp_path / "saved.yaml").flange("arm"), with_smr.flange("arm"))

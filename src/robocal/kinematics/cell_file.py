@@ -150,9 +150,9 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
             model = spec["model"] if isinstance(spec["model"], dict) else \
                 _resolve(spec["model"], path, f"{where}.model")
             track = None if spec.get("track") is None else _track(spec["track"], length, f"{where}.track")
-            flange = None if spec.get("flange") is None else _frame(spec["flange"], length, angle, f"{where}.flange")
+            flange = _frame(spec.get("flange"), length, angle, f"{where}.flange")
             out[name] = ArmEntry(model, _frame(spec.get("base"), length, angle, f"{where}.base"),
-                                      _text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track, flange)
+                                 _text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track, flange)
         return out
     if "robot" not in data:
         stray = sorted({"track", "mount"} & set(data))
