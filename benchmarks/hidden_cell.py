@@ -188,7 +188,9 @@ def perturbed(
     perpendicular to itself by ~``shift_mm``, each zero off by ~``zero_deg``, the last frame by
     ~``frame_mm``/``frame_deg`` and the base by ~``base_mm``/``base_deg`` (random, 1 sigma).
     ``last_frame_on_axis``: the last frame moves with its axis' line (a flange machined on its
-    axis, mastered at its zero): the last axis' zero and the frame's own error are none."""
+    axis, mastered at its zero), at its drawn distance from the common normal of the last two
+    axes: the last axis' zero and the frame's own error are none (what SMRs at unknown places on
+    the flange cannot see: its d6, its turn about axis 6, its offset from the axis)."""
     n = len(chain.u)
     tilt = [_small_rotation(rng, tilt_deg) for _ in range(n)]
     u = np.array([tilt[i] @ chain.u[i] for i in range(n)])
@@ -197,18 +199,22 @@ def perturbed(
     shift -= np.sum(shift * u, axis=1)[:, None] * u
     zero = rng.normal(size=n) * np.deg2rad(zero_deg)
     M = chain.M @ _small_transform(rng, frame_mm, frame_deg)
-    if last_frame_on_axis:  # the last line's tilt (about its point) and shift carry the frame along
-        p = chain.p[-1]
-        G = transform(tilt[-1], p + shift[-1] - tilt[-1] @ p)
+    p = chain.p + shift
+    if last_frame_on_axis:  # the last line's tilt (about its point) and shift carry the frame along,
+        G = transform(tilt[-1], p[-1] - tilt[-1] @ chain.p[-1])  # at its drawn distance along it
         M, zero[-1] = G @ chain.M, 0.0
+        drawn = (chain.M[:3, 3] - _foot(chain.u[-2], chain.p[-2], chain.u[-1], chain.p[-1])) @ chain.u[-1]
+        now = (M[:3, 3] - _foot(u[-2], p[-2], u[-1], p[-1])) @ u[-1]
+        M[:3, 3] += (drawn - now) * u[-1]
     return replace(
-        chain,
-        u=u,
-        p=chain.p + shift,
-        zero=zero,
-        M=M,
-        base=chain.base @ _small_transform(rng, base_mm, base_deg),
+        chain, u=u, p=p, zero=zero, M=M, base=chain.base @ _small_transform(rng, base_mm, base_deg)
     )
+
+
+def _foot(ua: np.ndarray, pa: np.ndarray, ub: np.ndarray, pb: np.ndarray) -> np.ndarray:
+    """The point of line b (direction ub through pb) nearest to line a (the common normal's foot)."""
+    w, c = pb - pa, ua @ ub
+    return pb + ub * ((ua @ w) * c - ub @ w) / (1.0 - c * c)
 
 
 def check_conventions(name: str) -> float:
@@ -1041,8 +1047,9 @@ def main() -> None:
     ap.add_argument("--small", action="store_true", help="the test's small version")
     ap.add_argument("--keep", type=Path, help="keep the files in this folder")
     ap.add_argument("--json", type=Path, help="write the figures as JSON")
+    ap.add_argument("--variant", choices=list(VARIANTS), action="append", help="default: both")
     args = ap.parse_args()
-    report = run(args.seed, SMALL if args.small else Sizes(), args.keep)
+    report = run(args.seed, SMALL if args.small else Sizes(), args.keep, tuple(args.variant or VARIANTS))
     text = json.dumps(report, indent=1, default=float)
     print(text)
     if args.json:
