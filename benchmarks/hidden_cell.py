@@ -24,7 +24,22 @@ coordinated RAPID and KRL targets filtered by ``robocal filter`` land on the tru
 outside the pose numbers changed; an uncoordinated positioner's targets corrected as arm targets;
 a program whose unit the cell lacks refused in one line with nothing written.
 
-Run: ``python benchmarks/hidden_cell.py [--seed S] [--small] [--keep DIR]``.
+The controller's semantics are the vendors': a RAPID robtarget is [[x,y,z],[q1..q4] (w first),
+[cf1,cf4,cf6,cfx],[eax_a..f]] in mm; a work object moved by a unit (ufprog FALSE) has its user frame
+defined by the system, not by its stored uframe (ABB, Technical reference manual RAPID, wobjdata:
+"When coordinated external axes are used (ufprog is FALSE), the user coordinate system is defined
+in the system parameters"), so the target is oframe @ target on the unit's plate, whatever the
+uframe holds (checked with an identity uframe and with the plate's world pose RobotStudio stores);
+KRL's A, B, C are R = Rz(A) Ry(B) Rx(C) in deg and $BASE = EK(root, #EASYS, BASE_DATA[n]) puts
+BASE_DATA[n] on the external kinematic's flange, the plate.
+
+Two truths per seed: the arm's flange on its axis 6 as drawn (what SMRs at unknown places on the
+flange cannot see is then not wrong), and off it (its d6, its turn about axis 6 and its frame off:
+the calibrated model's own error there is what no such campaign identifies; robocal's docs send
+the user to ``--tcp``).
+
+Run: ``python benchmarks/hidden_cell.py [--seed S] [--small] [--keep DIR] [--variant V] [--json F]``
+(about 2.5 minutes a seed and variant).
 """
 
 from __future__ import annotations
