@@ -150,10 +150,10 @@ def compensate_cell(calibrated: Cell, nominal: Cell, targets: np.ndarray, positi
         shown = np.round(chain.joints_shown(e[k]), 6).tolist()
         raise DataError(f"target {k + 1}: {positioner}'s values {shown} are outside its axes' limits")
     world = calibrated.positioners[positioner].plate(e) @ targets
-    comp = compensate_arm(calibrated.arms[arm], nominal.arms[arm], world, targets_frame="model", tool=tool,
-                          **options)
-    flange = nominal.arms[arm].with_frames(tool=nominal.arms[arm].tool if tool is None
-                                           else nominal.arms[arm].tool @ np.asarray(tool, float))
+    tool0 = nominal.flange(arm)  # the flange, not the SMR the cell's model calls its tool
+    comp = compensate_arm(calibrated.arms[arm].with_frames(tool=tool0), nominal.controller_arm(arm), world,
+                          targets_frame="model", tool=tool, **options)
+    flange = nominal.arms[arm].with_frames(tool=tool0 if tool is None else tool0 @ np.asarray(tool, float))
     corrected = invert_transform(nominal.positioners[positioner].plate(e)) @ flange.fk(comp.joints)
     return CellCompensation(arm, positioner, comp.joints, e, corrected, pose_error(corrected, targets), comp,
                             list(comp.warnings), chain.prismatic.copy())
