@@ -287,7 +287,7 @@ class Truth:
     nests: np.ndarray
     tracker: np.ndarray
     unit: str
-    program_axes: tuple[str, str]
+    external_axes: tuple[int, int]  # the controller's logical external-axis numbers
 
 
 # the positioner as the cell file gives it (mm, deg): a tilt axis along x, a turn axis along z
@@ -303,7 +303,7 @@ def make_truth(
     seed: int,
     arm_name: str = "abb_irb2600",
     unit: str = "STN1",
-    program_axes=("eax_b", "eax_c"),
+    external_axes=(2, 3),  # RAPID eax_b / eax_c
     flange_on_axis: bool = False,
 ) -> Truth:
     """The hidden cell of ``seed``. ``flange_on_axis``: the arm's flange carried by its axis 6
@@ -347,7 +347,7 @@ def make_truth(
         NESTS_MM * 1e-3,
         tracker,
         unit,
-        tuple(program_axes),
+        tuple(external_axes),
     )
 
 
@@ -415,7 +415,7 @@ def write_cell(folder: Path, t: Truth, nests: bool, name: str = "cell.yaml") -> 
         f"units: {{length: mm, angle: deg}}\nname: hidden cell\nrobot: {t.arm_name}_smr.yaml\n"
         f"positioner:\n  unit: {t.unit}\n  mount: {{xyz: {MOUNT_XYZ}, rpy: {MOUNT_RPY}}}\n"
         f"  axes: [{axes}]\n  plate: {{xyz: {PLATE_XYZ}, rpy: [0, 0, 0]}}\n"
-        f"  columns: [e1, e2]\n  program_axes: [{', '.join(t.program_axes)}]\n"
+        f"  columns: [e1, e2]\n  external_axes: {list(t.external_axes)}\n"
         + (f"  nests: {NESTS_MM.tolist()}\n" if nests else "")
     )
     path = folder / name
@@ -1052,7 +1052,7 @@ def run(seed: int = 0, sizes: Sizes = Sizes(), keep: Path | None = None, variant
             r = report[variant] = {"abb_calibration": calibrate_cell(abb, t, sizes, seed)}
             r["rapid"] = {mode: rapid_checks(abb, t, sizes, seed, mode) for mode in ("nests", "free")}
             r["unknown_unit"] = unknown_unit_check(abb, t)
-            tk = make_truth(seed + 1, "kuka_kr16_2", "DKP400", ("E1", "E2"), flange_on_axis=on_axis)
+            tk = make_truth(seed + 1, "kuka_kr16_2", "DKP400", (1, 2), flange_on_axis=on_axis)
             r["kuka_calibration"] = calibrate_cell(kuka, tk, sizes, seed + 1)
             r["krl"] = krl_checks(kuka, tk, sizes, seed + 1)
     return report

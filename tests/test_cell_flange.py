@@ -48,7 +48,7 @@ def _calibrated(cell: rc.Cell) -> rc.Cell:
 
 @pytest.mark.parametrize("arm_name", ["abb_irb2600", "kuka_kr16_2"])
 def test_flange_of_a_model_with_a_tool_is_the_catalogs(tmp_path, arm_name):
-    with_smr, plain, _ = _cells(tmp_path, arm_name, "STN1", ("eax_b", "eax_c"))
+    with_smr, plain, _ = _cells(tmp_path, arm_name, "STN1", (2, 3))
     np.testing.assert_allclose(with_smr.flange("arm"), rc.Robot.from_catalog(arm_name).tool, atol=1e-15)
     np.testing.assert_allclose(
         with_smr.arms["arm"].tool[:3, 3] @ with_smr.flange("arm")[:3, :3], [0, 0, 0.04], atol=1e-15
@@ -59,7 +59,7 @@ def test_flange_of_a_model_with_a_tool_is_the_catalogs(tmp_path, arm_name):
 
 
 def test_coordinated_targets_do_not_depend_on_the_measured_smr(tmp_path):
-    with_smr, plain, t = _cells(tmp_path, "abb_irb2600", "STN1", ("eax_b", "eax_c"))
+    with_smr, plain, t = _cells(tmp_path, "abb_irb2600", "STN1", (2, 3))
     e, _, cfg, T = hc.plan_targets(t, 4, 5)
     program = hc.rapid_module(tmp_path, e, cfg, T, "STN1")
     a = filter_program([program], _calibrated(with_smr), with_smr)

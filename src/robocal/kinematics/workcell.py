@@ -75,7 +75,6 @@ FORMAT = "robocal-cell/1"
 GEOMETRY_FORMS = ("model", "axes", "dh", "mdh", "joints")
 SECTION_KEYS = {*GEOMETRY_FORMS, "limits", "unit", "mount", "plate", "nests", "columns", "external_axes",
                 "name", "description"}
-RENAMED = {"program_axes": "external_axes"}  # a positioner key renamed during issue 45 -> its name now
 DEFINITION_KEYS = {"format", "name", "description", "units", "axes", "plate", "payload_kg"}
 URDF_SUFFIXES = (".urdf", ".xml")  # a positioner's model given as a URDF (load_model reads it)
 COLUMN = re.compile(r"^e([1-9]\d*)$")  # a positioner joint's column (its measurement column is e<k>_deg|_mm)
@@ -615,11 +614,6 @@ def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> P
     """A positioner section of a cell file (module docstring); its columns default to
     ``e<first>..``."""
     where = "positioner" if "positioner" in data else f"positioners.{name}"
-    old = [k for k in RENAMED if isinstance(spec, dict) and k in spec]
-    if old:
-        raise ModelError(f"{where}.{old[0]}: now {RENAMED[old[0]]}, the controller's logical external-axis "
-                         "numbers ([2, 3]: its second and third external axes; each program language names "
-                         "them)")
     spec = _mapping(spec, where, SECTION_KEYS if where == "positioner" else SECTION_KEYS - {"name"})
     length_unit, angle_unit = _units(data)
     length, angle = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit]
