@@ -34,16 +34,25 @@ TRACK_TASK = "\n".join([
 
 
 def test_track_targets_out_of_the_fixed_arms_reach_name_their_axes(tmp_path):
-    """Targets with eax_a values in a work object no unit moves are corrected as arm targets; those
-    the arm at a fixed base cannot reach were named 'no solution ... (out of reach)' alone, which
-    blames the target: their eax_a may carry the arm (here a track), and the reason says so with
-    the values and the cell file to give; the reachable one is corrected; every motion accounted."""
+    """Targets with eax_a values (three, one at the axis' zero: too few to judge the axis) in a work
+    object no unit moves are named, the axis possibly carrying the arm, but the one at the axis' zero
+    (the arm where its model has it); held at one value (no evidence) they
+    are corrected as arm targets, and those the arm at a fixed base cannot reach were named 'no
+    solution ... (out of reach)' alone, which blames the target: their eax_a may carry the arm (here
+    a track), and the reason says so with the values and the cell file to give; the reachable one is
+    corrected; every motion accounted."""
     path = tmp_path / "Track_T_ROB1.mod"
     path.write_text(TRACK_TASK)
     res = filter_program(path, perturbed(ABB, 7), ABB, keep_unreached=True)
     status = {m.line: (m.status, m.reason) for m in res.motions}
     assert len(res.motions) == 3 and status[9][0] == "corrected"
-    for line, value in ((7, "3079.80"), (8, "2749.92")):
+    assert all(status[k][0] == "named" and "eax_a varies (0 .. 3079.8) over 3 target(s)" in status[k][1]
+               for k in (7, 8))
+    path.write_text(TRACK_TASK.replace("[2749.92,9E9", "[3079.80,9E9").replace("[0.00,9E9", "[9E9,9E9"))
+    res = filter_program(path, perturbed(ABB, 7), ABB, keep_unreached=True)
+    status = {m.line: (m.status, m.reason) for m in res.motions}
+    assert len(res.motions) == 3 and status[9][0] == "corrected"
+    for line, value in ((7, "3079.80"), (8, "3079.80")):
         assert status[line][0] == "named"
         assert "out of reach" in status[line][1] and f"eax_a = {value}" in status[line][1]
         assert "if those axes move the arm" in status[line][1] and "--model CELL.yaml" in status[line][1]
