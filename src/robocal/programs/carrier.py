@@ -73,7 +73,7 @@ def arm_carriers(values: dict[str, np.ndarray], positions: np.ndarray) -> dict[s
             continue
         slope, r, u = follows(v[use], positions[use])
         if FOLLOW_SLOPE[0] <= slope <= FOLLOW_SLOPE[1] and abs(r) >= FOLLOW_CORRELATION:
-            direction = ", ".join(f"{c:.2f}" for c in u)
+            direction = ", ".join(f"{c:.2f}" for c in np.round(u, 2) + 0.0)  # no "-0.00"
             out[axis] = (f"external axis {axis} carries the arm (a track or gantry): the {n} targets' "
                          f"positions follow it, {slope:.2f} mm per mm along ({direction}), correlation "
                          f"{abs(r):.2f}; corrected at a fixed base they would be wrong; {ADVICE}")
