@@ -214,7 +214,8 @@ def _task(rows: list[tuple[tuple[float, float, float], str]], name: str = "Cell_
     moves = [f"MoveL [[{x:.2f},{y:.2f},{z:.2f}],{QUAT},[0,0,0,0],[{ext}]]\\ID:={k},{TAIL}"
              for k, ((x, y, z), ext) in enumerate(rows, 1)]
     return "\n".join(["MODULE " + name, f"PERS tooldata HeatGun:={TOOL};",
-                      f"TASK PERS wobjdata DefaultFrame:={WOBJ};", "TASK PERS speeddata Speed000:=[100.00,180.00,5000.00,1080.00];", "PROC Main()",
+                      f"TASK PERS wobjdata DefaultFrame:={WOBJ};",
+                      "TASK PERS speeddata Speed000:=[100.00,180.00,5000.00,1080.00];", "PROC Main()",
                       *moves, "ENDPROC", "ENDMODULE", ""])
 
 
