@@ -309,3 +309,23 @@ def test_the_filter_command_takes_fixed_base(tmp_path, capsys):
     api = tmp_path / "api.mod"
     filter_program(path, cal, ABB, fixed_base=True).write(api)
     assert (tmp_path / "out.mod").read_bytes() == api.read_bytes()
+
+
+def test_a_cells_positioner_axes_are_not_weighed(tmp_path):
+    """With a cell whose positioner is eax_b / eax_c (logical axes 2, 3), targets in a world work object
+    carrying varying eax_b values (3 targets, too few to judge with a plain arm: named) are not
+    suspected of carrying the arm: the cell file says that axis is the positioner's, which the
+    work object does not follow: corrected as arm targets."""
+    import cell_programs as cp
+
+    nominal, _, calibrated = cp.cells(0)
+    arm = nominal.arms["arm"]
+    rows = [((1000, -200, 900), "9E9,-30,10,9E9,9E9,9E9"), ((1050, 0, 950), "9E9,15,10,9E9,9E9,9E9"),
+            ((1100, 200, 900), "9E9,60,10,9E9,9E9,9E9")]
+    path = tmp_path / "Cell_T_ROB1.mod"
+    path.write_text(_task(rows))
+    res = filter_program(path, calibrated, nominal, keep_unreached=True)
+    assert res.summary_dict()["motions"] == {"total": 3, "corrected": 3, "named": 0}
+    res = filter_program(path, perturbed(arm, 7), arm, keep_unreached=True)
+    assert res.summary_dict()["motions"] == {"total": 3, "corrected": 0, "named": 3}
+    assert all("eax_b varies (-30 .. 60) over 3 target(s)" in m.reason for m in res.motions)
