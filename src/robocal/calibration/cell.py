@@ -62,12 +62,15 @@ class Relation:
 
     ``transform`` (4, 4) m: anchor frame {0} -> the body's frame {0}; ``covariance`` (6, 6): of its
     translation (m) and of its rotation (a small rotation vector, rad, about the anchor's axes),
-    from both bases' covariances (independent calibrations)."""
+    from both bases' covariances (independent calibrations); ``nominal`` (4, 4) m: the same in the
+    cell file (each body's frame {0} is its model's: a positioner's is its first axis' frame, not the
+    file's ``mount``), so that the sentence says how far the calibration found it from the file."""
 
     body: str
     anchor: str
     transform: np.ndarray
     covariance: np.ndarray
+    nominal: np.ndarray | None = None
 
     @property
     def sigma(self) -> np.ndarray:
@@ -78,8 +81,15 @@ class Relation:
     def to_dict(self) -> dict:
         rpy = np.rad2deg(Rotation.from_matrix(self.transform[:3, :3]).as_euler("xyz"))
         s = self.sigma
-        return {"body": self.body, "from": self.anchor, "xyz_mm": (self.transform[:3, 3] * 1e3).tolist(),
-                "rpy_deg": rpy.tolist(), "sigma_xyz_mm": s[:3].tolist(), "sigma_rotation_deg": s[3:].tolist()}
+        out = {"body": self.body, "from": self.anchor, "xyz_mm": (self.transform[:3, 3] * 1e3).tolist(),
+               "rpy_deg": rpy.tolist(), "sigma_xyz_mm": s[:3].tolist(), "sigma_rotation_deg": s[3:].tolist()}
+        if self.nominal is not None:
+            off = invert_transform(self.nominal) @ self.transform
+            rpy0 = np.rad2deg(Rotation.from_matrix(self.nominal[:3, :3]).as_euler("xyz"))
+            out |= {"nominal_xyz_mm": (self.nominal[:3, 3] * 1e3).tolist(), "nominal_rpy_deg": rpy0.tolist(),
+                    "off_nominal_mm": float(np.linalg.norm(off[:3, 3]) * 1e3),
+                    "off_nominal_deg": float(np.rad2deg(Rotation.from_matrix(off[:3, :3]).magnitude()))}
+        return out
 
     def sentence(self) -> str:
         d = self.to_dict()
@@ -87,7 +97,9 @@ class Relation:
         rpy = ", ".join(f"{v:.4f}" for v in d["rpy_deg"])
         return (f"{self.body} seen from {self.anchor}: xyz [{xyz}] mm (1 sigma up to "
                 f"{max(d['sigma_xyz_mm']):.3f} mm), rpy [{rpy}] deg (1 sigma up to "
-                f"{max(d['sigma_rotation_deg']):.4f} deg)")
+                f"{max(d['sigma_rotation_deg']):.4f} deg)" + ("" if self.nominal is None else
+                f"; the cell file has it {d['off_nominal_mm']:.3f} mm and {d['off_nominal_deg']:.4f} deg "
+                "from there (both the frame {0} of its model: a positioner's first axis, not its mount)"))
 
 
 @dataclass(frozen=True)
@@ -380,11 +392,13 @@ def _base_covariance(result) -> np.ndarray:
     return cov
 
 
-def _relation(anchor_name: str, name: str, models: dict, results: dict) -> Relation:
+def _relation(cell, name: str, models: dict, results: dict) -> Relation:
+    anchor_name = cell.anchor
     a, b = models[anchor_name], models[name]
     Ja, Jb = _base_jacobian(a, b, 0), _base_jacobian(a, b, 1)
     cov = Ja @ _base_covariance(results[anchor_name]) @ Ja.T + Jb @ _base_covariance(results[name]) @ Jb.T
-    return Relation(name, anchor_name, invert_transform(a.base) @ b.base, cov)
+    nominal = invert_transform(cell.body(anchor_name).base) @ cell.body(name).base
+    return Relation(name, anchor_name, invert_transform(a.base) @ b.base, cov, nominal)
 
 
 def _as_cell_data(cell, data, what: str) -> CellMeasurements | None:
@@ -454,7 +468,7 @@ def calibrate_cell(cell, data, calibrate_body: Callable, *, params="auto", valid
     if missing:
         warnings.append(f"no rows on {', '.join(missing)}: kept nominal in the calibrated cell (its place in "
                         "the world is the cell file's, not measured)")
-    relations = [_relation(cell.anchor, n, models, results) for n in models if n != cell.anchor]
+    relations = [_relation(cell, n, models, results) for n in models if n != cell.anchor]
     return CellCalibration(
         cell=cell, results=results, calibrated=cell.in_world(models), in_tracker=models, relations=relations,
         plates=plates, warnings=warnings,
