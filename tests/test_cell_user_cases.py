@@ -58,3 +58,48 @@ def test_krl_status_turn_out_of_float_range_is_named(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code != 0 and "seam.dat:2: status/turn '1e400' is not an integer" in err and "report" not in err
     assert not any((tmp_path / "out").iterdir())
+
+
+def _tilt_turn_cell(nests) -> rc.Cell:
+    from robocal.kinematics.positioner import positioner_chain
+
+    chain = positioner_chain([{"type": "revolute", "axis": [1, 0, 0], "origin": [0, 0, 0.7]},
+                              {"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.25]}],
+                             make_transform(np.eye(3), [1.1, 0.0, 0.0]), name="tilt-turn")
+    return rc.Cell({"arm": rc.Robot.from_catalog("abb_irb2600")},
+                   {"STN1": rc.Positioner(chain, unit="STN1", nests=np.array(nests))})
+
+
+def test_nests_on_one_line_do_not_claim_to_fix_the_plate_frame():
+    """One nest, or two (here 100 mm apart on the plate's x), cannot fix the plate frame's turn
+    about their line: the calibration held the plate's tilts (tool.rx, tool.ry) at nominal, and the
+    result said "SMR nests at known plate positions fix the plate frame ... the plate frame ... are
+    identified". It now names what is held and asks for 3 nests not on one line."""
+    for nests in ([[0.2, 0.0, 0.0]], [[0.2, 0.0, 0.0], [0.1, 0.0, 0.0]]):
+        cell = _tilt_turn_cell(nests)
+        sim = rc.simulate_cell(cell, 30, 20, seed=2)
+        cal = rc.calibrate(cell, sim.data, nongeometric=None)
+        (plate,) = cal.plates
+        held = cal.results["STN1"].identifiability.dropped
+        assert "tool.rx" in held or "tool.ry" in held  # what the fit itself could not see
+        assert "fix the plate frame" not in plate.sentence and "lie on one line" in plate.sentence
+        assert all(p in plate.sentence for p in held if p.startswith("tool."))
+    cal = rc.calibrate(_tilt_turn_cell(NESTS := [[0.2, 0, 0], [0, 0.2, 0], [-0.15, -0.15, 0]]),
+                       rc.simulate_cell(_tilt_turn_cell(NESTS), 30, 20, seed=2).data, nongeometric=None)
+    assert "nests at known plate positions fix the plate frame" in cal.plates[0].sentence
+
+
+def test_a_turntable_zero_is_the_mounts_turn_not_a_lack_of_table_angles():
+    """A 1-axis turntable with 3 nests (the FANUC cell): its zero and the mount's turn about the axis
+    are one freedom whatever the angles measured; it said "these data do not determine theta1 ...
+    measure more table angles", which more angles cannot cure."""
+    from robocal.kinematics.positioner import positioner_chain
+
+    chain = positioner_chain([{"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.6]}],
+                             make_transform(np.eye(3), [1.3, 0.0, -0.5]), name="turntable")
+    cell = rc.Cell({"arm": rc.Robot.from_catalog("fanuc_m20ia")}, {"GP2": rc.Positioner(
+        chain, unit="GP2", nests=np.array([[0.3, 0, 0], [0, 0.3, 0], [-0.2, -0.2, 0]]))})
+    cal = rc.calibrate(cell, rc.simulate_cell(cell, 30, 60, seed=3).data, nongeometric=None)
+    sentence = cal.plates[0].sentence
+    assert "theta1" in cal.results["GP2"].identifiability.dropped
+    assert "mount's turn about that axis are one freedom" in sentence and "more table angles" not in sentence

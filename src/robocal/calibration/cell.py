@@ -53,6 +53,9 @@ PLATE_HELD = ("tool.rz", "tool.z")
 # not where the cell file declares it (checked after the fit: the warning names it)
 NEST_MISMATCH_SIGMAS = 5.0
 NEST_MISMATCH_MM = 0.02
+# Nests whose distances from their best line are all below this (m) are on one line (or at one point):
+# the plate frame's turn about that line is not fixed by them
+NEST_LINE_M = 1e-3
 RELATION_STEP = 1e-7  # m / rad: the central-difference step of the relation's derivative by the bases
 
 
@@ -319,6 +322,22 @@ def _plate(cell, name: str, body: _Body, result) -> PlateSolution:
     ident = result.identifiability
     held = [p for p in (zero, f"d{chain.n_joints}") if p in ident.dropped or p in ident.undetermined]
     if body.smr_numbers is None:
+        nests = positioner.nests
+        centred = nests - nests.mean(axis=0)
+        spread = np.linalg.svd(centred, compute_uv=False)[1] / np.sqrt(len(nests)) if len(nests) > 1 else 0.0
+        if spread < NEST_LINE_M:
+            free = [p for p in ident.dropped + ident.undetermined if p.startswith("tool.") or p == zero]
+            return PlateSolution(
+                name, "nests", f"positioner {chain.name}: its {len(nests)} nest(s) lie on one line or at one "
+                "point: they leave the plate frame's turn about that line free; held at nominal by these "
+                f"data: {', '.join(free) or 'nothing'}: a work object on the plate is only as good as "
+                "those; declare at least 3 nests not on one line")
+        if zero in held and chain.n_joints == 1:  # the mount's turn about the axis is the same freedom
+            return PlateSolution(
+                name, "nests", f"positioner {chain.name}: SMR nests at known plate positions fix the plate "
+                f"frame on its one axis, whose zero ({zero}) and the mount's turn about that axis are one "
+                f"freedom (the mount is identified with it): {zero} is held at nominal "
+                f"({len(body.robot.smr)} nests)")
         if zero in held:
             return PlateSolution(name, "nests", f"{said}, but these data do not determine {zero}: it is held "
                                  f"at nominal ({len(body.robot.smr)} nests; measure more table angles)")
