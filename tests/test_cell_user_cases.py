@@ -103,3 +103,52 @@ def test_a_turntable_zero_is_the_mounts_turn_not_a_lack_of_table_angles():
     sentence = cal.plates[0].sentence
     assert "theta1" in cal.results["GP2"].identifiability.dropped
     assert "mount's turn about that axis are one freedom" in sentence and "more table angles" not in sentence
+
+
+def _three_axis_csv(tmp_path):
+    from robocal.kinematics.positioner import positioner_chain
+
+    chain = positioner_chain([{"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.4]},
+                              {"type": "revolute", "axis": [1, 0, 0], "origin": [0, 0, 0.5],
+                               "limits": [-np.pi / 2, np.pi / 2]},
+                              {"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.2]}],
+                             make_transform(np.eye(3), [1.5, 0.0, -0.4]), name="three-axis")
+    cell = rc.Cell({"arm": rc.Robot.from_catalog("abb_irb4600")}, {"STN1": rc.Positioner(
+        chain, unit="STN1", nests=np.array([[0.2, 0, 0], [0, 0.2, 0], [-0.15, -0.15, 0]]))})
+    sim = rc.simulate_cell(cell, 10, 5, seed=1)
+    sim.data.save(tmp_path / "m.csv")
+    return cell, (tmp_path / "m.csv").read_text().splitlines()
+
+
+def test_a_bad_positioner_value_is_named_by_its_file_column(tmp_path):
+    """'nan' (or 'abc') in a plate row's e1 column was refused as "column q1_rad" (the positioner's
+    axes are read as its chain's joints): the message names the file's column."""
+    cell, lines = _three_axis_csv(tmp_path)
+    header = lines[[k for k, line in enumerate(lines) if not line.startswith("#")][0]].split(",")
+    k = next(i for i, line in enumerate(lines) if line.startswith("STN1,"))
+    for bad in ("nan", "abc"):
+        cells = lines[k].split(",")
+        cells[header.index("e1_rad")] = bad
+        text = "\n".join([*lines[:k], ",".join(cells), *lines[k + 1:]]) + "\n"
+        try:
+            rc.CellMeasurements.parse(text, cell, "m.csv")
+        except rc.DataError as exc:
+            assert f"line {k + 1}, column e1_rad: '{bad}'" in str(exc) and "q1_rad" not in str(exc)
+        else:
+            raise AssertionError("accepted")
+
+
+def test_positioner_values_without_a_body_column_are_named(tmp_path):
+    """Without the body column every row was taken as the arm's, and the first plate row failed
+    with "column q1_rad: '' is not a number": the cause is the missing body column."""
+    cell, lines = _three_axis_csv(tmp_path)
+    rows = [line for line in lines if not line.startswith("#")]
+    text = "\n".join(line.split(",", 1)[1] for line in rows) + "\n"  # the body column dropped
+    try:
+        rc.CellMeasurements.parse(text, cell, "m.csv")
+    except rc.DataError as exc:
+        assert "no 'body' column, but the positioners' columns (e1_rad, e2_rad, e3_rad)" in str(exc)
+    else:
+        raise AssertionError("accepted")
+    arm_only = "\n".join(line.split(",", 1)[1] for line in rows if not line.startswith("STN1,")) + "\n"
+    assert len(rc.CellMeasurements.parse(arm_only, cell, "m.csv")["arm"]) == 10  # empty e columns: arm rows
