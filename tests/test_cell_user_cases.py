@@ -152,3 +152,35 @@ def test_positioner_values_without_a_body_column_are_named(tmp_path):
         raise AssertionError("accepted")
     arm_only = "\n".join(line.split(",", 1)[1] for line in rows if not line.startswith("STN1,")) + "\n"
     assert len(rc.CellMeasurements.parse(arm_only, cell, "m.csv")["arm"]) == 10  # empty e columns: arm rows
+
+
+def test_compensate_names_the_arm_of_a_two_arm_cell(tmp_path, capsys):
+    """Two arms and a table: compensate said "the cell has 2 arms (left, right): name the one the
+    targets are for" but had no option to name it (and rc.compensate no argument). --arm (body or
+    unit) picks it; each arm's joints reach the plate target on the (here nominal) cell; a
+    positioner named as the arm was an internal error (KeyError)."""
+    from robocal.cli import main
+    from robocal.kinematics.positioner import positioner_chain
+
+    turn = positioner_chain([{"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.6]}],
+                            make_transform(np.eye(3), [1.3, 0.0, 0.0]), name="turntable")
+    right_base = make_transform(np.diag([-1.0, -1.0, 1.0]), [2.6, 0.0, 0.0])
+    arm = rc.Robot.from_catalog("abb_irb2600")
+    cell = rc.Cell({"left": arm, "right": arm.with_frames(base=right_base)},
+                   {"STN1": rc.Positioner(turn, unit="STN1")}, arm_units={"left": "ROB_1", "right": "ROB_2"})
+    cell.save(tmp_path / "cell.yaml")
+    (tmp_path / "t.csv").write_text("x_mm,y_mm,z_mm,rx_deg,ry_deg,rz_deg,e1_deg\n0,0,100,180,0,0,30\n")
+    d = str(tmp_path)
+    base = ["compensate", f"{d}/cell.yaml", f"{d}/t.csv", "--nominal", f"{d}/cell.yaml", "-o"]
+    for name, unit in (("left", "ROB_1"), ("right", "ROB_2")):
+        assert main([*base, f"{d}/{name}.csv", "--arm", unit]) == 0
+        row = (tmp_path / f"{name}.csv").read_text().splitlines()[2].split(",")
+        q = np.deg2rad([float(v) for v in row[:6]])[None]
+        tcp = cell.arms[name].fk(q)[0]
+        plate = cell.positioners["STN1"].plate(np.deg2rad([[30.0]]))[0]
+        np.testing.assert_allclose((np.linalg.inv(plate) @ tcp)[:3, 3], [0, 0, 0.1], atol=1e-6)
+    capsys.readouterr()
+    assert main([*base, f"{d}/x.csv", "--arm", "plate"]) != 0
+    err = capsys.readouterr().err
+    assert "'plate' is not one of the cell's arms (left, right)" in err and "report" not in err
+    assert not (tmp_path / "x.csv").exists()

@@ -30,7 +30,10 @@ from robocal.trust.output_marker import mark_csv
 def _one(names, what: str, given: str | None, cell) -> str:
     """The body ``given`` (resolved in ``cell``), or the only one of ``names``."""
     if given is not None:
-        return cell.resolve(given)
+        name = cell.resolve(given)
+        if name not in names:  # another kind of body: its name is valid, its use is not
+            raise DataError(f"{given!r} is not one of the cell's {what}s ({', '.join(names) or 'none'})")
+        return name
     if len(names) != 1:
         raise DataError(f"the cell has {len(names)} {what}s ({', '.join(names) or 'none'}): name the one "
                         f"the targets are for")
