@@ -102,7 +102,7 @@ class Relation:
                 f"{max(d['sigma_xyz_mm']):.3f} mm), rpy [{rpy}] deg (1 sigma up to "
                 f"{max(d['sigma_rotation_deg']):.4f} deg)" + ("" if self.nominal is None else
                 f"; the cell file has it {d['off_nominal_mm']:.3f} mm and {d['off_nominal_deg']:.4f} deg "
-                "from there (both the frame {0} of its model: a positioner's first axis, not its mount)"))
+                "from there (its model's frame {0}: for `axes:`, the first axis' frame, not `mount`)"))
 
 
 @dataclass(frozen=True)
