@@ -184,3 +184,23 @@ def test_compensate_names_the_arm_of_a_two_arm_cell(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "'plate' is not one of the cell's arms (left, right)" in err and "report" not in err
     assert not (tmp_path / "x.csv").exists()
+
+
+def test_uncoordinated_targets_with_a_cell_do_not_ask_for_a_cell(tmp_path, capsys):
+    """A target in wobj0 carrying STN1's values, in a program filtered WITH the cell file: corrected
+    as an arm target (right), but the warning went on "if a track or gantry carries the arm, give
+    its cell file (--model CELL.yaml)", the file just given."""
+    from robocal.cli import main
+
+    cell = two_axis_cell(nests=True)
+    cell.save(tmp_path / "cell.yaml")
+    (tmp_path / "free.mod").write_text(
+        "MODULE Free\n  CONST robtarget pFree:=[[1000,0,1000],[0,0,1,0],[0,0,0,0],"
+        "[9E+09,10,20,9E+09,9E+09,9E+09]];\n  PROC main()\n    MoveL pFree,v100,fine,tool0;\n  ENDPROC\n"
+        "ENDMODULE\n")
+    d = str(tmp_path)
+    assert main(["filter", f"{d}/free.mod", "--model", f"{d}/cell.yaml", "--calibrated", f"{d}/cell.yaml",
+                 "-o", f"{d}/out.mod"]) == 0
+    out = capsys.readouterr().out
+    assert "1 of 1 Cartesian target(s) filtered" in out and "corrected as arm targets" in out
+    assert "give its cell file" not in out

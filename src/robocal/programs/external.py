@@ -41,14 +41,15 @@ def needs_cell(unit: str) -> str:
 
 
 def sort_external(program: Program, warnings: list[str], taken: frozenset[int] = frozenset(),
-                  fixed_arm: bool = True) -> None:
+                  fixed_arm: bool = True, cell: bool = False) -> None:
     """Keep in ``program.targets`` the targets that can be corrected as arm targets (and those in
     ``taken``: ids a cell model already took, :mod:`robocal.programs.positioner`); name every
     other target with external values (a warning and its reason in ``program.not_corrected``,
     so each motion reaching it is named). Appends one warning counting the targets whose
     external values no work object follows. ``fixed_arm`` False (an arm on a track, whose
     targets the track took first): a target with other external values is named, the arm's
-    place depending on them."""
+    place depending on them. ``cell``: a work cell was given (its arm on no track), so the warning
+    does not ask for one."""
     kept, loose, letters = [], 0, set()
     for t in program.targets:
         unit = None if id(t) in taken else coordinated_unit(program, t)
@@ -72,6 +73,6 @@ def sort_external(program: Program, warnings: list[str], taken: frozenset[int] =
         axes = ", ".join(sorted(letters))
         warnings.append(f"{loose} target(s) carry external-axis values ({axes}) in work objects no "
                         "mechanical unit moves: corrected as arm targets (the values do not move them "
-                        "relative to the arm); if a track or gantry carries the arm, give its cell file "
-                        "(--model CELL.yaml)")
+                        "relative to the arm)" + ("" if cell else "; if a track or gantry carries the arm, "
+                                                  "give its cell file (--model CELL.yaml)"))
     program.targets = kept

@@ -553,7 +553,7 @@ def _filterable(d: Dialect, program: Program, warnings: list,
     :mod:`robocal.programs.positioner`) whatever their external-axis values say
     (:func:`robocal.programs.external.sort_external`)."""
     taken = coordinated.take(program, warnings) if coordinated is not None else frozenset()
-    sort_external(program, warnings, taken, fixed_arm)
+    sort_external(program, warnings, taken, fixed_arm, cell=coordinated is not None)
     targets: list[Target] = []
     for t in program.targets:
         why = program.unsupported.get(f"tool:{t.tool}") or program.unsupported.get(f"frame:{t.frame}")
