@@ -204,3 +204,23 @@ def test_uncoordinated_targets_with_a_cell_do_not_ask_for_a_cell(tmp_path, capsy
     out = capsys.readouterr().out
     assert "1 of 1 Cartesian target(s) filtered" in out and "corrected as arm targets" in out
     assert "give its cell file" not in out
+
+
+def test_mutated_cell_measurements_are_read_or_refused_in_one_line(tmp_path):
+    """Property (a small, seeded form of the fuzzing done for issue 45): a cell CSV with random
+    cells replaced by odd values (empty, nan, text, huge, another body's name) is read or refused
+    with a DataError naming the cause; never another exception."""
+    import random
+
+    cell, lines = _three_axis_csv(tmp_path)
+    rng = random.Random(45)
+    odd = ["", "nan", "inf", "1e400", "abc", "-0", "0", "1e-300", "plate", "flange", "STN2", "arm", "7", "-1"]
+    for _ in range(60):
+        rows = [line.split(",") for line in lines]
+        for _ in range(rng.randint(1, 3)):
+            k = rng.randrange(1, len(rows))
+            rows[k][rng.randrange(len(rows[k]))] = rng.choice(odd)
+        try:
+            rc.CellMeasurements.parse("\n".join(",".join(r) for r in rows) + "\n", cell, "m.csv")
+        except rc.DataError as exc:
+            assert "m.csv" in str(exc) and "\n" not in str(exc)
