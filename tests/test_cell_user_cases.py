@@ -40,7 +40,8 @@ def test_the_relation_says_where_the_cell_file_has_it():
     np.testing.assert_allclose(d["nominal_xyz_mm"], [1100.0, 0.0, 700.0], atol=1e-9)
     off = np.linalg.norm(np.subtract(d["xyz_mm"], d["nominal_xyz_mm"]))
     assert abs(d["off_nominal_mm"] - off) < 1e-9 and 0.01 < off < 20.0  # the simulated mount errors
-    assert f"the cell file has it {off:.3f} mm" in relation.sentence()
+    assert "the cell file has it at xyz [1100.000, 0.000, 700.000] mm, rpy [" in relation.sentence()
+    assert f"deg, {off:.3f} mm and" in relation.sentence()
 
 
 def test_krl_status_turn_out_of_float_range_is_named(tmp_path, capsys):

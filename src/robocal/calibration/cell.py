@@ -101,8 +101,9 @@ class Relation:
         return (f"{self.body} seen from {self.anchor}: xyz [{xyz}] mm (1 sigma up to "
                 f"{max(d['sigma_xyz_mm']):.3f} mm), rpy [{rpy}] deg (1 sigma up to "
                 f"{max(d['sigma_rotation_deg']):.4f} deg)" + ("" if self.nominal is None else
-                f"; the cell file has it {d['off_nominal_mm']:.3f} mm and {d['off_nominal_deg']:.4f} deg "
-                "from there (its model's frame {0}: for `axes:`, the first axis' frame, not `mount`)"))
+                "; the cell file has it at xyz [" + ", ".join(f"{v:.3f}" for v in d["nominal_xyz_mm"])
+                + "] mm, rpy [" + ", ".join(f"{v:.4f}" for v in d["nominal_rpy_deg"]) + "] deg, "
+                f"{d['off_nominal_mm']:.3f} mm and {d['off_nominal_deg']:.4f} deg away"))
 
 
 @dataclass(frozen=True)
