@@ -225,3 +225,25 @@ def test_mutated_cell_measurements_are_read_or_refused_in_one_line(tmp_path):
             rc.CellMeasurements.parse("\n".join(",".join(r) for r in rows) + "\n", cell, "m.csv")
         except rc.DataError as exc:
             assert "m.csv" in str(exc) and "\n" not in str(exc)
+
+
+def test_a_turntable_without_nests_is_refused_for_its_cause():
+    """A 1-axis turntable (or a slide along its turn axis) with SMRs at unknown places: their
+    registration cannot fix the frame (its turn about the axis, its shift along it). The refusal
+    said "the pose set is degenerate ... they barely change the flange's orientation ...: measure
+    poses spread over the workspace and over the wrist's orientations", which no table angles
+    cure; it now names the cause and the remedy (nests)."""
+    from robocal.kinematics.positioner import positioner_chain
+
+    chain = positioner_chain([{"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.6]}],
+                             make_transform(np.eye(3), [1.3, 0.0, -0.5]), name="turntable")
+    cell = rc.Cell({"arm": rc.Robot.from_catalog("abb_irb4600")}, {"STN1": rc.Positioner(chain, unit="STN1")})
+    sim = rc.simulate_cell(cell, 30, 30, seed=4)
+    try:
+        rc.calibrate(cell, sim.data, nongeometric=None)
+    except rc.IdentificationError as exc:
+        text = str(exc)
+        assert text.startswith("STN1: SMRs at unknown places on a plate that turns about one axis only")
+        assert "nests:" in text and "wrist" not in text
+    else:
+        raise AssertionError("calibrated")

@@ -39,7 +39,7 @@ from robocal.core.version import __version__
 from robocal.core.yaml_load import dump_yaml
 from robocal.data.cell_measurements import CellMeasurements
 from robocal.data.measurements import Measurements
-from robocal.data.registration import umeyama
+from robocal.data.registration import REGISTRATION_DEGENERATE, turns_about_one_axis, umeyama
 from robocal.kinematics.prior_spec import POSITIONER_CLASS, PriorSpec
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 
@@ -301,6 +301,14 @@ def _body(cell, name: str, data: Measurements, validation: Measurements | None, 
     return _Body(chain, _numbered(data, numbers), held, params, True, numbers)
 
 
+def _unfixable_plate(cell, name: str, body: _Body, exc: Exception) -> bool:
+    """Whether ``exc`` is the registration's refusal of a positioner without nests whose plate turns
+    about one axis only (a turntable, a headstock; a slide along its turn axis): the SMRs' unknown
+    places leave the frame's turn about that axis free, which no choice of table angles cures."""
+    return (name in cell.positioners and body.smr_numbers is not None and isinstance(exc, IdentificationError)
+            and REGISTRATION_DEGENERATE in str(exc) and turns_about_one_axis(body.robot))
+
+
 def _in_tracker(cell, name: str, body: _Body, robot):
     """The calibrated model of a body as the cell carries it: an arm with its nominal tool (the
     measured SMRs off the flange), a positioner with its plate frame (identified with nests, else
@@ -474,6 +482,11 @@ def calibrate_cell(cell, data, calibrate_body: Callable, *, params="auto", valid
             result = calibrate_body(body.robot, body.data, params=body.params, validation=body.validation,
                                     register_frames=body.register, **options)
         except RobocalError as exc:  # which body, and for nests what to check first
+            if _unfixable_plate(cell, name, body, exc):
+                raise IdentificationError(
+                    f"{name}: SMRs at unknown places on a plate that turns about one axis only cannot fix "
+                    "its frame (its turn about that axis and its shift along it are free): declare the "
+                    "nests' plate positions in the cell file (nests:)") from None
             hint = " (its nests: is SMR k in nest k, and are the cell file's nests: where they are?)" \
                 if body.smr_numbers is None and name in cell.positioners else ""
             raise type(exc)(f"{name}{hint}: {exc}") from None
