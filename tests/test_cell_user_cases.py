@@ -247,3 +247,28 @@ def test_a_turntable_without_nests_is_refused_for_its_cause():
         assert "nests:" in text and "wrist" not in text
     else:
         raise AssertionError("calibrated")
+
+
+def test_rapid_inline_target_with_a_confdata_variable_is_named_not_fatal(tmp_path, capsys):
+    """RoboDK writes a positioner program's targets inline with a confdata variable,
+    ``MoveL [[x,y,z],[q..],conf,[9E9,0,0,..]],Speed000,Zone000,tool \\WObj:=Frame000;`` (valid
+    RAPID): the whole file was refused ("malformed robtarget inline@11: expected groups of 3, 4, 4
+    numbers"). Each such motion is now named with its cause, the others filtered."""
+    from robocal.cli import main
+
+    (tmp_path / "pos.mod").write_text(
+        "MODULE Pos\n  VAR confdata conf := [0,0,0,0];\n"
+        "  CONST robtarget p1:=[[1000,0,1000],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];\n"
+        "  PROC main()\n    MoveL p1,v100,fine,tool0;\n"
+        "    MoveL [[1000,100,1000],[0,0,1,0],conf,[9E9,9E9,9E9,9E9,9E9,9E9]],v100,fine,tool0;\n"
+        "  ENDPROC\nENDMODULE\n")
+    arm = rc.Robot.from_catalog("abb_irb2600")
+    arm.with_values({"a2": arm.get("a2") + 0.0005}).save(tmp_path / "cal.yaml")
+    d = str(tmp_path)
+    code = main(["filter", f"{d}/pos.mod", "--nominal", "abb_irb2600", "--calibrated", f"{d}/cal.yaml",
+                 "-o", f"{d}/out.mod"])
+    out = capsys.readouterr().out
+    assert code == 0 and "1 of 1 Cartesian target(s) filtered" in out and "1 not corrected" in out
+    assert "configuration (confdata) is the variable conf" in out
+    text = (tmp_path / "out.mod").read_text()
+    assert "[[1000,100,1000],[0,0,1,0],conf,[9E9,9E9,9E9,9E9,9E9,9E9]]" in text  # left as it is
