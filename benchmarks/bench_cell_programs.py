@@ -33,7 +33,7 @@ def _case(dialect: str, seed: int) -> dict:
     kuka = dialect == "krl"
     nominal, true, calibrated = cp.cells(seed, arm=cp.KUKA_ARM if kuka else cp.ARM,
                                          unit="DKP400" if kuka else "STN1",
-                                         axes=("E1", "E2") if kuka else ("eax_b", "eax_c"))
+                                         external_axes=(1, 2) if kuka else (2, 3))
     q, e, T = cp.poses(nominal, N_TARGETS, seed=seed + 10)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)

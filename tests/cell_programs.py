@@ -23,7 +23,6 @@ from robocal.kinematics.positioner import positioner_chain as chain_of
 from robocal.kinematics.transforms import invert_transform, make_transform, rot_x, rot_y, rot_z
 from robocal.programs.dialects.writing import quaternions, zyx_angles
 from robocal.programs.filter import controller_joints, target_poses
-from robocal.programs.positioner import logical_axis
 from robocal.programs.registry import dialect_named
 from robocal.programs.source import ProgramText
 
@@ -54,7 +53,7 @@ def _chain_error(chain: rc.Robot, rng, mm: float, deg: float) -> rc.Robot:
         base=_moved(chain.base, rng, mm * 4, deg * 2), tool=_moved(chain.tool, rng, mm, deg))
 
 
-def cells(seed: int = 0, arm: str = ARM, unit: str = "STN1", axes=("eax_b", "eax_c"),
+def cells(seed: int = 0, arm: str = ARM, unit: str = "STN1", external_axes=(2, 3),
           estimate_mm: float = 0.01, estimate_deg: float = 0.001,
           two_arms: bool = False) -> tuple[rc.Cell, rc.Cell, rc.Cell]:
     """``(nominal, true, calibrated)`` cells: the true one has the arm's link errors (0.05-0.5 mm,
@@ -80,7 +79,7 @@ def cells(seed: int = 0, arm: str = ARM, unit: str = "STN1", axes=("eax_b", "eax
 
     def cell(a, p, first):
         arms = {"left": first, "arm": a} if two_arms else {"arm": a}
-        return rc.Cell(arms, {"turntable": rc.Positioner(p, unit, program_axes=tuple(axes))},
+        return rc.Cell(arms, {"turntable": rc.Positioner(p, unit, external_axes=tuple(external_axes))},
                        arm_units={"left": "ROB_1", "arm": "ROB_2"} if two_arms else {})
 
     tracker = _moved(make_transform(rot_z(2.0), [2.5, -1.0, 0.3]), rng, 1.0, 1.0)  # the calibration's frame
@@ -225,8 +224,8 @@ def landing(paths, references, nominal: rc.Cell, true: rc.Cell, intended=None) -
     prog = d.parse([ProgramText(Path(p)) for p in paths], {}, {}, [ProgramText(Path(p)) for p in references])
     targets = [t for t in prog.targets if t.frame in prog.carried]
     P, W, tool = target_poses(d, prog, targets)[1], OFRAME, TOOL
-    p_axes = [logical_axis(a) for a in nominal.positioners["turntable"].program_axes]
-    e = np.deg2rad([[{logical_axis(k): v for k, v in t.axes.items()}[a] for a in p_axes] for t in targets])
+    names = d.positioner_axes(nominal.positioners["turntable"].external_axes)  # eax_b / E1 ...
+    e = np.deg2rad([[t.axes[a] for a in names] for t in targets])
     arm, chain = nominal.arms["arm"], nominal.positioners["turntable"].chain
     F = chain.fk(e) @ W @ P @ invert_transform(tool)
     q = controller_joints(d, prog, targets, arm, F, [], [])

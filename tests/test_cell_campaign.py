@@ -16,6 +16,7 @@ import robocal as rc
 from robocal.campaign import Constraints, Tracker, plan_cell
 from robocal.cli import main
 from robocal.core.errors import DataError
+from robocal.programs.registry import dialect_named
 
 CELL = """units: {length: mm, angle: deg}
 name: welding cell
@@ -27,7 +28,7 @@ positioner:
          {type: revolute, axis: [0, 0, 1], origin: [0, 0, 250], limits: [-360, 360]}]
   plate: {xyz: [0, 0, 0], rpy: [0, 0, 0]}
 %s  columns: [e1, e2]
-  program_axes: [eax_b, eax_c]
+  external_axes: [2, 3]
 """
 NESTS = "  nests: [[200, 0, 0], [0, 200, 0], [-150, -150, 0]]\n"
 TRACKER_MM = "1200,2800,2000"  # on the tilt side, above the plate
@@ -102,7 +103,8 @@ def test_the_plan_per_body_is_each_body_planned_alone(cell_file):
     np.testing.assert_array_equal(plan.arms["arm"].joints, alone.joints)
     assert plan.tables["STN1"].n == 12 and "positioner STN1 (STN1):" in plan.summary()
     q, external = plan.program_joints()
-    assert q.shape == (27, 6) and external.unit == "STN1" and external.axes == ("eax_b", "eax_c")
+    assert q.shape == (27, 6) and external.unit == "STN1" and external.external_axes == (2, 3)
+    assert external.in_language(dialect_named("rapid")).axes == ("eax_b", "eax_c")
     np.testing.assert_allclose(np.deg2rad(external.values[15:]), plan.tables["STN1"].joints, atol=1e-12)
 
 
@@ -209,8 +211,8 @@ def test_a_parked_arm_in_the_beam_hides_nests_from_the_table_plan(cell_file):
 
 
 def test_each_language_names_the_table_axes_its_own_way(tmp_path):
-    """One cell file (program_axes eax_b, eax_c; unit GP2), three programs: RAPID's extax b and c,
-    KRL's E2 and E3 (`Positioner.axes_in`), FANUC's motion group GP2 with its own J1 and J2."""
+    """One cell file (external_axes [2, 3]; unit GP2), three programs: RAPID's extax b and c, KRL's
+    E2 and E3 (`Dialect.positioner_axes`), FANUC's motion group GP2 with its own J1 and J2."""
     path = tmp_path / "cell.yaml"
     path.write_text((CELL % NESTS).replace("unit: STN1", "unit: GP2"))
     cell = rc.load_cell(path)

@@ -275,7 +275,14 @@ def test_coordinated_targets_land_on_the_true_cell(tmp_path, dialect):
     landing_goal(tmp_path, dialect, seed=5)
 
 
-def landing_goal(tmp_path: Path, dialect: str, seed: int) -> dict:
+@pytest.mark.parametrize("dialect", ["inform", "fanuc"])
+def test_a_group_positioner_on_other_logical_axes_is_its_own_axes_1_to_m(tmp_path, dialect):
+    """The cell's positioner on the controller's logical external axes 2 and 3 (RAPID eax_b, eax_c):
+    a FANUC motion group's / INFORM station's values are its own E1, E2, corrected all the same."""
+    landing_goal(tmp_path, dialect, seed=5, external_axes=(2, 3))
+
+
+def landing_goal(tmp_path: Path, dialect: str, seed: int, external_axes=(1, 2)) -> dict:
     """A true arm + tilt-and-turn cell, its calibration (truth + 0.01 mm / 0.001 deg), 30 coordinated
     targets on the workpiece: run by the nominal controller on the true cell, the filtered program
     lands within 1.3x the calibrated model's own error + 0.002 mm of the intended points and >= 10x
@@ -285,7 +292,7 @@ def landing_goal(tmp_path: Path, dialect: str, seed: int) -> dict:
 
     arm_name, unit, d = (("yaskawa_gp25", "ST1", InformDialect()) if dialect == "inform" else
                          ("fanuc_m20ia", "GP2", FanucDialect()))
-    nominal, true, calibrated = cp.cells(seed, arm=arm_name, unit=unit, axes=("E1", "E2"))
+    nominal, true, calibrated = cp.cells(seed, arm=arm_name, unit=unit, external_axes=external_axes)
     q, e, T = cp.poses(nominal, 30)
     arm = nominal.arms["arm"]
     intended = cp.OFRAME @ T  # the tool's poses on the plate the program means
@@ -319,7 +326,7 @@ def test_cli_filters_a_station_coordinated_job_with_cell_files(tmp_path, capsys)
 
     from robocal.cli import main
 
-    nominal, _, calibrated = cp.cells(5, arm="yaskawa_gp25", unit="ST1", axes=("E1", "E2"))
+    nominal, _, calibrated = cp.cells(5, arm="yaskawa_gp25", unit="ST1", external_axes=(1, 2))
     q, e, _ = cp.poses(nominal, 5)
     job = _inform_cell_job(tmp_path, nominal.arms["arm"], q, e, cp.TOOL)
     nominal.save(tmp_path / "cell.yaml")
@@ -346,7 +353,7 @@ def test_refusals_on_a_cell(tmp_path, dialect):
     import cell_programs as cp
 
     arm_name, unit = ("yaskawa_gp25", "ST1") if dialect == "inform" else ("fanuc_m20ia", "GP2")
-    nominal, _, calibrated = cp.cells(5, arm=arm_name, unit=unit, axes=("E1", "E2"))
+    nominal, _, calibrated = cp.cells(5, arm=arm_name, unit=unit, external_axes=(1, 2))
     q, e, T = cp.poses(nominal, 3)
     arm = nominal.arms["arm"]
     if dialect == "inform":

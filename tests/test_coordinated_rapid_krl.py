@@ -15,7 +15,7 @@ from robocal.programs import filter_program
 from robocal.programs.dialects.krl.reader import KRLDialect
 from robocal.programs.dialects.rapid.reader import RapidDialect
 from robocal.programs.dialects.writing import frame_text
-from robocal.programs.positioner import logical_axis
+from robocal.programs.registry import dialect_named
 from robocal.programs.source import ProgramText
 
 # The goal (issue 45): coordinated targets filtered land on the true cell within this factor of the
@@ -148,9 +148,18 @@ def test_krl_external_kinematic_without_its_declaration_is_named(tmp_path):
     assert prog.carried[key] == "DKP400" and np.allclose(prog.frames[key][:3, 3], [0.01, 0, 0.1])
 
 
-def test_logical_axis_names():
-    assert [logical_axis(n) for n in ("eax_a", "EAX_C", "E2", "e3", "E1 of GP2")] == ["1", "3", "2", "3",
-                                                                                    "e1 of gp2"]
+def test_each_dialect_names_the_logical_external_axes():
+    """A positioner's logical external axes (2, 3) as each language's programs name them: RAPID and
+    KRL among the robot's external axes, FANUC's motion group and INFORM's station their own axes
+    1..m; a language without external axes, or an axis beyond its names, is refused."""
+    names = {k: dialect_named(k).positioner_axes((2, 3)) for k in ("rapid", "krl", "fanuc", "inform")}
+    assert names == {"rapid": ("eax_b", "eax_c"), "krl": ("E2", "E3"), "fanuc": ("E1", "E2"),
+                     "inform": ("E1", "E2")}
+    assert dialect_named("rapid").positioner_axes((6, 1)) == ("eax_f", "eax_a")
+    with pytest.raises(DataError, match="no name for external axis 7"):
+        dialect_named("krl").positioner_axes((7,))
+    with pytest.raises(DataError, match="URScript programs name no external axes"):
+        dialect_named("urscript").positioner_axes((1,))
 
 
 def _identity_outside_numbers(d, before: list, after: list, refs=()) -> None:
@@ -202,7 +211,7 @@ def test_coordinated_rapid_targets_land_on_the_true_cell(tmp_path, robotstudio):
 
 @pytest.mark.parametrize("form", ["ek", "bas", "spline"])
 def test_coordinated_krl_targets_land_on_the_true_cell(tmp_path, form):
-    nominal, true, calibrated = cp.cells(3, arm=cp.KUKA_ARM, unit="DKP400", axes=("E1", "E2"))
+    nominal, true, calibrated = cp.cells(3, arm=cp.KUKA_ARM, unit="DKP400", external_axes=(1, 2))
     q, e, T = cp.poses(nominal, 30)
     paths, config = cp.krl_program(tmp_path, nominal, q, e, T, form=form)
     res = filter_program(paths, calibrated, nominal, references=[config])
@@ -292,7 +301,7 @@ def test_a_calibrated_plate_far_from_the_nominal_one_is_said(tmp_path):
     assert not any("plate is up to" in w for w in filter_program(path, calibrated, nominal).warnings)
     p = calibrated.positioners["turntable"]
     far = rc.Positioner(p.chain.with_frames(base=p.chain.base @ make_transform(np.eye(3), [0.04, 0, 0])),
-                        p.unit, program_axes=p.program_axes)
+                        p.unit, external_axes=p.external_axes)
     moved = rc.Cell(calibrated.arms, {"turntable": far})
     res = filter_program(path, moved, nominal, keep_unreached=True)
     said = [w for w in res.warnings if "plate is up to" in w]
@@ -308,13 +317,15 @@ def test_station_values_of_a_prismatic_axis_are_millimetres(tmp_path):
 
     chain = positioner_chain([{"type": "prismatic", "axis": [0, 0, 1], "limits": [0.0, 0.5]},
                               {"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.3]}])
-    station = Station("LIFT", chain, chain, ("E1", "E2"))
+    station = Station("LIFT", chain, chain, (1, 2))
+    axes = station.axes(dialect_named("rapid"))
     (tmp_path / "p.mod").write_text("MODULE m\nENDMODULE\n")
     t = Target(ProgramText(tmp_path / "p.mod"), 0, "p", [], axes={"eax_a": 250.0, "eax_b": 90.0})
-    assert np.allclose(station.values(t), [0.25, np.pi / 2])
+    assert axes == ("eax_a", "eax_b") and np.allclose(station.values(t, axes), [0.25, np.pi / 2])
     t.axes["eax_a"] = 600.0
-    with pytest.raises(DataError, match=r"^p.mod:1 \(p\): LIFT axis E1 = 600 mm \(limits 0 \.\. 500\)"):
-        station.check_limits(t, station.values(t))
+    with pytest.raises(DataError, match=r"^p.mod:1 \(p\): LIFT axis eax_a = 600 mm \(limits 0 \.\. 500\)"):
+        station.check_limits(t, station.values(t, axes), axes)
+    assert "no value for its axis E1, E2:" in station.values(t, station.axes(dialect_named("krl")))
 
 
 @pytest.mark.parametrize("root", ["MACHINE_DEF[2].ROOT", "{X 1100.0,Y 450.0,Z 0.0,A 0.0,B 0.0,C 0.0}"])
@@ -322,7 +333,7 @@ def test_krl_unnamed_machine_is_the_cells_only_positioner(tmp_path, root):
     """A KRL program whose EK machine no file names (no $config.dat; or a literal root, K_ROOT, with
     #EASYS): with a cell of one positioner it is that one, said once; the targets land as with the
     machine named."""
-    nominal, true, calibrated = cp.cells(3, arm=cp.KUKA_ARM, unit="DKP400", axes=("E1", "E2"))
+    nominal, true, calibrated = cp.cells(3, arm=cp.KUKA_ARM, unit="DKP400", external_axes=(1, 2))
     q, e, T = cp.poses(nominal, 6)
     paths, config = cp.krl_program(tmp_path, nominal, q, e, T)
     src = paths[0].read_bytes().replace(b"EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,",
@@ -342,7 +353,7 @@ def test_krl_unnamed_machine_is_the_cells_only_positioner(tmp_path, root):
 def test_krl_spline_form_without_config_says_the_base_is_taken_as_fixed(tmp_path):
     """EK(K_ROOT(FP1.BASE_NO), ...) without $config.dat: whether a machine carries base 3 is unknown;
     it is taken as a fixed base (KSS's own rule without MACHINE_FRAME_DAT), said once."""
-    nominal, _, calibrated = cp.cells(3, arm=cp.KUKA_ARM, unit="DKP400", axes=("E1", "E2"))
+    nominal, _, calibrated = cp.cells(3, arm=cp.KUKA_ARM, unit="DKP400", external_axes=(1, 2))
     q, e, T = cp.poses(nominal, 4)
     paths, _ = cp.krl_program(tmp_path, nominal, q, e, T, form="spline")
     prog = KRLDialect().parse([ProgramText(p) for p in paths], {}, {})

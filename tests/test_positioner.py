@@ -104,6 +104,19 @@ def test_fk_of_typical_positioners(axes):
     np.testing.assert_allclose(robot.fk(e), composed(axes, M, P, e), rtol=0, atol=FK_TOL)
 
 
+def test_nearly_parallel_axes_a_nanometre_apart_keep_the_offset():
+    """Hypothesis' case: two axes 1.2e-4 rad from parallel through one point 7.6e-6 m off the first
+    axis' foot, so the second axis' foot is 9.3e-10 m from the first frame's origin; that offset is
+    kept (it was dropped as rounding: FK off by 9.2e-10 m), FK exact to rounding."""
+    axis = {"type": "revolute", "axis": [0.015623093000542114, 0.9998779520346953, 0.0],
+            "origin": [0.0, 0.0, 0.0625], "rpy": [0.0, 0.0078125, 0.0], "limits": [-2.0, 2.0]}
+    axes = [axis, {**axis, "origin": [0.0, 0.0, 0.0]}]
+    robot = positioner_chain(axes)
+    e = np.random.default_rng(0).uniform(-2.0, 2.0, (7, 2))
+    np.testing.assert_allclose(robot.fk(e), composed(axes, np.eye(4), np.eye(4), e), rtol=0, atol=FK_TOL)
+    assert 9e-10 < abs(robot.a[1]) < 1e-9
+
+
 def test_parallel_axes_carry_beta_and_limits_default_to_a_turn():
     axes = [{"type": "revolute", "axis": [1, 0, 0], "origin": [0, 0, 1.0]},
             {"type": "revolute", "axis": [1, 0, 0], "origin": [0, 0.6, 0]}]

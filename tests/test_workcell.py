@@ -85,7 +85,7 @@ def write(tmp_path, data, name="cell.yaml"):
 def test_one_arm_and_a_tilt_turn_positioner(cell):
     assert list(cell.arms) == ["arm"] and list(cell.positioners) == ["STN1"] and cell.anchor == "arm"
     stn = cell.positioners["STN1"]
-    assert stn.unit == "STN1" and stn.columns == ("e1", "e2") and stn.program_axes == ("E1", "E2")
+    assert stn.unit == "STN1" and stn.columns == ("e1", "e2") and stn.external_axes == (1, 2)
     np.testing.assert_allclose(stn.plate(np.deg2rad(E_DEG)), tilt_turn_truth(E_DEG), rtol=0, atol=TOL)
     np.testing.assert_allclose(stn.chain.limits, np.deg2rad([[-90, 90], [-360, 360]]))
     arm = Robot.from_catalog("abb_irb2600")
@@ -134,7 +134,7 @@ def test_joint_columns_of_every_body(tmp_path):
     assert [j.column for j in cell.joints("STN2")] == ["e3_deg", "e4_deg"]
     assert [j.column for j in cell.joints("ROB_2")] == [f"q{i}_deg" for i in range(1, 7)]
     assert cell.joints("STN1")[0].limits == (0.0, 0.5)
-    assert cell.positioners["STN2"].program_axes == ("E3", "E4")
+    assert cell.positioners["STN2"].external_axes == (3, 4)
 
 
 def test_track_arm_and_positioner_columns_follow_e1(tmp_path):
@@ -146,7 +146,7 @@ def test_track_arm_and_positioner_columns_follow_e1(tmp_path):
     track = load_model(str(write(tmp_path, {k: data[k] for k in ("units", "robot", "track")}, "t.yaml")))
     np.testing.assert_array_equal(arm.values, track.values)
     assert cell.positioners["STN1"].columns == ("e2", "e3")
-    assert cell.positioners["STN1"].program_axes == ("E2", "E3")
+    assert cell.positioners["STN1"].external_axes == (2, 3)
     data["positioner"]["columns"] = ["e1", "e2"]
     with pytest.raises(ModelError, match="column e1 is already the track of arm 'arm''s"):
         load_cell(write(tmp_path, data))
@@ -162,7 +162,7 @@ def _same_cell(a: Cell, b: Cell) -> None:
         assert (x.name, x.description, x.joint_error_names) == (y.name, y.description, y.joint_error_names)
     for name, p in a.positioners.items():
         q = b.positioners[name]
-        assert (p.unit, p.columns, p.program_axes) == (q.unit, q.columns, q.program_axes)
+        assert (p.unit, p.columns, p.external_axes) == (q.unit, q.columns, q.external_axes)
         assert (p.nests is None) == (q.nests is None)
         if p.nests is not None:
             np.testing.assert_array_equal(p.nests, q.nests)
@@ -331,7 +331,13 @@ AX = ("positioner", "axes")
     (_with(CELL, P + ("columns",), ["e1"]), r"columns \['e1'\]: expected 2 distinct names"),
     (_with(CELL, P + ("columns",), ["e1", "e1"]), r"expected 2 distinct names"),
     (_with(CELL, P + ("columns",), ["q7", "e2"]), r"expected 2 distinct names e1, e2"),
-    (_with(CELL, P + ("program_axes",), ["eax_b"]), r"program_axes \['eax_b'\]: expected 2 names"),
+    (_with(CELL, P + ("external_axes",), [2]), r"external_axes \[2\]: expected 2 distinct logical"),
+    (_with(CELL, P + ("external_axes",), [2, 2]), r"expected 2 distinct logical external-axis numbers"),
+    (_with(CELL, P + ("external_axes",), ["eax_b", "eax_c"]), r"external_axes \['eax_b', 'eax_c'\]: exp"),
+    (_with(CELL, P + ("external_axes",), [0, 1]), r"external_axes \[0, 1\]: expected"),
+    (_with(CELL, P + ("external_axes",), [True, 2]), r"external_axes \[True, 2\]: expected"),
+    (_with(CELL, P + ("external_axes",), 2), r"positioner.external_axes: expected a list of logical"),
+    (_with(CELL, P + ("program_axes",), ["eax_b", "eax_c"]), r"positioner.program_axes: now external_axes"),
     (_with(CELL, P + ("model",), "abb_irbp_a250"), r"give exactly one geometry"),
     (_with(CELL, P + ("axes",), DELETE), r"give exactly one geometry.*found none"),
     (_with(CELL, P + ("limits",), [[-1, 1], [-1, 1]]), r"positioner.limits: only with a dh or mdh table"),
@@ -467,15 +473,13 @@ def test_a_positioner_with_nests_has_the_identification_jacobian():
         np.testing.assert_allclose(J[:, :, k], step[:, :3, 3] / (2 * h), rtol=0, atol=1e-8, err_msg=name)
 
 
-def test_program_axis_names_per_language():
-    stn = cell_from_data(_with(CELL, P + ("program_axes",), ["eax_b", "eax_c"])).positioners["STN1"]
-    assert stn.axes_in("rapid") == ("eax_b", "eax_c") and stn.axes_in("krl") == ("E2", "E3")
-    default = cell_from_data(CELL).positioners["STN1"]
-    assert default.axes_in("rapid") == ("eax_a", "eax_b") and default.axes_in("krl") == ("E1", "E2")
-    odd = cell_from_data(_with(CELL, P + ("program_axes",), ["B1", "B2"])).positioners["STN1"]
-    assert odd.axes_in("rapid") == ("B1", "B2")
-    with pytest.raises(ModelError, match="language must be rapid or krl"):
-        default.axes_in("inform")
+def test_external_axes_are_logical_numbers():
+    """A positioner's axes as the controller's logical external-axis numbers, language-neutral (each
+    dialect names them: test_coordinated_rapid_krl); default its columns' numbers; saved and read back."""
+    stn = cell_from_data(_with(CELL, P + ("external_axes",), [2, 3])).positioners["STN1"]
+    assert stn.external_axes == (2, 3) and stn.to_dict()["external_axes"] == [2, 3]
+    assert cell_from_data(CELL).positioners["STN1"].external_axes == (1, 2)
+    assert Positioner(stn.chain, "STN1", external_axes=(np.int64(3), 1)).external_axes == (3, 1)
 
 
 def test_positioner_from_catalog_in_python():

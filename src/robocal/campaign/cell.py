@@ -26,23 +26,24 @@ import csv
 import io
 import json
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from robocal.campaign.constraints import Constraints
 from robocal.campaign.planner import CampaignResult, plan_poses
 from robocal.campaign.positioner import TablePlan, plan_table
-from robocal.campaign.programs import DEGREE_DECIMALS, campaign_programs, fixed_point, program_options
+from robocal.campaign.programs import DEGREE_DECIMALS, campaign_programs, fixed_point
 from robocal.core.errors import DataError
 from robocal.core.io import write_all
 from robocal.core.version import __version__
 from robocal.identify import vocabulary
 from robocal.programs.dialects.writing import ExternalAxes
 
+if TYPE_CHECKING:  # annotations only
+    from robocal.kinematics.workcell import Cell
+
 FORMAT = "robocal-cell-campaign/1"
-# languages whose programs name a positioner's axes among the robot's external axes (RAPID eax_a..,
-# KRL E1..: `Positioner.axes_in`); the others move it as its own group or station, axes 1..m
-ROBOT_AXIS_NAMES = ("rapid", "krl")
 
 
 @dataclass
@@ -71,7 +72,7 @@ class CellCampaignResult:
     >>> axes = [{"type": "revolute", "axis": [1, 0, 0], "origin": [0, 0, 0.9], "limits": [-1.57, 1.57]},
     ...         {"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.25], "limits": [-3.14, 3.14]}]
     >>> mount = np.eye(4); mount[0, 3] = 1.4  # m: the tilt-and-turn table 1.4 m in front of the arm
-    >>> table = rc.Positioner(positioner_chain(axes, mount), unit="STN1", program_axes=("eax_b", "eax_c"),
+    >>> table = rc.Positioner(positioner_chain(axes, mount), unit="STN1", external_axes=(2, 3),
     ...                       nests=[[0.2, 0, 0], [0, 0.2, 0], [-0.15, -0.15, 0]])  # m, on the plate
     >>> cell = rc.Cell({"arm": rc.Robot.from_catalog("abb_irb2600")}, {"STN1": table})
     >>> tracker = rc.Tracker([1.2, 2.8, 2.0], acceptance_deg=45)  # m, world frame
@@ -164,8 +165,9 @@ class CellCampaignResult:
     def program_joints(self, arm: str | None = None, positioner: str | None = None
                        ) -> tuple[np.ndarray, ExternalAxes | None]:
         """The joints ``(R, 6)`` rad of ``arm`` (default the anchor) at every row and the
-        positioner's values (default the only one) as a program writes them (`ExternalAxes`): the
-        arm's planned poses with the table at rest, then the table's angles with the arm parked."""
+        positioner's values (default the only one) as a program writes them (`ExternalAxes`, its
+        axes the positioner's logical ``external_axes``, which each language names): the arm's
+        planned poses with the table at rest, then the table's angles with the arm parked."""
         arm = arm or next(iter(self.cell.arms), None)
         if arm is None:
             raise DataError("the cell has no arm: campaign programs drive an arm and its positioner")
@@ -177,32 +179,23 @@ class CellCampaignResult:
         if positioner is None:
             return q, None
         p = self.cell.positioners[positioner]
-        return q, ExternalAxes(p.chain.joints_shown(self.joints_of(positioner)[keep]), p.unit, p.program_axes,
-                               tuple(bool(x) for x in p.chain.prismatic))
+        return q, ExternalAxes(p.chain.joints_shown(self.joints_of(positioner)[keep]), p.unit,
+                               prismatic=tuple(bool(x) for x in p.chain.prismatic),
+                               external_axes=p.external_axes)
 
     def programs(self, programs: dict, *, arm: str | None = None, positioner: str | None = None,
                  pulses_per_unit=None, **options) -> dict[str, str]:
         """The campaign programs (`robocal.campaign.programs.campaign_programs`) driving ``arm``
-        and ``positioner`` through the plan (`program_joints`), the positioner's axes named as each
-        language names them (`Positioner.axes_in`: RAPID ``eax_b``, KRL ``E2``; FANUC's group and
-        INFORM's station: their own axes 1..m);
+        and ``positioner`` through the plan (`program_joints`), the positioner's logical external
+        axes named as each language names them (`Dialect.positioner_axes`: ``external_axes: [2, 3]``
+        is a robtarget's ``eax_b``, ``eax_c``; a motion group's or station's own axes 1..m);
         ``pulses_per_unit``: the positioner's encoder pulses per degree (mm) for INFORM;
         ``options``: speed_percent, settle_s, procedure, comment."""
         arm = arm or next(iter(self.cell.arms), None)
         q, external = self.program_joints(arm, positioner)
-        if external is None:
-            return campaign_programs(q, self.cell.arms[arm], programs, **options)
-        table = self.cell.positioners[positioner or next(iter(self.cell.positioners))]
-        ratio = None if pulses_per_unit is None else tuple(float(v) for v in pulses_per_unit)
-        texts: dict[str, str] = {}
-        for d in program_options():  # each language with the axis names it uses (Positioner.axes_in)
-            if programs.get(d.key) is not None:
-                axes = table.axes_in(d.key) if d.key in ROBOT_AXIS_NAMES else \
-                    tuple(f"E{i + 1}" for i in range(table.n_axes))  # a motion group's / station's own
-                texts.update(campaign_programs(q, self.cell.arms[arm], {d.key: programs[d.key]},
-                                               external=replace(external, axes=axes, pulses_per_unit=ratio),
-                                               **options))
-        return texts
+        if external is not None and pulses_per_unit is not None:
+            external = replace(external, pulses_per_unit=tuple(float(v) for v in pulses_per_unit))
+        return campaign_programs(q, self.cell.arms[arm], programs, external=external, **options)
 
     def summary(self) -> str:
         """Per body: what is measured, the predicted accuracy and how well its parameters are
@@ -260,7 +253,7 @@ def _axis_lines(arm, q: np.ndarray) -> np.ndarray:
     return np.stack([points[:-1], points[1:]], axis=1)
 
 
-def plan_cell(cell, arm_poses: dict[str, int], table_poses: dict[str, int], *,
+def plan_cell(cell: Cell, arm_poses: dict[str, int], table_poses: dict[str, int], *,
               constraints: Constraints | None = None, smr: dict | None = None, nests: dict | None = None,
               park: dict | None = None, noise_mm: float = 0.02, noise_model: str = "isotropic",
               criterion: str = "I", seed: int = 0, starts: int = 4, n_candidates: int = 5000,

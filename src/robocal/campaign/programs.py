@@ -99,7 +99,6 @@ def campaign_programs(joints: np.ndarray, robot: Robot, programs: dict[str, str 
     :func:`program_options` order. A language whose programs drive no positioner is refused when
     ``external`` is given."""
     q = np.asarray(joints, float)
-    options = {} if external is None else {"external": external}
     wanted = [d for d in program_options() if programs.get(d.key) is not None]
     blind = [d.title or d.name for d in wanted if not d.campaign_external]
     if external is not None and blind:
@@ -109,6 +108,7 @@ def campaign_programs(joints: np.ndarray, robot: Robot, programs: dict[str, str 
     texts: dict[str, str] = {}
     for d in program_options():
         if programs.get(d.key) is not None:
+            options = {} if external is None else {"external": external.in_language(d)}  # its axis names
             texts.update(d.campaign_files(q, robot, Path(programs[d.key]), speed_percent=speed_percent,
                                           settle_s=settle_s, procedure=procedure, comment=comment, **options))
     return texts

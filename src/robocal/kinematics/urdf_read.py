@@ -27,6 +27,10 @@ MAX_OFFSET_M = 100.0  # a joint origin farther than this from its parent is no r
 MAX_ANGLE_RAD = 100.0  # origin angles and joint limits beyond (16 turns) are a unit or typing error
 _MAX_AXIS = 1e6  # an axis vector is normalised; components beyond are refused
 HAYATI_DEG = 5.0  # consecutive axes closer than this to parallel are modelled with beta (Hayati)
+# m: between nearly parallel axes, an offset from one's frame origin to the other's foot below this is
+# rounding (the next x then follows the previous one); a larger one, however small, is kept as a, so
+# the chain's FK stays the joints' own to rounding (an offset of 1e-9 m dropped here was an error)
+SAME_POINT_M = 1e-13
 
 
 def rpy_to_matrix(rpy) -> np.ndarray:
@@ -242,7 +246,7 @@ def lines_to_chain(P: np.ndarray, Z: np.ndarray, T_tip: np.ndarray, limits: np.n
                 gap = foot2 - o
                 gap -= (gap @ z) * z  # in the plane normal to z, to rounding
                 hint = xs[i - 1] if i > 0 else np.array([1.0, 0, 0])
-                x = _unit(gap) if np.linalg.norm(gap) > 1e-9 else _perpendicular(z, hint)
+                x = _unit(gap) if np.linalg.norm(gap) > SAME_POINT_M else _perpendicular(z, hint)
             feet[i + 1] = foot2
         else:
             o = _closest_on_line(P[i], z, T_tip[:3, 3])

@@ -17,6 +17,8 @@ track cell file (`robocal.kinematics.cell_file`)::
       plate: {xyz: [0, 0, 0]}
       nests: [[200, 0, 0], [0, 200, 0], [-150, -150, 0]]
       columns: [e1, e2]
+      external_axes: [2, 3]             # the controller's logical external axes it drives (default
+                                        # the columns' numbers); each program language names them
 
 Calibration (docs): the measurements of bodies seen in one tracker frame are block-diagonal: one
 ordinary calibration per body, all in that frame; `Cell.in_world` then puts the calibrated bodies
@@ -65,18 +67,16 @@ from robocal.kinematics.model_file import (
     robot_kwargs,
     robot_to_dict,
 )
-from robocal.kinematics.positioner import check_chain, positioner_chain
+from robocal.kinematics.positioner import check_chain, nests_in_last_frame, positioner_chain
 from robocal.kinematics.transforms import invert_transform
 
 FORMAT = "robocal-cell/1"
 GEOMETRY_FORMS = ("model", "axes", "dh", "mdh", "joints")
-SECTION_KEYS = {*GEOMETRY_FORMS, "limits", "unit", "mount", "plate", "nests", "columns", "program_axes",
+SECTION_KEYS = {*GEOMETRY_FORMS, "limits", "unit", "mount", "plate", "nests", "columns", "external_axes",
                 "name", "description"}
+RENAMED = {"program_axes": "external_axes"}  # a positioner key renamed during issue 45 -> its name now
 DEFINITION_KEYS = {"format", "name", "description", "units", "axes", "plate", "payload_kg"}
 URDF_SUFFIXES = (".urdf", ".xml")  # a positioner's model given as a URDF (load_model reads it)
-GENERIC_AXIS = re.compile(r"^E([1-6])$")  # a program axis given as the k-th external axis
-RAPID_AXIS = re.compile(r"^eax_([a-f])$")  # a robtarget's extax letter
-RAPID_LETTERS = "abcdef"
 COLUMN = re.compile(r"^e([1-9]\d*)$")  # a positioner joint's column (its measurement column is e<k>_deg|_mm)
 SINGLE_POSITIONER = "positioner"  # the body name of a ``positioner:`` without name or unit
 # What a calibration of a positioner identifies (docs/model-yaml.md, "Work cells"): Positioner.identifiability
@@ -93,7 +93,7 @@ def _nests_in_flange(chain: Robot, nests: np.ndarray) -> Robot:
     """``chain`` with its extra SMRs the ``nests`` ``(K, 3)`` (plate frame, m) seen from its last
     frame {n} (``tool @ nest``; its nominal alike): SMR k is nest k."""
     def move(r: Robot) -> Robot:
-        return replace(r, nominal=None, smr=nests @ r.tool[:3, :3].T + r.tool[:3, 3])
+        return replace(r, nominal=None, smr=nests_in_last_frame(r, nests))
 
     return replace(move(chain), nominal=move(chain.nominal_robot()).nominal)
 
@@ -117,9 +117,11 @@ class Positioner:
         SMR nests at known positions in the plate frame (m); None: unknown. Nest k (1-based) is the
         chain's SMR k: its ``smr`` rows are the nests seen from its last frame (``tool @ nest``),
         so ``chain.fk(e, smr=k)`` is nest k's world pose; SMR 0 (the plate origin) is no nest.
-    program_axes : tuple of str
-        The program's letters for its axes (RAPID ``("eax_b", "eax_c")``, KRL ``("E1", "E2")``);
-        default the columns in capitals (``E1``: the k-th external axis).
+    external_axes : tuple of int
+        The controller's logical external-axis numbers of its axes, 1-based, in axis order: ``(2, 3)``
+        is a robtarget's ``eax_b``, ``eax_c`` in RAPID, ``E2``, ``E3`` in KRL (each program language
+        names them: `robocal.programs.dialects.base.Dialect.positioner_axes`); default the columns'
+        numbers (``e2`` -> 2).
 
     Examples
     --------
@@ -129,8 +131,8 @@ class Positioner:
     >>> chain = positioner_chain([{"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.8]}],
     ...                          mount=np.diag([1.0, 1.0, 1.0, 1.0]))
     >>> table = rc.Positioner(chain, unit="STN1", nests=np.array([[0.2, 0.0, 0.0]]))
-    >>> table.columns, table.program_axes
-    (('e1',), ('E1',))
+    >>> table.columns, table.external_axes
+    (('e1',), (1,))
     >>> table.plate(np.array([[np.pi / 2]]))[0, :3, 3].round(3)  # plate origin, m
     array([0. , 0. , 0.8])
     >>> table.chain.fk(np.array([[np.pi / 2]]), smr=[1])[0, :3, 3].round(3)  # nest 1 turned
@@ -141,7 +143,7 @@ class Positioner:
     unit: str
     columns: tuple[str, ...] = ()
     nests: np.ndarray | None = None
-    program_axes: tuple[str, ...] = ()
+    external_axes: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -158,11 +160,12 @@ class Positioner:
             raise ModelError(f"{self.chain.name}: columns {list(columns)}: expected {n} distinct names "
                              "e1, e2, ... (one per axis)")
         set_(self, "columns", columns)
-        axes = tuple(self.program_axes) or tuple(c.upper() for c in columns)
-        if len(axes) != n or not all(isinstance(a, str) and a.strip() for a in axes):
-            raise ModelError(f"{self.chain.name}: program_axes {list(axes)}: expected {n} names (one per "
-                             "axis)")
-        set_(self, "program_axes", axes)
+        axes = tuple(self.external_axes) or tuple(int(COLUMN.match(c)[1]) for c in columns)
+        if len(axes) != n or len(set(axes)) != n or not all(
+                isinstance(a, int | np.integer) and not isinstance(a, bool) and a >= 1 for a in axes):
+            raise ModelError(f"{self.chain.name}: external_axes {list(axes)}: expected {n} distinct logical "
+                             "external-axis numbers 1, 2, ... (one per axis)")
+        set_(self, "external_axes", tuple(int(a) for a in axes))
         if self.nests is not None:
             nests = np.array(self.nests, dtype=float)
             if nests.ndim != 2 or nests.shape[1] != 3 or not len(nests) or not np.isfinite(nests).all():
@@ -181,7 +184,7 @@ class Positioner:
                      plate: np.ndarray | None = None, **kwargs) -> Positioner:
         """A catalog positioner (``robocal robots`` lists them) at ``mount`` ``(4, 4)`` (world -> its
         base, m) with an extra ``plate`` ``(4, 4)`` after the catalog's plate frame; ``kwargs``:
-        ``columns``, ``nests`` (K, 3) m, ``program_axes``.
+        ``columns``, ``nests`` (K, 3) m, ``external_axes``.
 
         Examples
         --------
@@ -231,40 +234,13 @@ class Positioner:
         """
         return self.chain.fk(e)
 
-    def axes_in(self, language: str) -> tuple[str, ...]:
-        """The program's names of the axes in ``language``: ``"rapid"`` (a robtarget's extax
-        ``eax_a..eax_f``: ``E<k>`` is ``eax_<k-th letter>``) or ``"krl"`` (E6POS ``E1..E6``:
-        ``eax_<letter>`` is ``E<its number>``); a name of neither form is kept as written.
-
-        Examples
-        --------
-        >>> import robocal as rc
-        >>> from robocal.kinematics.positioner import positioner_chain
-        >>> chain = positioner_chain([{"type": "revolute", "axis": [1, 0, 0]},
-        ...                           {"type": "revolute", "axis": [0, 0, 1], "origin": [0, 0, 0.2]}])
-        >>> table = rc.Positioner(chain, "STN1", columns=("e2", "e3"))
-        >>> table.axes_in("rapid"), table.axes_in("krl")
-        (('eax_b', 'eax_c'), ('E2', 'E3'))
-        """
-        if language not in ("rapid", "krl"):
-            raise ModelError(f"axes_in: language must be rapid or krl, got {language!r}")
-        out = []
-        for name in self.program_axes:
-            generic, rapid = GENERIC_AXIS.match(name), RAPID_AXIS.match(name)
-            if language == "rapid" and generic:
-                name = f"eax_{RAPID_LETTERS[int(generic[1]) - 1]}"
-            elif language == "krl" and rapid:
-                name = f"E{RAPID_LETTERS.index(rapid[1]) + 1}"
-            out.append(name)
-        return tuple(out)
-
     def __repr__(self) -> str:
         return f"Positioner({self.chain.name!r}, unit {self.unit!r}, columns {list(self.columns)})"
 
     def to_dict(self) -> dict:
         """The positioner's entry of a saved cell file (SI: its chain as an inline model)."""
         out = {"model": robot_to_dict(self.chain), "unit": self.unit, "columns": list(self.columns),
-               "program_axes": list(self.program_axes)}
+               "external_axes": list(self.external_axes)}
         if self.nests is not None:
             out["nests"] = self.nests.tolist()
         return out
@@ -617,6 +593,11 @@ def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> P
     """A positioner section of a cell file (module docstring); its columns default to
     ``e<first>..``."""
     where = "positioner" if "positioner" in data else f"positioners.{name}"
+    old = [k for k in RENAMED if isinstance(spec, dict) and k in spec]
+    if old:
+        raise ModelError(f"{where}.{old[0]}: now {RENAMED[old[0]]}, the controller's logical external-axis "
+                         "numbers ([2, 3]: its second and third external axes; each program language names "
+                         "them)")
     spec = _mapping(spec, where, SECTION_KEYS if where == "positioner" else SECTION_KEYS - {"name"})
     length_unit, angle_unit = _units(data)
     length, angle = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit]
@@ -649,9 +630,20 @@ def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> P
                           for i, v in enumerate(spec["nests"], 1)]) * length
     columns = _names(spec.get("columns"), f"{where}.columns") or \
         tuple(f"e{first + i}" for i in range(chain.n_joints))
-    program_axes = _names(spec.get("program_axes"), f"{where}.program_axes")
     unit = _text(spec.get("unit", name), f"{where}.unit", MAX_NAME)
-    return Positioner(chain, unit, columns, nests, program_axes)
+    return Positioner(chain, unit, columns, nests, _numbers_list(spec.get("external_axes"),
+                                                                 f"{where}.external_axes"))
+
+
+def _numbers_list(values, where: str) -> tuple:
+    """A file's list (``external_axes: [2, 3]``) as a tuple, () when absent; `Positioner` checks
+    its items."""
+    if values is None:
+        return ()
+    if not isinstance(values, list):
+        raise ModelError(f"{where}: expected a list of logical external-axis numbers ([2, 3]: the "
+                         f"controller's second and third external axes), got {short_repr(values)}")
+    return tuple(values)
 
 
 def _names(values, where: str) -> tuple[str, ...]:

@@ -11,6 +11,8 @@ sorted before filtering by what the values do to the target:
   the values do not move it relative to the arm (an uncoordinated positioner, a turntable the
   program only indexes): it is corrected as an arm target, and one summary warning says how many
   such targets there were and that a track or gantry carrying the arm needs its cell file;
+  such a target the fixed arm cannot reach (or not in its configuration) is named with its values
+  (:func:`unreached_reason`), which may move the arm (a track);
 * a target whose values the dialect gives as text only (no :attr:`Target.axes`): where it is
   depends on axes the filter does not model, so it is set aside and every motion that reaches
   it is named with the values.
@@ -76,3 +78,15 @@ def sort_external(program: Program, warnings: list[str], taken: frozenset[int] =
                         "relative to the arm)" + ("" if cell else "; if a track or gantry carries the arm, "
                                                   "give its cell file (--model CELL.yaml)"))
     program.targets = kept
+
+
+def unreached_reason(t: Target, why: str, fixed_arm: bool = True) -> str:
+    """Why target ``t``, corrected as an arm target, was left unchanged (``why``: the arm's reason,
+    out of reach or a configuration it cannot have): for a target whose external-axis values were
+    read (:attr:`Target.axes`) in a frame no unit carries, on an arm assumed fixed, the reason adds
+    the values: if they move the arm (a track or gantry, the controller's base moving with them),
+    the fixed arm's answer says nothing of the program and the track's cell file is what to give."""
+    if not (fixed_arm and t.axes and t.external):
+        return why
+    return (f"{why}; the target carries external-axis values ({t.external}): if those axes move the arm "
+            "(a track or gantry carrying it), give the cell file (--model CELL.yaml) with that track")

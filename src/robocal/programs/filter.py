@@ -43,7 +43,7 @@ from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 from robocal.programs.config import BRANCH_MISMATCH
 from robocal.programs.dialects.base import Dialect
 from robocal.programs.edits import FileEdits, monitored, number_edits
-from robocal.programs.external import sort_external
+from robocal.programs.external import sort_external, unreached_reason
 from robocal.programs.given_data import (
     as_frames,
     check_language,
@@ -483,6 +483,8 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     q, sing = comp.joints, comp.singularity
     warnings += comp.assumed
     _check_joints(controller, comp, ok, problems)
+    if coordinated is None:  # external-axis values that may move the arm, said in the reason
+        problems = [(i, unreached_reason(targets[i], why, track is None)) for i, why in problems]
     bad = {i for i, _ in problems}
     if problems and not keep_unreached:
         problems.sort()
@@ -552,7 +554,7 @@ def _filterable(d: Dialect, program: Program, warnings: list,
     corrected as arm targets or on a positioner's plate (``coordinated``:
     :mod:`robocal.programs.positioner`) whatever their external-axis values say
     (:func:`robocal.programs.external.sort_external`)."""
-    taken = coordinated.take(program, warnings) if coordinated is not None else frozenset()
+    taken = coordinated.take(program, warnings, d) if coordinated is not None else frozenset()
     sort_external(program, warnings, taken, fixed_arm, cell=coordinated is not None)
     targets: list[Target] = []
     for t in program.targets:

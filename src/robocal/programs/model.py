@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.core.errors import DataError
 from robocal.programs.motions import Account, Ledger
 from robocal.programs.source import ProgramText
 from robocal.programs.target import IDENTITY, Target
@@ -72,8 +71,10 @@ class Program:
             motion: tuple[Path, int], account: Account | None = None) -> bool:
         """A motion at ``here`` (``motion``: its file and offset) reaches target ``t`` with ``tool`` in
         ``frame``: the first use appends it to :attr:`targets` (True); a later use with the same
-        tool and frame adds nothing (False); one with another tool or frame is refused (one
-        corrected target cannot serve both). Every use is a step of :attr:`motions`. ``label``
+        tool and frame adds nothing (False); one with another tool or frame leaves the target
+        uncorrected, every motion to it named (one corrected target cannot serve both: a valid
+        program, e.g. a search pattern taught once and run in two work objects, is not refused).
+        Every use is a step of :attr:`motions`. ``label``
         names the target and ``frame_word`` its kind of frame in the message. ``account``: the
         motion instruction's account, which the target joins."""
         self.motions.append((*motion, t))
@@ -81,10 +82,14 @@ class Program:
             account.reach(t)
         if id(t) in self.used:
             tool0, frame0, at0 = self.used[id(t)]
-            if (tool0, frame0) != (tool, frame):
-                raise DataError(f"{here}: {label} is used with tool {tool} and {frame_word} {frame}, but at "
-                                f"{at0} with tool {tool0} and {frame_word} {frame0}: one corrected target "
-                                "cannot serve both; declare a copy for each use")
+            if (tool0, frame0) != (tool, frame) and id(t) not in self.not_corrected:
+                why = (f"{label} is used with tool {tool} and {frame_word} {frame} at {here}, with tool "
+                       f"{tool0} and {frame_word} {frame0} at {at0}: one corrected target cannot serve both "
+                       "(every motion to it is named); declare a copy for each use")
+                self.not_corrected[id(t)] = why
+                self.warnings.append(f"{t.where}: not corrected: {why}")
+                self.uncorrected.append(f"{t.where}: not corrected: {why}")
+                self.targets = [u for u in self.targets if u is not t]
             return False
         self.used[id(t)] = (tool, frame, here)
         t.tool, t.frame, t.order = tool, frame, len(self.targets)

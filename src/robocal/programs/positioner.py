@@ -24,12 +24,14 @@ and every byte outside the pose numbers stay as they are.
 
 A positioner here is a :class:`Station`: its mechanical unit, its chain as a
 :class:`~robocal.kinematics.model.Robot` (base = the mount in the world, tool = the plate frame,
-joints = its axes) nominal and calibrated, and the program's names of its axes.
+joints = its axes) nominal and calibrated, and the controller's logical external-axis numbers of
+its axes, which the program's dialect names (:meth:`Dialect.positioner_axes
+<robocal.programs.dialects.base.Dialect.positioner_axes>`): a target's values are found under
+those names in :attr:`Target.axes`.
 """
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,12 +40,10 @@ from robocal.core.errors import DataError, ModelError
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, pose_error
 from robocal.kinematics.workcell import Cell
+from robocal.programs.dialects.base import Dialect
 from robocal.programs.external import UNNAMED, coordinated_unit
 from robocal.programs.model import Program, Target
 
-# The axis names programs write, as a logical axis number: RAPID eax_a..eax_f, KRL E1..E6,
-# cell files' columns e1..; other names (FANUC "E1 of GP2" ...) are matched as written.
-_LOGICAL = (re.compile(r"^eax_([a-f])$", re.IGNORECASE), re.compile(r"^e(\d)$", re.IGNORECASE))
 MM = 1e-3  # prismatic positioner values in programs are millimetres
 # A calibrated plate further than this from the nominal one is more than a cell file's placement
 # error (a layout drawing's mount, a plate frame by eye): said, the targets moving that much.
@@ -51,49 +51,45 @@ PLATE_MOVED_MM, PLATE_MOVED_DEG = 25.0, 2.0
 LIMIT_TOL = 1e-9  # rad or m: a value written at its limit converts to SI a rounding away from it
 
 
-def logical_axis(name: str) -> str:
-    """A program's axis name as a key that other dialects' names of the same axis share:
-    ``eax_b``, ``E2`` and ``e2`` -> ``'2'``; other names lower-cased."""
-    name = name.strip()
-    m = _LOGICAL[0].match(name)
-    if m:
-        return str("abcdef".index(m.group(1).lower()) + 1)
-    m = _LOGICAL[1].match(name)
-    return m.group(1) if m else name.lower()
-
-
 @dataclass(frozen=True)
 class Station:
     """A positioner as a program filter uses it: ``unit`` (the mechanical unit's name in programs,
     ``STN1``), its ``nominal`` chain (what the controller computes with) and its ``calibrated``
     one in the controller's world (both :class:`~robocal.kinematics.model.Robot`: base = mount,
-    tool = plate frame), and ``axes``: the program's names of its joints in order (``eax_b``,
-    ``eax_c``; RAPID, KRL and cell-file names of one logical axis are interchangeable)."""
+    tool = plate frame), and ``external_axes``: the controller's logical external-axis numbers of
+    its joints in order (the cell file's ``external_axes``; ``(2, 3)``: a robtarget's ``eax_b``,
+    ``eax_c``), which a program's dialect names (:meth:`axes`)."""
 
     unit: str
     nominal: Robot
     calibrated: Robot
-    axes: tuple[str, ...]
+    external_axes: tuple[int, ...]
 
     def __post_init__(self) -> None:
-        if len(self.axes) != self.nominal.n_joints or self.calibrated.n_joints != self.nominal.n_joints:
-            raise DataError(f"positioner {self.unit}: {self.nominal.n_joints} axes, {len(self.axes)} program "
-                            f"axis names, {self.calibrated.n_joints} calibrated axes: they must agree")
+        n = self.nominal.n_joints
+        if len(self.external_axes) != n or self.calibrated.n_joints != n:
+            raise DataError(f"positioner {self.unit}: {n} axes, {len(self.external_axes)} external axes, "
+                            f"{self.calibrated.n_joints} calibrated axes: they must agree")
 
-    def values(self, t: Target) -> np.ndarray | str:
-        """Target ``t``'s positioner values ``(n,)`` SI (rad; m for a prismatic axis), or why it has
-        none (an axis without a value)."""
-        given = {logical_axis(k): v for k, v in t.axes.items()}
-        missing = [a for a in self.axes if logical_axis(a) not in given]
+    def axes(self, dialect: Dialect) -> tuple[str, ...]:
+        """The names ``dialect``'s programs give its joints, in order (:attr:`Target.axes`' keys)."""
+        return dialect.positioner_axes(self.external_axes)
+
+    def values(self, t: Target, axes: tuple[str, ...]) -> np.ndarray | str:
+        """Target ``t``'s positioner values ``(n,)`` SI (rad; m for a prismatic axis) under the
+        program's names ``axes`` of its joints (:meth:`axes`), or why it has none (an axis without
+        a value)."""
+        missing = [a for a in axes if a not in t.axes]
         if missing:
             return (f"coordinated with {self.unit}, but the target gives no value for its axis "
                     f"{', '.join(missing)}: where the plate is depends on the motion before")
-        raw = np.array([given[logical_axis(a)] for a in self.axes], float)
+        raw = np.array([t.axes[a] for a in axes], float)
         return np.where(self.nominal.prismatic, raw * MM, np.deg2rad(raw))
 
-    def check_limits(self, t: Target, e: np.ndarray) -> None:
-        """Refuse values ``e`` (SI) outside the positioner's axis limits (one line naming the target)."""
-        for spec, value, name in zip(self.nominal.joints, e, self.axes, strict=True):
+    def check_limits(self, t: Target, e: np.ndarray, axes: tuple[str, ...]) -> None:
+        """Refuse values ``e`` (SI) outside the positioner's axis limits (one line naming the target
+        and the axis by its program name, ``axes``)."""
+        for spec, value, name in zip(self.nominal.joints, e, axes, strict=True):
             lo, hi = spec.limits
             if not lo - LIMIT_TOL <= value <= hi + LIMIT_TOL:
                 shown = spec.describe(float(value)).split(" = ", 1)[1]
@@ -116,8 +112,9 @@ class CoordinatedProgram:
     unit: dict[int, str] = field(default_factory=dict)  # id(target) -> its station's unit
     in_world: set[int] = field(default_factory=set)  # id(target): taught in the world (Program.in_world)
 
-    def take(self, program: Program, warnings: list[str]) -> frozenset[int]:
-        """Record the values of every target in a frame a unit carries; refuse a unit the cell
+    def take(self, program: Program, warnings: list[str], dialect: Dialect) -> frozenset[int]:
+        """Record the values of every target in a frame a unit carries, under the names ``dialect``
+        (the program's language) gives the positioner's axes; refuse a unit the cell
         does not have and values outside the axis limits (DataError, nothing written); name the
         targets without values for every axis (removed from ``program.targets``). Returns the
         ids of the targets taken (:func:`robocal.programs.external.sort_external` leaves them)."""
@@ -128,13 +125,14 @@ class CoordinatedProgram:
                 kept.append(t)
                 continue
             station = self._station(unit, t, warnings)
-            e = station.values(t)
+            axes = station.axes(dialect)
+            e = station.values(t, axes)
             if isinstance(e, str):
                 program.not_corrected[id(t)] = e
                 warnings.append(f"{t.where}: not corrected: {e}")
                 program.uncorrected.append(f"{t.where}: not corrected: {e}")
                 continue
-            station.check_limits(t, e)
+            station.check_limits(t, e, axes)
             self.e[id(t)], self.unit[id(t)] = e, station.unit
             if t.frame in program.in_world:
                 self.in_world.add(id(t))
@@ -236,7 +234,7 @@ def cell_models(calibrated: Robot | Cell, nominal: Robot | Cell, arm: str | None
         world = nominal.in_world({name: calibrated.body(name) for name in nominal.bodies})
     except ModelError as exc:
         raise DataError(f"the calibrated cell does not fit the cell {nominal.name!r}: {exc}") from None
-    stations = {p.unit: Station(p.unit, p.chain, world.positioners[name].chain, p.program_axes)
+    stations = {p.unit: Station(p.unit, p.chain, world.positioners[name].chain, p.external_axes)
                 for name, p in nominal.positioners.items()}
     return world.arms[arm], nominal.arms[arm], CoordinatedProgram(stations)
 

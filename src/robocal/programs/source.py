@@ -46,6 +46,24 @@ class Number:
         return len(mantissa) - mantissa.index(".") - 1 if "." in mantissa else 0
 
 
+TEXT_SHARE = 0.9  # share of text bytes (printable, tab, CR, LF) a text file's first 4 kB has at least
+UTF16_ZEROS = 0.4  # share of NULs at odd (or even) bytes from which a file is UTF-16 (ASCII code in it)
+
+
+def _utf16(head: bytes) -> bool:
+    """Whether ``head`` (a file's first bytes) is UTF-16 text: its ASCII characters leave NULs in
+    every other byte (random binary data has few NULs, and not in one parity)."""
+    half = max(len(head) // 2, 1)
+    return max(head[1::2].count(0), head[0::2].count(0)) >= UTF16_ZEROS * half
+
+
+def _binary(head: bytes) -> bool:
+    """Whether ``head`` is no text: control bytes (not tab, CR, LF, form feed, ESC) in more than a
+    tenth of it (latin-1 decoded, as the dialects read it)."""
+    controls = sum(b < 32 and b not in (9, 10, 12, 13, 26, 27) for b in head)
+    return controls > (1.0 - TEXT_SHARE) * len(head)
+
+
 class ProgramText:
     """The text of one program file (latin-1 decoded bytes) and its line starts."""
 
@@ -56,9 +74,13 @@ class ProgramText:
                 data = self.path.read_bytes()
             except OSError as exc:
                 raise DataError(f"cannot read program {self.path}: {exc.strerror}") from None
-        if data[:2] in (b"\xff\xfe", b"\xfe\xff") or b"\x00" in data[:4096]:
+        head = data[:4096]
+        if head[:2] in (b"\xff\xfe", b"\xfe\xff") or _utf16(head):
             raise DataError(f"{self.path}: the file looks UTF-16 encoded; save it as UTF-8 or ASCII "
                             "(the controllers' own export format) and run again")
+        if b"\x00" in head or _binary(head):
+            raise DataError(f"{self.path}: not a program text (binary data: an encrypted, compiled or "
+                            "compressed file?); give the module as the controller exports it")
         self.data = data
         self.original = data.decode("latin-1")
         # a lone CR ends a line as LF and CRLF do (old controllers, Mac-era editors): the text the

@@ -27,7 +27,10 @@ class Dialect:
     Capabilities the filter asks instead of the language's name: ``position_registers`` (a file
     of position registers the motions use, ``filter_program(position_registers=...)``),
     ``payload_schedules`` (load schedules the motions select, ``payload_schedules=...``),
-    ``scara_programs`` (its programs drive a SCARA: the filter reads them for a 4-joint SCARA)."""
+    ``scara_programs`` (its programs drive a SCARA: the filter reads them for a 4-joint SCARA),
+    ``external_axis_names`` and ``positioner_group`` (how its programs name a positioner's axes,
+    the controller's logical external axes of a cell file: :meth:`positioner_axes`, which the
+    coordinated-motion filter and the campaign writers ask)."""
 
     key = ""  # registry key: --format, poses --program
     name = ""  # the language as messages and results name it
@@ -54,6 +57,33 @@ class Dialect:
     keep_width = False  # numbers right-aligned after spaces keep their width (FANUC)
     euler_columns: tuple[int, ...] = ()  # pose columns that are Euler angles in deg (gimbal lock possible)
     frame_help = ""  # how --tool/--frame values are written for this dialect
+    # its names of the controller's logical external axes 1, 2, ... (a robtarget's eax_a, E6POS's E1);
+    # empty: its programs name no external axes
+    external_axis_names: tuple[str, ...] = ()
+    positioner_group = False  # a positioner moves as its own motion group / station: its axes 1..m there
+
+    def positioner_axes(self, external_axes: tuple[int, ...]) -> tuple[str, ...]:
+        """The names this language's programs give a positioner's axes, which are the controller's
+        logical external axes ``external_axes`` (1-based, in the positioner's axis order; a cell
+        file's ``external_axes``): logical axis k is ``external_axis_names[k - 1]``; a language
+        whose positioner is its own motion group or station (``positioner_group``) names its axes
+        1..m there whatever their logical numbers. DataError: an axis this language has no name for.
+
+        Examples
+        --------
+        >>> from robocal.programs.registry import dialect_named
+        >>> dialect_named("rapid").positioner_axes((2, 3)), dialect_named("krl").positioner_axes((2, 3))
+        (('eax_b', 'eax_c'), ('E2', 'E3'))
+        >>> dialect_named("fanuc").positioner_axes((2, 3))  # its motion group's own axes
+        ('E1', 'E2')
+        """
+        numbers = tuple(range(1, len(external_axes) + 1)) if self.positioner_group else tuple(external_axes)
+        names = self.external_axis_names
+        bad = [k for k in numbers if not 1 <= k <= len(names)]
+        if bad:
+            have = f"external axes 1..{len(names)} ({', '.join(names)})" if names else "no external axes"
+            raise DataError(f"{self.name} programs name {have}: no name for external axis {bad[0]}")
+        return tuple(names[k - 1] for k in numbers)
 
     def parse(self, sources: list[ProgramText], frames: dict[str, np.ndarray],
               tools: dict[str, np.ndarray], references: list[ProgramText] = ()) -> Program:

@@ -5,7 +5,7 @@ checks of joints, speed and settle time, and the header comment."""
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -70,19 +70,24 @@ class ExternalAxes:
         (``GP2``).
     axes : tuple of str
         The program's letter of each axis: RAPID ``eax_a``..``eax_f`` (the logical axes the unit
-        is configured on), KRL / INFORM / FANUC ``E1``.. (their order in the unit).
+        is configured on), KRL / INFORM / FANUC ``E1``.. (their order in the unit); or none, with
+        ``external_axes``.
     prismatic : tuple of bool
         Which axes are prismatic (mm).
     pulses_per_unit : tuple of float, optional
         Encoder pulses per degree (per mm) of each axis: INFORM writes a station's positions in
         pulses (the controller's parameters hold the ratio, not the cell file).
+    external_axes : tuple of int, optional
+        The controller's logical external-axis numbers of the axes (a cell file's positioner's
+        ``external_axes``), which each language names (`in_language`) when ``axes`` are not given.
     """
 
     values: np.ndarray
     unit: str
-    axes: tuple[str, ...]
+    axes: tuple[str, ...] = ()
     prismatic: tuple[bool, ...] = ()
     pulses_per_unit: tuple[float, ...] | None = None
+    external_axes: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         v = np.asarray(self.values, dtype=float)
@@ -90,14 +95,21 @@ class ExternalAxes:
             raise DataError("a positioner's program values must be a finite (N, m) array, 1 <= m <= 6")
         object.__setattr__(self, "values", v)
         object.__setattr__(self, "prismatic", tuple(self.prismatic) or (False,) * v.shape[1])
-        if len(self.axes) != v.shape[1] or len(self.prismatic) != v.shape[1]:
-            raise DataError(f"{self.unit}: {v.shape[1]} axes' values but {len(self.axes)} axis letters")
+        named = self.axes or self.external_axes
+        if len(named) != v.shape[1] or len(self.prismatic) != v.shape[1]:
+            raise DataError(f"{self.unit}: {v.shape[1]} axes' values but {len(named)} axis letters")
         if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", self.unit or ""):
             raise DataError(f"the mechanical unit {self.unit!r} is not a valid identifier")
         ratios = self.pulses_per_unit
         if ratios is not None and (len(ratios) != v.shape[1] or
                                    not all(np.isfinite(r) and r > 0 for r in ratios)):
             raise DataError(f"{self.unit}: give one positive pulses-per-degree (mm) ratio per axis")
+
+    def in_language(self, dialect: Dialect) -> ExternalAxes:
+        """These values with the axes named as ``dialect``'s programs name them: the logical
+        ``external_axes`` through :meth:`Dialect.positioner_axes
+        <robocal.programs.dialects.base.Dialect.positioner_axes>`; without them, as given (``axes``)."""
+        return replace(self, axes=dialect.positioner_axes(self.external_axes)) if self.external_axes else self
 
     def units(self) -> list[str]:
         """Each axis' unit in a program: ``deg`` or ``mm``."""

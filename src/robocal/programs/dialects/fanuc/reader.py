@@ -38,6 +38,7 @@ from robocal.programs.dialects.fanuc.configuration import SCARA, FANUCConfig
 from robocal.programs.dialects.fanuc.groups import COORD, coordinate, group_values, values_text
 from robocal.programs.dialects.fanuc.loads import FanucLoads, read_schedules
 from robocal.programs.dialects.fanuc.registers import ActiveFrames, read_registers
+from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
@@ -54,6 +55,9 @@ _VALUE = r"\b{}\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*(?:mm|deg)"
 _KEYS = ("X", "Y", "Z", "W", "P", "R")
 _VALUES = tuple(re.compile(_VALUE.format(k)) for k in _KEYS)
 _JOINTS = re.compile(r"\bJ1\s*=")  # a position in joint representation
+_REMOTE = re.compile(r"\bRX\s*=")  # a remote-TCP position (RX .. RR): the part carried past a fixed tool
+REMOTE_TCP = ("a remote-TCP position (RX .. RR, RTCP): the arm carries the part past a tool fixed in the "
+              "cell, which a calibrated arm model alone does not place: not corrected")
 _NEXT = re.compile(r"\bP\[")
 _NUMBER = re.compile(r"P\[(\d+)")
 _EXTENDED = re.compile(r"\b(E\d)\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))")
@@ -73,6 +77,8 @@ class FanucDialect(Dialect):
     key = "fanuc"
     campaign_rank = 3
     campaign_external = True  # a positioner's axes move in its campaign programs
+    external_axis_names = EXTERNAL_LETTERS  # E1.. of a position: an arm group's extended axes, a group's
+    positioner_group = True  # a positioner is its own motion group (GP2): its axes E1..Em there
     campaign_refuses_tracks = True
     campaign_scara = True  # an SR-series arm: J1, J2, J4 in deg, the quill J3 in mm
     scara_programs = True  # SR-series programs: CONFIG 'L|R, t1, t2, t4'
@@ -136,6 +142,7 @@ class FanucDialect(Dialect):
         order = 0
         others: dict[int, tuple] = {}  # id(position) -> (its other groups' values, its extended axes)
         joint: set = set()
+        remote: set = set()  # remote-TCP positions (file, number)
         registers = None  # the --position-registers file, given among the sources as a .csv
         for src in [s for s in sources if s.path.suffix.lower() == ".csv"]:
             registers = read_registers(src)
@@ -169,6 +176,9 @@ class FanucDialect(Dialect):
                 if _JOINTS.search(gp):
                     joint.add((src.path, int(m.group(1))))
                     continue  # joint representation
+                if _REMOTE.search(gp):
+                    remote.add((src.path, int(m.group(1))))
+                    continue  # every motion to it is named
                 nums = []
                 for k, value in zip(_KEYS, _VALUES, strict=True):
                     v = value.search(gp)
@@ -207,10 +217,10 @@ class FanucDialect(Dialect):
                 prog.targets.append(t)
                 order += 1
             _nothing_between(src, text, after, end)
-        self._motions(sources, prog, joint, registers, others)
+        self._motions(sources, prog, joint, registers, others, remote)
         return prog
 
-    def _motions(self, sources, prog, joint, registers, others):
+    def _motions(self, sources, prog, joint, registers, others, remote=frozenset()):
         """Account for every motion of the /MN sections: positions every motion reaches are the
         /POS targets (each carries its own UF and UT, so all are corrected); an incremental
         motion's position is a displacement (named; the position is left alone unless another
@@ -219,7 +229,8 @@ class FanucDialect(Dialect):
         a motion to a register given there is corrected in the user and tool frame active there.
         ``others``: id(position) -> (its other groups' values, its extended axes as text): a
         motion with ``COORD`` moves its position with the leader group
-        (:func:`robocal.programs.dialects.fanuc.groups.coordinate`)."""
+        (:func:`robocal.programs.dialects.fanuc.groups.coordinate`). ``remote``: the remote-TCP
+        positions (file, number), every motion to them named."""
         numbers = {(t.source.path, int(_NUMBER.match(t.name).group(1))): t for t in prog.targets}
         incremental: dict[tuple, list] = {}  # position -> accounts of the INC motions using it
         used_registers: dict[int, Target] = {}
@@ -257,6 +268,9 @@ class FanucDialect(Dialect):
                         else prog.motion(src, line.start(1), instr)
                     if acc is None:
                         continue  # a joint representation: nothing to correct
+                    if ref.group(1) == "P" and number and (src.path, int(ref.group(2))) in remote:
+                        prog.skip(here, instr, f"{label} is {REMOTE_TCP}", acc, label)
+                        continue
                     if ref.group(1) == "PR":
                         why = _register(ref, registers, active, line.start())
                         if isinstance(why, str):
@@ -311,7 +325,7 @@ class FanucDialect(Dialect):
                 prog.not_corrected[id(numbers[key])] = "used only as an incremental (INC) displacement"
         prog.targets = [t for key, t in numbers.items() if (key in plain or key not in incremental)
                         and id(t) not in prog.not_corrected]
-        prog.targets += used_registers.values()
+        prog.targets += [t for t in used_registers.values() if id(t) not in prog.not_corrected]
 
 
 def _register(ref, registers, active, at: int):

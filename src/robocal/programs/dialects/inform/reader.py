@@ -61,6 +61,7 @@ from robocal.programs.dialects.inform.configuration import YaskawaConfig
 from robocal.programs.dialects.inform.groups import BASE_KINDS, STATION_KINDS, Groups, Moved, job_groups
 from robocal.programs.dialects.inform.loads import InformLoads
 from robocal.programs.dialects.inform.tool_file import is_tool_file, read_tool_file
+from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.model import IDENTITY, Program, Target
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import Number, ProgramText
@@ -142,6 +143,8 @@ class InformDialect(Dialect):
     key = "inform"
     campaign_rank = 4
     campaign_external = True  # a positioner's axes move in its campaign programs
+    external_axis_names = EXTERNAL_LETTERS  # a station's axes 1.. (its EC values), as Target.axes names them
+    positioner_group = True  # a positioner is a station (ST1) of its own: its axes 1..m there
     vendor = "Yaskawa"
     title = "Yaskawa INFORM (.JBI)"
     shared_suffixes = (".dat",)  # the controller's VAR.DAT
@@ -406,6 +409,8 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
                 pos.header.postype == "PULSE" or not pos.header.rectan):
             prog.motions.append((src.path, start, np.full(6, np.nan)))  # a joint position: no correction
             continue
+        if ref is None and refs and all(r.group(1) in STATION_KINDS for r in refs):
+            continue  # a station's motion alone (a job of ///GROUP1 ST1, MOVJ EC00000): the arm stays
         acc = prog.motion(src, start, instr)
         if ref is None:
             prog.skip(src.where(start), instr, "no robot position (C, P or LP) in the instruction", acc)

@@ -37,6 +37,7 @@ from robocal.programs.dialects.krl.configuration import KUKAConfig
 from robocal.programs.dialects.krl.loads import KRLLoads
 from robocal.programs.dialects.krl.machines import Machines
 from robocal.programs.dialects.krl.syntax import COMMENT_RE, MOTION_RE, STRING_RE
+from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
@@ -74,7 +75,6 @@ _KEYWORDS = {"IF", "ELSE", "ENDIF", "FOR", "ENDFOR", "WHILE", "ENDWHILE", "LOOP"
              "SPLINE", "ENDSPLINE", "PTP_SPLINE", "GOTO", "CONTINUE", "EXIT", "SIGNAL", "ANIN", "ANOUT",
              "BRAKE", "RESUME"}
 _POSE_KEYS = ("X", "Y", "Z", "A", "B", "C")
-_EXTERNAL = ("E1", "E2", "E3", "E4", "E5", "E6")
 _POSITION_MM = 1e-3
 _ANGLE_DEG = 1e-4
 _DEPTH = 12  # calls and assignments followed at most this deep
@@ -93,6 +93,7 @@ class KRLDialect(Dialect):
     key = "krl"
     campaign_rank = 1
     campaign_external = True  # a positioner's axes move in its campaign programs
+    external_axis_names = EXTERNAL_LETTERS  # an E6POS's / E6AXIS' E1..E6: logical axis k is E<k>
     campaign_refuses_tracks = True
     vendor = "KUKA"
     signature = r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)"
@@ -186,7 +187,8 @@ class KRLDialect(Dialect):
             t = _int(comps["T"].text, src, at) if "T" in comps else -1
             config = np.array([s, t])
             spans = (comps["S"], comps.get("T"))
-        axes = {k: comps[k].value for k in _EXTERNAL if k in comps and not comps[k].text.startswith("'")}
+        axes = {k: comps[k].value for k in EXTERNAL_LETTERS
+                if k in comps and not comps[k].text.startswith("'")}
         external = ", ".join(f"{k} {comps[k].text}" for k, v in axes.items() if v != 0.0)
         return Target(src, at, name, nums, config=config, config_spans=spans, external=external, axes=axes)
 

@@ -44,7 +44,7 @@ from robocal.programs.aggregate import (
 )
 from robocal.programs.dialects.base import Dialect
 from robocal.programs.dialects.rapid import marker, simulated
-from robocal.programs.dialects.rapid.campaign import rapid_module
+from robocal.programs.dialects.rapid.campaign import RAPID_EXTAX, rapid_module
 from robocal.programs.dialects.rapid.configuration import ABBConfig
 from robocal.programs.dialects.rapid.loads import RapidLoads
 from robocal.programs.dialects.rapid.syntax import COMMENT_RE, STRING_RE
@@ -127,6 +127,7 @@ class RapidDialect(Dialect):
     key = "rapid"
     campaign_rank = 0
     campaign_external = True  # a positioner's axes move in its campaign programs
+    external_axis_names = RAPID_EXTAX  # a robtarget's extax: logical axis k is eax_<k-th letter>
     campaign_refuses_tracks = True
     vendor = "ABB"
     signature = r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)"
@@ -358,7 +359,7 @@ class RapidDialect(Dialect):
             raise DataError(f"{src.path.name}:{src.line_of(at)}: robtarget {name}: confdata must be "
                             f"integers, got {[n.text for n in conf]}")
         cf1, cf4, cf6, cfx = map(int, config)
-        used = [(f"eax_{'abcdef'[k]}", x) for k, x in ext if abs(float(x)) < _UNUSED_AXIS]
+        used = [(RAPID_EXTAX[k], x) for k, x in ext if abs(float(x)) < _UNUSED_AXIS]
         return Target(src, at, name, pose, config=np.array([cfx, cf1, cf4, cf6]), config_spans=conf,
                       external=", ".join(f"{k} = {x}" for k, x in used), axes={k: float(x) for k, x in used})
 

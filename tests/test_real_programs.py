@@ -1,0 +1,194 @@
+"""Filtering programs written the way public real programs with external axes are (issue 45: the
+measurement on public RAPID / KRL / INFORM / FANUC programs, its defects each tested here in the
+style of the program that showed it; the programs themselves are not copied: no licence allows it)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import robocal as rc
+from robocal.core.errors import DataError
+from robocal.data.simulate import perturbed
+from robocal.programs import filter_program
+from robocal.programs.source import ProgramText
+
+ABB = rc.Robot.from_catalog("abb_irb4600")
+
+# a MultiMove task of an arm on a track (eax_a, mm): targets in a world work object, x + eax_a the
+# same along the path (the track carries the arm); the last target is reachable from the arm's
+# base at the track's zero, the others are not (written as an exported COMPAS RRC program is)
+TOOL = "[TRUE,[[0,0,120],[1,0,0,0]],[2.5,[0,0,50],[1,0,0,0],0,0,0]]"
+WOBJ = '[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]'
+TAIL = "Speed000,fine,HeatGun \\WObj:=DefaultFrame;"
+TRACK_TASK = "\n".join([
+    "MODULE Track_T_ROB1", f"PERS tooldata HeatGun:={TOOL};", f"TASK PERS wobjdata DefaultFrame:={WOBJ};",
+    "TASK PERS speeddata Speed000:=[100.00,180.00,5000.00,1080.00];", "PROC Main()", "ConfL \\Off;",
+    "MoveJ [[3613.91,2326.15,1040.68],[0.5000,0.5000,0.5000,0.5000],[0,0,-2,0],"
+    f"[3079.80,9E9,9E9,9E9,9E9,9E9]]\\ID:=1,{TAIL}",
+    "MoveJ [[3943.83,2265.39,1040.68],[0.5000,0.5000,0.5000,0.5000],[0,0,-2,0],"
+    f"[2749.92,9E9,9E9,9E9,9E9,9E9]]\\ID:=2,{TAIL}",
+    "MoveL [[1200.00,300.00,900.00],[0,0.7071068,0.7071068,0],[0,0,0,0],"
+    f"[0.00,9E9,9E9,9E9,9E9,9E9]]\\ID:=3,{TAIL}",
+    "ENDPROC", "ENDMODULE", ""])
+
+
+def test_track_targets_out_of_the_fixed_arms_reach_name_their_axes(tmp_path):
+    """Targets with eax_a values in a work object no unit moves are corrected as arm targets; those
+    the arm at a fixed base cannot reach were named 'no solution ... (out of reach)' alone, which
+    blames the target: their eax_a may carry the arm (here a track), and the reason says so with
+    the values and the cell file to give; the reachable one is corrected; every motion accounted."""
+    path = tmp_path / "Track_T_ROB1.mod"
+    path.write_text(TRACK_TASK)
+    res = filter_program(path, perturbed(ABB, 7), ABB, keep_unreached=True)
+    status = {m.line: (m.status, m.reason) for m in res.motions}
+    assert len(res.motions) == 3 and status[9][0] == "corrected"
+    for line, value in ((7, "3079.80"), (8, "2749.92")):
+        assert status[line][0] == "named"
+        assert "out of reach" in status[line][1] and f"eax_a = {value}" in status[line][1]
+        assert "if those axes move the arm" in status[line][1] and "--model CELL.yaml" in status[line][1]
+    with pytest.raises(DataError, match=r"(?s)if those axes move the arm.*nothing was written"):
+        filter_program(path, perturbed(ABB, 7), ABB)
+
+
+def test_unreached_target_without_external_values_keeps_its_reason(tmp_path):
+    """A target with no external-axis value out of reach: the reason names no track."""
+    path = tmp_path / "far.mod"
+    path.write_text(TRACK_TASK.replace("[3079.80,9E9", "[9E9,9E9").replace("[2749.92,9E9", "[9E9,9E9"))
+    res = filter_program(path, perturbed(ABB, 7), ABB, keep_unreached=True)
+    named = [m.reason for m in res.motions if m.status == "named"]
+    assert len(named) == 2 and all("out of reach" in r and "track" not in r for r in named)
+
+
+# a touch-sensing (SmarTac) search written as the public program that showed it: one robtarget taught
+# once and run in the reference work object and in the one the search found
+SEARCH = """MODULE SearchCell
+  PERS tooldata toolWeldGun:=[TRUE,[[0,0,400],[1,0,0,0]],[3,[0,0,100],[1,0,0,0],0,0,0]];
+  PERS wobjdata obRef:=[FALSE,TRUE,"",[[1000,0,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
+  PERS wobjdata obNew:=[FALSE,TRUE,"",[[1000,0,300],[1,0,0,0]],[[1.2,-0.8,0.5],[1,0,0,0]]];
+  PERS robtarget pOframeHome:=[[0,0,150],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  PERS robtarget pSearch:=[[50,0,20],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  PROC main()
+    MoveJ pOframeHome, v200, fine, toolWeldGun\\WObj:=obRef;
+    MoveL pSearch, v200, fine, toolWeldGun\\WObj:=obRef;
+    MoveJ pOframeHome, v200, fine, toolWeldGun\\WObj:=obNew;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_target_used_in_two_work_objects_is_named_not_refused(tmp_path):
+    """A valid program whose robtarget is run in two work objects was refused whole (nothing
+    filtered); one correction cannot serve both, so that target is left as written and both of
+    its motions are named; the rest is corrected; the file's other bytes unchanged."""
+    path = tmp_path / "SearchCell.mod"
+    path.write_text(SEARCH)
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    res = filter_program(path, perturbed(robot, 7), robot)
+    by_line = {m.line: m for m in res.motions}
+    assert sorted(by_line) == [8, 9, 10] and by_line[9].status == "corrected"
+    for line in (8, 10):
+        assert by_line[line].status == "named" and "cannot serve both" in by_line[line].reason
+        assert "obref" in by_line[line].reason and "obnew" in by_line[line].reason
+    out = res.outputs[path].decode()
+    assert "pOframeHome:=[[0,0,150],[0,0,1,0]" in out and "pSearch:=[[50,0,20]" not in out
+
+
+# a sealing program on a pedestal nozzle (remote TCP), written as the public plant backups that showed
+# it: positions in RX .. RR, motions with RTCP, the servo gun / track groups GP2-GP3 in every position
+REMOTE_LS = """/PROG  UP022
+/ATTR
+DEFAULT_GROUP\t= 1,1,1,*,*;
+/MN
+   1:  UFRAME_NUM=1 ;
+   2:  UTOOL_NUM=2 ;
+   3:J P[1] 100% CNT0 ACC100    ;
+   4:L P[2] 200mm/sec CD5 ACC100 DB    0.0mm,P-SPS RTCP    ;
+   5:L P[3] 200mm/sec FINE    ;
+/POS
+P[1]{
+   GP1:
+\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',
+\tRX =   341.681  mm,\tRY =  -170.477  mm,\tRZ =  -671.251  mm,
+\tRW =    55.263 deg,\tRP =     4.579 deg,\tRR =  -173.433 deg
+   GP2:
+\tUF : 1, UT : 2,\t
+\tJ1=   100.000  mm
+   GP3:
+\tUF : 1, UT : 2,\t
+\tJ1=     0.000  mm
+};
+P[2]{
+   GP1:
+\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 1',
+\tRX =   810.218  mm,\tRY =  -319.330  mm,\tRZ =  -184.077  mm,
+\tRW =    60.000 deg,\tRP =     4.000 deg,\tRR =  -170.000 deg
+   GP2:
+\tUF : 1, UT : 2,\t
+\tJ1=   100.000  mm
+   GP3:
+\tUF : 1, UT : 2,\t
+\tJ1=     0.000  mm
+};
+P[3]{
+   GP1:
+\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',
+\tX =   300.000  mm,\tY =     0.000  mm,\tZ =   -50.000  mm,
+\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg
+   GP2:
+\tUF : 1, UT : 2,\t
+\tJ1=   300.000  mm
+   GP3:
+\tUF : 1, UT : 2,\t
+\tJ1=     0.000  mm
+};
+/END
+"""
+
+
+def test_fanuc_remote_tcp_positions_are_named_not_refused(tmp_path):
+    """Remote-TCP positions (RX .. RR) made the whole program refused as 'malformed position P[1]:
+    no X = ... mm'; they are read and every motion to them named (the fixed tool is not on the
+    arm's model); the other position (its GP2 servo-gun value in no coordinated frame) is
+    corrected as an arm target; every motion accounted; the RX numbers unchanged."""
+    path = tmp_path / "UP022.LS"
+    path.write_text(REMOTE_LS)
+    robot = rc.Robot.from_catalog("fanuc_r2000ic_165f")
+    res = filter_program(path, perturbed(robot, 7), robot, frames={"1": "1200,0,800,0,0,0"},
+                         tools={"2": "0,0,250,0,0,0"})
+    status = [(m.status, m.reason) for m in res.motions]
+    assert [s for s, _ in status] == ["named", "named", "corrected"]
+    assert all("remote-TCP position" in why for _, why in status[:2])
+    out = res.outputs[path].decode()
+    assert "RX =   341.681  mm" in out and "RX =   810.218  mm" in out and "X =   300.000  mm" not in out
+
+
+def test_inform_station_only_job_moves_no_arm(tmp_path):
+    """A job of the station group alone (///GROUP1 ST1, MOVJ EC00000: turn the positioner, as the
+    public welding cell's jobs do) was counted as a Cartesian motion and named 'no robot position';
+    the arm does not move: no motion to a Cartesian pose, nothing named, nothing refused."""
+    path = tmp_path / "TURN.JBI"
+    lines = ["/JOB", "//NAME TURN", "//POS", "///NPOS 0,0,1,0,0,0", "///TOOL 12", "///POSTYPE PULSE",
+             "///PULSE", "EC00000=-29914,0", "//INST", "///DATE 2023/11/10 10:40", "///ATTR SC,RW",
+             "///GROUP1 ST1", "NOP", "MOVJ EC00000 VJ=90.0", "END", ""]
+    path.write_bytes("\r\n".join(lines).encode())
+    robot = rc.Robot.from_catalog("yaskawa_gp25")
+    res = filter_program(path, perturbed(robot, 7), robot)
+    assert res.motions == [] and res.uncorrected == []
+    assert res.outputs[path] == path.read_bytes()
+
+
+def test_binary_module_is_said_binary_and_utf16_still_named(tmp_path):
+    """A module stored encrypted (random bytes, a NUL among them) was refused as 'looks UTF-16'
+    (the public repository's other modules were so); it is said binary; a UTF-16 module is still
+    said UTF-16, with or without its byte-order mark."""
+    rng = np.random.default_rng(3)
+    binary = tmp_path / "GeneralModule.mod"
+    binary.write_bytes(b"\xfc\xc8\xa4v\x00\x01" + rng.integers(0, 256, 3000, dtype=np.uint8).tobytes())
+    with pytest.raises(DataError, match="not a program text .binary data"):
+        ProgramText(binary)
+    for codec in ("utf-16", "utf-16-le", "utf-16-be"):
+        wide = tmp_path / f"{codec}.mod"
+        wide.write_bytes("MODULE A ! 注释\nENDMODULE\n".encode(codec))
+        with pytest.raises(DataError, match="looks UTF-16 encoded"):
+            ProgramText(wide)
