@@ -34,7 +34,10 @@ if TYPE_CHECKING:  # annotations only
 def _one(names, what: str, given: str | None, cell) -> str:
     """The body ``given`` (resolved in ``cell``), or the only one of ``names``."""
     if given is not None:
-        return cell.resolve(given)
+        name = cell.resolve(given)
+        if name not in names:  # another kind of body: its name is valid, its use is not
+            raise DataError(f"{given!r} is not one of the cell's {what}s ({', '.join(names) or 'none'})")
+        return name
     if len(names) != 1:
         raise DataError(f"the cell has {len(names)} {what}s ({', '.join(names) or 'none'}): name the one "
                         f"the targets are for")
@@ -70,12 +73,16 @@ class CellCompensation:
     prismatic: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))  # its axes that slide
 
     def summary(self) -> str:
-        mm = np.linalg.norm(self.target_shift[:, :3], axis=1) * 1e3
-        deg = np.rad2deg(np.linalg.norm(self.target_shift[:, 3:], axis=1))
-        reached = int(np.sum(self.arm_compensation.converged))
-        return (f"{len(self.joints)} target(s) on the plate of {self.positioner} reached by {self.arm} on "
-                f"the calibrated cell ({reached} reached exactly); corrections up to {mm.max():.4f} mm and "
-                f"{deg.max():.4f} deg in the plate frame")
+        ok = np.asarray(self.arm_compensation.converged, bool)
+        head = (f"{len(self.joints)} target(s) on the plate of {self.positioner} for {self.arm} on the "
+                f"calibrated cell: {int(ok.sum())} reached")
+        if not ok.any():  # an unreached target's shift is the solver's miss, not a correction
+            return head + "; none corrected (each one's miss is in the warnings)"
+        mm = np.linalg.norm(self.target_shift[ok, :3], axis=1) * 1e3
+        deg = np.rad2deg(np.linalg.norm(self.target_shift[ok, 3:], axis=1))
+        missed = f"; {int((~ok).sum())} not reached (converged 0)" if not ok.all() else ""
+        return (f"{head}, corrections up to {mm.max():.4f} mm and {deg.max():.4f} deg in the plate "
+                f"frame{missed}")
 
     def to_dict(self) -> dict:
         return {"arm": self.arm, "positioner": self.positioner,

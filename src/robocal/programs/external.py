@@ -58,7 +58,7 @@ def needs_cell(unit: str) -> str:
 
 def sort_external(program: Program, warnings: list[str], taken: frozenset[int] = frozenset(),
                   fixed_arm: bool = True, dialect: Dialect | None = None, fixed_base: bool = False,
-                  not_arm: frozenset[str] = frozenset()) -> None:
+                  not_arm: frozenset[str] = frozenset(), cell: bool = False) -> None:
     """Keep in ``program.targets`` the targets that can be corrected as arm targets (and those in
     ``taken``: ids a cell model already took, :mod:`robocal.programs.positioner`); name every
     other target with external values (a warning and its reason in ``program.not_corrected``,
@@ -67,7 +67,8 @@ def sort_external(program: Program, warnings: list[str], taken: frozenset[int] =
     targets the track took first): a target with other external values is named, the arm's
     place depending on them. ``dialect``: the program's (its :attr:`Dialect.arm_axes` and pose
     notation, for :func:`carried_arm`; None: no axis weighed); ``fixed_base``: the user declared that
-    no external axis carries the arm; ``not_arm``: axes the cell file gives a positioner."""
+    no external axis carries the arm; ``not_arm``: axes the cell file gives a positioner; ``cell``: a
+    work cell was given (its arm on no track), so the warning does not ask for one."""
     carriers = {} if fixed_base or not fixed_arm or dialect is None else \
         carried_arm(program, dialect, taken, not_arm)
     kept, loose, letters = [], 0, set()
@@ -94,11 +95,11 @@ def sort_external(program: Program, warnings: list[str], taken: frozenset[int] =
         program.uncorrected.append(f"{t.where}: not corrected: {why}")
     if loose:
         axes = ", ".join(sorted(letters))
-        tail = ("no external axis carries the arm (--fixed-base)" if fixed_base else
-                "if a track or gantry carries the arm, give its cell file (--model CELL.yaml)")
+        tail = ("; no external axis carries the arm (--fixed-base)" if fixed_base else "" if cell else
+                "; if a track or gantry carries the arm, give its cell file (--model CELL.yaml)")
         warnings.append(f"{loose} target(s) carry external-axis values ({axes}) in work objects no "
                         "mechanical unit moves: corrected as arm targets (the values do not move them "
-                        f"relative to the arm); {tail}")
+                        f"relative to the arm){tail}")
     program.targets = kept
 
 

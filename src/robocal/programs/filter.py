@@ -566,7 +566,8 @@ def _filterable(d: Dialect, program: Program, warnings: list,
     taken = coordinated.take(program, warnings, d) if coordinated is not None else frozenset()
     positioners = frozenset() if coordinated is None else frozenset(
         a for s in coordinated.stations.values() for a in s.axes(d))  # the cell's: no arm on them
-    sort_external(program, warnings, taken, fixed_arm, d, fixed_base, positioners)
+    sort_external(program, warnings, taken, fixed_arm, d, fixed_base, positioners,
+                  cell=coordinated is not None)
     targets: list[Target] = []
     for t in program.targets:
         why = program.unsupported.get(f"tool:{t.tool}") or program.unsupported.get(f"frame:{t.frame}")

@@ -537,6 +537,6 @@ def _int(text: str, src: ProgramText | None = None, at: int = 0) -> int:
         if v != int(v):
             raise ValueError
         return int(v)
-    except (ValueError, IndexError):
+    except (ValueError, IndexError, OverflowError):  # OverflowError: 1e400 reads as inf
         where = f"{src.path.name}:{src.line_of(at)}: " if src is not None else ""
         raise DataError(f"{where}status/turn {text!r} is not an integer") from None
