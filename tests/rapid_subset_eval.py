@@ -122,9 +122,7 @@ class Evaluator:
                     while not self.is_(")"):
                         self.take()
                     self.take()
-            elif t == "ENDMODULE":
-                self.take()
-            elif t in ("LOCAL", "TASK"):
+            elif t == "ENDMODULE" or t in ("LOCAL", "TASK"):
                 self.take()
             elif t in ("CONST", "PERS", "VAR"):
                 self._declare(self.globals, self.types, lambda: self._expr(self.globals))
