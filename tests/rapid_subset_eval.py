@@ -36,6 +36,7 @@ SCHEMA = {
     "tooldata": [("robhold", "bool"), ("tframe", "pose"), ("tload", "loaddata")],
     "wobjdata": [("robhold", "bool"), ("ufprog", "bool"), ("ufmec", "string"), ("uframe", "pose"),
                  ("oframe", "pose")],
+    "progdisp": [("pdisp", "pose"), ("eoffs", "extjoint")],
 }
 _TOKEN = re.compile(r"\s*(?:(\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)|([A-Za-z_]\w*)|(\"[^\"]*\")|"
                     r"(:=|<=|>=|<>|[\[\](){},;.+\-*/<>=\\:]))")
@@ -78,6 +79,9 @@ class Evaluator:
         self.toks, self.i = _tokens(text), 0
         self.module_toks = self.toks
         self.calls = {"CalcJointT": 0, "CalcRobT": 0}
+        # system data: the active program displacement (none until a test sets one)
+        self.globals["c_progdisp"] = self.coerce("progdisp", [[[0, 0, 0], [1, 0, 0, 0]], [9e9] * 6])
+        self.types["c_progdisp"] = "progdisp"
         self._module()
 
     # ---------------------------------------------------------------- values
@@ -506,9 +510,9 @@ class NominalController:
         self.nominal, self.scheme = nominal, ABBConfig()
 
     def world(self, ev: Evaluator, wobj) -> np.ndarray:
-        if wobj is None:
-            return np.eye(4)
-        return ev.matrix(wobj["uframe"]) @ ev.matrix(wobj["oframe"])
+        """The frame a robtarget is in: uframe * oframe * the active program displacement (mm)."""
+        frame = np.eye(4) if wobj is None else ev.matrix(wobj["uframe"]) @ ev.matrix(wobj["oframe"])
+        return frame @ ev.matrix(ev.globals["c_progdisp"]["pdisp"])
 
     def calc_joint_t(self, ev: Evaluator, target, tool, wobj) -> np.ndarray:
         """Joints (rad) of ``target`` in its robconf (ERR_ROBLIMIT: RapidError)."""

@@ -119,11 +119,15 @@ def test_every_other_byte_unchanged(filtered):
     assert text.index(END) < text.rindex("ENDMODULE")
 
 
-@pytest.mark.parametrize("single", [False, True])
-def test_routine_lands_on_the_true_robot_like_offline_compensation(filtered, single):
+@pytest.mark.parametrize("single, displaced", [(False, False), (True, False), (False, True)])
+def test_routine_lands_on_the_true_robot_like_offline_compensation(filtered, single, displaced):
+    """``single``: the controller's float32 nums; ``displaced``: a program displacement active
+    (PDispSet), which CalcJointT applies and the routine must take into the meant pose."""
     _, res, _ = filtered
     ctl = NominalController(NOMINAL)
     ev = Evaluator(_text(res), ctl, single=single)
+    if displaced:
+        ev.globals["c_progdisp"]["pdisp"] = ev.coerce("pose", [[30, -20, 15], [0.9990482, 0, 0, 0.0436194]])
     tool, wobj = ev.globals["tgrip"], ev.globals["wtable"]
     W = ctl.world(ev, wobj)
     Tt = ev.matrix(tool["tframe"])

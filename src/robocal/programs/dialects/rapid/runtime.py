@@ -8,8 +8,10 @@ a module's data come before its routines) composed with PoseMult in a FOR loop o
 ``RC_Correct(target, tool, wobj)`` runs the fixed-point iteration of
 :func:`robocal.programs.runtime.reference_correction` with CalcJointT as the controller's inverse
 kinematics (the target's robconf kept) and returns the target with the corrected trans/rot, its
-robconf and extax unchanged. Only base-system RAPID: PoseMult, PoseInv, OrientZYX, VectMagn,
-CalcJointT, FOR, IF (no option needed).
+robconf and extax unchanged. The meant pose is taken in the work object with the active program
+displacement (``C_PROGDISP.pdisp``, composed after oframe), which CalcJointT applies too. Only
+base-system RAPID: PoseMult, PoseInv, OrientZYX, VectMagn, Sqrt, CalcJointT, FOR, IF (no option
+needed).
 """
 
 from __future__ import annotations
@@ -97,7 +99,8 @@ class RapidRuntime(RuntimeWriter):
             "  VAR pose E;",
             "  VAR pose P;",
             "  T := Target;",
-            "  W := PoseMult(WObj.uframe, WObj.oframe);",
+            "  ! the work object with the active program displacement (PDispOn/PDispSet), as in CalcJointT",
+            "  W := PoseMult(PoseMult(WObj.uframe, WObj.oframe), C_PROGDISP.pdisp);",
             "  P.trans := Target.trans;",
             "  P.rot := Target.rot;",
             "  X := PoseMult(W, P);",
