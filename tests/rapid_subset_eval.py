@@ -3,7 +3,7 @@ data declarations (CONST/PERS/VAR of num, bool, string, pos, orient, pose, confd
 jointtarget, tooldata, wobjdata, arrays ``{n}``), LOCAL FUNCs (PROCs are skipped), assignments to
 variables, record fields and array elements, FOR, IF/ELSE, RETURN, + - * / and comparisons,
 AND/OR/NOT, aggregates, and the functions PoseMult, PoseInv, PoseVect, OrientZYX, EulerZYX,
-VectMagn, Sqrt, Abs, Offs, RelTool, CalcJointT, CalcRobT. The controller's kinematics (CalcJointT,
+VectMagn, Sqrt, Sin, Cos, Abs, Offs, RelTool, CalcJointT, CalcRobT. The controller's kinematics (CalcJointT,
 CalcRobT) are a :class:`NominalController`: the nominal model's closed-form IK in the robconf the
 robtarget gives (as the controller does). ``single=True`` rounds every num to float32 as the
 controller's ``num`` is (a 32-bit float).
@@ -469,6 +469,12 @@ class Evaluator:
 
     def _f_sqrt(self, v):
         return self.num(np.sqrt(v))
+
+    def _f_sin(self, deg):
+        return self.num(np.sin(np.deg2rad(deg)))
+
+    def _f_cos(self, deg):
+        return self.num(np.cos(np.deg2rad(deg)))
 
     def _f_abs(self, v):
         return self.num(abs(v))
