@@ -252,3 +252,18 @@ def test_cli_runtime_correction(tmp_path):
     text = Path(out).read_text()
     assert "LOCAL FUNC robtarget RC_Correct" in text and text.count(BEGIN) == 1
     assert mod.read_text() == MODULE  # the input is untouched
+
+
+def test_line_ends_and_a_second_run(tmp_path):
+    """CRLF: the same motions routed, the block in the file's line ends; a filtered program given
+    again (with --force) is refused: its motions would be corrected twice."""
+    crlf = tmp_path / "crlf.mod"
+    crlf.write_bytes(MODULE.replace("\n", "\r\n").encode())
+    res = filter_program(crlf, CALIBRATED, NOMINAL, runtime_correction=True)
+    text = _text(res)
+    assert text.count("RC_Correct(") == 5 and "\r\n" + END + "\r\n" in text
+    assert "\n" not in text.replace("\r\n", "")
+    out = tmp_path / "out.mod"
+    res.write(out)
+    with pytest.raises(DataError, match="already holds robocal's run-time correction"):
+        filter_program(out, CALIBRATED, NOMINAL, runtime_correction=True, force=True)

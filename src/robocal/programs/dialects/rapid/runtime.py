@@ -73,7 +73,11 @@ class RapidRuntime(RuntimeWriter):
 
     def routine(self, text: str, chain: CalibratedChain, tools: dict[str, np.ndarray],
                 note: str) -> tuple[int, str]:
-        if re.search(rf"\b{ROUTINE_NAME}\b|\bRC_FK\b", text, re.I) and BEGIN not in text:
+        if BEGIN in text:
+            raise DataError(f"the program already holds robocal's run-time correction ({ROUTINE_NAME}): "
+                            "filter the original program (routing its motions again would correct them "
+                            "twice)")
+        if re.search(rf"\b{ROUTINE_NAME}\b|\bRC_FK\b", text, re.I):
             raise DataError(f"the program already names {ROUTINE_NAME} or RC_FK: --runtime-correction "
                             "cannot add its routine under that name")
         ends = list(_ENDMODULE.finditer(text))
