@@ -5,7 +5,9 @@ part, which each language's writer (a :class:`~robocal.programs.dialects.base.Di
 Which motions: those whose every target is computed at run time (the reader names them with a
 :class:`RunTime` reason: an Offs/RelTool by run-time amounts, a position modified or computed at
 run time) and whose value depends on no target the filter corrects offline (that target is
-already corrected: correcting the result again would correct twice). Motions relative to the
+already corrected: correcting the result again would correct twice), except as a :class:`Meant`
+use: the base of an Offs/RelTool written by the target's name, which the writer replaces by the
+target's original value. Motions relative to the
 position the robot is at (CRobT, $POS_ACT: that position was reached through a corrected target,
 so it is already in the corrected space) are not routed, and say so.
 
