@@ -14,7 +14,8 @@ so it is already in the corrected space) are not routed, and say so.
 What the routine does, per motion (:func:`reference_correction` is its specification in numpy, the
 tests run the generated routine against it and against :func:`robocal.deploy.compensate`):
 
-1. ``X = wobj * target * tool``: the TCP pose the program means, in the controller's world;
+1. ``X = wobj * target``: the TCP pose (of the tool the motion names) the program means, in the
+   controller's world;
 2. ``T'_0 = target``; for k = 0 .. ``ITERATIONS - 1``: ``q_k`` = the controller's own inverse
    kinematics of ``T'_k`` (its nominal model, in the target's configuration: RAPID CalcJointT,
    KRL INVERSE); ``P_k`` = the calibrated chain's TCP at ``q_k`` (:class:`CalibratedChain`: the
