@@ -125,7 +125,8 @@ class RapidRuntime(RuntimeWriter):
             "  ! the calibrated TCP pose in the world at the commanded joints J (its reached joints first)",
             "  ! calibrated chain: base * link{i} * Rz(theta{i} + q{i}) * Tz(d{i}) * flange * tool (mm, deg)",
             f"  CONST pose RC_BASE := {_pose(chain.base)};",
-            f"  CONST pose RC_LINK{{{n}}} := [" + ",".join(_pose(L) for L in chain.links) + "];",
+            f"  CONST pose RC_LINK{{{n}}} := [",  # one link a line: short lines for the pendant
+            *[f"    {_pose(L)}{',' if i < n - 1 else '];'}" for i, L in enumerate(chain.links)],
             f"  CONST num RC_THETA{{{n}}} := {_nums(np.rad2deg(chain.theta))};",
             f"  CONST num RC_D{{{n}}} := {_nums(chain.d * 1e3)};",
             f"  CONST pose RC_FLANGE := {_pose(chain.flange)};",
