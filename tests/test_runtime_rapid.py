@@ -320,3 +320,17 @@ def test_near_a_wrist_singularity_the_routine_says_it_did_not_converge(tmp_path)
     assert ev.log == []
     ev.eval("RC_Correct(Offs(p0, 0, 0, 0), tool0, wobj0)")
     assert len(ev.log) == 1 and ev.log[0][1].get("w") and "no convergence" in ev.log[0][0][1]
+
+
+def test_no_routing_when_an_external_axis_may_carry_the_arm(tmp_path):
+    """Targets moving eax_a (a track?): the routine's chain is the arm alone, so nothing is routed
+    (said); --fixed-base declares that no axis carries the arm: then the motions are routed."""
+    text = MODULE.replace("[-1,0,-1,0],[9E+09,9E+09", "[-1,0,-1,0],[250,9E+09", 1)  # pBase at eax_a 250
+    assert text != MODULE
+    path = tmp_path / "track.mod"
+    path.write_text(text)
+    res = filter_program(path, CALIBRATED, NOMINAL, runtime_correction=True, keep_unreached=True)
+    assert "RC_Correct" not in _text(res)
+    assert any("may carry the arm" in w and "--fixed-base" in w for w in res.warnings)
+    res = filter_program(path, CALIBRATED, NOMINAL, runtime_correction=True, fixed_base=True)
+    assert "RC_Correct(Offs(pBase, dx, dy, 0), tGrip, wTable)" in _text(res)

@@ -64,6 +64,11 @@ def add_parser(sub) -> None:
     p.add_argument("--result", metavar="result.json",
                    help="the calibration's result JSON (calibrate --json): warn where targets lie whose "
                         "predicted error exceeds 3 x the validated one (outside the calibrated region)")
+    p.add_argument("--fixed-base", action="store_true",
+                   help="no external axis carries the arm (no track or gantry): targets with external-axis "
+                        "values in work objects no unit moves are corrected as arm targets (default: the "
+                        "targets of an axis that carries the arm, a track the targets follow, or may, are "
+                        "named)")
     p.add_argument("--keep-unreached", action="store_true",
                    help="leave targets that cannot be corrected unchanged (warning) instead of failing")
     p.add_argument("--position-registers", metavar="FILE.csv",
@@ -124,7 +129,7 @@ def run(args) -> int:
                          force=args.force, strict=args.strict, position_registers=args.position_registers,
                          payload=payload_si(args.payload), temperature=args.temperature,
                          payload_schedules=args.payload_schedules, prediction=prediction, arm=args.arm,
-                         runtime_correction=args.runtime_correction)
+                         fixed_base=args.fixed_base, runtime_correction=args.runtime_correction)
     written = res.write({p: targets[Path(p)] for p in res.outputs}, table)
     if args.quiet:  # the warnings still matter
         for w in res.warnings:

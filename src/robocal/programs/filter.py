@@ -57,7 +57,7 @@ from robocal.programs.motions import undeclared
 from robocal.programs.positioner import CoordinatedProgram, cell_models
 from robocal.programs.registry import capable, dialect_for, program_files
 from robocal.programs.result import LISTED, FilterResult, collapse
-from robocal.programs.runtime import ROUTINE_NAME, calibrated_chain, routed_sites
+from robocal.programs.runtime import ROUTINE_NAME, RunTime, calibrated_chain, routed_sites
 from robocal.programs.source import ProgramText
 from robocal.programs.track import track_program
 from robocal.trust.coverage import Prediction, target_warnings
@@ -276,7 +276,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                    position_registers: str | Path | None = None, payload=None,
                    temperature: float | None = None, payload_schedules=None,
                    prediction: Prediction | None = None, arm: str | None = None,
-                   runtime_correction: bool = False) -> FilterResult:
+                   fixed_base: bool = False, runtime_correction: bool = False) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -348,6 +348,11 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         With cells: the arm whose program this is (a body name or its unit, ``ROB_2``); default
         the cell's only arm. Each arm's program is filtered with its own model, in the world the
         cell's first arm anchors.
+    fixed_base : bool, default False
+        No external axis carries the arm: targets with external-axis values in frames no unit
+        moves are corrected as arm targets without weighing whether an axis is a track or gantry
+        (`robocal.programs.carrier`; by default the targets of an axis that carries the arm, or
+        may, are named).
     runtime_correction : bool, default False
         Add a routine in the program's language that corrects targets computed at run time with
         the calibrated model, and route the motions to such targets through it
@@ -400,7 +405,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     robot_base = np.eye(4) if coordinated is not None else robot_base_frame(robot_base, reach)
     res, declared_tools = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,
                                     references, keep_unreached, strict, force, position_registers, payload,
-                                    temperature, payload_schedules, coordinated, runtime_correction)
+                                    temperature, payload_schedules, coordinated, fixed_base,
+                                    runtime_correction)
     res.warnings[:0] = unused_conditions(calibrated, payload, temperature)
     if prediction is not None and res.joints is not None:
         res.warnings += target_warnings(prediction, calibrated, res.joints)
@@ -415,7 +421,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
 def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frames, tcp, robot_base,
               dialect: str | None, references: list, keep_unreached: bool, strict: bool, force: bool,
               position_registers, payload, temperature, payload_schedules,
-              coordinated: CoordinatedProgram | None,
+              coordinated: CoordinatedProgram | None, fixed_base: bool = False,
               runtime_correction: bool = False) -> tuple[FilterResult, dict[str, np.ndarray]]:
     """:func:`filter_program` of the files ``given`` (an application folder among them), without
     the warnings and checks of what the user gave, and the tool data the files hold without
@@ -453,7 +459,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     warnings = list(program.warnings)
     if track is not None:
         track.take(program, warnings)
-    targets = _filterable(d, program, warnings, coordinated, fixed_arm=track is None)
+    targets = _filterable(d, program, warnings, coordinated, fixed_arm=track is None, fixed_base=fixed_base)
     if not targets:
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
@@ -461,7 +467,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
         outputs = {s.path: s.data for s in sources}
         if runtime_correction:
             records, outputs = _runtime(d, program, sources, set(), records, {}, calibrated, nominal,
-                                        robot_base, warnings)
+                                        robot_base, warnings, fixed_base)
         return FilterResult(d.name, outputs, [], warnings, program.uncorrected, records, language=d), \
             program.declared_tools
     loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, payload_schedules)
@@ -498,7 +504,8 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     warnings += comp.assumed
     _check_joints(controller, comp, ok, problems)
     if coordinated is None:  # external-axis values that may move the arm, said in the reason
-        problems = [(i, unreached_reason(targets[i], why, track is None)) for i, why in problems]
+        loose = track is None and not fixed_base  # values that may move the arm
+        problems = [(i, unreached_reason(targets[i], why, loose)) for i, why in problems]
     bad = {i for i, _ in problems}
     if problems and not keep_unreached:
         problems.sort()
@@ -519,7 +526,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     records = program.ledger.records(corrected, program.not_corrected)
     if runtime_correction:
         records, outputs = _runtime(d, program, sources, corrected, records, edits, calibrated, nominal,
-                                    robot_base, warnings)
+                                    robot_base, warnings, fixed_base)
     else:
         outputs = {s.path: edits.pop(s.path, FileEdits()).apply(s) for s in sources}  # edits freed once used
     rows = _rows(d, targets, X, W @ Pc, controller, q, ok, good, comp.converged & ok, changed, cfg, sing)
@@ -544,11 +551,21 @@ def _check_runtime(d: Dialect, arm_alone: bool, tcp) -> None:
 
 
 def _runtime(d: Dialect, program: Program, sources: list[ProgramText], corrected: set[int], records: list,
-             edits: dict, calibrated: Robot, nominal: Robot, robot_base, warnings: list):
+             edits: dict, calibrated: Robot, nominal: Robot, robot_base, warnings: list, fixed_base: bool):
     """``(records, outputs)`` with the motions whose target is computed at run time routed through
     the language's run-time correction (:mod:`robocal.programs.runtime`), its routine added to each
-    file holding one; every other motion's record and every other byte as they were."""
+    file holding one; every other motion's record and every other byte as they were. None is
+    routed when the program's targets move external axes that may carry the arm (the routine's
+    chain is the arm alone) unless ``fixed_base`` says none does."""
     sites, why_not = routed_sites(program, corrected)
+    used = [t for _, _, t in program.motions if isinstance(t, Target)]  # every target a motion reaches
+    used += [t for s in sites for w in s.account.named if isinstance(w, RunTime) for t in w.sources]
+    axes = sorted({a for t in used for a in t.axes if a in d.arm_axes})
+    if sites and axes and not fixed_base:
+        why_not = [f"--runtime-correction: no motion routed: the targets move external axes "
+                   f"({', '.join(axes)}) that may carry the arm, which the routine's chain (the arm alone) "
+                   "does not follow; give --fixed-base if none does"]
+        sites = []
     warnings += why_not
     writer = d.runtime_writer()
     chain = calibrated_chain(calibrated, nominal, robot_base)
@@ -613,13 +630,16 @@ def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
 
 
 def _filterable(d: Dialect, program: Program, warnings: list,
-                coordinated: CoordinatedProgram | None = None, fixed_arm: bool = True) -> list[Target]:
+                coordinated: CoordinatedProgram | None = None, fixed_arm: bool = True,
+                fixed_base: bool = False) -> list[Target]:
     """The targets to filter: those with a supported tool and frame, all of them known, and
     corrected as arm targets or on a positioner's plate (``coordinated``:
     :mod:`robocal.programs.positioner`) whatever their external-axis values say
     (:func:`robocal.programs.external.sort_external`)."""
     taken = coordinated.take(program, warnings, d) if coordinated is not None else frozenset()
-    sort_external(program, warnings, taken, fixed_arm)
+    positioners = frozenset() if coordinated is None else frozenset(
+        a for s in coordinated.stations.values() for a in s.axes(d))  # the cell's: no arm on them
+    sort_external(program, warnings, taken, fixed_arm, d, fixed_base, positioners)
     targets: list[Target] = []
     for t in program.targets:
         why = program.unsupported.get(f"tool:{t.tool}") or program.unsupported.get(f"frame:{t.frame}")

@@ -66,7 +66,8 @@ ROUTINE_NAME = "RC_Correct"  # the added routine's name in every language (its m
 
 class RunTime(str):
     """A reason a motion is not corrected offline: its target is computed at run time. It reads as
-    the reason; ``depends``: the ids of the declared targets its value is computed from (a target
+    the reason; ``depends``: the ids of the declared targets its value is computed from
+    (``sources``, given; a target
     the filter corrects offline among them: the motion is routed only when each such target is
     named in ``meant``, else the routine would correct it twice); ``meant``: :class:`Meant` uses
     of a declared target written by its name as the base of the computation (``Offs(pPick, 0, 0,
@@ -74,12 +75,14 @@ class RunTime(str):
     the position the robot is at (CRobT, $POS_ACT), already in the corrected space: not routed."""
 
     depends: frozenset[int]
+    sources: tuple[Target, ...]  # the targets of ``depends``
     meant: tuple[Meant, ...]
     relative: bool
 
-    def __new__(cls, why: str, depends=(), relative: bool = False, meant=()) -> RunTime:
+    def __new__(cls, why: str, sources=(), relative: bool = False, meant=()) -> RunTime:
         obj = super().__new__(cls, why)
-        obj.depends, obj.relative, obj.meant = frozenset(depends), relative, tuple(meant)
+        obj.sources = tuple({id(t): t for t in sources}.values())
+        obj.depends, obj.relative, obj.meant = frozenset(id(t) for t in obj.sources), relative, tuple(meant)
         return obj
 
 
@@ -100,17 +103,17 @@ def merged(why: str, parts: list, meant=()) -> RunTime | None:
     followed the target's base to: targets, or reasons) and ``meant`` (:class:`Meant`: the base
     written as a target's name), None when a part is a reason that is not :class:`RunTime` (a name
     declared nowhere...): then the motion cannot be routed either."""
-    depends, relative, uses = set(), False, list(meant)
+    sources, relative, uses = [], False, list(meant)
     for p in parts:
         if isinstance(p, RunTime):
-            depends |= p.depends
+            sources += p.sources
             relative |= p.relative
             uses += p.meant
         elif isinstance(p, str):
             return None
         else:
-            depends.add(id(p))
-    return RunTime(why, depends, relative, uses)
+            sources.append(p)
+    return RunTime(why, sources, relative, uses)
 
 
 @dataclass(frozen=True)
