@@ -144,6 +144,7 @@ def test_only_run_time_targets_not_already_corrected_are_routed(filtered):
     assert "already in the corrected space" in reasons
     routed = [m for m in res.motions if m.reason.startswith("corrected at run time")]
     assert len(routed) == 4 and len(res.motions) == len(without.motions)
+    assert "4 of them corrected at run time" in res.summary()
     assert [m.line for m in routed] == [17, 20, 22, 23]
 
 

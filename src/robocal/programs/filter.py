@@ -57,7 +57,7 @@ from robocal.programs.motions import undeclared
 from robocal.programs.positioner import CoordinatedProgram, cell_models
 from robocal.programs.registry import capable, dialect_for, program_files
 from robocal.programs.result import LISTED, FilterResult, collapse
-from robocal.programs.runtime import ROUTINE_NAME, RunTime, calibrated_chain, routed_sites
+from robocal.programs.runtime import ROUTED, ROUTINE_NAME, RunTime, calibrated_chain, routed_sites
 from robocal.programs.source import ProgramText
 from robocal.programs.track import track_program
 from robocal.trust.coverage import Prediction, target_warnings
@@ -587,8 +587,7 @@ def _runtime(d: Dialect, program: Program, sources: list[ProgramText], corrected
                         f"{ROUTINE_NAME}, added to the program: up to {chain.iterations} inverse-kinematics "
                         f"calls each at run time{left}")
     at = {(p.name, ln) for p, ln in routed_at}
-    records = [replace(r, reason=f"corrected at run time by {ROUTINE_NAME} (--runtime-correction): "
-                                 f"{r.reason}") if (r.file, r.line) in at else r for r in records]
+    records = [replace(r, reason=f"{ROUTED}: {r.reason}") if (r.file, r.line) in at else r for r in records]
     return records, outputs
 
 

@@ -62,6 +62,7 @@ TOLERANCE_DEG = 0.0001  # ... and turned less than this from it
 WARN_MM = 0.05
 COMPUTED_TERMS = ("gear", "cyclic", "scale")  # joint-error terms of the joint's own angle: in the routine
 ROUTINE_NAME = "RC_Correct"  # the added routine's name in every language (its marker names robocal)
+ROUTED = f"corrected at run time by {ROUTINE_NAME} (--runtime-correction)"  # a routed motion's reason
 
 
 class RunTime(str):
