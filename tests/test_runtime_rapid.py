@@ -335,3 +335,8 @@ def test_no_routing_when_an_external_axis_may_carry_the_arm(tmp_path):
     assert any("may carry the arm" in w and "--fixed-base" in w for w in res.warnings)
     res = filter_program(path, CALIBRATED, NOMINAL, runtime_correction=True, fixed_base=True)
     assert "RC_Correct(Offs(pBase, dx, dy, 0), tGrip, wTable)" in _text(res)
+    text = MODULE.replace("[0,0,-1,0],[9E+09,9E+09", "[0,0,-1,0],[1234.567,9E+09", 1)  # pHome's eax_a
+    path.write_text(text)
+    res = filter_program(path, CALIBRATED, NOMINAL, runtime_correction=True, fixed_base=True)
+    assert "RETURN [[1139.82,200.98,722.77],[0.1300295,-0.08641011,0.98767211,0.01137611],[0,0,-1,0]," \
+           "[1234.567,9E+09,9E+09,9E+09,9E+09,9E+09]];" in _text(res)  # RC_Meant: pHome as written

@@ -73,7 +73,7 @@ def _meant_function(meant: list[Target]) -> list[str]:
     for k, t in enumerate(meant, 1):
         v = [n.text for n in t.numbers]
         cfx, cf1, cf4, cf6 = (int(c) for c in t.config)
-        extax = ",".join(f"{t.axes[a]:g}" if a in t.axes else "9E+09" for a in RAPID_EXTAX)
+        extax = ",".join(repr(float(t.axes[a])) if a in t.axes else "9E+09" for a in RAPID_EXTAX)
         value = f"[[{','.join(v[:3])}],[{','.join(v[3:7])}],[{cf1},{cf4},{cf6},{cfx}],[{extax}]]"
         last = k == len(meant)  # k is 1..len(meant): the last one needs no test
         lines += [f"  ! {k}: {t.name}", *([] if last else [f"  IF k = {k} THEN"]),
