@@ -67,8 +67,8 @@ ROUTED = f"corrected at run time by {ROUTINE_NAME} (--runtime-correction)"  # a 
 
 class RunTime(str):
     """A reason a motion is not corrected offline: its target is computed at run time. It reads as
-    the reason; ``depends``: the ids of the declared targets its value is computed from
-    (``sources``, given; a target
+    the reason; ``depends``: the ids of the declared targets its value is computed from (those
+    given and those of ``sources``, the targets themselves; a target
     the filter corrects offline among them: the motion is routed only when each such target is
     named in ``meant``, else the routine would correct it twice); ``meant``: :class:`Meant` uses
     of a declared target written by its name as the base of the computation (``Offs(pPick, 0, 0,
@@ -80,10 +80,11 @@ class RunTime(str):
     meant: tuple[Meant, ...]
     relative: bool
 
-    def __new__(cls, why: str, sources=(), relative: bool = False, meant=()) -> RunTime:
+    def __new__(cls, why: str, depends=(), relative: bool = False, meant=(), sources=()) -> RunTime:
         obj = super().__new__(cls, why)
         obj.sources = tuple({id(t): t for t in sources}.values())
-        obj.depends, obj.relative, obj.meant = frozenset(id(t) for t in obj.sources), relative, tuple(meant)
+        obj.depends = frozenset(depends) | {id(t) for t in obj.sources}
+        obj.relative, obj.meant = relative, tuple(meant)
         return obj
 
 
@@ -104,9 +105,10 @@ def merged(why: str, parts: list, meant=()) -> RunTime | None:
     followed the target's base to: targets, or reasons) and ``meant`` (:class:`Meant`: the base
     written as a target's name), None when a part is a reason that is not :class:`RunTime` (a name
     declared nowhere...): then the motion cannot be routed either."""
-    sources, relative, uses = [], False, list(meant)
+    depends, sources, relative, uses = set(), [], False, list(meant)
     for p in parts:
         if isinstance(p, RunTime):
+            depends |= p.depends
             sources += p.sources
             relative |= p.relative
             uses += p.meant
@@ -114,7 +116,7 @@ def merged(why: str, parts: list, meant=()) -> RunTime | None:
             return None
         else:
             sources.append(p)
-    return RunTime(why, sources, relative, uses)
+    return RunTime(why, depends, relative, uses, sources)
 
 
 @dataclass(frozen=True)

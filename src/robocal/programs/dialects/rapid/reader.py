@@ -514,7 +514,7 @@ class RapidDialect(Dialect):
                     st.inline[key] = self._robtarget(src, tree, f"inline@{src.line_of(lead)}", lead)
                 return [st.inline[key]]
             why = f"{text[:40]} is not a robtarget literal"
-            return [RunTime(why, self._named_targets(st, text))]
+            return [RunTime(why, sources=self._named_targets(st, text))]
         f = _CALLED.match(masked, lead, b)
         if f:
             inner = split_top(masked, f.end(), close_bracket(masked, f.end() - 1))
@@ -532,7 +532,7 @@ class RapidDialect(Dialect):
             why = f"the target is computed at run time by {f.group(1)}()"
             if f.group(1).lower() in _REACHED:
                 return [RunTime(why, relative=True)]
-            return [RunTime(why, self._named_targets(st, masked[f.end():b]))]
+            return [RunTime(why, sources=self._named_targets(st, masked[f.end():b]))]
         r = _REF.fullmatch(text)
         if not r:
             return [f"{' '.join(text.split())[:40]} is not a robtarget this filter can follow"]
@@ -548,7 +548,7 @@ class RapidDialect(Dialect):
                     "followed"]
         if st.modified.get(name):  # the pose reached is partly computed at run time
             return [RunTime(f"{r.group(1)} is modified at run time ({r.group(1)}.<field> := ... at "
-                            f"{st.modified[name][0]})", st.declared.get(name) or ())]
+                            f"{st.modified[name][0]})", sources=st.declared.get(name) or ())]
         out: list = []
         if name in st.assigned:
             for arg_src, x, y, where_proc in st.assigned[name]:
