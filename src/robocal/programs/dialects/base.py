@@ -5,6 +5,7 @@ marker and the programs robocal writes in it."""
 
 from __future__ import annotations
 
+import importlib
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +29,9 @@ class Dialect:
     of position registers the motions use, ``filter_program(position_registers=...)``),
     ``payload_schedules`` (load schedules the motions select, ``payload_schedules=...``),
     ``scara_programs`` (its programs drive a SCARA: the filter reads them for a 4-joint SCARA),
-    ``external_axis_names`` and ``positioner_group`` (how its programs name a positioner's axes,
+    ``runtime_correction`` (a routine in this language corrects targets computed at run time:
+    ``filter --runtime-correction``), ``external_axis_names`` and ``positioner_group`` (how its
+    programs name a positioner's axes,
     the controller's logical external axes of a cell file: :meth:`positioner_axes`, which the
     coordinated-motion filter and the campaign writers ask)."""
 
@@ -61,6 +64,9 @@ class Dialect:
     # empty: its programs name no external axes
     external_axis_names: tuple[str, ...] = ()
     positioner_group = False  # a positioner moves as its own motion group / station: its axes 1..m there
+    # capability: a run-time correction routine in this language ("module:Class" of its
+    # robocal.programs.runtime.RuntimeWriter; '': none), filter --runtime-correction
+    runtime_correction = ""
 
     def positioner_axes(self, external_axes: tuple[int, ...]) -> tuple[str, ...]:
         """The names this language's programs give a positioner's axes, which are the controller's
@@ -84,6 +90,13 @@ class Dialect:
             have = f"external axes 1..{len(names)} ({', '.join(names)})" if names else "no external axes"
             raise DataError(f"{self.name} programs name {have}: no name for external axis {bad[0]}")
         return tuple(names[k - 1] for k in numbers)
+
+    def runtime_writer(self):
+        """This language's :class:`robocal.programs.runtime.RuntimeWriter` (``runtime_correction``)."""
+        if not self.runtime_correction:
+            raise DataError(f"robocal writes no run-time correction in {self.name}")
+        module, name = self.runtime_correction.split(":")
+        return getattr(importlib.import_module(module), name)()
 
     def parse(self, sources: list[ProgramText], frames: dict[str, np.ndarray],
               tools: dict[str, np.ndarray], references: list[ProgramText] = ()) -> Program:

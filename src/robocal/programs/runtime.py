@@ -1,0 +1,241 @@
+"""A correction that runs in the controller (``filter --runtime-correction``): the language-neutral
+part, which each language's writer (a :class:`~robocal.programs.dialects.base.Dialect` whose
+``runtime_correction`` names it) turns into a routine of that language.
+
+Which motions: those whose every target is computed at run time (the reader names them with a
+:class:`RunTime` reason: an Offs/RelTool by run-time amounts, a position modified or computed at
+run time) and whose value depends on no target the filter corrects offline (that target is
+already corrected: correcting the result again would correct twice). Motions relative to the
+position the robot is at (CRobT, $POS_ACT: that position was reached through a corrected target,
+so it is already in the corrected space) are not routed, and say so.
+
+What the routine does, per motion (:func:`reference_correction` is its specification in numpy, the
+tests run the generated routine against it and against :func:`robocal.deploy.compensate`):
+
+1. ``X = wobj * target * tool``: the TCP pose the program means, in the controller's world;
+2. ``T'_0 = target``; for k = 0 .. ``ITERATIONS - 1``: ``q_k`` = the controller's own inverse
+   kinematics of ``T'_k`` (its nominal model, in the target's configuration: RAPID CalcJointT,
+   KRL INVERSE); ``P_k`` = the calibrated chain's TCP at ``q_k`` (:class:`CalibratedChain`: the
+   calibrated MDH + beta links, base and flange as constants, the program's tool data); stop when
+   ``P_k`` is within ``TOLERANCE_MM`` / ``TOLERANCE_DEG`` of ``X``; else
+   ``T'_{k+1} = wobj^-1 * (wobj * T'_k) * P_k^-1 * X`` (the pose error of the TCP, in the tool frame,
+   applied to the commanded pose);
+3. the target ``T'`` with the original configuration data and external axes.
+
+The fixed point is ``FK_cal(IK_nom(T')) = X``, the offline filter's answer: each step shrinks the
+error by the (small) difference between the nominal and calibrated Jacobians, so 3 steps leave
+sub-micrometre residuals for calibrations of a few millimetres. It costs up to ``ITERATIONS``
+inverse-kinematics calls per motion. Not exact: the calibrated model's joint-error terms
+(:attr:`CalibratedChain.left_out`) are not in the chain; near a singularity the controller's IK
+is ill-conditioned (the iteration may not converge: the routine returns its last iterate); a
+correction that crosses a configuration boundary keeps the target's configuration.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from robocal.core.errors import DataError
+from robocal.deploy.compensation import controller_model
+from robocal.kinematics.model import Robot
+from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec, rot_x, rot_y
+from robocal.programs.model import Program
+from robocal.programs.motions import Account
+
+ITERATIONS = 3  # fixed-point steps (controller IK calls) per motion at most
+TOLERANCE_MM = 0.001  # the routine stops when the calibrated TCP is this close to the meant one ...
+TOLERANCE_DEG = 0.0001  # ... and turned less than this from it
+ROUTINE_NAME = "RC_Correct"  # the added routine's name in every language (its marker names robocal)
+
+
+class RunTime(str):
+    """A reason a motion is not corrected offline: its target is computed at run time. It reads as
+    the reason; ``depends``: the ids of the declared targets its value is computed from (a target
+    the filter corrects offline among them: the motion is not routed through the run-time
+    routine, which would correct it twice); ``relative``: computed from the position the robot is
+    at (CRobT, $POS_ACT), already in the corrected space: not routed."""
+
+    depends: frozenset[int]
+    relative: bool
+
+    def __new__(cls, why: str, depends=(), relative: bool = False) -> RunTime:
+        obj = super().__new__(cls, why)
+        obj.depends, obj.relative = frozenset(depends), relative
+        return obj
+
+
+def merged(why: str, parts: list) -> RunTime | None:
+    """A :class:`RunTime` reason ``why`` whose value is computed from ``parts`` (what the reader
+    followed the target's base to: targets, or reasons), None when a part is a reason that is not
+    :class:`RunTime` (a name declared nowhere...): then the motion cannot be routed either."""
+    depends, relative = set(), False
+    for p in parts:
+        if isinstance(p, RunTime):
+            depends |= p.depends
+            relative |= p.relative
+        elif isinstance(p, str):
+            return None
+        else:
+            depends.add(id(p))
+    return RunTime(why, depends, relative)
+
+
+@dataclass(frozen=True)
+class RuntimeSite:
+    """One target argument of a motion instruction whose target is computed at run time:
+    ``account`` (the motion's), ``path`` and the span ``start:end`` of the argument as written,
+    the tool and work object as written there (``wobj`` None: the language's default) and the
+    names they resolve to in :class:`Program` (``tool_name``, ``frame_name``; '' unresolved)."""
+
+    account: Account
+    path: Path
+    start: int
+    end: int
+    tool: str
+    wobj: str | None
+    tool_name: str
+    frame_name: str
+
+
+@dataclass(frozen=True)
+class CalibratedChain:
+    """The calibrated model as the routine computes it, all in the controller's world frame, m and
+    rad: ``FK(q) = base * prod_i(links[i] * Rz(theta[i] + q[i]) * Tz(d[i])) * flange * tool``.
+    ``links`` ``(n, 4, 4)``: ``Rx(alpha_i) Tx(a_i) Ry(beta_i)``; ``flange``: the nominal flange
+    (the measured SMR replaced); ``left_out``: the calibrated model's joint-error terms the
+    routine does not compute (said in the result and the routine's comment)."""
+
+    base: np.ndarray
+    links: np.ndarray
+    theta: np.ndarray
+    d: np.ndarray
+    flange: np.ndarray
+    left_out: tuple[str, ...]
+    iterations: int = ITERATIONS
+    tolerance_mm: float = TOLERANCE_MM
+    tolerance_deg: float = TOLERANCE_DEG
+
+    def fk(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
+        """TCP poses ``(N, 4, 4)`` (m) of joints ``q`` ``(N, n)`` (rad) with ``tool`` ``(4, 4)`` or
+        ``(N, 4, 4)`` as the routine computes them (no joint-error terms)."""
+        q = np.atleast_2d(np.asarray(q, float))
+        T = np.broadcast_to(self.base, (len(q), 4, 4)).copy()
+        for i in range(len(self.theta)):  # n links: a short loop over batched poses
+            T = T @ self.links[i] @ _rz_tz(self.theta[i] + q[:, i], self.d[i])
+        return T @ self.flange @ tool
+
+
+def _rz_tz(phi: np.ndarray, d: float) -> np.ndarray:
+    """``Rz(phi) Tz(d)`` ``(N, 4, 4)``."""
+    out = np.zeros((len(phi), 4, 4))
+    c, s = np.cos(phi), np.sin(phi)
+    out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1] = c, -s, s, c
+    out[:, 2, 2] = out[:, 3, 3] = 1.0
+    out[:, 2, 3] = d
+    return out
+
+
+def calibrated_chain(calibrated: Robot, nominal: Robot, robot_base=None) -> CalibratedChain:
+    """The constants of the routine's chain (:class:`CalibratedChain`) from the calibrated model
+    as the controller sees it (:func:`robocal.deploy.compensation.controller_model`: its frame
+    {0} the controller's base, or ``robot_base``, 4x4 m). DataError: a prismatic joint (the
+    routines compute revolute links)."""
+    model = controller_model(calibrated, nominal, robot_base)
+    if model.has_prismatic:
+        raise DataError("--runtime-correction computes revolute arms only: the model has a prismatic joint")
+    links = np.array([rot_x(al) @ _tx(a) @ rot_y(be) for al, a, be in zip(model.alpha, model.a, model.beta,
+                                                                           strict=True)])
+    left = tuple(model.joint_errors.terms) if model.joint_errors is not None else ()
+    return CalibratedChain(model.base.copy(), links, model.theta.copy(), model.d.copy(), model.tool.copy(),
+                           left)
+
+
+def _tx(a: float) -> np.ndarray:
+    T = np.eye(4)
+    T[0, 3] = a
+    return T
+
+
+def reference_correction(chain: CalibratedChain, X: np.ndarray, W: np.ndarray, tool: np.ndarray,
+                         solve: Callable[[np.ndarray], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """What the routine computes, in numpy: the corrected targets ``(N, 4, 4)`` in their work
+    objects ``W`` ``(N, 4, 4)`` for meant TCP poses ``X`` ``(N, 4, 4)`` (world, m) with ``tool``
+    ``(N, 4, 4)``, and the number of IK calls each took ``(N,)``. ``solve``: the controller's IK,
+    TCP poses in the world ``(N, 4, 4)`` -> joints ``(N, n)`` rad (in each target's
+    configuration; NaN rows: none)."""
+    N = len(X)
+    Tw = X.copy()  # the commanded TCP pose in the world, wobj * T'_k
+    calls = np.zeros(N, int)
+    active = np.ones(N, bool)
+    for _ in range(chain.iterations):
+        q = solve(Tw)
+        calls += active
+        P = chain.fk(np.where(np.isfinite(q), q, 0.0), tool)
+        E = invert_transform(P) @ X
+        close = (np.linalg.norm(E[:, :3, 3], axis=1) * 1e3 <= chain.tolerance_mm) & \
+            (np.rad2deg(np.linalg.norm(matrix_to_rotvec(E[:, :3, :3]), axis=1)) <= chain.tolerance_deg)
+        active &= ~close & np.isfinite(q).all(axis=1)
+        Tw = np.where(active[:, None, None], Tw @ E, Tw)
+    return invert_transform(W) @ Tw, calls
+
+
+def routed_sites(program: Program, corrected: set[int]) -> tuple[list[RuntimeSite], list[str]]:
+    """The sites to route through the routine (:func:`routable`) and, for the motions with a
+    run-time target that are not routed, why (one line each)."""
+    by_motion: dict[int, list[RuntimeSite]] = {}
+    for s in program.runtime_sites:
+        by_motion.setdefault(id(s.account), []).append(s)
+    out, why = [], []
+    for sites in by_motion.values():
+        reason = routable(program, sites, corrected)
+        if reason:
+            acc = sites[0].account
+            why.append(f"{acc.where}: {acc.instruction}: not corrected at run time: {reason}")
+        else:
+            out += sites
+    return out, why
+
+
+def routable(program: Program, sites: list[RuntimeSite], corrected: set[int]) -> str:
+    """'' when the motion of ``sites`` can go through the routine, else why not."""
+    acc = sites[0].account
+    if acc.targets:
+        return "it also reaches a target corrected offline"
+    others = [w for w in acc.named if not isinstance(w, RunTime)]
+    if others:
+        return others[0]
+    if any(w.relative for w in acc.named):
+        return ("its target is relative to the position the robot is at, which it reached through a "
+                "corrected target: it is already in the corrected space")
+    if any(w.depends & corrected for w in acc.named):
+        return ("its target is computed from a target corrected offline (correcting it again would "
+                "correct twice)")
+    for s in sites:
+        for kind, name, known in (("tool", s.tool_name, program.tools),
+                                  ("frame", s.frame_name, program.frames)):
+            if not name or name not in known:
+                return f"its {kind} {s.tool if kind == 'tool' else s.wobj} is not known to the filter"
+            if program.unsupported.get(f"{kind}:{name}"):
+                return program.unsupported[f"{kind}:{name}"]
+    return ""
+
+
+class RuntimeWriter:
+    """A language's run-time correction (:attr:`Dialect.runtime_correction` names its class): the
+    edits that route one motion through the routine and the routine itself."""
+
+    def site_edits(self, text: str, site: RuntimeSite) -> dict[tuple[int, int], str]:
+        """Span -> text edits of the file ``text`` that route ``site``'s target through the routine
+        (insertions: zero-length spans; every other byte unchanged)."""
+        raise NotImplementedError
+
+    def routine(self, text: str, chain: CalibratedChain, tools: dict[str, np.ndarray],
+                note: str) -> tuple[int, str]:
+        """Where in file ``text`` the routine goes and its text (clearly marked, ``note``: the
+        marker's words: robocal's version and the model's fingerprint); ``tools``: the program's tool
+        data by name (4x4, m)."""
+        raise NotImplementedError
