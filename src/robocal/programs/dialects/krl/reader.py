@@ -42,6 +42,7 @@ from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
+from robocal.programs.runtime import RunTime, RuntimeSite, merged
 from robocal.programs.source import Number, ProgramText
 
 _AGG = re.compile(r"\{[^{}]*\}")
@@ -95,6 +96,7 @@ class KRLDialect(Dialect):
     campaign_external = True  # a positioner's axes move in its campaign programs
     external_axis_names = EXTERNAL_LETTERS  # an E6POS's / E6AXIS' E1..E6: logical axis k is E<k>
     campaign_refuses_tracks = True
+    runtime_correction = "robocal.programs.dialects.krl.runtime:KRLRuntime"  # filter --runtime-correction
     vendor = "KUKA"
     signature = r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)"
     angle_unit = "deg"
@@ -328,6 +330,13 @@ class KRLDialect(Dialect):
                     else:
                         head = _APPROX.sub("", text)
                         found = self._follow(st, head, proc, {}, 0) if head else []
+                    if found and all(isinstance(f, RunTime) for f in found):
+                        stop = a + len(_APPROX.sub("", masked[a:b]).rstrip())
+                        tool, base = state["tool"][0], state["base"][0]
+                        prog.runtime_sites.append(RuntimeSite(acc, src.path, a + len(masked[a:b]) -
+                                                              len(masked[a:b].lstrip()), stop, "$TOOL",
+                                                              "$BASE", "" if tool == "?" else tool,
+                                                              "" if base == "?" else base))
                     for f in found:
                         if f is None:
                             continue
@@ -403,7 +412,11 @@ class KRLDialect(Dialect):
             left, _, right = text.partition(":")
             if re.fullmatch(r"\s*\{(?:\s*[A-Za-z]\w*\s+[-+]?(?:\d+\.?\d*|\.\d+)\s*,?)*\}\s*", right):
                 return self._follow(st, left.strip(), proc, scope, depth + 1)  # a constant offset
-            return [f"{text} is computed at run time by the geometric operator ':'"]
+            why = f"{text} is computed at run time by the geometric operator ':'"
+            parts = [p for operand in split_top(text, 0, len(text), ":")
+                     for p in (self._follow(st, text[slice(*operand)].strip(), proc, scope, depth + 1)
+                               if text[slice(*operand)].strip() and "{" not in text[slice(*operand)] else [])]
+            return [merged(why, parts) or why]
         r = _REF.fullmatch(text.strip())
         if not r:
             return [f"{text[:40]} is not a position this filter can follow"]
@@ -411,7 +424,7 @@ class KRLDialect(Dialect):
         index = re.sub(r"\s+", "", r.group(2) or "")
         if name.startswith("$"):
             return [] if name.split("[")[0] in _JOINT_SYSTEM else [
-                f"{text} is a system variable (the current or a computed position)"]
+                RunTime(f"{text} is a system variable (the current or a computed position)", relative=True)]
         if name in st.axes:
             return []
         params = st.params.get(proc, [])
@@ -431,8 +444,8 @@ class KRLDialect(Dialect):
         if fields:
             return [f"{text} is a field of a structure: its value is not followed"]
         if st.modified.get(name):  # the pose reached is partly computed at run time
-            return [f"{name} is modified at run time ({name}.<field> or {name}[i] = ... at "
-                    f"{st.modified[name][0]})"]
+            return [RunTime(f"{name} is modified at run time ({name}.<field> or {name}[i] = ... at "
+                            f"{st.modified[name][0]})", [id(t) for t in st.declared.get(name + index, [])])]
         out: list = []
         key = name + index
         sources = st.assigned.get(key, []) + (st.assigned.get(name, []) if index else [])
