@@ -57,10 +57,11 @@ from robocal.programs.motions import undeclared
 from robocal.programs.positioner import CoordinatedProgram, cell_models
 from robocal.programs.registry import capable, dialect_for, program_files
 from robocal.programs.result import LISTED, FilterResult, collapse
+from robocal.programs.runtime import ROUTINE_NAME, calibrated_chain, routed_sites
 from robocal.programs.source import ProgramText
 from robocal.programs.track import track_program
 from robocal.trust.coverage import Prediction, target_warnings
-from robocal.trust.output_marker import check_unmarked
+from robocal.trust.output_marker import check_unmarked, marker_text
 
 CONTROLLER_JOINTS = 6  # the programs the dialects read drive 6-axis arms (a few a SCARA too)
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
@@ -274,7 +275,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                    keep_unreached: bool = False, strict: bool = False, force: bool = False,
                    position_registers: str | Path | None = None, payload=None,
                    temperature: float | None = None, payload_schedules=None,
-                   prediction: Prediction | None = None, arm: str | None = None) -> FilterResult:
+                   prediction: Prediction | None = None, arm: str | None = None,
+                   runtime_correction: bool = False) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -346,6 +348,11 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         With cells: the arm whose program this is (a body name or its unit, ``ROB_2``); default
         the cell's only arm. Each arm's program is filtered with its own model, in the world the
         cell's first arm anchors.
+    runtime_correction : bool, default False
+        Add a routine in the program's language that corrects targets computed at run time with
+        the calibrated model, and route the motions to such targets through it
+        (`robocal.programs.runtime`; languages with the ``runtime_correction`` capability; an arm
+        alone, without ``tcp``).
 
     Returns
     -------
@@ -393,7 +400,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     robot_base = np.eye(4) if coordinated is not None else robot_base_frame(robot_base, reach)
     res, declared_tools = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,
                                     references, keep_unreached, strict, force, position_registers, payload,
-                                    temperature, payload_schedules, coordinated)
+                                    temperature, payload_schedules, coordinated, runtime_correction)
     res.warnings[:0] = unused_conditions(calibrated, payload, temperature)
     if prediction is not None and res.joints is not None:
         res.warnings += target_warnings(prediction, calibrated, res.joints)
@@ -408,7 +415,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
 def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frames, tcp, robot_base,
               dialect: str | None, references: list, keep_unreached: bool, strict: bool, force: bool,
               position_registers, payload, temperature, payload_schedules,
-              coordinated: CoordinatedProgram | None) -> tuple[FilterResult, dict[str, np.ndarray]]:
+              coordinated: CoordinatedProgram | None,
+              runtime_correction: bool = False) -> tuple[FilterResult, dict[str, np.ndarray]]:
     """:func:`filter_program` of the files ``given`` (an application folder among them), without
     the warnings and checks of what the user gave, and the tool data the files hold without
     ``tools`` (`Program.declared_tools`, which the ``tools`` are checked against)."""
@@ -433,6 +441,8 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
             vendors = " / ".join(c.vendor for c in capable("position_registers"))
             raise DataError(f"--position-registers is for {vendors} programs, not {d.name}")
         sources.append(ProgramText(position_registers))
+    if runtime_correction:
+        _check_runtime(d, track is None and coordinated is None, tcp)
     refs = [ProgramText(p) for p in references]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
     missing = undeclared(program.ledger)
@@ -447,8 +457,12 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     if not targets:
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
-        return FilterResult(d.name, {s.path: s.data for s in sources}, [], warnings, program.uncorrected,
-                            program.ledger.records(set(), program.not_corrected), language=d), \
+        records = program.ledger.records(set(), program.not_corrected)
+        outputs = {s.path: s.data for s in sources}
+        if runtime_correction:
+            records, outputs = _runtime(d, program, sources, set(), records, {}, calibrated, nominal,
+                                        robot_base, warnings)
+        return FilterResult(d.name, outputs, [], warnings, program.uncorrected, records, language=d), \
             program.declared_tools
     loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, payload_schedules)
     warnings += loads.warnings
@@ -501,14 +515,63 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
         cfg = (d.scheme.encode(controller, seeds), d.scheme.encode(controller, q))
     edits, changed = number_edits(d, targets, values, good, Pc, cfg, warnings)
     warnings += comp.target_warnings([t.where for t in targets], good)  # corrected ones near a singularity
-    outputs = {s.path: edits.pop(s.path, FileEdits()).apply(s) for s in sources}  # edits freed once used
-    rows = _rows(d, targets, X, W @ Pc, controller, q, ok, good, comp.converged & ok, changed, cfg, sing)
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
-    return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,
-                        program.ledger.records(corrected, program.not_corrected), calibrated,
+    records = program.ledger.records(corrected, program.not_corrected)
+    if runtime_correction:
+        records, outputs = _runtime(d, program, sources, corrected, records, edits, calibrated, nominal,
+                                    robot_base, warnings)
+    else:
+        outputs = {s.path: edits.pop(s.path, FileEdits()).apply(s) for s in sources}  # edits freed once used
+    rows = _rows(d, targets, X, W @ Pc, controller, q, ok, good, comp.converged & ok, changed, cfg, sing)
+    return FilterResult(d.name, outputs, rows, warnings, program.uncorrected, records, calibrated,
                         joints=np.where(good[:, None], q, np.nan), loads=loads.lines,
                         data_files=frozenset(s.path for s in sources[len(paths):]),  # the register file
                         language=d), program.declared_tools
+
+
+def _check_runtime(d: Dialect, arm_alone: bool, tcp) -> None:
+    """Refuse ``runtime_correction`` where no routine can be written: a language without the
+    capability, an arm on a track or with a positioner, a real TCP (--tcp)."""
+    if not d.runtime_correction:
+        able = ", ".join(c.name for c in capable("runtime_correction"))
+        raise DataError(f"--runtime-correction writes routines in {able}, not {d.name}")
+    if not arm_alone:
+        raise DataError("--runtime-correction corrects an arm alone: not an arm on a track or with a "
+                        "positioner")
+    if tcp:
+        raise DataError("--runtime-correction computes with the program's tool data: it cannot be combined "
+                        "with --tcp")
+
+
+def _runtime(d: Dialect, program: Program, sources: list[ProgramText], corrected: set[int], records: list,
+             edits: dict, calibrated: Robot, nominal: Robot, robot_base, warnings: list):
+    """``(records, outputs)`` with the motions whose target is computed at run time routed through
+    the language's run-time correction (:mod:`robocal.programs.runtime`), its routine added to each
+    file holding one; every other motion's record and every other byte as they were."""
+    sites, why_not = routed_sites(program, corrected)
+    warnings += why_not
+    writer = d.runtime_writer()
+    chain = calibrated_chain(calibrated, nominal, robot_base)
+    routed_at = {(s.account.source.path, s.account.source.line_of(s.account.at)) for s in sites}
+    outputs = {}
+    for src in sources:
+        mine = {(s.start, s.end): s for s in sites if s.path == src.path}
+        fe = edits.pop(src.path, FileEdits())
+        if mine:
+            for site in mine.values():
+                fe.spans.update(writer.site_edits(src.text, site))
+            at, text = writer.routine(src.text, chain, program.tools, marker_text(calibrated))
+            fe.spans[(at, at)] = text
+        outputs[src.path] = fe.apply(src)
+    if sites:
+        left = f"; left out: the joint-error terms {', '.join(chain.left_out)}" if chain.left_out else ""
+        warnings.append(f"{len(routed_at)} motion(s) whose target is computed at run time go through "
+                        f"{ROUTINE_NAME}, added to the program: up to {chain.iterations} inverse-kinematics "
+                        f"calls each at run time{left}")
+    at = {(p.name, ln) for p, ln in routed_at}
+    records = [replace(r, reason=f"corrected at run time by {ROUTINE_NAME} (--runtime-correction): "
+                                 f"{r.reason}") if (r.file, r.line) in at else r for r in records]
+    return records, outputs
 
 
 def _compensate(model: Robot, nominal: Robot, F: np.ndarray, seeds: np.ndarray) -> Compensation:

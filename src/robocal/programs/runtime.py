@@ -147,11 +147,18 @@ def calibrated_chain(calibrated: Robot, nominal: Robot, robot_base=None) -> Cali
     model = controller_model(calibrated, nominal, robot_base)
     if model.has_prismatic:
         raise DataError("--runtime-correction computes revolute arms only: the model has a prismatic joint")
-    links = np.array([rot_x(al) @ _tx(a) @ rot_y(be) for al, a, be in zip(model.alpha, model.a, model.beta,
-                                                                           strict=True)])
+    links = np.array([_h(rot_x(al)) @ _tx(a) @ _h(rot_y(be))
+                      for al, a, be in zip(model.alpha, model.a, model.beta, strict=True)])
     left = tuple(model.joint_errors.terms) if model.joint_errors is not None else ()
     return CalibratedChain(model.base.copy(), links, model.theta.copy(), model.d.copy(), model.tool.copy(),
                            left)
+
+
+def _h(R: np.ndarray) -> np.ndarray:
+    """The 4x4 of rotation ``R`` (3x3)."""
+    T = np.eye(4)
+    T[:3, :3] = R
+    return T
 
 
 def _tx(a: float) -> np.ndarray:

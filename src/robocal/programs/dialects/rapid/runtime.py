@@ -1,0 +1,122 @@
+"""The run-time correction in ABB RAPID (:mod:`robocal.programs.runtime`): two LOCAL FUNCs added
+before the module's last ``ENDMODULE`` between marker comments, and each routed motion's target
+argument ``expr`` written ``RC_Correct(expr, tool, wobj)`` (every other byte unchanged).
+
+``RC_FK(joints, tool)`` is the calibrated TCP pose in the world: the calibrated chain's constants
+(:class:`~robocal.programs.runtime.CalibratedChain`, mm and deg, declared CONST inside the FUNC:
+a module's data come before its routines) composed with PoseMult in a FOR loop over the links.
+``RC_Correct(target, tool, wobj)`` runs the fixed-point iteration of
+:func:`robocal.programs.runtime.reference_correction` with CalcJointT as the controller's inverse
+kinematics (the target's robconf kept) and returns the target with the corrected trans/rot, its
+robconf and extax unchanged. Only base-system RAPID: PoseMult, PoseInv, OrientZYX, VectMagn,
+CalcJointT, FOR, IF (no option needed).
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from robocal.core.errors import DataError
+from robocal.programs.rotations import matrix_to_quat
+from robocal.programs.runtime import ROUTINE_NAME, CalibratedChain, RuntimeSite, RuntimeWriter
+
+BEGIN = "! >>> robocal run-time correction: BEGIN (added by robocal filter --runtime-correction)"
+END = "! <<< robocal run-time correction: END"
+_ENDMODULE = re.compile(r"^[ \t]*ENDMODULE\b", re.M | re.I)
+_DEFAULT_WOBJ = "wobj0"
+
+
+def _pose(T: np.ndarray) -> str:
+    """A RAPID pose aggregate of ``T`` (4x4, m): mm and a w-first quaternion."""
+    q = matrix_to_quat(T[None, :3, :3], np.array([[1.0, 0, 0, 0]]))[0]
+    p = T[:3, 3] * 1e3
+    return "[[" + ",".join(f"{v:.6f}" for v in p) + "],[" + ",".join(f"{v:.10f}" for v in q) + "]]"
+
+
+def _nums(values: np.ndarray) -> str:
+    return "[" + ",".join(f"{v:.8f}" for v in values) + "]"
+
+
+class RapidRuntime(RuntimeWriter):
+    """The RAPID run-time correction writer."""
+
+    def site_edits(self, text: str, site: RuntimeSite) -> dict[tuple[int, int], str]:
+        wobj = site.wobj or _DEFAULT_WOBJ
+        return {(site.start, site.start): f"{ROUTINE_NAME}(", (site.end, site.end): f", {site.tool}, {wobj})"}
+
+    def routine(self, text: str, chain: CalibratedChain, tools: dict[str, np.ndarray],
+                note: str) -> tuple[int, str]:
+        if re.search(rf"\b{ROUTINE_NAME}\b|\bRC_FK\b", text, re.I) and BEGIN not in text:
+            raise DataError(f"the program already names {ROUTINE_NAME} or RC_FK: --runtime-correction "
+                            "cannot add its routine under that name")
+        ends = list(_ENDMODULE.finditer(text))
+        if not ends:
+            raise DataError("--runtime-correction: no ENDMODULE in the file to add the routine before")
+        newline = "\r\n" if "\r\n" in text else "\n"
+        n = len(chain.theta)
+        left = (f"! not computed here (the calibrated model's joint-error terms): {', '.join(chain.left_out)}"
+                if chain.left_out else "! the calibrated model has no joint-error terms: the chain is all of "
+                "it")
+        lines = [
+            BEGIN,
+            f"! {note}",
+            f"! {ROUTINE_NAME}(target, tool, wobj): the robtarget to program so that the real robot's",
+            "! TCP lands on target: q := CalcJointT (the controller's nominal model, the target's",
+            "! robconf), the calibrated TCP at q (RC_FK), the target moved by the pose error, at most",
+            f"! {chain.iterations} CalcJointT calls; robconf and extax kept.",
+            left,
+            "LOCAL FUNC pose RC_FK(jointtarget J, PERS tooldata Tool)",
+            "  ! calibrated chain: base * link{i} * Rz(theta{i} + q{i}) * Tz(d{i}) * flange * tool (mm, deg)",
+            f"  CONST pose RC_BASE := {_pose(chain.base)};",
+            f"  CONST pose RC_LINK{{{n}}} := [" + ",".join(_pose(L) for L in chain.links) + "];",
+            f"  CONST num RC_THETA{{{n}}} := {_nums(np.rad2deg(chain.theta))};",
+            f"  CONST num RC_D{{{n}}} := {_nums(chain.d * 1e3)};",
+            f"  CONST pose RC_FLANGE := {_pose(chain.flange)};",
+            f"  VAR num q{{{n}}};",
+            "  VAR pose P;",
+            "  VAR pose Z := [[0,0,0],[1,0,0,0]];",
+            *[f"  q{{{i + 1}}} := J.robax.rax_{i + 1};" for i in range(n)],
+            "  P := RC_BASE;",
+            f"  FOR i FROM 1 TO {n} DO",
+            "    Z.trans.z := RC_D{i};",
+            "    Z.rot := OrientZYX(RC_THETA{i} + q{i}, 0, 0);",
+            "    P := PoseMult(PoseMult(P, RC_LINK{i}), Z);",
+            "  ENDFOR",
+            "  RETURN PoseMult(PoseMult(P, RC_FLANGE), Tool.tframe);",
+            "ENDFUNC",
+            f"LOCAL FUNC robtarget {ROUTINE_NAME}(robtarget Target, PERS tooldata Tool, PERS wobjdata WObj)",
+            f"  CONST num RC_TOL_MM := {chain.tolerance_mm:g};",
+            f"  CONST num RC_TOL_SIN := {np.sin(np.deg2rad(chain.tolerance_deg) / 2):.3e};  ! sin(angle / 2)",
+            "  VAR robtarget T;",
+            "  VAR jointtarget J;",
+            "  VAR pose W;",
+            "  VAR pose X;",
+            "  VAR pose C;",
+            "  VAR pose E;",
+            "  VAR pose P;",
+            "  T := Target;",
+            "  W := PoseMult(WObj.uframe, WObj.oframe);",
+            "  P.trans := Target.trans;",
+            "  P.rot := Target.rot;",
+            "  X := PoseMult(W, P);",
+            "  C := X;",
+            f"  FOR k FROM 1 TO {chain.iterations} DO",
+            "    J := CalcJointT(T, Tool \\WObj:=WObj);",
+            "    E := PoseMult(PoseInv(RC_FK(J, Tool)), X);",
+            "    IF VectMagn(E.trans) <= RC_TOL_MM AND",
+            "      Sqrt(E.rot.q2 * E.rot.q2 + E.rot.q3 * E.rot.q3 + E.rot.q4 * E.rot.q4) <= RC_TOL_SIN THEN",
+            "      RETURN T;",
+            "    ENDIF",
+            "    C := PoseMult(C, E);",
+            "    P := PoseMult(PoseInv(W), C);",
+            "    T.trans := P.trans;",
+            "    T.rot := P.rot;",
+            "  ENDFOR",
+            "  RETURN T;",
+            "ENDFUNC",
+            END,
+        ]
+        at = ends[-1].start()
+        return at, newline.join(lines) + newline
