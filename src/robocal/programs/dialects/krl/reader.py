@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import bisect
 import re
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -52,6 +53,10 @@ _DECL = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(E6POS|POS|FRAME)\s+([A-Za
 _AXES = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:E6AXIS|AXIS)\s+([A-Za-z_$]\w*)",
                    re.IGNORECASE | re.MULTILINE)
 _ELEMENT = re.compile(r"^[ \t]*([A-Za-z_]\w*\s*\[\s*\d+(?:\s*,\s*\d+)*\s*\])\s*=\s*(?=\{)", re.MULTILINE)
+_KINDS = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:CONST\s+)?(E6POS|POS|FRAME)\s+([^=\n]+)",
+                    re.IGNORECASE | re.MULTILINE)  # the position types the names are declared with
+_SYSTEM_KINDS = {"$POS_ACT": "E6POS", "$POS_INT": "E6POS", "$POS_RET": "E6POS", "$POS_BACK": "E6POS",
+                 "$POS_FOR": "E6POS"}  # other system positions ($BASE, $NULLFRAME ...): FRAME
 _FDAT = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?FDAT\s+(\w+)\s*=\s*(?=\{)",
                    re.IGNORECASE | re.MULTILINE)
 _DATA = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:FRAME\s+)?(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]"
@@ -216,6 +221,9 @@ class KRLDialect(Dialect):
                 st.fdat[m.group(1).upper()] = (comps.get("TOOL_NO"), comps.get("BASE_NO"),
                                                comps.get("IPO_FRAME", "#BASE").upper())
             st.axes |= {m.group(1).upper() for m in _AXES.finditer(masked)}
+            for m in _KINDS.finditer(masked):
+                for name in re.findall(r"([A-Za-z_$]\w*)\s*(?:\[[^\]]*\])?\s*(?:,|$)", m.group(2)):
+                    st.kinds[name.upper()] = m.group(1).upper()
             st.machines.read(src, masked)
             reference = src not in sources
             for m in _DECL.finditer(masked):
@@ -333,10 +341,10 @@ class KRLDialect(Dialect):
                     if found and all(isinstance(f, RunTime) for f in found):
                         stop = a + len(_APPROX.sub("", masked[a:b]).rstrip())
                         tool, base = state["tool"][0], state["base"][0]
-                        prog.runtime_sites.append(RuntimeSite(acc, src.path, a + len(masked[a:b]) -
-                                                              len(masked[a:b].lstrip()), stop, "$TOOL",
-                                                              "$BASE", "" if tool == "?" else tool,
-                                                              "" if base == "?" else base))
+                        site = _site(st, acc, src.path, a + len(masked[a:b]) - len(masked[a:b].lstrip()), stop,
+                                     head, "" if tool == "?" else tool, "" if base == "?" else base)
+                        if site is not None:
+                            prog.runtime_sites.append(site)
                     for f in found:
                         if f is None:
                             continue
@@ -477,6 +485,7 @@ class _State:
         self.declared: dict[str, list[Target]] = {}
         self.reference: set[int] = set()
         self.axes: set[str] = set()
+        self.kinds: dict[str, str] = {}  # name -> FRAME / POS / E6POS, as declared
         self.fdat: dict[str, tuple] = {}
         self.params: dict[str, list[str]] = {}
         self.calls: dict[str, list] = {}
@@ -494,6 +503,44 @@ class _State:
 
     def all_targets(self) -> list[Target]:
         return [t for ts in self.declared.values() for t in ts]
+
+
+@dataclass(frozen=True)
+class KRLSite(RuntimeSite):
+    """A KRL run-time target argument: ``reference`` is '' for a POS/E6POS expression, else the
+    POS/E6POS whose Status, Turn and external axes the FRAME it computes is corrected in (the
+    left operand of ``P:OFFSET``: KRL gives ':' the right operand's type)."""
+
+    reference: str = ""
+
+
+def _kind(st: _State, operand: str) -> str:
+    """The type of a KRL position expression's operand: FRAME, POS or E6POS ('' unknown)."""
+    operand = operand.strip()
+    if operand.startswith("{"):
+        return "POS" if re.search(r"\bS\s", operand, re.IGNORECASE) else "FRAME"
+    name = re.match(r"[A-Za-z_$]\w*", operand)
+    if name is None:
+        return ""
+    key = name.group().upper()
+    if key.startswith("$"):
+        return _SYSTEM_KINDS.get(key, "FRAME")
+    return st.kinds.get(key, "")
+
+
+def _site(st: _State, acc, path, start: int, end: int, text: str, tool: str, base: str) -> KRLSite | None:
+    """The run-time site of argument ``text`` (``start:end``), None when its type is not known or
+    it is a FRAME computed from no POS/E6POS (no Status/Turn to correct it in)."""
+    operands = [text[slice(*o)] for o in split_top(text, 0, len(text), ":")]
+    kind = _kind(st, operands[-1])
+    reference = ""
+    if kind == "FRAME":
+        reference = operands[0].strip()
+        if len(operands) < 2 or _kind(st, reference) not in ("POS", "E6POS") or "{" in reference:
+            return None
+    elif kind not in ("POS", "E6POS"):
+        return None
+    return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, reference)
 
 
 def _routine_at(routines: list[tuple[int, str]], at: int) -> str:

@@ -1,7 +1,8 @@
 """KUKA KRL's run-time correction (``filter --runtime-correction``, the language-neutral part is
 :mod:`robocal.programs.runtime`): a function the filter appends to the ``.src`` that corrects a
 target computed at run time with the calibrated model, and each such motion's target wrapped in
-a call of it (``LIN RC_CORRECT(P:OFFSET)``).
+a call of it (``LIN RC_CORRECT(PCUR)``; a FRAME target ``P:OFFSET`` as
+``LIN RC_CORRECTF(P:OFFSET, P)``, corrected in ``P``'s Status and Turn).
 
 ``RC_CORRECT(P)`` (a ``DEFFCT E6POS`` with two helpers, between ``;FOLD robocal run-time
 correction`` and ``;ENDFOLD``; nothing is added to the ``.dat``: the constants are assigned in the
@@ -34,6 +35,7 @@ from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.runtime import ROUTINE_NAME, CalibratedChain, RuntimeSite, RuntimeWriter
 
 FUNCTION = ROUTINE_NAME.upper()  # RC_CORRECT (KRL names: at most 24 characters, any case)
+FRAME_FUNCTION = FUNCTION + "F"  # its twin for a FRAME target (P:OFFSET), in a POS's Status and Turn
 BEGIN = ";FOLD robocal run-time correction"  # the added text's first line (a KRL fold)
 END = ";ENDFOLD robocal run-time correction"
 _DIGITS = 6  # decimals of the constants: 1e-6 mm and deg (KRL REAL is 32-bit: ~1e-4 mm at 1 m)
@@ -131,6 +133,17 @@ def routine_text(chain: CalibratedChain, note: str, newline: str = "\n") -> str:
            "RETURN RC_CMD",
            "ENDFCT",
            "",
+           f"DEFFCT FRAME {FRAME_FUNCTION}(RC_F:IN, RC_R:IN)",
+           "; a FRAME target F (P:OFFSET: KRL gives ':' its right operand's type) corrected in the Status,",
+           "; Turn and external axes of the position R it is computed from",
+           "DECL FRAME RC_F",
+           "DECL E6POS RC_R",
+           *[f"RC_R.{f} = RC_F.{f}" for f in _FIELDS],
+           f"RC_R = {FUNCTION}(RC_R)",
+           *[f"RC_F.{f} = RC_R.{f}" for f in _FIELDS],
+           "RETURN RC_F",
+           "ENDFCT",
+           "",
            "DEFFCT FRAME RC_CONST(RC_N:IN)",
            "; the calibrated chain's constant frames: 1..6 link N's Rx(alpha) Tx(a) Ry(beta), 7 the base",
            "; in $ROBROOT, 8 the flange (mm, deg)",
@@ -161,6 +174,9 @@ class KRLRuntime(RuntimeWriter):
     ``.src`` holding the motions, their targets wrapped in calls of it."""
 
     def site_edits(self, text, site: RuntimeSite):
+        reference = getattr(site, "reference", "")  # a KRLSite's: a FRAME target and its POS
+        if reference:
+            return {(site.start, site.start): f"{FRAME_FUNCTION}(", (site.end, site.end): f", {reference})"}
         return {(site.start, site.start): f"{FUNCTION}(", (site.end, site.end): ")"}
 
     def routine(self, text, chain, tools, note):
