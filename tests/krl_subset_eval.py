@@ -102,7 +102,7 @@ class Machine:
                               "$ROBROOT": null.copy(), **(system or {})}
         self.types: dict = {}
         self.functions: dict = {}
-        self.calls: dict[str, int] = {}  # built-in name -> times called
+        self.calls: dict[str, int] = {}  # built-in name / ':' / 'statements' -> times called or run
 
     # ------------------------------------------------------------------ loading
     def load_dat(self, text: str) -> None:
@@ -110,7 +110,8 @@ class Machine:
             head = line.split()[0].upper()
             if head in ("DEFDAT", "ENDDAT"):
                 continue
-            m = re.match(r"(?:DECL\s+)?(?:GLOBAL\s+)?(?:CONST\s+)?(INT|REAL|BOOL|FRAME|POS|E6POS|AXIS|E6AXIS)\s+"
+            m = re.match(r"(?:DECL\s+)?(?:GLOBAL\s+)?(?:CONST\s+)?"
+                         r"(INT|REAL|BOOL|FRAME|POS|E6POS|AXIS|E6AXIS)\s+"
                          r"(\w+)\s*(?:\[\s*(\d+)\s*\])?\s*(?:=\s*(.+))?$", line, re.IGNORECASE)
             if m:
                 self._declare(self.globals, self.types, m.group(1).upper(), m.group(2).upper(), m.group(3))
@@ -163,6 +164,7 @@ class Machine:
     def _run(self, body, local, types):
         for stmt in body:
             kind = stmt[0]
+            self.calls["statements"] = self.calls.get("statements", 0) + 1
             if kind == "assign":
                 target, path = _lvalue(stmt[1], self, local, types)
                 self._assign(target, path, self._eval(stmt[2], local, types), local, types)
@@ -219,7 +221,7 @@ class Machine:
             scope[name] = self._convert(value, t)
             return
         holder, key = scope, name
-        for kind, k in path:
+        for _, k in path:
             holder = holder[key]
             key = k
         if isinstance(holder, Struct):
@@ -412,6 +414,7 @@ class _Parser:
             if not (isinstance(left, Struct) and isinstance(right, Struct)):
                 raise KRLError("the ':' operator takes frames and positions")
             left = from_matrix(to_matrix(left) @ to_matrix(right), right)
+            self.m.calls[":"] = self.m.calls.get(":", 0) + 1
         return left
 
     def postfix(self):
@@ -451,7 +454,8 @@ class _Parser:
                 pieces.append(self.t[start:j])
             self.k = j + 1
             out_arg = {"INVERSE": 2, "FORWARD": 1}.get(name)
-            args = [None if i == out_arg else self.m._eval(p, self.local, self.types) for i, p in enumerate(pieces)]
+            args = [None if i == out_arg else self.m._eval(p, self.local, self.types)
+                    for i, p in enumerate(pieces)]
             if name in self.m.functions:
                 return self.m.call(name, args), None
             return self.m.builtin(name, args, pieces, self.local, self.types), None

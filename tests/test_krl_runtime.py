@@ -30,7 +30,8 @@ NOMINAL = rc.Robot.from_catalog("kuka_kr16_2")
 TOOL = np.array([[0.0, 0.0, 1.0, 0.012], [0.0, 1.0, 0.0, -0.004], [-1.0, 0.0, 0.0, 0.16], [0, 0, 0, 1]])
 BASE = np.eye(4)
 BASE[:3, 3] = [0.25, -0.1, 0.05]
-OFFSETS = [(20.0, -10.0, 5.0, 3.0, -2.0, 4.0), (-35.0, 15.0, -25.0, -6.0, 4.0, 1.0), (0.0, 40.0, 10.0, 0.0, 0.0, -8.0)]
+OFFSETS = [(20.0, -10.0, 5.0, 3.0, -2.0, 4.0), (-35.0, 15.0, -25.0, -6.0, 4.0, 1.0),
+           (0.0, 40.0, 10.0, 0.0, 0.0, -8.0)]  # run-time values of OFFS, mm and deg
 Q = np.deg2rad([[25, -85, 95, 35, 45, -40], [-25, -70, 110, -40, -35, 60], [30, -95, 85, 60, 55, 40],
                 [-30, -60, 100, -100, 25, 150]])  # axes 20 deg or more from 0: the offsets keep S and T
 
@@ -174,7 +175,8 @@ def test_the_krl_chain_is_the_calibrated_model(filtered):
         m.globals["RC_TEST_Y"] = m.evaluate("RC_CONST(7)")
         for i in range(1, 7):
             m.globals["RC_TEST_I"] = i
-            m.globals["RC_TEST_Y"] = m.evaluate("RC_TEST_Y:RC_CONST(RC_TEST_I):RC_JOINT(RC_TEST_I, RC_TEST_Q)")
+            m.globals["RC_TEST_Y"] = m.evaluate(
+                "RC_TEST_Y:RC_CONST(RC_TEST_I):RC_JOINT(RC_TEST_I, RC_TEST_Q)")
         Y = to_matrix(m.evaluate("RC_TEST_Y:RC_CONST(8)"))
         want = model.fk(q[None])[0]
         assert np.abs(Y[:3, 3] - want[:3, 3] * 1e3).max() < 2e-3  # mm (32-bit REALs)
@@ -199,6 +201,7 @@ def test_executed_routine_lands_where_compensate_does(filtered):
             target = Struct("E6POS", {**reference.values, **target.values})
             command = m.evaluate(call)
             calls.append(m.calls.get("INVERSE", 0) - before.get("INVERSE", 0))
+            work = {k: m.calls.get(k, 0) - before.get(k, 0) for k in (":", "INV_POS", "statements")}
             assert command.type == "FRAME"  # as the motion's target was
             command = Struct("E6POS", {**reference.values, **command.values})
             X = _metres(to_matrix(m.globals["$BASE"]) @ to_matrix(target))  # meant TCP, robot base
@@ -214,8 +217,11 @@ def test_executed_routine_lands_where_compensate_does(filtered):
             gap.append(np.linalg.norm((off.corrected_targets[0] @ TOOL)[:3, 3] - _metres(
                 to_matrix(m.globals["$BASE"]) @ to_matrix(command))[:3, 3]) * 1e3)
             config = [target.values["S"], target.values["T"]]
-            ref, _ = reference_correction(chain, X[None], BASE[None], TOOL[None], lambda T, c=config: np.deg2rad(
-                _inverse(m, _struct(np.linalg.inv(BASE) @ T[0], "E6POS", c), zero)[0])[None])
+
+            def solve(T, c=config):  # the controller's IK of world TCP poses (N, 4, 4) m -> rad
+                return np.deg2rad(_inverse(m, _struct(np.linalg.inv(BASE) @ T[0], "E6POS", c), zero)[0])[None]
+
+            ref, _ = reference_correction(chain, X[None], BASE[None], TOOL[None], solve)
             assert np.linalg.norm(ref[0][:3, 3] * 1e3 - to_matrix(command)[:3, 3]) < FLOAT32_MM
     rt_err, off_err = np.array(rt_err), np.array(off_err)
     assert (rt_err <= GOAL * off_err + FLOAT32_MM).all(), (rt_err, off_err)
@@ -223,7 +229,7 @@ def test_executed_routine_lands_where_compensate_does(filtered):
     assert max(calls) <= calibrated_chain(calibrated, NOMINAL).iterations
     print(f"landing error on the true robot, mm: run time max {rt_err.max():.4f} mean {rt_err.mean():.4f}; "
           f"offline compensate max {off_err.max():.4f} mean {off_err.mean():.4f}; command gap max "
-          f"{max(gap):.5f} mm; INVERSE calls per motion {min(calls)}..{max(calls)}")
+          f"{max(gap):.5f} mm; INVERSE calls per motion {min(calls)}..{max(calls)}; last motion: {work}")
 
 
 def test_crlf_program_keeps_its_line_ends(tmp_path):
@@ -239,9 +245,11 @@ def test_crlf_program_keeps_its_line_ends(tmp_path):
 def test_evaluator_frame_operator_against_matrices():
     """The evaluator's ':' and INV_POS are 4x4 products and inverses of Rz(A) Ry(B) Rx(C) frames."""
     m = Machine(_inverse, _forward)
-    m.globals["F1"] = Struct("FRAME", dict(zip(FIELDS["FRAME"], (10.0, 20.0, 30.0, 90.0, 0.0, 0.0), strict=True)))
+    m.globals["F1"] = Struct("FRAME", dict(zip(FIELDS["FRAME"], (10.0, 20.0, 30.0, 90.0, 0.0, 0.0),
+                                               strict=True)))
     out = m.evaluate("F1:{X 5.0, Y 0.0, Z 0.0, A 0.0, B 0.0, C 0.0}")
     assert np.allclose([out.values[k] for k in "XYZ"], [10.0, 25.0, 30.0], atol=1e-4)  # x turned onto y
     ident = m.evaluate("INV_POS(F1):F1")
     assert np.allclose([ident.values[k] for k in FIELDS["FRAME"]], 0.0, atol=1e-4)
-    assert m.evaluate("ATAN2(1.0, 1.0)") == pytest.approx(45.0) and m.evaluate("SIN(30.0)") == pytest.approx(0.5)
+    assert m.evaluate("ATAN2(1.0, 1.0)") == pytest.approx(45.0)
+    assert m.evaluate("SIN(30.0)") == pytest.approx(0.5)

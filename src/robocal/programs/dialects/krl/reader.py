@@ -341,7 +341,8 @@ class KRLDialect(Dialect):
                     if found and all(isinstance(f, RunTime) for f in found):
                         stop = a + len(_APPROX.sub("", masked[a:b]).rstrip())
                         tool, base = state["tool"][0], state["base"][0]
-                        site = _site(st, acc, src.path, a + len(masked[a:b]) - len(masked[a:b].lstrip()), stop,
+                        lead = len(masked[a:b]) - len(masked[a:b].lstrip())
+                        site = _site(st, acc, src.path, a + lead, stop,
                                      head, "" if tool == "?" else tool, "" if base == "?" else base)
                         if site is not None:
                             prog.runtime_sites.append(site)
