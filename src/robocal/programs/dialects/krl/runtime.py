@@ -82,7 +82,7 @@ def routine_text(chain: CalibratedChain, note: str, newline: str = "\n") -> str:
     joints = np.zeros((n, 6))
     joints[:, 2], joints[:, 3] = chain.d * 1e3, np.rad2deg(chain.theta)
     left = f" (not computed: {', '.join(chain.left_out)})" if chain.left_out else ""
-    src = [BEGIN + f": added by {note}; do not edit",
+    src = [BEGIN + f" (added by {note}, do not edit)",  # no ';' in a fold's title line
            f"DEFFCT E6POS {FUNCTION}(RC_P:IN)",
            "; the target P computed at run time, corrected with the calibrated model" + left + ": the",
            "; command whose nominal axes (INVERSE) put the calibrated TCP on P in $BASE with $TOOL",
