@@ -71,6 +71,10 @@ def add_parser(sub) -> None:
     p.add_argument("--strict", action="store_true",
                    help="refuse when a motion moves to a name declared in none of the files given (default: "
                         "each such motion is named, with the declaration it needs, and the rest corrected)")
+    p.add_argument("--runtime-correction", action="store_true",
+                   help="add a routine in the program's language that corrects targets computed at run time "
+                        "(run-time offsets, positions modified at run time) with the calibrated model, and "
+                        "route those motions through it (docs/programs.md)")
     p.set_defaults(func=run)
 
 
@@ -119,7 +123,8 @@ def run(args) -> int:
                          dialect=args.format, references=args.references, keep_unreached=args.keep_unreached,
                          force=args.force, strict=args.strict, position_registers=args.position_registers,
                          payload=payload_si(args.payload), temperature=args.temperature,
-                         payload_schedules=args.payload_schedules, prediction=prediction, arm=args.arm)
+                         payload_schedules=args.payload_schedules, prediction=prediction, arm=args.arm,
+                         runtime_correction=args.runtime_correction)
     written = res.write({p: targets[Path(p)] for p in res.outputs}, table)
     if args.quiet:  # the warnings still matter
         for w in res.warnings:
