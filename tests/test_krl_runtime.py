@@ -253,3 +253,21 @@ def test_evaluator_frame_operator_against_matrices():
     assert np.allclose([ident.values[k] for k in FIELDS["FRAME"]], 0.0, atol=1e-4)
     assert m.evaluate("ATAN2(1.0, 1.0)") == pytest.approx(45.0)
     assert m.evaluate("SIN(30.0)") == pytest.approx(0.5)
+
+
+def test_cli_runtime_correction(tmp_path):
+    from robocal.cli import main
+
+    _, calibrated = _models()
+    paths = _program(tmp_path)
+    before = [p.read_bytes() for p in paths]
+    calibrated.save(tmp_path / "cal.yaml")
+    out = tmp_path / "out"
+    out.mkdir()
+    text = lambda T: ",".join(f"{v:.6f}" for v in frame_numbers(T[None])[0])  # noqa: E731
+    assert main(["filter", *map(str, paths), "--calibrated", str(tmp_path / "cal.yaml"), "--nominal",
+                 "kuka_kr16_2", "--tool", f"1={text(TOOL)}", "--frame", f"1={text(BASE)}",
+                 "--runtime-correction", "-o", str(out)]) == 0
+    src = (out / "rtprog.src").read_text()
+    assert f"DEFFCT E6POS {FUNCTION}(RC_P:IN)" in src and src.count(BEGIN) == 1
+    assert [p.read_bytes() for p in paths] == before  # the inputs are untouched
