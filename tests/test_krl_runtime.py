@@ -271,3 +271,19 @@ def test_cli_runtime_correction(tmp_path):
     src = (out / "rtprog.src").read_text()
     assert f"DEFFCT E6POS {FUNCTION}(RC_P:IN)" in src and src.count(BEGIN) == 1
     assert [p.read_bytes() for p in paths] == before  # the inputs are untouched
+
+
+def test_a_frame_from_frames_is_not_routed_and_says_why(tmp_path):
+    """F1:F2 with both FRAMEs has no Status/Turn to correct it in: named, not routed."""
+    (tmp_path / "u.src").write_text("DEF u( )\n  $TOOL = TOOL_DATA[1]\n  $BASE = BASE_DATA[1]\n  LIN F1:F2\n"
+                                    "  F2.X = 3.0\n  LIN F1:F2\nEND\n")
+    (tmp_path / "u.dat").write_text("DEFDAT u\nDECL FRAME F1={X 900,Y 0,Z 900,A 0,B 90,C 0}\n"
+                                    "DECL FRAME F2={X 0,Y 0,Z 0,A 0,B 0,C 0}\nENDDAT\n")
+    _, calibrated = _models()
+    res = rc.filter_program([tmp_path / "u.src", tmp_path / "u.dat"], calibrated, NOMINAL,
+                            tools={"1": "0,0,100,0,0,0"}, frames={"1": "0,0,0,0,0,0"},
+                            runtime_correction=True)
+    assert FUNCTION not in res.outputs[tmp_path / "u.src"].decode()
+    assert any("u.src:4: LIN: not corrected at run time: F1:F2 is a FRAME computed from no POS/E6POS" in w
+               for w in res.warnings)
+    assert all(r.status != "corrected" for r in res.motions)

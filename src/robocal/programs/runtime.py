@@ -89,7 +89,8 @@ class RuntimeSite:
     """One target argument of a motion instruction whose target is computed at run time:
     ``account`` (the motion's), ``path`` and the span ``start:end`` of the argument as written,
     the tool and work object as written there (``wobj`` None: the language's default) and the
-    names they resolve to in :class:`Program` (``tool_name``, ``frame_name``; '' unresolved)."""
+    names they resolve to in :class:`Program` (``tool_name``, ``frame_name``; '' unresolved);
+    ``why_not``: why the language's reader already knows it cannot be routed ('': it may be)."""
 
     account: Account
     path: Path
@@ -99,6 +100,7 @@ class RuntimeSite:
     wobj: str | None
     tool_name: str
     frame_name: str
+    why_not: str = ""
 
 
 @dataclass(frozen=True)
@@ -222,6 +224,8 @@ def routable(program: Program, sites: list[RuntimeSite], corrected: set[int]) ->
         return ("its target is computed from a target corrected offline (correcting it again would "
                 "correct twice)")
     for s in sites:
+        if s.why_not:
+            return s.why_not
         for kind, name, known in (("tool", s.tool_name, program.tools),
                                   ("frame", s.frame_name, program.frames)):
             if not name or name not in known:

@@ -344,8 +344,7 @@ class KRLDialect(Dialect):
                         lead = len(masked[a:b]) - len(masked[a:b].lstrip())
                         site = _site(st, acc, src.path, a + lead, stop,
                                      head, "" if tool == "?" else tool, "" if base == "?" else base)
-                        if site is not None:
-                            prog.runtime_sites.append(site)
+                        prog.runtime_sites.append(site)
                     for f in found:
                         if f is None:
                             continue
@@ -529,19 +528,23 @@ def _kind(st: _State, operand: str) -> str:
     return st.kinds.get(key, "")
 
 
-def _site(st: _State, acc, path, start: int, end: int, text: str, tool: str, base: str) -> KRLSite | None:
-    """The run-time site of argument ``text`` (``start:end``), None when its type is not known or
-    it is a FRAME computed from no POS/E6POS (no Status/Turn to correct it in)."""
+def _site(st: _State, acc, path, start: int, end: int, text: str, tool: str, base: str) -> KRLSite:
+    """The run-time site of argument ``text`` (``start:end``); its ``why_not`` says when it cannot
+    be routed: its type is declared in no file given, or it is a FRAME computed from no POS/E6POS
+    (no Status/Turn to correct it in)."""
     operands = [text[slice(*o)] for o in split_top(text, 0, len(text), ":")]
     kind = _kind(st, operands[-1])
     reference = ""
     if kind == "FRAME":
         reference = operands[0].strip()
         if len(operands) < 2 or _kind(st, reference) not in ("POS", "E6POS") or "{" in reference:
-            return None
+            why = (f"{text} is a FRAME computed from no POS/E6POS: no Status and Turn to correct it in "
+                   "(write it as P:OFFSET with P a POS/E6POS)")
+            return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, why)
     elif kind not in ("POS", "E6POS"):
-        return None
-    return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, reference)
+        why = f"the type of {operands[-1].strip()} is declared in no file given (DECL E6POS/POS/FRAME)"
+        return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, why)
+    return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, "", reference)
 
 
 def _routine_at(routines: list[tuple[int, str]], at: int) -> str:
