@@ -287,3 +287,40 @@ def test_a_frame_from_frames_is_not_routed_and_says_why(tmp_path):
     assert any("u.src:4: LIN: not corrected at run time: F1:F2 is a FRAME computed from no POS/E6POS" in w
                for w in res.warnings)
     assert all(r.status != "corrected" for r in res.motions)
+
+
+def test_what_a_modified_position_starts_from_decides_its_routing(tmp_path):
+    """XP2 = XP1 (corrected offline) then XP2.Z changed: correcting XP2 again would correct twice;
+    P = $POS_ACT then changed: already in the corrected space; XP3 changed from its own value:
+    routed."""
+    (tmp_path / "v.src").write_text("DEF v( )\n  DECL E6POS P\n  $TOOL = TOOL_DATA[1]\n"
+                                    "  $BASE = BASE_DATA[1]\n"
+                                    "  PTP XP1\n  XP2 = XP1\n  XP2.Z = XP2.Z + 50.0\n  LIN XP2\n"
+                                    "  XP3.Z = XP3.Z + 10.0\n  LIN XP3\n  P = $POS_ACT\n  P.X = P.X + 5.0\n"
+                                    "  LIN P\nEND\n")
+    P = np.linalg.inv(BASE) @ NOMINAL.fk(Q[:1]) @ TOOL
+    (tmp_path / "v.dat").write_text("DEFDAT v\n" + "".join(f"DECL E6POS XP{i}={_e6pos(P[0], Q[0])}\n"
+                                                            for i in (1, 2, 3)) + "ENDDAT\n")
+    truth, calibrated = _models()
+    text = lambda T: ",".join(f"{v:.6f}" for v in frame_numbers(T[None])[0])  # noqa: E731
+    res = rc.filter_program([tmp_path / "v.src", tmp_path / "v.dat"], calibrated, NOMINAL,
+                            tools={"1": text(TOOL)}, frames={"1": text(BASE)}, runtime_correction=True)
+    src = res.outputs[tmp_path / "v.src"].decode()
+    assert _wrapped(src) == [("XP3", f"{FUNCTION}(XP3)")]
+    warned = " ".join(res.warnings)
+    assert "v.src:8: LIN: not corrected at run time: its target is computed from a target corrected" in warned
+    assert "v.src:13: LIN: not corrected at run time: its target is relative to the position" in warned
+    # RC_CORRECT on the E6POS XP3 as the program leaves it at run time (Z + 10 mm)
+    m = _machine(src, res.outputs[tmp_path / "v.dat"].decode())
+    m.globals["XP3"].values["Z"] += 10.0
+    target, command = m.evaluate("XP3"), m.evaluate(f"{FUNCTION}(XP3)")
+    assert command.type == "E6POS" and all(command.values[k] == target.values[k] for k in ("S", "T", "E1"))
+    zero = Struct("E6AXIS", {f"A{k}": 0.0 for k in range(1, 7)})
+    X = _metres(to_matrix(m.globals["$BASE"]) @ to_matrix(target))
+    real = controller_model(truth, NOMINAL)
+    landed = real.fk(np.deg2rad(_inverse(m, command, zero)[0])[None])[0] @ TOOL
+    off = compensate(controller_model(calibrated, NOMINAL), NOMINAL, (X @ np.linalg.inv(TOOL))[None],
+                     seeds=np.deg2rad(_inverse(m, target, zero)[0])[None])
+    off_landed = real.fk(off.joints)[0] @ TOOL
+    rt_err, off_err = (np.linalg.norm(T[:3, 3] - X[:3, 3]) * 1e3 for T in (landed, off_landed))
+    assert rt_err <= GOAL * off_err + FLOAT32_MM

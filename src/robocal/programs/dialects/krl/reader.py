@@ -452,8 +452,13 @@ class KRLDialect(Dialect):
         if fields:
             return [f"{text} is a field of a structure: its value is not followed"]
         if st.modified.get(name):  # the pose reached is partly computed at run time
-            return [RunTime(f"{name} is modified at run time ({name}.<field> or {name}[i] = ... at "
-                            f"{st.modified[name][0]})", [id(t) for t in st.declared.get(name + index, [])])]
+            why = (f"{name} is modified at run time ({name}.<field> or {name}[i] = ... at "
+                   f"{st.modified[name][0]})")
+            parts = list(st.declared.get(name + index, []))  # what it starts from: its value, assignments
+            for src, a, b, where_proc in st.assigned.get(name + index, []) + (st.assigned.get(name, [])
+                                                                              if index else []):
+                parts += self._follow(st, st.masked[src.path][a:b].strip(), where_proc, scope, depth + 1)
+            return [merged(why, parts) or why]
         out: list = []
         key = name + index
         sources = st.assigned.get(key, []) + (st.assigned.get(name, []) if index else [])
