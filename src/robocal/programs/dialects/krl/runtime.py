@@ -63,13 +63,14 @@ def _newline(text: str) -> str:
 
 
 def _frame_cases(frames: np.ndarray, var: str, extra: str = "") -> list[str]:
-    """``IF N == k THEN`` blocks assigning frame k's components to ``var``."""
+    """``IF N == k THEN`` blocks assigning frame k's non-zero components to ``var`` (``extra``:
+    added to A, which is then always assigned)."""
     out = []
     for k, row in enumerate(frames, 1):
-        out.append(f"IF RC_N == {k} THEN")
-        out += [f"  {var}.{f} = {_real(float(v))}{extra if f == 'A' else ''}"
+        body = [f"  {var}.{f} = {_real(float(v))}{extra if f == 'A' else ''}"
                 for f, v in zip(_FIELDS, row, strict=True) if v != 0.0 or f == "A" and extra]
-        out.append("ENDIF")
+        if body:  # an identity frame (a base at the robot's root): $NULLFRAME as it is
+            out += [f"IF RC_N == {k} THEN", *body, "ENDIF"]
     return out
 
 
