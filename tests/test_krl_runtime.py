@@ -324,3 +324,58 @@ def test_what_a_modified_position_starts_from_decides_its_routing(tmp_path):
     off_landed = real.fk(off.joints)[0] @ TOOL
     rt_err, off_err = (np.linalg.norm(T[:3, 3] - X[:3, 3]) * 1e3 for T in (landed, off_landed))
     assert rt_err <= GOAL * off_err + FLOAT32_MM
+
+
+@pytest.mark.parametrize("name", ["kuka_kr6_r700", "kuka_kr210_r2700"])
+def test_chain_constants_of_other_arms_and_a_robot_base(name):
+    """RC_CONST / RC_JOINT of another arm, calibrated with a robot base off the controller's,
+    run in the evaluator: robocal's FK of the calibrated model as the controller sees it."""
+    from robocal.programs.dialects.krl.runtime import routine_text
+
+    nominal = rc.Robot.from_catalog(name)
+    rng = np.random.default_rng(7)
+    names = [n for n in nominal.geometry_names if n[:-1] in ("a", "d", "alpha", "beta", "theta")]
+    calibrated = nominal.with_values({n: nominal.get(n) + rng.normal(0, 1e-3) for n in names})
+    robot_base = np.eye(4)
+    robot_base[:3, :3] = _rot_z(0.3)
+    robot_base[:3, 3] = [0.4, -0.2, 0.1]
+    chain = calibrated_chain(calibrated, nominal, robot_base)
+    m = Machine(_inverse, _forward)
+    m.load_src(routine_text(chain, "test"))
+    model = controller_model(calibrated, nominal, robot_base)
+    for q in np.deg2rad(rng.uniform(-150, 150, (5, 6))):
+        m.globals["RC_TEST_Q"] = Struct("E6AXIS", {f"A{k + 1}": float(v)
+                                                   for k, v in enumerate(np.rad2deg(q))})
+        m.globals["RC_TEST_Y"] = m.evaluate("RC_CONST(7)")
+        for i in range(1, 7):
+            m.globals["RC_TEST_I"] = i
+            m.globals["RC_TEST_Y"] = m.evaluate(
+                "RC_TEST_Y:RC_CONST(RC_TEST_I):RC_JOINT(RC_TEST_I, RC_TEST_Q)")
+        Y = to_matrix(m.evaluate("RC_TEST_Y:RC_CONST(8)"))
+        want = model.fk(q[None])[0]
+        assert np.abs(Y[:3, 3] - want[:3, 3] * 1e3).max() < 5e-3  # mm (32-bit REALs, 3 m reach)
+        assert np.abs(Y[:3, :3] - want[:3, :3]).max() < 1e-6
+
+
+def _rot_z(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def test_robroot_off_the_world_gives_the_same_command_in_the_robots_frame(filtered):
+    """$ROBROOT moved in the world and $BASE with it: the pose meant in the robot's base frame is
+    the same, so is the command there (what INVERSE gets)."""
+    _, _, paths, rt, _ = filtered
+    src, dat = (rt.outputs[p].decode("latin-1") for p in paths)
+    m = _machine(src, dat)
+    m.globals["OFFS"] = Struct("FRAME", dict(zip(FIELDS["FRAME"], OFFSETS[0], strict=True)))
+    arg, call = _wrapped(src)[0]
+    before = to_matrix(m.evaluate(call))
+    root = np.eye(4)
+    root[:3, :3] = _rot_z(0.5)
+    root[:3, 3] = [1.5, -0.7, 0.3]
+    m.globals["$ROBROOT"] = _struct(root)
+    m.globals["$BASE"] = _struct(root @ BASE)
+    after = to_matrix(m.evaluate(call))
+    assert np.abs(after[:3, 3] - before[:3, 3]).max() < 2e-3  # mm
+    assert np.abs(after[:3, :3] - before[:3, :3]).max() < 1e-6
