@@ -16,6 +16,12 @@
   ($config.dat) or the command line (``--tool n=X,Y,Z,A,B,C``). World = robot base
   ($ROBROOT = $WORLD) is assumed; an external TCP (IPO_FRAME #TCP) is not filtered.
 
+* Targets computed at run time (``P:OFFS`` with a run-time ``OFFS``, a position modified or
+  assigned at run time, ``$POS_ACT``) are named with a
+  :class:`~robocal.programs.runtime.RunTime` reason and recorded as run-time sites
+  (:class:`KRLSite`: a FRAME result is corrected in the Status/Turn of the POS it offsets) for
+  ``--runtime-correction`` (:mod:`robocal.programs.dialects.krl.runtime`).
+
 Comments (``;`` to the end of the line) and strings are masked first.
 """
 
