@@ -3,7 +3,7 @@ data declarations (CONST/PERS/VAR of num, bool, string, pos, orient, pose, confd
 jointtarget, tooldata, wobjdata, arrays ``{n}``), LOCAL FUNCs (PROCs are skipped), assignments to
 variables, record fields and array elements, FOR, IF/ELSE, RETURN, + - * / and comparisons,
 AND/OR/NOT, aggregates, and the functions PoseMult, PoseInv, PoseVect, OrientZYX, EulerZYX,
-VectMagn, Sqrt, Abs, Offs, RelTool, CalcJointT, CalcRobT. The controller's kinematics (CalcJointT,
+VectMagn, Sqrt, Sin, Cos, Abs, Offs, RelTool, CalcJointT, CalcRobT. The controller's kinematics (CalcJointT,
 CalcRobT) are a :class:`NominalController`: the nominal model's closed-form IK in the robconf the
 robtarget gives (as the controller does). ``single=True`` rounds every num to float32 as the
 controller's ``num`` is (a 32-bit float).
@@ -36,6 +36,7 @@ SCHEMA = {
     "tooldata": [("robhold", "bool"), ("tframe", "pose"), ("tload", "loaddata")],
     "wobjdata": [("robhold", "bool"), ("ufprog", "bool"), ("ufmec", "string"), ("uframe", "pose"),
                  ("oframe", "pose")],
+    "progdisp": [("pdisp", "pose"), ("eoffs", "extjoint")],
 }
 _TOKEN = re.compile(r"\s*(?:(\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)|([A-Za-z_]\w*)|(\"[^\"]*\")|"
                     r"(:=|<=|>=|<>|[\[\](){},;.+\-*/<>=\\:]))")
@@ -78,6 +79,9 @@ class Evaluator:
         self.toks, self.i = _tokens(text), 0
         self.module_toks = self.toks
         self.calls = {"CalcJointT": 0, "CalcRobT": 0}
+        # system data: the active program displacement (none until a test sets one)
+        self.globals["c_progdisp"] = self.coerce("progdisp", [[[0, 0, 0], [1, 0, 0, 0]], [9e9] * 6])
+        self.types["c_progdisp"] = "progdisp"
         self._module()
 
     # ---------------------------------------------------------------- values
@@ -466,6 +470,12 @@ class Evaluator:
     def _f_sqrt(self, v):
         return self.num(np.sqrt(v))
 
+    def _f_sin(self, deg):
+        return self.num(np.sin(np.deg2rad(deg)))
+
+    def _f_cos(self, deg):
+        return self.num(np.cos(np.deg2rad(deg)))
+
     def _f_abs(self, v):
         return self.num(abs(v))
 
@@ -506,9 +516,9 @@ class NominalController:
         self.nominal, self.scheme = nominal, ABBConfig()
 
     def world(self, ev: Evaluator, wobj) -> np.ndarray:
-        if wobj is None:
-            return np.eye(4)
-        return ev.matrix(wobj["uframe"]) @ ev.matrix(wobj["oframe"])
+        """The frame a robtarget is in: uframe * oframe * the active program displacement (mm)."""
+        frame = np.eye(4) if wobj is None else ev.matrix(wobj["uframe"]) @ ev.matrix(wobj["oframe"])
+        return frame @ ev.matrix(ev.globals["c_progdisp"]["pdisp"])
 
     def calc_joint_t(self, ev: Evaluator, target, tool, wobj) -> np.ndarray:
         """Joints (rad) of ``target`` in its robconf (ERR_ROBLIMIT: RapidError)."""

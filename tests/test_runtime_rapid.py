@@ -88,8 +88,41 @@ def test_chain_is_the_calibrated_model():
     q = np.random.default_rng(0).uniform(-2, 2, (50, 6))
     assert np.abs(chain.fk(q, np.eye(4)) - controller_model(CALIBRATED, NOMINAL).fk(q)).max() < 1e-12
     assert chain.left_out == ()
-    with_terms = CALIBRATED.with_joint_errors(["comp2_2"])
+    # the joint-error terms of the joint's own angle are in the chain, the others are named
+    terms = {"gear2_s1": 1e-4, "gear3_c2": -8e-5, "cyc4_3_s": 5e-5, "scale5": 2e-4}
+    geared = CALIBRATED.with_joint_errors(list(terms)).with_values(terms)
+    chain = calibrated_chain(geared, NOMINAL)
+    assert chain.left_out == () and len(chain.harmonics) == 3
+    assert np.abs(chain.fk(q, np.eye(4)) - controller_model(geared, NOMINAL).fk(q)).max() < 1e-12
+    assert np.abs(chain.fk(q, np.eye(4)) - controller_model(CALIBRATED, NOMINAL).fk(q)).max() > 1e-5
+    with_terms = CALIBRATED.with_joint_errors(["comp2_3", "gear2_s1"])
     assert calibrated_chain(with_terms, NOMINAL).left_out == ("compliance",)
+
+
+def test_routine_computes_the_gear_terms(tmp_path):
+    """A calibrated model with gear / cyclic terms (the true robot has them too): the executed
+    routine lands within 1.3x the model's own error; a compliance term is named as left out."""
+    terms = {"gear2_s1": 1e-4, "gear3_c1": 1.5e-4, "cyc6_3_c": 1e-4}
+    true = TRUE.with_joint_errors(list(terms)).with_values(terms)
+    cal = CALIBRATED.with_joint_errors(list(terms)).with_values(terms)
+    path = tmp_path / "cell.mod"
+    path.write_text(MODULE)
+    res = filter_program(path, cal, NOMINAL, runtime_correction=True)
+    assert "RC_HS{3}" in _text(res) and "left out" not in " ".join(res.warnings)
+    ctl = NominalController(NOMINAL)
+    ev = Evaluator(_text(res), ctl)
+    tool, wobj = ev.globals["tgrip"], ev.globals["wtable"]
+    W = ctl.world(ev, wobj)
+    for expr in ("Offs(pBase, 0, 0, 0)", "Offs(pBase, 120, 60, -40)", "RelTool(pBase, 0, 0, -20 \\Rz:=90)"):
+        X = W @ ev.matrix(ev.eval(expr))
+        corrected = ev.eval(f"RC_Correct({expr}, tGrip, wTable)")
+        landed = _land(ev, ctl, corrected, tool, wobj, true)
+        own = np.linalg.norm((_land(ev, ctl, corrected, tool, wobj, cal) - landed)[:3, 3])
+        assert np.linalg.norm(landed[:3, 3] - X[:3, 3]) <= MODEL_ERROR_FACTOR * own + ROUTINE_SLACK_MM
+    compliant = cal.with_joint_errors([*terms, "comp2_3"])
+    res = filter_program(path, compliant, NOMINAL, runtime_correction=True)
+    assert any("left out: the joint-error terms compliance" in w for w in res.warnings)
+    assert "! not computed here (the calibrated model's joint-error terms): compliance" in _text(res)
 
 
 def test_only_run_time_targets_not_already_corrected_are_routed(filtered):
@@ -119,11 +152,15 @@ def test_every_other_byte_unchanged(filtered):
     assert text.index(END) < text.rindex("ENDMODULE")
 
 
-@pytest.mark.parametrize("single", [False, True])
-def test_routine_lands_on_the_true_robot_like_offline_compensation(filtered, single):
+@pytest.mark.parametrize("single, displaced", [(False, False), (True, False), (False, True)])
+def test_routine_lands_on_the_true_robot_like_offline_compensation(filtered, single, displaced):
+    """``single``: the controller's float32 nums; ``displaced``: a program displacement active
+    (PDispSet), which CalcJointT applies and the routine must take into the meant pose."""
     _, res, _ = filtered
     ctl = NominalController(NOMINAL)
     ev = Evaluator(_text(res), ctl, single=single)
+    if displaced:
+        ev.globals["c_progdisp"]["pdisp"] = ev.coerce("pose", [[30, -20, 15], [0.9990482, 0, 0, 0.0436194]])
     tool, wobj = ev.globals["tgrip"], ev.globals["wtable"]
     W = ctl.world(ev, wobj)
     Tt = ev.matrix(tool["tframe"])

@@ -25,22 +25,25 @@ tests run the generated routine against it and against :func:`robocal.deploy.com
 The fixed point is ``FK_cal(IK_nom(T')) = X``, the offline filter's answer: each step shrinks the
 error by the (small) difference between the nominal and calibrated Jacobians, so 3 steps leave
 sub-micrometre residuals for calibrations of a few millimetres. It costs up to ``ITERATIONS``
-inverse-kinematics calls per motion. Not exact: the calibrated model's joint-error terms
-(:attr:`CalibratedChain.left_out`) are not in the chain; near a singularity the controller's IK
-is ill-conditioned (the iteration may not converge: the routine returns its last iterate); a
-correction that crosses a configuration boundary keeps the target's configuration.
+inverse-kinematics calls per motion. Not exact: the calibrated model's joint-error terms that
+need the load, the approach direction or the temperature (:attr:`CalibratedChain.left_out`:
+compliance, backlash, travel, payload, thermal) are not in the chain (gear, cyclic, scale are);
+near a singularity the controller's IK is ill-conditioned (the iteration may not converge: the
+routine returns its last iterate); a correction that crosses a configuration boundary keeps the
+target's configuration.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.deploy.compensation import controller_model
+from robocal.kinematics.joint_errors import parse_name
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec, rot_x, rot_y
 from robocal.programs.model import Program
@@ -49,6 +52,7 @@ from robocal.programs.motions import Account
 ITERATIONS = 3  # fixed-point steps (controller IK calls) per motion at most
 TOLERANCE_MM = 0.001  # the routine stops when the calibrated TCP is this close to the meant one ...
 TOLERANCE_DEG = 0.0001  # ... and turned less than this from it
+COMPUTED_TERMS = ("gear", "cyclic", "scale")  # joint-error terms of the joint's own angle: in the routine
 ROUTINE_NAME = "RC_Correct"  # the added routine's name in every language (its marker names robocal)
 
 
@@ -106,10 +110,14 @@ class RuntimeSite:
 @dataclass(frozen=True)
 class CalibratedChain:
     """The calibrated model as the routine computes it, all in the controller's world frame, m and
-    rad: ``FK(q) = base * prod_i(links[i] * Rz(theta[i] + q[i]) * Tz(d[i])) * flange * tool``.
+    rad: ``FK(q) = base * prod_i(links[i] * Rz(theta[i] + r[i]) * Tz(d[i])) * flange * tool`` at
+    the reached joints ``r = q + scale * q + sum_h (s_h sin(f_h q_j) + c_h cos(f_h q_j))`` (the
+    joint-error terms that depend on the joint's own angle only: gear, cyclic, scale).
     ``links`` ``(n, 4, 4)``: ``Rx(alpha_i) Tx(a_i) Ry(beta_i)``; ``flange``: the nominal flange
-    (the measured SMR replaced); ``left_out``: the calibrated model's joint-error terms the
-    routine does not compute (said in the result and the routine's comment)."""
+    (the measured SMR replaced); ``harmonics`` ``(m, 4)``: rows (joint index 0-based, f, s, c),
+    rad; ``scale`` ``(n,)``; ``left_out``: the calibrated model's joint-error terms the routine
+    does not compute (compliance, backlash, travel, payload, thermal: they need the load, the
+    approach direction or the temperature; said in the result and the routine's comment)."""
 
     base: np.ndarray
     links: np.ndarray
@@ -117,6 +125,8 @@ class CalibratedChain:
     d: np.ndarray
     flange: np.ndarray
     left_out: tuple[str, ...]
+    harmonics: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
+    scale: np.ndarray | None = None
     iterations: int = ITERATIONS
     tolerance_mm: float = TOLERANCE_MM
     tolerance_deg: float = TOLERANCE_DEG
@@ -125,10 +135,20 @@ class CalibratedChain:
         """TCP poses ``(N, 4, 4)`` (m) of joints ``q`` ``(N, n)`` (rad) with ``tool`` ``(4, 4)`` or
         ``(N, 4, 4)`` as the routine computes them (no joint-error terms)."""
         q = np.atleast_2d(np.asarray(q, float))
+        q = q + self.offsets(q)
         T = np.broadcast_to(self.base, (len(q), 4, 4)).copy()
         for i in range(len(self.theta)):  # n links: a short loop over batched poses
             T = T @ self.links[i] @ _rz_tz(self.theta[i] + q[:, i], self.d[i])
         return T @ self.flange @ tool
+
+
+    def offsets(self, q: np.ndarray) -> np.ndarray:
+        """The joint-error offsets ``(N, n)`` (rad) the routine computes at commanded ``q``."""
+        dq = np.zeros_like(q) if self.scale is None else self.scale * q
+        for j, f, s, c in self.harmonics:  # a few terms: a short loop over batched joints
+            j = int(j)
+            dq[:, j] += s * np.sin(f * q[:, j]) + c * np.cos(f * q[:, j])
+        return dq
 
 
 def _rz_tz(phi: np.ndarray, d: float) -> np.ndarray:
@@ -151,9 +171,30 @@ def calibrated_chain(calibrated: Robot, nominal: Robot, robot_base=None) -> Cali
         raise DataError("--runtime-correction computes revolute arms only: the model has a prismatic joint")
     links = np.array([_h(rot_x(al)) @ _tx(a) @ _h(rot_y(be))
                       for al, a, be in zip(model.alpha, model.a, model.beta, strict=True)])
-    left = tuple(model.joint_errors.terms) if model.joint_errors is not None else ()
+    harmonics, scale, left = _joint_terms(model)
     return CalibratedChain(model.base.copy(), links, model.theta.copy(), model.d.copy(), model.tool.copy(),
-                           left)
+                           left, harmonics, scale)
+
+
+def _joint_terms(model: Robot) -> tuple[np.ndarray, np.ndarray | None, tuple[str, ...]]:
+    """``(harmonics, scale, left_out)`` of ``model``'s joint-error terms (:class:`CalibratedChain`)."""
+    errors = model.joint_errors
+    if errors is None:
+        return np.zeros((0, 4)), None, ()
+    n = model.n_joints
+    rows, scale = [], np.zeros(n)
+    for name, value in zip(errors.names, errors.values.tolist(), strict=True):
+        j, kind, detail = parse_name(name, n)
+        if kind == "gear":
+            rows.append((j, 2.0 if detail[1] == "2" else 1.0, value if detail[0] == "s" else 0.0,
+                         value if detail[0] == "c" else 0.0))
+        elif kind == "cyclic":
+            rows.append((j, detail[1], value if detail[0] == "s" else 0.0,
+                         value if detail[0] == "c" else 0.0))
+        elif kind == "scale":
+            scale[j] += value
+    left = tuple(t for t in errors.terms if t not in COMPUTED_TERMS)
+    return np.array(rows, float).reshape(-1, 4), (scale if scale.any() else None), left
 
 
 def _h(R: np.ndarray) -> np.ndarray:

@@ -8,8 +8,10 @@ a module's data come before its routines) composed with PoseMult in a FOR loop o
 ``RC_Correct(target, tool, wobj)`` runs the fixed-point iteration of
 :func:`robocal.programs.runtime.reference_correction` with CalcJointT as the controller's inverse
 kinematics (the target's robconf kept) and returns the target with the corrected trans/rot, its
-robconf and extax unchanged. Only base-system RAPID: PoseMult, PoseInv, OrientZYX, VectMagn,
-CalcJointT, FOR, IF (no option needed).
+robconf and extax unchanged. The meant pose is taken in the work object with the active program
+displacement (``C_PROGDISP.pdisp``, composed after oframe), which CalcJointT applies too. Only
+base-system RAPID: PoseMult, PoseInv, OrientZYX, VectMagn, Sqrt, CalcJointT, FOR, IF (no option
+needed).
 """
 
 from __future__ import annotations
@@ -35,6 +37,29 @@ def _pose(T: np.ndarray) -> str:
     return "[[" + ",".join(f"{v:.6f}" for v in p) + "],[" + ",".join(f"{v:.10f}" for v in q) + "]]"
 
 
+def _joint_terms(chain: CalibratedChain) -> tuple[list[str], list[str]]:
+    """RAPID declarations and statements turning the commanded joints ``q{i}`` (deg) into the
+    reached ones with the chain's gear / cyclic / scale terms (none: no line)."""
+    n, H = len(chain.theta), chain.harmonics
+    if not len(H) and chain.scale is None:
+        return [], []
+    scale = np.zeros(n) if chain.scale is None else chain.scale
+    m = len(H)
+    decls = [f"  CONST num RC_SCALE{{{n}}} := {_nums(scale)};", f"  VAR num dq{{{n}}};"]
+    steps = ["  ! reached joints: q + scale * q + sum(s * Sin(f * q) + c * Cos(f * q)), deg",
+             f"  FOR i FROM 1 TO {n} DO", "    dq{i} := RC_SCALE{i} * q{i};", "  ENDFOR"]
+    if m:
+        decls += [f"  CONST num RC_HJ{{{m}}} := {_nums(H[:, 0] + 1)};",
+                  f"  CONST num RC_HF{{{m}}} := {_nums(H[:, 1])};",
+                  f"  CONST num RC_HS{{{m}}} := {_nums(np.rad2deg(H[:, 2]))};",
+                  f"  CONST num RC_HC{{{m}}} := {_nums(np.rad2deg(H[:, 3]))};"]
+        steps += [f"  FOR h FROM 1 TO {m} DO",
+                  "    dq{RC_HJ{h}} := dq{RC_HJ{h}} + RC_HS{h} * Sin(RC_HF{h} * q{RC_HJ{h}})",
+                  "      + RC_HC{h} * Cos(RC_HF{h} * q{RC_HJ{h}});",
+                  "  ENDFOR"]
+    return decls, steps + [f"  FOR i FROM 1 TO {n} DO", "    q{i} := q{i} + dq{i};", "  ENDFOR"]
+
+
 def _nums(values: np.ndarray) -> str:
     return "[" + ",".join(f"{v:.8f}" for v in values) + "]"
 
@@ -56,6 +81,7 @@ class RapidRuntime(RuntimeWriter):
             raise DataError("--runtime-correction: no ENDMODULE in the file to add the routine before")
         newline = "\r\n" if "\r\n" in text else "\n"
         n = len(chain.theta)
+        decls, steps = _joint_terms(chain)
         left = (f"! not computed here (the calibrated model's joint-error terms): {', '.join(chain.left_out)}"
                 if chain.left_out else "! the calibrated model has no joint-error terms: the chain is all of "
                 "it")
@@ -68,16 +94,19 @@ class RapidRuntime(RuntimeWriter):
             f"! {chain.iterations} CalcJointT calls; robconf and extax kept.",
             left,
             "LOCAL FUNC pose RC_FK(jointtarget J, PERS tooldata Tool)",
+            "  ! the calibrated TCP pose in the world at the commanded joints J (its reached joints first)",
             "  ! calibrated chain: base * link{i} * Rz(theta{i} + q{i}) * Tz(d{i}) * flange * tool (mm, deg)",
             f"  CONST pose RC_BASE := {_pose(chain.base)};",
             f"  CONST pose RC_LINK{{{n}}} := [" + ",".join(_pose(L) for L in chain.links) + "];",
             f"  CONST num RC_THETA{{{n}}} := {_nums(np.rad2deg(chain.theta))};",
             f"  CONST num RC_D{{{n}}} := {_nums(chain.d * 1e3)};",
             f"  CONST pose RC_FLANGE := {_pose(chain.flange)};",
+            *decls,
             f"  VAR num q{{{n}}};",
             "  VAR pose P;",
             "  VAR pose Z := [[0,0,0],[1,0,0,0]];",
             *[f"  q{{{i + 1}}} := J.robax.rax_{i + 1};" for i in range(n)],
+            *steps,
             "  P := RC_BASE;",
             f"  FOR i FROM 1 TO {n} DO",
             "    Z.trans.z := RC_D{i};",
@@ -97,7 +126,8 @@ class RapidRuntime(RuntimeWriter):
             "  VAR pose E;",
             "  VAR pose P;",
             "  T := Target;",
-            "  W := PoseMult(WObj.uframe, WObj.oframe);",
+            "  ! the work object with the active program displacement (PDispOn/PDispSet), as in CalcJointT",
+            "  W := PoseMult(PoseMult(WObj.uframe, WObj.oframe), C_PROGDISP.pdisp);",
             "  P.trans := Target.trans;",
             "  P.rot := Target.rot;",
             "  X := PoseMult(W, P);",
