@@ -328,14 +328,17 @@ def test_what_a_modified_position_starts_from_decides_its_routing(tmp_path):
 
 @pytest.mark.parametrize("name", ["kuka_kr6_r700", "kuka_kr210_r2700"])
 def test_chain_constants_of_other_arms_and_a_robot_base(name):
-    """RC_CONST / RC_JOINT of another arm, calibrated with a robot base off the controller's,
-    run in the evaluator: robocal's FK of the calibrated model as the controller sees it."""
+    """RC_CONST / RC_JOINT of another arm, calibrated with a robot base off the controller's and
+    gear / cyclic / scale joint-error terms, run in the evaluator: robocal's FK of the calibrated
+    model as the controller sees it."""
     from robocal.programs.dialects.krl.runtime import routine_text
 
     nominal = rc.Robot.from_catalog(name)
     rng = np.random.default_rng(7)
     names = [n for n in nominal.geometry_names if n[:-1] in ("a", "d", "alpha", "beta", "theta")]
     calibrated = nominal.with_values({n: nominal.get(n) + rng.normal(0, 1e-3) for n in names})
+    terms = {"gear2_s1": 1e-4, "gear3_c2": -8e-5, "cyc4_3_s": 5e-5, "cyc6_5_c": 7e-5, "scale5": 2e-4}
+    calibrated = calibrated.with_joint_errors(list(terms)).with_values(terms)
     robot_base = np.eye(4)
     robot_base[:3, :3] = _rot_z(0.3)
     robot_base[:3, 3] = [0.4, -0.2, 0.1]

@@ -39,13 +39,14 @@ FRAME_FUNCTION = FUNCTION + "F"  # its twin for a FRAME target (P:OFFSET), in a 
 BEGIN = ";FOLD robocal run-time correction"  # the added text's first line (a KRL fold)
 END = ";ENDFOLD robocal run-time correction"
 _DIGITS = 6  # decimals of the constants: 1e-6 mm and deg (KRL REAL is 32-bit: ~1e-4 mm at 1 m)
+_TERM_DIGITS = 9  # decimals of a joint-error coefficient (a scale of 2e-4: 6 significant digits)
 _FIELDS = ("X", "Y", "Z", "A", "B", "C")
 _JOINTS = 6
 
 
-def _real(x: float) -> str:
-    """A KRL REAL literal."""
-    text = f"{x:.{_DIGITS}f}".rstrip("0")
+def _real(x: float, digits: int = _DIGITS) -> str:
+    """A KRL REAL literal with at most ``digits`` decimals."""
+    text = f"{x:.{digits}f}".rstrip("0")
     text = text + "0" if text.endswith(".") else text
     return "0.0" if text in ("-0.0", "0.0") else text
 
@@ -71,6 +72,25 @@ def _frame_cases(frames: np.ndarray, var: str, extra: str = "") -> list[str]:
                 for f, v in zip(_FIELDS, row, strict=True) if v != 0.0 or f == "A" and extra]
         if body:  # an identity frame (a base at the robot's root): $NULLFRAME as it is
             out += [f"IF RC_N == {k} THEN", *body, "ENDIF"]
+    return out
+
+
+def _joint_terms(chain: CalibratedChain) -> list[str]:
+    """``IF N == j THEN RC_R = RC_R + ...`` blocks of the joint-error terms the chain computes
+    (:meth:`CalibratedChain.offsets`: scale, gear and cyclic harmonics), in degrees: KRL's SIN/COS
+    take degrees, so ``sin(f q)`` of q in rad is ``SIN(f * A)`` of A in deg."""
+    out = []
+    for j in range(len(chain.theta)):
+        terms = []
+        if chain.scale is not None and chain.scale[j] != 0.0:
+            terms.append(f"{_real(float(chain.scale[j]), _TERM_DIGITS)} * RC_QN")
+        for _, f, s, c in chain.harmonics[chain.harmonics[:, 0].astype(int) == j]:
+            for amp, fn in ((s, "SIN"), (c, "COS")):
+                if amp != 0.0:
+                    deg = _real(float(np.rad2deg(amp)), _TERM_DIGITS)
+                    terms.append(f"{deg} * {fn}({_real(float(f))} * RC_QN)")
+        if terms:
+            out += [f"IF RC_N == {j + 1} THEN", *[f"  RC_R = RC_R + {t}" for t in terms], "ENDIF"]
     return out
 
 
@@ -158,14 +178,18 @@ def routine_text(chain: CalibratedChain, note: str, newline: str = "\n") -> str:
            "ENDFCT",
            "",
            "DEFFCT FRAME RC_JOINT(RC_N:IN, RC_Q:IN)",
-           "; joint N of the calibrated chain at the axes Q: Rz(theta_N + A_N) Tz(d_N)",
+           "; joint N of the calibrated chain at the axes Q: Rz(theta_N + R) Tz(d_N), R the angle the",
+           "; joint reaches at A_N (deg): A_N + scale A_N + sum(s SIN(f A_N) + c COS(f A_N))",
            "DECL INT RC_N",
            "DECL E6AXIS RC_Q",
-           "DECL REAL RC_QA[6]",
+           "DECL REAL RC_QA[6], RC_QN, RC_R",
            "DECL FRAME RC_F",
            *[f"RC_QA[{k}] = RC_Q.A{k}" for k in range(1, n + 1)],
+           "RC_QN = RC_QA[RC_N]",
+           "RC_R = RC_QN",
+           *_joint_terms(chain),
            "RC_F = $NULLFRAME",
-           *_frame_cases(joints, "RC_F", " + RC_QA[RC_N]"),
+           *_frame_cases(joints, "RC_F", " + RC_R"),
            "RETURN RC_F",
            "ENDFCT",
            END]
