@@ -385,3 +385,12 @@ def test_robroot_off_the_world_gives_the_same_command_in_the_robots_frame(filter
     after = to_matrix(m.evaluate(call))
     assert np.abs(after[:3, 3] - before[:3, 3]).max() < 2e-3  # mm
     assert np.abs(after[:3, :3] - before[:3, :3]).max() < 1e-6
+
+
+def test_a_failed_inverse_returns_the_target_unchanged(filtered):
+    """Out of reach: INVERSE's status is not 0 on the first call, and RC_CORRECT returns P as given."""
+    _, _, paths, rt, _ = filtered
+    m = _machine(*(rt.outputs[p].decode("latin-1") for p in paths))
+    far = Struct("E6POS", {**m.globals["XP1"].values, "X": 9000.0})
+    out = m.call(FUNCTION, [far])
+    assert out.values == far.values and m.calls["INVERSE"] == 1

@@ -127,6 +127,9 @@ def routine_text(chain: CalibratedChain, note: str, newline: str = "\n") -> str:
            "    RC_ERR = 0",
            "    RC_Q = INVERSE(RC_CMD, RC_START, RC_ERR)",
            "    IF RC_ERR <> 0 THEN",
+           "      IF RC_K == 1 THEN",
+           "        RETURN RC_P",  # no solution for the target itself: as the program wrote it
+           "      ENDIF",
            "      RC_GO = 0",
            "    ELSE",
            "      RC_Y = RC_CONST(7)",
