@@ -352,6 +352,8 @@ class KRLDialect(Dialect):
                                      head, "" if tool == "?" else tool, "" if base == "?" else base)
                         prog.runtime_sites.append(site)
                     for f in found:
+                        if isinstance(f, RunTime):  # its operands are used, by this motion's record
+                            named |= f.depends
                         if f is None:
                             continue
                         if isinstance(f, str):
