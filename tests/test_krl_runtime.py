@@ -394,3 +394,17 @@ def test_a_failed_inverse_returns_the_target_unchanged(filtered):
     far = Struct("E6POS", {**m.globals["XP1"].values, "X": 9000.0})
     out = m.call(FUNCTION, [far])
     assert out.values == far.values and m.calls["INVERSE"] == 1
+
+
+def test_evaluator_forward_undoes_inverse(filtered):
+    """The emulated controller: FORWARD(INVERSE(P)) is P, in $BASE with $TOOL, with its S and T."""
+    _, _, paths, rt, _ = filtered
+    m = _machine(*(rt.outputs[p].decode("latin-1") for p in paths))
+    m.globals["RC_TEST_ERR"] = 0
+    m.globals["RC_TEST_AX"] = Struct("E6AXIS", {f"A{k}": 0.0 for k in range(1, 7)})
+    m.globals["RC_TEST_AX"] = m.evaluate("INVERSE(XP2, RC_TEST_AX, RC_TEST_ERR)")
+    back = m.evaluate("FORWARD(RC_TEST_AX, RC_TEST_ERR)")
+    want = m.globals["XP2"]
+    assert m.globals["RC_TEST_ERR"] == 0
+    assert np.abs(to_matrix(back) - to_matrix(want)).max() < 2e-3
+    assert (back.values["S"], back.values["T"]) == (want.values["S"], want.values["T"])
