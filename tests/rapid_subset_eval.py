@@ -82,6 +82,11 @@ class Evaluator:
         # system data: the active program displacement (none until a test sets one)
         self.globals["c_progdisp"] = self.coerce("progdisp", [[[0, 0, 0], [1, 0, 0, 0]], [9e9] * 6])
         self.types["c_progdisp"] = "progdisp"
+        for name, kind, value in (("tool0", "tooldata", [True, [[0, 0, 0], [1, 0, 0, 0]],
+                                                         [0.001, [0, 0, 0.001], [1, 0, 0, 0], 0, 0, 0]]),
+                                  ("wobj0", "wobjdata", [False, True, "", [[0, 0, 0], [1, 0, 0, 0]],
+                                                         [[0, 0, 0], [1, 0, 0, 0]]])):
+            self.globals[name], self.types[name] = self.coerce(kind, value), kind  # system data
         self._module()
 
     # ---------------------------------------------------------------- values

@@ -39,6 +39,7 @@ MODULE = "\n".join([
     f"  CONST robtarget pBase := [[100,50,200],[0,0,1,0],[-1,0,-1,0],{NINE}];",
     f"  VAR robtarget pMod := [[150,0,250],[0,0,1,0],[-1,0,-1,0],{NINE}];",
     "  VAR robtarget pHere;",
+    "  VAR robtarget pTmp;",
     "  VAR num dx := 0;",
     "  VAR num dy := 0;",
     "  PROC main()",
@@ -56,6 +57,8 @@ MODULE = "\n".join([
     "    MoveL Offs(pHome, dx, 0, 0), v100, fine, tool0;",
     "    pHere := CRobT(\\Tool:=tGrip \\WObj:=wTable);",
     "    MoveL Offs(pHere, 0, 0, 50), v100, z10, tGrip\\WObj:=wTable;",
+    "    pTmp := pHome;",
+    "    MoveL Offs(pTmp, dx, 0, 0), v100, fine, tool0;",
     "  ENDPROC",
     "ENDMODULE",
     ""])
@@ -131,14 +134,17 @@ def test_only_run_time_targets_not_already_corrected_are_routed(filtered):
     assert text.count("RC_Correct(Offs(pBase, dx, dy, 0), tGrip, wTable)") == 1
     assert "RC_Correct(RelTool(pBase, 0, 0, -20 \\Rz:=dx), tGrip, wTable)" in text
     assert "MoveL RC_Correct(pMod, tGrip, wTable)" in text
-    assert "MoveL Offs(pHome, dx, 0, 0)" in text  # pHome is corrected offline: not corrected twice
+    # pHome is corrected offline: the routine starts from its original value (RC_Meant), through a
+    # variable it cannot: not routed (it would be corrected twice)
+    assert "MoveL RC_Correct(Offs(RC_Meant(1), dx, 0, 0), tool0, wobj0)" in text
+    assert "MoveL Offs(pTmp, dx, 0, 0)" in text
     assert "MoveL Offs(pHere, 0, 0, 50)" in text  # relative to where the robot is: not routed
     reasons = " ".join(res.warnings)
     assert "correcting it again would correct twice" in reasons
     assert "already in the corrected space" in reasons
     routed = [m for m in res.motions if m.reason.startswith("corrected at run time")]
-    assert len(routed) == 3 and len(res.motions) == len(without.motions)
-    assert [m.line for m in routed] == [16, 19, 21]
+    assert len(routed) == 4 and len(res.motions) == len(without.motions)
+    assert [m.line for m in routed] == [17, 20, 22, 23]
 
 
 def test_every_other_byte_unchanged(filtered):
@@ -147,7 +153,8 @@ def test_every_other_byte_unchanged(filtered):
     block = re.compile(re.escape(BEGIN) + r"[\s\S]*?" + re.escape(END) + r"\n")
     assert len(block.findall(text)) == 1
     back = block.sub("", text)
-    back = re.sub(r"RC_Correct\(([\s\S]*?), tGrip, wTable\)", r"\1", back)
+    back = re.sub(r"RC_Correct\(([\s\S]*?), (tGrip, wTable|tool0, wobj0)\)", r"\1", back)
+    back = back.replace("RC_Meant(1)", "pHome")
     assert back == plain
     assert text.index(END) < text.rindex("ENDMODULE")
 
@@ -252,3 +259,36 @@ def test_cli_runtime_correction(tmp_path):
     text = Path(out).read_text()
     assert "LOCAL FUNC robtarget RC_Correct" in text and text.count(BEGIN) == 1
     assert mod.read_text() == MODULE  # the input is untouched
+
+
+def test_line_ends_and_a_second_run(tmp_path):
+    """CRLF: the same motions routed, the block in the file's line ends; a filtered program given
+    again (with --force) is refused: its motions would be corrected twice."""
+    crlf = tmp_path / "crlf.mod"
+    crlf.write_bytes(MODULE.replace("\n", "\r\n").encode())
+    res = filter_program(crlf, CALIBRATED, NOMINAL, runtime_correction=True)
+    text = _text(res)
+    assert text.count("RC_Correct(") == 6 and "\r\n" + END + "\r\n" in text
+    assert "\n" not in text.replace("\r\n", "")
+    out = tmp_path / "out.mod"
+    res.write(out)
+    with pytest.raises(DataError, match="already holds robocal's run-time correction"):
+        filter_program(out, CALIBRATED, NOMINAL, runtime_correction=True, force=True)
+
+
+def test_offsets_from_a_target_corrected_offline_start_from_its_original_value(filtered):
+    """``Offs(pHome, dx, 0, 0)`` where pHome is corrected offline: the routine is given pHome as the
+    program wrote it (RC_Meant) and lands within 1.3x the model's own error, as if pHome had not
+    been corrected."""
+    path, res, _ = filtered
+    ctl = NominalController(NOMINAL)
+    ev = Evaluator(_text(res), ctl)
+    original = Evaluator(path.read_text(), ctl)  # the program as written
+    tool, wobj = ev.globals["tool0"], ev.globals["wobj0"]
+    assert ev.matrix(ev.eval("pHome")) != pytest.approx(original.matrix(original.eval("pHome")))  # corrected
+    for dx in (0.0, 60.0, -90.0):
+        X = original.matrix(original.eval(f"Offs(pHome, {dx}, 0, 0)"))
+        corrected = ev.eval(f"RC_Correct(Offs(RC_Meant(1), {dx}, 0, 0), tool0, wobj0)")
+        landed = _land(ev, ctl, corrected, tool, wobj, TRUE)
+        own = np.linalg.norm((_land(ev, ctl, corrected, tool, wobj, CALIBRATED) - landed)[:3, 3])
+        assert np.linalg.norm(landed[:3, 3] - X[:3, 3]) <= MODEL_ERROR_FACTOR * own + ROUTINE_SLACK_MM

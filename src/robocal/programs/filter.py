@@ -558,9 +558,10 @@ def _runtime(d: Dialect, program: Program, sources: list[ProgramText], corrected
         mine = {(s.start, s.end): s for s in sites if s.path == src.path}
         fe = edits.pop(src.path, FileEdits())
         if mine:
+            meant = list({id(m.target): m.target for s in mine.values() for m in s.meant}.values())
             for site in mine.values():
-                fe.spans.update(writer.site_edits(src.text, site))
-            at, text = writer.routine(src.text, chain, program.tools, marker_text(calibrated))
+                fe.spans.update(writer.site_edits(src.text, site, meant))
+            at, text = writer.routine(src.text, chain, meant, marker_text(calibrated))
             fe.spans[(at, at)] = text
         outputs[src.path] = fe.apply(src)
     if sites:

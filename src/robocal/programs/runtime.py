@@ -5,14 +5,17 @@ part, which each language's writer (a :class:`~robocal.programs.dialects.base.Di
 Which motions: those whose every target is computed at run time (the reader names them with a
 :class:`RunTime` reason: an Offs/RelTool by run-time amounts, a position modified or computed at
 run time) and whose value depends on no target the filter corrects offline (that target is
-already corrected: correcting the result again would correct twice). Motions relative to the
+already corrected: correcting the result again would correct twice), except as a :class:`Meant`
+use: the base of an Offs/RelTool written by the target's name, which the writer replaces by the
+target's original value. Motions relative to the
 position the robot is at (CRobT, $POS_ACT: that position was reached through a corrected target,
 so it is already in the corrected space) are not routed, and say so.
 
 What the routine does, per motion (:func:`reference_correction` is its specification in numpy, the
 tests run the generated routine against it and against :func:`robocal.deploy.compensate`):
 
-1. ``X = wobj * target * tool``: the TCP pose the program means, in the controller's world;
+1. ``X = wobj * target``: the TCP pose (of the tool the motion names) the program means, in the
+   controller's world;
 2. ``T'_0 = target``; for k = 0 .. ``ITERATIONS - 1``: ``q_k`` = the controller's own inverse
    kinematics of ``T'_k`` (its nominal model, in the target's configuration: RAPID CalcJointT,
    KRL INVERSE); ``P_k`` = the calibrated chain's TCP at ``q_k`` (:class:`CalibratedChain`: the
@@ -36,7 +39,7 @@ target's configuration.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -48,6 +51,7 @@ from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec, rot_x, rot_y
 from robocal.programs.model import Program
 from robocal.programs.motions import Account
+from robocal.programs.target import Target
 
 ITERATIONS = 3  # fixed-point steps (controller IK calls) per motion at most
 TOLERANCE_MM = 0.001  # the routine stops when the calibrated TCP is this close to the meant one ...
@@ -59,33 +63,50 @@ ROUTINE_NAME = "RC_Correct"  # the added routine's name in every language (its m
 class RunTime(str):
     """A reason a motion is not corrected offline: its target is computed at run time. It reads as
     the reason; ``depends``: the ids of the declared targets its value is computed from (a target
-    the filter corrects offline among them: the motion is not routed through the run-time
-    routine, which would correct it twice); ``relative``: computed from the position the robot is
-    at (CRobT, $POS_ACT), already in the corrected space: not routed."""
+    the filter corrects offline among them: the motion is routed only when each such target is
+    named in ``meant``, else the routine would correct it twice); ``meant``: :class:`Meant` uses
+    of a declared target written by its name as the base of the computation (``Offs(pPick, 0, 0,
+    dz)``), which the writer replaces by the target's original value; ``relative``: computed from
+    the position the robot is at (CRobT, $POS_ACT), already in the corrected space: not routed."""
 
     depends: frozenset[int]
+    meant: tuple[Meant, ...]
     relative: bool
 
-    def __new__(cls, why: str, depends=(), relative: bool = False) -> RunTime:
+    def __new__(cls, why: str, depends=(), relative: bool = False, meant=()) -> RunTime:
         obj = super().__new__(cls, why)
-        obj.depends, obj.relative = frozenset(depends), relative
+        obj.depends, obj.relative, obj.meant = frozenset(depends), relative, tuple(meant)
         return obj
 
 
-def merged(why: str, parts: list) -> RunTime | None:
+@dataclass(frozen=True)
+class Meant:
+    """A declared target's name written at ``path`` ``start:end`` as the base of a run-time
+    computation: where the routine is used, the writer writes the target's original (uncorrected)
+    value there instead, so a target the filter corrects offline is not corrected twice."""
+
+    target: Target
+    path: Path
+    start: int
+    end: int
+
+
+def merged(why: str, parts: list, meant=()) -> RunTime | None:
     """A :class:`RunTime` reason ``why`` whose value is computed from ``parts`` (what the reader
-    followed the target's base to: targets, or reasons), None when a part is a reason that is not
-    :class:`RunTime` (a name declared nowhere...): then the motion cannot be routed either."""
-    depends, relative = set(), False
+    followed the target's base to: targets, or reasons) and ``meant`` (:class:`Meant`: the base
+    written as a target's name), None when a part is a reason that is not :class:`RunTime` (a name
+    declared nowhere...): then the motion cannot be routed either."""
+    depends, relative, uses = set(), False, list(meant)
     for p in parts:
         if isinstance(p, RunTime):
             depends |= p.depends
             relative |= p.relative
+            uses += p.meant
         elif isinstance(p, str):
             return None
         else:
             depends.add(id(p))
-    return RunTime(why, depends, relative)
+    return RunTime(why, depends, relative, uses)
 
 
 @dataclass(frozen=True)
@@ -105,6 +126,7 @@ class RuntimeSite:
     tool_name: str
     frame_name: str
     why_not: str = ""
+    meant: tuple[Meant, ...] = ()  # the uses inside this argument the writer replaces (routed_sites)
 
 
 @dataclass(frozen=True)
@@ -246,8 +268,16 @@ def routed_sites(program: Program, corrected: set[int]) -> tuple[list[RuntimeSit
             acc = sites[0].account
             why.append(f"{acc.where}: {acc.instruction}: not corrected at run time: {reason}")
         else:
-            out += sites
+            out += [replace(s, meant=_inside(s, corrected)) for s in sites]
     return out, why
+
+
+def _inside(site: RuntimeSite, corrected: set[int]) -> tuple[Meant, ...]:
+    """The uses of targets corrected offline written inside ``site``'s argument (once each)."""
+    uses = {(m.start, m.end): m for w in site.account.named if isinstance(w, RunTime) for m in w.meant
+            if id(m.target) in corrected and m.path == site.path
+            and site.start <= m.start < m.end <= site.end}
+    return tuple(uses[k] for k in sorted(uses))
 
 
 def routable(program: Program, sites: list[RuntimeSite], corrected: set[int]) -> str:
@@ -261,9 +291,12 @@ def routable(program: Program, sites: list[RuntimeSite], corrected: set[int]) ->
     if any(w.relative for w in acc.named):
         return ("its target is relative to the position the robot is at, which it reached through a "
                 "corrected target: it is already in the corrected space")
-    if any(w.depends & corrected for w in acc.named):
+    replaced = {id(m.target) for s in sites for m in _inside(s, corrected)}
+    if any((w.depends & corrected) - replaced for w in acc.named):
         return ("its target is computed from a target corrected offline (correcting it again would "
                 "correct twice)")
+    if any(m.target.config is None for s in sites for m in _inside(s, corrected)):
+        return "a target its value is computed from has no configuration data"
     for s in sites:
         if s.why_not:
             return s.why_not
@@ -280,14 +313,15 @@ class RuntimeWriter:
     """A language's run-time correction (:attr:`Dialect.runtime_correction` names its class): the
     edits that route one motion through the routine and the routine itself."""
 
-    def site_edits(self, text: str, site: RuntimeSite) -> dict[tuple[int, int], str]:
+    def site_edits(self, text: str, site: RuntimeSite, meant: list[Target]) -> dict[tuple[int, int], str]:
         """Span -> text edits of the file ``text`` that route ``site``'s target through the routine
-        (insertions: zero-length spans; every other byte unchanged)."""
+        (insertions: zero-length spans; every other byte unchanged) and write each of its
+        ``site.meant`` uses as the original value of its target (its index in ``meant``, the
+        file's list, which :meth:`routine` writes)."""
         raise NotImplementedError
 
-    def routine(self, text: str, chain: CalibratedChain, tools: dict[str, np.ndarray],
-                note: str) -> tuple[int, str]:
+    def routine(self, text: str, chain: CalibratedChain, meant: list[Target], note: str) -> tuple[int, str]:
         """Where in file ``text`` the routine goes and its text (clearly marked, ``note``: the
-        marker's words: robocal's version and the model's fingerprint); ``tools``: the program's tool
-        data by name (4x4, m)."""
+        marker's words: robocal's version and the model's fingerprint), with the original values
+        of the targets ``meant`` (numbers as written, configuration, external axes)."""
         raise NotImplementedError

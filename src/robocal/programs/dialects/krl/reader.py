@@ -553,11 +553,11 @@ def _site(st: _State, acc, path, start: int, end: int, text: str, tool: str, bas
         if len(operands) < 2 or _kind(st, reference) not in ("POS", "E6POS") or "{" in reference:
             why = (f"{text} is a FRAME computed from no POS/E6POS: no Status and Turn to correct it in "
                    "(write it as P:OFFSET with P a POS/E6POS)")
-            return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, why)
+            return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, why_not=why)
     elif kind not in ("POS", "E6POS"):
         why = f"the type of {operands[-1].strip()} is declared in no file given (DECL E6POS/POS/FRAME)"
-        return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, why)
-    return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, "", reference)
+        return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, why_not=why)
+    return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, reference=reference)
 
 
 def _routine_at(routines: list[tuple[int, str]], at: int) -> str:

@@ -203,13 +203,13 @@ class KRLRuntime(RuntimeWriter):
     """KRL's :class:`~robocal.programs.runtime.RuntimeWriter`: ``RC_CORRECT`` appended to the
     ``.src`` holding the motions, their targets wrapped in calls of it."""
 
-    def site_edits(self, text, site: RuntimeSite):
+    def site_edits(self, text, site: RuntimeSite, meant):
         reference = getattr(site, "reference", "")  # a KRLSite's: a FRAME target and its POS
         if reference:
             return {(site.start, site.start): f"{FRAME_FUNCTION}(", (site.end, site.end): f", {reference})"}
         return {(site.start, site.start): f"{FUNCTION}(", (site.end, site.end): ")"}
 
-    def routine(self, text, chain, tools, note):
+    def routine(self, text, chain, meant, note):
         nl = _newline(text)
         lead = nl if text and not text.endswith(("\n", "\r")) else ""
         return len(text), f"{lead}{nl}{routine_text(chain, note, nl)}{nl}"

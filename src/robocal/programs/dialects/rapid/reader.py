@@ -53,7 +53,7 @@ from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_quat, quat_to_matrix
-from robocal.programs.runtime import RunTime, RuntimeSite, merged
+from robocal.programs.runtime import Meant, RunTime, RuntimeSite, merged
 from robocal.programs.source import Number
 
 _DECL = re.compile(r"\b(?:(?:LOCAL|TASK)\s+)?(CONST|PERS|VAR)\s+(robtarget|tooldata|wobjdata)\s+"
@@ -465,6 +465,21 @@ class RapidDialect(Dialect):
                            tool, wobj)
 
     @staticmethod
+    def _meant(st, src, span, base, scope) -> list[Meant]:
+        """The base ``span`` of an Offs/RelTool as a :class:`Meant` use when it is a declared
+        robtarget's bare name (not a routine parameter, never assigned, one target), else none."""
+        masked = st.masked[src.path]
+        text = masked[span[0]:span[1]]
+        r = _REF.fullmatch(text.strip())
+        if not r or r.group(2) or r.group(3) or len(base) != 1 or not isinstance(base[0], Target):
+            return []
+        name = r.group(1).lower()
+        if name in scope or name in st.assigned or st.modified.get(name) or st.declared.get(name) != base:
+            return []
+        start = span[0] + len(text) - len(text.lstrip())
+        return [Meant(base[0], src.path, start, start + len(text.strip()))]
+
+    @staticmethod
     def _named_targets(st, text: str) -> list[Target]:
         """The declared robtargets named in ``text`` and in the bodies of the robtarget FUNCs of
         these files that it calls (what a value computed at run time from ``text`` depends on)."""
@@ -509,7 +524,8 @@ class RapidDialect(Dialect):
                 return self._follow(st, src, *inner[0], proc, scope, depth + 1)
             why = (f"{' '.join(text.split())[:60]} moves the target by amounts known at run time only "
                    f"({varying})")
-            return [merged(why, self._follow(st, src, *inner[0], proc, scope, depth + 1)) or why]
+            base = self._follow(st, src, *inner[0], proc, scope, depth + 1)
+            return [merged(why, base, self._meant(st, src, inner[0], base, scope)) or why]
         f = _FUNCTION.match(masked, lead, b)
         if f:
             why = f"the target is computed at run time by {f.group(1)}()"

@@ -21,13 +21,16 @@ import re
 import numpy as np
 
 from robocal.core.errors import DataError
+from robocal.programs.dialects.rapid.campaign import RAPID_EXTAX
 from robocal.programs.rotations import matrix_to_quat
 from robocal.programs.runtime import ROUTINE_NAME, CalibratedChain, RuntimeSite, RuntimeWriter
+from robocal.programs.target import Target
 
 BEGIN = "! >>> robocal run-time correction: BEGIN (added by robocal filter --runtime-correction)"
 END = "! <<< robocal run-time correction: END"
 _ENDMODULE = re.compile(r"^[ \t]*ENDMODULE\b", re.M | re.I)
 _DEFAULT_WOBJ = "wobj0"
+MEANT = "RC_Meant"  # the routine returning a target's original value
 
 
 def _pose(T: np.ndarray) -> str:
@@ -60,6 +63,24 @@ def _joint_terms(chain: CalibratedChain) -> tuple[list[str], list[str]]:
     return decls, steps + [f"  FOR i FROM 1 TO {n} DO", "    q{i} := q{i} + dq{i};", "  ENDFOR"]
 
 
+def _meant_function(meant: list[Target]) -> list[str]:
+    """``RC_Meant(k)``: the original value of the k-th target a routed motion computes from (a
+    target corrected offline: its numbers as written before the correction)."""
+    if not meant:
+        return []
+    lines = ["LOCAL FUNC robtarget RC_Meant(num k)",
+             "  ! the targets run-time offsets start from, as the program wrote them (uncorrected)"]
+    for k, t in enumerate(meant, 1):
+        v = [n.text for n in t.numbers]
+        cfx, cf1, cf4, cf6 = (int(c) for c in t.config)
+        extax = ",".join(f"{t.axes[a]:g}" if a in t.axes else "9E+09" for a in RAPID_EXTAX)
+        value = f"[[{','.join(v[:3])}],[{','.join(v[3:7])}],[{cf1},{cf4},{cf6},{cfx}],[{extax}]]"
+        last = k == len(meant)  # k is 1..len(meant): the last one needs no test
+        lines += [f"  ! {k}: {t.name}", *([] if last else [f"  IF k = {k} THEN"]),
+                  f"  {'' if last else '  '}RETURN {value};", *([] if last else ["  ENDIF"])]
+    return lines + ["ENDFUNC"]
+
+
 def _nums(values: np.ndarray) -> str:
     return "[" + ",".join(f"{v:.8f}" for v in values) + "]"
 
@@ -67,13 +88,20 @@ def _nums(values: np.ndarray) -> str:
 class RapidRuntime(RuntimeWriter):
     """The RAPID run-time correction writer."""
 
-    def site_edits(self, text: str, site: RuntimeSite) -> dict[tuple[int, int], str]:
+    def site_edits(self, text: str, site: RuntimeSite, meant: list[Target]) -> dict[tuple[int, int], str]:
         wobj = site.wobj or _DEFAULT_WOBJ
-        return {(site.start, site.start): f"{ROUTINE_NAME}(", (site.end, site.end): f", {site.tool}, {wobj})"}
+        edits = {(site.start, site.start): f"{ROUTINE_NAME}(",
+                 (site.end, site.end): f", {site.tool}, {wobj})"}
+        index = {id(t): k + 1 for k, t in enumerate(meant)}
+        edits.update({(m.start, m.end): f"{MEANT}({index[id(m.target)]})" for m in site.meant})
+        return edits
 
-    def routine(self, text: str, chain: CalibratedChain, tools: dict[str, np.ndarray],
-                note: str) -> tuple[int, str]:
-        if re.search(rf"\b{ROUTINE_NAME}\b|\bRC_FK\b", text, re.I) and BEGIN not in text:
+    def routine(self, text: str, chain: CalibratedChain, meant: list[Target], note: str) -> tuple[int, str]:
+        if BEGIN in text:
+            raise DataError(f"the program already holds robocal's run-time correction ({ROUTINE_NAME}): "
+                            "filter the original program (routing its motions again would correct them "
+                            "twice)")
+        if re.search(rf"\b{ROUTINE_NAME}\b|\bRC_FK\b|\b{MEANT}\b", text, re.I):
             raise DataError(f"the program already names {ROUTINE_NAME} or RC_FK: --runtime-correction "
                             "cannot add its routine under that name")
         ends = list(_ENDMODULE.finditer(text))
@@ -146,6 +174,7 @@ class RapidRuntime(RuntimeWriter):
             "  ENDFOR",
             "  RETURN T;",
             "ENDFUNC",
+            *_meant_function(meant),
             END,
         ]
         at = ends[-1].start()
