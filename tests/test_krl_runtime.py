@@ -135,8 +135,8 @@ def _wrapped(src: str) -> list[tuple[str, str]]:
 
 def _unwrapped(src: str) -> str:
     """The program part of a filtered .src with the calls taken out (the routine too)."""
-    body = src[:src.index(BEGIN)]
-    return re.sub(rf"{FRAME_FUNCTION}\((XP\d:OFFS), XP\d\)", r"\1", body)
+    body = src[:src.index(BEGIN)].replace("RC_MEANT(1)", "XHOMEP")
+    return re.sub(rf"{FRAME_FUNCTION}\((XP\d:OFFS|XHOMEP:OFFS), (?:XP\d|XHOMEP)\)", r"\1", body)
 
 
 @pytest.fixture(scope="module")
@@ -150,7 +150,8 @@ def filtered(tmp_path_factory):
 def test_routes_the_run_time_motions_and_leaves_every_other_byte(filtered):
     _, _, paths, rt, plain = filtered
     src, dat = (rt.outputs[p].decode("latin-1") for p in paths)
-    assert _wrapped(src) == [(f"XP{i}:OFFS", f"{FRAME_FUNCTION}(XP{i}:OFFS, XP{i})") for i in (1, 2, 3)]
+    assert _wrapped(src) == [(f"XP{i}:OFFS", f"{FRAME_FUNCTION}(XP{i}:OFFS, XP{i})") for i in (1, 2, 3)] + [
+        ("RC_MEANT(1):OFFS", f"{FRAME_FUNCTION}(RC_MEANT(1):OFFS, RC_MEANT(1))")]  # XHOMEP as written
     assert rt.outputs[paths[1]] == plain.outputs[paths[1]]  # the .dat: as the offline filter writes it
     added = src[src.index(BEGIN):]
     assert added.rstrip().endswith(END) and src.count(BEGIN) == 1
@@ -159,8 +160,9 @@ def test_routes_the_run_time_motions_and_leaves_every_other_byte(filtered):
     records = {r.line: r for r in rt.motions}
     assert "corrected at run time" in records[8].reason and "corrected at run time" in records[9].reason
     assert "already in the corrected space" in " ".join(rt.warnings)  # LIN PSTORE (= $POS_ACT): not routed
-    assert "correct twice" in " ".join(rt.warnings)  # XHOMEP:OFFS, XHOMEP corrected offline: not routed
-    assert "corrected at run time" not in records[12].reason + records[13].reason
+    # XHOMEP:OFFS with XHOMEP corrected offline: routed with XHOMEP's value as the program wrote it
+    assert "corrected at run time" in records[13].reason and "correct twice" not in " ".join(rt.warnings)
+    assert "corrected at run time" not in records[12].reason
 
 
 def test_the_krl_chain_is_the_calibrated_model(filtered):

@@ -49,7 +49,7 @@ from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
-from robocal.programs.runtime import RunTime, RuntimeSite, merged
+from robocal.programs.runtime import Meant, RunTime, RuntimeSite, merged
 from robocal.programs.source import Number, ProgramText
 
 _AGG = re.compile(r"\{[^{}]*\}")
@@ -348,6 +348,8 @@ class KRLDialect(Dialect):
                         stop = a + len(_APPROX.sub("", masked[a:b]).rstrip())
                         tool, base = state["tool"][0], state["base"][0]
                         lead = len(masked[a:b]) - len(masked[a:b].lstrip())
+                        uses = self._meant(st, src, masked, a + lead, stop, proc)
+                        found = [RunTime(f, f.depends, f.relative, (*f.meant, *uses)) for f in found]
                         site = _site(st, acc, src.path, a + lead, stop,
                                      head, "" if tool == "?" else tool, "" if base == "?" else base)
                         prog.runtime_sites.append(site)
@@ -389,6 +391,30 @@ class KRLDialect(Dialect):
         for t in st.all_targets():
             if id(t) not in used and id(t) not in st.reference and id(t) not in passed | named:
                 prog.warnings.append(f"{t.where}: not used by a motion in these files: left as it is")
+
+    def _meant(self, st, src, masked: str, start: int, end: int, proc: str) -> list[Meant]:
+        """The operands of the ':' expression at ``start:end`` that name a declared position
+        directly (``XP1`` in ``XP1:OFFS``, never assigned in the program): where the run-time
+        routine is used, the writer puts that position's value as written there
+        (:class:`~robocal.programs.runtime.Meant`)."""
+        text = masked[start:end]
+        operands = split_top(text, 0, len(text), ":")
+        if len(operands) < 2:
+            return []
+        out = []
+        for a, b in operands:
+            name = text[a:b].strip()
+            if not re.fullmatch(r"[A-Za-z_]\w*(?:\[\s*\d+(?:\s*,\s*\d+)*\s*\])?", name):
+                continue
+            key = re.sub(r"\s+", "", name).upper()
+            if st.assigned.get(key) or st.modified.get(key.split("[")[0]) or \
+                    key.split("[")[0] in st.params.get(proc, []):
+                continue  # through a variable: its value at run time is not the declaration's
+            found = self._follow(st, name, proc, {}, 0)
+            if len(found) == 1 and found == st.declared.get(key):
+                at = start + a + len(text[a:b]) - len(text[a:b].lstrip())
+                out.append(Meant(found[0], src.path, at, at + len(name)))
+        return out
 
     def _carried(self, prog, machines: Machines) -> None:
         """The bases the motions put on a machine: their frames (BASE_DATA[n] or the literal

@@ -36,6 +36,8 @@ from robocal.programs.runtime import ROUTINE_NAME, CalibratedChain, RuntimeSite,
 
 FUNCTION = ROUTINE_NAME.upper()  # RC_CORRECT (KRL names: at most 24 characters, any case)
 FRAME_FUNCTION = FUNCTION + "F"  # its twin for a FRAME target (P:OFFSET), in a POS's Status and Turn
+MEANT = "RC_MEANT"  # the original values of positions the filter corrects offline (XP1 in XP1:OFFS)
+_NAMES = re.compile(r"\bRC_(?:CORRECTF?|CONST|JOINT|MEANT)\b", re.IGNORECASE)  # the added functions
 BEGIN = ";FOLD robocal run-time correction"  # the added text's first line (a KRL fold)
 END = ";ENDFOLD robocal run-time correction"
 _DIGITS = 6  # decimals of the constants: 1e-6 mm and deg (KRL REAL is 32-bit: ~1e-4 mm at 1 m)
@@ -204,12 +206,46 @@ class KRLRuntime(RuntimeWriter):
     ``.src`` holding the motions, their targets wrapped in calls of it."""
 
     def site_edits(self, text, site: RuntimeSite, meant):
+        index = {id(t): k + 1 for k, t in enumerate(meant)}
+        edits = {(m.start, m.end): f"{MEANT}({index[id(m.target)]})" for m in site.meant}
         reference = getattr(site, "reference", "")  # a KRLSite's: a FRAME target and its POS
-        if reference:
-            return {(site.start, site.start): f"{FRAME_FUNCTION}(", (site.end, site.end): f", {reference})"}
-        return {(site.start, site.start): f"{FUNCTION}(", (site.end, site.end): ")"}
+        if reference:  # the POS it offsets: its value as written when the filter corrects it offline
+            same = reference.replace(" ", "").upper()
+            original = next((f"{MEANT}({index[id(m.target)]})" for m in site.meant
+                             if text[m.start:m.end].replace(" ", "").upper() == same), reference)
+            edits |= {(site.start, site.start): f"{FRAME_FUNCTION}(", (site.end, site.end): f", {original})"}
+        else:
+            edits |= {(site.start, site.start): f"{FUNCTION}(", (site.end, site.end): ")"}
+        return edits
 
     def routine(self, text, chain, meant, note):
+        if BEGIN in text:
+            raise DataError(f"the program already holds robocal's run-time correction ({FUNCTION}): filter "
+                            "the original program (routing its motions again would correct them twice)")
+        clash = _NAMES.search(text)
+        if clash:
+            raise DataError(f"the program already names {clash.group()}: --runtime-correction cannot add its "
+                            "functions under that name")
         nl = _newline(text)
         lead = nl if text and not text.endswith(("\n", "\r")) else ""
-        return len(text), f"{lead}{nl}{routine_text(chain, note, nl)}{nl}"
+        body = routine_text(chain, note, nl)
+        if meant:
+            body = body[:body.rindex(END)] + nl.join(["", *_meant_function(meant), END])
+        return len(text), f"{lead}{nl}{body}{nl}"
+
+
+def _meant_function(meant: list) -> list[str]:
+    """``RC_MEANT(k)``: target k's value as the program wrote it (before the filter corrected it
+    offline), its numbers, Status, Turn and external axes as written."""
+    out = [f"DEFFCT E6POS {MEANT}(RC_N:IN)",
+           "; the positions as the program wrote them (the filter corrects them offline): "
+           + ", ".join(f"{k} {t.name}" for k, t in enumerate(meant, 1)),
+           "DECL INT RC_N",
+           "DECL E6POS RC_M",
+           "RC_M = {X 0.0, Y 0.0, Z 0.0, A 0.0, B 0.0, C 0.0, S 0, T 0}"]
+    for k, t in enumerate(meant, 1):
+        parts = [f"{f} {n.text}" for f, n in zip(_FIELDS, t.numbers, strict=True)]
+        parts += [f"S {int(t.config[0])}"] + ([f"T {int(t.config[1])}"] if t.config[1] >= 0 else [])
+        parts += [f"{e} {_real(float(v))}" for e, v in t.axes.items()]
+        out += [f"IF RC_N == {k} THEN", f"  RC_M = {{{', '.join(parts)}}}", "ENDIF"]
+    return out + ["RETURN RC_M", "ENDFCT"]
