@@ -17,7 +17,14 @@ import robocal as rc
 from robocal.deploy.compensation import compensate, controller_model
 from robocal.ik.closed_form import solve_all
 from robocal.programs.dialects.krl.configuration import KUKAConfig
-from robocal.programs.dialects.krl.runtime import BEGIN, END, FRAME_FUNCTION, FUNCTION, frame_numbers
+from robocal.programs.dialects.krl.runtime import (
+    BEGIN,
+    END,
+    FRAME_FUNCTION,
+    FUNCTION,
+    KRLRuntime,
+    frame_numbers,
+)
 from robocal.programs.runtime import calibrated_chain, reference_correction
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -410,3 +417,23 @@ def test_evaluator_forward_undoes_inverse(filtered):
     assert m.globals["RC_TEST_ERR"] == 0
     assert np.abs(to_matrix(back) - to_matrix(want)).max() < 2e-3
     assert (back.values["S"], back.values["T"]) == (want.values["S"], want.values["T"])
+
+
+def test_a_program_holding_the_routine_is_refused(filtered, tmp_path):
+    """Filtering a filtered program again (--force) with the option would route twice: the routed
+    motions are not routed again, and say so."""
+    from robocal.core.errors import DataError
+
+    _, calibrated, paths, rt, _ = filtered
+    again = [tmp_path / p.name for p in paths]
+    for p, q in zip(paths, again, strict=True):
+        q.write_bytes(rt.outputs[p])
+    text = lambda T: ",".join(f"{v:.6f}" for v in frame_numbers(T[None])[0])  # noqa: E731
+    res = rc.filter_program(again, calibrated, NOMINAL, tools={"1": text(TOOL)}, frames={"1": text(BASE)},
+                            runtime_correction=True, force=True)
+    already = "not corrected at run time: it already goes through RC_CORRECT"
+    assert sum(already in w for w in res.warnings) == 3
+    assert res.outputs[again[0]].decode().count(BEGIN) == 1
+    with pytest.raises(DataError, match="already holds"):  # a routine added to a file holding one
+        KRLRuntime().routine(rt.outputs[paths[0]].decode("latin-1"), calibrated_chain(calibrated, NOMINAL),
+                             [], "note")

@@ -77,6 +77,7 @@ _CALL = re.compile(r"^[ \t]*([A-Za-z_]\w*)\s*\(([^\n]*)\)[ \t\r]*$", re.MULTILIN
 _APPROX = re.compile(r"(?:\s+(?:C_[A-Z]+|CA\s+[-+]?[\d.]+))+\s*$", re.IGNORECASE)  # C_DIS, CA 45 ...
 _JOINT_SYSTEM = ("$H_POS", "$AXIS_ACT", "$AXIS_HOME", "$AXIS_BACK", "$AXIS_RET", "$AXIS_FOR")
 _NULL_OPERAND = re.compile(r"\$NULLFRAME\s*:\s*\{[^{}]*\}\s*$", re.IGNORECASE)
+_ROUTED = re.compile(r"\s*RC_CORRECTF?\s*\(", re.IGNORECASE)  # a target robocal's run-time correction routes
 _HOME = re.compile(r"X?HOME\d?")  # KSS $config.dat: DECL E6AXIS XHOME, XHOME1..XHOME5
 _WITH = re.compile(r"\bWITH\b", re.IGNORECASE)
 _REF = re.compile(r"([A-Za-z_$]\w*)\s*(\[[^\]]*\])?((?:\.\w+)*)")
@@ -343,7 +344,10 @@ class KRLDialect(Dialect):
                                      "position at run time"]
                     else:
                         head = _APPROX.sub("", text)
-                        found = self._follow(st, head, proc, {}, 0) if head else []
+                        routed = RunTime(f"{head} is corrected at run time by robocal's RC_CORRECT (a "
+                                         "filtered program)")
+                        found = [routed] if _ROUTED.match(head) else \
+                            self._follow(st, head, proc, {}, 0) if head else []
                     if found and all(isinstance(f, RunTime) for f in found):
                         stop = a + len(_APPROX.sub("", masked[a:b]).rstrip())
                         tool, base = state["tool"][0], state["base"][0]
@@ -571,6 +575,10 @@ def _site(st: _State, acc, path, start: int, end: int, text: str, tool: str, bas
     """The run-time site of argument ``text`` (``start:end``); its ``why_not`` says when it cannot
     be routed: its type is declared in no file given, or it is a FRAME computed from no POS/E6POS
     (no Status/Turn to correct it in)."""
+    if _ROUTED.match(text):
+        return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base,
+                       why_not="it already goes through RC_CORRECT, robocal's run-time correction (a "
+                               "filtered program: routing it again would correct it twice)")
     operands = [text[slice(*o)] for o in split_top(text, 0, len(text), ":")]
     kind = _kind(st, operands[-1])
     reference = ""
