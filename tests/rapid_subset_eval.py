@@ -1,7 +1,7 @@
 """An evaluator of exactly the RAPID subset robocal's run-time correction uses (tests only): module
 data declarations (CONST/PERS/VAR of num, bool, string, pos, orient, pose, confdata, robtarget,
 jointtarget, tooldata, wobjdata, arrays ``{n}``), LOCAL FUNCs (PROCs are skipped), assignments to
-variables, record fields and array elements, FOR, IF/ELSE, RETURN, + - * / and comparisons,
+variables, record fields and array elements, FOR, IF/ELSE, RETURN, ErrWrite, + - * / and comparisons,
 AND/OR/NOT, aggregates, and the functions PoseMult, PoseInv, PoseVect, OrientZYX, EulerZYX,
 VectMagn, Sqrt, Sin, Cos, Abs, Offs, RelTool, CalcJointT, CalcRobT. The controller's kinematics (CalcJointT,
 CalcRobT) are a :class:`NominalController`: the nominal model's closed-form IK in the robconf the
@@ -78,6 +78,7 @@ class Evaluator:
         self.funcs: dict[str, tuple] = {}
         self.toks, self.i = _tokens(text), 0
         self.module_toks = self.toks
+        self.log: list[tuple[list, dict]] = []  # ErrWrite calls: (arguments, switches)
         self.calls = {"CalcJointT": 0, "CalcRobT": 0}
         # system data: the active program displacement (none until a test sets one)
         self.globals["c_progdisp"] = self.coerce("progdisp", [[[0, 0, 0], [1, 0, 0, 0]], [9e9] * 6])
@@ -283,6 +284,8 @@ class Evaluator:
                         return r
             self.take("ENDIF")
             return None
+        if self.peek(1) in ("\\", ",", ";") or self.peek(1).startswith('"'):  # a procedure call
+            return self._procedure(env)
         # an assignment: name [{index}] [.field ...] := expr ;
         name = self.take().lower()
         path: list = []
@@ -306,6 +309,28 @@ class Evaluator:
         last = path[-1]
         field_kind = kind if isinstance(last, int) else dict(SCHEMA[holder.kind])[last]
         holder[last] = self.coerce(field_kind, value)
+        return None
+
+    def _procedure(self, env):
+        """A procedure call statement (ErrWrite only): its arguments, logged in :attr:`log`."""
+        name = self.take()
+        if name.lower() != "errwrite":
+            raise RapidError(f"{name} is outside the subset")
+        args, switches = [], {}
+        while not self.is_(";"):
+            if self.is_("\\"):
+                self.take()
+                key = self.take().lower()
+                switches[key] = True
+                if self.is_(":="):
+                    self.take()
+                    switches[key] = self._expr(env)
+            elif self.is_(","):
+                self.take()
+            else:
+                args.append(self._expr(env))
+        self.take(";")
+        self.log.append((args, switches))
         return None
 
     # ---------------------------------------------------------------- expressions

@@ -292,3 +292,31 @@ def test_offsets_from_a_target_corrected_offline_start_from_its_original_value(f
         landed = _land(ev, ctl, corrected, tool, wobj, TRUE)
         own = np.linalg.norm((_land(ev, ctl, corrected, tool, wobj, CALIBRATED) - landed)[:3, 3])
         assert np.linalg.norm(landed[:3, 3] - X[:3, 3]) <= MODEL_ERROR_FACTOR * own + ROUTINE_SLACK_MM
+
+
+def test_near_a_wrist_singularity_the_routine_says_it_did_not_converge(tmp_path):
+    """Axis 5 at 0.05 deg: the fixed point does not converge in 3 steps (the controller's IK is
+    ill-conditioned there): the routine returns its last iterate and writes a warning to the
+    event log (ErrWrite \\W); at 20 deg it converges silently."""
+    from robocal.programs.dialects.rapid.configuration import ABBConfig
+    from robocal.programs.rotations import matrix_to_quat
+
+    lines = ["MODULE S"]
+    for k, q5 in enumerate((0.05, 20.0)):
+        q = np.deg2rad([[10, 20, 10, 30, q5, -20]])
+        F = NOMINAL.fk(q)[0]
+        quat = matrix_to_quat(F[None, :3, :3], np.array([[1.0, 0, 0, 0]]))[0]
+        c = ABBConfig().encode(NOMINAL, q)[0]
+        p = F[:3, 3] * 1e3
+        lines.append(f"  CONST robtarget p{k} := [[{p[0]:.4f},{p[1]:.4f},{p[2]:.4f}],"
+                     f"[{','.join(f'{v:.9f}' for v in quat)}],[{c[1]},{c[2]},{c[3]},{c[0]}],{NINE}];")
+    lines += ["  VAR num dx := 0;", "  PROC main()", "    MoveL Offs(p0, dx, 0, 0), v100, fine, tool0;",
+              "    MoveL Offs(p1, dx, 0, 0), v100, fine, tool0;", "  ENDPROC", "ENDMODULE", ""]
+    path = tmp_path / "s.mod"
+    path.write_text("\n".join(lines))
+    res = filter_program(path, CALIBRATED, NOMINAL, runtime_correction=True)
+    ev = Evaluator(_text(res), NominalController(NOMINAL))
+    ev.eval("RC_Correct(Offs(p1, 0, 0, 0), tool0, wobj0)")
+    assert ev.log == []
+    ev.eval("RC_Correct(Offs(p0, 0, 0, 0), tool0, wobj0)")
+    assert len(ev.log) == 1 and ev.log[0][1].get("w") and "no convergence" in ev.log[0][0][1]

@@ -32,7 +32,8 @@ inverse-kinematics calls per motion. Not exact: the calibrated model's joint-err
 need the load, the approach direction or the temperature (:attr:`CalibratedChain.left_out`:
 compliance, backlash, travel, payload, thermal) are not in the chain (gear, cyclic, scale are);
 near a singularity the controller's IK is ill-conditioned (the iteration may not converge: the
-routine returns its last iterate); a correction that crosses a configuration boundary keeps the
+routine returns its last iterate and, when the last step's error exceeds ``WARN_MM``, says so in
+the controller's log); a correction that crosses a configuration boundary keeps the
 target's configuration.
 """
 
@@ -56,6 +57,9 @@ from robocal.programs.target import Target
 ITERATIONS = 3  # fixed-point steps (controller IK calls) per motion at most
 TOLERANCE_MM = 0.001  # the routine stops when the calibrated TCP is this close to the meant one ...
 TOLERANCE_DEG = 0.0001  # ... and turned less than this from it
+# a pose error still this large at the last step: the iteration is not converging (near a
+# singularity): the routine writes a warning to the controller's event log and returns its last iterate
+WARN_MM = 0.05
 COMPUTED_TERMS = ("gear", "cyclic", "scale")  # joint-error terms of the joint's own angle: in the routine
 ROUTINE_NAME = "RC_Correct"  # the added routine's name in every language (its marker names robocal)
 
@@ -152,6 +156,7 @@ class CalibratedChain:
     iterations: int = ITERATIONS
     tolerance_mm: float = TOLERANCE_MM
     tolerance_deg: float = TOLERANCE_DEG
+    warn_mm: float = WARN_MM
 
     def fk(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
         """TCP poses ``(N, 4, 4)`` (m) of joints ``q`` ``(N, n)`` (rad) with ``tool`` ``(4, 4)`` or

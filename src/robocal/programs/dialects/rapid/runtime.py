@@ -10,8 +10,8 @@ a module's data come before its routines) composed with PoseMult in a FOR loop o
 kinematics (the target's robconf kept) and returns the target with the corrected trans/rot, its
 robconf and extax unchanged. The meant pose is taken in the work object with the active program
 displacement (``C_PROGDISP.pdisp``, composed after oframe), which CalcJointT applies too. Only
-base-system RAPID: PoseMult, PoseInv, OrientZYX, VectMagn, Sqrt, CalcJointT, FOR, IF (no option
-needed).
+base-system RAPID: PoseMult, PoseInv, OrientZYX, VectMagn, Sqrt, Sin, Cos, CalcJointT, ErrWrite,
+FOR, IF (no option needed).
 """
 
 from __future__ import annotations
@@ -125,7 +125,8 @@ class RapidRuntime(RuntimeWriter):
             "  ! the calibrated TCP pose in the world at the commanded joints J (its reached joints first)",
             "  ! calibrated chain: base * link{i} * Rz(theta{i} + q{i}) * Tz(d{i}) * flange * tool (mm, deg)",
             f"  CONST pose RC_BASE := {_pose(chain.base)};",
-            f"  CONST pose RC_LINK{{{n}}} := [" + ",".join(_pose(L) for L in chain.links) + "];",
+            f"  CONST pose RC_LINK{{{n}}} := [",  # one link a line: short lines for the pendant
+            *[f"    {_pose(L)}{',' if i < n - 1 else '];'}" for i, L in enumerate(chain.links)],
             f"  CONST num RC_THETA{{{n}}} := {_nums(np.rad2deg(chain.theta))};",
             f"  CONST num RC_D{{{n}}} := {_nums(chain.d * 1e3)};",
             f"  CONST pose RC_FLANGE := {_pose(chain.flange)};",
@@ -145,6 +146,7 @@ class RapidRuntime(RuntimeWriter):
             "ENDFUNC",
             f"LOCAL FUNC robtarget {ROUTINE_NAME}(robtarget Target, PERS tooldata Tool, PERS wobjdata WObj)",
             f"  CONST num RC_TOL_MM := {chain.tolerance_mm:g};",
+            f"  CONST num RC_WARN_MM := {chain.warn_mm:g};",
             f"  CONST num RC_TOL_SIN := {np.sin(np.deg2rad(chain.tolerance_deg) / 2):.3e};  ! sin(angle / 2)",
             "  VAR robtarget T;",
             "  VAR jointtarget J;",
@@ -172,6 +174,11 @@ class RapidRuntime(RuntimeWriter):
             "    T.trans := P.trans;",
             "    T.rot := P.rot;",
             "  ENDFOR",
+            "  IF VectMagn(E.trans) > RC_WARN_MM THEN",
+            "    ! not converging (near a singularity): the last iterate, said in the event log",
+            f'    ErrWrite \\W, "robocal {ROUTINE_NAME}", "no convergence in {chain.iterations} steps"'
+            ' \\RL2:="the target is corrected only in part (near a singularity?)";',
+            "  ENDIF",
             "  RETURN T;",
             "ENDFUNC",
             *_meant_function(meant),
