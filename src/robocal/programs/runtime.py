@@ -124,7 +124,8 @@ class RuntimeSite:
     """One target argument of a motion instruction whose target is computed at run time:
     ``account`` (the motion's), ``path`` and the span ``start:end`` of the argument as written,
     the tool and work object as written there (``wobj`` None: the language's default) and the
-    names they resolve to in :class:`Program` (``tool_name``, ``frame_name``; '' unresolved)."""
+    names they resolve to in :class:`Program` (``tool_name``, ``frame_name``; '' unresolved);
+    ``why_not``: why the language's reader already knows it cannot be routed ('': it may be)."""
 
     account: Account
     path: Path
@@ -134,6 +135,7 @@ class RuntimeSite:
     wobj: str | None
     tool_name: str
     frame_name: str
+    why_not: str = ""
     meant: tuple[Meant, ...] = ()  # the uses inside this argument the writer replaces (routed_sites)
 
 
@@ -307,6 +309,8 @@ def routable(program: Program, sites: list[RuntimeSite], corrected: set[int]) ->
     if any(m.target.config is None for s in sites for m in _inside(s, corrected)):
         return "a target its value is computed from has no configuration data"
     for s in sites:
+        if s.why_not:
+            return s.why_not
         for kind, name, known in (("tool", s.tool_name, program.tools),
                                   ("frame", s.frame_name, program.frames)):
             if not name or name not in known:
