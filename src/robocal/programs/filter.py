@@ -502,6 +502,9 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     edits, changed = number_edits(d, targets, values, good, Pc, cfg, warnings)
     warnings += comp.target_warnings([t.where for t in targets], good)  # corrected ones near a singularity
     outputs = {s.path: edits.pop(s.path, FileEdits()).apply(s) for s in sources}  # edits freed once used
+    # targets a reference holds (FANUC POSREG.VA): the dialect's own file delivers them
+    outputs.update(d.reference_outputs(program, refs, {r.path: edits.pop(r.path, FileEdits()).apply(r)
+                                                       for r in refs}, set(program.not_corrected)))
     rows = _rows(d, targets, X, W @ Pc, controller, q, ok, good, comp.converged & ok, changed, cfg, sing)
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,

@@ -37,20 +37,21 @@ from robocal.programs.dialects.fanuc.campaign import fanuc_ls_program
 from robocal.programs.dialects.fanuc.configuration import SCARA, FANUCConfig
 from robocal.programs.dialects.fanuc.groups import COORD, coordinate, group_values, values_text
 from robocal.programs.dialects.fanuc.loads import FanucLoads, read_schedules
-from robocal.programs.dialects.fanuc.registers import ActiveFrames, read_registers
+from robocal.programs.dialects.fanuc.posreg import SETTER_NAME, is_posreg, read_posreg, setter_program
+from robocal.programs.dialects.fanuc.registers import ActiveFrames, Registers, assignments, read_registers
 from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
-from robocal.programs.source import Number
+from robocal.programs.source import Number, ProgramText
 
 _POS = re.compile(r"\bP\[\s*(\d+)\s*(?::\s*\"([^\"]*)\")?\s*\]\s*\{(.*?)\}\s*;", re.DOTALL)
 _GROUP = re.compile(r"\bGP(\d+)\s*:")
 _FRAME_NO = re.compile(r"\b(UF|UT)\s*:\s*(\w+)")
 _CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d{1,3})\s*,"
                      r"\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*'")
-_SCARA_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([LR])\s*,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,"
-                           r"\s*([-+]?\d{1,3})\s*'")  # a SCARA's (SR-series): hand, three turns
+_SCARA_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([LR])\s*(?:,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,"
+                           r"\s*([-+]?\d{1,3}))?\s*'")  # a SCARA's (SR-series): hand, three turns (or none)
 _VALUE = r"\b{}\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*(?:mm|deg)"
 _KEYS = ("X", "Y", "Z", "W", "P", "R")
 _VALUES = tuple(re.compile(_VALUE.format(k)) for k in _KEYS)
@@ -125,13 +126,26 @@ class FanucDialect(Dialect):
     def resolutions(self):
         return np.array([_POSITION_MM] * 3 + [_ANGLE_DEG] * 3)
 
+    def reference_outputs(self, program, references, corrected, kept):
+        """A POSREG.VA among ``references``: the TP program setting its corrected registers
+        (:func:`robocal.programs.dialects.fanuc.posreg.setter_program`), beside it as PR_CAL.LS."""
+        out = {}
+        for ref in (r for r in references if is_posreg(r)):
+            used = {int(t.name[3:-1]): (t.frame, t.tool) for t in program.targets
+                    if t.source is ref and id(t) not in kept}
+            if used:
+                text = setter_program(ProgramText(ref.path, corrected[ref.path]), used, self.scheme)
+                out[ref.path.with_name(f"{SETTER_NAME}.LS")] = text.encode("latin-1")
+        return out
+
     def config_edits(self, target, new):
         spans = target.config_spans  # (flip, up, front, t1, t4, t6) as (start, end, text)
-        if len(spans) == 4:  # a SCARA's (hand, t1, t2, t4)
+        if int(target.config[1]) == SCARA:  # a SCARA's (hand, t1, t2, t4), or its hand alone
             texts = ["LR"[int(new[0])], *(str(int(v)) for v in new[3:])]
         else:
             letters = ("NF"[int(new[0])], "UD"[int(new[1])], "TB"[int(new[2])])
             texts = [*letters, *(str(int(v)) for v in new[3:])]
+        texts = texts[:len(spans)]  # turns the file does not write stay unwritten
         return {(a, b): t for (a, b, old), t in zip(spans, texts, strict=True) if old != t}
 
     def parse(self, sources, frames, tools, references=()):
@@ -143,10 +157,19 @@ class FanucDialect(Dialect):
         others: dict[int, tuple] = {}  # id(position) -> (its other groups' values, its extended axes)
         joint: set = set()
         remote: set = set()  # remote-TCP positions (file, number)
-        registers = None  # the --position-registers file, given among the sources as a .csv
+        registers = None  # the --position-registers file (among the sources as a .csv) or a POSREG.VA
         for src in [s for s in sources if s.path.suffix.lower() == ".csv"]:
-            registers = read_registers(src)
+            registers = Registers(read_registers(src), {}, f"the --position-registers file {src.path.name}")
         sources = [s for s in sources if s.path.suffix.lower() != ".csv"]
+        backups = [r for r in references if is_posreg(r)]
+        if len(backups) > 1 or backups and registers is not None:
+            given = [*(r.path.name for r in backups), *([registers.origin] if registers else [])]
+            raise DataError(f"the position registers are given twice ({', '.join(given)}): give one")
+        if backups:
+            va = read_posreg(backups[0])
+            registers = Registers(va.cartesian, va.other, backups[0].path.name)
+            prog.warnings.append(f"{backups[0].path.name}: the position registers' values are the backup's: "
+                                 "a program not given here that writes them at run time is not seen")
         for src in sources:
             text = src.text
             start = text.find("/POS")
@@ -195,10 +218,10 @@ class FanucDialect(Dialect):
                     row = np.array(["NF".index(c.group(1)), "UD".index(c.group(2)), "TB".index(c.group(3)),
                                     int(c.group(4)), int(c.group(5)), int(c.group(6))])
                     spans = [(a + c.start(k), a + c.end(k), c.group(k)) for k in range(1, 7)]
-                elif c := _SCARA_CONFIG.search(gp):
+                elif c := _SCARA_CONFIG.search(gp):  # no turns written: 0, the controller's nearest
                     row = np.array(["LR".index(c.group(1)), SCARA, SCARA,
-                                    *(int(c.group(k)) for k in (2, 3, 4))])
-                    spans = [(a + c.start(k), a + c.end(k), c.group(k)) for k in range(1, 5)]
+                                    *(int(c.group(k) or 0) for k in (2, 3, 4))])
+                    spans = [(a + c.start(k), a + c.end(k), c.group(k)) for k in range(1, 5) if c.group(k)]
                 else:
                     raise DataError(f"{where}: position {name}: CONFIG must read 'N|F U|D T|B, t1, t4, t6' "
                                     "(a SCARA's: 'L|R, t1, t2, t4')")
@@ -235,6 +258,7 @@ class FanucDialect(Dialect):
         incremental: dict[tuple, list] = {}  # position -> accounts of the INC motions using it
         used_registers: dict[int, Target] = {}
         plain = set()  # positions some motion uses as a pose
+        assigned = assignments(sources)  # registers written at run time -> where
         first: dict[int, tuple] = {}  # id(position) -> how its first motion moves it (leader, values)
         for src in sources:
             text = src.text
@@ -264,6 +288,9 @@ class FanucDialect(Dialect):
                         continue
                     label = ref.group(0)
                     number = ref.group(2).isdigit() and len(ref.group(2)) <= _POSITION_DIGITS
+                    if ref.group(1) == "PR" and number and registers is not None and int(ref.group(2)) \
+                            not in assigned and registers.other.get(int(ref.group(2)), "") is None:
+                        continue  # a joint register: nothing to correct
                     acc = None if ref.group(1) == "P" and number and (src.path, int(ref.group(2))) in joint \
                         else prog.motion(src, line.start(1), instr)
                     if acc is None:
@@ -272,7 +299,7 @@ class FanucDialect(Dialect):
                         prog.skip(here, instr, f"{label} is {REMOTE_TCP}", acc, label)
                         continue
                     if ref.group(1) == "PR":
-                        why = _register(ref, registers, active, line.start())
+                        why = _register(ref, registers, active, assigned, line.start())
                         if isinstance(why, str):
                             prog.skip(here, instr, why, acc, label)
                         elif off or "INC" in options and _INCREMENTAL.search(options):
@@ -328,26 +355,29 @@ class FanucDialect(Dialect):
         prog.targets += [t for t in used_registers.values() if id(t) not in prog.not_corrected]
 
 
-def _register(ref, registers, active, at: int):
+def _register(ref, registers, active, assigned: dict[int, str], at: int):
     """``(Target, user frame, tool frame)`` of the motion to position register ``ref`` at ``at``,
-    or why it cannot be corrected."""
+    or why it cannot be corrected. ``assigned``: register -> where a program given writes it."""
     label, n = ref.group(0), ref.group(2)
-    if registers is None:
-        return (f"{label} is a position register: its value lives in the controller (give the registers' "
-                "values with --position-registers to correct it)")
     if not n.isdigit():
         return f"{label}: the register number is known at run time only"
     if len(n) > _POSITION_DIGITS:
         return f"PR[{short_repr(n)}] is not a register number (more than {_POSITION_DIGITS} digits)"
-    if int(n) in active.assigned:
-        return f"{label} is assigned in this program: its value is computed at run time"
-    if int(n) not in registers:
-        return Undeclared(f"{label} is not in the --position-registers file",
-                          f"PR[{int(n)}] in --position-registers")
+    if int(n) in assigned:
+        return f"{label} is written at {assigned[int(n)]} (PR[{int(n)}]=...): its value is computed at run " \
+            "time"
+    if registers is None:
+        return (f"{label} is a position register: its value lives in the controller (give its backup "
+                "POSREG.VA with --references, or the values with --position-registers, to correct it)")
+    if registers.other.get(int(n)):
+        return registers.other[int(n)]
+    if int(n) not in registers.values:
+        return Undeclared(f"{label} is not in {registers.origin}", f"PR[{int(n)}] in {registers.origin}")
     uf, ut = active.at(at)
     if uf is None or ut is None:
-        return f"{label}: UFRAME_NUM and UTOOL_NUM are not both set before this motion (the frames it is in)"
-    return registers[int(n)], str(int(uf)), str(int(ut))
+        return (f"{label}: UFRAME_NUM and UTOOL_NUM are not both set in this program before this motion "
+                "(the frames its value is in are the caller's)")
+    return registers.values[int(n)], str(int(uf)), str(int(ut))
 
 
 def _nothing_between(src, text: str, a: int, b: int) -> None:

@@ -16,6 +16,7 @@ program assigns (``PR[5]=LPOS``, ``PR[5,3]=...``) is computed at run time: its m
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -28,7 +29,35 @@ _NUM = r"\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*"
 _ROW = re.compile(r"^\s*(\d{1,4})\s*," + ",".join([_NUM] * 6) + r",\s*\"?\s*([NF])\s*([UD])\s*([TB])\s*,\s*"
                   r"([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*\"?\s*$", re.MULTILINE)
 _ACTIVE = re.compile(r"\b(UFRAME_NUM|UTOOL_NUM)\s*=\s*(\d+)\s*;")
-_ASSIGNED = re.compile(r"\bPR\[\s*(\d+)\s*(?:,\s*\d+\s*)?(?::[^\]]*)?\]\s*=")
+# a /MN line that writes PR[n] or an element of it (not a remark)
+_ASSIGNED = re.compile(r"^[ \t]*\d*[ \t]*:[ \t]*PR\[\s*(?:GP1\s*:\s*)?(\d+)\s*(?:,\s*\d+\s*)?"
+                       r"(?::[^\]]*)?\]\s*=", re.MULTILINE)
+
+
+@dataclass
+class Registers:
+    """The position registers given: ``values`` number -> :class:`Target` (Cartesian, frame and
+    tool unset); ``other`` number -> why a motion to it is not corrected (None: a joint register,
+    nothing to correct); ``origin``: the file they come from, as said in a reason."""
+
+    values: dict[int, Target]
+    other: dict[int, str | None]
+    origin: str
+
+
+def assignments(sources: list[ProgramText]) -> dict[int, str]:
+    """Register number -> ``file:line`` of the first /MN line of ``sources`` that writes it
+    (``PR[n]=...``, ``PR[n,i]=...``): a PR[] is global, so a write in any program given makes its
+    value a run-time one."""
+    out: dict[int, str] = {}
+    for src in sources:
+        text = src.text
+        start, stop = text.find("/MN"), text.find("/POS")
+        if start < 0:
+            continue
+        for m in _ASSIGNED.finditer(text, start, stop if stop > start else len(text)):
+            out.setdefault(int(m.group(1)), f"{src.path.name}:{src.line_of(m.start(1))}")
+    return out
 
 
 def read_registers(src: ProgramText) -> dict[int, Target]:
@@ -77,7 +106,6 @@ class ActiveFrames:
                 ut = m.group(2)
             self._at.append(m.start())
             self._state.append((uf, ut))
-        self.assigned = {int(m.group(1)) for m in _ASSIGNED.finditer(src.text, start, stop)}
 
     def at(self, offset: int) -> tuple[str | None, str | None]:
         """``(user frame, tool frame)`` numbers in effect at ``offset`` (None: not set yet)."""
