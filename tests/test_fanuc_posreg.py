@@ -1,0 +1,223 @@
+"""FANUC position registers read from the controller's backup POSREG.VA (``--references``):
+motions to PR[n] corrected, the corrected values delivered as the TP program PR_CAL.LS, registers
+written at run time named with where; every motion accounted, every byte of the programs outside
+the corrected numbers unchanged (robocal.programs.dialects.fanuc.posreg)."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import robocal as rc
+from robocal.data.simulate import simulate_tracker
+from robocal.programs.dialects.fanuc.configuration import FANUCConfig
+from robocal.programs.dialects.fanuc.posreg import read_posreg
+from robocal.programs.motions import CORRECTED
+from robocal.programs.source import ProgramText
+
+# written in the style of real controller backups (CRLF, %9.3f with the leading zero of |x| < 1
+# dropped, a joint register with Group: on its index line and a blank line after it, Uninitialized
+# registers, an EXT1 line of zero, a second motion group, the next variable of the file after it)
+POSREG = """[*POSREG*]$POSREG  Storage: CMOS  Access: RW  : ARRAY[2,20] OF Position Reg
+    [1,1] =   'HOME'   Group: 1
+  J1 =     0.000 deg   J2 =     0.000 deg   J3 =     0.000 deg 
+  J4 =     0.000 deg   J5 =   -90.000 deg   J6 =      .000 deg 
+
+    [1,2] =   '' Uninitialized
+    [1,10] =   'PICK_APP' 
+  Group: 1   Config: N U T, 0, 0, 0
+  X:   612.500   Y:  -120.000   Z:   480.000
+  W:   180.000   P:     -.649   R:    90.000
+  EXT1:     0.000 mm  
+    [1,11] =   'PICK' 
+  Group: 1   Config: N U T, 0, 0, 0
+  X:   612.500   Y:  -120.000   Z:   330.000
+  W:   180.000   P:     -.649   R:    90.000
+    [1,12] =   'PLACE_BASE' 
+  Group: 1   Config: N U T, 0, 0, 0
+  X:   250.000   Y:   540.000   Z:   210.000
+  W:  -179.500   P:     0.000   R:   180.000
+    [1,13] =   'LIFT' 
+  Group: 1   Config: N U T, 0, 0, 0
+  X:     0.000   Y:     0.000   Z:    50.000
+  W:     0.000   P:     0.000   R:     0.000
+    [1,14] =   'SPARE' Uninitialized
+    [1,15] =   'RAIL' 
+  Group: 1   Config: N U T, 0, 0, 0
+  X:   600.000   Y:     0.000   Z:   400.000
+  W:   180.000   P:     0.000   R:     0.000
+  EXT1:   700.000 mm  
+    [1,20] =   'PLACE' 
+  Group: 1   Config: N U T, 0, 0, 0
+  X:   250.000   Y:   540.000   Z:   260.000
+  W:  -179.500   P:     0.000   R:   180.000
+    [2,10] =   'PICK_APP'   Group: 2
+  J1 =    45.000 deg 
+
+[*POSREG*]$MAXPREGNUM  Storage: CMOS  Access: RW  : INTEGER = 100
+"""
+
+PALLET = """/PROG  PALLET
+/ATTR
+OWNER\t\t= MNEDITOR;
+COMMENT\t\t= "";
+LINE_COUNT\t= 16;
+PROTECT\t\t= READ_WRITE;
+DEFAULT_GROUP\t= 1,*,*,*,*;
+/MN
+   1:  UFRAME_NUM=1 ;
+   2:  UTOOL_NUM=2 ;
+   3:J PR[1:HOME] 100% FINE    ;
+   4:J PR[10:PICK_APP] 100% CNT50    ;
+   5:L PR[11:PICK] 200mm/sec FINE    ;
+   6:L PR[10:PICK_APP] 500mm/sec CNT50    ;
+   7:  PR[20:PLACE]=PR[12:PLACE_BASE]    ;
+   8:  PR[20,3:PLACE]=PR[20,3:PLACE]+R[5:LAYER_H]    ;
+   9:L PR[20:PLACE] 200mm/sec FINE    ;
+  10:L P[1] 200mm/sec FINE Offset,PR[13:LIFT]    ;
+  11:L PR[14:SPARE] 200mm/sec FINE    ;
+  12:J PR[12:PLACE_BASE] 100% FINE    ;
+  13:  ! PR[11:PICK]=LPOS ;
+  14:J P[1] 100% FINE    ;
+  15:L PR[15:RAIL] 200mm/sec FINE    ;
+  16:L PR[16] 200mm/sec FINE    ;
+/POS
+P[1]{
+   GP1:
+\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',
+\tX =   650.000  mm,\tY =   -80.000  mm,\tZ =   300.000  mm,
+\tW =   180.000 deg,\tP =     0.000 deg,\tR =    90.000 deg
+};
+/END
+"""
+FRAME = "100,0,0,0,0,0"  # UF 1 (mm, deg)
+TOOL = "0,0,150,0,0,0"  # UT 2
+
+
+def _write(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_bytes(text.replace("\n", "\r\n").encode())
+    return path
+
+
+def _models():
+    nominal = rc.Robot.from_catalog("fanuc_m20ia")
+    truth = replace(simulate_tracker(nominal, 10, seed=7, noise_mm=0.0).truth, tool=nominal.tool,
+                    smr=np.zeros((0, 3)))
+    return nominal, truth
+
+
+def _pose(values) -> np.ndarray:
+    """X, Y, Z mm, W, P, R deg -> 4x4 m."""
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_euler("ZYX", np.asarray(values, float)[[5, 4, 3]], degrees=True).as_matrix()
+    T[:3, 3] = np.asarray(values[:3], float) * 1e-3
+    return T
+
+
+def test_posreg_va_is_read_as_a_controller_writes_it(tmp_path):
+    regs = read_posreg(ProgramText(_write(tmp_path, "POSREG.VA", POSREG)))
+    assert sorted(regs.cartesian) == [10, 11, 12, 13, 20]
+    assert regs.other[1] is None  # a joint register: nothing to correct
+    assert "uninitialized" in regs.other[2] and "uninitialized" in regs.other[14]
+    assert "EXT1 700.000" in regs.other[15]
+    np.testing.assert_array_equal(regs.cartesian[10].values(), [612.5, -120.0, 480.0, 180.0, -0.649, 90.0])
+    assert regs.comments[12] == "PLACE_BASE" and regs.cartesian[11].config.tolist() == [0, 0, 0, 0, 0, 0]
+
+
+def test_scara_registers_read_their_hand(tmp_path):
+    text = ("[*POSREG*]$POSREG  Storage: CMOS  Access: RW  : ARRAY[1,3] OF Position Reg\n"
+            "    [1,1] =   'A' \n  Group: 1   Config: R, 0, 0, -1\n"
+            "  X:   300.000   Y:   100.000   Z:    50.000\n  W:   180.000   P:     0.000   R:    10.000\n"
+            "    [1,2] =   'B' \n  Group: 1   Config: L\n"
+            "  X:   300.000   Y:  -100.000   Z:    50.000\n  W:   180.000   P:     0.000   R:    10.000\n")
+    regs = read_posreg(ProgramText(_write(tmp_path, "POSREG.VA", text)))
+    scheme = FANUCConfig()
+    assert scheme.text(regs.cartesian[1].config) == "R, 0, 0, -1"
+    assert scheme.text(regs.cartesian[2].config) == "L, 0, 0, 0" and len(regs.cartesian[2].config_spans) == 1
+
+
+def test_motions_to_registers_are_corrected_onto_the_truth_and_delivered_as_a_tp_program(tmp_path):
+    nominal, truth = _models()
+    program = _write(tmp_path, "PALLET.ls", PALLET)
+    posreg = _write(tmp_path, "POSREG.VA", POSREG)
+    before = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL})
+    res = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL}, references=[posreg])
+    # 11 motions; with the backup 10 to a Cartesian pose (PR[1:HOME] is a joint register, not counted
+    # as a joint P[] is not), 5 corrected; without it only P[1] (line 14)
+    for r, total, corrected in ((before, 11, 1), (res, 10, 5)):
+        assert len(r.motions) == total and sum(m.status == CORRECTED for m in r.motions) == corrected
+        assert all((m.status == CORRECTED) != bool(m.reason) for m in r.motions)
+    why = {m.line: m.reason for m in res.motions if m.status != CORRECTED}
+    assert "written at PALLET.ls:15 (PR[20]=...)" in why[17]
+    assert "Offset,PR[13:LIFT]" in why[18] and "uninitialized in POSREG.VA" in why[19]
+    assert "EXT1" in why[23] and "PR[16] is not in POSREG.VA" in why[24]
+    assert "PR[10:PICK_APP] is a position register" in {m.line: m.reason for m in before.motions}[12]
+    # the program: only P[1]'s numbers change (and the marker line): PR motions name the register
+    out = res.outputs[program].decode()
+    marker = re.compile(r"^  17:  !robocal[^\n]*\n", re.MULTILINE)
+    original = PALLET.replace("\n", "\r\n")
+    kept = marker.sub("", out.replace("\r\n", "\n")).replace("LINE_COUNT\t= 17", "LINE_COUNT\t= 16")
+    numbers = re.compile(r" *-?[\d.]+(?= +(?:mm|deg))")  # with its padding: the width is kept
+    assert numbers.sub("#", kept) == numbers.sub("#", original.replace("\r\n", "\n"))
+    assert [len(k) for k in kept.split("\n")] == [len(k) for k in original.split("\r\n")]
+    assert "\r\n" in out and posreg not in res.outputs  # the backup is never written
+    # the setter program: PR[n:comment]=P[k], P[k] the corrected values in the frames of the motions
+    setter = res.outputs[posreg.with_name("PR_CAL.LS")].decode()
+    assert re.findall(r"PR\[\d+:\w+\]=P\[\d\]", setter) == ["PR[10:PICK_APP]=P[1]", "PR[11:PICK]=P[2]",
+                                                           "PR[12:PLACE_BASE]=P[3]"]
+    values = np.array([[float(v) for v in re.findall(r"[XYZWPR] = +([-\d.]+)", b)]
+                       for b in setter.split("/POS")[1].split("P[")[1:]])
+    assert setter.count("UF : 1, UT : 2,") == 3 and setter.count("CONFIG : 'N U T, 0, 0, 0'") == 3
+    # independent truth: the controller's nominal IK of each corrected value (the branch its
+    # CONFIG names) run on the true robot puts the tool where the backup's value means
+    regs = read_posreg(ProgramText(posreg))
+    meant = np.array([regs.cartesian[n].values() for n in (10, 11, 12)])
+    uf, ut = _pose([100, 0, 0, 0, 0, 0]), _pose([0, 0, 150, 0, 0, 0])
+    F = uf @ np.array([_pose(v) for v in values]) @ np.linalg.inv(ut)
+    sols = rc.ik.solve_all(nominal, F)
+    scheme = FANUCConfig()
+    rows = scheme.encode(nominal, np.nan_to_num(sols))
+    pick = np.argmax(np.all(rows[..., :3] == 0, axis=-1) & np.isfinite(sols).all(-1), axis=1)
+    q = sols[np.arange(3), pick]
+    reached = np.linalg.inv(truth.base) @ truth.fk(q) @ ut
+    want = uf @ np.array([_pose(v) for v in meant])
+    assert np.abs(values[:, :3] - meant[:, :3]).max() > 0.1  # a real correction, not a copy
+    np.testing.assert_allclose(reached[:, :3, 3], want[:, :3, 3], atol=5e-6)  # 3-decimal rounding
+    cos = (np.trace(np.swapaxes(reached[:, :3, :3], 1, 2) @ want[:, :3, :3], axis1=1, axis2=2) - 1) / 2
+    assert np.degrees(np.arccos(np.clip(cos, -1, 1))).max() < 2e-3
+
+
+def test_the_cli_writes_the_setter_beside_the_program(tmp_path, capsys):
+    from robocal.cli import main
+
+    nominal, truth = _models()
+    truth.save(tmp_path / "cal.yaml")
+    program = _write(tmp_path, "PALLET.ls", PALLET)
+    posreg = _write(tmp_path, "POSREG.VA", POSREG)
+    data = posreg.read_bytes()
+    out = tmp_path / "out"
+    out.mkdir()
+    assert main(["filter", str(program), "--references", str(posreg), "--calibrated", str(tmp_path / "cal.yaml"),
+                 "--nominal", "fanuc_m20ia", "--frame", f"1={FRAME}", "--tool", f"2={TOOL}", "-o",
+                 str(out / "PALLET.ls")]) == 0
+    said = capsys.readouterr().out
+    assert "10 motions: 5 corrected, 5 not corrected" in said
+    assert (out / "PR_CAL.LS").read_text().startswith("/PROG  PR_CAL") and posreg.read_bytes() == data
+
+
+def test_a_register_without_frames_set_is_named_and_two_register_files_refused(tmp_path):
+    nominal, truth = _models()
+    text = PALLET.replace("   1:  UFRAME_NUM=1 ;\n", "   1:  ;\n")
+    program = _write(tmp_path, "PALLET.ls", text)
+    posreg = _write(tmp_path, "POSREG.VA", POSREG)
+    res = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL}, references=[posreg])
+    assert "UFRAME_NUM and UTOOL_NUM are not both set" in {m.line: m.reason for m in res.motions}[12]
+    csv = tmp_path / "pr.csv"
+    csv.write_text("register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,config\n")
+    with pytest.raises(rc.DataError, match="position registers are given twice"):
+        rc.filter_program(program, truth, nominal, references=[posreg], position_registers=csv)
