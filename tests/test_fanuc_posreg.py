@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,47 +20,11 @@ from robocal.programs.dialects.fanuc.posreg import read_posreg
 from robocal.programs.motions import CORRECTED
 from robocal.programs.source import ProgramText
 
-# written in the style of real controller backups (CRLF, %9.3f with the leading zero of |x| < 1
-# dropped, a joint register with Group: on its index line and a blank line after it, Uninitialized
-# registers, an EXT1 line of zero, a second motion group, the next variable of the file after it)
-POSREG = """[*POSREG*]$POSREG  Storage: CMOS  Access: RW  : ARRAY[2,20] OF Position Reg
-    [1,1] =   'HOME'   Group: 1
-  J1 =     0.000 deg   J2 =     0.000 deg   J3 =     0.000 deg 
-  J4 =     0.000 deg   J5 =   -90.000 deg   J6 =      .000 deg 
-
-    [1,2] =   '' Uninitialized
-    [1,10] =   'PICK_APP' 
-  Group: 1   Config: N U T, 0, 0, 0
-  X:   612.500   Y:  -120.000   Z:   480.000
-  W:   180.000   P:     -.649   R:    90.000
-  EXT1:     0.000 mm  
-    [1,11] =   'PICK' 
-  Group: 1   Config: N U T, 0, 0, 0
-  X:   612.500   Y:  -120.000   Z:   330.000
-  W:   180.000   P:     -.649   R:    90.000
-    [1,12] =   'PLACE_BASE' 
-  Group: 1   Config: N U T, 0, 0, 0
-  X:   250.000   Y:   540.000   Z:   210.000
-  W:  -179.500   P:     0.000   R:   180.000
-    [1,13] =   'LIFT' 
-  Group: 1   Config: N U T, 0, 0, 0
-  X:     0.000   Y:     0.000   Z:    50.000
-  W:     0.000   P:     0.000   R:     0.000
-    [1,14] =   'SPARE' Uninitialized
-    [1,15] =   'RAIL' 
-  Group: 1   Config: N U T, 0, 0, 0
-  X:   600.000   Y:     0.000   Z:   400.000
-  W:   180.000   P:     0.000   R:     0.000
-  EXT1:   700.000 mm  
-    [1,20] =   'PLACE' 
-  Group: 1   Config: N U T, 0, 0, 0
-  X:   250.000   Y:   540.000   Z:   260.000
-  W:  -179.500   P:     0.000   R:   180.000
-    [2,10] =   'PICK_APP'   Group: 2
-  J1 =    45.000 deg 
-
-[*POSREG*]$MAXPREGNUM  Storage: CMOS  Access: RW  : INTEGER = 100
-"""
+# tests/data/fanuc_backup/POSREG.VA: written for these tests in the style of real controller
+# backups (CRLF, trailing blanks, %9.3f with the leading zero of |x| < 1 dropped, a joint register
+# with Group: on its index line and a blank line after it, Uninitialized registers, an EXT1 line of
+# zero, a second motion group, the next variable of the file after it)
+POSREG = (Path(__file__).parent / "data" / "fanuc_backup" / "POSREG.VA").read_bytes().decode()
 
 PALLET = """/PROG  PALLET
 /ATTR
@@ -100,7 +65,7 @@ TOOL = "0,0,150,0,0,0"  # UT 2
 
 def _write(tmp_path, name, text):
     path = tmp_path / name
-    path.write_bytes(text.replace("\n", "\r\n").encode())
+    path.write_bytes(text.replace("\r\n", "\n").replace("\n", "\r\n").encode())
     return path
 
 
@@ -146,7 +111,8 @@ def test_motions_to_registers_are_corrected_onto_the_truth_and_delivered_as_a_tp
     program = _write(tmp_path, "PALLET.ls", PALLET)
     posreg = _write(tmp_path, "POSREG.VA", POSREG)
     before = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL})
-    res = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL}, references=[posreg])
+    res = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL},
+                            references=[posreg])
     # 11 motions; with the backup 10 to a Cartesian pose (PR[1:HOME] is a joint register, not counted
     # as a joint P[] is not), 5 corrected; without it only P[1] (line 14)
     for r, total, corrected in ((before, 11, 1), (res, 10, 5)):
@@ -202,9 +168,9 @@ def test_the_cli_writes_the_setter_beside_the_program(tmp_path, capsys):
     data = posreg.read_bytes()
     out = tmp_path / "out"
     out.mkdir()
-    assert main(["filter", str(program), "--references", str(posreg), "--calibrated", str(tmp_path / "cal.yaml"),
-                 "--nominal", "fanuc_m20ia", "--frame", f"1={FRAME}", "--tool", f"2={TOOL}", "-o",
-                 str(out / "PALLET.ls")]) == 0
+    assert main(["filter", str(program), "--references", str(posreg), "--calibrated",
+                 str(tmp_path / "cal.yaml"), "--nominal", "fanuc_m20ia", "--frame", f"1={FRAME}", "--tool",
+                 f"2={TOOL}", "-o", str(out / "PALLET.ls")]) == 0
     said = capsys.readouterr().out
     assert "10 motions: 5 corrected, 5 not corrected" in said
     assert (out / "PR_CAL.LS").read_text().startswith("/PROG  PR_CAL") and posreg.read_bytes() == data
@@ -215,7 +181,8 @@ def test_a_register_without_frames_set_is_named_and_two_register_files_refused(t
     text = PALLET.replace("   1:  UFRAME_NUM=1 ;\n", "   1:  ;\n")
     program = _write(tmp_path, "PALLET.ls", text)
     posreg = _write(tmp_path, "POSREG.VA", POSREG)
-    res = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL}, references=[posreg])
+    res = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL},
+                            references=[posreg])
     assert "UFRAME_NUM and UTOOL_NUM are not both set" in {m.line: m.reason for m in res.motions}[12]
     csv = tmp_path / "pr.csv"
     csv.write_text("register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,config\n")
