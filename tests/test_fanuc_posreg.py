@@ -30,7 +30,7 @@ PALLET = """/PROG  PALLET
 /ATTR
 OWNER\t\t= MNEDITOR;
 COMMENT\t\t= "";
-LINE_COUNT\t= 16;
+LINE_COUNT\t= 17;
 PROTECT\t\t= READ_WRITE;
 DEFAULT_GROUP\t= 1,*,*,*,*;
 /MN
@@ -50,12 +50,19 @@ DEFAULT_GROUP\t= 1,*,*,*,*;
   14:J P[1] 100% FINE    ;
   15:L PR[15:RAIL] 200mm/sec FINE    ;
   16:L PR[16] 200mm/sec FINE    ;
+  17:L P[2] 100mm/sec FINE Offset,PR[13:LIFT]    ;
 /POS
 P[1]{
    GP1:
 \tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',
 \tX =   650.000  mm,\tY =   -80.000  mm,\tZ =   300.000  mm,
 \tW =   180.000 deg,\tP =     0.000 deg,\tR =    90.000 deg
+};
+P[2]{
+   GP1:
+\tUF : 1, UT : 2,\t\tCONFIG : 'N U T, 0, 0, 0',
+\tX =   700.000  mm,\tY =    40.000  mm,\tZ =   250.000  mm,
+\tW =   180.000 deg,\tP =    10.000 deg,\tR =    90.000 deg
 };
 /END
 """
@@ -113,21 +120,22 @@ def test_motions_to_registers_are_corrected_onto_the_truth_and_delivered_as_a_tp
     before = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL})
     res = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL},
                             references=[posreg])
-    # 11 motions; with the backup 10 to a Cartesian pose (PR[1:HOME] is a joint register, not counted
-    # as a joint P[] is not), 5 corrected; without it only P[1] (line 14)
-    for r, total, corrected in ((before, 11, 1), (res, 10, 5)):
+    # 12 motions; with the backup 11 to a Cartesian pose (PR[1:HOME] is a joint register, not counted
+    # as a joint P[] is not), 6 corrected; without it only P[1] (line 14)
+    for r, total, corrected in ((before, 12, 1), (res, 11, 6)):
         assert len(r.motions) == total and sum(m.status == CORRECTED for m in r.motions) == corrected
         assert all((m.status == CORRECTED) != bool(m.reason) for m in r.motions)
     why = {m.line: m.reason for m in res.motions if m.status != CORRECTED}
     assert "written at PALLET.ls:15 (PR[20]=...)" in why[17]
-    assert "Offset,PR[13:LIFT]" in why[18] and "uninitialized in POSREG.VA" in why[19]
+    assert "P[1] is shifted by Offset,PR[13:LIFT] here and a pose in other motions" in why[18]
+    assert "uninitialized in POSREG.VA" in why[19]
     assert "EXT1" in why[23] and "PR[16] is not in POSREG.VA" in why[24]
     assert "PR[10:PICK_APP] is a position register" in {m.line: m.reason for m in before.motions}[12]
     # the program: only P[1]'s numbers change (and the marker line): PR motions name the register
     out = res.outputs[program].decode()
-    marker = re.compile(r"^  17:  !robocal[^\n]*\n", re.MULTILINE)
+    marker = re.compile(r"^  18:  !robocal[^\n]*\n", re.MULTILINE)
     original = PALLET.replace("\n", "\r\n")
-    kept = marker.sub("", out.replace("\r\n", "\n")).replace("LINE_COUNT\t= 17", "LINE_COUNT\t= 16")
+    kept = marker.sub("", out.replace("\r\n", "\n")).replace("LINE_COUNT\t= 18", "LINE_COUNT\t= 17")
     numbers = re.compile(r" *-?[\d.]+(?= +(?:mm|deg))")  # with its padding: the width is kept
     assert numbers.sub("#", kept) == numbers.sub("#", original.replace("\r\n", "\n"))
     assert [len(k) for k in kept.split("\n")] == [len(k) for k in original.split("\r\n")]
@@ -140,16 +148,25 @@ def test_motions_to_registers_are_corrected_onto_the_truth_and_delivered_as_a_tp
                        for b in setter.split("/POS")[1].split("P[")[1:]])
     assert setter.count("UF : 1, UT : 2,") == 3 and setter.count("CONFIG : 'N U T, 0, 0, 0'") == 3
     # independent truth: the controller's nominal IK of each corrected value (the branch its
-    # CONFIG names) run on the true robot puts the tool where the backup's value means
+    # CONFIG names) run on the true robot puts the tool where the backup's value means; P[2], moved
+    # to only with Offset,PR[13:LIFT] (Z + 50 mm in UF 1), lands shifted where P[2] + 50 mm means
     regs = read_posreg(ProgramText(posreg))
     meant = np.array([regs.cartesian[n].values() for n in (10, 11, 12)])
+    p2 = [float(v) for v in re.findall(r"[XYZWPR] = +([-\d.]+)", out.split("P[2]{")[1])]
+    lift = np.array([0.0, 0.0, 50.0, 0.0, 0.0, 0.0])
+    _lands_on_truth(nominal, truth, np.vstack([values, np.add(p2, lift)]),
+                    np.vstack([meant, np.add([700.0, 40.0, 250.0, 180.0, 10.0, 90.0], lift)]))
+
+
+def _lands_on_truth(nominal, truth, values, meant):
+    """The corrected ``values`` (N, 6) in UF 1 with UT 2, solved by the nominal model in the
+    configuration N U T and run on ``truth``, reach the poses ``meant`` mean."""
     uf, ut = _pose([100, 0, 0, 0, 0, 0]), _pose([0, 0, 150, 0, 0, 0])
     F = uf @ np.array([_pose(v) for v in values]) @ np.linalg.inv(ut)
     sols = rc.ik.solve_all(nominal, F)
-    scheme = FANUCConfig()
-    rows = scheme.encode(nominal, np.nan_to_num(sols))
+    rows = FANUCConfig().encode(nominal, np.nan_to_num(sols))
     pick = np.argmax(np.all(rows[..., :3] == 0, axis=-1) & np.isfinite(sols).all(-1), axis=1)
-    q = sols[np.arange(3), pick]
+    q = sols[np.arange(len(values)), pick]
     reached = np.linalg.inv(truth.base) @ truth.fk(q) @ ut
     want = uf @ np.array([_pose(v) for v in meant])
     assert np.abs(values[:, :3] - meant[:, :3]).max() > 0.1  # a real correction, not a copy
@@ -172,7 +189,7 @@ def test_the_cli_writes_the_setter_beside_the_program(tmp_path, capsys):
                  str(tmp_path / "cal.yaml"), "--nominal", "fanuc_m20ia", "--frame", f"1={FRAME}", "--tool",
                  f"2={TOOL}", "-o", str(out / "PALLET.ls")]) == 0
     said = capsys.readouterr().out
-    assert "10 motions: 5 corrected, 5 not corrected" in said
+    assert "11 motions: 6 corrected, 5 not corrected" in said
     assert (out / "PR_CAL.LS").read_text().startswith("/PROG  PR_CAL") and posreg.read_bytes() == data
 
 

@@ -68,6 +68,7 @@ _ARC_END = re.compile(r"\s*(P|PR)\[")
 _POSITION = re.compile(r"\b(PR|P)\[\s*((?:[A-Z]+\[\s*\d+\s*\])|\d+)\s*(?::[^\]]*)?\]")
 _OFFSET = re.compile(r"\b(Tool_Offset|Offset|VOFFSET)\b(?:\s*,\s*(\w+\[[^\]]*\]))?", re.IGNORECASE)
 _INCREMENTAL = re.compile(r"\bINC\b")
+_REGISTER = re.compile(r"^PR\[\s*(?:GP1\s*:\s*)?(\d+)\s*(?::[^\]]*)?\]$")  # an offset's PR[m]
 _POSITION_MM = 1e-3
 _POSITION_DIGITS = 5  # position numbers P[n] (the controller's are far below 100,000)
 _ANGLE_DEG = 1e-3  # the controller writes 3 decimals: 1e-3 deg is 2 um at 120 mm from the flange
@@ -258,6 +259,8 @@ class FanucDialect(Dialect):
         incremental: dict[tuple, list] = {}  # position -> accounts of the INC motions using it
         used_registers: dict[int, Target] = {}
         plain = set()  # positions some motion uses as a pose
+        shifted: dict[tuple, list] = {}  # position -> the motions moving to it shifted (Offset ...)
+        unshifted = set()  # positions some motion moves to as they are
         assigned = assignments(sources)  # registers written at run time -> where
         first: dict[int, tuple] = {}  # id(position) -> how its first motion moves it (leader, values)
         for src in sources:
@@ -303,8 +306,10 @@ class FanucDialect(Dialect):
                         if isinstance(why, str):
                             prog.skip(here, instr, why, acc, label)
                         elif off or "INC" in options and _INCREMENTAL.search(options):
-                            how = off.group(0) if off else "INC"
-                            prog.skip(here, instr, f"{label} is shifted at run time ({how})", acc, label)
+                            why = (f"{label} is shifted by {off.group(0)}: a register is corrected for its "
+                                   "own pose only, not a shifted one" if off else
+                                   f"{label} is an incremental move (INC): a displacement, not a pose")
+                            prog.skip(here, instr, why, acc, label)
                         else:
                             t, uf, ut = why
                             prog.use(t, ut, uf, here, label, "user frame", (src.path, line.start()), acc)
@@ -340,8 +345,22 @@ class FanucDialect(Dialect):
                             prog.warnings.append(f"{t.where}: not corrected: {why}")
                             prog.uncorrected.append(f"{t.where}: not corrected: {why}")
                     if off:
-                        prog.skip(here, instr, f"{label} is shifted at run time by {off.group(0)}: {label} "
-                                               "is corrected for its own pose, the shifted pose is not", acc)
+                        shifted.setdefault(key, []).append((here, instr, label, acc, off))
+                    else:
+                        unshifted.add(key)
+        for key, uses in shifted.items():
+            t = numbers[key]
+            why = _shift(uses, key in unshifted, registers, assigned, used_registers)
+            if why is None:  # a known translation d in the user frame: P[n] is corrected in UF @ Trans(d)
+                n = int(_REGISTER.search(uses[0][4].group(2)).group(1))
+                d = registers.values[n].values()[:3] * _POSITION_MM
+                frame = f"{t.frame}+PR[{n}]"
+                if t.frame in prog.frames:
+                    prog.frames[frame] = prog.frames[t.frame] @ make_transform(np.eye(3), d)
+                t.frame = frame if t.frame in prog.frames else t.frame
+                continue
+            for here, instr, _, acc, _ in uses:
+                prog.skip(here, instr, why, acc)
         for key, uses in incremental.items():
             for here, instr, label, acc in uses:
                 why = (f"{label} is an incremental move (INC): a displacement, not a pose" if key not in plain
@@ -378,6 +397,43 @@ def _register(ref, registers, active, assigned: dict[int, str], at: int):
         return (f"{label}: UFRAME_NUM and UTOOL_NUM are not both set in this program before this motion "
                 "(the frames its value is in are the caller's)")
     return registers.values[int(n)], str(int(uf)), str(int(ut))
+
+
+def _shift(uses: list, unshifted: bool, registers, assigned: dict[int, str], used: dict) -> str | None:
+    """Why the motions ``uses`` to one position P[n], shifted (``Offset,PR[m]``, ...), are not
+    corrected, or None: they are, in the user frame shifted by the translation PR[m] holds
+    (FANUC adds a Cartesian offset's X, Y, Z to the position's in the user frame). ``unshifted``:
+    some motion moves to P[n] itself; ``used``: the registers motions move to (by id)."""
+    label, offs = uses[0][2], {u[4].group(0) for u in uses}
+    own = f"{label} is corrected for its own pose, the shifted pose is not"
+    if len(offs) > 1:
+        return f"{label} is shifted by {' and by '.join(sorted(offs))}: one corrected {label} cannot serve " \
+            "both"
+    off = uses[0][4]
+    reg = _REGISTER.search(off.group(2) or "")
+    if reg is None:  # OFFSET CONDITION's register, or a register number known at run time
+        return f"{label} is shifted at run time by {off.group(0)}: {own}"
+    if off.group(1).lower() != "offset":
+        return f"{label} is shifted by {off.group(0)}, which robocal does not correct: {own}"
+    n = int(reg.group(1))
+    if n in assigned:
+        return f"{label} is shifted by {off.group(0)}, written at {assigned[n]}: computed at run time; {own}"
+    if registers is None:
+        return (f"{label} is shifted by {off.group(0)}, whose value lives in the controller (give its backup "
+                f"POSREG.VA with --references): {own}")
+    if n not in registers.values:
+        return f"{label} is shifted by {off.group(0)}, which {registers.origin} holds no Cartesian value " \
+            f"of: {own}"
+    if unshifted:
+        return (f"{label} is shifted by {off.group(0)} here and a pose in other motions, which correct it: "
+                f"one corrected {label} cannot serve both")
+    t = registers.values[n]
+    if np.any(t.values()[3:] != 0.0):
+        return f"{label} is shifted by {off.group(0)}, which turns the pose (W, P, R not 0): {own}"
+    if id(t) in used:
+        return (f"{label} is shifted by {off.group(0)}, which motions also move to: its corrected value "
+                f"would change this shift; {own}")
+    return None
 
 
 def _nothing_between(src, text: str, a: int, b: int) -> None:
