@@ -95,7 +95,7 @@ def test_posreg_va_is_read_as_a_controller_writes_it(tmp_path):
     regs = read_posreg(ProgramText(_write(tmp_path, "POSREG.VA", POSREG)))
     assert sorted(regs.cartesian) == [10, 11, 12, 13, 20]
     assert regs.other[1] is None  # a joint register: nothing to correct
-    assert "uninitialized" in regs.other[2] and "uninitialized" in regs.other[14]
+    assert "Uninitialized" in regs.other[2] and "Uninitialized" in regs.other[14]
     assert "EXT1 700.000" in regs.other[15]
     np.testing.assert_array_equal(regs.cartesian[10].values(), [612.5, -120.0, 480.0, 180.0, -0.649, 90.0])
     assert regs.comments[12] == "PLACE_BASE" and regs.cartesian[11].config.tolist() == [0, 0, 0, 0, 0, 0]
@@ -128,7 +128,7 @@ def test_motions_to_registers_are_corrected_onto_the_truth_and_delivered_as_a_tp
     why = {m.line: m.reason for m in res.motions if m.status != CORRECTED}
     assert "written at PALLET.ls:15 (PR[20]=...)" in why[17]
     assert "P[1] is shifted by Offset,PR[13:LIFT] here and a pose in other motions" in why[18]
-    assert "uninitialized in POSREG.VA" in why[19]
+    assert "PR[14] is Uninitialized in POSREG.VA" in why[19]
     assert "EXT1" in why[23] and "PR[16] is not in POSREG.VA" in why[24]
     assert "PR[10:PICK_APP] is a position register" in {m.line: m.reason for m in before.motions}[12]
     # the program: only P[1]'s numbers change (and the marker line): PR motions name the register
@@ -205,3 +205,13 @@ def test_a_register_without_frames_set_is_named_and_two_register_files_refused(t
     csv.write_text("register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,config\n")
     with pytest.raises(rc.DataError, match="position registers are given twice"):
         rc.filter_program(program, truth, nominal, references=[posreg], position_registers=csv)
+
+
+def test_a_scara_register_row_is_read(tmp_path):
+    from robocal.programs.dialects.fanuc.registers import read_registers
+
+    path = tmp_path / "pr.csv"
+    path.write_text('register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,config\n6,300,100,50,180,0,10,"R, 0, 0, -1"\n')
+    t = read_registers(ProgramText(path))[6]
+    assert FANUCConfig().text(t.config) == "R, 0, 0, -1"
+    assert [s[2] for s in t.config_spans] == ["R", "0", "0", "-1"]

@@ -92,7 +92,8 @@ def read_posreg(src: ProgramText) -> PositionRegisters:
         out.comments[n] = e.group(3)
         name = f"PR[{n}]"
         if "Uninitialized" in rest:
-            out.other[n] = f"{name} is uninitialized in {src.path.name}: its value is set at run time"
+            out.other[n] = (f"{name} is Uninitialized in {src.path.name} (no value at the backup): a program "
+                            "not given sets it at run time")
             continue
         if "Group:" in rest:
             out.other[n] = None  # a joint register: the joints are what the arm runs, nothing to correct
