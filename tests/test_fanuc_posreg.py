@@ -215,3 +215,30 @@ def test_a_scara_register_row_is_read(tmp_path):
     t = read_registers(ProgramText(path))[6]
     assert FANUCConfig().text(t.config) == "R, 0, 0, -1"
     assert [s[2] for s in t.config_spans] == ["R", "0", "0", "-1"]
+
+
+def test_a_scara_config_with_the_hand_alone_is_read_and_kept(tmp_path):
+    """An SR program's CONFIG 'R' / 'L' without turn numbers: the hand selects the solution, the
+    turns are the controller's nearest (0), and the CONFIG text stays as written."""
+    robot = rc.Robot.from_catalog("fanuc_sr6ia")
+    truth = replace(simulate_tracker(robot, 10, seed=5, noise_mm=0.0).truth, tool=robot.tool,
+                    smr=np.zeros((0, 3)))
+    q = np.deg2rad([[30.0, 40.0, 0.0, 10.0], [-50.0, -60.0, 0.0, 80.0]])
+    q[:, 2] = [-0.05, -0.1]
+    T = robot.fk(q)
+    rpw = Rotation.from_matrix(T[:, :3, :3]).as_euler("ZYX", degrees=True)
+    pos = []
+    for k, (p, (r, pp, w), hand) in enumerate(zip(T[:, :3, 3] * 1e3, rpw, "RL", strict=True), start=1):
+        pos += [f"P[{k}]{{", "   GP1:", f"\tUF : 0, UT : 0,\t\tCONFIG : '{hand}',",
+                f"\tX = {p[0]:.3f}  mm,\tY = {p[1]:.3f}  mm,\tZ = {p[2]:.3f}  mm,",
+                f"\tW = {w:.3f} deg,\tP = {pp:.3f} deg,\tR = {r:.3f} deg", "};"]
+    text = "\n".join(["/PROG  T", "/MN", "   1:J P[1] 100% FINE    ;", "   2:J P[2] 100% FINE    ;", "/POS",
+                      *pos, "/END", ""])
+    (tmp_path / "t.ls").write_text(text)
+    same = rc.filter_program(tmp_path / "t.ls", robot, robot)
+    assert [r["configuration"] for r in same.rows] == ["kept", "kept"]
+    assert max(r["correction_mm"] for r in same.rows) < 1e-6
+    res = rc.filter_program(tmp_path / "t.ls", truth, robot)
+    out = res.outputs[tmp_path / "t.ls"].decode()
+    assert "CONFIG : 'R'," in out and "CONFIG : 'L'," in out
+    assert min(r["correction_mm"] for r in res.rows) > 0.01
