@@ -321,7 +321,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         The program language (default: from the files' suffixes, see `dialect_for`).
     references : sequence of path-like
         Files read only for their tool / frame / load declarations (a KUKA $config.dat, RAPID
-        system modules, a Yaskawa TOOL.CND or UFRAME.CND), never written.
+        system modules, a Yaskawa TOOL.CND or UFRAME.CND), never written; a FANUC backup's
+        POSREG.VA: the registers motions move to are corrected and delivered as the TP
+        program ``PR_CAL.LS`` (an output keyed by that path, beside the .VA,
+        `robocal.programs.dialects.fanuc.posreg`).
     keep_unreached : bool, default False
         Leave the targets that cannot be corrected unchanged, with a warning, instead of failing.
     strict : bool, default False

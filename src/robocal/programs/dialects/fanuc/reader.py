@@ -17,7 +17,10 @@ user frame UF and tool frame UT; their values live in the controller, so they ar
 frame, UT 0 the faceplate. Joint representations (J1 = ...) are left alone. Other motion groups
 (``GP2:`` ...) and a ``COORD`` motion's leader: :mod:`robocal.programs.dialects.fanuc.groups`;
 extended axes of group 1 (``E1 = ...``, an integrated rail): a track cell
-(:mod:`robocal.programs.track`), else named.
+(:mod:`robocal.programs.track`), else named. Motions to position registers ``PR[n]``: corrected when
+their values are given, the controller's backup POSREG.VA among the references
+(:mod:`robocal.programs.dialects.fanuc.posreg`) or a register CSV
+(:mod:`robocal.programs.dialects.fanuc.registers`).
 """
 
 from __future__ import annotations
