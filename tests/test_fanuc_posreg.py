@@ -30,7 +30,7 @@ PALLET = """/PROG  PALLET
 /ATTR
 OWNER\t\t= MNEDITOR;
 COMMENT\t\t= "";
-LINE_COUNT\t= 17;
+LINE_COUNT\t= 18;
 PROTECT\t\t= READ_WRITE;
 DEFAULT_GROUP\t= 1,*,*,*,*;
 /MN
@@ -51,6 +51,7 @@ DEFAULT_GROUP\t= 1,*,*,*,*;
   15:L PR[15:RAIL] 200mm/sec FINE    ;
   16:L PR[16] 200mm/sec FINE    ;
   17:L P[2] 100mm/sec FINE Offset,PR[13:LIFT]    ;
+  18:L PR[17:DROP] 100mm/sec FINE Offset,PR[13:LIFT]    ;
 /POS
 P[1]{
    GP1:
@@ -93,7 +94,7 @@ def _pose(values) -> np.ndarray:
 
 def test_posreg_va_is_read_as_a_controller_writes_it(tmp_path):
     regs = read_posreg(ProgramText(_write(tmp_path, "POSREG.VA", POSREG)))
-    assert sorted(regs.cartesian) == [10, 11, 12, 13, 20]
+    assert sorted(regs.cartesian) == [10, 11, 12, 13, 17, 20]
     assert regs.other[1] is None  # a joint register: nothing to correct
     assert "Uninitialized" in regs.other[2] and "Uninitialized" in regs.other[14]
     assert "EXT1 700.000" in regs.other[15]
@@ -120,9 +121,9 @@ def test_motions_to_registers_are_corrected_onto_the_truth_and_delivered_as_a_tp
     before = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL})
     res = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL},
                             references=[posreg])
-    # 12 motions; with the backup 11 to a Cartesian pose (PR[1:HOME] is a joint register, not counted
-    # as a joint P[] is not), 6 corrected; without it only P[1] (line 14)
-    for r, total, corrected in ((before, 12, 1), (res, 11, 6)):
+    # 13 motions; with the backup 12 to a Cartesian pose (PR[1:HOME] is a joint register, not counted
+    # as a joint P[] is not), 7 corrected; without it only P[1] (line 14)
+    for r, total, corrected in ((before, 13, 1), (res, 12, 7)):
         assert len(r.motions) == total and sum(m.status == CORRECTED for m in r.motions) == corrected
         assert all((m.status == CORRECTED) != bool(m.reason) for m in r.motions)
     why = {m.line: m.reason for m in res.motions if m.status != CORRECTED}
@@ -133,9 +134,9 @@ def test_motions_to_registers_are_corrected_onto_the_truth_and_delivered_as_a_tp
     assert "PR[10:PICK_APP] is a position register" in {m.line: m.reason for m in before.motions}[12]
     # the program: only P[1]'s numbers change (and the marker line): PR motions name the register
     out = res.outputs[program].decode()
-    marker = re.compile(r"^  18:  !robocal[^\n]*\n", re.MULTILINE)
+    marker = re.compile(r"^  19:  !robocal[^\n]*\n", re.MULTILINE)
     original = PALLET.replace("\n", "\r\n")
-    kept = marker.sub("", out.replace("\r\n", "\n")).replace("LINE_COUNT\t= 18", "LINE_COUNT\t= 17")
+    kept = marker.sub("", out.replace("\r\n", "\n")).replace("LINE_COUNT\t= 19", "LINE_COUNT\t= 18")
     numbers = re.compile(r" *-?[\d.]+(?= +(?:mm|deg))")  # with its padding: the width is kept
     assert numbers.sub("#", kept) == numbers.sub("#", original.replace("\r\n", "\n"))
     assert [len(k) for k in kept.split("\n")] == [len(k) for k in original.split("\r\n")]
@@ -143,17 +144,19 @@ def test_motions_to_registers_are_corrected_onto_the_truth_and_delivered_as_a_tp
     # the setter program: PR[n:comment]=P[k], P[k] the corrected values in the frames of the motions
     setter = res.outputs[posreg.with_name("PR_CAL.LS")].decode()
     assert re.findall(r"PR\[\d+:\w+\]=P\[\d\]", setter) == ["PR[10:PICK_APP]=P[1]", "PR[11:PICK]=P[2]",
-                                                           "PR[12:PLACE_BASE]=P[3]"]
+                                                           "PR[12:PLACE_BASE]=P[3]", "PR[17:DROP]=P[4]"]
     values = np.array([[float(v) for v in re.findall(r"[XYZWPR] = +([-\d.]+)", b)]
                        for b in setter.split("/POS")[1].split("P[")[1:]])
-    assert setter.count("UF : 1, UT : 2,") == 3 and setter.count("CONFIG : 'N U T, 0, 0, 0'") == 3
+    assert setter.count("UF : 1, UT : 2,") == 4 and setter.count("CONFIG : 'N U T, 0, 0, 0'") == 4
     # independent truth: the controller's nominal IK of each corrected value (the branch its
     # CONFIG names) run on the true robot puts the tool where the backup's value means; P[2], moved
-    # to only with Offset,PR[13:LIFT] (Z + 50 mm in UF 1), lands shifted where P[2] + 50 mm means
+    # to only with Offset,PR[13:LIFT] (Z + 50 mm in UF 1), lands shifted where P[2] + 50 mm means,
+    # and so does PR[17:DROP] (moved to only with that offset: its PR_CAL value in UF 1 itself)
     regs = read_posreg(ProgramText(posreg))
-    meant = np.array([regs.cartesian[n].values() for n in (10, 11, 12)])
-    p2 = [float(v) for v in re.findall(r"[XYZWPR] = +([-\d.]+)", out.split("P[2]{")[1])]
     lift = np.array([0.0, 0.0, 50.0, 0.0, 0.0, 0.0])
+    meant = np.array([regs.cartesian[n].values() + (n == 17) * lift for n in (10, 11, 12, 17)])
+    values[3] += lift
+    p2 = [float(v) for v in re.findall(r"[XYZWPR] = +([-\d.]+)", out.split("P[2]{")[1])]
     _lands_on_truth(nominal, truth, np.vstack([values, np.add(p2, lift)]),
                     np.vstack([meant, np.add([700.0, 40.0, 250.0, 180.0, 10.0, 90.0], lift)]))
 
@@ -189,7 +192,7 @@ def test_the_cli_writes_the_setter_beside_the_program(tmp_path, capsys):
                  str(tmp_path / "cal.yaml"), "--nominal", "fanuc_m20ia", "--frame", f"1={FRAME}", "--tool",
                  f"2={TOOL}", "-o", str(out / "PALLET.ls")]) == 0
     said = capsys.readouterr().out
-    assert "11 motions: 6 corrected, 5 not corrected" in said
+    assert "12 motions: 7 corrected, 5 not corrected" in said
     assert (out / "PR_CAL.LS").read_text().startswith("/PROG  PR_CAL") and posreg.read_bytes() == data
 
 

@@ -71,6 +71,7 @@ _ARC_END = re.compile(r"\s*(P|PR)\[")
 _POSITION = re.compile(r"\b(PR|P)\[\s*((?:[A-Z]+\[\s*\d+\s*\])|\d+)\s*(?::[^\]]*)?\]")
 _OFFSET = re.compile(r"\b(Tool_Offset|Offset|VOFFSET)\b(?:\s*,\s*(\w+\[[^\]]*\]))?", re.IGNORECASE)
 _INCREMENTAL = re.compile(r"\bINC\b")
+SHIFTED = "+"  # user frame n shifted by Offset,PR[m]: the frame "n+PR[m]"
 _REGISTER = re.compile(r"^PR\[\s*(?:GP1\s*:\s*)?(\d+)\s*(?::[^\]]*)?\]$")  # an offset's PR[m]
 _POSITION_MM = 1e-3
 _POSITION_DIGITS = 5  # position numbers P[n] (the controller's are far below 100,000)
@@ -135,8 +136,8 @@ class FanucDialect(Dialect):
         (:func:`robocal.programs.dialects.fanuc.posreg.setter_program`), beside it as PR_CAL.LS."""
         out = {}
         for ref in (r for r in references if is_posreg(r)):
-            used = {int(t.name[3:-1]): (t.frame, t.tool) for t in program.targets
-                    if t.source is ref and id(t) not in kept}
+            used = {int(t.name[3:-1]): (t.frame.split(SHIFTED)[0], t.tool) for t in program.targets
+                    if t.source is ref and id(t) not in kept}  # a register's value is in UF n itself
             if used:
                 text = setter_program(ProgramText(ref.path, corrected[ref.path]), used, self.scheme)
                 out[ref.path.with_name(f"{SETTER_NAME}.LS")] = text.encode("latin-1")
@@ -263,6 +264,7 @@ class FanucDialect(Dialect):
         used_registers: dict[int, Target] = {}
         plain = set()  # positions some motion uses as a pose
         shifted: dict[tuple, list] = {}  # position -> the motions moving to it shifted (Offset ...)
+        pr_shifted: list[tuple] = []  # the motions to a register shifted (Offset ...), its frames known
         unshifted = set()  # positions some motion moves to as they are
         assigned = assignments(sources)  # registers written at run time -> where
         first: dict[int, tuple] = {}  # id(position) -> how its first motion moves it (leader, values)
@@ -308,11 +310,11 @@ class FanucDialect(Dialect):
                         why = _register(ref, registers, active, assigned, line.start())
                         if isinstance(why, str):
                             prog.skip(here, instr, why, acc, label)
-                        elif off or "INC" in options and _INCREMENTAL.search(options):
-                            why = (f"{label} is shifted by {off.group(0)}: a register is corrected for its "
-                                   "own pose only, not a shifted one" if off else
-                                   f"{label} is an incremental move (INC): a displacement, not a pose")
-                            prog.skip(here, instr, why, acc, label)
+                        elif "INC" in options and _INCREMENTAL.search(options):
+                            prog.skip(here, instr, f"{label} is an incremental move (INC): a displacement, "
+                                                   "not a pose", acc, label)
+                        elif off:
+                            pr_shifted.append((here, instr, label, acc, off, why, (src.path, line.start())))
                         else:
                             t, uf, ut = why
                             prog.use(t, ut, uf, here, label, "user frame", (src.path, line.start()), acc)
@@ -351,13 +353,27 @@ class FanucDialect(Dialect):
                         shifted.setdefault(key, []).append((here, instr, label, acc, off))
                     else:
                         unshifted.add(key)
+        unshifted_registers = set(used_registers)
+        for here, instr, label, acc, off, (t, uf, ut), motion in pr_shifted:
+            why = _shift([(here, instr, label, acc, off)], id(t) in unshifted_registers, registers, assigned,
+                         used_registers, "the shifted pose is not corrected")
+            if why is None:  # the register corrected in the user frame shifted by the offset's translation
+                n = int(_REGISTER.search(off.group(2)).group(1))
+                frame = f"{uf}{SHIFTED}PR[{n}]"
+                if uf in prog.frames:
+                    d = registers.values[n].values()[:3] * _POSITION_MM
+                    prog.frames.setdefault(frame, prog.frames[uf] @ make_transform(np.eye(3), d))
+                prog.use(t, ut, frame, here, label, "user frame", motion, acc)
+                used_registers.setdefault(id(t), t)
+            else:
+                prog.skip(here, instr, why, acc, label)
         for key, uses in shifted.items():
             t = numbers[key]
             why = _shift(uses, key in unshifted, registers, assigned, used_registers)
             if why is None:  # a known translation d in the user frame: P[n] is corrected in UF @ Trans(d)
                 n = int(_REGISTER.search(uses[0][4].group(2)).group(1))
                 d = registers.values[n].values()[:3] * _POSITION_MM
-                frame = f"{t.frame}+PR[{n}]"
+                frame = f"{t.frame}{SHIFTED}PR[{n}]"
                 if t.frame in prog.frames:
                     prog.frames[frame] = prog.frames[t.frame] @ make_transform(np.eye(3), d)
                 t.frame = frame if t.frame in prog.frames else t.frame
@@ -402,13 +418,15 @@ def _register(ref, registers, active, assigned: dict[int, str], at: int):
     return registers.values[int(n)], str(int(uf)), str(int(ut))
 
 
-def _shift(uses: list, unshifted: bool, registers, assigned: dict[int, str], used: dict) -> str | None:
-    """Why the motions ``uses`` to one position P[n], shifted (``Offset,PR[m]``, ...), are not
-    corrected, or None: they are, in the user frame shifted by the translation PR[m] holds
-    (FANUC adds a Cartesian offset's X, Y, Z to the position's in the user frame). ``unshifted``:
-    some motion moves to P[n] itself; ``used``: the registers motions move to (by id)."""
+def _shift(uses: list, unshifted: bool, registers, assigned: dict[int, str], used: dict,
+           own: str = "") -> str | None:
+    """Why the motions ``uses`` to one position (P[n] or a register), shifted (``Offset,PR[m]``,
+    ...), are not corrected, or None: they are, in the user frame shifted by the translation PR[m]
+    holds (FANUC adds a Cartesian offset's X, Y, Z to the position's in the user frame).
+    ``unshifted``: some motion moves to the position itself; ``used``: the registers motions move
+    to (by id); ``own``: what becomes of the position (default: P[n] corrected for its own pose)."""
     label, offs = uses[0][2], {u[4].group(0) for u in uses}
-    own = f"{label} is corrected for its own pose, the shifted pose is not"
+    own = own or f"{label} is corrected for its own pose, the shifted pose is not"
     if len(offs) > 1:
         return f"{label} is shifted by {' and by '.join(sorted(offs))}: one corrected {label} cannot serve " \
             "both"
