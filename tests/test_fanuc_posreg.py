@@ -245,3 +245,17 @@ def test_a_scara_config_with_the_hand_alone_is_read_and_kept(tmp_path):
     out = res.outputs[tmp_path / "t.ls"].decode()
     assert "CONFIG : 'R'," in out and "CONFIG : 'L'," in out
     assert min(r["correction_mm"] for r in res.rows) > 0.01
+
+
+def test_a_posreg_va_fetched_over_http_is_read_and_one_without_registers_refused(tmp_path):
+    html = "<HTML><PRE>" + POSREG.replace("\r\n", "\n") + "</PRE></HTML>\n"
+    regs = read_posreg(ProgramText(_write(tmp_path, "POSREG.VA", html)))
+    assert sorted(regs.cartesian) == [10, 11, 12, 13, 17, 20]
+    nominal, truth = _models()
+    program = _write(tmp_path, "PALLET.ls", PALLET)
+    empty = tmp_path / "x" / "posreg.va"
+    empty.parent.mkdir()
+    empty.write_text("[*NUMREG*]$NUMREG  Storage: CMOS  Access: RW  : ARRAY[1] OF Numeric Reg\n"
+                     "  [1] = 0  ''\n")
+    with pytest.raises(rc.DataError, match="not the controller's POSREG.VA"):
+        rc.filter_program(program, truth, nominal, references=[empty])

@@ -45,8 +45,9 @@ from robocal.programs.target import Target
 
 ARM_GROUP = 1  # PR[n] in a program: register n of motion group 1
 SETTER_NAME = "PR_CAL"  # the TP program that sets the corrected registers (its file PR_CAL.LS)
-_HEADER = re.compile(r"^\[\*POSREG\*\]\$POSREG\b[^\n]*$", re.MULTILINE)
-_NEXT_VARIABLE = re.compile(r"^\[", re.MULTILINE)
+_HEADER = re.compile(r"\[\*POSREG\*\]\$POSREG\b[^\n]*$", re.MULTILINE)  # after <PRE> over HTTP too
+# the next variable: [*PROG*]$NAME, [KAREL]NAME (not an entry [g,n])
+_NEXT_VARIABLE = re.compile(r"^[^\S\n]*\[(?![^\S\n]*\d)", re.MULTILINE)
 _ENTRY = re.compile(r"^[ \t]*\[\s*(\d+)\s*,\s*(\d+)\s*\][ \t]*=[ \t]*'([^'\n]*)'([^\n]*)$", re.MULTILINE)
 _NUM = r"([-+]?(?:\d+\.?\d*|\.\d+))"
 _CONFIG = re.compile(r"\bGroup:\s*(\d+)\s+Config:\s*(?:([NF])\s*([UD])\s*([TB])|([LR]))\s*"

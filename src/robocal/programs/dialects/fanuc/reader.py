@@ -167,6 +167,9 @@ class FanucDialect(Dialect):
             registers = Registers(read_registers(src), {}, f"the --position-registers file {src.path.name}")
         sources = [s for s in sources if s.path.suffix.lower() != ".csv"]
         backups = [r for r in references if is_posreg(r)]
+        for r in references:
+            if r.path.name.upper() == "POSREG.VA" and r not in backups:
+                raise DataError(f"{r.path}: no [*POSREG*]$POSREG variable: not the controller's POSREG.VA")
         if len(backups) > 1 or backups and registers is not None:
             given = [*(r.path.name for r in backups), *([registers.origin] if registers else [])]
             raise DataError(f"the position registers are given twice ({', '.join(given)}): give one")
