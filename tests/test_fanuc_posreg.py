@@ -259,3 +259,6 @@ def test_a_posreg_va_fetched_over_http_is_read_and_one_without_registers_refused
                      "  [1] = 0  ''\n")
     with pytest.raises(rc.DataError, match="not the controller's POSREG.VA"):
         rc.filter_program(program, truth, nominal, references=[empty])
+    posreg = _write(tmp_path, "POSREG.VA", POSREG)
+    with pytest.raises(rc.DataError, match="give it with --references"):
+        rc.filter_program(program, truth, nominal, position_registers=posreg)

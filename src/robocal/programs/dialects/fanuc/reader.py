@@ -166,6 +166,9 @@ class FanucDialect(Dialect):
         for src in [s for s in sources if s.path.suffix.lower() == ".csv"]:
             registers = Registers(read_registers(src), {}, f"the --position-registers file {src.path.name}")
         sources = [s for s in sources if s.path.suffix.lower() != ".csv"]
+        for src in (s for s in sources if is_posreg(s)):
+            raise DataError(f"{src.path.name} is the controller's backup of the position registers: give it "
+                            f"with --references (its corrected registers are written as {SETTER_NAME}.LS)")
         backups = [r for r in references if is_posreg(r)]
         for r in references:
             if r.path.name.upper() == "POSREG.VA" and r not in backups:
@@ -435,7 +438,9 @@ def _shift(uses: list, unshifted: bool, registers, assigned: dict[int, str], use
             "both"
     off = uses[0][4]
     reg = _REGISTER.search(off.group(2) or "")
-    if reg is None:  # OFFSET CONDITION's register, or a register number known at run time
+    if off.group(2) is None:  # the register of the OFFSET CONDITION in effect
+        return f"{label} is shifted by {off.group(0)}, the OFFSET CONDITION register in effect: {own}"
+    if reg is None:  # a register number known at run time (PR[R[3]]), or not a register
         return f"{label} is shifted at run time by {off.group(0)}: {own}"
     if off.group(1).lower() != "offset":
         return f"{label} is shifted by {off.group(0)}, which robocal does not correct: {own}"
