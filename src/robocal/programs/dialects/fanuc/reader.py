@@ -145,7 +145,7 @@ class FanucDialect(Dialect):
 
     def config_edits(self, target, new):
         spans = target.config_spans  # (flip, up, front, t1, t4, t6) as (start, end, text)
-        if int(target.config[1]) == SCARA:  # a SCARA's (hand, t1, t2, t4), or its hand alone
+        if spans[0][2] in ("L", "R"):  # a SCARA's (hand, t1, t2, t4), or its hand alone
             texts = ["LR"[int(new[0])], *(str(int(v)) for v in new[3:])]
         else:
             letters = ("NF"[int(new[0])], "UD"[int(new[1])], "TB"[int(new[2])])
