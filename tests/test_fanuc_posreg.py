@@ -262,3 +262,15 @@ def test_a_posreg_va_fetched_over_http_is_read_and_one_without_registers_refused
     posreg = _write(tmp_path, "POSREG.VA", POSREG)
     with pytest.raises(rc.DataError, match="give it with --references"):
         rc.filter_program(program, truth, nominal, position_registers=posreg)
+
+
+def test_frames_selected_through_the_system_variables_are_followed(tmp_path):
+    """Offline generators select the frames with $MNUFRAMENUM[1]= n / $MNUTOOLNUM[1]= n."""
+    nominal, truth = _models()
+    text = PALLET.replace("   1:  UFRAME_NUM=1 ;", "   1:  $MNUFRAMENUM[1]= 1;").replace(
+        "   2:  UTOOL_NUM=2 ;", "   2:  $MNUTOOLNUM[1]= 2;")
+    program = _write(tmp_path, "PALLET.ls", text)
+    posreg = _write(tmp_path, "POSREG.VA", POSREG)
+    res = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL},
+                            references=[posreg])
+    assert sum(m.status == CORRECTED for m in res.motions) == 7

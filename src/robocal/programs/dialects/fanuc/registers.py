@@ -36,7 +36,9 @@ _NUM = r"\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*"
 _ROW = re.compile(r"^\s*(\d{1,4})\s*," + ",".join([_NUM] * 6)
                   + r",\s*\"?\s*(?:([NF])\s*([UD])\s*([TB])|([LR]))"
                   r"\s*,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*\"?\s*$", re.MULTILINE)
-_ACTIVE = re.compile(r"\b(UFRAME_NUM|UTOOL_NUM)\s*=\s*(\d+)\s*;")
+# the frame selections: UFRAME_NUM=n, or the system variable as offline generators write it,
+# $MNUFRAMENUM[1]=n (group 1's)
+_ACTIVE = re.compile(r"(?:\b|\$MN)(UFRAME_NUM|UTOOL_NUM|UFRAMENUM|UTOOLNUM)(?:\[\s*1\s*\])?\s*=\s*(\d+)\s*;")
 # a /MN line that writes PR[n] or an element of it (not a remark)
 _ASSIGNED = re.compile(r"^[ \t]*\d*[ \t]*:[ \t]*PR\[\s*(?:GP1\s*:\s*)?(\d+)\s*(?:,\s*\d+\s*)?"
                        r"(?::[^\]]*)?\]\s*=", re.MULTILINE)
@@ -112,7 +114,7 @@ class ActiveFrames:
         self._state: list[tuple[str | None, str | None]] = []
         uf = ut = None
         for m in _ACTIVE.finditer(src.text, start, stop):
-            if m.group(1) == "UFRAME_NUM":
+            if m.group(1).startswith("UFRAME"):
                 uf = m.group(2)
             else:
                 ut = m.group(2)
