@@ -274,3 +274,7 @@ def test_frames_selected_through_the_system_variables_are_followed(tmp_path):
     res = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL},
                             references=[posreg])
     assert sum(m.status == CORRECTED for m in res.motions) == 7
+    indirect = _write(tmp_path, "INDIR.ls", "/PROG  INDIR\n/MN\n   1:  PR[R[3]]=LPOS    ;\n/POS\n/END\n")
+    res = rc.filter_program([program, indirect], truth, nominal, frames={"1": FRAME}, tools={"2": TOOL},
+                            references=[posreg])
+    assert any("INDIR.ls:3: a register whose number is known at run time" in w for w in res.warnings)

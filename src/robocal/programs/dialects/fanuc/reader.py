@@ -272,7 +272,11 @@ class FanucDialect(Dialect):
         shifted: dict[tuple, list] = {}  # position -> the motions moving to it shifted (Offset ...)
         pr_shifted: list[tuple] = []  # the motions to a register shifted (Offset ...), its frames known
         unshifted = set()  # positions some motion moves to as they are
-        assigned = assignments(sources)  # registers written at run time -> where
+        assigned, indirect = assignments(sources)  # registers written at run time -> where
+        if indirect and registers is not None:
+            prog.warnings.append(f"{', '.join(indirect[:4])}: a register whose number is known at run "
+                                 "time is written (PR[R[k]]=...): any register's value may differ from the "
+                                 "one given")
         first: dict[int, tuple] = {}  # id(position) -> how its first motion moves it (leader, values)
         for src in sources:
             text = src.text

@@ -40,8 +40,9 @@ _ROW = re.compile(r"^\s*(\d{1,4})\s*," + ",".join([_NUM] * 6)
 # $MNUFRAMENUM[1]=n (group 1's)
 _ACTIVE = re.compile(r"(?:\b|\$MN)(UFRAME_NUM|UTOOL_NUM|UFRAMENUM|UTOOLNUM)(?:\[\s*1\s*\])?\s*=\s*(\d+)\s*;")
 # a /MN line that writes PR[n] or an element of it (not a remark)
-_ASSIGNED = re.compile(r"^[ \t]*\d*[ \t]*:[ \t]*PR\[\s*(?:GP1\s*:\s*)?(\d+)\s*(?:,\s*\d+\s*)?"
-                       r"(?::[^\]]*)?\]\s*=", re.MULTILINE)
+# (or PR[R[k]]=..., a register known at run time)
+_ASSIGNED = re.compile(r"^[ \t]*\d*[ \t]*:[ \t]*PR\[\s*(?:GP1\s*:\s*)?(?:(\d+)\s*(?:,\s*\d+\s*)?"
+                       r"(?::[^\]]*)?\]\s*=|(R\[))", re.MULTILINE)
 
 
 @dataclass
@@ -55,19 +56,25 @@ class Registers:
     origin: str
 
 
-def assignments(sources: list[ProgramText]) -> dict[int, str]:
+def assignments(sources: list[ProgramText]) -> tuple[dict[int, str], list[str]]:
     """Register number -> ``file:line`` of the first /MN line of ``sources`` that writes it
     (``PR[n]=...``, ``PR[n,i]=...``): a PR[] is global, so a write in any program given makes its
-    value a run-time one."""
+    value a run-time one; and the ``file:line`` of the lines writing a register whose number is
+    known at run time (``PR[R[k]]=...``, ``PR[R[k],i]=...``: any register may be the one)."""
     out: dict[int, str] = {}
+    indirect: list[str] = []
     for src in sources:
         text = src.text
         start, stop = text.find("/MN"), text.find("/POS")
         if start < 0:
             continue
         for m in _ASSIGNED.finditer(text, start, stop if stop > start else len(text)):
-            out.setdefault(int(m.group(1)), f"{src.path.name}:{src.line_of(m.start(1))}")
-    return out
+            where = f"{src.path.name}:{src.line_of(m.start())}"
+            if m.group(1) is None:
+                indirect.append(where)
+            else:
+                out.setdefault(int(m.group(1)), where)
+    return out, indirect
 
 
 def read_registers(src: ProgramText) -> dict[int, Target]:
