@@ -278,3 +278,27 @@ def test_frames_selected_through_the_system_variables_are_followed(tmp_path):
     res = rc.filter_program([program, indirect], truth, nominal, frames={"1": FRAME}, tools={"2": TOOL},
                             references=[posreg])
     assert any("INDIR.ls:3: a register whose number is known at run time" in w for w in res.warnings)
+
+
+def test_the_frames_of_the_backup_sysframe_va_are_the_ones_used(tmp_path):
+    """SYSFRAME.VA ($MNUFRAME, $MNUTOOL) gives UF 1 and UT 2 as --frame / --tool did: the same
+    output bytes; a --frame given overrides the backup's."""
+    from robocal.programs.dialects.fanuc.reader import FanucDialect
+    from robocal.programs.dialects.fanuc.sysframe import read_sysframe
+
+    sysframe = tmp_path / "SYSFRAME.VA"
+    sysframe.write_bytes((Path(__file__).parent / "data" / "fanuc_backup" / "SYSFRAME.VA").read_bytes())
+    user, tool = read_sysframe(ProgramText(sysframe), FanucDialect().to_pose)
+    assert sorted(user) == sorted(tool) == ["1", "2", "3"]
+    np.testing.assert_allclose(user["2"], _pose([500, -200, 80, 0.5, 0, 90]), atol=1e-12)
+    np.testing.assert_allclose(tool["2"], _pose([0, 0, 150, 0, 0, 0]), atol=1e-12)
+    nominal, truth = _models()
+    program = _write(tmp_path, "PALLET.ls", PALLET)
+    posreg = _write(tmp_path, "POSREG.VA", POSREG)
+    given = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL},
+                              references=[posreg])
+    backup = rc.filter_program(program, truth, nominal, references=[posreg, sysframe])
+    assert backup.outputs == given.outputs and not any("differ" in w for w in backup.warnings)
+    other = rc.filter_program(program, truth, nominal, frames={"1": "120,0,0,0,0,0"},
+                              references=[posreg, sysframe])
+    assert other.outputs[program] != given.outputs[program]

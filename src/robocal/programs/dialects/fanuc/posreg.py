@@ -48,7 +48,7 @@ SETTER_NAME = "PR_CAL"  # the TP program that sets the corrected registers (its 
 _HEADER = re.compile(r"\[\*POSREG\*\]\$POSREG\b[^\n]*$", re.MULTILINE)  # after <PRE> over HTTP too
 # the next variable: [*PROG*]$NAME, [KAREL]NAME (not an entry [g,n])
 _NEXT_VARIABLE = re.compile(r"^[^\S\n]*\[(?![^\S\n]*\d)", re.MULTILINE)
-_ENTRY = re.compile(r"^[ \t]*\[\s*(\d+)\s*,\s*(\d+)\s*\][ \t]*=[ \t]*'([^'\n]*)'([^\n]*)$", re.MULTILINE)
+_ENTRY = re.compile(r"^[ \t]*\[\s*(\d+)\s*,\s*(\d+)\s*\][ \t]*=[ \t]*(?:'([^'\n]*)')?([^\n]*)$", re.MULTILINE)
 _NUM = r"([-+]?(?:\d+\.?\d*|\.\d+))"
 _CONFIG = re.compile(r"\bGroup:\s*(\d+)\s+Config:\s*(?:([NF])\s*([UD])\s*([TB])|([LR]))\s*"
                      r"(?:,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3}))?[ \t\r]*$",
@@ -77,20 +77,12 @@ def is_posreg(src: ProgramText) -> bool:
 
 def read_posreg(src: ProgramText) -> PositionRegisters:
     """The registers of motion group 1 in the POSREG.VA ``src`` (module docstring)."""
-    text = src.text
-    head = _HEADER.search(text)
-    if head is None:
+    entries = group_entries(src, _HEADER)
+    if entries is None:
         raise DataError(f"{src.path.name}: no [*POSREG*]$POSREG variable: not a POSREG.VA")
-    after = _NEXT_VARIABLE.search(text, head.end() + 1)
-    stop = after.start() if after else len(text)
-    entries = list(_ENTRY.finditer(text, head.end(), stop))
     out = PositionRegisters(src, {}, {}, {})
-    for k, e in enumerate(entries):
-        if int(e.group(1)) != ARM_GROUP:
-            continue
-        n, rest = int(e.group(2)), e.group(4)
-        a, b = e.end(), entries[k + 1].start() if k + 1 < len(entries) else stop
-        out.comments[n] = e.group(3)
+    for n, at, a, b, comment, rest in entries:
+        out.comments[n] = comment
         name = f"PR[{n}]"
         if "Uninitialized" in rest:
             out.other[n] = (f"{name} is Uninitialized in {src.path.name} (no value at the backup): a program "
@@ -99,7 +91,7 @@ def read_posreg(src: ProgramText) -> PositionRegisters:
         if "Group:" in rest:
             out.other[n] = None  # a joint register: the joints are what the arm runs, nothing to correct
             continue
-        target = _cartesian(src, e.start(), name, a, b)
+        target = cartesian(src, at, name, a, b)
         if isinstance(target, str):
             out.other[n] = target
         else:
@@ -107,8 +99,24 @@ def read_posreg(src: ProgramText) -> PositionRegisters:
     return out
 
 
-def _cartesian(src: ProgramText, at: int, name: str, a: int, b: int) -> Target | str:
-    """The Cartesian register whose body is ``src.text[a:b]``, or why it is not corrected."""
+def group_entries(src: ProgramText, header: re.Pattern) -> list[tuple[int, int, int, int, str, str]] | None:
+    """Motion group 1's entries ``[1,n] = 'comment' ...`` of the position array variable whose
+    header line ``header`` matches in the .VA ``src``, as ``(n, offset of the entry, start and end
+    of its body, its comment, the rest of its index line)``; None: the file has no such variable."""
+    text = src.text
+    head = header.search(text)
+    if head is None:
+        return None
+    after = _NEXT_VARIABLE.search(text, head.end() + 1)
+    stop = after.start() if after else len(text)
+    entries = list(_ENTRY.finditer(text, head.end(), stop))
+    return [(int(e.group(2)), e.start(), e.end(), entries[k + 1].start() if k + 1 < len(entries) else stop,
+             e.group(3) or "", e.group(4)) for k, e in enumerate(entries) if int(e.group(1)) == ARM_GROUP]
+
+
+def cartesian(src: ProgramText, at: int, name: str, a: int, b: int) -> Target | str:
+    """The Cartesian position ``name`` (a register, a frame) whose body is ``src.text[a:b]``, or why
+    it is not corrected."""
     text, where = src.text, f"{src.path.name}:{src.line_of(at)}"
     c = _CONFIG.search(text, a, b)
     if c is None:

@@ -42,6 +42,7 @@ from robocal.programs.dialects.fanuc.groups import COORD, coordinate, group_valu
 from robocal.programs.dialects.fanuc.loads import FanucLoads, read_schedules
 from robocal.programs.dialects.fanuc.posreg import SETTER_NAME, is_posreg, read_posreg, setter_program
 from robocal.programs.dialects.fanuc.registers import ActiveFrames, Registers, assignments, read_registers
+from robocal.programs.dialects.fanuc.sysframe import is_sysframe, read_sysframe
 from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
@@ -156,6 +157,15 @@ class FanucDialect(Dialect):
     def parse(self, sources, frames, tools, references=()):
         prog = Program([], frames={"0": np.eye(4)}, tools={"0": np.eye(4)})
         prog.declared_tools = dict(prog.tools)  # UTOOL 0, the flange: TP files declare no tool data
+        for ref in references:  # the controller's frames from its backup; --frame / --tool override them
+            if is_sysframe(ref):
+                user, tool = read_sysframe(ref, self.to_pose)
+                prog.frames.update(user)
+                prog.tools.update(tool)
+                prog.declared_tools.update(tool)
+            elif ref.path.name.upper() == "SYSFRAME.VA":
+                raise DataError(f"{ref.path}: no [*SYSTEM*]$MNUFRAME variable: not the controller's "
+                                "SYSFRAME.VA")
         prog.frames.update(frames)
         prog.tools.update(tools)
         order = 0
