@@ -64,7 +64,6 @@ class PositionRegisters:
     corrected (a joint register: None, nothing to correct; else the reason); ``comments``
     number -> the register's comment as the file has it."""
 
-    source: ProgramText
     cartesian: dict[int, Target]
     other: dict[int, str | None]
     comments: dict[int, str]
@@ -80,7 +79,7 @@ def read_posreg(src: ProgramText) -> PositionRegisters:
     entries = group_entries(src, _HEADER)
     if entries is None:
         raise DataError(f"{src.path.name}: no [*POSREG*]$POSREG variable: not a POSREG.VA")
-    out = PositionRegisters(src, {}, {}, {})
+    out = PositionRegisters({}, {}, {})
     for n, at, a, b, comment, rest in entries:
         out.comments[n] = comment
         name = f"PR[{n}]"
