@@ -47,6 +47,7 @@ reach are corrected too; otherwise a motion to ``P001`` is named.
 from __future__ import annotations
 
 import re
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -91,12 +92,15 @@ _SETTOOL = re.compile(r"^\s*SETTOOL\s+TL#\(\s*([^)]*?)\s*\)")  # writes tool n's
 ANY_TOOL = "*"  # a SETTOOL whose tool number is not written as a number
 # instructions that write a position variable at run time (its first operand)
 _WRITES = re.compile(r"^\s*(SET|SETE|GETS|GETE|GETPOS|ADD|SUB|MUL|DIV|CNVRT|CLEAR|SETFILE|GETFILE|MSHIFT|"
-                     r"READ|PXEREAD)\s+(LP|P|LBP|BP|LEX|EX)" + _INDEX + r"\b")
+                     r"MULMAT|INVMAT|READ|PXEREAD)\s+(LP|P|LBP|BP|LEX|EX)(?:" + _INDEX + r"\b|\[([^\]]*)\])")
+ANY_NUMBER = "[]"  # a variable written with a run-time index (SET P[I000] ...): any of its kind may be
 _REFP = re.compile(r"^\s*REFP\s+\d+\s+(C|P)" + _INDEX + r"\b")
 _LABELED = re.compile(r"^\s*(?:\*\w+\s+)?")
 _RUNTIME_INDEX = "the position number is computed at run time"
 _BOTH = "used by motions that move differently:"  # a target one correction cannot serve (every use named)
 _CONVEYOR = re.compile(r"\bCV#\(")  # a conveyor-synchronised SMOV (conveyor tracking)
+_CARTESIAN_POSTYPES = ("BASE", "ROBOT", "USER", "TOOL", "MTOOL")  # ///POSTYPEs of Cartesian numbers
+_BOM = ("\ufeff", "\xef\xbb\xbf")  # a byte-order mark before /JOB (as text, and UTF-8 read as latin-1)
 
 
 @dataclass
@@ -254,7 +258,15 @@ class InformDialect(Dialect):
 
 def _is_variable_file(src: ProgramText) -> bool:
     """A controller variable file (VAR.DAT): no ``/JOB`` line, position sections ``//P``."""
-    return not re.search(r"^\s*/JOB\b", src.text, re.MULTILINE)
+    return not re.search(r"^\s*/JOB\b", _without_bom(src.text), re.MULTILINE)
+
+
+def _without_bom(text: str) -> str:
+    """``text`` without a byte-order mark at its start (a job saved by a Windows editor as UTF-8)."""
+    for bom in _BOM:
+        if text.startswith(bom):
+            return text[len(bom):]
+    return text
 
 
 def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
@@ -279,8 +291,8 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
             state = None
             if h.group(1).upper() == "NPOS":
                 npos = (start, [int(v) for v in h.group(2).split(",")])
-            elif h.group(1).upper() == "POSTYPE":  # a new coordinate system: RECTAN / PULSE follows
-                head.rectan, head.values = False, ""
+            elif h.group(1).upper() == "POSTYPE":  # a new coordinate system: what its numbers are
+                head.rectan, head.values = _postype_values(head.postype)
             continue
         if not line.strip() or line.lstrip().startswith("'"):
             continue
@@ -323,6 +335,17 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
             prog.warnings.append(f"{src.where(npos[0])}: ///NPOS {','.join(map(str, npos[1]))} but the "
                                  f"section holds {','.join(map(str, counts))} (C, BC, EC, P, BP, EX)")
     return out
+
+
+def _postype_values(postype: str) -> tuple[bool, str]:
+    """``(rectan, values)`` a ``///POSTYPE`` implies until a ``///RECTAN``, ``///PULSE`` or ``///ANGLE``
+    line says otherwise: BASE, ROBOT, USER and TOOL positions are Cartesian (mm, deg) whatever the
+    line order (an offline generator may write ``///RECTAN`` before ``///POSTYPE`` or leave it out
+    after a second ``///POSTYPE BASE``: the controller reads Cartesian numbers there), PULSE
+    positions encoder pulses; another one is unknown until its line."""
+    if postype in _CARTESIAN_POSTYPES:
+        return True, "RECTAN"
+    return False, "PULSE" if postype == "PULSE" else ""
 
 
 def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _Header) -> None:
@@ -370,8 +393,13 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
             settool.setdefault(str(int(number.group(1))) if number else ANY_TOOL, src.where(start))
         w = _WRITES.match(body)
         if w:
-            runtime.setdefault(f"{w.group(2)}{int(w.group(3))}", f"{w.group(1)} ({src.where(start)})")
+            name = w.group(2) + (str(int(w.group(3))) if w.group(3) is not None else ANY_NUMBER)
+            what = w.group(1) if w.group(3) is not None else f"{w.group(1)} {w.group(2)}[{w.group(4)}]"
+            runtime.setdefault(name, f"{what} ({src.where(start)})")
+    seen = Counter()  # the job's motion instructions by what the reader makes of them
     for start, body in inst:
+        if _MOTION.match(body):
+            seen["instructions"] += 1
         if _SHIFT_OFF.match(body):
             shift = ""
             continue
@@ -394,7 +422,7 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         mv = _MOTION.match(body)
         if not mv:
             continue
-        instr, rest = mv.group(1), mv.group(2).split("'")[0]
+        instr, rest = mv.group(1), mv.group(2).split("'")[0].split("//")[0]  # ' and // comments
         parts = rest.split("+")  # the robot's group, then each other group's motion
         refs = list(_REF.finditer(parts[0]))
         robot_refs = [r for r in refs if r.group(1) in ("C", "P", "LP")]
@@ -408,9 +436,12 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         if pos is not None and pos.target is None and instr != "IMOV" and (
                 pos.header.postype == "PULSE" or not pos.header.rectan):
             prog.motions.append((src.path, start, np.full(6, np.nan)))  # a joint position: no correction
+            seen["joint"] += 1
             continue
         if ref is None and refs and all(r.group(1) in STATION_KINDS for r in refs):
+            seen["station"] += 1
             continue  # a station's motion alone (a job of ///GROUP1 ST1, MOVJ EC00000): the arm stays
+        seen["accounted"] += 1
         acc = prog.motion(src, start, instr)
         if ref is None:
             prog.skip(src.where(start), instr, "no robot position (C, P or LP) in the instruction", acc)
@@ -476,6 +507,24 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         used.add(id(t))
         acc.reach(t, label)
         prog.motions.append((src.path, start, t))
+    prog.warnings += _unaccounted(src, seen)
+
+
+def _unaccounted(src: ProgramText, seen: Counter) -> list[str]:
+    """A warning when the job's text holds motion instructions and none has a record (0 motions
+    corrected or named): what the reader made of them (joint positions, a station's own motions)
+    or where they are that it does not read (outside ``//INST``), never silence."""
+    if seen["accounted"]:
+        return []
+    outside = sum(1 for _, line, _ in _lines(src.text) if _MOTION.match(_LABELED.sub("", line, count=1))) \
+        - seen["instructions"]
+    parts = [f"{n} to joint (pulse) positions, which need no correction" for n in [seen["joint"]] if n]
+    parts += [f"{n} of a station alone (the arm stays)" for n in [seen["station"]] if n]
+    parts += [f"{n} outside its //INST section, not read as instructions" for n in [outside] if n]
+    if not parts:
+        return []
+    return [f"{src.path.name}: {seen['instructions'] + outside} motion instruction(s) and no motion of the arm to "
+            f"a Cartesian position: {'; '.join(parts)}"]
 
 
 def _moved(src: ProgramText, parts: list[str], refs: list, groups: Groups, positions: dict) -> Moved:
@@ -576,9 +625,13 @@ def _named_reason(instr: str, ref, rest: str, shift: str, runtime: dict) -> str:
         return f"{label}: a motion of an external axis group"
     name = f"{ref.group(1)}{int(ref.group(2))}"
     if name in runtime:
-        return f"{label} is written at run time by {runtime[name]}"
+        return f"{label} is assigned at run time by {runtime[name]}"
+    if ref.group(1) + ANY_NUMBER in runtime:
+        return (f"{label} may be assigned at run time by {runtime[ref.group(1) + ANY_NUMBER]}: that variable "
+                "number is computed at run time")
     if ref.group(1) == "LP":
-        return f"{label} is a local position variable: its value is set at run time"
+        return (f"{label} is a local position variable: assigned at run time (a job's local variables are "
+                "in no file)")
     if shift:
         return f"{label} is shifted at run time by {shift}"
     return ""
