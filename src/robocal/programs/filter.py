@@ -321,7 +321,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         The program language (default: from the files' suffixes, see `dialect_for`).
     references : sequence of path-like
         Files read only for their tool / frame / load declarations (a KUKA $config.dat, RAPID
-        system modules, a Yaskawa TOOL.CND or UFRAME.CND), never written.
+        system modules, a Yaskawa TOOL.CND or UFRAME.CND), never written; a FANUC backup's
+        POSREG.VA: the registers motions move to are corrected and delivered as the TP
+        program ``PR_CAL.LS`` (an output keyed by that path, beside the .VA,
+        `robocal.programs.dialects.fanuc.posreg`).
     keep_unreached : bool, default False
         Leave the targets that cannot be corrected unchanged, with a warning, instead of failing.
     strict : bool, default False
@@ -502,6 +505,9 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     edits, changed = number_edits(d, targets, values, good, Pc, cfg, warnings)
     warnings += comp.target_warnings([t.where for t in targets], good)  # corrected ones near a singularity
     outputs = {s.path: edits.pop(s.path, FileEdits()).apply(s) for s in sources}  # edits freed once used
+    # targets a reference holds (FANUC POSREG.VA): the dialect's own file delivers them
+    outputs.update(d.reference_outputs(program, refs, {r.path: edits.pop(r.path, FileEdits()).apply(r)
+                                                       for r in refs}, set(program.not_corrected)))
     rows = _rows(d, targets, X, W @ Pc, controller, q, ok, good, comp.converged & ok, changed, cfg, sing)
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected,

@@ -39,9 +39,20 @@ Base axes (``BC``), stations (``EC``, ``+MOVJ EC``) and station-coordinated ``SM
 :mod:`robocal.programs.dialects.inform.groups` (the values as :attr:`Target.axes`; an ``SMOV``
 target carried by its station).
 
-``VAR.DAT`` holds the global variables; its position section ``//P`` has the same header lines
-and ``P0001=...`` entries. Given as a program file, its Cartesian positions that the jobs' motions
-reach are corrected too; otherwise a motion to ``P001`` is named.
+``VAR.DAT`` (the controller's backup of its global variables) has a position section ``//P`` with
+the same header lines (the frame: ``///POSTYPE BASE|ROBOT|USER`` with ``///USER n``, ``///TOOL n``,
+``///RCONF``; the units: ``///RECTAN`` mm and deg, ``///PULSE`` encoder pulses) and ``P0001=...``
+entries. Given with ``--references`` (or as a program file), its Cartesian P variables that the
+jobs' motions reach are corrected; the corrected values are delivered as ``VAR_CAL.DAT`` (a copy
+with only those numbers, and a ``///RCONF`` line where a form changes, rewritten; loaded on the
+controller as VAR.DAT; :meth:`InformDialect.reference_outputs`). Without it a motion to ``P001`` is
+named. A variable a job given assigns at run time (``SET``, ``SUB``, ``ADD``, ``MUL``, ``CNVRT``,
+``GETS``, ``MULMAT``, ``SETE``..., anywhere in the job: loops) is named at every motion to it, like a
+local variable ``LP``, which no file holds; a write with a run-time index (``SET P[I000] ...``)
+names every motion to a variable of that kind.
+
+A job whose motion instructions give no motion record (all to joint positions, a station's own,
+or outside ``//INST``) says so in a warning.
 """
 
 from __future__ import annotations
@@ -100,6 +111,7 @@ _RUNTIME_INDEX = "the position number is computed at run time"
 _BOTH = "used by motions that move differently:"  # a target one correction cannot serve (every use named)
 _CONVEYOR = re.compile(r"\bCV#\(")  # a conveyor-synchronised SMOV (conveyor tracking)
 _CARTESIAN_POSTYPES = ("BASE", "ROBOT", "USER", "TOOL", "MTOOL")  # ///POSTYPEs of Cartesian numbers
+SHOWN_VARIABLES = 8  # P variables a message names before "and n more"
 _BOM = ("\ufeff", "\xef\xbb\xbf")  # a byte-order mark before /JOB (as text, and UTF-8 read as latin-1)
 
 
@@ -199,13 +211,26 @@ class InformDialect(Dialect):
             edits[(pos.line_end, pos.line_end)] = pos.header.rconf_line + newline
         return edits
 
+    def reference_outputs(self, program, references, corrected, kept):
+        """A VAR.DAT among ``references`` whose P variables motions reach: its corrected copy
+        (:func:`corrected_variables_name`, the numbers of the corrected P variables rewritten,
+        every other byte as it was)."""
+        out = {}
+        for ref in (r for r in references if is_variable_file(r)):
+            if any(t.source is ref and id(t) not in kept for t in program.targets):
+                out[ref.path.with_name(corrected_variables_name(ref.path.name))] = corrected[ref.path]
+        return out
+
     def parse(self, sources, frames, tools, references=()):
         prog = Program([], frames={IDENTITY: np.eye(4)}, tools={})
+        variables = []  # VAR.DATs given (as a reference or a program file)
         for ref in references:
             if is_tool_file(ref):  # TOOL.CND: its tool frames (its loads: load_data.inform)
                 entries = read_tool_file(ref)
                 poses = self.to_pose(np.array([e.frame for e in entries.values()]))
                 prog.tools.update(zip(entries, poses, strict=True))
+            elif is_variable_file(ref):  # VAR.DAT: the global position variables (read below)
+                variables.append(ref)
             else:
                 prog.frames.update(user_frames(ref))
         prog.frames.update(frames)
@@ -217,6 +242,12 @@ class InformDialect(Dialect):
             if is_tool_file(src) or _UFRAME_LINE.search(src.text):
                 raise DataError(f"{src.path.name} is a controller file of tools or user frames (TOOL.CND, "
                                 "UFRAME.CND), not a job: give it with --references")
+            if _is_variable_file(src):
+                variables.append(src)
+        if len(variables) > 1:
+            given = ", ".join(v.path.name for v in variables)
+            raise DataError(f"the global variables are given twice ({given}): give VAR.DAT once")
+        for src in [*variables, *(s for s in sources if not _is_variable_file(s))]:
             found = _read_positions(src, prog)
             scope = "global" if _is_variable_file(src) else src.path
             for p in found:
@@ -238,7 +269,8 @@ class InformDialect(Dialect):
             if id(t) in named and id(t) not in used:
                 continue
             if id(t) not in used:
-                prog.warnings.append(f"{t.where}: no motion of these jobs reaches it: left as it is")
+                if t.source not in references:  # a backup's VAR.DAT holds every variable of the cell
+                    prog.warnings.append(f"{t.where}: no motion of these jobs reaches it: left as it is")
                 continue
             tool0 |= t.tool == "0" and "0" not in prog.tools
             own_tool0 |= t.tool == "0" and "0" not in prog.declared_tools
@@ -250,10 +282,36 @@ class InformDialect(Dialect):
             prog.tools["0"] = np.eye(4)
             prog.warnings.append("TOOL 0 has no data given: taken as the flange (give "
                                  "--tool 0=X,Y,Z,Rx,Ry,Rz if tool file 0 holds a tool)")
+        prog.warnings += [_delivered(ref, prog.targets) for ref in variables if ref in references
+                          and any(t.source is ref for t in prog.targets)]
         prog.targets.sort(key=lambda t: (str(t.source.path), t.offset))
         for k, t in enumerate(prog.targets):
             t.order = k
         return prog
+
+
+def corrected_variables_name(name: str) -> str:
+    """The name of a VAR.DAT's corrected copy: ``VAR.DAT`` -> ``VAR_CAL.DAT`` (another name than the
+    controller's own, so that the backup it was read from is never overwritten)."""
+    stem, dot, suffix = name.rpartition(".")
+    return f"{stem}_CAL{dot}{suffix}" if dot else f"{name}_CAL"
+
+
+def _delivered(ref: ProgramText, targets: list[Target]) -> str:
+    """What the filter does with the P variables of VAR.DAT ``ref`` given with --references."""
+    names = [t.name for t in targets if t.source is ref]
+    shown = ", ".join(names[:SHOWN_VARIABLES]) + (f" and {len(names) - SHOWN_VARIABLES} more"
+                                                  if len(names) > SHOWN_VARIABLES else "")
+    return (f"{ref.path.name}: the {len(names)} P variable(s) these jobs move to ({shown}) are corrected in "
+            f"{corrected_variables_name(ref.path.name)}, a copy of {ref.path.name} with only their numbers "
+            f"(and a ///RCONF line where the form changes) rewritten: load it on the controller as "
+            f"{ref.path.name}. P variables are global: a job not given here that writes one changes it")
+
+
+def is_variable_file(src: ProgramText) -> bool:
+    """A controller's VAR.DAT: no ``/JOB`` line, a position section (``//P``) with ``P0000=`` entries."""
+    return _is_variable_file(src) and not is_tool_file(src) and not _UFRAME_LINE.search(src.text) and \
+        re.search(r"^//(?:P|BP|EX)\s*$", src.text, re.MULTILINE) is not None
 
 
 def _is_variable_file(src: ProgramText) -> bool:
@@ -454,9 +512,9 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
             prog.skip(src.where(start), instr, why, acc, label)
             continue
         if pos is None:
+            global_help = " (a global position variable: give the controller's VAR.DAT with --references)"
             prog.skip(src.where(start), instr, f"{label} is not in the files given" + (
-                " (a global position variable: give VAR.DAT as a program file)" if kind == "P" else ""),
-                acc, label)
+                global_help if kind == "P" else ""), acc, label)
             continue
         if pos.target is None:
             why = f"{label} is in an unsupported coordinate system (///POSTYPE {pos.header.postype or '?'})" \
@@ -523,8 +581,9 @@ def _unaccounted(src: ProgramText, seen: Counter) -> list[str]:
     parts += [f"{n} outside its //INST section, not read as instructions" for n in [outside] if n]
     if not parts:
         return []
-    return [f"{src.path.name}: {seen['instructions'] + outside} motion instruction(s) and no motion of the arm to "
-            f"a Cartesian position: {'; '.join(parts)}"]
+    total = seen["instructions"] + outside
+    return [f"{src.path.name}: {total} motion instruction(s) and no motion of the arm to a Cartesian "
+            f"position: {'; '.join(parts)}"]
 
 
 def _moved(src: ProgramText, parts: list[str], refs: list, groups: Groups, positions: dict) -> Moved:
@@ -662,7 +721,7 @@ def user_frames(src: ProgramText) -> dict[str, np.ndarray]:
             current = None
     if not out:
         raise DataError(f"{src.path.name}: no //UFRAME n with ////BUSER X,Y,Z,Rx,Ry,Rz: not a UFRAME.CND "
-                        "nor a TOOL.CND (//TOOL n) (VAR.DAT: give it as a program file)")
+                        "nor a TOOL.CND (//TOOL n) nor a VAR.DAT (//P with P0000= entries)")
     return out
 
 
