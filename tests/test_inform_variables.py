@@ -207,3 +207,21 @@ def test_station_coordinated_smov_is_no_conveyor(tmp_path):
     assert _counts(res)["total"] == 3  # by hand
     assert all("conveyor" not in r and "ST1" in r for r in reasons[:2]), reasons
     assert "follows a conveyor" in reasons[2]
+
+
+def test_a_global_variable_another_job_assigns_is_named(tmp_path):
+    """P variables are global: P001 assigned by SET in the job CALLed (given with it) is named in
+    the caller; LP000 assigned there is the callee's own and the caller's LP000 is named as a local
+    variable, not for the callee's SET."""
+    var = tmp_path / "VAR.DAT"
+    var.write_bytes("\r\n".join(["//P", *HEAD, *(f"P{k:04d}={_values(k)}" for k in range(3)), ""]).encode())
+    main_job, sub = tmp_path / "MAIN.JBI", tmp_path / "SUB.JBI"
+    moves = ["CALL JOB:SUB", "MOVL P000 V=100.0", "MOVL P001 V=100.0", "MOVL LP000 V=100.0"]
+    main_job.write_bytes(_job(["///NPOS 0,0,0,0,0,0"], moves))
+    sub.write_bytes(_job(["///NPOS 0,0,0,0,0,0"], ["SET P001 P002", "SET LP000 P002"]))
+    res = filter_program([main_job, sub], CALIBRATED, NOMINAL, references=[var])
+    # by hand: 3 motions (MAIN); P000 corrected, P001 and LP000 named
+    assert _counts(res) == {"total": 3, "corrected": 1, "named": 2}
+    reasons = [r.reason for r in res.motions if r.status == "named"]
+    assert "P001 is assigned at run time by SET (SUB.JBI:" in reasons[0]
+    assert "LP000 is a local position variable" in reasons[1]

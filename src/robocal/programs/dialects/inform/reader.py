@@ -258,8 +258,14 @@ class InformDialect(Dialect):
                 jobs.append(src)
         used: set[int] = set()  # targets a corrected motion reaches
         named: set[int] = set()  # ... a named motion reaches
+        writes = {id(src): _run_time_writes(src) for src in jobs}
+        shared: dict[str, str] = {}  # global variables (P, BP, EX) a job given assigns: for every job
+        for w in writes.values():
+            for name, where in w.items():
+                if not name.startswith("L"):
+                    shared.setdefault(name, where)
         for src in jobs:
-            _motions(src, positions, prog, used, named)
+            _motions(src, positions, prog, used, named, shared | writes[id(src)])
         # a reached target uses TOOL 0, without data for it: anywhere (tool0) / in TOOL.CND (own_tool0)
         tool0 = own_tool0 = False
         for p in {id(p): p for p in positions.values()}.values():  # a job's P variable is under two keys
@@ -430,14 +436,28 @@ def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _He
         head.rconf, head.rconf_line = fields, line
 
 
-def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named: set) -> None:
+def _run_time_writes(src: ProgramText) -> dict[str, str]:
+    """The position variables job ``src`` assigns at run time (anywhere: loops): ``'P1'``, ``'LP0'``
+    (a run-time index: ``'P[]'``, any of the kind) -> the instruction and where."""
+    out: dict[str, str] = {}
+    for start, line, _ in _instructions(src):
+        w = _WRITES.match(_LABELED.sub("", line, count=1))
+        if w:
+            name = w.group(2) + (str(int(w.group(3))) if w.group(3) is not None else ANY_NUMBER)
+            what = w.group(1) if w.group(3) is not None else f"{w.group(1)} {w.group(2)}[{w.group(4)}]"
+            out.setdefault(name, f"{what} ({src.where(start)})")
+    return out
+
+
+def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named: set,
+             runtime: dict[str, str]) -> None:
     """Account for every motion of the job's ``//INST`` in text order: a Cartesian C or P position
     is a corrected target; joint (PULSE) positions need nothing; incremental, shifted, conveyor-
-    or station-synchronised motions, base axes, stations, positions written at run time and
-    positions whose tool the job rewrites (``SETTOOL TL#(n) P..``: the tool file's data of tool n
-    from a position variable) are named."""
+    or station-synchronised motions, base axes, stations, positions assigned at run time
+    (``runtime``: :func:`_run_time_writes` of this job and the global variables any job given
+    assigns) and positions whose tool the job rewrites (``SETTOOL TL#(n) P..``: the tool file's
+    data of tool n from a position variable) are named."""
     shift = ""  # the SFTON in effect
-    runtime: dict[str, str] = {}  # variable -> where the job writes it at run time (anywhere: loops)
     mframe: dict[str, str] = {}  # user frame -> the MFRAME that sets it
     settool: dict[str, str] = {}  # tool -> the SETTOOL that writes it (anywhere: loops)
     groups = job_groups(src.text)
@@ -449,11 +469,6 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         if st:
             number = re.fullmatch(_INDEX, st.group(1))
             settool.setdefault(str(int(number.group(1))) if number else ANY_TOOL, src.where(start))
-        w = _WRITES.match(body)
-        if w:
-            name = w.group(2) + (str(int(w.group(3))) if w.group(3) is not None else ANY_NUMBER)
-            what = w.group(1) if w.group(3) is not None else f"{w.group(1)} {w.group(2)}[{w.group(4)}]"
-            runtime.setdefault(name, f"{what} ({src.where(start)})")
     seen = Counter()  # the job's motion instructions by what the reader makes of them
     for start, body in inst:
         if _MOTION.match(body):
