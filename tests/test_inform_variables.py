@@ -225,3 +225,20 @@ def test_a_global_variable_another_job_assigns_is_named(tmp_path):
     reasons = [r.reason for r in res.motions if r.status == "named"]
     assert "P001 is assigned at run time by SET (SUB.JBI:" in reasons[0]
     assert "LP000 is a local position variable" in reasons[1]
+
+
+@pytest.mark.parametrize("case", ["lone CR line ends", "no NOP, no END"])
+def test_the_filtered_job_is_marked_whatever_its_layout(case, tmp_path):
+    """The marker comment lands in a CR-only job (after NOP) and in one without NOP (before its first
+    instruction), with the job's line ends: filtering the output again is refused."""
+    path = tmp_path / "J.JBI"
+    path.write_bytes(READ_BEFORE[case])
+    out = tmp_path / "J_CAL.JBI"
+    filter_program([path], CALIBRATED, NOMINAL).write(out)
+    data = out.read_bytes()
+    marks = re.findall(rb"'robocal [^\r\n]*(\r\n|\r)", data)
+    assert len(marks) == 1 and marks[0] == (b"\r" if case == "lone CR line ends" else b"\r\n")
+    with pytest.raises(rc.core.errors.DataError, match="already filtered"):
+        filter_program([out], CALIBRATED, NOMINAL)
+    assert _counts(filter_program([out], CALIBRATED, NOMINAL, force=True)) == {"total": 6, "corrected": 6,
+                                                                              "named": 0}
