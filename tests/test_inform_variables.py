@@ -242,3 +242,48 @@ def test_the_filtered_job_is_marked_whatever_its_layout(case, tmp_path):
         filter_program([out], CALIBRATED, NOMINAL)
     assert _counts(filter_program([out], CALIBRATED, NOMINAL, force=True)) == {"total": 6, "corrected": 6,
                                                                               "named": 0}
+
+
+def _backup_var(tmp_path, forms: list[str]) -> Path:
+    """A VAR.DAT in a controller backup's layout (the public lukelalondePZ/Komatsu-Press-Demo's):
+    P000 unused, P001 pulses, P002 and P003 BASE (type 16, tool 0, forms ``forms``), P004 in user
+    coordinates (type 18), P005 unused."""
+    var = tmp_path / "VAR.DAT"
+    rect = [f'"RECTAN"0,0,0,{forms[k]},0,16,{_values(k)},0.0000,0.0000' for k in range(2)]
+    zeros = "0" * 24
+    lines = ["//VAR", "///PFNUM 6,0,0,0", "///SHARE 250,250,250,250,250,250,0,0", "///B",
+             "0,0,0,0,0,0,0,0,0,0", "///S", "", "", "///P", '"UNUSED"',
+             f'"PULSE"0,0,3,{zeros},0,0,2,-76037,-66182,0,4682,0,0,0', *rect,
+             f'"RECTAN"0,0,3,{zeros},0,18,{_values(2)},0.0000,0.0000', '"UNUSED"', "///BP", "///EX", ""]
+    var.write_bytes("\n".join(lines).encode())
+    return var
+
+
+def test_a_backups_var_dat_layout(tmp_path):
+    """The VAR.DAT of a controller's CMOS backup (one line per P variable): BASE variables corrected
+    like the same positions saved in a job (same correction), in VAR_CAL.DAT with only their numbers
+    changed; a pulse variable is a joint position; a user-coordinate one and an unused one named."""
+    forms = ["".join(map(str, InformDialect().scheme.encode(NOMINAL, Q[k]).clip(0, 1))) + "0" * 18
+             for k in range(2)]
+    var = _backup_var(tmp_path, forms)
+    job = tmp_path / "B.JBI"
+    job.write_bytes(_job(["///NPOS 0,0,0,0,0,0"], [f"MOVL P{k:03d} V=100.0" for k in range(1, 6)]))
+    res = filter_program([job], CALIBRATED, NOMINAL, references=[var])
+    # by hand: 5 motions, P001 to pulses (no record); P002, P003 corrected; P004 (type 18) and P005
+    # (unused) named
+    assert _counts(res) == {"total": 4, "corrected": 2, "named": 2}
+    named = [r.reason for r in res.motions if r.status == "named"]
+    assert "P004 is in coordinate type 18 of VAR.DAT" in named[0]
+    assert 'P005 is "UNUSED" in VAR.DAT' in named[1]
+    cal = tmp_path / "VAR_CAL.DAT"
+    assert _outside_numbers(res.outputs[cal]) == _outside_numbers(var.read_bytes())
+    same = tmp_path / "SAME.JBI"
+    rconf = [",".join(f[:6]) + ",0,0" for f in forms]
+    same.write_bytes(_job(["///NPOS 2,0,0,0,0,0", "///TOOL 0", "///POSTYPE BASE", "///RECTAN",
+                           *(x for k in range(2)
+                             for x in (f"///RCONF {rconf[k]}", f"C{k:05d}={_values(k)}"))],
+                          ["MOVL C00000 V=100.0", "MOVL C00001 V=100.0"]))
+    ref = filter_program([same], CALIBRATED, NOMINAL)
+    assert [r["correction_mm"] for r in res.rows] == pytest.approx([r["correction_mm"] for r in ref.rows])
+    identity = filter_program([job], NOMINAL, NOMINAL, references=[var])
+    assert identity.outputs.get(cal, var.read_bytes()) == var.read_bytes()

@@ -67,7 +67,7 @@ from scipy.spatial.transform import Rotation
 from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.dialects.base import Dialect
-from robocal.programs.dialects.inform import marker, simulated
+from robocal.programs.dialects.inform import marker, simulated, var_file
 from robocal.programs.dialects.inform.campaign import inform_job
 from robocal.programs.dialects.inform.configuration import YaskawaConfig
 from robocal.programs.dialects.inform.groups import BASE_KINDS, STATION_KINDS, Groups, Moved, job_groups
@@ -141,6 +141,8 @@ class Position:
     line_end: int
     newline: str
     target: Target | None = None  # the Cartesian target, when it is one
+    why: str = ""  # why a motion to it cannot be corrected, when the file says (a backup's VAR.DAT)
+    form: tuple[int, int] | None = None  # the span of its form digits (a backup's VAR.DAT), else None
 
 
 def _lines(text: str):
@@ -200,6 +202,8 @@ class InformDialect(Dialect):
 
     def config_edits(self, target, new):
         pos: Position = target.config_spans
+        if pos.form is not None:  # a backup's VAR.DAT: the form's digits in the line itself
+            return {(pos.form[0], pos.form[0] + CONFIG_FIELDS): "".join(str(min(int(v), 1)) for v in new)}
         old = pos.header.rconf or []
         fields = [str(min(int(v), 1)) for v in new] + old[CONFIG_FIELDS:]
         text = target.source.text
@@ -315,9 +319,11 @@ def _delivered(ref: ProgramText, targets: list[Target]) -> str:
 
 
 def is_variable_file(src: ProgramText) -> bool:
-    """A controller's VAR.DAT: no ``/JOB`` line, a position section (``//P``) with ``P0000=`` entries."""
-    return _is_variable_file(src) and not is_tool_file(src) and not _UFRAME_LINE.search(src.text) and \
-        re.search(r"^//(?:P|BP|EX)\s*$", src.text, re.MULTILINE) is not None
+    """A controller's VAR.DAT: no ``/JOB`` line; a backup's ``//VAR`` with ``///P`` lines, or position
+    sections (``//P``) with ``P0000=`` entries."""
+    sections = re.search(r"^//(?:P|BP|EX)\s*$", src.text, re.MULTILINE) is not None
+    return _is_variable_file(src) and not is_tool_file(src) and not _UFRAME_LINE.search(src.text) and (
+        sections or var_file.is_cmos_variables(src))
 
 
 def _is_variable_file(src: ProgramText) -> bool:
@@ -334,8 +340,11 @@ def _without_bom(text: str) -> str:
 
 
 def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
-    """The position entries of a job's ``//POS`` (or a VAR.DAT's ``//P``, ``//BP``, ``//EX``)
-    with their header state; Cartesian robot positions become targets. ``///NPOS`` is checked."""
+    """The position entries of a job's ``//POS`` (or a VAR.DAT's ``//P``, ``//BP``, ``//EX``, or
+    the ``///P`` lines of a backup's VAR.DAT: :func:`_backup_positions`) with their header state;
+    Cartesian robot positions become targets. ``///NPOS`` is checked."""
+    if var_file.is_cmos_variables(src):
+        return _backup_positions(src)
     out: list[Position] = []
     section = ""
     head = _Header()
@@ -398,6 +407,38 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
         if npos[1] != counts[:len(npos[1])]:
             prog.warnings.append(f"{src.where(npos[0])}: ///NPOS {','.join(map(str, npos[1]))} but the "
                                  f"section holds {','.join(map(str, counts))} (C, BC, EC, P, BP, EX)")
+    return out
+
+
+def _backup_positions(src: ProgramText) -> list[Position]:
+    """The P variables of a controller backup's VAR.DAT (:mod:`.var_file`): BASE and ROBOT ones
+    become targets, a pulse one a joint position; the others say why a motion
+    to them is not corrected."""
+    out = []
+    for e in var_file.entries(src):
+        postype = var_file.TYPES.get(e.type, "") if e.kind in ("PULSE", "RECTAN") else ""
+        cartesian = e.kind == "RECTAN" and postype in ("BASE", "ROBOT")
+        form = src.text[e.form[0]:e.form[1]]
+        values = "RECTAN" if cartesian else "PULSE" if postype == "PULSE" else ""
+        header = _Header(postype=postype, rectan=cartesian, tool=e.tool, rconf=list(form) or None,
+                         values=values)
+        nums = src.numbers_in(*e.values)[:POSE_VALUES] if cartesian else []
+        name = f"P{e.index:03d}"
+        why = ""
+        if e.kind == "UNUSED":
+            why = f"{name} is \"UNUSED\" in {src.path.name}: it holds no value (one is assigned at run time)"
+        elif not postype:
+            why = (f"{name} is in coordinate type {e.type} of {src.path.name} (user or tool coordinates: "
+                   "which field holds the frame number is not read)" if e.type is not None else
+                   f"{name}'s line in {src.path.name} is not \"RECTAN\" or \"PULSE\" followed by "
+                   "a,b,tool,FORM,c,TYPE,values")
+        pos = Position("P", e.index, nums, header, e.start, e.end, "", why=why,
+                       form=e.form if cartesian else None)
+        if cartesian and len(nums) == POSE_VALUES:
+            config = np.array([int(f) for f in form[:CONFIG_FIELDS]])
+            pos.target = Target(src, e.start, name, nums, frame=IDENTITY, tool=e.tool, config=config,
+                                config_spans=pos)
+        out.append(pos)
     return out
 
 
@@ -506,7 +547,7 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
             pos = positions.get((src.path, kind, index))  # the job's own //POS (P too), else VAR.DAT
             if pos is None and kind == "P":  # a global variable: VAR.DAT, else another job that saves it
                 pos = positions.get(("global", "P", index)) or positions.get(("jobs", "P", index))
-        if pos is not None and pos.target is None and instr != "IMOV" and (
+        if pos is not None and pos.target is None and instr != "IMOV" and not pos.why and (
                 pos.header.postype == "PULSE" or not pos.header.rectan):
             prog.motions.append((src.path, start, np.full(6, np.nan)))  # a joint position: no correction
             seen["joint"] += 1
@@ -532,8 +573,10 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
                 global_help if kind == "P" else ""), acc, label)
             continue
         if pos.target is None:
-            why = f"{label} is in an unsupported coordinate system (///POSTYPE {pos.header.postype or '?'})" \
-                if len(pos.numbers) == POSE_VALUES else f"{label} is not a 6-value Cartesian position"
+            postype = pos.header.postype or '?'
+            system = f"{label} is in an unsupported coordinate system (///POSTYPE {postype})"
+            why = pos.why or (system if len(pos.numbers) == POSE_VALUES else
+                              f"{label} is not a 6-value Cartesian position")
             prog.skip(src.where(start), instr, why, acc, label)
             continue
         t = pos.target
