@@ -285,5 +285,7 @@ def test_a_backups_var_dat_layout(tmp_path):
                           ["MOVL C00000 V=100.0", "MOVL C00001 V=100.0"]))
     ref = filter_program([same], CALIBRATED, NOMINAL)
     assert [r["correction_mm"] for r in res.rows] == pytest.approx([r["correction_mm"] for r in ref.rows])
+    as_program = filter_program([job, var], CALIBRATED, NOMINAL)  # told from its content, not .DAT
+    assert _counts(as_program) == _counts(res) and as_program.outputs[var] == res.outputs[cal]
     identity = filter_program([job], NOMINAL, NOMINAL, references=[var])
     assert identity.outputs.get(cal, var.read_bytes()) == var.read_bytes()

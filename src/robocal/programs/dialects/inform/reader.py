@@ -51,6 +51,9 @@ named. A variable a job given assigns at run time (``SET``, ``SUB``, ``ADD``, ``
 local variable ``LP``, which no file holds; a write with a run-time index (``SET P[I000] ...``)
 names every motion to a variable of that kind.
 
+The VAR.DAT of a controller's CMOS backup (``//VAR``, one ``///P`` line per variable) is read by
+:mod:`robocal.programs.dialects.inform.var_file`'s layout, the same way.
+
 A job whose motion instructions give no motion record (all to joint positions, a station's own,
 or outside ``//INST``) says so in a warning.
 """
@@ -784,8 +787,11 @@ def user_frames(src: ProgramText) -> dict[str, np.ndarray]:
 
 
 def looks_like_inform(text: str) -> bool:
-    """A job (``/JOB`` first) or a VAR.DAT (``//`` sections with ``P0000=`` entries)."""
+    """A job (``/JOB`` first) or a VAR.DAT (``//`` sections with ``P0000=`` entries, or a backup's
+    ``//VAR`` and ``///PFNUM``)."""
     head = text.lstrip("\ufeff \t\r\n")[:4000]
     if re.search(r"^/JOB\b", head, re.MULTILINE) and re.search(r"^//(?:NAME|POS|INST)\b", head, re.MULTILINE):
         return True  # a job (an offline generator may put a ' comment line before /JOB)
+    if re.match(r"//VAR[ \t]*[\r\n]+///PFNUM\b", head):
+        return True  # a controller backup's VAR.DAT
     return bool(re.match(r"//\w", head) and re.search(r"^P\d+=", head, re.M))
