@@ -289,3 +289,19 @@ def test_a_backups_var_dat_layout(tmp_path):
     assert _counts(as_program) == _counts(res) and as_program.outputs[var] == res.outputs[cal]
     identity = filter_program([job], NOMINAL, NOMINAL, references=[var])
     assert identity.outputs.get(cal, var.read_bytes()) == var.read_bytes()
+
+
+def test_the_second_robots_motions_are_named(tmp_path):
+    """A job of two robots (///GROUP1 RB1, ///GROUP2 RB2): each instruction's +MOVL part moves the
+    second robot to its own position: named (another robot's model), never lost; the first robot's
+    corrected."""
+    pos = ["///NPOS 4,0,0,0,0,0", *HEAD, *(f"C{k:05d}={_values(k)}" for k in range(4))]
+    path = tmp_path / "TWO.JBI"
+    data = _job(pos, ["MOVL C00000 V=100.0 +MOVL C00001 V=100.0",
+                      "MOVJ C00002 VJ=10.00 +MOVJ C00003 VJ=10.00"])
+    path.write_bytes(data.replace(b"///GROUP1 RB1", b"///GROUP1 RB1\r\n///GROUP2 RB2"))
+    res = filter_program([path], CALIBRATED, NOMINAL)
+    # by hand: 4 motions, 2 of each robot
+    assert _counts(res) == {"total": 4, "corrected": 2, "named": 2}
+    named = [r.reason for r in res.motions if r.status == "named"]
+    assert all("a position of RB2, another robot" in r for r in named) and len(named) == 2

@@ -541,6 +541,7 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
             continue
         instr, rest = mv.group(1), mv.group(2).split("'")[0].split("//")[0]  # ' and // comments
         parts = rest.split("+")  # the robot's group, then each other group's motion
+        seen["accounted"] += _other_robots(src, start, parts, groups, prog, positions, named)
         refs = list(_REF.finditer(parts[0]))
         robot_refs = [r for r in refs if r.group(1) in ("C", "P", "LP")]
         ref = robot_refs[0] if robot_refs else None
@@ -627,6 +628,32 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         acc.reach(t, label)
         prog.motions.append((src.path, start, t))
     prog.warnings += _unaccounted(src, seen)
+
+
+def _other_robots(src: ProgramText, start: int, parts: list[str], groups: Groups, prog: Program,
+                  positions: dict, named: set) -> int:
+    """Name the motions of another robot in one instruction (``MOVL C00000 +MOVL C00001`` in a job of
+    ``///GROUP1 RB1`` and ``///GROUP2 RB2``): its positions are that robot's, which this filter's
+    model is not (``named``: their targets' ids); how many were named."""
+    line = src.text[start:src.text.find("\n", start) if "\n" in src.text[start:] else len(src.text)]
+    pluses = [k for k, c in enumerate(line) if c == "+"]
+    count = 0
+    for k, part in enumerate(parts[1:], start=1):
+        group = groups.others[k - 1] if k - 1 < len(groups.others) else ()
+        robots = [u for u in group if u.startswith("RB")]
+        ref = next((r for r in _REF.finditer(part) if r.group(1) in ("C", "P", "LP")), None)
+        if not robots or ref is None or k > len(pluses):
+            continue
+        instr = "+" + (part.split() or [""])[0]
+        if ref.group(2) is not None:
+            pos = positions.get((src.path, ref.group(1), int(ref.group(2))))
+            if pos is not None and pos.target is not None:
+                named.add(id(pos.target))
+        why = (f"{ref.group(0)} is a position of {robots[0]}, another robot than the job's first "
+               f"({', '.join(groups.robot)}): filter it with {robots[0]}'s model")
+        prog.skip(src.where(start), instr, why, prog.motion(src, start + pluses[k - 1], instr), ref.group(0))
+        count += 1
+    return count
 
 
 def _unaccounted(src: ProgramText, seen: Counter) -> list[str]:
