@@ -40,7 +40,7 @@ from robocal.core.version import __version__
 from robocal.core.yaml_load import dump_yaml
 from robocal.data.cell_measurements import CellMeasurements
 from robocal.data.measurements import Measurements
-from robocal.data.registration import umeyama
+from robocal.data.registration import REGISTRATION_DEGENERATE, turns_about_one_axis, umeyama
 from robocal.kinematics.positioner import nests_in_last_frame, with_positioner_priors
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
 
@@ -57,6 +57,9 @@ PLATE_HELD = ("tool.rz", "tool.z")
 # not where the cell file declares it (checked after the fit: the warning names it)
 NEST_MISMATCH_SIGMAS = 5.0
 NEST_MISMATCH_MM = 0.02
+# Nests whose distances from their best line are all below this (m) are on one line (or at one point):
+# the plate frame's turn about that line is not fixed by them
+NEST_LINE_M = 1e-3
 RELATION_STEP = 1e-7  # m / rad: the central-difference step of the relation's derivative by the bases
 
 
@@ -66,12 +69,15 @@ class Relation:
 
     ``transform`` (4, 4) m: anchor frame {0} -> the body's frame {0}; ``covariance`` (6, 6): of its
     translation (m) and of its rotation (a small rotation vector, rad, about the anchor's axes),
-    from both bases' covariances (independent calibrations)."""
+    from both bases' covariances (independent calibrations); ``nominal`` (4, 4) m: the same in the
+    cell file (each body's frame {0} is its model's: a positioner's is its first axis' frame, not the
+    file's ``mount``), so that the sentence says how far the calibration found it from the file."""
 
     body: str
     anchor: str
     transform: np.ndarray
     covariance: np.ndarray
+    nominal: np.ndarray | None = None
 
     @property
     def sigma(self) -> np.ndarray:
@@ -82,8 +88,15 @@ class Relation:
     def to_dict(self) -> dict:
         rpy = np.rad2deg(Rotation.from_matrix(self.transform[:3, :3]).as_euler("xyz"))
         s = self.sigma
-        return {"body": self.body, "from": self.anchor, "xyz_mm": (self.transform[:3, 3] * 1e3).tolist(),
-                "rpy_deg": rpy.tolist(), "sigma_xyz_mm": s[:3].tolist(), "sigma_rotation_deg": s[3:].tolist()}
+        out = {"body": self.body, "from": self.anchor, "xyz_mm": (self.transform[:3, 3] * 1e3).tolist(),
+               "rpy_deg": rpy.tolist(), "sigma_xyz_mm": s[:3].tolist(), "sigma_rotation_deg": s[3:].tolist()}
+        if self.nominal is not None:
+            off = invert_transform(self.nominal) @ self.transform
+            rpy0 = np.rad2deg(Rotation.from_matrix(self.nominal[:3, :3]).as_euler("xyz"))
+            out |= {"nominal_xyz_mm": (self.nominal[:3, 3] * 1e3).tolist(), "nominal_rpy_deg": rpy0.tolist(),
+                    "off_nominal_mm": float(np.linalg.norm(off[:3, 3]) * 1e3),
+                    "off_nominal_deg": float(np.rad2deg(Rotation.from_matrix(off[:3, :3]).magnitude()))}
+        return out
 
     def sentence(self) -> str:
         d = self.to_dict()
@@ -91,7 +104,10 @@ class Relation:
         rpy = ", ".join(f"{v:.4f}" for v in d["rpy_deg"])
         return (f"{self.body} seen from {self.anchor}: xyz [{xyz}] mm (1 sigma up to "
                 f"{max(d['sigma_xyz_mm']):.3f} mm), rpy [{rpy}] deg (1 sigma up to "
-                f"{max(d['sigma_rotation_deg']):.4f} deg)")
+                f"{max(d['sigma_rotation_deg']):.4f} deg)" + ("" if self.nominal is None else
+                "; the cell file has it at xyz [" + ", ".join(f"{v:.3f}" for v in d["nominal_xyz_mm"])
+                + "] mm, rpy [" + ", ".join(f"{v:.4f}" for v in d["nominal_rpy_deg"]) + "] deg, "
+                f"{d['off_nominal_mm']:.3f} mm and {d['off_nominal_deg']:.4f} deg away"))
 
 
 @dataclass(frozen=True)
@@ -285,6 +301,14 @@ def _body(cell, name: str, data: Measurements, validation: Measurements | None, 
     return _Body(chain, _numbered(data, numbers), held, params, True, numbers)
 
 
+def _unfixable_plate(cell, name: str, body: _Body, exc: Exception) -> bool:
+    """Whether ``exc`` is the registration's refusal of a positioner without nests whose plate turns
+    about one axis only (a turntable, a headstock; a slide along its turn axis): the SMRs' unknown
+    places leave the frame's turn about that axis free, which no choice of table angles cures."""
+    return (name in cell.positioners and body.smr_numbers is not None and isinstance(exc, IdentificationError)
+            and REGISTRATION_DEGENERATE in str(exc) and turns_about_one_axis(body.robot))
+
+
 def _in_tracker(cell, name: str, body: _Body, robot):
     """The calibrated model of a body as the cell carries it: an arm with its nominal tool (the
     measured SMRs off the flange), a positioner with its plate frame (identified with nests, else
@@ -307,6 +331,22 @@ def _plate(cell, name: str, body: _Body, result) -> PlateSolution:
     ident = result.identifiability
     held = [p for p in (zero, f"d{chain.n_joints}") if p in ident.dropped or p in ident.undetermined]
     if body.smr_numbers is None:
+        nests = positioner.nests
+        centred = nests - nests.mean(axis=0)
+        spread = np.linalg.svd(centred, compute_uv=False)[1] / np.sqrt(len(nests)) if len(nests) > 1 else 0.0
+        if spread < NEST_LINE_M:
+            free = [p for p in ident.dropped + ident.undetermined if p.startswith("tool.") or p == zero]
+            return PlateSolution(
+                name, "nests", f"positioner {chain.name}: its {len(nests)} nest(s) lie on one line or at one "
+                "point: they leave the plate frame's turn about that line free; held at nominal by these "
+                f"data: {', '.join(free) or 'nothing'}: a work object on the plate is only as good as "
+                "those; declare at least 3 nests not on one line")
+        if zero in held and chain.n_joints == 1:  # the mount's turn about the axis is the same freedom
+            return PlateSolution(
+                name, "nests", f"positioner {chain.name}: SMR nests at known plate positions fix the plate "
+                f"frame on its one axis, whose zero ({zero}) and the mount's turn about that axis are one "
+                f"freedom (the mount is identified with it): {zero} is held at nominal "
+                f"({len(body.robot.smr)} nests)")
         if zero in held:
             return PlateSolution(name, "nests", f"{said}, but these data do not determine {zero}: it is held "
                                  f"at nominal ({len(body.robot.smr)} nests; measure more table angles)")
@@ -378,11 +418,13 @@ def _base_covariance(result) -> np.ndarray:
     return cov
 
 
-def _relation(anchor_name: str, name: str, models: dict, results: dict) -> Relation:
+def _relation(cell, name: str, models: dict, results: dict) -> Relation:
+    anchor_name = cell.anchor
     a, b = models[anchor_name], models[name]
     Ja, Jb = _base_jacobian(a, b, 0), _base_jacobian(a, b, 1)
     cov = Ja @ _base_covariance(results[anchor_name]) @ Ja.T + Jb @ _base_covariance(results[name]) @ Jb.T
-    return Relation(name, anchor_name, invert_transform(a.base) @ b.base, cov)
+    nominal = invert_transform(cell.body(anchor_name).base) @ cell.body(name).base
+    return Relation(name, anchor_name, invert_transform(a.base) @ b.base, cov, nominal)
 
 
 def _as_cell_data(cell, data, what: str) -> CellMeasurements | None:
@@ -438,6 +480,11 @@ def calibrate_cell(cell: Cell, data: CellMeasurements | Measurements, calibrate_
             result = calibrate_body(body.robot, body.data, params=body.params, validation=body.validation,
                                     register_frames=body.register, **options)
         except RobocalError as exc:  # which body, and for nests what to check first
+            if _unfixable_plate(cell, name, body, exc):
+                raise IdentificationError(
+                    f"{name}: SMRs at unknown places on a plate that turns about one axis only cannot fix "
+                    "its frame (its turn about that axis and its shift along it are free): declare the "
+                    "nests' plate positions in the cell file (nests:)") from None
             hint = " (its nests: is SMR k in nest k, and are the cell file's nests: where they are?)" \
                 if body.smr_numbers is None and name in cell.positioners else ""
             raise type(exc)(f"{name}{hint}: {exc}") from None
@@ -452,7 +499,7 @@ def calibrate_cell(cell: Cell, data: CellMeasurements | Measurements, calibrate_
     if missing:
         warnings.append(f"no rows on {', '.join(missing)}: kept nominal in the calibrated cell (its place in "
                         "the world is the cell file's, not measured)")
-    relations = [_relation(cell.anchor, n, models, results) for n in models if n != cell.anchor]
+    relations = [_relation(cell, n, models, results) for n in models if n != cell.anchor]
     return CellCalibration(
         cell=cell, results=results, calibrated=cell.in_world(models), in_tracker=models, relations=relations,
         plates=plates, warnings=warnings,

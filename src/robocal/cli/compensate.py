@@ -63,6 +63,8 @@ def add_parser(sub) -> None:
                    help="the arm's temperature (deg C) the targets are run at, for a model with a "
                         "thermal term")
     p.add_argument("--parameters", help="also write the corrected-parameter table (CSV) here")
+    p.add_argument("--arm", metavar="NAME", help="with a cell of several arms: the arm (body name or unit, "
+                   "ROB_2) that reaches the targets on the plate")
     p.add_argument("-o", "--output", required=True, help="commands CSV to write")
     p.add_argument("--result", metavar="result.json",
                    help="the calibration's result JSON (calibrate --json): warn per target where its "
@@ -81,6 +83,7 @@ def run(args) -> int:
     import numpy as np
 
     from robocal.cli.args import check_format
+    from robocal.core.errors import DataError
     from robocal.core.io import check_outputs
     from robocal.deploy.compensation import compensate, read_targets
     from robocal.deploy.models import load_model_pair, load_prediction, payload_si, tool_frame
@@ -90,6 +93,8 @@ def run(args) -> int:
     check_outputs([args.output, args.parameters], [args.calibrated, args.targets, args.nominal])
     if (cell := work_cell(args.calibrated, positioner=True)) is not None:  # targets on a positioner's plate
         return _compensate_cell(args, cell)
+    if args.arm is not None:
+        raise DataError(f"--arm names an arm of a work cell: {args.calibrated} is not one")
     calibrated, nominal = load_model_pair(args.calibrated, args.nominal, "calibrated model")
     origin = calibrated.base[:3, 3] if args.targets_in == "model" else np.zeros(3)
     targets, layout = read_targets(args.targets, nominal, origin, args.force)
@@ -137,7 +142,7 @@ def _compensate_cell(args, calibrated) -> int:
     e = read_positioner_values(args.targets, positioner)
     tool = None if args.tool == "flange" else tool_frame(args.tool, "--tool")
     res = rc.compensate(calibrated, nominal, targets, positioner_values=e, tool=tool, branch=args.branch,
-                        start=None if args.start is None else np.deg2rad(args.start))
+                        start=None if args.start is None else np.deg2rad(args.start), arm=args.arm)
     arm = calibrated.arms[res.arm]
     res.write(args.output, [j.column for j in arm.joints], [j.column for j in positioner.joints])
     if not args.quiet:

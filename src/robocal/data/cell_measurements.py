@@ -105,6 +105,13 @@ class _Table:
 
     def _bodies(self, cell) -> list[str]:
         if BODY_COLUMN not in self.header:
+            theirs = [h for n, p in cell.positioners.items() if n != cell.anchor
+                      for h in self.columns_of(tuple(p.columns)).values()
+                      if any(cells[self.header.index(h)].strip() for _, cells in self.rows)]
+            if theirs:  # every row would be taken as the anchor's, a plate row's empty joints refused
+                raise DataError(f"{self.name}, line {self.header_line}: no '{BODY_COLUMN}' column, but the "
+                                f"positioners' columns ({', '.join(theirs)}) are there: say on each row "
+                                f"which body carries the SMR ({', '.join(cell.bodies)}; or flange / plate)")
             return [cell.anchor] * len(self.rows)
         k, seen, out = self.header.index(BODY_COLUMN), {}, []
         for ln, cells in self.rows:
@@ -168,6 +175,15 @@ def _body_columns(table: _Table, cell, body: str, positioner_cols: dict) -> tupl
             keep.append(k)
             names.append(h)
     return keep, names
+
+
+def _file_columns(message: str, header: list[str], names: list[str]) -> str:
+    """``message`` with each column renamed for reading (``q1_rad``) named as the file has it
+    (``e1_rad``)."""
+    renamed = {n: h for h, n in zip(header, names, strict=True) if n != h}
+    if not renamed:
+        return message
+    return re.sub(r"\b(" + "|".join(map(re.escape, renamed)) + r")\b", lambda m: renamed[m[1]], message)
 
 
 def _check_positioner_rows(table: _Table, cell, body: str, cols: dict[str, str]) -> None:
@@ -274,8 +290,11 @@ class CellMeasurements:
         for body in present:
             chain = cell.body(body)
             keep, names = _body_columns(table, cell, body, positioner_cols)
-            data = parse_csv(_body_text(table, body, keep, names), name, joint_range_rad(chain))
-            data.check_against(chain, path=name)
+            try:
+                data = parse_csv(_body_text(table, body, keep, names), name, joint_range_rad(chain))
+                data.check_against(chain, path=name)
+            except DataError as exc:  # a positioner's axes are read as its chain's joints: name the file's
+                raise DataError(_file_columns(str(exc), [table.header[k] for k in keep], names)) from None
             data = replace(data, external=chain.external_axes, file=name)
             if body in cell.positioners:
                 _check_limits(data, chain, body, _joint_names(cell, body), name)

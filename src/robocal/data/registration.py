@@ -28,6 +28,7 @@ from robocal.kinematics.transforms import kabsch_rotation, make_transform, rotve
 # for which the poses still fix the frame and the SMR offsets (identical or collinear poses do not).
 REGISTRATION_RCOND = 1e-6
 FIXED_AXIS_TOL = 1e-12  # spread of a flange axis's world direction (relative) below which it never turns
+REGISTRATION_DEGENERATE = "cannot fix the tracker frame and the SMR offsets"  # said when they cannot
 
 
 @dataclass(frozen=True)
@@ -134,8 +135,8 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
     free = 1 if turns_about_one_axis(robot) else 0  # the structural freedom (turns_about_one_axis)
     if sv[-1 - free] < REGISTRATION_RCOND * sv[0]:
         raise IdentificationError(
-            f"the pose set is degenerate: its {data.n_poses} poses cannot fix the tracker frame and the SMR "
-            "offsets (they barely change the flange's orientation or position): measure poses spread "
+            f"the pose set is degenerate: its {data.n_poses} poses {REGISTRATION_DEGENERATE} (they barely "
+            "change the flange's orientation or position): measure poses spread "
             "over the workspace and over the wrist's orientations")
     local = np.einsum("nij,nj->ni", Rf, t[smr]) + of
     res = p - (local @ B[:3, :3].T + B[:3, 3])

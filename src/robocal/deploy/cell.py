@@ -34,7 +34,10 @@ if TYPE_CHECKING:  # annotations only
 def _one(names, what: str, given: str | None, cell) -> str:
     """The body ``given`` (resolved in ``cell``), or the only one of ``names``."""
     if given is not None:
-        return cell.resolve(given)
+        name = cell.resolve(given)
+        if name not in names:  # another kind of body: its name is valid, its use is not
+            raise DataError(f"{given!r} is not one of the cell's {what}s ({', '.join(names) or 'none'})")
+        return name
     if len(names) != 1:
         raise DataError(f"the cell has {len(names)} {what}s ({', '.join(names) or 'none'}): name the one "
                         f"the targets are for")
@@ -70,12 +73,16 @@ class CellCompensation:
     prismatic: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))  # its axes that slide
 
     def summary(self) -> str:
-        mm = np.linalg.norm(self.target_shift[:, :3], axis=1) * 1e3
-        deg = np.rad2deg(np.linalg.norm(self.target_shift[:, 3:], axis=1))
-        reached = int(np.sum(self.arm_compensation.converged))
-        return (f"{len(self.joints)} target(s) on the plate of {self.positioner} reached by {self.arm} on "
-                f"the calibrated cell ({reached} reached exactly); corrections up to {mm.max():.4f} mm and "
-                f"{deg.max():.4f} deg in the plate frame")
+        ok = np.asarray(self.arm_compensation.converged, bool)
+        head = (f"{len(self.joints)} target(s) on the plate of {self.positioner} for {self.arm} on the "
+                f"calibrated cell: {int(ok.sum())} reached")
+        if not ok.any():  # an unreached target's shift is the solver's miss, not a correction
+            return head + "; none corrected (each one's miss is in the warnings)"
+        mm = np.linalg.norm(self.target_shift[ok, :3], axis=1) * 1e3
+        deg = np.rad2deg(np.linalg.norm(self.target_shift[ok, 3:], axis=1))
+        missed = f"; {int((~ok).sum())} not reached (converged 0)" if not ok.all() else ""
+        return (f"{head}, corrections up to {mm.max():.4f} mm and {deg.max():.4f} deg in the plate "
+                f"frame{missed}")
 
     def to_dict(self) -> dict:
         return {"arm": self.arm, "positioner": self.positioner,
@@ -150,10 +157,10 @@ def compensate_cell(calibrated: Cell, nominal: Cell, targets: np.ndarray, positi
         shown = np.round(chain.joints_shown(e[k]), 6).tolist()
         raise DataError(f"target {k + 1}: {positioner}'s values {shown} are outside its axes' limits")
     world = calibrated.positioners[positioner].plate(e) @ targets
-    comp = compensate_arm(calibrated.arms[arm], nominal.arms[arm], world, targets_frame="model", tool=tool,
-                          **options)
-    flange = nominal.arms[arm].with_frames(tool=nominal.arms[arm].tool if tool is None
-                                           else nominal.arms[arm].tool @ np.asarray(tool, float))
+    tool0 = nominal.flange(arm)  # the flange, not the SMR the cell's model calls its tool
+    comp = compensate_arm(calibrated.arms[arm].with_frames(tool=tool0), nominal.controller_arm(arm), world,
+                          targets_frame="model", tool=tool, **options)
+    flange = nominal.arms[arm].with_frames(tool=tool0 if tool is None else tool0 @ np.asarray(tool, float))
     corrected = invert_transform(nominal.positioners[positioner].plate(e)) @ flange.fk(comp.joints)
     return CellCompensation(arm, positioner, comp.joints, e, corrected, pose_error(corrected, targets), comp,
                             list(comp.warnings), chain.prismatic.copy())

@@ -264,7 +264,8 @@ def controller_model(calibrated: Robot, nominal: Robot, robot_base=None, tool=No
 def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None = None,
                seeds=None, start=None, targets_frame: str = "model", tool=None, e1=None, payload=None,
                temperature: float | None = None, layout: dict | None = None,
-               prediction: Prediction | None = None, positioner_values=None) -> Compensation:
+               prediction: Prediction | None = None, positioner_values=None,
+               arm: str | None = None) -> Compensation:
     """Corrected joints and Cartesian targets for target poses ``(N, 4, 4)`` (m) of the
     calibrated model's TCP.
 
@@ -328,7 +329,10 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
         With ``calibrated`` and ``nominal`` work cells (`robocal.kinematics.workcell.Cell`): the
         targets are TCP poses in the plate frame of the cell's positioner standing at these axis
         values (rad; m for a prismatic axis), reached by its arm (`robocal.deploy.cell`: returns a
-        ``CellCompensation``; a cell of several arms or positioners: ``compensate_cell`` names them).
+        ``CellCompensation``; a cell of several positioners: ``compensate_cell`` names them).
+    arm : str, optional
+        With work cells of several arms: the arm (body name or unit, ``"ROB_2"``) that reaches the
+        targets.
 
     Returns
     -------
@@ -366,7 +370,7 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     if isinstance(calibrated, Cell):  # targets on a positioner's plate (robocal.deploy.cell)
         return compensate_cell(calibrated, nominal, targets, positioner_values, compensate, branch=branch,
                                seeds=seeds, start=start, tool=tool, payload=payload, temperature=temperature,
-                               prediction=prediction)
+                               prediction=prediction, arm=arm)
     if targets_frame not in ("model", "robot"):
         raise DataError(f"targets_frame must be 'model' or 'robot', got {targets_frame!r}")
     given = calibrated

@@ -106,6 +106,7 @@ BUILTIN_TOOLS = ("tool0",)
 BUILTIN_WOBJS = ("wobj0",)
 # a robtarget of numbers only (position, quaternion, confdata, six external axes): one match
 _ROBTARGET = shape_pattern((3, 4, 4, 6))
+_COMPONENTS = ("position", "orientation", "configuration (confdata)", "external axes")  # a robtarget's parts
 _DEPTH = 12  # routine calls and assignments followed at most this deep
 
 
@@ -127,6 +128,7 @@ class RapidDialect(Dialect):
     campaign_rank = 0
     campaign_external = True  # a positioner's axes move in its campaign programs
     external_axis_names = RAPID_EXTAX  # a robtarget's extax: logical axis k is eax_<k-th letter>
+    arm_axes = external_axis_names  # any of them may be a track or gantry carrying the arm
     campaign_refuses_tracks = True
     vendor = "ABB"
     signature = r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)"
@@ -462,6 +464,11 @@ class RapidDialect(Dialect):
             tree, _ = parse_aggregate(src, masked, lead, b, "robtarget")
             if isinstance(tree, list) and tree and isinstance(tree[0], list) and tree[0] \
                     and isinstance(tree[0][0], Number):
+                named = [(k, part.text) for k, part in enumerate(tree[:4]) if isinstance(part, Word)]
+                if named:  # e.g. RoboDK's [[x,y,z],[q..],conf,[eax..]]: a variable's value, not a literal
+                    k, word = named[0]
+                    return [f"the robtarget's {_COMPONENTS[k]} is the variable {word}: a target with a "
+                            "variable part is not followed"]
                 key = (src.path, lead)
                 if key not in st.inline:
                     st.inline[key] = self._robtarget(src, tree, f"inline@{src.line_of(lead)}", lead)
