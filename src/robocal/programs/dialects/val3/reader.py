@@ -42,7 +42,7 @@ from scipy.spatial.transform import Rotation
 from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.dialects.base import Dialect
-from robocal.programs.dialects.val3 import marker, simulated
+from robocal.programs.dialects.val3 import marker, s6, simulated
 from robocal.programs.dialects.val3.campaign import val3_application
 from robocal.programs.dialects.val3.configuration import (
     CONFIG_WORDS,
@@ -106,8 +106,10 @@ def _attrs(text: str, start: int, end: int) -> dict[str, tuple[str, int, int]]:
 
 
 def _read_data(src: ProgramText) -> dict[str, Datum]:
-    """Every element of every ``<Data>`` of a .dtx: 'name[k]' -> Datum."""
+    """Every element of every ``<Data>`` of a .dtx: 'name[k]' -> Datum (s6.x layout: its sections)."""
     text = mask(src.text, [_COMMENT])
+    if s6.is_s6(text):
+        return _read_data_s6(src, text)
     out: dict[str, Datum] = {}
     for d in _DATA.finditer(text):
         head = _attrs(text, d.start(1), d.end(1))
@@ -123,25 +125,65 @@ def _read_data(src: ProgramText) -> dict[str, Datum]:
             attrs = _attrs(text, v.start(1), v.end(1))
             if "key" not in attrs:
                 raise DataError(f"{src.where(v.start())}: a <Value> of {name} without key")
-            body_end = v.end()
+            anchor = attrs["key"][2] + 1  # an absent coordinate goes right after the one before it
             if v.group(2) != "/":
                 close = _VALUE_END.search(text, v.end(), stop.start())
                 if close is None:
                     raise DataError(f"{src.where(v.start())}: <Value> of {name} is not closed")
-                body_end = close.start()
-                for inner in _INNER.finditer(text, v.end(), body_end):
-                    for k, val in _attrs(text, inner.start(1), inner.end(1)).items():
-                        attrs.setdefault(k, val)  # the older layout: coordinates on an inner element
+                anchor = _inner(text, v.end(), close.start(), attrs, anchor)
             key = f"{name}[{attrs['key'][0]}]"
-            out[key] = _datum(src, key, kind, v, attrs)
+            out[key] = _datum(src, key, kind, v.start(), attrs, anchor, attrs.get("fatherId", ("",))[0])
     return out
 
 
-def _datum(src: ProgramText, key: str, kind: str, v: re.Match, attrs: dict) -> Datum:
+def _inner(text: str, start: int, end: int, attrs: dict, anchor: int) -> int:
+    """Add the attributes of the elements inside a value (the older layouts: coordinates on an
+    inner element) to ``attrs``; the anchor of an absent coordinate: right after the name of
+    the element that holds the coordinates."""
+    for inner in _INNER.finditer(text, start, end):
+        got = _attrs(text, inner.start(1), inner.end(1))
+        if any(c in got for c in COORDS):
+            anchor = inner.start(1)
+        for k, val in got.items():
+            attrs.setdefault(k, val)
+    return anchor
+
+
+def _read_data_s6(src: ProgramText, text: str) -> dict[str, Datum]:
+    """The pose and joint data of an s6.x .dtx (:mod:`robocal.programs.dialects.val3.s6`)."""
+    out: dict[str, Datum] = {}
+    for element, name, _start, end, body in s6.data_items(text):
+        if element not in s6.TYPES or body == end:
+            continue
+        father = ""
+        if element in s6.FATHER:
+            f = re.search(rf"<{s6.FATHER[element]}\b([^>]*?)/?>", text[body:end])
+            got = {} if f is None else dict(_ATTR.findall(f.group(1)))
+            if got.get("name"):
+                alias = f"{got['alias']}:" if got.get("alias") else ""
+                father = f"{alias}{got['name']}[{got.get('fatherIndex', '0')}]"
+        tag = s6.VALUE_ELEMENT[element]
+        value, close = re.compile(rf"<{tag}\b([^>]*?)(/?)>"), re.compile(rf"</{tag}\s*>")
+        for v in value.finditer(text, body, end):
+            attrs = _attrs(text, v.start(1), v.end(1))
+            if "index" not in attrs:
+                raise DataError(f"{src.where(v.start())}: a <{tag}> of {name} without index")
+            anchor = attrs["index"][2] + 1
+            if v.group(2) != "/":
+                stop = close.search(text, v.end(), end)
+                if stop is None:
+                    raise DataError(f"{src.where(v.start())}: <{tag}> of {name} is not closed")
+                anchor = _inner(text, v.end(), stop.start(), attrs, anchor)
+            key = f"{name}[{attrs['index'][0]}]"
+            out[key] = _datum(src, key, s6.TYPES[element], v.start(), attrs, anchor, father)
+    return out
+
+
+def _datum(src: ProgramText, key: str, kind: str, offset: int, attrs: dict, after: int, father: str) -> Datum:
+    """One value: ``after`` is where an absent first coordinate is inserted."""
     kind = OLD_TYPES.get(kind, kind)
-    datum = Datum(key, kind, src, v.start(), [], father=attrs.get("fatherId", ("",))[0])
+    datum = Datum(key, kind, src, offset, [], father=father)
     if kind in ("pointRx", "frame", "tool", "trsf"):
-        after = attrs["key"][2] + 1  # an absent coordinate goes right after the one before it
         for c in COORDS:
             if c in attrs:
                 val, a, b = attrs[c]
@@ -183,7 +225,7 @@ class Val3Dialect(Dialect):
     key = "val3"
     campaign_rank = 5
     vendor = "Staubli"
-    signature = r"staubli\.com/robotics/VAL3"
+    signature = r"staubli\.com/robotics/VAL3|" + s6.SIGNATURE
     suffixes = (".pgx", ".dtx", ".pjx")
     scheme = StaubliConfig()
     frame_help = "x,y,z in mm and rx,ry,rz in deg (R = Rx Ry Rz), as in the .dtx"
@@ -234,8 +276,10 @@ class Val3Dialect(Dialect):
         return np.array([_POSITION_MM] * 3 + [_ANGLE_DEG] * 3)
 
     def number_edit(self, target: Target, num: Number, text: str) -> str:
-        name = target.config_spans[1].get(num.start) if target.config_spans else None
-        return text if name is None or num.end != num.start else f" {name}=\"{text}\""
+        if num.end != num.start or not target.config_spans:
+            return text
+        k = next(i for i, n in enumerate(target.numbers) if n is num)  # several may be absent at one place
+        return f" {COORDS[k]}=\"{text}\""
 
     def config_edits(self, target, new):
         spans = target.config_spans[0]
@@ -309,7 +353,8 @@ class _Routine:
     params: list[str]
     kinds: dict[str, str]
     src: ProgramText
-    code_m: re.Match
+    base: int  # the code's offset in the file
+    text: str  # the code as the controller reads it (s6: entities decoded), at the file's offsets
 
 
 @dataclass
@@ -326,18 +371,21 @@ class _Context:
     def __init__(self, data: dict, routines: list[_Routine]):
         self.data, self.routines, self.written, self.calls = data, {r.name: r for r in routines}, {}, {}
         for r in routines:
-            code = _code(r.code_m)
+            code = _code(r)
             for name, how in _written(code).items():
                 self.written.setdefault(name, how)
             for m in _CALL.finditer(code):
                 args = _call_args(code, m.end() - 1)
                 if args is not None:
-                    self.calls.setdefault(m.group(1), []).append((r, args[0], r.code_m.start(1) + m.start()))
+                    self.calls.setdefault(m.group(1), []).append((r, args[0], r.base + m.start()))
 
 
 def _routines(src: ProgramText) -> list[_Routine]:
-    """The ``<Program>`` blocks of a .pgx (a file may hold several)."""
+    """The ``<Program>`` blocks of a .pgx (a file may hold several; s6.x: ``<program>``)."""
     text, out, last = src.text, [], 0
+    if s6.is_s6(text):
+        return [_Routine(name or src.path.stem, params, kinds, src, base, code)
+                for name, params, kinds, base, code in s6.programs(text)]
     for code_m in _CODE.finditer(text):
         header = text[last:code_m.start()]
         last = code_m.end()
@@ -347,20 +395,20 @@ def _routines(src: ProgramText) -> list[_Routine]:
         params = [a["name"][0] for m, a in zip(_LOCAL.finditer(header), decl, strict=True)
                   if "name" in a and m.group(0).startswith("<Parameter")]
         kinds = {a["name"][0]: a.get("type", ("",))[0] for a in decl if "name" in a}
-        out.append(_Routine(name or src.path.stem, params, kinds, src, code_m))
+        out.append(_Routine(name or src.path.stem, params, kinds, src, code_m.start(1), code_m.group(1)))
     return out
 
 
-def _code(code_m: re.Match) -> str:
+def _code(r: _Routine) -> str:
     """A program's code with comments blanked and strings masked (offsets kept)."""
-    return mask(code_m.group(1), [_LINE_COMMENT], [_STRING])
+    return mask(r.text, [_LINE_COMMENT], [_STRING])
 
 
 def _program_motions(r: _Routine, ctx: _Context, prog: Program, targets: dict, frames: dict) -> None:
     """The motions of one program's code: its points (and the tool) as targets, or named."""
     src, data, kinds, written = r.src, ctx.data, r.kinds, ctx.written
-    base = r.code_m.start(1)
-    code = _code(r.code_m)
+    base = r.base
+    code = _code(r)
     for m in _MOTION.finditer(code):
         call = _call_args(code, m.end() - 1)
         at = base + m.start()
