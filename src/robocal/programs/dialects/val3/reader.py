@@ -52,6 +52,7 @@ from robocal.programs.dialects.val3.configuration import (
     StaubliConfig,
 )
 from robocal.programs.dialects.val3.loads import NoLoads
+from robocal.programs.dialects.val3.project import declared_types, read_project
 from robocal.programs.model import Program, Target
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import NUMBER_RE, Number, ProgramText, mask
@@ -82,6 +83,8 @@ _LITERAL6 = re.compile(r"^\s*\{\s*" + r"\s*,\s*".join([f"({NUMBER_RE.pattern})"]
 _WRAPPER = re.compile(r"^\s*(appro|compose)\s*\((.*)\)\s*$", re.DOTALL)
 OLD_TYPES = {"point": "pointRx", "joint": "jointRx"}  # the type names of older VAL3 versions
 KNOWN_TYPES = ("pointRx", "frame", "tool", "trsf", "jointRx")  # the data read from a .dtx
+JOINT_TYPES = ("joint", "jointRx", "jointRs")  # a movej to one of these is no Cartesian motion
+_FIELD = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\[[^\]]*\])?\s*\.\s*([A-Za-z_]\w*)\s*$")
 
 
 @dataclass
@@ -293,18 +296,55 @@ class Val3Dialect(Dialect):
     def parse(self, sources, frames, tools, references=()):
         prog = Program([], frames={WORLD: np.eye(4), **frames}, tools={FLANGE: np.eye(4), **tools},
                        declared_tools={FLANGE: np.eye(4)})  # and each motion's tool from the .dtx alone
+        projects = [read_project(s.path) for s in sources if s.path.suffix.lower() == ".pjx"]
+        sources = _in_projects(sources, projects, prog.warnings)
         data: dict[str, Datum] = {}
+        types: dict[str, str] = {}
         for src in [*sources, *references]:
             if src.path.suffix.lower() == ".dtx":
                 data.update(_read_data(src))
+                types.update(declared_types(src.text))
         programs = [s for s in sources if s.path.suffix.lower() == ".pgx"]
         if not programs:
             prog.warnings.append("no .pgx program given: give the application's folder or its .pgx files")
         targets: dict[str, Target] = {}
         ctx = _Context(data, [r for src in programs for r in _routines(src)])
+        ctx.types, ctx.fields = types, _type_fields(projects, [*sources, *references])
         for r in ctx.routines.values():
             _program_motions(r, ctx, prog, targets, frames)
         return prog
+
+
+def _in_projects(sources: list[ProgramText], projects: list, warnings: list[str]) -> list[ProgramText]:
+    """The program and data files a ``.pjx`` given lists (the controller loads no other): a .pgx
+    or .dtx beside it that no project lists is left out, with a warning (its bytes unchanged)."""
+    if not projects:
+        return sources
+    listed = set().union(*(p.programs | p.data for p in projects))
+    out = []
+    for src in sources:
+        if src.path.suffix.lower() in (".pgx", ".dtx") and src.path.name.lower() not in listed:
+            names = ", ".join(p.path.name for p in projects)
+            warnings.append(f"{src.path.name} is not in the project ({names}): the controller does not load "
+                            "it; its motions and data are not read")
+            continue
+        out.append(src)
+    return out
+
+
+def _type_fields(projects: list, files: list[ProgramText]) -> dict[str, dict[str, str]]:
+    """User type -> its fields' VAL3 types: from the type's own .dtx, given or found on the disk the
+    project names (:class:`~robocal.programs.dialects.val3.project.Project`)."""
+    out: dict[str, dict[str, str]] = {}
+    for p in projects:
+        for name, where in p.types.items():
+            stem = Path(where.replace("\\", "/")).stem.lower()
+            given = [f.path for f in files if f.path.suffix.lower() == ".dtx" and f.path.stem.lower() == stem]
+            for dtx in given or p.type_data(name):
+                fields = declared_types(ProgramText(dtx).text if dtx not in given else
+                                        next(f.text for f in files if f.path == dtx))
+                out.setdefault(name, {}).update(fields)
+    return out
 
 
 def _target(d: Datum, frame: str, tool: str) -> Target:
@@ -364,16 +404,19 @@ class _Context:
     arguments, offset)``."""
 
     data: dict
+    types: dict[str, str] = field(default_factory=dict)  # every data name of the .dtx -> its type
+    fields: dict[str, dict[str, str]] = field(default_factory=dict)  # user type -> field -> type
     routines: dict[str, _Routine] = field(default_factory=dict)
     written: dict[str, str] = field(default_factory=dict)
     calls: dict[str, list[tuple[_Routine, list[str], int]]] = field(default_factory=dict)
 
     def __init__(self, data: dict, routines: list[_Routine]):
         self.data, self.routines, self.written, self.calls = data, {r.name: r for r in routines}, {}, {}
+        self.types, self.fields = {}, {}
         for r in routines:
             code = _code(r)
-            for name, how in _written(code).items():
-                self.written.setdefault(name, how)
+            for name, (how, at) in _written(code).items():
+                self.written.setdefault(name, f"{how} ({r.src.where(r.base + at)})")
             for m in _CALL.finditer(code):
                 args = _call_args(code, m.end() - 1)
                 if args is not None:
@@ -418,7 +461,7 @@ def _program_motions(r: _Routine, ctx: _Context, prog: Program, targets: dict, f
         args = call[0]
         points = args[:2] if instr == "movec" else args[:1]
         tool_arg = args[2] if instr == "movec" and len(args) > 2 else args[1] if len(args) > 1 else ""
-        if all(_is_joint(p, data) for p in points):
+        if all(_value_type(p, r, ctx) in JOINT_TYPES for p in points):
             continue  # a joint motion: no correction
         acc = prog.motion(src, at, instr)
         tool, why = _tool(tool_arg, data, kinds, written, prog.tools, src.where(at))
@@ -448,21 +491,27 @@ def _program_motions(r: _Routine, ctx: _Context, prog: Program, targets: dict, f
                 prog.use(t, tool, frame, src.where(at), key, "frame", (src.path, at), acc)
 
 
-def _is_joint(expr: str, data: dict) -> bool:
+def _value_type(expr: str, r: _Routine, ctx: _Context) -> str:
+    """The VAL3 type of a motion's argument (a local, a parameter, a datum of the .dtx, a field of
+    a user type whose data are known, ``herej()``), '' when not known."""
     m = _ITEM.match(expr)
-    if not m:
-        return False
-    d = data.get(f"{m.group(1)}[{m.group(2) or 0}]") or data.get(f"{m.group(1)}[0]")
-    return d is not None and d.type == "jointRx"
+    if m:
+        return r.kinds.get(m.group(1)) or ctx.types.get(m.group(1), "")
+    f = _FIELD.match(expr)
+    if f:
+        owner = r.kinds.get(f.group(1)) or ctx.types.get(f.group(1), "")
+        return ctx.fields.get(owner, {}).get(f.group(2), "")
+    return "jointRx" if re.match(r"\s*herej\s*\(", expr) else ""
 
 
-def _written(code: str) -> dict[str, str]:
-    """Names the code writes at run time (assignment, a field, sioGet) -> how."""
+def _written(code: str) -> dict[str, tuple[str, int]]:
+    """Names the code writes at run time (assignment, a field, sioGet) -> (how, offset in the code)."""
     out = {}
     for m in re.finditer(r"(?<![\w.])([A-Za-z_]\w*)\s*(?:\[[^\]]*\])?\s*((?:\.\w+)*)\s*=(?!=)", code):
-        out.setdefault(m.group(1), f"{m.group(1)}{m.group(2)} is assigned in the program at run time")
+        how = f"{m.group(1)}{m.group(2)} is assigned in the program at run time"
+        out.setdefault(m.group(1), (how, m.start()))
     for m in re.finditer(r"\bsioGet\s*\(\s*[^,]+,\s*([A-Za-z_]\w*)", code):
-        out.setdefault(m.group(1), f"{m.group(1)} is received at run time (sioGet)")
+        out.setdefault(m.group(1), (f"{m.group(1)} is received at run time (sioGet)", m.start()))
     return out
 
 
@@ -483,6 +532,13 @@ def _points(expr: str, r: _Routine, ctx: _Context, depth: int = 0) -> tuple[list
             return _points(args[0], r, ctx, depth)
         return [], f"{func}(...) with {len(args)} arguments"
     m = _ITEM.match(expr)
+    f = _FIELD.match(expr)
+    if not m and f:
+        owner = kinds.get(f.group(1)) or ctx.types.get(f.group(1), "")
+        if owner in ctx.fields:
+            return [], f"{f.group(1)}.{f.group(2)} is a field of {f.group(1)} ({owner}): set at run time"
+        return [], (f"{f.group(1)}.{f.group(2)} is a field of {f.group(1)} ({owner or 'type not declared'}) "
+                    "whose type data are not in the files given: give its .dtx with --references")
     if not m:
         call = re.match(r"\s*([A-Za-z_]\w*)\s*\(", expr)
         if call:
