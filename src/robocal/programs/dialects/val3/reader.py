@@ -40,7 +40,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
-from robocal.kinematics.transforms import make_transform
+from robocal.kinematics.transforms import make_transform, pose_error
 from robocal.programs.dialects.base import Dialect
 from robocal.programs.dialects.val3 import marker, s6, simulated
 from robocal.programs.dialects.val3.campaign import val3_application
@@ -53,6 +53,7 @@ from robocal.programs.dialects.val3.configuration import (
 )
 from robocal.programs.dialects.val3.loads import NoLoads
 from robocal.programs.dialects.val3.project import declared_types, read_project
+from robocal.programs.given_data import TOOL_DISAGREE_DEG, TOOL_DISAGREE_MM
 from robocal.programs.model import Program, Target
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import NUMBER_RE, Number, ProgramText, mask
@@ -293,7 +294,14 @@ class Val3Dialect(Dialect):
                 out[(got[1], got[2])] = text
         return out
 
+    def name_key(self, name):
+        """``fPart`` is the datum's first element ``fPart[0]``, as in the code."""
+        name = "".join(name.split())
+        return name if "[" in name else f"{name}[0]"
+
     def parse(self, sources, frames, tools, references=()):
+        frames = {self.name_key(k): v for k, v in frames.items()}
+        tools = {self.name_key(k): v for k, v in tools.items()}
         prog = Program([], frames={WORLD: np.eye(4), **frames}, tools={FLANGE: np.eye(4), **tools},
                        declared_tools={FLANGE: np.eye(4)})  # and each motion's tool from the .dtx alone
         projects = [read_project(s.path) for s in sources if s.path.suffix.lower() == ".pjx"]
@@ -310,9 +318,33 @@ class Val3Dialect(Dialect):
         targets: dict[str, Target] = {}
         ctx = _Context(data, [r for src in programs for r in _routines(src)])
         ctx.types, ctx.fields = types, _type_fields(projects, [*sources, *references])
+        prog.warnings += _frame_disagreements(data, frames)
         for r in ctx.routines.values():
             _program_motions(r, ctx, prog, targets, frames)
         return prog
+
+
+def _frame_disagreements(data: dict[str, Datum], frames: dict[str, np.ndarray]) -> list[str]:
+    """One warning per ``--frame`` that replaces a frame the .dtx declares differently (its pose
+    in world through its fatherId chain, against the given one)."""
+    out = []
+    for name, T in frames.items():
+        d = data.get(name)
+        if d is None or d.type != "frame":
+            continue
+        try:
+            own = _chain(data, name, WORLD, "frame", d.source.where(d.offset), {})
+        except DataError:
+            continue  # a chain the .dtx does not close: the given frame is the only one
+        err = pose_error(own[None], np.asarray(T)[None])[0]
+        mm, deg = np.linalg.norm(err[:3]) * 1e3, np.rad2deg(np.linalg.norm(err[3:]))
+        if mm > TOOL_DISAGREE_MM or deg > TOOL_DISAGREE_DEG:
+            own_mm = ", ".join(f"{v:.4g}" for v in own[:3, 3] * 1e3)
+            out.append(f"--frame {name} replaces the application's own frame {name} ("
+                       f"{d.source.where(d.offset)}: origin at {own_mm} mm in world) and differs from it by "
+                       f"{mm:.3g} mm, {deg:.3g} deg: the controller moves in the frame its .dtx holds; make "
+                       "sure --frame is what it holds")
+    return out
 
 
 def _in_projects(sources: list[ProgramText], projects: list, warnings: list[str]) -> list[ProgramText]:
