@@ -1,0 +1,381 @@
+"""VAL3 applications as real cells write them (in the style of public applications: a CS8 s6.8
+assembly cell, s7 chess and ROS-server applications): the s6.x XML layout (programList / dataList,
+code as XML text), motions counted as a hand counts them (joint moves to joints however declared
+are no Cartesian motion; files the project does not list are not loaded), every motion corrected
+or named with a true reason, only the pose numbers changed; --tool / --frame read as the code
+names the data and compared with the .dtx's own."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import robocal as rc
+from robocal.cli import main
+from robocal.data.simulate import perturbed
+from robocal.kinematics.transforms import invert_transform
+from robocal.programs import filter_program
+from robocal.programs.dialects.val3.reader import Val3Dialect, application_files
+from robocal.programs.simulate import execute
+from robocal.programs.source import NUMBER_RE
+
+NOMINAL = rc.Robot.from_catalog("staubli_tx2_140")
+CALIBRATED = perturbed(NOMINAL, 7)
+D = Val3Dialect()
+Q = np.deg2rad([[10, 20, 80, 5, 60, 0], [-15, 30, 70, 0, 50, 20], [5, 10, 95, -10, 65, -30],
+                [20, 25, 85, 15, 55, 10], [-5, 35, 75, -5, 60, 40]])
+TOOL_GRIP = [30, 30, 170, -90, 44, -90]
+TABLE = [600, -100, 50, 0, 0, 15]
+PALLET = [20, 0, 5, 0, 0, 0]
+
+
+def _coords(values, names=("x", "y", "z", "rx", "ry", "rz"), skip=()) -> str:
+    return " ".join(f'{k}="{v:.3f}"' for k, v in zip(names, values, strict=True) if k not in skip)
+
+
+def _in_frame(q, frame_chain) -> np.ndarray:
+    """The xyz/rx,ry,rz of the TCP (tool tGrip) at joints q in the frame chain (world first)."""
+    F = np.eye(4)
+    for f in frame_chain:
+        F = F @ D.to_pose(np.array([f], float))[0]
+    T = invert_transform(F) @ NOMINAL.fk(q) @ D.to_pose(np.array([TOOL_GRIP], float))[0]
+    return D.from_pose(T.reshape(1, 4, 4), np.zeros((1, 6)))[0]
+
+
+def _s6_point(name, values, father, skip=()):
+    vals = "".join(f"""
+      <valuePoint index="{k}">
+        <tpValue {_coords(v, skip=skip)} />
+        <cpValue shoulder="ssame" elbow="esame" wrist="wsame" />
+      </valuePoint>""" for k, v in enumerate(values))
+    return f"""
+    <point name="{name}" public="false">
+      <pFather alias="" name="{father}" fatherIndex="0" />{vals}
+    </point>"""
+
+
+def _s6_application(folder: Path) -> Path:
+    """An s6.8 application: tools on tools, frames on frames, points in them, a point array with a
+    run-time index, appro by constant and by run-time amounts, a program parameter, XML entities
+    in the code, a motion in a comment and one in a string, and a stale program the project does
+    not list."""
+    folder.mkdir()
+    p1 = _in_frame(Q[0], [])
+    p2 = _in_frame(Q[1], [TABLE, PALLET])
+    p3 = _in_frame(Q[2], [TABLE])
+    arr = [_in_frame(Q[3], [TABLE]), _in_frame(Q[4], [TABLE])]
+    points = (_s6_point("p1", [p1], "world") + _s6_point("p2", [p2], "fPallet", skip=("y", "ry"))
+              + _s6_point("p3", [p3], "fTable") + _s6_point("pArr", arr, "fTable"))
+    dtx = f"""\ufeff<?xml version="1.0" encoding="utf-8"?>
+<dataList xmlns="DataNameSpace">
+  <aioSection />
+  <frameSection>
+    <frame name="world" public="false">
+      <fFather alias="" name="" fatherIndex="0" />
+      <valueFrame index="0">
+        <tfValue x="0" y="0" z="0" rx="0" ry="0" rz="0" />
+      </valueFrame>
+    </frame>
+    <frame name="fTable" public="false">
+      <fFather alias="" name="world" fatherIndex="0" />
+      <valueFrame index="0">
+        <tfValue {_coords(TABLE)} />
+      </valueFrame>
+    </frame>
+    <frame name="fPallet" public="false">
+      <fFather alias="" name="fTable" fatherIndex="0" />
+      <valueFrame index="0">
+        <tfValue {_coords(PALLET)} />
+      </valueFrame>
+    </frame>
+  </frameSection>
+  <jointSection>
+    <joint name="jHome" public="false">
+      <valueJoint index="0">
+        <jointValue j1="0" j2="0" j3="90" j4="0" j5="45" j6="0" />
+      </valueJoint>
+    </joint>
+  </jointSection>
+  <numSection>
+    <num name="nStep" public="false">
+      <valueNum value="30" index="0" />
+    </num>
+  </numSection>
+  <pointSection>{points}
+  </pointSection>
+  <toolSection>
+    <tool name="flange" public="false">
+      <tFather alias="" name="" fatherIndex="0" />
+      <valueTool index="0">
+        <ttValue x="0" y="0" z="0" rx="0" ry="0" rz="0" />
+        <io alias="io" name="valve1" ioIndex="0" open="0" close="0" />
+      </valueTool>
+    </tool>
+    <tool name="tGrip" public="false">
+      <tFather alias="" name="flange" fatherIndex="0" />
+      <valueTool index="0">
+        <ttValue {_coords(TOOL_GRIP)} />
+        <io alias="io" name="valve1" ioIndex="0" open="1" close="1" />
+      </valueTool>
+    </tool>
+  </toolSection>
+  <trsfSection />
+</dataList>"""
+    start = """\ufeff<?xml version="1.0" encoding="utf-8"?>
+<programList xmlns="ProgramNameSpace">
+  <program name="start" public="false">
+    <description />
+    <paramSection />
+    <localSection>
+      <local name="i" type="num" size="1" />
+    </localSection>
+    <source>
+      <code>
+begin
+  movej(jHome, tGrip, mFast)
+  movej(appro(p1,{0,0,-100,0,0,0}), tGrip, mFast)
+  movel(p1, tGrip, mSlow)
+  // movel(p1, tGrip, mSlow)
+  putln(&quot;movel(p9, tGrip, mSlow)&quot;)
+  for i=0 to 1
+    movel(pArr[i], tGrip, mSlow)
+    movel(appro(p3,{i*nStep,0,-50,0,0,0}), tGrip, mSlow)
+  endFor
+  if nStep &lt; 40 and nStep &gt; 0
+    movec(p1, p2, tGrip, mSlow)
+  endIf
+  movej(herej(), tGrip, mFast)
+  call place(p2)
+end
+            </code>
+    </source>
+  </program>
+</programList>"""
+    place = """\ufeff<?xml version="1.0" encoding="utf-8"?>
+<programList xmlns="ProgramNameSpace">
+  <program name="place" public="false">
+    <description />
+    <paramSection>
+      <param name="x_pTarget" type="pointRx" byVal="false" />
+    </paramSection>
+    <localSection />
+    <source>
+      <code>begin
+  movel(x_pTarget, tGrip, mSlow)
+end
+      </code>
+    </source>
+  </program>
+</programList>"""
+    pjx = """\ufeff<?xml version="1.0" encoding="utf-8"?>
+<project xmlns="ProjectNameSpace">
+  <parameters version="s6.8" stackSize="5000" millimeterUnit="true" />
+  <programSection>
+    <program file="start.pgx" />
+    <program file="place.pgx" />
+  </programSection>
+  <dataSection>
+    <data file="cell.dtx" />
+  </dataSection>
+</project>"""
+    for name, text in (("cell.dtx", dtx), ("start.pgx", start), ("place.pgx", place), ("cell.pjx", pjx),
+                       ("old.pgx", place.replace('name="place"', 'name="old"'))):
+        (folder / name).write_bytes(text.replace("\n", "\r\n").encode("utf-8"))
+    return folder
+
+
+def _outside_numbers(data: bytes) -> str:
+    text = re.sub(NUMBER_RE.pattern, "#", data.decode("utf-8-sig"))
+    return re.sub(r' (?:x|y|z|rx|ry|rz)="#"', "", text)
+
+
+def test_s6_application_read_counted_corrected(tmp_path):
+    folder = _s6_application(tmp_path / "cell")
+    res = filter_program([folder], CALIBRATED, NOMINAL)
+    # hand count: start.pgx 5 Cartesian (movej appro p1, movel p1, movel pArr[i], movel appro p3, movec
+    # p1 p2) + place.pgx 1; not motions: movej(jHome), movej(herej()), the comment, the string, old.pgx
+    hand = {"total": 6, "corrected": 5, "named": 1}
+    assert json.loads(res.table_json())["summary"]["motions"] == hand
+    named = [(m.file, m.line, m.reason) for m in res.motions if m.status == "named"]
+    assert len(named) == 1 and named[0][:2] == ("start.pgx", 19)
+    assert "appro(...) with a run-time trsf ({i*nStep,0,-50,0,0,0})" in named[0][2]
+    assert any("old.pgx is not in the project (cell.pjx)" in w for w in res.warnings)
+    assert sorted(r["name"] for r in res.rows) == ["p1[0]", "p2[0]", "pArr[0]", "pArr[1]"]
+    assert {r["frame"] for r in res.rows if r["name"] == "p2[0]"} == {"fPallet[0]"}
+    for p in application_files(folder):
+        before = p.read_bytes()
+        assert _outside_numbers(res.outputs[p]) == _outside_numbers(before), p.name
+        assert res.outputs[p].count(b"\r\n") == before.count(b"\r\n")
+    dtx = res.outputs[folder / "cell.dtx"].decode("utf-8-sig")
+    # p2's absent y and ry are each added on its tpValue, named as what they are
+    p2 = re.search(r'<point name="p2".*?<tpValue ([^/]*)/>', dtx, re.DOTALL).group(1)
+    assert re.findall(r"(\w+)=", p2) == ["x", "y", "z", "rx", "ry", "rz"]
+    assert all(res.outputs[p] == p.read_bytes() for p in folder.glob("*.pgx"))
+    assert all(filter_program([folder], NOMINAL, NOMINAL).outputs[p] == p.read_bytes()
+               for p in application_files(folder))
+
+
+def test_s6_filtered_points_reach_the_intended_poses(tmp_path):
+    folder = _s6_application(tmp_path / "cell")
+    res = filter_program([folder], CALIBRATED, NOMINAL)
+    out = tmp_path / "out"
+    out.mkdir()
+    for p, data in res.outputs.items():
+        (out / p.name).write_bytes(data)
+    reached, _ = execute(application_files(out), CALIBRATED, NOMINAL)
+    before, X0 = execute(application_files(folder), CALIBRATED, NOMINAL)
+    err = np.linalg.norm(reached[:, :3, 3] - X0[:, :3, 3], axis=1) * 1e3
+    err0 = np.linalg.norm(before[:, :3, 3] - X0[:, :3, 3], axis=1) * 1e3
+    assert len(X0) == 4 and err.max() < 0.003 and err0.min() > 0.5
+
+
+def test_s6_files_with_format_val3_are_read_not_refused(tmp_path, capsys):
+    """The .pgx of s6.x matches URScript's signature too (movel( ...): --format val3 is never
+    overridden, and the files are recognised as VAL3 by their root elements."""
+    folder = _s6_application(tmp_path / "cell")
+    cal = tmp_path / "cal.yaml"
+    CALIBRATED.save(cal)
+    files = [str(folder / n) for n in ("start.pgx", "place.pgx", "cell.dtx")]
+    for extra in (["--format", "val3"], []):
+        out = tmp_path / f"out{len(extra)}"
+        out.mkdir()
+        assert main(["filter", *files, *extra, "--calibrated", str(cal), "--nominal", "staubli_tx2_140",
+                     "-o", str(out)]) == 0
+        assert "6 motions: 5 corrected, 1 not corrected (each named)" in capsys.readouterr().out
+
+
+def _s7(folder: Path, name: str, text: str) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / name).write_text(text, encoding="utf-8")
+
+
+S7_PGX = """<?xml version="1.0" encoding="utf-8"?>
+<Programs xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" xmlns="http://www.staubli.com/robotics/VAL3/Program/2">
+  <Program name="{name}">{decl}
+    <Code><![CDATA[begin
+{code}
+end]]></Code>
+  </Program>
+</Programs>
+"""
+
+
+def _s7_cell(usrapp: Path) -> Path:
+    """An s7 application whose joint moves go to a jointRx with no values (<Data .../>), a local of
+    type joint, herej() and a field of a user type declared on the controller disk (Disk://)."""
+    app = usrapp / "chess"
+    v = _coords(_in_frame(Q[0], []))
+    _s7(app, "chess.dtx", f"""<?xml version="1.0" encoding="utf-8"?>
+<Database xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" xmlns="http://www.staubli.com/robotics/VAL3/Data/2">
+  <Datas>
+    <Data name="jInitial" access="private" xsi:type="array" type="jointRx" size="1" />
+    <Data name="tGrip" access="private" xsi:type="array" type="tool" size="1">
+      <Value key="0" {_coords(TOOL_GRIP)} fatherId="flange[0]" />
+    </Data>
+    <Data name="pA" access="private" xsi:type="array" type="pointRx" size="1">
+      <Value key="0" {v} shoulder="lefty" elbow="epositive" wrist="wpositive" fatherId="world[0]" />
+    </Data>
+  </Datas>
+</Database>
+""")
+    _s7(app, "chess.pjx", """<?xml version="1.0" encoding="utf-8"?>
+<Project xmlns="http://www.staubli.com/robotics/VAL3/Project/3">
+  <Parameters version="s7.9" stackSize="5000" millimeterUnit="true" />
+  <Programs>
+    <Program file="start.pgx" />
+    <Program file="moveJoint.pgx" />
+  </Programs>
+  <Database>
+    <Data file="chess.dtx" />
+  </Database>
+  <Libraries />
+  <Types>
+    <Type name="MoveCmd" path="Disk://libs/MoveCmd/MoveCmd.pjx" />
+  </Types>
+</Project>
+""")
+    locals_ = """
+    <Locals>
+      <Local name="l_cmd" type="MoveCmd" xsi:type="array" size="1" />
+    </Locals>"""
+    _s7(app, "start.pgx", S7_PGX.format(name="start", decl=locals_, code="""\
+  movej(jInitial, tGrip, mNomSpeed)
+  movel(pA, tGrip, mNomSpeed)
+  nId = movej(l_cmd.jTarget, tGrip, l_cmd.mDesc)
+  movel(l_cmd.pTarget, tGrip, mNomSpeed)
+  movej(herej(), tGrip, mNomSpeed)
+  call moveJoint(0, 10, 90, 0, 45, 0)"""))
+    params = """
+    <Parameters xmlns="http://www.staubli.com/robotics/VAL3/Param/1">
+      <Parameter name="x_nJ1" type="num" xsi:type="element" />
+    </Parameters>
+    <Locals>
+      <Local name="l_jJoint" type="joint" xsi:type="array" size="1" />
+    </Locals>"""
+    _s7(app, "moveJoint.pgx", S7_PGX.format(name="moveJoint", decl=params, code="""  l_jJoint.j1 = x_nJ1
+  movej(l_jJoint, tGrip, mNomSpeed)"""))
+    _s7(app, "Data_acqu.pgx", S7_PGX.format(name="Data_acqu", decl="", code="  movel(pA, tGrip, mNomSpeed)"))
+    lib = usrapp / "libs" / "MoveCmd"
+    _s7(lib, "MoveCmd.pjx", """<?xml version="1.0" encoding="utf-8"?>
+<Project xmlns="http://www.staubli.com/robotics/VAL3/Project/3">
+  <Programs />
+  <Database>
+    <Data file="MoveCmd.dtx" />
+  </Database>
+</Project>
+""")
+    _s7(lib, "MoveCmd.dtx", """<?xml version="1.0" encoding="utf-8"?>
+<Database xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" xmlns="http://www.staubli.com/robotics/VAL3/Data/2">
+  <Datas>
+    <Data name="mDesc" access="public" xsi:type="array" type="mdesc" size="1" />
+    <Data name="jTarget" access="public" xsi:type="array" type="jointRx" size="1" />
+    <Data name="pTarget" access="public" xsi:type="array" type="pointRx" size="1" />
+  </Datas>
+</Database>
+""")
+    return app
+
+
+def test_joint_moves_are_no_cartesian_motion_however_the_joints_are_declared(tmp_path):
+    app = _s7_cell(tmp_path / "usrapp")
+    res = filter_program([app], CALIBRATED, NOMINAL)
+    # hand count: movel(pA) and movel(l_cmd.pTarget); movej to jInitial (no values), to l_cmd.jTarget
+    # (jointRx in MoveCmd.dtx), to herej() and to the joint local are joint moves; Data_acqu.pgx is
+    # not in the project
+    assert json.loads(res.table_json())["summary"]["motions"] == {"total": 2, "corrected": 1, "named": 1}
+    named = next(m for m in res.motions if m.status == "named")
+    assert named.line == 11 and named.reason == "l_cmd.pTarget is a field of l_cmd (MoveCmd): set at run time"
+    # without the type's data on the disk the field is named for what it is, and counted
+    (tmp_path / "usrapp" / "libs" / "MoveCmd" / "MoveCmd.pjx").unlink()
+    res = filter_program([app], CALIBRATED, NOMINAL)
+    reasons = [m.reason for m in res.motions if m.status == "named"]
+    assert len(reasons) == 2 and all("whose type data are not in the files given" in r for r in reasons)
+
+
+def test_tool_and_frame_options_name_the_data_as_the_code_does_and_are_compared(tmp_path):
+    folder = _s6_application(tmp_path / "cell")
+    grip = ",".join(str(v) for v in [30, 30, 172, -90, 44, -90])
+    for name in ("tGrip", "tGrip[0]"):
+        res = filter_program([folder], CALIBRATED, NOMINAL, tools={name: grip})
+        assert any(w.startswith(f"--tool {name}=") and "differs from it by 2 mm" in w for w in res.warnings)
+    base = filter_program([folder], CALIBRATED, NOMINAL)
+    res = filter_program([folder], CALIBRATED, NOMINAL, tools={"tGrip": grip})
+    assert [r["correction_mm"] for r in res.rows] != [r["correction_mm"] for r in base.rows]  # it is used
+    table = ",".join(str(v) for v in [600, -100, 51, 0, 0, 15])
+    res = filter_program([folder], CALIBRATED, NOMINAL, frames={"fTable": table})
+    assert any(w.startswith("--frame fTable[0] replaces the application's own frame") and "by 1 mm" in w
+               for w in res.warnings)
+    same = ",".join(str(v) for v in TABLE)
+    assert not any("--frame" in w for w in filter_program([folder], CALIBRATED, NOMINAL,
+                                                          frames={"fTable": same}).warnings)
+
+
+@pytest.mark.parametrize("entity, char", [("&lt;", "<"), ("&quot;", '"'), ("&#34;", '"'), ("&#x3C;", "<")])
+def test_s6_code_is_read_as_the_controller_reads_it(entity, char):
+    from robocal.programs.dialects.val3.s6 import decoded
+    text = f"if a{entity}b"
+    assert decoded(text) == f"if a{char}" + " " * (len(entity) - 1) + "b"
