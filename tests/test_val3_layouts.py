@@ -379,3 +379,18 @@ def test_s6_code_is_read_as_the_controller_reads_it(entity, char):
     from robocal.programs.dialects.val3.s6 import decoded
     text = f"if a{entity}b"
     assert decoded(text) == f"if a{char}" + " " * (len(entity) - 1) + "b"
+
+
+def test_a_task_passes_its_arguments_and_library_data_are_named_for_what_they_are(tmp_path):
+    folder = _s6_application(tmp_path / "cell")
+    start = folder / "start.pgx"
+    start.write_bytes(start.read_bytes().replace(
+        b"  call place(p2)", b'  taskCreate "placing", 10, place(p2)\r\n  movel(lib:pDrop, tGrip, mSlow)\r\n'
+                             b"  movel(p1, lib:tLong, mSlow)"))
+    res = filter_program([folder], CALIBRATED, NOMINAL)
+    # hand count: the 6 motions of the application, and 2 more to library data
+    assert json.loads(res.table_json())["summary"]["motions"] == {"total": 8, "corrected": 5, "named": 3}
+    reasons = {m.target: m.reason for m in res.motions if m.status == "named"}
+    assert reasons["lib:pDrop"] == "lib:pDrop is data of library lib, not in these files"
+    assert reasons["p1"] == "the tool lib:tLong is data of library lib, not in these files"
+    assert [m.status for m in res.motions if m.file == "place.pgx"] == ["corrected"]

@@ -78,7 +78,11 @@ _LOCAL = re.compile(r"<(?:Local|Parameter)\b([^>]*?)/?>")
 _LINE_COMMENT = re.compile(r"//[^\r\n]*")
 _STRING = re.compile(r"\"[^\"\r\n]*\"")
 _MOTION = re.compile(r"\b(movej|movel|movec)\s*\(")
-_CALL = re.compile(r"\bcall\s+([A-Za-z_]\w*)\s*\(")
+# a call of a program: call NAME(...), or a task started on it: taskCreate "name", priority, NAME(...),
+# taskCreateSync "name", period, overrun, NAME(...)
+_CALL = re.compile(r"(?:\bcall\s+|\btaskCreate\s+(?:[^,\r\n]+,){2}\s*|"
+                   r"\btaskCreateSync\s+(?:[^,\r\n]+,){3}\s*)([A-Za-z_]\w*)\s*\(")
+_LIBRARY = re.compile(r"^\s*([A-Za-z_]\w*)\s*:\s*([A-Za-z_]\w*)")  # alias:name (a library's data)
 _ITEM = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\[\s*([^\]]*?)\s*\])?\s*$")
 _LITERAL6 = re.compile(r"^\s*\{\s*" + r"\s*,\s*".join([f"({NUMBER_RE.pattern})"] * 6) + r"\s*\}\s*$")
 _WRAPPER = re.compile(r"^\s*(appro|compose)\s*\((.*)\)\s*$", re.DOTALL)
@@ -571,6 +575,9 @@ def _points(expr: str, r: _Routine, ctx: _Context, depth: int = 0) -> tuple[list
             return [], f"{f.group(1)}.{f.group(2)} is a field of {f.group(1)} ({owner}): set at run time"
         return [], (f"{f.group(1)}.{f.group(2)} is a field of {f.group(1)} ({owner or 'type not declared'}) "
                     "whose type data are not in the files given: give its .dtx with --references")
+    lib = _LIBRARY.match(expr)
+    if not m and lib:
+        return [], f"{' '.join(expr.split())} is data of library {lib.group(1)}, not in these files"
     if not m:
         call = re.match(r"\s*([A-Za-z_]\w*)\s*\(", expr)
         if call:
@@ -633,6 +640,9 @@ def _constant(expr: str, data: dict, kinds: dict, written: dict, what: str) -> s
 def _tool(expr: str, data: dict, kinds: dict, written: dict, tools: dict, where: str) -> tuple[str, str]:
     """(tool key, '') or ('', why)."""
     m = _ITEM.match(expr)
+    lib = _LIBRARY.match(expr)
+    if not m and lib:
+        return "", f"the tool {' '.join(expr.split())} is data of library {lib.group(1)}, not in these files"
     if not m:
         return "", f"the tool {' '.join(expr.split()) or '(none)'} is computed at run time"
     name = m.group(1)
