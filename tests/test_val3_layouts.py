@@ -202,7 +202,7 @@ def test_s6_application_read_counted_corrected(tmp_path):
     assert json.loads(res.table_json())["summary"]["motions"] == hand
     named = [(m.file, m.line, m.reason) for m in res.motions if m.status == "named"]
     assert len(named) == 1 and named[0][:2] == ("start.pgx", 19)
-    assert "appro(...) with a run-time trsf ({i*nStep,0,-50,0,0,0})" in named[0][2]
+    assert named[0][2] == "appro(...) with a trsf computed at run time ({i*nStep,0,-50,0,0,0})"
     assert any("old.pgx is not in the project (cell.pjx)" in w for w in res.warnings)
     assert sorted(r["name"] for r in res.rows) == ["p1[0]", "p2[0]", "pArr[0]", "pArr[1]"]
     assert {r["frame"] for r in res.rows if r["name"] == "p2[0]"} == {"fPallet[0]"}
@@ -394,3 +394,22 @@ def test_a_task_passes_its_arguments_and_library_data_are_named_for_what_they_ar
     assert reasons["lib:pDrop"] == "lib:pDrop is data of library lib, not in these files"
     assert reasons["p1"] == "the tool lib:tLong is data of library lib, not in these files"
     assert [m.status for m in res.motions if m.file == "place.pgx"] == ["corrected"]
+
+
+def test_appro_by_a_local_set_once_to_numbers_is_a_use_of_the_point(tmp_path):
+    """A local trsf only ever set to a literal of numbers is a constant offset (the point is
+    corrected); one whose field the code changes is a run-time amount (named, where it is set)."""
+    folder = _s6_application(tmp_path / "cell")
+    start = folder / "start.pgx"
+    text = start.read_bytes().replace(b'<local name="i" type="num" size="1" />', (
+        b'<local name="i" type="num" size="1" />\r\n      <local name="trOff" type="trsf" size="1" />\r\n'
+        b'      <local name="trMove" type="trsf" size="1" />'))
+    start.write_bytes(text.replace(b"  call place(p2)", (
+        b"  trOff={0,0,-80,0,0,0}\r\n  movel(appro(p1,trOff), tGrip, mSlow)\r\n  trMove.z=nStep\r\n"
+        b"  movel(appro(p1,trMove), tGrip, mSlow)\r\n  call place(p2)")))
+    res = filter_program([folder], CALIBRATED, NOMINAL)
+    # hand count: the 6 motions of the application and 2 more
+    assert json.loads(res.table_json())["summary"]["motions"] == {"total": 8, "corrected": 6, "named": 2}
+    why = next(m.reason for m in res.motions if m.target == "appro(p1,trMove)")
+    line = start.read_bytes().split(b"\r\n").index(b"  trMove.z=nStep") + 1
+    assert why == f"appro(...) with a run-time trsf (trMove is set at run time (start.pgx:{line}))"

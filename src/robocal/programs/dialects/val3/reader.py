@@ -561,8 +561,7 @@ def _points(expr: str, r: _Routine, ctx: _Context, depth: int = 0) -> tuple[list
         func = w.group(1)
         if func == "appro" and len(args) == 2 or func == "compose" and len(args) == 3:
             for extra in args[1:]:
-                why = _constant(extra, data, kinds, written, "frame" if func == "compose" and extra is args[1]
-                                else "trsf")
+                why = _constant(extra, r, ctx, "frame" if func == "compose" and extra is args[1] else "trsf")
                 if why:
                     return [], f"{func}(...) with {why}"
             return _points(args[0], r, ctx, depth)
@@ -624,17 +623,46 @@ def _through_calls(name: str, r: _Routine, ctx: _Context, depth: int) -> tuple[l
     return found, ""
 
 
-def _constant(expr: str, data: dict, kinds: dict, written: dict, what: str) -> str:
-    """'' when ``expr`` is a constant trsf / frame, else why not."""
+def _constant(expr: str, r: _Routine, ctx: _Context, what: str) -> str:
+    """'' when ``expr`` (an argument of program ``r``) is a constant trsf / frame, else why not: a
+    literal of numbers, a datum of the .dtx the code never writes (one declared without values
+    is zeros), a local only ever set to a literal of numbers (or never: zeros)."""
+    text = " ".join(expr.split())
     if _LITERAL6.match(expr):
         return ""
     m = _ITEM.match(expr)
-    if not m or m.group(1) in kinds or m.group(1) in written:
-        return f"a run-time {what} ({' '.join(expr.split())})"
-    if m.group(2) is not None and not re.fullmatch(r"\d+", m.group(2)):
-        return f"a {what} chosen at run time ({' '.join(expr.split())})"
-    d = data.get(f"{m.group(1)}[{int(m.group(2) or 0)}]")
-    return "" if d is not None and d.type == what else f"an unknown {what} {m.group(1)}"
+    if not m:
+        return f"a {what} computed at run time ({text})"
+    name, index = m.group(1), m.group(2)
+    if index is not None and not re.fullmatch(r"\d+", index):
+        return f"a {what} chosen at run time ({text})"
+    if name in r.params:
+        return f"a {what} passed at run time ({text} is a parameter of {r.name})"
+    if name in r.kinds:
+        why = _local_writes(name, r)
+        if r.kinds[name] == what and not why:
+            return ""
+        return f"a run-time {what} ({text} {why or 'is a ' + r.kinds[name]})"
+    if name in ctx.written:
+        return f"a run-time {what} ({ctx.written[name]})"
+    declared = ctx.types.get(name, "")
+    if declared == what:
+        return ""
+    return f"an unknown {what} {name}" if not declared else f"{name}, a {declared}, not a {what}"
+
+
+def _local_writes(name: str, r: _Routine) -> str:
+    """'' when program ``r`` only ever sets its local ``name`` to a literal of numbers (or never),
+    else where it sets it otherwise (a field, an expression, a call that may write it)."""
+    code = _code(r)
+    for m in re.finditer(rf"(?<![\w.]){name}\s*(?:\[[^\]]*\])?\s*((?:\.\w+)*)\s*=(?!=)([^\r\n]*)", code):
+        if m.group(1) or not _LITERAL6.match(m.group(2)):
+            return f"is set at run time ({r.src.where(r.base + m.start())})"
+    for m in _CALL.finditer(code):
+        args = _call_args(code, m.end() - 1)
+        if args is not None and any(re.fullmatch(rf"\s*{name}\s*(?:\[[^\]]*\])?\s*", a) for a in args[0]):
+            return f"is passed to {m.group(1)}() at {r.src.where(r.base + m.start())}, which may set it"
+    return ""
 
 
 def _tool(expr: str, data: dict, kinds: dict, written: dict, tools: dict, where: str) -> tuple[str, str]:
