@@ -75,8 +75,7 @@ _ATTR = re.compile(r"([\w:]+)\s*=\s*\"([^\"]*)\"")
 _PROGRAM = re.compile(r"<Program\b([^>]*?)>")
 _CODE = re.compile(r"<Code>\s*<!\[CDATA\[(.*?)\]\]>\s*</Code>", re.DOTALL)
 _LOCAL = re.compile(r"<(?:Local|Parameter)\b([^>]*?)/?>")
-_LINE_COMMENT = re.compile(r"//[^\r\n]*")
-_STRING = re.compile(r"\"[^\"\r\n]*\"")
+_STRING_OR_COMMENT = re.compile(r"\"[^\"\r\n]*\"|//[^\r\n]*")
 _MOTION = re.compile(r"\b(movej|movel|movec)\s*\(")
 # a call of a program: call NAME(...), or a task started on it: taskCreate "name", priority, NAME(...),
 # taskCreateSync "name", period, overrun, NAME(...)
@@ -479,8 +478,16 @@ def _routines(src: ProgramText) -> list[_Routine]:
 
 
 def _code(r: _Routine) -> str:
-    """A program's code with comments blanked and strings masked (offsets kept)."""
-    return mask(r.text, [_LINE_COMMENT], [_STRING])
+    """A program's code with comments blanked and strings masked (offsets kept), in one pass: a
+    ``//`` inside a string is no comment, a quote inside a comment opens no string."""
+
+    def one(m: re.Match) -> str:
+        s = m.group()
+        if s.startswith("//"):
+            return " " * len(s)
+        return s[0] + "_" * (len(s) - 2) + s[-1]
+
+    return _STRING_OR_COMMENT.sub(one, r.text)
 
 
 def _program_motions(r: _Routine, ctx: _Context, prog: Program, targets: dict, frames: dict) -> None:
