@@ -14,8 +14,10 @@ Data (``.dtx``)::
 
 x, y, z in mm, rx, ry, rz in deg: ``R = Rx(rx) Ry(ry) Rz(rz)`` (about the moving axes). An absent
 coordinate is 0 (the controller's editor leaves zeros out); when a correction makes it non-zero,
-the attribute is inserted after the coordinate before it. The coordinates may also stand on an
-element inside the ``<Value>`` (the older CS8 layout); both are read the same way. A point's
+the attribute is inserted after the coordinate before it (on the element that holds them). The
+coordinates may also stand on an element inside the ``<Value>`` (the older CS8 layout); both are
+read the same way. The s6.x layout of CS8 controllers (``programList`` / ``dataList``,
+:mod:`~robocal.programs.dialects.val3.s6`) is read too. A point's
 ``fatherId`` chain of frames ends at ``world[0]`` (the robot's base); a tool's at ``flange[0]``.
 Configuration (``shoulder`` lefty / righty, ``elbow`` epositive / enegative, ``wrist`` wpositive /
 wnegative; ``ssame``, ``sfree``, ... or absent: any) selects the branch; VAL3 carries no turn data.
@@ -24,9 +26,14 @@ The motions ``movej``, ``movel`` and ``movec`` of the programs are read from the
 (``pPick``, ``pPick[1]``; ``pPick[i]`` with a run-time index reaches every element),
 ``appro(p, trsf)`` and ``compose(p, frame, trsf)`` with a trsf of the ``.dtx`` or a literal
 ``{x, y, z, rx, ry, rz}`` (a use of ``p``), program parameters (followed to every call's argument),
-the tool (second argument; third of movec). Joint motions (a ``jointRx``) need nothing.
-``here()``, points written by the code (an assignment, a field, ``sioGet``), locals, parameters no
-call gives, and ``appro`` / ``compose`` with a run-time trsf are named. Only the numbers inside
+the tool (second argument; third of movec). Joint motions need nothing and are not counted: a
+``movej`` to joints however they are declared (a ``jointRx`` datum, with values or without, a local
+or parameter of a joint type, ``herej()``, a field of a user type whose ``.dtx`` is given or found
+where the project's ``<Types>`` put it). Only the programs and data the ``.pjx`` lists are read
+(the controller loads no other). ``here()``, points written by the code (an assignment, a field,
+``sioGet``), locals, parameters no call (``call``, ``taskCreate``) gives, library data
+(``lib:pPoint``) and ``appro`` / ``compose`` with a run-time trsf (a local trsf only ever set to a
+literal of numbers is constant) are named. Only the numbers inside
 the attribute values change (or an absent coordinate is added): the XML is never re-serialised.
 """
 
