@@ -601,7 +601,9 @@ def _points(expr: str, r: _Routine, ctx: _Context, depth: int = 0) -> tuple[list
         return _through_calls(name, r, ctx, depth)
     if name in kinds:
         what = "parameter" if name in r.params else "local"
-        return [], f"{name} is a {what} of {r.name} ({kinds[name] or 'no type'}): set at run time"
+        at = re.search(rf"(?<![\w.]){name}\s*(?:\[[^\]]*\])?\s*(?:\.\w+)*\s*=(?!=)", _code(r))
+        where = f" ({r.src.where(r.base + at.start())})" if at else ""
+        return [], f"{name} is a {what} of {r.name} ({kinds[name] or 'no type'}): set at run time{where}"
     if name in written:
         return [], written[name]
     if index is None or re.fullmatch(r"\d+", index):
