@@ -413,3 +413,27 @@ def test_appro_by_a_local_set_once_to_numbers_is_a_use_of_the_point(tmp_path):
     why = next(m.reason for m in res.motions if m.target == "appro(p1,trMove)")
     line = start.read_bytes().split(b"\r\n").index(b"  trMove.z=nStep") + 1
     assert why == f"appro(...) with a run-time trsf (trMove is set at run time (start.pgx:{line}))"
+
+
+def test_data_declared_without_values_are_at_their_defaults(tmp_path):
+    """A frame or tool declared without values is the identity on world / flange (a point in it is
+    corrected); a point without values is no taught target (named so, not 'not declared')."""
+    app = _s7_cell(tmp_path / "usrapp")
+    dtx = app / "chess.dtx"
+    v = _coords(_in_frame(Q[1], []))
+    dtx.write_text(dtx.read_text().replace("  </Datas>", f"""\
+    <Data name="fPart" access="private" xsi:type="array" type="frame" size="2" />
+    <Data name="pEmpty" access="private" xsi:type="array" type="pointRx" size="1" />
+    <Data name="pB" access="private" xsi:type="array" type="pointRx" size="1">
+      <Value key="0" {v} shoulder="lefty" elbow="epositive" wrist="wpositive" fatherId="fPart[1]" />
+    </Data>
+  </Datas>"""))
+    start = app / "start.pgx"
+    start.write_text(start.read_text().replace("  movel(pA, tGrip, mNomSpeed)", (
+        "  movel(pA, tGrip, mNomSpeed)\n  movel(pB, tGrip, mNomSpeed)\n  movel(pEmpty, tGrip, mNomSpeed)")))
+    res = filter_program([app], CALIBRATED, NOMINAL)
+    # hand count: the 2 Cartesian motions of the cell, and 2 more
+    assert json.loads(res.table_json())["summary"]["motions"] == {"total": 4, "corrected": 2, "named": 2}
+    assert {r["name"]: r["frame"] for r in res.rows} == {"pA[0]": "world[0]", "pB[0]": "fPart[1]"}
+    why = next(m.reason for m in res.motions if m.target == "pEmpty")
+    assert why == "pEmpty[0] has no values in the .dtx (all 0): no taught target"

@@ -69,6 +69,7 @@ COORDS = ("x", "y", "z", "rx", "ry", "rz")
 _POSITION_MM = 1e-3
 _ANGLE_DEG = 1e-4
 WORLD, FLANGE = "world[0]", "flange[0]"
+ROOTS = {"frame": WORLD, "tool": FLANGE}  # where a frame's / a tool's chain ends
 MAX_CHAIN = 32  # frames in a fatherId chain (a longer one is a loop)
 MAX_CALLS = 16  # calls a point parameter is followed through (deeper: named)
 
@@ -130,8 +131,12 @@ def _read_data(src: ProgramText) -> dict[str, Datum]:
         if "name" not in head or "type" not in head:
             raise DataError(f"{src.where(d.start())}: a <Data> without name or type")
         name, kind = head["name"][0], head["type"][0]
+        if d.group(2) == "/" and kind in ROOTS:  # no values: every element at its defaults (identity)
+            size = head.get("size", ("1",))[0]
+            for k in range(int(size) if size.isdigit() else 1):
+                out[f"{name}[{k}]"] = _datum(src, f"{name}[{k}]", kind, d.start(), {}, d.end(), "")
         if d.group(2) == "/" or OLD_TYPES.get(kind, kind) not in KNOWN_TYPES:
-            continue  # no values (every element at its defaults), or a type with no pose (num, user types)
+            continue  # no values (a point without values is no taught target), or a type with no pose
         stop = _DATA_END.search(text, d.end())
         if stop is None:
             raise DataError(f"{src.where(d.start())}: <Data name=\"{name}\"> is not closed")
@@ -196,6 +201,8 @@ def _read_data_s6(src: ProgramText, text: str) -> dict[str, Datum]:
 def _datum(src: ProgramText, key: str, kind: str, offset: int, attrs: dict, after: int, father: str) -> Datum:
     """One value: ``after`` is where an absent first coordinate is inserted."""
     kind = OLD_TYPES.get(kind, kind)
+    if not father and kind in ROOTS and key != ROOTS[kind]:
+        father = ROOTS[kind]  # fatherId left out: the default, world[0] for a frame, flange[0] for a tool
     datum = Datum(key, kind, src, offset, [], father=father)
     if kind in ("pointRx", "frame", "tool", "trsf"):
         for c in COORDS:
@@ -608,6 +615,11 @@ def _points(expr: str, r: _Routine, ctx: _Context, depth: int = 0) -> tuple[list
         return [], written[name]
     if index is None or re.fullmatch(r"\d+", index):
         d = data.get(f"{name}[{int(index or 0)}]")
+        declared = ctx.types.get(name, "")
+        if d is None and declared in ("pointRx", "point"):
+            return [], f"{name}[{int(index or 0)}] has no values in the .dtx (all 0): no taught target"
+        if d is None and declared:
+            return [], f"{name} is a {declared}, not a pointRx"
         if d is None:
             return [], f"{name}[{int(index or 0)}] is not declared in the .dtx files given"
         if d.type != "pointRx":
