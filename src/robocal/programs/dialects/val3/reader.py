@@ -171,7 +171,9 @@ def _inner(text: str, start: int, end: int, attrs: dict, anchor: int) -> int:
 def _read_data_s6(src: ProgramText, text: str) -> dict[str, Datum]:
     """The pose and joint data of an s6.x .dtx (:mod:`robocal.programs.dialects.val3.s6`)."""
     out: dict[str, Datum] = {}
-    for element, name, _start, end, body in s6.data_items(text):
+    for element, name, start, end, body in s6.data_items(text):
+        if element in ROOTS and body == end:  # no values: at its defaults (identity)
+            out[f"{name}[0]"] = _datum(src, f"{name}[0]", element, start, {}, end, "")
         if element not in s6.TYPES or body == end:
             continue
         father = ""
