@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -446,6 +447,13 @@ class _Routine:
     src: ProgramText
     base: int  # the code's offset in the file
     text: str  # the code as the controller reads it (s6: entities decoded), at the file's offsets
+    writes: dict[str, str] = field(default_factory=dict)  # local -> why it is no constant ('' : it is)
+    set_at: dict[str, str] = field(default_factory=dict)  # local -> where the code first sets it
+
+    @cached_property
+    def code(self) -> str:
+        """The code with comments blanked and strings masked (:func:`_code`), computed once."""
+        return _code(self)
 
 
 @dataclass
@@ -465,7 +473,7 @@ class _Context:
         self.data, self.routines, self.written, self.calls = data, {r.name: r for r in routines}, {}, {}
         self.types, self.fields = {}, {}
         for r in routines:
-            code = _code(r)
+            code = r.code
             for name, (how, at) in _written(code).items():
                 self.written.setdefault(name, f"{how} ({r.src.where(r.base + at)})")
             for m in _CALL.finditer(code):
@@ -510,7 +518,7 @@ def _program_motions(r: _Routine, ctx: _Context, prog: Program, targets: dict, f
     """The motions of one program's code: its points (and the tool) as targets, or named."""
     src, data, kinds, written = r.src, ctx.data, r.kinds, ctx.written
     base = r.base
-    code = _code(r)
+    code = r.code
     for m in _MOTION.finditer(code):
         call = _call_args(code, m.end() - 1)
         at = base + m.start()
@@ -610,8 +618,10 @@ def _points(expr: str, r: _Routine, ctx: _Context, depth: int = 0) -> tuple[list
         return _through_calls(name, r, ctx, depth)
     if name in kinds:
         what = "parameter" if name in r.params else "local"
-        at = re.search(rf"(?<![\w.]){name}\s*(?:\[[^\]]*\])?\s*(?:\.\w+)*\s*=(?!=)", _code(r))
-        where = f" ({r.src.where(r.base + at.start())})" if at else ""
+        if name not in r.set_at:
+            at = re.search(rf"(?<![\w.]){name}\s*(?:\[[^\]]*\])?\s*(?:\.\w+)*\s*=(?!=)", r.code)
+            r.set_at[name] = f" ({r.src.where(r.base + at.start())})" if at else ""
+        where = r.set_at[name]
         return [], f"{name} is a {what} of {r.name} ({kinds[name] or 'no type'}): set at run time{where}"
     if name in written:
         return [], written[name]
@@ -684,7 +694,13 @@ def _constant(expr: str, r: _Routine, ctx: _Context, what: str) -> str:
 def _local_writes(name: str, r: _Routine) -> str:
     """'' when program ``r`` only ever sets its local ``name`` to a literal of numbers (or never),
     else where it sets it otherwise (a field, an expression, a call that may write it)."""
-    code = _code(r)
+    if name not in r.writes:
+        r.writes[name] = _first_write(name, r)
+    return r.writes[name]
+
+
+def _first_write(name: str, r: _Routine) -> str:
+    code = r.code
     for m in re.finditer(rf"(?<![\w.]){name}\s*(?:\[[^\]]*\])?\s*((?:\.\w+)*)\s*=(?!=)([^\r\n]*)", code):
         if m.group(1) or not _LITERAL6.match(m.group(2)):
             return f"is set at run time ({r.src.where(r.base + m.start())})"
