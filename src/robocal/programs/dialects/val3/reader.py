@@ -369,7 +369,9 @@ def _frame_disagreements(data: dict[str, Datum], frames: dict[str, np.ndarray]) 
 
 def _in_projects(sources: list[ProgramText], projects: list, warnings: list[str]) -> list[ProgramText]:
     """The program and data files a ``.pjx`` given lists (the controller loads no other): a .pgx
-    or .dtx beside it that no project lists is left out, with a warning (its bytes unchanged)."""
+    or .dtx beside it that no project lists is left out, with a warning (its bytes unchanged). A
+    project that lists no program (unreadable) filters nothing."""
+    projects = [p for p in projects if p.programs]
     if not projects:
         return sources
     listed = set().union(*(p.programs | p.data for p in projects))
