@@ -437,3 +437,25 @@ def test_data_declared_without_values_are_at_their_defaults(tmp_path):
     assert {r["name"]: r["frame"] for r in res.rows} == {"pA[0]": "world[0]", "pB[0]": "fPart[1]"}
     why = next(m.reason for m in res.motions if m.target == "pEmpty")
     assert why == "pEmpty[0] has no values in the .dtx (all 0): no taught target"
+
+
+def test_a_tool_on_a_tool_the_code_changes_is_named_and_compose_in_world_is_constant(tmp_path):
+    app = _s7_cell(tmp_path / "usrapp")
+    dtx = app / "chess.dtx"
+    dtx.write_text(dtx.read_text().replace("  </Datas>", """\
+    <Data name="tTip" access="private" xsi:type="array" type="tool" size="1">
+      <Value key="0" z="25" fatherId="tGrip[0]" />
+    </Data>
+  </Datas>"""))
+    start = app / "start.pgx"
+    start.write_text(start.read_text().replace("  movel(pA, tGrip, mNomSpeed)", (
+        "  tGrip.trsf.z = 200\n  movel(pA, tGrip, mNomSpeed)\n  movel(pA, tTip, mNomSpeed)\n"
+        "  movel(compose(pA, world, {0,0,10,0,0,0}), flange, mNomSpeed)")))
+    res = filter_program([app], CALIBRATED, NOMINAL)
+    # hand count: the cell's 2 Cartesian motions and 2 more; only the one with the flange is corrected
+    assert json.loads(res.table_json())["summary"]["motions"] == {"total": 4, "corrected": 1, "named": 3}
+    reasons = {(m.target, m.reason) for m in res.motions if m.status == "named"}
+    set_at = "tGrip.trsf.z is assigned in the program at run time (start.pgx:9)"
+    assert ("pA", f"the tool tGrip is changed at run time: {set_at}") in reasons
+    assert ("pA", f"the tool tTip: its tool tGrip is changed at run time: {set_at}") in reasons
+    assert [r["tool"] for r in res.rows] == ["flange[0]"]

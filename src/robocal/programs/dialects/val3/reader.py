@@ -687,7 +687,7 @@ def _constant(expr: str, r: _Routine, ctx: _Context, what: str) -> str:
         return f"a run-time {what} ({text} {why or 'is a ' + r.kinds[name]})"
     if name in ctx.written:
         return f"a run-time {what} ({ctx.written[name]})"
-    declared = ctx.types.get(name, "")
+    declared = ctx.types.get(name, "") or ("frame" if name == "world" else "")  # world: built in
     if declared == what:
         return ""
     return f"an unknown {what} {name}" if not declared else f"{name}, a {declared}, not a {what}"
@@ -722,13 +722,18 @@ def _tool(expr: str, data: dict, kinds: dict, written: dict, tools: dict, where:
     if not m:
         return "", f"the tool {' '.join(expr.split()) or '(none)'} is computed at run time"
     name = m.group(1)
-    if name in kinds or name in written:
-        return "", f"the tool {name} is set at run time"
+    if name in kinds:
+        return "", f"the tool {name} is a local or parameter: set at run time"
+    if name in written:
+        return "", f"the tool {name} is changed at run time: {written[name]}"
     if m.group(2) is not None and not re.fullmatch(r"\d+", m.group(2)):
         return "", f"the tool {name}[{m.group(2)}] is chosen at run time"
     key = f"{name}[{int(m.group(2) or 0)}]"
     if key == FLANGE or name == "flange":
         return FLANGE, ""
+    moved = _frame_written(key, data, written, "tool")
+    if moved:
+        return "", f"the tool {name}: {moved}"
     if key in tools:
         return key, ""
     try:
@@ -738,14 +743,16 @@ def _tool(expr: str, data: dict, kinds: dict, written: dict, tools: dict, where:
     return key, ""
 
 
-def _frame_written(frame: str, data: dict, written: dict) -> str:
+def _frame_written(frame: str, data: dict, written: dict, what: str = "frame") -> str:
+    """Why the pose of ``frame`` (a frame, or a tool: ``what``) changes at run time: the code
+    writes it or one of its fathers; '' when it does not."""
     name = frame
     for _ in range(MAX_CHAIN):
-        if name == WORLD or name not in data:
+        if name in (WORLD, FLANGE) or name not in data:
             return ""
         base = name.split("[")[0]
         if base in written:
-            return f"its frame {base} is changed at run time"
+            return f"its {what} {base} is changed at run time: {written[base]}"
         name = data[name].father
     return ""
 
