@@ -459,3 +459,11 @@ def test_a_tool_on_a_tool_the_code_changes_is_named_and_compose_in_world_is_cons
     assert ("pA", f"the tool tGrip is changed at run time: {set_at}") in reasons
     assert ("pA", f"the tool tTip: its tool tGrip is changed at run time: {set_at}") in reasons
     assert [r["tool"] for r in res.rows] == ["flange[0]"]
+
+
+def test_s6_files_without_their_namespace_are_read_the_same(tmp_path):
+    folder = _s6_application(tmp_path / "cell")
+    for p in folder.iterdir():
+        p.write_bytes(re.sub(rb' xmlns="\w+NameSpace"', b"", p.read_bytes()))
+    res = filter_program([folder], CALIBRATED, NOMINAL)
+    assert json.loads(res.table_json())["summary"]["motions"] == {"total": 6, "corrected": 5, "named": 1}

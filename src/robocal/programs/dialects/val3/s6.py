@@ -24,8 +24,9 @@ from __future__ import annotations
 
 import re
 
-# an s6.x file, told by its root element and namespace
-SIGNATURE = r"<(?:programList|dataList|project)\s+xmlns\s*=\s*\"(?:Program|Data|Project)NameSpace\""
+# an s6.x file, told by its root element (and namespace, which some writers leave out)
+SIGNATURE = (r"<(?:programList|dataList)\b|"
+             r"<project\s+xmlns\s*=\s*\"ProjectNameSpace\"")
 # s6 element name -> (VAL3 type, value element): the data that carry a pose or joints
 TYPES = {"point": "pointRx", "frame": "frame", "tool": "tool", "trsf": "trsf", "joint": "jointRx"}
 VALUE_ELEMENT = {"point": "valuePoint", "frame": "valueFrame", "tool": "valueTool", "trsf": "valueTrsf",
@@ -43,8 +44,7 @@ _SECTION = re.compile(r"<(\w+)Section\b[^>]*?(/?)>")
 
 def is_s6(text: str) -> bool:
     """``text`` is an s6.x program or data file (its root element says so)."""
-    m = _ROOT.search(text)
-    return m is not None and re.search(SIGNATURE, text[m.start():m.start() + 200]) is not None
+    return _ROOT.search(text) is not None
 
 
 def decoded(code: str) -> str:
