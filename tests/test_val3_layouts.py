@@ -467,3 +467,27 @@ def test_s6_files_without_their_namespace_are_read_the_same(tmp_path):
         p.write_bytes(re.sub(rb' xmlns="\w+NameSpace"', b"", p.read_bytes()))
     res = filter_program([folder], CALIBRATED, NOMINAL)
     assert json.loads(res.table_json())["summary"]["motions"] == {"total": 6, "corrected": 5, "named": 1}
+
+
+def test_a_movej_to_a_librarys_joints_is_no_cartesian_motion(tmp_path):
+    usrapp = tmp_path / "usrapp"
+    app = _s7_cell(usrapp)
+    pjx = app / "chess.pjx"
+    pjx.write_text(pjx.read_text().replace("<Libraries />", (
+        '<Libraries>\n    <Library alias="libPos" path="Disk://libs/Pos/Pos.pjx" />\n  </Libraries>')))
+    _s7(usrapp / "libs" / "Pos", "Pos.pjx", '<Project xmlns="http://www.staubli.com/robotics/VAL3/Project/3">'
+        '<Database><Data file="Pos.dtx" /></Database></Project>\n')
+    _s7(usrapp / "libs" / "Pos", "Pos.dtx", (
+        '<Database xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" '
+        'xmlns="http://www.staubli.com/robotics/VAL3/Data/2"><Datas>\n'
+        '<Data name="jSafe" access="public" xsi:type="array" type="jointRx" size="1" />\n'
+        '<Data name="pDrop" access="public" xsi:type="array" type="pointRx" size="1" />\n'
+        '</Datas></Database>\n'))
+    start = app / "start.pgx"
+    start.write_text(start.read_text().replace("  movel(pA, tGrip, mNomSpeed)", (
+        "  movel(pA, tGrip, mNomSpeed)\n  movej(libPos:jSafe, tGrip, mNomSpeed)\n"
+        "  movel(libPos:pDrop, tGrip, mNomSpeed)")))
+    res = filter_program([app], CALIBRATED, NOMINAL)
+    # hand count: the cell's 2 Cartesian motions and the one to the library's point
+    assert json.loads(res.table_json())["summary"]["motions"] == {"total": 3, "corrected": 1, "named": 2}
+    assert "libPos:pDrop is data of library libPos, not in these files" in {m.reason for m in res.motions}

@@ -14,6 +14,9 @@ from pathlib import Path
 
 _FILE = re.compile(r"<(Program|program|Data|data)\b[^>]*?\bfile\s*=\s*\"([^\"]+)\"")
 _TYPE = re.compile(r"<Type\b[^>]*?\bname\s*=\s*\"([^\"]+)\"[^>]*?\bpath\s*=\s*\"([^\"]+)\"")
+# a library: <Library alias path> (s7), <alias name path> (s6.x)
+_LIBRARY = re.compile(r"<(?:Library|alias)\b[^>]*?\b(?:alias|name)\s*=\s*\"([^\"]+)\"[^>]*?"
+                      r"\bpath\s*=\s*\"([^\"]+)\"")
 _DATA_TYPES = re.compile(r"<Data\b[^>]*?\bname\s*=\s*\"([^\"]+)\"[^>]*?(?<![:\w])type\s*=\s*\"([^\"]+)\"")
 DISK = "Disk://"
 # s6.x sections whose elements are these VAL3 types (the others are named like the type)
@@ -23,19 +26,25 @@ S6_TYPES = {"point": "pointRx", "joint": "jointRx"}
 @dataclass
 class Project:
     """What one ``.pjx`` lists: program and data file names (lower case), user type -> the
-    ``.pjx`` path that declares it."""
+    ``.pjx`` path that declares it, library alias -> its ``.pjx`` path."""
 
     path: Path
     programs: set[str] = field(default_factory=set)
     data: set[str] = field(default_factory=set)
     types: dict[str, str] = field(default_factory=dict)
+    libraries: dict[str, str] = field(default_factory=dict)
 
     def type_data(self, name: str) -> list[Path]:
         """The ``.dtx`` files of user type ``name`` found on this disk (empty: none)."""
-        where = self.types.get(name, "")
-        if not where.startswith(DISK):
+        return self.data_at(self.types.get(name, ""))
+
+    def data_at(self, where: str) -> list[Path]:
+        """The ``.dtx`` files of the project at controller path ``where`` (``Disk://...pjx``, or
+        relative to the application's folder) found on this disk (empty: none)."""
+        if not where:
             return []
-        pjx = self.path.parent.parent / where[len(DISK):]
+        pjx = (self.path.parent.parent / where[len(DISK):] if where.startswith(DISK) else
+               self.path.parent / where.replace("\\", "/"))  # a path of s6.x: from the application's folder
         if not pjx.is_file():
             return []
         listed = read_project(pjx).data
@@ -49,6 +58,7 @@ def read_project(path: Path) -> Project:
     for kind, name in _FILE.findall(text):
         (out.programs if kind.lower() == "program" else out.data).add(Path(name).name.lower())
     out.types = dict(_TYPE.findall(text))
+    out.libraries = dict(_LIBRARY.findall(text))
     return out
 
 

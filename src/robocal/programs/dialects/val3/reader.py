@@ -338,6 +338,8 @@ class Val3Dialect(Dialect):
         targets: dict[str, Target] = {}
         ctx = _Context(data, [r for src in programs for r in _routines(src)])
         ctx.types, ctx.fields = types, _type_fields(projects, [*sources, *references])
+        ctx.libraries = {alias: {k: v for dtx in p.data_at(where) for k, v in declared_types(
+            ProgramText(dtx).text).items()} for p in projects for alias, where in p.libraries.items()}
         prog.warnings += _frame_disagreements(data, frames)
         for r in ctx.routines.values():
             _program_motions(r, ctx, prog, targets, frames)
@@ -467,13 +469,14 @@ class _Context:
     data: dict
     types: dict[str, str] = field(default_factory=dict)  # every data name of the .dtx -> its type
     fields: dict[str, dict[str, str]] = field(default_factory=dict)  # user type -> field -> type
+    libraries: dict[str, dict[str, str]] = field(default_factory=dict)  # library alias -> data -> type
     routines: dict[str, _Routine] = field(default_factory=dict)
     written: dict[str, str] = field(default_factory=dict)
     calls: dict[str, list[tuple[_Routine, list[str], int]]] = field(default_factory=dict)
 
     def __init__(self, data: dict, routines: list[_Routine]):
         self.data, self.routines, self.written, self.calls = data, {r.name: r for r in routines}, {}, {}
-        self.types, self.fields = {}, {}
+        self.types, self.fields, self.libraries = {}, {}, {}
         for r in routines:
             code = r.code
             for name, (how, at) in _written(code).items():
@@ -570,6 +573,9 @@ def _value_type(expr: str, r: _Routine, ctx: _Context) -> str:
     if f:
         owner = r.kinds.get(f.group(1)) or ctx.types.get(f.group(1), "")
         return ctx.fields.get(owner, {}).get(f.group(2), "")
+    lib = _LIBRARY.match(expr)
+    if lib:
+        return ctx.libraries.get(lib.group(1), {}).get(lib.group(2), "")
     return "jointRx" if re.match(r"\s*herej\s*\(", expr) else ""
 
 
