@@ -338,8 +338,8 @@ class Val3Dialect(Dialect):
         targets: dict[str, Target] = {}
         ctx = _Context(data, [r for src in programs for r in _routines(src)])
         ctx.types, ctx.fields = types, _type_fields(projects, [*sources, *references])
-        ctx.libraries = {alias: {k: v for dtx in p.data_at(where) for k, v in declared_types(
-            ProgramText(dtx).text).items()} for p in projects for alias, where in p.libraries.items()}
+        ctx.libraries = {alias: {k: v for dtx in p.data_at(where) for k, v in _declared_in(dtx).items()}
+                         for p in projects for alias, where in p.libraries.items()}
         prog.warnings += _frame_disagreements(data, frames)
         for r in ctx.routines.values():
             _program_motions(r, ctx, prog, targets, frames)
@@ -367,6 +367,15 @@ def _frame_disagreements(data: dict[str, Datum], frames: dict[str, np.ndarray]) 
                        f"{mm:.3g} mm, {deg:.3g} deg: the controller moves in the frame its .dtx holds; make "
                        "sure --frame is what it holds")
     return out
+
+
+def _declared_in(dtx: Path) -> dict[str, str]:
+    """:func:`declared_types` of a library's or user type's .dtx found on the disk (one it cannot
+    read declares nothing: what it would tell is then named, not guessed)."""
+    try:
+        return declared_types(ProgramText(dtx).text)
+    except (DataError, OSError):
+        return {}
 
 
 def _in_projects(sources: list[ProgramText], projects: list, warnings: list[str]) -> list[ProgramText]:
@@ -397,8 +406,8 @@ def _type_fields(projects: list, files: list[ProgramText]) -> dict[str, dict[str
             stem = Path(where.replace("\\", "/")).stem.lower()
             given = [f.path for f in files if f.path.suffix.lower() == ".dtx" and f.path.stem.lower() == stem]
             for dtx in given or p.type_data(name):
-                fields = declared_types(ProgramText(dtx).text if dtx not in given else
-                                        next(f.text for f in files if f.path == dtx))
+                fields = (_declared_in(dtx) if dtx not in given else
+                          declared_types(next(f.text for f in files if f.path == dtx)))
                 out.setdefault(name, {}).update(fields)
     return out
 
