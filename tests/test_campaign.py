@@ -10,7 +10,7 @@ from robots import require_datasets
 import robocal as rc
 from robocal import DataError, Robot
 from robocal.campaign import Constraints, Tracker, plan_poses
-from robocal.campaign.constraints import _segment_point_distance, _segment_segment_distance, smr_geometry
+from robocal.campaign.constraints import _segment_point_distance, segment_segment_distance, smr_geometry
 from robocal.data.measurements import Measurements
 from robocal.data.simulate import _tracker_noise, simulate_tracker
 from robocal.ik.singularity import classic_distances, singularity_distance
@@ -188,8 +188,8 @@ def test_segment_distances_against_sampling():
         s1 = a + t[:, None] * (b - a)
         s2 = c + t[:, None] * (d - c)
         brute = np.linalg.norm(s1[:, None] - s2[None], axis=2).min()
-        assert _segment_segment_distance(a, b, c, d) == pytest.approx(brute, abs=3e-3)
-        assert _segment_segment_distance(a, b, c, d) <= brute + 1e-12
+        assert segment_segment_distance(a, b, c, d) == pytest.approx(brute, abs=3e-3)
+        assert segment_segment_distance(a, b, c, d) <= brute + 1e-12
         nearest = np.linalg.norm(s1 - p, axis=1).min()
         assert _segment_point_distance(a, b, p) == pytest.approx(nearest, abs=3e-3)
 

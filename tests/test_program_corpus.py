@@ -220,19 +220,24 @@ def test_rapid_configuration_matching_no_solution_is_warned(tmp_path):
 
 
 def test_rapid_uncoordinated_external_values_are_arm_targets(tmp_path):
-    """Robtargets with eax_a values in wobj0 (no mechanical unit moves the work object) and a plain
-    arm model: the values do not move the targets relative to the arm, so the 3 motions (counted
-    by hand) are corrected as arm targets, the eax_a values untouched; one warning counts them
-    and says that a track carrying the arm needs its cell file."""
+    """Robtargets with eax_a values (800, 1450, 2100: a track's mm) in wobj0 (no mechanical unit moves
+    the work object) and a plain arm model: 3 targets are too few to tell a track carrying the arm
+    from a positioner, so by default the 3 motions (counted by hand) are named, the reason saying
+    so and what to give; declared fixed (``fixed_base``, no external axis carries the arm) they are
+    corrected as arm targets, the eax_a values untouched, one warning counting them."""
     robot = rc.Robot.from_catalog("abb_irb2600")
     path = _copy(["track_mill.mod"], tmp_path)[0]
     res = filter_program(path, perturbed(robot, 7), robot)
+    assert res.summary_dict()["motions"] == {"total": 3, "corrected": 0, "named": 3}
+    assert all("eax_a varies (800 .. 2100) over 3 target(s) at 3 value(s)" in m.reason and "too few to tell"
+               in m.reason and "--fixed-base" in m.reason for m in res.motions)
+    res = filter_program(path, perturbed(robot, 7), robot, fixed_base=True)
     assert res.summary_dict()["motions"] == {"total": 3, "corrected": 3, "named": 0}
     out = res.outputs[path].decode()
     assert re.findall(r"\],\[(\d+),9E\+09", out) == ["800", "1450", "2100"]
     said = [w for w in res.warnings if "external-axis values" in w]
     assert len(said) == 1 and said[0].startswith("3 target(s)") and "(eax_a)" in said[0]
-    assert "cell file" in said[0]
+    assert "--fixed-base" in said[0]
 
 
 def test_rapid_quaternions_keep_the_files_precision(tmp_path):
@@ -320,16 +325,26 @@ def test_krl_tool_from_a_variable_is_named(tmp_path):
 
 
 def test_krl_uncoordinated_external_axis_values_are_arm_targets(tmp_path):
-    """An E6POS with E1 1250 used with a base no machine carries: corrected as an arm target (its
-    E1 kept), with the one summary warning."""
+    """An E6POS with E1 1250 (the others 0) used with a base no machine carries: E1 takes two values
+    over 12 targets, too few to tell a track carrying the arm from a positioner, so the motion to the
+    target with E1 1250 is named (the safe side; those at 0 are where the arm is with the axis at
+    zero: corrected); declared fixed (``fixed_base``): corrected as an arm target (its E1 kept),
+    with the one summary warning. Motions counted by hand: 15, 9 corrected by default, 10 fixed."""
     files = _copy(["deburr_cell.src", "deburr_cell.dat"], tmp_path)
     dat = files[1].read_bytes()
     files[1].write_bytes(dat.replace(b"E1 0.0", b"E1 1250.0", 1))
     robot = rc.Robot.from_catalog("kuka_kr16_2")
-    res = filter_program(files, perturbed(robot, 7), robot, references=_copy(["$config.dat"], tmp_path))
+    refs = _copy(["$config.dat"], tmp_path)
+    res = filter_program(files, perturbed(robot, 7), robot, references=refs)
+    sptp = next(m for m in res.motions if m.line == 27)
+    assert sptp.status == "named" and "external axis E1 varies (0 .. 1250)" in sptp.reason
+    assert res.summary_dict()["motions"] == {"total": 15, "corrected": 9, "named": 6}
+    assert [m.line for m in res.motions if "E1 varies" in m.reason] == [27]
+    res = filter_program(files, perturbed(robot, 7), robot, references=refs, fixed_base=True)
     sptp = next(m for m in res.motions if m.line == 27)
     assert sptp.status == "corrected" and "XP1" in [r["name"] for r in res.rows]
-    assert res.summary_dict()["motions"]["total"] == 15 and b"E1 1250.0" in res.outputs[files[1]]
+    assert res.summary_dict()["motions"] == {"total": 15, "corrected": 10, "named": 5}
+    assert b"E1 1250.0" in res.outputs[files[1]]
     assert sum("external-axis values (E1)" in w for w in res.warnings) == 1
 
 

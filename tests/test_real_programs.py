@@ -34,16 +34,25 @@ TRACK_TASK = "\n".join([
 
 
 def test_track_targets_out_of_the_fixed_arms_reach_name_their_axes(tmp_path):
-    """Targets with eax_a values in a work object no unit moves are corrected as arm targets; those
-    the arm at a fixed base cannot reach were named 'no solution ... (out of reach)' alone, which
-    blames the target: their eax_a may carry the arm (here a track), and the reason says so with
-    the values and the cell file to give; the reachable one is corrected; every motion accounted."""
+    """Targets with eax_a values (three, one at the axis' zero: too few to judge the axis) in a work
+    object no unit moves are named, the axis possibly carrying the arm, but the one at the axis' zero
+    (the arm where its model has it); held at one value (no evidence) they
+    are corrected as arm targets, and those the arm at a fixed base cannot reach were named 'no
+    solution ... (out of reach)' alone, which blames the target: their eax_a may carry the arm (here
+    a track), and the reason says so with the values and the cell file to give; the reachable one is
+    corrected; every motion accounted."""
     path = tmp_path / "Track_T_ROB1.mod"
     path.write_text(TRACK_TASK)
     res = filter_program(path, perturbed(ABB, 7), ABB, keep_unreached=True)
     status = {m.line: (m.status, m.reason) for m in res.motions}
     assert len(res.motions) == 3 and status[9][0] == "corrected"
-    for line, value in ((7, "3079.80"), (8, "2749.92")):
+    assert all(status[k][0] == "named" and "eax_a varies (0 .. 3079.8) over 3 target(s)" in status[k][1]
+               for k in (7, 8))
+    path.write_text(TRACK_TASK.replace("[2749.92,9E9", "[3079.80,9E9").replace("[0.00,9E9", "[9E9,9E9"))
+    res = filter_program(path, perturbed(ABB, 7), ABB, keep_unreached=True)
+    status = {m.line: (m.status, m.reason) for m in res.motions}
+    assert len(res.motions) == 3 and status[9][0] == "corrected"
+    for line, value in ((7, "3079.80"), (8, "3079.80")):
         assert status[line][0] == "named"
         assert "out of reach" in status[line][1] and f"eax_a = {value}" in status[line][1]
         assert "if those axes move the arm" in status[line][1] and "--model CELL.yaml" in status[line][1]
@@ -192,3 +201,131 @@ def test_binary_module_is_said_binary_and_utf16_still_named(tmp_path):
         wide.write_bytes("MODULE A ! 注释\nENDMODULE\n".encode(codec))
         with pytest.raises(DataError, match="looks UTF-16 encoded"):
             ProgramText(wide)
+
+
+# --------------------------------------------------------- does an external axis carry the arm?
+# (the data decide what the RAPID / KRL text cannot: robocal.programs.carrier)
+QUAT = "[0,0.7071068,0.7071068,0]"
+
+
+def _task(rows: list[tuple[tuple[float, float, float], str]], name: str = "Cell_T_ROB1") -> str:
+    """A RAPID task of inline robtargets ``(x, y, z) mm, extax text`` in a world work object, written
+    as an exported COMPAS RRC program is."""
+    moves = [f"MoveL [[{x:.2f},{y:.2f},{z:.2f}],{QUAT},[0,0,0,0],[{ext}]]\\ID:={k},{TAIL}"
+             for k, ((x, y, z), ext) in enumerate(rows, 1)]
+    return "\n".join(["MODULE " + name, f"PERS tooldata HeatGun:={TOOL};",
+                      f"TASK PERS wobjdata DefaultFrame:={WOBJ};",
+                      "TASK PERS speeddata Speed000:=[100.00,180.00,5000.00,1080.00];", "PROC Main()",
+                      *moves, "ENDPROC", "ENDMODULE", ""])
+
+
+def _filtered(tmp_path, text: str, **kw):
+    path = tmp_path / "Cell_T_ROB1.mod"
+    path.write_text(text)
+    return path, filter_program(path, perturbed(ABB, 7), ABB, keep_unreached=True, **kw)
+
+
+def test_a_track_the_targets_follow_carries_the_arm(tmp_path):
+    """A task along a track (the ECL cell's: 10 targets, x = 3693.7 - eax_a, y drifting 100 mm): the
+    targets follow eax_a at 1 mm per mm, so the axis carries the arm: all 10 motions named with
+    the slope and direction measured (independent truth: the written relation), the cell file or
+    --fixed-base to give; with fixed_base they are corrected as arm targets (or named out of
+    reach with no word of a track); every motion accounted either way."""
+    e = np.linspace(72.81, 3079.80, 10)
+    rows = [((3693.7 - v, 326.2 - 0.03 * (3079.8 - v), 1040.7), f"{v:.2f},9E9,9E9,9E9,9E9,9E9") for v in e]
+    path, res = _filtered(tmp_path, _task(rows))
+    assert res.summary_dict()["motions"] == {"total": 10, "corrected": 0, "named": 10}
+    slope = np.hypot(1.0, 0.03)
+    u = np.array([-1.0, 0.03, 0.0]) / slope
+    want = f"{slope:.2f} mm per mm along ({', '.join(f'{c:.2f}' for c in u)}), correlation 1.00"
+    for m in res.motions:
+        assert "external axis eax_a carries the arm (a track or gantry)" in m.reason and want in m.reason
+        assert "--model CELL.yaml" in m.reason and "--fixed-base" in m.reason
+    _, res = _filtered(tmp_path, _task(rows), fixed_base=True)
+    assert res.summary_dict()["motions"]["total"] == 10
+    assert not any("carries the arm" in m.reason or "if those axes" in m.reason for m in res.motions)
+    assert {m.status for m in res.motions} == {"corrected", "named"}  # x 600..3600 mm: some out of reach
+
+
+def test_a_gantry_carrying_the_arm_is_named_on_each_axis(tmp_path):
+    """A 3-axis gantry (the ZhongXun cell's eax_a, eax_b, eax_c in mm) with the arm hanging from it: the
+    targets follow the gantry's x axis with the arm's own reach added: named, not corrected at a
+    fixed base far from where the arm is (-8000 mm)."""
+    rng = np.random.default_rng(3)
+    a = np.array([-8175.6, -6200.0, -4100.0, -2500.0, -800.0, 0.0, 859.8, 2643.7])
+    b = rng.uniform(-600, 500, a.size)
+    c = rng.uniform(-500, 450, a.size)
+    reach = rng.uniform(-300, 300, (a.size, 3))
+    rows = [((1200 + a[k] + reach[k, 0], 200 + reach[k, 1], 900 + reach[k, 2]),
+             f"{a[k]:.2f},{b[k]:.2f},{c[k]:.2f},9E9,9E9,9E9") for k in range(a.size)]
+    _, res = _filtered(tmp_path, _task(rows))
+    assert res.summary_dict()["motions"] == {"total": 8, "corrected": 0, "named": 8}
+    carried = sum("external axis eax_a carries the arm" in m.reason for m in res.motions)
+    assert carried == 7  # the eighth is at eax_a = 0: named for eax_b / eax_c
+    assert all("eax_b" in m.reason or "eax_c" in m.reason for m in res.motions if "eax_a" not in m.reason)
+
+
+def test_a_linear_axis_the_targets_do_not_follow_may_carry_the_arm(tmp_path):
+    """The ECL sheet-forming task: eax_a 979 .. 1189 mm (no positioner turn reads that: a linear
+    axis) while the heat gun stays on one point: the arm reaches back as the track moves, which the
+    data cannot tell from a linear work slide: named, the reason says why; 6 motions."""
+    e = [1054.42, 1084.45, 1056.57, 1078.07, 1108.62, 1189.48]
+    _, res = _filtered(tmp_path, _task([((1640.5, 446.2, 856.1), f"{v},9E9,9E9,9E9,9E9,9E9") for v in e]))
+    assert res.summary_dict()["motions"] == {"total": 6, "corrected": 0, "named": 6}
+    assert all("external axis eax_a varies (1054.42 .. 1189.48) beyond any positioner turn" in m.reason
+               for m in res.motions)
+
+
+def test_an_uncoordinated_positioner_stays_corrected(tmp_path):
+    """Issue 45's goal kept: a positioner the work object does not follow, turning (eax_b -90 .. 90 deg)
+    under targets all over the arm's reach (no line in its values), and a constant track value:
+    the 7 motions are corrected as arm targets, one warning counting them; nothing named."""
+    pts = [(1100, -300, 800), (1300, 250, 950), (1150, 100, 1000), (1250, -200, 850), (1200, 300, 900),
+           (1100, 0, 950), (1300, -100, 800)]
+    ang = [-90, 45, 0, 90, -45, 30, 60]
+    rows = [(p, f"500,{v},9E9,9E9,9E9,9E9") for p, v in zip(pts, ang, strict=True)]
+    _, res = _filtered(tmp_path, _task(rows))
+    assert res.summary_dict()["motions"] == {"total": 7, "corrected": 7, "named": 0}
+    said = [w for w in res.warnings if "external-axis values" in w]
+    assert len(said) == 1 and said[0].startswith("7 target(s) carry external-axis values (eax_a, eax_b)")
+
+
+def test_the_filter_command_takes_fixed_base(tmp_path, capsys):
+    """robocal filter --fixed-base: the short track task's targets, named by default, are corrected
+    as arm targets; the output is what the API gives with fixed_base=True."""
+    from robocal.cli import main
+
+    rows = [((1200, -200, 900), "800,9E9,9E9,9E9,9E9,9E9"), ((1250, 0, 950), "1450,9E9,9E9,9E9,9E9,9E9"),
+            ((1300, 200, 900), "2100,9E9,9E9,9E9,9E9,9E9")]
+    path, _ = _filtered(tmp_path, _task(rows))
+    cal = perturbed(ABB, 7)
+    cal.save(tmp_path / "cal.yaml")
+    args = ["filter", str(path), "--calibrated", str(tmp_path / "cal.yaml"), "--nominal", "abb_irb4600",
+            "-o", str(tmp_path / "out.mod")]
+    assert main(args) == 0
+    assert "3 motions: 0 corrected" in capsys.readouterr().out
+    assert main([*args, "--fixed-base", "--force"]) == 0
+    assert "3 motions: 3 corrected" in capsys.readouterr().out
+    api = tmp_path / "api.mod"
+    filter_program(path, cal, ABB, fixed_base=True).write(api)
+    assert (tmp_path / "out.mod").read_bytes() == api.read_bytes()
+
+
+def test_a_cells_positioner_axes_are_not_weighed(tmp_path):
+    """With a cell whose positioner is eax_b / eax_c (logical axes 2, 3), targets in a world work object
+    carrying varying eax_b values (3 targets, too few to judge with a plain arm: named) are not
+    suspected of carrying the arm: the cell file says that axis is the positioner's, which the
+    work object does not follow: corrected as arm targets."""
+    import cell_programs as cp
+
+    nominal, _, calibrated = cp.cells(0)
+    arm = nominal.arms["arm"]
+    rows = [((1000, -200, 900), "9E9,-30,10,9E9,9E9,9E9"), ((1050, 0, 950), "9E9,15,10,9E9,9E9,9E9"),
+            ((1100, 200, 900), "9E9,60,10,9E9,9E9,9E9")]
+    path = tmp_path / "Cell_T_ROB1.mod"
+    path.write_text(_task(rows))
+    res = filter_program(path, calibrated, nominal, keep_unreached=True)
+    assert res.summary_dict()["motions"] == {"total": 3, "corrected": 3, "named": 0}
+    res = filter_program(path, perturbed(arm, 7), arm, keep_unreached=True)
+    assert res.summary_dict()["motions"] == {"total": 3, "corrected": 0, "named": 3}
+    assert all("eax_b varies (-30 .. 60) over 3 target(s)" in m.reason for m in res.motions)

@@ -113,9 +113,10 @@ def test_targets_without_a_track_value_are_named(tmp_path):
 
 
 def test_a_six_axis_nominal_takes_track_targets_as_arm_targets_and_says_so(tmp_path):
-    """eax_a values in wobj0 with a plain arm: no work object follows them, so the targets are
-    corrected as arm targets (issue 45's rule), and one warning says that a track carrying the arm
-    needs its cell file."""
+    """eax_a values in wobj0 with a plain arm: no work object follows them; two targets at two
+    values are too few to tell a track carrying the arm from a positioner: named (the safe side);
+    declared fixed (``fixed_base``) they are corrected as arm targets (issue 45's rule), and one
+    warning says so."""
     from robocal import Robot
     from robocal.core.errors import DataError
 
@@ -123,10 +124,13 @@ def test_a_six_axis_nominal_takes_track_targets_as_arm_targets_and_says_so(tmp_p
     path = tmp_path / "m.mod"
     path.write_text(text)
     robot = Robot.from_catalog("abb_irb2600")
-    res = filter_program(path, robot, robot, keep_unreached=True)  # one is out of the arm's reach alone
+    res = filter_program(path, robot, robot, keep_unreached=True)
+    assert res.summary_dict()["motions"] == {"total": 2, "corrected": 0, "named": 2}
+    assert all("too few to tell a track or gantry" in m.reason for m in res.motions)
+    res = filter_program(path, robot, robot, keep_unreached=True, fixed_base=True)  # one out of reach alone
     assert res.summary_dict()["motions"]["total"] == 2
-    assert not any("external axes" in m.reason for m in res.motions)
-    assert sum("if a track or gantry carries the arm, give its cell file" in w for w in res.warnings) == 1
+    assert not any("external axes" in m.reason or "if those axes" in m.reason for m in res.motions)
+    assert sum("no external axis carries the arm (--fixed-base)" in w for w in res.warnings) == 1
     seven = Robot(alpha=[0.0] * 7, a=[0.0] * 7, beta=[0.0] * 7, theta=[0.0] * 7, d=[0.1] * 7)
     with pytest.raises(DataError, match="on a track: give its cell model"):
         filter_program(path, seven, seven)

@@ -337,7 +337,7 @@ AX = ("positioner", "axes")
     (_with(CELL, P + ("external_axes",), [0, 1]), r"external_axes \[0, 1\]: expected"),
     (_with(CELL, P + ("external_axes",), [True, 2]), r"external_axes \[True, 2\]: expected"),
     (_with(CELL, P + ("external_axes",), 2), r"positioner.external_axes: expected a list of logical"),
-    (_with(CELL, P + ("program_axes",), ["eax_b", "eax_c"]), r"positioner.program_axes: now external_axes"),
+    (_with(CELL, P + ("program_axes",), ["eax_b", "eax_c"]), r"program_axes"),
     (_with(CELL, P + ("model",), "abb_irbp_a250"), r"give exactly one geometry"),
     (_with(CELL, P + ("axes",), DELETE), r"give exactly one geometry.*found none"),
     (_with(CELL, P + ("limits",), [[-1, 1], [-1, 1]]), r"positioner.limits: only with a dh or mdh table"),

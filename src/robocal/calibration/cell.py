@@ -29,6 +29,7 @@ import datetime
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -40,8 +41,11 @@ from robocal.core.yaml_load import dump_yaml
 from robocal.data.cell_measurements import CellMeasurements
 from robocal.data.measurements import Measurements
 from robocal.data.registration import umeyama
-from robocal.kinematics.prior_spec import POSITIONER_CLASS, PriorSpec
+from robocal.kinematics.positioner import nests_in_last_frame, with_positioner_priors
 from robocal.kinematics.transforms import invert_transform, matrix_to_rotvec
+
+if TYPE_CHECKING:  # annotations only
+    from robocal.kinematics.workcell import Cell
 
 CELL_RESULT_FORMAT = "robocal-cell-calibration/1"
 BASE = tuple(f"base.{f}" for f in ("x", "y", "z", "rx", "ry", "rz"))
@@ -213,16 +217,6 @@ class CellCalibration:
 
 
 # ---------------------------------------------------------------------------------- the bodies
-def _with_positioner_priors(chain):
-    """A positioner's chain with the positioner prior class where the chain names none (a 3-axis
-    positioner is no arm either)."""
-    spec = chain.priors
-    if spec is not None and spec.robot_class is not None:
-        return chain
-    return chain.with_priors(PriorSpec(POSITIONER_CLASS) if spec is None else
-                             PriorSpec(POSITIONER_CLASS, spec.scales, spec.estimate))
-
-
 def _numbered(data: Measurements, smr_numbers: np.ndarray) -> Measurements:
     """``data`` with its SMRs renumbered to their index in ``smr_numbers`` (SMR 0 the first)."""
     missing = np.setdiff1d(data.smr, smr_numbers)
@@ -232,15 +226,21 @@ def _numbered(data: Measurements, smr_numbers: np.ndarray) -> Measurements:
     return replace(data, smr=np.searchsorted(smr_numbers, data.smr))
 
 
+def check_declared_nests(data: Measurements, n_nests: int, body: str) -> None:
+    """Refuse plate rows ``data`` of positioner ``body`` whose SMR is not one of its ``n_nests``
+    declared nests (SMR k sits in nest k, 1-based; SMR 0, the plate's origin, is no nest)."""
+    bad = data.smr[(data.smr < 1) | (data.smr > n_nests)]
+    if bad.size:
+        raise DataError(f"{data.label}: SMR {int(bad[0])} on {body}'s plate is not a declared nest (nests 1.."
+                        f"{n_nests}; SMR 0, the plate's origin, is no nest)")
+
+
 def _nest_rows(data: Measurements, n_nests: int, body: str) -> Measurements:
     """A plate's point rows as nest observations (SMR k in nest k, 1-based)."""
     if data.kind != "point":
         raise DataError(f"{data.label}: the plate of {body} declares nests: its rows must be SMR points "
                         f"(x, y, z), not {data.kind}")
-    bad = data.smr[(data.smr < 1) | (data.smr > n_nests)]
-    if bad.size:
-        raise DataError(f"{data.label}: SMR {int(bad[0])} on {body}'s plate is not a declared nest (nests 1.."
-                        f"{n_nests}; SMR 0, the plate's origin, is no nest)")
+    check_declared_nests(data, n_nests, body)
     return replace(data, kind="nest")
 
 
@@ -270,7 +270,7 @@ def _body(cell, name: str, data: Measurements, validation: Measurements | None, 
     if name in cell.arms:
         return _Body(cell.arms[name], data, validation, params, True)
     positioner = cell.positioners[name]
-    chain = _with_positioner_priors(positioner.chain)
+    chain = with_positioner_priors(positioner.chain)
     if positioner.nests is not None:
         chain = replace(chain, smr=np.asarray(positioner.nests, float), nominal=None)
         rows = _nest_rows(data, len(chain.smr), name)
@@ -296,7 +296,7 @@ def _in_tracker(cell, name: str, body: _Body, robot):
     if positioner.nests is None:
         return replace(robot, tool=positioner.chain.tool, smr=positioner.chain.smr, nominal=None)
     nests = np.asarray(positioner.nests, float)
-    return replace(robot, smr=nests @ robot.tool[:3, :3].T + robot.tool[:3, 3], nominal=None)
+    return replace(robot, smr=nests_in_last_frame(robot, nests), nominal=None)
 
 
 def _plate(cell, name: str, body: _Body, result) -> PlateSolution:
@@ -372,11 +372,9 @@ def _base_covariance(result) -> np.ndarray:
     """The covariance ``(6, 6)`` of a calibration's base parameters (0 where one was not estimated)."""
     names = list(result.unknowns)
     cov = np.zeros((6, 6))
-    idx = [names.index(n) if n in names else -1 for n in BASE]
-    for i, a in enumerate(idx):
-        for j, b in enumerate(idx):
-            if a >= 0 and b >= 0:
-                cov[i, j] = result.covariance[a, b]
+    held = np.array([n in names for n in BASE])
+    idx = [names.index(n) for n in BASE if n in names]
+    cov[np.ix_(held, held)] = result.covariance[np.ix_(idx, idx)]
     return cov
 
 
@@ -396,8 +394,8 @@ def _as_cell_data(cell, data, what: str) -> CellMeasurements | None:
                     f"cell)), got {type(data).__name__}")
 
 
-def calibrate_cell(cell, data, calibrate_body: Callable, *, params="auto", validation=None,
-                   **options) -> CellCalibration:
+def calibrate_cell(cell: Cell, data: CellMeasurements | Measurements, calibrate_body: Callable, *,
+                   params="auto", validation: CellMeasurements | None = None, **options) -> CellCalibration:
     """Calibrate a work cell: each body on its rows with ``calibrate_body`` (`rc.calibrate`), then
     the relations to the anchor and the calibrated cell in the controller's world.
 

@@ -14,14 +14,19 @@ other) until the frame moves less than `FRAME_STEP_TOL`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from robocal.calibration.cell import check_declared_nests
 from robocal.core.errors import DataError, IdentificationError
 from robocal.core.io import write_all
 from robocal.data.cell_measurements import CellMeasurements
-from robocal.data.registration import umeyama
+from robocal.data.registration import smr_offsets_lsq, umeyama
 from robocal.report.metrics import position_stats
+
+if TYPE_CHECKING:  # annotations only
+    from robocal.kinematics.workcell import Cell
 
 FRAME_STEP_TOL = 1e-12  # m: the alternation stops when the frame's points move less than this
 MAX_ALTERNATIONS = 500
@@ -50,9 +55,7 @@ def _rows(cell, name: str, data) -> tuple[_Rows, int]:
     known = np.zeros((len(data), 3))
     nests = cell.positioners[name].nests if name in cell.positioners else None
     if nests is not None:
-        bad = data.smr[(data.smr < 1) | (data.smr > len(nests))]
-        if bad.size:
-            raise DataError(f"{data.label}: SMR {int(bad[0])} on {name}'s plate is not a declared nest")
+        check_declared_nests(data, len(nests), name)
         plate = chain.fk(data.joints)
         known = np.einsum("nij,nj->ni", plate[:, :3, :3], np.asarray(nests)[data.smr - 1]) + plate[:, :3, 3]
         return _Rows(R, o, np.full(len(data), -1), known, data.points), 0
@@ -72,11 +75,7 @@ def _offsets(rows: _Rows, k: int, W: np.ndarray) -> np.ndarray:
     ``R_i^T (W^-1 p_i - o_i)`` over its rows (exact least squares: the R_i are rotations)."""
     if not k:
         return np.zeros((0, 3))
-    local = (rows.measured - W[:3, 3]) @ W[:3, :3]
-    v = np.einsum("nji,nj->ni", rows.R, local - rows.o)
-    sums = np.zeros((k, 3))
-    np.add.at(sums, rows.slot, v)
-    return sums / np.bincount(rows.slot, minlength=k)[:, None]
+    return smr_offsets_lsq(rows.R, rows.o, (rows.measured - W[:3, 3]) @ W[:3, :3], rows.slot, k)
 
 
 @dataclass(eq=False)
@@ -121,7 +120,7 @@ class CellEvaluation:
         return [str(json_path)]
 
 
-def evaluate_cell(cell, data: CellMeasurements) -> CellEvaluation:
+def evaluate_cell(cell: Cell, data: CellMeasurements) -> CellEvaluation:
     """Judge ``cell`` (a calibrated cell in its world, or a nominal one) on the SMR points ``data``
     of its bodies, in one tracker frame fitted once for all (module docstring).
 

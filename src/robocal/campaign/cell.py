@@ -26,6 +26,7 @@ import csv
 import io
 import json
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -38,6 +39,9 @@ from robocal.core.io import write_all
 from robocal.core.version import __version__
 from robocal.identify import vocabulary
 from robocal.programs.dialects.writing import ExternalAxes
+
+if TYPE_CHECKING:  # annotations only
+    from robocal.kinematics.workcell import Cell
 
 FORMAT = "robocal-cell-campaign/1"
 
@@ -249,7 +253,7 @@ def _axis_lines(arm, q: np.ndarray) -> np.ndarray:
     return np.stack([points[:-1], points[1:]], axis=1)
 
 
-def plan_cell(cell, arm_poses: dict[str, int], table_poses: dict[str, int], *,
+def plan_cell(cell: Cell, arm_poses: dict[str, int], table_poses: dict[str, int], *,
               constraints: Constraints | None = None, smr: dict | None = None, nests: dict | None = None,
               park: dict | None = None, noise_mm: float = 0.02, noise_model: str = "isotropic",
               criterion: str = "I", seed: int = 0, starts: int = 4, n_candidates: int = 5000,

@@ -251,8 +251,9 @@ def _segment_point_distance(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.n
     return np.linalg.norm(a + t[..., None] * ab - p, axis=-1)
 
 
-def _segment_segment_distance(p1, q1, p2, q2) -> np.ndarray:
-    """Shortest distance between segments ``p1 -> q1`` and ``p2 -> q2`` (broadcast), the
+def segment_segment_distance(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> np.ndarray:
+    """Shortest distance (m, shape: the broadcast of the inputs but the last axis) between segments
+    ``p1 -> q1`` and ``p2 -> q2`` (points ``(..., 3)`` m, broadcast), the
     clamped closest-point construction (Ericson, Real-Time Collision Detection 5.1.9)."""
     d1, d2, r = q1 - p1, q2 - p2, p1 - p2
     a = np.sum(d1 * d1, axis=-1)
@@ -342,7 +343,7 @@ def apply(robot, q: np.ndarray, constraints: Constraints, smr: np.ndarray, norma
         origins = frames[:, :, :3, 3]                               # (N, n + 1, 3)
         if tracker.arm_radius_m is not None:
             arm = origins[:, : BEAM_ARM_FRAME + 1]
-            gap = _segment_segment_distance(arm[:, None, :-1], arm[:, None, 1:],
+            gap = segment_segment_distance(arm[:, None, :-1], arm[:, None, 1:],
                                             pos[:, :, None], tracker.position)
             visible &= gap.min(axis=2) > tracker.arm_radius_m
             step(f"the arm blocking the beam (arm radius {tracker.arm_radius_m * 1e3:g} mm)",

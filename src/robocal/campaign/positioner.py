@@ -1,5 +1,5 @@
 """The table angles of a positioner's calibration campaign: SMR nests on the plate measured at angle
-pairs chosen so that the axes are found (issue 45).
+sets chosen so that the axes are found (issue 45).
 
 A positioner is a `Robot` (its ``base`` the mount in the world, its ``tool`` the plate frame,
 its joints its axes: ``Positioner.chain``). The laser tracker measures SMRs sitting in nests on the
@@ -33,18 +33,18 @@ and nests have none), and the I criterion ``trace(M^-1 A)`` with ``A`` the mean 
 nests' positions over a region of table angles: its square root is the predicted RMS error of the
 calibrated positioner at a nest seen at any angle (m), before the noise of a check measurement
 (`TablePlan.predicted_heldout_mm` adds it). The same figures for a naive grid of as many angle
-pairs (`table_grid`) are the baseline the plan is compared with.
+sets (`table_grid`) are the baseline the plan is compared with.
 """
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from robocal.calibration.cell import PLATE_HELD, _with_positioner_priors
-from robocal.campaign.constraints import Funnel, Tracker, _segment_segment_distance, limits_with_margin
+from robocal.calibration.cell import PLATE_HELD
+from robocal.campaign.constraints import Funnel, Tracker, limits_with_margin, segment_segment_distance
 from robocal.campaign.exchange import CRITERIA, averaged_search, criterion_value
 from robocal.campaign.order import measuring_order
 from robocal.campaign.programs import DEGREE_DECIMALS, fixed_point
@@ -56,6 +56,7 @@ from robocal.identify.identifiability import Identifiability, analyze
 from robocal.identify.priors import prior_sigma
 from robocal.ik.path import default_weights, travel
 from robocal.kinematics.model import Robot
+from robocal.kinematics.positioner import ZERO_AXIS, with_positioner_priors
 from robocal.trust.posterior import Noise, judge
 
 DEFAULT_TABLE_CANDIDATES = 2000     # angle sets drawn in the limits
@@ -64,6 +65,8 @@ DEFAULT_TABLE_MARGIN_DEG = 1.0      # generated angles stay this far inside the 
 NEST_NORMAL = (0.0, 0.0, 1.0)       # a nest's SMR faces along the plate z axis
 ROUND_DECIMALS_DEG = 4              # generated angles are rounded to 1e-4 deg (1e-4 mm)
 MAX_TABLE_DRAWS = 20                # candidate batches drawn before the tracker is declared blind
+FULL_TURN_TOL = 1e-9                # rad: a revolute range this close to 2 pi is a whole turn
+GRID_MIN_SPAN = 1e-9                # deg (mm): an axis' range counted no narrower in the grid's levels
 FORMAT = "robocal-table-campaign/1"
 
 
@@ -159,10 +162,15 @@ class TablePlan:
                  f"{self.n} angle sets: " + self._grid_text(),
                  f"{vocabulary.counts(ident)}; condition number {ident.condition_number:.3g} "
                  f"({ident.condition_class})",
-                 "predicted 1-sigma after calibration: " + axis_sigma_text(self.sigma),
+                 "predicted 1-sigma after calibration: " + axis_sigma_text(self.sigma, self._units()),
                  f"candidates: {self.funnel.text()}"]
         lines += vocabulary.lines(ident, indent="  ")
         return "\n".join(lines + [f"WARNING: {w}" for w in self.warnings])
+
+    def _units(self) -> dict[str, str]:
+        """Each parameter's SI unit (`Robot.parameter_units`; the nests as the chain's SMRs)."""
+        model = replace(self.chain, smr=self.nests, nominal=None)
+        return dict(zip(model.parameter_names, model.parameter_units(), strict=True))
 
     def _grid_text(self) -> str:
         if not np.isfinite(self.grid_rms_mm):
@@ -201,15 +209,11 @@ class TablePlan:
         return [str(json_path)]
 
 
-def axis_sigma_text(sigma: dict) -> str:
-    """The predicted 1-sigma of the parameters (m, rad) as 'name value unit' in mm and mdeg."""
-    return ", ".join(f"{k} {v * 1e3:.3g} mm" if _is_length(k) else f"{k} {np.rad2deg(v) * 1e3:.3g} mdeg"
+def axis_sigma_text(sigma: dict[str, float], units: dict[str, str]) -> str:
+    """The predicted 1-sigma of the parameters (SI: ``units`` their 'm' or 'rad', as
+    `Robot.parameter_units` gives them) as 'name value unit' in mm and mdeg."""
+    return ", ".join(f"{k} {v * 1e3:.3g} mm" if units[k] == "m" else f"{k} {np.rad2deg(v) * 1e3:.3g} mdeg"
                      for k, v in sigma.items())
-
-
-def _is_length(name: str) -> bool:
-    field_name = name.split(".")[-1] if "." in name else name.rstrip("0123456789")
-    return field_name in ("a", "d", "x", "y", "z")
 
 
 def nest_geometry(chain: Robot, q: np.ndarray, nests: np.ndarray,
@@ -237,7 +241,7 @@ def nest_visibility(chain: Robot, q: np.ndarray, nests: np.ndarray, normals: np.
     lo, hi = tracker.range_m
     seen = (cos >= np.cos(np.deg2rad(tracker.acceptance_deg))) & (dist >= lo) & (dist <= hi)
     if obstacles is not None and len(obstacles) and tracker.arm_radius_m is not None:
-        gap = _segment_segment_distance(obstacles[:, 0], obstacles[:, 1], pos[..., None, :],
+        gap = segment_segment_distance(obstacles[:, 0], obstacles[:, 1], pos[..., None, :],
                                         tracker.position)       # (N, K, S)
         seen &= gap.min(axis=2) > tracker.arm_radius_m
     return seen
@@ -296,7 +300,7 @@ def _blocks(chain: Robot, q: np.ndarray, visible: np.ndarray, nests: np.ndarray,
     pos, _ = nest_geometry(chain, q, nests, np.zeros_like(nests))
     W = noise.whitener(pos.reshape(-1, 3)).reshape(len(q), len(nests), 3, 3)
     Jw = np.einsum("nkij,nkjp->nkip", W, J) * visible[:, :, None, None]
-    sigma = prior_sigma(_with_positioner_priors(chain), names)  # the priors its calibration carries
+    sigma = prior_sigma(with_positioner_priors(chain), names)  # the priors its calibration carries
     if structure is None:  # what is identifiable is structural: all candidates together
         rows = Jw[visible].reshape(-1, len(names))
         structure = analyze(rows, names, len(q))
@@ -332,12 +336,13 @@ def table_grid(chain: Robot, n: int, margin_deg: float = DEFAULT_TABLE_MARGIN_DE
     lim = limits_with_margin(chain, margin_deg)
     span = np.where(chain.prismatic, (lim[:, 1] - lim[:, 0]) * 1e3,   # mm counts as deg, as elsewhere
                     np.rad2deg(np.minimum(lim[:, 1] - lim[:, 0], 2 * np.pi)))
+    log_span = np.log(np.maximum(span, GRID_MIN_SPAN))
     counts = min(_factorings(n, chain.n_joints),
-                 key=lambda c: float(np.ptp(np.log(np.array(c, float)) - np.log(np.maximum(span, 1e-9)))))
+                 key=lambda c: float(np.ptp(np.log(np.array(c, float)) - log_span)))
     axes = []
     for i, c in enumerate(counts):
         lo, hi = lim[i]
-        if not chain.prismatic[i] and hi - lo >= 2 * np.pi - 1e-9:
+        if not chain.prismatic[i] and hi - lo >= 2 * np.pi - FULL_TURN_TOL:
             hi = lo + 2 * np.pi * (1 - 1 / c)
         axes.append(np.linspace(lo, hi, c) if c > 1 else np.array([(lo + hi) / 2]))
     mesh = np.meshgrid(*axes, indexing="ij")
@@ -399,17 +404,7 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
         Bad counts or nests (not a finite (K, 3) array), a criterion other than I or D, or no angle
         at which the tracker sees a nest.
     """
-    if not isinstance(n, int | np.integer) or n < 1:
-        raise DataError(f"the number of table angle sets must be a positive integer, got {n!r}")
-    if criterion not in CRITERIA[:2]:
-        raise DataError(f"the table's criterion is I or D, got {criterion!r}")
-    nests = _check_nests(nests)
-    normals = np.tile(NEST_NORMAL, (len(nests), 1)) if normals is None else np.asarray(normals, float)
-    if normals.shape != nests.shape or (np.linalg.norm(normals, axis=1) < 1e-9).any():
-        raise DataError(f"give one non-zero facing direction per nest ({len(nests)} nests)")
-    normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
-    if int(n_candidates) < n or int(region_size) < 1 or int(starts) < 1:
-        raise DataError("n_candidates must be >= the angle sets asked for; region_size and starts >= 1")
+    nests, normals = _table_settings(n, criterion, nests, normals, n_candidates, region_size, starts)
     noise = Noise(sigma_m=float(noise_mm) * 1e-3, model=noise_model,
                   tracker_position=None if tracker is None else tracker.position)
     rng = np.random.default_rng(seed)
@@ -433,30 +428,15 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
     found = averaged_search([(b.G, A, b.prior)], n, criterion=criterion, starts=int(starts), seed=seed)
     weights = default_weights(chain)
     chosen = found.indices[measuring_order(chain, q[found.indices], weights)]
-    # the naive grid of as many angle sets, with what the tracker sees there
-    q_grid = table_grid(chain, n, margin_deg)
-    v_grid = nest_visibility(chain, q_grid, nests, normals, tracker, obstacles)
-    g, Jg, Jgw = _blocks(chain, q_grid, v_grid, nests, names, noise, b.structure)
+    ms_grid, grid_missing = _grid_baseline(chain, n, margin_deg, nests, normals, tracker, obstacles, names,
+                                           noise, b, A)
     heldout_noise = _noise_ms(noise, nest_geometry(chain, q_region, nests, normals)[0].reshape(-1, 3))
     ms = criterion_value(b.G, A, chosen, "I", b.prior)
-    ms_grid = criterion_value(g.G / b.scale * g.scale, A, np.arange(len(q_grid)), "I", b.prior)
     sigma = _kept_sigma(b, chosen)
     rows = visible[chosen].reshape(-1)
     ident = judge(J[chosen].reshape(-1, len(names))[np.repeat(rows, 3)],
                   Jw[chosen].reshape(-1, len(names))[np.repeat(rows, 3)], names, b.sigma, n)
-    grid_rows = np.repeat(v_grid.reshape(-1), 3)
-    grid_ident = judge(Jg.reshape(-1, len(names))[grid_rows], Jgw.reshape(-1, len(names))[grid_rows], names,
-                       b.sigma, len(q_grid)) if v_grid.any() else None
-    grid_missing = [nm for nm in b.structure.kept if grid_ident is None or nm not in grid_ident.kept
-                    or nm in grid_ident.undetermined]
-    warnings = []
-    if not nests_known:
-        warnings.append("the nests' plate positions are estimated: the last axis' zero is confounded with "
-                        "their rotation about it and is held at nominal; declare the nests (their known "
-                        "plate positions) to identify it with the plate frame")
-    if not np.isfinite(ms_grid) or grid_missing:
-        warnings.append(f"a grid of {n} angle sets does not determine the positioner (the tracker sees too "
-                        "few nests there): the plan's angles matter here")
+    warnings = _table_warnings(n, nests_known, ms_grid, grid_missing)
     return TablePlan(
         chain=chain, name=name or chain.name, joints=q[chosen], visible=visible[chosen], nests=nests,
         nests_known=nests_known, predicted_rms_mm=float(np.sqrt(ms) * 1e3),
@@ -470,6 +450,57 @@ def plan_table(chain: Robot, n: int, *, nests, nests_known: bool = True, normals
                   "travel": travel(q[chosen], weights), "normals": normals.tolist(),
                   "tracker_mm": None if tracker is None else (tracker.position * 1e3).tolist()},
         warnings=warnings)
+
+
+def _table_settings(n: int, criterion: str, nests, normals, n_candidates: int, region_size: int,
+                    starts: int) -> tuple[np.ndarray, np.ndarray]:
+    """`plan_table`'s arguments checked: the nests ``(K, 3)`` (m, plate frame) and their unit facing
+    directions ``(K, 3)`` (default the plate's z axis); DataError naming the bad one."""
+    if not isinstance(n, int | np.integer) or n < 1:
+        raise DataError(f"the number of table angle sets must be a positive integer, got {n!r}")
+    if criterion not in CRITERIA[:2]:
+        raise DataError(f"the table's criterion is I or D, got {criterion!r}")
+    nests = _check_nests(nests)
+    normals = np.tile(NEST_NORMAL, (len(nests), 1)) if normals is None else np.asarray(normals, float)
+    if normals.shape != nests.shape or (np.linalg.norm(normals, axis=1) < ZERO_AXIS).any():
+        raise DataError(f"give one non-zero facing direction per nest ({len(nests)} nests)")
+    normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    if int(n_candidates) < n or int(region_size) < 1 or int(starts) < 1:
+        raise DataError("n_candidates must be >= the angle sets asked for; region_size and starts >= 1")
+    return nests, normals
+
+
+def _grid_baseline(chain: Robot, n: int, margin_deg: float, nests: np.ndarray, normals: np.ndarray,
+                   tracker: Tracker | None, obstacles: np.ndarray | None, names: list[str], noise: Noise,
+                   b: _Blocks, A: np.ndarray) -> tuple[float, list[str]]:
+    """The naive grid of as many angle sets (`table_grid`), with what the tracker sees there, judged
+    as the plan is: its mean squared error at the nests over the region (m^2, the I criterion in the
+    plan's scaling ``b`` and region matrix ``A``; inf when it does not determine the positioner) and
+    the parameters the plan estimates that it leaves to their priors (or cannot see)."""
+    q_grid = table_grid(chain, n, margin_deg)
+    v_grid = nest_visibility(chain, q_grid, nests, normals, tracker, obstacles)
+    g, Jg, Jgw = _blocks(chain, q_grid, v_grid, nests, names, noise, b.structure)
+    ms_grid = criterion_value(g.G / b.scale * g.scale, A, np.arange(len(q_grid)), "I", b.prior)
+    grid_rows = np.repeat(v_grid.reshape(-1), 3)
+    grid_ident = judge(Jg.reshape(-1, len(names))[grid_rows], Jgw.reshape(-1, len(names))[grid_rows], names,
+                       b.sigma, len(q_grid)) if v_grid.any() else None
+    missing = [nm for nm in b.structure.kept if grid_ident is None or nm not in grid_ident.kept
+               or nm in grid_ident.undetermined]
+    return ms_grid, missing
+
+
+def _table_warnings(n: int, nests_known: bool, ms_grid: float, grid_missing: list[str]) -> list[str]:
+    """What limits a table plan: estimated nests (the last axis' zero held), a grid that does not
+    determine the positioner."""
+    warnings = []
+    if not nests_known:
+        warnings.append("the nests' plate positions are estimated: the last axis' zero is confounded with "
+                        "their rotation about it and is held at nominal; declare the nests (their known "
+                        "plate positions) to identify it with the plate frame")
+    if not np.isfinite(ms_grid) or grid_missing:
+        warnings.append(f"a grid of {n} angle sets does not determine the positioner (the tracker sees too "
+                        "few nests there): the plan's angles matter here")
+    return warnings
 
 
 def _kept_sigma(b: _Blocks, chosen: np.ndarray) -> dict[str, float]:

@@ -1,5 +1,6 @@
 """Argument types and helpers shared by the subcommands: numbers, measurements read with the
-reader's notes printed, output formats, the FANUC joint option, warnings of a quiet run."""
+reader's notes printed, output formats, the FANUC joint option, warnings of a quiet run, whether a
+model file is a work cell."""
 
 from __future__ import annotations
 
@@ -7,10 +8,14 @@ import argparse
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from robocal.core.io import FORMATS as DATA_FORMATS
 from robocal.core.io import check_format as check_data_format
 from robocal.programs.registry import program_formats
+
+if TYPE_CHECKING:  # annotations only
+    from robocal.kinematics.workcell import Cell
 
 # robocal.data.instruments.INSTRUMENTS (a test checks), named here for --instrument's choices
 # without importing the data layer (0.4 s) to build the parser
@@ -55,6 +60,20 @@ def check_format(path, kind: str, option: str, hint: str = "") -> None:
     if path is not None and not (data_suffix and kind in DATA_FORMATS.values()):
         formats = DATA_FORMATS | program_formats()
     check_data_format(path, kind, option, hint, formats)
+
+
+def work_cell(spec: str, *, positioner: bool = False) -> Cell | None:
+    """The `robocal.Cell` a model argument describes when the command treats it as a work cell,
+    else None: a cell with a positioner, or (unless ``positioner``: the command's targets are on a
+    plate) with several arms. A single robot, or a file `robocal.load_cell` refuses, is None: the
+    robot's loading then says what is wrong with it."""
+    import robocal as rc
+
+    try:
+        cell = rc.load_cell(spec)
+    except rc.RobocalError:
+        return None
+    return cell if cell.positioners or (not positioner and len(cell.arms) > 1) else None
 
 
 def print_warnings(command: str, warnings) -> None:

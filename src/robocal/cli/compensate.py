@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import numbers
+from robocal.cli.args import numbers, work_cell
 
 EPILOG = """Examples:
   robocal compensate calibrated.yaml targets.csv --nominal abb_irb2600 -o commands.csv
@@ -88,7 +88,7 @@ def run(args) -> int:
     check_format(args.output, "CSV", "-o")
     check_format(args.parameters, "CSV", "--parameters")
     check_outputs([args.output, args.parameters], [args.calibrated, args.targets, args.nominal])
-    if (cell := _cell(args.calibrated)) is not None:  # targets on a positioner's plate
+    if (cell := work_cell(args.calibrated, positioner=True)) is not None:  # targets on a positioner's plate
         return _compensate_cell(args, cell)
     calibrated, nominal = load_model_pair(args.calibrated, args.nominal, "calibrated model")
     origin = calibrated.base[:3, 3] if args.targets_in == "model" else np.zeros(3)
@@ -110,17 +110,6 @@ def run(args) -> int:
     for warning in res.warnings:
         print(f"warning: {warning}")
     return 0 if res.converged.all() else 1
-
-
-def _cell(spec: str):
-    """The work cell a model file describes (arms and positioners), else None."""
-    import robocal as rc
-
-    try:
-        cell = rc.load_cell(spec)
-    except rc.RobocalError:
-        return None  # not a cell: the model pair's loading says what is wrong
-    return cell if cell.positioners else None
 
 
 def _compensate_cell(args, calibrated) -> int:

@@ -42,7 +42,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from robocal.calibration.evaluation import check_files_memory, evaluate
-    from robocal.cli.args import check_format, load_measurements
+    from robocal.cli.args import check_format, load_measurements, work_cell
     from robocal.core.io import check_outputs
     from robocal.history.record import evaluation_record, open_history, record_entry
     from robocal.kinematics.model import load_model
@@ -50,7 +50,7 @@ def run(args) -> int:
     check_format(args.json, "JSON", "--json")
     check_outputs([args.json], [args.model, args.data, args.frame_from])
     robot_id = open_history(args.history, args.robot_id)
-    if (cell := _cell(args.model)) is not None:  # every body in one tracker frame
+    if (cell := work_cell(args.model)) is not None:  # every body in one tracker frame
         return _evaluate_cell(args, cell)
     robot = load_model(args.model)
     check_files_memory([args.data, args.frame_from])  # before reading them
@@ -60,30 +60,13 @@ def run(args) -> int:
     stats = evaluate(robot, data, fit_frame=args.fit_frame, frame_from=frame_from, force=args.force,
                      names={"model": args.model, "data": args.data, "frame_from": args.frame_from},
                      instrument=args.instrument)
-    written = stats.write(args.json)
-    for warning in stats.warnings:
-        print(f"WARNING: {warning}")
-    if not args.quiet:
-        print(stats.summary())
-        for path in written:
-            print(f"wrote {path}")
+    _said(stats, stats.write(args.json), args.quiet)
     if args.history:  # after the files: the history is never the only copy
         files = [(args.data, "evaluation")] + ([(args.frame_from, "frame")] if args.frame_from else [])
         said = record_entry(args.history, evaluation_record(args.history, robot_id, robot, stats, files))
         if not args.quiet:
             print(said)
     return 0
-
-
-def _cell(spec: str):
-    """The work cell a model file describes (arms and positioners, or several arms), else None."""
-    import robocal as rc
-
-    try:
-        cell = rc.load_cell(spec)
-    except rc.RobocalError:
-        return None  # not a cell: load_model says what is wrong with it
-    return cell if cell.positioners or len(cell.arms) > 1 else None
 
 
 def _evaluate_cell(args, cell) -> int:
@@ -97,11 +80,15 @@ def _evaluate_cell(args, cell) -> int:
         raise DataError(f"evaluate with a work cell fits one tracker frame for every body itself: not "
                         f"{', '.join(unsupported)}")
     result = rc.evaluate(cell, rc.CellMeasurements.load(args.data, cell))
-    written = result.write(args.json) if args.json else []
+    _said(result, result.write(args.json) if args.json else [], args.quiet)
+    return 0
+
+
+def _said(result, written: list[str], quiet: bool) -> None:
+    """An evaluation's warnings, then (unless ``quiet``) its summary and the files written."""
     for warning in result.warnings:
         print(f"WARNING: {warning}")
-    if not args.quiet:
+    if not quiet:
         print(result.summary())
         for path in written:
             print(f"wrote {path}")
-    return 0

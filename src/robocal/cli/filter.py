@@ -64,6 +64,11 @@ def add_parser(sub) -> None:
     p.add_argument("--result", metavar="result.json",
                    help="the calibration's result JSON (calibrate --json): warn where targets lie whose "
                         "predicted error exceeds 3 x the validated one (outside the calibrated region)")
+    p.add_argument("--fixed-base", action="store_true",
+                   help="no external axis carries the arm (no track or gantry): targets with external-axis "
+                        "values in work objects no unit moves are corrected as arm targets (default: the "
+                        "targets of an axis that carries the arm, a track the targets follow, or may, are "
+                        "named)")
     p.add_argument("--keep-unreached", action="store_true",
                    help="leave targets that cannot be corrected unchanged (warning) instead of failing")
     p.add_argument("--position-registers", metavar="FILE.csv",
@@ -119,7 +124,8 @@ def run(args) -> int:
                          dialect=args.format, references=args.references, keep_unreached=args.keep_unreached,
                          force=args.force, strict=args.strict, position_registers=args.position_registers,
                          payload=payload_si(args.payload), temperature=args.temperature,
-                         payload_schedules=args.payload_schedules, prediction=prediction, arm=args.arm)
+                         payload_schedules=args.payload_schedules, prediction=prediction, arm=args.arm,
+                         fixed_base=args.fixed_base)
     written = res.write({p: targets[Path(p)] for p in res.outputs}, table)
     if args.quiet:  # the warnings still matter
         for w in res.warnings:

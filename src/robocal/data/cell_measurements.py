@@ -32,6 +32,7 @@ import re
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -39,6 +40,9 @@ from robocal.core.errors import DataError, ModelError
 from robocal.core.io import read_text, write_atomic
 from robocal.data.csv_table import text_lines
 from robocal.data.measurements import Measurements, joint_range_rad, parse_csv
+
+if TYPE_CHECKING:  # annotations only
+    from robocal.kinematics.workcell import Cell
 
 BODY_COLUMN = "body"
 # columns of the arm's joints and of its working conditions: a positioner row does not use them
@@ -240,7 +244,8 @@ class CellMeasurements:
         return self.file or self.source
 
     @classmethod
-    def from_bodies(cls, cell, bodies: Mapping[str, Measurements], source: str = "") -> CellMeasurements:
+    def from_bodies(cls, cell: Cell, bodies: Mapping[str, Measurements],
+                    source: str = "") -> CellMeasurements:
         """Measurements of ``cell`` from per-body measurements (joints of each body's chain, SI);
         each body checked against its chain, a positioner's values against its limits."""
         out = {}
@@ -255,7 +260,7 @@ class CellMeasurements:
         return cls({b: out[b] for b in order}, {b: _joint_names(cell, b) for b in order}, source=source)
 
     @classmethod
-    def parse(cls, text: str, cell, name: str = "<text>") -> CellMeasurements:
+    def parse(cls, text: str, cell: Cell, name: str = "<text>") -> CellMeasurements:
         """Parse a cell's measurement CSV text (module docstring); ``name`` names it in messages."""
         table = _Table(text, cell, name)
         if not table.rows:
@@ -279,7 +284,7 @@ class CellMeasurements:
         return cls(bodies, {b: _joint_names(cell, b) for b in bodies}, file=name, source=first.source)
 
     @classmethod
-    def load(cls, path, cell) -> CellMeasurements:
+    def load(cls, path: str | Path, cell: Cell) -> CellMeasurements:
         """Read a cell's measurement CSV (module docstring) for ``cell``.
 
         Parameters

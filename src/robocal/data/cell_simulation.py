@@ -28,6 +28,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -38,14 +39,17 @@ from robocal.data.cell_measurements import CellMeasurements
 from robocal.data.measurements import Measurements
 from robocal.data.simulate import (
     TRACKER_DISTANCE_M,
-    _random_rotation,
-    _true_cell,
-    _unit,
+    flange_smrs,
     perturbed,
+    random_directions,
+    random_rotation,
     sample_joints,
+    true_arm,
 )
-from robocal.kinematics.cell import is_track_cell
 from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
+
+if TYPE_CHECKING:  # annotations only
+    from robocal.kinematics.workcell import Cell
 
 POSITIONER_LENGTH_MM = (0.1, 0.2)  # a positioner's axis origins (a, d): machined, not mastered
 POSITIONER_ANGLE_DEG = (0.025, 0.05)  # its axis directions (alpha, beta) and zero offsets (theta)
@@ -59,16 +63,15 @@ PLATE_SMR_M = np.array([[0.2, 0.0, 0.02], [-0.1, 0.1732, 0.02], [-0.1, -0.1732, 
 
 def _off(rng: np.random.Generator, mm: float, deg: float) -> np.ndarray:
     """A rigid error ``(4, 4)``: ``mm`` along a random direction, ``deg`` about a random axis."""
-    return make_transform(rotvec_to_matrix(_unit(rng, 1)[0] * np.deg2rad(deg)), _unit(rng, 1)[0] * mm * 1e-3)
+    return make_transform(rotvec_to_matrix(random_directions(rng, 1)[0] * np.deg2rad(deg)),
+                          random_directions(rng, 1)[0] * mm * 1e-3)
 
 
 def _true_arm(arm, rng: np.random.Generator, scale: float, anchor: bool, n_smr: int):
-    true = _true_cell(arm, rng, scale) if is_track_cell(arm) else perturbed(arm, rng, scale=scale)
+    true = true_arm(arm, rng, scale)
     if not anchor:
         true = replace(true, base=_off(rng, BODY_PLACEMENT_MM * scale, BODY_PLACEMENT_DEG * scale) @ arm.base)
-    tool0 = np.array([*rng.uniform(-0.05, 0.05, 2), rng.uniform(0.05, 0.12)])
-    extra = tool0 + _unit(rng, n_smr - 1) * rng.uniform(0.10, 0.15, (n_smr - 1, 1)) if n_smr > 1 \
-        else np.zeros((0, 3))
+    tool0, extra = flange_smrs(rng, n_smr)
     return replace(true, tool=make_transform(arm.tool[:3, :3], tool0), smr=extra, nominal=None,
                    name=f"{arm.name}_true")
 
@@ -83,8 +86,8 @@ def _true_positioner(positioner, rng: np.random.Generator, scale: float, plate_s
     return replace(positioner, chain=true, nests=np.array(nests, float))
 
 
-def true_cell(cell, seed: int | np.random.Generator | None = 0, *, error_scale: float = 1.0, n_smr: int = 1,
-              plate_smr=None):
+def true_cell(cell: Cell, seed: int | np.random.Generator | None = 0, *, error_scale: float = 1.0,
+              n_smr: int = 1, plate_smr=None) -> Cell:
     """A true cell around ``cell`` (module docstring): the errors drawn for ``seed``, the SMRs on
     each arm's flange (``n_smr`` of them: the arm's tool is SMR 0) and on each plate (its nests, or
     ``plate_smr`` ``(K, 3)`` m in the plate frame, default `PLATE_SMR_M`) as the positioner's nests."""
@@ -152,11 +155,11 @@ class CellSimulation:
 def _tracker_pose(cell, rng: np.random.Generator) -> np.ndarray:
     """A tracker 2-4 m from the anchor's base origin, randomly turned (its pose in the world)."""
     anchor = cell.body(cell.anchor).base
-    centre = anchor[:3, 3] + _unit(rng, 1)[0] * rng.uniform(*TRACKER_DISTANCE_M)
-    return make_transform(_random_rotation(rng), centre)
+    centre = anchor[:3, 3] + random_directions(rng, 1)[0] * rng.uniform(*TRACKER_DISTANCE_M)
+    return make_transform(random_rotation(rng), centre)
 
 
-def simulate_cell(cell, n_poses: int = 40, table_poses: int = 30, *, truth=None, tracker=None,
+def simulate_cell(cell: Cell, n_poses: int = 40, table_poses: int = 30, *, truth=None, tracker=None,
                   noise_mm: float = 0.02, n_smr: int = 1, plate_smr=None, error_scale: float = 1.0,
                   seed: int = 0) -> CellSimulation:
     """Simulate a tracker campaign on a work cell (module docstring).

@@ -66,8 +66,10 @@ def turns_about_one_axis(robot) -> bool:
     return bool(spread[0] <= FIXED_AXIS_TOL * max(spread[-1], 1e-300))
 
 
-def _offsets_lsq(Rf: np.ndarray, of: np.ndarray, local: np.ndarray, smr: np.ndarray, k: int) -> np.ndarray:
-    """Least-squares SMR offsets: ``local_i - o_i = R_i t_s`` -> ``t_s = mean_i R_i^T (local_i - o_i)``
+def smr_offsets_lsq(Rf: np.ndarray, of: np.ndarray, local: np.ndarray, smr: np.ndarray, k: int) -> np.ndarray:
+    """Least-squares SMR offsets ``(k, 3)`` (m) on the last frame, given its rotations ``Rf (N, 3, 3)``
+    and origins ``of (N, 3)`` and the measured points ``local (N, 3)`` in the same frame, row i on
+    SMR ``smr[i]`` (0..k-1): ``local_i - o_i = R_i t_s`` -> ``t_s = mean_i R_i^T (local_i - o_i)``
     (exact least squares since every R_i is orthonormal)."""
     v = np.einsum("nji,nj->ni", Rf, local - of)
     sums = np.zeros((k, 3))
@@ -101,7 +103,7 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
     B = umeyama(np.einsum("nij,nj->ni", Rf, t[smr]) + of, p)
     for _ in range(alternations):
         Binv_p = (p - B[:3, 3]) @ B[:3, :3]
-        t_new = _offsets_lsq(Rf, of, Binv_p, smr, k)
+        t_new = smr_offsets_lsq(Rf, of, Binv_p, smr, k)
         B = umeyama(np.einsum("nij,nj->ni", Rf, t_new[smr]) + of, p)
         step = np.abs(t_new - t).max()
         t = t_new

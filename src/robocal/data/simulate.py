@@ -9,7 +9,7 @@ frame is tracker -> frame {0}. SMR 0 sits on the flange at a random offset (|xy|
 z 50-120 mm); extra SMRs are 100-150 mm from SMR 0. Joints are uniform within the joint limits
 (optionally kept only where the SMR is inside ``workspace_box``, robot base frame, m).
 An arm on a track (:mod:`robocal.kinematics.cell`) also gets track errors: direction tilt, encoder
-scale and mount (:func:`_true_cell`); its carriage positions are uniform along the track.
+scale and mount (:func:`true_track_cell`); its carriage positions are uniform along the track.
 
 Noise, added to each point in the tracker frame:
 
@@ -63,7 +63,7 @@ from robocal.kinematics.cell_file import TRACK_SCALE
 from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.model import Robot, track_chain
 from robocal.kinematics.model_file import dump_model
-from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix
+from robocal.kinematics.transforms import invert_transform, make_transform, rotvec_to_matrix, transform_points
 
 TRACKER_RADIAL_MM = 0.010        # ADM range noise at zero distance (1 sigma)
 TRACKER_RADIAL_UM_PER_M = 0.5    # growth of the range noise with distance
@@ -153,12 +153,14 @@ class SimulationResult:
         return [str(data_path), str(truth_path), str(write_simulation(self, data_path, truth_path))]
 
 
-def _random_rotation(rng: np.random.Generator) -> np.ndarray:
-    """A uniformly random rotation matrix (scipy, from a normal 4-vector read as w, x, y, z)."""
+def random_rotation(rng: np.random.Generator) -> np.ndarray:
+    """A uniformly random rotation matrix ``(3, 3)`` (scipy, from a normal 4-vector read as w, x, y,
+    z)."""
     return Rotation.from_quat(rng.standard_normal(4), scalar_first=True).as_matrix()
 
 
-def _unit(rng: np.random.Generator, n: int) -> np.ndarray:
+def random_directions(rng: np.random.Generator, n: int) -> np.ndarray:
+    """``n`` uniformly random unit vectors ``(n, 3)``."""
     v = rng.standard_normal((n, 3))
     return v / np.linalg.norm(v, axis=1, keepdims=True)
 
@@ -218,7 +220,7 @@ def check_tracker_position(position) -> np.ndarray:
 def smr_in_link_frame(robot: Robot, smr: np.ndarray) -> np.ndarray:
     """SMR positions ``(k, 3)`` m given in the flange frame (the robot's ``tool``), in the last
     link frame."""
-    return smr @ robot.tool[:3, :3].T + robot.tool[:3, 3]
+    return transform_points(robot.tool, smr)
 
 
 def _tracker_noise(p: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -277,44 +279,58 @@ def _true_robot(robot: Robot, rng: np.random.Generator, kind: str, n_smr: int, e
                 smr_offsets=None, tracker_position=None) -> Robot:
     """The perturbed robot with its SMRs (or probe) on the flange and, for tracker data, the
     tracker frame as base; its nominal is the given robot's links with these frames."""
-    true = _true_cell(robot, rng, error_scale) if is_track_cell(robot) else \
-        perturbed(robot, rng, scale=error_scale)
-    tool0 = np.array([*rng.uniform(-0.05, 0.05, 2), rng.uniform(0.05, 0.12)])
-    extra = np.zeros((0, 3))
-    if n_smr > 1:
-        directions = _unit(rng, n_smr - 1)
-        extra = tool0 + directions * rng.uniform(0.10, 0.15, (n_smr - 1, 1))
+    true = true_arm(robot, rng, error_scale)
+    tool0, extra = flange_smrs(rng, n_smr)
     if smr_offsets is not None:
         placed = smr_in_link_frame(robot, smr_offsets)
         tool0, extra = placed[0], placed[1:]
-    tool_R = _random_rotation(rng) if OBSERVED[kind].sees_orientation else robot.tool[:3, :3]
+    tool_R = random_rotation(rng) if OBSERVED[kind].sees_orientation else robot.tool[:3, :3]
     # the tracker frame: random position 2-4 m from the base origin, random orientation
     if not OBSERVED[kind].sees_position:
         base = robot.base.copy()
     else:
-        c = _unit(rng, 1)[0] * rng.uniform(*TRACKER_DISTANCE_M)
+        c = random_directions(rng, 1)[0] * rng.uniform(*TRACKER_DISTANCE_M)
         if tracker_position is not None:
             c = robot.base[:3, :3] @ tracker_position + robot.base[:3, 3]
-        base = invert_transform(make_transform(_random_rotation(rng), c)) @ robot.base
+        base = invert_transform(make_transform(random_rotation(rng), c)) @ robot.base
     true = replace(true, base=base, tool=make_transform(tool_R, tool0), smr=extra, nominal=None)
     nominal = true.nominal.copy()
     nominal[: 5 * robot.n_joints] = robot.nominal[: 5 * robot.n_joints]
     return replace(true, nominal=nominal)
 
 
-def _true_cell(robot: Robot, rng: np.random.Generator, error_scale: float) -> Robot:
+def true_arm(robot: Robot, rng: np.random.Generator, error_scale: float) -> Robot:
+    """A true arm around ``robot``: `true_track_cell` for an arm on a track, else `perturbed`
+    (frames as ``robot``'s)."""
+    return true_track_cell(robot, rng, error_scale) if is_track_cell(robot) else \
+        perturbed(robot, rng, scale=error_scale)
+
+
+def flange_smrs(rng: np.random.Generator, n_smr: int) -> tuple[np.ndarray, np.ndarray]:
+    """``n_smr`` SMRs on a flange, m: SMR 0 ``(3,)`` at a random offset (|x|, |y| <= 50 mm, z 50-120
+    mm) and the others ``(n_smr - 1, 3)`` 100-150 mm from it in random directions."""
+    tool0 = np.array([*rng.uniform(-0.05, 0.05, 2), rng.uniform(0.05, 0.12)])
+    extra = np.zeros((0, 3))
+    if n_smr > 1:
+        directions = random_directions(rng, n_smr - 1)
+        extra = tool0 + directions * rng.uniform(0.10, 0.15, (n_smr - 1, 1))
+    return tool0, extra
+
+
+def true_track_cell(robot: Robot, rng: np.random.Generator, error_scale: float) -> Robot:
     """A true arm on a track: the arm perturbed as :func:`perturbed` does, the track direction tilted
     by TRACK_TILT_DEG about a random normal, the mount off by MOUNT_ERROR_MM / MOUNT_ERROR_DEG
     (random directions), the encoder scale off by TRACK_SCALE_ERROR (random sign), all times
     ``error_scale``; rebuilt exactly as a cell file's chain (:func:`robocal.kinematics.model.track_chain`)."""
     arm = arm_model(robot).with_frames(base=carriage_frames(robot, 0.0)[0])
-    true_arm = perturbed(arm, rng, scale=error_scale)
+    moved = perturbed(arm, rng, scale=error_scale)
     u = robot.fk(np.zeros((1, robot.n_joints)), frames=True)[1][0, 1, :3, 2]  # the track's direction
-    normal = np.cross(u, _unit(rng, 1)[0])
+    normal = np.cross(u, random_directions(rng, 1)[0])
     tilt = rotvec_to_matrix(normal / np.linalg.norm(normal) * np.deg2rad(TRACK_TILT_DEG) * error_scale)
-    mount = make_transform(rotvec_to_matrix(_unit(rng, 1)[0] * np.deg2rad(MOUNT_ERROR_DEG) * error_scale),
-                           _unit(rng, 1)[0] * MOUNT_ERROR_MM * 1e-3 * error_scale)
-    true = track_chain(true_arm, tilt @ u, mount, robot.limits[0], name=robot.name)
+    mount = make_transform(rotvec_to_matrix(random_directions(rng, 1)[0] * np.deg2rad(MOUNT_ERROR_DEG)
+                                            * error_scale),
+                           random_directions(rng, 1)[0] * MOUNT_ERROR_MM * 1e-3 * error_scale)
+    true = track_chain(moved, tilt @ u, mount, robot.limits[0], name=robot.name)
     scale = TRACK_SCALE_ERROR * error_scale * rng.choice([-1.0, 1.0])
     return true.with_values({TRACK_SCALE: scale})
 
@@ -329,7 +345,7 @@ def _tracker_readings(kind: str, T: np.ndarray, rng: np.random.Generator, noise_
     n_out = int(round(outliers * N))
     outlier_rows = np.sort(rng.choice(N, n_out, replace=False)) if n_out else np.zeros(0, np.int64)
     gross = np.zeros((N, 3))
-    gross[outlier_rows] = _unit(rng, n_out) * rng.uniform(*OUTLIER_MM, (n_out, 1)) * 1e-3
+    gross[outlier_rows] = random_directions(rng, n_out) * rng.uniform(*OUTLIER_MM, (n_out, 1)) * 1e-3
     kw = {"points": p + noise + gross}
     if OBSERVED[kind].sees_orientation:
         dR = rotvec_to_matrix(rng.standard_normal((N, 3)) * np.deg2rad(rotation_noise_deg))
@@ -577,7 +593,7 @@ def _bar_placements(true, n: int, length: float, noise_mm: float, rng: np.random
         qa = sample_joints(true, m, rng, workspace_box, tool=true.tool)
         qb = sample_joints(true, m, rng, workspace_box, tool=true.tool)
         noise = rng.standard_normal(m) * noise_mm * 1e-3
-        target = true.fk(qa)[:, :3, 3] + _unit(rng, m) * (length + noise)[:, None]
+        target = true.fk(qa)[:, :3, 3] + random_directions(rng, m) * (length + noise)[:, None]
         qb, miss = _move_tips(true, qb, target)
         apart = np.abs(qa[:, :2] - qb[:, :2]).max(axis=1) > np.deg2rad(MIN_BAR_ANGLE_DEG)
         ok = np.flatnonzero((miss < 1e-12) & true.within_limits(qb) & apart)[: n - len(noise_out)]
@@ -594,7 +610,7 @@ def _random_planes(true, n_poses: int, n_planes: int, rng: np.random.Generator,
     """``n_planes`` random planes through the middle of the true tip's workspace: unit normals
     ``(P, 3)``, offsets ``(P,)`` (n.p = c, m, within 0.1 m of the median tip), and the plane of
     each of ``n_poses`` contacts ``(n_poses,)`` (in turn)."""
-    normals = _unit(rng, n_planes)
+    normals = random_directions(rng, n_planes)
     q0 = sample_joints(true, 2048, rng, workspace_box, tool=true.tool)
     centre = np.median(true.fk(q0)[:, :3, 3], axis=0)
     offsets = normals @ centre + rng.uniform(-0.1, 0.1, n_planes)

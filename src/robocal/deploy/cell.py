@@ -17,6 +17,7 @@ import io
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -25,6 +26,9 @@ from robocal.core.errors import DataError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_all
 from robocal.kinematics.transforms import invert_transform, pose_error
 from robocal.trust.output_marker import mark_csv
+
+if TYPE_CHECKING:  # annotations only
+    from robocal.kinematics.workcell import Cell, Positioner
 
 
 def _one(names, what: str, given: str | None, cell) -> str:
@@ -102,7 +106,8 @@ class CellCompensation:
         return [str(output)]
 
 
-def compensate_cell(calibrated, nominal, targets, positioner_values, compensate_arm: Callable, *,
+def compensate_cell(calibrated: Cell, nominal: Cell, targets: np.ndarray, positioner_values: np.ndarray,
+                    compensate_arm: Callable, *,
                     arm: str | None = None, positioner: str | None = None, tool=None,
                     **options) -> CellCompensation:
     """Joints of a calibrated cell's arm for targets on a positioner's plate, and the targets to
@@ -145,16 +150,16 @@ def compensate_cell(calibrated, nominal, targets, positioner_values, compensate_
         shown = np.round(chain.joints_shown(e[k]), 6).tolist()
         raise DataError(f"target {k + 1}: {positioner}'s values {shown} are outside its axes' limits")
     world = calibrated.positioners[positioner].plate(e) @ targets
-    comp = compensate_arm(calibrated.arms[arm], nominal.arms[arm], world, targets_frame="model", tool=tool,
-                          **options)
-    flange = nominal.arms[arm].with_frames(tool=nominal.arms[arm].tool if tool is None
-                                           else nominal.arms[arm].tool @ np.asarray(tool, float))
+    tool0 = nominal.flange(arm)  # the flange, not the SMR the cell's model calls its tool
+    comp = compensate_arm(calibrated.arms[arm].with_frames(tool=tool0), nominal.controller_arm(arm), world,
+                          targets_frame="model", tool=tool, **options)
+    flange = nominal.arms[arm].with_frames(tool=tool0 if tool is None else tool0 @ np.asarray(tool, float))
     corrected = invert_transform(nominal.positioners[positioner].plate(e)) @ flange.fk(comp.joints)
     return CellCompensation(arm, positioner, comp.joints, e, corrected, pose_error(corrected, targets), comp,
                             list(comp.warnings), chain.prismatic.copy())
 
 
-def read_positioner_values(path, positioner) -> np.ndarray:
+def read_positioner_values(path: str | Path, positioner: Positioner) -> np.ndarray:
     """The values ``(N, k)`` (rad; m for a prismatic axis) of ``positioner``'s axes in a targets
     CSV: its columns (``e1_deg``, ``e2_rad``, ``e3_mm``...), one value per row (rows as the targets
     reader counts them: leading ``#`` lines and blank lines skipped); DataError naming the column

@@ -82,11 +82,6 @@ def positioner_names() -> list[str]:
     return sorted(_positioner_entries())
 
 
-def positioner_descriptions() -> dict[str, str]:
-    """name -> description (model, axes, where the numbers come from) of each catalog positioner."""
-    return {name: _positioner_entries()[name]["description"] for name in positioner_names()}
-
-
 def positioner_entry(name: str) -> dict | None:
     """The raw mapping of catalog positioner ``name``, None when the catalog has none of that name."""
     return _positioner_entries().get(name)

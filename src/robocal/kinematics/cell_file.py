@@ -49,7 +49,7 @@ from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 
 CELL_KEYS = {"format", "name", "description", "units", "robot", "track", "mount"}
 WORKCELL_KEYS = ("robots", "positioner", "positioners")  # any: a work cell (robocal.kinematics.workcell)
-ARM_KEYS = {"model", "base", "unit", "track"}
+ARM_KEYS = {"model", "base", "unit", "track", "flange"}
 SINGLE_ARM = "arm"  # the body name of the arm a work cell gives with ``robot:``
 DIRECTION_TOL = 1e-6  # |norm - 1| of the track direction: a unit vector written to 6 digits
 TRACK_SCALE = "scale1"  # the track encoder's scale error (a joint-error term of joint 1)
@@ -125,6 +125,7 @@ class ArmEntry(NamedTuple):
     base: np.ndarray | None  # (4, 4) world -> the arm's base (with a track: carriage at e1 = 0 -> base)
     unit: str  # its mechanical unit in programs (ROB_1...); default its body name
     track: tuple[np.ndarray, np.ndarray] | None  # (unit direction (3,), e1 limits (2,) m) or None
+    flange: np.ndarray | None = None  # (4, 4) the model's flange where its tool is not (a saved cell's)
 
 
 def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
@@ -149,8 +150,9 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
             model = spec["model"] if isinstance(spec["model"], dict) else \
                 _resolve(spec["model"], path, f"{where}.model")
             track = None if spec.get("track") is None else _track(spec["track"], length, f"{where}.track")
+            flange = _frame(spec.get("flange"), length, angle, f"{where}.flange")
             out[name] = ArmEntry(model, _frame(spec.get("base"), length, angle, f"{where}.base"),
-                                      _text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track)
+                                 _text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track, flange)
         return out
     if "robot" not in data:
         stray = sorted({"track", "mount"} & set(data))

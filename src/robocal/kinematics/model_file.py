@@ -73,6 +73,8 @@ def _text(value, where: str, max_len: int) -> str:
 
 
 def _numbers(values, where: str, count: int | None = None) -> np.ndarray:
+    """A file's list of finite numbers as an array ``(count,)`` (as written: no unit applied);
+    ModelError naming ``where`` otherwise."""
     if not isinstance(values, list):
         raise ModelError(f"{where}: expected a list of numbers, got {short_repr(values)}")
     if count is not None and len(values) != count:
@@ -81,6 +83,8 @@ def _numbers(values, where: str, count: int | None = None) -> np.ndarray:
 
 
 def _mapping(value, where: str, allowed: set, required: set = frozenset()) -> dict:
+    """A file's mapping with only ``allowed`` keys and every ``required`` one; ModelError naming
+    ``where`` and the keys otherwise."""
     if not isinstance(value, dict):
         raise ModelError(f"{where}: expected a mapping, got {short_repr(value)}")
     unknown = sorted(set(map(str, value)) - allowed)
@@ -93,6 +97,8 @@ def _mapping(value, where: str, allowed: set, required: set = frozenset()) -> di
 
 
 def _frame(spec, length: float, angle: float, where: str) -> np.ndarray | None:
+    """A file's frame ``{xyz, rotation | rpy | rotvec}`` as a transform ``(4, 4)`` (m), its values
+    scaled by ``length`` (to m) and ``angle`` (to rad); None when not given."""
     if spec is None:
         return None
     spec = _mapping(spec, where, {"xyz", "rotation", "rpy", "rotvec"})
@@ -189,7 +195,8 @@ def _table(form: str, spec, length_unit: str, degrees: bool, n_limits, base, too
     optional = {"beta", "type"} if form == "mdh" else {"type"}
     spec = _mapping(spec, form, {*keys, *optional}, set(keys))
     n = len(spec[keys[0]]) if isinstance(spec[keys[0]], list) else 0
-    cols = {k: _numbers(spec[k], f"{form}.{k}", n) for k in (*keys, *optional) if k in spec and k != "type"}
+    cols = {k: _numbers(spec[k], f"{form}.{k}", n)
+            for k in (*keys, *optional) if k in spec and k != "type"}
     if n == 0:
         raise ModelError(f"{form}: the table needs at least one joint")
     units = {"degrees": degrees, "length_unit": length_unit}
@@ -246,7 +253,8 @@ def robot_kwargs(data) -> dict:
         smr = data["smr"]
         if not isinstance(smr, list):
             raise ModelError("smr: expected a list of [x, y, z] flange-frame offsets")
-        kw["smr"] = np.array([_numbers(r, f"smr[{i}]", 3) for i, r in enumerate(smr)]).reshape(-1, 3) * length
+        kw["smr"] = np.array([_numbers(r, f"smr[{i}]", 3)
+                              for i, r in enumerate(smr)]).reshape(-1, 3) * length
     if data.get("joint_errors") is not None:
         kw["joint_errors"] = JointErrorModel.from_dict(data["joint_errors"], n)
     if data.get("priors") is not None:

@@ -32,7 +32,8 @@ from robocal.core.errors import ModelError
 from robocal.core.io import short_repr
 from robocal.kinematics.cell_file import DIRECTION_TOL
 from robocal.kinematics.model import Robot
-from robocal.kinematics.transforms import make_transform
+from robocal.kinematics.prior_spec import POSITIONER_CLASS, PriorSpec
+from robocal.kinematics.transforms import make_transform, transform_points
 from robocal.kinematics.urdf_read import HAYATI_DEG, lines_to_chain, rpy_to_matrix
 
 MAX_AXES = 3
@@ -182,3 +183,22 @@ def positioner_chain(axes: Sequence[Mapping], mount: np.ndarray | None = None,
     base = kw["base"] if mount is None else np.asarray(mount, float) @ kw["base"]
     return Robot(**{**kw, "base": base, "description": description})
 
+
+
+def with_positioner_priors(chain: Robot) -> Robot:
+    """``chain`` with the positioner prior class (`robocal.kinematics.prior_spec.POSITIONER_CLASS`)
+    where its priors name no class (a 3-axis positioner is no arm either); the chain's own scales
+    and estimate kept. The one place the calibration of a positioner and its campaign plan take
+    their priors from."""
+    spec = chain.priors
+    if spec is not None and spec.robot_class is not None:
+        return chain
+    return chain.with_priors(PriorSpec(POSITIONER_CLASS) if spec is None else
+                             PriorSpec(POSITIONER_CLASS, spec.scales, spec.estimate))
+
+
+def nests_in_last_frame(chain: Robot, nests: np.ndarray) -> np.ndarray:
+    """The SMR offsets ``(K, 3)`` (m) of nests ``(K, 3)`` (m, plate frame) seen from the chain's last
+    frame {n} (``tool @ nest``): how a positioner's chain carries its nests (SMR k is nest k, so
+    ``chain.fk(e, smr=k)`` is nest k's world pose)."""
+    return transform_points(chain.tool, nests)

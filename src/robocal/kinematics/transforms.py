@@ -71,6 +71,12 @@ def make_transform(R: np.ndarray, t: np.ndarray) -> np.ndarray:
     return T
 
 
+def transform_points(T: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Points ``(k, 3)`` given in a frame, expressed in the frame ``T`` ``(4, 4)`` is given in:
+    ``R p + t`` for each (m)."""
+    return points @ T[:3, :3].T + T[:3, 3]
+
+
 def invert_transform(T: np.ndarray) -> np.ndarray:
     """Inverse of rigid transforms ``(..., 4, 4)``."""
     R = T[..., :3, :3]

@@ -63,18 +63,18 @@ from robocal.kinematics.model_file import (
     MAX_DESCRIPTION,
     MAX_NAME,
     _frame,
+    _frame_dict,
     read_model_data,
     robot_kwargs,
     robot_to_dict,
 )
-from robocal.kinematics.positioner import check_chain, positioner_chain
+from robocal.kinematics.positioner import check_chain, nests_in_last_frame, positioner_chain
 from robocal.kinematics.transforms import invert_transform
 
 FORMAT = "robocal-cell/1"
 GEOMETRY_FORMS = ("model", "axes", "dh", "mdh", "joints")
 SECTION_KEYS = {*GEOMETRY_FORMS, "limits", "unit", "mount", "plate", "nests", "columns", "external_axes",
                 "name", "description"}
-RENAMED = {"program_axes": "external_axes"}  # a positioner key renamed during issue 45 -> its name now
 DEFINITION_KEYS = {"format", "name", "description", "units", "axes", "plate", "payload_kg"}
 URDF_SUFFIXES = (".urdf", ".xml")  # a positioner's model given as a URDF (load_model reads it)
 COLUMN = re.compile(r"^e([1-9]\d*)$")  # a positioner joint's column (its measurement column is e<k>_deg|_mm)
@@ -93,7 +93,7 @@ def _nests_in_flange(chain: Robot, nests: np.ndarray) -> Robot:
     """``chain`` with its extra SMRs the ``nests`` ``(K, 3)`` (plate frame, m) seen from its last
     frame {n} (``tool @ nest``; its nominal alike): SMR k is nest k."""
     def move(r: Robot) -> Robot:
-        return replace(r, nominal=None, smr=nests @ r.tool[:3, :3].T + r.tool[:3, 3])
+        return replace(r, nominal=None, smr=nests_in_last_frame(r, nests))
 
     return replace(move(chain), nominal=move(chain.nominal_robot()).nominal)
 
@@ -260,6 +260,10 @@ class Cell:
         The cell's name and description.
     arm_units : dict of str to str
         Arm name -> its mechanical unit in programs (``ROB_1``); an arm not named: its body name.
+    flanges : dict of str to numpy.ndarray
+        Arm name -> its flange frame tool0 ``(4, 4)`` as its model composes it (`flange`), where
+        the arm's ``tool`` is not it: a model file's ``tool`` describes the measured SMR 0. An arm
+        not named: its tool is its flange.
 
     Notes
     -----
@@ -291,6 +295,7 @@ class Cell:
     name: str = "cell"
     description: str = ""
     arm_units: dict[str, str] = field(default_factory=dict)
+    flanges: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -315,6 +320,10 @@ class Cell:
             raise ModelError(f"arm_units names no arm: {unknown}; arms: {sorted(self.arms)}")
         set_(self, "arm_units", {n: _text(self.arm_units.get(n, n), f"robots.{n}.unit", MAX_NAME)
                                  for n in self.arms})
+        stray = sorted(set(self.flanges) - set(self.arms))
+        if stray:
+            raise ModelError(f"flanges names no arm: {stray}; arms: {sorted(self.arms)}")
+        set_(self, "flanges", {n: np.asarray(f, float).reshape(4, 4) for n, f in self.flanges.items()})
         empty = [n for n, u in self.arm_units.items() if not u.strip()]
         if empty:
             raise ModelError(f"robots.{empty[0]}.unit is empty: name its mechanical unit (ROB_1...)")
@@ -344,6 +353,17 @@ class Cell:
                     what = f"the track of arm {other!r}" if other in self.arms else f"positioner {other!r}"
                     raise ModelError(f"positioner {name!r}: column {column} is already {what}'s")
                 taken[column] = name
+
+    def flange(self, name: str) -> np.ndarray:
+        """Arm ``name``'s flange frame tool0 ``(4, 4)`` in its model's last frame: what a
+        controller's tool data and a program's targets are given on. The arm's model's tool is the
+        measured SMR 0 (the cell file's ``tool`` of its model), so the flange is its model without
+        that tool (`flanges`), or its tool when the model gives none."""
+        return self.flanges.get(name, self.arms[name].tool)
+
+    def controller_arm(self, name: str) -> Robot:
+        """Arm ``name`` with its flange (`flange`) as its TCP: the arm a controller computes with."""
+        return self.arms[name].with_frames(tool=self.flange(name))
 
     @property
     def anchor(self) -> str:
@@ -474,7 +494,8 @@ class Cell:
         out: dict = {"format": FORMAT, "name": self.name, "description": self.description,
                      "units": {"length": "m", "angle": "rad"}}
         if self.arms:
-            out["robots"] = {n: {"model": robot_to_dict(a), "unit": self.arm_units[n]}
+            out["robots"] = {n: {"model": robot_to_dict(a), "unit": self.arm_units[n],
+                                 **({"flange": _frame_dict(self.flanges[n])} if n in self.flanges else {})}
                              for n, a in self.arms.items()}
         if self.positioners:
             out["positioners"] = {n: p.to_dict() for n, p in self.positioners.items()}
@@ -593,11 +614,6 @@ def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> P
     """A positioner section of a cell file (module docstring); its columns default to
     ``e<first>..``."""
     where = "positioner" if "positioner" in data else f"positioners.{name}"
-    old = [k for k in RENAMED if isinstance(spec, dict) and k in spec]
-    if old:
-        raise ModelError(f"{where}.{old[0]}: now {RENAMED[old[0]]}, the controller's logical external-axis "
-                         "numbers ([2, 3]: its second and third external axes; each program language names "
-                         "them)")
     spec = _mapping(spec, where, SECTION_KEYS if where == "positioner" else SECTION_KEYS - {"name"})
     length_unit, angle_unit = _units(data)
     length, angle = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit]
@@ -660,6 +676,7 @@ def cell_from_data(data: dict, path: Path | None = None) -> Cell:
     entries = read_arms(data, path)
     arms = {name: arm_from_entry(entry) for name, entry in entries.items()}
     units = {name: entry.unit for name, entry in entries.items()}
+    flanges = {name: f for name, entry in entries.items() if (f := _flange(entry)) is not None}
     if "positioner" in data and "positioners" in data:
         raise ModelError("give either positioner: (one) or positioners: {name: ...}, not both")
     if "positioner" in data:
@@ -678,7 +695,26 @@ def cell_from_data(data: dict, path: Path | None = None) -> Cell:
         following = max(int(COLUMN.match(c)[1]) for c in positioner.columns) + 1
     default_name = next(iter(arms.values())).name if len(arms) == 1 and not positioners else "cell"
     return Cell(arms, positioners, _text(data.get("name", default_name), "name", MAX_NAME),
-                _text(data.get("description", ""), "description", MAX_DESCRIPTION), units)
+                _text(data.get("description", ""), "description", MAX_DESCRIPTION), units, flanges)
+
+
+TABLE_FORMS = ("opw", "dh", "mdh")  # a model file's geometry that its base and tool wrap (docs/model-yaml.md)
+
+
+def _flange(entry) -> np.ndarray | None:
+    """The flange frame of a cell file's arm whose model gives a ``tool`` (the SMR 0 its
+    measurements call the tool): its model loaded without ``tool``, when the geometry is a table
+    form whose conversion the tool wraps; a saved cell's ``flange``; else None (the tool is the
+    flange: a catalog arm, a model without tool, ``joints`` rows whose tool is the model's own)."""
+    if entry.flange is not None:
+        return entry.flange
+    model = entry.model
+    if isinstance(model, str) and Path(model).suffix.lower() in (".yaml", ".yml") and Path(model).is_file():
+        model = read_model_data(Path(model))
+    if not isinstance(model, dict) or model.get("tool") is None or "joints" in model \
+            or not any(k in model for k in TABLE_FORMS):
+        return None
+    return Robot(**robot_kwargs({k: v for k, v in model.items() if k not in ("tool", "smr")})).tool
 
 
 def load_cell(path) -> Cell:

@@ -274,7 +274,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                    keep_unreached: bool = False, strict: bool = False, force: bool = False,
                    position_registers: str | Path | None = None, payload=None,
                    temperature: float | None = None, payload_schedules=None,
-                   prediction: Prediction | None = None, arm: str | None = None) -> FilterResult:
+                   prediction: Prediction | None = None, arm: str | None = None,
+                   fixed_base: bool = False) -> FilterResult:
     """Filter robot program file(s) through ``calibrated`` (see the module docstring).
 
     ``programs``: one path or several (a KUKA .src with its .dat); ``references``: files read
@@ -346,6 +347,11 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         With cells: the arm whose program this is (a body name or its unit, ``ROB_2``); default
         the cell's only arm. Each arm's program is filtered with its own model, in the world the
         cell's first arm anchors.
+    fixed_base : bool, default False
+        No external axis carries the arm: targets with external-axis values in frames no unit
+        moves are corrected as arm targets without weighing whether an axis is a track or gantry
+        (`robocal.programs.carrier`; by default the targets of an axis that carries the arm, or
+        may, are named).
 
     Returns
     -------
@@ -393,7 +399,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     robot_base = np.eye(4) if coordinated is not None else robot_base_frame(robot_base, reach)
     res, declared_tools = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,
                                     references, keep_unreached, strict, force, position_registers, payload,
-                                    temperature, payload_schedules, coordinated)
+                                    temperature, payload_schedules, coordinated, fixed_base)
     res.warnings[:0] = unused_conditions(calibrated, payload, temperature)
     if prediction is not None and res.joints is not None:
         res.warnings += target_warnings(prediction, calibrated, res.joints)
@@ -406,7 +412,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
 def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frames, tcp, robot_base,
               dialect: str | None, references: list, keep_unreached: bool, strict: bool, force: bool,
               position_registers, payload, temperature, payload_schedules,
-              coordinated: CoordinatedProgram | None) -> tuple[FilterResult, dict[str, np.ndarray]]:
+              coordinated: CoordinatedProgram | None, fixed_base: bool = False
+              ) -> tuple[FilterResult, dict[str, np.ndarray]]:
     """:func:`filter_program` of the files ``given`` (an application folder among them), without
     the warnings and checks of what the user gave, and the tool data the files hold without
     ``tools`` (`Program.declared_tools`, which the ``tools`` are checked against)."""
@@ -441,7 +448,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     warnings = list(program.warnings)
     if track is not None:
         track.take(program, warnings)
-    targets = _filterable(d, program, warnings, coordinated, fixed_arm=track is None)
+    targets = _filterable(d, program, warnings, coordinated, fixed_arm=track is None, fixed_base=fixed_base)
     if not targets:
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
@@ -482,7 +489,8 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     warnings += comp.assumed
     _check_joints(controller, comp, ok, problems)
     if coordinated is None:  # external-axis values that may move the arm, said in the reason
-        problems = [(i, unreached_reason(targets[i], why, track is None)) for i, why in problems]
+        loose = track is None and not fixed_base  # values that may move the arm
+        problems = [(i, unreached_reason(targets[i], why, loose)) for i, why in problems]
     bad = {i for i, _ in problems}
     if problems and not keep_unreached:
         problems.sort()
@@ -547,13 +555,16 @@ def _check_tcp(real: dict, tools: dict, warnings: list) -> None:
 
 
 def _filterable(d: Dialect, program: Program, warnings: list,
-                coordinated: CoordinatedProgram | None = None, fixed_arm: bool = True) -> list[Target]:
+                coordinated: CoordinatedProgram | None = None, fixed_arm: bool = True,
+                fixed_base: bool = False) -> list[Target]:
     """The targets to filter: those with a supported tool and frame, all of them known, and
     corrected as arm targets or on a positioner's plate (``coordinated``:
     :mod:`robocal.programs.positioner`) whatever their external-axis values say
     (:func:`robocal.programs.external.sort_external`)."""
     taken = coordinated.take(program, warnings, d) if coordinated is not None else frozenset()
-    sort_external(program, warnings, taken, fixed_arm)
+    positioners = frozenset() if coordinated is None else frozenset(
+        a for s in coordinated.stations.values() for a in s.axes(d))  # the cell's: no arm on them
+    sort_external(program, warnings, taken, fixed_arm, d, fixed_base, positioners)
     targets: list[Target] = []
     for t in program.targets:
         why = program.unsupported.get(f"tool:{t.tool}") or program.unsupported.get(f"frame:{t.frame}")

@@ -236,7 +236,8 @@ def cell_models(calibrated: Robot | Cell, nominal: Robot | Cell, arm: str | None
         raise DataError(f"the calibrated cell does not fit the cell {nominal.name!r}: {exc}") from None
     stations = {p.unit: Station(p.unit, p.chain, world.positioners[name].chain, p.external_axes)
                 for name, p in nominal.positioners.items()}
-    return world.arms[arm], nominal.arms[arm], CoordinatedProgram(stations)
+    # the controller's flange carries the program's tool data, not the SMR the cell's model calls its tool
+    return world.controller_arm(arm), nominal.controller_arm(arm), CoordinatedProgram(stations)
 
 
 def _program_arm(cell: Cell, arm: str | None) -> str:

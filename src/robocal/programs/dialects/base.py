@@ -30,7 +30,9 @@ class Dialect:
     ``scara_programs`` (its programs drive a SCARA: the filter reads them for a 4-joint SCARA),
     ``external_axis_names`` and ``positioner_group`` (how its programs name a positioner's axes,
     the controller's logical external axes of a cell file: :meth:`positioner_axes`, which the
-    coordinated-motion filter and the campaign writers ask)."""
+    coordinated-motion filter and the campaign writers ask), ``arm_axes`` (which of its programs'
+    external axes may carry the arm, a track or gantry the text cannot tell from a positioner:
+    :mod:`robocal.programs.carrier` weighs their values)."""
 
     key = ""  # registry key: --format, poses --program
     name = ""  # the language as messages and results name it
@@ -61,6 +63,11 @@ class Dialect:
     # empty: its programs name no external axes
     external_axis_names: tuple[str, ...] = ()
     positioner_group = False  # a positioner moves as its own motion group / station: its axes 1..m there
+    # its Target.axes names that may carry the arm (a track or gantry its text cannot tell from a
+    # positioner the work object does not follow); empty: none can (a FANUC group or an INFORM
+    # station moves no arm; their arm-carrying axes, an integrated rail or base axes, are named by
+    # their readers)
+    arm_axes: tuple[str, ...] = ()
 
     def positioner_axes(self, external_axes: tuple[int, ...]) -> tuple[str, ...]:
         """The names this language's programs give a positioner's axes, which are the controller's

@@ -94,6 +94,7 @@ class KRLDialect(Dialect):
     campaign_rank = 1
     campaign_external = True  # a positioner's axes move in its campaign programs
     external_axis_names = EXTERNAL_LETTERS  # an E6POS's / E6AXIS' E1..E6: logical axis k is E<k>
+    arm_axes = external_axis_names  # any of them may be a track or gantry carrying the arm
     campaign_refuses_tracks = True
     vendor = "KUKA"
     signature = r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)"

@@ -127,6 +127,7 @@ class RapidDialect(Dialect):
     campaign_rank = 0
     campaign_external = True  # a positioner's axes move in its campaign programs
     external_axis_names = RAPID_EXTAX  # a robtarget's extax: logical axis k is eax_<k-th letter>
+    arm_axes = external_axis_names  # any of them may be a track or gantry carrying the arm
     campaign_refuses_tracks = True
     vendor = "ABB"
     signature = r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)"
