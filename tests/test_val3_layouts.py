@@ -491,3 +491,17 @@ def test_a_movej_to_a_librarys_joints_is_no_cartesian_motion(tmp_path):
     # hand count: the cell's 2 Cartesian motions and the one to the library's point
     assert json.loads(res.table_json())["summary"]["motions"] == {"total": 3, "corrected": 1, "named": 2}
     assert "libPos:pDrop is data of library libPos, not in these files" in {m.reason for m in res.motions}
+
+
+def test_s7_code_written_as_xml_text_is_read(tmp_path):
+    """A <Code> without CDATA (its text XML-escaped) is read as the controller reads it."""
+    app = _s7_cell(tmp_path / "usrapp")
+    start = app / "start.pgx"
+    text = start.read_text()
+    code = re.search(r"<!\[CDATA\[(.*?)\]\]>", text, re.DOTALL)
+    extra = '  if nId &lt; 3\n    putln(&quot;movel(pA)&quot;)\n  endIf\n'
+    escaped = code.group(1).replace("  movel(pA", extra + "  movel(pA")
+    start.write_text(text[:code.start()] + escaped + text[code.end():])
+    res = filter_program([app], CALIBRATED, NOMINAL)
+    assert json.loads(res.table_json())["summary"]["motions"] == {"total": 2, "corrected": 1, "named": 1}
+    assert filter_program([app], NOMINAL, NOMINAL).outputs[start] == start.read_bytes()

@@ -82,7 +82,8 @@ _VALUE_END = re.compile(r"</Value\s*>")
 _INNER = re.compile(r"<\w+\b([^>]*?)/?>")
 _ATTR = re.compile(r"([\w:]+)\s*=\s*\"([^\"]*)\"")
 _PROGRAM = re.compile(r"<Program\b([^>]*?)>")
-_CODE = re.compile(r"<Code>\s*<!\[CDATA\[(.*?)\]\]>\s*</Code>", re.DOTALL)
+# a program's code: CDATA, or XML text (entities decoded: s6.decoded)
+_CODE = re.compile(r"<Code>(?:\s*<!\[CDATA\[(.*?)\]\]>\s*|([^<]*))</Code>", re.DOTALL)
 _LOCAL = re.compile(r"<(?:Local|Parameter)\b([^>]*?)/?>")
 _STRING_OR_COMMENT = re.compile(r"\"[^\"\r\n]*\"|//[^\r\n]*")
 _MOTION = re.compile(r"\b(movej|movel|movec)\s*\(")
@@ -511,7 +512,11 @@ def _routines(src: ProgramText) -> list[_Routine]:
         params = [a["name"][0] for m, a in zip(_LOCAL.finditer(header), decl, strict=True)
                   if "name" in a and m.group(0).startswith("<Parameter")]
         kinds = {a["name"][0]: a.get("type", ("",))[0] for a in decl if "name" in a}
-        out.append(_Routine(name or src.path.stem, params, kinds, src, code_m.start(1), code_m.group(1)))
+        if code_m.group(1) is not None:
+            out.append(_Routine(name or src.path.stem, params, kinds, src, code_m.start(1), code_m.group(1)))
+        else:
+            out.append(_Routine(name or src.path.stem, params, kinds, src, code_m.start(2),
+                                s6.decoded(code_m.group(2))))
     return out
 
 
