@@ -35,7 +35,7 @@ FATHER = {"point": "pFather", "frame": "fFather", "tool": "tFather"}
 
 _ROOT = re.compile(r"<(programList|dataList)\b")
 _PROGRAM = re.compile(r"<program\b([^>]*?)>(.*?)</program\s*>", re.DOTALL)
-_CODE = re.compile(r"<code>(?:\s*<!\[CDATA\[)?(.*?)(?:\]\]>\s*)?</code\s*>", re.DOTALL)
+_CODE = re.compile(r"<code\b[^>/]*>(?:\s*<!\[CDATA\[)?(.*?)(?:\]\]>\s*)?</code\s*>", re.DOTALL)
 _DECL = re.compile(r"<(param|local)\b([^>]*?)/?>")
 _ENTITY = re.compile(r"&(?:#(\d+)|#x([0-9A-Fa-f]+)|(lt|gt|amp|quot|apos));")
 _NAMED = {"lt": "<", "gt": ">", "amp": "&", "quot": '"', "apos": "'"}
