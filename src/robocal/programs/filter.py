@@ -415,9 +415,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         res.warnings += target_warnings(prediction, calibrated, res.joints)
     if not res.rows:
         check_language(programs, references, dialect)
-    # unchanged: a VAL3 application given as its folder was never compared (the check read it as a file)
-    if not any(p.is_dir() for p in given):
-        res.warnings[:0] = tool_disagreements(res.language, declared_tools, tools)
+    res.warnings[:0] = tool_disagreements(res.language, declared_tools, tools)  # a VAL3 folder too
     return res
 
 
