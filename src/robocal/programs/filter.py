@@ -564,7 +564,8 @@ def _runtime(d: Dialect, program: Program, sources: list[ProgramText], corrected
     sites, why_not = routed_sites(program, corrected)
     used = [t for _, _, t in program.motions if isinstance(t, Target)]  # every target a motion reaches
     used += [t for s in sites for w in s.account.named if isinstance(w, RunTime) for t in w.sources]
-    axes = sorted({a for t in used for a in t.axes if a in d.arm_axes})
+    # an axis at its zero leaves the arm where its model puts it (KRL writes E1..E6 = 0 on every E6POS)
+    axes = sorted({a for t in used for a, v in t.axes.items() if a in d.arm_axes and v != 0})
     if sites and axes and not fixed_base:
         why_not = [f"--runtime-correction: no motion routed: the targets move external axes "
                    f"({', '.join(axes)}) that may carry the arm, which the routine's chain (the arm alone) "
