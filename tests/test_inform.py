@@ -36,15 +36,16 @@ CASES = {
          r":43: IMOV: .*P011 is an increment \(IMOV\)"], (7, 2)),
     "pick and place, no VAR.DAT": (
         ["PICK_PLACE.JBI"], ["C00000", "C00001", "C00002", "C00003", "C00004", "C00005"],
-        [r":35: MOVL: .*P001 is not in the files given \(a global position variable: give VAR.DAT",
-         r":37: MOVL: .*P002 is written at run time by GETPOS \(PICK_PLACE.JBI:36\)",
-         r":39: MOVL: .*LP000 is written at run time by SET \(PICK_PLACE.JBI:38\)",
+        [r":35: MOVL: .*P001 is not in the files given \(a global position variable: give the controller.s "
+         r"VAR.DAT with --references",
+         r":37: MOVL: .*P002 is assigned at run time by GETPOS \(PICK_PLACE.JBI:36\)",
+         r":39: MOVL: .*LP000 is assigned at run time by SET \(PICK_PLACE.JBI:38\)",
          r":40: MOVL: .*P\[I000\]: the position number is computed at run time",
          r":42: MOVJ: .*P003 is not in the files given"], (8, 0)),
     "pick and place with VAR.DAT": (
         ["PICK_PLACE.JBI", "VAR.DAT"], ["C00000", "C00001", "C00002", "C00003", "C00004", "C00005", "P0001"],
-        [r":37: MOVL: .*P002 is written at run time by GETPOS",
-         r":39: MOVL: .*LP000 is written at run time by SET",
+        [r":37: MOVL: .*P002 is assigned at run time by GETPOS",
+         r":39: MOVL: .*LP000 is assigned at run time by SET",
          r":40: MOVL: .*P\[I000\]: the position number is computed at run time"], (9, 1)),
     "track and station": (
         # ROBOT positions with base-axis (BC) and station (+MOVJ EC) values: arm targets (issue 45)
@@ -306,7 +307,7 @@ def test_user_frames_from_uframe_cnd_and_p_variables_saved_in_the_job(tmp_path):
     assert [r["name"] for r in res.rows] == [r["name"].replace("C0000", "P0010") for r in ref.rows]
     assert [r["correction_mm"] for r in res.rows] == pytest.approx([r["correction_mm"] for r in ref.rows])
     with pytest.raises(DataError, match="not a UFRAME.CND"):
-        filter_program([job], CALIBRATED, NOMINAL, tools=TOOLS, references=[CORPUS / "VAR.DAT"])
+        filter_program([job], CALIBRATED, NOMINAL, tools=TOOLS, references=[CORPUS / "PALLETIZE.JBI"])
 
 
 def test_conveyor_station_and_external_group_motions_are_named(tmp_path):

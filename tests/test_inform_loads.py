@@ -172,7 +172,7 @@ def test_filter_cli_reads_the_tool_file_and_prints_the_loads(tmp_path, capsys):
             "PALLETIZE.JBI lines 30-32") in out
     table = json.loads((tmp_path / "out.JBI.targets.json").read_text())
     assert table["loads"][0].startswith("38 kg")
-    assert main([*args[:-1], str(CORPUS / "VAR.DAT")]) == 2  # neither a TOOL.CND nor a UFRAME.CND
+    assert main([*args[:-1], str(CORPUS / "PICK_PLACE.JBI")]) == 2  # a job: no TOOL.CND, UFRAME.CND, VAR.DAT
     assert "not a UFRAME.CND nor a TOOL.CND" in capsys.readouterr().err
 
 

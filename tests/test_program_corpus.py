@@ -55,16 +55,16 @@ CASES = {
                                         r":32: LIN: .*XAPP is not declared in these files"]),
     "fanuc arc welding": (["weld_bracket.ls"], [], "fanuc_lrmate200id", FANUC_FRAMES,
                           ["P[1:approach]", "P[2]", "P[3]", "P[4]", "P[5]", "P[6]", "P[7]", "P[8]"],
-                          [r":36: L: .*P\[6\] is shifted at run time by Offset,PR\[2\]",
-                           r":37: L: .*P\[7\] is shifted at run time by Tool_Offset,PR\[3\]",
-                           r":39: L: .*PR\[5:service\] is a position reg",
+                          [r":39: L: .*PR\[5:service\] is a position reg",
                            r":40: L: .*P\[12\] is not a Cartesian position of group 1",
+                           r":36: L: .*P\[6\] is shifted by Offset,PR\[2\], whose value lives in",
+                           r":37: L: .*P\[7\] is shifted by Tool_Offset,PR\[3\], which robocal does not",
                            r":38: L: .*P\[9\] is an incremental move"]),  # named once all uses are known
     "fanuc near gimbal lock": (["polish_vertical.ls"], [], "fanuc_lrmate200id", FANUC_FRAMES,
                                ["P[2:above lid]", "P[3]", "P[4]", "P[5]", "P[6]"],
-                               [r":31: L: .*P\[4\] is shifted at run time by Offset,PR\[4:lift\]",
-                                r":34: L: .*PR\[6:retract\] is a position register",
+                               [r":34: L: .*PR\[6:retract\] is written at polish_vertical.ls:33 \(PR\[6\]=",
                                 r":35: L: .*PR\[3:service\] is a position register",
+                                r":31: L: .*P\[4\] is shifted by Offset,PR\[4:lift\], whose value lives in",
                                 r":32: L: .*P\[7\] is an incremental move"]),
     "urscript polyscope screw station": (["screw_station.script"], [], "ur5", {}, ["p@14", "p@17", "p@19"],
                                          [r":21: movel: .*Feeder_p is not assigned a pose before this motion",
@@ -352,8 +352,9 @@ def test_krl_uncoordinated_external_axis_values_are_arm_targets(tmp_path):
 def test_fanuc_offsets_are_named_and_corrected(tmp_path):
     res, _ = _run("fanuc arc welding", tmp_path)
     named = {(m.line, m.status, m.reason.split(":")[0]) for m in res.motions}
-    assert (36, "named", "P[6] is shifted at run time by Offset,PR[2]") in named
-    assert (37, "named", "P[7] is shifted at run time by Tool_Offset,PR[3]") in named
+    assert (36, "named", "P[6] is shifted by Offset,PR[2], whose value lives in the controller (give its "
+                         "backup POSREG.VA with --references)") in named
+    assert (37, "named", "P[7] is shifted by Tool_Offset,PR[3], which robocal does not correct") in named
     assert (34, "corrected", "") in named  # the plain motion to P[6] is corrected
 
 

@@ -260,7 +260,8 @@ def test_a_pendant_written_sr_program_in_a_user_frame_is_filtered_onto_the_truth
     assert main(["filter", str(program), "--calibrated", cal, "--nominal", "fanuc_sr6ia",
                  "--frame", "1=0,0,50,0,0,0", "--tool", "1=0,0,0,0,0,0", "-o", str(out)]) == 0
     said = capsys.readouterr().out
-    assert "3 of 3 Cartesian target(s) filtered" in said and "PR[2:TMP] is a position register" in said
+    assert "3 of 3 Cartesian target(s) filtered" in said  # PR[2:TMP] is written on line 12: run time
+    assert "PR[2:TMP] is written at PICK_PLACE.ls:12 (PR[2]=...): its value is computed at run time" in said
     # the quill's margin to its limits is in mm (it was its metres shown as radians in deg: 2.86 'deg')
     import csv
 

@@ -220,6 +220,12 @@ def test_a_parameter_no_call_gives_is_named(tmp_path):
     folder = _app(tmp_path)
     text = (folder / "pickPart.pgx").read_bytes()
     (folder / "placePart.pgx").write_bytes(text.replace(b'name="pickPart"', b'name="placePart"'))
+    res = filter_program([folder], CALIBRATED, NOMINAL)  # not in the project: not read, said so
+    assert not [r for r in res.motions if r.file == "placePart.pgx"]
+    assert any("placePart.pgx is not in the project (pick_place.pjx)" in w for w in res.warnings)
+    pjx = folder / "pick_place.pjx"
+    listed = b'<Program file="pickPart.pgx" />'
+    pjx.write_bytes(pjx.read_bytes().replace(listed, listed + b'<Program file="placePart.pgx" />'))
     res = filter_program([folder], CALIBRATED, NOMINAL)
     named = [r for r in res.motions if r.file == "placePart.pgx"]
     why = "x_pPart is a parameter of placePart that no call in these files gives"

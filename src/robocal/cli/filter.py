@@ -76,6 +76,10 @@ def add_parser(sub) -> None:
     p.add_argument("--strict", action="store_true",
                    help="refuse when a motion moves to a name declared in none of the files given (default: "
                         "each such motion is named, with the declaration it needs, and the rest corrected)")
+    p.add_argument("--runtime-correction", action="store_true",
+                   help="add a routine in the program's language that corrects targets computed at run time "
+                        "(run-time offsets, positions modified at run time) with the calibrated model, and "
+                        "route those motions through it (docs/programs.md)")
     p.set_defaults(func=run)
 
 
@@ -105,6 +109,13 @@ def _output_paths(programs: list[str], output: str, table: str | None,
     return targets, table, [*targets.values(), *table_paths(table)]
 
 
+def _beside(output: str, path: Path) -> Path:
+    """Where a file the filter derives (FANUC's PR_CAL.LS from a POSREG.VA) is written: under its
+    own name in the output folder, or beside the one output program."""
+    out = Path(output)
+    return (out if out.is_dir() else out.parent) / Path(path).name
+
+
 def run(args) -> int:
     import sys
 
@@ -125,8 +136,8 @@ def run(args) -> int:
                          force=args.force, strict=args.strict, position_registers=args.position_registers,
                          payload=payload_si(args.payload), temperature=args.temperature,
                          payload_schedules=args.payload_schedules, prediction=prediction, arm=args.arm,
-                         fixed_base=args.fixed_base)
-    written = res.write({p: targets[Path(p)] for p in res.outputs}, table)
+                         fixed_base=args.fixed_base, runtime_correction=args.runtime_correction)
+    written = res.write({p: targets.get(Path(p), _beside(args.output, p)) for p in res.outputs}, table)
     if args.quiet:  # the warnings still matter
         for w in res.warnings:
             print(f"robocal filter: warning: {w}", file=sys.stderr)

@@ -195,6 +195,12 @@ def _parse(name: str, n: int) -> tuple[int, str, int | str | tuple | None]:
                      f"{', '.join(thermal.GROUP_NAMES)}")
 
 
+def parse_name(name: str, n: int) -> tuple[int, str, int | str | tuple | None]:
+    """``(joint index 0-based, term, detail)`` of joint-error parameter ``name`` of an ``n``-joint
+    robot (gear: ``(s|c, 1|2)``; cyclic: ``(s|c, frequency)``); ModelError if unknown."""
+    return _parse(name, n)
+
+
 def joint_error_basis(robot, q: np.ndarray, names: Sequence[str],
                       conditions: Conditions = UNKNOWN) -> tuple[np.ndarray, np.ndarray]:
     """``(B (N, k), joint (k,))``: d(dq_joint[p])/d(param p) at joints ``q (N, n)`` (rad).

@@ -96,7 +96,10 @@ def as_frames(d: Dialect, given) -> dict[str, np.ndarray]:
 
 def check_language(programs, references, dialect: str | None) -> None:
     """No Cartesian target was found: refuse when the ``programs`` (paths as given) are in another
-    language than their suffix says (each language's ``signature``)."""
+    language than their suffix says (each language's ``signature``). A language named with
+    ``--format`` (``dialect``) is never overridden."""
+    if dialect is not None:
+        return
     given = [programs] if isinstance(programs, str | Path) else list(programs)
     texts = {p: Path(p).read_text(encoding="utf-8", errors="replace")
              for p in [*given, *references] if not Path(p).is_dir()}  # a folder: its files

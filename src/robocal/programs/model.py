@@ -44,7 +44,8 @@ class Program:
     unit's plate frame, not the robot's world (:mod:`robocal.programs.positioner`). ``in_world``:
     the carried frames whose targets are written in the robot's world as taught with the unit at
     their values (an INFORM station-coordinated position): on the plate such a target is
-    ``inv(plate(e)) @ W @ T``."""
+    ``inv(plate(e)) @ W @ T``. ``runtime_sites``: the target arguments of motions whose target is
+    computed at run time (:class:`robocal.programs.runtime.RuntimeSite`), for ``--runtime-correction``."""
 
     targets: list[Target]
     frames: dict[str, np.ndarray] = field(default_factory=dict)
@@ -62,6 +63,7 @@ class Program:
     declared_tools: dict[str, np.ndarray] = field(default_factory=dict)
     carried: dict[str, str] = field(default_factory=dict)  # frame name -> mechanical unit moving it
     in_world: set[str] = field(default_factory=set)  # carried frames whose targets are taught in the world
+    runtime_sites: list = field(default_factory=list)  # target arguments computed at run time
 
     def motion(self, source: ProgramText, at: int, instruction: str) -> Account:
         """The account of the motion instruction at offset ``at`` of ``source`` (opened once)."""

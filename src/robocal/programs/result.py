@@ -23,6 +23,7 @@ from robocal.core.io import check_outputs, write_all
 from robocal.kinematics.model import Robot
 from robocal.programs.motions import MotionRecord, summary, summary_line
 from robocal.programs.registry import dialect_with_name
+from robocal.programs.runtime import ROUTED
 from robocal.trust.output_marker import ProgramMarker, mark_program
 
 LISTED = 20  # problems (warnings) listed in one message
@@ -160,6 +161,10 @@ class FilterResult:
         lines = [f"{self.dialect}: {s['filtered']} of {s['targets']} Cartesian target(s) filtered in "
                  f"{', '.join(p.name for p in self.outputs)}"]
         lines.append(f"  {summary_line(s['motions'])}")
+        routed = sum(m.reason.startswith(ROUTED) for m in self.motions)
+        if routed:
+            lines.append(f"  {routed} of them corrected at run time by the routine added to the program "
+                         "(--runtime-correction)")
         if len(self.uncorrected) > s["motions"]["named"]:
             lines.append(f"  {len(self.uncorrected)} place(s) where a Cartesian pose is not corrected, calls "
                          "of routines not in these files included (each named in a warning below)")

@@ -5,6 +5,7 @@ marker and the programs robocal writes in it."""
 
 from __future__ import annotations
 
+import importlib
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +29,9 @@ class Dialect:
     of position registers the motions use, ``filter_program(position_registers=...)``),
     ``payload_schedules`` (load schedules the motions select, ``payload_schedules=...``),
     ``scara_programs`` (its programs drive a SCARA: the filter reads them for a 4-joint SCARA),
-    ``external_axis_names`` and ``positioner_group`` (how its programs name a positioner's axes,
+    ``runtime_correction`` (a routine in this language corrects targets computed at run time:
+    ``filter --runtime-correction``), ``external_axis_names`` and ``positioner_group`` (how its
+    programs name a positioner's axes,
     the controller's logical external axes of a cell file: :meth:`positioner_axes`, which the
     coordinated-motion filter and the campaign writers ask), ``arm_axes`` (which of its programs'
     external axes may carry the arm, a track or gantry the text cannot tell from a positioner:
@@ -68,6 +71,9 @@ class Dialect:
     # station moves no arm; their arm-carrying axes, an integrated rail or base axes, are named by
     # their readers)
     arm_axes: tuple[str, ...] = ()
+    # capability: a run-time correction routine in this language ("module:Class" of its
+    # robocal.programs.runtime.RuntimeWriter; '': none), filter --runtime-correction
+    runtime_correction = ""
 
     def positioner_axes(self, external_axes: tuple[int, ...]) -> tuple[str, ...]:
         """The names this language's programs give a positioner's axes, which are the controller's
@@ -92,6 +98,13 @@ class Dialect:
             raise DataError(f"{self.name} programs name {have}: no name for external axis {bad[0]}")
         return tuple(names[k - 1] for k in numbers)
 
+    def runtime_writer(self):
+        """This language's :class:`robocal.programs.runtime.RuntimeWriter` (``runtime_correction``)."""
+        if not self.runtime_correction:
+            raise DataError(f"robocal writes no run-time correction in {self.name}")
+        module, name = self.runtime_correction.split(":")
+        return getattr(importlib.import_module(module), name)()
+
     def parse(self, sources: list[ProgramText], frames: dict[str, np.ndarray],
               tools: dict[str, np.ndarray], references: list[ProgramText] = ()) -> Program:
         """Targets, frames and tools of the files; ``references`` are read for their tool and
@@ -100,6 +113,15 @@ class Dialect:
         tool data the program holds without them is its ``declared_tools`` (the files are read
         once: a ``--tool`` that differs is named from this parse)."""
         raise NotImplementedError
+
+    def reference_outputs(self, program: Program, references: list[ProgramText],
+                          corrected: dict[Path, bytes], kept: set[int]) -> dict[Path, bytes]:
+        """Files written for the corrected targets that ``references`` hold (a FANUC POSREG.VA's
+        registers), by path (the reference's folder, the file's own name): ``corrected``:
+        reference path -> its text with those targets' numbers corrected (the text itself when
+        none changed); ``kept``: ids of the targets left uncorrected. None by default: a reference
+        is read for declarations only."""
+        return {}
 
     def to_pose(self, values: np.ndarray) -> np.ndarray:
         """Pose numbers ``(N, k)`` in the file's notation -> ``(N, 4, 4)`` (m)."""

@@ -17,7 +17,10 @@ user frame UF and tool frame UT; their values live in the controller, so they ar
 frame, UT 0 the faceplate. Joint representations (J1 = ...) are left alone. Other motion groups
 (``GP2:`` ...) and a ``COORD`` motion's leader: :mod:`robocal.programs.dialects.fanuc.groups`;
 extended axes of group 1 (``E1 = ...``, an integrated rail): a track cell
-(:mod:`robocal.programs.track`), else named.
+(:mod:`robocal.programs.track`), else named. Motions to position registers ``PR[n]``: corrected when
+their values are given, the controller's backup POSREG.VA among the references
+(:mod:`robocal.programs.dialects.fanuc.posreg`) or a register CSV
+(:mod:`robocal.programs.dialects.fanuc.registers`).
 """
 
 from __future__ import annotations
@@ -37,20 +40,22 @@ from robocal.programs.dialects.fanuc.campaign import fanuc_ls_program
 from robocal.programs.dialects.fanuc.configuration import SCARA, FANUCConfig
 from robocal.programs.dialects.fanuc.groups import COORD, coordinate, group_values, values_text
 from robocal.programs.dialects.fanuc.loads import FanucLoads, read_schedules
-from robocal.programs.dialects.fanuc.registers import ActiveFrames, read_registers
+from robocal.programs.dialects.fanuc.posreg import SETTER_NAME, is_posreg, read_posreg, setter_program
+from robocal.programs.dialects.fanuc.registers import ActiveFrames, Registers, assignments, read_registers
+from robocal.programs.dialects.fanuc.sysframe import is_sysframe, read_sysframe
 from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
-from robocal.programs.source import Number
+from robocal.programs.source import Number, ProgramText
 
 _POS = re.compile(r"\bP\[\s*(\d+)\s*(?::\s*\"([^\"]*)\")?\s*\]\s*\{(.*?)\}\s*;", re.DOTALL)
 _GROUP = re.compile(r"\bGP(\d+)\s*:")
 _FRAME_NO = re.compile(r"\b(UF|UT)\s*:\s*(\w+)")
 _CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d{1,3})\s*,"
                      r"\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*'")
-_SCARA_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([LR])\s*,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,"
-                           r"\s*([-+]?\d{1,3})\s*'")  # a SCARA's (SR-series): hand, three turns
+_SCARA_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([LR])\s*(?:,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,"
+                           r"\s*([-+]?\d{1,3}))?\s*'")  # a SCARA's (SR-series): hand, three turns (or none)
 _VALUE = r"\b{}\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*(?:mm|deg)"
 _KEYS = ("X", "Y", "Z", "W", "P", "R")
 _VALUES = tuple(re.compile(_VALUE.format(k)) for k in _KEYS)
@@ -67,6 +72,8 @@ _ARC_END = re.compile(r"\s*(P|PR)\[")
 _POSITION = re.compile(r"\b(PR|P)\[\s*((?:[A-Z]+\[\s*\d+\s*\])|\d+)\s*(?::[^\]]*)?\]")
 _OFFSET = re.compile(r"\b(Tool_Offset|Offset|VOFFSET)\b(?:\s*,\s*(\w+\[[^\]]*\]))?", re.IGNORECASE)
 _INCREMENTAL = re.compile(r"\bINC\b")
+SHIFTED = "+"  # user frame n shifted by Offset,PR[m]: the frame "n+PR[m]"
+_REGISTER = re.compile(r"^PR\[\s*(?:GP1\s*:\s*)?(\d+)\s*(?::[^\]]*)?\]$")  # an offset's PR[m]
 _POSITION_MM = 1e-3
 _POSITION_DIGITS = 5  # position numbers P[n] (the controller's are far below 100,000)
 _ANGLE_DEG = 1e-3  # the controller writes 3 decimals: 1e-3 deg is 2 um at 120 mm from the flange
@@ -125,28 +132,65 @@ class FanucDialect(Dialect):
     def resolutions(self):
         return np.array([_POSITION_MM] * 3 + [_ANGLE_DEG] * 3)
 
+    def reference_outputs(self, program, references, corrected, kept):
+        """A POSREG.VA among ``references``: the TP program setting its corrected registers
+        (:func:`robocal.programs.dialects.fanuc.posreg.setter_program`), beside it as PR_CAL.LS."""
+        out = {}
+        for ref in (r for r in references if is_posreg(r)):
+            used = {int(t.name[3:-1]): (t.frame.split(SHIFTED)[0], t.tool) for t in program.targets
+                    if t.source is ref and id(t) not in kept}  # a register's value is in UF n itself
+            if used:
+                text = setter_program(ProgramText(ref.path, corrected[ref.path]), used, self.scheme)
+                out[ref.path.with_name(f"{SETTER_NAME}.LS")] = text.encode("latin-1")
+        return out
+
     def config_edits(self, target, new):
         spans = target.config_spans  # (flip, up, front, t1, t4, t6) as (start, end, text)
-        if len(spans) == 4:  # a SCARA's (hand, t1, t2, t4)
+        if spans[0][2] in ("L", "R"):  # a SCARA's (hand, t1, t2, t4), or its hand alone
             texts = ["LR"[int(new[0])], *(str(int(v)) for v in new[3:])]
         else:
             letters = ("NF"[int(new[0])], "UD"[int(new[1])], "TB"[int(new[2])])
             texts = [*letters, *(str(int(v)) for v in new[3:])]
+        texts = texts[:len(spans)]  # turns the file does not write stay unwritten
         return {(a, b): t for (a, b, old), t in zip(spans, texts, strict=True) if old != t}
 
     def parse(self, sources, frames, tools, references=()):
         prog = Program([], frames={"0": np.eye(4)}, tools={"0": np.eye(4)})
         prog.declared_tools = dict(prog.tools)  # UTOOL 0, the flange: TP files declare no tool data
+        for ref in references:  # the controller's frames from its backup; --frame / --tool override them
+            if is_sysframe(ref):
+                user, tool = read_sysframe(ref, self.to_pose)
+                prog.frames.update(user)
+                prog.tools.update(tool)
+                prog.declared_tools.update(tool)
+            elif ref.path.name.upper() == "SYSFRAME.VA":
+                raise DataError(f"{ref.path}: no [*SYSTEM*]$MNUFRAME variable: not the controller's "
+                                "SYSFRAME.VA")
         prog.frames.update(frames)
         prog.tools.update(tools)
         order = 0
         others: dict[int, tuple] = {}  # id(position) -> (its other groups' values, its extended axes)
         joint: set = set()
         remote: set = set()  # remote-TCP positions (file, number)
-        registers = None  # the --position-registers file, given among the sources as a .csv
+        registers = None  # the --position-registers file (among the sources as a .csv) or a POSREG.VA
         for src in [s for s in sources if s.path.suffix.lower() == ".csv"]:
-            registers = read_registers(src)
+            registers = Registers(read_registers(src), {}, f"the --position-registers file {src.path.name}")
         sources = [s for s in sources if s.path.suffix.lower() != ".csv"]
+        for src in (s for s in sources if is_posreg(s)):
+            raise DataError(f"{src.path.name} is the controller's backup of the position registers: give it "
+                            f"with --references (its corrected registers are written as {SETTER_NAME}.LS)")
+        backups = [r for r in references if is_posreg(r)]
+        for r in references:
+            if r.path.name.upper() == "POSREG.VA" and r not in backups:
+                raise DataError(f"{r.path}: no [*POSREG*]$POSREG variable: not the controller's POSREG.VA")
+        if len(backups) > 1 or backups and registers is not None:
+            given = [*(r.path.name for r in backups), *([registers.origin] if registers else [])]
+            raise DataError(f"the position registers are given twice ({', '.join(given)}): give one")
+        if backups:
+            va = read_posreg(backups[0])
+            registers = Registers(va.cartesian, va.other, backups[0].path.name)
+            prog.warnings.append(f"{backups[0].path.name}: the position registers' values are the backup's: "
+                                 "a program not given here that writes them at run time is not seen")
         for src in sources:
             text = src.text
             start = text.find("/POS")
@@ -195,10 +239,10 @@ class FanucDialect(Dialect):
                     row = np.array(["NF".index(c.group(1)), "UD".index(c.group(2)), "TB".index(c.group(3)),
                                     int(c.group(4)), int(c.group(5)), int(c.group(6))])
                     spans = [(a + c.start(k), a + c.end(k), c.group(k)) for k in range(1, 7)]
-                elif c := _SCARA_CONFIG.search(gp):
+                elif c := _SCARA_CONFIG.search(gp):  # no turns written: 0, the controller's nearest
                     row = np.array(["LR".index(c.group(1)), SCARA, SCARA,
-                                    *(int(c.group(k)) for k in (2, 3, 4))])
-                    spans = [(a + c.start(k), a + c.end(k), c.group(k)) for k in range(1, 5)]
+                                    *(int(c.group(k) or 0) for k in (2, 3, 4))])
+                    spans = [(a + c.start(k), a + c.end(k), c.group(k)) for k in range(1, 5) if c.group(k)]
                 else:
                     raise DataError(f"{where}: position {name}: CONFIG must read 'N|F U|D T|B, t1, t4, t6' "
                                     "(a SCARA's: 'L|R, t1, t2, t4')")
@@ -235,6 +279,14 @@ class FanucDialect(Dialect):
         incremental: dict[tuple, list] = {}  # position -> accounts of the INC motions using it
         used_registers: dict[int, Target] = {}
         plain = set()  # positions some motion uses as a pose
+        shifted: dict[tuple, list] = {}  # position -> the motions moving to it shifted (Offset ...)
+        pr_shifted: list[tuple] = []  # the motions to a register shifted (Offset ...), its frames known
+        unshifted = set()  # positions some motion moves to as they are
+        assigned, indirect = assignments(sources)  # registers written at run time -> where
+        if indirect and registers is not None:
+            prog.warnings.append(f"{', '.join(indirect[:4])}: a register whose number is known at run "
+                                 "time is written (PR[R[k]]=...): any register's value may differ from the "
+                                 "one given")
         first: dict[int, tuple] = {}  # id(position) -> how its first motion moves it (leader, values)
         for src in sources:
             text = src.text
@@ -264,6 +316,9 @@ class FanucDialect(Dialect):
                         continue
                     label = ref.group(0)
                     number = ref.group(2).isdigit() and len(ref.group(2)) <= _POSITION_DIGITS
+                    if ref.group(1) == "PR" and number and registers is not None and int(ref.group(2)) \
+                            not in assigned and registers.other.get(int(ref.group(2)), "") is None:
+                        continue  # a joint register: nothing to correct
                     acc = None if ref.group(1) == "P" and number and (src.path, int(ref.group(2))) in joint \
                         else prog.motion(src, line.start(1), instr)
                     if acc is None:
@@ -272,12 +327,14 @@ class FanucDialect(Dialect):
                         prog.skip(here, instr, f"{label} is {REMOTE_TCP}", acc, label)
                         continue
                     if ref.group(1) == "PR":
-                        why = _register(ref, registers, active, line.start())
+                        why = _register(ref, registers, active, assigned, line.start())
                         if isinstance(why, str):
                             prog.skip(here, instr, why, acc, label)
-                        elif off or "INC" in options and _INCREMENTAL.search(options):
-                            how = off.group(0) if off else "INC"
-                            prog.skip(here, instr, f"{label} is shifted at run time ({how})", acc, label)
+                        elif "INC" in options and _INCREMENTAL.search(options):
+                            prog.skip(here, instr, f"{label} is an incremental move (INC): a displacement, "
+                                                   "not a pose", acc, label)
+                        elif off:
+                            pr_shifted.append((here, instr, label, acc, off, why, (src.path, line.start())))
                         else:
                             t, uf, ut = why
                             prog.use(t, ut, uf, here, label, "user frame", (src.path, line.start()), acc)
@@ -313,8 +370,36 @@ class FanucDialect(Dialect):
                             prog.warnings.append(f"{t.where}: not corrected: {why}")
                             prog.uncorrected.append(f"{t.where}: not corrected: {why}")
                     if off:
-                        prog.skip(here, instr, f"{label} is shifted at run time by {off.group(0)}: {label} "
-                                               "is corrected for its own pose, the shifted pose is not", acc)
+                        shifted.setdefault(key, []).append((here, instr, label, acc, off))
+                    else:
+                        unshifted.add(key)
+        unshifted_registers = set(used_registers)
+        for here, instr, label, acc, off, (t, uf, ut), motion in pr_shifted:
+            why = _shift([(here, instr, label, acc, off)], id(t) in unshifted_registers, registers, assigned,
+                         used_registers, "the shifted pose is not corrected")
+            if why is None:  # the register corrected in the user frame shifted by the offset's translation
+                n = int(_REGISTER.search(off.group(2)).group(1))
+                frame = f"{uf}{SHIFTED}PR[{n}]"
+                if uf in prog.frames:
+                    d = registers.values[n].values()[:3] * _POSITION_MM
+                    prog.frames.setdefault(frame, prog.frames[uf] @ make_transform(np.eye(3), d))
+                prog.use(t, ut, frame, here, label, "user frame", motion, acc)
+                used_registers.setdefault(id(t), t)
+            else:
+                prog.skip(here, instr, why, acc, label)
+        for key, uses in shifted.items():
+            t = numbers[key]
+            why = _shift(uses, key in unshifted, registers, assigned, used_registers)
+            if why is None:  # a known translation d in the user frame: P[n] is corrected in UF @ Trans(d)
+                n = int(_REGISTER.search(uses[0][4].group(2)).group(1))
+                d = registers.values[n].values()[:3] * _POSITION_MM
+                frame = f"{t.frame}{SHIFTED}PR[{n}]"
+                if t.frame in prog.frames:
+                    prog.frames[frame] = prog.frames[t.frame] @ make_transform(np.eye(3), d)
+                t.frame = frame if t.frame in prog.frames else t.frame
+                continue
+            for here, instr, _, acc, _ in uses:
+                prog.skip(here, instr, why, acc)
         for key, uses in incremental.items():
             for here, instr, label, acc in uses:
                 why = (f"{label} is an incremental move (INC): a displacement, not a pose" if key not in plain
@@ -328,26 +413,70 @@ class FanucDialect(Dialect):
         prog.targets += [t for t in used_registers.values() if id(t) not in prog.not_corrected]
 
 
-def _register(ref, registers, active, at: int):
+def _register(ref, registers, active, assigned: dict[int, str], at: int):
     """``(Target, user frame, tool frame)`` of the motion to position register ``ref`` at ``at``,
-    or why it cannot be corrected."""
+    or why it cannot be corrected. ``assigned``: register -> where a program given writes it."""
     label, n = ref.group(0), ref.group(2)
-    if registers is None:
-        return (f"{label} is a position register: its value lives in the controller (give the registers' "
-                "values with --position-registers to correct it)")
     if not n.isdigit():
         return f"{label}: the register number is known at run time only"
     if len(n) > _POSITION_DIGITS:
         return f"PR[{short_repr(n)}] is not a register number (more than {_POSITION_DIGITS} digits)"
-    if int(n) in active.assigned:
-        return f"{label} is assigned in this program: its value is computed at run time"
-    if int(n) not in registers:
-        return Undeclared(f"{label} is not in the --position-registers file",
-                          f"PR[{int(n)}] in --position-registers")
+    if int(n) in assigned:
+        return f"{label} is written at {assigned[int(n)]} (PR[{int(n)}]=...): its value is computed at run " \
+            "time"
+    if registers is None:
+        return (f"{label} is a position register: its value lives in the controller (give its backup "
+                "POSREG.VA with --references, or the values with --position-registers, to correct it)")
+    if registers.other.get(int(n)):
+        return registers.other[int(n)]
+    if int(n) not in registers.values:
+        return Undeclared(f"{label} is not in {registers.origin}", f"PR[{int(n)}] in {registers.origin}")
     uf, ut = active.at(at)
     if uf is None or ut is None:
-        return f"{label}: UFRAME_NUM and UTOOL_NUM are not both set before this motion (the frames it is in)"
-    return registers[int(n)], str(int(uf)), str(int(ut))
+        return (f"{label}: UFRAME_NUM and UTOOL_NUM are not both set in this program before this motion "
+                "(the frames its value is in are the caller's)")
+    return registers.values[int(n)], str(int(uf)), str(int(ut))
+
+
+def _shift(uses: list, unshifted: bool, registers, assigned: dict[int, str], used: dict,
+           own: str = "") -> str | None:
+    """Why the motions ``uses`` to one position (P[n] or a register), shifted (``Offset,PR[m]``,
+    ...), are not corrected, or None: they are, in the user frame shifted by the translation PR[m]
+    holds (FANUC adds a Cartesian offset's X, Y, Z to the position's in the user frame).
+    ``unshifted``: some motion moves to the position itself; ``used``: the registers motions move
+    to (by id); ``own``: what becomes of the position (default: P[n] corrected for its own pose)."""
+    label, offs = uses[0][2], {u[4].group(0) for u in uses}
+    own = own or f"{label} is corrected for its own pose, the shifted pose is not"
+    if len(offs) > 1:
+        return f"{label} is shifted by {' and by '.join(sorted(offs))}: one corrected {label} cannot serve " \
+            "both"
+    off = uses[0][4]
+    reg = _REGISTER.search(off.group(2) or "")
+    if off.group(2) is None:  # the register of the OFFSET CONDITION in effect
+        return f"{label} is shifted by {off.group(0)}, the OFFSET CONDITION register in effect: {own}"
+    if reg is None:  # a register number known at run time (PR[R[3]]), or not a register
+        return f"{label} is shifted at run time by {off.group(0)}: {own}"
+    if off.group(1).lower() != "offset":
+        return f"{label} is shifted by {off.group(0)}, which robocal does not correct: {own}"
+    n = int(reg.group(1))
+    if n in assigned:
+        return f"{label} is shifted by {off.group(0)}, written at {assigned[n]}: computed at run time; {own}"
+    if registers is None:
+        return (f"{label} is shifted by {off.group(0)}, whose value lives in the controller (give its backup "
+                f"POSREG.VA with --references): {own}")
+    if n not in registers.values:
+        return f"{label} is shifted by {off.group(0)}, which {registers.origin} holds no Cartesian value " \
+            f"of: {own}"
+    if unshifted:
+        return (f"{label} is shifted by {off.group(0)} here and a pose in other motions, which correct it: "
+                f"one corrected {label} cannot serve both")
+    t = registers.values[n]
+    if np.any(t.values()[3:] != 0.0):
+        return f"{label} is shifted by {off.group(0)}, which turns the pose (W, P, R not 0): {own}"
+    if id(t) in used:
+        return (f"{label} is shifted by {off.group(0)}, which motions also move to: its corrected value "
+                f"would change this shift; {own}")
+    return None
 
 
 def _nothing_between(src, text: str, a: int, b: int) -> None:

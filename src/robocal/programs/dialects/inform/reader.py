@@ -39,14 +39,29 @@ Base axes (``BC``), stations (``EC``, ``+MOVJ EC``) and station-coordinated ``SM
 :mod:`robocal.programs.dialects.inform.groups` (the values as :attr:`Target.axes`; an ``SMOV``
 target carried by its station).
 
-``VAR.DAT`` holds the global variables; its position section ``//P`` has the same header lines
-and ``P0001=...`` entries. Given as a program file, its Cartesian positions that the jobs' motions
-reach are corrected too; otherwise a motion to ``P001`` is named.
+``VAR.DAT`` (the controller's backup of its global variables) has a position section ``//P`` with
+the same header lines (the frame: ``///POSTYPE BASE|ROBOT|USER`` with ``///USER n``, ``///TOOL n``,
+``///RCONF``; the units: ``///RECTAN`` mm and deg, ``///PULSE`` encoder pulses) and ``P0001=...``
+entries. Given with ``--references`` (or as a program file), its Cartesian P variables that the
+jobs' motions reach are corrected; the corrected values are delivered as ``VAR_CAL.DAT`` (a copy
+with only those numbers, and a ``///RCONF`` line where a form changes, rewritten; loaded on the
+controller as VAR.DAT; :meth:`InformDialect.reference_outputs`). Without it a motion to ``P001`` is
+named. A variable a job given assigns at run time (``SET``, ``SUB``, ``ADD``, ``MUL``, ``CNVRT``,
+``GETS``, ``MULMAT``, ``SETE``..., anywhere in the job: loops) is named at every motion to it, like a
+local variable ``LP``, which no file holds; a write with a run-time index (``SET P[I000] ...``)
+names every motion to a variable of that kind.
+
+The VAR.DAT of a controller's CMOS backup (``//VAR``, one ``///P`` line per variable) is read by
+:mod:`robocal.programs.dialects.inform.var_file`'s layout, the same way.
+
+A job whose motion instructions give no motion record (all to joint positions, a station's own,
+or outside ``//INST``) says so in a warning.
 """
 
 from __future__ import annotations
 
 import re
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -55,7 +70,7 @@ from scipy.spatial.transform import Rotation
 from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.dialects.base import Dialect
-from robocal.programs.dialects.inform import marker, simulated
+from robocal.programs.dialects.inform import marker, simulated, var_file
 from robocal.programs.dialects.inform.campaign import inform_job
 from robocal.programs.dialects.inform.configuration import YaskawaConfig
 from robocal.programs.dialects.inform.groups import BASE_KINDS, STATION_KINDS, Groups, Moved, job_groups
@@ -91,12 +106,16 @@ _SETTOOL = re.compile(r"^\s*SETTOOL\s+TL#\(\s*([^)]*?)\s*\)")  # writes tool n's
 ANY_TOOL = "*"  # a SETTOOL whose tool number is not written as a number
 # instructions that write a position variable at run time (its first operand)
 _WRITES = re.compile(r"^\s*(SET|SETE|GETS|GETE|GETPOS|ADD|SUB|MUL|DIV|CNVRT|CLEAR|SETFILE|GETFILE|MSHIFT|"
-                     r"READ|PXEREAD)\s+(LP|P|LBP|BP|LEX|EX)" + _INDEX + r"\b")
+                     r"MULMAT|INVMAT|READ|PXEREAD)\s+(LP|P|LBP|BP|LEX|EX)(?:" + _INDEX + r"\b|\[([^\]]*)\])")
+ANY_NUMBER = "[]"  # a variable written with a run-time index (SET P[I000] ...): any of its kind may be
 _REFP = re.compile(r"^\s*REFP\s+\d+\s+(C|P)" + _INDEX + r"\b")
 _LABELED = re.compile(r"^\s*(?:\*\w+\s+)?")
 _RUNTIME_INDEX = "the position number is computed at run time"
 _BOTH = "used by motions that move differently:"  # a target one correction cannot serve (every use named)
 _CONVEYOR = re.compile(r"\bCV#\(")  # a conveyor-synchronised SMOV (conveyor tracking)
+_CARTESIAN_POSTYPES = ("BASE", "ROBOT", "USER", "TOOL", "MTOOL")  # ///POSTYPEs of Cartesian numbers
+SHOWN_VARIABLES = 8  # P variables a message names before "and n more"
+_BOM = ("\ufeff", "\xef\xbb\xbf")  # a byte-order mark before /JOB (as text, and UTF-8 read as latin-1)
 
 
 @dataclass
@@ -125,6 +144,8 @@ class Position:
     line_end: int
     newline: str
     target: Target | None = None  # the Cartesian target, when it is one
+    why: str = ""  # why a motion to it cannot be corrected, when the file says (a backup's VAR.DAT)
+    form: tuple[int, int] | None = None  # the span of its form digits (a backup's VAR.DAT), else None
 
 
 def _lines(text: str):
@@ -184,6 +205,8 @@ class InformDialect(Dialect):
 
     def config_edits(self, target, new):
         pos: Position = target.config_spans
+        if pos.form is not None:  # a backup's VAR.DAT: the form's digits in the line itself
+            return {(pos.form[0], pos.form[0] + CONFIG_FIELDS): "".join(str(min(int(v), 1)) for v in new)}
         old = pos.header.rconf or []
         fields = [str(min(int(v), 1)) for v in new] + old[CONFIG_FIELDS:]
         text = target.source.text
@@ -195,13 +218,26 @@ class InformDialect(Dialect):
             edits[(pos.line_end, pos.line_end)] = pos.header.rconf_line + newline
         return edits
 
+    def reference_outputs(self, program, references, corrected, kept):
+        """A VAR.DAT among ``references`` whose P variables motions reach: its corrected copy
+        (:func:`corrected_variables_name`, the numbers of the corrected P variables rewritten,
+        every other byte as it was)."""
+        out = {}
+        for ref in (r for r in references if is_variable_file(r)):
+            if any(t.source is ref and id(t) not in kept for t in program.targets):
+                out[ref.path.with_name(corrected_variables_name(ref.path.name))] = corrected[ref.path]
+        return out
+
     def parse(self, sources, frames, tools, references=()):
         prog = Program([], frames={IDENTITY: np.eye(4)}, tools={})
+        variables = []  # VAR.DATs given (as a reference or a program file)
         for ref in references:
             if is_tool_file(ref):  # TOOL.CND: its tool frames (its loads: load_data.inform)
                 entries = read_tool_file(ref)
                 poses = self.to_pose(np.array([e.frame for e in entries.values()]))
                 prog.tools.update(zip(entries, poses, strict=True))
+            elif is_variable_file(ref):  # VAR.DAT: the global position variables (read below)
+                variables.append(ref)
             else:
                 prog.frames.update(user_frames(ref))
         prog.frames.update(frames)
@@ -213,6 +249,12 @@ class InformDialect(Dialect):
             if is_tool_file(src) or _UFRAME_LINE.search(src.text):
                 raise DataError(f"{src.path.name} is a controller file of tools or user frames (TOOL.CND, "
                                 "UFRAME.CND), not a job: give it with --references")
+            if _is_variable_file(src):
+                variables.append(src)
+        if len(variables) > 1:
+            given = ", ".join(v.path.name for v in variables)
+            raise DataError(f"the global variables are given twice ({given}): give VAR.DAT once")
+        for src in [*variables, *(s for s in sources if not _is_variable_file(s))]:
             found = _read_positions(src, prog)
             scope = "global" if _is_variable_file(src) else src.path
             for p in found:
@@ -223,8 +265,14 @@ class InformDialect(Dialect):
                 jobs.append(src)
         used: set[int] = set()  # targets a corrected motion reaches
         named: set[int] = set()  # ... a named motion reaches
+        writes = {id(src): _run_time_writes(src) for src in jobs}
+        shared: dict[str, str] = {}  # global variables (P, BP, EX) a job given assigns: for every job
+        for w in writes.values():
+            for name, where in w.items():
+                if not name.startswith("L"):
+                    shared.setdefault(name, where)
         for src in jobs:
-            _motions(src, positions, prog, used, named)
+            _motions(src, positions, prog, used, named, shared | writes[id(src)])
         # a reached target uses TOOL 0, without data for it: anywhere (tool0) / in TOOL.CND (own_tool0)
         tool0 = own_tool0 = False
         for p in {id(p): p for p in positions.values()}.values():  # a job's P variable is under two keys
@@ -234,7 +282,8 @@ class InformDialect(Dialect):
             if id(t) in named and id(t) not in used:
                 continue
             if id(t) not in used:
-                prog.warnings.append(f"{t.where}: no motion of these jobs reaches it: left as it is")
+                if t.source not in references:  # a backup's VAR.DAT holds every variable of the cell
+                    prog.warnings.append(f"{t.where}: no motion of these jobs reaches it: left as it is")
                 continue
             tool0 |= t.tool == "0" and "0" not in prog.tools
             own_tool0 |= t.tool == "0" and "0" not in prog.declared_tools
@@ -246,20 +295,59 @@ class InformDialect(Dialect):
             prog.tools["0"] = np.eye(4)
             prog.warnings.append("TOOL 0 has no data given: taken as the flange (give "
                                  "--tool 0=X,Y,Z,Rx,Ry,Rz if tool file 0 holds a tool)")
+        prog.warnings += [_delivered(ref, prog.targets) for ref in variables if ref in references
+                          and any(t.source is ref for t in prog.targets)]
         prog.targets.sort(key=lambda t: (str(t.source.path), t.offset))
         for k, t in enumerate(prog.targets):
             t.order = k
         return prog
 
 
+def corrected_variables_name(name: str) -> str:
+    """The name of a VAR.DAT's corrected copy: ``VAR.DAT`` -> ``VAR_CAL.DAT`` (another name than the
+    controller's own, so that the backup it was read from is never overwritten)."""
+    stem, dot, suffix = name.rpartition(".")
+    return f"{stem}_CAL{dot}{suffix}" if dot else f"{name}_CAL"
+
+
+def _delivered(ref: ProgramText, targets: list[Target]) -> str:
+    """What the filter does with the P variables of VAR.DAT ``ref`` given with --references."""
+    names = [t.name for t in targets if t.source is ref]
+    shown = ", ".join(names[:SHOWN_VARIABLES]) + (f" and {len(names) - SHOWN_VARIABLES} more"
+                                                  if len(names) > SHOWN_VARIABLES else "")
+    return (f"{ref.path.name}: the {len(names)} P variable(s) these jobs move to ({shown}) are corrected in "
+            f"{corrected_variables_name(ref.path.name)}, a copy of {ref.path.name} with only their numbers "
+            f"(and a ///RCONF line where the form changes) rewritten: load it on the controller as "
+            f"{ref.path.name}. P variables are global: a job not given here that writes one changes it")
+
+
+def is_variable_file(src: ProgramText) -> bool:
+    """A controller's VAR.DAT: no ``/JOB`` line; a backup's ``//VAR`` with ``///P`` lines, or position
+    sections (``//P``) with ``P0000=`` entries."""
+    sections = re.search(r"^//(?:P|BP|EX)\s*$", src.text, re.MULTILINE) is not None
+    return _is_variable_file(src) and not is_tool_file(src) and not _UFRAME_LINE.search(src.text) and (
+        sections or var_file.is_cmos_variables(src))
+
+
 def _is_variable_file(src: ProgramText) -> bool:
     """A controller variable file (VAR.DAT): no ``/JOB`` line, position sections ``//P``."""
-    return not re.search(r"^\s*/JOB\b", src.text, re.MULTILINE)
+    return not re.search(r"^\s*/JOB\b", _without_bom(src.text), re.MULTILINE)
+
+
+def _without_bom(text: str) -> str:
+    """``text`` without a byte-order mark at its start (a job saved by a Windows editor as UTF-8)."""
+    for bom in _BOM:
+        if text.startswith(bom):
+            return text[len(bom):]
+    return text
 
 
 def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
-    """The position entries of a job's ``//POS`` (or a VAR.DAT's ``//P``, ``//BP``, ``//EX``)
-    with their header state; Cartesian robot positions become targets. ``///NPOS`` is checked."""
+    """The position entries of a job's ``//POS`` (or a VAR.DAT's ``//P``, ``//BP``, ``//EX``, or
+    the ``///P`` lines of a backup's VAR.DAT: :func:`_backup_positions`) with their header state;
+    Cartesian robot positions become targets. ``///NPOS`` is checked."""
+    if var_file.is_cmos_variables(src):
+        return _backup_positions(src)
     out: list[Position] = []
     section = ""
     head = _Header()
@@ -279,8 +367,8 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
             state = None
             if h.group(1).upper() == "NPOS":
                 npos = (start, [int(v) for v in h.group(2).split(",")])
-            elif h.group(1).upper() == "POSTYPE":  # a new coordinate system: RECTAN / PULSE follows
-                head.rectan, head.values = False, ""
+            elif h.group(1).upper() == "POSTYPE":  # a new coordinate system: what its numbers are
+                head.rectan, head.values = _postype_values(head.postype)
             continue
         if not line.strip() or line.lstrip().startswith("'"):
             continue
@@ -325,6 +413,49 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
     return out
 
 
+def _backup_positions(src: ProgramText) -> list[Position]:
+    """The P variables of a controller backup's VAR.DAT (:mod:`.var_file`): BASE and ROBOT ones
+    become targets, a pulse one a joint position; the others say why a motion
+    to them is not corrected."""
+    out = []
+    for e in var_file.entries(src):
+        postype = var_file.TYPES.get(e.type, "") if e.kind in ("PULSE", "RECTAN") else ""
+        cartesian = e.kind == "RECTAN" and postype in ("BASE", "ROBOT")
+        form = src.text[e.form[0]:e.form[1]]
+        values = "RECTAN" if cartesian else "PULSE" if postype == "PULSE" else ""
+        header = _Header(postype=postype, rectan=cartesian, tool=e.tool, rconf=list(form) or None,
+                         values=values)
+        nums = src.numbers_in(*e.values)[:POSE_VALUES] if cartesian else []
+        name = f"P{e.index:03d}"
+        why = ""
+        if e.kind == "UNUSED":
+            why = f"{name} is \"UNUSED\" in {src.path.name}: it holds no value (one is assigned at run time)"
+        elif not postype:
+            why = (f"{name} is in coordinate type {e.type} of {src.path.name} (user or tool coordinates: "
+                   "which field holds the frame number is not read)" if e.type is not None else
+                   f"{name}'s line in {src.path.name} is not \"RECTAN\" or \"PULSE\" followed by "
+                   "a,b,tool,FORM,c,TYPE,values")
+        pos = Position("P", e.index, nums, header, e.start, e.end, "", why=why,
+                       form=e.form if cartesian else None)
+        if cartesian and len(nums) == POSE_VALUES:
+            config = np.array([int(f) for f in form[:CONFIG_FIELDS]])
+            pos.target = Target(src, e.start, name, nums, frame=IDENTITY, tool=e.tool, config=config,
+                                config_spans=pos)
+        out.append(pos)
+    return out
+
+
+def _postype_values(postype: str) -> tuple[bool, str]:
+    """``(rectan, values)`` a ``///POSTYPE`` implies until a ``///RECTAN``, ``///PULSE`` or ``///ANGLE``
+    line says otherwise: BASE, ROBOT, USER and TOOL positions are Cartesian (mm, deg) whatever the
+    line order (an offline generator may write ``///RECTAN`` before ``///POSTYPE`` or leave it out
+    after a second ``///POSTYPE BASE``: the controller reads Cartesian numbers there), PULSE
+    positions encoder pulses; another one is unknown until its line."""
+    if postype in _CARTESIAN_POSTYPES:
+        return True, "RECTAN"
+    return False, "PULSE" if postype == "PULSE" else ""
+
+
 def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _Header) -> None:
     """Apply a ``///KEY value`` line of a position section to ``head`` (malformed: DataError)."""
     key, value = h.group(1).upper(), h.group(2)
@@ -349,14 +480,28 @@ def _header_line(src: ProgramText, start: int, line: str, h: re.Match, head: _He
         head.rconf, head.rconf_line = fields, line
 
 
-def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named: set) -> None:
+def _run_time_writes(src: ProgramText) -> dict[str, str]:
+    """The position variables job ``src`` assigns at run time (anywhere: loops): ``'P1'``, ``'LP0'``
+    (a run-time index: ``'P[]'``, any of the kind) -> the instruction and where."""
+    out: dict[str, str] = {}
+    for start, line, _ in _instructions(src):
+        w = _WRITES.match(_LABELED.sub("", line, count=1))
+        if w:
+            name = w.group(2) + (str(int(w.group(3))) if w.group(3) is not None else ANY_NUMBER)
+            what = w.group(1) if w.group(3) is not None else f"{w.group(1)} {w.group(2)}[{w.group(4)}]"
+            out.setdefault(name, f"{what} ({src.where(start)})")
+    return out
+
+
+def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named: set,
+             runtime: dict[str, str]) -> None:
     """Account for every motion of the job's ``//INST`` in text order: a Cartesian C or P position
     is a corrected target; joint (PULSE) positions need nothing; incremental, shifted, conveyor-
-    or station-synchronised motions, base axes, stations, positions written at run time and
-    positions whose tool the job rewrites (``SETTOOL TL#(n) P..``: the tool file's data of tool n
-    from a position variable) are named."""
+    or station-synchronised motions, base axes, stations, positions assigned at run time
+    (``runtime``: :func:`_run_time_writes` of this job and the global variables any job given
+    assigns) and positions whose tool the job rewrites (``SETTOOL TL#(n) P..``: the tool file's
+    data of tool n from a position variable) are named."""
     shift = ""  # the SFTON in effect
-    runtime: dict[str, str] = {}  # variable -> where the job writes it at run time (anywhere: loops)
     mframe: dict[str, str] = {}  # user frame -> the MFRAME that sets it
     settool: dict[str, str] = {}  # tool -> the SETTOOL that writes it (anywhere: loops)
     groups = job_groups(src.text)
@@ -368,10 +513,10 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         if st:
             number = re.fullmatch(_INDEX, st.group(1))
             settool.setdefault(str(int(number.group(1))) if number else ANY_TOOL, src.where(start))
-        w = _WRITES.match(body)
-        if w:
-            runtime.setdefault(f"{w.group(2)}{int(w.group(3))}", f"{w.group(1)} ({src.where(start)})")
+    seen = Counter()  # the job's motion instructions by what the reader makes of them
     for start, body in inst:
+        if _MOTION.match(body):
+            seen["instructions"] += 1
         if _SHIFT_OFF.match(body):
             shift = ""
             continue
@@ -394,8 +539,9 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         mv = _MOTION.match(body)
         if not mv:
             continue
-        instr, rest = mv.group(1), mv.group(2).split("'")[0]
+        instr, rest = mv.group(1), mv.group(2).split("'")[0].split("//")[0]  # ' and // comments
         parts = rest.split("+")  # the robot's group, then each other group's motion
+        seen["accounted"] += _other_robots(src, start, parts, groups, prog, positions, named)
         refs = list(_REF.finditer(parts[0]))
         robot_refs = [r for r in refs if r.group(1) in ("C", "P", "LP")]
         ref = robot_refs[0] if robot_refs else None
@@ -405,12 +551,15 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
             pos = positions.get((src.path, kind, index))  # the job's own //POS (P too), else VAR.DAT
             if pos is None and kind == "P":  # a global variable: VAR.DAT, else another job that saves it
                 pos = positions.get(("global", "P", index)) or positions.get(("jobs", "P", index))
-        if pos is not None and pos.target is None and instr != "IMOV" and (
+        if pos is not None and pos.target is None and instr != "IMOV" and not pos.why and (
                 pos.header.postype == "PULSE" or not pos.header.rectan):
             prog.motions.append((src.path, start, np.full(6, np.nan)))  # a joint position: no correction
+            seen["joint"] += 1
             continue
         if ref is None and refs and all(r.group(1) in STATION_KINDS for r in refs):
+            seen["station"] += 1
             continue  # a station's motion alone (a job of ///GROUP1 ST1, MOVJ EC00000): the arm stays
+        seen["accounted"] += 1
         acc = prog.motion(src, start, instr)
         if ref is None:
             prog.skip(src.where(start), instr, "no robot position (C, P or LP) in the instruction", acc)
@@ -423,13 +572,15 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
             prog.skip(src.where(start), instr, why, acc, label)
             continue
         if pos is None:
+            global_help = " (a global position variable: give the controller's VAR.DAT with --references)"
             prog.skip(src.where(start), instr, f"{label} is not in the files given" + (
-                " (a global position variable: give VAR.DAT as a program file)" if kind == "P" else ""),
-                acc, label)
+                global_help if kind == "P" else ""), acc, label)
             continue
         if pos.target is None:
-            why = f"{label} is in an unsupported coordinate system (///POSTYPE {pos.header.postype or '?'})" \
-                if len(pos.numbers) == POSE_VALUES else f"{label} is not a 6-value Cartesian position"
+            postype = pos.header.postype or '?'
+            system = f"{label} is in an unsupported coordinate system (///POSTYPE {postype})"
+            why = pos.why or (system if len(pos.numbers) == POSE_VALUES else
+                              f"{label} is not a 6-value Cartesian position")
             prog.skip(src.where(start), instr, why, acc, label)
             continue
         t = pos.target
@@ -476,6 +627,51 @@ def _motions(src: ProgramText, positions: dict, prog: Program, used: set, named:
         used.add(id(t))
         acc.reach(t, label)
         prog.motions.append((src.path, start, t))
+    prog.warnings += _unaccounted(src, seen)
+
+
+def _other_robots(src: ProgramText, start: int, parts: list[str], groups: Groups, prog: Program,
+                  positions: dict, named: set) -> int:
+    """Name the motions of another robot in one instruction (``MOVL C00000 +MOVL C00001`` in a job of
+    ``///GROUP1 RB1`` and ``///GROUP2 RB2``): its positions are that robot's, which this filter's
+    model is not (``named``: their targets' ids); how many were named."""
+    line = src.text[start:src.text.find("\n", start) if "\n" in src.text[start:] else len(src.text)]
+    pluses = [k for k, c in enumerate(line) if c == "+"]
+    count = 0
+    for k, part in enumerate(parts[1:], start=1):
+        group = groups.others[k - 1] if k - 1 < len(groups.others) else ()
+        robots = [u for u in group if u.startswith("RB")]
+        ref = next((r for r in _REF.finditer(part) if r.group(1) in ("C", "P", "LP")), None)
+        if not robots or ref is None or k > len(pluses):
+            continue
+        instr = "+" + (part.split() or [""])[0]
+        if ref.group(2) is not None:
+            pos = positions.get((src.path, ref.group(1), int(ref.group(2))))
+            if pos is not None and pos.target is not None:
+                named.add(id(pos.target))
+        why = (f"{ref.group(0)} is a position of {robots[0]}, another robot than the job's first "
+               f"({', '.join(groups.robot)}): filter it with {robots[0]}'s model")
+        prog.skip(src.where(start), instr, why, prog.motion(src, start + pluses[k - 1], instr), ref.group(0))
+        count += 1
+    return count
+
+
+def _unaccounted(src: ProgramText, seen: Counter) -> list[str]:
+    """A warning when the job's text holds motion instructions and none has a record (0 motions
+    corrected or named): what the reader made of them (joint positions, a station's own motions)
+    or where they are that it does not read (outside ``//INST``), never silence."""
+    if seen["accounted"]:
+        return []
+    outside = sum(1 for _, line, _ in _lines(src.text) if _MOTION.match(_LABELED.sub("", line, count=1))) \
+        - seen["instructions"]
+    parts = [f"{n} to joint (pulse) positions, which need no correction" for n in [seen["joint"]] if n]
+    parts += [f"{n} of a station alone (the arm stays)" for n in [seen["station"]] if n]
+    parts += [f"{n} outside its //INST section, not read as instructions" for n in [outside] if n]
+    if not parts:
+        return []
+    total = seen["instructions"] + outside
+    return [f"{src.path.name}: {total} motion instruction(s) and no motion of the arm to a Cartesian "
+            f"position: {'; '.join(parts)}"]
 
 
 def _moved(src: ProgramText, parts: list[str], refs: list, groups: Groups, positions: dict) -> Moved:
@@ -576,9 +772,13 @@ def _named_reason(instr: str, ref, rest: str, shift: str, runtime: dict) -> str:
         return f"{label}: a motion of an external axis group"
     name = f"{ref.group(1)}{int(ref.group(2))}"
     if name in runtime:
-        return f"{label} is written at run time by {runtime[name]}"
+        return f"{label} is assigned at run time by {runtime[name]}"
+    if ref.group(1) + ANY_NUMBER in runtime:
+        return (f"{label} may be assigned at run time by {runtime[ref.group(1) + ANY_NUMBER]}: that variable "
+                "number is computed at run time")
     if ref.group(1) == "LP":
-        return f"{label} is a local position variable: its value is set at run time"
+        return (f"{label} is a local position variable: assigned at run time (a job's local variables are "
+                "in no file)")
     if shift:
         return f"{label} is shifted at run time by {shift}"
     return ""
@@ -609,13 +809,16 @@ def user_frames(src: ProgramText) -> dict[str, np.ndarray]:
             current = None
     if not out:
         raise DataError(f"{src.path.name}: no //UFRAME n with ////BUSER X,Y,Z,Rx,Ry,Rz: not a UFRAME.CND "
-                        "nor a TOOL.CND (//TOOL n) (VAR.DAT: give it as a program file)")
+                        "nor a TOOL.CND (//TOOL n) nor a VAR.DAT (//P with P0000= entries)")
     return out
 
 
 def looks_like_inform(text: str) -> bool:
-    """A job (``/JOB`` first) or a VAR.DAT (``//`` sections with ``P0000=`` entries)."""
+    """A job (``/JOB`` first) or a VAR.DAT (``//`` sections with ``P0000=`` entries, or a backup's
+    ``//VAR`` and ``///PFNUM``)."""
     head = text.lstrip("\ufeff \t\r\n")[:4000]
     if re.search(r"^/JOB\b", head, re.MULTILINE) and re.search(r"^//(?:NAME|POS|INST)\b", head, re.MULTILINE):
         return True  # a job (an offline generator may put a ' comment line before /JOB)
+    if re.match(r"//VAR[ \t]*[\r\n]+///PFNUM\b", head):
+        return True  # a controller backup's VAR.DAT
     return bool(re.match(r"//\w", head) and re.search(r"^P\d+=", head, re.M))

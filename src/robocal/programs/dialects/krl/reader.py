@@ -16,6 +16,12 @@
   ($config.dat) or the command line (``--tool n=X,Y,Z,A,B,C``). World = robot base
   ($ROBROOT = $WORLD) is assumed; an external TCP (IPO_FRAME #TCP) is not filtered.
 
+* Targets computed at run time (``P:OFFS`` with a run-time ``OFFS``, a position modified or
+  assigned at run time, ``$POS_ACT``) are named with a
+  :class:`~robocal.programs.runtime.RunTime` reason and recorded as run-time sites
+  (:class:`KRLSite`: a FRAME result is corrected in the Status/Turn of the POS it offsets) for
+  ``--runtime-correction`` (:mod:`robocal.programs.dialects.krl.runtime`).
+
 Comments (``;`` to the end of the line) and strings are masked first.
 """
 
@@ -23,6 +29,7 @@ from __future__ import annotations
 
 import bisect
 import re
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -42,6 +49,7 @@ from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_zyx
+from robocal.programs.runtime import Meant, RunTime, RuntimeSite, merged
 from robocal.programs.source import Number, ProgramText
 
 _AGG = re.compile(r"\{[^{}]*\}")
@@ -51,6 +59,10 @@ _DECL = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(E6POS|POS|FRAME)\s+([A-Za
 _AXES = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:E6AXIS|AXIS)\s+([A-Za-z_$]\w*)",
                    re.IGNORECASE | re.MULTILINE)
 _ELEMENT = re.compile(r"^[ \t]*([A-Za-z_]\w*\s*\[\s*\d+(?:\s*,\s*\d+)*\s*\])\s*=\s*(?=\{)", re.MULTILINE)
+_KINDS = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:CONST\s+)?(E6POS|POS|FRAME)\s+([^=\n]+)",
+                    re.IGNORECASE | re.MULTILINE)  # the position types the names are declared with
+_SYSTEM_KINDS = {"$POS_ACT": "E6POS", "$POS_INT": "E6POS", "$POS_RET": "E6POS", "$POS_BACK": "E6POS",
+                 "$POS_FOR": "E6POS"}  # other system positions ($BASE, $NULLFRAME ...): FRAME
 _FDAT = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?FDAT\s+(\w+)\s*=\s*(?=\{)",
                    re.IGNORECASE | re.MULTILINE)
 _DATA = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:FRAME\s+)?(TOOL_DATA|BASE_DATA)\s*\[\s*(\d+)\s*\]"
@@ -65,6 +77,7 @@ _CALL = re.compile(r"^[ \t]*([A-Za-z_]\w*)\s*\(([^\n]*)\)[ \t\r]*$", re.MULTILIN
 _APPROX = re.compile(r"(?:\s+(?:C_[A-Z]+|CA\s+[-+]?[\d.]+))+\s*$", re.IGNORECASE)  # C_DIS, CA 45 ...
 _JOINT_SYSTEM = ("$H_POS", "$AXIS_ACT", "$AXIS_HOME", "$AXIS_BACK", "$AXIS_RET", "$AXIS_FOR")
 _NULL_OPERAND = re.compile(r"\$NULLFRAME\s*:\s*\{[^{}]*\}\s*$", re.IGNORECASE)
+_ROUTED = re.compile(r"\s*RC_CORRECTF?\s*\(", re.IGNORECASE)  # a target robocal's run-time correction routes
 _HOME = re.compile(r"X?HOME\d?")  # KSS $config.dat: DECL E6AXIS XHOME, XHOME1..XHOME5
 _WITH = re.compile(r"\bWITH\b", re.IGNORECASE)
 _REF = re.compile(r"([A-Za-z_$]\w*)\s*(\[[^\]]*\])?((?:\.\w+)*)")
@@ -96,6 +109,7 @@ class KRLDialect(Dialect):
     external_axis_names = EXTERNAL_LETTERS  # an E6POS's / E6AXIS' E1..E6: logical axis k is E<k>
     arm_axes = external_axis_names  # any of them may be a track or gantry carrying the arm
     campaign_refuses_tracks = True
+    runtime_correction = "robocal.programs.dialects.krl.runtime:KRLRuntime"  # filter --runtime-correction
     vendor = "KUKA"
     signature = r"^\s*(?:DEF\s+\w+\s*\(|DEFDAT\s|(?:PTP|LIN|CIRC)\s+\w)"
     angle_unit = "deg"
@@ -215,6 +229,9 @@ class KRLDialect(Dialect):
                 st.fdat[m.group(1).upper()] = (comps.get("TOOL_NO"), comps.get("BASE_NO"),
                                                comps.get("IPO_FRAME", "#BASE").upper())
             st.axes |= {m.group(1).upper() for m in _AXES.finditer(masked)}
+            for m in _KINDS.finditer(masked):
+                for name in re.findall(r"([A-Za-z_$]\w*)\s*(?:\[[^\]]*\])?\s*(?:,|$)", m.group(2)):
+                    st.kinds[name.upper()] = m.group(1).upper()
             st.machines.read(src, masked)
             reference = src not in sources
             for m in _DECL.finditer(masked):
@@ -328,8 +345,22 @@ class KRLDialect(Dialect):
                                      "position at run time"]
                     else:
                         head = _APPROX.sub("", text)
-                        found = self._follow(st, head, proc, {}, 0) if head else []
+                        routed = RunTime(f"{head} is corrected at run time by robocal's RC_CORRECT (a "
+                                         "filtered program)")
+                        found = [routed] if _ROUTED.match(head) else \
+                            self._follow(st, head, proc, {}, 0) if head else []
+                    if found and all(isinstance(f, RunTime) for f in found):
+                        stop = a + len(_APPROX.sub("", masked[a:b]).rstrip())
+                        tool, base = state["tool"][0], state["base"][0]
+                        lead = len(masked[a:b]) - len(masked[a:b].lstrip())
+                        uses = self._meant(st, src, masked, a + lead, stop, proc)
+                        found = [RunTime(f, f.depends, f.relative, (*f.meant, *uses)) for f in found]
+                        site = _site(st, acc, src.path, a + lead, stop,
+                                     head, "" if tool == "?" else tool, "" if base == "?" else base)
+                        prog.runtime_sites.append(site)
                     for f in found:
+                        if isinstance(f, RunTime):  # its operands are used, by this motion's record
+                            named |= f.depends
                         if f is None:
                             continue
                         if isinstance(f, str):
@@ -365,6 +396,30 @@ class KRLDialect(Dialect):
         for t in st.all_targets():
             if id(t) not in used and id(t) not in st.reference and id(t) not in passed | named:
                 prog.warnings.append(f"{t.where}: not used by a motion in these files: left as it is")
+
+    def _meant(self, st, src, masked: str, start: int, end: int, proc: str) -> list[Meant]:
+        """The operands of the ':' expression at ``start:end`` that name a declared position
+        directly (``XP1`` in ``XP1:OFFS``, never assigned in the program): where the run-time
+        routine is used, the writer puts that position's value as written there
+        (:class:`~robocal.programs.runtime.Meant`)."""
+        text = masked[start:end]
+        operands = split_top(text, 0, len(text), ":")
+        if len(operands) < 2:
+            return []
+        out = []
+        for a, b in operands:
+            name = text[a:b].strip()
+            if not re.fullmatch(r"[A-Za-z_]\w*(?:\[\s*\d+(?:\s*,\s*\d+)*\s*\])?", name):
+                continue
+            key = re.sub(r"\s+", "", name).upper()
+            if st.assigned.get(key) or st.modified.get(key.split("[")[0]) or \
+                    key.split("[")[0] in st.params.get(proc, []):
+                continue  # through a variable: its value at run time is not the declaration's
+            found = self._follow(st, name, proc, {}, 0)
+            if len(found) == 1 and found == st.declared.get(key):
+                at = start + a + len(text[a:b]) - len(text[a:b].lstrip())
+                out.append(Meant(found[0], src.path, at, at + len(name)))
+        return out
 
     def _carried(self, prog, machines: Machines) -> None:
         """The bases the motions put on a machine: their frames (BASE_DATA[n] or the literal
@@ -404,7 +459,11 @@ class KRLDialect(Dialect):
             left, _, right = text.partition(":")
             if re.fullmatch(r"\s*\{(?:\s*[A-Za-z]\w*\s+[-+]?(?:\d+\.?\d*|\.\d+)\s*,?)*\}\s*", right):
                 return self._follow(st, left.strip(), proc, scope, depth + 1)  # a constant offset
-            return [f"{text} is computed at run time by the geometric operator ':'"]
+            why = f"{text} is computed at run time by the geometric operator ':'"
+            parts = [p for operand in split_top(text, 0, len(text), ":")
+                     for p in (self._follow(st, text[slice(*operand)].strip(), proc, scope, depth + 1)
+                               if text[slice(*operand)].strip() and "{" not in text[slice(*operand)] else [])]
+            return [merged(why, parts) or why]
         r = _REF.fullmatch(text.strip())
         if not r:
             return [f"{text[:40]} is not a position this filter can follow"]
@@ -412,7 +471,7 @@ class KRLDialect(Dialect):
         index = re.sub(r"\s+", "", r.group(2) or "")
         if name.startswith("$"):
             return [] if name.split("[")[0] in _JOINT_SYSTEM else [
-                f"{text} is a system variable (the current or a computed position)"]
+                RunTime(f"{text} is a system variable (the current or a computed position)", relative=True)]
         if name in st.axes:
             return []
         params = st.params.get(proc, [])
@@ -432,8 +491,13 @@ class KRLDialect(Dialect):
         if fields:
             return [f"{text} is a field of a structure: its value is not followed"]
         if st.modified.get(name):  # the pose reached is partly computed at run time
-            return [f"{name} is modified at run time ({name}.<field> or {name}[i] = ... at "
-                    f"{st.modified[name][0]})"]
+            why = (f"{name} is modified at run time ({name}.<field> or {name}[i] = ... at "
+                   f"{st.modified[name][0]})")
+            parts = list(st.declared.get(name + index, []))  # what it starts from: its value, assignments
+            for src, a, b, where_proc in st.assigned.get(name + index, []) + (st.assigned.get(name, [])
+                                                                              if index else []):
+                parts += self._follow(st, st.masked[src.path][a:b].strip(), where_proc, scope, depth + 1)
+            return [merged(why, parts) or why]
         out: list = []
         key = name + index
         sources = st.assigned.get(key, []) + (st.assigned.get(name, []) if index else [])
@@ -465,6 +529,7 @@ class _State:
         self.declared: dict[str, list[Target]] = {}
         self.reference: set[int] = set()
         self.axes: set[str] = set()
+        self.kinds: dict[str, str] = {}  # name -> FRAME / POS / E6POS, as declared
         self.fdat: dict[str, tuple] = {}
         self.params: dict[str, list[str]] = {}
         self.calls: dict[str, list] = {}
@@ -482,6 +547,52 @@ class _State:
 
     def all_targets(self) -> list[Target]:
         return [t for ts in self.declared.values() for t in ts]
+
+
+@dataclass(frozen=True)
+class KRLSite(RuntimeSite):
+    """A KRL run-time target argument: ``reference`` is '' for a POS/E6POS expression, else the
+    POS/E6POS whose Status, Turn and external axes the FRAME it computes is corrected in (the
+    left operand of ``P:OFFSET``: KRL gives ':' the right operand's type)."""
+
+    reference: str = ""
+
+
+def _kind(st: _State, operand: str) -> str:
+    """The type of a KRL position expression's operand: FRAME, POS or E6POS ('' unknown)."""
+    operand = operand.strip()
+    if operand.startswith("{"):
+        return "POS" if re.search(r"\bS\s", operand, re.IGNORECASE) else "FRAME"
+    name = re.match(r"[A-Za-z_$]\w*", operand)
+    if name is None:
+        return ""
+    key = name.group().upper()
+    if key.startswith("$"):
+        return _SYSTEM_KINDS.get(key, "FRAME")
+    return st.kinds.get(key, "")
+
+
+def _site(st: _State, acc, path, start: int, end: int, text: str, tool: str, base: str) -> KRLSite:
+    """The run-time site of argument ``text`` (``start:end``); its ``why_not`` says when it cannot
+    be routed: its type is declared in no file given, or it is a FRAME computed from no POS/E6POS
+    (no Status/Turn to correct it in)."""
+    if _ROUTED.match(text):
+        return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base,
+                       why_not="it already goes through RC_CORRECT, robocal's run-time correction (a "
+                               "filtered program: routing it again would correct it twice)")
+    operands = [text[slice(*o)] for o in split_top(text, 0, len(text), ":")]
+    kind = _kind(st, operands[-1])
+    reference = ""
+    if kind == "FRAME":
+        reference = operands[0].strip()
+        if len(operands) < 2 or _kind(st, reference) not in ("POS", "E6POS") or "{" in reference:
+            why = (f"{text} is a FRAME computed from no POS/E6POS: no Status and Turn to correct it in "
+                   "(write it as P:OFFSET with P a POS/E6POS)")
+            return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, why_not=why)
+    elif kind not in ("POS", "E6POS"):
+        why = f"the type of {operands[-1].strip()} is declared in no file given (DECL E6POS/POS/FRAME)"
+        return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, why_not=why)
+    return KRLSite(acc, path, start, end, "$TOOL", "$BASE", tool, base, reference=reference)
 
 
 def _routine_at(routines: list[tuple[int, str]], at: int) -> str:

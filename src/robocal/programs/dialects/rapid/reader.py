@@ -53,6 +53,7 @@ from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_quat, quat_to_matrix
+from robocal.programs.runtime import Meant, RunTime, RuntimeSite, merged
 from robocal.programs.source import Number
 
 _DECL = re.compile(r"\b(?:(?:LOCAL|TASK)\s+)?(CONST|PERS|VAR)\s+(robtarget|tooldata|wobjdata)\s+"
@@ -81,6 +82,10 @@ _WORD = re.compile(r"\s*([A-Za-z]\w*)")
 _REF = re.compile(r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*((?:\.\s*[A-Za-z]\w*)*)")
 _CALLED = re.compile(r"\s*(Offs|RelTool)\s*\(", re.IGNORECASE)
 _FUNCTION = re.compile(r"\s*([A-Za-z]\w*)\s*\(")
+# functions whose robtarget is computed from the joints the robot is at or is given (already in the
+# controller's corrected space: not routed through a run-time correction)
+_REACHED = ("crobt", "calcrobt")
+_FUNC_BODY = re.compile(r"\bfunc\s+robtarget\s+([a-z]\w*)([\s\S]*?)\bendfunc\b")  # lower-cased text
 _ROUTINE = re.compile(r"\b(proc|func\s+\w+|trap)\s+([a-z]\w*)\s*(?:\(([^)]*)\))?")  # lower-cased text
 _ROUTINE_END = re.compile(r"\bend(?:proc|func|trap)\b")
 _ASSIGN = re.compile(r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*((?:\.\s*[A-Za-z]\w*)*)\s*:=",
@@ -130,6 +135,7 @@ class RapidDialect(Dialect):
     external_axis_names = RAPID_EXTAX  # a robtarget's extax: logical axis k is eax_<k-th letter>
     arm_axes = external_axis_names  # any of them may be a track or gantry carrying the arm
     campaign_refuses_tracks = True
+    runtime_correction = "robocal.programs.dialects.rapid.runtime:RapidRuntime"
     vendor = "ABB"
     signature = r"^\s*(?:MODULE\s+\w+|PROC\s+\w+\s*\(|Move[LJC]\s)"
     campaign_format, campaign_suffix = "RAPID", ".mod"
@@ -186,6 +192,7 @@ class RapidDialect(Dialect):
             masked = st.masked[src.path] = src.masked([COMMENT_RE], [STRING_RE])
             low = lowered[src.path] = masked.lower()  # case-insensitive searches, without the slow flag
             routines = spans[src.path] = []  # (start, end, name)
+            st.functions.update({m.group(1): m.group(2) for m in _FUNC_BODY.finditer(low)})
             for m in _ROUTINE.finditer(low):
                 stop = _ROUTINE_END.search(low, m.end())
                 routines.append((m.start(), stop.end() if stop else len(low), m.group(2)))
@@ -414,6 +421,8 @@ class RapidDialect(Dialect):
                     for found in self._follow(st, mv.src, a, b, mv.proc, scope, 0):
                         if isinstance(found, str):
                             prog.skip(here, mv.instr, found, acc, st.masked[mv.src.path][a:b][:60])
+                            if isinstance(found, RunTime):  # --runtime-correction may route it
+                                prog.runtime_sites.append(self._site(st, mv, acc, a, b, tool, wobj))
                             continue
                         if why_tool or why_wobj:
                             prog.skip(here, mv.instr, why_tool or why_wobj, acc)
@@ -446,6 +455,43 @@ class RapidDialect(Dialect):
                                      f"{targets[0].name.split('{')[0]} is not used by a motion instruction "
                                      "in these files: left as it is")
 
+    @staticmethod
+    def _site(st, mv, acc, a, b, tool, wobj) -> RuntimeSite:
+        """The target argument ``a:b`` of motion ``mv`` (its tool and work object resolved to
+        ``tool``, ``wobj``) as a run-time correction site."""
+        masked = st.masked[mv.src.path]
+        lead = a + len(masked[a:b]) - len(masked[a:b].lstrip())
+        end = lead + len(masked[lead:b].rstrip())
+        wobj_text = None if mv.wobj is None else masked[mv.wobj[0]:mv.wobj[1]].strip()
+        return RuntimeSite(acc, mv.src.path, lead, end, masked[mv.tool[0]:mv.tool[1]].strip(), wobj_text,
+                           tool, wobj)
+
+    @staticmethod
+    def _meant(st, src, span, base, scope) -> list[Meant]:
+        """The base ``span`` of an Offs/RelTool as a :class:`Meant` use when it is a declared
+        robtarget's bare name (not a routine parameter, never assigned, one target), else none."""
+        masked = st.masked[src.path]
+        text = masked[span[0]:span[1]]
+        r = _REF.fullmatch(text.strip())
+        if not r or r.group(2) or r.group(3) or len(base) != 1 or not isinstance(base[0], Target):
+            return []
+        name = r.group(1).lower()
+        if name in scope or name in st.assigned or st.modified.get(name) or st.declared.get(name) != base:
+            return []
+        start = span[0] + len(text) - len(text.lstrip())
+        return [Meant(base[0], src.path, start, start + len(text.strip()))]
+
+    @staticmethod
+    def _named_targets(st, text: str) -> list[Target]:
+        """The declared robtargets named in ``text`` and in the bodies of the robtarget FUNCs of
+        these files that it calls (what a value computed at run time from ``text`` depends on)."""
+        words = {w.lower() for w in re.findall(r"[A-Za-z]\w*", text)}
+        for body_of in st.functions:
+            if body_of in words:
+                words |= {w.lower() for w in re.findall(r"[A-Za-z]\w*", st.functions[body_of])}
+        return [t for w in words for key, ts in st.declared.items()
+                if key == w or key.startswith(w + "{") or key.startswith(w + ".") for t in ts]
+
     def _follow(self, st, src, a, b, proc, scope, depth) -> list:
         """The robtargets (Target) the expression ``src[a:b]`` takes its value from, or a string
         saying why a part of it cannot be followed."""
@@ -473,7 +519,8 @@ class RapidDialect(Dialect):
                 if key not in st.inline:
                     st.inline[key] = self._robtarget(src, tree, f"inline@{src.line_of(lead)}", lead)
                 return [st.inline[key]]
-            return [f"{text[:40]} is not a robtarget literal"]
+            why = f"{text[:40]} is not a robtarget literal"
+            return [RunTime(why, sources=self._named_targets(st, text))]
         f = _CALLED.match(masked, lead, b)
         if f:
             inner = split_top(masked, f.end(), close_bracket(masked, f.end() - 1))
@@ -482,11 +529,16 @@ class RapidDialect(Dialect):
             varying = ", ".join(" ".join(v.split()) for v in amounts if _constant(v, st.constants) is None)
             if not varying:
                 return self._follow(st, src, *inner[0], proc, scope, depth + 1)
-            return [f"{' '.join(text.split())[:60]} moves the target by amounts known at run time only "
-                    f"({varying})"]
+            why = (f"{' '.join(text.split())[:60]} moves the target by amounts known at run time only "
+                   f"({varying})")
+            base = self._follow(st, src, *inner[0], proc, scope, depth + 1)
+            return [merged(why, base, self._meant(st, src, inner[0], base, scope)) or why]
         f = _FUNCTION.match(masked, lead, b)
         if f:
-            return [f"the target is computed at run time by {f.group(1)}()"]
+            why = f"the target is computed at run time by {f.group(1)}()"
+            if f.group(1).lower() in _REACHED:
+                return [RunTime(why, relative=True)]
+            return [RunTime(why, sources=self._named_targets(st, masked[f.end():b]))]
         r = _REF.fullmatch(text)
         if not r:
             return [f"{' '.join(text.split())[:40]} is not a robtarget this filter can follow"]
@@ -501,8 +553,8 @@ class RapidDialect(Dialect):
             return [f"{' '.join(text.split())} is a field of a RECORD or robtarget: its value is not "
                     "followed"]
         if st.modified.get(name):  # the pose reached is partly computed at run time
-            return [f"{r.group(1)} is modified at run time ({r.group(1)}.<field> := ... at "
-                    f"{st.modified[name][0]})"]
+            return [RunTime(f"{r.group(1)} is modified at run time ({r.group(1)}.<field> := ... at "
+                            f"{st.modified[name][0]})", sources=st.declared.get(name) or ())]
         out: list = []
         if name in st.assigned:
             for arg_src, x, y, where_proc in st.assigned[name]:
@@ -553,6 +605,7 @@ class _State:
         self.multimove: set = set()
         self.foreign: list = []  # (src, at, routine, positional spans): calls of routines not in these files
         self.constants: dict[str, float] = {}  # CONST num name -> value
+        self.functions: dict[str, str] = {}  # FUNC robtarget name -> its body (lower case, masked)
         self.records: dict[str, list[tuple[str, str]]] = {}  # RECORD type -> [(type, field)]
         self._scopes: dict[str, list] = {}
         self._names: dict[tuple[str, str], tuple[str, str]] = {}  # (text, what) -> name_of outside parameters
