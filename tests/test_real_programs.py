@@ -329,3 +329,39 @@ def test_a_cells_positioner_axes_are_not_weighed(tmp_path):
     res = filter_program(path, perturbed(arm, 7), arm, keep_unreached=True)
     assert res.summary_dict()["motions"] == {"total": 3, "corrected": 0, "named": 3}
     assert all("eax_b varies (-30 .. 60) over 3 target(s)" in m.reason for m in res.motions)
+
+
+# a weld task's module with a calibration module given as --references (written the way the
+# zhongxun RAPID application is: the reference holds its own CRobT/RelTool motions and a routine
+# moving to its parameter; the task calls it with one of its own constant targets)
+CALIB_MODULE = "\n".join([
+    "MODULE CalibData", f"PERS tooldata toolWeldGun:={TOOL};", "VAR robtarget pTCP;",
+    "PROC rCheckTcp()", "pTCP:=CRobT(\\Tool:=toolWeldGun);",
+    "MoveL RelTool(pTCP,0,0,-30),v100,fine,toolWeldGun;", "MoveL RelTool(pTCP,0,0,30),v100,fine,toolWeldGun;",
+    "ENDPROC", "PROC rGoTo(robtarget ToPoint)", "MoveJ ToPoint,v200,z10,toolWeldGun;", "ENDPROC",
+    "ENDMODULE", ""])
+WELD_MODULE = "\n".join([
+    "MODULE WeldTest",
+    "CONST robtarget pHome:=[[1200.00,300.00,900.00],[0,0.7071068,0.7071068,0],[0,0,0,0],"
+    "[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST robtarget pApp:=[[1250.00,250.00,850.00],[0,0.7071068,0.7071068,0],[0,0,0,0],"
+    "[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "PROC main()", "rCheckTcp;", "MoveL pHome,v200,fine,toolWeldGun;", "rGoTo pApp;", "ENDPROC",
+    "ENDMODULE", ""])
+
+
+def test_a_reference_modules_motions_are_not_the_programs(tmp_path):
+    """The motions of a module given as a reference are not the program's (it is never written):
+    the program's account holds its own motion instructions only (total == its hand count, 1),
+    the reference's run-time motions are not named in it, and a constant target of the program
+    the reference's routine moves to is still corrected."""
+    prog, ref = tmp_path / "WeldTest.mod", tmp_path / "CalibData.mod"
+    prog.write_text(WELD_MODULE)
+    ref.write_text(CALIB_MODULE)
+    res = filter_program(prog, perturbed(ABB, 3), ABB, references=[ref])
+    records = [m.as_dict() for m in res.motions]
+    assert [(r["file"], r["status"]) for r in records] == [("WeldTest.mod", "corrected")]
+    assert not any("CRobT" in w for w in res.warnings)
+    assert {r["name"].lower() for r in res.rows} == {"phome", "papp"}
+    assert res.outputs[prog] != prog.read_bytes()
+    assert ref not in res.outputs

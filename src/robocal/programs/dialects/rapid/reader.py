@@ -186,6 +186,7 @@ class RapidDialect(Dialect):
     def parse(self, sources, frames, tools, references=()):
         prog = Program([])
         st = _State()
+        st.read_only = {r.path for r in references} - {s.path for s in sources}
         flow = Flow()
         lowered, spans = {}, {}
         for src in [*references, *sources]:  # every module's routines first: calls cross modules
@@ -412,13 +413,18 @@ class RapidDialect(Dialect):
         first = prog.used
         for mv in st.motions:
             here = f"{mv.src.path.name}:{mv.src.line_of(mv.at)}"
-            acc = prog.motion(mv.src, mv.at, mv.instr)
+            # a motion of a reference module is not one of the program's (never written, never
+            # accounted): it only carries a program's target reached through its routine's parameter
+            mine = mv.src.path not in st.read_only
+            acc = prog.motion(mv.src, mv.at, mv.instr) if mine else None
             for scope in st.scopes(mv.proc):
                 tool, why_tool = st.name_of(mv.src, mv.tool, scope, "tool")
                 wobj, why_wobj = ("wobj0", "") if mv.wobj is None else st.name_of(
                     mv.src, mv.wobj, scope, "work object")
                 for a, b in mv.targets:
                     for found in self._follow(st, mv.src, a, b, mv.proc, scope, 0):
+                        if not mine and (isinstance(found, str) or id(found) in st.reference):
+                            continue  # the reference's own target or run-time pose: not the program's
                         if isinstance(found, str):
                             prog.skip(here, mv.instr, found, acc, st.masked[mv.src.path][a:b][:60])
                             if isinstance(found, RunTime):  # --runtime-correction may route it
@@ -596,6 +602,7 @@ class _State:
         self.tools: dict[str, tuple] = {}
         self.wobjs: dict[str, tuple] = {}
         self.reference: set[int] = set()
+        self.read_only: set = set()  # the paths of the reference modules (read for their data only)
         self.procs: dict[str, list[tuple[str, bool]]] = {}  # name -> [(parameter, optional)]
         self.calls: dict[str, list] = {}  # name -> [(src, at, positional spans, optional, caller)]
         self.assigned: dict[str, list] = {}  # name -> [(src, start, end, routine)]
