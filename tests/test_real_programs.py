@@ -365,3 +365,47 @@ def test_a_reference_modules_motions_are_not_the_programs(tmp_path):
     assert {r["name"].lower() for r in res.rows} == {"phome", "papp"}
     assert res.outputs[prog] != prog.read_bytes()
     assert ref not in res.outputs
+
+
+# a seam found by touch sensing (written the way the zhongxun SmarTac module is): the work object
+# obNEW is recomputed from three searched points (OFrameChange) before the weld runs in it, and a
+# touch-up shifts it by a field; the declaration holds only the last run's value
+SMARTAC_MODULE = "\n".join([
+    "MODULE SmarTacTest", f"PERS tooldata toolWeldGun:={TOOL};",
+    'PERS wobjdata obREF:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];',
+    'PERS wobjdata obNEW:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[-7.29398,-15.2142,-3.66034],'
+    '[0.999905,-3.29978E-05,0.0025619,-0.0135815]]];',
+    'PERS wobjdata obTouch:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];',
+    "CONST robtarget pOFrame1:=[[1200.00,300.00,900.00],[0,0.7071068,0.7071068,0],[0,0,0,0],"
+    "[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST robtarget pOFrameWeld1:=[[1250.00,250.00,850.00],[0,0.7071068,0.7071068,0],[0,0,0,0],"
+    "[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST robtarget pOFrameHome:=[[1150.00,200.00,950.00],[0,0.7071068,0.7071068,0],[0,0,0,0],"
+    "[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "PROC WeldByWobjOFrame()", "MoveL pOFrameHome,v200,fine,toolWeldGun\\WObj:=obREF;",
+    "MoveL pOFrame1,v200,fine,toolWeldGun\\WObj:=obREF;",
+    "obNEW:=OFrameChange(obREF,pOFrame1,pOFrame1,pOFrame1,pOFrame1,pOFrame1,pOFrame1);",
+    "MoveL pOFrameWeld1,v200,fine,toolWeldGun\\WObj:=obNEW;",
+    "obTouch.oframe.trans.x:=obTouch.oframe.trans.x+5;",
+    "MoveL pOFrame1,v20,fine,toolWeldGun\\WObj:=obTouch;", "ENDPROC", "ENDMODULE", ""])
+
+
+def test_a_work_object_the_program_computes_names_its_motions(tmp_path):
+    """A motion in a work object the program assigns (whole or a field) moves to a place in the
+    world known only at run time: it is named with where the work object is written, not
+    corrected with the declaration's stale value; a target also moved to in the fixed obREF is
+    corrected for neither (its corrected numbers would move the run-time motion too); a target
+    moved to in obREF only is corrected."""
+    prog = tmp_path / "SmarTacTest.mod"
+    prog.write_text(SMARTAC_MODULE)
+    res = filter_program(prog, perturbed(ABB, 3), ABB)
+    records = [m.as_dict() for m in res.motions]
+    assert [r["status"] for r in records] == ["corrected", "named", "named", "named"]
+    assert "pOFrame1 is also moved to at SmarTacTest.mod:15, where the work object obTouch is " \
+           "assigned at run time (SmarTacTest.mod:14)" in records[1]["reason"]
+    assert "work object obNEW is assigned at run time (SmarTacTest.mod:12)" in records[2]["reason"]
+    assert "work object obTouch is assigned at run time (SmarTacTest.mod:14)" in records[3]["reason"]
+    assert [r["name"] for r in res.rows] == ["pOFrameHome"]
+    lines = zip(SMARTAC_MODULE.splitlines(), res.outputs[prog].decode().splitlines(), strict=True)
+    changed = [a for a, b in lines if a != b]
+    assert len(changed) == 1 and changed[0].startswith("CONST robtarget pOFrameHome")

@@ -432,6 +432,9 @@ class RapidDialect(Dialect):
                             continue
                         if why_tool or why_wobj:
                             prog.skip(here, mv.instr, why_tool or why_wobj, acc)
+                            if mine and id(found) not in st.reference:  # its other motions: not corrected
+                                prog.withhold(found, f"robtarget {found.name} is also moved to at {here}, "
+                                                     f"where {why_tool or why_wobj}")
                             continue
                         if id(found) in st.reference:
                             prog.skip(here, mv.instr, f"{found.name.split(' (')[0]} is declared in "
@@ -666,6 +669,9 @@ class _State:
             if arg_src is None:
                 return "", f"the {what} {text} is a routine parameter that no call in these files gives"
             return self.name_of(arg_src, (x, y), outer, what)
+        written = self._written(name)
+        if written:  # the data the controller uses are those of run time, not the declaration's
+            return "", f"the {what} {text} is assigned at run time ({written})"
         index = r.group(2)
         if index:
             literal = re.fullmatch(r"\{\s*(\d+(?:\s*,\s*\d+)*)\s*\}", index)
@@ -673,6 +679,16 @@ class _State:
                 return "", f"the {what} {text} is chosen at run time (a variable index)"
             name += "{" + ",".join(v.strip() for v in literal.group(1).split(",")) + "}"
         return name, ""
+
+
+    def _written(self, name: str) -> str:
+        """Where the tool / work object ``name`` (or a field or element of it) is assigned in a
+        routine of these files ('' if nowhere): a work object found by a search (``obNew :=
+        OFrameChange(...)``) or a TCP measured at run time."""
+        if name in self.assigned:
+            src, at, _, _ = self.assigned[name][0]
+            return f"{src.path.name}:{src.line_of(at)}"
+        return self.modified.get(name, [""])[0]
 
 
 def _arguments(masked: str, start: int, end: int) -> tuple[list[tuple[int, int]], dict]:
