@@ -409,3 +409,49 @@ def test_a_work_object_the_program_computes_names_its_motions(tmp_path):
     lines = zip(SMARTAC_MODULE.splitlines(), res.outputs[prog].decode().splitlines(), strict=True)
     changed = [a for a, b in lines if a != b]
     assert len(changed) == 1 and changed[0].startswith("CONST robtarget pOFrameHome")
+
+
+# a palletizing program written the way the errekaSmartPal KRC backup's are (KRC 4.1 inline forms):
+# the pallet's base is shifted layer by layer by a field of BASE_DATA[3] before the place motions;
+# the conveyor's motions run in BASE_DATA[1], which no routine writes ($config.dat holds both)
+KR = rc.Robot.from_catalog("kuka_kr120_r2500")
+PALLET_SRC = "\n".join([
+    "&ACCESS RVP", "&REL 7", "DEF paletizado( )", ";FOLD INI", "  BAS (#INITMOV,0 )", ";ENDFOLD (INI)",
+    "INT capa", "FOR capa=1 TO 3",
+    ";FOLD LIN FrenteCinta CONT Vel= 2 m/s CPDAT1 Tool[1] Base[1];%{PE}%R 4.1.16,%MKUKATPBASIS,%CMOVE,"
+    "%VLIN,%P 1:LIN, 2:FrenteCinta, 3:C_DIS, 5:2, 7:CPDAT1",
+    "$BWDSTART=FALSE", "LDAT_ACT=LCPDAT1", "FDAT_ACT=FFrenteCinta", "BAS(#CP_PARAMS,2)",
+    "LIN XFrenteCinta C_DIS",
+    ";ENDFOLD",
+    "BASE_DATA[3].Z=BASE_DATA[3].Z+120",
+    ";FOLD LIN Dejar CONT Vel= 2 m/s CPDAT1 Tool[1] Base[3];%{PE}%R 4.1.16,%MKUKATPBASIS,%CMOVE,%VLIN,"
+    "%P 1:LIN, 2:Dejar, 3:C_DIS, 5:2, 7:CPDAT1",
+    "$BWDSTART=FALSE", "LDAT_ACT=LCPDAT1", "FDAT_ACT=FDejar", "BAS(#CP_PARAMS,2)", "LIN XDejar C_DIS",
+    ";ENDFOLD", "ENDFOR", "END", ""])
+PALLET_DAT = "\n".join([
+    "&ACCESS RVP", "&REL 7", "DEFDAT  PALETIZADO",
+    "DECL E6POS XFrenteCinta={x 1586.7,y 475.2,z 1277.2,a 88.45,b -44.99,c -179.53,s 2,t 43,e1 0.0,e2 0.0,"
+    "e3 0.0,e4 0.0,e5 0.0,e6 0.0}",
+    "DECL FDAT FFrenteCinta={TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE}",
+    "DECL E6POS XDejar={x 200.7,y 356.5,z 302.6,a -0.09,b 1.01,c -178.34,s 6,t 50,e1 0.0,e2 0.0,e3 0.0,"
+    "e4 0.0,e5 0.0,e6 0.0}",
+    "DECL FDAT FDejar={TOOL_NO 1,BASE_NO 3,IPO_FRAME #BASE}",
+    "DECL LDAT LCPDAT1={VEL 2.0,ACC 100.0,APO_DIST 100.0}", "ENDDAT", ""])
+PALLET_CONFIG = "\n".join([
+    "DEFDAT  $CONFIG", "DECL FRAME TOOL_DATA[16]", "TOOL_DATA[1]={x 0.0,y 0.0,z 540.0,a 0.0,b 0.0,c 0.0}",
+    "DECL FRAME BASE_DATA[32]", "BASE_DATA[1]={x 0.0,y 0.0,z 0.0,a 0.0,b 0.0,c 0.0}",
+    "BASE_DATA[3]={x 1200.0,y -1400.0,z 300.0,a 0.0,b 0.0,c 0.0}", "ENDDAT", ""])
+
+
+def test_a_base_the_program_shifts_names_its_motions(tmp_path):
+    """A motion in BASE_DATA[3], which the program shifts by a field at run time, is named with
+    where (not corrected with $config.dat's stale value); the motion in BASE_DATA[1] is corrected."""
+    src, dat, config = tmp_path / "paletizado.src", tmp_path / "paletizado.dat", tmp_path / "$config.dat"
+    src.write_text(PALLET_SRC)
+    dat.write_text(PALLET_DAT)
+    config.write_text(PALLET_CONFIG)
+    res = filter_program([src, dat], perturbed(KR, 3), KR, references=[config])
+    records = [m.as_dict() for m in res.motions]
+    assert [r["status"] for r in records] == ["corrected", "named"]
+    assert "BASE_DATA[3] is written by the program at run time (paletizado.src:16)" in records[1]["reason"]
+    assert [r["name"] for r in res.rows] == ["XFrenteCinta"]
