@@ -455,3 +455,40 @@ def test_a_base_the_program_shifts_names_its_motions(tmp_path):
     assert [r["status"] for r in records] == ["corrected", "named"]
     assert "BASE_DATA[3] is written by the program at run time (paletizado.src:16)" in records[1]["reason"]
     assert [r["name"] for r in res.rows] == ["XFrenteCinta"]
+
+
+# a FANUC pick program written the way the VASC cells' are (R-30iB, TC_ONLINE, ACC, TB): user frame 2
+# is taught again at run time from a searched register (UFRAME[2]=PR[20]) before the picks in it;
+# the approach position is taught in user frame 1, which no line writes
+FANUC = rc.Robot.from_catalog("fanuc_m20ia")
+
+
+def _fanuc_position(n: int, uf: int, xyz: tuple[float, float, float]) -> str:
+    return "\n".join([
+        f"P[{n}]{{", "   GP1:", f"\tUF : {uf}, UT : 1,\t\tCONFIG : 'N U T, 0, 0, 0',",
+        f"\tX =  {xyz[0]:.3f}  mm,\tY =  {xyz[1]:.3f}  mm,\tZ =  {xyz[2]:.3f}  mm,",
+        "\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg", "};"])
+
+
+PICK_LS = "\n".join([
+    "/PROG  UP021", "/ATTR", "OWNER\t\t= MNEDITOR;", 'COMMENT\t\t= "Tomar en ST1540";',
+    "DEFAULT_GROUP\t= 1,*,*,*,*;", "/MN", "   1:  UFRAME_NUM=1 ;", "   2:  UTOOL_NUM=1 ;",
+    "   3:J P[1] 100% CNT0 ACC100 TB    .10sec,P-SPS    ;", "   4:  UFRAME[2]=PR[20] ;",
+    "   5:  UFRAME_NUM=2 ;", "   6:L P[2] 2000mm/sec CNT100 ACC100    ;", "   7:L P[3] 500mm/sec FINE    ;",
+    "/POS", _fanuc_position(1, 1, (1200.0, 0.0, 600.0)), _fanuc_position(2, 2, (150.0, 80.0, 120.0)),
+    _fanuc_position(3, 2, (150.0, 80.0, 20.0)), "/END", ""])
+
+
+def test_a_user_frame_the_program_writes_names_its_motions(tmp_path):
+    """Positions taught in user frame 2, which the program writes at run time (UFRAME[2]=PR[20]),
+    are named with the line that writes it (not corrected with the frame given, a stale value);
+    the position in user frame 1 is corrected."""
+    prog = tmp_path / "UP021.LS"
+    prog.write_text(PICK_LS)
+    res = filter_program(prog, perturbed(FANUC, 3), FANUC, tools={"1": "0,0,150,0,0,0"},
+                         frames={"1": "0,0,0,0,0,0", "2": "900,-300,400,0,0,0"})
+    records = [m.as_dict() for m in res.motions]
+    assert [r["status"] for r in records] == ["corrected", "named", "named"]
+    assert all("user frame UFRAME[2] is written by the program at run time (UP021.LS:10)" in r["reason"]
+               for r in records[1:])
+    assert [r["name"] for r in res.rows] == ["P[1]"]
