@@ -34,7 +34,7 @@ from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import IDENTITY, Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import nearest_rotvec
-from robocal.programs.runtime import RunTime, RuntimeSite
+from robocal.programs.runtime import ROUTINE_NAME, RunTime, RuntimeSite
 from robocal.programs.source import Number
 
 _POSE = re.compile(r"(?<![\w.])p\s*(?=\[)")
@@ -53,7 +53,7 @@ _KNOWN = {"movel", "movep", "movec", "movej", "set_tcp", "pose_trans", "pose_add
           "is_within_safety_limits", "get_forward_kin", "sleep", "sync", "socket_send_string", "while", "if",
           "elif", "len", "norm"}
 # a value computed at run time (a reader's reason saying so) that the run-time correction may route
-_RUN_TIME = re.compile(r"at run time|known at run time")
+_RUN_TIME = re.compile(r"(?<!corrected )at run time")
 # expressions whose value is a pose (the run-time correction wraps only those: a joint list is not)
 _POSE_VALUED = re.compile(r"\s*(?:p\s*\[|(?:pose_trans|pose_add|pose_sub|pose_inv|interpolate_pose|"
                          r"get_actual_tcp_pose|get_target_tcp_pose|get_forward_kin)\s*\()")
@@ -334,6 +334,8 @@ class _Script:
             found = self.resolve(*inner[0], at, depth + 1) if len(inner) == 1 else []
             if len(found) == 1 and found[0][0] in ("pose", "target") and found[0][2] == IDENTITY:
                 return [("pose", invert_transform(self._pose(found[0])), IDENTITY, None)]
+        if call and call.group(1) == ROUTINE_NAME:  # a program robocal filtered with --runtime-correction
+            return [("skip", f"already corrected at run time by robocal's {ROUTINE_NAME}", IDENTITY, None)]
         if call and call.group(1) != "p":
             return [("skip", f"the pose is computed at run time by {call.group(1)}()", IDENTITY, None)]
         if _POSE.match(masked, lead):
