@@ -187,7 +187,8 @@ def test_top_level_script_crlf_and_a_second_run(tmp_path):
     res.write(out)
     again = filter_program(out, CALIBRATED, NOMINAL, runtime_correction=True, force=True)
     assert next(iter(again.outputs.values())).decode().count(BEGIN) == 1  # nothing routed twice
-    assert sum("already corrected at run time by robocal's RC_Correct" in m.reason for m in again.motions) == 3
+    named = [m for m in again.motions if "already corrected at run time by robocal's RC_Correct" in m.reason]
+    assert len(named) == 3
     with pytest.raises(DataError, match="already holds robocal's run-time correction"):
         URScriptRuntime().routine(text, calibrated_chain(CALIBRATED, NOMINAL), [], "")
 
