@@ -236,3 +236,33 @@ def test_a_factory_calibrated_controller(tmp_path):
             off = _land(ctl, pose(comp.corrected_targets[0] @ Tt), true)
             miss = np.linalg.norm(off[:3, 3] - X[:3, 3]) * 1e3
             assert (miss > 0.5) if worse else (miss <= MODEL_ERROR_FACTOR * own + ROUTINE_SLACK_MM), miss
+
+
+def test_a_polyscope_export(tmp_path):
+    """The corpus's PolyScope-style palletizing program: ``place(k)``'s run-time ``target =
+    pose_add(Place_base_p, p[d[0], ...])`` is routed (Place_base_p is no motion's target: not
+    corrected offline), ``movel(get_actual_tcp_pose())`` is not; the block is defined in the
+    program's def, where ``place`` (a nested def) sees it; each layer lands within 1.3x."""
+    from pathlib import Path
+
+    nominal = rc.Robot.from_catalog("ur5e")
+    true = perturbed(nominal, 3, length_mm=(0.2, 0.8), angle_deg=(0.02, 0.08))
+    cal = perturbed(true, 4, length_mm=(0.01, 0.04), angle_deg=(0.0005, 0.002))
+    source = Path(__file__).parent / "data" / "programs" / "corpus" / "palletizing_ur5.script"
+    res = filter_program(source, cal, nominal, runtime_correction=True, keep_unreached=True)
+    text = next(iter(res.outputs.values())).decode()
+    assert text.count("(RC_Correct(") == 1 and "    movel(RC_Correct(target), a=1.2, v=0.25)" in text
+    assert text.index("def palletizing_ur5():") < text.index(BEGIN) < text.index("def place(k):")
+    assert "movel(get_actual_tcp_pose(), a=0.5, v=0.1)" in text
+    home = [0.1886, -1.6002, 1.6304, -1.7414, -1.6756, 0.3285]
+    ctl = NominalController(nominal, (0, 0, 0.145, 0, 0, 0), home)
+    ev = Evaluator(text, ctl)
+    base = ev.eval("p[-0.39667, -0.27297, 0.36669, -2.0384, -2.3653, 0.2017]")  # Place_base_p as written
+    for k in range(3):
+        target = ev._builtin("pose_add", [base, ev.eval(f"p[0, 0, {k * 0.12}, 0, 0, 0]")], {})
+        corrected = ev.call("RC_Correct", target)
+        q = ctl.inverse_kin(corrected, ctl.joints)
+        landed = controller_model(true, nominal).fk(q[None])[0] @ matrix(ctl.tcp)
+        own = controller_model(cal, nominal).fk(q[None])[0] @ matrix(ctl.tcp)
+        error = np.linalg.norm(landed[:3, 3] - matrix(target)[:3, 3]) * 1e3
+        assert error <= MODEL_ERROR_FACTOR * np.linalg.norm((own - landed)[:3, 3]) * 1e3 + ROUTINE_SLACK_MM
