@@ -266,3 +266,14 @@ def test_a_polyscope_export(tmp_path):
         own = controller_model(cal, nominal).fk(q[None])[0] @ matrix(ctl.tcp)
         error = np.linalg.norm(landed[:3, 3] - matrix(target)[:3, 3]) * 1e3
         assert error <= MODEL_ERROR_FACTOR * np.linalg.norm((own - landed)[:3, 3]) * 1e3 + ROUTINE_SLACK_MM
+
+
+def test_val3_refuses_and_names_the_languages_that_have_it():
+    """VAL3 has no run-time correction (docs/programs.md says why): the option is refused, naming
+    the languages that have one, URScript among them."""
+    from pathlib import Path
+
+    app = Path(__file__).parent / "data" / "programs" / "val3" / "pick_place"
+    staubli = rc.Robot.from_catalog("staubli_tx2_140")
+    with pytest.raises(DataError, match=r"writes routines in .*URScript, not .*VAL3"):
+        filter_program(app, perturbed(staubli, 3), staubli, runtime_correction=True)
