@@ -54,9 +54,9 @@ from robocal.programs.source import Number, ProgramText
 
 _AGG = re.compile(r"\{[^{}]*\}")
 _COMPONENT = re.compile(r"\b([A-Za-z]\w*)\s+([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|'[BbHh][^']*')")
-_DECL = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(E6POS|POS|FRAME)\s+([A-Za-z_$]\w*)"
+_DECL = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:CONST\s+)?(E6POS|POS|FRAME)\s+([A-Za-z_$]\w*)"
                    r"(?:\s*\[[^\]]*\])?\s*=\s*(?=\{)", re.IGNORECASE | re.MULTILINE)
-_AXES = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:E6AXIS|AXIS)\s+([A-Za-z_$]\w*)",
+_AXES = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:CONST\s+)?(?:E6AXIS|AXIS)\s+([A-Za-z_$]\w*)",
                    re.IGNORECASE | re.MULTILINE)
 _ELEMENT = re.compile(r"^[ \t]*([A-Za-z_]\w*\s*\[\s*\d+(?:\s*,\s*\d+)*\s*\])\s*=\s*(?=\{)", re.MULTILINE)
 _KINDS = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:CONST\s+)?(E6POS|POS|FRAME)\s+([^=\n]+)",

@@ -278,6 +278,17 @@ class RapidDialect(Dialect):
             if kind == "robtarget":
                 targets = [self._shaped(src, shaped, name, m.start())] if shaped else \
                     self._robtargets(src, tree, name, m.start(), m.group(4))
+                held = [t for t in targets if not _placeholder(t)]
+                for t in targets:
+                    if _placeholder(t):  # VAR robtarget pTemp := [[0,0,0],[0,0,0,0],...]: filled at run time
+                        key = t.name.lower()
+                        st.placeholders[key] = f"{src.path.name}:{t.line}"
+                        if not only_frames:
+                            prog.warnings.append(
+                                f"{src.path.name}:{t.line}: robtarget {t.name} holds the quaternion "
+                                "[0,0,0,0]: a placeholder the program assigns at run time, not a taught "
+                                "target: left as it is")
+                targets = held
                 if only_frames:
                     for t in targets:
                         t.name += f" (in the reference {src.path.name})"
@@ -285,6 +296,7 @@ class RapidDialect(Dialect):
                 st.reference |= {id(t) for t in targets} if only_frames else set()
                 return
             for suffix, node in _elements(tree, m.group(4), src, m.start(), f"{kind} {name}"):
+                st.data[(kind, name.lower() + suffix)] = _canonical(node)
                 read = self._tool if kind == "tooldata" else self._wobj
                 (st.tools if kind == "tooldata" else st.wobjs)[name.lower() + suffix] = read(
                     src, node, name + suffix, m.start(), where)
@@ -341,7 +353,11 @@ class RapidDialect(Dialect):
                     raise DataError(f"{src.path.name}:{src.line_of(m.start())}: malformed {m.group(1)} "
                                     f"{m.group(2)}: expected {len(components)} components")
                 at = _first_offset(node[k], m.start())
-                targets.append(self._robtarget(src, node[k], f"{m.group(2)}{suffix}.{field}", at))
+                t = self._robtarget(src, node[k], f"{m.group(2)}{suffix}.{field}", at)
+                if _placeholder(t):  # a record's robtarget filled at run time
+                    st.placeholders[f"{m.group(2).lower()}.{field.lower()}"] = f"{src.path.name}:{t.line}"
+                else:
+                    targets.append(t)
             st.declared[f"{m.group(2).lower()}.{field.lower()}"] = targets
             if only_frames:
                 st.reference |= {id(t) for t in targets}
@@ -410,6 +426,7 @@ class RapidDialect(Dialect):
         and work object (one per target); name every motion that reaches a pose this cannot
         follow."""
         first = prog.used
+        same = _same_data(prog, st)
         for mv in st.motions:
             here = f"{mv.src.path.name}:{mv.src.line_of(mv.at)}"
             acc = prog.motion(mv.src, mv.at, mv.instr)
@@ -417,6 +434,7 @@ class RapidDialect(Dialect):
                 tool, why_tool = st.name_of(mv.src, mv.tool, scope, "tool")
                 wobj, why_wobj = ("wobj0", "") if mv.wobj is None else st.name_of(
                     mv.src, mv.wobj, scope, "work object")
+                tool, wobj = same.get(("tooldata", tool), tool), same.get(("wobjdata", wobj), wobj)
                 for a, b in mv.targets:
                     for found in self._follow(st, mv.src, a, b, mv.proc, scope, 0):
                         if isinstance(found, str):
@@ -566,14 +584,20 @@ class RapidDialect(Dialect):
         if targets is None:
             return out + [Undeclared(f"robtarget {r.group(1)} is not declared in these files (give the "
                                      "module that declares it as a program file)", f"robtarget {r.group(1)}")]
-        if not targets:
-            return out + [f"{r.group(1)} is declared without a value and not assigned in these files"]
+        holes = [k for k in st.placeholders if k == name + fields or k.startswith(name + "{")]
         if index:
             literal = re.fullmatch(r"\{\s*(\d+(?:\s*,\s*\d+)*)\s*\}", index)
             if literal:
                 want = name + "{" + ",".join(v.strip() for v in literal.group(1).split(",")) + "}" + fields
                 chosen = [t for t in targets if t.name.split(" (")[0].lower() == want]
+                if not chosen and want in st.placeholders:
+                    return out + [_unfilled(f"{r.group(1)}{index}", st.placeholders[want])]
                 return out + (chosen or [f"{r.group(1)}{index} is outside the array"])
+        if holes:  # the placeholder (or an array's placeholder elements) has no value before run time
+            return out + list(targets) + [_unfilled(text if not index else f"{r.group(1)}{{...}}",
+                                                    st.placeholders[holes[0]])]
+        if not targets:
+            return out + [f"{r.group(1)} is declared without a value and not assigned in these files"]
         return out + list(targets)  # a variable index: every element of the array
 
 
@@ -607,6 +631,8 @@ class _State:
         self.constants: dict[str, float] = {}  # CONST num name -> value
         self.functions: dict[str, str] = {}  # FUNC robtarget name -> its body (lower case, masked)
         self.records: dict[str, list[tuple[str, str]]] = {}  # RECORD type -> [(type, field)]
+        self.data: dict[tuple[str, str], tuple] = {}  # ('tooldata' | 'wobjdata', name) -> its value, as data
+        self.placeholders: dict[str, str] = {}  # robtarget with the quaternion [0,0,0,0] -> where
         self._scopes: dict[str, list] = {}
         self._names: dict[tuple[str, str], tuple[str, str]] = {}  # (text, what) -> name_of outside parameters
 
@@ -666,6 +692,45 @@ class _State:
                 return "", f"the {what} {text} is chosen at run time (a variable index)"
             name += "{" + ",".join(v.strip() for v in literal.group(1).split(",")) + "}"
         return name, ""
+
+
+def _canonical(node) -> tuple | float | str:
+    """A declaration's value as data (numbers as floats, words upper case, strings as written):
+    two tools or work objects with equal canonical values are the same data under two names."""
+    if isinstance(node, list):
+        return tuple(_canonical(n) for n in node)
+    if isinstance(node, Number):
+        return node.value
+    return node.text.upper() if isinstance(node, Word) else repr(node)
+
+
+def _same_data(prog: Program, st: _State) -> dict[tuple[str, str], str]:
+    """``(kind, name) -> the first declared name with identical data`` for the tooldata / wobjdata
+    declared twice under two names (every value equal, and equal as the filter uses them after
+    ``--tool``/``--frame``; neither assigned in these files): a target used with both is one
+    target, corrected once."""
+    out, first = {}, {}
+    for (kind, name), value in st.data.items():
+        known = prog.tools if kind == "tooldata" else prog.frames
+        if name not in known or name in st.assigned or name in st.modified:
+            continue  # not filtered (a stationary tool ...), or its value changes at run time
+        head = first.setdefault((kind, value, prog.carried.get(name)), name)
+        if head != name and np.array_equal(known[head], known[name]):
+            out[(kind, name)] = head
+    return out
+
+
+def _placeholder(t: Target) -> bool:
+    """A robtarget whose quaternion is [0,0,0,0]: no orientation at all, a placeholder the program
+    fills at run time (``VAR robtarget pTemp := [[0,0,0],[0,0,0,0],...]``), not a taught target."""
+    return all(n.value == 0.0 for n in t.numbers[3:7])
+
+
+def _unfilled(text: str, where: str) -> str:
+    """Why a motion to placeholder ``text`` (declared at ``where``) is not corrected."""
+    return (f"{' '.join(text.split())} is a placeholder (declared at {where} with the quaternion [0,0,0,0]: "
+            "not a taught target) that the program assigns at run time, and no assignment in these files "
+            "gives it a value")
 
 
 def _arguments(masked: str, start: int, end: int) -> tuple[list[tuple[int, int]], dict]:
