@@ -80,6 +80,7 @@ _MOVE = re.compile(r"\b(" + "|".join(_MOVES) + r")\b", re.IGNORECASE)
 _STATEMENT = re.compile(r"[^;]+")
 _WORD = re.compile(r"\s*([A-Za-z]\w*)")
 _REF = re.compile(r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*((?:\.\s*[A-Za-z]\w*)*)")
+_NAMED_ARG = re.compile(r"\s*[A-Za-z]\w*\s*:=")
 _CALLED = re.compile(r"\s*(Offs|RelTool)\s*\(", re.IGNORECASE)
 _FUNCTION = re.compile(r"\s*([A-Za-z]\w*)\s*\(")
 # functions whose robtarget is computed from the joints the robot is at or is given (already in the
@@ -113,6 +114,7 @@ BUILTIN_WOBJS = ("wobj0",)
 _ROBTARGET = shape_pattern((3, 4, 4, 6))
 _COMPONENTS = ("position", "orientation", "configuration (confdata)", "external axes")  # a robtarget's parts
 _DEPTH = 12  # routine calls and assignments followed at most this deep
+ABSENT = (-1, -1)  # the span bound to an optional parameter that a call leaves out
 
 
 def _first_offset(node, default: int) -> int:
@@ -320,7 +322,7 @@ class RapidDialect(Dialect):
             joint = instr.lower().rstrip("sdoagync").endswith("j") or instr.lower() in ("triggjios", "spotj")
             st.motions.append(_Motion(instr, src, at, [positional[k] for k in target_pos],
                                       positional[tool_pos], optional.get("wobj"), proc,
-                                      conf["j" if joint else "l"]))
+                                      conf["j" if joint else "l"], "wobj?" in optional))
             return
         a = _ASSIGN.match(masked, lead + len(masked[lead:e]) - len(masked[lead:e].lstrip()), e)
         if a:
@@ -426,20 +428,22 @@ class RapidDialect(Dialect):
         and work object (one per target); name every motion that reaches a pose this cannot
         follow."""
         first = prog.used
-        same = _same_data(prog, st)
+        same, named = _same_data(prog, st), {}  # (target, data) -> the tool and wobj names of its first use
         for mv in st.motions:
             here = f"{mv.src.path.name}:{mv.src.line_of(mv.at)}"
             acc = prog.motion(mv.src, mv.at, mv.instr)
             for scope in st.scopes(mv.proc):
                 tool, why_tool = st.name_of(mv.src, mv.tool, scope, "tool")
-                wobj, why_wobj = ("wobj0", "") if mv.wobj is None else st.name_of(
+                wobj_text = "" if mv.wobj is None else st.masked[mv.src.path][slice(*mv.wobj)].strip().lower()
+                wobj, why_wobj = ("wobj0", "") if mv.wobj is None or (
+                    mv.conditional and _absent(scope.get(wobj_text))) else st.name_of(
                     mv.src, mv.wobj, scope, "work object")
-                tool, wobj = same.get(("tooldata", tool), tool), same.get(("wobjdata", wobj), wobj)
                 for a, b in mv.targets:
                     for found in self._follow(st, mv.src, a, b, mv.proc, scope, 0):
                         if isinstance(found, str):
                             prog.skip(here, mv.instr, found, acc, st.masked[mv.src.path][a:b][:60])
-                            if isinstance(found, RunTime):  # --runtime-correction may route it
+                            if isinstance(found, RunTime) and not mv.conditional:  # --runtime-correction
+                                # may route it (not with \\WObj?WObj: the routine takes a work object always)
                                 prog.runtime_sites.append(self._site(st, mv, acc, a, b, tool, wobj))
                             continue
                         if why_tool or why_wobj:
@@ -451,8 +455,16 @@ class RapidDialect(Dialect):
                                                       "that module as a program file to correct it", acc)
                             continue
                         label = f"robtarget {found.name.lower()}"
-                        if prog.use(found, tool, wobj, here, label, "work object", (mv.src.path, a), acc):
+                        data = (id(found), same.get(("tooldata", tool), tool),
+                                same.get(("wobjdata", wobj), wobj))
+                        if prog.use(found, *named.setdefault(data, (tool, wobj)), here, label, "work object",
+                                    (mv.src.path, a), acc):
                             found.monitored = mv.monitored
+            if not acc.targets and not acc.named:  # every call leaves out the optional parameter it moves to
+                text = " ".join(st.masked[mv.src.path][slice(*mv.targets[-1])].split())
+                prog.skip(here, mv.instr, f"{text} takes its value from an optional parameter of routine "
+                          f"{mv.proc} that no call in these files gives (the motion runs only when it is "
+                          "present)", acc, text)
         passed = set()
         for src, at, routine, positional in st.foreign:  # a robtarget given to a routine not in these files
             for a, b in positional:
@@ -563,6 +575,8 @@ class RapidDialect(Dialect):
         name, index, fields = r.group(1).lower(), r.group(2), r.group(3)
         if name in scope:
             arg_src, x, y, caller, outer = scope[name]
+            if _absent(scope[name]):  # left out by this call: the motion does not run with it
+                return []
             if arg_src is None:
                 return [f"{r.group(1)} is a parameter of routine {proc} that no call in these files gives"]
             return self._follow(st, arg_src, x, y, caller, outer, depth + 1)
@@ -603,11 +617,13 @@ class RapidDialect(Dialect):
 
 class _Motion:
     """A motion instruction: its name, where, the spans of its target and tool arguments, the
-    work object's text (None: wobj0), its routine and whether configuration is monitored."""
+    work object's text (None: wobj0), its routine, whether configuration is monitored and whether
+    the work object is passed conditionally (``\\WObj?WObj``)."""
 
-    def __init__(self, instr, src, at, targets, tool, wobj, proc, monitored):
+    def __init__(self, instr, src, at, targets, tool, wobj, proc, monitored, conditional=False):
         self.instr, self.src, self.at, self.targets = instr, src, at, targets
         self.tool, self.wobj, self.proc, self.monitored = tool, wobj, proc, monitored
+        self.conditional = conditional  # \WObj?Param: wobj0 when the routine's Param is absent
 
 
 class _State:
@@ -651,9 +667,12 @@ class _State:
             for outer in self.scopes(caller, depth + 1):
                 bound, k = {}, 0
                 for name, is_optional in self.procs[proc]:
-                    if is_optional:
+                    if is_optional:  # left out, or passed on (\\Via?Via) from an optional the caller lacks
                         span = optional.get(name)
-                        bound[name] = (src, *span, caller, outer) if span else (None, 0, 0, caller, outer)
+                        passed = span and name + "?" in optional and _absent(
+                            outer.get(self.masked[src.path][span[0]:span[1]].strip().lower()))
+                        bound[name] = (src, *span, caller, outer) if span and not passed else \
+                            (None, *ABSENT, caller, outer)
                     else:
                         bound[name] = (src, *positional[k], caller, outer) if k < len(positional) else \
                             (None, 0, 0, caller, outer)
@@ -682,6 +701,8 @@ class _State:
         name = r.group(1).lower()
         if name in scope:
             arg_src, x, y, _, outer = scope[name]
+            if _absent(scope[name]):
+                return "", f"the {what} {text} is an optional parameter that a call of its routine leaves out"
             if arg_src is None:
                 return "", f"the {what} {text} is a routine parameter that no call in these files gives"
             return self.name_of(arg_src, (x, y), outer, what)
@@ -692,6 +713,11 @@ class _State:
                 return "", f"the {what} {text} is chosen at run time (a variable index)"
             name += "{" + ",".join(v.strip() for v in literal.group(1).split(",")) + "}"
         return name, ""
+
+
+def _absent(binding: tuple | None) -> bool:
+    """A parameter binding of an optional parameter that the call leaves out (:data:`ABSENT`)."""
+    return binding is not None and binding[0] is None and binding[1:3] == ABSENT
 
 
 def _canonical(node) -> tuple | float | str:
@@ -735,14 +761,20 @@ def _unfilled(text: str, where: str) -> str:
 
 def _arguments(masked: str, start: int, end: int) -> tuple[list[tuple[int, int]], dict]:
     """Positional argument spans and optional ``\\Name:=value`` arguments (name -> value span, or
-    the switch's own span) of an instruction whose arguments run from ``start`` to ``end``."""
+    the switch's own span) of an instruction whose arguments run from ``start`` to ``end``; a
+    conditional ``\\Name?Param`` is ``name`` -> the span of ``Param``, and also ``name?``."""
     positional, optional = [], {}
     for ps, pe in split_top(masked, start, end, ","):
         parts = split_top(masked, ps, pe, "\\") if "\\" in masked[ps:pe] else [(ps, pe)]
         if masked[parts[0][0]:parts[0][1]].strip():
-            positional.append(parts[0])
+            named = _NAMED_ARG.match(masked, *parts[0])  # ToPoint:=p10: a required argument by name
+            positional.append((named.end(), parts[0][1]) if named else parts[0])
         for os_, oe in parts[1:]:
             key, sep, _ = masked[os_:oe].partition(":=")
+            if not sep and "?" in key:  # \Name?Param: given only when the routine's own Param is present
+                name = key.partition("?")[0].strip().lower()
+                optional[name] = optional[name + "?"] = (os_ + key.index("?") + 1, oe)
+                continue
             value_at = os_ + len(key) + len(sep)
             optional[key.strip().lower()] = (value_at, oe) if sep else (os_, oe)
     return positional, optional
