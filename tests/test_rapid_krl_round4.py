@@ -225,3 +225,27 @@ def test_krl_const_positions_in_the_dat_are_read(tmp_path):
     assert status == {k: ("corrected", "") for k in (8, 9, 10, 11)}
     assert {r["name"] for r in res.rows} == {"P_APPROACH", "P_PICK", "P_TABLE", "XP_GLOB"}
     assert res.outputs[paths[1]] != paths[1].read_bytes()
+
+
+def test_rapid_placeholder_tool_and_wobj_name_their_motions(tmp_path):
+    """A tooldata / wobjdata holding the quaternion [0,0,0,0] (a camera tool or a found work object
+    the program measures at run time) names the motions that use it; the rest is filtered."""
+    path = tmp_path / "Cam.mod"
+    path.write_text(f"""MODULE Cam
+  PERS tooldata tCam:=[TRUE,[[0,0,0],[0,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];
+  PERS wobjdata wFound:=[FALSE,TRUE,"",[[0,0,0],[0,0,0,0]],[[0,0,0],[1,0,0,0]]];
+  CONST robtarget pHome:=[[1200,0,1100],[0,0,1,0],[0,0,0,0],{EAX}];
+  CONST robtarget pCam:=[[1200,0,1000],[0,0,1,0],[0,0,0,0],{EAX}];
+  CONST robtarget pA:=[[100,0,100],[0,0,1,0],[0,0,0,0],{EAX}];
+  PROC main()
+    MoveJ pHome, v500, z10, tool0;
+    MoveL pCam, v500, z10, tCam;
+    MoveL pA, v500, z10, tool0 \\WObj:=wFound;
+  ENDPROC
+ENDMODULE
+""")
+    res = filter_program(path, perturbed(ABB, 7), ABB)
+    status = _accounted(res, [path])
+    assert status[8] == ("corrected", "")
+    assert "tooldata tCam holds the quaternion [0,0,0,0]" in status[9][1]
+    assert "wobjdata wFound holds the quaternion [0,0,0,0]" in status[10][1]

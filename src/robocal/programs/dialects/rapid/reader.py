@@ -114,6 +114,8 @@ BUILTIN_WOBJS = ("wobj0",)
 _ROBTARGET = shape_pattern((3, 4, 4, 6))
 _COMPONENTS = ("position", "orientation", "configuration (confdata)", "external axes")  # a robtarget's parts
 _DEPTH = 12  # routine calls and assignments followed at most this deep
+_EMPTY_DATA = ("holds the quaternion [0,0,0,0]: a placeholder the program assigns at run time, not data to "
+               "filter with")
 ABSENT = (-1, -1)  # the span bound to an optional parameter that a call leaves out
 
 
@@ -397,6 +399,8 @@ class RapidDialect(Dialect):
         if not (isinstance(tree, list) and len(tree) >= 2 and isinstance(tree[0], Word)):
             raise DataError(f"{where}: malformed tooldata {name}: expected [robhold,[[x,y,z],[q]],[load]]")
         vals = [n.value for n in _pose_numbers(tree[1], src, at, f"tooldata {name}")]
+        if not any(vals[3:]):  # [0,0,0,0]: filled at run time
+            return np.eye(4), False, f"{where}: tooldata {name} {_EMPTY_DATA}"
         held = tree[0].text.upper() == "TRUE"
         return (self.to_pose(np.array([vals]))[0], held,
                 f"{where}: tooldata {name} is a stationary tool (robhold FALSE)")
@@ -405,8 +409,11 @@ class RapidDialect(Dialect):
         if not (isinstance(tree, list) and len(tree) >= 5 and isinstance(tree[0], Word)):
             raise DataError(f"{where}: malformed wobjdata {name}: expected "
                             "[robhold,ufprog,ufmec,[uframe],[oframe]]")
-        uf = self.to_pose(np.array([[n.value for n in _pose_numbers(tree[3], src, at, f"wobjdata {name}")]]))
-        of = self.to_pose(np.array([[n.value for n in _pose_numbers(tree[4], src, at, f"wobjdata {name}")]]))
+        uf, of = (np.array([[n.value for n in _pose_numbers(tree[k], src, at, f"wobjdata {name}")]])
+                  for k in (3, 4))
+        if not (any(uf[0, 3:]) and any(of[0, 3:])):  # a quaternion [0,0,0,0]: filled at run time
+            return np.eye(4), False, f"{where}: wobjdata {name} {_EMPTY_DATA}", "", ""
+        uf, of = self.to_pose(uf), self.to_pose(of)
         robhold, ufprog = (tree[0].text.upper() == "TRUE",
                            isinstance(tree[1], Word) and tree[1].text.upper() == "TRUE")
         unit = "" if robhold or ufprog or not isinstance(tree[2], Word) else \
