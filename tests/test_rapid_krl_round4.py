@@ -67,6 +67,7 @@ WRAPPER = f"""MODULE MainModule
       MoveJ Via, Speed, z50, Tool \\WObj?WObj;
     ENDIF
     MoveL ToPoint, Speed, Zone, Tool \\WObj?WObj;
+    IF Present(WObj) MoveL Offs(ToPoint,0,0,50), Speed, z10, Tool \\WObj:=WObj;
   ENDPROC
 ENDMODULE
 """
@@ -76,18 +77,20 @@ def test_rapid_wrapper_parameters_are_resolved_at_their_calls(tmp_path):
     """Every call's constant argument is corrected (ToPoint of five calls, one given by name; Via
     of the one call that gives it: the calls that leave it out do not run the MoveJ, the ones
     that pass it on with \\Via?Via from a caller that lacks it neither), pTable in the work object
-    the call passes on with \\WObj?WObj, the others in wobj0; both motions corrected (main named
+    the call passes on with \\WObj?WObj, the others in wobj0; the motion under IF Present(WObj)
+    reaches pTable only; every motion corrected (main named
     ToPoint and Via 'no call in these files gives', and ToPoint:=pPlace 'not a robtarget this
     filter can follow')."""
     path = tmp_path / "MainModule.mod"
     path.write_text(WRAPPER)
     res = filter_program(path, perturbed(ABB, 7), ABB)
     status = _accounted(res, [path])
-    assert status == {25: ("corrected", ""), 27: ("corrected", "")}
+    assert status == {25: ("corrected", ""), 27: ("corrected", ""), 28: ("corrected", "")}
     rows = {r["name"].lower(): r for r in res.rows}
     assert set(rows) == {"papproach", "ppick", "pplace", "pvia", "ptable"}
     assert all(r["filtered"] for r in rows.values())
     assert rows["ptable"]["frame"] == "wtable" and rows["ppick"]["frame"] == "wobj0"
+    assert res.motions[2].target == "pTable"  # the guarded motion runs for the call that gives WObj only
 
 
 def test_rapid_wrapper_argument_not_declared_is_named_with_the_true_reason(tmp_path):
@@ -102,7 +105,7 @@ def test_rapid_wrapper_argument_not_declared_is_named_with_the_true_reason(tmp_p
     assert status[27][0] == "named" and "robtarget pService is not declared in these files" in status[27][1]
     assert "not a robtarget this filter can follow" not in status[27][1]
     assert status[25][0] == "named"
-    assert "Via takes its value from an optional parameter of routine moveto that no call" in status[25][1]
+    assert "Via: the motion needs an optional parameter of routine moveto that no call" in status[25][1]
     assert {r["name"].lower() for r in res.rows} == {"papproach", "ppick", "ptable"}
     assert res.motions[1].needs == "robtarget pService"
 

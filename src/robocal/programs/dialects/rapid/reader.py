@@ -440,8 +440,11 @@ class RapidDialect(Dialect):
             here = f"{mv.src.path.name}:{mv.src.line_of(mv.at)}"
             acc = prog.motion(mv.src, mv.at, mv.instr)
             for scope in st.scopes(mv.proc):
-                tool, why_tool = st.name_of(mv.src, mv.tool, scope, "tool")
                 wobj_text = "" if mv.wobj is None else st.masked[mv.src.path][slice(*mv.wobj)].strip().lower()
+                tool_text = st.masked[mv.src.path][slice(*mv.tool)].strip().lower()
+                if _absent(scope.get(tool_text)) or (not mv.conditional and _absent(scope.get(wobj_text))):
+                    continue  # an optional tool / \\WObj:=WObj this call leaves out: runs only when present
+                tool, why_tool = st.name_of(mv.src, mv.tool, scope, "tool")
                 wobj, why_wobj = ("wobj0", "") if mv.wobj is None or (
                     mv.conditional and _absent(scope.get(wobj_text))) else st.name_of(
                     mv.src, mv.wobj, scope, "work object")
@@ -467,10 +470,10 @@ class RapidDialect(Dialect):
                         if prog.use(found, *named.setdefault(data, (tool, wobj)), here, label, "work object",
                                     (mv.src.path, a), acc):
                             found.monitored = mv.monitored
-            if not acc.targets and not acc.named:  # every call leaves out the optional parameter it moves to
+            if not acc.targets and not acc.named:  # every call leaves out an optional parameter it needs
                 text = " ".join(st.masked[mv.src.path][slice(*mv.targets[-1])].split())
-                prog.skip(here, mv.instr, f"{text} takes its value from an optional parameter of routine "
-                          f"{mv.proc} that no call in these files gives (the motion runs only when it is "
+                prog.skip(here, mv.instr, f"{text}: the motion needs an optional parameter of routine "
+                          f"{mv.proc} that no call in these files gives (it runs only when the parameter is "
                           "present)", acc, text)
         passed = set()
         for src, at, routine, positional in st.foreign:  # a robtarget given to a routine not in these files
