@@ -1,7 +1,9 @@
 """RAPID and KRL constructs of issue 46 (real programs, round four), each written in the style of
 the public programs that showed it (the programs themselves are not copied: no licence allows it):
-a motion wrapper ``PROC MoveTo(robtarget ToPoint, ..., \\robtarget Via)`` resolved at its call sites
-(optional arguments left out, passed on with ``\\Via?Via``, required arguments given by name); one
+a motion wrapper ``PROC MoveTo(robtarget ToPoint, ...\\robtarget Via)`` (optional parameters after a
+backslash without a comma, as RAPID allows) resolved at its call sites (optional arguments left out,
+passed on with ``\\Via?Via``, required arguments given by name; main lost the parameter before the
+backslash and named ToPoint 'not declared'); one
 robtarget used with two tools (work objects) whose data are identical; a system module with a
 placeholder robtarget filled at run time (quaternion [0,0,0,0], as calibration user modules
 declare them); KRL ``DECL CONST POS/E6POS`` and ``DECL GLOBAL CONST`` in the .dat given."""
@@ -55,14 +57,21 @@ WRAPPER = f"""MODULE MainModule
     MoveTo ToPoint:=pPlace, v500, fine, tGripper;
     PickPart pTable \\WObj:=wTable;
     PickPart pPick;
+    Approach pPick;
+    Approach pPlace\\Via:=pVia;
   ENDPROC
 
-  PROC PickPart(robtarget pPart, \\PERS wobjdata WObj, \\robtarget Via)
+  PROC Approach(robtarget ToPoint\\robtarget Via)
+    IF Present(Via) MoveJ Via, v500, z50, tGripper;
+    MoveJ Offs(ToPoint,0,0,100), v500, z50, tGripper;
+  ENDPROC
+
+  PROC PickPart(robtarget pPart\\PERS wobjdata WObj\\robtarget Via)
     MoveTo pPart, v200, fine, tGripper \\WObj?WObj \\Via?Via;
   ENDPROC
 
-  PROC MoveTo(robtarget ToPoint, speeddata Speed, zonedata Zone, PERS tooldata Tool,
-              \\PERS wobjdata WObj, \\robtarget Via)
+  PROC MoveTo(robtarget ToPoint,speeddata Speed,zonedata Zone,PERS tooldata Tool\\PERS wobjdata WObj
+              \\robtarget Via)
     IF Present(Via) THEN
       MoveJ Via, Speed, z50, Tool \\WObj?WObj;
     ENDIF
@@ -85,12 +94,12 @@ def test_rapid_wrapper_parameters_are_resolved_at_their_calls(tmp_path):
     path.write_text(WRAPPER)
     res = filter_program(path, perturbed(ABB, 7), ABB)
     status = _accounted(res, [path])
-    assert status == {25: ("corrected", ""), 27: ("corrected", ""), 28: ("corrected", "")}
+    assert status == {k: ("corrected", "") for k in (21, 22, 32, 34, 35)}
     rows = {r["name"].lower(): r for r in res.rows}
     assert set(rows) == {"papproach", "ppick", "pplace", "pvia", "ptable"}
     assert all(r["filtered"] for r in rows.values())
     assert rows["ptable"]["frame"] == "wtable" and rows["ppick"]["frame"] == "wobj0"
-    assert res.motions[2].target == "pTable"  # the guarded motion runs for the call that gives WObj only
+    assert res.motions[4].target == "pTable"  # the guarded motion runs for the call that gives WObj only
 
 
 def test_rapid_wrapper_argument_not_declared_is_named_with_the_true_reason(tmp_path):
@@ -99,15 +108,17 @@ def test_rapid_wrapper_argument_not_declared_is_named_with_the_true_reason(tmp_p
     call gives names the MoveJ with that reason."""
     path = tmp_path / "MainModule.mod"
     path.write_text(WRAPPER.replace("ToPoint:=pPlace", "ToPoint:=pService")
-                    .replace("tGripper \\Via:=pVia;", "tGripper;"))
+                    .replace("tGripper \\Via:=pVia;", "tGripper;").replace("pPlace\\Via:=pVia", "pPlace"))
     res = filter_program(path, perturbed(ABB, 7), ABB)
     status = _accounted(res, [path])
-    assert status[27][0] == "named" and "robtarget pService is not declared in these files" in status[27][1]
-    assert "not a robtarget this filter can follow" not in status[27][1]
-    assert status[25][0] == "named"
-    assert "Via: the motion needs an optional parameter of routine moveto that no call" in status[25][1]
-    assert {r["name"].lower() for r in res.rows} == {"papproach", "ppick", "ptable"}
-    assert res.motions[1].needs == "robtarget pService"
+    assert status[34][0] == "named" and "robtarget pService is not declared in these files" in status[34][1]
+    assert "not a robtarget this filter can follow" not in status[34][1]
+    assert status[32][0] == "named"
+    assert "Via: the motion needs an optional parameter of routine moveto that no call" in status[32][1]
+    assert {r["name"].lower() for r in res.rows} == {"papproach", "ppick", "ptable", "pplace"}
+    assert status[21][0] == "named" and "Via: the motion needs an optional parameter of routine approach" \
+        in status[21][1]
+    assert res.motions[3].needs == "robtarget pService"
 
 
 # ----------------------------------------------------------------------------- identical tool data

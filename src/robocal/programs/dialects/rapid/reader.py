@@ -791,12 +791,16 @@ def _arguments(masked: str, start: int, end: int) -> tuple[list[tuple[int, int]]
 
 
 def _params(text: str) -> list[tuple[str, bool]]:
-    """A routine's parameters ``(name, optional)`` from ``robtarget p, \\PERS tooldata t, ...``."""
-    out = []
-    for part in re.split(r"[,|]", text):
-        words = re.findall(r"[A-Za-z]\w*", part)
+    """A routine's parameters ``(name, optional)`` from ``robtarget p, \\PERS tooldata t, ...``: an
+    optional parameter begins with a backslash, with or without a comma before it (``PERS tooldata
+    Tool\\robtarget Via``), and so does each alternative after a ``|`` (``\\switch On | switch Off``)."""
+    pieces = re.split(r"([,|])", text.replace("\\", ",\\"))
+    out, alternative = [], False
+    for k in range(0, len(pieces), 2):
+        words = re.findall(r"[A-Za-z]\w*", pieces[k])
         if words:
-            out.append((words[-1].lower(), "\\" in part))
+            out.append((words[-1].lower(), "\\" in pieces[k] or alternative))
+        alternative = k + 1 < len(pieces) and pieces[k + 1] == "|"
     return out
 
 
