@@ -13,6 +13,7 @@ from __future__ import annotations
 import re
 
 import numpy as np
+import pytest
 
 import robocal as rc
 from robocal.data.simulate import perturbed
@@ -82,7 +83,8 @@ ENDMODULE
 """
 
 
-def test_rapid_wrapper_parameters_are_resolved_at_their_calls(tmp_path):
+@pytest.mark.parametrize("newline", ["\n", "\r\n", "\r"])
+def test_rapid_wrapper_parameters_are_resolved_at_their_calls(tmp_path, newline):
     """Every call's constant argument is corrected (ToPoint of five calls, one given by name; Via
     of the one call that gives it: the calls that leave it out do not run the MoveJ, the ones
     that pass it on with \\Via?Via from a caller that lacks it neither), pTable in the work object
@@ -91,7 +93,7 @@ def test_rapid_wrapper_parameters_are_resolved_at_their_calls(tmp_path):
     ToPoint and Via 'no call in these files gives', and ToPoint:=pPlace 'not a robtarget this
     filter can follow')."""
     path = tmp_path / "MainModule.mod"
-    path.write_text(WRAPPER)
+    path.write_bytes(WRAPPER.replace("\n", newline).encode("latin-1"))  # as the controller saves it
     res = filter_program(path, perturbed(ABB, 7), ABB)
     status = _accounted(res, [path])
     assert status == {k: ("corrected", "") for k in (21, 22, 32, 34, 35)}
@@ -189,12 +191,13 @@ ENDMODULE
 """
 
 
-def test_rapid_placeholder_robtarget_is_named_and_the_module_filtered(tmp_path):
+@pytest.mark.parametrize("newline", ["\n", "\r\n"])
+def test_rapid_placeholder_robtarget_is_named_and_the_module_filtered(tmp_path, newline):
     """The module is read (main refused it whole: 'a quaternion is not normalised'); the taught
     targets are corrected, the placeholder assigned at run time is named by that assignment, the
     ones no assignment fills are named as placeholders; their bytes are unchanged."""
     path = tmp_path / "CalibUser.sys"
-    path.write_text(CALIB_SYS)
+    path.write_bytes(CALIB_SYS.replace("\n", newline).encode())
     res = filter_program(path, perturbed(ABB, 7), ABB)
     status = _accounted(res, [path])
     assert [status[k][0] for k in (10, 11, 15)] == ["corrected"] * 3
@@ -204,7 +207,7 @@ def test_rapid_placeholder_robtarget_is_named_and_the_module_filtered(tmp_path):
         assert f"{name} is a placeholder" in status[line][1] and "assigns at run time" in status[line][1]
         assert "no assignment in these files gives it a value" in status[line][1]
     assert any("pTemp holds the quaternion [0,0,0,0]" in w for w in res.warnings)
-    out = res.outputs[path].decode()
+    out = res.outputs[path].decode().replace(newline, "\n")
     assert "VAR robtarget pTemp:=[[0,0,0],[0,0,0,0],[0,0,0,0]" in out
     assert "[[0,0,0],[0,0,0,0],[0,0,0,0],[9E9" in out.split("calibPoses{2}:=")[1]
 
