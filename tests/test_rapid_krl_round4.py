@@ -225,12 +225,12 @@ def test_krl_const_positions_in_the_dat_are_read(tmp_path):
     """DECL CONST E6POS, DECL CONST POS, CONST POS and DECL GLOBAL CONST E6POS (as WorkVisual and
     hand-written .dat files declare fixed positions) are read and corrected (main: 'not declared')."""
     q = np.deg2rad([[25, -85, 95, 35, 45, -40], [-25, -70, 110, -40, -35, 60], [30, -95, 85, 60, 55, 40],
-                    [-30, -60, 100, -100, 25, 150]])
+                    [-30, -60, 100, -100, 25, 150], [20, -80, 100, 40, 50, 30]])
     decl = ["DECL CONST E6POS P_APPROACH", "DECL CONST POS P_PICK", "CONST POS P_TABLE",
-            "DECL GLOBAL CONST E6POS XP_GLOB"]
+            "DECL GLOBAL CONST E6POS XP_GLOB", "GLOBAL CONST E6POS XP_G2"]
     src = ["&ACCESS RVP", "DEF cell( )", ";FOLD INI", "  BAS(#INITMOV,0 )", ";ENDFOLD (INI)",
            "  $TOOL = TOOL_DATA[1]", "  $BASE = BASE_DATA[1]", "  PTP P_APPROACH", "  LIN P_PICK",
-           "  LIN P_TABLE", "  LIN XP_GLOB", "END", ""]
+           "  LIN P_TABLE", "  LIN XP_GLOB", "  LIN XP_G2", "END", ""]
     dat = ["&ACCESS RVP", "DEFDAT cell",
            *[f"{d}={_e6pos(KUKA, q[k], 'E6POS' in d)}" for k, d in enumerate(decl)], "ENDDAT", ""]
     paths = [tmp_path / "cell.src", tmp_path / "cell.dat"]
@@ -239,8 +239,8 @@ def test_krl_const_positions_in_the_dat_are_read(tmp_path):
     res = filter_program(paths, perturbed(KUKA, 7), KUKA, tools={"1": "0,0,0,0,0,0"},
                          frames={"1": "0,0,0,0,0,0"})
     status = _accounted(res, paths)
-    assert status == {k: ("corrected", "") for k in (8, 9, 10, 11)}
-    assert {r["name"] for r in res.rows} == {"P_APPROACH", "P_PICK", "P_TABLE", "XP_GLOB"}
+    assert status == {k: ("corrected", "") for k in (8, 9, 10, 11, 12)}
+    assert {r["name"] for r in res.rows} == {"P_APPROACH", "P_PICK", "P_TABLE", "XP_GLOB", "XP_G2"}
     assert res.outputs[paths[1]] != paths[1].read_bytes()
 
 
