@@ -266,3 +266,22 @@ ENDMODULE
     assert status[8] == ("corrected", "")
     assert "tooldata tCam holds the quaternion [0,0,0,0]" in status[9][1]
     assert "wobjdata wFound holds the quaternion [0,0,0,0]" in status[10][1]
+
+
+def test_rapid_declared_copies_of_wobj0_and_tool0_are_them(tmp_path):
+    """A work object declared with wobj0's own data (RobotStudio's wobj1 / DefaultFrame) and a
+    tooldata equal to tool0's are the built-in ones: a target used with both is corrected once."""
+    path = tmp_path / "Copies.mod"
+    path.write_text(f"""MODULE Copies
+  TASK PERS wobjdata DefaultFrame:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
+  PERS tooldata tFlange:=[TRUE,[[0,0,0],[1,0,0,0]],[0.001,[0,0,0.001],[1,0,0,0],0,0,0]];
+  CONST robtarget pHome:=[[1200,0,1100],[0,0,1,0],[0,0,0,0],{EAX}];
+  PROC main()
+    MoveJ pHome, v500, z10, tool0;
+    MoveL pHome, v500, fine, tFlange \\WObj:=DefaultFrame;
+  ENDPROC
+ENDMODULE
+""")
+    res = filter_program(path, perturbed(ABB, 7), ABB)
+    assert set(_accounted(res, [path]).values()) == {("corrected", "")}
+    assert [(r["tool"], r["frame"]) for r in res.rows] == [("tool0", "wobj0")]

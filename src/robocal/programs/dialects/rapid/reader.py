@@ -28,6 +28,7 @@ Comments (``!`` to the end of the line) and strings are masked before anything i
 
 from __future__ import annotations
 
+import functools
 import re
 
 import numpy as np
@@ -54,7 +55,7 @@ from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_quat, quat_to_matrix
 from robocal.programs.runtime import Meant, RunTime, RuntimeSite, merged
-from robocal.programs.source import Number
+from robocal.programs.source import Number, ProgramText
 
 _DECL = re.compile(r"\b(?:(?:LOCAL|TASK)\s+)?(CONST|PERS|VAR)\s+(robtarget|tooldata|wobjdata)\s+"
                    r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*(:=)?", re.IGNORECASE)
@@ -110,6 +111,9 @@ _POSITION_MM = 1e-3  # mm: 1 um
 _QUATERNION = 1e-6  # about 2e-6 rad: 0.4 um at 200 mm from the flange
 BUILTIN_TOOLS = ("tool0",)
 BUILTIN_WOBJS = ("wobj0",)
+# the controller's own data of tool0 and wobj0 (RAPID reference): a declaration equal to them is them
+_BUILTIN_DATA = {("tooldata", "tool0"): "[TRUE,[[0,0,0],[1,0,0,0]],[0.001,[0,0,0.001],[1,0,0,0],0,0,0]]",
+                 ("wobjdata", "wobj0"): '[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]'}
 # a robtarget of numbers only (position, quaternion, confdata, six external axes): one match
 _ROBTARGET = shape_pattern((3, 4, 4, 6))
 _COMPONENTS = ("position", "orientation", "configuration (confdata)", "external axes")  # a robtarget's parts
@@ -746,13 +750,24 @@ def _same_data(prog: Program, st: _State) -> dict[tuple[str, str], str]:
     ``--tool``/``--frame``; neither assigned in these files): a target used with both is one
     target, corrected once."""
     out, first = {}, {}
-    for (kind, name), value in st.data.items():
+    for (kind, name), value in [*_builtin_data().items(), *st.data.items()]:
         known = prog.tools if kind == "tooldata" else prog.frames
         if name not in known or name in st.assigned or name in st.modified:
             continue  # not filtered (a stationary tool ...), or its value changes at run time
         head = first.setdefault((kind, value, prog.carried.get(name)), name)
         if head != name and np.array_equal(known[head], known[name]):
             out[(kind, name)] = head
+    return out
+
+
+@functools.cache
+def _builtin_data() -> dict[tuple[str, str], tuple]:
+    """:data:`_BUILTIN_DATA` as data (:func:`_canonical`), read as a module's declaration is."""
+    out = {}
+    for key, text in _BUILTIN_DATA.items():
+        src = ProgramText(key[1], text.encode())
+        masked = src.masked([COMMENT_RE], [STRING_RE])
+        out[key] = _canonical(parse_aggregate(src, masked, 0, len(masked), key[1])[0])
     return out
 
 
