@@ -186,6 +186,9 @@ CALIB_SYS = f"""MODULE CalibUser(SYSMODULE)
     MoveL calibPose1, CALIB_SPEED, fine, tool0;
     MoveL calibPoses{{1}}, CALIB_SPEED, fine, tool0;
     MoveL calibPoses{{2}}, CALIB_SPEED, fine, tool0;
+    FOR i FROM 1 TO 2 DO
+      MoveL calibPoses{{i}}, CALIB_SPEED, fine, tool0;
+    ENDFOR
   ENDPROC
 ENDMODULE
 """
@@ -206,6 +209,7 @@ def test_rapid_placeholder_robtarget_is_named_and_the_module_filtered(tmp_path, 
         assert status[line][0] == "named"
         assert f"{name} is a placeholder" in status[line][1] and "assigns at run time" in status[line][1]
         assert "no assignment in these files gives it a value" in status[line][1]
+    assert status[18][0] == "named" and "calibPoses{...} is a placeholder" in status[18][1]  # {i}: either
     assert any("pTemp holds the quaternion [0,0,0,0]" in w for w in res.warnings)
     out = res.outputs[path].decode().replace(newline, "\n")
     assert "VAR robtarget pTemp:=[[0,0,0],[0,0,0,0],[0,0,0,0]" in out
