@@ -210,7 +210,9 @@ def test_rapid_placeholder_robtarget_is_named_and_the_module_filtered(tmp_path, 
         assert f"{name} is a placeholder" in status[line][1] and "assigns at run time" in status[line][1]
         assert "no assignment in these files gives it a value" in status[line][1]
     assert status[18][0] == "named" and "calibPoses{...} is a placeholder" in status[18][1]  # {i}: either
-    assert any("pTemp holds the quaternion [0,0,0,0]" in w for w in res.warnings)
+    assert any("robtarget pTemp holds the quaternion [0,0,0,0]" in w for w in res.warnings)
+    assert any("1 of the 2 elements of robtarget calibPoses (calibPoses{2} ...) hold" in w
+               for w in res.warnings)
     out = res.outputs[path].decode().replace(newline, "\n")
     assert "VAR robtarget pTemp:=[[0,0,0],[0,0,0,0],[0,0,0,0]" in out
     assert "[[0,0,0],[0,0,0,0],[0,0,0,0],[9E9" in out.split("calibPoses{2}:=")[1]

@@ -286,17 +286,17 @@ class RapidDialect(Dialect):
             if kind == "robtarget":
                 targets = [self._shaped(src, shaped, name, m.start())] if shaped else \
                     self._robtargets(src, tree, name, m.start(), m.group(4))
-                held = [t for t in targets if not _placeholder(t)]
-                for t in targets:
-                    if _placeholder(t):  # VAR robtarget pTemp := [[0,0,0],[0,0,0,0],...]: filled at run time
-                        key = t.name.lower()
-                        st.placeholders[key] = f"{src.path.name}:{t.line}"
-                        if not only_frames:
-                            prog.warnings.append(
-                                f"{src.path.name}:{t.line}: robtarget {t.name} holds the quaternion "
-                                "[0,0,0,0]: a placeholder the program assigns at run time, not a taught "
-                                "target: left as it is")
-                targets = held
+                holes = [t for t in targets if _placeholder(t)]  # pTemp := [[0,0,0],[0,0,0,0],...]
+                for t in holes:
+                    st.placeholders[t.name.lower()] = f"{src.path.name}:{t.line}"
+                if holes and not only_frames:  # one warning per declaration (an array may hold dozens)
+                    one = (f"{where}: robtarget {name} holds the quaternion [0,0,0,0]: a placeholder the "
+                           "program assigns at run time, not a taught target: left as it is")
+                    prog.warnings.append(one if not m.group(4) else (
+                        f"{where}: {len(holes)} of the {len(targets)} elements of robtarget {name} "
+                        f"({holes[0].name} ...) hold the quaternion [0,0,0,0]: placeholders the program "
+                        "assigns at run time, not taught targets: left as they are"))
+                targets = [t for t in targets if not _placeholder(t)]
                 if only_frames:
                     for t in targets:
                         t.name += f" (in the reference {src.path.name})"
