@@ -3,8 +3,9 @@
 * Positions ``{X x, Y y, Z z, A a, B b, C c, S s, T t, E1 ...}`` (mm; A, B, C = ZYX Euler in
   deg, R = Rz(A) Ry(B) Rx(C); S status and T turn, see
   :class:`robocal.programs.dialects.krl.configuration.KUKAConfig`;
-  external axes E1..E6 left alone) declared as ``DECL E6POS|POS|FRAME name=...`` (``DECL``
-  and ``GLOBAL`` optional; array elements ``name[i]=...``) or written inline in a motion.
+  external axes E1..E6 left alone) declared as ``DECL E6POS|POS|FRAME name=...`` (``DECL``,
+  ``GLOBAL`` and ``CONST`` optional, in any order; array elements ``name[i]=...``) or written
+  inline in a motion.
   A position without X, Y, Z, A, B, C (a partial aggregate) is left alone with a warning; one
   without S is solved nearest the previous target's joints, as the controller does.
 * Motions ``PTP|LIN|CIRC|SPTP|SLIN|SCIRC target`` (CIRC/SCIRC: auxiliary point, end point);
@@ -54,12 +55,12 @@ from robocal.programs.source import Number, ProgramText
 
 _AGG = re.compile(r"\{[^{}]*\}")
 _COMPONENT = re.compile(r"\b([A-Za-z]\w*)\s+([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|'[BbHh][^']*')")
-_DECL = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(E6POS|POS|FRAME)\s+([A-Za-z_$]\w*)"
+_DECL = re.compile(r"^[ \t]*(?:(?:DECL|GLOBAL|CONST)\s+)*(E6POS|POS|FRAME)\s+([A-Za-z_$]\w*)"
                    r"(?:\s*\[[^\]]*\])?\s*=\s*(?=\{)", re.IGNORECASE | re.MULTILINE)
-_AXES = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:E6AXIS|AXIS)\s+([A-Za-z_$]\w*)",
+_AXES = re.compile(r"^[ \t]*(?:(?:DECL|GLOBAL|CONST)\s+)*(?:E6AXIS|AXIS)\s+([A-Za-z_$]\w*)",
                    re.IGNORECASE | re.MULTILINE)
 _ELEMENT = re.compile(r"^[ \t]*([A-Za-z_]\w*\s*\[\s*\d+(?:\s*,\s*\d+)*\s*\])\s*=\s*(?=\{)", re.MULTILINE)
-_KINDS = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:CONST\s+)?(E6POS|POS|FRAME)\s+([^=\n]+)",
+_KINDS = re.compile(r"^[ \t]*(?:(?:DECL|GLOBAL|CONST)\s+)*(E6POS|POS|FRAME)\s+([^=\n]+)",
                     re.IGNORECASE | re.MULTILINE)  # the position types the names are declared with
 _SYSTEM_KINDS = {"$POS_ACT": "E6POS", "$POS_INT": "E6POS", "$POS_RET": "E6POS", "$POS_BACK": "E6POS",
                  "$POS_FOR": "E6POS"}  # other system positions ($BASE, $NULLFRAME ...): FRAME
