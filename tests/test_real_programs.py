@@ -386,7 +386,7 @@ SMARTAC_MODULE = "\n".join([
     "MoveL pOFrame1,v200,fine,toolWeldGun\\WObj:=obREF;",
     "obNEW:=OFrameChange(obREF,pOFrame1,pOFrame1,pOFrame1,pOFrame1,pOFrame1,pOFrame1);",
     "MoveL pOFrameWeld1,v200,fine,toolWeldGun\\WObj:=obNEW;",
-    "obTouch.oframe.trans.x:=obTouch.oframe.trans.x+5;",
+    "obTouch.oframe.trans.x:=obTouch.oframe.trans.x+5;", "toolWeldGun.tload.mass:=4.5;",
     "MoveL pOFrame1,v20,fine,toolWeldGun\\WObj:=obTouch;", "ENDPROC", "ENDMODULE", ""])
 
 
@@ -395,13 +395,14 @@ def test_a_work_object_the_program_computes_names_its_motions(tmp_path):
     world known only at run time: it is named with where the work object is written, not
     corrected with the declaration's stale value; a target also moved to in the fixed obREF is
     corrected for neither (its corrected numbers would move the run-time motion too); a target
-    moved to in obREF only is corrected."""
+    moved to in obREF only is corrected (a change of the tool's load, toolWeldGun.tload, moves no
+    target)."""
     prog = tmp_path / "SmarTacTest.mod"
     prog.write_text(SMARTAC_MODULE)
     res = filter_program(prog, perturbed(ABB, 3), ABB)
     records = [m.as_dict() for m in res.motions]
     assert [r["status"] for r in records] == ["corrected", "named", "named", "named"]
-    assert "pOFrame1 is also moved to at SmarTacTest.mod:15, where the work object obTouch is " \
+    assert "pOFrame1 is also moved to at SmarTacTest.mod:16, where the work object obTouch is " \
            "assigned at run time (SmarTacTest.mod:14)" in records[1]["reason"]
     assert "work object obNEW is assigned at run time (SmarTacTest.mod:12)" in records[2]["reason"]
     assert "work object obTouch is assigned at run time (SmarTacTest.mod:14)" in records[3]["reason"]

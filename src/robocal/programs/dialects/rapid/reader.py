@@ -92,6 +92,8 @@ _ROUTINE = re.compile(r"\b(proc|func\s+\w+|trap)\s+([a-z]\w*)\s*(?:\(([^)]*)\))?
 _ROUTINE_END = re.compile(r"\bend(?:proc|func|trap)\b")
 _ASSIGN = re.compile(r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*((?:\.\s*[A-Za-z]\w*)*)\s*:=",
                      re.IGNORECASE)
+# fields of a tooldata / wobjdata whose change does not move a target (a tool's load)
+_POSE_FREE = (".tload",)
 # searched in the lower-cased text
 _CONSTANT = re.compile(r"\bconst\s+num\s+([a-z]\w*)\s*(\{[^}]*\})?\s*:=\s*([^;]+);")
 _SUBSCRIPT = re.compile(r"([A-Za-z]\w*)\s*\{\s*(\d+(?:\s*,\s*\d+)*)\s*\}")  # name{1, 2}: a constant element
@@ -336,6 +338,9 @@ class RapidDialect(Dialect):
             name = a.group(1).lower()
             if a.group(3):
                 st.modified.setdefault(name, []).append(f"{src.path.name}:{src.line_of(a.start())}")
+                field = re.sub(r"\s+", "", a.group(3)).lower()
+                if not field.startswith(_POSE_FREE):  # a tool's load: not where the TCP is
+                    st.moved.setdefault(name, f"{src.path.name}:{src.line_of(a.start())}")
             else:
                 st.assigned.setdefault(name, []).append((src, a.end(), e, proc))
             return
@@ -664,6 +669,7 @@ class _State:
         self.calls: dict[str, list] = {}  # name -> [(src, at, positional spans, optional, caller)]
         self.assigned: dict[str, list] = {}  # name -> [(src, start, end, routine)]
         self.modified: dict[str, list[str]] = {}  # name -> where a field of it is assigned
+        self.moved: dict[str, str] = {}  # name -> where a field that places it (not a load) is assigned
         self.motions: list[_Motion] = []
         self.inline: dict = {}
         self.multimove: set = set()
@@ -748,7 +754,7 @@ class _State:
         if name in self.assigned:
             src, at, _, _ = self.assigned[name][0]
             return f"{src.path.name}:{src.line_of(at)}"
-        return self.modified.get(name, [""])[0]
+        return self.moved.get(name, "")
 
 
 def _absent(binding: tuple | None) -> bool:
