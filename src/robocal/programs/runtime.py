@@ -39,6 +39,7 @@ target's configuration.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -336,3 +337,17 @@ class RuntimeWriter:
         marker's words: robocal's version and the model's fingerprint), with the original values
         of the targets ``meant`` (numbers as written, configuration, external axes)."""
         raise NotImplementedError
+
+    @staticmethod
+    def refuse_present(text: str, begin: str, names: re.Pattern, function: str = ROUTINE_NAME) -> None:
+        """DataError when file ``text`` already holds the routine (its first marker line
+        ``begin``: its motions routed again would be corrected twice) or names one of the
+        routine's functions (``names``; ``function``: the routine's name as the language writes
+        it), before :meth:`routine` adds it."""
+        if begin in text:
+            raise DataError(f"the program already holds robocal's run-time correction ({function}): filter "
+                            "the original program (routing its motions again would correct them twice)")
+        clash = names.search(text)
+        if clash:
+            raise DataError(f"the program already names {clash.group()}: --runtime-correction cannot add its "
+                            "functions under that name")

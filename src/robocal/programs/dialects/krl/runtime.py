@@ -219,13 +219,7 @@ class KRLRuntime(RuntimeWriter):
         return edits
 
     def routine(self, text, chain, meant, note):
-        if BEGIN in text:
-            raise DataError(f"the program already holds robocal's run-time correction ({FUNCTION}): filter "
-                            "the original program (routing its motions again would correct them twice)")
-        clash = _NAMES.search(text)
-        if clash:
-            raise DataError(f"the program already names {clash.group()}: --runtime-correction cannot add its "
-                            "functions under that name")
+        self.refuse_present(text, BEGIN, _NAMES, FUNCTION)
         nl = _newline(text)
         lead = nl if text and not text.endswith(("\n", "\r")) else ""
         body = routine_text(chain, note, nl)

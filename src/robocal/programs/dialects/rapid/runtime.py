@@ -31,6 +31,7 @@ END = "! <<< robocal run-time correction: END"
 _ENDMODULE = re.compile(r"^[ \t]*ENDMODULE\b", re.M | re.I)
 _DEFAULT_WOBJ = "wobj0"
 MEANT = "RC_Meant"  # the routine returning a target's original value
+_NAMES = re.compile(rf"\b(?:{ROUTINE_NAME}|RC_FK|{MEANT})\b", re.I)  # the added routines (RAPID: any case)
 
 
 def _pose(T: np.ndarray) -> str:
@@ -97,13 +98,7 @@ class RapidRuntime(RuntimeWriter):
         return edits
 
     def routine(self, text: str, chain: CalibratedChain, meant: list[Target], note: str) -> tuple[int, str]:
-        if BEGIN in text:
-            raise DataError(f"the program already holds robocal's run-time correction ({ROUTINE_NAME}): "
-                            "filter the original program (routing its motions again would correct them "
-                            "twice)")
-        if re.search(rf"\b{ROUTINE_NAME}\b|\bRC_FK\b|\b{MEANT}\b", text, re.I):
-            raise DataError(f"the program already names {ROUTINE_NAME} or RC_FK: --runtime-correction "
-                            "cannot add its routine under that name")
+        self.refuse_present(text, BEGIN, _NAMES)
         ends = list(_ENDMODULE.finditer(text))
         if not ends:
             raise DataError("--runtime-correction: no ENDMODULE in the file to add the routine before")

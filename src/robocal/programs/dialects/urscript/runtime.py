@@ -31,7 +31,7 @@ import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.kinematics.transforms import matrix_to_rotvec
-from robocal.programs.dialects.urscript.reader import _defs
+from robocal.programs.dialects.urscript.reader import definitions
 from robocal.programs.dialects.urscript.syntax import COMMENT_RE, STRING_RE
 from robocal.programs.runtime import ROUTINE_NAME, CalibratedChain, RuntimeSite, RuntimeWriter
 from robocal.programs.source import mask
@@ -132,15 +132,9 @@ class URScriptRuntime(RuntimeWriter):
         return {(site.start, site.start): f"{FUNCTION}(", (site.end, site.end): ")"}
 
     def routine(self, text: str, chain: CalibratedChain, meant: list[Target], note: str) -> tuple[int, str]:
-        if BEGIN in text:
-            raise DataError(f"the program already holds robocal's run-time correction ({FUNCTION}): filter "
-                            "the original program (routing its motions again would correct them twice)")
-        clash = _NAMES.search(text)
-        if clash:
-            raise DataError(f"the program already names {clash.group()}: --runtime-correction cannot add its "
-                            "functions under that name")
+        self.refuse_present(text, BEGIN, _NAMES)
         masked = mask(text, [COMMENT_RE], [STRING_RE])
-        defs = _defs(masked)
+        defs = definitions(masked)
         outer = [(a, b) for _, a, b in defs if not any(s < a and b <= e for _, s, e in defs)]
         sites = self._sites.get(id(text), ())
         holding = {next(((a, b) for a, b in outer if a < at < b), None) for at in sites}
