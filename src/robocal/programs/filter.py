@@ -434,14 +434,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
         raise DataError("no program file given")
     track = track_program(nominal)  # an arm on a track: programs/track.py
     d = dialect_for(paths, dialect)
-    scara = is_scara(nominal) and d.scara_programs  # a language whose programs drive a SCARA
-    if nominal.n_joints != CONTROLLER_JOINTS and track is None and not scara:
-        scara_languages = ", ".join(c.name for c in capable("scara_programs"))
-        raise DataError(f"the programs of these controllers drive {CONTROLLER_JOINTS}-axis arms; the nominal "
-                        f"model {nominal.name!r} has {nominal.n_joints} joints (an arm on a track: give "
-                        "its cell model; a SCARA: its programs are read in "
-                        f"{scara_languages} only, Epson SPEL+ is not a language robocal reads)")
-    controller = nominal if track is None else track.arm  # the arm the controller solves for
+    controller = _controller_arm(d, nominal, track)
     sources = [ProgramText(p) for p in paths]
     for s in sources:
         check_unmarked(s.text, str(s.path), "filtered", force)
@@ -475,14 +468,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     if coordinated is not None:  # frames on a positioner's plate: in the world at each target's values
         W, W_real = coordinated.frames(targets, W)
     X = W @ P
-    real = {d.name_key(k): v for k, v in (tcp or {}).items()}
-    unknown_tcp = sorted(set(real) - {t.tool for t in targets})
-    if unknown_tcp:
-        raise DataError(f"--tcp names tool(s) {unknown_tcp} that no filtered target uses; the targets use "
-                        f"{sorted({t.tool for t in targets})}")
-    _check_tcp(real, program.tools, warnings)
-    real_tool = np.array([np.asarray(real[t.tool], float) if t.tool in real else program.tools[t.tool]
-                          for t in targets])
+    real_tool = _real_tools(d, tcp, program, targets, warnings)
     problems: list[tuple[int, str]] = []
     F = X @ invert_transform(tool)
     q_nom = controller_joints(d, program, targets, controller, F if track is None else track.in_arm_frame(
@@ -531,6 +517,35 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
                         joints=np.where(good[:, None], q, np.nan), loads=loads.lines,
                         data_files=frozenset(s.path for s in sources[len(paths):]),  # the register file
                         language=d), program.declared_tools
+
+
+def _controller_arm(d: Dialect, nominal: Robot, track) -> Robot:
+    """The arm the controller solves for (``nominal``, or the arm of a track's cell ``track``);
+    DataError when ``d``'s programs cannot drive it (not a 6-axis arm, nor a SCARA in a language
+    whose programs drive one)."""
+    scara = is_scara(nominal) and d.scara_programs  # a language whose programs drive a SCARA
+    if nominal.n_joints != CONTROLLER_JOINTS and track is None and not scara:
+        scara_languages = ", ".join(c.name for c in capable("scara_programs"))
+        raise DataError(f"the programs of these controllers drive {CONTROLLER_JOINTS}-axis arms; the nominal "
+                        f"model {nominal.name!r} has {nominal.n_joints} joints (an arm on a track: give "
+                        "its cell model; a SCARA: its programs are read in "
+                        f"{scara_languages} only, Epson SPEL+ is not a language robocal reads)")
+    return nominal if track is None else track.arm
+
+
+def _real_tools(d: Dialect, tcp, program: Program, targets: list[Target], warnings: list) -> np.ndarray:
+    """The real TCP of each target ``(N, 4, 4)`` (m): ``tcp`` (tool name -> the TCP identified on
+    the calibrated model, ``--tcp``) where it names the target's tool, else its tool data.
+    DataError: ``tcp`` names a tool no target uses; checked against the tool data
+    (:func:`_check_tcp`, ``warnings`` appended to)."""
+    real = {d.name_key(k): v for k, v in (tcp or {}).items()}
+    unknown_tcp = sorted(set(real) - {t.tool for t in targets})
+    if unknown_tcp:
+        raise DataError(f"--tcp names tool(s) {unknown_tcp} that no filtered target uses; the targets use "
+                        f"{sorted({t.tool for t in targets})}")
+    _check_tcp(real, program.tools, warnings)
+    return np.array([np.asarray(real[t.tool], float) if t.tool in real else program.tools[t.tool]
+                     for t in targets])
 
 
 def _written(d: Dialect, program: Program, sources: list[ProgramText], corrected: set[int], edits: dict,
