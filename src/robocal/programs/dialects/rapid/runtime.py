@@ -31,6 +31,9 @@ END = "! <<< robocal run-time correction: END"
 _ENDMODULE = re.compile(r"^[ \t]*ENDMODULE\b", re.M | re.I)
 _DEFAULT_WOBJ = "wobj0"
 MEANT = "RC_Meant"  # the routine returning a target's original value
+# decimals of the routine's constants: positions 1 nm (mm), quaternions 1e-10, angles (deg),
+# lengths (mm) and joint-error coefficients 1e-8 (RAPID num is a 32-bit float: ~1e-4 mm at 1 m)
+_MM_DIGITS, _QUATERNION_DIGITS, _NUM_DIGITS = 6, 10, 8
 _NAMES = re.compile(rf"\b(?:{ROUTINE_NAME}|RC_FK|{MEANT})\b", re.I)  # the added routines (RAPID: any case)
 
 
@@ -38,7 +41,8 @@ def _pose(T: np.ndarray) -> str:
     """A RAPID pose aggregate of ``T`` (4x4, m): mm and a w-first quaternion."""
     q = matrix_to_quat(T[None, :3, :3], np.array([[1.0, 0, 0, 0]]))[0]
     p = T[:3, 3] * 1e3
-    return "[[" + ",".join(f"{v:.6f}" for v in p) + "],[" + ",".join(f"{v:.10f}" for v in q) + "]]"
+    return "[[" + ",".join(f"{v:.{_MM_DIGITS}f}" for v in p) + "],[" + \
+        ",".join(f"{v:.{_QUATERNION_DIGITS}f}" for v in q) + "]]"
 
 
 def _joint_terms(chain: CalibratedChain) -> tuple[list[str], list[str]]:
@@ -83,7 +87,7 @@ def _meant_function(meant: list[Target]) -> list[str]:
 
 
 def _nums(values: np.ndarray) -> str:
-    return "[" + ",".join(f"{v:.8f}" for v in values) + "]"
+    return "[" + ",".join(f"{v:.{_NUM_DIGITS}f}" for v in values) + "]"
 
 
 class RapidRuntime(RuntimeWriter):
