@@ -33,8 +33,9 @@ need the load, the approach direction or the temperature (:attr:`CalibratedChain
 compliance, backlash, travel, payload, thermal) are not in the chain (gear, cyclic, scale are);
 near a singularity the controller's IK is ill-conditioned (the iteration may not converge: the
 routine returns its last iterate and, when the last step's error exceeds ``WARN_MM``, says so in
-the controller's log); a correction that crosses a configuration boundary keeps the
-target's configuration.
+the controller's log: RAPID's event log, URScript's ``textmsg``; the KRL routine writes no message,
+message functions differing between KSS versions); a correction that crosses a configuration
+boundary keeps the target's configuration.
 """
 
 from __future__ import annotations
