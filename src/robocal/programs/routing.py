@@ -34,7 +34,7 @@ class Routing:
     fixed_base: bool = False
 
     @staticmethod
-    def check(d: Dialect, arm_alone: bool, tcp) -> None:
+    def check(d: Dialect, arm_alone: bool, tcp: dict | None) -> None:
         """Refuse the run-time correction where no routine can be written: a language without the
         capability, an arm on a track or with a positioner (``arm_alone`` False), a real TCP
         (``tcp``: --tcp)."""

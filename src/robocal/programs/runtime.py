@@ -102,7 +102,7 @@ class Meant:
     end: int
 
 
-def merged(why: str, parts: list, meant=()) -> RunTime | None:
+def merged(why: str, parts: list, meant: tuple[Meant, ...] | list[Meant] = ()) -> RunTime | None:
     """A :class:`RunTime` reason ``why`` whose value is computed from ``parts`` (what the reader
     followed the target's base to: targets, or reasons) and ``meant`` (:class:`Meant`: the base
     written as a target's name), None when a part is a reason that is not :class:`RunTime` (a name
@@ -196,7 +196,8 @@ def _rz_tz(phi: np.ndarray, d: float) -> np.ndarray:
     return out
 
 
-def calibrated_chain(calibrated: Robot, nominal: Robot, robot_base=None) -> CalibratedChain:
+def calibrated_chain(calibrated: Robot, nominal: Robot,
+                     robot_base: np.ndarray | None = None) -> CalibratedChain:
     """The constants of the routine's chain (:class:`CalibratedChain`) from the calibrated model
     as the controller sees it (:func:`robocal.deploy.compensation.controller_model`: its frame
     {0} the controller's base, or ``robot_base``, 4x4 m). DataError: a prismatic joint (the

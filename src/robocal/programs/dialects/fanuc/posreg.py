@@ -34,6 +34,7 @@ register's correction (their motions name ``PR[n]``, whose value changes).
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -151,7 +152,8 @@ def _nonzero(value: str) -> bool:
         return True
 
 
-def position_block(k: int, uf: str, ut: str, config: str, values, decimals: int) -> list[str]:
+def position_block(k: int, uf: str, ut: str, config: str, values: Sequence[float],
+                   decimals: int) -> list[str]:
     """The lines of a Cartesian ``P[k]`` in a TP program's /POS (motion group 1): user frame
     ``uf``, tool frame ``ut``, the CONFIG text ``config``, ``values`` X, Y, Z (mm), W, P, R (deg)
     written with ``decimals`` decimals."""

@@ -33,6 +33,7 @@ import numpy as np
 from robocal.core.errors import DataError
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.runtime import ROUTINE_NAME, CalibratedChain, RuntimeSite, RuntimeWriter
+from robocal.programs.target import Target
 
 FUNCTION = ROUTINE_NAME.upper()  # RC_CORRECT (KRL names: at most 24 characters, any case)
 FRAME_FUNCTION = FUNCTION + "F"  # its twin for a FRAME target (P:OFFSET), in a POS's Status and Turn
@@ -205,7 +206,7 @@ class KRLRuntime(RuntimeWriter):
     """KRL's :class:`~robocal.programs.runtime.RuntimeWriter`: ``RC_CORRECT`` appended to the
     ``.src`` holding the motions, their targets wrapped in calls of it."""
 
-    def site_edits(self, text, site: RuntimeSite, meant):
+    def site_edits(self, text: str, site: RuntimeSite, meant: list[Target]) -> dict[tuple[int, int], str]:
         index = {id(t): k + 1 for k, t in enumerate(meant)}
         edits = {(m.start, m.end): f"{MEANT}({index[id(m.target)]})" for m in site.meant}
         reference = getattr(site, "reference", "")  # a KRLSite's: a FRAME target and its POS
@@ -218,7 +219,7 @@ class KRLRuntime(RuntimeWriter):
             edits |= {(site.start, site.start): f"{FUNCTION}(", (site.end, site.end): ")"}
         return edits
 
-    def routine(self, text, chain, meant, note):
+    def routine(self, text: str, chain: CalibratedChain, meant: list[Target], note: str) -> tuple[int, str]:
         self.refuse_present(text, BEGIN, _NAMES, FUNCTION)
         nl = _newline(text)
         lead = nl if text and not text.endswith(("\n", "\r")) else ""
@@ -228,7 +229,7 @@ class KRLRuntime(RuntimeWriter):
         return len(text), f"{lead}{nl}{body}{nl}"
 
 
-def _meant_function(meant: list) -> list[str]:
+def _meant_function(meant: list[Target]) -> list[str]:
     """``RC_MEANT(k)``: target k's value as the program wrote it (before the filter corrected it
     offline), its numbers, Status, Turn and external axes as written."""
     out = [f"DEFFCT E6POS {MEANT}(RC_N:IN)",
