@@ -488,19 +488,9 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     q, sing = comp.joints, comp.singularity
     warnings += comp.assumed
     _check_joints(controller, comp, ok, problems)
-    if coordinated is None:  # external-axis values that may move the arm, said in the reason
-        loose = track is None and not fixed_base  # values that may move the arm
-        problems = [(i, unreached_reason(targets[i], why, loose)) for i, why in problems]
-    bad = {i for i, _ in problems}
-    if problems and not keep_unreached:
-        problems.sort()
-        raise _listed(f"{len(bad)} target(s) cannot be corrected:",
-                      collapse([f"{targets[i].where}: {why}" for i, why in problems]),
-                      "nothing was written; fix or remove these targets (or use --keep-unreached to leave "
-                      "them unchanged)")
-    warnings += [f"{targets[i].where}: left unchanged: {why}" for i, why in sorted(problems)]
-    program.not_corrected.update({id(targets[i]): f"left unchanged: {why}" for i, why in problems})
-    good = np.array([i not in bad for i in range(len(targets))])
+    # external-axis values that may move the arm (no positioner's cell), said in the reason
+    loose = None if coordinated is not None else track is None and not fixed_base
+    good = _left_unchanged(program, targets, problems, loose, keep_unreached, warnings)
     Pc = np.where(good[:, None, None], invert_transform(W) @ comp.corrected_targets @ tool, P)
     cfg = None
     if d.scheme is not None:
@@ -517,6 +507,26 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
                         joints=np.where(good[:, None], q, np.nan), loads=loads.lines,
                         data_files=frozenset(s.path for s in sources[len(paths):]),  # the register file
                         language=d), program.declared_tools
+
+
+def _left_unchanged(program: Program, targets: list[Target], problems: list[tuple[int, str]],
+                    loose: bool | None, keep_unreached: bool, warnings: list) -> np.ndarray:
+    """Which ``targets`` are corrected ``(N,)`` bool: not those of ``problems`` (index, why), each
+    named in ``program.not_corrected`` and ``warnings`` as left unchanged (the reason saying when
+    its external-axis values may move the arm: ``loose``, None: the values are a cell's, not
+    said); a ListedError naming them all unless ``keep_unreached``."""
+    if loose is not None:
+        problems = [(i, unreached_reason(targets[i], why, loose)) for i, why in problems]
+    bad = {i for i, _ in problems}
+    if problems and not keep_unreached:
+        problems.sort()
+        raise _listed(f"{len(bad)} target(s) cannot be corrected:",
+                      collapse([f"{targets[i].where}: {why}" for i, why in problems]),
+                      "nothing was written; fix or remove these targets (or use --keep-unreached to leave "
+                      "them unchanged)")
+    warnings += [f"{targets[i].where}: left unchanged: {why}" for i, why in sorted(problems)]
+    program.not_corrected.update({id(targets[i]): f"left unchanged: {why}" for i, why in problems})
+    return np.array([i not in bad for i in range(len(targets))])
 
 
 def _controller_arm(d: Dialect, nominal: Robot, track) -> Robot:
