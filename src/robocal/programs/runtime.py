@@ -177,6 +177,17 @@ class CalibratedChain:
         return T @ self.flange @ tool
 
 
+    def joint_terms(self, j: int) -> list[tuple[str, float, float]]:
+        """The terms joint ``j`` (0-based) adds to its commanded angle ``q`` (rad), as each
+        routine writes them, in order, zero ones left out: ``("scale", k, 0)`` for ``k q``, then
+        per harmonic of the joint ``("sin", s, f)`` and ``("cos", c, f)`` for ``s sin(f q)`` and
+        ``c cos(f q)`` (``s``, ``c`` rad)."""
+        scaled = self.scale is not None and self.scale[j] != 0.0
+        out = [("scale", float(self.scale[j]), 0.0)] if scaled else []
+        for _, f, s, c in self.harmonics[self.harmonics[:, 0].astype(int) == j]:
+            out += [(fn, float(amp), float(f)) for amp, fn in ((s, "sin"), (c, "cos")) if amp != 0.0]
+        return out
+
     def offsets(self, q: np.ndarray) -> np.ndarray:
         """The joint-error offsets ``(N, n)`` (rad) the routine computes at commanded ``q``."""
         dq = np.zeros_like(q) if self.scale is None else self.scale * q

@@ -84,14 +84,9 @@ def _joint_terms(chain: CalibratedChain) -> list[str]:
     take degrees, so ``sin(f q)`` of q in rad is ``SIN(f * A)`` of A in deg."""
     out = []
     for j in range(len(chain.theta)):
-        terms = []
-        if chain.scale is not None and chain.scale[j] != 0.0:
-            terms.append(f"{_real(float(chain.scale[j]), _TERM_DIGITS)} * RC_QN")
-        for _, f, s, c in chain.harmonics[chain.harmonics[:, 0].astype(int) == j]:
-            for amp, fn in ((s, "SIN"), (c, "COS")):
-                if amp != 0.0:
-                    deg = _real(float(np.rad2deg(amp)), _TERM_DIGITS)
-                    terms.append(f"{deg} * {fn}({_real(float(f))} * RC_QN)")
+        terms = [f"{_real(k, _TERM_DIGITS)} * RC_QN" if fn == "scale" else
+                 f"{_real(float(np.rad2deg(k)), _TERM_DIGITS)} * {fn.upper()}({_real(f)} * RC_QN)"
+                 for fn, k, f in chain.joint_terms(j)]
         if terms:
             out += [f"IF RC_N == {j + 1} THEN", *[f"  RC_R = RC_R + {t}" for t in terms], "ENDIF"]
     return out

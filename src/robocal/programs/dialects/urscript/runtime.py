@@ -61,14 +61,9 @@ def _reached(chain: CalibratedChain, j: int) -> str:
     """The angle joint ``j`` reaches at the commanded ``q[j]`` (rad): the chain's scale, gear and
     cyclic terms of that joint (:meth:`CalibratedChain.offsets`)."""
     q = f"q[{j}]"
-    terms = [q]
-    if chain.scale is not None and chain.scale[j] != 0.0:
-        terms.append(f"{_num(chain.scale[j])} * {q}")
-    for _, f, s, c in chain.harmonics[chain.harmonics[:, 0].astype(int) == j]:
-        for amp, fn in ((s, "sin"), (c, "cos")):
-            if amp != 0.0:
-                terms.append(f"{_num(amp)} * {fn}({_num(f)} * {q})")
-    return " + ".join(terms)
+    terms = [f"{_num(k)} * {q}" if fn == "scale" else f"{_num(k)} * {fn}({_num(f)} * {q})"
+             for fn, k, f in chain.joint_terms(j)]
+    return " + ".join([q, *terms])
 
 
 def routine_lines(chain: CalibratedChain, note: str) -> list[str]:
