@@ -41,7 +41,7 @@ boundary keeps the target's configuration.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -82,7 +82,8 @@ class RunTime(str):
     meant: tuple[Meant, ...]
     relative: bool
 
-    def __new__(cls, why: str, depends=(), relative: bool = False, meant=(), sources=()) -> RunTime:
+    def __new__(cls, why: str, depends: Iterable[int] = (), relative: bool = False,
+                meant: Iterable[Meant] = (), sources: Iterable[Target] = ()) -> RunTime:
         obj = super().__new__(cls, why)
         obj.sources = tuple({id(t): t for t in sources}.values())
         obj.depends = frozenset(depends) | {id(t) for t in obj.sources}
@@ -102,7 +103,7 @@ class Meant:
     end: int
 
 
-def merged(why: str, parts: list, meant: tuple[Meant, ...] | list[Meant] = ()) -> RunTime | None:
+def merged(why: str, parts: list, meant: Iterable[Meant] = ()) -> RunTime | None:
     """A :class:`RunTime` reason ``why`` whose value is computed from ``parts`` (what the reader
     followed the target's base to: targets, or reasons) and ``meant`` (:class:`Meant`: the base
     written as a target's name), None when a part is a reason that is not :class:`RunTime` (a name
