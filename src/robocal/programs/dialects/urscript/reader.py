@@ -238,7 +238,7 @@ class _Script:
             names = [x.strip() for x in m.group(2).split(",") if x.strip()]
             if names:
                 self.params.append((m.start(), m.group(1), names))
-        self.defs = _defs(masked)  # (name, start, end) of every def
+        self.defs = definitions(masked)  # (name, start, end) of every def
         defined = {name for name, _, _ in self.defs}
         for m in re.finditer(r"\b([A-Za-z_]\w*)\s*\(", masked) if defined else ():
             if m.group(1) in defined and not masked[max(0, m.start() - 4):m.start()].endswith("def "):
@@ -540,7 +540,7 @@ _FUNCTIONS = {"sqrt": np.sqrt, "sin": np.sin, "cos": np.cos, "tan": np.tan, "d2r
 _BLOCK = re.compile(r"\b(def|thread|if|while|end)\b")
 
 
-def _defs(masked: str) -> list[tuple[str, int, int]]:
+def definitions(masked: str) -> list[tuple[str, int, int]]:
     """``(name, start, end)`` of every ``def`` (end: after its ``end``; the file's end if the
     blocks do not balance). ``def``, ``thread``, and ``if``/``while`` beginning a statement open a
     block; ``end`` closes one."""

@@ -31,7 +31,7 @@ import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.kinematics.transforms import matrix_to_rotvec
-from robocal.programs.dialects.urscript.reader import _defs
+from robocal.programs.dialects.urscript.reader import definitions
 from robocal.programs.dialects.urscript.syntax import COMMENT_RE, STRING_RE
 from robocal.programs.runtime import ROUTINE_NAME, CalibratedChain, RuntimeSite, RuntimeWriter
 from robocal.programs.source import mask
@@ -61,14 +61,9 @@ def _reached(chain: CalibratedChain, j: int) -> str:
     """The angle joint ``j`` reaches at the commanded ``q[j]`` (rad): the chain's scale, gear and
     cyclic terms of that joint (:meth:`CalibratedChain.offsets`)."""
     q = f"q[{j}]"
-    terms = [q]
-    if chain.scale is not None and chain.scale[j] != 0.0:
-        terms.append(f"{_num(chain.scale[j])} * {q}")
-    for _, f, s, c in chain.harmonics[chain.harmonics[:, 0].astype(int) == j]:
-        for amp, fn in ((s, "sin"), (c, "cos")):
-            if amp != 0.0:
-                terms.append(f"{_num(amp)} * {fn}({_num(f)} * {q})")
-    return " + ".join(terms)
+    terms = [f"{_num(k)} * {q}" if fn == "scale" else f"{_num(k)} * {fn}({_num(f)} * {q})"
+             for fn, k, f in chain.joint_terms(j)]
+    return " + ".join([q, *terms])
 
 
 def routine_lines(chain: CalibratedChain, note: str) -> list[str]:
@@ -132,15 +127,9 @@ class URScriptRuntime(RuntimeWriter):
         return {(site.start, site.start): f"{FUNCTION}(", (site.end, site.end): ")"}
 
     def routine(self, text: str, chain: CalibratedChain, meant: list[Target], note: str) -> tuple[int, str]:
-        if BEGIN in text:
-            raise DataError(f"the program already holds robocal's run-time correction ({FUNCTION}): filter "
-                            "the original program (routing its motions again would correct them twice)")
-        clash = _NAMES.search(text)
-        if clash:
-            raise DataError(f"the program already names {clash.group()}: --runtime-correction cannot add its "
-                            "functions under that name")
+        self.refuse_present(text, BEGIN, _NAMES)
         masked = mask(text, [COMMENT_RE], [STRING_RE])
-        defs = _defs(masked)
+        defs = definitions(masked)
         outer = [(a, b) for _, a, b in defs if not any(s < a and b <= e for _, s, e in defs)]
         sites = self._sites.get(id(text), ())
         holding = {next(((a, b) for a, b in outer if a < at < b), None) for at in sites}
