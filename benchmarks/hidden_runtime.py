@@ -39,7 +39,7 @@ import json
 import re
 import sys
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -55,6 +55,8 @@ import hidden_cell as hc  # noqa: E402
 GOAL_FACTOR, GOAL_MARGIN_MM = 1.3, 0.002  # issue 46: landing <= 1.3x own error + 0.002 mm
 NOISE_MM = hc.NOISE_MM  # tracker noise, 1 sigma per coordinate
 SMR_MM = np.array([[0.0, 0, 40], [55.0, 0, 25], [-30.0, 50, 25]])  # flange SMRs (SMR 0: the model's tool)
+# the true arm's errors, 1 sigma (hidden_cell.perturbed): axis lines, zeros, the flange frame
+TRUE_ERRORS = dict(tilt_deg=0.03, shift_mm=0.3, zero_deg=0.03, frame_mm=0.2, frame_deg=0.03)
 IK_RESIDUAL_MM = 1e-6  # the emulated controller's IK must reach its goal this closely
 
 
@@ -118,8 +120,7 @@ def make_arm(name: str, seed: int, flange_on_axis: bool) -> Arm:
     drawn instead: what SMRs at unknown places on the flange can identify)."""
     rng = np.random.default_rng(seed)
     nominal = hc.nominal_arm(name)
-    true = hc.perturbed(nominal, rng, tilt_deg=0.03, shift_mm=0.3, zero_deg=0.03, frame_mm=0.2, frame_deg=0.03,
-                        last_frame_on_axis=flange_on_axis)
+    true = hc.perturbed(nominal, rng, **TRUE_ERRORS, last_frame_on_axis=flange_on_axis)
     tracker = hc.transform(
         Rotation.from_euler("zyx", [rng.uniform(-np.pi, np.pi), *rng.normal(size=2) * 0.02]).as_matrix(),
         [rng.uniform(2.5, 3.5), rng.uniform(-2.0, 2.0), rng.uniform(0.2, 1.0)],
@@ -157,7 +158,8 @@ def write_model(folder: Path, name: str) -> Path:
 def calibrate(folder: Path, arm: Arm, n: int, seed: int) -> Path:
     write_measurements(folder / "train.csv", arm, n, np.random.default_rng(seed + 1000))
     cal = folder / "calibrated.yaml"
-    hc.robocal("calibrate", folder / "train.csv", "--model", write_model(folder, arm.name), "-o", cal)
+    model = write_ur_model(folder) if arm.name == "ur10e" else write_model(folder, arm.name)
+    hc.robocal("calibrate", folder / "train.csv", "--model", model, "-o", cal)
     return cal
 
 
@@ -173,6 +175,20 @@ def model_fk(cal: Path, name: str):
     model = controller_model(rc.Robot.load(cal), nominal)
     return model.fk
 
+
+
+def on_model_base(arm: Arm, cal: Path) -> Arm:
+    """The true arm moved rigidly so that its world is the calibrated model's frame {0}: the
+    least-squares rigid fit of the true flange points onto the model's over 300 poses."""
+    q = hc.arm_joints(np.random.default_rng(7), 300)
+    fk = model_fk(cal, arm.name)
+    G = np.eye(4)
+    for _ in range(2):  # the fit of points around the flange, rotations and positions together
+        pts = [np.r_[o, 1.0] for o in (np.zeros(3), [0.2, 0, 0], [0, 0.2, 0])]
+        A = np.concatenate([(G @ arm.true.fk(q) @ p)[:, :3] for p in pts])
+        B = np.concatenate([(fk(q) @ p)[:, :3] for p in pts])
+        G = hc.kabsch(A, B) @ G
+    return replace(arm, true=replace(arm.true, base=G @ arm.true.base))
 
 
 # ------------------------------------------------------------------------------ the controller
@@ -248,6 +264,7 @@ def rapid_evaluator(text: str, ctl: Controller):
     return Ev(text, Ctl())
 
 
+RAPID_NAMES = ("ndx", "ndy", "ndz", "napp", "nrot", "ncamx", "ncamy")  # the evaluator's lower-case names
 RAPID_VALUES = [  # run-time amounts: nDx, nDy, nDz, nApp, nRot, nCamX, nCamY (mm, deg)
     (0.0, 0.0, 0.0, 20.0, 0.0, 0.0, 0.0),
     (35.0, -20.0, 10.0, 50.0, 15.0, 12.5, -8.0),
@@ -341,7 +358,7 @@ def rapid_check(folder: Path, arm: Arm, cal: Path, n_targets: int, seed: int) ->
         k = _pick_base(lines_in, k_line) if "pPick" in li else int(re.search(r"pB(\d+)", li).group(1))
         for vals in RAPID_VALUES:
             for ev in (ev_rt, ev_in):
-                for name, v in zip(("ndx", "ndy", "ndz", "napp", "nrot", "ncamx", "ncamy"), vals, strict=True):
+                for name, v in zip(RAPID_NAMES, vals, strict=True):
                     ev.globals[name] = float(v)
                 if "pPick" in li:  # the PROC's assignments, as the controller runs them
                     pick = ev.coerce("robtarget", ev.globals[f"pb{k}"])
@@ -360,7 +377,7 @@ def _pick_base(lines: list[str], at: int) -> int:
         m = re.search(r"pPick := pB(\d+);", line)
         if m:
             return int(m.group(1))
-    raise ValueError("no pPick assignment before line %d" % at)
+    raise ValueError(f"no pPick assignment before line {at}")
 
 
 def _rapid_land(ev_rt, ev_in, arg_rt, arg_in, ctl, arm, cal_fk, where) -> dict:
@@ -370,21 +387,14 @@ def _rapid_land(ev_rt, ev_in, arg_rt, arg_in, ctl, arm, cal_fk, where) -> dict:
     before = ctl.calls
     corrected = ev_rt.eval(arg_rt)
     calls = ctl.calls - before
-    X = W @ ev_rt.matrix(corrected)
-    landed = ctl.land(X, tool, arm.true.fk)
-    own = ctl.land(X, tool, cal_fk)
-    raw = ctl.land(meant, tool, arm.true.fk)
-    return {"where": where, "landing_mm": float(np.linalg.norm(landed[:3, 3] - meant[:3, 3])),
-            "own_mm": float(np.linalg.norm(own[:3, 3] - landed[:3, 3])),
-            "unfiltered_mm": float(np.linalg.norm(raw[:3, 3] - meant[:3, 3])),
-            "model_residual_mm": float(np.linalg.norm(own[:3, 3] - meant[:3, 3])), "ik_calls": calls}
+    return landing(where, meant, W @ ev_rt.matrix(corrected), tool, ctl, arm, cal_fk, calls)
 
 
 def _rapid_rest_unchanged(routed: str, without: str) -> bool:
     """Removing the marked block and the wrappers (RC_Meant(k) written back as pB0) gives the
     output without the option."""
-    text = re.sub(r"\n?[ \t]*! >>> robocal run-time correction: BEGIN.*?! <<< robocal run-time correction: END[^\n]*",
-                  "", routed, flags=re.S)
+    text = re.sub(r"\n?[ \t]*! >>> robocal run-time correction: BEGIN.*?"
+                  r"! <<< robocal run-time correction: END[^\n]*", "", routed, flags=re.S)
     text = re.sub(r"RC_Meant\(\d+\)", "pB0", text)
     text = re.sub(r"RC_Correct\((.*), tGrip, wFix\)", r"\1", text)
     return text == without
@@ -417,8 +427,8 @@ def krl_program(folder: Path, arm: Arm, q: np.ndarray, cf: np.ndarray) -> list[P
     loop, a camera-shifted position (components assigned at run time)."""
     F = millimetres(arm.nominal.fk(q)) @ KRL_TOOL
     P = np.linalg.inv(KRL_BASE) @ F
-    src = ["DEF rtcheck( )", "  DECL INT I", "  BAS(#INITMOV,0 )", "  $TOOL=TOOL_DATA[1]", "  $BASE=BASE_DATA[1]",
-           "  PTP XP0", "  LIN XP0:OFFS"]
+    src = ["DEF rtcheck( )", "  DECL INT I", "  BAS(#INITMOV,0 )", "  $TOOL=TOOL_DATA[1]",
+           "  $BASE=BASE_DATA[1]", "  PTP XP0", "  LIN XP0:OFFS"]
     for k in range(1, len(q)):
         src += ["  FOR I = 1 TO 3", "    OFFS.X = OFFS.X + 5.0", f"    LIN XP{k}:OFFS C_DIS", "  ENDFOR",
                 f"  XPICK = XP{k}", "  XPICK.X = XPICK.X + CAMX", "  XPICK.Y = XPICK.Y + CAMY", "  LIN XPICK"]
@@ -491,10 +501,11 @@ def krl_check(folder: Path, arm: Arm, cal: Path, n_targets: int, seed: int) -> d
             continue
         arg_rt, arg_in = lr.split(None, 1)[1], li.split(None, 1)[1]
         arg_rt, arg_in = arg_rt.replace(" C_DIS", ""), arg_in.replace(" C_DIS", "")
-        k = int(re.search(r"XP(\d+)", li).group(1)) if "XP" in li and "XPICK" not in li else _xpick_base(src_in, k_line)
+        k = _xpick_base(src_in, k_line) if "XPICK" in li else int(re.search(r"XP(\d+)", li).group(1))
         for offs, cam in KRL_VALUES:
             for m in (m_rt, m_in):
-                m.globals["OFFS"] = kse.Struct("FRAME", {key: kse.real(v) for key, v in zip("XYZABC", offs, strict=True)})
+                m.globals["OFFS"] = kse.Struct("FRAME", {key: kse.real(v)
+                                                         for key, v in zip("XYZABC", offs, strict=True)})
                 pick = m.globals[f"XP{k}"].copy()
                 pick.values["X"] = kse.real(pick.values["X"] + cam[0])
                 pick.values["Y"] = kse.real(pick.values["Y"] + cam[1])
@@ -505,14 +516,7 @@ def krl_check(folder: Path, arm: Arm, cal: Path, n_targets: int, seed: int) -> d
             corrected = m_rt.evaluate(arg_rt)
             calls = ctl.calls - before
             X = KRL_BASE @ frame_matrix(corrected.values)
-            landed = ctl.land(X, tool, arm.true.fk)
-            own = ctl.land(X, tool, cal_fk)
-            raw = ctl.land(meant, tool, arm.true.fk)
-            rows.append({"where": li.strip(), "landing_mm": float(np.linalg.norm(landed[:3, 3] - meant[:3, 3])),
-                         "own_mm": float(np.linalg.norm(own[:3, 3] - landed[:3, 3])),
-                         "unfiltered_mm": float(np.linalg.norm(raw[:3, 3] - meant[:3, 3])),
-                         "model_residual_mm": float(np.linalg.norm(own[:3, 3] - meant[:3, 3])),
-                         "ik_calls": calls})
+            rows.append(landing(li.strip(), meant, X, tool, ctl, arm, cal_fk, calls))
     return _summary(rows, unchanged, src_rt)
 
 
@@ -533,7 +537,171 @@ def _krl_rest_unchanged(routed: str, without: str) -> bool:
     return text.rstrip() == without.rstrip()
 
 
+# ------------------------------------------------------------------------------ URScript
+
+
+UR10E_DH = dict(d=[0.1807, 0, 0, 0.17415, 0.11985, 0.11655], a=[0, -0.6127, -0.57155, 0, 0, 0],
+                alpha_deg=[90, 0, 0, 90, -90, 0])  # the catalog's (Universal Robots' published DH)
+UR_TCP = (0.01, -0.004, 0.12, 0.0, 0.0, 0.0)  # set_tcp: m, rotation vector rad
+UR_VALUES = [(0.0, 0.0, 0.05, 0.0), (0.035, -0.02, 0.08, 0.3), (-0.05, 0.045, 0.02, -0.5)]  # dx, dy, app, rz
+
+
+def ur_chain() -> hc.Chain:
+    """The UR10e's axis lines at zero from its DH numbers (standard DH: axis i is z of frame i-1)."""
+    T, u, p = np.eye(4), [], []
+    for d, a, al in zip(UR10E_DH["d"], UR10E_DH["a"], np.deg2rad(UR10E_DH["alpha_deg"]), strict=True):
+        u.append(T[:3, 2].copy()), p.append(T[:3, 3].copy())
+        step = hc.transform(np.eye(3), [a, 0, d])
+        step[:3, :3] = Rotation.from_euler("x", al).as_matrix()
+        T = T @ step
+    return hc.Chain(np.array(u), np.array(p), np.ones(6), np.zeros(6), np.zeros(6), T, np.eye(4))
+
+
+def ur_conventions() -> float:
+    """The largest difference (m) between this UR10e chain and robocal's catalog UR10e over random
+    joints (the joint values must mean the same pose to both)."""
+    import robocal as rc
+
+    q = np.deg2rad(np.random.default_rng(0).uniform(-170, 170, (200, 6)))
+    return float(np.max(np.abs(ur_chain().fk(q) - rc.Robot.from_catalog("ur10e").fk(q))))
+
+
+def make_ur(seed: int, flange_on_axis: bool) -> Arm:
+    rng = np.random.default_rng(seed)
+    nominal = ur_chain()
+    true = hc.perturbed(nominal, rng, **TRUE_ERRORS, last_frame_on_axis=flange_on_axis)
+    tracker = hc.transform(Rotation.from_euler("z", rng.uniform(-np.pi, np.pi)).as_matrix(),
+                           [rng.uniform(2.5, 3.5), rng.uniform(-2.0, 2.0), rng.uniform(0.2, 1.0)])
+    return Arm("ur10e", nominal, true, tracker, SMR_MM * 1e-3 + rng.normal(size=(3, 3)) * 5e-5)
+
+
+def write_ur_model(folder: Path) -> Path:
+    dh = UR10E_DH
+    text = (f"name: ur10e\nunits: {{length: m, angle: deg}}\n"
+            f"dh: {{theta: [0, 0, 0, 0, 0, 0], d: {dh['d']}, a: {dh['a']}, alpha: {dh['alpha_deg']}}}\n"
+            "limits: [[-360, 360], [-360, 360], [-180, 180], [-360, 360], [-360, 360], [-360, 360]]\n"
+            f"tool: {{xyz: {(SMR_MM[0] * 1e-3).tolist()}}}\nsmr: {(SMR_MM[1:] * 1e-3).tolist()}\n")
+    path = folder / "ur10e_smr.yaml"
+    path.write_text(text)
+    return path
+
+
+def _ur_pose_text(T: np.ndarray) -> str:
+    values = (*T[:3, 3], *Rotation.from_matrix(T[:3, :3]).as_rotvec())
+    return "p[" + ", ".join(f"{v:.6f}" for v in values) + "]"
+
+
+def ur_script(arm: Arm, q: np.ndarray) -> str:
+    """A script in the styles real ones use: a grid from a base pose by offsets read from input
+    registers (pose_add), an approach by a run-time distance and turn in the tool (pose_trans), a
+    camera pose built from run-time numbers (p[...] with variables)."""
+    tcp = hc.transform(Rotation.from_rotvec(UR_TCP[3:]).as_matrix(), UR_TCP[:3])
+    P = arm.nominal.fk(q) @ tcp
+    lines = ["def rtcheck():", f"  set_tcp(p[{', '.join(str(v) for v in UR_TCP)}])",
+             f"  home = {_ur_pose_text(P[0])}", "  movej(home, a=1.4, v=1.05)", "  i = 0", "  while i < 3:",
+             "    dx = read_input_float_register(0)", "    dy = read_input_float_register(1)",
+             "    app = read_input_float_register(2)", "    rz = read_input_float_register(3)"]
+    for k in range(1, len(q)):
+        x = _ur_pose_text(P[k])
+        v = x[2:-1].split(", ")
+        lines += [f"    movel(pose_add({x}, p[dx, dy, 0, 0, 0, 0]), a=1.2, v=0.25)",
+                  f"    movel(pose_trans({x}, p[0, 0, -app, 0, 0, rz]), a=1.2, v=0.25)",
+                  f"    cam = p[{v[0]} + dx, {v[1]} + dy, {v[2]}, {v[3]}, {v[4]}, {v[5]}]",
+                  "    movel(cam, a=1.2, v=0.25)"]
+    return "\n".join([*lines, "    i = i + 1", "  end", "end", ""])
+
+
+def ur_evaluator(text: str, ctl: Controller, tcp, joints):
+    """The authors' URScript interpreter with this module's pose built-ins and controller."""
+    import urscript_subset_eval as use
+
+    def matrix(pose):
+        return hc.transform(Rotation.from_rotvec(pose[3:6]).as_matrix(), pose[:3])
+
+    def pose(T):
+        return use.Pose((*T[:3, 3], *Rotation.from_matrix(T[:3, :3]).as_rotvec()))
+
+    use.matrix, use.pose = matrix, pose  # the evaluator's module-level pose conversions
+
+    class Ctl(use.NominalController):
+        def inverse_kin(self, x, qnear):
+            ctl.seed = np.asarray(qnear, float)  # the controller's solution nearest qnear
+            return ctl.joints(millimetres(matrix(x)), millimetres(matrix(self.tcp)))
+
+    return use.Evaluator(text, Ctl(None, tcp, joints))
+
+
+def _ur_substituted(arg: str, values, script: str) -> str:
+    """The argument with the run-time numbers and the pose variables the script assigns written in."""
+    for name, v in zip(("dx", "dy", "app", "rz"), values, strict=True):
+        arg = re.sub(rf"\b{name}\b", repr(float(v)), arg)
+    for name in re.findall(r"\b([a-z]\w*)\b(?!\()", arg):
+        m = re.search(rf"^\s*{name} = (.*)$", script, re.M)
+        if m and name not in ("p", "a", "v"):
+            arg = re.sub(rf"\b{name}\b(?!\()", _ur_substituted(m.group(1), values, script), arg)
+    return arg
+
+
+def ur_check(folder: Path, arm: Arm, cal: Path, n_targets: int, seed: int) -> dict:
+    rng = np.random.default_rng(seed + 4000)
+    q = np.deg2rad(np.column_stack([rng.uniform(-60, 60, n_targets), rng.uniform(-110, -70, n_targets),
+                                    rng.uniform(70, 110, n_targets), rng.uniform(-120, -60, n_targets),
+                                    rng.uniform(-120, -60, n_targets), rng.uniform(-60, 60, n_targets)]))
+    src = folder / "rtcheck.script"
+    src.write_text(ur_script(arm, q))
+    outs = {}
+    for opt in ((), ("--runtime-correction",)):
+        out = folder / f"out{len(opt)}.script"
+        hc.robocal("filter", src, "--calibrated", cal, "--nominal", "ur10e", "-o", out, *opt)
+        outs[bool(opt)] = out.read_text()
+    routed, without = outs[True], outs[False]
+    rest = re.sub(r"[ \t]*# >>> robocal run-time correction: BEGIN.*?"
+                  r"# <<< robocal run-time correction: END[^\n]*\n", "", routed, flags=re.S)
+    unchanged = re.sub(r"RC_Correct\((.*)\)(, a=)", r"\1\2", rest) == without
+    ctl = Controller(arm)
+    tcp = hc.transform(Rotation.from_rotvec(UR_TCP[3:]).as_matrix(), UR_TCP[:3])
+    cal_fk = model_fk(cal, "ur10e")
+    rows = []
+    text_in = src.read_text()
+    for line in routed.splitlines():
+        m = re.match(r"\s*move\w\((RC_Correct\((.*)\)), a=", line)
+        if not m:
+            continue
+        k = next(k for k in range(1, len(q))  # the base pose's x as written: its taught joints
+                 if _ur_pose_text(arm.nominal.fk(q[k:k + 1])[0] @ tcp)[2:].split(",")[0] in
+                 _ur_substituted(m.group(2), (0, 0, 0, 0), text_in))
+        for values in UR_VALUES:
+            ev = ur_evaluator(routed, ctl, UR_TCP, q[k])
+            meant = millimetres(ur_matrix(ev.eval(_ur_substituted(m.group(2), values, text_in))))
+            ctl.seed = q[k]
+            before = ctl.calls
+            X = millimetres(ur_matrix(ev.eval(_ur_substituted(m.group(1), values, routed))))
+            calls = ctl.calls - before
+            ctl.seed = q[k]
+            rows.append(landing(line.strip(), meant, X, millimetres(tcp), ctl, arm, cal_fk, calls))
+    return _summary(rows, unchanged, routed)
+
+
+def ur_matrix(pose) -> np.ndarray:
+    return hc.transform(Rotation.from_rotvec(pose[3:6]).as_matrix(), pose[:3])
+
+
 # ------------------------------------------------------------------------------ the report
+
+
+def landing(where: str, meant: np.ndarray, X: np.ndarray, tool: np.ndarray, ctl: Controller, arm: Arm,
+            cal_fk, calls: int) -> dict:
+    """One routed motion: the meant TCP pose and the corrected command ``X`` (world, mm), through
+    the emulated controller's IK: the true arm's TCP against the meant pose (``landing_mm``), the
+    calibrated model's against the true arm's there (``own_mm``), the true arm's at the
+    uncorrected command (``unfiltered_mm``), the calibrated model's against the meant pose (what
+    the routine's iteration leaves, ``model_residual_mm``)."""
+    landed = ctl.land(X, tool, arm.true.fk)
+    own = ctl.land(X, tool, cal_fk)
+    raw = ctl.land(meant, tool, arm.true.fk)
+    gap = lambda A, B: float(np.linalg.norm(A[:3, 3] - B[:3, 3]))  # noqa: E731
+    return {"where": where, "landing_mm": gap(landed, meant), "own_mm": gap(own, landed),
+            "unfiltered_mm": gap(raw, meant), "model_residual_mm": gap(own, meant), "ik_calls": calls}
 
 
 def _summary(rows: list[dict], unchanged: bool, text: str) -> dict:
@@ -554,6 +722,10 @@ def _summary(rows: list[dict], unchanged: bool, text: str) -> dict:
 
 
 FLANGES = {True: "flange on its axis", False: "flange off its axis"}
+# the controller's world: the true arm's base plate (its axis lines perturbed in it), or the frame
+# robocal's calibration calls the robot's base, its identified frame {0} (the true arm moved
+# rigidly onto it): the model's own error without the base's definition
+WORLDS = ("base plate", "calibrated frame {0}")
 
 
 @dataclass(frozen=True)
@@ -566,16 +738,23 @@ SMALL = Sizes(poses=50, targets=3)
 
 
 def run(seed: int = 0, sizes: Sizes = Sizes(), keep: Path | None = None) -> dict:
-    out = {}
+    out = {"conventions_m": {n: hc.check_conventions(n) for n in ("abb_irb2600", "kuka_kr16_2")}
+           | {"ur10e": ur_conventions()}}
     with tempfile.TemporaryDirectory() as tmp:
         root = keep or Path(tmp)
-        for name, lang, check in (("abb_irb2600", "RAPID", rapid_check), ("kuka_kr16_2", "KRL", krl_check)):
+        for name, lang, check in (("abb_irb2600", "RAPID", rapid_check), ("kuka_kr16_2", "KRL", krl_check),
+                                  ("ur10e", "URScript", ur_check)):
             for on_axis in (True, False):
                 folder = root / f"{lang}_{seed}_{'on' if on_axis else 'off'}"
                 folder.mkdir(parents=True, exist_ok=True)
-                arm = make_arm(name, seed, on_axis)
+                arm = make_ur(seed, on_axis) if name == "ur10e" else make_arm(name, seed, on_axis)
                 cal = calibrate(folder, arm, sizes.poses, seed)
-                out[f"{lang}, {FLANGES[on_axis]}"] = check(folder, arm, cal, sizes.targets, seed)
+                for world in WORLDS:
+                    sub = folder / world.split()[0]
+                    sub.mkdir(exist_ok=True)
+                    moved = arm if world == WORLDS[0] else on_model_base(arm, cal)
+                    key = f"{lang}, {FLANGES[on_axis]}, world: {world}"
+                    out[key] = check(sub, moved, cal, sizes.targets, seed)
     return out
 
 
