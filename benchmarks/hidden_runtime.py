@@ -335,7 +335,9 @@ def rapid_module(arm: Arm, q: np.ndarray, cf: np.ndarray) -> str:
 _RAPID_MOVE = re.compile(r"^\s*Move\w+\s+(.*),\s*v\d+,\s*\w+,\s*tGrip\\WObj:=wFix;", re.M)
 
 
-def rapid_check(folder: Path, arm: Arm, cal: Path, n_targets: int, seed: int) -> dict:
+def rapid_check(folder: Path, arm: Arm, cal: Path, n_targets: int, seed: int, mutate=None) -> dict:
+    """``mutate``: a function of the routed program's text run instead (the check's own control:
+    a routine with a wrong constant must miss)."""
     q, cf = _base_joints(arm, n_targets, seed + 2000)
     src = folder / "pick.mod"
     src.write_text(rapid_module(arm, q, cf))
@@ -346,6 +348,7 @@ def rapid_check(folder: Path, arm: Arm, cal: Path, n_targets: int, seed: int) ->
         outs[bool(opt)] = out.read_text()
     routed, without = outs[True], outs[False]
     unchanged = _rapid_rest_unchanged(routed, without)
+    routed = mutate(routed) if mutate else routed
     ctl = Controller(arm)
     ev_rt = rapid_evaluator(routed, ctl)
     ev_in = rapid_evaluator(src.read_text(), ctl)
@@ -735,6 +738,21 @@ class Sizes:
 
 
 SMALL = Sizes(poses=50, targets=3)
+
+
+def wrong_constant(text: str) -> str:
+    """The routed RAPID program with the calibrated d of axis 4 written 0.05 mm off (a wrong
+    routine the check must catch)."""
+    m = re.search(r"(CONST num RC_D\{6\} := \[[^,]*,[^,]*,[^,]*,)([^,]*)", text)
+    return text[:m.start(2)] + f"{float(m.group(2)) + 0.05:.8f}" + text[m.end(2):]
+
+
+def control(seed: int, sizes: Sizes, root: Path) -> dict:
+    """The check on a RAPID routine with one wrong constant (:func:`wrong_constant`), the flange on
+    its axis, the world the calibration's frame {0}: it must miss the goal."""
+    arm = make_arm("abb_irb2600", seed, True)
+    cal = calibrate(root, arm, sizes.poses, seed)
+    return rapid_check(root, on_model_base(arm, cal), cal, sizes.targets, seed, wrong_constant)
 
 
 def run(seed: int = 0, sizes: Sizes = Sizes(), keep: Path | None = None) -> dict:

@@ -37,9 +37,11 @@ def test_every_language_routes_its_run_time_motions(report):
 
 
 def test_routed_motions_land_within_the_goal(report):
+    """Not always better than unfiltered: with the true base plate as the world or the flange off
+    its axis, the model's own error (what an arm-only tracker calibration cannot see) may exceed
+    the true arm's error from the nominal on these targets."""
     for case, r in _cases(report).items():
         assert r["goal_met"], (case, r["worst"])
-        assert r["landing_median_mm"] < r["unfiltered_median_mm"], case
         assert r["ik_calls_max"] <= 3, case
 
 
@@ -53,3 +55,9 @@ def test_with_the_calibrated_base_the_routine_corrects_to_the_calibration(report
 
 def test_every_other_byte_unchanged(report):
     assert all(r["unchanged"] for r in _cases(report).values())
+
+
+def test_the_check_catches_a_wrong_routine(tmp_path):
+    """The control: the same check on a routine whose calibrated d4 is 0.05 mm off misses."""
+    r = hr.control(0, hr.SMALL, tmp_path)
+    assert not r["goal_met"] and r["ratio_max"] > 2
