@@ -43,6 +43,7 @@ def test_routed_motions_land_within_the_goal(report):
     for case, r in _cases(report).items():
         assert r["goal_met"], (case, r["worst"])
         assert r["ik_calls_max"] <= 3, case
+        assert r["config_mismatched"] == 0, case  # the emulated IK kept the configuration the target names
 
 
 def test_with_the_calibrated_base_the_routine_corrects_to_the_calibration(report):
