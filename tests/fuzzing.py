@@ -307,6 +307,72 @@ def build_readers(folder: Path) -> dict[str, Reader]:
 
     readers["inform"] = Reader("inform", {**{f: (corpus / f).read_bytes() for f in files},
                                           "cal.yaml": path.read_bytes()}, files, inform_argv, ["out.JBI"])
+    readers.update(_issue46_readers(folder, gp180_cal=path.read_bytes()))
+    return readers
+
+
+def _filter_reader(name: str, files: dict[str, bytes], programs: list[str], references: list[str],
+                   robot: str, cal: bytes, output: str, extra: tuple = ()) -> Reader:
+    """A `filter` command on ``programs`` with ``references``; every file but the model mutated."""
+
+    def argv(d):
+        refs = ["--references", *(str(d / f) for f in references)] if references else []
+        return ["filter", *(str(d / f) for f in programs), *refs, "--calibrated", str(d / "cal.yaml"),
+                "--nominal", robot, *extra, "-o", str(d / output)]
+
+    outdir = len(programs) > 1
+    return Reader(name, {**files, "cal.yaml": cal}, [*programs, *references], argv, [output],
+                  extra={"outdir": outdir})
+
+
+def _issue46_readers(folder: Path, gp180_cal: bytes) -> dict[str, Reader]:
+    """The inputs issue 46 added: FANUC POSREG.VA and SYSFRAME.VA, INFORM VAR.DAT (job layout and a
+    controller backup's), a VAL3 s6.x XML application, RAPID and KRL with --runtime-correction."""
+    import test_fanuc_posreg as fp
+    import test_inform_variables as iv
+    import test_val3_layouts as vl
+
+    corpus, backup = PROGRAMS / "corpus", PROGRAMS.parent / "fanuc_backup"
+    cals = {}
+    for robot in ("fanuc_m20ia", "abb_irb2600", "kuka_kr16_2", "staubli_tx2_140"):
+        perturbed(Robot.from_catalog(robot), 7).save(folder / f"cal46_{robot}.yaml")
+        cals[robot] = (folder / f"cal46_{robot}.yaml").read_bytes()
+    readers = {}
+    crlf = fp.PALLET.replace("\n", "\r\n").encode()
+    readers["fanuc_posreg"] = _filter_reader(
+        "fanuc_posreg", {"PALLET.ls": crlf, "POSREG.VA": (backup / "POSREG.VA").read_bytes(),
+                         "SYSFRAME.VA": (backup / "SYSFRAME.VA").read_bytes()},
+        ["PALLET.ls"], ["POSREG.VA", "SYSFRAME.VA"], "fanuc_m20ia", cals["fanuc_m20ia"], "out.ls")
+    iv.NOMINAL.save(folder / "gp_nominal.yaml")
+    iv.CALIBRATED.save(folder / "gp_cal.yaml")
+    files = ["PICK_PLACE.JBI", "VAR.DAT"]
+    tools = tuple(a for k, v in iv.TOOLS.items() for a in ("--tool", f"{k}={v}"))
+    readers["inform_var"] = _filter_reader(
+        "inform_var", {f: (corpus / f).read_bytes() for f in files}, files[:1], files[1:],
+        str(folder / "gp_nominal.yaml"), (folder / "gp_cal.yaml").read_bytes(), "out.JBI", tools)
+    sub = folder / "inform_backup"
+    sub.mkdir(exist_ok=True)
+    forms = ["".join(map(str, iv.InformDialect().scheme.encode(iv.NOMINAL, iv.Q[k]).clip(0, 1))) + "0" * 18
+             for k in range(2)]
+    var = iv._backup_var(sub, forms).read_bytes()
+    job = iv._job(["///NPOS 0,0,0,0,0,0"], [f"MOVL P{k:03d} V=100.0" for k in range(1, 6)])
+    readers["inform_var_backup"] = _filter_reader(
+        "inform_var_backup", {"B.JBI": job, "VAR.DAT": var}, ["B.JBI"], ["VAR.DAT"],
+        str(folder / "gp_nominal.yaml"), (folder / "gp_cal.yaml").read_bytes(), "out.JBI")
+    shutil.rmtree(folder / "val3_s6", ignore_errors=True)
+    sub = vl._s6_application(folder / "val3_s6")
+    names = ["start.pgx", "place.pgx", "cell.dtx"]
+    vl.CALIBRATED.save(folder / "tx2_cal.yaml")
+    readers["val3_s6"] = _filter_reader(
+        "val3_s6", {n: (sub / n).read_bytes() for n in names}, names, [], "staubli_tx2_140",
+        (folder / "tx2_cal.yaml").read_bytes(), "outdir")
+    readers["rapid_rt"] = _filter_reader(
+        "rapid_rt", {"arc_station.mod": (corpus / "arc_station.mod").read_bytes()}, ["arc_station.mod"], [],
+        "abb_irb2600", cals["abb_irb2600"], "out.mod", ("--runtime-correction",))
+    files = ["deburr_cell.src", "deburr_cell.dat", "$config.dat"]
+    readers["krl_rt"] = _filter_reader(
+        "krl_rt", {f: (corpus / f).read_bytes() for f in files}, files[:2], files[2:], "kuka_kr16_2",
+        cals["kuka_kr16_2"], "outdir", ("--runtime-correction",))
     return readers
 
 

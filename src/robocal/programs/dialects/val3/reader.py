@@ -224,7 +224,11 @@ def _datum(src: ProgramText, key: str, kind: str, offset: int, attrs: dict, afte
             got = attrs.get(word)
             datum.config.append(None if got is None or got[0] not in values else got)
     if kind == "jointRx":
-        datum.joints = np.deg2rad([float(attrs.get(f"j{i}", ("0",))[0]) for i in range(1, 7)])
+        joints = [attrs.get(f"j{i}", ("0",))[0] for i in range(1, 7)]
+        bad = next((f"j{i}=\"{v}\"" for i, v in enumerate(joints, 1) if not NUMBER_RE.fullmatch(v)), None)
+        if bad:
+            raise DataError(f"{src.where(offset)}: {key}: {bad} is not a number")
+        datum.joints = np.deg2rad([float(v) for v in joints])
     return datum
 
 
