@@ -14,6 +14,7 @@ a traceback or a stray warning line, never an input modified.
 from __future__ import annotations
 
 import contextlib
+import difflib
 import io
 import json
 import os
@@ -291,7 +292,7 @@ def build_readers(folder: Path) -> dict[str, Reader]:
             files,
             argv,
             [out] if len(programs) == 1 else ["outdir"],
-            extra={"outdir": len(programs) > 1},
+            extra={"outdir": len(programs) > 1, "programs": programs},
         )
     # a Yaskawa job with the controller's tool file, filtered with a payload model (the loads read)
     corpus = PROGRAMS / "corpus"
@@ -306,7 +307,8 @@ def build_readers(folder: Path) -> dict[str, Reader]:
                 str(d / "cal.yaml"), "--nominal", "yaskawa_gp180", "-o", str(d / "out.JBI")]
 
     readers["inform"] = Reader("inform", {**{f: (corpus / f).read_bytes() for f in files},
-                                          "cal.yaml": path.read_bytes()}, files, inform_argv, ["out.JBI"])
+                                          "cal.yaml": path.read_bytes()}, files, inform_argv, ["out.JBI"],
+                               extra={"programs": files[:1]})
     readers.update(_issue46_readers(folder, gp180_cal=path.read_bytes()))
     return readers
 
@@ -320,9 +322,9 @@ def _filter_reader(name: str, files: dict[str, bytes], programs: list[str], refe
         return ["filter", *(str(d / f) for f in programs), *refs, "--calibrated", str(d / "cal.yaml"),
                 "--nominal", robot, *extra, "-o", str(d / output)]
 
-    outdir = len(programs) > 1
+    edits_only = "--runtime-correction" not in extra  # the routine adds and reroutes lines
     return Reader(name, {**files, "cal.yaml": cal}, [*programs, *references], argv, [output],
-                  extra={"outdir": outdir})
+                  extra={"outdir": len(programs) > 1, "programs": programs if edits_only else []})
 
 
 def _issue46_readers(folder: Path, gp180_cal: bytes) -> dict[str, Reader]:
@@ -545,7 +547,7 @@ def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, std
         missing = [o for o in reader.outputs if not (folder / o).exists()]
         if reader.extra.get("outdir") and not any((folder / "outdir").iterdir()):
             missing.append("outdir/*")
-        return f"exit 0 without {missing}" if missing else None
+        return f"exit 0 without {missing}" if missing else _edit_outside_numbers(reader, target, data, folder)
     if code == 2:
         # the error: one line, or a headline and one indented item a line (a list of places)
         while len(lines) > 1 and lines[-1].startswith("  ") and ": error: " not in lines[-1]:
@@ -559,6 +561,31 @@ def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, std
     if code == -1:
         return "timeout"
     return f"exit {code}: {_site(stderr)}"
+
+
+_MASK = re.compile(rb"[ \t]*" + NUMBER.pattern)
+# VAL3 s6 writes an absent coordinate as a new attribute of its value element
+_VALUE, _VALUE_ATTR = re.compile(rb"<\w+Value\b"), re.compile(rb'\s+\w+="#"')
+
+
+def _edit_outside_numbers(reader: Reader, target: str, data: bytes, folder: Path) -> str | None:
+    """For a program reader (``extra['programs']``, no routine added): what changed in an output
+    beyond its numbers (lines may be added: the provenance marker), or None. A filter edits pose
+    numbers only; any other change is an unsafe edit."""
+    for name in reader.extra.get("programs", ()):
+        out = folder / (reader.outputs[0] if not reader.extra.get("outdir") else f"outdir/{name}")
+        if not out.is_file():
+            continue
+        source = data if name == target else reader.files[name]
+        old, new = ([_VALUE_ATTR.sub(b"", ln) if _VALUE.search(ln) else ln
+                     for ln in _MASK.sub(b"#", b).splitlines()] for b in (source, out.read_bytes()))
+        changed = [op for op in difflib.SequenceMatcher(None, old, new, autojunk=False).get_opcodes()
+                   if op[0] in ("replace", "delete")]
+        if changed:
+            _, i, _, j, _ = changed[0]
+            got = new[j][:80] if j < len(new) else b"(deleted)"
+            return f"edit outside a number in {name}:{i + 1}: {old[i][:80]!r} -> {got!r}"
+    return None
 
 
 def _site(stderr: str) -> str:

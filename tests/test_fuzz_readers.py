@@ -3,21 +3,36 @@ of the four kinds, both import layouts, model YAML (three catalog forms and a sa
 result JSON, URDF and five robot-program formats (INFORM with its TOOL.CND) must end with exit 0
 and every output written, or exit 2 and one line; never an internal error (exit 3), a traceback,
 a stray warning line or a modified input. The mutations and the contract are in tests/fuzzing.py;
-the long run (10,000 mutants per reader) is scripts/fuzz_readers.py."""
+the long run (10,000 mutants per reader) is scripts/fuzz_readers.py. A program reader's output may
+differ from its input only in numbers (and added lines: the provenance marker). Below: reproducers
+of the defects the fuzzing found, and the same program given with other line ends, a BOM, another
+encoding, trailing blanks or tabs must be accounted the same and edited the same (issue 46)."""
 
 from __future__ import annotations
 
 import random
+import re
+from pathlib import Path
 
 import pytest
-from fuzzing import build_readers, check, mutate, run_case
+from fuzzing import PROGRAMS, build_readers, check, mutate, run_case
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from robocal.cli import main
+from robocal.core.errors import DataError
+from robocal.data.simulate import perturbed
+from robocal.kinematics.model import Robot
+from robocal.programs import filter_program
+
 READERS = ["csv_point", "csv_pose", "csv_plane", "csv_distance", "import_rows", "import_files",
            "model_abb_irb2600", "model_ur5", "model_puma560", "model_saved", "urdf", "result_json",
-           "rapid", "krl", "fanuc", "urscript", "inform"]
-EXAMPLES = {"result_json": 15, "urscript": 20, "fanuc": 20, "inform": 20}  # the slower readers (default 30)
+           "rapid", "krl", "fanuc", "urscript", "inform", "fanuc_posreg", "inform_var", "inform_var_backup",
+           "val3_s6", "rapid_rt", "krl_rt"]
+SLOWER = ["urscript", "fanuc", "inform", "fanuc_posreg", "inform_var", "inform_var_backup", "val3_s6",
+          "rapid_rt",
+          "krl_rt"]
+EXAMPLES = {"result_json": 15, **dict.fromkeys(SLOWER, 20)}  # the slower readers (default 30)
 
 
 @pytest.fixture(scope="module")
@@ -39,5 +54,121 @@ def test_reader_keeps_the_contract_on_mutants(readers, tmp_path_factory, name):
         code, stderr = run_case(reader, target, data, folder / "case")
         problem = check(reader, target, data, folder / "case", code, stderr)
         assert problem is None, f"{name} mutant (seed {seed}, file {target}): {problem}"
+
+    one()
+
+
+# ----------------------------------------------------------------- reproducers of defects the fuzzing found
+def test_val3_joint_value_that_is_no_number_is_a_clear_error(tmp_path):
+    """<jointValue j1="" ...> (or "--1", "null") in an s6 .dtx: exit 2 with the place (was an
+    internal ValueError)."""
+    import test_val3_layouts as vl
+
+    folder = vl._s6_application(tmp_path / "cell")
+    dtx = folder / "cell.dtx"
+    dtx.write_bytes(dtx.read_bytes().replace(b'<jointValue j1="0"', b'<jointValue j1="--1"', 1))
+    with pytest.raises(DataError, match=r'cell.dtx:\d+: .*j1="--1" is not a number'):
+        filter_program([folder / n for n in ("start.pgx", "place.pgx", "cell.dtx")], vl.CALIBRATED,
+                       vl.NOMINAL)
+
+
+def test_val3_s6_point_without_its_coordinates_element_is_refused_not_written_elsewhere(tmp_path):
+    """<valuePoint> whose <tpValue> line is garbled (swapped case, as the fuzzing made it): the
+    corrected coordinates were written as attributes of <valuePoint>, which the controller does not
+    read (an unsafe edit): refused."""
+    import test_val3_layouts as vl
+
+    folder = vl._s6_application(tmp_path / "cell")
+    dtx = folder / "cell.dtx"
+    data = dtx.read_bytes()
+    k = data.index(b"<tpValue")
+    dtx.write_bytes(data[:k] + data[k:data.index(b"/>", k)].swapcase() + data[data.index(b"/>", k):])
+    with pytest.raises(DataError, match=r"<valuePoint> of p1\[0\] holds no coordinates element"):
+        filter_program([folder / n for n in ("start.pgx", "place.pgx", "cell.dtx")], vl.CALIBRATED,
+                       vl.NOMINAL)
+
+
+def test_fanuc_line_number_of_thousands_of_digits_is_no_internal_error(tmp_path):
+    """A TP line number of 5,000 digits: the provenance marker's int() raised ValueError (exit 3)."""
+    path = tmp_path / "S.ls"
+    text = (PROGRAMS / "sealing.ls").read_bytes()
+    path.write_bytes(text.replace(b"\n   1:", b"\n" + b"1" * 5000 + b":", 1))
+    out = tmp_path / "out.ls"
+    code = main(["--quiet", "filter", str(path), "--calibrated", str(_cal(tmp_path, "fanuc_lrmate200id")),
+                 "--nominal", "fanuc_lrmate200id", "--frame", "1=450,-150,100,0,0,-10", "--tool",
+                 "2=0,0,120,0,0,0", "-o", str(out)])
+    assert code in (0, 2)
+
+
+# ----------------------------------------------------------------- the same program whatever its bytes
+def _cal(folder: Path, robot: str) -> Path:
+    path = folder / f"cal_{robot}.yaml"
+    if not path.exists():
+        perturbed(Robot.from_catalog(robot), 7).save(path)
+    return path
+
+
+def _lf(b: bytes) -> bytes:
+    return b.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+
+
+# program files, references, robot, options, the comment mark after which an accented word goes
+SEEDS = {"rapid": (["weld_cell.mod"], [], "abb_irb2600", {}, b"!"),
+         "krl": (["palletize.src", "palletize.dat"], ["config.dat"], "kuka_kr16_2", {}, b";"),
+         "fanuc": (["sealing.ls"], [], "fanuc_lrmate200id",
+                   {"frames": {"1": "450,-150,100,0,0,-10"}, "tools": {"2": "0,0,120,0,0,0"}}, b"!"),
+         "urscript": (["pick_place.script"], [], "ur5", {}, b"#"),
+         "inform": (["corpus/PALLETIZE.JBI"], ["corpus/TOOL.CND"], "yaskawa_gp180", {}, b"'")}
+
+
+def _variant(data: bytes, mark: bytes, end: bytes, bom: bool, encoding: str, blanks: bool,
+             tabs: bool) -> bytes:
+    """``data`` with line ends ``end``, a UTF-8 BOM, an accented word in its first comment written in
+    ``encoding``, trailing blanks and tab indentation: what editors and controllers make of a file."""
+    out = _lf(data)
+    if tabs:
+        out = re.sub(rb"(?m)^ {2,}", lambda m: b"\t" * (len(m.group()) // 2), out)
+    if blanks:
+        out = re.sub(rb"(?m)(\S)$", rb"\1 \t ", out)
+    k = out.find(mark)
+    if encoding and k >= 0:
+        out = out[:k + 1] + "Schweißnaht é ".encode(encoding) + out[k + 1:]
+    out = out.replace(b"\n", end)
+    return (b"\xef\xbb\xbf" if bom else b"") + out
+
+
+def _filtered(folder: Path, seed: str, transform) -> tuple[tuple, dict[str, bytes]]:
+    files, refs, robot, options, _ = SEEDS[seed]
+    folder.mkdir()
+    for f in files + refs:
+        (folder / Path(f).name).write_bytes(transform((PROGRAMS / f).read_bytes()))
+    nominal = Robot.from_catalog(robot)
+    res = filter_program([folder / Path(f).name for f in files], perturbed(nominal, 7), nominal,
+                         references=[folder / Path(f).name for f in refs], **options)
+    account = (res.summary_dict()["motions"], [w.replace(str(folder), "") for w in res.warnings],
+               [(m.file, m.line, m.instruction, m.status, m.reason) for m in res.motions],
+               [(r["name"], r["filtered"]) for r in res.rows])
+    return account, {Path(p).name: b for p, b in res.outputs.items()}
+
+
+@pytest.mark.parametrize("seed", list(SEEDS))
+def test_every_motion_accounted_the_same_whatever_the_bytes(seed, tmp_path_factory):
+    """Line ends (LF, CRLF, lone CR), a UTF-8 BOM, an accented comment in UTF-8 / cp1252, trailing
+    blanks, tab indentation: the same motions, corrected and named with the same reasons, and the
+    output is the input's bytes with the same edits (its line ends and encoding kept)."""
+    base, outputs = _filtered(tmp_path_factory.mktemp("base") / "p", seed, _lf)
+    mark = SEEDS[seed][4]
+
+    @settings(max_examples=6, deadline=None, derandomize=True, database=None,
+              suppress_health_check=list(HealthCheck))
+    @given(st.sampled_from([b"\n", b"\r\n", b"\r"]), st.booleans(), st.sampled_from(["", "utf-8", "cp1252"]),
+           st.booleans(), st.booleans())
+    def one(end, bom, encoding, blanks, tabs):
+        def variant(b):
+            return _variant(b, mark, end, bom, encoding, blanks, tabs)
+
+        account, got = _filtered(tmp_path_factory.mktemp("v") / "p", seed, variant)
+        assert account == base
+        assert got == {n: variant(b) for n, b in outputs.items()}
 
     one()

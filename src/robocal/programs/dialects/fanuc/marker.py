@@ -11,8 +11,9 @@ from robocal.core.errors import DataError
 from robocal.programs.dialects.fanuc.campaign import TP_REMARK_WIDTH
 from robocal.trust.output_marker import newline, shortened
 
-_LINE = re.compile(r"^[ \t]*(\d+):", re.M)
-_COUNT = re.compile(r"^(LINE_COUNT\s*=\s*)(\d+)", re.M)
+LINE_DIGITS = 9  # a TP line number or LINE_COUNT longer than this is no controller's (a mangled file)
+_LINE = re.compile(rf"^[ \t]*(\d{{1,{LINE_DIGITS}}}):", re.M)
+_COUNT = re.compile(rf"^(LINE_COUNT\s*=\s*)(\d{{1,{LINE_DIGITS}}})(?!\d)", re.M)
 
 
 def mark(text: str, body: str, note: str) -> str:
