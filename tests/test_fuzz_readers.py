@@ -172,3 +172,26 @@ def test_every_motion_accounted_the_same_whatever_the_bytes(seed, tmp_path_facto
         assert got == {n: variant(b) for n, b in outputs.items()}
 
     one()
+
+
+@pytest.mark.parametrize("end", [b"\r", b"\r\n", b"\n"])
+@pytest.mark.parametrize("files", [["arc_station.mod"], ["deburr_cell.src", "deburr_cell.dat"]])
+def test_added_routine_and_marker_keep_the_files_line_ends(files, end, tmp_path):
+    """--runtime-correction's routine and the provenance marker are written with the program's own
+    line ends: a CR-only RAPID module had them with LF (the routine was written for the text the
+    readers see, where a lone CR is LF; the marker's anchor knew only CRLF and LF)."""
+    robot = "abb_irb2600" if files[0].endswith(".mod") else "kuka_kr16_2"
+    paths = []
+    for f in files:
+        paths.append(tmp_path / f)
+        paths[-1].write_bytes(_lf((PROGRAMS / "corpus" / f).read_bytes()).replace(b"\n", end))
+    nominal = Robot.from_catalog(robot)
+    refs = [] if robot == "abb_irb2600" else [PROGRAMS / "corpus" / "$config.dat"]
+    res = filter_program(paths, perturbed(nominal, 7), nominal, references=refs, runtime_correction=True)
+    out = tmp_path / "out"
+    out.mkdir()
+    res.write({p: out / p.name for p in paths})
+    for p in paths:
+        data = (out / p.name).read_bytes()
+        assert data.count(end) == len(re.findall(rb"\r\n|\r|\n", data)), p.name
+        assert data.count(end) > p.read_bytes().count(end)  # the marker (and the routine) added

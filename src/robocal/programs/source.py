@@ -87,7 +87,14 @@ class ProgramText:
         # dialects read has it as LF, same length, so offsets and line numbers hold for both
         self.text = _LONE_CR.sub("\n", self.original) if "\r" in self.original else self.original
         self._lines = [0] + [m.end() for m in re.finditer("\n", self.text)]
+        first = re.search("\r\n|\n|\r", self.original)
+        self._lone_cr_file = first is not None and first.group() == "\r"
         self._masked: dict[tuple, str] = {}  # (blank, quoted) patterns -> the masked text
+
+    def in_file_line_ends(self, added: str) -> str:
+        """Text written for this file in the form of :attr:`text` (lines ended by LF) with the
+        file's own line ends: a lone CR in a CR-only file (CRLF and LF are kept as written)."""
+        return added.replace("\n", "\r") if self._lone_cr_file else added
 
     def masked(self, blank: list[re.Pattern], quoted: list[re.Pattern] = ()) -> str:
         """:func:`mask` of the text with these patterns, computed once (the reader and the load

@@ -159,9 +159,14 @@ def check_unmarked(text: str, where: str, action: str, force: bool = False) -> M
     return found
 
 
+_LINE_END = re.compile(r"\r\n|\n|\r")
+
+
 def newline(text: str) -> str:
-    """The line end ``text`` uses."""
-    return "\r\n" if "\r\n" in text else "\n"
+    """The line end ``text`` uses: its first one (CRLF, LF or a lone CR: an old controller's or a
+    Mac-era editor's file); LF when it has none."""
+    m = _LINE_END.search(text)
+    return m.group() if m else "\n"
 
 
 def insert_after(text: str, anchor: re.Pattern, line: str) -> str:
