@@ -195,3 +195,21 @@ def test_added_routine_and_marker_keep_the_files_line_ends(files, end, tmp_path)
         data = (out / p.name).read_bytes()
         assert data.count(end) == len(re.findall(rb"\r\n|\r|\n", data)), p.name
         assert data.count(end) > p.read_bytes().count(end)  # the marker (and the routine) added
+
+
+@pytest.mark.parametrize("end", [b"\n", b"\r\n", b"\r"])
+def test_a_backups_var_dat_saved_with_a_bom_is_read_the_same(end, tmp_path):
+    """A controller backup's VAR.DAT saved by a Windows editor (UTF-8 BOM before //VAR): it was
+    refused ("not a UFRAME.CND nor a TOOL.CND nor a VAR.DAT"); now read as without the BOM."""
+    import test_inform_variables as iv
+
+    forms = ["".join(map(str, iv.InformDialect().scheme.encode(iv.NOMINAL, iv.Q[k]).clip(0, 1))) + "0" * 18
+             for k in range(2)]
+    var = iv._backup_var(tmp_path, forms)
+    job = tmp_path / "B.JBI"
+    job.write_bytes(iv._job(["///NPOS 0,0,0,0,0,0"], [f"MOVL P{k:03d} V=100.0" for k in range(1, 6)]))
+    plain = filter_program([job], iv.CALIBRATED, iv.NOMINAL, references=[var])
+    var.write_bytes(b"\xef\xbb\xbf" + _lf(var.read_bytes()).replace(b"\n", end))
+    res = filter_program([job], iv.CALIBRATED, iv.NOMINAL, references=[var])
+    assert [m.as_dict() for m in res.motions] == [m.as_dict() for m in plain.motions]
+    assert res.summary_dict()["motions"] == {"total": 4, "corrected": 2, "named": 2}

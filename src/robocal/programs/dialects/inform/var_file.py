@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 from robocal.programs.source import ProgramText
 
-_HEAD = re.compile(r"^//VAR\s*$", re.MULTILINE)
+_HEAD = re.compile(r"^(?:\ufeff|\xef\xbb\xbf)?//VAR\s*$", re.MULTILINE)  # a BOM: saved by a Windows editor
 _P_SECTION = re.compile(r"^///P\s*$")
 _LINE = re.compile(r'^"(\w+)"')
 _USED = re.compile(r"(\d+),(\d+),(\d+),([01]{6,}),(\d+),(\d+),(.*)$")
