@@ -375,7 +375,31 @@ def _issue46_readers(folder: Path, gp180_cal: bytes) -> dict[str, Reader]:
     readers["krl_rt"] = _filter_reader(
         "krl_rt", {f: (corpus / f).read_bytes() for f in files}, files[:2], files[2:], "kuka_kr16_2",
         cals["kuka_kr16_2"], "outdir", ("--runtime-correction",))
+    readers["inform_cell"] = _cell_reader(folder)
     return readers
+
+
+def _cell_reader(folder: Path) -> Reader:
+    """A station-coordinated INFORM job filtered with a cell (nominal and calibrated cell files):
+    the job and the nominal cell file are mutated."""
+    import cell_programs as cp
+    import test_coordinated_programs as tc
+
+    nominal, _, calibrated = cp.cells(5, arm="yaskawa_gp25", unit="ST1", external_axes=(1, 2))
+    q, e, _ = cp.poses(nominal, 5)
+    sub = folder / "inform_cell"
+    sub.mkdir(exist_ok=True)
+    job = tc._inform_cell_job(sub, nominal.arms["arm"], q, e, cp.TOOL)
+    nominal.save(sub / "cell.yaml")
+    calibrated.save(sub / "calibrated_cell.yaml")
+
+    def argv(d):
+        return ["filter", str(d / job.name), "--calibrated", str(d / "calibrated_cell.yaml"), "--nominal",
+                str(d / "cell.yaml"), "--tool", "1=0,0,250,0,20,0", "-o", str(d / "out.JBI")]
+
+    files = {n: (sub / n).read_bytes() for n in (job.name, "cell.yaml", "calibrated_cell.yaml")}
+    return Reader("inform_cell", files, [job.name, "cell.yaml"], argv, ["out.JBI"],
+                  extra={"programs": [job.name]})
 
 
 # ----------------------------------------------------------------- mutations

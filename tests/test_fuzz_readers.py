@@ -28,10 +28,9 @@ from robocal.programs import filter_program
 READERS = ["csv_point", "csv_pose", "csv_plane", "csv_distance", "import_rows", "import_files",
            "model_abb_irb2600", "model_ur5", "model_puma560", "model_saved", "urdf", "result_json",
            "rapid", "krl", "fanuc", "urscript", "inform", "fanuc_posreg", "inform_var", "inform_var_backup",
-           "val3_s6", "rapid_rt", "krl_rt"]
+           "val3_s6", "rapid_rt", "krl_rt", "inform_cell"]
 SLOWER = ["urscript", "fanuc", "inform", "fanuc_posreg", "inform_var", "inform_var_backup", "val3_s6",
-          "rapid_rt",
-          "krl_rt"]
+          "rapid_rt", "krl_rt", "inform_cell"]
 EXAMPLES = {"result_json": 15, **dict.fromkeys(SLOWER, 20)}  # the slower readers (default 30)
 
 
