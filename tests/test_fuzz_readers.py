@@ -212,3 +212,17 @@ def test_a_backups_var_dat_saved_with_a_bom_is_read_the_same(end, tmp_path):
     res = filter_program([job], iv.CALIBRATED, iv.NOMINAL, references=[var])
     assert [m.as_dict() for m in res.motions] == [m.as_dict() for m in plain.motions]
     assert res.summary_dict()["motions"] == {"total": 4, "corrected": 2, "named": 2}
+
+
+def test_a_var_dat_line_with_a_type_of_thousands_of_digits_is_named(tmp_path):
+    """A backup VAR.DAT line whose coordinate type has 5,000 digits: int() raised ValueError
+    (internal error); now the line is not a variable's and its motion is named."""
+    import test_inform_variables as iv
+
+    var = iv._backup_var(tmp_path, ["0" * 24, "0" * 24])
+    data = var.read_bytes()
+    var.write_bytes(data.replace(b"0,0,2,-76037", b"0," + b"1" * 5000 + b",2,-76037", 1))
+    job = tmp_path / "B.JBI"
+    job.write_bytes(iv._job(["///NPOS 0,0,0,0,0,0"], [f"MOVL P{k:03d} V=100.0" for k in range(1, 6)]))
+    res = filter_program([job], iv.CALIBRATED, iv.NOMINAL, references=[var], keep_unreached=True)
+    assert any(m.reason.startswith("P001's line in VAR.DAT is not") for m in res.motions)
