@@ -588,8 +588,8 @@ def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, std
 
 
 _MASK = re.compile(rb"[ \t]*" + NUMBER.pattern)
-# VAL3 s6 writes an absent coordinate as a new attribute of its value element
-_VALUE, _VALUE_ATTR = re.compile(rb"<\w+Value\b"), re.compile(rb'\s+\w+="#"')
+# VAL3 s6 writes an absent coordinate as a new attribute of the element holding the others
+_VALUE, _VALUE_ATTR = re.compile(rb'<\w[^>]*="#"'), re.compile(rb'\s+\w+="#"')
 
 
 def _edit_outside_numbers(reader: Reader, target: str, data: bytes, folder: Path) -> str | None:
