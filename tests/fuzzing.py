@@ -588,8 +588,14 @@ def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, std
 
 
 _MASK = re.compile(rb"[ \t]*" + NUMBER.pattern)
-# VAL3 s6 writes an absent coordinate as a new attribute of the element holding the others
-_VALUE, _VALUE_ATTR = re.compile(rb'<\w[^>]*="#"'), re.compile(rb'\s+\w+="#"')
+# VAL3 writes an absent coordinate as a new attribute of the element holding the others: a line's
+# coordinate attributes compare as one mark (so one added to an element that had none still shows)
+_COORD = re.compile(rb'\s+(?:x|y|z|rx|ry|rz)="#"', re.I)
+
+
+def _coords_as_one(line: bytes) -> bytes:
+    new = _COORD.sub(b"", line)
+    return new + b" @" if new != line else line
 
 
 def _edit_outside_numbers(reader: Reader, target: str, data: bytes, folder: Path) -> str | None:
@@ -601,8 +607,8 @@ def _edit_outside_numbers(reader: Reader, target: str, data: bytes, folder: Path
         if not out.is_file():
             continue
         source = data if name == target else reader.files[name]
-        old, new = ([_VALUE_ATTR.sub(b"", ln) if _VALUE.search(ln) else ln
-                     for ln in _MASK.sub(b"#", b).splitlines()] for b in (source, out.read_bytes()))
+        old, new = ([_coords_as_one(ln) for ln in _MASK.sub(b"#", b).splitlines()]
+                    for b in (source, out.read_bytes()))
         changed = [op for op in difflib.SequenceMatcher(None, old, new, autojunk=False).get_opcodes()
                    if op[0] in ("replace", "delete")]
         if changed:
