@@ -226,3 +226,27 @@ def test_a_var_dat_line_with_a_type_of_thousands_of_digits_is_named(tmp_path):
     job.write_bytes(iv._job(["///NPOS 0,0,0,0,0,0"], [f"MOVL P{k:03d} V=100.0" for k in range(1, 6)]))
     res = filter_program([job], iv.CALIBRATED, iv.NOMINAL, references=[var], keep_unreached=True)
     assert any(m.reason.startswith("P001's line in VAR.DAT is not") for m in res.motions)
+
+
+def test_fanuc_marker_of_a_program_cut_short_is_a_line_of_its_own(tmp_path):
+    """A .ls cut inside /MN (no /POS, no line end at its end) moving to PR[] of the POSREG.VA given:
+    the provenance remark was glued to the last instruction (`L PR[17:DROP] 100mm/sec FI  19:  !robocal
+    ...`), changing it; now on its own line."""
+    import test_fanuc_posreg as fp
+
+    backup = PROGRAMS.parent / "fanuc_backup"
+    text = fp.PALLET.replace("\n", "\r\n").encode()
+    path = tmp_path / "PALLET.ls"
+    path.write_bytes(text[:text.index(b"/POS")].rstrip(b"\r\n ;"))
+    out = tmp_path / "out.ls"
+    code = main(["--quiet", "filter", str(path), "--references", str(backup / "POSREG.VA"),
+                 str(backup / "SYSFRAME.VA"), "--calibrated", str(_cal(tmp_path, "fanuc_m20ia")),
+                 "--nominal", "fanuc_m20ia", "-o", str(out)])
+    assert code == 0
+    lines = out.read_bytes().splitlines()
+    marks = [ln for ln in lines if b"robocal" in ln]
+    assert len(marks) == 1 and re.match(rb" *\d+:  !robocal", marks[0]), marks
+    def masked(rows):
+        return [re.sub(rb"\d+", b"#", ln) for ln in rows]
+
+    assert masked(lines[:-1]) == masked(path.read_bytes().splitlines())  # only numbers (LINE_COUNT) changed

@@ -26,7 +26,7 @@ def mark(text: str, body: str, note: str) -> str:
     nl = newline(text)
     body = shortened(body, TP_REMARK_WIDTH)
     remark = f"{max(numbers, default=0) + 1:>4}:  !{body} ;{nl}"
-    if stop < len(text) and not text[:stop].endswith("\n"):
+    if not text[:stop].endswith(("\n", "\r")):  # its own line, also after a last line without end
         remark = nl + remark
     out = text[:stop] + remark + text[stop:]
     return _COUNT.sub(lambda m: f"{m.group(1)}{int(m.group(2)) + 1}", out, count=1)
