@@ -250,3 +250,26 @@ def test_fanuc_marker_of_a_program_cut_short_is_a_line_of_its_own(tmp_path):
         return [re.sub(rb"\d+", b"#", ln) for ln in rows]
 
     assert masked(lines[:-1]) == masked(path.read_bytes().splitlines())  # only numbers (LINE_COUNT) changed
+
+
+@pytest.mark.parametrize("seed", list(SEEDS))
+def test_the_marker_leaves_a_bom_first_and_is_found_again(seed, tmp_path):
+    """A file saved with a UTF-8 BOM: the provenance marker went before the BOM in RAPID (MODULE on
+    the BOM's line was not found) and URScript (marker as first line), moving the BOM into the text;
+    now the BOM stays first, and filtering the output again is refused as before."""
+    files, refs, robot, options, _ = SEEDS[seed]
+    for f in files + refs:
+        (tmp_path / Path(f).name).write_bytes(b"\xef\xbb\xbf" + (PROGRAMS / f).read_bytes())
+    paths = [tmp_path / Path(f).name for f in files]
+    nominal = Robot.from_catalog(robot)
+    res = filter_program(paths, perturbed(nominal, 7), nominal,
+                         references=[tmp_path / Path(f).name for f in refs], **options)
+    out = tmp_path / "out"
+    out.mkdir()
+    res.write({p: out / p.name for p in paths})
+    for p in paths:
+        data = (out / p.name).read_bytes()
+        assert data.startswith(b"\xef\xbb\xbf") and data.count(b"\xef\xbb\xbf") == 1, p.name
+    with pytest.raises(DataError, match="already filtered"):
+        filter_program([out / p.name for p in paths], perturbed(nominal, 7), nominal,
+                       references=[tmp_path / Path(f).name for f in refs], **options)
