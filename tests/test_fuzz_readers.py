@@ -273,3 +273,22 @@ def test_the_marker_leaves_a_bom_first_and_is_found_again(seed, tmp_path):
     with pytest.raises(DataError, match="already filtered"):
         filter_program([out / p.name for p in paths], perturbed(nominal, 7), nominal,
                        references=[tmp_path / Path(f).name for f in refs], **options)
+
+
+@pytest.mark.parametrize("end", [b"\r", b"\r\n", b"\n"])
+@pytest.mark.parametrize("seed", list(SEEDS))
+def test_the_written_program_keeps_its_line_ends(seed, end, tmp_path):
+    """The filtered file as written (with its provenance marker) has the input's line ends only."""
+    files, refs, robot, options, _ = SEEDS[seed]
+    for f in files + refs:
+        (tmp_path / Path(f).name).write_bytes(_lf((PROGRAMS / f).read_bytes()).replace(b"\n", end))
+    paths = [tmp_path / Path(f).name for f in files]
+    nominal = Robot.from_catalog(robot)
+    res = filter_program(paths, perturbed(nominal, 7), nominal,
+                         references=[tmp_path / Path(f).name for f in refs], **options)
+    out = tmp_path / "out"
+    out.mkdir()
+    res.write({p: out / p.name for p in paths})
+    for p in paths:
+        data = (out / p.name).read_bytes()
+        assert data.count(end) == len(re.findall(rb"\r\n|\r|\n", data)) > p.read_bytes().count(end), p.name
