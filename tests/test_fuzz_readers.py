@@ -292,3 +292,19 @@ def test_the_written_program_keeps_its_line_ends(seed, end, tmp_path):
     for p in paths:
         data = (out / p.name).read_bytes()
         assert data.count(end) == len(re.findall(rb"\r\n|\r|\n", data)) > p.read_bytes().count(end), p.name
+
+
+def test_a_fanuc_remark_naming_a_section_is_no_section(tmp_path):
+    """`! see /POS` in a remark of /MN: the reader took it for the /POS section and refused the valid
+    program ("malformed position block"); the marker would have gone into that remark. A section
+    header starts a line."""
+    files, refs, robot, options, _ = SEEDS["fanuc"]
+    data = (PROGRAMS / "sealing.ls").read_bytes()
+    path = tmp_path / "sealing.ls"
+    path.write_bytes(data.replace(b"!Sealing of the lid", b"!Sealing of the lid, see /POS and /END", 1))
+    nominal = Robot.from_catalog(robot)
+    res = filter_program([path], perturbed(nominal, 7), nominal, **options)
+    assert res.summary_dict()["motions"] == {"total": 4, "corrected": 4, "named": 0}
+    out = tmp_path / "out.ls"
+    res.write(out)
+    assert re.search(rb"\n *\d+:  !robocal[^\n]*\n/POS", out.read_bytes())

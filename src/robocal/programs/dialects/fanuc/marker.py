@@ -9,6 +9,7 @@ import re
 
 from robocal.core.errors import DataError
 from robocal.programs.dialects.fanuc.campaign import TP_REMARK_WIDTH
+from robocal.programs.dialects.fanuc.sections import section
 from robocal.trust.output_marker import newline, shortened
 
 LINE_DIGITS = 9  # a TP line number or LINE_COUNT longer than this is no controller's (a mangled file)
@@ -18,7 +19,7 @@ _COUNT = re.compile(rf"^(LINE_COUNT\s*=\s*)(\d{{1,{LINE_DIGITS}}})(?!\d)", re.M)
 
 def mark(text: str, body: str, note: str) -> str:
     """``text`` with the remark ``!body`` (cut to fit) as the last line of /MN."""
-    start, stop = text.find("/MN"), text.find("/POS")
+    start, stop = section(text, "MN"), section(text, "POS")
     if start < 0:
         raise DataError("a FANUC .ls program without /MN cannot carry a provenance marker")
     stop = len(text) if stop < start else stop
