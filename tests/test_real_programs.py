@@ -329,3 +329,167 @@ def test_a_cells_positioner_axes_are_not_weighed(tmp_path):
     res = filter_program(path, perturbed(arm, 7), arm, keep_unreached=True)
     assert res.summary_dict()["motions"] == {"total": 3, "corrected": 0, "named": 3}
     assert all("eax_b varies (-30 .. 60) over 3 target(s)" in m.reason for m in res.motions)
+
+
+# a weld task's module with a calibration module given as --references (written the way the
+# zhongxun RAPID application is: the reference holds its own CRobT/RelTool motions and a routine
+# moving to its parameter; the task calls it with one of its own constant targets)
+CALIB_MODULE = "\n".join([
+    "MODULE CalibData", f"PERS tooldata toolWeldGun:={TOOL};", "VAR robtarget pTCP;",
+    "PROC rCheckTcp()", "pTCP:=CRobT(\\Tool:=toolWeldGun);",
+    "MoveL RelTool(pTCP,0,0,-30),v100,fine,toolWeldGun;", "MoveL RelTool(pTCP,0,0,30),v100,fine,toolWeldGun;",
+    "ENDPROC", "PROC rGoTo(robtarget ToPoint)", "MoveJ ToPoint,v200,z10,toolWeldGun;", "ENDPROC",
+    "ENDMODULE", ""])
+WELD_MODULE = "\n".join([
+    "MODULE WeldTest",
+    "CONST robtarget pHome:=[[1200.00,300.00,900.00],[0,0.7071068,0.7071068,0],[0,0,0,0],"
+    "[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST robtarget pApp:=[[1250.00,250.00,850.00],[0,0.7071068,0.7071068,0],[0,0,0,0],"
+    "[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "PROC main()", "rCheckTcp;", "MoveL pHome,v200,fine,toolWeldGun;", "rGoTo pApp;", "ENDPROC",
+    "ENDMODULE", ""])
+
+
+def test_a_reference_modules_motions_are_not_the_programs(tmp_path):
+    """The motions of a module given as a reference are not the program's (it is never written):
+    the program's account holds its own motion instructions only (total == its hand count, 1),
+    the reference's run-time motions are not named in it, and a constant target of the program
+    the reference's routine moves to is still corrected."""
+    prog, ref = tmp_path / "WeldTest.mod", tmp_path / "CalibData.mod"
+    prog.write_text(WELD_MODULE)
+    ref.write_text(CALIB_MODULE)
+    res = filter_program(prog, perturbed(ABB, 3), ABB, references=[ref])
+    records = [m.as_dict() for m in res.motions]
+    assert [(r["file"], r["status"]) for r in records] == [("WeldTest.mod", "corrected")]
+    assert not any("CRobT" in w for w in res.warnings)
+    assert {r["name"].lower() for r in res.rows} == {"phome", "papp"}
+    assert res.outputs[prog] != prog.read_bytes()
+    assert ref not in res.outputs
+
+
+# a seam found by touch sensing (written the way the zhongxun SmarTac module is): the work object
+# obNEW is recomputed from three searched points (OFrameChange) before the weld runs in it, and a
+# touch-up shifts it by a field; the declaration holds only the last run's value
+SMARTAC_MODULE = "\n".join([
+    "MODULE SmarTacTest", f"PERS tooldata toolWeldGun:={TOOL};",
+    'PERS wobjdata obREF:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];',
+    'PERS wobjdata obNEW:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[-7.29398,-15.2142,-3.66034],'
+    '[0.999905,-3.29978E-05,0.0025619,-0.0135815]]];',
+    'PERS wobjdata obTouch:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];',
+    "CONST robtarget pOFrame1:=[[1200.00,300.00,900.00],[0,0.7071068,0.7071068,0],[0,0,0,0],"
+    "[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST robtarget pOFrameWeld1:=[[1250.00,250.00,850.00],[0,0.7071068,0.7071068,0],[0,0,0,0],"
+    "[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST robtarget pOFrameHome:=[[1150.00,200.00,950.00],[0,0.7071068,0.7071068,0],[0,0,0,0],"
+    "[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "PROC WeldByWobjOFrame()", "MoveL pOFrameHome,v200,fine,toolWeldGun\\WObj:=obREF;",
+    "MoveL pOFrame1,v200,fine,toolWeldGun\\WObj:=obREF;",
+    "obNEW:=OFrameChange(obREF,pOFrame1,pOFrame1,pOFrame1,pOFrame1,pOFrame1,pOFrame1);",
+    "MoveL pOFrameWeld1,v200,fine,toolWeldGun\\WObj:=obNEW;",
+    "obTouch.oframe.trans.x:=obTouch.oframe.trans.x+5;", "toolWeldGun.tload.mass:=4.5;",
+    "MoveL pOFrame1,v20,fine,toolWeldGun\\WObj:=obTouch;", "ENDPROC", "ENDMODULE", ""])
+
+
+def test_a_work_object_the_program_computes_names_its_motions(tmp_path):
+    """A motion in a work object the program assigns (whole or a field) moves to a place in the
+    world known only at run time: it is named with where the work object is written, not
+    corrected with the declaration's stale value; a target also moved to in the fixed obREF is
+    corrected for neither (its corrected numbers would move the run-time motion too); a target
+    moved to in obREF only is corrected (a change of the tool's load, toolWeldGun.tload, moves no
+    target)."""
+    prog = tmp_path / "SmarTacTest.mod"
+    prog.write_text(SMARTAC_MODULE)
+    res = filter_program(prog, perturbed(ABB, 3), ABB)
+    records = [m.as_dict() for m in res.motions]
+    assert [r["status"] for r in records] == ["corrected", "named", "named", "named"]
+    assert "pOFrame1 is also moved to at SmarTacTest.mod:16, where the work object obTouch is " \
+           "assigned at run time (SmarTacTest.mod:14)" in records[1]["reason"]
+    assert "work object obNEW is assigned at run time (SmarTacTest.mod:12)" in records[2]["reason"]
+    assert "work object obTouch is assigned at run time (SmarTacTest.mod:14)" in records[3]["reason"]
+    assert [r["name"] for r in res.rows] == ["pOFrameHome"]
+    lines = zip(SMARTAC_MODULE.splitlines(), res.outputs[prog].decode().splitlines(), strict=True)
+    changed = [a for a, b in lines if a != b]
+    assert len(changed) == 1 and changed[0].startswith("CONST robtarget pOFrameHome")
+
+
+# a palletizing program written the way the errekaSmartPal KRC backup's are (KRC 4.1 inline forms):
+# the pallet's base is shifted layer by layer by a field of BASE_DATA[3] before the place motions;
+# the conveyor's motions run in BASE_DATA[1], which no routine writes ($config.dat holds both)
+KR = rc.Robot.from_catalog("kuka_kr120_r2500")
+PALLET_SRC = "\n".join([
+    "&ACCESS RVP", "&REL 7", "DEF paletizado( )", ";FOLD INI", "  BAS (#INITMOV,0 )", ";ENDFOLD (INI)",
+    "INT capa", "FOR capa=1 TO 3",
+    ";FOLD LIN FrenteCinta CONT Vel= 2 m/s CPDAT1 Tool[1] Base[1];%{PE}%R 4.1.16,%MKUKATPBASIS,%CMOVE,"
+    "%VLIN,%P 1:LIN, 2:FrenteCinta, 3:C_DIS, 5:2, 7:CPDAT1",
+    "$BWDSTART=FALSE", "LDAT_ACT=LCPDAT1", "FDAT_ACT=FFrenteCinta", "BAS(#CP_PARAMS,2)",
+    "LIN XFrenteCinta C_DIS",
+    ";ENDFOLD",
+    "BASE_DATA[3].Z=BASE_DATA[3].Z+120",
+    ";FOLD LIN Dejar CONT Vel= 2 m/s CPDAT1 Tool[1] Base[3];%{PE}%R 4.1.16,%MKUKATPBASIS,%CMOVE,%VLIN,"
+    "%P 1:LIN, 2:Dejar, 3:C_DIS, 5:2, 7:CPDAT1",
+    "$BWDSTART=FALSE", "LDAT_ACT=LCPDAT1", "FDAT_ACT=FDejar", "BAS(#CP_PARAMS,2)", "LIN XDejar C_DIS",
+    ";ENDFOLD", "ENDFOR", "END", ""])
+PALLET_DAT = "\n".join([
+    "&ACCESS RVP", "&REL 7", "DEFDAT  PALETIZADO",
+    "DECL E6POS XFrenteCinta={x 1586.7,y 475.2,z 1277.2,a 88.45,b -44.99,c -179.53,s 2,t 43,e1 0.0,e2 0.0,"
+    "e3 0.0,e4 0.0,e5 0.0,e6 0.0}",
+    "DECL FDAT FFrenteCinta={TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE}",
+    "DECL E6POS XDejar={x 200.7,y 356.5,z 302.6,a -0.09,b 1.01,c -178.34,s 6,t 50,e1 0.0,e2 0.0,e3 0.0,"
+    "e4 0.0,e5 0.0,e6 0.0}",
+    "DECL FDAT FDejar={TOOL_NO 1,BASE_NO 3,IPO_FRAME #BASE}",
+    "DECL LDAT LCPDAT1={VEL 2.0,ACC 100.0,APO_DIST 100.0}", "ENDDAT", ""])
+PALLET_CONFIG = "\n".join([
+    "DEFDAT  $CONFIG", "DECL FRAME TOOL_DATA[16]", "TOOL_DATA[1]={x 0.0,y 0.0,z 540.0,a 0.0,b 0.0,c 0.0}",
+    "DECL FRAME BASE_DATA[32]", "BASE_DATA[1]={x 0.0,y 0.0,z 0.0,a 0.0,b 0.0,c 0.0}",
+    "BASE_DATA[3]={x 1200.0,y -1400.0,z 300.0,a 0.0,b 0.0,c 0.0}", "ENDDAT", ""])
+
+
+def test_a_base_the_program_shifts_names_its_motions(tmp_path):
+    """A motion in BASE_DATA[3], which the program shifts by a field at run time, is named with
+    where (not corrected with $config.dat's stale value); the motion in BASE_DATA[1] is corrected."""
+    src, dat, config = tmp_path / "paletizado.src", tmp_path / "paletizado.dat", tmp_path / "$config.dat"
+    src.write_text(PALLET_SRC)
+    dat.write_text(PALLET_DAT)
+    config.write_text(PALLET_CONFIG)
+    res = filter_program([src, dat], perturbed(KR, 3), KR, references=[config])
+    records = [m.as_dict() for m in res.motions]
+    assert [r["status"] for r in records] == ["corrected", "named"]
+    assert "BASE_DATA[3] is written by the program at run time (paletizado.src:16)" in records[1]["reason"]
+    assert [r["name"] for r in res.rows] == ["XFrenteCinta"]
+
+
+# a FANUC pick program written the way the VASC cells' are (R-30iB, TC_ONLINE, ACC, TB): user frame 2
+# is taught again at run time from a searched register (UFRAME[2]=PR[20]) before the picks in it;
+# the approach position is taught in user frame 1, which no line writes
+FANUC = rc.Robot.from_catalog("fanuc_m20ia")
+
+
+def _fanuc_position(n: int, uf: int, xyz: tuple[float, float, float]) -> str:
+    return "\n".join([
+        f"P[{n}]{{", "   GP1:", f"\tUF : {uf}, UT : 1,\t\tCONFIG : 'N U T, 0, 0, 0',",
+        f"\tX =  {xyz[0]:.3f}  mm,\tY =  {xyz[1]:.3f}  mm,\tZ =  {xyz[2]:.3f}  mm,",
+        "\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg", "};"])
+
+
+PICK_LS = "\n".join([
+    "/PROG  UP021", "/ATTR", "OWNER\t\t= MNEDITOR;", 'COMMENT\t\t= "Tomar en ST1540";',
+    "DEFAULT_GROUP\t= 1,*,*,*,*;", "/MN", "   1:  UFRAME_NUM=1 ;", "   2:  UTOOL_NUM=1 ;",
+    "   3:J P[1] 100% CNT0 ACC100 TB    .10sec,P-SPS    ;", "   4:  UFRAME[2]=PR[20] ;",
+    "   5:  UFRAME_NUM=2 ;", "   6:L P[2] 2000mm/sec CNT100 ACC100    ;", "   7:L P[3] 500mm/sec FINE    ;",
+    "/POS", _fanuc_position(1, 1, (1200.0, 0.0, 600.0)), _fanuc_position(2, 2, (150.0, 80.0, 120.0)),
+    _fanuc_position(3, 2, (150.0, 80.0, 20.0)), "/END", ""])
+
+
+def test_a_user_frame_the_program_writes_names_its_motions(tmp_path):
+    """Positions taught in user frame 2, which the program writes at run time (UFRAME[2]=PR[20]),
+    are named with the line that writes it (not corrected with the frame given, a stale value);
+    the position in user frame 1 is corrected."""
+    prog = tmp_path / "UP021.LS"
+    prog.write_text(PICK_LS)
+    res = filter_program(prog, perturbed(FANUC, 3), FANUC, tools={"1": "0,0,150,0,0,0"},
+                         frames={"1": "0,0,0,0,0,0", "2": "900,-300,400,0,0,0"})
+    records = [m.as_dict() for m in res.motions]
+    assert [r["status"] for r in records] == ["corrected", "named", "named"]
+    assert all("user frame UFRAME[2] is written by the program at run time (UP021.LS:10)" in r["reason"]
+               for r in records[1:])
+    assert [r["name"] for r in res.rows] == ["P[1]"]

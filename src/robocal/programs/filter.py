@@ -57,11 +57,11 @@ from robocal.programs.motions import undeclared
 from robocal.programs.positioner import CoordinatedProgram, cell_models
 from robocal.programs.registry import capable, dialect_for, program_files
 from robocal.programs.result import LISTED, FilterResult, collapse
-from robocal.programs.runtime import ROUTED, ROUTINE_NAME, RunTime, calibrated_chain, routed_sites
+from robocal.programs.routing import Routing
 from robocal.programs.source import ProgramText
 from robocal.programs.track import track_program
 from robocal.trust.coverage import Prediction, target_warnings
-from robocal.trust.output_marker import check_unmarked, marker_text
+from robocal.trust.output_marker import check_unmarked
 
 CONTROLLER_JOINTS = 6  # the programs the dialects read drive 6-axis arms (a few a SCARA too)
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
@@ -409,7 +409,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     res, declared_tools = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,
                                     references, keep_unreached, strict, force, position_registers, payload,
                                     temperature, payload_schedules, coordinated, fixed_base,
-                                    runtime_correction)
+                                    Routing(calibrated, nominal, robot_base, fixed_base) if runtime_correction
+                                    else None)
     res.warnings[:0] = unused_conditions(calibrated, payload, temperature)
     if prediction is not None and res.joints is not None:
         res.warnings += target_warnings(prediction, calibrated, res.joints)
@@ -423,23 +424,17 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
               dialect: str | None, references: list, keep_unreached: bool, strict: bool, force: bool,
               position_registers, payload, temperature, payload_schedules,
               coordinated: CoordinatedProgram | None, fixed_base: bool = False,
-              runtime_correction: bool = False) -> tuple[FilterResult, dict[str, np.ndarray]]:
+              routing: Routing | None = None) -> tuple[FilterResult, dict[str, np.ndarray]]:
     """:func:`filter_program` of the files ``given`` (an application folder among them), without
     the warnings and checks of what the user gave, and the tool data the files hold without
-    ``tools`` (`Program.declared_tools`, which the ``tools`` are checked against)."""
+    ``tools`` (`Program.declared_tools`, which the ``tools`` are checked against); ``routing``:
+    the run-time correction (``runtime_correction``), None without."""
     paths = program_files(given)  # an application folder: its files
     if not paths:
         raise DataError("no program file given")
     track = track_program(nominal)  # an arm on a track: programs/track.py
     d = dialect_for(paths, dialect)
-    scara = is_scara(nominal) and d.scara_programs  # a language whose programs drive a SCARA
-    if nominal.n_joints != CONTROLLER_JOINTS and track is None and not scara:
-        scara_languages = ", ".join(c.name for c in capable("scara_programs"))
-        raise DataError(f"the programs of these controllers drive {CONTROLLER_JOINTS}-axis arms; the nominal "
-                        f"model {nominal.name!r} has {nominal.n_joints} joints (an arm on a track: give "
-                        "its cell model; a SCARA: its programs are read in "
-                        f"{scara_languages} only, Epson SPEL+ is not a language robocal reads)")
-    controller = nominal if track is None else track.arm  # the arm the controller solves for
+    controller = _controller_arm(d, nominal, track)
     sources = [ProgramText(p) for p in paths]
     for s in sources:
         check_unmarked(s.text, str(s.path), "filtered", force)
@@ -448,8 +443,8 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
             vendors = " / ".join(c.vendor for c in capable("position_registers"))
             raise DataError(f"--position-registers is for {vendors} programs, not {d.name}")
         sources.append(ProgramText(position_registers))
-    if runtime_correction:
-        _check_runtime(d, track is None and coordinated is None, tcp)
+    if routing is not None:
+        routing.check(d, track is None and coordinated is None, tcp)
     refs = [ProgramText(p) for p in references]
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
     missing = undeclared(program.ledger)
@@ -464,11 +459,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     if not targets:
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
-        records = program.ledger.records(set(), program.not_corrected)
-        outputs = {s.path: s.data for s in sources}
-        if runtime_correction:
-            records, outputs = _runtime(d, program, sources, set(), records, {}, calibrated, nominal,
-                                        robot_base, warnings, fixed_base)
+        records, outputs = _written(d, program, sources, set(), {}, routing, warnings)
         return FilterResult(d.name, outputs, [], warnings, program.uncorrected, records, language=d), \
             program.declared_tools
     loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, payload_schedules)
@@ -477,14 +468,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     if coordinated is not None:  # frames on a positioner's plate: in the world at each target's values
         W, W_real = coordinated.frames(targets, W)
     X = W @ P
-    real = {d.name_key(k): v for k, v in (tcp or {}).items()}
-    unknown_tcp = sorted(set(real) - {t.tool for t in targets})
-    if unknown_tcp:
-        raise DataError(f"--tcp names tool(s) {unknown_tcp} that no filtered target uses; the targets use "
-                        f"{sorted({t.tool for t in targets})}")
-    _check_tcp(real, program.tools, warnings)
-    real_tool = np.array([np.asarray(real[t.tool], float) if t.tool in real else program.tools[t.tool]
-                          for t in targets])
+    real_tool = _real_tools(d, tcp, program, targets, warnings)
     problems: list[tuple[int, str]] = []
     F = X @ invert_transform(tool)
     q_nom = controller_joints(d, program, targets, controller, F if track is None else track.in_arm_frame(
@@ -504,19 +488,9 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     q, sing = comp.joints, comp.singularity
     warnings += comp.assumed
     _check_joints(controller, comp, ok, problems)
-    if coordinated is None:  # external-axis values that may move the arm, said in the reason
-        loose = track is None and not fixed_base  # values that may move the arm
-        problems = [(i, unreached_reason(targets[i], why, loose)) for i, why in problems]
-    bad = {i for i, _ in problems}
-    if problems and not keep_unreached:
-        problems.sort()
-        raise _listed(f"{len(bad)} target(s) cannot be corrected:",
-                      collapse([f"{targets[i].where}: {why}" for i, why in problems]),
-                      "nothing was written; fix or remove these targets (or use --keep-unreached to leave "
-                      "them unchanged)")
-    warnings += [f"{targets[i].where}: left unchanged: {why}" for i, why in sorted(problems)]
-    program.not_corrected.update({id(targets[i]): f"left unchanged: {why}" for i, why in problems})
-    good = np.array([i not in bad for i in range(len(targets))])
+    # external-axis values that may move the arm (no positioner's cell), said in the reason
+    loose = None if coordinated is not None else track is None and not fixed_base
+    good = _left_unchanged(program, targets, problems, loose, keep_unreached, warnings)
     Pc = np.where(good[:, None, None], invert_transform(W) @ comp.corrected_targets @ tool, P)
     cfg = None
     if d.scheme is not None:
@@ -524,12 +498,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     edits, changed = number_edits(d, targets, values, good, Pc, cfg, warnings)
     warnings += comp.target_warnings([t.where for t in targets], good)  # corrected ones near a singularity
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
-    records = program.ledger.records(corrected, program.not_corrected)
-    if runtime_correction:
-        records, outputs = _runtime(d, program, sources, corrected, records, edits, calibrated, nominal,
-                                    robot_base, warnings, fixed_base)
-    else:
-        outputs = {s.path: edits.pop(s.path, FileEdits()).apply(s) for s in sources}  # edits freed once used
+    records, outputs = _written(d, program, sources, corrected, edits, routing, warnings)
     # targets a reference holds (FANUC POSREG.VA, INFORM VAR.DAT): the dialect's own file delivers them
     outputs.update(d.reference_outputs(program, refs, {r.path: edits.pop(r.path, FileEdits()).apply(r)
                                                        for r in refs}, set(program.not_corrected)))
@@ -540,60 +509,65 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
                         language=d), program.declared_tools
 
 
-def _check_runtime(d: Dialect, arm_alone: bool, tcp) -> None:
-    """Refuse ``runtime_correction`` where no routine can be written: a language without the
-    capability, an arm on a track or with a positioner, a real TCP (--tcp)."""
-    if not d.runtime_correction:
-        able = ", ".join(c.name for c in capable("runtime_correction"))
-        raise DataError(f"--runtime-correction writes routines in {able}, not {d.name}")
-    if not arm_alone:
-        raise DataError("--runtime-correction corrects an arm alone: not an arm on a track or with a "
-                        "positioner")
-    if tcp:
-        raise DataError("--runtime-correction computes with the program's tool data: it cannot be combined "
-                        "with --tcp")
+def _left_unchanged(program: Program, targets: list[Target], problems: list[tuple[int, str]],
+                    loose: bool | None, keep_unreached: bool, warnings: list) -> np.ndarray:
+    """Which ``targets`` are corrected ``(N,)`` bool: not those of ``problems`` (index, why), each
+    named in ``program.not_corrected`` and ``warnings`` as left unchanged (the reason saying when
+    its external-axis values may move the arm: ``loose``, None: the values are a cell's, not
+    said); a ListedError naming them all unless ``keep_unreached``."""
+    if loose is not None:
+        problems = [(i, unreached_reason(targets[i], why, loose)) for i, why in problems]
+    bad = {i for i, _ in problems}
+    if problems and not keep_unreached:
+        problems.sort()
+        raise _listed(f"{len(bad)} target(s) cannot be corrected:",
+                      collapse([f"{targets[i].where}: {why}" for i, why in problems]),
+                      "nothing was written; fix or remove these targets (or use --keep-unreached to leave "
+                      "them unchanged)")
+    warnings += [f"{targets[i].where}: left unchanged: {why}" for i, why in sorted(problems)]
+    program.not_corrected.update({id(targets[i]): f"left unchanged: {why}" for i, why in problems})
+    return np.array([i not in bad for i in range(len(targets))])
 
 
-def _runtime(d: Dialect, program: Program, sources: list[ProgramText], corrected: set[int], records: list,
-             edits: dict, calibrated: Robot, nominal: Robot, robot_base, warnings: list, fixed_base: bool):
-    """``(records, outputs)`` with the motions whose target is computed at run time routed through
-    the language's run-time correction (:mod:`robocal.programs.runtime`), its routine added to each
-    file holding one; every other motion's record and every other byte as they were. None is
-    routed when the program's targets move external axes that may carry the arm (the routine's
-    chain is the arm alone) unless ``fixed_base`` says none does."""
-    sites, why_not = routed_sites(program, corrected)
-    used = [t for _, _, t in program.motions if isinstance(t, Target)]  # every target a motion reaches
-    used += [t for s in sites for w in s.account.named if isinstance(w, RunTime) for t in w.sources]
-    # an axis at its zero leaves the arm where its model puts it (KRL writes E1..E6 = 0 on every E6POS)
-    axes = sorted({a for t in used for a, v in t.axes.items() if a in d.arm_axes and v != 0})
-    if sites and axes and not fixed_base:
-        why_not = [f"--runtime-correction: no motion routed: the targets move external axes "
-                   f"({', '.join(axes)}) that may carry the arm, which the routine's chain (the arm alone) "
-                   "does not follow; give --fixed-base if none does"]
-        sites = []
-    warnings += why_not
-    writer = d.runtime_writer()
-    chain = calibrated_chain(calibrated, nominal, robot_base)
-    routed_at = {(s.account.source.path, s.account.source.line_of(s.account.at)) for s in sites}
-    outputs = {}
-    for src in sources:
-        mine = {(s.start, s.end): s for s in sites if s.path == src.path}
-        fe = edits.pop(src.path, FileEdits())
-        if mine:
-            meant = list({id(m.target): m.target for s in mine.values() for m in s.meant}.values())
-            for site in mine.values():
-                fe.spans.update(writer.site_edits(src.text, site, meant))
-            at, text = writer.routine(src.text, chain, meant, marker_text(calibrated))
-            fe.spans[(at, at)] = src.in_file_line_ends(text)
-        outputs[src.path] = fe.apply(src)
-    if sites:
-        left = f"; left out: the joint-error terms {', '.join(chain.left_out)}" if chain.left_out else ""
-        warnings.append(f"{len(routed_at)} motion(s) whose target is computed at run time go through "
-                        f"{ROUTINE_NAME}, added to the program: up to {chain.iterations} inverse-kinematics "
-                        f"calls each at run time{left}")
-    at = {(p.name, ln) for p, ln in routed_at}
-    records = [replace(r, reason=f"{ROUTED}: {r.reason}") if (r.file, r.line) in at else r for r in records]
-    return records, outputs
+def _controller_arm(d: Dialect, nominal: Robot, track) -> Robot:
+    """The arm the controller solves for (``nominal``, or the arm of a track's cell ``track``);
+    DataError when ``d``'s programs cannot drive it (not a 6-axis arm, nor a SCARA in a language
+    whose programs drive one)."""
+    scara = is_scara(nominal) and d.scara_programs  # a language whose programs drive a SCARA
+    if nominal.n_joints != CONTROLLER_JOINTS and track is None and not scara:
+        scara_languages = ", ".join(c.name for c in capable("scara_programs"))
+        raise DataError(f"the programs of these controllers drive {CONTROLLER_JOINTS}-axis arms; the nominal "
+                        f"model {nominal.name!r} has {nominal.n_joints} joints (an arm on a track: give "
+                        "its cell model; a SCARA: its programs are read in "
+                        f"{scara_languages} only, Epson SPEL+ is not a language robocal reads)")
+    return nominal if track is None else track.arm
+
+
+def _real_tools(d: Dialect, tcp, program: Program, targets: list[Target], warnings: list) -> np.ndarray:
+    """The real TCP of each target ``(N, 4, 4)`` (m): ``tcp`` (tool name -> the TCP identified on
+    the calibrated model, ``--tcp``) where it names the target's tool, else its tool data.
+    DataError: ``tcp`` names a tool no target uses; checked against the tool data
+    (:func:`_check_tcp`, ``warnings`` appended to)."""
+    real = {d.name_key(k): v for k, v in (tcp or {}).items()}
+    unknown_tcp = sorted(set(real) - {t.tool for t in targets})
+    if unknown_tcp:
+        raise DataError(f"--tcp names tool(s) {unknown_tcp} that no filtered target uses; the targets use "
+                        f"{sorted({t.tool for t in targets})}")
+    _check_tcp(real, program.tools, warnings)
+    return np.array([np.asarray(real[t.tool], float) if t.tool in real else program.tools[t.tool]
+                     for t in targets])
+
+
+def _written(d: Dialect, program: Program, sources: list[ProgramText], corrected: set[int], edits: dict,
+             routing: Routing | None, warnings: list) -> tuple[list, dict]:
+    """``(records, outputs)``: every motion's record and each source file's bytes with its
+    ``edits`` (path -> :class:`FileEdits`, each popped as its file is written: freed once used),
+    its motions computed at run time routed through the routine when ``routing`` is given
+    (:meth:`Routing.route`). ``corrected``: ids of the targets corrected offline."""
+    records = program.ledger.records(corrected, program.not_corrected)
+    if routing is not None:
+        return routing.route(d, program, sources, corrected, records, edits, warnings)
+    return records, {s.path: edits.pop(s.path, FileEdits()).apply(s) for s in sources}
 
 
 def _compensate(model: Robot, nominal: Robot, F: np.ndarray, seeds: np.ndarray) -> Compensation:

@@ -67,7 +67,7 @@ FILTER_OPTIONS = {
     "references": "files read for tool/frame/load declarations only ($config.dat, system modules, a Yaskawa "
                   "TOOL.CND / UFRAME.CND, a FANUC SYSFRAME.VA), and a FANUC backup's POSREG.VA: motions "
                   "to PR[n] are corrected, the corrected registers written as the TP program PR_CAL.LS "
-                  "beside the output",
+                  "beside the output; a Yaskawa backup's VAR.DAT: its P variables corrected in VAR_CAL.DAT",
     "payload_schedules": "FANUC: the payload schedules PAYLOAD[n] selects, the controller's SYSVARS.VA "
                          "($PLST_GRP1) or a CSV schedule,payload_kg,payload_x_cm,payload_y_cm,payload_z_cm",
     "position_registers": "FANUC: the position registers' values (register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,"

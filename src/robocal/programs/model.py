@@ -100,6 +100,17 @@ class Program:
         self.targets.append(t)
         return True
 
+    def withhold(self, t: Target, why: str) -> None:
+        """Target ``t`` is also moved to with a tool or frame known only at run time (``why``): it is
+        corrected for no use (its corrected numbers would move that motion too), every motion to
+        it named; a later :meth:`use` adds it to no list."""
+        if id(t) not in self.not_corrected:
+            self.not_corrected[id(t)] = why
+            self.warnings.append(f"{t.where}: not corrected: {why}")
+            self.uncorrected.append(f"{t.where}: not corrected: {why}")
+        self.targets = [u for u in self.targets if u is not t]
+        self.used.setdefault(id(t), ("", "", ""))
+
     def skip(self, where: str, instruction: str, why: str, account: Account | None = None,
              label: str = "") -> None:
         """Account for a motion to a Cartesian pose this filter cannot correct: a warning naming

@@ -33,13 +33,15 @@ need the load, the approach direction or the temperature (:attr:`CalibratedChain
 compliance, backlash, travel, payload, thermal) are not in the chain (gear, cyclic, scale are);
 near a singularity the controller's IK is ill-conditioned (the iteration may not converge: the
 routine returns its last iterate and, when the last step's error exceeds ``WARN_MM``, says so in
-the controller's log); a correction that crosses a configuration boundary keeps the
-target's configuration.
+the controller's log: RAPID's event log, URScript's ``textmsg``; the KRL routine writes no message,
+message functions differing between KSS versions); a correction that crosses a configuration
+boundary keeps the target's configuration.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import re
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -80,7 +82,8 @@ class RunTime(str):
     meant: tuple[Meant, ...]
     relative: bool
 
-    def __new__(cls, why: str, depends=(), relative: bool = False, meant=(), sources=()) -> RunTime:
+    def __new__(cls, why: str, depends: Iterable[int] = (), relative: bool = False,
+                meant: Iterable[Meant] = (), sources: Iterable[Target] = ()) -> RunTime:
         obj = super().__new__(cls, why)
         obj.sources = tuple({id(t): t for t in sources}.values())
         obj.depends = frozenset(depends) | {id(t) for t in obj.sources}
@@ -100,7 +103,7 @@ class Meant:
     end: int
 
 
-def merged(why: str, parts: list, meant=()) -> RunTime | None:
+def merged(why: str, parts: list, meant: Iterable[Meant] = ()) -> RunTime | None:
     """A :class:`RunTime` reason ``why`` whose value is computed from ``parts`` (what the reader
     followed the target's base to: targets, or reasons) and ``meant`` (:class:`Meant`: the base
     written as a target's name), None when a part is a reason that is not :class:`RunTime` (a name
@@ -175,6 +178,17 @@ class CalibratedChain:
         return T @ self.flange @ tool
 
 
+    def joint_terms(self, j: int) -> list[tuple[str, float, float]]:
+        """The terms joint ``j`` (0-based) adds to its commanded angle ``q`` (rad), as each
+        routine writes them, in order, zero ones left out: ``("scale", k, 0)`` for ``k q``, then
+        per harmonic of the joint ``("sin", s, f)`` and ``("cos", c, f)`` for ``s sin(f q)`` and
+        ``c cos(f q)`` (``s``, ``c`` rad)."""
+        scaled = self.scale is not None and self.scale[j] != 0.0
+        out = [("scale", float(self.scale[j]), 0.0)] if scaled else []
+        for _, f, s, c in self.harmonics[self.harmonics[:, 0].astype(int) == j]:
+            out += [(fn, float(amp), float(f)) for amp, fn in ((s, "sin"), (c, "cos")) if amp != 0.0]
+        return out
+
     def offsets(self, q: np.ndarray) -> np.ndarray:
         """The joint-error offsets ``(N, n)`` (rad) the routine computes at commanded ``q``."""
         dq = np.zeros_like(q) if self.scale is None else self.scale * q
@@ -194,7 +208,8 @@ def _rz_tz(phi: np.ndarray, d: float) -> np.ndarray:
     return out
 
 
-def calibrated_chain(calibrated: Robot, nominal: Robot, robot_base=None) -> CalibratedChain:
+def calibrated_chain(calibrated: Robot, nominal: Robot,
+                     robot_base: np.ndarray | None = None) -> CalibratedChain:
     """The constants of the routine's chain (:class:`CalibratedChain`) from the calibrated model
     as the controller sees it (:func:`robocal.deploy.compensation.controller_model`: its frame
     {0} the controller's base, or ``robot_base``, 4x4 m). DataError: a prismatic joint (the
@@ -336,3 +351,17 @@ class RuntimeWriter:
         marker's words: robocal's version and the model's fingerprint), with the original values
         of the targets ``meant`` (numbers as written, configuration, external axes)."""
         raise NotImplementedError
+
+    @staticmethod
+    def refuse_present(text: str, begin: str, names: re.Pattern, function: str = ROUTINE_NAME) -> None:
+        """DataError when file ``text`` already holds the routine (its first marker line
+        ``begin``: its motions routed again would be corrected twice) or names one of the
+        routine's functions (``names``; ``function``: the routine's name as the language writes
+        it), before :meth:`routine` adds it."""
+        if begin in text:
+            raise DataError(f"the program already holds robocal's run-time correction ({function}): filter "
+                            "the original program (routing its motions again would correct them twice)")
+        clash = names.search(text)
+        if clash:
+            raise DataError(f"the program already names {clash.group()}: --runtime-correction cannot add its "
+                            "functions under that name")

@@ -117,10 +117,11 @@ class Dialect:
     def reference_outputs(self, program: Program, references: list[ProgramText],
                           corrected: dict[Path, bytes], kept: set[int]) -> dict[Path, bytes]:
         """Files written for the corrected targets that ``references`` hold (a FANUC POSREG.VA's
-        registers), by path (the reference's folder, the file's own name): ``corrected``:
-        reference path -> its text with those targets' numbers corrected (the text itself when
-        none changed); ``kept``: ids of the targets left uncorrected. None by default: a reference
-        is read for declarations only."""
+        registers: the TP program PR_CAL.LS; an INFORM VAR.DAT's P variables: VAR_CAL.DAT), by
+        path (the reference's folder, the file's own name): ``corrected``: reference path -> its
+        text with those targets' numbers corrected (the text itself when none changed); ``kept``:
+        ids of the targets left uncorrected. None by default: a reference is read for
+        declarations only."""
         return {}
 
     def to_pose(self, values: np.ndarray) -> np.ndarray:

@@ -34,6 +34,7 @@ register's correction (their motions name ``PR[n]``, whose value changes).
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,6 +46,7 @@ from robocal.programs.target import Target
 
 ARM_GROUP = 1  # PR[n] in a program: register n of motion group 1
 SETTER_NAME = "PR_CAL"  # the TP program that sets the corrected registers (its file PR_CAL.LS)
+SETTER_DECIMALS = 6  # its positions' decimals: 1 nm and 1e-6 deg, the corrected values unrounded
 _HEADER = re.compile(r"\[\*POSREG\*\]\$POSREG\b[^\n]*$", re.MULTILINE)  # after <PRE> over HTTP too
 # the next variable: [*PROG*]$NAME, [KAREL]NAME (not an entry [g,n])
 _NEXT_VARIABLE = re.compile(r"^[^\S\n]*\[(?![^\S\n]*\d)", re.MULTILINE)
@@ -150,6 +152,16 @@ def _nonzero(value: str) -> bool:
         return True
 
 
+def position_block(k: int, uf: str, ut: str, config: str, values: Sequence[float],
+                   decimals: int) -> list[str]:
+    """The lines of a Cartesian ``P[k]`` in a TP program's /POS (motion group 1): user frame
+    ``uf``, tool frame ``ut``, the CONFIG text ``config``, ``values`` X, Y, Z (mm), W, P, R (deg)
+    written with ``decimals`` decimals."""
+    x, y, z, w, p, r = (f"{v:{decimals + 6}.{decimals}f}" for v in values)
+    return [f"P[{k}]{{", "   GP1:", f"\tUF : {uf}, UT : {ut},\t\tCONFIG : '{config}',",
+            f"\tX = {x}  mm,\tY = {y}  mm,\tZ = {z}  mm,", f"\tW = {w} deg,\tP = {p} deg,\tR = {r} deg", "};"]
+
+
 def setter_program(corrected: ProgramText, used: dict[int, tuple[str, str]], scheme) -> str:
     """The TP program (:data:`SETTER_NAME`) that sets the registers ``used`` (number -> (user
     frame, tool frame) of their motions) to their values in ``corrected``, the filtered copy of
@@ -165,9 +177,7 @@ def setter_program(corrected: ProgramText, used: dict[int, tuple[str, str]], sch
         comment = regs.comments.get(n, "").strip()
         label = f"PR[{n}:{comment}]" if comment else f"PR[{n}]"
         lines.append(f"{k:>4}:  {label}=P[{k}]    ;")
-        blocks += [f"P[{k}]{{", "   GP1:", f"\tUF : {uf}, UT : {ut},\t\tCONFIG : '{scheme.text(t.config)}',",
-                   f"\tX = {x:12.6f}  mm,\tY = {y:12.6f}  mm,\tZ = {z:12.6f}  mm,",
-                   f"\tW = {w:12.6f} deg,\tP = {p:12.6f} deg,\tR = {r:12.6f} deg", "};"]
+        blocks += position_block(k, uf, ut, scheme.text(t.config), (x, y, z, w, p, r), SETTER_DECIMALS)
     head = [f"/PROG  {SETTER_NAME}", "/ATTR", "OWNER\t\t= MNEDITOR;",
             f"COMMENT\t\t= \"{corrected.path.name[:16]}\";", f"LINE_COUNT\t= {len(lines)};",
             "PROTECT\t\t= READ_WRITE;", "DEFAULT_GROUP\t= 1,*,*,*,*;", "/MN"]

@@ -41,7 +41,14 @@ from robocal.programs.dialects.fanuc.configuration import SCARA, FANUCConfig
 from robocal.programs.dialects.fanuc.groups import COORD, coordinate, group_values, values_text
 from robocal.programs.dialects.fanuc.loads import FanucLoads, read_schedules
 from robocal.programs.dialects.fanuc.posreg import SETTER_NAME, is_posreg, read_posreg, setter_program
-from robocal.programs.dialects.fanuc.registers import ActiveFrames, Registers, assignments, read_registers
+from robocal.programs.dialects.fanuc.registers import (
+    ActiveFrames,
+    Registers,
+    assignments,
+    frame_writes,
+    frame_written,
+    read_registers,
+)
 from robocal.programs.dialects.fanuc.sections import section
 from robocal.programs.dialects.fanuc.sysframe import is_sysframe, read_sysframe
 from robocal.programs.dialects.writing import EXTERNAL_LETTERS
@@ -284,6 +291,7 @@ class FanucDialect(Dialect):
         pr_shifted: list[tuple] = []  # the motions to a register shifted (Offset ...), its frames known
         unshifted = set()  # positions some motion moves to as they are
         assigned, indirect = assignments(sources)  # registers written at run time -> where
+        frames_written = frame_writes(sources)  # UFRAME[n]/UTOOL[n] written at run time -> where
         if indirect and registers is not None:
             prog.warnings.append(f"{', '.join(indirect[:4])}: a register whose number is known at run "
                                  "time is written (PR[R[k]]=...): any register's value may differ from the "
@@ -329,6 +337,8 @@ class FanucDialect(Dialect):
                         continue
                     if ref.group(1) == "PR":
                         why = _register(ref, registers, active, assigned, line.start())
+                        if not isinstance(why, str) and frame_written(frames_written, why[1], why[2]):
+                            why = f"{label}: {frame_written(frames_written, why[1], why[2])}"
                         if isinstance(why, str):
                             prog.skip(here, instr, why, acc, label)
                         elif "INC" in options and _INCREMENTAL.search(options):
@@ -365,7 +375,9 @@ class FanucDialect(Dialect):
                     plain.add(key)
                     t = numbers[key]
                     if id(t) not in prog.not_corrected:
-                        why = coordinate(prog, t, COORD.search(options), *others[id(t)], first)
+                        why = frame_written(frames_written, t.frame, t.tool)
+                        why = f"{label}: {why}" if why else \
+                            coordinate(prog, t, COORD.search(options), *others[id(t)], first)
                         if why:  # every motion reaching it is named
                             prog.not_corrected[id(t)] = why
                             prog.warnings.append(f"{t.where}: not corrected: {why}")

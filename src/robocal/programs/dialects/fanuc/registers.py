@@ -46,6 +46,37 @@ _ASSIGNED = re.compile(r"^[ \t]*\d*[ \t]*:[ \t]*PR\[\s*(?:GP1\s*:\s*)?(?:(\d+)\s
                        r"(?::[^\]]*)?\]\s*=|(R\[))", re.MULTILINE)
 
 
+# a /MN line that writes a user or tool frame (UFRAME[n]=PR[m], UTOOL[n]=..., a number known at run time)
+_FRAME_WRITTEN = re.compile(r"^[ \t]*\d*[ \t]*:[ \t]*(UFRAME|UTOOL)\[\s*([^\]]+?)\s*\]\s*=", re.MULTILINE)
+
+
+def frame_writes(sources: list[ProgramText]) -> dict[tuple[str, str], str]:
+    """``(UFRAME|UTOOL, number or '*')`` -> ``file:line`` of the first /MN line of ``sources`` that
+    writes that frame (``UFRAME[1]=PR[5]``; ``'*'``: a number known at run time, any frame): a
+    frame is global, so a position taught in it moves where the frame is at run time."""
+    out: dict[tuple[str, str], str] = {}
+    for src in sources:
+        text = src.text
+        start, stop = section(text, "MN"), section(text, "POS")
+        if start < 0:
+            continue
+        for m in _FRAME_WRITTEN.finditer(text, start, stop if stop > start else len(text)):
+            n = m.group(2)
+            out.setdefault((m.group(1), str(int(n)) if n.isdigit() else "*"),
+                           f"{src.path.name}:{src.line_of(m.start())}")
+    return out
+
+
+def frame_written(writes: dict[tuple[str, str], str], uf: str, ut: str) -> str:
+    """Why a position in user frame ``uf`` with tool ``ut`` cannot be corrected because a program
+    given writes one of them ('' if none does)."""
+    for kind, n, word in (("UFRAME", uf, "user frame"), ("UTOOL", ut, "tool frame")):
+        where = writes.get((kind, n), writes.get((kind, "*")))
+        if where:
+            return f"its {word} {kind}[{n}] is written by the program at run time ({where})"
+    return ""
+
+
 @dataclass
 class Registers:
     """The position registers given: ``values`` number -> :class:`Target` (Cartesian, frame and

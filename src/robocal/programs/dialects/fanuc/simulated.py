@@ -9,7 +9,10 @@ import numpy as np
 
 from robocal.kinematics.model import Robot
 from robocal.programs.dialects.base import Dialect
+from robocal.programs.dialects.fanuc.posreg import position_block
 from robocal.programs.dialects.writing import program_poses, wpr_text, zyx_angles
+
+DECIMALS = 3  # a test program's positions: 1 um and 1e-3 deg, as the pendant writes them
 
 
 def write_test_program(d: Dialect, folder: Path, nominal: Robot, q: np.ndarray, tool: np.ndarray,
@@ -25,9 +28,7 @@ def write_test_program(d: Dialect, folder: Path, nominal: Robot, q: np.ndarray, 
           "CNT50    ;" for i in range(n)]
     pos = []
     for i in range(n):
-        pos += [f"P[{i + 1}]{{", "   GP1:", f"\tUF : 1, UT : 1,\t\tCONFIG : '{d.scheme.text(cfg[i])}',",
-                f"\tX = {p_mm[i, 0]:9.3f}  mm,\tY = {p_mm[i, 1]:9.3f}  mm,\tZ = {p_mm[i, 2]:9.3f}  mm,",
-                f"\tW = {rpw[i, 2]:9.3f} deg,\tP = {rpw[i, 1]:9.3f} deg,\tR = {rpw[i, 0]:9.3f} deg", "};"]
+        pos += position_block(i + 1, "1", "1", d.scheme.text(cfg[i]), (*p_mm[i], *rpw[i, ::-1]), DECIMALS)
     text = [f"/PROG  {name.upper()}", "/ATTR", "DEFAULT_GROUP\t= 1,*,*,*,*;", "/MN",
             "   0:  UFRAME_NUM=1 ;", "   0:  UTOOL_NUM=1 ;", *mn, "/POS", *pos, "/END", ""]
     path = folder / f"{name}.ls"

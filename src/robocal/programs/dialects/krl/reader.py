@@ -3,8 +3,9 @@
 * Positions ``{X x, Y y, Z z, A a, B b, C c, S s, T t, E1 ...}`` (mm; A, B, C = ZYX Euler in
   deg, R = Rz(A) Ry(B) Rx(C); S status and T turn, see
   :class:`robocal.programs.dialects.krl.configuration.KUKAConfig`;
-  external axes E1..E6 left alone) declared as ``DECL E6POS|POS|FRAME name=...`` (``DECL``
-  and ``GLOBAL`` optional; array elements ``name[i]=...``) or written inline in a motion.
+  external axes E1..E6 left alone) declared as ``DECL E6POS|POS|FRAME name=...`` (``DECL``,
+  ``GLOBAL`` and ``CONST`` optional, in any order; array elements ``name[i]=...``) or written
+  inline in a motion.
   A position without X, Y, Z, A, B, C (a partial aggregate) is left alone with a warning; one
   without S is solved nearest the previous target's joints, as the controller does.
 * Motions ``PTP|LIN|CIRC|SPTP|SLIN|SCIRC target`` (CIRC/SCIRC: auxiliary point, end point);
@@ -54,12 +55,12 @@ from robocal.programs.source import Number, ProgramText
 
 _AGG = re.compile(r"\{[^{}]*\}")
 _COMPONENT = re.compile(r"\b([A-Za-z]\w*)\s+([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|'[BbHh][^']*')")
-_DECL = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(E6POS|POS|FRAME)\s+([A-Za-z_$]\w*)"
+_DECL = re.compile(r"^[ \t]*(?:(?:DECL|GLOBAL|CONST)\s+)*(E6POS|POS|FRAME)\s+([A-Za-z_$]\w*)"
                    r"(?:\s*\[[^\]]*\])?\s*=\s*(?=\{)", re.IGNORECASE | re.MULTILINE)
-_AXES = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:E6AXIS|AXIS)\s+([A-Za-z_$]\w*)",
+_AXES = re.compile(r"^[ \t]*(?:(?:DECL|GLOBAL|CONST)\s+)*(?:E6AXIS|AXIS)\s+([A-Za-z_$]\w*)",
                    re.IGNORECASE | re.MULTILINE)
 _ELEMENT = re.compile(r"^[ \t]*([A-Za-z_]\w*\s*\[\s*\d+(?:\s*,\s*\d+)*\s*\])\s*=\s*(?=\{)", re.MULTILINE)
-_KINDS = re.compile(r"^[ \t]*(?:DECL\s+)?(?:GLOBAL\s+)?(?:CONST\s+)?(E6POS|POS|FRAME)\s+([^=\n]+)",
+_KINDS = re.compile(r"^[ \t]*(?:(?:DECL|GLOBAL|CONST)\s+)*(E6POS|POS|FRAME)\s+([^=\n]+)",
                     re.IGNORECASE | re.MULTILINE)  # the position types the names are declared with
 _SYSTEM_KINDS = {"$POS_ACT": "E6POS", "$POS_INT": "E6POS", "$POS_RET": "E6POS", "$POS_BACK": "E6POS",
                  "$POS_FOR": "E6POS"}  # other system positions ($BASE, $NULLFRAME ...): FRAME
@@ -281,6 +282,11 @@ class KRLDialect(Dialect):
                     or data_list and m.group(4).lstrip().startswith("{"):  # a .dat's initial value
                 continue
             proc = _routine_at(routines, m.start())
+            literal = not m.group(3) and m.group(4).lstrip().startswith("{")  # read as the data (_DATA)
+            if name in ("TOOL_DATA", "BASE_DATA") and proc and not literal:  # computed by the program
+                index = re.sub(r"[\[\]\s]", "", m.group(2) or "")
+                st.written.setdefault((name, index if index.isdigit() else "*"),
+                                      f"{src.path.name}:{src.line_of(m.start())}")
             if m.group(3) or m.group(2) and not re.fullmatch(r"\[\s*\d+(?:\s*,\s*\d+)*\s*\]", m.group(2)):
                 st.modified.setdefault(name, []).append(f"{src.path.name}:{src.line_of(m.start())}")
             else:
@@ -372,6 +378,12 @@ class KRLDialect(Dialect):
                                                    "a folder) to correct it", acc, f.name)
                             continue
                         (tool, why_tool), (base, why_base) = state["tool"], state["base"]
+                        written = _written(st, tool, base)
+                        if written:  # the data the controller uses are those of run time
+                            prog.skip(here, instr, f"{f.name}: {written}", acc)
+                            prog.withhold(f, f"{f.name} is also moved to at {here}, where {written}")
+                            named.add(id(f))
+                            continue
                         if "?" in (tool, base):
                             prog.skip(here, instr, f"{f.name}: {why_tool if tool == '?' else why_base}", acc)
                             named.add(id(f))
@@ -536,6 +548,7 @@ class _State:
         self.assigned: dict[str, list] = {}
         self.modified: dict[str, list[str]] = {}
         self.routines: dict = {}
+        self.written: dict[tuple[str, str], str] = {}  # (TOOL_DATA/BASE_DATA, n or *) -> where computed
         self.foreign: list = []  # (src, at, routine, argument spans): calls of routines not in these files
         self.homes: set[str] = set()  # XHOME names declared in no file given, taken as axis positions
         self.machines = Machines()  # external kinematics: the bases a machine carries
@@ -605,6 +618,17 @@ def _inside(motions: list, starts: list[int], at: int) -> bool:
     """Whether offset ``at`` is inside one of the motion lines (a WITH clause's $TOOL = ...)."""
     k = bisect.bisect_right(starts, at) - 1
     return k >= 0 and at < motions[k].end()
+
+
+def _written(st: _State, tool: str, base: str) -> str:
+    """Why a motion with tool ``tool`` and base ``base`` (their numbers) cannot be corrected
+    because a routine of these files writes TOOL_DATA[tool] or BASE_DATA[base] ('' if none does):
+    its place in the world is known only at run time."""
+    for kind, n in (("TOOL_DATA", tool), ("BASE_DATA", base)):
+        where = st.written.get((kind, n), st.written.get((kind, "*"))) if n.isdigit() else None
+        if where:
+            return f"{kind}[{n}] is written by the program at run time ({where})"
+    return ""
 
 
 def _frame_value(value: str, which: str, fdat: dict, machines: Machines) -> tuple[str, str]:

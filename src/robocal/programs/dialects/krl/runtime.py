@@ -33,6 +33,7 @@ import numpy as np
 from robocal.core.errors import DataError
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.runtime import ROUTINE_NAME, CalibratedChain, RuntimeSite, RuntimeWriter
+from robocal.programs.target import Target
 
 FUNCTION = ROUTINE_NAME.upper()  # RC_CORRECT (KRL names: at most 24 characters, any case)
 FRAME_FUNCTION = FUNCTION + "F"  # its twin for a FRAME target (P:OFFSET), in a POS's Status and Turn
@@ -83,14 +84,9 @@ def _joint_terms(chain: CalibratedChain) -> list[str]:
     take degrees, so ``sin(f q)`` of q in rad is ``SIN(f * A)`` of A in deg."""
     out = []
     for j in range(len(chain.theta)):
-        terms = []
-        if chain.scale is not None and chain.scale[j] != 0.0:
-            terms.append(f"{_real(float(chain.scale[j]), _TERM_DIGITS)} * RC_QN")
-        for _, f, s, c in chain.harmonics[chain.harmonics[:, 0].astype(int) == j]:
-            for amp, fn in ((s, "SIN"), (c, "COS")):
-                if amp != 0.0:
-                    deg = _real(float(np.rad2deg(amp)), _TERM_DIGITS)
-                    terms.append(f"{deg} * {fn}({_real(float(f))} * RC_QN)")
+        terms = [f"{_real(k, _TERM_DIGITS)} * RC_QN" if fn == "scale" else
+                 f"{_real(float(np.rad2deg(k)), _TERM_DIGITS)} * {fn.upper()}({_real(f)} * RC_QN)"
+                 for fn, k, f in chain.joint_terms(j)]
         if terms:
             out += [f"IF RC_N == {j + 1} THEN", *[f"  RC_R = RC_R + {t}" for t in terms], "ENDIF"]
     return out
@@ -205,7 +201,7 @@ class KRLRuntime(RuntimeWriter):
     """KRL's :class:`~robocal.programs.runtime.RuntimeWriter`: ``RC_CORRECT`` appended to the
     ``.src`` holding the motions, their targets wrapped in calls of it."""
 
-    def site_edits(self, text, site: RuntimeSite, meant):
+    def site_edits(self, text: str, site: RuntimeSite, meant: list[Target]) -> dict[tuple[int, int], str]:
         index = {id(t): k + 1 for k, t in enumerate(meant)}
         edits = {(m.start, m.end): f"{MEANT}({index[id(m.target)]})" for m in site.meant}
         reference = getattr(site, "reference", "")  # a KRLSite's: a FRAME target and its POS
@@ -218,14 +214,8 @@ class KRLRuntime(RuntimeWriter):
             edits |= {(site.start, site.start): f"{FUNCTION}(", (site.end, site.end): ")"}
         return edits
 
-    def routine(self, text, chain, meant, note):
-        if BEGIN in text:
-            raise DataError(f"the program already holds robocal's run-time correction ({FUNCTION}): filter "
-                            "the original program (routing its motions again would correct them twice)")
-        clash = _NAMES.search(text)
-        if clash:
-            raise DataError(f"the program already names {clash.group()}: --runtime-correction cannot add its "
-                            "functions under that name")
+    def routine(self, text: str, chain: CalibratedChain, meant: list[Target], note: str) -> tuple[int, str]:
+        self.refuse_present(text, BEGIN, _NAMES, FUNCTION)
         nl = _newline(text)
         lead = nl if text and not text.endswith(("\n", "\r")) else ""
         body = routine_text(chain, note, nl)
@@ -234,7 +224,7 @@ class KRLRuntime(RuntimeWriter):
         return len(text), f"{lead}{nl}{body}{nl}"
 
 
-def _meant_function(meant: list) -> list[str]:
+def _meant_function(meant: list[Target]) -> list[str]:
     """``RC_MEANT(k)``: target k's value as the program wrote it (before the filter corrected it
     offline), its numbers, Status, Turn and external axes as written."""
     out = [f"DEFFCT E6POS {MEANT}(RC_N:IN)",

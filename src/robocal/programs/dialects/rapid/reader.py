@@ -28,6 +28,7 @@ Comments (``!`` to the end of the line) and strings are masked before anything i
 
 from __future__ import annotations
 
+import functools
 import re
 
 import numpy as np
@@ -54,7 +55,7 @@ from robocal.programs.model import Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import matrix_to_quat, quat_to_matrix
 from robocal.programs.runtime import Meant, RunTime, RuntimeSite, merged
-from robocal.programs.source import Number
+from robocal.programs.source import Number, ProgramText
 
 _DECL = re.compile(r"\b(?:(?:LOCAL|TASK)\s+)?(CONST|PERS|VAR)\s+(robtarget|tooldata|wobjdata)\s+"
                    r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*(:=)?", re.IGNORECASE)
@@ -80,6 +81,7 @@ _MOVE = re.compile(r"\b(" + "|".join(_MOVES) + r")\b", re.IGNORECASE)
 _STATEMENT = re.compile(r"[^;]+")
 _WORD = re.compile(r"\s*([A-Za-z]\w*)")
 _REF = re.compile(r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*((?:\.\s*[A-Za-z]\w*)*)")
+_NAMED_ARG = re.compile(r"\s*[A-Za-z]\w*\s*:=")
 _CALLED = re.compile(r"\s*(Offs|RelTool)\s*\(", re.IGNORECASE)
 _FUNCTION = re.compile(r"\s*([A-Za-z]\w*)\s*\(")
 # functions whose robtarget is computed from the joints the robot is at or is given (already in the
@@ -90,6 +92,8 @@ _ROUTINE = re.compile(r"\b(proc|func\s+\w+|trap)\s+([a-z]\w*)\s*(?:\(([^)]*)\))?
 _ROUTINE_END = re.compile(r"\bend(?:proc|func|trap)\b")
 _ASSIGN = re.compile(r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*((?:\.\s*[A-Za-z]\w*)*)\s*:=",
                      re.IGNORECASE)
+# fields of a tooldata / wobjdata whose change does not move a target (a tool's load)
+_POSE_FREE = (".tload",)
 # searched in the lower-cased text
 _CONSTANT = re.compile(r"\bconst\s+num\s+([a-z]\w*)\s*(\{[^}]*\})?\s*:=\s*([^;]+);")
 _SUBSCRIPT = re.compile(r"([A-Za-z]\w*)\s*\{\s*(\d+(?:\s*,\s*\d+)*)\s*\}")  # name{1, 2}: a constant element
@@ -109,10 +113,16 @@ _POSITION_MM = 1e-3  # mm: 1 um
 _QUATERNION = 1e-6  # about 2e-6 rad: 0.4 um at 200 mm from the flange
 BUILTIN_TOOLS = ("tool0",)
 BUILTIN_WOBJS = ("wobj0",)
+# the controller's own data of tool0 and wobj0 (RAPID reference): a declaration equal to them is them
+_BUILTIN_DATA = {("tooldata", "tool0"): "[TRUE,[[0,0,0],[1,0,0,0]],[0.001,[0,0,0.001],[1,0,0,0],0,0,0]]",
+                 ("wobjdata", "wobj0"): '[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]'}
 # a robtarget of numbers only (position, quaternion, confdata, six external axes): one match
 _ROBTARGET = shape_pattern((3, 4, 4, 6))
 _COMPONENTS = ("position", "orientation", "configuration (confdata)", "external axes")  # a robtarget's parts
 _DEPTH = 12  # routine calls and assignments followed at most this deep
+_EMPTY_DATA = ("holds the quaternion [0,0,0,0]: a placeholder the program assigns at run time, not data to "
+               "filter with")
+ABSENT = (-1, -1)  # the span bound to an optional parameter that a call leaves out
 
 
 def _first_offset(node, default: int) -> int:
@@ -186,6 +196,7 @@ class RapidDialect(Dialect):
     def parse(self, sources, frames, tools, references=()):
         prog = Program([])
         st = _State()
+        st.read_only = {r.path for r in references} - {s.path for s in sources}
         flow = Flow()
         lowered, spans = {}, {}
         for src in [*references, *sources]:  # every module's routines first: calls cross modules
@@ -278,6 +289,17 @@ class RapidDialect(Dialect):
             if kind == "robtarget":
                 targets = [self._shaped(src, shaped, name, m.start())] if shaped else \
                     self._robtargets(src, tree, name, m.start(), m.group(4))
+                holes = [t for t in targets if _placeholder(t)]  # pTemp := [[0,0,0],[0,0,0,0],...]
+                for t in holes:
+                    st.placeholders[t.name.lower()] = f"{src.path.name}:{t.line}"
+                if holes and not only_frames:  # one warning per declaration (an array may hold dozens)
+                    one = (f"{where}: robtarget {name} holds the quaternion [0,0,0,0]: a placeholder the "
+                           "program assigns at run time, not a taught target: left as it is")
+                    prog.warnings.append(one if not m.group(4) else (
+                        f"{where}: {len(holes)} of the {len(targets)} elements of robtarget {name} "
+                        f"({holes[0].name} ...) hold the quaternion [0,0,0,0]: placeholders the program "
+                        "assigns at run time, not taught targets: left as they are"))
+                targets = [t for t in targets if not _placeholder(t)]
                 if only_frames:
                     for t in targets:
                         t.name += f" (in the reference {src.path.name})"
@@ -285,6 +307,7 @@ class RapidDialect(Dialect):
                 st.reference |= {id(t) for t in targets} if only_frames else set()
                 return
             for suffix, node in _elements(tree, m.group(4), src, m.start(), f"{kind} {name}"):
+                st.data[(kind, name.lower() + suffix)] = _canonical(node)
                 read = self._tool if kind == "tooldata" else self._wobj
                 (st.tools if kind == "tooldata" else st.wobjs)[name.lower() + suffix] = read(
                     src, node, name + suffix, m.start(), where)
@@ -308,13 +331,16 @@ class RapidDialect(Dialect):
             joint = instr.lower().rstrip("sdoagync").endswith("j") or instr.lower() in ("triggjios", "spotj")
             st.motions.append(_Motion(instr, src, at, [positional[k] for k in target_pos],
                                       positional[tool_pos], optional.get("wobj"), proc,
-                                      conf["j" if joint else "l"]))
+                                      conf["j" if joint else "l"], "wobj?" in optional))
             return
         a = _ASSIGN.match(masked, lead + len(masked[lead:e]) - len(masked[lead:e].lstrip()), e)
         if a:
             name = a.group(1).lower()
             if a.group(3):
                 st.modified.setdefault(name, []).append(f"{src.path.name}:{src.line_of(a.start())}")
+                field = re.sub(r"\s+", "", a.group(3)).lower()
+                if not field.startswith(_POSE_FREE):  # a tool's load: not where the TCP is
+                    st.moved.setdefault(name, f"{src.path.name}:{src.line_of(a.start())}")
             else:
                 st.assigned.setdefault(name, []).append((src, a.end(), e, proc))
             return
@@ -341,7 +367,11 @@ class RapidDialect(Dialect):
                     raise DataError(f"{src.path.name}:{src.line_of(m.start())}: malformed {m.group(1)} "
                                     f"{m.group(2)}: expected {len(components)} components")
                 at = _first_offset(node[k], m.start())
-                targets.append(self._robtarget(src, node[k], f"{m.group(2)}{suffix}.{field}", at))
+                t = self._robtarget(src, node[k], f"{m.group(2)}{suffix}.{field}", at)
+                if _placeholder(t):  # a record's robtarget filled at run time
+                    st.placeholders[f"{m.group(2).lower()}.{field.lower()}"] = f"{src.path.name}:{t.line}"
+                else:
+                    targets.append(t)
             st.declared[f"{m.group(2).lower()}.{field.lower()}"] = targets
             if only_frames:
                 st.reference |= {id(t) for t in targets}
@@ -379,6 +409,8 @@ class RapidDialect(Dialect):
         if not (isinstance(tree, list) and len(tree) >= 2 and isinstance(tree[0], Word)):
             raise DataError(f"{where}: malformed tooldata {name}: expected [robhold,[[x,y,z],[q]],[load]]")
         vals = [n.value for n in _pose_numbers(tree[1], src, at, f"tooldata {name}")]
+        if not any(vals[3:]):  # [0,0,0,0]: filled at run time
+            return np.eye(4), False, f"{where}: tooldata {name} {_EMPTY_DATA}"
         held = tree[0].text.upper() == "TRUE"
         return (self.to_pose(np.array([vals]))[0], held,
                 f"{where}: tooldata {name} is a stationary tool (robhold FALSE)")
@@ -387,8 +419,11 @@ class RapidDialect(Dialect):
         if not (isinstance(tree, list) and len(tree) >= 5 and isinstance(tree[0], Word)):
             raise DataError(f"{where}: malformed wobjdata {name}: expected "
                             "[robhold,ufprog,ufmec,[uframe],[oframe]]")
-        uf = self.to_pose(np.array([[n.value for n in _pose_numbers(tree[3], src, at, f"wobjdata {name}")]]))
-        of = self.to_pose(np.array([[n.value for n in _pose_numbers(tree[4], src, at, f"wobjdata {name}")]]))
+        uf, of = (np.array([[n.value for n in _pose_numbers(tree[k], src, at, f"wobjdata {name}")]])
+                  for k in (3, 4))
+        if not (any(uf[0, 3:]) and any(of[0, 3:])):  # a quaternion [0,0,0,0]: filled at run time
+            return np.eye(4), False, f"{where}: wobjdata {name} {_EMPTY_DATA}", "", ""
+        uf, of = self.to_pose(uf), self.to_pose(of)
         robhold, ufprog = (tree[0].text.upper() == "TRUE",
                            isinstance(tree[1], Word) and tree[1].text.upper() == "TRUE")
         unit = "" if robhold or ufprog or not isinstance(tree[2], Word) else \
@@ -410,22 +445,37 @@ class RapidDialect(Dialect):
         and work object (one per target); name every motion that reaches a pose this cannot
         follow."""
         first = prog.used
+        same, named = _same_data(prog, st), {}  # (target, data) -> the tool and wobj names of its first use
         for mv in st.motions:
             here = f"{mv.src.path.name}:{mv.src.line_of(mv.at)}"
-            acc = prog.motion(mv.src, mv.at, mv.instr)
+            # a motion of a reference module is not one of the program's (never written, never
+            # accounted): it only carries a program's target reached through its routine's parameter
+            mine = mv.src.path not in st.read_only
+            acc = prog.motion(mv.src, mv.at, mv.instr) if mine else None
             for scope in st.scopes(mv.proc):
+                wobj_text = "" if mv.wobj is None else st.masked[mv.src.path][slice(*mv.wobj)].strip().lower()
+                tool_text = st.masked[mv.src.path][slice(*mv.tool)].strip().lower()
+                if _absent(scope.get(tool_text)) or (not mv.conditional and _absent(scope.get(wobj_text))):
+                    continue  # an optional tool / \\WObj:=WObj this call leaves out: runs only when present
                 tool, why_tool = st.name_of(mv.src, mv.tool, scope, "tool")
-                wobj, why_wobj = ("wobj0", "") if mv.wobj is None else st.name_of(
+                wobj, why_wobj = ("wobj0", "") if mv.wobj is None or (
+                    mv.conditional and _absent(scope.get(wobj_text))) else st.name_of(
                     mv.src, mv.wobj, scope, "work object")
                 for a, b in mv.targets:
                     for found in self._follow(st, mv.src, a, b, mv.proc, scope, 0):
+                        if not mine and (isinstance(found, str) or id(found) in st.reference):
+                            continue  # the reference's own target or run-time pose: not the program's
                         if isinstance(found, str):
                             prog.skip(here, mv.instr, found, acc, st.masked[mv.src.path][a:b][:60])
-                            if isinstance(found, RunTime):  # --runtime-correction may route it
+                            if isinstance(found, RunTime) and not mv.conditional:  # --runtime-correction
+                                # may route it (not with \\WObj?WObj: the routine takes a work object always)
                                 prog.runtime_sites.append(self._site(st, mv, acc, a, b, tool, wobj))
                             continue
                         if why_tool or why_wobj:
                             prog.skip(here, mv.instr, why_tool or why_wobj, acc)
+                            if mine and id(found) not in st.reference:  # its other motions: not corrected
+                                prog.withhold(found, f"robtarget {found.name} is also moved to at {here}, "
+                                                     f"where {why_tool or why_wobj}")
                             continue
                         if id(found) in st.reference:
                             prog.skip(here, mv.instr, f"{found.name.split(' (')[0]} is declared in "
@@ -433,8 +483,16 @@ class RapidDialect(Dialect):
                                                       "that module as a program file to correct it", acc)
                             continue
                         label = f"robtarget {found.name.lower()}"
-                        if prog.use(found, tool, wobj, here, label, "work object", (mv.src.path, a), acc):
+                        data = (id(found), same.get(("tooldata", tool), tool),
+                                same.get(("wobjdata", wobj), wobj))
+                        if prog.use(found, *named.setdefault(data, (tool, wobj)), here, label, "work object",
+                                    (mv.src.path, a), acc):
                             found.monitored = mv.monitored
+            if mine and not acc.targets and not acc.named:  # every call leaves out an optional parameter
+                text = " ".join(st.masked[mv.src.path][slice(*mv.targets[-1])].split())
+                prog.skip(here, mv.instr, f"{text}: the motion needs an optional parameter of routine "
+                          f"{mv.proc} that no call in these files gives (it runs only when the parameter is "
+                          "present)", acc, text)
         passed = set()
         for src, at, routine, positional in st.foreign:  # a robtarget given to a routine not in these files
             for a, b in positional:
@@ -545,6 +603,8 @@ class RapidDialect(Dialect):
         name, index, fields = r.group(1).lower(), r.group(2), r.group(3)
         if name in scope:
             arg_src, x, y, caller, outer = scope[name]
+            if _absent(scope[name]):  # left out by this call: the motion does not run with it
+                return []
             if arg_src is None:
                 return [f"{r.group(1)} is a parameter of routine {proc} that no call in these files gives"]
             return self._follow(st, arg_src, x, y, caller, outer, depth + 1)
@@ -566,24 +626,32 @@ class RapidDialect(Dialect):
         if targets is None:
             return out + [Undeclared(f"robtarget {r.group(1)} is not declared in these files (give the "
                                      "module that declares it as a program file)", f"robtarget {r.group(1)}")]
-        if not targets:
-            return out + [f"{r.group(1)} is declared without a value and not assigned in these files"]
+        holes = [k for k in st.placeholders if k == name + fields or k.startswith(name + "{")]
         if index:
             literal = re.fullmatch(r"\{\s*(\d+(?:\s*,\s*\d+)*)\s*\}", index)
             if literal:
                 want = name + "{" + ",".join(v.strip() for v in literal.group(1).split(",")) + "}" + fields
                 chosen = [t for t in targets if t.name.split(" (")[0].lower() == want]
+                if not chosen and want in st.placeholders:
+                    return out + [_unfilled(f"{r.group(1)}{index}", st.placeholders[want])]
                 return out + (chosen or [f"{r.group(1)}{index} is outside the array"])
+        if holes:  # the placeholder (or an array's placeholder elements) has no value before run time
+            return out + list(targets) + [_unfilled(text if not index else f"{r.group(1)}{{...}}",
+                                                    st.placeholders[holes[0]])]
+        if not targets:
+            return out + [f"{r.group(1)} is declared without a value and not assigned in these files"]
         return out + list(targets)  # a variable index: every element of the array
 
 
 class _Motion:
     """A motion instruction: its name, where, the spans of its target and tool arguments, the
-    work object's text (None: wobj0), its routine and whether configuration is monitored."""
+    work object's text (None: wobj0), its routine, whether configuration is monitored and whether
+    the work object is passed conditionally (``\\WObj?WObj``)."""
 
-    def __init__(self, instr, src, at, targets, tool, wobj, proc, monitored):
+    def __init__(self, instr, src, at, targets, tool, wobj, proc, monitored, conditional=False):
         self.instr, self.src, self.at, self.targets = instr, src, at, targets
         self.tool, self.wobj, self.proc, self.monitored = tool, wobj, proc, monitored
+        self.conditional = conditional  # \WObj?Param: wobj0 when the routine's Param is absent
 
 
 class _State:
@@ -596,10 +664,12 @@ class _State:
         self.tools: dict[str, tuple] = {}
         self.wobjs: dict[str, tuple] = {}
         self.reference: set[int] = set()
+        self.read_only: set = set()  # the paths of the reference modules (read for their data only)
         self.procs: dict[str, list[tuple[str, bool]]] = {}  # name -> [(parameter, optional)]
         self.calls: dict[str, list] = {}  # name -> [(src, at, positional spans, optional, caller)]
         self.assigned: dict[str, list] = {}  # name -> [(src, start, end, routine)]
         self.modified: dict[str, list[str]] = {}  # name -> where a field of it is assigned
+        self.moved: dict[str, str] = {}  # name -> where a field that places it (not a load) is assigned
         self.motions: list[_Motion] = []
         self.inline: dict = {}
         self.multimove: set = set()
@@ -607,6 +677,8 @@ class _State:
         self.constants: dict[str, float] = {}  # CONST num name -> value
         self.functions: dict[str, str] = {}  # FUNC robtarget name -> its body (lower case, masked)
         self.records: dict[str, list[tuple[str, str]]] = {}  # RECORD type -> [(type, field)]
+        self.data: dict[tuple[str, str], tuple] = {}  # ('tooldata' | 'wobjdata', name) -> its value, as data
+        self.placeholders: dict[str, str] = {}  # robtarget with the quaternion [0,0,0,0] -> where
         self._scopes: dict[str, list] = {}
         self._names: dict[tuple[str, str], tuple[str, str]] = {}  # (text, what) -> name_of outside parameters
 
@@ -625,9 +697,12 @@ class _State:
             for outer in self.scopes(caller, depth + 1):
                 bound, k = {}, 0
                 for name, is_optional in self.procs[proc]:
-                    if is_optional:
+                    if is_optional:  # left out, or passed on (\\Via?Via) from an optional the caller lacks
                         span = optional.get(name)
-                        bound[name] = (src, *span, caller, outer) if span else (None, 0, 0, caller, outer)
+                        passed = span and name + "?" in optional and _absent(
+                            outer.get(self.masked[src.path][span[0]:span[1]].strip().lower()))
+                        bound[name] = (src, *span, caller, outer) if span and not passed else \
+                            (None, *ABSENT, caller, outer)
                     else:
                         bound[name] = (src, *positional[k], caller, outer) if k < len(positional) else \
                             (None, 0, 0, caller, outer)
@@ -656,9 +731,14 @@ class _State:
         name = r.group(1).lower()
         if name in scope:
             arg_src, x, y, _, outer = scope[name]
+            if _absent(scope[name]):
+                return "", f"the {what} {text} is an optional parameter that a call of its routine leaves out"
             if arg_src is None:
                 return "", f"the {what} {text} is a routine parameter that no call in these files gives"
             return self.name_of(arg_src, (x, y), outer, what)
+        written = self._written(name)
+        if written:  # the data the controller uses are those of run time, not the declaration's
+            return "", f"the {what} {text} is assigned at run time ({written})"
         index = r.group(2)
         if index:
             literal = re.fullmatch(r"\{\s*(\d+(?:\s*,\s*\d+)*)\s*\}", index)
@@ -667,29 +747,103 @@ class _State:
             name += "{" + ",".join(v.strip() for v in literal.group(1).split(",")) + "}"
         return name, ""
 
+    def _written(self, name: str) -> str:
+        """Where the tool / work object ``name`` (or a field or element of it) is assigned in a
+        routine of these files ('' if nowhere): a work object found by a search (``obNew :=
+        OFrameChange(...)``) or a TCP measured at run time."""
+        if name in self.assigned:
+            src, at, _, _ = self.assigned[name][0]
+            return f"{src.path.name}:{src.line_of(at)}"
+        return self.moved.get(name, "")
+
+
+def _absent(binding: tuple | None) -> bool:
+    """A parameter binding of an optional parameter that the call leaves out (:data:`ABSENT`)."""
+    return binding is not None and binding[0] is None and binding[1:3] == ABSENT
+
+
+def _canonical(node) -> tuple | float | str:
+    """A declaration's value as data (numbers as floats, words upper case, strings as written):
+    two tools or work objects with equal canonical values are the same data under two names."""
+    if isinstance(node, list):
+        return tuple(_canonical(n) for n in node)
+    if isinstance(node, Number):
+        return node.value
+    return node.text.upper() if isinstance(node, Word) else repr(node)
+
+
+def _same_data(prog: Program, st: _State) -> dict[tuple[str, str], str]:
+    """``(kind, name) -> the first declared name with identical data`` for the tooldata / wobjdata
+    declared twice under two names (every value equal, and equal as the filter uses them after
+    ``--tool``/``--frame``; neither assigned in these files): a target used with both is one
+    target, corrected once."""
+    out, first = {}, {}
+    for (kind, name), value in [*_builtin_data().items(), *st.data.items()]:
+        known = prog.tools if kind == "tooldata" else prog.frames
+        if name not in known or name in st.assigned or name in st.modified:
+            continue  # not filtered (a stationary tool ...), or its value changes at run time
+        head = first.setdefault((kind, value, prog.carried.get(name)), name)
+        if head != name and np.array_equal(known[head], known[name]):
+            out[(kind, name)] = head
+    return out
+
+
+@functools.cache
+def _builtin_data() -> dict[tuple[str, str], tuple]:
+    """:data:`_BUILTIN_DATA` as data (:func:`_canonical`), read as a module's declaration is."""
+    out = {}
+    for key, text in _BUILTIN_DATA.items():
+        src = ProgramText(key[1], text.encode())
+        masked = src.masked([COMMENT_RE], [STRING_RE])
+        out[key] = _canonical(parse_aggregate(src, masked, 0, len(masked), key[1])[0])
+    return out
+
+
+def _placeholder(t: Target) -> bool:
+    """A robtarget whose quaternion is [0,0,0,0]: no orientation at all, a placeholder the program
+    fills at run time (``VAR robtarget pTemp := [[0,0,0],[0,0,0,0],...]``), not a taught target."""
+    return all(n.value == 0.0 for n in t.numbers[3:7])
+
+
+def _unfilled(text: str, where: str) -> str:
+    """Why a motion to placeholder ``text`` (declared at ``where``) is not corrected."""
+    return (f"{' '.join(text.split())} is a placeholder (declared at {where} with the quaternion [0,0,0,0]: "
+            "not a taught target) that the program assigns at run time, and no assignment in these files "
+            "gives it a value")
+
 
 def _arguments(masked: str, start: int, end: int) -> tuple[list[tuple[int, int]], dict]:
     """Positional argument spans and optional ``\\Name:=value`` arguments (name -> value span, or
-    the switch's own span) of an instruction whose arguments run from ``start`` to ``end``."""
+    the switch's own span) of an instruction whose arguments run from ``start`` to ``end``; a
+    conditional ``\\Name?Param`` is ``name`` -> the span of ``Param``, and also ``name?``."""
     positional, optional = [], {}
     for ps, pe in split_top(masked, start, end, ","):
         parts = split_top(masked, ps, pe, "\\") if "\\" in masked[ps:pe] else [(ps, pe)]
         if masked[parts[0][0]:parts[0][1]].strip():
-            positional.append(parts[0])
+            named = _NAMED_ARG.match(masked, *parts[0])  # ToPoint:=p10: a required argument by name
+            positional.append((named.end(), parts[0][1]) if named else parts[0])
         for os_, oe in parts[1:]:
             key, sep, _ = masked[os_:oe].partition(":=")
+            if not sep and "?" in key:  # \Name?Param: given only when the routine's own Param is present
+                name = key.partition("?")[0].strip().lower()
+                optional[name] = optional[name + "?"] = (os_ + key.index("?") + 1, oe)
+                continue
             value_at = os_ + len(key) + len(sep)
             optional[key.strip().lower()] = (value_at, oe) if sep else (os_, oe)
     return positional, optional
 
 
 def _params(text: str) -> list[tuple[str, bool]]:
-    """A routine's parameters ``(name, optional)`` from ``robtarget p, \\PERS tooldata t, ...``."""
-    out = []
-    for part in re.split(r"[,|]", text):
-        words = re.findall(r"[A-Za-z]\w*", part)
+    """A routine's parameters ``(name, optional)`` from ``robtarget p, \\PERS tooldata t, ...``: an
+    optional parameter begins with a backslash, with or without a comma before it (``PERS tooldata
+    Tool\\robtarget Via``), and so does each alternative after a ``|`` (``\\switch On | switch Off``)."""
+    pieces = re.split(r"([,|])", text.replace("\\", ",\\"))
+    out, alternative = [], False
+    for k in range(0, len(pieces), 2):
+        words = re.findall(r"[A-Za-z]\w*", pieces[k])
         if words:
-            out.append((words[-1].lower(), "\\" in part))
+            out.append((words[-1].lower(), "\\" in pieces[k] or alternative))
+        alternative = k + 1 < len(pieces) and pieces[k + 1] == "|"
     return out
 
 

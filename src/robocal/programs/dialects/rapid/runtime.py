@@ -32,13 +32,18 @@ END = "! <<< robocal run-time correction: END"
 _ENDMODULE = re.compile(r"^[ \t]*ENDMODULE\b", re.M | re.I)
 _DEFAULT_WOBJ = "wobj0"
 MEANT = "RC_Meant"  # the routine returning a target's original value
+# decimals of the routine's constants: positions 1 nm (mm), quaternions 1e-10, angles (deg),
+# lengths (mm) and joint-error coefficients 1e-8 (RAPID num is a 32-bit float: ~1e-4 mm at 1 m)
+_MM_DIGITS, _QUATERNION_DIGITS, _NUM_DIGITS = 6, 10, 8
+_NAMES = re.compile(rf"\b(?:{ROUTINE_NAME}|RC_FK|{MEANT})\b", re.I)  # the added routines (RAPID: any case)
 
 
 def _pose(T: np.ndarray) -> str:
     """A RAPID pose aggregate of ``T`` (4x4, m): mm and a w-first quaternion."""
     q = matrix_to_quat(T[None, :3, :3], np.array([[1.0, 0, 0, 0]]))[0]
     p = T[:3, 3] * 1e3
-    return "[[" + ",".join(f"{v:.6f}" for v in p) + "],[" + ",".join(f"{v:.10f}" for v in q) + "]]"
+    return "[[" + ",".join(f"{v:.{_MM_DIGITS}f}" for v in p) + "],[" + \
+        ",".join(f"{v:.{_QUATERNION_DIGITS}f}" for v in q) + "]]"
 
 
 def _joint_terms(chain: CalibratedChain) -> tuple[list[str], list[str]]:
@@ -83,7 +88,7 @@ def _meant_function(meant: list[Target]) -> list[str]:
 
 
 def _nums(values: np.ndarray) -> str:
-    return "[" + ",".join(f"{v:.8f}" for v in values) + "]"
+    return "[" + ",".join(f"{v:.{_NUM_DIGITS}f}" for v in values) + "]"
 
 
 class RapidRuntime(RuntimeWriter):
@@ -98,13 +103,7 @@ class RapidRuntime(RuntimeWriter):
         return edits
 
     def routine(self, text: str, chain: CalibratedChain, meant: list[Target], note: str) -> tuple[int, str]:
-        if BEGIN in text:
-            raise DataError(f"the program already holds robocal's run-time correction ({ROUTINE_NAME}): "
-                            "filter the original program (routing its motions again would correct them "
-                            "twice)")
-        if re.search(rf"\b{ROUTINE_NAME}\b|\bRC_FK\b|\b{MEANT}\b", text, re.I):
-            raise DataError(f"the program already names {ROUTINE_NAME} or RC_FK: --runtime-correction "
-                            "cannot add its routine under that name")
+        self.refuse_present(text, BEGIN, _NAMES)
         ends = list(_ENDMODULE.finditer(text))
         if not ends:
             raise DataError("--runtime-correction: no ENDMODULE in the file to add the routine before")

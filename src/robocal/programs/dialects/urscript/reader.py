@@ -34,6 +34,7 @@ from robocal.programs.flow import Flow, Routine, order_by_execution
 from robocal.programs.model import IDENTITY, Program, Target
 from robocal.programs.motions import Undeclared
 from robocal.programs.rotations import nearest_rotvec
+from robocal.programs.runtime import ROUTINE_NAME, RunTime, RuntimeSite
 from robocal.programs.source import Number
 
 _POSE = re.compile(r"(?<![\w.])p\s*(?=\[)")
@@ -51,6 +52,14 @@ _KNOWN = {"movel", "movep", "movec", "movej", "set_tcp", "pose_trans", "pose_add
           "get_inverse_kin", "p", "def", "textmsg", "popup", "to_str", "str_cat", "pose_dist", "point_dist",
           "is_within_safety_limits", "get_forward_kin", "sleep", "sync", "socket_send_string", "while", "if",
           "elif", "len", "norm"}
+# a value computed at run time (a reader's reason saying so) that the run-time correction may route
+_RUN_TIME = re.compile(r"(?<!corrected )at run time")
+# expressions whose value is a pose (the run-time correction wraps only those: a joint list is not)
+_POSE_VALUED = re.compile(r"\s*(?:p\s*\[|(?:pose_trans|pose_add|pose_sub|pose_inv|interpolate_pose|"
+                         r"get_actual_tcp_pose|get_target_tcp_pose|get_forward_kin)\s*\()")
+# built-ins reading where the robot is: a pose computed from them is already in the corrected space
+_RELATIVE = frozenset({"get_actual_tcp_pose", "get_target_tcp_pose", "get_forward_kin",
+                       "get_actual_joint_positions", "get_target_joint_positions", "get_target_waypoint"})
 _POSITION_M = 1e-6
 _ROTVEC = 1e-7
 DEFAULT_TOOL = "default"
@@ -88,6 +97,7 @@ class URScriptDialect(Dialect):
     length_unit = "m"
     angle_unit = "rad"
     campaign_format, campaign_suffix = "URScript", ".script"
+    runtime_correction = "robocal.programs.dialects.urscript.runtime:URScriptRuntime"
     suffixes = (".script", ".urscript")
     scheme = None
     frame_help = "x,y,z in m and the rotation vector rx,ry,rz in rad, as in p[...]"
@@ -147,7 +157,10 @@ class URScriptDialect(Dialect):
                             continue
                         acc = prog.motion(src, m.start(), fn)
                         if kind == "skip":
+                            value = sc.run_time(value, a, b, m.start())
                             prog.skip(here, fn, value, acc, masked[a:b][:60])
+                            if isinstance(value, RunTime):  # --runtime-correction may route it
+                                prog.runtime_sites.append(sc.site(acc, a, b, tool))
                         elif kind == "pose":
                             prog.skip(here, fn, "the pose is computed from values this filter cannot rewrite "
                                                 "(expressions or another function's result)", acc,
@@ -225,7 +238,7 @@ class _Script:
             names = [x.strip() for x in m.group(2).split(",") if x.strip()]
             if names:
                 self.params.append((m.start(), m.group(1), names))
-        self.defs = _defs(masked)  # (name, start, end) of every def
+        self.defs = definitions(masked)  # (name, start, end) of every def
         defined = {name for name, _, _ in self.defs}
         for m in re.finditer(r"\b([A-Za-z_]\w*)\s*\(", masked) if defined else ():
             if m.group(1) in defined and not masked[max(0, m.start() - 4):m.start()].endswith("def "):
@@ -321,6 +334,8 @@ class _Script:
             found = self.resolve(*inner[0], at, depth + 1) if len(inner) == 1 else []
             if len(found) == 1 and found[0][0] in ("pose", "target") and found[0][2] == IDENTITY:
                 return [("pose", invert_transform(self._pose(found[0])), IDENTITY, None)]
+        if call and call.group(1) == ROUTINE_NAME:  # a program robocal filtered with --runtime-correction
+            return [("skip", f"already corrected at run time by robocal's {ROUTINE_NAME}", IDENTITY, None)]
         if call and call.group(1) != "p":
             return [("skip", f"the pose is computed at run time by {call.group(1)}()", IDENTITY, None)]
         if _POSE.match(masked, lead):
@@ -374,6 +389,55 @@ class _Script:
             return ("pose", self.d.to_pose(np.array([values]))[0], IDENTITY, None)
         varying = ", ".join(t for t, v in zip(texts, values, strict=False) if v is None)
         return ("skip", f"p[...] holds values known at run time only ({varying[:60]})", IDENTITY, None)
+
+    def run_time(self, why, a: int, b: int, at: int):
+        """``why`` as a :class:`RunTime` reason when the motion argument ``masked[a:b]`` at offset
+        ``at`` is a pose (literal or pose built-in, through variables) computed at run time; else
+        ``why`` as it is."""
+        if isinstance(why, Undeclared) or not _RUN_TIME.search(str(why)):
+            return why
+        final = self._final(a, b, at, 0)
+        if final is None or not _POSE_VALUED.match(self.masked, final[0]):
+            return why
+        targets, functions = {}, set()
+        self._closure(a, b, at, 0, targets, functions)
+        return RunTime(str(why), relative=bool(functions & _RELATIVE), sources=list(targets.values()))
+
+    def site(self, acc, a: int, b: int, tool: str) -> RuntimeSite:
+        """The motion argument ``a:b`` as a run-time correction site: the routine reads the active
+        TCP from the controller and URScript poses are in the base frame (tool and frame known)."""
+        lead = a + len(self.masked[a:b]) - len(self.masked[a:b].lstrip())
+        end = lead + len(self.masked[lead:b].rstrip())
+        return RuntimeSite(acc, self.src.path, lead, end, tool, None, IDENTITY, IDENTITY)
+
+    def _final(self, a: int, b: int, at: int, depth: int) -> tuple[int, int] | None:
+        """The span of the expression a plain variable ``masked[a:b]`` holds at ``at``, followed
+        through assignments (the span itself when it is not a name; None: not assigned here)."""
+        name = _IDENT.match(self.masked[a:b])
+        if not name:
+            return a, b
+        span = self.assigned.latest(name.group(1), at)
+        if span is None or depth > _DEPTH:
+            return None
+        return self._final(span[0], span[1], span[0], depth + 1)
+
+    def _closure(self, a: int, b: int, at: int, depth: int, targets: dict, functions: set) -> None:
+        """The literal targets (``targets``: id -> Target) and the functions (``functions``) the
+        expression ``masked[a:b]`` at ``at`` is computed from, through the variables it reads."""
+        if depth > _DEPTH:
+            return
+        masked = self.masked
+        for m in _POSE.finditer(masked, a, b):
+            found = self._literal(m.start(), close_bracket(masked, m.end()) + 1)
+            if found[0] == "target":
+                targets[id(found[1])] = found[1]
+        for m in re.finditer(r"\b([A-Za-z_]\w*)\b(\s*\()?", masked[a:b]):
+            if m.group(2):
+                functions.add(m.group(1))
+                continue
+            span = self.assigned.latest(m.group(1), at)
+            if span is not None:
+                self._closure(span[0], span[1], span[0], depth + 1, targets, functions)
 
     def passed(self, variables: set[str]) -> list[tuple[str, str, str]]:
         """``(variable, where, function)`` for each of ``variables`` given as an argument to a
@@ -476,7 +540,7 @@ _FUNCTIONS = {"sqrt": np.sqrt, "sin": np.sin, "cos": np.cos, "tan": np.tan, "d2r
 _BLOCK = re.compile(r"\b(def|thread|if|while|end)\b")
 
 
-def _defs(masked: str) -> list[tuple[str, int, int]]:
+def definitions(masked: str) -> list[tuple[str, int, int]]:
     """``(name, start, end)`` of every ``def`` (end: after its ``end``; the file's end if the
     blocks do not balance). ``def``, ``thread``, and ``if``/``while`` beginning a statement open a
     block; ``end`` closes one."""

@@ -12,6 +12,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from robocal.programs.dialects.val3 import s6
+
 _FILE = re.compile(r"<(Program|program|Data|data)\b[^>]*?\bfile\s*=\s*\"([^\"]+)\"")
 _TYPE = re.compile(r"<Type\b[^>]*?\bname\s*=\s*\"([^\"]+)\"[^>]*?\bpath\s*=\s*\"([^\"]+)\"")
 # a library: <Library alias path> (s7), <alias name path> (s6.x)
@@ -19,8 +21,6 @@ _LIBRARY = re.compile(r"<(?:Library|alias)\b[^>]*?\b(?:alias|name)\s*=\s*\"([^\"
                       r"\bpath\s*=\s*\"([^\"]+)\"")
 _DATA_TYPES = re.compile(r"<Data\b[^>]*?\bname\s*=\s*\"([^\"]+)\"[^>]*?(?<![:\w])type\s*=\s*\"([^\"]+)\"")
 DISK = "Disk://"
-# s6.x sections whose elements are these VAL3 types (the others are named like the type)
-S6_TYPES = {"point": "pointRx", "joint": "jointRx"}
 
 
 @dataclass
@@ -68,5 +68,5 @@ def declared_types(text: str) -> dict[str, str]:
     found = dict(_DATA_TYPES.findall(text))
     for section, body in re.findall(r"<(\w+)Section\b[^>/]*>(.*?)</\1Section\s*>", text, re.DOTALL):
         for name in re.findall(rf"<{section}\b[^>]*?\bname\s*=\s*\"([^\"]+)\"", body):
-            found.setdefault(name, S6_TYPES.get(section, section))
+            found.setdefault(name, s6.TYPES.get(section, section))  # others: named like the type
     return found

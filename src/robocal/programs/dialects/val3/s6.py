@@ -23,6 +23,7 @@ replaced by its character padded with spaces (offsets kept)."""
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 
 # an s6.x file, told by its root element (and namespace, which some writers leave out)
 SIGNATURE = (r"<(?:programList|dataList)\b|"
@@ -59,7 +60,7 @@ def decoded(code: str) -> str:
     return _ENTITY.sub(one, code)
 
 
-def data_items(text: str):
+def data_items(text: str) -> Iterator[tuple[str, str, int, int, int]]:
     """``(element, name, start, end, body_start)`` of every datum of an s6 .dtx: the datum's
     element name (``point``, ``tool``, ``num`` ...: its section's), its name, its span and where
     its body starts (``end == body_start``: an empty element)."""
@@ -82,9 +83,10 @@ def data_items(text: str):
             pos = max(stop_item, m.end())
 
 
-def programs(text: str):
-    """``(name, params [(name, type)], locals {name: type}, code_start, code)`` of every
-    ``<program>`` of an s6 .pgx (``code``: decoded, at the file's offsets from ``code_start``)."""
+def programs(text: str) -> Iterator[tuple[str, list[str], dict[str, str], int, str]]:
+    """``(name, params [name], kinds {name: type}, code_start, code)`` of every ``<program>``
+    of an s6 .pgx (``kinds``: of its parameters and locals; ``code``: decoded, at the file's
+    offsets from ``code_start``)."""
     for p in _PROGRAM.finditer(text):
         name = re.search(r"\bname\s*=\s*\"([^\"]*)\"", p.group(1))
         code = _CODE.search(text, p.start(2), p.end(2))
