@@ -308,3 +308,20 @@ def test_a_fanuc_remark_naming_a_section_is_no_section(tmp_path):
     out = tmp_path / "out.ls"
     res.write(out)
     assert re.search(rb"\n *\d+:  !robocal[^\n]*\n/POS", out.read_bytes())
+
+
+def test_a_posreg_index_of_thousands_of_digits_is_no_internal_error(tmp_path):
+    """`[1,1111...1] = ''` (5,000 digits) in POSREG.VA: int() raised ValueError (internal error); the
+    line is no register's now, and the motions to registers it does not hold are named."""
+    import test_fanuc_posreg as fp
+
+    backup = PROGRAMS.parent / "fanuc_backup"
+    posreg = tmp_path / "POSREG.VA"
+    data = (backup / "POSREG.VA").read_bytes()
+    posreg.write_bytes(re.sub(rb"\[1,10\]", b"[1," + b"1" * 5000 + b"]", data, count=1))
+    program = tmp_path / "PALLET.ls"
+    program.write_bytes(fp.PALLET.replace("\n", "\r\n").encode())
+    nominal = Robot.from_catalog("fanuc_m20ia")
+    res = filter_program([program], perturbed(nominal, 7), nominal,
+                         references=[posreg, backup / "SYSFRAME.VA"], keep_unreached=True)
+    assert any("PR[10" in m.reason for m in res.motions if m.reason)
