@@ -224,6 +224,9 @@ def test_a_var_dat_line_with_a_type_of_thousands_of_digits_is_named(tmp_path):
     var.write_bytes(data.replace(b"0,0,2,-76037", b"0," + b"1" * 5000 + b",2,-76037", 1))
     job = tmp_path / "B.JBI"
     job.write_bytes(iv._job(["///NPOS 0,0,0,0,0,0"], [f"MOVL P{k:03d} V=100.0" for k in range(1, 6)]))
+    with pytest.raises(DataError, match=r"VAR.DAT:11: a number of 5000 digits"):  # refused when read
+        filter_program([job], iv.CALIBRATED, iv.NOMINAL, references=[var], keep_unreached=True)
+    var.write_bytes(data.replace(b"0,0,2,-76037", b"0," + b"1" * 40 + b",2,-76037", 1))  # read, not a type
     res = filter_program([job], iv.CALIBRATED, iv.NOMINAL, references=[var], keep_unreached=True)
     assert any(m.reason.startswith("P001's line in VAR.DAT is not") for m in res.motions)
 
@@ -322,6 +325,29 @@ def test_a_posreg_index_of_thousands_of_digits_is_no_internal_error(tmp_path):
     program = tmp_path / "PALLET.ls"
     program.write_bytes(fp.PALLET.replace("\n", "\r\n").encode())
     nominal = Robot.from_catalog("fanuc_m20ia")
+    with pytest.raises(DataError, match=r"POSREG.VA:7: a number of 5000 digits"):  # refused when read
+        filter_program([program], perturbed(nominal, 7), nominal,
+                       references=[posreg, backup / "SYSFRAME.VA"], keep_unreached=True)
+    posreg.write_bytes(re.sub(rb"\[1,10\]", b"[1," + b"1" * 40 + b"]", data, count=1))  # read: no register
     res = filter_program([program], perturbed(nominal, 7), nominal,
                          references=[posreg, backup / "SYSFRAME.VA"], keep_unreached=True)
     assert any("PR[10" in m.reason for m in res.motions if m.reason)
+
+
+@pytest.mark.parametrize("seed", list(SEEDS))
+def test_a_number_of_thousands_of_digits_is_refused_with_its_place(seed, tmp_path):
+    """Any file holding a run of 5,000 digits (the fuzzing's huge number) is refused when read, with
+    file:line, before a reader's int() fails on it (Python's 4300-digit limit: internal errors in
+    FANUC POSREG.VA, TP line numbers, INFORM VAR.DAT)."""
+    files, refs, robot, options, _ = SEEDS[seed]
+    for f in files + refs:
+        (tmp_path / Path(f).name).write_bytes((PROGRAMS / f).read_bytes())
+    first = tmp_path / Path(files[0]).name
+    data = first.read_bytes()
+    k = data.index(b"\n", len(data) // 2) + 1
+    first.write_bytes(data[:k] + b"1" * 5000 + data[k:])
+    nominal = Robot.from_catalog(robot)
+    line = data[:k].count(b"\n") + 1
+    with pytest.raises(DataError, match=rf"{re.escape(first.name)}:{line}: a number of 5000 digits"):
+        filter_program([tmp_path / Path(f).name for f in files], perturbed(nominal, 7), nominal,
+                       references=[tmp_path / Path(f).name for f in refs], **options)
