@@ -14,6 +14,7 @@ a traceback or a stray warning line, never an input modified.
 from __future__ import annotations
 
 import contextlib
+import difflib
 import io
 import json
 import os
@@ -291,7 +292,7 @@ def build_readers(folder: Path) -> dict[str, Reader]:
             files,
             argv,
             [out] if len(programs) == 1 else ["outdir"],
-            extra={"outdir": len(programs) > 1},
+            extra={"outdir": len(programs) > 1, "programs": programs},
         )
     # a Yaskawa job with the controller's tool file, filtered with a payload model (the loads read)
     corpus = PROGRAMS / "corpus"
@@ -306,8 +307,99 @@ def build_readers(folder: Path) -> dict[str, Reader]:
                 str(d / "cal.yaml"), "--nominal", "yaskawa_gp180", "-o", str(d / "out.JBI")]
 
     readers["inform"] = Reader("inform", {**{f: (corpus / f).read_bytes() for f in files},
-                                          "cal.yaml": path.read_bytes()}, files, inform_argv, ["out.JBI"])
+                                          "cal.yaml": path.read_bytes()}, files, inform_argv, ["out.JBI"],
+                               extra={"programs": files[:1]})
+    readers.update(_issue46_readers(folder, gp180_cal=path.read_bytes()))
     return readers
+
+
+def _filter_reader(name: str, files: dict[str, bytes], programs: list[str], references: list[str],
+                   robot: str, cal: bytes, output: str, extra: tuple = ()) -> Reader:
+    """A `filter` command on ``programs`` with ``references``; every file but the model mutated."""
+
+    def argv(d):
+        refs = ["--references", *(str(d / f) for f in references)] if references else []
+        return ["filter", *(str(d / f) for f in programs), *refs, "--calibrated", str(d / "cal.yaml"),
+                "--nominal", robot, *extra, "-o", str(d / output)]
+
+    edits_only = "--runtime-correction" not in extra  # the routine adds and reroutes lines
+    return Reader(name, {**files, "cal.yaml": cal}, [*programs, *references], argv, [output],
+                  extra={"outdir": len(programs) > 1, "programs": programs if edits_only else []})
+
+
+def _issue46_readers(folder: Path, gp180_cal: bytes) -> dict[str, Reader]:
+    """The inputs issue 46 added: FANUC POSREG.VA and SYSFRAME.VA, INFORM VAR.DAT (job layout and a
+    controller backup's), a VAL3 s6.x XML application, RAPID and KRL with --runtime-correction."""
+    import test_fanuc_posreg as fp
+    import test_inform_variables as iv
+    import test_val3_layouts as vl
+
+    corpus, backup = PROGRAMS / "corpus", PROGRAMS.parent / "fanuc_backup"
+    cals = {}
+    for robot in ("fanuc_m20ia", "abb_irb2600", "kuka_kr16_2", "staubli_tx2_140"):
+        perturbed(Robot.from_catalog(robot), 7).save(folder / f"cal46_{robot}.yaml")
+        cals[robot] = (folder / f"cal46_{robot}.yaml").read_bytes()
+    readers = {}
+    crlf = fp.PALLET.replace("\n", "\r\n").encode()
+    readers["fanuc_posreg"] = _filter_reader(
+        "fanuc_posreg", {"PALLET.ls": crlf, "POSREG.VA": (backup / "POSREG.VA").read_bytes(),
+                         "SYSFRAME.VA": (backup / "SYSFRAME.VA").read_bytes()},
+        ["PALLET.ls"], ["POSREG.VA", "SYSFRAME.VA"], "fanuc_m20ia", cals["fanuc_m20ia"], "out.ls")
+    iv.NOMINAL.save(folder / "gp_nominal.yaml")
+    iv.CALIBRATED.save(folder / "gp_cal.yaml")
+    files = ["PICK_PLACE.JBI", "VAR.DAT"]
+    tools = tuple(a for k, v in iv.TOOLS.items() for a in ("--tool", f"{k}={v}"))
+    readers["inform_var"] = _filter_reader(
+        "inform_var", {f: (corpus / f).read_bytes() for f in files}, files[:1], files[1:],
+        str(folder / "gp_nominal.yaml"), (folder / "gp_cal.yaml").read_bytes(), "out.JBI", tools)
+    sub = folder / "inform_backup"
+    sub.mkdir(exist_ok=True)
+    forms = ["".join(map(str, iv.InformDialect().scheme.encode(iv.NOMINAL, iv.Q[k]).clip(0, 1))) + "0" * 18
+             for k in range(2)]
+    var = iv._backup_var(sub, forms).read_bytes()
+    job = iv._job(["///NPOS 0,0,0,0,0,0"], [f"MOVL P{k:03d} V=100.0" for k in range(1, 6)])
+    readers["inform_var_backup"] = _filter_reader(
+        "inform_var_backup", {"B.JBI": job, "VAR.DAT": var}, ["B.JBI"], ["VAR.DAT"],
+        str(folder / "gp_nominal.yaml"), (folder / "gp_cal.yaml").read_bytes(), "out.JBI")
+    shutil.rmtree(folder / "val3_s6", ignore_errors=True)
+    sub = vl._s6_application(folder / "val3_s6")
+    names = ["start.pgx", "place.pgx", "cell.dtx"]
+    vl.CALIBRATED.save(folder / "tx2_cal.yaml")
+    readers["val3_s6"] = _filter_reader(
+        "val3_s6", {n: (sub / n).read_bytes() for n in names}, names, [], "staubli_tx2_140",
+        (folder / "tx2_cal.yaml").read_bytes(), "outdir")
+    readers["rapid_rt"] = _filter_reader(
+        "rapid_rt", {"arc_station.mod": (corpus / "arc_station.mod").read_bytes()}, ["arc_station.mod"], [],
+        "abb_irb2600", cals["abb_irb2600"], "out.mod", ("--runtime-correction",))
+    files = ["deburr_cell.src", "deburr_cell.dat", "$config.dat"]
+    readers["krl_rt"] = _filter_reader(
+        "krl_rt", {f: (corpus / f).read_bytes() for f in files}, files[:2], files[2:], "kuka_kr16_2",
+        cals["kuka_kr16_2"], "outdir", ("--runtime-correction",))
+    readers["inform_cell"] = _cell_reader(folder)
+    return readers
+
+
+def _cell_reader(folder: Path) -> Reader:
+    """A station-coordinated INFORM job filtered with a cell (nominal and calibrated cell files):
+    the job and the nominal cell file are mutated."""
+    import cell_programs as cp
+    import test_coordinated_programs as tc
+
+    nominal, _, calibrated = cp.cells(5, arm="yaskawa_gp25", unit="ST1", external_axes=(1, 2))
+    q, e, _ = cp.poses(nominal, 5)
+    sub = folder / "inform_cell"
+    sub.mkdir(exist_ok=True)
+    job = tc._inform_cell_job(sub, nominal.arms["arm"], q, e, cp.TOOL)
+    nominal.save(sub / "cell.yaml")
+    calibrated.save(sub / "calibrated_cell.yaml")
+
+    def argv(d):
+        return ["filter", str(d / job.name), "--calibrated", str(d / "calibrated_cell.yaml"), "--nominal",
+                str(d / "cell.yaml"), "--tool", "1=0,0,250,0,20,0", "-o", str(d / "out.JBI")]
+
+    files = {n: (sub / n).read_bytes() for n in (job.name, "cell.yaml", "calibrated_cell.yaml")}
+    return Reader("inform_cell", files, [job.name, "cell.yaml"], argv, ["out.JBI"],
+                  extra={"programs": [job.name]})
 
 
 # ----------------------------------------------------------------- mutations
@@ -479,7 +571,7 @@ def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, std
         missing = [o for o in reader.outputs if not (folder / o).exists()]
         if reader.extra.get("outdir") and not any((folder / "outdir").iterdir()):
             missing.append("outdir/*")
-        return f"exit 0 without {missing}" if missing else None
+        return f"exit 0 without {missing}" if missing else _edit_outside_numbers(reader, target, data, folder)
     if code == 2:
         # the error: one line, or a headline and one indented item a line (a list of places)
         while len(lines) > 1 and lines[-1].startswith("  ") and ": error: " not in lines[-1]:
@@ -493,6 +585,37 @@ def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, std
     if code == -1:
         return "timeout"
     return f"exit {code}: {_site(stderr)}"
+
+
+_MASK = re.compile(rb"[ \t]*" + NUMBER.pattern)
+# VAL3 writes an absent coordinate as a new attribute of the element holding the others: a line's
+# coordinate attributes compare as one mark (so one added to an element that had none still shows)
+_COORD = re.compile(rb'\s+(?:x|y|z|rx|ry|rz)="#"', re.I)
+
+
+def _coords_as_one(line: bytes) -> bytes:
+    new = _COORD.sub(b"", line)
+    return new + b" @" if new != line else line
+
+
+def _edit_outside_numbers(reader: Reader, target: str, data: bytes, folder: Path) -> str | None:
+    """For a program reader (``extra['programs']``, no routine added): what changed in an output
+    beyond its numbers (lines may be added: the provenance marker), or None. A filter edits pose
+    numbers only; any other change is an unsafe edit."""
+    for name in reader.extra.get("programs", ()):
+        out = folder / (reader.outputs[0] if not reader.extra.get("outdir") else f"outdir/{name}")
+        if not out.is_file():
+            continue
+        source = data if name == target else reader.files[name]
+        old, new = ([_coords_as_one(ln) for ln in _MASK.sub(b"#", b).splitlines()]
+                    for b in (source, out.read_bytes()))
+        changed = [op for op in difflib.SequenceMatcher(None, old, new, autojunk=False).get_opcodes()
+                   if op[0] in ("replace", "delete")]
+        if changed:
+            _, i, _, j, _ = changed[0]
+            got = new[j][:80] if j < len(new) else b"(deleted)"
+            return f"edit outside a number in {name}:{i + 1}: {old[i][:80]!r} -> {got!r}"
+    return None
 
 
 def _site(stderr: str) -> str:

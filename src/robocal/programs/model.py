@@ -64,6 +64,8 @@ class Program:
     carried: dict[str, str] = field(default_factory=dict)  # frame name -> mechanical unit moving it
     in_world: set[str] = field(default_factory=set)  # carried frames whose targets are taught in the world
     runtime_sites: list = field(default_factory=list)  # target arguments computed at run time
+    _seen: tuple[set[str], int] = field(default_factory=lambda: (set(), 0), repr=False)  # `uncorrected`'s
+    # lines and how many of them the set holds
 
     def motion(self, source: ProgramText, at: int, instruction: str) -> Account:
         """The account of the motion instruction at offset ``at`` of ``source`` (opened once)."""
@@ -118,6 +120,10 @@ class Program:
         if account is not None:
             account.name(why, label)
         text = f"{where}: {instruction}: not corrected: {why}"
-        if text not in self.uncorrected:
+        seen, synced = self._seen
+        seen.update(self.uncorrected[synced:])  # lines appended elsewhere (the list only grows)
+        if text not in seen:  # a set: a list's `in` made 100,000 named motions quadratic
+            seen.add(text)
             self.uncorrected.append(text)
             self.warnings.append(text)
+        self._seen = (seen, len(self.uncorrected))

@@ -81,7 +81,7 @@ class Routing:
                 for site in mine.values():
                     fe.spans.update(writer.site_edits(src.text, site, meant))
                 at, text = writer.routine(src.text, chain, meant, marker_text(self.calibrated))
-                fe.spans[(at, at)] = text
+                fe.spans[(at, at)] = src.in_file_line_ends(text)
             outputs[src.path] = fe.apply(src)
         if sites:
             left = f"; left out: the joint-error terms {', '.join(chain.left_out)}" if chain.left_out else ""

@@ -47,6 +47,8 @@ class Number:
 
 
 TEXT_SHARE = 0.9  # share of text bytes (printable, tab, CR, LF) a text file's first 4 kB has at least
+MAX_DIGITS = 1000  # a run of this many digits is no number a controller writes (the file is refused)
+_HUGE_DIGITS = re.compile(rf"\d{{{MAX_DIGITS},}}")
 UTF16_ZEROS = 0.4  # share of NULs at odd (or even) bytes from which a file is UTF-16 (ASCII code in it)
 
 
@@ -87,7 +89,18 @@ class ProgramText:
         # dialects read has it as LF, same length, so offsets and line numbers hold for both
         self.text = _LONE_CR.sub("\n", self.original) if "\r" in self.original else self.original
         self._lines = [0] + [m.end() for m in re.finditer("\n", self.text)]
+        first = re.search("\r\n|\n|\r", self.original)
+        self._lone_cr_file = first is not None and first.group() == "\r"
+        huge = _HUGE_DIGITS.search(self.text)
+        if huge:  # no controller writes one; int() of it would fail (Python's 4300-digit limit)
+            raise DataError(f"{self.where(huge.start())}: a number of {len(huge.group())} digits: not a "
+                            f"program a controller wrote (at most {MAX_DIGITS - 1} digits are read)")
         self._masked: dict[tuple, str] = {}  # (blank, quoted) patterns -> the masked text
+
+    def in_file_line_ends(self, added: str) -> str:
+        """Text written for this file in the form of :attr:`text` (lines ended by LF) with the
+        file's own line ends: a lone CR in a CR-only file (CRLF and LF are kept as written)."""
+        return added.replace("\n", "\r") if self._lone_cr_file else added
 
     def masked(self, blank: list[re.Pattern], quoted: list[re.Pattern] = ()) -> str:
         """:func:`mask` of the text with these patterns, computed once (the reader and the load

@@ -159,17 +159,30 @@ def check_unmarked(text: str, where: str, action: str, force: bool = False) -> M
     return found
 
 
+_LINE_END = re.compile(r"\r\n|\n|\r")
+
+
 def newline(text: str) -> str:
-    """The line end ``text`` uses."""
-    return "\r\n" if "\r\n" in text else "\n"
+    """The line end ``text`` uses: its first one (CRLF, LF or a lone CR: an old controller's or a
+    Mac-era editor's file); LF when it has none."""
+    m = _LINE_END.search(text)
+    return m.group() if m else "\n"
+
+
+BOM = "\xef\xbb\xbf"  # a UTF-8 byte-order mark as the programs are read (latin-1): stays first
+
+
+def after_bom(text: str) -> int:
+    """Where a line put first in ``text`` goes: after its byte-order mark, if any."""
+    return len(BOM) if text.startswith(BOM) else 0
 
 
 def insert_after(text: str, anchor: re.Pattern, line: str) -> str:
     """``line`` inserted after the first match of ``anchor`` (whose group 1 is its line end), with
-    the next line's indent; no match: as the first line."""
+    the next line's indent; no match: as the first line (after a byte-order mark)."""
     m = anchor.search(text)
     nl = m.group(1) if m else newline(text)
-    at = m.end() if m else 0
+    at = m.end() if m else after_bom(text)
     rest = text[at:]
     indent = re.match(r"[ \t]*", rest).group() if m and rest.strip() else ""
     return text[:at] + indent + line + nl + rest

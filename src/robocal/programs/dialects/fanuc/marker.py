@@ -9,15 +9,17 @@ import re
 
 from robocal.core.errors import DataError
 from robocal.programs.dialects.fanuc.campaign import TP_REMARK_WIDTH
+from robocal.programs.dialects.fanuc.sections import section
 from robocal.trust.output_marker import newline, shortened
 
-_LINE = re.compile(r"^[ \t]*(\d+):", re.M)
-_COUNT = re.compile(r"^(LINE_COUNT\s*=\s*)(\d+)", re.M)
+LINE_DIGITS = 9  # a TP line number or LINE_COUNT longer than this is no controller's (a mangled file)
+_LINE = re.compile(rf"^[ \t]*(\d{{1,{LINE_DIGITS}}}):", re.M)
+_COUNT = re.compile(rf"^(LINE_COUNT\s*=\s*)(\d{{1,{LINE_DIGITS}}})(?!\d)", re.M)
 
 
 def mark(text: str, body: str, note: str) -> str:
     """``text`` with the remark ``!body`` (cut to fit) as the last line of /MN."""
-    start, stop = text.find("/MN"), text.find("/POS")
+    start, stop = section(text, "MN"), section(text, "POS")
     if start < 0:
         raise DataError("a FANUC .ls program without /MN cannot carry a provenance marker")
     stop = len(text) if stop < start else stop
@@ -25,7 +27,7 @@ def mark(text: str, body: str, note: str) -> str:
     nl = newline(text)
     body = shortened(body, TP_REMARK_WIDTH)
     remark = f"{max(numbers, default=0) + 1:>4}:  !{body} ;{nl}"
-    if stop < len(text) and not text[:stop].endswith("\n"):
+    if not text[:stop].endswith(("\n", "\r")):  # its own line, also after a last line without end
         remark = nl + remark
     out = text[:stop] + remark + text[stop:]
     return _COUNT.sub(lambda m: f"{m.group(1)}{int(m.group(2)) + 1}", out, count=1)

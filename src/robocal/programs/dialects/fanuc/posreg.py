@@ -50,9 +50,11 @@ SETTER_DECIMALS = 6  # its positions' decimals: 1 nm and 1e-6 deg, the corrected
 _HEADER = re.compile(r"\[\*POSREG\*\]\$POSREG\b[^\n]*$", re.MULTILINE)  # after <PRE> over HTTP too
 # the next variable: [*PROG*]$NAME, [KAREL]NAME (not an entry [g,n])
 _NEXT_VARIABLE = re.compile(r"^[^\S\n]*\[(?![^\S\n]*\d)", re.MULTILINE)
-_ENTRY = re.compile(r"^[ \t]*\[\s*(\d+)\s*,\s*(\d+)\s*\][ \t]*=[ \t]*(?:'([^'\n]*)')?([^\n]*)$", re.MULTILINE)
+# a group or register number of at most 9 digits (a longer one is no controller's: a mangled line)
+_ENTRY = re.compile(r"^[ \t]*\[\s*(\d{1,9})\s*,\s*(\d{1,9})\s*\][ \t]*=[ \t]*(?:'([^'\n]*)')?([^\n]*)$",
+                    re.MULTILINE)
 _NUM = r"([-+]?(?:\d+\.?\d*|\.\d+))"
-_CONFIG = re.compile(r"\bGroup:\s*(\d+)\s+Config:\s*(?:([NF])\s*([UD])\s*([TB])|([LR]))\s*"
+_CONFIG = re.compile(r"\bGroup:\s*(\d{1,9})\s+Config:\s*(?:([NF])\s*([UD])\s*([TB])|([LR]))\s*"
                      r"(?:,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3}))?[ \t\r]*$",
                      re.MULTILINE)
 _VALUES = tuple(re.compile(rf"\b{k}:\s*{_NUM}") for k in ("X", "Y", "Z", "W", "P", "R"))

@@ -49,6 +49,7 @@ from robocal.programs.dialects.fanuc.registers import (
     frame_written,
     read_registers,
 )
+from robocal.programs.dialects.fanuc.sections import section
 from robocal.programs.dialects.fanuc.sysframe import is_sysframe, read_sysframe
 from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.model import Program, Target
@@ -200,11 +201,11 @@ class FanucDialect(Dialect):
                                  "a program not given here that writes them at run time is not seen")
         for src in sources:
             text = src.text
-            start = text.find("/POS")
+            start = section(text, "POS")
             if start < 0:
                 prog.warnings.append(f"{src.path.name}: no /POS section: no positions")
                 continue
-            end = text.find("/END", start)
+            end = section(text, "END", start)
             end = len(text) if end < 0 else end
             after = start + len("/POS")  # the /POS section holds position blocks and nothing else
             for m in _POS.finditer(text, after, end):
@@ -298,7 +299,7 @@ class FanucDialect(Dialect):
         first: dict[int, tuple] = {}  # id(position) -> how its first motion moves it (leader, values)
         for src in sources:
             text = src.text
-            start, stop = text.find("/MN"), text.find("/POS")
+            start, stop = section(text, "MN"), section(text, "POS")
             if start < 0:
                 continue
             lines = list(_LINE.finditer(text, start, stop if stop > 0 else len(text)))

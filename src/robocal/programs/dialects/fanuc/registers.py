@@ -28,6 +28,7 @@ import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.programs.dialects.fanuc.configuration import SCARA
+from robocal.programs.dialects.fanuc.sections import section
 from robocal.programs.source import Number, ProgramText
 from robocal.programs.target import Target
 
@@ -56,7 +57,7 @@ def frame_writes(sources: list[ProgramText]) -> dict[tuple[str, str], str]:
     out: dict[tuple[str, str], str] = {}
     for src in sources:
         text = src.text
-        start, stop = text.find("/MN"), text.find("/POS")
+        start, stop = section(text, "MN"), section(text, "POS")
         if start < 0:
             continue
         for m in _FRAME_WRITTEN.finditer(text, start, stop if stop > start else len(text)):
@@ -96,7 +97,7 @@ def assignments(sources: list[ProgramText]) -> tuple[dict[int, str], list[str]]:
     indirect: list[str] = []
     for src in sources:
         text = src.text
-        start, stop = text.find("/MN"), text.find("/POS")
+        start, stop = section(text, "MN"), section(text, "POS")
         if start < 0:
             continue
         for m in _ASSIGNED.finditer(text, start, stop if stop > start else len(text)):

@@ -33,10 +33,11 @@ from dataclasses import dataclass
 
 from robocal.programs.source import ProgramText
 
-_HEAD = re.compile(r"^//VAR\s*$", re.MULTILINE)
+_HEAD = re.compile(r"^(?:\ufeff|\xef\xbb\xbf)?//VAR\s*$", re.MULTILINE)  # a BOM: saved by a Windows editor
 _P_SECTION = re.compile(r"^///P\s*$")
 _LINE = re.compile(r'^"(\w+)"')
-_USED = re.compile(r"(\d+),(\d+),(\d+),([01]{6,}),(\d+),(\d+),(.*)$")
+# tool number and coordinate type of at most 9 digits: a longer one is no controller's (a mangled line)
+_USED = re.compile(r"(\d+),(\d+),(\d{1,9}),([01]{6,}),(\d+),(\d{1,9}),(.*)$")
 TYPES = {0: "PULSE", 16: "BASE", 17: "ROBOT"}  # coordinate types read; 18, 19: user or tool coordinates
 
 

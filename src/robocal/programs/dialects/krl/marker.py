@@ -7,7 +7,8 @@ import re
 
 from robocal.trust.output_marker import insert_after
 
-_ANCHOR = re.compile(r"^[ \t]*(?:GLOBAL[ \t]+)?(?:DEF|DEFDAT|DEFFCT)\b[^\r\n]*(\r?\n)", re.M | re.I)
+_ANCHOR = re.compile(r"^(?:\xef\xbb\xbf)?[ \t]*(?:GLOBAL[ \t]+)?(?:DEF|DEFDAT|DEFFCT)\b[^\r\n]*(\r\n|\r|\n)",
+                     re.M | re.I)
 
 
 def mark(text: str, body: str, note: str) -> str:

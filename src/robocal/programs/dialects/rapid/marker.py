@@ -7,7 +7,7 @@ import re
 
 from robocal.trust.output_marker import insert_after
 
-_ANCHOR = re.compile(r"^[ \t]*MODULE\b[^\r\n]*(\r?\n)", re.M | re.I)
+_ANCHOR = re.compile(r"^(?:\xef\xbb\xbf)?[ \t]*MODULE\b[^\r\n]*(\r\n|\r|\n)", re.M | re.I)
 
 
 def mark(text: str, body: str, note: str) -> str:

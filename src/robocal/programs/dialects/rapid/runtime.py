@@ -25,6 +25,7 @@ from robocal.programs.dialects.rapid.campaign import RAPID_EXTAX
 from robocal.programs.rotations import matrix_to_quat
 from robocal.programs.runtime import ROUTINE_NAME, CalibratedChain, RuntimeSite, RuntimeWriter
 from robocal.programs.target import Target
+from robocal.trust.output_marker import newline as line_end
 
 BEGIN = "! >>> robocal run-time correction: BEGIN (added by robocal filter --runtime-correction)"
 END = "! <<< robocal run-time correction: END"
@@ -106,7 +107,7 @@ class RapidRuntime(RuntimeWriter):
         ends = list(_ENDMODULE.finditer(text))
         if not ends:
             raise DataError("--runtime-correction: no ENDMODULE in the file to add the routine before")
-        newline = "\r\n" if "\r\n" in text else "\n"
+        newline = line_end(text)  # the file's own (CRLF, LF or a lone CR)
         n = len(chain.theta)
         decls, steps = _joint_terms(chain)
         left = (f"! not computed here (the calibrated model's joint-error terms): {', '.join(chain.left_out)}"

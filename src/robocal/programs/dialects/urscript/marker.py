@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-from robocal.trust.output_marker import newline
+from robocal.trust.output_marker import after_bom, newline
 
 
 def mark(text: str, body: str, note: str) -> str:
-    """``text`` with the comment ``# note`` as its first line."""
-    return f"# {note}{newline(text)}{text}"
+    """``text`` with the comment ``# note`` as its first line (after a byte-order mark)."""
+    k = after_bom(text)
+    return f"{text[:k]}# {note}{newline(text)}{text[k:]}"

@@ -8,7 +8,7 @@ import re
 
 from robocal.trust.output_marker import insert_after
 
-_ANCHOR = re.compile(r"^(?:\xef\xbb\xbf)?<\?xml[^>]*\?>[ \t]*(\r?\n)")
+_ANCHOR = re.compile(r"^(?:\xef\xbb\xbf)?<\?xml[^>]*\?>[ \t]*(\r\n|\r|\n)")
 
 
 def mark(text: str, body: str, note: str) -> str:

@@ -198,6 +198,12 @@ def _read_data_s6(src: ProgramText, text: str) -> dict[str, Datum]:
                     raise DataError(f"{src.where(v.start())}: <{tag}> of {name} is not closed")
                 anchor = _inner(text, v.end(), stop.start(), attrs, anchor)
             key = f"{name}[{attrs['index'][0]}]"
+            if element != "joint" and not any(c in attrs for c in COORDS):
+                # s6 keeps the coordinates on an inner element (<tpValue .../>): without one there
+                # is nowhere safe to write a corrected value (not on <valuePoint> itself)
+                raise DataError(f"{src.where(v.start())}: <{tag}> of {key} holds no coordinates element "
+                                "(such as <tpValue x=... />): save the data again with the controller "
+                                "or Staubli Robotics Suite")
             out[key] = _datum(src, key, s6.TYPES[element], v.start(), attrs, anchor, father)
     return out
 
@@ -224,7 +230,11 @@ def _datum(src: ProgramText, key: str, kind: str, offset: int, attrs: dict, afte
             got = attrs.get(word)
             datum.config.append(None if got is None or got[0] not in values else got)
     if kind == "jointRx":
-        datum.joints = np.deg2rad([float(attrs.get(f"j{i}", ("0",))[0]) for i in range(1, 7)])
+        joints = [attrs.get(f"j{i}", ("0",))[0] for i in range(1, 7)]
+        bad = next((f"j{i}=\"{v}\"" for i, v in enumerate(joints, 1) if not NUMBER_RE.fullmatch(v)), None)
+        if bad:
+            raise DataError(f"{src.where(offset)}: {key}: {bad} is not a number")
+        datum.joints = np.deg2rad([float(v) for v in joints])
     return datum
 
 

@@ -1,0 +1,18 @@
+"""The sections of a FANUC TP .ls file (``/PROG``, ``/ATTR``, ``/MN``, ``/POS``, ``/END``): each
+header starts a line; the same word elsewhere (a remark ``! see /POS``, a position's comment) is
+no section."""
+
+from __future__ import annotations
+
+import re
+
+_HEADS: dict[str, re.Pattern] = {}
+
+
+def section(text: str, name: str, start: int = 0) -> int:
+    """Offset of the header ``/name`` at the start of a line of ``text`` (a lone CR ends a line
+    too; a UTF-8 byte-order mark may precede the first), at or after ``start``; -1 if none."""
+    if name not in _HEADS:
+        _HEADS[name] = re.compile(rf"(?:(?<=[\r\n])|\A(?:\xef\xbb\xbf)?)[ \t]*(/{name})\b")
+    m = _HEADS[name].search(text, start)
+    return m.start(1) if m else -1
