@@ -174,8 +174,8 @@ def test_joint_readings_past_the_limits_are_named_or_refused(tmp_path, capsys):
 @pytest.mark.parametrize("old, new, line", [
     ("P[3]{", "P[3!]{", 49), ("P[3]{\n   GP1:", "P[3]{\n   gp1:", 49),
     ("P[3]{\n   GP1:", "P[3]{\n   GP1_000:", 49), ("R =   -21.423 deg\n};", "R =   -21.423 deg\n", 49),
-    ("'F U T, 0, 0, 0'", "'F U T, 0, 0, " + "1" * 5000 + "'", 49),
-    ("UF : 1, UT : 2,\t\tCONFIG : 'F", "UF : " + "1" * 5000 + ", UT : 2,\t\tCONFIG : 'F", 49),
+    ("'F U T, 0, 0, 0'", "'F U T, 0, 0, " + "1" * 5000 + "'", 51),  # the digits' own line
+    ("UF : 1, UT : 2,\t\tCONFIG : 'F", "UF : " + "1" * 5000 + ", UT : 2,\t\tCONFIG : 'F", 51),
 ], ids=["P[3!]", "gp1", "GP1_000", "no };", "5000-digit turn", "5000-digit UF"])
 def test_fanuc_position_block_typos_are_refused(tmp_path, old, new, line):
     text = (PROGRAMS / "sealing.ls").read_text()
@@ -322,15 +322,16 @@ def test_rapid_malformed_array_element_is_refused(tmp_path, old, new):
 
 def test_fanuc_position_numbers_of_thousands_of_digits(tmp_path):
     """Found by the long fuzz: a 5,000-digit position number was an internal error (Python's
-    int conversion limit); in /POS it is refused, in a motion the motion is named."""
+    int conversion limit); such a run of digits is no program a controller wrote: refused on
+    reading, naming its line, in /POS and in a motion alike."""
     text = (PROGRAMS / "sealing.ls").read_text()
     robot = rc.Robot.from_catalog("fanuc_lrmate200id")
     kw = {"frames": {"1": "450,-150,100,0,0,-10"}, "tools": {"2": "0,0,120,0,0,0"}}
     bad = tmp_path / "sealing.ls"
     bad.write_text(text.replace("P[3]{", "P[" + "1" * 5000 + "]{", 1))
-    with pytest.raises(DataError, match=r"sealing.ls:49: position number '1+\.\.\. has more than 5 digits"):
+    with pytest.raises(DataError, match=r"sealing.ls:49: a number of 5000 digits"):
         filter_program(bad, perturbed(robot, 7), robot, **kw)
     motion = text.index("P[3]", text.index("/MN"))
     bad.write_text(text[:motion] + "P[" + "1" * 5000 + "]" + text[motion + 4:])
-    res = filter_program(bad, perturbed(robot, 7), robot, **kw)
-    assert any("is not a position number (more than 5 digits)" in u for u in res.uncorrected)
+    with pytest.raises(DataError, match=r"sealing.ls:\d+: a number of 5000 digits"):
+        filter_program(bad, perturbed(robot, 7), robot, **kw)
