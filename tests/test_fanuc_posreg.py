@@ -196,6 +196,25 @@ def test_the_cli_writes_the_setter_beside_the_program(tmp_path, capsys):
     assert (out / "PR_CAL.LS").read_text().startswith("/PROG  PR_CAL") and posreg.read_bytes() == data
 
 
+def test_the_api_writes_the_setter_beside_the_one_program_as_the_cli_does(tmp_path):
+    """FilterResult.write with one output path: the program there, PR_CAL.LS beside it (the
+    command line's placement, now the result's own)."""
+    nominal, truth = _models()
+    program = _write(tmp_path, "PALLET.ls", PALLET)
+    posreg = _write(tmp_path, "POSREG.VA", POSREG)
+    res = rc.filter_program(program, truth, nominal, frames={"1": FRAME}, tools={"2": TOOL},
+                            references=[posreg])
+    out = tmp_path / "out"
+    out.mkdir()
+    written = res.write(out / "PALLET.ls")
+    assert set(written) == {out / "PALLET.ls", out / "PR_CAL.LS"}
+    setter = res.outputs[posreg.with_name("PR_CAL.LS")].decode()
+    written_setter = (out / "PR_CAL.LS").read_text()  # the same program, with the calibrated model's marker
+    assert written_setter.startswith("/PROG  PR_CAL") and "!robocal" in written_setter
+    lines = re.compile(r"PR\[\d+:\w+\]=P\[\d\]")
+    assert lines.findall(written_setter) == lines.findall(setter)
+
+
 def test_a_register_without_frames_set_is_named_and_two_register_files_refused(tmp_path):
     nominal, truth = _models()
     text = PALLET.replace("   1:  UFRAME_NUM=1 ;\n", "   1:  ;\n")

@@ -109,13 +109,6 @@ def _output_paths(programs: list[str], output: str, table: str | None,
     return targets, table, [*targets.values(), *table_paths(table)]
 
 
-def _beside(output: str, path: Path) -> Path:
-    """Where a file the filter derives (FANUC's PR_CAL.LS from a POSREG.VA) is written: under its
-    own name in the output folder, or beside the one output program."""
-    out = Path(output)
-    return (out if out.is_dir() else out.parent) / Path(path).name
-
-
 def run(args) -> int:
     import sys
 
@@ -137,7 +130,7 @@ def run(args) -> int:
                          payload=payload_si(args.payload), temperature=args.temperature,
                          payload_schedules=args.payload_schedules, prediction=prediction, arm=args.arm,
                          fixed_base=args.fixed_base, runtime_correction=args.runtime_correction)
-    written = res.write({p: targets.get(Path(p), _beside(args.output, p)) for p in res.outputs}, table)
+    written = res.write({p: targets[Path(p)] for p in res.outputs if p not in res.derived}, table)
     if args.quiet:  # the warnings still matter
         for w in res.warnings:
             print(f"robocal filter: warning: {w}", file=sys.stderr)

@@ -500,13 +500,14 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     corrected = {id(t) for t, ok in zip(targets, good, strict=True) if ok}
     records, outputs = _written(d, program, sources, corrected, edits, routing, warnings)
     # targets a reference holds (FANUC POSREG.VA, INFORM VAR.DAT): the dialect's own file delivers them
-    outputs.update(d.reference_outputs(program, refs, {r.path: edits.pop(r.path, FileEdits()).apply(r)
-                                                       for r in refs}, set(program.not_corrected)))
+    derived = d.reference_outputs(program, refs, {r.path: edits.pop(r.path, FileEdits()).apply(r)
+                                                  for r in refs}, set(program.not_corrected))
+    outputs.update(derived)
     rows = _rows(d, targets, X, W @ Pc, controller, q, ok, good, comp.converged & ok, changed, cfg, sing)
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected, records, calibrated,
                         joints=np.where(good[:, None], q, np.nan), loads=loads.lines,
                         data_files=frozenset(s.path for s in sources[len(paths):]),  # the register file
-                        language=d), program.declared_tools
+                        derived=frozenset(derived), language=d), program.declared_tools
 
 
 def _left_unchanged(program: Program, targets: list[Target], problems: list[tuple[int, str]],

@@ -93,6 +93,9 @@ class FilterResult:
     calibrated: Robot | None = None  # the model that corrected the targets: its marker goes on the files
     joints: np.ndarray | None = None  # (targets, n) rad on the calibrated model, NaN where not corrected
     data_files: frozenset[Path] = frozenset()  # outputs that are data, not programs: no marker
+    # outputs made from the reference files (FANUC PR_CAL.LS, INFORM VAR_CAL.DAT): no input of their
+    # own; `write` puts them beside the programs unless a path is given
+    derived: frozenset[Path] = frozenset()
     loads: list[str] = field(default_factory=list)  # which motions ran with which load (payload term)
     language: ProgramMarker | None = field(default=None, repr=False, compare=False)  # marks the files
 
@@ -190,9 +193,11 @@ class FilterResult:
 
     def write(self, outputs: dict[Path, Path] | Path | str, table: str | Path | None = None) -> list[Path]:
         """Write the filtered files (input path -> output path, or one output path for a single
-        input) and the table (``table`` ending .csv or .json: that one; otherwise both
-        ``table.csv`` and ``table.json``), all together or none. Refuses to overwrite an input.
-        Program files carry the calibrated model's marker (`robocal.trust.output_marker.mark_program`).
+        input; a file made from the references (`derived`) goes beside the first output under its
+        own name unless the mapping gives it a path) and the table (``table`` ending .csv or .json:
+        that one; otherwise both ``table.csv`` and ``table.json``), all together or none. Refuses to
+        overwrite an input. Program files carry the calibrated model's marker
+        (`robocal.trust.output_marker.mark_program`).
         Returns the paths written.
 
         Parameters
@@ -212,10 +217,13 @@ class FilterResult:
         DataError
             One output path for several inputs, or an output that would overwrite an input.
         """
+        inputs = [p for p in self.outputs if p not in self.derived]
         if not isinstance(outputs, dict):
-            if len(self.outputs) != 1:
+            if len(inputs) != 1:
                 raise DataError("several program files: give one output path per input")
-            outputs = {next(iter(self.outputs)): Path(outputs)}
+            outputs = {inputs[0]: Path(outputs)}
+        folder = Path(next(iter(outputs.values()))).parent if outputs else Path(".")
+        outputs = {**{p: folder / Path(p).name for p in self.derived}, **outputs}
         files: dict[Path, bytes] = {}
         for src, dst in outputs.items():  # marked with the calibrated model that corrected them
             data = self.outputs[Path(src)]
