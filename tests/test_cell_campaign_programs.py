@@ -7,6 +7,7 @@ positioner, and bad units, refused."""
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -38,13 +39,21 @@ def parsed(language: str, path) -> Program:
     return d.parse([ProgramText(path)], {}, {}, [])
 
 
-def test_rapid_moves_the_unit_in_each_jointtarget(tmp_path):
+def _written(path: Path, language: str, unit: str, axes: tuple[str, str]):
+    """The planned campaign (arm joints q, rad, (n, 6); table e, (n, 2)) written as ``language`` at
+    ``path`` (every file it makes), the table driven as ``unit``'s ``axes``, and read back without
+    error: (q, e, path, {file name: text})."""
     q, e = planned()
-    path = tmp_path / "Campaign.mod"
-    external = ExternalAxes(e, "STN1", ("eax_b", "eax_c"))
-    text = campaign_programs(q, ROBOT, {"rapid": path}, external=external)[str(path)]
-    path.write_text(text)
-    parsed("rapid", path)
+    texts = campaign_programs(q, ROBOT, {language: path}, external=ExternalAxes(e, unit, axes))
+    for name, text in texts.items():
+        (path.parent / name).write_text(text)
+    parsed(language, path)
+    return q, e, path, texts
+
+
+def test_rapid_moves_the_unit_in_each_jointtarget(tmp_path):
+    q, e, path, texts = _written(tmp_path / "Campaign.mod", "rapid", "STN1", ("eax_b", "eax_c"))
+    text = texts[str(path)]
     targets = {m.group(1): (np.array(m.group(2).split(","), float), m.group(3).split(","))
                for m in re.finditer(r"CONST jointtarget (\w+) := \[\[([^\]]*)\],\[([^\]]*)\]\]", text)}
     order = re.findall(r"MoveAbsJ (\w+)\\NoEOffs", text)
@@ -59,12 +68,7 @@ def test_rapid_moves_the_unit_in_each_jointtarget(tmp_path):
 
 
 def test_krl_declares_e6axis_with_e1_e2(tmp_path):
-    q, e = planned()
-    path = tmp_path / "campaign.src"
-    texts = campaign_programs(q, ROBOT, {"krl": path}, external=ExternalAxes(e, "EASYS", ("E1", "E2")))
-    for name, text in texts.items():
-        (tmp_path / name).write_text(text)
-    parsed("krl", path)
+    q, e, path, texts = _written(tmp_path / "campaign.src", "krl", "EASYS", ("E1", "E2"))
     dat = texts[str(path.with_suffix(".dat"))]
     declared = {}
     for m in re.finditer(r"DECL E6AXIS (\w+)=\{([^}]*)\}", dat):
@@ -78,12 +82,8 @@ def test_krl_declares_e6axis_with_e1_e2(tmp_path):
 
 
 def test_fanuc_positions_carry_group_two(tmp_path):
-    q, e = planned()
-    path = tmp_path / "campaign.ls"
-    external = ExternalAxes(e, "GP2", ("E1", "E2"))
-    text = campaign_programs(q, ROBOT, {"fanuc": path}, external=external)[str(path)]
-    path.write_text(text)
-    parsed("fanuc", path)
+    q, e, path, texts = _written(tmp_path / "campaign.ls", "fanuc", "GP2", ("E1", "E2"))
+    text = texts[str(path)]
     assert "DEFAULT_GROUP\t= 1,1,*,*,*;" in text
     arm, table = [], []
     for m in _POS.finditer(text):  # the reader's own position pattern, split by its group pattern

@@ -136,14 +136,31 @@ def _variant(data: bytes, mark: bytes, end: bytes, bom: bool, encoding: str, bla
     return (b"\xef\xbb\xbf" if bom else b"") + out
 
 
-def _filtered(folder: Path, seed: str, transform) -> tuple[tuple, dict[str, bytes]]:
+def _filter_seed(folder: Path, seed: str, transform):
+    """The seed's programs and references, each file's bytes passed through ``transform``, written
+    to ``folder`` and filtered against the nominal robot perturbed with seed 7: (result, paths)."""
     files, refs, robot, options, _ = SEEDS[seed]
-    folder.mkdir()
     for f in files + refs:
         (folder / Path(f).name).write_bytes(transform((PROGRAMS / f).read_bytes()))
     nominal = Robot.from_catalog(robot)
-    res = filter_program([folder / Path(f).name for f in files], perturbed(nominal, 7), nominal,
+    paths = [folder / Path(f).name for f in files]
+    res = filter_program(paths, perturbed(nominal, 7), nominal,
                          references=[folder / Path(f).name for f in refs], **options)
+    return res, paths
+
+
+def _filter_and_write(seed: str, folder: Path, transform) -> tuple[list[Path], Path]:
+    """`_filter_seed`, its outputs written to ``folder``/out: (the input paths, the out folder)."""
+    res, paths = _filter_seed(folder, seed, transform)
+    out = folder / "out"
+    out.mkdir()
+    res.write({p: out / p.name for p in paths})
+    return paths, out
+
+
+def _filtered(folder: Path, seed: str, transform) -> tuple[tuple, dict[str, bytes]]:
+    folder.mkdir()
+    res, _ = _filter_seed(folder, seed, transform)
     account = (res.summary_dict()["motions"], [w.replace(str(folder), "") for w in res.warnings],
                [(m.file, m.line, m.instruction, m.status, m.reason) for m in res.motions],
                [(r["name"], r["filtered"]) for r in res.rows])
@@ -260,16 +277,9 @@ def test_the_marker_leaves_a_bom_first_and_is_found_again(seed, tmp_path):
     """A file saved with a UTF-8 BOM: the provenance marker went before the BOM in RAPID (MODULE on
     the BOM's line was not found) and URScript (marker as first line), moving the BOM into the text;
     now the BOM stays first, and filtering the output again is refused as before."""
-    files, refs, robot, options, _ = SEEDS[seed]
-    for f in files + refs:
-        (tmp_path / Path(f).name).write_bytes(b"\xef\xbb\xbf" + (PROGRAMS / f).read_bytes())
-    paths = [tmp_path / Path(f).name for f in files]
+    _, refs, robot, options, _ = SEEDS[seed]
+    paths, out = _filter_and_write(seed, tmp_path, lambda data: b"\xef\xbb\xbf" + data)
     nominal = Robot.from_catalog(robot)
-    res = filter_program(paths, perturbed(nominal, 7), nominal,
-                         references=[tmp_path / Path(f).name for f in refs], **options)
-    out = tmp_path / "out"
-    out.mkdir()
-    res.write({p: out / p.name for p in paths})
     for p in paths:
         data = (out / p.name).read_bytes()
         assert data.startswith(b"\xef\xbb\xbf") and data.count(b"\xef\xbb\xbf") == 1, p.name
@@ -282,16 +292,7 @@ def test_the_marker_leaves_a_bom_first_and_is_found_again(seed, tmp_path):
 @pytest.mark.parametrize("seed", list(SEEDS))
 def test_the_written_program_keeps_its_line_ends(seed, end, tmp_path):
     """The filtered file as written (with its provenance marker) has the input's line ends only."""
-    files, refs, robot, options, _ = SEEDS[seed]
-    for f in files + refs:
-        (tmp_path / Path(f).name).write_bytes(_lf((PROGRAMS / f).read_bytes()).replace(b"\n", end))
-    paths = [tmp_path / Path(f).name for f in files]
-    nominal = Robot.from_catalog(robot)
-    res = filter_program(paths, perturbed(nominal, 7), nominal,
-                         references=[tmp_path / Path(f).name for f in refs], **options)
-    out = tmp_path / "out"
-    out.mkdir()
-    res.write({p: out / p.name for p in paths})
+    paths, out = _filter_and_write(seed, tmp_path, lambda data: _lf(data).replace(b"\n", end))
     for p in paths:
         data = (out / p.name).read_bytes()
         assert data.count(end) == len(re.findall(rb"\r\n|\r|\n", data)) > p.read_bytes().count(end), p.name

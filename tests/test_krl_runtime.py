@@ -128,6 +128,22 @@ def _machine(src: str, dat: str) -> Machine:
     return m
 
 
+def _assert_chain_is(m: Machine, model, q: np.ndarray, tol_mm: float) -> None:
+    """The routine's FK at joints ``q`` (rad, (6,)) built in the evaluator (RC_CONST(7), then
+    RC_CONST(i):RC_JOINT(i) for each axis, then RC_CONST(8)) is ``model``'s FK: position within
+    ``tol_mm`` mm, rotation within 1e-6."""
+    m.globals["RC_TEST_Q"] = Struct("E6AXIS", {f"A{k + 1}": float(v) for k, v in enumerate(np.rad2deg(q))})
+    m.globals["RC_TEST_Y"] = m.evaluate("RC_CONST(7)")
+    for i in range(1, 7):
+        m.globals["RC_TEST_I"] = i
+        m.globals["RC_TEST_Y"] = m.evaluate(
+            "RC_TEST_Y:RC_CONST(RC_TEST_I):RC_JOINT(RC_TEST_I, RC_TEST_Q)")
+    Y = to_matrix(m.evaluate("RC_TEST_Y:RC_CONST(8)"))
+    want = model.fk(q[None])[0]
+    assert np.abs(Y[:3, 3] - want[:3, 3] * 1e3).max() < tol_mm
+    assert np.abs(Y[:3, :3] - want[:3, :3]).max() < 1e-6
+
+
 def _wrapped(src: str) -> list[tuple[str, str]]:
     """(the target as written, the call) of every RC_CORRECT / RC_CORRECTF call in the motions."""
     out = []
@@ -179,17 +195,7 @@ def test_the_krl_chain_is_the_calibrated_model(filtered):
     model = controller_model(calibrated, NOMINAL)
     rng = np.random.default_rng(3)
     for q in np.deg2rad(rng.uniform(-120, 120, (5, 6))):
-        axis = Struct("E6AXIS", {f"A{k + 1}": float(v) for k, v in enumerate(np.rad2deg(q))})
-        m.globals["RC_TEST_Q"] = axis
-        m.globals["RC_TEST_Y"] = m.evaluate("RC_CONST(7)")
-        for i in range(1, 7):
-            m.globals["RC_TEST_I"] = i
-            m.globals["RC_TEST_Y"] = m.evaluate(
-                "RC_TEST_Y:RC_CONST(RC_TEST_I):RC_JOINT(RC_TEST_I, RC_TEST_Q)")
-        Y = to_matrix(m.evaluate("RC_TEST_Y:RC_CONST(8)"))
-        want = model.fk(q[None])[0]
-        assert np.abs(Y[:3, 3] - want[:3, 3] * 1e3).max() < 2e-3  # mm (32-bit REALs)
-        assert np.abs(Y[:3, :3] - want[:3, :3]).max() < 1e-6
+        _assert_chain_is(m, model, q, 2e-3)  # mm (32-bit REALs)
 
 
 def test_executed_routine_lands_where_compensate_does(filtered):
@@ -359,17 +365,7 @@ def test_chain_constants_of_other_arms_and_a_robot_base(name):
     m.load_src(routine_text(chain, "test"))
     model = controller_model(calibrated, nominal, robot_base)
     for q in np.deg2rad(rng.uniform(-150, 150, (5, 6))):
-        m.globals["RC_TEST_Q"] = Struct("E6AXIS", {f"A{k + 1}": float(v)
-                                                   for k, v in enumerate(np.rad2deg(q))})
-        m.globals["RC_TEST_Y"] = m.evaluate("RC_CONST(7)")
-        for i in range(1, 7):
-            m.globals["RC_TEST_I"] = i
-            m.globals["RC_TEST_Y"] = m.evaluate(
-                "RC_TEST_Y:RC_CONST(RC_TEST_I):RC_JOINT(RC_TEST_I, RC_TEST_Q)")
-        Y = to_matrix(m.evaluate("RC_TEST_Y:RC_CONST(8)"))
-        want = model.fk(q[None])[0]
-        assert np.abs(Y[:3, 3] - want[:3, 3] * 1e3).max() < 5e-3  # mm (32-bit REALs, 3 m reach)
-        assert np.abs(Y[:3, :3] - want[:3, :3]).max() < 1e-6
+        _assert_chain_is(m, model, q, 5e-3)  # mm (32-bit REALs, 3 m reach)
 
 
 def _rot_z(angle: float) -> np.ndarray:

@@ -11,21 +11,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rapid_subset_eval import Evaluator, NominalController  # noqa: I001 (tests/ on the path)
+from runtime_models import MODEL_ERROR_FACTOR, ROUTINE_SLACK_MM, SAME_AS_OFFLINE_MM, true_and_calibrated
 
 import robocal as rc
 from robocal.core.errors import DataError
-from robocal.data.simulate import perturbed
 from robocal.deploy.compensation import compensate, controller_model
 from robocal.programs import filter_program
 from robocal.programs.dialects.rapid.runtime import BEGIN, END
 from robocal.programs.runtime import calibrated_chain, reference_correction
 
 NOMINAL = rc.Robot.from_catalog("abb_irb2600")
-TRUE = perturbed(NOMINAL, 3, length_mm=(0.2, 0.8), angle_deg=(0.02, 0.08))
-CALIBRATED = perturbed(TRUE, 4, length_mm=(0.01, 0.04), angle_deg=(0.0005, 0.002))  # its own error
-MODEL_ERROR_FACTOR = 1.3  # the goal: the routine lands within 1.3x the calibrated model's own error
-ROUTINE_SLACK_MM = 0.002  # the routine stops within 1 um (TOLERANCE_MM) of the calibrated model's answer
-SAME_AS_OFFLINE_MM = 0.005  # routine vs offline compensate, float32 nums included
+TRUE, CALIBRATED = true_and_calibrated(NOMINAL)
 WRITTEN_MM = 1e-5  # the routine's constants are written to 1 nm and 1e-10 (quaternions)
 NINE = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
 

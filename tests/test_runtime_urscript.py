@@ -9,6 +9,13 @@ import re
 
 import numpy as np
 import pytest
+from runtime_models import (
+    MODEL_ERROR_FACTOR,
+    ROUTINE_SLACK_MM,
+    SAME_AS_OFFLINE_MM,
+    calibrated_from,
+    true_and_calibrated,
+)
 from urscript_subset_eval import Evaluator, NominalController, matrix  # noqa: I001 (tests/ on the path)
 
 import robocal as rc
@@ -20,11 +27,7 @@ from robocal.programs.dialects.urscript.runtime import BEGIN, END, URScriptRunti
 from robocal.programs.runtime import calibrated_chain, reference_correction
 
 NOMINAL = rc.Robot.from_catalog("ur10e")
-TRUE = perturbed(NOMINAL, 3, length_mm=(0.2, 0.8), angle_deg=(0.02, 0.08))
-CALIBRATED = perturbed(TRUE, 4, length_mm=(0.01, 0.04), angle_deg=(0.0005, 0.002))  # its own error
-MODEL_ERROR_FACTOR = 1.3  # the goal: the routine lands within 1.3x the calibrated model's own error
-ROUTINE_SLACK_MM = 0.002  # the routine stops within 1 um (TOLERANCE_MM) of the calibrated model's answer
-SAME_AS_OFFLINE_MM = 0.005  # routine vs offline compensate
+TRUE, CALIBRATED = true_and_calibrated(NOMINAL)
 WRITTEN_MM = 1e-5  # the routine's constants are written to 0.1 nm and 1e-10 rad
 TCP = (0.0, 0.0, 0.12, 0.0, 0.0, 0.0)
 START = np.array([0.2, -1.9, 1.6, -1.3, -1.57, 0.1])  # rad: the arm's joints before the motions
@@ -215,7 +218,7 @@ def test_a_factory_calibrated_controller(tmp_path):
               "theta5": 0.0006}
     factory = NOMINAL.with_values({k: NOMINAL.get(k) + v for k, v in deltas.items()})  # keeps the UR form
     true = perturbed(factory, 5, length_mm=(0.05, 0.2), angle_deg=(0.005, 0.02))
-    cal = perturbed(true, 6, length_mm=(0.01, 0.04), angle_deg=(0.0005, 0.002))
+    cal = calibrated_from(true, 6)
     _, text = _filter(tmp_path, calibrated=cal)  # written with the datasheet nominal
     ctl = NominalController(factory, TCP, START)
     ev = Evaluator(text, ctl)
@@ -246,8 +249,7 @@ def test_a_polyscope_export(tmp_path):
     from pathlib import Path
 
     nominal = rc.Robot.from_catalog("ur5e")
-    true = perturbed(nominal, 3, length_mm=(0.2, 0.8), angle_deg=(0.02, 0.08))
-    cal = perturbed(true, 4, length_mm=(0.01, 0.04), angle_deg=(0.0005, 0.002))
+    true, cal = true_and_calibrated(nominal)
     source = Path(__file__).parent / "data" / "programs" / "corpus" / "palletizing_ur5.script"
     res = filter_program(source, cal, nominal, runtime_correction=True, keep_unreached=True)
     text = next(iter(res.outputs.values())).decode()

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from val3_tools import reached_before_after
 
 import robocal as rc
 from robocal.cli import main
@@ -22,7 +23,6 @@ from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.programs import filter_program
 from robocal.programs.dialects.val3.reader import Val3Dialect, _read_data, application_files
 from robocal.programs.registry import dialect_for
-from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE, ProgramText
 
 APP = Path(__file__).parent / "data" / "programs" / "val3" / "pick_place"
@@ -93,13 +93,7 @@ def test_filtered_points_reach_the_intended_poses(tmp_path):
     the filtered points (in their configuration) on the calibrated robot lands on the poses the
     application meant."""
     folder = _app(tmp_path)
-    res = filter_program([folder], CALIBRATED, NOMINAL)
-    out = tmp_path / "out"
-    out.mkdir()
-    for p, data in res.outputs.items():
-        (out / p.name).write_bytes(data)
-    reached, _ = execute(application_files(out), CALIBRATED, NOMINAL)
-    before, X0 = execute(application_files(folder), CALIBRATED, NOMINAL)
+    reached, before, X0 = reached_before_after(folder, tmp_path / "out", CALIBRATED, NOMINAL)
     err = np.linalg.norm(reached[:, :3, 3] - X0[:, :3, 3], axis=1) * 1e3
     turn = np.rad2deg(np.linalg.norm(matrix_to_rotvec(reached[:, :3, :3] @ np.swapaxes(X0[:, :3, :3], 1, 2)),
                                      axis=1))

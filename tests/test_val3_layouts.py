@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from val3_tools import reached_before_after
 
 import robocal as rc
 from robocal.cli import main
@@ -20,7 +21,6 @@ from robocal.data.simulate import perturbed
 from robocal.kinematics.transforms import invert_transform
 from robocal.programs import filter_program
 from robocal.programs.dialects.val3.reader import Val3Dialect, application_files
-from robocal.programs.simulate import execute
 from robocal.programs.source import NUMBER_RE
 
 NOMINAL = rc.Robot.from_catalog("staubli_tx2_140")
@@ -221,13 +221,7 @@ def test_s6_application_read_counted_corrected(tmp_path):
 
 def test_s6_filtered_points_reach_the_intended_poses(tmp_path):
     folder = _s6_application(tmp_path / "cell")
-    res = filter_program([folder], CALIBRATED, NOMINAL)
-    out = tmp_path / "out"
-    out.mkdir()
-    for p, data in res.outputs.items():
-        (out / p.name).write_bytes(data)
-    reached, _ = execute(application_files(out), CALIBRATED, NOMINAL)
-    before, X0 = execute(application_files(folder), CALIBRATED, NOMINAL)
+    reached, before, X0 = reached_before_after(folder, tmp_path / "out", CALIBRATED, NOMINAL)
     err = np.linalg.norm(reached[:, :3, 3] - X0[:, :3, 3], axis=1) * 1e3
     err0 = np.linalg.norm(before[:, :3, 3] - X0[:, :3, 3], axis=1) * 1e3
     assert len(X0) == 4 and err.max() < 0.003 and err0.min() > 0.5

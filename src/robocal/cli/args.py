@@ -83,6 +83,14 @@ def print_warnings(command: str, warnings) -> None:
         print(f"robocal {command}: warning: {' '.join(str(warning).split())}", file=sys.stderr)
 
 
+def add_model_options(parser, robot_help: str, cell_help: str) -> None:
+    """The required choice of what is modelled: ``--robot`` (catalog name or model YAML) or
+    ``--model CELL.yaml`` (a work cell), each with its subcommand's help."""
+    model = parser.add_mutually_exclusive_group(required=True)
+    model.add_argument("--robot", help=robot_help)
+    model.add_argument("--model", metavar="CELL.yaml", help=cell_help)
+
+
 def add_fanuc_coupled(parser) -> None:
     """The option that reads joint logs of a FANUC controller (J3 counted from the horizontal)."""
     from robocal.data.joint_conventions import COUPLED_OPTION

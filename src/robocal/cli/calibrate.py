@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import INSTRUMENT_NAMES, add_fanuc_coupled
+from robocal.cli.args import INSTRUMENT_NAMES, add_fanuc_coupled, add_model_options
 from robocal.cli.history_options import add_history_options
 from robocal.core.io import LENGTH_UNITS
 
@@ -88,13 +88,11 @@ def add_parser(sub) -> None:
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("data", nargs="+", help="canonical measurement CSV(s) (robocal import / simulate); "
                                            "several files of any kinds are identified together")
-    model = p.add_mutually_exclusive_group(required=True)
-    model.add_argument("--robot", help="nominal model: catalog name or model YAML")
-    model.add_argument("--model", metavar="CELL.yaml",
-                       help="a work cell file (arms, positioners): each body calibrated on its rows (the "
-                            "data's body column) in one tracker frame; writes the calibrated cell (-o) and "
-                            "the result (--json) and each body's report (--report R.html: R_<body>.html); "
-                            "--hold-out N holds out the last N poses of each body")
+    add_model_options(p, "nominal model: catalog name or model YAML",
+                      "a work cell file (arms, positioners): each body calibrated on its rows (the "
+                      "data's body column) in one tracker frame; writes the calibrated cell (-o) and "
+                      "the result (--json) and each body's report (--report R.html: R_<body>.html); "
+                      "--hold-out N holds out the last N poses of each body")
     p.add_argument("--method", help="lsq, robust, genetic, swarm, neural (default: robust for data of an "
                                     "instrument with heavy-tailed errors, mocap or camera; else lsq)")
     p.add_argument("--instrument", choices=INSTRUMENT_NAMES,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import check_format, numbers
+from robocal.cli.args import add_model_options, check_format, numbers
 from robocal.data.kinds import KINDS
 from robocal.programs.language_help import POSES_EPILOG, PROGRAM_OPTION
 from robocal.programs.registry import DIALECTS
@@ -28,11 +28,9 @@ def add_parser(sub) -> None:
                                    "a short measuring order, predict the accuracy, and write the pose list "
                                    "and robot programs.",
                        epilog=POSES_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    body = p.add_mutually_exclusive_group(required=True)
-    body.add_argument("--robot", help="nominal model: catalog name or model YAML")
-    body.add_argument("--model", metavar="CELL.yaml",
-                      help="a work cell (arms and positioners): -n poses of each arm, --table-poses table "
-                           "angle sets of each positioner (its nests on the plate seen by the tracker)")
+    add_model_options(p, "nominal model: catalog name or model YAML",
+                      "a work cell (arms and positioners): -n poses of each arm, --table-poses table "
+                      "angle sets of each positioner (its nests on the plate seen by the tracker)")
     p.add_argument("-n", "--poses", type=int, required=True, help="number of poses to measure")
     p.add_argument("-o", "--output", required=True, metavar="poses.csv", help="planned poses CSV to write")
     g = p.add_argument_group("candidates and search")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from robocal.cli.args import check_format, numbers
+from robocal.cli.args import add_model_options, check_format, numbers
 from robocal.data.kinds import KINDS
 
 EPILOG = """Examples:
@@ -39,14 +39,12 @@ def add_parser(sub) -> None:
                        description="Simulate measurements of the given robot plus random parameter "
                                    "errors, seen from a tracker at a random pose 2-4 m away.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    model = p.add_mutually_exclusive_group(required=True)
-    model.add_argument("--robot", help="catalog name or model YAML (the nominal robot)")
-    model.add_argument("--model", metavar="CELL.yaml",
-                       help="a work cell file: each arm measured at --poses poses (its --smr SMRs on the "
-                            "flange), each positioner at --table-poses poses (the SMRs on its plate: its "
-                            "nests, else 3 SMRs 200 mm from the plate's origin), one tracker frame, "
-                            "isotropic noise; --truth writes the true cell (the SMRs' places as its arms' "
-                            "tools and its plates' nests)")
+    add_model_options(p, "catalog name or model YAML (the nominal robot)",
+                      "a work cell file: each arm measured at --poses poses (its --smr SMRs on the "
+                      "flange), each positioner at --table-poses poses (the SMRs on its plate: its "
+                      "nests, else 3 SMRs 200 mm from the plate's origin), one tracker frame, "
+                      "isotropic noise; --truth writes the true cell (the SMRs' places as its arms' "
+                      "tools and its plates' nests)")
     p.add_argument("--table-poses", type=int, default=30, help="with --model: poses of each positioner")
     which = p.add_mutually_exclusive_group(required=True)
     which.add_argument("--poses", type=int, help="number of random poses")
