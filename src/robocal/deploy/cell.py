@@ -151,7 +151,7 @@ def compensate_cell(calibrated: Cell, nominal: Cell, targets: np.ndarray, positi
     if e.shape[1] != chain.n_joints:
         raise DataError(f"{positioner} has {chain.n_joints} axes: give {chain.n_joints} values per target, "
                         f"got {e.shape[1]}")
-    outside = np.flatnonzero(((e < chain.limits[:, 0]) | (e > chain.limits[:, 1])).any(axis=1))
+    outside = np.flatnonzero(chain.outside_limits(e).any(axis=1))
     if outside.size:
         k = int(outside[0])
         shown = np.round(chain.joints_shown(e[k]), 6).tolist()
