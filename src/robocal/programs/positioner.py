@@ -240,17 +240,14 @@ def cell_models(calibrated: Robot | Cell, nominal: Robot | Cell, arm: str | None
 
 
 def _program_arm(cell: Cell, arm: str | None) -> str:
-    """The body name of the arm a program drives: ``arm`` (a body name or unit), else the only one."""
-    arms = ", ".join(f"{n} ({cell.arm_units[n]})" for n in cell.arms) or "none"
-    if arm is None:
-        if len(cell.arms) != 1:
-            raise DataError(f"the cell {cell.name!r} has arms {arms}: name the arm whose program this is "
-                            "(--arm NAME or its unit)")
-        return next(iter(cell.arms))
+    """The body name of the arm a program drives: ``arm`` (a body name or unit), else the only one
+    (`Cell.pick`, its refusal said with the option and the arms' units)."""
     try:
-        name = cell.resolve(arm)
-    except ModelError:
-        name = None
-    if name not in cell.arms:
-        raise DataError(f"--arm {arm}: not an arm of the cell {cell.name!r} (its arms: {arms})")
-    return name
+        return cell.pick("arm", arm)
+    except DataError as exc:
+        arms = ", ".join(f"{n} ({cell.arm_units[n]})" for n in cell.arms) or "none"
+        if arm is None:
+            raise DataError(f"the cell {cell.name!r} has arms {arms}: name the arm whose program this is "
+                            "(--arm NAME or its unit)") from None
+        raise DataError(f"--arm {arm}: not an arm of the cell {cell.name!r} (its arms: {arms}): "
+                        f"{exc}") from None
