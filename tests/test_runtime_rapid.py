@@ -343,3 +343,16 @@ def test_no_routing_when_an_external_axis_may_carry_the_arm(tmp_path):
     res = filter_program(path, CALIBRATED, NOMINAL, runtime_correction=True, fixed_base=True)
     assert "RETURN [[1139.82,200.98,722.77],[0.1300295,-0.08641011,0.98767211,0.01137611],[0,0,-1,0]," \
            "[1234.567,9E+09,9E+09,9E+09,9E+09,9E+09]];" in _text(res)  # RC_Meant: pHome as written
+
+
+def test_routing_and_offline_correction_judge_an_axis_held_still_alike(tmp_path):
+    """One target at eax_a 250 (an axis held at one value, `carried_arm`: no carrier): the offline
+    correction keeps it as an arm target, and the run-time correction now routes it too (its own
+    any-non-zero rule refused it)."""
+    text = MODULE.replace("[-1,0,-1,0],[9E+09,9E+09", "[-1,0,-1,0],[250,9E+09", 1)
+    assert text != MODULE
+    path = tmp_path / "held.mod"
+    path.write_text(text)
+    res = filter_program(path, CALIBRATED, NOMINAL, runtime_correction=True)
+    assert "RC_Correct(Offs(pBase, dx, dy, 0), tGrip, wTable)" in _text(res)
+    assert not any("may carry the arm" in w for w in res.warnings)
