@@ -321,3 +321,20 @@ def test_the_frames_of_the_backup_sysframe_va_are_the_ones_used(tmp_path):
     other = rc.filter_program(program, truth, nominal, frames={"1": "120,0,0,0,0,0"},
                               references=[posreg, sysframe])
     assert other.outputs[program] != given.outputs[program]
+
+
+def test_main_section_is_one_span_for_reader_registers_and_marker():
+    """sections.main_section: /MN to the /POS header after it (a remark '! see /POS' is no
+    header), else the end; the register writes found in it are those of /MN only."""
+    from robocal.programs.dialects.fanuc.registers import assignments
+    from robocal.programs.dialects.fanuc.sections import main_section
+
+    text = ("/PROG T\n/MN\n   1:  ! see /POS ;\n   2:  PR[5]=LPOS ;\n/POS\n"
+            "   3:  PR[6]=LPOS ;\n/END\n")
+    start, stop = main_section(text)
+    assert text[start:].startswith("/MN") and text[stop:].startswith("/POS\n   3")
+    no_pos = "/PROG T\n/MN\n   1:  PR[7]=LPOS ;\n"
+    assert main_section(no_pos) == (8, len(no_pos))
+    assert main_section("/PROG T\n/POS\n/END\n") is None
+    out, indirect = assignments([ProgramText(Path("t.ls"), text.encode())])
+    assert out == {5: "t.ls:4"} and indirect == []

@@ -321,9 +321,12 @@ def test_near_a_wrist_singularity_the_routine_says_it_did_not_converge(tmp_path)
 
 def test_no_routing_when_an_external_axis_may_carry_the_arm(tmp_path):
     """Targets moving eax_a (a track?): the routine's chain is the arm alone, so nothing is routed
-    (said); --fixed-base declares that no axis carries the arm: then the motions are routed."""
+    (said); --fixed-base declares that no axis carries the arm: then the motions are routed. The
+    judgement is the offline correction's (`carried_arm`): eax_a at two values over two targets may
+    carry the arm; one target at one value would not (an axis held at one value moves no arm)."""
     text = MODULE.replace("[-1,0,-1,0],[9E+09,9E+09", "[-1,0,-1,0],[250,9E+09", 1)  # pBase at eax_a 250
-    assert text != MODULE
+    text = text.replace("[0,0,-1,0],[9E+09,9E+09", "[0,0,-1,0],[1250,9E+09", 1)  # pHome at eax_a 1250
+    assert text.count("[250,9E+09") == 1 and text.count("[1250,9E+09") == 1
     path = tmp_path / "track.mod"
     path.write_text(text)
     res = filter_program(path, CALIBRATED, NOMINAL, runtime_correction=True, keep_unreached=True)
@@ -336,3 +339,16 @@ def test_no_routing_when_an_external_axis_may_carry_the_arm(tmp_path):
     res = filter_program(path, CALIBRATED, NOMINAL, runtime_correction=True, fixed_base=True)
     assert "RETURN [[1139.82,200.98,722.77],[0.1300295,-0.08641011,0.98767211,0.01137611],[0,0,-1,0]," \
            "[1234.567,9E+09,9E+09,9E+09,9E+09,9E+09]];" in _text(res)  # RC_Meant: pHome as written
+
+
+def test_routing_and_offline_correction_judge_an_axis_held_still_alike(tmp_path):
+    """One target at eax_a 250 (an axis held at one value, `carried_arm`: no carrier): the offline
+    correction keeps it as an arm target, and the run-time correction now routes it too (its own
+    any-non-zero rule refused it)."""
+    text = MODULE.replace("[-1,0,-1,0],[9E+09,9E+09", "[-1,0,-1,0],[250,9E+09", 1)
+    assert text != MODULE
+    path = tmp_path / "held.mod"
+    path.write_text(text)
+    res = filter_program(path, CALIBRATED, NOMINAL, runtime_correction=True)
+    assert "RC_Correct(Offs(pBase, dx, dy, 0), tGrip, wTable)" in _text(res)
+    assert not any("may carry the arm" in w for w in res.warnings)

@@ -493,3 +493,44 @@ def test_positioner_from_catalog_in_python():
     for k in range(4):
         np.testing.assert_allclose(table.chain.fk(e, smr=np.full(len(e), k)),
                                    file.positioners["STN1"].chain.fk(e, smr=np.full(len(e), k)), atol=TOL)
+
+
+def test_outside_limits_one_tolerance_in_the_joints_unit():
+    """Robot.outside_limits, the one positioner limit check: a value written at its limit in
+    degrees (or mm) converts to SI a rounding away and is at it; LIMIT_TOL (rad or m) beyond is
+    outside; brute force against the plain comparison on random values."""
+    from robocal.kinematics.model import LIMIT_TOL
+    from robocal.kinematics.positioner import positioner_chain
+
+    chain = positioner_chain([{"type": "revolute", "axis": [1, 0, 0], "limits": [-np.pi / 2, np.pi / 2]},
+                              {"type": "prismatic", "axis": [0, 0, 1], "limits": [0.0, 1.2]}],
+                             np.eye(4), name="p")
+    at = np.array([[np.deg2rad(90.0) * (1 + 1e-15), 1200.0 * 1e-3 * (1 + 1e-15)]])
+    assert not chain.outside_limits(at).any()
+    beyond = np.array([[np.pi / 2 + 2 * LIMIT_TOL, 0.5], [0.0, -2 * LIMIT_TOL]])
+    np.testing.assert_array_equal(chain.outside_limits(beyond), [[True, False], [False, True]])
+    q = np.random.default_rng(0).uniform([-2, -0.2], [2, 1.4], (200, 2))
+    lo, hi = chain.limits[:, 0], chain.limits[:, 1]
+    np.testing.assert_array_equal(chain.outside_limits(q), (q < lo) | (q > hi))
+
+
+def test_cell_pick_given_or_the_only_one():
+    """Cell.pick: a body given by name or unit among its kind, else the only one; a body of
+    another kind, an unknown name or no single one is refused naming the kind's bodies."""
+    from robocal.core.errors import DataError
+    from robocal.kinematics.positioner import positioner_chain
+
+    arm = rc.Robot.from_catalog("abb_irb2600")
+    turn = positioner_chain([{"type": "revolute", "axis": [0, 0, 1]}], np.eye(4), name="turntable")
+    one = Cell({"left": arm}, {"STN1": Positioner(turn, unit="STN1")}, arm_units={"left": "ROB_1"})
+    assert (one.pick("arm"), one.pick("arm", "ROB_1"), one.pick("positioner")) == ("left", "left", "STN1")
+    with pytest.raises(DataError, match=r"'STN1' is not one of the cell's arms \(left\)"):
+        one.pick("arm", "STN1")
+    with pytest.raises(DataError, match=r"'nope' is not one of the cell's positioners \(STN1\)"):
+        one.pick("positioner", "nope")
+    two = Cell({"left": arm, "right": arm})
+    with pytest.raises(DataError, match=r"the cell has 2 arms \(left, right\): name the one"):
+        two.pick("arm")
+    assert two.pick("positioner", optional=True) is None
+    with pytest.raises(DataError, match=r"the cell has 0 positioners \(none\)"):
+        two.pick("positioner")

@@ -168,12 +168,13 @@ class CellCampaignResult:
         positioner's values (default the only one) as a program writes them (`ExternalAxes`, its
         axes the positioner's logical ``external_axes``, which each language names): the arm's
         planned poses with the table at rest, then the table's angles with the arm parked."""
-        arm = arm or next(iter(self.cell.arms), None)
-        if arm is None:
+        if not self.cell.arms:
             raise DataError("the cell has no arm: campaign programs drive an arm and its positioner")
-        if positioner is None and len(self.cell.positioners) > 1:
-            raise DataError(f"name the positioner the programs drive: {', '.join(self.cell.positioners)}")
-        positioner = positioner or next(iter(self.cell.positioners), None)
+        try:
+            arm = self.cell.anchor if arm is None else self.cell.pick("arm", arm)
+            positioner = self.cell.pick("positioner", positioner, optional=True)
+        except DataError as exc:
+            raise DataError(f"{exc}: the body the programs drive") from None
         keep = [k for k, (name, _) in enumerate(self.rows()) if name in (arm, positioner)]
         q = self.joints_of(arm)[keep]
         if positioner is None:

@@ -205,7 +205,7 @@ def _check_positioner_rows(table: _Table, cell, body: str, cols: dict[str, str])
 def _check_limits(data: Measurements, chain, body: str, columns: tuple[str, ...], name: str) -> None:
     """Positioner values within its axes' limits (one line naming the row and the axis)."""
     lo, hi = chain.limits[:, 0], chain.limits[:, 1]
-    bad = (data.joints < lo) | (data.joints > hi)
+    bad = chain.outside_limits(data.joints)
     if bad.any():
         r, j = np.argwhere(bad)[0]
         spec = chain.joints[j]

@@ -31,19 +31,6 @@ if TYPE_CHECKING:  # annotations only
     from robocal.kinematics.workcell import Cell, Positioner
 
 
-def _one(names, what: str, given: str | None, cell) -> str:
-    """The body ``given`` (resolved in ``cell``), or the only one of ``names``."""
-    if given is not None:
-        name = cell.resolve(given)
-        if name not in names:  # another kind of body: its name is valid, its use is not
-            raise DataError(f"{given!r} is not one of the cell's {what}s ({', '.join(names) or 'none'})")
-        return name
-    if len(names) != 1:
-        raise DataError(f"the cell has {len(names)} {what}s ({', '.join(names) or 'none'}): name the one "
-                        f"the targets are for")
-    return next(iter(names))
-
-
 @dataclass(eq=False)
 class CellCompensation:
     """What `compensate_cell` returns.
@@ -142,8 +129,10 @@ def compensate_cell(calibrated: Cell, nominal: Cell, targets: np.ndarray, positi
     -------
     CellCompensation
     """
-    arm = _one(calibrated.arms, "arm", arm, calibrated)
-    positioner = _one(calibrated.positioners, "positioner", positioner, calibrated)
+    try:
+        arm, positioner = calibrated.pick("arm", arm), calibrated.pick("positioner", positioner)
+    except DataError as exc:
+        raise DataError(f"{exc} (the targets' body)") from None
     targets = np.asarray(targets, float).reshape(-1, 4, 4)
     chain = nominal.positioners[positioner].chain
     e = np.asarray(positioner_values, float).reshape(len(targets), -1) if np.size(positioner_values) \
@@ -151,7 +140,7 @@ def compensate_cell(calibrated: Cell, nominal: Cell, targets: np.ndarray, positi
     if e.shape[1] != chain.n_joints:
         raise DataError(f"{positioner} has {chain.n_joints} axes: give {chain.n_joints} values per target, "
                         f"got {e.shape[1]}")
-    outside = np.flatnonzero(((e < chain.limits[:, 0]) | (e > chain.limits[:, 1])).any(axis=1))
+    outside = np.flatnonzero(chain.outside_limits(e).any(axis=1))
     if outside.size:
         k = int(outside[0])
         shown = np.round(chain.joints_shown(e[k]), 6).tolist()

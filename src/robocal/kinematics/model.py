@@ -76,6 +76,9 @@ DEFAULT_SPAN = {"length": 0.005, "angle": np.deg2rad(1.0), "frame_length": 0.05,
 
 
 # Magnitudes no real robot model has (a unit or typing error, or a corrupted file): refused.
+# rad for a revolute joint, m for a prismatic one: a value written at its limit (in degrees, mm)
+# converts to SI a rounding away from it, and is still at the limit (Robot.outside_limits).
+LIMIT_TOL = 1e-9
 MAX_LINK_M = 100.0  # a_i, d_i, SMR offsets
 MAX_FRAME_M = 10_000.0  # base and tool translations (a tracker can stand far away, not 10 km)
 MAX_ANGLE_RAD = 100.0  # alpha, beta, theta, finite joint limits (16 turns)
@@ -1004,6 +1007,14 @@ class Robot:
         """``(N,)`` bool: every joint inside its limits."""
         q = self.check_joints(q)
         return ((q >= self.limits[:, 0]) & (q <= self.limits[:, 1])).all(axis=1)
+
+    def outside_limits(self, q) -> np.ndarray:
+        """``(N, n)`` bool: joint values ``q`` ``(N, n)`` (rad; m for a prismatic joint) beyond
+        their limits by more than :data:`LIMIT_TOL` (a value written at its limit in degrees or mm
+        is at it). The one limit check of positioner values (programs, measurements, deployment);
+        the caller names the row and the axis."""
+        q = self.check_joints(q)
+        return (q < self.limits[:, 0] - LIMIT_TOL) | (q > self.limits[:, 1] + LIMIT_TOL)
 
     # ----------------------------------------------------------------- files
     def save(self, path) -> None:

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.core.errors import ModelError, UnitError
+from robocal.core.errors import DataError, ModelError, UnitError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, short_repr, write_atomic
 from robocal.core.yaml_load import dump_yaml
 from robocal.kinematics.catalog import positioner_entry, positioner_names
@@ -400,6 +400,35 @@ class Cell:
         raise ModelError(f"no body {label!r} in cell {self.name!r}: bodies {self.bodies} (units "
                          f"{sorted(units)}; {ANCHOR_ALIAS!r} is the first arm, {PLATE_ALIAS!r} the only "
                          "positioner)")
+
+    def pick(self, kind: str, given: str | None = None, *, optional: bool = False) -> str | None:
+        """The body a caller works on among the cell's ``kind`` (``"arm"`` or ``"positioner"``):
+        ``given`` (any label `resolve` takes), else the only one (None when ``optional`` and the
+        cell has none). DataError naming the bodies of that kind when ``given`` is not one of them
+        or there is no single one; callers add their context (an option's name, what it is for).
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> cell = rc.Cell({"left": rc.Robot.from_catalog("abb_irb2600")}, arm_units={"left": "ROB_1"})
+        >>> cell.pick("arm"), cell.pick("arm", "ROB_1"), cell.pick("positioner", optional=True)
+        ('left', 'left', None)
+        """
+        names = {"arm": self.arms, "positioner": self.positioners}[kind]
+        listed = ", ".join(names) or "none"
+        if given is not None:
+            try:
+                name = self.resolve(given)
+            except ModelError:
+                name = None
+            if name not in names:  # another kind of body: its name is valid, its use is not
+                raise DataError(f"{given!r} is not one of the cell's {kind}s ({listed})")
+            return name
+        if optional and not names:
+            return None
+        if len(names) != 1:
+            raise DataError(f"the cell has {len(names)} {kind}s ({listed}): name the one to use")
+        return next(iter(names))
 
     def body(self, name: str) -> Robot:
         """The `Robot` of a body (an arm, or a positioner's chain), by any label `resolve` takes.

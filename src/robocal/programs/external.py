@@ -104,12 +104,14 @@ def sort_external(program: Program, warnings: list[str], taken: frozenset[int] =
 
 
 def carried_arm(program: Program, dialect: Dialect, taken: frozenset[int] = frozenset(),
-                not_arm: frozenset[str] = frozenset()) -> dict[str, str]:
+                not_arm: frozenset[str] = frozenset(), targets: list[Target] | None = None) -> dict[str, str]:
     """The axes (the dialect's :attr:`Dialect.arm_axes` but ``not_arm``) that carry or may carry the
-    arm, each with why, judged from the targets with values in frames no unit carries
-    (:func:`robocal.programs.carrier.arm_carriers`; their positions in the fixed frame, mm; a target
-    in a frame not known yet is no evidence)."""
-    loose = [t for t in program.targets
+    arm, each with why, judged from the targets (``targets``, default ``program.targets``) with
+    values in frames no unit carries (:func:`robocal.programs.carrier.arm_carriers`; their
+    positions in the fixed frame, mm; a target in a frame not known yet is no evidence). The one
+    judgement: the offline correction (:func:`sort_external`) and the run-time one
+    (:mod:`robocal.programs.routing`) both ask it."""
+    loose = [t for t in (program.targets if targets is None else targets)
              if t.axes and id(t) not in taken and coordinated_unit(program, t) is None]
     names = sorted({a for t in loose for a in t.axes if a in dialect.arm_axes and a not in not_arm})
     if not names:

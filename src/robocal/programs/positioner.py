@@ -48,7 +48,6 @@ MM = 1e-3  # prismatic positioner values in programs are millimetres
 # A calibrated plate further than this from the nominal one is more than a cell file's placement
 # error (a layout drawing's mount, a plate frame by eye): said, the targets moving that much.
 PLATE_MOVED_MM, PLATE_MOVED_DEG = 25.0, 2.0
-LIMIT_TOL = 1e-9  # rad or m: a value written at its limit converts to SI a rounding away from it
 
 
 @dataclass(frozen=True)
@@ -89,9 +88,9 @@ class Station:
     def check_limits(self, t: Target, e: np.ndarray, axes: tuple[str, ...]) -> None:
         """Refuse values ``e`` (SI) outside the positioner's axis limits (one line naming the target
         and the axis by its program name, ``axes``)."""
-        for spec, value, name in zip(self.nominal.joints, e, axes, strict=True):
-            lo, hi = spec.limits
-            if not lo - LIMIT_TOL <= value <= hi + LIMIT_TOL:
+        outside = self.nominal.outside_limits(e[None])[0]
+        for spec, value, name, bad in zip(self.nominal.joints, e, axes, outside, strict=True):
+            if bad:
                 shown = spec.describe(float(value)).split(" = ", 1)[1]
                 raise DataError(f"{t.where}: {self.unit} axis {name} = {shown}: outside the positioner's "
                                 "limits in the cell file (another positioner, or a wrong axis letter)")
@@ -241,17 +240,14 @@ def cell_models(calibrated: Robot | Cell, nominal: Robot | Cell, arm: str | None
 
 
 def _program_arm(cell: Cell, arm: str | None) -> str:
-    """The body name of the arm a program drives: ``arm`` (a body name or unit), else the only one."""
-    arms = ", ".join(f"{n} ({cell.arm_units[n]})" for n in cell.arms) or "none"
-    if arm is None:
-        if len(cell.arms) != 1:
-            raise DataError(f"the cell {cell.name!r} has arms {arms}: name the arm whose program this is "
-                            "(--arm NAME or its unit)")
-        return next(iter(cell.arms))
+    """The body name of the arm a program drives: ``arm`` (a body name or unit), else the only one
+    (`Cell.pick`, its refusal said with the option and the arms' units)."""
     try:
-        name = cell.resolve(arm)
-    except ModelError:
-        name = None
-    if name not in cell.arms:
-        raise DataError(f"--arm {arm}: not an arm of the cell {cell.name!r} (its arms: {arms})")
-    return name
+        return cell.pick("arm", arm)
+    except DataError as exc:
+        arms = ", ".join(f"{n} ({cell.arm_units[n]})" for n in cell.arms) or "none"
+        if arm is None:
+            raise DataError(f"the cell {cell.name!r} has arms {arms}: name the arm whose program this is "
+                            "(--arm NAME or its unit)") from None
+        raise DataError(f"--arm {arm}: not an arm of the cell {cell.name!r} (its arms: {arms}): "
+                        f"{exc}") from None

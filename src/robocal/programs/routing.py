@@ -15,6 +15,7 @@ from robocal.core.errors import DataError
 from robocal.kinematics.model import Robot
 from robocal.programs.dialects.base import Dialect
 from robocal.programs.edits import FileEdits
+from robocal.programs.external import carried_arm
 from robocal.programs.model import Program, Target
 from robocal.programs.registry import capable
 from robocal.programs.runtime import ROUTED, ROUTINE_NAME, RunTime, calibrated_chain, routed_sites
@@ -61,8 +62,8 @@ class Routing:
         sites, why_not = routed_sites(program, corrected)
         used = [t for _, _, t in program.motions if isinstance(t, Target)]  # every target a motion reaches
         used += [t for s in sites for w in s.account.named if isinstance(w, RunTime) for t in w.sources]
-        # an axis at its zero leaves the arm where its model puts it (KRL writes E1..E6 = 0 on every E6POS)
-        axes = sorted({a for t in used for a, v in t.axes.items() if a in d.arm_axes and v != 0})
+        # the offline correction's judgement (an axis held at one value, KRL's E1..E6 = 0, moves no arm)
+        axes = sorted(carried_arm(program, d, targets=list({id(t): t for t in used}.values())))
         if sites and axes and not self.fixed_base:
             why_not = [f"--runtime-correction: no motion routed: the targets move external axes "
                        f"({', '.join(axes)}) that may carry the arm, which the routine's chain (the arm "

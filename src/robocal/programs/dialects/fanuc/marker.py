@@ -9,7 +9,7 @@ import re
 
 from robocal.core.errors import DataError
 from robocal.programs.dialects.fanuc.campaign import TP_REMARK_WIDTH
-from robocal.programs.dialects.fanuc.sections import section
+from robocal.programs.dialects.fanuc.sections import main_section
 from robocal.trust.output_marker import newline, shortened
 
 LINE_DIGITS = 9  # a TP line number or LINE_COUNT longer than this is no controller's (a mangled file)
@@ -19,10 +19,10 @@ _COUNT = re.compile(rf"^(LINE_COUNT\s*=\s*)(\d{{1,{LINE_DIGITS}}})(?!\d)", re.M)
 
 def mark(text: str, body: str, note: str) -> str:
     """``text`` with the remark ``!body`` (cut to fit) as the last line of /MN."""
-    start, stop = section(text, "MN"), section(text, "POS")
-    if start < 0:
+    span = main_section(text)
+    if span is None:
         raise DataError("a FANUC .ls program without /MN cannot carry a provenance marker")
-    stop = len(text) if stop < start else stop
+    start, stop = span
     numbers = [int(n) for n in _LINE.findall(text, start, stop)]
     nl = newline(text)
     body = shortened(body, TP_REMARK_WIDTH)

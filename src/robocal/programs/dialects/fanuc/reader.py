@@ -49,7 +49,7 @@ from robocal.programs.dialects.fanuc.registers import (
     frame_written,
     read_registers,
 )
-from robocal.programs.dialects.fanuc.sections import section
+from robocal.programs.dialects.fanuc.sections import main_section, section
 from robocal.programs.dialects.fanuc.sysframe import is_sysframe, read_sysframe
 from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.model import Program, Target
@@ -299,11 +299,11 @@ class FanucDialect(Dialect):
         first: dict[int, tuple] = {}  # id(position) -> how its first motion moves it (leader, values)
         for src in sources:
             text = src.text
-            start, stop = section(text, "MN"), section(text, "POS")
-            if start < 0:
+            span = main_section(text)
+            if span is None:
                 continue
-            lines = list(_LINE.finditer(text, start, stop if stop > 0 else len(text)))
-            active = ActiveFrames(src, start, stop if stop > 0 else len(text))
+            lines = list(_LINE.finditer(text, *span))
+            active = ActiveFrames(src, *span)
             for k, line in enumerate(lines):
                 body = line.group(1)
                 mv = _MOVE.match(body)

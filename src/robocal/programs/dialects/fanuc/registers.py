@@ -28,7 +28,7 @@ import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.programs.dialects.fanuc.configuration import SCARA
-from robocal.programs.dialects.fanuc.sections import section
+from robocal.programs.dialects.fanuc.sections import main_section
 from robocal.programs.source import Number, ProgramText
 from robocal.programs.target import Target
 
@@ -55,16 +55,20 @@ def frame_writes(sources: list[ProgramText]) -> dict[tuple[str, str], str]:
     writes that frame (``UFRAME[1]=PR[5]``; ``'*'``: a number known at run time, any frame): a
     frame is global, so a position taught in it moves where the frame is at run time."""
     out: dict[tuple[str, str], str] = {}
-    for src in sources:
-        text = src.text
-        start, stop = section(text, "MN"), section(text, "POS")
-        if start < 0:
-            continue
-        for m in _FRAME_WRITTEN.finditer(text, start, stop if stop > start else len(text)):
-            n = m.group(2)
-            out.setdefault((m.group(1), str(int(n)) if n.isdigit() else "*"),
-                           f"{src.path.name}:{src.line_of(m.start())}")
+    for m, where in _main_lines(sources, _FRAME_WRITTEN):
+        n = m.group(2)
+        out.setdefault((m.group(1), str(int(n)) if n.isdigit() else "*"), where)
     return out
+
+
+def _main_lines(sources: list[ProgramText], pattern: re.Pattern):
+    """``(match, file:line)`` of every match of ``pattern`` in the /MN section of each of
+    ``sources`` (:func:`~robocal.programs.dialects.fanuc.sections.main_section`), in order."""
+    for src in sources:
+        span = main_section(src.text)
+        if span is not None:
+            for m in pattern.finditer(src.text, *span):
+                yield m, f"{src.path.name}:{src.line_of(m.start())}"
 
 
 def frame_written(writes: dict[tuple[str, str], str], uf: str, ut: str) -> str:
@@ -95,17 +99,11 @@ def assignments(sources: list[ProgramText]) -> tuple[dict[int, str], list[str]]:
     known at run time (``PR[R[k]]=...``, ``PR[R[k],i]=...``: any register may be the one)."""
     out: dict[int, str] = {}
     indirect: list[str] = []
-    for src in sources:
-        text = src.text
-        start, stop = section(text, "MN"), section(text, "POS")
-        if start < 0:
-            continue
-        for m in _ASSIGNED.finditer(text, start, stop if stop > start else len(text)):
-            where = f"{src.path.name}:{src.line_of(m.start())}"
-            if m.group(1) is None:
-                indirect.append(where)
-            else:
-                out.setdefault(int(m.group(1)), where)
+    for m, where in _main_lines(sources, _ASSIGNED):
+        if m.group(1) is None:
+            indirect.append(where)
+        else:
+            out.setdefault(int(m.group(1)), where)
     return out, indirect
 
 

@@ -16,3 +16,14 @@ def section(text: str, name: str, start: int = 0) -> int:
         _HEADS[name] = re.compile(rf"(?:(?<=[\r\n])|\A(?:\xef\xbb\xbf)?)[ \t]*(/{name})\b")
     m = _HEADS[name].search(text, start)
     return m.start(1) if m else -1
+
+
+def main_section(text: str) -> tuple[int, int] | None:
+    """``(start, stop)`` offsets of the /MN section of ``text`` (its instructions): from its header
+    to the /POS header after it, else to the end of the text; None without /MN. The one span the
+    reader's motions, the register and frame writes and the marker all look in."""
+    start = section(text, "MN")
+    if start < 0:
+        return None
+    stop = section(text, "POS", start)
+    return start, stop if stop >= 0 else len(text)
