@@ -1010,7 +1010,7 @@ class Robot:
 
     def outside_limits(self, q) -> np.ndarray:
         """``(N, n)`` bool: joint values ``q`` ``(N, n)`` (rad; m for a prismatic joint) beyond
-        their limits by more than :data:`LIMIT_TOL` (a value written at its limit in degrees or mm
+        their limits by more than `LIMIT_TOL` (a value written at its limit in degrees or mm
         is at it). The one limit check of positioner values (programs, measurements, deployment);
         the caller names the row and the axis."""
         q = self.check_joints(q)
