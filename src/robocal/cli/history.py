@@ -34,8 +34,11 @@ def run(args) -> int:
     check_format(args.json, "JSON", "--json")
     check_format(args.report, "HTML", "--report")
     check_outputs([args.json, args.report], [] if is_postgres(args.history) else [args.history])
-    result = read_timeline(args.history, open_history(args.history, args.robot_id, existing=True))
+    result = read_timeline(args.history, open_history(args.history, args.robot_id, existing=True,
+                                                      writes=False))
     written = result.write(args.json, args.report)
+    for warning in result.warnings:
+        print(f"WARNING: {warning}")
     print(result.summary())
     for path in written:
         print(f"wrote {path}")

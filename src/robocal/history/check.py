@@ -114,7 +114,7 @@ def load_calibration(model: str, result: str | None, history: str | None, robot_
     if result:
         uncertainty = Uncertainty.from_result(load_json(result, "a calibration result JSON"))
     if history:
-        with History(history) as store:
+        with History(history, readonly=True) as store:
             calibration = store.calibration(robot_id, dump_model(robot))
         parent = calibration.id
         uncertainty = uncertainty or Uncertainty.from_dict(calibration.uncertainty)

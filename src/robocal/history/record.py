@@ -50,16 +50,20 @@ def calibration_record(result, robot_id: str, files: list[tuple[str, str]], pare
                   data=fingerprints(files), parent=parent)
 
 
-def open_history(location: str | None, robot_id: str | None, existing: bool = False) -> str | None:
-    """Check a command's ``--history`` and ``--robot-id`` before any work: both or neither, the
-    robot id's form, the history opens (its schema created or migrated); ``existing``: a SQLite
-    history must exist already (it holds what the command reads). The checked robot id (None
-    without a history).
+def open_history(location: str | None, robot_id: str | None, existing: bool = False,
+                 writes: bool = True) -> str | None:
+    """Check a command's ``--history`` and ``--robot-id`` before any work (before any output is
+    written: all or none): both or neither, the robot id's form, the history opens; ``writes``:
+    the command records in it, so it must be writable, a robocal history and sound (SQLite's
+    integrity check), its schema created or migrated; else it is opened read-only and changed in
+    nothing. ``existing``: a SQLite history must exist already (it holds what the command reads).
+    The checked robot id (None without a history).
 
     Raises
     ------
     DataError
-        One option without the other, a missing history, a bad robot id.
+        One option without the other, a missing history, a bad robot id, a history that is not
+        robocal's, damaged, or (``writes``) read-only.
     """
     if bool(location) != bool(robot_id):
         raise DataError("--history and --robot-id go together: give both to record in a robot's history")
@@ -68,18 +72,17 @@ def open_history(location: str | None, robot_id: str | None, existing: bool = Fa
     if not location:
         return robot_id
     robot_id = check_robot_id(robot_id)
-    History(location).close()
+    History(location, readonly=not writes).close()
     return robot_id
 
 
 def parent_calibration(location: str, robot_id: str, robot) -> int | None:
     """The id of the history's calibration record of ``robot`` (the same model), None when it
-    holds none (a model calibrated elsewhere, or a nominal one)."""
-    with History(location) as history:
-        try:
-            return history.calibration(robot_id, dump_model(robot)).id
-        except DataError:
-            return None
+    holds none (a model calibrated elsewhere, or a nominal one); DataError when the history is
+    damaged or one of the robot's calibration records is unreadable."""
+    with History(location, readonly=True) as history:
+        found = history.find_calibration(robot_id, dump_model(robot))
+    return None if found is None else found.id
 
 
 def evaluation_record(location: str, robot_id: str, robot, result, files: list[tuple[str, str]]) -> Record:

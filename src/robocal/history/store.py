@@ -5,24 +5,43 @@ never the only copy of a result: the commands still write their outputs as files
 SQLite file (the default, through the standard library) or a ``postgresql://`` URL (a server
 several engineers share, through psycopg 3: ``pip install robocal[history-pg]``).
 
-Several writers at once all succeed: SQLite runs in WAL mode with a busy timeout, and every write
-is one short ``BEGIN IMMEDIATE`` transaction retried with backoff while another writer holds the
-lock; PostgreSQL serialises the schema set-up with an advisory lock. The schema carries a version
-(table ``schema_version``); `MIGRATIONS` brings any older database up to date on open.
+Several writers at once all succeed: SQLite waits on a busy timeout, and every write is one short
+``BEGIN IMMEDIATE`` transaction retried with backoff while another writer holds the lock. The
+journal is SQLite's default rollback journal, not WAL: a reader then needs no shared-memory or WAL
+file beside the history, so reading creates nothing and works in a read-only folder (a history in
+WAL mode, written by an earlier robocal, is switched back when next written). PostgreSQL
+serialises the schema set-up with an advisory lock. The schema carries a version (table
+``schema_version``); `MIGRATIONS` brings any older database up to date when it is opened for
+writing.
+
+A history is never trusted: a command that only reads opens it read-only (``mode=ro``: nothing is
+created, migrated or switched to WAL), a command that records first checks that the file is
+writable, that it is a robocal history (a SQLite file of another application is refused without
+being touched) and that SQLite's ``integrity_check`` passes, so a damaged history is never written
+to. Every record read is validated (column types, JSON, the figures a command uses, its model
+against its fingerprint); a lookup that finds nothing runs the integrity check before saying so (a
+scrambled index hides records that are there). Each failure is one `DataError` naming its cause: a
+damaged file, a bad record (by id), a full disk, a read-only file or folder, a busy database.
 """
 
 from __future__ import annotations
 
 import datetime
+import errno
 import hashlib
 import json
+import math
+import os
 import random
 import sqlite3
 import time
+import urllib.parse
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 from pathlib import Path
+
+import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.core.version import __version__
@@ -33,6 +52,9 @@ BUSY_TIMEOUT_S = 30.0  # SQLite waits this long for another writer's lock before
 RETRY_DEADLINE_S = 120.0  # give up (one clear error) after retrying a locked database this long
 MAX_ROBOT_ID = 200  # characters of a robot id
 _ADVISORY_LOCK = 7_032_032  # PostgreSQL advisory lock key of robocal's schema set-up
+INTEGRITY_LINES = 5  # problems integrity_check lists at most (the first is named in the error)
+FULL_DISK_BYTES = 1 << 20  # free space below which an I/O error while writing is a full disk
+ROBOCAL_TABLES = ("schema_version", "records")  # a file with tables but not these is not a history
 
 # Each migration brings the schema from version i to i + 1 (index i); "{id}" is the dialect's
 # auto-increment primary key. Append, never edit: a released database has run the earlier ones.
@@ -160,19 +182,25 @@ def is_postgres(location: str) -> bool:
 
 class History:
     """A history database (SQLite file or PostgreSQL URL); use as a context manager or call
-    `close`. Opening creates the schema, or migrates an older one.
+    `close`. Opening for writing creates the schema, or migrates an older one; opening read-only
+    (``readonly=True``) changes nothing, not even the journal mode.
 
     Parameters
     ----------
     location : str or path
-        A SQLite file (created if missing; its folder must exist) or a ``postgresql://`` URL
-        (needs the ``history-pg`` extra).
+        A SQLite file (created if missing when writing; its folder must exist) or a
+        ``postgresql://`` URL (needs the ``history-pg`` extra).
+    readonly : bool
+        Only read: the SQLite file is opened with ``mode=ro`` (in a read-only folder as immutable)
+        and must exist; a PostgreSQL session is read-only.
 
     Raises
     ------
     DataError
-        A folder given for a file, a missing folder, a file that is not a robocal history, a
-        database newer than this robocal, or a PostgreSQL URL without psycopg.
+        A folder given for a file, a missing folder, a file that is not a robocal history (left
+        untouched), a damaged one (SQLite's integrity check), a read-only file or folder when
+        writing, a schema version that is not a whole number or newer than this robocal, or a
+        PostgreSQL URL without psycopg.
 
     Examples
     --------
@@ -186,17 +214,22 @@ class History:
     ...     history.record(Record(robot_id="cell-3", kind="evaluation", model_yaml=yaml_text,
     ...                           summary={"rms": 0.42}))
     1
-    >>> with History(path) as history:  # reopened: the record is kept
+    >>> with History(path, readonly=True) as history:  # reopened: the record is kept
     ...     [(e.id, e.kind, e.summary) for e in history.entries("cell-3")]
     [(1, 'evaluation', {'rms': 0.42})]
     """
 
-    def __init__(self, location) -> None:
+    def __init__(self, location, readonly: bool = False) -> None:
         self.location = str(location)
+        self.readonly = readonly
         self.postgres = is_postgres(self.location)
         self._conn = self._connect_postgres() if self.postgres else self._connect_sqlite()
         try:
-            self._migrate()
+            if readonly:
+                self._check_schema()
+            else:
+                self._migrate()
+                self._check_sound()  # never write into a damaged history
         except BaseException:
             self._conn.close()
             raise
@@ -208,15 +241,40 @@ class History:
             raise DataError(f"the history {path} is a folder: give a file name (e.g. history.sqlite)")
         if not path.parent.is_dir():
             raise DataError(f"the history's folder {path.parent} does not exist")
-        conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
+        if self.readonly and not path.is_file():
+            raise DataError(f"the history {path} does not exist")
+        if path.is_file() and path.stat().st_size:
+            with _closing(_open_readonly(path, self._failure)) as conn:  # what it is, before any write
+                self._identify(conn)
+        if self.readonly:
+            conn = _open_readonly(path, self._failure)
+        else:
+            _check_writable(path)
+            conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
         try:
-            self._retry(lambda: conn.execute("PRAGMA journal_mode=WAL"))
             conn.execute(f"PRAGMA busy_timeout={int(BUSY_TIMEOUT_S * 1000)}")
-            conn.execute("PRAGMA foreign_keys=ON")
-        except sqlite3.DatabaseError as exc:
+            if self.readonly:
+                conn.execute("PRAGMA query_only=ON")
+            else:
+                if str(conn.execute("PRAGMA journal_mode").fetchone()[0]).lower() == "wal":  # older robocal
+                    self._retry(lambda: conn.execute("PRAGMA journal_mode=DELETE"))
+                conn.execute("PRAGMA foreign_keys=ON")
+        except BaseException:
             conn.close()
-            raise DataError(f"{path} is not a robocal history (SQLite: {exc})") from None
+            raise
         return conn
+
+    def _identify(self, conn) -> None:
+        """Refuse (DataError) a SQLite file that is not a robocal history: not SQLite, damaged
+        beyond reading its table list, or holding tables but not robocal's."""
+        try:
+            tables = {row[0] for row in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+        except sqlite3.DatabaseError as exc:
+            raise self._failure(exc, "reading") from None
+        if tables and "schema_version" not in tables:
+            raise DataError(f"{self.location} is not a robocal history: it is a SQLite database of another "
+                            f"application (tables {', '.join(sorted(tables))[:120]}); robocal left it "
+                            "untouched")
 
     def _connect_postgres(self):
         try:
@@ -225,9 +283,12 @@ class History:
             raise DataError("a postgresql:// history needs psycopg 3: pip install 'robocal[history-pg]'") \
                 from None
         try:
-            return psycopg.connect(self.location, autocommit=True, connect_timeout=10)
+            conn = psycopg.connect(self.location, autocommit=True, connect_timeout=10)
         except psycopg.Error as exc:
             raise DataError(f"cannot connect to the history server: {' '.join(str(exc).split())}") from None
+        if self.readonly:
+            conn.execute("SET default_transaction_read_only = on")
+        return conn
 
     def close(self) -> None:
         self._conn.close()
@@ -238,24 +299,84 @@ class History:
     def __exit__(self, *exc) -> None:
         self.close()
 
+    # -- failures ----------------------------------------------------------------------------
+    def _failure(self, exc: Exception, doing: str) -> DataError:
+        """The `DataError` of a database error met while ``doing`` ("reading", "writing"), worded
+        by its cause: a damaged file (with the integrity check's first finding), a full disk, a
+        read-only file or folder, a file that is not a database, a busy lock."""
+        name = getattr(exc, "sqlite_errorname", "") or ""
+        text = " ".join(str(exc).split())
+        where = shown(self.location)
+        if isinstance(exc, OSError) and exc.errno == errno.ENOSPC or name.startswith("SQLITE_FULL") or \
+                (name.startswith(("SQLITE_IOERR", "SQLITE_CANTOPEN")) and self._disk_nearly_full()):
+            return DataError(f"the disk holding the history {where} is full: nothing was recorded; free some "
+                             f"space and run the command again ({text})")
+        if name.startswith("SQLITE_READONLY"):
+            return DataError(f"cannot write the history {where}: it is read-only ({text})")
+        if name.startswith("SQLITE_CANTOPEN"):
+            return DataError(f"cannot open the history {where}: its file or folder cannot be read or, for "
+                             f"writing, written ({text})")
+        if name.startswith("SQLITE_NOTADB"):
+            return DataError(f"{where} is not a robocal history: not a SQLite database ({text}); robocal "
+                             "left it untouched")
+        if name.startswith(("SQLITE_BUSY", "SQLITE_LOCKED")):
+            return DataError(f"the history database {where} stayed busy for {RETRY_DEADLINE_S:.0f} s: "
+                             f"another program holds its lock ({text})")
+        if name.startswith("SQLITE_CORRUPT") or "malformed" in text:
+            return self._damaged(self._integrity() or text)
+        return DataError(f"the history {where} failed while {doing} ({name or type(exc).__name__}: {text})")
+
+    def _damaged(self, finding: str) -> DataError:
+        where = shown(self.location)
+        return DataError(f"the history {where} is damaged (SQLite integrity check: {finding}); robocal reads "
+                         f"and writes nothing in it: restore it from a backup (sqlite3 {where} .recover "
+                         "salvages what is left into a new file)")
+
+    def _integrity(self) -> str | None:
+        """None when SQLite's ``integrity_check`` passes (or on PostgreSQL), else its findings."""
+        if self.postgres:
+            return None
+        try:
+            rows = self._conn.execute(f"PRAGMA integrity_check({INTEGRITY_LINES})").fetchall()
+        except sqlite3.DatabaseError as exc:
+            return " ".join(str(exc).split())
+        found = [str(r[0]) for r in rows]
+        return None if found == ["ok"] else "; ".join(found)
+
+    def _check_sound(self) -> None:
+        """DataError when the integrity check finds damage."""
+        finding = self._integrity()
+        if finding:
+            raise self._damaged(finding)
+
+    def _disk_nearly_full(self) -> bool:
+        try:
+            stat = os.statvfs(Path(self.location).parent)
+        except OSError:
+            return False
+        return stat.f_bavail * stat.f_frsize < FULL_DISK_BYTES
+
     # -- transactions ------------------------------------------------------------------------
-    @staticmethod
-    def _retry(action):
-        """Run ``action`` again while SQLite reports a lock held by another writer."""
+    def _retry(self, action):
+        """Run ``action`` again while SQLite reports a lock held by another writer; any other
+        error (or a lock held past `RETRY_DEADLINE_S`) is a `DataError` worded by its cause."""
         deadline, wait = time.monotonic() + RETRY_DEADLINE_S, 0.01
         while True:
             try:
                 return action()
-            except sqlite3.OperationalError as exc:
+            except (sqlite3.Error, OSError) as exc:
                 text = str(exc).lower()
-                if ("locked" not in text and "busy" not in text) or time.monotonic() > deadline:
-                    raise DataError(f"the history database stayed busy: {exc}") from None
+                busy = isinstance(exc, sqlite3.OperationalError) and ("locked" in text or "busy" in text)
+                if not busy or time.monotonic() > deadline:
+                    raise self._failure(exc, "reading" if self.readonly else "writing") from None
                 time.sleep(wait * (1 + random.random()))
                 wait = min(wait * 2, 0.5)
 
     @contextmanager
     def _transaction(self) -> Iterator:
         """One write transaction; yields a function ``run(sql, params) -> cursor`` (``?`` marks)."""
+        if self.readonly:
+            raise DataError(f"the history {shown(self.location)} was opened read-only")
         if self.postgres:
             with self._conn.transaction(), self._conn.cursor() as cur:
                 cur.execute("SELECT pg_advisory_xact_lock(%s)", (_ADVISORY_LOCK,))
@@ -265,8 +386,11 @@ class History:
         self._retry(lambda: conn.execute("BEGIN IMMEDIATE"))
         try:
             yield lambda sql, params=(): conn.execute(sql, params)
+        except sqlite3.Error as exc:
+            _rollback(conn)
+            raise self._failure(exc, "writing") from None
         except BaseException:
-            conn.execute("ROLLBACK")
+            _rollback(conn)
             raise
         self._retry(lambda: conn.execute("COMMIT"))
 
@@ -277,30 +401,53 @@ class History:
                 return cur.fetchall()
         return self._retry(lambda: self._conn.execute(sql, params).fetchall())
 
+    def _version(self, rows: list[tuple]) -> int:
+        """The schema version of ``rows`` (of ``SELECT version FROM schema_version``): 0 when
+        none, DataError when it is not one whole number or newer than this robocal."""
+        if not rows:
+            return 0
+        version = rows[0][0]
+        if len(rows) != 1 or isinstance(version, bool) or not isinstance(version, int):
+            raise DataError(f"the history {shown(self.location)} has a damaged schema version "
+                            f"({len(rows)} row(s), {version!r:.40} of type {type(version).__name__}, not one "
+                            "whole number): it was changed by another program; robocal reads and writes "
+                            "nothing in it")
+        if version > SCHEMA_VERSION:
+            raise DataError(f"the history {shown(self.location)} has schema version {version}, newer than "
+                            f"this robocal's {SCHEMA_VERSION}: upgrade robocal")
+        return version
+
     def _migrate(self) -> None:
         key = "BIGINT GENERATED ALWAYS AS IDENTITY PRIMARY KEY" if self.postgres \
             else "INTEGER PRIMARY KEY AUTOINCREMENT"
-        try:
-            with self._transaction() as run:
-                run("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)")
-                rows = run("SELECT version FROM schema_version").fetchall()
-                version = rows[0][0] if rows else 0
-                if version > SCHEMA_VERSION:
-                    raise DataError(f"the history {self.location} has schema version {version}, newer than "
-                                    f"this robocal's {SCHEMA_VERSION}: upgrade robocal")
-                for step in MIGRATIONS[version:]:
-                    for sql in step:
-                        run(sql.replace("{id}", key))
-                if not rows:
-                    run("INSERT INTO schema_version (version) VALUES (?)", (SCHEMA_VERSION,))
-                elif version < SCHEMA_VERSION:
-                    run("UPDATE schema_version SET version = ?", (SCHEMA_VERSION,))
-        except sqlite3.DatabaseError as exc:
-            raise DataError(f"{self.location} is not a robocal history (SQLite: {exc})") from None
+        with self._transaction() as run:
+            run("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)")
+            rows = run("SELECT version FROM schema_version").fetchall()
+            version = self._version(rows)
+            for step in MIGRATIONS[version:]:
+                for sql in step:
+                    run(sql.replace("{id}", key))
+            if not rows:
+                run("INSERT INTO schema_version (version) VALUES (?)", (SCHEMA_VERSION,))
+            elif version < SCHEMA_VERSION:
+                run("UPDATE schema_version SET version = ?", (SCHEMA_VERSION,))
+
+    def _check_schema(self) -> None:
+        """Read-only: the history holds robocal's tables at this robocal's schema version."""
+        probe = "SELECT to_regclass('schema_version') IS NOT NULL" if self.postgres else \
+            "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'schema_version'"
+        if not self._query(probe)[0][0]:
+            raise DataError(f"{shown(self.location)} is not a robocal history (it has no schema_version "
+                            "table): record in it first (calibrate ... --history)")
+        version = self._version(self._query("SELECT version FROM schema_version"))
+        if version < SCHEMA_VERSION:
+            raise DataError(f"the history {shown(self.location)} has schema version {version}, older than "
+                            f"this robocal's {SCHEMA_VERSION}: a command that records in it (calibrate, "
+                            "check or evaluate with --history) brings it up to date")
 
     @property
     def schema_version(self) -> int:
-        return int(self._query("SELECT version FROM schema_version")[0][0])
+        return self._version(self._query("SELECT version FROM schema_version"))
 
     # -- records -----------------------------------------------------------------------------
     def record(self, entry: Record) -> int:
@@ -314,38 +461,67 @@ class History:
                   None if entry.uncertainty is None else json.dumps(entry.uncertainty, allow_nan=False),
                   json.dumps(entry.data), entry.parent)
         with self._transaction() as run:
+            finding = self._integrity()  # under the write lock: nothing can damage it before the insert
+            if finding:
+                raise self._damaged(finding)
             cur = run("INSERT INTO records (robot_id, kind, recorded_at, robocal_version, model_yaml, "
                       "model_sha256, summary, parameters, uncertainty, data, parent_id) "
                       "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id", values)
             entry.id = int(cur.fetchone()[0])
         return entry.id
 
-    def entries(self, robot_id: str, kind: str | None = None) -> list[Record]:
-        """The records of ``robot_id`` (of one ``kind``, or all) in recording order."""
-        sql = ("SELECT id, robot_id, kind, recorded_at, robocal_version, model_yaml, summary, parameters, "
-               "uncertainty, data, parent_id FROM records WHERE robot_id = ?")
+    def entries(self, robot_id: str, kind: str | None = None,
+                skipped: list[str] | None = None) -> list[Record]:
+        """The records of ``robot_id`` (of one ``kind``, or all) in recording order, each
+        validated (`validate_row`). A record that fails is refused (DataError naming it and the
+        cause), or, when a list ``skipped`` is given, left out with a line appended there. When
+        none is found, SQLite's integrity check runs first (a damaged index hides records)."""
+        sql = ("SELECT id, robot_id, kind, recorded_at, robocal_version, model_yaml, model_sha256, summary, "
+               "parameters, uncertainty, data, parent_id FROM records WHERE robot_id = ?")
         params: tuple = (check_robot_id(robot_id),)
         if kind is not None:
             sql, params = sql + " AND kind = ?", (*params, kind)
-        return [_record(row) for row in self._query(sql + " ORDER BY id", params)]
+        rows = self._query(sql + " ORDER BY id", params)
+        if not rows:
+            self._check_sound()
+        found = []
+        for row in rows:
+            try:
+                found.append(validate_row(row, params[0], kind))
+            except BadRecordError as exc:
+                if skipped is None:
+                    raise DataError(f"the history {shown(self.location)}: {exc}; robocal does not use a "
+                                    "damaged record (restore the history from a backup)") from None
+                skipped.append(f"left out {exc}")
+        return found
+
+    def find_calibration(self, robot_id: str, model_yaml: str | None = None) -> Record | None:
+        """The latest calibration of ``robot_id`` (whose model is ``model_yaml`` when given), None
+        when there is none; DataError when any calibration record of the robot is unreadable
+        (it could be the one asked for: an older one would be a wrong answer that looks right)."""
+        found = self.entries(robot_id, "calibration")
+        if model_yaml is not None:
+            digest = sha256_text(model_yaml)
+            found = [r for r in found if r.model_sha256 == digest]
+            if not found:
+                self._check_sound()
+        return found[-1] if found else None
 
     def calibration(self, robot_id: str, model_yaml: str | None = None) -> Record:
         """The latest calibration of ``robot_id`` (whose model is ``model_yaml`` when given);
         DataError naming the robot id when there is none."""
-        found = self.entries(robot_id, "calibration")
-        if not found:
+        found = self.find_calibration(robot_id, model_yaml)
+        if found is not None:
+            return found
+        every = self.entries(robot_id, "calibration")
+        if not every:
             raise DataError(f"the history {shown(self.location)} has no calibration of robot id "
                             f"{robot_id!r}: record one with robocal calibrate ... --history ... "
                             "--robot-id ...")
-        if model_yaml is not None:
-            digest = sha256_text(model_yaml)
-            latest = found[-1]
-            found = [r for r in found if r.model_sha256 == digest]
-            if not found:
-                raise DataError(f"none of the calibrations of robot id {robot_id!r} in the history has this "
-                                f"model (the latest is #{latest.id} of {latest.date}): give the calibrated "
-                                "model that calibration wrote")
-        return found[-1]
+        latest = every[-1]
+        raise DataError(f"none of the calibrations of robot id {robot_id!r} in the history has this "
+                        f"model (the latest is #{latest.id} of {latest.date}): give the calibrated "
+                        "model that calibration wrote")
 
 
 def shown(location: str) -> str:
@@ -356,9 +532,146 @@ def shown(location: str) -> str:
     return location
 
 
-def _record(row: tuple) -> Record:
-    (id_, robot_id, kind, date, version, model_yaml, summary, parameters, uncertainty, data, parent) = row
-    return Record(robot_id=robot_id, kind=kind, model_yaml=model_yaml, summary=json.loads(summary),
-                  parameters=json.loads(parameters),
-                  uncertainty=None if uncertainty is None else json.loads(uncertainty),
-                  data=json.loads(data), parent=parent, date=date, robocal_version=version, id=int(id_))
+def _open_readonly(path: Path, failure):
+    """A read-only connection to the SQLite file ``path`` (``mode=ro``: it creates nothing). In a
+    folder that cannot be written and without a WAL file, no writer can change the database (a
+    writer needs that file), so it is opened as immutable (no lock or shared-memory file).
+    ``failure(exc, doing)``: the DataError of any other SQLite error."""
+    uri = f"file:{urllib.parse.quote(str(path.resolve()))}?mode=ro"
+    try:
+        conn = sqlite3.connect(uri, uri=True, timeout=BUSY_TIMEOUT_S, isolation_level=None)
+        conn.execute("SELECT 1 FROM sqlite_master LIMIT 1").fetchall()
+        return conn
+    except sqlite3.DatabaseError as exc:
+        if getattr(exc, "sqlite_errorname", "").startswith("SQLITE_NOTADB"):
+            raise DataError(f"{path} is not a robocal history: not a SQLite database ({exc}); robocal left "
+                            "it untouched") from None
+        if os.access(path.parent, os.W_OK) or Path(f"{path}-wal").exists():
+            raise failure(exc, "reading") from None
+    try:
+        conn = sqlite3.connect(uri + "&immutable=1", uri=True, isolation_level=None)
+        conn.execute("SELECT 1 FROM sqlite_master LIMIT 1").fetchall()
+    except sqlite3.DatabaseError as exc:
+        raise failure(exc, "reading") from None
+    return conn
+
+
+@contextmanager
+def _closing(conn) -> Iterator:
+    try:
+        yield conn
+    finally:
+        conn.close()
+
+
+def _rollback(conn) -> None:
+    with suppress(sqlite3.Error):  # the failed statement may have ended it (SQLite rolls back on a full disk)
+        conn.execute("ROLLBACK")
+
+
+def _check_writable(path: Path) -> None:
+    """DataError unless the SQLite history ``path`` (and the journal files SQLite makes beside it)
+    can be written: checked before a command writes any output, so it writes all or none."""
+    if path.exists() and not (os.access(path, os.W_OK) and path.stat().st_mode & 0o222):
+        raise DataError(f"cannot record in the history {path}: the file is read-only (make it writable, or "
+                        "leave out --history); nothing was written")
+    if not os.access(path.parent, os.W_OK | os.X_OK):
+        raise DataError(f"cannot record in the history {path}: its folder {path.parent} is not writable "
+                        "(SQLite writes its journal beside the file); nothing was written")
+
+
+class BadRecordError(Exception):
+    """A history row that fails validation: its id and the cause, in words."""
+
+    def __init__(self, ident, cause: str) -> None:
+        super().__init__(f"record #{ident}: {cause}")
+
+
+_NUMBERS = ("held_out_rms", "rms", "rms_mm", "predicted_rms_mm", "p_value", "mean", "max", "p95")
+_TEXT_COLUMNS = ("robot_id", "kind", "recorded_at", "robocal_version", "model_yaml", "model_sha256",
+                 "summary", "parameters", "data")
+
+
+def _json(ident, column: str, text, kind: type):
+    try:
+        value = json.loads(text)
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise BadRecordError(ident, f"its {column} is not JSON ({exc})") from None
+    if not isinstance(value, kind):
+        raise BadRecordError(ident, f"its {column} is JSON {type(value).__name__}, not {kind.__name__}")
+    return value
+
+
+def _number(value) -> bool:
+    return value is None or (isinstance(value, int | float) and not isinstance(value, bool)
+                             and math.isfinite(value))
+
+
+def validate_row(row: tuple, robot_id: str, kind: str | None) -> Record:
+    """The `Record` of a ``records`` row (id, robot_id, kind, recorded_at, robocal_version,
+    model_yaml, model_sha256, summary, parameters, uncertainty, data, parent_id), or `BadRecordError`
+    naming the first fault: a column of the wrong type, text that is not JSON (or not the JSON
+    kind expected), a figure that is not a finite number or null (a check's p-value in [0, 1]
+    and its verdict), a calibration without its uncertainty (covariance, noise), a model that
+    does not match its SHA-256, a record of another robot id or kind than asked."""
+    ident, rid, rkind, date, version, model_yaml, digest, summary, parameters, uncertainty, data, parent = \
+        row
+    if isinstance(ident, bool) or not isinstance(ident, int):
+        raise BadRecordError(ident, f"its id is {ident!r:.40}, not a whole number")
+    for name, value in zip(_TEXT_COLUMNS, (rid, rkind, date, version, model_yaml, digest, summary, parameters,
+                                           data), strict=True):
+        if not isinstance(value, str):
+            raise BadRecordError(ident, f"its {name} is {type(value).__name__} {value!r:.40}, not text")
+    if rid != robot_id or rkind not in KINDS or (kind is not None and rkind != kind):
+        raise BadRecordError(ident, f"the database returned it for robot id {robot_id!r} but it is a "
+                                    f"{rkind!r:.40} of robot id {rid!r:.40} (a damaged index)")
+    if parent is not None and (isinstance(parent, bool) or not isinstance(parent, int)):
+        raise BadRecordError(ident, f"its parent_id is {parent!r:.40}, not a record id")
+    try:
+        datetime.datetime.fromisoformat(date)
+    except ValueError:
+        raise BadRecordError(ident, f"its date {date!r:.40} is not an ISO 8601 time") from None
+    if sha256_text(model_yaml) != digest:
+        raise BadRecordError(ident, "its model does not match its SHA-256 fingerprint (changed after "
+                                    "recording)")
+    figures = _json(ident, "summary", summary, dict)
+    for name in _NUMBERS:
+        if not _number(figures.get(name)):
+            raise BadRecordError(ident, f"its {name} is {figures[name]!r:.40}, not a number")
+    for name in ("before", "after"):
+        part = figures.get(name)
+        if part is not None and not (isinstance(part, dict) and _number(part.get("rms"))):
+            raise BadRecordError(ident, f"its {name} figures are {part!r:.60}, not {{\"rms\": mm, ...}}")
+    if rkind == "check" and (figures.get("verdict") not in ("holds", "changed")
+                             or not isinstance(figures.get("p_value"), int | float)
+                             or not 0 <= figures["p_value"] <= 1):
+        raise BadRecordError(ident, "a check needs a verdict (holds, changed) and a p-value in [0, 1], it "
+                                    f"has {figures.get('verdict')!r:.20} and {figures.get('p_value')!r:.20}")
+    unc = None if uncertainty is None else _json(ident, "uncertainty", uncertainty, dict)
+    if rkind == "calibration":
+        _check_uncertainty(ident, unc)
+    return Record(robot_id=rid, kind=rkind, model_yaml=model_yaml, summary=figures,
+                  parameters=_json(ident, "parameters", parameters, list), uncertainty=unc,
+                  data=_json(ident, "data", data, list), parent=parent, date=date, robocal_version=version,
+                  id=ident)
+
+
+def _check_uncertainty(ident, unc: dict | None) -> None:
+    """A calibration's uncertainty: names, a square finite covariance over them, noise > 0, dof >= 1."""
+    if unc is None:
+        raise BadRecordError(ident, "a calibration without its uncertainty (NULL): a check cannot use it")
+    names = unc.get("names")
+    if not (isinstance(names, list) and all(isinstance(n, str) for n in names)):
+        raise BadRecordError(ident, "its uncertainty has no list of parameter names")
+    try:
+        cov = np.asarray(unc.get("covariance"), dtype=float)
+    except (TypeError, ValueError):
+        cov = np.empty(0)
+    if cov.shape != (len(names), len(names)) or not np.isfinite(cov).all():
+        raise BadRecordError(ident, f"its uncertainty's covariance is not a finite {len(names)} x "
+                                    f"{len(names)} matrix")
+    noise, dof = unc.get("noise_m"), unc.get("dof")
+    if not (_number(noise) and noise is not None and noise > 0):
+        raise BadRecordError(ident, f"its uncertainty's noise_m is {noise!r:.40}, not a number > 0 (m)")
+    if isinstance(dof, bool) or not isinstance(dof, int) or dof < 1:
+        raise BadRecordError(ident, f"its uncertainty's dof is {dof!r:.40}, not a whole number >= 1")

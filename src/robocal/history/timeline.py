@@ -25,7 +25,7 @@ class Timeline:
 
     robot_id: str
     entries: list[dict]
-    warnings: list[str] = field(default_factory=list)  # a timeline only reports: none
+    warnings: list[str] = field(default_factory=list)  # the records left out, unreadable, and why
 
     def to_dict(self) -> dict:
         """``{"robot_id": ..., "entries": [...]}`` (the timeline JSON)."""
@@ -57,10 +57,21 @@ class Timeline:
 
 
 def read_timeline(location: str, robot_id: str) -> Timeline:
-    """The `Timeline` of ``robot_id`` in the history at ``location`` (DataError when it holds no
-    record of it)."""
-    with History(location) as history:
-        records = history.entries(robot_id)
+    """The `Timeline` of ``robot_id`` in the history at ``location``, opened read-only. A record
+    that fails validation is left out with a warning naming it and the cause (a timeline is a
+    report: the other records are still right; a command that uses a record, like check, refuses
+    instead).
+
+    Raises
+    ------
+    DataError
+        The history holds no readable record of the robot id, is damaged (SQLite's integrity
+        check, run when no record is found) or is not a robocal history.
+    """
+    skipped: list[str] = []
+    with History(location, readonly=True) as history:
+        records = history.entries(robot_id, skipped=skipped)
     if not records:
-        raise DataError(f"the history has no record of robot id {robot_id!r}")
-    return Timeline(robot_id, [r.timeline_entry() for r in records])
+        raise DataError(f"the history has no record of robot id {robot_id!r}" if not skipped else
+                        f"the history has no readable record of robot id {robot_id!r}: " + "; ".join(skipped))
+    return Timeline(robot_id, [r.timeline_entry() for r in records], skipped)
