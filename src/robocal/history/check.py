@@ -117,6 +117,10 @@ def load_calibration(model: str, result: str | None, history: str | None, robot_
         with History(history, readonly=True) as store:
             calibration = store.calibration(robot_id, dump_model(robot))
         parent = calibration.id
+        if uncertainty is None and calibration.uncertainty is None:
+            raise DataError(f"the history's calibration #{parent} of robot id {robot_id!r} has no "
+                            "uncertainty (NULL; calibrate records it): give --result RESULT.json of that "
+                            "calibration")
         uncertainty = uncertainty or Uncertainty.from_dict(calibration.uncertainty)
     return robot, uncertainty, parent
 

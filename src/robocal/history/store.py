@@ -612,7 +612,7 @@ def validate_row(row: tuple, robot_id: str, kind: str | None) -> Record:
     model_yaml, model_sha256, summary, parameters, uncertainty, data, parent_id), or `BadRecordError`
     naming the first fault: a column of the wrong type, text that is not JSON (or not the JSON
     kind expected), a figure that is not a finite number or null (a check's p-value in [0, 1]
-    and its verdict), a calibration without its uncertainty (covariance, noise), a model that
+    and its verdict), an uncertainty without its covariance or noise, a model that
     does not match its SHA-256, a record of another robot id or kind than asked."""
     ident, rid, rkind, date, version, model_yaml, digest, summary, parameters, uncertainty, data, parent = \
         row
@@ -648,7 +648,7 @@ def validate_row(row: tuple, robot_id: str, kind: str | None) -> Record:
         raise BadRecordError(ident, "a check needs a verdict (holds, changed) and a p-value in [0, 1], it "
                                     f"has {figures.get('verdict')!r:.20} and {figures.get('p_value')!r:.20}")
     unc = None if uncertainty is None else _json(ident, "uncertainty", uncertainty, dict)
-    if rkind == "calibration":
+    if unc is not None:
         _check_uncertainty(ident, unc)
     return Record(robot_id=rid, kind=rkind, model_yaml=model_yaml, summary=figures,
                   parameters=_json(ident, "parameters", parameters, list), uncertainty=unc,
@@ -656,10 +656,8 @@ def validate_row(row: tuple, robot_id: str, kind: str | None) -> Record:
                   id=ident)
 
 
-def _check_uncertainty(ident, unc: dict | None) -> None:
+def _check_uncertainty(ident, unc: dict) -> None:
     """A calibration's uncertainty: names, a square finite covariance over them, noise > 0, dof >= 1."""
-    if unc is None:
-        raise BadRecordError(ident, "a calibration without its uncertainty (NULL): a check cannot use it")
     names = unc.get("names")
     if not (isinstance(names, list) and all(isinstance(n, str) for n in names)):
         raise BadRecordError(ident, "its uncertainty has no list of parameter names")
