@@ -155,6 +155,10 @@ def test_a_bad_schema_version_is_refused(made, hist, capsys, sql, message):
     ("UPDATE records SET data = X'0102' WHERE id = 2", "record #2: its data is bytes"),
     ("UPDATE records SET model_yaml = model_yaml || ' ' WHERE id = 2", "record #2: its model does not match"),
     ("UPDATE records SET recorded_at = 'yesterday' WHERE id = 2", "record #2: its date 'yesterday'"),
+    ("UPDATE records SET summary = json_set(summary, '$.changed_parameters', json('[{\"name\": \"a2\"}]')) "
+     "WHERE id = 2", r"record #2: its changed_parameters\[0\].unit is None, not text"),
+    ("UPDATE records SET data = json_set(data, '$[0].sha256', 7) WHERE id = 2",
+     r"record #2: its data\[0\].sha256 is 7, not text"),
 ])
 def test_a_bad_check_record_is_left_out_of_the_timeline_with_a_warning(made, hist, tmp_path, capsys, sql,
                                                                        cause):
@@ -166,10 +170,12 @@ def test_a_bad_check_record_is_left_out_of_the_timeline_with_a_warning(made, his
     assert len(skipped) == 1
     timeline = read_timeline(str(hist), ROBOT)
     assert [e["id"] for e in timeline.entries] == [1] and timeline.warnings == skipped
-    out = tmp_path / "timeline.json"
-    code, text, err = _cli(capsys, "history", hist, "--robot-id", ROBOT, "--json", out)
+    out, page = tmp_path / "timeline.json", tmp_path / "history.html"
+    code, text, err = _cli(capsys, "history", hist, "--robot-id", ROBOT, "--json", out, "--report", page)
     assert code == 0 and "WARNING: left out record #2" in text
-    assert [e["id"] for e in json.loads(out.read_text())["entries"]] == [1]
+    written = json.loads(out.read_text())
+    assert [e["id"] for e in written["entries"]] == [1] and written["warnings"] == skipped
+    assert "1 unreadable left out" in page.read_text()
     # check needs only the calibration (#1), which is sound: it runs
     code, _, err = _cli(capsys, "check", made / "cal.yaml", made / "check.csv", "--history", hist,
                         "--robot-id", ROBOT)
@@ -195,6 +201,10 @@ def test_a_bad_calibration_record_makes_check_refuse_by_its_cause(made, hist, tm
                         "--robot-id", ROBOT, "--json", out)
     assert code == 2 and "internal error" not in err, err
     assert len(err.strip().splitlines()) == 1 and re.search(cause, err), err
+    if "no uncertainty" not in cause:  # evaluate reads the calibration after its outputs: it checks first
+        code, _, err = _cli(capsys, "evaluate", made / "cal.yaml", made / "check.csv", "--fit-frame",
+                            "--history", hist, "--robot-id", ROBOT, "--json", out)
+        assert code == 2 and re.search(cause, err), err
     assert not out.exists() and _sha(hist) == before
 
 

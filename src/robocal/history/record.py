@@ -63,7 +63,8 @@ def open_history(location: str | None, robot_id: str | None, existing: bool = Fa
     ------
     DataError
         One option without the other, a missing history, a bad robot id, a history that is not
-        robocal's, damaged, or (``writes``) read-only.
+        robocal's, damaged, or (``writes``) read-only or holding an unreadable calibration record
+        of the robot id.
     """
     if bool(location) != bool(robot_id):
         raise DataError("--history and --robot-id go together: give both to record in a robot's history")
@@ -72,7 +73,9 @@ def open_history(location: str | None, robot_id: str | None, existing: bool = Fa
     if not location:
         return robot_id
     robot_id = check_robot_id(robot_id)
-    History(location, readonly=not writes).close()
+    with History(location, readonly=not writes) as history:
+        if writes:  # the calibrations a command records from are read after its outputs: check them now
+            history.find_calibration(robot_id)
     return robot_id
 
 

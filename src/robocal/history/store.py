@@ -647,13 +647,35 @@ def validate_row(row: tuple, robot_id: str, kind: str | None) -> Record:
                              or not 0 <= figures["p_value"] <= 1):
         raise BadRecordError(ident, "a check needs a verdict (holds, changed) and a p-value in [0, 1], it "
                                     f"has {figures.get('verdict')!r:.20} and {figures.get('p_value')!r:.20}")
+    _check_rows(ident, "changed_parameters", figures.get("changed_parameters") or [], _SHIFT_FIELDS)
     unc = None if uncertainty is None else _json(ident, "uncertainty", uncertainty, dict)
     if unc is not None:
         _check_uncertainty(ident, unc)
-    return Record(robot_id=rid, kind=rkind, model_yaml=model_yaml, summary=figures,
-                  parameters=_json(ident, "parameters", parameters, list), uncertainty=unc,
-                  data=_json(ident, "data", data, list), parent=parent, date=date, robocal_version=version,
-                  id=ident)
+    rows = _json(ident, "parameters", parameters, list)
+    _check_rows(ident, "parameters", rows, _PARAMETER_FIELDS)
+    files = _json(ident, "data", data, list)
+    _check_rows(ident, "data", files, _FILE_FIELDS)
+    return Record(robot_id=rid, kind=rkind, model_yaml=model_yaml, summary=figures, parameters=rows,
+                  uncertainty=unc, data=files, parent=parent, date=date, robocal_version=version, id=ident)
+
+
+# the fields of each row of a record's lists: "text" or "number" (finite or null)
+_SHIFT_FIELDS = {"name": "text", "unit": "text", "shift": "number", "sigma": "number"}
+_PARAMETER_FIELDS = {"name": "text", "unit": "text", "estimate": "number", "sigma": "number"}
+_FILE_FIELDS = {"file": "text", "role": "text", "sha256": "text"}
+
+
+def _check_rows(ident, column: str, rows, fields: dict[str, str]) -> None:
+    """Each of ``rows`` is an object whose ``fields`` have their type (BadRecordError otherwise)."""
+    if not isinstance(rows, list):
+        raise BadRecordError(ident, f"its {column} is {type(rows).__name__}, not a list")
+    for i, row in enumerate(rows):
+        if not isinstance(row, dict):
+            raise BadRecordError(ident, f"its {column}[{i}] is {type(row).__name__}, not an object")
+        for name, kind in fields.items():
+            value = row.get(name)
+            if not (isinstance(value, str) if kind == "text" else _number(value)):
+                raise BadRecordError(ident, f"its {column}[{i}].{name} is {value!r:.40}, not {kind}")
 
 
 def _check_uncertainty(ident, unc: dict) -> None:

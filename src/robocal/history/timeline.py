@@ -28,8 +28,9 @@ class Timeline:
     warnings: list[str] = field(default_factory=list)  # the records left out, unreadable, and why
 
     def to_dict(self) -> dict:
-        """``{"robot_id": ..., "entries": [...]}`` (the timeline JSON)."""
-        return {"robot_id": self.robot_id, "entries": self.entries}
+        """``{"robot_id": ..., "entries": [...], "warnings": [...]}`` (the timeline JSON;
+        ``warnings``: the records left out, unreadable, and why)."""
+        return {"robot_id": self.robot_id, "entries": self.entries, "warnings": self.warnings}
 
     def summary(self) -> str:
         """One line per record: id, date (UTC), kind, held-out and RMS (mm), a check's verdict."""

@@ -56,7 +56,11 @@ def render_history(timeline: dict, version: str) -> str:
                           "RMS of each check after the tracker frame was refitted.",
                      "a check RMS well above the held-out RMS, and checks marked changed.")
     robot = esc(timeline["robot_id"])
-    return page(f"History of {timeline['robot_id']}", f"robot id {robot} &middot; {len(entries)} records",
+    left_out = len(timeline.get("warnings") or [])  # unreadable records the timeline left out
+    subtitle = f"robot id {robot} &middot; {len(entries)} records" + \
+        (f" &middot; {left_out} unreadable left out (robocal history prints which and why)" if left_out
+         else "")
+    return page(f"History of {timeline['robot_id']}", subtitle,
                 [("accuracy", "Accuracy over time", figure), ("timeline", "Timeline", table)], version,
                 narrow=frozenset({"accuracy"}))
 
