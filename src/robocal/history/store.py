@@ -222,14 +222,14 @@ class History:
     def __init__(self, location, readonly: bool = False) -> None:
         self.location = str(location)
         self.readonly = readonly
+        self._conn = None  # set once connected (an error before then is worded without it)
         self.postgres = is_postgres(self.location)
         self._conn = self._connect_postgres() if self.postgres else self._connect_sqlite()
         try:
             if readonly:
                 self._check_schema()
             else:
-                self._migrate()
-                self._check_sound()  # never write into a damaged history
+                self._migrate()  # the file was checked sound before (and is again before each insert)
         except BaseException:
             self._conn.close()
             raise
@@ -246,6 +246,8 @@ class History:
         if path.is_file() and path.stat().st_size:
             with _closing(_open_readonly(path, self._failure)) as conn:  # what it is, before any write
                 self._identify(conn)
+                if not self.readonly:  # a damaged file is not touched, not even its journal mode
+                    self._check_sound(conn)
         if self.readonly:
             conn = _open_readonly(path, self._failure)
         else:
@@ -256,8 +258,6 @@ class History:
             if self.readonly:
                 conn.execute("PRAGMA query_only=ON")
             else:
-                if str(conn.execute("PRAGMA journal_mode").fetchone()[0]).lower() == "wal":  # older robocal
-                    self._retry(lambda: conn.execute("PRAGMA journal_mode=DELETE"))
                 conn.execute("PRAGMA foreign_keys=ON")
         except BaseException:
             conn.close()
@@ -332,20 +332,22 @@ class History:
                          f"and writes nothing in it: restore it from a backup (sqlite3 {where} .recover "
                          "salvages what is left into a new file)")
 
-    def _integrity(self) -> str | None:
-        """None when SQLite's ``integrity_check`` passes (or on PostgreSQL), else its findings."""
-        if self.postgres:
+    def _integrity(self, conn=None) -> str | None:
+        """None when SQLite's ``integrity_check`` passes on ``conn`` (default: the history's; on
+        PostgreSQL always None), else its findings."""
+        conn = conn or self._conn
+        if self.postgres or conn is None:
             return None
         try:
-            rows = self._conn.execute(f"PRAGMA integrity_check({INTEGRITY_LINES})").fetchall()
+            rows = conn.execute(f"PRAGMA integrity_check({INTEGRITY_LINES})").fetchall()
         except sqlite3.DatabaseError as exc:
             return " ".join(str(exc).split())
         found = [str(r[0]) for r in rows]
         return None if found == ["ok"] else "; ".join(found)
 
-    def _check_sound(self) -> None:
-        """DataError when the integrity check finds damage."""
-        finding = self._integrity()
+    def _check_sound(self, conn=None) -> None:
+        """DataError when the integrity check (on ``conn``, default the history's) finds damage."""
+        finding = self._integrity(conn)
         if finding:
             raise self._damaged(finding)
 
@@ -383,6 +385,8 @@ class History:
                 yield lambda sql, params=(): cur.execute(sql.replace("?", "%s"), params)
             return
         conn = self._conn
+        if str(conn.execute("PRAGMA journal_mode").fetchone()[0]).lower() == "wal":  # an older robocal's
+            self._retry(lambda: conn.execute("PRAGMA journal_mode=DELETE"))  # at the first write only
         self._retry(lambda: conn.execute("BEGIN IMMEDIATE"))
         try:
             yield lambda sql, params=(): conn.execute(sql, params)
@@ -417,7 +421,18 @@ class History:
                             f"this robocal's {SCHEMA_VERSION}: upgrade robocal")
         return version
 
+    def _stored_version(self) -> int | None:
+        """The schema version the history holds (validated, `_version`), None without the table."""
+        probe = "SELECT to_regclass('schema_version') IS NOT NULL" if self.postgres else \
+            "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'schema_version'"
+        if not self._query(probe)[0][0]:
+            return None
+        return self._version(self._query("SELECT version FROM schema_version"))
+
     def _migrate(self) -> None:
+        """Create or bring the schema up to date; an up-to-date history is not written to at all."""
+        if self._stored_version() == SCHEMA_VERSION:
+            return
         key = "BIGINT GENERATED ALWAYS AS IDENTITY PRIMARY KEY" if self.postgres \
             else "INTEGER PRIMARY KEY AUTOINCREMENT"
         with self._transaction() as run:
@@ -434,12 +449,10 @@ class History:
 
     def _check_schema(self) -> None:
         """Read-only: the history holds robocal's tables at this robocal's schema version."""
-        probe = "SELECT to_regclass('schema_version') IS NOT NULL" if self.postgres else \
-            "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'schema_version'"
-        if not self._query(probe)[0][0]:
+        version = self._stored_version()
+        if version is None:
             raise DataError(f"{shown(self.location)} is not a robocal history (it has no schema_version "
                             "table): record in it first (calibrate ... --history)")
-        version = self._version(self._query("SELECT version FROM schema_version"))
         if version < SCHEMA_VERSION:
             raise DataError(f"the history {shown(self.location)} has schema version {version}, older than "
                             f"this robocal's {SCHEMA_VERSION}: a command that records in it (calibrate, "
