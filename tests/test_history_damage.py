@@ -72,14 +72,14 @@ def _page(path, name: str) -> int:
     return (root - 1) * size
 
 
-def _scramble_index(path) -> None:
-    """Change the robot id keys stored in the index page (the table keeps its rows)."""
+def _scramble_index(path, count: int = -1) -> None:
+    """Change ``count`` (default all) robot id keys stored in the index page (the table keeps its rows)."""
     at = _page(path, "records_robot")
     with open(path, "r+b") as f:
         f.seek(at)
         page = f.read(4096)
         f.seek(at)
-        f.write(page.replace(ROBOT.encode(), b"Q7"))
+        f.write(page.replace(ROBOT.encode(), b"Q7", count))
 
 
 def _sql(path, sql: str) -> None:
@@ -115,6 +115,16 @@ def test_a_scrambled_index_is_found_and_the_history_is_never_written(made, hist,
                         "--robot-id", ROBOT)
     assert code == 2 and "damaged" in err
     assert _sha(hist) == before and _rows(hist) == ids  # no write, no record lost
+
+
+def test_an_index_that_hides_one_record_is_found(made, hist, capsys):
+    _scramble_index(hist, 1)  # the lookup still finds a record: the table count tells
+    before = _sha(hist)
+    with pytest.raises(DataError, match="is damaged .*missing from index records_robot"):
+        History(hist, readonly=True).entries(ROBOT)
+    code, _, err = _cli(capsys, "history", hist, "--robot-id", ROBOT)
+    assert code == 2 and "damaged" in err
+    assert _sha(hist) == before and _rows(hist) == [1, 2]
 
 
 def test_an_overwritten_page_is_reported_as_damage(made, hist, capsys):

@@ -487,16 +487,24 @@ class History:
                 skipped: list[str] | None = None) -> list[Record]:
         """The records of ``robot_id`` (of one ``kind``, or all) in recording order, each
         validated (`validate_row`). A record that fails is refused (DataError naming it and the
-        cause), or, when a list ``skipped`` is given, left out with a line appended there. When
-        none is found, SQLite's integrity check runs first (a damaged index hides records)."""
+        cause), or, when a list ``skipped`` is given, left out with a line appended there. On
+        SQLite the rows found through the index are counted in the table itself too (a scan of the
+        robot id column); when none is found or the counts differ, SQLite's integrity check runs
+        and the history is reported damaged (a scrambled index hides records that are there)."""
         sql = ("SELECT id, robot_id, kind, recorded_at, robocal_version, model_yaml, model_sha256, summary, "
                "parameters, uncertainty, data, parent_id FROM records WHERE robot_id = ?")
         params: tuple = (check_robot_id(robot_id),)
         if kind is not None:
             sql, params = sql + " AND kind = ?", (*params, kind)
         rows = self._query(sql + " ORDER BY id", params)
-        if not rows:
-            self._check_sound()
+        if not rows or any(row[1] != params[0] or kind not in (None, row[2]) for row in rows) or \
+                not self.postgres and len(rows) != self._query(
+                    "SELECT count(*) FROM records NOT INDEXED WHERE robot_id = ?"
+                    + (" AND kind = ?" if kind is not None else ""), params)[0][0]:
+            self._check_sound()  # nothing found, rows not asked for, or rows the index did not give
+            if rows:
+                raise self._damaged("the index records_robot and the table disagree on robot id "
+                                    f"{params[0]!r}")
         found = []
         for row in rows:
             try:
