@@ -269,13 +269,13 @@ def test_a_read_only_history_is_refused_before_any_output_and_read_without_chang
 
 
 @contextlib.contextmanager
-def _read_only_folder(tmp_path, made):
-    """A folder holding a copy of the history that cannot be written even by root: a read-only
-    tmpfs when running as root (skip when it cannot be mounted), else a folder chmod 555."""
+def _read_only_folder(tmp_path, source):
+    """A folder holding a copy of the history ``source`` that cannot be written even by root: a
+    read-only tmpfs when running as root (skip when it cannot be mounted), else a folder chmod 555."""
     folder = tmp_path / "ro"
     folder.mkdir()
     if os.geteuid() != 0:
-        shutil.copy(made / "h.sqlite", folder / "h.sqlite")
+        shutil.copy(source, folder / "h.sqlite")
         folder.chmod(0o555)
         try:
             yield folder / "h.sqlite"
@@ -286,15 +286,18 @@ def _read_only_folder(tmp_path, made):
                       capture_output=True).returncode:
         pytest.skip("root without a tmpfs mount: a read-only folder cannot be made")
     try:
-        shutil.copy(made / "h.sqlite", folder / "h.sqlite")
+        shutil.copy(source, folder / "h.sqlite")
         subprocess.run(["mount", "-o", "remount,ro", str(folder)], check=True, capture_output=True)
         yield folder / "h.sqlite"
     finally:
         subprocess.run(["umount", str(folder)], capture_output=True)
 
 
-def test_a_history_in_a_read_only_folder_is_read(made, tmp_path, capsys):
-    with _read_only_folder(tmp_path, made) as hist:
+@pytest.mark.parametrize("journal", ["delete", "wal"])  # wal: opened immutable (no writer can be there)
+def test_a_history_in_a_read_only_folder_is_read(made, hist, tmp_path, capsys, journal):
+    with contextlib.closing(sqlite3.connect(hist)) as conn:
+        conn.execute(f"PRAGMA journal_mode={journal}")
+    with _read_only_folder(tmp_path, hist) as hist:
         code, text, err = _cli(capsys, "history", hist, "--robot-id", ROBOT)
         assert code == 0 and "#1" in text and "#2" in text, err
         code, _, err = _cli(capsys, "check", made / "cal.yaml", made / "check.csv", "--history", hist,
