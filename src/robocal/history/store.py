@@ -243,25 +243,24 @@ class History:
             raise DataError(f"the history's folder {path.parent} does not exist")
         if self.readonly and not path.is_file():
             raise DataError(f"the history {path} does not exist")
+        if self.readonly:
+            conn = _open_readonly(path, self._failure)
+            try:
+                self._identify(conn)
+                conn.execute(f"PRAGMA busy_timeout={int(BUSY_TIMEOUT_S * 1000)}")
+                conn.execute("PRAGMA query_only=ON")
+            except BaseException:
+                conn.close()
+                raise
+            return conn
         if path.is_file() and path.stat().st_size:
             with _closing(_open_readonly(path, self._failure)) as conn:  # what it is, before any write
                 self._identify(conn)
-                if not self.readonly:  # a damaged file is not touched, not even its journal mode
-                    self._check_sound(conn)
-        if self.readonly:
-            conn = _open_readonly(path, self._failure)
-        else:
-            _check_writable(path)
-            conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
-        try:
-            conn.execute(f"PRAGMA busy_timeout={int(BUSY_TIMEOUT_S * 1000)}")
-            if self.readonly:
-                conn.execute("PRAGMA query_only=ON")
-            else:
-                conn.execute("PRAGMA foreign_keys=ON")
-        except BaseException:
-            conn.close()
-            raise
+                self._check_sound(conn)  # a damaged file is not touched, not even its journal mode
+        _check_writable(path)
+        conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
+        conn.execute(f"PRAGMA busy_timeout={int(BUSY_TIMEOUT_S * 1000)}")
+        conn.execute("PRAGMA foreign_keys=ON")
         return conn
 
     def _identify(self, conn) -> None:
