@@ -48,12 +48,12 @@ from robocal.programs.given_data import (
     as_frames,
     check_language,
     check_magnitudes,
-    tool_disagreements,
     unused_conditions,
 )
 from robocal.programs.load import compensate_by_load, plan_loads
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import undeclared
+from robocal.programs.overrides import override_disagreements
 from robocal.programs.positioner import CoordinatedProgram, cell_models
 from robocal.programs.registry import capable, dialect_for, program_files
 from robocal.programs.result import LISTED, FilterResult, collapse
@@ -366,8 +366,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     -------
     FilterResult
         The filtered files' bytes and the per-target table; `FilterResult.write` writes them.
-        Its warnings begin with the ``tools`` that differ from the program's own tool data of
-        the same name and a ``payload`` / ``temperature`` the model has no term for.
+        Its warnings begin with the ``tools`` / ``frames`` that differ from the program's own
+        data of the same name (:mod:`robocal.programs.overrides`, every language) and a
+        ``payload`` / ``temperature`` the model has no term for.
 
     Raises
     ------
@@ -406,7 +407,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     check_magnitudes(given, dialect, tools, frames, reach)
     # a cell's arm is in the controller's world already (Cell.in_world): its calibrated base is kept
     robot_base = np.eye(4) if coordinated is not None else robot_base_frame(robot_base, reach)
-    res, declared_tools = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,
+    res, program = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,
                                     references, keep_unreached, strict, force, position_registers, payload,
                                     temperature, payload_schedules, coordinated, fixed_base,
                                     Routing(calibrated, nominal, robot_base, fixed_base) if runtime_correction
@@ -416,7 +417,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         res.warnings += target_warnings(prediction, calibrated, res.joints)
     if not res.rows:
         check_language(programs, references, dialect)
-    res.warnings[:0] = tool_disagreements(res.language, declared_tools, tools)  # a VAL3 folder too
+    d = res.language
+    res.warnings[:0] = [*override_disagreements(d, "tool", program.declared_tools, tools, reach),
+                        *override_disagreements(d, "frame", program.declared_frames, frames, reach)]
     return res
 
 
@@ -424,10 +427,11 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
               dialect: str | None, references: list, keep_unreached: bool, strict: bool, force: bool,
               position_registers, payload, temperature, payload_schedules,
               coordinated: CoordinatedProgram | None, fixed_base: bool = False,
-              routing: Routing | None = None) -> tuple[FilterResult, dict[str, np.ndarray]]:
+              routing: Routing | None = None) -> tuple[FilterResult, Program]:
     """:func:`filter_program` of the files ``given`` (an application folder among them), without
-    the warnings and checks of what the user gave, and the tool data the files hold without
-    ``tools`` (`Program.declared_tools`, which the ``tools`` are checked against); ``routing``:
+    the warnings and checks of what the user gave, and the parsed program (its
+    `Program.declared_tools` / `Program.declared_frames`, which the ``tools`` / ``frames`` are
+    checked against: :mod:`robocal.programs.overrides`); ``routing``:
     the run-time correction (``runtime_correction``), None without."""
     paths = program_files(given)  # an application folder: its files
     if not paths:
@@ -460,8 +464,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
         records, outputs = _written(d, program, sources, set(), {}, routing, warnings)
-        return FilterResult(d.name, outputs, [], warnings, program.uncorrected, records, language=d), \
-            program.declared_tools
+        return FilterResult(d.name, outputs, [], warnings, program.uncorrected, records, language=d), program
     loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, payload_schedules)
     warnings += loads.warnings
     values, P, W, tool = target_poses(d, program, targets)
@@ -507,7 +510,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected, records, calibrated,
                         joints=np.where(good[:, None], q, np.nan), loads=loads.lines,
                         data_files=frozenset(s.path for s in sources[len(paths):]),  # the register file
-                        derived=frozenset(derived), language=d), program.declared_tools
+                        derived=frozenset(derived), language=d), program
 
 
 def _left_unchanged(program: Program, targets: list[Target], problems: list[tuple[int, str]],
