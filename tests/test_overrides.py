@@ -116,3 +116,47 @@ def test_a_rotation_is_judged_by_how_far_it_moves_a_working_point():
     assert override_disagreements(d, "frame", {"1": own}, {"1": "0,0,200,0,0,0.005"}, 1.6)
     assert not override_disagreements(d, "tool", {"1": own}, {"1": "0,0,200,0,0,0.005"}, 1.6)
     assert 0.2 * np.deg2rad(0.005) * 1e3 < OVERRIDE_TOL_MM < 1.6 * np.deg2rad(0.005) * 1e3
+
+
+def _payload_data(tmp_path: Path, robot: str, masses: list[float], scale: float) -> Path:
+    """Simulated point data of catalog ``robot`` carrying ``masses`` (kg) in turn, the payload_kg
+    column written as kg times ``scale`` (2.2046: pounds, 1000: grams)."""
+    nominal = rc.Robot.from_catalog(robot)
+    sim = rc.simulate_tracker(nominal, 24, payloads=masses, seed=4)
+    path = tmp_path / f"{robot}.csv"
+    sim.data.save(path)
+    lines = [line for line in path.read_text().splitlines() if not line.startswith("#")]
+    k = lines[0].split(",").index("payload_kg")
+    rows = [line.split(",") for line in lines[1:]]
+    for r in rows:
+        r[k] = f"{float(r[k]) * scale:.6g}"
+    path.write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
+    return path
+
+
+@pytest.mark.parametrize(("robot", "masses", "scale", "unit"), [
+    ("kuka_kr210_r2700", [0.0, 180.0], 1 / 0.45359237, "pounds"),  # 397 "kg" on a 210 kg robot
+    ("fanuc_lrmate200id", [0.0, 4.0], 1000.0, "grams")])  # 4,000 "kg" on a 7 kg one
+def test_a_payload_column_in_another_unit_is_refused_against_the_rated_payload(tmp_path, capsys, robot, masses,
+                                                                              scale, unit):
+    """The catalog's rated payload (Robot.payload_kg) is the yardstick: a payload_kg column in lb
+    or g is refused naming the unit, by the API and the command line (exit 2); in kg it loads."""
+    nominal = rc.Robot.from_catalog(robot)
+    assert nominal.payload_kg is not None and rc.Measurements.load(_payload_data(tmp_path, robot, masses, 1.0),
+                                                                   robot=nominal).payload is not None
+    path = _payload_data(tmp_path, robot, masses, scale)
+    with pytest.raises(rc.UnitError, match=f"times the rated payload of {robot} .*look like {unit}"):
+        rc.Measurements.load(path, robot=nominal)
+    data = rc.Measurements.load(path)  # read without the robot: calibrate checks it against the model
+    with pytest.raises(rc.UnitError, match=f"look like {unit}"):
+        rc.calibrate(nominal, data)
+    assert main(["calibrate", str(path), "--robot", robot, "-o", str(tmp_path / "cal.yaml")]) == 2
+    assert f"look like {unit}" in capsys.readouterr().err
+    assert not (tmp_path / "cal.yaml").exists()
+
+
+def test_a_payload_option_in_grams_is_refused_by_the_filter(tmp_path):
+    paths, refs = _program("krl", tmp_path)
+    with pytest.raises(rc.UnitError, match=r"--payload: 5000 kg .* rated payload of kuka_kr16_2 .*grams"):
+        filter_program(paths, CALIBRATED, NOMINAL, payload=5000.0, references=refs)
+    assert filter_program(paths, CALIBRATED, NOMINAL, payload=5.0, references=refs).rows

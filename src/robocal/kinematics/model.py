@@ -217,6 +217,10 @@ class Robot:
         What the model file (or `with_priors`) says about the parameter priors: the robot's class
         and group scales (`robocal.kinematics.prior_spec`, docs/priors.md); None: the class is
         chosen from the model and every group scale estimated from the data.
+    payload_kg : float or None
+        The vendor's rated payload, kg (a model file's ``payload_kg``: the catalog's), which the
+        payloads a user gives are checked against (`robocal.core.magnitudes.check_payload`);
+        None: not known.
     prismatic : numpy.ndarray of bool, shape (n,)
         ``prismatic[i]`` makes joint i prismatic: its value (m) adds to ``d_i`` (``theta_i`` stays
         a constant angle); ``d_i`` is its zero and a ``scale{i}`` joint-error term its encoder
@@ -260,6 +264,7 @@ class Robot:
     prismatic: np.ndarray | None = None
     priors: PriorSpec | None = None
     link_frames: dict[str, int] | None = None
+    payload_kg: float | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.alpha).size
@@ -307,6 +312,12 @@ class Robot:
             raise ModelError("priors must be a PriorSpec (robocal.kinematics.prior_spec)")
         if self.link_frames is not None:
             set_(self, "link_frames", check_link_frames(self.link_frames, n))
+        if self.payload_kg is not None:
+            payload = float(self.payload_kg)
+            if not (np.isfinite(payload) and payload > 0):
+                raise ModelError(f"payload_kg (the rated payload) must be a positive number of kg, got "
+                                 f"{self.payload_kg!r}")
+            set_(self, "payload_kg", payload)
         set_(self, "nominal", self._nominal_vector(self.nominal))
         for f in (*LINK_FIELDS, "base", "tool", "limits", "parallel", "smr", "nominal", "prismatic"):
             getattr(self, f).flags.writeable = False

@@ -48,6 +48,7 @@ from robocal.programs.given_data import (
     as_frames,
     check_language,
     check_magnitudes,
+    check_payload_given,
     unused_conditions,
 )
 from robocal.programs.load import compensate_by_load, plan_loads
@@ -376,7 +377,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         No file, an unknown dialect, a nominal model without 6 joints, a program moving with a
         mechanical unit the cell does not have or positioner values outside its limits, an
         unknown tool or
-        frame, ``tools`` / ``frames`` / ``robot_base`` text whose magnitudes say another unit,
+        frame, ``tools`` / ``frames`` / ``robot_base`` text whose magnitudes say another unit, a
+        ``payload`` above 1.5 times the model's rated payload (``Robot.payload_kg``),
         targets that cannot be corrected (each named), or files without a Cartesian target
         that read as another language than their suffix says.
 
@@ -405,6 +407,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                         "identified frame {0} (Cell.in_world), where the controller has that arm's base")
     reach = robot_reach(nominal)
     check_magnitudes(given, dialect, tools, frames, reach)
+    check_payload_given(payload, calibrated if calibrated.payload_kg is not None else nominal)
     # a cell's arm is in the controller's world already (Cell.in_world): its calibrated base is kept
     robot_base = np.eye(4) if coordinated is not None else robot_base_frame(robot_base, reach)
     res, program = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,

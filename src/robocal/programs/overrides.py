@@ -63,8 +63,9 @@ def override_disagreements(d: Dialect, kind: str, declared: dict[str, np.ndarray
     >>> krl = dialect_named("krl")
     >>> override_disagreements(krl, "tool", own, {"1": "0,0,250.02,0,0,0"}, 1.6)  # 0.02 mm: rounding
     []
-    >>> override_disagreements(krl, "tool", own, {"1": "0,0,250.2,0,0,0"}, 1.6)[0][:60]
-    '--tool 1=0,0,250.2,0,0,0 replaces the program\\'s own tool data 1'
+    >>> said = override_disagreements(krl, "tool", own, {"1": "0,0,250.2,0,0,0"}, 1.6)  # 0.2 mm
+    >>> said[0].startswith("--tool 1=0,0,250.2,0,0,0 replaces the program's own tool data 1 (TCP at")
+    True
     """
     if not given:
         return []
