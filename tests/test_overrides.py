@@ -3,6 +3,7 @@ with the program's own data in every language that carries them (robocal.program
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -137,13 +138,13 @@ def _payload_data(tmp_path: Path, robot: str, masses: list[float], scale: float)
 @pytest.mark.parametrize(("robot", "masses", "scale", "unit"), [
     ("kuka_kr210_r2700", [0.0, 180.0], 1 / 0.45359237, "pounds"),  # 397 "kg" on a 210 kg robot
     ("fanuc_lrmate200id", [0.0, 4.0], 1000.0, "grams")])  # 4,000 "kg" on a 7 kg one
-def test_a_payload_column_in_another_unit_is_refused_against_the_rated_payload(tmp_path, capsys, robot, masses,
-                                                                              scale, unit):
+def test_a_payload_column_in_another_unit_is_refused_against_the_rated_payload(tmp_path, capsys, robot,
+                                                                              masses, scale, unit):
     """The catalog's rated payload (Robot.payload_kg) is the yardstick: a payload_kg column in lb
     or g is refused naming the unit, by the API and the command line (exit 2); in kg it loads."""
     nominal = rc.Robot.from_catalog(robot)
-    assert nominal.payload_kg is not None and rc.Measurements.load(_payload_data(tmp_path, robot, masses, 1.0),
-                                                                   robot=nominal).payload is not None
+    in_kg = _payload_data(tmp_path, robot, masses, 1.0)
+    assert nominal.payload_kg is not None and rc.Measurements.load(in_kg, robot=nominal).payload is not None
     path = _payload_data(tmp_path, robot, masses, scale)
     with pytest.raises(rc.UnitError, match=f"times the rated payload of {robot} .*look like {unit}"):
         rc.Measurements.load(path, robot=nominal)
@@ -160,3 +161,45 @@ def test_a_payload_option_in_grams_is_refused_by_the_filter(tmp_path):
     with pytest.raises(rc.UnitError, match=r"--payload: 5000 kg .* rated payload of kuka_kr16_2 .*grams"):
         filter_program(paths, CALIBRATED, NOMINAL, payload=5000.0, references=refs)
     assert filter_program(paths, CALIBRATED, NOMINAL, payload=5.0, references=refs).rows
+
+
+TRACK_CELL = """units: {{length: mm, angle: deg}}
+robot: kuka_kr210_r2700
+track: {{direction: [1, 0, 0], limits: [0, 6000]}}
+mount: {{xyz: [0, 0, {riser}]}}
+"""
+WORK_CELL = """units: {{length: mm, angle: deg}}
+robots:
+  left: {{model: abb_irb2600, unit: ROB_1, base: {{xyz: [0, 0, {riser}]}}}}
+positioner:
+  unit: STN1
+  mount: {{xyz: [{mount}, 0, 0]}}
+  axes: [{{type: revolute, axis: [1, 0, 0], origin: [0, 0, {height}], limits: [-90, 90]}}]
+"""
+
+
+@pytest.mark.parametrize(("text", "good", "bad", "key"), [
+    (TRACK_CELL, {"riser": 500}, {"riser": 0.5}, "mount"),  # a 500 mm riser written 0.5 in a file in mm
+    (WORK_CELL, {"riser": 500, "mount": 1400, "height": 900}, {"riser": 0.5, "mount": 1400, "height": 900},
+     "robots.left.base"),
+    (WORK_CELL, {"riser": 0, "mount": 1400, "height": 900}, {"riser": 0, "mount": 1.4, "height": 900},
+     "positioner.mount"),
+    (WORK_CELL, {"riser": 0, "mount": 1400, "height": 900}, {"riser": 0, "mount": 1400, "height": 0.9},
+     "positioner.axes' origins"),
+    (WORK_CELL.replace("mm", "m", 1), {"riser": 0.5, "mount": 1.4, "height": 0.9},
+     {"riser": 500, "mount": 1.4, "height": 0.9}, "robots.left.base")])  # 500 'm' on a 3 m arm
+def test_a_cell_offset_in_another_unit_is_refused_against_the_arms_size(tmp_path, capsys, text, good, bad,
+                                                                        key):
+    """A riser, a base, a positioner's mount or axis height whose number, read in the file's unit,
+    is no offset this arm's cell has (links add up to ~3 m) is refused naming the unit it fits, by
+    the API and the command line (exit 2); the same offset written in the file's unit loads."""
+    path = tmp_path / "cell.yaml"
+    path.write_text(text.format(**good))
+    assert rc.load_cell(path).bodies
+    path.write_text(text.format(**bad))
+    with pytest.raises(rc.RobocalError, match=rf"cell.yaml: {re.escape(key)}: .* the values look like"):
+        rc.load_cell(path)
+    args = ["simulate", "--model", str(path), "--poses", "10", "-o", str(tmp_path / "d.csv"), "--truth",
+            str(tmp_path / "t.yaml")]
+    assert main(args) == 2
+    assert f"{key}: " in capsys.readouterr().err and not (tmp_path / "d.csv").exists()

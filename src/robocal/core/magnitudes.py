@@ -11,6 +11,9 @@ scales with the robot:
   than 2 mm to the flange centre but not on it is metres typed as mm);
 * a frame (work object, user frame, base) translation: 0 or `FRAME_MIN_M` ..
   `FRAME_MAX_REACHES` reaches;
+* a cell's offsets (an arm's base or mount on a riser or carriage, a positioner's mount and axis
+  origins: `check_cell_offset`): as a frame, against the arm's reach from its link lengths, the
+  advice naming the cell file's unit;
 * a set of Cartesian targets: the farthest from the robot's base lies `TARGETS_MIN_REACHES`
   .. `TARGETS_MAX_REACHES` reaches away (the robot reaches its targets);
 * a robot model's reach (sum of its link lengths): `MODEL_MIN_REACH_M` ..
@@ -158,6 +161,28 @@ def check_frame(xyz_m: Sequence[float], declared: str, reach_m: float, what: str
     xyz = np.abs(np.asarray(xyz_m, dtype=float))
     check_length(float(xyz.max()), declared, FRAME_MIN_M, FRAME_MAX_REACHES * reach_m, what,
                  "a frame of this robot")
+
+
+def check_cell_offset(xyz_m: Sequence[float], declared: str, reach_m: float, what: str) -> None:
+    """A cell file's offset ``(3,)`` or ``(k, 3)`` (m, read in the file's unit ``declared``) for an
+    arm whose link lengths add up to ``reach_m``: an arm's base or its mount on a riser or a track's
+    carriage, a positioner's mount or its axes' origins. Its largest coordinate must lie within
+    `FRAME_MIN_M` .. `FRAME_MAX_REACHES` reaches (all zeros pass), or UnitError naming the unit the
+    number fits (a 500 mm riser written 0.5 in a file in mm lands the flange 0.5 m off).
+
+    Examples
+    --------
+    >>> from robocal.core.magnitudes import check_cell_offset
+    >>> check_cell_offset([0.0, 0.0, 0.5], "mm", 3.1, "mount")  # a 500 mm riser, 500 in mm: passes
+    >>> check_cell_offset([0.0, 0.0, 0.0005], "mm", 3.1, "mount")  # written 0.5 in a file in mm
+    Traceback (most recent call last):
+    ...
+    robocal.core.errors.UnitError: mount: 0.5 mm is too small ... look like metres (0.5 m = 500 mm): write ...
+    """
+    xyz = np.abs(np.asarray(xyz_m, dtype=float))
+    check_length(float(xyz.max(initial=0.0)), declared, FRAME_MIN_M, FRAME_MAX_REACHES * reach_m, what,
+                 "an offset in a cell of this arm",
+                 advice="write it in {declared}, the cell file's length unit (units: {{length: ...}})")
 
 
 def check_targets(points_m: np.ndarray, declared: str, reach_m: float, what: str,

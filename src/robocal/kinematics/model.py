@@ -31,6 +31,7 @@ import numpy as np
 
 from robocal.core.errors import DataError, ModelError, UnitError
 from robocal.core.io import as_number, write_atomic
+from robocal.core.magnitudes import check_cell_offset
 from robocal.kinematics.catalog import catalog_kwargs
 from robocal.kinematics.cell_file import (
     TRACK_SCALE,
@@ -1136,8 +1137,15 @@ def cell_from_data(data: dict, path: Path | None = None) -> Robot:
     a model file relative to ``path``'s folder, loaded by :func:`load_model`)."""
     cell = read_cell(data, path)
     arm = load_model(cell.robot)
+    check_cell_offset(cell.mount[:3, 3], cell.length_unit, links_length(arm), "mount")
     name = _text(f"{arm.name} on a track", "name", MAX_NAME) if cell.name is None else cell.name
     return track_chain(arm, cell.direction, cell.mount, cell.limits, name=name, description=cell.description)
+
+
+def links_length(robot: Robot) -> float:
+    """The sum of ``robot``'s link lengths ``|a_i| + |d_i|`` (m): its size, which a cell's offsets
+    are checked against (`robocal.core.magnitudes.check_cell_offset`)."""
+    return float(np.abs(robot.a).sum() + np.abs(robot.d).sum())
 
 
 def placed(robot: Robot, mount: np.ndarray | None = None, plate: np.ndarray | None = None) -> Robot:
@@ -1160,6 +1168,8 @@ def arm_from_entry(entry: ArmEntry) -> Robot:
     catalog name, a file, or an inline model mapping) placed at the entry's base in the world, or
     on the entry's track (the track cell chain, its mount the entry's base)."""
     arm = Robot(**robot_kwargs(entry.model)) if isinstance(entry.model, dict) else load_model(entry.model)
+    if entry.base is not None:  # a riser written in another unit than the file's
+        check_cell_offset(entry.base[:3, 3], entry.length_unit, links_length(arm), entry.key)
     if entry.track is not None:
         mount = np.eye(4) if entry.base is None else entry.base
         return track_chain(arm, entry.track[0], mount, entry.track[1], name=f"{arm.name} on a track")
