@@ -161,6 +161,10 @@ def test_a_payload_option_in_grams_is_refused_by_the_filter(tmp_path):
     with pytest.raises(rc.UnitError, match=r"--payload: 5000 kg .* rated payload of kuka_kr16_2 .*grams"):
         filter_program(paths, CALIBRATED, NOMINAL, payload=5000.0, references=refs)
     assert filter_program(paths, CALIBRATED, NOMINAL, payload=5.0, references=refs).rows
+    paths, refs = _program("fanuc", tmp_path)  # schedules of a controller in lb
+    with pytest.raises(rc.UnitError, match=r"--payload-schedules: 33.07 kg .*pounds"):
+        filter_program(paths, CALIBRATED, NOMINAL, payload_schedules={1: (15.0 / 0.45359237, 0, 0, 0)},
+                       references=refs)
 
 
 TRACK_CELL = """units: {{length: mm, angle: deg}}
