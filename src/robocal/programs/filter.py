@@ -368,7 +368,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     FilterResult
         The filtered files' bytes and the per-target table; `FilterResult.write` writes them.
         Its warnings begin with the ``tools`` / ``frames`` that differ from the program's own
-        data of the same name (:mod:`robocal.programs.overrides`, every language) and a
+        data of the same name (`robocal.programs.overrides`, every language) and a
         ``payload`` / ``temperature`` the model has no term for.
 
     Raises
