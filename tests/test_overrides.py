@@ -16,7 +16,9 @@ from robocal.data.simulate import perturbed
 from robocal.kinematics.transforms import make_transform
 from robocal.programs import filter_program
 from robocal.programs.overrides import OVERRIDE_TOL_MM
+from robocal.programs.registry import dialect_named
 from robocal.programs.simulate import write_program
+from robocal.programs.source import ProgramText
 
 NOMINAL = rc.Robot.from_catalog("kuka_kr16_2")
 CALIBRATED = perturbed(NOMINAL, 3)
@@ -110,7 +112,6 @@ def test_a_rotation_is_judged_by_how_far_it_moves_a_working_point():
     """0.005 deg on a frame moves a point at a 1.6 m reach 0.14 mm: said; on a tool of 200 mm,
     0.017 mm: not (the tolerance is what a point moves, OVERRIDE_TOL_MM)."""
     from robocal.programs.overrides import override_disagreements
-    from robocal.programs.registry import dialect_named
 
     d = dialect_named("inform")
     own = d.frame_from_text("0,0,200,0,0,0")
@@ -207,3 +208,20 @@ def test_a_cell_offset_in_another_unit_is_refused_against_the_arms_size(tmp_path
             str(tmp_path / "t.yaml")]
     assert main(args) == 2
     assert f"{key}: " in capsys.readouterr().err and not (tmp_path / "d.csv").exists()
+
+
+def test_a_frame_rotation_is_judged_at_its_farthest_target(tmp_path):
+    """The lever of a frame is the distance of its farthest target (frame_levers), not the reach:
+    0.002 deg on a frame whose targets lie within 0.9 m moves them 0.03 mm (not said), 0.01 deg
+    0.15 mm (said, naming that distance)."""
+    from robocal.programs.overrides import frame_levers
+
+    paths, refs = _program("krl", tmp_path)
+    res = filter_program(paths, CALIBRATED, NOMINAL, frames={"1": "600,-100,50,15.002,0,0"}, references=refs)
+    assert not [w for w in res.warnings if "replaces the program's own" in w]
+    res = filter_program(paths, CALIBRATED, NOMINAL, frames={"1": "600,-100,50,15.01,0,0"}, references=refs)
+    said = [w for w in res.warnings if "replaces the program's own" in w]
+    krl = dialect_named("krl")
+    program = krl.parse([ProgramText(p) for p in paths], {}, {}, [ProgramText(r) for r in refs])
+    far = frame_levers(krl, program)["1"]
+    assert 0.8 < far < 0.9 and len(said) == 1 and f"a point {far * 1e3:.4g} mm away" in said[0]

@@ -54,7 +54,7 @@ from robocal.programs.given_data import (
 from robocal.programs.load import compensate_by_load, plan_loads
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import undeclared
-from robocal.programs.overrides import override_disagreements
+from robocal.programs.overrides import frame_levers, override_disagreements
 from robocal.programs.positioner import CoordinatedProgram, cell_models
 from robocal.programs.registry import capable, dialect_for, program_files
 from robocal.programs.result import LISTED, FilterResult, collapse
@@ -422,7 +422,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         check_language(programs, references, dialect)
     d = res.language
     res.warnings[:0] = [*override_disagreements(d, "tool", program.declared_tools, tools, reach),
-                        *override_disagreements(d, "frame", program.declared_frames, frames, reach)]
+                        *override_disagreements(d, "frame", program.declared_frames, frames, reach,
+                                                frame_levers(d, program))]
     return res
 
 

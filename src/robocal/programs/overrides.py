@@ -8,9 +8,9 @@ Each dialect reports what its files (and their references: a KUKA $config.dat, a
 command line that differs from them makes every corrected target land off by the difference,
 while the correction looks right. The difference is judged by how far it moves a point the robot
 works at: the translation plus the rotation times a lever (a tool: its TCP's distance from the
-flange; a frame: the robot's reach, where its targets lie), against `OVERRIDE_TOL_MM`, the size of
-what a calibration corrects down to (a laser tracker's and a calibrated arm's accuracy, a few
-hundredths of a mm): a larger difference is said, naming both values.
+flange; a frame: its farthest target's distance, else the robot's reach), against
+`OVERRIDE_TOL_MM`, the size of what a calibration corrects down to (a laser tracker's and a
+calibrated arm's accuracy, a few hundredths of a mm): a larger difference is said, naming both.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ import numpy as np
 
 from robocal.kinematics.transforms import pose_error
 from robocal.programs.dialects.base import Dialect
+from robocal.programs.model import Program
 
 # a --tool / --frame moving a working point this far (mm) from the program's own data of the same
 # name is other data: a calibrated arm with a tracker is accurate to a few hundredths of a mm, and a
@@ -29,8 +30,22 @@ _WORDS = {"tool": ("--tool", "tool data", "TCP at", "on the flange"),
           "frame": ("--frame", "frame", "origin at", "in the robot's base frame")}
 
 
+def frame_levers(d: Dialect, program: Program) -> dict[str, float]:
+    """Frame key -> the farthest distance (m) of the program's targets from that frame's origin
+    (what a rotation of the frame moves them by, per radian); frames without targets are absent."""
+    targets = [t for t in program.targets if len(t.numbers) == d.n_values]
+    if not targets:
+        return {}
+    far = np.linalg.norm(d.to_pose(np.array([t.values() for t in targets]))[:, :3, 3], axis=1)
+    out: dict[str, float] = {}
+    for t, r in zip(targets, far, strict=True):
+        if np.isfinite(r):
+            out[t.frame] = max(out.get(t.frame, 0.0), float(r))
+    return out
+
+
 def override_disagreements(d: Dialect, kind: str, declared: dict[str, np.ndarray], given,
-                           lever_m: float) -> list[str]:
+                           lever_m: float, levers: dict[str, float] | None = None) -> list[str]:
     """One warning per ``given`` entry (name -> 4x4 m, or text in ``d``'s pose notation) that
     replaces ``kind`` data ('tool' or 'frame') the program holds differently, naming both.
 
@@ -46,8 +61,10 @@ def override_disagreements(d: Dialect, kind: str, declared: dict[str, np.ndarray
     given : dict of str to str or ndarray
         The user's ``--tool`` / ``--frame`` values.
     lever_m : float
-        The distance (m) at which a rotation difference is judged for a frame (the robot's reach);
-        a tool's lever is its own TCP offset (the larger of the two TCPs').
+        The distance (m) at which a rotation difference is judged for a frame without targets
+        (the robot's reach); a tool's lever is its own TCP offset (the larger of the two TCPs').
+    levers : dict of str to float, optional
+        Frame key -> the distance of its farthest target (`frame_levers`), used instead.
 
     Returns
     -------
@@ -79,7 +96,8 @@ def override_disagreements(d: Dialect, kind: str, declared: dict[str, np.ndarray
         T = d.frame_from_text(value) if isinstance(value, str) else np.asarray(value, float)
         own = np.asarray(own, float)
         err = pose_error(own[None], T[None])[0]
-        lever = max(np.linalg.norm(own[:3, 3]), np.linalg.norm(T[:3, 3])) if kind == "tool" else lever_m
+        lever = max(np.linalg.norm(own[:3, 3]), np.linalg.norm(T[:3, 3])) if kind == "tool" else \
+            (levers or {}).get(key, lever_m)
         mm, rad = np.linalg.norm(err[:3]) * 1e3, np.linalg.norm(err[3:])
         moved = mm + rad * lever * 1e3
         if moved > OVERRIDE_TOL_MM:
