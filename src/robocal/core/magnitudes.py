@@ -168,7 +168,8 @@ def check_cell_offset(xyz_m: Sequence[float], declared: str, reach_m: float, wha
     arm whose link lengths add up to ``reach_m``: an arm's base or its mount on a riser or a track's
     carriage, a positioner's mount or its axes' origins. Its largest coordinate must lie within
     `FRAME_MIN_M` .. `FRAME_MAX_REACHES` reaches (all zeros pass), or UnitError naming the unit the
-    number fits (a 500 mm riser written 0.5 in a file in mm lands the flange 0.5 m off).
+    number fits (a 500 mm riser written 0.5 in a file in mm lands the flange 0.5 m off); a number
+    that fits no unit passes (a 1 mm shim in a file in metres).
 
     Examples
     --------
@@ -182,7 +183,8 @@ def check_cell_offset(xyz_m: Sequence[float], declared: str, reach_m: float, wha
     xyz = np.abs(np.asarray(xyz_m, dtype=float))
     check_length(float(xyz.max(initial=0.0)), declared, FRAME_MIN_M, FRAME_MAX_REACHES * reach_m, what,
                  "an offset in a cell of this arm",
-                 advice="write it in {declared}, the cell file's length unit (units: {{length: ...}})")
+                 advice="write it in {declared}, the cell file's length unit (units: {{length: ...}})",
+                 strict=False)
 
 
 def check_targets(points_m: np.ndarray, declared: str, reach_m: float, what: str,
