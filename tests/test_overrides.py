@@ -225,3 +225,12 @@ def test_a_frame_rotation_is_judged_at_its_farthest_target(tmp_path):
     program = krl.parse([ProgramText(p) for p in paths], {}, {}, [ProgramText(r) for r in refs])
     far = frame_levers(krl, program)["1"]
     assert 0.8 < far < 0.9 and len(said) == 1 and f"a point {far * 1e3:.4g} mm away" in said[0]
+
+
+def test_an_offset_no_unit_explains_and_a_rated_payload_on_a_track_pass(tmp_path):
+    """A 1 mm shim under an arm in a cell file in metres fits no other unit: it loads (only an
+    offset another unit explains is refused); an arm on a track keeps its rated payload."""
+    path = tmp_path / "cell.yaml"
+    path.write_text(TRACK_CELL.format(riser=0.001).replace("mm", "m", 1).replace("6000", "6"))
+    chain = rc.load_model(str(path))
+    assert chain.base is not None and chain.payload_kg == rc.Robot.from_catalog("kuka_kr210_r2700").payload_kg

@@ -1129,7 +1129,7 @@ def track_chain(arm: Robot, direction, mount: np.ndarray, limits, name: str | No
     return Robot(**chain, limits=limits, prismatic=kinds,
                  nominal=nominal_robot.nominal, opw=arm.opw,
                  name=arm.name if name is None else name, description=description,
-                 joint_errors=JointErrorModel((TRACK_SCALE,), np.zeros(1)))
+                 joint_errors=JointErrorModel((TRACK_SCALE,), np.zeros(1)), payload_kg=arm.payload_kg)
 
 
 def cell_from_data(data: dict, path: Path | None = None) -> Robot:
