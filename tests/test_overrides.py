@@ -234,3 +234,12 @@ def test_an_offset_no_unit_explains_and_a_rated_payload_on_a_track_pass(tmp_path
     path.write_text(TRACK_CELL.format(riser=0.001).replace("mm", "m", 1).replace("6000", "6"))
     chain = rc.load_model(str(path))
     assert chain.base is not None and chain.payload_kg == rc.Robot.from_catalog("kuka_kr210_r2700").payload_kg
+
+
+def test_an_unnamed_urscript_tool_the_script_never_uses_is_said(tmp_path):
+    """The installation's TCP (--tool without a name) serves no motion of a script that sets its
+    own TCP before every motion: said, not silently dropped."""
+    paths, _, _ = write_program("urscript", tmp_path, NOMINAL, Q, TOOL, FRAME)
+    res = filter_program(paths, CALIBRATED, NOMINAL, tools={"": "0.05,0,0.25,0,0.5235987756,0"})
+    assert any(w.startswith("--tool (the installation's TCP) is not used") and "set_tcp@2" in w
+               for w in res.warnings), res.warnings

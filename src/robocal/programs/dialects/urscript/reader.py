@@ -190,6 +190,12 @@ class URScriptDialect(Dialect):
                 prog.unsupported[f"tool:{t.tool}"] = (f"set_tcp({t.tool[1:]}) is not a pose this filter can "
                                                       "read")
         default_used = any(t.tool == DEFAULT_TOOL for t in prog.targets)
+        if user_default is not None and prog.targets and not default_used:  # the user's TCP, unused
+            own = sorted({t.tool for t in prog.targets})
+            named = ", ".join(own[:3]) + (" ..." if len(own) > 3 else "")
+            prog.warnings.append(f"--tool (the installation's TCP) is not used: every corrected motion "
+                                 f"follows the script's own set_tcp ({named}), which the controller moves "
+                                 "with; give --tool NAME= for set_tcp(NAME) to replace one")
         if default_used:  # the installation's TCP, which the script does not hold: taken as the flange
             prog.declared_tools[DEFAULT_TOOL] = np.eye(4)
         if default_used and DEFAULT_TOOL not in prog.tools:
