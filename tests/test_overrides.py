@@ -162,6 +162,13 @@ def test_a_payload_option_in_grams_is_refused_by_the_filter(tmp_path):
     with pytest.raises(rc.UnitError, match=r"--payload: 5000 kg .* rated payload of kuka_kr16_2 .*grams"):
         filter_program(paths, CALIBRATED, NOMINAL, payload=5000.0, references=refs)
     assert filter_program(paths, CALIBRATED, NOMINAL, payload=5.0, references=refs).rows
+    cal = tmp_path / "cal.yaml"
+    CALIBRATED.save(cal)
+    args = ["filter", *map(str, paths), "--calibrated", str(cal), "--nominal", "kuka_kr16_2", "-o",
+            str(tmp_path / "out"), "--payload", "5000", *[a for r in refs for a in ("--references", str(r))]]
+    assert main(args) == 2 and not (tmp_path / "out").exists()
+    with pytest.raises(rc.UnitError, match="--payload: 35.27 kg .*pounds"):  # 16 kg in lb to compensate
+        rc.compensate(CALIBRATED, NOMINAL, NOMINAL.fk(Q), payload=16 / 0.45359237)
     paths, refs = _program("fanuc", tmp_path)  # schedules of a controller in lb
     with pytest.raises(rc.UnitError, match=r"--payload-schedules: 33.07 kg .*pounds"):
         filter_program(paths, CALIBRATED, NOMINAL, payload_schedules={1: (15.0 / 0.45359237, 0, 0, 0)},

@@ -30,7 +30,7 @@ import numpy as np
 from robocal.core.errors import DataError, ListedError, ModelError
 from robocal.core.resources import gc_paused, heap_trimmed
 from robocal.data.measurements import robot_reach
-from robocal.deploy.compensation import Compensation, compensate, controller_model
+from robocal.deploy.compensation import Compensation, check_payload_given, compensate, controller_model
 from robocal.deploy.models import robot_base_frame
 from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
@@ -48,7 +48,6 @@ from robocal.programs.given_data import (
     as_frames,
     check_language,
     check_magnitudes,
-    check_payload_given,
     unused_conditions,
 )
 from robocal.programs.load import compensate_by_load, plan_loads

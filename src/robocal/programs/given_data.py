@@ -16,7 +16,6 @@ from robocal.core.magnitudes import (
     LENGTH_SCALES_M,
     check_degrees,
     check_frame,
-    check_payload,
     check_radians,
     check_tool,
 )
@@ -58,19 +57,6 @@ def check_magnitudes(given: list[Path], dialect: str | None, tools, frames, reac
                 check_degrees(values[3:6], what)
             elif angles == "rad":
                 check_radians(values[3:6], what)
-
-
-def check_payload_given(payload, robot: Robot) -> None:
-    """Refuse a ``payload`` (kg, or kg and its centre of mass; None: none given) heavier than the
-    rated payload of ``robot`` allows (:func:`robocal.core.magnitudes.check_payload`: lb or g
-    typed as kg); one that is not numbers is left to the load planner, which names it."""
-    if payload is None:
-        return
-    try:
-        mass = float(np.asarray(payload, dtype=float).reshape(-1)[0])
-    except (TypeError, ValueError, IndexError):
-        return
-    check_payload([mass], robot.payload_kg, robot.name, "--payload")
 
 
 def unused_conditions(calibrated: Robot, payload, temperature) -> list[str]:
