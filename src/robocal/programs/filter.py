@@ -422,7 +422,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     d = res.language
     res.warnings[:0] = [*override_disagreements(d, "tool", program.declared_tools, tools, reach),
                         *override_disagreements(d, "frame", program.declared_frames, frames, reach,
-                                                frame_levers(d, program))]
+                                                frame_levers(d, program) if frames else None)]
     return res
 
 

@@ -37,11 +37,10 @@ def frame_levers(d: Dialect, program: Program) -> dict[str, float]:
     if not targets:
         return {}
     far = np.linalg.norm(d.to_pose(np.array([t.values() for t in targets]))[:, :3, 3], axis=1)
-    out: dict[str, float] = {}
-    for t, r in zip(targets, far, strict=True):
-        if np.isfinite(r):
-            out[t.frame] = max(out.get(t.frame, 0.0), float(r))
-    return out
+    keys, which = np.unique([t.frame for t in targets], return_inverse=True)
+    most = np.full(len(keys), np.nan)
+    np.fmax.at(most, which, far)  # NaN (a number the file leaves out) never wins
+    return {str(k): float(m) for k, m in zip(keys, most, strict=True) if np.isfinite(m)}
 
 
 def override_disagreements(d: Dialect, kind: str, declared: dict[str, np.ndarray], given,
