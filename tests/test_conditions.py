@@ -40,7 +40,7 @@ def test_a_calibration_records_the_conditions_it_covered_and_its_file_keeps_them
     (tmp_path / "old.yaml").write_text(yaml.safe_dump(data))
     old = Robot.load(tmp_path / "old.yaml")
     assert old.joint_errors.calibrated is None
-    assert not [w for w in compensate(old, nominal, nominal.fk(np.zeros((1, 6))), payload=[500.0],
+    assert not [w for w in compensate(old, nominal, nominal.fk(np.zeros((1, 6))), payload=[300.0],
                                       temperature=60.0).assumed if BEYOND in w]
     data["joint_errors"]["calibrated_conditions"] = {"temperature_c": [35.0, 20.0]}
     (tmp_path / "bad.yaml").write_text(yaml.safe_dump(data))

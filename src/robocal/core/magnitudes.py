@@ -11,6 +11,9 @@ scales with the robot:
   than 2 mm to the flange centre but not on it is metres typed as mm);
 * a frame (work object, user frame, base) translation: 0 or `FRAME_MIN_M` ..
   `FRAME_MAX_REACHES` reaches;
+* a cell's offsets (an arm's base or mount on a riser or carriage, a positioner's mount and axis
+  origins: `check_cell_offset`): as a frame, against the arm's reach from its link lengths, the
+  advice naming the cell file's unit;
 * a set of Cartesian targets: the farthest from the robot's base lies `TARGETS_MIN_REACHES`
   .. `TARGETS_MAX_REACHES` reaches away (the robot reaches its targets);
 * a robot model's reach (sum of its link lengths): `MODEL_MIN_REACH_M` ..
@@ -18,6 +21,9 @@ scales with the robot:
 * a robot model file's angles (`check_model_units`): fixed angles all within a turn of
   'degrees' (largest above `RADIAN_SET_MIN_DEG`), or joint limits all within a turn of
   'degrees', are radians;
+* a payload's mass (a ``payload_kg`` column, ``--payload``): at most `PAYLOAD_MAX_RATED` times
+  the robot's rated payload (`check_payload`); a larger one that fits in pounds or grams read
+  as kg (`MASS_SCALES_KG`) is refused naming that unit;
 * angles in degrees that are radians: multiples of pi/12 within `RADIAN_LIKE_TOL`
   (0.785 = pi/4 typed where 45 belongs) for a value typed once; a set of targets' angles that
   all lie within pi 'degrees' (`check_degree_set`); angles in radians beyond
@@ -48,6 +54,11 @@ MODEL_MAX_REACH_M = 50.0  # nor more than 50 m
 RADIAN_LIKE_TOL = 5e-4  # rad: angles in degrees this close to a multiple of pi/12 are radians
 MAX_RADIANS = 2 * math.pi + 1e-6  # an orientation angle in radians beyond a full turn: degrees
 RADIAN_SET_MIN_DEG = 0.1  # deg: a set of angles whose largest lies between this and pi 'deg' is radians
+# a payload heavier than this many times the rated one is no load the arm carries (controllers refuse
+# well below; the rated figure is at the rated centre-of-mass distance, a load nearer may exceed it a little)
+PAYLOAD_MAX_RATED = 1.5
+MASS_SCALES_KG = {"lb": 0.45359237, "g": 1e-3}  # kg per unit of the masses typed as kg by mistake
+MASS_WORDS = {"lb": "pounds", "g": "grams"}
 
 
 def _mm(v: float) -> str:
@@ -150,6 +161,30 @@ def check_frame(xyz_m: Sequence[float], declared: str, reach_m: float, what: str
     xyz = np.abs(np.asarray(xyz_m, dtype=float))
     check_length(float(xyz.max()), declared, FRAME_MIN_M, FRAME_MAX_REACHES * reach_m, what,
                  "a frame of this robot")
+
+
+def check_cell_offset(xyz_m: Sequence[float], declared: str, reach_m: float, what: str) -> None:
+    """A cell file's offset ``(3,)`` or ``(k, 3)`` (m, read in the file's unit ``declared``) for an
+    arm whose link lengths add up to ``reach_m``: an arm's base or its mount on a riser or a track's
+    carriage, a positioner's mount or its axes' origins. Its largest coordinate must lie within
+    `FRAME_MIN_M` .. `FRAME_MAX_REACHES` reaches (all zeros pass), or UnitError naming the unit the
+    number fits (a 500 mm riser written 0.5 in a file in mm lands the flange 0.5 m off); a number
+    that fits no unit passes (a 1 mm shim in a file in metres).
+
+    Examples
+    --------
+    >>> from robocal.core.magnitudes import check_cell_offset
+    >>> check_cell_offset([0.0, 0.0, 0.5], "mm", 3.1, "mount")  # a 500 mm riser, 500 in mm: passes
+    >>> check_cell_offset([0.0, 0.0, 0.0005], "mm", 3.1, "mount")  # written 0.5 in a file in mm
+    Traceback (most recent call last):
+    ...
+    robocal.core.errors.UnitError: mount: 0.5 mm is too small ... look like metres (0.5 m = 500 mm): write ...
+    """
+    xyz = np.abs(np.asarray(xyz_m, dtype=float))
+    check_length(float(xyz.max(initial=0.0)), declared, FRAME_MIN_M, FRAME_MAX_REACHES * reach_m, what,
+                 "an offset in a cell of this arm",
+                 advice="write it in {declared}, the cell file's length unit (units: {{length: ...}})",
+                 strict=False)
 
 
 def check_targets(points_m: np.ndarray, declared: str, reach_m: float, what: str,
@@ -344,3 +379,55 @@ def check_model_units(lengths_m, angles_rad, limits_rad, length_unit: str, angle
     elif raw.max(initial=0.0) > MAX_RADIANS:
         raise UnitError(f"{head}: a fixed angle of {raw.max():.4g} rad (more than a turn); the angles look "
                         "like degrees: make it angle: deg (or convert them to radians)")
+
+
+def check_payload(masses_kg: Sequence[float], rated_kg: float | None, robot: str, what: str) -> None:
+    """Refuse payload masses ``(N,)`` (kg as given) heavier than `PAYLOAD_MAX_RATED` times the
+    rated payload ``rated_kg`` of ``robot`` (None: not known, nothing is checked): UnitError naming
+    pounds or grams (`MASS_SCALES_KG`) when the heaviest, read in that unit, is a load the robot
+    carries, else saying it fits none.
+
+    Parameters
+    ----------
+    masses_kg : sequence of float, shape (N,)
+        The payload masses as given, kg.
+    rated_kg : float or None
+        The robot's rated payload, kg (`robocal.kinematics.model.Robot.payload_kg`).
+    robot : str
+        The robot's name, for the message.
+    what : str
+        Where the masses came from (a file's column, an option).
+
+    Raises
+    ------
+    UnitError
+        A mass above `PAYLOAD_MAX_RATED` times the rated payload.
+
+    Examples
+    --------
+    >>> from robocal.core.magnitudes import check_payload
+    >>> check_payload([0.0, 150.0, 200.0], 200.0, "gp180", "data.csv payload_kg")  # passes
+    >>> check_payload([0.0, 397.0], 200.0, "gp180", "data.csv payload_kg")
+    Traceback (most recent call last):
+    ...
+    robocal.core.errors.UnitError: data.csv payload_kg: 397 kg is ... pounds (397 lb = 180.1 kg): give ...
+    >>> check_payload([4000.0], 7.0, "lrmate200id", "--payload")
+    Traceback (most recent call last):
+    ...
+    robocal.core.errors.UnitError: --payload: 4000 kg is ... the masses look like grams (4000 g = 4 kg): ...
+    """
+    m = np.asarray(masses_kg, dtype=float)
+    if rated_kg is None or m.size == 0:
+        return
+    heaviest, most = float(m.max()), PAYLOAD_MAX_RATED * rated_kg
+    if heaviest <= most:
+        return
+    head = (f"{what}: {heaviest:.4g} kg is {heaviest / rated_kg:.3g} times the rated payload of {robot} "
+            f"({rated_kg:.4g} kg; at most {PAYLOAD_MAX_RATED:g} times is a load it carries)")
+    fits = [u for u, s in MASS_SCALES_KG.items() if heaviest * s <= most]
+    if fits:
+        u = fits[0]
+        raise UnitError(f"{head}; the masses look like {MASS_WORDS[u]} ({heaviest:.4g} {u} = "
+                        f"{heaviest * MASS_SCALES_KG[u]:.4g} kg): give them in kilograms "
+                        f"(x {MASS_SCALES_KG[u]:.6g})")
+    raise UnitError(f"{head} in any unit (kg, lb, g): check the payload or the robot model")

@@ -67,6 +67,7 @@ from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError, UnitError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
+from robocal.core.magnitudes import check_payload
 from robocal.data.csv_table import csv_rows, read_table, text_lines
 from robocal.data.instruments import check_instrument
 from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
@@ -519,7 +520,9 @@ class Measurements:
         return self.subset(np.isin(self._groups(), labels))
 
     def check_against(self, robot, reach: float | None = None, path: str | None = None) -> Measurements:
-        """Check joint count, SMR indices and unit plausibility against a robot; returns self."""
+        """Check joint count, SMR indices and unit plausibility (lengths against its reach, payload
+        masses against its rated payload: `robocal.core.magnitudes.check_payload`) against a robot;
+        returns self."""
         where = f"{path}: " if path else (f"{self.source}: " if self.source else "")
         if self.n_joints != robot.n_joints:
             k = robot.external_axes
@@ -532,6 +535,9 @@ class Measurements:
         if reach is None:
             reach = robot_reach(robot)
         _check_plausible(self, reach, where)
+        if self.payload is not None:  # kg typed in lb or g: against the robot's rated payload
+            check_payload(self.payload[:, 0], getattr(robot, "payload_kg", None), robot.name,
+                          f"{where}the payload_kg column")
         return self
 
     # ----------------------------------------------------------------- files

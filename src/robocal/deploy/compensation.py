@@ -32,7 +32,7 @@ from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_all
-from robocal.core.magnitudes import check_degree_set, check_radians, check_targets
+from robocal.core.magnitudes import check_degree_set, check_payload, check_radians, check_targets
 from robocal.data.measurements import robot_reach
 from robocal.deploy.cell import compensate_cell
 from robocal.identify.plausibility import (
@@ -202,6 +202,20 @@ class Compensation:
         """Why target ``i`` has no correction (how far the IK stopped, the nearest singularity)."""
         where = "" if self.singularity is None else f"; {self.singularity.describe(i)}"
         return f"not reached on the calibrated model (best {self.position_error[i] * 1e3:.3g} mm off){where}"
+
+
+def check_payload_given(payload, robot: Robot) -> None:
+    """Refuse a ``payload`` (kg, or kg and its centre of mass; None: none given) heavier than the
+    rated payload of ``robot`` allows (`robocal.core.magnitudes.check_payload`: lb or g typed as
+    kg); one that is not numbers is left to the check that names it (`Robot.with_conditions`, the
+    filter's load planner)."""
+    if payload is None:
+        return
+    try:
+        mass = float(np.asarray(payload, dtype=float).reshape(-1)[0])
+    except (TypeError, ValueError, IndexError):
+        return
+    check_payload([mass], robot.payload_kg, robot.name, "--payload")
 
 
 def unused_conditions(robot: Robot, payload=None, temperature: float | None = None) -> list[str]:
@@ -374,6 +388,7 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     if targets_frame not in ("model", "robot"):
         raise DataError(f"targets_frame must be 'model' or 'robot', got {targets_frame!r}")
     given = calibrated
+    check_payload_given(payload, given if given.payload_kg is not None else nominal)  # lb or g typed as kg
     if targets_frame == "robot":
         calibrated = calibrated.with_frames(base=nominal.base)
     calibrated = calibrated.with_conditions(payload, temperature)

@@ -64,6 +64,7 @@ class CellFile(NamedTuple):
     limits: np.ndarray  # (2,) e1 range, m
     name: str | None  # None: "<arm's name> on a track"
     description: str
+    length_unit: str = "m"  # the file's length unit (its offsets are checked in it against the arm's size)
 
 
 def _resolve(spec, path: Path | None, where: str) -> str:
@@ -101,7 +102,7 @@ def read_cell(data: dict, path: Path | None = None) -> CellFile:
     name = data.get("name")
     return CellFile(robot, direction, mount, limits,
                     None if name is None else _text(name, "name", MAX_NAME),
-                    _text(data.get("description", ""), "description", MAX_DESCRIPTION))
+                    _text(data.get("description", ""), "description", MAX_DESCRIPTION), length_unit)
 
 
 def named(value, where: str) -> dict:
@@ -126,6 +127,8 @@ class ArmEntry(NamedTuple):
     unit: str  # its mechanical unit in programs (ROB_1...); default its body name
     track: tuple[np.ndarray, np.ndarray] | None  # (unit direction (3,), e1 limits (2,) m) or None
     flange: np.ndarray | None = None  # (4, 4) the model's flange where its tool is not (a saved cell's)
+    length_unit: str = "m"  # the file's length unit: ``base`` is checked in it against the arm's size
+    key: str = "base"  # where ``base`` is in the file (robots.NAME.base, mount)
 
 
 def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
@@ -152,7 +155,8 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
             track = None if spec.get("track") is None else _track(spec["track"], length, f"{where}.track")
             flange = _frame(spec.get("flange"), length, angle, f"{where}.flange")
             out[name] = ArmEntry(model, _frame(spec.get("base"), length, angle, f"{where}.base"),
-                                 _text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track, flange)
+                                 _text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track, flange,
+                                 length_unit, f"{where}.base")
         return out
     if "robot" not in data:
         stray = sorted({"track", "mount"} & set(data))
@@ -161,7 +165,8 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
         return {}
     track = None if data.get("track") is None else _track(data["track"], length)
     return {SINGLE_ARM: ArmEntry(_resolve(data["robot"], path, "robot"),
-                                 _frame(data.get("mount"), length, angle, "mount"), SINGLE_ARM, track)}
+                                 _frame(data.get("mount"), length, angle, "mount"), SINGLE_ARM, track,
+                                 length_unit=length_unit, key="mount")}
 
 
 def count_positioners(data: dict) -> int:

@@ -31,6 +31,7 @@ import numpy as np
 
 from robocal.core.errors import DataError, ModelError, UnitError
 from robocal.core.io import as_number, write_atomic
+from robocal.core.magnitudes import check_cell_offset
 from robocal.kinematics.catalog import catalog_kwargs
 from robocal.kinematics.cell_file import (
     TRACK_SCALE,
@@ -217,6 +218,10 @@ class Robot:
         What the model file (or `with_priors`) says about the parameter priors: the robot's class
         and group scales (`robocal.kinematics.prior_spec`, docs/priors.md); None: the class is
         chosen from the model and every group scale estimated from the data.
+    payload_kg : float or None
+        The vendor's rated payload, kg (a model file's ``payload_kg``: the catalog's), which the
+        payloads a user gives are checked against (`robocal.core.magnitudes.check_payload`);
+        None: not known.
     prismatic : numpy.ndarray of bool, shape (n,)
         ``prismatic[i]`` makes joint i prismatic: its value (m) adds to ``d_i`` (``theta_i`` stays
         a constant angle); ``d_i`` is its zero and a ``scale{i}`` joint-error term its encoder
@@ -260,6 +265,7 @@ class Robot:
     prismatic: np.ndarray | None = None
     priors: PriorSpec | None = None
     link_frames: dict[str, int] | None = None
+    payload_kg: float | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.alpha).size
@@ -307,6 +313,12 @@ class Robot:
             raise ModelError("priors must be a PriorSpec (robocal.kinematics.prior_spec)")
         if self.link_frames is not None:
             set_(self, "link_frames", check_link_frames(self.link_frames, n))
+        if self.payload_kg is not None:
+            payload = float(self.payload_kg)
+            if not (np.isfinite(payload) and payload > 0):
+                raise ModelError(f"payload_kg (the rated payload) must be a positive number of kg, got "
+                                 f"{self.payload_kg!r}")
+            set_(self, "payload_kg", payload)
         set_(self, "nominal", self._nominal_vector(self.nominal))
         for f in (*LINK_FIELDS, "base", "tool", "limits", "parallel", "smr", "nominal", "prismatic"):
             getattr(self, f).flags.writeable = False
@@ -1117,7 +1129,7 @@ def track_chain(arm: Robot, direction, mount: np.ndarray, limits, name: str | No
     return Robot(**chain, limits=limits, prismatic=kinds,
                  nominal=nominal_robot.nominal, opw=arm.opw,
                  name=arm.name if name is None else name, description=description,
-                 joint_errors=JointErrorModel((TRACK_SCALE,), np.zeros(1)))
+                 joint_errors=JointErrorModel((TRACK_SCALE,), np.zeros(1)), payload_kg=arm.payload_kg)
 
 
 def cell_from_data(data: dict, path: Path | None = None) -> Robot:
@@ -1125,8 +1137,15 @@ def cell_from_data(data: dict, path: Path | None = None) -> Robot:
     a model file relative to ``path``'s folder, loaded by :func:`load_model`)."""
     cell = read_cell(data, path)
     arm = load_model(cell.robot)
+    check_cell_offset(cell.mount[:3, 3], cell.length_unit, links_length(arm), "mount")
     name = _text(f"{arm.name} on a track", "name", MAX_NAME) if cell.name is None else cell.name
     return track_chain(arm, cell.direction, cell.mount, cell.limits, name=name, description=cell.description)
+
+
+def links_length(robot: Robot) -> float:
+    """The sum of ``robot``'s link lengths ``|a_i| + |d_i|`` (m): its size, which a cell's offsets
+    are checked against (`robocal.core.magnitudes.check_cell_offset`)."""
+    return float(np.abs(robot.a).sum() + np.abs(robot.d).sum())
 
 
 def placed(robot: Robot, mount: np.ndarray | None = None, plate: np.ndarray | None = None) -> Robot:
@@ -1149,6 +1168,8 @@ def arm_from_entry(entry: ArmEntry) -> Robot:
     catalog name, a file, or an inline model mapping) placed at the entry's base in the world, or
     on the entry's track (the track cell chain, its mount the entry's base)."""
     arm = Robot(**robot_kwargs(entry.model)) if isinstance(entry.model, dict) else load_model(entry.model)
+    if entry.base is not None:  # a riser written in another unit than the file's
+        check_cell_offset(entry.base[:3, 3], entry.length_unit, links_length(arm), entry.key)
     if entry.track is not None:
         mount = np.eye(4) if entry.base is None else entry.base
         return track_chain(arm, entry.track[0], mount, entry.track[1], name=f"{arm.name} on a track")

@@ -3,7 +3,7 @@ catalog, for the user's own robot and for :meth:`Robot.save`. docs/model-yaml.md
 
     name: my_robot                      # optional: description, format
     reach_mm: 850                       # optional: the vendor's reach and payload, listed by
-    payload_kg: 5                       #   `robocal robots` (no effect on the model)
+    payload_kg: 5                       #   `robocal robots` (the payload: payloads given are checked)
     units: {length: mm, angle: deg}     # required: the units of every number below
     # the geometry, exactly one of:
     opw:  {a1, a2, b, c1, c2, c3, c4, offsets: [6], signs: [6]}    # an OPW set
@@ -51,7 +51,9 @@ from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
 FORMAT = "robocal-model/1"
 LINK_FIELDS = ("alpha", "a", "beta", "theta", "d")
 FORMS = ("opw", "dh", "mdh", "joints")
-INFO_KEYS = ("reach_mm", "payload_kg")  # the vendor's figures (catalog listing only; no effect on the model)
+# the vendor's figures (listed by `robocal robots`); payload_kg is also the model's rated payload
+# (Robot.payload_kg), which payloads given are checked against: neither changes the geometry
+INFO_KEYS = ("reach_mm", "payload_kg")
 _TOP_KEYS = {"format", "name", "description", "units", "limits", "base", "tool", "smr", "nominal",
              "joint_errors", "priors", "link_frames", *INFO_KEYS, *FORMS}
 _JOINT_KEYS = {*LINK_FIELDS, "type", "limits", "parallel_to_previous"}
@@ -261,6 +263,8 @@ def robot_kwargs(data) -> dict:
         kw["priors"] = PriorSpec.from_mapping(data["priors"])
     if data.get("link_frames") is not None:
         kw["link_frames"] = check_link_frames(data["link_frames"], n)
+    if data.get("payload_kg") is not None:  # the rated payload: payloads given are checked against it
+        kw["payload_kg"] = as_number(data["payload_kg"], "payload_kg", ModelError)
     kw["name"] = _text(data.get("name", "robot"), "name", MAX_NAME)
     kw["description"] = _text(data.get("description", ""), "description", MAX_DESCRIPTION)
     if data.get("nominal") is not None:  # a name -> value mapping (SI), resolved by the Robot
@@ -306,6 +310,8 @@ def robot_to_dict(robot) -> dict:
         out["priors"] = given
     if robot.link_frames:
         out["link_frames"] = dict(robot.link_frames)
+    if robot.payload_kg is not None:
+        out["payload_kg"] = robot.payload_kg
     return out
 
 

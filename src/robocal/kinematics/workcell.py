@@ -36,6 +36,7 @@ import numpy as np
 
 from robocal.core.errors import DataError, ModelError, UnitError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, short_repr, write_atomic
+from robocal.core.magnitudes import check_cell_offset
 from robocal.core.yaml_load import dump_yaml
 from robocal.kinematics.catalog import positioner_entry, positioner_names
 from robocal.kinematics.cell_file import (
@@ -56,6 +57,7 @@ from robocal.kinematics.model import (
     Robot,
     _looks_like_xml,
     arm_from_entry,
+    links_length,
     load_model,
     placed,
 )
@@ -639,9 +641,11 @@ def _model_chain(model, path: Path | None, where: str, name: str) -> Robot:
     return Robot(**robot_kwargs({"name": name, **model}))
 
 
-def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> Positioner:
+def _positioner(spec, name: str, data: dict, path: Path | None, first: int,
+                reach_m: float | None) -> Positioner:
     """A positioner section of a cell file (module docstring); its columns default to
-    ``e<first>..``."""
+    ``e<first>..``; its mount and axis origins are checked in the file's unit against the size
+    ``reach_m`` (m) of the cell's arms (None: a cell without arms, against its own)."""
     where = "positioner" if "positioner" in data else f"positioners.{name}"
     spec = _mapping(spec, where, SECTION_KEYS if where == "positioner" else SECTION_KEYS - {"name"})
     length_unit, angle_unit = _units(data)
@@ -665,6 +669,14 @@ def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> P
         table = {"units": data["units"], "name": name, forms[0]: spec[forms[0]],
                  **({"limits": spec["limits"]} if "limits" in spec else {})}
         chain = placed(Robot(**robot_kwargs(table)), mount, plate)
+    size = links_length(chain) if reach_m is None else reach_m
+    if size > 0:  # a positioner written in another unit than the file's (a riser, an axis height)
+        if mount is not None:
+            check_cell_offset(mount[:3, 3], length_unit, size, f"{where}.mount")
+        if forms[0] == "axes":
+            axes = _axes_si(spec["axes"], length, angle, f"{where}.axes")
+            check_cell_offset(np.reshape([a["origin"] for a in axes if "origin" in a], (-1, 3)), length_unit,
+                              size, f"{where}.axes' origins")
     if description:
         chain = replace(chain, description=description)
     nests = None
@@ -718,8 +730,9 @@ def cell_from_data(data: dict, path: Path | None = None) -> Cell:
             raise ModelError("positioners: expected at least one positioner {name: {axes or model, ...}}")
     positioners: dict[str, Positioner] = {}
     following = 1 + any(arm.external_axes for arm in arms.values())  # after a track's e1
+    reach = max((links_length(arm) for arm in arms.values()), default=None)
     for name, spec in sections.items():
-        positioner = _positioner(spec, name, data, path, following)
+        positioner = _positioner(spec, name, data, path, following, reach)
         positioners[name] = positioner
         following = max(int(COLUMN.match(c)[1]) for c in positioner.columns) + 1
     default_name = next(iter(arms.values())).name if len(arms) == 1 and not positioners else "cell"

@@ -30,7 +30,7 @@ import numpy as np
 from robocal.core.errors import DataError, ListedError, ModelError
 from robocal.core.resources import gc_paused, heap_trimmed
 from robocal.data.measurements import robot_reach
-from robocal.deploy.compensation import Compensation, compensate, controller_model
+from robocal.deploy.compensation import Compensation, check_payload_given, compensate, controller_model
 from robocal.deploy.models import robot_base_frame
 from robocal.ik import solve as ik_solve
 from robocal.ik import solve_all
@@ -48,12 +48,12 @@ from robocal.programs.given_data import (
     as_frames,
     check_language,
     check_magnitudes,
-    tool_disagreements,
     unused_conditions,
 )
 from robocal.programs.load import compensate_by_load, plan_loads
 from robocal.programs.model import Program, Target
 from robocal.programs.motions import undeclared
+from robocal.programs.overrides import frame_levers, override_disagreements
 from robocal.programs.positioner import CoordinatedProgram, cell_models
 from robocal.programs.registry import capable, dialect_for, program_files
 from robocal.programs.result import LISTED, FilterResult, collapse
@@ -366,8 +366,9 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
     -------
     FilterResult
         The filtered files' bytes and the per-target table; `FilterResult.write` writes them.
-        Its warnings begin with the ``tools`` that differ from the program's own tool data of
-        the same name and a ``payload`` / ``temperature`` the model has no term for.
+        Its warnings begin with the ``tools`` / ``frames`` that differ from the program's own
+        data of the same name (`robocal.programs.overrides`, every language) and a
+        ``payload`` / ``temperature`` the model has no term for.
 
     Raises
     ------
@@ -375,7 +376,8 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         No file, an unknown dialect, a nominal model without 6 joints, a program moving with a
         mechanical unit the cell does not have or positioner values outside its limits, an
         unknown tool or
-        frame, ``tools`` / ``frames`` / ``robot_base`` text whose magnitudes say another unit,
+        frame, ``tools`` / ``frames`` / ``robot_base`` text whose magnitudes say another unit, a
+        ``payload`` above 1.5 times the model's rated payload (``Robot.payload_kg``),
         targets that cannot be corrected (each named), or files without a Cartesian target
         that read as another language than their suffix says.
 
@@ -404,9 +406,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                         "identified frame {0} (Cell.in_world), where the controller has that arm's base")
     reach = robot_reach(nominal)
     check_magnitudes(given, dialect, tools, frames, reach)
+    check_payload_given(payload, calibrated if calibrated.payload_kg is not None else nominal)
     # a cell's arm is in the controller's world already (Cell.in_world): its calibrated base is kept
     robot_base = np.eye(4) if coordinated is not None else robot_base_frame(robot_base, reach)
-    res, declared_tools = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,
+    res, program = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,
                                     references, keep_unreached, strict, force, position_registers, payload,
                                     temperature, payload_schedules, coordinated, fixed_base,
                                     Routing(calibrated, nominal, robot_base, fixed_base) if runtime_correction
@@ -416,7 +419,10 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         res.warnings += target_warnings(prediction, calibrated, res.joints)
     if not res.rows:
         check_language(programs, references, dialect)
-    res.warnings[:0] = tool_disagreements(res.language, declared_tools, tools)  # a VAL3 folder too
+    d = res.language
+    res.warnings[:0] = [*override_disagreements(d, "tool", program.declared_tools, tools, reach),
+                        *override_disagreements(d, "frame", program.declared_frames, frames, reach,
+                                                frame_levers(d, program) if frames else None)]
     return res
 
 
@@ -424,10 +430,11 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
               dialect: str | None, references: list, keep_unreached: bool, strict: bool, force: bool,
               position_registers, payload, temperature, payload_schedules,
               coordinated: CoordinatedProgram | None, fixed_base: bool = False,
-              routing: Routing | None = None) -> tuple[FilterResult, dict[str, np.ndarray]]:
+              routing: Routing | None = None) -> tuple[FilterResult, Program]:
     """:func:`filter_program` of the files ``given`` (an application folder among them), without
-    the warnings and checks of what the user gave, and the tool data the files hold without
-    ``tools`` (`Program.declared_tools`, which the ``tools`` are checked against); ``routing``:
+    the warnings and checks of what the user gave, and the parsed program (its
+    `Program.declared_tools` / `Program.declared_frames`, which the ``tools`` / ``frames`` are
+    checked against: :mod:`robocal.programs.overrides`); ``routing``:
     the run-time correction (``runtime_correction``), None without."""
     paths = program_files(given)  # an application folder: its files
     if not paths:
@@ -460,8 +467,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
         if not program.uncorrected:
             warnings.append("no motion to a Cartesian pose in these files")
         records, outputs = _written(d, program, sources, set(), {}, routing, warnings)
-        return FilterResult(d.name, outputs, [], warnings, program.uncorrected, records, language=d), \
-            program.declared_tools
+        return FilterResult(d.name, outputs, [], warnings, program.uncorrected, records, language=d), program
     loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, payload_schedules)
     warnings += loads.warnings
     values, P, W, tool = target_poses(d, program, targets)
@@ -507,7 +513,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     return FilterResult(d.name, outputs, rows, warnings, program.uncorrected, records, calibrated,
                         joints=np.where(good[:, None], q, np.nan), loads=loads.lines,
                         data_files=frozenset(s.path for s in sources[len(paths):]),  # the register file
-                        derived=frozenset(derived), language=d), program.declared_tools
+                        derived=frozenset(derived), language=d), program
 
 
 def _left_unchanged(program: Program, targets: list[Target], problems: list[tuple[int, str]],

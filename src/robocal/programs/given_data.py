@@ -1,7 +1,8 @@
 """What the user gives the filter beside the program files, checked: ``--tool`` / ``--frame`` /
-``--robot-base`` values whose magnitudes say another unit than the language's notation, tool data
-that differ from the program's own, a payload or temperature the model has no term for, and files
-that read as another language than their suffix says (:func:`robocal.programs.filter_program`)."""
+``--robot-base`` values whose magnitudes say another unit than the language's notation, a payload
+or temperature the model has no term for, and files that read as another language than their
+suffix says (:func:`robocal.programs.filter_program`); values that differ from the program's own
+data: :mod:`robocal.programs.overrides`."""
 
 from __future__ import annotations
 
@@ -11,16 +12,17 @@ from pathlib import Path
 import numpy as np
 
 from robocal.core.errors import DataError
-from robocal.core.magnitudes import LENGTH_SCALES_M, check_degrees, check_frame, check_radians, check_tool
+from robocal.core.magnitudes import (
+    LENGTH_SCALES_M,
+    check_degrees,
+    check_frame,
+    check_radians,
+    check_tool,
+)
 from robocal.kinematics.joint_errors import condition_terms
 from robocal.kinematics.model import Robot
-from robocal.kinematics.transforms import pose_error
 from robocal.programs.dialects.base import Dialect
 from robocal.programs.registry import DIALECTS, dialect_named, dialects, language_of
-
-# a --tool this far from the program's own tool data of the same name is another tool: a warning
-TOOL_DISAGREE_MM = 0.5
-TOOL_DISAGREE_DEG = 0.1
 
 
 def _language(given: list[Path], dialect: str | None) -> Dialect | None:
@@ -64,28 +66,6 @@ def unused_conditions(calibrated: Robot, payload, temperature) -> list[str]:
             for option, term, value in (("--payload", "payload", payload),
                                         ("--temperature", "thermal", temperature))
             if value is not None and term not in terms]
-
-
-def tool_disagreements(d: Dialect, declared: dict[str, np.ndarray], tools) -> list[str]:
-    """One warning per ``tools`` entry (name -> 4x4 m, or text in ``d``'s pose notation) that
-    replaces tool data the program holds differently, naming both. ``declared``: the tool data
-    the program files hold without ``tools`` (`Program.declared_tools` of the filter's parse)."""
-    if not tools:
-        return []
-    out = []
-    for key, T in {d.name_key(k): v for k, v in as_frames(d, tools).items()}.items():
-        own = declared.get(key)
-        if own is None:
-            continue
-        err = pose_error(np.asarray(own)[None], np.asarray(T)[None])[0]
-        mm, deg = np.linalg.norm(err[:3]) * 1e3, np.rad2deg(np.linalg.norm(err[3:]))
-        if mm > TOOL_DISAGREE_MM or deg > TOOL_DISAGREE_DEG:
-            name = next(k for k in tools if d.name_key(k) == key)
-            own_text = ", ".join(f"{v:.4g}" for v in np.r_[own[:3, 3] * 1e3])
-            out.append(f"--tool {name}={tools[name]} replaces the program's own tool data {name} (TCP at "
-                       f"{own_text} mm on the flange) and differs from it by {mm:.3g} mm, {deg:.3g} deg: the "
-                       "controller moves with the tool data it holds; make sure --tool is what it holds")
-    return out
 
 
 def as_frames(d: Dialect, given) -> dict[str, np.ndarray]:

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from robocal.core.errors import DataError
+from robocal.core.magnitudes import check_payload
 from robocal.deploy.compensation import Compensation
 from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.joint_errors import condition_terms, condition_warnings
@@ -89,6 +90,9 @@ def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibr
         schedules = dialect.read_schedules(schedules)
     elif schedules is not None:
         schedules = {int(k): tuple(np.asarray(v, float).tolist()) for k, v in schedules.items()}
+    if schedules:  # masses in lb or g: against the model's rated payload
+        check_payload([load[0] for load in schedules.values()], calibrated.payload_kg, calibrated.name,
+                      "--payload-schedules")
     if "payload" not in condition_terms(calibrated):  # --payload given anyway: the CLI says it is not used
         unused = [] if schedules is None else [f"--payload-schedules is not used: the model of "
                                                f"{calibrated.name} has no payload term"]

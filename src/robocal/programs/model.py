@@ -37,7 +37,9 @@ class Program:
     ``executed``: the text pieces ``(file, start, end)`` in the order the controller runs them
     (:mod:`robocal.programs.flow`; empty: not known, text order). ``declared_tools``: the tool data
     the program holds without the user's ``tools`` (what the files declare and the controller's
-    own, e.g. tool0 or the flange), name -> 4x4 (m): what a ``--tool`` of the same name replaces.
+    own, e.g. tool0 or the flange), name -> 4x4 (m): what a ``--tool`` of the same name replaces;
+    ``declared_frames`` likewise the frames it holds without the user's ``frames`` (in the robot's
+    base frame): what a ``--frame`` replaces (both compared by :mod:`robocal.programs.overrides`).
     ``carried``: frames that a mechanical unit moves (a work object on a positioner's plate: RAPID
     ufmec, KRL external kinematics, an INFORM station frame, FANUC coordinated motion), frame name ->
     the unit's name as the program and the cell file call it (``STN1``); such a frame is in that
@@ -61,6 +63,7 @@ class Program:
     not_corrected: dict[int, str] = field(default_factory=dict)
     executed: list[tuple[Path, int, int]] = field(default_factory=list)  # text pieces in execution order
     declared_tools: dict[str, np.ndarray] = field(default_factory=dict)
+    declared_frames: dict[str, np.ndarray] = field(default_factory=dict)
     carried: dict[str, str] = field(default_factory=dict)  # frame name -> mechanical unit moving it
     in_world: set[str] = field(default_factory=set)  # carried frames whose targets are taught in the world
     runtime_sites: list = field(default_factory=list)  # target arguments computed at run time

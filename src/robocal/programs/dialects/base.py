@@ -110,8 +110,9 @@ class Dialect:
         """Targets, frames and tools of the files; ``references`` are read for their tool and
         frame declarations only (KUKA $config.dat, ABB system modules); ``frames``/``tools``
         from the command line (already in SI) complete or override those in the files; the
-        tool data the program holds without them is its ``declared_tools`` (the files are read
-        once: a ``--tool`` that differs is named from this parse)."""
+        tool and frame data the program holds without them are its ``declared_tools`` and
+        ``declared_frames`` (the files are read once: a ``--tool`` / ``--frame`` that differs is
+        named from this parse, :mod:`robocal.programs.overrides`)."""
         raise NotImplementedError
 
     def reference_outputs(self, program: Program, references: list[ProgramText],

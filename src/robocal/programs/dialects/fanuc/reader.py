@@ -174,6 +174,7 @@ class FanucDialect(Dialect):
             elif ref.path.name.upper() == "SYSFRAME.VA":
                 raise DataError(f"{ref.path}: no [*SYSTEM*]$MNUFRAME variable: not the controller's "
                                 "SYSFRAME.VA")
+        prog.declared_frames = dict(prog.frames)  # UF 0, the world, and SYSFRAME.VA's user frames
         prog.frames.update(frames)
         prog.tools.update(tools)
         order = 0

@@ -240,8 +240,8 @@ class InformDialect(Dialect):
                 variables.append(ref)
             else:
                 prog.frames.update(user_frames(ref))
+        prog.declared_tools, prog.declared_frames = dict(prog.tools), dict(prog.frames)
         prog.frames.update(frames)
-        prog.declared_tools = dict(prog.tools)
         prog.tools.update(tools)
         positions: dict[tuple, Position] = {}  # (path or 'global', kind, index) -> position
         jobs = []

@@ -252,7 +252,7 @@ class KRLDialect(Dialect):
             for m in _ROUTINE.finditer(masked):
                 st.params[m.group(1).upper()] = [p.split(":")[0].strip().upper()
                                                  for p in m.group(2).split(",") if p.strip()]
-        prog.declared_tools = dict(prog.tools)
+        prog.declared_tools, prog.declared_frames = dict(prog.tools), dict(prog.frames)
         prog.tools.update({self.name_key(k): v for k, v in tools.items()})
         prog.frames.update({self.name_key(k): v for k, v in frames.items()})
         flow = Flow()

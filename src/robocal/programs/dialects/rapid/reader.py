@@ -264,7 +264,7 @@ class RapidDialect(Dialect):
             prog.tools.setdefault(name, np.eye(4))
         for name in BUILTIN_WOBJS:
             prog.frames.setdefault(name, np.eye(4))
-        prog.declared_tools = dict(prog.tools)
+        prog.declared_tools, prog.declared_frames = dict(prog.tools), dict(prog.frames)
         prog.tools.update({self.name_key(k): v for k, v in tools.items()})
         prog.frames.update({self.name_key(k): v for k, v in frames.items()})
         self._assign(prog, st)

@@ -190,6 +190,12 @@ class URScriptDialect(Dialect):
                 prog.unsupported[f"tool:{t.tool}"] = (f"set_tcp({t.tool[1:]}) is not a pose this filter can "
                                                       "read")
         default_used = any(t.tool == DEFAULT_TOOL for t in prog.targets)
+        if user_default is not None and prog.targets and not default_used:  # the user's TCP, unused
+            own = sorted({t.tool for t in prog.targets})
+            named = ", ".join(own[:3]) + (" ..." if len(own) > 3 else "")
+            prog.warnings.append(f"--tool (the installation's TCP) is not used: every corrected motion "
+                                 f"follows the script's own set_tcp ({named}), which the controller moves "
+                                 "with; give --tool NAME= for set_tcp(NAME) to replace one")
         if default_used:  # the installation's TCP, which the script does not hold: taken as the flange
             prog.declared_tools[DEFAULT_TOOL] = np.eye(4)
         if default_used and DEFAULT_TOOL not in prog.tools:
@@ -203,15 +209,18 @@ class URScriptDialect(Dialect):
         """The tool name a ``set_tcp(...)`` sets (a pose it can read is registered)."""
         a, b = span
         found = sc.resolve(a, b, at, 0)
+        text = " ".join(sc.masked[a:b].split())
         if len(found) == 1 and found[0][0] in ("target", "pose") and found[0][2] == IDENTITY:
             pose = found[0][1] if found[0][0] == "pose" else self.to_pose(found[0][1].values()[None])[0]
-            name = f"set_tcp@{sc.src.line_of(at)}"
-            sc.prog.tools[name] = sc.prog.declared_tools[name] = pose
             if found[0][0] == "target":
                 sc.as_frame.add(id(found[0][1]))
+            if text in tools:  # --tool NAME= for set_tcp(NAME): the user's, compared with the script's
+                sc.prog.declared_tools.setdefault(text, pose)
+                return text
+            name = f"set_tcp@{sc.src.line_of(at)}"
+            sc.prog.tools[name] = sc.prog.declared_tools[name] = pose
             return name
-        name = " ".join(sc.masked[a:b].split())
-        return name if name in tools else f"?{name}"
+        return text if text in tools else f"?{text}"
 
 class _Script:
     """One script's assignments in text order and the resolution of a motion's argument to the
@@ -482,6 +491,8 @@ class _Script:
                                         "can read", IDENTITY, None))
             elif kind_b == "target" and fn == "pose_trans" and frame_b == IDENTITY:
                 if first_text in self.prog.frames:
+                    if len(first) == 1 and first[0][0] in ("pose", "target") and first[0][2] == IDENTITY:
+                        self.prog.declared_frames.setdefault(first_text, self._pose(first[0]))  # --frame's
                     out.append(("target", value_b, first_text, None))
                 elif len(first) == 1 and first[0][0] in ("pose", "target") and first[0][2] == IDENTITY:
                     pose = self._pose(first[0])

@@ -48,7 +48,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
-from robocal.kinematics.transforms import make_transform, pose_error
+from robocal.kinematics.transforms import make_transform
 from robocal.programs.dialects.base import Dialect
 from robocal.programs.dialects.val3 import marker, s6, simulated
 from robocal.programs.dialects.val3.campaign import val3_application
@@ -61,7 +61,6 @@ from robocal.programs.dialects.val3.configuration import (
 )
 from robocal.programs.dialects.val3.loads import NoLoads
 from robocal.programs.dialects.val3.project import declared_types, read_project
-from robocal.programs.given_data import TOOL_DISAGREE_DEG, TOOL_DISAGREE_MM
 from robocal.programs.model import Program, Target
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import NUMBER_RE, Number, ProgramText, mask
@@ -351,32 +350,22 @@ class Val3Dialect(Dialect):
         ctx.types, ctx.fields = types, _type_fields(projects, [*sources, *references])
         ctx.libraries = {alias: {k: v for dtx in p.data_at(where) for k, v in _declared_in(dtx).items()}
                          for p in projects for alias, where in p.libraries.items()}
-        prog.warnings += _frame_disagreements(data, frames)
+        prog.declared_frames = _declared_frames(data)
         for r in ctx.routines.values():
             _program_motions(r, ctx, prog, targets, frames)
         return prog
 
 
-def _frame_disagreements(data: dict[str, Datum], frames: dict[str, np.ndarray]) -> list[str]:
-    """One warning per ``--frame`` that replaces a frame the .dtx declares differently (its pose
-    in world through its fatherId chain, against the given one)."""
-    out = []
-    for name, T in frames.items():
-        d = data.get(name)
-        if d is None or d.type != "frame":
-            continue
-        try:
-            own = _chain(data, name, WORLD, "frame", d.source.where(d.offset), {})
-        except DataError:
-            continue  # a chain the .dtx does not close: the given frame is the only one
-        err = pose_error(own[None], np.asarray(T)[None])[0]
-        mm, deg = np.linalg.norm(err[:3]) * 1e3, np.rad2deg(np.linalg.norm(err[3:]))
-        if mm > TOOL_DISAGREE_MM or deg > TOOL_DISAGREE_DEG:
-            own_mm = ", ".join(f"{v:.4g}" for v in own[:3, 3] * 1e3)
-            out.append(f"--frame {name} replaces the application's own frame {name} ("
-                       f"{d.source.where(d.offset)}: origin at {own_mm} mm in world) and differs from it by "
-                       f"{mm:.3g} mm, {deg:.3g} deg: the controller moves in the frame its .dtx holds; make "
-                       "sure --frame is what it holds")
+def _declared_frames(data: dict[str, Datum]) -> dict[str, np.ndarray]:
+    """The frames the .dtx files declare, each in world through its fatherId chain (a chain they do
+    not close is left out: a given frame is the only one), by name: what a ``--frame`` replaces."""
+    out = {}
+    for name, d in data.items():
+        if d.type == "frame":
+            try:
+                out[name] = _chain(data, name, WORLD, "frame", d.source.where(d.offset), {})
+            except DataError:
+                continue
     return out
 
 
