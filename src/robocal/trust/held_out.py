@@ -1,0 +1,230 @@
+"""Held-out figures judged against the calibration's own prediction, split into a tracker-frame
+shift and the model's error.
+
+A validation RMS means something only against what the calibration predicts at the same poses:
+``p = sqrt(mean e(q_i)^2)`` with ``e(q)`` the predicted TCP error of
+:meth:`robocal.trust.coverage.Prediction.error_mm` (the parameters' posterior propagated to the
+pose plus the unmodelled error, which holds the instrument's noise). Per validation file of point
+or pose data (items ``i = 1..N``, errors ``r_i`` measured minus modelled, m, with the calibration's
+tracker frame):
+
+- the held-out RMS ``h = sqrt(sum |r_i|^2 / N)``;
+- the frame refitted on the file (6-DOF, :func:`robocal.data.registration.umeyama`, the rigid fit
+  the registration of ``evaluate --fit-frame`` starts from) on the modelled points, and the model's
+  error what is left, per degree of freedom: ``m = sqrt(sum |r'_i|^2 / (N - 2))`` (``3N - 6`` over
+  3 coordinates); the frame shift is the RMS displacement the refitted frame makes at the file's
+  points.
+
+Verdict (:data:`HELD_OUT_FACTOR` as :data:`robocal.trust.coverage.EXTRAPOLATION_FACTOR`):
+
+- ``h <= HELD_OUT_FACTOR p``: ``consistent``, the held-out figure is the validated one;
+- else ``m <= HELD_OUT_FACTOR p``: ``frame shift``: the tracker was moved or re-registered between
+  the calibration and the validation; the model is judged (and validated) on ``m``, a warning names
+  the shift;
+- else ``beyond the prediction``: the calibration does not explain these data. When ``m`` exceeds
+  :data:`HELD_OUT_REFUSE` ``p`` it is no model error a calibration leaves but another setup:
+  PlausibilityError (``force``: a warning) naming the likely cause, another SMR nest or tool when
+  refitting the SMR offsets with the frame (:func:`robocal.data.registration.register_frame`, as
+  ``evaluate --fit-frame``) brings the error within :data:`HELD_OUT_REFUSE` ``p`` (not within the
+  prediction: the calibrated wrist parameters, confounded with the calibration's tool, meet
+  another tool), else another robot or a mismatched file. Nothing
+  beyond the prediction is called validated.
+
+Files with fewer than :data:`MIN_FRAME_POSES` items are judged on ``h`` alone (no frame refitted).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from robocal.core.errors import DataError, IdentificationError, PlausibilityError
+from robocal.data.registration import register_frame, umeyama
+from robocal.identify.plausibility import FORCE_HINT
+from robocal.kinematics.transforms import matrix_to_rotvec
+from robocal.trust.coverage import EXTRAPOLATION_FACTOR, Prediction
+
+HELD_OUT_FACTOR = EXTRAPOLATION_FACTOR  # held-out RMS beyond this x the prediction: not validated
+HELD_OUT_REFUSE = 10.0  # the model's error beyond this x the prediction: another setup (refused)
+MIN_FRAME_POSES = 5  # items a file needs for its frame to be refitted (3 N - 6 degrees of freedom)
+CONSISTENT, FRAME_SHIFT, BEYOND = "consistent", "frame shift", "beyond the prediction"
+
+
+class HeldOutError(PlausibilityError):
+    """Validation data the calibrated model misses beyond :data:`HELD_OUT_REFUSE` times its
+    prediction, frame refitted: the message names the likely cause (the calibration's own diagnosis
+    of them, not the nominal model's)."""
+
+
+@dataclass(frozen=True)
+class FileJudgement:
+    """One validation file judged against the prediction (module docstring); figures in mm, the
+    frame's rotation in deg."""
+
+    file: str
+    n: int
+    predicted_mm: float
+    held_out_mm: float
+    model_error_mm: float
+    frame_shift_mm: float
+    frame_rotation_deg: float
+    verdict: str
+    cause: str = ""
+
+    @property
+    def ratio(self) -> float:
+        """The model's error over the prediction."""
+        return self.model_error_mm / self.predicted_mm
+
+    def to_dict(self) -> dict:
+        return {"file": self.file, "n": self.n, "predicted_mm": self.predicted_mm,
+                "held_out_mm": self.held_out_mm, "model_error_mm": self.model_error_mm,
+                "frame_shift_mm": self.frame_shift_mm, "frame_rotation_deg": self.frame_rotation_deg,
+                "ratio": self.ratio, "verdict": self.verdict, "cause": self.cause}
+
+    def sentence(self) -> str:
+        """The warning of a file that is not consistent with the prediction ('' if it is)."""
+        figures = (f"held out {self.held_out_mm:.4g} mm RMS against {self.predicted_mm:.3g} mm predicted at "
+                   f"these poses")
+        if self.verdict == FRAME_SHIFT:
+            return (f"the validation data {self.file}: {figures}: a tracker-frame shift of "
+                    f"{self.frame_shift_mm:.3g} mm ({self.frame_rotation_deg:.3g} deg) carries it: with the "
+                    f"frame refitted on the validation data (as evaluate --fit-frame) the model misses them by "
+                    f"{self.model_error_mm:.3g} mm, consistent with the prediction; the tracker was moved or "
+                    "re-registered between the calibration and the validation. The model is judged on "
+                    f"{self.model_error_mm:.3g} mm")
+        if self.verdict == BEYOND:
+            return (f"NOT VALIDATED: the validation data {self.file}: {figures}; with the tracker frame "
+                    f"refitted on them the model still misses by {self.model_error_mm:.4g} mm, "
+                    f"{self.ratio:.3g} x the prediction: {self.cause}")
+        return ""
+
+
+@dataclass(frozen=True)
+class HeldOut:
+    """Every validation file judged (:class:`FileJudgement`) and the figures over all of them (mm):
+    the prediction, the held-out RMS and the model's error with each file's frame refitted."""
+
+    files: tuple[FileJudgement, ...]
+
+    def _rms(self, key: str) -> float:
+        n = np.array([f.n for f in self.files], float)
+        values = np.array([getattr(f, key) for f in self.files])
+        return float(np.sqrt(np.sum(n * values**2) / n.sum()))
+
+    @property
+    def verdict(self) -> str:
+        """The worst verdict of the files."""
+        found = {f.verdict for f in self.files}
+        return next(v for v in (BEYOND, FRAME_SHIFT, CONSISTENT) if v in found)
+
+    @property
+    def predicted_mm(self) -> float:
+        return self._rms("predicted_mm")
+
+    @property
+    def model_error_mm(self) -> float:
+        return self._rms("model_error_mm")
+
+    def validated(self, prediction: Prediction, held_out_mm: float) -> Prediction:
+        """``prediction`` with the validated error these files support: the held-out RMS when
+        consistent, the model's error with the frames refitted after a frame shift, none (the
+        calibration residual, said so) beyond the prediction."""
+        if self.verdict == CONSISTENT:
+            return prediction
+        if self.verdict == FRAME_SHIFT:
+            return replace(prediction, validated_mm=max(self.model_error_mm, 1e-6),
+                           validated_from="on the validation data, tracker frame refitted")
+        return replace(prediction, validated_mm=max(prediction.unmodelled_mm, 1e-6),
+                       validated_from=f"NOT validated: the held-out {held_out_mm:.4g} mm is beyond the "
+                                      "prediction; this is the calibration residual")
+
+    def line(self) -> str:
+        """The summary line."""
+        shifted = [f for f in self.files if f.verdict == FRAME_SHIFT]
+        shift = (f"; of it a tracker-frame shift of {max(f.frame_shift_mm for f in shifted):.4f} mm, the model's "
+                 f"error {self.model_error_mm:.4f} mm") if shifted else ""
+        return (f"held out against the prediction: {self._rms('held_out_mm'):.4f} mm RMS, "
+                f"{self.predicted_mm:.4f} mm predicted at those poses{shift}: {self.verdict}")
+
+    def to_dict(self) -> dict:
+        return {"verdict": self.verdict, "factor": HELD_OUT_FACTOR, "refuse_factor": HELD_OUT_REFUSE,
+                "predicted_mm": self.predicted_mm, "held_out_mm": self._rms("held_out_mm"),
+                "model_error_mm": self.model_error_mm, "files": [f.to_dict() for f in self.files]}
+
+
+def _frame_refit(errors: np.ndarray, measured: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """The errors ``(N, 3)`` (m) left when the 6-DOF frame is refitted (the rigid fit of the
+    modelled points ``measured - errors`` to ``measured``), the RMS displacement (m) and the rotation
+    (rad) of that refit."""
+    modelled = measured - errors
+    B = umeyama(modelled, measured)
+    moved = modelled @ B[:3, :3].T + B[:3, 3]
+    shift = float(np.sqrt(np.mean(np.sum((moved - modelled) ** 2, axis=1))))
+    return measured - moved, shift, float(np.linalg.norm(matrix_to_rotvec(B[:3, :3])))
+
+
+def _cause(robot, data, predicted_mm: float) -> str:
+    """The likely cause of held-out data the refitted frame does not explain: another SMR nest or
+    tool when the SMR offsets refitted with the frame (`register_frame`) do, else another robot."""
+    try:
+        reg = register_frame(robot, data)
+    except (DataError, IdentificationError):  # poses that cannot fix the offsets: no verdict on them
+        reg = None
+    if reg is not None:
+        dof = max(len(data) - 2 - data.n_smr, 1)
+        refit_mm = float(np.sqrt(np.sum(reg.residuals**2) / dof)) * 1e3
+        if refit_mm <= HELD_OUT_REFUSE * predicted_mm:  # the calibrated wrist errors meet another tool
+            moved = np.linalg.norm(reg.offsets[0] - robot.tool[:3, 3]) * 1e3
+            return (f"with the SMR offset refitted too the model misses them by only {refit_mm:.3g} mm: they "
+                    f"were measured with another SMR nest or tool ({moved:.4g} mm from the calibration's); "
+                    "measure the validation with the calibration's SMR and tool")
+    return ("they belong to another robot or another setup (another SMR or tool, a joint or point file "
+            "mismatched), or the calibration does not carry over to these poses; check the file")
+
+
+def judge_held_out(robot, prediction: Prediction, judged: list, *, force: bool = False,
+                   warnings: list[str] | None = None) -> HeldOut | None:
+    """Judge every validation file of point or pose data in ``judged`` (a calibration's
+    `robocal.calibration.result.Judged`: data, problem, states) against ``prediction`` for the
+    calibrated ``robot`` (module docstring); their warnings appended to ``warnings``. None
+    without such a file.
+
+    Raises
+    ------
+    HeldOutError
+        A file the model misses, frame refitted, by more than :data:`HELD_OUT_REFUSE` times the
+        prediction (``force``: a warning).
+    """
+    files = []
+    for j in judged:
+        if not j.data.spec.sees_position:
+            continue
+        errors = j.problem.item_error_vectors(j.states[1])[0]
+        measured = j.data.points  # point and pose data: one item per row
+        if errors.shape != measured.shape:
+            raise IdentificationError(f"internal: {len(errors)} items for {len(measured)} rows of "
+                                      f"{j.data.label}, please report this")
+        predicted = float(np.sqrt(np.mean(prediction.error_mm(robot, j.data.joints) ** 2)))
+        n = len(errors)
+        held = float(np.sqrt(np.mean(np.sum(errors**2, axis=1)))) * 1e3
+        model, shift, turn = held, 0.0, 0.0
+        if n >= MIN_FRAME_POSES:
+            left, shift_m, turn = _frame_refit(errors, measured)
+            model, shift = float(np.sqrt(np.sum(left**2) / (n - 2))) * 1e3, shift_m * 1e3
+        verdict = CONSISTENT if held <= HELD_OUT_FACTOR * predicted else \
+            FRAME_SHIFT if model <= HELD_OUT_FACTOR * predicted else BEYOND
+        cause = _cause(j.states[1].robot, j.data, predicted) if verdict == BEYOND else ""
+        files.append(FileJudgement(j.data.label, n, predicted, held, model, shift, float(np.rad2deg(turn)),
+                                   verdict, cause))
+    if not files:
+        return None
+    out = HeldOut(tuple(files))
+    for f in files:
+        if f.verdict == BEYOND and f.ratio > HELD_OUT_REFUSE and not force:
+            raise HeldOutError(f"{f.sentence()}; {FORCE_HINT}")
+        if f.verdict != CONSISTENT and warnings is not None:
+            forced = "FORCED past a plausibility check: " if f.ratio > HELD_OUT_REFUSE else ""
+            warnings.append(forced + f.sentence())
+    return out
