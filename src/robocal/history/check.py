@@ -35,6 +35,7 @@ from scipy import linalg, stats
 from robocal.core.errors import DataError
 from robocal.core.io import load_json, write_all
 from robocal.data.registration import register
+from robocal.history.expected import expected_uncertainty
 from robocal.history.store import History
 from robocal.identify.plausibility import check_residual
 from robocal.identify.space import block_of
@@ -78,6 +79,10 @@ class Uncertainty:
         """From a calibration's result JSON (docs/result-json.md): the covariance from the
         parameters' sigma and the correlation matrix, the noise from the calibration residuals
         (point data)."""
+        if (result.get("settings") or {}).get("offsets_only"):
+            raise DataError("this result JSON is an offsets-only re-fit: its residual holds what the joint "
+                            "zeros could not absorb, not the robot's noise floor; give the full calibration's "
+                            "result JSON (--result) or the history that holds both (--history)")
         try:
             corr_names = list(result["correlation"]["names"])
             corr = np.asarray(result["correlation"]["matrix"], float)
@@ -116,8 +121,9 @@ def load_calibration(model: str, result: str | None, history: str | None, robot_
     if history:
         with History(history) as store:
             calibration = store.calibration(robot_id, dump_model(robot))
+            expected = None if uncertainty else expected_uncertainty(store, calibration)  # never a re-fit's
         parent = calibration.id
-        uncertainty = uncertainty or Uncertainty.from_dict(calibration.uncertainty)
+        uncertainty = uncertainty or Uncertainty.from_dict(expected)
     return robot, uncertainty, parent
 
 
