@@ -30,8 +30,8 @@ from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import Consistency
 from robocal.trust.coverage import accuracy_line
-from robocal.trust.held_out import HeldOut
 from robocal.trust.file_shifts import FileShifts, pose_means, split_by_file
+from robocal.trust.held_out import HeldOut
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG
 
 RESULT_FORMAT = "robocal-result/1"

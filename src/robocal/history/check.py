@@ -81,8 +81,8 @@ class Uncertainty:
         (point data)."""
         if (result.get("settings") or {}).get("offsets_only"):
             raise DataError("this result JSON is an offsets-only re-fit: its residual holds what the joint "
-                            "zeros could not absorb, not the robot's noise floor; give the full calibration's "
-                            "result JSON (--result) or the history that holds both (--history)")
+                            "zeros could not absorb, not the robot's noise floor; give the full "
+                            "calibration's result JSON (--result) or the history that holds both (--history)")
         try:
             corr_names = list(result["correlation"]["names"])
             corr = np.asarray(result["correlation"]["matrix"], float)

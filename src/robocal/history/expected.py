@@ -35,9 +35,10 @@ def _full_calibration(history, record):
         seen.add(current.id)
         parent = by_id.get(current.parent)
         if parent is None or parent.id in seen:
-            raise DataError(f"the calibration #{record.id} of robot id {record.robot_id!r} is an offsets-only "
-                            "re-fit and the history holds no full calibration it descends from: its residual is "
-                            "not the robot's noise floor; give the full calibration's result JSON (--result)")
+            raise DataError(f"the calibration #{record.id} of robot id {record.robot_id!r} is an "
+                            "offsets-only re-fit and the history holds no full calibration it descends from: "
+                            "its residual is not the robot's noise floor; give the full calibration's result "
+                            "JSON (--result)")
         current = parent
     return current
 

@@ -90,10 +90,10 @@ class FileJudgement:
         if self.verdict == FRAME_SHIFT:
             return (f"the validation data {self.file}: {figures}: a tracker-frame shift of "
                     f"{self.frame_shift_mm:.3g} mm ({self.frame_rotation_deg:.3g} deg) carries it: with the "
-                    f"frame refitted on the validation data (as evaluate --fit-frame) the model misses them by "
-                    f"{self.model_error_mm:.3g} mm, consistent with the prediction; the tracker was moved or "
-                    "re-registered between the calibration and the validation. The model is judged on "
-                    f"{self.model_error_mm:.3g} mm")
+                    "frame refitted on the validation data (as evaluate --fit-frame) the model misses them "
+                    f"by {self.model_error_mm:.3g} mm, consistent with the prediction; the tracker was "
+                    "moved or re-registered between the calibration and the validation. The model is judged "
+                    f"on {self.model_error_mm:.3g} mm")
         if self.verdict == BEYOND:
             return (f"NOT VALIDATED: the validation data {self.file}: {figures}; with the tracker frame "
                     f"refitted on them the model still misses by {self.model_error_mm:.4g} mm, "
@@ -143,8 +143,9 @@ class HeldOut:
     def line(self) -> str:
         """The summary line."""
         shifted = [f for f in self.files if f.verdict == FRAME_SHIFT]
-        shift = (f"; of it a tracker-frame shift of {max(f.frame_shift_mm for f in shifted):.4f} mm, the model's "
-                 f"error {self.model_error_mm:.4f} mm") if shifted else ""
+        largest = max((f.frame_shift_mm for f in shifted), default=0.0)
+        shift = (f"; of it a tracker-frame shift of {largest:.4f} mm, the model's error "
+                 f"{self.model_error_mm:.4f} mm") if shifted else ""
         return (f"held out against the prediction: {self._rms('held_out_mm'):.4f} mm RMS, "
                 f"{self.predicted_mm:.4f} mm predicted at those poses{shift}: {self.verdict}")
 
