@@ -112,6 +112,17 @@ def test_another_smr_nest_is_refused_naming_it_and_not_validated_when_forced(cam
     assert any(w.startswith("FORCED") and "NOT VALIDATED" in w for w in result.warnings)
 
 
+def test_a_few_gross_errors_in_the_validation_are_no_other_setup(campaign):
+    cal, val, truth = campaign
+    points = val.points.copy()
+    points[[3, 11]] += np.array([3e-3, -2e-3, 4e-3])  # two mistyped rows, 5 mm off
+    result = rc.calibrate(NOMINAL, cal, validation=replace(val, points=points), nongeometric="none",
+                          progress=False)
+    f = result.held_out.files[0]
+    assert f.held_out_mm > 1.0 and f.verdict == CONSISTENT  # mm: the RMS, the bulk within the prediction
+    assert f.bulk_mm[0] <= HELD_OUT_FACTOR * f.predicted_mm
+
+
 def test_cli_judges_the_validation_against_the_prediction(campaign, tmp_path, capsys):
     cal, val, truth = campaign
     cal.save(tmp_path / "cal.csv")

@@ -30,7 +30,10 @@ Verdict (:data:`HELD_OUT_FACTOR` as :data:`robocal.trust.coverage.EXTRAPOLATION_
   another tool), else another robot or a mismatched file. Nothing
   beyond the prediction is called validated.
 
-Files with fewer than :data:`MIN_FRAME_POSES` items are judged on ``h`` alone (no frame refitted).
+The verdict compares the bulk of the items (:func:`robocal.identify.plausibility.bulk_rms_mm`: the
+largest errors left out, as the plausibility checks do), so that a few gross errors in a validation
+file (a mistyped row) do not make a right calibration look like another setup. Files with fewer
+than :data:`MIN_FRAME_POSES` items are judged on ``h`` alone (no frame refitted).
 """
 
 from __future__ import annotations
@@ -41,7 +44,7 @@ import numpy as np
 
 from robocal.core.errors import DataError, IdentificationError, PlausibilityError
 from robocal.data.registration import register_frame, umeyama
-from robocal.identify.plausibility import FORCE_HINT
+from robocal.identify.plausibility import FORCE_HINT, bulk_rms_mm
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.trust.coverage import EXTRAPOLATION_FACTOR, Prediction
 
@@ -71,16 +74,18 @@ class FileJudgement:
     frame_rotation_deg: float
     verdict: str
     cause: str = ""
+    bulk_mm: tuple[float, float] = (0.0, 0.0)  # held out and model's error of the bulk (the verdict's)
 
     @property
     def ratio(self) -> float:
-        """The model's error over the prediction."""
-        return self.model_error_mm / self.predicted_mm
+        """The model's error over the prediction, of the bulk of the items (the verdict's)."""
+        return self.bulk_mm[1] / self.predicted_mm
 
     def to_dict(self) -> dict:
         return {"file": self.file, "n": self.n, "predicted_mm": self.predicted_mm,
                 "held_out_mm": self.held_out_mm, "model_error_mm": self.model_error_mm,
                 "frame_shift_mm": self.frame_shift_mm, "frame_rotation_deg": self.frame_rotation_deg,
+                "bulk_held_out_mm": self.bulk_mm[0], "bulk_model_error_mm": self.bulk_mm[1],
                 "ratio": self.ratio, "verdict": self.verdict, "cause": self.cause}
 
     def sentence(self) -> str:
@@ -210,15 +215,17 @@ def judge_held_out(robot, prediction: Prediction, judged: list, *, force: bool =
         predicted = float(np.sqrt(np.mean(prediction.error_mm(robot, j.data.joints) ** 2)))
         n = len(errors)
         held = float(np.sqrt(np.mean(np.sum(errors**2, axis=1)))) * 1e3
-        model, shift, turn = held, 0.0, 0.0
+        left, shift, turn, dof = errors, 0.0, 0.0, 1.0
         if n >= MIN_FRAME_POSES:
             left, shift_m, turn = _frame_refit(errors, measured)
-            model, shift = float(np.sqrt(np.sum(left**2) / (n - 2))) * 1e3, shift_m * 1e3
-        verdict = CONSISTENT if held <= HELD_OUT_FACTOR * predicted else \
-            FRAME_SHIFT if model <= HELD_OUT_FACTOR * predicted else BEYOND
+            shift, dof = shift_m * 1e3, n / (n - 2)
+        model = float(np.sqrt(np.mean(np.sum(left**2, axis=1)) * dof)) * 1e3
+        bulk = (bulk_rms_mm(errors), bulk_rms_mm(left) * float(np.sqrt(dof)))
+        verdict = CONSISTENT if bulk[0] <= HELD_OUT_FACTOR * predicted else \
+            FRAME_SHIFT if bulk[1] <= HELD_OUT_FACTOR * predicted else BEYOND
         cause = _cause(j.states[1].robot, j.data, predicted) if verdict == BEYOND else ""
         files.append(FileJudgement(j.data.label, n, predicted, held, model, shift, float(np.rad2deg(turn)),
-                                   verdict, cause))
+                                   verdict, cause, bulk))
     if not files:
         return None
     out = HeldOut(tuple(files))
