@@ -64,7 +64,7 @@ from robocal.report.metrics import position_stats
 from robocal.trust.consistency import check_fit, check_not_worse
 from robocal.trust.coverage import predict, prediction
 from robocal.trust.diagnosis import diagnosed
-from robocal.trust.held_out import HeldOutError, judge_held_out
+from robocal.trust.held_out import judge_held_out
 from robocal.trust.posterior import Noise, posterior_analysis
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, independent, tolerance_unit
 
@@ -384,8 +384,6 @@ def calibrate(robot, data, method: str | None = None, params="auto", validation=
         result = _calibrate_sets(robot, datasets, validations, method, params, register_frames, rtol, seed,
                                  progress, nongeometric, force, sigma, warm_start, options,
                                  components=variance_components)
-    except HeldOutError:  # judged against the calibrated model: its own diagnosis
-        raise
     except PlausibilityError as exc:  # the data's own diagnosis first when it tells more
         raise diagnosed(exc, robot, [*datasets, *validations]) from None
     if hold_out is not None:  # the JSON and the report name the split (docs/result-json.md)
@@ -460,8 +458,7 @@ def _calibrate_sets(robot, datasets: list, validations: list, method: str, param
     else:
         result = fit(terms, validations, warm_start)
     predicted = prediction(result)
-    result.held_out = judge_held_out(result.robot, predicted, result.judged, force=force,
-                                     warnings=result.warnings)
+    result.held_out = judge_held_out(result.robot, predicted, result.judged, result.warnings)
     if result.held_out is not None:  # the validated figure only as far as the prediction explains it
         predicted = result.held_out.validated(predicted, result.validation["rms"])
     result.predicted_accuracy, more = predict(result.robot, predicted,

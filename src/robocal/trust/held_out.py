@@ -21,11 +21,13 @@ Verdict (:data:`HELD_OUT_FACTOR` as :data:`robocal.trust.coverage.EXTRAPOLATION_
 - else ``m <= HELD_OUT_FACTOR p``: ``frame shift``: the tracker was moved or re-registered between
   the calibration and the validation; the model is judged (and validated) on ``m``, a warning names
   the shift;
-- else ``beyond the prediction``: the calibration does not explain these data. When ``m`` exceeds
-  :data:`HELD_OUT_REFUSE` ``p`` it is no model error a calibration leaves but another setup:
-  PlausibilityError (``force``: a warning) naming the likely cause, another SMR nest or tool when
-  refitting the SMR offsets with the frame (:func:`robocal.data.registration.register_frame`, as
-  ``evaluate --fit-frame``) brings the error within :data:`HELD_OUT_REFUSE` ``p`` (not within the
+- else ``beyond the prediction``: the calibration does not explain these data, a warning headed
+  "NOT VALIDATED" says so and the validated figure falls back to the calibration residual (the
+  calibrated model itself owes nothing to the validation data: it is written). Up to
+  :data:`ANOTHER_SETUP` ``p`` the likely cause is a calibration that does not carry over to these
+  poses; beyond, it is no error a calibration leaves but another setup: another SMR nest or tool
+  when refitting the SMR offsets with the frame (:func:`robocal.data.registration.register_frame`,
+  as ``evaluate --fit-frame``) brings the error within :data:`ANOTHER_SETUP` ``p`` (not within the
   prediction: the calibrated wrist parameters, confounded with the calibration's tool, meet
   another tool), else another robot or a mismatched file. Nothing
   beyond the prediction is called validated.
@@ -42,22 +44,16 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from robocal.core.errors import DataError, IdentificationError, PlausibilityError
+from robocal.core.errors import DataError, IdentificationError
 from robocal.data.registration import register_frame, umeyama
-from robocal.identify.plausibility import FORCE_HINT, bulk_rms_mm
+from robocal.identify.plausibility import bulk_rms_mm
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.trust.coverage import EXTRAPOLATION_FACTOR, Prediction
 
 HELD_OUT_FACTOR = EXTRAPOLATION_FACTOR  # held-out RMS beyond this x the prediction: not validated
-HELD_OUT_REFUSE = 10.0  # the model's error beyond this x the prediction: another setup (refused)
+ANOTHER_SETUP = 10.0  # the model's error beyond this x the prediction: another setup, not the model
 MIN_FRAME_POSES = 5  # items a file needs for its frame to be refitted (3 N - 6 degrees of freedom)
 CONSISTENT, FRAME_SHIFT, BEYOND = "consistent", "frame shift", "beyond the prediction"
-
-
-class HeldOutError(PlausibilityError):
-    """Validation data the calibrated model misses beyond :data:`HELD_OUT_REFUSE` times its
-    prediction, frame refitted: the message names the likely cause (the calibration's own diagnosis
-    of them, not the nominal model's)."""
 
 
 @dataclass(frozen=True)
@@ -152,10 +148,11 @@ class HeldOut:
         shift = (f"; of it a tracker-frame shift of {largest:.4f} mm, the model's error "
                  f"{self.model_error_mm:.4f} mm") if shifted else ""
         return (f"held out against the prediction: {self._rms('held_out_mm'):.4f} mm RMS, "
-                f"{self.predicted_mm:.4f} mm predicted at those poses{shift}: {self.verdict}")
+                f"{self.predicted_mm:.4f} mm predicted at those poses{shift}: {self.verdict}"
+                + (", NOT VALIDATED" if self.verdict == BEYOND else ""))
 
     def to_dict(self) -> dict:
-        return {"verdict": self.verdict, "factor": HELD_OUT_FACTOR, "refuse_factor": HELD_OUT_REFUSE,
+        return {"verdict": self.verdict, "factor": HELD_OUT_FACTOR, "another_setup_factor": ANOTHER_SETUP,
                 "predicted_mm": self.predicted_mm, "held_out_mm": self._rms("held_out_mm"),
                 "model_error_mm": self.model_error_mm, "files": [f.to_dict() for f in self.files]}
 
@@ -171,9 +168,15 @@ def _frame_refit(errors: np.ndarray, measured: np.ndarray) -> tuple[np.ndarray, 
     return measured - moved, shift, float(np.linalg.norm(matrix_to_rotvec(B[:3, :3])))
 
 
-def _cause(robot, data, predicted_mm: float) -> str:
-    """The likely cause of held-out data the refitted frame does not explain: another SMR nest or
-    tool when the SMR offsets refitted with the frame (`register_frame`) do, else another robot."""
+def _cause(robot, data, predicted_mm: float, ratio: float) -> str:
+    """The likely cause of held-out data the refitted frame does not explain, ``ratio`` times the
+    prediction: up to :data:`ANOTHER_SETUP`, a calibration that does not carry over; beyond,
+    another SMR nest or tool when the SMR offsets refitted with the frame (`register_frame`)
+    explain them, else another robot or file."""
+    if ratio <= ANOTHER_SETUP:
+        return ("the calibration does not carry over to these poses (an error the model lacks, poses "
+                "outside the calibrated region) or the setup changed between them; calibrate with poses "
+                "like these")
     try:
         reg = register_frame(robot, data)
     except (DataError, IdentificationError):  # poses that cannot fix the offsets: no verdict on them
@@ -181,28 +184,21 @@ def _cause(robot, data, predicted_mm: float) -> str:
     if reg is not None:
         dof = max(len(data) - 2 - data.n_smr, 1)
         refit_mm = float(np.sqrt(np.sum(reg.residuals**2) / dof)) * 1e3
-        if refit_mm <= HELD_OUT_REFUSE * predicted_mm:  # the calibrated wrist errors meet another tool
+        if refit_mm <= ANOTHER_SETUP * predicted_mm:  # the calibrated wrist errors meet another tool
             moved = np.linalg.norm(reg.offsets[0] - robot.tool[:3, 3]) * 1e3
             return (f"with the SMR offset refitted too the model misses them by only {refit_mm:.3g} mm: they "
                     f"were measured with another SMR nest or tool ({moved:.4g} mm from the calibration's); "
                     "measure the validation with the calibration's SMR and tool")
     return ("they belong to another robot or another setup (another SMR or tool, a joint or point file "
-            "mismatched), or the calibration does not carry over to these poses; check the file")
+            "mismatched); check the file")
 
 
-def judge_held_out(robot, prediction: Prediction, judged: list, *, force: bool = False,
-                   warnings: list[str] | None = None) -> HeldOut | None:
+def judge_held_out(robot, prediction: Prediction, judged: list, warnings: list[str] | None = None
+                   ) -> HeldOut | None:
     """Judge every validation file of point or pose data in ``judged`` (a calibration's
     `robocal.calibration.result.Judged`: data, problem, states) against ``prediction`` for the
     calibrated ``robot`` (module docstring); their warnings appended to ``warnings``. None
-    without such a file.
-
-    Raises
-    ------
-    HeldOutError
-        A file the model misses, frame refitted, by more than :data:`HELD_OUT_REFUSE` times the
-        prediction (``force``: a warning).
-    """
+    without such a file."""
     files = []
     for j in judged:
         if not j.data.spec.sees_position:
@@ -223,16 +219,13 @@ def judge_held_out(robot, prediction: Prediction, judged: list, *, force: bool =
         bulk = (bulk_rms_mm(errors), bulk_rms_mm(left) * float(np.sqrt(dof)))
         verdict = CONSISTENT if bulk[0] <= HELD_OUT_FACTOR * predicted else \
             FRAME_SHIFT if bulk[1] <= HELD_OUT_FACTOR * predicted else BEYOND
-        cause = _cause(j.states[1].robot, j.data, predicted) if verdict == BEYOND else ""
+        ratio = bulk[1] / predicted
+        cause = _cause(j.states[1].robot, j.data, predicted, ratio) if verdict == BEYOND else ""
         files.append(FileJudgement(j.data.label, n, predicted, held, model, shift, float(np.rad2deg(turn)),
                                    verdict, cause, bulk))
     if not files:
         return None
     out = HeldOut(tuple(files))
-    for f in files:
-        if f.verdict == BEYOND and f.ratio > HELD_OUT_REFUSE and not force:
-            raise HeldOutError(f"{f.sentence()}; {FORCE_HINT}")
-        if f.verdict != CONSISTENT and warnings is not None:
-            forced = "FORCED past a plausibility check: " if f.ratio > HELD_OUT_REFUSE else ""
-            warnings.append(forced + f.sentence())
+    if warnings is not None:
+        warnings += [f.sentence() for f in files if f.verdict != CONSISTENT]
     return out
