@@ -22,6 +22,7 @@ from robocal.trust.held_out import (
     CONSISTENT,
     FRAME_SHIFT,
     HELD_OUT_FACTOR,
+    HeldOutError,
     _frame_refit,
 )
 
@@ -109,6 +110,22 @@ def test_another_smr_nest_is_not_validated_and_named(campaign):
     said = [w for w in result.warnings if w.startswith("NOT VALIDATED")]
     assert len(said) == 1 and "another SMR nest or tool" in said[0]
     assert result.to_dict()["held_out"]["files"][0]["cause"].startswith("with the SMR offset refitted")
+
+
+def test_on_a_small_arm_another_nest_beyond_any_robot_error_is_refused_naming_the_nest():
+    """A Denso VS-060-like OPW arm (approximate lengths): 40 mm is beyond what its geometric errors
+    can leave, so the plausibility check refuses the file; the calibrated model names why."""
+    limits = [[-170, 170], [-120, 120], [-125, 155], [-270, 270], [-120, 120], [-360, 360]]
+    arm = rc.Robot.from_opw(0.0, 0.0, 0.0, 0.345, 0.305, 0.30, 0.07, offsets=[0] * 6, signs=[1] * 6,
+                            degrees=True, length_unit="m", limits=limits, name="denso-like")
+    sim = rc.simulate_tracker(arm, 80, noise_mm=0.01, seed=5)
+    first = sim.data.pose_id < 60
+    cal, val = sim.data.subset(np.flatnonzero(first)), sim.data.subset(np.flatnonzero(~first))
+    with pytest.raises(HeldOutError, match="another SMR nest or tool") as info:
+        rc.calibrate(arm, cal, validation=_other_nest(val, sim.truth), nongeometric="none", progress=False)
+    assert "NOT VALIDATED" in str(info.value) and "tracker positions" not in str(info.value)
+    moved = rc.calibrate(arm, cal, validation=_moved(val), nongeometric="none", progress=False)
+    assert moved.held_out.verdict == FRAME_SHIFT and moved.held_out.model_error_mm < 0.03
 
 
 def test_a_validation_of_another_robot_is_named_so(campaign):

@@ -32,6 +32,11 @@ Verdict (:data:`HELD_OUT_FACTOR` as :data:`robocal.trust.coverage.EXTRAPOLATION_
   another tool), else another robot or a mismatched file. Nothing
   beyond the prediction is called validated.
 
+On a small arm another SMR nest can miss by more than any robot's geometric errors: the
+plausibility check of the validation data refuses the file before this judgement, and
+:func:`refused_validation` names the nest there (the frame refitted alone against the frame and the
+SMR offsets refitted together, as above).
+
 The verdict compares the bulk of the items (:func:`robocal.identify.plausibility.bulk_rms_mm`: the
 largest errors left out, as the plausibility checks do), so that a few gross errors in a validation
 file (a mistyped row) do not make a right calibration look like another setup. Files with fewer
@@ -44,7 +49,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from robocal.core.errors import DataError, IdentificationError
+from robocal.core.errors import DataError, IdentificationError, PlausibilityError
 from robocal.data.registration import register_frame, umeyama
 from robocal.identify.plausibility import bulk_rms_mm
 from robocal.kinematics.transforms import matrix_to_rotvec
@@ -168,6 +173,49 @@ def _frame_refit(errors: np.ndarray, measured: np.ndarray) -> tuple[np.ndarray, 
     return measured - moved, shift, float(np.linalg.norm(matrix_to_rotvec(B[:3, :3])))
 
 
+class HeldOutError(PlausibilityError):
+    """Validation data refused by the plausibility check, with the cause the calibrated model finds
+    (:func:`refused_validation`): the nominal model's diagnosis of the data is not asked."""
+
+
+def _smr_refit_mm(robot, data) -> tuple[float, float] | None:
+    """The model's error (mm, per degree of freedom) on ``data`` with the tracker frame and the SMR
+    offsets refitted (`register_frame`, as ``evaluate --fit-frame``) and how far the tool's SMR
+    moved (mm); None where the poses cannot fix them."""
+    try:
+        reg = register_frame(robot, data)
+    except (DataError, IdentificationError):
+        return None
+    dof = max(len(data) - 2 - data.n_smr, 1)
+    return (float(np.sqrt(np.sum(reg.residuals**2) / dof)) * 1e3,
+            float(np.linalg.norm(reg.offsets[0] - robot.tool[:3, 3])) * 1e3)
+
+
+def _nest_sentence(refit_mm: float, moved_mm: float) -> str:
+    return (f"with the SMR offset refitted too the model misses them by only {refit_mm:.3g} mm: they "
+            f"were measured with another SMR nest or tool ({moved_mm:.4g} mm from the calibration's); "
+            "measure the validation with the calibration's SMR and tool")
+
+
+def refused_validation(error: PlausibilityError, judged) -> PlausibilityError:
+    """``error`` (the plausibility check refusing validation data ``judged``: a calibration's
+    `robocal.calibration.result.Judged`) as a :class:`HeldOutError` naming another SMR nest or tool
+    when the frame refitted alone leaves more than :data:`ANOTHER_SETUP` times what the frame and
+    the SMR offsets refitted together leave (another robot, or the same one in another tracker
+    setup, is explained by neither; the sentence gives both figures); ``error`` itself otherwise."""
+    data = judged.data
+    if not data.spec.sees_position or len(data) < MIN_FRAME_POSES:
+        return error
+    errors = judged.problem.item_error_vectors(judged.states[1])[0]
+    frame_only = bulk_rms_mm(_frame_refit(errors, data.points)[0])
+    refit = _smr_refit_mm(judged.states[1].robot, data)
+    if refit is None or frame_only <= ANOTHER_SETUP * refit[0]:
+        return error
+    return HeldOutError(f"NOT VALIDATED: the validation data {data.label}: with the tracker frame refitted "
+                        f"on them the model still misses by {frame_only:.4g} mm; {_nest_sentence(*refit)} "
+                        f"(the check: {error})")
+
+
 def _cause(robot, data, predicted_mm: float, ratio: float) -> str:
     """The likely cause of held-out data the refitted frame does not explain, ``ratio`` times the
     prediction: up to :data:`ANOTHER_SETUP`, a calibration that does not carry over; beyond,
@@ -177,18 +225,9 @@ def _cause(robot, data, predicted_mm: float, ratio: float) -> str:
         return ("the calibration does not carry over to these poses (an error the model lacks, poses "
                 "outside the calibrated region) or the setup changed between them; calibrate with poses "
                 "like these")
-    try:
-        reg = register_frame(robot, data)
-    except (DataError, IdentificationError):  # poses that cannot fix the offsets: no verdict on them
-        reg = None
-    if reg is not None:
-        dof = max(len(data) - 2 - data.n_smr, 1)
-        refit_mm = float(np.sqrt(np.sum(reg.residuals**2) / dof)) * 1e3
-        if refit_mm <= ANOTHER_SETUP * predicted_mm:  # the calibrated wrist errors meet another tool
-            moved = np.linalg.norm(reg.offsets[0] - robot.tool[:3, 3]) * 1e3
-            return (f"with the SMR offset refitted too the model misses them by only {refit_mm:.3g} mm: they "
-                    f"were measured with another SMR nest or tool ({moved:.4g} mm from the calibration's); "
-                    "measure the validation with the calibration's SMR and tool")
+    refit = _smr_refit_mm(robot, data)
+    if refit is not None and refit[0] <= ANOTHER_SETUP * predicted_mm:  # wrist errors meet another tool
+        return _nest_sentence(*refit)
     return ("they belong to another robot or another setup (another SMR or tool, a joint or point file "
             "mismatched); check the file")
 
