@@ -108,3 +108,8 @@ def test_merged_uncertainty_against_its_blocks():
     assert chained.noise_m == 1e-5 and chained.covariance[3, 3] == pytest.approx(32.0 * (1e-5 / 8e-4) ** 2)
     with pytest.raises(DataError, match="no full calibration"):
         expected_uncertainty(_Store([refit, again]), again)
+    refit.uncertainty["covariance"] = "not a matrix"
+    with pytest.raises(DataError, match="malformed uncertainty"):
+        expected_uncertainty(store, refit)
+    with pytest.raises(DataError, match="lacks what a check needs"):
+        Uncertainty.from_result([1])  # a result JSON that is no mapping

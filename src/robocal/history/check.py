@@ -79,7 +79,8 @@ class Uncertainty:
         """From a calibration's result JSON (docs/result-json.md): the covariance from the
         parameters' sigma and the correlation matrix, the noise from the calibration residuals
         (point data)."""
-        if (result.get("settings") or {}).get("offsets_only"):
+        settings = result.get("settings") if isinstance(result, dict) else None
+        if isinstance(settings, dict) and settings.get("offsets_only"):
             raise DataError("this result JSON is an offsets-only re-fit: its residual holds what the joint "
                             "zeros could not absorb, not the robot's noise floor; give the full "
                             "calibration's result JSON (--result) or the history that holds both (--history)")

@@ -63,10 +63,20 @@ def expected_uncertainty(history, record) -> dict:
     """
     if not is_offsets_only(record):
         return record.uncertainty
-    full = _full_calibration(history, record).uncertainty
+    full_record = _full_calibration(history, record)
+    try:
+        return _merged(full_record.uncertainty, record.uncertainty)
+    except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
+        raise DataError(f"the history's calibrations #{full_record.id} and #{record.id} of robot id "
+                        f"{record.robot_id!r} hold a malformed uncertainty ({exc!r}): record them again "
+                        "with robocal calibrate --history") from None
+
+
+def _merged(full: dict, refit: dict) -> dict:
+    """The full calibration's uncertainty with the re-fit's zeros in it (module docstring)."""
     names = list(full["names"])
     cov = np.asarray(full["covariance"], float).reshape(len(names), len(names))
-    refit_names, refit_cov = _rescaled(record.uncertainty, float(full["noise_m"]))
+    refit_names, refit_cov = _rescaled(refit, float(full["noise_m"]))
     merged = names + [n for n in refit_names if n not in names]
     out = np.zeros((len(merged), len(merged)))
     out[: len(names), : len(names)] = cov
