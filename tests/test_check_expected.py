@@ -15,6 +15,7 @@ from robocal.cli import main
 from robocal.core.errors import DataError
 from robocal.history.check import Uncertainty, check_calibration, load_calibration
 from robocal.history.expected import expected_uncertainty
+from robocal.history.offsets import recalibrate_offsets
 from robocal.history.store import Record
 
 ROBOT = "kuka_kr16_2"
@@ -73,6 +74,22 @@ def test_an_offsets_only_result_json_is_refused_and_the_full_one_taken(history):
         load_calibration(str(folder / "recal.yaml"), str(folder / "recal.json"), None, None)
     robot, unc, _ = load_calibration(str(folder / "recal.yaml"), str(folder / "cal.json"), None, None)
     assert check_calibration(robot, check, unc, fit_frame=True).verdict == "changed"
+
+
+def test_the_re_fit_itself_warns_when_more_than_the_zeros_moved(history):
+    folder, bent, _ = history
+    nominal, start = rc.Robot.from_catalog(ROBOT), rc.Robot.load(folder / "cal.yaml")
+    where = {"history": str(folder / "h.sqlite"), "robot_id": "R1"}
+    bent_refit = recalibrate_offsets(nominal, start, rc.Measurements.load(folder / "off.csv"), **where)
+    assert [w for w in bent_refit.warnings if "more than the joint zeros changed" in w]
+    # only a zero moved (a motor change): the re-fit meets the floor, nothing said
+    truth = bent.with_values({k: bent.get(k) - v for k, v in BEND.items()})
+    knocked = truth.with_values({"theta2": truth.get("theta2") + 0.002})
+    data = rc.simulate_tracker(knocked, 20, noise_mm=0.01, seed=11, as_is=True).data
+    refit = recalibrate_offsets(nominal, start, data, **where)
+    assert not [w for w in refit.warnings if "joint zeros changed" in w]
+    alone = recalibrate_offsets(nominal, start, rc.Measurements.load(folder / "off.csv"))
+    assert not [w for w in alone.warnings if "joint zeros changed" in w]  # no history: no floor
 
 
 class _Store:
