@@ -57,7 +57,7 @@ def recalibrate_offsets(nominal, start, data, validation=None, *, history: str |
         Held-out data to report the recalibrated model's accuracy on.
     history, robot_id : str, optional
         The history holding the calibration of ``start`` (`robocal.history.store`): a re-fit
-        leaving more than :data:`REFIT_FLOOR_FACTOR` times its full calibration's noise floor is
+        leaving more than `REFIT_FLOOR_FACTOR` times its full calibration's noise floor is
         warned of (`refit_warnings`).
     **options
         Further `robocal.calibrate` options (method, loss, ``hold_out`` ...).
