@@ -64,6 +64,7 @@ from robocal.report.metrics import position_stats
 from robocal.trust.consistency import check_fit, check_not_worse
 from robocal.trust.coverage import predict, prediction
 from robocal.trust.diagnosis import diagnosed
+from robocal.trust.held_out import HeldOutError, judge_held_out, refused_validation
 from robocal.trust.posterior import Noise, posterior_analysis
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, independent, tolerance_unit
 
@@ -217,9 +218,12 @@ def _judge(problem: CalibrationProblem, start, states: tuple[State, State], data
                       errors=tuple(vproblem.position_errors(s) for s in carried))
 
     result = judged(data)
-    check_residual(bulk_rms_mm(result.errors[1]), result.problem.modelled_points(result.states[1]),
-                   f"the validation data (the best {BULK_PERCENT} % of its measurements)", force=force,
-                   warnings=warnings)
+    try:
+        check_residual(bulk_rms_mm(result.errors[1]), result.problem.modelled_points(result.states[1]),
+                       f"the validation data (the best {BULK_PERCENT} % of its measurements)", force=force,
+                       warnings=warnings)
+    except PlausibilityError as exc:  # another SMR nest or tool is the calibrated model's finding
+        raise refused_validation(exc, result) from None
     what = f"the validation data {data.label or ''}".strip()
     rows, repeated = independent(data, problem.datasets, what)
     if repeated:
@@ -383,6 +387,8 @@ def calibrate(robot, data, method: str | None = None, params="auto", validation=
         result = _calibrate_sets(robot, datasets, validations, method, params, register_frames, rtol, seed,
                                  progress, nongeometric, force, sigma, warm_start, options,
                                  components=variance_components)
+    except HeldOutError:  # the calibrated model's diagnosis of the validation data
+        raise
     except PlausibilityError as exc:  # the data's own diagnosis first when it tells more
         raise diagnosed(exc, robot, [*datasets, *validations]) from None
     if hold_out is not None:  # the JSON and the report name the split (docs/result-json.md)
@@ -456,7 +462,11 @@ def _calibrate_sets(robot, datasets: list, validations: list, method: str, param
         result = calibrate_cyclic(fit, [t for t in terms if t != "cyclic"], validations)
     else:
         result = fit(terms, validations, warm_start)
-    result.predicted_accuracy, more = predict(result.robot, prediction(result),
+    predicted = prediction(result)
+    result.held_out = judge_held_out(result.robot, predicted, result.judged, result.warnings)
+    if result.held_out is not None:  # the validated figure only as far as the prediction explains it
+        predicted = result.held_out.validated(predicted, result.validation["rms"])
+    result.predicted_accuracy, more = predict(result.robot, predicted,
                                               np.vstack([d.joints for d in result.problem.datasets]))
     result.warnings += more
     result.error_model_choice = _default_geometric(nongeometric, method, datasets)

@@ -31,6 +31,7 @@ from robocal.report.metrics import position_stats
 from robocal.trust.consistency import Consistency
 from robocal.trust.coverage import accuracy_line
 from robocal.trust.file_shifts import FileShifts, pose_means, split_by_file
+from robocal.trust.held_out import HeldOut
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG
 
 RESULT_FORMAT = "robocal-result/1"
@@ -180,6 +181,7 @@ class CalibrationResult(_BeforeAfter):
     variance_components: list = field(default_factory=list)  # per 6-D set (identify.variance_components)
     error_model_choice: str | None = None  # why the default error model is geometric, when it is
     prior_scales: PriorScales | None = None  # the prior group scales used and where they came from
+    held_out: HeldOut | None = None  # the validation judged against the prediction (trust.held_out)
 
     @property
     def state(self) -> State:
@@ -413,6 +415,8 @@ class CalibrationResult(_BeforeAfter):
             out["validation"] = self.validation
             if (shifts := self.validation_shifts) is not None:
                 out["validation_shifts"] = shifts.to_dict()
+            if self.held_out is not None:
+                out["held_out"] = self.held_out.to_dict()
             j = self.judged[0]
             out["validation_observations"] = self._observations(j.problem.observations[0], j.states, None)
         return out
@@ -538,6 +542,8 @@ class CalibrationResult(_BeforeAfter):
                 lines.append(f"  of it, a shift per validation file {shifts.shift_rms_mm:.4f} mm RMS "
                              f"(F test p = {shifts.p_value:.2g}); within the files "
                              f"{shifts.within_rms_mm:.4f} mm")
+            if self.held_out is not None:
+                lines.append(f"  {self.held_out.line()}")
         if len(self.problem.datasets) + len(self.judged) > 1:
             for row in self.per_file():
                 b, a = row["before"], row["after"]

@@ -190,7 +190,7 @@ def run(args) -> int:
         result = calibrate(robot, data, params=args.params, nongeometric=args.nongeometric,
                            priors=args.priors, variance_components=args.variance_components, **common)
     else:
-        result = recalibrate_offsets(robot, start, data, **common)
+        result = recalibrate_offsets(robot, start, data, history=args.history, robot_id=robot_id, **common)
     result.provenance.update(command="robocal " + " ".join(args.argv), robot_spec=args.robot,
                              data_file=", ".join(args.data), validation_file=", ".join(validate) or None,
                              hold_out=result.provenance.pop("hold_out", None))  # the calibration's, last

@@ -35,6 +35,7 @@ from scipy import linalg, stats
 from robocal.core.errors import DataError
 from robocal.core.io import load_json, write_all
 from robocal.data.registration import register
+from robocal.history.expected import expected_uncertainty
 from robocal.history.store import History
 from robocal.identify.plausibility import check_residual
 from robocal.identify.space import block_of
@@ -78,6 +79,11 @@ class Uncertainty:
         """From a calibration's result JSON (docs/result-json.md): the covariance from the
         parameters' sigma and the correlation matrix, the noise from the calibration residuals
         (point data)."""
+        settings = result.get("settings") if isinstance(result, dict) else None
+        if isinstance(settings, dict) and settings.get("offsets_only"):
+            raise DataError("this result JSON is an offsets-only re-fit: its residual holds what the joint "
+                            "zeros could not absorb, not the robot's noise floor; give the full "
+                            "calibration's result JSON (--result) or the history that holds both (--history)")
         try:
             corr_names = list(result["correlation"]["names"])
             corr = np.asarray(result["correlation"]["matrix"], float)
@@ -116,12 +122,13 @@ def load_calibration(model: str, result: str | None, history: str | None, robot_
     if history:
         with History(history, readonly=True) as store:
             calibration = store.calibration(robot_id, dump_model(robot))
+            expected = None if uncertainty else expected_uncertainty(store, calibration)  # never a re-fit's
         parent = calibration.id
-        if uncertainty is None and calibration.uncertainty is None:
+        if uncertainty is None and expected is None:
             raise DataError(f"the history's calibration #{parent} of robot id {robot_id!r} has no "
                             "uncertainty (NULL; calibrate records it): give --result RESULT.json of that "
                             "calibration")
-        uncertainty = uncertainty or Uncertainty.from_dict(calibration.uncertainty)
+        uncertainty = uncertainty or Uncertainty.from_dict(expected)
     return robot, uncertainty, parent
 
 

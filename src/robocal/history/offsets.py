@@ -8,10 +8,16 @@ import numpy as np
 
 from robocal.calibration.pipeline import calibrate
 from robocal.core.errors import DataError
+from robocal.history.expected import expected_uncertainty
+from robocal.history.record import calibration_uncertainty
+from robocal.history.store import History
 from robocal.kinematics.model import Robot, load_model
+from robocal.kinematics.model_file import dump_model
 
 FRAME_PARAMS = ("base.x", "base.y", "base.z", "base.rx", "base.ry", "base.rz", "tool.x", "tool.y", "tool.z")
 SAME_NOMINAL_TOL = 1e-9  # m or rad: the calibrated model must carry the nominal robot's links
+# a re-fit leaving more than this x the full calibration's noise per coordinate: more than the zeros moved
+REFIT_FLOOR_FACTOR = 3.0
 
 
 def offsets_params(robot, n_smr: int = 1) -> list[str]:
@@ -32,7 +38,8 @@ def check_same_robot(nominal, start) -> None:
                         "links differ; give the calibrated model of this robot")
 
 
-def recalibrate_offsets(nominal, start, data, validation=None, **options):
+def recalibrate_offsets(nominal, start, data, validation=None, *, history: str | None = None,
+                        robot_id: str | None = None, **options):
     """A `robocal.calibration.result.CalibrationResult` whose robot is ``start`` (an earlier
     calibration of ``nominal``) with only its joint zeros re-identified on ``data`` (point or pose
     measurements; the tracker frame and SMR offsets fitted with them); ``validation`` and
@@ -48,6 +55,10 @@ def recalibrate_offsets(nominal, start, data, validation=None, **options):
         Point or pose tracker measurements: joints ``(n, dof)`` rad, points ``(n, 3)`` m.
     validation : Measurements, optional
         Held-out data to report the recalibrated model's accuracy on.
+    history, robot_id : str, optional
+        The history holding the calibration of ``start`` (`robocal.history.store`): a re-fit
+        leaving more than `REFIT_FLOOR_FACTOR` times its full calibration's noise floor is
+        warned of (`refit_warnings`).
     **options
         Further `robocal.calibrate` options (method, loss, ``hold_out`` ...).
 
@@ -88,6 +99,7 @@ def recalibrate_offsets(nominal, start, data, validation=None, **options):
     result = calibrate(start, sets, params=offsets_params(start, n_smr), validation=validation,
                        nongeometric="none", **options)
     result.settings["offsets_only"] = True
+    result.warnings += refit_warnings(history, robot_id, start, result)
     return result
 
 
@@ -118,3 +130,26 @@ def shifts_line(shifts: list[dict]) -> str:
     """One line of `zero_shifts`: each joint zero's change with its sigma (deg)."""
     return "joint zeros changed from the start: " + \
         ", ".join(f"{r['name']} {r['shift']:+.4f} ± {r['sigma']:.4f} deg" for r in shifts)
+
+
+def refit_warnings(location: str | None, robot_id: str | None, start, result) -> list[str]:
+    """The warning (a list of at most one line) of an offsets-only re-fit ``result`` whose residual
+    noise per coordinate exceeds :data:`REFIT_FLOOR_FACTOR` times the noise floor of the full
+    calibration that ``start`` descends from in the history at ``location``
+    (`robocal.history.expected`): more than the joint zeros changed. Nothing without a history or
+    without a record of ``start`` in it."""
+    if not location:
+        return []
+    with History(location) as history:
+        try:
+            record = history.calibration(robot_id, dump_model(start))
+        except DataError:  # a start model calibrated elsewhere: no floor to compare with
+            return []
+        floor = float(expected_uncertainty(history, record)["noise_m"])
+    own = float(calibration_uncertainty(result)["noise_m"])
+    if own <= REFIT_FLOOR_FACTOR * floor:
+        return []
+    return [f"the offsets-only re-fit leaves {own * 1e3:.3g} mm per coordinate, {own / floor:.3g} x the "
+            f"noise floor of the full calibration #{record.id} ({floor * 1e3:.3g} mm): more than the joint "
+            "zeros changed (a bent link, a collision, another tool or SMR nest); the written model keeps "
+            "that error: recalibrate fully"]
