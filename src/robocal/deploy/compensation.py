@@ -371,6 +371,48 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
         return compensate_cell(calibrated, nominal, targets, positioner_values, compensate, branch=branch,
                                seeds=seeds, start=start, tool=tool, payload=payload, temperature=temperature,
                                prediction=prediction, arm=arm)
+    comp = _compensate_arm(calibrated, nominal, targets, branch=branch, seeds=seeds, start=start,
+                           targets_frame=targets_frame, tool=tool, e1=e1, payload=payload,
+                           temperature=temperature, layout=layout, prediction=prediction)
+    hint = targets_frame_hint(comp, calibrated, nominal, targets, targets_frame, branch=branch, tool=tool,
+                              e1=e1, payload=payload, temperature=temperature)
+    return comp if hint is None else replace(comp, warnings=[hint, *comp.warnings])
+
+
+FRAME_TRIALS = 20  # targets not reached tried in the other frame at most (an IK each)
+OTHER_FRAME = {"robot": "model", "model": "robot"}
+FRAME_WORDS = {"robot": "the robot's base frame (--targets-in robot; targets_frame='robot')",
+               "model": "the calibrated model's world frame, the tracker's (--targets-in model; "
+                        "targets_frame='model')"}
+
+
+def targets_frame_hint(comp: Compensation, calibrated: Robot, nominal: Robot, targets,
+                       targets_frame: str, **options) -> str | None:
+    """When targets are not reached: the hypothesis that they are in the other frame (the tracker's
+    where the robot's base frame was assumed, or the other way), tested by compensating up to
+    :data:`FRAME_TRIALS` of the unreached ones in it (``options``: the same branch, tool, carriage
+    positions, payload and temperature); the warning naming the option when every one tried is
+    reached there, None otherwise (or when the two frames coincide)."""
+    missed = np.flatnonzero(~comp.converged)
+    if not missed.size or np.array_equal(calibrated.base, nominal.base):
+        return None
+    tried = missed[:FRAME_TRIALS]
+    e1 = options.pop("e1")
+    other = OTHER_FRAME[targets_frame]
+    alt = _compensate_arm(calibrated, nominal, check_poses(targets)[tried], targets_frame=other,
+                          e1=None if e1 is None else np.asarray(e1)[tried], **options)
+    if not alt.converged.all():
+        return None
+    return (f"{missed.size} of {len(comp.converged)} target(s) are not reached in "
+            f"{FRAME_WORDS[targets_frame]}, but in {FRAME_WORDS[other]} all {tried.size} tried are "
+            f"(largest model residual {alt.position_error.max() * 1e3:.3g} mm): the targets look given in that "
+            f"frame; compensate them with --targets-in {other}")
+
+
+def _compensate_arm(calibrated: Robot, nominal: Robot, targets, *, branch, seeds=None, start=None,
+                    targets_frame: str, tool, e1, payload, temperature, layout=None,
+                    prediction=None) -> Compensation:
+    """`compensate` of one arm (a Robot, not a cell), without the other-frame hypothesis."""
     if targets_frame not in ("model", "robot"):
         raise DataError(f"targets_frame must be 'model' or 'robot', got {targets_frame!r}")
     given = calibrated
