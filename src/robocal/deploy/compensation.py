@@ -405,8 +405,8 @@ def targets_frame_hint(comp: Compensation, calibrated: Robot, nominal: Robot, ta
         return None
     return (f"{missed.size} of {len(comp.converged)} target(s) are not reached in "
             f"{FRAME_WORDS[targets_frame]}, but in {FRAME_WORDS[other]} all {tried.size} tried are "
-            f"(largest model residual {alt.position_error.max() * 1e3:.3g} mm): the targets look given in that "
-            f"frame; compensate them with --targets-in {other}")
+            f"(largest model residual {alt.position_error.max() * 1e3:.3g} mm): the targets look given in "
+            f"that frame; compensate them with --targets-in {other}")
 
 
 def _compensate_arm(calibrated: Robot, nominal: Robot, targets, *, branch, seeds=None, start=None,
