@@ -379,7 +379,8 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     return comp if hint is None else replace(comp, warnings=[hint, *comp.warnings])
 
 
-FRAME_TRIALS = 20  # targets not reached tried in the other frame at most (an IK each)
+FRAME_TRIALS = 20  # targets not reached tried in the other frame at most (an IK each) ...
+FRAME_REACHED_FRACTION = 0.5  # ... of which at least this fraction reached there names the other frame
 OTHER_FRAME = {"robot": "model", "model": "robot"}
 FRAME_WORDS = {"robot": "the robot's base frame (--targets-in robot; targets_frame='robot')",
                "model": "the calibrated model's world frame, the tracker's (--targets-in model; "
@@ -391,8 +392,9 @@ def targets_frame_hint(comp: Compensation, calibrated: Robot, nominal: Robot, ta
     """When targets are not reached: the hypothesis that they are in the other frame (the tracker's
     where the robot's base frame was assumed, or the other way), tested by compensating up to
     :data:`FRAME_TRIALS` of the unreached ones in it (``options``: the same branch, tool, carriage
-    positions, payload and temperature); the warning naming the option when every one tried is
-    reached there, None otherwise (or when the two frames coincide)."""
+    positions, payload and temperature); the warning naming the option when at least
+    :data:`FRAME_REACHED_FRACTION` of those tried are reached there, None otherwise (or when the
+    two frames coincide)."""
     missed = np.flatnonzero(~comp.converged)
     if not missed.size or np.array_equal(calibrated.base, nominal.base):
         return None
@@ -401,12 +403,13 @@ def targets_frame_hint(comp: Compensation, calibrated: Robot, nominal: Robot, ta
     other = OTHER_FRAME[targets_frame]
     alt = _compensate_arm(calibrated, nominal, check_poses(targets)[tried], targets_frame=other,
                           e1=None if e1 is None else np.asarray(e1)[tried], **options)
-    if not alt.converged.all():
+    reached = int(alt.converged.sum())
+    if reached < FRAME_REACHED_FRACTION * tried.size:
         return None
     return (f"{missed.size} of {len(comp.converged)} target(s) are not reached in "
-            f"{FRAME_WORDS[targets_frame]}, but in {FRAME_WORDS[other]} all {tried.size} tried are "
-            f"(largest model residual {alt.position_error.max() * 1e3:.3g} mm): the targets look given in "
-            f"that frame; compensate them with --targets-in {other}")
+            f"{FRAME_WORDS[targets_frame]}, but in {FRAME_WORDS[other]} {reached} of the {tried.size} tried "
+            "are: the targets look given in that frame; compensate them with --targets-in "
+            f"{other}")
 
 
 def _compensate_arm(calibrated: Robot, nominal: Robot, targets, *, branch, seeds=None, start=None,
