@@ -119,7 +119,9 @@ def joint_mixup(robot, data, given_mm: float) -> str | None:
     Every hypothesis is screened at once by a rigid fit of its forward kinematics to the points
     (:func:`rigid_fit_rms`); the :data:`SCREENED` best get the full frame and SMR fit. Of those that
     fit, the one with the fewest joints changed among those within :data:`SIMPLER_WITHIN` of the
-    best is named (a flip the data cannot see, a wrist joint with the SMR on its axis, is not)."""
+    best is named (a flip the data cannot see, a wrist joint with the SMR on its axis, is not); a
+    mirrored tracker frame that fits as well as several joints flipped is named instead (one
+    mistake in the export, the same to the data: :func:`mirrored`)."""
     limit = error_limit_mm(data.points)
     spec = robot.joints
     trials = _mixup_trials(spec, len(spec))
@@ -133,7 +135,12 @@ def joint_mixup(robot, data, given_mm: float) -> str | None:
         changed = int(np.count_nonzero(signs < 0) + np.count_nonzero(order != np.arange(len(spec))))
         refined.append((rms, changed, what))
     best = min(r[0] for r in refined)
-    rms, _, what = min((r for r in refined if r[0] <= SIMPLER_WITHIN * best), key=lambda r: (r[1], r[0]))
+    rms, changed, what = min((r for r in refined if r[0] <= SIMPLER_WITHIN * best),
+                             key=lambda r: (r[1], r[0]))
+    mirror = _mirror_rms(robot, data) if changed > 1 else np.inf
+    if mirror <= SIMPLER_WITHIN * rms:  # one mistake in the export explains it as well: named first
+        said = mirrored(robot, data, given_mm)
+        return None if said is None else f"{said} (to these data the same as: {what})"
     if rms <= limit and rms * GAIN < given_mm:
         return (f"{what}: corrected so, the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} "
                 "mm as given); fix the file's joint columns")
@@ -176,10 +183,17 @@ def mount_turned(robot, data, given_mm: float) -> str | None:
     return None
 
 
-def mirrored(robot, data, given_mm: float) -> str | None:
-    """The sentence naming a mirrored tracker frame when the model fits the mirrored points."""
+def _mirror_rms(robot, data) -> float:
+    """RMS (mm) of the frame and SMR fit to ``data``'s points with one axis's sign flipped."""
     flipped = data.points * np.array([1.0, 1.0, -1.0])
-    rms = fit_rms_mm(robot, replace(data, points=flipped, rotations=None, kind="point"))
+    return fit_rms_mm(robot, replace(data, points=flipped, rotations=None, kind="point"))
+
+
+def mirrored(robot, data, given_mm: float) -> str | None:
+    """The sentence naming a mirrored tracker frame when the model fits the mirrored points (a
+    mirror is the same, to the data, as some joints counted the other way: :func:`joint_mixup`
+    names it first when it fits as well)."""
+    rms = _mirror_rms(robot, data)
     if rms <= error_limit_mm(data.points) and rms * GAIN < given_mm:
         return (f"the tracker frame looks mirrored (left-handed: one axis's sign flipped in the export): "
                 f"with one axis flipped the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as "
