@@ -143,8 +143,13 @@ def test_a_track_counted_the_other_way_and_a_turned_mount_are_named():
     for turn in (90, -90, 35):
         real = cell_from_data(dict(CELL, mount={"xyz": [0, 0, 0], "rpy": [0, 0, turn]}))
         why = diagnose(cell, [_check_data(real, sim.data.joints)])
-        assert f"mounted turned by {turn:+d} deg" in why, why
+        assert f"mounted turned by {turn:+d} deg about the z axis of its base" in why, why
     assert diagnose(cell, [sim.data]) is None
+    # a KUKA's joint 1 turns about its base's -z: the turn is still said as the mount's rpy z
+    kuka = {**CELL, "robot": "kuka_kr16_2", "track": {"direction": [0, 1, 0], "limits": [0, 5000]}}
+    real = cell_from_data(dict(kuka, mount={"xyz": [0, 0, 0], "rpy": [0, 0, 90]}))
+    why = diagnose(cell_from_data(kuka), [_check_data(real, sim.data.joints)])
+    assert "mounted turned by +90 deg" in why, why
 
 
 def test_a_reversed_track_through_the_calibrate_command(tmp_path, capsys):

@@ -32,6 +32,7 @@ from robocal.core.errors import RobocalError
 from robocal.data.joint_conventions import COUPLED_OPTION, fanuc_decoupled
 from robocal.data.registration import register_frame
 from robocal.identify.plausibility import error_limit_mm
+from robocal.kinematics.cell import carriage_frames, is_track_cell
 from robocal.kinematics.prior_spec import MAX_SCALE
 
 GAIN = 5.0  # a hypothesis must fit this many times better than the data as given
@@ -176,10 +177,15 @@ def mount_turned(robot, data, given_mm: float) -> str | None:
     if abs(deg - right) <= MOUNT_RIGHT_ANGLE_DEG and rms_at(np.deg2rad(right)) <= SIMPLER_WITHIN * rms:
         deg, rms = right, rms_at(np.deg2rad(right))
     if rms <= error_limit_mm(data.points) and rms * GAIN < given_mm:
-        return (f"the arm looks mounted turned by {deg:+.4g} deg about its first axis "
-                f"({robot.joints[first].name}) on the {robot.joints[0].name} carriage: turned so, the "
-                f"nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as given); fix the mount's "
-                "rotation (a cell file's mount rpy z)")
+        axis = f"its first axis ({robot.joints[first].name}, in that joint's sense)"
+        if is_track_cell(robot):  # as a cell file's mount rpy z turns it: about the arm base's z
+            z_arm = carriage_frames(robot, [0.0])[0, :3, 2]
+            z_joint = robot.fk(np.zeros((1, robot.n_joints)), frames=True)[1][0, first + 1, :3, 2]
+            deg *= 1.0 if z_arm @ z_joint >= 0 else -1.0
+            axis = "the z axis of its base (a cell file's mount rpy z)"
+        return (f"the arm looks mounted turned by {deg:+.4g} deg about {axis} on the {robot.joints[0].name} "
+                f"carriage: turned so, the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as "
+                "given); fix the mount's rotation")
     return None
 
 
