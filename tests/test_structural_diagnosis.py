@@ -152,16 +152,24 @@ def test_a_track_counted_the_other_way_and_a_turned_mount_are_named():
     assert "mounted turned by +90 deg" in why, why
 
 
-def test_a_reversed_track_through_the_calibrate_command(tmp_path, capsys):
+def test_a_reversed_track_a_turned_mount_and_flipped_joints_through_the_calibrate_command(tmp_path, capsys):
     cell = cell_from_data(CELL)
     (tmp_path / "track.yaml").write_text(yaml.safe_dump(CELL))
     sim = simulate_tracker(cell, 40, seed=4)
-    replace(sim.data, joints=sim.data.joints * np.r_[-1.0, np.ones(6)]).save(tmp_path / "cal.csv")
-    capsys.readouterr()
-    assert main(["calibrate", str(tmp_path / "cal.csv"), "--robot", str(tmp_path / "track.yaml"),
-                 "-o", str(tmp_path / "cal.yaml")]) == 2
-    err = capsys.readouterr().err
-    assert "prismatic axis e1's direction looks reversed" in err and not (tmp_path / "cal.yaml").exists()
+    replace(sim.data, joints=sim.data.joints * np.r_[-1.0, np.ones(6)]).save(tmp_path / "reversed.csv")
+    real = cell_from_data(dict(CELL, mount={"xyz": [0, 0, 0], "rpy": [0, 0, 90]}))
+    _check_data(real, sim.data.joints).save(tmp_path / "turned.csv")
+    kr6 = simulate_tracker(rc.Robot.from_catalog("kuka_kr6_r700"), 40, seed=2).data
+    replace(kr6, joints=kr6.joints * np.array([1, -1, -1, 1, -1, 1])).save(tmp_path / "flipped.csv")
+    track = str(tmp_path / "track.yaml")
+    for data, robot, said in (("reversed", track, "prismatic axis e1's direction looks"),
+                              ("turned", track, "mounted turned by +90 deg"),
+                              ("flipped", "kuka_kr6_r700", "joints q2, q3, q5 look counted the other way")):
+        capsys.readouterr()
+        assert main(["calibrate", str(tmp_path / f"{data}.csv"), "--robot", robot,
+                     "-o", str(tmp_path / "cal.yaml")]) == 2
+        err = capsys.readouterr().err
+        assert said in err and not (tmp_path / "cal.yaml").exists(), err
 
 
 def test_targets_in_the_tracker_frame_name_targets_in(tmp_path, capsys):
