@@ -201,3 +201,14 @@ def test_targets_in_the_tracker_frame_name_targets_in(tmp_path, capsys):
     assert "compensate them with --targets-in model" in capsys.readouterr().out
     assert main(["--quiet", "compensate", str(tmp_path / "cal.yaml"), str(tmp_path / "targets.csv"),
                  "--nominal", "kuka_kr6_r700", "--targets-in", "model", "-o", str(tmp_path / "out.csv")]) == 0
+
+
+def test_a_check_whose_joints_are_counted_the_other_way_is_diagnosed(gp25):
+    from robocal.core.errors import PlausibilityError
+
+    truth, result, unc, q = gp25
+    data = _check_data(truth, q)
+    flipped = replace(data, joints=data.joints * np.array([1, -1, -1, 1, -1, 1]))
+    for fit_frame in (True, False):
+        with pytest.raises(PlausibilityError, match="joints q2, q3, q5 look counted the other way"):
+            check_calibration(result.robot, flipped, unc, fit_frame=fit_frame)

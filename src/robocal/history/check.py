@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg, stats
 
-from robocal.core.errors import DataError
+from robocal.core.errors import DataError, PlausibilityError
 from robocal.core.io import load_json, write_all
 from robocal.data.registration import register
 from robocal.history.store import History
@@ -41,6 +41,7 @@ from robocal.identify.space import block_of
 from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.model import Robot
 from robocal.kinematics.model_file import dump_model
+from robocal.trust.diagnosis import diagnosed
 
 ALPHA = 0.01  # the false-alarm rate the verdict is taken at: changed exactly when p_value < ALPHA
 MIN_CHECK_POSES = 8  # fewer poses leave too few degrees of freedom after the frame fit
@@ -371,7 +372,11 @@ def check_calibration(robot, data, uncertainty: Uncertainty, *, fit_frame: bool 
     modelled = start.fk(data.joints, **kw)[:, :3, 3]
     r = (data.points - modelled).reshape(-1)
     rms_mm = float(np.sqrt(np.mean(np.sum((data.points - modelled) ** 2, axis=1)))) * 1e3
-    check_residual(rms_mm, modelled, "the check data (calibrated model, frame fitted)", force=force)
+    try:
+        check_residual(rms_mm, modelled, "the check data (calibrated model, "
+                       + ("frame fitted)" if fit_frame else "its own frame)"), force=force)
+    except PlausibilityError as exc:  # the data's own diagnosis first (flipped joints, a frame, a unit)
+        raise diagnosed(exc, robot, [data], frame_fitted=fit_frame) from None
     smr_names = ["tool.x", "tool.y", "tool.z", *(f"smr{k}.{c}" for k in range(1, data.n_smr) for c in "xyz")]
     groups = {"tracker": list(FRAME_NAMES[:6]), "smr": smr_names}
     every_frame = [*groups["tracker"], *smr_names]
