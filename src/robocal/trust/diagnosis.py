@@ -45,6 +45,7 @@ SCREENED = 4  # the hypotheses that pass the rigid screen best get the full fram
 # a hypothesis changing fewer joints is named when it fits within this factor of the best (a wrist flip
 # the SMR's 0.7 mm lateral offset shows: 1.50 mm against 1.20 on a GP25 whose links are 1.2 mm off nominal)
 SIMPLER_WITHIN = 1.1
+SCREEN_ROWS = 400  # rows (evenly spaced) the screens use at most: 78 hypotheses x 400 rows of a 7-axis cell
 MOUNT_STEP_DEG = 15.0  # the grid of mount rotations tried before the fitted one
 MOUNT_RIGHT_ANGLE_DEG = 1.0  # a fitted mount rotation this close to a multiple of 90 deg is named as one
 
@@ -76,6 +77,11 @@ def rigid_fit_rms(points: np.ndarray, measured: np.ndarray) -> np.ndarray:
     s[:, -1] *= np.sign(np.linalg.det(U @ Vt))  # a rotation, not a reflection
     sse = np.sum(P**2, axis=(1, 2)) + np.sum(Y**2) - 2.0 * s.sum(axis=1)
     return np.sqrt(np.maximum(sse, 0.0) / len(measured))
+
+
+def _screen_rows(n: int) -> np.ndarray:
+    """Indices of at most :data:`SCREEN_ROWS` rows of ``n``, evenly spaced (all when fewer)."""
+    return np.unique(np.linspace(0, n - 1, min(n, SCREEN_ROWS)).round().astype(int))
 
 
 def _flip_words(spec, flipped: tuple[int, ...]) -> str:
@@ -126,9 +132,10 @@ def joint_mixup(robot, data, given_mm: float) -> str | None:
     limit = error_limit_mm(data.points)
     spec = robot.joints
     trials = _mixup_trials(spec, len(spec))
-    q = np.stack([data.joints[:, order] * signs for _, order, signs in trials])  # (H, N, n)
-    modelled = robot.fk(q.reshape(-1, len(spec)), smr=np.tile(data.smr, len(trials)))[:, :3, 3]
-    screen = rigid_fit_rms(modelled.reshape(len(trials), len(data), 3), data.points)
+    rows = _screen_rows(len(data))
+    q = np.stack([data.joints[rows][:, order] * signs for _, order, signs in trials])  # (H, R, n)
+    modelled = robot.fk(q.reshape(-1, len(spec)), smr=np.tile(data.smr[rows], len(trials)))[:, :3, 3]
+    screen = rigid_fit_rms(modelled.reshape(len(trials), rows.size, 3), data.points[rows])
     refined = []
     for h in np.argsort(screen)[:SCREENED]:
         what, order, signs = trials[h]
@@ -163,19 +170,29 @@ def mount_turned(robot, data, given_mm: float) -> str | None:
     def rms_at(turn: float) -> float:
         return fit_rms_mm(robot.with_values({name: zero + turn}), data)
 
+    rows = _screen_rows(len(data))
+
+    def rigid_mm(turns: np.ndarray) -> np.ndarray:  # the cheap screen: a rigid fit per angle
+        q, smr = data.joints[rows], data.smr[rows]
+        points = np.stack([robot.with_values({name: zero + t}).fk(q, smr=smr)[:, :3, 3]
+                           for t in np.atleast_1d(turns)])
+        return rigid_fit_rms(points, data.points[rows]) * 1e3
+
+    # the grid and the fitted angle screened, the named angle judged by the full frame and SMR fit
     grid = np.deg2rad(np.arange(MOUNT_STEP_DEG, 360.0, MOUNT_STEP_DEG))
-    fits = np.array([rms_at(t) for t in grid])
-    best = int(np.argmin(fits))
+    best = grid[int(np.argmin(rigid_mm(grid)))]
     from scipy.optimize import minimize_scalar  # here: scipy.optimize costs start-up to every command
 
     step = np.deg2rad(MOUNT_STEP_DEG)
-    found = minimize_scalar(rms_at, bounds=(grid[best] - step, grid[best] + step), method="bounded",
-                            options={"xatol": 1e-6})
-    turn, rms = (float(found.x), float(found.fun)) if found.fun < fits[best] else (grid[best], fits[best])
+    found = minimize_scalar(lambda t: float(rigid_mm(t)[0]), bounds=(best - step, best + step),
+                            method="bounded", options={"xatol": 1e-6})
+    turn = float(found.x)
     deg = float(np.rad2deg(np.remainder(turn + np.pi, 2 * np.pi) - np.pi))
+    rms = rms_at(turn)
     right = round(deg / 90.0) * 90.0
-    if abs(deg - right) <= MOUNT_RIGHT_ANGLE_DEG and rms_at(np.deg2rad(right)) <= SIMPLER_WITHIN * rms:
-        deg, rms = right, rms_at(np.deg2rad(right))
+    at_right = rms_at(np.deg2rad(right)) if abs(deg - right) <= MOUNT_RIGHT_ANGLE_DEG else np.inf
+    if at_right <= SIMPLER_WITHIN * rms:
+        deg, rms = right, at_right
     if rms <= error_limit_mm(data.points) and rms * GAIN < given_mm:
         axis = f"its first axis ({robot.joints[first].name}, in that joint's sense)"
         if is_track_cell(robot):  # as a cell file's mount rpy z turns it: about the arm base's z
