@@ -15,13 +15,17 @@ degrees of freedom, and ``Sigma`` proportional to ``s^2``), ``T / m ~ F(m, nu)``
 the uncertainty of the noise estimate. With the noise stated (``noise_mm``), ``T ~ chi2(m)``.
 The verdict is ``changed`` exactly when ``p_value < ALPHA``.
 
-What moved: re-identify a small set of parameters on the check data, in the same metric, greedily
-(the one that lowers ``T`` most, joint zeros first, other link parameters only when no joint zero
-explains a significant part), until the rest is consistent with the hypothesis. Each carries its
-shift (new minus calibrated) and a 1-sigma that includes the calibration's uncertainty. With the
-frame refitted, the zeros of the first and last joints are not identifiable: a change of theta1
-turns the whole robot about the base axis, which the refitted tracker frame absorbs, and one of
-theta6 turns the SMR about the flange axis, which the refitted SMR offset absorbs.
+What moved: without a frame fit, first the frames the model kept (the SMR offsets, the tracker
+frame), greedily, each while it explains a significant part: a re-seated SMR or a bumped tracker is
+not the robot, and a check with ``--fit-frame`` would hold (``frame_change``). Then re-identify a
+small set of parameters on the check data, in the same metric, greedily (the one that lowers ``T``
+most, joint zeros first, other link parameters only when no joint zero explains a significant
+part), until the rest is consistent with the hypothesis. Each carries its shift (new minus
+calibrated) and a 1-sigma that includes the calibration's uncertainty. A parameter whose column
+lies in the span of the tracker frame's and the SMR offsets' columns (`confounded`: alpha1, a1,
+theta1, d1 with the base frame, theta{n}, d{n} with the SMR on a 6-axis arm, found by the columns,
+not the names) is never named: to the data its change is a moved tracker or SMR; with the frame
+refitted a change of theirs does not show at all (the note lists them).
 """
 
 from __future__ import annotations
