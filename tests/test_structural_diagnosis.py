@@ -212,3 +212,19 @@ def test_a_check_whose_joints_are_counted_the_other_way_is_diagnosed(gp25):
     for fit_frame in (True, False):
         with pytest.raises(PlausibilityError, match="joints q2, q3, q5 look counted the other way"):
             check_calibration(result.robot, flipped, unc, fit_frame=fit_frame)
+
+
+def test_the_smr_that_moved_is_named_among_several():
+    nominal = rc.Robot.from_catalog("kuka_kr6_r700")
+    sim = simulate_tracker(nominal, 60, seed=8, n_smr=2)
+    result = rc.calibrate(nominal, sim.data, nongeometric="none", progress=False)
+    unc = Uncertainty.from_dict(calibration_uncertainty(result))
+    truth = sim.truth
+    smr = truth.smr.copy()
+    smr[0] += [0.0, 0.002, 0.0]  # the second SMR (smr index 1) moved 2 mm
+    q = sample_joints(truth, 16, np.random.default_rng(2))
+    data = simulate_tracker(replace(truth, smr=smr), joints=q, as_is=True, seed=2, n_smr=2).data
+    check = check_calibration(result.robot, data, unc, fit_frame=False)
+    assert check.frame_change["moved"] == ["smr"] and check.frame_change["smr"] == 1
+    assert check.frame_change["smr_shift_norm_mm"] == pytest.approx(2.0, rel=0.05)
+    assert "(smr index 1)" in check.summary() and not check.changed_parameters

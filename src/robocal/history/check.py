@@ -160,7 +160,8 @@ class CheckResult:
         one confounded with the tracker frame or the SMR offset: ``CONFOUNDED_FRACTION``).
     frame_change : dict or None
         Without ``fit_frame``: what of the frames the model kept moved, tested before any link
-        parameter: ``{moved: [smr, tracker], smr_shift_mm: [x, y, z] (flange frame),
+        parameter: ``{moved: [smr, tracker], smr (the index, as the data's smr column, of the
+        SMR that moved most), smr_shift_mm: [x, y, z] (its shift, flange frame),
         smr_shift_norm_mm, translation_mm: [x, y, z], rotation_deg: [rx, ry, rz] (the base
         frame's, about the world axes), explained_p_value}`` (the keys of what moved).
     explained_p_value : float or None
@@ -238,8 +239,9 @@ class CheckResult:
         out = []
         if "smr" in f["moved"]:
             x, y, z = f["smr_shift_mm"]
-            out.append(f"{FRAME_GROUPS['smr']} by {f['smr_shift_norm_mm']:.4f} mm (x {x:+.4f}, y {y:+.4f}, "
-                       f"z {z:+.4f} mm in the flange frame)")
+            which = f" (smr index {f['smr']})" if f["smr"] else ""
+            out.append(f"{FRAME_GROUPS['smr']}{which} by {f['smr_shift_norm_mm']:.4f} mm (x {x:+.4f}, "
+                       f"y {y:+.4f}, z {z:+.4f} mm in the flange frame)")
         if "tracker" in f["moved"]:
             out.append(f"{FRAME_GROUPS['tracker']} by {np.linalg.norm(f['translation_mm']):.4f} mm and "
                        f"{np.linalg.norm(f['rotation_deg']):.4f} deg")
@@ -455,8 +457,10 @@ def _frame_change(result: CheckResult, r: np.ndarray, C: np.ndarray, columns, gr
     x = dict(zip(names, fits["x"], strict=True))
     change = {"moved": chosen, "explained_p_value": p}
     if "smr" in chosen:
-        shift = np.array([x[f"tool.{c}"] for c in "xyz"]) * 1e3
-        change.update(smr_shift_mm=shift.tolist(), smr_shift_norm_mm=float(np.linalg.norm(shift)))
+        shifts = np.array([x[n] for n in groups["smr"]]).reshape(-1, 3) * 1e3  # (SMRs, 3) mm
+        k = int(np.argmax(np.linalg.norm(shifts, axis=1)))  # the SMR that moved most
+        change.update(smr=k, smr_shift_mm=shifts[k].tolist(),
+                      smr_shift_norm_mm=float(np.linalg.norm(shifts[k])))
     if "tracker" in chosen:
         change.update(translation_mm=[x[f"base.{c}"] * 1e3 for c in "xyz"],
                       rotation_deg=[float(np.rad2deg(x[f"base.r{c}"])) for c in "xyz"])
