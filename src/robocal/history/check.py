@@ -163,7 +163,8 @@ class CheckResult:
         parameter: ``{moved: [smr, tracker], smr (the index, as the data's smr column, of the
         SMR that moved most), smr_shift_mm: [x, y, z] (its shift, flange frame),
         smr_shift_norm_mm, translation_mm: [x, y, z], rotation_deg: [rx, ry, rz] (the base
-        frame's, about the world axes), explained_p_value}`` (the keys of what moved).
+        frame's, about the world axes), points_moved_rms_mm (how far that moves the check's
+        points), explained_p_value}`` (the keys of what moved).
     explained_p_value : float or None
         The p-value once those parameters are refitted.
     notes : list of str
@@ -243,8 +244,10 @@ class CheckResult:
             out.append(f"{FRAME_GROUPS['smr']}{which} by {f['smr_shift_norm_mm']:.4f} mm (x {x:+.4f}, "
                        f"y {y:+.4f}, z {z:+.4f} mm in the flange frame)")
         if "tracker" in f["moved"]:
-            out.append(f"{FRAME_GROUPS['tracker']} by {np.linalg.norm(f['translation_mm']):.4f} mm and "
-                       f"{np.linalg.norm(f['rotation_deg']):.4f} deg")
+            out.append(f"{FRAME_GROUPS['tracker']}: it moves the check's points by "
+                       f"{f['points_moved_rms_mm']:.4f} mm RMS (translation "
+                       f"{np.linalg.norm(f['translation_mm']):.4f} mm, rotation "
+                       f"{np.linalg.norm(f['rotation_deg']):.4f} deg about the tracker's origin)")
         out[-1] += (" (not the robot: check again with --fit-frame, which refits them"
                     + (")" if f["explained_p_value"] >= ALPHA else "; the rest follows)"))
         return out
@@ -454,19 +457,31 @@ def _frame_change(result: CheckResult, r: np.ndarray, C: np.ndarray, columns, gr
     if not chosen:
         return empty, result.statistic, result.p_value, len(r)
     names = [n for c in chosen for n in groups[c]]
-    x = dict(zip(names, fits["x"], strict=True))
-    change = {"moved": chosen, "explained_p_value": p}
-    if "smr" in chosen:
-        shifts = np.array([x[n] for n in groups["smr"]]).reshape(-1, 3) * 1e3  # (SMRs, 3) mm
-        k = int(np.argmax(np.linalg.norm(shifts, axis=1)))  # the SMR that moved most
-        change.update(smr=k, smr_shift_mm=shifts[k].tolist(),
-                      smr_shift_norm_mm=float(np.linalg.norm(shifts[k])))
-    if "tracker" in chosen:
-        change.update(translation_mm=[x[f"base.{c}"] * 1e3 for c in "xyz"],
-                      rotation_deg=[float(np.rad2deg(x[f"base.r{c}"])) for c in "xyz"])
+    change = {"moved": chosen, "explained_p_value": p,
+              **_frame_shift(chosen, groups, names, fits["x"], columns)}
     result.frame_change = change
     result.explained_p_value = p
     return _Whitened(r, columns(names), C), T, p, dof
+
+
+def _frame_shift(chosen: list[str], groups: dict, names: list[str], estimate: np.ndarray, columns) -> dict:
+    """`CheckResult.frame_change`'s figures of the frame groups ``chosen`` from their ``names``'
+    ``estimate`` (SI): the SMR that moved most and its shift (mm, flange frame), the tracker
+    frame's translation (mm), rotation (deg) and how far it moves the check's points (mm RMS; the
+    frame's origin is the tracker's, so the translation alone says little)."""
+    x = dict(zip(names, estimate, strict=True))
+    out = {}
+    if "smr" in chosen:
+        shifts = np.array([x[n] for n in groups["smr"]]).reshape(-1, 3) * 1e3  # (SMRs, 3) mm
+        k = int(np.argmax(np.linalg.norm(shifts, axis=1)))  # the SMR that moved most
+        out.update(smr=k, smr_shift_mm=shifts[k].tolist(),
+                   smr_shift_norm_mm=float(np.linalg.norm(shifts[k])))
+    if "tracker" in chosen:
+        moves = (columns(groups["tracker"]) @ np.array([x[n] for n in groups["tracker"]])).reshape(-1, 3)
+        out.update(translation_mm=[x[f"base.{c}"] * 1e3 for c in "xyz"],
+                   rotation_deg=[float(np.rad2deg(x[f"base.r{c}"])) for c in "xyz"],
+                   points_moved_rms_mm=float(np.sqrt(np.mean(np.sum(moves**2, axis=1)))) * 1e3)
+    return out
 
 
 def _explain(result: CheckResult, space: _Whitened, T: float, p: float, dof: int, blocks: dict, robot,
