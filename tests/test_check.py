@@ -73,7 +73,11 @@ def test_unchanged_robot_holds_and_a_moved_joint_zero_is_named(calibrated):
     in_place = simulate_tracker(truth.with_values({"theta1": truth.get("theta1") + np.deg2rad(0.02)}),
                                 joints=in_place.joints, as_is=True, seed=4).data
     seen = check_calibration(result.robot, in_place, unc, fit_frame=False)
-    assert seen.verdict == "changed" and seen.changed_parameters[0]["name"] == "theta1"
+    # without a frame fit the change shows, but a turn about the base axis is a turned tracker frame to
+    # the data (theta1's column lies in the frame's span): the frame is named, never theta1
+    assert seen.verdict == "changed" and seen.frame_change["moved"] == ["tracker"]
+    assert np.linalg.norm(seen.frame_change["rotation_deg"]) == pytest.approx(0.02, rel=0.05)
+    assert not seen.changed_parameters and "--fit-frame" in seen.summary()
 
 
 def test_the_result_json_carries_the_same_uncertainty_as_the_history(calibrated):

@@ -21,7 +21,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("check", help="judge a calibration on a short check campaign (holds / changed)",
                        description="Refit the tracker frame and SMR offsets, then test the check residuals "
                                    "against the instrument noise plus the calibration's own predicted "
-                                   "error; when changed, name the parameters that most likely moved.",
+                                   "error; when changed, name what most likely moved (without --fit-frame "
+                                   "the SMR or the tracker frame first, then the parameters).",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("model", metavar="CALIBRATED.yaml", help="the calibrated model (calibrate -o)")
     p.add_argument("data", metavar="CHECK.csv", help="point measurements of the check campaign (10-30 poses)")

@@ -385,6 +385,51 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
         return compensate_cell(calibrated, nominal, targets, positioner_values, compensate, branch=branch,
                                seeds=seeds, start=start, tool=tool, payload=payload, temperature=temperature,
                                prediction=prediction, arm=arm)
+    comp = _compensate_arm(calibrated, nominal, targets, branch=branch, seeds=seeds, start=start,
+                           targets_frame=targets_frame, tool=tool, e1=e1, payload=payload,
+                           temperature=temperature, layout=layout, prediction=prediction)
+    hint = targets_frame_hint(comp, calibrated, nominal, targets, targets_frame, branch=branch, tool=tool,
+                              e1=e1, payload=payload, temperature=temperature)
+    return comp if hint is None else replace(comp, warnings=[hint, *comp.warnings])
+
+
+FRAME_TRIALS = 20  # targets not reached tried in the other frame at most (an IK each) ...
+FRAME_REACHED_FRACTION = 0.5  # ... of which at least this fraction reached there names the other frame
+OTHER_FRAME = {"robot": "model", "model": "robot"}
+FRAME_WORDS = {"robot": "the robot's base frame (--targets-in robot; targets_frame='robot')",
+               "model": "the calibrated model's world frame, the tracker's (--targets-in model; "
+                        "targets_frame='model')"}
+
+
+def targets_frame_hint(comp: Compensation, calibrated: Robot, nominal: Robot, targets,
+                       targets_frame: str, **options) -> str | None:
+    """When targets are not reached: the hypothesis that they are in the other frame (the tracker's
+    where the robot's base frame was assumed, or the other way), tested by compensating up to
+    :data:`FRAME_TRIALS` of the unreached ones in it (``options``: the same branch, tool, carriage
+    positions, payload and temperature); the warning naming the option when at least
+    :data:`FRAME_REACHED_FRACTION` of those tried are reached there, None otherwise (or when the
+    two frames coincide)."""
+    missed = np.flatnonzero(~comp.converged)
+    if not missed.size or np.array_equal(calibrated.base, nominal.base):
+        return None
+    tried = missed[:FRAME_TRIALS]
+    e1 = options.pop("e1")
+    other = OTHER_FRAME[targets_frame]
+    alt = _compensate_arm(calibrated, nominal, check_poses(targets)[tried], targets_frame=other,
+                          e1=None if e1 is None else np.asarray(e1)[tried], **options)
+    reached = int(alt.converged.sum())
+    if reached < FRAME_REACHED_FRACTION * tried.size:
+        return None
+    return (f"{missed.size} of {len(comp.converged)} target(s) are not reached in "
+            f"{FRAME_WORDS[targets_frame]}, but in {FRAME_WORDS[other]} {reached} of the {tried.size} tried "
+            "are: the targets look given in that frame; compensate them with --targets-in "
+            f"{other}")
+
+
+def _compensate_arm(calibrated: Robot, nominal: Robot, targets, *, branch, seeds=None, start=None,
+                    targets_frame: str, tool, e1, payload, temperature, layout=None,
+                    prediction=None) -> Compensation:
+    """`compensate` of one arm (a Robot, not a cell), without the other-frame hypothesis."""
     if targets_frame not in ("model", "robot"):
         raise DataError(f"targets_frame must be 'model' or 'robot', got {targets_frame!r}")
     given = calibrated

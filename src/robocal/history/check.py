@@ -15,13 +15,17 @@ degrees of freedom, and ``Sigma`` proportional to ``s^2``), ``T / m ~ F(m, nu)``
 the uncertainty of the noise estimate. With the noise stated (``noise_mm``), ``T ~ chi2(m)``.
 The verdict is ``changed`` exactly when ``p_value < ALPHA``.
 
-What moved: re-identify a small set of parameters on the check data, in the same metric, greedily
-(the one that lowers ``T`` most, joint zeros first, other link parameters only when no joint zero
-explains a significant part), until the rest is consistent with the hypothesis. Each carries its
-shift (new minus calibrated) and a 1-sigma that includes the calibration's uncertainty. With the
-frame refitted, the zeros of the first and last joints are not identifiable: a change of theta1
-turns the whole robot about the base axis, which the refitted tracker frame absorbs, and one of
-theta6 turns the SMR about the flange axis, which the refitted SMR offset absorbs.
+What moved: without a frame fit, first the frames the model kept (the SMR offsets, the tracker
+frame), greedily, each while it explains a significant part: a re-seated SMR or a bumped tracker is
+not the robot, and a check with ``--fit-frame`` would hold (``frame_change``). Then re-identify a
+small set of parameters on the check data, in the same metric, greedily (the one that lowers ``T``
+most, joint zeros first, other link parameters only when no joint zero explains a significant
+part), until the rest is consistent with the hypothesis. Each carries its shift (new minus
+calibrated) and a 1-sigma that includes the calibration's uncertainty. A parameter whose column
+lies in the span of the tracker frame's and the SMR offsets' columns (`confounded`: alpha1, a1,
+theta1, d1 with the base frame, theta{n}, d{n} with the SMR on a 6-axis arm, found by the columns,
+not the names) is never named: to the data its change is a moved tracker or SMR; with the frame
+refitted a change of theirs does not show at all (the note lists them).
 """
 
 from __future__ import annotations
@@ -32,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg, stats
 
-from robocal.core.errors import DataError
+from robocal.core.errors import DataError, PlausibilityError
 from robocal.core.io import load_json, write_all
 from robocal.data.registration import register
 from robocal.history.expected import expected_uncertainty
@@ -42,14 +46,24 @@ from robocal.identify.space import block_of
 from robocal.kinematics.conditions import Conditions
 from robocal.kinematics.model import Robot
 from robocal.kinematics.model_file import dump_model
+from robocal.trust.diagnosis import diagnosed
 
 ALPHA = 0.01  # the false-alarm rate the verdict is taken at: changed exactly when p_value < ALPHA
 MIN_CHECK_POSES = 8  # fewer poses leave too few degrees of freedom after the frame fit
 MAX_CHANGED = 3  # parameters re-identified at most to explain a change
 RANK_RTOL = 1e-9  # relative singular value below which a refitted column adds nothing
 FRAME_NAMES = ("base.x", "base.y", "base.z", "base.rx", "base.ry", "base.rz", "tool.x", "tool.y", "tool.z")
-UNSEEN_WITH_FRAME = ("the zeros of the first and last joints (theta1, theta{n}) cannot be told from the "
-                     "refitted tracker frame and SMR offset: a change of theirs does not show in a check")
+UNSEEN_WITH_FRAME = ("{names} cannot be told from the refitted tracker frame and SMR offset (their columns "
+                     "lie in the span of the frame's and the SMR's at these poses): a change of theirs does "
+                     "not show in a check")
+# a parameter whose whitened column keeps less than this fraction of its norm outside the span of the
+# tracker frame's and the SMR offsets' columns is confounded with them: never named as what moved
+# (measured on 25 poses of a GP25, a KR 6 R700 and a UR10e: alpha1, a1, theta1, d1 with the tracker
+# frame, theta{n}, d{n} with the SMR keep 1e-13 to 1e-16; the next parameter 0.81 or more)
+CONFOUNDED_FRACTION = 0.02
+# what a check without --fit-frame tests first, before any link parameter: the frames it kept fixed
+FRAME_GROUPS = {"smr": "the SMR on the tool (re-seated or moved to another nest)",
+                "tracker": "the tracker frame (the tracker or the robot's base moved)"}
 _LINK_KINDS = ("alpha", "a", "beta", "d")
 TRACKER_KINDS = ("point",)  # calibrations whose residuals give the tracker's noise per coordinate
 
@@ -153,7 +167,15 @@ class CheckResult:
     rms_mm, predicted_rms_mm : float
         The residual RMS (mm) and the RMS expected if nothing changed (mm).
     changed_parameters : list of dict
-        ``{name, unit, shift, sigma}`` (mm, deg) of the parameters that most likely moved.
+        ``{name, unit, shift, sigma}`` (mm, deg) of the parameters that most likely moved (never
+        one confounded with the tracker frame or the SMR offset: ``CONFOUNDED_FRACTION``).
+    frame_change : dict or None
+        Without ``fit_frame``: what of the frames the model kept moved, tested before any link
+        parameter: ``{moved: [smr, tracker], smr (the index, as the data's smr column, of the
+        SMR that moved most), smr_shift_mm: [x, y, z] (its shift, flange frame),
+        smr_shift_norm_mm, translation_mm: [x, y, z], rotation_deg: [rx, ry, rz] (the base
+        frame's, about the world axes), points_moved_rms_mm (how far that moves the check's
+        points), explained_p_value}`` (the keys of what moved).
     explained_p_value : float or None
         The p-value once those parameters are refitted.
     notes : list of str
@@ -185,6 +207,7 @@ class CheckResult:
     predicted_rms_mm: float
     changed_parameters: list[dict] = field(default_factory=list)
     explained_p_value: float | None = None
+    frame_change: dict | None = None
     notes: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)  # the verdict says what matters: none today
 
@@ -206,17 +229,39 @@ class CheckResult:
         if self.verdict == "changed":
             out["changed_parameters"] = self.changed_parameters
             out["explained_p_value"] = self.explained_p_value
+            out["frame_change"] = self.frame_change
         return out
 
     def summary(self) -> str:
         """The verdict with its p-value and RMS (mm), the parameters most likely moved, the notes."""
         lines = [f"check of {self.n_poses} poses: {self.verdict} (p = {self.p_value:.3g}; "
                  f"RMS {self.rms_mm:.4f} mm, expected {self.predicted_rms_mm:.4f} mm if unchanged)"]
-        moved = [f"{c['name']} {c['shift']:+.4f} ± {c['sigma']:.4f} {c['unit']}"
-                 for c in self.changed_parameters]
+        moved = [*self._frame_words(), *(f"{c['name']} {c['shift']:+.4f} ± {c['sigma']:.4f} {c['unit']}"
+                                         for c in self.changed_parameters)]
         if moved:
             lines.append("most likely moved: " + ", ".join(moved))
         return "\n".join(lines + [f"note: {note}" for note in self.notes])
+
+
+    def _frame_words(self) -> list[str]:
+        """`frame_change` in words, with the option that refits what moved."""
+        f = self.frame_change
+        if not f:
+            return []
+        out = []
+        if "smr" in f["moved"]:
+            x, y, z = f["smr_shift_mm"]
+            which = f" (smr index {f['smr']})" if f["smr"] else ""
+            out.append(f"{FRAME_GROUPS['smr']}{which} by {f['smr_shift_norm_mm']:.4f} mm (x {x:+.4f}, "
+                       f"y {y:+.4f}, z {z:+.4f} mm in the flange frame)")
+        if "tracker" in f["moved"]:
+            out.append(f"{FRAME_GROUPS['tracker']}: it moves the check's points by "
+                       f"{f['points_moved_rms_mm']:.4f} mm RMS (translation "
+                       f"{np.linalg.norm(f['translation_mm']):.4f} mm, rotation "
+                       f"{np.linalg.norm(f['rotation_deg']):.4f} deg about the tracker's origin)")
+        out[-1] += (" (not the robot: check again with --fit-frame, which refits them"
+                    + (")" if f["explained_p_value"] >= ALPHA else "; the rest follows)"))
+        return out
 
 
 class _Whitened:
@@ -254,16 +299,29 @@ def _display(name: str, robot) -> tuple[str, float]:
     return ("deg", 180.0 / np.pi) if unit == "rad" else ("mm", 1e3)
 
 
-def candidates(robot, fit_frame: bool) -> tuple[list[str], list[str]]:
+def candidates(robot) -> tuple[list[str], list[str]]:
     """The parameters a change is looked for in: joint zeros first, then the other link
-    parameters (beta only on nominally parallel axes); with the frame refitted, without theta1 and
-    theta{n} (absorbed by the frame and the SMR offset)."""
+    parameters (beta only on nominally parallel axes); those confounded with the frames are
+    removed by `confounded`, by their columns, not their names."""
     n = robot.n_joints
-    joints = range(2, n) if fit_frame else range(1, n + 1)
-    zeros = [f"theta{i}" for i in joints]
+    zeros = [f"theta{i}" for i in range(1, n + 1)]
     others = [f"{k}{i}" for i in range(1, n + 1) for k in _LINK_KINDS
               if k != "beta" or robot.parallel[i - 1]]
     return zeros, others
+
+
+def confounded(names, blocks: np.ndarray, frame: np.ndarray, L: np.ndarray) -> list[str]:
+    """Of ``names`` (columns ``blocks`` ``(3N, k)``), those whose column in the metric ``L``
+    (``C = L L^T``) keeps less than `CONFOUNDED_FRACTION` of its norm outside the span of the
+    tracker frame's and the SMR offsets' columns ``frame`` ``(3N, m)``: a change of theirs is a
+    moved tracker or SMR to the data (d1 or theta1 and the base frame, d{n} or theta{n} and the SMR)."""
+    W = linalg.solve_triangular(L, np.hstack([frame, blocks]), lower=True)
+    F, B = W[:, :frame.shape[1]], W[:, frame.shape[1]:]
+    U, sv, _ = linalg.svd(F, full_matrices=False)
+    Q = U[:, sv > RANK_RTOL * sv[0]]
+    outside = np.linalg.norm(B - Q @ (Q.T @ B), axis=0)
+    norm = np.linalg.norm(B, axis=0)
+    return [n for n, o, b in zip(names, outside, norm, strict=True) if b == 0 or o < CONFOUNDED_FRACTION * b]
 
 
 def check_calibration(robot, data, uncertainty: Uncertainty, *, fit_frame: bool = True,
@@ -334,8 +392,15 @@ def check_calibration(robot, data, uncertainty: Uncertainty, *, fit_frame: bool 
     modelled = start.fk(data.joints, **kw)[:, :3, 3]
     r = (data.points - modelled).reshape(-1)
     rms_mm = float(np.sqrt(np.mean(np.sum((data.points - modelled) ** 2, axis=1)))) * 1e3
-    check_residual(rms_mm, modelled, "the check data (calibrated model, frame fitted)", force=force)
-    frame = [*FRAME_NAMES, *(f"smr{k}.{c}" for k in range(1, data.n_smr) for c in "xyz")] if fit_frame else []
+    try:
+        check_residual(rms_mm, modelled, "the check data (calibrated model, "
+                       + ("frame fitted)" if fit_frame else "its own frame)"), force=force)
+    except PlausibilityError as exc:  # the data's own diagnosis first (flipped joints, a frame, a unit)
+        raise diagnosed(exc, robot, [data], frame_fitted=fit_frame) from None
+    smr_names = ["tool.x", "tool.y", "tool.z", *(f"smr{k}.{c}" for k in range(1, data.n_smr) for c in "xyz")]
+    groups = {"tracker": list(FRAME_NAMES[:6]), "smr": smr_names}
+    every_frame = [*groups["tracker"], *smr_names]
+    frame = every_frame if fit_frame else []
 
     def columns(names) -> np.ndarray:
         return start.jacobian(data.joints, list(names), **kw).reshape(len(r), len(names))
@@ -357,18 +422,84 @@ def check_calibration(robot, data, uncertainty: Uncertainty, *, fit_frame: bool 
     result = CheckResult(verdict="changed" if p < ALPHA else "holds", p_value=p, statistic=T, dof=dof,
                          noise_dof=noise_dof, noise_m=noise, noise_source=source, n_poses=data.n_poses,
                          rms_mm=rms_mm, predicted_rms_mm=predicted)
-    if fit_frame:
-        result.notes.append(UNSEEN_WITH_FRAME.format(n=robot.n_joints))
+    zeros, others = candidates(start)
+    names = [*zeros, *others]
+    blocks = columns(names)
+    hidden = confounded(names, blocks, columns(every_frame), space.L)
+    if fit_frame and hidden:
+        result.notes.append(UNSEEN_WITH_FRAME.format(names=", ".join(hidden)))
     if result.verdict == "changed":
-        _explain(result, space, columns, start, candidates(start, fit_frame), noise_dof, dof)
+        if not fit_frame:  # the frames kept fixed first: a moved tracker or SMR is not the robot
+            space, T, p, dof = _frame_change(result, r, C, columns, groups, noise_dof)
+        pools = [[n for n in pool if n not in hidden] for pool in (zeros, others)]
+        _explain(result, space, T, p, dof, dict(zip(names, blocks.T[:, :, None], strict=True)), start, pools,
+                 noise_dof)
     return result
 
 
-def _explain(result: CheckResult, space: _Whitened, columns, robot, pools, noise_dof, dof: int) -> None:
-    """Greedy re-identification of what moved (module docstring): fills ``changed_parameters``."""
+def _significant(T: float, T_new: float, dof_new: int, k: int) -> bool:
+    """Whether refitting ``k`` more columns, which leave ``T_new`` on ``dof_new`` degrees of
+    freedom, explains a significant part of ``T`` (the drop against the chi-square of ``k``,
+    scaled by what is left unexplained)."""
+    return (T - T_new) / max(T_new / max(dof_new, 1), 1.0) > stats.chi2.isf(ALPHA, k)
+
+
+def _frame_change(result: CheckResult, r: np.ndarray, C: np.ndarray, columns, groups: dict,
+                  noise_dof) -> tuple[_Whitened, float, float, int]:
+    """Without a frame fit: which of the frames the model kept (the SMR offsets, the tracker frame)
+    moved, tested before any link parameter, greedily (the group that lowers ``T`` most, while it
+    explains a significant part); fills ``frame_change`` and returns the space with those groups
+    refitted, its ``T``, p-value and degrees of freedom for the link parameters that may follow."""
     chosen: list[str] = []
-    T, p = result.statistic, result.p_value
-    blocks = {n: columns([n]) for pool in pools for n in pool}
+    T, p, dof = result.statistic, result.p_value, len(r)
+    empty = _Whitened(r, np.zeros((len(r), 0)), C)
+    fits = {}
+    while p < ALPHA and len(chosen) < len(groups):
+        trials = {g: empty.fit(columns([n for c in (*chosen, g) for n in groups[c]]))
+                  for g in groups if g not in chosen}
+        best = min(trials, key=lambda g: trials[g][0])
+        T_new, rank = trials[best][:2]
+        if not _significant(T, T_new, len(r) - rank, rank - (len(r) - dof)):
+            break
+        chosen.append(best)
+        fits = {"T": T_new, "rank": rank, "x": trials[best][2]}
+        T, dof = T_new, len(r) - rank
+        p = _p_value(T, dof, noise_dof)
+    if not chosen:
+        return empty, result.statistic, result.p_value, len(r)
+    names = [n for c in chosen for n in groups[c]]
+    change = {"moved": chosen, "explained_p_value": p,
+              **_frame_shift(chosen, groups, names, fits["x"], columns)}
+    result.frame_change = change
+    result.explained_p_value = p
+    return _Whitened(r, columns(names), C), T, p, dof
+
+
+def _frame_shift(chosen: list[str], groups: dict, names: list[str], estimate: np.ndarray, columns) -> dict:
+    """`CheckResult.frame_change`'s figures of the frame groups ``chosen`` from their ``names``'
+    ``estimate`` (SI): the SMR that moved most and its shift (mm, flange frame), the tracker
+    frame's translation (mm), rotation (deg) and how far it moves the check's points (mm RMS; the
+    frame's origin is the tracker's, so the translation alone says little)."""
+    x = dict(zip(names, estimate, strict=True))
+    out = {}
+    if "smr" in chosen:
+        shifts = np.array([x[n] for n in groups["smr"]]).reshape(-1, 3) * 1e3  # (SMRs, 3) mm
+        k = int(np.argmax(np.linalg.norm(shifts, axis=1)))  # the SMR that moved most
+        out.update(smr=k, smr_shift_mm=shifts[k].tolist(),
+                   smr_shift_norm_mm=float(np.linalg.norm(shifts[k])))
+    if "tracker" in chosen:
+        moves = (columns(groups["tracker"]) @ np.array([x[n] for n in groups["tracker"]])).reshape(-1, 3)
+        out.update(translation_mm=[x[f"base.{c}"] * 1e3 for c in "xyz"],
+                   rotation_deg=[float(np.rad2deg(x[f"base.r{c}"])) for c in "xyz"],
+                   points_moved_rms_mm=float(np.sqrt(np.mean(np.sum(moves**2, axis=1)))) * 1e3)
+    return out
+
+
+def _explain(result: CheckResult, space: _Whitened, T: float, p: float, dof: int, blocks: dict, robot,
+             pools, noise_dof) -> None:
+    """Greedy re-identification of what moved (module docstring), from the statistic ``T`` (p-value
+    ``p``, ``dof``) of ``space``; ``blocks`` the candidates' columns: fills ``changed_parameters``."""
+    chosen: list[str] = []
     while p < ALPHA and len(chosen) < MAX_CHANGED:
         for pool in pools:
             trials = {}
@@ -381,9 +512,7 @@ def _explain(result: CheckResult, space: _Whitened, columns, robot, pools, noise
             if not trials:
                 continue
             best = min(trials, key=trials.get)
-            m = dof - len(chosen) - 1
-            scale = max(trials[best] / m, 1.0)
-            if (T - trials[best]) / scale > stats.chi2.isf(ALPHA, 1):  # a significant part explained
+            if _significant(T, trials[best], dof - len(chosen) - 1, 1):  # a significant part explained
                 break
         else:
             break
@@ -391,8 +520,9 @@ def _explain(result: CheckResult, space: _Whitened, columns, robot, pools, noise
         T = trials[best]
         p = _p_value(T, dof - len(chosen), noise_dof)
     if not chosen:
-        result.notes.append("no single link parameter explains the change: the robot moved in a way "
-                            "its geometric model does not describe (or the check data are wrong)")
+        if result.frame_change is None:
+            result.notes.append("no single link parameter explains the change: the robot moved in a way "
+                                "its geometric model does not describe (or the check data are wrong)")
         return
     T, _, x, cov = space.fit(np.hstack([blocks[c] for c in chosen]))
     m = dof - len(chosen)

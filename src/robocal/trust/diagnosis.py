@@ -7,7 +7,10 @@ to the data as the hypothesis would correct them; one that fits within the plaus
 (:func:`robocal.identify.plausibility.error_limit_mm`) and at least ``GAIN`` times better than the
 data as given is named:
 
-- two joint columns exchanged (every pair) or one joint's sign flipped (every joint);
+- two joint columns exchanged (every pair) or the signs of up to three joints flipped together
+  (every subset, screened at once by a rigid fit; a prismatic axis named as a reversed track or
+  lift direction, by the joint's kind);
+- an arm mounted turned on its track or gantry carriage (multiples of 90 deg, then a fitted angle);
 - a mirrored tracker frame (a left-handed frame: one axis's sign flipped in the export);
 - several files: the odd one (the others fit, it does not), or every file fitting alone but not
   together (a second tracker station, or the tracker moved between files);
@@ -29,6 +32,7 @@ from robocal.core.errors import RobocalError
 from robocal.data.joint_conventions import COUPLED_OPTION, fanuc_decoupled
 from robocal.data.registration import register_frame
 from robocal.identify.plausibility import error_limit_mm
+from robocal.kinematics.cell import carriage_frames, is_track_cell
 from robocal.kinematics.prior_spec import MAX_SCALE
 
 GAIN = 5.0  # a hypothesis must fit this many times better than the data as given
@@ -36,6 +40,14 @@ GAIN = 5.0  # a hypothesis must fit this many times better than the data as give
 # (measured: 9 % on FIGAROH's TIAGo with the industrial priors fixed; 0.001 % for points in inches,
 # whose evidence also rises: the huge corrections they need are made anyway, a prior does not stop them)
 PRIORS_MIN_RMS_DROP = 0.05
+MAX_FLIPPED = 3  # joints whose signs a hypothesis flips together at most (63 subsets of 7 joints)
+SCREENED = 4  # the hypotheses that pass the rigid screen best get the full frame and SMR fit
+# a hypothesis changing fewer joints is named when it fits within this factor of the best (a wrist flip
+# the SMR's 0.7 mm lateral offset shows: 1.50 mm against 1.20 on a GP25 whose links are 1.2 mm off nominal)
+SIMPLER_WITHIN = 1.1
+SCREEN_ROWS = 400  # rows (evenly spaced) the screens use at most: 78 hypotheses x 400 rows of a 7-axis cell
+MOUNT_STEP_DEG = 15.0  # the grid of mount rotations tried before the fitted one
+MOUNT_RIGHT_ANGLE_DEG = 1.0  # a fitted mount rotation this close to a multiple of 90 deg is named as one
 
 
 def fit_rms_mm(robot, data) -> float:
@@ -55,34 +67,156 @@ def _columns(data, joints) -> object:
                    travel=travel_from_order(joints, data.pose_id))
 
 
+def rigid_fit_rms(points: np.ndarray, measured: np.ndarray) -> np.ndarray:
+    """RMS (m) left after the best rigid transform of each hypothesis' points ``(H, N, 3)`` onto
+    ``measured`` ``(N, 3)`` (Kabsch, all hypotheses at once): the cheap screen of
+    :func:`joint_mixup` before the full frame and SMR fit of the few best."""
+    P = points - points.mean(axis=1, keepdims=True)
+    Y = measured - measured.mean(axis=0)
+    U, s, Vt = np.linalg.svd(np.einsum("hni,nj->hij", P, Y))
+    s[:, -1] *= np.sign(np.linalg.det(U @ Vt))  # a rotation, not a reflection
+    sse = np.sum(P**2, axis=(1, 2)) + np.sum(Y**2) - 2.0 * s.sum(axis=1)
+    return np.sqrt(np.maximum(sse, 0.0) / len(measured))
+
+
+def _screen_rows(n: int) -> np.ndarray:
+    """Indices of at most :data:`SCREEN_ROWS` rows of ``n``, evenly spaced (all when fewer)."""
+    return np.unique(np.linspace(0, n - 1, min(n, SCREEN_ROWS)).round().astype(int))
+
+
+def _flip_words(spec, flipped: tuple[int, ...]) -> str:
+    """The sign flip of joints ``flipped`` in words, by the joints' kind: a prismatic axis (a
+    track, a lift) is a direction counted the other way, a revolute joint a sign."""
+    slides = [spec[i] for i in flipped if spec[i].prismatic]
+    turns = [spec[i] for i in flipped if not spec[i].prismatic]
+    parts = [f"the prismatic axis {j.name}'s direction looks reversed (a track or lift counted the other "
+             "way: the cell file's track direction, or the controller's sign of that axis; to the data the "
+             "same as the arm mounted turned 180 deg on it)" for j in slides]
+    if turns:
+        names = ", ".join(j.name for j in turns)
+        parts.append(f"joint {names}'s sign looks flipped (the controller counts it the other way)"
+                     if len(turns) == 1 else
+                     f"joints {names} look counted the other way (their signs flipped)")
+    return "; ".join(parts)
+
+
+def _mixup_trials(spec, n: int) -> list[tuple[str, np.ndarray]]:
+    """Every joint column exchange (two joints of one kind) and sign flip of up to
+    :data:`MAX_FLIPPED` joints together, as (words, column map ``(n,)``, signs ``(n,)``)."""
+    trials = []
+    for i, j in combinations(range(n), 2):
+        if spec[i].kind == spec[j].kind:
+            order = np.arange(n)
+            order[[i, j]] = [j, i]
+            trials.append((f"joint columns {spec[i].name} and {spec[j].name} look exchanged", order,
+                           np.ones(n)))
+    for k in range(1, min(MAX_FLIPPED, n) + 1):
+        for flipped in combinations(range(n), k):
+            signs = np.ones(n)
+            signs[list(flipped)] = -1.0
+            trials.append((_flip_words(spec, flipped), np.arange(n), signs))
+    return trials
+
+
 def joint_mixup(robot, data, given_mm: float) -> str | None:
-    """A joint column exchange (of two joints of one kind: two angles, two lengths) or sign flip
-    under which the model fits, as a sentence naming the joints as ``robot`` does, or None."""
+    """A joint column exchange (of two joints of one kind: two angles, two lengths) or the signs of
+    up to :data:`MAX_FLIPPED` joints flipped together under which the model fits, as a sentence
+    naming the joints as ``robot`` does (a prismatic axis as a reversed direction), or None.
+
+    Every hypothesis is screened at once by a rigid fit of its forward kinematics to the points
+    (:func:`rigid_fit_rms`); the :data:`SCREENED` best get the full frame and SMR fit. Of those that
+    fit, the one with the fewest joints changed among those within :data:`SIMPLER_WITHIN` of the
+    best is named (a flip the data cannot see, a wrist joint with the SMR on its axis, is not); a
+    mirrored tracker frame that fits as well as several joints flipped is named instead (one
+    mistake in the export, the same to the data: :func:`mirrored`)."""
     limit = error_limit_mm(data.points)
     spec = robot.joints
-    trials = []
-    for i, j in combinations(range(len(spec)), 2):
-        if spec[i].kind != spec[j].kind:
-            continue
-        q = data.joints.copy()
-        q[:, [i, j]] = q[:, [j, i]]
-        trials.append((f"joint columns {spec[i].name} and {spec[j].name} look exchanged", q))
-    for i, joint in enumerate(spec):
-        q = data.joints.copy()
-        q[:, i] = -q[:, i]
-        trials.append((f"joint {joint.name}'s sign looks flipped (the controller counts it the other way)",
-                       q))
-    best = min(((fit_rms_mm(robot, _columns(data, q)), what) for what, q in trials), key=lambda t: t[0])
-    if best[0] <= limit and best[0] * GAIN < given_mm:
-        return (f"{best[1]}: corrected so, the nominal model fits to {best[0]:.3g} mm RMS ({given_mm:.3g} "
+    trials = _mixup_trials(spec, len(spec))
+    rows = _screen_rows(len(data))
+    q = np.stack([data.joints[rows][:, order] * signs for _, order, signs in trials])  # (H, R, n)
+    modelled = robot.fk(q.reshape(-1, len(spec)), smr=np.tile(data.smr[rows], len(trials)))[:, :3, 3]
+    screen = rigid_fit_rms(modelled.reshape(len(trials), rows.size, 3), data.points[rows])
+    refined = []
+    for h in np.argsort(screen)[:SCREENED]:
+        what, order, signs = trials[h]
+        rms = fit_rms_mm(robot, _columns(data, data.joints[:, order] * signs))
+        changed = int(np.count_nonzero(signs < 0) + np.count_nonzero(order != np.arange(len(spec))))
+        refined.append((rms, changed, what))
+    best = min(r[0] for r in refined)
+    rms, changed, what = min((r for r in refined if r[0] <= SIMPLER_WITHIN * best),
+                             key=lambda r: (r[1], r[0]))
+    mirror = _mirror_rms(robot, data) if changed > 1 else np.inf
+    if mirror <= SIMPLER_WITHIN * rms:  # one mistake in the export explains it as well: named first
+        said = mirrored(robot, data, given_mm)
+        return None if said is None else f"{said} (to these data the same as: {what})"
+    if rms <= limit and rms * GAIN < given_mm:
+        return (f"{what}: corrected so, the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} "
                 "mm as given); fix the file's joint columns")
     return None
 
 
-def mirrored(robot, data, given_mm: float) -> str | None:
-    """The sentence naming a mirrored tracker frame when the model fits the mirrored points."""
+def mount_turned(robot, data, given_mm: float) -> str | None:
+    """For a chain whose first revolute joint is carried by prismatic axes (an arm on a track, a
+    gantry): the arm's mount turned about its first axis (the base z of the arm) by a multiple of
+    90 deg, or by a fitted angle, under which the model fits, as a sentence; None otherwise. (On a
+    fixed base the tracker frame fit absorbs any mount rotation: nothing to test.)"""
+    slides = np.array([j.prismatic for j in robot.joints])
+    if not slides[0] or slides.all():
+        return None
+    first = int(np.argmin(slides))  # the arm's first revolute joint
+    name = f"theta{first + 1}"
+    zero = robot.get(name)
+
+    def rms_at(turn: float) -> float:
+        return fit_rms_mm(robot.with_values({name: zero + turn}), data)
+
+    rows = _screen_rows(len(data))
+
+    def rigid_mm(turns: np.ndarray) -> np.ndarray:  # the cheap screen: a rigid fit per angle
+        q, smr = data.joints[rows], data.smr[rows]
+        points = np.stack([robot.with_values({name: zero + t}).fk(q, smr=smr)[:, :3, 3]
+                           for t in np.atleast_1d(turns)])
+        return rigid_fit_rms(points, data.points[rows]) * 1e3
+
+    # the grid and the fitted angle screened, the named angle judged by the full frame and SMR fit
+    grid = np.deg2rad(np.arange(MOUNT_STEP_DEG, 360.0, MOUNT_STEP_DEG))
+    best = grid[int(np.argmin(rigid_mm(grid)))]
+    from scipy.optimize import minimize_scalar  # here: scipy.optimize costs start-up to every command
+
+    step = np.deg2rad(MOUNT_STEP_DEG)
+    found = minimize_scalar(lambda t: float(rigid_mm(t)[0]), bounds=(best - step, best + step),
+                            method="bounded", options={"xatol": 1e-6})
+    turn = float(found.x)
+    deg = float(np.rad2deg(np.remainder(turn + np.pi, 2 * np.pi) - np.pi))
+    rms = rms_at(turn)
+    right = round(deg / 90.0) * 90.0
+    at_right = rms_at(np.deg2rad(right)) if abs(deg - right) <= MOUNT_RIGHT_ANGLE_DEG else np.inf
+    if at_right <= SIMPLER_WITHIN * rms:
+        deg, rms = right, at_right
+    if rms <= error_limit_mm(data.points) and rms * GAIN < given_mm:
+        axis = f"its first axis ({robot.joints[first].name}, in that joint's sense)"
+        if is_track_cell(robot):  # as a cell file's mount rpy z turns it: about the arm base's z
+            z_arm = carriage_frames(robot, [0.0])[0, :3, 2]
+            z_joint = robot.fk(np.zeros((1, robot.n_joints)), frames=True)[1][0, first + 1, :3, 2]
+            deg *= 1.0 if z_arm @ z_joint >= 0 else -1.0
+            axis = "the z axis of its base (a cell file's mount rpy z)"
+        return (f"the arm looks mounted turned by {deg:+.4g} deg about {axis} on the {robot.joints[0].name} "
+                f"carriage: turned so, the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as "
+                "given); fix the mount's rotation")
+    return None
+
+
+def _mirror_rms(robot, data) -> float:
+    """RMS (mm) of the frame and SMR fit to ``data``'s points with one axis's sign flipped."""
     flipped = data.points * np.array([1.0, 1.0, -1.0])
-    rms = fit_rms_mm(robot, replace(data, points=flipped, rotations=None, kind="point"))
+    return fit_rms_mm(robot, replace(data, points=flipped, rotations=None, kind="point"))
+
+
+def mirrored(robot, data, given_mm: float) -> str | None:
+    """The sentence naming a mirrored tracker frame when the model fits the mirrored points (a
+    mirror is the same, to the data, as some joints counted the other way: :func:`joint_mixup`
+    names it first when it fits as well)."""
+    rms = _mirror_rms(robot, data)
     if rms <= error_limit_mm(data.points) and rms * GAIN < given_mm:
         return (f"the tracker frame looks mirrored (left-handed: one axis's sign flipped in the export): "
                 f"with one axis flipped the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as "
@@ -150,12 +284,13 @@ def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
         odd = [d.label or str(k) for k, (d, ok) in enumerate(zip(sets, fits, strict=True)) if not ok]
         worst = max(a for a, ok in zip(alone, fits, strict=True) if not ok)
         reason = next((r for d, ok in zip(sets, fits, strict=True) if not ok
-                       for r in [joint_mixup(robot, d, worst) or mirrored(robot, d, worst)] if r), None)
+                       for r in [joint_mixup(robot, d, worst) or mount_turned(robot, d, worst)
+                                 or mirrored(robot, d, worst)] if r), None)
         return (f"{', '.join(odd)} is the odd file: the others fit the model, it misses by {worst:.4g} mm RMS"
                 + (f"; {reason}" if reason else " (another robot's data, another file, or a unit)"))
     for d, a in zip(sets, alone, strict=True):
-        reason = (joint_mixup(robot, d, a) or mirrored(robot, d, a) or length_unit(robot, d, a)
-                  or fanuc_coupled(robot, d, a))
+        reason = (joint_mixup(robot, d, a) or mount_turned(robot, d, a) or mirrored(robot, d, a)
+                  or length_unit(robot, d, a) or fanuc_coupled(robot, d, a))
         if reason:
             return (f"{d.label}: " if len(sets) > 1 and d.label else "") + reason
     return None
