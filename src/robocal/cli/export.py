@@ -10,6 +10,7 @@ EPILOG = """Examples:
   robocal export abb_irb2600 --urdf irb2600.urdf             # catalog robot
   robocal export my_robot.urdf --yaml my_robot.yaml          # import a serial revolute URDF
   robocal export calibrated.yaml --nominal factory.yaml --ur-calibration ur.yaml   # for the UR ROS driver
+  robocal export calibrated.yaml --urdf-like kr16_2.urdf -o kr16_2_calibrated.urdf   # the vendor's URDF, calibrated
 """
 
 
@@ -27,6 +28,12 @@ def add_parser(sub) -> None:
     p.add_argument("--ur-calibration", metavar="OUT",
                    help="ur_calibration YAML to write (Universal Robots: the geometry from the controller's "
                         "base to the flange, as ur_description's xacro composes it)")
+    p.add_argument("--urdf-like", metavar="VENDOR",
+                   help="the vendor's expanded URDF (ROS-Industrial support package, ur_description): write "
+                        "the same document (names, meshes, limits, extra frames) with the calibrated "
+                        "kinematics to -o; only its moving joints' origins change (checked against "
+                        "--nominal: refused when it describes another robot)")
+    p.add_argument("-o", "--output", metavar="OUT", help="--urdf-like: the URDF file to write")
     p.add_argument("--frames", choices=("robot", "model"), default="robot",
                    help="robot (default): base_link at the robot base, tool0 at the flange; model: a "
                         "world link at the model's world frame (after a tracker calibration, the tracker) "
@@ -40,6 +47,8 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
 
+    if args.urdf_like or args.output:
+        return _urdf_like(args)
     from robocal.cli.args import check_format
     from robocal.core.errors import DataError
     from robocal.core.io import check_outputs
@@ -59,4 +68,27 @@ def run(args) -> int:
     written = result.write()
     if not args.quiet:
         print(f"{robot.name} ({robot.n_joints} joints): wrote {', '.join(written)}")
+    return 0
+
+
+def _urdf_like(args) -> int:
+    """``--urdf-like VENDOR -o OUT``: the vendor's URDF with the calibrated kinematics."""
+    from robocal.cli.args import check_format
+    from robocal.core.errors import DataError
+    from robocal.core.io import check_outputs
+    from robocal.deploy.urdf_like import export_urdf_like
+
+    if not args.urdf_like or not args.output:
+        raise DataError("--urdf-like VENDOR and -o OUT go together: the vendor's URDF and the file to write")
+    if args.urdf or args.yaml or args.ur_calibration:
+        raise DataError("--urdf-like writes one file (-o OUT): run --urdf, --yaml or --ur-calibration apart")
+    check_format(args.output, "URDF", "-o")
+    check_outputs([args.output], [args.model, args.urdf_like])
+    result = export_urdf_like(args.model, args.urdf_like, nominal=args.nominal, output=args.output,
+                              tip=args.tip)
+    if not args.quiet:
+        print(result.summary())
+    for line in result.warnings:
+        print(f"WARNING: {line}")
+    result.write()
     return 0

@@ -51,6 +51,7 @@ CHECK_POSES = 256  # random joint vectors the map is checked on
 FK_POSES = 1000  # random joint vectors the written file's FK is compared on
 FK_TOL_M = 1e-9  # m: the written file's FK off the calibrated model's beyond this is an internal error
 FK_TOL_RAD = 1e-9  # rad: the same for the orientation
+KEPT_BELOW = 1e-12  # m, rad: a new origin's number this close to the vendor's is written as the vendor's
 GOAL_MM = 1.0  # a joint origin moved further than this from the vendor's is said (meshes move with it)
 GOAL_DEG = 0.1  # the same, deg
 _MOVING = ("revolute", "continuous", "prismatic")
@@ -219,29 +220,62 @@ def _number_list(values) -> str:
     return " ".join(repr(float(v) + 0.0) for v in values)
 
 
+def _kept(old: str, candidates: list[np.ndarray], angles: bool) -> str:
+    """The text of an origin attribute: of the ``candidates`` ``(3,)`` (the same pose: an rpy has
+    two), the one nearest the vendor's ``old`` numbers, each number written as the vendor's where it
+    is within `KEPT_BELOW` of it (``angles``: modulo 2 pi), so that what the calibration did not move
+    reads as the vendor wrote it; ``old`` itself when every number is kept."""
+    tokens = old.split()
+    try:
+        given = np.array([float(t) for t in tokens])
+    except ValueError:
+        given = np.zeros(0)
+    if given.size != 3:
+        return _number_list(candidates[0])
+
+    def gap(values):
+        d = given - values
+        return np.abs(np.remainder(d + np.pi, 2 * np.pi) - np.pi) if angles else np.abs(d)
+
+    values = min(candidates, key=lambda c: gap(c).max())
+    out = [t if g <= KEPT_BELOW else repr(float(v) + 0.0) for t, g, v in zip(tokens, gap(values), values,
+                                                                             strict=True)]
+    return old if out == tokens else " ".join(out)
+
+
+def _rpy_pair(R: np.ndarray) -> list[np.ndarray]:
+    """The two roll-pitch-yaw triples of rotation ``R`` (rad)."""
+    r, p, y = matrix_to_rpy(R)
+    wrap = np.remainder(np.array([r + np.pi, np.pi - p, y + np.pi]) + np.pi, 2 * np.pi) - np.pi
+    return [np.array([r, p, y]), wrap]
+
+
 def _with_origins(text: str, origins: dict[str, np.ndarray]) -> str:
     """``text`` with the ``xyz`` and ``rpy`` of each named joint's ``<origin>`` set to
     ``origins[name]`` (4x4, m), everything else as it was (an ``<origin>`` added where none is)."""
     masked = _masked(text)
     edits = []
     for name, T in origins.items():
-        values = {"xyz": _number_list(T[:3, 3]), "rpy": _number_list(matrix_to_rpy(T[:3, :3]))}
+        values = {"xyz": [T[:3, 3]], "rpy": _rpy_pair(T[:3, :3])}
         start = re.search(r"<joint\b[^>]*\bname\s*=\s*([\"'])" + re.escape(name) + r"\1[^>]*>", masked)
         if start is None:
             raise ModelError(f"internal: joint {name!r} not found in the URDF text")
         end = masked.find("</joint>", start.end())
         tag = re.compile(r"<origin\b[^>]*>").search(masked, start.end(), end)
         if tag is None:
-            edits.append((start.end(), start.end(), f'<origin xyz="{values["xyz"]}" rpy="{values["rpy"]}"/>'))
+            xyz, rpy = (_number_list(values[k][0]) for k in ("xyz", "rpy"))
+            edits.append((start.end(), start.end(), f'<origin xyz="{xyz}" rpy="{rpy}"/>'))
             continue
         new = text[tag.start():tag.end()]
         for attr, value in values.items():
-            pattern = re.compile(r"(\b" + attr + r"\s*=\s*)([\"'])[^\"']*\2")
-            if pattern.search(new):
+            pattern = re.compile(r"(\b" + attr + r"\s*=\s*)([\"'])([^\"']*)\2")
+            found = pattern.search(new)
+            if found:
+                value = _kept(found.group(3), value, attr == "rpy")
                 new = pattern.sub(lambda m, v=value: f"{m.group(1)}{m.group(2)}{v}{m.group(2)}", new, count=1)
             else:
                 close = len(new) - (2 if new.endswith("/>") else 1)
-                new = f'{new[:close].rstrip()} {attr}="{value}"{new[close:]}'
+                new = f'{new[:close].rstrip()} {attr}="{_number_list(value[0])}"{new[close:]}'
         edits.append((tag.start(), tag.end(), new))
     for a, b, new in sorted(edits, reverse=True):
         text = text[:a] + new + text[b:]
