@@ -100,8 +100,10 @@ def one(file: str, name: str, poses: int, seed: int) -> dict:
     map_mm, map_rad = gaps(vendor_fk, base @ np.linalg.inv(nominal.base) @ nominal.fk(q) @ out.tool)
     worst_mm = max(s.origin_mm for s in out.shifts)
     worst_deg = max(s.origin_deg for s in out.shifts)
-    return {"file": file, "robot": name, "same": same, "yourdfpy": parsed.robot.name == ET.fromstring(vendor_text).get("name"), "fk_mm": mm,
-            "fk_rad": rad, "vendor_mm": vendor_mm, "vendor_rad": vendor_rad, "map_mm": map_mm, "map_rad": map_rad, "origin_mm": worst_mm,
+    named = parsed.robot.name == ET.fromstring(vendor_text).get("name")
+    return {"file": file, "robot": name, "same": same, "yourdfpy": named, "fk_mm": mm,
+            "fk_rad": rad, "vendor_mm": vendor_mm, "vendor_rad": vendor_rad, "map_mm": map_mm,
+            "map_rad": map_rad, "origin_mm": worst_mm,
             "origin_deg": worst_deg, "seconds": seconds, "shifts": out.shifts}
 
 
@@ -116,7 +118,8 @@ def main() -> None:
         ok = (r["same"] and r["yourdfpy"] and r["fk_mm"] < GOAL_MM and r["fk_rad"] < GOAL_RAD
               and r["origin_mm"] < ORIGIN_GOAL_MM and r["origin_deg"] < ORIGIN_GOAL_DEG)
         print(f"{file:16} {name:18} {str(r['same']):5} {r['fk_mm']:9.2e} / {r['fk_rad']:8.2e}        "
-              f"{r['vendor_mm']:7.3f} / {r['vendor_rad']:8.2e}      {r['origin_mm']:6.3f} / {r['origin_deg']:7.4f}"
+              f"{r['vendor_mm']:7.3f} / {r['vendor_rad']:8.2e}      {r['origin_mm']:6.3f} / "
+              f"{r['origin_deg']:7.4f}"
               f"       {r['seconds']:.3f}  {'ok' if ok else 'GOAL MISSED'}")
         print(f"    the vendor's file vs robocal's nominal model through the map: {r['map_mm']:.2e} mm / "
               f"{r['map_rad']:.2e} rad")

@@ -10,7 +10,7 @@ EPILOG = """Examples:
   robocal export abb_irb2600 --urdf irb2600.urdf             # catalog robot
   robocal export my_robot.urdf --yaml my_robot.yaml          # import a serial revolute URDF
   robocal export calibrated.yaml --nominal factory.yaml --ur-calibration ur.yaml   # for the UR ROS driver
-  robocal export calibrated.yaml --urdf-like kr16_2.urdf -o kr16_2_calibrated.urdf   # the vendor's URDF, calibrated
+  robocal export calibrated.yaml --urdf-like kr16_2.urdf -o kr16_2_cal.urdf   # into the vendor's URDF
 """
 
 

@@ -156,7 +156,8 @@ def _random_joints(robot: Robot, count: int, seed: int = 0) -> np.ndarray:
     return q
 
 
-def _link_maps(chain: _Chain, nominal: Robot, vendor_file: str) -> tuple[np.ndarray, np.ndarray, float, float]:
+def _link_maps(chain: _Chain, nominal: Robot,
+               vendor_file: str) -> tuple[np.ndarray, np.ndarray, float, float]:
     """``B`` (robocal's world in the vendor's root link), the links' poses ``M`` ``(m + 1, 4, 4)`` in
     the robocal frame each rides on, and the check's largest variation (m, rad); DataError when the
     vendor's chain is not ``nominal``'s robot."""
@@ -354,7 +355,8 @@ class UrdfLikeExport:
                 "nominal": self.nominal.name, "base_in_base_link": self.base.tolist(),
                 "tool0_in_flange": self.tool.tolist(),
                 "map_check": {"m": self.map_check[0], "rad": self.map_check[1], "joint_vectors": CHECK_POSES},
-                "fk_check": {"m": self.fk_check[0], "rad": self.fk_check[1], "joint_vectors": self.fk_check[2]},
+                "fk_check": {"m": self.fk_check[0], "rad": self.fk_check[1],
+                             "joint_vectors": self.fk_check[2]},
                 "joints": [vars(s) for s in self.shifts], "warnings": list(self.warnings),
                 "output": self.output, "urdf": self.text}
 
@@ -378,9 +380,10 @@ def _shift_comment(result: UrdfLikeExport) -> str:
     rows = "\n".join(f"       {s.joint} ({s.link}): origin {s.origin_mm:.4f} mm {s.origin_deg:.5f} deg, "
                      f"frame at q = 0 {s.frame_mm:.4f} mm {s.frame_deg:.5f} deg" for s in result.shifts)
     mm, rad, count = result.fk_check
-    return (f"robocal: the kinematics of calibrated model {result.robot.name} (nominal {result.nominal.name}) "
-            f"in {Path(result.vendor).name}.\n     Only the origins of the moving joints changed; names, "
-            "axes, meshes, limits, inertials and the fixed frames are the vendor's.\n     robocal's base is "
+    return (f"robocal: the kinematics of calibrated model {result.robot.name} (nominal "
+            f"{result.nominal.name}) in {Path(result.vendor).name}.\n     Only the origins of the moving "
+            "joints changed; names, axes, meshes, limits, inertials and the fixed frames are the "
+            "vendor's.\n     robocal's base is "
             f"at {_pose_text(result.base)} in base_link; tool0 at {_pose_text(result.tool)} in robocal's "
             f"flange.\n     FK base_link to tool0 = the calibrated model's within {mm * 1e3:.2g} mm / "
             f"{rad:.2g} rad ({count} joint vectors).\n     Moved from the vendor's (joint origin; the link's "
@@ -470,12 +473,12 @@ def _result(robot, controller, vendor_file, robot_name, chain, B, M, origins, ch
                                                                           prismatic=cal.prismatic) @ tool
     dist, angle = _pose_gap(mine, theirs)
     if dist.max() > FK_TOL_M or angle.max() > FK_TOL_RAD:
-        raise RobocalError(f"internal: the written URDF's FK is {dist.max() * 1e3:.3g} mm / {angle.max():.3g} "
-                           "rad off the calibrated model's")
+        raise RobocalError(f"internal: the written URDF's FK is {dist.max() * 1e3:.3g} mm / "
+                           f"{angle.max():.3g} rad off the calibrated model's")
     vendor0, new0 = chain.poses(q[:1])[0], written.poses(q[:1])[0]
     frame_mm, frame_rad = _pose_gap(invert_transform(vendor0[base_at]) @ vendor0,
                                     invert_transform(new0[base_at]) @ new0)
-    origin_mm, origin_rad = _pose_gap(chain.origins, origins)
+    origin_mm, origin_rad = _pose_gap(chain.origins, written.origins)  # as the file holds them
     shifts = [JointShift(chain.joints[i].get("name"), chain.links[i + 1], float(origin_mm[i] * 1e3),
                          float(np.rad2deg(origin_rad[i])), float(frame_mm[i + 1] * 1e3),
                          float(np.rad2deg(frame_rad[i + 1]))) for i in chain.moving]
