@@ -107,9 +107,42 @@ def one(file: str, name: str, poses: int, seed: int) -> dict:
             "origin_deg": worst_deg, "seconds": seconds, "shifts": out.shifts}
 
 
+def ik_figures(name: str, seed: int, count: int = 1000) -> dict:
+    """What the how-to (docs/how-to/ros.md) says of IK once the model is calibrated, on ``count``
+    poses the calibrated robot reaches (random joints within the limits): the nominal closed form's
+    pose error on the calibrated robot (an OPW / UR analytic plugin keeps the nominal geometry), and
+    robocal's numeric IK (``rc.ik.solve``, the calibrated model) seeded by the nominal closed form
+    vs seeded from all-zero joints (an unseeded numeric plugin): converged share, same joints as the
+    truth, time per pose."""
+    nominal = rc.Robot.from_catalog(name)
+    calibrated = rc.calibrate(nominal, rc.simulate_tracker(nominal, 150, seed=seed).data).robot
+    robot = controller_model(calibrated, nominal)
+    q = np.random.default_rng(seed).uniform(nominal.limits[:, 0] * 0.9, nominal.limits[:, 1] * 0.9,
+                                            (count, nominal.n_joints))
+    poses = robot.fk(q)
+    branches = rc.ik.solve_all(nominal, poses)  # (N, 8, n)
+    d = np.abs(np.remainder(branches - q[:, None] + np.pi, 2 * np.pi) - np.pi).max(axis=2)
+    d = np.where(np.isnan(d), np.inf, d)
+    keep = np.isfinite(d.min(axis=1))  # the nominal closed form reaches the pose in some branch
+    q, poses, branches, d = q[keep], poses[keep], branches[keep], d[keep]
+    best = np.take_along_axis(branches, d.argmin(axis=1)[:, None, None], 1)[:, 0]
+    count = len(q)
+    opw_mm = np.linalg.norm(robot.fk(best)[:, :3, 3] - poses[:, :3, 3], axis=1) * 1e3
+    out = {"opw_mean_mm": float(opw_mm.mean()), "opw_max_mm": float(opw_mm.max()), "poses": count}
+    for label, seeds in (("closed-form seed", best), ("zero seed", np.zeros_like(q))):
+        start = time.perf_counter()
+        res = rc.ik.solve(robot, poses, seeds=seeds, nominal=nominal)
+        ms = (time.perf_counter() - start) / count * 1e3
+        same = np.abs(np.remainder(res.joints - q + np.pi, 2 * np.pi) - np.pi).max(axis=1) < 1e-6
+        out[label] = (float(res.converged.mean()), float(same.mean()), ms,
+                      float(res.position_error[res.converged].max(initial=0)))
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=150, help="simulated calibration poses")
+    parser.add_argument("--ik", action="store_true", help="also the IK figures of docs/how-to/ros.md")
     args = parser.parse_args()
     print(f"{'file':16} {'robot':18} same  FK gap mm / rad ({N_Q} q)   vendor file mm / rad   "
           "worst origin mm / deg   export s")
@@ -126,7 +159,16 @@ def main() -> None:
         for s in r["shifts"]:
             print(f"    {s.joint:20} {s.origin_mm:7.4f} mm {s.origin_deg:8.5f} deg   frame at q=0 "
                   f"{s.frame_mm:7.4f} mm {s.frame_deg:8.5f} deg")
+        if args.ik:
+            f = ik_figures(name, seed)
+            print(f"    IK ({f['poses']} poses): nominal closed form on the calibrated robot "
+                  f"{f['opw_mean_mm']:.3f} mm mean, {f['opw_max_mm']:.3f} mm max")
+            for label in ("closed-form seed", "zero seed"):
+                conv, same, ms, err = f[label]
+                print(f"    IK numeric, {label}: converged {conv:.1%}, the true joints {same:.1%}, "
+                      f"{ms:.3f} ms/pose, worst converged {err * 1e3:.1e} mm")
 
 
 if __name__ == "__main__":
     main()
+
