@@ -5,6 +5,7 @@ as plain XML, UR's documented base (the controller's base turned by pi), a file 
 from __future__ import annotations
 
 import io
+import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -167,3 +168,32 @@ def test_the_command(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "is not fanuc_lrmate200id" in err
     assert not (tmp_path / "x.urdf").exists()
+
+
+def test_the_vendors_macro_with_the_calibrated_origins(tmp_path):
+    nominal = rc.Robot.from_catalog("kuka_kr16_2")
+    out = rc.export_urdf_like(typical(nominal, seed=5), DATA / "kr16_2.urdf",
+                              xacro=DATA / "kr16_2_macro.xacro")
+    urdf = {j.get("name"): j.find("origin").attrib for j in ET.fromstring(out.text).iter("joint")}
+    macro = ET.fromstring(out.xacro_text)
+    joints = {j.get("name").removeprefix("${prefix}"): j for j in macro.iter("joint")}
+    assert set(joints) == set(urdf)
+    for name, joint in joints.items():
+        if joint.get("type") == "fixed":  # as the vendor wrote it (e.g. ${radians(90)})
+            continue
+        origin = joint.find("origin")
+        assert {k: origin.get(k) for k in ("xyz", "rpy")} == {k: urdf[name][k] for k in ("xyz", "rpy")}
+    vendor = (DATA / "kr16_2_macro.xacro").read_text(encoding="utf-8")
+    assert _without_origins(out.xacro_text) == _without_origins(vendor)
+    assert main(["export", "kuka_kr16_2", "--urdf-like", str(DATA / "kr16_2.urdf"), "-o",
+                 str(tmp_path / "a.urdf"), "--xacro", str(DATA / "kr16_2_macro.xacro"),
+                 str(tmp_path / "m.xacro")]) == 0
+    assert (tmp_path / "m.xacro").is_file() and (tmp_path / "a.urdf").is_file()
+    with pytest.raises(rc.ModelError, match="has no joint 'joint_1_s'"):
+        rc.export_urdf_like("yaskawa_gp25", DATA / "gp25.urdf", xacro=DATA / "kr16_2_macro.xacro")
+
+
+def _without_origins(text: str) -> list[str]:
+    """The lines of a file, the robocal comment and the origin lines left out."""
+    body = re.sub(r"<!-- robocal: the kinematics.*?-->\n", "", text, count=1, flags=re.S)
+    return [line for line in body.splitlines() if "<origin" not in line]

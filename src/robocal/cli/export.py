@@ -11,6 +11,7 @@ EPILOG = """Examples:
   robocal export my_robot.urdf --yaml my_robot.yaml          # import a serial revolute URDF
   robocal export calibrated.yaml --nominal factory.yaml --ur-calibration ur.yaml   # for the UR ROS driver
   robocal export calibrated.yaml --urdf-like kr16_2.urdf -o kr16_2_cal.urdf   # into the vendor's URDF
+  robocal export calibrated.yaml --urdf-like kr16_2.urdf -o cal.urdf --xacro kr16_2_macro.xacro macro.xacro
 """
 
 
@@ -34,6 +35,9 @@ def add_parser(sub) -> None:
                         "kinematics to -o; only its moving joints' origins change (checked against "
                         "--nominal: refused when it describes another robot)")
     p.add_argument("-o", "--output", metavar="OUT", help="--urdf-like: the URDF file to write")
+    p.add_argument("--xacro", nargs=2, metavar=("MACRO", "OUT"),
+                   help="--urdf-like: also the vendor's xacro macro the URDF was expanded from (a "
+                        "ROS-Industrial *_macro.xacro) written to OUT with the calibrated joint origins")
     p.add_argument("--frames", choices=("robot", "model"), default="robot",
                    help="robot (default): base_link at the robot base, tool0 at the flange; model: a "
                         "world link at the model's world frame (after a tracker calibration, the tracker) "
@@ -47,7 +51,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
 
-    if args.urdf_like or args.output:
+    if args.urdf_like or args.output or args.xacro:
         return _urdf_like(args)
     from robocal.cli.args import check_format
     from robocal.core.errors import DataError
@@ -83,9 +87,10 @@ def _urdf_like(args) -> int:
     if args.urdf or args.yaml or args.ur_calibration:
         raise DataError("--urdf-like writes one file (-o OUT): run --urdf, --yaml or --ur-calibration apart")
     check_format(args.output, "URDF", "-o")
-    check_outputs([args.output], [args.model, args.urdf_like])
+    macro, macro_out = args.xacro or (None, None)
+    check_outputs([args.output, macro_out], [args.model, args.urdf_like, macro])
     result = export_urdf_like(args.model, args.urdf_like, nominal=args.nominal, output=args.output,
-                              tip=args.tip)
+                              tip=args.tip, xacro=macro, xacro_output=macro_out)
     if not args.quiet:
         print(result.summary())
     for line in result.warnings:

@@ -251,16 +251,21 @@ def _rpy_pair(R: np.ndarray) -> list[np.ndarray]:
     return [np.array([r, p, y]), wrap]
 
 
-def _with_origins(text: str, origins: dict[str, np.ndarray]) -> str:
+def _with_origins(text: str, origins: dict[str, np.ndarray], what: str = "") -> str:
     """``text`` with the ``xyz`` and ``rpy`` of each named joint's ``<origin>`` set to
-    ``origins[name]`` (4x4, m), everything else as it was (an ``<origin>`` added where none is)."""
+    ``origins[name]`` (4x4, m), everything else as it was (an ``<origin>`` added where none is).
+    ``what`` names a xacro macro file: its joints' names may start with a property (``${prefix}``);
+    ModelError when a joint is not in it."""
     masked = _masked(text)
     edits = []
+    prefix = r"(?:\$\{[^}\"']*\})?" if what else ""
     for name, T in origins.items():
         values = {"xyz": [T[:3, 3]], "rpy": _rpy_pair(T[:3, :3])}
-        start = re.search(r"<joint\b[^>]*\bname\s*=\s*([\"'])" + re.escape(name) + r"\1[^>]*>", masked)
+        start = re.search(r"<joint\b[^>]*\bname\s*=\s*([\"'])" + prefix + re.escape(name) + r"\1[^>]*>",
+                          masked)
         if start is None:
-            raise ModelError(f"internal: joint {name!r} not found in the URDF text")
+            raise ModelError(f"{what or 'the URDF text'} has no joint {name!r}: give the vendor's macro of "
+                             "this robot (the xacro file the URDF was expanded from)")
         end = masked.find("</joint>", start.end())
         tag = re.compile(r"<origin\b[^>]*>").search(masked, start.end(), end)
         if tag is None:
@@ -348,6 +353,9 @@ class UrdfLikeExport:
     fk_check: tuple[float, float, int]
     output: str | None = None
     warnings: list[str] = field(default_factory=list)
+    xacro: str | None = None
+    xacro_text: str | None = None
+    xacro_output: str | None = None
 
     def summary(self) -> str:
         """The map, the FK check and the per-joint shifts, one line each."""
@@ -373,22 +381,27 @@ class UrdfLikeExport:
                 "fk_check": {"m": self.fk_check[0], "rad": self.fk_check[1],
                              "joint_vectors": self.fk_check[2]},
                 "joints": [vars(s) for s in self.shifts], "warnings": list(self.warnings),
-                "output": self.output, "urdf": self.text}
+                "output": self.output, "urdf": self.text, "xacro": self.xacro,
+                "xacro_output": self.xacro_output, "xacro_text": self.xacro_text}
 
-    def write(self, path=None) -> list[str]:
-        """Write the URDF to ``path`` (default ``output``), atomically; the paths written.
+    def write(self, path=None, xacro_path=None) -> list[str]:
+        """Write the URDF to ``path`` (default ``output``) and, with a vendor macro, the calibrated
+        macro to ``xacro_path`` (default ``xacro_output``), all or none; the paths written.
 
         Raises
         ------
         DataError
-            No path, or the path is the vendor's file (never overwritten).
+            No path, or a path is one of the vendor's files (never overwritten).
         """
         path = path if path is not None else self.output
-        if path is None:
-            raise DataError("no output path: give write(path) or export_urdf_like(..., output=)")
-        check_outputs([path], [self.vendor])
-        write_all({path: self.text})
-        return [str(path)]
+        xacro_path = xacro_path if xacro_path is not None else self.xacro_output
+        if path is None or (self.xacro_text is not None and xacro_path is None):
+            raise DataError("no output path: give write(path, xacro_path) or export_urdf_like(..., output=, "
+                            "xacro_output=)")
+        texts = {path: self.text} | ({} if self.xacro_text is None else {xacro_path: self.xacro_text})
+        check_outputs(list(texts), [self.vendor, self.xacro])
+        write_all(texts)
+        return [str(p) for p in texts]
 
 
 def _shift_comment(result: UrdfLikeExport) -> str:
@@ -407,7 +420,7 @@ def _shift_comment(result: UrdfLikeExport) -> str:
 
 # ----------------------------------------------------------------- the export
 def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str | None = None,
-                     output=None, tip: str | None = None) -> UrdfLikeExport:
+                     output=None, tip: str | None = None, xacro=None, xacro_output=None) -> UrdfLikeExport:
     """The vendor's URDF (``vendor_urdf``: a path, as xacro expands it) with the kinematics of
     ``calibrated`` (a `Robot`, model file or catalog name).
 
@@ -425,6 +438,11 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
         Where `UrdfLikeExport.write` writes by default.
     tip : str, optional
         The vendor's tool link (default ``tool0`` when it has one, else its deepest leaf).
+    xacro, xacro_output : str or Path, optional
+        The vendor's xacro macro the URDF was expanded from (a ROS-Industrial
+        ``*_macro.xacro``, joint names after ``${prefix}``), and where `UrdfLikeExport.write`
+        writes the same macro with the calibrated joint origins (``xacro_text``), for launch files
+        that include a macro.
 
     Returns
     -------
@@ -476,6 +494,11 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
                      check, new_text, cal)
     result.output = None if output is None else str(output)
     result.text = _with_comment(new_text, _shift_comment(result))
+    if xacro is not None:
+        macro = _with_origins(read_text(xacro, "vendor xacro macro"),
+                              {chain.joints[i].get("name"): origins[i] for i in chain.moving}, str(xacro))
+        result.xacro, result.xacro_text = str(xacro), _with_comment(macro, _shift_comment(result))
+        result.xacro_output = None if xacro_output is None else str(xacro_output)
     return result
 
 
