@@ -41,7 +41,7 @@ def fk_by_yourdfpy(text: str, q: np.ndarray) -> np.ndarray:
     """base_link -> tool0 ``(N, 4, 4)``; ``q`` in the moving joints' document order."""
     u = yourdfpy.URDF.load(io.StringIO(text), load_meshes=False, build_collision_scene_graph=False,
                            load_collision_meshes=False)
-    names = [j.get("name") for j in ET.fromstring(text).iter("joint") if j.get("type") != "fixed"]
+    names = [j.get("name") for j in ET.fromstring(text).findall("joint") if j.get("type") != "fixed"]
     out = []
     for qk in q:
         u.update_cfg(dict(zip(names, qk, strict=True)))
@@ -133,13 +133,16 @@ def test_a_joint_without_origin_and_a_commented_joint(tmp_path):
     text = (DATA / "kr16_2.urdf").read_text(encoding="utf-8")
     fake = '<!-- <joint name="joint_a5" type="revolute"><origin xyz="9 9 9"/> -->'
     text = text.replace("<!-- LINKS -->", fake)
+    transmission = ('<transmission name="t5"><type>transmission_interface/SimpleTransmission</type>'
+                    '<joint name="joint_a5"><hardwareInterface>x</hardwareInterface></joint></transmission>')
+    text = text.replace("<!-- JOINTS -->", transmission)
     start = text.index('<joint name="joint_a5"', text.index("<robot"))
     text = text[:start] + text[start:].replace('<origin rpy="0 0 0" xyz="0 0 0"/>', "", 1)
     (tmp_path / "v.urdf").write_text(text, encoding="utf-8")
     nominal = rc.Robot.from_catalog("kuka_kr16_2")
     calibrated = nominal.with_values({"d5": nominal.get("d5") + 4e-4})
     out = rc.export_urdf_like(calibrated, tmp_path / "v.urdf")
-    assert '<origin xyz="9 9 9"/> -->' in out.text  # the comment untouched
+    assert '<origin xyz="9 9 9"/> -->' in out.text and transmission in out.text  # untouched
     q = joints_in_limits(nominal, 20)
     truth = out.base @ calibrated.fk(q) @ out.tool
     assert max(gap(fk_by_yourdfpy(out.text, q), truth)) < 1e-9
@@ -189,7 +192,7 @@ def test_the_vendors_macro_with_the_calibrated_origins(tmp_path):
                  str(tmp_path / "a.urdf"), "--xacro", str(DATA / "kr16_2_macro.xacro"),
                  str(tmp_path / "m.xacro")]) == 0
     assert (tmp_path / "m.xacro").is_file() and (tmp_path / "a.urdf").is_file()
-    with pytest.raises(rc.ModelError, match="has no joint 'joint_1_s'"):
+    with pytest.raises(rc.ModelError, match="has no joint\\(s\\) 'joint_1_s'"):
         rc.export_urdf_like("yaskawa_gp25", DATA / "gp25.urdf", xacro=DATA / "kr16_2_macro.xacro")
 
 

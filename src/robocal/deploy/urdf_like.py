@@ -261,11 +261,13 @@ def _with_origins(text: str, origins: dict[str, np.ndarray], what: str = "") -> 
     prefix = r"(?:\$\{[^}\"']*\})?" if what else ""
     for name, T in origins.items():
         values = {"xyz": [T[:3, 3]], "rpy": _rpy_pair(T[:3, :3])}
-        start = re.search(r"<joint\b[^>]*\bname\s*=\s*([\"'])" + prefix + re.escape(name) + r"\1[^>]*>",
-                          masked)
+        pattern = r"<joint\b[^>]*\bname\s*=\s*([\"'])" + prefix + re.escape(name) + r"\1[^>]*>"
+        # a joint with a type: not a <transmission>'s or <ros2_control>'s reference to it
+        found = [m for m in re.finditer(pattern, masked) if re.search(r"\btype\s*=", m.group())]
+        start = found[0] if len(found) == 1 else None
         if start is None:
-            raise ModelError(f"{what or 'the URDF text'} has no joint {name!r}: give the vendor's macro of "
-                             "this robot (the xacro file the URDF was expanded from)")
+            raise ModelError(f"{what or 'the URDF text'} has {len(found) or 'no'} joint(s) {name!r}: give "
+                             "the vendor's macro of this robot (the xacro file the URDF was expanded from)")
         end = masked.find("</joint>", start.end())
         tag = re.compile(r"<origin\b[^>]*>").search(masked, start.end(), end)
         if tag is None:
