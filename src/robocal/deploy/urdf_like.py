@@ -8,8 +8,9 @@ The map between the vendor's frames and robocal's is found from the nominal mode
 1. The vendor's joint values are the controller's (as the ROS drivers send them) and robocal's
    nominal model is the controller's, so the n joint axes of the two at q = 0 are the same lines;
    the rigid transform ``B`` (robocal's world in the vendor's root link) that carries robocal's
-   axes onto the vendor's is fitted (directions: Kabsch; points: the lines' normal distances).
-   UR's base_link, the controller's base turned by pi, comes out of the fit as such.
+   axes onto the vendor's is fitted (directions: Kabsch; points: the lines' normal distances),
+   and every axis must then lie on the vendor's. UR's base_link, the controller's base turned by
+   pi, comes out of the fit as such.
 2. Every link of the vendor's chain rides on one of robocal's frames {f} (f: the moving joints
    before it); its pose in that frame, ``M = (B F_f(q))^-1 T_link(q)``, must be the same for every
    joint vector: checked on `CHECK_POSES` random ones (`MAP_TOL_M`, `MAP_TOL_RAD`), else the vendor
@@ -174,15 +175,36 @@ def _link_maps(chain: _Chain, nominal: Robot,
     axes_v = np.einsum("kij,kj->ki", vendor[0, child, :3, :3], chain.axes[chain.moving])
     B = _fit_lines(frames[0, 1:, :3, 3], frames[0, 1:, :3, 2], vendor[0, child, :3, 3], axes_v,
                    ~np.asarray(nominal.prismatic))
+    _check_axes(B, frames[0, 1:], vendor[0, child, :3, 3], axes_v, nominal, chain, vendor_file)
     M = invert_transform(B @ frames[:, chain.frame]) @ vendor  # (N, m + 1, 4, 4)
     dist, angle = _pose_gap(M, M[:1])
-    worst = int(np.argmax(np.maximum(dist.max(0) / MAP_TOL_M, angle.max(0) / MAP_TOL_RAD)))
-    if dist[:, worst].max() > MAP_TOL_M or angle[:, worst].max() > MAP_TOL_RAD:
+    off = np.flatnonzero((dist.max(0) > MAP_TOL_M) | (angle.max(0) > MAP_TOL_RAD))
+    if off.size:
+        worst = int(off[0])  # the first link along the chain that does not follow robocal's frame
         raise DataError(f"{vendor_file} is not {nominal.name}: its link {chain.links[worst]} moves "
                         f"{dist[:, worst].max() * 1e3:.3g} mm / {np.rad2deg(angle[:, worst].max()):.3g} deg "
                         f"against robocal's frame {{{chain.frame[worst]}}} over {CHECK_POSES} joint vectors "
                         "(another robot, or joints that are not the controller's)")
     return B, _on_axes(chain, M[0]), float(dist.max()), float(angle.max())
+
+
+def _check_axes(B: np.ndarray, frames: np.ndarray, points: np.ndarray, axes: np.ndarray, nominal: Robot,
+                chain: _Chain, vendor_file: str) -> None:
+    """DataError naming the joint whose axis (robocal's frames {1..n} ``(n, 4, 4)`` moved by ``B``)
+    is furthest from the vendor's line (``points``, unit ``axes`` ``(n, 3)``) beyond the map's
+    tolerance: the vendor's file is another robot (or another joint convention)."""
+    mapped = B @ frames
+    angle = np.arccos(np.clip(np.einsum("ki,ki->k", mapped[:, :3, 2], axes), -1.0, 1.0))
+    gap = mapped[:, :3, 3] - points
+    dist = np.linalg.norm(gap - np.einsum("ki,ki->k", gap, axes)[:, None] * axes, axis=1)
+    dist[np.asarray(nominal.prismatic)] = 0.0  # a slide's line has no position
+    k = int(np.argmax(np.maximum(dist / MAP_TOL_M, angle / MAP_TOL_RAD)))
+    if dist[k] > MAP_TOL_M or angle[k] > MAP_TOL_RAD:
+        name = chain.joints[chain.moving[k]].get("name")
+        raise DataError(f"{vendor_file} is not {nominal.name}: the axis of its joint {name} is "
+                        f"{dist[k] * 1e3:.3g} mm / {np.rad2deg(angle[k]):.3g} deg off the model's joint "
+                        f"{k + 1} after the best rigid fit of all the axes (another robot, or joints that "
+                        "are not the controller's)")
 
 
 def _on_axes(chain: _Chain, M: np.ndarray) -> np.ndarray:
