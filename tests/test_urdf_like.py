@@ -200,3 +200,34 @@ def _without_origins(text: str) -> list[str]:
     """The lines of a file, the robocal comment and the origin lines left out."""
     body = re.sub(r"<!-- robocal: the kinematics.*?-->\n", "", text, count=1, flags=re.S)
     return [line for line in body.splitlines() if "<origin" not in line]
+
+
+def test_a_robot_on_a_track_keeps_the_vendors_rail_joint(tmp_path):
+    from robocal.kinematics.model import track_chain
+    from robocal.kinematics.transforms import make_transform
+
+    rail = ('<link name="world"/><link name="carriage"/>'
+            '<joint name="rail_joint" type="prismatic"><parent link="world"/><child link="carriage"/>'
+            '<origin xyz="0 0 0" rpy="0 0 0"/><axis xyz="1 0 0"/>'
+            '<limit lower="0" upper="6" effort="0" velocity="1"/></joint>'
+            '<joint name="carriage-base_link" type="fixed"><parent link="carriage"/><child link="base_link"/>'
+            '<origin xyz="0.1 0.2 0.3" rpy="0 0 1.5707963267948966"/></joint>')
+    text = (DATA / "kr16_2.urdf").read_text(encoding="utf-8").replace("<!-- LINKS -->", rail)
+    mount = make_transform(rot_z(np.pi / 2), [0.1, 0.2, 0.3])
+    nominal = track_chain(rc.Robot.from_catalog("kuka_kr16_2"), [1, 0, 0], mount, (0, 6), name="kr16_on_rail")
+    calibrated = nominal.with_values({"d1": nominal.get("d1") + 8e-4, "a3": nominal.get("a3") + 4e-4})
+    (tmp_path / "rail.urdf").write_text(text, encoding="utf-8")
+    out = rc.export_urdf_like(calibrated, tmp_path / "rail.urdf", nominal=nominal)
+    assert [s.joint for s in out.shifts][:2] == ["rail_joint", "joint_a1"]
+    assert round(out.shifts[0].origin_mm, 6) == 0.8  # the rail's zero
+    u = yourdfpy.URDF.load(io.StringIO(out.text), load_meshes=False, build_collision_scene_graph=False,
+                           load_collision_meshes=False)
+    q = joints_in_limits(nominal, 30)
+    names = [j.get("name") for j in ET.fromstring(out.text).findall("joint") if j.get("type") != "fixed"]
+    mine = []
+    for qk in q:
+        u.update_cfg(dict(zip(names, qk, strict=True)))
+        mine.append(u.get_transform("tool0", "world"))
+    truth = calibrated.with_frames(tool=nominal.tool).fk(q)  # its track scale term is 0
+    assert max(gap(np.array(mine), truth)) < 1e-9
+

@@ -40,7 +40,7 @@ from robocal.core.errors import DataError, ModelError, RobocalError
 from robocal.core.io import check_outputs, read_text, write_all
 from robocal.deploy.compensation import controller_model
 from robocal.deploy.models import controller_for
-from robocal.kinematics.fk import chain_fk, chain_frames
+from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.model import Robot, load_model
 from robocal.kinematics.transforms import invert_transform
 from robocal.kinematics.urdf import not_carried
@@ -380,6 +380,7 @@ class UrdfLikeExport:
     xacro: str | None = None
     xacro_text: str | None = None
     xacro_output: str | None = None
+    fk_frames: str = "base_link -> tool0"
 
     def summary(self) -> str:
         """The map, the FK check and the per-joint shifts, one line each."""
@@ -389,7 +390,7 @@ class UrdfLikeExport:
                  f"map: robocal's base in base_link {_pose_text(self.base)}; tool0 in robocal's flange "
                  f"{_pose_text(self.tool)} (checked to {self.map_check[0] * 1e3:.2g} mm / "
                  f"{self.map_check[1]:.2g} rad on {CHECK_POSES} joint vectors)",
-                 f"FK base_link -> tool0 = the calibrated model's within {mm * 1e3:.2g} mm / {rad:.2g} rad "
+                 f"FK {self.fk_frames} = the calibrated model's within {mm * 1e3:.2g} mm / {rad:.2g} rad "
                  f"({count} joint vectors)",
                  "moved from the vendor's: joint origin (mm, deg), link frame at q = 0 (mm, deg)"]
         lines += [f"  {s.joint} ({s.link}): {s.origin_mm:.4f} mm {s.origin_deg:.5f} deg; "
@@ -403,7 +404,7 @@ class UrdfLikeExport:
                 "tool0_in_flange": self.tool.tolist(),
                 "map_check": {"m": self.map_check[0], "rad": self.map_check[1], "joint_vectors": CHECK_POSES},
                 "fk_check": {"m": self.fk_check[0], "rad": self.fk_check[1],
-                             "joint_vectors": self.fk_check[2]},
+                             "joint_vectors": self.fk_check[2], "frames": self.fk_frames},
                 "joints": [vars(s) for s in self.shifts], "warnings": list(self.warnings),
                 "output": self.output, "urdf": self.text, "xacro": self.xacro,
                 "xacro_output": self.xacro_output, "xacro_text": self.xacro_text}
@@ -437,8 +438,8 @@ def _shift_comment(result: UrdfLikeExport) -> str:
             "joints changed; names, axes, meshes, limits, inertials and the fixed frames are the "
             "vendor's.\n     robocal's base is "
             f"at {_pose_text(result.base)} in base_link; tool0 at {_pose_text(result.tool)} in robocal's "
-            f"flange.\n     FK base_link to tool0 = the calibrated model's within {mm * 1e3:.2g} mm / "
-            f"{rad:.2g} rad ({count} joint vectors).\n     Moved from the vendor's (joint origin; the link's "
+            f"flange.\n     FK {result.fk_frames.replace('->', 'to')} = the calibrated model's within "
+            f"{mm * 1e3:.2g} mm / {rad:.2g} rad ({count} joint vectors).\n     Moved from the vendor's (joint origin; the link's "
             f"frame in base_link at q = 0):\n{rows}\n")
 
 
@@ -528,15 +529,17 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
 
 def _result(robot, controller, vendor_file, robot_name, chain, B, M, origins, check, new_text, cal):
     """The checks of an export: the written text read back, its FK against the calibrated model's
-    (base_link to tool0), the shifts per joint, the warnings."""
+    (base_link to tool0, base_link wherever it rides: before a track or after it), the shifts per
+    joint, the warnings."""
     written = _Chain.read(parse_urdf(new_text), chain.links[-1])
     q = _random_joints(controller, FK_POSES, seed=1)
     base_at = chain.links.index("base_link") if "base_link" in chain.links else 0
-    mine = written.poses(q)
-    mine = invert_transform(mine[:, base_at]) @ mine[:, -1]
-    tool = invert_transform(controller.tool) @ M[-1]
-    theirs = invert_transform(B @ cal.base @ M[base_at]) @ B @ chain_fk(cal.links, cal.base, cal.tool, q,
-                                                                          prismatic=cal.prismatic) @ tool
+    poses = written.poses(q)
+    _, frames = chain_frames(cal.links, cal.base, cal.tool, q, frames=True, prismatic=cal.prismatic)
+    links = B @ frames[:, chain.frame[[base_at, -1]]] @ M[[base_at, -1]]  # base_link and the tip
+    # the tip from base_link and, where they differ (a track before base_link), from the root link
+    mine = np.stack([invert_transform(poses[:, base_at]) @ poses[:, -1], poses[:, -1]])
+    theirs = np.stack([invert_transform(links[:, 0]) @ links[:, 1], links[:, 1]])
     dist, angle = _pose_gap(mine, theirs)
     if dist.max() > FK_TOL_M or angle.max() > FK_TOL_RAD:
         raise RobocalError(f"internal: the written URDF's FK is {dist.max() * 1e3:.3g} mm / "
@@ -554,7 +557,9 @@ def _result(robot, controller, vendor_file, robot_name, chain, B, M, origins, ch
         warnings.append(f"the origins of {', '.join(far)} moved more than {GOAL_MM:g} mm or {GOAL_DEG:g} deg "
                         "from the vendor's (more than a typical calibration): their meshes hang that far "
                         "from where the vendor drew them")
-    base = invert_transform(M[base_at])  # robocal's base, frame {0}, in base_link
+    base = invert_transform(vendor0[base_at]) @ B @ cal.base  # robocal's frame {0} in base_link at q = 0
+    tool = invert_transform(controller.tool) @ M[-1]
+    fk_frames = " and ".join(f"{chain.links[k]} -> {chain.links[-1]}" for k in dict.fromkeys((base_at, 0)))
     return UrdfLikeExport(robot, controller, vendor_file, robot_name, new_text, base, tool,
                           (check[0], check[1]), shifts, (float(dist.max()), float(angle.max()), FK_POSES),
-                          warnings=warnings)
+                          warnings=warnings, fk_frames=fk_frames)
