@@ -439,8 +439,8 @@ def _shift_comment(result: UrdfLikeExport) -> str:
             "vendor's.\n     robocal's base is "
             f"at {_pose_text(result.base)} in base_link; tool0 at {_pose_text(result.tool)} in robocal's "
             f"flange.\n     FK {result.fk_frames.replace('->', 'to')} = the calibrated model's within "
-            f"{mm * 1e3:.2g} mm / {rad:.2g} rad ({count} joint vectors).\n     Moved from the vendor's (joint origin; the link's "
-            f"frame in base_link at q = 0):\n{rows}\n")
+            f"{mm * 1e3:.2g} mm / {rad:.2g} rad ({count} joint vectors).\n     Moved from the vendor's "
+            f"(joint origin; the link's frame in base_link at q = 0):\n{rows}\n")
 
 
 # ----------------------------------------------------------------- the export
