@@ -21,7 +21,9 @@ def add_parser(sub) -> None:
                                    "base, `tool0` at the flange, the (calibrated) geometry in between; "
                                    "the model's measurement frame and tool (tracker frame, SMR) in a "
                                    "comment, or as the URDF's `world` and `tool0` with --frames model. "
-                                   "Or convert a serial revolute URDF into a model YAML (MDH + beta).",
+                                   "Or convert a serial revolute URDF into a model YAML (MDH + beta). "
+                                   "Or, with --urdf-like, write the vendor's own URDF (and xacro macro) "
+                                   "with the calibrated kinematics.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("model", help="model YAML, catalog name, or URDF file (.urdf)")
     p.add_argument("--urdf", metavar="OUT", help="URDF file to write")

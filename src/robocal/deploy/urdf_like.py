@@ -222,9 +222,8 @@ def _on_axes(chain: _Chain, M: np.ndarray) -> np.ndarray:
         w = np.cross(v, [0.0, 0.0, 1.0])
         turn = np.arctan2(np.linalg.norm(w), v[2])
         if np.linalg.norm(w) > 0:
-            k = w / np.linalg.norm(w)
-            K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-            M[i + 1, :3, :3] = (np.eye(3) + np.sin(turn) * K + (1 - np.cos(turn)) * K @ K) @ M[i + 1, :3, :3]
+            M[i + 1, :3, :3] = _joint_motion(w / np.linalg.norm(w), np.array([turn]), False)[0, :3, :3] \
+                @ M[i + 1, :3, :3]
         if kind != "prismatic":
             M[i + 1, :2, 3] = 0.0
     return M
