@@ -231,3 +231,18 @@ def test_a_robot_on_a_track_keeps_the_vendors_rail_joint(tmp_path):
     truth = calibrated.with_frames(tool=nominal.tool).fk(q)  # its track scale term is 0
     assert max(gap(np.array(mine), truth)) < 1e-9
 
+
+
+def test_a_model_whose_joint_terms_matter_is_refused_unless_asked(tmp_path):
+    nominal = rc.Robot.from_catalog("kuka_kr16_2")
+    terms = nominal.with_joint_errors(["backlash2", "comp2_3"])
+    calibrated = terms.with_values({"backlash2": 5e-4, "comp2_3": 2e-3})  # the IRB 120 set's sizes
+    with pytest.raises(DataError, match="terms .* move its TCP by .* calibrate with --nongeometric none"):
+        rc.export_urdf_like(calibrated, DATA / "kr16_2.urdf")
+    out = rc.export_urdf_like(calibrated, DATA / "kr16_2.urdf", geometry_only=True)
+    assert "this URDF is not the calibrated robot" in out.warnings[0]
+    calibrated.save(tmp_path / "cal.yaml")
+    assert main(["export", str(tmp_path / "cal.yaml"), "--urdf-like", str(DATA / "kr16_2.urdf"), "-o",
+                 str(tmp_path / "a.urdf"), "--geometry-only"]) == 0
+    small = terms.with_values({"comp2_3": 1e-6})  # terms that do not matter: written, said
+    assert "joint-error terms" in rc.export_urdf_like(small, DATA / "kr16_2.urdf").warnings[0]

@@ -40,6 +40,9 @@ def add_parser(sub) -> None:
     p.add_argument("--xacro", nargs=2, metavar=("MACRO", "OUT"),
                    help="--urdf-like: also the vendor's xacro macro the URDF was expanded from (a "
                         "ROS-Industrial *_macro.xacro) written to OUT with the calibrated joint origins")
+    p.add_argument("--geometry-only", action="store_true",
+                   help="--urdf-like: write the geometry of a model whose joint-error terms (compliance, "
+                        "backlash...) matter, which a URDF cannot hold (refused otherwise)")
     p.add_argument("--frames", choices=("robot", "model"), default="robot",
                    help="robot (default): base_link at the robot base, tool0 at the flange; model: a "
                         "world link at the model's world frame (after a tracker calibration, the tracker) "
@@ -92,7 +95,8 @@ def _urdf_like(args) -> int:
     macro, macro_out = args.xacro or (None, None)
     check_outputs([args.output, macro_out], [args.model, args.urdf_like, macro])
     result = export_urdf_like(args.model, args.urdf_like, nominal=args.nominal, output=args.output,
-                              tip=args.tip, xacro=macro, xacro_output=macro_out)
+                              tip=args.tip, xacro=macro, xacro_output=macro_out,
+                              geometry_only=args.geometry_only)
     if not args.quiet:
         print(result.summary())
     for line in result.warnings:

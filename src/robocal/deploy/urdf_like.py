@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import re
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -52,6 +52,7 @@ CHECK_POSES = 256  # random joint vectors the map is checked on
 FK_POSES = 1000  # random joint vectors the written file's FK is compared on
 FK_TOL_M = 1e-9  # m: the written file's FK off the calibrated model's beyond this is an internal error
 FK_TOL_RAD = 1e-9  # rad: the same for the orientation
+DROPPED_TERMS_MM = 0.05  # mm: joint-error terms moving the TCP by more (mean) make a URDF another robot
 KEPT_BELOW = 1e-12  # m, rad: a new origin's number this close to the vendor's is written as the vendor's
 GOAL_MM = 1.0  # a joint origin moved further than this from the vendor's is said (meshes move with it)
 GOAL_DEG = 0.1  # the same, deg
@@ -444,7 +445,8 @@ def _shift_comment(result: UrdfLikeExport) -> str:
 
 # ----------------------------------------------------------------- the export
 def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str | None = None,
-                     output=None, tip: str | None = None, xacro=None, xacro_output=None) -> UrdfLikeExport:
+                     output=None, tip: str | None = None, xacro=None, xacro_output=None,
+                     geometry_only: bool = False) -> UrdfLikeExport:
     """The vendor's URDF (``vendor_urdf``: a path, as xacro expands it) with the kinematics of
     ``calibrated`` (a `Robot`, model file or catalog name).
 
@@ -467,6 +469,10 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
         ``*_macro.xacro``, joint names after ``${prefix}``), and where `UrdfLikeExport.write`
         writes the same macro with the calibrated joint origins (``xacro_text``), for launch files
         that include a macro.
+    geometry_only : bool, default False
+        Write the geometry of a model whose joint-error terms (compliance, backlash, ...) move its
+        TCP by more than `DROPPED_TERMS_MM` (refused otherwise: that URDF is not the calibrated
+        robot; calibrate with ``nongeometric=None`` for ROS), with a warning saying how far.
 
     Returns
     -------
@@ -476,7 +482,8 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     Raises
     ------
     DataError
-        The vendor file is another robot, or there is no nominal model.
+        The vendor file is another robot, there is no nominal model, or the model's joint-error
+        terms matter and ``geometry_only`` is not set.
     ModelError
         The vendor file is not a readable URDF.
 
@@ -500,6 +507,7 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     if controller is None:
         raise DataError(f"{robot.name} is not a catalog robot: give the controller's nominal model "
                         "(--nominal, a catalog name or model file), which the vendor's URDF must describe")
+    dropped = _dropped_terms(robot, geometry_only)
     vendor_file = str(vendor_urdf)
     text = read_text(vendor_file, "vendor URDF")
     root = parse_urdf(text)
@@ -517,6 +525,7 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     result = _result(robot, controller, vendor_file, root.get("name") or "", chain, B, M, origins,
                      check, new_text, cal)
     result.output = None if output is None else str(output)
+    result.warnings[:0] = dropped
     result.text = _with_comment(new_text, _shift_comment(result))
     if xacro is not None:
         macro = _with_origins(read_text(xacro, "vendor xacro macro"),
@@ -524,6 +533,27 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
         result.xacro, result.xacro_text = str(xacro), _with_comment(macro, _shift_comment(result))
         result.xacro_output = None if xacro_output is None else str(xacro_output)
     return result
+
+
+def _dropped_terms(robot: Robot, geometry_only: bool) -> list[str]:
+    """What leaving ``robot``'s joint-error terms out of a URDF costs, as a warning (with
+    ``geometry_only``), or DataError when they move the TCP by more than `DROPPED_TERMS_MM` on
+    average over `FK_POSES` random joint vectors (their conditions unknown: no payload, the
+    reference temperature)."""
+    if robot.joint_errors is None:
+        return []
+    q = _random_joints(robot, FK_POSES, seed=2)
+    rigid = replace(robot, joint_errors=None)
+    gap = np.linalg.norm(robot.fk(q)[:, :3, 3] - rigid.fk(q)[:, :3, 3], axis=1) * 1e3
+    said = (f"{robot.name}'s joint-error terms ({', '.join(robot.joint_errors.names)}) move its TCP by "
+            f"{gap.mean():.3f} mm on average, {gap.max():.3f} mm at most, over {FK_POSES} joint vectors; a "
+            "URDF has rigid links and exact joints, so it holds the geometry without them")
+    if gap.mean() <= DROPPED_TERMS_MM:
+        return []
+    if not geometry_only:
+        raise DataError(f"{said}, which is not the calibrated robot: calibrate with --nongeometric none "
+                        "(nongeometric=None) for ROS, or give --geometry-only to write it anyway")
+    return [f"{said}: this URDF is not the calibrated robot (calibrate with --nongeometric none for ROS)"]
 
 
 def _result(robot, controller, vendor_file, robot_name, chain, B, M, origins, check, new_text, cal):
