@@ -176,7 +176,8 @@ def main() -> None:
     parser.add_argument("--poses", type=int, default=150, help="simulated calibration poses")
     parser.add_argument("--ik", action="store_true", help="also the IK figures of docs/how-to/ros.md")
     parser.add_argument("--datasets", type=Path,
-                        default=Path(__file__).resolve().parents[2] / "shared" / "datasets", help="the real data sets' folder (irb120-faro): the IRB 120 row, when it exists")
+                        default=Path(__file__).resolve().parents[2] / "shared" / "datasets",
+                        help="the real data sets' folder (irb120-faro): the IRB 120 row, when it exists")
     args = parser.parse_args()
     print(f"{'file':16} {'robot':18} same  FK gap mm / rad ({N_Q} q)   vendor file mm / rad   "
           "worst origin mm / deg   export s")
