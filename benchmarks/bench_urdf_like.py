@@ -16,7 +16,8 @@ Per robot: a calibration of robocal's catalog model (``rc.simulate_tracker`` 150
 - per moving joint, how far its origin moved from the vendor's (mm, deg; the file's XML comment
   says the same) and the time of the export.
 
-``python benchmarks/bench_urdf_like.py [--poses N]``.
+``python benchmarks/bench_urdf_like.py [--poses N] [--ik] [--datasets DIR]`` (``--ik``: the IK figures of
+docs/how-to/ros.md; the real IRB 120 rows when DIR/irb120-faro exists).
 """
 
 from __future__ import annotations
@@ -171,14 +172,14 @@ def real_irb120(folder: Path) -> None:
               f"{s.frame_mm:7.4f} mm {s.frame_deg:8.5f} deg")
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=150, help="simulated calibration poses")
     parser.add_argument("--ik", action="store_true", help="also the IK figures of docs/how-to/ros.md")
     parser.add_argument("--datasets", type=Path,
                         default=Path(__file__).resolve().parents[2] / "shared" / "datasets",
                         help="the real data sets' folder (irb120-faro): the IRB 120 row, when it exists")
-    args = parser.parse_args()
+    args = parser.parse_args([] if argv is None and __name__ != "__main__" else argv)  # run.py: defaults
     print(f"{'file':16} {'robot':18} same  FK gap mm / rad ({N_Q} q)   vendor file mm / rad   "
           "worst origin mm / deg   export s")
     for seed, (file, name) in enumerate(ROBOTS.items(), start=7):
