@@ -138,11 +138,13 @@ def test_a_joint_without_origin_and_a_commented_joint(tmp_path):
     text = text.replace("<!-- JOINTS -->", transmission)
     start = text.index('<joint name="joint_a5"', text.index("<robot"))
     text = text[:start] + text[start:].replace('<origin rpy="0 0 0" xyz="0 0 0"/>', "", 1)
+    text = text.replace('<origin rpy="0 0 0" xyz="0.67 0 -0.035"/>', '<origin xyz="0.67 0 -0.035"/>')
     (tmp_path / "v.urdf").write_text(text, encoding="utf-8")
     nominal = rc.Robot.from_catalog("kuka_kr16_2")
-    calibrated = nominal.with_values({"d5": nominal.get("d5") + 4e-4})
+    calibrated = nominal.with_values({"d5": nominal.get("d5") + 4e-4, "theta4": nominal.get("theta4") + 1e-3})
     out = rc.export_urdf_like(calibrated, tmp_path / "v.urdf")
     assert '<origin xyz="9 9 9"/> -->' in out.text and transmission in out.text  # untouched
+    assert re.search(r'<origin xyz="0.67 0 -0.035" rpy="[^"]+"/>', out.text)  # rpy added
     q = joints_in_limits(nominal, 20)
     truth = out.base @ calibrated.fk(q) @ out.tool
     assert max(gap(fk_by_yourdfpy(out.text, q), truth)) < 1e-9
