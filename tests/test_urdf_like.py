@@ -248,3 +248,18 @@ def test_a_model_whose_joint_terms_matter_is_refused_unless_asked(tmp_path):
                  str(tmp_path / "a.urdf"), "--geometry-only"]) == 0
     small = terms.with_values({"comp2_3": 1e-6})  # terms that do not matter: written, said
     assert "joint-error terms" in rc.export_urdf_like(small, DATA / "kr16_2.urdf").warnings[0]
+
+
+def test_a_ur_calibrated_against_its_factory_model_goes_into_the_nominal_description():
+    from robocal.kinematics.manufacturer.ur import import_calibration
+
+    factory = import_calibration(Path(__file__).parent / "data" / "ur5e_calibration.conf", "ur5e").robot
+    calibrated = factory.with_values({"a2": factory.get("a2") + 3e-4})
+    with pytest.raises(DataError, match="give that as --vendor-model"):
+        rc.export_urdf_like(calibrated, DATA / "ur5e.urdf", nominal=factory)
+    out = rc.export_urdf_like(calibrated, DATA / "ur5e.urdf", nominal=factory, vendor_model="ur5e")
+    q = joints_in_limits(factory, 50)
+    controller = controller_model(calibrated, factory)
+    truth = out.base @ np.linalg.inv(controller.base) @ controller.fk(q) @ out.tool
+    assert max(gap(fk_by_yourdfpy(out.text, q), truth)) < 1e-9
+    assert max(s.origin_mm for s in out.shifts) < 1.0  # the factory calibration moves the joints little

@@ -40,6 +40,9 @@ def add_parser(sub) -> None:
     p.add_argument("--xacro", nargs=2, metavar=("MACRO", "OUT"),
                    help="--urdf-like: also the vendor's xacro macro the URDF was expanded from (a "
                         "ROS-Industrial *_macro.xacro) written to OUT with the calibrated joint origins")
+    p.add_argument("--vendor-model", metavar="R",
+                   help="--urdf-like: the nominal model the vendor's file draws when --nominal is not it "
+                        "(e.g. --nominal factory.yaml, a UR's factory calibration, --vendor-model ur5e)")
     p.add_argument("--geometry-only", action="store_true",
                    help="--urdf-like: write the geometry of a model whose joint-error terms (compliance, "
                         "backlash...) matter, which a URDF cannot hold (refused otherwise)")
@@ -96,7 +99,7 @@ def _urdf_like(args) -> int:
     check_outputs([args.output, macro_out], [args.model, args.urdf_like, macro])
     result = export_urdf_like(args.model, args.urdf_like, nominal=args.nominal, output=args.output,
                               tip=args.tip, xacro=macro, xacro_output=macro_out,
-                              geometry_only=args.geometry_only)
+                              geometry_only=args.geometry_only, vendor_model=args.vendor_model)
     if not args.quiet:
         print(result.summary())
     for line in result.warnings:

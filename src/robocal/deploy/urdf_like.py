@@ -57,6 +57,8 @@ KEPT_BELOW = 1e-12  # m, rad: a new origin's number this close to the vendor's i
 GOAL_MM = 1.0  # a joint origin moved further than this from the vendor's is said (meshes move with it)
 GOAL_DEG = 0.1  # the same, deg
 _MOVING = ("revolute", "continuous", "prismatic")
+_WHY_NOT = ("(another robot, joints that are not the controller's, or a controller's model that is not what "
+            "the file draws: give that as --vendor-model)")
 
 
 # ----------------------------------------------------------------- the vendor's chain
@@ -185,7 +187,7 @@ def _link_maps(chain: _Chain, nominal: Robot,
         raise DataError(f"{vendor_file} is not {nominal.name}: its link {chain.links[worst]} moves "
                         f"{dist[:, worst].max() * 1e3:.3g} mm / {np.rad2deg(angle[:, worst].max()):.3g} deg "
                         f"against robocal's frame {{{chain.frame[worst]}}} over {CHECK_POSES} joint vectors "
-                        "(another robot, or joints that are not the controller's)")
+                        f"{_WHY_NOT}")
     return B, _on_axes(chain, M[0]), float(dist.max()), float(angle.max())
 
 
@@ -204,8 +206,7 @@ def _check_axes(B: np.ndarray, frames: np.ndarray, points: np.ndarray, axes: np.
         name = chain.joints[chain.moving[k]].get("name")
         raise DataError(f"{vendor_file} is not {nominal.name}: the axis of its joint {name} is "
                         f"{dist[k] * 1e3:.3g} mm / {np.rad2deg(angle[k]):.3g} deg off the model's joint "
-                        f"{k + 1} after the best rigid fit of all the axes (another robot, or joints that "
-                        "are not the controller's)")
+                        f"{k + 1} after the best rigid fit of all the axes {_WHY_NOT}")
 
 
 def _on_axes(chain: _Chain, M: np.ndarray) -> np.ndarray:
@@ -446,7 +447,7 @@ def _shift_comment(result: UrdfLikeExport) -> str:
 # ----------------------------------------------------------------- the export
 def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str | None = None,
                      output=None, tip: str | None = None, xacro=None, xacro_output=None,
-                     geometry_only: bool = False) -> UrdfLikeExport:
+                     geometry_only: bool = False, vendor_model: Robot | str | None = None) -> UrdfLikeExport:
     """The vendor's URDF (``vendor_urdf``: a path, as xacro expands it) with the kinematics of
     ``calibrated`` (a `Robot`, model file or catalog name).
 
@@ -469,6 +470,10 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
         ``*_macro.xacro``, joint names after ``${prefix}``), and where `UrdfLikeExport.write`
         writes the same macro with the calibrated joint origins (``xacro_text``), for launch files
         that include a macro.
+    vendor_model : Robot or str, optional
+        The nominal model the vendor's file draws, when the controller's is not (a UR's factory
+        calibration as ``nominal``, the catalog ``ur5e`` here): the same parametrization as the
+        calibrated model; its base and flange are base_link's and tool0's. Default: ``nominal``.
     geometry_only : bool, default False
         Write the geometry of a model whose joint-error terms (compliance, backlash, ...) move its
         TCP by more than `DROPPED_TERMS_MM` (refused otherwise: that URDF is not the calibrated
@@ -513,8 +518,10 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     root = parse_urdf(text)
     names = {lk.get("name") for lk in root.findall("link")}
     chain = _Chain.read(root, tip if tip is not None else ("tool0" if "tool0" in names else None))
-    B, M, *check = _link_maps(chain, controller, vendor_file)
-    cal = controller_model(robot, controller)
+    drawn = controller if vendor_model is None else (
+        vendor_model if isinstance(vendor_model, Robot) else load_model(str(vendor_model)))
+    cal = controller_model(robot, drawn)  # DataError: the model the vendor draws is another robot's
+    B, M, *check = _link_maps(chain, drawn.nominal_robot(), vendor_file)
     zero = np.zeros((1, robot.n_joints))
     _, F = chain_frames(cal.links, cal.base, cal.tool, zero, frames=True, prismatic=cal.prismatic)
     origins = chain.origins.copy()
@@ -522,7 +529,7 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
         f = chain.frame[i + 1]
         origins[i] = invert_transform(M[i]) @ invert_transform(F[0, f - 1]) @ F[0, f] @ M[i + 1]
     new_text = _with_origins(text, {chain.joints[i].get("name"): origins[i] for i in chain.moving})
-    result = _result(robot, controller, vendor_file, root.get("name") or "", chain, B, M, origins,
+    result = _result(robot, drawn, vendor_file, root.get("name") or "", chain, B, M, origins,
                      check, new_text, cal)
     result.output = None if output is None else str(output)
     result.warnings[:0] = dropped
