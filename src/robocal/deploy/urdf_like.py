@@ -529,8 +529,7 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
         f = chain.frame[i + 1]
         origins[i] = invert_transform(M[i]) @ invert_transform(F[0, f - 1]) @ F[0, f] @ M[i + 1]
     new_text = _with_origins(text, {chain.joints[i].get("name"): origins[i] for i in chain.moving})
-    result = _result(robot, drawn, vendor_file, root.get("name") or "", chain, B, M, origins,
-                     check, new_text, cal)
+    result = _result(robot, drawn, vendor_file, root.get("name") or "", chain, B, M, check, new_text, cal)
     result.output = None if output is None else str(output)
     result.warnings[:0] = dropped
     result.text = _with_comment(new_text, _shift_comment(result))
@@ -563,7 +562,7 @@ def _dropped_terms(robot: Robot, geometry_only: bool) -> list[str]:
     return [f"{said}: this URDF is not the calibrated robot (calibrate with --nongeometric none for ROS)"]
 
 
-def _result(robot, controller, vendor_file, robot_name, chain, B, M, origins, check, new_text, cal):
+def _result(robot, controller, vendor_file, robot_name, chain, B, M, check, new_text, cal):
     """The checks of an export: the written text read back, its FK against the calibrated model's
     (base_link to tool0, base_link wherever it rides: before a track or after it), the shifts per
     joint, the warnings."""
