@@ -61,6 +61,7 @@ def results(sim, tmp_path) -> dict:
         "identifiability": (rc.analyze(nominal, sim.data.joints), lambda r: r.write(p / "ident.json")),
         "timeline": (Timeline("R1", [entry]), lambda r: r.write(p / "timeline.json")),
         "model export": (export_model(nominal, urdf=p / "r.urdf"), lambda r: r.write()),
+        "urdf-like export": (rc.export_urdf_like(ur5e, VENDOR_UR5E), lambda r: r.write(p / "ur5e_cal.urdf")),
         "imported calibration": (ImportedCalibration(ur5e, "calibration.conf", ["a note"]),
                                  lambda r: r.write(p / "factory.yaml")),
         **_cell_results(p),
@@ -82,6 +83,7 @@ def _cell_results(p: Path) -> dict:
             "cell compensation": (comp, lambda r: r.write(p / "cell_cmd.csv", ARM_COLUMNS, TABLE_COLUMNS))}
 
 
+VENDOR_UR5E = Path(__file__).resolve().parent / "data" / "urdf_vendor" / "ur5e.urdf"  # issue 49
 ARM_COLUMNS = [f"q{i}_deg" for i in range(1, 7)]
 TABLE_COLUMNS = ["e1_deg", "e2_deg"]
 

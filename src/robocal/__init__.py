@@ -24,6 +24,7 @@ _LAZY = {
     "CampaignResult": "robocal.campaign", "Constraints": "robocal.campaign", "Tracker": "robocal.campaign",
     "plan_poses": "robocal.campaign",
     "compensate": "robocal.deploy.compensation",
+    "export_urdf_like": "robocal.deploy.urdf_like",  # the calibrated kinematics in the vendor's URDF
     "Measurements": "robocal.data.measurements",
     "register": "robocal.data.registration",
     "Conditions": "robocal.kinematics.conditions",  # the rows' conditions for Robot.fk / jacobian
@@ -84,6 +85,7 @@ __all__ = [
     "UnreachableError",
     "__version__",
     "compensate",
+    "export_urdf_like",
     "filter_program",
     "identify_tcp",
     "ik",

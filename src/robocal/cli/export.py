@@ -10,6 +10,8 @@ EPILOG = """Examples:
   robocal export abb_irb2600 --urdf irb2600.urdf             # catalog robot
   robocal export my_robot.urdf --yaml my_robot.yaml          # import a serial revolute URDF
   robocal export calibrated.yaml --nominal factory.yaml --ur-calibration ur.yaml   # for the UR ROS driver
+  robocal export calibrated.yaml --urdf-like kr16_2.urdf -o kr16_2_cal.urdf   # into the vendor's URDF
+  robocal export calibrated.yaml --urdf-like kr16_2.urdf -o cal.urdf --xacro kr16_2_macro.xacro macro.xacro
 """
 
 
@@ -19,7 +21,9 @@ def add_parser(sub) -> None:
                                    "base, `tool0` at the flange, the (calibrated) geometry in between; "
                                    "the model's measurement frame and tool (tracker frame, SMR) in a "
                                    "comment, or as the URDF's `world` and `tool0` with --frames model. "
-                                   "Or convert a serial revolute URDF into a model YAML (MDH + beta).",
+                                   "Or convert a serial revolute URDF into a model YAML (MDH + beta). "
+                                   "Or, with --urdf-like, write the vendor's own URDF (and xacro macro) "
+                                   "with the calibrated kinematics.",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("model", help="model YAML, catalog name, or URDF file (.urdf)")
     p.add_argument("--urdf", metavar="OUT", help="URDF file to write")
@@ -27,6 +31,21 @@ def add_parser(sub) -> None:
     p.add_argument("--ur-calibration", metavar="OUT",
                    help="ur_calibration YAML to write (Universal Robots: the geometry from the controller's "
                         "base to the flange, as ur_description's xacro composes it)")
+    p.add_argument("--urdf-like", metavar="VENDOR",
+                   help="the vendor's expanded URDF (ROS-Industrial support package, ur_description): write "
+                        "the same document (names, meshes, limits, extra frames) with the calibrated "
+                        "kinematics to -o; only its moving joints' origins change (checked against "
+                        "--nominal: refused when it describes another robot)")
+    p.add_argument("-o", "--output", metavar="OUT", help="--urdf-like: the URDF file to write")
+    p.add_argument("--xacro", nargs=2, metavar=("MACRO", "OUT"),
+                   help="--urdf-like: also the vendor's xacro macro the URDF was expanded from (a "
+                        "ROS-Industrial *_macro.xacro) written to OUT with the calibrated joint origins")
+    p.add_argument("--vendor-model", metavar="R",
+                   help="--urdf-like: the nominal model the vendor's file draws when --nominal is not it "
+                        "(e.g. --nominal factory.yaml, a UR's factory calibration, --vendor-model ur5e)")
+    p.add_argument("--geometry-only", action="store_true",
+                   help="--urdf-like: write the geometry of a model whose joint-error terms (compliance, "
+                        "backlash...) matter, which a URDF cannot hold (refused otherwise)")
     p.add_argument("--frames", choices=("robot", "model"), default="robot",
                    help="robot (default): base_link at the robot base, tool0 at the flange; model: a "
                         "world link at the model's world frame (after a tracker calibration, the tracker) "
@@ -40,6 +59,8 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
 
+    if args.urdf_like or args.output or args.xacro:
+        return _urdf_like(args)
     from robocal.cli.args import check_format
     from robocal.core.errors import DataError
     from robocal.core.io import check_outputs
@@ -59,4 +80,29 @@ def run(args) -> int:
     written = result.write()
     if not args.quiet:
         print(f"{robot.name} ({robot.n_joints} joints): wrote {', '.join(written)}")
+    return 0
+
+
+def _urdf_like(args) -> int:
+    """``--urdf-like VENDOR -o OUT``: the vendor's URDF with the calibrated kinematics."""
+    from robocal.cli.args import check_format
+    from robocal.core.errors import DataError
+    from robocal.core.io import check_outputs
+    from robocal.deploy.urdf_like import export_urdf_like
+
+    if not args.urdf_like or not args.output:
+        raise DataError("--urdf-like VENDOR and -o OUT go together: the vendor's URDF and the file to write")
+    if args.urdf or args.yaml or args.ur_calibration:
+        raise DataError("--urdf-like writes one file (-o OUT): run --urdf, --yaml or --ur-calibration apart")
+    check_format(args.output, "URDF", "-o")
+    macro, macro_out = args.xacro or (None, None)
+    check_outputs([args.output, macro_out], [args.model, args.urdf_like, macro])
+    result = export_urdf_like(args.model, args.urdf_like, nominal=args.nominal, output=args.output,
+                              tip=args.tip, xacro=macro, xacro_output=macro_out,
+                              geometry_only=args.geometry_only, vendor_model=args.vendor_model)
+    if not args.quiet:
+        print(result.summary())
+    for line in result.warnings:
+        print(f"WARNING: {line}")
+    result.write()
     return 0

@@ -47,7 +47,9 @@ def matrix_to_rpy(R: np.ndarray) -> np.ndarray:
     return np.array([np.arctan2(R[2, 1], R[2, 2]), pitch, np.arctan2(R[1, 0], R[0, 0])])
 
 
-def _parse(source) -> ET.Element:
+def parse_urdf(source) -> ET.Element:
+    """The ``<robot>`` element of a URDF (text, or a path to a file); ModelError when it is not
+    well-formed, has a DOCTYPE or entities (unsafe XML), or its root is another element."""
     if isinstance(source, Path) or (isinstance(source, str) and "<" not in source):
         text = read_text(source, "URDF file", ModelError)
     else:
@@ -85,7 +87,8 @@ def _floats(text: str | None, default, what: str, bound: float, unit: str, count
     return values
 
 
-def _joint_origin(joint: ET.Element, where: str) -> np.ndarray:
+def joint_origin(joint: ET.Element, where: str) -> np.ndarray:
+    """A joint's ``<origin>`` as a 4x4 transform (m), checked (``where`` names it in errors)."""
     origin = joint.find("origin")
     xyz = _floats(None if origin is None else origin.get("xyz"), [0, 0, 0], f"{where} origin xyz",
                   MAX_OFFSET_M, "m")
@@ -94,7 +97,17 @@ def _joint_origin(joint: ET.Element, where: str) -> np.ndarray:
     return make_transform(rpy_to_matrix(rpy), xyz)
 
 
-def _chain(root: ET.Element, tip: str | None) -> list[ET.Element]:
+def joint_axis(joint: ET.Element) -> np.ndarray:
+    """The unit axis ``(3,)`` of a moving joint in its child link's frame (URDF's default: x)."""
+    axis_el = joint.find("axis")
+    axis = _floats(None if axis_el is None else axis_el.get("xyz"), [1, 0, 0],
+                   f"joint {joint.get('name')!r} axis", _MAX_AXIS, "(a direction)")
+    if np.linalg.norm(axis) < 1e-12:
+        raise ModelError(f"URDF joint {joint.get('name')!r} has a zero axis")
+    return _unit(axis)
+
+
+def urdf_chain(root: ET.Element, tip: str | None) -> list[ET.Element]:
     """Joints from the root link to ``tip`` (default: the leaf with most moving joints)."""
     joints = root.findall("joint")
     by_child: dict[str, ET.Element] = {}
@@ -165,14 +178,14 @@ def urdf_kwargs(source, tip: str | None = None, name: str | None = None,
     axes closer than ``parallel_tol_deg`` to parallel are modelled with beta (flagged
     ``parallel``). The result's FK from the URDF root link to ``tip`` equals the URDF's.
     """
-    root = _parse(source)
-    chain = _chain(root, tip)
+    root = parse_urdf(source)
+    chain = urdf_chain(root, tip)
     T = np.eye(4)
     points, dirs, limits, prismatic = [], [], [], []
     link_frames = {chain[0].find("parent").get("link"): 0} if chain else {}
     for j in chain:
         jname, jtype = j.get("name"), j.get("type")
-        T = T @ _joint_origin(j, f"joint {jname!r}")
+        T = T @ joint_origin(j, f"joint {jname!r}")
         link_frames[j.find("child").get("link")] = len(dirs) + (jtype != "fixed")
         if jtype == "fixed":
             continue
@@ -181,13 +194,8 @@ def urdf_kwargs(source, tip: str | None = None, name: str | None = None,
                              "and fixed joints are supported")
         if j.find("mimic") is not None:
             raise ModelError(f"URDF joint {jname!r} mimics another joint: not a serial robot joint")
-        axis_el = j.find("axis")
-        axis = _floats(None if axis_el is None else axis_el.get("xyz"), [1, 0, 0],
-                       f"joint {jname!r} axis", _MAX_AXIS, "(a direction)")
-        if np.linalg.norm(axis) < 1e-12:
-            raise ModelError(f"URDF joint {jname!r} has a zero axis")
         points.append(T[:3, 3].copy())
-        dirs.append(T[:3, :3] @ _unit(axis))
+        dirs.append(T[:3, :3] @ joint_axis(j))
         lim = j.find("limit")
         slides = jtype == "prismatic"
         prismatic.append(slides)
