@@ -198,6 +198,10 @@ def test_near_opw_chain_is_seeded_by_its_nearest_opw_arm(tmp_path):
     res = rc.ik.solve(robot, robot.fk(q))
     assert res.converged.all()
     assert np.linalg.norm(robot.fk(res.joints)[:, :3, 3] - robot.fk(q)[:, :3, 3], axis=1).max() < 1e-9
+    # and a path over its branches (the seed model's own base and tool kept: "no IK solution" else)
+    path = np.linspace([0.1, -0.3, 0.2, 0.0, 0.6, 0.0], [0.5, 0.1, -0.2, 0.4, 0.9, 0.3], 10)
+    plan = rc.ik.plan_path(robot, robot.fk(path))
+    assert np.linalg.norm(robot.fk(plan.joints)[:, :3, 3] - robot.fk(path)[:, :3, 3], axis=1).max() < 1e-9
 
 
 def test_calibrated_urdf_arm_is_seeded_by_its_nominal_closed_form(tmp_path):
