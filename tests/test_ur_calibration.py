@@ -416,8 +416,9 @@ def test_conf_key_given_twice_is_refused_naming_it(tmp_path, capsys):
     assert not (tmp_path / "m.yaml").exists()
 
 
-def test_twist_gap_of_another_model_is_worded_in_degrees():
-    """A twist (alpha) far from the nominal is worded in deg, a length in mm (it was "+100.0 mm")."""
+def test_twist_gap_of_another_model_is_worded_in_degrees(tmp_path, capsys):
+    """A twist (alpha) far from the nominal is worded in deg, a length in mm (it was "+100.0 mm"),
+    API and CLI."""
     nom = vur.nominal_dh("ur5e")
     deltas = {"delta_theta": np.zeros(6), "delta_a": np.zeros(6), "delta_d": np.zeros(6),
               "delta_alpha": np.r_[0.0, 0.0, 0.1, 0.0, 0.0, 0.0]}
@@ -426,3 +427,8 @@ def test_twist_gap_of_another_model_is_worded_in_degrees():
     assert nom.alpha[2] == 0.0
     with pytest.raises(ModelError, match=r"alpha4 is \+5\.73 deg from the nominal"):
         vur.from_calibration_conf(text, "ur5e")
+    conf = tmp_path / "calibration.conf"
+    conf.write_text(text)
+    assert main(["import-calibration", str(conf), "--robot", "ur5e", "-o", str(tmp_path / "m.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert "alpha4 is +5.73 deg" in err and " mm from the nominal" not in err
