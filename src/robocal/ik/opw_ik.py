@@ -219,9 +219,9 @@ def _solve_chunk(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.nda
 def chunk_solver(robot: Robot, tol: float = TOL) -> tuple[Callable[[np.ndarray], np.ndarray], int]:
     """The chunk solver of the kernels in use (numpy or the compiled twin) and its chunk size:
     world poses ``(M, 4, 4)`` -> verified branches ``(M, 8, 6)``. ModelError without an OPW form."""
-    robot = opw_model(robot)  # the same arm, its chain in the OPW form
-    opw = robot.opw
-    pre, post = _opw_frames(robot, opw)
+    model = opw_model(robot)  # the same arm, its chain in the OPW form; solutions verified on robot's own
+    opw = model.opw
+    pre, post = _opw_frames(model, opw)
     kernel = compiled("robocal.ik.opw_numba")
     if kernel is None:
         return partial(_solve_chunk, robot, opw, pre, post, tol=tol), _CHUNK
@@ -234,9 +234,9 @@ def seed_branches(robot: Robot, T: np.ndarray) -> np.ndarray:
     form with out-of-reach arguments clamped (:func:`paper_branches` with ``SEED_MARGIN``), not
     verified: a pose just beyond the nominal reach (a calibrated robot may reach it) still gets a
     seed in each branch, off the singular stretched arm where the reach's gradient vanishes."""
-    robot = opw_model(robot)
-    opw = robot.opw
-    pre, post = _opw_frames(robot, opw)
+    model = opw_model(robot)
+    opw = model.opw
+    pre, post = _opw_frames(model, opw)
     return _robot_joints(opw, paper_branches(opw, pre @ T @ post, seed_margin=SEED_MARGIN))
 
 
