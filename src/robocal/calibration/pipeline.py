@@ -51,7 +51,7 @@ from robocal.identify.problem import CalibrationProblem
 from robocal.identify.robust import GROSS_K1, without_gross_errors
 from robocal.identify.solvers import SolverResult, check_options, get_solver, iteration_limit
 from robocal.identify.space import ParameterSpace, State, block_of
-from robocal.identify.structural import separate, unidentifiable
+from robocal.identify.structural import separate, structural_form, unidentifiable
 from robocal.identify.uncertainty import correlation, covariance
 from robocal.identify.variance_components import chosen as chosen_components
 from robocal.identify.variance_components import fit as fit_components
@@ -97,7 +97,8 @@ def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: f
     (:func:`robocal.identify.priors.fit_priors`); IdentificationError when the data cannot support
     a calibration."""
     candidates = problem.space(state0.robot, params)
-    J0 = problem.jacobian(state0, candidates)
+    # judged on the chain's structural form: a SCARA microradians off parallel is ranked as the SCARA it is
+    J0 = problem.jacobian(replace(state0, robot=structural_form(state0.robot)), candidates)
     ident = analyze_jacobian(J0, candidates.names, n_poses, rtol)
     warnings = []
     if len(problem.observations) == 1:

@@ -27,7 +27,12 @@ from robocal.kinematics.transforms import kabsch_rotation, make_transform, rotve
 # Smallest singular value (relative to the largest) of the column-normalised registration Jacobian
 # for which the poses still fix the frame and the SMR offsets (identical or collinear poses do not).
 REGISTRATION_RCOND = 1e-6
-FIXED_AXIS_TOL = 1e-12  # spread of a flange axis's world direction (relative) below which it never turns
+# A flange axis whose world direction wobbles less than this (rad RMS over the joint range) counts as
+# fixed: the SMR offsets along it then move the points apart from the frame's translation by under
+# 1e-3 of the offsets' change (micrometres), below any tracker's noise -- the structure of a SCARA,
+# calibrated (its axes microradians off parallel) or read from a file with rounded angles as well
+FIXED_AXIS_RAD = 1e-3
+_SPREAD_POSES = 8  # joint vectors spread over the limits on which the wobble is judged
 REGISTRATION_DEGENERATE = "cannot fix the tracker frame and the SMR offsets"  # said when they cannot
 
 
@@ -55,16 +60,18 @@ def umeyama(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
 
 
 def turns_about_one_axis(robot) -> bool:
-    """Whether every joint of ``robot`` leaves one flange axis pointing the same way (a SCARA: all
-    its revolute axes parallel): point data then cannot tell the SMR offsets along that axis from
-    the base frame's translation (one freedom the registration leaves where it started)."""
+    """Whether every joint of ``robot`` leaves one flange axis pointing the same way, within
+    `FIXED_AXIS_RAD` (a SCARA: all its revolute axes parallel, or microradians off in a calibrated
+    model): point data then cannot tell the SMR offsets along that axis from the base frame's
+    translation (one freedom the registration leaves where it started)."""
     lo, hi = robot.limits[:, 0], robot.limits[:, 1]
-    phase = (np.arange(8)[:, None] * 0.618 + np.arange(robot.n_joints) * 0.382) % 1.0  # spread joints
+    phase = (np.arange(_SPREAD_POSES)[:, None] * 0.618 + np.arange(robot.n_joints) * 0.382) % 1.0
     R = replace(robot, base=np.eye(4), tool=np.eye(4), smr=np.zeros((0, 3)), nominal=None,
                 joint_errors=None).fk(lo + (hi - lo) * phase)[:, :3, :3]
     D = R - R[0]
-    spread = np.linalg.eigvalsh(np.einsum("nji,njk->ik", D, D))
-    return bool(spread[0] <= FIXED_AXIS_TOL * max(spread[-1], 1e-300))
+    # the least-moving flange direction v: sum_n |R_n v - R_0 v|^2, each term ~ its turn (rad) squared
+    least = np.linalg.eigvalsh(np.einsum("nji,njk->ik", D, D))[0]
+    return bool(np.sqrt(max(least, 0.0) / _SPREAD_POSES) <= FIXED_AXIS_RAD)
 
 
 def smr_offsets_lsq(Rf: np.ndarray, of: np.ndarray, local: np.ndarray, smr: np.ndarray, k: int) -> np.ndarray:
@@ -76,6 +83,17 @@ def smr_offsets_lsq(Rf: np.ndarray, of: np.ndarray, local: np.ndarray, smr: np.n
     sums = np.zeros((k, 3))
     np.add.at(sums, smr, v)
     return sums / np.bincount(smr, minlength=k)[:, None]
+
+
+def _step(J: np.ndarray, r: np.ndarray, free: int) -> np.ndarray:
+    """The Gauss-Newton step ``(p,)`` of residuals ``r (M,)`` on columns ``J (M, p)``, scaled to unit
+    norm, without the ``free`` weakest directions (the structure's: a SCARA's height, its axes
+    microradians off parallel, whose freedom then stays where it started instead of wandering
+    metres to fit the noise) nor any below `REGISTRATION_RCOND` (the check after the loop names them)."""
+    scale = np.maximum(np.linalg.norm(J, axis=0), 1e-300)
+    U, s, Vt = np.linalg.svd(J / scale, full_matrices=False)
+    keep = (np.arange(s.size) < s.size - free) & (s >= REGISTRATION_RCOND * s[0])
+    return (Vt[keep].T @ ((U[:, keep].T @ r) / s[keep])) / scale
 
 
 def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30) -> Registration:
@@ -111,6 +129,7 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
         if step < 1e-6:  # Gauss-Newton below polishes to machine precision
             break
     # 2. Gauss-Newton on (B translation, B rotation increment, offsets)
+    free = 1 if turns_about_one_axis(robot) else 0  # the structural freedom (turns_about_one_axis)
     it = 0
     while it < iterations:
         it += 1
@@ -124,7 +143,7 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
         for s in range(k):
             rows = smr == s
             J[rows, :, 6 + 3 * s : 9 + 3 * s] = RBRf[rows]
-        dx = np.linalg.lstsq(J.reshape(-1, 6 + 3 * k), r, rcond=None)[0]
+        dx = _step(J.reshape(-1, 6 + 3 * k), r, free)
         Rb = rotvec_to_matrix(dx[3:6])
         B = make_transform(Rb @ B[:3, :3], Rb @ B[:3, 3] + dx[:3])
         t = t + dx[6:].reshape(k, 3)
@@ -132,7 +151,6 @@ def register_frame(robot, data, *, alternations: int = 200, iterations: int = 30
             break
     Jn = J.reshape(-1, 6 + 3 * k)
     sv = np.linalg.svd(Jn / np.maximum(np.linalg.norm(Jn, axis=0), 1e-300), compute_uv=False)
-    free = 1 if turns_about_one_axis(robot) else 0  # the structural freedom (turns_about_one_axis)
     if sv[-1 - free] < REGISTRATION_RCOND * sv[0]:
         raise IdentificationError(
             f"the pose set is degenerate: its {data.n_poses} poses {REGISTRATION_DEGENERATE} (they barely "

@@ -6,7 +6,8 @@ d2 of two parallel axes, theta6 beside the tool: the model has more parameters t
 only on these poses (a joint that never moved, poses that all share one arm posture), and other
 poses would determine them. :func:`unidentifiable` repeats the rank test on
 :data:`GENERIC_POSES` poses drawn uniformly within the joint limits (seeded), the same SMRs and the
-same kind of measurement, and :func:`separate` moves a robot parameter dropped on the data but
+same kind of measurement (on the chain's `structural_form`: a SCARA a little off parallel is judged
+as the SCARA it is), and :func:`separate` moves a robot parameter dropped on the data but
 identifiable there from ``dropped`` to ``undetermined`` (not determined by these data,
 :mod:`robocal.identify.vocabulary`). Joint-error terms are not judged here (their effect needs the
 rows' conditions and approach directions), nor plane or other kinds (the fixture decides what a
@@ -22,6 +23,7 @@ import numpy as np
 
 from robocal.data.kinds import OBSERVED
 from robocal.data.measurements import Measurements
+from robocal.data.registration import turns_about_one_axis
 from robocal.identify.freedoms import structural_freedoms
 from robocal.identify.identifiability import DEFAULT_RTOL, Identifiability, analyze
 from robocal.identify.problem import CalibrationProblem
@@ -30,6 +32,22 @@ from robocal.identify.space import block_of
 GENERIC_POSES = 60  # poses spread over the joint limits: beyond the parameters of any arm robocal models
 GENERIC_SEED = 0
 JUDGED_BLOCKS = ("links", "base", "tool", "smr")
+
+
+def structural_form(robot):
+    """The chain whose structure ``robot`` has, for the rank tests: a SCARA whose axes are within
+    `robocal.data.registration.FIXED_AXIS_RAD` of parallel (a calibrated one, a file with rounded
+    angles) with its axes 2.. made exactly parallel to axis 1 (alpha on 0 or pi, beta 0), so the
+    freedoms of its structure are held as a SCARA's instead of estimated from microradian tilts;
+    any other robot itself."""
+    if robot.n_joints < 2 or not turns_about_one_axis(robot):
+        return robot
+    known = set(robot.parameter_names)
+    later = range(2, robot.n_joints + 1)
+    snapped = {f"alpha{i}": float(np.round(robot.alpha[i - 1] / np.pi) * np.pi) for i in later}
+    snapped.update({f"beta{i}": 0.0 for i in later})
+    snapped = {k: v for k, v in snapped.items() if k in known and robot.get(k) != v}
+    return robot.with_values(snapped) if snapped else robot
 
 
 def unidentifiable(robot, kind: str, names: list[str], n_smr: int = 1,
@@ -43,6 +61,7 @@ def unidentifiable(robot, kind: str, names: list[str], n_smr: int = 1,
     pairs = spec is not None and spec.group == "pair"  # distances: consecutive generic poses pair up
     if spec is None or not (spec.sees_position or pairs) or not judged:
         return set(names)
+    robot = structural_form(robot)
     lo, hi = robot.limits[:, 0], robot.limits[:, 1]
     q = np.random.default_rng(GENERIC_SEED).uniform(lo, hi, (GENERIC_POSES, robot.n_joints))
     smr = np.repeat(np.arange(n_smr), GENERIC_POSES)

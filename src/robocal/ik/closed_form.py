@@ -1,8 +1,9 @@
 """Closed-form inverse kinematics of every form robocal solves: OPW arms (spherical wrist,
 :mod:`robocal.ik.opw_ik`) and UR arms (three parallel axes, offset wrist, :mod:`robocal.ik.ur_ik`).
 
-The form is the robot's own: an OPW set the model carries and its chain still follows
-(:attr:`Robot.has_opw_form`), or the UR structure of its links (:attr:`Robot.has_ur_form`). Both
+The form is the robot's own, recognised from its chain's geometry: an OPW arm (:attr:`Robot.opw_model`:
+the set the model carries, or one derived from its joint lines whatever the chain was written in), or
+the UR structure of its links (:attr:`Robot.has_ur_form`). Both
 give up to 8 solutions in the same slot order, ``s = 4 * wrist_flip + 2 * shoulder + elbow``,
 each verified by ``robot.fk``. A calibrated model has neither: numeric IK
 (:func:`robocal.ik.numeric.solve`) seeds it from its nominal model's closed form
@@ -24,30 +25,33 @@ from robocal.core.errors import ModelError
 from robocal.ik.opw_ik import SEED_MARGIN, TOL, check_poses
 from robocal.kinematics.model import Robot
 from robocal.kinematics.model_file import LINK_FIELDS
+from robocal.kinematics.opw_geometry import opw_model
 from robocal.kinematics.ur import nearest_ur_links
 
 
 def has_closed_form(robot: Robot) -> bool:
     """Whether closed-form IK applies to this robot's own chain (OPW, UR or SCARA form)."""
-    return robot.has_opw_form or robot.has_ur_form or scara_ik.is_scara(robot)
+    return robot.opw_model is not None or robot.has_ur_form or scara_ik.is_scara(robot)
 
 
 def seed_model(model: Robot) -> Robot:
     """The model whose closed form seeds numeric IK on ``model``: ``model`` itself when it has a
     closed form; for a calibrated UR chain without one (e.g. a factory calibration imported with
     ``robocal import-calibration``, beta on its parallel axes) the nearest UR-form chain
-    (:func:`robocal.kinematics.ur.nearest_ur_links`, same base and tool); else ``model``."""
+    (:func:`robocal.kinematics.ur.nearest_ur_links`, same base and tool); for a chain a little off
+    the OPW form (a URDF with rounded angles) the nearest OPW arm
+    (:func:`robocal.kinematics.opw_geometry.opw_model` with ``seed=True``); else ``model``."""
     if has_closed_form(model) or model.n_joints != 6:
         return model
     links = nearest_ur_links(*model.links)
     if links is None:
-        return model
+        return opw_model(model, seed=True) or model
     return replace(model, joint_errors=None, **dict(zip(LINK_FIELDS, links, strict=True)))
 
 
 def _module(robot: Robot):
     """The solver module of the robot's own form; ModelError naming why there is none."""
-    if robot.has_opw_form:
+    if robot.opw_model is not None:
         return opw_ik
     if robot.has_ur_form:
         return ur_ik
@@ -103,6 +107,8 @@ def branch_slot(nominal: Robot, q: np.ndarray) -> np.ndarray:
     set, else the UR form of its chain); a calibrated robot's slots are its nominal model's."""
     if nominal.opw is not None:
         return opw_ik.branch_slot(nominal.opw, q)
+    if nominal.opw_model is not None:
+        return opw_ik.branch_slot(nominal.opw_model.opw, q)
     if scara_ik.is_scara(nominal):
         return scara_ik.branch_slot(nominal, q)
     shoulder, elbow, flip = ur_ik.branch_bits(nominal, q)
@@ -115,7 +121,7 @@ def branch_model(robot: Robot, nominal: Robot | None = None) -> Robot | None:
     model = seed_model(robot.nominal_robot() if nominal is None else nominal)
     if model.n_joints != 6 or robot.n_joints != 6:
         return None
-    return model if model.opw is not None or model.has_ur_form else None
+    return model if model.opw is not None or model.opw_model is not None or model.has_ur_form else None
 
 
 def turn_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -24,7 +24,7 @@ from robocal.ik.closed_form import branch_model, branch_slot, seed_branches, see
 from robocal.ik.opw_ik import check_poses
 from robocal.ik.scara import is_scara_arm
 from robocal.kinematics.model import Robot
-from robocal.kinematics.transforms import pose_error
+from robocal.kinematics.transforms import invert_transform, pose_error
 
 POS_TOL = 1e-10  # m
 ROT_TOL = 1e-9  # rad
@@ -123,9 +123,12 @@ class _Targets:
 
 def _nominal_model(robot: Robot, nominal: Robot | None) -> Robot:
     """The closed-form model seeding IK on ``robot`` (:func:`robocal.ik.closed_form.seed_model` of
-    ``nominal``, default the robot's own nominal model) with the robot's base and tool."""
-    model = seed_model(robot.nominal_robot() if nominal is None else nominal)
-    return model.with_frames(base=robot.base, tool=robot.tool)
+    ``nominal``, default the robot's own nominal model) with the robot's base and tool (a seed model
+    whose chain is written otherwise, the nearest OPW arm's, keeps its frames' share of the placement)."""
+    source = robot.nominal_robot() if nominal is None else nominal
+    model = seed_model(source)
+    return model.with_frames(base=robot.base @ invert_transform(source.base) @ model.base,
+                             tool=model.tool @ invert_transform(source.tool) @ robot.tool)
 
 
 def seeded_branches(robot: Robot, T: np.ndarray) -> np.ndarray:

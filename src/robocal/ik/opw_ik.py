@@ -54,19 +54,26 @@ TOL = 1e-9  # m and rad: largest forward-kinematics error of a returned solution
 SEED_MARGIN = 1e-3  # seeds keep the elbow's cosine this far inside +-1 (the arm ~2.6 deg off straight)
 
 
-def opw_form(robot: Robot) -> OPWParameters:
-    """The robot's OPW form; ModelError if its chain does not follow one (:attr:`Robot.has_opw_form`)."""
-    if robot.has_opw_form:
-        return robot.opw
+def opw_model(robot: Robot) -> Robot:
+    """The OPW-form model of the robot's arm (:attr:`Robot.opw_model`: its own, or the one its
+    chain's geometry has); ModelError naming why there is none."""
+    model = robot.opw_model
+    if model is not None:
+        return model
     if robot.opw is None:
         raise ModelError(
-            f"robot {robot.name!r} has no OPW form (ortho-parallel arm with a spherical wrist), so "
-            "closed-form inverse kinematics is not available; use the numeric solver "
-            "rc.ik.solve(robot, poses, seeds) instead")
+            f"robot {robot.name!r} has no OPW form (its joint lines are not those of an ortho-parallel "
+            "arm with a spherical wrist), so closed-form inverse kinematics is not available; use the "
+            "numeric solver rc.ik.solve(robot, poses, seeds) instead")
     raise ModelError(
         f"robot {robot.name!r}: its chain no longer follows its nominal OPW form (a calibrated model "
         "or one with joint-error terms), so closed-form inverse kinematics does not apply; use the "
         "numeric solver rc.ik.solve(robot, poses), which is seeded by the nominal closed form")
+
+
+def opw_form(robot: Robot) -> OPWParameters:
+    """The OPW set of the robot's arm (:func:`opw_model`); ModelError without one."""
+    return opw_model(robot).opw
 
 
 def check_poses(poses) -> np.ndarray:
@@ -212,8 +219,9 @@ def _solve_chunk(robot: Robot, opw: OPWParameters, pre: np.ndarray, post: np.nda
 def chunk_solver(robot: Robot, tol: float = TOL) -> tuple[Callable[[np.ndarray], np.ndarray], int]:
     """The chunk solver of the kernels in use (numpy or the compiled twin) and its chunk size:
     world poses ``(M, 4, 4)`` -> verified branches ``(M, 8, 6)``. ModelError without an OPW form."""
-    opw = opw_form(robot)
-    pre, post = _opw_frames(robot, opw)
+    model = opw_model(robot)  # the same arm, its chain in the OPW form; solutions verified on robot's own
+    opw = model.opw
+    pre, post = _opw_frames(model, opw)
     kernel = compiled("robocal.ik.opw_numba")
     if kernel is None:
         return partial(_solve_chunk, robot, opw, pre, post, tol=tol), _CHUNK
@@ -226,8 +234,9 @@ def seed_branches(robot: Robot, T: np.ndarray) -> np.ndarray:
     form with out-of-reach arguments clamped (:func:`paper_branches` with ``SEED_MARGIN``), not
     verified: a pose just beyond the nominal reach (a calibrated robot may reach it) still gets a
     seed in each branch, off the singular stretched arm where the reach's gradient vanishes."""
-    opw = opw_form(robot)
-    pre, post = _opw_frames(robot, opw)
+    model = opw_model(robot)
+    opw = model.opw
+    pre, post = _opw_frames(model, opw)
     return _robot_joints(opw, paper_branches(opw, pre @ T @ post, seed_margin=SEED_MARGIN))
 
 

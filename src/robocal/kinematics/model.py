@@ -58,6 +58,7 @@ from robocal.kinematics.model_file import (
     robot_kwargs,
 )
 from robocal.kinematics.opw import OPWParameters
+from robocal.kinematics.opw_geometry import opw_model
 from robocal.kinematics.prior_spec import PriorSpec
 from robocal.kinematics.thermal import link_coefficients as thermal_coefficients
 from robocal.kinematics.thermal import scale as thermal_scale
@@ -348,6 +349,13 @@ class Robot:
         chain = opw_chain(self.opw)
         return all(np.allclose(getattr(self, f), chain[f], rtol=0.0, atol=OPW_MATCH_TOL)
                    for f in LINK_FIELDS)
+
+    @functools.cached_property
+    def opw_model(self) -> Robot | None:
+        """This arm as an OPW-form model (closed-form IK applies): itself when `has_opw_form`, else
+        the OPW form its chain's geometry has (`robocal.kinematics.opw_geometry.opw_model`: an OPW
+        arm read from a URDF, a DH or MDH table, a cell), None without one (computed on first use)."""
+        return self if self.has_opw_form else opw_model(self)
 
     @functools.cached_property
     def ur_form(self) -> URForm | None:

@@ -64,6 +64,9 @@ NOMINAL_GAP_RAD = np.deg2rad(2.0)
 SELF_CHECK_M = 1e-11
 SELF_CHECK_RAD = 1e-12
 SELF_CHECK_POSES = 64
+# ... plus what floating point allows: a composition with lengths up to L (a DH d of kilometres on
+# nearly parallel axes) places its lines to ~L eps, and a direction taken over a lever l to L eps / l
+ROUND_SLACK_ULPS = 20
 FLANGE_ON_AXIS_TOL = 1e-12  # m / rad: tool0 off joint 6's axis by more cannot be written for the xacro
 
 
@@ -267,15 +270,32 @@ def _robot(mdh: dict, nominal: Robot, name: str, description: str) -> Robot:
                  name=name, description=description)
 
 
-def _check_against(robot: Robot, reference, what: str) -> None:
-    """``robot.fk`` equals ``reference(q)`` (flange poses) at fixed joint vectors, else ModelError."""
+def self_check_tolerance(magnitude: float, lever: float) -> tuple[float, float]:
+    """The self-check bounds (m, rad) of a composition whose lengths reach ``magnitude`` (m) and
+    whose shortest link (the lever a direction is taken over) is ``lever`` (m): `SELF_CHECK_M`,
+    `SELF_CHECK_RAD` plus `ROUND_SLACK_ULPS` ulps of ``magnitude`` (over ``lever`` for angles)."""
+    slack = ROUND_SLACK_ULPS * np.finfo(float).eps * magnitude
+    return SELF_CHECK_M + slack, SELF_CHECK_RAD + slack / max(lever, SELF_CHECK_M)
+
+
+def _lever(nominal: Robot) -> float:
+    """The nominal arm's shortest non-zero link length (m): the lever of its directions."""
+    lengths = np.abs(np.r_[nominal.a, nominal.d])
+    return float(lengths[lengths > 0].min(initial=1.0))
+
+
+def _check_against(robot: Robot, reference, what: str, magnitude: float, lever: float) -> None:
+    """``robot.fk`` equals ``reference(q)`` (flange poses) at fixed joint vectors within
+    `self_check_tolerance` of the composition's ``magnitude`` and ``lever`` (m), else ModelError."""
     q = np.random.default_rng(0).uniform(-2 * np.pi, 2 * np.pi, (SELF_CHECK_POSES, 6))
     mine, ref = robot.fk(q), reference(q)
     dp = np.abs(mine[:, :3, 3] - ref[:, :3, 3]).max()
     dr = np.abs(mine[:, :3, :3] - ref[:, :3, :3]).max()
-    if dp > SELF_CHECK_M or dr > SELF_CHECK_RAD:
+    tol_m, tol_rad = self_check_tolerance(magnitude, lever)
+    if dp > tol_m or dr > tol_rad:
         raise ModelError(f"internal: the MDH + beta model of the {what} differs from its composition by "
-                         f"{dp:.3g} m / {dr:.3g} rad; please report this file")
+                         f"{dp:.3g} m / {dr:.3g} rad (bounds {tol_m:.3g} m / {tol_rad:.3g} rad); please "
+                         "report this file")
 
 
 def _largest_gap(robot: Robot, nominal: Robot) -> tuple[str, float, bool]:
@@ -302,7 +322,8 @@ def _check_nominal(robot: Robot, nominal: Robot, source: str, fits) -> None:
     name, gap, bad = _largest_gap(robot, nominal)
     if not bad:
         return
-    size = f"{gap * 1e3:+.1f} mm" if name[0] in "ad" else f"{np.rad2deg(gap):+.2f} deg"
+    length = name.rstrip("0123456789") in ("a", "d")  # alpha and beta are angles
+    size = f"{gap * 1e3:+.1f} mm" if length else f"{np.rad2deg(gap):+.2f} deg"
     others = [other for other in _ur_names() if other != nominal.name
               and (arm := fits(other)) is not None and not _largest_gap(arm, Robot.from_catalog(other))[2]]
     hint = f"it fits {', '.join(others)}" if others else "it fits no UR of the catalog"
@@ -335,7 +356,11 @@ def parse_calibration_conf(text: str, where: str) -> URDeltas:
             raise ModelError(f"{where} line {number}: expected `key = value` or `[section]`, got "
                              f"{raw.strip()[:60]!r}")
         if section == "mounting":
-            values[match.group(1)] = (number, match.group(2))
+            key = match.group(1)
+            if key in values:  # the controller would read one of them: which is not ours to guess
+                raise ModelError(f"{where} line {number}: {key} is given twice in [mounting] (first on line "
+                                 f"{values[key][0]}): remove one copy")
+            values[key] = (number, match.group(2))
     if section is None and not values:
         raise ModelError(f"{where}: no [mounting] section: not a UR calibration.conf")
     missing = [k for k in DELTA_KEYS if k not in values]
@@ -395,7 +420,8 @@ def from_calibration_conf(text: str, nominal_name: str, where: str = "calibratio
     table = controller_table(deltas, nominal_dh(nominal_name))
     nominal = Robot.from_catalog(nominal_name)
     robot = arm(nominal_name)
-    _check_against(robot, lambda q: dh_fk(table, q), "controller's DH table")
+    _check_against(robot, lambda q: dh_fk(table, q), "controller's DH table",
+                   float(np.abs(np.r_[table.a, table.d]).max()), _lever(nominal))
     _check_nominal(robot, nominal, where, arm)
     notes = []
     if deltas.status not in (None, LINEARISED):
@@ -455,7 +481,8 @@ def from_ur_calibration(text: str, nominal_name: str, where: str = "calibration.
                       f"{Path(where).name}" + (f" (hash {digest})" if digest else ""))
 
     robot = arm(nominal_name)
-    _check_against(robot, lambda q: origins_fk(origins, q, XACRO_TOOL0), "ur_calibration YAML")
+    _check_against(robot, lambda q: origins_fk(origins, q, XACRO_TOOL0), "ur_calibration YAML",
+                   float(np.abs(origins[:, :3, 3]).max()), _lever(nominal))
     _check_nominal(robot, nominal, where, arm)
     return ImportedCalibration(robot, "ur_calibration YAML", [
         "read as ur_description's xacro composes it (URDF rpy = Rz(yaw) Ry(pitch) Rx(roll), tool0 on "
