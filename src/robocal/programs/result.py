@@ -24,7 +24,7 @@ from robocal.kinematics.model import Robot
 from robocal.programs.motions import MotionRecord, summary, summary_line
 from robocal.programs.registry import dialect_with_name
 from robocal.programs.runtime import ROUTED
-from robocal.trust.output_marker import ProgramMarker, mark_program
+from robocal.trust.output_marker import ProgramMarker, corrected_path, mark_program
 
 LISTED = 20  # problems (warnings) listed in one message
 JSON_ROWS = 5_000  # table rows encoded by one call of json's encoder
@@ -198,7 +198,8 @@ class FilterResult:
         that one; otherwise both ``table.csv`` and ``table.json``), all together or none. Refuses to
         overwrite an input. Every file carries the calibrated model's marker in its own comment
         syntax, a data file too (`robocal.trust.output_marker.mark_program`); one without comments
-        (a VAR.DAT) is marked by its name (``VAR_CAL.DAT``: another name is refused).
+        (a VAR.DAT) is marked by its name: written as ``<stem>_CAL<suffix>`` beside the output
+        path given, unless that name already says so (`robocal.trust.output_marker.corrected_path`).
         Returns the paths written.
 
         Parameters
@@ -228,8 +229,14 @@ class FilterResult:
         files: dict[Path, bytes] = {}
         for src, dst in outputs.items():  # marked with the calibrated model that corrected them
             data = self.outputs[Path(src)]  # programs and data files alike (a register file too)
-            files[Path(dst)] = data if self.calibrated is None else \
-                mark_program(self.language or dialect_with_name(self.dialect), data, self.calibrated, dst)
+            if self.calibrated is None:
+                files[Path(dst)] = data
+                continue
+            marked = mark_program(self.language or dialect_with_name(self.dialect), data, self.calibrated)
+            if marked is None:  # no comment syntax (a VAR.DAT): marked by its name
+                files[corrected_path(dst)] = data
+            else:
+                files[Path(dst)] = marked
         for t in table_paths(table) if table is not None else []:
             files[t] = (self.table_csv() if t.suffix.lower() == ".csv" else self.table_json()).encode()
         check_outputs(files, self.outputs)

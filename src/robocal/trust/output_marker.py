@@ -32,7 +32,8 @@ language's comment syntax (its ``programs/dialects/<language>/marker.py``):
 A format with no comment syntax, a Yaskawa VAR.DAT (the controller's variables: ``//`` and ``///``
 lines are its sections, and a line it does not know may make it refuse the whole file), carries
 no line of robocal's: its corrected copy is marked by its name, ``<stem>_CAL<suffix>``
-(:func:`corrected_name`; the filter refuses to write it under another name), and a file so named
+(:func:`corrected_name`; the filter writes it so named whatever output name it is given), and a
+file so named
 is refused as input like a marked one (:func:`check_unmarked_name`). What the name cannot cover:
 a user who renames the corrected copy (to load it on the controller as VAR.DAT) and gives that
 back to robocal.
@@ -272,17 +273,16 @@ class ProgramMarker(Protocol):
         """``text`` with the marker ``body`` (and ``note``, the same with what was done) added."""
 
 
-def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot, path=None) -> bytes:
+def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot) -> bytes | None:
     """A filtered file's bytes (a program or a data file of its language) with the marker of
     ``robot`` (the calibrated model) added in ``dialect``'s comment syntax (see the module
-    docstring). A file the dialect cannot mark (no comment syntax: a VAR.DAT) is returned as it
-    is, and must be written as ``path`` named as a corrected copy (:func:`corrected_name`).
+    docstring); None for a file the dialect cannot mark (no comment syntax: a VAR.DAT), which is
+    marked by its name instead (:func:`corrected_path`).
 
     Raises
     ------
     DataError
-        A format with no marker, a FANUC program without ``/MN``, or an unmarkable file to be
-        written under a name that does not say it is corrected.
+        A format with no marker, or a FANUC program without ``/MN``.
 
     Examples
     --------
@@ -297,11 +297,20 @@ def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot, path=None) -
     body = marker_text(robot)
     text = data.decode("latin-1")
     marked = dialect.mark(text, body, f"{body}: {_NOTE['filtered']}")
-    if marked == text and path is not None and not is_corrected_name(Path(path).name):
-        raise DataError(f"cannot write {path}: the file has no comment syntax to carry robocal's marker, "
-                        f"so its corrected copy is marked by its name: name it "
-                        f"{corrected_name(Path(path).name)}")
-    return marked.encode("latin-1")
+    return None if marked == text else marked.encode("latin-1")
+
+
+def corrected_path(path) -> Path:
+    """Where a corrected file that cannot carry a marker is written: ``path`` when its name says
+    it is corrected (:func:`is_corrected_name`), else the same folder with :func:`corrected_name`.
+
+    Examples
+    --------
+    >>> str(corrected_path("out/VAR.DAT")), str(corrected_path("out/VAR_CAL.DAT"))
+    ('out/VAR_CAL.DAT', 'out/VAR_CAL.DAT')
+    """
+    path = Path(path)
+    return path if is_corrected_name(path.name) else path.with_name(corrected_name(path.name))
 
 
 def mark_csv(text: str, robot: Robot) -> str:
