@@ -56,3 +56,29 @@ def test_a_hostile_model_name_in_the_urdf_and_ur_calibration(tmp_path):
     import yaml
 
     assert set(yaml.safe_load((tmp_path / "cal.yaml").read_text())) == {"kinematics"}
+
+
+def test_a_hostile_model_name_in_the_campaign_report(tmp_path):
+    model = _evil_model(tmp_path, "staubli_tx2_140")
+    assert main(["--quiet", "poses", "--robot", str(model), "-n", "12", "-o", str(tmp_path / "p.csv"),
+                 "--html", str(tmp_path / "p.html")]) == 0
+    page = (tmp_path / "p.html").read_text()
+    assert "<Program" not in page and "<x>" not in page and "&lt;x&gt;" in page
+
+
+def test_a_measurement_file_source_with_line_breaks_stays_one_comment(tmp_path):
+    """A file name or label with a line break, in the ``# source`` comment of a measurement CSV,
+    cannot start a line of its own (it would be read as a header or a row)."""
+    from dataclasses import replace
+
+    import robocal as rc
+    from robocal.data.simulate import simulate_tracker
+
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    data = replace(simulate_tracker(robot, 5, seed=1).data, source="run\nq1_rad,q2_rad\r\n1,2")
+    path = tmp_path / "m.csv"
+    data.save(path)
+    lines = path.read_text().splitlines()
+    assert lines[0] == "# run?q1_rad,q2_rad??1,2" and not lines[1].startswith("q1_rad,q2_rad")
+    back = type(data).load(path, robot)
+    assert len(back) == len(data)

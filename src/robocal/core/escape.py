@@ -5,6 +5,8 @@ became a new ``<Program>`` of a VAL3 application).
 * :func:`comment_text`: one line of printable ASCII (a newline ends a line comment in every robot
   language and in YAML and CSV ``#`` comments; controllers' comment charsets are ASCII): every
   other character becomes ``?``;
+* :func:`line_text`: one line of any printable text (a ``#`` comment of a UTF-8 CSV: a file name
+  with accents stays as it is), every line break or control character a ``?``;
 * :func:`cdata_text`: text inside an XML CDATA section (``]]>`` would end it);
 * :func:`xml_text`: XML character data or an attribute value (``&``, ``<``, ``>``, quotes);
 * :func:`xml_comment_text`: the inside of an XML comment (``--`` is not allowed there).
@@ -24,6 +26,18 @@ def comment_text(text: str) -> str:
     'model A?kinematics: {}?'
     """
     return "".join(ch if 32 <= ord(ch) < 127 else REPLACEMENT for ch in str(text))
+
+
+def line_text(text: str) -> str:
+    """``text`` as one line: every character that breaks a line (``str.splitlines``' separators)
+    or is a control character becomes ``?``.
+
+    Examples
+    --------
+    >>> line_text("mesures été.csv\\nkind: pose\\u2028x")
+    'mesures été.csv?kind: pose?x'
+    """
+    return "".join(ch if ch.isprintable() or ch == "\t" else REPLACEMENT for ch in str(text))
 
 
 def cdata_text(text: str) -> str:
