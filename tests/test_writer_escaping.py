@@ -82,3 +82,26 @@ def test_a_measurement_file_source_with_line_breaks_stays_one_comment(tmp_path):
     assert lines[0] == "# run?q1_rad,q2_rad??1,2" and not lines[1].startswith("q1_rad,q2_rad")
     back = type(data).load(path, robot)
     assert len(back) == len(data)
+
+
+def test_a_register_comment_cannot_break_the_setter_program(tmp_path):
+    """A POSREG.VA register comment holding ``]`` and ``;`` (the end of the label and of the TP
+    line) is written into PR_CAL.LS without them: every /MN line stays one assignment."""
+    from test_fanuc_posreg import FRAME, PALLET, POSREG, TOOL, _write
+
+    import robocal as rc
+    from robocal.data.simulate import perturbed
+
+    assert "'PICK' " in POSREG
+    program = _write(tmp_path, "PALLET.ls", PALLET)
+    posreg = _write(tmp_path, "POSREG.VA", POSREG.replace("'PICK' ", "'P]I;C\"K' "))
+    perturbed(rc.Robot.from_catalog("fanuc_m20ia"), 7).save(tmp_path / "cal.yaml")
+    out = tmp_path / "out"
+    out.mkdir()
+    assert main(["--quiet", "filter", str(program), "--references", str(posreg), "--calibrated",
+                 str(tmp_path / "cal.yaml"), "--nominal", "fanuc_m20ia", "--frame", f"1={FRAME}", "--tool",
+                 f"2={TOOL}", "-o", str(out / "PALLET.ls")]) == 0
+    text = (out / "PR_CAL.LS").read_text()
+    assert "PR[11:P I C K]=P[" in text  # the comment kept, its brackets and ';' and quote spaces
+    for line in text[text.index("/MN") + 3:text.index("/POS")].strip().splitlines():
+        assert re.fullmatch(r"\s*\d+:\s+(PR\[\d+(:[^\[\];]*)?\]=P\[\d+\]\s+;|!.*;)", line), line
