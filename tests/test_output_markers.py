@@ -56,8 +56,9 @@ def test_the_fanuc_register_file_is_marked_and_refused_back(tmp_path, capsys):
     _refused(["filter", str(program), "--position-registers", str(corrected), "-o", str(tmp_path / "p.ls"),
               *options], capsys, "o.ls.registers.csv", "already filtered", "--force")
     assert not (tmp_path / "p.ls").exists()
-    assert main(["--quiet", "filter", str(program), "--position-registers", str(corrected), "-o",
+    assert main(["filter", str(program), "--position-registers", str(corrected), "-o",
                  str(tmp_path / "p.ls"), "--force", *options]) == 0
+    assert "o.ls.registers.csv was already filtered by robocal" in capsys.readouterr().out  # a warning
 
 
 def test_the_fanuc_register_setter_program_is_refused_back(tmp_path, capsys):
