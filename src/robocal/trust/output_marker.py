@@ -32,9 +32,9 @@ language's comment syntax (its ``programs/dialects/<language>/marker.py``):
 A format with no comment syntax, a Yaskawa VAR.DAT (the controller's variables: ``//`` and ``///``
 lines are its sections, and a line it does not know may make it refuse the whole file), carries
 no line of robocal's: its corrected copy is marked by its name, ``<stem>_CAL<suffix>``
-(:func:`corrected_name`; the filter writes it so named whatever output name it is given), and a
+(`corrected_name`; the filter writes it so named whatever output name it is given), and a
 file so named
-is refused as input like a marked one (:func:`check_unmarked_name`). What the name cannot cover:
+is refused as input like a marked one (`check_unmarked_name`). What the name cannot cover:
 a user who renames the corrected copy (to load it on the controller as VAR.DAT) and gives that
 back to robocal.
 """
@@ -186,7 +186,7 @@ def corrected_name(name: str) -> str:
 
 
 def is_corrected_name(name: str) -> bool:
-    """Whether file ``name`` is named as a corrected copy (:func:`corrected_name`).
+    """Whether file ``name`` is named as a corrected copy (`corrected_name`).
 
     Examples
     --------
@@ -199,7 +199,7 @@ def is_corrected_name(name: str) -> bool:
 
 def check_unmarked_name(path, action: str, force: bool = False) -> bool:
     """Refuse (DataError) file ``path`` of a format that carries no marker when it is named as
-    robocal's corrected copy (:func:`corrected_name`); ``force`` lets it through (True is then
+    robocal's corrected copy (`corrected_name`); ``force`` lets it through (True is then
     returned, for a warning).
 
     Examples
@@ -277,7 +277,7 @@ def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot) -> bytes | N
     """A filtered file's bytes (a program or a data file of its language) with the marker of
     ``robot`` (the calibrated model) added in ``dialect``'s comment syntax (see the module
     docstring); None for a file the dialect cannot mark (no comment syntax: a VAR.DAT), which is
-    marked by its name instead (:func:`corrected_path`).
+    marked by its name instead (`corrected_path`).
 
     Raises
     ------
@@ -302,7 +302,7 @@ def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot) -> bytes | N
 
 def corrected_path(path) -> Path:
     """Where a corrected file that cannot carry a marker is written: ``path`` when its name says
-    it is corrected (:func:`is_corrected_name`), else the same folder with :func:`corrected_name`.
+    it is corrected (`is_corrected_name`), else the same folder with `corrected_name`.
 
     Examples
     --------
