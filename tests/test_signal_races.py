@@ -244,9 +244,9 @@ def _ctrl_c_at_random_moments(folder: Path, signals: int, busy: bool, seed: int)
 
 
 def test_ctrl_c_at_random_moments_is_always_answered(tmp_path):
-    """150 SIGINTs at random moments (about 10 s): every one answered, every child ended by its
+    """300 SIGINTs at random moments (about 10 s): every one answered, every child ended by its
     last, the outputs whole after each."""
-    assert _ctrl_c_at_random_moments(tmp_path, 150, busy=False, seed=47) >= 150
+    assert _ctrl_c_at_random_moments(tmp_path, 300, busy=False, seed=47) >= 300
 
 
 @pytest.mark.slow
