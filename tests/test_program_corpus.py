@@ -400,7 +400,8 @@ def test_fanuc_position_registers_from_a_file(tmp_path, capsys):
     assert main(["filter", str(path), "--calibrated", str(cal_path), "--nominal", "fanuc_lrmate200id",
                  "--frame", "1=450,-150,100,0,0,-10", "--tool", "2=0,0,120,0,0,0", "--position-registers",
                  str(regs), "-o", str(tmp_path / "o.ls")]) == 0
-    assert (tmp_path / "o.ls.registers.csv").read_bytes() == out
+    written = (tmp_path / "o.ls.registers.csv").read_bytes()  # the corrected copy, marked (issue 47)
+    assert written.startswith(b"# robocal ") and written.split(b"\n", 1)[1] == out
     assert "11 motions: 7 corrected, 4 not corrected" in capsys.readouterr().out
 
 

@@ -72,11 +72,14 @@ def _one_line(exc: BaseException) -> str:
 class _Interrupts:
     """SIGINT raises KeyboardInterrupt as usual and is also remembered: a library that turns the
     interrupt into another exception (numpy's C extensions make an ImportError of it during their
-    import) still ends as an interrupt. Main thread only; the previous handler is restored."""
+    import) still ends as an interrupt. Main thread only, and only over Python's own handler
+    (an ignored SIGINT stays ignored; another program's handler stays its own); Python's handler
+    is put back on every path (``signal.signal`` runs a pending handler first, which may be this
+    one raising: the swap is retried until done, the interrupt then raised)."""
 
     def __init__(self) -> None:
         self.seen = False
-        self.previous = None
+        self.installed = False
 
     def _handler(self, signum, frame):
         self.seen = True
@@ -85,30 +88,42 @@ class _Interrupts:
     def __enter__(self):
         if threading.current_thread() is threading.main_thread() \
                 and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
-            self.previous = signal.signal(signal.SIGINT, self._handler)
+            self.installed = True  # before the swap: an interrupt right after it still restores
+            signal.signal(signal.SIGINT, self._handler)
         return self
 
     def __exit__(self, *exc) -> None:
-        if self.previous is not None:
-            signal.signal(signal.SIGINT, self.previous)
+        if not self.installed:
+            return
+        interrupt = None
+        while signal.getsignal(signal.SIGINT) == self._handler:
+            try:
+                signal.signal(signal.SIGINT, signal.default_int_handler)
+            except KeyboardInterrupt as caught:  # this handler ran first: put back, then raised
+                interrupt = caught
+        self.installed = False
+        if interrupt is not None:
+            raise interrupt
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; the exit code: 0 done, 2 the user's input refused (one line on
-    stderr), 3 an internal error (a bug), 130 interrupted (Ctrl-C at any moment)."""
+    stderr), 3 an internal error (a bug), 130 interrupted (Ctrl-C at any moment, also while the
+    handlers are set up or put back)."""
     command = "robocal"
-    with _Interrupts() as interrupts:
-        try:
+    interrupts = _Interrupts()
+    try:
+        with interrupts:
             parser = build_parser()
             argv = sys.argv[1:] if argv is None else list(argv)
             args = parser.parse_args(argv)
             command = f"robocal {args.command}"
             return _run(args, argv, interrupts)
-        except KeyboardInterrupt:
-            pass
-        except Exception:
-            if not interrupts.seen:
-                raise
+    except KeyboardInterrupt:
+        pass
+    except Exception:
+        if not interrupts.seen:
+            raise
     print(f"{command}: interrupted", file=sys.stderr)
     return 130
 

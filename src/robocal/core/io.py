@@ -210,8 +210,9 @@ class _FolderLocks:
     DataError says so. Where folders cannot be locked (no ``fcntl``, some network file systems),
     writes are not serialised."""
 
-    def __init__(self, paths) -> None:
+    def __init__(self, paths, signals: _DeferSignals | None = None) -> None:
         self.folders = sorted({_folder(p).resolve() for p in paths})
+        self.signals = signals  # waiting for another process ends on a deferred signal
         self.fds: list[int] = []
 
     def __enter__(self):
@@ -232,6 +233,8 @@ class _FolderLocks:
                         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
                         break
                     except BlockingIOError:
+                        if self.signals is not None:
+                            self.signals.check()
                         if time.monotonic() > deadline:
                             raise DataError(f"cannot write in {folder}: another robocal process has been "
                                             f"writing there for {LOCK_TIMEOUT_S:.0f} s; try again when it "
@@ -250,47 +253,140 @@ class _FolderLocks:
         self.fds.clear()
 
 
-class _DeferSignals:
-    """While a set of outputs is written, SIGINT and SIGTERM are noted instead of acted on
-    (``pending``); the writer checks ``pending`` between its steps and abandons the write (old
-    outputs kept) when one came before the last rename. On exit the previous handlers are back and
-    a noted signal is delivered to them (SIGINT: KeyboardInterrupt; SIGTERM: the process ends as it
-    would have). Only in the main thread (signals cannot be handled elsewhere)."""
+class _Deferral:
+    """The process's one deferral of SIGINT and SIGTERM (main thread only: signals cannot be
+    handled elsewhere). While at least one write is open (``writes``, nested writes share it) the
+    two signals are noted in ``pending`` instead of acted on; when the last write closes, the
+    handlers found before the first one are put back and the noted signals delivered to them.
 
-    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+    Built so that no Ctrl-C can be lost (issue 47: a loop of writes stopped answering SIGINT):
+
+    * one set of saved handlers for the whole process, never one of its own (a nested or an
+      overlapping write cannot save a deferring handler as the one to put back);
+    * the note handler itself checks that a write is open: one left installed by an exception
+      at an unlucky moment puts the saved handlers back and delivers the signal to them;
+    * handlers are swapped with the two signals blocked (a signal arriving during a swap waits
+      for the handler put back) and the mask is restored on every path, also when a handler of
+      another signal raises inside ``pthread_sigmask`` or ``signal.signal``;
+    * putting the handlers back is retried until it is done: ``signal.signal`` and
+      ``pthread_sigmask`` run the pending handlers first, and one put back a moment before (a
+      signal taken by another thread) or another signal's may raise; the first such exception
+      is raised once every handler is back;
+    * noted signals are delivered SIGTERM first (a KeyboardInterrupt cannot hide a SIGTERM).
+    """
+
+    SIGNALS = (signal.SIGTERM, signal.SIGINT)  # also the order noted signals are delivered in
+    DEFAULTS = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: signal.SIG_DFL}
 
     def __init__(self) -> None:
+        self.writes: list[object] = []  # the open writes (their _DeferSignals)
+        self.saved: dict[int, object] = {}  # signal -> its handler before the first open write
         self.pending: list[int] = []
-        self.previous: dict[int, object] = {}
+        self.handler = self._note  # one bound method: compared with signal.getsignal()
 
     def _note(self, signum, frame) -> None:
-        self.pending.append(signum)
+        if self.writes:
+            self.pending.append(signum)
+            return
+        self.restore()  # left installed although no write is open: the signal is the user's
+        signal.raise_signal(signum)
+
+    def open(self, write: object) -> None:
+        """Start deferring for ``write`` (an exception leaves nothing open: see `close`)."""
+        try:
+            self.writes.append(write)
+            if len(self.writes) > 1:
+                return
+            self.pending.clear()
+            with _blocked(self.SIGNALS):
+                for sig in self.SIGNALS:
+                    current = signal.getsignal(sig)
+                    if current is signal.SIG_IGN or current == self.handler:  # ignored: stays so
+                        continue
+                    self.saved[sig] = signal.SIG_DFL if current is None else current
+                    signal.signal(sig, self.handler)
+        except BaseException:
+            self.close(write)
+            raise
+
+    def close(self, write: object) -> None:
+        """Stop deferring for ``write``; the last one puts the handlers back and delivers the
+        noted signals."""
+        if write in self.writes:
+            self.writes.remove(write)
+        if self.writes:
+            return
+        noted = [sig for sig in self.SIGNALS if sig in self.pending]
+        self.pending.clear()
+        try:
+            self.restore()
+        finally:
+            for sig in noted:
+                signal.raise_signal(sig)
+
+    def restore(self) -> None:
+        """Put back every saved handler (and the default where a deferring one is found without
+        a saved one), the two signals blocked meanwhile; retried until all are back (see the
+        class docstring), the first exception met then raised."""
+        error = None
+        while True:
+            left = {sig: self.saved.get(sig, self.DEFAULTS[sig]) for sig in self.SIGNALS
+                    if sig in self.saved or signal.getsignal(sig) == self.handler}
+            if not left:
+                break
+            try:
+                with _blocked(self.SIGNALS):
+                    for sig, handler in left.items():
+                        signal.signal(sig, handler)
+                        self.saved.pop(sig, None)
+            except BaseException as exc:  # a handler put back a moment before ran and raised
+                error = error or exc
+        if error is not None:
+            raise error
+
+
+@contextlib.contextmanager
+def _blocked(signals):
+    """``signals`` blocked in this thread inside the block; the mask as it was afterwards, on
+    every path (``pthread_sigmask`` runs the pending handlers after changing the mask: one that
+    raises must not leave the signals blocked). Nothing where the platform has no signal masks."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, ())  # the mask, unchanged
+    try:
+        signal.pthread_sigmask(signal.SIG_BLOCK, signals)
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+
+_DEFERRAL = _Deferral()
+
+
+class _DeferSignals:
+    """While a set of outputs is written, SIGINT and SIGTERM are noted instead of acted on
+    (:class:`_Deferral`); the writer calls `check` between its steps and abandons the write (old
+    outputs kept) when one came before the last rename. On exit the previous handlers are back and
+    a noted signal is delivered to them (SIGINT: KeyboardInterrupt; SIGTERM: the process ends as it
+    would have). Only in the main thread; elsewhere nothing is deferred."""
+
+    def __init__(self) -> None:
+        self.active = threading.current_thread() is threading.main_thread()
 
     def __enter__(self):
-        if threading.current_thread() is threading.main_thread():
-            for sig in self.SIGNALS:
-                if signal.getsignal(sig) is not signal.SIG_IGN:  # ignored (a background job): stays so
-                    self.previous[sig] = signal.signal(sig, self._note)
+        if self.active:
+            _DEFERRAL.open(self)
         return self
 
     def check(self) -> None:
         """Raise KeyboardInterrupt when a signal was noted (the writer then cleans up)."""
-        if self.pending:
+        if self.active and _DEFERRAL.pending:
             raise KeyboardInterrupt
 
     def __exit__(self, *exc) -> None:
-        # a signal arriving while the handlers are swapped back stays pending (blocked) and reaches
-        # the restored handler, instead of being caught by the C handler and dropped
-        mask = hasattr(signal, "pthread_sigmask") and self.previous
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, self.SIGNALS) if mask else None
-        try:
-            for sig, handler in self.previous.items():
-                signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
-        finally:
-            if mask:
-                signal.pthread_sigmask(signal.SIG_SETMASK, old)
-        for sig in dict.fromkeys(self.pending):
-            signal.raise_signal(sig)
+        if self.active:
+            _DEFERRAL.close(self)
 
 
 def _temp_for(path: Path, data: str | bytes) -> str:
@@ -358,7 +454,9 @@ def write_all(outputs: Mapping) -> None:
     items = [(Path(p), data) for p, data in outputs.items()]
     check_writable(p for p, _ in items)
     paths = [p for p, _ in items]
-    with _FolderLocks(paths), _DeferSignals() as signals:
+    # the locks are taken and released while signals are deferred: an interrupt never leaves a
+    # folder's descriptor open (its lock held) behind
+    with _DeferSignals() as signals, _FolderLocks(paths, signals):
         _remove_stale(paths)
         _commit(items, signals)
 

@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from robocal.core.errors import DataError, ModelError
+from robocal.core.escape import line_text
 from robocal.core.io import read_text, write_atomic
 from robocal.data.csv_table import text_lines
 from robocal.data.measurements import Measurements, joint_range_rad, parse_csv
@@ -343,10 +344,10 @@ class CellMeasurements:
         header = [BODY_COLUMN] + list(dict.fromkeys(h for _, _, cells in rows for h in cells))
         out = io.StringIO()
         if self.source:
-            out.write(f"# {self.source}\n")
+            out.write(f"# {line_text(self.source)}\n")
         instrument = next((d.instrument for d in self.bodies.values() if d.instrument), "")
         if instrument:
-            out.write(f"# instrument: {instrument}\n")
+            out.write(f"# instrument: {line_text(instrument)}\n")
         out.write(",".join(header) + "\n")
         for _, body, cells in rows:
             out.write(_csv_line([body] + [cells.get(h, "") for h in header[1:]]) + "\n")

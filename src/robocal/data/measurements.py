@@ -66,6 +66,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError, UnitError
+from robocal.core.escape import line_text
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
 from robocal.core.magnitudes import check_payload
 from robocal.data.csv_table import csv_rows, read_table, text_lines
@@ -636,9 +637,9 @@ class Measurements:
             cols["temperature_c"] = self.temperature
         out = io.StringIO()
         if self.source:
-            out.write(f"# {self.source}\n")
+            out.write(f"# {line_text(self.source)}\n")
         if self.instrument:
-            out.write(f"# instrument: {self.instrument}\n")
+            out.write(f"# instrument: {line_text(self.instrument)}\n")
         if self.kind != _columns_kind(set(cols)):
             out.write(f"# kind: {self.kind}\n")
         out.write(",".join(cols) + "\n")

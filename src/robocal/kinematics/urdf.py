@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from robocal.core.errors import ModelError
+from robocal.core.escape import xml_comment_text, xml_text
 from robocal.core.io import write_atomic
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
@@ -36,8 +37,7 @@ def _origin(T: np.ndarray) -> str:
 
 
 def _attr(text: str) -> str:
-    return (text.replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;")
-            .replace(">", "&gt;"))
+    return xml_text(text)
 
 
 # ----------------------------------------------------------------- export
@@ -57,7 +57,7 @@ def not_carried(robot: Robot) -> str | None:
 
 
 def _comment(text: str) -> str:
-    return f"<!-- {_attr(text).replace('-', '&#45;')} -->"
+    return f"<!-- {xml_comment_text(text)} -->"
 
 
 def _frames_comment(robot: Robot, base: np.ndarray, flange: np.ndarray) -> str:

@@ -61,7 +61,7 @@ from robocal.programs.routing import Routing
 from robocal.programs.source import ProgramText
 from robocal.programs.track import track_program
 from robocal.trust.coverage import Prediction, target_warnings
-from robocal.trust.output_marker import check_unmarked
+from robocal.trust.output_marker import check_unmarked, check_unmarked_name
 
 CONTROLLER_JOINTS = 6  # the programs the dialects read drive 6-axis arms (a few a SCARA too)
 SAME_JOINTS = 1e-6  # rad: two executions of one target with joints this close take the same solution
@@ -443,8 +443,6 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     d = dialect_for(paths, dialect)
     controller = _controller_arm(d, nominal, track)
     sources = [ProgramText(p) for p in paths]
-    for s in sources:
-        check_unmarked(s.text, str(s.path), "filtered", force)
     if position_registers is not None:
         if not d.position_registers:
             vendors = " / ".join(c.vendor for c in capable("position_registers"))
@@ -453,13 +451,14 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
     if routing is not None:
         routing.check(d, track is None and coordinated is None, tcp)
     refs = [ProgramText(p) for p in references]
+    forced = _check_uncorrected(d, [*sources, *refs], force)
     program = d.parse(sources, as_frames(d, frames), as_frames(d, tools), refs)
     missing = undeclared(program.ledger)
     if strict and missing:
         raise _listed(f"{len(missing)} motion(s) move to names declared in none of the files given:", missing,
                       "give the files that declare them (or --references), or run without --strict to "
                       "name these motions and correct the rest")
-    warnings = list(program.warnings)
+    warnings = forced + list(program.warnings)
     if track is not None:
         track.take(program, warnings)
     targets = _filterable(d, program, warnings, coordinated, fixed_arm=track is None, fixed_base=fixed_base)
@@ -514,6 +513,22 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
                         joints=np.where(good[:, None], q, np.nan), loads=loads.lines,
                         data_files=frozenset(s.path for s in sources[len(paths):]),  # the register file
                         derived=frozenset(derived), language=d), program
+
+
+def _check_uncorrected(d: Dialect, files: list[ProgramText], force: bool) -> list[str]:
+    """Refuse (DataError) any of ``files`` (programs, a register file, references: whatever holds
+    targets the filter corrects) that robocal already corrected: its marker, or, for a format with
+    no comments (an INFORM VAR.DAT), its name (`robocal.trust.output_marker`); with ``force``, the
+    warnings naming each one let through."""
+    out = []
+    for s in files:
+        found = check_unmarked(s.text, str(s.path), "filtered", force)
+        if found is not None:
+            out.append(f"{s.path.name} was already filtered by {found.describe()}: filtered again "
+                       "(--force): its corrections are applied twice unless it really is uncorrected")
+        elif d.marked_by_name(s) and check_unmarked_name(s.path, "filtered", force):
+            out.append(f"{s.path.name} is named as robocal's filtered copy: filtered again (--force)")
+    return out
 
 
 def _left_unchanged(program: Program, targets: list[Target], problems: list[tuple[int, str]],

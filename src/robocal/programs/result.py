@@ -24,7 +24,7 @@ from robocal.kinematics.model import Robot
 from robocal.programs.motions import MotionRecord, summary, summary_line
 from robocal.programs.registry import dialect_with_name
 from robocal.programs.runtime import ROUTED
-from robocal.trust.output_marker import ProgramMarker, mark_program
+from robocal.trust.output_marker import ProgramMarker, corrected_path, mark_program
 
 LISTED = 20  # problems (warnings) listed in one message
 JSON_ROWS = 5_000  # table rows encoded by one call of json's encoder
@@ -92,7 +92,7 @@ class FilterResult:
     motions: list[MotionRecord] = field(default_factory=list)  # every motion to a Cartesian pose
     calibrated: Robot | None = None  # the model that corrected the targets: its marker goes on the files
     joints: np.ndarray | None = None  # (targets, n) rad on the calibrated model, NaN where not corrected
-    data_files: frozenset[Path] = frozenset()  # outputs that are data, not programs: no marker
+    data_files: frozenset[Path] = frozenset()  # outputs that are data, not programs (marked in their syntax)
     # outputs made from the reference files (FANUC PR_CAL.LS, INFORM VAR_CAL.DAT): no input of their
     # own; `write` puts them beside the programs unless a path is given
     derived: frozenset[Path] = frozenset()
@@ -196,8 +196,10 @@ class FilterResult:
         input; a file made from the references (`derived`) goes beside the first output under its
         own name unless the mapping gives it a path) and the table (``table`` ending .csv or .json:
         that one; otherwise both ``table.csv`` and ``table.json``), all together or none. Refuses to
-        overwrite an input. Program files carry the calibrated model's marker
-        (`robocal.trust.output_marker.mark_program`).
+        overwrite an input. Every file carries the calibrated model's marker in its own comment
+        syntax, a data file too (`robocal.trust.output_marker.mark_program`); one without comments
+        (a VAR.DAT) is marked by its name: written as ``<stem>_CAL<suffix>`` beside the output
+        path given, unless that name already says so (`robocal.trust.output_marker.corrected_path`).
         Returns the paths written.
 
         Parameters
@@ -226,9 +228,15 @@ class FilterResult:
         outputs = {**{p: folder / Path(p).name for p in self.derived}, **outputs}
         files: dict[Path, bytes] = {}
         for src, dst in outputs.items():  # marked with the calibrated model that corrected them
-            data = self.outputs[Path(src)]
-            files[Path(dst)] = data if self.calibrated is None or Path(src) in self.data_files else \
-                mark_program(self.language or dialect_with_name(self.dialect), data, self.calibrated)
+            data = self.outputs[Path(src)]  # programs and data files alike (a register file too)
+            if self.calibrated is None:
+                files[Path(dst)] = data
+                continue
+            marked = mark_program(self.language or dialect_with_name(self.dialect), data, self.calibrated)
+            if marked is None:  # no comment syntax (a VAR.DAT): marked by its name
+                files[corrected_path(dst)] = data
+            else:
+                files[Path(dst)] = marked
         for t in table_paths(table) if table is not None else []:
             files[t] = (self.table_csv() if t.suffix.lower() == ".csv" else self.table_json()).encode()
         check_outputs(files, self.outputs)

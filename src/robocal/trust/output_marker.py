@@ -22,11 +22,21 @@ language's comment syntax (its ``programs/dialects/<language>/marker.py``):
   the fingerprint is cut to fit (10 hex digits with a five-character version);
 * URScript: ``# ...`` as the first line;
 * Yaskawa INFORM: a comment instruction ``'...`` after the job's ``NOP`` (a comment holds 32
-  characters: the fingerprint is cut to fit); a VAR.DAT, which holds
-  no instructions, carries none;
+  characters: the fingerprint is cut to fit);
 * Staubli VAL3: an XML comment ``<!-- ... -->`` on the line after the XML declaration of each
-  file written (a file without a declaration carries none);
-* CSV: ``# ...`` as the first line (robocal's CSV readers skip leading ``#`` lines).
+  file written, or as the first line of a file without a declaration (a .dtx as some editors
+  save it);
+* CSV (compensated targets, FANUC position register files): ``# ...`` as the first line
+  (robocal's CSV readers skip leading ``#`` lines).
+
+A format with no comment syntax, a Yaskawa VAR.DAT (the controller's variables: ``//`` and ``///``
+lines are its sections, and a line it does not know may make it refuse the whole file), carries
+no line of robocal's: its corrected copy is marked by its name, ``<stem>_CAL<suffix>``
+(`corrected_name`; the filter writes it so named whatever output name it is given), and a
+file so named
+is refused as input like a marked one (`check_unmarked_name`). What the name cannot cover:
+a user who renames the corrected copy (to load it on the controller as VAR.DAT) and gives that
+back to robocal.
 """
 
 from __future__ import annotations
@@ -34,6 +44,7 @@ from __future__ import annotations
 import hashlib
 import re
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Protocol
 
 from robocal.core.errors import DataError
@@ -159,6 +170,58 @@ def check_unmarked(text: str, where: str, action: str, force: bool = False) -> M
     return found
 
 
+CORRECTED_STEM = "_CAL"  # the end of the stem of a corrected copy marked by its name (VAR_CAL.DAT)
+
+
+def corrected_name(name: str) -> str:
+    """The name of a corrected copy of file ``name`` (a format that cannot carry a marker).
+
+    Examples
+    --------
+    >>> corrected_name("VAR.DAT"), corrected_name("VAR")
+    ('VAR_CAL.DAT', 'VAR_CAL')
+    """
+    stem, dot, suffix = name.rpartition(".")
+    return f"{stem}{CORRECTED_STEM}{dot}{suffix}" if dot else f"{name}{CORRECTED_STEM}"
+
+
+def is_corrected_name(name: str) -> bool:
+    """Whether file ``name`` is named as a corrected copy (`corrected_name`).
+
+    Examples
+    --------
+    >>> is_corrected_name("VAR_CAL.DAT"), is_corrected_name("var_cal.dat"), is_corrected_name("VAR.DAT")
+    (True, True, False)
+    """
+    stem = name.rpartition(".")[0] or name
+    return stem.upper().endswith(CORRECTED_STEM)
+
+
+def check_unmarked_name(path, action: str, force: bool = False) -> bool:
+    """Refuse (DataError) file ``path`` of a format that carries no marker when it is named as
+    robocal's corrected copy (`corrected_name`); ``force`` lets it through (True is then
+    returned, for a warning).
+
+    Examples
+    --------
+    >>> check_unmarked_name("VAR.DAT", "filtered")
+    False
+    >>> check_unmarked_name("VAR_CAL.DAT", "filtered")
+    Traceback (most recent call last):
+    ...
+    robocal.core.errors.DataError: VAR_CAL.DAT is named as robocal's filtered copy (its format has ...
+    """
+    if not is_corrected_name(Path(path).name):
+        return False
+    if force:
+        return True
+    verb = action[:-2] if action.endswith("ed") else action
+    raise DataError(f"{path} is named as robocal's {action} copy (its format has no comments: robocal "
+                    f"marks it by the name's {CORRECTED_STEM}): {verb}ing it again applies the corrections "
+                    "twice; start from the controller's original file (or give --force if this one really "
+                    "is uncorrected)")
+
+
 _LINE_END = re.compile(r"\r\n|\n|\r")
 
 
@@ -210,9 +273,11 @@ class ProgramMarker(Protocol):
         """``text`` with the marker ``body`` (and ``note``, the same with what was done) added."""
 
 
-def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot) -> bytes:
-    """A filtered program's bytes with the marker of ``robot`` (the calibrated model) added in
-    ``dialect``'s comment syntax (see the module docstring).
+def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot) -> bytes | None:
+    """A filtered file's bytes (a program or a data file of its language) with the marker of
+    ``robot`` (the calibrated model) added in ``dialect``'s comment syntax (see the module
+    docstring); None for a file the dialect cannot mark (no comment syntax: a VAR.DAT), which is
+    marked by its name instead (`corrected_path`).
 
     Raises
     ------
@@ -230,7 +295,22 @@ def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot) -> bytes:
     True
     """
     body = marker_text(robot)
-    return dialect.mark(data.decode("latin-1"), body, f"{body}: {_NOTE['filtered']}").encode("latin-1")
+    text = data.decode("latin-1")
+    marked = dialect.mark(text, body, f"{body}: {_NOTE['filtered']}")
+    return None if marked == text else marked.encode("latin-1")
+
+
+def corrected_path(path) -> Path:
+    """Where a corrected file that cannot carry a marker is written: ``path`` when its name says
+    it is corrected (`is_corrected_name`), else the same folder with `corrected_name`.
+
+    Examples
+    --------
+    >>> str(corrected_path("out/VAR.DAT")), str(corrected_path("out/VAR_CAL.DAT"))
+    ('out/VAR_CAL.DAT', 'out/VAR_CAL.DAT')
+    """
+    path = Path(path)
+    return path if is_corrected_name(path.name) else path.with_name(corrected_name(path.name))
 
 
 def mark_csv(text: str, robot: Robot) -> str:

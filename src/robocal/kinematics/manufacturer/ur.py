@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from robocal.core.errors import ModelError
+from robocal.core.escape import comment_text
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_all
 from robocal.core.yaml_load import load_yaml
 from robocal.kinematics.catalog import catalog_entry, catalog_names
@@ -647,8 +648,10 @@ def to_ur_calibration(robot: Robot, nominal: Robot) -> str:
     True
     """
     origins = xacro_origins(robot, nominal)
-    lines = [f"# written by robocal from model {robot.name}: the calibrated geometry from the controller's",
-             f"# base to its flange (tool0), for ur_description's xacro (nominal {nominal.name}).",
+    lines = [f"# written by robocal from model {comment_text(robot.name)}: the calibrated geometry from the "
+             "controller's",
+             "# base to its flange (tool0), for ur_description's xacro (nominal "
+             f"{comment_text(nominal.name)}).",
              "# The hash is robocal's: the ROS driver compares it with the robot's own and reports a",
              "# mismatch, which is expected for a calibration the controller does not run.",
              "kinematics:"]

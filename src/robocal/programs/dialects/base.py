@@ -189,6 +189,11 @@ class Dialect:
         <fingerprint>``, ``note`` the same with what was done to the file."""
         raise DataError(f"no provenance marker for program format {self.name!r}")
 
+    def marked_by_name(self, src: ProgramText) -> bool:
+        """Whether file ``src`` is of a format with no comment syntax (an INFORM VAR.DAT), whose
+        corrected copy robocal marks by its name (`robocal.trust.output_marker.corrected_name`)."""
+        return False
+
     def campaign_files(self, joints: np.ndarray, robot: Robot, path: Path, **options) -> dict[str, str]:
         """A campaign program visiting ``joints`` ``(N, 6)`` (rad) of ``robot`` in order, written
         as ``path``: file path -> text (:mod:`robocal.campaign.programs`, ``options``: its

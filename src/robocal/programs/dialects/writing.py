@@ -11,6 +11,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError
+from robocal.core.escape import comment_text
 from robocal.kinematics.model import Robot
 from robocal.kinematics.transforms import invert_transform
 from robocal.programs.dialects.base import Dialect
@@ -142,9 +143,10 @@ def checked_external(external: ExternalAxes | None, n: int, language: str) -> Ex
 
 
 def comment_lines(comment: str, n: int) -> list[str]:
-    """Comment text for a program header: printable ASCII only (controllers' comment charset)."""
-    text = comment or f"robocal measurement campaign: {n} poses"
-    clean = "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in text)
+    """Comment text for a program header: printable ASCII only (controllers' comment charset), no
+    line end (`robocal.core.escape.comment_text`); a language that puts it elsewhere than a line
+    comment escapes it further (VAL3's CDATA: `robocal.core.escape.cdata_text`)."""
+    clean = comment_text(comment or f"robocal measurement campaign: {n} poses")
     return [clean[i : i + 100] for i in range(0, len(clean), 100)] + [
         "joint values in the controller's joint convention; replace the measure procedure's body "
         "with your tracker trigger"]

@@ -1,7 +1,9 @@
 """The provenance marker of FANUC TP (.ls): a remark ``!...`` as the last line of ``/MN``,
 numbered after the last line, with ``LINE_COUNT`` raised by one; a remark line holds
 `TP_REMARK_WIDTH` characters, so the fingerprint is cut to fit (10 hex digits with a
-five-character version) (:mod:`robocal.trust.output_marker`)."""
+five-character version). The position register file (``--position-registers``, a CSV whose
+``#`` lines are comments: :mod:`robocal.programs.dialects.fanuc.registers`) gets ``# ...`` as its
+first line (:mod:`robocal.trust.output_marker`)."""
 
 from __future__ import annotations
 
@@ -9,8 +11,9 @@ import re
 
 from robocal.core.errors import DataError
 from robocal.programs.dialects.fanuc.campaign import TP_REMARK_WIDTH
+from robocal.programs.dialects.fanuc.registers import is_register_file
 from robocal.programs.dialects.fanuc.sections import main_section
-from robocal.trust.output_marker import newline, shortened
+from robocal.trust.output_marker import after_bom, newline, shortened
 
 LINE_DIGITS = 9  # a TP line number or LINE_COUNT longer than this is no controller's (a mangled file)
 _LINE = re.compile(rf"^[ \t]*(\d{{1,{LINE_DIGITS}}}):", re.M)
@@ -20,6 +23,9 @@ _COUNT = re.compile(rf"^(LINE_COUNT\s*=\s*)(\d{{1,{LINE_DIGITS}}})(?!\d)", re.M)
 def mark(text: str, body: str, note: str) -> str:
     """``text`` with the remark ``!body`` (cut to fit) as the last line of /MN."""
     span = main_section(text)
+    if span is None and is_register_file(text):
+        k = after_bom(text)
+        return f"{text[:k]}# {note}{newline(text)}{text[k:]}"
     if span is None:
         raise DataError("a FANUC .ls program without /MN cannot carry a provenance marker")
     start, stop = span

@@ -41,6 +41,7 @@ import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.programs.dialects.fanuc.configuration import SCARA
+from robocal.programs.dialects.writing import ascii_comment
 from robocal.programs.source import Number, ProgramText
 from robocal.programs.target import Target
 
@@ -164,6 +165,12 @@ def position_block(k: int, uf: str, ut: str, config: str, values: Sequence[float
             f"\tX = {x}  mm,\tY = {y}  mm,\tZ = {z}  mm,", f"\tW = {w} deg,\tP = {p} deg,\tR = {r} deg", "};"]
 
 
+def _register_comment(text: str) -> str:
+    """A register's comment as it can stand in ``PR[n:comment]``: printable ASCII without quotes,
+    brackets or ``;`` (which would end the label or the line)."""
+    return "".join(" " if ch in "[];" else ch for ch in ascii_comment(text)).strip()
+
+
 def setter_program(corrected: ProgramText, used: dict[int, tuple[str, str]], scheme) -> str:
     """The TP program (:data:`SETTER_NAME`) that sets the registers ``used`` (number -> (user
     frame, tool frame) of their motions) to their values in ``corrected``, the filtered copy of
@@ -176,11 +183,11 @@ def setter_program(corrected: ProgramText, used: dict[int, tuple[str, str]], sch
         t = regs.cartesian[n]
         uf, ut = used[n]
         x, y, z, w, p, r = t.values()
-        comment = regs.comments.get(n, "").strip()
+        comment = _register_comment(regs.comments.get(n, ""))
         label = f"PR[{n}:{comment}]" if comment else f"PR[{n}]"
         lines.append(f"{k:>4}:  {label}=P[{k}]    ;")
         blocks += position_block(k, uf, ut, scheme.text(t.config), (x, y, z, w, p, r), SETTER_DECIMALS)
     head = [f"/PROG  {SETTER_NAME}", "/ATTR", "OWNER\t\t= MNEDITOR;",
-            f"COMMENT\t\t= \"{corrected.path.name[:16]}\";", f"LINE_COUNT\t= {len(lines)};",
+            f"COMMENT\t\t= \"{ascii_comment(corrected.path.name)[:16]}\";", f"LINE_COUNT\t= {len(lines)};",
             "PROTECT\t\t= READ_WRITE;", "DEFAULT_GROUP\t= 1,*,*,*,*;", "/MN"]
     return nl.join([*head, *lines, "/POS", *blocks, "/END", ""])

@@ -107,6 +107,16 @@ def assignments(sources: list[ProgramText]) -> tuple[dict[int, str], list[str]]:
     return out, indirect
 
 
+def is_register_file(text: str) -> bool:
+    """Whether ``text`` is a position register file: its first line that is not blank nor a ``#``
+    comment is the header."""
+    for line in text.splitlines():
+        body = line.strip().lstrip("\ufeff\xef\xbb\xbf")
+        if body and not body.startswith("#"):
+            return body.replace(" ", "").lower() == HEADER
+    return False
+
+
 def read_registers(src: ProgramText) -> dict[int, Target]:
     """Register number -> a :class:`Target` whose numbers are in ``src`` (frame and tool unset)."""
     text = src.text

@@ -1,8 +1,9 @@
 """The provenance marker of Yaskawa INFORM: a comment instruction ``'...`` after the job's
 ``NOP`` (a comment holds `INFORM_COMMENT_WIDTH` characters: the fingerprint is cut to fit), or, in a
 job without ``NOP`` (an offline generator's), before its first instruction; any line end (CRLF, LF,
-a lone CR) is the job's own. A VAR.DAT, which holds no instructions, carries none
-(:mod:`robocal.trust.output_marker`)."""
+a lone CR) is the job's own. A VAR.DAT, which has no comment syntax, carries no line of
+robocal's: its corrected copy is marked by its name (``VAR_CAL.DAT``,
+:mod:`robocal.trust.output_marker`)."""
 
 from __future__ import annotations
 

@@ -80,6 +80,7 @@ from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.model import IDENTITY, Program, Target
 from robocal.programs.rotations import matrix_to_zyx
 from robocal.programs.source import Number, ProgramText
+from robocal.trust.output_marker import corrected_name
 
 _POSITION_MM = 1e-3  # the pendant writes 3 decimals for mm
 _ANGLE_DEG = 1e-4  # ... and 4 for degrees
@@ -187,6 +188,9 @@ class InformDialect(Dialect):
 
     def mark(self, text, body, note):
         return marker.mark(text, body, note)
+
+    def marked_by_name(self, src):
+        return is_variable_file(src)
 
     def test_program(self, folder, nominal, q, tool, frame, name, variables=False):
         return simulated.write_test_program(self, folder, nominal, q, tool, frame, name, variables)
@@ -306,8 +310,7 @@ class InformDialect(Dialect):
 def corrected_variables_name(name: str) -> str:
     """The name of a VAR.DAT's corrected copy: ``VAR.DAT`` -> ``VAR_CAL.DAT`` (another name than the
     controller's own, so that the backup it was read from is never overwritten)."""
-    stem, dot, suffix = name.rpartition(".")
-    return f"{stem}_CAL{dot}{suffix}" if dot else f"{name}_CAL"
+    return corrected_name(name)
 
 
 def _delivered(ref: ProgramText, targets: list[Target]) -> str:

@@ -8,6 +8,7 @@ parameter; its body only writes a message) and ``NAME.dtx`` declaring ``jPose`` 
 from __future__ import annotations
 
 from robocal.core.errors import DataError
+from robocal.core.escape import cdata_text
 from robocal.programs.dialects.writing import (
     DEFAULT_PROCEDURE,
     DEFAULT_SETTLE_S,
@@ -34,7 +35,8 @@ def val3_application(joints_deg, name: str = "robocalCampaign", *,
         raise DataError(f"the procedure cannot be named {procedure}: start and stop are the application's")
     head = '<?xml version="1.0" encoding="utf-8"?>'
     ns = 'xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" xmlns="http://www.staubli.com/robotics/VAL3'
-    code = ["begin", *(f"  // {line}" for line in comment_lines(comment, len(q)))]
+    # the comment is in the code's CDATA: a "]]>" in it (a model's name) would end the section
+    code = ["begin", *(f"  // {cdata_text(line)}" for line in comment_lines(comment, len(q)))]
     for k in range(len(q)):
         code += [f"  movej(jPose[{k}], flange, mCampaign)", "  waitEndMove()",
                  f"  delay({fixed_point(settle_s, 3)})", f"  call {procedure}({k + 1})"]
