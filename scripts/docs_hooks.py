@@ -25,6 +25,9 @@ import os
 import re
 from pathlib import Path
 
+# the run's marks, defined once (scripts/ is on the path while MkDocs loads a hook, and in the tests)
+from docs_bench_plots import run_commit, run_dirty, run_load, run_marks
+
 ROOT = Path(__file__).resolve().parents[1]
 BENCH_RESULTS = ROOT / "benchmarks" / "results.json"
 CLI_MARK = "<!-- generated: cli -->"
@@ -122,8 +125,6 @@ def _table(table: dict) -> list[str]:
 
 
 def _ran(run: dict) -> str:
-    from docs_bench_plots import run_commit, run_dirty, run_load, run_marks  # the run's marks: one place
-
     machine = run["machine"]
     commit = (f" (commit {run_commit(run)}{', with uncommitted changes' if run_dirty(run) else ''})"
               if run_commit(run) else " (commit not recorded)")

@@ -223,7 +223,7 @@ class CalibrationResult(_BeforeAfter):
 
     @property
     def noise_floor_mm(self) -> float | None:
-        """The noise floor of the validation figure (mm, :mod:`robocal.report.floor`): the RMS a
+        """The noise floor of the validation figure (mm, `robocal.report.floor`): the RMS a
         perfect model would show on the validation items, from their instrument noise; None
         without validation sets, or when they are not all point or pose files (whose items are
         3-D position errors)."""
