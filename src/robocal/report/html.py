@@ -771,7 +771,7 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     named = (result.get("provenance") or {}).get("data_file") or data.get("file")  # its source: the table
     subtitle = (f"{esc(named)} &middot; error model {error_model(result)[0]} &middot; "
                 f"method {esc(result.get('method'))}")
-    narrow = {"model-selection", "identifiability", "rejected", "iso9283", "history", "priors"}
+    narrow = {"identifiability", "rejected", "iso9283", "history", "priors"}  # their tables fit half
     return page(title, subtitle, sections, result.get("robocal_version"), frozenset(narrow),
                 screen_only=SCREEN_ONLY)
 
