@@ -173,6 +173,7 @@ def test_campaign_page_renders_without_console_messages(browser, tmp_path):
 
 
 PHONE = 390  # px: a phone's screen width
+LAPTOP = 1280  # px: a laptop's, where two columns of half width sit side by side
 
 
 def _page_width(browser: str, tmp_path, report, width: int) -> int:
@@ -194,6 +195,7 @@ def _page_width(browser: str, tmp_path, report, width: int) -> int:
 def test_report_fits_a_phone(browser, tmp_path, report):
     assert _page_width(browser, tmp_path, report, PHONE) <= PHONE + 10
     assert _page_width(browser, tmp_path, report, WIDTH) <= WIDTH + 10  # and the wide layout still fits
+    assert _page_width(browser, tmp_path, report, LAPTOP) <= LAPTOP + 10  # tables scroll in half columns
 
 
 A4_PAGES = 4  # a typical calibration's report prints on at most this many A4 pages (issue 48)

@@ -85,3 +85,13 @@ def test_the_warning_count_is_coloured_by_what_it_says(calibrated):
     assert "<b class='bad'>0 warning" not in quiet
     loud = render_report({**content, "warnings": ["something to read"]})
     assert "<b class='bad'>1 warning(s)</b>" in loud
+
+
+def test_wide_tables_take_the_full_width(calibrated):
+    """The parameter and error-model tables (8 columns) are not put in half-width columns, where
+    they were clipped at 1280 px; a table in a column scrolls inside it."""
+    from robocal.report.html import render_report
+
+    page = render_report(calibrated.to_dict())
+    assert '<section id="parameters">' in page
+    assert page.count("<table") == page.count("<div class='scroll")  # each table in a scrolling box
