@@ -25,6 +25,9 @@ import os
 import re
 from pathlib import Path
 
+# the run's marks, defined once (scripts/ is on the path while MkDocs loads a hook, and in the tests)
+from docs_bench_plots import run_commit, run_dirty, run_load, run_marks
+
 ROOT = Path(__file__).resolve().parents[1]
 BENCH_RESULTS = ROOT / "benchmarks" / "results.json"
 CLI_MARK = "<!-- generated: cli -->"
@@ -60,7 +63,8 @@ def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001
 # ----------------------------------------------------------------- command line
 def _cell(text: str) -> str:
     """Text for a Markdown table cell: HTML-escaped, no pipes, no emphasis markers, one line."""
-    return " ".join(html.escape(text).replace("|", "&#124;").replace("*", "&#42;").split())
+    # quotes stay quotes: an entity inside a code span would be shown as written (&quot;auto&quot;)
+    return " ".join(html.escape(text, quote=False).replace("|", "&#124;").replace("*", "&#42;").split())
 
 
 def _expanded_help(parser: argparse.ArgumentParser, action: argparse.Action) -> str:
@@ -122,12 +126,16 @@ def _table(table: dict) -> list[str]:
 
 def _ran(run: dict) -> str:
     machine = run["machine"]
-    commit = f" (commit {run['git_commit']})" if run.get("git_commit") else " (commit not recorded)"
+    commit = (f" (commit {run_commit(run)}{', with uncommitted changes' if run_dirty(run) else ''})"
+              if run_commit(run) else " (commit not recorded)")
+    load = run_load(run)
+    marks = run_marks(run)
     return (f"Ran {run['date']} (UTC) in {run['seconds']:.0f} s with robocal {run['robocal_version']}"
             f"{commit} "
-            f"on {_cell(machine['cpu'])}, {machine['cores']} cores, load average "
-            f"{machine['load_average']} at the start, {_cell(machine['platform'])}, "
-            f"Python {machine['python']}, numpy {machine['numpy']}.")
+            f"on {_cell(machine['cpu'])}, {machine['cores']} cores, load "
+            f"{'not recorded' if load is None else f'{load:.2f}'}, {_cell(machine['platform'])}, "
+            f"Python {machine['python']}, numpy {machine['numpy']}."
+            + (f" **Marked: {'; '.join(marks)}.**" if marks else ""))
 
 
 def _run(runs: dict, name: str, path: Path) -> dict:

@@ -173,6 +173,7 @@ def test_campaign_page_renders_without_console_messages(browser, tmp_path):
 
 
 PHONE = 390  # px: a phone's screen width
+LAPTOP = 1280  # px: a laptop's, where two columns of half width sit side by side
 
 
 def _page_width(browser: str, tmp_path, report, width: int) -> int:
@@ -194,3 +195,33 @@ def _page_width(browser: str, tmp_path, report, width: int) -> int:
 def test_report_fits_a_phone(browser, tmp_path, report):
     assert _page_width(browser, tmp_path, report, PHONE) <= PHONE + 10
     assert _page_width(browser, tmp_path, report, WIDTH) <= WIDTH + 10  # and the wide layout still fits
+    assert _page_width(browser, tmp_path, report, LAPTOP) <= LAPTOP + 10  # tables scroll in half columns
+
+
+A4_PAGES = 4  # a typical calibration's report prints on at most this many A4 pages (issue 48)
+PDF_PAGE = re.compile(rb"/Type\s*/Page(?![s\w])")
+
+
+def _typical_report(tmp_path_factory):
+    """The tutorial's calibration: 20 planned-size poses of an IRB 2600, 100 held-out poses."""
+    from robocal import Robot, calibrate, simulate_tracker
+
+    robot = Robot.from_catalog("abb_irb2600")
+    cal = simulate_tracker(robot, 20, seed=7)
+    val = simulate_tracker(cal.truth, 100, seed=8, as_is=True)
+    result = calibrate(robot, cal.data, validation=val.data)
+    return write_report(result.to_dict(), tmp_path_factory.mktemp("typical") / "report.html")
+
+
+@pytest.mark.parametrize("make", [_typical_report, _demo_report], ids=["tutorial", "demo"])
+def test_a_typical_calibration_prints_on_few_a4_pages(browser, tmp_path, tmp_path_factory, make):
+    """Printed to PDF by the browser: A4 pages (the page's @page rule), at most `A4_PAGES`."""
+    path = make(tmp_path_factory)
+    pdf = tmp_path / "report.pdf"
+    proc = run_browser(browser, tmp_path, path.as_uri(), f"--print-to-pdf={pdf}", "--no-pdf-header-footer")
+    assert pdf.exists(), proc.stderr[-2000:]
+    data = pdf.read_bytes()
+    pages = len(PDF_PAGE.findall(data))
+    assert 1 <= pages <= A4_PAGES, pages
+    box = re.search(rb"/MediaBox\s*\[\s*0\s+0\s+([\d.]+)\s+([\d.]+)\s*\]", data)
+    assert box and abs(float(box.group(1)) - 595.3) < 2 and abs(float(box.group(2)) - 841.9) < 2, box

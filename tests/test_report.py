@@ -284,7 +284,7 @@ def test_summary_without_validation_says_the_accuracy_is_the_fits_own():
 
 def test_every_figure_says_what_to_look_for(full):
     text = full[1]
-    assert text.count("<figure>") == svg_count(text) == text.count("<b>Look for:</b>")
+    assert text.count("<figure") == svg_count(text) == text.count("<b>Look for:</b>")
 
 
 def test_figures_state_scale_and_density_in_words(full):

@@ -131,6 +131,6 @@ def test_cli_same_seed_same_files(tmp_path):
     truth = Robot.load(tmp_path / "t1.yaml")
     data = Measurements.load(tmp_path / "d1.csv", robot=truth)
     assert len(side["outlier_rows"]) == 6 and side["noise_floor_mm"] > 0
-    assert f"noise floor {side['noise_floor_mm']:.6g} mm" in truth.description
+    assert f"noise drawn {side['noise_floor_mm']:.6g} mm" in truth.description
     clean = ~np.isin(data.source_row, side["outlier_rows"])
     assert evaluate(truth, data.subset(clean))["rms"] == pytest.approx(side["noise_floor_mm"], rel=1e-9)

@@ -27,8 +27,9 @@ from robocal.kinematics.cell import first_joint_identifiability
 from robocal.kinematics.model_file import dump_model
 from robocal.kinematics.thermal import groups_of as thermal_groups_of
 from robocal.kinematics.transforms import matrix_to_rotvec
+from robocal.report.floor import noise_floor_mm, own_error_mm
 from robocal.report.metrics import position_stats
-from robocal.trust.consistency import Consistency
+from robocal.trust.consistency import Consistency, item_noise
 from robocal.trust.coverage import accuracy_line
 from robocal.trust.file_shifts import FileShifts, pose_means, split_by_file
 from robocal.trust.held_out import HeldOut
@@ -223,6 +224,19 @@ class CalibrationResult(_BeforeAfter):
         return _combined([j.errors[1] for j in self.judged])
 
     @property
+    def noise_floor_mm(self) -> float | None:
+        """The noise floor of the validation figure (mm, `robocal.report.floor`): the RMS a
+        perfect model would show on the validation items, from their instrument noise; None
+        without validation sets, or when they are not all point or pose files (whose items are
+        3-D position errors)."""
+        if not self.judged or not all(j.data.spec.sees_position for j in self.judged):
+            return None
+        given = {k: v * 1e-3 for k, v in (self.provenance.get("sigma_mm") or {}).items()}
+        sigma = [item_noise(j.data, obs.kind, len(obs.item_of_rows()), obs.item_of_rows(), given)
+                 for j in self.judged for obs in j.problem.observations]
+        return noise_floor_mm(np.concatenate(sigma) * 1e3)
+
+    @property
     def validation_shifts(self) -> FileShifts | None:
         """The held-out error split into a shift per validation file and the error within the files
         (`robocal.trust.file_shifts`; point and pose files), with two validation files or more."""
@@ -412,7 +426,7 @@ class CalibrationResult(_BeforeAfter):
                  "rows_judged": len(j.data), "tolerance_deg": JOINT_REPEAT_TOL_DEG} for j in self.judged]
             out["data"]["validation_file"] = ", ".join(j.data.source for j in self.judged)
             out["validation_before"] = self.validation_before
-            out["validation"] = self.validation
+            out["validation"] = {**self.validation, "noise_floor_mm": self.noise_floor_mm}
             if (shifts := self.validation_shifts) is not None:
                 out["validation_shifts"] = shifts.to_dict()
             if self.held_out is not None:
@@ -538,6 +552,9 @@ class CalibrationResult(_BeforeAfter):
             vb, va = self.validation_before, self.validation
             lines.append(f"validation set  ({va['n']} obs): RMS {vb['rms']:.4f} -> {va['rms']:.4f} mm, "
                          f"max {vb['max']:.4f} -> {va['max']:.4f} mm")
+            if (floor := self.noise_floor_mm) is not None:
+                lines.append(f"  against a noise floor of {floor:.4f} mm (the instrument alone): the model's "
+                             f"own error is about {own_error_mm(va['rms'], floor):.4f} mm")
             if (shifts := self.validation_shifts) is not None:
                 lines.append(f"  of it, a shift per validation file {shifts.shift_rms_mm:.4f} mm RMS "
                              f"(F test p = {shifts.p_value:.2g}); within the files "

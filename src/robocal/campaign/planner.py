@@ -246,7 +246,7 @@ class CampaignResult:
                  f"{self.n_candidates} candidates ({self.criterion}-optimal{unknown})",
                  f"predicted accuracy: {self.predicted_rms_mm:.4f} mm RMS of the TCP position over the "
                  f"region (noise {noise}); held-out check measurements: {self.predicted_heldout_mm:.4f} mm "
-                 f"RMS (with their own noise, {self.settings['heldout_noise_mm']:.4g} mm 3-D RMS from "
+                 f"RMS (including their noise floor, {self.settings['heldout_noise_mm']:.4f} mm, from "
                  f"{self.settings['heldout_noise_from']})",
                  f"{vocabulary.counts(ident)}; condition number {ident.condition_number:.3g} "
                  f"({ident.condition_class}); " + " ".join(f"{k} {v:.3g}" for k, v in o.items()),

@@ -278,7 +278,7 @@ RESULT_SCHEMA = Obj({
     "method": Str(null=True, max_len=100), "settings": Map(Any(), null=True),
     "converged": Bool(null=True), "status": Str(null=True, max_len=100), "message": Str(null=True),
     "before": _STATS, "after": _STATS, "after_inliers": _STATS, "validation_before": _STATS,
-    "validation": _STATS,
+    "validation": Obj({**_STATS.fields, "noise_floor_mm": Num(null=True)}, null=True),  # robocal.report.floor
     "parameters": Seq(Obj({"name": Str(max_len=200), "unit": Str(null=True, max_len=40),
                            "nominal": Num(null=True), "estimate": Num(null=True),
                            "correction": Num(null=True),

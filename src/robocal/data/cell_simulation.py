@@ -135,7 +135,7 @@ class CellSimulation:
 
     def summary(self) -> str:
         rows = ", ".join(f"{b}: {len(d)} rows ({d.n_poses} poses)" for b, d in self.data.bodies.items())
-        return f"simulated cell {self.truth.name}: {rows}; noise floor {self.noise_floor_mm:.4f} mm"
+        return f"simulated cell {self.truth.name}: {rows}; noise drawn {self.noise_floor_mm:.4f} mm RMS"
 
     def to_dict(self) -> dict:
         return {"info": self.info, "noise_floor_mm": self.noise_floor_mm,
@@ -224,7 +224,7 @@ def simulate_cell(cell: Cell, n_poses: int = 40, table_poses: int = 30, *, truth
         row += len(smr)
     every = np.concatenate(list(noise.values()))
     floor = float(np.sqrt(np.mean(np.sum(every**2, axis=1)))) * 1e3
-    source = f"simulated by robocal: cell {cell.name}, seed {seed}, noise floor {floor:.6g} mm"
+    source = f"simulated by robocal: cell {cell.name}, seed {seed}, noise drawn {floor:.6g} mm RMS"
     data = CellMeasurements.from_bodies(cell, bodies, source=source)
     info = {"seed": int(seed), "n_poses": int(n_poses), "table_poses": int(table_poses), "n_smr": int(n_smr),
             "noise_mm": float(noise_mm), "error_scale": float(error_scale), "noise_floor_mm": floor}

@@ -19,9 +19,12 @@ Noise, added to each point in the tracker frame:
   (r = distance from the tracker, m). ``noise_mm`` is ignored.
 
 A fraction ``outliers`` of the rows gets an extra gross error of uniform size ``OUTLIER_MM``
-(1-5 mm) in a random direction. The *noise floor* is the 3-D RMS (sqrt(mean |n|^2), mm) of the noise actually
-added, outliers excluded: the figure a perfect calibration's RMS residual would reach. It is in
-``SimulationResult.noise_floor_mm``, in the truth YAML's description and in the sidecar JSON
+(1-5 mm) in a random direction. The *noise drawn* is the 3-D RMS (sqrt(mean |n|^2), mm) of the noise actually
+added, outliers excluded: the figure a perfect calibration's RMS residual would reach on these rows
+(this draw of the noise; it scatters by a few percent around the noise floor of the noise model,
+:mod:`robocal.report.floor`, which the calibration and its report quote). It is in
+``SimulationResult.noise_floor_mm``, in the data's source and the truth YAML's description ("noise
+drawn") and in the sidecar JSON
 that `write_simulation` writes next to the truth (``truth.yaml`` -> ``truth.sim.json``).
 
 Kinds: ``point`` (n_smr SMRs per pose), ``pose`` (6-DOF probe; ``rotation_noise_deg`` per axis),
@@ -137,7 +140,7 @@ class SimulationResult:
         """Observations, poses, the noise floor (mm) and the outliers."""
         info = self.info
         return (f"simulated {len(self.data)} {info['kind']} observations of {info['n_poses']} poses; "
-                f"noise floor {self.noise_floor_mm:.4f} mm; {len(self.outlier_rows)} outlier(s)")
+                f"noise drawn {self.noise_floor_mm:.4f} mm RMS; {len(self.outlier_rows)} outlier(s)")
 
     def to_dict(self) -> dict:
         """The settings and seed, the outliers' file lines and the planes (the sidecar JSON)."""
@@ -536,13 +539,13 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
             "outlier_mm": list(OUTLIER_MM), "joint_noise_deg": float(joint_noise_deg),
             "rotation_noise_deg": float(rotation_noise_deg), "error_scale": float(error_scale),
             "noise_floor_mm": floor}
-    source = f"simulated by robocal: robot {robot.name}, seed {seed}, {kind}, noise floor {floor:.6g} mm"
+    source = f"simulated by robocal: robot {robot.name}, seed {seed}, {kind}, noise drawn {floor:.6g} mm RMS"
     data = Measurements.from_arrays(kind, q_rows + joint_noise, smr=smr, pose_id=pose_id,
                                     conditions=Conditions(approach, travel, payload, temperature),
                                     source_row=np.arange(2, N + 2), source=source,
                                     linear=robot.prismatic, external=robot.external_axes, **kw)
     truth = replace(true, name=f"{robot.name}_true",
-                    description=f"true robot of a robocal simulation (seed {seed}); noise floor "
+                    description=f"true robot of a robocal simulation (seed {seed}); noise drawn "
                                 f"{floor:.6g} mm (3-D RMS of the added noise)")
     return SimulationResult(data=data, truth=truth, noise=noise, noise_floor_mm=floor,
                             outlier_rows=outlier_rows, true_joints=q_rows, planes=planes, info=info)

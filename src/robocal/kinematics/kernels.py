@@ -11,7 +11,8 @@ its work (``items``) does not make the process import numba for a small one: imp
 loading its cached kernels costs about 1.4 s, more than the compiled kernels save on anything below
 :data:`LOAD_MIN_ITEMS` items per call (forward kinematics: 0.17 us per pose, 100,000 poses in 17 ms
 against numpy's 34 ms). Once numba is imported (by a large call, or by any other kernel), every
-call uses it.
+call uses it. The first compile of a kernel on a machine (~20 s for all of them) prints one line on
+a terminal (:mod:`robocal.kinematics.compile_notice`).
 """
 
 from __future__ import annotations
@@ -46,6 +47,10 @@ def _load(module: str) -> ModuleType | None:
             _loaded[module] = importlib.import_module(module)
         except ImportError:  # numba absent (or unusable with this numpy): the numpy path runs
             _loaded[module] = None
+        else:  # a compile (a cache miss) says so once on a terminal
+            from robocal.kinematics.compile_notice import install
+
+            install()
     return _loaded[module]
 
 

@@ -31,6 +31,9 @@ def p_value(value) -> str:
     return f"{value:.2g}" if isinstance(value, float) else esc(value)
 
 
+KEEP_ROWS = 15  # a table of at most this many rows is not split across printed pages
+
+
 def table(header: list[str], rows: list[list[str]], left: int = 1, row_class=None,
           align: str | None = None) -> str:
     """Rows of pre-escaped cells; the first ``left`` columns are left-aligned, or ``align`` gives
@@ -47,7 +50,8 @@ def table(header: list[str], rows: list[list[str]], left: int = 1, row_class=Non
         rc = f' class="{row_class[i]}"' if row_class and row_class[i] else ""
         body.append(f"<tr{rc}>" + "".join(f"<td{cls(k)}>{c}</td>" for k, c in enumerate(r)) + "</tr>")
     markup = f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
-    return f"<div class='scroll'>{markup}</div>"
+    keep = " keep" if len(rows) <= KEEP_ROWS else ""  # kept on one printed page
+    return f"<div class='scroll{keep}'>{markup}</div>"
 
 
 def joint_columns(result: dict, n: int, external: int = 0) -> list[tuple[str, str]]:

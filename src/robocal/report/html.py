@@ -34,7 +34,7 @@ h1{font-size:24px;margin:0 0 4px}h2{font-size:18px;margin:28px 0 8px;border-bott
 .sub{color:#666;margin:0 0 12px}nav{margin:8px 0 12px;font-size:13px}nav a{margin-right:12px;color:#1b6e5a}
 table{border-collapse:collapse;margin:6px 0 12px;font-size:13px}
 th,td{padding:3px 6px;border-bottom:1px solid #e3e3e3;text-align:right;white-space:nowrap}
-th{background:#f0f2f4;font-weight:600}td.l,th.l{text-align:left}td.wrap{white-space:normal}
+th{background:#f0f2f4;font-weight:600}td.l,th.l{text-align:left}td.wrap{white-space:normal;min-width:8em}
 tr.dropped td{background:#fff4e5}tr.chosen td{background:#e8f4ea;font-weight:600}
 .lead{font-size:16px;margin:4px 0 10px}.lead b{font-size:17px}
 .kpi{display:flex;gap:12px;flex-wrap:wrap;margin:10px 0}
@@ -46,31 +46,48 @@ tr.dropped td{background:#fff4e5}tr.chosen td{background:#e8f4ea;font-weight:600
 .verdict.bad{border-color:#d95f02;background:#fff4e5}
 .good{color:#1b9e77}.bad{color:#d95f02}.warn{background:#fff4e5;border-left:4px solid #d95f02;
  padding:6px 10px;margin:6px 0}
-figure{margin:4px 0 10px}figure svg{width:100%;height:auto}
+figure{margin:4px 0 10px;max-width:780px}.grid figure{max-width:none}figure svg{width:100%;height:auto}
 figcaption{color:#555;font-size:12px}figcaption b{color:#222}
 .grid{display:grid;grid-template-columns:repeat(auto-fit,minmax(min(560px,100%),1fr));gap:8px 28px;
  align-items:start}
-.grid>*{min-width:0}.scroll{overflow-x:auto}section.narrow>figure{max-width:680px}
-.note{color:#666;font-size:12px}td code{white-space:pre-wrap;word-break:break-all}
+.grid>*{min-width:0}.scroll{max-width:100%;overflow-x:auto}section.narrow>figure{max-width:680px}
+.note{color:#666;font-size:12px}td code{white-space:pre-wrap;word-break:break-all}.printonly{display:none}
 @media (max-width:600px){main{padding:12px 10px 32px}.kpi div{min-width:0;flex:1 1 40%}
  table{font-size:12px}th,td{padding:2px 4px}}
-@page{size:A4;margin:12mm}
-@media print{body{background:#fff;font-size:11px}main{padding:0;max-width:none}h2{break-after:avoid}
- figure,table,.kpi{break-inside:avoid}nav{display:none}.scroll{overflow:visible}
- table{font-size:9px;max-width:100%}th,td{padding:1px 3px;white-space:normal}
- .grid{grid-template-columns:1fr}}
+@page{size:A4;margin:10mm 10mm 11mm}
+@media print{body{background:#fff;font-size:8.5pt;line-height:1.3}main{padding:0;max-width:none}
+ h1{font-size:14pt}h2{font-size:11.5pt;margin:10px 0 4px}h3{font-size:9.5pt;margin:6px 0 3px}
+ h1,h2,h3{break-after:avoid;page-break-after:avoid}h2+*,h3+*{break-before:avoid;page-break-before:avoid}
+ nav,.kpi,.noprint,figcaption .look{display:none}.printonly{display:block}
+ .sub{margin:0 0 6px}.lead{font-size:9pt;margin:1px 0 3px}.lead b{font-size:9pt}
+ .verdict{padding:0 10px;margin:4px 0 6px;break-inside:avoid}.verdict h3{margin:4px 0 2px}
+ .verdict p{margin:1px 0}.warn{padding:2px 6px;margin:2px 0;break-inside:avoid}
+ .grid{grid-template-columns:1fr 1fr;gap:2px 14px}.grid .grid{grid-template-columns:1fr}
+ .grid>:only-child{grid-column:1/-1}
+ figure{margin:2px 0 4px;max-width:none;break-inside:avoid}figcaption,.note{font-size:7.5pt}
+ section.narrow>figure{max-width:none}
+ table{font-size:7.5pt;margin:3px 0 6px}th,td{padding:1px 3px;white-space:normal}td.wrap{min-width:0}
+ .keep{break-inside:avoid}
+ thead{display:table-header-group}tr{break-inside:avoid}.scroll{overflow:visible}}
 """
 
 
-def _figure(svg: str, caption: str, look: str | None = None) -> str:
-    """A figure with its caption, led by one line saying what to look for (pre-escaped text)."""
-    lead = f"<b>Look for:</b> {look} " if look else ""
-    return f"<figure>{svg}<figcaption>{lead}{caption}</figcaption></figure>"
+SCREEN_FIGURE = "<figure class='noprint'"  # how a figure left out of a print starts
+
+
+def _figure(svg: str, caption: str, look: str | None = None, *, screen_only: bool = False) -> str:
+    """A figure with its caption, led by one line saying what to look for (pre-escaped text);
+    ``screen_only``: left out of the printed page (a 3-D view, a map one reads by hovering)."""
+    lead = f"<span class='look'><b>Look for:</b> {look} </span>" if look else ""
+    start = SCREEN_FIGURE if screen_only else "<figure"
+    return f"{start}>{svg}<figcaption>{lead}{caption}</figcaption></figure>"
 
 
 def _grid(*parts: str) -> str:
     """Blocks side by side where the page is wide enough (one column on a narrow screen)."""
-    return "<div class='grid'>" + "".join(f"<div>{p}</div>" for p in parts if p) + "</div>"
+    cell = {True: "<div class='noprint'>", False: "<div>"}  # a screen-only figure leaves no hole on paper
+    cells = "".join(f"{cell[p.startswith(SCREEN_FIGURE)]}{p}</div>" for p in parts if p)
+    return f"<div class='grid'>{cells}</div>"
 
 
 # ----------------------------------------------------------------- observation errors
@@ -177,12 +194,13 @@ def _lead(result: dict) -> str:
         lines.append("<b class='bad'>The solver did not converge</b>: "
                      f"{esc(result.get('status'))}, {esc(result.get('message'))}")
     held = held_parameters(result)
-    if warnings or held:
-        lines.append(f"<b class='bad'>{len(warnings)} warning(s)</b>"
-                     + (f" and {len(held)} parameter(s) held at nominal (see Parameters)" if held else "")
-                     + ", read them before the numbers" + (":" if warnings else "."))
+    kept = f"{len(held)} parameter(s) held at nominal (see Parameters)" if held else ""
+    if warnings:  # the count coloured by what it says: orange only when there is one to read
+        lines.append(f"<b class='bad'>{len(warnings)} warning(s)</b>" + (f" and {kept}" if kept else "")
+                     + ", read them before the numbers:")
     else:
-        lines.append("No warnings.")
+        lines.append(f"<b class='good'>0 warnings</b>; {kept}: read them before the numbers." if kept
+                     else "No warnings.")
     out = "".join(f"<p class='lead'>{line}</p>" for line in lines)
     out += "".join(f"<div class='warn'>{esc(w)}</div>" for w in warnings)
     return out
@@ -380,7 +398,7 @@ def _points_figures(cal: _ObsErrors, pts: np.ndarray) -> list[str]:
     figs.append(_figure(plots.points_3d(pts[idx], cal.after[idx], f"after: {cal.label}", cal.rejected[idx]),
                         f"3-D view of the {what} coloured by the residual after calibration{note}{rejected}.",
                         "regions of large residuals (yellow): where the model is weakest, often at the "
-                        "edge of the measured workspace."))
+                        "edge of the measured workspace.", screen_only=True))
     if cal.vectors is not None:
         worst = np.argsort(np.where(cal.rejected, -np.inf, -cal.after), kind="stable")[:WORST]
         figs.append(_figure(plots.worst_vectors(pts[idx], cal.vectors, worst),
@@ -388,7 +406,7 @@ def _points_figures(cal: _ObsErrors, pts: np.ndarray) -> list[str]:
                             "worst observations that were not rejected, magnified (the title says by how "
                             "much).",
                             "arrows pointing the same way: a systematic error is left; random directions "
-                            "are noise."))
+                            "are noise.", screen_only=True))
     return figs
 
 
@@ -562,11 +580,13 @@ def _identifiability(result: dict) -> str:
                  "it. <b>not determined by these data</b>: "
                  "held near nominal by its prior (posterior &sigma; over half the prior's): more or other "
                  "poses would determine it. <b>not used</b>: the data do not vary the condition it needs.</p>"
+                 "<p class='printonly note'>Each one's confounders: the note column of the Parameters "
+                 "table.</p><div class='noprint'>"
                  + _table(["parameter", "status", "reason", "confounded with"],
                           [[esc(d.get("name")), esc(d.get("status") or "held at nominal"),
                             esc(d.get("reason")), esc(", ".join(d.get("confounded_with") or [])) or "&ndash;"]
                            for d in dropped],
-                          align="llww"))
+                          align="llww") + "</div>")
 
 
 def _correlation(result: dict) -> str:
@@ -595,7 +615,7 @@ def _correlation(result: dict) -> str:
                          f"(1: fully correlated, &minus;1: anti-correlated).{note}",
                          "dark red or blue cells off the diagonal: the data barely separate those two "
                          "parameters, so each one's value is uncertain even where their joint effect is "
-                         "well determined."),
+                         "well determined.", screen_only=True),
                  "<h3>Strongest correlations</h3>" + _table(["parameter", "parameter", "correlation"], rows,
                                                             left=2))
 
@@ -746,24 +766,44 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     hist = _history(result)
     if hist:
         sections.append(("history", "Solver history", hist))
+    sections[0] = (*sections[0][:2], sections[0][2] + _print_note(sections))
     data = result.get("data") or {}
-    subtitle = (f"{esc(data.get('file'))} &middot; error model {error_model(result)[0]} &middot; "
+    named = (result.get("provenance") or {}).get("data_file") or data.get("file")  # its source: the table
+    subtitle = (f"{esc(named)} &middot; error model {error_model(result)[0]} &middot; "
                 f"method {esc(result.get('method'))}")
-    narrow = {"model-selection", "identifiability", "rejected", "iso9283", "history", "priors"}
-    if not _joint_error_names(result):  # the parameter table alone: half the width is enough
-        narrow.add("parameters")
-    return page(title, subtitle, sections, result.get("robocal_version"), frozenset(narrow))
+    narrow = {"identifiability", "rejected", "iso9283", "history", "priors"}  # their tables fit half
+    return page(title, subtitle, sections, result.get("robocal_version"), frozenset(narrow),
+                screen_only=SCREEN_ONLY)
+
+
+# sections left out of the printed page (an A4 print is the summary to file and forward: the
+# solver's history and the 3-D views are read on screen; `_print_note` says so on paper)
+SCREEN_ONLY = frozenset({"history"})
+
+
+def _print_note(sections: list[tuple[str, str, str]]) -> str:
+    """A line shown only on paper: what the print leaves out and where it is."""
+    left = [name.lower() for sid, name, _ in sections if sid in SCREEN_ONLY] + [
+        "the 3-D views", "the correlation map"]
+    return (f"<p class='printonly note'>Printed without {', '.join(left[:-1])} and {left[-1]}: "
+            "open the HTML report for them.</p>")
 
 
 def page(title: str, subtitle: str, sections: list[tuple[str, str, str]], version,
-         narrow: frozenset[str] = frozenset()) -> str:
+         narrow: frozenset[str] = frozenset(), screen_only: frozenset[str] = frozenset()) -> str:
     """One self-contained HTML page (inline CSS, a CSP that forbids loading anything) with a
     navigation bar over ``sections`` (id, heading, pre-escaped content); two consecutive sections
-    whose ids are in ``narrow`` sit side by side on a wide screen. ``title`` is escaped here,
-    ``subtitle`` must be escaped by the caller."""
+    whose ids are in ``narrow`` sit side by side on a wide screen (and on paper); the sections in
+    ``screen_only`` are left out of a print. ``title`` is escaped here, ``subtitle`` must be
+    escaped by the caller."""
     nav = "".join(f'<a href="#{sid}">{name}</a>' for sid, name, _ in sections)
-    html_sections = [f'<section id="{sid}"{" class=narrow" if sid in narrow else ""}><h2>{name}</h2>'
-                     f"{content}</section>" for sid, name, content in sections]
+
+    def classes(sid: str) -> str:
+        names = [c for c, on in (("narrow", sid in narrow), ("noprint", sid in screen_only)) if on]
+        return f' class="{" ".join(names)}"' if names else ""
+
+    html_sections = [f'<section id="{sid}"{classes(sid)}><h2>{name}</h2>{content}</section>'
+                     for sid, name, content in sections]
     body, k = [], 0
     while k < len(sections):
         if k + 1 < len(sections) and sections[k][0] in narrow and sections[k + 1][0] in narrow:

@@ -59,13 +59,15 @@ def section(result: dict) -> str | None:
         rows.append(f"<tr><td>{esc(name)}</td><td>{num(a, 1)} .. {num(b, 1)}{each}</td><td>{num(lo, 1)} .. "
                     f"{num(hi, 1)}{each}</td><td>{num(100 * j['fraction'], 0)}%</td></tr>")
     ws = pa.get("workspace") or {}
-    return (f"<figure>{svg}<figcaption><b>Look for:</b> the predicted error far from the calibration poses "
-            f"against the validated {num(pa['validated_mm'])} mm ({esc(pa.get('validated_from'))}). "
-            f"Predicted from the parameters' posterior covariance and the unmodelled error "
+    return ("<div class='grid'><div>"
+            f"<figure>{svg}<figcaption><span class='look'><b>Look for:</b> the predicted error far from the "
+            f"calibration poses against the validated {num(pa['validated_mm'])} mm "
+            f"({esc(pa.get('validated_from'))}).</span> Predicted from the parameters' posterior "
+            "covariance and the unmodelled error "
             f"({num(pa.get('unmodelled_mm'))} mm) at {esc(ws.get('samples'))} joint vectors uniform in "
             "the limits (seeded)"
             + (f", {esc(pa['gauge'])}" if pa.get("gauge") else "")
             + (f"; {esc(pa['scale'].get('text'))}" if pa.get("scale") else "")
-            + ".</figcaption></figure>"
-            f"<table><tr><th>joint</th><th>calibration poses{shown}</th><th>limits{shown}</th>"
-            f"<th>covered</th></tr>{''.join(rows)}</table>")
+            + ".</figcaption></figure></div><div>"
+            f"<div class='scroll'><table><tr><th>joint</th><th>calibration poses{shown}</th>"
+            f"<th>limits{shown}</th><th>covered</th></tr>{''.join(rows)}</table></div></div></div>")

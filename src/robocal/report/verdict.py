@@ -1,8 +1,8 @@
 """The report's verdict box: in one place at the top, whether the calibration can be used and what
 to do next. It reads the result JSON (docs/result-json.md) and judges:
 
-- the held-out accuracy against the noise floor (``consistency.noise_mm``, the instrument's noise per
-  coordinate: a perfect model's point errors have an RMS of sqrt(3) times it on point data);
+- the held-out accuracy against the noise floor (:mod:`robocal.report.floor`: the RMS a perfect
+  model would show on the held-out data, ``validation.noise_floor_mm``);
 - the predicted accuracy over the workspace (``predicted_accuracy``);
 - the warnings, counting the parameters held at nominal (``dropped``), by the words of
   :mod:`robocal.identify.vocabulary` (not identifiable; not determined by these data; not used);
@@ -11,18 +11,11 @@ to do next. It reads the result JSON (docs/result-json.md) and judges:
 
 from __future__ import annotations
 
-import math
-
+from robocal.report.floor import of_result as noise_floor_mm
+from robocal.report.floor import own_error_mm
 from robocal.report.format import esc, num
 
 FLOOR_FACTOR = 1.5  # held-out RMS within this factor of the noise floor: the model explains the data
-POINT_DIMENSIONS = 3  # a point error's RMS is sqrt(3) times the per-coordinate noise
-
-
-def noise_floor_mm(result: dict) -> float | None:
-    """The RMS a perfect model would show on point data (mm), from the residual test's noise."""
-    noise = (result.get("consistency") or {}).get("noise_mm")
-    return None if noise is None else math.sqrt(POINT_DIMENSIONS) * float(noise)
 
 
 def held_parameters(result: dict) -> list[str]:
@@ -89,9 +82,8 @@ def verdict_box(result: dict) -> str:
     if val.get("rms") is not None:
         own = ""
         if floor is not None:
-            model = math.sqrt(max(float(val["rms"]) ** 2 - floor**2, 0.0))
             own = (f" against a noise floor of {num(floor)} mm (the instrument alone); the model's own "
-                   f"error is about {num(model)} mm")
+                   f"error is about {num(own_error_mm(val['rms'], floor))} mm")
         lines.append(f"Held out: <b>{num(val['rms'])} mm RMS</b> on {esc(val.get('n'))} observations the "
                      f"calibration did not see{own}.")
     else:
@@ -108,7 +100,9 @@ def verdict_box(result: dict) -> str:
     for word, names in held.items():
         shown = ", ".join(esc(n) for n in names[:8]) + (" ..." if len(names) > 8 else "")
         parts.append(f"{len(names)} parameter(s) {esc(word)}: {shown}")
-    lines.append(("<b class='bad'>Read first:</b> " + "; ".join(parts) + ".") if parts
+    # orange only for a warning: parameters held at nominal are read, not alarmed about
+    lead = "<b class='bad'>Read first:</b> " if warnings else "<b>Read first:</b> "
+    lines.append((lead + "; ".join(parts) + ".") if parts
                  else "No warnings, and every parameter was determined by the data.")
     lines.append(f"<b>Next:</b> {esc(step)}")
     body = "".join(f"<p>{line}</p>" for line in lines)
