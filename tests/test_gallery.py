@@ -31,6 +31,9 @@ def _numbers(pattern: str, text: str) -> list[float]:
 
 def check_tracker_export(text: str) -> None:
     assert "dropped 1 failed reading(s)" in text and "90 poses with 2-3 readings" in text
+    gross, = _numbers(r"(\d+) poses got a gross error", text)
+    rejected, = _numbers(r"without the (\d+) rejected observations", text)
+    assert rejected == gross > 0  # every gross error left out (all fell in the calibration set)
     gap, _ = _numbers(r"vs true robot: RMS ([\d.]+) mm, max ([\d.]+) mm", text)
     before, after = _numbers(r"validation  RMS ([\d.]+) mm -> ([\d.]+) mm", text)
     assert gap < TRUTH_MM and after < before / 20

@@ -33,21 +33,22 @@ print(f"{cell.name}: {cell.n_joints} joints (e1, then q1..q6)")
 # %% A campaign along the track: 160 poses to calibrate, 80 held out
 sim = rc.simulate_tracker(cell, 240, noise_mm=0.02, seed=4)
 calibration, validation = sim.data.first_poses(160), sim.data.subset(np.arange(160, 240))
-print(f"carriage positions {validation.joints[:, 0].min():.2f} .. {validation.joints[:, 0].max():.2f} m")
+e1 = validation.joints[:, 0]  # m: the carriage position of each held-out pose
+print(f"held-out carriage positions {e1.min():.2f} .. {e1.max():.2f} m")
 
 # %% Calibrate the arm and the track together (geometry only)
-result = rc.calibrate(cell, calibration, validation=[validation], nongeometric="none", progress=False)
-scale, true_scale = result.robot.get(TRACK_SCALE), sim.truth.get(TRACK_SCALE)
-print(f"track encoder scale error: found {scale * 1e6:+.1f} ppm, true {true_scale * 1e6:+.1f} ppm")
+result = rc.calibrate(cell, calibration, validation=[validation], nongeometric="none",
+                      progress=False)
+found, true = result.robot.get(TRACK_SCALE) * 1e6, sim.truth.get(TRACK_SCALE) * 1e6
+print(f"track encoder scale error: found {found:+.1f} ppm, true {true:+.1f} ppm")
 
 # %% Held-out poses, each judged in its own tracker frame without refitting the model
 nominal = rc.evaluate(cell, validation, fit_frame=True)
 calibrated = rc.evaluate(result.robot, validation)
-print(f"validation RMS: nominal {nominal['rms']:.3f} mm, calibrated {calibrated['rms']:.4f} mm "
-      f"(noise floor {sim.noise_floor_mm:.4f} mm)")
+print(f"validation RMS: nominal {nominal['rms']:.3f} mm, "
+      f"calibrated {calibrated['rms']:.4f} mm (noise floor {sim.noise_floor_mm:.4f} mm)")
 
 # %% Figure: the held-out error along the track, before and after
-e1 = validation.joints[:, 0]
 before, after = (e * 1e3 for e in result.judged[0].errors)
 fig, ax = plt.subplots(figsize=(6, 3.2), layout="constrained")
 ax.scatter(e1, before, s=12, label="nominal cell")

@@ -19,27 +19,33 @@ import robocal as rc
 
 # %% The campaign: 300 poses in three payload blocks, the arm warming within each block
 nominal = rc.Robot.from_catalog("kuka_kr210_r2700")
-sim = rc.simulate_tracker(nominal, 300, payloads=[0, 75, 150], temperatures=(20, 35), seed=3)
+sim = rc.simulate_tracker(nominal, 300, payloads=[0, 75, 150], temperatures=(20, 35),
+                          seed=3)
 print(sim.summary())
 
 # %% The held-out set: the same true arm at 110 kg and 28 deg C
-held = rc.simulate_tracker(sim.truth, 100, as_is=True, payloads=[110], temperatures=(28, 28), seed=3)
+held = rc.simulate_tracker(sim.truth, 100, as_is=True, payloads=[110],
+                           temperatures=(28, 28), seed=3)
 print(f"held-out poses at 110 kg, 28 deg C; noise floor {held.noise_floor_mm:.4f} mm")
 
 # %% Two calibrations of the same data: geometry only, and geometry + payload + thermal
 models = {"geometric": "none", "payload, thermal": "payload,thermal"}
-results = {name: rc.calibrate(nominal, sim.data, nongeometric=terms, validation=held.data, progress=False)
+results = {name: rc.calibrate(nominal, sim.data, nongeometric=terms, validation=held.data,
+                              progress=False)
            for name, terms in models.items()}
 for name, res in results.items():
     ratio = res.validation["rms"] / held.noise_floor_mm
-    print(f"{name:<17} held-out RMS {res.validation['rms']:.4f} mm = {ratio:.2f} x the noise floor")
+    print(f"{name:<17} held-out RMS {res.validation['rms']:.4f} mm "
+          f"= {ratio:.2f} x the noise floor")
 
-# %% What the model found, against the truth: the shoulder's and elbow's compliance, the expansion
+# %% What the model found against the truth: two joints' compliance, the expansion
 found = {p["name"]: p for p in results["payload, thermal"].nongeometric["parameters"]}
-for name, unit, scale in (("payload2", "urad/(kg m)", 1e6), ("payload3", "urad/(kg m)", 1e6),
-                          ("thermal", "1e-6/K", 1e6)):
+for name, unit in (("payload2", "urad/(kg m)"), ("payload3", "urad/(kg m)"),
+                   ("thermal", "1e-6/K")):
+    scale = 1e6  # rad/(N m) and 1/K in the model: micro-units printed
     est, sigma = found[name]["estimate"] * scale, found[name]["sigma"] * scale
-    print(f"{name:<9} found {est:.4f} +- {sigma:.4f} {unit}, true {sim.truth.get(name) * scale:.4f}")
+    true = sim.truth.get(name) * scale
+    print(f"{name:<9} found {est:.4f} +- {sigma:.4f} {unit}, true {true:.4f}")
 
 # %% Figure: the held-out error of each pose with the two models
 fig, ax = plt.subplots(figsize=(6, 3.2), layout="constrained")

@@ -32,22 +32,22 @@ from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
 nominal = rc.Robot.from_catalog("abb_irb2600")
 sim = rc.simulate_tracker(nominal, 80, seed=21)
 result = rc.calibrate(nominal, sim.data, nongeometric="none", progress=False)
-model = result.robot
-# what the calibration left uncertain (parameter covariance, noise): what a check is judged against
+model, truth = result.robot, sim.truth
+# what the calibration left uncertain (covariance, noise): what a check is judged against
 uncertainty = Uncertainty.from_dict(calibration_uncertainty(result))
-truth = sim.truth
 
 
 def check_campaign(robot, month: int) -> rc.Measurements:
-    """20 poses of ``robot`` measured with the tracker set up somewhere else (a new frame)."""
+    """20 poses of ``robot`` measured with the tracker set up anew (another frame)."""
     rng = np.random.default_rng(month)
     turn = rotvec_to_matrix(np.deg2rad(rng.uniform(-5, 5, 3)))
-    moved = make_transform(turn, rng.uniform(-0.3, 0.3, 3)) @ robot.base
-    return rc.simulate_tracker(replace(robot, base=moved), joints=sample_joints(robot, 20, rng),
-                               as_is=True, seed=month).data
+    tracker = make_transform(turn, rng.uniform(-0.3, 0.3, 3)) @ robot.base
+    q = sample_joints(robot, 20, rng)
+    return rc.simulate_tracker(replace(robot, base=tracker), joints=q, as_is=True,
+                               seed=month).data
 
 
-# %% The robot's life: checks every three months; in month 6, after a collision, theta3 moved
+# %% The robot's life: a check every three months; in month 6 a collision moves theta3
 history = []
 for month in (3, 6, 9, 12):
     if month == 6:
@@ -62,9 +62,10 @@ for month in (3, 6, 9, 12):
               f"+- {moved['sigma']:.4f} {moved['unit']} (true change +0.0200 deg)")
         # the joint zeros refitted on the same 20 poses; the links are kept
         fixed = recalibrate_offsets(nominal, model, data, progress=False)
-        shifts = {s["name"]: s for s in zero_shifts(fixed, model)}
-        print(f"          offsets-only recalibration: theta3 {shifts['theta3']['shift']:+.4f} deg")
-        model, uncertainty = fixed.robot, Uncertainty.from_dict(calibration_uncertainty(fixed))
+        shift = {s["name"]: s["shift"] for s in zero_shifts(fixed, model)}["theta3"]
+        print(f"          offsets-only recalibration: theta3 {shift:+.4f} deg")
+        model = fixed.robot
+        uncertainty = Uncertainty.from_dict(calibration_uncertainty(fixed))
 
 # %% Figure: each check's RMS against what an unchanged robot would give
 fig, ax = plt.subplots(figsize=(6, 3.2), layout="constrained")
