@@ -56,10 +56,10 @@ print(f"calibrated model vs true robot: RMS {np.sqrt(np.mean(gap_mm**2)):.4f} mm
 
 # %% Figure: the error of each held-out pose with the nominal and the calibrated model
 before, after = (e * 1e3 for e in result.judged[0].errors)  # (30,) m -> mm, one per pose
-fig, ax = plt.subplots(figsize=(6, 3.2), layout="constrained")
+fig, ax = plt.subplots(figsize=(5, 3), layout="constrained")
 ax.bar(np.arange(len(before)) - 0.2, before, 0.4, label="nominal model")
 ax.bar(np.arange(len(after)) + 0.2, after, 0.4, label="calibrated model")
 ax.set(xlabel="validation pose", ylabel="position error, mm", yscale="log",
        title="IRB 2600: held-out poses before and after")
 ax.legend()
-fig.savefig("01_tracker_export.png", dpi=100)
+fig.savefig("01_tracker_export.png", dpi=120)

@@ -50,10 +50,10 @@ print(f"validation RMS: nominal {nominal['rms']:.3f} mm, "
 
 # %% Figure: the held-out error along the track, before and after
 before, after = (e * 1e3 for e in result.judged[0].errors)
-fig, ax = plt.subplots(figsize=(6, 3.2), layout="constrained")
+fig, ax = plt.subplots(figsize=(5, 3), layout="constrained")
 ax.scatter(e1, before, s=12, label="nominal cell")
 ax.scatter(e1, after, s=12, label="calibrated cell")
 ax.set(xlabel="carriage position e1, m", ylabel="position error, mm", yscale="log",
        title="KR 210 on a 6 m track: held-out poses")
 ax.legend()
-fig.savefig("02_track_cell.png", dpi=100)
+fig.savefig("02_track_cell.png", dpi=120)

@@ -48,7 +48,7 @@ for name, unit in (("payload2", "urad/(kg m)"), ("payload3", "urad/(kg m)"),
     print(f"{name:<9} found {est:.4f} +- {sigma:.4f} {unit}, true {true:.4f}")
 
 # %% Figure: the held-out error of each pose with the two models
-fig, ax = plt.subplots(figsize=(6, 3.2), layout="constrained")
+fig, ax = plt.subplots(figsize=(5, 3), layout="constrained")
 for name, res in results.items():
     errors = np.sort(res.judged[0].errors[1]) * 1e3
     ax.plot(errors, np.linspace(0, 1, len(errors)), label=name)
@@ -56,4 +56,4 @@ ax.axvline(held.noise_floor_mm, color="grey", ls=":", label="noise floor")
 ax.set(xlabel="held-out position error at 110 kg, 28 deg C, mm", ylabel="fraction of poses",
        xscale="log", title="KR 210: payload and temperature in the model")
 ax.legend()
-fig.savefig("03_payload_campaign.png", dpi=100)
+fig.savefig("03_payload_campaign.png", dpi=120)

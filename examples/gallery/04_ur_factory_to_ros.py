@@ -55,10 +55,10 @@ out.write()
 print(out.summary())
 
 # %% Figure: how far each joint's origin moved from the vendor's nominal description
-fig, ax = plt.subplots(figsize=(6, 3.2), layout="constrained")
+fig, ax = plt.subplots(figsize=(5, 3), layout="constrained")
 names = [s.joint.replace("_joint", "") for s in out.shifts]
 ax.bar(names, [s.origin_mm for s in out.shifts])
 ax.set(ylabel="joint origin shift, mm",
        title="UR5e: calibrated joint origins vs ur_description's")
 ax.tick_params(axis="x", labelrotation=30)
-fig.savefig("04_ur_factory_to_ros.png", dpi=100)
+fig.savefig("04_ur_factory_to_ros.png", dpi=120)

@@ -68,7 +68,7 @@ for month in (3, 6, 9, 12):
         uncertainty = Uncertainty.from_dict(calibration_uncertainty(fixed))
 
 # %% Figure: each check's RMS against what an unchanged robot would give
-fig, ax = plt.subplots(figsize=(6, 3.2), layout="constrained")
+fig, ax = plt.subplots(figsize=(5, 3), layout="constrained")
 months, rms, expected, verdicts = zip(*history, strict=True)
 ax.plot(months, expected, "k:", label="expected if unchanged")
 for m, r, v in zip(months, rms, verdicts, strict=True):
@@ -77,4 +77,4 @@ for m, r, v in zip(months, rms, verdicts, strict=True):
 ax.set(xlabel="month", ylabel="check RMS, mm", xticks=months, ylim=(0, 1.3 * max(rms)),
        title="IRB 2600: a calibration checked every three months")
 ax.legend(loc="upper right")
-fig.savefig("05_check_over_life.png", dpi=100)
+fig.savefig("05_check_over_life.png", dpi=120)

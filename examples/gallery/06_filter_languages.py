@@ -68,10 +68,10 @@ before, after = ([t.strip() for t in Path(f).read_text().splitlines()
 print(f"weld_cell.mod, first target:\n  before {before[0]}\n  after  {after[0]}")
 
 # %% Figure: how far the calibration moved each program's targets
-fig, ax = plt.subplots(figsize=(6, 3.4), layout="constrained")
+fig, ax = plt.subplots(figsize=(5, 3.2), layout="constrained")
 rng = np.random.default_rng(0)
 for k, mm in enumerate(corrections.values()):
     ax.scatter(k + rng.uniform(-0.15, 0.15, len(mm)), mm, s=14)  # jittered: every target
 ax.set_xticks(range(len(corrections)), [name.replace(" ", "\n") for name in corrections])
 ax.set(ylabel="target correction, mm", title="Each language's targets, filtered")
-fig.savefig("06_filter_languages.png", dpi=100)
+fig.savefig("06_filter_languages.png", dpi=120)
