@@ -216,7 +216,8 @@ def page_markdown(example: Example, out: dict) -> str:
     md = [f"# {example.title}", "", example.intro, "",
           f'[Download `{example.path.name}`]({example.path.name}){{ download="'
           f'{example.path.name}" }} &nbsp; Run it with `python {example.path.name}` in an empty folder '
-          f"(it needs robocal and matplotlib); it took {out['seconds']:.0f} s when this page was built.", ""]
+          f"(robocal with its `report` extra, which brings matplotlib); it took {out['seconds']:.0f} s "
+          "when this page was built.", ""]
     for section, result in zip(example.sections, out["sections"], strict=True):
         if section.heading:
             md += [f"## {section.heading}", ""]
