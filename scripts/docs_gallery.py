@@ -213,7 +213,8 @@ def _figures(example: Example, out: dict) -> list[tuple[str, str]]:
 def page_markdown(example: Example, out: dict) -> str:
     """The example's page: title, explanation, download, then each section's code, output, figures."""
     site_names = dict(_figures(example, out))
-    md = [f"# {example.title}", "", example.intro, "",
+    # no table of contents beside the code: the code gets the width of the page (~110 characters)
+    md = ["---", "hide:", "  - toc", "---", "", f"# {example.title}", "", example.intro, "",
           f'[Download `{example.path.name}`]({example.path.name}){{ download="'
           f'{example.path.name}" }} &nbsp; Run it with `python {example.path.name}` in an empty folder '
           f"(robocal with its `report` extra, which brings matplotlib); it took {out['seconds']:.0f} s "

@@ -109,7 +109,7 @@ def test_the_example_runs_writes_its_figures_and_finds_the_truth(stem):
         assert (dg.cache_dir(example) / name).read_bytes().startswith(PNG_MAGIC)
     CHECKS[stem]("".join(section["output"] for section in out["sections"]))
     page = dg.page_markdown(example, out)
-    assert page.startswith(f"# {example.title}\n") and f"]({example.path.name}){{ download=" in page
+    assert f"\n# {example.title}\n" in page and f"]({example.path.name}){{ download=" in page
     for section in example.sections:
         assert section.code in page and (not section.heading or f"## {section.heading}\n" in page)
     for k in range(1, len(figures) + 1):
