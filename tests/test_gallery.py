@@ -71,6 +71,9 @@ def check_over_life(text: str) -> None:
     assert abs(shift - 0.02) < SIGMAS * sigma
     refit, = _numbers(r"offsets-only recalibration: theta3 ([-+\d.]+) deg", text)
     assert abs(refit - 0.02) < 0.002  # deg: 20 poses, 0.02 mm noise
+    timeline = re.findall(r"#\d (calibration|check) +(full|holds|changed|offsets only) ", text)
+    assert timeline == [("calibration", "full"), ("check", "holds"), ("check", "changed"),
+                        ("calibration", "offsets only"), ("check", "holds"), ("check", "holds")]
 
 
 def check_filter_languages(text: str) -> None:

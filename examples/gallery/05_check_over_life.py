@@ -9,8 +9,9 @@ residual is tested against what the calibration's own uncertainty and the tracke
 recalibration on the same 20 poses then restores the model without a full campaign. The robot's
 life is simulated: a known change (joint 3's zero moves 0.02 deg in month 6), fixed seeds.
 
-On the command line the same story is ``robocal calibrate/check --history robots.sqlite``, and
-``robocal history`` draws the timeline.
+Every calibration and check is recorded in the robot's history (a SQLite file: what
+``robocal calibrate/check --history robots.sqlite --robot-id ...`` record on the command line), and
+the timeline is read back from it at the end.
 """
 
 from dataclasses import replace
@@ -25,14 +26,24 @@ import robocal as rc
 from robocal.data.simulate import sample_joints
 from robocal.history.check import Uncertainty, check_calibration
 from robocal.history.offsets import recalibrate_offsets, zero_shifts
-from robocal.history.record import calibration_uncertainty
+from robocal.history.record import (
+    calibration_record,
+    calibration_uncertainty,
+    check_record,
+    parent_calibration,
+    record_entry,
+)
+from robocal.history.timeline import read_timeline
 from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
 
-# %% Month 0: the calibration (80 poses)
+# %% Month 0: the calibration (80 poses), recorded in the robot's history
+HISTORY, ROBOT = "robots.sqlite", "IRB2600-4711"
 nominal = rc.Robot.from_catalog("abb_irb2600")
 sim = rc.simulate_tracker(nominal, 80, seed=21)
+sim.data.save("calibration.csv")
 result = rc.calibrate(nominal, sim.data, nongeometric="none", progress=False)
 model, truth = result.robot, sim.truth
+print(record_entry(HISTORY, calibration_record(result, ROBOT, [("calibration.csv", "cal")])))
 # what the calibration left uncertain (covariance, noise): what a check is judged against
 uncertainty = Uncertainty.from_dict(calibration_uncertainty(result))
 
@@ -53,8 +64,11 @@ for month in (3, 6, 9, 12):
     if month == 6:
         truth = truth.with_values({"theta3": truth.get("theta3") + np.deg2rad(0.02)})
     data = check_campaign(truth, month)
+    data.save(f"check_{month:02d}.csv")
     check = check_calibration(model, data, uncertainty)
     print(f"month {month:>2}: {check.summary().splitlines()[0]}")
+    parent = parent_calibration(HISTORY, ROBOT, model)  # the calibration under check
+    record_entry(HISTORY, check_record(check, ROBOT, model, f"check_{month:02d}.csv", parent))
     history.append((month, check.rms_mm, check.predicted_rms_mm, check.verdict))
     if check.verdict == "changed":
         moved = check.changed_parameters[0]
@@ -64,8 +78,18 @@ for month in (3, 6, 9, 12):
         fixed = recalibrate_offsets(nominal, model, data, progress=False)
         shift = {s["name"]: s["shift"] for s in zero_shifts(fixed, model)}["theta3"]
         print(f"          offsets-only recalibration: theta3 {shift:+.4f} deg")
+        record_entry(HISTORY, calibration_record(fixed, ROBOT, [(f"check_{month:02d}.csv", "cal")],
+                                                 parent=parent, offsets_only=True))
         model = fixed.robot
         uncertainty = Uncertainty.from_dict(calibration_uncertainty(fixed))
+
+# %% The timeline, read back from the history (`robocal history` prints and draws the same)
+timeline = read_timeline(HISTORY, ROBOT)
+for entry in timeline.entries:
+    what = entry["verdict"] if entry["kind"] == "check" else "offsets only" if entry.get(
+        "offsets_only") else "full"
+    print(f"#{entry['id']} {entry['kind']:<11} {what:<12} RMS {entry['rms']:.4f} mm")
+timeline.write(report="history.html")
 
 # %% Figure: each check's RMS against what an unchanged robot would give
 fig, ax = plt.subplots(figsize=(5, 3), layout="constrained")
