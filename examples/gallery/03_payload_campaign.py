@@ -42,10 +42,11 @@ for name, res in results.items():
 found = {p["name"]: p for p in results["payload, thermal"].nongeometric["parameters"]}
 for name, unit in (("payload2", "urad/(kg m)"), ("payload3", "urad/(kg m)"),
                    ("thermal", "1e-6/K")):
-    scale = 1e6  # rad/(N m) and 1/K in the model: micro-units printed
+    scale = 1e6  # rad/(kg m) and 1/K in the model: micro-units printed
     est, sigma = found[name]["estimate"] * scale, found[name]["sigma"] * scale
     true = sim.truth.get(name) * scale
-    print(f"{name:<9} found {est:.4f} +- {sigma:.4f} {unit}, true {true:.4f}")
+    print(f"{name:<9} found {est:.4f} +- {sigma:.4f} {unit}, true {true:.4f} "
+          f"({abs(est - true) / sigma:.1f} sigma off)")
 
 # %% Figure: the held-out error of each pose with the two models
 fig, ax = plt.subplots(figsize=(5, 3), layout="constrained")
