@@ -5,8 +5,10 @@ the hook makes hold every section, output, figure and the download."""
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
+import subprocess
 import sys
 from pathlib import Path
 
@@ -118,6 +120,20 @@ def test_the_example_runs_writes_its_figures_and_finds_the_truth(stem):
         assert section.code in page and (not section.heading or f"## {section.heading}\n" in page)
     for k in range(1, len(figures) + 1):
         assert f"]({stem}_{k}.png)" in page
+
+
+def test_the_downloaded_script_prints_what_its_page_shows(tmp_path):
+    """Run as a reader runs it (``python NN_name.py``), an example prints exactly the sections'
+    outputs the runner recorded for its page (the fastest example stands for all)."""
+    example = EXAMPLES["02_track_cell"]
+    out = dg.outputs(example)
+    env = {**os.environ, "MPLBACKEND": "Agg",
+           "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.run([sys.executable, str(example.path)], cwd=tmp_path, capture_output=True,
+                          text=True, env=env, timeout=dg.RUN_TIMEOUT_S)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == "".join(section["output"] for section in out["sections"])
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == ["02_track_cell.png"]
 
 
 def test_sections_keep_their_line_numbers_and_a_failure_names_the_script(tmp_path, monkeypatch):
