@@ -226,10 +226,10 @@ def page_markdown(example: Example, out: dict) -> str:
         text = result["output"].rstrip()
         if text:
             body = "\n".join("    " + line for line in text.splitlines())
-            md += ['??? success "Output" open', "", "    ```text", body, "    ```", ""]
+            md += ['???+ success "Output"', "", "    ```text", body, "    ```", ""]  # open, foldable
         for name in result["figures"]:
-            md += [f"![{example.title}: figure]({site_names[name]})", ""]
-    return "\n".join(md).replace('??? success "Output" open', '???+ success "Output"')
+            md += [f"![{section.heading or example.title}]({site_names[name]})", ""]
+    return "\n".join(md)
 
 
 def index_markdown(items: list[tuple[Example, dict]]) -> str:
