@@ -3,9 +3,11 @@
 
 A tracker's software exports what it measured as a plain table: no header, the six joint angles
 the controller reported (degrees) and the SMR's position (millimetres), one row per reading, and
-several readings of each pose. This example writes such an export for an ABB IRB 2600 whose true
-geometry we know (simulated, fixed seed), imports it, calibrates the robot on 60 poses, judges the
-result on 30 held-out poses, and compares the calibrated model with the true robot.
+several readings of each pose; a reading may have failed (zeros) and a pose may carry a gross
+error (an SMR knocked in its nest). This example writes such an export for an ABB IRB 2600 whose
+true geometry we know (simulated, fixed seed), imports it, calibrates the robot robustly on 60
+poses, judges the result on 30 held-out poses, and compares the calibrated model with the true
+robot.
 """
 
 from pathlib import Path
