@@ -4,8 +4,9 @@
 A KUKA KR 210 carries 0, 75 and 150 kg during the day and warms from 20 to 35 deg C. The joints
 yield under the load and the links expand with the heat: a purely geometric calibration averages
 these effects away and leaves an error that grows with how far the load and the temperature are
-from that average (here, on a stiff arm, about as large as the tracker's noise). Each row of the data records its payload and temperature; calibrating with the
-``payload`` and ``thermal`` terms models both. The arm is then judged at a payload and temperature
+from that average (here, on a stiff arm, about as large as the tracker's noise). Each row of
+the data records its payload and temperature; calibrating with the ``payload`` and ``thermal``
+terms models both. The arm is then judged at a payload and temperature
 it was never calibrated at (110 kg, 28 deg C). Simulated, fixed seeds, known truth.
 """
 
