@@ -6,7 +6,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow docs bench lint clean
+.PHONY: demo test test-slow docs gallery bench lint clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 11), "robocal needs Python >= 3.11"'
@@ -35,9 +35,14 @@ test-slow: $(STAMP)
 	$(PY) -m pytest -q -m slow
 
 # the documentation site in build/site; --strict: any warning (a broken link, a missing page) fails
-docs: $(STAMP)
+docs: gallery
 	@# not --quiet: mkdocs then drops the warnings that --strict counts
 	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict
+
+# the gallery's examples (examples/gallery) whose outputs build/gallery has not cached for their
+# current text: run once here (~30 s for all), read by the site build (scripts/docs_gallery.py)
+gallery: $(STAMP)
+	$(PY) scripts/docs_gallery.py
 
 bench: $(STAMP)
 	$(PY) -m pip install --quiet -e '.[bench]'
