@@ -27,6 +27,7 @@ from robocal.history.store import BadRecordError, History, Record, validate_row
 from robocal.history.timeline import read_timeline
 
 ROBOT = "R1"
+MOUNT_TIMEOUT_S = 30  # mount/umount of a small tmpfs: seconds, never waited on without a deadline
 
 
 @pytest.fixture(scope="module")
@@ -283,14 +284,15 @@ def _read_only_folder(tmp_path, source):
             folder.chmod(0o755)
         return
     if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=4m", "tmpfs", str(folder)],
-                      capture_output=True).returncode:
+                      capture_output=True, timeout=MOUNT_TIMEOUT_S).returncode:
         pytest.skip("root without a tmpfs mount: a read-only folder cannot be made")
     try:
         shutil.copy(source, folder / "h.sqlite")
-        subprocess.run(["mount", "-o", "remount,ro", str(folder)], check=True, capture_output=True)
+        subprocess.run(["mount", "-o", "remount,ro", str(folder)], check=True, capture_output=True,
+                       timeout=MOUNT_TIMEOUT_S)
         yield folder / "h.sqlite"
     finally:
-        subprocess.run(["umount", str(folder)], capture_output=True)
+        subprocess.run(["umount", str(folder)], capture_output=True, timeout=MOUNT_TIMEOUT_S)
 
 
 @pytest.mark.parametrize("journal", ["delete", "wal"])  # wal: opened immutable (no writer can be there)
@@ -347,7 +349,7 @@ def test_a_full_file_system_through_the_cli(made, tmp_path, capsys):
     folder = tmp_path / "full"
     folder.mkdir()
     if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(folder)],
-                                           capture_output=True).returncode:
+                                           capture_output=True, timeout=MOUNT_TIMEOUT_S).returncode:
         pytest.skip("a small tmpfs needs root and mount")
     try:
         hist = folder / "h.sqlite"
@@ -362,7 +364,7 @@ def test_a_full_file_system_through_the_cli(made, tmp_path, capsys):
         assert code == 2 and "is full" in err and "busy" not in err, err
         assert _sha(hist) == before and _rows(hist) == [1, 2]
     finally:
-        subprocess.run(["umount", str(folder)], capture_output=True)
+        subprocess.run(["umount", str(folder)], capture_output=True, timeout=MOUNT_TIMEOUT_S)
 
 
 def test_reading_creates_nothing_and_writing_leaves_the_rollback_journal(made, tmp_path):
