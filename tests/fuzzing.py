@@ -254,6 +254,17 @@ def build_readers(folder: Path) -> dict[str, Reader]:
         ["out.html"],
         kind="json",
     )
+    readers.update(program_readers(folder))
+    readers.update(cell_file_readers(folder))
+    return readers
+
+
+def program_readers(folder: Path) -> dict[str, Reader]:
+    """The `filter` readers of every program dialect (RAPID, KRL, FANUC, URScript, INFORM with its
+    TOOL.CND, and issue 46's: POSREG.VA, VAR.DAT, VAL3 s6, runtime correction, a cell's INFORM job),
+    their seeds the hand-written programs of tests/data/programs."""
+    folder.mkdir(parents=True, exist_ok=True)
+    readers: dict[str, Reader] = {}
     for name, robot, files, extra in (
         ("rapid", "abb_irb2600", ["weld_cell.mod"], []),
         ("krl", "kuka_kr16_2", ["palletize.src", "palletize.dat", "config.dat"], []),
@@ -402,6 +413,33 @@ def _cell_reader(folder: Path) -> Reader:
                   extra={"programs": [job.name]})
 
 
+CELLS = PROGRAMS.parent / "cells"
+
+
+def cell_file_readers(folder: Path) -> dict[str, Reader]:
+    """The cell files' readers, their seeds tests/data/cells: a work cell (two arms, one a model file
+    beside it, and a positioner) read by ``simulate --model``, and a robot on a track read by
+    ``export``. ``extra['names']``: the file names a mutant may put where another is named (a cell
+    naming itself or a file naming the cell)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    work = {n: (CELLS / n).read_bytes() for n in ("weld_cell.yaml", "irb2600.yaml")}
+    track = {"track_cell.yaml": (CELLS / "track_cell.yaml").read_bytes(),
+             "irb2600.yaml": work["irb2600.yaml"]}
+    names = [b"weld_cell.yaml", b"irb2600.yaml", b"track_cell.yaml", b"abb_irb2600", b"kuka_kr210_r2700"]
+    return {
+        "cell_work": Reader(
+            "cell_work", work, ["weld_cell.yaml", "irb2600.yaml"],
+            lambda d: ["simulate", "--model", str(d / "weld_cell.yaml"), "--as-is", "--poses", "4",
+                       "--table-poses", "4", "--seed", "1", "-o", str(d / "out.csv"), "--truth",
+                       str(d / "truth.yaml")],
+            ["out.csv", "truth.yaml"], extra={"names": names}),
+        "cell_track": Reader(
+            "cell_track", track, ["track_cell.yaml"],
+            lambda d: ["export", str(d / "track_cell.yaml"), "--urdf", str(d / "out.urdf")],
+            ["out.urdf"], extra={"names": names}),
+    }
+
+
 # ----------------------------------------------------------------- mutations
 def _lines(data: bytes) -> list[bytes]:
     return data.splitlines(keepends=True) or [b""]
@@ -513,13 +551,55 @@ def _json_op(data: bytes, rng: random.Random) -> bytes:
     return text.replace(b'"HUGE"', b"1" * 5000).replace(b'"DEEP"', b"[" * 5000 + b"]" * 5000)
 
 
-def mutate(reader: Reader, rng: random.Random) -> tuple[str, bytes]:
-    """A mutant of one of the reader's target files: (file name, content)."""
+BOM = b"\xef\xbb\xbf"
+NOT_UTF8 = [b"\xff", b"\xfe\xff", b"\xc3(", b"\xe9", b"\xed\xa0\x80", b"\x80\x80", BOM]
+HUGE = [b"9" * 400, b"1e999", b"-1e400", b"9" * 20 + b"." + b"9" * 20, b"1" * 999 + b".5"]
+
+
+def _encoding_op(data: bytes, rng: random.Random, names: list[bytes] = ()) -> bytes:
+    """What editors, transfers and controllers do to a file's bytes: a UTF-8 byte-order mark put
+    first (or in the middle), every line end made CRLF or a lone CR, a NUL byte or bytes that are no
+    UTF-8 inserted, a huge number, a line copied many times, a file name put where another is named
+    (a cell naming itself)."""
+    op = rng.randrange(9)
+    k = rng.randrange(len(data) + 1)
+    if op == 0:
+        return BOM + data
+    if op == 1:
+        return data[:k] + BOM + data[k:]
+    if op in (2, 3):
+        lf = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+        return lf.replace(b"\n", b"\r\n" if op == 2 else b"\r")
+    if op == 4:
+        return data[:k] + b"\x00" * rng.choice((1, 1, 8)) + data[k:]
+    if op == 5:
+        return data[:k] + rng.choice(NOT_UTF8) + data[k:]
+    if op == 6:
+        found = list(NUMBER.finditer(data))
+        if found:
+            m = rng.choice(found)
+            return data[: m.start()] + rng.choice(HUGE) + data[m.end():]
+    if op == 7 and names:
+        present = [n for n in names if n in data]
+        if present:
+            old = rng.choice(present)
+            return data.replace(old, rng.choice(names), 1)
+    lines = _lines(data)
+    i = rng.randrange(len(lines))
+    lines[i:i] = [lines[i]] * rng.choice((2, 40))
+    return b"".join(lines)
+
+
+def mutate(reader: Reader, rng: random.Random, encodings: bool = False) -> tuple[str, bytes]:
+    """A mutant of one of the reader's target files: (file name, content). ``encodings``: half of
+    the mutants get one of :func:`_encoding_op`'s byte-level changes too."""
     target = rng.choice(reader.targets)
     data = reader.files[target]
     for _ in range(rng.choice((1, 1, 2, 3))):
         new = _json_op(data, rng) if reader.kind == "json" and rng.random() < 0.6 else _text_op(data, rng)
         data = new if len(new) <= MAX_MUTANT else data  # repeated blocks of repeated blocks stay bounded
+    if encodings and rng.random() < 0.5:
+        data = _encoding_op(data, rng, reader.extra.get("names", ()))
     return target, data
 
 

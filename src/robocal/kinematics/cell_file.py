@@ -97,7 +97,8 @@ def read_cell(data: dict, path: Path | None = None) -> CellFile:
     angle = ANGLE_UNITS[angle_unit]
     robot = _resolve(data["robot"], path, "robot")
     direction, limits = _track(data["track"], length)
-    mount = _frame(data.get("mount", {}), length, angle, "mount")
+    mount = _frame(data.get("mount"), length, angle, "mount")  # `mount:` left empty: none, as base:
+    mount = np.eye(4) if mount is None else mount
     name = data.get("name")
     return CellFile(robot, direction, mount, limits,
                     None if name is None else _text(name, "name", MAX_NAME),

@@ -65,6 +65,7 @@ from robocal.kinematics.model_file import (
     _frame,
     _frame_dict,
     read_model_data,
+    reading_model,
     robot_kwargs,
     robot_to_dict,
 )
@@ -797,7 +798,8 @@ def load_cell(path) -> Cell:
         data = read_model_data(spec)
         if is_workcell(data):
             try:
-                return cell_from_data(data, spec)
+                with reading_model(spec):
+                    return cell_from_data(data, spec)
             except (ModelError, UnitError) as exc:
                 raise ModelError(f"{path}: {exc}") from None
     arm = load_model(str(path))
