@@ -347,7 +347,7 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
     the ``///P`` lines of a backup's VAR.DAT: :func:`_backup_positions`) with their header state;
     Cartesian robot positions become targets. ``///NPOS`` is checked."""
     if var_file.is_cmos_variables(src):
-        return _backup_positions(src)
+        return _unique(src, _backup_positions(src))
     out: list[Position] = []
     section = ""
     head = _Header()
@@ -410,7 +410,25 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
         if npos[1] != counts[:len(npos[1])]:
             prog.warnings.append(f"{src.where(npos[0])}: ///NPOS {','.join(map(str, npos[1]))} but the "
                                  f"section holds {','.join(map(str, counts))} (C, BC, EC, P, BP, EX)")
-    return out
+    return _unique(src, out)
+
+
+def _unique(src: ProgramText, positions: list[Position]) -> list[Position]:
+    """``positions``, each number given once; a number given twice (C00003 on two lines of a job's
+    //POS, P001 twice in a VAR.DAT) is a DataError naming both lines: which copy the controller
+    loads is not documented, and correcting one would leave the other as it was."""
+    seen: dict[tuple[str, int], Position] = {}
+    for pos in positions:
+        first = seen.setdefault((pos.kind.upper(), pos.index), pos)
+        if first is not pos:
+            head = src.text[pos.line_start:pos.line_start + 40]
+            written = re.match(rf"\s*({pos.kind}0*{pos.index})\b", head)
+            name = written[1] if written else f"{pos.kind}{pos.index:03d}"  # as the file writes it
+            raise DataError(f"{src.where(pos.line_start)}: {name} is given twice "
+                            f"(first at line {src.line_of(first.line_start)}): give each position number "
+                            "once (which copy the controller keeps is not known, and correcting one would "
+                            "leave the other as it was)")
+    return positions
 
 
 def _backup_positions(src: ProgramText) -> list[Position]:

@@ -72,7 +72,9 @@ _STATE = re.compile(r"(\$TOOL|\$BASE)\s*=\s*([^\n]+)|BAS\s*\(\s*#(TOOL|BASE)\s*,
                     r"FDAT_ACT\s*=\s*(\w+)", re.IGNORECASE)
 _ROUTINE = re.compile(r"^[ \t]*(?:GLOBAL\s+)?DEF\s+([A-Za-z_]\w*)\s*\(([^)]*)\)",
                       re.IGNORECASE | re.MULTILINE)
-_ASSIGN = re.compile(r"^[ \t]*([A-Za-z_]\w*)\s*(\[[^\]\n]*\])?((?:\.\w+)*)\s*=(?!=)\s*([^\n]+)$",
+# one line (a KRL statement is): blanks, not \s, between its tokens (\s* crossing a masked comment
+# block twice backtracked in quadratic time)
+_ASSIGN = re.compile(r"^[ \t]*([A-Za-z_]\w*)[ \t]*(\[[^\]\n]*\])?((?:\.\w+)*)[ \t]*=(?!=)[ \t]*([^\n]+)$",
                      re.MULTILINE)
 _CALL = re.compile(r"^[ \t]*([A-Za-z_]\w*)\s*\(([^\n]*)\)[ \t\r]*$", re.MULTILINE)
 _APPROX = re.compile(r"(?:\s+(?:C_[A-Z]+|CA\s+[-+]?[\d.]+))+\s*$", re.IGNORECASE)  # C_DIS, CA 45 ...

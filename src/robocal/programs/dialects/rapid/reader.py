@@ -90,8 +90,9 @@ _REACHED = ("crobt", "calcrobt")
 _FUNC_BODY = re.compile(r"\bfunc\s+robtarget\s+([a-z]\w*)([\s\S]*?)\bendfunc\b")  # lower-cased text
 _ROUTINE = re.compile(r"\b(proc|func\s+\w+|trap)\s+([a-z]\w*)\s*(?:\(([^)]*)\))?")  # lower-cased text
 _ROUTINE_END = re.compile(r"\bend(?:proc|func|trap)\b")
-_ASSIGN = re.compile(r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*((?:\.\s*[A-Za-z]\w*)*)\s*:=",
-                     re.IGNORECASE)
+# each \s* before a token of its own (two adjacent ones over a long blank run, as a masked comment
+# block leaves, backtrack in quadratic time or worse)
+_ASSIGN = re.compile(r"([A-Za-z]\w*)(?:\s*(\{[^}]*\}))?((?:\s*\.\s*[A-Za-z]\w*)*)\s*:=", re.IGNORECASE)
 # fields of a tooldata / wobjdata whose change does not move a target (a tool's load)
 _POSE_FREE = (".tload",)
 # searched in the lower-cased text
