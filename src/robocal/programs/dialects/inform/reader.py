@@ -79,7 +79,7 @@ from robocal.programs.dialects.inform.tool_file import is_tool_file, read_tool_f
 from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.model import IDENTITY, Program, Target
 from robocal.programs.rotations import matrix_to_zyx
-from robocal.programs.source import Number, ProgramText
+from robocal.programs.source import Number, ProgramText, without_bom
 
 _POSITION_MM = 1e-3  # the pendant writes 3 decimals for mm
 _ANGLE_DEG = 1e-4  # ... and 4 for degrees
@@ -115,7 +115,6 @@ _BOTH = "used by motions that move differently:"  # a target one correction cann
 _CONVEYOR = re.compile(r"\bCV#\(")  # a conveyor-synchronised SMOV (conveyor tracking)
 _CARTESIAN_POSTYPES = ("BASE", "ROBOT", "USER", "TOOL", "MTOOL")  # ///POSTYPEs of Cartesian numbers
 SHOWN_VARIABLES = 8  # P variables a message names before "and n more"
-_BOM = ("\ufeff", "\xef\xbb\xbf")  # a byte-order mark before /JOB (as text, and UTF-8 read as latin-1)
 
 
 @dataclass
@@ -149,8 +148,9 @@ class Position:
 
 
 def _lines(text: str):
-    """``(start, line without its end, line end)`` of every line."""
-    pos = 0
+    """``(start, line without its end, line end)`` of every line; a byte-order mark before the first
+    line is not part of it (a file saved by a Windows editor starts its first section there)."""
+    pos = len(text) - len(without_bom(text))
     while pos < len(text):
         m = _LINE.match(text, pos)
         yield pos, m.group(1), m.group(2)
@@ -324,22 +324,15 @@ def _delivered(ref: ProgramText, targets: list[Target]) -> str:
 def is_variable_file(src: ProgramText) -> bool:
     """A controller's VAR.DAT: no ``/JOB`` line; a backup's ``//VAR`` with ``///P`` lines, or position
     sections (``//P``) with ``P0000=`` entries."""
-    sections = re.search(r"^//(?:P|BP|EX)\s*$", src.text, re.MULTILINE) is not None
+    sections = re.search(r"^//(?:P|BP|EX)\s*$", without_bom(src.text), re.MULTILINE) is not None
     return _is_variable_file(src) and not is_tool_file(src) and not _UFRAME_LINE.search(src.text) and (
         sections or var_file.is_cmos_variables(src))
 
 
 def _is_variable_file(src: ProgramText) -> bool:
     """A controller variable file (VAR.DAT): no ``/JOB`` line, position sections ``//P``."""
-    return not re.search(r"^\s*/JOB\b", _without_bom(src.text), re.MULTILINE)
+    return not re.search(r"^\s*/JOB\b", without_bom(src.text), re.MULTILINE)
 
-
-def _without_bom(text: str) -> str:
-    """``text`` without a byte-order mark at its start (a job saved by a Windows editor as UTF-8)."""
-    for bom in _BOM:
-        if text.startswith(bom):
-            return text[len(bom):]
-    return text
 
 
 def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
@@ -835,7 +828,7 @@ def user_frames(src: ProgramText) -> dict[str, np.ndarray]:
 def looks_like_inform(text: str) -> bool:
     """A job (``/JOB`` first) or a VAR.DAT (``//`` sections with ``P0000=`` entries, or a backup's
     ``//VAR`` and ``///PFNUM``)."""
-    head = text.lstrip("\ufeff \t\r\n")[:4000]
+    head = without_bom(text).lstrip(" \t\r\n")[:4000]
     if re.search(r"^/JOB\b", head, re.MULTILINE) and re.search(r"^//(?:NAME|POS|INST)\b", head, re.MULTILINE):
         return True  # a job (an offline generator may put a ' comment line before /JOB)
     if re.match(r"//VAR[ \t]*[\r\n]+///PFNUM\b", head):
