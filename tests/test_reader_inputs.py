@@ -244,3 +244,34 @@ def test_every_reader_is_linear_in_a_comments_size(place, tmp_path):
 def test_the_val3_application_files_are_found_for_the_scaling_check():
     names = {p.name for p in program_files([VAL3_APP])}
     assert set(PLACES["val3_code"][1]) >= names - {"pick_place.pjx"}
+
+
+# ----------------------------------------------------------------- the same position declared twice
+def _twice(data: bytes, first: bytes, last: bytes) -> bytes:
+    """``data`` with its block from ``first`` to ``last`` (included) written twice in a row."""
+    i = data.index(first)
+    j = data.index(last, i) + len(last)
+    return data[:j] + data[i:j] + data[j:]
+
+
+@pytest.mark.parametrize("files, robot, edit, match, options", [
+    (["weld_cell.mod"], "abb_irb2600", (b"CONST robtarget pApproach", b"\n"),
+     r"weld_cell\.mod:\d+: robtarget pApproach is declared twice in the module \(first at line \d+\)", {}),
+    (["palletize.src", "palletize.dat"], "kuka_kr16_2", (b"DECL E6POS XP1=", b"\n"),
+     r"palletize\.dat:\d+: XP1 is declared twice in palletize\.dat \(first at line \d+\)", {}),
+    (["sealing.ls"], "fanuc_lrmate200id", (b"P[2]{", b"};\r\n"),
+     r"sealing\.ls:\d+: P\[2\] is given twice in /POS \(first at line \d+\)",
+     {"frames": {"1": "450,-150,100,0,0,-10"}, "tools": {"2": "0,0,120,0,0,0"}}),
+])
+def test_a_position_declared_twice_in_one_file_is_refused(tmp_path, files, robot, edit, match, options):
+    """The controllers refuse a module, data list or program declaring a name twice in one scope;
+    the filter corrected one copy and left the other as it was (exit 0)."""
+    paths = []
+    for name in files:
+        data = (PROGRAMS / name).read_bytes()
+        (tmp_path / name).write_bytes(_twice(data, *edit) if edit[0] in data else data)
+        paths.append(tmp_path / name)
+    nominal = rc.Robot.from_catalog(robot)
+    refs = [PROGRAMS / "config.dat"] if robot == "kuka_kr16_2" else []
+    with pytest.raises(DataError, match=match):
+        filter_program(paths, perturbed(nominal, 7), nominal, references=refs, **options)

@@ -208,12 +208,18 @@ class FanucDialect(Dialect):
             end = section(text, "END", start)
             end = len(text) if end < 0 else end
             after = start + len("/POS")  # the /POS section holds position blocks and nothing else
+            seen: dict[int, int] = {}  # position number -> where its block starts
             for m in _POS.finditer(text, after, end):
                 _nothing_between(src, text, after, m.start())
                 after = m.end()
                 if len(m.group(1)) > _POSITION_DIGITS:
                     raise DataError(f"{src.path.name}:{src.line_of(m.start())}: position number "
                                     f"{short_repr(m.group(1))} has more than {_POSITION_DIGITS} digits")
+                first = seen.setdefault(int(m.group(1)), m.start())
+                if first != m.start():  # the controller refuses the program; one copy would stay as is
+                    raise DataError(f"{src.path.name}:{src.line_of(m.start())}: P[{int(m.group(1))}] is "
+                                    f"given twice in /POS (first at line {src.line_of(first)}): give each "
+                                    "position once")
                 name = f"P[{m.group(1)}{':' + m.group(2) if m.group(2) else ''}]"
                 body_start = m.start(3)
                 body = m.group(3)

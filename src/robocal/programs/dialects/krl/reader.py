@@ -237,9 +237,11 @@ class KRLDialect(Dialect):
                     st.kinds[name.upper()] = m.group(1).upper()
             st.machines.read(src, masked)
             reference = src not in sources
+            here: dict[str, int] = {}  # a position declared in this file -> its offset
             for m in _DECL.finditer(masked):
                 t = self._target(src, masked, m.end(), m.group(2), m.group(1).upper(), prog)
                 if t is not None:
+                    _once(src, here, m.group(2), m.start())
                     st.declare(m.group(2).upper(), t, reference)
             for m in _ELEMENT.finditer(masked):
                 name = re.sub(r"\s+", "", m.group(1))
@@ -250,6 +252,7 @@ class KRLDialect(Dialect):
                     continue  # another structure (LOAD_DATA, MACHINE_DEF ...): not a position
                 t = self._target(src, masked, m.end(), name, "E6POS", prog)
                 if t is not None:
+                    _once(src, here, name, m.start())
                     st.declare(name.upper(), t, reference)
             for m in _ROUTINE.finditer(masked):
                 st.params[m.group(1).upper()] = [p.split(":")[0].strip().upper()
@@ -562,6 +565,16 @@ class _State:
 
     def all_targets(self) -> list[Target]:
         return [t for ts in self.declared.values() for t in ts]
+
+
+def _once(src: ProgramText, here: dict[str, int], name: str, at: int) -> None:
+    """Note position ``name`` declared at offset ``at`` of ``src``; a second declaration in the
+    same file is a DataError naming both lines (the controller refuses the file; correcting one
+    copy would leave the other)."""
+    first = here.setdefault(name.upper(), at)
+    if first != at:
+        raise DataError(f"{src.where(at)}: {name} is declared twice in {src.path.name} (first at line "
+                        f"{src.line_of(first)}): give each position once")
 
 
 @dataclass(frozen=True)

@@ -288,6 +288,11 @@ class RapidDialect(Dialect):
             tree = None if shaped else parse_aggregate(src, masked, m.end(), e, f"{kind} {name}")[0]
             where = f"{src.path.name}:{src.line_of(m.start())}"
             if kind == "robtarget":
+                first = st.places.setdefault((src.path, proc, name.lower()), m.start())
+                if first != m.start():  # the controller refuses the module; one copy would stay as it is
+                    raise DataError(f"{where}: robtarget {name} is declared twice in "
+                                    f"{f'routine {proc}' if proc else 'the module'} (first at line "
+                                    f"{src.line_of(first)}): give each target once")
                 targets = [self._shaped(src, shaped, name, m.start())] if shaped else \
                     self._robtargets(src, tree, name, m.start(), m.group(4))
                 holes = [t for t in targets if _placeholder(t)]  # pTemp := [[0,0,0],[0,0,0,0],...]
@@ -662,6 +667,7 @@ class _State:
     def __init__(self):
         self.masked: dict = {}
         self.declared: dict[str, list[Target]] = {}
+        self.places: dict[tuple, int] = {}  # (path, routine, robtarget name) -> where it is declared
         self.tools: dict[str, tuple] = {}
         self.wobjs: dict[str, tuple] = {}
         self.reference: set[int] = set()
