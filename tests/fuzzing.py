@@ -321,6 +321,14 @@ def program_readers(folder: Path) -> dict[str, Reader]:
                                           "cal.yaml": path.read_bytes()}, files, inform_argv, ["out.JBI"],
                                extra={"programs": files[:1]})
     readers.update(_issue46_readers(folder, gp180_cal=path.read_bytes()))
+    # the job and the controller's VAR.DAT both given as programs (told apart by their contents)
+    import test_inform_variables as iv
+
+    files = ["PICK_PLACE.JBI", "VAR.DAT"]
+    tools = tuple(a for k, v in iv.TOOLS.items() for a in ("--tool", f"{k}={v}"))
+    readers["inform_var_program"] = _filter_reader(
+        "inform_var_program", {f: (corpus / f).read_bytes() for f in files}, files, [],
+        str(folder / "gp_nominal.yaml"), (folder / "gp_cal.yaml").read_bytes(), "outdir", tools)
     return readers
 
 
@@ -601,6 +609,46 @@ def mutate(reader: Reader, rng: random.Random, encodings: bool = False) -> tuple
     if encodings and rng.random() < 0.5:
         data = _encoding_op(data, rng, reader.extra.get("names", ()))
     return target, data
+
+
+# ----------------------------------------------------------------- the same file in other bytes
+VARIANTS = {"bom": lambda b: BOM + b.removeprefix(BOM),
+            "crlf": lambda b: b.replace(b"\r\n", b"\n").replace(b"\r", b"\n").replace(b"\n", b"\r\n"),
+            "cr": lambda b: b.replace(b"\r\n", b"\n").replace(b"\n", b"\r")}
+
+
+def _normal(data: bytes) -> bytes:
+    """An output as compared across variants: no BOM, LF line ends, no provenance marker line."""
+    lines = data.removeprefix(BOM).replace(b"\r\n", b"\n").replace(b"\r", b"\n").split(b"\n")
+    return b"\n".join(ln for ln in lines if b"robocal" not in ln)
+
+
+def _outputs(reader: Reader, folder: Path) -> dict[str, bytes]:
+    out = {}
+    for name in reader.outputs:
+        path = folder / name
+        files = sorted(path.iterdir()) if path.is_dir() else [path] if path.exists() else []
+        out.update({f.name: _normal(f.read_bytes()) for f in files})
+    return out
+
+
+def same_whatever_the_bytes(reader: Reader, folder: Path) -> list[str]:
+    """A reader given one of its files with a BOM, CRLF or lone-CR line ends must give what it gives
+    for the file as it is (exit code and outputs, compared without BOM, line ends and marker): a
+    BOM read as another format, or a line end that hides a line, reads 'fine' and wrongly."""
+    code, _ = run_case(reader, reader.targets[0], reader.files[reader.targets[0]], folder / "case")
+    expected = (code, _outputs(reader, folder / "case"))
+    problems = []
+    for target in reader.targets:
+        for name, variant in VARIANTS.items():
+            data = variant(reader.files[target])
+            code, stderr = run_case(reader, target, data, folder / "case")
+            got = (code, _outputs(reader, folder / "case"))
+            if got != expected:
+                differ = sorted(k for k in {*got[1], *expected[1]} if got[1].get(k) != expected[1].get(k))
+                problems.append(f"{reader.name}: {target} with {name}: exit {got[0]} (as is: {expected[0]}), "
+                                f"outputs differing {differ} {stderr.strip()[-160:]}")
+    return problems
 
 
 # ----------------------------------------------------------------- one case

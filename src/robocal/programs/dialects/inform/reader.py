@@ -828,7 +828,7 @@ def user_frames(src: ProgramText) -> dict[str, np.ndarray]:
 def looks_like_inform(text: str) -> bool:
     """A job (``/JOB`` first) or a VAR.DAT (``//`` sections with ``P0000=`` entries, or a backup's
     ``//VAR`` and ``///PFNUM``)."""
-    head = without_bom(text).lstrip(" \t\r\n")[:4000]
+    head = re.sub(r"\r\n?", "\n", without_bom(text)).lstrip(" \t\n")[:4000]  # a lone CR ends a line too
     if re.search(r"^/JOB\b", head, re.MULTILINE) and re.search(r"^//(?:NAME|POS|INST)\b", head, re.MULTILINE):
         return True  # a job (an offline generator may put a ' comment line before /JOB)
     if re.match(r"//VAR[ \t]*[\r\n]+///PFNUM\b", head):
