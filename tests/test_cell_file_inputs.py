@@ -83,3 +83,20 @@ def test_a_robot_given_a_mirrored_base_is_refused_by_the_same_check():
     arm = rc.Robot.from_catalog("abb_irb2600")
     with pytest.raises(ModelError, match="base rotation is a mirror"):
         arm.with_frames(base=np.diag([1.0, 1.0, -1.0, 1.0]))
+
+
+def test_a_model_name_too_long_for_a_file_is_refused_not_an_os_error(tmp_path):
+    """``robot: kuka_kr1111...`` (thousands of characters, as the fuzzing made it): 'File name too
+    long' from the file system was an internal error; now no file, an unknown catalog name."""
+    long = "kuka_kr" + "1" * 3000
+    path = _write(tmp_path, "track.yaml", f"robot: {long}\n" + TRACK)
+    with pytest.raises(ModelError, match=r"track\.yaml: .*kuka_kr1111"):
+        rc.load_cell(path)
+    out = tmp_path / "o.urdf"
+    assert main(["--quiet", "export", long, "--urdf", str(out)]) == 2 and not out.exists()
+
+
+def test_a_positioner_column_of_thousands_of_digits_is_refused_with_its_key(tmp_path):
+    path = _write(tmp_path, "cell.yaml", f"positioner:\n  unit: STN1\n  columns: [e{'1' * 5000}]\n" + AXES)
+    with pytest.raises(ModelError, match=r"cell\.yaml: STN1: columns .*expected 1 distinct names e1, e2"):
+        rc.load_cell(path)

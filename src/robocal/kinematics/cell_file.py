@@ -44,7 +44,16 @@ from robocal.core.errors import ModelError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, short_repr
 from robocal.kinematics.convert import PARALLEL_TOL, default_parallel
 from robocal.kinematics.fk import LinkArrays
-from robocal.kinematics.model_file import MAX_DESCRIPTION, MAX_NAME, _frame, _mapping, _numbers, _text, _units
+from robocal.kinematics.model_file import (
+    MAX_DESCRIPTION,
+    MAX_NAME,
+    _frame,
+    _mapping,
+    _numbers,
+    _text,
+    _units,
+    on_disk,
+)
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 
 CELL_KEYS = {"format", "name", "description", "units", "robot", "track", "mount"}
@@ -71,7 +80,7 @@ def _resolve(spec, path: Path | None, where: str) -> str:
     if not isinstance(spec, str) or not spec.strip():
         raise ModelError(f"{where}: expected a catalog name or a model file, got {short_repr(spec)}")
     local = (path.parent if path is not None else Path(".")) / spec
-    return str(local) if local.suffix or local.exists() else spec
+    return str(local) if local.suffix or on_disk(local) else spec
 
 
 def _track(spec, length: float, where: str = "track") -> tuple[np.ndarray, np.ndarray]:

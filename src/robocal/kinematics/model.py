@@ -53,6 +53,7 @@ from robocal.kinematics.model_file import (
     _text,
     dump_model,
     is_cell,
+    on_disk,
     read_model_data,
     reading_model,
     robot_kwargs,
@@ -1083,7 +1084,8 @@ def load_model(spec: str, tip: str | None = None) -> Robot:
     `robocal.kinematics.urdf_read`, ending at link ``tip``, default the deepest leaf) or a catalog
     name (what every ``--robot`` takes). A ``tip`` for anything but a URDF is refused (ModelError)."""
     path = Path(spec)
-    if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (path.is_file() and _looks_like_xml(path)):
+    if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (on_disk(path, Path.is_file)
+                                                                and _looks_like_xml(path)):
         if path.suffix.lower() == ".xacro":
             raise ModelError(f"{spec} is a xacro macro file: expand it first (xacro {path.name} > "
                              "robot.urdf) and give the URDF")
@@ -1091,7 +1093,7 @@ def load_model(spec: str, tip: str | None = None) -> Robot:
     if tip is not None:
         raise ModelError(f"tip {tip!r} is a URDF link, but {spec} is not a URDF (its chain ends where its "
                          "model says)")
-    if path.suffix.lower() in (".yaml", ".yml") or path.exists():
+    if path.suffix.lower() in (".yaml", ".yml") or on_disk(path):
         return Robot.load(path)
     return Robot.from_catalog(spec)
 

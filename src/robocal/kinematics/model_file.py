@@ -327,6 +327,15 @@ def is_cell(data) -> bool:
     return isinstance(data, dict) and "track" in data and "robot" in data
 
 
+def on_disk(path: Path, check=Path.exists) -> bool:
+    """``check(path)`` (`Path.exists`, `Path.is_file`), False for a name no file system holds (a
+    name of thousands of characters: OSError 'File name too long'): no file, a catalog name then."""
+    try:
+        return check(path)
+    except OSError:
+        return False
+
+
 _OPEN: ContextVar[tuple[Path, ...]] = ContextVar("robocal_model_files_open", default=())
 
 
