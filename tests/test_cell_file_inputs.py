@@ -97,6 +97,31 @@ def test_a_model_name_too_long_for_a_file_is_refused_not_an_os_error(tmp_path):
 
 
 def test_a_positioner_column_of_thousands_of_digits_is_refused_with_its_key(tmp_path):
-    path = _write(tmp_path, "cell.yaml", f"positioner:\n  unit: STN1\n  columns: [e{'1' * 5000}]\n" + AXES)
+    path = _write(tmp_path, "cell.yaml",
+                  f"positioner:\n  unit: STN1\n  columns: [e{'1' * 5000}]\n" + AXES)
     with pytest.raises(ModelError, match=r"cell\.yaml: STN1: columns .*expected 1 distinct names e1, e2"):
+        rc.load_cell(path)
+
+
+@pytest.mark.parametrize("text, match", [
+    ("robot: abb_irb2600\n" + TRACK + "mount: {xyz: [0, 0, 0.5]}\n",
+     r"mount\.xyz: 0\.5 mm is too small for a body's placement in a cell .*metres \(0\.5 m = 500 mm\)"),
+    ("robots: {left: {model: abb_irb2600}, right: {model: abb_irb2600, base: {xyz: [0.003, 0.0005, 0]}}}\n",
+     r"robots\.right\.base\.xyz: 0\.003 mm is too small"),
+    ("robot: abb_irb2600\npositioner:\n  unit: STN1\n  mount: {xyz: [1.5, 0, 0]}\n" + AXES,
+     r"positioner\.mount\.xyz: 1\.5 mm is too small .*metres"),
+])
+def test_a_placement_in_another_unit_than_the_files_is_refused(tmp_path, text, match):
+    """A 500 mm riser written 0.5 in a cell file in mm was accepted (the flange 0.5 m off): a body's
+    placement is checked against the file's unit as a model file's lengths are."""
+    path = _write(tmp_path, "cell.yaml", text)
+    with pytest.raises(ModelError, match=match):
+        rc.load_cell(path)
+
+
+def test_a_placement_in_millimetres_in_a_file_in_metres_is_refused(tmp_path):
+    path = tmp_path / "cell.yaml"
+    path.write_text("units: {length: m, angle: deg}\nrobots: {left: {model: abb_irb2600}, right: "
+                    "{model: abb_irb2600, base: {xyz: [3000, 0, 0]}}}\n")
+    with pytest.raises(ModelError, match=r"robots\.right\.base\.xyz: 3000 m is too large .*millimetres"):
         rc.load_cell(path)

@@ -42,6 +42,7 @@ import numpy as np
 
 from robocal.core.errors import ModelError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, short_repr
+from robocal.core.magnitudes import FRAME_MIN_M, check_length
 from robocal.kinematics.convert import PARALLEL_TOL, default_parallel
 from robocal.kinematics.fk import LinkArrays
 from robocal.kinematics.model_file import (
@@ -60,6 +61,7 @@ CELL_KEYS = {"format", "name", "description", "units", "robot", "track", "mount"
 WORKCELL_KEYS = ("robots", "positioner", "positioners")  # any: a work cell (robocal.kinematics.workcell)
 ARM_KEYS = {"model", "base", "unit", "track", "flange"}
 SINGLE_ARM = "arm"  # the body name of the arm a work cell gives with ``robot:``
+CELL_MAX_M = 200.0  # no body of a cell is placed 200 m from its world origin (mm read as m: 1500 m)
 DIRECTION_TOL = 1e-6  # |norm - 1| of the track direction: a unit vector written to 6 digits
 TRACK_SCALE = "scale1"  # the track encoder's scale error (a joint-error term of joint 1)
 
@@ -81,6 +83,18 @@ def _resolve(spec, path: Path | None, where: str) -> str:
         raise ModelError(f"{where}: expected a catalog name or a model file, got {short_repr(spec)}")
     local = (path.parent if path is not None else Path(".")) / spec
     return str(local) if local.suffix or on_disk(local) else spec
+
+
+def placement(spec, length_unit: str, angle: float, where: str) -> np.ndarray | None:
+    """A body's placement in a cell (an arm's ``base``, a track's or a positioner's ``mount``) as
+    `_frame` reads it, its translation checked against the file's length unit as a model file's
+    lengths are: a nonzero offset under `FRAME_MIN_M` (a 500 mm riser written 0.5 in a file in mm)
+    or beyond `CELL_MAX_M` is a UnitError naming the unit it fits."""
+    frame = _frame(spec, LENGTH_UNITS[length_unit], angle, where)
+    if frame is not None:
+        check_length(float(np.abs(frame[:3, 3]).max()), length_unit, FRAME_MIN_M, CELL_MAX_M, f"{where}.xyz",
+                     "a body's placement in a cell", advice="write every length of the file in {declared}")
+    return frame
 
 
 def _track(spec, length: float, where: str = "track") -> tuple[np.ndarray, np.ndarray]:
@@ -106,7 +120,7 @@ def read_cell(data: dict, path: Path | None = None) -> CellFile:
     angle = ANGLE_UNITS[angle_unit]
     robot = _resolve(data["robot"], path, "robot")
     direction, limits = _track(data["track"], length)
-    mount = _frame(data.get("mount"), length, angle, "mount")  # `mount:` left empty: none, as base:
+    mount = placement(data.get("mount"), length_unit, angle, "mount")  # `mount:` left empty: none, as base:
     mount = np.eye(4) if mount is None else mount
     name = data.get("name")
     return CellFile(robot, direction, mount, limits,
@@ -161,7 +175,7 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
                 _resolve(spec["model"], path, f"{where}.model")
             track = None if spec.get("track") is None else _track(spec["track"], length, f"{where}.track")
             flange = _frame(spec.get("flange"), length, angle, f"{where}.flange")
-            out[name] = ArmEntry(model, _frame(spec.get("base"), length, angle, f"{where}.base"),
+            out[name] = ArmEntry(model, placement(spec.get("base"), length_unit, angle, f"{where}.base"),
                                  _text(spec.get("unit", str(name)), f"{where}.unit", MAX_NAME), track, flange)
         return out
     if "robot" not in data:
@@ -171,7 +185,8 @@ def read_arms(data: dict, path: Path | None = None) -> dict[str, ArmEntry]:
         return {}
     track = None if data.get("track") is None else _track(data["track"], length)
     return {SINGLE_ARM: ArmEntry(_resolve(data["robot"], path, "robot"),
-                                 _frame(data.get("mount"), length, angle, "mount"), SINGLE_ARM, track)}
+                                 placement(data.get("mount"), length_unit, angle, "mount"), SINGLE_ARM,
+                                 track)}
 
 
 def count_positioners(data: dict) -> int:

@@ -47,6 +47,7 @@ from robocal.kinematics.cell_file import (
     _units,
     is_workcell,
     named,
+    placement,
     read_arms,
 )
 from robocal.kinematics.model import (
@@ -657,7 +658,7 @@ def _positioner(spec, name: str, data: dict, path: Path | None, first: int) -> P
     if "limits" in spec and forms[0] not in ("dh", "mdh"):
         raise ModelError(f"{where}.limits: only with a dh or mdh table (axes and joints rows carry "
                          "their own)")
-    mount = _frame(spec.get("mount"), length, angle, f"{where}.mount")
+    mount = placement(spec.get("mount"), length_unit, angle, f"{where}.mount")
     plate = _frame(spec.get("plate"), length, angle, f"{where}.plate")
     description = _text(spec.get("description", ""), f"{where}.description", MAX_DESCRIPTION)
     if forms[0] == "axes":
