@@ -689,8 +689,10 @@ def run_case(reader: Reader, target: str, data: bytes, folder: Path, timeout_s: 
     return code, err.getvalue()
 
 
-def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, stderr: str) -> str | None:
-    """None when the case kept the contract, else what broke it (one line, with the site)."""
+def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, stderr: str,
+          no_partial: bool = False) -> str | None:
+    """None when the case kept the contract, else what broke it (one line, with the site);
+    ``no_partial``: a refusal (exit 2) must also leave no output behind."""
     for name, content in reader.files.items():
         if (folder / name).read_bytes() != (data if name == target else content):
             return f"input {name} modified"
@@ -707,7 +709,10 @@ def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, std
         noise = [ln for ln in lines[:-1] if not ln.lower().startswith(("warning", "robocal"))]
         if not lines or not lines[-1].startswith("robocal ") or noise:
             return f"exit 2 with stray output: {(noise or lines or [''])[0][:160]}"
-        return None
+        written = [o for o in reader.outputs if (folder / o).is_file()]
+        if reader.extra.get("outdir"):
+            written += [f"outdir/{f.name}" for f in (folder / "outdir").iterdir()]
+        return f"exit 2 with partial output {written}" if no_partial and written else None
     if code == 3:
         return f"internal error: {_site(stderr)}"
     if code == -1:

@@ -3,9 +3,9 @@ files, with the byte-level changes editors and transfers make besides tests/fuzz
 mutations: a UTF-8 BOM, CRLF or lone-CR line ends, NUL bytes, bytes that are no UTF-8, huge
 numbers, a line copied many times, a cell naming itself (tests/fuzzing.py `_encoding_op`). Each
 mutant must end with exit 0 and every output written, or exit 2 and one line; never an internal
-error, a traceback, a hang or a modified input (`fuzzing.check`). The default run is seeded and
-small (a few hundred mutants); the slow one has thousands (scripts/fuzz_readers.py --encodings
-runs any number)."""
+error, a traceback, a hang, a modified input or, refused, an output left behind (`fuzzing.check`).
+The default run is seeded and small (a few hundred mutants); the slow one has thousands
+(scripts/fuzz_readers.py --encodings runs any number)."""
 
 from __future__ import annotations
 
@@ -39,7 +39,7 @@ def _fuzz(readers, folder, name: str, count: int, seed: int) -> list[str]:
     for k in range(count):
         target, data = mutate(reader, rng, encodings=True)
         code, stderr = run_case(reader, target, data, folder / "case", timeout_s=TIMEOUT_S)
-        problem = check(reader, target, data, folder / "case", code, stderr)
+        problem = check(reader, target, data, folder / "case", code, stderr, no_partial=True)
         if problem:
             problems.append(f"{name} mutant {k} (seed {seed}, file {target}): {problem}")
     return problems
