@@ -275,3 +275,15 @@ def test_a_position_declared_twice_in_one_file_is_refused(tmp_path, files, robot
     refs = [PROGRAMS / "config.dat"] if robot == "kuka_kr16_2" else []
     with pytest.raises(DataError, match=match):
         filter_program(paths, perturbed(nominal, 7), nominal, references=refs, **options)
+
+
+def test_a_ur_calibration_conf_key_given_twice_is_refused_naming_both_lines(tmp_path):
+    """delta_a twice in [mounting]: the last one was taken (the arm 10 mm longer, exit 0)."""
+    from robocal.kinematics.manufacturer.ur import import_calibration
+
+    text = (Path(__file__).parent / "data" / "ur5e_calibration.conf").read_text()
+    line = next(ln for ln in text.splitlines() if ln.startswith("delta_a "))
+    path = tmp_path / "calibration.conf"
+    path.write_text(text + line.replace("0.321935209127972688", "0.331935209127972688") + "\n")
+    with pytest.raises(rc.ModelError, match=r"delta_a is given twice in \[mounting\] \(first at line 3\)"):
+        import_calibration(path, "ur5e")

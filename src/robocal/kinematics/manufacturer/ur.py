@@ -335,6 +335,9 @@ def parse_calibration_conf(text: str, where: str) -> URDeltas:
             raise ModelError(f"{where} line {number}: expected `key = value` or `[section]`, got "
                              f"{raw.strip()[:60]!r}")
         if section == "mounting":
+            if match.group(1) in values:  # which one the controller reads is not known: neither is taken
+                raise ModelError(f"{where} line {number}: {match.group(1)} is given twice in [mounting] "
+                                 f"(first at line {values[match.group(1)][0]}): keep the controller's one")
             values[match.group(1)] = (number, match.group(2))
     if section is None and not values:
         raise ModelError(f"{where}: no [mounting] section: not a UR calibration.conf")
