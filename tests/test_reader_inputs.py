@@ -187,6 +187,7 @@ PLACES = {
     "krl_line": ("krl", ["palletize.src", "palletize.dat"], b"\n", ";"),
     "rapid_move": ("rapid", ["weld_cell.mod"], b"MoveL", "!"),
     "rapid_proc": ("rapid", ["weld_cell.mod"], b"PROC", "!"),
+    "rapid_for": ("rapid", ["corpus/arc_station.mod"], b"FOR", "!"),
     "val3_code": ("val3", ["pickPart.pgx", "pick_place.dtx", "start.pgx", "stop.pgx", "pick_place.pjx"],
                   b"movel(x_pPart", "//"),
     "val3_begin": ("val3", ["pickPart.pgx", "pick_place.dtx", "start.pgx", "stop.pgx", "pick_place.pjx"],

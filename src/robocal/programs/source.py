@@ -25,7 +25,9 @@ from robocal.core.errors import DataError
 
 _LONE_CR = re.compile(r"\r(?!\n)")
 BOMS = ("\xef\xbb\xbf", "\ufeff")  # a UTF-8 byte-order mark as the latin-1 text shows it, and decoded
-NUMBER_RE = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+# \d+(?:\.\d*)? and not \d+\.?\d*: the same numbers, but a run of digits splits one way only (inside a
+# longer pattern that then fails, the other form backtracks in quadratic time over the run)
+NUMBER_RE = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?")
 
 
 @dataclass(frozen=True, slots=True)

@@ -64,7 +64,7 @@ _CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d{
                      r"\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*'")
 _SCARA_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([LR])\s*(?:,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,"
                            r"\s*([-+]?\d{1,3}))?\s*'")  # a SCARA's (SR-series): hand, three turns (or none)
-_VALUE = r"\b{}\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*(?:mm|deg)"
+_VALUE = r"\b{}\s*=\s*([-+]?(?:\d+(?:\.\d*)?|\.\d+))\s*(?:mm|deg)"
 _KEYS = ("X", "Y", "Z", "W", "P", "R")
 _VALUES = tuple(re.compile(_VALUE.format(k)) for k in _KEYS)
 _JOINTS = re.compile(r"\bJ1\s*=")  # a position in joint representation
@@ -73,7 +73,7 @@ REMOTE_TCP = ("a remote-TCP position (RX .. RR, RTCP): the arm carries the part 
               "cell, which a calibrated arm model alone does not place: not corrected")
 _NEXT = re.compile(r"\bP\[")
 _NUMBER = re.compile(r"P\[(\d+)")
-_EXTENDED = re.compile(r"\b(E\d)\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))")
+_EXTENDED = re.compile(r"\b(E\d)\s*=\s*([-+]?(?:\d+(?:\.\d*)?|\.\d+))")
 _LINE = re.compile(r"^[ \t]*\d*[ \t]*:(.*)$", re.MULTILINE)
 _MOVE = re.compile(r"\s*([JLCA])\s+(.*)$")
 _ARC_END = re.compile(r"\s*(P|PR)\[")

@@ -96,7 +96,7 @@ _INDEX = r"(\d{1,9})"  # a position, variable, tool or frame number (a longer on
 _ENTRY = re.compile(r"^\s*([A-Z]{1,4})" + _INDEX + r"\s*=\s*(.*?)\s*$")
 _MOTION = re.compile(r"^\s*(MOVJ|MOVL|MOVC|MOVS|IMOV|SMOVJ|SMOVL|SMOVC|SMOV|SYMOVJ|SYMOVL|SYMOVC|EIMOVL|"
                      r"EIMOVC|EIMOVJ|EMOVJ|EMOVL)\b(.*)$")
-_NUM = r"([-+]?(?:\d+\.?\d*|\.\d+))"
+_NUM = r"([-+]?(?:\d+(?:\.\d*)?|\.\d+))"
 _SIX = re.compile(r"(C|P)" + _INDEX + "=" + ",".join([_NUM] * POSE_VALUES) + r"[ \t]*$")  # the usual, fast
 _REF = re.compile(r"\b(C|BC|EC|P|BP|EX|LP|LBP|LEX)(?:" + _INDEX + r"|\[([^\]]*)\])")
 _SHIFT_ON = re.compile(r"^\s*SFTON\b(.*)$")

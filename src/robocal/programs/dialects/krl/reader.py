@@ -54,7 +54,7 @@ from robocal.programs.runtime import Meant, RunTime, RuntimeSite, merged
 from robocal.programs.source import Number, ProgramText
 
 _AGG = re.compile(r"\{[^{}]*\}")
-_COMPONENT = re.compile(r"\b([A-Za-z]\w*)\s+([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|'[BbHh][^']*')")
+_COMPONENT = re.compile(r"\b([A-Za-z]\w*)\s+([-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?|'[BbHh][^']*')")
 _DECL = re.compile(r"^[ \t]*(?:(?:DECL|GLOBAL|CONST)\s+)*(E6POS|POS|FRAME)\s+([A-Za-z_$]\w*)"
                    r"(?:\s*\[[^\]]*\])?\s*=\s*(?=\{)", re.IGNORECASE | re.MULTILINE)
 _AXES = re.compile(r"^[ \t]*(?:(?:DECL|GLOBAL|CONST)\s+)*(?:E6AXIS|AXIS)\s+([A-Za-z_$]\w*)",
@@ -474,7 +474,7 @@ class KRLDialect(Dialect):
             return [f"{text} is defined through more than {_DEPTH} assignments or calls"]
         if ":" in text:
             left, _, right = text.partition(":")
-            if re.fullmatch(r"\s*\{(?:\s*[A-Za-z]\w*\s+[-+]?(?:\d+\.?\d*|\.\d+)\s*,?)*\}\s*", right):
+            if re.fullmatch(r"\s*\{(?:\s*[A-Za-z]\w*\s+[-+]?(?:\d+(?:\.\d*)?|\.\d+)\s*,?)*\}\s*", right):
                 return self._follow(st, left.strip(), proc, scope, depth + 1)  # a constant offset
             why = f"{text} is computed at run time by the geometric operator ':'"
             parts = [p for operand in split_top(text, 0, len(text), ":")

@@ -102,10 +102,11 @@ _RECORD = re.compile(r"\brecord\s+([a-z]\w*)([\s\S]*?)\bendrecord\b")
 _COMPONENT = re.compile(r"([A-Za-z]\w*)\s+([A-Za-z]\w*)\s*;")
 _CONF = re.compile(r"\bconf([lj])\s*\\\s*(on|off)\b")
 _ACTUNIT = re.compile(r"\bactunit\s+([a-z]\w*)")  # searched in the lower-cased text
-# block keywords a statement may begin with before its instruction
+# block keywords a statement may begin with before its instruction (a keyword's blank is a lookahead:
+# \s+ before [\s\S]*? split a long blank run, a masked comment, in quadratic time)
 _LEAD = re.compile(r"\s*(?:(?:LOCAL\s+)?(?:PROC|TRAP)\s+\w+\s*(?:\([^)]*\))?|(?:LOCAL\s+)?FUNC\s+\w+\s+\w+\s*"
                    r"\([^)]*\)|ENDPROC|ENDFUNC|ENDTRAP|ENDIF|ELSE|ENDFOR|ENDWHILE|ENDTEST|DEFAULT\s*:|"
-                   r"CASE\s+[^:]+:|(?:ELSE)?IF\s+[\s\S]*?\bTHEN|FOR\s+[\s\S]*?\bDO|WHILE\s+[\s\S]*?\bDO|"
+                   r"CASE(?=\s)[^:]+:|(?:ELSE)?IF(?=\s)[\s\S]*?\bTHEN|FOR(?=\s)[\s\S]*?\bDO|WHILE(?=\s)[\s\S]*?\bDO|"
                    r"TEST\s+[^\n]+|MODULE\s+\w+(?:\s*\([^)]*\))?|ERROR(?:\s*\([^)]*\))?|UNDO|BACKWARD|"
                    r"[A-Za-z]\w*:(?!=))", re.IGNORECASE)
 _CONF_LIMIT = 2**31  # confdata are quadrants and turns: an integer beyond this is not one
