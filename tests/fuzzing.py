@@ -8,7 +8,10 @@ duplicated or swapped, numbers replaced by extreme or ambiguous forms, character
 deleted, the file truncated, a structure nested deeply, a JSON node given another type or shape).
 The contract of the CLI on any input (:func:`check`): exit 0 with every output written, or exit 2
 with one line on stderr (a warning line before it allowed); never exit 3 (internal error), never
-a traceback or a stray warning line, never an input modified.
+a traceback or a stray warning line, never an input modified. ``mutate(..., encodings=True)`` adds
+byte-level changes (:func:`_encoding_op`: BOM, CRLF/CR, NUL, bytes that are no UTF-8, huge numbers,
+a line copied, a file named in place of another); :func:`same_whatever_the_bytes` checks that a
+file with a BOM or other line ends reads as it is (tests/test_fuzz_inputs.py).
 """
 
 from __future__ import annotations
