@@ -3,6 +3,7 @@ checked against the CLI contract (tests/fuzzing.py). Prints per reader the count
 each exit code and of contract breaks grouped by site; saves one reproducer per site.
 
     .venv/bin/python scripts/fuzz_readers.py -n 10000 --out /tmp/fuzz [--readers rapid,urdf] [--seed 0]
+    [--encodings]
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from fuzzing import build_readers, check, mutate, run_case  # noqa: E402
+from fuzzing import build_readers, cell_file_readers, check, mutate, program_readers, run_case  # noqa: E402
 
 
 def main() -> int:
@@ -30,12 +31,17 @@ def main() -> int:
     parser.add_argument(
         "--budget-s", type=float, default=float("inf"), help="stop each reader after this time"
     )
+    parser.add_argument("--encodings", action="store_true",
+                        help="half the mutants get a byte-level change too (BOM, CRLF/CR, NUL, not UTF-8...)")
     parser.add_argument("--memory-gib", type=float, default=6.0, help="address-space cap of this process")
     args = parser.parse_args()
     cap = int(args.memory_gib * 2**30)
     resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
-    readers = build_readers(args.out / "seeds")
-    names = args.readers.split(",") if args.readers else list(readers)
+    names = args.readers.split(",") if args.readers else None
+    seeds = args.out / "seeds"
+    quick = {**program_readers(seeds), **cell_file_readers(seeds)} if names else {}
+    readers = quick if names and set(names) <= set(quick) else build_readers(seeds)
+    names = names or list(readers)
     total_bad = 0
     for name in names:
         reader = readers[name]
@@ -47,7 +53,7 @@ def main() -> int:
         for _ in range(args.n):
             if time.monotonic() - start > args.budget_s:
                 break
-            target, data = mutate(reader, rng)
+            target, data = mutate(reader, rng, args.encodings)
             case = args.out / "case" / name
             code, stderr = run_case(reader, target, data, case)
             codes[code] += 1

@@ -8,7 +8,10 @@ duplicated or swapped, numbers replaced by extreme or ambiguous forms, character
 deleted, the file truncated, a structure nested deeply, a JSON node given another type or shape).
 The contract of the CLI on any input (:func:`check`): exit 0 with every output written, or exit 2
 with one line on stderr (a warning line before it allowed); never exit 3 (internal error), never
-a traceback or a stray warning line, never an input modified.
+a traceback or a stray warning line, never an input modified. ``mutate(..., encodings=True)`` adds
+byte-level changes (:func:`_encoding_op`: BOM, CRLF/CR, NUL, bytes that are no UTF-8, huge numbers,
+a line copied, a file named in place of another); :func:`same_whatever_the_bytes` checks that a
+file with a BOM or other line ends reads as it is (tests/test_fuzz_inputs.py).
 """
 
 from __future__ import annotations
@@ -254,6 +257,17 @@ def build_readers(folder: Path) -> dict[str, Reader]:
         ["out.html"],
         kind="json",
     )
+    readers.update(program_readers(folder))
+    readers.update(cell_file_readers(folder))
+    return readers
+
+
+def program_readers(folder: Path) -> dict[str, Reader]:
+    """The `filter` readers of every program dialect (RAPID, KRL, FANUC, URScript, INFORM with its
+    TOOL.CND, and issue 46's: POSREG.VA, VAR.DAT, VAL3 s6, runtime correction, a cell's INFORM job),
+    their seeds the hand-written programs of tests/data/programs."""
+    folder.mkdir(parents=True, exist_ok=True)
+    readers: dict[str, Reader] = {}
     for name, robot, files, extra in (
         ("rapid", "abb_irb2600", ["weld_cell.mod"], []),
         ("krl", "kuka_kr16_2", ["palletize.src", "palletize.dat", "config.dat"], []),
@@ -310,6 +324,14 @@ def build_readers(folder: Path) -> dict[str, Reader]:
                                           "cal.yaml": path.read_bytes()}, files, inform_argv, ["out.JBI"],
                                extra={"programs": files[:1]})
     readers.update(_issue46_readers(folder, gp180_cal=path.read_bytes()))
+    # the job and the controller's VAR.DAT both given as programs (told apart by their contents)
+    import test_inform_variables as iv
+
+    both = ["PICK_PLACE.JBI", "VAR.DAT"]  # (not `files`: inform_argv above reads that name when run)
+    tools = tuple(a for k, v in iv.TOOLS.items() for a in ("--tool", f"{k}={v}"))
+    readers["inform_var_program"] = _filter_reader(
+        "inform_var_program", {f: (corpus / f).read_bytes() for f in both}, both, [],
+        str(folder / "gp_nominal.yaml"), (folder / "gp_cal.yaml").read_bytes(), "outdir", tools)
     return readers
 
 
@@ -400,6 +422,33 @@ def _cell_reader(folder: Path) -> Reader:
     files = {n: (sub / n).read_bytes() for n in (job.name, "cell.yaml", "calibrated_cell.yaml")}
     return Reader("inform_cell", files, [job.name, "cell.yaml"], argv, ["out.JBI"],
                   extra={"programs": [job.name]})
+
+
+CELLS = PROGRAMS.parent / "cells"
+
+
+def cell_file_readers(folder: Path) -> dict[str, Reader]:
+    """The cell files' readers, their seeds tests/data/cells: a work cell (two arms, one a model file
+    beside it, and a positioner) read by ``simulate --model``, and a robot on a track read by
+    ``export``. ``extra['names']``: the file names a mutant may put where another is named (a cell
+    naming itself or a file naming the cell)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    work = {n: (CELLS / n).read_bytes() for n in ("weld_cell.yaml", "irb2600.yaml")}
+    track = {"track_cell.yaml": (CELLS / "track_cell.yaml").read_bytes(),
+             "irb2600.yaml": work["irb2600.yaml"]}
+    names = [b"weld_cell.yaml", b"irb2600.yaml", b"track_cell.yaml", b"abb_irb2600", b"kuka_kr210_r2700"]
+    return {
+        "cell_work": Reader(
+            "cell_work", work, ["weld_cell.yaml", "irb2600.yaml"],
+            lambda d: ["simulate", "--model", str(d / "weld_cell.yaml"), "--as-is", "--poses", "4",
+                       "--table-poses", "4", "--seed", "1", "-o", str(d / "out.csv"), "--truth",
+                       str(d / "truth.yaml")],
+            ["out.csv", "truth.yaml"], extra={"names": names}),
+        "cell_track": Reader(
+            "cell_track", track, ["track_cell.yaml"],
+            lambda d: ["export", str(d / "track_cell.yaml"), "--urdf", str(d / "out.urdf")],
+            ["out.urdf"], extra={"names": names}),
+    }
 
 
 # ----------------------------------------------------------------- mutations
@@ -513,14 +562,98 @@ def _json_op(data: bytes, rng: random.Random) -> bytes:
     return text.replace(b'"HUGE"', b"1" * 5000).replace(b'"DEEP"', b"[" * 5000 + b"]" * 5000)
 
 
-def mutate(reader: Reader, rng: random.Random) -> tuple[str, bytes]:
-    """A mutant of one of the reader's target files: (file name, content)."""
+BOM = b"\xef\xbb\xbf"
+NOT_UTF8 = [b"\xff", b"\xfe\xff", b"\xc3(", b"\xe9", b"\xed\xa0\x80", b"\x80\x80", BOM]
+HUGE = [b"9" * 400, b"1e999", b"-1e400", b"9" * 20 + b"." + b"9" * 20, b"1" * 999 + b".5"]
+
+
+def _encoding_op(data: bytes, rng: random.Random, names: list[bytes] = ()) -> bytes:
+    """What editors, transfers and controllers do to a file's bytes: a UTF-8 byte-order mark put
+    first (or in the middle), every line end made CRLF or a lone CR, a NUL byte or bytes that are no
+    UTF-8 inserted, a huge number, a line copied many times, a file name put where another is named
+    (a cell naming itself)."""
+    op = rng.randrange(9)
+    k = rng.randrange(len(data) + 1)
+    if op == 0:
+        return BOM + data
+    if op == 1:
+        return data[:k] + BOM + data[k:]
+    if op in (2, 3):
+        lf = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+        return lf.replace(b"\n", b"\r\n" if op == 2 else b"\r")
+    if op == 4:
+        return data[:k] + b"\x00" * rng.choice((1, 1, 8)) + data[k:]
+    if op == 5:
+        return data[:k] + rng.choice(NOT_UTF8) + data[k:]
+    if op == 6:
+        found = list(NUMBER.finditer(data))
+        if found:
+            m = rng.choice(found)
+            return data[: m.start()] + rng.choice(HUGE) + data[m.end():]
+    if op == 7 and names:
+        present = [n for n in names if n in data]
+        if present:
+            old = rng.choice(present)
+            return data.replace(old, rng.choice(names), 1)
+    lines = _lines(data)
+    i = rng.randrange(len(lines))
+    lines[i:i] = [lines[i]] * rng.choice((2, 40))
+    return b"".join(lines)
+
+
+def mutate(reader: Reader, rng: random.Random, encodings: bool = False) -> tuple[str, bytes]:
+    """A mutant of one of the reader's target files: (file name, content). ``encodings``: half of
+    the mutants get one of :func:`_encoding_op`'s byte-level changes too."""
     target = rng.choice(reader.targets)
     data = reader.files[target]
     for _ in range(rng.choice((1, 1, 2, 3))):
         new = _json_op(data, rng) if reader.kind == "json" and rng.random() < 0.6 else _text_op(data, rng)
         data = new if len(new) <= MAX_MUTANT else data  # repeated blocks of repeated blocks stay bounded
+    if encodings and rng.random() < 0.5:
+        data = _encoding_op(data, rng, reader.extra.get("names", ()))
     return target, data
+
+
+# ----------------------------------------------------------------- the same file in other bytes
+VARIANTS = {"bom": lambda b: BOM + b.removeprefix(BOM),
+            "crlf": lambda b: b.replace(b"\r\n", b"\n").replace(b"\r", b"\n").replace(b"\n", b"\r\n"),
+            "cr": lambda b: b.replace(b"\r\n", b"\n").replace(b"\n", b"\r")}
+
+
+def _normal(data: bytes) -> bytes:
+    """An output as compared across variants: no BOM, LF line ends, no provenance marker line."""
+    lines = data.removeprefix(BOM).replace(b"\r\n", b"\n").replace(b"\r", b"\n").split(b"\n")
+    return b"\n".join(ln for ln in lines if b"robocal" not in ln)
+
+
+def _outputs(reader: Reader, folder: Path) -> dict[str, bytes]:
+    out = {}
+    for name in reader.outputs:
+        path = folder / name
+        files = sorted(path.iterdir()) if path.is_dir() else [path] if path.exists() else []
+        out.update({f.name: _normal(f.read_bytes()) for f in files})
+    return out
+
+
+def same_whatever_the_bytes(reader: Reader, folder: Path) -> list[str]:
+    """A reader given one of its files with a BOM, CRLF or lone-CR line ends must give what it gives
+    for the file as it is (exit code and outputs, compared without BOM, line ends and marker): a
+    BOM read as another format, or a line end that hides a line, reads 'fine' and wrongly."""
+    code, stderr = run_case(reader, reader.targets[0], reader.files[reader.targets[0]], folder / "case")
+    expected = (code, _outputs(reader, folder / "case"))
+    if code != 0:  # a seed the reader refuses makes every mutant a refusal: a vacuous fuzz
+        return [f"{reader.name}: its seed files are refused: {stderr.strip()[-200:]}"]
+    problems = []
+    for target in reader.targets:
+        for name, variant in VARIANTS.items():
+            data = variant(reader.files[target])
+            code, stderr = run_case(reader, target, data, folder / "case")
+            got = (code, _outputs(reader, folder / "case"))
+            if got != expected:
+                differ = sorted(k for k in {*got[1], *expected[1]} if got[1].get(k) != expected[1].get(k))
+                problems.append(f"{reader.name}: {target} with {name}: exit {got[0]} (as is: {expected[0]}), "
+                                f"outputs differing {differ} {stderr.strip()[-160:]}")
+    return problems
 
 
 # ----------------------------------------------------------------- one case
@@ -561,8 +694,10 @@ def run_case(reader: Reader, target: str, data: bytes, folder: Path, timeout_s: 
     return code, err.getvalue()
 
 
-def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, stderr: str) -> str | None:
-    """None when the case kept the contract, else what broke it (one line, with the site)."""
+def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, stderr: str,
+          no_partial: bool = False) -> str | None:
+    """None when the case kept the contract, else what broke it (one line, with the site);
+    ``no_partial``: a refusal (exit 2) must also leave no output behind."""
     for name, content in reader.files.items():
         if (folder / name).read_bytes() != (data if name == target else content):
             return f"input {name} modified"
@@ -579,7 +714,10 @@ def check(reader: Reader, target: str, data: bytes, folder: Path, code: int, std
         noise = [ln for ln in lines[:-1] if not ln.lower().startswith(("warning", "robocal"))]
         if not lines or not lines[-1].startswith("robocal ") or noise:
             return f"exit 2 with stray output: {(noise or lines or [''])[0][:160]}"
-        return None
+        written = [o for o in reader.outputs if (folder / o).is_file()]
+        if reader.extra.get("outdir"):
+            written += [f"outdir/{f.name}" for f in (folder / "outdir").iterdir()]
+        return f"exit 2 with partial output {written}" if no_partial and written else None
     if code == 3:
         return f"internal error: {_site(stderr)}"
     if code == -1:
@@ -606,9 +744,12 @@ def _edit_outside_numbers(reader: Reader, target: str, data: bytes, folder: Path
         out = folder / (reader.outputs[0] if not reader.extra.get("outdir") else f"outdir/{name}")
         if not out.is_file():
             continue
-        source = data if name == target else reader.files[name]
-        old, new = ([_coords_as_one(ln) for ln in _MASK.sub(b"#", b).splitlines()]
-                    for b in (source, out.read_bytes()))
+        source, written = data if name == target else reader.files[name], out.read_bytes()
+        if source.startswith(BOM):  # it stays first, the marker after it (test_fuzz_readers)
+            if not written.startswith(BOM):
+                return f"the byte-order mark of {name} not kept first"
+            source, written = source[len(BOM):], written[len(BOM):]
+        old, new = ([_coords_as_one(ln) for ln in _MASK.sub(b"#", b).splitlines()] for b in (source, written))
         changed = [op for op in difflib.SequenceMatcher(None, old, new, autojunk=False).get_opcodes()
                    if op[0] in ("replace", "delete")]
         if changed:

@@ -111,12 +111,21 @@ def check_writable(paths) -> None:
                             "read-only files; make it writable or choose another name)")
 
 
+def _exists(path: Path) -> bool:
+    """Whether ``path`` exists (a name no file system holds, thousands of characters: no; a catalog
+    name or a mistake the reader names)."""
+    try:
+        return path.exists()
+    except OSError:
+        return False
+
+
 def check_outputs(outputs, inputs=()) -> None:
     """Before any work: the output paths (None entries skipped) are distinct, none is one of the
     ``inputs`` (a user's file is never overwritten by its own results) and all are writable
     (:func:`check_writable`). DataError names the path and the reason."""
     outs = [Path(p) for p in outputs if p is not None]
-    ins = {Path(p).resolve() for p in inputs if p is not None and Path(p).exists()}
+    ins = {Path(p).resolve() for p in inputs if p is not None and _exists(Path(p))}
     seen = set()
     for path in outs:
         where = path.resolve()

@@ -13,7 +13,7 @@ from importlib import resources
 
 from robocal.core.errors import ModelError
 from robocal.core.yaml_load import load_yaml
-from robocal.kinematics.model_file import robot_kwargs
+from robocal.kinematics.model_file import MAX_NAME, robot_kwargs
 
 
 @cache
@@ -49,7 +49,9 @@ def catalog_specs() -> dict[str, tuple[float | None, float | None]]:
 def catalog_entry(name: str) -> dict:
     """The raw mapping of catalog robot ``name``; an unknown name raises ModelError listing the
     known ones."""
-    if name.isidentifier() and resources.files("robocal").joinpath("catalog", f"{name}.yaml").is_file():
+    # (a name longer than a model's is none, and no file system holds a file name of thousands)
+    if name.isidentifier() and len(name) <= MAX_NAME and \
+            resources.files("robocal").joinpath("catalog", f"{name}.yaml").is_file():
         return _file(f"{name}.yaml")  # one file, not the 30 (a tenth of a calibration's start-up)
     entries = _entries()
     if name not in entries:

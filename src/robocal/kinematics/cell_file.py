@@ -44,7 +44,16 @@ from robocal.core.errors import ModelError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, short_repr
 from robocal.kinematics.convert import PARALLEL_TOL, default_parallel
 from robocal.kinematics.fk import LinkArrays
-from robocal.kinematics.model_file import MAX_DESCRIPTION, MAX_NAME, _frame, _mapping, _numbers, _text, _units
+from robocal.kinematics.model_file import (
+    MAX_DESCRIPTION,
+    MAX_NAME,
+    _frame,
+    _mapping,
+    _numbers,
+    _text,
+    _units,
+    on_disk,
+)
 from robocal.kinematics.transforms import make_transform, rot_x, rot_y, rot_z
 
 CELL_KEYS = {"format", "name", "description", "units", "robot", "track", "mount"}
@@ -72,7 +81,15 @@ def _resolve(spec, path: Path | None, where: str) -> str:
     if not isinstance(spec, str) or not spec.strip():
         raise ModelError(f"{where}: expected a catalog name or a model file, got {short_repr(spec)}")
     local = (path.parent if path is not None else Path(".")) / spec
-    return str(local) if local.suffix or local.exists() else spec
+    return str(local) if local.suffix or on_disk(local) else spec
+
+
+def placement(spec, length_unit: str, angle: float, where: str) -> np.ndarray | None:
+    """A body's placement in a cell (an arm's ``base``, a track's or a positioner's ``mount``) as
+    `_frame` reads it in the file's length unit. Its size is judged against the arm's once the arm
+    is known (`robocal.core.magnitudes.check_cell_offset`): a 500 mm riser written 0.5 in a file in
+    mm is refused there, naming the unit it fits."""
+    return _frame(spec, LENGTH_UNITS[length_unit], angle, where)
 
 
 def _track(spec, length: float, where: str = "track") -> tuple[np.ndarray, np.ndarray]:
@@ -98,7 +115,8 @@ def read_cell(data: dict, path: Path | None = None) -> CellFile:
     angle = ANGLE_UNITS[angle_unit]
     robot = _resolve(data["robot"], path, "robot")
     direction, limits = _track(data["track"], length)
-    mount = _frame(data.get("mount", {}), length, angle, "mount")
+    mount = placement(data.get("mount"), length_unit, angle, "mount")  # `mount:` left empty: none, as base:
+    mount = np.eye(4) if mount is None else mount
     name = data.get("name")
     return CellFile(robot, direction, mount, limits,
                     None if name is None else _text(name, "name", MAX_NAME),

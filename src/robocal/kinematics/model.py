@@ -54,7 +54,9 @@ from robocal.kinematics.model_file import (
     _text,
     dump_model,
     is_cell,
+    on_disk,
     read_model_data,
+    reading_model,
     robot_kwargs,
 )
 from robocal.kinematics.opw import OPWParameters
@@ -63,7 +65,7 @@ from robocal.kinematics.prior_spec import PriorSpec
 from robocal.kinematics.thermal import link_coefficients as thermal_coefficients
 from robocal.kinematics.thermal import scale as thermal_scale
 from robocal.kinematics.thermal import scaled_links
-from robocal.kinematics.transforms import ROTATION_TOL, make_transform, matrix_to_rotvec, rotvec_to_matrix
+from robocal.kinematics.transforms import make_transform, matrix_to_rotvec, rotation_fault, rotvec_to_matrix
 from robocal.kinematics.ur import URForm, ur_form
 from robocal.kinematics.urdf_read import urdf_kwargs
 
@@ -112,9 +114,9 @@ def _as_frame(T, what: str) -> np.ndarray:
     T = np.array(T, dtype=float)
     if T.shape != (4, 4) or not np.isfinite(T).all():
         raise ModelError(f"{what} must be a finite 4x4 transform")
-    R = T[:3, :3]
-    if np.abs(R @ R.T - np.eye(3)).max() > ROTATION_TOL or abs(np.linalg.det(R) - 1) > ROTATION_TOL:
-        raise ModelError(f"{what} rotation is not orthonormal with det +1")
+    fault = rotation_fault(T[:3, :3])
+    if fault:
+        raise ModelError(f"{what} rotation is {fault}: not orthonormal with det +1")
     return T
 
 
@@ -1083,11 +1085,12 @@ class Robot:
         """
         data = read_model_data(path)
         try:
-            if is_workcell(data):
-                return single_arm(data, Path(path))
-            if is_cell(data):
-                return cell_from_data(data, Path(path))
-            return cls(**robot_kwargs(data))
+            with reading_model(path):
+                if is_workcell(data):
+                    return single_arm(data, Path(path))
+                if is_cell(data):
+                    return cell_from_data(data, Path(path))
+                return cls(**robot_kwargs(data))
         except (ModelError, UnitError) as exc:  # the model file's fault, whatever the check
             raise ModelError(f"{path}: {exc}") from None
 
@@ -1101,7 +1104,8 @@ def load_model(spec: str, tip: str | None = None) -> Robot:
     `robocal.kinematics.urdf_read`, ending at link ``tip``, default the deepest leaf) or a catalog
     name (what every ``--robot`` takes). A ``tip`` for anything but a URDF is refused (ModelError)."""
     path = Path(spec)
-    if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (path.is_file() and _looks_like_xml(path)):
+    if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (on_disk(path, Path.is_file)
+                                                                and _looks_like_xml(path)):
         if path.suffix.lower() == ".xacro":
             raise ModelError(f"{spec} is a xacro macro file: expand it first (xacro {path.name} > "
                              "robot.urdf) and give the URDF")
@@ -1109,7 +1113,7 @@ def load_model(spec: str, tip: str | None = None) -> Robot:
     if tip is not None:
         raise ModelError(f"tip {tip!r} is a URDF link, but {spec} is not a URDF (its chain ends where its "
                          "model says)")
-    if path.suffix.lower() in (".yaml", ".yml") or path.exists():
+    if path.suffix.lower() in (".yaml", ".yml") or on_disk(path):
         return Robot.load(path)
     return Robot.from_catalog(spec)
 

@@ -32,6 +32,9 @@ length unit).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 
 import numpy as np
@@ -46,7 +49,7 @@ from robocal.kinematics.joint_errors import JointErrorModel
 from robocal.kinematics.link_names import check_link_frames
 from robocal.kinematics.opw import GEOMETRY, OPWParameters
 from robocal.kinematics.prior_spec import PriorSpec
-from robocal.kinematics.transforms import make_transform, rotvec_to_matrix
+from robocal.kinematics.transforms import make_transform, rotation_fault, rotvec_to_matrix
 
 FORMAT = "robocal-model/1"
 LINK_FIELDS = ("alpha", "a", "beta", "theta", "d")
@@ -115,6 +118,10 @@ def _frame(spec, length: float, angle: float, where: str) -> np.ndarray | None:
         if not isinstance(rows, list) or len(rows) != 3:
             raise ModelError(f"{where}.rotation must be 3 rows of 3 numbers")
         R = np.array([_numbers(r, f"{where}.rotation[{i}]", 3) for i, r in enumerate(rows)])
+        fault = rotation_fault(R)
+        if fault:
+            raise ModelError(f"{where}.rotation is {fault}, no rotation: give a rotation matrix "
+                             "(orthonormal, det +1), rpy or rotvec")
     else:
         v = _numbers(spec[keys[0]], f"{where}.{keys[0]}", 3) * angle
         R = rotvec_to_matrix(v) if keys[0] == "rotvec" else Rotation.from_euler("xyz", v).as_matrix()
@@ -324,6 +331,36 @@ def is_cell(data) -> bool:
     """Whether a loaded model mapping is a cell file, a robot on a track (it names a ``robot`` and
     a ``track``: :mod:`robocal.kinematics.cell_file`)."""
     return isinstance(data, dict) and "track" in data and "robot" in data
+
+
+def on_disk(path: Path, check=Path.exists) -> bool:
+    """``check(path)`` (`Path.exists`, `Path.is_file`), False for a name no file system holds (a
+    name of thousands of characters: OSError 'File name too long'): no file, a catalog name then."""
+    try:
+        return check(path)
+    except OSError:
+        return False
+
+
+_OPEN: ContextVar[tuple[Path, ...]] = ContextVar("robocal_model_files_open", default=())
+
+
+@contextmanager
+def reading_model(path) -> Iterator[None]:
+    """Mark the model or cell file ``path`` as being read while the block builds its model: a file
+    that names itself, or two that name each other (a cell whose ``robot`` is the cell, a model file
+    naming the cell that names it), is a ModelError naming the loop instead of a RecursionError."""
+    key = Path(path).resolve()
+    chain = _OPEN.get()
+    if key in chain:
+        loop = " -> ".join(p.name for p in (*chain[chain.index(key):], key))
+        raise ModelError(f"a file that names itself ({loop}): give the arm's own model file or a "
+                         "catalog name")
+    token = _OPEN.set((*chain, key))
+    try:
+        yield
+    finally:
+        _OPEN.reset(token)
 
 
 def read_model_data(path):

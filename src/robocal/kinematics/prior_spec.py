@@ -82,6 +82,14 @@ _BOOL = {"yes": True, "true": True, "no": False, "false": False}
 _VALUE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-z]+)\s*$")
 
 
+def _in_catalog(name: str) -> bool:
+    """Whether the catalog has a model file ``name`` (a name no file system holds: no)."""
+    try:
+        return resources.files("robocal").joinpath("catalog", f"{name}.yaml").is_file()
+    except OSError:
+        return False
+
+
 def canonical_class(name) -> str:
     """The class named ``name`` (an alias allowed); ModelError listing the classes otherwise."""
     word = str(name).strip().lower()
@@ -188,7 +196,7 @@ def class_of(robot) -> tuple[str, str]:
     if spec is not None and spec.robot_class is not None:
         return spec.robot_class, "named"
     name = str(robot.name).lower()
-    if resources.files("robocal").joinpath("catalog", f"{name}.yaml").is_file():  # a catalog model
+    if _in_catalog(name):  # a catalog model
         cls = next((c for prefix, c in CATALOG_CLASS.items() if re.match(prefix, name)), "industrial")
         return cls, f"model {robot.name}"
     if robot.n_joints >= SERVICE_MIN_JOINTS:

@@ -94,6 +94,29 @@ def pose_error(T_measured: np.ndarray, T_model: np.ndarray) -> np.ndarray:
     return np.concatenate([dp, matrix_to_rotvec(dR)], axis=-1)
 
 
+def rotation_fault(R: np.ndarray, tol: float = ROTATION_TOL) -> str | None:
+    """What keeps a ``(3, 3)`` matrix from being a rotation (to ``tol``): ``"a mirror (det -1)"``,
+    ``"not orthonormal (a shear or a scale)"``, ``"not finite"``; None for a proper rotation. Every
+    frame a file or a caller gives (a model's base and tool, a cell's mount, plate, flange) is
+    checked with it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from robocal.kinematics.transforms import rotation_fault
+    >>> rotation_fault(np.eye(3)) is None, rotation_fault(np.diag([1.0, 1.0, -1.0]))
+    (True, 'a mirror (det -1)')
+    """
+    R = np.asarray(R, dtype=float)
+    if R.shape != (3, 3) or not np.isfinite(R).all():
+        return "not finite"
+    if np.abs(R @ R.T - np.eye(3)).max() > tol:
+        return "not orthonormal (a shear or a scale)"
+    if abs(np.linalg.det(R) - 1) > tol:
+        return "a mirror (det -1)"
+    return None
+
+
 def is_rigid(T: np.ndarray, tol: float = ROTATION_TOL) -> np.ndarray:
     """Whether each ``(..., 4, 4)`` matrix is a proper rigid transform (to ``tol``)."""
     T = np.asarray(T, dtype=float)

@@ -48,6 +48,7 @@ from robocal.kinematics.cell_file import (
     _units,
     is_workcell,
     named,
+    placement,
     read_arms,
 )
 from robocal.kinematics.model import (
@@ -66,7 +67,9 @@ from robocal.kinematics.model_file import (
     MAX_NAME,
     _frame,
     _frame_dict,
+    on_disk,
     read_model_data,
+    reading_model,
     robot_kwargs,
     robot_to_dict,
 )
@@ -79,7 +82,9 @@ SECTION_KEYS = {*GEOMETRY_FORMS, "limits", "unit", "mount", "plate", "nests", "c
                 "name", "description"}
 DEFINITION_KEYS = {"format", "name", "description", "units", "axes", "plate", "payload_kg"}
 URDF_SUFFIXES = (".urdf", ".xml")  # a positioner's model given as a URDF (load_model reads it)
-COLUMN = re.compile(r"^e([1-9]\d*)$")  # a positioner joint's column (its measurement column is e<k>_deg|_mm)
+# a positioner joint's column (its measurement column is e<k>_deg|_mm); at most 6 digits (a longer
+# number is no axis, and int() of thousands of digits fails)
+COLUMN = re.compile(r"^e([1-9]\d{0,5})$")
 SINGLE_POSITIONER = "positioner"  # the body name of a ``positioner:`` without name or unit
 # What a calibration of a positioner identifies (docs/model-yaml.md, "Work cells"): Positioner.identifiability
 WITH_NESTS = ("positioner {name}: SMR nests at known plate positions fix the plate frame: its axes, the "
@@ -625,11 +630,11 @@ def _model_chain(model, path: Path | None, where: str, name: str) -> Robot:
         return catalog_positioner(model)[0]
     if isinstance(model, str):
         spec = _resolve(model, path, f"{where}.model")
-        if not Path(spec).suffix and not Path(spec).exists():
+        if not Path(spec).suffix and not on_disk(Path(spec)):
             raise ModelError(f"{where}.model: unknown positioner {model!r}; the catalog has: "
                              f"{', '.join(positioner_names())} (run `robocal robots`), or give a file")
         file = Path(spec)
-        if file.suffix.lower() in URDF_SUFFIXES or (file.is_file() and _looks_like_xml(file)):
+        if file.suffix.lower() in URDF_SUFFIXES or (on_disk(file, Path.is_file) and _looks_like_xml(file)):
             return load_model(spec)  # a URDF of the positioner's chain (its root link the mount)
         model = read_model_data(spec)
         where = f"{where}.model ({spec})"
@@ -657,7 +662,7 @@ def _positioner(spec, name: str, data: dict, path: Path | None, first: int,
     if "limits" in spec and forms[0] not in ("dh", "mdh"):
         raise ModelError(f"{where}.limits: only with a dh or mdh table (axes and joints rows carry "
                          "their own)")
-    mount = _frame(spec.get("mount"), length, angle, f"{where}.mount")
+    mount = placement(spec.get("mount"), length_unit, angle, f"{where}.mount")
     plate = _frame(spec.get("plate"), length, angle, f"{where}.plate")
     description = _text(spec.get("description", ""), f"{where}.description", MAX_DESCRIPTION)
     if forms[0] == "axes":
@@ -751,7 +756,8 @@ def _flange(entry) -> np.ndarray | None:
     if entry.flange is not None:
         return entry.flange
     model = entry.model
-    if isinstance(model, str) and Path(model).suffix.lower() in (".yaml", ".yml") and Path(model).is_file():
+    if isinstance(model, str) and Path(model).suffix.lower() in (".yaml", ".yml") and on_disk(Path(model),
+                                                                                                Path.is_file):
         model = read_model_data(Path(model))
     if not isinstance(model, dict) or model.get("tool") is None or "joints" in model \
             or not any(k in model for k in TABLE_FORMS):
@@ -806,11 +812,13 @@ def load_cell(path) -> Cell:
     [3.0, 0.0, 0.0]
     """
     spec = Path(path)
-    if spec.suffix.lower() in (".yaml", ".yml") or (spec.is_file() and not _looks_like_xml(spec)):
+    if spec.suffix.lower() in (".yaml", ".yml") or (on_disk(spec, Path.is_file)
+                                                     and not _looks_like_xml(spec)):
         data = read_model_data(spec)
         if is_workcell(data):
             try:
-                return cell_from_data(data, spec)
+                with reading_model(spec):
+                    return cell_from_data(data, spec)
             except (ModelError, UnitError) as exc:
                 raise ModelError(f"{path}: {exc}") from None
     arm = load_model(str(path))

@@ -28,7 +28,7 @@ import numpy as np
 
 from robocal.programs.model import Program, Target
 
-_AXIS = re.compile(r"\b([JE]\d{1,2})\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))")
+_AXIS = re.compile(r"\b([JE]\d{1,2})\s*=\s*([-+]?(?:\d+(?:\.\d*)?|\.\d+))")
 COORD = re.compile(r"\bCOORD\b(?:\s*\[\s*([^\]]*?)\s*\])?")
 _LEADER = re.compile(r"^(?:GP|G)?\s*(\d)$", re.IGNORECASE)
 BOTH = "used by motions that move differently:"  # a position one correction cannot serve (every use named)

@@ -54,7 +54,7 @@ _NEXT_VARIABLE = re.compile(r"^[^\S\n]*\[(?![^\S\n]*\d)", re.MULTILINE)
 # a group or register number of at most 9 digits (a longer one is no controller's: a mangled line)
 _ENTRY = re.compile(r"^[ \t]*\[\s*(\d{1,9})\s*,\s*(\d{1,9})\s*\][ \t]*=[ \t]*(?:'([^'\n]*)')?([^\n]*)$",
                     re.MULTILINE)
-_NUM = r"([-+]?(?:\d+\.?\d*|\.\d+))"
+_NUM = r"([-+]?(?:\d+(?:\.\d*)?|\.\d+))"
 _CONFIG = re.compile(r"\bGroup:\s*(\d{1,9})\s+Config:\s*(?:([NF])\s*([UD])\s*([TB])|([LR]))\s*"
                      r"(?:,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3}))?[ \t\r]*$",
                      re.MULTILINE)

@@ -64,7 +64,7 @@ _CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([NF])\s*([UD])\s*([TB])\s*,\s*([-+]?\d{
                      r"\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*'")
 _SCARA_CONFIG = re.compile(r"CONFIG\s*:\s*'\s*([LR])\s*(?:,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,"
                            r"\s*([-+]?\d{1,3}))?\s*'")  # a SCARA's (SR-series): hand, three turns (or none)
-_VALUE = r"\b{}\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*(?:mm|deg)"
+_VALUE = r"\b{}\s*=\s*([-+]?(?:\d+(?:\.\d*)?|\.\d+))\s*(?:mm|deg)"
 _KEYS = ("X", "Y", "Z", "W", "P", "R")
 _VALUES = tuple(re.compile(_VALUE.format(k)) for k in _KEYS)
 _JOINTS = re.compile(r"\bJ1\s*=")  # a position in joint representation
@@ -73,7 +73,7 @@ REMOTE_TCP = ("a remote-TCP position (RX .. RR, RTCP): the arm carries the part 
               "cell, which a calibrated arm model alone does not place: not corrected")
 _NEXT = re.compile(r"\bP\[")
 _NUMBER = re.compile(r"P\[(\d+)")
-_EXTENDED = re.compile(r"\b(E\d)\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+))")
+_EXTENDED = re.compile(r"\b(E\d)\s*=\s*([-+]?(?:\d+(?:\.\d*)?|\.\d+))")
 _LINE = re.compile(r"^[ \t]*\d*[ \t]*:(.*)$", re.MULTILINE)
 _MOVE = re.compile(r"\s*([JLCA])\s+(.*)$")
 _ARC_END = re.compile(r"\s*(P|PR)\[")
@@ -209,12 +209,18 @@ class FanucDialect(Dialect):
             end = section(text, "END", start)
             end = len(text) if end < 0 else end
             after = start + len("/POS")  # the /POS section holds position blocks and nothing else
+            seen: dict[int, int] = {}  # position number -> where its block starts
             for m in _POS.finditer(text, after, end):
                 _nothing_between(src, text, after, m.start())
                 after = m.end()
                 if len(m.group(1)) > _POSITION_DIGITS:
                     raise DataError(f"{src.path.name}:{src.line_of(m.start())}: position number "
                                     f"{short_repr(m.group(1))} has more than {_POSITION_DIGITS} digits")
+                first = seen.setdefault(int(m.group(1)), m.start())
+                if first != m.start():  # the controller refuses the program; one copy would stay as is
+                    raise DataError(f"{src.path.name}:{src.line_of(m.start())}: P[{int(m.group(1))}] is "
+                                    f"given twice in /POS (first at line {src.line_of(first)}): give each "
+                                    "position once")
                 name = f"P[{m.group(1)}{':' + m.group(2) if m.group(2) else ''}]"
                 body_start = m.start(3)
                 body = m.group(3)

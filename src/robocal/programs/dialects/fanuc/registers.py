@@ -33,7 +33,7 @@ from robocal.programs.source import Number, ProgramText
 from robocal.programs.target import Target
 
 HEADER = "register,x_mm,y_mm,z_mm,w_deg,p_deg,r_deg,config"
-_NUM = r"\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*"
+_NUM = r"\s*([-+]?(?:\d+(?:\.\d*)?|\.\d+))\s*"
 _ROW = re.compile(r"^\s*(\d{1,4})\s*," + ",".join([_NUM] * 6)
                   + r",\s*\"?\s*(?:([NF])\s*([UD])\s*([TB])|([LR]))"
                   r"\s*,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*,\s*([-+]?\d{1,3})\s*\"?\s*$", re.MULTILINE)

@@ -79,7 +79,7 @@ from robocal.programs.dialects.inform.tool_file import is_tool_file, read_tool_f
 from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.model import IDENTITY, Program, Target
 from robocal.programs.rotations import matrix_to_zyx
-from robocal.programs.source import Number, ProgramText
+from robocal.programs.source import Number, ProgramText, without_bom
 from robocal.trust.output_marker import corrected_name
 
 _POSITION_MM = 1e-3  # the pendant writes 3 decimals for mm
@@ -97,7 +97,7 @@ _INDEX = r"(\d{1,9})"  # a position, variable, tool or frame number (a longer on
 _ENTRY = re.compile(r"^\s*([A-Z]{1,4})" + _INDEX + r"\s*=\s*(.*?)\s*$")
 _MOTION = re.compile(r"^\s*(MOVJ|MOVL|MOVC|MOVS|IMOV|SMOVJ|SMOVL|SMOVC|SMOV|SYMOVJ|SYMOVL|SYMOVC|EIMOVL|"
                      r"EIMOVC|EIMOVJ|EMOVJ|EMOVL)\b(.*)$")
-_NUM = r"([-+]?(?:\d+\.?\d*|\.\d+))"
+_NUM = r"([-+]?(?:\d+(?:\.\d*)?|\.\d+))"
 _SIX = re.compile(r"(C|P)" + _INDEX + "=" + ",".join([_NUM] * POSE_VALUES) + r"[ \t]*$")  # the usual, fast
 _REF = re.compile(r"\b(C|BC|EC|P|BP|EX|LP|LBP|LEX)(?:" + _INDEX + r"|\[([^\]]*)\])")
 _SHIFT_ON = re.compile(r"^\s*SFTON\b(.*)$")
@@ -116,7 +116,6 @@ _BOTH = "used by motions that move differently:"  # a target one correction cann
 _CONVEYOR = re.compile(r"\bCV#\(")  # a conveyor-synchronised SMOV (conveyor tracking)
 _CARTESIAN_POSTYPES = ("BASE", "ROBOT", "USER", "TOOL", "MTOOL")  # ///POSTYPEs of Cartesian numbers
 SHOWN_VARIABLES = 8  # P variables a message names before "and n more"
-_BOM = ("\ufeff", "\xef\xbb\xbf")  # a byte-order mark before /JOB (as text, and UTF-8 read as latin-1)
 
 
 @dataclass
@@ -150,8 +149,9 @@ class Position:
 
 
 def _lines(text: str):
-    """``(start, line without its end, line end)`` of every line."""
-    pos = 0
+    """``(start, line without its end, line end)`` of every line; a byte-order mark before the first
+    line is not part of it (a file saved by a Windows editor starts its first section there)."""
+    pos = len(text) - len(without_bom(text))
     while pos < len(text):
         m = _LINE.match(text, pos)
         yield pos, m.group(1), m.group(2)
@@ -327,22 +327,15 @@ def _delivered(ref: ProgramText, targets: list[Target]) -> str:
 def is_variable_file(src: ProgramText) -> bool:
     """A controller's VAR.DAT: no ``/JOB`` line; a backup's ``//VAR`` with ``///P`` lines, or position
     sections (``//P``) with ``P0000=`` entries."""
-    sections = re.search(r"^//(?:P|BP|EX)\s*$", src.text, re.MULTILINE) is not None
+    sections = re.search(r"^//(?:P|BP|EX)\s*$", without_bom(src.text), re.MULTILINE) is not None
     return _is_variable_file(src) and not is_tool_file(src) and not _UFRAME_LINE.search(src.text) and (
         sections or var_file.is_cmos_variables(src))
 
 
 def _is_variable_file(src: ProgramText) -> bool:
     """A controller variable file (VAR.DAT): no ``/JOB`` line, position sections ``//P``."""
-    return not re.search(r"^\s*/JOB\b", _without_bom(src.text), re.MULTILINE)
+    return not re.search(r"^\s*/JOB\b", without_bom(src.text), re.MULTILINE)
 
-
-def _without_bom(text: str) -> str:
-    """``text`` without a byte-order mark at its start (a job saved by a Windows editor as UTF-8)."""
-    for bom in _BOM:
-        if text.startswith(bom):
-            return text[len(bom):]
-    return text
 
 
 def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
@@ -350,7 +343,7 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
     the ``///P`` lines of a backup's VAR.DAT: :func:`_backup_positions`) with their header state;
     Cartesian robot positions become targets. ``///NPOS`` is checked."""
     if var_file.is_cmos_variables(src):
-        return _backup_positions(src)
+        return _unique(src, _backup_positions(src))
     out: list[Position] = []
     section = ""
     head = _Header()
@@ -413,7 +406,25 @@ def _read_positions(src: ProgramText, prog: Program) -> list[Position]:
         if npos[1] != counts[:len(npos[1])]:
             prog.warnings.append(f"{src.where(npos[0])}: ///NPOS {','.join(map(str, npos[1]))} but the "
                                  f"section holds {','.join(map(str, counts))} (C, BC, EC, P, BP, EX)")
-    return out
+    return _unique(src, out)
+
+
+def _unique(src: ProgramText, positions: list[Position]) -> list[Position]:
+    """``positions``, each number given once; a number given twice (C00003 on two lines of a job's
+    //POS, P001 twice in a VAR.DAT) is a DataError naming both lines: which copy the controller
+    loads is not documented, and correcting one would leave the other as it was."""
+    seen: dict[tuple[str, int], Position] = {}
+    for pos in positions:
+        first = seen.setdefault((pos.kind.upper(), pos.index), pos)
+        if first is not pos:
+            head = src.text[pos.line_start:pos.line_start + 40]
+            written = re.match(rf"\s*({pos.kind}0*{pos.index})\b", head)
+            name = written[1] if written else f"{pos.kind}{pos.index:03d}"  # as the file writes it
+            raise DataError(f"{src.where(pos.line_start)}: {name} is given twice "
+                            f"(first at line {src.line_of(first.line_start)}): give each position number "
+                            "once (which copy the controller keeps is not known, and correcting one would "
+                            "leave the other as it was)")
+    return positions
 
 
 def _backup_positions(src: ProgramText) -> list[Position]:
@@ -820,7 +831,7 @@ def user_frames(src: ProgramText) -> dict[str, np.ndarray]:
 def looks_like_inform(text: str) -> bool:
     """A job (``/JOB`` first) or a VAR.DAT (``//`` sections with ``P0000=`` entries, or a backup's
     ``//VAR`` and ``///PFNUM``)."""
-    head = text.lstrip("\ufeff \t\r\n")[:4000]
+    head = re.sub(r"\r\n?", "\n", without_bom(text)).lstrip(" \t\n")[:4000]  # a lone CR ends a line too
     if re.search(r"^/JOB\b", head, re.MULTILINE) and re.search(r"^//(?:NAME|POS|INST)\b", head, re.MULTILINE):
         return True  # a job (an offline generator may put a ' comment line before /JOB)
     if re.match(r"//VAR[ \t]*[\r\n]+///PFNUM\b", head):

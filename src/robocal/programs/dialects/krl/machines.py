@@ -118,7 +118,7 @@ class Machines:
         key = f"{' '.join(args[2].split())}@{unit}"
         self.carried[key] = (unit, "")
         self.literals[key] = np.array([float(v) for v in re.findall(
-            r"\b[XYZABC]\s+([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)", args[2], re.IGNORECASE)])
+            r"\b[XYZABC]\s+([-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?)", args[2], re.IGNORECASE)])
         return key, ""
 
     def carry(self, n: str, unit: str) -> str:

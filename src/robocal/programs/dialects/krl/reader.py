@@ -54,7 +54,7 @@ from robocal.programs.runtime import Meant, RunTime, RuntimeSite, merged
 from robocal.programs.source import Number, ProgramText
 
 _AGG = re.compile(r"\{[^{}]*\}")
-_COMPONENT = re.compile(r"\b([A-Za-z]\w*)\s+([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|'[BbHh][^']*')")
+_COMPONENT = re.compile(r"\b([A-Za-z]\w*)\s+([-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?|'[BbHh][^']*')")
 _DECL = re.compile(r"^[ \t]*(?:(?:DECL|GLOBAL|CONST)\s+)*(E6POS|POS|FRAME)\s+([A-Za-z_$]\w*)"
                    r"(?:\s*\[[^\]]*\])?\s*=\s*(?=\{)", re.IGNORECASE | re.MULTILINE)
 _AXES = re.compile(r"^[ \t]*(?:(?:DECL|GLOBAL|CONST)\s+)*(?:E6AXIS|AXIS)\s+([A-Za-z_$]\w*)",
@@ -72,7 +72,9 @@ _STATE = re.compile(r"(\$TOOL|\$BASE)\s*=\s*([^\n]+)|BAS\s*\(\s*#(TOOL|BASE)\s*,
                     r"FDAT_ACT\s*=\s*(\w+)", re.IGNORECASE)
 _ROUTINE = re.compile(r"^[ \t]*(?:GLOBAL\s+)?DEF\s+([A-Za-z_]\w*)\s*\(([^)]*)\)",
                       re.IGNORECASE | re.MULTILINE)
-_ASSIGN = re.compile(r"^[ \t]*([A-Za-z_]\w*)\s*(\[[^\]\n]*\])?((?:\.\w+)*)\s*=(?!=)\s*([^\n]+)$",
+# one line (a KRL statement is): blanks, not \s, between its tokens (\s* crossing a masked comment
+# block twice backtracked in quadratic time)
+_ASSIGN = re.compile(r"^[ \t]*([A-Za-z_]\w*)[ \t]*(\[[^\]\n]*\])?((?:\.\w+)*)[ \t]*=(?!=)[ \t]*([^\n]+)$",
                      re.MULTILINE)
 _CALL = re.compile(r"^[ \t]*([A-Za-z_]\w*)\s*\(([^\n]*)\)[ \t\r]*$", re.MULTILINE)
 _APPROX = re.compile(r"(?:\s+(?:C_[A-Z]+|CA\s+[-+]?[\d.]+))+\s*$", re.IGNORECASE)  # C_DIS, CA 45 ...
@@ -235,9 +237,11 @@ class KRLDialect(Dialect):
                     st.kinds[name.upper()] = m.group(1).upper()
             st.machines.read(src, masked)
             reference = src not in sources
+            here: dict[str, int] = {}  # a position declared in this file -> its offset
             for m in _DECL.finditer(masked):
                 t = self._target(src, masked, m.end(), m.group(2), m.group(1).upper(), prog)
                 if t is not None:
+                    _once(src, here, m.group(2), m.start())
                     st.declare(m.group(2).upper(), t, reference)
             for m in _ELEMENT.finditer(masked):
                 name = re.sub(r"\s+", "", m.group(1))
@@ -248,6 +252,7 @@ class KRLDialect(Dialect):
                     continue  # another structure (LOAD_DATA, MACHINE_DEF ...): not a position
                 t = self._target(src, masked, m.end(), name, "E6POS", prog)
                 if t is not None:
+                    _once(src, here, name, m.start())
                     st.declare(name.upper(), t, reference)
             for m in _ROUTINE.finditer(masked):
                 st.params[m.group(1).upper()] = [p.split(":")[0].strip().upper()
@@ -469,7 +474,7 @@ class KRLDialect(Dialect):
             return [f"{text} is defined through more than {_DEPTH} assignments or calls"]
         if ":" in text:
             left, _, right = text.partition(":")
-            if re.fullmatch(r"\s*\{(?:\s*[A-Za-z]\w*\s+[-+]?(?:\d+\.?\d*|\.\d+)\s*,?)*\}\s*", right):
+            if re.fullmatch(r"\s*\{(?:\s*[A-Za-z]\w*\s+[-+]?(?:\d+(?:\.\d*)?|\.\d+)\s*,?)*\}\s*", right):
                 return self._follow(st, left.strip(), proc, scope, depth + 1)  # a constant offset
             why = f"{text} is computed at run time by the geometric operator ':'"
             parts = [p for operand in split_top(text, 0, len(text), ":")
@@ -560,6 +565,16 @@ class _State:
 
     def all_targets(self) -> list[Target]:
         return [t for ts in self.declared.values() for t in ts]
+
+
+def _once(src: ProgramText, here: dict[str, int], name: str, at: int) -> None:
+    """Note position ``name`` declared at offset ``at`` of ``src``; a second declaration in the
+    same file is a DataError naming both lines (the controller refuses the file; correcting one
+    copy would leave the other)."""
+    first = here.setdefault(name.upper(), at)
+    if first != at:
+        raise DataError(f"{src.where(at)}: {name} is declared twice in {src.path.name} (first at line "
+                        f"{src.line_of(first)}): give each position once")
 
 
 @dataclass(frozen=True)

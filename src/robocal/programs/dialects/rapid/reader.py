@@ -90,8 +90,9 @@ _REACHED = ("crobt", "calcrobt")
 _FUNC_BODY = re.compile(r"\bfunc\s+robtarget\s+([a-z]\w*)([\s\S]*?)\bendfunc\b")  # lower-cased text
 _ROUTINE = re.compile(r"\b(proc|func\s+\w+|trap)\s+([a-z]\w*)\s*(?:\(([^)]*)\))?")  # lower-cased text
 _ROUTINE_END = re.compile(r"\bend(?:proc|func|trap)\b")
-_ASSIGN = re.compile(r"([A-Za-z]\w*)\s*(\{[^}]*\})?\s*((?:\.\s*[A-Za-z]\w*)*)\s*:=",
-                     re.IGNORECASE)
+# each \s* before a token of its own (two adjacent ones over a long blank run, as a masked comment
+# block leaves, backtrack in quadratic time or worse)
+_ASSIGN = re.compile(r"([A-Za-z]\w*)(?:\s*(\{[^}]*\}))?((?:\s*\.\s*[A-Za-z]\w*)*)\s*:=", re.IGNORECASE)
 # fields of a tooldata / wobjdata whose change does not move a target (a tool's load)
 _POSE_FREE = (".tload",)
 # searched in the lower-cased text
@@ -101,10 +102,11 @@ _RECORD = re.compile(r"\brecord\s+([a-z]\w*)([\s\S]*?)\bendrecord\b")
 _COMPONENT = re.compile(r"([A-Za-z]\w*)\s+([A-Za-z]\w*)\s*;")
 _CONF = re.compile(r"\bconf([lj])\s*\\\s*(on|off)\b")
 _ACTUNIT = re.compile(r"\bactunit\s+([a-z]\w*)")  # searched in the lower-cased text
-# block keywords a statement may begin with before its instruction
+# block keywords a statement may begin with before its instruction (a keyword's blank is a lookahead:
+# \s+ before [\s\S]*? split a long blank run, a masked comment, in quadratic time)
 _LEAD = re.compile(r"\s*(?:(?:LOCAL\s+)?(?:PROC|TRAP)\s+\w+\s*(?:\([^)]*\))?|(?:LOCAL\s+)?FUNC\s+\w+\s+\w+\s*"
                    r"\([^)]*\)|ENDPROC|ENDFUNC|ENDTRAP|ENDIF|ELSE|ENDFOR|ENDWHILE|ENDTEST|DEFAULT\s*:|"
-                   r"CASE\s+[^:]+:|(?:ELSE)?IF\s+[\s\S]*?\bTHEN|FOR\s+[\s\S]*?\bDO|WHILE\s+[\s\S]*?\bDO|"
+                   r"CASE(?=\s)[^:]+:|(?:ELSE)?IF(?=\s)[\s\S]*?\bTHEN|FOR(?=\s)[\s\S]*?\bDO|WHILE(?=\s)[\s\S]*?\bDO|"
                    r"TEST\s+[^\n]+|MODULE\s+\w+(?:\s*\([^)]*\))?|ERROR(?:\s*\([^)]*\))?|UNDO|BACKWARD|"
                    r"[A-Za-z]\w*:(?!=))", re.IGNORECASE)
 _CONF_LIMIT = 2**31  # confdata are quadrants and turns: an integer beyond this is not one
@@ -287,6 +289,11 @@ class RapidDialect(Dialect):
             tree = None if shaped else parse_aggregate(src, masked, m.end(), e, f"{kind} {name}")[0]
             where = f"{src.path.name}:{src.line_of(m.start())}"
             if kind == "robtarget":
+                first = st.places.setdefault((src.path, proc, name.lower()), m.start())
+                if first != m.start():  # the controller refuses the module; one copy would stay as it is
+                    raise DataError(f"{where}: robtarget {name} is declared twice in "
+                                    f"{f'routine {proc}' if proc else 'the module'} (first at line "
+                                    f"{src.line_of(first)}): give each target once")
                 targets = [self._shaped(src, shaped, name, m.start())] if shaped else \
                     self._robtargets(src, tree, name, m.start(), m.group(4))
                 holes = [t for t in targets if _placeholder(t)]  # pTemp := [[0,0,0],[0,0,0,0],...]
@@ -661,6 +668,7 @@ class _State:
     def __init__(self):
         self.masked: dict = {}
         self.declared: dict[str, list[Target]] = {}
+        self.places: dict[tuple, int] = {}  # (path, routine, robtarget name) -> where it is declared
         self.tools: dict[str, tuple] = {}
         self.wobjs: dict[str, tuple] = {}
         self.reference: set[int] = set()

@@ -263,7 +263,7 @@ class _Script:
         variables last assigned such a value before ``at``), else None."""
         try:
             tree = ast.parse(text.strip(), mode="eval")
-        except SyntaxError:
+        except (SyntaxError, RecursionError, MemoryError):  # deep nesting
             return None
 
         def ev(node):
@@ -297,7 +297,7 @@ class _Script:
 
         try:
             v = ev(tree.body)
-        except (ValueError, ZeroDivisionError, TypeError):
+        except (ValueError, ZeroDivisionError, TypeError, OverflowError, RecursionError):  # 10**400: no value
             return None
         return v if np.isfinite(v) else None
 

@@ -39,6 +39,7 @@ the attribute values change (or an absent coordinate is added): the XML is never
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -91,13 +92,16 @@ _MOTION = re.compile(r"\b(movej|movel|movec)\s*\(")
 _CALL = re.compile(r"(?:\bcall\s+|\btaskCreate\s+(?:[^,\r\n]+,){2}\s*|"
                    r"\btaskCreateSync\s+(?:[^,\r\n]+,){3}\s*)([A-Za-z_]\w*)\s*\(")
 _LIBRARY = re.compile(r"^\s*([A-Za-z_]\w*)\s*:\s*([A-Za-z_]\w*)")  # alias:name (a library's data)
-_ITEM = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\[\s*([^\]]*?)\s*\])?\s*$")
+# no two quantifiers over the same blanks next to each other (``\[\s*([^\]]*?)\s*\]`` backtracked in
+# cubic time on a long blank run: the index is stripped by `_item`)
+_ITEM = re.compile(r"^\s*([A-Za-z_]\w*)(?:\s*\[([^\]]*)\])?\s*$")
 _LITERAL6 = re.compile(r"^\s*\{\s*" + r"\s*,\s*".join([f"({NUMBER_RE.pattern})"] * 6) + r"\s*\}\s*$")
 _WRAPPER = re.compile(r"^\s*(appro|compose)\s*\((.*)\)\s*$", re.DOTALL)
 OLD_TYPES = {"point": "pointRx", "joint": "jointRx"}  # the type names of older VAL3 versions
 KNOWN_TYPES = ("pointRx", "frame", "tool", "trsf", "jointRx")  # the data read from a .dtx
 JOINT_TYPES = ("joint", "jointRx", "jointRs")  # a movej to one of these is no Cartesian motion
-_FIELD = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\[[^\]]*\])?\s*\.\s*([A-Za-z_]\w*)\s*$")
+_ASSIGNED = re.compile(r"(?<![\w.])([A-Za-z_]\w*)(?:\s*\[[^\]]*\])?((?:\s*\.\w+)*)\s*=(?!=)")  # name[i].f =
+_FIELD = re.compile(r"^\s*([A-Za-z_]\w*)(?:\s*\[[^\]]*\])?\s*\.\s*([A-Za-z_]\w*)\s*$")
 
 
 @dataclass
@@ -116,9 +120,40 @@ class Datum:
     joints: np.ndarray | None = None
 
 
-def _attrs(text: str, start: int, end: int) -> dict[str, tuple[str, int, int]]:
-    """name -> (value, start, end of the value) of the attributes in ``text[start:end]``."""
-    return {m.group(1): (m.group(2), m.start(2), m.end(2)) for m in _ATTR.finditer(text, start, end)}
+def _attrs(text: str, start: int, end: int,
+           src: ProgramText | None = None) -> dict[str, tuple[str, int, int]]:
+    """name -> (value, start, end of the value) of the attributes in ``text[start:end]``; with
+    ``src``, an attribute given twice in the element is a DataError (XML forbids it, and which copy
+    a reader takes differs: correcting one would leave the other)."""
+    out: dict[str, tuple[str, int, int]] = {}
+    for m in _ATTR.finditer(text, start, end):
+        if src is not None and m.group(1) in out:
+            raise DataError(f"{src.where(m.start())}: attribute {m.group(1)} given twice in one element "
+                            f"(first at line {src.line_of(out[m.group(1)][1])}): keep one")
+        out[m.group(1)] = (m.group(2), m.start(2), m.end(2))
+    return out
+
+
+def _add(out: dict[str, Datum], datum: Datum) -> None:
+    """Add ``datum`` to ``out``; a value named twice (two ``<Value key="0">`` of one datum, or two
+    data of one name) is a DataError naming both lines: correcting one copy would leave the other."""
+    first = out.get(datum.name)
+    if first is not None:
+        src = datum.source
+        where = src.line_of(first.offset) if first.source is src else first.source.where(first.offset)
+        raise DataError(f"{src.where(datum.offset)}: {datum.name} is given twice (first at "
+                        f"{'line ' if first.source is src else ''}{where}): give each value once")
+    out[datum.name] = datum
+
+
+def _closing(text: str, start: int, close: re.Pattern, opening: re.Pattern, end: int | None = None) \
+        -> re.Match | None:
+    """The closing tag ``close`` of the element opened before ``start``, searched before the next
+    element ``opening`` and ``end`` (a missing one must not take the next element's close, and with
+    it the next element's values)."""
+    end = len(text) if end is None else end
+    following = opening.search(text, start, end)
+    return close.search(text, start, following.start() if following else end)
 
 
 def _read_data(src: ProgramText) -> dict[str, Datum]:
@@ -128,40 +163,43 @@ def _read_data(src: ProgramText) -> dict[str, Datum]:
         return _read_data_s6(src, text)
     out: dict[str, Datum] = {}
     for d in _DATA.finditer(text):
-        head = _attrs(text, d.start(1), d.end(1))
+        head = _attrs(text, d.start(1), d.end(1), src)
         if "name" not in head or "type" not in head:
             raise DataError(f"{src.where(d.start())}: a <Data> without name or type")
         name, kind = head["name"][0], head["type"][0]
         if d.group(2) == "/" and kind in ROOTS:  # no values: every element at its defaults (identity)
             size = head.get("size", ("1",))[0]
-            for k in range(int(size) if size.isdigit() else 1):
-                out[f"{name}[{k}]"] = _datum(src, f"{name}[{k}]", kind, d.start(), {}, d.end(), "")
-        if d.group(2) == "/" or OLD_TYPES.get(kind, kind) not in KNOWN_TYPES:
-            continue  # no values (a point without values is no taught target), or a type with no pose
-        stop = _DATA_END.search(text, d.end())
+            for k in range(int(size) if size.isdigit() and len(size) < 6 else 1):
+                _add(out, _datum(src, f"{name}[{k}]", kind, d.start(), {}, d.end(), ""))
+        if d.group(2) == "/":
+            continue  # no values (a point without values is no taught target)
+        stop = _closing(text, d.end(), _DATA_END, _DATA)
         if stop is None:
-            raise DataError(f"{src.where(d.start())}: <Data name=\"{name}\"> is not closed")
+            raise DataError(f"{src.where(d.start())}: <Data name=\"{name}\"> is not closed: no </Data> "
+                            "before the next <Data> or the end of the file")
+        if OLD_TYPES.get(kind, kind) not in KNOWN_TYPES:
+            continue  # a type with no pose
         for v in _VALUE.finditer(text, d.end(), stop.start()):
-            attrs = _attrs(text, v.start(1), v.end(1))
+            attrs = _attrs(text, v.start(1), v.end(1), src)
             if "key" not in attrs:
                 raise DataError(f"{src.where(v.start())}: a <Value> of {name} without key")
             anchor = attrs["key"][2] + 1  # an absent coordinate goes right after the one before it
             if v.group(2) != "/":
-                close = _VALUE_END.search(text, v.end(), stop.start())
+                close = _closing(text, v.end(), _VALUE_END, _VALUE, stop.start())
                 if close is None:
                     raise DataError(f"{src.where(v.start())}: <Value> of {name} is not closed")
-                anchor = _inner(text, v.end(), close.start(), attrs, anchor)
+                anchor = _inner(text, v.end(), close.start(), attrs, anchor, src)
             key = f"{name}[{attrs['key'][0]}]"
-            out[key] = _datum(src, key, kind, v.start(), attrs, anchor, attrs.get("fatherId", ("",))[0])
+            _add(out, _datum(src, key, kind, v.start(), attrs, anchor, attrs.get("fatherId", ("",))[0]))
     return out
 
 
-def _inner(text: str, start: int, end: int, attrs: dict, anchor: int) -> int:
+def _inner(text: str, start: int, end: int, attrs: dict, anchor: int, src: ProgramText) -> int:
     """Add the attributes of the elements inside a value (the older layouts: coordinates on an
     inner element) to ``attrs``; the anchor of an absent coordinate: right after the name of
     the element that holds the coordinates."""
     for inner in _INNER.finditer(text, start, end):
-        got = _attrs(text, inner.start(1), inner.end(1))
+        got = _attrs(text, inner.start(1), inner.end(1), src)
         if any(c in got for c in COORDS):
             anchor = inner.start(1)
         for k, val in got.items():
@@ -172,9 +210,12 @@ def _inner(text: str, start: int, end: int, attrs: dict, anchor: int) -> int:
 def _read_data_s6(src: ProgramText, text: str) -> dict[str, Datum]:
     """The pose and joint data of an s6.x .dtx (:mod:`robocal.programs.dialects.val3.s6`)."""
     out: dict[str, Datum] = {}
-    for element, name, start, end, body in s6.data_items(text):
+    for element, name, start, end, body, closed in s6.data_items(text):
+        if not closed:
+            raise DataError(f"{src.where(start)}: <{element} name=\"{name}\"> is not closed: no </{element}> "
+                            f"before the next <{element}> or the end of its section")
         if element in ROOTS and body == end:  # no values: at its defaults (identity)
-            out[f"{name}[0]"] = _datum(src, f"{name}[0]", element, start, {}, end, "")
+            _add(out, _datum(src, f"{name}[0]", element, start, {}, end, ""))
         if element not in s6.TYPES or body == end:
             continue
         father = ""
@@ -187,15 +228,15 @@ def _read_data_s6(src: ProgramText, text: str) -> dict[str, Datum]:
         tag = s6.VALUE_ELEMENT[element]
         value, close = re.compile(rf"<{tag}\b([^>]*?)(/?)>"), re.compile(rf"</{tag}\s*>")
         for v in value.finditer(text, body, end):
-            attrs = _attrs(text, v.start(1), v.end(1))
+            attrs = _attrs(text, v.start(1), v.end(1), src)
             if "index" not in attrs:
                 raise DataError(f"{src.where(v.start())}: a <{tag}> of {name} without index")
             anchor = attrs["index"][2] + 1
             if v.group(2) != "/":
-                stop = close.search(text, v.end(), end)
+                stop = _closing(text, v.end(), close, value, end)
                 if stop is None:
                     raise DataError(f"{src.where(v.start())}: <{tag}> of {name} is not closed")
-                anchor = _inner(text, v.end(), stop.start(), attrs, anchor)
+                anchor = _inner(text, v.end(), stop.start(), attrs, anchor, src)
             key = f"{name}[{attrs['index'][0]}]"
             if element != "joint" and not any(c in attrs for c in COORDS):
                 # s6 keeps the coordinates on an inner element (<tpValue .../>): without one there
@@ -203,8 +244,15 @@ def _read_data_s6(src: ProgramText, text: str) -> dict[str, Datum]:
                 raise DataError(f"{src.where(v.start())}: <{tag}> of {key} holds no coordinates element "
                                 "(such as <tpValue x=... />): save the data again with the controller "
                                 "or Staubli Robotics Suite")
-            out[key] = _datum(src, key, s6.TYPES[element], v.start(), attrs, anchor, father)
+            _add(out, _datum(src, key, s6.TYPES[element], v.start(), attrs, anchor, father))
     return out
+
+
+def _not_a_number(value: str) -> str:
+    """Why an attribute's value is no coordinate or joint value ("" when it is one)."""
+    if not NUMBER_RE.fullmatch(value):
+        return "not a number"
+    return "" if math.isfinite(float(value)) else "not a finite number"
 
 
 def _datum(src: ProgramText, key: str, kind: str, offset: int, attrs: dict, after: int, father: str) -> Datum:
@@ -217,8 +265,8 @@ def _datum(src: ProgramText, key: str, kind: str, offset: int, attrs: dict, afte
         for c in COORDS:
             if c in attrs:
                 val, a, b = attrs[c]
-                if not NUMBER_RE.fullmatch(val):
-                    raise DataError(f"{src.where(a)}: {key}: {c}=\"{val}\" is not a number")
+                if _not_a_number(val):
+                    raise DataError(f"{src.where(a)}: {key}: {c}=\"{val}\" is {_not_a_number(val)}")
                 datum.numbers.append(Number(a, b, val))
                 after = b + 1
             else:
@@ -230,9 +278,10 @@ def _datum(src: ProgramText, key: str, kind: str, offset: int, attrs: dict, afte
             datum.config.append(None if got is None or got[0] not in values else got)
     if kind == "jointRx":
         joints = [attrs.get(f"j{i}", ("0",))[0] for i in range(1, 7)]
-        bad = next((f"j{i}=\"{v}\"" for i, v in enumerate(joints, 1) if not NUMBER_RE.fullmatch(v)), None)
+        bad = next((f"j{i}=\"{v}\" is {why}" for i, v in enumerate(joints, 1) if (why := _not_a_number(v))),
+                   None)
         if bad:
-            raise DataError(f"{src.where(offset)}: {key}: {bad} is not a number")
+            raise DataError(f"{src.where(offset)}: {key}: {bad}")
         datum.joints = np.deg2rad([float(v) for v in joints])
     return datum
 
@@ -595,8 +644,9 @@ def _value_type(expr: str, r: _Routine, ctx: _Context) -> str:
 def _written(code: str) -> dict[str, tuple[str, int]]:
     """Names the code writes at run time (assignment, a field, sioGet) -> (how, offset in the code)."""
     out = {}
-    for m in re.finditer(r"(?<![\w.])([A-Za-z_]\w*)\s*(?:\[[^\]]*\])?\s*((?:\.\w+)*)\s*=(?!=)", code):
-        how = f"{m.group(1)}{m.group(2)} is assigned in the program at run time"
+    for m in _ASSIGNED.finditer(code):
+        fields = "".join(m.group(2).split())
+        how = f"{m.group(1)}{fields} is assigned in the program at run time"
         out.setdefault(m.group(1), (how, m.start()))
     for m in re.finditer(r"\bsioGet\s*\(\s*[^,]+,\s*([A-Za-z_]\w*)", code):
         out.setdefault(m.group(1), (f"{m.group(1)} is received at run time (sioGet)", m.start()))
@@ -634,13 +684,13 @@ def _points(expr: str, r: _Routine, ctx: _Context, depth: int = 0) -> tuple[list
         if call:
             return [], f"computed at run time by {call.group(1)}()"
         return [], "an expression this filter does not follow"
-    name, index = m.group(1), m.group(2)
+    name, index = m.group(1), None if m.group(2) is None else m.group(2).strip()
     if name in r.params and index is None and name not in written:
         return _through_calls(name, r, ctx, depth)
     if name in kinds:
         what = "parameter" if name in r.params else "local"
         if name not in r.set_at:
-            at = re.search(rf"(?<![\w.]){name}\s*(?:\[[^\]]*\])?\s*(?:\.\w+)*\s*=(?!=)", r.code)
+            at = re.search(rf"(?<![\w.]){name}(?:\s*\[[^\]]*\])?(?:\s*\.\w+)*\s*=(?!=)", r.code)
             r.set_at[name] = f" ({r.src.where(r.base + at.start())})" if at else ""
         where = r.set_at[name]
         return [], f"{name} is a {what} of {r.name} ({kinds[name] or 'no type'}): set at run time{where}"
@@ -694,7 +744,7 @@ def _constant(expr: str, r: _Routine, ctx: _Context, what: str) -> str:
     m = _ITEM.match(expr)
     if not m:
         return f"a {what} computed at run time ({text})"
-    name, index = m.group(1), m.group(2)
+    name, index = m.group(1), None if m.group(2) is None else m.group(2).strip()
     if index is not None and not re.fullmatch(r"\d+", index):
         return f"a {what} chosen at run time ({text})"
     if name in r.params:
@@ -745,9 +795,10 @@ def _tool(expr: str, data: dict, kinds: dict, written: dict, tools: dict, where:
         return "", f"the tool {name} is a local or parameter: set at run time"
     if name in written:
         return "", f"the tool {name} is changed at run time: {written[name]}"
-    if m.group(2) is not None and not re.fullmatch(r"\d+", m.group(2)):
-        return "", f"the tool {name}[{m.group(2)}] is chosen at run time"
-    key = f"{name}[{int(m.group(2) or 0)}]"
+    index = None if m.group(2) is None else m.group(2).strip()
+    if index is not None and not re.fullmatch(r"\d+", index):
+        return "", f"the tool {name}[{index}] is chosen at run time"
+    key = f"{name}[{int(index or 0)}]"
     if key == FLANGE or name == "flange":
         return FLANGE, ""
     moved = _frame_written(key, data, written, "tool")

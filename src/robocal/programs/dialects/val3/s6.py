@@ -60,10 +60,11 @@ def decoded(code: str) -> str:
     return _ENTITY.sub(one, code)
 
 
-def data_items(text: str) -> Iterator[tuple[str, str, int, int, int]]:
-    """``(element, name, start, end, body_start)`` of every datum of an s6 .dtx: the datum's
-    element name (``point``, ``tool``, ``num`` ...: its section's), its name, its span and where
-    its body starts (``end == body_start``: an empty element)."""
+def data_items(text: str) -> Iterator[tuple[str, str, int, int, int, bool]]:
+    """``(element, name, start, end, body_start, closed)`` of every datum of an s6 .dtx: the
+    datum's element name (``point``, ``tool``, ``num`` ...: its section's), its name, its span and
+    where its body starts (``end == body_start``: an empty element); ``closed`` False: its closing
+    tag is missing before the next datum of its section (its span is its opening tag)."""
     for sec in _SECTION.finditer(text):
         if sec.group(2) == "/":
             continue
@@ -75,11 +76,13 @@ def data_items(text: str) -> Iterator[tuple[str, str, int, int, int]]:
         pos = sec.end()
         while (m := item.search(text, pos, end)) is not None:
             name = re.search(r"\bname\s*=\s*\"([^\"]*)\"", m.group(1))
-            stop_item = m.end() if m.group(2) == "/" else (close.search(text, m.end(), end) or m).start()
-            if m.group(2) != "/" and stop_item == m.start():
-                stop_item = m.end()
+            following = item.search(text, m.end(), end)
+            found = None if m.group(2) == "/" else close.search(text, m.end(), following.start() if following
+                                                                else end)
+            stop_item = m.end() if found is None else found.start()
+            closed = m.group(2) == "/" or found is not None
             if name:
-                yield element, name.group(1), m.start(), stop_item, m.end()
+                yield element, name.group(1), m.start(), stop_item, m.end(), closed
             pos = max(stop_item, m.end())
 
 
