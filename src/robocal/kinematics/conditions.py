@@ -62,7 +62,18 @@ class Conditions:
         return Conditions(self.approach, self.travel)
 
     def rows(self, index) -> Conditions:
-        """The conditions of the rows ``index`` (a slice, indices or a mask) of every field given."""
+        """The conditions of the rows ``index`` (a slice, indices or a mask) of every field given.
+
+        Parameters
+        ----------
+        index : slice, array_like of int or bool
+            The rows to keep.
+
+        Returns
+        -------
+        Conditions
+            The selected rows' conditions.
+        """
         return Conditions(**{f.name: None if getattr(self, f.name) is None else
                              np.asarray(getattr(self, f.name))[index] for f in fields(self)})
 
