@@ -76,6 +76,15 @@ class EvaluationResult(dict):
     ``write()``. ``names`` labels the model, the data and the frame's data in the summary and the
     JSON (file names or catalog names; None: unnamed).
 
+    Parameters
+    ----------
+    stats : dict
+        The statistics (mm) and the warnings.
+    names : dict, optional
+        ``{"model": ..., "data": ..., "frame_from": ...}``: the names the summary and the JSON show.
+    fit_frame : bool, default False
+        The measurement frame was fitted on the data evaluated.
+
     Examples
     --------
     >>> import robocal as rc
@@ -105,7 +114,13 @@ class EvaluationResult(dict):
 
     def summary(self) -> str:
         """One line: the kind of errors, of which model on which data, the statistics (mm; and of
-        the rotation errors, deg, for 6-D rows)."""
+        the rotation errors, deg, for 6-D rows).
+
+        Returns
+        -------
+        str
+            One line.
+        """
         stats = self.statistics
         rotation = self.get("rotation_deg")
         turns = "" if rotation is None else "; rotation " + ", ".join(
@@ -117,7 +132,13 @@ class EvaluationResult(dict):
 
     def to_dict(self) -> dict:
         """The evaluation JSON: the names, the statistics, each row's error (mm), the consistency
-        and the warnings."""
+        and the warnings.
+
+        Returns
+        -------
+        dict
+            The evaluation (JSON-ready).
+        """
         out = {"model": self.names.get("model"), "data": self.names.get("data"), "kind": self["kind"],
                "n_poses": self["n_poses"], "fit_frame": bool(self.fit_frame),
                "frame_from": self.names.get("frame_from"), "units": "mm", "evaluation": self.statistics,
@@ -128,7 +149,18 @@ class EvaluationResult(dict):
         return out
 
     def write(self, json_path=None) -> list[str]:
-        """Write `to_dict` as JSON to ``json_path`` (atomically); the paths written."""
+        """Write `to_dict` as JSON to ``json_path`` (atomically); the paths written.
+
+        Parameters
+        ----------
+        json_path : str or pathlib.Path, optional
+            The JSON file (None: nothing written).
+
+        Returns
+        -------
+        list of str
+            The paths written.
+        """
         if json_path is None:
             return []
         out = self.to_dict()  # the per-row errors on one line by json's C encoder (indent: pure Python)

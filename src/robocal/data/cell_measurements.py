@@ -230,6 +230,21 @@ class CellMeasurements:
         The file it was read from ("" when built from arrays).
     source : str
         The provenance text (the file's first ``#`` comment).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> mount = np.eye(4)
+    >>> mount[0, 3] = 1.5  # the table 1.5 m in front of the arm
+    >>> nests = [[0.2, 0, 0], [0, 0.2, 0], [-0.15, -0.15, 0]]  # m, on the plate
+    >>> table = rc.Positioner.from_catalog("abb_irbp_a250", "STN1", mount, nests=nests)
+    >>> cell = rc.Cell({"arm": rc.Robot.from_catalog("abb_irb2600")}, {"STN1": table})
+    >>> sim = rc.simulate_cell(cell, 30, 20, seed=1)
+    >>> data = sim.data  # a CellMeasurements
+    >>> back = rc.CellMeasurements.parse(data.to_csv(), cell)  # the cell's CSV, read back
+    >>> sorted(back.bodies), bool(np.allclose(back.bodies["STN1"].points, data.bodies["STN1"].points))
+    (['STN1', 'arm'], True)
     """
 
     bodies: Mapping[str, Measurements]

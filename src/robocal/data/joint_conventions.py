@@ -75,7 +75,18 @@ def fanuc_decoupled(q: np.ndarray) -> np.ndarray:
 
 def fanuc_decoupled_data(data):
     """Measurements whose joints are a FANUC controller's -> the same with the catalog's joints
-    (the approach directions and travel re-derived from the row order)."""
+    (the approach directions and travel re-derived from the row order).
+
+    Parameters
+    ----------
+    data : Measurements
+        Rows whose joints are in the FANUC controller's convention (J3 counted from the horizontal).
+
+    Returns
+    -------
+    Measurements
+        The same rows with the catalog's joints; the input is not changed.
+    """
     q = fanuc_decoupled(data.joints)
     return replace(data, joints=q, approach=approach_from_order(q, data.pose_id),
                    travel=travel_from_order(q, data.pose_id))

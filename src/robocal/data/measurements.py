@@ -196,6 +196,14 @@ class Measurements:
     instrument : str
         The instrument that took the rows (``tracker``, ``mocap``, ``camera``;
         `robocal.data.instruments`); "" when the data do not say.
+    payload : numpy.ndarray, shape (N, 4), optional
+        Payload of each row: kg, then the centre of mass x, y, z (m) in the flange frame.
+    temperature : numpy.ndarray, shape (N,), optional
+        Temperature of each row (deg C).
+    linear : numpy.ndarray of bool, shape (n,), optional
+        Joints in length units (m: prismatic); None: every joint an angle.
+    external : int
+        The first ``external`` joints are external axes (``e1``..: a track carrying the arm).
 
     Examples
     --------

@@ -97,6 +97,20 @@ class Record:
         The model the record is about, as model YAML text (docs/model-yaml.md).
     summary : dict
         The figures (mm); of a check, its verdict and p-value.
+    parameters : list of dict
+        Rows ``{name, unit, estimate, sigma}`` (mm, deg).
+    uncertainty : dict or None
+        What a later check needs of a calibration (its covariance in SI, the noise); None for a check.
+    data : list of dict
+        The input files ``{file, role, sha256}``.
+    parent : int or None
+        The record a derived calibration (offsets only) or a check started from.
+    date : str
+        UTC, ISO 8601 with the offset; default now.
+    robocal_version : str
+        The version that made the record.
+    id : int or None
+        Set once recorded.
 
     Examples
     --------
@@ -132,7 +146,13 @@ class Record:
     def timeline_entry(self) -> dict:
         """This record as one entry of ``robocal history --json`` (docs/reference/history-json.md):
         ``held_out_rms`` (mm) of a calibration with validation or of an evaluation, else null;
-        ``verdict`` and ``p_value`` of a check, else null; ``rms`` the record's own figure (mm)."""
+        ``verdict`` and ``p_value`` of a check, else null; ``rms`` the record's own figure (mm).
+
+        Returns
+        -------
+        dict
+            The timeline entry (JSON-ready).
+        """
         s = self.summary
         held_out = s.get("held_out_rms") if self.kind == "calibration" else \
             s.get("rms") if self.kind == "evaluation" else None
@@ -463,7 +483,18 @@ class History:
 
     # -- records -----------------------------------------------------------------------------
     def record(self, entry: Record) -> int:
-        """Store ``entry`` (its ``id`` is set) and return its id."""
+        """Store ``entry`` (its ``id`` is set) and return its id.
+
+        Parameters
+        ----------
+        entry : Record
+            The record to store.
+
+        Returns
+        -------
+        int
+            Its id.
+        """
         check_robot_id(entry.robot_id)
         if entry.kind not in KINDS:
             raise DataError(f"a history record is one of {KINDS}, not {entry.kind!r}")
@@ -489,7 +520,27 @@ class History:
         cause), or, when a list ``skipped`` is given, left out with a line appended there. On
         SQLite the rows found through the index are counted in the table itself too (a scan of the
         robot id column); when none is found or the counts differ, SQLite's integrity check runs
-        and the history is reported damaged (a scrambled index hides records that are there)."""
+        and the history is reported damaged (a scrambled index hides records that are there).
+
+        Parameters
+        ----------
+        robot_id : str
+            The robot.
+        kind : str, optional
+            Only records of this kind (``calibration``, ``check``...).
+        skipped : list of str, optional
+            Receives one line a record left out; without it an unreadable record raises.
+
+        Returns
+        -------
+        list of Record
+            In recording order.
+
+        Raises
+        ------
+        DataError
+            An unreadable record (without ``skipped``).
+        """
         sql = ("SELECT id, robot_id, kind, recorded_at, robocal_version, model_yaml, model_sha256, summary, "
                "parameters, uncertainty, data, parent_id FROM records WHERE robot_id = ?")
         params: tuple = (check_robot_id(robot_id),)
@@ -518,7 +569,25 @@ class History:
     def find_calibration(self, robot_id: str, model_yaml: str | None = None) -> Record | None:
         """The latest calibration of ``robot_id`` (whose model is ``model_yaml`` when given), None
         when there is none; DataError when any calibration record of the robot is unreadable
-        (it could be the one asked for: an older one would be a wrong answer that looks right)."""
+        (it could be the one asked for: an older one would be a wrong answer that looks right).
+
+        Parameters
+        ----------
+        robot_id : str
+            The robot.
+        model_yaml : str, optional
+            Only a calibration of this model.
+
+        Returns
+        -------
+        Record or None
+            The latest calibration.
+
+        Raises
+        ------
+        DataError
+            A calibration record of the robot is unreadable.
+        """
         found = self.entries(robot_id, "calibration")
         if model_yaml is not None:
             digest = sha256_text(model_yaml)
@@ -529,7 +598,25 @@ class History:
 
     def calibration(self, robot_id: str, model_yaml: str | None = None) -> Record:
         """The latest calibration of ``robot_id`` (whose model is ``model_yaml`` when given);
-        DataError naming the robot id when there is none."""
+        DataError naming the robot id when there is none.
+
+        Parameters
+        ----------
+        robot_id : str
+            The robot.
+        model_yaml : str, optional
+            Only a calibration of this model.
+
+        Returns
+        -------
+        Record
+            The latest calibration.
+
+        Raises
+        ------
+        DataError
+            There is none.
+        """
         found = self.find_calibration(robot_id, model_yaml)
         if found is not None:
             return found

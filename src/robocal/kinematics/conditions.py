@@ -48,6 +48,14 @@ class Conditions:
         The payload carried: mass (kg), then its centre of mass x, y, z in the flange frame (m).
     temperature : numpy.ndarray, shape (N,), optional
         The arm's temperature, deg C.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> conditions = rc.Conditions(temperature=np.array([20.0, 25.0]))  # deg C, one a row
+    >>> conditions.rows([1]).temperature
+    array([25.])
     """
 
     approach: np.ndarray | None = None

@@ -1386,7 +1386,32 @@ def load_model(spec: str, tip: str | None = None) -> Robot:
     """A robot from a model YAML path (or a cell file: a robot on a track; a work cell file with one
     arm and no positioner: that arm, placed in the world), a URDF (a serial chain:
     `robocal.kinematics.urdf_read`, ending at link ``tip``, default the deepest leaf) or a catalog
-    name (what every ``--robot`` takes). A ``tip`` for anything but a URDF is refused (ModelError)."""
+    name (what every ``--robot`` takes). A ``tip`` for anything but a URDF is refused (ModelError).
+
+    Parameters
+    ----------
+    spec : str
+        A model YAML or cell file, a URDF, or a catalog name (``robocal robots`` lists them).
+    tip : str, optional
+        A URDF's last link.
+
+    Returns
+    -------
+    Robot
+        The model.
+
+    Raises
+    ------
+    ModelError
+        A model that cannot be read, a xacro file, a ``tip`` for anything but a URDF.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> robot = rc.load_model("ur5e")  # a catalog name; a YAML or URDF path reads the file
+    >>> robot.name, robot.n_joints
+    ('ur5e', 6)
+    """
     path = Path(spec)
     if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (path.is_file() and _looks_like_xml(path)):
         if path.suffix.lower() == ".xacro":

@@ -87,6 +87,16 @@ def model_fingerprint(robot: Robot) -> str:
     """The `FINGERPRINT_HEX` hex digits naming ``robot``'s parameters (see the module
     docstring).
 
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    str
+        The fingerprint (hex digits).
+
     Examples
     --------
     >>> import robocal as rc
@@ -120,6 +130,16 @@ def marker_text(robot: Robot) -> str:
 def find_marker(text: str) -> Marker | None:
     """The first marker in ``text``, else None.
 
+    Parameters
+    ----------
+    text : str
+        A file's text.
+
+    Returns
+    -------
+    Marker or None
+        The version and model fingerprint it names.
+
     Examples
     --------
     >>> from robocal.trust.output_marker import find_marker
@@ -136,6 +156,27 @@ def check_unmarked(text: str, where: str, action: str, force: bool = False) -> M
     """Refuse (DataError) a file that carries a marker: ``action`` ('filtered' or 'compensated') was
     already done to it by the run the marker names; ``force`` lets it through (the marker is
     returned, for a warning).
+
+    Parameters
+    ----------
+    text : str
+        The file's text.
+    where : str
+        Its name, for the message.
+    action : {"filtered", "compensated"}
+        What the caller is about to do.
+    force : bool, default False
+        Let a marked file through.
+
+    Returns
+    -------
+    Marker or None
+        The marker found (only with ``force``), None for an unmarked file.
+
+    Raises
+    ------
+    DataError
+        A marked file without ``force``.
 
     Examples
     --------
@@ -214,6 +255,20 @@ def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot) -> bytes:
     """A filtered program's bytes with the marker of ``robot`` (the calibrated model) added in
     ``dialect``'s comment syntax (see the module docstring).
 
+    Parameters
+    ----------
+    dialect : ProgramMarker
+        The program language (its comment syntax).
+    data : bytes
+        The program.
+    robot : Robot
+        The calibrated model.
+
+    Returns
+    -------
+    bytes
+        The marked program.
+
     Raises
     ------
     DataError
@@ -235,6 +290,18 @@ def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot) -> bytes:
 
 def mark_csv(text: str, robot: Robot) -> str:
     """A compensated targets CSV with the marker of ``robot`` as a ``#`` first line.
+
+    Parameters
+    ----------
+    text : str
+        The CSV text.
+    robot : Robot
+        The calibrated model.
+
+    Returns
+    -------
+    str
+        The marked text.
 
     Examples
     --------

@@ -106,6 +106,8 @@ class ImportedCalibration:
         The format read: "calibration.conf" or "ur_calibration YAML".
     notes : list of str
         What the user should know about the reading (one sentence each).
+    warnings : list of str
+        Always empty: what matters is in ``notes`` (the result protocol).
 
     Examples
     --------
@@ -123,16 +125,39 @@ class ImportedCalibration:
     warnings: list[str] = field(default_factory=list)  # what matters is said in ``notes``: none
 
     def summary(self) -> str:
-        """The format read and the notes, one line each."""
+        """The format read and the notes, one line each.
+
+        Returns
+        -------
+        str
+            The summary, several lines.
+        """
         return "\n".join([f"{self.robot.name}: {self.kind} read (exact to its own composition)",
                           *(f"note: {note}" for note in self.notes)])
 
     def to_dict(self) -> dict:
-        """The format read, the notes and the model YAML."""
+        """The format read, the notes and the model YAML.
+
+        Returns
+        -------
+        dict
+            The format, the notes and the model YAML (JSON-ready).
+        """
         return {"kind": self.kind, "notes": list(self.notes), "model_yaml": dump_model(self.robot)}
 
     def write(self, output) -> list[str]:
-        """Write the model YAML (atomically); the paths written."""
+        """Write the model YAML (atomically); the paths written.
+
+        Parameters
+        ----------
+        output : str or pathlib.Path
+            The model YAML.
+
+        Returns
+        -------
+        list of str
+            The paths written.
+        """
         write_all({output: dump_model(self.robot)})
         return [str(output)]
 
