@@ -71,7 +71,8 @@ MODULE_MEMBERS = {
                                     "mark_csv", "Marker"],
     "robocal.data.joint_conventions": None,  # all its public members
 }
-SEE_ALSO = re.compile(r'<details class="see-also" open>\s*<summary>See Also</summary>\s*(.*?)</details>', re.S)
+SEE_ALSO = re.compile(r'<details class="see-also" open>\s*<summary>See Also</summary>\s*(.*?)</details>',
+                      re.S)
 SEE_ALSO_ENTRY = re.compile(r"^\s*([\w.]+(?:\s*,\s*[\w.]+)*)\s*(?::\s*(.*))?$")
 
 
@@ -212,7 +213,8 @@ def see_also_html(block: str, page, files) -> str:
         match = SEE_ALSO_ENTRY.match(re.sub(r"</?code>", "", line))
         if match is None or not all(n.strip() in _lookup() for n in match.group(1).split(",")):
             if last is None:
-                raise ValueError(f"See Also on {page.file.src_uri}: {line.strip()!r} names no page of the API reference")
+                raise ValueError(f"See Also on {page.file.src_uri}: {line.strip()!r} names no page of the "
+                                 "API reference")
             items[-1] += " " + line.strip()  # a description continued on the next line
             continue
         links = []
@@ -220,7 +222,8 @@ def see_also_html(block: str, page, files) -> str:
             where, anchor = _lookup()[entry]
             url = get_relative_url(files.get_file_from_path(f"{API_DIR}/{where}.md").url, page.url)
             links.append(f'<a href="{url}{"#" + anchor if anchor else ""}"><code>{entry}</code></a>')
-        items.append(", ".join(links) + (f": {match.group(2)}" if match.group(2) else ""))
+        described = line.split(":", 1)[1].strip() if match.group(2) else ""  # its markup kept
+        items.append(", ".join(links) + (f": {described}" if described else ""))
         last = entry
     return '<details class="see-also" open><summary>See Also</summary><ul>' + "".join(
         f"<li>{item}</li>" for item in items) + "</ul></details>"

@@ -27,7 +27,8 @@ EXAMPLES = re.compile(r"^\s*Examples\n\s*-{8,}\n", re.M)
 
 def section(doc: str, title: str) -> str | None:
     """The text of numpydoc section ``title`` of ``doc``, None when it has none."""
-    match = re.search(rf"^{title}\n-{{{len(title)}}}\n(.*?)(?=^[A-Z][A-Za-z ]+\n-{{3,}}\n|\Z)", doc, re.M | re.S)
+    following = r"(?=^[A-Z][A-Za-z ]+\n-{3,}\n|\Z)"  # the next section's title, or the end
+    match = re.search(rf"^{title}\n-{{{len(title)}}}\n(.*?){following}", doc, re.M | re.S)
     return match.group(1) if match else None
 
 
@@ -87,13 +88,15 @@ def test_parameters_and_returns_documented(name, function):
     signature = inspect.signature(function)
     params = [p for p in signature.parameters if p not in ("self", "cls")]
     if params:  # a class may document its constructor's parameters as its Attributes (a dataclass)
-        documented = section(doc, "Parameters") or (inspect.isclass(function) and section(doc, "Attributes")) or ""
+        documented = (section(doc, "Parameters") or (inspect.isclass(function) and section(doc, "Attributes"))
+                      or "")
         assert documented, f"{name}: no Parameters section"
         names = {n.strip().lstrip("*") for line in documented.splitlines() if line and not line[0].isspace()
                  for n in line.split(" : ")[0].split(",")}
         missing = [p for p in params if p not in names]
         assert not missing, f"{name}: parameters {missing} not in its Parameters section"
-    if not inspect.isclass(function) and signature.return_annotation not in (inspect.Signature.empty, None, "None"):
+    returns = signature.return_annotation not in (inspect.Signature.empty, None, "None")
+    if returns and not inspect.isclass(function):
         assert section(doc, "Returns") or section(doc, "Yields"), f"{name}: no Returns section"
 
 

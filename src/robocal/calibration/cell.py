@@ -159,6 +159,12 @@ class CellCalibration:
     provenance : dict
         When and from which files the calibration was made (written to the JSON).
 
+    See Also
+    --------
+    rc.calibrate : The calibration that returns it (for a cell).
+    rc.Cell : The cells it holds (nominal and calibrated).
+    rc.CalibrationResult : Each body's result.
+
     Examples
     --------
     >>> import numpy as np

@@ -85,6 +85,10 @@ class EvaluationResult(dict):
     fit_frame : bool, default False
         The measurement frame was fitted on the data evaluated.
 
+    See Also
+    --------
+    rc.evaluate : The evaluation that returns it.
+
     Examples
     --------
     >>> import robocal as rc
@@ -233,6 +237,12 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     ResourceError
         The machine lacks the memory the evaluation needs (refused before it starts, naming how
         much it needs: `robocal.core.resources.evaluation_bytes`).
+
+    See Also
+    --------
+    robocal.calibration.evaluation.EvaluationResult : What it returns.
+    rc.calibrate : Calibrate, with held-out data (``validation``).
+    robocal.history.check.check_calibration : Whether a calibration still holds.
 
     Examples
     --------

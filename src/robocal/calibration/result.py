@@ -151,6 +151,13 @@ class CalibrationResult(_BeforeAfter):
     held_out : HeldOut or None
         The validation files judged against the prediction (`robocal.trust.held_out`).
 
+    See Also
+    --------
+    rc.calibrate : The calibration that returns it.
+    rc.evaluate : Evaluate the calibrated model on other data.
+    robocal.report.html.write_report : Its HTML report.
+    robocal.history.History : Record it in the robot's history.
+
     Examples
     --------
     >>> import numpy as np

@@ -63,6 +63,10 @@ class CellCampaignResult:
     warnings : list of str
         What limits the plan, per body.
 
+    See Also
+    --------
+    robocal.campaign.plan_cell : The planner that returns it.
+
     Examples
     --------
     >>> import numpy as np
@@ -377,6 +381,12 @@ def plan_cell(cell: Cell, arm_poses: dict[str, int], table_poses: dict[str, int]
     DataError
         A body not in the cell, a positioner with neither declared nests nor ``nests``, or what
         `robocal.plan_poses` / `plan_table` refuse.
+
+    See Also
+    --------
+    robocal.campaign.CellCampaignResult : What it returns.
+    rc.plan_poses : One robot's campaign.
+    rc.Cell : The cell planned.
 
     Examples
     --------

@@ -87,6 +87,10 @@ class CurvePoint:
     random_median_mm : float
         The same for random sets of ``n`` poses (median), mm.
 
+    See Also
+    --------
+    rc.CampaignResult : Holds the curve.
+
     Examples
     --------
     >>> import robocal as rc
@@ -157,6 +161,12 @@ class CampaignResult:
         What limits the plan (e.g. an SMR on the flange axis).
     criterion_value : float
         The value of the design criterion ``criterion`` at the chosen poses.
+
+    See Also
+    --------
+    rc.plan_poses : The planner that returns it.
+    robocal.campaign.CurvePoint : A point of its accuracy curve.
+    robocal.campaign.read_planned : Read a planned file back.
 
     Examples
     --------
@@ -507,6 +517,14 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     DataError
         Invalid counts, kind, criterion or shapes, or no candidate left after the constraints
         (the message names the constraint that removed the last ones).
+
+    See Also
+    --------
+    rc.CampaignResult : What it returns.
+    rc.Constraints : The limits the poses keep.
+    rc.Tracker : The tracker's place and line of sight.
+    robocal.campaign.plan_cell : A work cell's campaign.
+    robocal.campaign.read_candidates : Candidate poses from a file.
 
     Examples
     --------

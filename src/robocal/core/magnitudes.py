@@ -28,6 +28,11 @@ scales with the robot:
   (0.785 = pi/4 typed where 45 belongs) for a value typed once; a set of targets' angles that
   all lie within pi 'degrees' (`check_degree_set`); angles in radians beyond
   `MAX_RADIANS` are degrees.
+
+See Also
+--------
+rc.UnitError : What a check raises.
+rc.Measurements : Read with these checks.
 """
 
 from __future__ import annotations

@@ -231,6 +231,12 @@ class CellMeasurements:
     source : str
         The provenance text (the file's first ``#`` comment).
 
+    See Also
+    --------
+    rc.Measurements : One body's measurements.
+    rc.Cell : The cell they measure.
+    rc.simulate_cell : Simulated measurements of a cell.
+
     Examples
     --------
     >>> import numpy as np

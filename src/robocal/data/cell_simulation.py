@@ -193,6 +193,13 @@ def simulate_cell(cell: Cell, n_poses: int = 40, table_poses: int = 30, *, truth
     -------
     CellSimulation
 
+    See Also
+    --------
+    rc.Cell : The cell simulated.
+    rc.CellMeasurements : The simulated data.
+    rc.simulate_tracker : One robot's campaign.
+    rc.CellCalibration : The calibration of the simulated data.
+
     Examples
     --------
     >>> import numpy as np

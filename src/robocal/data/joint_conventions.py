@@ -5,6 +5,11 @@ controller shows, logs and takes in a TP program is ``J3 + J23_FACTOR * J2`` of 
 joints (ROS-Industrial fanuc_driver: ``J3_out = J3_in + J23_factor * J2_in``, J23_factor 1 for its
 arms). A joint log from a FANUC controller is read with `fanuc_decoupled` (CLI
 ``--fanuc-j2j3-coupled``); robocal's ``--fanuc`` campaign programs write `fanuc_coupled`.
+
+See Also
+--------
+rc.Measurements : Rows whose joints it converts.
+rc.filter_program : Filters FANUC programs in the controller's convention.
 """
 
 from __future__ import annotations

@@ -205,6 +205,13 @@ class Measurements:
     external : int
         The first ``external`` joints are external axes (``e1``..: a track carrying the arm).
 
+    See Also
+    --------
+    rc.CellMeasurements : A work cell's measurements, per body.
+    rc.register : The tracker -> robot base frame of measurements.
+    rc.simulate_tracker : Simulated measurements of a known true robot.
+    rc.calibrate : Calibrate a robot with them.
+
     Examples
     --------
     >>> import numpy as np

@@ -115,6 +115,11 @@ class SimulationResult:
     warnings : list of str
         Always empty: a simulation measures what it is told (the result protocol).
 
+    See Also
+    --------
+    rc.simulate_tracker : The simulation that returns it.
+    rc.Measurements : Its ``data``.
+
     Examples
     --------
     >>> import robocal as rc
@@ -465,6 +470,13 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         Invalid counts, fractions, noise levels or shapes of the given arrays.
     UnreachableError
         Too few poses found inside ``workspace_box``, scale-bar placements or plane contacts.
+
+    See Also
+    --------
+    rc.simulate_markers : Markers on links seen by motion capture.
+    rc.simulate_camera : A camera's board poses.
+    rc.simulate_cell : A work cell's campaign.
+    robocal.data.simulate.SimulationResult : What it returns: the data, the truth, the noise.
 
     Examples
     --------

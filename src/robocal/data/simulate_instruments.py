@@ -83,6 +83,12 @@ def simulate_markers(robot, n_poses: int = 40, *, links=None, noise_mm: float = 
         ``info["frames"]``: ``capture`` (the robot's world in the capture frame) and
         ``markers`` (offsets ``(K, 3)`` m in their link frames).
 
+    See Also
+    --------
+    rc.simulate_tracker : A laser tracker's points or poses.
+    rc.simulate_camera : A camera's board poses.
+    robocal.data.simulate.SimulationResult : What it returns.
+
     Examples
     --------
     >>> import robocal as rc
@@ -151,6 +157,12 @@ def simulate_camera(robot, n_poses: int = 40, *, mount: str = "cell", noise_mm: 
     SimulationResult
         ``info["frames"]``: ``camera`` and ``board`` (the camera in the world and the board on the
         flange for 'cell'; the camera on the flange and the board in the world for 'flange').
+
+    See Also
+    --------
+    rc.simulate_tracker : A laser tracker's points or poses.
+    rc.simulate_markers : Markers on links seen by motion capture.
+    robocal.data.simulate.SimulationResult : What it returns.
 
     Examples
     --------

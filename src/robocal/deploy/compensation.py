@@ -98,6 +98,10 @@ class Compensation:
     source_model : Robot or None
         The calibrated model as given: its fingerprint marks the written file.
 
+    See Also
+    --------
+    rc.compensate : The compensation that returns it.
+
     Examples
     --------
     >>> import numpy as np
@@ -421,6 +425,13 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
         outside 0-7, or more than one of ``branch``, ``seeds`` and ``start``.
     ModelError
         Closed-form seeds asked of a nominal model without an OPW or UR form.
+
+    See Also
+    --------
+    robocal.deploy.compensation.Compensation : What it returns.
+    rc.filter_program : Compensate a robot program.
+    rc.ik.solve_all : Every inverse-kinematics solution of a model.
+    robocal.deploy.models.load_model_pair : The calibrated and nominal models, checked together.
 
     Examples
     --------

@@ -44,6 +44,10 @@ class ToolCalibration:
     warnings : list of str
         None today: poses that do not determine the TCP are refused.
 
+    See Also
+    --------
+    rc.identify_tcp : The identification that returns it.
+
     Examples
     --------
     >>> import numpy as np
@@ -172,6 +176,11 @@ def identify_tcp(calibrated: Robot, nominal: Robot, q, robot_base=None) -> ToolC
     DataError
         Fewer than 4 poses, orientations too alike to determine the TCP, or a pose far from the
         common point (a slipped tip), each named.
+
+    See Also
+    --------
+    rc.ToolCalibration : What it returns.
+    rc.compensate : Targets of a tool (its ``tool``).
 
     Examples
     --------

@@ -185,6 +185,10 @@ class CheckResult:
     warnings : list of str
         Always empty: the verdict says what matters (the result protocol).
 
+    See Also
+    --------
+    robocal.history.check.check_calibration : The check that returns it.
+
     Examples
     --------
     >>> import numpy as np
@@ -391,6 +395,13 @@ def check_calibration(robot, data, uncertainty: Uncertainty, *, fit_frame: bool 
     DataError
         Not point data, too few poses, uncertainty naming parameters the model lacks, a noise out
         of range, or residuals no calibration explains (without ``force``).
+
+    See Also
+    --------
+    robocal.history.check.CheckResult : What it returns.
+    robocal.history.History : Where calibrations and checks are recorded.
+    robocal.history.offsets.recalibrate_offsets : What to do when only offsets moved.
+    rc.evaluate : A model's errors on data, without a verdict.
 
     Examples
     --------

@@ -112,6 +112,10 @@ class Record:
     id : int or None
         Set once recorded.
 
+    See Also
+    --------
+    robocal.history.History : The store of records.
+
     Examples
     --------
     >>> import robocal as rc
@@ -221,6 +225,12 @@ class History:
         untouched), a damaged one (SQLite's integrity check), a read-only file or folder when
         writing, a schema version that is not a whole number or newer than this robocal, or a
         PostgreSQL URL without psycopg.
+
+    See Also
+    --------
+    robocal.history.Record : One entry.
+    robocal.history.check.check_calibration : Check a recorded calibration.
+    robocal.history.offsets.recalibrate_offsets : Recalibrate the joint offsets only.
 
     Examples
     --------

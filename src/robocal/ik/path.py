@@ -63,6 +63,10 @@ class PathResult:
     warnings : list of str
         None today: a waypoint without a solution is refused.
 
+    See Also
+    --------
+    rc.ik.plan_path : The planner that returns it.
+
     Examples
     --------
     >>> import numpy as np
@@ -151,6 +155,10 @@ def default_weights(robot: Robot, wrist=(1.0, 1.0, 1.0)) -> np.ndarray:
     -------
     numpy.ndarray, shape (n,)
         Weight per joint, per radian of travel (dimensionless, 1 + metres for the first three).
+
+    See Also
+    --------
+    rc.ik.plan_path : Uses them.
 
     Examples
     --------
@@ -273,6 +281,12 @@ def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | No
     DataError
         ``robot`` is an arm on a track (its path needs each pose's carriage position:
         `robocal.ik.track.plan`).
+
+    See Also
+    --------
+    rc.ik.PathResult : What it returns.
+    rc.ik.default_weights : The joints' default weights.
+    rc.ik.solve_all : The solutions it chooses among.
 
     Examples
     --------

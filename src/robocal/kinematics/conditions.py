@@ -49,6 +49,12 @@ class Conditions:
     temperature : numpy.ndarray, shape (N,), optional
         The arm's temperature, deg C.
 
+    See Also
+    --------
+    rc.Robot.fk : Forward kinematics at the rows' conditions.
+    rc.Robot.with_conditions : Fixed conditions for compensation and programs.
+    rc.Measurements : Rows with their payload and temperature columns.
+
     Examples
     --------
     >>> import numpy as np

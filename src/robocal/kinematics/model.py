@@ -227,6 +227,13 @@ class Robot:
         a constant angle); ``d_i`` is its zero and a ``scale{i}`` joint-error term its encoder
         scale.
 
+    See Also
+    --------
+    rc.load_model : A robot from a model YAML, a URDF or a catalog name.
+    rc.Cell : Arms and positioners placed in one world.
+    rc.Conditions : The payload and temperature of each row, for `fk` and `jacobian`.
+    rc.calibrate : Identify the robot's parameters from measurements.
+
     Examples
     --------
     >>> import numpy as np
@@ -1404,6 +1411,12 @@ def load_model(spec: str, tip: str | None = None) -> Robot:
     ------
     ModelError
         A model that cannot be read, a xacro file, a ``tip`` for anything but a URDF.
+
+    See Also
+    --------
+    rc.Robot : The model it returns (``Robot.from_catalog``, ``Robot.load``).
+    rc.load_cell : A work cell file.
+    robocal.kinematics.manufacturer.ur.import_calibration : A UR robot's factory calibration.
 
     Examples
     --------

@@ -125,6 +125,12 @@ class Positioner:
         names them: `robocal.programs.dialects.base.Dialect.positioner_axes`); default the columns'
         numbers (``e2`` -> 2).
 
+    See Also
+    --------
+    rc.Cell : The cell it belongs to.
+    robocal.kinematics.positioner.positioner_chain : Its chain from axis descriptions.
+    robocal.campaign.plan_cell : Plan the table angles of a cell's campaign.
+
     Examples
     --------
     >>> import numpy as np
@@ -300,6 +306,13 @@ class Cell:
         Arm name -> its flange frame tool0 ``(4, 4)`` as its model composes it (`flange`), where
         the arm's ``tool`` is not it: a model file's ``tool`` describes the measured SMR 0. An arm
         not named: its tool is its flange.
+
+    See Also
+    --------
+    rc.Positioner : A positioner of the cell.
+    rc.load_cell : A cell from its file.
+    rc.CellMeasurements : A cell's measurements, split per body.
+    rc.CellCalibration : The calibration of a cell.
 
     Notes
     -----
@@ -923,6 +936,11 @@ def load_cell(path) -> Cell:
         A malformed file, one line naming the file, the key and the cause: an unknown key, a
         positioner whose axes are zero or coaxial, a unit or body named twice, nests that are not
         3-vectors, positioner columns clashing with a track's e1...
+
+    See Also
+    --------
+    rc.Cell : The cell it returns.
+    rc.load_model : A robot (a cell of one arm is one too).
 
     Examples
     --------

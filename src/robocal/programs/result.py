@@ -69,6 +69,10 @@ class FilterResult:
     derived : frozenset of pathlib.Path
         Outputs made from the references, written beside the first output.
 
+    See Also
+    --------
+    rc.filter_program : The filter that returns it.
+
     Examples
     --------
     >>> from pathlib import Path

@@ -27,6 +27,11 @@ language's comment syntax (its ``programs/dialects/<language>/marker.py``):
 * Staubli VAL3: an XML comment ``<!-- ... -->`` on the line after the XML declaration of each
   file written (a file without a declaration carries none);
 * CSV: ``# ...`` as the first line (robocal's CSV readers skip leading ``#`` lines).
+
+See Also
+--------
+rc.filter_program : Marks the programs it writes.
+rc.compensate : Marks the targets it writes (``Compensation.write``).
 """
 
 from __future__ import annotations

@@ -109,6 +109,10 @@ class ImportedCalibration:
     warnings : list of str
         Always empty: what matters is in ``notes`` (the result protocol).
 
+    See Also
+    --------
+    robocal.kinematics.manufacturer.ur.import_calibration : The import that returns it.
+
     Examples
     --------
     `import_calibration` returns one (its example writes a file and reads it back); by hand:
@@ -514,6 +518,12 @@ def import_calibration(path, nominal_name: str, name: str | None = None) -> Impo
         An unreadable or malformed file (either format, a line or key named), a nominal that is
         not a catalog UR arm, or values farther from the nominal than a factory calibration.
 
+    See Also
+    --------
+    robocal.kinematics.manufacturer.ur.ImportedCalibration : What it returns.
+    robocal.kinematics.manufacturer.ur.to_ur_calibration : The way back, for the controller.
+    rc.load_model : Load the model it writes.
+
     Examples
     --------
     >>> import os, tempfile
@@ -592,6 +602,10 @@ def not_representable(robot: Robot) -> str | None:
     str or None
         One sentence naming the joint-error terms lost in the export; None when there are none.
 
+    See Also
+    --------
+    robocal.kinematics.manufacturer.ur.to_ur_calibration : Writes what it can hold.
+
     Examples
     --------
     >>> import robocal as rc
@@ -631,6 +645,11 @@ def to_ur_calibration(robot: Robot, nominal: Robot) -> str:
     ------
     ModelError
         A flange off joint 6's axis (the xacro cannot hold it).
+
+    See Also
+    --------
+    robocal.kinematics.manufacturer.ur.import_calibration : The way in.
+    robocal.kinematics.manufacturer.ur.not_representable : What the controller's format cannot hold.
 
     Examples
     --------
