@@ -21,6 +21,7 @@ from __future__ import annotations
 import html
 import importlib
 import inspect
+import json
 import re
 from functools import cache
 
@@ -174,9 +175,26 @@ def module_map() -> str:
     return "\n".join(out)
 
 
+def old_anchors(page, files) -> str:
+    """A script that sends a link to an anchor of the old one-page reference
+    (``api.md#robocal.kinematics.model.Robot.fk``) on to the object's page (and the method's anchor)."""
+    from mkdocs.utils import get_relative_url
+
+    where = {}
+    for name in names():
+        url = get_relative_url(files.get_file_from_path(page_uri(name)).url, page.url)
+        where[target(name)] = url
+        obj = resolve(name)
+        if inspect.isclass(obj):
+            where.update({f"{target(name)}.{m}": f"{url}#{target(name)}.{m}" for m in vars(obj)
+                          if not m.startswith("_")})
+    return ("<script>(function () { var to = " + json.dumps(where, sort_keys=True) +
+            "[decodeURIComponent(location.hash.slice(1))]; if (to) location.replace(to); })();</script>")
+
+
 def on_page_markdown(markdown, page, config, files):  # noqa: ARG001 - MkDocs' signature
     if MAP_MARK in markdown:
-        markdown = markdown.replace(MAP_MARK, module_map())
+        markdown = markdown.replace(MAP_MARK, module_map() + "\n" + old_anchors(page, files) + "\n")
     return markdown
 
 
