@@ -28,6 +28,7 @@ from functools import cache
 API_INDEX = "reference/api.md"
 API_DIR = "reference/api"
 MAP_MARK = "<!-- generated: api-map -->"
+MAP_LINE = 160  # characters of a docstring's first sentence the module map shows
 
 # (task, names): ``rc.X`` is ``import robocal as rc; rc.X``; a longer name is the import path
 GROUPS: list[tuple[str, list[str]]] = [
@@ -71,6 +72,15 @@ MODULE_MEMBERS = {
     "robocal.trust.output_marker": ["model_fingerprint", "find_marker", "check_unmarked", "mark_program",
                                     "mark_csv", "Marker"],
     "robocal.data.joint_conventions": None,  # all its public members
+}
+# the map's line of a result class whose docstring starts with its fields
+MAP_SUMMARY = {
+    "robocal.data.simulate.SimulationResult":
+        "What a simulation returns: the measurements, the true model, the noise and the outliers.",
+    "robocal.deploy.compensation.Compensation":
+        "What `compensate` returns: the joints and corrected targets for the controller, and their warnings.",
+    "rc.FilterResult":
+        "What `filter_program` returns: the filtered programs, the per-target table, the warnings.",
 }
 SEE_ALSO = re.compile(r'<details class="see-also" open>\s*<summary>See Also</summary>\s*(.*?)</details>',
                       re.S)
@@ -116,9 +126,19 @@ def page_uri(name: str) -> str:
 
 
 def summary(name: str) -> str:
-    doc = inspect.getdoc(resolve(name)) or ""
-    first = doc.split("\n\n")[0]
-    return " ".join(first.split())
+    """The docstring's first sentence, for the module map: a long one cut before its first
+    parenthesis or last comma within ``MAP_LINE`` characters (the object's page has it all)."""
+    if name in MAP_SUMMARY:
+        return MAP_SUMMARY[name]
+    doc = " ".join((inspect.getdoc(resolve(name)) or "").split("\n\n")[0].split())
+    match = re.match(r"(.*?\.)\s+(?=[A-Z`(])", doc)
+    first = match.group(1) if match else doc
+    if len(first) <= MAP_LINE:
+        return first
+    cut = first.find(" (")
+    if not MAP_LINE // 4 < cut <= MAP_LINE:
+        cut = first.rfind(", ", 0, MAP_LINE)
+    return first[:cut].rstrip(",;: ") + " …"
 
 
 def page_markdown(name: str) -> str:
