@@ -157,7 +157,7 @@ class CellCalibration:
     warnings : list of str
         Each body's warnings (named), and the cell's.
     provenance : dict
-        When and from which files the calibration was made (written to the JSON).
+        When and by which version it was made, the cell and the data's names (in the JSON).
 
     See Also
     --------

@@ -181,7 +181,7 @@ class CheckResult:
     notes : list of str
         Remarks for the reader.
     noise_source : str
-        Where the noise used comes from (the calibration's estimate, the check's repeated poses...).
+        Where the noise comes from: ``"calibration"`` (its estimate) or ``"stated"`` (``noise_mm``).
     warnings : list of str
         Always empty: the verdict says what matters (the result protocol).
 
