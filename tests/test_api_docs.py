@@ -110,3 +110,32 @@ def test_examples_run(name, obj, tmp_path, monkeypatch):
             runner.run(test)
     result = runner.summarize(verbose=False)
     assert result.failed == 0, f"{name}: {result.failed} of {result.attempted} example lines failed"
+
+
+def test_the_nav_holds_the_map_then_a_page_per_object_by_task():
+    config = {"nav": [{"Home": "index.md"}, {"Reference": [{"Python API": docs_api.API_INDEX}]}]}
+    docs_api.on_config(config)
+    section = config["nav"][1]["Reference"][0]["Python API"]
+    assert section[0] == {"Module map": docs_api.API_INDEX}
+    assert [task for group in section[1:] for task in group] == [task for task, _ in docs_api.GROUPS]
+    pages = [(title, uri) for group in section[1:] for items in group.values() for item in items
+             for title, uri in item.items()]
+    assert pages == [(name, docs_api.page_uri(name)) for name in docs_api.names()]
+    page = docs_api.page_markdown("rc.calibrate")
+    assert "::: robocal.calibration.pipeline.calibrate" in page and 'heading: "rc.calibrate"' in page
+
+
+def test_see_also_entries_become_links_to_pages_and_methods():
+    from types import SimpleNamespace
+
+    files = SimpleNamespace(get_file_from_path=lambda uri: SimpleNamespace(url=uri.replace(".md", ".html")))
+    page = SimpleNamespace(url="reference/api/calibrate.html",
+                           file=SimpleNamespace(src_uri="reference/api/calibrate.md"))
+    block = "<p>rc.evaluate : Errors on <code>data</code>.\nRobot.fk : Forward\n    kinematics.</p>"
+    out = docs_api.see_also_html(block, page, files)
+    assert ('<li><a href="evaluate.html"><code>rc.evaluate</code></a>: Errors on <code>data</code>.</li>'
+            in out)
+    assert ('<a href="Robot.html#robocal.kinematics.model.Robot.fk"><code>Robot.fk</code></a>: Forward '
+            "kinematics.</li>") in out
+    with pytest.raises(ValueError, match="names no page"):
+        docs_api.see_also_html("<p>rc.nowhere : Not a page.</p>", page, files)
