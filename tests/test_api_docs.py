@@ -82,6 +82,17 @@ def test_documented_with_examples_see_also_and_no_raw_roles(name, obj):
         assert raw is None, f"{member}: raw role {raw.group(0)!r}"
 
 
+@pytest.mark.parametrize("name, obj", [(n, o) for n, o in OBJECTS if inspect.isclass(o)])
+def test_every_public_method_and_property_has_a_docstring(name, obj):
+    bare = []
+    for member, value in vars(obj).items():
+        function = value.__func__ if isinstance(value, classmethod | staticmethod) else value
+        shown = isinstance(value, property) or inspect.isfunction(function)
+        if not member.startswith("_") and shown and not (function.__doc__ or "").strip():
+            bare.append(member)
+    assert not bare, f"{name}: {bare} without a docstring"
+
+
 @pytest.mark.parametrize("name, function", FUNCTIONS, ids=[n for n, _ in FUNCTIONS])
 def test_parameters_and_returns_documented(name, function):
     doc = inspect.getdoc(function) or ""

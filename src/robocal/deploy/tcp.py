@@ -66,6 +66,7 @@ class ToolCalibration:
 
     @property
     def rms_mm(self) -> float:
+        """The RMS (mm) of the residuals of the touched poses."""
         return float(np.sqrt(np.mean(self.residuals**2)) * 1e3)
 
     def summary(self) -> str:

@@ -145,6 +145,7 @@ class Record:
 
     @property
     def model_sha256(self) -> str:
+        """SHA-256 (hex) of ``model_yaml``: which model the record is about."""
         return sha256_text(self.model_yaml)
 
     def timeline_entry(self) -> dict:
@@ -320,6 +321,7 @@ class History:
         return conn
 
     def close(self) -> None:
+        """Close the connection (leaving a ``with`` block does it)."""
         self._conn.close()
 
     def __enter__(self) -> History:
@@ -489,6 +491,7 @@ class History:
 
     @property
     def schema_version(self) -> int:
+        """The version of the database's schema."""
         return self._version(self._query("SELECT version FROM schema_version"))
 
     # -- records -----------------------------------------------------------------------------
