@@ -114,11 +114,13 @@ def test_parameters_and_returns_documented(name, function):
 @pytest.mark.parametrize("name, obj", OBJECTS, ids=[n for n, _ in OBJECTS])
 def test_examples_run(name, obj, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # an example that writes a file writes it here
-    finder = doctest.DocTestFinder(recurse=False)
     runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS)
-    for label, value in [(name, obj), *members(name, obj)]:  # a class's methods run on its page
-        for test in finder.find(value, label, globs={}):
-            runner.run(test)
+    # a class's examples include its methods' and properties' (on its page); a module page's, its members'
+    tests = doctest.DocTestFinder(recurse=inspect.isclass(obj)).find(obj, name, globs={})
+    for label, value in members(name, obj) if inspect.ismodule(obj) else []:
+        tests += doctest.DocTestFinder(recurse=inspect.isclass(value)).find(value, label, globs={})
+    for test in tests:
+        runner.run(test)
     result = runner.summarize(verbose=False)
     assert result.failed == 0, f"{name}: {result.failed} of {result.attempted} example lines failed"
 
