@@ -88,6 +88,7 @@ SEE_ALSO_ENTRY = re.compile(r"^\s*([\w.]+(?:\s*,\s*[\w.]+)*)\s*(?::\s*(.*))?$")
 
 
 def names() -> list[str]:
+    """Every name of the reference, in the nav's order."""
     return [name for _, group in GROUPS for name in group]
 
 
@@ -122,6 +123,7 @@ def slug(name: str) -> str:
 
 
 def page_uri(name: str) -> str:
+    """The generated page's path in the docs (``reference/api/calibrate.md``)."""
     return f"{API_DIR}/{slug(name)}.md"
 
 
@@ -142,6 +144,7 @@ def summary(name: str) -> str:
 
 
 def page_markdown(name: str) -> str:
+    """The page: a link back to the module map, then mkdocstrings on the object, titled ``name``."""
     path = target(name)
     options = [f"heading: \"{name}\"", "heading_level: 1", "show_root_full_path: false"]
     if inspect.ismodule(resolve(name)):
@@ -162,16 +165,19 @@ def on_config(config):
     section = [{"Module map": API_INDEX}]
     section += [{task: [{name: page_uri(name)} for name in group]} for task, group in GROUPS]
 
-    def replace(items):
+    def replace(items) -> bool:
+        found = False
         for i, item in enumerate(items):
             if isinstance(item, dict):
                 for key, value in item.items():
                     if value == API_INDEX:
-                        items[i] = {key: section}
+                        items[i], found = {key: section}, True
                     elif isinstance(value, list):
-                        replace(value)
+                        found = replace(value) or found
+        return found
 
-    replace(config["nav"])
+    if not replace(config["nav"] or []):
+        raise ValueError(f"mkdocs.yml: no nav entry '{API_INDEX}' for the Python API's pages to go under")
     return config
 
 
@@ -184,6 +190,8 @@ def on_files(files, config):
 
 
 def module_map() -> str:
+    """One table per task: each object's name (its page) and its docstring's first sentence; each
+    row carries the object's old anchor (its dotted path)."""
     out = []
     for task, group in GROUPS:
         out += [f"## {task}", "", "| name | what it is |", "|---|---|"]
