@@ -147,6 +147,8 @@ def page_markdown(name: str) -> str:
     """The page: a link back to the module map, then mkdocstrings on the object, titled ``name``."""
     path = target(name)
     options = [f"heading: \"{name}\"", "heading_level: 1", "show_root_full_path: false"]
+    if inspect.isclass(resolve(name)):
+        options.append("summary: {functions: true}")  # a table of the methods at the top of the page
     if inspect.ismodule(resolve(name)):
         members = MODULE_MEMBERS.get(path, [])  # [] for rc.ik (its members have their pages), the version
         if members is not None:
