@@ -206,7 +206,7 @@ class CellCalibration:
         Returns
         -------
         str
-            The summary, several lines.
+            The summary text.
         """
         lines = [f"cell {self.cell.name}: {len(self.results)} bod{'y' if len(self.results) == 1 else 'ies'} "
                  "calibrated in one tracker frame (one calibration per body: the rows of each SMR see only "

@@ -585,7 +585,7 @@ class CalibrationResult(_BeforeAfter):
         Returns
         -------
         str
-            The summary, several lines.
+            The summary text.
         """
         b, a = self.before, self.after
         lines = [f"{self.method}: {self.solver.message}",

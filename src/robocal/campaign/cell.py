@@ -268,7 +268,7 @@ class CellCampaignResult:
         Returns
         -------
         str
-            The summary, several lines.
+            The summary text.
         """
         lines = [f"campaign of cell {self.cell.name!r}: {len(self.rows())} rows "
                  f"({', '.join(f'{n} {len([1 for b, _ in self.rows() if b == n])}' for n in self.park)})"]

@@ -269,7 +269,7 @@ class CampaignResult:
         Returns
         -------
         str
-            The summary, several lines.
+            The summary text.
         """
         ident = self.identifiability
         o = ident.observability

@@ -146,7 +146,7 @@ class SimulationResult:
         Returns
         -------
         str
-            The summary, several lines.
+            The summary text.
         """
         info = self.info
         return (f"simulated {len(self.data)} {info['kind']} observations of {info['n_poses']} poses; "

@@ -139,7 +139,7 @@ class Compensation:
         Returns
         -------
         str
-            The summary, several lines.
+            The summary text.
         """
         shift = ""
         if self.target_shift is not None:

@@ -75,7 +75,7 @@ class ToolCalibration:
         Returns
         -------
         str
-            The summary, several lines.
+            The summary text.
         """
         t, p = self.tcp * 1e3, self.point * 1e3
         lines = [f"TCP in flange coordinates: x {t[0]:.3f} y {t[1]:.3f} z {t[2]:.3f} mm",

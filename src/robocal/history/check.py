@@ -267,7 +267,7 @@ class CheckResult:
         Returns
         -------
         str
-            The summary, several lines.
+            The summary text.
         """
         lines = [f"check of {self.n_poses} poses: {self.verdict} (p = {self.p_value:.3g}; "
                  f"RMS {self.rms_mm:.4f} mm, expected {self.predicted_rms_mm:.4f} mm if unchanged)"]

@@ -99,7 +99,7 @@ class PathResult:
         Returns
         -------
         str
-            The summary, several lines.
+            The summary text.
         """
         return (f"weights {np.round(self.weights, 4).tolist()}\n"
                 f"optimal total weighted travel {self.cost:.6g}\n"

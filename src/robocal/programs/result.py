@@ -196,7 +196,7 @@ class FilterResult:
         Returns
         -------
         str
-            The summary, several lines.
+            The summary text.
         """
         s = self.summary_dict()
         lines = [f"{self.dialect}: {s['filtered']} of {s['targets']} Cartesian target(s) filtered in "

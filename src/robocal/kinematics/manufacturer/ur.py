@@ -134,7 +134,7 @@ class ImportedCalibration:
         Returns
         -------
         str
-            The summary, several lines.
+            The summary text.
         """
         return "\n".join([f"{self.robot.name}: {self.kind} read (exact to its own composition)",
                           *(f"note: {note}" for note in self.notes)])
