@@ -552,6 +552,15 @@ class Measurements:
         -------
         tuple of Measurements
             ``(first, rest)``.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> data = rc.simulate_tracker(robot, 30, noise_mm=0.01, seed=1).data
+        >>> calibration, validation = data.split_poses(0.7, seed=0)  # 70 % of the poses to calibrate
+        >>> calibration.n_poses, validation.n_poses
+        (21, 9)
         """
         labels = np.unique(self._groups())
         k = int(fraction) if isinstance(fraction, int | np.integer) else int(round(fraction * labels.size))
@@ -574,6 +583,14 @@ class Measurements:
         -------
         Measurements
             Their rows.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> data = rc.simulate_tracker(robot, 30, noise_mm=0.01, seed=1).data
+        >>> data.first_poses(5).n_poses
+        5
         """
         _, first = np.unique(self._groups(), return_index=True)
         labels = self._groups()[np.sort(first)][:k]

@@ -413,6 +413,14 @@ class Robot:
         -------
         numpy.ndarray, shape (N, n)
             The values in deg (mm for a prismatic joint).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> robot.joints_shown(np.array([[np.pi / 2, 0, 0, 0, 0, 0]]))  # deg
+        array([[90.,  0.,  0.,  0.,  0.,  0.]])
         """
         return joints_in_units(q, self.prismatic)
 
@@ -727,6 +735,16 @@ class Robot:
         -------
         float
             Its value (m or rad).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> robot.get("d1")  # m
+        0.445
+        >>> robot.indices(["a1", "d1"])  # their places in the parameter vector
+        array([1, 4])
         """
         return float(self._value_vector[self.indices([name])[0]])
 
@@ -1080,6 +1098,16 @@ class Robot:
         -------
         Robot
             The copy.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> tool = np.eye(4)
+        >>> tool[2, 3] = 0.25  # a 250 mm tool along the flange's z
+        >>> float(robot.with_frames(tool=tool).tool[2, 3]), float(robot.tool[2, 3])  # a copy
+        (0.25, 0.0)
         """
         return replace(self, base=self.base if base is None else base,
                        tool=self.tool if tool is None else tool)
@@ -1307,6 +1335,16 @@ class Robot:
         -------
         numpy.ndarray of bool, shape (N,)
             True where the row is inside every limit.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> q = np.zeros((2, 6))
+        >>> q[1, 1] = 3.0  # rad: beyond joint 2's limit
+        >>> robot.within_limits(q)
+        array([ True, False])
         """
         q = self.check_joints(q)
         return ((q >= self.limits[:, 0]) & (q <= self.limits[:, 1])).all(axis=1)
@@ -1326,6 +1364,16 @@ class Robot:
         -------
         numpy.ndarray of bool, shape (N, n)
             True for each value beyond its limit.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> q = np.zeros((2, 6))
+        >>> q[1, 1] = 3.0  # rad: beyond joint 2's limit
+        >>> robot.outside_limits(q)[1]
+        array([False,  True, False, False, False, False])
         """
         q = self.check_joints(q)
         return (q < self.limits[:, 0] - LIMIT_TOL) | (q > self.limits[:, 1] + LIMIT_TOL)
