@@ -156,6 +156,28 @@ class CellCalibration:
         How each measured positioner's plate was identified.
     warnings : list of str
         Each body's warnings (named), and the cell's.
+    provenance : dict
+        When and by which version it was made, the cell and the data's names (in the JSON).
+
+    See Also
+    --------
+    rc.calibrate : The calibration that returns it (for a cell).
+    rc.Cell : The cells it holds (nominal and calibrated).
+    rc.CalibrationResult : Each body's result.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> mount = np.eye(4)
+    >>> mount[0, 3] = 1.5  # the table 1.5 m in front of the arm
+    >>> nests = [[0.2, 0, 0], [0, 0.2, 0], [-0.15, -0.15, 0]]  # m, on the plate
+    >>> table = rc.Positioner.from_catalog("abb_irbp_a250", "STN1", mount, nests=nests)
+    >>> cell = rc.Cell({"arm": rc.Robot.from_catalog("abb_irb2600")}, {"STN1": table})
+    >>> sim = rc.simulate_cell(cell, 30, 20, seed=1)
+    >>> cal = rc.calibrate(cell, sim.data, nongeometric=None)  # a cell: a CellCalibration
+    >>> sorted(cal.results), cal.results["STN1"].after["rms"] < 0.1  # mm
+    (['STN1', 'arm'], True)
     """
 
     cell: object
@@ -179,7 +201,13 @@ class CellCalibration:
 
     def summary(self) -> str:
         """Per body: before -> after (and held out), the relations, how each plate was identified,
-        the warnings."""
+        the warnings.
+
+        Returns
+        -------
+        str
+            The summary text.
+        """
         lines = [f"cell {self.cell.name}: {len(self.results)} bod{'y' if len(self.results) == 1 else 'ies'} "
                  "calibrated in one tracker frame (one calibration per body: the rows of each SMR see only "
                  "its body)"]
@@ -198,7 +226,13 @@ class CellCalibration:
 
     def to_dict(self) -> dict:
         """The result as plain data (mm, deg): each body's result (docs/result-json.md), the
-        relations, the plates, pooled figures and the warnings."""
+        relations, the plates, pooled figures and the warnings.
+
+        Returns
+        -------
+        dict
+            The result (JSON-ready).
+        """
         return {"format": CELL_RESULT_FORMAT, "robocal_version": __version__, "provenance": self.provenance,
                 "cell": self.cell.name, "anchor": self.cell.anchor,
                 "bodies": {name: r.to_dict() for name, r in self.results.items()},
@@ -210,7 +244,24 @@ class CellCalibration:
         """Write the calibrated cell file (``output``, YAML: the cell in the controller's world), the
         result JSON (``json_path``) and each body's HTML report (``report`` ``R.html``: ``R_<body>.html``
         each), together or none (`robocal.core.io.write_all`). ``force`` writes the results of a body
-        whose solve did not converge; returns the paths written."""
+        whose solve did not converge; returns the paths written.
+
+        Parameters
+        ----------
+        output : str or pathlib.Path, optional
+            The calibrated cell file (YAML).
+        json_path : str or pathlib.Path, optional
+            The result JSON.
+        report : str or pathlib.Path, optional
+            The HTML report's path, one a body (``R_<body>.html``).
+        force : bool, default False
+            Write the results of a body whose solve did not converge.
+
+        Returns
+        -------
+        list of str
+            The paths written.
+        """
         import json
 
         from robocal.report.html import render_report

@@ -76,6 +76,19 @@ class EvaluationResult(dict):
     ``write()``. ``names`` labels the model, the data and the frame's data in the summary and the
     JSON (file names or catalog names; None: unnamed).
 
+    Parameters
+    ----------
+    stats : dict
+        The statistics (mm) and the warnings.
+    names : dict, optional
+        ``{"model": ..., "data": ..., "frame_from": ...}``: the names the summary and the JSON show.
+    fit_frame : bool, default False
+        The measurement frame was fitted on the data evaluated.
+
+    See Also
+    --------
+    rc.evaluate : The evaluation that returns it.
+
     Examples
     --------
     >>> import robocal as rc
@@ -105,7 +118,13 @@ class EvaluationResult(dict):
 
     def summary(self) -> str:
         """One line: the kind of errors, of which model on which data, the statistics (mm; and of
-        the rotation errors, deg, for 6-D rows)."""
+        the rotation errors, deg, for 6-D rows).
+
+        Returns
+        -------
+        str
+            One line.
+        """
         stats = self.statistics
         rotation = self.get("rotation_deg")
         turns = "" if rotation is None else "; rotation " + ", ".join(
@@ -117,7 +136,13 @@ class EvaluationResult(dict):
 
     def to_dict(self) -> dict:
         """The evaluation JSON: the names, the statistics, each row's error (mm), the consistency
-        and the warnings."""
+        and the warnings.
+
+        Returns
+        -------
+        dict
+            The evaluation (JSON-ready).
+        """
         out = {"model": self.names.get("model"), "data": self.names.get("data"), "kind": self["kind"],
                "n_poses": self["n_poses"], "fit_frame": bool(self.fit_frame),
                "frame_from": self.names.get("frame_from"), "units": "mm", "evaluation": self.statistics,
@@ -128,7 +153,18 @@ class EvaluationResult(dict):
         return out
 
     def write(self, json_path=None) -> list[str]:
-        """Write `to_dict` as JSON to ``json_path`` (atomically); the paths written."""
+        """Write `to_dict` as JSON to ``json_path`` (atomically); the paths written.
+
+        Parameters
+        ----------
+        json_path : str or pathlib.Path, optional
+            The JSON file (None: nothing written).
+
+        Returns
+        -------
+        list of str
+            The paths written.
+        """
         if json_path is None:
             return []
         out = self.to_dict()  # the per-row errors on one line by json's C encoder (indent: pure Python)
@@ -201,6 +237,12 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     ResourceError
         The machine lacks the memory the evaluation needs (refused before it starts, naming how
         much it needs: `robocal.core.resources.evaluation_bytes`).
+
+    See Also
+    --------
+    robocal.calibration.evaluation.EvaluationResult : What it returns.
+    rc.calibrate : Calibrate, with held-out data (``validation``).
+    robocal.history.check.check_calibration : Whether a calibration still holds.
 
     Examples
     --------

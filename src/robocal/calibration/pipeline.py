@@ -359,6 +359,14 @@ def calibrate(robot, data, method: str | None = None, params="auto", validation=
     DataError
         Invalid data (shapes, joint count, units), or a ``hold_out`` the data cannot give.
 
+    See Also
+    --------
+    rc.CalibrationResult : What it returns.
+    rc.analyze : Which parameters joint values can identify, before measuring.
+    rc.evaluate : A model's errors on held-out data.
+    rc.plan_poses : Plan the poses to measure.
+    rc.compensate : Use the calibrated model on targets.
+
     Examples
     --------
     >>> import robocal as rc
@@ -677,6 +685,11 @@ def analyze(robot, joints_or_data, kind: str = "point", params="auto",
     ------
     DataError
         Joints of the wrong shape or with NaN.
+
+    See Also
+    --------
+    rc.calibrate : The calibration itself.
+    rc.plan_poses : Poses chosen to identify the parameters well.
 
     Examples
     --------

@@ -143,6 +143,21 @@ class CalibrationResult(_BeforeAfter):
     prior_scales : PriorScales or None
         The prior scale of each parameter group the fit used (class default, estimated from the
         data, or given) and what the data ask for (`robocal.identify.priors.fit_priors`).
+    consistency : Consistency or None
+        The residual test of the fit (`robocal.trust.consistency`): its verdict and p-value.
+    predicted_accuracy : dict or None
+        The accuracy predicted over the workspace (mm) from the covariance.
+    error_model_choice : str or None
+        Why the default error model is the geometric one, when it is.
+    held_out : HeldOut or None
+        The validation files judged against the prediction (`robocal.trust.held_out`).
+
+    See Also
+    --------
+    rc.calibrate : The calibration that returns it.
+    rc.evaluate : Evaluate the calibrated model on other data.
+    robocal.report.html.write_report : Its HTML report.
+    robocal.history.History : Record it in the robot's history.
 
     Examples
     --------
@@ -253,12 +268,36 @@ class CalibrationResult(_BeforeAfter):
 
     def per_file(self) -> list[dict]:
         """Per measurement file (calibration, then validation): its kind and its statistics (mm)
-        before and after; the errors of each kind are in mm (position, plane deviation, distance)."""
+        before and after; the errors of each kind are in mm (position, plane deviation, distance).
+
+        Returns
+        -------
+        list of dict
+            One a file: its name, role, kind and statistics (mm).
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> data = rc.simulate_tracker(robot, 30, noise_mm=0.01, seed=1).data
+        >>> calibration, validation = data.split_poses(0.7, seed=0)
+        >>> result = rc.calibrate(robot, calibration, validation=validation)
+        >>> [(f["role"], f["kind"]) for f in result.per_file()]
+        [('calibration', 'point'), ('validation', 'point')]
+        >>> result.per_file()[1]["after"]["rms"] < 0.05  # mm, on the held-out poses
+        True
+        """
         return [{"role": role, "file": data.label, "kind": data.kind, "before": position_stats(before),
                  "after": position_stats(after)} for role, data, before, after in self._files()]
 
     def per_kind(self) -> dict[str, dict]:
-        """Per role and kind (e.g. ``calibration plane``): statistics (mm) after calibration."""
+        """Per role and kind (e.g. ``calibration plane``): statistics (mm) after calibration.
+
+        Returns
+        -------
+        dict of str to dict
+            ``{"role kind": statistics}``.
+        """
         out: dict[str, list] = {}
         for role, data, _, after in self._files():
             out.setdefault(f"{role} {data.kind}", []).append(after)
@@ -309,7 +348,24 @@ class CalibrationResult(_BeforeAfter):
 
     def parameter_table(self) -> list[dict]:
         """Every candidate parameter (and nuisance) with nominal, estimate, correction, sigma
-        (display units: mm, deg; nuisance in its own)."""
+        (display units: mm, deg; nuisance in its own).
+
+        Returns
+        -------
+        list of dict
+            One a parameter (mm, deg).
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> data = rc.simulate_tracker(robot, 30, noise_mm=0.01, seed=1).data
+        >>> calibration, validation = data.split_poses(0.7, seed=0)
+        >>> result = rc.calibrate(robot, calibration, validation=validation)
+        >>> row = result.parameter_table()[0]
+        >>> row["name"], row["unit"], row["status"]  # alpha1 turns the first axis: not identifiable
+        ('alpha1', 'deg', 'dropped')
+        """
         start = self.initial.robot
         sigma = dict(zip(self.unknowns, self.sigma, strict=True))
         units = dict(zip(start.parameter_names, start.parameter_units(), strict=True))
@@ -365,7 +421,13 @@ class CalibrationResult(_BeforeAfter):
         }
 
     def to_dict(self) -> dict:
-        """The result as plain data (mm, deg), per docs/result-json.md."""
+        """The result as plain data (mm, deg), per docs/result-json.md.
+
+        Returns
+        -------
+        dict
+            The result (JSON-ready).
+        """
         ident, problem = self.identifiability, self.problem
         k = len(self.unknowns)
         data, first = problem.datasets[0], problem.observations[0]  # the per-row sections: the first file
@@ -455,7 +517,13 @@ class CalibrationResult(_BeforeAfter):
     def leaning_on_prior(self) -> dict[str, float]:
         """The estimated parameters whose prior carries at least `PRIOR_SHARE_SHOWN` of their
         information (posterior / prior variance: how much the prior holds them), largest first;
-        the parameters held near nominal are listed with the not determined ones."""
+        the parameters held near nominal are listed with the not determined ones.
+
+        Returns
+        -------
+        dict of str to float
+            ``{parameter: share of its information the prior carries}``, largest first.
+        """
         ratio = self.identifiability.prior_ratio
         share = {n: float(ratio[n] ** 2) for n in self.space.robot if n in ratio and np.isfinite(ratio[n])}
         return dict(sorted(((n, v) for n, v in share.items() if v >= PRIOR_SHARE_SHOWN), key=lambda t: -t[1]))
@@ -480,7 +548,13 @@ class CalibrationResult(_BeforeAfter):
         return out
 
     def to_json(self) -> str:
-        """The result JSON text (docs/result-json.md)."""
+        """The result JSON text (docs/result-json.md).
+
+        Returns
+        -------
+        str
+            The JSON text.
+        """
         return json_text(self.to_dict())
 
     def save_json(self, path) -> None:
@@ -543,7 +617,13 @@ class CalibrationResult(_BeforeAfter):
 
     def summary(self) -> str:
         """A short human summary: before -> after, largest corrections, dropped parameters, the
-        warnings, the `notes` and why the default error model is the geometric one."""
+        warnings, the `notes` and why the default error model is the geometric one.
+
+        Returns
+        -------
+        str
+            The summary text.
+        """
         b, a = self.before, self.after
         lines = [f"{self.method}: {self.solver.message}",
                  f"calibration set ({b['n']} obs): RMS {b['rms']:.4f} -> {a['rms']:.4f} mm, "

@@ -63,6 +63,10 @@ class CellCampaignResult:
     warnings : list of str
         What limits the plan, per body.
 
+    See Also
+    --------
+    robocal.campaign.plan_cell : The planner that returns it.
+
     Examples
     --------
     >>> import numpy as np
@@ -95,13 +99,30 @@ class CellCampaignResult:
 
     def rows(self) -> list[tuple[str, int]]:
         """``(body, index)`` of every planned row in measuring order: the arms' poses, then the
-        positioners' angles."""
+        positioners' angles.
+
+        Returns
+        -------
+        list of tuple of (str, int)
+            ``(body, index)`` a row.
+        """
         return [(name, i) for name, r in self.arms.items() for i in range(r.n)] + \
             [(name, i) for name, t in self.tables.items() for i in range(t.n)]
 
     def joints_of(self, body: str) -> np.ndarray:
         """``(R, n)`` the joints of ``body`` (an arm, or a positioner's axes) at every row of
-        `rows` (its planned values on its own rows, its park values on the others)."""
+        `rows` (its planned values on its own rows, its park values on the others).
+
+        Parameters
+        ----------
+        body : str
+            An arm or a positioner of the cell.
+
+        Returns
+        -------
+        numpy.ndarray, shape (R, n)
+            Its joints (rad; m for a prismatic joint) at every row.
+        """
         if body not in self.park:
             raise DataError(f"no body {body!r} in the cell: {', '.join(self.park)}")
         out = np.tile(self.park[body], (len(self.rows()), 1))
@@ -112,7 +133,13 @@ class CellCampaignResult:
 
     def columns(self) -> list[tuple[str, list[str]]]:
         """The joint columns: one group per arm joint layout (shared by the arms: each row holds
-        the joints of its arm) and per positioner, ``(owner, [column, ...])``."""
+        the joints of its arm) and per positioner, ``(owner, [column, ...])``.
+
+        Returns
+        -------
+        list of tuple of (str, list of str)
+            ``(owner, [column, ...])`` a group.
+        """
         groups: list[tuple[str, list[str]]] = []
         arm_cols: list[str] = []
         for name in self.cell.arms:
@@ -127,7 +154,13 @@ class CellCampaignResult:
         return groups
 
     def poses_csv(self) -> str:
-        """The planned file (module docstring)."""
+        """The planned file (module docstring).
+
+        Returns
+        -------
+        str
+            The CSV text.
+        """
         rows = self.rows()
         arm_name = next(iter(self.cell.arms), None)
         k = max([r.visible.shape[1] for r in self.arms.values()] +
@@ -167,7 +200,20 @@ class CellCampaignResult:
         """The joints ``(R, 6)`` rad of ``arm`` (default the anchor) at every row and the
         positioner's values (default the only one) as a program writes them (`ExternalAxes`, its
         axes the positioner's logical ``external_axes``, which each language names): the arm's
-        planned poses with the table at rest, then the table's angles with the arm parked."""
+        planned poses with the table at rest, then the table's angles with the arm parked.
+
+        Parameters
+        ----------
+        arm : str, optional
+            The arm (default the anchor).
+        positioner : str, optional
+            The positioner (default the only one).
+
+        Returns
+        -------
+        tuple of (numpy.ndarray, ExternalAxes or None)
+            The arm's joints ``(R, 6)`` (rad) and the positioner's values.
+        """
         if not self.cell.arms:
             raise DataError("the cell has no arm: campaign programs drive an arm and its positioner")
         try:
@@ -191,7 +237,24 @@ class CellCampaignResult:
         axes named as each language names them (`Dialect.positioner_axes`: ``external_axes: [2, 3]``
         is a robtarget's ``eax_b``, ``eax_c``; a motion group's or station's own axes 1..m);
         ``pulses_per_unit``: the positioner's encoder pulses per degree (mm) for INFORM;
-        ``options``: speed_percent, settle_s, procedure, comment."""
+        ``options``: speed_percent, settle_s, procedure, comment.
+
+        Parameters
+        ----------
+        programs : dict of str to str or pathlib.Path
+            ``{language key: path to write}``.
+        arm, positioner : str, optional
+            The bodies the programs drive (defaults as `program_joints`).
+        pulses_per_unit : array_like, optional
+            The positioner's encoder pulses per unit, for languages that command pulses.
+        **options
+            ``speed_percent``, ``settle_s``, ``procedure``, ``comment``.
+
+        Returns
+        -------
+        dict of str to str
+            ``{path: program text}``.
+        """
         arm = arm or next(iter(self.cell.arms), None)
         q, external = self.program_joints(arm, positioner)
         if external is not None and pulses_per_unit is not None:
@@ -200,7 +263,13 @@ class CellCampaignResult:
 
     def summary(self) -> str:
         """Per body: what is measured, the predicted accuracy and how well its parameters are
-        determined."""
+        determined.
+
+        Returns
+        -------
+        str
+            The summary text.
+        """
         lines = [f"campaign of cell {self.cell.name!r}: {len(self.rows())} rows "
                  f"({', '.join(f'{n} {len([1 for b, _ in self.rows() if b == n])}' for n in self.park)})"]
         for name, r in self.arms.items():
@@ -212,7 +281,13 @@ class CellCampaignResult:
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        """Plain data (mm, deg): each body's plan."""
+        """Plain data (mm, deg): each body's plan.
+
+        Returns
+        -------
+        dict
+            Each body's plan (JSON-ready).
+        """
         return {"format": FORMAT, "robocal_version": __version__, "cell": self.cell.name,
                 "arms": {n: r.to_dict() for n, r in self.arms.items()},
                 "positioners": {n: t.to_dict() for n, t in self.tables.items()},
@@ -224,7 +299,22 @@ class CellCampaignResult:
 
     def write(self, csv_path, json_path=None, programs: dict | None = None) -> list[str]:
         """Write the planned file, the JSON of `to_dict` and the program texts ``programs``
-        {path: text} (all or none); the paths written."""
+        {path: text} (all or none); the paths written.
+
+        Parameters
+        ----------
+        csv_path : str or pathlib.Path
+            The planned file (CSV).
+        json_path : str or pathlib.Path, optional
+            The campaign JSON.
+        programs : dict of str to str, optional
+            ``{path: program text}``.
+
+        Returns
+        -------
+        list of str
+            The paths written.
+        """
         texts = {csv_path: self.poses_csv()}
         if json_path:
             texts[json_path] = json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n"
@@ -291,6 +381,12 @@ def plan_cell(cell: Cell, arm_poses: dict[str, int], table_poses: dict[str, int]
     DataError
         A body not in the cell, a positioner with neither declared nests nor ``nests``, or what
         `robocal.plan_poses` / `plan_table` refuse.
+
+    See Also
+    --------
+    robocal.campaign.CellCampaignResult : What it returns.
+    rc.plan_poses : One robot's campaign.
+    rc.Cell : The cell planned.
 
     Examples
     --------

@@ -68,6 +68,11 @@ class Tracker:
         A non-finite position, ``range_m`` not 0 <= min < max, an acceptance angle outside
         (0, 90] degrees, a negative clearance or a non-positive arm radius.
 
+    See Also
+    --------
+    rc.plan_poses : Plans in its line of sight.
+    rc.Constraints : The robot's constraints.
+
     Examples
     --------
     >>> import robocal as rc
@@ -134,6 +139,11 @@ class Constraints:
     DataError
         A box that is not ``(2, 3)`` with min < max, a negative or non-finite value, or a
         singularity angle of 90 degrees or more.
+
+    See Also
+    --------
+    rc.plan_poses : Plans within them.
+    rc.Tracker : The tracker's constraints.
 
     Examples
     --------

@@ -77,6 +77,11 @@ def read_candidates(path, robot, kind: str = "point") -> CandidateFile:
         A malformed file, a wrong joint count, or plane / distance candidates from a file of
         another kind.
 
+    See Also
+    --------
+    rc.plan_poses : Chooses among the candidates.
+    robocal.campaign.read_planned : Read a planned file.
+
     Examples
     --------
     >>> import robocal as rc
@@ -226,6 +231,11 @@ def read_planned(path, robot) -> Planned:
     ------
     DataError
         A malformed file, a wrong joint count, or inconsistent visibility or SMR columns.
+
+    See Also
+    --------
+    rc.CampaignResult : Writes the planned file.
+    robocal.campaign.read_candidates : Read candidate poses.
 
     Examples
     --------

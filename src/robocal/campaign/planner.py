@@ -87,6 +87,10 @@ class CurvePoint:
     random_median_mm : float
         The same for random sets of ``n`` poses (median), mm.
 
+    See Also
+    --------
+    rc.CampaignResult : Holds the curve.
+
     Examples
     --------
     >>> import robocal as rc
@@ -155,6 +159,14 @@ class CampaignResult:
         The chosen poses' rows in that file.
     warnings : list of str
         What limits the plan (e.g. an SMR on the flange axis).
+    criterion_value : float
+        The value of the design criterion ``criterion`` at the chosen poses.
+
+    See Also
+    --------
+    rc.plan_poses : The planner that returns it.
+    robocal.campaign.CurvePoint : A point of its accuracy curve.
+    robocal.campaign.read_planned : Read a planned file back.
 
     Examples
     --------
@@ -203,7 +215,13 @@ class CampaignResult:
         return self.funnel.left
 
     def poses_csv(self) -> str:
-        """The text of ``poses.csv`` (see `robocal.campaign.files`)."""
+        """The text of ``poses.csv`` (see `robocal.campaign.files`).
+
+        Returns
+        -------
+        str
+            The CSV text.
+        """
         return poses_csv(self.joints, self.visible, self.source, self.source_rows,
                          smr_mm=self.settings["smr_mm"], tracker_mm=self.settings["tracker_mm"],
                          spec=self.robot.joints)
@@ -212,6 +230,22 @@ class CampaignResult:
         """Write ``poses.csv`` (``csv``), the JSON of `to_dict` (``json_path``), the HTML page
         (``html``) and the robot programs ``programs`` {path: text} (all or none); the paths
         written.
+
+        Parameters
+        ----------
+        csv : str or pathlib.Path
+            ``poses.csv``.
+        json_path : str or pathlib.Path, optional
+            The campaign JSON.
+        html : str or pathlib.Path, optional
+            The HTML page.
+        programs : dict of str to str, optional
+            ``{path: program text}``.
+
+        Returns
+        -------
+        list of str
+            The paths written.
 
         Examples
         --------
@@ -230,7 +264,13 @@ class CampaignResult:
         return [str(path) for path in texts]
 
     def summary(self) -> str:
-        """A short human summary: poses, predicted accuracy, identifiability, route, candidates."""
+        """A short human summary: poses, predicted accuracy, identifiability, route, candidates.
+
+        Returns
+        -------
+        str
+            The summary text.
+        """
         ident = self.identifiability
         o = ident.observability
         noise = (f"isotropic {self.noise.sigma_m * 1e3:g} mm" if self.noise.model == "isotropic"
@@ -261,7 +301,13 @@ class CampaignResult:
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        """Plain data (mm, deg) for JSON and the HTML page."""
+        """Plain data (mm, deg) for JSON and the HTML page.
+
+        Returns
+        -------
+        dict
+            The campaign (JSON-ready).
+        """
         ident = self.identifiability
         shown, k = self.robot.joints_shown(self.joints), self.robot.external_axes
         return {
@@ -471,6 +517,14 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     DataError
         Invalid counts, kind, criterion or shapes, or no candidate left after the constraints
         (the message names the constraint that removed the last ones).
+
+    See Also
+    --------
+    rc.CampaignResult : What it returns.
+    rc.Constraints : The limits the poses keep.
+    rc.Tracker : The tracker's place and line of sight.
+    robocal.campaign.plan_cell : A work cell's campaign.
+    robocal.campaign.read_candidates : Candidate poses from a file.
 
     Examples
     --------

@@ -18,6 +18,15 @@ class RobocalError(Exception):
 
     Its message says what is wrong and what to do; the command line prints it alone and exits 2.
 
+    See Also
+    --------
+    rc.DataError : Input data that cannot be used.
+    rc.ModelError : A model that cannot be used.
+    rc.UnitError : Values in the wrong unit.
+    rc.IdentificationError : A calibration problem that cannot be solved.
+    rc.PlausibilityError : Data and model that disagree beyond what real robots do.
+    rc.UnreachableError : A target with no inverse-kinematics solution.
+
     Examples
     --------
     >>> import numpy as np
@@ -32,11 +41,21 @@ class RobocalError(Exception):
 
 
 class ModelError(RobocalError):
-    """A robot model is malformed: wrong sizes, NaN parameters, unknown names, bad YAML."""
+    """A robot model is malformed: wrong sizes, NaN parameters, unknown names, bad YAML.
+
+    See Also
+    --------
+    rc.RobocalError : The base of every refusal: catch it for any.
+    """
 
 
 class DataError(RobocalError):
-    """A measurement file or array is malformed: columns, units, NaN, joint count."""
+    """A measurement file or array is malformed: columns, units, NaN, joint count.
+
+    See Also
+    --------
+    rc.RobocalError : The base of every refusal: catch it for any.
+    """
 
 
 class ListedError(DataError):
@@ -45,20 +64,40 @@ class ListedError(DataError):
 
 
 class UnitError(DataError):
-    """Units are missing, unknown or implausible for the values."""
+    """Units are missing, unknown or implausible for the values.
+
+    See Also
+    --------
+    rc.RobocalError : The base of every refusal: catch it for any.
+    """
 
 
 class PlausibilityError(DataError):
     """Data and model disagree beyond what real robots do (a unit, the wrong robot, the wrong
-    file); ``force`` overrides it."""
+    file); ``force`` overrides it.
+
+    See Also
+    --------
+    rc.RobocalError : The base of every refusal: catch it for any.
+    """
 
 
 class IdentificationError(RobocalError):
-    """A calibration problem cannot be solved: too few observations, rank collapse."""
+    """A calibration problem cannot be solved: too few observations, rank collapse.
+
+    See Also
+    --------
+    rc.RobocalError : The base of every refusal: catch it for any.
+    """
 
 
 class UnreachableError(RobocalError):
-    """A target pose has no inverse-kinematics solution."""
+    """A target pose has no inverse-kinematics solution.
+
+    See Also
+    --------
+    rc.RobocalError : The base of every refusal: catch it for any.
+    """
 
 
 class ResourceError(RobocalError):

@@ -28,6 +28,11 @@ scales with the robot:
   (0.785 = pi/4 typed where 45 belongs) for a value typed once; a set of targets' angles that
   all lie within pi 'degrees' (`check_degree_set`); angles in radians beyond
   `MAX_RADIANS` are degrees.
+
+See Also
+--------
+rc.UnitError : What a check raises.
+rc.Measurements : Read with these checks.
 """
 
 from __future__ import annotations
@@ -130,6 +135,20 @@ def check_tool(xyz_m: Sequence[float], declared: str, what: str) -> None:
     Refused (UnitError) when its largest coordinate lies outside ``TOOL_MIN_M`` .. ``TOOL_MAX_M``
     (a TCP on the flange, all zeros, passes); ``what`` names where it came from.
 
+    Parameters
+    ----------
+    xyz_m : sequence of float
+        The TCP offset (m).
+    declared : str
+        The unit the file declared (named in the message).
+    what : str
+        Where the values come from (a file, its columns), for the message.
+
+    Raises
+    ------
+    UnitError
+        An offset too large or too small for a tool.
+
     Examples
     --------
     >>> from robocal.core.magnitudes import check_tool
@@ -148,6 +167,22 @@ def check_frame(xyz_m: Sequence[float], declared: str, reach_m: float, what: str
 
     Refused (UnitError) when its largest coordinate lies outside ``FRAME_MIN_M`` ..
     ``FRAME_MAX_REACHES`` times the reach (m; a frame at the origin passes).
+
+    Parameters
+    ----------
+    xyz_m : sequence of float
+        The translation (m).
+    declared : str
+        The unit the file declared (named in the message).
+    reach_m : float
+        The robot's reach (m).
+    what : str
+        Where the values come from (a file, its columns), for the message.
+
+    Raises
+    ------
+    UnitError
+        A translation too large or too small for the robot.
 
     Examples
     --------
@@ -269,6 +304,13 @@ def radian_like(angles_deg: Sequence[float]) -> np.ndarray:
 def check_degrees(angles_deg: Sequence[float], what: str) -> None:
     """Refuse angles given in degrees that are clearly radians (pi/4 = 0.785, pi/2 = 1.571).
 
+    Parameters
+    ----------
+    angles_deg : sequence of float
+        The angles, read as degrees.
+    what : str
+        Where the values come from (a file, its columns), for the message.
+
     Raises
     ------
     UnitError
@@ -296,6 +338,18 @@ def check_degree_set(angles_deg: Sequence[float], what: str) -> None:
     [-pi, pi] 'degrees' while the largest is above `RADIAN_SET_MIN_DEG`: radians (a set of
     real orientations that all lie within 3.14 deg of the identity is not what a program holds).
 
+    Parameters
+    ----------
+    angles_deg : sequence of float
+        The angles, read as degrees.
+    what : str
+        Where the values come from (a file, its columns), for the message.
+
+    Raises
+    ------
+    UnitError
+        The angles look like radians.
+
     Examples
     --------
     >>> from robocal.core.magnitudes import check_degree_set
@@ -313,6 +367,18 @@ def check_degree_set(angles_deg: Sequence[float], what: str) -> None:
 
 def check_radians(angles_rad: Sequence[float], what: str) -> None:
     """Refuse orientation angles given in radians beyond a full turn: degrees.
+
+    Parameters
+    ----------
+    angles_rad : sequence of float
+        The angles, read as radians.
+    what : str
+        Where the values come from (a file, its columns), for the message.
+
+    Raises
+    ------
+    UnitError
+        An angle beyond a full turn.
 
     Examples
     --------

@@ -4,6 +4,11 @@
 the result and campaign JSON files record it (``robocal_version``), and
 ``robocal --version`` prints it.
 
+See Also
+--------
+robocal.history.Record : Records the version of each calibration and check.
+rc.CalibrationResult : Its JSON names the version that made it.
+
 Examples
 --------
 >>> import robocal as rc

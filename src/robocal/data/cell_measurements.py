@@ -231,6 +231,27 @@ class CellMeasurements:
         The file it was read from ("" when built from arrays).
     source : str
         The provenance text (the file's first ``#`` comment).
+
+    See Also
+    --------
+    rc.Measurements : One body's measurements.
+    rc.Cell : The cell they measure.
+    rc.simulate_cell : Simulated measurements of a cell.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> mount = np.eye(4)
+    >>> mount[0, 3] = 1.5  # the table 1.5 m in front of the arm
+    >>> nests = [[0.2, 0, 0], [0, 0.2, 0], [-0.15, -0.15, 0]]  # m, on the plate
+    >>> table = rc.Positioner.from_catalog("abb_irbp_a250", "STN1", mount, nests=nests)
+    >>> cell = rc.Cell({"arm": rc.Robot.from_catalog("abb_irb2600")}, {"STN1": table})
+    >>> sim = rc.simulate_cell(cell, 30, 20, seed=1)
+    >>> data = sim.data  # a CellMeasurements
+    >>> back = rc.CellMeasurements.parse(data.to_csv(), cell)  # the cell's CSV, read back
+    >>> sorted(back.bodies), bool(np.allclose(back.bodies["STN1"].points, data.bodies["STN1"].points))
+    (['STN1', 'arm'], True)
     """
 
     bodies: Mapping[str, Measurements]
@@ -264,7 +285,22 @@ class CellMeasurements:
     def from_bodies(cls, cell: Cell, bodies: Mapping[str, Measurements],
                     source: str = "") -> CellMeasurements:
         """Measurements of ``cell`` from per-body measurements (joints of each body's chain, SI);
-        each body checked against its chain, a positioner's values against its limits."""
+        each body checked against its chain, a positioner's values against its limits.
+
+        Parameters
+        ----------
+        cell : Cell
+            The cell.
+        bodies : mapping of str to Measurements
+            Each body's measurements.
+        source : str, optional
+            Where they come from, for messages.
+
+        Returns
+        -------
+        CellMeasurements
+            The cell's measurements.
+        """
         out = {}
         for name, data in bodies.items():
             body = _resolved(cell, str(name), "the data")
@@ -278,7 +314,27 @@ class CellMeasurements:
 
     @classmethod
     def parse(cls, text: str, cell: Cell, name: str = "<text>") -> CellMeasurements:
-        """Parse a cell's measurement CSV text (module docstring); ``name`` names it in messages."""
+        """Parse a cell's measurement CSV text (module docstring); ``name`` names it in messages.
+
+        Parameters
+        ----------
+        text : str
+            The CSV text.
+        cell : Cell
+            The cell it measures.
+        name : str, optional
+            Its name in messages.
+
+        Returns
+        -------
+        CellMeasurements
+            The rows.
+
+        Raises
+        ------
+        DataError
+            A malformed file.
+        """
         table = _Table(text, cell, name)
         if not table.rows:
             raise DataError(f"{name}: the file has a header but no data rows")
@@ -339,7 +395,13 @@ class CellMeasurements:
 
     def to_csv(self) -> str:
         """The cell's CSV text (SI columns, a ``body`` column; rows in their source order): `parse`
-        gives the same values back."""
+        gives the same values back.
+
+        Returns
+        -------
+        str
+            The CSV text.
+        """
         rows = sorted(self._rows(), key=lambda r: r[0])
         header = [BODY_COLUMN] + list(dict.fromkeys(h for _, _, cells in rows for h in cells))
         out = io.StringIO()
@@ -354,10 +416,29 @@ class CellMeasurements:
         return out.getvalue()
 
     def save(self, path) -> None:
-        """Write `to_csv` atomically."""
+        """Write `to_csv` atomically.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The CSV file to write.
+        """
         write_atomic(path, self.to_csv())
 
     def split_poses(self, fraction: float = 0.5, seed: int = 0) -> tuple[CellMeasurements, CellMeasurements]:
-        """Each body's poses split at random into (first, rest) (`Measurements.split_poses`)."""
+        """Each body's poses split at random into (first, rest) (`Measurements.split_poses`).
+
+        Parameters
+        ----------
+        fraction : float, default 0.5
+            Share of each body's poses in the first part.
+        seed : int, default 0
+            Seed of the random choice.
+
+        Returns
+        -------
+        tuple of CellMeasurements
+            ``(first, rest)``.
+        """
         parts = {b: d.split_poses(fraction, seed) for b, d in self.bodies.items()}
         return tuple(replace(self, bodies={b: p[k] for b, p in parts.items()}) for k in (0, 1))

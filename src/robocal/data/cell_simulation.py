@@ -192,6 +192,26 @@ def simulate_cell(cell: Cell, n_poses: int = 40, table_poses: int = 30, *, truth
     Returns
     -------
     CellSimulation
+
+    See Also
+    --------
+    rc.Cell : The cell simulated.
+    rc.CellMeasurements : The simulated data.
+    rc.simulate_tracker : One robot's campaign.
+    rc.CellCalibration : The calibration of the simulated data.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> mount = np.eye(4)
+    >>> mount[0, 3] = 1.5  # the table 1.5 m in front of the arm
+    >>> nests = [[0.2, 0, 0], [0, 0.2, 0], [-0.15, -0.15, 0]]  # m, on the plate
+    >>> table = rc.Positioner.from_catalog("abb_irbp_a250", "STN1", mount, nests=nests)
+    >>> cell = rc.Cell({"arm": rc.Robot.from_catalog("abb_irb2600")}, {"STN1": table})
+    >>> sim = rc.simulate_cell(cell, 30, 20, seed=1)
+    >>> {body: len(rows) for body, rows in sim.data.bodies.items()}  # the plate: 3 nests x 20
+    {'arm': 30, 'STN1': 60}
     """
     if int(n_poses) < 1 or int(table_poses) < 1:
         raise DataError("n_poses and table_poses must be >= 1")

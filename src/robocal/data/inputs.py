@@ -31,6 +31,11 @@ def check_distinct_inputs(paths, what: str = "input files", why: str = TWICE) ->
     DataError
         Two of ``paths`` are the same file or have the same contents.
 
+    See Also
+    --------
+    rc.calibrate : Refuses the same file given as two roles.
+    robocal.deploy.models.load_model_pair : The calibrated and nominal models of a deployment, checked.
+
     Examples
     --------
     >>> from pathlib import Path

@@ -5,6 +5,11 @@ controller shows, logs and takes in a TP program is ``J3 + J23_FACTOR * J2`` of 
 joints (ROS-Industrial fanuc_driver: ``J3_out = J3_in + J23_factor * J2_in``, J23_factor 1 for its
 arms). A joint log from a FANUC controller is read with `fanuc_decoupled` (CLI
 ``--fanuc-j2j3-coupled``); robocal's ``--fanuc`` campaign programs write `fanuc_coupled`.
+
+See Also
+--------
+rc.Measurements : Rows whose joints it converts.
+rc.filter_program : Filters FANUC programs in the controller's convention.
 """
 
 from __future__ import annotations
@@ -75,7 +80,18 @@ def fanuc_decoupled(q: np.ndarray) -> np.ndarray:
 
 def fanuc_decoupled_data(data):
     """Measurements whose joints are a FANUC controller's -> the same with the catalog's joints
-    (the approach directions and travel re-derived from the row order)."""
+    (the approach directions and travel re-derived from the row order).
+
+    Parameters
+    ----------
+    data : Measurements
+        Rows whose joints are in the FANUC controller's convention (J3 counted from the horizontal).
+
+    Returns
+    -------
+    Measurements
+        The same rows with the catalog's joints; the input is not changed.
+    """
     q = fanuc_decoupled(data.joints)
     return replace(data, joints=q, approach=approach_from_order(q, data.pose_id),
                    travel=travel_from_order(q, data.pose_id))

@@ -197,6 +197,21 @@ class Measurements:
     instrument : str
         The instrument that took the rows (``tracker``, ``mocap``, ``camera``;
         `robocal.data.instruments`); "" when the data do not say.
+    payload : numpy.ndarray, shape (N, 4), optional
+        Payload of each row: kg, then the centre of mass x, y, z (m) in the flange frame.
+    temperature : numpy.ndarray, shape (N,), optional
+        Temperature of each row (deg C).
+    linear : numpy.ndarray of bool, shape (n,), optional
+        Joints in length units (m: prismatic); None: every joint an angle.
+    external : int
+        The first ``external`` joints are external axes (``e1``..: a track carrying the arm).
+
+    See Also
+    --------
+    rc.CellMeasurements : A work cell's measurements, per body.
+    rc.register : The tracker -> robot base frame of measurements.
+    rc.simulate_tracker : Simulated measurements of a known true robot.
+    rc.calibrate : Calibrate a robot with them.
 
     Examples
     --------
@@ -410,7 +425,18 @@ class Measurements:
     # ----------------------------------------------------------------- views
     def missing_conditions(self, robot) -> list[str]:
         """Warnings for ``robot``'s payload / thermal terms these data have no column for, naming
-        the default the model assumes (no payload; its reference temperature)."""
+        the default the model assumes (no payload; its reference temperature).
+
+        Parameters
+        ----------
+        robot : Robot
+            The model the data calibrate.
+
+        Returns
+        -------
+        list of str
+            One warning a missing condition (empty: none).
+        """
         errors = robot.joint_errors
         if errors is None:
             return []
@@ -422,7 +448,18 @@ class Measurements:
 
     def unused_conditions(self, robot) -> str | None:
         """A note naming the recorded conditions (payload, temperature) ``robot``'s error model
-        has no term for, or None when it uses every one recorded."""
+        has no term for, or None when it uses every one recorded.
+
+        Parameters
+        ----------
+        robot : Robot
+            The model the data calibrate.
+
+        Returns
+        -------
+        str or None
+            The note.
+        """
         used = condition_terms(robot)
         unused = [c for c, term in (("payload", "payload"), ("temperature", "thermal"))
                   if getattr(self, c) is not None and term not in used]
@@ -504,6 +541,27 @@ class Measurements:
         """Random split by pose (distance data: by pair) into (first, rest).
 
         ``fraction`` in (0, 1) is the share of poses in the first part; an int is a pose count.
+
+        Parameters
+        ----------
+        fraction : float or int, default 0.5
+            Share of the poses in the first part, or their number.
+        seed : int, default 0
+            Seed of the random choice.
+
+        Returns
+        -------
+        tuple of Measurements
+            ``(first, rest)``.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> data = rc.simulate_tracker(robot, 30, noise_mm=0.01, seed=1).data
+        >>> calibration, validation = data.split_poses(0.7, seed=0)  # 70 % of the poses to calibrate
+        >>> calibration.n_poses, validation.n_poses
+        (21, 9)
         """
         labels = np.unique(self._groups())
         k = int(fraction) if isinstance(fraction, int | np.integer) else int(round(fraction * labels.size))
@@ -515,7 +573,26 @@ class Measurements:
         return self.subset(mask), self.subset(~mask)
 
     def first_poses(self, k: int) -> Measurements:
-        """Rows of the first ``k`` distinct poses in file order (e.g. a calibration half)."""
+        """Rows of the first ``k`` distinct poses in file order (e.g. a calibration half).
+
+        Parameters
+        ----------
+        k : int
+            Number of poses.
+
+        Returns
+        -------
+        Measurements
+            Their rows.
+
+        Examples
+        --------
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> data = rc.simulate_tracker(robot, 30, noise_mm=0.01, seed=1).data
+        >>> data.first_poses(5).n_poses
+        5
+        """
         _, first = np.unique(self._groups(), return_index=True)
         labels = self._groups()[np.sort(first)][:k]
         return self.subset(np.isin(self._groups(), labels))
@@ -523,7 +600,29 @@ class Measurements:
     def check_against(self, robot, reach: float | None = None, path: str | None = None) -> Measurements:
         """Check joint count, SMR indices and unit plausibility (lengths against its reach, payload
         masses against its rated payload: `robocal.core.magnitudes.check_payload`) against a robot;
-        returns self."""
+        returns self.
+
+        Parameters
+        ----------
+        robot : Robot
+            The model the data go with.
+        reach : float, optional
+            The robot's reach (m) for the unit check; default computed from the model.
+        path : str, optional
+            The file's name, for messages.
+
+        Returns
+        -------
+        Measurements
+            This object.
+
+        Raises
+        ------
+        DataError
+            A joint count or an SMR index that does not fit the robot.
+        UnitError
+            Lengths or masses in the wrong unit.
+        """
         where = f"{path}: " if path else (f"{self.source}: " if self.source else "")
         if self.n_joints != robot.n_joints:
             k = robot.external_axes
@@ -596,11 +695,30 @@ class Measurements:
 
     def joint_column(self, k: int, unit: str) -> str:
         """The CSV name of joint ``k`` (0-based) with ``unit`` (e.g. ``_rad``): ``e{k+1}`` for an
-        external axis, else ``q{i}`` counted after them."""
+        external axis, else ``q{i}`` counted after them.
+
+        Parameters
+        ----------
+        k : int
+            The joint (0-based).
+        unit : str
+            The suffix (``_rad``, ``_deg``, ``_mm``...).
+
+        Returns
+        -------
+        str
+            The column name.
+        """
         return f"e{k + 1}{unit}" if k < self.external else f"q{k - self.external + 1}{unit}"
 
     def to_csv(self) -> str:
-        """Canonical CSV text in SI columns (exact round trip)."""
+        """Canonical CSV text in SI columns (exact round trip).
+
+        Returns
+        -------
+        str
+            The CSV text.
+        """
         n = self.n_joints
         cols = {"pose_id": self.pose_id, "source_row": self.source_row}
         linear = np.zeros(n, bool) if self.linear is None else self.linear

@@ -197,6 +197,12 @@ def register(robot, data, **kwargs):
     DataError
         The data are plane contacts or distances (no frame to fit), or an SMR index has no row.
 
+    See Also
+    --------
+    rc.Measurements : The data registered.
+    rc.evaluate : Evaluate a model on data (registering them first by default).
+    rc.calibrate : Calibration, whose frames are registered the same way.
+
     Examples
     --------
     >>> import numpy as np

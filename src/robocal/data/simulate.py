@@ -115,6 +115,13 @@ class SimulationResult:
         base; for flush data the normal is along the tool's z at the contacts).
     info : dict
         The settings and the seed.
+    warnings : list of str
+        Always empty: a simulation measures what it is told (the result protocol).
+
+    See Also
+    --------
+    rc.simulate_tracker : The simulation that returns it.
+    rc.Measurements : Its ``data``.
 
     Examples
     --------
@@ -137,13 +144,25 @@ class SimulationResult:
     warnings: list[str] = field(default_factory=list)  # a simulation measures what it is told: none
 
     def summary(self) -> str:
-        """Observations, poses, the noise floor (mm) and the outliers."""
+        """Observations, poses, the noise floor (mm) and the outliers.
+
+        Returns
+        -------
+        str
+            The summary text.
+        """
         info = self.info
         return (f"simulated {len(self.data)} {info['kind']} observations of {info['n_poses']} poses; "
                 f"noise drawn {self.noise_floor_mm:.4f} mm RMS; {len(self.outlier_rows)} outlier(s)")
 
     def to_dict(self) -> dict:
-        """The settings and seed, the outliers' file lines and the planes (the sidecar JSON)."""
+        """The settings and seed, the outliers' file lines and the planes (the sidecar JSON).
+
+        Returns
+        -------
+        dict
+            The sidecar JSON's content (JSON-ready).
+        """
         side = dict(self.info)
         side["outlier_rows"] = (self.outlier_rows + 2).tolist()  # file line numbers
         side["planes"] = None if self.planes is None else [
@@ -152,7 +171,20 @@ class SimulationResult:
 
     def write(self, data_path, truth_path) -> list[str]:
         """Write the data CSV, the truth model YAML and the sidecar JSON ``TRUTH.sim.json`` (all
-        three or none); the paths written."""
+        three or none); the paths written.
+
+        Parameters
+        ----------
+        data_path : str or pathlib.Path
+            The measurement CSV.
+        truth_path : str or pathlib.Path
+            The true model's YAML; the sidecar JSON is written next to it.
+
+        Returns
+        -------
+        list of str
+            The paths written.
+        """
         return [str(data_path), str(truth_path), str(write_simulation(self, data_path, truth_path))]
 
 
@@ -441,6 +473,13 @@ def simulate_tracker(robot, n_poses: int | None = None, *, noise_mm: float = 0.0
         Invalid counts, fractions, noise levels or shapes of the given arrays.
     UnreachableError
         Too few poses found inside ``workspace_box``, scale-bar placements or plane contacts.
+
+    See Also
+    --------
+    rc.simulate_markers : Markers on links seen by motion capture.
+    rc.simulate_camera : A camera's board poses.
+    rc.simulate_cell : A work cell's campaign.
+    robocal.data.simulate.SimulationResult : What it returns: the data, the truth, the noise.
 
     Examples
     --------

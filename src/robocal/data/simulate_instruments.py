@@ -74,12 +74,27 @@ def simulate_markers(robot, n_poses: int = 40, *, links=None, noise_mm: float = 
         Size of the robot's errors (1: a realistic arm) and the random seed.
     instrument : str
         The instrument the data declare.
+    outlier_mm : float
+        Size of a gross error (mm).
 
     Returns
     -------
     SimulationResult
         ``info["frames"]``: ``capture`` (the robot's world in the capture frame) and
         ``markers`` (offsets ``(K, 3)`` m in their link frames).
+
+    See Also
+    --------
+    rc.simulate_tracker : A laser tracker's points or poses.
+    rc.simulate_camera : A camera's board poses.
+    robocal.data.simulate.SimulationResult : What it returns.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> sim = rc.simulate_markers(rc.Robot.from_catalog("abb_irb2600"), 10, seed=0)
+    >>> sim.data.kind, len(sim.data)  # three markers (the default links) at each of 10 poses
+    ('marker', 30)
     """
     if links is not None and np.asarray(links).dtype.kind in "US":  # texts: link names or frame numbers
         links = robot.link_numbers(np.asarray(links))
@@ -142,6 +157,19 @@ def simulate_camera(robot, n_poses: int = 40, *, mount: str = "cell", noise_mm: 
     SimulationResult
         ``info["frames"]``: ``camera`` and ``board`` (the camera in the world and the board on the
         flange for 'cell'; the camera on the flange and the board in the world for 'flange').
+
+    See Also
+    --------
+    rc.simulate_tracker : A laser tracker's points or poses.
+    rc.simulate_markers : Markers on links seen by motion capture.
+    robocal.data.simulate.SimulationResult : What it returns.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> sim = rc.simulate_camera(rc.Robot.from_catalog("abb_irb2600"), 10, seed=0)
+    >>> sim.data.kind, len(sim.data)  # a camera fixed in the cell sees a board on the flange
+    ('eye_to_hand', 10)
     """
     if mount not in MOUNTS:
         raise DataError(f"mount must be one of {', '.join(MOUNTS)}, got {mount!r}")

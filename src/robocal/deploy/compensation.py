@@ -93,6 +93,14 @@ class Compensation:
     target_shift : numpy.ndarray, shape (N, 6), or None
         How far each corrected target is from the given one (m, rad; `pose_error`), None for
         the calibrated model's own tool (its corrected targets are for another TCP).
+    assumed : tuple of str
+        The conditions (payload, temperature) assumed by default or beyond the calibrated ones.
+    source_model : Robot or None
+        The calibrated model as given: its fingerprint marks the written file.
+
+    See Also
+    --------
+    rc.compensate : The compensation that returns it.
 
     Examples
     --------
@@ -126,7 +134,13 @@ class Compensation:
 
     def summary(self) -> str:
         """How many targets, how far their corrections move them (mm, deg) and the largest residual
-        left on the calibrated model (mm)."""
+        left on the calibrated model (mm).
+
+        Returns
+        -------
+        str
+            The summary text.
+        """
         shift = ""
         if self.target_shift is not None:
             mm = np.linalg.norm(self.target_shift[:, :3], axis=1) * 1e3
@@ -138,7 +152,13 @@ class Compensation:
 
     def to_dict(self) -> dict:
         """The commands (joints in deg or mm, corrected targets in the targets' units, converged,
-        distances from the singularities) as ``{column: list}``, and the warnings."""
+        distances from the singularities) as ``{column: list}``, and the warnings.
+
+        Returns
+        -------
+        dict
+            The commands and the warnings (JSON-ready).
+        """
         columns, values = self._table()
         return {"columns": {c: values[:, i].tolist() for i, c in enumerate(columns)},
                 "warnings": self.warnings}
@@ -160,7 +180,20 @@ class Compensation:
     def write(self, output, parameters=None) -> list[str]:
         """Write the commands CSV (``output``, marked with the calibrated model's fingerprint) and
         the corrected-parameter table (``parameters``: name, unit (mm/deg), nominal, calibrated,
-        delta), all or none; the paths written."""
+        delta), all or none; the paths written.
+
+        Parameters
+        ----------
+        output : str or pathlib.Path
+            The commands CSV.
+        parameters : str or pathlib.Path, optional
+            The corrected-parameter table (CSV).
+
+        Returns
+        -------
+        list of str
+            The paths written.
+        """
         texts = {output: mark_csv(format_csv(*self._table()), self.source_model or self.corrected_model)}
         if parameters:
             lines = ["name,unit,nominal,calibrated,delta"]
@@ -175,7 +208,20 @@ class Compensation:
     def target_warnings(self, names: Sequence[str] | None = None,
                         which: np.ndarray | None = None) -> list[str]:
         """One line per target that was not reached or sits close to a singularity, labelled by
-        ``names`` (default ``target i``, i from 0); ``which`` ``(N,)`` bool: only those targets."""
+        ``names`` (default ``target i``, i from 0); ``which`` ``(N,)`` bool: only those targets.
+
+        Parameters
+        ----------
+        names : sequence of str, optional
+            One label a target.
+        which : numpy.ndarray of bool, shape (N,), optional
+            The targets to report on (default all).
+
+        Returns
+        -------
+        list of str
+            One line a target not reached or near a singularity.
+        """
         out = []
         n = len(self.converged)
         close = np.zeros(n, bool) if self.singularity is None else self.singularity.close
@@ -199,7 +245,18 @@ class Compensation:
         return out
 
     def not_reached(self, i: int) -> str:
-        """Why target ``i`` has no correction (how far the IK stopped, the nearest singularity)."""
+        """Why target ``i`` has no correction (how far the IK stopped, the nearest singularity).
+
+        Parameters
+        ----------
+        i : int
+            The target's index.
+
+        Returns
+        -------
+        str
+            The reason, one line.
+        """
         where = "" if self.singularity is None else f"; {self.singularity.describe(i)}"
         return f"not reached on the calibrated model (best {self.position_error[i] * 1e3:.3g} mm off){where}"
 
@@ -347,6 +404,10 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
     arm : str, optional
         With work cells of several arms: the arm (body name or unit, ``"ROB_2"``) that reaches the
         targets.
+    payload : float or array_like of 4, optional
+        The payload the targets are run at: kg, or kg and the centre of mass x, y, z (m, flange frame).
+    temperature : float, optional
+        The temperature the targets are run at (deg C).
 
     Returns
     -------
@@ -364,6 +425,13 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
         outside 0-7, or more than one of ``branch``, ``seeds`` and ``start``.
     ModelError
         Closed-form seeds asked of a nominal model without an OPW or UR form.
+
+    See Also
+    --------
+    robocal.deploy.compensation.Compensation : What it returns.
+    rc.filter_program : Compensate a robot program.
+    rc.ik.solve_all : Every inverse-kinematics solution of a model.
+    robocal.deploy.models.load_model_pair : The calibrated and nominal models, checked together.
 
     Examples
     --------

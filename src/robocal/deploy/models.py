@@ -50,6 +50,12 @@ def load_model_pair(calibrated: str, nominal: str, option: str = "--calibrated")
     DataError
         The two look swapped, or a file is missing or not a model.
 
+    See Also
+    --------
+    rc.compensate : Uses the pair.
+    rc.filter_program : Uses the pair.
+    robocal.data.inputs.check_distinct_inputs : The input files checked distinct.
+
     Examples
     --------
     >>> import robocal as rc

@@ -44,6 +44,10 @@ class ToolCalibration:
     warnings : list of str
         None today: poses that do not determine the TCP are refused.
 
+    See Also
+    --------
+    rc.identify_tcp : The identification that returns it.
+
     Examples
     --------
     >>> import numpy as np
@@ -62,9 +66,17 @@ class ToolCalibration:
 
     @property
     def rms_mm(self) -> float:
+        """The RMS (mm) of the residuals of the touched poses."""
         return float(np.sqrt(np.mean(self.residuals**2)) * 1e3)
 
     def summary(self) -> str:
+        """The TCP, the touched point (mm), the residuals' RMS (mm) and the spread (deg).
+
+        Returns
+        -------
+        str
+            The summary text.
+        """
         t, p = self.tcp * 1e3, self.point * 1e3
         lines = [f"TCP in flange coordinates: x {t[0]:.3f} y {t[1]:.3f} z {t[2]:.3f} mm",
                  f"touched point (robot base): x {p[0]:.3f} y {p[1]:.3f} z {p[2]:.3f} mm",
@@ -75,19 +87,60 @@ class ToolCalibration:
 
     def option(self, name: str = "TOOL", rotation: np.ndarray | None = None) -> str:
         """The ``--tcp`` value ``NAME=x,y,z,rx,ry,rz`` (mm, deg) of this TCP with the tool's
-        orientation ``rotation`` (3x3; default none): the 4-point method finds the position only."""
+        orientation ``rotation`` (3x3; default none): the 4-point method finds the position only.
+
+        Parameters
+        ----------
+        name : str, default "TOOL"
+            The tool's name.
+        rotation : numpy.ndarray, shape (3, 3), optional
+            The tool's orientation in the flange frame; default none (identity).
+
+        Returns
+        -------
+        str
+            ``NAME=x,y,z,rx,ry,rz`` (mm, deg).
+        """
         T = make_transform(np.eye(3) if rotation is None else rotation, self.tcp)
         return f"{name}={frame_to_text(T)}"
 
     def to_dict(self, name: str = "TOOL", rotation: np.ndarray | None = None) -> dict:
         """The TCP and the touched point (mm), each pose's residual (mm), their RMS, the spread
-        (deg) and the `option`."""
+        (deg) and the `option`.
+
+        Parameters
+        ----------
+        name : str, default "TOOL"
+            The tool's name in the `option`.
+        rotation : numpy.ndarray, shape (3, 3), optional
+            The tool's orientation in the flange frame.
+
+        Returns
+        -------
+        dict
+            The TCP result (JSON-ready).
+        """
         return {"tcp_mm": (self.tcp * 1e3).tolist(), "point_mm": (self.point * 1e3).tolist(),
                 "residuals_mm": (self.residuals * 1e3).tolist(), "rms_mm": self.rms_mm,
                 "spread_deg": self.spread_deg, "tcp_option": self.option(name, rotation)}
 
     def write(self, json_path=None, name: str = "TOOL", rotation: np.ndarray | None = None) -> list[str]:
-        """Write `to_dict` as JSON to ``json_path`` (atomically); the paths written."""
+        """Write `to_dict` as JSON to ``json_path`` (atomically); the paths written.
+
+        Parameters
+        ----------
+        json_path : str or pathlib.Path, optional
+            The JSON file (None: nothing written).
+        name : str, default "TOOL"
+            The tool's name in the `option`.
+        rotation : numpy.ndarray, shape (3, 3), optional
+            The tool's orientation in the flange frame.
+
+        Returns
+        -------
+        list of str
+            The paths written.
+        """
         if json_path is None:
             return []
         write_atomic(json_path, json.dumps(self.to_dict(name, rotation), indent=1) + "\n")
@@ -124,6 +177,11 @@ def identify_tcp(calibrated: Robot, nominal: Robot, q, robot_base=None) -> ToolC
     DataError
         Fewer than 4 poses, orientations too alike to determine the TCP, or a pose far from the
         common point (a slipped tip), each named.
+
+    See Also
+    --------
+    rc.ToolCalibration : What it returns.
+    rc.compensate : Targets of a tool (its ``tool``).
 
     Examples
     --------

@@ -351,6 +351,40 @@ class UrdfLikeExport:
     comparison of the written file's FK with the calibrated model's ``fk_check`` (m, rad, joint
     vectors) and the ``warnings``.
 
+    Parameters
+    ----------
+    robot : Robot
+        The calibrated model written into the vendor's file.
+    nominal : Robot
+        The nominal model the vendor's file was mapped against.
+    vendor : str
+        The vendor's URDF (path).
+    robot_name : str
+        The ``<robot name>`` of the vendor's file (kept).
+    text : str
+        The written URDF.
+    base, tool : ndarray, shape (4, 4)
+        robocal's base frame in base_link; tool0 in robocal's flange (m).
+    map_check : tuple of float
+        The map's largest variation over the check's joint vectors (m, rad).
+    shifts : list of JointShift
+        Per moving joint: how far its origin and its link frame at q = 0 moved (mm, deg).
+    fk_check : tuple
+        The written file's FK against the calibrated model's: largest gap (m, rad), joint vectors.
+    output : str, optional
+        Where `write` writes the URDF by default.
+    warnings : list of str
+        What the user should know (joint-error terms a URDF cannot hold...).
+    xacro, xacro_text, xacro_output : str, optional
+        The vendor's macro, the calibrated macro and where it is written.
+    fk_frames : str
+        The frames the FK check compares.
+
+    See Also
+    --------
+    rc.export_urdf_like : Makes it.
+    rc.Robot : The calibrated model.
+
     Examples
     --------
     >>> import robocal as rc
@@ -384,7 +418,13 @@ class UrdfLikeExport:
     fk_frames: str = "base_link -> tool0"
 
     def summary(self) -> str:
-        """The map, the FK check and the per-joint shifts, one line each."""
+        """The map, the FK check and the per-joint shifts, one line each.
+
+        Returns
+        -------
+        str
+            The summary, several lines.
+        """
         mm, rad, count = self.fk_check
         lines = [f"{self.vendor} ({self.robot_name}) with the kinematics of {self.robot.name} "
                  f"(nominal {self.nominal.name}): only the {len(self.shifts)} moving joints' origins changed",
@@ -399,7 +439,13 @@ class UrdfLikeExport:
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        """The map, the checks, the shifts, the warnings and the file."""
+        """The map, the checks, the shifts, the warnings and the file.
+
+        Returns
+        -------
+        dict
+            JSON-ready (lengths in m, angles in rad; the shifts in mm and deg).
+        """
         return {"vendor": self.vendor, "robot_name": self.robot_name, "model": self.robot.name,
                 "nominal": self.nominal.name, "base_in_base_link": self.base.tolist(),
                 "tool0_in_flange": self.tool.tolist(),
@@ -413,6 +459,18 @@ class UrdfLikeExport:
     def write(self, path=None, xacro_path=None) -> list[str]:
         """Write the URDF to ``path`` (default ``output``) and, with a vendor macro, the calibrated
         macro to ``xacro_path`` (default ``xacro_output``), all or none; the paths written.
+
+        Parameters
+        ----------
+        path : str, optional
+            The URDF to write (default ``output``).
+        xacro_path : str, optional
+            The calibrated macro to write (default ``xacro_output``).
+
+        Returns
+        -------
+        list of str
+            The paths written.
 
         Raises
         ------
@@ -491,6 +549,11 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
         terms matter and ``geometry_only`` is not set.
     ModelError
         The vendor file is not a readable URDF.
+
+    See Also
+    --------
+    robocal.deploy.urdf_like.UrdfLikeExport : What it returns.
+    rc.Robot : The calibrated model (``Robot.load`` of calibrate's output).
 
     Examples
     --------

@@ -180,6 +180,14 @@ class CheckResult:
         The p-value once those parameters are refitted.
     notes : list of str
         Remarks for the reader.
+    noise_source : str
+        Where the noise comes from: ``"calibration"`` (its estimate) or ``"stated"`` (``noise_mm``).
+    warnings : list of str
+        Always empty: the verdict says what matters (the result protocol).
+
+    See Also
+    --------
+    robocal.history.check.check_calibration : The check that returns it.
 
     Examples
     --------
@@ -213,13 +221,34 @@ class CheckResult:
 
     def write(self, json_path=None, **header) -> list[str]:
         """Write ``header`` (e.g. the model and data files) and `to_dict` as JSON to
-        ``json_path`` (atomically); the paths written."""
+        ``json_path`` (atomically); the paths written.
+
+        Parameters
+        ----------
+        json_path : str or pathlib.Path, optional
+            The JSON file (None: nothing written).
+        **header
+            Entries written first (the model and data files...).
+
+        Returns
+        -------
+        list of str
+            The paths written.
+        """
         if json_path is None:
             return []
         write_all({json_path: json.dumps({**header, **self.to_dict()}, indent=2, allow_nan=False) + "\n"})
         return [str(json_path)]
 
     def to_dict(self) -> dict:
+        """The verdict, the p-value, the test (statistic, degrees of freedom, noise), the RMS (mm),
+        the notes and, when the verdict is ``changed``, the parameters most likely moved.
+
+        Returns
+        -------
+        dict
+            The check (JSON-ready).
+        """
         out = {"verdict": self.verdict, "p_value": self.p_value, "alpha": ALPHA,
                "test": {"kind": "F" if self.noise_dof else "chi2", "statistic": self.statistic,
                         "dof": self.dof, "noise_dof": self.noise_dof, "noise_mm": self.noise_m * 1e3,
@@ -233,7 +262,13 @@ class CheckResult:
         return out
 
     def summary(self) -> str:
-        """The verdict with its p-value and RMS (mm), the parameters most likely moved, the notes."""
+        """The verdict with its p-value and RMS (mm), the parameters most likely moved, the notes.
+
+        Returns
+        -------
+        str
+            The summary text.
+        """
         lines = [f"check of {self.n_poses} poses: {self.verdict} (p = {self.p_value:.3g}; "
                  f"RMS {self.rms_mm:.4f} mm, expected {self.predicted_rms_mm:.4f} mm if unchanged)"]
         moved = [*self._frame_words(), *(f"{c['name']} {c['shift']:+.4f} ± {c['sigma']:.4f} {c['unit']}"
@@ -360,6 +395,13 @@ def check_calibration(robot, data, uncertainty: Uncertainty, *, fit_frame: bool 
     DataError
         Not point data, too few poses, uncertainty naming parameters the model lacks, a noise out
         of range, or residuals no calibration explains (without ``force``).
+
+    See Also
+    --------
+    robocal.history.check.CheckResult : What it returns.
+    robocal.history.History : Where calibrations and checks are recorded.
+    robocal.history.offsets.recalibrate_offsets : What to do when only offsets moved.
+    rc.evaluate : A model's errors on data, without a verdict.
 
     Examples
     --------

@@ -74,6 +74,12 @@ def recalibrate_offsets(nominal, start, data, validation=None, *, history: str |
         Models of different robots, data other than points or poses, or ``params`` /
         ``nongeometric`` among the options.
 
+    See Also
+    --------
+    robocal.history.check.check_calibration : Says when offsets moved.
+    rc.calibrate : A full calibration.
+    robocal.history.History : Records the result.
+
     Examples
     --------
     >>> import robocal as rc

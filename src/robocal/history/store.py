@@ -97,6 +97,24 @@ class Record:
         The model the record is about, as model YAML text (docs/model-yaml.md).
     summary : dict
         The figures (mm); of a check, its verdict and p-value.
+    parameters : list of dict
+        Rows ``{name, unit, estimate, sigma}`` (mm, deg).
+    uncertainty : dict or None
+        What a later check needs of a calibration (its covariance in SI, the noise); None for a check.
+    data : list of dict
+        The input files ``{file, role, sha256}``.
+    parent : int or None
+        The record a derived calibration (offsets only) or a check started from.
+    date : str
+        UTC, ISO 8601 with the offset; default now.
+    robocal_version : str
+        The version that made the record.
+    id : int or None
+        Set once recorded.
+
+    See Also
+    --------
+    robocal.history.History : The store of records.
 
     Examples
     --------
@@ -127,12 +145,19 @@ class Record:
 
     @property
     def model_sha256(self) -> str:
+        """SHA-256 (hex) of ``model_yaml``: which model the record is about."""
         return sha256_text(self.model_yaml)
 
     def timeline_entry(self) -> dict:
         """This record as one entry of ``robocal history --json`` (docs/reference/history-json.md):
         ``held_out_rms`` (mm) of a calibration with validation or of an evaluation, else null;
-        ``verdict`` and ``p_value`` of a check, else null; ``rms`` the record's own figure (mm)."""
+        ``verdict`` and ``p_value`` of a check, else null; ``rms`` the record's own figure (mm).
+
+        Returns
+        -------
+        dict
+            The timeline entry (JSON-ready).
+        """
         s = self.summary
         held_out = s.get("held_out_rms") if self.kind == "calibration" else \
             s.get("rms") if self.kind == "evaluation" else None
@@ -201,6 +226,12 @@ class History:
         untouched), a damaged one (SQLite's integrity check), a read-only file or folder when
         writing, a schema version that is not a whole number or newer than this robocal, or a
         PostgreSQL URL without psycopg.
+
+    See Also
+    --------
+    robocal.history.Record : One entry.
+    robocal.history.check.check_calibration : Check a recorded calibration.
+    robocal.history.offsets.recalibrate_offsets : Recalibrate the joint offsets only.
 
     Examples
     --------
@@ -290,6 +321,7 @@ class History:
         return conn
 
     def close(self) -> None:
+        """Close the connection (leaving a ``with`` block does it)."""
         self._conn.close()
 
     def __enter__(self) -> History:
@@ -459,11 +491,23 @@ class History:
 
     @property
     def schema_version(self) -> int:
+        """The version of the database's schema."""
         return self._version(self._query("SELECT version FROM schema_version"))
 
     # -- records -----------------------------------------------------------------------------
     def record(self, entry: Record) -> int:
-        """Store ``entry`` (its ``id`` is set) and return its id."""
+        """Store ``entry`` (its ``id`` is set) and return its id.
+
+        Parameters
+        ----------
+        entry : Record
+            The record to store.
+
+        Returns
+        -------
+        int
+            Its id.
+        """
         check_robot_id(entry.robot_id)
         if entry.kind not in KINDS:
             raise DataError(f"a history record is one of {KINDS}, not {entry.kind!r}")
@@ -489,7 +533,27 @@ class History:
         cause), or, when a list ``skipped`` is given, left out with a line appended there. On
         SQLite the rows found through the index are counted in the table itself too (a scan of the
         robot id column); when none is found or the counts differ, SQLite's integrity check runs
-        and the history is reported damaged (a scrambled index hides records that are there)."""
+        and the history is reported damaged (a scrambled index hides records that are there).
+
+        Parameters
+        ----------
+        robot_id : str
+            The robot.
+        kind : str, optional
+            Only records of this kind (``calibration``, ``check``...).
+        skipped : list of str, optional
+            Receives one line a record left out; without it an unreadable record raises.
+
+        Returns
+        -------
+        list of Record
+            In recording order.
+
+        Raises
+        ------
+        DataError
+            An unreadable record (without ``skipped``).
+        """
         sql = ("SELECT id, robot_id, kind, recorded_at, robocal_version, model_yaml, model_sha256, summary, "
                "parameters, uncertainty, data, parent_id FROM records WHERE robot_id = ?")
         params: tuple = (check_robot_id(robot_id),)
@@ -518,7 +582,25 @@ class History:
     def find_calibration(self, robot_id: str, model_yaml: str | None = None) -> Record | None:
         """The latest calibration of ``robot_id`` (whose model is ``model_yaml`` when given), None
         when there is none; DataError when any calibration record of the robot is unreadable
-        (it could be the one asked for: an older one would be a wrong answer that looks right)."""
+        (it could be the one asked for: an older one would be a wrong answer that looks right).
+
+        Parameters
+        ----------
+        robot_id : str
+            The robot.
+        model_yaml : str, optional
+            Only a calibration of this model.
+
+        Returns
+        -------
+        Record or None
+            The latest calibration.
+
+        Raises
+        ------
+        DataError
+            A calibration record of the robot is unreadable.
+        """
         found = self.entries(robot_id, "calibration")
         if model_yaml is not None:
             digest = sha256_text(model_yaml)
@@ -529,7 +611,25 @@ class History:
 
     def calibration(self, robot_id: str, model_yaml: str | None = None) -> Record:
         """The latest calibration of ``robot_id`` (whose model is ``model_yaml`` when given);
-        DataError naming the robot id when there is none."""
+        DataError naming the robot id when there is none.
+
+        Parameters
+        ----------
+        robot_id : str
+            The robot.
+        model_yaml : str, optional
+            Only a calibration of this model.
+
+        Returns
+        -------
+        Record
+            The latest calibration.
+
+        Raises
+        ------
+        DataError
+            There is none.
+        """
         found = self.find_calibration(robot_id, model_yaml)
         if found is not None:
             return found

@@ -11,6 +11,12 @@
 
 Poses are world TCP poses ``(N, 4, 4)`` in metres, joints ``(N, n)`` in radians.
 
+See Also
+--------
+rc.ik.solve_all : Every solution of each target.
+rc.ik.solve : One solution of each target.
+rc.ik.plan_path : The solutions of a path that move the joints least.
+
 Examples
 --------
 >>> import numpy as np

@@ -191,6 +191,12 @@ def solve_all(robot: Robot, poses, *, limits: bool = False, extra_turns: bool = 
     DataError
         ``poses`` are not rigid transforms.
 
+    See Also
+    --------
+    rc.ik.solve : One solution per target.
+    rc.ik.IKResult : What it returns.
+    rc.ik.plan_path : Choose among the solutions along a path.
+
     Examples
     --------
     >>> import numpy as np

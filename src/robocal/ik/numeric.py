@@ -52,6 +52,11 @@ class IKResult:
     iterations : int
         The most accepted steps any target took over all its runs.
 
+    See Also
+    --------
+    rc.ik.solve_all : Returns it.
+    rc.ik.solve : Returns it.
+
     Examples
     --------
     >>> import numpy as np
@@ -371,6 +376,11 @@ def solve(robot: Robot, poses, seeds=None, *, branch: int | None = None, nominal
     ------
     UnreachableError
         With ``strict=True``: the poses that did not converge, listed.
+
+    See Also
+    --------
+    rc.ik.solve_all : Every solution of each target.
+    rc.ik.IKResult : What it returns.
 
     Examples
     --------

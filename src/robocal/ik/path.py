@@ -63,6 +63,10 @@ class PathResult:
     warnings : list of str
         None today: a waypoint without a solution is refused.
 
+    See Also
+    --------
+    rc.ik.plan_path : The planner that returns it.
+
     Examples
     --------
     >>> import numpy as np
@@ -90,19 +94,42 @@ class PathResult:
         return 100.0 * (1.0 - self.cost / self.greedy_cost) if self.greedy_cost > 0 else 0.0
 
     def summary(self) -> str:
-        """The weights and the optimal and greedy weighted travel."""
+        """The weights and the optimal and greedy weighted travel.
+
+        Returns
+        -------
+        str
+            The summary text.
+        """
         return (f"weights {np.round(self.weights, 4).tolist()}\n"
                 f"optimal total weighted travel {self.cost:.6g}\n"
                 f"greedy  total weighted travel {self.greedy_cost:.6g} (optimal saves {self.saving:.1f}%)")
 
     def to_dict(self) -> dict:
-        """The joints (rad; a track's carriage m), the costs, the weights and the branch slots."""
+        """The joints (rad; a track's carriage m), the costs, the weights and the branch slots.
+
+        Returns
+        -------
+        dict
+            The path (JSON-ready).
+        """
         return {"joints": self.joints.tolist(), "cost": self.cost, "greedy_cost": self.greedy_cost,
                 "weights": self.weights.tolist(), "slots": self.slots.tolist()}
 
     def write(self, path) -> list[str]:
         """Write the joints CSV (each joint under its column in its unit: ``q1_deg..``, a track's
-        ``e1_mm`` first, a quill's ``q3_mm``) atomically; the paths written."""
+        ``e1_mm`` first, a quill's ``q3_mm``) atomically; the paths written.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The joints CSV.
+
+        Returns
+        -------
+        list of str
+            The paths written.
+        """
         columns = [j.column for j in self.joint_specs]
         shown = np.column_stack([j.shown(self.joints[:, k]) for k, j in enumerate(self.joint_specs)])
         lines = [",".join(columns)] + [",".join(repr(float(v)) for v in row) for row in shown.tolist()]
@@ -128,6 +155,10 @@ def default_weights(robot: Robot, wrist=(1.0, 1.0, 1.0)) -> np.ndarray:
     -------
     numpy.ndarray, shape (n,)
         Weight per joint, per radian of travel (dimensionless, 1 + metres for the first three).
+
+    See Also
+    --------
+    rc.ik.plan_path : Uses them.
 
     Examples
     --------
@@ -250,6 +281,12 @@ def plan_path(robot: Robot, poses, weights=None, start=None, nominal: Robot | No
     DataError
         ``robot`` is an arm on a track (its path needs each pose's carriage position:
         `robocal.ik.track.plan`).
+
+    See Also
+    --------
+    rc.ik.PathResult : What it returns.
+    rc.ik.default_weights : The joints' default weights.
+    rc.ik.solve_all : The solutions it chooses among.
 
     Examples
     --------

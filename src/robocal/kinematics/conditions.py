@@ -48,6 +48,20 @@ class Conditions:
         The payload carried: mass (kg), then its centre of mass x, y, z in the flange frame (m).
     temperature : numpy.ndarray, shape (N,), optional
         The arm's temperature, deg C.
+
+    See Also
+    --------
+    rc.Robot.fk : Forward kinematics at the rows' conditions.
+    rc.Robot.with_conditions : Fixed conditions for compensation and programs.
+    rc.Measurements : Rows with their payload and temperature columns.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import robocal as rc
+    >>> conditions = rc.Conditions(temperature=np.array([20.0, 25.0]))  # deg C, one a row
+    >>> conditions.rows([1]).temperature
+    array([25.])
     """
 
     approach: np.ndarray | None = None
@@ -62,7 +76,18 @@ class Conditions:
         return Conditions(self.approach, self.travel)
 
     def rows(self, index) -> Conditions:
-        """The conditions of the rows ``index`` (a slice, indices or a mask) of every field given."""
+        """The conditions of the rows ``index`` (a slice, indices or a mask) of every field given.
+
+        Parameters
+        ----------
+        index : slice, array_like of int or bool
+            The rows to keep.
+
+        Returns
+        -------
+        Conditions
+            The selected rows' conditions.
+        """
         return Conditions(**{f.name: None if getattr(self, f.name) is None else
                              np.asarray(getattr(self, f.name))[index] for f in fields(self)})
 

@@ -230,6 +230,13 @@ class Robot:
         a constant angle); ``d_i`` is its zero and a ``scale{i}`` joint-error term its encoder
         scale.
 
+    See Also
+    --------
+    rc.load_model : A robot from a model YAML, a URDF or a catalog name.
+    rc.Cell : Arms and positioners placed in one world.
+    rc.Conditions : The payload and temperature of each row, for `fk` and `jacobian`.
+    rc.calibrate : Identify the robot's parameters from measurements.
+
     Examples
     --------
     >>> import numpy as np
@@ -405,14 +412,39 @@ class Robot:
 
     def joints_shown(self, q) -> np.ndarray:
         """Joints ``q`` ``(N, n)`` (rad; m for a prismatic joint) in each joint's unit (deg; mm):
-        what joints files and messages show (`joints`)."""
+        what joints files and messages show (`joints`).
+
+        Parameters
+        ----------
+        q : array_like, shape (N, n)
+            Joint values (rad; m for a prismatic joint).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, n)
+            The values in deg (mm for a prismatic joint).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> robot.joints_shown(np.array([[np.pi / 2, 0, 0, 0, 0, 0]]))  # deg
+        array([[90.,  0.,  0.,  0.,  0.,  0.]])
+        """
         return joints_in_units(q, self.prismatic)
 
     def section(self) -> dict:
         """The ``robot`` section of the result and campaign JSON: ``name``, ``description``,
         ``n_joints`` and, when a joint is prismatic, ``joints``: each joint's CSV column (``['e1_mm',
         'q1_deg', ...]``, ``['q1_deg', 'q2_deg', 'q3_mm', 'q4_deg']``), which says the unit of its
-        values in the JSON (absent: every joint revolute, in deg)."""
+        values in the JSON (absent: every joint revolute, in deg).
+
+        Returns
+        -------
+        dict
+            The ``robot`` section (JSON-ready).
+        """
         out = {"name": self.name, "description": self.description, "n_joints": self.n_joints}
         return {**out, "joints": [j.column for j in self.joints]} if self.has_prismatic else out
 
@@ -631,7 +663,13 @@ class Robot:
 
     def parameter_units(self) -> list[str]:
         """'m' or 'rad' for each parameter, in vector order (joint-error terms: their own unit,
-        see `JointErrorModel.units`)."""
+        see `JointErrorModel.units`).
+
+        Returns
+        -------
+        list of str
+            One unit a parameter, in the order of the parameter vector.
+        """
         units = ["m" if _LINK_IS_LENGTH[f] else "rad" for _ in range(self.n_joints)
                  for f in LINK_FIELDS]
         units += (["m"] * 3 + ["rad"] * 3) * 2 + ["m"] * self.smr.size
@@ -643,7 +681,23 @@ class Robot:
         return {name: i for i, name in enumerate(self.parameter_names)}
 
     def indices(self, names: Iterable[str]) -> np.ndarray:
-        """Vector indices of parameter names; unknown names raise ModelError."""
+        """Vector indices of parameter names; unknown names raise ModelError.
+
+        Parameters
+        ----------
+        names : iterable of str
+            Parameter names (`names`).
+
+        Returns
+        -------
+        numpy.ndarray of int, shape (k,)
+            Their positions in the parameter vector.
+
+        Raises
+        ------
+        ModelError
+            A name the model does not have.
+        """
         lookup = self._index
         names = list(names)
         unknown = [nm for nm in names if nm not in lookup]
@@ -680,12 +734,44 @@ class Robot:
         return self._value_vector.copy()
 
     def get(self, name: str) -> float:
-        """One parameter's value (m or rad)."""
+        """One parameter's value (m or rad).
+
+        Parameters
+        ----------
+        name : str
+            A parameter name (`names`).
+
+        Returns
+        -------
+        float
+            Its value (m or rad).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> robot.get("d1")  # m
+        0.445
+        >>> robot.indices(["a1", "d1"])  # their places in the parameter vector
+        array([1, 4])
+        """
         return float(self._value_vector[self.indices([name])[0]])
 
     def values_of(self, names: Iterable[str]) -> np.ndarray:
         """The values ``(k,)`` (m or rad) of the named parameters, read from the vector computed
-        once per model (what a loop over parameters uses instead of `get` per name)."""
+        once per model (what a loop over parameters uses instead of `get` per name).
+
+        Parameters
+        ----------
+        names : iterable of str
+            Parameter names.
+
+        Returns
+        -------
+        numpy.ndarray, shape (k,)
+            Their values (m or rad).
+        """
         return self._value_vector[self.indices(names)]
 
     def with_values(self, updates: dict[str, float]) -> Robot:
@@ -736,7 +822,18 @@ class Robot:
 
     def with_joint_errors(self, names: Sequence[str]) -> Robot:
         """A copy that declares the joint-error terms ``names`` (new ones at zero, the nominal
-        zero) and no others; values of terms kept from this robot are kept."""
+        zero) and no others; values of terms kept from this robot are kept.
+
+        Parameters
+        ----------
+        names : sequence of str
+            The joint-error terms to declare (``robocal robots --terms`` lists them).
+
+        Returns
+        -------
+        Robot
+            The copy; this robot is unchanged.
+        """
         names = list(dict.fromkeys(names))
         if not names:
             return replace(self, joint_errors=None)
@@ -749,20 +846,53 @@ class Robot:
         return replace(self, joint_errors=errors)
 
     def with_priors(self, priors: PriorSpec | None) -> Robot:
-        """A copy with the prior class and group scales ``priors`` (None: chosen and estimated)."""
+        """A copy with the prior class and group scales ``priors`` (None: chosen and estimated).
+
+        Parameters
+        ----------
+        priors : PriorSpec or None
+            The prior class and group scales (`robocal.identify.priors`).
+
+        Returns
+        -------
+        Robot
+            The copy.
+        """
         if priors is not None and not isinstance(priors, PriorSpec):
             raise ModelError("priors must be a PriorSpec (robocal.kinematics.prior_spec)")
         return replace(self, priors=priors)
 
     def with_reference_temperature(self, celsius: float) -> Robot:
-        """A copy whose thermal term's T_ref is ``celsius`` (deg C); self without joint errors."""
+        """A copy whose thermal term's T_ref is ``celsius`` (deg C); self without joint errors.
+
+        Parameters
+        ----------
+        celsius : float
+            The reference temperature T_ref (deg C).
+
+        Returns
+        -------
+        Robot
+            The copy (this robot itself when it has no joint-error terms).
+        """
         if self.joint_errors is None:
             return self
         return replace(self, joint_errors=replace(self.joint_errors, reference_temperature_c=float(celsius)))
 
     def with_calibrated_conditions(self, calibrated) -> Robot:
         """A copy whose error model records the payloads and temperatures its calibration covered
-        (a `robocal.kinematics.conditions.CalibratedRange`); self without joint errors."""
+        (a `robocal.kinematics.conditions.CalibratedRange`); self without joint errors.
+
+        Parameters
+        ----------
+        calibrated : CalibratedRange
+            The payloads and temperatures the calibration's data covered.
+
+        Returns
+        -------
+        Robot
+            The copy (this robot itself when it has no joint-error terms).
+        """
         if self.joint_errors is None:
             return self
         return replace(self, joint_errors=replace(self.joint_errors, calibrated=calibrated))
@@ -770,7 +900,20 @@ class Robot:
     def with_conditions(self, payload=None, temperature: float | None = None) -> Robot:
         """A copy used at a fixed payload ``(kg, x, y, z)`` (kg, m: the centre of mass in the flange
         frame; a mass alone: at the flange) and ``temperature`` deg C wherever the rows give none
-        (compensation, programs); None leaves that condition as it was."""
+        (compensation, programs); None leaves that condition as it was.
+
+        Parameters
+        ----------
+        payload : float or array_like of 4, optional
+            Mass (kg) or ``(kg, x, y, z)`` with the centre of mass in the flange frame (m).
+        temperature : float, optional
+            deg C.
+
+        Returns
+        -------
+        Robot
+            The copy.
+        """
         if self.joint_errors is None:
             return self
         errors = self.joint_errors
@@ -789,7 +932,18 @@ class Robot:
     def link_scale(self, temperature: np.ndarray | None = None) -> np.ndarray | None:
         """``(N, n)`` the thermal terms' scale of each link length at ``temperature (N,)`` deg C
         (`robocal.kinematics.thermal`: each link by its group's k; ``(1, n)`` at the fixed
-        temperature of `with_conditions`); None without a thermal term or a temperature."""
+        temperature of `with_conditions`); None without a thermal term or a temperature.
+
+        Parameters
+        ----------
+        temperature : numpy.ndarray, shape (N,), optional
+            deg C of each row.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, n) or (1, n), or None
+            The scale of each link length (1 at T_ref).
+        """
         errors = self.joint_errors
         k = None if errors is None else thermal_coefficients(errors.names, errors.values, self.prismatic)
         if k is not None and temperature is None and errors.temperature_c is not None:
@@ -798,13 +952,35 @@ class Robot:
 
     def links_at(self, temperature: np.ndarray | None = None) -> LinkArrays:
         """The link parameters, ``a, d`` ``(N, n)`` scaled by `link_scale` at ``temperature
-        (N,)`` deg C; the plain ``(n,)`` links without a thermal term or a temperature."""
+        (N,)`` deg C; the plain ``(n,)`` links without a thermal term or a temperature.
+
+        Parameters
+        ----------
+        temperature : numpy.ndarray, shape (N,), optional
+            deg C of each row.
+
+        Returns
+        -------
+        LinkArrays
+            The link parameters (m, rad), ``a`` and ``d`` scaled.
+        """
         return scaled_links(self.links, self.link_scale(temperature))
 
     def default_free(self, orientation: bool = False) -> list[str]:
         """Parameters a calibration frees by default: every link parameter (beta only on
         parallel axes), the base frame, the tool translation (and rotation for pose data), the
-        extra SMRs and the declared joint-error terms."""
+        extra SMRs and the declared joint-error terms.
+
+        Parameters
+        ----------
+        orientation : bool, default False
+            The data measure orientation (pose data): free the tool rotation too.
+
+        Returns
+        -------
+        list of str
+            Parameter names.
+        """
         names = []
         for i in range(self.n_joints):
             for f in LINK_FIELDS:
@@ -817,7 +993,18 @@ class Robot:
         return names + self.joint_error_names
 
     def default_spans(self, names: Iterable[str]) -> np.ndarray:
-        """Default search half-widths (m or rad) of the named geometry parameters."""
+        """Default search half-widths (m or rad) of the named geometry parameters.
+
+        Parameters
+        ----------
+        names : iterable of str
+            Geometry parameter names.
+
+        Returns
+        -------
+        numpy.ndarray, shape (k,)
+            Half-widths (m or rad).
+        """
         units = self.parameter_units()
         spans = []
         for name in names:
@@ -828,7 +1015,20 @@ class Robot:
         return np.array(spans)
 
     def bounds(self, names: Iterable[str], spans: np.ndarray | None = None):
-        """(lower, upper) bounds of displacements from the current model for ``names``."""
+        """(lower, upper) bounds of displacements from the current model for ``names``.
+
+        Parameters
+        ----------
+        names : iterable of str
+            Parameter names.
+        spans : numpy.ndarray, shape (k,), optional
+            Half-widths (m or rad); default `default_spans`.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``(lower, upper)``, each ``(k,)``.
+        """
         names = list(names)
         spans = self.default_spans(names) if spans is None else np.asarray(spans, float)
         return -spans, spans
@@ -840,6 +1040,18 @@ class Robot:
         Link parameters, frame translations, SMR offsets and joint-error terms add; frame
         rotations compose (base: R <- exp(d) R about the world origin; tool: R <- exp(d) R in
         flange axes), matching the identification Jacobian.
+
+        Parameters
+        ----------
+        names : sequence of str
+            k parameter names.
+        delta : numpy.ndarray, shape (..., k)
+            Displacements (m or rad).
+
+        Returns
+        -------
+        DisplacedArrays
+            Links, frames, SMR offsets and joint-error values, batched over ``delta``'s leading axes.
         """
         delta = np.asarray(delta, dtype=float)
         batch = delta.shape[:-1]
@@ -863,7 +1075,20 @@ class Robot:
         return DisplacedArrays(link_arrays, base, tool, smr, errors)
 
     def displaced(self, names: Sequence[str], delta: np.ndarray) -> Robot:
-        """A copy displaced by ``delta`` ``(k,)`` on ``names`` (see `displaced_arrays`)."""
+        """A copy displaced by ``delta`` ``(k,)`` on ``names`` (see `displaced_arrays`).
+
+        Parameters
+        ----------
+        names : sequence of str
+            k parameter names.
+        delta : numpy.ndarray, shape (k,)
+            Displacements (m or rad).
+
+        Returns
+        -------
+        Robot
+            The displaced copy.
+        """
         delta = _as_vector(delta, len(names), "parameter displacement")
         moved = self.displaced_arrays(names, delta)
         errors = None if moved.joint_errors is None else \
@@ -872,13 +1097,45 @@ class Robot:
                        **moved.links._asdict())
 
     def with_frames(self, base: np.ndarray | None = None, tool: np.ndarray | None = None) -> Robot:
-        """A copy with a new base and/or tool frame (4x4)."""
+        """A copy with a new base and/or tool frame (4x4).
+
+        Parameters
+        ----------
+        base, tool : numpy.ndarray, shape (4, 4), optional
+            Homogeneous transforms (m); None keeps this robot's.
+
+        Returns
+        -------
+        Robot
+            The copy.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> tool = np.eye(4)
+        >>> tool[2, 3] = 0.25  # a 250 mm tool along the flange's z
+        >>> float(robot.with_frames(tool=tool).tool[2, 3]), float(robot.tool[2, 3])  # a copy
+        (0.25, 0.0)
+        """
         return replace(self, base=self.base if base is None else base,
                        tool=self.tool if tool is None else tool)
 
     def tools_for(self, smr_index) -> np.ndarray:
         """Tool frames ``(N, 4, 4)`` for SMR indices ``(N,)``: SMR 0 is the tool, s > 0 the
-        tool's rotation with translation ``smr[s - 1]``."""
+        tool's rotation with translation ``smr[s - 1]``.
+
+        Parameters
+        ----------
+        smr_index : array_like of int, shape (N,)
+            The SMR of each row.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 4, 4)
+            Flange -> SMR transforms (m).
+        """
         smr_index = np.asarray(smr_index, dtype=int)
         if smr_index.size and (smr_index.min() < 0 or smr_index.max() > len(self.smr)):
             raise ModelError(f"SMR index out of range: the model has {len(self.smr) + 1} SMR(s)")
@@ -889,7 +1146,13 @@ class Robot:
 
     def nominal_robot(self) -> Robot:
         """The nominal model (the controller's: no joint-error terms), with this robot's nominal
-        as its own."""
+        as its own.
+
+        Returns
+        -------
+        Robot
+            The nominal model.
+        """
         return replace(self, joint_errors=None, **self._geometry_kwargs(self.nominal))
 
     # ----------------------------------------------------------------- kinematics
@@ -901,12 +1164,44 @@ class Robot:
     def link_numbers(self, links) -> np.ndarray:
         """The frame numbers ``(N,)`` (0 the base .. n the flange) of markers' links ``links (N,)``:
         numbers, or the names of this model's links (`link_frames`); DataError for an unknown name,
-        listing the known ones (`robocal.kinematics.link_names.link_numbers`)."""
+        listing the known ones (`robocal.kinematics.link_names.link_numbers`).
+
+        Parameters
+        ----------
+        links : array_like, shape (N,)
+            Frame numbers or link names.
+
+        Returns
+        -------
+        numpy.ndarray of int, shape (N,)
+            Frame numbers.
+
+        Raises
+        ------
+        DataError
+            An unknown link name.
+        """
         return link_numbers(links, self.link_frames, self.name)
 
     def check_joints(self, q) -> np.ndarray:
         """Joints as a ``(N, n)`` float array (rad; m for prismatic joints); raises DataError on
-        wrong shape or NaN."""
+        wrong shape or NaN.
+
+        Parameters
+        ----------
+        q : array_like, shape (N, n)
+            Joint values (rad; m for a prismatic joint).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, n)
+            The joints as floats (a single pose ``(n,)`` becomes ``(1, n)``).
+
+        Raises
+        ------
+        DataError
+            A wrong shape or a NaN.
+        """
         q = np.asarray(q, dtype=float)
         if q.ndim == 1:
             q = q[None, :]
@@ -921,7 +1216,20 @@ class Robot:
     def reached_joints(self, q: np.ndarray, conditions: Conditions = UNKNOWN) -> np.ndarray:
         """The joints ``(N, n)`` the robot really turns to for commanded ``q`` (rad): ``q + dq(q)``
         with the declared joint-error terms at the rows' ``conditions`` (approach directions for
-        backlash, last moves for travel, the payload carried for payload)."""
+        backlash, last moves for travel, the payload carried for payload).
+
+        Parameters
+        ----------
+        q : array_like, shape (N, n)
+            Joint values (rad; m for a prismatic joint).
+        conditions : Conditions, optional
+            The rows' conditions (none given: the model's fixed ones).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, n)
+            The joints reached (rad; m for a prismatic joint).
+        """
         if self.joint_errors is None:
             return q
         return q + self.joint_errors.offsets(self, q, conditions)
@@ -1026,7 +1334,28 @@ class Robot:
         return identification_jacobian(self, self.check_joints(q), names, kind, smr, conditions)
 
     def within_limits(self, q) -> np.ndarray:
-        """``(N,)`` bool: every joint inside its limits."""
+        """``(N,)`` bool: every joint inside its limits.
+
+        Parameters
+        ----------
+        q : array_like, shape (N, n)
+            Joint values (rad; m for a prismatic joint).
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (N,)
+            True where the row is inside every limit.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> q = np.zeros((2, 6))
+        >>> q[1, 1] = 3.0  # rad: beyond joint 2's limit
+        >>> robot.within_limits(q)
+        array([ True, False])
+        """
         q = self.check_joints(q)
         return ((q >= self.limits[:, 0]) & (q <= self.limits[:, 1])).all(axis=1)
 
@@ -1034,7 +1363,28 @@ class Robot:
         """``(N, n)`` bool: joint values ``q`` ``(N, n)`` (rad; m for a prismatic joint) beyond
         their limits by more than `LIMIT_TOL` (a value written at its limit in degrees or mm
         is at it). The one limit check of positioner values (programs, measurements, deployment);
-        the caller names the row and the axis."""
+        the caller names the row and the axis.
+
+        Parameters
+        ----------
+        q : array_like, shape (N, n)
+            Joint values (rad; m for a prismatic joint).
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (N, n)
+            True for each value beyond its limit.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import robocal as rc
+        >>> robot = rc.Robot.from_catalog("abb_irb2600")
+        >>> q = np.zeros((2, 6))
+        >>> q[1, 1] = 3.0  # rad: beyond joint 2's limit
+        >>> robot.outside_limits(q)[1]
+        array([False,  True, False, False, False, False])
+        """
         q = self.check_joints(q)
         return (q < self.limits[:, 0] - LIMIT_TOL) | (q > self.limits[:, 1] + LIMIT_TOL)
 
@@ -1102,7 +1452,38 @@ def load_model(spec: str, tip: str | None = None) -> Robot:
     """A robot from a model YAML path (or a cell file: a robot on a track; a work cell file with one
     arm and no positioner: that arm, placed in the world), a URDF (a serial chain:
     `robocal.kinematics.urdf_read`, ending at link ``tip``, default the deepest leaf) or a catalog
-    name (what every ``--robot`` takes). A ``tip`` for anything but a URDF is refused (ModelError)."""
+    name (what every ``--robot`` takes). A ``tip`` for anything but a URDF is refused (ModelError).
+
+    Parameters
+    ----------
+    spec : str
+        A model YAML or cell file, a URDF, or a catalog name (``robocal robots`` lists them).
+    tip : str, optional
+        A URDF's last link.
+
+    Returns
+    -------
+    Robot
+        The model.
+
+    Raises
+    ------
+    ModelError
+        A model that cannot be read, a xacro file, a ``tip`` for anything but a URDF.
+
+    See Also
+    --------
+    rc.Robot : The model it returns (``Robot.from_catalog``, ``Robot.load``).
+    rc.load_cell : A work cell file.
+    robocal.kinematics.manufacturer.ur.import_calibration : A UR robot's factory calibration.
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> robot = rc.load_model("ur5e")  # a catalog name; a YAML or URDF path reads the file
+    >>> robot.name, robot.n_joints
+    ('ur5e', 6)
+    """
     path = Path(spec)
     if path.suffix.lower() in (".urdf", ".xml", ".xacro") or (on_disk(path, Path.is_file)
                                                                 and _looks_like_xml(path)):

@@ -138,6 +138,11 @@ def positioner_chain(axes: Sequence[Mapping], mount: np.ndarray | None = None,
     ModelError
         One line naming the axis and the cause (see the module docstring).
 
+    See Also
+    --------
+    rc.Positioner : A positioner built on the chain.
+    rc.Robot : The chain is a robot of the positioner's axes.
+
     Examples
     --------
     >>> import numpy as np

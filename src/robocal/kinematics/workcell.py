@@ -130,6 +130,12 @@ class Positioner:
         names them: `robocal.programs.dialects.base.Dialect.positioner_axes`); default the columns'
         numbers (``e2`` -> 2).
 
+    See Also
+    --------
+    rc.Cell : The cell it belongs to.
+    robocal.kinematics.positioner.positioner_chain : Its chain from axis descriptions.
+    robocal.campaign.plan_cell : Plan the table angles of a cell's campaign.
+
     Examples
     --------
     >>> import numpy as np
@@ -193,6 +199,24 @@ class Positioner:
         base, m) with an extra ``plate`` ``(4, 4)`` after the catalog's plate frame; ``kwargs``:
         ``columns``, ``nests`` (K, 3) m, ``external_axes``.
 
+        Parameters
+        ----------
+        name : str
+            A catalog positioner.
+        unit : str
+            Its program unit (``STN1``...).
+        mount : numpy.ndarray, shape (4, 4), optional
+            World -> its base (m); default identity.
+        plate : numpy.ndarray, shape (4, 4), optional
+            An extra transform after the catalog's plate frame (m).
+        **kwargs
+            ``columns``, ``nests``, ``external_axes`` (`Positioner`).
+
+        Returns
+        -------
+        Positioner
+            The positioner.
+
         Examples
         --------
         >>> import numpy as np
@@ -230,6 +254,16 @@ class Positioner:
         """World poses ``(N, 4, 4)`` (m) of the plate frame at axis values ``e`` ``(N, n)`` (rad; m
         for a prismatic axis).
 
+        Parameters
+        ----------
+        e : array_like, shape (N, n)
+            Axis values (rad; m for a prismatic axis).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 4, 4)
+            World poses of the plate frame (m).
+
         Examples
         --------
         >>> import numpy as np
@@ -245,7 +279,13 @@ class Positioner:
         return f"Positioner({self.chain.name!r}, unit {self.unit!r}, columns {list(self.columns)})"
 
     def to_dict(self) -> dict:
-        """The positioner's entry of a saved cell file (SI: its chain as an inline model)."""
+        """The positioner's entry of a saved cell file (SI: its chain as an inline model).
+
+        Returns
+        -------
+        dict
+            The cell file's entry of this positioner.
+        """
         out = {"model": robot_to_dict(self.chain), "unit": self.unit, "columns": list(self.columns),
                "external_axes": list(self.external_axes)}
         if self.nests is not None:
@@ -271,6 +311,13 @@ class Cell:
         Arm name -> its flange frame tool0 ``(4, 4)`` as its model composes it (`flange`), where
         the arm's ``tool`` is not it: a model file's ``tool`` describes the measured SMR 0. An arm
         not named: its tool is its flange.
+
+    See Also
+    --------
+    rc.Positioner : A positioner of the cell.
+    rc.load_cell : A cell from its file.
+    rc.CellMeasurements : A cell's measurements, split per body.
+    rc.CellCalibration : The calibration of a cell.
 
     Notes
     -----
@@ -365,11 +412,33 @@ class Cell:
         """Arm ``name``'s flange frame tool0 ``(4, 4)`` in its model's last frame: what a
         controller's tool data and a program's targets are given on. The arm's model's tool is the
         measured SMR 0 (the cell file's ``tool`` of its model), so the flange is its model without
-        that tool (`flanges`), or its tool when the model gives none."""
+        that tool (`flanges`), or its tool when the model gives none.
+
+        Parameters
+        ----------
+        name : str
+            The arm's name.
+
+        Returns
+        -------
+        numpy.ndarray, shape (4, 4)
+            The flange frame (m) in the model's last frame.
+        """
         return self.flanges.get(name, self.arms[name].tool)
 
     def controller_arm(self, name: str) -> Robot:
-        """Arm ``name`` with its flange (`flange`) as its TCP: the arm a controller computes with."""
+        """Arm ``name`` with its flange (`flange`) as its TCP: the arm a controller computes with.
+
+        Parameters
+        ----------
+        name : str
+            The arm's name.
+
+        Returns
+        -------
+        Robot
+            The arm with its flange as tool.
+        """
         return self.arms[name].with_frames(tool=self.flange(name))
 
     @property
@@ -386,6 +455,21 @@ class Cell:
     def resolve(self, label: str) -> str:
         """The body name of a label: a body's name or unit, ``"flange"`` (the anchor arm) or
         ``"plate"`` (the only positioner); ModelError listing the bodies otherwise.
+
+        Parameters
+        ----------
+        label : str
+            A body's name or unit, ``"flange"`` or ``"plate"``.
+
+        Returns
+        -------
+        str
+            The body's name.
+
+        Raises
+        ------
+        ModelError
+            No body has that label.
 
         Examples
         --------
@@ -414,6 +498,25 @@ class Cell:
         cell has none). DataError naming the bodies of that kind when ``given`` is not one of them
         or there is no single one; callers add their context (an option's name, what it is for).
 
+        Parameters
+        ----------
+        kind : {"arm", "positioner"}
+            The kind of body.
+        given : str, optional
+            A label `resolve` takes.
+        optional : bool, default False
+            No body of that kind is not an error (None is returned).
+
+        Returns
+        -------
+        str or None
+            The body's name.
+
+        Raises
+        ------
+        DataError
+            ``given`` is not a body of that kind, or there is not exactly one.
+
         Examples
         --------
         >>> import robocal as rc
@@ -440,6 +543,16 @@ class Cell:
     def body(self, name: str) -> Robot:
         """The `Robot` of a body (an arm, or a positioner's chain), by any label `resolve` takes.
 
+        Parameters
+        ----------
+        name : str
+            Any label `resolve` takes.
+
+        Returns
+        -------
+        Robot
+            The body's model.
+
         Examples
         --------
         >>> import robocal as rc
@@ -453,6 +566,16 @@ class Cell:
         """The joints of a body (by any label `resolve` takes) as measurement files name them: an
         arm's ``q1..`` (a track's ``e1``), a positioner's `Positioner.columns`.
 
+        Parameters
+        ----------
+        name : str
+            Any label `resolve` takes.
+
+        Returns
+        -------
+        tuple of JointSpec
+            One a joint: its column name and unit.
+
         Examples
         --------
         >>> import robocal as rc
@@ -464,7 +587,18 @@ class Cell:
         return self.arms[name].joints if name in self.arms else self.positioners[name].joints
 
     def unit_of(self, name: str) -> str:
-        """The program unit of a body (by any label `resolve` takes)."""
+        """The program unit of a body (by any label `resolve` takes).
+
+        Parameters
+        ----------
+        name : str
+            Any label `resolve` takes.
+
+        Returns
+        -------
+        str
+            The unit (``ROB_1``, ``STN1``...).
+        """
         name = self.resolve(name)
         return self.arm_units[name] if name in self.arms else self.positioners[name].unit
 
@@ -526,7 +660,13 @@ class Cell:
         return replace(self, arms=arms, positioners=positioners)
 
     def to_dict(self) -> dict:
-        """The saved cell file's mapping (SI; every body as an inline model)."""
+        """The saved cell file's mapping (SI; every body as an inline model).
+
+        Returns
+        -------
+        dict
+            The cell file's content.
+        """
         out: dict = {"format": FORMAT, "name": self.name, "description": self.description,
                      "units": {"length": "m", "angle": "rad"}}
         if self.arms:
@@ -541,6 +681,11 @@ class Cell:
         """Write the cell file (SI units, every body's model inline: an exact round trip),
         atomically.
 
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The YAML file to write.
+
         Examples
         --------
         >>> import robocal as rc
@@ -552,7 +697,18 @@ class Cell:
 
     @classmethod
     def load(cls, path) -> Cell:
-        """Read a cell file (`load_cell`)."""
+        """Read a cell file (`load_cell`).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            A cell file.
+
+        Returns
+        -------
+        Cell
+            The cell.
+        """
         return load_cell(path)
 
     def __repr__(self) -> str:
@@ -786,6 +942,11 @@ def load_cell(path) -> Cell:
         A malformed file, one line naming the file, the key and the cause: an unknown key, a
         positioner whose axes are zero or coaxial, a unit or body named twice, nests that are not
         3-vectors, positioner columns clashing with a track's e1...
+
+    See Also
+    --------
+    rc.Cell : The cell it returns.
+    rc.load_model : A robot (a cell of one arm is one too).
 
     Examples
     --------

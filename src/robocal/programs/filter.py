@@ -381,6 +381,13 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
         targets that cannot be corrected (each named), or files without a Cartesian target
         that read as another language than their suffix says.
 
+    See Also
+    --------
+    rc.FilterResult : What it returns.
+    robocal.programs.registry.dialect_for : The language of a program file.
+    rc.compensate : Compensate targets given as a table.
+    robocal.deploy.models.load_model_pair : The calibrated and nominal models, checked together.
+
     Examples
     --------
     >>> from pathlib import Path

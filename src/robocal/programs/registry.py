@@ -120,6 +120,10 @@ def dialect_for(paths: list[Path], name: str | None = None) -> Dialect:
     DataError
         An unknown ``name``, or files whose suffixes name no dialect or more than one.
 
+    See Also
+    --------
+    rc.filter_program : Filters a program in its language.
+
     Examples
     --------
     >>> from pathlib import Path

@@ -64,6 +64,14 @@ class FilterResult:
     language : Dialect, optional
         The language's dialect, which marks the written files (default: the registered one
         named `dialect`).
+    data_files : frozenset of pathlib.Path
+        Outputs that are data, not programs: written without a marker.
+    derived : frozenset of pathlib.Path
+        Outputs made from the references, written beside the first output.
+
+    See Also
+    --------
+    rc.filter_program : The filter that returns it.
 
     Examples
     --------
@@ -100,7 +108,13 @@ class FilterResult:
     language: ProgramMarker | None = field(default=None, repr=False, compare=False)  # marks the files
 
     def table_csv(self) -> str:
-        """The per-target table as CSV text (one row per target, `rows`' columns)."""
+        """The per-target table as CSV text (one row per target, `rows`' columns).
+
+        Returns
+        -------
+        str
+            The CSV text.
+        """
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")
         cols = list(self.rows[0]) if self.rows else ["file", "line", "name"]
@@ -112,7 +126,13 @@ class FilterResult:
     def to_dict(self) -> dict:
         """The result as plain data: the dialect, the filtered files, the summary
         (`summary_dict`), the loads, the warnings, the per-target table and the motions (what
-        `table_json` writes)."""
+        `table_json` writes).
+
+        Returns
+        -------
+        dict
+            The result (JSON-ready).
+        """
         return {"dialect": self.dialect, "files": [str(p) for p in self.outputs],
                 "summary": self.summary_dict(), "loads": self.loads, "warnings": self.warnings,
                 "targets": self.rows, "motions": [m.as_dict() for m in self.motions]}
@@ -120,7 +140,13 @@ class FilterResult:
     def table_json(self) -> str:
         """The per-target table, the summary, the motions and the warnings as JSON text: one key
         per line, one target or motion per line (each encoded by json's C encoder: an indented dump
-        runs the pure-Python encoder, seconds for a 100,000-target program)."""
+        runs the pure-Python encoder, seconds for a 100,000-target program).
+
+        Returns
+        -------
+        str
+            The JSON text.
+        """
         content = self.to_dict()
         lists = {key: content.pop(key) for key in ("targets", "motions")}
         parts = ["{\n", ",\n".join(f" {json.dumps(k)}: {json.dumps(v)}" for k, v in content.items())]
@@ -134,7 +160,13 @@ class FilterResult:
 
     def summary_dict(self) -> dict:
         """Counts and extremes: targets filtered, motions corrected and named, configurations
-        changed, corrections (mm, deg), the smallest joint-limit margin and the nearest singularity."""
+        changed, corrections (mm, deg), the smallest joint-limit margin and the nearest singularity.
+
+        Returns
+        -------
+        dict
+            The counts and extremes (mm, deg) (JSON-ready).
+        """
         rows = [r for r in self.rows if r["filtered"]]
         pos = np.array([r["correction_mm"] for r in rows]) if rows else np.zeros(0)
         rot = np.array([r["correction_deg"] for r in rows]) if rows else np.zeros(0)
@@ -159,7 +191,13 @@ class FilterResult:
         return out
 
     def summary(self) -> str:
-        """A short human summary of `summary_dict` and the warnings."""
+        """A short human summary of `summary_dict` and the warnings.
+
+        Returns
+        -------
+        str
+            The summary text.
+        """
         s = self.summary_dict()
         lines = [f"{self.dialect}: {s['filtered']} of {s['targets']} Cartesian target(s) filtered in "
                  f"{', '.join(p.name for p in self.outputs)}"]

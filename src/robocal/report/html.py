@@ -715,6 +715,11 @@ def render_report(result: dict, *, title: str | None = None) -> str:
     DataError
         ``result`` is not a calibration result (or a field of it is malformed, named).
 
+    See Also
+    --------
+    robocal.report.html.write_report : Write it to a file.
+    rc.CalibrationResult : What the report shows.
+
     Examples
     --------
     >>> import robocal as rc
@@ -838,6 +843,11 @@ def write_report(result: dict, path, *, title: str | None = None) -> Path:
     -------
     pathlib.Path
         ``path``.
+
+    See Also
+    --------
+    robocal.report.html.render_report : The HTML text, not written.
+    rc.CalibrationResult : What the report shows.
 
     Examples
     --------

@@ -37,6 +37,11 @@ file so named
 is refused as input like a marked one (`check_unmarked_name`). What the name cannot cover:
 a user who renames the corrected copy (to load it on the controller as VAR.DAT) and gives that
 back to robocal.
+
+See Also
+--------
+rc.filter_program : Marks the programs it writes.
+rc.compensate : Marks the targets it writes (``Compensation.write``).
 """
 
 from __future__ import annotations
@@ -98,6 +103,16 @@ def model_fingerprint(robot: Robot) -> str:
     """The `FINGERPRINT_HEX` hex digits naming ``robot``'s parameters (see the module
     docstring).
 
+    Parameters
+    ----------
+    robot : Robot
+        The model.
+
+    Returns
+    -------
+    str
+        The fingerprint (hex digits).
+
     Examples
     --------
     >>> import robocal as rc
@@ -131,6 +146,16 @@ def marker_text(robot: Robot) -> str:
 def find_marker(text: str) -> Marker | None:
     """The first marker in ``text``, else None.
 
+    Parameters
+    ----------
+    text : str
+        A file's text.
+
+    Returns
+    -------
+    Marker or None
+        The version and model fingerprint it names.
+
     Examples
     --------
     >>> from robocal.trust.output_marker import find_marker
@@ -147,6 +172,27 @@ def check_unmarked(text: str, where: str, action: str, force: bool = False) -> M
     """Refuse (DataError) a file that carries a marker: ``action`` ('filtered' or 'compensated') was
     already done to it by the run the marker names; ``force`` lets it through (the marker is
     returned, for a warning).
+
+    Parameters
+    ----------
+    text : str
+        The file's text.
+    where : str
+        Its name, for the message.
+    action : {"filtered", "compensated"}
+        What the caller is about to do.
+    force : bool, default False
+        Let a marked file through.
+
+    Returns
+    -------
+    Marker or None
+        The marker found (only with ``force``), None for an unmarked file.
+
+    Raises
+    ------
+    DataError
+        A marked file without ``force``.
 
     Examples
     --------
@@ -279,6 +325,20 @@ def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot) -> bytes | N
     docstring); None for a file the dialect cannot mark (no comment syntax: a VAR.DAT), which is
     marked by its name instead (`corrected_path`).
 
+    Parameters
+    ----------
+    dialect : ProgramMarker
+        The program language (its comment syntax).
+    data : bytes
+        The program or data file.
+    robot : Robot
+        The calibrated model.
+
+    Returns
+    -------
+    bytes or None
+        The marked file; None where the format has no comment syntax (marked by its name).
+
     Raises
     ------
     DataError
@@ -315,6 +375,18 @@ def corrected_path(path) -> Path:
 
 def mark_csv(text: str, robot: Robot) -> str:
     """A compensated targets CSV with the marker of ``robot`` as a ``#`` first line.
+
+    Parameters
+    ----------
+    text : str
+        The CSV text.
+    robot : Robot
+        The calibrated model.
+
+    Returns
+    -------
+    str
+        The marked text.
 
     Examples
     --------

@@ -110,6 +110,12 @@ class ImportedCalibration:
         The format read: "calibration.conf" or "ur_calibration YAML".
     notes : list of str
         What the user should know about the reading (one sentence each).
+    warnings : list of str
+        Always empty: what matters is in ``notes`` (the result protocol).
+
+    See Also
+    --------
+    robocal.kinematics.manufacturer.ur.import_calibration : The import that returns it.
 
     Examples
     --------
@@ -127,16 +133,39 @@ class ImportedCalibration:
     warnings: list[str] = field(default_factory=list)  # what matters is said in ``notes``: none
 
     def summary(self) -> str:
-        """The format read and the notes, one line each."""
+        """The format read and the notes, one line each.
+
+        Returns
+        -------
+        str
+            The summary text.
+        """
         return "\n".join([f"{self.robot.name}: {self.kind} read (exact to its own composition)",
                           *(f"note: {note}" for note in self.notes)])
 
     def to_dict(self) -> dict:
-        """The format read, the notes and the model YAML."""
+        """The format read, the notes and the model YAML.
+
+        Returns
+        -------
+        dict
+            The format, the notes and the model YAML (JSON-ready).
+        """
         return {"kind": self.kind, "notes": list(self.notes), "model_yaml": dump_model(self.robot)}
 
     def write(self, output) -> list[str]:
-        """Write the model YAML (atomically); the paths written."""
+        """Write the model YAML (atomically); the paths written.
+
+        Parameters
+        ----------
+        output : str or pathlib.Path
+            The model YAML.
+
+        Returns
+        -------
+        list of str
+            The paths written.
+        """
         write_all({output: dump_model(self.robot)})
         return [str(output)]
 
@@ -517,6 +546,12 @@ def import_calibration(path, nominal_name: str, name: str | None = None) -> Impo
         An unreadable or malformed file (either format, a line or key named), a nominal that is
         not a catalog UR arm, or values farther from the nominal than a factory calibration.
 
+    See Also
+    --------
+    robocal.kinematics.manufacturer.ur.ImportedCalibration : What it returns.
+    robocal.kinematics.manufacturer.ur.to_ur_calibration : The way back, for the controller.
+    rc.load_model : Load the model it writes.
+
     Examples
     --------
     >>> import os, tempfile
@@ -595,6 +630,10 @@ def not_representable(robot: Robot) -> str | None:
     str or None
         One sentence naming the joint-error terms lost in the export; None when there are none.
 
+    See Also
+    --------
+    robocal.kinematics.manufacturer.ur.to_ur_calibration : Writes what it can hold.
+
     Examples
     --------
     >>> import robocal as rc
@@ -634,6 +673,11 @@ def to_ur_calibration(robot: Robot, nominal: Robot) -> str:
     ------
     ModelError
         A flange off joint 6's axis (the xacro cannot hold it).
+
+    See Also
+    --------
+    robocal.kinematics.manufacturer.ur.import_calibration : The way in.
+    robocal.kinematics.manufacturer.ur.not_representable : What the controller's format cannot hold.
 
     Examples
     --------

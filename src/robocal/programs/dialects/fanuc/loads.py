@@ -87,6 +87,10 @@ def read_schedules(path: str | Path) -> dict[int, Load]:
     DataError
         An unread file, neither format, a schedule without a mass, or none set.
 
+    See Also
+    --------
+    rc.filter_program : Uses the payload schedules (``loads``).
+
     Examples
     --------
     >>> from pathlib import Path
