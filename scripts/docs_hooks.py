@@ -186,7 +186,9 @@ def benchmarks_markdown(path: Path) -> str:
     out = []
     for name in sorted(runs):
         run = runs[name]
-        out += [f"## {name}", "", _cell(run.get("description", "")), "", _ran(run), ""]
+        # the description is Markdown (a docstring's first paragraph): one line, not HTML-escaped
+        # (escaping it put `&quot;auto&quot;` on the page: the code span escapes again)
+        out += [f"## {name}", "", " ".join(run.get("description", "").split()), "", _ran(run), ""]
         for table in run.get("tables", []):
             out += _table(table)
         if run.get("figures"):

@@ -15,4 +15,4 @@ True
 True
 """
 
-__version__ = "0.1.0"
+__version__ = "0.7.0"
