@@ -62,7 +62,8 @@ def on_post_page(output: str, page, config) -> str:  # noqa: ARG001 - MkDocs' si
 def literal_entities(page_html: str) -> list[str]:
     """The double-escaped entities of a page's HTML outside code, each with the text around it."""
     text = CODE_BLOCK.sub("", HTML_COMMENT.sub("", page_html))
-    return [text[max(0, m.start() - 30):m.end() + 30].replace("\n", " ") for m in DOUBLE_ESCAPED.finditer(text)]
+    return [text[max(0, m.start() - 30):m.end() + 30].replace("\n", " ")
+            for m in DOUBLE_ESCAPED.finditer(text)]
 
 
 def version_key(version: str) -> tuple:
