@@ -122,7 +122,7 @@ def changelog_by_version(text: str) -> str:
     for v in order:
         date = versions[v]["date"]
         label = f"{v} ({__version__}, this version)" if v == UNRELEASED else v
-        index.append(f"[{label}](#{version_anchor(v)})" + (f" {date}" if date else ""))
+        index.append(f"[{label}](#{version_anchor(v)})" + (f" ({date})" if date else ""))
     out += ["Versions: " + " · ".join(index), ""]
     for v in order:
         entry = versions[v]

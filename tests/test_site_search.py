@@ -201,7 +201,7 @@ def test_changelog_grouping_on_a_small_file():
     assert out.index("## 0.2.0") < out.index("### Added\n\n- b2") < out.index("### Fixed\n\n- b1")
     assert out.index("### Fixed\n\n- b1") < out.index("- b3")
     assert out.index("- b3") < out.index("## 0.1.0") < out.index("- a1")
-    assert "[0.2.0](#v0-2-0) 2026-01-02" in out
+    assert "[0.2.0](#v0-2-0) (2026-01-02)" in out
 
 
 def test_every_glossary_link_has_its_term():
