@@ -218,3 +218,19 @@ def test_every_glossary_link_has_its_term():
     assert len(links) >= 10
     missing = [(str(p.relative_to(ROOT)), a) for p, a in links if a not in terms]
     assert not missing, missing
+
+
+def test_changelog_entries_stand_under_their_round():
+    """The issues an entry names grow with the version it stands under: a line of this round merged
+    under an older version's heading (below an inserted `## [0.6.0]`) fails here when it names its
+    issue, as most entries do."""
+    _, versions = docs_site.parse_changelog((ROOT / "CHANGELOG.md").read_text(encoding="utf-8"))
+    named = []
+    for version in sorted(versions, key=docs_site.version_key, reverse=True):  # oldest first
+        text = " ".join(line for lines in versions[version]["categories"].values() for line in lines)
+        issues = {int(n) for n in re.findall(r"\b[Ii]ssues? (\d+)", text)}
+        if issues:
+            named.append((version, min(issues), max(issues)))
+    assert len(named) >= 4
+    for (older, _, older_max), (newer, newer_min, _) in zip(named, named[1:], strict=False):
+        assert older_max <= newer_min, f"{older} names issue {older_max}, newer than {newer}'s {newer_min}"
