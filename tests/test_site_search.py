@@ -171,6 +171,12 @@ def test_every_page_shows_the_version_and_no_entity_as_text(site):
     assert [m for m in re.findall(r'<h2 id="([^"]+)"', changelog)][:2] == ["unreleased", "v0-6-0"]
 
 
+def test_the_home_page_cites_this_version():
+    from robocal.core.version import __version__
+
+    assert f"Version {__version__}," in (ROOT / "docs" / "index.md").read_text(encoding="utf-8")
+
+
 def test_literal_entities_are_found_outside_code_blocks():
     assert docs_site.literal_entities("<p>Does <code>x=&amp;quot;auto&amp;quot;</code> lose?</p>")
     assert docs_site.literal_entities("<td>a &amp;lt; b</td>")
