@@ -67,6 +67,16 @@ def _cell(text: str) -> str:
     return " ".join(html.escape(text, quote=False).replace("|", "&#124;").replace("*", "&#42;").split())
 
 
+def _paragraph(text: str) -> str:
+    """Text for a Markdown paragraph, one line: escaped as :func:`_cell` outside code spans, and
+    not inside them (a code span escapes its text itself: escaping it here too showed
+    ``nongeometric=&quot;auto&quot;`` on the page)."""
+    parts = re.split(r"(`+[^`]*`+)", " ".join(text.split()))
+    return "".join(part if part.startswith("`")
+                   else html.escape(part, quote=False).replace("|", "&#124;").replace("*", "&#42;")
+                   for part in parts)
+
+
 def _expanded_help(parser: argparse.ArgumentParser, action: argparse.Action) -> str:
     if not action.help or action.help == argparse.SUPPRESS:
         return ""
@@ -194,7 +204,7 @@ def benchmarks_markdown(path: Path) -> str:
     out = []
     for name in sorted(runs):
         run = runs[name]
-        out += [f"## {name}", "", _cell(run.get("description", "")), "", _ran(run), ""]
+        out += [f"## {name}", "", _paragraph(run.get("description", "")), "", _ran(run), ""]
         for table in run.get("tables", []):
             out += _table(table)
         if run.get("figures"):

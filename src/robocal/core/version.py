@@ -20,4 +20,4 @@ True
 True
 """
 
-__version__ = "0.1.0"
+__version__ = "0.7.0"
