@@ -31,6 +31,10 @@ import docs_tutorial  # noqa: E402
 BLOCK = re.compile(r"^```(\w+)([^\n]*)\n(.*?)^```$", re.M | re.S)
 NUMBER = re.compile(r"[-+]?\d+(?:[.,]\d+)*(?:[eE][-+]?\d+)?")
 NUMBER_RTOL, NUMBER_ATOL = 0.05, 0.002  # printed figures may differ in the last digits between machines
+# what differs on every run by nature, compared as a placeholder: dates (a history's records) and
+# durations in seconds ("selection 0.41 s")
+VOLATILE = re.compile(r"\d{4}-\d{2}-\d{2}[T ]\d{2}:\d{2}:\d{2}(?:\.\d+)?(?:[+-]\d{2}:\d{2}|Z)?"
+                      r"|\b\d+(?:\.\d+)? s\b")
 BLOCK_TIMEOUT_S = 900
 # pages whose blocks take more than ~20 s on a busy 2-core machine: run by `make test-slow`
 SLOW = {"tutorial/first-campaign.md", "how-to/error-model.md", "how-to/recalibrating.md",
@@ -49,6 +53,7 @@ def blocks(text: str) -> list[tuple[str, str]]:
 
 def same_output(recorded: str, fresh: str) -> str | None:
     """None when ``fresh`` is ``recorded`` up to the numbers' last digits, else the first difference."""
+    recorded, fresh = VOLATILE.sub("<volatile>", recorded), VOLATILE.sub("<volatile>", fresh)
     rec_lines, new_lines = recorded.strip().splitlines(), fresh.strip().splitlines()
     if len(rec_lines) != len(new_lines):
         return f"{len(new_lines)} lines printed, {len(rec_lines)} recorded"
@@ -79,6 +84,10 @@ def test_output_comparison():
     assert same_output("RMS 1.2797 -> 0.0206 mm", "RMS 1.9 -> 0.0206 mm") is not None
     assert same_output("wrote a.csv", "wrote b.csv") is not None
     assert same_output("a\nb", "a") is not None
+    assert same_output("#1    2026-12-06T11:17:26.214+00:00  calibration",
+                       "#1    2027-01-02T08:00:00.001+00:00  calibration") is None
+    assert same_output("time: selection 0.41 s, final fit 0.09 s",
+                       "time: selection 1.9 s, final fit 0.2 s") is None
     page = docs_tutorial.with_outputs("x\n<!-- output -->\ny", ["line 1\nline 2"])
     assert "        line 2" in page and "<!--" not in page
     with pytest.raises(docs_tutorial.TutorialOutputError, match="markers"):
