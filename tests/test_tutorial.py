@@ -147,3 +147,20 @@ def test_page_runs_as_written(page, tmp_path):
         diff = same_output(old, new)
         assert diff is None, (f"{page}: block {k + 1} printed other than the site shows (record again with "
                               f"ROBOCAL_RECORD_TUTORIAL=1 if the change is intended):\n{diff}")
+
+
+def test_a_list_rendered_as_a_paragraph_is_found():
+    """scripts/docs_lists.py (a build hook) reports a paragraph holding list items; none of the pages
+    the readers paste from, nor the result JSON reference, has one."""
+    markdown = pytest.importorskip("markdown")
+    import docs_lists
+
+    exts = ["admonition", "attr_list", "tables", "def_list", "pymdownx.superfences"]
+    broken = markdown.markdown("| a |\n|---|\n| 1 |\n- one\n- two\n", extensions=exts)
+    assert docs_lists.broken_lists(markdown.markdown("text\n- one\n- two\n", extensions=exts))
+    assert docs_lists.broken_lists(broken)
+    assert not docs_lists.broken_lists(markdown.markdown("text\n\n- one\n- two\n", extensions=exts))
+    assert not docs_lists.broken_lists("<p>a - b, 1. c</p>")
+    for page in [*docs_tutorial.runnable_pages(), "index.md", "result-json.md"]:
+        html = markdown.markdown((docs_tutorial.DOCS / page).read_text(encoding="utf-8"), extensions=exts)
+        assert not docs_lists.broken_lists(html), page
