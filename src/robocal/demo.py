@@ -44,7 +44,7 @@ SAMPLES = {
     "pns0012.ls": "a FANUC TP program for an R-2000iC/165F: a bag palletizer switching PAYLOAD[1] and [2]",
     "SYSVARS.VA": "the FANUC controller's payload schedules of pns0012.ls ($PLST_GRP1)",
     "track_weld.mod": "a RAPID module for an IRB 2600 on a 6 m track: 8 robtargets with eax_a (mm)",
-    "tracker_export.txt": "a raw tracker export: 30 IRB 2600 poses, joints (deg) and points (mm), 3 readings each",
+    "tracker_export.txt": "a raw tracker export: 30 IRB 2600 poses, joints deg, points mm, 3 readings each",
 }
 
 
