@@ -49,11 +49,29 @@ SAMPLES = {
 
 
 def sample_path(name: str) -> Path:
-    """The path of the sample file ``name`` shipped with robocal (one of ``SAMPLES``).
+    """The path of a small sample file shipped with robocal, the files the how-to pages start from
+    (``robocal sample NAME`` copies one into the current folder).
+
+    Parameters
+    ----------
+    name : str
+        One of ``SAMPLES`` (``robocal sample`` lists them): ``"weld_cell.mod"``,
+        ``"calibration.conf"``, ``"tracker_export.txt"``...
+
+    Returns
+    -------
+    pathlib.Path
+        The file inside the installed package: read it or copy it, do not edit it.
+
+    Raises
+    ------
+    DataError
+        ``name`` is not a sample (the message lists them).
 
     Examples
     --------
-    >>> sample_path("weld_cell.mod").name
+    >>> import robocal as rc
+    >>> rc.sample_path("weld_cell.mod").name
     'weld_cell.mod'
     """
     if name not in SAMPLES:
