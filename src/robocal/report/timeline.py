@@ -62,6 +62,7 @@ def render_history(timeline: dict, version: str) -> str:
     table = _table(["#", "date (UTC)", "kind", "held-out RMS", "RMS", "verdict", "p", "moved",
                     "data SHA-256"], rows, align="lllrrllww")
     figure = _figure(svg, "Held-out RMS of each calibration with validation data (and of each evaluation), "
+                          "fit RMS of a calibration without (an offsets-only one: open marker), "
                           "RMS of each check after the tracker frame was refitted.",
                      "a check RMS well above the held-out RMS, and checks marked changed.")
     robot = esc(timeline["robot_id"])
