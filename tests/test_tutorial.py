@@ -29,7 +29,8 @@ sys.path.insert(0, str(ROOT / "scripts"))
 import docs_tutorial  # noqa: E402
 
 BLOCK = re.compile(r"^```(\w+)([^\n]*)\n(.*?)^```$", re.M | re.S)
-NUMBER = re.compile(r"[-+]?\d+(?:[.,]\d+)*(?:[eE][-+]?\d+)?")
+# a number, with thousands separators ("1,000") but not across a comma-separated list ("49.99,0.03")
+NUMBER = re.compile(r"[-+]?(?:\d{1,3}(?:,\d{3})+(?!\d)|\d+)(?:\.\d+)?(?:[eE][-+]?\d+)?")
 NUMBER_RTOL, NUMBER_ATOL = 0.05, 0.002  # printed figures may differ in the last digits between machines
 # what differs on every run by nature, compared as a placeholder: dates (a history's records) and
 # durations in seconds ("selection 0.41 s")
@@ -83,6 +84,9 @@ def test_output_comparison():
     assert same_output("RMS 1.2797 -> 0.0206 mm", "RMS 1.2799 -> 0.0207 mm") is None
     assert same_output("RMS 1.2797 -> 0.0206 mm", "RMS 1.9 -> 0.0206 mm") is not None
     assert same_output("wrote a.csv", "wrote b.csv") is not None
+    assert same_output("--tcp t=49.9983,0.0277,200.4340", "--tcp t=49.9985,0.0278,200.4341") is None
+    assert same_output("--tcp t=49.9983,0.0277,200.4340", "--tcp t=49.9983,0.0277,260.4340") is not None
+    assert same_output("from 1,000 candidates", "from 1,010 candidates") is None
     assert same_output("a\nb", "a") is not None
     assert same_output("#1    2026-12-06T11:17:26.214+00:00  calibration",
                        "#1    2027-01-02T08:00:00.001+00:00  calibration") is None
