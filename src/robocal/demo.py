@@ -31,7 +31,8 @@ def demo_files() -> dict[str, Path]:
             (("calibration", "csv"), ("validation", "csv"), ("truth", "yaml"))}
 
 
-# the small files the how-to pages start from (``robocal sample NAME``): name -> what it is
+# the small files the how-to pages start from (``robocal sample NAME``): name -> what it is. All
+# written for robocal (copies of tests/data files, or simulated), none taken from a vendor or a data set
 SAMPLES = {
     "calibration.csv": "the demo's calibration campaign: a simulated IRB 2600, 3 SMRs, gross outliers",
     "validation.csv": "the demo's held-out poses of the same simulated IRB 2600",
