@@ -58,6 +58,7 @@ def with_outputs(markdown: str, outputs: list[str], page: str = TUTORIAL) -> str
                                   "ROBOCAL_RECORD_TUTORIAL=1 pytest tests/test_tutorial.py")
     out = [parts[0]]
     for text, rest in zip(outputs, parts[1:], strict=True):
-        body = "\n".join("        " + line for line in text.rstrip().splitlines()) or "        (nothing)"
+        # indented as the fence inside the admonition (4 spaces): the output's own indentation kept
+        body = "\n".join("    " + line for line in text.rstrip().splitlines()) or "    (nothing)"
         out += ['???+ success "Output"\n\n    ```text\n', body, "\n    ```\n", rest]
     return "".join(out)
