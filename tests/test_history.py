@@ -141,3 +141,22 @@ def test_fingerprints_and_dates(tmp_path):
     with pytest.raises(DataError, match="cannot read"):
         file_sha256(tmp_path / "none.csv")
     assert now_utc().endswith("+00:00") and "T" in now_utc()
+
+
+def test_the_timeline_marks_an_offsets_only_recalibration_and_plots_it():
+    """The offsets-only entry (no held-out data) is named in the text with the record it started
+    from, and drawn in the history plot (its fit RMS) rather than left out."""
+    from robocal.history.timeline import Timeline
+
+    base = {"date": "2026-01-02T03:04:05.000+00:00", "verdict": None, "p_value": None, "data": [],
+            "changed_parameters": None, "parent": None}
+    entries = [{**base, "id": 1, "kind": "calibration", "held_out_rms": 0.036, "rms": 0.028},
+               {**base, "id": 2, "kind": "calibration", "held_out_rms": None, "rms": 0.0305,
+                "parent": 1, "offsets_only": True, "date": "2026-01-03T03:04:05.000+00:00"}]
+    lines = Timeline("R-1", entries).summary().splitlines()
+    assert lines[1].endswith("joint zeros only (from #1)") and "joint zeros" not in lines[0]
+    pytest.importorskip("matplotlib")
+    from robocal.report.timeline import render_history
+
+    page = render_history({"robot_id": "R-1", "entries": entries}, "0")
+    assert "fit RMS (no held-out data)" in page and "(offsets only)" in page

@@ -39,6 +39,7 @@ _LAZY = {
     "simulate_cell": "robocal.data.cell_simulation", "CellCalibration": "robocal.calibration.cell",
     "FilterResult": "robocal.programs", "filter_program": "robocal.programs",
     "ToolCalibration": "robocal.deploy.tcp", "identify_tcp": "robocal.deploy.tcp",
+    "sample_path": "robocal.demo",  # the small files the how-to pages start from
 }
 
 
@@ -69,6 +70,7 @@ __all__ = [
     "Positioner",
     "analyze",
     "calibrate",
+    "sample_path",
     "evaluate",
     "plan_poses",
     "register",

@@ -15,7 +15,8 @@ import numpy as np
 
 from robocal.calibration.pipeline import calibrate
 from robocal.calibration.result import json_text
-from robocal.core.io import write_all
+from robocal.core.errors import DataError
+from robocal.core.io import write_all, write_atomic
 from robocal.data.measurements import Measurements
 from robocal.deploy.compensation import compensate
 from robocal.ik import plan_path
@@ -28,6 +29,65 @@ def demo_files() -> dict[str, Path]:
     root = files("robocal") / "demo_data"
     return {name: Path(str(root / f"{name}.{ext}")) for name, ext in
             (("calibration", "csv"), ("validation", "csv"), ("truth", "yaml"))}
+
+
+# the small files the how-to pages start from (``robocal sample NAME``): name -> what it is. All
+# written for robocal (copies of tests/data files, or simulated), none taken from a vendor or a data set
+SAMPLES = {
+    "calibration.csv": "the demo's calibration campaign: a simulated IRB 2600, 3 SMRs, gross outliers",
+    "validation.csv": "the demo's held-out poses of the same simulated IRB 2600",
+    "truth.yaml": "the true robot the demo's campaign was simulated on",
+    "weld_cell.mod": "a RAPID module for an IRB 2600: tooldata, wobjdata, MoveJ/MoveL/MoveC, Offs",
+    "pick_place.script": "a URScript pick and place for a UR5e",
+    "calibration.conf": "a UR5e controller's factory calibration (/root/.urcontrol/calibration.conf)",
+    "PALLETIZE.JBI": "a Yaskawa INFORM job for a GP180: a bag palletizer switching tools 1 and 2",
+    "TOOL.CND": "the Yaskawa controller's tool file of PALLETIZE.JBI (frames and loads)",
+    "pns0012.ls": "a FANUC TP program for an R-2000iC/165F: a bag palletizer switching PAYLOAD[1] and [2]",
+    "SYSVARS.VA": "the FANUC controller's payload schedules of pns0012.ls ($PLST_GRP1)",
+    "track_weld.mod": "a RAPID module for an IRB 2600 on a 6 m track: 8 robtargets with eax_a (mm)",
+    "tracker_export.txt": "a raw tracker export: 30 IRB 2600 poses, joints deg, points mm, 3 readings each",
+}
+
+
+def sample_path(name: str) -> Path:
+    """The path of a small sample file shipped with robocal, the files the how-to pages start from
+    (``robocal sample NAME`` copies one into the current folder).
+
+    Parameters
+    ----------
+    name : str
+        One of ``SAMPLES`` (``robocal sample`` lists them): ``"weld_cell.mod"``,
+        ``"calibration.conf"``, ``"tracker_export.txt"``...
+
+    Returns
+    -------
+    pathlib.Path
+        The file inside the installed package: read it or copy it, do not edit it.
+
+    Raises
+    ------
+    DataError
+        ``name`` is not a sample (the message lists them).
+
+    Examples
+    --------
+    >>> import robocal as rc
+    >>> rc.sample_path("weld_cell.mod").name
+    'weld_cell.mod'
+    """
+    if name not in SAMPLES:
+        raise DataError(f"no sample named {name!r}: the samples are {', '.join(SAMPLES)}")
+    return Path(str(files("robocal") / "demo_data" / name))
+
+
+def copy_sample(name: str, destination: Path) -> Path:
+    """Copy the sample ``name`` to ``destination`` (a file, or a folder to copy it into under its
+    name), atomically; an existing file is never overwritten. Returns the written path."""
+    target = destination / name if destination.is_dir() else destination
+    if target.exists():
+        raise DataError(f"{target} exists: robocal does not overwrite it (remove it or name another file)")
+    write_atomic(target, sample_path(name).read_bytes())
+    return target
 
 
 def _line(text: str = "") -> None:

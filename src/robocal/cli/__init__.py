@@ -30,7 +30,7 @@ COMMANDS = {
     "calibrate": "calibrate", "analyze": "analyze",
     "plan": "plan", "poses": "poses", "compensate": "compensate",
     "filter": "filter", "tool": "tool", "check": "check",
-    "history": "history",
+    "history": "history", "sample": "sample",
 }
 
 

@@ -33,13 +33,16 @@ class Timeline:
         return {"robot_id": self.robot_id, "entries": self.entries, "warnings": self.warnings}
 
     def summary(self) -> str:
-        """One line per record: id, date (UTC), kind, held-out and RMS (mm), a check's verdict."""
+        """One line per record: id, date (UTC), kind, held-out and RMS (mm), a check's verdict, and
+        ``joint zeros only (from #k)`` for an offsets-only recalibration of record k."""
         lines = []
         for e in self.entries:
             held, rms = ("-" if v is None else f"{v:.4f}" for v in (e["held_out_rms"], e["rms"]))
             line = f"#{e['id']:<4} {e['date']}  {e['kind']:<11} held-out {held} mm  RMS {rms} mm"
             if e["kind"] == "check":
                 line += f"  {e['verdict']} (p = {e['p_value']:.3g})"
+            if e.get("offsets_only"):
+                line += "  joint zeros only" + (f" (from #{e['parent']})" if e.get("parent") else "")
             lines.append(line)
         return "\n".join(lines)
 

@@ -12,22 +12,29 @@ from robocal.report.plots import _figure as _mpl_figure
 
 
 @_styled
-def rms_over_time(dates: list[datetime.datetime], held_out: list, checks: list, changed: list[bool]):
+def rms_over_time(dates: list[datetime.datetime], held_out: list, checks: list, changed: list[bool],
+                  fitted: list | None = None):
     """Held-out RMS (mm; None where a record has none) and check RMS (mm) against the date;
-    checks that found a change are drawn as filled red markers."""
+    checks that found a change are drawn as filled red markers; ``fitted``: the RMS on their own
+    data of the calibrations without held-out data (an offsets-only recalibration on a check
+    campaign), open markers. A margin on both sides keeps the first and last records inside."""
     fig = _mpl_figure(6.4, 2.8, top=0.4)
     ax = fig.add_subplot()
+    fitted = fitted or [None] * len(dates)
     for values, label, color, marker in ((held_out, "held-out RMS", VALIDATION, "o"),
-                                         (checks, "check RMS", AFTER, "s")):
+                                         (checks, "check RMS", AFTER, "s"),
+                                         (fitted, "fit RMS (no held-out data)", VALIDATION, "D")):
         keep = [i for i, v in enumerate(values) if v is not None]
         if keep:
             ax.plot([dates[i] for i in keep], [values[i] for i in keep], marker, color=color, ms=5,
-                    ls="-", lw=1, label=label)
+                    ls="none" if marker == "D" else "-", lw=1, label=label,
+                    mfc="none" if marker == "D" else color)
     bad = [i for i, c in enumerate(changed) if c and checks[i] is not None]
     if bad:
         ax.plot([dates[i] for i in bad], [checks[i] for i in bad], "s", color=BEFORE, ms=8,
                 label="check: changed")
     ax.set_ylabel("RMS (mm)")
+    ax.margins(x=0.08, y=0.15)
     ax.set_ylim(bottom=0)
     fig.autofmt_xdate()
     _legend_above(ax)
@@ -40,7 +47,9 @@ def render_history(timeline: dict, version: str) -> str:
     dates = [datetime.datetime.fromisoformat(e["date"]) for e in entries]
     svg = rms_over_time(dates, [e["held_out_rms"] for e in entries],
                         [e["rms"] if e["kind"] == "check" else None for e in entries],
-                        [e["verdict"] == "changed" for e in entries])
+                        [e["verdict"] == "changed" for e in entries],
+                        [e["rms"] if e["kind"] == "calibration" and e["held_out_rms"] is None else None
+                         for e in entries])
     rows = []
     for e in entries:
         moved = ", ".join(f"{esc(c['name'])} {c['shift']:+.4f} ± {c['sigma']:.4f} {esc(c['unit'])}"
@@ -53,6 +62,7 @@ def render_history(timeline: dict, version: str) -> str:
     table = _table(["#", "date (UTC)", "kind", "held-out RMS", "RMS", "verdict", "p", "moved",
                     "data SHA-256"], rows, align="lllrrllww")
     figure = _figure(svg, "Held-out RMS of each calibration with validation data (and of each evaluation), "
+                          "fit RMS of a calibration without (an offsets-only one: open marker), "
                           "RMS of each check after the tracker frame was refitted.",
                      "a check RMS well above the held-out RMS, and checks marked changed.")
     robot = esc(timeline["robot_id"])
