@@ -357,11 +357,10 @@ def parse_calibration_conf(text: str, where: str) -> URDeltas:
             raise ModelError(f"{where} line {number}: expected `key = value` or `[section]`, got "
                              f"{raw.strip()[:60]!r}")
         if section == "mounting":
-            key = match.group(1)
-            if key in values:  # the controller would read one of them: which is not ours to guess
-                raise ModelError(f"{where} line {number}: {key} is given twice in [mounting] (first on line "
-                                 f"{values[key][0]}): remove one copy")
-            values[key] = (number, match.group(2))
+            if match.group(1) in values:  # which one the controller reads is not known: neither is taken
+                raise ModelError(f"{where} line {number}: {match.group(1)} is given twice in [mounting] "
+                                 f"(first at line {values[match.group(1)][0]}): keep the controller's one")
+            values[match.group(1)] = (number, match.group(2))
     if section is None and not values:
         raise ModelError(f"{where}: no [mounting] section: not a UR calibration.conf")
     missing = [k for k in DELTA_KEYS if k not in values]
