@@ -28,9 +28,8 @@ from itertools import combinations
 
 import numpy as np
 
-from robocal.core.errors import RobocalError
 from robocal.data.joint_conventions import COUPLED_OPTION, fanuc_decoupled
-from robocal.data.registration import register_frame
+from robocal.data.registration import refit_frame, rigid_fit_rms
 from robocal.identify.plausibility import error_limit_mm
 from robocal.kinematics.cell import carriage_frames, is_track_cell
 from robocal.kinematics.prior_spec import MAX_SCALE
@@ -52,11 +51,9 @@ MOUNT_RIGHT_ANGLE_DEG = 1.0  # a fitted mount rotation this close to a multiple 
 
 def fit_rms_mm(robot, data) -> float:
     """RMS (mm) left after fitting the tracker frame and SMR offsets of ``robot`` to ``data``
-    (point or pose Measurements); inf when the fit fails."""
-    try:
-        return register_frame(robot, data).rms * 1e3
-    except (RobocalError, np.linalg.LinAlgError, FloatingPointError):
-        return float("inf")
+    (point or pose Measurements, `robocal.data.registration.refit_frame`); inf when the fit fails."""
+    reg = refit_frame(robot, data)
+    return float("inf") if reg is None else reg.rms * 1e3
 
 
 def _columns(data, joints) -> object:
@@ -65,18 +62,6 @@ def _columns(data, joints) -> object:
 
     return replace(data, joints=joints, approach=approach_from_order(joints, data.pose_id),
                    travel=travel_from_order(joints, data.pose_id))
-
-
-def rigid_fit_rms(points: np.ndarray, measured: np.ndarray) -> np.ndarray:
-    """RMS (m) left after the best rigid transform of each hypothesis' points ``(H, N, 3)`` onto
-    ``measured`` ``(N, 3)`` (Kabsch, all hypotheses at once): the cheap screen of
-    :func:`joint_mixup` before the full frame and SMR fit of the few best."""
-    P = points - points.mean(axis=1, keepdims=True)
-    Y = measured - measured.mean(axis=0)
-    U, s, Vt = np.linalg.svd(np.einsum("hni,nj->hij", P, Y))
-    s[:, -1] *= np.sign(np.linalg.det(U @ Vt))  # a rotation, not a reflection
-    sse = np.sum(P**2, axis=(1, 2)) + np.sum(Y**2) - 2.0 * s.sum(axis=1)
-    return np.sqrt(np.maximum(sse, 0.0) / len(measured))
 
 
 def _screen_rows(n: int) -> np.ndarray:
