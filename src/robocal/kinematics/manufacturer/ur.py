@@ -323,7 +323,7 @@ def _check_nominal(robot: Robot, nominal: Robot, source: str, fits) -> None:
     name, gap, bad = _largest_gap(robot, nominal)
     if not bad:
         return
-    length = name.rstrip("0123456789") in ("a", "d")  # alpha and beta are angles
+    length = robot.parameter_units()[robot.parameter_names.index(name)] == "m"  # the model's own units
     size = f"{gap * 1e3:+.1f} mm" if length else f"{np.rad2deg(gap):+.2f} deg"
     others = [other for other in _ur_names() if other != nominal.name
               and (arm := fits(other)) is not None and not _largest_gap(arm, Robot.from_catalog(other))[2]]
