@@ -245,6 +245,19 @@ def fanuc_coupled(robot, data, given_mm: float) -> str | None:
     return None
 
 
+# The hypotheses a file the model misses is tested on, in order, each a function (robot, data, the RMS
+# as given (mm)) -> its sentence or None: a new one is registered here. An odd file among others that
+# fit is tried on what its poses' structure allows (its joints, its mount, its frame's handedness).
+STRUCTURE_HYPOTHESES = (joint_mixup, mount_turned, mirrored)
+HYPOTHESES = (*STRUCTURE_HYPOTHESES, length_unit, fanuc_coupled)
+
+
+def first_reason(robot, data, given_mm: float, hypotheses=HYPOTHESES) -> str | None:
+    """The sentence of the first of ``hypotheses`` (default `HYPOTHESES`) that explains why
+    ``robot`` misses ``data`` (Measurements) by ``given_mm`` (mm RMS, frames fitted), or None."""
+    return next((r for h in hypotheses if (r := h(robot, data, given_mm))), None)
+
+
 def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
     """The most likely mistake behind data that ``robot`` (nominal or calibrated links) misses,
     as one sentence, or None when the data do not tell. ``datasets``: Measurements (only point
@@ -269,13 +282,11 @@ def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
         odd = [d.label or str(k) for k, (d, ok) in enumerate(zip(sets, fits, strict=True)) if not ok]
         worst = max(a for a, ok in zip(alone, fits, strict=True) if not ok)
         reason = next((r for d, ok in zip(sets, fits, strict=True) if not ok
-                       for r in [joint_mixup(robot, d, worst) or mount_turned(robot, d, worst)
-                                 or mirrored(robot, d, worst)] if r), None)
+                       for r in [first_reason(robot, d, worst, STRUCTURE_HYPOTHESES)] if r), None)
         return (f"{', '.join(odd)} is the odd file: the others fit the model, it misses by {worst:.4g} mm RMS"
                 + (f"; {reason}" if reason else " (another robot's data, another file, or a unit)"))
     for d, a in zip(sets, alone, strict=True):
-        reason = (joint_mixup(robot, d, a) or mount_turned(robot, d, a) or mirrored(robot, d, a)
-                  or length_unit(robot, d, a) or fanuc_coupled(robot, d, a))
+        reason = first_reason(robot, d, a)
         if reason:
             return (f"{d.label}: " if len(sets) > 1 and d.label else "") + reason
     return None
