@@ -7,7 +7,6 @@ from __future__ import annotations
 import io
 import re
 import xml.etree.ElementTree as ET
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +17,6 @@ from robocal.cli import main
 from robocal.core.errors import DataError
 from robocal.deploy.compensation import controller_model
 from robocal.kinematics.transforms import rot_z
-from robocal.kinematics.urdf import to_urdf
 
 yourdfpy = pytest.importorskip("yourdfpy", reason="yourdfpy (test extra) is needed to parse URDF")
 
@@ -265,27 +263,3 @@ def test_a_ur_calibrated_against_its_factory_model_goes_into_the_nominal_descrip
     truth = out.base @ np.linalg.inv(controller.base) @ controller.fk(q) @ out.tool
     assert max(gap(fk_by_yourdfpy(out.text, q), truth)) < 1e-9
     assert max(s.origin_mm for s in out.shifts) < 1.0  # the factory calibration moves the joints little
-
-
-def test_api_refuses_overwriting_what_it_read_and_another_format(tmp_path, monkeypatch):
-    """The checks of `robocal export --urdf-like` in the API too, before any work: the output is
-    never one of the files read (the calibrated model file here), and is named for a URDF."""
-    monkeypatch.chdir(tmp_path)
-    nominal = rc.Robot.from_catalog("kuka_kr16_2")
-    Path("kr16_2.urdf").write_text(to_urdf(nominal, frames="robot"))
-    nominal.with_values({"a2": nominal.get("a2") + 5e-4}).save("cal.yaml")
-    before = Path("cal.yaml").read_bytes()
-    with pytest.raises(rc.DataError, match="one of this command's input files"):
-        rc.export_urdf_like("cal.yaml", "kr16_2.urdf", output="kr16_2.urdf")
-    with pytest.raises(rc.DataError, match="writes URDF, but the name says YAML"):
-        rc.export_urdf_like("cal.yaml", "kr16_2.urdf", output="cal.yaml")
-    with pytest.raises(rc.DataError, match="writes URDF, but the name says JSON"):
-        rc.export_urdf_like("cal.yaml", "kr16_2.urdf", output="cal.json")
-    out = rc.export_urdf_like("cal.yaml", "kr16_2.urdf")
-    with pytest.raises(rc.DataError, match="writes URDF, but the name says YAML"):
-        out.write("cal.yaml")
-    Path("cal.urdf").write_text("<robot name='mine'/>")  # a model file of the user's, read: never written
-    with pytest.raises(rc.DataError, match="one of this command's input files"):
-        replace(out, sources=(*out.sources, "cal.urdf")).write("cal.urdf")
-    assert Path("cal.yaml").read_bytes() == before and not Path("cal.json").exists()
-    assert out.to_dict()["sources"] == ["cal.yaml", "kr16_2.urdf"]

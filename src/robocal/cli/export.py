@@ -87,6 +87,7 @@ def _urdf_like(args) -> int:
     """``--urdf-like VENDOR -o OUT``: the vendor's URDF with the calibrated kinematics."""
     from robocal.cli.args import check_format
     from robocal.core.errors import DataError
+    from robocal.core.io import check_outputs
     from robocal.deploy.urdf_like import export_urdf_like
 
     if not args.urdf_like or not args.output:
@@ -94,7 +95,8 @@ def _urdf_like(args) -> int:
     if args.urdf or args.yaml or args.ur_calibration:
         raise DataError("--urdf-like writes one file (-o OUT): run --urdf, --yaml or --ur-calibration apart")
     check_format(args.output, "URDF", "-o")
-    macro, macro_out = args.xacro or (None, None)  # inputs never written: checked by export_urdf_like
+    macro, macro_out = args.xacro or (None, None)
+    check_outputs([args.output, macro_out], [args.model, args.urdf_like, macro])
     result = export_urdf_like(args.model, args.urdf_like, nominal=args.nominal, output=args.output,
                               tip=args.tip, xacro=macro, xacro_output=macro_out,
                               geometry_only=args.geometry_only, vendor_model=args.vendor_model)

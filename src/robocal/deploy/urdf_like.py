@@ -382,7 +382,6 @@ class UrdfLikeExport:
     xacro_text: str | None = None
     xacro_output: str | None = None
     fk_frames: str = "base_link -> tool0"
-    sources: tuple[str, ...] = ()  # the files the export read (model, nominal, vendor URDF, macro)
 
     def summary(self) -> str:
         """The map, the FK check and the per-joint shifts, one line each."""
@@ -408,7 +407,7 @@ class UrdfLikeExport:
                 "fk_check": {"m": self.fk_check[0], "rad": self.fk_check[1],
                              "joint_vectors": self.fk_check[2], "frames": self.fk_frames},
                 "joints": [vars(s) for s in self.shifts], "warnings": list(self.warnings),
-                "output": self.output, "sources": list(self.sources), "urdf": self.text, "xacro": self.xacro,
+                "output": self.output, "urdf": self.text, "xacro": self.xacro,
                 "xacro_output": self.xacro_output, "xacro_text": self.xacro_text}
 
     def write(self, path=None, xacro_path=None) -> list[str]:
@@ -419,7 +418,7 @@ class UrdfLikeExport:
         ------
         DataError
             No path, a path named for another format than URDF, or a path that is one of the
-            files the export read (never overwritten).
+            vendor's files (never overwritten).
         """
         path = path if path is not None else self.output
         xacro_path = xacro_path if xacro_path is not None else self.xacro_output
@@ -427,8 +426,8 @@ class UrdfLikeExport:
             raise DataError("no output path: give write(path, xacro_path) or export_urdf_like(..., output=, "
                             "xacro_output=)")
         texts = {path: self.text} | ({} if self.xacro_text is None else {xacro_path: self.xacro_text})
-        check_format(path, "URDF", "path")
-        check_outputs(list(texts), [*self.sources, self.vendor, self.xacro])
+        check_format(path, "URDF", "path")  # as robocal export --urdf-like -o does
+        check_outputs(list(texts), [self.vendor, self.xacro])
         write_all(texts)
         return [str(p) for p in texts]
 
@@ -510,10 +509,6 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     >>> out.write()
     ['kr16_2_calibrated.urdf']
     """
-    sources = tuple(str(s) for s in (calibrated, nominal, vendor_model, vendor_urdf, xacro)
-                    if s is not None and not isinstance(s, Robot))  # the files read: never written
-    check_format(output, "URDF", "output")
-    check_outputs([output, xacro_output], sources)  # before any work, as the command line does
     robot = calibrated if isinstance(calibrated, Robot) else load_model(str(calibrated))
     controller = nominal if isinstance(nominal, Robot) else controller_for(robot, nominal)
     if controller is None:
@@ -538,7 +533,6 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     new_text = _with_origins(text, {chain.joints[i].get("name"): origins[i] for i in chain.moving})
     result = _result(robot, drawn, vendor_file, root.get("name") or "", chain, B, M, check, new_text, cal)
     result.output = None if output is None else str(output)
-    result.sources = sources
     result.warnings[:0] = dropped
     result.text = _with_comment(new_text, _shift_comment(result))
     if xacro is not None:
