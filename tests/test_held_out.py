@@ -174,3 +174,20 @@ def test_real_validation_files_are_consistent_with_the_prediction():
     assert result.held_out.verdict == CONSISTENT
     assert result.held_out.model_error_mm < 2 * result.held_out.predicted_mm
     assert not any("held out" in w for w in result.warnings)
+
+
+def test_the_report_verdict_follows_the_held_out_judgement():
+    """The report's verdict box (which reads the result JSON alone) takes the held-out judgement:
+    beyond the prediction is 'do not use', whatever the noise floor says; after a frame shift the
+    model's error with the frame refitted is judged against the floor, not the shifted RMS."""
+    from robocal.report import verdict
+
+    assert (verdict.HELD_OUT_FRAME_SHIFT, verdict.HELD_OUT_BEYOND) == (FRAME_SHIFT, BEYOND)
+    base = {"converged": True, "validation": {"rms": 0.5, "n": 20, "noise_floor_mm": 0.03}}
+    shifted = {**base, "held_out": {"verdict": FRAME_SHIFT, "model_error_mm": 0.035}}
+    assert verdict.next_step(base)[0] == "care"  # 0.5 mm against a 0.03 mm floor
+    assert verdict.next_step(shifted)[0] == "good"  # the 0.5 mm was the tracker's
+    beyond = {**base, "validation": {"rms": 0.04, "n": 20, "noise_floor_mm": 0.03},
+              "held_out": {"verdict": BEYOND, "model_error_mm": 0.04}}
+    level, sentence = verdict.next_step(beyond)
+    assert level == "bad" and sentence.startswith("NOT VALIDATED")

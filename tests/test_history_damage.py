@@ -162,7 +162,7 @@ def test_a_bad_schema_version_is_refused(made, hist, capsys, sql, message):
 @pytest.mark.parametrize("sql, cause", [
     ("UPDATE records SET summary = '{\"rms\": 0.1' WHERE id = 2", "record #2: its summary is not JSON"),
     ("UPDATE records SET summary = json_set(summary, '$.p_value', '0.288') WHERE id = 2",
-     "record #2: its p_value is '0.288', not a number"),
+     r"record #2: its summary.p_value: expected a number, got '0.288'"),
     ("UPDATE records SET summary = json_set(summary, '$.p_value', 1.5) WHERE id = 2",
      "record #2: a check needs a verdict .* p-value in"),
     ("UPDATE records SET summary = '[1, 2]' WHERE id = 2", "record #2: its summary is JSON list, not dict"),
@@ -170,9 +170,9 @@ def test_a_bad_schema_version_is_refused(made, hist, capsys, sql, message):
     ("UPDATE records SET model_yaml = model_yaml || ' ' WHERE id = 2", "record #2: its model does not match"),
     ("UPDATE records SET recorded_at = 'yesterday' WHERE id = 2", "record #2: its date 'yesterday'"),
     ("UPDATE records SET summary = json_set(summary, '$.changed_parameters', json('[{\"name\": \"a2\"}]')) "
-     "WHERE id = 2", r"record #2: its changed_parameters\[0\].unit is None, not text"),
+     "WHERE id = 2", r"record #2: its summary.changed_parameters\[0\]: missing field 'unit'"),
     ("UPDATE records SET data = json_set(data, '$[0].sha256', 7) WHERE id = 2",
-     r"record #2: its data\[0\].sha256 is 7, not text"),
+     r"record #2: its data\[0\].sha256: expected a text, got 7"),
 ])
 def test_a_bad_check_record_is_left_out_of_the_timeline_with_a_warning(made, hist, tmp_path, capsys, sql,
                                                                        cause):
@@ -229,7 +229,7 @@ def test_validate_row_names_each_fault():
             "[]", None, "[]", None)
     assert validate_row(good, ROBOT, None).summary["p_value"] == 0.3
     faults = ((0, "1", "its id is '1'"), (1, "R2", "robot id 'R2' .*damaged index"), (2, "evaluation", None),
-              (7, '{"verdict": "holds", "p_value": true}', "p_value is True"),
+              (7, '{"verdict": "holds", "p_value": true}', "summary.p_value: expected a number, got True"),
               (7, '{"verdict": "holds", "p_value": 0.3, "rms_mm": "0.1"}', "rms_mm"),
               (9, '{"names": ["a"], "covariance": [[1]], "noise_m": 1e-5, "dof": 0}', "dof"),
               (11, 1.5, "parent_id"))
@@ -397,7 +397,7 @@ def test_postgres_records_are_validated_on_read(postgres_url):  # noqa: F811
         conn.execute("UPDATE records SET summary = %s WHERE id = %s",
                      ('{"verdict": "holds", "p_value": "0.5"}', bad))
     with History(postgres_url, readonly=True) as h:
-        with pytest.raises(DataError, match=f"record #{bad}: its p_value is '0.5', not a number"):
+        with pytest.raises(DataError, match=f"record #{bad}: its summary.p_value: expected a number"):
             h.entries(robot)
         skipped: list[str] = []
         assert [r.id for r in h.entries(robot, skipped=skipped)] == [good] and len(skipped) == 1

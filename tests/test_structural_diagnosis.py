@@ -15,13 +15,13 @@ import yaml
 
 import robocal as rc
 from robocal.cli import main
-from robocal.data.registration import register
+from robocal.data.registration import register, rigid_fit_rms
 from robocal.data.simulate import sample_joints, simulate_tracker
 from robocal.history.check import FRAME_NAMES, Uncertainty, candidates, check_calibration, confounded
 from robocal.history.record import calibration_uncertainty
 from robocal.kinematics.model import cell_from_data
 from robocal.kinematics.transforms import make_transform
-from robocal.trust.diagnosis import diagnose, rigid_fit_rms
+from robocal.trust.diagnosis import diagnose
 
 CELL = {"units": {"length": "mm", "angle": "deg"}, "robot": "fanuc_m20ia",
         "track": {"direction": [1, 0, 0], "limits": [0, 4000]}}

@@ -406,7 +406,7 @@ def test_conf_key_given_twice_is_refused_naming_it(tmp_path, capsys):
     longer = line.replace("[ -7.906", "[ 9.92094", 1)  # a1 + 10 mm
     assert longer != line
     twice = text.replace(line, line + "\n" + longer, 1)
-    with pytest.raises(ModelError, match=r"line 4: delta_a is given twice in \[mounting\] \(first on line 3"):
+    with pytest.raises(ModelError, match=r"line 4: delta_a is given twice in \[mounting\] \(first at line 3"):
         vur.from_calibration_conf(twice, "ur5e")
     conf = tmp_path / "calibration.conf"
     conf.write_text(twice)

@@ -70,6 +70,24 @@ def _mm(v: float) -> str:
     return f"{v * 1e3:.4g} mm" if abs(v) < 1 else f"{v:.4g} m"
 
 
+def likely_unit(raw: float, scales: dict[str, float], low: float, high: float,
+                besides: str | None = None) -> str | None:
+    """The unit a number was most likely typed in: the first of ``scales`` (unit -> SI factor, in
+    order of likelihood: `LENGTH_SCALES_M`, `MASS_SCALES_KG`) other than ``besides`` in which
+    ``raw`` (the number as typed) lands within ``low .. high`` (SI); None when it fits none. The
+    one rule behind every "the values look like ..." of this module.
+
+    Examples
+    --------
+    >>> from robocal.core.magnitudes import LENGTH_SCALES_M, MASS_SCALES_KG, likely_unit
+    >>> likely_unit(250.0, LENGTH_SCALES_M, 2e-3, 5.0, besides="m")  # a 250 mm tool typed as metres
+    'mm'
+    >>> likely_unit(397.0, MASS_SCALES_KG, 0.0, 300.0)  # 397 'kg' on a 200 kg robot: pounds
+    'lb'
+    """
+    return next((u for u, s in scales.items() if u != besides and low <= raw * s <= high), None)
+
+
 def check_length(size_m: float, declared: str, low_m: float, high_m: float, what: str, kind: str,
                  zero_ok: bool = True, advice: str = "give {declared}", strict: bool = True) -> None:
     """Refuse ``size_m`` (m, a length read in the ``declared`` unit: 'mm', 'm' or 'inch') outside
@@ -114,11 +132,10 @@ def check_length(size_m: float, declared: str, low_m: float, high_m: float, what
     if (zero_ok and size_m == 0.0) or low_m <= size_m <= high_m:
         return
     raw = size_m / LENGTH_SCALES_M[declared]
-    fits = [u for u, s in LENGTH_SCALES_M.items() if u != declared and low_m <= raw * s <= high_m]
+    u = likely_unit(raw, LENGTH_SCALES_M, low_m, high_m, besides=declared)
     where = "too small" if size_m < low_m else "too large"
     span = f"{_mm(low_m)} .. {_mm(high_m)}"
-    if fits:
-        u = fits[0]
+    if u is not None:
         as_mm = "" if u == "mm" else f" = {raw * LENGTH_SCALES_M[u] * 1e3:.4g} mm"
         raise UnitError(f"{what}: {raw:.4g} {declared} is {where} for {kind} ({span}); the values "
                         f"look like {UNIT_WORDS[u]} ({raw:.4g} {u}{as_mm}): "
@@ -490,9 +507,8 @@ def check_payload(masses_kg: Sequence[float], rated_kg: float | None, robot: str
         return
     head = (f"{what}: {heaviest:.4g} kg is {heaviest / rated_kg:.3g} times the rated payload of {robot} "
             f"({rated_kg:.4g} kg; at most {PAYLOAD_MAX_RATED:g} times is a load it carries)")
-    fits = [u for u, s in MASS_SCALES_KG.items() if heaviest * s <= most]
-    if fits:
-        u = fits[0]
+    u = likely_unit(heaviest, MASS_SCALES_KG, 0.0, most)
+    if u is not None:
         raise UnitError(f"{head}; the masses look like {MASS_WORDS[u]} ({heaviest:.4g} {u} = "
                         f"{heaviest * MASS_SCALES_KG[u]:.4g} kg): give them in kilograms "
                         f"(x {MASS_SCALES_KG[u]:.6g})")

@@ -75,6 +75,7 @@ from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
 from robocal.kinematics.conditions import UNKNOWN, Conditions
 from robocal.kinematics.joint_errors import assumed_conditions, condition_terms
 from robocal.kinematics.link_names import is_frame_number
+from robocal.kinematics.model import links_length
 from robocal.kinematics.transforms import ROTATION_TOL
 
 _ARRAY_FIELDS = ("joints", "pose_id", "smr", "source_row", "sigma", "points", "rotations", "plane",
@@ -802,13 +803,13 @@ def joint_range_rad(robot=None) -> float:
 
 
 def robot_reach(robot) -> float:
-    """A generous reach (m) of a robot: sum of link lengths plus tool and SMR offsets, plus the travel
-    of its prismatic joints (a track)."""
+    """A generous reach (m) of a robot: its link lengths (`robocal.kinematics.model.links_length`)
+    plus tool and SMR offsets, plus the travel of its prismatic joints (a track)."""
     tool = max([np.linalg.norm(robot.tool[:3, 3])] + [np.linalg.norm(s) for s in robot.smr])
     slides = robot.limits[robot.prismatic]
     travel = float(np.sum(np.where(np.isfinite(slides), np.abs(slides), 0.0).max(axis=1))) \
         if len(slides) else 0.0
-    return float(np.abs(robot.a).sum() + np.abs(robot.d).sum() + tool + travel)
+    return links_length(robot) + float(tool) + travel
 
 
 def _conditions(payload, temperature, N: int) -> dict:

@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from robocal.core.errors import DataError, IdentificationError
+from robocal.core.errors import DataError, IdentificationError, RobocalError
 from robocal.kinematics.transforms import kabsch_rotation, make_transform, rotvec_to_matrix, skew
 
 # Smallest singular value (relative to the largest) of the column-normalised registration Jacobian
@@ -57,6 +57,19 @@ def umeyama(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     H = (src - cs).T @ ((dst - cd) * w[:, None])
     R = kabsch_rotation(H)
     return make_transform(R, cd - R @ cs)
+
+
+def rigid_fit_rms(points: np.ndarray, measured: np.ndarray) -> np.ndarray:
+    """RMS (m) left after the best rigid transform of each hypothesis' points ``(H, N, 3)`` onto
+    ``measured`` ``(N, 3)`` (Kabsch, all hypotheses at once: :func:`umeyama`'s fit, batched, its
+    residual in closed form): the cheap screen of many hypotheses (the diagnoses' flipped joints,
+    turned mounts) before the full frame and SMR fit (:func:`refit_frame`) of the few best."""
+    P = points - points.mean(axis=1, keepdims=True)
+    Y = measured - measured.mean(axis=0)
+    U, s, Vt = np.linalg.svd(np.einsum("hni,nj->hij", P, Y))
+    s[:, -1] *= np.sign(np.linalg.det(U @ Vt))  # a rotation, not a reflection
+    sse = np.sum(P**2, axis=(1, 2)) + np.sum(Y**2) - 2.0 * s.sum(axis=1)
+    return np.sqrt(np.maximum(sse, 0.0) / len(measured))
 
 
 def turns_about_one_axis(robot) -> bool:
@@ -226,3 +239,13 @@ def apply_registration(robot, reg: Registration):
     nominal = out.nominal.copy()
     nominal[: 5 * robot.n_joints] = robot.nominal[: 5 * robot.n_joints]
     return replace(out, nominal=nominal)
+
+
+def refit_frame(robot, data) -> Registration | None:
+    """:func:`register_frame` of ``robot`` on ``data``, or None where it fails (poses that cannot
+    fix the frame and the SMR offsets, a fit that breaks down numerically): the one refit the
+    diagnoses and the held-out judgement test their hypotheses with."""
+    try:
+        return register_frame(robot, data)
+    except (RobocalError, np.linalg.LinAlgError, FloatingPointError):
+        return None

@@ -261,17 +261,19 @@ class Compensation:
         return f"not reached on the calibrated model (best {self.position_error[i] * 1e3:.3g} mm off){where}"
 
 
-def check_payload_given(payload, robot: Robot) -> None:
+def check_payload_given(payload, calibrated: Robot, nominal: Robot | None = None) -> None:
     """Refuse a ``payload`` (kg, or kg and its centre of mass; None: none given) heavier than the
-    rated payload of ``robot`` allows (`robocal.core.magnitudes.check_payload`: lb or g typed as
-    kg); one that is not numbers is left to the check that names it (`Robot.with_conditions`, the
-    filter's load planner)."""
+    rated payload allows (`robocal.core.magnitudes.check_payload`: lb or g typed as kg): the
+    ``calibrated`` model's ``payload_kg``, else the ``nominal`` model's (a calibrated model saved
+    without it). One that is not numbers is left to the check that names it
+    (`Robot.with_conditions`, the filter's load planner)."""
     if payload is None:
         return
     try:
         mass = float(np.asarray(payload, dtype=float).reshape(-1)[0])
     except (TypeError, ValueError, IndexError):
         return
+    robot = calibrated if calibrated.payload_kg is not None or nominal is None else nominal
     check_payload([mass], robot.payload_kg, robot.name, "--payload")
 
 
@@ -501,7 +503,7 @@ def _compensate_arm(calibrated: Robot, nominal: Robot, targets, *, branch, seeds
     if targets_frame not in ("model", "robot"):
         raise DataError(f"targets_frame must be 'model' or 'robot', got {targets_frame!r}")
     given = calibrated
-    check_payload_given(payload, given if given.payload_kg is not None else nominal)  # lb or g typed as kg
+    check_payload_given(payload, given, nominal)  # lb or g typed as kg
     if targets_frame == "robot":
         calibrated = calibrated.with_frames(base=nominal.base)
     calibrated = calibrated.with_conditions(payload, temperature)

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from robocal.core.errors import DataError, ModelError, RobocalError
-from robocal.core.io import check_outputs, read_text, write_all
+from robocal.core.io import check_format, check_outputs, read_text, write_all
 from robocal.deploy.compensation import controller_model
 from robocal.deploy.models import controller_for
 from robocal.kinematics.fk import chain_frames
@@ -475,7 +475,8 @@ class UrdfLikeExport:
         Raises
         ------
         DataError
-            No path, or a path is one of the vendor's files (never overwritten).
+            No path, a path named for another format than URDF, or a path that is one of the
+            vendor's files (never overwritten).
         """
         path = path if path is not None else self.output
         xacro_path = xacro_path if xacro_path is not None else self.xacro_output
@@ -483,6 +484,7 @@ class UrdfLikeExport:
             raise DataError("no output path: give write(path, xacro_path) or export_urdf_like(..., output=, "
                             "xacro_output=)")
         texts = {path: self.text} | ({} if self.xacro_text is None else {xacro_path: self.xacro_text})
+        check_format(path, "URDF", "path")  # as robocal export --urdf-like -o does
         check_outputs(list(texts), [self.vendor, self.xacro])
         write_all(texts)
         return [str(p) for p in texts]

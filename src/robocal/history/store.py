@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from robocal.core.errors import DataError
+from robocal.core.schema import Num, Obj, Seq, Str, validate
 from robocal.core.version import __version__
 
 KINDS = ("calibration", "check", "evaluation")  # evaluation: a model judged on held-out data
@@ -707,7 +708,16 @@ class BadRecordError(Exception):
         super().__init__(f"record #{ident}: {cause}")
 
 
-_NUMBERS = ("held_out_rms", "rms", "rms_mm", "predicted_rms_mm", "p_value", "mean", "max", "p95")
+# a record's JSON as `robocal.core.schema` checks it (numbers finite or null, texts, the rows' fields)
+_ROWS = {"shift": Obj({"name": Str(), "unit": Str(), "shift": Num(null=True), "sigma": Num(null=True)},
+                      required=("name", "unit")),
+         "parameter": Obj({"name": Str(), "unit": Str(), "estimate": Num(null=True), "sigma": Num(null=True)},
+                          required=("name", "unit")),
+         "file": Obj({"file": Str(), "role": Str(), "sha256": Str()}, required=("file", "role", "sha256"))}
+_FIGURES = Obj({**{name: Num(null=True) for name in ("held_out_rms", "rms", "rms_mm", "predicted_rms_mm",
+                                                      "p_value", "mean", "max", "p95")},
+                **{part: Obj({"rms": Num(null=True)}, null=True) for part in ("before", "after")},
+                "changed_parameters": Seq(_ROWS["shift"], null=True)})
 _TEXT_COLUMNS = ("robot_id", "kind", "recorded_at", "robocal_version", "model_yaml", "model_sha256",
                  "summary", "parameters", "data")
 
@@ -755,47 +765,29 @@ def validate_row(row: tuple, robot_id: str, kind: str | None) -> Record:
         raise BadRecordError(ident, "its model does not match its SHA-256 fingerprint (changed after "
                                     "recording)")
     figures = _json(ident, "summary", summary, dict)
-    for name in _NUMBERS:
-        if not _number(figures.get(name)):
-            raise BadRecordError(ident, f"its {name} is {figures[name]!r:.40}, not a number")
-    for name in ("before", "after"):
-        part = figures.get(name)
-        if part is not None and not (isinstance(part, dict) and _number(part.get("rms"))):
-            raise BadRecordError(ident, f"its {name} figures are {part!r:.60}, not {{\"rms\": mm, ...}}")
+    _check(ident, figures, _FIGURES, "its summary")
     if rkind == "check" and (figures.get("verdict") not in ("holds", "changed")
                              or not isinstance(figures.get("p_value"), int | float)
                              or not 0 <= figures["p_value"] <= 1):
         raise BadRecordError(ident, "a check needs a verdict (holds, changed) and a p-value in [0, 1], it "
                                     f"has {figures.get('verdict')!r:.20} and {figures.get('p_value')!r:.20}")
-    _check_rows(ident, "changed_parameters", figures.get("changed_parameters") or [], _SHIFT_FIELDS)
     unc = None if uncertainty is None else _json(ident, "uncertainty", uncertainty, dict)
     if unc is not None:
         _check_uncertainty(ident, unc)
     rows = _json(ident, "parameters", parameters, list)
-    _check_rows(ident, "parameters", rows, _PARAMETER_FIELDS)
+    _check(ident, rows, Seq(_ROWS["parameter"]), "its parameters")
     files = _json(ident, "data", data, list)
-    _check_rows(ident, "data", files, _FILE_FIELDS)
+    _check(ident, files, Seq(_ROWS["file"]), "its data")
     return Record(robot_id=rid, kind=rkind, model_yaml=model_yaml, summary=figures, parameters=rows,
                   uncertainty=unc, data=files, parent=parent, date=date, robocal_version=version, id=ident)
 
 
-# the fields of each row of a record's lists: "text" or "number" (finite or null)
-_SHIFT_FIELDS = {"name": "text", "unit": "text", "shift": "number", "sigma": "number"}
-_PARAMETER_FIELDS = {"name": "text", "unit": "text", "estimate": "number", "sigma": "number"}
-_FILE_FIELDS = {"file": "text", "role": "text", "sha256": "text"}
-
-
-def _check_rows(ident, column: str, rows, fields: dict[str, str]) -> None:
-    """Each of ``rows`` is an object whose ``fields`` have their type (BadRecordError otherwise)."""
-    if not isinstance(rows, list):
-        raise BadRecordError(ident, f"its {column} is {type(rows).__name__}, not a list")
-    for i, row in enumerate(rows):
-        if not isinstance(row, dict):
-            raise BadRecordError(ident, f"its {column}[{i}] is {type(row).__name__}, not an object")
-        for name, kind in fields.items():
-            value = row.get(name)
-            if not (isinstance(value, str) if kind == "text" else _number(value)):
-                raise BadRecordError(ident, f"its {column}[{i}].{name} is {value!r:.40}, not {kind}")
+def _check(ident, value, spec, where: str) -> None:
+    """``value`` follows ``spec`` (`robocal.core.schema`), else BadRecordError naming the field."""
+    try:
+        validate(value, spec, where)
+    except DataError as exc:
+        raise BadRecordError(ident, str(exc)) from None
 
 
 def _check_uncertainty(ident, unc: dict) -> None:

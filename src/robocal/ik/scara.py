@@ -21,11 +21,11 @@ from collections.abc import Callable
 
 import numpy as np
 
+from robocal.kinematics.convert import PARALLEL_TOL
 from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.model import Robot
 
 BRANCHES = 2
-AXIS_TOL = 1e-9  # |sin| between two joint axes below which a chain counts as a nominal SCARA
 _ITERATIONS = 30
 _MAX_STEP = 0.2  # rad (m on the quill): the longest step one iteration takes
 _SINGULAR_FLOOR = 1e-12  # added to the task Jacobian's diagonal (a stretched arm's elbow)
@@ -46,11 +46,12 @@ def _frame_axes(robot: Robot, q: np.ndarray) -> np.ndarray:
 
 def is_scara(robot: Robot) -> bool:
     """Whether ``robot``'s own chain is a nominal SCARA: 4 joints, the third prismatic, the others
-    revolute, every joint axis parallel to the first (within :data:`AXIS_TOL`)."""
+    revolute, every joint axis parallel to the first (within
+    `robocal.kinematics.convert.PARALLEL_TOL`, |sin| of their angle)."""
     if robot.n_joints != 4 or list(robot.prismatic) != [False, False, True, False]:
         return False
     z = _frame_axes(robot, np.zeros((1, 4)))[0]
-    return bool(np.all(np.linalg.norm(np.cross(z, z[0]), axis=1) <= AXIS_TOL))
+    return bool(np.all(np.linalg.norm(np.cross(z, z[0]), axis=1) <= PARALLEL_TOL))
 
 
 def is_scara_arm(robot: Robot) -> bool:

@@ -21,16 +21,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from robocal.kinematics.convert import opw_kwargs
+from robocal.kinematics.convert import PARALLEL_TOL, opw_kwargs
 from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.opw import OPWParameters, opw_fk
 
 if TYPE_CHECKING:
     from robocal.kinematics.model import Robot
 
-# The exact form: |cos| of axes that must be perpendicular, |sin| of axes that must be parallel (rad),
+# The exact form: |cos| of axes that must be perpendicular, |sin| of axes that must be parallel
+# (robocal.kinematics.convert.PARALLEL_TOL, the tolerance every chain reader decides parallel axes by),
 # and the distance between wrist axes that must meet, relative to the arm's size (its lines' span)
-AXIS_TOL = 1e-9
 LENGTH_REL = 1e-9
 # The derived OPW model is the chain's arm when their poses agree this well (relative to the arm's
 # size; rad): far below the closed form's own check (robocal.ik.opw_ik.TOL, 1e-9 m / rad)
@@ -142,14 +142,15 @@ def opw_model(robot: Robot, seed: bool = False) -> Robot | None:
     """``robot``'s arm as an OPW-form robot (``opw`` set derived from its joint lines, base and tool
     placing it; same joints, same name and limits), or None when its chain is not of the OPW form.
 
-    ``seed=False``: the form within `AXIS_TOL` / `LENGTH_REL` and forward kinematics equal within
-    `ROUND_TRIP_REL` x the arm's size (m) / `ROUND_TRIP_RAD` -- the closed form is then the
-    chain's own. ``seed=True``: the nearest OPW arm of a chain within `SEED_AXIS_TOL` /
-    `SEED_LENGTH_REL` of the form (not the chain's arm; its closed form seeds numeric IK).
+    ``seed=False``: the form within `robocal.kinematics.convert.PARALLEL_TOL` / `LENGTH_REL` and
+    forward kinematics equal within `ROUND_TRIP_REL` x the arm's size (m) / `ROUND_TRIP_RAD` -- the
+    closed form is then the chain's own. ``seed=True``: the nearest OPW arm of a chain within
+    `SEED_AXIS_TOL` / `SEED_LENGTH_REL` of the form (not the chain's arm; its closed form seeds
+    numeric IK).
     A 6R chain without joint-error terms only."""
     if robot.n_joints != 6 or robot.has_prismatic or robot.joint_errors is not None:
         return None
-    model = _derive(robot, SEED_AXIS_TOL, SEED_LENGTH_REL) if seed else _derive(robot, AXIS_TOL, LENGTH_REL)
+    model = _derive(robot, *((SEED_AXIS_TOL, SEED_LENGTH_REL) if seed else (PARALLEL_TOL, LENGTH_REL)))
     if model is None or seed:
         return model
     dp, dr = round_trip_gap(robot, model)

@@ -413,7 +413,7 @@ def filter_program(programs, calibrated: Robot, nominal: Robot, *, tools=None, f
                         "identified frame {0} (Cell.in_world), where the controller has that arm's base")
     reach = robot_reach(nominal)
     check_magnitudes(given, dialect, tools, frames, reach)
-    check_payload_given(payload, calibrated if calibrated.payload_kg is not None else nominal)
+    check_payload_given(payload, calibrated, nominal)
     # a cell's arm is in the controller's world already (Cell.in_world): its calibrated base is kept
     robot_base = np.eye(4) if coordinated is not None else robot_base_frame(robot_base, reach)
     res, program = _filtered(given, calibrated, nominal, tools, frames, tcp, robot_base, dialect,

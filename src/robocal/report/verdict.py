@@ -16,6 +16,9 @@ from robocal.report.floor import own_error_mm
 from robocal.report.format import esc, num
 
 FLOOR_FACTOR = 1.5  # held-out RMS within this factor of the noise floor: the model explains the data
+# the held-out judgement's verdicts as the result JSON writes them (``held_out.verdict``, docs/result-json.md;
+# robocal.trust.held_out, which the report does not import: it renders the JSON alone)
+HELD_OUT_FRAME_SHIFT, HELD_OUT_BEYOND = "frame shift", "beyond the prediction"
 
 
 def held_parameters(result: dict) -> list[str]:
@@ -47,6 +50,9 @@ def next_step(result: dict) -> tuple[str, str]:
     consistency = result.get("consistency") or {}
     predicted = result.get("predicted_accuracy") or {}
     held_out = (result.get("validation") or {}).get("rms")
+    judged = result.get("held_out") or {}
+    if judged.get("verdict") == HELD_OUT_FRAME_SHIFT:  # the model is judged without the tracker's shift
+        held_out = judged.get("model_error_mm", held_out)
     floor = noise_floor_mm(result)
     if "converged" in result and not result.get("converged"):
         return "bad", ("The solver did not converge: do not use this model; read the warnings and calibrate "
@@ -58,6 +64,10 @@ def next_step(result: dict) -> tuple[str, str]:
     if consistency.get("verdict") == "step":
         return "bad", ("The residuals change part-way through the measuring order (a reflector or the "
                        "tracker moved): measure again, or calibrate on the rows before the change.")
+    if judged.get("verdict") == HELD_OUT_BEYOND:
+        return "bad", ("NOT VALIDATED: the model misses the held-out poses by more than its prediction, "
+                       "even with the tracker frame refitted on them: find the cause named in the warnings "
+                       "(another SMR nest or tool, another robot, a changed arm) before using it.")
     if held_out is None:
         return "care", ("No poses were held out: measure 20 or more poses the calibration did not see and "
                         "judge the model on them (robocal calibrate --validate, or robocal evaluate).")

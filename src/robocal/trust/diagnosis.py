@@ -28,9 +28,8 @@ from itertools import combinations
 
 import numpy as np
 
-from robocal.core.errors import RobocalError
 from robocal.data.joint_conventions import COUPLED_OPTION, fanuc_decoupled
-from robocal.data.registration import register_frame
+from robocal.data.registration import refit_frame, rigid_fit_rms
 from robocal.identify.plausibility import error_limit_mm
 from robocal.kinematics.cell import carriage_frames, is_track_cell
 from robocal.kinematics.prior_spec import MAX_SCALE
@@ -52,11 +51,9 @@ MOUNT_RIGHT_ANGLE_DEG = 1.0  # a fitted mount rotation this close to a multiple 
 
 def fit_rms_mm(robot, data) -> float:
     """RMS (mm) left after fitting the tracker frame and SMR offsets of ``robot`` to ``data``
-    (point or pose Measurements); inf when the fit fails."""
-    try:
-        return register_frame(robot, data).rms * 1e3
-    except (RobocalError, np.linalg.LinAlgError, FloatingPointError):
-        return float("inf")
+    (point or pose Measurements, `robocal.data.registration.refit_frame`); inf when the fit fails."""
+    reg = refit_frame(robot, data)
+    return float("inf") if reg is None else reg.rms * 1e3
 
 
 def _columns(data, joints) -> object:
@@ -65,18 +62,6 @@ def _columns(data, joints) -> object:
 
     return replace(data, joints=joints, approach=approach_from_order(joints, data.pose_id),
                    travel=travel_from_order(joints, data.pose_id))
-
-
-def rigid_fit_rms(points: np.ndarray, measured: np.ndarray) -> np.ndarray:
-    """RMS (m) left after the best rigid transform of each hypothesis' points ``(H, N, 3)`` onto
-    ``measured`` ``(N, 3)`` (Kabsch, all hypotheses at once): the cheap screen of
-    :func:`joint_mixup` before the full frame and SMR fit of the few best."""
-    P = points - points.mean(axis=1, keepdims=True)
-    Y = measured - measured.mean(axis=0)
-    U, s, Vt = np.linalg.svd(np.einsum("hni,nj->hij", P, Y))
-    s[:, -1] *= np.sign(np.linalg.det(U @ Vt))  # a rotation, not a reflection
-    sse = np.sum(P**2, axis=(1, 2)) + np.sum(Y**2) - 2.0 * s.sum(axis=1)
-    return np.sqrt(np.maximum(sse, 0.0) / len(measured))
 
 
 def _screen_rows(n: int) -> np.ndarray:
@@ -260,6 +245,19 @@ def fanuc_coupled(robot, data, given_mm: float) -> str | None:
     return None
 
 
+# The hypotheses a file the model misses is tested on, in order, each a function (robot, data, the RMS
+# as given (mm)) -> its sentence or None: a new one is registered here. An odd file among others that
+# fit is tried on what its poses' structure allows (its joints, its mount, its frame's handedness).
+STRUCTURE_HYPOTHESES = (joint_mixup, mount_turned, mirrored)
+HYPOTHESES = (*STRUCTURE_HYPOTHESES, length_unit, fanuc_coupled)
+
+
+def first_reason(robot, data, given_mm: float, hypotheses=HYPOTHESES) -> str | None:
+    """The sentence of the first of ``hypotheses`` (default `HYPOTHESES`) that explains why
+    ``robot`` misses ``data`` (Measurements) by ``given_mm`` (mm RMS, frames fitted), or None."""
+    return next((r for h in hypotheses if (r := h(robot, data, given_mm))), None)
+
+
 def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
     """The most likely mistake behind data that ``robot`` (nominal or calibrated links) misses,
     as one sentence, or None when the data do not tell. ``datasets``: Measurements (only point
@@ -284,13 +282,11 @@ def diagnose(robot, datasets, *, frame_fitted: bool = True) -> str | None:
         odd = [d.label or str(k) for k, (d, ok) in enumerate(zip(sets, fits, strict=True)) if not ok]
         worst = max(a for a, ok in zip(alone, fits, strict=True) if not ok)
         reason = next((r for d, ok in zip(sets, fits, strict=True) if not ok
-                       for r in [joint_mixup(robot, d, worst) or mount_turned(robot, d, worst)
-                                 or mirrored(robot, d, worst)] if r), None)
+                       for r in [first_reason(robot, d, worst, STRUCTURE_HYPOTHESES)] if r), None)
         return (f"{', '.join(odd)} is the odd file: the others fit the model, it misses by {worst:.4g} mm RMS"
                 + (f"; {reason}" if reason else " (another robot's data, another file, or a unit)"))
     for d, a in zip(sets, alone, strict=True):
-        reason = (joint_mixup(robot, d, a) or mount_turned(robot, d, a) or mirrored(robot, d, a)
-                  or length_unit(robot, d, a) or fanuc_coupled(robot, d, a))
+        reason = first_reason(robot, d, a)
         if reason:
             return (f"{d.label}: " if len(sets) > 1 and d.label else "") + reason
     return None

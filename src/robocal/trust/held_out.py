@@ -49,8 +49,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from robocal.core.errors import DataError, IdentificationError, PlausibilityError
-from robocal.data.registration import register_frame, umeyama
+from robocal.core.errors import IdentificationError, PlausibilityError
+from robocal.data.registration import refit_frame, umeyama
 from robocal.identify.plausibility import bulk_rms_mm
 from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.trust.coverage import EXTRAPOLATION_FACTOR, Prediction
@@ -182,9 +182,8 @@ def _smr_refit_mm(robot, data) -> tuple[float, float] | None:
     """The model's error (mm, per degree of freedom) on ``data`` with the tracker frame and the SMR
     offsets refitted (`register_frame`, as ``evaluate --fit-frame``) and how far the tool's SMR
     moved (mm); None where the poses cannot fix them."""
-    try:
-        reg = register_frame(robot, data)
-    except (DataError, IdentificationError):
+    reg = refit_frame(robot, data)
+    if reg is None:
         return None
     dof = max(len(data) - 2 - data.n_smr, 1)
     return (float(np.sqrt(np.sum(reg.residuals**2) / dof)) * 1e3,

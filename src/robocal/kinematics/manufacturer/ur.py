@@ -352,7 +352,7 @@ def _check_nominal(robot: Robot, nominal: Robot, source: str, fits) -> None:
     name, gap, bad = _largest_gap(robot, nominal)
     if not bad:
         return
-    length = name.rstrip("0123456789") in ("a", "d")  # alpha and beta are angles
+    length = robot.parameter_units()[robot.parameter_names.index(name)] == "m"  # the model's own units
     size = f"{gap * 1e3:+.1f} mm" if length else f"{np.rad2deg(gap):+.2f} deg"
     others = [other for other in _ur_names() if other != nominal.name
               and (arm := fits(other)) is not None and not _largest_gap(arm, Robot.from_catalog(other))[2]]
@@ -386,11 +386,10 @@ def parse_calibration_conf(text: str, where: str) -> URDeltas:
             raise ModelError(f"{where} line {number}: expected `key = value` or `[section]`, got "
                              f"{raw.strip()[:60]!r}")
         if section == "mounting":
-            key = match.group(1)
-            if key in values:  # the controller would read one of them: which is not ours to guess
-                raise ModelError(f"{where} line {number}: {key} is given twice in [mounting] (first on line "
-                                 f"{values[key][0]}): remove one copy")
-            values[key] = (number, match.group(2))
+            if match.group(1) in values:  # which one the controller reads is not known: neither is taken
+                raise ModelError(f"{where} line {number}: {match.group(1)} is given twice in [mounting] "
+                                 f"(first at line {values[match.group(1)][0]}): keep the controller's one")
+            values[match.group(1)] = (number, match.group(2))
     if section is None and not values:
         raise ModelError(f"{where}: no [mounting] section: not a UR calibration.conf")
     missing = [k for k in DELTA_KEYS if k not in values]
