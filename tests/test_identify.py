@@ -181,8 +181,9 @@ def test_result_json_and_summary(tmp_path):
     path = tmp_path / "r.json"
     res.save_json(path)
     d = json.loads(path.read_text())
-    for key in ("before", "after", "validation", "validation_before"):
+    for key in ("before", "after", "validation_before"):
         assert set(d[key]) == {"n", "rms", "mean", "max", "p95"}
+    assert set(d["validation"]) == {"n", "rms", "mean", "max", "p95", "noise_floor_mm"}
     assert d["identifiability"]["condition_class"] in ("weak", "moderate", "strong")
     names = [p["name"] for p in d["parameters"]]
     assert "a2" in names and d["parameters"][names.index("d3")]["status"] == "dropped"

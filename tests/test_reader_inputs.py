@@ -286,5 +286,5 @@ def test_a_ur_calibration_conf_key_given_twice_is_refused_naming_both_lines(tmp_
     line = next(ln for ln in text.splitlines() if ln.startswith("delta_a "))
     path = tmp_path / "calibration.conf"
     path.write_text(text + line.replace("0.321935209127972688", "0.331935209127972688") + "\n")
-    with pytest.raises(rc.ModelError, match=r"delta_a is given twice in \[mounting\] \(first on line 3\)"):
+    with pytest.raises(rc.ModelError, match=r"delta_a is given twice in \[mounting\] \(first at line 3\)"):
         import_calibration(path, "ur5e")

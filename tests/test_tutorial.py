@@ -37,6 +37,7 @@ NUMBER_RTOL, NUMBER_ATOL = 0.05, 0.002  # printed figures may differ in the last
 VOLATILE = re.compile(r"\d{4}-\d{2}-\d{2}[T ]\d{2}:\d{2}:\d{2}(?:\.\d+)?(?:[+-]\d{2}:\d{2}|Z)?"
                       r"|\b\d+(?:\.\d+)? s\b")
 BLOCK_TIMEOUT_S = 900
+SHELL_TIMEOUT_S = 60  # `command -v` in a fresh shell: seconds
 # pages whose blocks take more than ~15 s on a busy 2-core machine: run by `make test-slow`
 # (the others, own-robot, tracker-export, flush-contacts, ur-factory-calibration: ~65 s together at load 13)
 SLOW = {"tutorial/first-campaign.md", "how-to/error-model.md", "how-to/recalibrating.md",
@@ -106,10 +107,10 @@ def test_activation_is_said_where_a_reader_starts():
     env, activation = fresh_shell()
     if activation and shutil.which("robocal", path=env["PATH"]) is None:
         found = subprocess.run(["bash", "-c", "command -v robocal"], env=env, capture_output=True,
-                               check=False)
+                               check=False, timeout=SHELL_TIMEOUT_S)
         assert found.returncode != 0
         found = subprocess.run(["bash", "-c", activation + "command -v robocal"], env=env,
-                               capture_output=True, check=False)
+                               capture_output=True, check=False, timeout=SHELL_TIMEOUT_S)
         assert found.returncode == 0
 
 

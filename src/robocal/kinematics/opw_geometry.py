@@ -17,7 +17,7 @@ the form (a calibrated arm, a URDF with rounded angles): its closed form seeds n
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
@@ -25,8 +25,24 @@ from robocal.kinematics.convert import PARALLEL_TOL, opw_kwargs
 from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.opw import OPWParameters, opw_fk
 
-if TYPE_CHECKING:
-    from robocal.kinematics.model import Robot
+
+class SerialArm(Protocol):
+    """What this module reads of a robot: `robocal.kinematics.model.Robot`, which imports this
+    module (its ``opw_model``), so it is not imported here (no import circle)."""
+
+    name: str
+    description: str
+    base: np.ndarray  # (4, 4) m
+    tool: np.ndarray  # (4, 4) m
+    smr: np.ndarray
+    limits: np.ndarray  # (n, 2) rad
+    joint_errors: object
+    n_joints: int
+    has_prismatic: bool
+    links: tuple
+
+    def fk(self, q: np.ndarray) -> np.ndarray:
+        """Flange or tool poses (..., 4, 4) m at joint vectors ``q`` (..., n) rad."""
 
 # The exact form: |cos| of axes that must be perpendicular, |sin| of axes that must be parallel
 # (robocal.kinematics.convert.PARALLEL_TOL, the tolerance every chain reader decides parallel axes by),
@@ -46,7 +62,7 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
-def _lines(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _lines(robot: SerialArm) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Joint axes (unit ``(6, 3)``), a point on each ``(6, 3)`` and the TCP ``(4, 4)`` at zero
     joints, world frame (m)."""
     q0 = np.zeros((1, robot.n_joints))
@@ -64,7 +80,7 @@ def _sign(value: float) -> float:
     return -1.0 if value < 0 else 1.0
 
 
-def _derive(robot: Robot, axis_tol: float, length_rel: float) -> Robot | None:
+def _derive(robot: SerialArm, axis_tol: float, length_rel: float) -> SerialArm | None:
     """The OPW-form robot of ``robot``'s lines within the tolerances, unchecked; None off the form."""
     u, p, tcp = _lines(robot)
     scale = _size(p, tcp)
@@ -130,7 +146,7 @@ def _derive(robot: Robot, axis_tol: float, length_rel: float) -> Robot | None:
                                     description=robot.description, smr=robot.smr))
 
 
-def round_trip_gap(robot: Robot, model: Robot) -> tuple[float, float]:
+def round_trip_gap(robot: SerialArm, model: SerialArm) -> tuple[float, float]:
     """The largest position (m) and rotation-matrix (rad) gap between the two models' TCP poses at
     `ROUND_TRIP_POSES` fixed joint vectors over a full turn of each joint."""
     q = np.random.default_rng(0).uniform(-np.pi, np.pi, (ROUND_TRIP_POSES, 6))
@@ -138,7 +154,7 @@ def round_trip_gap(robot: Robot, model: Robot) -> tuple[float, float]:
     return (float(np.abs(A[:, :3, 3] - B[:, :3, 3]).max()), float(np.abs(A[:, :3, :3] - B[:, :3, :3]).max()))
 
 
-def opw_model(robot: Robot, seed: bool = False) -> Robot | None:
+def opw_model(robot: SerialArm, seed: bool = False) -> SerialArm | None:
     """``robot``'s arm as an OPW-form robot (``opw`` set derived from its joint lines, base and tool
     placing it; same joints, same name and limits), or None when its chain is not of the OPW form.
 
