@@ -54,6 +54,10 @@ FK_TOL_M = 1e-9  # m: the written file's FK off the calibrated model's beyond th
 FK_TOL_RAD = 1e-9  # rad: the same for the orientation
 DROPPED_TERMS_MM = 0.05  # mm: joint-error terms moving the TCP by more (mean) make a URDF another robot
 KEPT_BELOW = 1e-12  # m, rad: a new origin's number this close to the vendor's is written as the vendor's
+OFFSET_CANDIDATES = (0.0, np.pi / 2, np.pi, -np.pi / 2)  # rad: a vendor joint's zero tried against the
+# controller's (then refined: any value), for the revolute joints but the first and the last
+SNAP_RAD = 1e-9  # rad: a refined offset this close to a candidate is the candidate
+REFINED = 8  # best candidate maps refined by least squares when none holds as tried
 GOAL_MM = 1.0  # a joint origin moved further than this from the vendor's is said (meshes move with it)
 GOAL_DEG = 0.1  # the same, deg
 _MOVING = ("revolute", "continuous", "prismatic")
@@ -138,20 +142,6 @@ def _pose_gap(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return dist, np.arctan2(sin, cos)
 
 
-def _fit_lines(robot_P, robot_Z, vendor_P, vendor_Z, revolute) -> np.ndarray:
-    """The rigid transform ``(4, 4)`` carrying robocal's joint lines (points, unit directions
-    ``(n, 3)``) onto the vendor's: rotation by Kabsch on the directions, translation by least squares
-    of the distances to the vendor's lines (revolute joints: a slide's line has no position)."""
-    U, _, Vt = np.linalg.svd(robot_Z.T @ vendor_Z)
-    R = Vt.T @ np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))]) @ U.T
-    normal = np.eye(3) - vendor_Z[revolute, :, None] * vendor_Z[revolute, None, :]  # (k, 3, 3)
-    rhs = normal @ (vendor_P[revolute] - robot_P[revolute] @ R.T)[..., None]
-    t = np.linalg.lstsq(normal.reshape(-1, 3), rhs.reshape(-1), rcond=None)[0]
-    out = np.eye(4)
-    out[:3, :3], out[:3, 3] = R, t
-    return out
-
-
 def _random_joints(robot: Robot, count: int, seed: int = 0) -> np.ndarray:
     """``(count, n)`` joint vectors within ``robot``'s limits (rad, m), q = 0 first."""
     lo, hi = robot.limits[:, 0], robot.limits[:, 1]
@@ -160,25 +150,167 @@ def _random_joints(robot: Robot, count: int, seed: int = 0) -> np.ndarray:
     return q
 
 
+@dataclass(frozen=True)
+class JointMap:
+    """The vendor's joint values from the controller's: ``u = signs * q + offsets`` per moving
+    joint (``(n,)`` each; rad, or m for a slide, whose offset is 0)."""
+
+    signs: np.ndarray
+    offsets: np.ndarray
+    alternative: JointMap | None = None  # another map as good among the candidates, when not the identity
+
+    @classmethod
+    def identity(cls, n: int) -> JointMap:
+        return cls(np.ones(n), np.zeros(n))
+
+    def vendor(self, q: np.ndarray) -> np.ndarray:
+        """The vendor's joint values ``(N, n)`` of the controller's ``q`` ``(N, n)``."""
+        return q * self.signs + self.offsets
+
+    @property
+    def is_identity(self) -> bool:
+        return bool(np.all(self.signs == 1) and np.all(self.offsets == 0))
+
+    def text(self, names: list[str]) -> list[str]:
+        """One line per joint the map changes: ``joint_3 = -q3 + 1.570796 rad``."""
+        return [f"{name} = {'-' if s < 0 else ''}q{k + 1}"
+                + (f" {'+-'[int(o < 0)]} {abs(o):.9g} rad" if o else "")
+                for k, (name, s, o) in enumerate(zip(names, self.signs, self.offsets, strict=True))
+                if s != 1 or o != 0]
+
+
+def _lines(chain: _Chain, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The vendor's joint lines at joint values ``u`` ``(C, n)``: points and unit directions
+    ``(C, n, 3)`` in its root link."""
+    poses = chain.poses(u)[:, [i + 1 for i in chain.moving]]
+    return poses[..., :3, 3], np.einsum("ckij,kj->cki", poses[..., :3, :3], chain.axes[chain.moving])
+
+
+def _fit_all(P: np.ndarray, Z: np.ndarray, vP: np.ndarray, vZ: np.ndarray, signs: np.ndarray,
+             revolute: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rigid transforms ``(C, S, 4, 4)`` carrying robocal's joint lines (points ``P``, unit
+    directions ``Z`` ``(n, 3)``) onto the vendor's (``vP``, ``vZ`` ``(C, n, 3)``: ``C`` candidate
+    offsets) with the directions turned by ``S`` sign vectors ``(S, n)``: rotation by Kabsch on the
+    directions, translation by least squares of the distances to the vendor's lines (``revolute``
+    joints only: a slide's line has no position); and each joint line's distance (m) and angle
+    (rad) ``(C, S, n)`` from the vendor's after the fit."""
+    vZs = vZ[:, None] * signs[None, :, :, None]  # (C, S, n, 3)
+    U, _, Vt = np.linalg.svd(np.einsum("ki,cskj->csij", Z, vZs))
+    D = np.broadcast_to(np.eye(3), U.shape).copy()
+    D[..., 2, 2] = np.sign(np.linalg.det(np.swapaxes(Vt, -1, -2) @ np.swapaxes(U, -1, -2)))
+    R = np.swapaxes(Vt, -1, -2) @ D @ np.swapaxes(U, -1, -2)
+    normal = np.eye(3) - vZ[..., :, None] * vZ[..., None, :]  # (C, n, 3, 3)
+    normal = normal * revolute[None, :, None, None]
+    rhs = np.einsum("ckij,cskj->cski", normal, vP[:, None] - np.einsum("csij,kj->cski", R, P))
+    t = np.einsum("cij,csj->csi", np.linalg.pinv(normal.sum(1)), rhs.sum(2))
+    mapped_Z = np.einsum("csij,kj->cski", R, Z)
+    angle = np.arctan2(np.linalg.norm(np.cross(mapped_Z, vZs), axis=-1),
+                       np.einsum("cski,cski->csk", mapped_Z, vZs))
+    gap = np.einsum("csij,kj->cski", R, P) + t[:, :, None] - vP[:, None]
+    along = np.einsum("cski,cki->csk", gap, vZ)[..., None] * vZ[:, None]
+    dist = np.linalg.norm(gap - along, axis=-1) * revolute
+    T = np.broadcast_to(np.eye(4), (*R.shape[:2], 4, 4)).copy()
+    T[..., :3, :3], T[..., :3, 3] = R, t
+    return T, dist, angle
+
+
+def _joint_map(chain: _Chain, nominal: Robot, vendor_file: str) -> tuple[JointMap, np.ndarray]:
+    """The map from the controller's joints to the vendor's (`JointMap`) and ``B`` (robocal's world
+    in the vendor's root link) that make the vendor's joint lines robocal's nominal ones moved
+    rigidly; DataError (naming the worst joint) when no such map exists.
+
+    Every sign and, for the revolute joints but the first (its offset is the base map's turn about
+    it) and the last (its offset is tool0's turn in the flange), every offset in
+    `OFFSET_CANDIDATES` is tried at once; when none holds, the best few are refined by least
+    squares over the offsets (any value). Among the maps that hold, the one with the fewest offsets,
+    then the fewest signs turned, is taken: the vendor's joint values equal the controller's where
+    the file allows it (a spherical wrist also fits joint 4 turned by pi with joint 5 reversed)."""
+    n = nominal.n_joints
+    _, frames = chain_frames(nominal.links, nominal.base, nominal.tool, np.zeros((1, n)), frames=True,
+                             prismatic=nominal.prismatic)
+    P, Z = frames[0, 1:, :3, 3], frames[0, 1:, :3, 2]
+    revolute = ~np.asarray(nominal.prismatic, bool)
+    free = [k for k in np.flatnonzero(revolute) if 0 < k < n - 1]
+    grid = np.array(np.meshgrid(*[OFFSET_CANDIDATES] * len(free), indexing="ij")).reshape(len(free), -1).T
+    offsets = np.zeros((len(grid), n))
+    offsets[:, free] = grid
+    signs = np.array(np.meshgrid(*[[1.0, -1.0]] * n, indexing="ij")).reshape(n, -1).T
+    vP, vZ = _lines(chain, offsets)
+    T, dist, angle = _fit_all(P, Z, vP, vZ, signs, revolute)
+    score = np.maximum(dist / MAP_TOL_M, angle / MAP_TOL_RAD).max(-1)  # (C, S)
+    cost = (np.count_nonzero(offsets, axis=1)[:, None] * (n + 1) + (signs < 0).sum(1)[None, :]).astype(float)
+    if not (score <= 1).any() and free:
+        refined = _refined(chain, P, Z, signs, revolute, offsets, score, free)
+        if refined is not None:
+            return refined
+    cost = np.where(score <= 1, cost, np.inf)
+    c, s = np.unravel_index(np.argmin(cost), score.shape)
+    if score[c, s] > 1:
+        c, s = np.unravel_index(np.argmin(score), score.shape)
+        k = int(np.argmax(np.maximum(dist[c, s] / MAP_TOL_M, angle[c, s] / MAP_TOL_RAD)))
+        name = chain.joints[chain.moving[k]].get("name")
+        raise DataError(f"{vendor_file} is not {nominal.name}: the axis of its joint {name} is "
+                        f"{dist[c, s, k] * 1e3:.3g} mm / {np.rad2deg(angle[c, s, k]):.3g} deg off the "
+                        f"model's joint {k + 1} after the best rigid fit of all the axes, with any joint's "
+                        f"sign and zero {_WHY_NOT}")
+    alternative = None
+    cost[c, s] = np.inf
+    if ((signs[s] < 0).any() or offsets[c].any()) and np.isfinite(cost).any():
+        a, b = np.unravel_index(np.argmin(cost), score.shape)
+        alternative = JointMap(signs[b], offsets[a])
+    return JointMap(signs[s], offsets[c], alternative), T[c, s]
+
+
+def _refined(chain, P, Z, signs, revolute, offsets, score, free) -> tuple[JointMap, np.ndarray] | None:
+    """The offsets (any value) of the `REFINED` best candidates of `_joint_map` refined by least
+    squares of the joint lines' gaps: of the maps that then hold, the one with the fewest offsets
+    (then reversed joints), another as its ``alternative``; None when none holds."""
+    from scipy.optimize import least_squares
+
+    found = {}
+    for c, s in zip(*np.unravel_index(np.argsort(score, axis=None)[:REFINED], score.shape), strict=True):
+        def gaps(x, c=c, s=s):
+            u = offsets[c].copy()
+            u[free] = x
+            vP, vZ = _lines(chain, u[None])
+            _, dist, angle = _fit_all(P, Z, vP, vZ, signs[s:s + 1], revolute)
+            return np.concatenate([dist[0, 0] / MAP_TOL_M, angle[0, 0] / MAP_TOL_RAD])
+
+        fit = least_squares(gaps, offsets[c, free], jac="3-point", diff_step=1e-5, xtol=1e-15, ftol=1e-15,
+                            gtol=1e-15)
+        if np.abs(gaps(fit.x)).max() > 1:
+            continue
+        u = offsets[c].copy()
+        u[free] = np.remainder(fit.x + np.pi, 2 * np.pi) - np.pi
+        near = np.asarray(OFFSET_CANDIDATES)[np.argmin(np.abs(u[:, None] - OFFSET_CANDIDATES), axis=1)]
+        u = np.where(np.abs(u - near) < SNAP_RAD, near, u)  # a candidate the refinement kept
+        key = (np.count_nonzero(u), int((signs[s] < 0).sum()), tuple(np.round(u, 6)), tuple(signs[s]))
+        found.setdefault(key, (u, s))
+    if not found:
+        return None
+    ranked = [found[k] for k in sorted(found)]
+    (u, s), other = ranked[0], ranked[1] if len(ranked) > 1 else None
+    vP, vZ = _lines(chain, u[None])
+    T, *_ = _fit_all(P, Z, vP, vZ, signs[s:s + 1], revolute)
+    alternative = None if other is None else JointMap(signs[other[1]], other[0])
+    return JointMap(signs[s], u, alternative), T[0, 0]
+
+
 def _link_maps(chain: _Chain, nominal: Robot,
-               vendor_file: str) -> tuple[np.ndarray, np.ndarray, float, float]:
+               vendor_file: str) -> tuple[np.ndarray, np.ndarray, float, float, JointMap]:
     """``B`` (robocal's world in the vendor's root link), the links' poses ``M`` ``(m + 1, 4, 4)`` in
-    the robocal frame each rides on, and the check's largest variation (m, rad); DataError when the
-    vendor's chain is not ``nominal``'s robot."""
+    the robocal frame each rides on, the check's largest variation (m, rad) and the joint map
+    (`_joint_map`); DataError when the vendor's chain is not ``nominal``'s robot."""
     n = nominal.n_joints
     kinds = [chain.kinds[i] for i in chain.moving]
     if chain.n_moving != n or [k == "prismatic" for k in kinds] != list(nominal.prismatic):
         raise DataError(f"{vendor_file} is not {nominal.name}: its chain to {chain.links[-1]} has "
                         f"{chain.n_moving} moving joints ({', '.join(kinds)}), the model {n}")
+    joint_map, B = _joint_map(chain, nominal, vendor_file)
     q = _random_joints(nominal, CHECK_POSES)
-    vendor = chain.poses(q)
+    vendor = chain.poses(joint_map.vendor(q))
     _, frames = chain_frames(nominal.links, nominal.base, nominal.tool, q, frames=True,
                              prismatic=nominal.prismatic)
-    child = [i + 1 for i in chain.moving]
-    axes_v = np.einsum("kij,kj->ki", vendor[0, child, :3, :3], chain.axes[chain.moving])
-    B = _fit_lines(frames[0, 1:, :3, 3], frames[0, 1:, :3, 2], vendor[0, child, :3, 3], axes_v,
-                   ~np.asarray(nominal.prismatic))
-    _check_axes(B, frames[0, 1:], vendor[0, child, :3, 3], axes_v, nominal, chain, vendor_file)
     M = invert_transform(B @ frames[:, chain.frame]) @ vendor  # (N, m + 1, 4, 4)
     dist, angle = _pose_gap(M, M[:1])
     off = np.flatnonzero((dist.max(0) > MAP_TOL_M) | (angle.max(0) > MAP_TOL_RAD))
@@ -188,41 +320,24 @@ def _link_maps(chain: _Chain, nominal: Robot,
                         f"{dist[:, worst].max() * 1e3:.3g} mm / {np.rad2deg(angle[:, worst].max()):.3g} deg "
                         f"against robocal's frame {{{chain.frame[worst]}}} over {CHECK_POSES} joint vectors "
                         f"{_WHY_NOT}")
-    return B, _on_axes(chain, M[0]), float(dist.max()), float(angle.max())
+    return B, _on_axes(chain, M[0], joint_map.signs), float(dist.max()), float(angle.max()), joint_map
 
 
-def _check_axes(B: np.ndarray, frames: np.ndarray, points: np.ndarray, axes: np.ndarray, nominal: Robot,
-                chain: _Chain, vendor_file: str) -> None:
-    """DataError naming the joint whose axis (robocal's frames {1..n} ``(n, 4, 4)`` moved by ``B``)
-    is furthest from the vendor's line (``points``, unit ``axes`` ``(n, 3)``) beyond the map's
-    tolerance: the vendor's file is another robot (or another joint convention)."""
-    mapped = B @ frames
-    angle = np.arccos(np.clip(np.einsum("ki,ki->k", mapped[:, :3, 2], axes), -1.0, 1.0))
-    gap = mapped[:, :3, 3] - points
-    dist = np.linalg.norm(gap - np.einsum("ki,ki->k", gap, axes)[:, None] * axes, axis=1)
-    dist[np.asarray(nominal.prismatic)] = 0.0  # a slide's line has no position
-    k = int(np.argmax(np.maximum(dist / MAP_TOL_M, angle / MAP_TOL_RAD)))
-    if dist[k] > MAP_TOL_M or angle[k] > MAP_TOL_RAD:
-        name = chain.joints[chain.moving[k]].get("name")
-        raise DataError(f"{vendor_file} is not {nominal.name}: the axis of its joint {name} is "
-                        f"{dist[k] * 1e3:.3g} mm / {np.rad2deg(angle[k]):.3g} deg off the model's joint "
-                        f"{k + 1} after the best rigid fit of all the axes {_WHY_NOT}")
-
-
-def _on_axes(chain: _Chain, M: np.ndarray) -> np.ndarray:
+def _on_axes(chain: _Chain, M: np.ndarray, signs: np.ndarray) -> np.ndarray:
     """The links' poses ``M`` ``(m + 1, 4, 4)`` made exact where the map holds to rounding only: each
-    moving joint's child carries the vendor's axis exactly onto robocal's z (the smallest turn) with
-    its origin on that z (a revolute joint), and every link after a fixed joint sits at the vendor's
-    origin from its parent; so the written joints turn about the vendor's axes and the file's FK is
-    the calibrated model's to rounding, not to the vendor file's rounding of pi/2 (UR: 1e-10)."""
+    moving joint's child carries the vendor's axis exactly onto robocal's z turned by the joint's
+    sign (``signs`` ``(n,)``; the smallest turn) with its origin on that z (a revolute joint), and
+    every link after a fixed joint sits at the vendor's origin from its parent; so the written joints
+    turn about the vendor's axes and the file's FK is the calibrated model's to rounding, not to the
+    vendor file's rounding of pi/2 (UR: 1e-10)."""
     M = M.copy()
     for i, kind in enumerate(chain.kinds):
         if kind == "fixed":
             M[i + 1] = M[i] @ chain.origins[i]
             continue
         v = M[i + 1, :3, :3] @ chain.axes[i]
-        w = np.cross(v, [0.0, 0.0, 1.0])
-        turn = np.arctan2(np.linalg.norm(w), v[2])
+        w = np.cross(v, [0.0, 0.0, signs[chain.frame[i + 1] - 1]])
+        turn = np.arctan2(np.linalg.norm(w), v[2] * signs[chain.frame[i + 1] - 1])
         if np.linalg.norm(w) > 0:
             M[i + 1, :3, :3] = _joint_motion(w / np.linalg.norm(w), np.array([turn]), False)[0, :3, :3] \
                 @ M[i + 1, :3, :3]
@@ -382,6 +497,13 @@ class UrdfLikeExport:
     xacro_text: str | None = None
     xacro_output: str | None = None
     fk_frames: str = "base_link -> tool0"
+    joint_map: JointMap | None = None
+
+    def _map_lines(self) -> list[str]:
+        """The joints whose values are not the controller's (``u = sign * q + offset``)."""
+        if self.joint_map is None or self.joint_map.is_identity:
+            return []
+        return self.joint_map.text([s.joint for s in self.shifts])
 
     def summary(self) -> str:
         """The map, the FK check and the per-joint shifts, one line each."""
@@ -393,6 +515,8 @@ class UrdfLikeExport:
                  f"{self.map_check[1]:.2g} rad on {CHECK_POSES} joint vectors)",
                  f"FK {self.fk_frames} = the calibrated model's within {mm * 1e3:.2g} mm / {rad:.2g} rad "
                  f"({count} joint vectors)",
+                 *([f"joint values: the vendor's from the controller's q: {'; '.join(self._map_lines())}"]
+                   if self._map_lines() else []),
                  "moved from the vendor's: joint origin (mm, deg), link frame at q = 0 (mm, deg)"]
         lines += [f"  {s.joint} ({s.link}): {s.origin_mm:.4f} mm {s.origin_deg:.5f} deg; "
                   f"{s.frame_mm:.4f} mm {s.frame_deg:.5f} deg" for s in self.shifts]
@@ -407,6 +531,8 @@ class UrdfLikeExport:
                 "fk_check": {"m": self.fk_check[0], "rad": self.fk_check[1],
                              "joint_vectors": self.fk_check[2], "frames": self.fk_frames},
                 "joints": [vars(s) for s in self.shifts], "warnings": list(self.warnings),
+                "joint_map": None if self.joint_map is None else {
+                    "signs": self.joint_map.signs.tolist(), "offsets_rad": self.joint_map.offsets.tolist()},
                 "output": self.output, "urdf": self.text, "xacro": self.xacro,
                 "xacro_output": self.xacro_output, "xacro_text": self.xacro_text}
 
@@ -439,9 +565,19 @@ def _shift_comment(result: UrdfLikeExport) -> str:
             "joints changed; names, axes, meshes, limits, inertials and the fixed frames are the "
             "vendor's.\n     robocal's base is "
             f"at {_pose_text(result.base)} in base_link; tool0 at {_pose_text(result.tool)} in robocal's "
-            f"flange.\n     FK {result.fk_frames.replace('->', 'to')} = the calibrated model's within "
+            f"flange.\n{_map_comment(result)}     FK {result.fk_frames.replace('->', 'to')} = the "
+            "calibrated model's within "
             f"{mm * 1e3:.2g} mm / {rad:.2g} rad ({count} joint vectors).\n     Moved from the vendor's "
             f"(joint origin; the link's frame in base_link at q = 0):\n{rows}\n")
+
+
+def _map_comment(result: UrdfLikeExport) -> str:
+    lines = result._map_lines()
+    if not lines:
+        return ""
+    return ("     Joint values: this file's are not the controller's q (robocal's model) for\n" +
+            "".join(f"       {line}\n" for line in lines) +
+            "     (the ROS driver must send these values: check it does before use).\n")
 
 
 # ----------------------------------------------------------------- the export
@@ -521,15 +657,17 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     drawn = controller if vendor_model is None else (
         vendor_model if isinstance(vendor_model, Robot) else load_model(str(vendor_model)))
     cal = controller_model(robot, drawn)  # DataError: the model the vendor draws is another robot's
-    B, M, *check = _link_maps(chain, drawn.nominal_robot(), vendor_file)
+    B, M, *check, joint_map = _link_maps(chain, drawn.nominal_robot(), vendor_file)
     zero = np.zeros((1, robot.n_joints))
     _, F = chain_frames(cal.links, cal.base, cal.tool, zero, frames=True, prismatic=cal.prismatic)
     origins = chain.origins.copy()
     for i in chain.moving:
-        f = chain.frame[i + 1]
-        origins[i] = invert_transform(M[i]) @ invert_transform(F[0, f - 1]) @ F[0, f] @ M[i + 1]
+        f = chain.frame[i + 1]  # the vendor's joint at u = offset is robocal's at q = 0: turn it back
+        back = _joint_motion(chain.axes[i], -joint_map.offsets[f - 1:f], chain.kinds[i] == "prismatic")[0]
+        origins[i] = invert_transform(M[i]) @ invert_transform(F[0, f - 1]) @ F[0, f] @ M[i + 1] @ back
     new_text = _with_origins(text, {chain.joints[i].get("name"): origins[i] for i in chain.moving})
-    result = _result(robot, drawn, vendor_file, root.get("name") or "", chain, B, M, check, new_text, cal)
+    result = _result(robot, drawn, vendor_file, root.get("name") or "", chain, B, M, check, new_text, cal,
+                     joint_map)
     result.output = None if output is None else str(output)
     result.warnings[:0] = dropped
     result.text = _with_comment(new_text, _shift_comment(result))
@@ -562,14 +700,14 @@ def _dropped_terms(robot: Robot, geometry_only: bool) -> list[str]:
     return [f"{said}: this URDF is not the calibrated robot (calibrate with --nongeometric none for ROS)"]
 
 
-def _result(robot, controller, vendor_file, robot_name, chain, B, M, check, new_text, cal):
+def _result(robot, controller, vendor_file, robot_name, chain, B, M, check, new_text, cal, joint_map):
     """The checks of an export: the written text read back, its FK against the calibrated model's
     (base_link to tool0, base_link wherever it rides: before a track or after it), the shifts per
     joint, the warnings."""
     written = _Chain.read(parse_urdf(new_text), chain.links[-1])
     q = _random_joints(controller, FK_POSES, seed=1)
     base_at = chain.links.index("base_link") if "base_link" in chain.links else 0
-    poses = written.poses(q)
+    poses = written.poses(joint_map.vendor(q))
     _, frames = chain_frames(cal.links, cal.base, cal.tool, q, frames=True, prismatic=cal.prismatic)
     links = B @ frames[:, chain.frame[[base_at, -1]]] @ M[[base_at, -1]]  # base_link and the tip
     # the tip from base_link and, where they differ (a track before base_link), from the root link
@@ -579,7 +717,7 @@ def _result(robot, controller, vendor_file, robot_name, chain, B, M, check, new_
     if dist.max() > FK_TOL_M or angle.max() > FK_TOL_RAD:
         raise RobocalError(f"internal: the written URDF's FK is {dist.max() * 1e3:.3g} mm / "
                            f"{angle.max():.3g} rad off the calibrated model's")
-    vendor0, new0 = chain.poses(q[:1])[0], written.poses(q[:1])[0]
+    vendor0, new0 = (c.poses(joint_map.vendor(q[:1]))[0] for c in (chain, written))
     frame_mm, frame_rad = _pose_gap(invert_transform(vendor0[base_at]) @ vendor0,
                                     invert_transform(new0[base_at]) @ new0)
     origin_mm, origin_rad = _pose_gap(chain.origins, written.origins)  # as the file holds them
@@ -592,9 +730,19 @@ def _result(robot, controller, vendor_file, robot_name, chain, B, M, check, new_
         warnings.append(f"the origins of {', '.join(far)} moved more than {GOAL_MM:g} mm or {GOAL_DEG:g} deg "
                         "from the vendor's (more than a typical calibration): their meshes hang that far "
                         "from where the vendor drew them")
+    if not joint_map.is_identity:
+        names = [s.joint for s in shifts]
+        other = joint_map.alternative
+        warnings.append("the vendor's joint values are not the controller's: "
+                        f"{'; '.join(joint_map.text(names))} "
+                        "(found from the axes: the fewest zeros moved, then the fewest joints reversed); "
+                        "the ROS driver must send these values" + (
+                            "" if other is None else f"; the axes fit as well {'; '.join(other.text(names))}"
+                            ", "
+                            "with other links' meshes turned: check the file's zero pose against the robot's"))
     base = invert_transform(vendor0[base_at]) @ B @ cal.base  # robocal's frame {0} in base_link at q = 0
     tool = invert_transform(controller.tool) @ M[-1]
     fk_frames = " and ".join(f"{chain.links[k]} -> {chain.links[-1]}" for k in dict.fromkeys((base_at, 0)))
     return UrdfLikeExport(robot, controller, vendor_file, robot_name, new_text, base, tool,
                           (check[0], check[1]), shifts, (float(dist.max()), float(angle.max()), FK_POSES),
-                          warnings=warnings, fk_frames=fk_frames)
+                          warnings=warnings, fk_frames=fk_frames, joint_map=joint_map)
