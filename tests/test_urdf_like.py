@@ -263,3 +263,62 @@ def test_a_ur_calibrated_against_its_factory_model_goes_into_the_nominal_descrip
     truth = out.base @ np.linalg.inv(controller.base) @ controller.fk(q) @ out.tool
     assert max(gap(fk_by_yourdfpy(out.text, q), truth)) < 1e-9
     assert max(s.origin_mm for s in out.shifts) < 1.0  # the factory calibration moves the joints little
+
+
+def remapped(text: str, changes: dict[str, tuple[float, float]]) -> str:
+    """The same robot drawn with joint values ``u = sign * q + offset`` for the named joints (the
+    axis reversed, the origin turned back by the offset: ``R Rot(a, -sign offset)``), by scipy."""
+    import warnings
+
+    from scipy.spatial.transform import Rotation
+
+    root = ET.fromstring(text)
+    for joint in root.iter("joint"):
+        if joint.get("name") not in changes:
+            continue
+        sign, offset = changes[joint.get("name")]
+        axis, origin = joint.find("axis"), joint.find("origin")
+        a = np.array([float(v) for v in axis.get("xyz").split()])
+        R = Rotation.from_euler("xyz", [float(v) for v in origin.get("rpy", "0 0 0").split()])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # gimbal lock: the angles still give the rotation
+            rpy = (R * Rotation.from_rotvec(a * (-sign * offset))).as_euler("xyz")
+        origin.set("rpy", " ".join(repr(float(v)) for v in rpy))
+        axis.set("xyz", " ".join(repr(float(v) + 0.0) for v in sign * a))
+    return ET.tostring(root, encoding="unicode")
+
+
+def test_a_vendor_joint_reversed_or_with_another_zero_is_mapped(tmp_path):
+    nominal = rc.Robot.from_catalog("kuka_kr16_2")
+    # joint 2 reversed (axis -y), joint 3's zero a quarter turn away, joint 5's 0.3 rad (refined)
+    changes = {"joint_a2": (-1.0, 0.0), "joint_a3": (1.0, np.pi / 2), "joint_a5": (1.0, 0.3)}
+    (tmp_path / "v.urdf").write_text(remapped((DATA / "kr16_2.urdf").read_text(encoding="utf-8"), changes),
+                                     encoding="utf-8")
+    calibrated = typical(nominal, seed=5)
+    out = rc.export_urdf_like(calibrated, tmp_path / "v.urdf")
+    assert np.array_equal(out.joint_map.signs, [1, -1, 1, 1, 1, 1])
+    assert np.allclose(out.joint_map.offsets, [0, 0, np.pi / 2, 0, 0.3, 0], atol=1e-9, rtol=0)
+    assert out.joint_map.offsets[2] == np.pi / 2  # a candidate kept exact by the refinement
+    # joint 5's zero turned by pi with joint 6 reversed fits the axes too: said, not taken
+    assert np.array_equal(out.joint_map.alternative.signs, [1, -1, 1, 1, 1, -1])
+    q = joints_in_limits(nominal, N_Q)
+    controller = controller_model(calibrated, nominal)
+    truth = out.base @ np.linalg.inv(controller.base) @ controller.fk(q) @ out.tool
+    assert np.allclose(out.base, np.eye(4), atol=1e-9) and np.allclose(out.tool, np.eye(4), atol=1e-9)
+    dist, rot = gap(fk_by_yourdfpy(out.text, q * out.joint_map.signs + out.joint_map.offsets), truth)
+    assert dist < FK_M and rot < FK_RAD
+    assert max(s.origin_mm for s in out.shifts) < 3.0  # the origins move as the parameters did
+    assert "joint_a2 = -q2; joint_a3 = q3 + 1.57079633 rad; joint_a5 = q5 + 0.3 rad" in out.summary()
+    assert "joint_a2 = -q2" in out.text.split("<robot", 1)[0]
+    assert any("not the controller's" in w for w in out.warnings)
+    assert out.to_dict()["joint_map"]["signs"][1] == -1.0
+
+
+def test_a_spherical_wrist_twin_map_is_said(tmp_path):
+    """Joint 4's zero turned by pi with joint 5 reversed fits the same axes: the map with the
+    fewer changes is taken, the other named in the warning."""
+    text = remapped((DATA / "kr16_2.urdf").read_text(encoding="utf-8"), {"joint_a4": (1.0, -np.pi / 2)})
+    (tmp_path / "v.urdf").write_text(text, encoding="utf-8")
+    out = rc.export_urdf_like("kuka_kr16_2", tmp_path / "v.urdf")
+    assert out.joint_map.text([s.joint for s in out.shifts]) == ["joint_a4 = q4 - 1.57079633 rad"]
+    assert "the axes fit as well joint_a4 = q4 + 1.57079633 rad; joint_a5 = -q5" in out.warnings[0]

@@ -733,13 +733,12 @@ def _result(robot, controller, vendor_file, robot_name, chain, B, M, check, new_
     if not joint_map.is_identity:
         names = [s.joint for s in shifts]
         other = joint_map.alternative
+        also = "" if other is None else (
+            f"; the axes fit as well {'; '.join(other.text(names))}, with other links' meshes turned: check "
+            "the file's zero pose against the robot's")
         warnings.append("the vendor's joint values are not the controller's: "
-                        f"{'; '.join(joint_map.text(names))} "
-                        "(found from the axes: the fewest zeros moved, then the fewest joints reversed); "
-                        "the ROS driver must send these values" + (
-                            "" if other is None else f"; the axes fit as well {'; '.join(other.text(names))}"
-                            ", "
-                            "with other links' meshes turned: check the file's zero pose against the robot's"))
+                        f"{'; '.join(joint_map.text(names))} (found from the axes: the fewest zeros moved, "
+                        f"then the fewest joints reversed); the ROS driver must send these values{also}")
     base = invert_transform(vendor0[base_at]) @ B @ cal.base  # robocal's frame {0} in base_link at q = 0
     tool = invert_transform(controller.tool) @ M[-1]
     fk_frames = " and ".join(f"{chain.links[k]} -> {chain.links[-1]}" for k in dict.fromkeys((base_at, 0)))
