@@ -35,16 +35,19 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+import yaml
 
 from robocal.core.errors import DataError, ModelError, RobocalError
 from robocal.core.io import check_outputs, read_text, write_all
 from robocal.deploy.compensation import controller_model
 from robocal.deploy.models import controller_for
+from robocal.kinematics.cell_file import is_workcell
 from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.model import Robot, load_model
 from robocal.kinematics.transforms import invert_transform
 from robocal.kinematics.urdf import not_carried
 from robocal.kinematics.urdf_read import joint_axis, joint_origin, matrix_to_rpy, parse_urdf, urdf_chain
+from robocal.kinematics.workcell import Cell, load_cell
 
 MAP_TOL_M = 1e-6  # m: a vendor link's pose in robocal's frame may vary this much over joint vectors
 MAP_TOL_RAD = 1e-6  # rad: the same for its orientation (the vendor files round pi/2 to 1e-10)
@@ -163,6 +166,9 @@ class JointMap:
     def identity(cls, n: int) -> JointMap:
         return cls(np.ones(n), np.zeros(n))
 
+    def to_dict(self) -> dict:
+        return {"signs": self.signs.tolist(), "offsets_rad": self.offsets.tolist()}
+
     def vendor(self, q: np.ndarray) -> np.ndarray:
         """The vendor's joint values ``(N, n)`` of the controller's ``q`` ``(N, n)``."""
         return q * self.signs + self.offsets
@@ -187,22 +193,28 @@ def _lines(chain: _Chain, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _fit_all(P: np.ndarray, Z: np.ndarray, vP: np.ndarray, vZ: np.ndarray, signs: np.ndarray,
-             revolute: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+             revolute: np.ndarray,
+             fixed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The rigid transforms ``(C, S, 4, 4)`` carrying robocal's joint lines (points ``P``, unit
     directions ``Z`` ``(n, 3)``) onto the vendor's (``vP``, ``vZ`` ``(C, n, 3)``: ``C`` candidate
     offsets) with the directions turned by ``S`` sign vectors ``(S, n)``: rotation by Kabsch on the
     directions, translation by least squares of the distances to the vendor's lines (``revolute``
     joints only: a slide's line has no position); and each joint line's distance (m) and angle
-    (rad) ``(C, S, n)`` from the vendor's after the fit."""
+    (rad) ``(C, S, n)`` from the vendor's after the fit. ``fixed`` ``(4, 4)``: that transform
+    instead of the fit (a positioner in the world its cell's arm fixed)."""
     vZs = vZ[:, None] * signs[None, :, :, None]  # (C, S, n, 3)
-    U, _, Vt = np.linalg.svd(np.einsum("ki,cskj->csij", Z, vZs))
-    D = np.broadcast_to(np.eye(3), U.shape).copy()
-    D[..., 2, 2] = np.sign(np.linalg.det(np.swapaxes(Vt, -1, -2) @ np.swapaxes(U, -1, -2)))
-    R = np.swapaxes(Vt, -1, -2) @ D @ np.swapaxes(U, -1, -2)
-    normal = np.eye(3) - vZ[..., :, None] * vZ[..., None, :]  # (C, n, 3, 3)
-    normal = normal * revolute[None, :, None, None]
-    rhs = np.einsum("ckij,cskj->cski", normal, vP[:, None] - np.einsum("csij,kj->cski", R, P))
-    t = np.einsum("cij,csj->csi", np.linalg.pinv(normal.sum(1)), rhs.sum(2))
+    if fixed is not None:
+        R = np.broadcast_to(fixed[:3, :3], (*vZs.shape[:2], 3, 3))
+        t = np.broadcast_to(fixed[:3, 3], (*vZs.shape[:2], 3))
+    else:
+        U, _, Vt = np.linalg.svd(np.einsum("ki,cskj->csij", Z, vZs))
+        D = np.broadcast_to(np.eye(3), U.shape).copy()
+        D[..., 2, 2] = np.sign(np.linalg.det(np.swapaxes(Vt, -1, -2) @ np.swapaxes(U, -1, -2)))
+        R = np.swapaxes(Vt, -1, -2) @ D @ np.swapaxes(U, -1, -2)
+        normal = np.eye(3) - vZ[..., :, None] * vZ[..., None, :]  # (C, n, 3, 3)
+        normal = normal * revolute[None, :, None, None]
+        rhs = np.einsum("ckij,cskj->cski", normal, vP[:, None] - np.einsum("csij,kj->cski", R, P))
+        t = np.einsum("cij,csj->csi", np.linalg.pinv(normal.sum(1)), rhs.sum(2))
     mapped_Z = np.einsum("csij,kj->cski", R, Z)
     angle = np.arctan2(np.linalg.norm(np.cross(mapped_Z, vZs), axis=-1),
                        np.einsum("cski,cski->csk", mapped_Z, vZs))
@@ -214,7 +226,8 @@ def _fit_all(P: np.ndarray, Z: np.ndarray, vP: np.ndarray, vZ: np.ndarray, signs
     return T, dist, angle
 
 
-def _joint_map(chain: _Chain, nominal: Robot, vendor_file: str) -> tuple[JointMap, np.ndarray]:
+def _joint_map(chain: _Chain, nominal: Robot, vendor_file: str,
+               B: np.ndarray | None = None) -> tuple[JointMap, np.ndarray]:
     """The map from the controller's joints to the vendor's (`JointMap`) and ``B`` (robocal's world
     in the vendor's root link) that make the vendor's joint lines robocal's nominal ones moved
     rigidly; DataError (naming the worst joint) when no such map exists.
@@ -224,23 +237,24 @@ def _joint_map(chain: _Chain, nominal: Robot, vendor_file: str) -> tuple[JointMa
     `OFFSET_CANDIDATES` is tried at once; when none holds, the best few are refined by least
     squares over the offsets (any value). Among the maps that hold, the one with the fewest offsets,
     then the fewest signs turned, is taken: the vendor's joint values equal the controller's where
-    the file allows it (a spherical wrist also fits joint 4 turned by pi with joint 5 reversed)."""
+    the file allows it (a spherical wrist also fits joint 4 turned by pi with joint 5 reversed).
+    ``B`` given (a positioner in its cell's world): no fit, and the first joint's offset is tried too."""
     n = nominal.n_joints
     _, frames = chain_frames(nominal.links, nominal.base, nominal.tool, np.zeros((1, n)), frames=True,
                              prismatic=nominal.prismatic)
     P, Z = frames[0, 1:, :3, 3], frames[0, 1:, :3, 2]
     revolute = ~np.asarray(nominal.prismatic, bool)
-    free = [k for k in np.flatnonzero(revolute) if 0 < k < n - 1]
+    free = [k for k in np.flatnonzero(revolute) if (k > 0 or B is not None) and k < n - 1]
     grid = np.array(np.meshgrid(*[OFFSET_CANDIDATES] * len(free), indexing="ij")).reshape(len(free), -1).T
     offsets = np.zeros((len(grid), n))
     offsets[:, free] = grid
     signs = np.array(np.meshgrid(*[[1.0, -1.0]] * n, indexing="ij")).reshape(n, -1).T
     vP, vZ = _lines(chain, offsets)
-    T, dist, angle = _fit_all(P, Z, vP, vZ, signs, revolute)
+    T, dist, angle = _fit_all(P, Z, vP, vZ, signs, revolute, B)
     score = np.maximum(dist / MAP_TOL_M, angle / MAP_TOL_RAD).max(-1)  # (C, S)
     cost = (np.count_nonzero(offsets, axis=1)[:, None] * (n + 1) + (signs < 0).sum(1)[None, :]).astype(float)
     if not (score <= 1).any() and free:
-        refined = _refined(chain, P, Z, signs, revolute, offsets, score, free)
+        refined = _refined(chain, P, Z, signs, revolute, offsets, score, free, B)
         if refined is not None:
             return refined
     cost = np.where(score <= 1, cost, np.inf)
@@ -261,7 +275,7 @@ def _joint_map(chain: _Chain, nominal: Robot, vendor_file: str) -> tuple[JointMa
     return JointMap(signs[s], offsets[c], alternative), T[c, s]
 
 
-def _refined(chain, P, Z, signs, revolute, offsets, score, free) -> tuple[JointMap, np.ndarray] | None:
+def _refined(chain, P, Z, signs, revolute, offsets, score, free, B) -> tuple[JointMap, np.ndarray] | None:
     """The offsets (any value) of the `REFINED` best candidates of `_joint_map` refined by least
     squares of the joint lines' gaps: of the maps that then hold, the one with the fewest offsets
     (then reversed joints), another as its ``alternative``; None when none holds."""
@@ -273,7 +287,7 @@ def _refined(chain, P, Z, signs, revolute, offsets, score, free) -> tuple[JointM
             u = offsets[c].copy()
             u[free] = x
             vP, vZ = _lines(chain, u[None])
-            _, dist, angle = _fit_all(P, Z, vP, vZ, signs[s:s + 1], revolute)
+            _, dist, angle = _fit_all(P, Z, vP, vZ, signs[s:s + 1], revolute, B)
             return np.concatenate([dist[0, 0] / MAP_TOL_M, angle[0, 0] / MAP_TOL_RAD])
 
         fit = least_squares(gaps, offsets[c, free], jac="3-point", diff_step=1e-5, xtol=1e-15, ftol=1e-15,
@@ -291,22 +305,23 @@ def _refined(chain, P, Z, signs, revolute, offsets, score, free) -> tuple[JointM
     ranked = [found[k] for k in sorted(found)]
     (u, s), other = ranked[0], ranked[1] if len(ranked) > 1 else None
     vP, vZ = _lines(chain, u[None])
-    T, *_ = _fit_all(P, Z, vP, vZ, signs[s:s + 1], revolute)
+    T, *_ = _fit_all(P, Z, vP, vZ, signs[s:s + 1], revolute, B)
     alternative = None if other is None else JointMap(signs[other[1]], other[0])
     return JointMap(signs[s], u, alternative), T[0, 0]
 
 
-def _link_maps(chain: _Chain, nominal: Robot,
-               vendor_file: str) -> tuple[np.ndarray, np.ndarray, float, float, JointMap]:
+def _link_maps(chain: _Chain, nominal: Robot, vendor_file: str,
+               B: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, float, JointMap]:
     """``B`` (robocal's world in the vendor's root link), the links' poses ``M`` ``(m + 1, 4, 4)`` in
     the robocal frame each rides on, the check's largest variation (m, rad) and the joint map
-    (`_joint_map`); DataError when the vendor's chain is not ``nominal``'s robot."""
+    (`_joint_map`; ``B`` given: that one); DataError when the vendor's chain is not ``nominal``'s
+    robot."""
     n = nominal.n_joints
     kinds = [chain.kinds[i] for i in chain.moving]
     if chain.n_moving != n or [k == "prismatic" for k in kinds] != list(nominal.prismatic):
         raise DataError(f"{vendor_file} is not {nominal.name}: its chain to {chain.links[-1]} has "
                         f"{chain.n_moving} moving joints ({', '.join(kinds)}), the model {n}")
-    joint_map, B = _joint_map(chain, nominal, vendor_file)
+    joint_map, B = _joint_map(chain, nominal, vendor_file, B)
     q = _random_joints(nominal, CHECK_POSES)
     vendor = chain.poses(joint_map.vendor(q))
     _, frames = chain_frames(nominal.links, nominal.base, nominal.tool, q, frames=True,
@@ -498,12 +513,14 @@ class UrdfLikeExport:
     xacro_output: str | None = None
     fk_frames: str = "base_link -> tool0"
     joint_map: JointMap | None = None
+    world: np.ndarray | None = None  # (4, 4) robocal's world in the vendor's root link (the map B)
+    bodies: dict = field(default_factory=dict)  # a cell's positioners: tip, checks, joint map, joints
 
     def _map_lines(self) -> list[str]:
         """The joints whose values are not the controller's (``u = sign * q + offset``)."""
         if self.joint_map is None or self.joint_map.is_identity:
             return []
-        return self.joint_map.text([s.joint for s in self.shifts])
+        return self.joint_map.text([s.joint for s in self.shifts[:len(self.joint_map.signs)]])
 
     def summary(self) -> str:
         """The map, the FK check and the per-joint shifts, one line each."""
@@ -517,6 +534,9 @@ class UrdfLikeExport:
                  f"({count} joint vectors)",
                  *([f"joint values: the vendor's from the controller's q: {'; '.join(self._map_lines())}"]
                    if self._map_lines() else []),
+                 *(f"{name} ({b['unit']}): FK {b['root']} -> {b['tip']} = the calibrated positioner's within "
+                   f"{b['fk_check'][0] * 1e3:.2g} mm / {b['fk_check'][1]:.2g} rad ({b['fk_check'][2]} joint "
+                   "vectors), in the arm's map" for name, b in self.bodies.items()),
                  "moved from the vendor's: joint origin (mm, deg), link frame at q = 0 (mm, deg)"]
         lines += [f"  {s.joint} ({s.link}): {s.origin_mm:.4f} mm {s.origin_deg:.5f} deg; "
                   f"{s.frame_mm:.4f} mm {s.frame_deg:.5f} deg" for s in self.shifts]
@@ -531,8 +551,9 @@ class UrdfLikeExport:
                 "fk_check": {"m": self.fk_check[0], "rad": self.fk_check[1],
                              "joint_vectors": self.fk_check[2], "frames": self.fk_frames},
                 "joints": [vars(s) for s in self.shifts], "warnings": list(self.warnings),
-                "joint_map": None if self.joint_map is None else {
-                    "signs": self.joint_map.signs.tolist(), "offsets_rad": self.joint_map.offsets.tolist()},
+                "joint_map": None if self.joint_map is None else self.joint_map.to_dict(),
+                "bodies": {name: {**b, "joint_map": b["joint_map"].to_dict()}
+                           for name, b in self.bodies.items()},
                 "output": self.output, "urdf": self.text, "xacro": self.xacro,
                 "xacro_output": self.xacro_output, "xacro_text": self.xacro_text}
 
@@ -568,7 +589,15 @@ def _shift_comment(result: UrdfLikeExport) -> str:
             f"flange.\n{_map_comment(result)}     FK {result.fk_frames.replace('->', 'to')} = the "
             "calibrated model's within "
             f"{mm * 1e3:.2g} mm / {rad:.2g} rad ({count} joint vectors).\n     Moved from the vendor's "
-            f"(joint origin; the link's frame in base_link at q = 0):\n{rows}\n")
+            f"(joint origin; the link's frame in base_link at q = 0):\n{rows}\n{_bodies_comment(result)}")
+
+
+def _bodies_comment(result: UrdfLikeExport) -> str:
+    return "".join(f"     {name} ({b['unit']}, joints {', '.join(b['joints'])}; its link frames above in "
+                   f"{b['root']}): FK {b['root']} to {b['tip']} = the calibrated positioner's within "
+                   f"{b['fk_check'][0] * 1e3:.2g} mm / {b['fk_check'][1]:.2g} rad ({b['fk_check'][2]} joint "
+                   "vectors)\n" + "".join(f"       {line}\n" for line in b["joint_map"].text(b["joints"]))
+                   for name, b in result.bodies.items())
 
 
 def _map_comment(result: UrdfLikeExport) -> str:
@@ -643,13 +672,47 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     >>> out.write()
     ['kr16_2_calibrated.urdf']
     """
+    cell = _as_cell(calibrated)
+    if cell is not None:
+        return _export_cell(cell, str(vendor_urdf), output, tip, geometry_only, xacro)
+    result, chain, origins = _export_arm(calibrated, str(vendor_urdf), nominal, tip, geometry_only,
+                                         vendor_model)
+    result.output = None if output is None else str(output)
+    result.text = _with_comment(result.text, _shift_comment(result))
+    if xacro is not None:
+        macro = _with_origins(read_text(xacro, "vendor xacro macro"),
+                              {chain.joints[i].get("name"): origins[i] for i in chain.moving}, str(xacro))
+        result.xacro, result.xacro_text = str(xacro), _with_comment(macro, _shift_comment(result))
+        result.xacro_output = None if xacro_output is None else str(xacro_output)
+    return result
+
+
+def _new_origins(chain: _Chain, M: np.ndarray, joint_map: JointMap, cal: Robot,
+                 base: np.ndarray) -> np.ndarray:
+    """The joint origins ``(m, 4, 4)`` that put each vendor link ``M`` (`_link_maps`) on the
+    calibrated chain ``cal``'s frame, the links before the first moving joint staying on ``base``
+    (the nominal frame {0}: the file's fixed joints are kept)."""
+    _, F = chain_frames(cal.links, cal.base, cal.tool, np.zeros((1, cal.n_joints)), frames=True,
+                        prismatic=cal.prismatic)
+    F = F[0].copy()
+    F[0] = base
+    origins = chain.origins.copy()
+    for i in chain.moving:
+        f = chain.frame[i + 1]  # the vendor's joint at u = offset is robocal's at q = 0: turn it back
+        back = _joint_motion(chain.axes[i], -joint_map.offsets[f - 1:f], chain.kinds[i] == "prismatic")[0]
+        origins[i] = invert_transform(M[i]) @ invert_transform(F[f - 1]) @ F[f] @ M[i + 1] @ back
+    return origins
+
+
+def _export_arm(calibrated, vendor_file: str, nominal, tip, geometry_only, vendor_model):
+    """The arm's export (`export_urdf_like` without the comment and the macro), its chain and its
+    new joint origins."""
     robot = calibrated if isinstance(calibrated, Robot) else load_model(str(calibrated))
     controller = nominal if isinstance(nominal, Robot) else controller_for(robot, nominal)
     if controller is None:
         raise DataError(f"{robot.name} is not a catalog robot: give the controller's nominal model "
                         "(--nominal, a catalog name or model file), which the vendor's URDF must describe")
     dropped = _dropped_terms(robot, geometry_only)
-    vendor_file = str(vendor_urdf)
     text = read_text(vendor_file, "vendor URDF")
     root = parse_urdf(text)
     names = {lk.get("name") for lk in root.findall("link")}
@@ -658,25 +721,104 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
         vendor_model if isinstance(vendor_model, Robot) else load_model(str(vendor_model)))
     cal = controller_model(robot, drawn)  # DataError: the model the vendor draws is another robot's
     B, M, *check, joint_map = _link_maps(chain, drawn.nominal_robot(), vendor_file)
-    zero = np.zeros((1, robot.n_joints))
-    _, F = chain_frames(cal.links, cal.base, cal.tool, zero, frames=True, prismatic=cal.prismatic)
-    origins = chain.origins.copy()
-    for i in chain.moving:
-        f = chain.frame[i + 1]  # the vendor's joint at u = offset is robocal's at q = 0: turn it back
-        back = _joint_motion(chain.axes[i], -joint_map.offsets[f - 1:f], chain.kinds[i] == "prismatic")[0]
-        origins[i] = invert_transform(M[i]) @ invert_transform(F[0, f - 1]) @ F[0, f] @ M[i + 1] @ back
+    origins = _new_origins(chain, M, joint_map, cal, cal.base)
     new_text = _with_origins(text, {chain.joints[i].get("name"): origins[i] for i in chain.moving})
     result = _result(robot, drawn, vendor_file, root.get("name") or "", chain, B, M, check, new_text, cal,
                      joint_map)
-    result.output = None if output is None else str(output)
     result.warnings[:0] = dropped
-    result.text = _with_comment(new_text, _shift_comment(result))
-    if xacro is not None:
-        macro = _with_origins(read_text(xacro, "vendor xacro macro"),
-                              {chain.joints[i].get("name"): origins[i] for i in chain.moving}, str(xacro))
-        result.xacro, result.xacro_text = str(xacro), _with_comment(macro, _shift_comment(result))
-        result.xacro_output = None if xacro_output is None else str(xacro_output)
+    return result, chain, origins
+
+
+# ----------------------------------------------------------------- cells: an arm and its positioners
+def _as_cell(calibrated) -> Cell | None:
+    """``calibrated`` as a work cell (a `Cell`, or a cell file: several bodies), else None."""
+    if isinstance(calibrated, Cell):
+        return calibrated
+    if isinstance(calibrated, Robot) or not str(calibrated).endswith((".yaml", ".yml")) \
+            or not Path(str(calibrated)).is_file():
+        return None
+    data = yaml.safe_load(read_text(str(calibrated), "model file"))
+    return load_cell(str(calibrated)) if is_workcell(data) else None
+
+
+def _export_cell(cell: Cell, vendor_file: str, output, tip, geometry_only, xacro) -> UrdfLikeExport:
+    """`export_urdf_like` of a calibrated cell's arm and positioners into one vendor file: the arm
+    as one robot (its map ``B`` fixes the cell's world in the file's root link), then each
+    positioner's chain (tip: the leaf whose chain holds its moving joints) mapped with that ``B``,
+    its joints' origins corrected for its calibrated axes and mount."""
+    if len(cell.arms) != 1 or xacro is not None:
+        raise DataError(f"cell {cell.name!r}: one arm per vendor file and no xacro macro for a cell "
+                        f"(it has {len(cell.arms)} arms)")
+    (arm_name, arm), = cell.arms.items()
+    result, chain, _ = _export_arm(arm, vendor_file, arm.nominal_robot(), tip, geometry_only, None)
+    B = result.world
+    root = parse_urdf(result.text)
+    taken = {chain.joints[i].get("name") for i in chain.moving}
+    for name, positioner in cell.positioners.items():
+        body = positioner.chain
+        pchain = _Chain.read(root, _positioner_tip(root, taken, body.n_joints, name, vendor_file))
+        taken |= {pchain.joints[i].get("name") for i in pchain.moving}
+        drawn = body.nominal_robot()
+        _, M, *check, joint_map = _link_maps(pchain, drawn, vendor_file, B)
+        origins = _new_origins(pchain, M, joint_map, body, drawn.base)
+        result.text = _with_origins(result.text,
+                                    {pchain.joints[i].get("name"): origins[i] for i in pchain.moving})
+        shifts, fk = _body_check(result.text, pchain, body, drawn, B, M, joint_map)
+        result.shifts += shifts
+        result.bodies[name] = {"unit": positioner.unit, "root": pchain.links[0], "tip": pchain.links[-1],
+                               "fk_check": fk,
+                               "map_check": tuple(check), "joint_map": joint_map,
+                               "joints": [s.joint for s in shifts]}
+        far = [s.joint for s in shifts if s.origin_mm > GOAL_MM or s.origin_deg > GOAL_DEG]
+        if far:
+            result.warnings.append(f"{name}: the origins of {', '.join(far)} moved more than {GOAL_MM:g} mm "
+                                   f"or {GOAL_DEG:g} deg from the vendor's: the calibrated cell has the "
+                                   "positioner there (its mount against the arm's), and its meshes with it")
+        if not joint_map.is_identity:
+            result.warnings.append(f"{name}: the vendor's joint values are not the controller's: "
+                                   f"{'; '.join(joint_map.text([s.joint for s in shifts]))}")
+    result.output = None if output is None else str(output)
+    result.text = _with_comment(result.text, _shift_comment(result))
     return result
+
+
+def _positioner_tip(root: ET.Element, taken: set[str], n: int, name: str, vendor_file: str) -> str:
+    """The leaf link of the vendor's tree whose chain from the root holds ``n`` moving joints, none
+    of them ``taken`` (another body's); DataError unless exactly one such set of joints exists."""
+    parents = {j.find("parent").get("link") for j in root.findall("joint")}
+    found: dict[tuple, str] = {}
+    for link in root.findall("link"):
+        if link.get("name") in parents:
+            continue
+        moving = tuple(j.get("name") for j in urdf_chain(root, link.get("name")) if j.get("type") in _MOVING)
+        if len(moving) == n and not taken & set(moving):
+            found.setdefault(moving, link.get("name"))
+    if len(found) != 1:
+        raise DataError(f"{vendor_file}: {len(found) or 'no'} chains of {n} moving joints apart from the "
+                        f"arm's for positioner {name!r} ({', '.join(found.values()) or 'none'})")
+    return next(iter(found.values()))
+
+
+def _body_check(text: str, chain: _Chain, body: Robot, drawn: Robot, B: np.ndarray, M: np.ndarray,
+                joint_map: JointMap) -> tuple[list[JointShift], tuple[float, float, int]]:
+    """A positioner's written chain read back: its tip's pose in the root link against the
+    calibrated body's (in the cell's world, ``B``) on `FK_POSES` joint vectors (RobocalError beyond
+    `FK_TOL_M`, `FK_TOL_RAD`), and how far each joint's origin and link frame (at q = 0, in the
+    root link) moved from the vendor's."""
+    written = _Chain.read(parse_urdf(text), chain.links[-1])
+    q = _random_joints(drawn, FK_POSES, seed=1)
+    _, frames = chain_frames(body.links, body.base, body.tool, q, frames=True, prismatic=body.prismatic)
+    dist, angle = _pose_gap(written.poses(joint_map.vendor(q))[:, -1], B @ frames[:, chain.frame[-1]] @ M[-1])
+    if dist.max() > FK_TOL_M or angle.max() > FK_TOL_RAD:
+        raise RobocalError(f"internal: the written URDF's FK of {body.name} is {dist.max() * 1e3:.3g} mm / "
+                           f"{angle.max():.3g} rad off the calibrated model's")
+    vendor0, new0 = (c.poses(joint_map.vendor(q[:1]))[0] for c in (chain, written))
+    frame_mm, frame_rad = _pose_gap(vendor0, new0)
+    origin_mm, origin_rad = _pose_gap(chain.origins, written.origins)
+    shifts = [JointShift(chain.joints[i].get("name"), chain.links[i + 1], float(origin_mm[i] * 1e3),
+                         float(np.rad2deg(origin_rad[i])), float(frame_mm[i + 1] * 1e3),
+                         float(np.rad2deg(frame_rad[i + 1]))) for i in chain.moving]
+    return shifts, (float(dist.max()), float(angle.max()), FK_POSES)
 
 
 def _dropped_terms(robot: Robot, geometry_only: bool) -> list[str]:
@@ -744,4 +886,4 @@ def _result(robot, controller, vendor_file, robot_name, chain, B, M, check, new_
     fk_frames = " and ".join(f"{chain.links[k]} -> {chain.links[-1]}" for k in dict.fromkeys((base_at, 0)))
     return UrdfLikeExport(robot, controller, vendor_file, robot_name, new_text, base, tool,
                           (check[0], check[1]), shifts, (float(dist.max()), float(angle.max()), FK_POSES),
-                          warnings=warnings, fk_frames=fk_frames, joint_map=joint_map)
+                          warnings=warnings, fk_frames=fk_frames, joint_map=joint_map, world=B)
