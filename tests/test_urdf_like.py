@@ -322,3 +322,63 @@ def test_a_spherical_wrist_twin_map_is_said(tmp_path):
     out = rc.export_urdf_like("kuka_kr16_2", tmp_path / "v.urdf")
     assert out.joint_map.text([s.joint for s in out.shifts]) == ["joint_a4 = q4 - 1.57079633 rad"]
     assert "the axes fit as well joint_a4 = q4 + 1.57079633 rad; joint_a5 = -q5" in out.warnings[0]
+
+
+STN1 = """<link name="world"/>
+  <joint name="world-base_link" type="fixed"><parent link="world"/><child link="base_link"/></joint>
+  <link name="irbp_base_link"><visual><geometry><mesh filename="package://irbp/base.stl"/></geometry></visual></link>
+  <link name="irbp_link_1"/><link name="irbp_link_2"/><link name="irbp_tool0"/>
+  <joint name="world-irbp_base_link" type="fixed"><parent link="world"/><child link="irbp_base_link"/>
+    <origin xyz="1.4 0 0" rpy="0 0 1.5707963267948966"/></joint>
+  <joint name="irbp_joint_1" type="revolute"><parent link="irbp_base_link"/><child link="irbp_link_1"/>
+    <origin xyz="0 0 0.9" rpy="0 0 0"/><axis xyz="TILT"/>
+    <limit lower="-1.5" upper="1.5" effort="0" velocity="1"/></joint>
+  <joint name="irbp_joint_2" type="revolute"><parent link="irbp_link_1"/><child link="irbp_link_2"/>
+    <origin xyz="0 0 0.25" rpy="0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-6" upper="6" effort="0" velocity="1"/></joint>
+  <joint name="irbp_link_2-tool0" type="fixed"><parent link="irbp_link_2"/><child link="irbp_tool0"/></joint>
+  """
+CELL = """units: {length: mm, angle: deg}
+robot: abb_irb2600
+positioner: {model: abb_irbp_a250, unit: STN1, mount: {xyz: [1400, 0, 0], rpy: [0, 0, 90]}}
+"""
+
+
+@pytest.mark.parametrize("tilt", ["1 0 0", "-1 0 0"])
+def test_a_cell_arm_and_positioner_in_one_vendor_file(tmp_path, tilt):
+    """A hand-built work-cell URDF (ROS-Industrial's IRB 2600 file and an IRBP A-250 chain under a
+    world link: no public description of the IRBP exists): the positioner's joints keep their names,
+    their origins take its calibrated axes and mount, the tilt axis may be the controller's reversed."""
+    from robocal.kinematics.workcell import load_cell
+
+    vendor = (DATA / "irb2600_12_165.urdf").read_text(encoding="utf-8")
+    at = vendor.index("<link ")
+    text = vendor[:at] + STN1.replace("TILT", tilt) + vendor[at:]
+    (tmp_path / "cell.urdf").write_text(text, encoding="utf-8")
+    (tmp_path / "cell.yaml").write_text(CELL, encoding="utf-8")
+    cell = load_cell(tmp_path / "cell.yaml")
+    arm, stn = cell.arms["arm"], cell.positioners["STN1"].chain
+    moved = stn.with_values({"base.x": stn.get("base.x") + 1.2e-3, "base.rz": stn.get("base.rz") + 1e-3,
+                             "a2": stn.get("a2") + 4e-4, "alpha2": stn.get("alpha2") + 8e-4})
+    calibrated = cell.in_world({"arm": typical(arm, seed=2), "STN1": moved})
+    out = rc.export_urdf_like(calibrated, tmp_path / "cell.urdf")
+    assert [s.joint for s in out.shifts][6:] == ["irbp_joint_1", "irbp_joint_2"]
+    assert content(out.text) == content((tmp_path / "cell.urdf").read_text(encoding="utf-8"))
+    body = out.bodies["STN1"]
+    assert body["tip"] == "irbp_tool0" and body["fk_check"][0] < FK_M
+    assert body["joint_map"].signs.tolist() == ([1.0, 1.0] if tilt[0] == "1" else [-1.0, 1.0])
+    assert any("STN1: the origins of irbp_joint_1 moved" in w for w in out.warnings)  # its mount: 1.2 mm
+    # yourdfpy: the plate in the world against the calibrated positioner's (its plate as the file's)
+    u = yourdfpy.URDF.load(io.StringIO(out.text), load_meshes=False, build_collision_scene_graph=False,
+                           load_collision_meshes=False)
+    e = joints_in_limits(stn, 20)
+    mine = []
+    for ek in e:
+        u.update_cfg({"irbp_joint_1": ek[0] * body["joint_map"].signs[0], "irbp_joint_2": ek[1]})
+        mine.append(u.get_transform("irbp_tool0", "world"))
+    nominal = stn.nominal_robot()
+    plate = np.linalg.inv(nominal.fk(np.zeros((1, 2)))[0]) @ yourdfpy.URDF.load(
+        tmp_path / "cell.urdf", load_meshes=False, build_collision_scene_graph=False,
+        load_collision_meshes=False).get_transform("irbp_tool0", "world")
+    truth = calibrated.positioners["STN1"].chain.with_frames(tool=nominal.tool).fk(e) @ plate
+    assert max(gap(np.array(mine), truth)) < 1e-9
