@@ -35,7 +35,6 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from robocal.core.errors import DataError, ModelError, RobocalError
 from robocal.core.io import check_outputs, read_text, write_all
@@ -44,6 +43,7 @@ from robocal.deploy.models import controller_for
 from robocal.kinematics.cell_file import is_workcell
 from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.model import Robot, load_model
+from robocal.kinematics.model_file import read_model_data
 from robocal.kinematics.transforms import invert_transform
 from robocal.kinematics.urdf import not_carried
 from robocal.kinematics.urdf_read import joint_axis, joint_origin, matrix_to_rpy, parse_urdf, urdf_chain
@@ -734,11 +734,10 @@ def _as_cell(calibrated) -> Cell | None:
     """``calibrated`` as a work cell (a `Cell`, or a cell file: several bodies), else None."""
     if isinstance(calibrated, Cell):
         return calibrated
-    if isinstance(calibrated, Robot) or not str(calibrated).endswith((".yaml", ".yml")) \
-            or not Path(str(calibrated)).is_file():
+    path = Path(str(calibrated))
+    if isinstance(calibrated, Robot) or path.suffix.lower() not in (".yaml", ".yml") or not path.is_file():
         return None
-    data = yaml.safe_load(read_text(str(calibrated), "model file"))
-    return load_cell(str(calibrated)) if is_workcell(data) else None
+    return load_cell(path) if is_workcell(read_model_data(path)) else None
 
 
 def _export_cell(cell: Cell, vendor_file: str, output, tip, geometry_only, xacro) -> UrdfLikeExport:
