@@ -5,21 +5,25 @@ calibrated model's and every link frame (where its mesh hangs) stays where the c
 
 The map between the vendor's frames and robocal's is found from the nominal models and checked:
 
-1. The vendor's joint values are the controller's (as the ROS drivers send them) and robocal's
-   nominal model is the controller's, so the n joint axes of the two at q = 0 are the same lines;
-   the rigid transform ``B`` (robocal's world in the vendor's root link) that carries robocal's
-   axes onto the vendor's is fitted (directions: Kabsch; points: the lines' normal distances),
-   and every axis must then lie on the vendor's. UR's base_link, the controller's base turned by
-   pi, comes out of the fit as such.
+1. The vendor's joint values are the controller's up to a sign and a zero per joint (`JointMap`,
+   ``u = sign * q + offset``; the identity for the ROS-Industrial and UR files), so the n joint
+   lines of the vendor's file at ``u = offset`` are robocal's nominal ones at q = 0 moved rigidly:
+   the map and the rigid transform ``B`` (robocal's world in the vendor's root link) are fitted
+   together (`_joint_map`: every sign and candidate zero at once, directions by Kabsch, points by
+   the lines' normal distances), and every axis must then lie on the vendor's. UR's base_link, the
+   controller's base turned by pi, comes out of the fit as such.
 2. Every link of the vendor's chain rides on one of robocal's frames {f} (f: the moving joints
    before it); its pose in that frame, ``M = (B F_f(q))^-1 T_link(q)``, must be the same for every
    joint vector: checked on `CHECK_POSES` random ones (`MAP_TOL_M`, `MAP_TOL_RAD`), else the vendor
    file is refused as another robot.
 3. The calibrated link frames are ``B F_f(q) M`` with the calibrated chain F (its frame {0} the
    controller's base, `robocal.deploy.compensation.controller_model`): the origin of moving joint k
-   becomes ``M_parent^-1 F_{k-1}(0)^-1 F_k(0) M_child``. Its axis stays the vendor's exactly (M's
-   origin is on the joint's line, so the calibrated rotation about frame {k}'s z is the vendor's
-   joint turning about its own axis) and no fixed joint is added.
+   becomes ``M_parent^-1 F_{k-1}(0)^-1 F_k(0) M_child Rot(axis, -offset_k)``. Its axis stays the
+   vendor's exactly (M's origin is on the joint's line, so the calibrated rotation about frame
+   {k}'s z is the vendor's joint turning about its own axis by ``sign``) and no fixed joint is
+   added.
+4. A work cell (`robocal.kinematics.workcell.Cell`, or its file): the arm as above, its ``B`` the
+   cell's world for each positioner's branch (`_export_cell`).
 
 The document is edited as text (the values of those ``<origin>`` elements only, floats written with
 ``repr``), and an XML comment says per joint how far its origin and its link's frame moved from the
@@ -64,8 +68,8 @@ REFINED = 8  # best candidate maps refined by least squares when none holds as t
 GOAL_MM = 1.0  # a joint origin moved further than this from the vendor's is said (meshes move with it)
 GOAL_DEG = 0.1  # the same, deg
 _MOVING = ("revolute", "continuous", "prismatic")
-_WHY_NOT = ("(another robot, joints that are not the controller's, or a controller's model that is not what "
-            "the file draws: give that as --vendor-model)")
+_WHY_NOT = ("(another robot, joints that differ from the controller's by more than a sign and a zero, or a "
+            "controller's model that is not what the file draws: give that as --vendor-model)")
 
 
 # ----------------------------------------------------------------- the vendor's chain
