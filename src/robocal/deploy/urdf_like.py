@@ -483,7 +483,10 @@ class UrdfLikeExport:
     (``base`` robocal's base frame in base_link, ``tool`` tool0 in robocal's flange, both 4x4 m, and
     the check's largest variation ``map_check`` (m, rad)), the ``shifts`` per moving joint, the
     comparison of the written file's FK with the calibrated model's ``fk_check`` (m, rad, joint
-    vectors) and the ``warnings``.
+    vectors), the ``joint_map`` (`JointMap`: the vendor's joint values from the controller's),
+    ``world`` (robocal's world in the vendor's root link, 4x4 m), a cell's positioners in ``bodies``
+    (per body: its unit, root and tip links, FK and map checks, joint map and joints) and the
+    ``warnings``.
 
     Examples
     --------
@@ -622,9 +625,13 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
 
     Parameters
     ----------
-    calibrated : Robot or str
+    calibrated : Robot, Cell or str
         The calibrated model; its frame {0} is taken as the controller's base and the flange as
-        the nominal model's (`robocal.deploy.compensation.controller_model`).
+        the nominal model's (`robocal.deploy.compensation.controller_model`). Or a calibrated work
+        cell (`Cell`, or its file from ``robocal calibrate --model``): one arm and its positioners,
+        all in the one vendor file (each positioner's branch found by its moving joints; its
+        joints' origins take its calibrated axes and mount); ``nominal``, ``vendor_model`` and
+        ``xacro`` are then not taken.
     vendor_urdf : str or Path
         The vendor's expanded URDF (ROS-Industrial support package, ur_description); read only.
     nominal : Robot or str, optional
@@ -651,7 +658,9 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     Returns
     -------
     UrdfLikeExport
-        The text, the map, the checks and the per-joint shifts (mm, deg).
+        The text, the map, the checks, the joint map (``u = sign * q + offset`` where the vendor's
+        joints are not the controller's) and the per-joint shifts (mm, deg); a cell's positioners
+        in ``bodies``.
 
     Raises
     ------
@@ -678,6 +687,9 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     """
     cell = _as_cell(calibrated)
     if cell is not None:
+        if nominal is not None or vendor_model is not None:
+            raise DataError("a calibrated cell carries its bodies' nominal models: no --nominal or "
+                            "--vendor-model for a cell")
         return _export_cell(cell, str(vendor_urdf), output, tip, geometry_only, xacro)
     result, chain, origins = _export_arm(calibrated, str(vendor_urdf), nominal, tip, geometry_only,
                                          vendor_model)
