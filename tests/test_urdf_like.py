@@ -382,3 +382,31 @@ def test_a_cell_arm_and_positioner_in_one_vendor_file(tmp_path, tilt):
         load_collision_meshes=False).get_transform("irbp_tool0", "world")
     truth = calibrated.positioners["STN1"].chain.with_frames(tool=nominal.tool).fk(e) @ plate
     assert max(gap(np.array(mine), truth)) < 1e-9
+
+
+def test_the_other_map_can_be_given_and_is_checked(tmp_path, capsys):
+    from robocal.deploy.urdf_like import parse_joint_map
+
+    text = remapped((DATA / "kr16_2.urdf").read_text(encoding="utf-8"), {"joint_a4": (1.0, -np.pi / 2)})
+    (tmp_path / "v.urdf").write_text(text, encoding="utf-8")
+    nominal = rc.Robot.from_catalog("kuka_kr16_2")
+    calibrated = typical(nominal, seed=6)
+    twin = parse_joint_map(["joint_a4=1,90", "joint_a5=-1,0"])
+    out = rc.export_urdf_like(calibrated, tmp_path / "v.urdf", joint_map=twin)
+    assert out.joint_map.given and np.array_equal(out.joint_map.signs, [1, 1, 1, 1, -1, 1])
+    q = joints_in_limits(nominal, N_Q)
+    controller = controller_model(calibrated, nominal)
+    truth = out.base @ np.linalg.inv(controller.base) @ controller.fk(q) @ out.tool
+    u = q * out.joint_map.signs + out.joint_map.offsets
+    assert max(gap(fk_by_yourdfpy(out.text, u), truth)) < 1e-9
+    assert any("(as given, checked on the axes)" in w for w in out.warnings)
+    with pytest.raises(DataError, match="joint_a5 is .* with the given joint map"):
+        rc.export_urdf_like(calibrated, tmp_path / "v.urdf", joint_map=parse_joint_map(["joint_a4=1,90"]))
+    with pytest.raises(DataError, match="names no moving joint of .*: joint_9"):
+        rc.export_urdf_like(calibrated, tmp_path / "v.urdf", joint_map={"joint_9": (1.0, 0.0)})
+    for bad in (["joint_a4=2,0"], ["joint_a4=1"], ["joint_a4=1,x"], ["joint_a4=1,0", "joint_a4=1,0"]):
+        with pytest.raises(DataError, match="NAME=SIGN,OFFSET_DEG"):
+            parse_joint_map(bad)
+    assert main(["export", "kuka_kr16_2", "--urdf-like", str(tmp_path / "v.urdf"),
+                 "-o", str(tmp_path / "o.urdf"), "--joint-map", "joint_a4=1,-90"]) == 0
+    assert "joint_a4 = q4 - 1.57079633 rad (as given" in capsys.readouterr().out

@@ -72,6 +72,30 @@ _WHY_NOT = ("(another robot, joints that differ from the controller's by more th
             "controller's model that is not what the file draws: give that as --vendor-model)")
 
 
+def parse_joint_map(items) -> dict[str, tuple[float, float]]:
+    """``{joint: (sign, offset_rad)}`` from ``NAME=SIGN,OFFSET_DEG`` texts (``joint_a4=1,-90``;
+    sign 1 or -1, the offset in degrees) for `export_urdf_like`'s ``joint_map``.
+
+    Examples
+    --------
+    >>> parse_joint_map(["joint_a2=-1,0", "joint_a4=1,90"])["joint_a4"]
+    (1.0, 1.5707963267948966)
+    """
+    out = {}
+    for item in items or ():
+        name, _, value = str(item).partition("=")
+        parts = value.split(",")
+        try:
+            sign, offset = float(parts[0]), float(parts[1]) if len(parts) == 2 else None
+        except ValueError:
+            sign = offset = None
+        if not name or sign not in (1.0, -1.0) or offset is None or not np.isfinite(offset) or name in out:
+            raise DataError(f"--joint-map {item!r}: give NAME=SIGN,OFFSET_DEG once per joint, SIGN 1 or -1 "
+                            "(the vendor's joint value = SIGN * the controller's + OFFSET)")
+        out[name] = (sign, float(np.deg2rad(offset)))
+    return out
+
+
 # ----------------------------------------------------------------- the vendor's chain
 @dataclass(frozen=True)
 class _Chain:
@@ -165,6 +189,7 @@ class JointMap:
     signs: np.ndarray
     offsets: np.ndarray
     alternative: JointMap | None = None  # another map as good among the candidates, when not the identity
+    given: bool = False  # the user's (checked), not found
 
     @classmethod
     def identity(cls, n: int) -> JointMap:
@@ -230,8 +255,8 @@ def _fit_all(P: np.ndarray, Z: np.ndarray, vP: np.ndarray, vZ: np.ndarray, signs
     return T, dist, angle
 
 
-def _joint_map(chain: _Chain, nominal: Robot, vendor_file: str,
-               B: np.ndarray | None = None) -> tuple[JointMap, np.ndarray]:
+def _joint_map(chain: _Chain, nominal: Robot, vendor_file: str, B: np.ndarray | None = None,
+               given: dict | None = None) -> tuple[JointMap, np.ndarray]:
     """The map from the controller's joints to the vendor's (`JointMap`) and ``B`` (robocal's world
     in the vendor's root link) that make the vendor's joint lines robocal's nominal ones moved
     rigidly; DataError (naming the worst joint) when no such map exists.
@@ -242,17 +267,24 @@ def _joint_map(chain: _Chain, nominal: Robot, vendor_file: str,
     squares over the offsets (any value). Among the maps that hold, the one with the fewest offsets,
     then the fewest signs turned, is taken: the vendor's joint values equal the controller's where
     the file allows it (a spherical wrist also fits joint 4 turned by pi with joint 5 reversed).
-    ``B`` given (a positioner in its cell's world): no fit, and the first joint's offset is tried too."""
+    ``B`` given (a positioner in its cell's world): no fit, and the first joint's offset is tried too.
+    ``given`` (`parse_joint_map`; a joint not named: sign 1, offset 0): that map only, checked."""
     n = nominal.n_joints
     _, frames = chain_frames(nominal.links, nominal.base, nominal.tool, np.zeros((1, n)), frames=True,
                              prismatic=nominal.prismatic)
     P, Z = frames[0, 1:, :3, 3], frames[0, 1:, :3, 2]
     revolute = ~np.asarray(nominal.prismatic, bool)
-    free = [k for k in np.flatnonzero(revolute) if (k > 0 or B is not None) and k < n - 1]
-    grid = np.array(np.meshgrid(*[OFFSET_CANDIDATES] * len(free), indexing="ij")).reshape(len(free), -1).T
-    offsets = np.zeros((len(grid), n))
-    offsets[:, free] = grid
-    signs = np.array(np.meshgrid(*[[1.0, -1.0]] * n, indexing="ij")).reshape(n, -1).T
+    if given is None:
+        free = [k for k in np.flatnonzero(revolute) if (k > 0 or B is not None) and k < n - 1]
+        grid = np.array(np.meshgrid(*[OFFSET_CANDIDATES] * len(free), indexing="ij")).reshape(len(free), -1).T
+        offsets = np.zeros((len(grid), n))
+        offsets[:, free] = grid
+        signs = np.array(np.meshgrid(*[[1.0, -1.0]] * n, indexing="ij")).reshape(n, -1).T
+    else:
+        free, pairs = [], [given.get(chain.joints[i].get("name"), (1.0, 0.0)) for i in chain.moving]
+        signs, offsets = np.array([[p[0] for p in pairs]]), np.array([[p[1] for p in pairs]])
+        if (offsets[0] != 0)[~revolute].any():
+            raise DataError("--joint-map: a prismatic joint's zero is its origin: give it no offset")
     vP, vZ = _lines(chain, offsets)
     T, dist, angle = _fit_all(P, Z, vP, vZ, signs, revolute, B)
     score = np.maximum(dist / MAP_TOL_M, angle / MAP_TOL_RAD).max(-1)  # (C, S)
@@ -267,16 +299,16 @@ def _joint_map(chain: _Chain, nominal: Robot, vendor_file: str,
         c, s = np.unravel_index(np.argmin(score), score.shape)
         k = int(np.argmax(np.maximum(dist[c, s] / MAP_TOL_M, angle[c, s] / MAP_TOL_RAD)))
         name = chain.joints[chain.moving[k]].get("name")
+        how = "with the given joint map" if given is not None else "with any joint's sign and zero"
         raise DataError(f"{vendor_file} is not {nominal.name}: the axis of its joint {name} is "
                         f"{dist[c, s, k] * 1e3:.3g} mm / {np.rad2deg(angle[c, s, k]):.3g} deg off the "
-                        f"model's joint {k + 1} after the best rigid fit of all the axes, with any joint's "
-                        f"sign and zero {_WHY_NOT}")
+                        f"model's joint {k + 1} after the best rigid fit of all the axes, {how} {_WHY_NOT}")
     alternative = None
     cost[c, s] = np.inf
     if ((signs[s] < 0).any() or offsets[c].any()) and np.isfinite(cost).any():
         a, b = np.unravel_index(np.argmin(cost), score.shape)
         alternative = JointMap(signs[b], offsets[a])
-    return JointMap(signs[s], offsets[c], alternative), T[c, s]
+    return JointMap(signs[s], offsets[c], alternative, given is not None), T[c, s]
 
 
 def _refined(chain, P, Z, signs, revolute, offsets, score, free, B) -> tuple[JointMap, np.ndarray] | None:
@@ -314,8 +346,8 @@ def _refined(chain, P, Z, signs, revolute, offsets, score, free, B) -> tuple[Joi
     return JointMap(signs[s], u, alternative), T[0, 0]
 
 
-def _link_maps(chain: _Chain, nominal: Robot, vendor_file: str,
-               B: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, float, JointMap]:
+def _link_maps(chain: _Chain, nominal: Robot, vendor_file: str, B: np.ndarray | None = None,
+               given: dict | None = None) -> tuple[np.ndarray, np.ndarray, float, float, JointMap]:
     """``B`` (robocal's world in the vendor's root link), the links' poses ``M`` ``(m + 1, 4, 4)`` in
     the robocal frame each rides on, the check's largest variation (m, rad) and the joint map
     (`_joint_map`; ``B`` given: that one); DataError when the vendor's chain is not ``nominal``'s
@@ -325,7 +357,7 @@ def _link_maps(chain: _Chain, nominal: Robot, vendor_file: str,
     if chain.n_moving != n or [k == "prismatic" for k in kinds] != list(nominal.prismatic):
         raise DataError(f"{vendor_file} is not {nominal.name}: its chain to {chain.links[-1]} has "
                         f"{chain.n_moving} moving joints ({', '.join(kinds)}), the model {n}")
-    joint_map, B = _joint_map(chain, nominal, vendor_file, B)
+    joint_map, B = _joint_map(chain, nominal, vendor_file, B, given)
     q = _random_joints(nominal, CHECK_POSES)
     vendor = chain.poses(joint_map.vendor(q))
     _, frames = chain_frames(nominal.links, nominal.base, nominal.tool, q, frames=True,
@@ -619,7 +651,8 @@ def _map_comment(result: UrdfLikeExport) -> str:
 # ----------------------------------------------------------------- the export
 def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str | None = None,
                      output=None, tip: str | None = None, xacro=None, xacro_output=None,
-                     geometry_only: bool = False, vendor_model: Robot | str | None = None) -> UrdfLikeExport:
+                     geometry_only: bool = False, vendor_model: Robot | str | None = None,
+                     joint_map: dict[str, tuple[float, float]] | None = None) -> UrdfLikeExport:
     """The vendor's URDF (``vendor_urdf``: a path, as xacro expands it) with the kinematics of
     ``calibrated`` (a `Robot`, model file or catalog name).
 
@@ -650,6 +683,10 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
         The nominal model the vendor's file draws, when the controller's is not (a UR's factory
         calibration as ``nominal``, the catalog ``ur5e`` here): the same parametrization as the
         calibrated model; its base and flange are base_link's and tool0's. Default: ``nominal``.
+    joint_map : dict, optional
+        The vendor's joint values from the controller's, ``{joint: (sign, offset_rad)}`` (a joint
+        not named: 1, 0; `parse_joint_map` reads ``NAME=SIGN,OFFSET_DEG``), checked instead of
+        found: to take the other map a spherical wrist allows.
     geometry_only : bool, default False
         Write the geometry of a model whose joint-error terms (compliance, backlash, ...) move its
         TCP by more than `DROPPED_TERMS_MM` (refused otherwise: that URDF is not the calibrated
@@ -690,9 +727,9 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
         if nominal is not None or vendor_model is not None:
             raise DataError("a calibrated cell carries its bodies' nominal models: no --nominal or "
                             "--vendor-model for a cell")
-        return _export_cell(cell, str(vendor_urdf), output, tip, geometry_only, xacro)
+        return _export_cell(cell, str(vendor_urdf), output, tip, geometry_only, xacro, joint_map)
     result, chain, origins = _export_arm(calibrated, str(vendor_urdf), nominal, tip, geometry_only,
-                                         vendor_model)
+                                         vendor_model, joint_map)
     result.output = None if output is None else str(output)
     result.text = _with_comment(result.text, _shift_comment(result))
     if xacro is not None:
@@ -720,7 +757,7 @@ def _new_origins(chain: _Chain, M: np.ndarray, joint_map: JointMap, cal: Robot,
     return origins
 
 
-def _export_arm(calibrated, vendor_file: str, nominal, tip, geometry_only, vendor_model):
+def _export_arm(calibrated, vendor_file: str, nominal, tip, geometry_only, vendor_model, given):
     """The arm's export (`export_urdf_like` without the comment and the macro), its chain and its
     new joint origins."""
     robot = calibrated if isinstance(calibrated, Robot) else load_model(str(calibrated))
@@ -733,10 +770,13 @@ def _export_arm(calibrated, vendor_file: str, nominal, tip, geometry_only, vendo
     root = parse_urdf(text)
     names = {lk.get("name") for lk in root.findall("link")}
     chain = _Chain.read(root, tip if tip is not None else ("tool0" if "tool0" in names else None))
+    unknown = set(given or {}) - {j.get("name") for j in root.findall("joint") if j.get("type") in _MOVING}
+    if unknown:
+        raise DataError(f"--joint-map names no moving joint of {vendor_file}: {', '.join(sorted(unknown))}")
     drawn = controller if vendor_model is None else (
         vendor_model if isinstance(vendor_model, Robot) else load_model(str(vendor_model)))
     cal = controller_model(robot, drawn)  # DataError: the model the vendor draws is another robot's
-    B, M, *check, joint_map = _link_maps(chain, drawn.nominal_robot(), vendor_file)
+    B, M, *check, joint_map = _link_maps(chain, drawn.nominal_robot(), vendor_file, given=given)
     origins = _new_origins(chain, M, joint_map, cal, cal.base)
     new_text = _with_origins(text, {chain.joints[i].get("name"): origins[i] for i in chain.moving})
     result = _result(robot, drawn, vendor_file, root.get("name") or "", chain, B, M, check, new_text, cal,
@@ -756,7 +796,7 @@ def _as_cell(calibrated) -> Cell | None:
     return load_cell(path) if is_workcell(read_model_data(path)) else None
 
 
-def _export_cell(cell: Cell, vendor_file: str, output, tip, geometry_only, xacro) -> UrdfLikeExport:
+def _export_cell(cell: Cell, vendor_file: str, output, tip, geometry_only, xacro, given) -> UrdfLikeExport:
     """`export_urdf_like` of a calibrated cell's arm and positioners into one vendor file: the arm
     as one robot (its map ``B`` fixes the cell's world in the file's root link), then each
     positioner's chain (tip: the leaf whose chain holds its moving joints) mapped with that ``B``,
@@ -765,7 +805,7 @@ def _export_cell(cell: Cell, vendor_file: str, output, tip, geometry_only, xacro
         raise DataError(f"cell {cell.name!r}: one arm per vendor file and no xacro macro for a cell "
                         f"(it has {len(cell.arms)} arms)")
     (arm_name, arm), = cell.arms.items()
-    result, chain, _ = _export_arm(arm, vendor_file, arm.nominal_robot(), tip, geometry_only, None)
+    result, chain, _ = _export_arm(arm, vendor_file, arm.nominal_robot(), tip, geometry_only, None, given)
     B = result.world
     root = parse_urdf(result.text)
     taken = {chain.joints[i].get("name") for i in chain.moving}
@@ -774,7 +814,7 @@ def _export_cell(cell: Cell, vendor_file: str, output, tip, geometry_only, xacro
         pchain = _Chain.read(root, _positioner_tip(root, taken, body.n_joints, name, vendor_file))
         taken |= {pchain.joints[i].get("name") for i in pchain.moving}
         drawn = body.nominal_robot()
-        _, M, *check, joint_map = _link_maps(pchain, drawn, vendor_file, B)
+        _, M, *check, joint_map = _link_maps(pchain, drawn, vendor_file, B, given)
         origins = _new_origins(pchain, M, joint_map, body, drawn.base)
         result.text = _with_origins(result.text,
                                     {pchain.joints[i].get("name"): origins[i] for i in pchain.moving})
@@ -893,9 +933,11 @@ def _result(robot, controller, vendor_file, robot_name, chain, B, M, check, new_
         also = "" if other is None else (
             f"; the axes fit as well {'; '.join(other.text(names))}, with other links' meshes turned: check "
             "the file's zero pose against the robot's")
+        how = "as given, checked on the axes" if joint_map.given else (
+            "found from the axes: the fewest zeros moved, then the fewest joints reversed")
         warnings.append("the vendor's joint values are not the controller's: "
-                        f"{'; '.join(joint_map.text(names))} (found from the axes: the fewest zeros moved, "
-                        f"then the fewest joints reversed); the ROS driver must send these values{also}")
+                        f"{'; '.join(joint_map.text(names))} ({how}); the ROS driver must send these "
+                        f"values{also}")
     base = invert_transform(vendor0[base_at]) @ B @ cal.base  # robocal's frame {0} in base_link at q = 0
     tool = invert_transform(controller.tool) @ M[-1]
     fk_frames = " and ".join(f"{chain.links[k]} -> {chain.links[-1]}" for k in dict.fromkeys((base_at, 0)))
