@@ -410,3 +410,31 @@ def test_the_other_map_can_be_given_and_is_checked(tmp_path, capsys):
     assert main(["export", "kuka_kr16_2", "--urdf-like", str(tmp_path / "v.urdf"),
                  "-o", str(tmp_path / "o.urdf"), "--joint-map", "joint_a4=1,-90"]) == 0
     assert "joint_a4 = q4 - 1.57079633 rad (as given" in capsys.readouterr().out
+
+
+def test_a_cell_of_an_arm_on_a_track_and_a_positioner(tmp_path):
+    """The vendor's rail joint before base_link and the positioner's branch, both under world."""
+    from robocal.kinematics.workcell import load_cell
+
+    (tmp_path / "cell.yaml").write_text(CELL.replace("robot: abb_irb2600", (
+        "robot: kuka_kr16_2\ntrack: {direction: [1, 0, 0], limits: [0, 6000]}\n"
+        "mount: {xyz: [100, 200, 300], rpy: [0, 0, 90]}")), encoding="utf-8")
+    rail = ('<link name="carriage"/><joint name="rail_joint" type="prismatic"><parent link="world"/>'
+            '<child link="carriage"/><axis xyz="1 0 0"/><limit lower="0" upper="6" effort="0" velocity="1"/>'
+            '</joint><joint name="carriage-base_link" type="fixed"><parent link="carriage"/>'
+            '<child link="base_link"/><origin xyz="0.1 0.2 0.3" rpy="0 0 1.5707963267948966"/></joint>')
+    branch = re.sub(r'<joint name="world-base_link".*?</joint>', rail, STN1.replace("TILT", "1 0 0"),
+                    flags=re.S)
+    vendor = (DATA / "kr16_2.urdf").read_text(encoding="utf-8")
+    at = vendor.index("<link ")
+    (tmp_path / "cell.urdf").write_text(vendor[:at] + branch + vendor[at:], encoding="utf-8")
+    cell = load_cell(tmp_path / "cell.yaml")
+    arm, stn = cell.arms["arm"], cell.positioners["STN1"].chain
+    arm_cal = arm.with_values({"d2": arm.get("d2") + 5e-4, "a3": arm.get("a3") + 4e-4})
+    calibrated = cell.in_world({"arm": arm_cal, "STN1": stn.with_values({"base.y": stn.get("base.y") + 3e-4})})
+    out = rc.export_urdf_like(calibrated, tmp_path / "cell.urdf")
+    assert [s.joint for s in out.shifts] == ["rail_joint", *(f"joint_a{k}" for k in range(1, 7)),
+                                             "irbp_joint_1", "irbp_joint_2"]
+    assert out.fk_check[0] < FK_M and out.bodies["STN1"]["fk_check"][0] < FK_M
+    assert round(out.shifts[7].origin_mm, 6) == 0.3  # the positioner's mount, 0.3 mm along y
+    assert content(out.text) == content((tmp_path / "cell.urdf").read_text(encoding="utf-8"))
