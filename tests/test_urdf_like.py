@@ -431,7 +431,8 @@ def test_a_cell_of_an_arm_on_a_track_and_a_positioner(tmp_path):
     cell = load_cell(tmp_path / "cell.yaml")
     arm, stn = cell.arms["arm"], cell.positioners["STN1"].chain
     arm_cal = arm.with_values({"d2": arm.get("d2") + 5e-4, "a3": arm.get("a3") + 4e-4})
-    calibrated = cell.in_world({"arm": arm_cal, "STN1": stn.with_values({"base.y": stn.get("base.y") + 3e-4})})
+    stn_cal = stn.with_values({"base.y": stn.get("base.y") + 3e-4})
+    calibrated = cell.in_world({"arm": arm_cal, "STN1": stn_cal})
     out = rc.export_urdf_like(calibrated, tmp_path / "cell.urdf")
     assert [s.joint for s in out.shifts] == ["rail_joint", *(f"joint_a{k}" for k in range(1, 7)),
                                              "irbp_joint_1", "irbp_joint_2"]
