@@ -9,7 +9,9 @@ Per robot: a calibration of robocal's catalog model (``rc.simulate_tracker`` 150
   parents, children, axes, limits), meshes, inertials and materials are the vendor's (every element
   and attribute but the moving joints' ``<origin>``);
 - pinocchio's FK base_link -> tool0 on ``N_Q`` random joint vectors (within the limits) against the
-  calibrated model's FK (controller frame {0} and flange, through the map the export reports):
+  calibrated model's FK (controller frame {0} and flange, through the documented map: base_link the
+  catalog base, UR's turned by pi about z; tool0 a constant pose in the flange, taken from the
+  vendor's file and the nominal model at one joint vector):
   the largest position (mm) and rotation (rad) gap; the vendor's own file on the same vectors
   (how far the uncalibrated description is from the calibrated robot), and against robocal's
   nominal model through the same map (the map's independent check);
@@ -104,12 +106,15 @@ def one(file: str, name: str, poses: int, seed: int) -> dict:
                                 load_collision_meshes=False)
     q = np.random.default_rng(11).uniform(nominal.limits[:, 0], nominal.limits[:, 1], (N_Q, nominal.n_joints))
     controller = controller_model(calibrated, nominal)
-    base = out.base  # robocal's frame {0} in base_link
-    truth = base @ np.linalg.inv(controller.base) @ controller.fk(q) @ out.tool
-    mm, rad = gaps(pin_fk(text, q), truth)
+    # the documented map, not the export's: base_link is the catalog base (UR's turned by pi about z),
+    # tool0 a constant pose in the flange, taken from the vendor's file and the nominal model at one q
+    base = np.diag([-1.0, -1.0, 1.0, 1.0]) if name.startswith("ur") else np.eye(4)
     vendor_fk = pin_fk(vendor_text, q)
+    tool = np.linalg.inv(base @ nominal.fk(q[:1])[0]) @ vendor_fk[0]
+    truth = base @ np.linalg.inv(controller.base) @ controller.fk(q) @ tool
+    mm, rad = gaps(pin_fk(text, q), truth)
     vendor_mm, vendor_rad = gaps(vendor_fk, truth)
-    map_mm, map_rad = gaps(vendor_fk, base @ np.linalg.inv(nominal.base) @ nominal.fk(q) @ out.tool)
+    map_mm, map_rad = gaps(vendor_fk, base @ np.linalg.inv(nominal.base) @ nominal.fk(q) @ tool)
     worst_mm = max(s.origin_mm for s in out.shifts)
     worst_deg = max(s.origin_deg for s in out.shifts)
     named = parsed.robot.name == ET.fromstring(vendor_text).get("name")
