@@ -439,3 +439,31 @@ def test_a_cell_of_an_arm_on_a_track_and_a_positioner(tmp_path):
     assert out.fk_check[0] < FK_M and out.bodies["STN1"]["fk_check"][0] < FK_M
     assert round(out.shifts[7].origin_mm, 6) == 0.3  # the positioner's mount, 0.3 mm along y
     assert content(out.text) == content((tmp_path / "cell.urdf").read_text(encoding="utf-8"))
+
+
+def test_a_one_axis_turntable_turning_the_other_way(tmp_path):
+    from robocal.kinematics.workcell import load_cell
+
+    (tmp_path / "cell.yaml").write_text(
+        "units: {length: mm, angle: deg}\nrobot: abb_irb2600\n"
+        "positioner: {unit: STN1, mount: {xyz: [1400, 0, 0]},\n"
+        "  axes: [{type: revolute, axis: [0, 0, 1], origin: [0, 0, 800], limits: [-360, 360]}]}\n",
+        encoding="utf-8")
+    branch = ('<link name="world"/><link name="table_base"/><link name="table_plate"/>'
+              '<joint name="world-base_link" type="fixed"><parent link="world"/><child link="base_link"/>'
+              '</joint>'
+              '<joint name="world-table" type="fixed"><parent link="world"/><child link="table_base"/>'
+              '<origin xyz="1.4 0 0.8"/></joint><joint name="table_joint" type="continuous">'
+              '<parent link="table_base"/><child link="table_plate"/><axis xyz="0 0 -1"/></joint>')
+    vendor = (DATA / "irb2600_12_165.urdf").read_text(encoding="utf-8")
+    at = vendor.index("<link ")
+    (tmp_path / "cell.urdf").write_text(vendor[:at] + branch + vendor[at:], encoding="utf-8")
+    cell = load_cell(tmp_path / "cell.yaml")
+    stn = cell.positioners["STN1"].chain
+    moved = stn.with_values({"base.x": stn.get("base.x") + 5e-4, "base.rx": stn.get("base.rx") + 1e-3})
+    out = rc.export_urdf_like(cell.in_world({"arm": cell.arms["arm"], "STN1": moved}), tmp_path / "cell.urdf")
+    body = out.bodies["STN1"]
+    assert body["joint_map"].signs.tolist() == [-1.0] and body["fk_check"][0] < FK_M
+    assert round(out.shifts[-1].origin_mm, 9) == 0.5 and round(out.shifts[-1].origin_deg, 9) == round(
+        np.rad2deg(1e-3), 9)
+    assert "STN1: the vendor's joint values are not the controller's: table_joint = -q1" in out.warnings

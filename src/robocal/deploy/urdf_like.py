@@ -276,7 +276,10 @@ def _joint_map(chain: _Chain, nominal: Robot, vendor_file: str, B: np.ndarray | 
     revolute = ~np.asarray(nominal.prismatic, bool)
     if given is None:
         free = [k for k in np.flatnonzero(revolute) if (k > 0 or B is not None) and k < n - 1]
-        grid = np.array(np.meshgrid(*[OFFSET_CANDIDATES] * len(free), indexing="ij")).reshape(len(free), -1).T
+        grid = np.zeros((1, 0))  # no offset to try (a one-axis positioner)
+        if free:
+            grid = np.array(np.meshgrid(*[OFFSET_CANDIDATES] * len(free), indexing="ij"))
+            grid = grid.reshape(len(free), -1).T
         offsets = np.zeros((len(grid), n))
         offsets[:, free] = grid
         signs = np.array(np.meshgrid(*[[1.0, -1.0]] * n, indexing="ij")).reshape(n, -1).T
