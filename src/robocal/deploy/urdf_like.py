@@ -519,7 +519,7 @@ class UrdfLikeExport:
     the check's largest variation ``map_check`` (m, rad)), the ``shifts`` per moving joint, the
     comparison of the written file's FK with the calibrated model's ``fk_check`` (m, rad, joint
     vectors), the ``joint_map`` (`JointMap`: the vendor's joint values from the controller's),
-    ``world`` (robocal's world in the vendor's root link, 4x4 m), a cell's positioners in ``bodies``
+    ``world`` (robocal's world in the vendor's root link, 4x4 m), a cell's other bodies in ``bodies``
     (per body: its unit, root and tip links, FK and map checks, joint map and joints) and the
     ``warnings``.
 
@@ -556,7 +556,7 @@ class UrdfLikeExport:
     fk_frames: str = "base_link -> tool0"
     joint_map: JointMap | None = None
     world: np.ndarray | None = None  # (4, 4) robocal's world in the vendor's root link (the map B)
-    bodies: dict = field(default_factory=dict)  # a cell's positioners: tip, checks, joint map, joints
+    bodies: dict = field(default_factory=dict)  # a cell's other bodies: tip, checks, joint map, joints
 
     def _map_lines(self) -> list[str]:
         """The joints whose values are not the controller's (``u = sign * q + offset``)."""
@@ -576,7 +576,7 @@ class UrdfLikeExport:
                  f"({count} joint vectors)",
                  *([f"joint values: the vendor's from the controller's q: {'; '.join(self._map_lines())}"]
                    if self._map_lines() else []),
-                 *(f"{name} ({b['unit']}): FK {b['root']} -> {b['tip']} = the calibrated positioner's within "
+                 *(f"{name} ({b['unit']}): FK {b['root']} -> {b['tip']} = the calibrated body's within "
                    f"{b['fk_check'][0] * 1e3:.2g} mm / {b['fk_check'][1]:.2g} rad ({b['fk_check'][2]} joint "
                    "vectors), in the arm's map" for name, b in self.bodies.items()),
                  "moved from the vendor's: joint origin (mm, deg), link frame at q = 0 (mm, deg)"]
@@ -636,7 +636,7 @@ def _shift_comment(result: UrdfLikeExport) -> str:
 
 def _bodies_comment(result: UrdfLikeExport) -> str:
     return "".join(f"     {name} ({b['unit']}, joints {', '.join(b['joints'])}; its link frames above in "
-                   f"{b['root']}): FK {b['root']} to {b['tip']} = the calibrated positioner's within "
+                   f"{b['root']}): FK {b['root']} to {b['tip']} = the calibrated body's within "
                    f"{b['fk_check'][0] * 1e3:.2g} mm / {b['fk_check'][1]:.2g} rad ({b['fk_check'][2]} joint "
                    "vectors)\n" + "".join(f"       {line}\n" for line in b["joint_map"].text(b["joints"]))
                    for name, b in result.bodies.items())
@@ -664,10 +664,10 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     calibrated : Robot, Cell or str
         The calibrated model; its frame {0} is taken as the controller's base and the flange as
         the nominal model's (`robocal.deploy.compensation.controller_model`). Or a calibrated work
-        cell (`Cell`, or its file from ``robocal calibrate --model``): one arm and its positioners,
-        all in the one vendor file (each positioner's branch found by its moving joints; its
-        joints' origins take its calibrated axes and mount); ``nominal``, ``vendor_model`` and
-        ``xacro`` are then not taken.
+        cell (`Cell`, or its file from ``robocal calibrate --model``): its arms and positioners,
+        all in the one vendor file (the first arm's tip ``tip`` or tool0; each other body on the
+        branch that fits it where the cell puts it; its joints' origins take its calibrated axes
+        and base or mount); ``nominal``, ``vendor_model`` and ``xacro`` are then not taken.
     vendor_urdf : str or Path
         The vendor's expanded URDF (ROS-Industrial support package, ur_description); read only.
     nominal : Robot or str, optional
@@ -699,8 +699,8 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     -------
     UrdfLikeExport
         The text, the map, the checks, the joint map (``u = sign * q + offset`` where the vendor's
-        joints are not the controller's) and the per-joint shifts (mm, deg); a cell's positioners
-        in ``bodies``.
+        joints are not the controller's) and the per-joint shifts (mm, deg); a cell's other arms
+        and positioners in ``bodies``.
 
     Raises
     ------
@@ -800,38 +800,37 @@ def _as_cell(calibrated) -> Cell | None:
 
 
 def _export_cell(cell: Cell, vendor_file: str, output, tip, geometry_only, xacro, given) -> UrdfLikeExport:
-    """`export_urdf_like` of a calibrated cell's arm and positioners into one vendor file: the arm
-    as one robot (its map ``B`` fixes the cell's world in the file's root link), then each
-    positioner's chain (tip: the leaf whose chain holds its moving joints) mapped with that ``B``,
-    its joints' origins corrected for its calibrated axes and mount."""
-    if len(cell.arms) != 1 or xacro is not None:
-        raise DataError(f"cell {cell.name!r}: one arm per vendor file and no xacro macro for a cell "
-                        f"(it has {len(cell.arms)} arms)")
-    (arm_name, arm), = cell.arms.items()
+    """`export_urdf_like` of a calibrated cell's arms and positioners into one vendor file: the
+    first arm (the cell's anchor; its tip ``tip`` or tool0) as one robot, its map ``B`` fixing the
+    cell's world in the file's root link; then each other body (arm, positioner) on the branch of
+    the file that fits it with that ``B`` (`_branch`), its joints' origins corrected for its
+    calibrated axes and its calibrated base or mount."""
+    if xacro is not None:
+        raise DataError(f"cell {cell.name!r}: no xacro macro for a cell (the macros are per robot)")
+    (anchor, arm), *arms = cell.arms.items()
     result, chain, _ = _export_arm(arm, vendor_file, arm.nominal_robot(), tip, geometry_only, None, given)
     B = result.world
     root = parse_urdf(result.text)
     taken = {chain.joints[i].get("name") for i in chain.moving}
-    for name, positioner in cell.positioners.items():
-        body = positioner.chain
-        pchain = _Chain.read(root, _positioner_tip(root, taken, body.n_joints, name, vendor_file))
-        taken |= {pchain.joints[i].get("name") for i in pchain.moving}
+    others = [(name, body, cell.unit_of(name)) for name, body in arms]
+    others += [(name, p.chain, p.unit) for name, p in cell.positioners.items()]
+    for name, body, unit in others:
         drawn = body.nominal_robot()
-        _, M, *check, joint_map = _link_maps(pchain, drawn, vendor_file, B, given)
+        pchain, M, check, joint_map = _branch(root, taken, drawn, vendor_file, B, given, name)
+        taken |= {pchain.joints[i].get("name") for i in pchain.moving}
         origins = _new_origins(pchain, M, joint_map, body, drawn.base)
         result.text = _with_origins(result.text,
                                     {pchain.joints[i].get("name"): origins[i] for i in pchain.moving})
         shifts, fk = _body_check(result.text, pchain, body, drawn, B, M, joint_map)
         result.shifts += shifts
-        result.bodies[name] = {"unit": positioner.unit, "root": pchain.links[0], "tip": pchain.links[-1],
-                               "fk_check": fk,
-                               "map_check": tuple(check), "joint_map": joint_map,
+        result.bodies[name] = {"unit": unit, "root": pchain.links[0], "tip": pchain.links[-1],
+                               "fk_check": fk, "map_check": check, "joint_map": joint_map,
                                "joints": [s.joint for s in shifts]}
         far = [s.joint for s in shifts if s.origin_mm > GOAL_MM or s.origin_deg > GOAL_DEG]
         if far:
             result.warnings.append(f"{name}: the origins of {', '.join(far)} moved more than {GOAL_MM:g} mm "
-                                   f"or {GOAL_DEG:g} deg from the vendor's: the calibrated cell has the "
-                                   "positioner there (its mount against the arm's), and its meshes with it")
+                                   f"or {GOAL_DEG:g} deg from the vendor's: the calibrated cell has {name} "
+                                   f"there (its base against {anchor}'s), and its meshes with it")
         if not joint_map.is_identity:
             result.warnings.append(f"{name}: the vendor's joint values are not the controller's: "
                                    f"{'; '.join(joint_map.text([s.joint for s in shifts]))}")
@@ -840,21 +839,35 @@ def _export_cell(cell: Cell, vendor_file: str, output, tip, geometry_only, xacro
     return result
 
 
-def _positioner_tip(root: ET.Element, taken: set[str], n: int, name: str, vendor_file: str) -> str:
-    """The leaf link of the vendor's tree whose chain from the root holds ``n`` moving joints, none
-    of them ``taken`` (another body's); DataError unless exactly one such set of joints exists."""
+def _branch(root: ET.Element, taken: set[str], drawn: Robot, vendor_file: str, B: np.ndarray, given,
+            name: str) -> tuple[_Chain, np.ndarray, tuple[float, float], JointMap]:
+    """The chain of the vendor's tree (root to a leaf) whose moving joints, none ``taken`` (another
+    body's), are body ``name``'s (``drawn``, its nominal model in the cell's world) with the map
+    ``B``; its `_link_maps`. DataError unless exactly one set of joints fits."""
     parents = {j.find("parent").get("link") for j in root.findall("joint")}
-    found: dict[tuple, str] = {}
+    chains: dict[tuple, str] = {}
     for link in root.findall("link"):
         if link.get("name") in parents:
             continue
         moving = tuple(j.get("name") for j in urdf_chain(root, link.get("name")) if j.get("type") in _MOVING)
-        if len(moving) == n and not taken & set(moving):
-            found.setdefault(moving, link.get("name"))
-    if len(found) != 1:
-        raise DataError(f"{vendor_file}: {len(found) or 'no'} chains of {n} moving joints apart from the "
-                        f"arm's for positioner {name!r} ({', '.join(found.values()) or 'none'})")
-    return next(iter(found.values()))
+        if len(moving) == drawn.n_joints and not taken & set(moving):
+            chains.setdefault(moving, link.get("name"))
+    fits, refused = [], []
+    for leaf in chains.values():
+        chain = _Chain.read(root, leaf)
+        try:
+            _, M, *check, joint_map = _link_maps(chain, drawn, vendor_file, B, given)
+        except DataError as exc:
+            refused.append(str(exc))
+            continue
+        fits.append((chain, M, (check[0], check[1]), joint_map))
+    if len(fits) != 1:
+        leaves = ", ".join(chains.values()) or "none"
+        raise DataError(f"{vendor_file}: {len(fits) or 'no'} branches fit {name} ({drawn.name}) where the "
+                        f"cell puts it (chains of {drawn.n_joints} moving joints but the first arm's: "
+                        f"{leaves})"
+                        + (f"; {refused[0]}" if refused and not fits else ""))
+    return fits[0]
 
 
 def _body_check(text: str, chain: _Chain, body: Robot, drawn: Robot, B: np.ndarray, M: np.ndarray,
