@@ -467,3 +467,54 @@ def test_a_one_axis_turntable_turning_the_other_way(tmp_path):
     assert round(out.shifts[-1].origin_mm, 9) == 0.5 and round(out.shifts[-1].origin_deg, 9) == round(
         np.rad2deg(1e-3), 9)
     assert "STN1: the vendor's joint values are not the controller's: table_joint = -q1" in out.warnings
+
+
+def prefixed(text: str, prefix: str) -> str:
+    """The vendor's links and joints of ``text`` (a URDF's body) under ``prefix`` (a workcell
+    xacro's ``prefix`` argument), its materials and mesh files unchanged."""
+    body = text[text.index("<link "):text.rindex("</robot>")]
+    body = re.sub(r'(<(?:link|joint)\s+name=")', rf"\g<1>{prefix}", body)
+    return re.sub(r'(<(?:parent|child)\s+link=")', rf"\g<1>{prefix}", body)
+
+
+def test_a_cell_of_two_arms_and_a_positioner(tmp_path):
+    from robocal.kinematics.workcell import load_cell
+
+    (tmp_path / "cell.yaml").write_text(
+        "units: {length: mm, angle: deg}\n"
+        "robots: {left: {model: abb_irb2600}, right: {model: abb_irb2600, base: {xyz: [2800, 0, 0],"
+        " rpy: [0, 0, 180]}}}\n"
+        "positioner: {model: abb_irbp_a250, unit: STN1, mount: {xyz: [1400, 0, 0], rpy: [0, 0, 90]}}\n",
+        encoding="utf-8")
+    vendor = (DATA / "irb2600_12_165.urdf").read_text(encoding="utf-8")
+    world = ('<link name="world"/><joint name="world-left" type="fixed"><parent link="world"/>'
+             '<child link="left_base_link"/></joint><joint name="world-right" type="fixed">'
+             '<parent link="world"/><child link="right_base_link"/>'
+             '<origin xyz="2.8 0 0" rpy="0 0 3.141592653589793"/></joint>')
+    stn = re.sub(r'<link name="world"/>\s*<joint name="world-base_link".*?</joint>', "",
+                 STN1.replace("TILT", "1 0 0"), flags=re.S)
+    # the right arm first in the document: the branches are found by fit, not by order
+    text = (vendor[:vendor.index("<link ")] + world + stn + prefixed(vendor, "right_")
+            + prefixed(vendor, "left_") + "</robot>\n")
+    (tmp_path / "cell.urdf").write_text(text, encoding="utf-8")
+    cell = load_cell(tmp_path / "cell.yaml")
+    left, right, stn = cell.arms["left"], cell.arms["right"], cell.positioners["STN1"].chain
+    right_cal = right.with_values({"base.y": right.get("base.y") + 6e-4, "a3": right.get("a3") + 3e-4})
+    calibrated = cell.in_world({"left": typical(left, seed=7), "STN1": stn, "right": right_cal})
+    with pytest.raises(rc.ModelError, match="cannot choose the URDF chain's tip link"):  # no tool0: name it
+        rc.export_urdf_like(calibrated, tmp_path / "cell.urdf")
+    out = rc.export_urdf_like(calibrated, tmp_path / "cell.urdf", tip="left_tool0")
+    assert out.bodies["right"]["tip"] == "right_tool0" and out.bodies["STN1"]["tip"] == "irbp_tool0"
+    assert out.bodies["right"]["joints"][0] == "right_joint_1" and out.bodies["right"]["fk_check"][0] < FK_M
+    assert round(out.shifts[6].origin_mm, 6) == 0.6  # right_joint_1: its base, 0.6 mm along y
+    assert content(out.text) == content(text)
+    # yourdfpy: the right arm's tool0 in the world against its calibrated model in the cell's world
+    u = yourdfpy.URDF.load(io.StringIO(out.text), load_meshes=False, build_collision_scene_graph=False,
+                           load_collision_meshes=False)
+    q = joints_in_limits(right, 20)
+    mine = []
+    for qk in q:
+        u.update_cfg({f"right_joint_{k + 1}": v for k, v in enumerate(qk)})
+        mine.append(u.get_transform("right_tool0", "world"))
+    truth = calibrated.arms["right"].with_frames(tool=right.nominal_robot().tool).fk(q)  # tool0 = the flange
+    assert max(gap(np.array(mine), truth)) < 1e-9
