@@ -9,12 +9,25 @@ Per robot: a calibration of robocal's catalog model (``rc.simulate_tracker`` 150
   parents, children, axes, limits), meshes, inertials and materials are the vendor's (every element
   and attribute but the moving joints' ``<origin>``);
 - pinocchio's FK base_link -> tool0 on ``N_Q`` random joint vectors (within the limits) against the
-  calibrated model's FK (controller frame {0} and flange, through the map the export reports):
+  calibrated model's FK (controller frame {0} and flange, through the documented map: base_link the
+  catalog base, UR's turned by pi about z; tool0 a constant pose in the flange, taken from the
+  vendor's file and the nominal model at one joint vector):
   the largest position (mm) and rotation (rad) gap; the vendor's own file on the same vectors
   (how far the uncalibrated description is from the calibrated robot), and against robocal's
   nominal model through the same map (the map's independent check);
 - per moving joint, how far its origin moved from the vendor's (mm, deg; the file's XML comment
   says the same) and the time of the export.
+
+Then two cases beyond a vendor file of the controller's joints, by the command line
+(``robocal simulate``, ``calibrate``, ``export --urdf-like``), pinocchio's FK on ``N_Q`` vectors:
+
+- a joint map: the KR 16-2 file redrawn (scipy) with joint_a2 reversed, joint_a3's zero a quarter
+  turn away and joint_a5's 0.3 rad away; the export must find ``u = sign * q + offset`` and its FK
+  at those ``u`` be the calibrated model's;
+- a work cell: ROS-Industrial's IRB 2600 file with a hand-built IRBP A-250 chain under a ``world``
+  link (no public ROS description of an ABB positioner), the cell calibrated from a simulated
+  campaign (``--model``); the arm's tool0 and the positioner's plate in the world, and tool0 in the
+  plate, against the calibrated cell's.
 
 ``python benchmarks/bench_urdf_like.py [--poses N] [--ik] [--datasets DIR]`` (``--ik``: the IK figures of
 docs/how-to/ros.md; the real IRB 120 rows when DIR/irb120-faro exists).
@@ -93,12 +106,15 @@ def one(file: str, name: str, poses: int, seed: int) -> dict:
                                 load_collision_meshes=False)
     q = np.random.default_rng(11).uniform(nominal.limits[:, 0], nominal.limits[:, 1], (N_Q, nominal.n_joints))
     controller = controller_model(calibrated, nominal)
-    base = out.base  # robocal's frame {0} in base_link
-    truth = base @ np.linalg.inv(controller.base) @ controller.fk(q) @ out.tool
-    mm, rad = gaps(pin_fk(text, q), truth)
+    # the documented map, not the export's: base_link is the catalog base (UR's turned by pi about z),
+    # tool0 a constant pose in the flange, taken from the vendor's file and the nominal model at one q
+    base = np.diag([-1.0, -1.0, 1.0, 1.0]) if name.startswith("ur") else np.eye(4)
     vendor_fk = pin_fk(vendor_text, q)
+    tool = np.linalg.inv(base @ nominal.fk(q[:1])[0]) @ vendor_fk[0]
+    truth = base @ np.linalg.inv(controller.base) @ controller.fk(q) @ tool
+    mm, rad = gaps(pin_fk(text, q), truth)
     vendor_mm, vendor_rad = gaps(vendor_fk, truth)
-    map_mm, map_rad = gaps(vendor_fk, base @ np.linalg.inv(nominal.base) @ nominal.fk(q) @ out.tool)
+    map_mm, map_rad = gaps(vendor_fk, base @ np.linalg.inv(nominal.base) @ nominal.fk(q) @ tool)
     worst_mm = max(s.origin_mm for s in out.shifts)
     worst_deg = max(s.origin_deg for s in out.shifts)
     named = parsed.robot.name == ET.fromstring(vendor_text).get("name")
@@ -172,6 +188,137 @@ def real_irb120(folder: Path) -> None:
               f"{s.frame_mm:7.4f} mm {s.frame_deg:8.5f} deg")
 
 
+def cli(*args: str) -> None:
+    """``robocal ARGS`` in this process; SystemExit on a refusal."""
+    from robocal.cli import main as robocal_main
+
+    code = robocal_main(["--quiet", *args])
+    if code:
+        raise SystemExit(f"robocal {' '.join(args)}: exit {code}")
+
+
+def pin_frames(text: str, q: np.ndarray, names: list[str]) -> np.ndarray:
+    """``(len(names), N, 4, 4)``: the named frames in the root link by pinocchio."""
+    model = pin.buildModelFromXML(text)
+    data = model.createData()
+    ids = [model.getFrameId(n) for n in names]
+    out = np.empty((len(names), len(q), 4, 4))
+    for k, qk in enumerate(q):
+        pin.framesForwardKinematics(model, data, qk)
+        for j, i in enumerate(ids):
+            out[j, k] = data.oMf[i].homogeneous
+    return out
+
+
+def redrawn(text: str, changes: dict[str, tuple[float, float]]) -> str:
+    """The same robot with joint values ``u = sign * q + offset`` for the named joints (axis
+    reversed, origin turned back by the offset), by scipy's rotations."""
+    import warnings
+
+    from scipy.spatial.transform import Rotation
+
+    root = ET.fromstring(text)
+    for joint in root.iter("joint"):
+        if joint.get("name") in changes:
+            sign, offset = changes[joint.get("name")]
+            axis, origin = joint.find("axis"), joint.find("origin")
+            a = np.array([float(v) for v in axis.get("xyz").split()])
+            R = Rotation.from_euler("xyz", [float(v) for v in origin.get("rpy", "0 0 0").split()])
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # gimbal lock: the angles still give the rotation
+                rpy = (R * Rotation.from_rotvec(a * (-sign * offset))).as_euler("xyz")
+            origin.set("rpy", " ".join(repr(float(v)) for v in rpy))
+            axis.set("xyz", " ".join(repr(float(v) + 0.0) for v in sign * a))
+    return ET.tostring(root, encoding="unicode")
+
+
+POSITIONER = """<link name="world"/>
+  <joint name="world-base_link" type="fixed"><parent link="world"/><child link="base_link"/></joint>
+  <link name="irbp_a250_base_link"/><link name="irbp_a250_link_1"/><link name="irbp_a250_link_2"/>
+  <link name="irbp_a250_tool0"/>
+  <joint name="world-irbp_a250_base_link" type="fixed"><parent link="world"/>
+    <child link="irbp_a250_base_link"/>
+    <origin xyz="1.4 0 0" rpy="0 0 1.5707963267948966"/></joint>
+  <joint name="irbp_a250_joint_1" type="revolute"><parent link="irbp_a250_base_link"/>
+    <child link="irbp_a250_link_1"/><origin xyz="0 0 0.9" rpy="0 0 0"/><axis xyz="1 0 0"/>
+    <limit lower="-1.5707963267948966" upper="1.5707963267948966" effort="0" velocity="1.5"/></joint>
+  <joint name="irbp_a250_joint_2" type="revolute"><parent link="irbp_a250_link_1"/>
+    <child link="irbp_a250_link_2"/><origin xyz="0 0 0.25" rpy="0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-6.283185307179586" upper="6.283185307179586" effort="0" velocity="3"/></joint>
+  <joint name="irbp_a250_link_2-tool0" type="fixed"><parent link="irbp_a250_link_2"/>
+    <child link="irbp_a250_tool0"/></joint>
+  """
+CELL = """units: {length: mm, angle: deg}
+name: irb2600 with irbp a250
+robot: abb_irb2600
+positioner:
+  model: abb_irbp_a250
+  unit: STN1
+  mount: {xyz: [1400, 0, 0], rpy: [0, 0, 90]}
+  nests: [[200, 0, 0], [0, 200, 0], [-150, -150, 0]]
+"""
+
+
+def mapped_and_cell(folder: Path) -> None:
+    """The joint-map and work-cell rows (module docstring), files in ``folder``."""
+    rng = np.random.default_rng(5)
+    # the joint map
+    changes = {"joint_a2": (-1.0, 0.0), "joint_a3": (1.0, np.pi / 2), "joint_a5": (1.0, 0.3)}
+    (folder / "kr16_mapped.urdf").write_text(redrawn((DATA / "kr16_2.urdf").read_text(encoding="utf-8"),
+                                                     changes), encoding="utf-8")
+    cli("simulate", "--robot", "kuka_kr16_2", "--poses", "150", "--seed", "8", "-o", str(folder / "kr16.csv"),
+        "--truth", str(folder / "kr16_truth.yaml"))
+    cli("calibrate", "--robot", "kuka_kr16_2", str(folder / "kr16.csv"), "--nongeometric", "none",
+        "-o", str(folder / "kr16_cal.yaml"))
+    cli("export", str(folder / "kr16_cal.yaml"), "--urdf-like", str(folder / "kr16_mapped.urdf"),
+        "-o", str(folder / "kr16_mapped_cal.urdf"))
+    nominal = rc.Robot.from_catalog("kuka_kr16_2")
+    q = rng.uniform(nominal.limits[:, 0], nominal.limits[:, 1], (N_Q, 6))
+    u = q * [1, -1, 1, 1, 1, 1] + [0, 0, np.pi / 2, 0, 0.3, 0]
+    mine = pin_frames((folder / "kr16_mapped_cal.urdf").read_text(encoding="utf-8"), u, ["tool0"])[0]
+    vendor = pin_frames((folder / "kr16_mapped.urdf").read_text(encoding="utf-8"), u, ["tool0"])[0]
+    tool = np.linalg.inv(nominal.fk(q[:1])[0]) @ vendor[0]
+    calibrated = rc.load_model(str(folder / "kr16_cal.yaml"))
+    calibrated = calibrated.with_frames(base=nominal.base, tool=nominal.tool)
+    print(f"KR 16-2 file redrawn (joint_a2 reversed, joint_a3 +pi/2, joint_a5 +0.3 rad): the map on the "
+          f"nominal {gaps(vendor, nominal.fk(q) @ tool)[0]:.1e} mm; FK at u = sign q + offset "
+          "{:.2e} mm / {:.2e} rad ({} q)".format(*gaps(mine, calibrated.fk(q) @ tool), N_Q))
+    # the work cell
+    from robocal.kinematics.workcell import load_cell
+
+    (folder / "cell.yaml").write_text(CELL, encoding="utf-8")
+    vendor_text = (DATA / "irb2600_12_165.urdf").read_text(encoding="utf-8")
+    at = vendor_text.index("<link ")
+    (folder / "cell.urdf").write_text(vendor_text[:at] + POSITIONER + vendor_text[at:], encoding="utf-8")
+    cli("simulate", "--model", str(folder / "cell.yaml"), "--poses", "120", "--table-poses", "40",
+        "--seed", "3",
+        "-o", str(folder / "cell.csv"), "--truth", str(folder / "cell_truth.yaml"))
+    cli("calibrate", "--model", str(folder / "cell.yaml"), str(folder / "cell.csv"), "--nongeometric", "none",
+        "-o", str(folder / "cell_cal.yaml"))
+    cli("export", str(folder / "cell_cal.yaml"), "--urdf-like", str(folder / "cell.urdf"),
+        "-o", str(folder / "cell_cal.urdf"))
+    cell = load_cell(folder / "cell_cal.yaml")
+    arm, table = cell.arms["arm"], cell.positioners["STN1"].chain
+    arm0, table0 = arm.nominal_robot(), table.nominal_robot()
+    qa = rng.uniform(arm0.limits[:, 0], arm0.limits[:, 1], (N_Q, 6))
+    qe = rng.uniform(table0.limits[:, 0], table0.limits[:, 1], (N_Q, 2))
+    names = ["tool0", "irbp_a250_tool0"]
+    both = np.hstack([qa, qe])
+    mine_t, mine_p = pin_frames((folder / "cell_cal.urdf").read_text(encoding="utf-8"), both, names)
+    vend_t, vend_p = pin_frames((folder / "cell.urdf").read_text(encoding="utf-8"), both, names)
+    tool = np.linalg.inv(arm0.fk(qa[:1])[0]) @ vend_t[0]
+    plate = np.linalg.inv(table0.fk(qe[:1])[0]) @ vend_p[0]
+    truth_t = arm.with_frames(base=arm0.base, tool=arm0.tool).fk(qa) @ tool
+    truth_p = table.with_frames(tool=table0.tool).fk(qe) @ plate
+    relative = np.linalg.inv(truth_p) @ truth_t
+    arm_mm, table_mm = gaps(mine_t, truth_t)[0], gaps(mine_p, truth_p)[0]
+    rel_mm, rel_rad = gaps(np.linalg.inv(mine_p) @ mine_t, relative)
+    print(f"cell IRB 2600 + IRBP A-250 ({N_Q} q): world -> tool0 {arm_mm:.2e} mm, world -> plate "
+          f"{table_mm:.2e} mm, tool0 in the plate {rel_mm:.2e} mm / {rel_rad:.2e} rad; the vendor's file: "
+          "tool0 in the plate "
+          f"{gaps(np.linalg.inv(vend_p) @ vend_t, relative)[0]:.2f} mm")
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=150, help="simulated calibration poses")
@@ -203,6 +350,10 @@ def main(argv: list[str] | None = None) -> None:
                 conv, same, ms, err = f[label]
                 print(f"    IK numeric, {label}: converged {conv:.1%}, the true joints {same:.1%}, "
                       f"{ms:.3f} ms/pose, worst converged {err * 1e3:.1e} mm")
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        mapped_and_cell(Path(folder))
     if (args.datasets / "irb120-faro").is_dir():
         real_irb120(args.datasets)
 

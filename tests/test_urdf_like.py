@@ -263,3 +263,258 @@ def test_a_ur_calibrated_against_its_factory_model_goes_into_the_nominal_descrip
     truth = out.base @ np.linalg.inv(controller.base) @ controller.fk(q) @ out.tool
     assert max(gap(fk_by_yourdfpy(out.text, q), truth)) < 1e-9
     assert max(s.origin_mm for s in out.shifts) < 1.0  # the factory calibration moves the joints little
+
+
+def remapped(text: str, changes: dict[str, tuple[float, float]]) -> str:
+    """The same robot drawn with joint values ``u = sign * q + offset`` for the named joints (the
+    axis reversed, the origin turned back by the offset: ``R Rot(a, -sign offset)``), by scipy."""
+    import warnings
+
+    from scipy.spatial.transform import Rotation
+
+    root = ET.fromstring(text)
+    for joint in root.iter("joint"):
+        if joint.get("name") not in changes:
+            continue
+        sign, offset = changes[joint.get("name")]
+        axis, origin = joint.find("axis"), joint.find("origin")
+        a = np.array([float(v) for v in axis.get("xyz").split()])
+        R = Rotation.from_euler("xyz", [float(v) for v in origin.get("rpy", "0 0 0").split()])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # gimbal lock: the angles still give the rotation
+            rpy = (R * Rotation.from_rotvec(a * (-sign * offset))).as_euler("xyz")
+        origin.set("rpy", " ".join(repr(float(v)) for v in rpy))
+        axis.set("xyz", " ".join(repr(float(v) + 0.0) for v in sign * a))
+    return ET.tostring(root, encoding="unicode")
+
+
+def test_a_vendor_joint_reversed_or_with_another_zero_is_mapped(tmp_path):
+    nominal = rc.Robot.from_catalog("kuka_kr16_2")
+    # joint 2 reversed (axis -y), joint 3's zero a quarter turn away, joint 5's 0.3 rad (refined)
+    changes = {"joint_a2": (-1.0, 0.0), "joint_a3": (1.0, np.pi / 2), "joint_a5": (1.0, 0.3)}
+    (tmp_path / "v.urdf").write_text(remapped((DATA / "kr16_2.urdf").read_text(encoding="utf-8"), changes),
+                                     encoding="utf-8")
+    calibrated = typical(nominal, seed=5)
+    out = rc.export_urdf_like(calibrated, tmp_path / "v.urdf")
+    assert np.array_equal(out.joint_map.signs, [1, -1, 1, 1, 1, 1])
+    assert np.allclose(out.joint_map.offsets, [0, 0, np.pi / 2, 0, 0.3, 0], atol=1e-9, rtol=0)
+    assert out.joint_map.offsets[2] == np.pi / 2  # a candidate kept exact by the refinement
+    # joint 5's zero turned by pi with joint 6 reversed fits the axes too: said, not taken
+    assert np.array_equal(out.joint_map.alternative.signs, [1, -1, 1, 1, 1, -1])
+    q = joints_in_limits(nominal, N_Q)
+    controller = controller_model(calibrated, nominal)
+    truth = out.base @ np.linalg.inv(controller.base) @ controller.fk(q) @ out.tool
+    assert np.allclose(out.base, np.eye(4), atol=1e-9) and np.allclose(out.tool, np.eye(4), atol=1e-9)
+    dist, rot = gap(fk_by_yourdfpy(out.text, q * out.joint_map.signs + out.joint_map.offsets), truth)
+    assert dist < FK_M and rot < FK_RAD
+    assert max(s.origin_mm for s in out.shifts) < 3.0  # the origins move as the parameters did
+    assert "joint_a2 = -q2; joint_a3 = q3 + 1.57079633 rad; joint_a5 = q5 + 0.3 rad" in out.summary()
+    assert "joint_a2 = -q2" in out.text.split("<robot", 1)[0]
+    assert any("not the controller's" in w for w in out.warnings)
+    assert out.to_dict()["joint_map"]["signs"][1] == -1.0
+
+
+def test_a_spherical_wrist_twin_map_is_said(tmp_path):
+    """Joint 4's zero turned by pi with joint 5 reversed fits the same axes: the map with the
+    fewer changes is taken, the other named in the warning."""
+    text = remapped((DATA / "kr16_2.urdf").read_text(encoding="utf-8"), {"joint_a4": (1.0, -np.pi / 2)})
+    (tmp_path / "v.urdf").write_text(text, encoding="utf-8")
+    out = rc.export_urdf_like("kuka_kr16_2", tmp_path / "v.urdf")
+    assert out.joint_map.text([s.joint for s in out.shifts]) == ["joint_a4 = q4 - 1.57079633 rad"]
+    assert "the axes fit as well joint_a4 = q4 + 1.57079633 rad; joint_a5 = -q5" in out.warnings[0]
+
+
+STN1 = """<link name="world"/>
+  <joint name="world-base_link" type="fixed"><parent link="world"/><child link="base_link"/></joint>
+  <link name="irbp_base_link"><visual><geometry><mesh filename="package://irbp/base.stl"/></geometry></visual></link>
+  <link name="irbp_link_1"/><link name="irbp_link_2"/><link name="irbp_tool0"/>
+  <joint name="world-irbp_base_link" type="fixed"><parent link="world"/><child link="irbp_base_link"/>
+    <origin xyz="1.4 0 0" rpy="0 0 1.5707963267948966"/></joint>
+  <joint name="irbp_joint_1" type="revolute"><parent link="irbp_base_link"/><child link="irbp_link_1"/>
+    <origin xyz="0 0 0.9" rpy="0 0 0"/><axis xyz="TILT"/>
+    <limit lower="-1.5" upper="1.5" effort="0" velocity="1"/></joint>
+  <joint name="irbp_joint_2" type="revolute"><parent link="irbp_link_1"/><child link="irbp_link_2"/>
+    <origin xyz="0 0 0.25" rpy="0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-6" upper="6" effort="0" velocity="1"/></joint>
+  <joint name="irbp_link_2-tool0" type="fixed"><parent link="irbp_link_2"/><child link="irbp_tool0"/></joint>
+  """
+CELL = """units: {length: mm, angle: deg}
+robot: abb_irb2600
+positioner: {model: abb_irbp_a250, unit: STN1, mount: {xyz: [1400, 0, 0], rpy: [0, 0, 90]}}
+"""
+
+
+@pytest.mark.parametrize("tilt", ["1 0 0", "-1 0 0"])
+def test_a_cell_arm_and_positioner_in_one_vendor_file(tmp_path, tilt):
+    """A hand-built work-cell URDF (ROS-Industrial's IRB 2600 file and an IRBP A-250 chain under a
+    world link: no public description of the IRBP exists): the positioner's joints keep their names,
+    their origins take its calibrated axes and mount, the tilt axis may be the controller's reversed."""
+    from robocal.kinematics.workcell import load_cell
+
+    vendor = (DATA / "irb2600_12_165.urdf").read_text(encoding="utf-8")
+    at = vendor.index("<link ")
+    text = vendor[:at] + STN1.replace("TILT", tilt) + vendor[at:]
+    (tmp_path / "cell.urdf").write_text(text, encoding="utf-8")
+    (tmp_path / "cell.yaml").write_text(CELL, encoding="utf-8")
+    cell = load_cell(tmp_path / "cell.yaml")
+    arm, stn = cell.arms["arm"], cell.positioners["STN1"].chain
+    moved = stn.with_values({"base.x": stn.get("base.x") + 1.2e-3, "base.rz": stn.get("base.rz") + 1e-3,
+                             "a2": stn.get("a2") + 4e-4, "alpha2": stn.get("alpha2") + 8e-4})
+    calibrated = cell.in_world({"arm": typical(arm, seed=2), "STN1": moved})
+    out = rc.export_urdf_like(calibrated, tmp_path / "cell.urdf")
+    assert [s.joint for s in out.shifts][6:] == ["irbp_joint_1", "irbp_joint_2"]
+    assert content(out.text) == content((tmp_path / "cell.urdf").read_text(encoding="utf-8"))
+    body = out.bodies["STN1"]
+    assert body["tip"] == "irbp_tool0" and body["fk_check"][0] < FK_M
+    assert body["joint_map"].signs.tolist() == ([1.0, 1.0] if tilt[0] == "1" else [-1.0, 1.0])
+    assert any("STN1: the origins of irbp_joint_1 moved" in w for w in out.warnings)  # its mount: 1.2 mm
+    # yourdfpy: the plate in the world against the calibrated positioner's (its plate as the file's)
+    u = yourdfpy.URDF.load(io.StringIO(out.text), load_meshes=False, build_collision_scene_graph=False,
+                           load_collision_meshes=False)
+    e = joints_in_limits(stn, 20)
+    mine = []
+    for ek in e:
+        u.update_cfg({"irbp_joint_1": ek[0] * body["joint_map"].signs[0], "irbp_joint_2": ek[1]})
+        mine.append(u.get_transform("irbp_tool0", "world"))
+    nominal = stn.nominal_robot()
+    plate = np.linalg.inv(nominal.fk(np.zeros((1, 2)))[0]) @ yourdfpy.URDF.load(
+        tmp_path / "cell.urdf", load_meshes=False, build_collision_scene_graph=False,
+        load_collision_meshes=False).get_transform("irbp_tool0", "world")
+    truth = calibrated.positioners["STN1"].chain.with_frames(tool=nominal.tool).fk(e) @ plate
+    assert max(gap(np.array(mine), truth)) < 1e-9
+
+
+def test_the_other_map_can_be_given_and_is_checked(tmp_path, capsys):
+    from robocal.deploy.urdf_like import parse_joint_map
+
+    text = remapped((DATA / "kr16_2.urdf").read_text(encoding="utf-8"), {"joint_a4": (1.0, -np.pi / 2)})
+    (tmp_path / "v.urdf").write_text(text, encoding="utf-8")
+    nominal = rc.Robot.from_catalog("kuka_kr16_2")
+    calibrated = typical(nominal, seed=6)
+    twin = parse_joint_map(["joint_a4=1,90", "joint_a5=-1,0"])
+    out = rc.export_urdf_like(calibrated, tmp_path / "v.urdf", joint_map=twin)
+    assert out.joint_map.given and np.array_equal(out.joint_map.signs, [1, 1, 1, 1, -1, 1])
+    q = joints_in_limits(nominal, N_Q)
+    controller = controller_model(calibrated, nominal)
+    truth = out.base @ np.linalg.inv(controller.base) @ controller.fk(q) @ out.tool
+    u = q * out.joint_map.signs + out.joint_map.offsets
+    assert max(gap(fk_by_yourdfpy(out.text, u), truth)) < 1e-9
+    assert any("(as given, checked on the axes)" in w for w in out.warnings)
+    with pytest.raises(DataError, match="joint_a5 is .* with the given joint map"):
+        rc.export_urdf_like(calibrated, tmp_path / "v.urdf", joint_map=parse_joint_map(["joint_a4=1,90"]))
+    with pytest.raises(DataError, match="names no moving joint of .*: joint_9"):
+        rc.export_urdf_like(calibrated, tmp_path / "v.urdf", joint_map={"joint_9": (1.0, 0.0)})
+    for bad in (["joint_a4=2,0"], ["joint_a4=1"], ["joint_a4=1,x"], ["joint_a4=1,0", "joint_a4=1,0"]):
+        with pytest.raises(DataError, match="NAME=SIGN,OFFSET_DEG"):
+            parse_joint_map(bad)
+    assert main(["export", "kuka_kr16_2", "--urdf-like", str(tmp_path / "v.urdf"),
+                 "-o", str(tmp_path / "o.urdf"), "--joint-map", "joint_a4=1,-90"]) == 0
+    assert "joint_a4 = q4 - 1.57079633 rad (as given" in capsys.readouterr().out
+
+
+def test_a_cell_of_an_arm_on_a_track_and_a_positioner(tmp_path):
+    """The vendor's rail joint before base_link and the positioner's branch, both under world."""
+    from robocal.kinematics.workcell import load_cell
+
+    (tmp_path / "cell.yaml").write_text(CELL.replace("robot: abb_irb2600", (
+        "robot: kuka_kr16_2\ntrack: {direction: [1, 0, 0], limits: [0, 6000]}\n"
+        "mount: {xyz: [100, 200, 300], rpy: [0, 0, 90]}")), encoding="utf-8")
+    rail = ('<link name="carriage"/><joint name="rail_joint" type="prismatic"><parent link="world"/>'
+            '<child link="carriage"/><axis xyz="1 0 0"/><limit lower="0" upper="6" effort="0" velocity="1"/>'
+            '</joint><joint name="carriage-base_link" type="fixed"><parent link="carriage"/>'
+            '<child link="base_link"/><origin xyz="0.1 0.2 0.3" rpy="0 0 1.5707963267948966"/></joint>')
+    branch = re.sub(r'<joint name="world-base_link".*?</joint>', rail, STN1.replace("TILT", "1 0 0"),
+                    flags=re.S)
+    vendor = (DATA / "kr16_2.urdf").read_text(encoding="utf-8")
+    at = vendor.index("<link ")
+    (tmp_path / "cell.urdf").write_text(vendor[:at] + branch + vendor[at:], encoding="utf-8")
+    cell = load_cell(tmp_path / "cell.yaml")
+    arm, stn = cell.arms["arm"], cell.positioners["STN1"].chain
+    arm_cal = arm.with_values({"d2": arm.get("d2") + 5e-4, "a3": arm.get("a3") + 4e-4})
+    stn_cal = stn.with_values({"base.y": stn.get("base.y") + 3e-4})
+    calibrated = cell.in_world({"arm": arm_cal, "STN1": stn_cal})
+    out = rc.export_urdf_like(calibrated, tmp_path / "cell.urdf")
+    assert [s.joint for s in out.shifts] == ["rail_joint", *(f"joint_a{k}" for k in range(1, 7)),
+                                             "irbp_joint_1", "irbp_joint_2"]
+    assert out.fk_check[0] < FK_M and out.bodies["STN1"]["fk_check"][0] < FK_M
+    assert round(out.shifts[7].origin_mm, 6) == 0.3  # the positioner's mount, 0.3 mm along y
+    assert content(out.text) == content((tmp_path / "cell.urdf").read_text(encoding="utf-8"))
+
+
+def test_a_one_axis_turntable_turning_the_other_way(tmp_path):
+    from robocal.kinematics.workcell import load_cell
+
+    (tmp_path / "cell.yaml").write_text(
+        "units: {length: mm, angle: deg}\nrobot: abb_irb2600\n"
+        "positioner: {unit: STN1, mount: {xyz: [1400, 0, 0]},\n"
+        "  axes: [{type: revolute, axis: [0, 0, 1], origin: [0, 0, 800], limits: [-360, 360]}]}\n",
+        encoding="utf-8")
+    branch = ('<link name="world"/><link name="table_base"/><link name="table_plate"/>'
+              '<joint name="world-base_link" type="fixed"><parent link="world"/><child link="base_link"/>'
+              '</joint>'
+              '<joint name="world-table" type="fixed"><parent link="world"/><child link="table_base"/>'
+              '<origin xyz="1.4 0 0.8"/></joint><joint name="table_joint" type="continuous">'
+              '<parent link="table_base"/><child link="table_plate"/><axis xyz="0 0 -1"/></joint>')
+    vendor = (DATA / "irb2600_12_165.urdf").read_text(encoding="utf-8")
+    at = vendor.index("<link ")
+    (tmp_path / "cell.urdf").write_text(vendor[:at] + branch + vendor[at:], encoding="utf-8")
+    cell = load_cell(tmp_path / "cell.yaml")
+    stn = cell.positioners["STN1"].chain
+    moved = stn.with_values({"base.x": stn.get("base.x") + 5e-4, "base.rx": stn.get("base.rx") + 1e-3})
+    out = rc.export_urdf_like(cell.in_world({"arm": cell.arms["arm"], "STN1": moved}), tmp_path / "cell.urdf")
+    body = out.bodies["STN1"]
+    assert body["joint_map"].signs.tolist() == [-1.0] and body["fk_check"][0] < FK_M
+    assert round(out.shifts[-1].origin_mm, 9) == 0.5 and round(out.shifts[-1].origin_deg, 9) == round(
+        np.rad2deg(1e-3), 9)
+    assert "STN1: the vendor's joint values are not the controller's: table_joint = -q1" in out.warnings
+
+
+def prefixed(text: str, prefix: str) -> str:
+    """The vendor's links and joints of ``text`` (a URDF's body) under ``prefix`` (a workcell
+    xacro's ``prefix`` argument), its materials and mesh files unchanged."""
+    body = text[text.index("<link "):text.rindex("</robot>")]
+    body = re.sub(r'(<(?:link|joint)\s+name=")', rf"\g<1>{prefix}", body)
+    return re.sub(r'(<(?:parent|child)\s+link=")', rf"\g<1>{prefix}", body)
+
+
+def test_a_cell_of_two_arms_and_a_positioner(tmp_path):
+    from robocal.kinematics.workcell import load_cell
+
+    (tmp_path / "cell.yaml").write_text(
+        "units: {length: mm, angle: deg}\n"
+        "robots: {left: {model: abb_irb2600}, right: {model: abb_irb2600, base: {xyz: [2800, 0, 0],"
+        " rpy: [0, 0, 180]}}}\n"
+        "positioner: {model: abb_irbp_a250, unit: STN1, mount: {xyz: [1400, 0, 0], rpy: [0, 0, 90]}}\n",
+        encoding="utf-8")
+    vendor = (DATA / "irb2600_12_165.urdf").read_text(encoding="utf-8")
+    world = ('<link name="world"/><joint name="world-left" type="fixed"><parent link="world"/>'
+             '<child link="left_base_link"/></joint><joint name="world-right" type="fixed">'
+             '<parent link="world"/><child link="right_base_link"/>'
+             '<origin xyz="2.8 0 0" rpy="0 0 3.141592653589793"/></joint>')
+    stn = re.sub(r'<link name="world"/>\s*<joint name="world-base_link".*?</joint>', "",
+                 STN1.replace("TILT", "1 0 0"), flags=re.S)
+    # the right arm first in the document: the branches are found by fit, not by order
+    text = (vendor[:vendor.index("<link ")] + world + stn + prefixed(vendor, "right_")
+            + prefixed(vendor, "left_") + "</robot>\n")
+    (tmp_path / "cell.urdf").write_text(text, encoding="utf-8")
+    cell = load_cell(tmp_path / "cell.yaml")
+    left, right, stn = cell.arms["left"], cell.arms["right"], cell.positioners["STN1"].chain
+    right_cal = right.with_values({"base.y": right.get("base.y") + 6e-4, "a3": right.get("a3") + 3e-4})
+    calibrated = cell.in_world({"left": typical(left, seed=7), "STN1": stn, "right": right_cal})
+    with pytest.raises(rc.ModelError, match="cannot choose the URDF chain's tip link"):  # no tool0: name it
+        rc.export_urdf_like(calibrated, tmp_path / "cell.urdf")
+    out = rc.export_urdf_like(calibrated, tmp_path / "cell.urdf", tip="left_tool0")
+    assert out.bodies["right"]["tip"] == "right_tool0" and out.bodies["STN1"]["tip"] == "irbp_tool0"
+    assert out.bodies["right"]["joints"][0] == "right_joint_1" and out.bodies["right"]["fk_check"][0] < FK_M
+    assert round(out.shifts[6].origin_mm, 6) == 0.6  # right_joint_1: its base, 0.6 mm along y
+    assert content(out.text) == content(text)
+    # yourdfpy: the right arm's tool0 in the world against its calibrated model in the cell's world
+    u = yourdfpy.URDF.load(io.StringIO(out.text), load_meshes=False, build_collision_scene_graph=False,
+                           load_collision_meshes=False)
+    q = joints_in_limits(right, 20)
+    mine = []
+    for qk in q:
+        u.update_cfg({f"right_joint_{k + 1}": v for k, v in enumerate(qk)})
+        mine.append(u.get_transform("right_tool0", "world"))
+    truth = calibrated.arms["right"].with_frames(tool=right.nominal_robot().tool).fk(q)  # tool0 = the flange
+    assert max(gap(np.array(mine), truth)) < 1e-9

@@ -43,6 +43,9 @@ def add_parser(sub) -> None:
     p.add_argument("--vendor-model", metavar="R",
                    help="--urdf-like: the nominal model the vendor's file draws when --nominal is not it "
                         "(e.g. --nominal factory.yaml, a UR's factory calibration, --vendor-model ur5e)")
+    p.add_argument("--joint-map", action="append", metavar="NAME=SIGN,OFFSET_DEG",
+                   help="--urdf-like: a vendor joint's value as SIGN * the controller's + OFFSET (repeat per "
+                        "joint; default: found from the axes), e.g. joint_a4=1,-90")
     p.add_argument("--geometry-only", action="store_true",
                    help="--urdf-like: write the geometry of a model whose joint-error terms (compliance, "
                         "backlash...) matter, which a URDF cannot hold (refused otherwise)")
@@ -88,7 +91,7 @@ def _urdf_like(args) -> int:
     from robocal.cli.args import check_format
     from robocal.core.errors import DataError
     from robocal.core.io import check_outputs
-    from robocal.deploy.urdf_like import export_urdf_like
+    from robocal.deploy.urdf_like import export_urdf_like, parse_joint_map
 
     if not args.urdf_like or not args.output:
         raise DataError("--urdf-like VENDOR and -o OUT go together: the vendor's URDF and the file to write")
@@ -99,7 +102,8 @@ def _urdf_like(args) -> int:
     check_outputs([args.output, macro_out], [args.model, args.urdf_like, macro])
     result = export_urdf_like(args.model, args.urdf_like, nominal=args.nominal, output=args.output,
                               tip=args.tip, xacro=macro, xacro_output=macro_out,
-                              geometry_only=args.geometry_only, vendor_model=args.vendor_model)
+                              geometry_only=args.geometry_only, vendor_model=args.vendor_model,
+                              joint_map=parse_joint_map(args.joint_map) if args.joint_map else None)
     if not args.quiet:
         print(result.summary())
     for line in result.warnings:
