@@ -24,7 +24,7 @@ from robocal.kinematics.manufacturer.ur import import_calibration
 
 demo = files("robocal") / "demo_data"  # small sample files shipped with the package
 conf = Path("calibration.conf")  # as copied from the controller
-conf.write_text((demo / "ur5e_calibration.conf").read_text())
+conf.write_text((demo / "calibration.conf").read_text())
 vendor_urdf = Path("ur5e.urdf")  # `xacro ur.urdf.xacro ur_type:=ur5e name:=ur` expanded
 vendor_urdf.write_text((demo / "ur5e.urdf").read_text())
 

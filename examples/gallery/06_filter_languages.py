@@ -23,7 +23,7 @@ import numpy as np
 import robocal as rc
 from robocal.data.simulate import perturbed
 
-demo = files("robocal") / "demo_data" / "programs"  # sample programs shipped with robocal
+demo = files("robocal") / "demo_data"  # sample programs shipped with robocal (`robocal sample`)
 
 
 def copy(*names: str) -> list[Path]:

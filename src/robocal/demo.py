@@ -45,6 +45,11 @@ SAMPLES = {
     "pns0012.ls": "a FANUC TP program for an R-2000iC/165F: a bag palletizer switching PAYLOAD[1] and [2]",
     "SYSVARS.VA": "the FANUC controller's payload schedules of pns0012.ls ($PLST_GRP1)",
     "track_weld.mod": "a RAPID module for an IRB 2600 on a 6 m track: 8 robtargets with eax_a (mm)",
+    "palletize.src": "a KUKA KRL program for a KR 16-2 (with palletize.dat and config.dat)",
+    "palletize.dat": "the KRL data list of palletize.src: its E6POS points",
+    "config.dat": "the KUKA controller's $config.dat of palletize.src (tool and base data)",
+    "sealing.ls": "a FANUC TP program for an LR Mate 200iD: a sealing path",
+    "ur5e.urdf": "the UR5e description as ur_description's xacro expands it (BSD-3-Clause)",
     "tracker_export.txt": "a raw tracker export: 30 IRB 2600 poses, joints deg, points mm, 3 readings each",
 }
 
