@@ -67,7 +67,7 @@ from scipy.spatial.transform import Rotation
 
 from robocal.core.errors import DataError, UnitError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
-from robocal.core.magnitudes import check_payload
+from robocal.core.magnitudes import check_payload, temperature_note
 from robocal.data.csv_table import csv_rows, read_table, text_lines
 from robocal.data.instruments import check_instrument
 from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
@@ -1146,6 +1146,8 @@ def parse_csv(text: str, name: str = "<text>", max_joint_rad: float = MAX_JOINT_
     notes = ()
     if ints["pose_id"] is None and OBSERVED[kind].group == "pose_id":
         ints["pose_id"], notes = _repeats(joints, np.array(line_no), name)
+    hot = None if temperature is None else temperature_note(temperature, name)
+    notes += (f"WARNING: {hot}",) if hot else ()
     try:
         data = Measurements.from_arrays(kind, joints, smr=ints["smr"], pose_id=ints["pose_id"],
                                         source_row=source_row, source=source,
