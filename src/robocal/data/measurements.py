@@ -699,8 +699,11 @@ def _conditions(payload, temperature, N: int) -> dict:
         payload = _float_array(payload, "payload", (N, 4))
         bad = np.flatnonzero((payload[:, 0] < 0) | (payload[:, 0] > MAX_PAYLOAD_KG))
         if bad.size:
-            raise DataError(f"payload mass {payload[bad[0], 0]:.6g} kg (row index {bad[0]}) is outside "
-                            f"0..{MAX_PAYLOAD_KG:g} kg: give payload_kg in kilograms")
+            heaviest = float(payload[:, 0].max())
+            grams = (f" (the masses look like grams: {heaviest:.6g} g = {heaviest * 1e-3:.4g} kg)"
+                     if payload[:, 0].min() >= 0 and heaviest * 1e-3 <= MAX_PAYLOAD_KG else "")
+            raise UnitError(f"payload mass {payload[bad[0], 0]:.6g} kg (row index {bad[0]}) is outside "
+                            f"0..{MAX_PAYLOAD_KG:g} kg{grams}: give payload_kg in kilograms")
         far = np.flatnonzero(np.abs(payload[:, 1:]).max(axis=1) > MAX_TRACKER_RANGE_M)
         if far.size:
             raise UnitError(f"payload centre of mass {np.abs(payload[far[0], 1:]).max():.6g} m from the "
