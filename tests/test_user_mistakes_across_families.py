@@ -145,6 +145,17 @@ def test_files_of_two_tracker_setups_calibrated_together_are_named(nachi, capsys
     assert code == 0 and "shifted" not in said and "WARNING" not in said, said
 
 
+def test_evaluate_with_the_frame_of_another_day_names_the_moved_tracker(nachi, capsys):
+    """`evaluate --frame-from cal.csv` on a file measured after the tracker was re-registered 0.5 mm
+    off: 0.498 mm RMS with no word (the model is 0.03 mm off); now the frame shift is named."""
+    day2 = _moved(nachi["truth"], nachi["dir"] / "next_day.csv", 30, 11, base_mm=[0.5, 0, 0])
+    code, said = _run(["evaluate", nachi["calibrated"], day2, "--frame-from", nachi["cal"]], capsys)
+    assert code == 0 and "the tracker or the SMR moved between cal.csv and these data" in said, said
+    same = _moved(nachi["truth"], nachi["dir"] / "same_day.csv", 30, 12)
+    code, said = _run(["evaluate", nachi["calibrated"], same, "--frame-from", nachi["cal"]], capsys)
+    assert code == 0 and "WARNING" not in said, said
+
+
 def test_arm_temperatures_in_fahrenheit_are_named(tmp_path, capsys):
     """A BX200L campaign warming 20-35 deg C written in Fahrenheit (68-95): the thermal term fitted
     k 1.8 x too small, silently; now the column is named, the Celsius values given."""
