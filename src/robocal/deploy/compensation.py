@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import csv
 import io
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -519,9 +520,18 @@ def frame_from_text(text: str, what: str = "frame") -> np.ndarray:
     return frame_from_values(frame_values(text, what))
 
 
+def fixed_xyz(R: np.ndarray) -> np.ndarray:
+    """Fixed-axis XYZ angles (rad) of rotations ``R (..., 3, 3)``; at a gimbal lock (pitch +-90 deg,
+    a target pointing straight along x) scipy sets the yaw to 0 and says so: a valid angle set, so
+    not said to the user (a UserWarning on stderr)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return Rotation.from_matrix(R).as_euler("xyz")
+
+
 def frame_to_text(T: np.ndarray) -> str:
     """4x4 (m) -> ``x,y,z,rx,ry,rz`` (mm, deg, fixed-axis XYZ), the inverse of `frame_from_text`."""
-    r = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)
+    r = fixed_xyz(T[:3, :3]) * (180 / np.pi)
     return ",".join(f"{v:.4f}" for v in (*(T[:3, 3] * 1e3), *r))
 
 
@@ -598,7 +608,7 @@ def check_target_units(T: np.ndarray, layout: dict, reach_m: float, what: str,
     radians or in radians beyond a turn."""
     check_targets(T[:, :3, 3], layout["length"], reach_m, what, origin_m)
     if layout["orientation"] in ANGLE_UNITS:
-        angles = Rotation.from_matrix(T[:, :3, :3]).as_euler("xyz") / ANGLE_UNITS[layout["orientation"]]
+        angles = fixed_xyz(T[:, :3, :3]) / ANGLE_UNITS[layout["orientation"]]
         check = check_degree_set if layout["orientation"] == "deg" else check_radians
         check(angles.reshape(-1), f"{what}: rx, ry, rz")
 
@@ -612,7 +622,7 @@ def pose_columns(T: np.ndarray, layout: dict) -> tuple[list[str], np.ndarray]:
     if layout["orientation"] == "quat":
         return names + ["qw", "qx", "qy", "qz"], np.hstack([p, rot.as_quat(scalar_first=True)])
     a = layout["orientation"]
-    return names + [f"rx_{a}", f"ry_{a}", f"rz_{a}"], np.hstack([p, rot.as_euler("xyz") / ANGLE_UNITS[a]])
+    return names + [f"rx_{a}", f"ry_{a}", f"rz_{a}"], np.hstack([p, fixed_xyz(T[:, :3, :3]) / ANGLE_UNITS[a]])
 
 
 def format_csv(columns: list[str], values: np.ndarray) -> str:
