@@ -12,7 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from scipy.spatial.transform import Rotation
 
+import robocal as rc
 from robocal.cli import main
 from robocal.core.magnitudes import ARM_TEMPERATURE_C, fahrenheit_to_celsius, temperature_note
 
@@ -198,6 +200,34 @@ def test_payload_masses_in_grams_are_named(tmp_path, capsys):
     g = _scaled(data, tmp_path / "loads_g.csv", "payload_kg", lambda v: v * 1e3)
     code, said = _run(["calibrate", "--robot", tmp_path / "rs.yaml", g, "-o", tmp_path / "c.yaml"], capsys)
     assert code == 2 and "the masses look like grams: 6000 g = 6 kg" in said, said
+
+
+def test_a_redundant_arm_is_compensated_from_the_joints_it_starts_at(tmp_path, capsys):
+    """The Panda (7 joints, no closed form): compensate said 'use rc.ik.solve' (Python) to a
+    command-line user; now it asks for --start and solves each target numerically from the previous
+    one's joints. Truth: the targets are the nominal model's poses, the corrected joints put the
+    calibrated model's flange on them."""
+    model = _user_model("panda", tmp_path)
+    cal = tmp_path / "cal.csv"
+    _simulate(model, cal, "--poses", 70, "--seed", 3)
+    assert main(["--quiet", "calibrate", "--robot", model, str(cal), "-o", str(tmp_path / "c.yaml")]) == 0
+    nominal = rc.load_model(model)
+    q = nominal.limits.mean(axis=1) + np.linspace(0.0, 0.3, 4)[:, None]
+    T = nominal.fk(q)
+    rpy = Rotation.from_matrix(T[:, :3, :3]).as_euler("xyz", degrees=True)
+    rows = [",".join(f"{v:.9f}" for v in np.r_[T[i, :3, 3] * 1e3, rpy[i]]) for i in range(len(T))]
+    (tmp_path / "targets.csv").write_text("x_mm,y_mm,z_mm,rx_deg,ry_deg,rz_deg\n" + "\n".join(rows) + "\n")
+    argv = ["compensate", tmp_path / "c.yaml", tmp_path / "targets.csv", "--nominal", model]
+    code, said = _run([*argv, "-o", tmp_path / "none.csv"], capsys)
+    assert code == 2 and "give the joints the robot is at before the first target (--start" in said, said
+    start = ",".join(f"{v:.4f}" for v in np.rad2deg(q[0] - 0.05))
+    code, said = _run([*argv, f"--start={start}", "-o", tmp_path / "cmd.csv"], capsys)
+    assert code == 0 and "not reached" not in said, said
+    lines = [ln for ln in (tmp_path / "cmd.csv").read_text().splitlines() if not ln.startswith("#")]
+    joints = np.deg2rad(np.array([[float(v) for v in ln.split(",")[:7]] for ln in lines[1:]]))
+    calibrated = rc.load_model(str(tmp_path / "c.yaml")).with_frames(base=nominal.base, tool=nominal.tool)
+    reached = calibrated.fk(joints)
+    assert np.abs(reached[:, :3, 3] - T[:, :3, 3]).max() < 1e-6  # m: the calibrated flange on the targets
 
 
 def _user_model(family: str, folder: Path) -> str:

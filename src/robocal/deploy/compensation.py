@@ -41,7 +41,8 @@ from robocal.identify.plausibility import (
     MAX_LENGTH_CORRECTION_FRACTION,
     MAX_LENGTH_CORRECTION_MM,
 )
-from robocal.ik.controller import ControllerChoice, nearest_solutions
+from robocal.ik.closed_form import has_closed_form, seed_model
+from robocal.ik.controller import ControllerChoice, followed_numerically, nearest_solutions
 from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
 from robocal.ik.singularity import SingularityDistance, singularity_distance
@@ -390,7 +391,7 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
                            targets_frame=targets_frame, tool=tool, e1=e1, payload=payload,
                            temperature=temperature, layout=layout, prediction=prediction)
     hint = targets_frame_hint(comp, calibrated, nominal, targets, targets_frame, branch=branch, tool=tool,
-                              e1=e1, payload=payload, temperature=temperature)
+                              e1=e1, payload=payload, temperature=temperature, start=start)
     return comp if hint is None else replace(comp, warnings=[hint, *comp.warnings])
 
 
@@ -407,7 +408,7 @@ def targets_frame_hint(comp: Compensation, calibrated: Robot, nominal: Robot, ta
     """When targets are not reached: the hypothesis that they are in the other frame (the tracker's
     where the robot's base frame was assumed, or the other way), tested by compensating up to
     :data:`FRAME_TRIALS` of the unreached ones in it (``options``: the same branch, tool, carriage
-    positions, payload and temperature); the warning naming the option when at least
+    positions, payload, temperature and start joints); the warning naming the option when at least
     :data:`FRAME_REACHED_FRACTION` of those tried are reached there, None otherwise (or when the
     two frames coincide)."""
     missed = np.flatnonzero(~comp.converged)
@@ -449,8 +450,18 @@ def _compensate_arm(calibrated: Robot, nominal: Robot, targets, *, branch, seeds
     if start is not None:
         if seeds is not None or branch is not None:
             raise DataError("give one of branch, seeds and start (the controller's nearest-solution choice)")
-        choice = nearest_solutions(controller.with_frames(base=model.base, tool=model.tool), T, start)
-        seeds = choice.joints  # NaN rows (no nominal solution inside the limits): not converged
+        view = controller.with_frames(base=model.base, tool=model.tool)
+        if has_closed_form(seed_model(view)):
+            choice = nearest_solutions(view, T, start)
+            seeds = choice.joints  # NaN rows (no nominal solution inside the limits): not converged
+        else:  # a 5-axis or a redundant arm: the nominal joints followed numerically from start
+            seeds = followed_numerically(view, T, start)
+    elif seeds is None and not is_track_cell(model) and not any(
+            has_closed_form(seed_model(m)) for m in (controller, model.nominal_robot())):
+        raise DataError(f"{controller.name} has no closed form to seed each target's solution "
+                        f"({controller.n_joints} joints: not an OPW, UR or SCARA chain): give the joints the "
+                        "robot is at before the first target (--start, deg; start= in rad), and each target "
+                        "is solved numerically from the previous one's joints, as the controller moves")
     if is_track_cell(model):
         if e1 is None or start is not None:
             raise DataError(f"{model.name} is an arm on a track: give each target's carriage position "
