@@ -203,6 +203,10 @@ class Compensation:
     def not_reached(self, i: int) -> str:
         """Why target ``i`` has no correction (how far the IK stopped, the nearest singularity)."""
         where = "" if self.singularity is None else f"; {self.singularity.describe(i)}"
+        n = getattr(self.corrected_model, "n_joints", 6)
+        if n < 6:  # its poses are a 5-D set: the calibrated arm's is another one than the nominal's
+            where += (f"; a {n}-joint arm reaches {n} of a pose's 6 freedoms: the calibrated arm cannot meet "
+                      "every pose the nominal one reaches")
         return f"not reached on the calibrated model (best {self.position_error[i] * 1e3:.3g} mm off){where}"
 
 
