@@ -265,6 +265,24 @@ def test_a_5_axis_arm_says_why_a_6_dof_target_is_not_reached(tmp_path, capsys):
     assert code in (0, 1) and "a 5-joint arm reaches 5 of a pose's 6 freedoms" in said, said
 
 
+def test_a_runtime_correction_with_nothing_to_route_is_said(nachi, tmp_path, capsys):
+    """`filter --runtime-correction` on a program whose targets are all literals: corrected offline
+    as before, and said that no routine is added (it was silent: a user counts on it)."""
+    from robocal.kinematics.transforms import make_transform
+    from robocal.programs.simulate import write_program
+
+    nominal = rc.load_model(nachi["model"])
+    q = np.deg2rad([[10, 20, -30, 5, 40, 15], [15, 25, -35, 0, 45, 10]])
+    paths, tools, frames = write_program("krl", tmp_path, nominal, q, make_transform(np.eye(3), [0, 0, 0.2]),
+                                         np.eye(4))
+    given = [a for k, v in tools.items() for a in ("--tool", f"{k}={v}")] + \
+        [a for k, v in frames.items() for a in ("--frame", f"{k}={v}")]
+    (tmp_path / "out").mkdir()
+    code, said = _run(["filter", *paths, "--calibrated", nachi["calibrated"], "--nominal", nachi["model"],
+                       "-o", tmp_path / "out", "--runtime-correction", *given], capsys)
+    assert code == 0 and "no motion of these files computes its target at run time" in said, said
+
+
 def _user_model(family: str, folder: Path) -> str:
     """The model of ``family`` as a user gives it: a catalog name or a model file in ``folder``."""
     if family == "g6":
