@@ -56,13 +56,19 @@ FRAME_MOVED_MM = 0.1
 FRAME_MOVED_GAIN = 5.0
 
 
-def _check_frame_moved(robot, data, rms_mm: float, warnings: list[str]) -> None:
-    """Warn when refitting only the tracker frame and SMR offsets explains most of the error."""
+def _check_frame_moved(robot, data, rms_mm: float, warnings: list[str], frame_from=None) -> None:
+    """Warn when refitting only the tracker frame and SMR offsets explains most of the error (of
+    the model's own frame, or of the frame fitted on ``frame_from``: the tracker or SMR moved
+    between the two files)."""
     refit = fit_rms_mm(robot, data)
     if rms_mm > FRAME_MOVED_MM and rms_mm > FRAME_MOVED_GAIN * refit:
+        since = "since the model was made"
+        if frame_from is not None:
+            fit_on = Path(frame_from.file).name if frame_from.file else "the fit data"
+            since = f"between {fit_on} and these data"
         warnings.append(f"with the tracker frame and SMR offsets refitted the model misses these data by "
-                        f"{refit:.3g} mm RMS instead of {rms_mm:.3g} mm: the tracker or the SMR moved since "
-                        "the model was made (--fit-frame judges the links alone)")
+                        f"{refit:.3g} mm RMS instead of {rms_mm:.3g} mm: the tracker or the SMR moved "
+                        f"{since} (--fit-frame judges the links alone)")
 
 
 _ERRORS = "<errors_mm>"  # stands for the per-row error list in the JSON until it is written
@@ -290,8 +296,8 @@ def _statistics(robot, data, fit_frame: bool, frame_from, force: bool) -> dict:
     stats = position_stats(err)
     check_residual(stats["rms"], obs.modelled_points(robot, nuisance), "the evaluated data", force=force,
                    warnings=warnings)
-    if not (fit_frame or frame_from is not None) and data.spec.sees_position:
-        _check_frame_moved(robot, data, stats["rms"], warnings)
+    if not fit_frame and data.spec.sees_position:
+        _check_frame_moved(robot, data, stats["rms"], warnings, frame_from)
     unknowns = 6 + 3 * data.n_smr if fit_frame and frame_from is None else 0
     consistency = check_fit(robot, robot, [obs], [err], unknowns)
     warnings += consistency.warnings("the model")

@@ -90,6 +90,22 @@ def _start_model(robot, datasets: list, register_frames: bool, force: bool, warn
     return start
 
 
+PROBE_KINDS = ("plane", "distance")  # contact data whose probe tip (the model's tool) no frame fit places
+PROBE_PARAMS = ("tool.x", "tool.y", "tool.z")
+
+
+def _probe_fitted(problem: CalibrationProblem, state0: State, seed: int) -> State:
+    """``state0`` with the probe tip (the tool's translation) fitted, when every set is contact data
+    (:data:`PROBE_KINDS`): as the SMR offsets are for tracker points, the "frames fitted" of the
+    nominal model's plausibility check (a probe 100 mm off the flange otherwise misses planes by
+    tens of mm, refused as implausible); unchanged for other data."""
+    if not all(d.kind in PROBE_KINDS for d in problem.datasets):
+        return state0
+    space = problem.space(state0.robot, list(PROBE_PARAMS))
+    out = get_solver("lsq")(problem, state0, space, seed=seed)
+    return out.state if out.success else state0
+
+
 def _estimated_space(problem: CalibrationProblem, state0: State, params, rtol: float,
                      n_poses: int) -> tuple[ParameterSpace, Identifiability, list[str], object, PriorScales]:
     """The identifiable unknowns of ``params`` (plus every nuisance parameter), their analysis,
@@ -542,6 +558,8 @@ def _calibrate(robot, datasets: list, method: str, params, terms: list[str], val
         conditions_range([d.conditions for d in datasets]))
     problem = CalibrationProblem(declared_start, datasets, sigma=sigma)
     state0 = problem.start(declared_start)
+    if register_frames and warm_start is None:
+        state0 = _probe_fitted(problem, state0, seed)
     errors0 = problem.position_errors(state0)
     check_residual(bulk_rms_mm(errors0), problem.modelled_points(state0),
                    f"the calibration data (nominal model, frames fitted; the best {BULK_PERCENT} % of its "

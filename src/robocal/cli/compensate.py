@@ -46,7 +46,8 @@ def add_parser(sub) -> None:
     p.add_argument("--start", type=numbers(None, "q1,...,qn in deg"),
                    help="joints before the first target (deg): each target takes the nominal solution "
                         "nearest the previous target's, as a controller does for targets without "
-                        "configuration data (URScript); excludes --branch")
+                        "configuration data (URScript); excludes --branch. An arm without a closed form "
+                        "(5 or 7 joints) needs it: each target is solved numerically from the previous one's")
     p.add_argument("--targets-in", choices=("robot", "model"), default="robot",
                    help="frame of the targets: the robot's base frame (default; the calibrated model's "
                         "identified frame {0}) or the calibrated model's world frame (the tracker's)")

@@ -24,6 +24,9 @@ scales with the robot:
 * a payload's mass (a ``payload_kg`` column, ``--payload``): at most `PAYLOAD_MAX_RATED` times
   the robot's rated payload (`check_payload`); a larger one that fits in pounds or grams read
   as kg (`MASS_SCALES_KG`) is refused naming that unit;
+* an arm's temperature (a ``temperature_c`` column): within `ARM_TEMPERATURE_C`; hotter values
+  that read as degrees Fahrenheit fall inside it are said (`temperature_note`; a warning, not a
+  refusal: a hot cell may be real);
 * angles in degrees that are radians: multiples of pi/12 within `RADIAN_LIKE_TOL`
   (0.785 = pi/4 typed where 45 belongs) for a value typed once; a set of targets' angles that
   all lie within pi 'degrees' (`check_degree_set`); angles in radians beyond
@@ -62,6 +65,9 @@ RADIAN_SET_MIN_DEG = 0.1  # deg: a set of angles whose largest lies between this
 # a payload heavier than this many times the rated one is no load the arm carries (controllers refuse
 # well below; the rated figure is at the rated centre-of-mass distance, a load nearer may exceed it a little)
 PAYLOAD_MAX_RATED = 1.5
+# deg C an arm's structure works at: its ambient 0..45 deg C (robot data sheets), the motors warming the
+# links some 15 K above it; a campaign hotter than this is read in another unit (Fahrenheit) or odd
+ARM_TEMPERATURE_C = (-10.0, 60.0)
 MASS_SCALES_KG = {"lb": 0.45359237, "g": 1e-3}  # kg per unit of the masses typed as kg by mistake
 MASS_WORDS = {"lb": "pounds", "g": "grams"}
 
@@ -513,3 +519,36 @@ def check_payload(masses_kg: Sequence[float], rated_kg: float | None, robot: str
                         f"{heaviest * MASS_SCALES_KG[u]:.4g} kg): give them in kilograms "
                         f"(x {MASS_SCALES_KG[u]:.6g})")
     raise UnitError(f"{head} in any unit (kg, lb, g): check the payload or the robot model")
+
+
+def fahrenheit_to_celsius(t_f):
+    """Degrees Fahrenheit -> Celsius (scalar or array)."""
+    return (np.asarray(t_f, dtype=float) - 32.0) / 1.8
+
+
+def temperature_note(temperatures_c: Sequence[float], what: str) -> str | None:
+    """A warning when the arm temperatures ``(N,)`` (deg C as given) run above `ARM_TEMPERATURE_C`:
+    naming Fahrenheit when the values read in it lie inside that range, else the range; None when
+    they lie inside it.
+
+    Examples
+    --------
+    >>> from robocal.core.magnitudes import temperature_note
+    >>> temperature_note([20.0, 35.0], "cal.csv") is None
+    True
+    >>> print(temperature_note([68.0, 95.0], "cal.csv"))  # doctest: +ELLIPSIS
+    cal.csv: the temperature_c column runs from 68 to 95 deg C, ... Fahrenheit they are 20 to 35 deg C...
+    """
+    t = np.asarray(temperatures_c, dtype=float)
+    lo, hi = ARM_TEMPERATURE_C
+    if t.size == 0 or float(t.max()) <= hi:
+        return None
+    head = (f"{what}: the temperature_c column runs from {t.min():.4g} to {t.max():.4g} deg C, above an "
+            f"arm's working temperature (at most {hi:g} deg C)")
+    as_c = fahrenheit_to_celsius(t)
+    if float(as_c.min()) >= lo and float(as_c.max()) <= hi:
+        return (f"{head}; read as degrees Fahrenheit they are {as_c.min():.4g} to {as_c.max():.4g} deg C: if "
+                "the column is in Fahrenheit, convert it (deg C = (deg F - 32) / 1.8), else a thermal term "
+                "identifies a wrong expansion")
+    return f"{head}: check the column is in degrees Celsius"
+

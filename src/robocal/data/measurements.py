@@ -68,7 +68,7 @@ from scipy.spatial.transform import Rotation
 from robocal.core.errors import DataError, UnitError
 from robocal.core.escape import line_text
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
-from robocal.core.magnitudes import check_payload
+from robocal.core.magnitudes import check_payload, temperature_note
 from robocal.data.csv_table import csv_rows, read_table, text_lines
 from robocal.data.instruments import check_instrument
 from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
@@ -819,8 +819,11 @@ def _conditions(payload, temperature, N: int) -> dict:
         payload = _float_array(payload, "payload", (N, 4))
         bad = np.flatnonzero((payload[:, 0] < 0) | (payload[:, 0] > MAX_PAYLOAD_KG))
         if bad.size:
-            raise DataError(f"payload mass {payload[bad[0], 0]:.6g} kg (row index {bad[0]}) is outside "
-                            f"0..{MAX_PAYLOAD_KG:g} kg: give payload_kg in kilograms")
+            heaviest = float(payload[:, 0].max())
+            grams = (f" (the masses look like grams: {heaviest:.6g} g = {heaviest * 1e-3:.4g} kg)"
+                     if payload[:, 0].min() >= 0 and heaviest * 1e-3 <= MAX_PAYLOAD_KG else "")
+            raise UnitError(f"payload mass {payload[bad[0], 0]:.6g} kg (row index {bad[0]}) is outside "
+                            f"0..{MAX_PAYLOAD_KG:g} kg{grams}: give payload_kg in kilograms")
         far = np.flatnonzero(np.abs(payload[:, 1:]).max(axis=1) > MAX_TRACKER_RANGE_M)
         if far.size:
             raise UnitError(f"payload centre of mass {np.abs(payload[far[0], 1:]).max():.6g} m from the "
@@ -1266,6 +1269,8 @@ def parse_csv(text: str, name: str = "<text>", max_joint_rad: float = MAX_JOINT_
     notes = ()
     if ints["pose_id"] is None and OBSERVED[kind].group == "pose_id":
         ints["pose_id"], notes = _repeats(joints, np.array(line_no), name)
+    hot = None if temperature is None else temperature_note(temperature, name)
+    notes += (f"WARNING: {hot}",) if hot else ()
     try:
         data = Measurements.from_arrays(kind, joints, smr=ints["smr"], pose_id=ints["pose_id"],
                                         source_row=source_row, source=source,

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import csv
 import io
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -40,7 +41,8 @@ from robocal.identify.plausibility import (
     MAX_LENGTH_CORRECTION_FRACTION,
     MAX_LENGTH_CORRECTION_MM,
 )
-from robocal.ik.controller import ControllerChoice, nearest_solutions
+from robocal.ik.closed_form import has_closed_form, seed_model
+from robocal.ik.controller import ControllerChoice, followed_numerically, nearest_solutions
 from robocal.ik.numeric import solve as ik_solve
 from robocal.ik.opw_ik import check_poses
 from robocal.ik.singularity import SingularityDistance, singularity_distance
@@ -258,6 +260,10 @@ class Compensation:
             The reason, one line.
         """
         where = "" if self.singularity is None else f"; {self.singularity.describe(i)}"
+        n = getattr(self.corrected_model, "n_joints", 6)
+        if n < 6:  # its poses are a 5-D set: the calibrated arm's is another one than the nominal's
+            where += (f"; a {n}-joint arm reaches {n} of a pose's 6 freedoms: the calibrated arm cannot meet "
+                      "every pose the nominal one reaches")
         return f"not reached on the calibrated model (best {self.position_error[i] * 1e3:.3g} mm off){where}"
 
 
@@ -459,7 +465,7 @@ def compensate(calibrated: Robot, nominal: Robot, targets, *, branch: int | None
                            targets_frame=targets_frame, tool=tool, e1=e1, payload=payload,
                            temperature=temperature, layout=layout, prediction=prediction)
     hint = targets_frame_hint(comp, calibrated, nominal, targets, targets_frame, branch=branch, tool=tool,
-                              e1=e1, payload=payload, temperature=temperature)
+                              e1=e1, payload=payload, temperature=temperature, start=start)
     return comp if hint is None else replace(comp, warnings=[hint, *comp.warnings])
 
 
@@ -476,7 +482,7 @@ def targets_frame_hint(comp: Compensation, calibrated: Robot, nominal: Robot, ta
     """When targets are not reached: the hypothesis that they are in the other frame (the tracker's
     where the robot's base frame was assumed, or the other way), tested by compensating up to
     :data:`FRAME_TRIALS` of the unreached ones in it (``options``: the same branch, tool, carriage
-    positions, payload and temperature); the warning naming the option when at least
+    positions, payload, temperature and start joints); the warning naming the option when at least
     :data:`FRAME_REACHED_FRACTION` of those tried are reached there, None otherwise (or when the
     two frames coincide)."""
     missed = np.flatnonzero(~comp.converged)
@@ -518,8 +524,18 @@ def _compensate_arm(calibrated: Robot, nominal: Robot, targets, *, branch, seeds
     if start is not None:
         if seeds is not None or branch is not None:
             raise DataError("give one of branch, seeds and start (the controller's nearest-solution choice)")
-        choice = nearest_solutions(controller.with_frames(base=model.base, tool=model.tool), T, start)
-        seeds = choice.joints  # NaN rows (no nominal solution inside the limits): not converged
+        view = controller.with_frames(base=model.base, tool=model.tool)
+        if has_closed_form(seed_model(view)):
+            choice = nearest_solutions(view, T, start)
+            seeds = choice.joints  # NaN rows (no nominal solution inside the limits): not converged
+        else:  # a 5-axis or a redundant arm: the nominal joints followed numerically from start
+            seeds = followed_numerically(view, T, start)
+    elif seeds is None and not is_track_cell(model) and not any(
+            has_closed_form(seed_model(m)) for m in (controller, model.nominal_robot())):
+        raise DataError(f"{controller.name} has no closed form to seed each target's solution "
+                        f"({controller.n_joints} joints: not an OPW, UR or SCARA chain): give the joints the "
+                        "robot is at before the first target (--start, deg; start= in rad), and each target "
+                        "is solved numerically from the previous one's joints, as the controller moves")
     if is_track_cell(model):
         if e1 is None or start is not None:
             raise DataError(f"{model.name} is an arm on a track: give each target's carriage position "
@@ -589,9 +605,18 @@ def frame_from_text(text: str, what: str = "frame") -> np.ndarray:
     return frame_from_values(frame_values(text, what))
 
 
+def fixed_xyz(R: np.ndarray) -> np.ndarray:
+    """Fixed-axis XYZ angles (rad) of rotations ``R (..., 3, 3)``; at a gimbal lock (pitch +-90 deg,
+    a target pointing straight along x) scipy sets the yaw to 0 and says so: a valid angle set, so
+    not said to the user (a UserWarning on stderr)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return Rotation.from_matrix(R).as_euler("xyz")
+
+
 def frame_to_text(T: np.ndarray) -> str:
     """4x4 (m) -> ``x,y,z,rx,ry,rz`` (mm, deg, fixed-axis XYZ), the inverse of `frame_from_text`."""
-    r = Rotation.from_matrix(T[:3, :3]).as_euler("xyz", degrees=True)
+    r = fixed_xyz(T[:3, :3]) * (180 / np.pi)
     return ",".join(f"{v:.4f}" for v in (*(T[:3, 3] * 1e3), *r))
 
 
@@ -668,7 +693,7 @@ def check_target_units(T: np.ndarray, layout: dict, reach_m: float, what: str,
     radians or in radians beyond a turn."""
     check_targets(T[:, :3, 3], layout["length"], reach_m, what, origin_m)
     if layout["orientation"] in ANGLE_UNITS:
-        angles = Rotation.from_matrix(T[:, :3, :3]).as_euler("xyz") / ANGLE_UNITS[layout["orientation"]]
+        angles = fixed_xyz(T[:, :3, :3]) / ANGLE_UNITS[layout["orientation"]]
         check = check_degree_set if layout["orientation"] == "deg" else check_radians
         check(angles.reshape(-1), f"{what}: rx, ry, rz")
 
@@ -682,7 +707,7 @@ def pose_columns(T: np.ndarray, layout: dict) -> tuple[list[str], np.ndarray]:
     if layout["orientation"] == "quat":
         return names + ["qw", "qx", "qy", "qz"], np.hstack([p, rot.as_quat(scalar_first=True)])
     a = layout["orientation"]
-    return names + [f"rx_{a}", f"ry_{a}", f"rz_{a}"], np.hstack([p, rot.as_euler("xyz") / ANGLE_UNITS[a]])
+    return names + [f"rx_{a}", f"ry_{a}", f"rz_{a}"], np.hstack([p, fixed_xyz(T[:, :3, :3]) / ANGLE_UNITS[a]])
 
 
 def format_csv(columns: list[str], values: np.ndarray) -> str:

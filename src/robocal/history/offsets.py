@@ -8,6 +8,7 @@ import numpy as np
 
 from robocal.calibration.pipeline import calibrate
 from robocal.core.errors import DataError
+from robocal.data.instruments import noise_of
 from robocal.history.expected import expected_uncertainty
 from robocal.history.record import calibration_uncertainty
 from robocal.history.store import History
@@ -58,7 +59,8 @@ def recalibrate_offsets(nominal, start, data, validation=None, *, history: str |
     history, robot_id : str, optional
         The history holding the calibration of ``start`` (`robocal.history.store`): a re-fit
         leaving more than `REFIT_FLOOR_FACTOR` times its full calibration's noise floor is
-        warned of (`refit_warnings`).
+        warned of (`refit_warnings`); without them (or without a record of ``start``), more than
+        that times the instrument's noise.
     **options
         Further `robocal.calibrate` options (method, loss, ``hold_out`` ...).
 
@@ -105,7 +107,7 @@ def recalibrate_offsets(nominal, start, data, validation=None, *, history: str |
     result = calibrate(start, sets, params=offsets_params(start, n_smr), validation=validation,
                        nongeometric="none", **options)
     result.settings["offsets_only"] = True
-    result.warnings += refit_warnings(history, robot_id, start, result)
+    result.warnings += refit_warnings(history, robot_id, start, result, sets)
     return result
 
 
@@ -138,24 +140,37 @@ def shifts_line(shifts: list[dict]) -> str:
         ", ".join(f"{r['name']} {r['shift']:+.4f} ± {r['sigma']:.4f} deg" for r in shifts)
 
 
-def refit_warnings(location: str | None, robot_id: str | None, start, result) -> list[str]:
+def refit_warnings(location: str | None, robot_id: str | None, start, result, data=()) -> list[str]:
     """The warning (a list of at most one line) of an offsets-only re-fit ``result`` whose residual
     noise per coordinate exceeds :data:`REFIT_FLOOR_FACTOR` times the noise floor of the full
     calibration that ``start`` descends from in the history at ``location``
-    (`robocal.history.expected`): more than the joint zeros changed. Nothing without a history or
-    without a record of ``start`` in it."""
-    if not location:
-        return []
-    with History(location) as history:
-        try:
-            record = history.calibration(robot_id, dump_model(start))
-        except DataError:  # a start model calibrated elsewhere: no floor to compare with
+    (`robocal.history.expected`): more than the joint zeros changed. Without a history or a record
+    of ``start`` in it, the floor is the instrument's documented noise of ``data`` (the
+    measurements re-fitted; `robocal.data.instruments.noise_of`), and the sentence says the full
+    calibration may have left as much."""
+    record = None
+    if location:
+        with History(location) as history:
+            try:
+                record = history.calibration(robot_id, dump_model(start))
+            except DataError:  # a start model calibrated elsewhere: the instrument's noise is the floor
+                record = None
+            else:
+                floor = float(expected_uncertainty(history, record)["noise_m"])
+    sets = list(data) if isinstance(data, list | tuple) else [data]
+    if record is None:
+        if not sets:
             return []
-        floor = float(expected_uncertainty(history, record)["noise_m"])
+        floor = float(np.sqrt(np.mean([noise_of(d) ** 2 for d in sets])))
     own = float(calibration_uncertainty(result)["noise_m"])
     if own <= REFIT_FLOOR_FACTOR * floor:
         return []
-    return [f"the offsets-only re-fit leaves {own * 1e3:.3g} mm per coordinate, {own / floor:.3g} x the "
-            f"noise floor of the full calibration #{record.id} ({floor * 1e3:.3g} mm): more than the joint "
-            "zeros changed (a bent link, a collision, another tool or SMR nest); the written model keeps "
-            "that error: recalibrate fully"]
+    said = f"the offsets-only re-fit leaves {own * 1e3:.3g} mm per coordinate, {own / floor:.3g} x "
+    if record is not None:
+        return [said + f"the noise floor of the full calibration #{record.id} ({floor * 1e3:.3g} mm): more "
+                "than the joint zeros changed (a bent link, a collision, another tool or SMR nest); the "
+                "written model keeps that error: recalibrate fully"]
+    return [said + f"the instrument's noise ({floor * 1e3:.3g} mm; no record of the start model's full "
+            "calibration to compare with: give --history and --robot-id): more than the joint zeros "
+            "changed (a bent link, a collision, another tool or SMR nest), unless the full calibration "
+            "left as much; the written model keeps that error: recalibrate fully"]

@@ -111,5 +111,7 @@ def check_record(result, robot_id: str, robot, data_file: str, parent: int | Non
     figures = result.to_dict()
     summary = {key: figures[key] for key in ("verdict", "p_value", "n_poses", "rms_mm", "predicted_rms_mm")}
     summary["changed_parameters"] = result.changed_parameters
+    if result.frame_change:  # a moved SMR or tracker: not the robot (the timeline says so)
+        summary["frame_change"] = result.frame_change
     return Record(robot_id=robot_id, kind="check", model_yaml=dump_model(robot), summary=summary,
                   data=fingerprints([(data_file, "check")]), parent=parent)

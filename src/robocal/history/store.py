@@ -167,6 +167,8 @@ class Record:
         return {"id": self.id, "kind": self.kind, "date": self.date, "held_out_rms": held_out, "rms": rms,
                 "verdict": s.get("verdict"), "p_value": s.get("p_value"),
                 "changed_parameters": s.get("changed_parameters") if self.kind == "check" else None,
+                **({"frame_change": s["frame_change"]} if self.kind == "check" and s.get("frame_change")
+                   else {}),
                 "parent": self.parent, "model_sha256": self.model_sha256, "data": self.data,
                 "robocal_version": self.robocal_version,
                 **({"offsets_only": True} if s.get("offsets_only") else {})}

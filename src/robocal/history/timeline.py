@@ -9,6 +9,7 @@ from robocal.core.errors import DataError
 from robocal.core.io import write_all
 from robocal.core.version import __version__
 from robocal.history.store import History
+from robocal.report.timeline import moved_words
 
 
 @dataclass
@@ -41,6 +42,8 @@ class Timeline:
             line = f"#{e['id']:<4} {e['date']}  {e['kind']:<11} held-out {held} mm  RMS {rms} mm"
             if e["kind"] == "check":
                 line += f"  {e['verdict']} (p = {e['p_value']:.3g})"
+                moved = moved_words(e)
+                line += f"  moved: {', '.join(moved)}" if moved else ""
             if e.get("offsets_only"):
                 line += "  joint zeros only" + (f" (from #{e['parent']})" if e.get("parent") else "")
             lines.append(line)

@@ -66,6 +66,7 @@ JOINT_LIMIT_TOL_DEG = 1.0
 JOINT_LIMIT_MARGIN_DEG = 90.0
 JOINT_LIMIT_TOL_MM = 1.0  # the same for a prismatic joint (a track's carriage, a SCARA's quill)
 JOINT_LIMIT_MARGIN_MM = 100.0
+UNIT_SPREAD_OF_RANGE = 0.1  # prismatic readings read in mm span this share of the axis' range at least
 MAX_JOINT_TURNS = 2.0
 _LISTED = 5  # rows named in a joint-limit message
 FORCE_HINT = "if you are sure the data and the model are right, rerun with --force (force=True)"
@@ -194,6 +195,25 @@ def _readings(data, robot, mask: np.ndarray) -> str:
     return f"{n_rows} row(s): " + "; ".join(items) + (f"; and {more} more" if more > 0 else "")
 
 
+def _prismatic_unit(robot, data, far: np.ndarray) -> str | None:
+    """The cause of prismatic readings far outside the limits (``far (N, n)``) when, read in
+    millimetres (the values / 1000), every reading of each such axis lies within its limits and
+    they spread over `UNIT_SPREAD_OF_RANGE` of its range at least (a track counted the other way
+    near its zero is not millimetres): a column named in metres holding millimetres; None
+    otherwise."""
+    axes = np.flatnonzero(robot.prismatic & far.any(axis=0))
+    if not axes.size or axes.size != np.flatnonzero(far.any(axis=0)).size:
+        return None
+    q = data.joints[:, axes] * 1e-3
+    lo, hi = robot.limits[axes, 0], robot.limits[axes, 1]
+    spread = np.ptp(q, axis=0) >= UNIT_SPREAD_OF_RANGE * (hi - lo)  # readings over the range, not near 0
+    if (np.maximum(lo - q, q - hi) > JOINT_LIMIT_TOL_MM * 1e-3).any() or not spread.all():
+        return None
+    names = ", ".join(data.joint_column(int(k), "_m") for k in axes)
+    return (f"read in millimetres every reading of {names} lies inside the limits: the column holds "
+            f"millimetres under a metres header; name it {names.replace('_m', '_mm')}")
+
+
 def check_joint_limits(robot, data, what: str, *, force: bool = False,
                        warnings: list[str] | None = None) -> None:
     """The joint readings of ``data`` (Measurements) against ``robot``'s limits (module docstring):
@@ -217,6 +237,7 @@ def check_joint_limits(robot, data, what: str, *, force: bool = False,
                 cause = ("J3 looks coupled to J2: with J3 - J2 every reading is inside the limits (a FANUC "
                          "controller's joint log counts J3 from the horizontal): read it with "
                          f"{COUPLED_OPTION}")
+        cause = _prismatic_unit(robot, data, far) or cause
         margin = f"{JOINT_LIMIT_MARGIN_DEG:g} deg" + (f" ({JOINT_LIMIT_MARGIN_MM:g} mm on a prismatic joint)"
                                                        if robot.has_prismatic else "")
         _fail(f"{what}: joint readings more than {margin} outside {robot.name}'s "

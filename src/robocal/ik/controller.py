@@ -22,7 +22,7 @@ import numpy as np
 
 from robocal.core.errors import DataError
 from robocal.ik.closed_form import branch_slot, seed_model
-from robocal.ik.numeric import seeded_branches
+from robocal.ik.numeric import seeded_branches, solve
 from robocal.ik.opw_ik import check_poses
 from robocal.kinematics.model import Robot
 
@@ -102,3 +102,23 @@ def _joint_copies(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     valid = (np.isfinite(copies) & (copies >= lo[:, None]) & (copies <= hi[:, None])
              & np.isfinite(q).all(axis=2)[:, :, None, None])
     return copies, valid
+
+
+def followed_numerically(robot: Robot, poses, start) -> np.ndarray:
+    """Joints ``(N, n)`` (rad) of ``robot`` reaching world TCP poses ``(N, 4, 4)`` (m) in order, each
+    solved numerically (:func:`robocal.ik.numeric.solve`) from the joints of the previous target
+    reached, the first from ``start`` ``(n,)`` rad: the nearest solution a controller moves to, for
+    a chain without a closed form (a 5-axis or a redundant 7-axis arm), where
+    :func:`nearest_solutions` has no branches to choose from. A pose not reached is a NaN row; the
+    next one starts from the last joints reached."""
+    T = check_poses(poses)
+    n = robot.n_joints
+    prev = np.asarray(start, dtype=float).reshape(-1)
+    if prev.shape != (n,) or not np.isfinite(prev).all():
+        raise DataError(f"start joints must be {n} finite values (rad), got {prev.tolist()}")
+    joints = np.full((T.shape[0], n), np.nan)
+    for i in range(T.shape[0]):  # sequential by nature: each seed is the previous target's joints
+        res = solve(robot, T[i:i + 1], prev[None])
+        if res.converged[0]:
+            joints[i] = prev = res.joints[0]
+    return joints

@@ -84,6 +84,9 @@ class Routing:
                 at, text = writer.routine(src.text, chain, meant, marker_text(self.calibrated))
                 fe.spans[(at, at)] = src.in_file_line_ends(text)
             outputs[src.path] = fe.apply(src)
+        if not program.runtime_sites:  # asked for, nothing to do: said, so no one counts on it
+            warnings.append(f"--runtime-correction: no motion of these files computes its target at run time "
+                            f"(all are corrected offline): {ROUTINE_NAME} is not added")
         if sites:
             left = f"; left out: the joint-error terms {', '.join(chain.left_out)}" if chain.left_out else ""
             warnings.append(f"{len(routed_at)} motion(s) whose target is computed at run time go through "

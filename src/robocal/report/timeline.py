@@ -41,6 +41,21 @@ def rms_over_time(dates: list[datetime.datetime], held_out: list, checks: list, 
     return fig
 
 
+def moved_words(entry: dict) -> list[str]:
+    """What a check entry of a timeline says moved: the SMR or the tracker frame (a check's
+    ``frame_change``: not the robot) and the parameters (name, shift ± sigma, unit); empty for
+    other entries."""
+    f = entry.get("frame_change") or {}
+    out = []
+    if "smr" in (f.get("moved") or []):
+        which = f" {f['smr']}" if f.get("smr") else ""
+        out.append(f"SMR{which} {f['smr_shift_norm_mm']:.4f} mm (not the robot)")
+    if "tracker" in (f.get("moved") or []):
+        out.append(f"tracker frame {f['points_moved_rms_mm']:.4f} mm (not the robot)")
+    return out + [f"{c['name']} {c['shift']:+.4f} ± {c['sigma']:.4f} {c['unit']}"
+                  for c in entry.get("changed_parameters") or []]
+
+
 def render_history(timeline: dict, version: str) -> str:
     """The HTML page of ``timeline`` (``robocal history --json``'s content)."""
     entries = timeline["entries"]
@@ -52,8 +67,7 @@ def render_history(timeline: dict, version: str) -> str:
                          for e in entries])
     rows = []
     for e in entries:
-        moved = ", ".join(f"{esc(c['name'])} {c['shift']:+.4f} ± {c['sigma']:.4f} {esc(c['unit'])}"
-                          for c in e.get("changed_parameters") or [])
+        moved = esc(", ".join(moved_words(e)))
         rows.append([esc(e["id"]), esc(e["date"]), esc(e["kind"] + (" (offsets only)" if e.get("offsets_only")
                                                                      else "")),
                      _num(e["held_out_rms"]), _num(e["rms"]), esc(e["verdict"] or ""),

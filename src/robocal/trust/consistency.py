@@ -56,6 +56,7 @@ from robocal.data.measurements import NEAR_REPEAT_RAD, robot_reach
 from robocal.data.registration import register_frame
 from robocal.identify.plausibility import FORCE_HINT
 from robocal.trust.diagnosis import GAIN, fit_rms_mm, joint_mixup, length_unit, mount_turned, priors_too_tight
+from robocal.trust.file_shifts import FileShifts, pose_means, split_by_file
 
 ALPHA = 1e-3  # the residual test's false-alarm probability per fit (model and noise right)
 UNMODELLED_MM_PER_M = 0.5  # unmodelled-error budget: mm (1 sigma, per coordinate) per metre of reach
@@ -385,19 +386,32 @@ def diagnose_misfit(robot, datasets) -> list[str]:
     return out
 
 
+def file_shifts(observations, errors: list[np.ndarray]) -> FileShifts | None:
+    """The shift common to each point or pose file's poses among files fitted in one tracker frame
+    (`robocal.trust.file_shifts.split_by_file` on the per-pose mean errors): a tracker set up again
+    between the files' sessions shows as one; None with fewer than two such files."""
+    kept = [(obs.data.label or f"file {i + 1}", pose_means(e, obs.data.pose_id))
+            for i, (obs, e) in enumerate(zip(observations, errors, strict=True))
+            if obs.data.spec.sees_position and e.ndim == 2 and e.shape[1] == 3 and len(e) == len(obs.data)]
+    return split_by_file([label for label, _ in kept], [e for _, e in kept]) if len(kept) > 1 else None
+
+
 def check_fit(robot, start, observations, errors: list[np.ndarray], n_unknowns: int, *,
               sigma: dict | None = None, seed: int = 0, priors=None) -> Consistency:
-    """The residual test, change points and (when the test fails or a change point is found) the
-    diagnosis of a fit: ``robot`` the fitted model, ``start`` the nominal model (frames fitted) the
-    diagnosis tries its hypotheses on, ``observations`` the files' observation models, ``errors``
-    their item errors with ``robot`` (m), ``n_unknowns`` the unknowns estimated, ``sigma`` the noise
-    per kind (m) given for files without a sigma column, ``priors`` the fit's prior group scales
+    """The residual test, change points, the files' shifts from each other (`file_shifts`) and
+    (when the test fails or a change point is found) the diagnosis of a fit: ``robot`` the
+    fitted model, ``start`` the nominal model (frames fitted) the diagnosis tries its hypotheses on,
+    ``observations`` the files' observation models, ``errors`` their item errors with ``robot``
+    (m), ``n_unknowns`` the unknowns estimated, ``sigma`` the noise per kind (m) given for files
+    without a sigma column, ``priors`` the fit's prior group scales
     (:class:`robocal.identify.priors.PriorScales`: priors too tight for the robot are a diagnosis)."""
     noise = [item_noise(obs.data, obs.kind, len(e), obs.item_of_rows(), sigma)
              for obs, e in zip(observations, errors, strict=True)]
     result = residual_test(errors, noise, n_unknowns, budget_m(robot))
     result.change_points = find_change_points(robot, observations, errors, noise, seed)
     result.diagnosis = [c.sentence() for c in result.change_points]
+    shifts = file_shifts(observations, errors)
+    result.diagnosis += [shifts.sentence("calibration")] if shifts is not None and shifts.significant else []
     if result.misfit and not result.change_points:
         result.diagnosis += diagnose_misfit(start, [obs.data for obs in observations])
     mistakes = [d for d in result.diagnosis if d not in {c.sentence() for c in result.change_points}]

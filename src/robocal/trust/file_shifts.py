@@ -62,14 +62,19 @@ class FileShifts:
         """The files' shifts are real and not negligible (module docstring)."""
         return self.p_value < SHIFT_ALPHA and self.shift_rms_mm**2 >= SHIFT_MIN_SHARE * self.rms_mm**2
 
-    def sentence(self) -> str:
-        """The finding in words, for the warnings."""
-        return (f"the validation files are shifted from each other: a shift common to each file's poses "
-                f"carries {self.shift_rms_mm:.3g} mm RMS of the held-out {self.rms_mm:.3g} mm (F test across "
+    def sentence(self, role: str = "validation") -> str:
+        """The finding in words, for the warnings: ``role`` 'validation' (held-out files) or
+        'calibration' (files calibrated together in one tracker frame)."""
+        of = "the held-out" if role == "validation" else "the residual's"
+        tail = ("the calibration data cannot predict the first two" if role == "validation" else
+                "one tracker frame is fitted to all the files: calibrate the files of one setup together, "
+                "or recalibrate the sessions apart")
+        return (f"the {role} files are shifted from each other: a shift common to each file's poses "
+                f"carries {self.shift_rms_mm:.3g} mm RMS of {of} {self.rms_mm:.3g} mm (F test across "
                 f"{len(self.files)} files, p = {self.p_value:.2g}); within the files the model misses by "
                 f"{self.within_rms_mm:.3g} mm. A shift per file is the tracker or the robot's base set up "
                 "again between sessions, the arm at another temperature, or an error of the model constant "
-                "over a file's poses; the calibration data cannot predict the first two")
+                f"over a file's poses; {tail}")
 
     def to_dict(self) -> dict:
         return {"test": "F test of the validation files' mean errors", "statistic": self.statistic,
@@ -90,8 +95,8 @@ def pose_means(errors: np.ndarray, pose_id: np.ndarray) -> np.ndarray:
 
 
 def split_by_file(labels: list[str], errors: list[np.ndarray]) -> FileShifts | None:
-    """The test of the module docstring on validation files named ``labels`` with their per-pose
-    errors ``errors`` (each ``(n_f, 3)``, m); None with fewer than two files of at least
+    """The test of the module docstring on validation (or calibration) files named ``labels``
+    with their per-pose errors ``errors`` (each ``(n_f, 3)``, m); None with fewer than two files of at least
     :data:`MIN_FILE_POSES` poses."""
     kept = [(label, np.asarray(e, float)) for label, e in zip(labels, errors, strict=True)
             if len(e) >= MIN_FILE_POSES]
