@@ -35,6 +35,7 @@ h1{font-size:24px;margin:0 0 4px}h2{font-size:18px;margin:28px 0 8px;border-bott
 table{border-collapse:collapse;margin:6px 0 12px;font-size:13px}
 th,td{padding:3px 6px;border-bottom:1px solid #e3e3e3;text-align:right;white-space:nowrap}
 th{background:#f0f2f4;font-weight:600}td.l,th.l{text-align:left}td.wrap{white-space:normal;min-width:8em}
+td.l:first-child{white-space:normal}
 tr.dropped td{background:#fff4e5}tr.chosen td{background:#e8f4ea;font-weight:600}
 .lead{font-size:16px;margin:4px 0 10px}.lead b{font-size:17px}
 .kpi{display:flex;gap:12px;flex-wrap:wrap;margin:10px 0}
