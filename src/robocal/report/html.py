@@ -54,7 +54,8 @@ figcaption{color:#555;font-size:12px}figcaption b{color:#222}
 .grid>*{min-width:0}.scroll{max-width:100%;overflow-x:auto}section.narrow>figure{max-width:680px}
 .note{color:#666;font-size:12px}td code{white-space:pre-wrap;word-break:break-all}.printonly{display:none}
 @media (max-width:600px){main{padding:12px 10px 32px}.kpi div{min-width:0;flex:1 1 40%}
- table{font-size:12px}th,td{padding:2px 4px}}
+ table{font-size:12px}th,td{padding:2px 4px}
+ figure{overflow-x:auto}figure svg{min-width:520px}}
 @page{size:A4;margin:10mm 10mm 11mm}
 @media print{body{background:#fff;font-size:8.5pt;line-height:1.3}main{padding:0;max-width:none}
  h1{font-size:14pt}h2{font-size:11.5pt;margin:10px 0 4px}h3{font-size:9.5pt;margin:6px 0 3px}
