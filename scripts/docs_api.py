@@ -35,7 +35,8 @@ GROUPS: list[tuple[str, list[str]]] = [
     ("Robot models", ["rc.Robot", "rc.load_model", "rc.Conditions", "rc.Cell", "rc.Positioner",
                       "rc.load_cell", "robocal.kinematics.positioner.positioner_chain"]),
     ("Measurements", ["rc.Measurements", "rc.CellMeasurements", "rc.register",
-                      "robocal.data.inputs.check_distinct_inputs", "robocal.data.joint_conventions"]),
+                      "robocal.data.inputs.check_distinct_inputs", "robocal.data.joint_conventions",
+                      "rc.sample_path"]),
     ("Simulated data", ["rc.simulate_tracker", "rc.simulate_markers", "rc.simulate_camera",
                         "rc.simulate_cell", "robocal.data.simulate.SimulationResult"]),
     ("Identification", ["rc.calibrate", "rc.analyze", "rc.CalibrationResult", "rc.CellCalibration",
@@ -86,6 +87,11 @@ MAP_SUMMARY = {
 SEE_ALSO = re.compile(r'<details class="see-also" open>\s*<summary>See Also</summary>\s*(.*?)</details>',
                       re.S)
 SEE_ALSO_ENTRY = re.compile(r"^\s*([\w.]+(?:\s*,\s*[\w.]+)*)\s*(?::\s*(.*))?$")
+# a docstring's pointer to a documentation page ("the JSON of docs/result-json.md"): a link on the
+# site; a page the docstring names by an older path is the page that now holds it
+DOCS_PATH = re.compile(r"(?<![\w/.])docs/((?:[\w-]+/)*[\w-]+\.md)\b")
+DOCS_MOVED = {"reference/history-json.md": "reference/history.md#history-json-robocal-history-json",
+              "reference/check-json.md": "reference/history.md#check-json-robocal-check-json"}
 
 
 def names() -> list[str]:
@@ -150,6 +156,9 @@ def page_markdown(name: str) -> str:
     options = [f"heading: \"{name}\"", "heading_level: 1", "show_root_full_path: false"]
     if inspect.isclass(resolve(name)):
         options.append("summary: {functions: true}")  # a table of the methods at the top of the page
+        bases = [b for b in resolve(name).__bases__ if b is not object]
+        if bases and all(b.__name__.startswith("_") for b in bases):  # "Bases: _BeforeAfter" says nothing
+            options.append("show_bases: false")
     if inspect.ismodule(resolve(name)):
         members = MODULE_MEMBERS.get(path, [])  # [] for rc.ik (its members have their pages), the version
         if members is not None:
@@ -278,7 +287,26 @@ def see_also_html(block: str, page, files) -> str:
         f"<li>{item}</li>" for item in items) + "</ul></details>"
 
 
+def docs_links(html_text: str, page, files) -> str:
+    """``docs/X.md`` in a docstring's prose (not in code) as a link to that page of the site; a path
+    that is no page is left as written."""
+    from mkdocs.utils import get_relative_url
+
+    def link(match: re.Match) -> str:
+        path, _, anchor = DOCS_MOVED.get(match.group(1), match.group(1)).partition("#")
+        file = files.get_file_from_path(path)
+        if file is None:
+            return match.group(0)
+        title = file.page.title if file.page is not None and file.page.title else path
+        url = get_relative_url(file.url, page.url) + ("#" + anchor if anchor else "")
+        return f'<a href="{url}">{html.escape(str(title))}</a>'
+
+    parts = re.split(r"(<pre\b.*?</pre>|<code\b.*?</code>)", html_text, flags=re.S)
+    return "".join(part if i % 2 else DOCS_PATH.sub(link, part) for i, part in enumerate(parts))
+
+
 def on_page_content(html_text, page, config, files):  # noqa: ARG001 - MkDocs' signature
     if page.file.src_uri.startswith(API_DIR + "/"):
         html_text = SEE_ALSO.sub(lambda m: see_also_html(m.group(1), page, files), html_text)
+        html_text = docs_links(html_text, page, files)
     return html_text

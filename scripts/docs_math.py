@@ -17,6 +17,9 @@ from latex2mathml.converter import convert
 
 ARITHMATEX = re.compile(r'<(div|span) class="arithmatex">(.*?)</\1>', re.DOTALL)
 DELIMITERS = {"div": (r"\[", r"\]"), "span": (r"\(", r"\)")}
+# a displayed formula wider than a phone's column (the modified-DH product, 396 px at 390) scrolls
+# inside its own box instead of widening the page
+BLOCK_BOX = '<div class="math-block" style="overflow-x:auto;max-width:100%">{}</div>'
 
 
 class FormulaError(ValueError):
@@ -33,7 +36,9 @@ def formulas_to_mathml(content: str, where: str = "") -> str:
             raise FormulaError(f"formula without {opening} {closing} delimiters{where}: {body[:60]!r}")
         latex = body[len(opening):-len(closing)].strip()
         try:
-            return convert(latex, display="block" if tag == "div" else "inline")
+            if tag == "div":
+                return BLOCK_BOX.format(convert(latex, display="block"))
+            return convert(latex, display="inline")
         except Exception as exc:  # the converter raises several types for unreadable LaTeX
             raise FormulaError(f"cannot convert the formula {latex[:60]!r}{where}: {exc}") from None
 

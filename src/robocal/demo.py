@@ -74,6 +74,11 @@ def sample_path(name: str) -> Path:
     DataError
         ``name`` is not a sample (the message lists them).
 
+    See Also
+    --------
+    rc.filter_program : filter a sample program (``weld_cell.mod``) with a calibration
+    rc.Measurements : read a sample measurement file
+
     Examples
     --------
     >>> import robocal as rc

@@ -551,6 +551,13 @@ class UrdfLikeExport:
         The vendor's macro, the calibrated macro and where it is written.
     fk_frames : str
         The frames the FK check compares.
+    joint_map : JointMap, optional
+        The vendor's joint values from the controller's (``u = sign * q + offset`` per joint).
+    world : ndarray, shape (4, 4), optional
+        robocal's world in the vendor's root link (m).
+    bodies : dict
+        A cell's other bodies, by name: their unit, root and tip links, FK and map checks, joint
+        map and joints.
 
     See Also
     --------

@@ -35,6 +35,7 @@ h1{font-size:24px;margin:0 0 4px}h2{font-size:18px;margin:28px 0 8px;border-bott
 table{border-collapse:collapse;margin:6px 0 12px;font-size:13px}
 th,td{padding:3px 6px;border-bottom:1px solid #e3e3e3;text-align:right;white-space:nowrap}
 th{background:#f0f2f4;font-weight:600}td.l,th.l{text-align:left}td.wrap{white-space:normal;min-width:8em}
+td.l:first-child{white-space:normal}
 tr.dropped td{background:#fff4e5}tr.chosen td{background:#e8f4ea;font-weight:600}
 .lead{font-size:16px;margin:4px 0 10px}.lead b{font-size:17px}
 .kpi{display:flex;gap:12px;flex-wrap:wrap;margin:10px 0}
@@ -53,7 +54,8 @@ figcaption{color:#555;font-size:12px}figcaption b{color:#222}
 .grid>*{min-width:0}.scroll{max-width:100%;overflow-x:auto}section.narrow>figure{max-width:680px}
 .note{color:#666;font-size:12px}td code{white-space:pre-wrap;word-break:break-all}.printonly{display:none}
 @media (max-width:600px){main{padding:12px 10px 32px}.kpi div{min-width:0;flex:1 1 40%}
- table{font-size:12px}th,td{padding:2px 4px}}
+ table{font-size:12px}th,td{padding:2px 4px}
+ figure{overflow-x:auto}figure svg{min-width:520px}}
 @page{size:A4;margin:10mm 10mm 11mm}
 @media print{body{background:#fff;font-size:8.5pt;line-height:1.3}main{padding:0;max-width:none}
  h1{font-size:14pt}h2{font-size:11.5pt;margin:10px 0 4px}h3{font-size:9.5pt;margin:6px 0 3px}
