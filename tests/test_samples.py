@@ -7,13 +7,13 @@ import pytest
 
 import robocal as rc
 from robocal.cli import main
-from robocal.demo import SAMPLES
+from robocal.demo import samples
 
 MAX_SAMPLE_BYTES = 50_000  # small sample data, not data sets
 
 
 def test_every_sample_is_shipped_and_small():
-    for name in SAMPLES:
+    for name in samples():
         path = rc.sample_path(name)
         assert path.is_file() and 0 < path.stat().st_size <= MAX_SAMPLE_BYTES, name
     with pytest.raises(rc.DataError, match="no sample named 'nope'.*weld_cell.mod"):
@@ -24,7 +24,7 @@ def test_the_command_lists_copies_and_never_overwrites(tmp_path, monkeypatch, ca
     monkeypatch.chdir(tmp_path)
     assert main(["sample"]) == 0
     listing = capsys.readouterr().out
-    assert all(name in listing for name in SAMPLES)
+    assert all(name in listing for name in samples())
     assert main(["sample", "weld_cell.mod", "TOOL.CND"]) == 0
     assert (tmp_path / "weld_cell.mod").read_bytes() == rc.sample_path("weld_cell.mod").read_bytes()
     assert main(["sample", "calibration.conf", "-o", "ur5e.conf"]) == 0

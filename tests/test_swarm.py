@@ -64,7 +64,10 @@ def test_reproducible_and_interruptible():
     assert res.solver.status == "interrupted" and not res.solver.success
     assert res.solver.history[-1]["iteration"] == 3 and "polish" not in res.solver.message
     assert res.summary().startswith("swarm: interrupted")  # the method named once
-    assert res.after["rms"] <= res.before["rms"] * (1 + 1e-9)  # never worse than the start
+    # never worse than the start: the start is the probe-fitted nominal (a least-squares minimum over
+    # the tool), and the swarm keeps its best particle by its cost (weighted, with the priors), so its
+    # plain RMS may differ from the start's in the 7th digit
+    assert res.after["rms"] <= res.before["rms"] * (1 + 1e-6)
 
 
 @pytest.mark.parametrize("options, match", [

@@ -8,6 +8,7 @@ calibrated model, the result JSON and the HTML report written to ``out_dir``.
 
 from __future__ import annotations
 
+import functools
 from importlib.resources import files
 from pathlib import Path
 
@@ -31,27 +32,13 @@ def demo_files() -> dict[str, Path]:
             (("calibration", "csv"), ("validation", "csv"), ("truth", "yaml"))}
 
 
-# the small files the how-to pages start from (``robocal sample NAME``): name -> what it is. All
-# written for robocal (copies of tests/data files, or simulated), none taken from a vendor or a data set
-SAMPLES = {
-    "calibration.csv": "the demo's calibration campaign: a simulated IRB 2600, 3 SMRs, gross outliers",
-    "validation.csv": "the demo's held-out poses of the same simulated IRB 2600",
-    "truth.yaml": "the true robot the demo's campaign was simulated on",
-    "weld_cell.mod": "a RAPID module for an IRB 2600: tooldata, wobjdata, MoveJ/MoveL/MoveC, Offs",
-    "pick_place.script": "a URScript pick and place for a UR5e",
-    "calibration.conf": "a UR5e controller's factory calibration (/root/.urcontrol/calibration.conf)",
-    "PALLETIZE.JBI": "a Yaskawa INFORM job for a GP180: a bag palletizer switching tools 1 and 2",
-    "TOOL.CND": "the Yaskawa controller's tool file of PALLETIZE.JBI (frames and loads)",
-    "pns0012.ls": "a FANUC TP program for an R-2000iC/165F: a bag palletizer switching PAYLOAD[1] and [2]",
-    "SYSVARS.VA": "the FANUC controller's payload schedules of pns0012.ls ($PLST_GRP1)",
-    "track_weld.mod": "a RAPID module for an IRB 2600 on a 6 m track: 8 robtargets with eax_a (mm)",
-    "palletize.src": "a KUKA KRL program for a KR 16-2 (with palletize.dat and config.dat)",
-    "palletize.dat": "the KRL data list of palletize.src: its E6POS points",
-    "config.dat": "the KUKA controller's $config.dat of palletize.src (tool and base data)",
-    "sealing.ls": "a FANUC TP program for an LR Mate 200iD: a sealing path",
-    "ur5e.urdf": "the UR5e description as ur_description's xacro expands it (BSD-3-Clause)",
-    "tracker_export.txt": "a raw tracker export: 30 IRB 2600 poses, joints deg, points mm, 3 readings each",
-}
+@functools.cache
+def samples() -> dict[str, str]:
+    """The small files the how-to pages start from (``robocal sample NAME``): name -> what it is
+    (``demo_data/samples.tsv``, the list being data: it names programs of every language)."""
+    text = (files("robocal") / "demo_data" / "samples.tsv").read_text(encoding="utf-8")
+    rows = (line.split("\t", 1) for line in text.splitlines() if line and not line.startswith("#"))
+    return {name: what for name, what in rows}
 
 
 def sample_path(name: str) -> Path:
@@ -61,7 +48,7 @@ def sample_path(name: str) -> Path:
     Parameters
     ----------
     name : str
-        One of ``SAMPLES`` (``robocal sample`` lists them): ``"weld_cell.mod"``,
+        One of `samples` (``robocal sample`` lists them): ``"weld_cell.mod"``,
         ``"calibration.conf"``, ``"tracker_export.txt"``...
 
     Returns
@@ -85,8 +72,8 @@ def sample_path(name: str) -> Path:
     >>> rc.sample_path("weld_cell.mod").name
     'weld_cell.mod'
     """
-    if name not in SAMPLES:
-        raise DataError(f"no sample named {name!r}: the samples are {', '.join(SAMPLES)}")
+    if name not in samples():
+        raise DataError(f"no sample named {name!r}: the samples are {', '.join(samples())}")
     return Path(str(files("robocal") / "demo_data" / name))
 
 

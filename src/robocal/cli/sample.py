@@ -21,11 +21,12 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from robocal.core.errors import DataError
-    from robocal.demo import SAMPLES, copy_sample
+    from robocal.demo import copy_sample, samples
 
     if not args.names:
-        width = max(map(len, SAMPLES))
-        print("\n".join(f"{name:<{width}}  {text}" for name, text in SAMPLES.items()))
+        listed = samples()
+        width = max(map(len, listed))
+        print("\n".join(f"{name:<{width}}  {text}" for name, text in listed.items()))
         return 0
     if args.out is not None and len(args.names) != 1:
         raise DataError("-o names one file: give one NAME with it")

@@ -661,20 +661,24 @@ def _open_readonly(path: Path, failure):
     writer needs that file), so it is opened as immutable (no lock or shared-memory file).
     ``failure(exc, doing)``: the DataError of any other SQLite error."""
     uri = f"file:{urllib.parse.quote(str(path.resolve()))}?mode=ro"
+    conn = None
     try:
         conn = sqlite3.connect(uri, uri=True, timeout=BUSY_TIMEOUT_S, isolation_level=None)
         conn.execute("SELECT 1 FROM sqlite_master LIMIT 1").fetchall()
         return conn
     except sqlite3.DatabaseError as exc:
+        if conn is not None:
+            conn.close()  # a connection left open keeps the file (and its file system) busy
         if getattr(exc, "sqlite_errorname", "").startswith("SQLITE_NOTADB"):
             raise DataError(f"{path} is not a robocal history: not a SQLite database ({exc}); robocal left "
                             "it untouched") from None
         if os.access(path.parent, os.W_OK) or Path(f"{path}-wal").exists():
             raise failure(exc, "reading") from None
+    conn = sqlite3.connect(uri + "&immutable=1", uri=True, isolation_level=None)
     try:
-        conn = sqlite3.connect(uri + "&immutable=1", uri=True, isolation_level=None)
         conn.execute("SELECT 1 FROM sqlite_master LIMIT 1").fetchall()
     except sqlite3.DatabaseError as exc:
+        conn.close()
         raise failure(exc, "reading") from None
     return conn
 
