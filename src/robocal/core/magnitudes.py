@@ -56,6 +56,12 @@ TARGETS_MIN_REACHES = 0.05  # the farthest target of a set lies at least 5 % of 
 TARGETS_MAX_REACHES = 2.0  # ... and at most twice the reach (the robot must get there)
 MODEL_MIN_REACH_M = 0.05  # no arm this tool handles reaches less than 50 mm
 MODEL_MAX_REACH_M = 50.0  # nor more than 50 m
+# mm: the accuracy a calibrated arm measured with a laser tracker reaches at its TCP (a few hundredths
+# of a mm): a TCP difference below it is too small to matter, one above it is what a calibration
+# corrects. One threshold for: a --tool/--frame differing from the program's own data
+# (programs/overrides), joint-error terms a URDF leaves out (deploy/urdf_like), a run-time
+# correction's last step still off (programs/runtime: the controller's warning)
+CALIBRATED_TCP_MM = 0.05
 RADIAN_LIKE_TOL = 5e-4  # rad: angles in degrees this close to a multiple of pi/12 are radians
 MAX_RADIANS = 2 * math.pi + 1e-6  # an orientation angle in radians beyond a full turn: degrees
 RADIAN_SET_MIN_DEG = 0.1  # deg: a set of angles whose largest lies between this and pi 'deg' is radians
