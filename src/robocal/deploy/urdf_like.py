@@ -603,6 +603,7 @@ class UrdfLikeExport:
     joint_map: JointMap | None = None
     world: np.ndarray | None = None  # (4, 4) robocal's world in the vendor's root link (the map B)
     bodies: dict = field(default_factory=dict)  # a cell's other bodies: tip, checks, joint map, joints
+    inputs: list[str] = field(default_factory=list)  # the model files read: never written over
 
     def _map_lines(self) -> list[str]:
         """The joints whose values are not the controller's (``u = sign * q + offset``)."""
@@ -677,7 +678,7 @@ class UrdfLikeExport:
         ------
         DataError
             No path, a path named for another format than URDF, or a path that is one of the
-            vendor's files (never overwritten).
+            files read (the vendor's, the model files: never overwritten).
         """
         path = path if path is not None else self.output
         xacro_path = xacro_path if xacro_path is not None else self.xacro_output
@@ -686,7 +687,7 @@ class UrdfLikeExport:
                             "xacro_output=)")
         texts = {path: self.text} | ({} if self.xacro_text is None else {xacro_path: self.xacro_text})
         check_format(path, "URDF", "path")  # as robocal export --urdf-like -o does
-        check_outputs(list(texts), [self.vendor, self.xacro])
+        check_outputs(list(texts), [self.vendor, self.xacro, *self.inputs])
         write_all(texts)
         return [str(p) for p in texts]
 
@@ -802,14 +803,21 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     >>> out.write()
     ['kr16_2_calibrated.urdf']
     """
+    inputs = [str(p) for p in (calibrated, nominal, vendor_model) if isinstance(p, str | Path)]
+    if output is not None or xacro_output is not None:  # before any work; write() checks again
+        check_format(output, "URDF", "output")
+        check_outputs([output, xacro_output], [str(vendor_urdf), xacro, *inputs])
     cell = _as_cell(calibrated)
     if cell is not None:
         if nominal is not None or vendor_model is not None:
             raise DataError("a calibrated cell carries its bodies' nominal models: no --nominal or "
                             "--vendor-model for a cell")
-        return _export_cell(cell, str(vendor_urdf), output, tip, geometry_only, xacro, joint_map)
+        result = _export_cell(cell, str(vendor_urdf), output, tip, geometry_only, xacro, joint_map)
+        result.inputs = inputs
+        return result
     result, chain, origins = _export_arm(calibrated, str(vendor_urdf), nominal, tip, geometry_only,
                                          vendor_model, joint_map)
+    result.inputs = inputs
     result.output = None if output is None else str(output)
     result.text = _with_comment(result.text, _shift_comment(result))
     if xacro is not None:
