@@ -68,7 +68,7 @@ from scipy.spatial.transform import Rotation
 from robocal.core.errors import DataError, UnitError
 from robocal.core.escape import line_text
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
-from robocal.core.magnitudes import check_payload
+from robocal.core.magnitudes import MASS_SCALES_KG, MASS_WORDS, check_payload, likely_unit
 from robocal.data.csv_table import csv_rows, read_table, text_lines
 from robocal.data.instruments import check_instrument
 from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
@@ -819,8 +819,12 @@ def _conditions(payload, temperature, N: int) -> dict:
         payload = _float_array(payload, "payload", (N, 4))
         bad = np.flatnonzero((payload[:, 0] < 0) | (payload[:, 0] > MAX_PAYLOAD_KG))
         if bad.size:
-            raise DataError(f"payload mass {payload[bad[0], 0]:.6g} kg (row index {bad[0]}) is outside "
-                            f"0..{MAX_PAYLOAD_KG:g} kg: give payload_kg in kilograms")
+            mass = float(payload[bad[0], 0])
+            unit = likely_unit(mass, MASS_SCALES_KG, 0.0, MAX_PAYLOAD_KG)
+            like = "" if unit is None else (f" (it looks like {MASS_WORDS[unit]}: {mass:.6g} {unit} = "
+                                            f"{mass * MASS_SCALES_KG[unit]:.4g} kg)")
+            raise DataError(f"payload mass {mass:.6g} kg (row index {bad[0]}) is outside "
+                            f"0..{MAX_PAYLOAD_KG:g} kg{like}: give payload_kg in kilograms")
         far = np.flatnonzero(np.abs(payload[:, 1:]).max(axis=1) > MAX_TRACKER_RANGE_M)
         if far.size:
             raise UnitError(f"payload centre of mass {np.abs(payload[far[0], 1:]).max():.6g} m from the "
