@@ -563,6 +563,14 @@ class UrdfLikeExport:
         The vendor's macro, the calibrated macro and where it is written.
     fk_frames : str
         The frames the FK check compares.
+    joint_map : JointMap, optional
+        The vendor's joint values from the controller's (``u = sign * q + offset``).
+    world : ndarray, shape (4, 4), optional
+        robocal's world in the vendor's root link (the map ``B``).
+    bodies : dict
+        A cell's other bodies: unit, root and tip links, FK and map checks, joint map, joints.
+    inputs : list of str
+        The model files read (given by path), which `write` never writes over.
 
     See Also
     --------
