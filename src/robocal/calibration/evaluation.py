@@ -24,7 +24,7 @@ from robocal.trust.consistency import check_fit
 from robocal.trust.coverage import Prediction
 from robocal.trust.coverage import prediction as fit_prediction
 from robocal.trust.diagnosis import diagnosed, fit_rms_mm
-from robocal.trust.held_out import held_out, judge_file
+from robocal.trust.held_out import held_out_of, judge_file
 
 
 def model_errors(robot, data) -> np.ndarray:
@@ -332,7 +332,7 @@ def _statistics(robot, data, fit_frame: bool, frame_from, force: bool,
     warnings += consistency.warnings("the model")
     stats["consistency"] = consistency.to_dict()
     stats["held_out"] = None if predicted is None or err.ndim != 2 else \
-        held_out([judge_file(robot, predicted, data, err)], warnings)
+        held_out_of([judge_file(robot, predicted, data, err)], warnings)
     stats["kind"] = data.kind
     stats["n_poses"] = data.n_poses
     if err.ndim == 2:

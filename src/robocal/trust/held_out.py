@@ -257,7 +257,7 @@ def judge_file(robot, prediction: Prediction, data, errors: np.ndarray, fitted=N
                          cause, bulk)
 
 
-def held_out(files: list[FileJudgement], warnings: list[str] | None = None) -> HeldOut | None:
+def held_out_of(files: list[FileJudgement], warnings: list[str] | None = None) -> HeldOut | None:
     """The :class:`HeldOut` of judged ``files`` (None without any); their warnings appended to
     ``warnings``."""
     if not files:
@@ -273,5 +273,5 @@ def judge_held_out(robot, prediction: Prediction, judged: list, warnings: list[s
     `robocal.calibration.result.Judged`: data, problem, states) against ``prediction`` for the
     calibrated ``robot`` (:func:`judge_file`); their warnings appended to ``warnings``. None
     without such a file."""
-    return held_out([judge_file(robot, prediction, j.data, j.problem.item_error_vectors(j.states[1])[0],
+    return held_out_of([judge_file(robot, prediction, j.data, j.problem.item_error_vectors(j.states[1])[0],
                                 j.states[1].robot) for j in judged if j.data.spec.sees_position], warnings)
