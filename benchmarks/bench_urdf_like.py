@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import io
+import sys
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -48,9 +49,9 @@ import yourdfpy
 import robocal as rc
 from robocal.deploy.compensation import controller_model
 
-DATA = Path(__file__).resolve().parents[1] / "tests" / "data" / "urdf_vendor"
-ROBOTS = {"irb2600_12_165": "abb_irb2600", "kr16_2": "kuka_kr16_2", "lrmate200id": "fanuc_lrmate200id",
-          "m20ia": "fanuc_m20ia", "gp25": "yaskawa_gp25", "ur5e": "ur5e"}
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from test_urdf_like import DATA, ROBOTS, remapped  # noqa: E402  the vendor files and the test's redrawing
+
 N_Q = 10_000
 GOAL_MM, GOAL_RAD = 1e-6, 1e-6  # issue 49: FK base_link -> tool0 equal to the calibrated model's
 ORIGIN_GOAL_MM, ORIGIN_GOAL_DEG = 1.0, 0.1  # issue 49: every joint origin near the vendor's
@@ -210,28 +211,6 @@ def pin_frames(text: str, q: np.ndarray, names: list[str]) -> np.ndarray:
     return out
 
 
-def redrawn(text: str, changes: dict[str, tuple[float, float]]) -> str:
-    """The same robot with joint values ``u = sign * q + offset`` for the named joints (axis
-    reversed, origin turned back by the offset), by scipy's rotations."""
-    import warnings
-
-    from scipy.spatial.transform import Rotation
-
-    root = ET.fromstring(text)
-    for joint in root.iter("joint"):
-        if joint.get("name") in changes:
-            sign, offset = changes[joint.get("name")]
-            axis, origin = joint.find("axis"), joint.find("origin")
-            a = np.array([float(v) for v in axis.get("xyz").split()])
-            R = Rotation.from_euler("xyz", [float(v) for v in origin.get("rpy", "0 0 0").split()])
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")  # gimbal lock: the angles still give the rotation
-                rpy = (R * Rotation.from_rotvec(a * (-sign * offset))).as_euler("xyz")
-            origin.set("rpy", " ".join(repr(float(v)) for v in rpy))
-            axis.set("xyz", " ".join(repr(float(v) + 0.0) for v in sign * a))
-    return ET.tostring(root, encoding="unicode")
-
-
 POSITIONER = """<link name="world"/>
   <joint name="world-base_link" type="fixed"><parent link="world"/><child link="base_link"/></joint>
   <link name="irbp_a250_base_link"/><link name="irbp_a250_link_1"/><link name="irbp_a250_link_2"/>
@@ -264,7 +243,7 @@ def mapped_and_cell(folder: Path) -> None:
     rng = np.random.default_rng(5)
     # the joint map
     changes = {"joint_a2": (-1.0, 0.0), "joint_a3": (1.0, np.pi / 2), "joint_a5": (1.0, 0.3)}
-    (folder / "kr16_mapped.urdf").write_text(redrawn((DATA / "kr16_2.urdf").read_text(encoding="utf-8"),
+    (folder / "kr16_mapped.urdf").write_text(remapped((DATA / "kr16_2.urdf").read_text(encoding="utf-8"),
                                                      changes), encoding="utf-8")
     cli("simulate", "--robot", "kuka_kr16_2", "--poses", "150", "--seed", "8", "-o", str(folder / "kr16.csv"),
         "--truth", str(folder / "kr16_truth.yaml"))

@@ -191,3 +191,38 @@ def test_the_report_verdict_follows_the_held_out_judgement():
               "held_out": {"verdict": BEYOND, "model_error_mm": 0.04}}
     level, sentence = verdict.next_step(beyond)
     assert level == "bad" and sentence.startswith("NOT VALIDATED")
+
+
+def test_evaluate_with_the_calibration_judges_as_calibrate_does(campaign, tmp_path):
+    """`rc.evaluate` given the calibration's result (the object, or its JSON) judges a validation
+    file the way `calibrate --validate` does (one code path: the same verdict and figures); without
+    it, it says it cannot."""
+    cal, val, truth = campaign
+    moved = _moved(val)
+    result = rc.calibrate(NOMINAL, cal, validation=moved, nongeometric="none", progress=False)
+    result.save_json(tmp_path / "r.json")
+    want = result.held_out.files[0]
+    for given in (result, str(tmp_path / "r.json")):
+        stats = rc.evaluate(result.robot, moved, result=given)
+        got = stats["held_out"].files[0]
+        assert got.verdict == want.verdict == FRAME_SHIFT
+        for key in ("held_out_mm", "model_error_mm", "frame_shift_mm", "predicted_mm"):
+            assert getattr(got, key) == pytest.approx(getattr(want, key), rel=1e-6), key
+        assert any("tracker-frame shift" in w for w in stats.warnings)
+        assert stats.to_dict()["held_out"]["verdict"] == FRAME_SHIFT
+        assert "held out against the prediction" in stats.summary()
+    plain = rc.evaluate(result.robot, moved)
+    assert plain["held_out"] is None and "not judged against a calibration's prediction" in plain.summary()
+
+
+def test_cli_evaluate_with_the_result_judges_the_file(campaign, tmp_path, capsys):
+    cal, val, truth = campaign
+    cal.save(tmp_path / "cal.csv")
+    _other_nest(val, truth).save(tmp_path / "nest.csv")
+    model, json_path = str(tmp_path / "m.yaml"), str(tmp_path / "r.json")
+    assert main(["calibrate", str(tmp_path / "cal.csv"), "--robot", "kuka_kr16_2", "--nongeometric", "none",
+                 "-o", model, "--json", json_path]) == 0
+    capsys.readouterr()
+    assert main(["evaluate", model, str(tmp_path / "nest.csv"), "--result", json_path]) == 0
+    out = capsys.readouterr().out
+    assert "beyond the prediction" in out and "WARNING: NOT VALIDATED" in out and "another SMR" in out

@@ -286,3 +286,15 @@ def test_a_file_longer_than_a_chunk_reads_every_row_with_its_line_number():
     lines[-1] = "0.1,0.2,oops,0.5,0.25"
     with pytest.raises(DataError, match=f"line {len(lines)}, column x_m: 'oops' is not a number"):
         parse_csv("\n".join(lines))
+
+
+def test_a_payload_mass_beyond_any_arm_names_the_unit_it_looks_like():
+    """The mass check of a file's payload column says which unit the number fits
+    (`robocal.core.magnitudes.likely_unit`, the one rule), not only 'give kilograms'."""
+    from robocal.data.measurements import _conditions
+
+    for mass, words in ((150_000.0, "grams: 150000 g = 150 kg"), (6000.0, "pounds: 6000 lb = 2722 kg")):
+        with pytest.raises(DataError, match=f"it looks like {words}"):
+            _conditions(np.array([[mass, 0.0, 0.0, 0.0]]), None, 1)
+    with pytest.raises(DataError, match=r"outside 0..5000 kg: give payload_kg in kilograms"):
+        _conditions(np.array([[1e9, 0.0, 0.0, 0.0]]), None, 1)

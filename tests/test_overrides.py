@@ -12,10 +12,10 @@ from scipy.spatial.transform import Rotation
 
 import robocal as rc
 from robocal.cli import main
+from robocal.core.magnitudes import CALIBRATED_TCP_MM
 from robocal.data.simulate import perturbed
 from robocal.kinematics.transforms import make_transform
 from robocal.programs import filter_program
-from robocal.programs.overrides import OVERRIDE_TOL_MM
 from robocal.programs.registry import dialect_named
 from robocal.programs.simulate import write_program
 from robocal.programs.source import ProgramText
@@ -110,14 +110,14 @@ def test_the_override_warning_through_the_command_line(tmp_path, capsys):
 
 def test_a_rotation_is_judged_by_how_far_it_moves_a_working_point():
     """0.005 deg on a frame moves a point at a 1.6 m reach 0.14 mm: said; on a tool of 200 mm,
-    0.017 mm: not (the tolerance is what a point moves, OVERRIDE_TOL_MM)."""
+    0.017 mm: not (the tolerance is what a point moves, CALIBRATED_TCP_MM)."""
     from robocal.programs.overrides import override_disagreements
 
     d = dialect_named("inform")
     own = d.frame_from_text("0,0,200,0,0,0")
     assert override_disagreements(d, "frame", {"1": own}, {"1": "0,0,200,0,0,0.005"}, 1.6)
     assert not override_disagreements(d, "tool", {"1": own}, {"1": "0,0,200,0,0,0.005"}, 1.6)
-    assert 0.2 * np.deg2rad(0.005) * 1e3 < OVERRIDE_TOL_MM < 1.6 * np.deg2rad(0.005) * 1e3
+    assert 0.2 * np.deg2rad(0.005) * 1e3 < CALIBRATED_TCP_MM < 1.6 * np.deg2rad(0.005) * 1e3
 
 
 def _payload_data(tmp_path: Path, robot: str, masses: list[float], scale: float) -> Path:

@@ -607,3 +607,20 @@ def test_urscript_partial_payload_setters_keep_the_other_half(tmp_path):
         "3 kg, centre of mass [0, 0, 100] mm",
         "5 kg, centre of mass [0, 0, 100] mm",
     ]
+
+
+def test_payload_schedules_are_checked_against_the_nominal_rating_when_the_model_has_none(tmp_path):
+    """A calibrated model saved without its rated payload: payload schedules in grams were let
+    through (the check had only the calibrated model's rating); now they are checked against the
+    nominal's, as --payload is (`check_masses`, one path)."""
+    from dataclasses import replace
+
+    nominal, cal = _robots()
+    unrated = replace(cal, payload_kg=None)
+    paths, tools, frames = write_program("fanuc", tmp_path, nominal, _joints(nominal, 2), TOOL, FRAME)
+    _set_payload_after_tool(paths[0], "PAYLOAD[1]")
+    with pytest.raises(DataError, match="--payload-schedules"):
+        filter_program(paths, unrated, nominal, tools=tools, frames=frames,
+                       payload_schedules={1: (150_000.0, 0, 0, 0)})  # 150 kg typed in grams
+    with pytest.raises(DataError, match="--payload"):
+        filter_program(paths, unrated, nominal, tools=tools, frames=frames, payload=[150_000.0])

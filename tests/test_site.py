@@ -4,7 +4,6 @@ Chromium, the file:// worker shim). The site is built once into a temporary fold
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
 import subprocess
@@ -22,16 +21,6 @@ import docs_math  # noqa: E402
 from test_browser import BROWSERS, FLAGS, console_messages  # noqa: E402
 
 RAW_LATEX = re.compile(r"\\\(|\\\)|\\\[|\\\]|\$\$")
-
-
-@pytest.fixture(scope="module")
-def site(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("site")
-    env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
-    proc = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-q", "-d", str(out)],
-                          cwd=ROOT, capture_output=True, text=True, env=env, check=False, timeout=900)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return out
 
 
 def pages(site: Path) -> list[Path]:

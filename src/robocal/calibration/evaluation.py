@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from robocal.calibration.cell_evaluation import evaluate_cell
+from robocal.calibration.result import CalibrationResult, result_prediction
 from robocal.core.errors import DataError, PlausibilityError
 from robocal.core.io import write_all
 from robocal.core.resources import EVALUATION_ADVICE, check_memory, evaluation_bytes
@@ -20,7 +21,10 @@ from robocal.kinematics.joint_errors import extrapolated_conditions
 from robocal.kinematics.workcell import Cell
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import check_fit
+from robocal.trust.coverage import Prediction
+from robocal.trust.coverage import prediction as fit_prediction
 from robocal.trust.diagnosis import diagnosed, fit_rms_mm
+from robocal.trust.held_out import held_out_of, judge_file
 
 
 def model_errors(robot, data) -> np.ndarray:
@@ -123,22 +127,30 @@ class EvaluationResult(dict):
         return {k: self[k] for k in STATISTICS}
 
     def summary(self) -> str:
-        """One line: the kind of errors, of which model on which data, the statistics (mm; and of
-        the rotation errors, deg, for 6-D rows).
+        """The kind of errors, of which model on which data, the statistics (mm; and of the
+        rotation errors, deg, for 6-D rows); point or pose data on a second line: judged against
+        the calibration's prediction, or that they are not (no ``result``).
 
         Returns
         -------
         str
-            One line.
+            One line, two for point or pose data.
         """
         stats = self.statistics
         rotation = self.get("rotation_deg")
         turns = "" if rotation is None else "; rotation " + ", ".join(
             f"{k} {rotation[k]:.4f} deg" for k in ("rms", "mean", "max", "p95"))
-        return (f"{self['kind']} errors of {self.names.get('model') or 'the model'} on "
+        line = (f"{self['kind']} errors of {self.names.get('model') or 'the model'} on "
                 f"{self.names.get('data') or 'the data'} ({self['n_poses']} poses): "
                 + ", ".join(f"{k} {stats[k]:.4f} mm" if k != "n" else f"n {stats[k]}" for k in STATISTICS)
                 + turns)
+        judged = self.get("held_out")
+        if judged is not None:
+            return f"{line}\n{judged.line()}"
+        if self.fit_frame or "error_vectors_mm" not in self:
+            return line
+        return (f"{line}\nnot judged against a calibration's prediction: give the calibration's result "
+                "(--result RESULT.json, result=) to judge these data as calibrate judges its validation")
 
     def to_dict(self) -> dict:
         """The evaluation JSON: the names, the statistics, each row's error (mm), the consistency
@@ -153,6 +165,7 @@ class EvaluationResult(dict):
                "n_poses": self["n_poses"], "fit_frame": bool(self.fit_frame),
                "frame_from": self.names.get("frame_from"), "units": "mm", "evaluation": self.statistics,
                "errors_mm": self["errors_mm"].tolist(), "consistency": self["consistency"],
+               "held_out": None if self.get("held_out") is None else self["held_out"].to_dict(),
                "warnings": self["warnings"]}
         if "rotation_deg" in self:
             out["rotation_deg"] = self["rotation_deg"]
@@ -187,7 +200,7 @@ def check_files_memory(paths) -> None:
 
 
 def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bool = False,
-             names: dict | None = None, instrument: str | None = None) -> EvaluationResult:
+             names: dict | None = None, instrument: str | None = None, result=None) -> EvaluationResult:
     """Position error statistics (mm) of ``robot`` against ``data``.
 
     ``fit_frame`` first registers the base frame and SMR offsets on ``data`` (for a nominal
@@ -222,6 +235,12 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
         The instrument that took ``data`` if it declares none (`robocal.data.instruments`): its
         documented noise is the consistency test's. Marker and camera data fit their own frames
         (capture frame and marker offsets; camera and board) on ``data`` itself.
+    result : CalibrationResult or str or pathlib.Path, optional
+        The calibration that made ``robot`` (its result, or the result JSON ``calibrate --json``
+        wrote): point or pose data are judged against its accuracy prediction at their poses as
+        ``calibrate`` judges its validation data (`robocal.trust.held_out.judge_file`, one code
+        path): ``"held_out"``, its warnings in ``"warnings"``. Without it, the summary says the
+        data are not judged against a prediction.
 
     Returns
     -------
@@ -230,7 +249,8 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
         ``n``, ``rms``, ``mean``, ``max``, ``p95`` (mm); ``errors_mm`` ``(N,)`` (plane/distance:
         signed); ``error_vectors_mm`` ``(N, 3)`` (point/pose); ``rotation_deg`` (6-D rows: pose, camera);
         ``kind``; ``n_poses``; ``warnings`` (list of str); ``consistency`` (the residual test);
-        with a fitted frame ``robot`` and ``registration_rms_mm``.
+        ``held_out`` (`robocal.trust.held_out.HeldOut`, with ``result``; else None); with a fitted
+        frame ``robot`` and ``registration_rms_mm``.
 
     Raises
     ------
@@ -264,15 +284,30 @@ def evaluate(robot, data, fit_frame: bool = False, *, frame_from=None, force: bo
     if isinstance(robot, Cell):  # every body in one tracker frame (robocal.calibration.cell_evaluation)
         return evaluate_cell(robot, data)
     data = declared([data], instrument)[0]
+    predicted = _prediction(result, robot)
     try:
-        return EvaluationResult(_statistics(robot, data, fit_frame, frame_from, force), names, fit_frame)
+        return EvaluationResult(_statistics(robot, data, fit_frame, frame_from, force, predicted), names,
+                                fit_frame)
     except PlausibilityError as exc:  # the data's own diagnosis first when it tells more
         fitted = fit_frame or frame_from is not None
         raise diagnosed(exc, robot, [d for d in (frame_from, data) if d is not None], fitted) from None
 
 
-def _statistics(robot, data, fit_frame: bool, frame_from, force: bool) -> dict:
-    """`evaluate`'s statistics as a plain dict."""
+def _prediction(result, robot) -> Prediction | None:
+    """The accuracy prediction of ``result`` (a `CalibrationResult` or its JSON's path) for the
+    calibrated ``robot``; None without ``result``."""
+    if result is None:
+        return None
+    if isinstance(result, CalibrationResult):
+        return fit_prediction(result)
+    if not isinstance(result, str | Path):
+        raise DataError(f"result: a CalibrationResult or the path of its JSON, not {type(result).__name__}")
+    return result_prediction(result, robot)
+
+
+def _statistics(robot, data, fit_frame: bool, frame_from, force: bool,
+                predicted: Prediction | None = None) -> dict:
+    """`evaluate`'s statistics as a plain dict; the data judged against ``predicted``."""
     rows = len(data) + (0 if frame_from is None else len(frame_from))
     check_memory(evaluation_bytes(rows), f"evaluating {rows:,} measurement rows", EVALUATION_ADVICE)
     out, warnings = {}, []
@@ -302,6 +337,8 @@ def _statistics(robot, data, fit_frame: bool, frame_from, force: bool) -> dict:
     consistency = check_fit(robot, robot, [obs], [err], unknowns)
     warnings += consistency.warnings("the model")
     stats["consistency"] = consistency.to_dict()
+    stats["held_out"] = None if predicted is None or err.ndim != 2 else \
+        held_out_of([judge_file(robot, predicted, data, err)], warnings)
     stats["kind"] = data.kind
     stats["n_poses"] = data.n_poses
     if err.ndim == 2:

@@ -30,7 +30,7 @@ from robocal.kinematics.transforms import matrix_to_rotvec
 from robocal.report.floor import noise_floor_mm, own_error_mm
 from robocal.report.metrics import position_stats
 from robocal.trust.consistency import Consistency, item_noise
-from robocal.trust.coverage import accuracy_line
+from robocal.trust.coverage import Prediction, accuracy_line
 from robocal.trust.file_shifts import FileShifts, pose_means, split_by_file
 from robocal.trust.held_out import HeldOut
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG
@@ -705,6 +705,23 @@ def load_result(path) -> dict:
         return validate(data, RESULT_SCHEMA)
     except DataError as exc:
         raise DataError(f"{path}: {exc}") from None
+
+
+def result_prediction(path, calibrated) -> Prediction:
+    """The accuracy prediction (`robocal.trust.coverage.Prediction`) of the result JSON ``path``,
+    checked against the ``calibrated`` model (the same parameters).
+
+    Raises
+    ------
+    DataError
+        The JSON has no prediction or belongs to another model.
+    """
+    section = load_result(path).get("predicted_accuracy")
+    if not isinstance(section, dict) or not isinstance(section.get("model"), dict):
+        raise DataError(f"{path} has no predicted_accuracy section: calibrate again with --json to get one")
+    prediction = Prediction.from_dict(section["model"])
+    prediction.error_mm(calibrated, calibrated.limits.mean(axis=1)[None])  # DataError: another model's
+    return prediction
 
 
 def _frame_dict(T: np.ndarray) -> dict:

@@ -9,6 +9,7 @@ from robocal.cli.history_options import add_history_options
 
 EPILOG = """Examples:
   robocal evaluate calibrated.yaml validation.csv --json val.json
+  robocal evaluate calibrated.yaml validation.csv --result result.json   # judged against its prediction
   robocal evaluate meca500 meca_val.csv --fit-frame                   # nominal model: fit base and SMRs first
   robocal evaluate meca500 meca_val.csv --frame-from meca_cal.csv     # fit them on one file, judge another
   robocal evaluate calibrated_cell.yaml cell_check.csv --json check.json   # a work cell: one tracker frame
@@ -29,6 +30,10 @@ def add_parser(sub) -> None:
     frame.add_argument("--frame-from", metavar="FIT.csv",
                        help="fit the base frame and SMR offsets on FIT.csv and judge DATA with them")
     p.add_argument("--json", metavar="OUT", help="write the statistics as JSON")
+    p.add_argument("--result", metavar="RESULT.json",
+                   help="the result JSON of the calibration that made MODEL (calibrate --json): judge point "
+                        "or pose data against its accuracy prediction at their poses (as calibrate "
+                        "--validate)")
     p.add_argument("--instrument", choices=INSTRUMENT_NAMES,
                    help="the instrument that took DATA if it declares none: its documented noise is the "
                         "consistency test's")
@@ -48,7 +53,7 @@ def run(args) -> int:
     from robocal.kinematics.model import load_model
 
     check_format(args.json, "JSON", "--json")
-    check_outputs([args.json], [args.model, args.data, args.frame_from])
+    check_outputs([args.json], [args.model, args.data, args.frame_from, args.result])
     robot_id = open_history(args.history, args.robot_id)
     if (cell := work_cell(args.model)) is not None:  # every body in one tracker frame
         return _evaluate_cell(args, cell)
@@ -59,7 +64,7 @@ def run(args) -> int:
         load_measurements(args.frame_from, robot, args.quiet, args.fanuc_coupled)
     stats = evaluate(robot, data, fit_frame=args.fit_frame, frame_from=frame_from, force=args.force,
                      names={"model": args.model, "data": args.data, "frame_from": args.frame_from},
-                     instrument=args.instrument)
+                     instrument=args.instrument, result=args.result)
     _said(stats, stats.write(args.json), args.quiet)
     if args.history:  # after the files: the history is never the only copy
         files = [(args.data, "evaluation")] + ([(args.frame_from, "frame")] if args.frame_from else [])
@@ -75,7 +80,7 @@ def _evaluate_cell(args, cell) -> int:
     from robocal.core.errors import DataError
 
     unsupported = [o for o, v in (("--fit-frame", args.fit_frame), ("--frame-from", args.frame_from),
-                                  ("--history", args.history)) if v]
+                                  ("--history", args.history), ("--result", args.result)) if v]
     if unsupported:
         raise DataError(f"evaluate with a work cell fits one tracker frame for every body itself: not "
                         f"{', '.join(unsupported)}")

@@ -90,7 +90,6 @@ def _urdf_like(args) -> int:
     """``--urdf-like VENDOR -o OUT``: the vendor's URDF with the calibrated kinematics."""
     from robocal.cli.args import check_format
     from robocal.core.errors import DataError
-    from robocal.core.io import check_outputs
     from robocal.deploy.urdf_like import export_urdf_like, parse_joint_map
 
     if not args.urdf_like or not args.output:
@@ -99,7 +98,7 @@ def _urdf_like(args) -> int:
         raise DataError("--urdf-like writes one file (-o OUT): run --urdf, --yaml or --ur-calibration apart")
     check_format(args.output, "URDF", "-o")
     macro, macro_out = args.xacro or (None, None)
-    check_outputs([args.output, macro_out], [args.model, args.urdf_like, macro])
+    # the API refuses writing over the model file, the vendor's files (export_urdf_like, write)
     result = export_urdf_like(args.model, args.urdf_like, nominal=args.nominal, output=args.output,
                               tip=args.tip, xacro=macro, xacro_output=macro_out,
                               geometry_only=args.geometry_only, vendor_model=args.vendor_model,

@@ -17,6 +17,7 @@ import time
 from collections.abc import Mapping
 from pathlib import Path
 
+from robocal.core.bom import decode_utf8
 from robocal.core.errors import DataError, RobocalError
 
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3}  # unit name -> metres per unit
@@ -62,7 +63,7 @@ def read_text(path, what: str, error: type[RobocalError] = DataError) -> str:
     type) names the file, ``what`` it should be and the reason when it cannot be read."""
     path = Path(path)
     try:
-        return path.read_bytes().decode("utf-8-sig")
+        return decode_utf8(path.read_bytes())
     except OSError as exc:
         raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
     except UnicodeDecodeError:

@@ -59,6 +59,12 @@ TARGETS_MIN_REACHES = 0.05  # the farthest target of a set lies at least 5 % of 
 TARGETS_MAX_REACHES = 2.0  # ... and at most twice the reach (the robot must get there)
 MODEL_MIN_REACH_M = 0.05  # no arm this tool handles reaches less than 50 mm
 MODEL_MAX_REACH_M = 50.0  # nor more than 50 m
+# mm: the accuracy a calibrated arm measured with a laser tracker reaches at its TCP (a few hundredths
+# of a mm): a TCP difference below it is too small to matter, one above it is what a calibration
+# corrects. One threshold for: a --tool/--frame differing from the program's own data
+# (programs/overrides), joint-error terms a URDF leaves out (deploy/urdf_like), a run-time
+# correction's last step still off (programs/runtime: the controller's warning)
+CALIBRATED_TCP_MM = 0.05
 RADIAN_LIKE_TOL = 5e-4  # rad: angles in degrees this close to a multiple of pi/12 are radians
 MAX_RADIANS = 2 * math.pi + 1e-6  # an orientation angle in radians beyond a full turn: degrees
 RADIAN_SET_MIN_DEG = 0.1  # deg: a set of angles whose largest lies between this and pi 'deg' is radians
@@ -91,7 +97,22 @@ def likely_unit(raw: float, scales: dict[str, float], low: float, high: float,
     >>> likely_unit(397.0, MASS_SCALES_KG, 0.0, 300.0)  # 397 'kg' on a 200 kg robot: pounds
     'lb'
     """
-    return next((u for u, s in scales.items() if u != besides and low <= raw * s <= high), None)
+    return next(iter(fitting_units(raw, scales, low, high, besides)), None)
+
+
+def fitting_units(raw: float, scales: dict[str, float], low: float, high: float,
+                  besides: str | None = None) -> list[str]:
+    """Every unit of ``scales`` (other than ``besides``) in which ``raw`` lands within
+    ``low .. high`` (SI), in the order of ``scales``: where a bound alone cannot tell them apart
+    (6000 typed as kg: 6 kg in grams, 2722 kg in pounds), a message names them all.
+
+    Examples
+    --------
+    >>> from robocal.core.magnitudes import MASS_SCALES_KG, fitting_units
+    >>> fitting_units(6000.0, MASS_SCALES_KG, 0.0, 5000.0)
+    ['lb', 'g']
+    """
+    return [u for u, s in scales.items() if u != besides and low <= raw * s <= high]
 
 
 def check_length(size_m: float, declared: str, low_m: float, high_m: float, what: str, kind: str,

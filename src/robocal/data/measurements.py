@@ -68,7 +68,7 @@ from scipy.spatial.transform import Rotation
 from robocal.core.errors import DataError, UnitError
 from robocal.core.escape import line_text
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, read_text, write_atomic
-from robocal.core.magnitudes import check_payload, temperature_note
+from robocal.core.magnitudes import MASS_SCALES_KG, MASS_WORDS, check_payload, fitting_units, temperature_note
 from robocal.data.csv_table import csv_rows, read_table, text_lines
 from robocal.data.instruments import check_instrument
 from robocal.data.kinds import OBSERVED, KindSpec, kind_spec
@@ -819,11 +819,12 @@ def _conditions(payload, temperature, N: int) -> dict:
         payload = _float_array(payload, "payload", (N, 4))
         bad = np.flatnonzero((payload[:, 0] < 0) | (payload[:, 0] > MAX_PAYLOAD_KG))
         if bad.size:
-            heaviest = float(payload[:, 0].max())
-            grams = (f" (the masses look like grams: {heaviest:.6g} g = {heaviest * 1e-3:.4g} kg)"
-                     if payload[:, 0].min() >= 0 and heaviest * 1e-3 <= MAX_PAYLOAD_KG else "")
-            raise UnitError(f"payload mass {payload[bad[0], 0]:.6g} kg (row index {bad[0]}) is outside "
-                            f"0..{MAX_PAYLOAD_KG:g} kg{grams}: give payload_kg in kilograms")
+            mass = float(payload[bad[0], 0])
+            units = fitting_units(mass, MASS_SCALES_KG, 0.0, MAX_PAYLOAD_KG)
+            like = "" if not units else " (it looks like " + " or ".join(
+                f"{MASS_WORDS[u]}: {mass:.6g} {u} = {mass * MASS_SCALES_KG[u]:.4g} kg" for u in units) + ")"
+            raise UnitError(f"payload mass {mass:.6g} kg (row index {bad[0]}) is outside "
+                            f"0..{MAX_PAYLOAD_KG:g} kg{like}: give payload_kg in kilograms")
         far = np.flatnonzero(np.abs(payload[:, 1:]).max(axis=1) > MAX_TRACKER_RANGE_M)
         if far.size:
             raise UnitError(f"payload centre of mass {np.abs(payload[far[0], 1:]).max():.6g} m from the "

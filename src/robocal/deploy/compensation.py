@@ -279,8 +279,15 @@ def check_payload_given(payload, calibrated: Robot, nominal: Robot | None = None
         mass = float(np.asarray(payload, dtype=float).reshape(-1)[0])
     except (TypeError, ValueError, IndexError):
         return
+    check_masses([mass], calibrated, nominal, "--payload")
+
+
+def check_masses(masses, calibrated: Robot, nominal: Robot | None, option: str) -> None:
+    """Refuse ``masses`` (kg) given with ``option`` heavier than the rated payload allows
+    (`robocal.core.magnitudes.check_payload`): the ``calibrated`` model's ``payload_kg``, else the
+    ``nominal`` model's (a calibrated model saved without it)."""
     robot = calibrated if calibrated.payload_kg is not None or nominal is None else nominal
-    check_payload([mass], robot.payload_kg, robot.name, "--payload")
+    check_payload(masses, robot.payload_kg, robot.name, option)
 
 
 def unused_conditions(robot: Robot, payload=None, temperature: float | None = None) -> list[str]:

@@ -145,17 +145,12 @@ def load_prediction(path: str | None, calibrated: Robot | Cell, outputs: list) -
     """
     if path is None:
         return None
-    from robocal.calibration.result import load_result
+    from robocal.calibration.result import result_prediction
 
     check_outputs(outputs, [path])
     if isinstance(calibrated, Cell):  # a cell calibration's prediction is its anchor arm's
         calibrated = calibrated.body(calibrated.anchor)
-    section = load_result(path).get("predicted_accuracy")
-    if not isinstance(section, dict) or not isinstance(section.get("model"), dict):
-        raise DataError(f"{path} has no predicted_accuracy section: calibrate again with --json to get one")
-    prediction = Prediction.from_dict(section["model"])
-    prediction.error_mm(calibrated, calibrated.limits.mean(axis=1)[None])  # DataError: another model's
-    return prediction
+    return result_prediction(path, calibrated)
 
 
 def payload_si(values: list[float] | None) -> list[float] | None:

@@ -14,7 +14,7 @@ The map between the vendor's frames and robocal's is found from the nominal mode
    controller's base turned by pi, comes out of the fit as such.
 2. Every link of the vendor's chain rides on one of robocal's frames {f} (f: the moving joints
    before it); its pose in that frame, ``M = (B F_f(q))^-1 T_link(q)``, must be the same for every
-   joint vector: checked on `CHECK_POSES` random ones (`MAP_TOL_M`, `MAP_TOL_RAD`), else the vendor
+   joint vector: checked on `CHECK_POSES` random ones (`MAP_TOL_REACHES`, `MAP_TOL_RAD`), else the vendor
    file is refused as another robot.
 3. The calibrated link frames are ``B F_f(q) M`` with the calibrated chain F (its frame {0} the
    controller's base, `robocal.deploy.compensation.controller_model`): the origin of moving joint k
@@ -42,24 +42,27 @@ import numpy as np
 
 from robocal.core.errors import DataError, ModelError, RobocalError
 from robocal.core.io import check_format, check_outputs, read_text, write_all
+from robocal.core.magnitudes import CALIBRATED_TCP_MM, MODEL_MIN_REACH_M
 from robocal.deploy.compensation import controller_model
 from robocal.deploy.models import controller_for
 from robocal.kinematics.cell_file import is_workcell
 from robocal.kinematics.fk import chain_frames
-from robocal.kinematics.model import Robot, load_model
+from robocal.kinematics.model import Robot, links_length, load_model
 from robocal.kinematics.model_file import read_model_data
 from robocal.kinematics.transforms import invert_transform
 from robocal.kinematics.urdf import not_carried
 from robocal.kinematics.urdf_read import joint_axis, joint_origin, matrix_to_rpy, parse_urdf, urdf_chain
 from robocal.kinematics.workcell import Cell, load_cell
 
-MAP_TOL_M = 1e-6  # m: a vendor link's pose in robocal's frame may vary this much over joint vectors
-MAP_TOL_RAD = 1e-6  # rad: the same for its orientation (the vendor files round pi/2 to 1e-10)
+# a vendor link's pose in robocal's frame may vary this much over joint vectors, in reaches of the arm
+# (`_tol_m`: 1 um on a KR 16's 2.5 m; the vendor files round pi/2 to 1e-10; looser, the refined
+# offsets of `_refined` keep micro-radian residues that pass for a map with one more offset)
+MAP_TOL_REACHES = 4e-7
+MAP_TOL_RAD = 1e-6  # rad: the same for its orientation
 CHECK_POSES = 256  # random joint vectors the map is checked on
 FK_POSES = 1000  # random joint vectors the written file's FK is compared on
-FK_TOL_M = 1e-9  # m: the written file's FK off the calibrated model's beyond this is an internal error
+FK_TOL_REACHES = 1e-9  # the written file's FK off the calibrated model's beyond this: an internal error
 FK_TOL_RAD = 1e-9  # rad: the same for the orientation
-DROPPED_TERMS_MM = 0.05  # mm: joint-error terms moving the TCP by more (mean) make a URDF another robot
 KEPT_BELOW = 1e-12  # m, rad: a new origin's number this close to the vendor's is written as the vendor's
 OFFSET_CANDIDATES = (0.0, np.pi / 2, np.pi, -np.pi / 2)  # rad: a vendor joint's zero tried against the
 # controller's (then refined: any value), for the revolute joints but the first and the last
@@ -171,6 +174,13 @@ def _pose_gap(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     sin = np.linalg.norm(np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0],
                                    R[..., 1, 0] - R[..., 0, 1]], -1), axis=-1) / 2
     return dist, np.arctan2(sin, cos)
+
+
+def _tol_m(robot: Robot, reaches: float) -> float:
+    """A length tolerance (m) of ``reaches`` times ``robot``'s reach (its link lengths, at least the
+    smallest arm's, `MODEL_MIN_REACH_M`): a position compared over the arm is off by rounding in
+    proportion to its size."""
+    return reaches * max(links_length(robot), MODEL_MIN_REACH_M)
 
 
 def _random_joints(robot: Robot, count: int, seed: int = 0) -> np.ndarray:
@@ -290,17 +300,18 @@ def _joint_map(chain: _Chain, nominal: Robot, vendor_file: str, B: np.ndarray | 
             raise DataError("--joint-map: a prismatic joint's zero is its origin: give it no offset")
     vP, vZ = _lines(chain, offsets)
     T, dist, angle = _fit_all(P, Z, vP, vZ, signs, revolute, B)
-    score = np.maximum(dist / MAP_TOL_M, angle / MAP_TOL_RAD).max(-1)  # (C, S)
+    tol_m = _tol_m(nominal, MAP_TOL_REACHES)
+    score = np.maximum(dist / tol_m, angle / MAP_TOL_RAD).max(-1)  # (C, S)
     cost = (np.count_nonzero(offsets, axis=1)[:, None] * (n + 1) + (signs < 0).sum(1)[None, :]).astype(float)
     if not (score <= 1).any() and free:
-        refined = _refined(chain, P, Z, signs, revolute, offsets, score, free, B)
+        refined = _refined(chain, P, Z, signs, revolute, offsets, score, free, B, tol_m)
         if refined is not None:
             return refined
     cost = np.where(score <= 1, cost, np.inf)
     c, s = np.unravel_index(np.argmin(cost), score.shape)
     if score[c, s] > 1:
         c, s = np.unravel_index(np.argmin(score), score.shape)
-        k = int(np.argmax(np.maximum(dist[c, s] / MAP_TOL_M, angle[c, s] / MAP_TOL_RAD)))
+        k = int(np.argmax(np.maximum(dist[c, s] / tol_m, angle[c, s] / MAP_TOL_RAD)))
         name = chain.joints[chain.moving[k]].get("name")
         how = "with the given joint map" if given is not None else "with any joint's sign and zero"
         raise DataError(f"{vendor_file} is not {nominal.name}: the axis of its joint {name} is "
@@ -314,7 +325,8 @@ def _joint_map(chain: _Chain, nominal: Robot, vendor_file: str, B: np.ndarray | 
     return JointMap(signs[s], offsets[c], alternative, given is not None), T[c, s]
 
 
-def _refined(chain, P, Z, signs, revolute, offsets, score, free, B) -> tuple[JointMap, np.ndarray] | None:
+def _refined(chain, P, Z, signs, revolute, offsets, score, free, B,
+             tol_m: float) -> tuple[JointMap, np.ndarray] | None:
     """The offsets (any value) of the `REFINED` best candidates of `_joint_map` refined by least
     squares of the joint lines' gaps: of the maps that then hold, the one with the fewest offsets
     (then reversed joints), another as its ``alternative``; None when none holds."""
@@ -327,7 +339,7 @@ def _refined(chain, P, Z, signs, revolute, offsets, score, free, B) -> tuple[Joi
             u[free] = x
             vP, vZ = _lines(chain, u[None])
             _, dist, angle = _fit_all(P, Z, vP, vZ, signs[s:s + 1], revolute, B)
-            return np.concatenate([dist[0, 0] / MAP_TOL_M, angle[0, 0] / MAP_TOL_RAD])
+            return np.concatenate([dist[0, 0] / tol_m, angle[0, 0] / MAP_TOL_RAD])
 
         fit = least_squares(gaps, offsets[c, free], jac="3-point", diff_step=1e-5, xtol=1e-15, ftol=1e-15,
                             gtol=1e-15)
@@ -367,7 +379,7 @@ def _link_maps(chain: _Chain, nominal: Robot, vendor_file: str, B: np.ndarray | 
                              prismatic=nominal.prismatic)
     M = invert_transform(B @ frames[:, chain.frame]) @ vendor  # (N, m + 1, 4, 4)
     dist, angle = _pose_gap(M, M[:1])
-    off = np.flatnonzero((dist.max(0) > MAP_TOL_M) | (angle.max(0) > MAP_TOL_RAD))
+    off = np.flatnonzero((dist.max(0) > _tol_m(nominal, MAP_TOL_REACHES)) | (angle.max(0) > MAP_TOL_RAD))
     if off.size:
         worst = int(off[0])  # the first link along the chain that does not follow robocal's frame
         raise DataError(f"{vendor_file} is not {nominal.name}: its link {chain.links[worst]} moves "
@@ -552,12 +564,13 @@ class UrdfLikeExport:
     fk_frames : str
         The frames the FK check compares.
     joint_map : JointMap, optional
-        The vendor's joint values from the controller's (``u = sign * q + offset`` per joint).
+        The vendor's joint values from the controller's (``u = sign * q + offset``).
     world : ndarray, shape (4, 4), optional
-        robocal's world in the vendor's root link (m).
+        robocal's world in the vendor's root link (the map ``B``).
     bodies : dict
-        A cell's other bodies, by name: their unit, root and tip links, FK and map checks, joint
-        map and joints.
+        A cell's other bodies: unit, root and tip links, FK and map checks, joint map, joints.
+    inputs : list of str
+        The model files read (given by path), which `write` never writes over.
 
     See Also
     --------
@@ -598,6 +611,7 @@ class UrdfLikeExport:
     joint_map: JointMap | None = None
     world: np.ndarray | None = None  # (4, 4) robocal's world in the vendor's root link (the map B)
     bodies: dict = field(default_factory=dict)  # a cell's other bodies: tip, checks, joint map, joints
+    inputs: list[str] = field(default_factory=list)  # the model files read: never written over
 
     def _map_lines(self) -> list[str]:
         """The joints whose values are not the controller's (``u = sign * q + offset``)."""
@@ -672,7 +686,7 @@ class UrdfLikeExport:
         ------
         DataError
             No path, a path named for another format than URDF, or a path that is one of the
-            vendor's files (never overwritten).
+            files read (the vendor's, the model files: never overwritten).
         """
         path = path if path is not None else self.output
         xacro_path = xacro_path if xacro_path is not None else self.xacro_output
@@ -681,7 +695,7 @@ class UrdfLikeExport:
                             "xacro_output=)")
         texts = {path: self.text} | ({} if self.xacro_text is None else {xacro_path: self.xacro_text})
         check_format(path, "URDF", "path")  # as robocal export --urdf-like -o does
-        check_outputs(list(texts), [self.vendor, self.xacro])
+        check_outputs(list(texts), [self.vendor, self.xacro, *self.inputs])
         write_all(texts)
         return [str(p) for p in texts]
 
@@ -759,7 +773,7 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
         found: to take the other map a spherical wrist allows.
     geometry_only : bool, default False
         Write the geometry of a model whose joint-error terms (compliance, backlash, ...) move its
-        TCP by more than `DROPPED_TERMS_MM` (refused otherwise: that URDF is not the calibrated
+        TCP by more than `CALIBRATED_TCP_MM` (refused otherwise: that URDF is not the calibrated
         robot; calibrate with ``nongeometric=None`` for ROS), with a warning saying how far.
 
     Returns
@@ -797,14 +811,21 @@ def export_urdf_like(calibrated: Robot | str, vendor_urdf, nominal: Robot | str 
     >>> out.write()
     ['kr16_2_calibrated.urdf']
     """
+    inputs = [str(p) for p in (calibrated, nominal, vendor_model) if isinstance(p, str | Path)]
+    if output is not None or xacro_output is not None:  # before any work; write() checks again
+        check_format(output, "URDF", "output")
+        check_outputs([output, xacro_output], [str(vendor_urdf), xacro, *inputs])
     cell = _as_cell(calibrated)
     if cell is not None:
         if nominal is not None or vendor_model is not None:
             raise DataError("a calibrated cell carries its bodies' nominal models: no --nominal or "
                             "--vendor-model for a cell")
-        return _export_cell(cell, str(vendor_urdf), output, tip, geometry_only, xacro, joint_map)
+        result = _export_cell(cell, str(vendor_urdf), output, tip, geometry_only, xacro, joint_map)
+        result.inputs = inputs
+        return result
     result, chain, origins = _export_arm(calibrated, str(vendor_urdf), nominal, tip, geometry_only,
                                          vendor_model, joint_map)
+    result.inputs = inputs
     result.output = None if output is None else str(output)
     result.text = _with_comment(result.text, _shift_comment(result))
     if xacro is not None:
@@ -946,13 +967,13 @@ def _body_check(text: str, chain: _Chain, body: Robot, drawn: Robot, B: np.ndarr
                 joint_map: JointMap) -> tuple[list[JointShift], tuple[float, float, int]]:
     """A positioner's written chain read back: its tip's pose in the root link against the
     calibrated body's (in the cell's world, ``B``) on `FK_POSES` joint vectors (RobocalError beyond
-    `FK_TOL_M`, `FK_TOL_RAD`), and how far each joint's origin and link frame (at q = 0, in the
+    `FK_TOL_REACHES`, `FK_TOL_RAD`), and how far each joint's origin and link frame (at q = 0, in the
     root link) moved from the vendor's."""
     written = _Chain.read(parse_urdf(text), chain.links[-1])
     q = _random_joints(drawn, FK_POSES, seed=1)
     _, frames = chain_frames(body.links, body.base, body.tool, q, frames=True, prismatic=body.prismatic)
     dist, angle = _pose_gap(written.poses(joint_map.vendor(q))[:, -1], B @ frames[:, chain.frame[-1]] @ M[-1])
-    if dist.max() > FK_TOL_M or angle.max() > FK_TOL_RAD:
+    if dist.max() > _tol_m(body, FK_TOL_REACHES) or angle.max() > FK_TOL_RAD:
         raise RobocalError(f"internal: the written URDF's FK of {body.name} is {dist.max() * 1e3:.3g} mm / "
                            f"{angle.max():.3g} rad off the calibrated model's")
     vendor0, new0 = (c.poses(joint_map.vendor(q[:1]))[0] for c in (chain, written))
@@ -966,7 +987,7 @@ def _body_check(text: str, chain: _Chain, body: Robot, drawn: Robot, B: np.ndarr
 
 def _dropped_terms(robot: Robot, geometry_only: bool) -> list[str]:
     """What leaving ``robot``'s joint-error terms out of a URDF costs, as a warning (with
-    ``geometry_only``), or DataError when they move the TCP by more than `DROPPED_TERMS_MM` on
+    ``geometry_only``), or DataError when they move the TCP by more than `CALIBRATED_TCP_MM` on
     average over `FK_POSES` random joint vectors (their conditions unknown: no payload, the
     reference temperature)."""
     if robot.joint_errors is None:
@@ -977,7 +998,7 @@ def _dropped_terms(robot: Robot, geometry_only: bool) -> list[str]:
     said = (f"{robot.name}'s joint-error terms ({', '.join(robot.joint_errors.names)}) move its TCP by "
             f"{gap.mean():.3f} mm on average, {gap.max():.3f} mm at most, over {FK_POSES} joint vectors; a "
             "URDF has rigid links and exact joints, so it holds the geometry without them")
-    if gap.mean() <= DROPPED_TERMS_MM:
+    if gap.mean() <= CALIBRATED_TCP_MM:  # joint-error terms moving the TCP more: another robot
         return []
     if not geometry_only:
         raise DataError(f"{said}, which is not the calibrated robot: calibrate with --nongeometric none "
@@ -999,7 +1020,7 @@ def _result(robot, controller, vendor_file, robot_name, chain, B, M, check, new_
     mine = np.stack([invert_transform(poses[:, base_at]) @ poses[:, -1], poses[:, -1]])
     theirs = np.stack([invert_transform(links[:, 0]) @ links[:, 1], links[:, 1]])
     dist, angle = _pose_gap(mine, theirs)
-    if dist.max() > FK_TOL_M or angle.max() > FK_TOL_RAD:
+    if dist.max() > _tol_m(cal, FK_TOL_REACHES) or angle.max() > FK_TOL_RAD:
         raise RobocalError(f"internal: the written URDF's FK is {dist.max() * 1e3:.3g} mm / "
                            f"{angle.max():.3g} rad off the calibrated model's")
     vendor0, new0 = (c.poses(joint_map.vendor(q[:1]))[0] for c in (chain, written))

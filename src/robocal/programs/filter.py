@@ -474,7 +474,7 @@ def _filtered(given: list[Path], calibrated: Robot, nominal: Robot, tools, frame
             warnings.append("no motion to a Cartesian pose in these files")
         records, outputs = _written(d, program, sources, set(), {}, routing, warnings)
         return FilterResult(d.name, outputs, [], warnings, program.uncorrected, records, language=d), program
-    loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, payload_schedules)
+    loads = plan_loads(d, program, targets, calibrated, sources, refs, payload, payload_schedules, nominal)
     warnings += loads.warnings
     values, P, W, tool = target_poses(d, program, targets)
     if coordinated is not None:  # frames on a positioner's plate: in the world at each target's values

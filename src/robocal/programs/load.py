@@ -29,8 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from robocal.core.errors import DataError
-from robocal.core.magnitudes import check_payload
-from robocal.deploy.compensation import Compensation
+from robocal.deploy.compensation import Compensation, check_masses
 from robocal.ik.singularity import SingularityDistance
 from robocal.kinematics.joint_errors import condition_terms, condition_warnings
 from robocal.kinematics.model import Robot
@@ -76,11 +75,13 @@ def _capable(attribute: str) -> str:
 
 def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibrated: Robot,
                sources: list[ProgramText], references: list[ProgramText], payload=None,
-               schedules: str | Path | dict[int, Load] | None = None) -> LoadPlan:
+               schedules: str | Path | dict[int, Load] | None = None,
+               nominal: Robot | None = None) -> LoadPlan:
     """The load of each of ``targets`` (module docstring). ``payload``: kg or (kg, x, y, z m),
     overriding the program's; ``schedules``: payload schedules (of a language that
     has them, :meth:`~robocal.programs.dialects.base.Dialect.read_schedules`), a file or
-    schedule -> (kg, x, y, z m).
+    schedule -> (kg, x, y, z m); their masses checked against the rated payload of ``calibrated``, else
+    of ``nominal`` (`robocal.deploy.compensation.check_masses`, as ``payload``'s).
     Motions named for running with another load than their target's are named in ``program``'s
     accounting (its ledger and uncorrected)."""
     if schedules is not None and not dialect.payload_schedules:
@@ -91,8 +92,7 @@ def plan_loads(dialect: Dialect, program: Program, targets: list[Target], calibr
     elif schedules is not None:
         schedules = {int(k): tuple(np.asarray(v, float).tolist()) for k, v in schedules.items()}
     if schedules:  # masses in lb or g: against the model's rated payload
-        check_payload([load[0] for load in schedules.values()], calibrated.payload_kg, calibrated.name,
-                      "--payload-schedules")
+        check_masses([load[0] for load in schedules.values()], calibrated, nominal, "--payload-schedules")
     if "payload" not in condition_terms(calibrated):  # --payload given anyway: the CLI says it is not used
         unused = [] if schedules is None else [f"--payload-schedules is not used: the model of "
                                                f"{calibrated.name} has no payload term"]

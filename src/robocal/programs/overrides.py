@@ -9,22 +9,19 @@ command line that differs from them makes every corrected target land off by the
 while the correction looks right. The difference is judged by how far it moves a point the robot
 works at: the translation plus the rotation times a lever (a tool: its TCP's distance from the
 flange; a frame: its farthest target's distance, else the robot's reach), against
-`OVERRIDE_TOL_MM`, the size of what a calibration corrects down to (a laser tracker's and a
-calibrated arm's accuracy, a few hundredths of a mm): a larger difference is said, naming both.
+`robocal.core.magnitudes.CALIBRATED_TCP_MM`, the size of what a calibration corrects down to (a
+laser tracker's and a calibrated arm's accuracy, a few hundredths of a mm): a larger difference is
+said, naming both.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from robocal.core.magnitudes import CALIBRATED_TCP_MM
 from robocal.kinematics.transforms import pose_error
 from robocal.programs.dialects.base import Dialect
 from robocal.programs.model import Program
-
-# a --tool / --frame moving a working point this far (mm) from the program's own data of the same
-# name is other data: a calibrated arm with a tracker is accurate to a few hundredths of a mm, and a
-# correction computed with other tool or frame data than the controller's is off by the difference
-OVERRIDE_TOL_MM = 0.05
 
 _WORDS = {"tool": ("--tool", "tool data", "TCP at", "on the flange"),
           "frame": ("--frame", "frame", "origin at", "in the robot's base frame")}
@@ -68,7 +65,7 @@ def override_disagreements(d: Dialect, kind: str, declared: dict[str, np.ndarray
     Returns
     -------
     list of str
-        A warning per value moving a working point more than `OVERRIDE_TOL_MM`.
+        A warning per value moving a working point more than `CALIBRATED_TCP_MM`.
 
     Examples
     --------
@@ -99,11 +96,11 @@ def override_disagreements(d: Dialect, kind: str, declared: dict[str, np.ndarray
             (levers or {}).get(key, lever_m)
         mm, rad = np.linalg.norm(err[:3]) * 1e3, np.linalg.norm(err[3:])
         moved = mm + rad * lever * 1e3
-        if moved > OVERRIDE_TOL_MM:
+        if moved > CALIBRATED_TCP_MM:
             own_text = ", ".join(f"{v:.4g}" for v in own[:3, 3] * 1e3)
             shown = value if isinstance(value, str) else "(a 4x4)"
             out.append(f"{option} {name}={shown} replaces the program's own {noun} {name} ({at} {own_text} "
                        f"mm {where}) and differs from it by {mm:.3g} mm, {np.rad2deg(rad):.3g} deg (a point "
-                       f"{lever * 1e3:.4g} mm away moves {moved:.3g} mm, above {OVERRIDE_TOL_MM:g} mm): the "
-                       f"controller moves with the {noun} it holds; make sure {option} is what it holds")
+                       f"{lever * 1e3:.4g} mm away moves {moved:.3g} mm, above {CALIBRATED_TCP_MM:g} mm): "
+                       f"the controller moves with the {noun} it holds; make sure {option} is what it holds")
     return out

@@ -32,8 +32,9 @@ inverse-kinematics calls per motion. Not exact: the calibrated model's joint-err
 need the load, the approach direction or the temperature (:attr:`CalibratedChain.left_out`:
 compliance, backlash, travel, payload, thermal) are not in the chain (gear, cyclic, scale are);
 near a singularity the controller's IK is ill-conditioned (the iteration may not converge: the
-routine returns its last iterate and, when the last step's error exceeds ``WARN_MM``, says so in
-the controller's log: RAPID's event log, URScript's ``textmsg``; the KRL routine writes no message,
+routine returns its last iterate and, when the last step's error exceeds ``CALIBRATED_TCP_MM``
+(:mod:`robocal.core.magnitudes`: what a calibration corrects down to), says so in the controller's
+log: RAPID's event log, URScript's ``textmsg``; the KRL routine writes no message,
 message functions differing between KSS versions); a correction that crosses a configuration
 boundary keeps the target's configuration.
 """
@@ -48,6 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from robocal.core.errors import DataError
+from robocal.core.magnitudes import CALIBRATED_TCP_MM
 from robocal.deploy.compensation import controller_model
 from robocal.kinematics.joint_errors import parse_name
 from robocal.kinematics.model import Robot
@@ -59,9 +61,6 @@ from robocal.programs.target import Target
 ITERATIONS = 3  # fixed-point steps (controller IK calls) per motion at most
 TOLERANCE_MM = 0.001  # the routine stops when the calibrated TCP is this close to the meant one ...
 TOLERANCE_DEG = 0.0001  # ... and turned less than this from it
-# a pose error still this large at the last step: the iteration is not converging (near a
-# singularity): the routine writes a warning to the controller's event log and returns its last iterate
-WARN_MM = 0.05
 COMPUTED_TERMS = ("gear", "cyclic", "scale")  # joint-error terms of the joint's own angle: in the routine
 ROUTINE_NAME = "RC_Correct"  # the added routine's name in every language (its marker names robocal)
 ROUTED = f"corrected at run time by {ROUTINE_NAME} (--runtime-correction)"  # a routed motion's reason
@@ -165,7 +164,7 @@ class CalibratedChain:
     iterations: int = ITERATIONS
     tolerance_mm: float = TOLERANCE_MM
     tolerance_deg: float = TOLERANCE_DEG
-    warn_mm: float = WARN_MM
+    warn_mm: float = CALIBRATED_TCP_MM  # a last step still this far off: not converging (warned)
 
     def fk(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
         """TCP poses ``(N, 4, 4)`` (m) of joints ``q`` ``(N, n)`` (rad) with ``tool`` ``(4, 4)`` or

@@ -24,7 +24,6 @@ import numpy as np
 from robocal.core.errors import DataError
 
 _LONE_CR = re.compile(r"\r(?!\n)")
-BOMS = ("\xef\xbb\xbf", "\ufeff")  # a UTF-8 byte-order mark as the latin-1 text shows it, and decoded
 # \d+(?:\.\d*)? and not \d+\.?\d*: the same numbers, but a run of digits splits one way only (inside a
 # longer pattern that then fails, the other form backtracks in quadratic time over the run)
 NUMBER_RE = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?")
@@ -53,12 +52,6 @@ TEXT_SHARE = 0.9  # share of text bytes (printable, tab, CR, LF) a text file's f
 MAX_DIGITS = 1000  # a run of this many digits is no number a controller writes (the file is refused)
 _HUGE_DIGITS = re.compile(rf"\d{{{MAX_DIGITS},}}")
 UTF16_ZEROS = 0.4  # share of NULs at odd (or even) bytes from which a file is UTF-16 (ASCII code in it)
-
-
-def without_bom(text: str) -> str:
-    """``text`` without a byte-order mark at its start (a file saved by a Windows editor): what a
-    language's signature or first line is looked for in. Offsets in the file keep the mark."""
-    return next((text[len(b):] for b in BOMS if text.startswith(b)), text)
 
 
 def _utf16(head: bytes) -> bool:

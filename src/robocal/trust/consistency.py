@@ -30,10 +30,11 @@ sentence names the joint and says the data cannot tell the two apart (`held_join
 
 **Diagnosis** of an inconsistent fit, in order: the change point; the orientation convention of a
 6-DOF pose file (quaternions scalar-last under ``qw,qx,qy,qz`` headers, or the inverse rotation:
-each tried, the one that fits named); the length unit (:func:`robocal.trust.diagnosis.length_unit`); a
-joint column exchange or sign flips (:func:`robocal.trust.diagnosis.joint_mixup`); an arm mounted
-turned on its carriage (:func:`robocal.trust.diagnosis.mount_turned`); when none of
-them, priors too tight for the robot (:func:`robocal.trust.diagnosis.priors_too_tight`).
+each tried, the one that fits named); the hypotheses registered in
+:data:`robocal.trust.diagnosis.HYPOTHESES`, in their order (:func:`robocal.trust.diagnosis.first_reason`:
+joint columns exchanged or signs flipped, an arm mounted turned, a mirrored frame, the length unit,
+FANUC's J2/J3 coupling); when none of them, priors too tight for the robot
+(:func:`robocal.trust.diagnosis.priors_too_tight`).
 
 **Worse than nominal.** A fitted model that misses its own data by more than the nominal model
 with the frames fitted (beyond :data:`WORSE_TOLERANCE`) is not written
@@ -55,7 +56,12 @@ from robocal.data.instruments import noise_of
 from robocal.data.measurements import NEAR_REPEAT_RAD, robot_reach
 from robocal.data.registration import register_frame
 from robocal.identify.plausibility import FORCE_HINT
-from robocal.trust.diagnosis import GAIN, fit_rms_mm, joint_mixup, length_unit, mount_turned, priors_too_tight
+from robocal.trust.diagnosis import (
+    GAIN,
+    first_reason,
+    fit_rms_mm,
+    priors_too_tight,
+)
 from robocal.trust.file_shifts import FileShifts, pose_means, split_by_file
 
 ALPHA = 1e-3  # the residual test's false-alarm probability per fit (model and noise right)
@@ -370,17 +376,17 @@ def orientation_convention(robot, data) -> str | None:
 
 def diagnose_misfit(robot, datasets) -> list[str]:
     """Why ``robot`` (nominal links, frames fitted or not) misses ``datasets`` (Measurements), after
-    the change points: orientation convention, length unit, joint columns (first that fits per
-    file). Empty when the data do not tell."""
+    the change points: orientation convention, then the hypotheses registered in
+    :data:`robocal.trust.diagnosis.HYPOTHESES` (first that fits per file). Empty when the data do
+    not tell."""
     out = []
     for d in datasets:
         if not d.spec.sees_position or len(d) < 6:
             continue
         given = fit_rms_mm(robot, d)
-        reason = orientation_convention(robot, d)
+        reason = orientation_convention(robot, d)  # a 6-DOF file's quaternions: before its positions
         if reason is None and given > 0 and np.isfinite(given):
-            reason = (length_unit(robot, d, given) or joint_mixup(robot, d, given)
-                      or mount_turned(robot, d, given))
+            reason = first_reason(robot, d, given)  # the registered hypotheses, in their order
         if reason:
             out.append((f"{d.label}: " if len(datasets) > 1 and d.label else "") + reason)
     return out

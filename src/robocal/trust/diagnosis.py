@@ -28,6 +28,7 @@ from itertools import combinations
 
 import numpy as np
 
+from robocal.core.magnitudes import LENGTH_SCALES_M, UNIT_WORDS
 from robocal.data.joint_conventions import COUPLED_OPTION, fanuc_decoupled
 from robocal.data.registration import refit_frame, rigid_fit_rms
 from robocal.identify.plausibility import error_limit_mm
@@ -209,11 +210,11 @@ def mirrored(robot, data, given_mm: float) -> str | None:
     return None
 
 
-# factor the points as read must be multiplied by to be right, and the mistake it undoes
-UNIT_SCALES = ((1e3, "the points look like metres under _mm headers (or the file's unit is m)"),
-               (1e-3, "the points look like millimetres under _m headers"),
-               (25.4, "the points look like inches under _mm headers (the tracker exported inches)"),
-               (25.4e-3, "the points look like inches under _m headers (the tracker exported inches)"))
+# factor the points as read must be multiplied by to be right, and the mistake it undoes: every other
+# unit of `robocal.core.magnitudes.LENGTH_SCALES_M` read under each header unit a file has (_mm, _m)
+UNIT_SCALES = tuple((LENGTH_SCALES_M[unit] / LENGTH_SCALES_M[header],
+                     f"the points look like {UNIT_WORDS[unit]} under _{header} headers")
+                    for header in ("mm", "m") for unit in LENGTH_SCALES_M if unit != header)
 
 
 def length_unit(robot, data, given_mm: float) -> str | None:

@@ -231,39 +231,47 @@ def _cause(robot, data, predicted_mm: float, ratio: float) -> str:
             "mismatched); check the file")
 
 
+def judge_file(robot, prediction: Prediction, data, errors: np.ndarray, fitted=None) -> FileJudgement:
+    """One file of point or pose data judged against ``prediction`` for the calibrated ``robot``
+    (module docstring): ``errors`` ``(N, 3)`` (m) measured minus modelled, one item per row of
+    ``data``; ``fitted`` the model that made them (with the frame and SMR it used; default
+    ``robot``), whose SMR is refitted to name a cause beyond the prediction."""
+    measured = data.points  # point and pose data: one item per row
+    if errors.shape != measured.shape:
+        raise IdentificationError(f"internal: {len(errors)} items for {len(measured)} rows of "
+                                  f"{data.label}, please report this")
+    predicted = float(np.sqrt(np.mean(prediction.error_mm(robot, data.joints) ** 2)))
+    n = len(errors)
+    held = float(np.sqrt(np.mean(np.sum(errors**2, axis=1)))) * 1e3
+    left, shift, turn, dof = errors, 0.0, 0.0, 1.0
+    if n >= MIN_FRAME_POSES:
+        left, shift_m, turn = _frame_refit(errors, measured)
+        shift, dof = shift_m * 1e3, n / (n - 2)
+    model = float(np.sqrt(np.mean(np.sum(left**2, axis=1)) * dof)) * 1e3
+    bulk = (bulk_rms_mm(errors), bulk_rms_mm(left) * float(np.sqrt(dof)))
+    verdict = CONSISTENT if bulk[0] <= HELD_OUT_FACTOR * predicted else \
+        FRAME_SHIFT if bulk[1] <= HELD_OUT_FACTOR * predicted else BEYOND
+    ratio = bulk[1] / predicted
+    cause = _cause(robot if fitted is None else fitted, data, predicted, ratio) if verdict == BEYOND else ""
+    return FileJudgement(data.label, n, predicted, held, model, shift, float(np.rad2deg(turn)), verdict,
+                         cause, bulk)
+
+
+def held_out_of(files: list[FileJudgement], warnings: list[str] | None = None) -> HeldOut | None:
+    """The :class:`HeldOut` of judged ``files`` (None without any); their warnings appended to
+    ``warnings``."""
+    if not files:
+        return None
+    if warnings is not None:
+        warnings += [f.sentence() for f in files if f.verdict != CONSISTENT]
+    return HeldOut(tuple(files))
+
+
 def judge_held_out(robot, prediction: Prediction, judged: list, warnings: list[str] | None = None
                    ) -> HeldOut | None:
     """Judge every validation file of point or pose data in ``judged`` (a calibration's
     `robocal.calibration.result.Judged`: data, problem, states) against ``prediction`` for the
-    calibrated ``robot`` (module docstring); their warnings appended to ``warnings``. None
+    calibrated ``robot`` (:func:`judge_file`); their warnings appended to ``warnings``. None
     without such a file."""
-    files = []
-    for j in judged:
-        if not j.data.spec.sees_position:
-            continue
-        errors = j.problem.item_error_vectors(j.states[1])[0]
-        measured = j.data.points  # point and pose data: one item per row
-        if errors.shape != measured.shape:
-            raise IdentificationError(f"internal: {len(errors)} items for {len(measured)} rows of "
-                                      f"{j.data.label}, please report this")
-        predicted = float(np.sqrt(np.mean(prediction.error_mm(robot, j.data.joints) ** 2)))
-        n = len(errors)
-        held = float(np.sqrt(np.mean(np.sum(errors**2, axis=1)))) * 1e3
-        left, shift, turn, dof = errors, 0.0, 0.0, 1.0
-        if n >= MIN_FRAME_POSES:
-            left, shift_m, turn = _frame_refit(errors, measured)
-            shift, dof = shift_m * 1e3, n / (n - 2)
-        model = float(np.sqrt(np.mean(np.sum(left**2, axis=1)) * dof)) * 1e3
-        bulk = (bulk_rms_mm(errors), bulk_rms_mm(left) * float(np.sqrt(dof)))
-        verdict = CONSISTENT if bulk[0] <= HELD_OUT_FACTOR * predicted else \
-            FRAME_SHIFT if bulk[1] <= HELD_OUT_FACTOR * predicted else BEYOND
-        ratio = bulk[1] / predicted
-        cause = _cause(j.states[1].robot, j.data, predicted, ratio) if verdict == BEYOND else ""
-        files.append(FileJudgement(j.data.label, n, predicted, held, model, shift, float(np.rad2deg(turn)),
-                                   verdict, cause, bulk))
-    if not files:
-        return None
-    out = HeldOut(tuple(files))
-    if warnings is not None:
-        warnings += [f.sentence() for f in files if f.verdict != CONSISTENT]
-    return out
+    return held_out_of([judge_file(robot, prediction, j.data, j.problem.item_error_vectors(j.states[1])[0],
+                                j.states[1].robot) for j in judged if j.data.spec.sees_position], warnings)

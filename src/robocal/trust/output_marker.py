@@ -52,6 +52,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
+from robocal.core.bom import bom_length
 from robocal.core.errors import DataError
 from robocal.core.version import __version__
 from robocal.kinematics.model import Robot
@@ -278,20 +279,12 @@ def newline(text: str) -> str:
     return m.group() if m else "\n"
 
 
-BOM = "\xef\xbb\xbf"  # a UTF-8 byte-order mark as the programs are read (latin-1): stays first
-
-
-def after_bom(text: str) -> int:
-    """Where a line put first in ``text`` goes: after its byte-order mark, if any."""
-    return len(BOM) if text.startswith(BOM) else 0
-
-
 def insert_after(text: str, anchor: re.Pattern, line: str) -> str:
     """``line`` inserted after the first match of ``anchor`` (whose group 1 is its line end), with
     the next line's indent; no match: as the first line (after a byte-order mark)."""
     m = anchor.search(text)
     nl = m.group(1) if m else newline(text)
-    at = m.end() if m else after_bom(text)
+    at = m.end() if m else bom_length(text)  # a byte-order mark stays first
     rest = text[at:]
     indent = re.match(r"[ \t]*", rest).group() if m and rest.strip() else ""
     return text[:at] + indent + line + nl + rest

@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import re
 
+from robocal.core.bom import bom_length
 from robocal.core.errors import DataError
 from robocal.programs.dialects.fanuc.campaign import TP_REMARK_WIDTH
 from robocal.programs.dialects.fanuc.registers import is_register_file
 from robocal.programs.dialects.fanuc.sections import main_section
-from robocal.trust.output_marker import after_bom, newline, shortened
+from robocal.trust.output_marker import newline, shortened
 
 LINE_DIGITS = 9  # a TP line number or LINE_COUNT longer than this is no controller's (a mangled file)
 _LINE = re.compile(rf"^[ \t]*(\d{{1,{LINE_DIGITS}}}):", re.M)
@@ -24,7 +25,7 @@ def mark(text: str, body: str, note: str) -> str:
     """``text`` with the remark ``!body`` (cut to fit) as the last line of /MN."""
     span = main_section(text)
     if span is None and is_register_file(text):
-        k = after_bom(text)
+        k = bom_length(text)
         return f"{text[:k]}# {note}{newline(text)}{text[k:]}"
     if span is None:
         raise DataError("a FANUC .ls program without /MN cannot carry a provenance marker")

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robocal.core.bom import without_bom
 from robocal.core.errors import DataError
 from robocal.programs.dialects.fanuc.configuration import SCARA
 from robocal.programs.dialects.fanuc.sections import main_section
@@ -111,7 +112,7 @@ def is_register_file(text: str) -> bool:
     """Whether ``text`` is a position register file: its first line that is not blank nor a ``#``
     comment is the header."""
     for line in text.splitlines():
-        body = line.strip().lstrip("\ufeff\xef\xbb\xbf")
+        body = without_bom(line.strip())
         if body and not body.startswith("#"):
             return body.replace(" ", "").lower() == HEADER
     return False

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import re
 
+from robocal.core.bom import BOM_PATTERN
+
 _HEADS: dict[str, re.Pattern] = {}
 
 
@@ -13,7 +15,7 @@ def section(text: str, name: str, start: int = 0) -> int:
     """Offset of the header ``/name`` at the start of a line of ``text`` (a lone CR ends a line
     too; a UTF-8 byte-order mark may precede the first), at or after ``start``; -1 if none."""
     if name not in _HEADS:
-        _HEADS[name] = re.compile(rf"(?:(?<=[\r\n])|\A(?:\xef\xbb\xbf)?)[ \t]*(/{name})\b")
+        _HEADS[name] = re.compile(rf"(?:(?<=[\r\n])|\A{BOM_PATTERN})[ \t]*(/{name})\b")
     m = _HEADS[name].search(text, start)
     return m.start(1) if m else -1
 

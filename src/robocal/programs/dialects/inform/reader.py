@@ -67,6 +67,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from robocal.core.bom import without_bom
 from robocal.core.errors import DataError
 from robocal.kinematics.transforms import make_transform
 from robocal.programs.dialects.base import Dialect
@@ -79,7 +80,7 @@ from robocal.programs.dialects.inform.tool_file import is_tool_file, read_tool_f
 from robocal.programs.dialects.writing import EXTERNAL_LETTERS
 from robocal.programs.model import IDENTITY, Program, Target
 from robocal.programs.rotations import matrix_to_zyx
-from robocal.programs.source import Number, ProgramText, without_bom
+from robocal.programs.source import Number, ProgramText
 from robocal.trust.output_marker import corrected_name
 
 _POSITION_MM = 1e-3  # the pendant writes 3 decimals for mm

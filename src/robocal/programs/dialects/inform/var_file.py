@@ -31,9 +31,10 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from robocal.core.bom import BOM_PATTERN
 from robocal.programs.source import ProgramText
 
-_HEAD = re.compile(r"^(?:\ufeff|\xef\xbb\xbf)?//VAR\s*$", re.MULTILINE)  # a BOM: saved by a Windows editor
+_HEAD = re.compile(rf"^{BOM_PATTERN}//VAR\s*$", re.MULTILINE)
 _P_SECTION = re.compile(r"^///P\s*$")
 _LINE = re.compile(r'^"(\w+)"')
 # tool number and coordinate type of at most 9 digits: a longer one is no controller's (a mangled line)

@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import re
 
+from robocal.core.bom import BOM_PATTERN
 from robocal.trust.output_marker import insert_after
 
-_ANCHOR = re.compile(r"^(?:\xef\xbb\xbf)?[ \t]*(?:GLOBAL[ \t]+)?(?:DEF|DEFDAT|DEFFCT)\b[^\r\n]*(\r\n|\r|\n)",
+_ANCHOR = re.compile(rf"^{BOM_PATTERN}[ \t]*(?:GLOBAL[ \t]+)?(?:DEF|DEFDAT|DEFFCT)\b[^\r\n]*(\r\n|\r|\n)",
                      re.M | re.I)
 
 

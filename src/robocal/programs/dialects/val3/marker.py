@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import re
 
+from robocal.core.bom import BOM_PATTERN
 from robocal.core.escape import xml_comment_text
 from robocal.trust.output_marker import insert_after
 
-_ANCHOR = re.compile(r"^(?:\xef\xbb\xbf)?<\?xml[^>]*\?>[ \t]*(\r\n|\r|\n)")
+_ANCHOR = re.compile(rf"^{BOM_PATTERN}<\?xml[^>]*\?>[ \t]*(\r\n|\r|\n)")
 
 
 def mark(text: str, body: str, note: str) -> str:

@@ -12,6 +12,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from robocal.core.bom import decode_utf8
 from robocal.programs.dialects.val3 import s6
 
 _FILE = re.compile(r"<(Program|program|Data|data)\b[^>]*?\bfile\s*=\s*\"([^\"]+)\"")
@@ -53,7 +54,7 @@ class Project:
 
 def read_project(path: Path) -> Project:
     """The programs, data files and user types a ``.pjx`` lists."""
-    text = path.read_text(encoding="utf-8-sig", errors="replace")
+    text = decode_utf8(path.read_bytes(), errors="replace")
     out = Project(path)
     for kind, name in _FILE.findall(text):
         (out.programs if kind.lower() == "program" else out.data).add(Path(name).name.lower())
