@@ -54,6 +54,8 @@ MAX_ROBOT_ID = 200  # characters of a robot id
 _ADVISORY_LOCK = 7_032_032  # PostgreSQL advisory lock key of robocal's schema set-up
 INTEGRITY_LINES = 5  # problems integrity_check lists at most (the first is named in the error)
 FULL_DISK_BYTES = 1 << 20  # free space below which an I/O error while writing is a full disk
+FIRST_YEAR, LAST_YEAR = 1970, 9000  # a record's date outside these years was not written by robocal
+MAX_RECORD_ID = 2**63 - 1  # SQLite's largest row id: a counter there cannot give the next record one
 ROBOCAL_TABLES = ("schema_version", "records")  # a file with tables but not these is not a history
 
 # Each migration brings the schema from version i to i + 1 (index i); "{id}" is the dialect's
@@ -288,6 +290,7 @@ class History:
             with _closing(_open_readonly(path, self._failure)) as conn:  # what it is, before any write
                 self._identify(conn)
                 self._check_sound(conn)  # a damaged file is not touched, not even its journal mode
+                self._check_insertable(conn)  # refused now, not after the command wrote its outputs
         _check_writable(path)
         conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
         conn.execute(f"PRAGMA busy_timeout={int(BUSY_TIMEOUT_S * 1000)}")
@@ -305,6 +308,27 @@ class History:
             raise DataError(f"{self.location} is not a robocal history: it is a SQLite database of another "
                             f"application (tables {', '.join(sorted(tables))[:120]}); robocal left it "
                             "untouched")
+
+    def _check_insertable(self, conn) -> None:
+        """Refuse (DataError) a history a record cannot be added to as robocal made it: one holding
+        a trigger (robocal makes none: another program's could delete or change records when
+        robocal inserts, or abort the insert after the command wrote its outputs), or whose record
+        id counter is at its end (SQLite's answer would be a misleading "disk is full")."""
+        try:
+            triggers = [r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'trigger'")]
+            counted = conn.execute("SELECT count(*) FROM sqlite_master WHERE name = 'sqlite_sequence'")
+            seq = conn.execute("SELECT seq FROM sqlite_sequence WHERE name = 'records'").fetchall() \
+                if counted.fetchone()[0] else []
+        except sqlite3.DatabaseError as exc:
+            raise self._failure(exc, "reading") from None
+        if triggers:
+            raise DataError(f"the history {shown(self.location)} holds trigger(s) robocal never makes "
+                            f"({', '.join(triggers)[:120]}): another program changed it, and a trigger can "
+                            "delete or change records when one is added; robocal writes nothing in it")
+        if seq and not (isinstance(seq[0][0], int) and 0 <= seq[0][0] < MAX_RECORD_ID):
+            raise DataError(f"the history {shown(self.location)} has a damaged record id counter "
+                            f"({seq[0][0]!r:.40} in sqlite_sequence): another program changed it; robocal "
+                            "writes nothing in it")
 
     def _connect_postgres(self):
         try:
@@ -416,8 +440,6 @@ class History:
                 yield lambda sql, params=(): cur.execute(sql.replace("?", "%s"), params)
             return
         conn = self._conn
-        if str(conn.execute("PRAGMA journal_mode").fetchone()[0]).lower() == "wal":  # an older robocal's
-            self._retry(lambda: conn.execute("PRAGMA journal_mode=DELETE"))  # at the first write only
         self._retry(lambda: conn.execute("BEGIN IMMEDIATE"))
         try:
             yield lambda sql, params=(): conn.execute(sql, params)
@@ -428,6 +450,10 @@ class History:
             _rollback(conn)
             raise
         self._retry(lambda: conn.execute("COMMIT"))
+        # an older robocal's WAL history is switched back once a write succeeded (before it, a
+        # refused write would have changed the file)
+        if str(conn.execute("PRAGMA journal_mode").fetchone()[0]).lower() == "wal":
+            self._retry(lambda: conn.execute("PRAGMA journal_mode=DELETE"))
 
     def _query(self, sql: str, params=()) -> list[tuple]:
         if self.postgres:
@@ -748,9 +774,12 @@ def validate_row(row: tuple, robot_id: str, kind: str | None) -> Record:
     if parent is not None and (isinstance(parent, bool) or not isinstance(parent, int)):
         raise BadRecordError(ident, f"its parent_id is {parent!r:.40}, not a record id")
     try:
-        datetime.datetime.fromisoformat(date)
+        year = datetime.datetime.fromisoformat(date).year
     except ValueError:
         raise BadRecordError(ident, f"its date {date!r:.40} is not an ISO 8601 time") from None
+    if not FIRST_YEAR <= year <= LAST_YEAR:  # year 1 broke the timeline's plot (exit 3)
+        raise BadRecordError(ident, f"its date {date!r:.40} is not one robocal could have recorded "
+                                    f"(years {FIRST_YEAR} to {LAST_YEAR})")
     if sha256_text(model_yaml) != digest:
         raise BadRecordError(ident, "its model does not match its SHA-256 fingerprint (changed after "
                                     "recording)")

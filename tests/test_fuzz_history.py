@@ -1,0 +1,100 @@
+"""Mutated history databases through history, check, evaluate and calibrate --history
+(tests/fuzz_history.py): exit 0 with every output and no record lost, or exit 2 in one line with
+no output and the history's bytes unchanged. The reproducers of the defects the fuzzing found come
+first; the default run has a seeded sample, the slow one 400 mutants (SEED=1 python
+tests/fuzz_history.py 400 runs any number)."""
+
+from __future__ import annotations
+
+import random
+import shutil
+import sqlite3
+from contextlib import closing
+
+import pytest
+from fuzz_history import ROBOT, commands, fuzz_one, judge, make_seed, rows, run
+
+FAST = 12  # mutants in the default suite (each through every command; calibrate every 4th)
+SLOW = 400
+
+
+@pytest.fixture(scope="module")
+def seed(tmp_path_factory):
+    return make_seed(tmp_path_factory.mktemp("history_seed"))
+
+
+def _mutant(seed, tmp_path, *sql: str):
+    hist = tmp_path / "h.sqlite"
+    shutil.copy(seed.history, hist)
+    with closing(sqlite3.connect(hist, isolation_level=None)) as conn:
+        for statement in sql:
+            conn.execute(statement)
+    return hist
+
+
+def _through_every_command(seed, tmp_path, hist) -> list[str]:
+    mutant = hist.read_bytes()
+    problems = []
+    for name, (argv, outputs) in commands(seed, hist, tmp_path, calibrate=True).items():
+        hist.write_bytes(mutant)
+        before = rows(hist)
+        code, stderr = run(argv)
+        problem = judge(code, stderr, outputs, mutant, hist, before, writes=name != "history")
+        if problem:
+            problems.append(f"{name}: {problem}")
+    return problems
+
+
+@pytest.mark.parametrize("trigger", [
+    "AFTER INSERT ON records BEGIN DELETE FROM records WHERE id <> NEW.id; END",  # exit 0, records lost
+    "AFTER INSERT ON records BEGIN UPDATE records SET robot_id = 'gone'; END",  # exit 0, records changed
+    "BEFORE INSERT ON records BEGIN SELECT RAISE(ABORT, 'no'); END",  # exit 2 after the outputs were written
+])
+def test_a_history_with_a_trigger_is_refused_before_any_output(seed, tmp_path, trigger, capsys):
+    hist = _mutant(seed, tmp_path, f"CREATE TRIGGER t {trigger}")
+    assert not _through_every_command(seed, tmp_path, hist)
+    code, stderr = run(commands(seed, hist, tmp_path, calibrate=False)["check"][0])
+    assert code == 2 and "trigger" in stderr and "writes nothing" in stderr
+
+
+def test_an_exhausted_record_id_counter_is_refused_not_called_a_full_disk(seed, tmp_path):
+    hist = _mutant(seed, tmp_path, "UPDATE sqlite_sequence SET seq = 9223372036854775807")
+    assert not _through_every_command(seed, tmp_path, hist)
+    code, stderr = run(commands(seed, hist, tmp_path, calibrate=False)["evaluate"][0])
+    assert code == 2 and "record id counter" in stderr and "full" not in stderr
+
+
+def test_a_record_dated_year_one_is_left_out_of_the_timeline_plot(seed, tmp_path):
+    """Was exit 3 (matplotlib: dates before year 1) in ``history --report``."""
+    hist = _mutant(seed, tmp_path, "UPDATE records SET recorded_at = '0001-01-01' WHERE id = 3")
+    assert not _through_every_command(seed, tmp_path, hist)
+
+
+def test_a_failed_migration_of_a_wal_history_leaves_its_bytes(seed, tmp_path):
+    """A WAL history (an older robocal's) whose schema cannot be migrated: the journal mode was
+    switched before the write failed, so a refusal changed the file."""
+    hist = _mutant(seed, tmp_path, "ALTER TABLE records DROP COLUMN parent_id",
+                   "UPDATE schema_version SET version = 0", "PRAGMA journal_mode=WAL")
+    assert not _through_every_command(seed, tmp_path, hist)
+
+
+def test_a_wal_history_is_still_switched_back_when_written(seed, tmp_path):
+    hist = _mutant(seed, tmp_path, "PRAGMA journal_mode=WAL")
+    code, _ = run(commands(seed, hist, tmp_path, calibrate=False)["evaluate"][0])
+    assert code == 0
+    with closing(sqlite3.connect(f"file:{hist}?mode=ro", uri=True)) as conn:
+        assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "delete"
+    assert ROBOT in {r[1] for r in rows(hist).values()}
+
+
+def test_mutated_histories_keep_the_contract(seed, tmp_path):
+    rng = random.Random(0)
+    problems = [p for k in range(FAST) for p in fuzz_one(seed, tmp_path / "case", rng, k % 4 == 0)]
+    assert not problems, "\n".join(problems[:5])
+
+
+@pytest.mark.slow
+def test_many_mutated_histories_keep_the_contract(seed, tmp_path):
+    rng = random.Random(1)
+    problems = [p for k in range(SLOW) for p in fuzz_one(seed, tmp_path / "case", rng, k % 4 == 0)]
+    assert not problems, "\n".join(problems[:5])
