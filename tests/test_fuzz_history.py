@@ -6,6 +6,7 @@ tests/fuzz_history.py 400 runs any number)."""
 
 from __future__ import annotations
 
+import json
 import random
 import shutil
 import sqlite3
@@ -98,3 +99,22 @@ def test_many_mutated_histories_keep_the_contract(seed, tmp_path):
     rng = random.Random(1)
     problems = [p for k in range(SLOW) for p in fuzz_one(seed, tmp_path / "case", rng, k % 4 == 0)]
     assert not problems, "\n".join(problems[:5])
+
+
+@pytest.mark.parametrize("row", ['{"name": "d1", "unit": "mm", "shift": 0.5}',  # exit 3: KeyError 'sigma'
+                                 '{"name": "d1", "unit": "mm", "shift": 0.5, "sigma": null}'])
+def test_a_check_whose_shift_lacks_its_sigma_is_a_bad_record(seed, tmp_path, row):
+    """A flipped byte turned a key of a check's changed parameters: ``history`` (its report prints
+    each shift with its sigma) failed with an internal error."""
+    hist = _mutant(seed, tmp_path, "UPDATE records SET summary = json_set(summary, '$.verdict', 'changed', "
+                   f"'$.changed_parameters', json('[{row}]')) WHERE kind = 'check'")
+    assert not _through_every_command(seed, tmp_path, hist)
+    argv, outputs = commands(seed, hist, tmp_path, calibrate=False)["history"]
+    assert run(argv)[0] == 0
+    assert 3 not in [e["id"] for e in json.loads(outputs[0].read_text())["entries"]]  # left out
+
+
+def test_a_calibration_parameter_without_its_sigma_is_a_bad_record(seed, tmp_path):
+    hist = _mutant(seed, tmp_path, "UPDATE records SET parameters = json_remove(parameters, '$[0].sigma') "
+                   "WHERE id = 1")
+    assert not _through_every_command(seed, tmp_path, hist)

@@ -808,8 +808,9 @@ def validate_row(row: tuple, robot_id: str, kind: str | None) -> Record:
                   uncertainty=unc, data=files, parent=parent, date=date, robocal_version=version, id=ident)
 
 
-# the fields of each row of a record's lists: "text" or "number" (finite or null)
-_SHIFT_FIELDS = {"name": "text", "unit": "text", "shift": "number", "sigma": "number"}
+# the fields of each row of a record's lists: "text", "number" (finite or null) or "figure" (finite:
+# a check's shifts are printed as figures; a null one was exit 3 in history --report)
+_SHIFT_FIELDS = {"name": "text", "unit": "text", "shift": "figure", "sigma": "figure"}
 _PARAMETER_FIELDS = {"name": "text", "unit": "text", "estimate": "number", "sigma": "number"}
 _FILE_FIELDS = {"file": "text", "role": "text", "sha256": "text"}
 
@@ -822,8 +823,11 @@ def _check_rows(ident, column: str, rows, fields: dict[str, str]) -> None:
         if not isinstance(row, dict):
             raise BadRecordError(ident, f"its {column}[{i}] is {type(row).__name__}, not an object")
         for name, kind in fields.items():
+            if name not in row and kind != "text":  # a null figure is one robocal writes; a missing one
+                raise BadRecordError(ident, f"its {column}[{i}] has no {name}")  # is damage (was exit 3)
             value = row.get(name)
-            if not (isinstance(value, str) if kind == "text" else _number(value)):
+            if not (isinstance(value, str) if kind == "text" else _number(value)
+                    and (kind == "number" or value is not None)):
                 raise BadRecordError(ident, f"its {column}[{i}].{name} is {value!r:.40}, not {kind}")
 
 
