@@ -118,3 +118,26 @@ def test_a_calibration_parameter_without_its_sigma_is_a_bad_record(seed, tmp_pat
     hist = _mutant(seed, tmp_path, "UPDATE records SET parameters = json_remove(parameters, '$[0].sigma') "
                    "WHERE id = 1")
     assert not _through_every_command(seed, tmp_path, hist)
+
+
+@pytest.mark.parametrize("command, option", [("evaluate", "--json"), ("check", "--json"), ("calibrate", "-o"),
+                                             ("calibrate", "--json"), ("calibrate", "--report")])
+def test_an_output_named_as_the_history_is_refused_and_loses_nothing(seed, tmp_path, command, option):
+    """``evaluate ... --history h.sqlite --json h.sqlite`` replaced every record with the JSON, then
+    said the history was 'not a SQLite database' (exit 2)."""
+    hist = _mutant(seed, tmp_path)
+    argv, outputs = commands(seed, hist, tmp_path, calibrate=True)[command]
+    at = argv.index(option) + 1 if option in argv else len(argv)
+    argv = [*argv[:at], str(hist), *argv[at + 1:]] if option in argv else [*argv, option, str(hist)]
+    before = hist.read_bytes()
+    code, stderr = run(argv)
+    assert code == 2 and "it is the history" in stderr and hist.read_bytes() == before
+    assert not [o for o in outputs if o.exists() and o != hist]
+
+
+def test_a_new_history_named_as_an_output_is_refused_before_it_is_made(seed, tmp_path):
+    hist = tmp_path / "new.sqlite"
+    argv = commands(seed, hist, tmp_path, calibrate=True)["calibrate"][0]
+    argv[argv.index("-o") + 1] = str(hist)
+    code, stderr = run(argv)
+    assert code == 2 and "it is the history" in stderr and not hist.exists()
