@@ -27,3 +27,15 @@ def test_the_planner_checks_its_numbers_through_the_api():
     for kw in ({"noise_mm": float("inf")}, {"seed": -1}, {"unmodelled_mm": float("nan")}):
         with pytest.raises(DataError):
             rc.plan_poses(robot, 12, n_candidates=200, starts=1, **kw)
+
+
+def test_a_command_out_of_memory_gets_its_own_advice(tmp_path, monkeypatch):
+    """``poses --candidates 100000000`` ran out of memory and was told to 'calibrate fewer poses, use
+    --nongeometric none'."""
+    import robocal.campaign as campaign
+
+    def exhausted(*args, **kwargs):
+        raise MemoryError
+    monkeypatch.setattr(campaign, "plan_poses", exhausted)
+    code, err = cli([*BASE, "-o", str(tmp_path / "p.csv")])
+    assert one_error_line(code, err) and "ran out of memory" in err and "nongeometric" not in err, err
