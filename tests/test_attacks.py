@@ -40,3 +40,34 @@ def test_hostile_names_keep_every_output_whole(tmp_path, name):
 @pytest.mark.parametrize("name", [h for h in HOSTILE if h not in FAST])
 def test_every_hostile_name_keeps_every_output_whole(tmp_path, name):
     assert not attack(tmp_path, name)
+
+
+def _evaluate_into(tmp_path, out) -> tuple[int, str]:
+    model = tmp_path / "m.yaml"
+    rc.Robot.from_catalog("abb_irb2600").save(model)
+    data = tmp_path / "d.csv"
+    from robocal.data.simulate import simulate_tracker
+    simulate_tracker(rc.Robot.from_catalog("abb_irb2600"), 20, seed=1).data.save(data)
+    code, _, err = cli(["--quiet", "evaluate", model, data, "--fit-frame", "--json", out])
+    return code, err
+
+
+@pytest.mark.parametrize("make", ["fifo", "link to a device", "link to a file"])
+def test_an_output_that_is_no_regular_file_is_refused_and_left_alone(tmp_path, make):
+    """Run as root, ``--json /dev/stdout`` and ``--json /dev/full`` replaced the link and the device
+    with a regular file (exit 0): the atomic write renames a new file over the name given."""
+    import os
+
+    out = tmp_path / "out.json"
+    target = tmp_path / "target.json"
+    if make == "fifo":
+        os.mkfifo(out)
+    elif make == "link to a device":
+        out.symlink_to("/dev/null")
+    else:
+        target.write_text("{}")
+        out.symlink_to(target)
+    code, err = _evaluate_into(tmp_path, out)
+    assert code == 2 and ("not a regular file" in err or "symbolic link" in err), err
+    assert (out.is_fifo() if make == "fifo" else out.is_symlink())
+    assert make != "link to a file" or target.read_text() == "{}"
