@@ -12,6 +12,7 @@ import shutil
 import sqlite3
 from contextlib import closing
 
+import numpy as np
 import pytest
 from fuzz_history import ROBOT, commands, fuzz_one, judge, make_seed, rows, run
 
@@ -141,3 +142,39 @@ def test_a_new_history_named_as_an_output_is_refused_before_it_is_made(seed, tmp
     argv[argv.index("-o") + 1] = str(hist)
     code, stderr = run(argv)
     assert code == 2 and "it is the history" in stderr and not hist.exists()
+
+
+def _with_uncertainty(seed, tmp_path, change):
+    hist = _mutant(seed, tmp_path)
+    with closing(sqlite3.connect(hist)) as conn, conn:
+        unc = json.loads(conn.execute("SELECT uncertainty FROM records WHERE id = 1").fetchone()[0])
+        change(unc)
+        conn.execute("UPDATE records SET uncertainty = ? WHERE id = 1", (json.dumps(unc),))
+    return hist
+
+
+def _scaled(factor):
+    return lambda u: u.__setitem__("covariance", (np.array(u["covariance"]) * factor).tolist())
+
+
+@pytest.mark.parametrize("label, change", [
+    ("variances 1e300", _scaled(1e300)),
+    ("negative variances", _scaled(-1.0)),
+    ("asymmetric", lambda u: u.__setitem__("covariance", (np.array(u["covariance"]) + np.triu(
+        np.full(np.shape(u["covariance"]), 1e-9))).tolist())),
+    ("noise 1e300 m", lambda u: u.__setitem__("noise_m", 1e300)),
+    ("noise 1e-300 m", lambda u: u.__setitem__("noise_m", 1e-300)),
+    ("dof 1e30", lambda u: u.__setitem__("dof", 10**30)),
+])
+def test_a_calibration_uncertainty_no_calibration_makes_is_a_bad_record(seed, tmp_path, label, change):
+    """Each made ``check`` end in an internal error (a Cholesky factor of a matrix without one, an
+    overflow, an F distribution of 1e30 degrees of freedom)."""
+    hist = _with_uncertainty(seed, tmp_path, change)
+    assert not _through_every_command(seed, tmp_path, hist)
+    code, stderr = run(commands(seed, hist, tmp_path, calibrate=False)["check"][0])
+    assert code == 2 and "record #1" in stderr and "uncertainty" in stderr, stderr
+
+
+def test_a_real_uncertainty_scaled_down_is_still_used(seed, tmp_path):
+    hist = _with_uncertainty(seed, tmp_path, _scaled(1e-6))
+    assert run(commands(seed, hist, tmp_path, calibrate=False)["check"][0])[0] == 0

@@ -54,6 +54,13 @@ MAX_ROBOT_ID = 200  # characters of a robot id
 _ADVISORY_LOCK = 7_032_032  # PostgreSQL advisory lock key of robocal's schema set-up
 INTEGRITY_LINES = 5  # problems integrity_check lists at most (the first is named in the error)
 FULL_DISK_BYTES = 1 << 20  # free space below which an I/O error while writing is a full disk
+# a calibration's stored uncertainty: a variance beyond (1 m)^2 or (1 rad)^2, an asymmetry or negative
+# eigenvalue beyond this fraction of the largest entry, a noise outside 1 nm .. 1 m, more than 1e9
+# degrees of freedom: not one robocal recorded (each made check exit 3)
+MAX_VARIANCE = 1.0
+COVARIANCE_REL_TOL = 1e-9
+MIN_NOISE_M, MAX_NOISE_M = 1e-9, 1.0
+MAX_DOF = 10**9
 FIRST_YEAR, LAST_YEAR = 1970, 9000  # a record's date outside these years was not written by robocal
 MAX_RECORD_ID = 2**63 - 1  # SQLite's largest row id: a counter there cannot give the next record one
 ROBOCAL_TABLES = ("schema_version", "records")  # a file with tables but not these is not a history
@@ -843,8 +850,17 @@ def _check_uncertainty(ident, unc: dict) -> None:
     if cov.shape != (len(names), len(names)) or not np.isfinite(cov).all():
         raise BadRecordError(ident, f"its uncertainty's covariance is not a finite {len(names)} x "
                                     f"{len(names)} matrix")
+    # a covariance a calibration makes: symmetric, positive semi-definite, no sigma beyond 1 m or
+    # 1 rad (one that was not made check exit 3: a Cholesky factor of a matrix that has none)
+    scale = float(np.abs(cov).max(initial=0.0))
+    if scale > MAX_VARIANCE or np.abs(cov - cov.T).max(initial=0.0) > COVARIANCE_REL_TOL * scale or \
+            (cov.size and np.linalg.eigvalsh(cov).min() < -COVARIANCE_REL_TOL * scale):
+        raise BadRecordError(ident, "its uncertainty's covariance is not one a calibration makes (symmetric, "
+                                    f"positive semi-definite, variances at most {MAX_VARIANCE:g})")
     noise, dof = unc.get("noise_m"), unc.get("dof")
-    if not (_number(noise) and noise is not None and noise > 0):
-        raise BadRecordError(ident, f"its uncertainty's noise_m is {noise!r:.40}, not a number > 0 (m)")
-    if isinstance(dof, bool) or not isinstance(dof, int) or dof < 1:
-        raise BadRecordError(ident, f"its uncertainty's dof is {dof!r:.40}, not a whole number >= 1")
+    if not (_number(noise) and noise is not None and MIN_NOISE_M <= noise <= MAX_NOISE_M):
+        raise BadRecordError(ident, f"its uncertainty's noise_m is {noise!r:.40}, not a number in "
+                                    f"[{MIN_NOISE_M:g}, {MAX_NOISE_M:g}] (m)")
+    if isinstance(dof, bool) or not isinstance(dof, int) or not 1 <= dof <= MAX_DOF:
+        raise BadRecordError(ident, f"its uncertainty's dof is {dof!r:.40}, not a whole number in [1, "
+                                    f"{MAX_DOF:g}]")
