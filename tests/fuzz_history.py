@@ -21,6 +21,7 @@ import hashlib
 import io
 import os
 import random
+import re
 import shutil
 import signal
 import sqlite3
@@ -134,7 +135,20 @@ def _sql_ops(path: Path, rng: random.Random) -> str:
     try:
         ids = [r[0] for r in conn.execute("SELECT id FROM records")]
         op = rng.random()
-        if op < 0.55 and ids:
+        if op < 0.15 and ids:  # one figure inside a record's JSON scaled, negated or made whole and huge
+            ident, column = rng.choice(ids), rng.choice(["summary", "uncertainty", "parameters"])
+            text = conn.execute(f"SELECT {column} FROM records WHERE id = ?", (ident,)).fetchone()[0]
+            if not isinstance(text, str):
+                return f"record {ident} {column}: not text"
+            spots = list(re.finditer(r"-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?", text))
+            if not spots:
+                return f"record {ident} {column}: no number"
+            m = rng.choice(spots)
+            value = rng.choice(["1e300", "-1e300", "1e-300", "0", "-1", str(10**30), str(-float(m.group()))])
+            conn.execute(f"UPDATE records SET {column} = ? WHERE id = ?",
+                         (text[:m.start()] + value + text[m.end():], ident))
+            return f"record {ident} {column}: {m.group()} -> {value}"
+        if op < 0.6 and ids:
             ident, column = rng.choice(ids), rng.choice(COLUMNS)
             if column in ("summary", "parameters", "uncertainty", "data"):
                 value = rng.choice(HOSTILE_JSON + HOSTILE_NUMBERS[:3])

@@ -246,7 +246,9 @@ def fuzz_one(rng: random.Random, folder: Path, through_cli: bool) -> list[str]:
         out.unlink(missing_ok=True)
         src.write_text(text)
         code, err = cli(["export", str(src), "--yaml", str(out)])
-        if code != 0:
+        if code == 2 and one_error_line(code, err) and "would not read back" in err and not out.exists():
+            pass  # a chain beyond what a model file holds (a reach over 50 m): refused, nothing written
+        elif code != 0:
             problems.append(f"export --yaml exit {code}: {err.strip()[:200]}\n{text}")
         else:
             try:
