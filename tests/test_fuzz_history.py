@@ -178,3 +178,34 @@ def test_a_calibration_uncertainty_no_calibration_makes_is_a_bad_record(seed, tm
 def test_a_real_uncertainty_scaled_down_is_still_used(seed, tmp_path):
     hist = _with_uncertainty(seed, tmp_path, _scaled(1e-6))
     assert run(commands(seed, hist, tmp_path, calibrate=False)["check"][0])[0] == 0
+
+
+@pytest.fixture(scope="module")
+def result_json(seed, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("result")
+    code, err = run(["calibrate", str(seed.cal), "--robot", "ur5e", "--nongeometric", "none", "-o",
+                     str(folder / "m.yaml"), "--json", str(folder / "r.json")])
+    assert code == 0, err
+    return folder
+
+
+def _set_all(key, value):
+    return lambda r: [p.__setitem__(key, value) for p in r["parameters"] if p.get("sigma") is not None]
+
+
+@pytest.mark.parametrize("label, change", [
+    ("sigma null", _set_all("sigma", None)),  # exit 3: None / float
+    ("rms 1e308", lambda r: r["after"].__setitem__("rms", 1e308)),  # exit 3: OverflowError
+    ("correlation negated", lambda r: r["correlation"].__setitem__("matrix", (-np.array(
+        r["correlation"]["matrix"])).tolist())),
+])
+def test_check_refuses_a_result_json_no_calibration_makes(seed, result_json, tmp_path, label, change):
+    data = json.loads((result_json / "r.json").read_text())
+    out = tmp_path / "c.json"
+    argv = ["check", str(result_json / "m.yaml"), str(seed.check), "--json", str(out), "--result"]
+    assert run([*argv, str(result_json / "r.json")])[0] == 0  # the file as written is used
+    out.unlink()
+    change(data)
+    (tmp_path / "x.json").write_text(json.dumps(data))
+    code, stderr = run([*argv, str(tmp_path / "x.json")])
+    assert code == 2 and len(stderr.strip().splitlines()) == 1 and not (tmp_path / "c.json").exists(), stderr

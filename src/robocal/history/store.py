@@ -840,27 +840,33 @@ def _check_rows(ident, column: str, rows, fields: dict[str, str]) -> None:
 
 def _check_uncertainty(ident, unc: dict) -> None:
     """A calibration's uncertainty: names, a square finite covariance over them, noise > 0, dof >= 1."""
+    fault = uncertainty_fault(unc)
+    if fault:
+        raise BadRecordError(ident, f"its uncertainty's {fault}")
+
+
+def uncertainty_fault(unc: dict) -> str | None:
+    """What makes ``unc`` (``names``, ``covariance`` (SI), ``noise_m``, ``dof``) not the uncertainty
+    a calibration makes (one phrase, starting with the field), None when it is one."""
     names = unc.get("names")
-    if not (isinstance(names, list) and all(isinstance(n, str) for n in names)):
-        raise BadRecordError(ident, "its uncertainty has no list of parameter names")
+    if not (isinstance(names, list | tuple) and all(isinstance(n, str) for n in names)):
+        return "names are not a list of parameter names"
     try:
         cov = np.asarray(unc.get("covariance"), dtype=float)
     except (TypeError, ValueError):
         cov = np.empty(0)
     if cov.shape != (len(names), len(names)) or not np.isfinite(cov).all():
-        raise BadRecordError(ident, f"its uncertainty's covariance is not a finite {len(names)} x "
-                                    f"{len(names)} matrix")
+        return f"covariance is not a finite {len(names)} x {len(names)} matrix"
     # a covariance a calibration makes: symmetric, positive semi-definite, no sigma beyond 1 m or
     # 1 rad (one that was not made check exit 3: a Cholesky factor of a matrix that has none)
     scale = float(np.abs(cov).max(initial=0.0))
     if scale > MAX_VARIANCE or np.abs(cov - cov.T).max(initial=0.0) > COVARIANCE_REL_TOL * scale or \
             (cov.size and np.linalg.eigvalsh(cov).min() < -COVARIANCE_REL_TOL * scale):
-        raise BadRecordError(ident, "its uncertainty's covariance is not one a calibration makes (symmetric, "
-                                    f"positive semi-definite, variances at most {MAX_VARIANCE:g})")
+        return ("covariance is not one a calibration makes (symmetric, positive semi-definite, variances "
+                f"at most {MAX_VARIANCE:g})")
     noise, dof = unc.get("noise_m"), unc.get("dof")
     if not (_number(noise) and noise is not None and MIN_NOISE_M <= noise <= MAX_NOISE_M):
-        raise BadRecordError(ident, f"its uncertainty's noise_m is {noise!r:.40}, not a number in "
-                                    f"[{MIN_NOISE_M:g}, {MAX_NOISE_M:g}] (m)")
-    if isinstance(dof, bool) or not isinstance(dof, int) or not 1 <= dof <= MAX_DOF:
-        raise BadRecordError(ident, f"its uncertainty's dof is {dof!r:.40}, not a whole number in [1, "
-                                    f"{MAX_DOF:g}]")
+        return f"noise_m is {noise!r:.40}, not a number in [{MIN_NOISE_M:g}, {MAX_NOISE_M:g}] (m)"
+    if isinstance(dof, bool) or not isinstance(dof, int | np.integer) or not 1 <= dof <= MAX_DOF:
+        return f"dof is {dof!r:.40}, not a whole number in [1, {MAX_DOF:g}]"
+    return None
