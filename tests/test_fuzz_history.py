@@ -209,3 +209,16 @@ def test_check_refuses_a_result_json_no_calibration_makes(seed, result_json, tmp
     (tmp_path / "x.json").write_text(json.dumps(data))
     code, stderr = run([*argv, str(tmp_path / "x.json")])
     assert code == 2 and len(stderr.strip().splitlines()) == 1 and not (tmp_path / "c.json").exists(), stderr
+
+
+def test_a_history_that_is_a_pipe_is_refused_by_what_it_is(seed, tmp_path):
+    """A FIFO as --history: 'does not exist' (history) and an internal error (evaluate: disk I/O)."""
+    import os
+
+    fifo = tmp_path / "h.sqlite"
+    os.mkfifo(fifo)
+    for name in ("history", "evaluate", "check"):
+        argv, outputs = commands(seed, fifo, tmp_path, calibrate=False)[name]
+        code, stderr = run(argv)
+        assert code == 2 and "not a regular file" in stderr and not any(o.exists() for o in outputs), stderr
+    assert fifo.is_fifo()

@@ -70,7 +70,7 @@ def open_history(location: str | None, robot_id: str | None, existing: bool = Fa
     """
     if bool(location) != bool(robot_id):
         raise DataError("--history and --robot-id go together: give both to record in a robot's history")
-    if location and existing and not is_postgres(location) and not Path(location).is_file():
+    if location and existing and not is_postgres(location) and not Path(location).exists():
         raise DataError(f"the history {location} does not exist")
     if not location:
         return robot_id

@@ -279,6 +279,9 @@ class History:
         path = Path(self.location)
         if path.is_dir():
             raise DataError(f"the history {path} is a folder: give a file name (e.g. history.sqlite)")
+        if path.exists() and not path.is_file():  # a FIFO was 'does not exist' or exit 3 (disk I/O error)
+            raise DataError(f"the history {path} is not a regular file (a device, a pipe or a socket): give "
+                            "a SQLite file (e.g. history.sqlite)")
         if not path.parent.is_dir():
             raise DataError(f"the history's folder {path.parent} does not exist")
         if self.readonly and not path.is_file():
