@@ -71,3 +71,34 @@ def test_an_output_that_is_no_regular_file_is_refused_and_left_alone(tmp_path, m
     assert code == 2 and ("not a regular file" in err or "symbolic link" in err), err
     assert (out.is_fifo() if make == "fifo" else out.is_symlink())
     assert make != "link to a file" or target.read_text() == "{}"
+
+
+@pytest.mark.parametrize("source", ["/dev/zero", "fifo"])
+@pytest.mark.parametrize("role", ["model", "data"])
+def test_an_input_that_is_a_device_or_a_pipe_is_refused_at_once(tmp_path, source, role):
+    """``evaluate m.yaml /dev/zero`` read until killed (a timeout of 20 s), the model from /dev/zero
+    until memory ran out, a FIFO with no writer forever."""
+    import os
+    import signal
+
+    if source == "fifo":
+        source = tmp_path / "in.fifo"
+        os.mkfifo(source)
+    model = tmp_path / "m.yaml"
+    rc.Robot.from_catalog("abb_irb2600").save(model)
+    from robocal.data.simulate import simulate_tracker
+    data = tmp_path / "d.csv"
+    simulate_tracker(rc.Robot.from_catalog("abb_irb2600"), 20, seed=1).data.save(data)
+    argv = ["--quiet", "evaluate", source if role == "model" else model, source if role == "data" else data,
+            "--json", tmp_path / "o.json"]
+
+    def hung(*_):
+        raise TimeoutError
+    previous = signal.signal(signal.SIGALRM, hung)
+    signal.alarm(20)
+    try:
+        code, _, err = cli(argv)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    assert code == 2 and "not a regular file" in err and not (tmp_path / "o.json").exists(), err

@@ -62,6 +62,8 @@ def read_text(path, what: str, error: type[RobocalError] = DataError) -> str:
     type) names the file, ``what`` it should be and the reason when it cannot be read."""
     path = Path(path)
     try:
+        if path.exists() and not path.is_file():  # /dev/zero was read until memory ran out, a FIFO forever
+            raise error(f"cannot read {what} {path}: it is not a regular file (a device, a pipe or a socket)")
         return path.read_bytes().decode("utf-8-sig")
     except OSError as exc:
         raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
