@@ -14,7 +14,7 @@ from contextlib import closing
 
 import numpy as np
 import pytest
-from fuzz_history import ROBOT, commands, fuzz_one, judge, make_seed, rows, run
+from fuzz_history import ROBOT, commands, fuzz_one, judge, make_seed, mutate, rows, run
 
 FAST = 12  # mutants in the default suite (each through every command; calibrate every 4th)
 SLOW = 400
@@ -222,3 +222,28 @@ def test_a_history_that_is_a_pipe_is_refused_by_what_it_is(seed, tmp_path):
         code, stderr = run(argv)
         assert code == 2 and "not a regular file" in stderr and not any(o.exists() for o in outputs), stderr
     assert fifo.is_fifo()
+
+
+def test_a_history_an_insert_fails_in_is_refused_before_any_output(seed, tmp_path):
+    """Mutant 155 of seed 3 (a figure changed, a view added, header byte 35 changed: the first
+    freelist trunk page now 11 of 18): SQLite's integrity check passes, but the record's insert
+    failed ('malformed') after evaluate and check had written their outputs. Now a record-sized
+    row is inserted and rolled back before any output (the file's bytes stay)."""
+    rng = random.Random(3)
+    for _ in range(156):
+        what = mutate(seed, tmp_path / "h.sqlite", rng)
+    assert "header byte 35" in what
+    hist = tmp_path / "h.sqlite"
+    with closing(sqlite3.connect(f"file:{hist}?mode=ro", uri=True)) as conn:
+        assert conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
+    assert not _through_every_command(seed, tmp_path, hist)
+
+
+def test_the_write_probe_leaves_a_sound_history_as_it_was(seed, tmp_path):
+    from robocal.history.store import History
+
+    hist = _mutant(seed, tmp_path)
+    before = hist.read_bytes()
+    with History(hist) as history:
+        history.probe_write()
+    assert hist.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["h.sqlite"]

@@ -83,6 +83,7 @@ def open_history(location: str | None, robot_id: str | None, existing: bool = Fa
     with History(location, readonly=not writes) as history:
         if writes:  # the calibrations a command records from are read after its outputs: check them now
             history.find_calibration(robot_id)
+            history.probe_write()  # and that a record can be added, before any output is written
     return robot_id
 
 

@@ -61,6 +61,7 @@ MAX_VARIANCE = 1.0
 COVARIANCE_REL_TOL = 1e-9
 MIN_NOISE_M, MAX_NOISE_M = 1e-9, 1.0
 MAX_DOF = 10**9
+PROBE_BYTES = 1 << 16  # a probe row larger than a record's model YAML: it takes pages as a record does
 FIRST_YEAR, LAST_YEAR = 1970, 9000  # a record's date outside these years was not written by robocal
 MAX_RECORD_ID = 2**63 - 1  # SQLite's largest row id: a counter there cannot give the next record one
 ROBOCAL_TABLES = ("schema_version", "records")  # a file with tables but not these is not a history
@@ -561,6 +562,25 @@ class History:
                       "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id", values)
             entry.id = int(cur.fetchone()[0])
         return entry.id
+
+    def probe_write(self) -> None:
+        """Check, before a command writes its outputs, that a record can be added: a record-sized
+        row is inserted and rolled back (the file's bytes stay as they were). DataError worded by
+        the cause otherwise: a freelist pointer changed by a flipped byte passed the integrity
+        check, and the insert after the outputs failed ('malformed': outputs left, exit 2)."""
+        if self.readonly or self.postgres:
+            return
+        conn = self._conn
+        self._retry(lambda: conn.execute("BEGIN IMMEDIATE"))
+        try:
+            conn.execute("INSERT INTO records (robot_id, kind, recorded_at, robocal_version, model_yaml, "
+                         "model_sha256, summary, parameters, uncertainty, data, parent_id) "
+                         "VALUES (?, 'check', ?, ?, ?, '', '{}', '[]', NULL, '[]', NULL)",
+                         ("robocal write probe", now_utc(), __version__, "#" * PROBE_BYTES))
+        except sqlite3.Error as exc:
+            raise self._failure(exc, "writing") from None
+        finally:
+            _rollback(conn)
 
     def entries(self, robot_id: str, kind: str | None = None,
                 skipped: list[str] | None = None) -> list[Record]:
