@@ -35,3 +35,13 @@ def test_a_vendor_tool0_off_the_flange_is_refused(tmp_path, old, new):
     out = tmp_path / "o.urdf"
     code, err = cli(["export", "kuka_kr16_2", "--urdf-like", str(tmp_path / "v.urdf"), "-o", str(out)])
     assert one_error_line(code, err) and "from the model's flange" in err and not out.exists()
+
+
+@pytest.mark.parametrize("old, new", [(b'<link name="link_2"', b'<link name="link_1"'),
+                                      (b'<joint name="joint_a2"', b'<joint name="joint_a1"')])
+def test_a_vendor_file_with_a_name_given_twice_is_refused(tmp_path, old, new):
+    """Two links named link_1 (a file ROS refuses) were written, exit 0."""
+    (tmp_path / "v.urdf").write_bytes((DATA / "kr16_2.urdf").read_bytes().replace(old, new, 1))
+    out = tmp_path / "o.urdf"
+    code, err = cli(["export", "kuka_kr16_2", "--urdf-like", str(tmp_path / "v.urdf"), "-o", str(out)])
+    assert one_error_line(code, err) and "given 2 times" in err and not out.exists(), err
