@@ -247,3 +247,14 @@ def test_the_write_probe_leaves_a_sound_history_as_it_was(seed, tmp_path):
     with History(hist) as history:
         history.probe_write()
     assert hist.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["h.sqlite"]
+
+
+def test_a_history_whose_check_constraint_only_a_writer_sees_broken_is_refused_first(seed, tmp_path):
+    """Mutant 313 of seed 5 (a column added, bytes flipped): the integrity check on a read-only
+    connection passes, on the writing one 'CHECK constraint failed in records'; evaluate and check
+    wrote their outputs, then refused to record."""
+    rng = random.Random(5)
+    for _ in range(314):
+        what = mutate(seed, tmp_path / "h.sqlite", rng)
+    assert "bytes flipped" in what
+    assert not _through_every_command(seed, tmp_path, tmp_path / "h.sqlite")

@@ -577,10 +577,15 @@ class History:
                          "model_sha256, summary, parameters, uncertainty, data, parent_id) "
                          "VALUES (?, 'check', ?, ?, ?, '', '{}', '[]', NULL, '[]', NULL)",
                          ("robocal write probe", now_utc(), __version__, "#" * PROBE_BYTES))
+            # on the writing connection, as record() will: a read-only connection's check passed a
+            # file whose CHECK constraint this one finds broken (the insert then refused, after the outputs)
+            finding = self._integrity()
         except sqlite3.Error as exc:
             raise self._failure(exc, "writing") from None
         finally:
             _rollback(conn)
+        if finding:
+            raise self._damaged(finding)
 
     def entries(self, robot_id: str, kind: str | None = None,
                 skipped: list[str] | None = None) -> list[Record]:
