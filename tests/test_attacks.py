@@ -13,7 +13,7 @@ from attacks import HOSTILE, attack, cli, model_with_name
 import robocal as rc
 from robocal.kinematics.urdf import to_urdf
 
-FAST = ["a\x00b", "a\nb", "a]]>b", "<script>alert(1)</script>"]
+FAST = ["a\nb", "<script>alert(1)</script>"]  # the rest in the slow run (each ~7 s)
 
 
 @pytest.mark.parametrize("name", ["a\x00b", "a\x1b[31mb", "a\x0bb\x0cc"])
