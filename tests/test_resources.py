@@ -65,7 +65,7 @@ def test_a_memory_error_outside_the_calibration_is_the_same_line(monkeypatch, ca
     monkeypatch.setattr(cli, "build_parser", patched)
     assert main(["robots"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"robocal robots: error: {res.out_of_memory('the command')}"]
+    assert err == [f"robocal robots: error: {res.out_of_memory('the command', 'robots')}"]
 
 
 def test_small_calibrations_run_on_one_blas_thread_and_large_ones_keep_theirs(monkeypatch):

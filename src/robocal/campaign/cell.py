@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from robocal.campaign.constraints import Constraints
-from robocal.campaign.planner import CampaignResult, plan_poses
+from robocal.campaign.planner import CampaignResult, check_plan_numbers, plan_poses
 from robocal.campaign.positioner import TablePlan, plan_table
 from robocal.campaign.programs import DEGREE_DECIMALS, campaign_programs, fixed_point
 from robocal.core.errors import DataError
@@ -403,6 +403,7 @@ def plan_cell(cell: Cell, arm_poses: dict[str, int], table_poses: dict[str, int]
     >>> plan.tables["STN1"].n, round(plan.tables["STN1"].predicted_rms_mm, 3) < 0.05  # mm at the nests
     (10, True)
     """
+    check_plan_numbers(noise_mm, seed)
     constraints = Constraints() if constraints is None else constraints
     tracker = constraints.tracker
     arms, tables, warnings = {}, {}, []

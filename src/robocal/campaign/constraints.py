@@ -35,6 +35,7 @@ from robocal.kinematics.model import joints_in_units
 DEFAULT_ACCEPTANCE_DEG = 30.0
 DEFAULT_RANGE_M = (0.5, 40.0)      # a typical tracker's measuring range; set your instrument's
 DEFAULT_CLEARANCE_M = 0.3          # free space kept between the arm's axis lines and the tracker
+MAX_DISTANCE_DEG = 3600.0          # an angle or joint distance beyond ten turns is no constraint's
 DEFAULT_MARGIN_DEG = 1.0           # generated poses stay this far inside the joint limits
 BEAM_ARM_FRAME = 4                 # the arm that can block the beam: frames {0}..{4}
 
@@ -182,6 +183,8 @@ class Constraints:
                 continue
             if not np.isfinite(value) or value < 0:
                 raise DataError(f"{name} must be a finite value >= 0, got {value}")
+            if name.endswith("_deg") and value > MAX_DISTANCE_DEG:  # 1e308 overflowed (exit 3)
+                raise DataError(f"{name} must be at most {MAX_DISTANCE_DEG:g} deg, got {value:g}")
         if self.min_wrist_deg >= 90 or self.min_elbow_deg >= 90:
             raise DataError("singularity angles are at most 90 deg from a singularity: use less than 90")
 

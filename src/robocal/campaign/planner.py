@@ -70,6 +70,7 @@ ROUND_DECIMALS_DEG = 4      # generated joints are rounded to 1e-4 deg (1e-4 mm)
 CURVE_POINTS = 12           # N values of an accuracy curve given as start:stop
 CURVE_RANDOM_DESIGNS = 9    # random designs per N for the curve's random baseline
 FORMAT = "robocal-campaign/1"
+MAX_NOISE_MM = 100.0        # an instrument noisier than this (1 sigma) measures no calibration
 
 
 @dataclass(frozen=True)
@@ -432,6 +433,16 @@ def _fail_empty(funnel: cons.Funnel, what: str) -> None:
                     "(or, for the tracker, move it or the SMRs)")
 
 
+def check_plan_numbers(noise_mm: float, seed: int | None) -> None:
+    """DataError unless the noise (mm, 1 sigma) is finite in (0, `MAX_NOISE_MM`] and the seed a
+    whole number >= 0 or None (an infinite noise or a negative seed was an internal error)."""
+    if not (isinstance(noise_mm, int | float | np.number) and 0 < float(noise_mm) <= MAX_NOISE_MM):
+        raise DataError(f"the measurement noise must be a number in (0, {MAX_NOISE_MM:g}] mm, got "
+                        f"{noise_mm!r}")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0):
+        raise DataError(f"the random seed must be a whole number >= 0, got {seed!r}")
+
+
 def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candidates: int = DEFAULT_CANDIDATES,
                constraints: cons.Constraints | None = None, smr=None, smr_normals=None,
                noise_mm: float = 0.02, noise_model: str = "isotropic", rotation_noise_deg: float = 0.001,
@@ -540,6 +551,7 @@ def plan_poses(robot, n: int, *, kind: str = "point", candidates=None, n_candida
     """
     if not isinstance(n, int | np.integer) or n < 1:
         raise DataError(f"the number of poses must be a positive integer, got {n!r}")
+    check_plan_numbers(noise_mm, seed)
     kind_spec(kind)  # an unknown kind: DataError
     if criterion not in CRITERIA:
         raise DataError(f"unknown criterion {criterion!r}: use one of {', '.join(CRITERIA)}")

@@ -54,6 +54,7 @@ from robocal.kinematics.joint_errors import CONDITION_TERMS, candidate_names, pa
 from robocal.trust.coverage import region_matrix
 from robocal.trust.posterior import Noise, whitened_rows
 
+MAX_UNMODELLED_MM = 1000.0  # an unmodelled error of a metre is no robot's to plan for
 DEFAULT_TERMS = ("compliance", "backlash", "travel")  # the non-geometric errors of common arms
 DOWNDATE_MIN_DET = 1e-4  # removing a block with det(I - H B H^T) below this: forms afresh (a rank-r
                          # downdate would amplify the rounding by about its inverse)
@@ -109,8 +110,9 @@ def unmodelled_error(robot, data: Measurements, noise: Noise, info: Information,
     of the RMS the measured values make together over the region (their fitted values compensate
     each other where the terms are correlated; ``rms_mm`` unused); None when it is zero
     (DataError when none of the terms is left with an effect)."""
-    if not (np.isfinite(rms_mm) and rms_mm >= 0):
-        raise DataError(f"the unmodelled error must be a finite RMS >= 0 mm, got {rms_mm}")
+    if not (np.isfinite(rms_mm) and 0 <= rms_mm <= MAX_UNMODELLED_MM):  # 1e308 overflowed (exit 3)
+        raise DataError(f"the unmodelled error must be a finite RMS >= 0 mm (at most {MAX_UNMODELLED_MM:g}), "
+                        f"got {rms_mm}")
     terms = check_terms(terms)
     if rms_mm == 0 and values is None:
         return None

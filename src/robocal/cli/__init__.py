@@ -151,7 +151,7 @@ def _run(args, argv: list[str], interrupts: _Interrupts) -> int:
               file=sys.stderr)
         return 2
     except MemoryError:  # what ran out is named; the traceback's arrays are freed by now
-        print(f"robocal {args.command}: error: {out_of_memory('the command')}", file=sys.stderr)
+        print(f"robocal {args.command}: error: {out_of_memory('the command', args.command)}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into e.g. head, which stopped reading
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -176,7 +176,8 @@ def run(args) -> int:
     check_network_output(args.network_out, args.method)  # fail before the work
     if args.model:  # a work cell: one calibration per body (robocal.calibration.cell)
         return _calibrate_cell(args, validate)
-    robot_id = open_history(args.history, args.robot_id)
+    robot_id = open_history(args.history, args.robot_id,
+                            outputs=[args.output, args.json, args.report, args.network_out])
     start = offsets_start(args.start, args.offsets_only, args.params, args.nongeometric)
     robot = load_model(args.robot)
     def read(files: list[str]) -> list:  # conditions without a term in the model: result.notes

@@ -50,7 +50,7 @@ def run(args) -> int:
 
     check_format(args.json, "JSON", "--json")
     check_outputs([args.json], [args.model, args.data, args.result])
-    robot_id = open_history(args.history, args.robot_id, existing=True)
+    robot_id = open_history(args.history, args.robot_id, existing=True, outputs=[args.json])
     robot, uncertainty, parent = load_calibration(args.model, args.result, args.history, robot_id)
     data = load_measurements(args.data, robot, args.quiet)
     result = check_calibration(robot, data, uncertainty, fit_frame=args.fit_frame, noise_mm=args.noise_mm,

@@ -54,7 +54,7 @@ def run(args) -> int:
 
     check_format(args.json, "JSON", "--json")
     check_outputs([args.json], [args.model, args.data, args.frame_from, args.result])
-    robot_id = open_history(args.history, args.robot_id)
+    robot_id = open_history(args.history, args.robot_id, outputs=[args.json])
     if (cell := work_cell(args.model)) is not None:  # every body in one tracker frame
         return _evaluate_cell(args, cell)
     robot = load_model(args.model)

@@ -58,11 +58,25 @@ def xml_text(text: str) -> str:
 
     Examples
     --------
-    >>> xml_text('a<b & "c"')
-    'a&lt;b &amp; &quot;c&quot;'
+    >>> xml_text('a<b & "c"\\x00')
+    'a&lt;b &amp; &quot;c&quot;?'
     """
-    return (str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    text = (str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
             .replace('"', "&quot;").replace("'", "&apos;"))
+    # XML 1.0 cannot hold other control characters even as references (a model name holding
+    # one made an exported URDF that no parser reads); line ends and tabs as references keep
+    # their value in an attribute (a parser turns a literal one into a space)
+    text = "".join(_XML_KEPT.get(ch, ch) if _xml_char(ch) else REPLACEMENT for ch in text)
+    return text
+
+
+_XML_KEPT = {"\n": "&#10;", "\r": "&#13;", "\t": "&#9;"}
+
+
+def _xml_char(ch: str) -> bool:
+    """Whether XML 1.0 allows ``ch`` (its Char production)."""
+    code = ord(ch)
+    return code in (0x9, 0xA, 0xD) or 0x20 <= code <= 0xD7FF or 0xE000 <= code <= 0xFFFD or code >= 0x10000
 
 
 def xml_comment_text(text: str) -> str:

@@ -63,6 +63,8 @@ def read_text(path, what: str, error: type[RobocalError] = DataError) -> str:
     type) names the file, ``what`` it should be and the reason when it cannot be read."""
     path = Path(path)
     try:
+        if path.exists() and not path.is_file():  # /dev/zero was read until memory ran out, a FIFO forever
+            raise error(f"cannot read {what} {path}: it is not a regular file (a device, a pipe or a socket)")
         return decode_utf8(path.read_bytes())
     except OSError as exc:
         raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
@@ -107,6 +109,13 @@ def check_writable(paths) -> None:
             raise DataError(f"cannot write {path}: its folder {folder} does not exist")
         if not os.access(folder, os.W_OK | os.X_OK):
             raise DataError(f"cannot write {path}: its folder {folder} is not writable")
+        if path.is_symlink():  # replaced whole, the link would go, not its target (/dev/stdout, as root)
+            raise DataError(f"cannot write {path}: it is a symbolic link (to {os.readlink(path)}); robocal "
+                            "replaces an output whole, which would replace the link, not what it points to: "
+                            "give the target's own name or another name")
+        if _exists(path) and not path.is_file():  # run as root, /dev/full was replaced by a file
+            raise DataError(f"cannot write {path}: it is not a regular file (a device, a pipe or a socket): "
+                            "robocal writes its outputs as files, each replaced whole; give a file name")
         if path.exists() and not (os.access(path, os.W_OK) and path.stat().st_mode & _WRITE_BITS):
             raise DataError(f"cannot write {path}: the file is read-only (robocal does not replace "
                             "read-only files; make it writable or choose another name)")

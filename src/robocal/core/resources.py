@@ -43,6 +43,9 @@ EVALUATION_ADVICE = ("evaluate a subset of the rows (split the file, e.g. by pos
                      "machine with more memory")
 ADVICE = ("calibrate fewer poses (a subset, e.g. every second pose), use --nongeometric none (the "
           "geometric model needs about a third of the memory) or run on a machine with more memory")
+GENERAL_ADVICE = ("ask for less (fewer poses, candidates, starts or rows) or run on a machine with more "
+                  "memory")
+COMMAND_ADVICE = {"calibrate": ADVICE, "evaluate": EVALUATION_ADVICE, "check": EVALUATION_ADVICE}
 
 
 def _meminfo() -> dict[str, int]:
@@ -106,9 +109,10 @@ def check_memory(needed: int, what: str, advice: str = ADVICE) -> None:
                             f"{_gb(have)}: {advice}")
 
 
-def out_of_memory(what: str) -> str:
-    """The one line for a computation that ran out of memory anyway."""
-    return f"{what} ran out of memory: {ADVICE}"
+def out_of_memory(what: str, command: str = "calibrate") -> str:
+    """The one line for a computation that ran out of memory anyway, with the advice of ``command``
+    (the calibration's advice was given for a ``poses --candidates 100000000`` too)."""
+    return f"{what} ran out of memory: {COMMAND_ADVICE.get(command, GENERAL_ADVICE)}"
 
 
 def memory_guard(what: str):

@@ -17,6 +17,7 @@ import csv
 import itertools
 import re
 from collections.abc import Iterable, Iterator
+from pathlib import Path
 
 import numpy as np
 
@@ -56,6 +57,8 @@ def count_lines(path, block: int = 1 << 20) -> int:
     1 MB at a time: a file's size in rows before reading it; 0 when it cannot be read (the reader
     then says why)."""
     ends, last = 0, b"\n"
+    if not Path(path).is_file():  # a device or a pipe never ends (/dev/zero): the reader says what it is
+        return 0
     try:
         with open(path, "rb") as f:
             while chunk := f.read(block):  # LF, CR and CR LF (one end, also across two chunks)

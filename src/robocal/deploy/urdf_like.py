@@ -71,6 +71,7 @@ REFINED = 8  # best candidate maps refined by least squares when none holds as t
 GOAL_MM = 1.0  # a joint origin moved further than this from the vendor's is said (meshes move with it)
 GOAL_DEG = 0.1  # the same, deg
 _MOVING = ("revolute", "continuous", "prismatic")
+FLANGE_LINKS = ("tool0", "flange")  # links at the controller's flange (ROS-Industrial, REP 199)
 _WHY_NOT = ("(another robot, joints that differ from the controller's by more than a sign and a zero, or a "
             "controller's model that is not what the file draws: give that as --vendor-model)")
 
@@ -386,7 +387,22 @@ def _link_maps(chain: _Chain, nominal: Robot, vendor_file: str, B: np.ndarray | 
                         f"{dist[:, worst].max() * 1e3:.3g} mm / {np.rad2deg(angle[:, worst].max()):.3g} deg "
                         f"against robocal's frame {{{chain.frame[worst]}}} over {CHECK_POSES} joint vectors "
                         f"{_WHY_NOT}")
+    _check_flange(chain, M[0], nominal, vendor_file)
     return B, _on_axes(chain, M[0], joint_map.signs), float(dist.max()), float(angle.max()), joint_map
+
+
+def _check_flange(chain: _Chain, M: np.ndarray, nominal: Robot, vendor_file: str) -> None:
+    """DataError when a link of the chain named as the flange (`FLANGE_LINKS`: ROS-Industrial's
+    ``tool0`` is the controller's flange) has its origin off robocal's flange frame {n} (``M``: the
+    links' poses in the frames they ride on): a vendor file whose tool0 was 1 m beyond the flange
+    was written, exit 0, with its base_link-to-tool0 FK 1 m off the calibrated model's."""
+    for i, link in enumerate(chain.links):
+        if link in FLANGE_LINKS and chain.frame[i] == chain.n_moving:
+            off = float(np.linalg.norm(M[i, :3, 3]))
+            if off > _tol_m(nominal, MAP_TOL_REACHES):
+                raise DataError(f"{vendor_file} is not {nominal.name}: its {link} is {off * 1e3:.4g} mm "
+                                f"from the model's flange (ROS-Industrial's {link} is the controller's "
+                                f"flange) {_WHY_NOT}")
 
 
 def _on_axes(chain: _Chain, M: np.ndarray, signs: np.ndarray) -> np.ndarray:

@@ -40,7 +40,7 @@ from robocal.core.errors import DataError, PlausibilityError
 from robocal.core.io import load_json, write_all
 from robocal.data.registration import register
 from robocal.history.expected import expected_uncertainty
-from robocal.history.store import History
+from robocal.history.store import History, uncertainty_fault
 from robocal.identify.plausibility import check_residual
 from robocal.identify.space import block_of
 from robocal.kinematics.conditions import Conditions
@@ -103,17 +103,22 @@ class Uncertainty:
             corr = np.asarray(result["correlation"]["matrix"], float)
             rows = {r["name"]: r for r in result["parameters"]}
             n_points, rms_mm = int(result["after"]["n"]), float(result["after"]["rms"])
-        except (KeyError, TypeError, ValueError) as exc:
+            keep = [i for i, n in enumerate(corr_names) if block_of(n) in ("links", "joint_errors")]
+            names = [corr_names[i] for i in keep]
+            scale = np.array([rows[n]["sigma"] / (1e3 if rows[n]["unit"] == "mm" else 180 / np.pi)
+                              for n in names])  # a null sigma: TypeError (was exit 3)
+            cov = corr[np.ix_(keep, keep)] * np.outer(scale, scale)
+            dof = max(3 * n_points - len(corr_names), 1)
+            noise = float(np.sqrt(n_points * (rms_mm * 1e-3) ** 2 / dof))  # rms 1e308: OverflowError
+        except (KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:
             raise DataError(f"the result JSON lacks what a check needs ({exc}): give the --json of "
                             "robocal calibrate") from None
-        keep = [i for i, n in enumerate(corr_names) if block_of(n) in ("links", "joint_errors")]
-        names = [corr_names[i] for i in keep]
-        scale = np.array([rows[n]["sigma"] / (1e3 if rows[n]["unit"] == "mm" else 180 / np.pi)
-                          for n in names])
-        cov = corr[np.ix_(keep, keep)] * np.outer(scale, scale)
-        dof = max(3 * n_points - len(corr_names), 1)
+        fault = uncertainty_fault({"names": names, "covariance": cov, "noise_m": noise, "dof": dof})
+        if fault:
+            raise DataError(f"the result JSON's uncertainty is not one a calibration makes: its {fault}; "
+                            "give the --json robocal calibrate wrote")
         kind = str(result.get("data", {}).get("kind"))
-        return cls(tuple(names), cov, float(np.sqrt(n_points * (rms_mm * 1e-3) ** 2 / dof)), dof, kind)
+        return cls(tuple(names), cov, noise, dof, kind)
 
 
 def load_calibration(model: str, result: str | None, history: str | None, robot_id: str | None):

@@ -51,13 +51,15 @@ def calibration_record(result, robot_id: str, files: list[tuple[str, str]], pare
 
 
 def open_history(location: str | None, robot_id: str | None, existing: bool = False,
-                 writes: bool = True) -> str | None:
+                 writes: bool = True, outputs=()) -> str | None:
     """Check a command's ``--history`` and ``--robot-id`` before any work (before any output is
     written: all or none): both or neither, the robot id's form, the history opens; ``writes``:
     the command records in it, so it must be writable, a robocal history and sound (SQLite's
     integrity check), its schema created or migrated; else it is opened read-only and changed in
     nothing. ``existing``: a SQLite history must exist already (it holds what the command reads).
-    The checked robot id (None without a history).
+    ``outputs``: the files the command writes (None entries skipped); none may be the history (a
+    ``--json`` naming it replaced every record with the JSON). The checked robot id (None without
+    a history).
 
     Raises
     ------
@@ -68,14 +70,20 @@ def open_history(location: str | None, robot_id: str | None, existing: bool = Fa
     """
     if bool(location) != bool(robot_id):
         raise DataError("--history and --robot-id go together: give both to record in a robot's history")
-    if location and existing and not is_postgres(location) and not Path(location).is_file():
+    if location and existing and not is_postgres(location) and not Path(location).exists():
         raise DataError(f"the history {location} does not exist")
     if not location:
         return robot_id
     robot_id = check_robot_id(robot_id)
+    if not is_postgres(location):
+        same = [str(o) for o in outputs if o is not None and Path(o).resolve() == Path(location).resolve()]
+        if same:
+            raise DataError(f"cannot write {same[0]}: it is the history (--history {location}), which would "
+                            "lose every record; choose another output name")
     with History(location, readonly=not writes) as history:
         if writes:  # the calibrations a command records from are read after its outputs: check them now
             history.find_calibration(robot_id)
+            history.probe_write()  # and that a record can be added, before any output is written
     return robot_id
 
 

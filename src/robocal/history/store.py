@@ -55,6 +55,16 @@ MAX_ROBOT_ID = 200  # characters of a robot id
 _ADVISORY_LOCK = 7_032_032  # PostgreSQL advisory lock key of robocal's schema set-up
 INTEGRITY_LINES = 5  # problems integrity_check lists at most (the first is named in the error)
 FULL_DISK_BYTES = 1 << 20  # free space below which an I/O error while writing is a full disk
+# a calibration's stored uncertainty: a variance beyond (1 m)^2 or (1 rad)^2, an asymmetry or negative
+# eigenvalue beyond this fraction of the largest entry, a noise outside 1 nm .. 1 m, more than 1e9
+# degrees of freedom: not one robocal recorded (each made check exit 3)
+MAX_VARIANCE = 1.0
+COVARIANCE_REL_TOL = 1e-9
+MIN_NOISE_M, MAX_NOISE_M = 1e-9, 1.0
+MAX_DOF = 10**9
+PROBE_BYTES = 1 << 16  # a probe row larger than a record's model YAML: it takes pages as a record does
+FIRST_YEAR, LAST_YEAR = 1970, 9000  # a record's date outside these years was not written by robocal
+MAX_RECORD_ID = 2**63 - 1  # SQLite's largest row id: a counter there cannot give the next record one
 ROBOCAL_TABLES = ("schema_version", "records")  # a file with tables but not these is not a history
 
 # Each migration brings the schema from version i to i + 1 (index i); "{id}" is the dialect's
@@ -273,6 +283,9 @@ class History:
         path = Path(self.location)
         if path.is_dir():
             raise DataError(f"the history {path} is a folder: give a file name (e.g. history.sqlite)")
+        if path.exists() and not path.is_file():  # a FIFO was 'does not exist' or exit 3 (disk I/O error)
+            raise DataError(f"the history {path} is not a regular file (a device, a pipe or a socket): give "
+                            "a SQLite file (e.g. history.sqlite)")
         if not path.parent.is_dir():
             raise DataError(f"the history's folder {path.parent} does not exist")
         if self.readonly and not path.is_file():
@@ -291,6 +304,7 @@ class History:
             with _closing(_open_readonly(path, self._failure)) as conn:  # what it is, before any write
                 self._identify(conn)
                 self._check_sound(conn)  # a damaged file is not touched, not even its journal mode
+                self._check_insertable(conn)  # refused now, not after the command wrote its outputs
         _check_writable(path)
         conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
         conn.execute(f"PRAGMA busy_timeout={int(BUSY_TIMEOUT_S * 1000)}")
@@ -308,6 +322,27 @@ class History:
             raise DataError(f"{self.location} is not a robocal history: it is a SQLite database of another "
                             f"application (tables {', '.join(sorted(tables))[:120]}); robocal left it "
                             "untouched")
+
+    def _check_insertable(self, conn) -> None:
+        """Refuse (DataError) a history a record cannot be added to as robocal made it: one holding
+        a trigger (robocal makes none: another program's could delete or change records when
+        robocal inserts, or abort the insert after the command wrote its outputs), or whose record
+        id counter is at its end (SQLite's answer would be a misleading "disk is full")."""
+        try:
+            triggers = [r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'trigger'")]
+            counted = conn.execute("SELECT count(*) FROM sqlite_master WHERE name = 'sqlite_sequence'")
+            seq = conn.execute("SELECT seq FROM sqlite_sequence WHERE name = 'records'").fetchall() \
+                if counted.fetchone()[0] else []
+        except sqlite3.DatabaseError as exc:
+            raise self._failure(exc, "reading") from None
+        if triggers:
+            raise DataError(f"the history {shown(self.location)} holds trigger(s) robocal never makes "
+                            f"({', '.join(triggers)[:120]}): another program changed it, and a trigger can "
+                            "delete or change records when one is added; robocal writes nothing in it")
+        if seq and not (isinstance(seq[0][0], int) and 0 <= seq[0][0] < MAX_RECORD_ID):
+            raise DataError(f"the history {shown(self.location)} has a damaged record id counter "
+                            f"({seq[0][0]!r:.40} in sqlite_sequence): another program changed it; robocal "
+                            "writes nothing in it")
 
     def _connect_postgres(self):
         try:
@@ -419,8 +454,6 @@ class History:
                 yield lambda sql, params=(): cur.execute(sql.replace("?", "%s"), params)
             return
         conn = self._conn
-        if str(conn.execute("PRAGMA journal_mode").fetchone()[0]).lower() == "wal":  # an older robocal's
-            self._retry(lambda: conn.execute("PRAGMA journal_mode=DELETE"))  # at the first write only
         self._retry(lambda: conn.execute("BEGIN IMMEDIATE"))
         try:
             yield lambda sql, params=(): conn.execute(sql, params)
@@ -431,6 +464,10 @@ class History:
             _rollback(conn)
             raise
         self._retry(lambda: conn.execute("COMMIT"))
+        # an older robocal's WAL history is switched back once a write succeeded (before it, a
+        # refused write would have changed the file)
+        if str(conn.execute("PRAGMA journal_mode").fetchone()[0]).lower() == "wal":
+            self._retry(lambda: conn.execute("PRAGMA journal_mode=DELETE"))
 
     def _query(self, sql: str, params=()) -> list[tuple]:
         if self.postgres:
@@ -528,6 +565,30 @@ class History:
                       "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id", values)
             entry.id = int(cur.fetchone()[0])
         return entry.id
+
+    def probe_write(self) -> None:
+        """Check, before a command writes its outputs, that a record can be added: a record-sized
+        row is inserted and rolled back (the file's bytes stay as they were). DataError worded by
+        the cause otherwise: a freelist pointer changed by a flipped byte passed the integrity
+        check, and the insert after the outputs failed ('malformed': outputs left, exit 2)."""
+        if self.readonly or self.postgres:
+            return
+        conn = self._conn
+        self._retry(lambda: conn.execute("BEGIN IMMEDIATE"))
+        try:
+            conn.execute("INSERT INTO records (robot_id, kind, recorded_at, robocal_version, model_yaml, "
+                         "model_sha256, summary, parameters, uncertainty, data, parent_id) "
+                         "VALUES (?, 'check', ?, ?, ?, '', '{}', '[]', NULL, '[]', NULL)",
+                         ("robocal write probe", now_utc(), __version__, "#" * PROBE_BYTES))
+            # on the writing connection, as record() will: a read-only connection's check passed a
+            # file whose CHECK constraint this one finds broken (the insert then refused, after the outputs)
+            finding = self._integrity()
+        except sqlite3.Error as exc:
+            raise self._failure(exc, "writing") from None
+        finally:
+            _rollback(conn)
+        if finding:
+            raise self._damaged(finding)
 
     def entries(self, robot_id: str, kind: str | None = None,
                 skipped: list[str] | None = None) -> list[Record]:
@@ -715,10 +776,11 @@ class BadRecordError(Exception):
 
 
 # a record's JSON as `robocal.core.schema` checks it (numbers finite or null, texts, the rows' fields)
-_ROWS = {"shift": Obj({"name": Str(), "unit": Str(), "shift": Num(null=True), "sigma": Num(null=True)},
-                      required=("name", "unit")),
+# (a check's shifts are printed as figures: a null or missing one was exit 3 in history --report)
+_ROWS = {"shift": Obj({"name": Str(), "unit": Str(), "shift": Num(), "sigma": Num()},
+                      required=("name", "unit", "shift", "sigma")),
          "parameter": Obj({"name": Str(), "unit": Str(), "estimate": Num(null=True), "sigma": Num(null=True)},
-                          required=("name", "unit")),
+                          required=("name", "unit", "estimate", "sigma")),
          "file": Obj({"file": Str(), "role": Str(), "sha256": Str()}, required=("file", "role", "sha256"))}
 _FIGURES = Obj({**{name: Num(null=True) for name in ("held_out_rms", "rms", "rms_mm", "predicted_rms_mm",
                                                       "p_value", "mean", "max", "p95")},
@@ -764,9 +826,12 @@ def validate_row(row: tuple, robot_id: str, kind: str | None) -> Record:
     if parent is not None and (isinstance(parent, bool) or not isinstance(parent, int)):
         raise BadRecordError(ident, f"its parent_id is {parent!r:.40}, not a record id")
     try:
-        datetime.datetime.fromisoformat(date)
+        year = datetime.datetime.fromisoformat(date).year
     except ValueError:
         raise BadRecordError(ident, f"its date {date!r:.40} is not an ISO 8601 time") from None
+    if not FIRST_YEAR <= year <= LAST_YEAR:  # year 1 broke the timeline's plot (exit 3)
+        raise BadRecordError(ident, f"its date {date!r:.40} is not one robocal could have recorded "
+                                    f"(years {FIRST_YEAR} to {LAST_YEAR})")
     if sha256_text(model_yaml) != digest:
         raise BadRecordError(ident, "its model does not match its SHA-256 fingerprint (changed after "
                                     "recording)")
@@ -798,18 +863,33 @@ def _check(ident, value, spec, where: str) -> None:
 
 def _check_uncertainty(ident, unc: dict) -> None:
     """A calibration's uncertainty: names, a square finite covariance over them, noise > 0, dof >= 1."""
+    fault = uncertainty_fault(unc)
+    if fault:
+        raise BadRecordError(ident, f"its uncertainty's {fault}")
+
+
+def uncertainty_fault(unc: dict) -> str | None:
+    """What makes ``unc`` (``names``, ``covariance`` (SI), ``noise_m``, ``dof``) not the uncertainty
+    a calibration makes (one phrase, starting with the field), None when it is one."""
     names = unc.get("names")
-    if not (isinstance(names, list) and all(isinstance(n, str) for n in names)):
-        raise BadRecordError(ident, "its uncertainty has no list of parameter names")
+    if not (isinstance(names, list | tuple) and all(isinstance(n, str) for n in names)):
+        return "names are not a list of parameter names"
     try:
         cov = np.asarray(unc.get("covariance"), dtype=float)
     except (TypeError, ValueError):
         cov = np.empty(0)
     if cov.shape != (len(names), len(names)) or not np.isfinite(cov).all():
-        raise BadRecordError(ident, f"its uncertainty's covariance is not a finite {len(names)} x "
-                                    f"{len(names)} matrix")
+        return f"covariance is not a finite {len(names)} x {len(names)} matrix"
+    # a covariance a calibration makes: symmetric, positive semi-definite, no sigma beyond 1 m or
+    # 1 rad (one that was not made check exit 3: a Cholesky factor of a matrix that has none)
+    scale = float(np.abs(cov).max(initial=0.0))
+    if scale > MAX_VARIANCE or np.abs(cov - cov.T).max(initial=0.0) > COVARIANCE_REL_TOL * scale or \
+            (cov.size and np.linalg.eigvalsh(cov).min() < -COVARIANCE_REL_TOL * scale):
+        return ("covariance is not one a calibration makes (symmetric, positive semi-definite, variances "
+                f"at most {MAX_VARIANCE:g})")
     noise, dof = unc.get("noise_m"), unc.get("dof")
-    if not (_number(noise) and noise is not None and noise > 0):
-        raise BadRecordError(ident, f"its uncertainty's noise_m is {noise!r:.40}, not a number > 0 (m)")
-    if isinstance(dof, bool) or not isinstance(dof, int) or dof < 1:
-        raise BadRecordError(ident, f"its uncertainty's dof is {dof!r:.40}, not a whole number >= 1")
+    if not (_number(noise) and noise is not None and MIN_NOISE_M <= noise <= MAX_NOISE_M):
+        return f"noise_m is {noise!r:.40}, not a number in [{MIN_NOISE_M:g}, {MAX_NOISE_M:g}] (m)"
+    if isinstance(dof, bool) or not isinstance(dof, int | np.integer) or not 1 <= dof <= MAX_DOF:
+        return f"dof is {dof!r:.40}, not a whole number in [1, {MAX_DOF:g}]"
+    return None

@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from robocal.core.errors import ModelError
+from robocal.core.errors import ModelError, UnitError
 from robocal.core.io import ANGLE_UNITS, LENGTH_UNITS, as_number, read_text, short_repr
 from robocal.core.magnitudes import check_model_units
 from robocal.core.yaml_load import dump_yaml, load_yaml
@@ -323,8 +323,16 @@ def robot_to_dict(robot) -> dict:
 
 
 def dump_model(robot) -> str:
-    """The model YAML text (SI, full precision: an exact round trip)."""
-    return dump_yaml(robot_to_dict(robot))
+    """The model YAML text (SI, full precision: an exact round trip); ModelError when the text
+    would not read back as a model (a robot built in memory, e.g. from a URDF, beyond what a
+    model file may hold: a file written then refused by ``Robot.load`` was exit 0 of export)."""
+    text = dump_yaml(robot_to_dict(robot))
+    try:
+        robot_kwargs(load_yaml(text, "the model YAML", ModelError))
+    except (ModelError, UnitError) as exc:
+        raise ModelError(f"the model {robot.name!r} cannot be written as a model YAML: it would not read "
+                         f"back ({exc})") from None
+    return text
 
 
 def is_cell(data) -> bool:

@@ -15,6 +15,7 @@ construction places it, and the joint is flagged prismatic (its value, m, adds t
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -110,6 +111,12 @@ def joint_axis(joint: ET.Element) -> np.ndarray:
 def urdf_chain(root: ET.Element, tip: str | None) -> list[ET.Element]:
     """Joints from the root link to ``tip`` (default: the leaf with most moving joints)."""
     joints = root.findall("joint")
+    for kind, elements in (("link", root.findall("link")), ("joint", joints)):  # as ROS's parser does
+        counts = Counter(e.get("name") for e in elements if e.get("name") is not None)
+        twice = sorted(n for n, c in counts.items() if c > 1)
+        if twice:
+            raise ModelError(f"URDF {kind} name {twice[0]!r} is given {counts[twice[0]]} times: each "
+                             f"{kind} needs its own name (ROS refuses such a file)")
     by_child: dict[str, ET.Element] = {}
     for j in joints:
         parent, child = j.find("parent"), j.find("child")
