@@ -113,6 +113,19 @@ def test_ur_base_link_is_the_controllers_base_turned_by_pi_and_the_others_are_th
     assert np.allclose(kuka.base, np.eye(4), atol=1e-12) and np.allclose(kuka.tool, np.eye(4), atol=1e-12)
 
 
+def test_a_base_link_that_is_not_the_controllers_base_is_said(tmp_path):
+    """A vendor file whose base_link sits 100 mm below the controller's base: the export still
+    writes the calibrated robot's FK, and says that base_link is not the controller's base frame
+    (UR's base_link, the base turned by pi about z, is the controller's: nothing said)."""
+    text = (DATA / "kr16_2.urdf").read_text(encoding="utf-8")
+    lowered = tmp_path / "kr16_2.urdf"
+    lowered.write_text(text.replace('xyz="0 0 0.675"', 'xyz="0 0 0.775"', 1), encoding="utf-8")
+    out = rc.export_urdf_like(typical(rc.Robot.from_catalog("kuka_kr16_2")), lowered)
+    assert any("base_link is not the controller's base frame: that frame sits 100 mm away" in w
+               for w in out.warnings), out.warnings
+    assert not rc.export_urdf_like(rc.Robot.from_catalog("ur5e"), DATA / "ur5e.urdf").warnings
+
+
 def test_the_nominal_model_gives_back_the_vendors_file():
     text = (DATA / "kr16_2.urdf").read_text(encoding="utf-8")
     out = rc.export_urdf_like("kuka_kr16_2", DATA / "kr16_2.urdf")

@@ -1064,6 +1064,14 @@ def _result(robot, controller, vendor_file, robot_name, chain, B, M, check, new_
                         f"{'; '.join(joint_map.text(names))} ({how}); the ROS driver must send these "
                         f"values{also}")
     base = invert_transform(vendor0[base_at]) @ B @ cal.base  # robocal's frame {0} in base_link at q = 0
+    drawn_base = invert_transform(vendor0[base_at]) @ B @ controller.base  # the controller's, nominal
+    shift_mm = float(np.linalg.norm(drawn_base[:3, 3]) * 1e3)
+    tilt_deg = float(np.rad2deg(np.arccos(np.clip(drawn_base[2, 2], -1.0, 1.0))))
+    if shift_mm > GOAL_MM or tilt_deg > GOAL_DEG:  # ROS-Industrial's base_link is the controller's base
+        warnings.append(f"the vendor's {chain.links[base_at]} is not the controller's base frame: that "
+                        f"frame sits {shift_mm:.4g} mm away and {tilt_deg:.4g} deg tilted in it, so poses "
+                        f"from {chain.links[base_at]} are not the controller's base-frame targets (the "
+                        "file's FK is still the calibrated robot's)")
     tool = invert_transform(controller.tool) @ M[-1]
     fk_frames = " and ".join(f"{chain.links[k]} -> {chain.links[-1]}" for k in dict.fromkeys((base_at, 0)))
     return UrdfLikeExport(robot, controller, vendor_file, robot_name, new_text, base, tool,
