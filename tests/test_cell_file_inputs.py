@@ -125,3 +125,13 @@ def test_a_placement_in_millimetres_in_a_file_in_metres_is_refused(tmp_path):
                     "{model: abb_irb2600, base: {xyz: [3000, 0, 0]}}}\n")
     with pytest.raises(ModelError, match=r"robots\.right\.base: 3000 m is too large .*millimetres"):
         rc.load_cell(path)
+
+
+def test_an_arm_on_a_riser_without_a_track_is_a_one_arm_cell(tmp_path):
+    """``robot:`` with a ``mount:`` and no track (an arm on a 500 mm riser) was refused as a model
+    file with unknown keys; it is a work cell of one arm, and as a robot its base is the mount."""
+    path = tmp_path / "riser.yaml"
+    path.write_text("units: {length: mm, angle: deg}\nrobot: abb_irb2600\nmount: {xyz: [0, 0, 500]}\n")
+    cell = rc.load_cell(path)
+    assert list(cell.arms) == ["arm"] and not cell.positioners
+    assert np.allclose(rc.Robot.load(path).base[:3, 3], [0, 0, 0.5])

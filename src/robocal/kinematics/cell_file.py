@@ -133,8 +133,10 @@ def named(value, where: str) -> dict:
 
 def is_workcell(data) -> bool:
     """Whether a loaded model mapping is a work cell (several arms or a positioner:
-    `robocal.kinematics.workcell`), not one robot (nor a robot on a track alone)."""
-    return isinstance(data, dict) and any(k in data for k in WORKCELL_KEYS)
+    `robocal.kinematics.workcell`, or one ``robot:`` placed by its ``mount:`` without a track), not
+    one robot (nor a robot on a track alone)."""
+    return isinstance(data, dict) and (any(k in data for k in WORKCELL_KEYS)
+                                       or ("robot" in data and "track" not in data))  # an arm on a riser
 
 
 class ArmEntry(NamedTuple):
