@@ -226,3 +226,14 @@ def test_cli_evaluate_with_the_result_judges_the_file(campaign, tmp_path, capsys
     assert main(["evaluate", model, str(tmp_path / "nest.csv"), "--result", json_path]) == 0
     out = capsys.readouterr().out
     assert "beyond the prediction" in out and "WARNING: NOT VALIDATED" in out and "another SMR" in out
+
+
+def test_a_calibration_worse_than_its_start_on_the_validation_data_is_said():
+    """FIGAROH's tiago set, split 0: the validation RMS went 5.248 -> 7.388 mm with a prediction of
+    4.10 mm ("consistent") and no warning; the start model is the yardstick not the answer's own."""
+    from robocal.trust.held_out import worse_than_start
+
+    said = worse_than_start({"rms": 5.248}, {"rms": 7.388})
+    assert said.startswith("NOT BETTER") and "7.388 mm RMS, the start model by 5.248 mm" in said
+    assert worse_than_start({"rms": 5.248}, {"rms": 0.617}) is None
+    assert worse_than_start(None, {"rms": 1.0}) is None

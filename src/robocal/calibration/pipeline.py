@@ -64,7 +64,7 @@ from robocal.report.metrics import position_stats
 from robocal.trust.consistency import check_fit, check_not_worse
 from robocal.trust.coverage import predict, prediction
 from robocal.trust.diagnosis import diagnosed
-from robocal.trust.held_out import HeldOutError, judge_held_out, refused_validation
+from robocal.trust.held_out import HeldOutError, judge_held_out, refused_validation, worse_than_start
 from robocal.trust.posterior import Noise, posterior_analysis
 from robocal.trust.provenance import JOINT_REPEAT_TOL_DEG, fingerprint, independent, tolerance_unit
 
@@ -489,6 +489,8 @@ def _calibrate_sets(robot, datasets: list, validations: list, method: str, param
         result = fit(terms, validations, warm_start)
     predicted = prediction(result)
     result.held_out = judge_held_out(result.robot, predicted, result.judged, result.warnings)
+    if (worse := worse_than_start(result.validation_before, result.validation)) is not None:
+        result.warnings.append(worse)
     if result.held_out is not None:  # the validated figure only as far as the prediction explains it
         predicted = result.held_out.validated(predicted, result.validation["rms"])
     result.predicted_accuracy, more = predict(result.robot, predicted,

@@ -257,6 +257,25 @@ def judge_file(robot, prediction: Prediction, data, errors: np.ndarray, fitted=N
                          cause, bulk)
 
 
+# the calibrated model's validation RMS over the start model's beyond which the calibration is said to
+# be no better (a start model already right: a calibration adds its own noise, a few percent)
+WORSE_THAN_START = 1.1
+
+
+def worse_than_start(before: dict | None, after: dict | None) -> str | None:
+    """The warning when the calibrated model misses the validation data by more than the start
+    (nominal) model does (``before``/``after``: their statistics, mm; each with its frames fitted on
+    the calibration data); None otherwise. A prediction that grew with a poor fit can still call such
+    a result consistent (FIGAROH's tiago set: 5.248 -> 7.388 mm, 4.10 mm predicted): the start model
+    is the yardstick that is not the answer's own."""
+    if not before or not after or not after["rms"] > WORSE_THAN_START * before["rms"]:
+        return None
+    return (f"NOT BETTER than the start model: on the validation data the calibrated model misses by "
+            f"{after['rms']:.4g} mm RMS, the start model by {before['rms']:.4g} mm: the calibration does not "
+            "carry over to those poses; keep the start model, or calibrate on more poses or fewer "
+            "parameters (--nongeometric none)")
+
+
 def held_out_of(files: list[FileJudgement], warnings: list[str] | None = None) -> HeldOut | None:
     """The :class:`HeldOut` of judged ``files`` (None without any); their warnings appended to
     ``warnings``."""
