@@ -291,8 +291,9 @@ def _read_only_folder(tmp_path, source):
         subprocess.run(["mount", "-o", "remount,ro", str(folder)], check=True, capture_output=True,
                        timeout=MOUNT_TIMEOUT_S)
         yield folder / "h.sqlite"
-    finally:
-        subprocess.run(["umount", str(folder)], capture_output=True, timeout=MOUNT_TIMEOUT_S)
+    finally:  # detached even when a connection still holds it (a later run's cleanup then succeeds)
+        if subprocess.run(["umount", str(folder)], capture_output=True, timeout=MOUNT_TIMEOUT_S).returncode:
+            subprocess.run(["umount", "-l", str(folder)], capture_output=True, timeout=MOUNT_TIMEOUT_S)
 
 
 @pytest.mark.parametrize("journal", ["delete", "wal"])  # wal: opened immutable (no writer can be there)
@@ -363,8 +364,9 @@ def test_a_full_file_system_through_the_cli(made, tmp_path, capsys):
                             "--fit-frame", "--history", hist, "--robot-id", ROBOT)
         assert code == 2 and "is full" in err and "busy" not in err, err
         assert _sha(hist) == before and _rows(hist) == [1, 2]
-    finally:
-        subprocess.run(["umount", str(folder)], capture_output=True, timeout=MOUNT_TIMEOUT_S)
+    finally:  # detached even when a connection still holds it (a later run's cleanup then succeeds)
+        if subprocess.run(["umount", str(folder)], capture_output=True, timeout=MOUNT_TIMEOUT_S).returncode:
+            subprocess.run(["umount", "-l", str(folder)], capture_output=True, timeout=MOUNT_TIMEOUT_S)
 
 
 def test_reading_creates_nothing_and_writing_leaves_the_rollback_journal(made, tmp_path):
