@@ -11,32 +11,17 @@ the same model loaded from any of its files gives the same fingerprint). Reading
 back in (filtering a filtered program, compensating compensated targets: the corrections applied
 twice) is refused, naming the earlier run, unless the caller forces it.
 
-Where the marker goes (one added line; the rest of the file is byte for byte the same), in each
-language's comment syntax (its ``programs/dialects/<language>/marker.py``):
+Where the marker goes is one added line (the rest of the file byte for byte the same) in the
+format's own comment syntax: each robot language says where in its
+``programs/dialects/<language>/marker.py`` (registered in `robocal.programs.registry`); a CSV
+(compensated targets) carries ``# ...`` as its first line (robocal's CSV readers skip leading ``#``
+lines). A language whose comments are short cuts the fingerprint to fit (`shortened`, never below
+`_SHORTEST_HEX` hex digits).
 
-* ABB RAPID: ``! ...`` on the line after the first ``MODULE`` line (the file's first line
-  without one);
-* KUKA KRL: ``; ...`` on the line after the first ``DEF`` / ``DEFDAT`` / ``DEFFCT`` line;
-* FANUC TP (.ls): a remark ``!...`` as the last line of ``/MN``, numbered after the last line,
-  with ``LINE_COUNT`` raised by one; a remark line holds 30 characters, so
-  the fingerprint is cut to fit (10 hex digits with a five-character version);
-* URScript: ``# ...`` as the first line;
-* Yaskawa INFORM: a comment instruction ``'...`` after the job's ``NOP`` (a comment holds 32
-  characters: the fingerprint is cut to fit);
-* Staubli VAL3: an XML comment ``<!-- ... -->`` on the line after the XML declaration of each
-  file written, or as the first line of a file without a declaration (a .dtx as some editors
-  save it);
-* CSV (compensated targets, FANUC position register files): ``# ...`` as the first line
-  (robocal's CSV readers skip leading ``#`` lines).
-
-A format with no comment syntax, a Yaskawa VAR.DAT (the controller's variables: ``//`` and ``///``
-lines are its sections, and a line it does not know may make it refuse the whole file), carries
-no line of robocal's: its corrected copy is marked by its name, ``<stem>_CAL<suffix>``
-(`corrected_name`; the filter writes it so named whatever output name it is given), and a
-file so named
-is refused as input like a marked one (`check_unmarked_name`). What the name cannot cover:
-a user who renames the corrected copy (to load it on the controller as VAR.DAT) and gives that
-back to robocal.
+A format with no comment syntax carries no line of robocal's: its corrected copy is marked by its
+name, ``<stem>_CAL<suffix>`` (`corrected_name`; the writer names it so whatever output name it is
+given), and a file so named is refused as input like a marked one (`check_unmarked_name`). What the
+name cannot cover: a user who renames the corrected copy and gives that back to robocal.
 
 See Also
 --------
@@ -76,7 +61,7 @@ class Marker:
         The robocal version that wrote the file.
     model : str
         The calibrated model's fingerprint: ``FINGERPRINT_HEX`` hex digits of the SHA-256 of its
-        parameters (fewer in a FANUC remark or an INFORM comment, cut to fit).
+        parameters (fewer where a language's comment is short: cut to fit).
 
     Examples
     --------
@@ -335,7 +320,7 @@ def mark_program(dialect: ProgramMarker, data: bytes, robot: Robot) -> bytes | N
     Raises
     ------
     DataError
-        A format with no marker, or a FANUC program without ``/MN``.
+        A format with no marker, or a program without the place its dialect marks (its ``marker.py``).
 
     Examples
     --------
