@@ -382,3 +382,20 @@ def test_a_writer_waits_for_another_and_then_refuses_with_one_line(tmp_path, mon
         os.close(fd)
     write_all({tmp_path / "a": "x"})
     assert (tmp_path / "a").read_text() == "x"
+
+
+def test_an_output_named_as_a_history_is_refused_through_the_python_api_too(tmp_path):
+    """A Python caller's ``write()`` over a robocal history (no CLI's --history to compare with) is
+    refused by the write itself: the database is left byte for byte as it was."""
+    import robocal as rc
+    from robocal.history.store import History
+
+    hist = tmp_path / "cell7.sqlite"
+    with History(str(hist)):
+        pass
+    before = hist.read_bytes()
+    robot = rc.Robot.from_catalog("abb_irb2600")
+    with pytest.raises(rc.DataError, match="SQLite database"):
+        robot.save(hist)
+    assert hist.read_bytes() == before
+    robot.save(tmp_path / "fine.yaml")  # an ordinary output still written

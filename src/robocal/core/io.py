@@ -119,6 +119,21 @@ def check_writable(paths) -> None:
         if path.exists() and not (os.access(path, os.W_OK) and path.stat().st_mode & _WRITE_BITS):
             raise DataError(f"cannot write {path}: the file is read-only (robocal does not replace "
                             "read-only files; make it writable or choose another name)")
+        if path.is_file() and _is_database(path):  # a history (any caller's: the API's write() too)
+            raise DataError(f"cannot write {path}: it is an SQLite database (a robocal history?), which "
+                            "would lose every record; choose another output name")
+
+
+_SQLITE_HEADER = b"SQLite format 3\x00"  # the first 16 bytes of every SQLite 3 database file
+
+
+def _is_database(path: Path) -> bool:
+    """Whether the file ``path`` is an SQLite database (its header; unreadable: no)."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(len(_SQLITE_HEADER)) == _SQLITE_HEADER
+    except OSError:
+        return False
 
 
 def _exists(path: Path) -> bool:
