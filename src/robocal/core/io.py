@@ -120,8 +120,9 @@ def check_writable(paths) -> None:
             raise DataError(f"cannot write {path}: the file is read-only (robocal does not replace "
                             "read-only files; make it writable or choose another name)")
         if path.is_file() and _is_database(path):  # a history (any caller's: the API's write() too)
-            raise DataError(f"cannot write {path}: it is an SQLite database (a robocal history?), which "
-                            "would lose every record; choose another output name")
+            raise DataError(f"cannot write {path}: it is an SQLite database, as a robocal history is (if it "
+                            "is the history, replacing it would lose every record); choose another "
+                            "output name")
 
 
 _SQLITE_HEADER = b"SQLite format 3\x00"  # the first 16 bytes of every SQLite 3 database file
