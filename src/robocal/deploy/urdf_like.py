@@ -49,7 +49,7 @@ from robocal.kinematics.cell_file import is_workcell
 from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.model import Robot, links_length, load_model
 from robocal.kinematics.model_file import read_model_data
-from robocal.kinematics.transforms import invert_transform
+from robocal.kinematics.transforms import invert_transform, skew
 from robocal.kinematics.urdf import not_carried
 from robocal.kinematics.urdf_read import joint_axis, joint_origin, matrix_to_rpy, parse_urdf, urdf_chain
 from robocal.kinematics.workcell import Cell, load_cell
@@ -162,7 +162,7 @@ def _joint_motion(axis: np.ndarray, q: np.ndarray, prismatic: bool) -> np.ndarra
     if prismatic:
         T[:, :3, 3] = q[:, None] * axis
         return T
-    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    K = skew(axis)
     T[:, :3, :3] += np.sin(q)[:, None, None] * K + (1 - np.cos(q))[:, None, None] * (K @ K)
     return T
 
