@@ -49,7 +49,7 @@ from robocal.kinematics.cell_file import is_workcell
 from robocal.kinematics.fk import chain_frames
 from robocal.kinematics.model import Robot, links_length, load_model
 from robocal.kinematics.model_file import read_model_data
-from robocal.kinematics.transforms import invert_transform
+from robocal.kinematics.transforms import invert_transform, skew
 from robocal.kinematics.urdf import not_carried
 from robocal.kinematics.urdf_read import joint_axis, joint_origin, matrix_to_rpy, parse_urdf, urdf_chain
 from robocal.kinematics.workcell import Cell, load_cell
@@ -162,7 +162,7 @@ def _joint_motion(axis: np.ndarray, q: np.ndarray, prismatic: bool) -> np.ndarra
     if prismatic:
         T[:, :3, 3] = q[:, None] * axis
         return T
-    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    K = skew(axis)
     T[:, :3, :3] += np.sin(q)[:, None, None] * K + (1 - np.cos(q))[:, None, None] * (K @ K)
     return T
 
@@ -1064,7 +1064,9 @@ def _result(robot, controller, vendor_file, robot_name, chain, B, M, check, new_
                         f"{'; '.join(joint_map.text(names))} ({how}); the ROS driver must send these "
                         f"values{also}")
     base = invert_transform(vendor0[base_at]) @ B @ cal.base  # robocal's frame {0} in base_link at q = 0
-    drawn_base = invert_transform(vendor0[base_at]) @ B @ controller.base  # the controller's, nominal
+    # the controller's base frame is the nominal model's world (not its frame {0}, which a model
+    # imported from a URDF places at joint 1): B maps that world into the vendor's root link
+    drawn_base = invert_transform(vendor0[base_at]) @ B
     shift_mm = float(np.linalg.norm(drawn_base[:3, 3]) * 1e3)
     tilt_deg = float(np.rad2deg(np.arccos(np.clip(drawn_base[2, 2], -1.0, 1.0))))
     if shift_mm > GOAL_MM or tilt_deg > GOAL_DEG:  # ROS-Industrial's base_link is the controller's base

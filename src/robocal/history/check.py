@@ -449,8 +449,14 @@ def check_calibration(robot, data, uncertainty: Uncertainty, *, fit_frame: bool 
     every_frame = [*groups["tracker"], *smr_names]
     frame = every_frame if fit_frame else []
 
+    zeros, others = candidates(start)
+    names = [*zeros, *others]
+    every = list(dict.fromkeys([*uncertainty.names, *every_frame, *names]))  # one Jacobian for all
+    J_all, at = start.jacobian(data.joints, every, **kw).reshape(len(r), len(every)), \
+        {n: i for i, n in enumerate(every)}
+
     def columns(names) -> np.ndarray:
-        return start.jacobian(data.joints, list(names), **kw).reshape(len(r), len(names))
+        return J_all[:, [at[n] for n in names]]
 
     if noise_mm is None and uncertainty.kind not in TRACKER_KINDS:
         raise DataError(f"the calibration used {uncertainty.kind} data, whose noise is not the tracker's "
@@ -469,8 +475,6 @@ def check_calibration(robot, data, uncertainty: Uncertainty, *, fit_frame: bool 
     result = CheckResult(verdict="changed" if p < ALPHA else "holds", p_value=p, statistic=T, dof=dof,
                          noise_dof=noise_dof, noise_m=noise, noise_source=source, n_poses=data.n_poses,
                          rms_mm=rms_mm, predicted_rms_mm=predicted)
-    zeros, others = candidates(start)
-    names = [*zeros, *others]
     blocks = columns(names)
     hidden = confounded(names, blocks, columns(every_frame), space.L)
     if fit_frame and hidden:

@@ -45,7 +45,7 @@ the scale's prior is reported apart.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -112,6 +112,11 @@ class Prediction:
         """Predicted RMS TCP position error ``(N,)`` (mm) of ``robot`` (the calibrated model) at
         joints ``q (N, n)`` (rad): the parameters' posterior propagated, and the unmodelled error
         grown where the joints leave the sampled ranges (module docstring)."""
+        return self.errors_mm(robot, q)[0]
+
+    def errors_mm(self, robot, q) -> tuple[np.ndarray, np.ndarray]:
+        """``(error_mm, within_mm)``, each ``(N,)`` (mm): `error_mm`, and the same without the
+        growth beyond the sampled ranges; the Jacobians are computed once for both."""
         q = robot.check_joints(q)
         missing = [n for n in self.names if n not in robot.parameter_names]
         if missing:
@@ -119,8 +124,9 @@ class Prediction:
                             "use the result JSON written with this calibrated model")
         G = tcp_jacobian(robot, self.names, q)  # (N, 3, k)
         var = np.einsum("nik,nik->n", G @ self.covariance, G)  # G C G^T's trace, pose by pose
+        var = np.maximum(var, 0.0)
         u = self.unmodelled_mm * 1e-3 * (1.0 + EXTRAPOLATION_GROWTH * self.outside(robot, q).sum(axis=1))
-        return np.sqrt(np.maximum(var, 0.0) + u**2) * 1e3
+        return np.sqrt(var + u**2) * 1e3, np.sqrt(var + (self.unmodelled_mm * 1e-3) ** 2) * 1e3
 
     def beyond(self, robot, q) -> np.ndarray:
         """``(N,)`` bool: targets where the predicted error exceeds :data:`EXTRAPOLATION_FACTOR`
@@ -344,13 +350,13 @@ def _by_distance(robot, q_ws: np.ndarray, q_cal: np.ndarray, err: np.ndarray) ->
     return {"distance_deg": centres, "rms_mm": rms}
 
 
-def _extrapolated(robot, prediction: Prediction, q_ws: np.ndarray, ws: np.ndarray, joints: list[dict]
-                  ) -> dict | None:
+def _extrapolated(robot, prediction: Prediction, q_ws: np.ndarray, ws: np.ndarray, within: np.ndarray,
+                  joints: list[dict]) -> dict | None:
     """The ``extrapolated`` entry of the section when the unmodelled error's growth beyond the
     sampled joint ranges raises the workspace RMS by :data:`EXTRAPOLATED_SHARE` or more: the RMS
     within the ranges (no growth), the growth factor and the joints that carry at least that share
-    of the excursions, with their ranges (`covered_text`); None otherwise."""
-    within = replace(prediction, sampled=None).error_mm(robot, q_ws)
+    of the excursions, with their ranges (`covered_text`); None otherwise. ``ws``, ``within``: the
+    workspace sample's predicted error with and without that growth (`Prediction.errors_mm`)."""
     rms, rms_within = (float(np.sqrt(np.mean(e**2))) for e in (ws, within))
     if rms < (1.0 + EXTRAPOLATED_SHARE) * rms_within:
         return None
@@ -364,7 +370,7 @@ def predict(robot, prediction: Prediction, q_cal: np.ndarray) -> tuple[dict, lis
     """The ``predicted_accuracy`` section (module docstring) of a calibrated ``robot`` with its
     ``prediction`` and calibration joints ``q_cal (N, n)`` (rad), and its warnings."""
     q_ws = workspace_sample(robot)
-    ws, cal = prediction.error_mm(robot, q_ws), prediction.error_mm(robot, q_cal)
+    (ws, within), cal = prediction.errors_mm(robot, q_ws), prediction.error_mm(robot, q_cal)
     joints = joint_coverage(robot, q_cal)
     ratio = float(np.sqrt(np.mean(ws**2))) / prediction.validated_mm
     out = {"workspace": {**_stats(ws), "samples": WORKSPACE_SAMPLES, "seed": WORKSPACE_SEED,
@@ -376,7 +382,7 @@ def predict(robot, prediction: Prediction, q_cal: np.ndarray) -> tuple[dict, lis
            "by_distance": _by_distance(robot, q_ws, q_cal, ws), "model": prediction.to_dict()}
     if prediction.gauge:
         out.update(gauge=prediction.gauge, scale=prediction.scale)
-    if (extrapolated := _extrapolated(robot, prediction, q_ws, ws, joints)) is not None:
+    if (extrapolated := _extrapolated(robot, prediction, q_ws, ws, within, joints)) is not None:
         out["extrapolated"] = extrapolated
     warnings = []
     if out["holds_only_near_poses"]:

@@ -133,7 +133,7 @@ def joint_mixup(robot, data, given_mm: float) -> str | None:
                              key=lambda r: (r[1], r[0]))
     mirror = _mirror_rms(robot, data) if changed > 1 else np.inf
     if mirror <= SIMPLER_WITHIN * rms:  # one mistake in the export explains it as well: named first
-        said = mirrored(robot, data, given_mm)
+        said = _mirror_sentence(mirror, data, given_mm)  # the mirror's fit done once
         return None if said is None else f"{said} (to these data the same as: {what})"
     if rms <= limit and rms * GAIN < given_mm:
         return (f"{what}: corrected so, the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} "
@@ -202,7 +202,11 @@ def mirrored(robot, data, given_mm: float) -> str | None:
     """The sentence naming a mirrored tracker frame when the model fits the mirrored points (a
     mirror is the same, to the data, as some joints counted the other way: :func:`joint_mixup`
     names it first when it fits as well)."""
-    rms = _mirror_rms(robot, data)
+    return _mirror_sentence(_mirror_rms(robot, data), data, given_mm)
+
+
+def _mirror_sentence(rms: float, data, given_mm: float) -> str | None:
+    """:func:`mirrored`'s sentence from the mirrored points' fit ``rms`` (mm, `_mirror_rms`)."""
     if rms <= error_limit_mm(data.points) and rms * GAIN < given_mm:
         return (f"the tracker frame looks mirrored (left-handed: one axis's sign flipped in the export): "
                 f"with one axis flipped the nominal model fits to {rms:.3g} mm RMS ({given_mm:.3g} mm as "
