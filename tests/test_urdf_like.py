@@ -126,6 +126,20 @@ def test_a_base_link_that_is_not_the_controllers_base_is_said(tmp_path):
     assert not rc.export_urdf_like(rc.Robot.from_catalog("ur5e"), DATA / "ur5e.urdf").warnings
 
 
+def test_a_model_imported_from_the_vendors_urdf_keeps_its_base_link_as_the_base(tmp_path):
+    """A nominal model imported from the vendor's URDF (KUKA's joint_a1 0.675 m up, axis -z: the
+    model's frame {0} sits there, turned by pi) has base_link as its world: the export's FK is the
+    calibrated model's and nothing says base_link is not the controller's base (found on Kawasaki's
+    RS007N: 'sits 360 mm away and 180 deg tilted')."""
+    from robocal.kinematics.urdf import from_urdf
+    nominal = from_urdf(DATA / "kr16_2.urdf")
+    assert np.linalg.norm(nominal.base[:3, 3]) > 0.5  # the case: frame {0} is not the world
+    cal = typical(nominal)
+    out = rc.export_urdf_like(cal, DATA / "kr16_2.urdf", nominal=nominal)
+    assert not any("not the controller's base frame" in w for w in out.warnings), out.warnings
+    assert out.fk_check[0] < FK_M and out.fk_check[1] < FK_RAD
+
+
 def test_the_nominal_model_gives_back_the_vendors_file():
     text = (DATA / "kr16_2.urdf").read_text(encoding="utf-8")
     out = rc.export_urdf_like("kuka_kr16_2", DATA / "kr16_2.urdf")

@@ -1064,7 +1064,9 @@ def _result(robot, controller, vendor_file, robot_name, chain, B, M, check, new_
                         f"{'; '.join(joint_map.text(names))} ({how}); the ROS driver must send these "
                         f"values{also}")
     base = invert_transform(vendor0[base_at]) @ B @ cal.base  # robocal's frame {0} in base_link at q = 0
-    drawn_base = invert_transform(vendor0[base_at]) @ B @ controller.base  # the controller's, nominal
+    # the controller's base frame is the nominal model's world (not its frame {0}, which a model
+    # imported from a URDF places at joint 1): B maps that world into the vendor's root link
+    drawn_base = invert_transform(vendor0[base_at]) @ B
     shift_mm = float(np.linalg.norm(drawn_base[:3, 3]) * 1e3)
     tilt_deg = float(np.rad2deg(np.arccos(np.clip(drawn_base[2, 2], -1.0, 1.0))))
     if shift_mm > GOAL_MM or tilt_deg > GOAL_DEG:  # ROS-Industrial's base_link is the controller's base
